@@ -1,0 +1,110 @@
+"""Figures for the reports (matplotlib, non-interactive Agg backend).
+
+Each function draws one figure from library results and saves it as PNG; none computes
+model quantities of its own.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import control as ct  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def _save(fig, path: Path) -> None:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def omib_phase_plane(system, runs: dict, path: Path) -> None:
+    """Phase plane (delta, d(delta)/dt): streamlines of the post-fault system (python-control
+    phase_plane_plot), the stability boundary through delta_u, and one run per fault."""
+    fig, ax = plt.subplots(figsize=(7, 5))
+    f = system.rhs("post")
+    ct.phase_plane_plot(lambda t, x: np.array(f(t, x)), [-1.0, 4.0, -12.0, 12.0], 1.0,
+                        ax=ax, plot_separatrices=False, plot_equilpoints=False,
+                        plot_streamplot={"color": "0.8"})
+    d = np.linspace(-1.0, system.delta_u, 600)
+    w = system.separatrix(d)
+    ax.plot(d, w, "k--", lw=1.5, label="stability boundary")
+    ax.plot(d, -w, "k--", lw=1.5)
+    for cyc, run in runs.items():
+        ax.plot(run.delta, run.omega, lw=1.8,
+                label=f"{cyc} cycles ({'stable' if run.stable else 'unstable'})")
+        ax.plot(run.delta_cl, run.omega_cl, "o", color=ax.lines[-1].get_color())
+    ax.plot([system.delta_s, system.delta_u], [0, 0], "kx")
+    ax.set(xlim=(-1, 4), ylim=(-12, 12), xlabel="delta (rad)", ylabel="d(delta)/dt (rad/s)",
+           title="OMIB phase plane (paper Figs. 4-5)")
+    ax.legend(loc="lower left", fontsize=8)
+    _save(fig, path)
+
+
+def omib_equal_area(system, run, path: Path) -> None:
+    """Power-angle curves with the accelerating and available decelerating areas."""
+    fig, ax = plt.subplots(figsize=(7, 4))
+    d = np.linspace(0, np.pi, 400)
+    ax.plot(d, system.pe(d, "post"), label="Pe pre/post-fault")
+    ax.plot(d, system.pe(d, "fault"), label="Pe fault-on")
+    ax.axhline(system.Pm, color="k", lw=1, label="Pm")
+    d1 = np.linspace(system.delta0, run.delta_cl, 100)
+    ax.fill_between(d1, system.pe(d1, "fault"), system.Pm, alpha=0.4, label="A1 (accelerating)")
+    d2 = np.linspace(run.delta_cl, system.delta_u, 100)
+    ax.fill_between(d2, system.Pm, system.pe(d2, "post"), alpha=0.4, label="A2 available")
+    ax.axvline(system.critical_clearing_angle(), color="r", ls=":", label="critical clearing angle")
+    ax.set(xlabel="delta (rad)", ylabel="power (pu)",
+           title=f"Equal-area criterion, clearing at {run.t_clear * 60:.0f} cycles")
+    ax.legend(fontsize=8)
+    _save(fig, path)
+
+
+def feedback_phase_plane(system, runs: dict, path: Path) -> None:
+    """Phase-plane comparison of the feedback laws (paper Fig. 7) and speed versus time."""
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
+    d = np.linspace(-1.0, system.delta_u, 400)
+    ax1.plot(d, system.separatrix(d), "k--", lw=1, label="stability boundary")
+    ax1.plot(d, -system.separatrix(d), "k--", lw=1)
+    for name, run in runs.items():
+        ax1.plot(run.delta, run.omega, lw=1.3, label=name)
+        ax2.plot(run.t, run.omega, lw=1.1, label=name)
+    ax1.set(xlim=(-1, 3.5), ylim=(-12, 12), xlabel="delta (rad)", ylabel="d(delta)/dt (rad/s)",
+            title="15-cycle fault: feedback laws (paper Fig. 7)")
+    ax2.set(xlim=(0, 6), ylim=(-12, 12), xlabel="t (s)", ylabel="d(delta)/dt (rad/s)")
+    ax1.legend(fontsize=7, loc="lower left")
+    _save(fig, path)
+
+
+def min_time_figures(system, x_release, sols: dict, states_path: Path,
+                     costates_path: Path) -> None:
+    """States with the minimum-time pulse versus no storage (Fig. 10) and co-states (Fig. 11)."""
+    from .optimal import time_to_zero_speed
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
+    T0, sol0 = time_to_zero_speed(system, x_release, 0.0)
+    t0 = np.linspace(0, T0, 200)
+    x0 = sol0.sol(t0)
+    ax1.plot(t0, x0[1], "k", label="no storage")
+    ax2.plot(x0[0], x0[1], "k", label="no storage")
+    for pc, s in sols.items():
+        ax1.plot(s.t, s.x2, label=f"P_Cmax = {pc} pu (T = {s.T:.4f} s)")
+        ax2.plot(s.x1, s.x2, label=f"P_Cmax = {pc} pu")
+    ax1.set(xlabel="time after release (s)", ylabel="x2 = d(delta)/dt (rad/s)",
+            title="Minimum-time control: speed (paper Fig. 10)")
+    ax2.set(xlabel="x1 = delta (rad)", ylabel="x2 (rad/s)", title="phase plane")
+    ax1.legend(fontsize=8)
+    _save(fig, states_path)
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
+    for pc, s in sols.items():
+        ax1.plot(s.t, s.l1, label=f"P_Cmax = {pc} pu")
+        ax2.plot(s.t, s.l2, label=f"P_Cmax = {pc} pu")
+    ax1.set(xlabel="time after release (s)", ylabel="lambda1", title="co-state lambda1 (Fig. 11)")
+    ax2.axhline(0, color="k", lw=0.8)
+    ax2.set(xlabel="time after release (s)", ylabel="lambda2",
+            title="co-state lambda2 > 0: P_C = P_Cmax throughout")
+    ax1.legend(fontsize=8)
+    _save(fig, costates_path)
