@@ -480,8 +480,8 @@ class ExciterTable(Table):
 
     Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2); use
     ``col(k)`` for those. Omitted trailing columns are 0 (a simple exciter needs 9).
-    Validation: type in {0, 1, 2, 3}, one exciter per machine (machine existence is
-    checked by :class:`Case`).
+    Validation: type in {0, 1, 2, 3}, one exciter per machine, TR, TA, TB >= 0 (machine
+    existence is checked by :class:`Case`).
     """
 
     type: np.ndarray
@@ -514,7 +514,7 @@ class ExciterTable(Table):
     def _check(self):
         self._require(np.isin(self.type, (0, 1, 2, 3)), "type", "exciter type must be 0, 1, 2 or 3")
         self._unique("machine", "exciter on machine")
-        self._nonnegative("TR", "TA", "TB", "TC")
+        self._nonnegative("TR", "TA", "TB")  # filter and lag constants
 
 
 @dataclass(frozen=True, eq=False)
@@ -534,7 +534,8 @@ class PssTable(Table):
     10  ymin     minimum output, pu
     ==  =======  ==================================================================
 
-    Validation: type in {1, 2}, one PSS per machine, time constants >= 0.
+    Validation: type in {1, 2}, one PSS per machine, washout and lag constants (Tw, T2,
+    T4) >= 0.
     """
 
     type: np.ndarray
@@ -557,7 +558,7 @@ class PssTable(Table):
     def _check(self):
         self._require(np.isin(self.type, (1, 2)), "type", "pss type must be 1 or 2")
         self._unique("machine", "pss on machine")
-        self._nonnegative("Tw", "T1", "T2", "T3", "T4")
+        self._nonnegative("Tw", "T2", "T4")  # washout and lag constants
 
 
 @dataclass(frozen=True, eq=False)
@@ -577,7 +578,8 @@ class GovernorTable(Table):
     10  T5       reheater time constant, s
     ==  =======  ==================================================================
 
-    Validation: one governor per machine, time constants >= 0.
+    Validation: one governor per machine, lag time constants Ts, Tc, T5 >= 0 (the lead
+    constants T3, T4 may be negative: miniWECC's hydro units use T4 = -1).
     """
 
     type: np.ndarray
@@ -599,7 +601,7 @@ class GovernorTable(Table):
 
     def _check(self):
         self._unique("machine", "governor on machine")
-        self._nonnegative("Ts", "Tc", "T3", "T4", "T5")
+        self._nonnegative("Ts", "Tc", "T5")  # T3, T4 are lead constants: T4 < 0 models hydro
 
 
 @dataclass(frozen=True, eq=False)
