@@ -8,12 +8,15 @@ Polar coordinates, sparse Jacobian, sparse LU solve. Conventions (PSTess ``loadf
 * specified injection ``Pg - Pl`` (and ``Qg - Ql`` at PQ buses), loads at PV and swing
   buses are kept as given; bus shunts are constant admittances in Ybus;
 * convergence when ``max|dP| + max|dQ| <= tol`` over non-swing (P) and PQ (Q) buses;
-* after each update the magnitudes are clipped to [vmin, vmax] (0 means 0.5 / 1.5);
+* after each update the magnitudes are clipped to [vmin, vmax] (0 means 0.5 / 1.5), so a
+  solution with a voltage outside its limits does not converge unless a tap moves;
 * Q limits: after each iteration a PV bus whose ``Q + Ql`` leaves [qmin, qmax] (0 means
   no limit, i.e. +-9999) becomes PQ with its generation fixed at the limit, for good;
 * on-load tap changers (branches with ``tapmax != 0``): after a solution, a bus at or
   beyond its voltage limit moves the tap of the branches whose to-bus it is, in steps of
-  ``tapstep`` within [tapmin, tapmax], and the flow is solved again (at most 10 times);
+  ``tapstep`` within [tapmin, tapmax], and the flow is solved again from the start values
+  (at most 10 times); an inner solve that ran out of iterations is not an error while a
+  tap still moves;
 * the solved bus matrix (:meth:`PowerFlowResult.bus_matrix`) follows ``bus_sol``:
   generation at PV and swing buses and loads at PQ buses are recomputed from the
   solution, limited generators are listed as PQ buses with ``qgen`` at the limit.
@@ -192,13 +195,16 @@ def _apply_q_limits(st: _State, s, qmax, qmin) -> bool:
 
 
 def _newton(case, ybus, st: _State, tol, max_iter, q_limits):
-    """Newton iterations in place on ``st``; returns (iterations, mismatch, s)."""
+    """Newton iterations in place on ``st``.
+
+    Returns (iterations, mismatch norm, S, converged, dP, dQ). A singular Jacobian or a
+    non-finite step raises :class:`PowerFlowError` at once; running out of iterations
+    does not (PST then tries its tap changer before giving up).
+    """
     qmax, qmin, vmax, vmin = _limits(case)
     dp, dq, s = _mismatch(ybus, st)
     it = 0
-    while _norm(dp, dq) > tol:
-        if it >= max_iter:
-            _fail(case, it, dp, dq, "did not converge")
+    while _norm(dp, dq) > tol and it < max_iter:
         it += 1
         ang_idx = np.flatnonzero(st.kind != SWING)
         mag_idx = np.flatnonzero(st.kind == PQ)
@@ -218,7 +224,8 @@ def _newton(case, ybus, st: _State, tol, max_iter, q_limits):
         dp, dq, s = _mismatch(ybus, st)
         if q_limits and _apply_q_limits(st, s, qmax, qmin):
             dp, dq, s = _mismatch(ybus, st)
-    return it, _norm(dp, dq), s
+    mism = _norm(dp, dq)
+    return it, mism, s, mism <= tol, dp, dq
 
 
 def _fail(case, it, dp, dq, what):
@@ -330,13 +337,15 @@ def solve_powerflow(
     for tap_it in range(1, _TAP_ITER_MAX + 1):
         ybus = build_ybus(case, drop=drop, taps=taps)
         st, inj_p, inj_q = _initial_state(case)
-        iters, mism, s = _newton(case, ybus, st, tol, max_iter, q_limits)
+        iters, mism, s, converged, dp, dq = _newton(case, ybus, st, tol, max_iter, q_limits)
         if not (tap_changing and _move_taps(case, st.vmag, taps)):
             break
     else:
         warnings.warn(
             f"power flow of case '{case.name}': voltages still at limits after "
             f"{_TAP_ITER_MAX} tap iterations", RuntimeWarning, stacklevel=2)
+    if not converged:
+        _fail(case, iters, dp, dq, "did not converge")
     pg, qg, pl, ql, limited = _report(case, st, s, inj_p, inj_q)
     return PowerFlowResult(
         case=case, vmag=st.vmag, vang=st.vang, pgen=pg, qgen=qg, pload=pl, qload=ql,
