@@ -217,8 +217,12 @@ def _logical_lines(text: str):
     buf: list[str] = []
     start = 0
     depth = 0
+    block = False  # inside a %{ ... %} block comment
     for lineno, raw in enumerate(text.splitlines(), start=1):
         stripped = raw.strip()
+        if stripped in ("%{", "%}") or block:
+            block = (stripped == "%{") or (block and stripped != "%}")
+            continue
         if not buf and (stripped.startswith("%") or not stripped):
             continue
         if not buf and _DISP.match(stripped):
@@ -246,7 +250,8 @@ def parse_m(text: str, where: str = "<m-file>") -> dict[str, np.ndarray]:
 
     Accepted statements: ``name = [ rows ];`` (numbers separated by blanks or commas,
     rows by ``;`` or newlines, ``...`` continuations), ``name = [];``, ``name = number;``;
-    ``%`` comments, blank lines and ``disp(...)`` lines are skipped. Returns name -> 2-D
+    ``%`` comments, ``%{ ... %}`` block comments, blank lines and ``disp(...)`` lines are
+    skipped. Returns name -> 2-D
     float array (a scalar as shape (1, 1)); a later assignment replaces an earlier one.
 
     Raises :class:`CaseError` naming ``where`` and the line of the first statement or

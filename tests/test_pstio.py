@@ -54,6 +54,9 @@ a = [1, 2 3;  % commas or blanks
      7 ...
      8 9];
 b = [];
+%{
+x = anything(1);
+%}
 c = [1.5e-3 -2 +3];
 """
     m = pstio.parse_m(text)
