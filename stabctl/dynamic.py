@@ -1,0 +1,266 @@
+"""The dynamic model of a case: state layout, initialisation from the power flow, network
+stages, and one evaluation of all right-hand sides (PST flag 1, network solution, flag 2).
+
+This is the single implementation of the multi-machine equations: the time-domain
+integrator, the linearisation, the CCT search and the estimators all call
+`DynamicModel.evaluate`.  Source: PSTess 1.1 `s_simu.m` (order of model calls),
+docs/pst_models.md sections 1-7.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import exciters as exc
+from . import governors as gov
+from . import machines as mac
+from . import pss as pss_
+from .case import BranchTable, BusTable, Case
+from .errors import CaseError
+from .netsolve import NonConformingLoads, ReducedNetwork, reduce_network, solve_nc
+
+FAULT_B = 1e7      # PST's bolted-fault shunt susceptance (1/1e-7)
+OPEN_X = 1e7       # PST opens a branch by giving it this reactance (charging stays)
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    """Solved power flow as the dynamic model needs it, arrays of shape (n_bus,):
+    V complex bus voltage (pu), S_gen and S_load complex generation and load (pu)."""
+
+    V: np.ndarray
+    S_gen: np.ndarray
+    S_load: np.ndarray
+
+    @classmethod
+    def from_bus_matrix(cls, bus: np.ndarray) -> "OperatingPoint":
+        """From a solved PST bus matrix (columns: number, |V|, angle deg, Pg, Qg, Pl, Ql...)."""
+        bus = np.asarray(bus, float)
+        V = bus[:, 1] * np.exp(1j * np.deg2rad(bus[:, 2]))
+        return cls(V=V, S_gen=bus[:, 3] + 1j * bus[:, 4], S_load=bus[:, 5] + 1j * bus[:, 6])
+
+
+@dataclass(frozen=True)
+class StageConfig:
+    """Network configuration of one interval (hashable; built by `stabctl.events`).
+
+    faults: (bus index, shunt admittance) pairs replacing the bus shunt (PST sw_con fault);
+    opened: branch rows opened by PST's x = 1e7 (line charging stays connected);
+    fault_feeds: (branch row, far-end bus number, still_faulted) for a line cleared at the
+        near end: a copy of the line feeds a fault node from the far end until the far end
+        clears too (PST y_switch);
+    tripped_machines: machine indices disconnected; load_steps: (bus index, admittance).
+    """
+
+    faults: tuple = ()
+    opened: tuple = ()
+    fault_feeds: tuple = ()
+    tripped_machines: tuple = ()
+    load_steps: tuple = ()
+
+
+@dataclass
+class Layout:
+    """Slices of the flat state vector: machines (6, n_mac), exciters (3, n_exc),
+    pss (3, n_pss), governors (3, n_tg), each stored state-major."""
+
+    n_mac: int
+    n_exc: int
+    n_pss: int
+    n_tg: int
+    blocks: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        start = 0
+        for name, rows, n in (("mac", 6, self.n_mac), ("exc", 3, self.n_exc),
+                              ("pss", 3, self.n_pss), ("tg", 3, self.n_tg)):
+            self.blocks[name] = (slice(start, start + rows * n), (rows, n))
+            start += rows * n
+        self.size = start
+
+    def view(self, x, name):
+        sl, shape = self.blocks[name]
+        return x[sl].reshape(shape)
+
+
+class DynamicModel:
+    """Dynamic model of a case at an operating point.
+
+    Args:
+        case: the case; op: its solved power flow; injection_buses: extra bus numbers to
+            keep in the reduced network for device injections (storage).
+    Raises:
+        CaseError: unsupported models, limits violated at the initial point, a machine bus
+            without generation.
+    """
+
+    def __init__(self, case: Case, op: OperatingPoint, injection_buses=()):
+        self.case, self.op = case, op
+        self.mp = mac.machine_params(case)
+        self.ep = exc.exciter_params(case)
+        self.pp = pss_.pss_params(case)
+        self.gp = gov.governor_params(case)
+        self.layout = Layout(self.mp.n, self.ep.n, self.pp.n, self.gp.n)
+        self._setup_loads(injection_buses)
+        self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
+        self._initialise()
+
+    # -- loads and kept buses ---------------------------------------------------------
+    def _setup_loads(self, injection_buses):
+        case, op = self.case, self.op
+        V0 = np.abs(op.V)
+        lc = case.loads.matrix()
+        frac = np.zeros((case.n_bus, 4))
+        if lc.size:
+            frac[case.bus_indices(lc[:, 0])] = lc[:, 1:5]
+        has_mac = np.zeros(case.n_bus, bool)
+        has_mac[self.mp.bus_idx] = True
+        S_L = op.S_load - np.where(has_mac, 0.0, op.S_gen)   # generation without machine
+        fP, fQ, fIP, fIQ = frac.T
+        S_Z = (1 - fP - fIP) * S_L.real + 1j * (1 - fQ - fIQ) * S_L.imag
+        self.y_load = np.conj(S_Z) / V0 ** 2
+        extra = case.bus_indices(list(injection_buses)) if len(injection_buses) else []
+        nc = np.asarray(case.bus_indices(lc[:, 0]) if lc.size else [], int)
+        self.nc_idx = np.unique(np.concatenate([nc, np.asarray(extra, int)])).astype(int)
+        i = self.nc_idx
+        S_P = fP[i] * S_L[i].real + 1j * fQ[i] * S_L[i].imag
+        S_I = fIP[i] * S_L[i].real + 1j * fIQ[i] * S_L[i].imag
+        self.nc = NonConformingLoads(S_P=S_P, I0=S_I / V0[i],
+                                     Y_low=np.conj(S_P + S_I) / V0[i] ** 2)
+
+    # -- network stages ---------------------------------------------------------------
+    def network(self, config: StageConfig = StageConfig()) -> ReducedNetwork:
+        """Reduced network of a stage (cached)."""
+        if config not in self._stage_cache:
+            self._stage_cache[config] = self._reduce(config)
+        return self._stage_cache[config]
+
+    def _reduce(self, config: StageConfig) -> ReducedNetwork:
+        case = self.case
+        bus = case.buses.matrix().copy()
+        line = case.branches.matrix().copy()
+        y_shunt = self.y_load.copy()
+        for b, y in config.faults:
+            bus[b, 7], bus[b, 8] = y.real, y.imag
+        for b, y in config.load_steps:
+            y_shunt[b] += y
+        for row in config.opened:
+            line[row, 3] = OPEN_X
+        new_bus, new_line = [], []
+        next_number = bus[:, 0].max() + 10
+        for row, far, faulted in config.fault_feeds:
+            line[row, 3] = OPEN_X
+            nb = np.zeros(bus.shape[1])
+            nb[[0, 1, 9]] = next_number, 1.0, 3
+            nb[8] = -FAULT_B if faulted else 0.0
+            nl = line[row].copy()
+            nl[0], nl[1] = next_number, far
+            nl[3] = case.branches.x[row] if faulted else OPEN_X
+            new_bus.append(nb)
+            new_line.append(nl)
+            next_number += 10
+        if new_bus:
+            bus = np.vstack([bus, new_bus])
+            line = np.vstack([line, new_line])
+            y_shunt = np.concatenate([y_shunt, np.zeros(len(new_bus))])
+        stage = case.replace(buses=BusTable.from_matrix(bus), branches=BranchTable.from_matrix(line))
+        online = np.ones(self.mp.n, bool)
+        online[list(config.tripped_machines)] = False
+        return reduce_network(stage, y_shunt, self.mp.y_internal, self.mp.bus_idx, online,
+                              self.nc_idx, case.n_bus)
+
+    # -- initialisation ---------------------------------------------------------------
+    def _initialise(self):
+        mp, ep, op, L = self.mp, self.ep, self.op, self.layout
+        xm, self.vex0, self.pmech0 = mac.initialise(mp, op.V, op.S_gen)
+        self.eqp0 = xm[2].copy()
+        x = np.zeros(L.size)
+        L.view(x, "mac")[:] = xm
+        eterm0 = np.abs(op.V[mp.bus_idx])
+        S0 = op.S_gen[mp.bus_idx]
+        S0 = S0.real * mp.pfrac + 1j * S0.imag * mp.qfrac
+        em = ep.mac
+        VB0 = exc.st3_source_voltage(ep, eterm0[em], np.angle(op.V[mp.bus_idx])[em], S0.real[em],
+                                     S0.imag[em], mp.mac_pot[em], self.vex0[em], init=True)
+        xe, self.Vref = exc.initialise(ep, self.vex0[em], eterm0[em], VB0)
+        L.view(x, "exc")[:] = xe
+        u0 = pss_.pss_input(self.pp, xm[1], S0.real, mp.mac_pot)
+        L.view(x, "pss")[:] = pss_.initialise(self.pp, u0)
+        xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac])
+        L.view(x, "tg")[:] = xg
+        self.x0 = x
+        self.V_nc0 = op.V[self.nc_idx].astype(complex)
+        self.pss_of_exc = np.full(ep.n, -1)
+        for k, m in enumerate(self.pp.mac):
+            hit = np.nonzero(ep.mac == m)[0]
+            if hit.size == 0:
+                raise CaseError(f"pss_con row {k + 1}: machine has no exciter for the PSS output")
+            self.pss_of_exc[hit] = k
+
+    # -- one evaluation -----------------------------------------------------------------
+    def evaluate(self, x, net: ReducedNetwork, V_nc_guess, S_extra=None):
+        """All derivatives at state x with network stage `net` (PST flag 1 + 2).
+
+        Args:
+            x: flat state vector (modified in place where PST clamps limited states).
+            net: reduced network of the stage; V_nc_guess: kept-bus voltages to start the
+                load iteration from; S_extra: extra complex power drawn at the kept buses
+                (storage devices), shape (n_nc,), or None.
+        Returns:
+            (dx flat array, Outputs).
+        """
+        mp, ep, L = self.mp, self.ep, self.layout
+        xm, xe, xp, xg = (L.view(x, n) for n in ("mac", "exc", "pss", "tg"))
+        psi = mac.internal_voltage(mp, xm)
+        V_nc = solve_nc(net, psi, self.nc, V_nc_guess, S_extra)
+        cur = net.Y11 @ psi + net.Y12 @ V_nc
+        V_bus = net.R @ np.concatenate([psi, V_nc])
+        omega = xm[1]
+        u = pss_.pss_input(self.pp, omega, (psi * np.conj(cur)).real, mp.mac_pot)
+        pss_all, dxp = pss_.output_and_derivatives(self.pp, xp, u)
+        pss_out = np.where(self.pss_of_exc >= 0, pss_all[self.pss_of_exc], 0.0) \
+            if self.pp.n else np.zeros(ep.n)
+        em = ep.mac
+        ed, eq, curd, curq = mac.stator_voltage_without_speed(mp, xm, cur)
+        et_ns = np.hypot(ed, eq)
+        VB = exc.st3_source_voltage(ep, et_ns[em], np.angle(V_bus[mp.bus_idx])[em],
+                                    (eq * curq + ed * curd)[em], (eq * curd - ed * curq)[em],
+                                    mp.mac_pot[em], self._st3_field_current(xm, cur)[em])
+        efd_alg = exc.field_voltage(ep, xe, self.Vref, et_ns[em], pss_out, VB)
+        vex = self.vex0.copy()
+        vex[em] = efd_alg
+        pmech = self.pmech0.copy()
+        pmech[self.gp.mac] = gov.pmech(self.gp, xg)
+        dxm, pelect, qelect, eterm, _ = mac.derivatives(mp, xm, cur, vex, pmech, self.eqp0)
+        dxe = exc.derivatives(ep, xe, self.Vref, eterm[em], pss_out, efd_alg)
+        dxg = gov.derivatives(self.gp, xg, self.Pref, omega)
+        dx = np.concatenate([dxm.ravel(), dxe.ravel(), dxp.ravel(), dxg.ravel()])
+        efd = self.vex0.copy()
+        efd[em] = exc.recorded_efd(ep, xe, efd_alg)
+        return dx, Outputs(pelect=pelect, qelect=qelect, eterm=eterm, V_bus=V_bus, V_nc=V_nc,
+                           efd=efd, pmech=pmech, cur=cur)
+
+    def _st3_field_current(self, xm, cur):
+        """PST exc_st3's own field-current estimate E_Isat + p6 (E'q - psi_kd) + p7 i_d."""
+        mp = self.mp
+        curdg = mac.to_dq(xm[0], cur)[0] * mp.mac_pot
+        a, b, c = mp.sat.T
+        esat = np.maximum(xm[2], a * xm[2] ** 2 + b * xm[2] + c)
+        return esat + mp.p6 * (xm[2] - xm[3]) + mp.p7 * curdg
+
+
+@dataclass
+class Outputs:
+    """Algebraic outputs of one evaluation: per machine pelect, qelect (system base), eterm,
+    efd, pmech (machine base), cur (complex, system base); V_bus (n_bus,), V_nc."""
+
+    pelect: np.ndarray
+    qelect: np.ndarray
+    eterm: np.ndarray
+    V_bus: np.ndarray
+    V_nc: np.ndarray
+    efd: np.ndarray
+    pmech: np.ndarray
+    cur: np.ndarray
