@@ -11,8 +11,9 @@ fix(length/h) equal steps, so the run restarts exactly at every event.  Two sema
   persist), as PSTess does.
 - ``"exact"``: each step uses the network of the interval it lies in.
 
-Loss of synchronism: a machine whose angle leaves the centre of inertia (eq. 40, weights
-H*MVA) by more than `separation_limit` rad; the run can stop there.  A run that produces
+Loss of synchronism: a machine's angle leaves the centre of inertia (eq. 40, weights H*MVA)
+by more than `separation_limit` rad; the separated machines are the smaller coherent group
+(`separated_group`); the run can stop there.  A run that produces
 non-finite values or meets a singular network raises SimulationError carrying the
 trajectory up to that point.
 """
@@ -141,6 +142,18 @@ class Simulator:
         return rec.result(self, grid.t, grid.t.size, time.perf_counter() - wall)
 
 
+def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """Machines that lost synchronism: split the rotor angles at their largest gap into two
+    coherent groups and return the indices of the group with the smaller inertia (the
+    leading group on a tie), sorted."""
+    order = np.argsort(delta)
+    cut = int(np.argmax(np.diff(delta[order]))) + 1
+    lagging, leading = order[:cut], order[cut:]
+    m_lag, m_lead = inertia[lagging].sum(), inertia[leading].sum()
+    group = leading if m_lead <= m_lag * (1 + 1e-9) else lagging
+    return np.sort(group)
+
+
 class _Recorder:
     """Preallocated trajectories (PST stores the predictor-stage outputs at each index)."""
 
@@ -164,12 +177,12 @@ class _Recorder:
         if self.t_sep is not None:
             return True
         delta = self.m.layout.view(x, "mac")[0]
-        dev = delta - delta @ inertia / inertia.sum()
-        out = np.nonzero(np.abs(dev) > limit)[0]
-        if out.size:
-            self.t_sep = float(t[k])
-            self.separated = [int(n) for n in self.m.case.machines.number[out]]
-        return out.size > 0
+        if np.max(np.abs(delta - delta @ inertia / inertia.sum())) <= limit:
+            return False
+        self.t_sep = float(t[k])
+        group = separated_group(delta, inertia)
+        self.separated = [int(n) for n in self.m.case.machines.number[group]]
+        return True
 
     def result(self, sim: Simulator, t, n, wall) -> SimulationResult:
         c = sim.case
