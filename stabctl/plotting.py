@@ -108,3 +108,35 @@ def min_time_figures(system, x_release, sols: dict, states_path: Path,
             title="co-state lambda2 > 0: P_C = P_Cmax throughout")
     ax1.legend(fontsize=8)
     _save(fig, costates_path)
+
+
+def simulation_overview(result, path, title: str | None = None, max_labels: int = 10) -> None:
+    """Three panels versus time for a `stabctl.results.SimulationResult`: machine speeds
+    (pu), rotor angles relative to the centre of inertia (rad, the result's own COI with
+    H*MVA weights) and bus voltage magnitudes (pu).  Loss of synchronism, if any, is marked
+    by a vertical line.  Legends only when there are at most `max_labels` series."""
+    t = result.t
+    fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+    rel = result.angle - result.coi_angle[:, None]
+    series = ((axes[0], result.speed, "G", result.machines, "speed (pu)"),
+              (axes[1], rel, "G", result.machines, "angle - COI angle (rad)"),
+              (axes[2], result.vmag, "B", result.buses, "bus voltage (pu)"))
+    for ax, data, prefix, numbers, ylabel in series:
+        many = data.shape[1] > max_labels
+        for j, n in enumerate(numbers):
+            ax.plot(t, data[:, j], lw=0.8 if many else 1.2,
+                    label=None if many else f"{prefix}{int(n)}")
+        if result.t_separation is not None:
+            ax.axvline(result.t_separation, color="r", ls=":", lw=1.2,
+                       label=None if many else "loss of synchronism")
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
+        if not many:
+            ax.legend(fontsize=7, ncol=min(5, data.shape[1] + 1), loc="best")
+    axes[2].set_xlabel("t (s)")
+    verdict = ("stable" if result.stable else
+               f"loss of synchronism at {result.t_separation:.3f} s, machines "
+               + ", ".join(str(int(m)) for m in result.separated))
+    head = title or str(result.meta.get("case", "simulation"))
+    axes[0].set_title(f"{head}\n{verdict}", fontsize=9)
+    _save(fig, Path(path))
