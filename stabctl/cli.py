@@ -11,6 +11,7 @@ import json
 import os
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 
 import click
@@ -19,14 +20,22 @@ from .errors import InputError, SimulationError, StabctlError
 
 
 def _reports_errors(func):
-    """Turn stabctl errors into a one-line message and exit status 2."""
+    """Turn stabctl errors into a one-line message and exit status 2.
+
+    Python warnings raised meanwhile are held back: on success they are printed as
+    `warning:` lines on stderr, on error only the `error:` line is printed."""
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
-        try:
-            return func(*args, **kwargs)
-        except StabctlError as exc:
-            click.echo(f"error: {_one_line(exc)}", err=True)
-            sys.exit(2)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")
+            try:
+                out = func(*args, **kwargs)
+            except StabctlError as exc:
+                click.echo(f"error: {_one_line(exc)}", err=True)
+                sys.exit(2)
+        for w in caught:
+            click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
+        return out
     return wrapper
 
 
@@ -34,7 +43,7 @@ def _one_line(exc) -> str:
     """The error message on one line; a diverged run also says where it stopped."""
     msg = " ".join(str(exc).split())
     res = getattr(exc, "result", None)
-    if isinstance(exc, SimulationError) and res is not None and len(res.t):
+    if isinstance(exc, SimulationError) and res is not None and len(res.t) and "t = " not in msg:
         msg += f" (run stopped; last computed point t = {float(res.t[-1]):.4f} s)"
     return msg
 
@@ -265,7 +274,9 @@ def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
               help="End time (s); default 5 s, or the sw_con end with --pstess-default.")
 @click.option("--step", type=float, default=None, metavar="H",
               help="Integration step (s); default the data file's (sw_con) step, else half "
-                   "a cycle. Each interval between events gets fix(length/H) equal steps.")
+                   "a cycle. Each interval between events gets fix(length/H) equal steps. "
+                   "The method is explicit (PST's Heun): H near twice the smallest time "
+                   "constant (Kundur T_R = 0.01 s) makes the run numerically unstable.")
 @click.option("--separation-limit", type=float, default=3.141592653589793,
               show_default="pi", metavar="RAD",
               help="Loss of synchronism: a rotor angle more than RAD from the centre of "
