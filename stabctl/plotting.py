@@ -123,19 +123,21 @@ def simulation_overview(result, path, title: str | None = None, max_labels: int 
               (axes[2], result.vmag, "B", result.buses, "bus voltage (pu)"))
     for ax, data, prefix, numbers, ylabel in series:
         many = data.shape[1] > max_labels
+        lost = set(int(m) for m in result.separated) if prefix == "G" else set()
         for j, n in enumerate(numbers):
-            ax.plot(t, data[:, j], lw=0.8 if many else 1.2,
-                    label=None if many else f"{prefix}{int(n)}")
+            named = not many or int(n) in lost
+            ax.plot(t, data[:, j], lw=1.8 if int(n) in lost and many else (0.8 if many else 1.2),
+                    label=f"{prefix}{int(n)}" if named else None)
         if result.t_separation is not None:
             ax.axvline(result.t_separation, color="r", ls=":", lw=1.2,
-                       label=None if many else "loss of synchronism")
+                       label="loss of synchronism" if not many or lost else None)
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
-        if not many:
+        if not many or lost:
             ax.legend(fontsize=7, ncol=min(5, data.shape[1] + 1), loc="best")
     axes[2].set_xlabel("t (s)")
     verdict = ("stable" if result.stable else
-               f"loss of synchronism at {result.t_separation:.3f} s, machines "
+               f"loss of synchronism at {result.t_separation:.3f} s, machine(s) "
                + ", ".join(str(int(m)) for m in result.separated))
     head = title or str(result.meta.get("case", "simulation"))
     axes[0].set_title(f"{head}\n{verdict}", fontsize=9)
