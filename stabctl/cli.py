@@ -338,6 +338,10 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
         tf = float(case.sw_con[-1, 0]) if pstess_default and case.sw_con is not None else 5.0
     if not tf > 0:
         raise InputError(f"--tf must be > 0 s, got {tf:g}")
+    late = [e for e in events if min(e.times()) >= tf]
+    if late:
+        raise InputError(f"{_describe_event(late[0])}: starts at or after the end of the run "
+                         f"(--tf {tf:g} s)")
     h = default_step(case) if step is None else step
     sim = Simulator(case)
     result = sim.run(events, t_end=tf, h=h, separation_limit=separation_limit,

@@ -138,7 +138,8 @@ def test_flat_run_and_line_trips(tmp_path):
     (["kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 6, "--far-clear-cycles", 3],
      ["far end"]),
     (["kundur", "--far-bus", 101], ["without --fault"]),
-    (["kundur", "--fault", 3, "--tf", 1.05], ["outside the run"]),
+    (["kundur", "--fault", 3, "--t-fault", 6, "--tf", 5], ["after the end of the run"]),
+    (["kundur", "--trip", 3, 101, "--t-trip", -1], ["--t-trip"]),
     (["kundur", "--step", 0], ["--step"]),
     (["nonesuch"], ["unknown case 'nonesuch'"]),
 ])
