@@ -10,15 +10,17 @@ docs/pst_models.md sections 1-7.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
 from . import exciters as exc
 from . import governors as gov
 from . import machines as mac
 from . import pss as pss_
 from .case import BranchTable, BusTable, Case
-from .errors import CaseError
+from .errors import CaseError, SimulationError
 from .netsolve import NonConformingLoads, ReducedNetwork, reduce_network, solve_nc
 
 FAULT_B = 1e7      # PST's bolted-fault shunt susceptance (1/1e-7)
@@ -182,8 +184,11 @@ class DynamicModel:
         S0 = op.S_gen[mp.bus_idx]
         S0 = S0.real * mp.pfrac + 1j * S0.imag * mp.qfrac
         em = ep.mac
-        VB0 = exc.st3_source_voltage(ep, eterm0[em], np.angle(op.V[mp.bus_idx])[em], S0.real[em],
-                                     S0.imag[em], mp.mac_pot[em], self.vex0[em], init=True)
+        theta0 = np.angle(op.V[mp.bus_idx])
+        VB0 = np.array([exc.st3_source_voltage(ep.KP[i], ep.KI[i], ep.XL[i], ep.KC[i],
+                                               eterm0[m], theta0[m], S0.real[m], S0.imag[m],
+                                               mp.mac_pot[m], self.vex0[m], True)
+                        for i, m in enumerate(em)])
         xe, self.Vref = exc.initialise(ep, self.vex0[em], eterm0[em], VB0)
         L.view(x, "exc")[:] = xe
         u0 = pss_.pss_input(self.pp, xm[1], S0.real, mp.mac_pot)
@@ -198,57 +203,124 @@ class DynamicModel:
             if hit.size == 0:
                 raise CaseError(f"pss_con row {k + 1}: machine has no exciter for the PSS output")
             self.pss_of_exc[hit] = k
+        self.params = KernelParams(
+            MP=mp.packed(self.eqp0), basrad=mp.basrad, EP=ep.packed(self.Vref),
+            SP=self.pp.packed(), GP=self.gp.packed(self.Pref), pss_of_exc=self.pss_of_exc,
+            mac_bus=mp.bus_idx.astype(np.int64), vex0=self.vex0, pmech0=self.pmech0,
+            S_P=self.nc.S_P.astype(complex), I0=self.nc.I0.astype(complex),
+            Y_low=self.nc.Y_low.astype(complex))
 
     # -- one evaluation -----------------------------------------------------------------
-    def evaluate(self, x, net: ReducedNetwork, V_nc_guess, S_extra=None):
+    def evaluate(self, x, net: ReducedNetwork, V_nc_guess, S_extra=None, want_vbus=True):
         """All derivatives at state x with network stage `net` (PST flag 1 + 2).
 
         Args:
             x: flat state vector (modified in place where PST clamps limited states).
             net: reduced network of the stage; V_nc_guess: kept-bus voltages to start the
                 load iteration from; S_extra: extra complex power drawn at the kept buses
-                (storage devices), shape (n_nc,), or None.
+                (storage devices), shape (n_nc,), or None; want_vbus: also compute every
+                bus voltage (else only the machine buses are valid in V_bus).
         Returns:
             (dx flat array, Outputs).
+        Raises:
+            SimulationError: the non-conforming load iteration did not converge.
         """
-        mp, ep, L = self.mp, self.ep, self.layout
-        xm, xe, xp, xg = (L.view(x, n) for n in ("mac", "exc", "pss", "tg"))
-        psi = mac.internal_voltage(mp, xm)
-        V_nc = solve_nc(net, psi, self.nc, V_nc_guess, S_extra)
-        cur = net.Y11 @ psi + net.Y12 @ V_nc
-        V_bus = net.R @ np.concatenate([psi, V_nc])
-        omega = xm[1]
-        u = pss_.pss_input(self.pp, omega, (psi * np.conj(cur)).real, mp.mac_pot)
-        pss_all, dxp = pss_.output_and_derivatives(self.pp, xp, u)
-        pss_out = np.where(self.pss_of_exc >= 0, pss_all[self.pss_of_exc], 0.0) \
-            if self.pp.n else np.zeros(ep.n)
-        em = ep.mac
-        ed, eq, curd, curq = mac.stator_voltage_without_speed(mp, xm, cur)
-        et_ns = np.hypot(ed, eq)
-        VB = exc.st3_source_voltage(ep, et_ns[em], np.angle(V_bus[mp.bus_idx])[em],
-                                    (eq * curq + ed * curd)[em], (eq * curd - ed * curq)[em],
-                                    mp.mac_pot[em], self._st3_field_current(xm, cur)[em])
-        efd_alg = exc.field_voltage(ep, xe, self.Vref, et_ns[em], pss_out, VB)
-        vex = self.vex0.copy()
-        vex[em] = efd_alg
-        pmech = self.pmech0.copy()
-        pmech[self.gp.mac] = gov.pmech(self.gp, xg)
-        dxm, pelect, qelect, eterm, _ = mac.derivatives(mp, xm, cur, vex, pmech, self.eqp0)
-        dxe = exc.derivatives(ep, xe, self.Vref, eterm[em], pss_out, efd_alg)
-        dxg = gov.derivatives(self.gp, xg, self.Pref, omega)
-        dx = np.concatenate([dxm.ravel(), dxe.ravel(), dxp.ravel(), dxg.ravel()])
-        efd = self.vex0.copy()
-        efd[em] = exc.recorded_efd(ep, xe, efd_alg)
-        return dx, Outputs(pelect=pelect, qelect=qelect, eterm=eterm, V_bus=V_bus, V_nc=V_nc,
-                           efd=efd, pmech=pmech, cur=cur)
+        nm, nb = self.mp.n, self.case.n_bus
+        o = Outputs(pelect=np.empty(nm), qelect=np.empty(nm), eterm=np.empty(nm),
+                    V_bus=np.zeros(nb, complex), V_nc=np.array(V_nc_guess, complex),
+                    efd=np.empty(nm), pmech=np.empty(nm), cur=np.empty(nm, complex))
+        S = np.zeros(self.nc_idx.size, complex) if S_extra is None else np.asarray(S_extra, complex)
+        dx = np.empty_like(x)
+        it = evaluate_kernel(x, self.layout.n_mac, self.layout.n_exc, self.layout.n_pss,
+                             self.layout.n_tg, self.params, net.Y11, net.Y12, net.Y21, net.Y22,
+                             net.Z22, net.R, o.V_nc, S, want_vbus, dx, o.cur, o.pelect, o.qelect,
+                             o.eterm, o.efd, o.pmech, o.V_bus)
+        if it < 0:
+            raise SimulationError("non-conforming load iteration did not converge")
+        return dx, o
 
-    def _st3_field_current(self, xm, cur):
-        """PST exc_st3's own field-current estimate E_Isat + p6 (E'q - psi_kd) + p7 i_d."""
-        mp = self.mp
-        curdg = mac.to_dq(xm[0], cur)[0] * mp.mac_pot
-        a, b, c = mp.sat.T
-        esat = np.maximum(xm[2], a * xm[2] ** 2 + b * xm[2] + c)
-        return esat + mp.p6 * (xm[2] - xm[3]) + mp.p7 * curdg
+
+class KernelParams(NamedTuple):
+    """Packed parameters of every model for the compiled kernels (see each model's
+    `packed`), plus the non-conforming load data of the kept buses."""
+
+    MP: np.ndarray
+    basrad: float
+    EP: np.ndarray
+    SP: np.ndarray
+    GP: np.ndarray
+    pss_of_exc: np.ndarray
+    mac_bus: np.ndarray
+    vex0: np.ndarray
+    pmech0: np.ndarray
+    S_P: np.ndarray
+    I0: np.ndarray
+    Y_low: np.ndarray
+
+
+@njit(cache=True)
+def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, S_extra, want_vbus,
+                    dx, cur, pelect, qelect, eterm, efd, pmech, V_bus):
+    """One evaluation in PSTess's order (docs/pst_models.md 7.2): machine flag 1, network,
+    PSS / exciter / governor flag 1, then flag 2 of machines, PSS, exciters, governors.
+
+    Writes dx and the outputs; V_nc is updated in place.  Returns the load-iteration count,
+    -1 without convergence.
+    """
+    o = 6 * nm
+    xm, dxm = x[:o].reshape(6, nm), dx[:o].reshape(6, nm)
+    xe, dxe = x[o:o + 3 * ne].reshape(3, ne), dx[o:o + 3 * ne].reshape(3, ne)
+    o += 3 * ne
+    xp, dxp = x[o:o + 3 * nps].reshape(3, nps), dx[o:o + 3 * nps].reshape(3, nps)
+    o += 3 * nps
+    xg, dxg = x[o:o + 3 * ng].reshape(3, ng), dx[o:o + 3 * ng].reshape(3, ng)
+    psi = np.empty(nm, np.complex128)
+    mac.internal_voltage(p.MP, xm, psi)
+    it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra)
+    if it < 0:
+        return -1
+    cur[:] = Y11 @ psi + Y12 @ V_nc
+    z = np.concatenate((psi, V_nc))
+    if want_vbus:
+        V_bus[:] = R @ z
+    else:
+        for m in range(nm):
+            V_bus[p.mac_bus[m]] = R[p.mac_bus[m]] @ z
+    pss_out = np.empty(nps)
+    for k in range(nps):
+        m = int(p.SP[k, pss_.S_MAC])
+        u = xm[1, m] if p.SP[k, pss_.S_PWR] == 0 else (psi[m] * np.conj(cur[m])).real * p.MP[m, mac.K_POT]
+        pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, u, dxp)
+    vex = p.vex0.copy()
+    efd_alg = np.empty(ne)
+    pss_exc = np.zeros(ne)
+    for i in range(ne):
+        m = int(p.EP[i, exc.E_MAC])
+        if p.pss_of_exc[i] >= 0:
+            pss_exc[i] = pss_out[p.pss_of_exc[i]]
+        ed, eq, cd, cq = mac.stator_without_speed(p.MP, xm, cur, m)
+        et = np.hypot(ed, eq)
+        VB = 1.0
+        if p.EP[i, exc.E_KIND] == exc.ST3:
+            KP = p.EP[i, exc.E_KPR] + 1j * p.EP[i, exc.E_KPI]
+            VB = exc.st3_source_voltage(KP, p.EP[i, exc.E_KI], p.EP[i, exc.E_XL],
+                                        p.EP[i, exc.E_KC], et, np.angle(V_bus[p.mac_bus[m]]),
+                                        eq * cq + ed * cd, eq * cd - ed * cq, p.MP[m, mac.K_POT],
+                                        mac.st3_field_current(p.MP, xm, cur, m), False)
+        efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB)
+        vex[m] = efd_alg[i]
+    pmech[:] = p.pmech0
+    for k in range(ng):
+        pmech[int(p.GP[k, gov.G_MAC])] = gov.pmech(p.GP, xg, k)
+    mac.derivatives(p.MP, p.basrad, xm, cur, vex, pmech, dxm, pelect, qelect, eterm)
+    efd[:] = p.vex0
+    for i in range(ne):
+        m = int(p.EP[i, exc.E_MAC])
+        exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], dxe)
+        efd[m] = exc.recorded_efd(p.EP, xe, i, efd_alg[i])
+    for k in range(ng):
+        gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G_MAC])], dxg)
+    return it
 
 
 @dataclass

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from .case import Case
 from .errors import CaseError
@@ -18,6 +19,10 @@ from .errors import CaseError
 LBND = 1e-3
 SMP, ST3 = 0, 3
 STATE_NAMES = ("VTR", "VAs", "Efd_or_VR")
+
+# columns of the packed parameter matrix used by the compiled kernels
+(E_KIND, E_MAC, E_TR, E_KA, E_TA, E_TB, E_TC, E_VRMAX, E_VRMIN, E_VIMAX, E_VIMIN, E_KJ,
+ E_KPR, E_KPI, E_KI, E_XL, E_KC, E_EFDMAX, E_KG, E_VGMAX, E_TCTB, E_VREF, E_NCOL) = range(23)
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,6 +52,13 @@ class ExciterParams:
     @property
     def n(self) -> int:
         return self.kind.size
+
+    def packed(self, Vref: np.ndarray) -> np.ndarray:
+        """Parameter matrix (n_exc, E_NCOL) for the compiled kernels, with Vref."""
+        cols = (self.kind, self.mac, self.TR, self.KA, self.TA, self.TB, self.TC, self.Vrmax,
+                self.Vrmin, self.VImax, self.VImin, self.KJ, self.KP.real, self.KP.imag,
+                self.KI, self.XL, self.KC, self.Efdmax, self.KG, self.VGmax, self.tc_tb, Vref)
+        return np.column_stack([np.asarray(c, float) for c in cols]).reshape(self.n, E_NCOL)
 
     @property
     def has_TR(self):
@@ -84,20 +96,26 @@ def exciter_params(case: Case) -> ExciterParams:
         VGmax=e.VGmax.copy())
 
 
-def _fex(IN, init: bool = False):
-    """Rectifier loading factor F_EX(I_N) of the ST3 (PST, with its initialisation quirk)."""
-    mid = np.sqrt(np.clip(0.75 - (IN ** 0.2 if init else IN ** 2), 0, None))
-    high = np.maximum(0.0, (1.708 if init else 1.732) * (1 - IN))
-    return np.where(IN < 0.433, 1 - 0.5771 * IN,
-                    np.where((IN > 0.433) & (IN < 0.75), mid, np.where(IN > 0.75, high, 0.0)))
+@njit(cache=True)
+def _fex(IN, init):
+    """Rectifier loading factor F_EX(I_N) of the ST3 (PST, with its initialisation quirk:
+    sqrt(0.75 - I_N^0.2) and 1.708 in flag 0)."""
+    if IN < 0.433:
+        return 1.0 - 0.5771 * IN
+    if 0.433 < IN < 0.75:
+        return np.sqrt(max(0.75 - (IN ** 0.2 if init else IN * IN), 0.0))
+    if IN > 0.75:
+        return max(0.0, (1.708 if init else 1.732) * (1.0 - IN))
+    return 0.0
 
 
-def st3_source_voltage(p: ExciterParams, eterm, theta, pelect, qelect, mac_pot, fldcur,
-                       init: bool = False):
-    """V_B = V_E F_EX of the ST3 potential/compound source (PST exc_st3 flag 0/1)."""
+@njit(cache=True)
+def st3_source_voltage(KP, KI, XL, KC, eterm, theta, pelect, qelect, mac_pot, fldcur, init):
+    """V_B = V_E F_EX of the ST3 potential/compound source (PST exc_st3 flag 0/1); KP is
+    the complex K_P exp(j theta_P); pelect, qelect on the system base."""
     i_t = (pelect - 1j * qelect) / (eterm * np.exp(-1j * theta)) * mac_pot
-    VE = np.abs(p.KP * eterm * np.exp(1j * theta) + 1j * (p.KI + p.KP * p.XL) * i_t)
-    IN = p.KC * fldcur / np.where(VE > 0, VE, 1.0)
+    VE = np.abs(KP * eterm * np.exp(1j * theta) + 1j * (KI + KP * XL) * i_t)
+    IN = KC * fldcur / VE if VE > 0 else 0.0
     return VE * _fex(IN, init)
 
 
@@ -113,8 +131,9 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     VR = vex / VB
     VA_st3 = VR / p.KA + np.minimum(p.VGmax, p.KG * vex)
     VI = VA_st3 / np.where(p.KJ == 0, 1.0, p.KJ)
-    if np.any(st3 & (vex > p.Efdmax)) or np.any(st3 & ((VI > p.VImax) | (VI < p.VImin))):
-        i = int(np.nonzero(st3 & ((vex > p.Efdmax) | (VI > p.VImax) | (VI < p.VImin)))[0][0])
+    bad = st3 & ((vex > p.Efdmax) | (VI > p.VImax) | (VI < p.VImin))
+    if bad.any():
+        i = int(np.nonzero(bad)[0][0])
         raise CaseError(f"exc_con row {i + 1}: initial field voltage {vex[i]:.3f} pu outside "
                         "the ST3 limits (Efdmax or VI range)")
     x[1] = np.where(smp, VA_smp, VA_st3)
@@ -123,48 +142,59 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     return x, Vref
 
 
-def field_voltage(p: ExciterParams, x, Vref, VTR_alg, pss_out, VB):
-    """Field voltage seen by the machine (PST flag 1), shape (n_exc,).
+@njit(cache=True)
+def field_voltage(P, x, i, VTR_alg, pss_out, VB):
+    """Field voltage exciter i hands its machine (PST flag 1).
 
     smpexc: the Efd state (unclamped) when T_A exists, else K_A times the (lead-lag of the)
-    error without limits; exc_st3: min(V_R V_B, Efdmax).
+    error, without limits; exc_st3: min(V_R V_B, Efdmax).
     """
-    VTR = np.where(p.has_TR, x[0], VTR_alg)
-    err = Vref - VTR + pss_out
-    VA = np.where(p.has_TB, p.tc_tb * err + (1 - p.tc_tb) * x[1], err)
-    smp = np.where(p.has_TA, x[2], p.KA * VA)
-    st3 = np.minimum(x[2] * VB, p.Efdmax)
-    return np.where(p.kind == SMP, smp, st3)
+    if P[i, E_KIND] == ST3:
+        return min(x[2, i] * VB, P[i, E_EFDMAX])
+    if P[i, E_TA] >= LBND:
+        return x[2, i]
+    VTR = x[0, i] if P[i, E_TR] >= LBND else VTR_alg
+    err = P[i, E_VREF] - VTR + pss_out
+    VA = P[i, E_TCTB] * err + (1 - P[i, E_TCTB]) * x[1, i] if P[i, E_TB] >= LBND else err
+    return P[i, E_KA] * VA
 
 
-def derivatives(p: ExciterParams, x, Vref, eterm, pss_out, efd):
-    """State derivatives (3, n_exc) (PST flag 2); clamps the limited states of x in place.
+@njit(cache=True)
+def derivatives(P, x, i, eterm, pss_out, efd, dx):
+    """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
 
     smpexc: the Efd state is clamped to [Vrmin, Vrmax] after its derivative is computed and
-    the derivative is kept (PST's misspelt dEFD: docs/pst_models.md 2.1).  exc_st3: V_R is
+    the derivative is kept (PST's misspelt dEFD, docs/pst_models.md 2.1).  exc_st3: V_R is
     clamped and its derivative zeroed when it pushes outward.
     """
-    dx = np.zeros_like(x)
-    VTR = np.where(p.has_TR, x[0], eterm)
-    dx[0] = np.where(p.has_TR, (eterm - x[0]) / np.where(p.has_TR, p.TR, 1.0), 0.0)
-    smp = p.kind == SMP
-    VI = np.where(smp, Vref - VTR + pss_out, np.clip(Vref - VTR + pss_out, p.VImin, p.VImax))
-    u = np.where(smp, VI, p.KJ * VI)
-    TB = np.where(p.has_TB, p.TB, 1.0)
-    dx[1] = np.where(p.has_TB, (u - x[1]) / TB, 0.0)
-    VA = np.where(p.has_TB, p.tc_tb * u + (1 - p.tc_tb) * x[1], u)
-    TA = np.where(p.has_TA | ~smp, p.TA, 1.0)
-    d_smp = np.where(p.has_TA, (p.KA * VA - x[2]) / TA, 0.0)
-    d_st3 = (p.KA * (VA - np.minimum(p.VGmax, p.KG * efd)) - x[2]) / TA
-    st3 = ~smp
-    d_st3 = np.where(st3 & (x[2] > p.Vrmax) & (d_st3 > 0), 0.0, d_st3)
-    d_st3 = np.where(st3 & (x[2] < p.Vrmin) & (d_st3 < 0), 0.0, d_st3)
-    dx[2] = np.where(smp, d_smp, d_st3)
-    limited = smp & p.has_TA | st3
-    x[2] = np.where(limited, np.clip(x[2], p.Vrmin, p.Vrmax), x[2])
-    return dx
+    has_TR, has_TB = P[i, E_TR] >= LBND, P[i, E_TB] >= LBND
+    VTR = x[0, i] if has_TR else eterm
+    dx[0, i] = (eterm - x[0, i]) / P[i, E_TR] if has_TR else 0.0
+    smp = P[i, E_KIND] == SMP
+    VI = P[i, E_VREF] - VTR + pss_out
+    if not smp:
+        VI = min(max(VI, P[i, E_VIMIN]), P[i, E_VIMAX])
+    u = VI if smp else P[i, E_KJ] * VI
+    dx[1, i] = (u - x[1, i]) / P[i, E_TB] if has_TB else 0.0
+    VA = P[i, E_TCTB] * u + (1 - P[i, E_TCTB]) * x[1, i] if has_TB else u
+    lo, hi = P[i, E_VRMIN], P[i, E_VRMAX]
+    if smp:
+        if P[i, E_TA] >= LBND:
+            dx[2, i] = (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA]
+            x[2, i] = min(max(x[2, i], lo), hi)
+        else:
+            dx[2, i] = 0.0
+    else:
+        d = (P[i, E_KA] * (VA - min(P[i, E_VGMAX], P[i, E_KG] * efd)) - x[2, i]) / P[i, E_TA]
+        if (x[2, i] > hi and d > 0) or (x[2, i] < lo and d < 0):
+            d = 0.0
+        dx[2, i] = d
+        x[2, i] = min(max(x[2, i], lo), hi)
 
 
-def recorded_efd(p: ExciterParams, x, efd_alg):
+@njit(cache=True)
+def recorded_efd(P, x, i, efd_alg):
     """Efd as PST records it: the (clamped) smpexc state, or the ST3 algebraic value."""
-    return np.where((p.kind == SMP) & p.has_TA, x[2], efd_alg)
+    if P[i, E_KIND] == SMP and P[i, E_TA] >= LBND:
+        return x[2, i]
+    return efd_alg

@@ -11,11 +11,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from .case import Case
 from .errors import CaseError
 
 STATE_NAMES = ("servo", "transient", "turbine")
+(G_MAC, G_WF, G_INVR, G_TMAX, G_TS, G_TC, G_T3, G_T4, G_T5, G_PREF, G_NCOL) = range(11)
 
 
 @dataclass(frozen=True, eq=False)
@@ -35,6 +37,12 @@ class GovernorParams:
     @property
     def n(self) -> int:
         return self.mac.size
+
+    def packed(self, Pref: np.ndarray) -> np.ndarray:
+        """Parameter matrix (n_tg, G_NCOL) for the compiled kernels, with P_ref."""
+        cols = (self.mac, self.wf, self.invR, self.Tmax, self.Ts, self.Tc, self.T3, self.T4,
+                self.T5, Pref)
+        return np.column_stack([np.asarray(c, float) for c in cols]).reshape(self.n, G_NCOL)
 
 
 def governor_params(case: Case) -> GovernorParams:
@@ -61,15 +69,18 @@ def initialise(p: GovernorParams, pmech0):
     return x, pmech0.copy()
 
 
-def pmech(p: GovernorParams, x):
-    """Mechanical power from the states (machine base), PST flag 1."""
-    y2 = x[1] + p.T3 / p.Tc * x[0]
-    return x[2] + p.T4 / p.T5 * y2
+@njit(cache=True)
+def pmech(P, x, k):
+    """Mechanical power of governor k from its states (machine base), PST flag 1."""
+    y2 = x[1, k] + P[k, G_T3] / P[k, G_TC] * x[0, k]
+    return x[2, k] + P[k, G_T4] / P[k, G_T5] * y2
 
 
-def derivatives(p: GovernorParams, x, Pref, omega):
-    """State derivatives (3, n_tg) for machine speeds omega (pu), PST flag 2."""
-    demand = np.clip(Pref + (p.wf - omega[p.mac]) * p.invR, 0.0, p.Tmax)
-    y2 = x[1] + p.T3 / p.Tc * x[0]
-    return np.vstack([(demand - x[0]) / p.Ts, ((1 - p.T3 / p.Tc) * x[0] - x[1]) / p.Tc,
-                      ((1 - p.T4 / p.T5) * y2 - x[2]) / p.T5])
+@njit(cache=True)
+def derivatives(P, x, k, omega, dx):
+    """Derivatives of governor k into dx[:, k] for its machine speed omega (pu), flag 2."""
+    demand = min(max(P[k, G_PREF] + (P[k, G_WF] - omega) * P[k, G_INVR], 0.0), P[k, G_TMAX])
+    y2 = x[1, k] + P[k, G_T3] / P[k, G_TC] * x[0, k]
+    dx[0, k] = (demand - x[0, k]) / P[k, G_TS]
+    dx[1, k] = ((1 - P[k, G_T3] / P[k, G_TC]) * x[0, k] - x[1, k]) / P[k, G_TC]
+    dx[2, k] = ((1 - P[k, G_T4] / P[k, G_T5]) * y2 - x[2, k]) / P[k, G_T5]

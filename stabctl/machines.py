@@ -17,11 +17,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from .case import Case
 
 SUB, TRA, EM = 2, 1, 0
 STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
+
+# columns of the packed parameter matrix used by the compiled kernels
+(K_KIND, K_POT, K_RA, K_XL, K_XD, K_XDP, K_XDPP, K_XQ, K_XQP, K_XQPP, K_TDOP, K_TDOPP,
+ K_TQOP, K_TQOPP, K_H, K_D0, K_P6, K_P7, K_P8, K_P9, K_P10, K_P11, K_P12, K_P13, K_P14,
+ K_P15, K_SA, K_SB, K_SC, K_EQP0, K_NCOL) = range(31)
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,6 +65,22 @@ class MachineParams:
     @property
     def n(self) -> int:
         return self.kind.size
+
+    def packed(self, eqp0: np.ndarray) -> np.ndarray:
+        """Parameter matrix (n_mac, K_NCOL) for the compiled kernels; eqp0 = initial E'q."""
+        cols = {K_KIND: self.kind, K_POT: self.mac_pot, K_RA: self.ra, K_XL: self.xl,
+                K_XD: self.xd, K_XDP: self.xdp, K_XDPP: self.xdpp, K_XQ: self.xq,
+                K_XQP: self.xqp, K_XQPP: self.xqpp, K_TDOP: self.Tdop, K_TDOPP: self.Tdopp,
+                K_TQOP: self.Tqop, K_TQOPP: self.Tqopp, K_H: self.H, K_D0: self.D0,
+                K_P6: self.p6, K_P7: self.p7, K_P8: self.p8, K_P9: self.p9, K_P10: self.p10,
+                K_P11: self.p11, K_P12: self.p12, K_P13: self.p13, K_P14: self.p14,
+                K_P15: self.p15, K_SA: self.sat[:, 0], K_SB: self.sat[:, 1],
+                K_SC: self.sat[:, 2], K_EQP0: eqp0}
+        P = np.zeros((self.n, K_NCOL))
+        for k, v in cols.items():
+            with np.errstate(divide="ignore", invalid="ignore"):
+                P[:, k] = np.nan_to_num(np.asarray(v, float))
+        return P
 
     @property
     def x_network(self) -> np.ndarray:
@@ -146,11 +168,6 @@ def to_dq(delta, X):
     return z.real, z.imag
 
 
-def from_dq(delta, d, q):
-    """Network phasor of rotor-frame components (d, q)."""
-    return np.exp(1j * delta) * (q - 1j * d)
-
-
 def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     """Machine states, field voltage and mechanical power from the solved power flow.
 
@@ -196,78 +213,105 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     return x, vex, pmech
 
 
-def subtransient_fluxes(p: MachineParams, x):
-    """psi"_d and psi"_q of the subtransient model (machine base)."""
-    return p.p9 * x[2] + p.p10 * x[3], p.p14 * x[4] + p.p15 * x[5]
+# -- compiled runtime kernels (PST flag 1 and flag 2), one loop over machines -----------
+# P is MachineParams.packed(); x the machine block of the state vector, shape (6, n_mac).
 
 
-def internal_voltage(p: MachineParams, x) -> np.ndarray:
-    """Voltage behind the network reactance, network frame (PST flag 1), shape (n_mac,).
+@njit(cache=True)
+def _fluxes(P, x, i):
+    """psi"_d, psi"_q of machine i (subtransient model)."""
+    return (P[i, K_P9] * x[2, i] + P[i, K_P10] * x[3, i],
+            P[i, K_P14] * x[4, i] + P[i, K_P15] * x[5, i])
+
+
+@njit(cache=True)
+def _dq(delta, X):
+    """(d, q) of the network phasor X in the rotor frame: d + jq = j exp(-j delta) X."""
+    z = 1j * np.exp(-1j * delta) * X
+    return z.real, z.imag
+
+
+@njit(cache=True)
+def internal_voltage(P, x, psi):
+    """Voltage behind the network reactance, network frame (PST flag 1), into psi (n_mac,).
 
     Subtransient: speed * exp(j delta) (psi"_d + j psi"_q); transient and classical:
     exp(j delta) (E'q - j E'd).
     """
-    psidpp, psiqpp = subtransient_fluxes(p, x)
-    sub = x[1] * np.exp(1j * x[0]) * (psidpp + 1j * psiqpp)
-    other = np.exp(1j * x[0]) * (x[2] - 1j * x[4])
-    return np.where(p.kind == SUB, sub, other)
+    for i in range(P.shape[0]):
+        e = np.exp(1j * x[0, i])
+        if P[i, K_KIND] == SUB:
+            psidpp, psiqpp = _fluxes(P, x, i)
+            psi[i] = x[1, i] * e * (psidpp + 1j * psiqpp)
+        else:
+            psi[i] = e * (x[2, i] - 1j * x[4, i])
 
 
-def derivatives(p: MachineParams, x, cur, vex, pmech, initial_eqp=None):
-    """Machine state derivatives and outputs (PST flag 2).
+@njit(cache=True)
+def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
+    """Machine derivatives into dx (6, n_mac) and outputs (PST flag 2, docs 1.6-1.9).
 
-    Args:
-        x: states (6, n_mac); cur: terminal currents (system base, network frame);
-        vex: field voltages; pmech: mechanical power (machine base);
-        initial_eqp: E'q at t = 0 (PST's `mac_tra` saturation test uses it).
-    Returns:
-        dx (6, n_mac), pelect (system base), qelect, eterm (pu), fldcur.
+    cur: terminal currents (system base, network frame); vex: field voltages; pmech:
+    mechanical power (machine base).  pelect, qelect on the system base; eterm in pu.
     """
-    delta, omega = x[0], x[1]
-    curd, curq = to_dq(delta, cur)
-    curdg, curqg = curd * p.mac_pot, curq * p.mac_pot
-    dx = np.zeros_like(x)
-    dx[0] = p.basrad * (omega - 1.0)
-    # subtransient
-    psidpp, psiqpp = subtransient_fluxes(p, x)
-    Eqpe = x[2] - x[3] - p.p8 * curdg
-    fld_sub = x[2] + p.p7 * (curdg + p.p6 * Eqpe)
-    Edpe = x[4] - x[5] - p.p13 * curqg
-    ed_s = -p.ra * curdg - (omega * psiqpp - p.xqpp * curqg)
-    eq_s = -p.ra * curqg + (omega * psidpp - p.xdpp * curdg)
-    Te_sub = psidpp * curqg - psiqpp * curdg
-    # transient / classical
-    e0 = x[2] if initial_eqp is None else initial_eqp
-    a, b, c = p.sat.T
-    esat = np.where(e0 < 0.8, x[2], a * x[2] ** 2 + b * x[2] + c)
-    fld_tra = esat + (p.xd - p.xdp) * curdg
-    ed_t = x[4] - p.ra * curdg + p.xdp * curqg
-    eq_t = x[2] - p.ra * curqg - p.xdp * curdg
-    ed_e, eq_e = x[4] + p.xdp * curqg, x[2] - p.xdp * curdg
-    sub, tra = p.kind == SUB, p.kind == TRA
-    ed = np.where(sub, ed_s, np.where(tra, ed_t, ed_e))
-    eq = np.where(sub, eq_s, np.where(tra, eq_t, eq_e))
-    pelect = eq * curq + ed * curd
-    qelect = eq * curd - ed * curq
-    Te_other = np.where(tra, pelect * p.mac_pot + p.ra * (curdg ** 2 + curqg ** 2),
-                        pelect * p.mac_pot)
-    fldcur = np.where(sub, fld_sub, np.where(tra, fld_tra, x[2]))
-    dx[2] = np.where(p.kind == EM, 0.0, (vex - fldcur) / p.Tdop)
-    dx[3] = np.where(sub, Eqpe / p.Tdopp, 0.0)
-    dx[4] = np.where(sub, (-x[4] + p.p12 * (-curqg - p.p11 * Edpe)) / p.Tqop,
-                     np.where(tra, (-x[4] + (p.xq - p.xqp) * curqg) / p.Tqop, 0.0))
-    dx[5] = np.where(sub, Edpe / p.Tqopp, 0.0)
-    torque = np.where(sub, pmech / omega - Te_sub, pmech - Te_other)
-    dx[1] = (torque - p.D0 * (omega - 1.0)) / (2 * p.H)
-    return dx, pelect, qelect, np.hypot(ed, eq), fldcur
+    for i in range(P.shape[0]):
+        w = x[1, i]
+        curd, curq = _dq(x[0, i], cur[i])
+        pot = P[i, K_POT]
+        cdg, cqg = curd * pot, curq * pot
+        kind = P[i, K_KIND]
+        dx[0, i] = basrad * (w - 1.0)
+        dx[3, i] = 0.0
+        dx[5, i] = 0.0
+        if kind == SUB:
+            psidpp, psiqpp = _fluxes(P, x, i)
+            Eqpe = x[2, i] - x[3, i] - P[i, K_P8] * cdg
+            fld = x[2, i] + P[i, K_P7] * (cdg + P[i, K_P6] * Eqpe)
+            Edpe = x[4, i] - x[5, i] - P[i, K_P13] * cqg
+            ed = -P[i, K_RA] * cdg - (w * psiqpp - P[i, K_XQPP] * cqg)
+            eq = -P[i, K_RA] * cqg + (w * psidpp - P[i, K_XDPP] * cdg)
+            dx[2, i] = (vex[i] - fld) / P[i, K_TDOP]
+            dx[3, i] = Eqpe / P[i, K_TDOPP]
+            dx[4, i] = (-x[4, i] + P[i, K_P12] * (-cqg - P[i, K_P11] * Edpe)) / P[i, K_TQOP]
+            dx[5, i] = Edpe / P[i, K_TQOPP]
+            torque = pmech[i] / w - (psidpp * cqg - psiqpp * cdg)
+        elif kind == TRA:
+            e = x[2, i]
+            esat = e if P[i, K_EQP0] < 0.8 else P[i, K_SA] * e * e + P[i, K_SB] * e + P[i, K_SC]
+            fld = esat + (P[i, K_XD] - P[i, K_XDP]) * cdg
+            ed = x[4, i] - P[i, K_RA] * cdg + P[i, K_XDP] * cqg
+            eq = x[2, i] - P[i, K_RA] * cqg - P[i, K_XDP] * cdg
+            dx[2, i] = (vex[i] - fld) / P[i, K_TDOP]
+            dx[4, i] = (-x[4, i] + (P[i, K_XQ] - P[i, K_XQP]) * cqg) / P[i, K_TQOP]
+            torque = pmech[i] - ((eq * curq + ed * curd) * pot + P[i, K_RA] * (cdg ** 2 + cqg ** 2))
+        else:
+            ed = x[4, i] + P[i, K_XDP] * cqg
+            eq = x[2, i] - P[i, K_XDP] * cdg
+            dx[2, i] = 0.0
+            dx[4, i] = 0.0
+            torque = pmech[i] - (eq * curq + ed * curd) * pot
+        pelect[i] = eq * curq + ed * curd
+        qelect[i] = eq * curd - ed * curq
+        eterm[i] = np.hypot(ed, eq)
+        dx[1, i] = (torque - P[i, K_D0] * (w - 1.0)) / (2.0 * P[i, K_H])
 
 
-def stator_voltage_without_speed(p: MachineParams, x, cur):
-    """Terminal voltage components from the subtransient stator equations without the speed
-    factor (PST `exc_st3` flag 1 recomputes them this way): (ed, eq, curd, curq)."""
-    curd, curq = to_dq(x[0], cur)
-    curdg, curqg = curd * p.mac_pot, curq * p.mac_pot
-    psidpp, psiqpp = subtransient_fluxes(p, x)
-    ed = -p.ra * curdg - (psiqpp - p.xqpp * curqg)
-    eq = -p.ra * curqg + (psidpp - p.xdpp * curdg)
+@njit(cache=True)
+def stator_without_speed(P, x, cur, i):
+    """(ed, eq, curd, curq) of machine i from the subtransient stator equations without the
+    speed factor (PST `exc_st3` flag 1 recomputes them this way); currents system base."""
+    curd, curq = _dq(x[0, i], cur[i])
+    pot = P[i, K_POT]
+    psidpp, psiqpp = _fluxes(P, x, i)
+    ed = -P[i, K_RA] * curd * pot - (psiqpp - P[i, K_XQPP] * curq * pot)
+    eq = -P[i, K_RA] * curq * pot + (psidpp - P[i, K_XDPP] * curd * pot)
     return ed, eq, curd, curq
+
+
+@njit(cache=True)
+def st3_field_current(P, x, cur, i):
+    """PST exc_st3's own field-current estimate E_Isat + p6 (E'q - psi_kd) + p7 i_d."""
+    e = x[2, i]
+    esat = max(e, P[i, K_SA] * e * e + P[i, K_SB] * e + P[i, K_SC])
+    curd = _dq(x[0, i], cur[i])[0]
+    return esat + P[i, K_P6] * (e - x[3, i]) + P[i, K_P7] * curd * P[i, K_POT]

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as la
+from numba import njit
 
 from .case import Case
 from .errors import SimulationError
@@ -31,7 +32,8 @@ class ReducedNetwork:
     """Reduced matrices of one network stage (dense complex, pu on the system base).
 
     Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 (n_nc, n_nc); R (n_bus,
-    n_mac + n_nc) gives every original bus voltage from [psi; V_nc].
+    n_mac + n_nc) gives every original bus voltage from [psi; V_nc]; Z22 = inv(Y22), the
+    chord of the load iteration.
     """
 
     Y11: np.ndarray
@@ -39,6 +41,7 @@ class ReducedNetwork:
     Y21: np.ndarray
     Y22: np.ndarray
     R: np.ndarray
+    Z22: np.ndarray
 
 
 def reduce_network(case: Case, y_shunt: np.ndarray, y_mac: np.ndarray, mac_bus: np.ndarray,
@@ -86,9 +89,11 @@ def reduce_network(case: Case, y_shunt: np.ndarray, y_mac: np.ndarray, mac_bus: 
     R[np.asarray(nc_idx, int), n_mac + np.arange(len(nc_idx))] = 1.0
     bus_elim = elim[elim >= n_mac] - n_mac
     R[bus_elim] = rec[elim >= n_mac]
-    return ReducedNetwork(Y11=Yred[:n_mac, :n_mac], Y12=Yred[:n_mac, n_mac:],
-                          Y21=Yred[n_mac:, :n_mac], Y22=Yred[n_mac:, n_mac:],
-                          R=R[:n_bus_orig])
+    c = np.ascontiguousarray
+    Y22 = c(Yred[n_mac:, n_mac:])
+    return ReducedNetwork(Y11=c(Yred[:n_mac, :n_mac]), Y12=c(Yred[:n_mac, n_mac:]),
+                          Y21=c(Yred[n_mac:, :n_mac]), Y22=Y22, R=c(R[:n_bus_orig]),
+                          Z22=c(np.linalg.inv(Y22)) if Y22.size else Y22.copy())
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,43 +109,79 @@ class NonConformingLoads:
     Y_low: np.ndarray
 
 
-def solve_nc(net: ReducedNetwork, psi, loads: NonConformingLoads, V_guess, S_extra=None,
-             tol: float = 1e-10, max_iter: int = 50):
-    """Kept-bus voltages V_nc by Newton's method in rectangular coordinates (PST nc_load).
+@njit(cache=True)
+def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F):
+    """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|."""
+    F[:] = b + Y22 @ V
+    worst = 0.0
+    for i in range(V.size):
+        m = abs(V[i])
+        if m > V_SWITCH:
+            F[i] += np.conj(S_P[i] + S_extra[i] + I0[i] * m) / np.conj(V[i])
+        else:
+            F[i] += np.conj(Y_low[i]) * V[i]
+        worst = max(worst, abs(F[i]))
+    return worst
 
-    Solves Y21 psi + Y22 V + I_load(V) = 0 with I_load = conj((S_P + S_extra + I0 |V|)/V)
-    above 0.5 pu and conj(Y_low) V below (PST's low-voltage switch; S_extra, e.g. storage
-    power, is dropped below 0.5 pu together with the rest).  Returns V_nc (n_nc,).
 
-    Raises:
-        SimulationError: no convergence in max_iter iterations (names the worst bus index).
+@njit(cache=True)
+def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, tol=1e-10, max_iter=50):
+    """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
+
+    I_load = conj((S_P + S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's
+    low-voltage switch; S_extra, e.g. storage power, is dropped below 0.5 pu with the
+    rest).  V (n_nc,) is the starting point and is updated in place.  First the chord
+    iteration V <- V - Z22 F(V) (the loads are small beside the network admittance, so it
+    contracts fast and costs one matrix-vector product per step); if that has not converged
+    in 30 steps, Newton's method in rectangular coordinates (as PST).  Returns the number
+    of iterations, or -1 without convergence (the caller raises SimulationError).
     """
-    n = V_guess.size
+    n = V.size
     if n == 0:
-        return V_guess
-    b = net.Y21 @ psi
-    S = loads.S_P if S_extra is None else loads.S_P + S_extra
-    V = V_guess.astype(complex)
-    Yr, Yi = net.Y22.real, net.Y22.imag
-    for _ in range(max_iter):
-        m = np.abs(V)
-        high = m > V_SWITCH
-        Vc = np.conj(V)
-        g = np.where(high, np.conj(S + loads.I0 * m) / Vc, np.conj(loads.Y_low) * V)
-        F = b + net.Y22 @ V + g
-        err = np.abs(F)
-        if err.max() < tol:
-            return V
-        # Wirtinger derivatives of g: dg = A dV + B conj(dV)
-        A = np.where(high, np.conj(loads.I0) / (2 * m), np.conj(loads.Y_low))
-        B = np.where(high, -np.conj(S) / Vc ** 2 - np.conj(loads.I0) * m / (2 * Vc ** 2), 0.0)
-        ApB, AmB = A + B, A - B
-        J = np.empty((2 * n, 2 * n))
-        J[:n, :n] = Yr + np.diag(ApB.real)
-        J[:n, n:] = -Yi - np.diag(AmB.imag)
-        J[n:, :n] = Yi + np.diag(ApB.imag)
-        J[n:, n:] = Yr + np.diag(AmB.real)
-        d = np.linalg.solve(J, -np.concatenate([F.real, F.imag]))
-        V = V + d[:n] + 1j * d[n:]
-    raise SimulationError(f"non-conforming load iteration did not converge in {max_iter} "
-                          f"iterations (worst kept bus index {int(np.argmax(err))})")
+        return 0
+    b = Y21 @ psi
+    F = np.empty(n, np.complex128)
+    V_start = V.copy()
+    for it in range(30):
+        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F) < tol:
+            return it
+        V -= Z22 @ F
+    V[:] = V_start
+    return _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter)
+
+
+@njit(cache=True)
+def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter):
+    """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load)."""
+    n = V.size
+    J = np.empty((2 * n, 2 * n))
+    rhs = np.empty(2 * n)
+    F = np.empty(n, np.complex128)
+    for it in range(max_iter):
+        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F) < tol:
+            return it
+        # Wirtinger derivatives: d(load current) = A dV + B conj(dV), A, B diagonal
+        for r in range(n):
+            for c in range(n):
+                J[r, c] = Y22[r, c].real
+                J[r, n + c] = -Y22[r, c].imag
+                J[n + r, c] = Y22[r, c].imag
+                J[n + r, n + c] = Y22[r, c].real
+            m = abs(V[r])
+            Vc = np.conj(V[r])
+            if m > V_SWITCH:
+                A = np.conj(I0[r]) / (2 * m)
+                B = -np.conj(S_P[r] + S_extra[r]) / Vc ** 2 - np.conj(I0[r]) * m / (2 * Vc ** 2)
+            else:
+                A = np.conj(Y_low[r])
+                B = 0.0 + 0.0j
+            J[r, r] += (A + B).real
+            J[r, n + r] -= (A - B).imag
+            J[n + r, r] += (A + B).imag
+            J[n + r, n + r] += (A - B).real
+            rhs[r] = -F[r].real
+            rhs[n + r] = -F[r].imag
+        d = np.linalg.solve(J, rhs)
+        for i in range(n):
+            V[i] += d[i] + 1j * d[n + i]
+    return -1

@@ -12,11 +12,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from .case import Case
 
 LBND = 1e-3
 STATE_NAMES = ("washout", "leadlag1", "leadlag2")
+(S_MAC, S_PWR, S_KTW, S_TW, S_T1, S_T2, S_T3, S_T4, S_MAX, S_MIN, S_NCOL) = range(11)
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,6 +40,12 @@ class PssParams:
     @property
     def n(self) -> int:
         return self.mac.size
+
+    def packed(self) -> np.ndarray:
+        """Parameter matrix (n_pss, S_NCOL) for the compiled kernels."""
+        cols = (self.mac, self.power_input, self.KTw, self.Tw, self.T1, self.T2, self.T3,
+                self.T4, self.vmax, self.vmin)
+        return np.column_stack([np.asarray(c, float) for c in cols]).reshape(self.n, S_NCOL)
 
     @property
     def has_T4(self):
@@ -65,16 +73,19 @@ def initialise(p: PssParams, u0):
     return x
 
 
-def output_and_derivatives(p: PssParams, x, u):
-    """(pss_out (n_pss,), dx (3, n_pss)) for input u (PST flag 1/2)."""
-    var1 = (u - x[0]) / p.Tw
-    r12 = p.T1 / p.T2
-    var2 = r12 * p.KTw * var1 + x[1]
-    T4 = np.where(p.has_T4, p.T4, 1.0)
-    r34 = p.T3 / T4
-    var3 = np.where(p.has_T4, r34 * var2 + x[2], var2)
-    dx = np.empty_like(x)
-    dx[0] = var1
-    dx[1] = ((1 - r12) * p.KTw * var1 - x[1]) / p.T2
-    dx[2] = np.where(p.has_T4, ((1 - r34) * var2 - x[2]) / T4, 0.0)
-    return np.clip(var3, p.vmin, p.vmax), dx
+@njit(cache=True)
+def output_and_derivatives(P, x, k, u, dx):
+    """Output of PSS k for input u (PST flag 1/2); its derivatives into dx[:, k]."""
+    var1 = (u - x[0, k]) / P[k, S_TW]
+    r12 = P[k, S_T1] / P[k, S_T2]
+    var2 = r12 * P[k, S_KTW] * var1 + x[1, k]
+    dx[0, k] = var1
+    dx[1, k] = ((1 - r12) * P[k, S_KTW] * var1 - x[1, k]) / P[k, S_T2]
+    if P[k, S_T4] >= LBND:
+        r34 = P[k, S_T3] / P[k, S_T4]
+        var3 = r34 * var2 + x[2, k]
+        dx[2, k] = ((1 - r34) * var2 - x[2, k]) / P[k, S_T4]
+    else:
+        var3 = var2
+        dx[2, k] = 0.0
+    return min(max(var3, P[k, S_MIN]), P[k, S_MAX])

@@ -22,12 +22,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
 from . import events as ev_
 from .case import Case
-from .dynamic import DynamicModel, OperatingPoint
+from .dynamic import DynamicModel, OperatingPoint, evaluate_kernel
 from .errors import InputError, SimulationError
 from .results import SimulationResult
 
@@ -70,6 +72,25 @@ def default_step(case: Case) -> float:
     return 0.5 / case.freq_hz
 
 
+_BLAS_LIMITED = False
+
+
+def single_threaded_blas() -> None:
+    """Limit BLAS/LAPACK to one thread in this process (once).
+
+    The kernels solve many tiny dense systems; OpenBLAS threads make each solve 10-20 times
+    slower and oversubscribe the cores when sweeps run one simulation per process.  The
+    environment defaults set in `stabctl/__init__` do not reach a BLAS that numpy loaded
+    before stabctl was imported, hence this run-time limit (threadpoolctl).
+    """
+    global _BLAS_LIMITED
+    if not _BLAS_LIMITED:
+        import scipy.linalg.cython_lapack  # noqa: F401  the LAPACK numba calls: load it first
+        from threadpoolctl import threadpool_limits
+        threadpool_limits(limits=1, user_api="blas")
+        _BLAS_LIMITED = True
+
+
 class Simulator:
     """Runs disturbances on one case from its solved power flow.
 
@@ -82,6 +103,7 @@ class Simulator:
         if op is None:
             from .powerflow import solve_powerflow
             op = OperatingPoint.from_bus_matrix(solve_powerflow(case).bus_matrix())
+        single_threaded_blas()
         self.case, self.op = case, op
         self.model = DynamicModel(case, op, injection_buses)
         mp = self.model.mp
@@ -89,11 +111,9 @@ class Simulator:
 
     def run(self, events=(), t_end: float = 5.0, h: float | None = None,
             semantics: str = "pst", separation_limit: float = np.pi,
-            stop_at_separation: bool = False, injection=None) -> SimulationResult:
+            stop_at_separation: bool = False) -> SimulationResult:
         """Simulate `events` (see `stabctl.events`) from t = 0 to t_end (s) with step h.
 
-        injection: optional callable (t, x, outputs) -> complex power drawn at the kept buses
-            (n_nc,), evaluated at every stage (storage devices; see `stabctl.storage`).
         Raises:
             InputError, UnknownBusError, CaseError: bad events or step;
             SimulationError: divergence (carries the partial result as `.result`).
@@ -107,39 +127,45 @@ class Simulator:
         m = self.model
         nets = [m.network(ev_.configuration(self.case, events, s, self.op.V))
                 for s in grid.starts]
-        rec = _Recorder(grid.t.size, m)
-        x, V_nc = m.x0.copy(), m.V_nc0.copy()
+        stack = lambda name: np.ascontiguousarray(np.stack([getattr(n, name) for n in nets]))  # noqa: E731
+        N, nm, nb = grid.t.size, m.mp.n, self.case.n_bus
+        rec = Recording(speed=np.zeros((N, nm)), angle=np.zeros((N, nm)), pelect=np.zeros((N, nm)),
+                        pmech=np.zeros((N, nm)), efd=np.zeros((N, nm)),
+                        V=np.zeros((N, nb), np.complex128))
+        first = np.r_[False, np.diff(grid.interval) > 0]
+        S_extra = np.zeros(m.nc_idx.size, np.complex128)
         wall = time.perf_counter()
-        first_of_interval = np.r_[False, np.diff(grid.interval) > 0]
-        S = (lambda t, x, out: None) if injection is None else injection
-        out = None
-        try:
-            for k in range(grid.t.size - 1):
-                iv = grid.interval[k]
-                net_k = nets[iv]
-                hk = grid.h[iv]
-                S_k = S(grid.t[k], x, out)
-                if first_of_interval[k] and semantics == "pst":
-                    m.evaluate(x, net_k, V_nc, S_k)        # PSTess's repeated step: clamps stay
-                f_k, out = m.evaluate(x, net_k, V_nc, S_k)
-                rec.store(k, x, out)
-                xp = x + hk * f_k
-                net_j = nets[grid.interval[k + 1]] if semantics == "pst" else net_k
-                S_j = S(grid.t[k + 1], xp, out)
-                f_j, out = m.evaluate(xp, net_j, out.V_nc, S_j)
-                x = x + 0.5 * hk * (f_k + f_j)
-                V_nc = out.V_nc
-                if not np.all(np.isfinite(x)):
-                    raise SimulationError(f"non-finite state at t = {grid.t[k + 1]:.4f} s")
-                if rec.check_separation(k + 1, x, self.inertia, separation_limit, grid.t) \
-                        and stop_at_separation:
-                    rec.store(k + 1, x, out)
-                    return rec.result(self, grid.t, k + 2, time.perf_counter() - wall)
-            rec.store(grid.t.size - 1, x, out)
-        except SimulationError as exc:
-            res = rec.result(self, grid.t, max(rec.n_stored, 1), time.perf_counter() - wall)
-            raise SimulationError(f"case '{self.case.name}': {exc}", result=res) from exc
-        return rec.result(self, grid.t, grid.t.size, time.perf_counter() - wall)
+        status, k_end = integrate(
+            m.x0.copy(), m.V_nc0.copy(), grid.interval, grid.h, first, semantics == "pst",
+            stack("Y11"), stack("Y12"), stack("Y21"), stack("Y22"), stack("Z22"), stack("R"), m.params,
+            m.layout.n_mac, m.layout.n_exc, m.layout.n_pss, m.layout.n_tg, S_extra,
+            self.inertia, separation_limit, stop_at_separation, rec)
+        res = self._result(grid.t, rec, k_end + 1, time.perf_counter() - wall,
+                           separation_limit)
+        if status < 0:
+            why = "non-finite state" if status == DIVERGED else \
+                "non-conforming load iteration did not converge"
+            raise SimulationError(f"case '{self.case.name}': {why} at t = {grid.t[k_end]:.4f} s "
+                                  "(trajectory kept up to there)", result=res)
+        return res
+
+    def _result(self, t, rec: "Recording", n, wall, limit) -> SimulationResult:
+        c = self.case
+        angle = rec.angle[:n]
+        dev = np.abs(angle - (angle @ self.inertia / self.inertia.sum())[:, None])
+        lost = np.nonzero(dev.max(axis=1) > limit)[0]
+        t_sep, separated = None, []
+        if lost.size:
+            k = int(lost[0])
+            t_sep = float(t[k])
+            group = separated_group(angle[k], self.inertia)
+            separated = [int(x) for x in c.machines.number[group]]
+        return SimulationResult(
+            t=t[:n].copy(), machines=c.machines.number.astype(int), buses=c.buses.number.astype(int),
+            speed=rec.speed[:n], angle=angle, pelect=rec.pelect[:n], pmech=rec.pmech[:n],
+            efd=rec.efd[:n], vmag=np.abs(rec.V[:n]), vang=np.angle(rec.V[:n]),
+            inertia=self.inertia, stable=t_sep is None, t_separation=t_sep, separated=separated,
+            meta={"case": c.name, "wall_time_s": wall})
 
 
 def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:
@@ -154,42 +180,69 @@ def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:
     return np.sort(group)
 
 
-class _Recorder:
-    """Preallocated trajectories (PST stores the predictor-stage outputs at each index)."""
+class Recording(NamedTuple):
+    """Preallocated trajectories filled by `integrate` (n_t rows)."""
 
-    def __init__(self, n, m: DynamicModel):
-        nm, nb = m.mp.n, m.case.n_bus
-        self.m = m
-        self.speed, self.angle = np.zeros((n, nm)), np.zeros((n, nm))
-        self.pelect, self.pmech, self.efd = np.zeros((n, nm)), np.zeros((n, nm)), np.zeros((n, nm))
-        self.V = np.zeros((n, nb), complex)
-        self.n_stored = 0
-        self.t_sep, self.separated = None, []
+    speed: np.ndarray
+    angle: np.ndarray
+    pelect: np.ndarray
+    pmech: np.ndarray
+    efd: np.ndarray
+    V: np.ndarray
 
-    def store(self, k, x, out):
-        xm = self.m.layout.view(x, "mac")
-        self.angle[k], self.speed[k] = xm[0], xm[1]
-        self.pelect[k], self.pmech[k], self.efd[k] = out.pelect, out.pmech, out.efd
-        self.V[k] = out.V_bus
-        self.n_stored = max(self.n_stored, k + 1)
 
-    def check_separation(self, k, x, inertia, limit, t) -> bool:
-        if self.t_sep is not None:
-            return True
-        delta = self.m.layout.view(x, "mac")[0]
-        if np.max(np.abs(delta - delta @ inertia / inertia.sum())) <= limit:
-            return False
-        self.t_sep = float(t[k])
-        group = separated_group(delta, inertia)
-        self.separated = [int(n) for n in self.m.case.machines.number[group]]
-        return True
+OK, SEPARATED, DIVERGED, NO_LOAD_FLOW = 0, 1, -2, -1
 
-    def result(self, sim: Simulator, t, n, wall) -> SimulationResult:
-        c = sim.case
-        return SimulationResult(
-            t=t[:n].copy(), machines=c.machines.number.astype(int), buses=c.buses.number.astype(int),
-            speed=self.speed[:n], angle=self.angle[:n], pelect=self.pelect[:n],
-            pmech=self.pmech[:n], efd=self.efd[:n], vmag=np.abs(self.V[:n]),
-            vang=np.angle(self.V[:n]), inertia=sim.inertia, stable=self.t_sep is None,
-            t_separation=self.t_sep, separated=self.separated,
-            meta={"case": c.name, "wall_time_s": wall})
+
+@njit(cache=True)
+def _store(rec, k, x, nm, pelect, pmech, efd, V_bus):
+    for i in range(nm):
+        rec.angle[k, i] = x[i]
+        rec.speed[k, i] = x[nm + i]
+    rec.pelect[k] = pelect
+    rec.pmech[k] = pmech
+    rec.efd[k] = efd
+    rec.V[k] = V_bus
+
+
+@njit(cache=True)
+def integrate(x, V_nc, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, nm, ne, nps, ng,
+              S_extra, inertia, limit, stop, rec):
+    """PST's predictor-corrector over the whole grid (see the module docstring).
+
+    Stage matrices are stacked by interval.  Stores the predictor-stage outputs and the
+    states at every index into `rec`.  Returns (status, last stored index): status OK,
+    SEPARATED (stopped at loss of synchronism), DIVERGED or NO_LOAD_FLOW.
+    """
+    n = interval.size
+    nb = R.shape[1]
+    dx_k, dx_j = np.empty_like(x), np.empty_like(x)
+    cur = np.empty(nm, np.complex128)
+    pel, qel, et, efd, pm = np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm)
+    V_bus = np.zeros(R.shape[1], np.complex128)
+    M = inertia.sum()
+    for k in range(n - 1):
+        s = interval[k]
+        if first[k] and pst:   # PSTess computes this step twice; the first pass's clamps stay
+            V_tmp = V_nc.copy()
+            evaluate_kernel(x, nm, ne, nps, ng, p, Y11[s], Y12[s], Y21[s], Y22[s], Z22[s], R[s], V_tmp,
+                            S_extra, False, dx_k, cur, pel, qel, et, efd, pm, V_bus)
+        if evaluate_kernel(x, nm, ne, nps, ng, p, Y11[s], Y12[s], Y21[s], Y22[s], Z22[s], R[s], V_nc,
+                           S_extra, True, dx_k, cur, pel, qel, et, efd, pm, V_bus) < 0:
+            return NO_LOAD_FLOW, max(k - 1, 0)
+        _store(rec, k, x, nm, pel, pm, efd, V_bus)
+        xp = x + h[s] * dx_k
+        j = interval[k + 1] if pst else s
+        if evaluate_kernel(xp, nm, ne, nps, ng, p, Y11[j], Y12[j], Y21[j], Y22[j], Z22[j], R[j], V_nc,
+                           S_extra, k == n - 2, dx_j, cur, pel, qel, et, efd, pm, V_bus) < 0:
+            return NO_LOAD_FLOW, k
+        x = x + 0.5 * h[s] * (dx_k + dx_j)
+        if not np.all(np.isfinite(x)):
+            return DIVERGED, k
+        if stop:
+            coi = (x[:nm] * inertia).sum() / M
+            if np.max(np.abs(x[:nm] - coi)) > limit:
+                _store(rec, k + 1, x, nm, pel, pm, efd, V_bus)
+                return SEPARATED, k + 1
+    _store(rec, n - 1, x, nm, pel, pm, efd, V_bus)
+    return OK, n - 1
