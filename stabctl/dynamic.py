@@ -20,7 +20,7 @@ from . import governors as gov
 from . import machines as mac
 from . import pss as pss_
 from .case import BranchTable, BusTable, Case
-from .errors import CaseError, SimulationError
+from .errors import CaseError, InputError, SimulationError
 from .netsolve import NonConformingLoads, ReducedNetwork, reduce_network, solve_nc
 
 FAULT_B = 1e7      # PST's bolted-fault shunt susceptance (1/1e-7)
@@ -170,6 +170,7 @@ class DynamicModel:
         stage = case.replace(buses=BusTable.from_matrix(bus), branches=BranchTable.from_matrix(line))
         online = np.ones(self.mp.n, bool)
         online[list(config.tripped_machines)] = False
+        _check_islands(stage, self.mp.bus_idx[online], case.n_bus)
         return reduce_network(stage, y_shunt, self.mp.y_internal, self.mp.bus_idx, online,
                               self.nc_idx, case.n_bus)
 
@@ -321,6 +322,25 @@ def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, S_e
     for k in range(ng):
         gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G_MAC])], dxg)
     return it
+
+
+def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:
+    """Raise InputError when a stage leaves buses without a path to any online machine
+    (PST cannot solve such an island either); names the buses."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    br = stage.branches
+    closed = br.x < OPEN_X / 10
+    f, t = stage.bus_indices(br.from_bus[closed]), stage.bus_indices(br.to_bus[closed])
+    n = stage.n_bus
+    graph = coo_matrix((np.ones(f.size), (f, t)), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    live = np.isin(label, label[source_buses])
+    dead = np.nonzero(~live[:n_orig])[0]
+    if dead.size:
+        raise InputError("the disturbance islands bus(es) "
+                         f"{[int(b) for b in stage.buses.number[dead]]} from every generator")
 
 
 @dataclass

@@ -91,6 +91,34 @@ def single_threaded_blas() -> None:
         _BLAS_LIMITED = True
 
 
+def fastest_time_constant(model: DynamicModel) -> tuple[float, str]:
+    """Smallest time constant among the states of the model (s) and where it is."""
+    from .exciters import LBND
+    cands = []
+    mp, ep, pp, gp = model.mp, model.ep, model.pp, model.gp
+    for name, arr, rows, active in (
+            ("mac_con T\"do", mp.Tdopp, mp.kind == 2, None), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2, None),
+            ("exc_con T_R", ep.TR, ep.has_TR, None), ("exc_con T_A", ep.TA, ep.has_TA, None),
+            ("exc_con T_B", ep.TB, ep.has_TB, None), ("pss_con T_w", pp.Tw, None, None),
+            ("pss_con T_2", pp.T2, None, None), ("pss_con T_4", pp.T4, pp.T4 >= LBND, None),
+            ("tg_con T_s", gp.Ts, None, None), ("tg_con T_c", gp.Tc, None, None),
+            ("tg_con T_5", gp.T5, None, None)):
+        sel = np.ones(arr.size, bool) if rows is None else rows
+        if np.any(sel):
+            k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))
+            cands.append((float(abs(arr[k])), f"{name} row {k + 1}"))
+    return min(cands) if cands else (np.inf, "")
+
+
+def check_step(model: DynamicModel, h: float) -> None:
+    """Raise InputError when h exceeds twice the fastest time constant: the explicit
+    predictor-corrector is unstable there (its stability interval is h/T < 2)."""
+    T, where = fastest_time_constant(model)
+    if h >= 2 * T:
+        raise InputError(f"step {h} s is too large: the fastest time constant is {T} s "
+                         f"({where}); the predictor-corrector needs h < {2 * T} s")
+
+
 class Simulator:
     """Runs disturbances on one case from its solved power flow.
 
@@ -123,6 +151,7 @@ class Simulator:
         events = list(events)
         ev_.validate(self.case, events, t_end)
         h = default_step(self.case) if h is None else h
+        check_step(self.model, h)
         grid = time_grid([t for e in events for t in e.times()], t_end, h)
         m = self.model
         nets = [m.network(ev_.configuration(self.case, events, s, self.op.V))
@@ -144,9 +173,11 @@ class Simulator:
                            separation_limit)
         if status < 0:
             why = "non-finite state" if status == DIVERGED else \
-                "non-conforming load iteration did not converge"
-            raise SimulationError(f"case '{self.case.name}': {why} at t = {grid.t[k_end]:.4f} s "
-                                  "(trajectory kept up to there)", result=res)
+                "the network/load equations did not converge (voltage collapse)"
+            t_fail = grid.t[min(k_end + 1, grid.t.size - 1)]
+            raise SimulationError(f"case '{self.case.name}': {why} in the step ending at "
+                                  f"t = {t_fail:.4f} s (trajectory kept up to "
+                                  f"{grid.t[k_end]:.4f} s)", result=res)
         return res
 
     def _result(self, t, rec: "Recording", n, wall, limit) -> SimulationResult:
