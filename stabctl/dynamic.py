@@ -210,6 +210,24 @@ class DynamicModel:
             mac_bus=mp.bus_idx.astype(np.int64), vex0=self.vex0, pmech0=self.pmech0,
             S_P=self.nc.S_P.astype(complex), I0=self.nc.I0.astype(complex),
             Y_low=self.nc.Y_low.astype(complex))
+        dx, _ = self.evaluate(self.x0.copy(), self.network(StageConfig()), self.V_nc0)
+        k = int(np.argmax(np.abs(dx)))
+        #: largest |derivative| at t = 0 and the state it belongs to (initialisation check)
+        self.initial_residual = (float(abs(dx[k])), self.state_name(k))
+
+    def state_name(self, k: int) -> str:
+        """Name of flat state index k, e.g. 'mac.omega.G3' or 'exc.VTR.G1'."""
+        from . import exciters, governors, machines, pss
+        names = {"mac": machines.STATE_NAMES, "exc": exciters.STATE_NAMES,
+                 "pss": pss.STATE_NAMES, "tg": governors.STATE_NAMES}
+        owners = {"mac": np.arange(self.mp.n), "exc": self.ep.mac, "pss": self.pp.mac,
+                  "tg": self.gp.mac}
+        for block, (sl, (rows, n)) in self.layout.blocks.items():
+            if sl.start <= k < sl.stop:
+                r, i = divmod(k - sl.start, n)
+                number = int(self.case.machines.number[owners[block][i]])
+                return f"{block}.{names[block][r]}.G{number}"
+        raise IndexError(f"state index {k} out of range")
 
     # -- one evaluation -----------------------------------------------------------------
     def evaluate(self, x, net: ReducedNetwork, V_nc_guess, S_extra=None, want_vbus=True):

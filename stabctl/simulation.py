@@ -196,7 +196,9 @@ class Simulator:
             speed=rec.speed[:n], angle=angle, pelect=rec.pelect[:n], pmech=rec.pmech[:n],
             efd=rec.efd[:n], vmag=np.abs(rec.V[:n]), vang=np.angle(rec.V[:n]),
             inertia=self.inertia, stable=t_sep is None, t_separation=t_sep, separated=separated,
-            meta={"case": c.name, "wall_time_s": wall})
+            meta={"case": c.name, "wall_time_s": wall,
+                  "max_initial_derivative": self.model.initial_residual[0],
+                  "max_initial_derivative_state": self.model.initial_residual[1]})
 
 
 def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:

@@ -1,0 +1,43 @@
+"""Wall time of 20 s simulations with the paper's Case 1 and Case 2 faults (not a test).
+
+Prints the best of several runs after a warm-up (compilation excluded), the ratio to real
+time, and the issue's targets on one core: Kundur 20 s <= 0.05 s, miniWECC 20 s <= 0.3 s.
+Run: python benchmarks/bench_simulate.py
+"""
+
+import time
+
+from stabctl.case import load_case
+from stabctl.events import fault_with_clearing
+from stabctl.simulation import Simulator, default_step
+
+CASES = (  # name, fault bus, far bus, clearing cycles, target s, label
+    ("kundur", 3, 101, 21, 0.05, "Case 1: bus 3, line 3-101, 21 cycles"),
+    ("miniwecc", 83, 33, 6, 0.3, "Case 2: bus 83, line 83-33, 6 cycles"),
+)
+
+
+def best_of(fn, repeat=3):
+    fn()
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return min(times)
+
+
+def main():
+    print(f"{'case':10} {'run':44} {'step s':>9} {'wall s':>8} {'x real time':>12} {'target s':>9}")
+    for name, bus, far, cyc, target, label in CASES:
+        case = load_case(name)
+        sim = Simulator(case)
+        fault = [fault_with_clearing(case, bus, far, 1.0, cyc)]
+        for h in (default_step(case), 1 / 240):
+            for what, ev in ((label, fault), ("no disturbance", [])):
+                wall = best_of(lambda: sim.run(ev, t_end=20.0, h=h))
+                print(f"{name:10} {what:44} {h:9.5f} {wall:8.3f} {20.0 / wall:12.0f} {target:9.2f}")
+
+
+if __name__ == "__main__":
+    main()
