@@ -1,0 +1,374 @@
+"""Critical clearing time (CCT) of a line fault by bisection on the clearing time.
+
+The fault (`LineFault`) is a bolted three-phase fault at `bus` on the line `bus`-`far_bus`
+from `t_fault`, cleared at both ends at once after a clearing time tc (s, counted from the
+fault start), the line staying out (PST's sw_con fault type 0 with equal near and far
+clearing, `stabctl.events.Fault`).  The CCT is the longest tc for which the system stays
+stable; `critical_clearing_time` brackets it between a stable and an unstable tc at most
+`tol` apart (Kundur, Power System Stability and Control, 1994, sec. 13.3; Pai, Energy
+Function Analysis for Power System Stability, 1989, ch. 1, for the time-domain definition).
+
+Stability criterion (default `no_separation`): no machine's rotor angle leaves the centre of
+inertia (paper eq. 40, weights H*MVA) by more than `separation_limit` (pi rad) before
+`t_end` (default fault time + 5 s); the runs stop at separation to save time.  Any
+callable(SimulationResult) -> bool (True = stable) can replace it.
+
+Grid: the simulator's grid lands on every event time (`stabctl.simulation.time_grid`), so a
+clearing time is never rounded to a multiple of the step h: the fault-on interval of length
+tc gets fix(tc/h) equal steps (each in [h, 2h)) and the post-fault interval restarts at the
+clearing instant.  The bisection probes only clearing times k*tol (k integer), so results
+are reproducible to the last digit and the final bracket is one lattice cell, exactly tol
+wide.  A tol far below h resolves the discretised model, not the physics.
+
+Sweeps of many faults or ratings (`cct_jobs`, `cct_job`) run through `stabctl.sweep`.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from .errors import InputError, SimulationError
+from .events import Fault, LineTrip
+from .results import SimulationResult
+from .simulation import Simulator, default_step
+
+#: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
+#: to the limit), the limit, tolerance, and the run length after the fault.
+T_LO, T_HI, T_MAX, TOL, T_AFTER_FAULT = 0.0, 0.1, 1.0, 1e-3, 5.0
+
+
+@dataclass(frozen=True)
+class LineFault:
+    """A three-phase fault at `bus` on circuit `circuit` of line `bus`-`far_bus`, starting
+    at `t_fault` (s), cleared at both ends at the same instant (the line stays out).
+
+    trips: further circuits (from_bus, to_bus) opened at the clearing instant, e.g. the
+    parallel circuit of a double line.
+    """
+
+    bus: int
+    far_bus: int
+    t_fault: float = 1.0
+    circuit: int = 1
+    trips: tuple[tuple[int, int], ...] = ()
+
+    def events(self, t_clear: float) -> list:
+        """The run's events for clearing time `t_clear` (s after the fault start)."""
+        tc = self.t_fault + t_clear
+        fault = Fault(bus=self.bus, t=self.t_fault, clear_near=tc, clear_far=tc,
+                      far_bus=self.far_bus, circuit=self.circuit)
+        return [fault] + [LineTrip(a, b, tc) for a, b in self.trips]
+
+    def describe(self) -> str:
+        circ = f" (circuit {self.circuit})" if self.circuit != 1 else ""
+        extra = "".join(f", {a}-{b} also opened" for a, b in self.trips)
+        return f"fault at bus {self.bus} on line {self.bus}-{self.far_bus}{circ} at " \
+               f"{self.t_fault:g} s{extra}"
+
+
+def no_separation(result: SimulationResult) -> bool:
+    """Default criterion: True if no rotor angle left the COI by more than the run's
+    separation limit (`SimulationResult.stable`)."""
+    return result.stable
+
+
+@dataclass(frozen=True)
+class CCTResult:
+    """Outcome of a CCT search.  Times are clearing times in s after the fault start.
+
+    t_stable, t_unstable: the closest stable and unstable clearing times found
+    (t_unstable - t_stable = tol); the CCT is t_stable (the conservative end).
+    search_bracket: the (stable, unstable) interval the bisection started from, after the
+    bound checks and expansion.  probes: every (clearing time s, stable) simulated, in
+    order.  separated: machines that lose synchronism when cleared at t_unstable (empty if
+    the criterion failed without separation).  step_s: integration step h; wall_time_s:
+    the whole search.
+    """
+
+    fault: LineFault
+    t_stable: float
+    t_unstable: float
+    search_bracket: tuple[float, float]
+    tol_s: float
+    step_s: float
+    freq_hz: float
+    n_simulations: int
+    wall_time_s: float
+    criterion: str
+    probes: tuple[tuple[float, bool], ...] = field(repr=False)
+    separated: tuple[int, ...] = ()
+
+    @property
+    def cct_s(self) -> float:
+        """Critical clearing time (s): the longest clearing time found stable."""
+        return self.t_stable
+
+    @property
+    def cct_cycles(self) -> float:
+        """CCT in cycles of the case frequency."""
+        return self.t_stable * self.freq_hz
+
+    @property
+    def bracket(self) -> tuple[float, float]:
+        """(stable, unstable) clearing times (s) that bound the CCT."""
+        return self.t_stable, self.t_unstable
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (times in s, cycles of the case frequency)."""
+        return {"fault": asdict(self.fault), "cct_s": self.cct_s, "cct_cycles": self.cct_cycles,
+                "t_stable_s": self.t_stable, "t_unstable_s": self.t_unstable,
+                "t_unstable_cycles": self.t_unstable * self.freq_hz,
+                "search_bracket_s": list(self.search_bracket), "tol_s": self.tol_s,
+                "step_s": self.step_s, "n_simulations": self.n_simulations,
+                "wall_time_s": self.wall_time_s, "criterion": self.criterion,
+                "separated_machines": list(self.separated),
+                "probes": [[t, ok] for t, ok in self.probes]}
+
+
+def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL,
+                           t_lo: float = T_LO, t_hi: float = T_HI, t_max: float = T_MAX,
+                           t_end: float | None = None, h: float | None = None,
+                           separation_limit: float = np.pi,
+                           criterion: Callable[[SimulationResult], bool] | None = None,
+                           stop_at_separation: bool | None = None,
+                           storage=None) -> CCTResult:
+    """CCT of `fault` on `sim`'s case by bisection on the clearing time (see module doc).
+
+    Args:
+        sim: the simulator of the case (its power flow is solved once).
+        fault: the fault; its clearing time is the unknown.
+        tol: width of the final bracket (s, > 0).
+        t_lo: clearing time that must be stable (s, >= 0; 0 = the line trip alone).
+        t_hi: first upper bound (s); doubled (capped at t_max) while it is still stable.
+        t_max: largest clearing time tried (s).
+        t_end: run end (s, absolute; default t_fault + 5 s; must exceed t_fault + t_max).
+        h: integration step (s, default the case's); separation_limit: rad from the COI.
+        criterion: callable(result) -> True if stable; default `no_separation`.
+        stop_at_separation: stop runs at separation; default True for the default
+            criterion, False for a custom one (which then sees whole trajectories).
+        storage: passed untouched to `Simulator.run` (a `stabctl.storage.StorageFleet`).
+
+    A run that diverges after a machine has already separated counts as unstable; any
+    other divergence is raised.
+
+    Raises:
+        InputError: bad settings; unstable at t_lo (also at zero clearing); still stable
+            at t_max (the CCT is above it).
+        UnknownBusError, CaseError: no such bus or line; SimulationError: divergence.
+    """
+    t_end = fault.t_fault + T_AFTER_FAULT if t_end is None else t_end
+    _check_settings(fault, tol, t_lo, t_hi, t_max, t_end)
+    h = default_step(sim.case) if h is None else h
+    crit = no_separation if criterion is None else criterion
+    stop = criterion is None if stop_at_separation is None else stop_at_separation
+    extra = {} if storage is None else {"storage": storage}
+    probes, separated = [], {}
+
+    def stable_at(k: int) -> bool:
+        t_clear = _lattice(k, tol)
+        res, diverged = _run(sim, fault, t_clear, t_end, h, separation_limit, stop, extra)
+        ok = not diverged and bool(crit(res))
+        probes.append((t_clear, ok))
+        if not ok:
+            separated[k] = tuple(int(m) for m in res.separated)
+        return ok
+
+    wall = time.perf_counter()
+    k_lo, k_hi, k_max = _lattice_bounds(tol, t_lo, t_hi, t_max)
+    k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
+    start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
+    while k_hi - k_lo > 1:
+        mid = (k_lo + k_hi) // 2
+        k_lo, k_hi = (mid, k_hi) if stable_at(mid) else (k_lo, mid)
+    return CCTResult(fault=fault, t_stable=_lattice(k_lo, tol), t_unstable=_lattice(k_hi, tol),
+                     search_bracket=start, tol_s=tol, step_s=h, freq_hz=sim.case.freq_hz,
+                     n_simulations=len(probes), wall_time_s=time.perf_counter() - wall,
+                     criterion=getattr(crit, "__name__", repr(crit)), probes=tuple(probes),
+                     separated=separated.get(k_hi, ()))
+
+
+def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
+    if not tol > 0:
+        raise InputError(f"CCT tolerance must be > 0 s, got {tol:g}")
+    if not 0 <= t_lo < t_hi <= t_max:
+        raise InputError(f"CCT search bounds need 0 <= t_lo < t_hi <= t_max, got "
+                         f"{t_lo:g}, {t_hi:g}, {t_max:g} s")
+    if fault.t_fault < 0:
+        raise InputError(f"fault time must be >= 0 s, got {fault.t_fault:g}")
+    if not t_end > fault.t_fault + t_max:
+        raise InputError(f"run end {t_end:g} s must come after the latest clearing "
+                         f"(fault at {fault.t_fault:g} s + t_max {t_max:g} s)")
+
+
+def _lattice(k: int, tol: float) -> float:
+    """Clearing time k*tol (s), rounded to 1e-12 s so that printed values are exact."""
+    return round(k * tol, 12)
+
+
+def _lattice_bounds(tol, t_lo, t_hi, t_max) -> tuple[int, int, int]:
+    """Lattice indices: t_lo rounded down, t_hi up, t_max down (within 1e-9 of a cell)."""
+    k_lo = math.floor(t_lo / tol + 1e-9)
+    k_max = math.floor(t_max / tol + 1e-9)
+    k_hi = min(max(math.ceil(t_hi / tol - 1e-9), k_lo + 1), k_max)
+    if k_hi <= k_lo:
+        raise InputError(f"CCT search range {t_lo:g}-{t_max:g} s is narrower than the "
+                         f"tolerance {tol:g} s")
+    return k_lo, k_hi, k_max
+
+
+def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple[int, int]:
+    """Check stable at k_lo, then double k_hi (up to k_max) until it is unstable."""
+    if not stable_at(k_lo):
+        if k_lo == 0:
+            raise InputError(f"{fault.describe()}: unstable even when cleared instantly "
+                             "(the line trip alone loses synchronism), no CCT")
+        raise InputError(f"{fault.describe()}: unstable already at the lower bound "
+                         f"{_lattice(k_lo, tol):g} s; lower it")
+    while stable_at(k_hi):
+        if k_hi == k_max:
+            t = _lattice(k_max, tol)
+            raise InputError(f"{fault.describe()}: the CCT is above the limit {t:g} s "
+                             f"({t * freq:.4g} cycles): still stable there; raise it")
+        k_lo, k_hi = k_hi, min(2 * k_hi, k_max)
+    return k_lo, k_hi
+
+
+def _run(sim, fault: LineFault, t_clear, t_end, h, limit, stop, extra):
+    """One probe: (result, diverged).  A run that diverged after a machine separated
+    gives its partial result and True; any other divergence is raised, naming the fault
+    and the clearing time."""
+    try:
+        return sim.run(fault.events(t_clear), t_end, h=h, separation_limit=limit,
+                       stop_at_separation=stop, **extra), False
+    except SimulationError as exc:
+        if exc.result is not None and not exc.result.stable:
+            return exc.result, True
+        raise SimulationError(f"{fault.describe()}, cleared after {t_clear:g} s: {exc}",
+                              result=exc.result) from exc
+
+
+# -- CCT sweeps (jobs for stabctl.sweep) -------------------------------------------------
+
+#: Built-in fault lists of `stabctl sweep-cct CASE --faults DEFAULT`: the paper's Case 1
+#: (Kundur) and Case 2 (miniWECC) faults and one more tie-line fault each.
+DEFAULT_FAULTS = {
+    "kundur": (LineFault(3, 101), LineFault(13, 101)),
+    "miniwecc": (LineFault(83, 33), LineFault(40, 44)),
+}
+
+
+def storage_fleet(case, esd_pct: float | None):
+    """`stabctl.storage.uniform_fleet(case, esd_pct)`, or None for no storage.
+
+    Raises InputError if stabctl.storage (another part of issue 4) is not there yet.
+    """
+    if esd_pct is None:
+        return None
+    try:
+        from . import storage
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{__package__}.storage":
+            raise
+        raise InputError("storage not available yet: stabctl.storage is missing, so "
+                         "--esd-pct cannot be honoured") from None
+    if not hasattr(storage, "uniform_fleet"):
+        raise InputError("storage not available yet: stabctl.storage has no uniform_fleet")
+    return storage.uniform_fleet(case, esd_pct)
+
+
+@functools.lru_cache(maxsize=None)
+def cached_simulator(case_name: str) -> Simulator:
+    """One Simulator per case per process (the power flow is solved once per worker)."""
+    from .case import load_case
+
+    return Simulator(load_case(case_name))
+
+
+def cct_job(case: str, bus: int, far_bus: int, t_fault: float = 1.0, circuit: int = 1,
+            trips=(), esd_pct: float | None = None, tol: float = TOL, t_max: float = T_MAX,
+            t_end: float | None = None) -> dict:
+    """Worker entry of a CCT sweep: the CCT of one fault at one storage rating.
+
+    Arguments are JSON-able (a sweep's recorded inputs; esd_pct: storage rating in %,
+    None = no storage); returns `CCTResult.to_dict()`.  Raises as
+    `critical_clearing_time` and `storage_fleet`.
+    """
+    sim = cached_simulator(case)
+    fault = LineFault(int(bus), int(far_bus), float(t_fault), int(circuit),
+                      tuple((int(a), int(b)) for a, b in trips))
+    res = critical_clearing_time(sim, fault, tol=tol, t_max=t_max, t_end=t_end,
+                                 storage=storage_fleet(sim.case, esd_pct))
+    return res.to_dict()
+
+
+def cct_key(case: str, fault: LineFault, esd_pct: float | None) -> str:
+    """Sweep key, e.g. 'kundur/3-101/t1/esd-none' or 'kundur/3-101#2+13-101/t1/esd20'."""
+    line = f"{fault.bus}-{fault.far_bus}" + (f"#{fault.circuit}" if fault.circuit != 1 else "")
+    line += "".join(f"+{a}-{b}" for a, b in fault.trips)
+    rating = "none" if esd_pct is None else f"{esd_pct:g}"
+    return f"{case}/{line}/t{fault.t_fault:g}/esd{'-' if esd_pct is None else ''}{rating}"
+
+
+def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
+             t_max: float = T_MAX, t_end: float | None = None) -> list:
+    """One `stabctl.sweep.Job` per (fault, storage rating %, None = no storage) pair.
+
+    Checks every fault's bus and line against the case first (UnknownBusError, CaseError)
+    so that bad input fails before any job runs.
+    """
+    from .case import load_case
+    from .events import validate
+    from .sweep import Job
+
+    case = load_case(case_name)
+    faults = list(faults)
+    for f in faults:
+        validate(case, f.events(0.0), 0.0)
+    settings = {"tol": tol, "t_max": t_max, "t_end": t_end}
+    return [Job(key=cct_key(case_name, f, p), func=cct_job,
+                inputs={"case": case_name, "bus": f.bus, "far_bus": f.far_bus,
+                        "t_fault": f.t_fault, "circuit": f.circuit,
+                        "trips": [list(t) for t in f.trips], "esd_pct": p, **settings})
+            for f in faults for p in ratings]
+
+
+def read_faults(path: str | Path) -> list[LineFault]:
+    """Faults from a CSV file with a header: bus, far_bus[, t_fault (s, default 1)]
+    [, circuit (default 1)], one fault per row.  Raises InputError naming the row."""
+    path = Path(path)
+    try:
+        with path.open(newline="") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as exc:
+        raise InputError(f"fault list {path}: {exc.strerror or exc}") from None
+    if not rows or not {"bus", "far_bus"} <= set(rows[0]):
+        raise InputError(f"fault list {path}: needs a header with columns bus,far_bus "
+                         "[,t_fault,circuit] and at least one row")
+    return [_fault_row(path, i, r) for i, r in enumerate(rows, start=2)]
+
+
+def _fault_row(path, line: int, row: dict) -> LineFault:
+    try:
+        return LineFault(bus=int(row["bus"]), far_bus=int(row["far_bus"]),
+                         t_fault=float(row.get("t_fault") or 1.0),
+                         circuit=int(row.get("circuit") or 1))
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"fault list {path} line {line}: {exc}") from None
+
+
+def default_faults(case_name: str) -> tuple[LineFault, ...]:
+    """`DEFAULT_FAULTS` of a built-in case; InputError for any other case."""
+    try:
+        return DEFAULT_FAULTS[case_name]
+    except KeyError:
+        raise InputError(f"no DEFAULT fault list for case '{case_name}' (there is one for "
+                         f"{', '.join(DEFAULT_FAULTS)}); give --faults FILE.csv") from None
+
