@@ -377,5 +377,194 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
         click.echo(f"wrote {w}")
 
 
+
+# -- critical clearing time and sweeps --------------------------------------------------
+
+def _cct_settings(tol_ms, t_max, tf) -> dict:
+    if not tol_ms > 0:
+        raise InputError(f"--tol-ms must be > 0, got {tol_ms:g}")
+    if not t_max > 0:
+        raise InputError(f"--t-max must be > 0 s, got {t_max:g}")
+    if tf is not None and not tf > 0:
+        raise InputError(f"--tf must be > 0 s, got {tf:g}")
+    return {"tol": tol_ms / 1000.0, "t_max": t_max, "t_end": tf}
+
+
+def _print_cct(case_name, rating, d) -> None:
+    f = d["fault"]
+    circ = f" (circuit {f['circuit']})" if f["circuit"] != 1 else ""
+    click.echo(f"case {case_name}: fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']}"
+               f"{circ} at {f['t_fault']:g} s, cleared at both ends, line tripped"
+               + "".join(f", {a}-{b} also opened" for a, b in f["trips"])
+               + ("; no storage" if rating is None else f"; storage {rating:g} % of machine MVA"))
+    click.echo(f"CCT {d['cct_s']:.3f} s = {d['cct_cycles']:.2f} cycles (stable at "
+               f"{d['t_stable_s']:.3f} s, unstable at {d['t_unstable_s']:.3f} s = "
+               f"{d['t_unstable_cycles']:.2f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
+               f"step {d['step_s']:g} s)")
+    if d["separated_machines"]:
+        click.echo(f"machine(s) {', '.join(map(str, d['separated_machines']))} lose "
+                   f"synchronism when cleared at {d['t_unstable_s']:.3f} s")
+    click.echo(f"{d['n_simulations']} simulations, wall {d['wall_time_s']:.2f} s")
+
+
+@main.command()
+@click.argument("case_name", metavar="CASE")
+@click.option("--fault", type=int, required=True, metavar="BUS",
+              help="Three-phase (bolted) fault at bus BUS.")
+@click.option("--far-bus", type=int, required=True, metavar="BUS",
+              help="Far end of the faulted line BUS-FAR_BUS, tripped at clearing.")
+@click.option("--circuit", type=int, default=1, show_default=True, metavar="K",
+              help="Which of parallel circuits BUS-FAR_BUS is faulted.")
+@click.option("--t-fault", type=float, default=1.0, show_default=True, metavar="S",
+              help="Fault start time (s).")
+@click.option("--trip", type=(int, int), multiple=True, metavar="FROM TO",
+              help="Also open one circuit of line FROM-TO at the clearing instant "
+                   "(repeatable), e.g. the parallel circuit.")
+@click.option("--esd-pct", type=float, default=None, metavar="P",
+              help="Storage of P % of each generator's MVA at its HV bus "
+                   "(stabctl.storage.uniform_fleet, paper's bang-bang COI control).")
+@click.option("--tol-ms", type=float, default=1.0, show_default=True, metavar="MS",
+              help="Width of the final bracket (ms).")
+@click.option("--t-max", type=float, default=1.0, show_default=True, metavar="S",
+              help="Longest clearing time tried (s); a CCT above it is an error.")
+@click.option("--tf", type=float, default=None, metavar="S",
+              help="End of each run (s); default fault time + 5 s.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@_reports_errors
+def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, tol_ms, t_max, tf,
+        as_json):
+    """Critical clearing time of a line fault by bisection on the clearing time.
+
+    The fault at BUS on line BUS-FAR_BUS starts at --t-fault and is cleared at both ends
+    at once after the clearing time (s after the fault start); the line stays out.
+
+    \b
+    Criterion: unstable if a rotor angle leaves the centre of inertia (H*MVA weights) by
+    more than pi rad before --tf (default fault time + 5 s); runs stop at separation.
+    The search checks stability at zero clearing (the line trip alone), doubles the upper
+    bound from 0.1 s while stable (up to --t-max), then bisects on multiples of --tol-ms.
+    The CCT printed is the stable end of the final bracket (conservative).
+    \b
+    Examples:
+      stabctl cct kundur --fault 3 --far-bus 101
+      stabctl cct miniwecc --fault 83 --far-bus 33 --json
+
+    Bad input (unknown bus or line, unstable at zero clearing, CCT above --t-max, storage
+    not available) exits with status 2 and one `error:` line.
+    """
+    from .case import load_case
+    from .cct import LineFault, critical_clearing_time, storage_fleet
+    from .simulation import Simulator
+
+    settings = _cct_settings(tol_ms, t_max, tf)
+    case = load_case(case_name)
+    storage = storage_fleet(case, esd_pct)
+    line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
+    res = critical_clearing_time(Simulator(case), line_fault, storage=storage, **settings)
+    out = {"case": case.name, "esd_pct": esd_pct, **res.to_dict()}
+    if as_json:
+        _print_json(out)
+    else:
+        _print_cct(case.name, esd_pct, out)
+
+
+
+def _ratings(values) -> list:
+    """--esd-pct values (repeatable, comma-separated, 'none' = no storage) -> list."""
+    out = []
+    for v in values or ("none",):
+        for item in str(v).split(","):
+            item = item.strip().lower()
+            try:
+                out.append(None if item == "none" else float(item))
+            except ValueError:
+                raise InputError(f"--esd-pct {item!r}: not a number or 'none'") from None
+    return list(dict.fromkeys(out))
+
+
+def _sweep_line(key, rec) -> str:
+    if rec["status"] != "ok":
+        return f"{key:<34} failed: {rec['error']}"
+    r = rec["result"]
+    return (f"{key:<34} {r['cct_s']:7.3f} {r['cct_cycles']:8.2f} {r['n_simulations']:5d} "
+            f"{rec['wall_time_s']:7.2f}")
+
+
+@main.command("sweep-cct")
+@click.argument("case_name", metavar="CASE")
+@click.option("--faults", "faults_src", required=True, metavar="FILE.csv|DEFAULT",
+              help="CSV with a header bus,far_bus[,t_fault,circuit], one fault per row; "
+                   "DEFAULT: the built-in list (kundur: 3-101, 13-101; miniwecc: 83-33, "
+                   "40-44; faults at 1 s).")
+@click.option("--esd-pct", multiple=True, metavar="P",
+              help="Storage ratings, % of machine MVA: repeat or comma-separate; 'none' "
+                   "= no storage (the default). Every fault runs at every rating.")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False), default="results.jsonl",
+              show_default=True, help="JSON-lines file, one line per finished job; "
+                                      "rerunning with it skips the jobs already there.")
+@click.option("--workers", type=int, default=None, metavar="N",
+              help="Local worker processes (default: the available cores).")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Dask distributed scheduler (tcp://host:8786) to run on instead "
+                   "(needs pip install 'stabctl[dask]').")
+@click.option("--retry-failed", is_flag=True, help="Rerun the jobs recorded as failed.")
+@click.option("--tol-ms", type=float, default=1.0, show_default=True, metavar="MS",
+              help="Width of each final bracket (ms).")
+@click.option("--t-max", type=float, default=1.0, show_default=True, metavar="S",
+              help="Longest clearing time tried (s).")
+@click.option("--tf", type=float, default=None, metavar="S",
+              help="End of each run (s); default fault time + 5 s.")
+@click.option("--json", "as_json", is_flag=True, help="Print every record as JSON.")
+@_reports_errors
+def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retry_failed,
+              tol_ms, t_max, tf, as_json):
+    """CCT of every (fault, storage rating) pair, in parallel, resumable.
+
+    Each job is one `stabctl cct` search; its line in --out holds its key
+    (CASE/BUS-FAR/tT_FAULT/esdP), inputs and result, or `failed` with the reason (e.g. a
+    diverging run). Lines are written as jobs finish, so an interrupted sweep (Ctrl-C)
+    keeps them; rerun the same command to finish it. A progress bar goes to stderr.
+    Criterion and search as `stabctl cct` (see its --help).
+    \b
+    Examples:
+      stabctl sweep-cct kundur --faults DEFAULT --esd-pct none,5,10 --out kundur.jsonl
+      stabctl sweep-cct miniwecc --faults faults.csv --scheduler tcp://10.0.0.5:8786
+    """
+    from .case import load_case
+    from .cct import cct_jobs, default_faults, read_faults, storage_fleet
+    from .sweep import read_records, run_sweep
+
+    settings = _cct_settings(tol_ms, t_max, tf)
+    if workers is not None and workers < 1:
+        raise InputError(f"--workers must be >= 1, got {workers}")
+    if Path(out_path).is_dir():
+        raise InputError(f"--out {out_path} is a directory")
+    case = load_case(case_name)
+    ratings = _ratings(esd_pct)
+    for p in ratings:
+        storage_fleet(case, p)
+    faults = default_faults(case_name) if faults_src == "DEFAULT" else read_faults(faults_src)
+    jobs = cct_jobs(case_name, faults, ratings, **settings)
+    try:
+        rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
+                        retry_failed=retry_failed)
+    except KeyboardInterrupt:
+        n = len(read_records(out_path))
+        click.echo(f"interrupted: {n} job(s) recorded in {out_path}; rerun the same command "
+                   "to resume", err=True)
+        sys.exit(130)
+    if as_json:
+        _print_json({"out": str(rep.out), "ran": rep.ran, "skipped": rep.skipped,
+                     "failed": rep.failed, "wall_time_s": rep.wall_time_s,
+                     "records": list(rep.records.values())})
+        return
+    click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'sims':>5} {'wall s':>7}")
+    for key, rec in rep.records.items():
+        click.echo(_sweep_line(key, rec))
+    n_bad = sum(r["status"] != "ok" for r in rep.records.values())
+    click.echo(f"{len(jobs)} job(s): {rep.ran} run now, {rep.skipped} already in {rep.out}; "
+               f"{n_bad} failed; wall {rep.wall_time_s:.1f} s")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -170,8 +170,15 @@ def _check_jobs(jobs, done: dict, out: Path) -> None:
             raise InputError(f"duplicate job key {j.key!r}")
         seen.add(j.key)
         if j.key in done and done[j.key].get("inputs") != _normalised(j.inputs):
-            raise InputError(f"{out} already holds job {j.key!r} with other inputs "
-                             f"({done[j.key].get('inputs')}); use another output file")
+            raise InputError(f"{out} already holds job {j.key!r} with other inputs ("
+                             f"{_differences(done[j.key].get('inputs') or {}, j.inputs)}); "
+                             "use another output file")
+
+
+def _differences(old: dict, new: Mapping) -> str:
+    new = _normalised(new)
+    return ", ".join(f"{k}: {old.get(k)!r} there, {new.get(k)!r} now"
+                     for k in sorted(set(old) | set(new)) if old.get(k) != new.get(k))
 
 
 def _normalised(inputs: Mapping) -> dict:
