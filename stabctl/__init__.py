@@ -12,4 +12,8 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+from ._jitcache import ensure_fresh_cache  # noqa: E402
+
+ensure_fresh_cache()
+
 __version__ = "0.1.0"

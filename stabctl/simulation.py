@@ -29,6 +29,7 @@ from numba import njit
 
 from . import events as ev_
 from .case import Case
+from . import storage as st
 from .dynamic import DynamicModel, OperatingPoint, evaluate_kernel
 from .errors import InputError, SimulationError
 from .results import SimulationResult
@@ -133,14 +134,24 @@ class Simulator:
             op = OperatingPoint.from_bus_matrix(solve_powerflow(case).bus_matrix())
         single_threaded_blas()
         self.case, self.op = case, op
-        self.model = DynamicModel(case, op, injection_buses)
-        mp = self.model.mp
-        self.inertia = mp.H * case.machines.mva
+        self._models: dict[frozenset, DynamicModel] = {}
+        self.model = self.model_for(injection_buses)
+        self.inertia = self.model.mp.H * case.machines.mva
+
+    def model_for(self, buses=()) -> DynamicModel:
+        """The dynamic model keeping `buses` (bus numbers) in the reduced network (cached);
+        storage devices need their buses kept."""
+        key = frozenset(int(b) for b in buses)
+        if key not in self._models:
+            self._models[key] = DynamicModel(self.case, self.op, sorted(key))
+        return self._models[key]
 
     def run(self, events=(), t_end: float = 5.0, h: float | None = None,
             semantics: str = "pst", separation_limit: float = np.pi,
-            stop_at_separation: bool = False) -> SimulationResult:
+            stop_at_separation: bool = False, storage=None) -> SimulationResult:
         """Simulate `events` (see `stabctl.events`) from t = 0 to t_end (s) with step h.
+
+        storage: a `stabctl.storage.StorageFleet` (devices and controller) or None.
 
         Raises:
             InputError, UnknownBusError, CaseError: bad events or step;
@@ -151,9 +162,10 @@ class Simulator:
         events = list(events)
         ev_.validate(self.case, events, t_end)
         h = default_step(self.case) if h is None else h
-        check_step(self.model, h)
+        m = self.model_for(storage.buses if storage is not None else ())
+        sa = st.pack(storage, self.case, m.nc_idx)
+        check_step(m, h)
         grid = time_grid([t for e in events for t in e.times()], t_end, h)
-        m = self.model
         nets = [m.network(ev_.configuration(self.case, events, s, self.op.V))
                 for s in grid.starts]
         stack = lambda name: np.ascontiguousarray(np.stack([getattr(n, name) for n in nets]))  # noqa: E731
@@ -162,15 +174,18 @@ class Simulator:
                         pmech=np.zeros((N, nm)), efd=np.zeros((N, nm)),
                         V=np.zeros((N, nb), np.complex128))
         first = np.r_[False, np.diff(grid.interval) > 0]
-        S_extra = np.zeros(m.nc_idx.size, np.complex128)
+        P_rec = np.zeros((N, sa.pmax.size))
+        stats = np.zeros((sa.pmax.size, 3))
         wall = time.perf_counter()
         status, k_end = integrate(
             m.x0.copy(), m.V_nc0.copy(), grid.interval, grid.h, first, semantics == "pst",
             stack("Y11"), stack("Y12"), stack("Y21"), stack("Y22"), stack("Z22"), stack("R"), m.params,
-            m.layout.n_mac, m.layout.n_exc, m.layout.n_pss, m.layout.n_tg, S_extra,
-            self.inertia, separation_limit, stop_at_separation, rec)
+            m.layout.n_mac, m.layout.n_exc, m.layout.n_pss, m.layout.n_tg, sa,
+            self.inertia, separation_limit, stop_at_separation, rec, P_rec, stats)
         res = self._result(grid.t, rec, k_end + 1, time.perf_counter() - wall,
                            separation_limit)
+        if storage is not None:
+            _attach_storage(res, storage, P_rec[:k_end + 1], stats, self.case.base_mva)
         if status < 0:
             why = "non-finite state" if status == DIVERGED else \
                 "the network/load equations did not converge (voltage collapse)"
@@ -199,6 +214,19 @@ class Simulator:
             meta={"case": c.name, "wall_time_s": wall,
                   "max_initial_derivative": self.model.initial_residual[0],
                   "max_initial_derivative_state": self.model.initial_residual[1]})
+
+
+def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva) -> None:
+    """Device powers and per-device figures: switchings, energy absorbed and delivered
+    (MJ), peak power actually used (MW)."""
+    res.devices = np.arange(1, len(fleet.devices) + 1)
+    res.pesd = P
+    res.meta["storage"] = [
+        {"device": i + 1, "bus": d.bus, "machine": d.machine, "pmax_mw": d.pmax_mw,
+         "switchings": int(stats[i, 0]), "energy_absorbed_mj": float(stats[i, 1] * base_mva),
+         "energy_delivered_mj": float(stats[i, 2] * base_mva),
+         "peak_power_mw": float(np.abs(P[:, i]).max() * base_mva) if P.size else 0.0}
+        for i, d in enumerate(fleet.devices)]
 
 
 def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:
@@ -239,43 +267,161 @@ def _store(rec, k, x, nm, pelect, pmech, efd, V_bus):
 
 
 @njit(cache=True)
-def integrate(x, V_nc, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, nm, ne, nps, ng,
-              S_extra, inertia, limit, stop, rec):
-    """PST's predictor-corrector over the whole grid (see the module docstring).
+def _inject(sa, P, S):
+    """Complex power drawn at the kept buses by the devices (absorbing is +)."""
+    S[:] = 0.0
+    for d in range(P.size):
+        S[sa.pos[d]] += P[d]
 
-    Stage matrices are stacked by interval.  Stores the predictor-stage outputs and the
-    states at every index into `rec`.  Returns (status, last stored index): status OK,
-    SEPARATED (stopped at loss of synchronism), DIVERGED or NO_LOAD_FLOW.
+
+@njit(cache=True)
+def _targets(sa, mode, r, v, accel, out):
+    """Device power set-points: bang-bang modes times ratings, or the linear law."""
+    for d in range(out.size):
+        if sa.kind == st.BANG_BANG:
+            out[d] = mode[d] * sa.pmax[d]
+        elif v[d] < sa.vgate:
+            out[d] = 0.0
+        else:
+            out[d] = min(max(sa.Kv * r[d] + sa.Ka * accel[d], -sa.pmax[d]), sa.pmax[d])
+
+
+@njit(cache=True)
+def _advance(sa, P, target, e, hh, stats):
+    """Device powers after hh seconds; energy (SOC, absorbed, delivered) by trapezoid."""
+    Pn = np.empty_like(P)
+    for d in range(P.size):
+        Pn[d] = st.device_power(sa, d, target[d], P[d], e[d], hh)
+        e[d] += 0.5 * hh * (P[d] + Pn[d])
+        stats[d, 1] += 0.5 * hh * (max(P[d], 0.0) + max(Pn[d], 0.0))
+        stats[d, 2] += 0.5 * hh * (max(-P[d], 0.0) + max(-Pn[d], 0.0))
+    return Pn
+
+
+@njit(cache=True)
+def _device_state(x, nm, inertia, sa, V_nc, dx, r, v, accel):
+    """Relative speeds, bus voltages and relative accelerations seen by the devices."""
+    st.relative_speeds(x, nm, inertia, sa, r)
+    st.relative_speeds(dx, nm, inertia, sa, accel)
+    for d in range(r.size):
+        v[d] = abs(V_nc[sa.pos[d]])
+
+
+@njit(cache=True)
+def integrate(x, V_nc, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, nm, ne, nps, ng,
+              sa, inertia, limit, stop, rec, P_rec, stats):
+    """PST's predictor-corrector over the whole grid (see the module docstring), with the
+    storage devices `sa` (stabctl.storage.StorageArrays).
+
+    Stage matrices are stacked by interval.  Stores the predictor-stage outputs, the states
+    and the device powers at every index (rec, P_rec).  A bang-bang device whose mode
+    changes within a step has its switching instant located (`storage.crossing`) and the
+    step is re-integrated in two parts; stats[d] = (switchings, energy absorbed, energy
+    delivered in pu*s).  Returns (status, last stored index): status OK, SEPARATED
+    (stopped at loss of synchronism), DIVERGED or NO_LOAD_FLOW.
     """
-    n = interval.size
-    nb = R.shape[1]
+    n, nd = interval.size, sa.pmax.size
     dx_k, dx_j = np.empty_like(x), np.empty_like(x)
     cur = np.empty(nm, np.complex128)
     pel, qel, et, efd, pm = np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm)
     V_bus = np.zeros(R.shape[1], np.complex128)
+    S = np.zeros(V_nc.size, np.complex128)
+    P, target, e = np.zeros(nd), np.zeros(nd), sa.e0.copy()
+    mode = np.zeros(nd, np.int64)
+    r, v, acc = np.zeros(nd), np.zeros(nd), np.zeros(nd)
+    rb, vb, accb = np.zeros(nd), np.zeros(nd), np.zeros(nd)
     M = inertia.sum()
+
+    def ev(xx, st_, want, dx):
+        return evaluate_kernel(xx, nm, ne, nps, ng, p, Y11[st_], Y12[st_], Y21[st_], Y22[st_],
+                               Z22[st_], R[st_], V_nc, S, want, dx, cur, pel, qel, et, efd, pm,
+                               V_bus)
+
     for k in range(n - 1):
         s = interval[k]
-        if first[k] and pst:   # PSTess computes this step twice; the first pass's clamps stay
-            V_tmp = V_nc.copy()
-            evaluate_kernel(x, nm, ne, nps, ng, p, Y11[s], Y12[s], Y21[s], Y22[s], Z22[s], R[s], V_tmp,
-                            S_extra, False, dx_k, cur, pel, qel, et, efd, pm, V_bus)
-        if evaluate_kernel(x, nm, ne, nps, ng, p, Y11[s], Y12[s], Y21[s], Y22[s], Z22[s], R[s], V_nc,
-                           S_extra, True, dx_k, cur, pel, qel, et, efd, pm, V_bus) < 0:
-            return NO_LOAD_FLOW, max(k - 1, 0)
-        _store(rec, k, x, nm, pel, pm, efd, V_bus)
-        xp = x + h[s] * dx_k
         j = interval[k + 1] if pst else s
-        if evaluate_kernel(xp, nm, ne, nps, ng, p, Y11[j], Y12[j], Y21[j], Y22[j], Z22[j], R[j], V_nc,
-                           S_extra, k == n - 2, dx_j, cur, pel, qel, et, efd, pm, V_bus) < 0:
-            return NO_LOAD_FLOW, k
-        x = x + 0.5 * h[s] * (dx_k + dx_j)
+        _inject(sa, P, S)
+        if first[k] and pst:   # PSTess computes this step twice; the first pass's clamps stay
+            V_keep = V_nc.copy()
+            ev(x, s, False, dx_k)
+            V_nc[:] = V_keep
+        if ev(x, s, True, dx_k) < 0:
+            return NO_LOAD_FLOW, max(k - 1, 0)
+        if nd > 0:   # controller at the grid point (events make voltages jump here)
+            _device_state(x, nm, inertia, sa, V_nc, dx_k, r, v, acc)
+            for d in range(nd):
+                want = st.desired_mode(sa, d, mode[d], r[d], v[d])
+                if sa.kind == st.BANG_BANG and want != mode[d]:
+                    mode[d] = want
+                    stats[d, 0] += 1
+            _targets(sa, mode, r, v, acc, target)
+            changed = False
+            for d in range(nd):
+                Pn = st.device_power(sa, d, target[d], P[d], e[d], 0.0)
+                changed = changed or Pn != P[d]
+                P[d] = Pn
+            if changed:
+                _inject(sa, P, S)
+                ev(x, s, True, dx_k)
+        _store(rec, k, x, nm, pel, pm, efd, V_bus)
+        if nd > 0:
+            P_rec[k] = P
+        x_a, dx_a, rem = x, dx_k, h[s]
+        for _split in range(8):
+            Pb = _advance(sa, P, target, e.copy(), rem, np.zeros((nd, 3)))
+            _inject(sa, Pb, S)
+            xp = x_a + rem * dx_a
+            if ev(xp, j, k == n - 2, dx_j) < 0:
+                return NO_LOAD_FLOW, k
+            x_b = x_a + 0.5 * rem * (dx_a + dx_j)
+            if nd == 0 or sa.kind != st.BANG_BANG:
+                break
+            _device_state(x_b, nm, inertia, sa, V_nc, dx_j, rb, vb, accb)
+            theta, first_d = 2.0, -1
+            for d in range(nd):
+                want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
+                if want != mode[d]:
+                    th, _ = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
+                    if th < theta:
+                        theta, first_d = th, d
+            if first_d < 0:
+                break
+            hh = theta * rem           # re-integrate up to the first switching instant
+            Pm = _advance(sa, P, target, e, hh, stats)
+            _inject(sa, Pm, S)
+            if ev(x_a + hh * dx_a, s, False, dx_j) < 0:
+                return NO_LOAD_FLOW, k
+            x_a = x_a + 0.5 * hh * (dx_a + dx_j)
+            rem -= hh
+            P = Pm
+            _device_state(x_a, nm, inertia, sa, V_nc, dx_j, r, v, acc)
+            for d in range(nd):
+                want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
+                if want != mode[d]:
+                    th, new = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
+                    if d == first_d or th <= 1e-9:
+                        mode[d] = new
+                        stats[d, 0] += 1
+            _targets(sa, mode, r, v, acc, target)
+            for d in range(nd):
+                P[d] = st.device_power(sa, d, target[d], P[d], e[d], 0.0)
+            _inject(sa, P, S)
+            dx_a = np.empty_like(x)
+            if ev(x_a, s, False, dx_a) < 0:
+                return NO_LOAD_FLOW, k
+        if nd > 0:
+            P = _advance(sa, P, target, e, rem, stats)
+        x = x_b
         if not np.all(np.isfinite(x)):
             return DIVERGED, k
         if stop:
             coi = (x[:nm] * inertia).sum() / M
             if np.max(np.abs(x[:nm] - coi)) > limit:
                 _store(rec, k + 1, x, nm, pel, pm, efd, V_bus)
+                if nd > 0:
+                    P_rec[k + 1] = P
                 return SEPARATED, k + 1
     _store(rec, n - 1, x, nm, pel, pm, efd, V_bus)
+    if nd > 0:
+        P_rec[n - 1] = P
     return OK, n - 1
