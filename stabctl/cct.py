@@ -37,6 +37,7 @@ import numpy as np
 
 from .errors import InputError, SimulationError
 from .events import Fault, LineTrip
+from .network import circuit_row
 from .results import SimulationResult
 from .simulation import Simulator, default_step
 
@@ -50,8 +51,8 @@ class LineFault:
     """A three-phase fault at `bus` on circuit `circuit` of line `bus`-`far_bus`, starting
     at `t_fault` (s), cleared at both ends at the same instant (the line stays out).
 
-    trips: further circuits (from_bus, to_bus) opened at the clearing instant, e.g. the
-    parallel circuit of a double line.
+    trips: further lines (from_bus, to_bus), circuit 1 of each, opened at the clearing
+    instant; both circuits of a double line: circuit=2 and trips=((bus, far_bus),).
     """
 
     bus: int
@@ -166,6 +167,7 @@ def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL
     """
     t_end = fault.t_fault + T_AFTER_FAULT if t_end is None else t_end
     _check_settings(fault, tol, t_lo, t_hi, t_max, t_end)
+    _check_trips(sim.case, fault)
     h = default_step(sim.case) if h is None else h
     crit = no_separation if criterion is None else criterion
     stop = criterion is None if stop_at_separation is None else stop_at_separation
@@ -206,6 +208,17 @@ def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
     if not t_end > fault.t_fault + t_max:
         raise InputError(f"run end {t_end:g} s must come after the latest clearing "
                          f"(fault at {fault.t_fault:g} s + t_max {t_max:g} s)")
+
+
+def _check_trips(case, fault: LineFault) -> None:
+    """A further trip must not name the faulted circuit itself (it would do nothing)."""
+    if not fault.trips:
+        return
+    faulted = circuit_row(case, fault.bus, fault.far_bus, fault.circuit)
+    for a, b in fault.trips:
+        if circuit_row(case, a, b) == faulted:
+            raise InputError(f"{fault.describe()}: trip {a}-{b} is the faulted circuit itself; "
+                             f"to open both circuits fault circuit 2 and trip circuit 1")
 
 
 def _lattice(k: int, tol: float) -> float:

@@ -418,8 +418,9 @@ def _print_cct(case_name, rating, d) -> None:
 @click.option("--t-fault", type=float, default=1.0, show_default=True, metavar="S",
               help="Fault start time (s).")
 @click.option("--trip", type=(int, int), multiple=True, metavar="FROM TO",
-              help="Also open one circuit of line FROM-TO at the clearing instant "
-                   "(repeatable), e.g. the parallel circuit.")
+              help="Also open circuit 1 of line FROM-TO at the clearing instant "
+                   "(repeatable); both circuits of a double line: --circuit 2 --trip "
+                   "BUS FAR_BUS.")
 @click.option("--esd-pct", type=float, default=None, metavar="P",
               help="Storage of P % of each generator's MVA at its HV bus "
                    "(stabctl.storage.uniform_fleet, paper's bang-bang COI control).")
