@@ -177,15 +177,17 @@ class Simulator:
         P_rec = np.zeros((N, sa.pmax.size))
         stats = np.zeros((sa.pmax.size, 3))
         wall = time.perf_counter()
+        log = np.full((4096, 4), np.nan)
         status, k_end = integrate(
-            m.x0.copy(), m.V_nc0.copy(), grid.interval, grid.h, first, semantics == "pst",
+            m.x0.copy(), m.V_nc0.copy(), grid.t, grid.interval, grid.h, first, semantics == "pst",
             stack("Y11"), stack("Y12"), stack("Y21"), stack("Y22"), stack("Z22"), stack("R"), m.params,
             m.layout.n_mac, m.layout.n_exc, m.layout.n_pss, m.layout.n_tg, sa,
-            self.inertia, separation_limit, stop_at_separation, rec, P_rec, stats)
+            self.inertia, separation_limit, stop_at_separation, rec, P_rec, stats, log)
         res = self._result(grid.t, rec, k_end + 1, time.perf_counter() - wall,
                            separation_limit)
         if storage is not None:
-            _attach_storage(res, storage, P_rec[:k_end + 1], stats, self.case.base_mva)
+            _attach_storage(res, storage, P_rec[:k_end + 1], stats, self.case.base_mva,
+                            log[~np.isnan(log[:, 0])], self.case.freq_hz)
         if status < 0:
             why = "non-finite state" if status == DIVERGED else \
                 "the network/load equations did not converge (voltage collapse)"
@@ -216,11 +218,13 @@ class Simulator:
                   "max_initial_derivative_state": self.model.initial_residual[1]})
 
 
-def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva) -> None:
+def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva, log, f0) -> None:
     """Device powers and per-device figures: switchings, energy absorbed and delivered
-    (MJ), peak power actually used (MW)."""
+    (MJ), peak power actually used (MW); the switching log (time s, device number, new
+    mode, relative speed Hz) in res.meta["switchings"]."""
     res.devices = np.arange(1, len(fleet.devices) + 1)
     res.pesd = P
+    res.meta["switchings"] = [(float(t), int(d) + 1, int(m), float(r * f0)) for t, d, m, r in log]
     res.meta["storage"] = [
         {"device": i + 1, "bus": d.bus, "machine": d.machine, "pmax_mw": d.pmax_mw,
          "switchings": int(stats[i, 0]), "energy_absorbed_mj": float(stats[i, 1] * base_mva),
@@ -267,6 +271,15 @@ def _store(rec, k, x, nm, pelect, pmech, efd, V_bus):
 
 
 @njit(cache=True)
+def _log(log, stats, d, time_, mode, r):
+    """Count a switching of device d and log it (time s, device, new mode, rel. speed)."""
+    row = int(stats[:, 0].sum())
+    stats[d, 0] += 1
+    if row < log.shape[0]:
+        log[row, 0], log[row, 1], log[row, 2], log[row, 3] = time_, d, mode, r
+
+
+@njit(cache=True)
 def _inject(sa, P, S):
     """Complex power drawn at the kept buses by the devices (absorbing is +)."""
     S[:] = 0.0
@@ -308,8 +321,8 @@ def _device_state(x, nm, inertia, sa, V_nc, dx, r, v, accel):
 
 
 @njit(cache=True)
-def integrate(x, V_nc, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, nm, ne, nps, ng,
-              sa, inertia, limit, stop, rec, P_rec, stats):
+def integrate(x, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, nm, ne, nps,
+              ng, sa, inertia, limit, stop, rec, P_rec, stats, log):
     """PST's predictor-corrector over the whole grid (see the module docstring), with the
     storage devices `sa` (stabctl.storage.StorageArrays).
 
@@ -317,7 +330,8 @@ def integrate(x, V_nc, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, n
     and the device powers at every index (rec, P_rec).  A bang-bang device whose mode
     changes within a step has its switching instant located (`storage.crossing`) and the
     step is re-integrated in two parts; stats[d] = (switchings, energy absorbed, energy
-    delivered in pu*s).  Returns (status, last stored index): status OK, SEPARATED
+    delivered in pu*s); log rows (time, device, new mode, relative speed pu) record the
+    switchings while there is room.  Returns (status, last stored index): status OK, SEPARATED
     (stopped at loss of synchronism), DIVERGED or NO_LOAD_FLOW.
     """
     n, nd = interval.size, sa.pmax.size
@@ -353,7 +367,7 @@ def integrate(x, V_nc, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, n
                 want = st.desired_mode(sa, d, mode[d], r[d], v[d])
                 if sa.kind == st.BANG_BANG and want != mode[d]:
                     mode[d] = want
-                    stats[d, 0] += 1
+                    _log(log, stats, d, t[k], want, r[d])
             _targets(sa, mode, r, v, acc, target)
             changed = False
             for d in range(nd):
@@ -378,9 +392,11 @@ def integrate(x, V_nc, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, n
                 break
             _device_state(x_b, nm, inertia, sa, V_nc, dx_j, rb, vb, accb)
             theta, first_d = 2.0, -1
+            at_event = interval[k + 1] != s
             for d in range(nd):
                 want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
-                if want != mode[d]:
+                gate_jump = (v[d] >= sa.vgate) != (vb[d] >= sa.vgate)
+                if want != mode[d] and not (at_event and gate_jump):  # events switch at t_k+1
                     th, _ = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
                     if th < theta:
                         theta, first_d = th, d
@@ -401,7 +417,7 @@ def integrate(x, V_nc, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, n
                     th, new = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
                     if d == first_d or th <= 1e-9:
                         mode[d] = new
-                        stats[d, 0] += 1
+                        _log(log, stats, d, t[k + 1] - rem, new, r[d])
             _targets(sa, mode, r, v, acc, target)
             for d in range(nd):
                 P[d] = st.device_power(sa, d, target[d], P[d], e[d], 0.0)
