@@ -152,9 +152,10 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
                    disable=not progress)
         with closing(results), _appender(out) as f, bar:
             for rec in results:
-                f.write(_line(rec))
+                line = _line(rec)
+                f.write(line)
                 f.flush()
-                done[rec["key"]] = rec
+                rec = done[rec["key"]] = json.loads(line)      # as it reads back
                 failed += rec["status"] == "failed"
                 bar.update()
                 bar.set_postfix(failed=failed)
