@@ -14,7 +14,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import plotting
+from . import paper_storage, plotting
 from .coi import PAPER_TWO_MACHINE, PAPER_TWO_MACHINE_T_RELEASE
 from .feedback import PAPER_LAWS, settling_time
 from .omib import PAPER_OMIB, clearing_table, eac_summary, simulate
@@ -150,8 +150,9 @@ def section_two_machine_and_min_time(fig_dir: Path) -> str:
     return "\n".join(lines)
 
 
-SECTIONS: tuple[Callable[[Path], str], ...] = (section_omib, section_feedback,
-                                               section_two_machine_and_min_time)
+SECTIONS: tuple[Callable[[Path], str], ...] = (
+    section_omib, section_feedback, section_two_machine_and_min_time,
+    paper_storage.section_case1, paper_storage.section_case2)
 
 
 def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], None] = print) -> Path:
@@ -170,6 +171,8 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
         for section in SECTIONS:
             progress(f"paper: {section.__doc__.splitlines()[0]}")
             parts.append(section(tmp))
+        progress("paper: Table 4 (CCT sweeps, resumable records in the report directory)")
+        parts.append(paper_storage.section_table4(tmp, out))
         (tmp / "paper.md").write_text("\n".join(parts))
         for f in tmp.iterdir():
             os.replace(f, out / f.name)

@@ -142,3 +142,36 @@ def simulation_overview(result, path, title: str | None = None, max_labels: int 
     head = title or str(result.meta.get("case", "simulation"))
     axes[0].set_title(f"{head}\n{verdict}", fontsize=9)
     _save(fig, Path(path))
+
+
+def storage_case_figure(without, with_, path: Path, title: str) -> None:
+    """Speeds without and with storage control, and the device powers (paper Figs. 14-19)."""
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    for ax, res, label in ((axes[0], without, "without control"), (axes[1], with_, "with control")):
+        ax.plot(res.t, res.speed, lw=1)
+        ax.set(xlabel="t (s)", ylabel="speed (pu)", title=f"machine speeds, {label}")
+    active = [i for i, d in enumerate(with_.meta["storage"]) if d["switchings"] > 0]
+    for i in active[:12]:
+        d = with_.meta["storage"][i]
+        axes[2].plot(with_.t, with_.pesd[:, i] * 100, lw=1,
+                     label=f"ESD at bus {d['bus']} (G{d['machine']})")
+    axes[2].set(xlabel="t (s)", ylabel="ESD power (MW, + absorbs)", title="device powers")
+    axes[2].legend(fontsize=7)
+    for ax in axes[:2]:
+        ax.set_ylim(min(a.speed.min() for a in (without, with_)) - 0.002,
+                    max(a.speed.max() for a in (without, with_)) + 0.002)
+    fig.suptitle(title)
+    _save(fig, path)
+
+
+def cct_versus_rating(results: dict, ratings, path: Path) -> None:
+    """CCT increase (%) versus ESD rating (% of machine MVA) per case (Table 4)."""
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for key, res in results.items():
+        base = res[None]["cct_s"]
+        gains = [0] + [100 * (res[p]["cct_s"] / base - 1) for p in ratings]
+        ax.plot([0, *ratings], gains, "o-", label=key.replace("case", "Case "))
+    ax.set(xlabel="ESD rating (% of machine MVA)", ylabel="CCT increase (%)",
+           title="Table 4: CCT gain versus storage rating")
+    ax.legend()
+    _save(fig, path)
