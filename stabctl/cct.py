@@ -135,7 +135,8 @@ class CCTResult:
 
 
 def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL,
-                           t_lo: float = T_LO, t_hi: float = T_HI, t_max: float = T_MAX,
+                           t_lo: float = T_LO, t_hi: float | None = None,
+                           t_max: float = T_MAX,
                            t_end: float | None = None, h: float | None = None,
                            separation_limit: float = np.pi,
                            criterion: Callable[[SimulationResult], bool] | None = None,
@@ -148,7 +149,8 @@ def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL
         fault: the fault; its clearing time is the unknown.
         tol: width of the final bracket (s, > 0).
         t_lo: clearing time that must be stable (s, >= 0; 0 = the line trip alone).
-        t_hi: first upper bound (s); doubled (capped at t_max) while it is still stable.
+        t_hi: first upper bound (s, default min(0.1 s, t_max)); doubled (capped at t_max)
+            while it is still stable.
         t_max: largest clearing time tried (s).
         t_end: run end (s, absolute; default t_fault + 5 s; must exceed t_fault + t_max).
         h: integration step (s, default the case's); separation_limit: rad from the COI.
@@ -166,6 +168,7 @@ def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL
         UnknownBusError, CaseError: no such bus or line; SimulationError: divergence.
     """
     t_end = fault.t_fault + T_AFTER_FAULT if t_end is None else t_end
+    t_hi = min(T_HI, t_max) if t_hi is None else t_hi
     _check_settings(fault, tol, t_lo, t_hi, t_max, t_end)
     _check_trips(sim.case, fault)
     h = default_step(sim.case) if h is None else h

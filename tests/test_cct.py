@@ -133,6 +133,8 @@ def test_unstable_at_the_lower_bound_is_an_error(kundur):
 def test_cct_above_t_max_is_an_error(kundur):
     with pytest.raises(InputError, match=r"above the search limit t_max = 0.2 s \(12 cycles\)"):
         critical_clearing_time(kundur, CASE1, t_max=0.2)
+    with pytest.raises(InputError, match=r"above the search limit t_max = 0.05 s"):
+        critical_clearing_time(kundur, CASE1, t_max=0.05)      # below the first upper bound
 
 
 @pytest.mark.parametrize("kw, msg", [
