@@ -251,7 +251,8 @@ def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple
     while stable_at(k_hi):
         if k_hi == k_max:
             t = _lattice(k_max, tol)
-            raise InputError(f"{fault.describe()}: the CCT is above the search limit t_max = {t:g} s "
+            raise InputError(f"{fault.describe()}: the CCT is above the search limit "
+                             f"t_max = {t:g} s "
                              f"({t * freq:.4g} cycles): still stable when cleared there")
         k_lo, k_hi = k_hi, min(2 * k_hi, k_max)
     return k_lo, k_hi

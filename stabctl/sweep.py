@@ -10,7 +10,8 @@ must be installed on the workers).
 Output: a JSON-lines file, one line per finished job, appended and flushed as each job
 completes, so an interrupted sweep (Ctrl-C, a killed job) keeps every finished job:
 
-    {"key": ..., "inputs": {...}, "status": "ok", "result": {...}, "wall_time_s": ..., "worker": "host:pid"}
+    {"key": ..., "inputs": {...}, "status": "ok", "result": {...}, "wall_time_s": ...,
+     "worker": "host:pid"}          (one line in the file)
     {"key": ..., "inputs": {...}, "status": "failed", "error": "SimulationError: ...", ...}
 
 A job that raises is recorded as failed with the exception's type and message (and the

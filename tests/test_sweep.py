@@ -48,6 +48,10 @@ def ctrl_c_parent(x):
     return {}
 
 
+def crash(x):
+    os._exit(x)                     # the worker process dies (as on a segfault or OOM kill)
+
+
 def simulator_identity(case):
     return {"id": id(cached_simulator(case)), "pid": os.getpid()}
 
@@ -101,6 +105,16 @@ def test_failures_are_recorded_with_their_reason(tmp_path):
     retry = run_sweep(jobs, out, workers=1, progress=False, retry_failed=True)
     assert (retry.ran, retry.failed) == (3, 3)
     assert len(lines(out)) == 7 and read_records(out)["boom/3"]["status"] == "failed"
+
+
+def test_a_dying_worker_is_recorded_not_dropped(tmp_path):
+    out = tmp_path / "crash.jsonl"
+    rep = run_sweep(jobs_of(crash, 3) + jobs_of(square, 1, 2), out, workers=2, progress=False)
+    assert sorted(r["key"] for r in lines(out)) == ["crash/3", "square/1", "square/2"]
+    died = rep.records["crash/3"]
+    assert died["status"] == "failed" and died["error"].startswith("worker failed: Broken")
+    again = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False, retry_failed=True)
+    assert all(r["status"] == "ok" for r in again.records.values())
 
 
 def test_simulator_built_once_per_case_per_process(tmp_path):
