@@ -259,15 +259,19 @@ def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple
 
 
 def _run(sim, fault: LineFault, t_clear, t_end, h, limit, stop, extra):
-    """One probe: (result, diverged).  A run that diverged after a machine separated
-    gives its partial result and True; any other divergence is raised, naming the fault
-    and the clearing time."""
+    """One probe: (result, diverged).  A run that diverged after a machine separated, or
+    whose network has no solution after the fault is cleared (voltage collapse), gives its
+    partial result and True (unstable); a failure while the fault is on is raised, naming
+    the fault and the clearing time (the model's limit, not a verdict)."""
     try:
         return sim.run(fault.events(t_clear), t_end, h=h, separation_limit=limit,
                        stop_at_separation=stop, **extra), False
     except SimulationError as exc:
-        if exc.result is not None and not exc.result.stable:
-            return exc.result, True
+        res = exc.result
+        t = getattr(res, "t", None)
+        cleared = t is not None and len(t) > 0 and t[-1] >= fault.t_fault + t_clear
+        if res is not None and (not res.stable or cleared):
+            return res, True
         raise SimulationError(f"{fault.describe()}, cleared after {t_clear:g} s: {exc}",
                               result=exc.result) from exc
 

@@ -110,13 +110,14 @@ class NonConformingLoads:
 
 
 @njit(cache=True)
-def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F):
-    """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|."""
+def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
+    """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|.  Buses with low[i]
+    are held at their low-voltage impedance model."""
     F[:] = b + Y22 @ V
     worst = 0.0
     for i in range(V.size):
         m = abs(V[i])
-        if m > V_SWITCH:
+        if m > V_SWITCH and not low[i]:
             F[i] += np.conj(S_P[i] + S_extra[i] + I0[i] * m) / np.conj(V[i])
         else:
             F[i] += np.conj(Y_low[i]) * V[i]
@@ -133,8 +134,11 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, tol=1e-10, max_iter
     rest).  V (n_nc,) is the starting point and is updated in place.  First the chord
     iteration V <- V - Z22 F(V) (the loads are small beside the network admittance, so it
     contracts fast and costs one matrix-vector product per step); if that has not converged
-    in 30 steps, Newton's method in rectangular coordinates (as PST).  Returns the number
-    of iterations, or -1 without convergence (the caller raises SimulationError).
+    in 30 steps, Newton's method in rectangular coordinates (as PST).  If Newton fails too,
+    the switch has left the equations without a solution (a load at 0.5 pu draws twice as
+    much just above the switch as just below; PSTess stops there): the loads within 0.05 pu
+    of the switch are then held at their impedance model for this evaluation.  Returns the
+    number of iterations, or -1 without convergence (the caller raises SimulationError).
     """
     n = V.size
     if n == 0:
@@ -142,23 +146,30 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, tol=1e-10, max_iter
     b = Y21 @ psi
     F = np.empty(n, np.complex128)
     V_start = V.copy()
+    low = np.zeros(n, np.bool_)
     for it in range(30):
-        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F) < tol:
+        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low) < tol:
             return it
         V -= Z22 @ F
     V[:] = V_start
-    return _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter)
+    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low)
+    if it >= 0:
+        return it
+    for i in range(n):
+        low[i] = abs(V_start[i]) < V_SWITCH + 0.05 or abs(V[i]) < V_SWITCH + 0.05
+    V[:] = V_start
+    return _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low)
 
 
 @njit(cache=True)
-def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter):
+def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low):
     """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load)."""
     n = V.size
     J = np.empty((2 * n, 2 * n))
     rhs = np.empty(2 * n)
     F = np.empty(n, np.complex128)
     for it in range(max_iter):
-        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F) < tol:
+        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low) < tol:
             return it
         # Wirtinger derivatives: d(load current) = A dV + B conj(dV), A, B diagonal
         for r in range(n):
@@ -169,7 +180,7 @@ def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter):
                 J[n + r, n + c] = Y22[r, c].real
             m = abs(V[r])
             Vc = np.conj(V[r])
-            if m > V_SWITCH:
+            if m > V_SWITCH and not low[r]:
                 A = np.conj(I0[r]) / (2 * m)
                 B = -np.conj(S_P[r] + S_extra[r]) / Vc ** 2 - np.conj(I0[r]) * m / (2 * Vc ** 2)
             else:

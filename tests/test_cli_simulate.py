@@ -11,7 +11,7 @@ from click.testing import CliRunner
 from stabctl import pstio
 from stabctl.case import load_case
 from stabctl.cli import main
-from stabctl.events import LoadStep
+from stabctl.events import GeneratorTrip
 from stabctl.results import SimulationResult
 from stabctl.simulation import Simulator
 
@@ -166,14 +166,15 @@ def test_nonconvergent_powerflow_exits_2(tmp_path):
 
 
 def test_diverging_run_exits_2_reports_stop_time(tmp_path, monkeypatch):
-    """A real divergence (the 40 pu load step of test_simulation's diverging run, which the
-    CLI has no option for) injected into the CLI's run: nothing written, stop time told."""
+    """A real divergence (test_simulation's: three of Kundur's four generators tripped, which
+    the CLI has no option for) injected into the CLI's run: nothing written, stop time told."""
     original = Simulator.run
 
-    def with_load_step(self, events=(), *args, **kwargs):
-        return original(self, [*events, LoadStep(bus=4, t=0.5, P=40.0)], *args, **kwargs)
+    def with_trips(self, events=(), *args, **kwargs):
+        trips = [GeneratorTrip(m, 0.5) for m in (1, 2, 3)]
+        return original(self, [*events, *trips], *args, **kwargs)
 
-    monkeypatch.setattr(Simulator, "run", with_load_step)
+    monkeypatch.setattr(Simulator, "run", with_trips)
     res = run("simulate", "kundur", "--tf", 3, "--out", tmp_path / "r.csv", "--plot",
               tmp_path / "r.png", "--json")
     assert_bad_input(res, tmp_path, "did not converge", "t = ")
