@@ -100,12 +100,20 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 @main.command()
 @click.option("--out", "out_dir", default="reports", show_default=True,
               type=click.Path(file_okay=False), help="Report directory.")
+@click.option("--resume", is_flag=True,
+              help="Keep the Table 4 sweep records already in OUT (after an interruption); "
+                   "by default they are recomputed.")
 @_reports_errors
-def paper(out_dir):
-    """Reproduce the paper's tables and figures into OUT/paper.md (+ PNG figures)."""
+def paper(out_dir, resume):
+    """Reproduce the paper's tables and figures into OUT/paper.md (+ PNG figures).
+
+    The Table 4 CCT sweeps record each finished search in OUT/table4_<case>.jsonl as it
+    completes; an interrupted run continues from there with --resume.
+    """
     from .paper import write_paper_report
 
-    path = write_paper_report(out_dir, progress=lambda msg: click.echo(msg, err=True))
+    path = write_paper_report(out_dir, progress=lambda msg: click.echo(msg, err=True),
+                              resume=resume)
     click.echo(f"wrote {path}")
 
 
@@ -287,11 +295,22 @@ def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
               metavar="FILE.csv|FILE.npz", help="Write the trajectories (CSV or numpy .npz).")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
               metavar="FILE.png", help="Plot speeds, angles from the COI and bus voltages.")
+@click.option("--esd-pct", type=float, default=None, metavar="P",
+              help="ESD of P % of each generator's MVA at its HV bus, paper's bang-bang "
+                   "COI control (Table 3).")
+@click.option("--deadband-hz", type=float, default=0.1, show_default=True,
+              help="ESD controller deadband on f_i - f_COI (Hz).")
+@click.option("--v-gate", type=float, default=0.8, show_default=True,
+              help="ESDs act only while their bus voltage is at least this (pu).")
+@click.option("--coi", type=click.Choice(["system", "rest"]), default="system",
+              show_default=True, help="COI of the whole system or of the rest of it.")
+@click.option("--hysteresis-hz", type=float, default=0.0, show_default=True,
+              help="A running ESD stops only inside deadband - hysteresis (Hz).")
 @click.option("--json", "as_json", is_flag=True, help="Print the run summary as JSON.")
 @_reports_errors
 def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clear_cycles, trip,
              t_trip, pstess_default, tf, step, separation_limit, stop_at_separation, out_path,
-             plot_path, as_json):
+             plot_path, esd_pct, deadband_hz, v_gate, coi, hysteresis_hz, as_json):
     """Nonlinear multi-machine time-domain simulation (PSTess models and integrator).
 
     CASE is a built-in name (see `stabctl cases`) or a case file (.json, PST .m). The run
@@ -310,13 +329,16 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
 
     \b
     CSV columns: t, speed_pu.G<k>, angle_rad.G<k>, pelect_pu.G<k>, pmech_pu.G<k>,
-    efd_pu.G<k> per machine k, vmag_pu.B<n>, vang_rad.B<n> per bus n.
+    efd_pu.G<k> per machine k, vmag_pu.B<n>, vang_rad.B<n> per bus n, and with
+    --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also lists, per device,
+    switchings, energy absorbed and delivered (MJ) and peak power used (MW).
 
     \b
     Examples:
       stabctl simulate kundur --pstess-default --out kundur.csv
       stabctl simulate kundur --fault 3 --far-bus 101 --t-fault 1 --clear-cycles 21 --json
       stabctl simulate miniwecc --trip 40 44 --t-trip 1 --tf 10 --plot wecc.png
+      stabctl simulate miniwecc --fault 83 --far-bus 33 --clear-cycles 6 --esd-pct 5 --json
 
     Bad input (unknown case or bus, no such line, negative cycles, power flow not
     converging) and a run that diverges exit with status 2 and one `error:` line; no file
@@ -343,9 +365,13 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
         raise InputError(f"{_describe_event(late[0])}: starts at or after the end of the run "
                          f"(--tf {tf:g} s)")
     h = default_step(case) if step is None else step
+    fleet = None
+    if esd_pct is not None:
+        from .storage import BangBangCOI, uniform_fleet
+        fleet = uniform_fleet(case, esd_pct, BangBangCOI(deadband_hz, v_gate, coi, hysteresis_hz))
     sim = Simulator(case)
     result = sim.run(events, t_end=tf, h=h, separation_limit=separation_limit,
-                     stop_at_separation=stop_at_separation)
+                     stop_at_separation=stop_at_separation, storage=fleet)
     written = []
     if plot_p is not None:
         _save_plot_atomically(result, plot_p, title=f"{case.name}: "
@@ -565,6 +591,66 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
     n_bad = sum(r["status"] != "ok" for r in rep.records.values())
     click.echo(f"{len(jobs)} job(s): {rep.ran} run now, {rep.skipped} already in {rep.out}; "
                f"{n_bad} failed; wall {rep.wall_time_s:.1f} s")
+
+
+# -- small-signal modes ------------------------------------------------------------------
+
+@main.command()
+@click.argument("case_name", metavar="CASE")
+@click.option("--no-pss", is_flag=True, help="Analyse the case with its PSS removed (pss_con empty).")
+@click.option("--areas", "n_areas", type=int, default=None, metavar="N",
+              help="Number of coherent areas for the local/inter-area classification "
+                   "(default: from the largest gap between electromechanical frequencies).")
+@click.option("--report", is_flag=True,
+              help="Write OUT/eig_<case>[_nopss].md with the eigenvalue plot, mode-shape "
+                   "compass plots and participation bar charts (PNG).")
+@click.option("--out", "out_dir", default="reports", show_default=True, metavar="DIR",
+              help="Report directory (with --report).")
+@click.option("--json", "as_json", is_flag=True, help="Print every mode as JSON.")
+@_reports_errors
+def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
+    """Small-signal modes: linearise CASE at its power flow and list its modes.
+
+    The simulator's own equations are linearised by central differences (PSTess svm_mgen's
+    method; docs/modal.md). Printed: the electromechanical modes (0.1-2.5 Hz, dominated by
+    rotor angle and speed states) with frequency (Hz), damping ratio, dominant machines,
+    and local / inter-area by their mode shapes; --json prints every mode (eigenvalue,
+    frequency, damping, kind, dominant states, and for electromechanical modes the
+    coherent groups, speed mode shape and the ESD bus with the largest residue).
+    \b
+    Examples:
+      stabctl eig kundur --report
+      stabctl eig kundur --no-pss --json
+      stabctl eig miniwecc --areas 3 --report
+
+    Bad input (unknown case, --areas out of range, --out a file) exits with status 2 and
+    one `error:` line; nothing is written then.
+    """
+    import numpy as np
+
+    from .case import load_case
+    from .eigreport import eig_study, study_json, write_report
+
+    if Path(out_dir).exists() and not Path(out_dir).is_dir():
+        raise InputError(f"--out {out_dir} is not a directory")
+    st = eig_study(load_case(case_name), no_pss=no_pss, n_areas=n_areas)
+    written = [str(write_report(st, out_dir))] if report else []
+    if as_json:
+        _print_json({**study_json(st), "files": written})
+        return
+    ma = st.ma
+    click.echo(f"case {st.case.name}{' without PSS' if no_pss else ''}: {st.sys.nstates} "
+               f"states; linearised in {st.t_linearise:.2f} s, analysed in {st.t_analyse:.2f} s")
+    click.echo(f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
+               "(excluded from damping statistics)")
+    click.echo(f"{'mode':>5} {'f Hz':>7} {'damping':>8}  {'kind':<10} machines")
+    em = ma.electromechanical
+    for i in em[np.argsort(ma.freq_hz[em])]:
+        g1, g2 = ma.groups(i)
+        click.echo(f"{i:5d} {ma.freq_hz[i]:7.3f} {ma.damping[i]:8.4f}  {ma.kind[i]:<10} "
+                   f"{' '.join(f'G{k}' for k in g1[:6])} vs {' '.join(f'G{k}' for k in g2[:6]) or '-'}")
+    for w in written:
+        click.echo(f"wrote {w}")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -27,6 +27,7 @@ from .errors import InputError
 
 F_MIN_HZ, F_MAX_HZ = 0.1, 2.5     # electromechanical band
 INTER_AREA_ETA = 0.5              # area-momentum fraction above which a mode is inter-area
+GAP_RATIO = 1.3                   # consecutive EM frequencies this far apart: time-scale gap
 SIGNIFICANT = 0.2                 # |speed shape| (of the largest) to count in a coherent group
 STATE_GROUPS = ("rotor angle/speed", "rotor flux", "exciter", "pss", "governor")
 
@@ -131,7 +132,8 @@ def state_group(name: str) -> str:
     return {"exc": STATE_GROUPS[2], "pss": STATE_GROUPS[3], "tg": STATE_GROUPS[4]}[block]
 
 
-def modal_analysis(sys, inertia=None, n_areas: int | None = None) -> ModalAnalysis:
+def modal_analysis(sys, inertia=None, n_areas: int | None = None,
+                   areas: dict | None = None) -> ModalAnalysis:
     """Modes of a linearised model (a control.StateSpace from `stabctl.linearise`).
 
     Args:
@@ -141,8 +143,11 @@ def modal_analysis(sys, inertia=None, n_areas: int | None = None) -> ModalAnalys
             model's 'omega_coi' output, i.e. the ones `linearise` used).
         n_areas: number of coherent areas (default: from the largest gap between
             consecutive electromechanical frequencies, `coherent_areas`).
+        areas: the planner's own areas, machine number -> label (every machine), instead
+            of coherency.
     Raises:
-        InputError: a model without machine speed states, or n_areas out of range.
+        InputError: a model without machine speed states, n_areas out of range, areas
+            missing a machine.
     """
     states = np.array(sys.state_labels)
     speed = np.array([i for i, n in enumerate(states) if n.startswith("mac_omega_G")])
@@ -163,7 +168,10 @@ def modal_analysis(sys, inertia=None, n_areas: int | None = None) -> ModalAnalys
     groups = np.array([state_group(n) for n in states])
     shares = np.array([[P[groups == g, i].sum() for g in STATE_GROUPS] for i in range(lam.size)])
     em = np.nonzero((f >= F_MIN_HZ) & (f <= F_MAX_HZ) & (shares[:, 0] >= shares.max(axis=1)))[0]
-    areas = coherent_areas(shape, f, em, n_areas)
+    if areas is None:
+        areas = coherent_areas(shape, f, em, n_areas)
+    else:
+        areas = _given_areas(areas, machines)
     eta = np.full(lam.size, np.nan)
     eta[em] = area_momentum_fraction(shape[:, em], inertia, areas)
     kind = np.full(lam.size, "other", dtype=object)
@@ -216,9 +224,12 @@ def coherent_areas(shape: np.ndarray, freq_hz: np.ndarray, em: np.ndarray,
     of V^T are the area references; machine k joins the area j maximising
     (V V_ref^-1)_kj (invariant to the basis of the span).
 
-    r (n_areas) defaults to 1 + the position of the largest ratio between consecutive
-    sorted electromechanical frequencies among the lower half (a time-scale gap: the modes
-    below it are the slow, inter-area ones).  Returns labels (g,), 0 for a single area.
+    r (n_areas) defaults to 1 + the number of slow modes: the electromechanical modes below
+    a time-scale gap, taken as the highest ratio of at least GAP_RATIO between consecutive
+    sorted frequencies in their lower half (else the largest ratio there).  This is a
+    heuristic (Kundur: r = 2, miniWECC: r = 3, docs/modal.md); planners who know their
+    areas pass n_areas or `modal_analysis(areas=...)`.  Returns labels (g,), 0 for a
+    single area.
     Raises InputError for n_areas outside [1, number of EM modes + 1] or above g.
     """
     g = shape.shape[0]
@@ -226,7 +237,8 @@ def coherent_areas(shape: np.ndarray, freq_hz: np.ndarray, em: np.ndarray,
     if n_areas is None:
         n_areas = 1 + _slow_mode_count(freq_hz[em])
     if not 1 <= n_areas <= min(em.size + 1, g):
-        raise InputError(f"n_areas must be between 1 and {min(em.size + 1, g)}, got {n_areas}")
+        raise InputError(f"the number of areas must be between 1 and {min(em.size + 1, g)} "
+                         f"(electromechanical modes + 1, at most the machines), got {n_areas}")
     if n_areas == 1:
         return np.zeros(g, int)
     V = np.column_stack([np.ones(g), *(shape[:, i].real for i in em[:n_areas - 1])])
@@ -235,13 +247,24 @@ def coherent_areas(shape: np.ndarray, freq_hz: np.ndarray, em: np.ndarray,
     return np.argmax(L, axis=1)
 
 
+def _given_areas(areas: dict, machines: np.ndarray) -> np.ndarray:
+    """Labels 0..r-1 per machine from a machine number -> area mapping."""
+    missing = [int(k) for k in machines if int(k) not in areas]
+    if missing:
+        raise InputError(f"areas: no area given for machine(s) {missing}")
+    _, labels = np.unique([str(areas[int(k)]) for k in machines], return_inverse=True)
+    return labels
+
+
 def _slow_mode_count(f_sorted: np.ndarray) -> int:
-    """Number of slow modes below the largest frequency gap in the lower half (>= 1)."""
+    """Number of slow modes: those below the highest frequency gap of at least GAP_RATIO
+    among the lower half of the sorted frequencies, else below the largest gap there."""
     if f_sorted.size < 2:
         return f_sorted.size
     ratios = f_sorted[1:] / f_sorted[:-1]
-    half = max(1, f_sorted.size // 2)
-    return int(np.argmax(ratios[:half])) + 1
+    lower = ratios[:max(1, f_sorted.size // 2)]
+    wide = np.nonzero(lower >= GAP_RATIO)[0]
+    return int(wide[-1] if wide.size else np.argmax(lower)) + 1
 
 
 def area_momentum_fraction(shape: np.ndarray, inertia: np.ndarray, areas: np.ndarray):

@@ -175,3 +175,94 @@ def cct_versus_rating(results: dict, ratings, path: Path) -> None:
            title="Table 4: CCT gain versus storage rating")
     ax.legend()
     _save(fig, path)
+
+
+# -- modal analysis (stabctl.modal) --------------------------------------------------------
+
+_KIND_STYLE = {"inter-area": ("tab:red", "s"), "local": ("tab:blue", "o"),
+               "other": ("0.6", "."), "angle reference": ("k", "x")}
+
+
+def eigenvalue_plot(ma, path, title: str, dampings=(0.03, 0.05, 0.1, 0.2)) -> None:
+    """Eigenvalues of a `stabctl.modal.ModalAnalysis`: the whole spectrum (left) and the
+    electromechanical region (right, frequency in Hz) with lines of constant damping ratio
+    zeta (sigma = -zeta omega_n, f = omega_n sqrt(1 - zeta^2) / 2 pi); markers by kind."""
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 5))
+    lam = ma.eigenvalues
+    for kind, (color, marker) in _KIND_STYLE.items():
+        sel = ma.kind == kind
+        if sel.any():
+            z = lam[sel]
+            ax1.plot(z.real, z.imag / (2 * np.pi), marker, color=color, ls="", label=kind)
+            ax2.plot(z.real, z.imag / (2 * np.pi), marker, color=color, ls="", label=kind, ms=7)
+    fmax = 2.6
+    sig_min = min(-0.5, 1.2 * float(np.min(lam[ma.electromechanical].real, initial=-1.0)))
+    for zeta in dampings:
+        wn = np.linspace(0, 2 * np.pi * fmax / np.sqrt(1 - zeta ** 2), 50)
+        ax2.plot(-zeta * wn, wn * np.sqrt(1 - zeta ** 2) / (2 * np.pi), "k:", lw=0.8)
+        f_end = min(fmax, -sig_min * np.sqrt(1 - zeta ** 2) / (2 * np.pi * zeta))
+        ax2.annotate(f"{zeta:.0%}", (-zeta * 2 * np.pi * f_end / np.sqrt(1 - zeta ** 2), f_end),
+                     fontsize=7, ha="right")
+    for ax in (ax1, ax2):
+        ax.axvline(0, color="k", lw=0.8)
+        ax.grid(True, alpha=0.3)
+        ax.set(xlabel="real part (1/s)", ylabel="frequency (Hz)")
+    ax1.set_xscale("symlog", linthresh=1.0)
+    ax1.set_title("all modes (one per conjugate pair)")
+    ax2.set(xlim=(sig_min, 0.25 * abs(sig_min)), ylim=(0, fmax),
+            title="electromechanical region, dotted: constant damping ratio")
+    ax2.legend(fontsize=8, loc="upper left")
+    fig.suptitle(title)
+    _save(fig, Path(path))
+
+
+def _mode_title(ma, i) -> str:
+    return f"{ma.freq_hz[i]:.3f} Hz, zeta {ma.damping[i]:.3f}, {ma.kind[i]}"
+
+
+def _grid(n: int):
+    cols = min(3, n)
+    rows = (n + cols - 1) // cols
+    return rows, cols
+
+
+def mode_shape_compass(ma, modes, path, max_labels: int = 6) -> None:
+    """Compass plots of the speed mode shapes (normalised, largest = 1 at 0 deg) of the
+    given modes, one arrow per machine coloured by coherent area; the largest machines
+    are labelled."""
+    rows, cols = _grid(len(modes))
+    fig = plt.figure(figsize=(4.2 * cols, 4.2 * rows))
+    colors = plt.get_cmap("tab10")
+    for n, i in enumerate(modes):
+        ax = fig.add_subplot(rows, cols, n + 1, projection="polar")
+        s = ma.speed_shape[:, i]
+        for k in np.argsort(np.abs(s)):
+            ax.annotate("", xy=(np.angle(s[k]), abs(s[k])), xytext=(0, 0),
+                        arrowprops=dict(arrowstyle="->", color=colors(ma.areas[k] % 10), lw=1.2))
+        for k in np.argsort(-np.abs(s))[:max_labels]:
+            ax.text(np.angle(s[k]), abs(s[k]) * 1.08, f"G{int(ma.machines[k])}", fontsize=7)
+        ax.set_ylim(0, 1.15)
+        ax.set_yticklabels([])
+        ax.set_title(_mode_title(ma, i), fontsize=9)
+    fig.suptitle("speed mode shapes (colour = coherent area)")
+    _save(fig, Path(path))
+
+
+def participation_bars(ma, modes, path, n_bars: int = 12) -> None:
+    """Bar charts of the participation of each machine (its states and controls summed)
+    in the given modes, largest n_bars machines per mode, coloured by area."""
+    rows, cols = _grid(len(modes))
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.4 * rows), squeeze=False)
+    colors = plt.get_cmap("tab10")
+    for ax, i in zip(axes.flat, modes):
+        p = ma.machine_participation(i)
+        k = np.argsort(-p)[:n_bars]
+        ax.bar(range(k.size), p[k], color=[colors(ma.areas[j] % 10) for j in k])
+        ax.set_xticks(range(k.size), [f"G{int(ma.machines[j])}" for j in k], fontsize=7,
+                      rotation=90)
+        ax.set(ylabel="participation", title=_mode_title(ma, i))
+        ax.title.set_fontsize(9)
+    for ax in axes.flat[len(modes):]:
+        ax.set_visible(False)
+    fig.suptitle("participation factors per machine (each mode sums to 1; colour = area)")
+    _save(fig, Path(path))
