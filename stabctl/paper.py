@@ -155,14 +155,19 @@ SECTIONS: tuple[Callable[[Path], str], ...] = (
     paper_storage.section_case1, paper_storage.section_case2)
 
 
-def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], None] = print) -> Path:
+def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], None] = print,
+                       resume: bool = False) -> Path:
     """Build every section into out_dir/paper.md with its PNG figures; returns the path.
 
     Files are written to a temporary directory first and moved into out_dir only when all
-    sections succeeded.
+    sections succeeded.  The Table 4 sweep records (out_dir/table4_*.jsonl) are started
+    afresh unless `resume`.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if not resume:
+        for f in out.glob("table4_*.jsonl"):
+            f.unlink()
     with tempfile.TemporaryDirectory(dir=out, prefix=".paper-") as tmp:
         tmp = Path(tmp)
         parts = ["# stabctl: reproduction of the paper's results", "",

@@ -135,3 +135,22 @@ def test_linear_speed_law_is_proportional_and_clipped(kundur):
     rel_prev = (r.speed[k - 1] - r.coi_speed[k - 1]) * 2 * np.pi * 60
     assert np.all(np.minimum(abs(r.pesd[k] - expected),
                              abs(r.pesd[k] - np.clip(0.5 * rel_prev, -0.45, 0.45))) < 0.02)
+
+
+def test_cli_simulate_with_storage(tmp_path):
+    import json
+
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+    args = ["simulate", "kundur", "--fault", "3", "--far-bus", "101", "--clear-cycles", "17",
+            "--tf", "5", "--json"]
+    plain = json.loads(CliRunner().invoke(main, args).stdout)
+    res = CliRunner().invoke(main, args + ["--esd-pct", "5", "--out", str(tmp_path / "r.csv")])
+    out = json.loads(res.stdout)
+    assert not plain["stable"] and out["stable"]
+    assert [d["bus"] for d in out["storage"]] == [10, 20, 110, 120]
+    header = (tmp_path / "r.csv").read_text().splitlines()[0].split(",")
+    assert header[-4:] == [f"pesd_pu.D{d}" for d in (1, 2, 3, 4)]
+    bad = CliRunner().invoke(main, args + ["--esd-pct", "-5"])
+    assert bad.exit_code == 2
