@@ -100,12 +100,20 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 @main.command()
 @click.option("--out", "out_dir", default="reports", show_default=True,
               type=click.Path(file_okay=False), help="Report directory.")
+@click.option("--resume", is_flag=True,
+              help="Keep the Table 4 sweep records already in OUT (after an interruption); "
+                   "by default they are recomputed.")
 @_reports_errors
-def paper(out_dir):
-    """Reproduce the paper's tables and figures into OUT/paper.md (+ PNG figures)."""
+def paper(out_dir, resume):
+    """Reproduce the paper's tables and figures into OUT/paper.md (+ PNG figures).
+
+    The Table 4 CCT sweeps record each finished search in OUT/table4_<case>.jsonl as it
+    completes; an interrupted run continues from there with --resume.
+    """
     from .paper import write_paper_report
 
-    path = write_paper_report(out_dir, progress=lambda msg: click.echo(msg, err=True))
+    path = write_paper_report(out_dir, progress=lambda msg: click.echo(msg, err=True),
+                              resume=resume)
     click.echo(f"wrote {path}")
 
 
@@ -287,11 +295,22 @@ def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
               metavar="FILE.csv|FILE.npz", help="Write the trajectories (CSV or numpy .npz).")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
               metavar="FILE.png", help="Plot speeds, angles from the COI and bus voltages.")
+@click.option("--esd-pct", type=float, default=None, metavar="P",
+              help="ESD of P % of each generator's MVA at its HV bus, paper's bang-bang "
+                   "COI control (Table 3).")
+@click.option("--deadband-hz", type=float, default=0.1, show_default=True,
+              help="ESD controller deadband on f_i - f_COI (Hz).")
+@click.option("--v-gate", type=float, default=0.8, show_default=True,
+              help="ESDs act only while their bus voltage is at least this (pu).")
+@click.option("--coi", type=click.Choice(["system", "rest"]), default="system",
+              show_default=True, help="COI of the whole system or of the rest of it.")
+@click.option("--hysteresis-hz", type=float, default=0.0, show_default=True,
+              help="A running ESD stops only inside deadband - hysteresis (Hz).")
 @click.option("--json", "as_json", is_flag=True, help="Print the run summary as JSON.")
 @_reports_errors
 def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clear_cycles, trip,
              t_trip, pstess_default, tf, step, separation_limit, stop_at_separation, out_path,
-             plot_path, as_json):
+             plot_path, esd_pct, deadband_hz, v_gate, coi, hysteresis_hz, as_json):
     """Nonlinear multi-machine time-domain simulation (PSTess models and integrator).
 
     CASE is a built-in name (see `stabctl cases`) or a case file (.json, PST .m). The run
@@ -310,13 +329,16 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
 
     \b
     CSV columns: t, speed_pu.G<k>, angle_rad.G<k>, pelect_pu.G<k>, pmech_pu.G<k>,
-    efd_pu.G<k> per machine k, vmag_pu.B<n>, vang_rad.B<n> per bus n.
+    efd_pu.G<k> per machine k, vmag_pu.B<n>, vang_rad.B<n> per bus n, and with
+    --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also lists, per device,
+    switchings, energy absorbed and delivered (MJ) and peak power used (MW).
 
     \b
     Examples:
       stabctl simulate kundur --pstess-default --out kundur.csv
       stabctl simulate kundur --fault 3 --far-bus 101 --t-fault 1 --clear-cycles 21 --json
       stabctl simulate miniwecc --trip 40 44 --t-trip 1 --tf 10 --plot wecc.png
+      stabctl simulate miniwecc --fault 83 --far-bus 33 --clear-cycles 6 --esd-pct 5 --json
 
     Bad input (unknown case or bus, no such line, negative cycles, power flow not
     converging) and a run that diverges exit with status 2 and one `error:` line; no file
@@ -343,9 +365,13 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
         raise InputError(f"{_describe_event(late[0])}: starts at or after the end of the run "
                          f"(--tf {tf:g} s)")
     h = default_step(case) if step is None else step
+    fleet = None
+    if esd_pct is not None:
+        from .storage import BangBangCOI, uniform_fleet
+        fleet = uniform_fleet(case, esd_pct, BangBangCOI(deadband_hz, v_gate, coi, hysteresis_hz))
     sim = Simulator(case)
     result = sim.run(events, t_end=tf, h=h, separation_limit=separation_limit,
-                     stop_at_separation=stop_at_separation)
+                     stop_at_separation=stop_at_separation, storage=fleet)
     written = []
     if plot_p is not None:
         _save_plot_atomically(result, plot_p, title=f"{case.name}: "
