@@ -312,3 +312,23 @@ def mode_sensitivity(sys, ma: ModalAnalysis, inputs: str = "P_esd_",
     return ModeSensitivity(residues=R, controllability=np.abs(psib), observability=np.abs(cphi.T),
                            inputs=[sys.input_labels[j] for j in ins],
                            outputs=[sys.output_labels[k] for k in outs])
+
+
+def match_modes(ours: np.ndarray, reference: np.ndarray, f_min: float = F_MIN_HZ,
+                f_max: float = F_MAX_HZ) -> list[dict]:
+    """Pair every reference eigenvalue with Im > 0 and frequency in [f_min, f_max] Hz with
+    the nearest of ours (complex arrays, any order, conjugates allowed); each pair as
+    {"reference", "ours" (complex), "freq_ref_hz", "freq_err_pct", "damping_ref",
+    "damping_err"} (ours minus reference)."""
+    ours = np.asarray(ours, complex)
+    out = []
+    for r in np.asarray(reference, complex):
+        f_r = r.imag / (2 * np.pi)
+        if not f_min <= f_r <= f_max:
+            continue
+        o = ours[np.argmin(np.abs(ours - r))]
+        f_o = abs(o.imag) / (2 * np.pi)
+        out.append({"reference": r, "ours": o, "freq_ref_hz": f_r,
+                    "freq_err_pct": 100 * (f_o - f_r) / f_r,
+                    "damping_ref": -r.real / abs(r), "damping_err": -o.real / abs(o) + r.real / abs(r)})
+    return out
