@@ -157,6 +157,15 @@ class Simulator:
             InputError, UnknownBusError, CaseError: bad events or step;
             SimulationError: divergence (carries the partial result as `.result`).
         """
+        m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
+        run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
+                   stop_at_separation)
+        run.advance(grid.t.size - 1)
+        return run.finish(storage)
+
+    def _prepare(self, events, t_end, h, storage, semantics):
+        """Validate, choose the model (storage buses kept), pack the devices, build the
+        event grid and the network of every interval."""
         if semantics not in ("pst", "exact"):
             raise InputError(f"semantics must be 'pst' or 'exact', got {semantics!r}")
         events = list(events)
@@ -168,34 +177,39 @@ class Simulator:
         grid = time_grid([t for e in events for t in e.times()], t_end, h)
         nets = [m.network(ev_.configuration(self.case, events, s, self.op.V))
                 for s in grid.starts]
-        stack = lambda name: np.ascontiguousarray(np.stack([getattr(n, name) for n in nets]))  # noqa: E731
-        N, nm, nb = grid.t.size, m.mp.n, self.case.n_bus
-        rec = Recording(speed=np.zeros((N, nm)), angle=np.zeros((N, nm)), pelect=np.zeros((N, nm)),
-                        pmech=np.zeros((N, nm)), efd=np.zeros((N, nm)),
-                        V=np.zeros((N, nb), np.complex128))
-        first = np.r_[False, np.diff(grid.interval) > 0]
-        P_rec = np.zeros((N, sa.pmax.size))
-        stats = np.zeros((sa.pmax.size, 3))
-        wall = time.perf_counter()
-        log = np.full((4096, 4), np.nan)
-        status, k_end = integrate(
-            m.x0.copy(), m.V_nc0.copy(), grid.t, grid.interval, grid.h, first, semantics == "pst",
-            stack("Y11"), stack("Y12"), stack("Y21"), stack("Y22"), stack("Z22"), stack("R"), m.params,
-            m.layout.n_mac, m.layout.n_exc, m.layout.n_pss, m.layout.n_tg, sa,
-            self.inertia, separation_limit, stop_at_separation, rec, P_rec, stats, log)
-        res = self._result(grid.t, rec, k_end + 1, time.perf_counter() - wall,
-                           separation_limit)
-        if storage is not None:
-            _attach_storage(res, storage, P_rec[:k_end + 1], stats, self.case.base_mva,
-                            log[~np.isnan(log[:, 0])], self.case.freq_hz)
-        if status < 0:
-            why = "non-finite state" if status == DIVERGED else \
-                "the network/load equations did not converge (voltage collapse)"
-            t_fail = grid.t[min(k_end + 1, grid.t.size - 1)]
-            raise SimulationError(f"case '{self.case.name}': {why} in the step ending at "
-                                  f"t = {t_fail:.4f} s (trajectory kept up to "
-                                  f"{grid.t[k_end]:.4f} s)", result=res)
-        return res
+        return m, sa, grid, nets
+
+    def run_commanded(self, events, t_end: float, storage, frame_times, decide,
+                      latency: float = 0.0, h: float | None = None, semantics: str = "pst",
+                      separation_limit: float = np.pi) -> SimulationResult:
+        """Simulate with storage devices commanded from measurements (estimator in the loop).
+
+        At each frame time t_f (s, increasing) the run is advanced to the first grid point at
+        or after t_f and `decide(t_f, partial)` is called with the trajectory so far (a
+        SimulationResult up to that grid point, so a measurement at t_f can be interpolated);
+        it returns the device modes (n_dev ints in
+        {-1, 0, +1}) that take effect at exactly t_f + latency (the step is split there).
+        `storage.controller` must be `stabctl.storage.ExternalCommands`.
+
+        Raises:
+            InputError: wrong controller, frame times not increasing, negative latency;
+            SimulationError: as `run`.
+        """
+        if storage is None or not isinstance(storage.controller, st.ExternalCommands):
+            raise InputError("run_commanded needs a fleet whose controller is ExternalCommands")
+        frame_times = np.asarray(frame_times, float)
+        if np.any(np.diff(frame_times) <= 0) or latency < 0:
+            raise InputError("frame times must increase and the latency must be >= 0")
+        m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
+        run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit, False,
+                   n_commands=frame_times.size)
+        for i, t_f in enumerate(frame_times[frame_times <= t_end]):
+            k = int(np.searchsorted(grid.t, t_f - 1e-12))
+            run.advance(k)
+            modes = np.asarray(decide(float(t_f), run.partial(k)), np.int64)
+            run.command(i, t_f + latency, modes)
+        run.advance(grid.t.size - 1)
+        return run.finish(storage)
 
     def _result(self, t, rec: "Recording", n, wall, limit) -> SimulationResult:
         c = self.case
@@ -216,6 +230,72 @@ class Simulator:
             meta={"case": c.name, "wall_time_s": wall,
                   "max_initial_derivative": self.model.initial_residual[0],
                   "max_initial_derivative_state": self.model.initial_residual[1]})
+
+
+class _Run:
+    """One simulation in progress: the compiled loop advanced piecewise (see `integrate`)."""
+
+    def __init__(self, sim: "Simulator", m, sa, grid, nets, pst, limit, stop, n_commands=0):
+        stack = lambda name: np.ascontiguousarray(np.stack([getattr(n, name) for n in nets]))  # noqa: E731
+        self.sim, self.m, self.sa, self.grid = sim, m, sa, grid
+        N, nm, nb, nd = grid.t.size, m.mp.n, sim.case.n_bus, sa.pmax.size
+        self.rec = Recording(speed=np.zeros((N, nm)), angle=np.zeros((N, nm)),
+                             pelect=np.zeros((N, nm)), pmech=np.zeros((N, nm)),
+                             efd=np.zeros((N, nm)), V=np.zeros((N, nb), np.complex128))
+        self.P_rec, self.stats = np.zeros((N, nd)), np.zeros((nd, 3))
+        self.log = np.full((4096, 4), np.nan)
+        self.x, self.V_nc, self.ds = m.x0.copy(), m.V_nc0.copy(), device_state(sa)
+        self.cmd_t = np.full(n_commands, np.inf)
+        self.cmd_mode = np.zeros((n_commands, nd), np.int64)
+        self.mats = tuple(stack(n) for n in ("Y11", "Y12", "Y21", "Y22", "Z22", "R"))
+        self.first = np.r_[False, np.diff(grid.interval) > 0]
+        self.pst, self.limit, self.stop = pst, limit, stop
+        self.k, self.status, self.wall = 0, OK, 0.0
+
+    def advance(self, k1: int) -> None:
+        """Integrate up to grid index k1 (nothing after a stop)."""
+        if self.status != OK or k1 <= self.k:
+            return
+        m, g = self.m, self.grid
+        wall = time.perf_counter()
+        self.status, k_end = integrate(
+            self.x, self.V_nc, g.t, g.interval, g.h, self.first, self.pst, *self.mats, m.params,
+            m.layout.n_mac, m.layout.n_exc, m.layout.n_pss, m.layout.n_tg, self.sa, self.ds,
+            self.cmd_t, self.cmd_mode, self.sim.inertia, self.limit, self.stop, self.k, k1,
+            self.rec, self.P_rec, self.stats, self.log)
+        self.wall += time.perf_counter() - wall
+        self.k = k_end
+
+    def command(self, i: int, t_apply: float, modes) -> None:
+        """Schedule command i: device modes from time t_apply (s)."""
+        self.cmd_t[i], self.cmd_mode[i] = t_apply, modes
+
+    def partial(self, k: int) -> SimulationResult:
+        """The trajectory up to grid index k (views, no verdict)."""
+        r, c, n = self.rec, self.sim.case, k + 1
+        return SimulationResult(
+            t=self.grid.t[:n], machines=c.machines.number.astype(int),
+            buses=c.buses.number.astype(int), speed=r.speed[:n], angle=r.angle[:n],
+            pelect=r.pelect[:n], pmech=r.pmech[:n], efd=r.efd[:n], vmag=np.abs(r.V[:n]),
+            vang=np.angle(r.V[:n]), inertia=self.sim.inertia, devices=np.arange(1, self.sa.pmax.size + 1),
+            pesd=self.P_rec[:n])
+
+    def finish(self, storage) -> SimulationResult:
+        """The result; raises SimulationError (with the partial result) after a divergence."""
+        sim, g, k_end = self.sim, self.grid, self.k
+        res = sim._result(g.t, self.rec, k_end + 1, self.wall, self.limit)
+        if storage is not None:
+            _attach_storage(res, storage, self.P_rec[:k_end + 1], self.stats,
+                            sim.case.base_mva, self.log[~np.isnan(self.log[:, 0])],
+                            sim.case.freq_hz)
+        if self.status < 0:
+            why = "non-finite state" if self.status == DIVERGED else \
+                "the network/load equations did not converge (voltage collapse)"
+            t_fail = g.t[min(k_end + 1, g.t.size - 1)]
+            raise SimulationError(f"case '{sim.case.name}': {why} in the step ending at "
+                                  f"t = {t_fail:.4f} s (trajectory kept up to "
+                                  f"{g.t[k_end]:.4f} s)", result=res)
+        return res
 
 
 def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva, log, f0) -> None:
@@ -293,6 +373,8 @@ def _targets(sa, mode, r, v, accel, out):
     for d in range(out.size):
         if sa.kind == st.BANG_BANG:
             out[d] = mode[d] * sa.pmax[d]
+        elif sa.kind == st.EXTERNAL:
+            out[d] = mode[d] * sa.pmax[d] if v[d] >= sa.vgate else 0.0
         elif v[d] < sa.vgate:
             out[d] = 0.0
         else:
@@ -320,38 +402,72 @@ def _device_state(x, nm, inertia, sa, V_nc, dx, r, v, accel):
         v[d] = abs(V_nc[sa.pos[d]])
 
 
-@njit(cache=True)
-def integrate(x, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, nm, ne, nps,
-              ng, sa, inertia, limit, stop, rec, P_rec, stats, log):
-    """PST's predictor-corrector over the whole grid (see the module docstring), with the
-    storage devices `sa` (stabctl.storage.StorageArrays).
+class DeviceState(NamedTuple):
+    """Controller and device state carried across `integrate` calls (n_dev entries):
+    mode (-1, 0, +1), power P (pu), set-point, energy content e (pu*s), the next entry of
+    the command schedule (cmd_next[0]) for externally commanded devices."""
 
-    Stage matrices are stacked by interval.  Stores the predictor-stage outputs, the states
-    and the device powers at every index (rec, P_rec).  A bang-bang device whose mode
-    changes within a step has its switching instant located (`storage.crossing`) and the
-    step is re-integrated in two parts; stats[d] = (switchings, energy absorbed, energy
-    delivered in pu*s); log rows (time, device, new mode, relative speed pu) record the
-    switchings while there is room.  Returns (status, last stored index): status OK, SEPARATED
-    (stopped at loss of synchronism), DIVERGED or NO_LOAD_FLOW.
+    mode: np.ndarray
+    P: np.ndarray
+    target: np.ndarray
+    e: np.ndarray
+    cmd_next: np.ndarray
+
+
+def device_state(sa) -> DeviceState:
+    nd = sa.pmax.size
+    return DeviceState(np.zeros(nd, np.int64), np.zeros(nd), np.zeros(nd), sa.e0.copy(),
+                       np.zeros(1, np.int64))
+
+
+@njit(cache=True)
+def _apply_commands(sa, ds, cmd_t, cmd_mode, t_now, log, stats, r):
+    """Apply every scheduled command due by t_now (externally commanded devices)."""
+    while ds.cmd_next[0] < cmd_t.size and cmd_t[ds.cmd_next[0]] <= t_now + 1e-12:
+        c = ds.cmd_next[0]
+        for d in range(ds.mode.size):
+            if cmd_mode[c, d] != ds.mode[d]:
+                ds.mode[d] = cmd_mode[c, d]
+                _log(log, stats, d, cmd_t[c], ds.mode[d], r[d])
+        ds.cmd_next[0] += 1
+
+
+@njit(cache=True)
+def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, nm, ne,
+              nps, ng, sa, ds, cmd_t, cmd_mode, inertia, limit, stop, k0, k1, rec, P_rec,
+              stats, log):
+    """PST's predictor-corrector from grid index k0 to k1 (see the module docstring), with
+    the storage devices `sa` (stabctl.storage.StorageArrays) in state `ds` (DeviceState).
+
+    xs (the state) and V_nc are updated in place, so a run can be continued.  Stage
+    matrices are stacked by interval.  Stores the predictor-stage outputs, the states and
+    the device powers at every index (rec, P_rec).  Bang-bang devices: a mode change
+    within a step has its instant located (`storage.crossing`) and the step is
+    re-integrated in two parts.  Externally commanded devices: each command of the
+    schedule (cmd_t sorted, cmd_mode) takes effect at its exact time, splitting the step.
+    stats[d] = (switchings, energy absorbed, energy delivered in pu*s); log rows (time,
+    device, new mode, relative speed pu) while there is room.  Returns (status, last
+    stored index): OK, SEPARATED (stopped at loss of synchronism), DIVERGED, NO_LOAD_FLOW.
     """
     n, nd = interval.size, sa.pmax.size
+    x = xs.copy()
     dx_k, dx_j = np.empty_like(x), np.empty_like(x)
     cur = np.empty(nm, np.complex128)
     pel, qel, et, efd, pm = np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm)
     V_bus = np.zeros(R.shape[1], np.complex128)
     S = np.zeros(V_nc.size, np.complex128)
-    P, target, e = np.zeros(nd), np.zeros(nd), sa.e0.copy()
-    mode = np.zeros(nd, np.int64)
+    mode, P, target, e = ds.mode, ds.P, ds.target, ds.e
     r, v, acc = np.zeros(nd), np.zeros(nd), np.zeros(nd)
     rb, vb, accb = np.zeros(nd), np.zeros(nd), np.zeros(nd)
     M = inertia.sum()
+    bang, external = sa.kind == st.BANG_BANG, sa.kind == st.EXTERNAL
 
     def ev(xx, st_, want, dx):
         return evaluate_kernel(xx, nm, ne, nps, ng, p, Y11[st_], Y12[st_], Y21[st_], Y22[st_],
                                Z22[st_], R[st_], V_nc, S, want, dx, cur, pel, qel, et, efd, pm,
                                V_bus)
 
-    for k in range(n - 1):
+    for k in range(k0, min(k1, n - 1)):
         s = interval[k]
         j = interval[k + 1] if pst else s
         _inject(sa, P, S)
@@ -360,12 +476,15 @@ def integrate(x, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p
             ev(x, s, False, dx_k)
             V_nc[:] = V_keep
         if ev(x, s, True, dx_k) < 0:
+            xs[:] = x
             return NO_LOAD_FLOW, max(k - 1, 0)
         if nd > 0:   # controller at the grid point (events make voltages jump here)
             _device_state(x, nm, inertia, sa, V_nc, dx_k, r, v, acc)
+            if external:
+                _apply_commands(sa, ds, cmd_t, cmd_mode, t[k], log, stats, r)
             for d in range(nd):
                 want = st.desired_mode(sa, d, mode[d], r[d], v[d])
-                if sa.kind == st.BANG_BANG and want != mode[d]:
+                if bang and want != mode[d]:
                     mode[d] = want
                     _log(log, stats, d, t[k], want, r[d])
             _targets(sa, mode, r, v, acc, target)
@@ -381,37 +500,50 @@ def integrate(x, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p
         if nd > 0:
             P_rec[k] = P
         x_a, dx_a, rem = x, dx_k, h[s]
-        for _split in range(8):
-            Pb = _advance(sa, P, target, e.copy(), rem, np.zeros((nd, 3)))
+        for _split in range(64):
+            t_a = t[k + 1] - rem
+            hh = rem
+            if external and ds.cmd_next[0] < cmd_t.size and cmd_t[ds.cmd_next[0]] < t[k + 1] - 1e-12:
+                hh = max(cmd_t[ds.cmd_next[0]] - t_a, 0.0)   # a command falls in this step
+            Pb = _advance(sa, P, target, e.copy(), hh, np.zeros((nd, 3)))
             _inject(sa, Pb, S)
-            xp = x_a + rem * dx_a
-            if ev(xp, j, k == n - 2, dx_j) < 0:
+            xp = x_a + hh * dx_a
+            if ev(xp, j if hh == rem else s, k == n - 2 and hh == rem, dx_j) < 0:
+                xs[:] = x
                 return NO_LOAD_FLOW, k
-            x_b = x_a + 0.5 * rem * (dx_a + dx_j)
-            if nd == 0 or sa.kind != st.BANG_BANG:
-                break
-            _device_state(x_b, nm, inertia, sa, V_nc, dx_j, rb, vb, accb)
+            x_b = x_a + 0.5 * hh * (dx_a + dx_j)
             theta, first_d = 2.0, -1
-            at_event = interval[k + 1] != s
-            for d in range(nd):
-                want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
-                gate_jump = (v[d] >= sa.vgate) != (vb[d] >= sa.vgate)
-                if want != mode[d] and not (at_event and gate_jump):  # events switch at t_k+1
-                    th, _ = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
-                    if th < theta:
-                        theta, first_d = th, d
-            if first_d < 0:
+            if bang and hh == rem:
+                _device_state(x_b, nm, inertia, sa, V_nc, dx_j, rb, vb, accb)
+                at_event = interval[k + 1] != s
+                for d in range(nd):
+                    want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
+                    gate_jump = (v[d] >= sa.vgate) != (vb[d] >= sa.vgate)
+                    if want != mode[d] and not (at_event and gate_jump):  # events: at t_k+1
+                        th, _ = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
+                        if th < theta:
+                            theta, first_d = th, d
+            if hh == rem and first_d < 0:
                 break
-            hh = theta * rem           # re-integrate up to the first switching instant
-            Pm = _advance(sa, P, target, e, hh, stats)
-            _inject(sa, Pm, S)
-            if ev(x_a + hh * dx_a, s, False, dx_j) < 0:
-                return NO_LOAD_FLOW, k
-            x_a = x_a + 0.5 * hh * (dx_a + dx_j)
+            if first_d >= 0:           # re-integrate up to the first switching instant
+                hh = theta * rem
+                Pm = _advance(sa, P, target, e, hh, stats)
+                _inject(sa, Pm, S)
+                if ev(x_a + hh * dx_a, s, False, dx_j) < 0:
+                    xs[:] = x
+                    return NO_LOAD_FLOW, k
+                x_a = x_a + 0.5 * hh * (dx_a + dx_j)
+            else:                      # up to the scheduled command
+                Pm = _advance(sa, P, target, e, hh, stats)
+                x_a = x_b
             rem -= hh
-            P = Pm
+            P[:] = Pm
             _device_state(x_a, nm, inertia, sa, V_nc, dx_j, r, v, acc)
+            if external:
+                _apply_commands(sa, ds, cmd_t, cmd_mode, t[k + 1] - rem, log, stats, r)
             for d in range(nd):
+                if first_d < 0:
+                    break
                 want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
                 if want != mode[d]:
                     th, new = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
@@ -424,11 +556,16 @@ def integrate(x, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p
             _inject(sa, P, S)
             dx_a = np.empty_like(x)
             if ev(x_a, s, False, dx_a) < 0:
+                xs[:] = x
                 return NO_LOAD_FLOW, k
+            x_b = x_a
+            if rem <= 1e-15:
+                break
         if nd > 0:
-            P = _advance(sa, P, target, e, rem, stats)
+            P[:] = _advance(sa, P, target, e, rem, stats) if rem > 1e-15 else P
         x = x_b
         if not np.all(np.isfinite(x)):
+            xs[:] = x
             return DIVERGED, k
         if stop:
             coi = (x[:nm] * inertia).sum() / M
@@ -436,8 +573,20 @@ def integrate(x, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p
                 _store(rec, k + 1, x, nm, pel, pm, efd, V_bus)
                 if nd > 0:
                     P_rec[k + 1] = P
+                xs[:] = x
                 return SEPARATED, k + 1
-    _store(rec, n - 1, x, nm, pel, pm, efd, V_bus)
+    xs[:] = x
+    if k1 >= n - 1:
+        _store(rec, n - 1, x, nm, pel, pm, efd, V_bus)
+        if nd > 0:
+            P_rec[n - 1] = P
+        return OK, n - 1
+    # paused at k1: store its outputs from copies (the next call evaluates it for real)
+    V_keep = V_nc.copy()
+    _inject(sa, P, S)
+    ev(x.copy(), interval[k1], True, dx_k)
+    V_nc[:] = V_keep
+    _store(rec, k1, x, nm, pel, pm, efd, V_bus)
     if nd > 0:
-        P_rec[n - 1] = P
-    return OK, n - 1
+        P_rec[k1] = P
+    return OK, k1

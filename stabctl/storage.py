@@ -157,7 +157,16 @@ class StorageArrays(NamedTuple):
     Ka: float             # pu per pu speed per s
 
 
-NO_STORAGE, BANG_BANG, LINEAR = 0, 1, 2
+NO_STORAGE, BANG_BANG, LINEAR, EXTERNAL = 0, 1, 2, 3
+
+
+@dataclass(frozen=True)
+class ExternalCommands:
+    """Devices commanded from outside the simulation (estimator in the loop): their modes
+    (-1 inject, 0 idle, +1 absorb the full rating) come from `Simulator.run_commanded`
+    at measurement-frame arrival times; the local voltage gate still applies."""
+
+    v_gate_pu: float = 0.8
 
 
 def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageArrays:
@@ -176,7 +185,8 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageA
                         "reduced network: pass the fleet to the Simulator")
     f = lambda attr: np.array([getattr(d, attr) for d in devs], float)  # noqa: E731
     ctrl = None if fleet is None else fleet.controller
-    kind = NO_STORAGE if not devs else (BANG_BANG if isinstance(ctrl, BangBangCOI) else LINEAR)
+    kind = NO_STORAGE if not devs else (BANG_BANG if isinstance(ctrl, BangBangCOI) else
+                                        EXTERNAL if isinstance(ctrl, ExternalCommands) else LINEAR)
     ws = 2 * np.pi * f0
     return StorageArrays(
         pos=pos, bus=bus, mac=np.array([case.machine_index(d.machine) for d in devs], np.int64),

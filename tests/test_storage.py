@@ -154,3 +154,30 @@ def test_cli_simulate_with_storage(tmp_path):
     assert header[-4:] == [f"pesd_pu.D{d}" for d in (1, 2, 3, 4)]
     bad = CliRunner().invoke(main, args + ["--esd-pct", "-5"])
     assert bad.exit_code == 2
+
+
+def test_commanded_devices_follow_the_schedule_at_exact_times(kundur):
+    """Estimator-in-the-loop hook: modes decided at 60 frames/s from the (here ideal)
+    speeds take effect exactly at frame time + latency, and reproduce the internal
+    controller's verdict."""
+    from stabctl.storage import ExternalCommands
+
+    case, sim = kundur
+    fleet = uniform_fleet(case, 5)
+    mac = np.array([case.machine_index(d.machine) for d in fleet.devices])
+
+    def decide(t, part):
+        w = part.speed[-1]
+        rel = (w - w @ part.inertia / part.inertia.sum())[mac] * 60
+        return np.where(rel > 0.1, 1, np.where(rel < -0.1, -1, 0))
+
+    frames = np.arange(0, 6, 1 / 60)
+    ev = [fault_with_clearing(case, 3, 101, 1.0, 17)]
+    res = sim.run_commanded(ev, 6.0, StorageFleet(fleet.devices, ExternalCommands()), frames,
+                            decide, latency=0.05)
+    assert res.stable and sim.run(ev, t_end=6.0).stable is False
+    times = np.array([t for t, *_ in res.meta["switchings"]])
+    assert times.size >= 8
+    assert np.allclose(np.min(np.abs(times[:, None] - (frames + 0.05)[None, :]), axis=1), 0)
+    with pytest.raises(InputError):
+        sim.run_commanded(ev, 6.0, fleet, frames, decide)        # not ExternalCommands
