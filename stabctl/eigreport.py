@@ -19,7 +19,7 @@ from .case import Case, PssTable
 from .linearise import linearise
 from .modal import ModalAnalysis, ModeSensitivity, modal_analysis, mode_sensitivity
 
-N_FIGURE_MODES = 6   # modes drawn in the compass and bar charts (least damped EM modes)
+N_FIGURE_MODES = 6   # EM modes drawn in the compass and bar charts
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,9 +81,11 @@ def _areas(ma: ModalAnalysis) -> dict:
 
 
 def figure_modes(ma: ModalAnalysis) -> list[int]:
-    """The N_FIGURE_MODES least-damped electromechanical modes, by frequency."""
+    """Up to N_FIGURE_MODES electromechanical modes, by frequency: the inter-area ones
+    first, then the least-damped local ones."""
     em = ma.electromechanical
-    pick = em[np.argsort(ma.damping[em])[:N_FIGURE_MODES]]
+    order = np.lexsort((ma.damping[em], ma.kind[em] != "inter-area"))
+    pick = em[order[:N_FIGURE_MODES]]
     return [int(i) for i in pick[np.argsort(ma.freq_hz[pick])]]
 
 
@@ -166,7 +168,7 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         lam = ma.eigenvalues[i]
         g1, g2 = ma.groups(i)
         bus, r = best_esd(st, i)
-        fmt = lambda ks: ", ".join(f"G{k}" for k in ks[:8]) + (" ..." if len(ks) > 8 else "")  # noqa: E731
+        fmt = lambda ks: (", ".join(f"G{k}" for k in ks[:8]) or "-") + (" ..." if len(ks) > 8 else "")  # noqa: E731
         lines.append(f"| {i} | {lam.real:.4f} ± j{lam.imag:.4f} | {ma.freq_hz[i]:.4f} | "
                      f"{ma.damping[i]:.4f} | {ma.kind[i]} | {ma.eta[i]:.2f} | "
                      f"{fmt(ma.dominant_machines(i))} | {fmt(g1)} | {fmt(g2)} | "
@@ -178,7 +180,8 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
               "relative speeds.", "", "## Figures", "",
               f"![eigenvalues]({figures['eigs']})", ""]
     if with_mode_figures:
-        lines += [f"Mode shapes of the {min(N_FIGURE_MODES, em.size)} least-damped "
-                  "electromechanical modes:", "", f"![mode shapes]({figures['shapes']})", "",
+        lines += [f"Mode shapes and participations of {min(N_FIGURE_MODES, em.size)} "
+                  "electromechanical modes (the inter-area ones, then the least-damped local "
+                  "ones):", "", f"![mode shapes]({figures['shapes']})", "",
                   f"![participation]({figures['pf']})", ""]
     return "\n".join(lines)
