@@ -116,27 +116,64 @@ def validate(case: Case, events, t_end: float) -> None:
                              "simply do not happen)")
 
 
-def configuration(case: Case, events, t: float, V0: np.ndarray) -> StageConfig:
-    """Network configuration in force at time t: events at exactly t have happened."""
+def stage_boundaries(events, t_end: float) -> list[tuple[float, int, int]]:
+    """Every change of network configuration before t_end, in time order:
+    (time, event index, phase), phase counting the event's own changes (a fault: 1 on,
+    2 near end cleared, 3 far end cleared).  A fault cleared at both ends at the same
+    instant keeps its two changes, as PSTess keeps the zero-length interval between them
+    (one step of h = 0 in the near-end-cleared network)."""
+    out = []
+    for i, ev in enumerate(events):
+        if isinstance(ev, Fault):
+            times = [ev.t] if ev.clear_near is None else \
+                [ev.t, ev.clear_near] + ([ev.far_clear] if ev.far_bus is not None else [])
+        else:
+            times = ev.times()
+        out += [(float(t), i, k + 1) for k, t in enumerate(times) if t < t_end]
+    return sorted(out)
+
+
+def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
+    """Network configuration with phases[i] changes of event i applied (see
+    `stage_boundaries`)."""
     faults, opened, feeds, tripped, loads = [], [], [], [], []
-    for ev in events:
-        if isinstance(ev, Fault) and ev.t <= t:
-            cn, cf = ev.clear_near, ev.far_clear
-            if cn is None or t < cn:
+    for ev, n in zip(events, phases):
+        if n == 0:
+            continue
+        if isinstance(ev, Fault):
+            if n == 1:
                 faults.append((case.bus_index(ev.bus), ev.admittance))
             elif ev.far_bus is not None:
                 row = circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
-                feeds.append((row, ev.far_bus, t < cf))
-        elif isinstance(ev, LineTrip) and ev.t <= t:
+                feeds.append((row, ev.far_bus, n == 2))
+        elif isinstance(ev, LineTrip):
             opened.append(circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit))
-        elif isinstance(ev, GeneratorTrip) and ev.t <= t:
+        elif isinstance(ev, GeneratorTrip):
             tripped.append(case.machine_index(ev.machine))
-        elif isinstance(ev, LoadStep) and ev.t <= t:
+        elif isinstance(ev, LoadStep):
             b = case.bus_index(ev.bus)
             loads.append((b, complex(ev.P, -ev.Q) / abs(V0[b]) ** 2))
     return StageConfig(faults=tuple(faults), opened=tuple(sorted(set(opened))),
                        fault_feeds=tuple(feeds), tripped_machines=tuple(sorted(set(tripped))),
                        load_steps=tuple(loads))
+
+
+def stages(case: Case, events, t_end: float, V0: np.ndarray):
+    """(start times, configurations) of the run's intervals, the first starting at 0.  A
+    start time repeats only between the phases of one fault (PSTess's zero-length
+    interval); simultaneous changes of different events form one stage."""
+    phases = [0] * len(events)
+    starts, configs, last = [0.0], [configuration(case, events, phases, V0)], None
+    for t, i, k in stage_boundaries(events, t_end):
+        phases[i] = k
+        merge = t == starts[-1] and (len(starts) == 1 or last != i)   # t = 0, or another event
+        if merge:
+            configs[-1] = configuration(case, events, phases, V0)
+        else:
+            starts.append(t)
+            configs.append(configuration(case, events, phases, V0))
+        last = i
+    return starts, configs
 
 
 def fault_with_clearing(case: Case, bus: int, far_bus: int | None, t_fault: float,

@@ -38,7 +38,8 @@ from .results import SimulationResult
 @dataclass(frozen=True)
 class TimeGrid:
     """Integration grid: t (N+1,), interval id of each point (a point at an event belongs to
-    the interval that starts there), step h of each interval, and the interval start times."""
+    the interval that starts there; a time repeats after a zero-length interval), step h
+    of each interval (0 for a zero-length one), and the interval start times."""
 
     t: np.ndarray
     interval: np.ndarray
@@ -46,14 +47,16 @@ class TimeGrid:
     starts: np.ndarray
 
 
-def time_grid(switch_times, t_end: float, h: float) -> TimeGrid:
-    """PST's grid: intervals between switching times, fix(length/h) steps each (>= 1).
+def time_grid(starts, t_end: float, h: float) -> TimeGrid:
+    """PST's grid: intervals between consecutive start times (the first 0, non-decreasing,
+    all below t_end), fix(length/h) steps each, at least one (so a zero-length interval
+    gets one step of h = 0 and its start time appears twice, as in PSTess).
 
     Raises InputError for a non-positive step or end time.
     """
     if not (h > 0 and t_end > 0):
         raise InputError(f"need a positive step and end time, got h={h}, t_end={t_end}")
-    pts = sorted({0.0, float(t_end), *[float(s) for s in switch_times if 0 < s < t_end]})
+    pts = [float(x) for x in starts] + [float(t_end)]
     ts, ids, hs = [], [], []
     for s, (a, b) in enumerate(zip(pts[:-1], pts[1:])):
         n = max(1, int(np.trunc((b - a) / h)))
@@ -174,10 +177,9 @@ class Simulator:
         m = self.model_for(storage.buses if storage is not None else ())
         sa = st.pack(storage, self.case, m.nc_idx)
         check_step(m, h)
-        grid = time_grid([t for e in events for t in e.times()], t_end, h)
-        nets = [m.network(ev_.configuration(self.case, events, s, self.op.V))
-                for s in grid.starts]
-        return m, sa, grid, nets
+        starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
+        grid = time_grid(starts, t_end, h)
+        return m, sa, grid, [m.network(c) for c in configs]
 
     def run_commanded(self, events, t_end: float, storage, frame_times, decide,
                       latency: float = 0.0, h: float | None = None, semantics: str = "pst",

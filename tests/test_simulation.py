@@ -297,3 +297,17 @@ def test_npz_round_trip(case1, tmp_path):
     assert back.t_separation == pytest.approx(case1.t_separation)
     assert back.columns()[0] == expected_columns(case1)
     assert [p.name for p in tmp_path.iterdir()] == ["run.npz"]
+
+
+def test_simultaneous_near_and_far_clearing_keeps_psts_zero_length_stage(kundur):
+    """PSTess gives the zero-length interval between near- and far-end clearing one step of
+    h = 0 (k_inc >= 1), so the clearing time appears twice: first with the near end open and
+    the far end still feeding the fault (bus 101 collapsed), then with the line out."""
+    case = load_case("kundur")
+    res = kundur.run([fault_with_clearing(case, 3, 101, 1.0, 12)], t_end=2.0)
+    dup = np.nonzero(np.diff(res.t) == 0)[0]
+    assert dup.size == 1 and res.t[dup[0]] == pytest.approx(1.2)
+    v101 = res.vmag[dup[0]:dup[0] + 2, res.bus(101)]
+    assert v101[0] < 0.7 and v101[1] > 0.9          # fed fault, then line out
+    assert res.vmag[dup[0], res.bus(3)] > 0.9        # near end already open
+    np.testing.assert_array_equal(res.speed[dup[0]], res.speed[dup[0] + 1])   # h = 0 step
