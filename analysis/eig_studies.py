@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.case import PssTable, load_case
+from stabctl.case import load_case
 from stabctl.eigreport import eig_study, write_report
 from stabctl.linearise import compare_pulse, linearise, perturbation_error
 from stabctl.modal import match_modes
@@ -30,13 +30,14 @@ def pstess_section(study, ref_file) -> list[str]:
     pairs = match_modes(np.linalg.eigvals(study.sys.A), ref[:, 1] + 1j * ref[:, 2])
     lines = [f"### {study.stem}: {study.sys.nstates} states (PSTess {ref.shape[0]}, of which "
              "4 lmod/rlmod lags at -20 1/s, inactive in the simulation)", "",
-             "| PSTess eigenvalue | ours | f (Hz) | frequency error (%) | damping | damping error |",
+             "| PSTess eigenvalue | ours | f (Hz) | frequency error (%) | damping | "
+             "damping error |",
              "|---|---|---|---|---|---|"]
     for p in pairs:
         r, o = p["reference"], p["ours"]
         lines.append(f"| {r.real:.5f} + j{r.imag:.5f} | {o.real:.5f} + j{abs(o.imag):.5f} | "
-                     f"{p['freq_ref_hz']:.4f} | {p['freq_err_pct']:+.1e} | {p['damping_ref']:.4f} | "
-                     f"{p['damping_err']:+.1e} |")
+                     f"{p['freq_ref_hz']:.4f} | {p['freq_err_pct']:+.1e} | "
+                     f"{p['damping_ref']:.4f} | {p['damping_err']:+.1e} |")
     worst_f = max(abs(p["freq_err_pct"]) for p in pairs)
     worst_z = max(abs(p["damping_err"]) for p in pairs)
     lines += ["", f"Worst: frequency {worst_f:.1e} %, damping ratio {worst_z:.1e} "

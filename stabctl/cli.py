@@ -597,10 +597,11 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
 
 @main.command()
 @click.argument("case_name", metavar="CASE")
-@click.option("--no-pss", is_flag=True, help="Analyse the case with its PSS removed (pss_con empty).")
+@click.option("--no-pss", is_flag=True,
+              help="Analyse the case with its PSS removed (pss_con empty).")
 @click.option("--areas", "n_areas", type=int, default=None, metavar="N",
               help="Number of coherent areas for the local/inter-area classification "
-                   "(default: from the largest gap between electromechanical frequencies).")
+                   "(default: from a gap in the electromechanical frequencies, docs/modal.md).")
 @click.option("--report", is_flag=True,
               help="Write OUT/eig_<case>[_nopss].md with the eigenvalue plot, mode-shape "
                    "compass plots and participation bar charts (PNG).")
@@ -647,8 +648,9 @@ def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
     em = ma.electromechanical
     for i in em[np.argsort(ma.freq_hz[em])]:
         g1, g2 = ma.groups(i)
+        against = " ".join(f"G{k}" for k in g2[:6]) or "-"
         click.echo(f"{i:5d} {ma.freq_hz[i]:7.3f} {ma.damping[i]:8.4f}  {ma.kind[i]:<10} "
-                   f"{' '.join(f'G{k}' for k in g1[:6])} vs {' '.join(f'G{k}' for k in g2[:6]) or '-'}")
+                   f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}")
     for w in written:
         click.echo(f"wrote {w}")
 

@@ -128,6 +128,12 @@ def _temp(out: Path, name: str) -> str:
     return path
 
 
+def _machines(numbers, most: int = 8) -> str:
+    """'G1, G2, ...' (at most `most` machines), '-' for none."""
+    text = ", ".join(f"G{k}" for k in numbers[:most]) or "-"
+    return text + (" ..." if len(numbers) > most else "")
+
+
 def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str:
     """The report text (electromechanical-mode table, areas, statistics, figures)."""
     ma, sys = st.ma, st.sys
@@ -168,10 +174,9 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         lam = ma.eigenvalues[i]
         g1, g2 = ma.groups(i)
         bus, r = best_esd(st, i)
-        fmt = lambda ks: (", ".join(f"G{k}" for k in ks[:8]) or "-") + (" ..." if len(ks) > 8 else "")  # noqa: E731
         lines.append(f"| {i} | {lam.real:.4f} ± j{lam.imag:.4f} | {ma.freq_hz[i]:.4f} | "
                      f"{ma.damping[i]:.4f} | {ma.kind[i]} | {ma.eta[i]:.2f} | "
-                     f"{fmt(ma.dominant_machines(i))} | {fmt(g1)} | {fmt(g2)} | "
+                     f"{_machines(ma.dominant_machines(i))} | {_machines(g1)} | {_machines(g2)} | "
                      f"{bus} ({r:.2e}) |")
     lines += ["", "Dominant machines: participation at least half the largest machine's "
               "(states and controls of a machine summed). Groups: speed mode-shape components "

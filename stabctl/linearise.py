@@ -30,6 +30,7 @@ named by `DynamicModel.state_name`; unused slots (docs/modal.md, "State counts")
 
 from __future__ import annotations
 
+import control as ct
 import numpy as np
 from numba import njit
 
@@ -110,8 +111,6 @@ def linearise_model(model: DynamicModel, esd_buses=(), rel_step: float = REL_STE
     """
     if not 0 < rel_step < 0.1:
         raise InputError(f"rel_step must be in (0, 0.1), got {rel_step}")
-    import control as ct
-
     case = model.case
     pos = _kept_positions(model, esd_buses)
     act = np.nonzero(active_states(model))[0]
@@ -173,8 +172,6 @@ def compare_pulse(sim, sys, bus: int, P: float = 0.05, t_on: float = 0.5, width:
     linear model leaves out the angle jump there, module docstring).
     Raises InputError when bus is not an ESD input of sys or a time is not on the grid.
     """
-    import control as ct
-
     from .events import LoadStep
 
     name = f"P_esd_B{int(bus)}"
@@ -266,7 +263,8 @@ def jacobian_columns(model: DynamicModel, kind, index, step):
 
 
 def _what(model, kind, index, c) -> str:
-    names = {ESD: "ESD power at kept bus", VREF: "Vref of exciter row", PREF: "Pref of governor row"}
+    names = {ESD: "ESD power at kept bus", VREF: "Vref of exciter row",
+             PREF: "Pref of governor row"}
     if kind[c] == STATE:
         return f"state {model.state_name(int(index[c]))}"
     return f"{names[int(kind[c])]} {int(index[c]) + 1}"

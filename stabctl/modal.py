@@ -163,11 +163,9 @@ def modal_analysis(sys, inertia=None, n_areas: int | None = None,
     e = np.zeros(states.size)
     e[angle] = 1.0
     ref = int(np.argmax(np.abs(e @ right)))
-    f, zeta = np.abs(lam.imag) / (2 * np.pi), -lam.real / np.abs(lam)
-    zeta[np.abs(lam) == 0] = 1.0
-    groups = np.array([state_group(n) for n in states])
-    shares = np.array([[P[groups == g, i].sum() for g in STATE_GROUPS] for i in range(lam.size)])
-    em = np.nonzero((f >= F_MIN_HZ) & (f <= F_MAX_HZ) & (shares[:, 0] >= shares.max(axis=1)))[0]
+    f, mag = np.abs(lam.imag) / (2 * np.pi), np.abs(lam)
+    zeta = np.divide(-lam.real, mag, out=np.ones_like(mag), where=mag > 0)   # lambda = 0: 1
+    em = electromechanical_modes(f, P, states)
     if areas is None:
         areas = coherent_areas(shape, f, em, n_areas)
     else:
@@ -182,6 +180,15 @@ def modal_analysis(sys, inertia=None, n_areas: int | None = None,
                          inertia=np.asarray(inertia, float), speed_shape=shape,
                          reference_mode=ref, electromechanical=em, areas=areas,
                          kind=kind.astype(str), eta=eta)
+
+
+def electromechanical_modes(freq_hz: np.ndarray, P: np.ndarray, states) -> np.ndarray:
+    """Indices of the modes with F_MIN_HZ <= f <= F_MAX_HZ whose participation summed over
+    the rotor angle/speed states is the largest of the STATE_GROUPS."""
+    groups = np.array([state_group(n) for n in states])
+    shares = np.stack([P[groups == g].sum(axis=0) for g in STATE_GROUPS])   # (groups, modes)
+    band = (freq_hz >= F_MIN_HZ) & (freq_hz <= F_MAX_HZ)
+    return np.nonzero(band & (shares[0] >= shares.max(axis=0)))[0]
 
 
 def eigen(A: np.ndarray):
@@ -328,7 +335,8 @@ def match_modes(ours: np.ndarray, reference: np.ndarray, f_min: float = F_MIN_HZ
             continue
         o = ours[np.argmin(np.abs(ours - r))]
         f_o = abs(o.imag) / (2 * np.pi)
+        z_r = -r.real / abs(r)
         out.append({"reference": r, "ours": o, "freq_ref_hz": f_r,
                     "freq_err_pct": 100 * (f_o - f_r) / f_r,
-                    "damping_ref": -r.real / abs(r), "damping_err": -o.real / abs(o) + r.real / abs(r)})
+                    "damping_ref": z_r, "damping_err": -o.real / abs(o) - z_r})
     return out

@@ -80,7 +80,8 @@ def test_state_counts_and_inactive_slots(kundur):
     m = kundur.model
     act = active_states(m)
     assert act.sum() == 56 and act.size == 4 * (6 + 3 + 3 + 3)
-    assert [m.state_name(k) for k in np.nonzero(~act)[0]] == [f"exc.VAs.G{g}" for g in (1, 2, 3, 4)]
+    unused = [m.state_name(k) for k in np.nonzero(~act)[0]]
+    assert unused == [f"exc.VAs.G{g}" for g in (1, 2, 3, 4)]
     # the excluded slots are dummies: zero rows and zero columns of the full Jacobian
     idx = np.arange(act.size)
     J, _, _ = jacobian_columns(m, np.full(idx.size, STATE), idx, 1e-4 * np.maximum(abs(m.x0), 1))
@@ -98,7 +99,8 @@ def test_signal_names_and_output_structure(sys_k, kundur):
     lab = sys_k.output_labels
     assert lab[:5] == ["omega_G1", "omega_G2", "omega_G3", "omega_G4", "omega_coi"]
     nb = kundur.case.n_bus
-    assert len(lab) == 4 + 1 + 4 + 2 * nb and lab[-1] == f"f_bus_B{int(kundur.case.buses.number[-1])}"
+    assert len(lab) == 4 + 1 + 4 + 2 * nb
+    assert lab[-1] == f"f_bus_B{int(kundur.case.buses.number[-1])}"
     C, D = np.asarray(sys_k.C), np.asarray(sys_k.D)
     w = kundur.inertia / kundur.inertia.sum()
     speeds = [sys_k.state_labels.index(f"mac_omega_G{g}") for g in range(1, 5)]
@@ -112,7 +114,8 @@ def test_signal_names_and_output_structure(sys_k, kundur):
 def test_reference_inputs_enter_as_the_equations_say(sys_k):
     """d(dEfd/dt)/dVref = K_A/T_A (smpexc, no lead-lag); d(dtg1/dt)/dPref = 1/T_s."""
     B, s, i = np.asarray(sys_k.B), sys_k.state_labels, sys_k.input_labels
-    assert B[s.index("exc_Efd_or_VR_G2"), i.index("Vref_G2")] == pytest.approx(200 / 0.05, rel=1e-9)
+    KA_TA = 200 / 0.05
+    assert B[s.index("exc_Efd_or_VR_G2"), i.index("Vref_G2")] == pytest.approx(KA_TA, rel=1e-9)
     assert B[s.index("tg_servo_G3"), i.index("Pref_G3")] == pytest.approx(1 / 0.1, rel=1e-9)
     assert np.count_nonzero(B[:, i.index("Vref_G2")]) == 1
 

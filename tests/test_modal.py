@@ -3,7 +3,6 @@ angle-reference mode, Kundur's local and inter-area modes, residues against the 
 function, areas, reports and bad input."""
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -133,9 +132,10 @@ def test_eig_json_lists_every_mode():
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert out["n_states"] == 44 and out["pss"] is False and out["files"] == []
-    assert len(out["modes"]) > 25 and [m["mode"] for m in out["modes"]] == list(range(len(out["modes"])))
-    assert all({"real", "imag", "freq_hz", "damping", "kind"} <= set(m) for m in out["modes"])
-    em = [out["modes"][i] for i in out["electromechanical_modes"]]
+    modes = out["modes"]
+    assert len(modes) > 25 and [m["mode"] for m in modes] == list(range(len(modes)))
+    assert all({"real", "imag", "freq_hz", "damping", "kind"} <= set(m) for m in modes)
+    em = [modes[i] for i in out["electromechanical_modes"]]
     ia = [m for m in em if m["kind"] == "inter-area"]
     assert len(ia) == 1 and ia[0]["damping"] < 0 and ia[0]["best_esd_bus"].startswith("B")
     assert out["modes"][out["reference_mode"]]["kind"] == "angle reference"
