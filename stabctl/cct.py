@@ -49,14 +49,15 @@ T_LO, T_HI, T_MAX, TOL, T_AFTER_FAULT = 0.0, 0.1, 1.0, 1e-3, 5.0
 @dataclass(frozen=True)
 class LineFault:
     """A three-phase fault at `bus` on circuit `circuit` of line `bus`-`far_bus`, starting
-    at `t_fault` (s), cleared at both ends at the same instant (the line stays out).
+    at `t_fault` (s), cleared at both ends at the same instant (the line stays out);
+    far_bus None: a bus fault cleared without loss of a line (PST sw_con type 7).
 
     trips: further lines (from_bus, to_bus), circuit 1 of each, opened at the clearing
     instant; both circuits of a double line: circuit=2 and trips=((bus, far_bus),).
     """
 
     bus: int
-    far_bus: int
+    far_bus: int | None
     t_fault: float = 1.0
     circuit: int = 1
     trips: tuple[tuple[int, int], ...] = ()
@@ -71,8 +72,8 @@ class LineFault:
     def describe(self) -> str:
         circ = f" (circuit {self.circuit})" if self.circuit != 1 else ""
         extra = "".join(f", {a}-{b} also opened" for a, b in self.trips)
-        return f"fault at bus {self.bus} on line {self.bus}-{self.far_bus}{circ} at " \
-               f"{self.t_fault:g} s{extra}"
+        where = "" if self.far_bus is None else f" on line {self.bus}-{self.far_bus}{circ}"
+        return f"fault at bus {self.bus}{where} at {self.t_fault:g} s{extra}"
 
 
 def no_separation(result: SimulationResult) -> bool:
@@ -313,7 +314,7 @@ def cached_simulator(case_name: str) -> Simulator:
     return Simulator(load_case(case_name))
 
 
-def cct_job(case: str, bus: int, far_bus: int, t_fault: float = 1.0, circuit: int = 1,
+def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circuit: int = 1,
             trips=(), esd_pct: float | None = None, tol: float = TOL, t_max: float = T_MAX,
             t_end: float | None = None) -> dict:
     """Worker entry of a CCT sweep: the CCT of one fault at one storage rating.
@@ -323,7 +324,8 @@ def cct_job(case: str, bus: int, far_bus: int, t_fault: float = 1.0, circuit: in
     `critical_clearing_time` and `storage_fleet`.
     """
     sim = cached_simulator(case)
-    fault = LineFault(int(bus), int(far_bus), float(t_fault), int(circuit),
+    fault = LineFault(int(bus), None if far_bus is None else int(far_bus), float(t_fault),
+                      int(circuit),
                       tuple((int(a), int(b)) for a, b in trips))
     res = critical_clearing_time(sim, fault, tol=tol, t_max=t_max, t_end=t_end,
                                  storage=storage_fleet(sim.case, esd_pct))
@@ -332,7 +334,8 @@ def cct_job(case: str, bus: int, far_bus: int, t_fault: float = 1.0, circuit: in
 
 def cct_key(case: str, fault: LineFault, esd_pct: float | None) -> str:
     """Sweep key, e.g. 'kundur/3-101/t1/esd-none' or 'kundur/3-101#2+13-101/t1/esd20'."""
-    line = f"{fault.bus}-{fault.far_bus}" + (f"#{fault.circuit}" if fault.circuit != 1 else "")
+    line = f"bus{fault.bus}" if fault.far_bus is None else \
+        f"{fault.bus}-{fault.far_bus}" + (f"#{fault.circuit}" if fault.circuit != 1 else "")
     line += "".join(f"+{a}-{b}" for a, b in fault.trips)
     rating = "none" if esd_pct is None else f"{esd_pct:g}"
     return f"{case}/{line}/t{fault.t_fault:g}/esd{'-' if esd_pct is None else ''}{rating}"

@@ -137,7 +137,8 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, tol=1e-10, max_iter
     in 30 steps, Newton's method in rectangular coordinates (as PST).  If Newton fails too,
     the switch has left the equations without a solution (a load at 0.5 pu draws twice as
     much just above the switch as just below; PSTess stops there): the loads within 0.05 pu
-    of the switch are then held at their impedance model for this evaluation.  Returns the
+    of the switch (at any iterate) are then held at their impedance model for this
+    evaluation.  Returns the
     number of iterations, or -1 without convergence (the caller raises SimulationError).
     """
     n = V.size
@@ -147,23 +148,25 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, tol=1e-10, max_iter
     F = np.empty(n, np.complex128)
     V_start = V.copy()
     low = np.zeros(n, np.bool_)
+    vmin = np.abs(V_start)
     for it in range(30):
         if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low) < tol:
             return it
         V -= Z22 @ F
+        vmin = np.minimum(vmin, np.abs(V))
     V[:] = V_start
-    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low)
+    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin)
     if it >= 0:
         return it
-    for i in range(n):
-        low[i] = abs(V_start[i]) < V_SWITCH + 0.05 or abs(V[i]) < V_SWITCH + 0.05
+    low[:] = vmin < V_SWITCH + 0.05      # every bus that came near the switch
     V[:] = V_start
-    return _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low)
+    return _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin)
 
 
 @njit(cache=True)
-def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low):
-    """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load)."""
+def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin):
+    """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load);
+    vmin keeps the smallest magnitude each bus reached."""
     n = V.size
     J = np.empty((2 * n, 2 * n))
     rhs = np.empty(2 * n)
@@ -195,4 +198,5 @@ def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low):
         d = np.linalg.solve(J, rhs)
         for i in range(n):
             V[i] += d[i] + 1j * d[n + i]
+            vmin[i] = min(vmin[i], abs(V[i]))
     return -1

@@ -266,3 +266,28 @@ def participation_bars(ma, modes, path, n_bars: int = 12) -> None:
         ax.set_visible(False)
     fig.suptitle("participation factors per machine (each mode sums to 1; colour = area)")
     _save(fig, Path(path))
+
+
+def screening_map(case, rows, path: Path) -> None:
+    """Network drawn with `screening.spectral_layout`, each bus coloured by the CCT of a
+    fault there (grey: failed search); bus numbers on the most critical ones."""
+    from .screening import spectral_layout
+
+    xy = spectral_layout(case)
+    fig, ax = plt.subplots(figsize=(8, 6.5))
+    f, t = case.bus_indices(case.branches.from_bus), case.bus_indices(case.branches.to_bus)
+    for a, b in zip(f, t):
+        ax.plot(xy[[a, b], 0], xy[[a, b], 1], color="0.8", lw=0.7, zorder=1)
+    bus_rows = {r["bus"]: r for r in rows if r["far_bus"] is None}
+    idx = case.bus_indices(list(bus_rows))
+    cct = np.array([r.get("cct_s", np.nan) for r in bus_rows.values()])
+    ok = np.isfinite(cct)
+    sc = ax.scatter(xy[idx[ok], 0], xy[idx[ok], 1], c=cct[ok] * case.freq_hz, cmap="RdYlGn",
+                    s=40, zorder=2, edgecolors="k", linewidths=0.3)
+    ax.scatter(xy[idx[~ok], 0], xy[idx[~ok], 1], c="0.5", s=40, zorder=2, marker="x")
+    for k in np.argsort(np.where(ok, cct, np.inf))[:10]:
+        ax.annotate(str(int(case.buses.number[idx[k]])), xy[idx[k]], fontsize=7)
+    fig.colorbar(sc, ax=ax, label="CCT of a bus fault (cycles)")
+    ax.set(title=f"{case.name}: critical clearing time of a fault at each bus", xticks=[],
+           yticks=[])
+    _save(fig, path)
