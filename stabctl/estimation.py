@@ -42,10 +42,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import cmath
+import math
+
 import numpy as np
 import scipy.linalg
 from filterpy.common import Q_continuous_white_noise
 from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
+from numba import njit
 from scipy.stats import chi2
 
 from .case import Case
@@ -61,7 +65,7 @@ class FrequencyTuning:
     per s); gate_sigma: innovation gate in standard deviations (inf: none).  The
     measurement noise comes from the PMU settings."""
 
-    rocof_walk: float = 4.0
+    rocof_walk: float = 50.0
     gate_sigma: float = np.inf
 
 
@@ -110,7 +114,7 @@ class LinearSystems:
             M = np.zeros((n, k + 1, k + 1))
             M[:, :k, :k], M[:, :k, k] = self.A * dt, self.b * dt
             E = np.stack([scipy.linalg.expm(a) for a in M])
-            self._zoh[key] = (E[:, :k, :k], E[:, :k, k])
+            self._zoh[key] = (np.ascontiguousarray(E[:, :k, :k]), np.ascontiguousarray(E[:, :k, k]))
         return self._zoh[key]
 
 
@@ -290,30 +294,31 @@ def _series_impedance(case: Case, term: int, bus: int) -> complex:
 
 
 # -- centre of inertia ------------------------------------------------------------------------
-def coi_speed(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray) -> tuple[float, float]:
+def coi_speed(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray):
     """COI speed sum(M_i w_i) / sum(M_i) (paper eq. 40, M = H*MVA) and its variance, the
     machine estimates taken as independent (one filter per machine, independent PMU
-    noise).  speed, var: (n,) pu, pu^2."""
+    noise).  speed, var: (..., n) pu, pu^2, machines on the last axis; returns (...)."""
     w = inertia / inertia.sum()
-    return float(w @ speed), float(w ** 2 @ var)
+    return speed @ w, var @ w ** 2
 
 
 def relative_speeds(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray,
                     coi: str = "system") -> tuple[np.ndarray, np.ndarray]:
     """omega_i - omega_COI of every machine (pu) and its variance (pu^2), the COI of all
     machines (coi="system") or of the others (coi="rest"), as `stabctl.storage.BangBangCOI`.
+    speed, var: (..., n), machines on the last axis.
 
     With weights w = M / sum(M) and independent estimates: var = (1 - 2 w_i) s_i^2 +
     sum_j w_j^2 s_j^2 (system); s_i^2 + sum_{j != i} w_j^2 s_j^2 / (1 - w_i)^2 (rest).
     Raises InputError for another coi.
     """
     w = inertia / inertia.sum()
+    c, cv = coi_speed(speed, var, inertia)
     if coi == "system":
-        c, cv = coi_speed(speed, var, inertia)
-        return speed - c, (1 - 2 * w) * var + cv
+        return speed - c[..., None], (1 - 2 * w) * var + cv[..., None]
     if coi == "rest":
-        rest = (w @ speed - w * speed) / (1 - w)
-        return speed - rest, var + (w ** 2 @ var - w ** 2 * var) / (1 - w) ** 2
+        rest = (c[..., None] - w * speed) / (1 - w)
+        return speed - rest, var + (cv[..., None] - w ** 2 * var) / (1 - w) ** 2
     raise InputError(f"coi must be 'system' or 'rest', got {coi!r}")
 
 
@@ -323,183 +328,352 @@ def nis_bounds(dof: int, coverage: float = 0.95) -> tuple[float, float]:
     return float(chi2.ppf(a, dof)), float(chi2.ppf(1 - a, dof))
 
 
-# -- baseline filter equations ------------------------------------------------------------
-@dataclass
-class _FreqMeasurement:
-    """Baseline-filter inputs of one frame: z (n, 2) = [f - f0 (Hz), ROCOF (Hz/s)],
-    R (2, 2), valid mask ok (n,)."""
-
-    z: np.ndarray
-    R: np.ndarray
-    ok: np.ndarray
+# -- packed parameters for the compiled kernels ----------------------------------------------
+(C_H, C_D, C_POT, C_RA, C_ZRE, C_ZIM, C_PERSPEED, C_QC1, C_QC2, C_QSIGN, C_QSPEED, C_KIND,
+ C_XL, C_XQ, C_XQP, C_XDP, C_GACT, C_WF, C_INVR, C_TMAX, C_GC, C_GU, C_NCOL) = \
+    tuple(range(20)) + (20, 23, 26)
+(T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP, T_GATE, T_SIG2, T_SIGF, T_F0,
+ T_NCOL) = range(11)
+(H_PAG, H_PAGVAR, H_IQVAR, H_PM0) = range(4)   # columns of the held-values array
 
 
-def _freq_measurements(frame: Frame, pmu: np.ndarray, f0: float, s: PMUSettings):
-    z = np.stack([frame.freq[pmu] - f0, frame.rocof[pmu]], axis=1)
-    return _FreqMeasurement(z=z, R=np.diag([s.sigma_freq ** 2, s.sigma_rocof ** 2]),
-                            ok=frame.valid[pmu] & np.isfinite(z).all(axis=1))
+def _packed(m: MachineModels) -> np.ndarray:
+    """Parameter matrix (n, C_NCOL) of the swing filter's compiled kernels."""
+    P = np.zeros((m.n, C_NCOL))
+    q, g = m.qaxis, m.governor
+    for col, val in ((C_H, m.H), (C_D, m.D), (C_POT, m.pot), (C_RA, m.ra), (C_ZRE, m.z_emf.real),
+                     (C_ZIM, m.z_emf.imag), (C_PERSPEED, m.per_speed), (C_QC1, q.c[:, 0]),
+                     (C_QC2, q.c[:, 1]), (C_QSIGN, q.sign), (C_QSPEED, q.speed),
+                     (C_KIND, q.kind), (C_XL, q.xl), (C_XQ, q.xq), (C_XQP, q.xqp),
+                     (C_XDP, q.xdp), (C_GACT, g.active), (C_WF, g.wf), (C_INVR, g.invR),
+                     (C_TMAX, g.Tmax)):
+        P[:, col] = val
+    P[:, C_GC:C_GC + 3], P[:, C_GU:C_GU + 3] = g.c, g.g_unit
+    return P
 
 
-def _freq_F(dt: float) -> np.ndarray:
-    return np.array([[1.0, dt], [0.0, 1.0]])
+def _tuning_vector(tun: SwingTuning, s: PMUSettings, f0: float) -> np.ndarray:
+    v = np.zeros(T_NCOL)
+    v[[T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP, T_GATE]] = (
+        tun.angle_model_rad, tun.accel_psd, tun.pm_walk, tun.pm0_sd, tun.flux0_sd, tun.jump_pu,
+        tun.gate_sigma)
+    v[T_SIG2], v[T_SIGF], v[T_F0] = s.sigma_phasor ** 2, s.sigma_freq, f0
+    return v
 
 
-# -- swing filter equations ---------------------------------------------------------------
-@dataclass
-class _SwingMeasurement:
-    """Swing-filter inputs of one frame, arrays (n,): internal-voltage angle theta (rad)
-    and magnitude emag (pu), terminal voltage v and current cur (complex pu, system base),
-    bus frequency freq (Hz, for the start only), air-gap power pag and its noise variance
-    (pu machine base), variance of I_q (pu^2 machine base), PMU noise variance of theta
-    r (rad^2), valid mask ok."""
-
-    theta: np.ndarray
-    emag: np.ndarray
-    v: np.ndarray
-    cur: np.ndarray
-    freq: np.ndarray
-    pag: np.ndarray
-    pag_var: np.ndarray
-    iq_var: np.ndarray
-    r: np.ndarray
-    ok: np.ndarray
+# -- swing filter equations, one machine (shared by the compiled and the filterpy paths) ---
+@njit(cache=True)
+def _wrap(a):
+    """Angle wrapped to [-pi, pi)."""
+    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
-def _swing_measurements(frame: Frame, m: MachineModels, s: PMUSettings) -> _SwingMeasurement:
-    """Internal voltage, air-gap power and noise from one frame.
+@njit(cache=True)
+def _to_dq(delta, X):
+    """(d, q) of the network phasor X in the rotor frame: d + jq = j exp(-j delta) X."""
+    z = 1j * cmath.exp(-1j * delta) * X
+    return z.real, z.imag
 
-    To first order in the relative phasor errors e_V, e_I (std s per component): the
-    angle of E = V + Z I has variance s^2 (|V|^2 + |Z I|^2) / |E|^2, P = Re(V conj I)
-    2 s^2 |S|^2, I_q (machine base) s^2 |I|^2 pot^2.
-    """
-    v, i, f = frame.v[m.pmu], frame.i[m.pmu], frame.freq[m.pmu]
-    ok = frame.valid[m.pmu] & np.isfinite(v) & np.isfinite(i) & np.isfinite(f)
-    e = v + m.z_emf * i
+
+@njit(cache=True)
+def swing_measure(v, i, pr, sig2):
+    """One machine's measurement quantities from its PMU phasors v, i (complex pu, system
+    base): (theta, |E|, P_ag, var P_ag, var I_q, var theta) with E = V + Z I.
+
+    To first order in the relative phasor errors (std s, sig2 = s^2, per component): angle
+    of E: s^2 (|V|^2 + |Z I|^2) / |E|^2; P = Re(V conj I): 2 s^2 |S|^2; I_q: s^2 |I|^2
+    (machine base, pot^2 |I|^2)."""
+    pot = pr[C_POT]
+    zi = complex(pr[C_ZRE], pr[C_ZIM]) * i
+    e = v + zi
     S = v * np.conj(i)
-    sig2 = s.sigma_phasor ** 2
-    ia = np.abs(i) * m.pot
-    return _SwingMeasurement(
-        theta=np.angle(e), emag=np.abs(e), v=v, cur=i, freq=f, pag=m.pot * S.real + m.ra * ia ** 2,
-        pag_var=2 * sig2 * (m.pot * np.abs(S)) ** 2, iq_var=sig2 * ia ** 2,
-        r=sig2 * (np.abs(v) ** 2 + np.abs(m.z_emf * i) ** 2) / np.abs(e) ** 2, ok=ok)
+    ia2 = (abs(i) * pot) ** 2
+    emag = abs(e)
+    return (math.atan2(e.imag, e.real), emag, pot * S.real + pr[C_RA] * ia2,
+            2 * sig2 * (pot * abs(S)) ** 2, sig2 * ia2,
+            sig2 * (abs(v) ** 2 + abs(zi) ** 2) / emag ** 2)
 
 
-@dataclass
-class _SwingInputs:
-    """Inputs over one interval: mean P_m and P_ag, the variance of the mean P_ag, the
-    currents at both ends (complex, system base) and the variance of their I_q."""
+@njit(cache=True)
+def swing_start(v, i, freq, r, pr, tv):
+    """Initial state (5,) and covariance (5, 5) of one machine: steady state as PST's
+    initialisation (docs/pst_models.md 1.7), speed from the bus frequency."""
+    i_m = i * pr[C_POT]
+    kind = int(pr[C_KIND])
+    if kind == EM:
+        delta = cmath.phase(v + 1j * pr[C_XDP] * i_m)
+    else:
+        delta = cmath.phase(v + complex(pr[C_RA], pr[C_XQ]) * i_m)
+    curd, curq = _to_dq(delta, i_m)
+    edra = -_to_dq(delta, v)[0] - pr[C_RA] * curd
+    x = np.zeros(5)
+    x[0], x[1] = delta, freq / tv[T_F0] - 1.0
+    if kind == SUB:
+        x[3], x[4] = edra + pr[C_XQP] * curq, edra + pr[C_XL] * curq
+    elif kind == TRA:
+        x[3] = _to_dq(delta, v + complex(pr[C_RA], pr[C_XDP]) * i_m)[0]
+    P = np.zeros((5, 5))
+    P[0, 0] = r + tv[T_ANGLE] ** 2
+    P[1, 1] = (tv[T_SIGF] / tv[T_F0]) ** 2
+    P[2, 2] = tv[T_PM0] ** 2
+    P[3, 3] = P[4, 4] = tv[T_FLUX0] ** 2
+    return x, P
 
-    pm: np.ndarray
-    pag: np.ndarray
-    pag_var: np.ndarray
-    cur0: np.ndarray
-    cur1: np.ndarray
-    iq_var: np.ndarray
+
+@njit(cache=True)
+def swing_inputs(k, valid, pag, pag_var, cur, iq_var, hold, cur_hold, g, w, pr, Adg, bdg, tv):
+    """Inputs of machine k over one interval: (mean P_m, mean P_ag, variance of the mean
+    P_ag, current at both ends, variance of I_q).  Advances its governor (demand from the
+    estimated speed 1 + w, P_ref such that the start was an equilibrium at nominal speed)
+    and its held values (the last valid P_ag and current stand in for a dropped frame);
+    hold (n, 4), cur_hold (n,), g (n, 3) are updated in place."""
+    pm0 = hold[k, H_PM0]
+    pm_before, pm_after = pm0, pm0
+    if pr[C_GACT] > 0:
+        pm_before = _dot(g[k], pr[C_GC:C_GC + 3])
+        u = pm0 - (pr[C_WF] - 1.0) * pr[C_INVR] + (pr[C_WF] - 1.0 - w) * pr[C_INVR]
+        g[k] = _mv(Adg, g[k]) + bdg * min(max(u, 0.0), pr[C_TMAX])
+        pm_after = _dot(g[k], pr[C_GC:C_GC + 3])
+    cur0 = cur_hold[k]
+    if not valid:
+        return (0.5 * (pm_before + pm_after), hold[k, H_PAG], hold[k, H_PAGVAR], cur0, cur0,
+                hold[k, H_IQVAR])
+    dp = pag - hold[k, H_PAG]
+    jump = dp * dp / 12 if abs(dp) > tv[T_JUMP] else 0.0
+    out = (0.5 * (pm_before + pm_after), 0.5 * (hold[k, H_PAG] + pag),
+           0.25 * (hold[k, H_PAGVAR] + pag_var) + jump, cur0, cur, 0.5 * (hold[k, H_IQVAR] + iq_var))
+    hold[k, H_PAG], hold[k, H_PAGVAR], hold[k, H_IQVAR] = pag, pag_var, iq_var
+    cur_hold[k] = cur
+    return out
 
 
-def _swing_transition(x: np.ndarray, u: _SwingInputs, dt: float, m: MachineModels):
-    """Propagated states (n, 5), Jacobian F (n, 5, 5) and the sensitivity g (n, 5) of the
-    propagated states to the mean P_ag (module docstring)."""
-    d, w, p = x[:, 0], x[:, 1], x[:, 2]
-    wb = 2 * np.pi * m.f0
-    omega = np.where(m.per_speed, 1.0 + w, 1.0)
-    c = 1.0 / (2 * m.H * omega)
-    acc = c * (u.pm + p - u.pag) - m.D * w / (2 * m.H)
-    da_dw = -np.where(m.per_speed, c * (u.pm + p - u.pag) / omega, 0.0) - m.D / (2 * m.H)
+@njit(cache=True)
+def swing_transition(x, pm, pag, cur0, cur1, dt, pr, Adq, bdq, f0):
+    """Propagated state (5,), Jacobian F (5, 5) and sensitivity g (5,) to the mean P_ag
+    of one machine over dt (module docstring)."""
+    d, w, p = x[0], x[1], x[2]
+    wb = 2 * math.pi * f0
+    omega = 1.0 + w if pr[C_PERSPEED] > 0 else 1.0
+    c = 1.0 / (2 * pr[C_H] * omega)
+    acc = c * (pm + p - pag) - pr[C_D] * w / (2 * pr[C_H])
+    da_dw = -pr[C_D] / (2 * pr[C_H])
+    if pr[C_PERSPEED] > 0:
+        da_dw -= c * (pm + p - pag) / omega
     d1 = d + wb * dt * (w + 0.5 * dt * acc)
-    r0, r1 = np.exp(-1j * d) * u.cur0 * m.pot, np.exp(-1j * d1) * u.cur1 * m.pot
-    Ad, bd = m.qaxis.sys.discrete(dt)
-    xn = np.empty_like(x)
-    xn[:, 0], xn[:, 1], xn[:, 2] = d1, w + dt * acc, p
-    xn[:, 3:] = np.einsum("nij,nj->ni", Ad, x[:, 3:]) + bd * (0.5 * (r0.real + r1.real))[:, None]
-    F = np.zeros((m.n, 5, 5))
-    F[:, 0, 0] = F[:, 2, 2] = 1.0
-    F[:, 0, 1] = wb * dt * (1 + 0.5 * dt * da_dw)
-    F[:, 0, 2] = wb * dt * 0.5 * dt * c
-    F[:, 1, 1] = 1 + dt * da_dw
-    F[:, 1, 2] = dt * c
-    F[:, 3:, 3:] = Ad
-    dIq = 0.5 * (r1.imag[:, None] * F[:, 0, :3])          # d I_q(delta') / d(delta, w, dPm)
-    dIq[:, 0] += 0.5 * r0.imag                              # d I_q(delta) / d delta
-    F[:, 3:, :3] = bd[:, :, None] * dIq[:, None, :]
-    g = np.zeros((m.n, 5))
-    g[:, 0], g[:, 1] = -wb * 0.5 * dt * dt * c, -dt * c
+    r0 = cmath.exp(-1j * d) * cur0 * pr[C_POT]
+    r1 = cmath.exp(-1j * d1) * cur1 * pr[C_POT]
+    iq = 0.5 * (r0.real + r1.real)
+    xn = np.empty(5)
+    xn[0], xn[1], xn[2] = d1, w + dt * acc, p
+    xn[3:] = _mv(Adq, x[3:]) + bdq * iq
+    F = np.zeros((5, 5))
+    F[0, 0] = F[2, 2] = 1.0
+    F[0, 1] = wb * dt * (1 + 0.5 * dt * da_dw)
+    F[0, 2] = wb * dt * 0.5 * dt * c
+    F[1, 1] = 1 + dt * da_dw
+    F[1, 2] = dt * c
+    F[3:, 3:] = Adq
+    for j in range(3):                       # I_q(delta') depends on (delta, w, dPm)
+        dIq = 0.5 * r1.imag * F[0, j] + (0.5 * r0.imag if j == 0 else 0.0)
+        F[3, j], F[4, j] = bdq[0] * dIq, bdq[1] * dIq
+    g = np.zeros(5)
+    g[0], g[1] = -wb * 0.5 * dt * dt * c, -dt * c
     return xn, F, g
 
 
-def _swing_Q(g: np.ndarray, u: _SwingInputs, dt: float, m: MachineModels,
-             tun: SwingTuning) -> np.ndarray:
-    """Process noise (n, 5, 5): measured-power noise through g, I_q noise through b_d,
-    white unmodelled acceleration on (delta, w), random walk of dPm."""
-    wb = 2 * np.pi * m.f0
-    bd = m.qaxis.sys.discrete(dt)[1]
-    Q = g[:, :, None] * g[:, None, :] * u.pag_var[:, None, None]
-    Q[:, 3:, 3:] += bd[:, :, None] * bd[:, None, :] * (0.5 * u.iq_var)[:, None, None]
-    Q[:, :2, :2] += tun.accel_psd * np.array([[wb ** 2 * dt ** 3 / 3, wb * dt ** 2 / 2],
-                                              [wb * dt ** 2 / 2, dt]])
-    Q[:, 2, 2] += tun.pm_walk * dt
+@njit(cache=True)
+def swing_Q(g, pag_var, iq_var, bdq, dt, tv):
+    """Process noise (5, 5) of one machine: measured-power noise through g, I_q noise
+    through b_d, white unmodelled acceleration on (delta, w), random walk of dPm."""
+    wb = 2 * math.pi * tv[T_F0]
+    Q = np.zeros((5, 5))
+    for a in range(5):
+        for b in range(5):
+            Q[a, b] = g[a] * g[b] * pag_var
+    for a in range(2):
+        for b in range(2):
+            Q[3 + a, 3 + b] += bdq[a] * bdq[b] * iq_var
+    q = tv[T_ACCEL]
+    Q[0, 0] += q * wb * wb * dt ** 3 / 3
+    Q[0, 1] += q * wb * dt * dt / 2
+    Q[1, 0] += q * wb * dt * dt / 2
+    Q[1, 1] += q * dt
+    Q[2, 2] += tv[T_PMWALK] * dt
     return Q
 
 
-def _swing_h(x: np.ndarray, emag: np.ndarray, m: MachineModels):
-    """Predicted internal-voltage angle (n,) and its Jacobian H (n, 1, 5)."""
-    qa = m.qaxis
-    omega = np.where(qa.speed, 1.0 + x[:, 1], 1.0)
-    psi = np.einsum("ni,ni->n", qa.c, x[:, 3:])
-    s = np.clip(omega * psi / emag, -0.99, 0.99)
-    k = qa.sign / (emag * np.sqrt(1 - s ** 2))
-    H = np.zeros((m.n, 1, 5))
-    H[:, 0, 0] = 1.0
-    H[:, 0, 1] = np.where(qa.speed, k * psi, 0.0)
-    H[:, 0, 3:] = (k * omega)[:, None] * qa.c
-    return x[:, 0] + qa.sign * np.arcsin(s), H
+@njit(cache=True)
+def swing_h(x, emag, pr):
+    """Predicted internal-voltage angle of one machine and its Jacobian H (5,)."""
+    omega = 1.0 + x[1] if pr[C_QSPEED] > 0 else 1.0
+    psi = pr[C_QC1] * x[3] + pr[C_QC2] * x[4]
+    s = min(max(omega * psi / emag, -0.99), 0.99)
+    k = pr[C_QSIGN] / (emag * math.sqrt(1 - s * s))
+    H = np.zeros(5)
+    H[0] = 1.0
+    if pr[C_QSPEED] > 0:
+        H[1] = k * psi
+    H[3], H[4] = k * omega * pr[C_QC1], k * omega * pr[C_QC2]
+    return x[0] + pr[C_QSIGN] * math.asin(s), H
 
 
-def _wrap(a):
-    """Angle(s) wrapped to [-pi, pi)."""
-    return (a + np.pi) % (2 * np.pi) - np.pi
+# -- compiled filters, all machines ---------------------------------------------------------
+@njit(cache=True)
+def _dot(a, b):
+    acc = 0.0
+    for j in range(a.size):
+        acc += a[j] * b[j]
+    return acc
 
 
-# -- Kalman algebra (filterpy's equations, vectorised) ------------------------------------
-def _gated_R(P, y, H, R, gate):
-    """Measurement noise with outliers removed, and the NIS of the full innovation.
-
-    A component j whose innovation exceeds `gate` standard deviations of S = H P H' + R
-    gets R_jj = 1e12 S_jj, i.e. is not used in this frame.  P (k, nx, nx), y (k, nz),
-    H and R (k, nz, nx), (k, nz, nz).
-    """
-    S = H @ P @ np.swapaxes(H, 1, 2) + R
-    nis = np.einsum("ki,kij,kj->k", y, np.linalg.inv(S), y)
-    Sd = np.diagonal(S, axis1=1, axis2=2)
-    k, j = np.nonzero(y ** 2 > gate ** 2 * Sd)
-    Rg = R.copy()
-    Rg[k, j, j] = 1e12 * Sd[k, j]
-    return Rg, nis
+@njit(cache=True)
+def _mv(A, x):
+    """A x for small matrices (explicit loops: BLAS calls cost more at this size)."""
+    y = np.zeros(A.shape[0])
+    for a in range(A.shape[0]):
+        for b in range(A.shape[1]):
+            y[a] += A[a, b] * x[b]
+    return y
 
 
-def _batch_update(x, P, y, H, R):
-    """Kalman update of a stack of filters, Joseph form as filterpy: x (k, nx),
-    P (k, nx, nx), innovation y (k, nz), H (k, nz, nx), R (k, nz, nz); returns x, P."""
-    Ht = np.swapaxes(H, 1, 2)
-    PHt = P @ Ht
-    K = PHt @ np.linalg.inv(H @ PHt + R)
-    x = x + np.einsum("kij,kj->ki", K, y)
-    IKH = np.eye(x.shape[1]) - K @ H
-    return x, IKH @ P @ np.swapaxes(IKH, 1, 2) + K @ R @ np.swapaxes(K, 1, 2)
+@njit(cache=True)
+def _mm(A, B):
+    C = np.zeros((A.shape[0], B.shape[1]))
+    for a in range(A.shape[0]):
+        for b in range(B.shape[1]):
+            for c in range(A.shape[1]):
+                C[a, b] += A[a, c] * B[c, b]
+    return C
+
+
+@njit(cache=True)
+def _inv2(S):
+    """Inverse of a 2 x 2 matrix."""
+    det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
+    return np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det
+
+
+@njit(cache=True)
+def _sandwich(F, P):
+    """F P F' for small square matrices."""
+    n = F.shape[0]
+    FP = np.zeros((n, n))
+    for a in range(n):
+        for b in range(n):
+            acc = 0.0
+            for c in range(n):
+                acc += F[a, c] * P[c, b]
+            FP[a, b] = acc
+    out = np.zeros((n, n))
+    for a in range(n):
+        for b in range(n):
+            acc = 0.0
+            for c in range(n):
+                acc += FP[a, c] * F[b, c]
+            out[a, b] = acc
+    return out
+
+
+@njit(cache=True)
+def _scalar_update(x, P, y, H, R, gate):
+    """Kalman update with one measurement (filterpy's equations, Joseph form); returns
+    x, P, NIS.  An innovation beyond `gate` standard deviations is not used (R -> 1e12 S)."""
+    n = x.size
+    PHt = _mv(P, H)
+    HPHt = _dot(H, PHt)
+    S = HPHt + R
+    nis = y * y / S
+    if y * y > gate * gate * S:
+        R = 1e12 * S
+    K = PHt / (HPHt + R)
+    IKH = np.zeros((n, n))
+    for a in range(n):
+        IKH[a, a] = 1.0
+        for b in range(n):
+            IKH[a, b] -= K[a] * H[b]
+    P1 = _sandwich(IKH, P)
+    for a in range(n):
+        for b in range(n):
+            P1[a, b] += R * K[a] * K[b]
+    return x + K * y, P1, nis
+
+
+@njit(cache=True)
+def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par, Adq, bdq,
+                 Adg, bdg, tv):
+    """One frame of the swing filter for every machine (in place): predict the machines
+    already started over dt, update those with a valid frame, start the others."""
+    for k in range(x.shape[0]):
+        nis[k] = np.nan
+        pr = par[k]
+        if not (ready[k] or valid[k]):
+            continue
+        theta = emag = pag = pag_var = iq_var = r = np.nan
+        if valid[k]:
+            theta, emag, pag, pag_var, iq_var, r = swing_measure(v[k], i[k], pr, tv[T_SIG2])
+        if not ready[k]:
+            x[k], P[k] = swing_start(v[k], i[k], freq[k], r, pr, tv)
+            hold[k, H_PAG], hold[k, H_PAGVAR], hold[k, H_IQVAR], hold[k, H_PM0] = \
+                pag, pag_var, iq_var, pag
+            cur_hold[k] = i[k]
+            g[k] = pr[C_GU:C_GU + 3] * pag
+            ready[k] = True
+            continue
+        pm, pbar, pvar, c0, c1, iqv = swing_inputs(k, valid[k], pag, pag_var, i[k], iq_var,
+                                                   hold, cur_hold, g, x[k, 1], pr, Adg[k],
+                                                   bdg[k], tv)
+        xn, F, gs = swing_transition(x[k], pm, pbar, c0, c1, dt, pr, Adq[k], bdq[k], tv[T_F0])
+        Pp = _sandwich(F, P[k]) + swing_Q(gs, pvar, iqv, bdq[k], dt, tv)
+        if valid[k]:
+            h, H = swing_h(xn, emag, pr)
+            x[k], P[k], nis[k] = _scalar_update(xn, Pp, _wrap(theta - h), H,
+                                                r + tv[T_ANGLE] ** 2, tv[T_GATE])
+        else:
+            x[k], P[k] = xn, Pp
+
+
+@njit(cache=True)
+def _freq_batch(x, P, nis, ready, z, valid, dt, q, R, gate):
+    """One frame of the baseline filter for every machine (in place); z (n, 2) =
+    [f - f0, ROCOF], R (2, 2) diagonal.  Per-component gating as `_scalar_update`; the two
+    components are independent (R diagonal), so their joint update is done jointly."""
+    F = np.array([[1.0, dt], [0.0, 1.0]])
+    Q = q * np.array([[dt ** 3 / 3, dt ** 2 / 2], [dt ** 2 / 2, dt]])
+    for k in range(x.shape[0]):
+        nis[k] = np.nan
+        if not ready[k]:
+            if valid[k]:
+                x[k], P[k], ready[k] = z[k], R, True
+            continue
+        xn, Pp = _mv(F, x[k]), _sandwich(F, P[k]) + Q
+        if not valid[k]:
+            x[k], P[k] = xn, Pp
+            continue
+        y = z[k] - xn
+        S = Pp + R
+        nis[k] = _dot(y, _mv(_inv2(S), y))
+        Rg = R.copy()
+        for j in range(2):
+            if y[j] * y[j] > gate * gate * S[j, j]:
+                Rg[j, j] = 1e12 * S[j, j]
+        K = _mm(Pp, _inv2(Pp + Rg))
+        IK = np.eye(2) - K
+        x[k], P[k] = xn + _mv(K, y), _sandwich(IK, Pp) + _mm(_mm(K, Rg), K.T)
 
 
 # -- filters --------------------------------------------------------------------------------
 class _MachineFilters:
-    """Time keeping shared by the estimators: frames in increasing time-stamp order, each
-    machine starting at its first valid frame; subclasses implement `_measure`, `_init`,
-    `_predict`, `_update`, `_output`."""
+    """Frame bookkeeping shared by the estimators: frames in increasing time-stamp order,
+    each machine starting at its first valid frame.  Subclasses implement
+    `_advance(frame, dt)` and `_output()`; x, P are the states and covariances."""
 
     dof = 1
 
-    def __init__(self, n: int):
+    def __init__(self, n: int, nx: int):
         self.t: float | None = None
         self.ready = np.zeros(n, bool)
         self.nis = np.full(n, np.nan)
+        self.x, self.P = np.full((n, nx), np.nan), np.full((n, nx, nx), np.nan)
 
     def step(self, frame: Frame) -> tuple[np.ndarray, np.ndarray]:
         """Advance to the frame's time stamp and use its valid measurements.
@@ -511,23 +685,21 @@ class _MachineFilters:
         if self.t is not None and not frame.t > self.t:
             raise InputError(f"frame at t = {frame.t} s is not after the previous one "
                              f"({self.t} s): frames must come in time-stamp order")
-        meas = self._measure(frame)
-        self.nis = np.full(self.ready.size, np.nan)
-        if self.ready.any():
-            self._predict(frame.t - self.t, meas)
-            sel = meas.ok & self.ready
-            if sel.any():
-                self._update(meas, sel)
-        new = meas.ok & ~self.ready
-        if new.any():
-            self._init(meas, new)
-            self.ready |= new
+        self._advance(frame, 0.0 if self.t is None else frame.t - self.t)
         self.t = frame.t
         return self._output()
 
+    def forecast(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
+        """Speed estimates (n,) pu and variances (n,) pu^2 `horizon` s after the last
+        frame's time stamp, without changing the filter (e.g. to the instant a controller
+        acts, latency included): the last rate of change of speed held."""
+        speed, var = self._output()
+        rate, rate_var, cov = self._rate()
+        return speed + horizon * rate, var + 2 * horizon * cov + horizon ** 2 * rate_var
+
 
 class FrequencyKF(_MachineFilters):
-    """Baseline filter on PMU frequency and ROCOF, vectorised over machines.
+    """Baseline filter on PMU frequency and ROCOF (compiled, all machines).
 
     pmu: (n,) index of each machine's PMU in the frames; settings: the PMUs' (noise);
     tuning: `FrequencyTuning`; f0: nominal frequency (Hz).
@@ -538,35 +710,31 @@ class FrequencyKF(_MachineFilters):
 
     def __init__(self, pmu, settings: PMUSettings, tuning: FrequencyTuning = FrequencyTuning(),
                  f0: float = 60.0):
-        self.pmu, self.s, self.tun, self.f0 = np.asarray(pmu), settings, tuning, f0
-        super().__init__(self.pmu.size)
-        self.x = np.full((self.pmu.size, 2), np.nan)
-        self.P = np.full((self.pmu.size, 2, 2), np.nan)
+        self.pmu, self.tun, self.f0 = np.asarray(pmu), tuning, f0
+        super().__init__(self.pmu.size, 2)
+        self.R = np.diag([settings.sigma_freq ** 2, settings.sigma_rocof ** 2])
 
-    def _measure(self, frame):
-        return _freq_measurements(frame, self.pmu, self.f0, self.s)
+    def _measure(self, frame: Frame):
+        """z (n, 2) = [f - f0 (Hz), ROCOF (Hz/s)] and the valid mask (n,)."""
+        z = np.stack([frame.freq[self.pmu] - self.f0, frame.rocof[self.pmu]], axis=1)
+        return z, frame.valid[self.pmu] & np.isfinite(z).all(axis=1)
 
-    def _init(self, meas, sel):
-        self.x[sel], self.P[sel] = meas.z[sel], meas.R
-
-    def _predict(self, dt, meas):
-        F = _freq_F(dt)
-        self.x = self.x @ F.T
-        self.P = F @ self.P @ F.T + Q_continuous_white_noise(2, dt, self.tun.rocof_walk)
-
-    def _update(self, meas, sel):
-        k = int(sel.sum())
-        y, H = meas.z[sel] - self.x[sel], np.broadcast_to(np.eye(2), (k, 2, 2))
-        R, self.nis[sel] = _gated_R(self.P[sel], y, H, np.broadcast_to(meas.R, (k, 2, 2)),
-                                    self.tun.gate_sigma)
-        self.x[sel], self.P[sel] = _batch_update(self.x[sel], self.P[sel], y, H, R)
+    def _advance(self, frame, dt):
+        z, ok = self._measure(frame)
+        _freq_batch(self.x, self.P, self.nis, self.ready, z, ok, dt, self.tun.rocof_walk,
+                    self.R, self.tun.gate_sigma)
 
     def _output(self):
         return 1.0 + self.x[:, 0] / self.f0, self.P[:, 0, 0] / self.f0 ** 2
 
+    def _rate(self):
+        """d(speed)/dt (pu/s), its variance and its covariance with the speed."""
+        f2 = self.f0 ** 2
+        return self.x[:, 1] / self.f0, self.P[:, 1, 1] / f2, self.P[:, 0, 1] / f2
+
 
 class SwingEKF(_MachineFilters):
-    """Model-based filter on the swing equation, vectorised over machines.
+    """Model-based filter on the swing equation (compiled, all machines).
 
     models: `MachineModels` (`machine_models`); settings: the PMUs'; tuning: `SwingTuning`.
     """
@@ -575,105 +743,74 @@ class SwingEKF(_MachineFilters):
 
     def __init__(self, models: MachineModels, settings: PMUSettings,
                  tuning: SwingTuning = SwingTuning()):
-        self.m, self.s, self.tun = models, settings, tuning
-        super().__init__(models.n)
-        n = models.n
-        self.x, self.P = np.full((n, 5), np.nan), np.full((n, 5, 5), np.nan)
-        self._pag, self._pag_var = np.full(n, np.nan), np.full(n, np.nan)  # last valid
-        self._cur, self._iq_var = np.full(n, np.nan + 0j), np.full(n, np.nan)
-        self._pm0, self._g = np.full(n, np.nan), np.zeros((n, 3))  # start P_m, governors
+        self.m = models
+        super().__init__(models.n, 5)
+        self.par, self.tv = _packed(models), _tuning_vector(tuning, settings, models.f0)
+        self.hold = np.full((models.n, 4), np.nan)           # H_* columns
+        self.cur_hold = np.full(models.n, np.nan + 0j)
+        self.g = np.zeros((models.n, 3))                      # governor states
 
-    def _measure(self, frame):
-        return _swing_measurements(frame, self.m, self.s)
+    def _frame(self, frame: Frame):
+        """This filter's machines' voltage, current, frequency and valid mask."""
+        p = self.m.pmu
+        v, i, f = frame.v[p], frame.i[p], frame.freq[p]
+        return v, i, f, frame.valid[p] & np.isfinite(v) & np.isfinite(i) & np.isfinite(f)
 
-    def _init(self, meas, sel):
-        """Start in steady state at the first valid frame (PST's initialisation), speed
-        from the bus frequency, P_m = P_ag, governors in equilibrium."""
-        m, n = self.m, self.m.n
-        delta, q = m.qaxis.steady_state(meas.v, meas.cur * m.pot)
-        x0 = np.column_stack([delta, meas.freq / m.f0 - 1, np.zeros(n), q])
-        P0 = np.zeros((n, 5, 5))
-        P0[:, 0, 0] = meas.r + self.tun.angle_model_rad ** 2
-        P0[:, 1, 1] = (self.s.sigma_freq / m.f0) ** 2
-        P0[:, 2, 2] = self.tun.pm0_sd ** 2
-        P0[:, 3, 3] = P0[:, 4, 4] = self.tun.flux0_sd ** 2
-        self.x[sel], self.P[sel] = x0[sel], P0[sel]
-        self._pag[sel], self._pag_var[sel], self._pm0[sel] = \
-            meas.pag[sel], meas.pag_var[sel], meas.pag[sel]
-        self._cur[sel], self._iq_var[sel] = meas.cur[sel], meas.iq_var[sel]
-        self._g[sel] = (m.governor.g_unit * meas.pag[:, None])[sel]
+    def _discrete(self, dt):
+        return (*self.m.qaxis.sys.discrete(dt), *self.m.governor.sys.discrete(dt))
 
-    def _inputs(self, dt, meas) -> _SwingInputs:
-        """Interval inputs; advances the governors (demand from the estimated speed, P_ref
-        such that the start was an equilibrium at nominal speed) and the held values (the
-        last valid P_ag and current stand in for a dropped frame)."""
-        gov = self.m.governor
-        pm_before = np.where(gov.active, gov.output(self._g), self._pm0)
-        pref = self._pm0 - (gov.wf - 1.0) * gov.invR
-        self._g = gov.step(self._g, pref, np.nan_to_num(1.0 + self.x[:, 1], nan=1.0), dt)
-        pm = 0.5 * (pm_before + np.where(gov.active, gov.output(self._g), self._pm0))
-        ok = meas.ok
-        dp = meas.pag - self._pag
-        jump = np.where(np.abs(dp) > self.tun.jump_pu, dp ** 2 / 12, 0.0)
-        u = _SwingInputs(
-            pm=pm, pag=np.where(ok, 0.5 * (self._pag + meas.pag), self._pag),
-            pag_var=np.where(ok, 0.25 * (self._pag_var + meas.pag_var) + jump, self._pag_var),
-            cur0=self._cur, cur1=np.where(ok, meas.cur, self._cur),
-            iq_var=np.where(ok, 0.5 * (self._iq_var + meas.iq_var), self._iq_var))
-        self._pag = np.where(ok, meas.pag, self._pag)
-        self._pag_var = np.where(ok, meas.pag_var, self._pag_var)
-        self._cur, self._iq_var = u.cur1, np.where(ok, meas.iq_var, self._iq_var)
-        return u
-
-    def _predict(self, dt, meas):
-        u = self._inputs(dt, meas)
-        self.x, F, g = _swing_transition(self.x, u, dt, self.m)
-        self.P = F @ self.P @ np.swapaxes(F, 1, 2) + _swing_Q(g, u, dt, self.m, self.tun)
-
-    def _innovation(self, meas):
-        """Innovation (n,), Jacobian H (n, 1, 5) and noise R (n, 1, 1) of every machine."""
-        h, H = _swing_h(self.x, meas.emag, self.m)
-        R = (meas.r + self.tun.angle_model_rad ** 2)[:, None, None]
-        return _wrap(meas.theta - h), H, R
-
-    def _update(self, meas, sel):
-        y, H, R = self._innovation(meas)
-        y, H, R = y[sel, None], H[sel], R[sel]
-        R, self.nis[sel] = _gated_R(self.P[sel], y, H, R, self.tun.gate_sigma)
-        self.x[sel], self.P[sel] = _batch_update(self.x[sel], self.P[sel], y, H, R)
+    def _advance(self, frame, dt):
+        v, i, f, ok = self._frame(frame)
+        _swing_batch(self.x, self.P, self.nis, self.ready, self.hold, self.cur_hold, self.g,
+                     v, i, f, ok, dt, self.par, *self._discrete(dt), self.tv)
 
     def _output(self):
         return 1.0 + self.x[:, 1], self.P[:, 1, 1]
 
+    def _rate(self):
+        """Acceleration (pu/s) from the swing equation at the last frame's powers, its
+        variance (from those of dPm and P_ag) and its covariance with the speed."""
+        m, w = self.m, self.x[:, 1]
+        gov = m.governor
+        pm = np.where(gov.active, gov.output(self.g), self.hold[:, H_PM0])
+        c = 1.0 / (2 * m.H * np.where(m.per_speed, 1.0 + w, 1.0))
+        acc = c * (pm + self.x[:, 2] - self.hold[:, H_PAG]) - m.D * w / (2 * m.H)
+        return acc, c ** 2 * (self.P[:, 2, 2] + self.hold[:, H_PAGVAR]), c * self.P[:, 1, 2]
+
 
 # -- filterpy reference implementations -----------------------------------------------------
+def _gate(S: np.ndarray, y: np.ndarray, R: np.ndarray, gate: float):
+    """Noise R with the innovation components beyond `gate` standard deviations of S
+    removed (R_jj = 1e12 S_jj), and the NIS y' S^-1 y (numpy, one filter)."""
+    Rg = R.copy()
+    for j in np.flatnonzero(y ** 2 > gate ** 2 * np.diag(S)):
+        Rg[j, j] = 1e12 * S[j, j]
+    return Rg, float(y @ np.linalg.solve(S, y))
+
+
 class FrequencyKFReference(FrequencyKF):
-    """`FrequencyKF` with one filterpy `KalmanFilter` per machine (reference, slower)."""
+    """`FrequencyKF` with one filterpy `KalmanFilter` per machine (reference, slow)."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self.kfs = [KalmanFilter(dim_x=2, dim_z=2) for _ in range(self.pmu.size)]
 
-    def _init(self, meas, sel):
-        for k in np.flatnonzero(sel):
-            self.kfs[k].x, self.kfs[k].P = meas.z[k].copy(), meas.R.copy()
-            self.x[k], self.P[k] = self.kfs[k].x, self.kfs[k].P
-
-    def _predict(self, dt, meas):
-        for k in np.flatnonzero(self.ready):
-            kf = self.kfs[k]
-            kf.F, kf.Q = _freq_F(dt), Q_continuous_white_noise(2, dt, self.tun.rocof_walk)
+    def _advance(self, frame, dt):
+        z, ok = self._measure(frame)
+        self.nis[:] = np.nan
+        for k, kf in enumerate(self.kfs):
+            if not self.ready[k]:
+                if ok[k]:
+                    kf.x, kf.P, self.ready[k] = z[k].copy(), self.R.copy(), True
+                    self.x[k], self.P[k] = kf.x, kf.P
+                continue
+            kf.F, kf.Q = np.array([[1.0, dt], [0.0, 1.0]]), \
+                Q_continuous_white_noise(2, dt, self.tun.rocof_walk)
             kf.predict()
+            if ok[k]:
+                R, self.nis[k] = _gate(kf.P + self.R, z[k] - kf.x, self.R, self.tun.gate_sigma)
+                kf.update(z[k], R=R, H=np.eye(2))
             self.x[k], self.P[k] = kf.x, kf.P
-
-    def _update(self, meas, sel):
-        H = np.eye(2)
-        for k in np.flatnonzero(sel):
-            kf, z = self.kfs[k], meas.z[k]
-            R, nis = _gated_R(kf.P[None], (z - kf.x)[None], H[None], meas.R[None],
-                              self.tun.gate_sigma)
-            kf.update(z, R=R[0], H=H)
-            self.x[k], self.P[k], self.nis[k] = kf.x, kf.P, nis[0]
 
 
 class _SwingEKF1(ExtendedKalmanFilter):
@@ -685,36 +822,45 @@ class _SwingEKF1(ExtendedKalmanFilter):
 
 
 class SwingEKFReference(SwingEKF):
-    """`SwingEKF` with one filterpy `ExtendedKalmanFilter` per machine (reference, slower)."""
+    """`SwingEKF` with one filterpy `ExtendedKalmanFilter` per machine (reference, slow),
+    on the same one-machine equations (`swing_*`)."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self.ekfs = [_SwingEKF1(dim_x=5, dim_z=1) for _ in range(self.m.n)]
 
-    def _init(self, meas, sel):
-        super()._init(meas, sel)
-        for k in np.flatnonzero(sel):
-            self.ekfs[k].x, self.ekfs[k].P = self.x[k].copy(), self.P[k].copy()
-
-    def _predict(self, dt, meas):
-        u = self._inputs(dt, meas)
-        for k in np.flatnonzero(self.ready):
-            mk, s = self.m.take(k), slice(k, k + 1)
-            uk = _SwingInputs(*(getattr(u, f)[s] for f in u.__dataclass_fields__))
-            xn, F, g = _swing_transition(self.x[s], uk, dt, mk)
-            ekf = self.ekfs[k]
-            ekf.F, ekf.Q = F[0], _swing_Q(g, uk, dt, mk, self.tun)[0]
-            ekf.predict(u=xn[0])
+    def _advance(self, frame, dt):
+        v, i, f, ok = self._frame(frame)
+        Adq, bdq, Adg, bdg = self._discrete(dt)
+        tv = self.tv
+        self.nis[:] = np.nan
+        for k, ekf in enumerate(self.ekfs):
+            pr = self.par[k]
+            if not (self.ready[k] or ok[k]):
+                continue
+            meas = swing_measure(v[k], i[k], pr, tv[T_SIG2]) if ok[k] else (np.nan,) * 6
+            theta, emag, pag, pag_var, iq_var, r = meas
+            if not self.ready[k]:
+                ekf.x, ekf.P = swing_start(v[k], i[k], f[k], r, pr, tv)
+                self.hold[k] = pag, pag_var, iq_var, pag
+                self.cur_hold[k], self.g[k], self.ready[k] = i[k], pr[C_GU:C_GU + 3] * pag, True
+            else:
+                u = swing_inputs(k, ok[k], pag, pag_var, i[k], iq_var, self.hold, self.cur_hold,
+                                 self.g, ekf.x[1], pr, Adg[k], bdg[k], tv)
+                xn, F, gs = swing_transition(ekf.x, u[0], u[1], u[3], u[4], dt, pr, Adq[k], bdq[k],
+                                             tv[T_F0])
+                ekf.F, ekf.Q = F, swing_Q(gs, u[2], u[5], bdq[k], dt, tv)
+                ekf.predict(u=xn)
+                if ok[k]:
+                    self._update(ekf, k, theta, emag, r)
             self.x[k], self.P[k] = ekf.x, ekf.P
 
-    def _update(self, meas, sel):
-        for k in np.flatnonzero(sel):
-            mk, ekf, e = self.m.take(k), self.ekfs[k], meas.emag[k:k + 1]
-            hH = lambda x: _swing_h(x[None], e, mk)  # noqa: E731  (h (1,), H (1, 1, 5))
-            h, H = hH(ekf.x)
-            R, nis = _gated_R(ekf.P[None], _wrap(meas.theta[k] - h)[None], H,
-                              np.array([[[meas.r[k] + self.tun.angle_model_rad ** 2]]]),
-                              self.tun.gate_sigma)
-            ekf.update(np.array([meas.theta[k]]), HJacobian=lambda x: hH(x)[1][0],
-                       Hx=lambda x: hH(x)[0], R=R[0], residual=lambda a, b: _wrap(a - b))
-            self.x[k], self.P[k], self.nis[k] = ekf.x, ekf.P, nis[0]
+    def _update(self, ekf, k, theta, emag, r):
+        pr, tv = self.par[k], self.tv
+        h, H = swing_h(ekf.x, emag, pr)
+        R0 = np.array([[r + tv[T_ANGLE] ** 2]])
+        y = np.array([_wrap(theta - h)])
+        R, self.nis[k] = _gate(H @ ekf.P @ H[:, None] + R0, y, R0, tv[T_GATE])
+        ekf.update(np.array([theta]), HJacobian=lambda x: swing_h(x, emag, pr)[1][None, :],
+                   Hx=lambda x: np.array([swing_h(x, emag, pr)[0]]), R=R,
+                   residual=lambda a, b: np.array([_wrap(a[0] - b[0])]))
