@@ -11,7 +11,6 @@ from click.testing import CliRunner
 from stabctl import pstio
 from stabctl.case import load_case
 from stabctl.cli import main
-from stabctl.events import GeneratorTrip
 from stabctl.results import SimulationResult
 from stabctl.simulation import Simulator
 
@@ -165,16 +164,16 @@ def test_nonconvergent_powerflow_exits_2(tmp_path):
     assert_bad_input(res, out_dir, "power flow")
 
 
-def test_diverging_run_exits_2_reports_stop_time(tmp_path, monkeypatch):
-    """A real divergence (test_simulation's: three of Kundur's four generators tripped, which
-    the CLI has no option for) injected into the CLI's run: nothing written, stop time told."""
-    original = Simulator.run
-
-    def with_trips(self, events=(), *args, **kwargs):
-        trips = [GeneratorTrip(m, 0.5) for m in (1, 2, 3)]
-        return original(self, [*events, *trips], *args, **kwargs)
-
-    monkeypatch.setattr(Simulator, "run", with_trips)
-    res = run("simulate", "kundur", "--tf", 3, "--out", tmp_path / "r.csv", "--plot",
-              tmp_path / "r.png", "--json")
-    assert_bad_input(res, tmp_path, "did not converge", "t = ")
+def test_diverging_run_exits_2_reports_stop_time(tmp_path):
+    """A real numerical divergence (machine 1 of Kundur with H = 1e-5 s, as in
+    test_simulation): exit 2, nothing written, the stop time told."""
+    case = load_case("kundur")
+    H = case.machines.H.copy()
+    H[0] = 1e-5
+    path = pstio.write_case_json(case.replace(machines=case.machines.replace(H=H)),
+                                 tmp_path / "tiny_h.json")
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    res = run("simulate", path, "--tf", 3, "--out", out_dir / "r.csv", "--plot",
+              out_dir / "r.png", "--json")
+    assert_bad_input(res, out_dir, "did not converge", "t = ")

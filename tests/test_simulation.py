@@ -24,7 +24,7 @@ import pytest
 
 from stabctl.case import load_case
 from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
-from stabctl.events import Fault, GeneratorTrip, LineTrip, fault_with_clearing, from_sw_con
+from stabctl.events import Fault, LineTrip, fault_with_clearing, from_sw_con
 from stabctl.results import SimulationResult
 from stabctl.simulation import Simulator, default_step
 
@@ -243,21 +243,29 @@ def test_bad_clearing_and_times(kundur):
         kundur.run([], t_end=1.0, h=0.0)
 
 
-def test_diverging_run_raises_with_partial_trajectory(kundur):
-    """Three of the four generators tripped at 0.5 s: the last one cannot hold the 27 pu of
-    load, the network equations have no solution (voltage collapse, PSTess's nc_load stops
-    too); the run must raise, naming the failing step, with the trajectory computed so far."""
-    with pytest.raises(SimulationError, match="did not converge.*0.5100 s") as info:
-        kundur.run([GeneratorTrip(m, 0.5) for m in (1, 2, 3)], t_end=3.0)
+def tiny_inertia_case():
+    """Kundur with machine 1's inertia at 1e-5 s: its swing mode is far beyond the explicit
+    integrator's stability limit at the 10 ms step, so the run blows up numerically."""
+    case = load_case("kundur")
+    H = case.machines.H.copy()
+    H[0] = 1e-5
+    return case.replace(machines=case.machines.replace(H=H))
+
+
+def test_diverging_run_raises_with_partial_trajectory():
+    """A diverging run raises SimulationError naming the failing step, carrying the
+    (finite) trajectory computed until then."""
+    case = tiny_inertia_case()
+    with pytest.raises(SimulationError, match="did not converge|non-finite") as info:
+        Simulator(case).run([], t_end=3.0)
     part = info.value.result
     assert isinstance(part, SimulationResult)
-    assert part.t[-1] == pytest.approx(0.5)
+    assert 0.0 < part.t[-1] < 0.5
     assert np.all(np.diff(part.t) > 0)
     for name in ("speed", "angle", "pelect", "vmag"):
         arr = getattr(part, name)
         assert arr.shape[0] == part.t.size and np.all(np.isfinite(arr)), name
-    flat = kundur.run([], t_end=0.4)                 # before the trips: undisturbed
-    np.testing.assert_allclose(part.speed[: flat.t.size], flat.speed, atol=1e-12)
+    assert abs(part.speed[-1, 0] - 1) > 10 * abs(part.speed[1, 0] - 1)   # it was blowing up
 
 
 # --------------------------------------------------------------------------- export
