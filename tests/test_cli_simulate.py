@@ -12,7 +12,6 @@ from stabctl import pstio
 from stabctl.case import load_case
 from stabctl.cli import main
 from stabctl.results import SimulationResult
-from stabctl.simulation import Simulator
 
 DATA = Path(__file__).parent / "data" / "pstess"
 
