@@ -62,11 +62,10 @@ from .pmu import Frame, PMUSettings
 @dataclass(frozen=True)
 class FrequencyTuning:
     """Baseline filter: rocof_walk, spectral density of the ROCOF random walk ((Hz/s)^2
-    per s); gate_sigma: innovation gate in standard deviations (inf: none).  The
-    measurement noise comes from the PMU settings."""
+    per s), sized for post-fault swings (the ROCOF of a 0.2 Hz swing at 1 Hz changes by
+    about 8 Hz/s within a second).  The measurement noise comes from the PMU settings."""
 
     rocof_walk: float = 50.0
-    gate_sigma: float = np.inf
 
 
 @dataclass(frozen=True)
@@ -80,8 +79,7 @@ class SwingTuning:
     standard deviations of dPm and of the q-axis fluxes (pu); jump_pu: a change of P_ag
     between two frames above this (pu machine base) is taken for a network event at an
     unknown instant of the interval, adding dP^2/12 (the trapezoid's error variance) to the
-    power noise; gate_sigma: innovation gate (standard deviations) beyond which a frame's
-    angle is not used (an event's transient).
+    power noise.
     """
 
     angle_model_rad: float = 0.002
@@ -90,7 +88,6 @@ class SwingTuning:
     pm0_sd: float = 0.005
     flux0_sd: float = 0.01
     jump_pu: float = 0.1
-    gate_sigma: float = 5.0
 
 
 # -- machine models -------------------------------------------------------------------------
@@ -332,9 +329,10 @@ def nis_bounds(dof: int, coverage: float = 0.95) -> tuple[float, float]:
 (C_H, C_D, C_POT, C_RA, C_ZRE, C_ZIM, C_PERSPEED, C_QC1, C_QC2, C_QSIGN, C_QSPEED, C_KIND,
  C_XL, C_XQ, C_XQP, C_XDP, C_GACT, C_WF, C_INVR, C_TMAX, C_GC, C_GU, C_NCOL) = \
     tuple(range(20)) + (20, 23, 26)
-(T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP, T_GATE, T_SIG2, T_SIGF, T_F0,
- T_NCOL) = range(11)
-(H_PAG, H_PAGVAR, H_IQVAR, H_PM0) = range(4)   # columns of the held-values array
+(T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP, T_SIG2, T_SIGF, T_F0, T_NCOL) = range(10)
+# held values per machine: P_ag at the previous frame (measured or held) and its variance,
+# its last measured change between frames, the variance of I_q, P_m at the start
+(H_PAG, H_PAGVAR, H_DPAG, H_IQVAR, H_PM0, H_NCOL) = range(6)
 
 
 def _packed(m: MachineModels) -> np.ndarray:
@@ -354,9 +352,8 @@ def _packed(m: MachineModels) -> np.ndarray:
 
 def _tuning_vector(tun: SwingTuning, s: PMUSettings, f0: float) -> np.ndarray:
     v = np.zeros(T_NCOL)
-    v[[T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP, T_GATE]] = (
-        tun.angle_model_rad, tun.accel_psd, tun.pm_walk, tun.pm0_sd, tun.flux0_sd, tun.jump_pu,
-        tun.gate_sigma)
+    v[[T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP]] = (
+        tun.angle_model_rad, tun.accel_psd, tun.pm_walk, tun.pm0_sd, tun.flux0_sd, tun.jump_pu)
     v[T_SIG2], v[T_SIGF], v[T_F0] = s.sigma_phasor ** 2, s.sigma_freq, f0
     return v
 
@@ -423,10 +420,13 @@ def swing_start(v, i, freq, r, pr, tv):
 @njit(cache=True)
 def swing_inputs(k, valid, pag, pag_var, cur, iq_var, hold, cur_hold, g, w, pr, Adg, bdg, tv):
     """Inputs of machine k over one interval: (mean P_m, mean P_ag, variance of the mean
-    P_ag, current at both ends, variance of I_q).  Advances its governor (demand from the
-    estimated speed 1 + w, P_ref such that the start was an equilibrium at nominal speed)
-    and its held values (the last valid P_ag and current stand in for a dropped frame);
-    hold (n, 4), cur_hold (n,), g (n, 3) are updated in place."""
+    P_ag, current at both ends, variance of I_q).
+
+    Advances its governor (demand from the estimated speed 1 + w, P_ref such that the start
+    was an equilibrium at nominal speed) and its held values (in place: hold (n, H_NCOL),
+    cur_hold (n,), g (n, 3)).  For a dropped frame the last P_ag and current are held and
+    the variance of P_ag grows by the square of its last change between frames dP; a
+    change of a measured P_ag above jump_pu adds dP^2 / 12 (event at an unknown instant)."""
     pm0 = hold[k, H_PM0]
     pm_before, pm_after = pm0, pm0
     if pr[C_GACT] > 0:
@@ -434,17 +434,17 @@ def swing_inputs(k, valid, pag, pag_var, cur, iq_var, hold, cur_hold, g, w, pr, 
         u = pm0 - (pr[C_WF] - 1.0) * pr[C_INVR] + (pr[C_WF] - 1.0 - w) * pr[C_INVR]
         g[k] = _mv(Adg, g[k]) + bdg * min(max(u, 0.0), pr[C_TMAX])
         pm_after = _dot(g[k], pr[C_GC:C_GC + 3])
-    cur0 = cur_hold[k]
-    if not valid:
-        return (0.5 * (pm_before + pm_after), hold[k, H_PAG], hold[k, H_PAGVAR], cur0, cur0,
-                hold[k, H_IQVAR])
-    dp = pag - hold[k, H_PAG]
-    jump = dp * dp / 12 if abs(dp) > tv[T_JUMP] else 0.0
-    out = (0.5 * (pm_before + pm_after), 0.5 * (hold[k, H_PAG] + pag),
-           0.25 * (hold[k, H_PAGVAR] + pag_var) + jump, cur0, cur, 0.5 * (hold[k, H_IQVAR] + iq_var))
-    hold[k, H_PAG], hold[k, H_PAGVAR], hold[k, H_IQVAR] = pag, pag_var, iq_var
-    cur_hold[k] = cur
-    return out
+    p0, v0, cur0, iq0 = hold[k, H_PAG], hold[k, H_PAGVAR], cur_hold[k], hold[k, H_IQVAR]
+    if valid:
+        dp = pag - p0
+        var = 0.25 * (v0 + pag_var) + (dp * dp / 12 if abs(dp) > tv[T_JUMP] else 0.0)
+        hold[k, H_DPAG], hold[k, H_IQVAR], cur_hold[k] = dp, iq_var, cur
+    else:
+        pag, pag_var = p0, v0 + hold[k, H_DPAG] ** 2
+        var = 0.25 * (v0 + pag_var)
+    hold[k, H_PAG], hold[k, H_PAGVAR] = pag, pag_var
+    return (0.5 * (pm_before + pm_after), 0.5 * (p0 + pag), var, cur0, cur_hold[k],
+            0.5 * (iq0 + hold[k, H_IQVAR]))
 
 
 @njit(cache=True)
@@ -575,17 +575,13 @@ def _sandwich(F, P):
 
 
 @njit(cache=True)
-def _scalar_update(x, P, y, H, R, gate):
+def _scalar_update(x, P, y, H, R):
     """Kalman update with one measurement (filterpy's equations, Joseph form); returns
-    x, P, NIS.  An innovation beyond `gate` standard deviations is not used (R -> 1e12 S)."""
+    x, P and the NIS y^2 / S."""
     n = x.size
     PHt = _mv(P, H)
-    HPHt = _dot(H, PHt)
-    S = HPHt + R
-    nis = y * y / S
-    if y * y > gate * gate * S:
-        R = 1e12 * S
-    K = PHt / (HPHt + R)
+    S = _dot(H, PHt) + R
+    K = PHt / S
     IKH = np.zeros((n, n))
     for a in range(n):
         IKH[a, a] = 1.0
@@ -595,7 +591,7 @@ def _scalar_update(x, P, y, H, R, gate):
     for a in range(n):
         for b in range(n):
             P1[a, b] += R * K[a] * K[b]
-    return x + K * y, P1, nis
+    return x + K * y, P1, y * y / S
 
 
 @njit(cache=True)
@@ -613,8 +609,8 @@ def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par
             theta, emag, pag, pag_var, iq_var, r = swing_measure(v[k], i[k], pr, tv[T_SIG2])
         if not ready[k]:
             x[k], P[k] = swing_start(v[k], i[k], freq[k], r, pr, tv)
-            hold[k, H_PAG], hold[k, H_PAGVAR], hold[k, H_IQVAR], hold[k, H_PM0] = \
-                pag, pag_var, iq_var, pag
+            hold[k, H_PAG], hold[k, H_PAGVAR], hold[k, H_DPAG], hold[k, H_IQVAR], \
+                hold[k, H_PM0] = pag, pag_var, 0.0, iq_var, pag
             cur_hold[k] = i[k]
             g[k] = pr[C_GU:C_GU + 3] * pag
             ready[k] = True
@@ -627,16 +623,15 @@ def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par
         if valid[k]:
             h, H = swing_h(xn, emag, pr)
             x[k], P[k], nis[k] = _scalar_update(xn, Pp, _wrap(theta - h), H,
-                                                r + tv[T_ANGLE] ** 2, tv[T_GATE])
+                                                r + tv[T_ANGLE] ** 2)
         else:
             x[k], P[k] = xn, Pp
 
 
 @njit(cache=True)
-def _freq_batch(x, P, nis, ready, z, valid, dt, q, R, gate):
+def _freq_batch(x, P, nis, ready, z, valid, dt, q, R):
     """One frame of the baseline filter for every machine (in place); z (n, 2) =
-    [f - f0, ROCOF], R (2, 2) diagonal.  Per-component gating as `_scalar_update`; the two
-    components are independent (R diagonal), so their joint update is done jointly."""
+    [f - f0, ROCOF], R (2, 2)."""
     F = np.array([[1.0, dt], [0.0, 1.0]])
     Q = q * np.array([[dt ** 3 / 3, dt ** 2 / 2], [dt ** 2 / 2, dt]])
     for k in range(x.shape[0]):
@@ -650,15 +645,11 @@ def _freq_batch(x, P, nis, ready, z, valid, dt, q, R, gate):
             x[k], P[k] = xn, Pp
             continue
         y = z[k] - xn
-        S = Pp + R
-        nis[k] = _dot(y, _mv(_inv2(S), y))
-        Rg = R.copy()
-        for j in range(2):
-            if y[j] * y[j] > gate * gate * S[j, j]:
-                Rg[j, j] = 1e12 * S[j, j]
-        K = _mm(Pp, _inv2(Pp + Rg))
+        SI = _inv2(Pp + R)
+        nis[k] = _dot(y, _mv(SI, y))
+        K = _mm(Pp, SI)
         IK = np.eye(2) - K
-        x[k], P[k] = xn + _mv(K, y), _sandwich(IK, Pp) + _mm(_mm(K, Rg), K.T)
+        x[k], P[k] = xn + _mv(K, y), _sandwich(IK, Pp) + _mm(_mm(K, R), K.T)
 
 
 # -- filters --------------------------------------------------------------------------------
@@ -722,7 +713,7 @@ class FrequencyKF(_MachineFilters):
     def _advance(self, frame, dt):
         z, ok = self._measure(frame)
         _freq_batch(self.x, self.P, self.nis, self.ready, z, ok, dt, self.tun.rocof_walk,
-                    self.R, self.tun.gate_sigma)
+                    self.R)
 
     def _output(self):
         return 1.0 + self.x[:, 0] / self.f0, self.P[:, 0, 0] / self.f0 ** 2
@@ -746,7 +737,7 @@ class SwingEKF(_MachineFilters):
         self.m = models
         super().__init__(models.n, 5)
         self.par, self.tv = _packed(models), _tuning_vector(tuning, settings, models.f0)
-        self.hold = np.full((models.n, 4), np.nan)           # H_* columns
+        self.hold = np.full((models.n, H_NCOL), np.nan)      # H_* columns
         self.cur_hold = np.full(models.n, np.nan + 0j)
         self.g = np.zeros((models.n, 3))                      # governor states
 
@@ -779,15 +770,6 @@ class SwingEKF(_MachineFilters):
 
 
 # -- filterpy reference implementations -----------------------------------------------------
-def _gate(S: np.ndarray, y: np.ndarray, R: np.ndarray, gate: float):
-    """Noise R with the innovation components beyond `gate` standard deviations of S
-    removed (R_jj = 1e12 S_jj), and the NIS y' S^-1 y (numpy, one filter)."""
-    Rg = R.copy()
-    for j in np.flatnonzero(y ** 2 > gate ** 2 * np.diag(S)):
-        Rg[j, j] = 1e12 * S[j, j]
-    return Rg, float(y @ np.linalg.solve(S, y))
-
-
 class FrequencyKFReference(FrequencyKF):
     """`FrequencyKF` with one filterpy `KalmanFilter` per machine (reference, slow)."""
 
@@ -808,8 +790,8 @@ class FrequencyKFReference(FrequencyKF):
                 Q_continuous_white_noise(2, dt, self.tun.rocof_walk)
             kf.predict()
             if ok[k]:
-                R, self.nis[k] = _gate(kf.P + self.R, z[k] - kf.x, self.R, self.tun.gate_sigma)
-                kf.update(z[k], R=R, H=np.eye(2))
+                kf.update(z[k], R=self.R, H=np.eye(2))
+                self.nis[k] = kf.y @ kf.SI @ kf.y
             self.x[k], self.P[k] = kf.x, kf.P
 
 
@@ -842,7 +824,7 @@ class SwingEKFReference(SwingEKF):
             theta, emag, pag, pag_var, iq_var, r = meas
             if not self.ready[k]:
                 ekf.x, ekf.P = swing_start(v[k], i[k], f[k], r, pr, tv)
-                self.hold[k] = pag, pag_var, iq_var, pag
+                self.hold[k] = pag, pag_var, 0.0, iq_var, pag
                 self.cur_hold[k], self.g[k], self.ready[k] = i[k], pr[C_GU:C_GU + 3] * pag, True
             else:
                 u = swing_inputs(k, ok[k], pag, pag_var, i[k], iq_var, self.hold, self.cur_hold,
@@ -857,10 +839,8 @@ class SwingEKFReference(SwingEKF):
 
     def _update(self, ekf, k, theta, emag, r):
         pr, tv = self.par[k], self.tv
-        h, H = swing_h(ekf.x, emag, pr)
-        R0 = np.array([[r + tv[T_ANGLE] ** 2]])
-        y = np.array([_wrap(theta - h)])
-        R, self.nis[k] = _gate(H @ ekf.P @ H[:, None] + R0, y, R0, tv[T_GATE])
         ekf.update(np.array([theta]), HJacobian=lambda x: swing_h(x, emag, pr)[1][None, :],
-                   Hx=lambda x: np.array([swing_h(x, emag, pr)[0]]), R=R,
+                   Hx=lambda x: np.array([swing_h(x, emag, pr)[0]]),
+                   R=np.array([[r + tv[T_ANGLE] ** 2]]),
                    residual=lambda a, b: np.array([_wrap(a[0] - b[0])]))
+        self.nis[k] = ekf.y @ ekf.SI @ ekf.y

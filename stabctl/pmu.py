@@ -231,14 +231,15 @@ def bus_frequency(t: np.ndarray, vang: np.ndarray, f0: float) -> tuple[np.ndarra
     """Frequency (Hz) and ROCOF (Hz/s) of bus voltages from their angles.
 
     t (n_t,) strictly increasing s; vang (n_t, n) rad (wrapped or not).  f = f0 +
-    d(unwrap(vang))/dt / (2 pi), ROCOF = df/dt, both by second-order centred differences on
-    the (possibly non-uniform) grid (`numpy.gradient`).  Raises InputError for fewer than 3
-    points or a non-increasing grid.
+    d(unwrap(vang))/dt / (2 pi), ROCOF = df/dt, both by second-order differences on the
+    (possibly non-uniform) grid, centred inside and one-sided at the ends
+    (`numpy.gradient`, edge_order 2).  Raises InputError for fewer than 3 points or a
+    non-increasing grid.
     """
     if t.size < 3 or np.any(np.diff(t) <= 0):
         raise InputError("bus frequency needs at least 3 strictly increasing time points")
-    f = f0 + np.gradient(np.unwrap(vang, axis=0), t, axis=0) / (2 * np.pi)
-    return f, np.gradient(f, t, axis=0)
+    f = f0 + np.gradient(np.unwrap(vang, axis=0), t, axis=0, edge_order=2) / (2 * np.pi)
+    return f, np.gradient(f, t, axis=0, edge_order=2)
 
 
 def phasor_truth(case: Case, result: SimulationResult, pmus) -> PhasorTruth:
