@@ -31,7 +31,7 @@ default).  A phasor X is reported as X (1 + e), e complex, circular Gaussian wit
 independent real and imaginary parts of standard deviation s = TVE / (k sqrt 2): to first
 order the magnitude has relative error Re(e) and the angle error Im(e) rad, both of standard
 deviation s (k = 3: s = 0.236 %, 2.36 mrad), and TVE = |e| is Rayleigh distributed with
-RMS value TVE_limit / k, so P(TVE > limit) = exp(-k^2 / 2) (1.1e-4 for k = 3).  Frequency
+RMS value TVE_limit / k, so P(TVE > limit) = exp(-k^2) (1.2e-4 for k = 3).  Frequency
 and ROCOF get independent Gaussian errors of standard deviation FE / k and RFE / k.
 Errors are white: independent between frames, channels and PMUs (a compliance-limit
 worst case for the noise level; real PMU errors are smaller and correlated in time).

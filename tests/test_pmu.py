@@ -36,7 +36,7 @@ def test_phasor_noise_matches_the_tve_limit_as_a_3_sigma_bound(steady_stream):
     assert abs(np.mean(e.real)) < 4 * sigma / np.sqrt(e.size)
     tve = np.abs(e)
     assert np.sqrt(np.mean(tve ** 2)) == pytest.approx(0.01 / 3, rel=0.03)      # RMS = limit/k
-    assert np.mean(tve <= 0.01) > 0.999                        # P(TVE > 1 %) = exp(-4.5)
+    assert np.mean(tve <= 0.01) > 0.999                        # P(TVE > 1 %) = exp(-9)
     ei = s.i / s.true.i - 1
     assert np.std(ei.imag) == pytest.approx(sigma, rel=0.03)
     assert abs(np.corrcoef(e.real.ravel(), ei.real.ravel())[0, 1]) < 0.03   # independent
