@@ -25,10 +25,12 @@ Estimators, one filter per machine, all machines advanced together (docs/estimat
   (transient machines: delta - asin(E'_d / |E|); classical: delta).  The bus frequency is
   not used: during swings it differs from the rotor speed by tens of mHz.
 
-Both follow filterpy's equations: `FrequencyKFReference` and `SwingEKFReference` run one
-filterpy filter per machine; `FrequencyKF` and `SwingEKF` run the same equations vectorised
-over machines with numpy (tests check that they agree to rounding; the vectorised path is
-the fast one, `benchmarks/bench_estimator.py`).
+The one-machine equations (`swing_*`) are compiled (numba) and shared by two paths:
+`FrequencyKFReference` and `SwingEKFReference` run one filterpy filter per machine (filterpy
+does the Kalman algebra); `FrequencyKF` and `SwingEKF` run the same algebra (Joseph form, as
+filterpy) in one compiled loop over the machines, the fast path (tests check that both agree
+to rounding; `benchmarks/bench_estimator.py`).  Sources: filterpy 1.4 `KalmanFilter`,
+`ExtendedKalmanFilter`; IEEE C37.118.1-2011 for the PMU noise (`stabctl.pmu`).
 
 Online interface: `step(frame) -> (speed, variance)`, speed (n_mac,) pu, variance pu^2,
 NaN until a machine's first valid frame; frames in increasing time-stamp order; where a
@@ -40,10 +42,9 @@ estimates into what each ESD controller needs (paper eq. 40), with variances.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import cmath
 import math
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
@@ -54,7 +55,7 @@ from scipy.stats import chi2
 
 from .case import Case
 from .errors import InputError
-from .machines import EM, SUB, TRA, machine_params, to_dq
+from .machines import EM, SUB, TRA, machine_params
 from .pmu import Frame, PMUSettings
 
 
@@ -98,9 +99,6 @@ class LinearSystems:
     A: np.ndarray
     b: np.ndarray
     _zoh: dict = field(default_factory=dict, repr=False)
-
-    def take(self, k: int) -> "LinearSystems":
-        return LinearSystems(self.A[k:k + 1], self.b[k:k + 1])
 
     def discrete(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """Exact zero-order-hold discretisation (A_d (n, k, k), b_d (n, k)) over dt (s),
@@ -147,17 +145,6 @@ class Governors:
             wf[k], invR[k], Tmax[k], active[k] = g.wf[r], g.invR[r], g.Tmax[r], True
         return cls(LinearSystems(A, b), c, gu, wf, invR, Tmax, active)
 
-    def take(self, k: int) -> "Governors":
-        s = slice(k, k + 1)
-        return Governors(self.sys.take(k), self.c[s], self.g_unit[s], self.wf[s],
-                         self.invR[s], self.Tmax[s], self.active[s])
-
-    def step(self, g: np.ndarray, pref: np.ndarray, omega: np.ndarray, dt: float) -> np.ndarray:
-        """States (n, 3) after dt (s), the demand held."""
-        Ad, bd = self.sys.discrete(dt)
-        u = np.clip(pref + (self.wf - omega) * self.invR, 0.0, self.Tmax)
-        return np.einsum("nij,nj->ni", Ad, g) + bd * u[:, None]
-
     def output(self, g: np.ndarray) -> np.ndarray:
         """Mechanical power (machine base), (n,); 0 for inactive machines."""
         return np.einsum("ni,ni->n", self.c, g)
@@ -169,14 +156,14 @@ class QAxis:
     current I_q (machine base) as input, dq/dt = A q + b I_q (subtransient: q = (E'_d in
     PST's sign, psi_kq), psi"_q = p14 q1 + p15 q2; transient: q1 = E'_d, q2 unused;
     classical: none), and the angle of the internal voltage E behind Z:
-    angle(E) = delta + sign asin(omega^speed (c.q) / |E|).  Arrays (n, ...)."""
+    angle(E) = delta + sign asin(omega^speed (c.q) / |E|); kind (PST model) and the
+    reactances that locate the rotor in steady state (`swing_start`).  Arrays (n, ...)."""
 
     sys: LinearSystems
     c: np.ndarray
     sign: np.ndarray
     speed: np.ndarray
     kind: np.ndarray
-    ra: np.ndarray
     xl: np.ndarray
     xq: np.ndarray
     xqp: np.ndarray
@@ -199,26 +186,9 @@ class QAxis:
         A[tra, 0, 0] = -1 / Tq[tra]
         b[tra, 0] = ((mp.xq - mp.xqp) / Tq)[tra]
         c[tra, 0] = 1.0
-        return cls(LinearSystems(A, b), c, np.where(tra, -1.0, 1.0), sub, mp.kind,
-                   np.where(mp.kind == EM, 0.0, mp.ra), mp.xl, mp.xq, mp.xqp, mp.xdp)
+        return cls(LinearSystems(A, b), c, np.where(tra, -1.0, 1.0), sub, mp.kind, mp.xl,
+                   mp.xq, mp.xqp, mp.xdp)
 
-    def take(self, k: int) -> "QAxis":
-        s = slice(k, k + 1)
-        return QAxis(self.sys.take(k), self.c[s], self.sign[s], self.speed[s], self.kind[s],
-                     self.ra[s], self.xl[s], self.xq[s], self.xqp[s], self.xdp[s])
-
-    def steady_state(self, v: np.ndarray, i_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Rotor angle (n,) and q-axis states (n, 2) in steady state at terminal voltage v
-        and current i_m (machine base), as PST initialises them (docs/pst_models.md 1.7)."""
-        em = self.kind == EM
-        delta = np.angle(v + np.where(em, 1j * self.xdp, self.ra + 1j * self.xq) * i_m)
-        curd, curq = to_dq(delta, i_m)
-        edra = -to_dq(delta, v)[0] - self.ra * curd
-        q = np.zeros((delta.size, 2))
-        sub, tra = self.kind == SUB, self.kind == TRA
-        q[sub] = np.stack([edra + self.xqp * curq, edra + self.xl * curq], -1)[sub]
-        q[tra, 0] = to_dq(delta, v + (self.ra + 1j * self.xdp) * i_m)[0][tra]
-        return delta, q
 
 
 @dataclass(frozen=True, eq=False)
@@ -250,14 +220,6 @@ class MachineModels:
     def n(self) -> int:
         return self.numbers.size
 
-    def take(self, k: int) -> "MachineModels":
-        """The model of machine index k alone (arrays of length 1)."""
-        s = slice(k, k + 1)
-        return MachineModels(self.numbers[s], self.pmu[s], self.H[s], self.D[s], self.pot[s],
-                             self.ra[s], self.z_emf[s], self.per_speed[s], self.inertia[s],
-                             self.f0, self.governor.take(k), self.qaxis.take(k))
-
-
 def machine_models(case: Case, pmus) -> MachineModels:
     """Swing-filter models of every machine of the case from its data (mac_con, tg_con)
     and the PMU measuring its current: at its terminal bus, or at a bus joined to the
@@ -286,7 +248,8 @@ def _series_impedance(case: Case, term: int, bus: int) -> complex:
     if term == bus:
         return 0j
     br = case.branches
-    sel = ((br.from_bus == term) & (br.to_bus == bus)) | ((br.from_bus == bus) & (br.to_bus == term))
+    sel = ((br.from_bus == term) & (br.to_bus == bus)) | \
+        ((br.from_bus == bus) & (br.to_bus == term))
     return complex(1.0 / np.sum(1.0 / (br.r[sel] + 1j * br.x[sel])))
 
 
@@ -351,6 +314,7 @@ def _packed(m: MachineModels) -> np.ndarray:
 
 
 def _tuning_vector(tun: SwingTuning, s: PMUSettings, f0: float) -> np.ndarray:
+    """Tuning and PMU noise of the swing filter's compiled kernels, (T_NCOL,)."""
     v = np.zeros(T_NCOL)
     v[[T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP]] = (
         tun.angle_model_rad, tun.accel_psd, tun.pm_walk, tun.pm0_sd, tun.flux0_sd, tun.jump_pu)

@@ -249,10 +249,11 @@ def phasor_truth(case: Case, result: SimulationResult, pmus) -> PhasorTruth:
     A repeated time point (a zero-length interval at an event) keeps its last value.  The
     check of generator currents against pelect leaves out the run's last point, whose
     pelect and voltages the simulator may take from different evaluations (storage
-    switching in the last step).  Raises UnknownBusError / CaseError for unknown buses or machines, InputError for a
-    device not in the result or not at the PMU's bus, or a generator current that cannot
-    be reconstructed (P from the phasors differs from the simulated pelect by more than
-    1e-6 pu: load at the terminal bus, or a branch there tripped or faulted).
+    switching in the last step).  Raises UnknownBusError / CaseError for unknown buses or
+    machines, InputError for a device not in the result or not at the PMU's bus, or a
+    generator current that cannot be reconstructed (P from the phasors differs from the
+    simulated pelect by more than 1e-6 pu: load at the terminal bus, or a branch there
+    tripped or faulted).
     """
     keep = np.r_[np.diff(result.t) > 0, True]
     t = result.t[keep]
@@ -319,7 +320,8 @@ def frame_times(t_end: float, rate: float) -> np.ndarray:
     return np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
 
 
-def measure(truth: PhasorTruth, settings: PMUSettings = PMUSettings(), seed: int = 0) -> FrameStream:
+def measure(truth: PhasorTruth, settings: PMUSettings = PMUSettings(),
+            seed: int = 0) -> FrameStream:
     """The frame stream of the PMUs of `truth`: true values at the reporting instants
     within the truth's time span, plus noise, latency and dropped frames (module docstring).
 

@@ -61,8 +61,7 @@ def classical_models():
     gov = es.Governors(es.LinearSystems(np.zeros((1, 3, 3)), np.zeros((1, 3))), np.zeros((1, 3)),
                        np.zeros((1, 3)), np.ones(1), z1, np.full(1, np.inf), np.zeros(1, bool))
     qax = es.QAxis(es.LinearSystems(np.zeros((1, 2, 2)), np.zeros((1, 2))), np.zeros((1, 2)),
-                   np.ones(1), np.zeros(1, bool), np.zeros(1, int), z1, z1, z1, z1,
-                   np.full(1, X))
+                   np.ones(1), np.zeros(1, bool), np.zeros(1, int), z1, z1, z1, np.full(1, X))
     return es.MachineModels(numbers=np.array([1]), pmu=np.array([0]), H=np.full(1, H), D=z1,
                             pot=np.ones(1), ra=z1, z_emf=np.full(1, 1j * X),
                             per_speed=np.zeros(1, bool), inertia=np.full(1, H * 100.0), f0=F0,
@@ -103,11 +102,11 @@ def test_ekf_on_a_linear_swing_is_unbiased_accurate_and_consistent(swing):
 
 def test_baseline_kf_smooths_the_pmu_frequency_consistently():
     t = np.linspace(0, 60, 60001)
-    f = 60 + 0.05 * np.sin(2 * np.pi * 0.2 * t)
+    f = 60 + 0.05 * np.sin(2 * np.pi * 0.2 * t)                 # 0.2 Hz, 50 mHz
+    rocof = 0.05 * 2 * np.pi * 0.2 * np.cos(2 * np.pi * 0.2 * t)
     ones = np.ones((t.size, 1))
     truth = pmu.PhasorTruth(t=t, pmus=(pmu.PMU(bus=1),), v=ones + 0j, i=ones * np.nan,
-                            freq=f[:, None], rocof=(0.01 * 2 * np.pi * np.cos(2 * np.pi * 0.2 * t))[:, None],
-                            f0=F0)
+                            freq=f[:, None], rocof=rocof[:, None], f0=F0)
     st = pmu.PMUSettings()
     stream = pmu.measure(truth, st, seed=2)
     speed, var, nis = feed(es.FrequencyKF([0], st, es.FrequencyTuning(rocof_walk=0.001)), stream)
