@@ -732,7 +732,7 @@ def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
 @click.option("--drop", type=float, default=0.0, show_default=True, metavar="P",
               help="Probability that a frame is lost.")
 @click.option("--tve-pct", type=float, default=1.0, show_default=True,
-              help="Total vector error limit (%%), C37.118.1 Table 3.")
+              help="Total vector error limit (%), C37.118.1 Table 3.")
 @click.option("--fe-hz", type=float, default=0.005, show_default=True,
               help="Frequency error limit (Hz), C37.118.1 Table 4.")
 @click.option("--rfe-hz-s", type=float, default=0.01, show_default=True,
@@ -742,7 +742,7 @@ def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
 @click.option("--pmu-at", type=click.Choice(["terminal", "hv"]), default="terminal",
               show_default=True, help="PMU of each generator at its terminal or HV bus.")
 @click.option("--esd-pct", type=float, default=None, metavar="P",
-              help="Storage of P %% of each generator's MVA at its HV bus in the fault run, "
+              help="Storage of P % of each generator's MVA at its HV bus in the fault run, "
                    "controlled on the true speeds (paper's Table 3).")
 @click.option("--runs", type=int, default=20, show_default=True, metavar="N",
               help="Monte-Carlo runs (PMU noise seeds S, S+1, ..., S+N-1).")

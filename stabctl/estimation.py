@@ -382,6 +382,17 @@ def swing_start(v, i, freq, r, pr, tv):
 
 
 @njit(cache=True)
+def swing_begin(k, v, i, freq, pag, pag_var, iq_var, r, pr, tv, hold, cur_hold, g):
+    """Start machine k at its first valid frame: initial state and covariance
+    (`swing_start`); held values (in place) with P_m = P_ag and the governor in equilibrium."""
+    hold[k, H_PAG], hold[k, H_PAGVAR], hold[k, H_DPAG], hold[k, H_IQVAR], hold[k, H_PM0] = \
+        pag, pag_var, 0.0, iq_var, pag
+    cur_hold[k] = i
+    g[k] = pr[C_GU:C_GU + 3] * pag
+    return swing_start(v, i, freq, r, pr, tv)
+
+
+@njit(cache=True)
 def swing_inputs(k, valid, pag, pag_var, cur, iq_var, hold, cur_hold, g, w, pr, Adg, bdg, tv):
     """Inputs of machine k over one interval: (mean P_m, mean P_ag, variance of the mean
     P_ag, current at both ends, variance of I_q).
@@ -572,11 +583,8 @@ def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par
         if valid[k]:
             theta, emag, pag, pag_var, iq_var, r = swing_measure(v[k], i[k], pr, tv[T_SIG2])
         if not ready[k]:
-            x[k], P[k] = swing_start(v[k], i[k], freq[k], r, pr, tv)
-            hold[k, H_PAG], hold[k, H_PAGVAR], hold[k, H_DPAG], hold[k, H_IQVAR], \
-                hold[k, H_PM0] = pag, pag_var, 0.0, iq_var, pag
-            cur_hold[k] = i[k]
-            g[k] = pr[C_GU:C_GU + 3] * pag
+            x[k], P[k] = swing_begin(k, v[k], i[k], freq[k], pag, pag_var, iq_var, r, pr, tv,
+                                     hold, cur_hold, g)
             ready[k] = True
             continue
         pm, pbar, pvar, c0, c1, iqv = swing_inputs(k, valid[k], pag, pag_var, i[k], iq_var,
@@ -777,29 +785,30 @@ class SwingEKFReference(SwingEKF):
 
     def _advance(self, frame, dt):
         v, i, f, ok = self._frame(frame)
-        Adq, bdq, Adg, bdg = self._discrete(dt)
-        tv = self.tv
+        disc = self._discrete(dt)
         self.nis[:] = np.nan
         for k, ekf in enumerate(self.ekfs):
             pr = self.par[k]
             if not (self.ready[k] or ok[k]):
                 continue
-            meas = swing_measure(v[k], i[k], pr, tv[T_SIG2]) if ok[k] else (np.nan,) * 6
-            theta, emag, pag, pag_var, iq_var, r = meas
+            meas = swing_measure(v[k], i[k], pr, self.tv[T_SIG2]) if ok[k] else (np.nan,) * 6
             if not self.ready[k]:
-                ekf.x, ekf.P = swing_start(v[k], i[k], f[k], r, pr, tv)
-                self.hold[k] = pag, pag_var, 0.0, iq_var, pag
-                self.cur_hold[k], self.g[k], self.ready[k] = i[k], pr[C_GU:C_GU + 3] * pag, True
+                ekf.x, ekf.P = swing_begin(k, v[k], i[k], f[k], *meas[2:], pr, self.tv,
+                                           self.hold, self.cur_hold, self.g)
+                self.ready[k] = True
             else:
-                u = swing_inputs(k, ok[k], pag, pag_var, i[k], iq_var, self.hold, self.cur_hold,
-                                 self.g, ekf.x[1], pr, Adg[k], bdg[k], tv)
-                xn, F, gs = swing_transition(ekf.x, u[0], u[1], u[3], u[4], dt, pr, Adq[k], bdq[k],
-                                             tv[T_F0])
-                ekf.F, ekf.Q = F, swing_Q(gs, u[2], u[5], bdq[k], dt, tv)
-                ekf.predict(u=xn)
+                self._predict(ekf, k, ok[k], meas, i[k], dt, *(d[k] for d in disc))
                 if ok[k]:
-                    self._update(ekf, k, theta, emag, r)
+                    self._update(ekf, k, meas[0], meas[1], meas[5])
             self.x[k], self.P[k] = ekf.x, ekf.P
+
+    def _predict(self, ekf, k, ok, meas, cur, dt, Adq, bdq, Adg, bdg):
+        pr, tv = self.par[k], self.tv
+        u = swing_inputs(k, ok, meas[2], meas[3], cur, meas[4], self.hold, self.cur_hold,
+                         self.g, ekf.x[1], pr, Adg, bdg, tv)
+        xn, F, gs = swing_transition(ekf.x, u[0], u[1], u[3], u[4], dt, pr, Adq, bdq, tv[T_F0])
+        ekf.F, ekf.Q = F, swing_Q(gs, u[2], u[5], bdq, dt, tv)
+        ekf.predict(u=xn)
 
     def _update(self, ekf, k, theta, emag, r):
         pr, tv = self.par[k], self.tv
