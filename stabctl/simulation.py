@@ -300,16 +300,23 @@ class _Run:
         return res
 
 
+#: Two switchings of a device closer than this (s) count as chattering.
+CHATTER_S = 0.02
+
+
 def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva, log, f0) -> None:
-    """Device powers and per-device figures: switchings, energy absorbed and delivered
-    (MJ), peak power actually used (MW); the switching log (time s, device number, new
-    mode, relative speed Hz) in res.meta["switchings"]."""
+    """Device powers and per-device figures: switchings, chattering (switchings within
+    CHATTER_S of the previous one), energy absorbed and delivered (MJ), peak power actually
+    used (MW); the switching log (time s, device number, new mode, relative speed Hz) in
+    res.meta["switchings"]."""
     res.devices = np.arange(1, len(fleet.devices) + 1)
     res.pesd = P
     res.meta["switchings"] = [(float(t), int(d) + 1, int(m), float(r * f0)) for t, d, m, r in log]
     res.meta["storage"] = [
         {"device": i + 1, "bus": d.bus, "machine": d.machine, "pmax_mw": d.pmax_mw,
-         "switchings": int(stats[i, 0]), "energy_absorbed_mj": float(stats[i, 1] * base_mva),
+         "switchings": int(stats[i, 0]),
+         "chattering": int(np.sum(np.diff(log[log[:, 1] == i, 0]) < CHATTER_S)),
+         "energy_absorbed_mj": float(stats[i, 1] * base_mva),
          "energy_delivered_mj": float(stats[i, 2] * base_mva),
          "peak_power_mw": float(np.abs(P[:, i]).max() * base_mva) if P.size else 0.0}
         for i, d in enumerate(fleet.devices)]
@@ -459,6 +466,7 @@ def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, 
     V_bus = np.zeros(R.shape[1], np.complex128)
     S = np.zeros(V_nc.size, np.complex128)
     mode, P, target, e = ds.mode, ds.P, ds.target, ds.e
+    switched = np.zeros(nd, np.bool_)
     r, v, acc = np.zeros(nd), np.zeros(nd), np.zeros(nd)
     rb, vb, accb = np.zeros(nd), np.zeros(nd), np.zeros(nd)
     M = inertia.sum()
@@ -480,6 +488,7 @@ def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, 
         if ev(x, s, True, dx_k) < 0:
             xs[:] = x
             return NO_LOAD_FLOW, max(k - 1, 0)
+        switched[:] = False
         if nd > 0:   # controller at the grid point (events make voltages jump here)
             _device_state(x, nm, inertia, sa, V_nc, dx_k, r, v, acc)
             if external:
@@ -488,6 +497,7 @@ def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, 
                 want = st.desired_mode(sa, d, mode[d], r[d], v[d])
                 if bang and want != mode[d]:
                     mode[d] = want
+                    switched[d] = True
                     _log(log, stats, d, t[k], want, r[d])
             _targets(sa, mode, r, v, acc, target)
             changed = False
@@ -502,7 +512,7 @@ def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, 
         if nd > 0:
             P_rec[k] = P
         x_a, dx_a, rem = x, dx_k, h[s]
-        for _split in range(64):
+        while True:   # ends: each device switches at most once per step, commands are finite
             t_a = t[k + 1] - rem
             hh = rem
             if external and ds.cmd_next[0] < cmd_t.size and cmd_t[ds.cmd_next[0]] < t[k + 1] - 1e-12:
@@ -519,6 +529,8 @@ def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, 
                 _device_state(x_b, nm, inertia, sa, V_nc, dx_j, rb, vb, accb)
                 at_event = interval[k + 1] != s
                 for d in range(nd):
+                    if switched[d]:    # one switching per device and step: no chattering loop
+                        continue
                     want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
                     gate_jump = (v[d] >= sa.vgate) != (vb[d] >= sa.vgate)
                     if want != mode[d] and not (at_event and gate_jump):  # events: at t_k+1
@@ -547,10 +559,11 @@ def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, 
                 if first_d < 0:
                     break
                 want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
-                if want != mode[d]:
+                if want != mode[d] and not switched[d]:
                     th, new = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
                     if d == first_d or th <= 1e-9:
                         mode[d] = new
+                        switched[d] = True
                         _log(log, stats, d, t[k + 1] - rem, new, r[d])
             _targets(sa, mode, r, v, acc, target)
             for d in range(nd):

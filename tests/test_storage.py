@@ -181,3 +181,18 @@ def test_commanded_devices_follow_the_schedule_at_exact_times(kundur):
     assert np.allclose(np.min(np.abs(times[:, None] - (frames + 0.05)[None, :]), axis=1), 0)
     with pytest.raises(InputError):
         sim.run_commanded(ev, 6.0, fleet, frames, decide)        # not ExternalCommands
+
+
+def test_boundary_chattering_is_bounded_measured_and_removed_by_hysteresis(kundur):
+    """On the deadband boundary the ideal relay would switch infinitely often (a sliding
+    mode); each device switches at most once per step, time keeps advancing, chattering is
+    counted, and 20 mHz of hysteresis removes it."""
+    case, sim = kundur
+    fault = [fault_with_clearing(case, 3, 101, 1.0, 21)]
+    plain = sim.run(fault, t_end=10.0, storage=uniform_fleet(case, 20))
+    assert plain.stable and np.all(np.diff(plain.t) >= 0)
+    assert np.ptp(plain.speed[-200:], axis=0).max() > 0           # dynamics not frozen
+    chatter = [d["chattering"] for d in plain.meta["storage"]]
+    assert sum(chatter) > 0 and max(d["switchings"] for d in plain.meta["storage"]) < 1000
+    hyst = sim.run(fault, t_end=10.0, storage=uniform_fleet(case, 20, BangBangCOI(hysteresis_hz=0.02)))
+    assert hyst.stable and all(d["chattering"] == 0 for d in hyst.meta["storage"])
