@@ -1,0 +1,244 @@
+"""Storage control with the speed estimator in the loop (issue 7, closed-loop half).
+
+The paper's ESDs (Table 3) act on f_i - f_COI.  Here they see it only through PMU frames:
+at each reporting instant t_f = k / rate the simulation (`Simulator.run_commanded`) is
+advanced to t_f, the frame of every generator's PMU is made from the trajectory so far
+(`stabctl.pmu` model: true values at t_f plus the C37.118.1 noise of a seeded stream),
+fed to an estimator, and the Table 3 modes (`stabctl.storage.desired_mode`, the estimate
+forecast over the latency as docs/estimation.md 2.2 describes) take effect at t_f + latency.
+
+Estimators (`ESTIMATORS`): ``ideal`` (true rotor speeds at t_f, no noise, no forecast),
+``raw`` (the PMU frequency, the last valid frame held), ``kf`` (`FrequencyKF`), ``ekf``
+(`SwingEKF`).  The voltage gate (0.8 pu) is applied by the devices themselves.
+
+Frames are made incrementally: the noise of the whole run is drawn once per seed (the same
+draws as `pmu.measure` gives for a run of that length), and each frame's true values come
+from the last few grid points only, so a run costs O(frames).  Unlike the offline model
+(centred differences on the whole trajectory), the bus frequency is causal: the mean over
+the last two cycles, as a P-class PMU estimates it; a derivative at the end of the
+trajectory would spike at every ESD switching and feed those spikes back.  The first frame
+(t = 0, before the run has a recorded point) is skipped: the devices stay idle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from . import estimation as es
+from . import storage as st
+from .errors import InputError
+from .estimation_study import true_speeds
+from .pmu import Frame, PhasorTruth, PMUSettings, machine_pmus, measure, phasor_truth
+from .results import SimulationResult
+
+ESTIMATORS = ("ideal", "raw", "kf", "ekf")
+PMU_WINDOW_CYCLES = 2.0    # frequency estimation window of a P-class PMU (C37.118.1 annex)
+
+
+class _Separated(Exception):
+    """Raised from the controller to stop a run once a machine has lost synchronism."""
+
+    def __init__(self, partial: SimulationResult):
+        super().__init__("separated")
+        self.partial = partial
+
+
+@dataclass
+class Diagnostics:
+    """What the controller saw, per frame: t (n_f,) s time stamps; rel (n_f, n_mac) the
+    relative speeds f_i - f_COI it acted on (Hz, forecast to t + latency); modes
+    (n_f, n_dev) the commanded modes; mac: each device's machine index; latency (s), f0
+    (Hz), coi ("system" or "rest") of the loop."""
+
+    t: np.ndarray
+    rel: np.ndarray
+    modes: np.ndarray
+    mac: np.ndarray
+    latency: float
+    f0: float
+    coi: str
+
+
+class LoopController:
+    """The `decide(t_f, partial)` callback of `Simulator.run_commanded`.
+
+    case: the case; devices: the fleet's `StorageDevice`s; estimator: one of
+    `ESTIMATORS`; settings: the PMUs (rate, noise, latency = the loop's latency); seed:
+    noise stream; t_end: run end (s, the noise is drawn for frames in [0, t_end]);
+    control: `BangBangCOI` giving the deadband, hysteresis and COI of Table 3 (its voltage
+    gate is ignored here: the devices apply theirs); at: PMUs at the "terminal" or "hv"
+    buses; separation_limit: rad from the COI at which the run is stopped (None: never).
+    """
+
+    def __init__(self, case, devices, estimator: str, settings: PMUSettings, seed: int,
+                 t_end: float, control: st.BangBangCOI = st.BangBangCOI(),
+                 at: str = "terminal", separation_limit: float | None = np.pi):
+        if estimator not in ESTIMATORS:
+            raise InputError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {estimator!r}")
+        self.case, self.estimator, self.settings = case, estimator, settings
+        self.limit, self.coi = separation_limit, control.coi
+        self.pmus = machine_pmus(case, at)
+        self.models = es.machine_models(case, self.pmus)
+        self.noise = _unit_noise(self.pmus, settings, seed, t_end, case.freq_hz)
+        self.sa = st.pack(st.StorageFleet(tuple(devices), replace(control, v_gate_pu=0.0)),
+                          case, np.arange(case.n_bus))
+        self.filter = _make_filter(estimator, self.models, settings)
+        self.mode = np.zeros(len(devices), np.int64)
+        self.held = np.full(self.models.n, np.nan)
+        self.rows: list = []
+
+    def __call__(self, t_f: float, partial: SimulationResult) -> np.ndarray:
+        """Modes (n_dev,) to take effect at t_f + latency."""
+        if self.limit is not None and _separated(partial, self.limit):
+            raise _Separated(_copy(partial, self.limit))
+        speed = self._speeds(t_f, partial)
+        rel = es.relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
+        rel = np.nan_to_num(rel)
+        self.mode = np.array([st.desired_mode(self.sa, d, self.mode[d], rel[self.sa.mac[d]], 1.0)
+                              for d in range(self.mode.size)], np.int64)
+        self.rows.append((t_f, rel * self.case.freq_hz, self.mode.copy()))
+        return self.mode
+
+    def _speeds(self, t_f: float, partial: SimulationResult) -> np.ndarray:
+        """Speed estimates (n_mac,) pu for the instant the modes take effect."""
+        if self.estimator == "ideal":
+            return true_speeds(partial, np.array([t_f]))[0]
+        if partial.t.size < 2:          # the run start is not recorded yet: no frame
+            return np.ones(self.models.n)
+        frame = self._frame(t_f, partial)
+        if self.estimator == "raw":
+            f = frame.freq[self.models.pmu] / self.models.f0
+            self.held = np.where(np.isfinite(f), f, self.held)
+            return self.held
+        self.filter.step(frame)
+        return self.filter.forecast(self.settings.latency_s)[0]
+
+    def _frame(self, t_f: float, partial: SimulationResult) -> Frame:
+        """The measured frame at t_f: true values from the trajectory's tail, plus noise."""
+        k = int(round(t_f * self.settings.rate))
+        true = _tail_truth(self.case, partial, self.pmus, t_f,
+                           PMU_WINDOW_CYCLES / self.case.freq_hz)
+        n = self.noise
+        nan = np.where(n.valid[k], 1.0, np.nan)
+        return Frame(t_f, n.valid[k], true.v[0] * (1 + n.v[k]) * nan,
+                     true.i[0] * (1 + n.i[k]) * nan, (true.freq[0] + n.freq[k]) * nan,
+                     (true.rocof[0] + n.rocof[k]) * nan)
+
+    def diagnostics(self) -> Diagnostics:
+        t, rel, modes = (np.array(a) for a in zip(*self.rows)) if self.rows else \
+            (np.zeros(0), np.zeros((0, self.models.n)), np.zeros((0, self.mode.size), int))
+        return Diagnostics(t=t, rel=rel, modes=modes, mac=np.asarray(self.sa.mac),
+                           latency=self.settings.latency_s, f0=self.case.freq_hz, coi=self.coi)
+
+
+def _make_filter(estimator: str, models: es.MachineModels, settings: PMUSettings):
+    """The online filter of an estimator (None for ideal and raw)."""
+    if estimator == "kf":
+        return es.FrequencyKF(models.pmu, settings, f0=models.f0)
+    if estimator == "ekf":
+        return es.SwingEKF(models, settings)
+    return None
+
+
+def _unit_noise(pmus, settings: PMUSettings, seed: int, t_end: float, f0: float):
+    """The errors of every frame in [0, t_end]: a stream measured on a constant truth
+    (v = i = 1, f = ROCOF = 0), so v - 1, i - 1, freq, rocof are the errors and `valid`
+    the losses, exactly as `measure` draws them for a run of that length."""
+    n = len(pmus)
+    one = np.ones((2, n), complex)
+    truth = PhasorTruth(t=np.array([0.0, t_end]), pmus=tuple(pmus), v=one, i=one,
+                        freq=np.zeros((2, n)), rocof=np.zeros((2, n)), f0=f0)
+    s = measure(truth, settings, seed)
+    return replace(s, v=np.nan_to_num(s.v - 1), i=np.nan_to_num(s.i - 1),
+                   freq=np.nan_to_num(s.freq), rocof=np.nan_to_num(s.rocof))
+
+
+def _tail_truth(case, partial: SimulationResult, pmus, t_f: float, window: float):
+    """Noise-free PMU values at t_f from the end of the run so far (up to the first grid
+    point at or after t_f): phasors interpolated as `phasor_truth`; frequency the mean over
+    the last `window` s (phase advance / window, a P-class PMU's estimate: causal, and
+    without the one-step spikes of a derivative at the end of the trajectory), ROCOF the
+    change of that frequency over one more window.  Times before the start take the
+    initial (steady) state."""
+    lo = max(int(np.searchsorted(partial.t, t_f - 2 * window)) - 1, 0)
+    part = replace(partial, t=partial.t[lo:], vmag=partial.vmag[lo:],
+                   vang=partial.vang[lo:], pelect=partial.pelect[lo:])
+    truth = phasor_truth(case, part, pmus)
+    phase = np.unwrap(np.angle(truth.at(t_f - window * np.arange(2, -1, -1.0)).v), axis=0)
+    f = truth.f0 + np.diff(phase, axis=0) / (2 * np.pi * window)
+    now = truth.at(np.array([t_f]))
+    return replace(now, freq=f[1:], rocof=np.diff(f, axis=0) / window)
+
+
+def _separated(partial: SimulationResult, limit: float) -> bool:
+    """A machine's angle more than `limit` rad from the COI at the last grid point."""
+    a, M = partial.angle[-1], partial.inertia
+    return bool(np.abs(a - a @ M / M.sum()).max() > limit)
+
+
+def _copy(partial: SimulationResult, limit: float) -> SimulationResult:
+    """A run stopped at separation: the trajectory so far (copied), verdict unstable."""
+    arrays = {k: np.array(getattr(partial, k)) for k in
+              ("t", "speed", "angle", "pelect", "pmech", "efd", "vmag", "vang", "pesd")}
+    a, M = partial.angle[-1], partial.inertia
+    lost = np.abs(a - a @ M / M.sum()) > limit
+    return replace(partial, **arrays, stable=False, t_separation=float(partial.t[-1]),
+                   separated=[int(m) for m in partial.machines[lost]],
+                   meta={"case": partial.meta.get("case"), "stopped_at_separation": True})
+
+
+@dataclass
+class ClosedLoopRun:
+    """One closed-loop run: the SimulationResult (its meta["switchings"] and
+    meta["storage"] as `Simulator.run_commanded` gives them; a run stopped at separation
+    has neither) and what the controller saw."""
+
+    result: SimulationResult
+    diagnostics: Diagnostics
+
+
+def run_closed_loop(sim, events, t_end: float, fleet_pct: float, estimator: str,
+                    rate: float = 60.0, latency: float = 0.05, seed: int = 0, *,
+                    settings: PMUSettings | None = None,
+                    control: st.BangBangCOI = st.BangBangCOI(), at: str = "terminal",
+                    h: float | None = None, separation_limit: float = np.pi,
+                    stop_at_separation: bool = True) -> ClosedLoopRun:
+    """Simulate `events` to t_end (s) with ESDs of fleet_pct % of each generator's MVA at
+    its HV bus, commanded by Table 3 on the relative speeds from `estimator` (frames at
+    `rate` frames/s, modes effective `latency` s after each time stamp, PMU noise stream
+    `seed`).  settings: the PMUs (default C37.118.1 limits; its rate and latency are
+    replaced by `rate`, `latency`).  A run is stopped at separation unless
+    stop_at_separation is False.  Raises InputError for a bad estimator, rate, latency,
+    rating; SimulationError as `Simulator.run_commanded`.
+    """
+    settings = replace(settings or PMUSettings(), rate=rate, latency_s=latency)
+    fleet = st.uniform_fleet(sim.case, fleet_pct)
+    ctrl = LoopController(sim.case, fleet.devices, estimator, settings, seed, t_end, control,
+                          at, separation_limit if stop_at_separation else None)
+    gate = st.ExternalCommands(v_gate_pu=control.v_gate_pu)
+    frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
+    try:
+        res = sim.run_commanded(events, t_end, st.StorageFleet(fleet.devices, gate), frames,
+                                ctrl, latency=latency, h=h, separation_limit=separation_limit)
+    except _Separated as stop:
+        res = stop.partial
+    return ClosedLoopRun(res, ctrl.diagnostics())
+
+
+def false_actions(run: ClosedLoopRun, deadband_hz: float = 0.1) -> int:
+    """Commands from idle to a running mode that Table 3 on the true relative speed at the
+    instant they take effect (time stamp + latency) would not give (idle or the opposite
+    mode); commands taking effect after the run's end are not counted."""
+    d, res = run.diagnostics, run.result
+    t_eff = d.t + d.latency
+    inside = t_eff <= res.t[-1]
+    if not inside.any():
+        return 0
+    prev = np.vstack([np.zeros((1, d.modes.shape[1]), int), d.modes[:-1]])
+    start = ((prev == 0) & (d.modes != 0))[inside]
+    true = true_speeds(res, t_eff[inside])
+    rel = es.relative_speeds(true, true, res.inertia, d.coi)[0][:, d.mac] * d.f0
+    want = np.where(rel > deadband_hz, 1, np.where(rel < -deadband_hz, -1, 0))
+    return int(np.sum(start & (want != d.modes[inside])))
