@@ -11,7 +11,8 @@ Design, 1968, ch. 2):
 
 so the ESD acts on a mode of that amplitude as the linear feedback P_j = K_j omega_rel_j,
 K_j = n(A) P_j, LINEAR in the rating.  n(A) is computed by `control.describing_function`
-(python-control) on the relay itself.  Closing these loops on the linearised model
+(python-control) on the relay itself (`relay_df`); with hysteresis h it gains a small
+lag, of relative size ~h / A, which is left out (the in-phase part is used).  Closing these loops on the linearised model
 (`stabctl.linearise`: inputs P_esd_B<bus>, outputs omega_rel_G<k>) gives
 A_cl(P) = A + B_s diag(n P / S_base) C_s, whose eigenvalues are recomputed exactly
 (`stabctl.modal`); their first-order change is the residue of each site's own loop
@@ -31,15 +32,39 @@ from .modal import mode_sensitivity, modal_analysis
 from .placement import DampingRows
 
 
-def relay_gain(deadband_hz: float, amplitude_hz: float, freq_hz: float) -> float:
-    """n(A): equivalent gain of a unit bang-bang relay with deadband `deadband_hz` at a
-    relative-speed amplitude `amplitude_hz` (Hz), in pu power per pu speed per pu rating;
-    0 at or below the deadband.  Raises InputError for a non-positive amplitude."""
+class BangBangRelay(ct.DescribingFunctionNonlinearity):
+    """The Table 3 law on a relative speed x (pu) with unit output: +1 above the deadband,
+    -1 below minus it, 0 inside; with hysteresis a running relay stops only inside
+    deadband - hysteresis (stateful then).  Deadband and hysteresis in pu speed."""
+
+    def __init__(self, deadband: float, hysteresis: float = 0.0):
+        super().__init__()
+        self.db, self.hyst, self.mode = deadband, hysteresis, 0
+
+    def __call__(self, x):
+        keep = (self.mode == 1 and x > self.db - self.hyst) or \
+            (self.mode == -1 and x < self.hyst - self.db)
+        if not keep:
+            self.mode = 1 if x > self.db else -1 if x < -self.db else 0
+        return float(self.mode)
+
+    def _isstatic(self):
+        return self.hyst == 0
+
+
+def relay_df(deadband_hz: float, amplitude_hz: float, freq_hz: float,
+             hysteresis_hz: float = 0.0) -> complex:
+    """Describing function n(A) of the unit bang-bang relay (`BangBangRelay`) at a
+    relative-speed amplitude `amplitude_hz` (Hz), in pu power per pu speed per pu rating,
+    by `control.describing_function` (first harmonic over one period, 4000 points).  Real
+    4 / (pi A) sqrt(1 - (d / A)^2) without hysteresis, 0 at or below the deadband;
+    hysteresis adds a small lag (imaginary part ~ -(4 / (pi A)) h / A).
+    Raises InputError for a non-positive amplitude."""
     if not amplitude_hz > 0:
         raise InputError(f"oscillation amplitude must be > 0 Hz, got {amplitude_hz:g}")
-    d, A = deadband_hz / freq_hz, amplitude_hz / freq_hz
-    relay = lambda x: float(np.sign(x)) if abs(x) > d else 0.0  # noqa: E731
-    return float(np.real(ct.describing_function(relay, [A], num_points=4000))[0])
+    relay = BangBangRelay(deadband_hz / freq_hz, hysteresis_hz / freq_hz)
+    return complex(ct.describing_function(relay, [amplitude_hz / freq_hz],
+                                          num_points=4000)[0])
 
 
 class DampingModel:
@@ -48,7 +73,7 @@ class DampingModel:
     Args:
         sys: `stabctl.linearise.linearise` model with an ESD input at every site bus.
         sites: `stabctl.placement.Site` sequence (bus, machine).
-        gain: n(A) of `relay_gain`; base_mva: system base (MW per pu).
+        gain: n(A), real (in-phase part of `relay_df`); base_mva: system base (MW per pu).
     Raises InputError when a site bus or machine has no input or output in sys.
     """
 

@@ -43,11 +43,9 @@ from .placement_eval import Contingency, cuts_from, verify, worker_pool
 from .storage import BangBangCOI
 
 MIN_MW = 1.0        # ratings below this are not installed (MW)
-#: The paper's Table 3 law with 10 mHz of hysteresis: a large ESD alone on its machine
-#: holds the relative speed on the deadband edge in a sliding mode, which the ideal relay
-#: (hysteresis 0) follows with ~1e5 switchings per run (and 100 times the run time); a
-#: real converter switches at a finite rate.  Its effect on the CCT is about 1 ms.
-DEFAULT_CONTROLLER = BangBangCOI(hysteresis_hz=0.01)
+#: The paper's Table 3 law (`stabctl.storage.BangBangCOI` defaults: 100 mHz deadband, 0.8 pu
+#: voltage gate, system COI, no hysteresis).
+DEFAULT_CONTROLLER = BangBangCOI()
 ACCEPT, GOOD = 0.1, 0.75
 
 
@@ -172,6 +170,7 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
     contingencies = tuple(contingencies)
     _check_settings(contingencies, max_iter, tol, workers, zeta_min)
     sim = cached_simulator(case)
+    _check_faults(sim.case, contingencies)
     sites = tuple(sites or candidate_sites(sim.case))
     controller = controller or DEFAULT_CONTROLLER
     beta, damping = _linear_models(sim, sites, controller, zeta_min, amplitude_hz)
@@ -188,10 +187,59 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
     return result
 
 
+def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | None = None,
+                scan: str = "target", tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
+                controller: BangBangCOI | None = None) -> dict:
+    """Simulated CCT (and its gradient) of every contingency at ratings mw (MW per site of
+    `sites`, default `candidate_sites`; None = no storage), in `workers` processes:
+    name -> `placement_eval.evaluate` dict.  base and scan as `placement_eval.verify`
+    (scan="full" with base: the first unstable clearing time, e.g. of a uniform fleet).
+    Raises as `place`.
+    """
+    contingencies = tuple(contingencies)
+    sim = cached_simulator(case)
+    _check_faults(sim.case, contingencies)
+    sites = tuple(sites or candidate_sites(sim.case))
+    controller = controller or DEFAULT_CONTROLLER
+    beta, _ = _linear_models(sim, sites, controller, None, 0.0)
+    mw = np.zeros(len(sites)) if mw is None else np.asarray(mw, float)
+    with worker_pool(workers) as run_map:
+        return verify(run_map, case, contingencies, sites, mw, beta, controller, tol, t_max,
+                      base=base, scan=scan)
+
+
+def baseline(case: str, faults, **kw) -> dict:
+    """`evaluations` of every fault (`LineFault`) without storage: CCT by bisection and
+    its gradient, by contingency name.  kw as `evaluations`."""
+    return evaluations(case, [Contingency(f, kw.get("t_max", 1.0)) for f in faults], **kw)
+
+
+def with_gain(faults, base: dict, gain_pct: float, tol: float = 1e-3) -> tuple:
+    """Contingencies whose target is the CCT without storage (`base`, by name) raised by
+    gain_pct %, rounded up to the tolerance lattice (s).  Raises InputError for
+    gain_pct <= 0."""
+    if not gain_pct > 0:
+        raise InputError(f"target CCT gain must be > 0 %, got {gain_pct:g}")
+    out = []
+    for f in faults:
+        name = Contingency(f, 1.0).name
+        t = base[name]["cct_s"] * (1 + gain_pct / 100)
+        out.append(Contingency(f, round(np.ceil(t / tol - 1e-9) * tol, 12)))
+    return tuple(out)
+
+
+def _check_faults(case, contingencies) -> None:
+    """Every fault's buses and lines exist (before any simulation)."""
+    from .events import validate
+
+    for c in contingencies:
+        validate(case, c.fault.events(0.0), 0.0)
+
+
 def _linear_models(sim, sites, controller, zeta_min, amplitude_hz):
     """Distribution factors (`sime.distribution_factors`) and, with zeta_min, the
     `damping.DampingModel`, both from one linearisation with an ESD input at every site."""
-    from .damping import DampingModel, relay_gain
+    from .damping import DampingModel, relay_df
     from .linearise import linearise
     from .sime import distribution_factors
 
@@ -201,7 +249,12 @@ def _linear_models(sim, sites, controller, zeta_min, amplitude_hz):
                                 sim.inertia, case.base_mva)
     if zeta_min is None:
         return beta, None
-    gain = relay_gain(controller.deadband_hz, amplitude_hz, case.freq_hz)
+    gain = relay_df(controller.deadband_hz, amplitude_hz, case.freq_hz,
+                    controller.hysteresis_hz).real
+    if not gain > 0:
+        raise InputError(f"oscillation amplitude {amplitude_hz:g} Hz is inside the ESD "
+                         f"deadband ({controller.deadband_hz:g} Hz): the devices are idle "
+                         "there and add no damping")
     return beta, DampingModel(sys, sites, gain, case.base_mva)
 
 
