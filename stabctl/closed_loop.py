@@ -30,7 +30,8 @@ from . import estimation as es
 from . import storage as st
 from .errors import InputError
 from .estimation_study import true_speeds
-from .pmu import Frame, PhasorTruth, PMUSettings, machine_pmus, measure, phasor_truth
+from .network import branch_admittances
+from .pmu import Frame, PhasorTruth, PMUSettings, machine_pmus, measure
 from .results import SimulationResult
 
 ESTIMATORS = ("ideal", "raw", "kf", "ekf")
@@ -81,6 +82,8 @@ class LoopController:
         self.limit, self.coi = separation_limit, control.coi
         self.pmus = machine_pmus(case, at)
         self.models = es.machine_models(case, self.pmus)
+        self.cols = case.bus_indices([p.bus for p in self.pmus])
+        self.C = current_map(case, self.pmus)
         self.noise = _unit_noise(self.pmus, settings, seed, t_end, case.freq_hz)
         self.sa = st.pack(st.StorageFleet(tuple(devices), replace(control, v_gate_pu=0.0)),
                           case, np.arange(case.n_bus))
@@ -118,13 +121,12 @@ class LoopController:
     def _frame(self, t_f: float, partial: SimulationResult) -> Frame:
         """The measured frame at t_f: true values from the trajectory's tail, plus noise."""
         k = int(round(t_f * self.settings.rate))
-        true = _tail_truth(self.case, partial, self.pmus, t_f,
-                           PMU_WINDOW_CYCLES / self.case.freq_hz)
+        f0 = self.case.freq_hz
+        v, i, f, rocof = _tail_truth(partial, self.cols, self.C, t_f, PMU_WINDOW_CYCLES / f0, f0)
         n = self.noise
         nan = np.where(n.valid[k], 1.0, np.nan)
-        return Frame(t_f, n.valid[k], true.v[0] * (1 + n.v[k]) * nan,
-                     true.i[0] * (1 + n.i[k]) * nan, (true.freq[0] + n.freq[k]) * nan,
-                     (true.rocof[0] + n.rocof[k]) * nan)
+        return Frame(t_f, n.valid[k], v * (1 + n.v[k]) * nan, i * (1 + n.i[k]) * nan,
+                     (f + n.freq[k]) * nan, (rocof + n.rocof[k]) * nan)
 
     def diagnostics(self) -> Diagnostics:
         t, rel, modes = (np.array(a) for a in zip(*self.rows)) if self.rows else \
@@ -155,21 +157,43 @@ def _unit_noise(pmus, settings: PMUSettings, seed: int, t_end: float, f0: float)
                    freq=np.nan_to_num(s.freq), rocof=np.nan_to_num(s.rocof))
 
 
-def _tail_truth(case, partial: SimulationResult, pmus, t_f: float, window: float):
+def current_map(case, pmus) -> np.ndarray:
+    """C (n_pmu, n_bus) complex with I_pmu = C @ V_bus (pu): each machine PMU's current as
+    `pmu.phasor_truth` computes it (base-case branches: Kirchhoff at the terminal bus, or
+    the current through the branches from the terminal bus into the PMU's bus)."""
+    ba, C = branch_admittances(case), np.zeros((len(pmus), case.n_bus), complex)
+    for p, pmu in enumerate(pmus):
+        term = case.bus_index(int(case.machines.bus[case.machine_index(pmu.machine)]))
+        b = case.bus_index(pmu.bus)
+        for j in range(ba.f.size):
+            f, t = ba.f[j], ba.t[j]
+            if b == term and term in (f, t):
+                C[p, f] += ba.yff[j] if f == term else ba.ytf[j]
+                C[p, t] += ba.yft[j] if f == term else ba.ytt[j]
+            elif b != term and {f, t} == {b, term}:
+                C[p, f] -= ba.ytf[j] if t == b else ba.yff[j]
+                C[p, t] -= ba.ytt[j] if t == b else ba.yft[j]
+        if b == term:
+            C[p, term] += case.buses.gshunt[term] + 1j * case.buses.bshunt[term]
+    return C
+
+
+def _tail_truth(partial: SimulationResult, cols, C, t_f: float, window: float, f0: float):
     """Noise-free PMU values at t_f from the end of the run so far (up to the first grid
-    point at or after t_f): phasors interpolated as `phasor_truth`; frequency the mean over
-    the last `window` s (phase advance / window, a P-class PMU's estimate: causal, and
-    without the one-step spikes of a derivative at the end of the trajectory), ROCOF the
-    change of that frequency over one more window.  Times before the start take the
-    initial (steady) state."""
+    point at or after t_f): bus voltages interpolated by magnitude and unwrapped angle, the
+    currents C @ V; frequency the mean over the last `window` s (phase advance / window, a
+    P-class PMU's estimate: causal, and without the one-step spikes of a derivative at the
+    end of the trajectory), ROCOF the change of that frequency over one more window.
+    Times before the start take the initial (steady) state.  cols: the PMU buses' indices."""
     lo = max(int(np.searchsorted(partial.t, t_f - 2 * window)) - 1, 0)
-    part = replace(partial, t=partial.t[lo:], vmag=partial.vmag[lo:],
-                   vang=partial.vang[lo:], pelect=partial.pelect[lo:])
-    truth = phasor_truth(case, part, pmus)
-    phase = np.unwrap(np.angle(truth.at(t_f - window * np.arange(2, -1, -1.0)).v), axis=0)
-    f = truth.f0 + np.diff(phase, axis=0) / (2 * np.pi * window)
-    now = truth.at(np.array([t_f]))
-    return replace(now, freq=f[1:], rocof=np.diff(f, axis=0) / window)
+    t = partial.t[lo:]
+    keep = np.r_[np.diff(t) > 0, True]
+    ang = np.unwrap(partial.vang[lo:][keep], axis=0)
+    at = lambda y, x: np.array([np.interp(x, t[keep], y[:, j]) for j in range(y.shape[1])]).T  # noqa: E731
+    now = at(partial.vmag[lo:][keep], [t_f])[0] * np.exp(1j * at(ang, [t_f])[0])
+    phase = at(ang[:, cols], t_f - window * np.arange(2, -1, -1.0))
+    f = f0 + np.diff(phase, axis=0) / (2 * np.pi * window)
+    return now[cols], C @ now, f[1], (f[1] - f[0]) / window
 
 
 def _separated(partial: SimulationResult, limit: float) -> bool:
@@ -242,3 +266,77 @@ def false_actions(run: ClosedLoopRun, deadband_hz: float = 0.1) -> int:
     rel = es.relative_speeds(true, true, res.inertia, d.coi)[0][:, d.mac] * d.f0
     want = np.where(rel > deadband_hz, 1, np.where(rel < -deadband_hz, -1, 0))
     return int(np.sum(start & (want != d.modes[inside])))
+
+
+# -- CCT with the estimator in the loop ---------------------------------------------------
+
+@dataclass(frozen=True)
+class LoopRunner:
+    """What `cct.critical_clearing_time` needs of a simulator (`.case`, `.run`), with the
+    ESDs (fleet_pct % of each MVA) commanded through `run_closed_loop`."""
+
+    sim: object
+    fleet_pct: float
+    estimator: str
+    rate: float = 60.0
+    latency: float = 0.05
+    seed: int = 0
+
+    @property
+    def case(self):
+        return self.sim.case
+
+    def run(self, events, t_end, h=None, separation_limit=np.pi, stop_at_separation=True):
+        """The closed-loop SimulationResult (run_closed_loop's arguments)."""
+        return run_closed_loop(self.sim, events, t_end, self.fleet_pct, self.estimator,
+                               self.rate, self.latency, self.seed, h=h,
+                               separation_limit=separation_limit,
+                               stop_at_separation=stop_at_separation).result
+
+
+def cct_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str, seed: int,
+            rate: float = 60.0, latency: float = 0.05, t_fault: float = 1.0,
+            tol: float = 1 / 240) -> dict:
+    """Worker entry (`stabctl.sweep`): CCT (s, cycles) of a line fault with the estimator
+    in the loop, PMU noise stream `seed`."""
+    from .cct import LineFault, cached_simulator, critical_clearing_time
+
+    runner = LoopRunner(cached_simulator(case), esd_pct, estimator, rate, latency, seed)
+    r = critical_clearing_time(runner, LineFault(int(bus), int(far_bus), float(t_fault)),
+                               tol=tol)
+    return {"cct_s": r.cct_s, "cct_cycles": r.cct_cycles, "n_simulations": r.n_simulations}
+
+
+def cct_study(case: str, bus: int, far_bus: int, ratings, runs: int, out, *,
+              estimators=ESTIMATORS, seed: int = 0, rate: float = 60.0, latency: float = 0.05,
+              workers: int | None = None, progress: bool = True) -> dict:
+    """CCTs per rating and estimator over `runs` noise seeds (seed .. seed + runs - 1; one
+    run for "ideal", which has no noise), in parallel with `stabctl.sweep.run_sweep`
+    (records appended to `out`, finished jobs reused).  Returns
+    {rating: {estimator: {"mean", "std", "min", "max", "runs"} of the CCT in cycles}}."""
+    from .sweep import Job, run_sweep
+
+    if runs < 1:
+        raise InputError(f"need at least one run, got {runs}")
+    jobs = [Job(f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s/seed{s}", cct_job,
+                dict(case=case, bus=bus, far_bus=far_bus, esd_pct=p, estimator=e, seed=s,
+                     rate=rate, latency=latency))
+            for p in ratings for e in estimators
+            for s in ([seed] if e == "ideal" else range(seed, seed + runs))]
+    rep = run_sweep(jobs, out, workers=workers, progress=progress)
+    table = {}
+    for j in jobs:
+        rec = rep.records[j.key]
+        val = rec["result"]["cct_cycles"] if rec["status"] == "ok" else np.nan
+        table.setdefault(j.inputs["esd_pct"], {}).setdefault(j.inputs["estimator"], []).append(val)
+    return {p: {e: _spread(v) for e, v in row.items()} for p, row in table.items()}
+
+
+def _spread(values) -> dict:
+    """Mean, standard deviation, range of finite values (failed runs: NaN, counted)."""
+    v = np.asarray(values, float)
+    ok = v[np.isfinite(v)]
+    stats = (float(ok.mean()), float(ok.std()), float(ok.min()), float(ok.max())) if ok.size \
+        else (None,) * 4
+    return {**dict(zip(("mean", "std", "min", "max"), stats)), "runs": int(v.size),
+            "failed": int(v.size - ok.size)}
