@@ -3,7 +3,7 @@
 Decision: the rating P_j (MW) of an ESD at each candidate site j (a bus, tied to the
 generator whose relative speed drives its bang-bang control), 0 <= P_j <= max_mw_j.
 
-    minimise    sum_j (cost_j + site_cost * w_j) P_j  (+ mu_t sum_c u_c + mu_d sum_m s_m)
+    minimise    sum_j cost_j P_j  (+ mu_t sum_c u_c + mu_d sum_m s_m)
     subject to  cct_c + gradient_c . (P - at_c) + u_c >= target_c + safety   every contingency c
                 A_damp P <= b_damp + s                                (optional damping rows)
                 |P_j - centre_j| <= radius                            (optional trust region)
@@ -17,10 +17,10 @@ nearby (`CCTCut.through`, `stabctl.placement_loop`).  Damping rows (`DampingRows
 `stabctl.damping`): every electromechanical mode's eigenvalue linearised in the ratings,
 kept left of the constant-damping line zeta_min.  Inside the verification loop the rows
 are elastic (slacks at exact-penalty prices) so that every trust-region step has a
-solution; hard rows give the infeasibility diagnosis.  The l1 norm of P is the total MW
-itself (P >= 0); the weights w_j = 1 / (P_j_previous + eps) of reweighted l1 (Candes,
-Wakin, Boyd, J. Fourier Anal. Appl. 14, 2008) turn a per-site cost into fewer sites
-(`sparse_allocation`).
+solution; hard rows give the infeasibility diagnosis.  The objective is the l1 norm of
+the (non-negative) ratings, weighted by cost; being a linear program its solutions are
+vertices, with at most as many sites as binding rows.  A per-site cost or a site limit is
+met by greedy removal of sites (`sparse_allocation`).
 
 Solved by cvxpy with Clarabel.
 """
@@ -157,8 +157,7 @@ class Allocation:
 
 def solve_allocation(sites, cuts, *, safety_s: float = 0.0, damping: DampingRows | None = None,
                      penalty: float | None = None, cct_penalty: float | None = None,
-                     upper=None, weights=None, site_cost=0.0,
-                     trust: tuple | None = None) -> Allocation:
+                     upper=None, trust: tuple | None = None) -> Allocation:
     """Solve the linear program of the module docstring once (cvxpy, Clarabel).
 
     Args:
@@ -168,7 +167,6 @@ def solve_allocation(sites, cuts, *, safety_s: float = 0.0, damping: DampingRows
             (default ten times the cost of every site at its bound).
         cct_penalty: None for hard CCT rows, else their slack's price per s of shortfall.
         upper: per-site upper bounds (MW, default each site's max_mw; 0 excludes a site).
-        weights, site_cost: reweighted-l1 weights w_j (default 1) and the cost per site.
         trust: (centre MW (n_sites,), radius MW (scalar or (n_sites,))) trust region.
     Returns the Allocation (ratings below 1e-6 MW set to 0).
     Raises InfeasibleError (hard rows only) naming the contingencies that cannot be met
@@ -177,13 +175,12 @@ def solve_allocation(sites, cuts, *, safety_s: float = 0.0, damping: DampingRows
     n = len(sites)
     cost = np.array([s.cost for s in sites])
     ub = np.array([s.max_mw for s in sites]) if upper is None else np.asarray(upper, float)
-    w = np.ones(n) if weights is None else np.asarray(weights, float)
     P = cp.Variable(n, nonneg=True)
     u = cp.Variable(len(cuts), nonneg=True) if cct_penalty is not None and cuts else None
     lin = [c.cct_s + c.gradient @ (P - c.at_mw) for c in cuts]
     cons = [P <= ub] + [lin[i] + (0 if u is None else u[i]) >= c.target_s + safety_s
                         for i, c in enumerate(cuts)]
-    obj = (cost + site_cost * w) @ P + (0 if u is None else cct_penalty * cp.sum(u))
+    obj = cost @ P + (0 if u is None else cct_penalty * cp.sum(u))
     slack = None
     if damping is not None and len(damping.b):
         slack = cp.Variable(len(damping.b), nonneg=True)
@@ -232,35 +229,52 @@ def _infeasible(cuts, ub, safety_s, status) -> InfeasibleError:
                            f"within the site bounds and limits (solver status {status})")
 
 
-def sparse_allocation(sites, cuts, *, max_sites: int | None = None, site_cost: float = 0.0,
-                      rounds: int = 5, eps_mw: float = 1.0, upper=None, **kw) -> Allocation:
-    """Fewer sites: reweighted l1 (`rounds` solves, w_j = 1 / (P_j + eps_mw)) when
-    site_cost > 0 or max_sites is set and exceeded; the per-site cost defaults to the mean
-    site's rating times the mean cost per MW (a site weighs as much as a typical site's
-    MW).  With max_sites, the largest max_sites sites of the last round are kept and the
-    problem is solved again on them alone (a heuristic: the cardinality limit is not
-    convex).  upper and kw go to `solve_allocation`.
+def sparse_allocation(sites, cuts, *, max_sites: int | None = None,
+                      site_cost: float = 0.0, upper=None, **kw) -> Allocation:
+    """Fewer sites by greedy backward elimination: while more than max_sites sites are
+    used, or while leaving one out lowers objective + site_cost * sites, the used site
+    whose removal raises the objective least is removed (its bound set to 0; one program
+    per used site per removal).  A heuristic: the site count is not convex.  (Reweighted
+    l1 cannot do this on a linear program: its solution is already a vertex, and the
+    weights 1 / (P_j + eps) only push the unused sites further out.)  upper and kw go to
+    `solve_allocation`.
 
-    Raises InfeasibleError (as solve_allocation) and InputError for max_sites < 1.
+    Raises InfeasibleError (as solve_allocation, or when no used site can be left out
+    to meet max_sites) and InputError for max_sites < 1 or site_cost < 0.
     """
     if max_sites is not None and max_sites < 1:
         raise InputError(f"max_sites must be >= 1, got {max_sites}")
-    alloc = solve_allocation(sites, cuts, upper=upper, **kw)
-    if site_cost <= 0 and (max_sites is None or alloc.n_sites <= max_sites):
-        return alloc
-    if site_cost <= 0:
-        site_cost = float(np.mean([s.cost for s in sites])) * alloc.total_mw / alloc.n_sites
-    for _ in range(rounds):
-        alloc = solve_allocation(sites, cuts, weights=1.0 / (alloc.mw + eps_mw),
-                                 site_cost=site_cost, upper=upper, **kw)
-    if max_sites is None or alloc.n_sites <= max_sites:
-        return alloc
-    keep = np.argsort(-alloc.mw)[:max_sites]
+    if site_cost < 0:
+        raise InputError(f"site cost must be >= 0, got {site_cost:g}")
     ub = np.array([s.max_mw for s in sites]) if upper is None else np.asarray(upper, float)
-    ub = np.where(np.isin(np.arange(len(sites)), keep), ub, 0.0)
-    try:
-        return solve_allocation(sites, cuts, upper=ub, **kw)
-    except InfeasibleError as exc:
-        raise InfeasibleError(f"with at most {max_sites} site(s) "
-                              f"({', '.join(f'bus {sites[j].bus}' for j in keep)}): {exc}",
-                              exc.contingencies) from None
+    alloc = solve_allocation(sites, cuts, upper=ub, **kw)
+    total = lambda a: a.objective + site_cost * a.n_sites  # noqa: E731
+    while alloc.n_sites > 0:
+        over = max_sites is not None and alloc.n_sites > max_sites
+        if not over and site_cost == 0:
+            break
+        best = _drop_one_site(sites, cuts, alloc, ub, kw)
+        if over and best is None:
+            used = ", ".join(f"bus {sites[j].bus}" for j in np.nonzero(alloc.mw > 0)[0])
+            raise InfeasibleError(f"with at most {max_sites} site(s): none of the "
+                                  f"{alloc.n_sites} sites used ({used}) can be left out")
+        if not over and (best is None or total(best[0]) >= total(alloc)):
+            break
+        alloc, ub = best
+    return alloc
+
+
+def _drop_one_site(sites, cuts, alloc: Allocation, ub, kw):
+    """The cheapest program with one more used site excluded, (allocation, bounds), or
+    None when every exclusion is infeasible."""
+    best = None
+    for j in np.nonzero(alloc.mw > 0)[0]:
+        trial_ub = ub.copy()
+        trial_ub[j] = 0.0
+        try:
+            trial = solve_allocation(sites, cuts, upper=trial_ub, **kw)
+        except InfeasibleError:
+            continue
+        if best is None or trial.objective < best[0].objective:
+            best = (trial, trial_ub)
+    return best

@@ -6,7 +6,8 @@ contingency by bisection, in parallel, and its gradient in the ratings from the 
 margin).  The loop is sequential linear programming with a trust region on an exact
 penalty merit (Nocedal, Wright, Numerical Optimization, 2nd ed., 2006, sec. 18.5):
 
-    merit(P) = cost . P + mu_t sum_c max(0, target_c - CCT_c(P)) + mu_d damping shortfall
+    merit(P) = cost . P + site_cost * sites(P) + mu_t sum_c max(0, target_c - CCT_c(P))
+               + mu_d * damping shortfall
 
 1. P = 0 is simulated; each contingency's CCT is linearised there (a cut).
 2. The program is solved with the cuts of the current allocation P (elastic at the merit's
@@ -123,6 +124,10 @@ class _Setup:
     @property
     def cost(self) -> np.ndarray:
         return np.array([s.cost for s in self.sites])
+
+    @property
+    def site_cost(self) -> float:
+        return self.solve_kw["site_cost"]
 
 
 @dataclass
@@ -345,7 +350,8 @@ def _point(setup: _Setup, mw, ev: dict, prices) -> _Point:
     zeta = None if setup.damping is None else setup.damping.em_damping(mw)
     short_t = sum(max(0.0, c.target_cct_s - ev[c.name]["cct_s"]) for c in setup.contingencies)
     short_d = 0.0 if zeta is None else damping_shortfall(zeta[1], setup.zeta_min)
-    merit = float(setup.cost @ mw + prices[0] * short_t + prices[1] * short_d)
+    merit = float(setup.cost @ mw + setup.site_cost * np.count_nonzero(mw)
+                  + prices[0] * short_t + prices[1] * short_d)
     return _Point(mw=np.asarray(mw, float), ev=ev, zeta=zeta, merit=merit,
                   feasible=short_t <= 1e-9 and short_d <= 1e-4)
 
@@ -366,7 +372,8 @@ def _model_merit(setup: _Setup, cuts, rows, mw, prices) -> float:
     short_t = sum(max(0.0, c.target_s - c.predicted(mw)) for c in cuts)
     short_d = 0.0 if rows is None or not len(rows.b) else \
         float(max(0.0, np.max(rows.A @ mw - rows.b)))
-    return float(setup.cost @ mw + prices[0] * short_t + prices[1] * short_d)
+    return float(setup.cost @ mw + setup.site_cost * np.count_nonzero(mw)
+                 + prices[0] * short_t + prices[1] * short_d)
 
 
 def _trial(setup: _Setup, cuts, centre, radius, prices, solve_times, max_steps: int = 8):
@@ -432,6 +439,8 @@ def _record(it, setup: _Setup, p: _Point, alloc: Allocation, rho, radius) -> dic
             "n_sites": int(np.count_nonzero(p.mw)), "mw_by_site": [float(x) for x in p.mw],
             "meets_targets": p.feasible, "rho": float(rho), "radius_mw": float(radius),
             "cct_s": {c.name: p.ev[c.name]["cct_s"] for c in setup.contingencies},
+            "n_simulations": sum(p.ev[c.name]["n_simulations"] or 0
+                                 for c in setup.contingencies),
             "predicted_cct_s": alloc.predicted_cct_s,
             "min_damping": None if p.zeta is None else float(np.min(p.zeta[1])),
             "solve_time_s": alloc.solve_time_s, "solve_wall_s": alloc.wall_time_s}

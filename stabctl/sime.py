@@ -120,14 +120,14 @@ def unstable_margin(eq: OmibEquivalent, k_u: int) -> float:
 
 
 def storage_integrals(eq: OmibEquivalent, modes: np.ndarray, k_s: int, k_u: int) -> np.ndarray:
-    """integral of s_j(t) * sigma * omega(t) dt from t_s to t_u (trapezoid on the run's
-    grid), per device (n_dev,), rad; modes (n_t, n_dev) in {-1, 0, +1}."""
+    """integral of s_j(t) * sigma * omega(t) dt from t_s to t_u per device (n_dev,), rad;
+    modes (n_t, n_dev) in {-1, 0, +1}, each held over the step that starts at its grid
+    point (as the simulator holds a device's mode), omega by the trapezoid rule."""
     if k_u <= k_s:
         return np.zeros(modes.shape[1])
     w = eq.sigma * eq.omega[k_s:k_u + 1]
-    s = modes[k_s:k_u + 1]
-    f = s * w[:, None]
-    return 0.5 * ((f[1:] + f[:-1]) * np.diff(eq.t[k_s:k_u + 1])[:, None]).sum(axis=0)
+    area = 0.5 * (w[1:] + w[:-1]) * np.diff(eq.t[k_s:k_u + 1])
+    return area @ modes[k_s:k_u]
 
 
 def device_modes(result: SimulationResult, buses, machines, controller,
