@@ -756,11 +756,18 @@ def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
               help="ESD deadband on f_i - f_COI for the false actions (Hz).")
 @click.option("--coi", type=click.Choice(["system", "rest"]), default="system",
               show_default=True, help="COI of the whole system or of the rest of it.")
+@click.option("--closed-loop", is_flag=True,
+              help="Instead: simulate the fault with the ESDs (--esd-pct) commanded by each "
+                   "estimator in the loop (ideal, raw, kf, ekf; seed S) and report the "
+                   "verdict, switchings and false actions.")
+@click.option("--cct", is_flag=True,
+              help="Instead: CCT of the fault line with each estimator in the loop at "
+                   "--esd-pct over --runs seeds, in parallel; mean and spread (cycles).")
 @click.option("--json", "as_json", is_flag=True, help="Print the figures as JSON.")
 @_reports_errors
 def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms, drop,
              tve_pct, fe_hz, rfe_hz_s, k_sigma, pmu_at, esd_pct, runs, seed, settle_ms,
-             ambient_s, deadband_hz, coi, as_json):
+             ambient_s, deadband_hz, coi, closed_loop, cct, as_json):
     """Machine and COI speed estimation from simulated PMU data, against the truth.
 
     The fault run is simulated once (with --esd-pct, storage acts on the true speeds);
@@ -795,6 +802,13 @@ def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency
                            k_sigma=k_sigma, latency_s=latency_ms / 1000, drop_prob=drop)
     case = load_case(case_name)
     ev = fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles)
+    if closed_loop or cct:
+        if esd_pct is None:
+            raise InputError("--closed-loop and --cct need --esd-pct")
+        out = _estimate_loop(case, ev, fault, far_bus, t_fault, tf, settings, esd_pct, runs,
+                             seed, deadband_hz, coi, cct)
+        click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
+        return
     window = (max(ev.times()) + settle_ms / 1000, tf)
     if not window[0] < tf:
         raise InputError(f"--tf {tf:g} s ends before the errors start ({window[0]:g} s)")
@@ -817,6 +831,38 @@ def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency
         _print_json(out)
         return
     _print_estimate(out)
+
+
+def _estimate_loop(case, ev, fault, far_bus, t_fault, tf, settings, esd_pct, runs, seed,
+                   deadband_hz, coi, cct) -> dict:
+    """`estimate --closed-loop` / `--cct`: figures and text lines."""
+    from . import closed_loop as cl
+    from .simulation import Simulator
+    from .storage import BangBangCOI
+
+    rate, lat = settings.rate, settings.latency_s
+    if cct:
+        with tempfile.TemporaryDirectory() as tmp:
+            table = cl.cct_study(case.name, fault, far_bus, [esd_pct], runs, Path(tmp) / "cct.jsonl",
+                                 seed=seed, rate=rate, latency=lat)[esd_pct]
+        lines = [f"CCT of line {fault}-{far_bus}, ESD {esd_pct:g} %, {rate:g} frames/s, latency "
+                 f"{1000 * lat:g} ms, {runs} seeds from {seed} (cycles):"]
+        lines += [f"  {e:5} " + ("failed" if s["mean"] is None else
+                                 f"{s['mean']:7.2f} +- {s['std']:.2f} ({s['min']:.2f}..{s['max']:.2f})")
+                  + f"  runs {s['runs']}, failed {s['failed']}" for e, s in table.items()]
+        return {"cct_cycles": table, "lines": lines}
+    sim, rows, lines = Simulator(case), {}, []
+    control = BangBangCOI(deadband_hz=deadband_hz, coi=coi)
+    for e in cl.ESTIMATORS:
+        run = cl.run_closed_loop(sim, [ev], tf, esd_pct, e, rate, lat, seed,
+                                 settings=settings, control=control)
+        rows[e] = {"stable": run.result.stable,
+                   "switchings": len(run.result.meta.get("switchings", [])),
+                   "false_actions": cl.false_actions(run, deadband_hz)}
+        lines.append(f"  {e:5} {'stable' if rows[e]['stable'] else 'UNSTABLE':8} switchings "
+                     f"{rows[e]['switchings']:5d}  false actions {rows[e]['false_actions']}")
+    head = f"closed loop, fault at bus {fault} line {fault}-{far_bus}, ESD {esd_pct:g} %, seed {seed}:"
+    return {"closed_loop": rows, "lines": [head, *lines]}
 
 
 def _print_estimate(d) -> None:
