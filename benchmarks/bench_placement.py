@@ -1,0 +1,89 @@
+"""Wall time of ESD placement (issue 6; not a test).
+
+1. The convex program alone, 34 sites (miniWECC): 10 CCT cuts (gradients drawn at random,
+   seed 0, like SIME's: a few sites per contingency), the 33 real damping rows of the
+   linearised miniWECC (`stabctl.damping`, zeta_min 0.05), elastic rows and a trust region,
+   as inside the loop; median of 20 solves: Clarabel's own time and the wall time with
+   cvxpy's canonicalisation.  Target (issue 6): well under 1 s.
+2. The verified placement (`stabctl.placement_loop.place`) of each case's DEFAULT
+   contingencies (`stabctl sweep-cct`), targets = CCT of the uniform 5 % fleet, 2 workers:
+   wall time, allocations simulated, simulations, total MW.
+3. With --study: the whole study (`analysis/placement_study.py`) per case.
+
+Run: python benchmarks/bench_placement.py [--study]
+"""
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from stabctl.case import load_case
+from stabctl.cct import DEFAULT_FAULTS, cached_simulator
+from stabctl.damping import DampingModel, relay_df
+from stabctl.linearise import linearise
+from stabctl.placement import CCTCut, candidate_sites, solve_allocation
+from stabctl.placement_eval import Contingency
+from stabctl.placement_loop import baseline, evaluations, place
+
+
+def convex_solve_time(n_rep: int = 20) -> None:
+    case = load_case("miniwecc")
+    sites = candidate_sites(case)
+    sys_ = linearise(cached_simulator("miniwecc"),
+                     esd_buses=list(dict.fromkeys(s.bus for s in sites)))
+    rows = DampingModel(sys_, sites, relay_df(0.1, 0.2, case.freq_hz).real,
+                        case.base_mva).rows(np.zeros(len(sites)), 0.05)
+    rng = np.random.default_rng(0)
+    cuts = []
+    for c in range(10):
+        g = np.zeros(len(sites))
+        g[rng.choice(len(sites), 3, replace=False)] = rng.uniform(1e-5, 3e-4, 3)
+        cuts.append(CCTCut(f"c{c}", 0.15, 0.1, g, np.zeros(len(sites))))
+    times, walls = [], []
+    for _ in range(n_rep):
+        a = solve_allocation(sites, cuts, damping=rows, cct_penalty=1e5, penalty=1e5,
+                             trust=(np.zeros(len(sites)), 500.0), safety_s=0.002)
+        times.append(a.solve_time_s)
+        walls.append(a.wall_time_s)
+    print(f"convex program, {len(sites)} sites, {len(cuts)} CCT rows, {len(rows.b)} damping "
+          f"rows: Clarabel {1000 * np.median(times):.2f} ms, with cvxpy "
+          f"{1000 * np.median(walls):.1f} ms (median of {n_rep}); target < 1000 ms: "
+          f"{'ok' if np.median(walls) < 1.0 else 'MISSED'}")
+
+
+def verified_placement(case_name: str, workers: int = 2) -> None:
+    faults = DEFAULT_FAULTS[case_name]
+    case = load_case(case_name)
+    sites = candidate_sites(case)
+    mva = np.array([float(case.machines.mva[case.machine_index(s.machine)]) for s in sites])
+    t = time.perf_counter()
+    base = baseline(case_name, faults, workers=workers)
+    plain = [Contingency(f, 1.0) for f in faults]
+    uni = evaluations(case_name, plain, 0.05 * mva, base=base, scan="full", workers=workers)
+    cons = [Contingency(c.fault, uni[c.name]["cct_s"]) for c in plain]
+    t_targets = time.perf_counter() - t
+    res = place(case_name, cons, base=base, workers=workers)
+    sims = sum(r["n_simulations"] for r in res.iterations)
+    print(f"{case_name}: targets (no storage + uniform 5 %) {t_targets:.1f} s; verified "
+          f"placement {res.wall_time_s:.1f} s, {len(res.iterations)} allocations, {sims} "
+          f"simulations, {res.allocation.total_mw:.1f} MW vs {0.05 * mva.sum():.0f} MW "
+          f"uniform, {'verified' if res.verified else 'NOT verified'}")
+
+
+def main():
+    convex_solve_time()
+    for name in ("kundur", "miniwecc"):
+        verified_placement(name)
+    if "--study" in sys.argv:
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "analysis"))
+        from placement_study import placement_study
+        for name in ("kundur", "miniwecc"):
+            t = time.perf_counter()
+            path = placement_study(name, "reports", progress=lambda msg: None)
+            print(f"{name}: whole study {time.perf_counter() - t:.0f} s -> {path}")
+
+
+if __name__ == "__main__":
+    main()
