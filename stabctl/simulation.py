@@ -252,12 +252,14 @@ class _Run:
         self.mats = tuple(stack(n) for n in ("Y11", "Y12", "Y21", "Y22", "Z22", "R"))
         self.first = np.r_[False, np.diff(grid.interval) > 0]
         self.pst, self.limit, self.stop = pst, limit, stop
-        self.k, self.status, self.wall = 0, OK, 0.0
+        self.k, self.status, self.wall, self.stored = 0, OK, 0.0, False
 
     def advance(self, k1: int) -> None:
-        """Integrate up to grid index k1 (nothing after a stop)."""
-        if self.status != OK or k1 <= self.k:
+        """Integrate up to grid index k1 and store its outputs (nothing after a stop);
+        advance(0) at the start stores the initial point."""
+        if self.status != OK or k1 < self.k or (k1 == self.k and self.stored):
             return
+        self.stored = True
         m, g = self.m, self.grid
         wall = time.perf_counter()
         self.status, k_end = integrate(
