@@ -103,8 +103,13 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 @click.option("--resume", is_flag=True,
               help="Keep the Table 4 sweep records already in OUT (after an interruption); "
                    "by default they are recomputed.")
+@click.option("--only", multiple=True,
+              type=click.Choice(["analytic", "cases", "table4", "estimation"]),
+              help="Build only these parts (repeatable): analytic = Sections 2-4 (seconds); "
+                   "cases = Cases 1 and 2; table4 = CCT sweeps (minutes); estimation = "
+                   "estimator Monte Carlo (about 10 minutes on 2 cores). Default: all.")
 @_reports_errors
-def paper(out_dir, resume):
+def paper(out_dir, resume, only):
     """Reproduce the paper's tables and figures into OUT/paper.md (+ PNG figures).
 
     The Table 4 CCT sweeps record each finished search in OUT/table4_<case>.jsonl as it
@@ -113,7 +118,7 @@ def paper(out_dir, resume):
     from .paper import write_paper_report
 
     path = write_paper_report(out_dir, progress=lambda msg: click.echo(msg, err=True),
-                              resume=resume)
+                              resume=resume, only=only)
     click.echo(f"wrote {path}")
 
 

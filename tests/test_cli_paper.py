@@ -25,9 +25,14 @@ def test_bad_arguments_exit_nonzero_with_message():
 
 
 def test_paper_report_written(tmp_path):
-    res = CliRunner().invoke(main, ["paper", "--out", str(tmp_path)])
+    res = CliRunner().invoke(main, ["paper", "--out", str(tmp_path), "--only", "analytic"])
     assert res.exit_code == 0, res.output
     text = (tmp_path / "paper.md").read_text()
     assert "Table 1" in text and "1.0734" in text
     assert (tmp_path / "fig07_feedback_phase_plane.png").stat().st_size > 10000
     assert not list(tmp_path.glob(".paper-*"))  # no temporary leftovers
+
+
+def test_paper_rejects_unknown_part(tmp_path):
+    res = CliRunner().invoke(main, ["paper", "--out", str(tmp_path), "--only", "nope"])
+    assert res.exit_code != 0 and not (tmp_path / "paper.md").exists()
