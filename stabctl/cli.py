@@ -107,7 +107,8 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
               type=click.Choice(["analytic", "cases", "table4", "estimation"]),
               help="Build only these parts (repeatable): analytic = Sections 2-4 (seconds); "
                    "cases = Cases 1 and 2; table4 = CCT sweeps (minutes); estimation = "
-                   "estimator Monte Carlo (about 10 minutes on 2 cores). Default: all.")
+                   "estimator Monte Carlo (about 10 minutes on 2 cores). Default: all; "
+                   "with --only, paper.md holds only those parts.")
 @_reports_errors
 def paper(out_dir, resume, only):
     """Reproduce the paper's tables and figures into OUT/paper.md (+ PNG figures).

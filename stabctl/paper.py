@@ -155,7 +155,7 @@ def section_estimation(fig_dir: Path) -> str:
     """PMU estimation and estimator-in-the-loop control (issue 7): separate reports."""
     from .estimation_report import write_estimation_report
 
-    paths = write_estimation_report(fig_dir, runs=20, cct_runs={"miniwecc": 3})
+    paths = write_estimation_report(fig_dir, runs=20)
     links = ", ".join(f"[{p.stem}]({p.name})" for p in paths)
     return "\n".join(["## 7. Estimated speeds in the control loop", "",
                       "PMU model (IEEE C37.118.1 limits), Kalman filters, RMSE versus truth, "
