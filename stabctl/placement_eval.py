@@ -25,8 +25,8 @@ import numpy as np
 from .cct import LineFault, cached_simulator, critical_clearing_time
 from .errors import InputError, SimulationError
 from .placement import CCTCut
-from .sime import (critical_machines, device_modes, omib_equivalent, storage_integrals,
-                   unstable_margin, unstable_swing)
+from .sime import (clearing_energy_rate, critical_machines, device_modes, omib_equivalent,
+                   storage_integrals, unstable_margin, unstable_point)
 from .storage import BangBangCOI, StorageDevice, StorageFleet
 
 EPS_S = 0.005       # clearing-time step of d eta / d t_clear (s)
@@ -123,42 +123,47 @@ def scanned_cct(sim, fault: LineFault, fleet, *, tol: float, t_max: float, start
 
 def cct_gradient(sim, fault: LineFault, t_clear: float, fleet, sites, beta: np.ndarray,
                  controller: BangBangCOI, eps_s: float = EPS_S) -> dict:
-    """Gradient of the CCT in the site ratings (s/MW) from runs cleared at t_clear (just
-    beyond the CCT) and t_clear + eps_s (doubled up to 3 times while that run is stable).
+    """Gradient of the CCT in the site ratings (s/MW) from the run cleared at t_clear (just
+    beyond the CCT) and a later unstable one (t_clear + eps_s, the step doubled up to 3
+    times while that run is stable or the margin does not fall).  When no later run gives
+    a falling margin (a run-away from rest on a later swing has margin 0 at every
+    clearing time), d eta / d t_clear is taken as minus the OMIB's kinetic energy rate at
+    clearing (`sime.clearing_energy_rate`): what one more second of fault adds.
 
     Returns {"gradient_s_per_mw", "margin" (pu*rad), "dmargin_dtc" (pu*rad/s),
-    "critical" (machine numbers), "n_runs"}.  Raises InputError when no later clearing
-    time is unstable or the margin does not fall with the clearing time.
+    "slope_from" ("difference" or "clearing energy"), "critical" (machine numbers),
+    "n_runs"}.  Raises InputError when neither slope is negative.
     """
     case = sim.case
     r1 = _run(sim, fault, t_clear, fleet)
     crit = critical_machines(r1)
-    eta1, eq, ks, ku = _margin(r1, crit, fault.t_fault + t_clear, case)
+    eta1, eq, ku = _margin(r1, crit, fault.t_fault + t_clear, case)
     buses, macs = [s[0] for s in sites], [s[1] for s in sites]
     modes = device_modes(r1, buses, macs, controller, case.freq_hz)
-    deta_dp = eq.group_weights(beta) * storage_integrals(eq, modes, ks, ku) / case.base_mva
-    eps, runs = eps_s, 1
-    for _ in range(3):
+    deta_dp = eq.group_weights(beta) * storage_integrals(eq, modes, ku) / case.base_mva
+    slope, how, runs = 0.0, "difference", 1
+    for k in range(4):
+        eps = eps_s * 2 ** k
         runs += 1
         r2 = _run(sim, fault, t_clear + eps, fleet)
         if not r2.stable:
-            break
-        eps *= 2
-    else:
-        raise InputError(f"{fault.describe()}: stable again when cleared {eps / 2:g} s "
-                         f"after {t_clear:g} s; no margin slope for the CCT gradient")
-    slope = (_margin(r2, crit, fault.t_fault + t_clear + eps, case)[0] - eta1) / eps
+            slope = (_margin(r2, crit, fault.t_fault + t_clear + eps, case)[0] - eta1) / eps
+            if slope < 0:
+                break
     if not slope < 0:
-        raise InputError(f"{fault.describe()}: the SIME margin does not fall with the "
-                         f"clearing time near {t_clear:g} s (slope {slope:.3g})")
+        slope, how = -clearing_energy_rate(eq, fault.t_fault + t_clear), "clearing energy"
+    if not slope < 0:
+        raise InputError(f"{fault.describe()}: no SIME margin slope in the clearing time "
+                         f"near {t_clear:g} s")
     return {"gradient_s_per_mw": (-deta_dp / slope).tolist(), "margin": eta1,
-            "dmargin_dtc": slope, "critical": crit, "n_runs": runs}
+            "dmargin_dtc": slope, "slope_from": how, "critical": crit, "n_runs": runs}
 
 
 def _margin(result, crit, t_clear_abs: float, case):
+    """(SIME margin, OMIB equivalent, index of the unstable point) of one run."""
     eq = omib_equivalent(result, crit, case.base_mva, case.freq_hz)
-    ks, ku = unstable_swing(eq, t_clear_abs)
-    return unstable_margin(eq, ku), eq, ks, ku
+    k_u = unstable_point(eq, t_clear_abs)
+    return unstable_margin(eq, k_u), eq, k_u
 
 
 def _run(sim, fault: LineFault, t_clear: float, fleet):

@@ -21,10 +21,12 @@ kinetic energy left there, eta = -M omega(t_u)^2 / 2 (pu*rad, the equal-area exc
 the accelerating over the decelerating area).  First order in the ratings (trajectory and
 switching held, the shift of t_u is second order because P_a(t_u) = 0):
 
-    d eta / d P_j = g_j * integral_{t_s}^{t_u} s_j(t) sigma omega(t) dt    (rad)
+    d eta / d P_j = g_j * integral_{t_0}^{t_u} s_j(t) sigma omega(t) dt    (rad)
 
-from the start t_s of that swing: the ESD's absorbed power adds g_j P_j to the decelerating
-power of the critical group while it is on, i.e. g_j P_j times the angle it is on for.
+from the start of the run: the ESD's absorbed power adds g_j P_j to the decelerating power
+of the critical group while it is on, i.e. g_j P_j times the angle it is on for, on every
+swing up to the one that runs away (exact for a conservative OMIB whose unstable angle
+stays put; the first swing alone for a first-swing instability).
 """
 
 from __future__ import annotations
@@ -93,25 +95,24 @@ def omib_equivalent(result: SimulationResult, critical, base_mva: float,
                           sigma=sigma, in_critical=C, M_machine=Mk)
 
 
-def unstable_swing(eq: OmibEquivalent, t_clear: float) -> tuple[int, int]:
-    """Grid indices (k_s, k_u) of the swing on which synchronism is lost.
+def unstable_point(eq: OmibEquivalent, t_clear: float) -> int:
+    """Grid index k_u of the OMIB's unstable angle (P_a = 0) on the swing that runs away.
 
-    k_u: the last local minimum of omega before the end of the run (the OMIB's unstable
-    angle, where P_a = 0, just before the final run-away), not before clearing (the
-    clearing instant itself when omega only grows after it).  k_s: the start of that
-    swing, the last upward zero crossing of omega before k_u followed by a speed peak of
-    at least twice |omega(k_u)| (a swing that almost stopped at the unstable angle counts
-    as the swing that ran away), else the first point of the run.
+    That swing is the last stretch of omega > 0, after clearing; k_u is the last local
+    minimum of omega before that stretch's speed peak (the run-away), or its last point
+    when omega only falls on it (a run that ends at the unstable angle), or its first point
+    when omega only rises (all of it accelerates: the margin is the whole kinetic energy).
     """
     w = eq.omega
     k_cl = int(np.searchsorted(eq.t, t_clear - 1e-9))
-    k_u = w.size - 1
-    while k_u > k_cl and w[k_u - 1] <= w[k_u]:
+    rest = np.nonzero(w[:-1] <= 0)[0]
+    k_a = min(max(k_cl, int(rest[-1]) + 1 if rest.size else 0), w.size - 1)
+    k_u = k_a + int(np.argmax(w[k_a:]))
+    if k_u == k_a:
+        return w.size - 1
+    while k_u > k_a and w[k_u - 1] <= w[k_u]:
         k_u -= 1
-    up = np.nonzero((w[:k_u - 1] <= 0) & (w[1:k_u] > 0))[0] + 1
-    peak = 2 * abs(w[k_u])
-    starts = [k for k in up if w[k:k_u + 1].max() > peak]
-    return (int(starts[-1]) if starts else 0), int(k_u)
+    return int(k_u)
 
 
 def unstable_margin(eq: OmibEquivalent, k_u: int) -> float:
@@ -119,15 +120,27 @@ def unstable_margin(eq: OmibEquivalent, k_u: int) -> float:
     return -0.5 * eq.M * max(float(eq.omega[k_u]), 0.0) ** 2
 
 
-def storage_integrals(eq: OmibEquivalent, modes: np.ndarray, k_s: int, k_u: int) -> np.ndarray:
-    """integral of s_j(t) * sigma * omega(t) dt from t_s to t_u per device (n_dev,), rad;
-    modes (n_t, n_dev) in {-1, 0, +1}, each held over the step that starts at its grid
-    point (as the simulator holds a device's mode), omega by the trapezoid rule."""
-    if k_u <= k_s:
+def clearing_energy_rate(eq: OmibEquivalent, t_clear: float) -> float:
+    """M omega dw/dt just before clearing (pu*rad/s): the OMIB kinetic energy that one more
+    second of fault adds; 0 when clearing is at the first point."""
+    k = int(np.searchsorted(eq.t, t_clear - 1e-9))
+    if k < 2:
+        return 0.0
+    dw = (eq.omega[k - 1] - eq.omega[k - 2]) / (eq.t[k - 1] - eq.t[k - 2])
+    return float(eq.M * eq.omega[k - 1] * dw)
+
+
+def storage_integrals(eq: OmibEquivalent, modes: np.ndarray, k_u: int) -> np.ndarray:
+    """integral of s_j(t) * sigma * omega(t) dt from the start of the run to t_u per device
+    (n_dev,), rad; modes (n_t, n_dev) in {-1, 0, +1}, each held over the step that starts
+    at its grid point (as the simulator holds a device's mode), omega by the trapezoid
+    rule.  Over every swing up to the one that runs away: a device absorbing while its
+    group runs ahead and injecting while it falls behind removes energy on each swing."""
+    if k_u <= 0:
         return np.zeros(modes.shape[1])
-    w = eq.sigma * eq.omega[k_s:k_u + 1]
-    area = 0.5 * (w[1:] + w[:-1]) * np.diff(eq.t[k_s:k_u + 1])
-    return area @ modes[k_s:k_u]
+    w = eq.sigma * eq.omega[:k_u + 1]
+    area = 0.5 * (w[1:] + w[:-1]) * np.diff(eq.t[:k_u + 1])
+    return area @ modes[:k_u]
 
 
 def device_modes(result: SimulationResult, buses, machines, controller,

@@ -21,7 +21,7 @@ from stabctl.placement import (CCTCut, InfeasibleError, Site, candidate_sites, d
 from stabctl.placement_eval import Contingency
 from stabctl.placement_loop import place
 from stabctl.results import SimulationResult
-from stabctl.sime import omib_equivalent, storage_integrals, unstable_margin, unstable_swing
+from stabctl.sime import omib_equivalent, storage_integrals, unstable_margin, unstable_point
 from stabctl.simulation import Simulator
 from stabctl.storage import BangBangCOI, StorageDevice, StorageFleet
 
@@ -49,10 +49,10 @@ def sime_of_omib(t_clear):
     with the storage on from clearing (mode +1) and the generator taking all its power."""
     run = simulate(PAPER_OMIB, t_clear, t_end=3.0, max_step=2e-4)
     eq = omib_equivalent(omib_as_result(run), [1], BASE_MVA, F0)
-    ks, ku = unstable_swing(eq, t_clear)
+    ku = unstable_point(eq, t_clear)
     modes = (run.t >= t_clear).astype(int)[:, None]
     g = eq.group_weights(np.array([[1.0], [0.0]]))
-    return unstable_margin(eq, ku), float(g[0] * storage_integrals(eq, modes, ks, ku)[0]), \
+    return unstable_margin(eq, ku), float(g[0] * storage_integrals(eq, modes, ku)[0]), \
         run.delta_cl
 
 
