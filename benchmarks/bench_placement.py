@@ -8,14 +8,13 @@
 2. The verified placement (`stabctl.placement_loop.place`) of each case's DEFAULT
    contingencies (`stabctl sweep-cct`), targets = CCT of the uniform 5 % fleet, 2 workers:
    wall time, allocations simulated, simulations, total MW.
-3. With --study: the whole study (`analysis/placement_study.py`) per case.
+3. With --study: the whole study (`stabctl.placement_study`, into reports/) per case.
 
 Run: python benchmarks/bench_placement.py [--study]
 """
 
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -77,8 +76,7 @@ def main():
     for name in ("kundur", "miniwecc"):
         verified_placement(name)
     if "--study" in sys.argv:
-        sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "analysis"))
-        from placement_study import placement_study
+        from stabctl.placement_study import placement_study
         for name in ("kundur", "miniwecc"):
             t = time.perf_counter()
             path = placement_study(name, "reports", progress=lambda msg: None)
