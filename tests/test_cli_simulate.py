@@ -95,7 +95,7 @@ def test_case1_fault_json_and_stop_at_separation(tmp_path):
     assert res.exit_code == 0, res.output
     s = json.loads(res.stdout)
     assert s["stable"] is False and s["separated_machines"] == [1, 2]
-    assert 1.35 < s["t_separation_s"] < 3.0
+    assert s["t_separation_s"] > 1.35 and s["t_separation_s"] < 3.0
     assert s["t_end_s"] == pytest.approx(s["t_separation_s"])        # stopped there
     assert s["max_angle_spread_rad"] > np.pi
     assert "3-101" in s["events"][0] and "1.35 s" in s["events"][0]

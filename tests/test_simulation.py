@@ -147,7 +147,7 @@ def test_case1_kundur_area1_loses_synchronism(case1, record_property):
     print(f"\nCase 1: separation at {res.t_separation:.3f} s, machines {res.separated}")
     assert not res.stable
     assert res.separated == [1, 2]                  # area 1
-    assert 1.35 < res.t_separation < 3.0            # after clearing at 1.35 s (2.07 s)
+    assert res.t_separation > 1.35 and res.t_separation < 3.0   # after clearing (2.07 s)
     d = {m: res.angle[:, res.machine(m)] for m in (1, 2, 3, 4)}
     assert np.abs(d[3] - d[4]).max() < 1.0           # area 2 stays together
     assert np.abs(d[1] - d[2]).max() < 1.0           # area 1 swings out as one group
@@ -173,7 +173,7 @@ def test_case2_miniwecc_colstrip_loses_synchronism(wecc, record_property):
     assert not res.stable
     assert res.separated == [14]
     assert case.machines.bus[case.machine_index(14)] == 32
-    assert 1.1 < res.t_separation < 3.0
+    assert res.t_separation > 1.1 and res.t_separation < 3.0
     # machine 13 (bus 30) is still with the rest of the system when 14 has gone
     rest = [j for j, m in enumerate(res.machines) if m != 14]
     w = res.inertia[rest]
