@@ -98,21 +98,25 @@ def omib_equivalent(result: SimulationResult, critical, base_mva: float,
 def unstable_point(eq: OmibEquivalent, t_clear: float) -> int:
     """Grid index k_u of the OMIB's unstable angle (P_a = 0) on the swing that runs away.
 
-    That swing is the last stretch of omega > 0, after clearing; k_u is the last local
-    minimum of omega before that stretch's speed peak (the run-away), or its last point
-    when omega only falls on it (a run that ends at the unstable angle), or its first point
-    when omega only rises (all of it accelerates: the margin is the whole kinetic energy).
+    That swing is the last stretch of omega > 0 after clearing.  Going back from the end
+    over a final fall to the last speed peak, then over the rise before it to the last
+    local minimum: if that rise exceeds the final fall, the run-away dominates and k_u is
+    that minimum (the clearing instant when omega only rises: all of the swing
+    accelerates); otherwise the run ended (machines judged separated from the centre of
+    inertia, or a run stopped at the unstable angle) while the OMIB was still slowing
+    down, and k_u is the last point: the kinetic energy left there bounds the margin.
     """
     w = eq.omega
     k_cl = int(np.searchsorted(eq.t, t_clear - 1e-9))
     rest = np.nonzero(w[:-1] <= 0)[0]
     k_a = min(max(k_cl, int(rest[-1]) + 1 if rest.size else 0), w.size - 1)
-    k_u = k_a + int(np.argmax(w[k_a:]))
-    if k_u == k_a:
-        return w.size - 1
-    while k_u > k_a and w[k_u - 1] <= w[k_u]:
-        k_u -= 1
-    return int(k_u)
+    k = w.size - 1
+    while k > k_a and w[k - 1] >= w[k]:
+        k -= 1
+    k_pk = k
+    while k > k_a and w[k - 1] <= w[k]:
+        k -= 1
+    return int(k) if w[k_pk] - w[k] > w[k_pk] - w[-1] else w.size - 1
 
 
 def unstable_margin(eq: OmibEquivalent, k_u: int) -> float:
