@@ -52,6 +52,20 @@ def _print_json(obj) -> None:
     click.echo(json.dumps(obj, indent=2, default=float))
 
 
+def _line_fault_options(func):
+    """--fault BUS --far-bus BUS [--t-fault S]: a bolted fault on line BUS-FAR_BUS (cct,
+    estimate)."""
+    for opt in reversed((
+            click.option("--fault", type=int, required=True, metavar="BUS",
+                         help="Three-phase (bolted) fault at bus BUS."),
+            click.option("--far-bus", type=int, required=True, metavar="BUS",
+                         help="Far end of the faulted line BUS-FAR_BUS, tripped at clearing."),
+            click.option("--t-fault", type=float, default=1.0, show_default=True, metavar="S",
+                         help="Fault start time (s)."))):
+        func = opt(func)
+    return func
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="stabctl")
 def main():
@@ -441,14 +455,9 @@ def _print_cct(case_name, rating, d) -> None:
 
 @main.command()
 @click.argument("case_name", metavar="CASE")
-@click.option("--fault", type=int, required=True, metavar="BUS",
-              help="Three-phase (bolted) fault at bus BUS.")
-@click.option("--far-bus", type=int, required=True, metavar="BUS",
-              help="Far end of the faulted line BUS-FAR_BUS, tripped at clearing.")
+@_line_fault_options
 @click.option("--circuit", type=int, default=1, show_default=True, metavar="K",
               help="Which of parallel circuits BUS-FAR_BUS is faulted.")
-@click.option("--t-fault", type=float, default=1.0, show_default=True, metavar="S",
-              help="Fault start time (s).")
 @click.option("--trip", type=(int, int), multiple=True, metavar="FROM TO",
               help="Also open circuit 1 of line FROM-TO at the clearing instant "
                    "(repeatable); both circuits of a double line: --circuit 2 --trip "
@@ -721,12 +730,7 @@ def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
 
 @main.command()
 @click.argument("case_name", metavar="CASE")
-@click.option("--fault", type=int, required=True, metavar="BUS",
-              help="Three-phase (bolted) fault at bus BUS.")
-@click.option("--far-bus", type=int, required=True, metavar="BUS",
-              help="Far end of the faulted line BUS-FAR_BUS, tripped at clearing.")
-@click.option("--t-fault", type=float, default=1.0, show_default=True, metavar="S",
-              help="Fault start time (s).")
+@_line_fault_options
 @click.option("--clear-cycles", type=float, default=6.0, show_default=True, metavar="N",
               help="Clearing after N cycles, both ends.")
 @click.option("--tf", type=float, default=10.0, show_default=True, metavar="S",
