@@ -115,20 +115,22 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 @click.option("--out", "out_dir", default="reports", show_default=True,
               type=click.Path(file_okay=False), help="Report directory.")
 @click.option("--resume", is_flag=True,
-              help="Keep the Table 4 sweep records already in OUT (after an interruption); "
-                   "by default they are recomputed.")
+              help="Keep the sweep records already in OUT (Table 4 CCT sweeps, placement "
+                   "screening; after an interruption); by default they are recomputed.")
 @click.option("--only", multiple=True,
-              type=click.Choice(["analytic", "cases", "table4", "estimation"]),
+              type=click.Choice(["analytic", "cases", "table4", "estimation", "placement"]),
               help="Build only these parts (repeatable): analytic = Sections 2-4 (seconds); "
                    "cases = Cases 1 and 2; table4 = CCT sweeps (minutes); estimation = "
-                   "estimator Monte Carlo (about 10 minutes on 2 cores). Default: all; "
+                   "estimator Monte Carlo (about 10 minutes on 2 cores); placement = ESD "
+                   "sizing and placement studies (about 30 minutes). Default: all; "
                    "with --only, paper.md holds only those parts.")
 @_reports_errors
 def paper(out_dir, resume, only):
     """Reproduce the paper's tables and figures into OUT/paper.md (+ PNG figures).
 
-    The Table 4 CCT sweeps record each finished search in OUT/table4_<case>.jsonl as it
-    completes; an interrupted run continues from there with --resume.
+    The Table 4 CCT sweeps and the placement screening record each finished search in
+    OUT/table4_<case>.jsonl and OUT/placement_<case>_screening.jsonl as it completes; an
+    interrupted run continues from there with --resume.
     """
     from .paper import write_paper_report
 

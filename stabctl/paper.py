@@ -163,13 +163,32 @@ def section_estimation(fig_dir: Path) -> str:
                       f"PMU frequency and each estimator in the loop: {links}.", ""])
 
 
+def section_placement(fig_dir: Path, records_dir: Path) -> str:
+    """ESD sizing and placement (issue 6): separate reports per case."""
+    from .placement_study import placement_study
+
+    paths = [placement_study(case, fig_dir, records_dir=records_dir)
+             for case in ("kundur", "miniwecc")]
+    links = ", ".join(f"[{p.stem}]({p.name})" for p in paths)
+    return "\n".join(["## 8. Where to put how much storage", "",
+                      "Least total ESD rating (convex program, cvxpy + Clarabel) that gives, "
+                      "on the paper's fault and the most severe screened faults, the CCT of "
+                      "5 % storage at every generator, verified by simulation, with the "
+                      f"Pareto curve of total MW against target gain: {links}.", ""])
+
+
 #: Report parts: key -> sections (each returns markdown and writes its figures).
 PARTS: dict[str, tuple[Callable[[Path], str], ...]] = {
     "analytic": (section_omib, section_feedback, section_two_machine_and_min_time),
     "cases": (paper_storage.section_case1, paper_storage.section_case2),
     "table4": (),
     "estimation": (section_estimation,),
+    "placement": (),
 }
+#: Parts whose sweeps keep resumable records (JSON lines) in the report directory itself:
+#: key -> (section(fig_dir, records_dir), record files started afresh unless resume).
+RESUMABLE = {"table4": (paper_storage.section_table4, "table4_*.jsonl"),
+             "placement": (section_placement, "placement_*_screening.jsonl")}
 
 
 def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], None] = print,
@@ -190,8 +209,8 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
         raise InputError(f"unknown report part(s) {bad}; choose from {list(PARTS)}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    if not resume and "table4" in keys:
-        for f in out.glob("table4_*.jsonl"):
+    for key in keys if not resume else ():
+        for f in out.glob(RESUMABLE[key][1]) if key in RESUMABLE else ():
             f.unlink()
     with tempfile.TemporaryDirectory(dir=out, prefix=".paper-") as tmp:
         tmp = Path(tmp)
@@ -202,9 +221,11 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
             for section in PARTS[key]:
                 progress(f"paper: {section.__doc__.splitlines()[0]}")
                 parts.append(section(tmp))
-            if key == "table4":
-                progress("paper: Table 4 (CCT sweeps, resumable records in the report directory)")
-                parts.append(paper_storage.section_table4(tmp, out))
+            if key in RESUMABLE:
+                section = RESUMABLE[key][0]
+                progress(f"paper: {section.__doc__.splitlines()[0]} (resumable records in "
+                         "the report directory)")
+                parts.append(section(tmp, out))
         (tmp / "paper.md").write_text("\n".join(parts))
         for f in tmp.iterdir():
             os.replace(f, out / f.name)

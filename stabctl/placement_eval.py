@@ -44,7 +44,8 @@ class Contingency:
     @property
     def name(self) -> str:
         f = self.fault
-        return f"{f.bus}-{f.far_bus}" + (f"#{f.circuit}" if f.circuit != 1 else "") + \
+        where = f"{f.bus}" if f.far_bus is None else f"{f.bus}-{f.far_bus}"
+        return where + (f"#{f.circuit}" if f.circuit != 1 else "") + \
             "".join(f"+{a}-{b}" for a, b in f.trips)
 
 
@@ -68,7 +69,8 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
     Raises InputError (unstable at zero clearing, bad fault) and SimulationError.
     """
     sim = cached_simulator(case)
-    f = LineFault(int(fault["bus"]), int(fault["far_bus"]), float(fault["t_fault"]),
+    far = None if fault["far_bus"] is None else int(fault["far_bus"])
+    f = LineFault(int(fault["bus"]), far, float(fault["t_fault"]),
                   int(fault["circuit"]), tuple((int(a), int(b)) for a, b in fault["trips"]))
     ctrl = BangBangCOI(**controller)
     fleet = StorageFleet(tuple(StorageDevice(int(b), int(k), float(p)) for b, k, p in devices),

@@ -9,7 +9,8 @@ penalty merit (Nocedal, Wright, Numerical Optimization, 2nd ed., 2006, sec. 18.5
     merit(P) = cost . P + site_cost * sites(P) + mu_t sum_c max(0, target_c - CCT_c(P))
                + mu_d * damping shortfall
 
-1. P = 0 is simulated; each contingency's CCT is linearised there (a cut).
+1. P = 0 (or a given start, e.g. a uniform fleet known to meet the targets) is simulated;
+   each contingency's CCT is linearised there (a cut).
 2. The program is solved with the cuts of the current allocation P (elastic at the merit's
    prices), the damping rows (refined at the trial by recomputed eigenvalues until they
    stop improving, `stabctl.damping`), and |P' - P| <= radius; the trial P' is rounded.
@@ -145,7 +146,8 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
           max_sites: int | None = None, site_cost: float = 0.0, safety_s: float | None = None,
           tol: float = 1e-3, t_max: float = 1.0, max_iter: int = 10, rtol: float = 0.02,
           workers: int = 1, controller: BangBangCOI | None = None,
-          amplitude_hz: float = 0.2, base: dict | None = None, progress=None) -> PlacementResult:
+          amplitude_hz: float = 0.2, base: dict | None = None, start=None,
+          progress=None) -> PlacementResult:
     """Least-cost ESD allocation meeting every contingency's target CCT (and damping),
     verified by simulation (module docstring).
 
@@ -165,6 +167,9 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
         workers: processes for the evaluations (1: in this process).
         controller: the bang-bang law of every ESD (default `DEFAULT_CONTROLLER`).
         base: evaluations without storage if already done (`verify` at zero ratings).
+        start: first allocation (MW per site, shape (n_sites,)) instead of none, e.g. a
+            uniform fleet that meets every target: the loop then starts feasible and
+            every allocation it returns is at most as costly.
         progress: callable(str), one line per step.
     Raises:
         InfeasibleError: a contingency misses its target even with every site at its
@@ -187,7 +192,7 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
         setup.run_map = run_map
         base = setup.base = base or setup.verify(np.zeros(len(sites)))
         say("no storage: " + _cct_line(contingencies, base))
-        result = _iterate(setup, base, max_iter, rtol, say)
+        result = _iterate(setup, base, _start(setup, start, base, say), max_iter, rtol, say)
     result.wall_time_s = time.perf_counter() - wall
     return result
 
@@ -280,11 +285,26 @@ def _check_settings(contingencies, max_iter, tol, workers, zeta_min) -> None:
 
 # -- the trust-region loop ---------------------------------------------------------------
 
-def _iterate(setup: _Setup, base: dict, max_iter: int, rtol: float, say) -> PlacementResult:
-    zero = np.zeros(len(setup.sites))
-    cuts = cuts_from(setup.contingencies, base, zero)
-    prices = _prices(setup, cuts)
-    cur = _point(setup, zero, base, prices)
+def _start(setup: _Setup, start, base: dict, say) -> tuple[np.ndarray, dict]:
+    """The first allocation and its evaluations (no storage unless `start` is given)."""
+    n = len(setup.sites)
+    if start is None:
+        return np.zeros(n), base
+    start = np.asarray(start, float)
+    if start.shape != (n,) or np.any(start < 0) or np.any(start > setup.upper + 1e-9):
+        raise InputError(f"start: need {n} ratings within the site bounds (MW)")
+    mw = _rounded(start, setup.sites)
+    ev = setup.verify(mw)
+    say(f"start {mw.sum():.1f} MW: " + _cct_line(setup.contingencies, ev))
+    return mw, ev
+
+
+def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float,
+             say) -> PlacementResult:
+    mw0, ev0 = start
+    cuts = cuts_from(setup.contingencies, ev0, mw0)
+    prices = _prices(setup, cuts_from(setup.contingencies, base, np.zeros_like(mw0)))
+    cur = _point(setup, mw0, ev0, prices)
     best = cur if cur.feasible else None
     radius, checked, iterations, solve_times = float(setup.upper.max()), set(), [], []
     seen = []

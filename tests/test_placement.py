@@ -13,6 +13,7 @@ from click.testing import CliRunner
 from stabctl.case import load_case
 from stabctl.cct import LineFault, critical_clearing_time
 from stabctl.cli import main
+from stabctl.errors import InputError
 from stabctl.damping import DampingModel, relay_df
 from stabctl.linearise import linearise
 from stabctl.omib import PAPER_OMIB, clearing_state_closed_form, simulate
@@ -208,6 +209,21 @@ def test_verified_cct_equals_an_independent_cct_search(counted_place):
     assert res.evaluations["3-101"]["cct_s"] == pytest.approx(independent.cct_s)
     assert independent.cct_s >= 0.280
     assert res.base["3-101"]["cct_s"] == pytest.approx(critical_clearing_time(sim, CASE1).cct_s)
+
+
+def test_a_feasible_uniform_start_is_only_ever_improved_and_verified():
+    """From the uniform 5 % fleet (which meets a target set below its own CCT) the loop
+    may only return a verified allocation costing at most that fleet."""
+    case = load_case("kundur")
+    sites = candidate_sites(case)
+    uniform = 0.05 * np.array([case.machines.mva[case.machine_index(s.machine)]
+                               for s in sites])
+    res = place("kundur", [Contingency(CASE1, 0.290)], workers=1, start=uniform, max_iter=4)
+    assert res.verified
+    assert res.allocation.total_mw <= uniform.sum() + 0.4
+    assert res.evaluations["3-101"]["cct_s"] >= 0.290
+    with pytest.raises(InputError, match="start"):
+        place("kundur", [Contingency(CASE1, 0.290)], workers=1, start=uniform[:2])
 
 
 def test_infeasible_bounds_are_proven_by_simulation_and_name_the_contingency():
