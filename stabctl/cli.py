@@ -549,8 +549,9 @@ def _sweep_line(key, rec) -> str:
 @click.option("--workers", type=int, default=None, metavar="N",
               help="Local worker processes (default: the available cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
-              help="Dask distributed scheduler (tcp://host:8786) to run on instead "
-                   "(needs pip install 'stabctl[dask]').")
+              help="Dask distributed scheduler (tcp://host:8786) to run on instead, or "
+                   "'local' for a local Dask cluster of --workers processes (needs pip "
+                   "install 'stabctl[dask]').")
 @click.option("--retry-failed", is_flag=True, help="Rerun the jobs recorded as failed.")
 @click.option("--tol-ms", type=float, default=1.0, show_default=True, metavar="MS",
               help="Width of each final bracket (ms).")
@@ -628,7 +629,8 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
 @click.option("--workers", type=int, default=None, metavar="N",
               help="Local worker processes (default: the available cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
-              help="Dask distributed scheduler (tcp://host:8786).")
+              help="Dask distributed scheduler (tcp://host:8786), or 'local' for a local "
+                   "Dask cluster of --workers processes.")
 @click.option("--json", "as_json", is_flag=True, help="Print every row as JSON.")
 @_reports_errors
 def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers, scheduler,

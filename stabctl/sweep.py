@@ -65,6 +65,11 @@ class SweepReport:
     wall_time_s: float
 
 
+#: Dask resubmits a job whose worker died this many times (a job's own errors are recorded
+#: by `run_job` and never retried); after that the job is recorded as failed, with why.
+DASK_RETRIES = 1
+
+
 def default_workers() -> int:
     """Cores available to this process."""
     try:
@@ -128,7 +133,8 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
 
     Args:
         workers: local processes (default: the available cores); 1 runs in this process.
-        scheduler: Dask scheduler address ('tcp://host:8786'): run there instead.
+        scheduler: Dask scheduler address ('tcp://host:8786'): run there instead;
+            'local': a Dask LocalCluster of `workers` single-threaded processes.
         progress: tqdm bar on stderr.  retry_failed: rerun keys recorded as failed.
 
     Raises:
@@ -147,7 +153,7 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
     wall = time.perf_counter()
     failed = 0
     if todo:
-        results = _dask(todo, scheduler) if scheduler else _local(todo, workers)
+        results = _dask(todo, scheduler, workers) if scheduler else _local(todo, workers)
         out.parent.mkdir(parents=True, exist_ok=True)
         bar = tqdm(total=len(todo), desc=out.name, unit="job", file=sys.stderr,
                    disable=not progress)
@@ -246,16 +252,22 @@ def _local(jobs: list, workers: int | None) -> Iterator[dict]:
         pool.shutdown(wait=not interrupted, cancel_futures=True)
 
 
-def _dask(jobs: list, scheduler: str) -> Iterator[dict]:
-    """Records in completion order from a Dask distributed cluster (connects at once, so
-    that a missing Dask or a wrong address fails before anything is written)."""
+def _dask(jobs: list, scheduler: str, workers: int | None) -> Iterator[dict]:
+    """Records in completion order from a Dask distributed cluster: at `scheduler`, or a
+    local cluster of `workers` single-threaded processes for scheduler="local" (connects
+    at once, so that a missing Dask or a wrong address fails before anything is written)."""
     try:
-        from distributed import Client
+        from distributed import Client, LocalCluster
     except ImportError:
         raise InputError(f"--scheduler {scheduler} needs Dask distributed, which is not "
                          "installed: pip install 'stabctl[dask]'") from None
     try:
-        client = Client(scheduler)
+        if scheduler == "local":
+            n = min(workers or default_workers(), len(jobs))
+            client = Client(LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                         dashboard_address=None))
+        else:
+            client = Client(scheduler)
     except (OSError, TimeoutError, ValueError) as exc:
         raise InputError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
     return _dask_records(client, jobs)
@@ -265,12 +277,15 @@ def _dask_records(client, jobs: list) -> Iterator[dict]:
     from distributed import as_completed
 
     try:
-        futures = {client.submit(run_job, j.func, j.key, dict(j.inputs), pure=False): j
-                   for j in jobs}
+        futures = {client.submit(run_job, j.func, j.key, dict(j.inputs), pure=False,
+                                 retries=DASK_RETRIES): j for j in jobs}
         for fut in as_completed(futures):
             try:
                 yield fut.result()
             except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker, cancelled
                 yield _lost(futures[fut], exc)
     finally:
+        cluster = client.cluster            # ours (scheduler="local") or None
         client.close()
+        if cluster is not None:
+            cluster.close()
