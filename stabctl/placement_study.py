@@ -2,14 +2,16 @@
 contingency, the CCT gain of 5 % storage at every generator, against that uniform fleet
 (`python analysis/placement_study.py`; `placement_study(case, out_dir)` for reports).
 
-For each case: (1) screen line faults at both ends of every line (in miniWECC of every line at a
-generator's HV bus; coarse CCT: 5 ms, t_max 0.5 s; resumable, `stabctl.sweep`), keep the
-paper's fault and the most severe others (smallest CCT, distinct lines first), up to 10; (2) CCT without
-storage (bisection, 1 ms) and with the uniform 5 % fleet (first unstable clearing time,
-`placement_eval.scanned_cct`); (3) `stabctl.placement_loop.place` with those uniform CCTs
-as targets; (4) the Pareto curve: total MW for 25/50/75 % of each contingency's uniform
-gain, against uniform fleets of 1.25 and 2.5 %.  Writes reports/placement_<case>.md, its
-JSON and three figures.
+For each case: (1) screen line faults at both ends of every line (in miniWECC of every line
+at a generator's HV bus; in Kundur also bus faults; coarse CCT: 5 ms, t_max 0.5 s;
+resumable, `stabctl.sweep`), keep the paper's fault and the most severe others (smallest
+CCT, distinct lines first), up to 10; (2) CCT without storage (bisection, 1 ms) and with
+the uniform 5 % fleet (first unstable clearing time, `placement_eval.scanned_cct`);
+(3) `stabctl.placement_loop.place` from the uniform fleet with its CCTs as targets, for
+all contingencies and for the paper's alone; (4) the Pareto curve: total MW for
+25/50/75 % of each contingency's uniform gain (from uniform fleets of 1.25/2.5/3.75 %);
+(5) the first-order SIME estimate of the MW the critical machines' sites need.  Writes
+reports/placement_<case>.md, its JSON and three figures.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ N_FAULTS = 10
 GAIN_FRACTIONS = (0.25, 0.5, 0.75)        # Pareto points below the full uniform gain
 UNIFORM_PCTS = (1.25, 2.5)                # smaller uniform fleets for comparison
 SCREEN_TOL, SCREEN_T_MAX, TOL = 0.005, 0.5, 1e-3
+MAX_ITER, MAX_ITER_SIDE = 8, 4            # simulated allocations: the main run; the others
 
 
 # -- contingencies -----------------------------------------------------------------------
@@ -123,14 +126,42 @@ def study(case_name: str, records_dir: Path, workers: int, say) -> dict:
                for p in (UNIFORM_PCT, *UNIFORM_PCTS)}
     say(f"{case_name}: uniform CCTs done at {time.perf_counter() - wall:.0f} s")
     runs = {}
+    paper = targets(faults[:1], base, uniform[UNIFORM_PCT], 1.0)
+    single = place(case_name, paper, base=base, start=UNIFORM_PCT / 100 * mva, progress=say,
+                   max_iter=MAX_ITER_SIDE, **kw)
+    say(f"{case_name}: the paper's fault alone: {single.allocation.total_mw:.1f} MW")
     for frac in (1.0, *GAIN_FRACTIONS):
         cons = targets(faults, base, uniform[UNIFORM_PCT], frac)
         start = frac * UNIFORM_PCT / 100 * mva       # a uniform fleet: a feasible start
-        runs[frac] = place(case_name, cons, base=base, start=start, progress=say, **kw)
+        runs[frac] = place(case_name, cons, base=base, start=start, progress=say,
+                           max_iter=MAX_ITER if frac == 1.0 else MAX_ITER_SIDE, **kw)
         say(f"{case_name}: {frac:.0%} of the uniform gain: {runs[frac].allocation.total_mw:.1f}"
             f" MW, {'verified' if runs[frac].verified else 'NOT verified'}")
-    return _summary(case_name, rows, faults, sites, mva, base, uniform, runs,
-                    time.perf_counter() - wall)
+    d = _summary(case_name, rows, faults, sites, mva, base, uniform, runs,
+                 time.perf_counter() - wall)
+    d["paper_alone"] = {"name": paper[0].name, "total_mw": single.allocation.total_mw,
+                        "verified": single.verified, "allocation": single.allocation.rows(),
+                        "cct_s": single.evaluations[paper[0].name]["cct_s"],
+                        "target_s": paper[0].target_cct_s}
+    inertia = np.asarray(case.machines.H * case.machines.mva, float)
+    for c in d["contingencies"]:
+        c["first_order_mw"] = critical_only_mw(case, sites, UNIFORM_PCT / 100 * mva, inertia,
+                                               c["critical"])
+    return d
+
+
+def critical_only_mw(case, sites, uniform_mw, inertia, critical) -> float:
+    """First-order MW at the critical machines' sites giving the uniform fleet's effect on
+    the single-machine equivalent (SIME, docs/placement.md section 6): a rating P_i moves
+    the OMIB accelerating power by P_i M_nc / M_T at a critical machine and by
+    P_i M_c / M_T at another (the bang-bang law makes both act against the swing), so
+    the same effect from critical sites alone needs (sum_c P_c M_nc + sum_nc P_nc M_c) / M_nc.
+    inertia: H * MVA per machine (n_mac,); uniform_mw: per site (MW)."""
+    crit = np.isin(case.machines.number, critical)
+    m_c, m_t = inertia[crit].sum(), inertia.sum()
+    at_crit = np.array([s.machine in critical for s in sites])
+    effect = uniform_mw[at_crit].sum() * (m_t - m_c) + uniform_mw[~at_crit].sum() * m_c
+    return float(effect / (m_t - m_c))
 
 
 def _summary(case_name, rows, faults, sites, mva, base, uniform, runs, wall) -> dict:
@@ -264,13 +295,16 @@ def _markdown(d: dict, figs: dict) -> list[str]:
              f"{'' if main['verified'] else ' (allocation not verified: ' + main['message'] + ')'}.",
              "", "## Contingencies", "", _screening_text(d), "",
              "| contingency | critical machines | CCT none (ms) | uniform 5 % = target (ms) "
-             "| gain | optimised (ms) | met |", "|---|---|---|---|---|---|---|"]
+             "| gain | optimised (ms) | met | first-order MW at critical sites |",
+             "|---|---|---|---|---|---|---|---|"]
     for c in d["contingencies"]:
         gain = (c["cct_uniform_s"] - c["cct_none_s"]) / c["cct_none_s"]
         lines.append(f"| {c['name']} | {', '.join(f'G{k}' for k in c['critical'])} | "
                      f"{1000 * c['cct_none_s']:.0f} | {1000 * c['cct_uniform_s']:.0f} | "
                      f"{100 * gain:+.0f} % | {1000 * c['cct_optimised_s']:.0f} | "
-                     f"{'yes' if c['cct_optimised_s'] >= c['target_s'] - 1e-9 else 'NO'} |")
+                     f"{'yes' if c['cct_optimised_s'] >= c['target_s'] - 1e-9 else 'NO'} | "
+                     f"{c['first_order_mw']:.0f} |")
+    lines += ["", _first_order_text(d)]
     lines += ["", f"![CCT per contingency]({figs['cct']})", "", "## Allocation", "",
               "| HV bus | generator | MW | % of its MVA |", "|---|---|---|---|"]
     mva = {s["bus"]: s["mva"] for s in d["sites"]}
@@ -301,6 +335,28 @@ def _markdown(d: dict, figs: dict) -> list[str]:
                      f"{len(d['sites'])} | yes |")
     lines += ["", f"![Pareto]({figs['pareto']})"]
     return lines
+
+
+def _first_order_text(d: dict) -> str:
+    """The SIME first-order reading of the result (docs/placement.md section 6)."""
+    groups = {}
+    for c in d["contingencies"]:
+        key = tuple(sorted(c["critical"]))
+        groups[key] = max(groups.get(key, 0.0), c["first_order_mw"])
+    bound = sum(groups.values())
+    u_total = d["uniform_total_mw"][str(d["uniform_pct"])]
+    pa = d["paper_alone"]
+    return (f"Last column: the MW that the critical machines' own sites need for the uniform "
+            f"fleet's effect on the single-machine equivalent, to first order (an ESD at a "
+            f"critical machine weighs M_nc/M_T, elsewhere M_c/M_T).  Summed over the "
+            f"{len(groups)} distinct critical groups: {bound:.0f} MW = "
+            f"{100 * bound / u_total:.0f} % of the uniform total, which is what this "
+            f"contingency set asks at best to first order.  The paper's fault alone "
+            f"({pa['name']}) needs {pa['total_mw']:.1f} MW = "
+            f"{100 * pa['total_mw'] / u_total:.1f} % of the uniform total (verified CCT "
+            f"{1000 * pa['cct_s']:.0f} ms, target {1000 * pa['target_s']:.0f} ms; "
+            + ", ".join(f"{a['mw']:.0f} MW at bus {a['bus']} (G{a['machine']})"
+                        for a in pa["allocation"]) + ").")
 
 
 def _screening_text(d: dict) -> str:
