@@ -211,6 +211,20 @@ def test_verified_cct_equals_an_independent_cct_search(counted_place):
     assert res.base["3-101"]["cct_s"] == pytest.approx(critical_clearing_time(sim, CASE1).cct_s)
 
 
+def test_first_order_critical_site_rating_is_twice_their_share_when_ratings_follow_inertia():
+    """With ratings proportional to H * MVA, the SIME weights M_nc/M_T (critical) and
+    M_c/M_T (others) make the critical sites alone need twice their own uniform rating."""
+    from stabctl.placement_study import critical_only_mw
+
+    case = load_case("kundur")
+    sites = candidate_sites(case)
+    inertia = np.asarray(case.machines.H * case.machines.mva, float)
+    mw = np.array([0.01 * inertia[case.machine_index(s.machine)] for s in sites])
+    for critical in ([1, 2], [3]):
+        own = sum(p for p, s in zip(mw, sites) if s.machine in critical)
+        assert critical_only_mw(case, sites, mw, inertia, critical) == pytest.approx(2 * own)
+
+
 def test_a_feasible_uniform_start_is_only_ever_improved_and_verified():
     """From the uniform 5 % fleet (which meets a target set below its own CCT) the loop
     may only return a verified allocation costing at most that fleet."""
