@@ -24,6 +24,9 @@ penalty merit (Nocedal, Wright, Numerical Optimization, 2nd ed., 2006, sec. 18.5
 4. Stop when the program predicts less than `rtol` of the current cost as further saving
    (converged if the current allocation meets every target, stuck otherwise), or after
    `max_iter` simulated allocations.
+5. Feasibility restoration: the cheapest allocation that missed by at most a few
+   tolerances is scaled up by 3, 6 and 10 % and simulated while cheaper than the best
+   verified one (`_restore`).
 The cheapest allocation that met every target in simulation is returned.  Whenever the
 hard program (no slack) is infeasible, the contingencies it names (`placement.diagnose`)
 are simulated with every site at its bound: still below target there proves the
@@ -49,6 +52,9 @@ MIN_MW = 1.0        # ratings below this are not installed (MW)
 #: voltage gate, system COI, no hysteresis).
 DEFAULT_CONTROLLER = BangBangCOI()
 ACCEPT, GOOD = 0.1, 0.75
+#: Feasibility restoration (`_restore`): near miss = CCT shortfall <= RESTORE_MISS
+#: tolerances in all; scale factors tried on it, in order.
+RESTORE_MISS, RESTORE_SCALE = 3, (1.03, 1.06, 1.1)
 
 
 @dataclass
@@ -307,7 +313,7 @@ def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float,
     cur = _point(setup, mw0, ev0, prices)
     best = cur if cur.feasible else None
     radius, checked, iterations, solve_times = float(setup.upper.max()), set(), [], []
-    seen = []
+    seen, tried = [], []
     message = f"stopped after {max_iter} simulated allocation(s) (cap)"
     for it in range(1, max_iter + 1):
         _prove_infeasible(setup, cuts, checked)
@@ -327,6 +333,7 @@ def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float,
             + _cct_line(setup.contingencies, new.ev))
         if new.feasible and (best is None or setup.cost @ new.mw < setup.cost @ best.mw):
             best = new
+        tried.append(new)
         step = float(np.max(np.abs(trial - cur.mw)))
         if rho >= ACCEPT:
             cur, seen = new, [cur]
@@ -336,6 +343,9 @@ def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float,
             seen.append(new)
             radius = step / 2
         cuts = _secant_cuts(setup, cur, seen)
+    restored = _restore(setup, tried, best, prices, iterations, say)
+    if restored is not None:
+        best, message = restored, message + "; then restored by scaling a near miss"
     if best is None:
         message = f"no allocation met every target in {len(iterations)} simulated allocation(s)"
     end = best or cur
@@ -344,6 +354,44 @@ def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float,
         evaluations=end.ev, base=base, iterations=iterations,
         contingencies=setup.contingencies, damping=end.zeta, message=message,
         solve_times_s=solve_times)
+
+
+def _restore(setup: _Setup, tried, best, prices, iterations, say):
+    """Feasibility restoration along a ray: the cheapest simulated allocation that missed
+    only by a little (CCT shortfall summed <= RESTORE_MISS tolerances, no damping
+    shortfall) is scaled up by each RESTORE_SCALE factor (within the site bounds) while
+    still cheaper than the best verified allocation; the first scaled allocation that
+    meets every target in simulation is returned (None if none does).  Each one
+    simulated is recorded in `iterations`."""
+    def cost(p):
+        return float(setup.cost @ p)
+
+    near = [p for p in tried if not p.feasible
+            and _misses_by(setup, p) <= RESTORE_MISS * setup.tol
+            and (best is None or cost(p.mw) < cost(best.mw))]
+    if not near:
+        return None
+    p0 = min(near, key=lambda p: cost(p.mw))
+    for k in RESTORE_SCALE:
+        mw = _rounded(np.minimum(k * p0.mw, setup.upper), setup.sites)
+        if best is not None and cost(mw) >= cost(best.mw):
+            return None
+        new = _point(setup, mw, setup.verify(mw), prices)
+        iterations.append(_record(len(iterations) + 1, setup, new,
+                                  _as_allocation(setup.sites, mw, []), float("nan"), 0.0))
+        say(f"restoration x{k:g}: {mw.sum():.1f} MW, "
+            f"{'meets every target' if new.feasible else 'misses'}; "
+            + _cct_line(setup.contingencies, new.ev))
+        if new.feasible:
+            return new
+    return None
+
+
+def _misses_by(setup: _Setup, p: _Point) -> float:
+    """CCT shortfall summed over the contingencies (s); inf with a damping shortfall."""
+    if p.zeta is not None and damping_shortfall(p.zeta[1], setup.zeta_min) > 1e-4:
+        return float("inf")
+    return sum(max(0.0, c.target_cct_s - p.ev[c.name]["cct_s"]) for c in setup.contingencies)
 
 
 def _secant_cuts(setup: _Setup, cur: _Point, seen) -> list:

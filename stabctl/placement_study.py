@@ -307,17 +307,18 @@ def _markdown(d: dict, figs: dict) -> list[str]:
     lines += ["", _first_order_text(d)]
     lines += ["", f"![CCT per contingency]({figs['cct']})", "", "## Allocation", "",
               "| HV bus | generator | MW | % of its MVA |", "|---|---|---|---|"]
-    mva = {s["bus"]: s["mva"] for s in d["sites"]}
+    mva = {s["machine"]: s["mva"] for s in d["sites"]}
     for a in main["allocation"]:
         lines.append(f"| {a['bus']} | G{a['machine']} | {a['mw']:.1f} | "
-                     f"{100 * a['mw'] / mva[a['bus']]:.1f} |")
+                     f"{100 * a['mw'] / mva[a['machine']]:.1f} |")
     lines += ["", f"Total {main['total_mw']:.1f} MW against {u_total:.0f} MW uniform.", "",
               f"![allocation]({figs['allocation']})", "", "## Iterations (target: full gain)",
               "", "| allocation | MW | sites | meets all | rho | simulations |",
               "|---|---|---|---|---|---|"]
     for it in main["iterations"]:
+        rho = "restoration" if np.isnan(it["rho"]) else f"{it['rho']:.2f}"
         lines.append(f"| {it['iteration']} | {it['total_mw']:.1f} | {it['n_sites']} | "
-                     f"{'yes' if it['meets_targets'] else 'no'} | {it['rho']:.2f} | "
+                     f"{'yes' if it['meets_targets'] else 'no'} | {rho} | "
                      f"{it['n_simulations']} |")
     lines += ["", f"Stopped: {main['message']}.  Loop wall time {main['wall_time_s']:.0f} s "
               f"(study {d['wall_time_s']:.0f} s); convex solves: median "
