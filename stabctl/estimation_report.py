@@ -19,6 +19,7 @@ from . import ambient as am
 from . import closed_loop as cl
 from . import estimation_study as study
 from .case import load_case
+from .errors import InputError
 from .events import fault_with_clearing
 from .pmu import PMUSettings
 from .simulation import Simulator
@@ -72,26 +73,32 @@ def markdown(name: str, fig: dict) -> str:
                      f"{m['max_rel_mhz']['max']:.2f} | {m['std_rel_mhz']['mean']:.2f} |")
     lines += ["", f"## CCT with the estimator in the loop (cycles; {fig['cct_runs']} noise seeds, "
               "ideal: one run; tolerance 1/4 cycle)", "",
-              "| rating | estimator | mean | std | min | max | runs (failed) |",
-              "|---|---|---|---|---|---|---|"]
+              "| rating | estimator | mean | std | min | max | mean vs ideal | runs (failed) |",
+              "|---|---|---|---|---|---|---|---|"]
     for p, row in fig["cct"].items():
         for e, s in row.items():
             num = (lambda k: "-" if s[k] is None else f"{s[k]:.2f}")  # noqa: E731
+            ideal = row.get("ideal", {}).get("mean")
+            rel = "-" if None in (s["mean"], ideal) else f"{100 * (s['mean'] / ideal - 1):+.1f} %"
             lines.append(f"| {p:g} % | {e} | {num('mean')} | {num('std')} | {num('min')} | "
-                         f"{num('max')} | {s['runs']} ({s['failed']}) |")
+                         f"{num('max')} | {rel} | {s['runs']} ({s['failed']}) |")
     return "\n".join(lines) + "\n"
 
 
 def write_estimation_report(out_dir="reports", runs: int = 20, cct_runs=None,
-                            workers=None) -> list[Path]:
-    """Write reports/estimation_kundur.md and estimation_miniwecc.md.  runs: Monte-Carlo
-    runs of the RMSE and CCT studies; cct_runs: {case: runs} to cut the CCT runs of a case
-    (miniWECC is heavy).  Returns the paths."""
+                            workers=None, cases=tuple(CASES)) -> list[Path]:
+    """Write reports/estimation_<case>.md for each of `cases` (default both).  runs:
+    Monte-Carlo runs of the RMSE and CCT studies; cct_runs: {case: runs} to cut the CCT
+    runs of a case (miniWECC is heavy); workers: processes of the CCT sweep.  Returns the
+    paths.  Raises InputError for an unknown case."""
+    unknown = set(cases) - set(CASES)
+    if unknown:
+        raise InputError(f"no estimation study for case(s) {sorted(unknown)}")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     cct_runs = cct_runs or {}
     paths = []
-    for name in CASES:
+    for name in cases:
         fig = case_figures(name, runs, cct_runs.get(name, runs), out_dir, workers)
         path = out_dir / f"estimation_{name}.md"
         path.write_text(markdown(name, fig))
