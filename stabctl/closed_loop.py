@@ -4,12 +4,14 @@ The paper's ESDs (Table 3) act on f_i - f_COI.  Here they see it only through PM
 at each reporting instant t_f = k / rate the simulation (`Simulator.run_commanded`) is
 advanced to t_f, the frame of every generator's PMU is made from the trajectory so far
 (`stabctl.pmu` model: true values at t_f plus the C37.118.1 noise of a seeded stream),
-fed to an estimator, and the Table 3 modes (`stabctl.storage.desired_mode`, the estimate
-forecast over the latency as docs/estimation.md 2.2 describes) take effect at t_f + latency.
+fed to an estimator, and the Table 3 modes (`stabctl.storage.desired_mode`, on the
+estimator's `forecast` over the latency) take effect at t_f + latency (docs/estimation.md 5).
 
 Estimators (`ESTIMATORS`): ``ideal`` (true rotor speeds at t_f, no noise, no forecast),
-``raw`` (the PMU frequency, the last valid frame held), ``kf`` (`FrequencyKF`), ``ekf``
-(`SwingEKF`).  The voltage gate (0.8 pu) is applied by the devices themselves.
+``raw`` (the PMU frequency, the last valid frame held), ``kf`` (`FrequencyKF`, its estimate
+held over the latency), ``ekf`` (`SwingEKF`, forecast with the swing equation).  The voltage
+gate (0.8 pu) is applied by the devices themselves.  Optional ambient load fluctuation
+(`stabctl.ambient`) rides on the same commanded fleet.
 
 Frames are made incrementally: the noise of the whole run is drawn once per seed (the same
 draws as `pmu.measure` gives for a run of that length), and each frame's true values come
@@ -42,7 +44,7 @@ PMU_WINDOW_CYCLES = 2.0    # frequency estimation window of a P-class PMU (C37.1
 @dataclass
 class Diagnostics:
     """What the controller saw, per frame: t (n_f,) s time stamps; rel (n_f, n_mac) the
-    relative speeds f_i - f_COI it acted on (Hz, forecast to t + latency); modes
+    relative speeds f_i - f_COI it acted on (Hz, the estimator's forecast to t + latency); modes
     (n_f, n_dev) the commanded modes; mac: each device's machine index; latency (s), f0
     (Hz), coi ("system" or "rest") of the loop."""
 
