@@ -234,7 +234,12 @@ def test_estimate_command_json_and_bad_input():
     assert d["estimators"]["ekf"]["rel_rmse_mhz"]["mean"] < 3.0
     assert len(d["estimators"]["ekf"]["rel_rmse_mhz"]["runs"]) == 2
     assert d["false_actions"]["true"]["actions"]["mean"] == 0
+    assert d["false_actions"]["true"]["std_rel_mhz"]["mean"] > 0      # the loads move it
+    assert d["ambient"]["pct"] == 1.0 and d["ambient"]["runs"] == 5
     assert d["window_s"] == pytest.approx([1.2, 4.0])
+    neg = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
+                                    "--ambient-pct", "-1"])
+    assert neg.exit_code == 2 and neg.stderr.startswith("error: ambient load needs pct >= 0")
     bad = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
                                     "--rate", "50"])
     assert bad.exit_code == 2 and bad.stderr.startswith("error: PMU rate must be one of")
