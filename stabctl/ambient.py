@@ -69,6 +69,13 @@ class AmbientLoad:
         """x (n, n_loads) at t_k = k dt, k = 0 .. n-1, relative to each load's P."""
         return ou_samples(n, dt, self.tau_s, self.pct / 100.0, n_loads, self.seed)
 
+    def schedule(self, case: Case, n: int, rate: float):
+        """The load devices and their set-points as a function of the command instant
+        t = k / rate (k < n): (devices, set_points(t) -> (n_loads,))."""
+        devs = self.devices(case)
+        x = self.deviations(n, 1.0 / rate, len(devs))
+        return devs, lambda t: x[int(round(t * rate))]
+
 
 def ou_samples(n: int, dt: float, tau: float, sd: float, m: int, seed: int) -> np.ndarray:
     """m independent Ornstein-Uhlenbeck paths (n, m) sampled exactly every dt (s), from
@@ -85,9 +92,7 @@ def simulate(sim, t_end: float, ambient: AmbientLoad, rate: float = 60.0, events
     updated `rate` times per second; `events` as `Simulator.run`.  The result's `pesd`
     holds the load deviations (pu, system base), one column per load of
     `ambient.devices(case)`.  Raises as `Simulator.run_commanded`."""
-    devs = ambient.devices(sim.case)
-    x = ambient.deviations(int(np.floor(t_end * rate + 1e-9)) + 1, 1.0 / rate, len(devs))
-    frames = np.arange(x.shape[0]) / rate
+    frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
+    devs, set_points = ambient.schedule(sim.case, frames.size, rate)
     fleet = StorageFleet(devs, ExternalCommands(v_gate_pu=0.0))
-    return sim.run_commanded(events, t_end, fleet, frames,
-                             lambda t, _: x[int(round(t * rate))], h=h)
+    return sim.run_commanded(events, t_end, fleet, frames, lambda t, _: set_points(t), h=h)

@@ -30,10 +30,10 @@ import numpy as np
 
 from . import estimation as es
 from . import storage as st
+from .ambient import AmbientLoad
 from .errors import InputError
 from .estimation_study import true_speeds
 from .network import branch_admittances
-from .ambient import AmbientLoad
 from .pmu import Frame, PhasorTruth, PMUSettings, machine_pmus, measure
 from .results import SimulationResult
 
@@ -222,10 +222,9 @@ def run_closed_loop(sim, events, t_end: float, fleet_pct: float, estimator: str,
     frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
     devices, decide = fleet.devices, ctrl
     if ambient is not None:
-        loads = ambient.devices(sim.case)
-        x = ambient.deviations(frames.size, 1.0 / rate, len(loads))
+        loads, set_points = ambient.schedule(sim.case, frames.size, rate)
         devices = devices + loads
-        decide = lambda t, p: np.r_[ctrl(t, p), x[int(round(t * rate))]]  # noqa: E731
+        decide = lambda t, p: np.r_[ctrl(t, p), set_points(t)]  # noqa: E731
     gate = st.ExternalCommands(v_gate_pu=control.v_gate_pu)
     res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), frames, decide,
                             latency=latency, h=h, separation_limit=separation_limit,
