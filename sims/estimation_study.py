@@ -1,15 +1,24 @@
-"""Issue 7 study: estimator RMSE, false ESD actions and CCT with the estimator in the loop
-for Kundur Case 1 and miniWECC Case 2 -> reports/estimation_{kundur,miniwecc}.md.
+"""Issue 7 study: estimator RMSE, false ESD actions under ambient load fluctuation and CCT
+with the estimator in the loop for Kundur Case 1 and miniWECC Case 2 ->
+reports/estimation_{kundur,miniwecc}.md (+ estimation_cct_<case>.jsonl, whose finished CCT
+jobs are reused: delete it after a change of the loop).
 
-Usage: python sims/estimation_study.py [RUNS] [MINIWECC_CCT_RUNS]
+Usage: python sims/estimation_study.py [RUNS] [MINIWECC_CCT_RUNS] [--workers N]
+       [--case kundur|miniwecc ...]
 """
 
-import sys
+import argparse
 
-from stabctl.estimation_report import write_estimation_report
+from stabctl.estimation_report import CASES, write_estimation_report
 
 if __name__ == "__main__":
-    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 20
-    mini = int(sys.argv[2]) if len(sys.argv) > 2 else runs
-    for p in write_estimation_report("reports", runs, {"miniwecc": mini}):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("runs", nargs="?", type=int, default=20)
+    ap.add_argument("miniwecc_cct_runs", nargs="?", type=int, default=None)
+    ap.add_argument("--workers", type=int, default=None, help="CCT sweep processes")
+    ap.add_argument("--case", action="append", choices=list(CASES), help="default: both")
+    a = ap.parse_args()
+    mini = a.runs if a.miniwecc_cct_runs is None else a.miniwecc_cct_runs
+    for p in write_estimation_report("reports", a.runs, {"miniwecc": mini}, a.workers,
+                                     tuple(a.case or CASES)):
         print(f"wrote {p}")

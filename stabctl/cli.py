@@ -765,7 +765,14 @@ def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
 @click.option("--settle-ms", type=float, default=100.0, show_default=True, metavar="MS",
               help="Errors are taken from this long after the clearing to the end.")
 @click.option("--ambient-s", type=float, default=60.0, show_default=True, metavar="S",
-              help="Length of the run without fault for the false ESD actions (0: skip).")
+              help="Length of the runs without fault for the false ESD actions (0: skip).")
+@click.option("--ambient-pct", type=float, default=1.0, show_default=True, metavar="P",
+              help="Ambient load fluctuation in the runs without fault: standard deviation "
+                   "of every load's P (%; 0: PMU noise only).")
+@click.option("--ambient-tau-s", type=float, default=2.0, show_default=True, metavar="T",
+              help="Correlation time of the ambient load fluctuation (s).")
+@click.option("--ambient-runs", type=int, default=5, show_default=True, metavar="N",
+              help="Runs without fault (load and PMU noise seeds S..S+N-1).")
 @click.option("--deadband-hz", type=float, default=0.1, show_default=True,
               help="ESD deadband on f_i - f_COI for the false actions (Hz).")
 @click.option("--coi", type=click.Choice(["system", "rest"]), default="system",
@@ -781,7 +788,8 @@ def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
 @_reports_errors
 def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms, drop,
              tve_pct, fe_hz, rfe_hz_s, k_sigma, pmu_at, esd_pct, runs, seed, settle_ms,
-             ambient_s, deadband_hz, coi, closed_loop, cct, as_json):
+             ambient_s, ambient_pct, ambient_tau_s, ambient_runs, deadband_hz, coi,
+             closed_loop, cct, as_json):
     """Machine and COI speed estimation from simulated PMU data, against the truth.
 
     The fault run is simulated once (with --esd-pct, storage acts on the true speeds);
@@ -796,10 +804,17 @@ def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency
     controllers use, at the frame time stamps from --settle-ms after the clearing to
     --tf; the relative-speed RMSE at each frame's arrival (latency included), as
     delivered and forecast to the arrival; the fraction of normalised innovations
-    squared inside their 95 % chi-square interval (consistency: about 0.95).  Then, on a
-    run without fault of --ambient-s, the number of ESD actions (Table 3 rule with
-    --deadband-hz) each estimate would trigger: all are false.
+    squared inside their 95 % chi-square interval (consistency: about 0.95).  Then, on
+    --ambient-runs runs without fault of --ambient-s with ambient load fluctuation (every
+    load's P an Ornstein-Uhlenbeck process of --ambient-pct standard deviation and
+    --ambient-tau-s correlation time, stabctl.ambient), the number of ESD actions (Table 3
+    rule with --deadband-hz) each estimate would trigger (all are false), the largest
+    |f_i - f_COI| and the largest standard deviation of f_i - f_COI (true: the ambient
+    spread).
     """
+    from dataclasses import replace
+
+    from . import ambient as am
     from . import estimation_study as study
     from .case import load_case
     from .events import fault_with_clearing
@@ -810,8 +825,9 @@ def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency
     for name, value in (("--tf", tf), ("--runs", runs), ("--deadband-hz", deadband_hz)):
         if not value > 0:
             raise InputError(f"{name} must be > 0, got {value:g}")
-    if min(settle_ms, ambient_s, seed) < 0:
-        raise InputError("--settle-ms, --ambient-s and --seed must be >= 0")
+    if min(settle_ms, ambient_s, seed) < 0 or ambient_runs < 1:
+        raise InputError("--settle-ms, --ambient-s and --seed must be >= 0, --ambient-runs >= 1")
+    ambient = am.AmbientLoad(ambient_pct, ambient_tau_s, seed)
     settings = PMUSettings(rate=rate, tve=tve_pct / 100, fe_hz=fe_hz, rfe_hz_s=rfe_hz_s,
                            k_sigma=k_sigma, latency_s=latency_ms / 1000, drop_prob=drop)
     case = load_case(case_name)
@@ -832,15 +848,17 @@ def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency
     figures = study.monte_carlo(case, res, settings, runs, seed, window, pmu_at, coi)
     actions = None
     if ambient_s > 0:
-        flat = Simulator(case).run([], t_end=ambient_s)
-        actions = study.false_actions(case, flat, settings, runs, seed,
+        flat = [am.simulate(sim, ambient_s, replace(ambient, seed=seed + r), rate)
+                for r in range(ambient_runs)]
+        actions = study.false_actions(case, flat, settings, seed,
                                       BangBangCOI(deadband_hz=deadband_hz, coi=coi), pmu_at)
     out = {"case": case.name, "fault": {"bus": fault, "far_bus": far_bus, "t_fault_s": t_fault,
                                         "clear_cycles": clear_cycles},
            "esd_pct": esd_pct, "pmu": {**settings.__dict__, "at": pmu_at}, "runs": runs,
            "seed": seed, "window_s": list(window), "stable": res.stable,
            "estimators": figures, "false_actions": actions,
-           "ambient": {"t_s": ambient_s, "deadband_hz": deadband_hz}}
+           "ambient": {"t_s": ambient_s, "deadband_hz": deadband_hz, "pct": ambient_pct,
+                       "tau_s": ambient_tau_s, "runs": ambient_runs}}
     if as_json:
         _print_json(out)
         return
@@ -902,11 +920,12 @@ def _print_estimate(d) -> None:
         click.echo(f"{name:9}" + "".join(cells))
     if d["false_actions"] is not None:
         a = d["ambient"]
-        click.echo(f"no fault, {a['t_s']:g} s, deadband {1000 * a['deadband_hz']:g} mHz: "
-                   "false ESD actions per run (largest |f_i - f_COI| seen, mHz)")
+        click.echo(f"no fault, {a['runs']} runs of {a['t_s']:g} s, ambient load {a['pct']:g} % "
+                   f"(tau {a['tau_s']:g} s), deadband {1000 * a['deadband_hz']:g} mHz: false ESD "
+                   "actions per run (largest |f_i - f_COI|, largest std of f_i - f_COI; mHz)")
         for name, fig in d["false_actions"].items():
             click.echo(f"  {name:5} {fig['actions']['mean']:8.2f}  "
-                       f"({fig['max_rel_mhz']['mean']:.2f})")
+                       f"({fig['max_rel_mhz']['mean']:.2f}, {fig['std_rel_mhz']['mean']:.2f})")
 
 # -- storage placement -------------------------------------------------------------------
 

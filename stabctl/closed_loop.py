@@ -4,12 +4,14 @@ The paper's ESDs (Table 3) act on f_i - f_COI.  Here they see it only through PM
 at each reporting instant t_f = k / rate the simulation (`Simulator.run_commanded`) is
 advanced to t_f, the frame of every generator's PMU is made from the trajectory so far
 (`stabctl.pmu` model: true values at t_f plus the C37.118.1 noise of a seeded stream),
-fed to an estimator, and the Table 3 modes (`stabctl.storage.desired_mode`, the estimate
-forecast over the latency as docs/estimation.md 2.2 describes) take effect at t_f + latency.
+fed to an estimator, and the Table 3 modes (`stabctl.storage.desired_mode`, on the
+estimator's `forecast` over the latency) take effect at t_f + latency (docs/estimation.md 5).
 
 Estimators (`ESTIMATORS`): ``ideal`` (true rotor speeds at t_f, no noise, no forecast),
-``raw`` (the PMU frequency, the last valid frame held), ``kf`` (`FrequencyKF`), ``ekf``
-(`SwingEKF`).  The voltage gate (0.8 pu) is applied by the devices themselves.
+``raw`` (the PMU frequency, the last valid frame held), ``kf`` (`FrequencyKF`, its estimate
+held over the latency), ``ekf`` (`SwingEKF`, forecast with the swing equation).  The voltage
+gate (0.8 pu) is applied by the devices themselves.  Optional ambient load fluctuation
+(`stabctl.ambient`) rides on the same commanded fleet.
 
 Frames are made incrementally: the noise of the whole run is drawn once per seed (the same
 draws as `pmu.measure` gives for a run of that length), and each frame's true values come
@@ -28,6 +30,7 @@ import numpy as np
 
 from . import estimation as es
 from . import storage as st
+from .ambient import AmbientLoad
 from .errors import InputError
 from .estimation_study import true_speeds
 from .network import branch_admittances
@@ -38,18 +41,10 @@ ESTIMATORS = ("ideal", "raw", "kf", "ekf")
 PMU_WINDOW_CYCLES = 2.0    # frequency estimation window of a P-class PMU (C37.118.1 annex)
 
 
-class _Separated(Exception):
-    """Raised from the controller to stop a run once a machine has lost synchronism."""
-
-    def __init__(self, partial: SimulationResult):
-        super().__init__("separated")
-        self.partial = partial
-
-
 @dataclass
 class Diagnostics:
     """What the controller saw, per frame: t (n_f,) s time stamps; rel (n_f, n_mac) the
-    relative speeds f_i - f_COI it acted on (Hz, forecast to t + latency); modes
+    relative speeds f_i - f_COI it acted on (Hz, the estimator's forecast to t + latency); modes
     (n_f, n_dev) the commanded modes; mac: each device's machine index; latency (s), f0
     (Hz), coi ("system" or "rest") of the loop."""
 
@@ -70,16 +65,16 @@ class LoopController:
     noise stream; t_end: run end (s, the noise is drawn for frames in [0, t_end]);
     control: `BangBangCOI` giving the deadband, hysteresis and COI of Table 3 (its voltage
     gate is ignored here: the devices apply theirs); at: PMUs at the "terminal" or "hv"
-    buses; separation_limit: rad from the COI at which the run is stopped (None: never).
+    buses.
     """
 
     def __init__(self, case, devices, estimator: str, settings: PMUSettings, seed: int,
                  t_end: float, control: st.BangBangCOI = st.BangBangCOI(),
-                 at: str = "terminal", separation_limit: float | None = np.pi):
+                 at: str = "terminal"):
         if estimator not in ESTIMATORS:
             raise InputError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {estimator!r}")
         self.case, self.estimator, self.settings = case, estimator, settings
-        self.limit, self.coi = separation_limit, control.coi
+        self.coi = control.coi
         self.pmus = machine_pmus(case, at)
         self.models = es.machine_models(case, self.pmus)
         self.cols = case.bus_indices([p.bus for p in self.pmus])
@@ -94,8 +89,6 @@ class LoopController:
 
     def __call__(self, t_f: float, partial: SimulationResult) -> np.ndarray:
         """Modes (n_dev,) to take effect at t_f + latency."""
-        if self.limit is not None and _separated(partial, self.limit):
-            raise _Separated(_copy(partial, self.limit))
         speed = self._speeds(t_f, partial)
         rel = es.relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
         rel = np.nan_to_num(rel)
@@ -196,28 +189,10 @@ def _tail_truth(partial: SimulationResult, cols, C, t_f: float, window: float, f
     return now[cols], C @ now, f[1], (f[1] - f[0]) / window
 
 
-def _separated(partial: SimulationResult, limit: float) -> bool:
-    """A machine's angle more than `limit` rad from the COI at the last grid point."""
-    a, M = partial.angle[-1], partial.inertia
-    return bool(np.abs(a - a @ M / M.sum()).max() > limit)
-
-
-def _copy(partial: SimulationResult, limit: float) -> SimulationResult:
-    """A run stopped at separation: the trajectory so far (copied), verdict unstable."""
-    arrays = {k: np.array(getattr(partial, k)) for k in
-              ("t", "speed", "angle", "pelect", "pmech", "efd", "vmag", "vang", "pesd")}
-    a, M = partial.angle[-1], partial.inertia
-    lost = np.abs(a - a @ M / M.sum()) > limit
-    return replace(partial, **arrays, stable=False, t_separation=float(partial.t[-1]),
-                   separated=[int(m) for m in partial.machines[lost]],
-                   meta={"case": partial.meta.get("case"), "stopped_at_separation": True})
-
-
 @dataclass
 class ClosedLoopRun:
     """One closed-loop run: the SimulationResult (its meta["switchings"] and
-    meta["storage"] as `Simulator.run_commanded` gives them; a run stopped at separation
-    has neither) and what the controller saw."""
+    meta["storage"] as `Simulator.run_commanded` gives them) and what the controller saw."""
 
     result: SimulationResult
     diagnostics: Diagnostics
@@ -228,26 +203,32 @@ def run_closed_loop(sim, events, t_end: float, fleet_pct: float, estimator: str,
                     settings: PMUSettings | None = None,
                     control: st.BangBangCOI = st.BangBangCOI(), at: str = "terminal",
                     h: float | None = None, separation_limit: float = np.pi,
-                    stop_at_separation: bool = True) -> ClosedLoopRun:
+                    stop_at_separation: bool = True,
+                    ambient: AmbientLoad | None = None) -> ClosedLoopRun:
     """Simulate `events` to t_end (s) with ESDs of fleet_pct % of each generator's MVA at
     its HV bus, commanded by Table 3 on the relative speeds from `estimator` (frames at
     `rate` frames/s, modes effective `latency` s after each time stamp, PMU noise stream
     `seed`).  settings: the PMUs (default C37.118.1 limits; its rate and latency are
-    replaced by `rate`, `latency`).  A run is stopped at separation unless
-    stop_at_separation is False.  Raises InputError for a bad estimator, rate, latency,
-    rating; SimulationError as `Simulator.run_commanded`.
+    replaced by `rate`, `latency`).  The run stops once a rotor angle is more than
+    separation_limit rad from the COI unless stop_at_separation is False
+    (`Simulator.run_commanded`).  ambient: load fluctuations (`stabctl.ambient`) added to
+    the fleet after the ESDs (the result's `pesd` and meta["storage"] list the ESDs, then
+    the loads; the ESDs' voltage gate applies to both).  Raises InputError for a bad
+    estimator, rate, latency, rating; SimulationError as `Simulator.run_commanded`.
     """
     settings = replace(settings or PMUSettings(), rate=rate, latency_s=latency)
     fleet = st.uniform_fleet(sim.case, fleet_pct)
-    ctrl = LoopController(sim.case, fleet.devices, estimator, settings, seed, t_end, control,
-                          at, separation_limit if stop_at_separation else None)
-    gate = st.ExternalCommands(v_gate_pu=control.v_gate_pu)
+    ctrl = LoopController(sim.case, fleet.devices, estimator, settings, seed, t_end, control, at)
     frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
-    try:
-        res = sim.run_commanded(events, t_end, st.StorageFleet(fleet.devices, gate), frames,
-                                ctrl, latency=latency, h=h, separation_limit=separation_limit)
-    except _Separated as stop:
-        res = stop.partial
+    devices, decide = fleet.devices, ctrl
+    if ambient is not None:
+        loads, set_points = ambient.schedule(sim.case, frames.size, rate)
+        devices = devices + loads
+        decide = lambda t, p: np.r_[ctrl(t, p), set_points(t)]  # noqa: E731
+    gate = st.ExternalCommands(v_gate_pu=control.v_gate_pu)
+    res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), frames, decide,
+                            latency=latency, h=h, separation_limit=separation_limit,
+                            stop_at_separation=stop_at_separation)
     return ClosedLoopRun(res, ctrl.diagnostics())
 
 

@@ -5,7 +5,8 @@ Estimators, one filter per machine, all machines advanced together (docs/estimat
 
 - `FrequencyKF`, baseline: linear Kalman filter on the PMU frequency and ROCOF of the
   machine's bus; state [f - f0 (Hz), df/dt (Hz/s)], the ROCOF a random walk.  The speed
-  estimate is 1 + (f - f0)/f0, i.e. the bus frequency is taken for the rotor speed.
+  estimate is 1 + (f - f0)/f0, i.e. the bus frequency is taken for the rotor speed; its
+  forecast over the latency holds it (the bus ROCOF is not extrapolated).
 - `SwingEKF`, model-based: extended Kalman filter on the swing equation of PSTess's machine
   models (docs/pst_models.md 1.6-1.9) driven by the measured electrical power; state
   [delta (rad), w = omega - 1 (pu), dPm (pu machine base), q1, q2 (q-axis rotor fluxes,
@@ -628,7 +629,8 @@ def _freq_batch(x, P, nis, ready, z, valid, dt, q, R):
 class _MachineFilters:
     """Frame bookkeeping shared by the estimators: frames in increasing time-stamp order,
     each machine starting at its first valid frame.  Subclasses implement
-    `_advance(frame, dt)` and `_output()`; x, P are the states and covariances."""
+    `_advance(frame, dt)`, `_output()` and `_rate()` (or their own `forecast`); x, P are
+    the states and covariances."""
 
     dof = 1
 
@@ -690,10 +692,14 @@ class FrequencyKF(_MachineFilters):
     def _output(self):
         return 1.0 + self.x[:, 0] / self.f0, self.P[:, 0, 0] / self.f0 ** 2
 
-    def _rate(self):
-        """d(speed)/dt (pu/s), its variance and its covariance with the speed."""
-        f2 = self.f0 ** 2
-        return self.x[:, 1] / self.f0, self.P[:, 1, 1] / f2, self.P[:, 0, 1] / f2
+    def forecast(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
+        """The filtered frequency as the speed `horizon` s ahead, held, not extrapolated
+        with the ROCOF state: every ESD switching steps the bus angle, the PMU's ROCOF
+        then swings +-dtheta / (2 pi w^2) (w its window), and extrapolating that over the
+        latency fed the steps back into the commands (docs/estimation.md 2.1).  Variance:
+        the filter's plus horizon^2 times that of the ROCOF (the unextrapolated change)."""
+        speed, var = self._output()
+        return speed, var + horizon ** 2 * self.P[:, 1, 1] / self.f0 ** 2
 
 
 class SwingEKF(_MachineFilters):

@@ -17,8 +17,8 @@ at the arrival of each frame (latency included), with the estimate as delivered 
 forecast to the arrival instant (`forecast`); the fraction of NIS values inside the
 two-sided 95 % chi-square interval.  False ESD actions: the paper's Table 3 rule
 (`stabctl.storage.desired_mode`: absorb above +deadband, inject below -deadband) applied to
-each estimate of the relative speed on a run without fault; every switching from idle to a
-running mode is a false action.
+each estimate of the relative speed on runs without fault (with ambient load fluctuation,
+`stabctl.ambient`); every switching from idle to a running mode is a false action.
 """
 
 from __future__ import annotations
@@ -147,30 +147,36 @@ def _summary(values) -> dict:
             "max": float(np.nanmax(v)), "runs": [float(x) for x in v]}
 
 
-def false_actions(case: Case, result: SimulationResult, settings: PMUSettings, runs: int,
-                  seed: int, controller: st.BangBangCOI = st.BangBangCOI(),
+def false_actions(case: Case, results, settings: PMUSettings, seed: int,
+                  controller: st.BangBangCOI = st.BangBangCOI(),
                   at: str = "terminal") -> dict:
-    """ESD actions of every estimator on a run without fault (module docstring).
+    """ESD actions of every estimator on runs without fault (module docstring).
 
-    Returns {estimator: {"actions": {"mean", ...} per run summary, "max_rel_mhz": summary
-    of the largest |relative speed| seen}}; "true" uses the simulated speeds.
+    results: the runs without fault (e.g. with ambient load fluctuation,
+    `stabctl.ambient.simulate`); run r is measured with PMU noise seed seed + r.
+    Returns {estimate: {"actions": summary of the actions per run, "max_rel_mhz": of the
+    largest |f_i - f_COI| seen, "std_rel_mhz": of the largest standard deviation of a
+    machine's f_i - f_COI over the run}}; "true" uses the simulated speeds (its
+    std_rel_mhz is the ambient spread itself).  Raises InputError without a run.
     """
+    if not results:
+        raise InputError("need at least one run without fault")
     pmus = machine_pmus(case, at)
     models = es.machine_models(case, pmus)
-    truth = phasor_truth(case, result, pmus)
     sa = st.pack(st.uniform_fleet(case, 1.0, controller), case, np.arange(case.n_bus))
-    counts = {name: [] for name in ("true", *ESTIMATORS)}
-    peaks = {name: [] for name in counts}
-    for r in range(runs):
-        stream = measure(truth, settings, seed + r)
+    figs = {name: {"actions": [], "max_rel_mhz": [], "std_rel_mhz": []}
+            for name in ("true", *ESTIMATORS)}
+    for r, result in enumerate(results):
+        stream = measure(phasor_truth(case, result, pmus), settings, seed + r)
         tracks = {k: v.speed for k, v in run_estimators(stream, models).items()}
         tracks["true"] = true_speeds(result, stream.t)
         for name, speed in tracks.items():
             rel = es.relative_speeds(speed, speed, models.inertia, controller.coi)[0]
-            counts[name].append(_count_actions(sa, np.nan_to_num(rel)))
-            peaks[name].append(float(np.nanmax(np.abs(rel)) * models.f0 * 1e3))
-    return {name: {"actions": _summary(counts[name]), "max_rel_mhz": _summary(peaks[name])}
-            for name in counts}
+            mhz = rel * models.f0 * 1e3
+            figs[name]["actions"].append(_count_actions(sa, np.nan_to_num(rel)))
+            figs[name]["max_rel_mhz"].append(float(np.nanmax(np.abs(mhz))))
+            figs[name]["std_rel_mhz"].append(float(np.nanstd(mhz, axis=0).max()))
+    return {name: {k: _summary(v) for k, v in fig.items()} for name, fig in figs.items()}
 
 
 @njit(cache=True)

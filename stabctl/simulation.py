@@ -183,15 +183,19 @@ class Simulator:
 
     def run_commanded(self, events, t_end: float, storage, frame_times, decide,
                       latency: float = 0.0, h: float | None = None, semantics: str = "pst",
-                      separation_limit: float = np.pi) -> SimulationResult:
+                      separation_limit: float = np.pi,
+                      stop_at_separation: bool = False) -> SimulationResult:
         """Simulate with storage devices commanded from measurements (estimator in the loop).
 
         At each frame time t_f (s, increasing) the run is advanced to the first grid point at
         or after t_f and `decide(t_f, partial)` is called with the trajectory so far (a
         SimulationResult up to that grid point, so a measurement at t_f can be interpolated);
-        it returns the device modes (n_dev ints in
-        {-1, 0, +1}) that take effect at exactly t_f + latency (the step is split there).
-        `storage.controller` must be `stabctl.storage.ExternalCommands`.
+        it returns the device set-points (n_dev,) in units of each rating (Table 3 modes
+        -1 inject, 0 idle, +1 absorb; any real value for a scaled power, e.g. an ambient
+        load deviation) that take effect at exactly t_f + latency (the step is split there).
+        `storage.controller` must be `stabctl.storage.ExternalCommands`.  With
+        stop_at_separation the run ends at the first step after which a rotor angle is more
+        than separation_limit rad from the COI, as `run` (no further frame is decided).
 
         Raises:
             InputError: wrong controller, frame times not increasing, negative latency;
@@ -203,13 +207,14 @@ class Simulator:
         if np.any(np.diff(frame_times) <= 0) or latency < 0:
             raise InputError("frame times must increase and the latency must be >= 0")
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
-        run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit, False,
-                   n_commands=frame_times.size)
+        run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
+                   stop_at_separation, n_commands=frame_times.size)
         for i, t_f in enumerate(frame_times[frame_times <= t_end]):
             k = int(np.searchsorted(grid.t, t_f - 1e-12))
             run.advance(k)
-            modes = np.asarray(decide(float(t_f), run.partial(k)), np.int64)
-            run.command(i, t_f + latency, modes)
+            if run.status != OK:
+                break
+            run.command(i, t_f + latency, np.asarray(decide(float(t_f), run.partial(k)), float))
         run.advance(grid.t.size - 1)
         return run.finish(storage)
 
@@ -248,7 +253,7 @@ class _Run:
         self.log = np.full((4096, 4), np.nan)
         self.x, self.V_nc, self.ds = m.x0.copy(), m.V_nc0.copy(), device_state(sa)
         self.cmd_t = np.full(n_commands, np.inf)
-        self.cmd_mode = np.zeros((n_commands, nd), np.int64)
+        self.cmd_mode = np.zeros((n_commands, nd))
         self.mats = tuple(stack(n) for n in ("Y11", "Y12", "Y21", "Y22", "Z22", "R"))
         self.first = np.r_[False, np.diff(grid.interval) > 0]
         self.pst, self.limit, self.stop = pst, limit, stop
@@ -271,7 +276,7 @@ class _Run:
         self.k = k_end
 
     def command(self, i: int, t_apply: float, modes) -> None:
-        """Schedule command i: device modes from time t_apply (s)."""
+        """Schedule command i: device set-points (units of each rating) from t_apply (s)."""
         self.cmd_t[i], self.cmd_mode[i] = t_apply, modes
 
     def partial(self, k: int) -> SimulationResult:
@@ -415,8 +420,9 @@ def _device_state(x, nm, inertia, sa, V_nc, dx, r, v, accel):
 
 class DeviceState(NamedTuple):
     """Controller and device state carried across `integrate` calls (n_dev entries):
-    mode (-1, 0, +1), power P (pu), set-point, energy content e (pu*s), the next entry of
-    the command schedule (cmd_next[0]) for externally commanded devices."""
+    mode (-1, 0, +1; an external set-point in units of the rating), power P (pu), power
+    target, energy content e (pu*s), the next entry of the command schedule (cmd_next[0])
+    for externally commanded devices."""
 
     mode: np.ndarray
     P: np.ndarray
@@ -427,19 +433,20 @@ class DeviceState(NamedTuple):
 
 def device_state(sa) -> DeviceState:
     nd = sa.pmax.size
-    return DeviceState(np.zeros(nd, np.int64), np.zeros(nd), np.zeros(nd), sa.e0.copy(),
+    return DeviceState(np.zeros(nd), np.zeros(nd), np.zeros(nd), sa.e0.copy(),
                        np.zeros(1, np.int64))
 
 
 @njit(cache=True)
 def _apply_commands(sa, ds, cmd_t, cmd_mode, t_now, log, stats, r):
-    """Apply every scheduled command due by t_now (externally commanded devices)."""
+    """Apply every scheduled command due by t_now (externally commanded devices); a
+    change of the set-point's sign (idle, absorb, inject) is logged as a switching."""
     while ds.cmd_next[0] < cmd_t.size and cmd_t[ds.cmd_next[0]] <= t_now + 1e-12:
         c = ds.cmd_next[0]
         for d in range(ds.mode.size):
-            if cmd_mode[c, d] != ds.mode[d]:
-                ds.mode[d] = cmd_mode[c, d]
-                _log(log, stats, d, cmd_t[c], ds.mode[d], r[d])
+            if np.sign(cmd_mode[c, d]) != np.sign(ds.mode[d]):
+                _log(log, stats, d, cmd_t[c], np.sign(cmd_mode[c, d]), r[d])
+            ds.mode[d] = cmd_mode[c, d]
         ds.cmd_next[0] += 1
 
 

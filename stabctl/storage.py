@@ -37,7 +37,8 @@ class StorageDevice:
 
     Attributes:
         bus: bus number where it connects.
-        machine: number of the generator whose relative speed drives it.
+        machine: number of the generator whose relative speed drives it (None: a device
+            commanded from outside, e.g. an ambient load fluctuation, `stabctl.ambient`).
         pmax_mw: rating (MW), > 0.
         lag_s: first-order power lag (s), 0 = ideal.
         ramp_mw_s: ramp limit (MW/s), inf = none.
@@ -45,7 +46,7 @@ class StorageDevice:
     """
 
     bus: int
-    machine: int
+    machine: int | None
     pmax_mw: float
     lag_s: float = 0.0
     ramp_mw_s: float = float("inf")
@@ -142,7 +143,7 @@ class StorageArrays(NamedTuple):
 
     pos: np.ndarray       # index of the device bus among the kept buses
     bus: np.ndarray       # bus index (for its voltage)
-    mac: np.ndarray       # machine index
+    mac: np.ndarray       # machine index (-1: none)
     pmax: np.ndarray
     lag: np.ndarray
     ramp: np.ndarray      # pu/s
@@ -162,9 +163,11 @@ NO_STORAGE, BANG_BANG, LINEAR, EXTERNAL = 0, 1, 2, 3
 
 @dataclass(frozen=True)
 class ExternalCommands:
-    """Devices commanded from outside the simulation (estimator in the loop): their modes
-    (-1 inject, 0 idle, +1 absorb the full rating) come from `Simulator.run_commanded`
-    at measurement-frame arrival times; the local voltage gate still applies."""
+    """Devices commanded from outside the simulation (estimator in the loop): their
+    set-points in units of the rating (Table 3 modes -1 inject, 0 idle, +1 absorb; other
+    values for a scaled power such as an ambient load deviation) come from
+    `Simulator.run_commanded` at measurement-frame arrival times; the voltage gate
+    (v_gate_pu, the same for every device of the fleet) still applies."""
 
     v_gate_pu: float = 0.8
 
@@ -189,7 +192,8 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageA
                                         EXTERNAL if isinstance(ctrl, ExternalCommands) else LINEAR)
     ws = 2 * np.pi * f0
     return StorageArrays(
-        pos=pos, bus=bus, mac=np.array([case.machine_index(d.machine) for d in devs], np.int64),
+        pos=pos, bus=bus, mac=np.array([-1 if d.machine is None else case.machine_index(d.machine)
+                                        for d in devs], np.int64),
         pmax=f("pmax_mw") / base, lag=f("lag_s"), ramp=f("ramp_mw_s") / base,
         emax=f("energy_mj") / base,
         e0=np.where(np.isfinite(f("energy_mj")), f("soc0") * f("energy_mj"), 0.0) / base, kind=kind,
@@ -205,13 +209,15 @@ from numba import njit  # noqa: E402
 @njit(cache=True)
 def relative_speeds(x, nm, inertia, sa, out):
     """omega_i - omega_COI (pu) of each device's machine: COI of all machines (eq. 40) or of
-    the rest of the system (sa.rest)."""
+    the rest of the system (sa.rest); 0 for a device without a machine."""
     M = inertia.sum()
     coi = (x[nm:2 * nm] * inertia).sum() / M
     for d in range(sa.mac.size):
         i = sa.mac[d]
         w = x[nm + i]
-        if sa.rest:
+        if i < 0:
+            out[d] = 0.0
+        elif sa.rest:
             out[d] = w - (coi * M - w * inertia[i]) / (M - inertia[i])
         else:
             out[d] = w - coi

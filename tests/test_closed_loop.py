@@ -7,7 +7,8 @@ from stabctl import closed_loop as cl
 from stabctl.case import load_case
 from stabctl.events import fault_with_clearing
 from stabctl.simulation import Simulator
-from stabctl.storage import uniform_fleet
+from stabctl.ambient import AmbientLoad
+from stabctl.storage import ExternalCommands, StorageFleet, uniform_fleet
 
 
 @pytest.fixture(scope="module")
@@ -42,3 +43,39 @@ def test_same_seed_same_switchings_other_seed_other_noise(kundur):
     assert not np.array_equal(runs[0].diagnostics.rel, runs[2].diagnostics.rel)
     with pytest.raises(Exception, match="estimator"):
         cl.run_closed_loop(sim, ev, 3.0, 5, "oracle")
+
+
+def test_stop_at_separation_ends_the_commanded_run_where_run_does(kundur):
+    case, sim, ev = kundur
+    fleet = StorageFleet(uniform_fleet(case, 5).devices, ExternalCommands())
+    frames = np.arange(361) / 60
+    idle = sim.run_commanded(ev, 6.0, fleet, frames, lambda t, p: np.zeros(4),
+                             stop_at_separation=True)
+    plain = sim.run(ev, t_end=6.0, stop_at_separation=True)
+    assert not idle.stable and not plain.stable
+    assert idle.t[-1] == idle.t_separation < 6.0
+    assert abs(idle.t_separation - plain.t_separation) <= 0.01          # one step
+    assert idle.separated == plain.separated
+    assert len(idle.meta["storage"]) == 4                                 # kept when stopped
+
+
+def test_kf_in_the_loop_keeps_the_20_cycle_fault_at_20_percent_stable(kundur):
+    # analysis/kf_loop_diagnosis.py: a KF extrapolating its ROCOF over the latency loses
+    # synchronism here (limit cycle on the bus-angle steps of ESD switching)
+    case, sim, _ = kundur
+    ev = [fault_with_clearing(case, 3, 101, 1.0, 20)]
+    assert not sim.run(ev, t_end=6.0, storage=uniform_fleet(case, 5)).stable
+    assert cl.run_closed_loop(sim, ev, 6.0, 20, "kf", seed=0).result.stable
+
+
+def test_no_false_action_in_the_loop_under_ambient_load_noise(kundur):
+    case, sim, _ = kundur
+    amb = AmbientLoad(pct=1.0, tau_s=2.0, seed=1)
+    for est in ("raw", "kf", "ekf"):
+        run = cl.run_closed_loop(sim, [], 10.0, 5, est, seed=1, ambient=amb)
+        res = run.result
+        assert [s["switchings"] for s in res.meta["storage"][:4]] == [0, 0, 0, 0]
+        assert cl.false_actions(run) == 0
+        assert np.abs(run.diagnostics.rel).max() < 0.1                    # Hz, the deadband
+    rel = (res.speed - res.coi_speed[:, None]) * case.freq_hz
+    assert np.abs(rel).max() > 1e-3                    # the loads do move the machines (Hz)

@@ -234,7 +234,35 @@ def test_estimate_command_json_and_bad_input():
     assert d["estimators"]["ekf"]["rel_rmse_mhz"]["mean"] < 3.0
     assert len(d["estimators"]["ekf"]["rel_rmse_mhz"]["runs"]) == 2
     assert d["false_actions"]["true"]["actions"]["mean"] == 0
+    assert d["false_actions"]["true"]["std_rel_mhz"]["mean"] > 0      # the loads move it
+    assert d["ambient"]["pct"] == 1.0 and d["ambient"]["runs"] == 5
     assert d["window_s"] == pytest.approx([1.2, 4.0])
+    neg = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
+                                    "--ambient-pct", "-1"])
+    assert neg.exit_code == 2 and neg.stderr.startswith("error: ambient load needs pct >= 0")
     bad = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
                                     "--rate", "50"])
     assert bad.exit_code == 2 and bad.stderr.startswith("error: PMU rate must be one of")
+
+
+def test_baseline_kf_forecast_does_not_amplify_a_bus_angle_step():
+    # An ESD switching steps the bus angle by dtheta: the P-class frequency over a window
+    # w is then f0 + dtheta / (2 pi w) for one window, the ROCOF +-that / w.  The KF's
+    # forecast over the 50 ms latency must stay at the pulse the PMU itself reports (an
+    # extrapolated ROCOF would add 50 ms * A / w = 1.5 A) and return once both windows
+    # have passed.
+    st, w, dth, t_step = pmu.PMUSettings(), 2 / F0, 0.05, 1.0 + 1 / 240
+    pulse = dth / (2 * np.pi * w)                                          # Hz, 239 mHz
+    phase = lambda t: dth * (t >= t_step)                                  # noqa: E731
+    freq = lambda t: F0 + (phase(t) - phase(t - w)) / (2 * np.pi * w)      # noqa: E731
+    rng = np.random.default_rng(0)
+    kf, out = es.FrequencyKF([0], st, f0=F0), []
+    for t in np.arange(1, 150) / F0:
+        z = freq(t) + rng.normal() * st.sigma_freq
+        r = (freq(t) - freq(t - w)) / w + rng.normal() * st.sigma_rocof
+        kf.step(pmu.Frame(t, np.array([True]), np.ones(1, complex), np.ones(1, complex),
+                          np.array([z]), np.array([r])))
+        out.append((t, (kf.forecast(st.latency_s)[0][0] - 1) * F0))
+    t, dev = np.array(out).T
+    assert np.abs(dev).max() <= 1.1 * pulse
+    assert np.abs(dev[t > t_step + 2 * w + 3 / F0]).max() < 6 * st.sigma_freq
