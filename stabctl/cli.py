@@ -115,8 +115,9 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 @click.option("--out", "out_dir", default="reports", show_default=True,
               type=click.Path(file_okay=False), help="Report directory.")
 @click.option("--resume", is_flag=True,
-              help="Keep the sweep records already in OUT (Table 4 CCT sweeps, placement "
-                   "screening; after an interruption); by default they are recomputed.")
+              help="Keep the sweep records already in OUT (Table 4 and estimator CCT "
+                   "sweeps, placement screening; after an interruption); by default they "
+                   "are recomputed.")
 @click.option("--only", multiple=True,
               type=click.Choice(["analytic", "cases", "table4", "estimation", "placement"]),
               help="Build only these parts (repeatable): analytic = Sections 2-4 (seconds); "
@@ -128,9 +129,10 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 def paper(out_dir, resume, only):
     """Reproduce the paper's tables and figures into OUT/paper.md (+ PNG figures).
 
-    The Table 4 CCT sweeps and the placement screening record each finished search in
-    OUT/table4_<case>.jsonl and OUT/placement_<case>_screening.jsonl as it completes; an
-    interrupted run continues from there with --resume.
+    The Table 4 and estimator CCT sweeps and the placement screening record each finished
+    search in OUT/table4_<case>.jsonl, OUT/estimation_cct_<case>.jsonl and
+    OUT/placement_<case>_screening.jsonl as it completes; an interrupted run continues
+    from there with --resume.
     """
     from .paper import write_paper_report
 

@@ -29,8 +29,10 @@ RATINGS = (5.0, 20.0)
 AMBIENT, AMBIENT_RUNS, AMBIENT_S = am.AmbientLoad(pct=1.0, tau_s=2.0), 5, 60.0
 
 
-def case_figures(name: str, runs: int, cct_runs: int, out_dir: Path, workers=None) -> dict:
-    """RMSE, false actions and CCT table of one case (see the module docstring)."""
+def case_figures(name: str, runs: int, cct_runs: int, records_dir: Path,
+                 workers=None) -> dict:
+    """RMSE, false actions and CCT table of one case (see the module docstring); the CCT
+    sweep's resumable records go to records_dir."""
     bus, far, cycles = CASES[name]
     case = load_case(name)
     ev = fault_with_clearing(case, bus, far, 1.0, cycles)
@@ -40,8 +42,8 @@ def case_figures(name: str, runs: int, cct_runs: int, out_dir: Path, workers=Non
     sim = Simulator(case)
     flat = [am.simulate(sim, AMBIENT_S, replace(AMBIENT, seed=r)) for r in range(AMBIENT_RUNS)]
     false = study.false_actions(case, flat, PMUSettings(), 0)
-    cct = cl.cct_study(name, bus, far, RATINGS, cct_runs, out_dir / f"estimation_cct_{name}.jsonl",
-                       workers=workers)
+    cct = cl.cct_study(name, bus, far, RATINGS, cct_runs,
+                       records_dir / f"estimation_cct_{name}.jsonl", workers=workers)
     return {"rmse": rmse, "false": false, "cct": cct, "cycles": cycles, "bus": bus, "far": far,
             "runs": runs, "cct_runs": cct_runs}
 
@@ -86,10 +88,11 @@ def markdown(name: str, fig: dict) -> str:
 
 
 def write_estimation_report(out_dir="reports", runs: int = 20, cct_runs=None,
-                            workers=None, cases=tuple(CASES)) -> list[Path]:
+                            workers=None, cases=tuple(CASES), records_dir=None) -> list[Path]:
     """Write reports/estimation_<case>.md for each of `cases` (default both).  runs:
     Monte-Carlo runs of the RMSE and CCT studies; cct_runs: {case: runs} to cut the CCT
-    runs of a case (miniWECC is heavy); workers: processes of the CCT sweep.  Returns the
+    runs of a case (miniWECC is heavy); workers: processes of the CCT sweep; records_dir:
+    where the CCT sweeps keep their resumable records (default out_dir).  Returns the
     paths.  Raises InputError for an unknown case."""
     unknown = set(cases) - set(CASES)
     if unknown:
@@ -99,7 +102,9 @@ def write_estimation_report(out_dir="reports", runs: int = 20, cct_runs=None,
     cct_runs = cct_runs or {}
     paths = []
     for name in cases:
-        fig = case_figures(name, runs, cct_runs.get(name, runs), out_dir, workers)
+        records = Path(records_dir or out_dir)
+        records.mkdir(parents=True, exist_ok=True)
+        fig = case_figures(name, runs, cct_runs.get(name, runs), records, workers)
         path = out_dir / f"estimation_{name}.md"
         path.write_text(markdown(name, fig))
         paths.append(path)

@@ -151,11 +151,11 @@ def section_two_machine_and_min_time(fig_dir: Path) -> str:
     return "\n".join(lines)
 
 
-def section_estimation(fig_dir: Path) -> str:
+def section_estimation(fig_dir: Path, records_dir: Path) -> str:
     """PMU estimation and estimator-in-the-loop control (issue 7): separate reports."""
     from .estimation_report import write_estimation_report
 
-    paths = write_estimation_report(fig_dir, runs=20)
+    paths = write_estimation_report(fig_dir, runs=20, records_dir=records_dir)
     links = ", ".join(f"[{p.stem}]({p.name})" for p in paths)
     return "\n".join(["## 7. Estimated speeds in the control loop", "",
                       "PMU model (IEEE C37.118.1 limits), Kalman filters, RMSE versus truth, "
@@ -182,12 +182,13 @@ PARTS: dict[str, tuple[Callable[[Path], str], ...]] = {
     "analytic": (section_omib, section_feedback, section_two_machine_and_min_time),
     "cases": (paper_storage.section_case1, paper_storage.section_case2),
     "table4": (),
-    "estimation": (section_estimation,),
+    "estimation": (),
     "placement": (),
 }
 #: Parts whose sweeps keep resumable records (JSON lines) in the report directory itself:
 #: key -> (section(fig_dir, records_dir), record files started afresh unless resume).
 RESUMABLE = {"table4": (paper_storage.section_table4, "table4_*.jsonl"),
+             "estimation": (section_estimation, "estimation_cct_*.jsonl"),
              "placement": (section_placement, "placement_*_screening.jsonl")}
 
 
