@@ -415,7 +415,7 @@ def _branch(b: _Builder, rec: _Rec):
 def _transformer(b: _Builder, rec: _Rec):
     """Transformer (POM Transformer Data): line 1 I, J, K, CKT, CW, CZ, CM, MAG1, MAG2,
     NMETR, 'NAME', STAT; line 2 R1-2, X1-2, SBASE1-2; line 3 WINDV1, NOMV1, ANG1, ...,
-    TAB1 (field 14; v34: field 23); line 4 WINDV2, NOMV2."""
+    TAB1 (field 14; v34: field 24, after 12 ratings and NODE1); line 4 WINDV2, NOMV2."""
     i, j, k3, ckt = rec.int(0, 0), rec.int(0, 1), rec.int(0, 2, 0), rec.text(0, 3)
     what = f"transformer {i}-{j}" + (f"-{k3}" if k3 else "") + f" '{ckt}'"
     if k3 != 0:
@@ -423,7 +423,7 @@ def _transformer(b: _Builder, rec: _Rec):
     ends = _ends(b, rec, i, j, "transformer")
     if ends is None or rec.int(0, 11, 1) == 0:
         return
-    tab = rec.int(2, 22 if b.version >= 34 else 13, 0)
+    tab = rec.int(2, 23 if b.version >= 34 else 13, 0)
     if rec.num(0, 7, 0.0) != 0 or rec.num(0, 8, 0.0) != 0 or tab != 0:
         return b.skip(rec, f"{what}: magnetizing admittance (MAG1, MAG2) or impedance "
                            "correction table (TAB1)")
@@ -432,7 +432,8 @@ def _transformer(b: _Builder, rec: _Rec):
     r2, x2 = r * t2 ** 2, x * t2 ** 2
     if r2 < 0 or (r2 == 0 and x2 == 0):
         rec.fail(f"{what}: R1-2 must be >= 0 and R1-2 + jX1-2 not 0")
-    b.branches.append([i, j, r2, x2, 0, t1 / t2, -rec.num(2, 2, 0.0), 0, 0, 0])
+    ang = rec.num(2, 2, 0.0)
+    b.branches.append([i, j, r2, x2, 0, t1 / t2, -ang if ang else 0.0, 0, 0, 0])
 
 
 def _windings(rec: _Rec, ends, what: str) -> tuple[float, float]:
