@@ -563,23 +563,41 @@ class PssTable(Table):
 
 @dataclass(frozen=True, eq=False)
 class GovernorTable(Table):
-    """Turbine-governor data: PST ``tg_con``, 10 columns (PST manual 3.45, ``tg``).
+    """Turbine-governor data: PST ``tg_con`` (PST manual 3.45, ``tg``), extended by stabctl
+    with the PSS/E ``TGOV1`` and ``IEEEG1`` models (PSS/E Model Library; equations in
+    docs/pst_models.md section 4).
 
-    ==  =======  ==================================================================
-    1   type     turbine model number (1: tg)
+    ==  =======  =========================================================================
+    1   type     1 PST tg, 2 TGOV1, 3 IEEEG1
     2   machine  machine number
     3   wf       speed set point, pu
-    4   invR     steady-state gain 1/R, pu
-    5   Tmax     maximum power order, pu on machine base
-    6   Ts       servo time constant, s
-    7   Tc       governor time constant, s
-    8   T3       transient gain time constant, s
-    9   T4       HP section time constant, s
-    10  T5       reheater time constant, s
-    ==  =======  ==================================================================
+    4   invR     steady-state gain 1/R (IEEEG1: K), pu on machine base
+    5   Tmax     maximum power order (TGOV1: VMAX, IEEEG1: PMAX), pu on machine base
+    6   Ts       servo time constant (TGOV1: T1; IEEEG1: T3, gate servo), s
+    7   Tc       governor lag time constant (TGOV1: T3; IEEEG1: T1), s
+    8   T3       transient gain (lead) time constant (TGOV1: T2; IEEEG1: T2), s
+    9   T4       HP section time constant (IEEEG1: T4, steam chest), s
+    10  T5       reheater time constant (IEEEG1: T5), s
+    11  Tmin     minimum power order (tg: 0 as PST; TGOV1: VMIN; IEEEG1: PMIN), pu
+    12  Dt       turbine damping (TGOV1), pu power / pu speed on machine base
+    13  T6       IEEEG1 third turbine time constant, s
+    14  T7       IEEEG1 fourth turbine time constant, s
+    15  Uo       IEEEG1 maximum valve opening rate, pu/s
+    16  Uc       IEEEG1 maximum valve closing rate (< 0), pu/s
+    17  K1       IEEEG1 fraction of power after T4 (HP shaft)
+    18  K2       IEEEG1 fraction of power after T4 (LP shaft)
+    19  K3       IEEEG1 fraction after T5 (HP)
+    20  K4       IEEEG1 fraction after T5 (LP)
+    21  K5       IEEEG1 fraction after T6 (HP)
+    22  K6       IEEEG1 fraction after T6 (LP)
+    23  K7       IEEEG1 fraction after T7 (HP)
+    24  K8       IEEEG1 fraction after T7 (LP)
+    ==  =======  =========================================================================
 
-    Validation: one governor per machine, lag time constants Ts, Tc, T5 >= 0 (the lead
-    constants T3, T4 may be negative: miniWECC's hydro units use T4 = -1).
+    PST files give 10 columns; the omitted ones are 0 (Tmin = 0 is PST tg's lower clip).
+    Validation: type in {1, 2, 3}, one governor per machine, lag time constants Ts, Tc,
+    T5, T6, T7 >= 0 (the lead constants T3, T4 may be negative: miniWECC's hydro units use
+    T4 = -1).
     """
 
     type: np.ndarray
@@ -592,6 +610,20 @@ class GovernorTable(Table):
     T3: np.ndarray
     T4: np.ndarray
     T5: np.ndarray
+    Tmin: np.ndarray
+    Dt: np.ndarray
+    T6: np.ndarray
+    T7: np.ndarray
+    Uo: np.ndarray
+    Uc: np.ndarray
+    K1: np.ndarray
+    K2: np.ndarray
+    K3: np.ndarray
+    K4: np.ndarray
+    K5: np.ndarray
+    K6: np.ndarray
+    K7: np.ndarray
+    K8: np.ndarray
 
     TABLE: ClassVar[str] = "tg_con"
     MIN_COLUMNS: ClassVar[int] = 10
@@ -600,8 +632,9 @@ class GovernorTable(Table):
     INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine")
 
     def _check(self):
+        self._require(np.isin(self.type, (1, 2, 3)), "type", "governor type must be 1, 2 or 3")
         self._unique("machine", "governor on machine")
-        self._nonnegative("Ts", "Tc", "T5")  # T3, T4 are lead constants: T4 < 0 models hydro
+        self._nonnegative("Ts", "Tc", "T5", "T6", "T7")  # T3, T4 are leads: T4 < 0 is hydro
 
 
 @dataclass(frozen=True, eq=False)

@@ -65,19 +65,22 @@ class StageConfig:
 
 @dataclass
 class Layout:
-    """Slices of the flat state vector: machines (6, n_mac), exciters (3, n_exc),
-    pss (3, n_pss), governors (3, n_tg), each stored state-major."""
+    """Slices of the flat state vector: machines (6, n_mac), exciters (exc_rows, n_exc),
+    pss (3, n_pss), governors (tg_rows, n_tg), each stored state-major; exc_rows and
+    tg_rows are the most slots any exciter / governor type of the case uses."""
 
     n_mac: int
     n_exc: int
     n_pss: int
     n_tg: int
+    exc_rows: int = 3
+    tg_rows: int = 3
     blocks: dict = field(default_factory=dict)
 
     def __post_init__(self):
         start = 0
-        for name, rows, n in (("mac", 6, self.n_mac), ("exc", 3, self.n_exc),
-                              ("pss", 3, self.n_pss), ("tg", 3, self.n_tg)):
+        for name, rows, n in (("mac", 6, self.n_mac), ("exc", self.exc_rows, self.n_exc),
+                              ("pss", 3, self.n_pss), ("tg", self.tg_rows, self.n_tg)):
             self.blocks[name] = (slice(start, start + rows * n), (rows, n))
             start += rows * n
         self.size = start
@@ -104,7 +107,8 @@ class DynamicModel:
         self.ep = exc.exciter_params(case)
         self.pp = pss_.pss_params(case)
         self.gp = gov.governor_params(case)
-        self.layout = Layout(self.mp.n, self.ep.n, self.pp.n, self.gp.n)
+        self.layout = Layout(self.mp.n, self.ep.n, self.pp.n, self.gp.n,
+                             self.ep.n_slots(), self.gp.n_slots())
         self._setup_loads(injection_buses)
         self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
         self._initialise()
@@ -190,12 +194,13 @@ class DynamicModel:
                                                eterm0[m], theta0[m], S0.real[m], S0.imag[m],
                                                mp.mac_pot[m], self.vex0[m], True)
                         for i, m in enumerate(em)])
-        xe, self.Vref = exc.initialise(ep, self.vex0[em], eterm0[em], VB0)
+        xe, self.Vref, self.ep = exc.initialise(ep, self.vex0[em], eterm0[em], VB0)
+        ep = self.ep
         L.view(x, "exc")[:] = xe
         u0 = pss_.pss_input(self.pp, xm[1], S0.real, mp.mac_pot)
         L.view(x, "pss")[:] = pss_.initialise(self.pp, u0)
         xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac])
-        L.view(x, "tg")[:] = xg
+        L.view(x, "tg")[:] = xg[:L.tg_rows]
         self.x0 = x
         self.V_nc0 = op.V[self.nc_idx].astype(complex)
         self.pss_of_exc = np.full(ep.n, -1)
@@ -207,6 +212,7 @@ class DynamicModel:
         self.params = KernelParams(
             MP=mp.packed(self.eqp0), basrad=mp.basrad, EP=ep.packed(self.Vref),
             SP=self.pp.packed(), GP=self.gp.packed(self.Pref), pss_of_exc=self.pss_of_exc,
+            exc_rows=L.exc_rows, tg_rows=L.tg_rows,
             mac_bus=mp.bus_idx.astype(np.int64), vex0=self.vex0, pmech0=self.pmech0,
             S_P=self.nc.S_P.astype(complex), I0=self.nc.I0.astype(complex),
             Y_low=self.nc.Y_low.astype(complex))
@@ -217,16 +223,17 @@ class DynamicModel:
 
     def state_name(self, k: int) -> str:
         """Name of flat state index k, e.g. 'mac.omega.G3' or 'exc.VTR.G1'."""
-        from . import exciters, governors, machines, pss
-        names = {"mac": machines.STATE_NAMES, "exc": exciters.STATE_NAMES,
-                 "pss": pss.STATE_NAMES, "tg": governors.STATE_NAMES}
         owners = {"mac": np.arange(self.mp.n), "exc": self.ep.mac, "pss": self.pp.mac,
                   "tg": self.gp.mac}
+        names = {"mac": lambda i: mac.STATE_NAMES, "pss": lambda i: pss_.STATE_NAMES,
+                 "exc": lambda i: exc.STATE_NAMES[int(self.ep.kind[i])],
+                 "tg": lambda i: gov.STATE_NAMES[int(self.gp.kind[i])]}
         for block, (sl, (rows, n)) in self.layout.blocks.items():
             if sl.start <= k < sl.stop:
                 r, i = divmod(k - sl.start, n)
                 number = int(self.case.machines.number[owners[block][i]])
-                return f"{block}.{names[block][r]}.G{number}"
+                own = names[block](i)
+                return f"{block}.{own[r] if r < len(own) else f'unused{r}'}.G{number}"
         raise IndexError(f"state index {k} out of range")
 
     # -- one evaluation -----------------------------------------------------------------
@@ -269,6 +276,8 @@ class KernelParams(NamedTuple):
     SP: np.ndarray
     GP: np.ndarray
     pss_of_exc: np.ndarray
+    exc_rows: int
+    tg_rows: int
     mac_bus: np.ndarray
     vex0: np.ndarray
     pmech0: np.ndarray
@@ -286,13 +295,13 @@ def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, S_e
     Writes dx and the outputs; V_nc is updated in place.  Returns the load-iteration count,
     -1 without convergence.
     """
-    o = 6 * nm
+    o, re, rg = 6 * nm, p.exc_rows, p.tg_rows
     xm, dxm = x[:o].reshape(6, nm), dx[:o].reshape(6, nm)
-    xe, dxe = x[o:o + 3 * ne].reshape(3, ne), dx[o:o + 3 * ne].reshape(3, ne)
-    o += 3 * ne
+    xe, dxe = x[o:o + re * ne].reshape(re, ne), dx[o:o + re * ne].reshape(re, ne)
+    o += re * ne
     xp, dxp = x[o:o + 3 * nps].reshape(3, nps), dx[o:o + 3 * nps].reshape(3, nps)
     o += 3 * nps
-    xg, dxg = x[o:o + 3 * ng].reshape(3, ng), dx[o:o + 3 * ng].reshape(3, ng)
+    xg, dxg = x[o:o + rg * ng].reshape(rg, ng), dx[o:o + rg * ng].reshape(rg, ng)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
     it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra)
@@ -330,7 +339,8 @@ def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, S_e
         vex[m] = efd_alg[i]
     pmech[:] = p.pmech0
     for k in range(ng):
-        pmech[int(p.GP[k, gov.G_MAC])] = gov.pmech(p.GP, xg, k)
+        m = int(p.GP[k, gov.G_MAC])
+        pmech[m] = gov.pmech(p.GP, xg, k, xm[1, m])
     mac.derivatives(p.MP, p.basrad, xm, cur, vex, pmech, dxm, pelect, qelect, eterm)
     efd[:] = p.vex0
     for i in range(ne):

@@ -100,13 +100,10 @@ def fastest_time_constant(model: DynamicModel) -> tuple[float, str]:
     from .exciters import LBND
     cands = []
     mp, ep, pp, gp = model.mp, model.ep, model.pp, model.gp
-    for name, arr, rows, active in (
-            ("mac_con T\"do", mp.Tdopp, mp.kind == 2, None), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2, None),
-            ("exc_con T_R", ep.TR, ep.has_TR, None), ("exc_con T_A", ep.TA, ep.has_TA, None),
-            ("exc_con T_B", ep.TB, ep.has_TB, None), ("pss_con T_w", pp.Tw, None, None),
-            ("pss_con T_2", pp.T2, None, None), ("pss_con T_4", pp.T4, pp.T4 >= LBND, None),
-            ("tg_con T_s", gp.Ts, None, None), ("tg_con T_c", gp.Tc, None, None),
-            ("tg_con T_5", gp.T5, None, None)):
+    for name, arr, rows in (
+            ("mac_con T\"do", mp.Tdopp, mp.kind == 2), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2),
+            ("pss_con T_w", pp.Tw, None), ("pss_con T_2", pp.T2, None),
+            ("pss_con T_4", pp.T4, pp.T4 >= LBND), *ep.time_constants(), *gp.time_constants()):
         sel = np.ones(arr.size, bool) if rows is None else rows
         if np.any(sel):
             k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))
