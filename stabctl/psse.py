@@ -3,9 +3,9 @@
 The RAW part (:mod:`stabctl.psse_raw`) gives the PST ``bus``, ``line`` and ``load_con``
 matrices and the in-service generators; the DYR part (:mod:`stabctl.dyr`) gives
 ``mac_con``, ``exc_con``, ``pss_con`` and ``tg_con`` for those generators (machine ``k``
-is the k-th in-service generator of the RAW file). Where several machines share a bus,
-each takes the share PG_k / sum(PG) of the bus generation (MBASE shares when the bus
-generates no P) and QG_k / sum(QG) of its Q (``mac_con`` columns 22, 23).
+is the k-th in-service generator of the RAW file); where several machines share a bus,
+each takes the share PG_k / sum(PG) of the bus generation and QG_k / sum(QG) of its Q
+(``mac_con`` columns 22, 23).
 
 Records that stabctl cannot represent are collected from both files and either refused
 together (``on_unsupported="error"``: one :class:`~stabctl.errors.CaseError` listing every
@@ -17,17 +17,14 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-import numpy as np
-
 from stabctl.case import Case
 from stabctl.errors import CaseError
-from stabctl.psse_raw import Generator, RawData, read_raw
+from stabctl.psse_raw import RawData, read_raw
 from stabctl.pstio import case_from_matrices
 
 __all__ = ["load_psse", "import_psse"]
 
 _MODES = ("error", "skip")
-_PFRAC, _QFRAC = 21, 22  # 0-based mac_con columns of pfrac, qfrac
 
 
 def load_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
@@ -86,8 +83,8 @@ def _dynamic_tables(raw: RawData, dyr_path) -> tuple[dict, list[str]]:
 
     tables = dyr_tables(read_dyr(dyr_path), [g.as_dyr() for g in raw.generators],
                         on_unsupported="skip")
-    mats = {"mac_con": _share_generation(tables.mac_con, raw.generators)}
-    for key in ("exc_con", "pss_con", "tg_con"):
+    mats = {}
+    for key in ("mac_con", "exc_con", "pss_con", "tg_con"):
         if getattr(tables, key) is not None:
             mats[key] = getattr(tables, key)
     return mats, [_dyr_text(r) for r in tables.unsupported]
@@ -95,32 +92,6 @@ def _dynamic_tables(raw: RawData, dyr_path) -> tuple[dict, list[str]]:
 
 def _dyr_text(rec) -> str:
     return f"{rec.file}:{rec.line} {rec.model} at bus {rec.bus} '{rec.id}'"
-
-
-def _share_generation(mac_con, generators: tuple[Generator, ...]) -> np.ndarray:
-    """``mac_con`` with pfrac and qfrac set from the RAW generation (module doc)."""
-    if mac_con is None or len(mac_con) == 0:
-        raise CaseError("the DYR file gives no machine model for any RAW generator")
-    mac = np.array(mac_con, dtype=float)
-    if mac.shape[1] <= _QFRAC:
-        mac = np.hstack([mac, np.ones((len(mac), _QFRAC + 1 - mac.shape[1]))])
-    gens = [generators[int(k) - 1] for k in mac[:, 0]]
-    for col, attr in ((_PFRAC, "pg"), (_QFRAC, "qg")):
-        mac[:, col] = _shares(gens, attr)
-    return mac
-
-
-def _shares(gens: list[Generator], attr: str) -> np.ndarray:
-    """Each machine's share of its bus's total ``attr`` (MBASE shares when it is 0)."""
-    buses = np.array([g.bus for g in gens])
-    vals = np.array([getattr(g, attr) for g in gens])
-    mbase = np.array([g.mbase for g in gens])
-    out = np.empty(len(gens))
-    for bus in np.unique(buses):
-        at = buses == bus
-        total = vals[at].sum()
-        out[at] = vals[at] / total if total != 0 else mbase[at] / mbase[at].sum()
-    return out
 
 
 def _report(unsupported: list[str], mode: str, where: str) -> None:

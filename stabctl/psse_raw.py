@@ -95,7 +95,7 @@ class Generator:
 
     Attributes: number (1-based position, the machine number of ``mac_con``), bus, id
     (the RAW ID, stripped), mbase (MVA), ra and xsource (ZSORCE, pu on MBASE), pg and qg
-    (pu on the system base), source (:class:`RawSource`).
+    (MW, Mvar, as in the RAW), source (:class:`RawSource`).
     """
 
     number: int
@@ -109,9 +109,10 @@ class Generator:
     source: RawSource
 
     def as_dyr(self) -> dict:
-        """The dict ``stabctl.dyr.dyr_tables`` takes for this generator."""
+        """The dict ``stabctl.dyr.dyr_tables`` takes for this generator (pg and qg split
+        a bus's generation among its machines)."""
         return {"number": self.number, "bus": self.bus, "id": self.id, "mbase": self.mbase,
-                "ra": self.ra, "xsource": self.xsource}
+                "ra": self.ra, "xsource": self.xsource, "pg": self.pg, "qg": self.qg}
 
 
 @dataclass(frozen=True, eq=False)
@@ -370,10 +371,10 @@ def _generator(b: _Builder, rec: _Rec):
 
 
 def _add_generator(b: _Builder, rec: _Rec, row: list, vs: float, o: int, gid: str):
-    pg, qg = rec.num(0, 2, 0.0) / b.base, rec.num(0, 3, 0.0) / b.base
+    pg, qg = rec.num(0, 2, 0.0), rec.num(0, 3, 0.0)
     row[1] = vs
-    row[3] += pg
-    row[4] += qg
+    row[3] += pg / b.base
+    row[4] += qg / b.base
     row[10] += rec.num(0, 4, 9999.0) / b.base
     row[11] += rec.num(0, 5, -9999.0) / b.base
     mbase = rec.num(0, 8 + o, b.base)

@@ -65,9 +65,12 @@ def test_five_bus_generators(path):
     np.testing.assert_allclose(bus3[[1, 3, 4, 10, 11]], [1.01, 2.0, 0.3, 1.6, -0.7],
                                rtol=0, atol=1e-15)
     assert [g.as_dyr() for g in raw.generators] == [
-        {"number": 1, "bus": 1, "id": "1", "mbase": 500.0, "ra": 0.003, "xsource": 0.25},
-        {"number": 2, "bus": 3, "id": "1", "mbase": 200.0, "ra": 0.002, "xsource": 0.2},
-        {"number": 3, "bus": 3, "id": "2", "mbase": 100.0, "ra": 0.001, "xsource": 0.3}]
+        {"number": 1, "bus": 1, "id": "1", "mbase": 500.0, "ra": 0.003, "xsource": 0.25,
+         "pg": 0.0, "qg": 0.0},
+        {"number": 2, "bus": 3, "id": "1", "mbase": 200.0, "ra": 0.002, "xsource": 0.2,
+         "pg": 150.0, "qg": 20.0},
+        {"number": 3, "bus": 3, "id": "2", "mbase": 100.0, "ra": 0.001, "xsource": 0.3,
+         "pg": 50.0, "qg": 10.0}]
     assert raw.generators[2].source.line == (19 if path == V33 else 22)
 
 
