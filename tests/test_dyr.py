@@ -1,0 +1,307 @@
+"""PSS/E DYR import (stabctl.dyr) and the models it maps to: exc_dc12 (DC1/DC2), TGOV1,
+IEEEG1.  Reference values: the ANDES DYR files (parameter order of the PSS/E Model
+Library), closed forms of the linear blocks, steady-state equalities of the models."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from stabctl import exciters as exc
+from stabctl import governors as gov
+from stabctl.case import ExciterTable, GovernorTable, load_case
+from stabctl.dyr import dyr_tables, exp_saturation, read_dyr
+from stabctl.errors import CaseError
+from stabctl.linearise import linearise
+from stabctl.simulation import Simulator
+
+andes = pytest.importorskip("andes")
+CASES = Path(andes.__file__).parent / "cases"
+KUNDUR_DYR = CASES / "kundur" / "kundur_full.dyr"
+WECC_DYR = CASES / "wecc" / "wecc_full.dyr"
+
+
+def kundur_generators(mbase=900.0):
+    """The four Kundur generators as the RAW reader gives them (ANDES buses 1-4, id 1)."""
+    return [dict(number=k, bus=k, id="1", mbase=mbase, ra=0.0, xsource=0.25) for k in range(1, 5)]
+
+
+def wecc_generators(records):
+    keys = sorted({(r.bus, r.id) for r in records if r.model == "GENROU"})
+    return [dict(number=i + 1, bus=b, id=d, mbase=100.0, ra=0.0, xsource=0.2)
+            for i, (b, d) in enumerate(keys)]
+
+
+def write(tmp_path, text, name="t.dyr"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+@pytest.fixture(scope="module")
+def kundur_tables():
+    return dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip")
+
+
+# -- parsing and mapping against the files ------------------------------------------------------
+
+def test_kundur_records_as_in_the_file():
+    recs = read_dyr(KUNDUR_DYR)
+    assert [r.model for r in recs[:3]] == ["GENROU", "EXDC2", "TGOV1"]
+    assert (recs[0].line, recs[1].line, recs[2].line) == (1, 4, 8)
+    assert recs[0].params == (8.0, 0.03, 0.4, 0.05, 6.5, 0.0, 1.8, 1.7, 0.3, 0.55, 0.25, 0.06,
+                              0.0, 0.0)
+    assert recs[-1].model == "TOGGLE" and recs[-1].line == 37   # ANDES's own event record
+
+
+def test_kundur_genrou_to_mac_sub(kundur_tables):
+    m = kundur_tables.mac_con
+    row = dict(zip(("number", "bus", "mva", "xl", "ra", "xd", "xdp", "xdpp", "Tdop", "Tdopp",
+                    "xq", "xqp", "xqpp", "Tqop", "Tqopp", "H", "D0"), m[2]))
+    assert row == dict(number=3, bus=3, mva=900, xl=0.06, ra=0, xd=1.8, xdp=0.3, xdpp=0.25,
+                       Tdop=8.0, Tdopp=0.03, xq=1.7, xqp=0.55, xqpp=0.25, Tqop=0.4,
+                       Tqopp=0.05, H=6.175, D0=0)
+    assert m.shape == (4, 23) and np.all(m[:, 21:] == 1.0)
+
+
+def test_kundur_exdc2_to_dc2_and_tgov1(kundur_tables):
+    e = kundur_tables.exc_con[0]
+    # type 2 (bus fed), TR KA TA TB TC VRMAX VRMIN KE TE; E1 = SE1 = 0: no saturation
+    np.testing.assert_array_equal(e[:11], [2, 1, 0.02, 20, 0.02, 1, 1, 5.2, -4.16, 1, 0.83])
+    assert (e[12], e[13], e[14], e[15], e[16]) == (0, 0, 0, 0.0754, 1.246)
+    g = GovernorTable.from_matrix(kundur_tables.tg_con)
+    assert (g.type[0], g.invR[0], g.Ts[0], g.Tmax[0], g.Tmin[0]) == (2, 1 / 0.05, 0.49, 33, 0.4)
+    assert (g.T3[0], g.Tc[0], g.Dt[0]) == (2.1, 7.0, 0.0)
+    assert kundur_tables.pss_con is None
+
+
+def test_wecc_ieeeg1_sums_hp_and_lp():
+    recs = read_dyr(WECC_DYR)
+    t = dyr_tables(recs, wecc_generators(recs), on_unsupported="skip")
+    g = GovernorTable.from_matrix(t.tg_con)
+    # K = 20, T1 = 0.1, T2 = 0, T3 = 0.2, Uo = 1, Uc = -1, PMAX 0.95, T4 = 0.1, T7 = 8.72
+    assert (g.type[0], g.invR[0], g.Tc[0], g.T3[0], g.Ts[0]) == (3, 20, 0.1, 0, 0.2)
+    assert (g.Uo[0], g.Uc[0], g.Tmax[0], g.Tmin[0], g.T4[0], g.T7[0]) == (1, -1, 0.95, 0, 0.1, 8.72)
+    assert (g.K5[0], g.K7[0]) == (0.3, 0.7)
+    p = gov.governor_params(load_case("kundur").replace(governors=g.select(np.arange(4))
+                                                       .replace(machine=np.array([1, 2, 3, 4]))))
+    np.testing.assert_allclose(p.K[0], [0, 0, 0.3, 0.7])
+
+
+def test_wecc_unsupported_records_are_listed_with_file_and_line():
+    recs = read_dyr(WECC_DYR)
+    with pytest.raises(CaseError) as e:
+        dyr_tables(recs, wecc_generators(recs))
+    msg = str(e.value)
+    assert "wecc_full.dyr:8 ESST3A (bus 3, id 1)" in msg
+    assert "wecc_full.dyr:4 IEEEST (bus 3, id 1): its machine has no (supported) exciter" in msg
+    t = dyr_tables(recs, wecc_generators(recs), on_unsupported="skip")
+    assert {r.model for r in t.unsupported} == {"ESST3A", "EXST1", "ESDC2A", "ST2CUT", "IEEEST"}
+
+
+def test_ieeest_maps_to_pst_pss_when_equivalent(tmp_path):
+    text = ("1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
+            "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n")
+    t = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
+    # speed input (PST type 1), K*Tw = KS T5 = 20 * 1.5, Tw = T6, lead-lags (0.2/0.02), (0/0.5)
+    np.testing.assert_array_equal(t.pss_con[0], [1, 1, 30, 10, 0.2, 0.02, 0, 0.5, 0.1, -0.1])
+    np.testing.assert_array_equal(t.exc_con[0][:9], [0, 1, 0, 100, 0.05, 10, 1.0, 5, -5])
+    assert t.mac_con[0][6] == 0.25 and t.mac_con[0][5] == 0     # classical: x'd = ZSORCE X
+
+
+def test_gensal_has_no_q_axis_transient_circuit(tmp_path):
+    text = "1 'GENSAL' 1 5.0 0.05 0.1 3.0 0.0 1.2 0.7 0.3 0.2 0.1 0.1 0.3 /\n"
+    m = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1]).mac_con[0]
+    assert (m[10], m[11], m[12], m[13], m[14]) == (0.7, 0.7, 0.2, 0.0, 0.1)  # xq, x'q=xq, x''q=x''d
+
+
+# -- errors --------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("text, message", [
+    ("1 'GENCLS' 1 3.0 0.0\n", r"t.dyr:1: record not terminated by '/'"),
+    ("\n1 'GENCLS' 1 3.0 x0 /\n", r"t.dyr:2: GENCLS parameter 2 'x0' is not a number"),
+    ("1 GENCLS 1 3.0 0.0 /\n", r"t.dyr:1: malformed record"),
+    ("B1 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1: GENCLS bus field 'B1' is not an integer"),
+])
+def test_malformed_records_name_file_and_line(tmp_path, text, message):
+    with pytest.raises(CaseError, match=message):
+        read_dyr(write(tmp_path, text))
+
+
+@pytest.mark.parametrize("text, message", [
+    ("1 'GENCLS' 1 3.0 /\n", r"t.dyr:1 GENCLS \(bus 1, id 1\): needs 2 parameters after the id, got 1"),
+    ("7 'GENCLS' 1 3.0 0 /\n", r"t.dyr:1 GENCLS \(bus 7, id 1\): no such generator"),
+    ("1 'GENCLS' 1 3.0 0 /\n1 'GENCLS' 1 3.0 0 /\n", r"t.dyr:2 GENCLS .*second machine model .*t.dyr:1"),
+    ("1 'GENCLS' 1 0.0 0 /\n", r"H = 0.0 \(PSS/E infinite bus\)"),
+    ("1 'GENCLS' 1 3.0 0 /\n1 'TGOV1' 1 0 0.5 1 0 1 2 0 /\n", r"t.dyr:2 TGOV1 .*droop R = 0.0"),
+    ("1 'TGOV1' 1 0.05 0.5 1 0 1 2 0 /\n", r"machine 1 \(bus 1, id 1\)"),
+])
+def test_mapping_errors_name_the_record(tmp_path, text, message):
+    with pytest.raises(CaseError, match=message):
+        dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
+
+
+def test_generator_without_machine_model_is_named(tmp_path):
+    with pytest.raises(CaseError, match=r"machine 2 \(bus 2, id 1\)"):
+        dyr_tables(read_dyr(write(tmp_path, "1 'GENCLS' 1 3.0 0 /\n")), kundur_generators()[:2])
+
+
+# -- model equations ------------------------------------------------------------------------------
+
+def test_exponential_saturation_passes_both_points():
+    A, B = exp_saturation(3.1, 0.33, 2.3, 0.1)
+    np.testing.assert_allclose([A * np.exp(B * 3.1), A * np.exp(B * 2.3)], [0.33, 0.1], rtol=1e-14)
+    assert exp_saturation(0.0, 0.0, 1.0, 1.0) == (0.0, 0.0)
+
+
+def dc_params(kind=exc.DC1, KE=1.0, A=0.0, B=0.0):
+    e = ExciterTable.from_matrix([[kind, 1, 0.02, 20, 0.02, 1, 1, 5.2, -4.16, KE, 0.83, 0, A, 0,
+                                   B, 0.0754, 1.246, 0, 0, 0]])
+    return exc.exciter_params(load_case("kundur").replace(exciters=e))
+
+
+@pytest.mark.parametrize("KE", [1.0, 0.0])
+def test_dc_exciter_steady_state_vr_equals_ke_plus_se_times_efd(KE):
+    """V_R0 = (K_E + S_E(Efd0)) Efd0 (PST exc_dc12 flag 0); K_E = 0 -> -S_E(Efd0): V_R0 = 0;
+    all derivatives zero at the initial point."""
+    A, B = exp_saturation(3.1, 0.33, 2.3, 0.1)
+    p = dc_params(KE=KE, A=A, B=B)
+    Efd, Vt = 1.9, 1.03
+    x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
+    SE = A * np.exp(B * Efd)
+    KE_eff = KE if KE else -SE
+    assert x[2, 0] == pytest.approx((KE_eff + SE) * Efd, abs=1e-15)
+    assert Vref[0] == pytest.approx(Vt + x[2, 0] / 20, rel=1e-15)
+    dx = np.zeros_like(x)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx)
+    assert np.abs(dx).max() < 1e-12
+
+
+def test_dc2_limit_scales_with_terminal_voltage():
+    """DC2 (bus fed): V_R is held at VRMAX * V_t; DC1 at VRMAX."""
+    for kind, bound in ((exc.DC1, 5.2), (exc.DC2, 5.2 * 0.5)):
+        p = dc_params(kind)
+        x, Vref, p = exc.initialise(p, np.array([1.0]), np.array([1.0]))
+        x[2, 0] = 10.0
+        dx = np.zeros_like(x)
+        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, dx)
+        assert x[2, 0] == pytest.approx(bound, rel=1e-15) and dx[2, 0] == 0.0
+
+
+def tgov1_params(Dt=0.0):
+    g = GovernorTable.from_matrix([[2, 1, 1, 20, 1.2, 0.49, 7.0, 2.1, 0, 0, 0.1, Dt]])
+    return gov.governor_params(load_case("kundur").replace(governors=g))
+
+
+def test_tgov1_pm_equals_pref_at_rated_speed_and_damps_with_dt():
+    p = tgov1_params(Dt=2.0)
+    x, Pref = gov.initialise(p, np.array([0.78]))
+    P = p.packed(Pref)
+    assert Pref[0] == 0.78 and gov.pmech(P, x, 0, 1.0) == pytest.approx(0.78, rel=1e-15)
+    assert gov.pmech(P, x, 0, 1.01) == pytest.approx(0.78 - 2.0 * 0.01, rel=1e-14)
+    dx = np.zeros_like(x)
+    gov.derivatives(P, x, 0, 1.0, dx)
+    assert np.abs(dx).max() < 1e-15
+
+
+def test_tgov1_step_response_matches_closed_form():
+    """Pref step dP: Pm(t) = dP [1 - (T1 - T2)/(T1 - T3) e^(-t/T1) - (T3 - T2)/(T3 - T1) e^(-t/T3)]."""
+    p = tgov1_params()
+    x0, Pref = gov.initialise(p, np.array([0.5]))
+    dP, T1, T2, T3 = 0.1, 0.49, 2.1, 7.0
+    P = p.packed(Pref + dP)
+
+    def f(t, y):
+        x, dx = y.reshape(x0.shape).copy(), np.zeros_like(x0)
+        gov.derivatives(P, x, 0, 1.0, dx)
+        return dx.ravel()
+
+    t = 3.0
+    sol = solve_ivp(f, (0, t), x0.ravel(), rtol=1e-11, atol=1e-13)
+    pm = gov.pmech(P, sol.y[:, -1].reshape(x0.shape), 0, 1.0) - 0.5
+    exact = dP * (1 - (T1 - T2) / (T1 - T3) * np.exp(-t / T1) - (T3 - T2) / (T3 - T1) * np.exp(-t / T3))
+    assert pm == pytest.approx(exact, rel=1e-8)
+
+
+def test_tgov1_valve_is_non_windup():
+    p = tgov1_params()
+    x, Pref = gov.initialise(p, np.array([1.1]))
+    dx = np.zeros_like(x)
+    x[0, 0] = 1.3
+    gov.derivatives(p.packed(Pref + 1.0), x, 0, 1.0, dx)
+    assert x[0, 0] == 1.2 and dx[0, 0] == 0.0
+
+
+def ieeeg1_params():
+    g = GovernorTable.from_matrix([[3, 1, 1, 20, 0.95, 0.2, 0.1, 0, 0.1, 0, 0, 0, 0, 8.72,
+                                    0.5, -1, 0, 0, 0, 0, 0.3, 0, 0.6, 0.1]])
+    return gov.governor_params(load_case("kundur").replace(governors=g))
+
+
+def test_ieeeg1_steady_state_and_gate_rate_limit():
+    """Pm = (K1+..+K8) gate in steady state; a large Pref step moves the gate at Uo."""
+    p = ieeeg1_params()
+    x, gate = gov.initialise(p, np.array([0.7]))
+    assert gate[0] == pytest.approx(0.7, rel=1e-15)        # K sum = 0.3 + 0.6 + 0.1 = 1
+    P = p.packed(gate)
+    assert gov.pmech(P, x, 0, 1.0) == pytest.approx(0.7, rel=1e-15)
+    dx = np.zeros_like(x)
+    gov.derivatives(P, x, 0, 1.0, dx)
+    assert np.abs(dx).max() < 1e-15
+    gov.derivatives(p.packed(gate + 0.2), x, 0, 1.0, dx)
+    assert dx[1, 0] == 0.5                                   # (0.2 / T3 = 1) limited to Uo
+    gov.derivatives(P, x, 0, 1.01, dx)            # speed up 1 %: the T1 lag starts at K dw/T1
+    assert dx[1, 0] == 0.0 and dx[0, 0] == pytest.approx(20 * 0.01 / 0.1, rel=1e-12)
+    x[0, 0] = 0.4                                 # lag output K dw = 0.4: (0 - 0.4)/T3 -> Uc
+    gov.derivatives(P, x, 0, 1.02, dx)
+    assert dx[1, 0] == -1.0 and dx[0, 0] == pytest.approx(0.0, abs=1e-12)
+
+
+# -- the models in the simulator and the linearisation -------------------------------------------
+
+def replaced_kundur(exc_con, tg_con):
+    case = load_case("kundur")
+    return case.replace(exciters=ExciterTable.from_matrix(exc_con),
+                        governors=GovernorTable.from_matrix(tg_con), pss=case.pss.empty())
+
+
+@pytest.fixture(scope="module")
+def dyr_kundur(kundur_tables):
+    """Built-in Kundur with ANDES's EXDC2 and TGOV1 data (the machines stay PSTess's)."""
+    return replaced_kundur(kundur_tables.exc_con, kundur_tables.tg_con)
+
+
+def test_flat_run_with_exdc2_and_tgov1_has_no_drift(dyr_kundur):
+    sim = Simulator(dyr_kundur)
+    residual, where = sim.model_for([]).initial_residual
+    assert residual < 1e-9, where
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9
+    assert np.abs(r.efd - r.efd[0]).max() < 1e-9 and np.abs(r.pmech - r.pmech[0]).max() < 1e-9
+
+
+def test_flat_run_with_ieeex1_and_ieeeg1_has_no_drift(kundur_tables):
+    exc_con = kundur_tables.exc_con.copy()
+    exc_con[:, 0] = 1                                    # IEEEX1: solid-fed DC1
+    exc_con[:, 12], exc_con[:, 14] = exp_saturation(3.1, 0.33, 2.3, 0.1)
+    rows = np.tile(GovernorTable.from_matrix([[3, 1, 1, 20, 0.95, 0.2, 0.1, 0, 0.1, 0, 0, 0,
+                                               0, 8.72, 0.5, -1, 0, 0, 0, 0, 0.3, 0, 0.6,
+                                               0.1]]).matrix(), (4, 1))
+    rows[:, 1] = [1, 2, 3, 4]
+    sim = Simulator(replaced_kundur(exc_con, rows))
+    residual, where = sim.model_for([]).initial_residual
+    assert residual < 1e-9, where
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.pmech - r.pmech[0]).max() < 1e-9
+
+
+def test_linearised_dyr_kundur_states_and_reference_inputs(dyr_kundur):
+    """States: 6 machine + 5 DC exciter (V_TR, V_As, V_R, Efd, R_f) + 2 TGOV1 per machine;
+    dV_R'/dVref = K_A/T_A (T_C = T_B), d valve'/dPref = 1/T1 (closed forms of the blocks)."""
+    sys = linearise(dyr_kundur)
+    assert sys.nstates == 4 * (6 + 5 + 2)
+    B, s, i = np.asarray(sys.B), sys.state_labels, sys.input_labels
+    assert B[s.index("exc_VR_G2"), i.index("Vref_G2")] == pytest.approx(20 / 0.02, rel=1e-9)
+    assert B[s.index("tg_valve_G3"), i.index("Pref_G3")] == pytest.approx(1 / 0.49, rel=1e-9)
+    assert np.all(np.linalg.eigvals(np.asarray(sys.A)).real < 1e-3)
