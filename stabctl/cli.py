@@ -1021,10 +1021,11 @@ def place(case_name, faults_src, target_cct_gain, zeta_min, max_sites, max_site_
 @click.option("--skip-unsupported", is_flag=True,
               help="Leave out records stabctl cannot represent (listed as warnings) "
                    "instead of refusing the files.")
-@click.option("--loads", type=click.Choice(["raw", "impedance"]), default="raw",
+@click.option("--loads", type=click.Choice(["impedance", "raw"]), default="impedance",
               show_default=True,
-              help="Load model in dynamic runs: the RAW composition (constant power, "
-                   "current, admittance) or all constant impedance.")
+              help="Load model in dynamic runs: all constant impedance, or the RAW "
+                   "composition (constant power, current, admittance; PST's network "
+                   "solution may fail with constant power under deep voltage dips).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @_reports_errors
 def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, as_json):

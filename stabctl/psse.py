@@ -28,7 +28,7 @@ _MODES = ("error", "skip")
 
 
 def load_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
-              on_unsupported: str = "error", loads: str = "raw") -> Case:
+              on_unsupported: str = "error", loads: str = "impedance") -> Case:
     """Build a :class:`~stabctl.case.Case` from a PSS/E RAW (v32-34) and a DYR file.
 
     Args:
@@ -37,9 +37,8 @@ def load_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
             branches, loads only: a power flow, no dynamic run).
         on_unsupported: ``"error"`` refuses records stabctl cannot represent, ``"skip"``
             leaves them out and warns (:class:`UserWarning`) with the list.
-        loads: ``"raw"`` keeps the PSS/E load composition in the dynamic run,
-            ``"impedance"`` makes all loads constant impedance (see
-            :mod:`stabctl.psse_raw`).
+        loads: ``"impedance"`` makes all loads constant impedance in the dynamic run,
+            ``"raw"`` keeps the PSS/E load composition (see :mod:`stabctl.psse_raw`).
 
     Returns:
         the case, named after the RAW file, described by the RAW title lines; units as
@@ -57,7 +56,7 @@ def load_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
 
 
 def import_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
-                on_unsupported: str = "error", loads: str = "raw"
+                on_unsupported: str = "error", loads: str = "impedance"
                 ) -> tuple[Case, tuple[str, ...]]:
     """:func:`load_psse` that also returns the records left out, each as
     ``"file:line record"`` (empty unless ``on_unsupported="skip"``). Same arguments and
@@ -71,7 +70,7 @@ def import_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
         dyn, dyr_unsupported = _dynamic_tables(raw, dyr_path)
         mats.update(dyn)
         unsupported += dyr_unsupported
-    _report(unsupported, on_unsupported, Path(raw_path).name)
+    _report(unsupported, on_unsupported, _files(raw_path, dyr_path))
     case = case_from_matrices(mats, raw.name, source=_source(raw_path, dyr_path),
                               description=raw.title)
     return case, tuple(unsupported)
@@ -91,7 +90,8 @@ def _dynamic_tables(raw: RawData, dyr_path) -> tuple[dict, list[str]]:
 
 
 def _dyr_text(rec) -> str:
-    return f"{rec.file}:{rec.line} {rec.model} at bus {rec.bus} '{rec.id}'"
+    at = f" at bus {rec.bus}" if rec.bus else ""
+    return f"{rec.file}:{rec.line} {rec.model}{at} '{rec.id}'"
 
 
 def _report(unsupported: list[str], mode: str, where: str) -> None:
@@ -106,6 +106,9 @@ def _report(unsupported: list[str], mode: str, where: str) -> None:
                   UserWarning, stacklevel=4)
 
 
+def _files(raw_path, dyr_path) -> str:
+    return Path(raw_path).name + ("" if dyr_path is None else f" + {Path(dyr_path).name}")
+
+
 def _source(raw_path, dyr_path) -> str:
-    files = Path(raw_path).name + ("" if dyr_path is None else f" + {Path(dyr_path).name}")
-    return f"PSS/E data {files}, imported by stabctl.psse.load_psse"
+    return f"PSS/E data {_files(raw_path, dyr_path)}, imported by stabctl.psse.load_psse"

@@ -14,11 +14,14 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
 * loads (in service): PL + jQL constant power, IP + jIQ constant current (MW/Mvar at
   1 pu), YP + jYQ constant admittance (MW/Mvar at 1 pu, YQ < 0 inductive). The admittance
   part is exact as a bus shunt ``G + jB = (YP + jYQ) / SBASE``. The constant-current part
-  enters the bus load at the bus's RAW voltage VM (``IP * VM``), as PST and ANDES do, and
-  PST's non-conforming load model (``load_con``) keeps it constant current in the dynamic
-  run: ``p_power = PL / (PL + IP*VM)``, ``p_current = IP*VM / (PL + IP*VM)`` (Q alike).
-  ``loads="impedance"`` writes no ``load_con`` rows instead, so that every load is
-  constant impedance in the dynamic run (PST's default; ANDES's default ``p2z = q2z = 1``);
+  enters the bus load at the bus's RAW voltage VM (``IP * VM``), as PST and ANDES do. In
+  the dynamic run (PSS/E converts loads with CONL before dynamics; the RAW file does not
+  say how): ``loads="impedance"`` (default) makes every bus load constant impedance (no
+  ``load_con`` rows: PST's default, ANDES's default ``p2z = q2z = 1``); ``loads="raw"``
+  keeps the RAW composition in PST's non-conforming load model (``load_con``):
+  ``p_power = PL / (PL + IP*VM)``, ``p_current = IP*VM / (PL + IP*VM)`` (Q alike). PST's
+  network solution can fail under deep voltage dips with constant-power loads (PSS/E
+  switches them to constant impedance below PQBRAK; stabctl does not);
 * fixed shunts (in service): GL + jBL (MW/Mvar at 1 pu) into the bus shunt;
 * generators (in service): PG, QG, QT, QB, VS, IREG, MBASE, ZSORCE = ZR + jZX (pu on
   MBASE). Several generators at one bus add up; the bus is PV (IDE 2) or swing (IDE 3) at
@@ -124,7 +127,7 @@ class RawData:
         version: RAW version (32, 33, 34); base_mva: SBASE (MVA); freq_hz: BASFRQ (Hz).
         bus: PST ``bus`` matrix, shape (n_bus, 15) (:class:`stabctl.case.BusTable`).
         line: PST ``line`` matrix, shape (n_branch, 10).
-        load_con: PST ``load_con`` rows, shape (n, 5) (empty with ``loads="impedance"``).
+        load_con: PST ``load_con`` rows, shape (n, 5) (empty unless ``loads="raw"``).
         generators: in-service generators in RAW order.
         unsupported: records that could not be represented, in file order.
     """
@@ -518,13 +521,13 @@ def _demote_idle_pv(b: _Builder):
             row[9] = PQ
 
 
-def read_raw(path: str | Path, loads: str = "raw") -> RawData:
+def read_raw(path: str | Path, loads: str = "impedance") -> RawData:
     """Read a PSS/E RAW file (version 32, 33 or 34) into PST matrices.
 
     Args:
         path: the ``.raw`` file.
-        loads: ``"raw"`` keeps each load's PSS/E composition in the dynamic run
-            (``load_con``); ``"impedance"`` makes every load constant impedance there.
+        loads: ``"impedance"`` makes every load constant impedance in the dynamic run;
+            ``"raw"`` keeps each load's PSS/E composition there (``load_con``).
 
     Returns:
         :class:`RawData` (bus, line, load_con matrices in pu on SBASE, the generators,

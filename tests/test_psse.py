@@ -38,7 +38,7 @@ def test_fields_split_on_commas_and_blanks_with_quoted_names_and_comments():
 
 @pytest.mark.parametrize("path", [V33, V34])
 def test_five_bus_buses_loads_and_shunts(path):
-    raw = read_raw(path)
+    raw = read_raw(path, loads="raw")
     assert (raw.version, raw.base_mva, raw.freq_hz) == (int(path.stem[-2:]), 100.0, 50.0)
     bus = {int(r[0]): r for r in raw.bus}
     assert sorted(bus) == [1, 2, 3, 4]  # bus 5 is IDE 4 (isolated): left out with its load
@@ -103,9 +103,21 @@ def test_two_winding_circuit_of_two_off_nominal_windings():
 
 
 def test_impedance_loads_leave_load_con_empty():
-    raw = read_raw(V33, loads="impedance")
+    raw = read_raw(V33)
     assert raw.load_con.shape == (0, 5)
     assert raw.bus[1, 5] == pytest.approx(1.196, abs=1e-15)  # I part still at VM
+
+
+def test_dyr_machines_share_their_bus_generation():
+    # machine k is the k-th in-service RAW generator; at bus 3 generators '1' and '2'
+    # produce 150 + 50 MW and 20 + 10 Mvar
+    case = load_psse(V33, DATA / "five_bus.dyr")
+    mac = case.machines
+    assert list(mac.number) == [1, 2, 3] and list(mac.bus) == [1, 3, 3]
+    assert list(mac.mva) == [500.0, 200.0, 100.0]  # MBASE
+    np.testing.assert_allclose(mac.pfrac, [1, 0.75, 0.25], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(mac.qfrac, [1, 2 / 3, 1 / 3], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(mac.H, [5.0, 4.0, 3.0])
 
 
 # ---------------------------------------------------------------- errors, unsupported
@@ -168,6 +180,17 @@ def test_unsupported_records_skipped_with_a_warning(tmp_path):
     assert len(case.branches) == 4  # the case without them
 
 
+def test_unsupported_dyr_records_are_listed_with_the_raw_ones():
+    andes, raw = _andes_case("kundur/kundur.raw")
+    dyr = raw.with_name("kundur_full.dyr")  # ends with ANDES's own Toggle record (line 37)
+    with pytest.raises(CaseError, match=r"kundur\.raw \+ kundur_full\.dyr: 1 unsupported "
+                                        r"record\(s\).*kundur_full\.dyr:37 TOGGLE 'Line_8'"):
+        load_psse(raw, dyr)
+    with pytest.warns(UserWarning, match="kundur_full.dyr:37 TOGGLE"):
+        case = load_psse(raw, dyr, on_unsupported="skip")
+    assert (len(case.machines), len(case.exciters), len(case.governors)) == (4, 4, 4)
+
+
 def test_remote_regulation_is_unsupported(tmp_path):
     path = _edit(tmp_path, "1.01000,     3,   100.000", "1.01000,     4,   100.000")
     with pytest.raises(CaseError, match=r"edited\.raw:19 generator at bus 3 '2': remote "
@@ -180,11 +203,11 @@ def test_remote_regulation_is_unsupported(tmp_path):
 
 def test_import_psse_writes_a_case_that_reads_back(tmp_path):
     out = tmp_path / "five.json"
-    res = run("import-psse", V34, "-o", out, "--json")
+    res = run("import-psse", V34, "-o", out, "--json", "--loads", "raw")
     assert res.exit_code == 0, res.output
     summary = json.loads(res.stdout)
     assert (summary["buses"], summary["branches"], summary["nonconforming_loads"]) == (4, 4, 2)
-    assert load_case(out).equals(load_psse(V34))
+    assert load_case(out).equals(load_psse(V34, loads="raw"))
 
 
 def test_import_psse_bad_input_exits_2_and_writes_nothing(tmp_path):
