@@ -11,7 +11,8 @@ tools solve the same problem:
 * fault: ANDES's ``Fault`` model, a shunt ``rf + j xf`` at the bus from ``tf`` to ``tc``
   (no line lost);
 * records ANDES reads but stabctl does not map are removed from the DYR text for both
-  tools (:func:`strip_dyr`), so that the comparison is like for like.
+  tools (:func:`strip_dyr`), so that the comparison is like for like; optionally the
+  machine saturation too (PSS/E's GENROU saturation, which ANDES follows, is not PST's).
 
 Source: ANDES 2.0 documentation (``andes.load``, ``System.add``, ``PFlow``, ``TDS``,
 ``EIG`` routines; ``Fault`` and ``Toggle`` models).
@@ -51,10 +52,13 @@ def _andes():
     return andes
 
 
-def strip_dyr(src: str | Path, dst: str | Path, models) -> tuple[str, ...]:
+def strip_dyr(src: str | Path, dst: str | Path, models, unsaturated: bool = False
+              ) -> tuple[str, ...]:
     """Copy the DYR file ``src`` to ``dst`` without the records of ``models`` (names in
     upper case, e.g. ``{"EXST1", "TOGGLE"}``); returns the removed model names in file
-    order. A record ends at the line holding its ``/`` (PSS/E POM, Dynamics Data File)."""
+    order. ``unsaturated``: GENROU and GENSAL records get S(1.0) = S(1.2) = 0 (their last
+    two CONs), as the two tools' saturation functions differ. A record ends at the line
+    holding its ``/`` (PSS/E POM, Dynamics Data File)."""
     drop = {m.upper() for m in models}
     kept, record, removed = [], [], []
     for line in Path(src).read_text().splitlines(keepends=True):
@@ -66,10 +70,21 @@ def strip_dyr(src: str | Path, dst: str | Path, models) -> tuple[str, ...]:
         if model in drop:
             removed.append(model)
         else:
-            kept.extend(record)
+            kept.append(_unsaturated(text) if unsaturated and model in _SATURATED else text)
         record = []
     Path(dst).write_text("".join(kept + record))
     return tuple(removed)
+
+
+_SATURATED = {"GENROU", "GENSAL"}
+
+
+def _unsaturated(text: str) -> str:
+    """The record with its last two numbers (S(1.0), S(1.2)) replaced by 0."""
+    body, slash, comment = text.partition("/")
+    head, quote, rest = body.rpartition("'")
+    fields = rest.split()
+    return f"{head}{quote} {' '.join(fields[:-2] + ['0.0', '0.0'])} {slash}{comment}"
 
 
 def andes_system(raw: str | Path, dyr: str | Path | None = None,
