@@ -453,10 +453,11 @@ class MachineTable(Table):
 
 @dataclass(frozen=True, eq=False)
 class ExciterTable(Table):
-    """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3).
+    """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3),
+    plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4).
 
     ==  ======  =======================================================================
-    1   type    0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3)
+    1   type    0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1
     2   machine machine number
     3   TR      input filter time constant, s
     4   KA      voltage regulator gain
@@ -476,12 +477,15 @@ class ExciterTable(Table):
     18  Efdmax  ST3: maximum field voltage, pu
     19  KG      ST3: inner loop feedback constant
     20  VGmax   ST3: maximum inner loop feedback, pu
+    21  KF      EXST1: rate feedback gain
+    22  TF      EXST1: rate feedback time constant, s
     ==  ======  =======================================================================
 
     Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2); use
-    ``col(k)`` for those. Omitted trailing columns are 0 (a simple exciter needs 9).
-    Validation: type in {0, 1, 2, 3}, one exciter per machine, TR, TA, TB >= 0 (machine
-    existence is checked by :class:`Case`).
+    ``col(k)`` for those.  EXST1 (type 4) uses columns 3-11 and KC (17) as named, with
+    Vrmax, Vrmin its output limits (times V_t) and KF, TF (21, 22).  Omitted trailing
+    columns are 0 (a simple exciter needs 9).  Validation: type in {0, 1, 2, 3, 4}, one
+    exciter per machine, TR, TA, TB >= 0 (machine existence is checked by :class:`Case`).
     """
 
     type: np.ndarray
@@ -504,6 +508,8 @@ class ExciterTable(Table):
     Efdmax: np.ndarray
     KG: np.ndarray
     VGmax: np.ndarray
+    KF: np.ndarray
+    TF: np.ndarray
 
     TABLE: ClassVar[str] = "exc_con"
     MIN_COLUMNS: ClassVar[int] = 9
@@ -512,7 +518,8 @@ class ExciterTable(Table):
     INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine")
 
     def _check(self):
-        self._require(np.isin(self.type, (0, 1, 2, 3)), "type", "exciter type must be 0, 1, 2 or 3")
+        self._require(np.isin(self.type, (0, 1, 2, 3, 4)), "type",
+                      "exciter type must be 0, 1, 2, 3 or 4")
         self._unique("machine", "exciter on machine")
         self._nonnegative("TR", "TA", "TB")  # filter and lag constants
 

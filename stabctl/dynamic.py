@@ -335,7 +335,8 @@ def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, S_e
                                         p.EP[i, exc.E_KC], et, np.angle(V_bus[p.mac_bus[m]]),
                                         eq * cq + ed * cd, eq * cd - ed * cq, p.MP[m, mac.K_POT],
                                         mac.st3_field_current(p.MP, xm, cur, m), False)
-        efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB)
+        ifd = mac.field_current(p.MP, xm, cur, m) if p.EP[i, exc.E_KIND] == exc.ST1 else 0.0
+        efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB, ifd)
         vex[m] = efd_alg[i]
     pmech[:] = p.pmech0
     for k in range(ng):

@@ -25,7 +25,7 @@ from .case import ExciterTable, GovernorTable, MachineTable, PssTable
 from .errors import CaseError
 
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
-N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16,
+N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16, "EXST1": 12,
             "IEEEST": 19, "TGOV1": 7, "IEEEG1": 22}
 
 
@@ -312,6 +312,14 @@ def _dc(kind):
     return mapper
 
 
+def _exst1(rec, gen):
+    """EXST1: TR VIMAX VIMIN TC TB KA TA VRMAX VRMIN KC KF TF -> stabctl type 4 (columns
+    as ExciterTable: VImax, VImin 10-11, KC 17, KF, TF 21-22)."""
+    TR, VIMAX, VIMIN, TC, TB, KA, TA, VRMAX, VRMIN, KC, KF, TF = rec.params
+    return _exc_row(gen, 4, {3: TR, 4: KA, 5: TA, 6: TB, 7: TC, 8: VRMAX, 9: VRMIN, 10: VIMAX,
+                             11: VIMIN, 17: KC, 21: KF, 22: TF})
+
+
 # -- PSS (PST pss_con, PssTable) ----------------------------------------------------------------
 
 def _ieeest(rec, gen):
@@ -366,7 +374,7 @@ def _ieeeg1(rec, gen):
 
 _MAPPERS = {
     "machine": {"GENROU": _genrou, "GENSAL": _gensal, "GENCLS": _gencls},
-    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2)},
+    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2), "EXST1": _exst1},
     "pss": {"IEEEST": _ieeest},
     "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1},
 }

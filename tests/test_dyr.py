@@ -97,7 +97,20 @@ def test_wecc_unsupported_records_are_listed_with_file_and_line():
     assert "wecc_full.dyr:8 ESST3A (bus 3, id 1)" in msg
     assert "wecc_full.dyr:4 IEEEST (bus 3, id 1): its machine has no (supported) exciter" in msg
     t = dyr_tables(recs, wecc_generators(recs), on_unsupported="skip")
-    assert {r.model for r in t.unsupported} == {"ESST3A", "EXST1", "ESDC2A", "ST2CUT", "IEEEST"}
+    assert {r.model for r in t.unsupported} == {"ESST3A", "ESDC2A", "ST2CUT", "IEEEST"}
+
+
+def test_wecc_exst1_mapping():
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens, on_unsupported="skip")
+    e = ExciterTable.from_matrix(t.exc_con)
+    r = list(e.machine).index(next(g["number"] for g in gens if g["bus"] == 8))
+    # line 44: TR .02 VIMAX 99 VIMIN -99 TC 0 TB .02 KA 50 TA .02 VRMAX 9999 VRMIN -9999
+    # KC 0 KF .01 TF 1
+    assert (e.type[r], e.TR[r], e.VImax[r], e.VImin[r], e.TC[r], e.TB[r]) == (4, 0.02, 99, -99, 0, 0.02)
+    assert (e.KA[r], e.TA[r], e.Vrmax[r], e.Vrmin[r], e.KC[r]) == (50, 0.02, 9999, -9999, 0)
+    assert (e.KF[r], e.TF[r]) == (0.01, 1.0)
 
 
 def test_ieeest_maps_to_pst_pss_when_equivalent(tmp_path):
@@ -187,6 +200,35 @@ def test_dc2_limit_scales_with_terminal_voltage():
         dx = np.zeros_like(x)
         exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, dx)
         assert x[2, 0] == pytest.approx(bound, rel=1e-15) and dx[2, 0] == 0.0
+
+
+def st1_params(KC=0.1, KF=0.01):
+    e = ExciterTable.from_matrix([[4, 1, 0.02, 50, 0.02, 0.02, 0.1, 4.0, -3.0, 0.2, -0.2, 0, 0,
+                                   0, 0, 0, KC, 0, 0, 0, KF, 1.0]])
+    return exc.exciter_params(load_case("kundur").replace(exciters=e))
+
+
+def test_exst1_steady_state_and_output_limit():
+    """Efd0 = V_R0 = K_A V_I0, Vref = V_t + Efd0/K_A, zero derivatives; output clipped to
+    V_t Vrmax - K_C I_fd and V_t Vrmin (PSS/E EXST1)."""
+    p = st1_params()
+    Efd, Vt = 1.9, 1.02
+    x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
+    assert (x[2, 0], x[3, 0]) == (Efd, Efd) and Vref[0] == pytest.approx(Vt + Efd / 50, rel=1e-15)
+    P = p.packed(Vref)
+    assert exc.field_voltage(P, x, 0, Vt, 0.0, 1.0, Efd) == Efd
+    dx = np.full_like(x, np.nan)
+    exc.derivatives(P, x, 0, Vt, 0.0, Efd, dx)
+    assert np.abs(dx).max() < 1e-12
+    x[2, 0] = 10.0
+    assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0) == pytest.approx(0.9 * 4.0 - 0.1 * 2.0)
+    x[2, 0] = -10.0
+    assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0) == pytest.approx(0.9 * -3.0)
+
+
+def test_exst1_initial_point_outside_limits_is_refused():
+    with pytest.raises(CaseError, match="exc_con row 1: EXST1 initial field voltage 3.9"):
+        exc.initialise(st1_params(), np.array([3.9]), np.array([1.0]))
 
 
 def tgov1_params(Dt=0.0):
@@ -294,6 +336,20 @@ def test_flat_run_with_ieeex1_and_ieeeg1_has_no_drift(kundur_tables):
     assert residual < 1e-9, where
     r = sim.run([], 10.0)
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.pmech - r.pmech[0]).max() < 1e-9
+
+
+def test_flat_run_with_exst1_has_no_drift(kundur_tables):
+    """WECC's EXST1 data (T_C = 0: no transient gain; with T_C/T_B = 5 and no PSS, Kundur's
+    inter-area mode is unstable and round-off grows), K_C = 0.1 so the I_fd limit acts."""
+    e = np.tile(ExciterTable.from_matrix(
+        [[4, 1, 0.02, 50, 0.02, 0.02, 0.0, 4.0, -3.0, 0.2, -0.2, 0, 0, 0, 0, 0, 0.1, 0, 0, 0,
+          0.01, 1.0]]).matrix(), (4, 1))
+    e[:, 1] = [1, 2, 3, 4]
+    sim = Simulator(replaced_kundur(e, kundur_tables.tg_con))
+    residual, where = sim.model_for([]).initial_residual
+    assert residual < 1e-9, where
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
 
 
 def test_linearised_dyr_kundur_states_and_reference_inputs(dyr_kundur):
