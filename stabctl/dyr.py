@@ -26,6 +26,7 @@ from .errors import CaseError
 
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
 N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16, "EXST1": 12,
+            "ESST3A": 21,
             "IEEEST": 19, "TGOV1": 7, "IEEEG1": 22}
 
 
@@ -320,6 +321,22 @@ def _exst1(rec, gen):
                              11: VIMIN, 17: KC, 21: KF, 22: TF})
 
 
+def _esst3a(rec, gen):
+    """ESST3A: TR VIMAX VIMIN KM TC TB KA TA VRMAX VRMIN KG KP KI VBMAX KC XL VGMAX THETAP TM
+    VMMAX VMMIN -> PST exc_st3 (type 3) when TA = 0: ST3A's gain KA is PST's K_J, its inner
+    loop KM/(1 + s TM) limited [VMMIN, VMMAX] is PST's K_A/(1 + s T_A) limited [Vrmin,
+    Vrmax]; VRMAX/VRMIN and VBMAX have no PST counterpart (Efdmax = VBMAX VMMAX; docs
+    12.2)."""
+    (TR, VIMAX, VIMIN, KM, TC, TB, KA, TA, VRMAX, VRMIN, KG, KP, KI, VBMAX, KC, XL, VGMAX,
+     THETAP, TM, VMMAX, VMMIN) = rec.params
+    if TA >= 1e-3:
+        raise _Unsupported(f"TA = {TA:g} s: the regulator lag before the inner loop has no PST "
+                           "exc_st3 counterpart (only TA = 0)")
+    return _exc_row(gen, 3, {3: TR, 4: KM, 5: TM, 6: TB, 7: TC, 8: VMMAX, 9: VMMIN, 10: VIMAX,
+                             11: VIMIN, 12: KA, 13: KP, 14: THETAP, 15: KI, 16: XL, 17: KC,
+                             18: VBMAX * VMMAX, 19: KG, 20: VGMAX})
+
+
 # -- PSS (PST pss_con, PssTable) ----------------------------------------------------------------
 
 def _ieeest(rec, gen):
@@ -374,7 +391,8 @@ def _ieeeg1(rec, gen):
 
 _MAPPERS = {
     "machine": {"GENROU": _genrou, "GENSAL": _gensal, "GENCLS": _gencls},
-    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2), "EXST1": _exst1},
+    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2), "EXST1": _exst1,
+                "ESST3A": _esst3a},
     "pss": {"IEEEST": _ieeest},
     "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1},
 }

@@ -10,7 +10,7 @@ from scipy.integrate import solve_ivp
 
 from stabctl import exciters as exc
 from stabctl import governors as gov
-from stabctl.case import ExciterTable, GovernorTable, load_case
+from stabctl.case import ExciterTable, GovernorTable, PssTable, load_case
 from stabctl.dyr import dyr_tables, exp_saturation, read_dyr
 from stabctl.errors import CaseError
 from stabctl.linearise import linearise
@@ -94,10 +94,27 @@ def test_wecc_unsupported_records_are_listed_with_file_and_line():
     with pytest.raises(CaseError) as e:
         dyr_tables(recs, wecc_generators(recs))
     msg = str(e.value)
-    assert "wecc_full.dyr:8 ESST3A (bus 3, id 1)" in msg
-    assert "wecc_full.dyr:4 IEEEST (bus 3, id 1): its machine has no (supported) exciter" in msg
+    assert "wecc_full.dyr:60 ESDC2A (bus 10, id 1): model ESDC2A is not mapped" in msg
+    assert "wecc_full.dyr:320 IEEEST (bus 111, id 1): its machine has no (supported) exciter" in msg
     t = dyr_tables(recs, wecc_generators(recs), on_unsupported="skip")
-    assert {r.model for r in t.unsupported} == {"ESST3A", "ESDC2A", "ST2CUT", "IEEEST"}
+    assert {r.model for r in t.unsupported} == {"ESDC2A", "ST2CUT", "IEEEST"}
+    assert len(t.unsupported) == 8 + 25 + 2
+
+
+def test_wecc_esst3a_to_exc_st3():
+    """Line 8 (bus 3): TR .02 VIMAX .3 VIMIN -.2 KM 8 TC 1 TB 5 KA 20 TA 0 VRMAX 99 VRMIN -99
+    KG 1 KP 3.67 KI .435 VBMAX 6.48 KC .01 XL .0098 VGMAX 4.86 THETAP 3.33 TM .4 VMMAX 99
+    VMMIN 0 -> exc_st3 with K_J = KA, K_A = KM, T_A = TM, V_R limits = VM limits."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens, on_unsupported="skip")
+    r = [g["bus"] for g in gens].index(3)
+    row = t.exc_con[list(t.exc_con[:, 1]).index(gens[r]["number"])]
+    np.testing.assert_array_equal(row[:20], [3, gens[r]["number"], 0.02, 8, 0.4, 5, 1, 99, 0, 0.3,
+                                            -0.2, 20, 3.67, 3.33, 0.435, 0.0098, 0.01,
+                                            6.48 * 99, 1, 4.86])
+    np.testing.assert_array_equal(t.pss_con[0], [2, gens[r]["number"], -2 * 1.0, 4.2, 0, 0.75, 0,
+                                                 0, 0.1, -0.1])
 
 
 def test_wecc_exst1_mapping():
@@ -346,6 +363,27 @@ def test_flat_run_with_exst1_has_no_drift(kundur_tables):
           0.01, 1.0]]).matrix(), (4, 1))
     e[:, 1] = [1, 2, 3, 4]
     sim = Simulator(replaced_kundur(e, kundur_tables.tg_con))
+    residual, where = sim.model_for([]).initial_residual
+    assert residual < 1e-9, where
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
+
+
+def test_flat_run_with_esst3a_and_ieeest_has_no_drift():
+    """WECC's ESST3A (as exc_st3) and power-input IEEEST (as PST pss) on Kundur's machines,
+    with K_C = 0: PST's exc_st3 feeds K_C a field current formed differently from the one
+    of its initialisation, so K_C != 0 starts off equilibrium (docs/pst_models.md 12.2)."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens, on_unsupported="skip")
+    n3 = [g["number"] for g in gens if g["bus"] == 3][0]
+    e = np.tile(t.exc_con[t.exc_con[:, 1] == n3], (4, 1))
+    p = np.tile(t.pss_con[t.pss_con[:, 1] == n3], (4, 1))
+    e[:, 1] = p[:, 1] = [1, 2, 3, 4]
+    case = load_case("kundur")
+    e[:, 16] = 0.0                                   # K_C
+    case = case.replace(exciters=ExciterTable.from_matrix(e), pss=PssTable.from_matrix(p))
+    sim = Simulator(case)
     residual, where = sim.model_for([]).initial_residual
     assert residual < 1e-9, where
     r = sim.run([], 10.0)
