@@ -68,6 +68,10 @@ class MachineParams:
 
     def packed(self, eqp0: np.ndarray) -> np.ndarray:
         """Parameter matrix (n_mac, K_NCOL) for the compiled kernels; eqp0 = initial E'q."""
+        with np.errstate(divide="ignore", invalid="ignore"):   # mac_em: 0/0 constants unused
+            return self._packed(eqp0)
+
+    def _packed(self, eqp0):
         cols = {K_KIND: self.kind, K_POT: self.mac_pot, K_RA: self.ra, K_XL: self.xl,
                 K_XD: self.xd, K_XDP: self.xdp, K_XDPP: self.xdpp, K_XQ: self.xq,
                 K_XQP: self.xqp, K_XQPP: self.xqpp, K_TDOP: self.Tdop, K_TDOPP: self.Tdopp,
@@ -78,8 +82,7 @@ class MachineParams:
                 K_SC: self.sat[:, 2], K_EQP0: eqp0}
         P = np.zeros((self.n, K_NCOL))
         for k, v in cols.items():
-            with np.errstate(divide="ignore", invalid="ignore"):
-                P[:, k] = np.nan_to_num(np.asarray(v, float))
+            P[:, k] = np.nan_to_num(np.asarray(v, float))
         return P
 
     @property
