@@ -25,8 +25,9 @@ from .case import ExciterTable, GovernorTable, MachineTable, PssTable
 from .errors import CaseError
 
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
-N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16,
-            "IEEEST": 19, "TGOV1": 7, "IEEEG1": 22}
+N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16, "EXST1": 12,
+            "ESST3A": 21,
+            "IEEEST": 19, "ST2CUT": 20, "TGOV1": 7, "IEEEG1": 22}
 
 
 @dataclass(frozen=True)
@@ -312,25 +313,87 @@ def _dc(kind):
     return mapper
 
 
+def _exst1(rec, gen):
+    """EXST1: TR VIMAX VIMIN TC TB KA TA VRMAX VRMIN KC KF TF -> stabctl type 4 (columns
+    as ExciterTable: VImax, VImin 10-11, KC 17, KF, TF 21-22)."""
+    TR, VIMAX, VIMIN, TC, TB, KA, TA, VRMAX, VRMIN, KC, KF, TF = rec.params
+    return _exc_row(gen, 4, {3: TR, 4: KA, 5: TA, 6: TB, 7: TC, 8: VRMAX, 9: VRMIN, 10: VIMAX,
+                             11: VIMIN, 17: KC, 21: KF, 22: TF})
+
+
+def _esst3a(rec, gen):
+    """ESST3A: TR VIMAX VIMIN KM TC TB KA TA VRMAX VRMIN KG KP KI VBMAX KC XL VGMAX THETAP TM
+    VMMAX VMMIN -> PST exc_st3 (type 3) when TA = 0: ST3A's gain KA is PST's K_J, its inner
+    loop KM/(1 + s TM) limited [VMMIN, VMMAX] is PST's K_A/(1 + s T_A) limited [Vrmin,
+    Vrmax]; VRMAX/VRMIN and VBMAX have no PST counterpart (Efdmax = VBMAX VMMAX; docs
+    12.2)."""
+    (TR, VIMAX, VIMIN, KM, TC, TB, KA, TA, VRMAX, VRMIN, KG, KP, KI, VBMAX, KC, XL, VGMAX,
+     THETAP, TM, VMMAX, VMMIN) = rec.params
+    if TA >= 1e-3:
+        raise _Unsupported(f"TA = {TA:g} s: the regulator lag before the inner loop has no PST "
+                           "exc_st3 counterpart (only TA = 0)")
+    return _exc_row(gen, 3, {3: TR, 4: KM, 5: TM, 6: TB, 7: TC, 8: VMMAX, 9: VMMIN, 10: VIMAX,
+                             11: VIMIN, 12: KA, 13: KP, 14: THETAP, 15: KI, 16: XL, 17: KC,
+                             18: VBMAX * VMMAX, 19: KG, 20: VGMAX})
+
+
 # -- PSS (PST pss_con, PssTable) ----------------------------------------------------------------
 
+def _pss_row(gen, **cols) -> list:
+    row = [0.0] * len(PssTable.columns())
+    cols.update(machine=gen["number"])
+    for name, v in cols.items():
+        row[PssTable.columns().index(name)] = float(v)
+    return row
+
+
+def _local_inputs(*pairs) -> None:
+    """PSS/E input codes and remote buses: only local speed (1) or electrical power (3)."""
+    for code, bus in pairs:
+        if code not in (0.0, 1.0, 3.0) or bus != 0:
+            raise _Unsupported(f"input code {code:g} at bus {bus:g} (only local speed 1 or "
+                               "electrical power 3)")
+
+
+def _washout(gain_T, T):
+    if gain_T == 0 or T < 1e-3:
+        raise _Unsupported("washout numerator time constant 0 (a lag instead) or washout "
+                           "time constant below 1e-3 s")
+
+
 def _ieeest(rec, gen):
-    """IEEEST: ICS IB A1..A6 T1..T6 KS LSMAX LSMIN VCU VCL -> PST pss when exactly
-    equivalent: A1..A6 = 0, local input speed (ICS 1) or electrical power (ICS 3), no
-    VCU/VCL cut-off; washout KS sT5/(1 + sT6) = K_Tw s/(1 + s T_w) with K_Tw = KS T5,
-    T_w = T6; the existing lead-lags fill PST's two (docs 12.3)."""
+    """IEEEST: ICS IB A1..A6 T1..T6 KS LSMAX LSMIN VCU VCL -> PST pss (type 1 speed, 2
+    power) when exactly equivalent (A1..A6 = 0, a lead-lag with lag >= 1e-3 s): washout
+    KS sT5/(1 + sT6) = K_Tw s/(1 + s T_w), K_Tw = KS T5, T_w = T6; else stabctl's PSS/E
+    stabiliser (type 3).  VCU/VCL cut-off unsupported (docs 12.3)."""
     ics, ib, *A, T1, T2, T3, T4, T5, T6, KS, LSMAX, LSMIN, VCU, VCL = rec.params
-    pst_type = {1.0: 1, 3.0: 2}.get(ics)
-    if pst_type is None or ib != 0:
-        raise _Unsupported(f"input ICS = {ics:g}, IB = {ib:g} (only local speed 1 or "
-                           "electrical power 3)")
-    if any(A) or VCU or VCL:
-        raise _Unsupported("filter A1..A6 or VCU/VCL cut-off not zero (no PST equivalent)")
+    _local_inputs((ics, ib))
+    _washout(T5, T6)
+    if ics == 0 or VCU or VCL:
+        raise _Unsupported("no input (ICS 0) or VCU/VCL cut-off")
     stages = [(a, b) for a, b in ((T1, T2), (T3, T4)) if a or b]
-    if not stages or any(b < 1e-3 for _, b in stages) or T6 < 1e-3:
-        raise _Unsupported("needs T6 >= 1e-3 s and at least one lead-lag with lag >= 1e-3 s")
-    (a1, b1), (a2, b2) = (stages + [(0.0, 0.0)])[:2]
-    return [pst_type, gen["number"], KS * T5, T6, a1, b1, a2, b2, LSMAX, LSMIN]
+    if not any(A) and stages and all(b >= 1e-3 for _, b in stages):
+        (a1, b1), (a2, b2) = (stages + [(0.0, 0.0)])[:2]
+        return _pss_row(gen, type={1.0: 1, 3.0: 2}[ics], KTw=KS * T5, Tw=T6, T1=a1, T2=b1,
+                        T3=a2, T4=b2, ymax=LSMAX, ymin=LSMIN)
+    return _pss_row(gen, type=3, input1=ics, K1=1.0, KTw=KS * T5, Tw=T6, T1=T1, T2=T2, T3=T3,
+                    T4=T4, ymax=LSMAX, ymin=LSMIN, **dict(zip(("A1", "A2", "A3", "A4", "A5",
+                                                                "A6"), A)))
+
+
+def _st2cut(rec, gen):
+    """ST2CUT: MODE BUSR MODE2 BUSR2 K1 K2 T1..T10 LSMAX LSMIN VCU VCL -> stabctl's PSS/E
+    stabiliser (type 3): K1/(1 + sT1) + K2/(1 + sT2) inputs, washout sT3/(1 + sT4), lead-lags
+    T5/T6, T7/T8, T9/T10.  VCU/VCL cut-off unsupported."""
+    (mode, busr, mode2, busr2, K1, K2, T1, T2, T3, T4, T5, T6, T7, T8, T9, T10, LSMAX, LSMIN,
+     VCU, VCL) = rec.params
+    _local_inputs((mode, busr), (mode2, busr2))
+    _washout(T3, T4)
+    if mode == 0 or VCU or VCL:
+        raise _Unsupported("no first input (MODE 0) or VCU/VCL cut-off")
+    return _pss_row(gen, type=3, input1=mode, K1=K1, Tr1=T1, input2=mode2, K2=K2, Tr2=T2,
+                    KTw=T3, Tw=T4, T1=T5, T2=T6, T3=T7, T4=T8, T5=T9, T6=T10, ymax=LSMAX,
+                    ymin=LSMIN)
 
 
 # -- governors (PST tg_con, GovernorTable) ----------------------------------------------------
@@ -366,8 +429,9 @@ def _ieeeg1(rec, gen):
 
 _MAPPERS = {
     "machine": {"GENROU": _genrou, "GENSAL": _gensal, "GENCLS": _gencls},
-    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2)},
-    "pss": {"IEEEST": _ieeest},
+    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2), "EXST1": _exst1,
+                "ESST3A": _esst3a},
+    "pss": {"IEEEST": _ieeest, "ST2CUT": _st2cut},
     "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1},
 }
 _KIND = {model: kind for kind, models in _MAPPERS.items() for model in models}

@@ -1,11 +1,13 @@
 """Exciter models: PST `smpexc` (type 0, simple static), `exc_dc12` (types 1 and 2, IEEE
-DC1 / DC2 dc commutator exciters) and `exc_st3` (type 3, IEEE ST3).
+DC1 / DC2 dc commutator exciters), `exc_st3` (type 3, IEEE ST3) and stabctl's PSS/E
+`EXST1` (type 4, IEEE ST1 simplified).
 
 Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
-Table 2, 3.13 Table 3); equations, limits and PST's quirks in docs/pst_models.md section
-2.  A time constant below 1e-3 s means the block is absent (no state).  States, named per
-type in STATE_NAMES: smpexc (V_TR, V_As, Efd); exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR,
-V_As, V_R, Efd, R_f).  Units: pu on the machine base; times in s.
+Table 2, 3.13 Table 3); PSS/E Model Library EXST1 (IEEE Std 421.5 ST1A simplified);
+equations, limits and PST's quirks in docs/pst_models.md section 2.  A time constant
+below 1e-3 s means the block is absent (no state).  States, named per type in
+STATE_NAMES: smpexc (V_TR, V_As, Efd); exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As,
+V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f).  Units: pu on the machine base; times in s.
 """
 
 from __future__ import annotations
@@ -19,9 +21,10 @@ from .case import Case
 from .errors import CaseError
 
 LBND = 1e-3
-SMP, DC1, DC2, ST3 = 0, 1, 2, 3
+SMP, DC1, DC2, ST3, ST1 = 0, 1, 2, 3, 4
 STATE_NAMES = {SMP: ("VTR", "VAs", "Efd"), ST3: ("VTR", "VAs", "VR"),
-               DC1: ("VTR", "VAs", "VR", "Efd", "Rf"), DC2: ("VTR", "VAs", "VR", "Efd", "Rf")}
+               DC1: ("VTR", "VAs", "VR", "Efd", "Rf"), DC2: ("VTR", "VAs", "VR", "Efd", "Rf"),
+               ST1: ("VTR", "VAs", "VR", "Rf")}
 
 # columns of the packed parameter matrix used by the compiled kernels
 (E_KIND, E_MAC, E_TR, E_KA, E_TA, E_TB, E_TC, E_VRMAX, E_VRMIN, E_VIMAX, E_VIMIN, E_KJ,
@@ -32,8 +35,8 @@ STATE_NAMES = {SMP: ("VTR", "VAs", "Efd"), ST3: ("VTR", "VAs", "VR"),
 @dataclass(frozen=True, eq=False)
 class ExciterParams:
     """Exciter data of a case, arrays of shape (n_exc,); `mac` is the machine index.
-    DC exciters (types 1, 2): KE, TE, KF, TF and the saturation SE(E) = Asat exp(Bsat |E|)
-    (0 for the other types)."""
+    DC exciters (types 1, 2): KE, TE and the saturation SE(E) = Asat exp(Bsat |E|) (0 for
+    the other types); KF, TF: rate feedback of the DC exciters and EXST1."""
 
     kind: np.ndarray
     mac: np.ndarray
@@ -104,14 +107,20 @@ class ExciterParams:
         act[0], act[1] = self.has_TR, self.has_TB
         act[2] = (self.kind == ST3) | self.has_TA
         if act.shape[0] > 3:
-            act[3:5] = self.is_dc
+            act[3] = self.has_Rf
+            act[4] = self.is_dc
         return act
+
+    @property
+    def has_Rf(self):
+        """The rate-feedback state exists: DC exciters, EXST1 with K_F != 0."""
+        return self.is_dc | ((self.kind == ST1) & (self.KF != 0))
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
         return (("exc_con T_R", self.TR, self.has_TR), ("exc_con T_A", self.TA, self.has_TA),
                 ("exc_con T_B", self.TB, self.has_TB), ("exc_con T_E", self.TE, self.is_dc),
-                ("exc_con T_F", self.TF, self.is_dc))
+                ("exc_con T_F", self.TF, self.has_Rf))
 
 
 def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
@@ -133,13 +142,18 @@ def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _check_dc(e) -> None:
-    """PST exc_dc12 cases stabctl does not model: raise CaseError naming row and field."""
-    for r in np.nonzero((e.type == DC1) | (e.type == DC2))[0]:
-        for name, k in (("TA", 5), ("TE", 11), ("TF", 17)):
+    """DC exciter and EXST1 options stabctl does not model: raise CaseError naming row and
+    field (T_A, T_E, T_F must exist; Vrmax = 0 is PST's 'compute it')."""
+    need = {DC1: (("TA", 5), ("TE", 11), ("TF", 17)), DC2: (("TA", 5), ("TE", 11), ("TF", 17)),
+            ST1: (("TA", 5),)}
+    for r in np.nonzero(np.isin(e.type, (DC1, DC2, ST1)))[0]:
+        kind = int(e.type[r])
+        extra = (("TF", 22),) if kind == ST1 and e.KF[r] != 0 else ()
+        for name, k in need[kind] + extra:
             if e.col(k)[r] < LBND:
-                raise CaseError(f"exc_con row {r + 1}, field '{name}' (column {k}): a DC "
-                                f"exciter needs {name} >= {LBND} s")
-        if e.Vrmax[r] == 0:
+                raise CaseError(f"exc_con row {r + 1}, field '{name}' (column {k}): exciter "
+                                f"type {kind} needs {name} >= {LBND} s")
+        if kind != ST1 and e.Vrmax[r] == 0:
             raise CaseError(f"exc_con row {r + 1}, field 'Vrmax': 0 (PST computes it from E2) "
                             "is not supported; give the limit")
 
@@ -150,7 +164,7 @@ def exciter_params(case: Case) -> ExciterParams:
     _check_dc(e)
     A, B = _dc_saturation(e)
     dc = (e.type == DC1) | (e.type == DC2)
-    KA = np.where(((e.type == ST3) | dc) & (e.KA == 0), 1.0, e.KA)
+    KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
     return ExciterParams(
         kind=e.type.astype(int), mac=np.array([case.machine_index(m) for m in e.machine], int),
         TR=e.TR.copy(), KA=KA, TA=e.TA.copy(), TB=e.TB.copy(), TC=e.TC.copy(),
@@ -158,8 +172,9 @@ def exciter_params(case: Case) -> ExciterParams:
         KJ=e.KJ.copy(), KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)), KI=e.KI.copy(),
         XL=e.XL.copy(), KC=e.KC.copy(), Efdmax=e.Efdmax.copy(), KG=e.KG.copy(),
         VGmax=e.VGmax.copy(), KE=np.where(dc, e.col(10), 0.0), TE=np.where(dc, e.col(11), 0.0),
-        Asat=np.where(dc, A, 0.0), Bsat=np.where(dc, B, 0.0), KF=np.where(dc, e.col(16), 0.0),
-        TF=np.where(dc, e.col(17), 0.0))
+        Asat=np.where(dc, A, 0.0), Bsat=np.where(dc, B, 0.0),
+        KF=np.where(dc, e.col(16), np.where(e.type == ST1, e.KF, 0.0)),
+        TF=np.where(dc, e.col(17), np.where(e.type == ST1, e.TF, 0.0)))
 
 
 @njit(cache=True)
@@ -205,13 +220,31 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
         raise CaseError(f"exc_con row {i + 1}: initial field voltage {vex[i]:.3f} pu outside "
                         "the ST3 limits (Efdmax or VI range)")
     p, VR_dc = _dc_initial_regulator(p, vex, eterm)
-    VA = np.where(smp, VA_smp, np.where(dc, VR_dc / p.KA, VA_st3))
+    st1 = p.kind == ST1
+    _check_st1_initial(p, vex, eterm)
+    VA = np.where(smp, VA_smp, np.where(dc, VR_dc, vex) / p.KA)
+    VA = np.where(st3, VA_st3, VA)
     x[1] = VA
-    x[2] = np.where(smp, vex, np.where(dc, VR_dc, VR))
-    if dc.any():
-        x[3], x[4] = np.where(dc, vex, 0.0), np.where(dc, vex, 0.0)
+    x[2] = np.where(smp | st1, vex, np.where(dc, VR_dc, VR))
+    if x.shape[0] > 3:
+        x[3] = np.where(p.has_Rf, vex, 0.0)
+    if x.shape[0] > 4:
+        x[4] = np.where(dc, vex, 0.0)
     Vref = eterm + np.where(st3, VI, VA)
     return x, Vref, p
+
+
+def _check_st1_initial(p: ExciterParams, Efd, eterm):
+    """EXST1 at the initial point: Efd0 inside [V_t Vrmin, V_t Vrmax - K_C I_fd0] (I_fd0 =
+    Efd0) and the regulator input Efd0/K_A inside [VImin, VImax]; raises CaseError."""
+    st1 = p.kind == ST1
+    VI = Efd / p.KA
+    bad = np.nonzero(st1 & ((Efd > eterm * p.Vrmax - p.KC * Efd) | (Efd < eterm * p.Vrmin)
+                            | (VI > p.VImax) | (VI < p.VImin)))[0]
+    if bad.size:
+        i = bad[0]
+        raise CaseError(f"exc_con row {i + 1}: EXST1 initial field voltage {Efd[i]:.4f} pu "
+                        "outside its output limits or regulator input outside [VImin, VImax]")
 
 
 def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
@@ -232,15 +265,20 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
 
 
 @njit(cache=True)
-def field_voltage(P, x, i, VTR_alg, pss_out, VB):
-    """Field voltage exciter i hands its machine (PST flag 1).
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd):
+    """Field voltage exciter i hands its machine (PST flag 1); VTR_alg: terminal voltage,
+    VB: ST3 source voltage, ifd: machine field current (EXST1).
 
     smpexc: the Efd state (unclamped) when T_A exists, else K_A times the (lead-lag of the)
-    error, without limits; exc_dc12: the Efd state; exc_st3: min(V_R V_B, Efdmax).
+    error, without limits; exc_dc12: the Efd state; exc_st3: min(V_R V_B, Efdmax); EXST1:
+    V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd].
     """
     kind = P[i, E_KIND]
     if kind == ST3:
         return min(x[2, i] * VB, P[i, E_EFDMAX])
+    if kind == ST1:
+        hi = VTR_alg * P[i, E_VRMAX] - P[i, E_KC] * ifd
+        return min(max(x[2, i], VTR_alg * P[i, E_VRMIN]), hi)
     if kind == DC1 or kind == DC2:
         return x[3, i]
     if P[i, E_TA] >= LBND:
@@ -269,14 +307,19 @@ def derivatives(P, x, i, eterm, pss_out, efd, dx):
     the derivative is kept (PST's misspelt dEFD, docs/pst_models.md 2.1).  exc_st3 and
     exc_dc12: V_R is clamped and its derivative zeroed when it pushes outward.
     """
+    dx[:, i] = 0.0
     has_TR, has_TB = P[i, E_TR] >= LBND, P[i, E_TB] >= LBND
     VTR = x[0, i] if has_TR else eterm
     dx[0, i] = (eterm - x[0, i]) / P[i, E_TR] if has_TR else 0.0
     kind = P[i, E_KIND]
-    smp, dc = kind == SMP, kind == DC1 or kind == DC2
+    smp, dc, st1 = kind == SMP, kind == DC1 or kind == DC2, kind == ST1
     VI = P[i, E_VREF] - VTR + pss_out
     if dc:
         VI -= P[i, E_KF] / P[i, E_TF] * (x[3, i] - x[4, i])
+    elif st1 and P[i, E_KF] != 0:
+        VI = min(max(VI - P[i, E_KF] / P[i, E_TF] * (efd - x[3, i]), P[i, E_VIMIN]),
+                 P[i, E_VIMAX])
+        dx[3, i] = (efd - x[3, i]) / P[i, E_TF]
     elif not smp:
         VI = min(max(VI, P[i, E_VIMIN]), P[i, E_VIMAX])
     u = P[i, E_KJ] * VI if kind == ST3 else VI
@@ -289,6 +332,8 @@ def derivatives(P, x, i, eterm, pss_out, efd, dx):
             x[2, i] = min(max(x[2, i], lo), hi)
         else:
             dx[2, i] = 0.0
+    elif st1:
+        dx[2, i] = (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA]
     elif dc:
         mult = eterm if kind == DC2 else 1.0
         _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo * mult, hi * mult)

@@ -89,10 +89,10 @@ class GovernorParams:
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
         tg, t1, g1 = self.kind == TG, self.kind == TGOV1, self.kind == IEEEG1
-        act = self.has_state()
-        return (("tg_con T_s", self.Ts, tg | t1 | g1), ("tg_con T_c", self.Tc, tg | t1 | act[0]),
-                ("tg_con T_5", self.T5, tg | act[3]), ("tg_con T_4", self.T4, act[2]),
-                ("tg_con T_6", self.T6, act[4]), ("tg_con T_7", self.T7, act[5]))
+        lag = {name: g1 & (getattr(self, name) >= LBND) for name in ("Tc", "T4", "T5", "T6", "T7")}
+        return (("tg_con T_s", self.Ts, tg | t1 | g1), ("tg_con T_c", self.Tc, tg | t1 | lag["Tc"]),
+                ("tg_con T_5", self.T5, tg | lag["T5"]), ("tg_con T_4", self.T4, lag["T4"]),
+                ("tg_con T_6", self.T6, lag["T6"]), ("tg_con T_7", self.T7, lag["T7"]))
 
 
 def governor_params(case: Case) -> GovernorParams:
@@ -184,6 +184,7 @@ def derivatives(P, x, k, omega, dx):
     """Derivatives of governor k into dx[:, k] for its machine speed omega (pu), flag 2;
     clamps the limited TGOV1 valve and IEEEG1 gate states in x."""
     kind = P[k, G_KIND]
+    dx[:, k] = 0.0
     if kind == IEEEG1:
         _ieeeg1_derivatives(P, x, k, omega, dx)
         return

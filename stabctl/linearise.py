@@ -61,9 +61,7 @@ def active_states(model: DynamicModel) -> np.ndarray:
     m[[2, 4]] = mp.kind != mac.EM
     m[[3, 5]] = mp.kind == mac.SUB
     L.view(act, "exc")[:] = ep.has_state()
-    p = L.view(act, "pss")
-    p[[0, 1]] = True
-    p[2] = pp.has_T4
+    L.view(act, "pss")[:] = pp.has_state()
     L.view(act, "tg")[:] = model.gp.has_state()[:L.tg_rows]
     return act
 

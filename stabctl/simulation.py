@@ -97,14 +97,11 @@ def single_threaded_blas() -> None:
 
 def fastest_time_constant(model: DynamicModel) -> tuple[float, str]:
     """Smallest time constant among the states of the model (s) and where it is."""
-    from .exciters import LBND
     cands = []
     mp, ep, pp, gp = model.mp, model.ep, model.pp, model.gp
-    for name, arr, rows in (
+    for name, arr, sel in (
             ("mac_con T\"do", mp.Tdopp, mp.kind == 2), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2),
-            ("pss_con T_w", pp.Tw, None), ("pss_con T_2", pp.T2, None),
-            ("pss_con T_4", pp.T4, pp.T4 >= LBND), *ep.time_constants(), *gp.time_constants()):
-        sel = np.ones(arr.size, bool) if rows is None else rows
+            *pp.time_constants(), *ep.time_constants(), *gp.time_constants()):
         if np.any(sel):
             k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))
             cands.append((float(abs(arr[k])), f"{name} row {k + 1}"))

@@ -10,7 +10,8 @@ from scipy.integrate import solve_ivp
 
 from stabctl import exciters as exc
 from stabctl import governors as gov
-from stabctl.case import ExciterTable, GovernorTable, load_case
+from stabctl import pss as pss_
+from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable, load_case
 from stabctl.dyr import dyr_tables, exp_saturation, read_dyr
 from stabctl.errors import CaseError
 from stabctl.linearise import linearise
@@ -94,10 +95,40 @@ def test_wecc_unsupported_records_are_listed_with_file_and_line():
     with pytest.raises(CaseError) as e:
         dyr_tables(recs, wecc_generators(recs))
     msg = str(e.value)
-    assert "wecc_full.dyr:8 ESST3A (bus 3, id 1)" in msg
-    assert "wecc_full.dyr:4 IEEEST (bus 3, id 1): its machine has no (supported) exciter" in msg
+    assert "wecc_full.dyr:60 ESDC2A (bus 10, id 1): model ESDC2A is not mapped" in msg
+    assert "wecc_full.dyr:320 IEEEST (bus 111, id 1): its machine has no (supported) exciter" in msg
     t = dyr_tables(recs, wecc_generators(recs), on_unsupported="skip")
-    assert {r.model for r in t.unsupported} == {"ESST3A", "EXST1", "ESDC2A", "ST2CUT", "IEEEST"}
+    assert {r.model for r in t.unsupported} == {"ESDC2A", "ST2CUT", "IEEEST"}
+    assert len(t.unsupported) == 8 + 8              # ESDC2A and the PSS of those machines
+
+
+def test_wecc_esst3a_to_exc_st3():
+    """Line 8 (bus 3): TR .02 VIMAX .3 VIMIN -.2 KM 8 TC 1 TB 5 KA 20 TA 0 VRMAX 99 VRMIN -99
+    KG 1 KP 3.67 KI .435 VBMAX 6.48 KC .01 XL .0098 VGMAX 4.86 THETAP 3.33 TM .4 VMMAX 99
+    VMMIN 0 -> exc_st3 with K_J = KA, K_A = KM, T_A = TM, V_R limits = VM limits."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens, on_unsupported="skip")
+    r = [g["bus"] for g in gens].index(3)
+    row = t.exc_con[list(t.exc_con[:, 1]).index(gens[r]["number"])]
+    np.testing.assert_array_equal(row[:20], [3, gens[r]["number"], 0.02, 8, 0.4, 5, 1, 99, 0, 0.3,
+                                            -0.2, 20, 3.67, 3.33, 0.435, 0.0098, 0.01,
+                                            6.48 * 99, 1, 4.86])
+    np.testing.assert_array_equal(t.pss_con[0], [2, gens[r]["number"], -2 * 1.0, 4.2, 0, 0.75, 0,
+                                                 0, 0.1, -0.1] + [0] * 14)
+
+
+def test_wecc_exst1_mapping():
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens, on_unsupported="skip")
+    e = ExciterTable.from_matrix(t.exc_con)
+    r = list(e.machine).index(next(g["number"] for g in gens if g["bus"] == 8))
+    # line 44: TR .02 VIMAX 99 VIMIN -99 TC 0 TB .02 KA 50 TA .02 VRMAX 9999 VRMIN -9999
+    # KC 0 KF .01 TF 1
+    assert (e.type[r], e.TR[r], e.VImax[r], e.VImin[r], e.TC[r], e.TB[r]) == (4, 0.02, 99, -99, 0, 0.02)
+    assert (e.KA[r], e.TA[r], e.Vrmax[r], e.Vrmin[r], e.KC[r]) == (50, 0.02, 9999, -9999, 0)
+    assert (e.KF[r], e.TF[r]) == (0.01, 1.0)
 
 
 def test_ieeest_maps_to_pst_pss_when_equivalent(tmp_path):
@@ -105,7 +136,8 @@ def test_ieeest_maps_to_pst_pss_when_equivalent(tmp_path):
             "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n")
     t = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
     # speed input (PST type 1), K*Tw = KS T5 = 20 * 1.5, Tw = T6, lead-lags (0.2/0.02), (0/0.5)
-    np.testing.assert_array_equal(t.pss_con[0], [1, 1, 30, 10, 0.2, 0.02, 0, 0.5, 0.1, -0.1])
+    np.testing.assert_array_equal(t.pss_con[0], [1, 1, 30, 10, 0.2, 0.02, 0, 0.5, 0.1, -0.1]
+                                  + [0] * 14)
     np.testing.assert_array_equal(t.exc_con[0][:9], [0, 1, 0, 100, 0.05, 10, 1.0, 5, -5])
     assert t.mac_con[0][6] == 0.25 and t.mac_con[0][5] == 0     # classical: x'd = ZSORCE X
 
@@ -187,6 +219,35 @@ def test_dc2_limit_scales_with_terminal_voltage():
         dx = np.zeros_like(x)
         exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, dx)
         assert x[2, 0] == pytest.approx(bound, rel=1e-15) and dx[2, 0] == 0.0
+
+
+def st1_params(KC=0.1, KF=0.01):
+    e = ExciterTable.from_matrix([[4, 1, 0.02, 50, 0.02, 0.02, 0.1, 4.0, -3.0, 0.2, -0.2, 0, 0,
+                                   0, 0, 0, KC, 0, 0, 0, KF, 1.0]])
+    return exc.exciter_params(load_case("kundur").replace(exciters=e))
+
+
+def test_exst1_steady_state_and_output_limit():
+    """Efd0 = V_R0 = K_A V_I0, Vref = V_t + Efd0/K_A, zero derivatives; output clipped to
+    V_t Vrmax - K_C I_fd and V_t Vrmin (PSS/E EXST1)."""
+    p = st1_params()
+    Efd, Vt = 1.9, 1.02
+    x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
+    assert (x[2, 0], x[3, 0]) == (Efd, Efd) and Vref[0] == pytest.approx(Vt + Efd / 50, rel=1e-15)
+    P = p.packed(Vref)
+    assert exc.field_voltage(P, x, 0, Vt, 0.0, 1.0, Efd) == Efd
+    dx = np.full_like(x, np.nan)
+    exc.derivatives(P, x, 0, Vt, 0.0, Efd, dx)
+    assert np.abs(dx).max() < 1e-12
+    x[2, 0] = 10.0
+    assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0) == pytest.approx(0.9 * 4.0 - 0.1 * 2.0)
+    x[2, 0] = -10.0
+    assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0) == pytest.approx(0.9 * -3.0)
+
+
+def test_exst1_initial_point_outside_limits_is_refused():
+    with pytest.raises(CaseError, match="exc_con row 1: EXST1 initial field voltage 3.9"):
+        exc.initialise(st1_params(), np.array([3.9]), np.array([1.0]))
 
 
 def tgov1_params(Dt=0.0):
@@ -296,6 +357,41 @@ def test_flat_run_with_ieeex1_and_ieeeg1_has_no_drift(kundur_tables):
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.pmech - r.pmech[0]).max() < 1e-9
 
 
+def test_flat_run_with_exst1_has_no_drift(kundur_tables):
+    """WECC's EXST1 data (T_C = 0: no transient gain; with T_C/T_B = 5 and no PSS, Kundur's
+    inter-area mode is unstable and round-off grows), K_C = 0.1 so the I_fd limit acts."""
+    e = np.tile(ExciterTable.from_matrix(
+        [[4, 1, 0.02, 50, 0.02, 0.02, 0.0, 4.0, -3.0, 0.2, -0.2, 0, 0, 0, 0, 0, 0.1, 0, 0, 0,
+          0.01, 1.0]]).matrix(), (4, 1))
+    e[:, 1] = [1, 2, 3, 4]
+    sim = Simulator(replaced_kundur(e, kundur_tables.tg_con))
+    residual, where = sim.model_for([]).initial_residual
+    assert residual < 1e-9, where
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
+
+
+def test_flat_run_with_esst3a_and_ieeest_has_no_drift():
+    """WECC's ESST3A (as exc_st3) and power-input IEEEST (as PST pss) on Kundur's machines,
+    with K_C = 0: PST's exc_st3 feeds K_C a field current formed differently from the one
+    of its initialisation, so K_C != 0 starts off equilibrium (docs/pst_models.md 12.2)."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens, on_unsupported="skip")
+    n3 = [g["number"] for g in gens if g["bus"] == 3][0]
+    e = np.tile(t.exc_con[t.exc_con[:, 1] == n3], (4, 1))
+    p = np.tile(t.pss_con[t.pss_con[:, 1] == n3], (4, 1))
+    e[:, 1] = p[:, 1] = [1, 2, 3, 4]
+    case = load_case("kundur")
+    e[:, 16] = 0.0                                   # K_C
+    case = case.replace(exciters=ExciterTable.from_matrix(e), pss=PssTable.from_matrix(p))
+    sim = Simulator(case)
+    residual, where = sim.model_for([]).initial_residual
+    assert residual < 1e-9, where
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
+
+
 def test_linearised_dyr_kundur_states_and_reference_inputs(dyr_kundur):
     """States: 6 machine + 5 DC exciter (V_TR, V_As, V_R, Efd, R_f) + 2 TGOV1 per machine;
     dV_R'/dVref = K_A/T_A (T_C = T_B), d valve'/dPref = 1/T1 (closed forms of the blocks)."""
@@ -305,3 +401,134 @@ def test_linearised_dyr_kundur_states_and_reference_inputs(dyr_kundur):
     assert B[s.index("exc_VR_G2"), i.index("Vref_G2")] == pytest.approx(20 / 0.02, rel=1e-9)
     assert B[s.index("tg_valve_G3"), i.index("Pref_G3")] == pytest.approx(1 / 0.49, rel=1e-9)
     assert np.all(np.linalg.eigvals(np.asarray(sys.A)).real < 1e-3)
+
+
+KUNDUR_PST_DYR = """\
+1 'GENSAL' 1  8.0 0.03 0.05  6.5 0.0  1.8 1.7 0.3 0.25 0.2  0.0 0.0 /
+2 'GENCLS' 1  6.5 0.0 /
+11 'GENROU' 1 8.0 0.03 0.4 0.05  6.175 0.0  1.8 1.7 0.3 0.55 0.25 0.2  0.0 0.0 /
+12 'GENROU' 1 8.0 0.03 0.4 0.05  6.175 0.0  1.8 1.7 0.3 0.55 0.25 0.2  0.0 0.0 /
+1 'SEXS' 1  1.0 1.0 200 0.05 -5 5 /
+11 'SEXS' 1  0.2 10.0 200 0.05 -5 5 /
+12 'EXDC2' 1  0.02 20 0.02 1 1 5.2 -4.16 1 0.83 0.0754 1.246 0 3.1 0.33 2.3 0.1 /
+1 'TGOV1' 1  0.05 0.49 33 0.4 2.1 7.0 0.0 /
+2 'TGOV1' 1  0.05 0.49 33 0.4 2.1 7.0 1.0 /
+11 'TGOV1' 1  0.05 0.49 33 0.4 2.1 7.0 0.0 /
+"""
+
+
+def test_kundur_network_with_dyr_machines_runs_flat(tmp_path):
+    """Built-in Kundur network with every machine, exciter and governor from DYR records
+    (GENSAL, GENCLS, GENROU; SEXS, EXDC2 with saturation; TGOV1 with Dt; machine 4 without
+    governor): equilibrium at t = 0, no drift, GENSAL's E'd identically 0 (docs 12.1)."""
+    case = load_case("kundur")
+    gens = [dict(number=int(k), bus=int(b), id="1", mbase=900.0, ra=0.0, xsource=0.3)
+            for k, b in zip(case.machines.number, case.machines.bus)]
+    t = dyr_tables(read_dyr(write(tmp_path, KUNDUR_PST_DYR)), gens)
+    case = case.replace(machines=MachineTable.from_matrix(t.mac_con),
+                        exciters=ExciterTable.from_matrix(t.exc_con), pss=PssTable.empty(),
+                        governors=GovernorTable.from_matrix(t.tg_con))
+    sim = Simulator(case)
+    m = sim.model_for([])
+    assert m.initial_residual[0] < 1e-9, m.initial_residual[1]
+    assert list(m.mp.kind) == [2, 0, 2, 2]                   # mac_sub, mac_em, mac_sub x2
+    assert abs(m.layout.view(m.x0, "mac")[4, 0]) < 1e-12      # GENSAL: E'd = 0
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
+
+
+# -- PSS/E stabilisers (pss type 3) ------------------------------------------------------------
+
+def test_wecc_st2cut_mapping():
+    """Line 21 (bus 5): MODE 1 BUSR 0 MODE2 0 BUSR2 0 K1 5.5 K2 0 T1 .03 T2 0 T3 10 T4 10
+    T5 .4 T6 .04 T7..T10 0 LSMAX .05 LSMIN -.05 VCU 0 VCL 0."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens, on_unsupported="skip")
+    n5 = [g["number"] for g in gens if g["bus"] == 5][0]
+    s = PssTable.from_matrix(t.pss_con[t.pss_con[:, 1] == n5])
+    assert (s.type[0], s.input1[0], s.K1[0], s.Tr1[0], s.input2[0]) == (3, 1, 5.5, 0.03, 0)
+    assert (s.KTw[0], s.Tw[0], s.T1[0], s.T2[0], s.T3[0], s.T4[0]) == (10, 10, 0.4, 0.04, 0, 0)
+    assert (s.ymax[0], s.ymin[0]) == (0.05, -0.05)
+
+
+PSSE_ROW = [3, 1, 2.0, 3.0, 0.3, 0.05, 0.2, 0.04, 0.2, -0.2, 0.1, 0.02, 1, 20.0, 0.03, 3, 0.5,
+            0.1, 0.05, 0.002, 0.02, 0.0001, 0.01, 0.0005]
+
+
+def psse_params(row=PSSE_ROW):
+    return pss_.pss_params(load_case("kundur").replace(pss=PssTable.from_matrix([row])))
+
+
+def test_psse_stabiliser_transfer_function_matches_closed_form():
+    """Type 3, speed input: Vs/dw = K1/(1 + s Tr1) N(s)/D(s) K_w s/(1 + s T_w)
+    prod (1 + s T_lead)/(1 + s T_lag), N = 1 + A5 s + A6 s^2, D = (1 + A1 s + A2 s^2)
+    (1 + A3 s + A4 s^2), at 1 Hz, from the kernel's state equations (linear inside the
+    output limits, here opened)."""
+    p = psse_params(PSSE_ROW[:8] + [1e9, -1e9] + PSSE_ROW[10:])
+    P = p.packed()
+    x0 = pss_.initialise(p, *pss_.pss_inputs(p, np.array([1.0]), np.array([0.0]), np.ones(1)))
+    act = np.nonzero(p.has_state()[:, 0])[0]
+
+    def f(x, w):
+        full, dx = x0.copy(), np.zeros_like(x0)
+        full[act, 0] = x
+        y = pss_.output_and_derivatives(P, full, 0, w, 0.0, dx)
+        return dx[act, 0], y
+
+    n, h = act.size, 1e-4
+    A, C = np.zeros((n, n)), np.zeros(n)
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = h
+        (fp, yp), (fm, ym) = f(x0[act, 0] + e, 1.0), f(x0[act, 0] - e, 1.0)
+        A[:, j], C[j] = (fp - fm) / (2 * h), (yp - ym) / (2 * h)
+    (fp, yp), (fm, ym) = f(x0[act, 0], 1.0 + h), f(x0[act, 0], 1.0 - h)
+    B, D = (fp - fm) / (2 * h), (yp - ym) / (2 * h)
+    s = 2j * np.pi
+    H = C @ np.linalg.solve(s * np.eye(n) - A, B) + D
+    _, _, Kw, Tw, T1, T2, T3, T4, _, _, T5, T6, _, K1, Tr1, _, _, _, A1, A2, A3, A4, A5, A6 = PSSE_ROW
+    exact = (K1 / (1 + s * Tr1) * (1 + A5 * s + A6 * s**2)
+             / ((1 + A1 * s + A2 * s**2) * (1 + A3 * s + A4 * s**2)) * Kw * s / (1 + s * Tw)
+             * (1 + s * T1) / (1 + s * T2) * (1 + s * T3) / (1 + s * T4) * (1 + s * T5) / (1 + s * T6))
+    assert H == pytest.approx(exact, rel=1e-7)
+    assert n == 2 + 4 + 1 + 3                                  # lags, 4th-order filter, ...
+
+
+def test_psse_stabiliser_output_is_zero_and_steady_at_the_initial_point():
+    p = psse_params()
+    u1, u2 = pss_.pss_inputs(p, np.array([1.0]), np.array([0.7]), np.ones(1))
+    assert (u1[0], u2[0]) == (0.0, 0.7)                       # speed deviation, power
+    x = pss_.initialise(p, u1, u2)
+    dx = np.full_like(x, np.nan)
+    assert pss_.output_and_derivatives(p.packed(), x, 0, 1.0, 0.7, dx) == pytest.approx(0, abs=1e-15)
+    assert np.abs(dx).max() < 1e-14
+
+
+def test_flat_run_and_linearisation_with_psse_stabilisers(dyr_kundur):
+    """Kundur (EXDC2, TGOV1) with a type-3 stabiliser on every machine: equilibrium, no
+    drift; the linearised model has its 10 states per PSS and no unstable mode."""
+    rows = np.tile(PSSE_ROW, (4, 1))
+    rows[:, 1] = [1, 2, 3, 4]
+    rows[:, 13] = 2.0                                           # K1: a moderate speed gain
+    case = dyr_kundur.replace(pss=PssTable.from_matrix(rows))
+    sim = Simulator(case)
+    residual, where = sim.model_for([]).initial_residual
+    assert residual < 1e-9, where
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
+    sys = linearise(sim)
+    assert sys.nstates == 4 * (6 + 5 + 10 + 2)
+    assert "pss_filter4_G2" in sys.state_labels
+
+
+def test_ieeest_with_filter_maps_to_psse_type_and_other_inputs_are_unsupported(tmp_path):
+    text = ("1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
+            "1 'IEEEST' 1 3 0 0.1 0.01 0 0 0.05 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
+            "2 'GENCLS' 1 3.0 0.0 /\n2 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
+            "2 'IEEEST' 1 2 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n")
+    t = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:2], on_unsupported="skip")
+    s = PssTable.from_matrix(t.pss_con)
+    assert (s.type[0], s.input1[0], s.K1[0], s.KTw[0], s.Tw[0]) == (3, 3, 1.0, 20 * 1.5, 10)
+    assert (s.A1[0], s.A2[0], s.A5[0], s.T1[0], s.T2[0], s.T4[0]) == (0.1, 0.01, 0.05, 0.2, 0.02, 0.5)
+    assert [r.line for r in t.unsupported] == [6]             # ICS 2: bus frequency
