@@ -17,6 +17,7 @@ from stabctl.network import branch_admittances
 from stabctl.powerflow import solve_powerflow
 from stabctl.psse import import_psse, load_psse
 from stabctl.psse_raw import read_raw, split_fields
+from stabctl.results import SimulationResult
 
 DATA = Path(__file__).parent / "data" / "psse"
 V33 = DATA / "five_bus_v33.raw"
@@ -65,11 +66,11 @@ def test_five_bus_generators(path):
     np.testing.assert_allclose(bus3[[1, 3, 4, 10, 11]], [1.01, 2.0, 0.3, 1.6, -0.7],
                                rtol=0, atol=1e-15)
     assert [g.as_dyr() for g in raw.generators] == [
-        {"number": 1, "bus": 1, "id": "1", "mbase": 500.0, "ra": 0.003, "xsource": 0.25,
+        {"number": 1, "bus": 1, "id": "1", "mbase": 500.0, "ra": 0.0, "xsource": 0.25,
          "pg": 0.0, "qg": 0.0},
-        {"number": 2, "bus": 3, "id": "1", "mbase": 200.0, "ra": 0.002, "xsource": 0.2,
+        {"number": 2, "bus": 3, "id": "1", "mbase": 200.0, "ra": 0.0, "xsource": 0.2,
          "pg": 150.0, "qg": 20.0},
-        {"number": 3, "bus": 3, "id": "2", "mbase": 100.0, "ra": 0.001, "xsource": 0.3,
+        {"number": 3, "bus": 3, "id": "2", "mbase": 100.0, "ra": 0.0, "xsource": 0.3,
          "pg": 50.0, "qg": 10.0}]
     assert raw.generators[2].source.line == (19 if path == V33 else 22)
 
@@ -208,6 +209,18 @@ def test_import_psse_writes_a_case_that_reads_back(tmp_path):
     summary = json.loads(res.stdout)
     assert (summary["buses"], summary["branches"], summary["nonconforming_loads"]) == (4, 4, 2)
     assert load_case(out).equals(load_psse(V34, loads="raw"))
+
+
+def test_imported_case_runs_flat_from_its_power_flow(tmp_path):
+    # the CLI's case file through `simulate`: no disturbance, so the machines initialised
+    # from the imported power flow stay at synchronous speed (the five-bus generators have
+    # ZSORCE R = 0: with armature resistance stabctl's flat runs drift, ~4e-4 pu in 1 s)
+    out = tmp_path / "five.json"
+    assert run("import-psse", V33, DATA / "five_bus.dyr", "-o", out).exit_code == 0
+    res = run("simulate", out, "--tf", "1", "--out", tmp_path / "flat.npz", "--json")
+    assert res.exit_code == 0, res.output
+    flat = SimulationResult.from_npz(tmp_path / "flat.npz")
+    assert np.max(np.abs(flat.speed - 1.0)) < 1e-9
 
 
 def test_import_psse_bad_input_exits_2_and_writes_nothing(tmp_path):
