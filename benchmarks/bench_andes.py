@@ -3,8 +3,10 @@
 
 Cases: ANDES's Kundur (kundur.raw + kundur_full.dyr without its Toggle record) and
 WECC-179 (wecc.raw + wecc_full.dyr without the records stabctl does not map, GENROU
-saturation set to 0), imported by ``stabctl.psse.load_psse`` and read by ANDES from the
-same files (``stabctl.andes_xval``). Fault: three-phase at one bus through j1e-4 pu from
+saturation set to 0, and a SEXS exciter on every machine in place of the unmapped
+ESST3A/EXST1/ESDC2A: without exciters WECC-179 loses synchronism 10-20 s after any fault
+in both tools), imported by ``stabctl.psse.load_psse`` and read by ANDES from the same
+files (``stabctl.andes_xval``). Fault: three-phase at one bus through j1e-4 pu from
 t = 1 s, cleared after 6 cycles without loss of a line; fixed step 5 ms in both tools.
 
 Prints one table per study with each tool's wall time and the ratio ANDES / stabctl:
@@ -37,6 +39,7 @@ from stabctl.andes_xval import (AndesFault, andes_modes, andes_speeds, andes_sys
                                 strip_dyr)
 from stabctl.case import load_case
 from stabctl.cct import LineFault, critical_clearing_time
+from stabctl.dyr import read_dyr
 from stabctl.events import Fault
 from stabctl.linearise import linearise
 from stabctl.modal import modal_analysis
@@ -48,12 +51,20 @@ UNMAPPED = {"TOGGLE", "ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
 CASES = (("kundur", "kundur", 7), ("wecc179", "wecc", 1))  # label, ANDES folder, fault bus
 
 
+SEXS = "0.1 10.0 50.0 0.05 -5.0 5.0"  # TA/TB, TB s, K, TE s, EMIN, EMAX pu
+
+
 def case_files(folder: str, work: Path):
+    """(RAW, DYR) of an ANDES case, the DYR made like for like (module doc)."""
     import andes
 
     src = Path(andes.__file__).parent / "cases" / folder
     dyr = work / f"{folder}.dyr"
-    strip_dyr(src / f"{folder}_full.dyr", dyr, UNMAPPED, unsaturated=True)
+    removed = strip_dyr(src / f"{folder}_full.dyr", dyr, UNMAPPED, unsaturated=True)
+    if any(m in removed for m in ("EXST1", "ESST3A", "ESDC2A")):
+        gens = [r for r in read_dyr(dyr) if r.model == "GENROU"]
+        with open(dyr, "a") as fh:
+            fh.writelines(f"{g.bus} 'SEXS' {g.id} {SEXS} /\n" for g in gens)
     return src / f"{folder}.raw", dyr
 
 
