@@ -163,7 +163,8 @@ def test_malformed_records_name_file_and_line(tmp_path, text, message):
 
 @pytest.mark.parametrize("text, message", [
     ("1 'GENCLS' 1 3.0 /\n", r"t.dyr:1 GENCLS \(bus 1, id 1\): needs 2 parameters after the id, got 1"),
-    ("7 'GENCLS' 1 3.0 0 /\n", r"t.dyr:1 GENCLS \(bus 7, id 1\): no such generator"),
+    ("1 'GENCLS' 1 3.0 0 /\n7 'GENCLS' 1 3.0 0 /\n",
+     r"unsupported DYR .*\n  t.dyr:2 GENCLS \(bus 7, id 1\): no such generator in the RAW"),
     ("1 'GENCLS' 1 3.0 0 /\n1 'GENCLS' 1 3.0 0 /\n", r"t.dyr:2 GENCLS .*second machine model .*t.dyr:1"),
     ("1 'GENCLS' 1 0.0 0 /\n", r"H = 0.0 \(PSS/E infinite bus\)"),
     ("1 'GENCLS' 1 3.0 0 /\n1 'TGOV1' 1 0 0.5 1 0 1 2 0 /\n", r"t.dyr:2 TGOV1 .*droop R = 0.0"),
@@ -172,6 +173,14 @@ def test_malformed_records_name_file_and_line(tmp_path, text, message):
 def test_mapping_errors_name_the_record(tmp_path, text, message):
     with pytest.raises(CaseError, match=message):
         dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
+
+
+def test_ids_compare_without_quotes_and_other_models_parse_leniently(tmp_path):
+    text = "1 'GENCLS' '1 ' 3.0 0 /\n1 'USRMDL' 1 'GENTPJU1' 1 0 2 /  comment\n"
+    recs = read_dyr(write(tmp_path, text))
+    assert recs[0].id == "1" and recs[1].model == "USRMDL" and np.isnan(recs[1].params[0])
+    t = dyr_tables(recs, [dict(kundur_generators()[0], id="'1'")], on_unsupported="skip")
+    assert t.mac_con.shape == (1, 23) and [r.line for r in t.unsupported] == [2]
 
 
 def test_generator_without_machine_model_is_named(tmp_path):
