@@ -202,7 +202,7 @@ class DynamicModel:
         L.view(x, "pss")[:] = pss_.initialise(self.pp, *pss_.pss_inputs(self.pp, xm[1], S0.real,
                                                                        mp.mac_pot))
         xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac])
-        L.view(x, "tg")[:] = xg[:L.tg_rows]
+        L.view(x, "tg")[:] = xg
         self.x0 = x
         self.V_nc0 = op.V[self.nc_idx].astype(complex)
         self.pss_of_exc = np.full(ep.n, -1)

@@ -33,7 +33,8 @@ N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "E
 @dataclass(frozen=True)
 class DyrRecord:
     """One DYR record: file and 1-based line where it starts, bus number, model name
-    (upper case), machine id (stripped), the numbers after the id (ICONs then CONs)."""
+    (upper case), machine id (quotes and blanks stripped, upper case), the numbers after
+    the id (ICONs then CONs; NaN for a non-number of a model stabctl does not map)."""
 
     file: str
     line: int
@@ -77,9 +78,9 @@ def read_dyr(path) -> list[DyrRecord]:
         list of DyrRecord.
     Raises:
         CaseError "{file}:{line}: ..." for an unreadable file, a record not ended by '/',
-        without a quoted model name or id, with a non-integer bus (for the models stabctl
-        maps; other models' records are kept with bus 0 for the unsupported report), or a
-        parameter that is not a number.
+        without a quoted model name or id, or, for the models stabctl maps, a non-integer
+        bus or a parameter that is not a number (other models' records are kept, with bus
+        0 and NaN parameters there, for the unsupported report).
     """
     path = Path(path)
     try:
@@ -117,9 +118,16 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
         try:
             params.append(float(tok.replace("D", "E").replace("d", "e")))
         except ValueError:
-            raise CaseError(f"{file}:{line}: {model} parameter {k} {tok!r} is not a "
-                            "number") from None
-    return DyrRecord(file, line, bus, model, tokens[2].strip("'").strip(), tuple(params))
+            if model in N_PARAMS:
+                raise CaseError(f"{file}:{line}: {model} parameter {k} {tok!r} is not a "
+                                "number") from None
+            params.append(float("nan"))   # e.g. USRMDL's quoted names: reported unsupported
+    return DyrRecord(file, line, bus, model, _machine_id(tokens[2]), tuple(params))
+
+
+def _machine_id(tok) -> str:
+    """Machine id as compared between RAW and DYR: quotes and blanks stripped, upper case."""
+    return str(tok).strip().strip("'").strip().upper()
 
 
 def _integer(tok: str) -> int | None:
@@ -147,13 +155,13 @@ def dyr_tables(records, generators, on_unsupported: str = "error") -> DyrTables:
         DyrTables.
     Raises:
         CaseError naming file:line, model and (bus, id): wrong parameter count, a value the
-        model cannot take (R = 0, H = 0, ...), a record for a generator not in the RAW, two
-        records of one kind for a generator, a generator without machine model, or
-        (on_unsupported="error") unsupported records.
+        model cannot take (R = 0, H = 0, ...), two records of one kind for a generator, a
+        generator without machine model, or (on_unsupported="error") unsupported records:
+        models or options not mapped, records for a generator not among `generators`.
     """
     if on_unsupported not in ("error", "skip"):
         raise CaseError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
-    gens = {(int(g["bus"]), str(g["id"]).strip().upper()): g for g in generators}
+    gens = {(int(g["bus"]), _machine_id(g["id"])): g for g in generators}
     rows: dict[str, dict[int, tuple[DyrRecord, list]]] = {k: {} for k in _MAPPERS}
     skipped = []
     for rec in records:
@@ -162,9 +170,9 @@ def dyr_tables(records, generators, on_unsupported: str = "error") -> DyrTables:
             if kind is None:
                 raise _Unsupported(f"model {rec.model} is not mapped")
             _check_count(rec)
-            gen = gens.get((rec.bus, rec.id.upper()))
+            gen = gens.get((rec.bus, rec.id))
             if gen is None:
-                raise CaseError(f"{rec.label()}: no such generator in the RAW data")
+                raise _Unsupported("no such generator in the RAW data (or out of service)")
             row = _MAPPERS[kind][rec.model](rec, gen)
         except _Unsupported as why:
             skipped.append((rec, str(why)))

@@ -12,8 +12,8 @@ be negative (hydro).  TGOV1: P_ref + (w_f - omega)/R -> 1/(1 + s T1) non-windup 
 VMAX] -> (1 + s T2)/(1 + s T3) -> minus Dt (omega - 1).  IEEEG1: K (1 + s T2)/(1 + s T1)
 on the speed deviation, gate servo 1/T3 with rate limits [Uc, Uo] and position limits
 [PMIN, PMAX], four lags T4..T7, power fractions K1..K8 (HP + LP summed: one shaft).
-States: N_STATES slots per governor, named per type in STATE_NAMES; slots a type does
-not use stay 0 (`has_state`).
+States: up to N_STATES slots per governor (the most any type present uses), named per
+type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 """
 
 from __future__ import annotations
@@ -75,7 +75,7 @@ class GovernorParams:
         return max([2, *(len(STATE_NAMES[int(k)]) for k in self.kind)]) if self.n else 3
 
     def has_state(self) -> np.ndarray:
-        """Boolean (N_STATES, n_tg): the slots that are states of each governor."""
+        """Boolean (n_slots, n_tg): the slots that are states of each governor."""
         act = np.zeros((N_STATES, self.n), bool)
         tg, t1, g1 = self.kind == TG, self.kind == TGOV1, self.kind == IEEEG1
         act[:3] |= tg
@@ -84,7 +84,7 @@ class GovernorParams:
         act[1] |= g1
         for r, T in zip(range(2, 6), (self.T4, self.T5, self.T6, self.T7)):
             act[r] |= g1 & (T >= LBND)
-        return act
+        return act[:self.n_slots()]
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
@@ -121,7 +121,7 @@ def governor_params(case: Case) -> GovernorParams:
 
 
 def initialise(p: GovernorParams, pmech0):
-    """States (N_STATES, n_tg) and P_ref (n_tg,) from the initial mechanical power pmech0
+    """States (n_slots, n_tg) and P_ref (n_tg,) from the initial mechanical power pmech0
     (machine base) at rated speed: every lag at its input, lead-lag states at
     (1 - T_lead/T_lag) times their input.  P_ref is the power order (tg, TGOV1) or the
     gate position (IEEEG1: pmech0 / sum K).
@@ -140,6 +140,7 @@ def initialise(p: GovernorParams, pmech0):
     x[1] = np.where(tg | t1, (1 - p.T3 / tc) * pmech0, gate)
     x[2] = np.where(tg, (1 - p.T4 / np.where(tg, p.T5, 1.0)) * pmech0, gate)
     x[3:] = np.where(g1, gate, 0.0)
+    x = x[:p.n_slots()]
     x[2:] *= p.has_state()[2:] | tg
     return x, gate
 

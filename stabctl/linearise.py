@@ -62,7 +62,7 @@ def active_states(model: DynamicModel) -> np.ndarray:
     m[[3, 5]] = mp.kind == mac.SUB
     L.view(act, "exc")[:] = ep.has_state()
     L.view(act, "pss")[:] = pp.has_state()
-    L.view(act, "tg")[:] = model.gp.has_state()[:L.tg_rows]
+    L.view(act, "tg")[:] = model.gp.has_state()
     return act
 
 

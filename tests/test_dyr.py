@@ -10,6 +10,7 @@ from scipy.integrate import solve_ivp
 
 from stabctl import exciters as exc
 from stabctl import governors as gov
+from stabctl import machines as mac
 from stabctl import pss as pss_
 from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable, load_case
 from stabctl.dyr import dyr_tables, exp_saturation, read_dyr
@@ -163,7 +164,8 @@ def test_malformed_records_name_file_and_line(tmp_path, text, message):
 
 @pytest.mark.parametrize("text, message", [
     ("1 'GENCLS' 1 3.0 /\n", r"t.dyr:1 GENCLS \(bus 1, id 1\): needs 2 parameters after the id, got 1"),
-    ("7 'GENCLS' 1 3.0 0 /\n", r"t.dyr:1 GENCLS \(bus 7, id 1\): no such generator"),
+    ("1 'GENCLS' 1 3.0 0 /\n7 'GENCLS' 1 3.0 0 /\n",
+     r"unsupported DYR .*\n  t.dyr:2 GENCLS \(bus 7, id 1\): no such generator in the RAW"),
     ("1 'GENCLS' 1 3.0 0 /\n1 'GENCLS' 1 3.0 0 /\n", r"t.dyr:2 GENCLS .*second machine model .*t.dyr:1"),
     ("1 'GENCLS' 1 0.0 0 /\n", r"H = 0.0 \(PSS/E infinite bus\)"),
     ("1 'GENCLS' 1 3.0 0 /\n1 'TGOV1' 1 0 0.5 1 0 1 2 0 /\n", r"t.dyr:2 TGOV1 .*droop R = 0.0"),
@@ -172,6 +174,14 @@ def test_malformed_records_name_file_and_line(tmp_path, text, message):
 def test_mapping_errors_name_the_record(tmp_path, text, message):
     with pytest.raises(CaseError, match=message):
         dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
+
+
+def test_ids_compare_without_quotes_and_other_models_parse_leniently(tmp_path):
+    text = "1 'GENCLS' '1 ' 3.0 0 /\n1 'USRMDL' 1 'GENTPJU1' 1 0 2 /  comment\n"
+    recs = read_dyr(write(tmp_path, text))
+    assert recs[0].id == "1" and recs[1].model == "USRMDL" and np.isnan(recs[1].params[0])
+    t = dyr_tables(recs, [dict(kundur_generators()[0], id="'1'")], on_unsupported="skip")
+    assert t.mac_con.shape == (1, 23) and [r.line for r in t.unsupported] == [2]
 
 
 def test_generator_without_machine_model_is_named(tmp_path):
@@ -532,3 +542,33 @@ def test_ieeest_with_filter_maps_to_psse_type_and_other_inputs_are_unsupported(t
     assert (s.type[0], s.input1[0], s.K1[0], s.KTw[0], s.Tw[0]) == (3, 3, 1.0, 20 * 1.5, 10)
     assert (s.A1[0], s.A2[0], s.A5[0], s.T1[0], s.T2[0], s.T4[0]) == (0.1, 0.01, 0.05, 0.2, 0.02, 0.5)
     assert [r.line for r in t.unsupported] == [6]             # ICS 2: bus frequency
+
+
+def test_initial_point_matches_andes_kundur_full():
+    """ANDES reference: kundur.raw + kundur_full.dyr solved and initialised by ANDES; from
+    its bus voltages and generator powers, stabctl's mapping and initialisation give the
+    same rotor angles, field voltages (GENROU vf0), mechanical powers (tm0, TGOV1 pref0)
+    and EXDC2 voltage references (vref0)."""
+    cases = CASES / "kundur"
+    ss = andes.load(str(cases / "kundur.raw"), addfile=str(cases / "kundur_full.dyr"),
+                    setup=True, no_output=True, default_config=True)
+    ss.PFlow.run()
+    ss.TDS.init()
+    g = ss.GENROU
+    rows = [ss.Bus.idx.v.index(b) for b in g.bus.v]
+    t = dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip")
+    case = load_case("kundur")        # its bus list holds ANDES's generator buses 1-4
+    case = case.replace(machines=MachineTable.from_matrix(t.mac_con),
+                        exciters=ExciterTable.from_matrix(t.exc_con),
+                        governors=GovernorTable.from_matrix(t.tg_con))
+    mp = mac.machine_params(case)
+    V, S = np.ones(case.n_bus, complex), np.zeros(case.n_bus, complex)
+    V[mp.bus_idx] = ss.Bus.v.v[rows] * np.exp(1j * ss.Bus.a.v[rows])
+    S[mp.bus_idx] = g.Pe.v + 1j * g.Qe.v
+    x, vex, pm = mac.initialise(mp, V, S)
+    np.testing.assert_allclose(x[0], g.delta.v, atol=1e-12)
+    np.testing.assert_allclose(vex, g.vf0.v, atol=1e-12)
+    _, Vref, _ = exc.initialise(exc.exciter_params(case), vex, np.abs(V[mp.bus_idx]))
+    np.testing.assert_allclose(Vref, ss.EXDC2.vref0.v, atol=1e-12)
+    _, Pref = gov.initialise(gov.governor_params(case), pm)
+    np.testing.assert_allclose(Pref * 900 / 100, ss.TGOV1.pref0.v, rtol=1e-12)   # system base
