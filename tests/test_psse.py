@@ -185,7 +185,7 @@ def test_unsupported_dyr_records_are_listed_with_the_raw_ones():
     andes, raw = _andes_case("kundur/kundur.raw")
     dyr = raw.with_name("kundur_full.dyr")  # ends with ANDES's own Toggle record (line 37)
     with pytest.raises(CaseError, match=r"kundur\.raw \+ kundur_full\.dyr: 1 unsupported "
-                                        r"record\(s\).*kundur_full\.dyr:37 TOGGLE 'Line_8'"):
+                                        r"record\(s\).*kundur_full\.dyr:37 TOGGLE 'LINE_8'"):
         load_psse(raw, dyr)
     with pytest.warns(UserWarning, match="kundur_full.dyr:37 TOGGLE"):
         case = load_psse(raw, dyr, on_unsupported="skip")
