@@ -4,12 +4,14 @@ WECC-179 (wecc.raw + wecc_full.dyr). Skipped without ANDES (``pip install
 "stabctl[andes]"``).
 
 Like for like (stabctl.andes_xval): loads constant impedance in both, ANDES's own Toggle
-record removed from Kundur's DYR, and from WECC's the records stabctl does not map (ESDC2A,
-ESST3A, EXST1, ST2CUT exciters and the IEEEST stabilisers on them) removed for both tools,
-leaving GENROU machines with constant field voltage and IEEEG1 governors. WECC's GENROU
-saturation (S(1.0) up to 2.2, S(1.2) up to 11) is set to 0 in both: PSS/E's saturation
-function (ANDES) is not PST's, and with it ANDES finds two unstable modes (0.88 and
-1.29 Hz) that stabctl does not; Kundur's machines have none.
+record removed from Kundur's DYR; from WECC's, for both tools, the ESDC2A exciters stabctl
+does not map and the stabilisers (ST2CUT, IEEEST) on those 8 machines, leaving 21 EXST1 /
+ESST3A exciters with their stabilisers; the eigenvalue comparison also without those (so
+GENROU with constant field voltage and IEEEG1: stabctl's linearisation fails on the EXST1 /
+ESST3A mix, an IndexError in exciters.has_state). WECC's GENROU saturation (S(1.0) up to
+2.2, S(1.2) up to 11) is set to 0 in both: PSS/E's saturation function (ANDES) is not
+PST's, and with it ANDES finds two unstable modes (0.88 and 1.29 Hz) that stabctl does
+not; Kundur's machines have none.
 
 The bounds are the measured differences with a margin. Known model difference behind
 them: PST's machine (stabctl) takes mechanical torque as Pm/speed, ANDES's GENROU as the
@@ -33,7 +35,8 @@ from stabctl.psse import load_psse  # noqa: E402
 from stabctl.simulation import Simulator  # noqa: E402
 
 CASES = Path(andes.__file__).parent / "cases"
-WECC_UNMAPPED = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
+WECC_CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
+WECC_ESDC2A = (10, 17, 42, 76, 78, 111, 117, 139)  # buses of the ESDC2A exciters
 STEP = 0.005  # s, both tools
 
 
@@ -46,8 +49,19 @@ def kundur(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def wecc(tmp_path_factory):
+    """WECC-179 with the 21 EXST1 / ESST3A exciters and their stabilisers."""
     dyr = tmp_path_factory.mktemp("wecc") / "wecc.dyr"
-    removed = strip_dyr(CASES / "wecc" / "wecc_full.dyr", dyr, WECC_UNMAPPED, unsaturated=True)
+    removed = strip_dyr(CASES / "wecc" / "wecc_full.dyr", dyr, {"ESDC2A", "ST2CUT", "IEEEST"},
+                        unsaturated=True, buses=WECC_ESDC2A)
+    assert len(removed) == 16  # 8 ESDC2A, 6 ST2CUT, 2 IEEEST
+    return CASES / "wecc" / "wecc.raw", dyr
+
+
+@pytest.fixture(scope="module")
+def wecc_no_controls(tmp_path_factory):
+    """WECC-179 without exciters and stabilisers (GENROU and IEEEG1)."""
+    dyr = tmp_path_factory.mktemp("wecc_nc") / "wecc.dyr"
+    removed = strip_dyr(CASES / "wecc" / "wecc_full.dyr", dyr, WECC_CONTROLS, unsaturated=True)
     assert len(removed) == 58  # 29 exciters, 25 ST2CUT + 4 IEEEST stabilisers
     return CASES / "wecc" / "wecc.raw", dyr
 
@@ -76,9 +90,10 @@ def test_kundur_fault_speeds_match_andes(kundur):
 
 
 def test_wecc_fault_speeds_match_andes(wecc):
-    # 6-cycle fault at bus 1 (Coronado 500 kV), 29 GENROU machines with IEEEG1
+    # 6-cycle fault at bus 1 (Coronado 500 kV): 29 GENROU, IEEEG1, 21 exciters and PSS
     t, w, wa = fault_speeds(wecc, 1, 6, 3.0)
-    assert np.max(np.abs(w - wa)) < 1.2e-3                        # measured 0.95e-3
+    assert np.max(np.abs(w[t <= 2.0] - wa[t <= 2.0])) < 4e-4     # measured 2.8e-4
+    assert np.max(np.abs(w - wa)) < 8e-4                          # measured 6.5e-4
     assert np.max(np.abs(wa - 1)) > 5e-3
 
 
@@ -98,8 +113,8 @@ def test_kundur_electromechanical_modes_match_andes(kundur):
     assert np.max(np.abs(ours - theirs) / np.abs(theirs)) < 0.015  # measured 1.2 %
 
 
-def test_wecc_electromechanical_modes_match_andes(wecc):
-    ours, theirs = em_modes(wecc)
+def test_wecc_electromechanical_modes_match_andes(wecc_no_controls):
+    ours, theirs = em_modes(wecc_no_controls)
     f = ours.imag / (2 * np.pi)
     above = f > 0.6  # the slow inter-area modes differ more (0.12 Hz: 22 %, 0.31 Hz: 5 %)
     assert above.sum() >= 20
