@@ -2,11 +2,11 @@
 ``pip install "stabctl[andes]"``).
 
 Cases: ANDES's Kundur (kundur.raw + kundur_full.dyr without its Toggle record) and
-WECC-179 (wecc.raw + wecc_full.dyr without the records stabctl does not map, GENROU
-saturation set to 0, and a SEXS exciter on every machine in place of the unmapped
-ESST3A/EXST1/ESDC2A: without exciters WECC-179 loses synchronism 10-20 s after any fault
-in both tools), imported by ``stabctl.psse.load_psse`` and read by ANDES from the same
-files (``stabctl.andes_xval``). Fault: three-phase at one bus through j1e-4 pu from
+WECC-179 (wecc.raw + wecc_full.dyr without the 8 ESDC2A exciters stabctl does not map and
+the stabilisers on those machines, GENROU saturation set to 0; for the eigenvalues without
+any exciter or stabiliser, as stabctl's linearisation fails on the EXST1/ESST3A mix),
+imported by ``stabctl.psse.load_psse`` and read by ANDES from the same files
+(``stabctl.andes_xval``). Fault: three-phase at one bus through j1e-4 pu from
 t = 1 s, cleared after 6 cycles without loss of a line; fixed step 5 ms in both tools.
 
 Prints one table per study with each tool's wall time and the ratio ANDES / stabctl:
@@ -40,7 +40,6 @@ from stabctl.andes_xval import (AndesFault, andes_modes, andes_speeds, andes_sys
                                 strip_dyr)
 from stabctl.case import load_case
 from stabctl.cct import LineFault, critical_clearing_time
-from stabctl.dyr import read_dyr
 from stabctl.events import Fault
 from stabctl.linearise import linearise
 from stabctl.modal import modal_analysis
@@ -48,24 +47,25 @@ from stabctl.psse import load_psse
 from stabctl.simulation import Simulator
 
 STEP, T_FAULT, CYCLES, TOL = 0.005, 1.0, 6, 0.001
-UNMAPPED = {"TOGGLE", "ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
+CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
+ESDC2A_BUSES = (10, 17, 42, 76, 78, 111, 117, 139)
 CASES = (("kundur", "kundur", 7), ("wecc179", "wecc", 1))  # label, ANDES folder, fault bus
 
 
-SEXS = "0.1 10.0 50.0 0.05 -5.0 5.0"  # TA/TB, TB s, K, TE s, EMIN, EMAX pu
-
-
-def case_files(folder: str, work: Path):
-    """(RAW, DYR) of an ANDES case, the DYR made like for like (module doc)."""
+def case_files(folder: str, work: Path, controls: bool = True):
+    """(RAW, DYR) of an ANDES case, the DYR made like for like (module doc); controls
+    False: WECC-179 without exciters and stabilisers."""
     import andes
 
     src = Path(andes.__file__).parent / "cases" / folder
-    dyr = work / f"{folder}.dyr"
-    removed = strip_dyr(src / f"{folder}_full.dyr", dyr, UNMAPPED, unsaturated=True)
-    if any(m in removed for m in ("EXST1", "ESST3A", "ESDC2A")):
-        gens = [r for r in read_dyr(dyr) if r.model == "GENROU"]
-        with open(dyr, "a") as fh:
-            fh.writelines(f"{g.bus} 'SEXS' {g.id} {SEXS} /\n" for g in gens)
+    dyr = work / f"{folder}{'' if controls else '_nc'}.dyr"
+    if folder == "kundur":
+        strip_dyr(src / f"{folder}_full.dyr", dyr, {"TOGGLE"})
+    elif controls:
+        strip_dyr(src / f"{folder}_full.dyr", dyr, {"ESDC2A", "ST2CUT", "IEEEST"},
+                  unsaturated=True, buses=ESDC2A_BUSES)
+    else:
+        strip_dyr(src / f"{folder}_full.dyr", dyr, CONTROLS, unsaturated=True)
     return src / f"{folder}.raw", dyr
 
 
@@ -123,7 +123,7 @@ def _word(stable: bool) -> str:
 
 
 def study_eig(files):
-    print("\nEigenvalues at the power flow (wall s)")
+    print("\nEigenvalues at the power flow (wall s; WECC-179 without exciters and PSS)")
     row("case", "stabctl", "ANDES", "ANDES/ours", "n modes EM")
     for label, (raw, dyr), _ in files:
         case = load_psse(raw, dyr)
@@ -221,8 +221,10 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         files = [(label, case_files(folder, Path(tmp)), bus) for label, folder, bus in CASES]
+        plain = [(label, case_files(folder, Path(tmp), controls=False), bus)
+                 for label, folder, bus in CASES]
         for name in args.only:
-            STUDIES[name](files)
+            STUDIES[name](plain if name == "eig" else files)
 
 
 if __name__ == "__main__":
