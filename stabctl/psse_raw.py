@@ -281,12 +281,11 @@ def _records(lines: list[str], path: Path, version: int):
 class _Builder:
     """Accumulates the PST tables while the records are read."""
 
-    file: str
     version: int
     base: float
     loads: str
     buses: dict = field(default_factory=dict)      # number -> bus row (list of 15)
-    bus_src: dict = field(default_factory=dict)    # number -> _Rec
+    load_src: dict = field(default_factory=dict)   # bus -> its first load record
     isolated: set = field(default_factory=set)
     load_parts: dict = field(default_factory=dict)  # bus -> [Pp, Qp, Pi, Qi]
     branches: list = field(default_factory=list)
@@ -325,7 +324,6 @@ def _bus(b: _Builder, rec: _Rec):
     kind = {1: PQ, 2: PV, 3: SWING}[ide]
     b.buses[num] = [num, vm, rec.num(0, 8, 0.0), 0, 0, 0, 0, 0, 0, kind, 0, 0,
                     rec.num(0, 2, 0.0), 0, 0]
-    b.bus_src[num] = rec
 
 
 def _load(b: _Builder, rec: _Rec):
@@ -336,6 +334,7 @@ def _load(b: _Builder, rec: _Rec):
         return
     pl, ql, ip, iq, yp, yq = (rec.num(0, k, 0.0) for k in range(5, 11))
     v0 = b.v0(num)
+    b.load_src.setdefault(num, rec)
     parts = b.load_parts.setdefault(num, [0.0, 0.0, 0.0, 0.0])
     for i, v in enumerate((pl, ql, ip * v0, iq * v0)):
         parts[i] += v / b.base
@@ -494,13 +493,13 @@ def _load_con(b: _Builder) -> np.ndarray:
     for num, (pp, qp, pi, qi) in b.load_parts.items():
         bus = b.buses[num]
         bus[5], bus[6] = pp + pi, qp + qi
+        if b.loads != "raw":
+            continue
         fp, fq = _fraction(pp, pi), _fraction(qp, qi)
         if fp is None or fq is None:
-            src = b.bus_src[num]
-            b.unsupported.append(src.source(
-                f"loads at bus {num}: constant-power and constant-current parts of "
-                "opposite sign (no load_con fractions)"))
-        elif b.loads == "raw":
+            b.skip(b.load_src[num], f"loads at bus {num}: constant-power and constant-"
+                                    "current parts of opposite sign (no load_con fractions)")
+        else:
             rows.append([num, fp, fq, 1.0 - fp, 1.0 - fq])
     return np.array(rows, dtype=float).reshape(-1, 5)
 
@@ -548,7 +547,7 @@ def read_raw(path: str | Path, loads: str = "impedance") -> RawData:
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
     base, version, freq = _header(lines, path)
-    b = _Builder(path.name, version, base, loads)
+    b = _Builder(version, base, loads)
     for rec in _records(lines, path, version):
         _dispatch(b, rec)
     return _finish(b, path, lines, version, freq)

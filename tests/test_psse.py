@@ -192,6 +192,15 @@ def test_unsupported_dyr_records_are_listed_with_the_raw_ones():
     assert (len(case.machines), len(case.exciters), len(case.governors)) == (4, 4, 4)
 
 
+def test_load_of_mixed_sign_has_no_load_con_fractions(tmp_path):
+    # PL = 100 MW with IP = -200 MW: no fractions in [0, 1] (PST load_con); fine when all
+    # loads are constant impedance
+    path = _edit(tmp_path, "100.000,    30.000,    20.000", "100.000,    30.000,  -200.000")
+    with pytest.raises(CaseError, match=r"edited\.raw:10 loads at bus 2: constant-power"):
+        load_psse(path, loads="raw")
+    assert load_psse(path).buses.pload[1] == pytest.approx((100 - 200 * 0.98) / 100)
+
+
 def test_remote_regulation_is_unsupported(tmp_path):
     path = _edit(tmp_path, "1.01000,     3,   100.000", "1.01000,     4,   100.000")
     with pytest.raises(CaseError, match=r"edited\.raw:19 generator at bus 3 '2': remote "
