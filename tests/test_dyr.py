@@ -365,6 +365,11 @@ def test_flat_run_with_ieeex1_and_ieeeg1_has_no_drift(kundur_tables):
     assert residual < 1e-9, where
     r = sim.run([], 10.0)
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.pmech - r.pmech[0]).max() < 1e-9
+    # per machine 6 + DC 5 + IEEEG1 4 (lead-lag, gate, T4, T7 lags; T5 = T6 = 0 pass through)
+    sys = linearise(sim)
+    assert sys.nstates == 4 * (6 + 5 + 4) and "tg_T7lag_G1" in sys.state_labels
+    B, s, i = np.asarray(sys.B), sys.state_labels, sys.input_labels
+    assert B[s.index("tg_gate_G2"), i.index("Pref_G2")] == pytest.approx(1 / 0.2, rel=1e-9)
 
 
 def test_flat_run_with_exst1_has_no_drift(kundur_tables):
@@ -379,6 +384,8 @@ def test_flat_run_with_exst1_has_no_drift(kundur_tables):
     assert residual < 1e-9, where
     r = sim.run([], 10.0)
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
+    sys = linearise(sim)                            # 6 + EXST1 4 (V_TR, V_As, V_R, R_f) + 2
+    assert sys.nstates == 4 * (6 + 4 + 2) and "exc_Rf_G3" in sys.state_labels
 
 
 def test_flat_run_with_esst3a_and_ieeest_has_no_drift():
