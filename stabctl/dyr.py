@@ -161,6 +161,21 @@ def dyr_tables(records, generators, on_unsupported: str = "error") -> DyrTables:
     """
     if on_unsupported not in ("error", "skip"):
         raise CaseError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
+    rows, skipped = _map_records(records, generators)
+    if skipped and on_unsupported == "error":
+        raise CaseError("unsupported DYR records (use on_unsupported='skip' to leave them "
+                        "out):\n" + "\n".join(f"  {r.label()}: {why}" for r, why in skipped))
+    _check_machines(generators, rows["machine"])
+    _set_fractions(generators, rows["machine"])
+    tables = {k: _matrix(rows[k], width) for k, width in _WIDTH.items()}
+    return DyrTables(mac_con=tables["machine"], exc_con=tables["exciter"],
+                     pss_con=tables["pss"], tg_con=tables["governor"],
+                     unsupported=tuple(r for r, _ in skipped))
+
+
+def _map_records(records, generators):
+    """Rows per kind {kind: {machine number: (record, row)}} and the unsupported records
+    with their reasons, in file order; raises CaseError for malformed records."""
     gens = {(int(g["bus"]), _machine_id(g["id"])): g for g in generators}
     rows: dict[str, dict[int, tuple[DyrRecord, list]]] = {k: {} for k in _MAPPERS}
     skipped = []
@@ -184,15 +199,7 @@ def dyr_tables(records, generators, on_unsupported: str = "error") -> DyrTables:
         rows[kind][number] = (rec, row)
     for number in [k for k in rows["pss"] if k not in rows["exciter"]]:
         skipped.append((rows["pss"].pop(number)[0], "its machine has no (supported) exciter"))
-    if skipped and on_unsupported == "error":
-        raise CaseError("unsupported DYR records (use on_unsupported='skip' to leave them "
-                        "out):\n" + "\n".join(f"  {r.label()}: {why}" for r, why in skipped))
-    _check_machines(generators, rows["machine"])
-    _set_fractions(generators, rows["machine"])
-    tables = {k: _matrix(rows[k], width) for k, width in _WIDTH.items()}
-    return DyrTables(mac_con=tables["machine"], exc_con=tables["exciter"],
-                     pss_con=tables["pss"], tg_con=tables["governor"],
-                     unsupported=tuple(r for r, _ in skipped))
+    return rows, sorted(skipped, key=lambda item: (item[0].file, item[0].line))
 
 
 def _check_count(rec: DyrRecord) -> None:
