@@ -25,9 +25,9 @@ from .case import ExciterTable, GovernorTable, MachineTable, PssTable
 from .errors import CaseError
 
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
-N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16, "EXST1": 12,
-            "ESST3A": 21,
-            "IEEEST": 19, "ST2CUT": 20, "TGOV1": 7, "IEEEG1": 22}
+#: numbers after the id per model (PSS/E Model Library: ICONs, then CONs)
+N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16,
+            "EXST1": 12, "ESST3A": 21, "IEEEST": 19, "ST2CUT": 20, "TGOV1": 7, "IEEEG1": 22}
 
 
 @dataclass(frozen=True)
