@@ -27,7 +27,7 @@ from .errors import CaseError
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
 #: numbers after the id per model (PSS/E Model Library: ICONs, then CONs)
 N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16,
-            "EXST1": 12, "ESST3A": 21, "IEEEST": 19, "ST2CUT": 20, "TGOV1": 7, "IEEEG1": 22}
+            "ESDC2A": 16, "EXST1": 12, "ESST3A": 21, "IEEEST": 19, "ST2CUT": 20, "TGOV1": 7, "IEEEG1": 22}
 
 
 @dataclass(frozen=True)
@@ -312,11 +312,18 @@ def exp_saturation(E1, SE1, E2, SE2) -> tuple[float, float]:
     return float(SE1 * np.exp(-B * E1)), float(B)
 
 
-def _dc(kind):
+#: ESDC2A's VRMAX = 0 read as no upper limit (ANDES; PST would compute it from E2)
+VRMAX_UNLIMITED = 999.0
+
+
+def _dc(kind, zero_vrmax_unlimited=False):
     def mapper(rec, gen):
-        """IEEEX1 (DC1, type 1) / EXDC2 (DC2, type 2): TR KA TA TB TC VRMAX VRMIN KE TE KF
-        TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; saturation as Asat, Bsat (E2 column 0)."""
+        """IEEEX1 (DC1, type 1) / EXDC2, ESDC2A (DC2, type 2): TR KA TA TB TC VRMAX VRMIN KE
+        TE KF TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; saturation as Asat, Bsat (E2
+        column 0); K_E = 0 is computed at initialisation (V_R0 = 0, docs 2.3)."""
         TR, KA, TA, TB, TC, VRMAX, VRMIN, KE, TE, KF, TF, switch, E1, SE1, E2, SE2 = rec.params
+        if zero_vrmax_unlimited and VRMAX == 0:
+            VRMAX = VRMAX_UNLIMITED
         if switch != 0:
             raise _Unsupported(f"Switch = {switch} is not modelled (only 0)")
         try:
@@ -444,7 +451,8 @@ def _ieeeg1(rec, gen):
 
 _MAPPERS = {
     "machine": {"GENROU": _genrou, "GENSAL": _gensal, "GENCLS": _gencls},
-    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2), "EXST1": _exst1,
+    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2),
+                "ESDC2A": _dc(2, zero_vrmax_unlimited=True), "EXST1": _exst1,
                 "ESST3A": _esst3a},
     "pss": {"IEEEST": _ieeest, "ST2CUT": _st2cut},
     "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1},

@@ -91,16 +91,42 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
     np.testing.assert_allclose(p.K[0], [0, 0, 0.3, 0.7])
 
 
-def test_wecc_unsupported_records_are_listed_with_file_and_line():
-    recs = read_dyr(WECC_DYR)
+def test_unsupported_records_are_listed_with_file_and_line(tmp_path):
     with pytest.raises(CaseError) as e:
-        dyr_tables(recs, wecc_generators(recs))
-    msg = str(e.value)
-    assert "wecc_full.dyr:60 ESDC2A (bus 10, id 1): model ESDC2A is not mapped" in msg
-    assert "wecc_full.dyr:320 IEEEST (bus 111, id 1): its machine has no (supported) exciter" in msg
-    t = dyr_tables(recs, wecc_generators(recs), on_unsupported="skip")
-    assert {r.model for r in t.unsupported} == {"ESDC2A", "ST2CUT", "IEEEST"}
-    assert len(t.unsupported) == 8 + 8              # ESDC2A and the PSS of those machines
+        dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators())
+    assert str(e.value).endswith("kundur_full.dyr:37 TOGGLE (bus 0, id LINE_8): model TOGGLE "
+                                 "is not mapped")
+    text = ("1 'GENCLS' 1 3.0 0.0 /\n1 'ESAC1A' 1 0 0 /\n"
+            "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n")
+    with pytest.raises(CaseError) as e:
+        dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
+    assert str(e.value).splitlines()[1:] == [
+        "  t.dyr:2 ESAC1A (bus 1, id 1): model ESAC1A is not mapped",
+        "  t.dyr:3 IEEEST (bus 1, id 1): its machine has no (supported) exciter"]
+
+
+def test_wecc_imports_completely():
+    recs = read_dyr(WECC_DYR)
+    t = dyr_tables(recs, wecc_generators(recs))
+    assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
+        (29, 23), (29, 22), (29, 24), (29, 24)) and t.unsupported == ()
+    kinds = dict(zip(*np.unique(t.exc_con[:, 0], return_counts=True)))
+    assert kinds == {2: 8, 3: 4, 4: 17}                       # ESDC2A, ESST3A, EXST1
+
+
+def test_wecc_esdc2a_to_dc2():
+    """Line 60 (bus 10): TR .02 KA 50 TA .05 TB .02 TC 0 VRMAX 0 (no limit, as ANDES) VRMIN -3
+    KE 0 (computed at initialisation) TE .512 KF .07 TF1 1.3 Switch 0 E1 3.9825 SE1 .5
+    E2 5.31 SE2 1.049."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens)
+    n10 = [g["number"] for g in gens if g["bus"] == 10][0]
+    e = t.exc_con[t.exc_con[:, 1] == n10][0]
+    np.testing.assert_array_equal(e[:11], [2, n10, 0.02, 50, 0.05, 0.02, 0, 999, -3, 0, 0.512])
+    assert (e[15], e[16]) == (0.07, 1.3)
+    A, B = e[12], e[14]
+    np.testing.assert_allclose(A * np.exp(B * np.array([3.9825, 5.31])), [0.5, 1.049], rtol=1e-14)
 
 
 def test_wecc_esst3a_to_exc_st3():
@@ -589,3 +615,20 @@ def test_initial_point_matches_andes_kundur_full():
     np.testing.assert_allclose(Vref, ss.EXDC2.vref0.v, atol=1e-12)
     _, Pref = gov.initialise(gov.governor_params(case), pm)
     np.testing.assert_allclose(Pref * 900 / 100, ss.TGOV1.pref0.v, rtol=1e-12)   # system base
+
+
+def test_flat_run_with_wecc_esdc2a_has_no_drift(kundur_tables):
+    """WECC's ESDC2A (K_E = 0 computed so that V_R0 = 0, exponential saturation) on Kundur's
+    machines: equilibrium, V_R0 = 0, no drift."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens)
+    n10 = [g["number"] for g in gens if g["bus"] == 10][0]
+    e = np.tile(t.exc_con[t.exc_con[:, 1] == n10], (4, 1))
+    e[:, 1] = [1, 2, 3, 4]
+    sim = Simulator(replaced_kundur(e, kundur_tables.tg_con))
+    m = sim.model_for([])
+    assert m.initial_residual[0] < 1e-9, m.initial_residual[1]
+    np.testing.assert_allclose(m.layout.view(m.x0, "exc")[2], 0.0, atol=1e-15)   # V_R0
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
