@@ -632,3 +632,32 @@ def test_flat_run_with_wecc_esdc2a_has_no_drift(kundur_tables):
     np.testing.assert_allclose(m.layout.view(m.x0, "exc")[2], 0.0, atol=1e-15)   # V_R0
     r = sim.run([], 10.0)
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
+
+
+def test_exst1_and_ieeeg1_initialisation_match_andes_wecc():
+    """ANDES reference (wecc.raw + wecc_full.dyr, solved and initialised by ANDES): from
+    ANDES's field voltages, terminal voltages and mechanical powers, stabctl's EXST1 gives
+    ANDES's vref0 and IEEEG1 its pref0 (machine base here, system base in ANDES)."""
+    cases = CASES / "wecc"
+    ss = andes.load(str(cases / "wecc.raw"), addfile=str(cases / "wecc_full.dyr"),
+                    setup=True, no_output=True, default_config=True)
+    ss.PFlow.run()
+    ss.TDS.init()
+    g = ss.GENROU
+    gens = [dict(number=i + 1, bus=int(b), id="1", mbase=float(sn), ra=0.0, xsource=0.2)
+            for i, (b, sn) in enumerate(zip(g.bus.v, g.Sn.v))]
+    t = dyr_tables(read_dyr(WECC_DYR), gens)
+    st1 = [g.idx.v.index(s) for s in ss.EXST1.syn.v][:4]        # four EXST1 machines
+    rows = np.array([t.exc_con[t.exc_con[:, 1] == k + 1][0] for k in st1])
+    rows[:, 1] = [1, 2, 3, 4]
+    case = load_case("kundur").replace(exciters=ExciterTable.from_matrix(rows))
+    vt = ss.Bus.v.v[[ss.Bus.idx.v.index(g.bus.v[k]) for k in st1]]
+    _, Vref, _ = exc.initialise(exc.exciter_params(case), g.vf0.v[st1], vt)
+    np.testing.assert_allclose(Vref, ss.EXST1.vref0.v[:4], atol=1e-12)
+    tg = [g.idx.v.index(s) for s in ss.IEEEG1.syn.v][:4]
+    rows = np.array([t.tg_con[t.tg_con[:, 1] == k + 1][0] for k in tg])
+    rows[:, 1] = [1, 2, 3, 4]
+    case = load_case("kundur").replace(governors=GovernorTable.from_matrix(rows))
+    pm = g.tm0.v[tg] * 100 / g.Sn.v[tg]
+    _, Pref = gov.initialise(gov.governor_params(case), pm)
+    np.testing.assert_allclose(Pref * g.Sn.v[tg] / 100, ss.IEEEG1.pref0.v[:4], rtol=1e-12)
