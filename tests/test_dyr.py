@@ -661,3 +661,12 @@ def test_exst1_and_ieeeg1_initialisation_match_andes_wecc():
     pm = g.tm0.v[tg] * 100 / g.Sn.v[tg]
     _, Pref = gov.initialise(gov.governor_params(case), pm)
     np.testing.assert_allclose(Pref * g.Sn.v[tg] / 100, ss.IEEEG1.pref0.v[:4], rtol=1e-12)
+    # ESST3A's source voltage V_E: PST's formula gives ANDES's value when fed, as ANDES
+    # does, system-base currents (mac_pot = 1); stabctl feeds machine-base ones (docs 12)
+    e = ss.ESST3A
+    for i, k in enumerate(g.idx.v.index(s) for s in e.syn.v):
+        b = ss.Bus.idx.v.index(g.bus.v[k])
+        KP = e.KP.v[i] * np.exp(1j * np.deg2rad(e.THETAP.v[i]))
+        VE = exc.st3_source_voltage(KP, e.KI.v[i], e.XL.v[i], 0.0, ss.Bus.v.v[b], ss.Bus.a.v[b],
+                                    g.Pe.v[k], g.Qe.v[k], 1.0, 0.0, True)
+        assert VE == pytest.approx(e.VE.v[i], rel=1e-12)
