@@ -6,7 +6,8 @@ RAW file, to the PST matrices `mac_con`, `exc_con`, `pss_con`, `tg_con` that
 
 Record syntax (PSS/E Program Operation Manual, "Dynamics Data File"): ``IBUS 'MODEL' ID
 CON(J) ... CON(J+n) /`` over one or more lines, fields separated by blanks or commas;
-ICONs of IEEEG1 (JBUS, M) and IEEEST (ICS, IB) come first among the numbers.  Parameter
+ICONs of IEEEG1 (JBUS, M), IEEEST (ICS, IB) and ST2CUT (MODE, BUSR, MODE2, BUSR2) come
+first among the numbers.  Parameter
 order per model: PSS/E Model Library (as ANDES `andes/io/psse-dyr.yaml`).  Mapping and
 the known modelling differences: docs/pst_models.md section 12.
 
@@ -27,7 +28,8 @@ from .errors import CaseError
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
 #: numbers after the id per model (PSS/E Model Library: ICONs, then CONs)
 N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16,
-            "ESDC2A": 16, "EXST1": 12, "ESST3A": 21, "IEEEST": 19, "ST2CUT": 20, "TGOV1": 7, "IEEEG1": 22}
+            "ESDC2A": 16, "EXST1": 12, "ESST3A": 21, "IEEEST": 19, "ST2CUT": 20, "TGOV1": 7,
+            "IEEEG1": 22}
 
 
 @dataclass(frozen=True)
@@ -52,9 +54,10 @@ class DyrRecord:
 
 @dataclass(frozen=True)
 class DyrTables:
-    """PST matrices built from DYR records, rows in machine order: mac_con (n_gen, 23),
-    exc_con (n, 20), pss_con (n, 10), tg_con (n, 24) (None when no record of that kind);
-    unsupported: the records skipped (`on_unsupported="skip"`)."""
+    """PST matrices built from DYR records, rows in machine order, columns as the case
+    tables (MachineTable, ExciterTable, PssTable, GovernorTable): mac_con (n_gen, 23),
+    exc_con (n, 22), pss_con (n, 24), tg_con (n, 24) (None when no record of that kind);
+    unsupported: the records skipped (`on_unsupported="skip"`), in file order."""
 
     mac_con: np.ndarray
     exc_con: np.ndarray | None
@@ -77,10 +80,10 @@ def read_dyr(path) -> list[DyrRecord]:
     Returns:
         list of DyrRecord.
     Raises:
-        CaseError "{file}:{line}: ..." for an unreadable file, a record not ended by '/',
-        without a quoted model name or id, or, for the models stabctl maps, a non-integer
-        bus or a parameter that is not a number (other models' records are kept, with bus
-        0 and NaN parameters there, for the unsupported report).
+        CaseError "{file}:{line}: ..." for an unreadable file, a record not ended by '/'
+        or without a quoted model name after the bus, and, for the models stabctl maps, a
+        non-integer bus or a parameter that is not a number (other models' records are
+        kept, with bus 0 and NaN parameters there, for the unsupported report).
     """
     path = Path(path)
     try:
