@@ -6,7 +6,8 @@ RAW file, to the PST matrices `mac_con`, `exc_con`, `pss_con`, `tg_con` that
 
 Record syntax (PSS/E Program Operation Manual, "Dynamics Data File"): ``IBUS 'MODEL' ID
 CON(J) ... CON(J+n) /`` over one or more lines, fields separated by blanks or commas;
-ICONs of IEEEG1 (JBUS, M) and IEEEST (ICS, IB) come first among the numbers.  Parameter
+ICONs of IEEEG1 (JBUS, M), IEEEST (ICS, IB) and ST2CUT (MODE, BUSR, MODE2, BUSR2) come
+first among the numbers.  Parameter
 order per model: PSS/E Model Library (as ANDES `andes/io/psse-dyr.yaml`).  Mapping and
 the known modelling differences: docs/pst_models.md section 12.
 
@@ -25,9 +26,10 @@ from .case import ExciterTable, GovernorTable, MachineTable, PssTable
 from .errors import CaseError
 
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
-N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16, "EXST1": 12,
-            "ESST3A": 21,
-            "IEEEST": 19, "ST2CUT": 20, "TGOV1": 7, "IEEEG1": 22}
+#: numbers after the id per model (PSS/E Model Library: ICONs, then CONs)
+N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16,
+            "ESDC2A": 16, "EXST1": 12, "ESST3A": 21, "IEEEST": 19, "ST2CUT": 20, "TGOV1": 7,
+            "IEEEG1": 22}
 
 
 @dataclass(frozen=True)
@@ -52,9 +54,10 @@ class DyrRecord:
 
 @dataclass(frozen=True)
 class DyrTables:
-    """PST matrices built from DYR records, rows in machine order: mac_con (n_gen, 23),
-    exc_con (n, 20), pss_con (n, 10), tg_con (n, 24) (None when no record of that kind);
-    unsupported: the records skipped (`on_unsupported="skip"`)."""
+    """PST matrices built from DYR records, rows in machine order, columns as the case
+    tables (MachineTable, ExciterTable, PssTable, GovernorTable): mac_con (n_gen, 23),
+    exc_con (n, 22), pss_con (n, 24), tg_con (n, 24) (None when no record of that kind);
+    unsupported: the records skipped (`on_unsupported="skip"`), in file order."""
 
     mac_con: np.ndarray
     exc_con: np.ndarray | None
@@ -77,10 +80,10 @@ def read_dyr(path) -> list[DyrRecord]:
     Returns:
         list of DyrRecord.
     Raises:
-        CaseError "{file}:{line}: ..." for an unreadable file, a record not ended by '/',
-        without a quoted model name or id, or, for the models stabctl maps, a non-integer
-        bus or a parameter that is not a number (other models' records are kept, with bus
-        0 and NaN parameters there, for the unsupported report).
+        CaseError "{file}:{line}: ..." for an unreadable file, a record not ended by '/'
+        or without a quoted model name after the bus, and, for the models stabctl maps, a
+        non-integer bus or a parameter that is not a number (other models' records are
+        kept, with bus 0 and NaN parameters there, for the unsupported report).
     """
     path = Path(path)
     try:
@@ -161,6 +164,21 @@ def dyr_tables(records, generators, on_unsupported: str = "error") -> DyrTables:
     """
     if on_unsupported not in ("error", "skip"):
         raise CaseError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
+    rows, skipped = _map_records(records, generators)
+    if skipped and on_unsupported == "error":
+        raise CaseError("unsupported DYR records (use on_unsupported='skip' to leave them "
+                        "out):\n" + "\n".join(f"  {r.label()}: {why}" for r, why in skipped))
+    _check_machines(generators, rows["machine"])
+    _set_fractions(generators, rows["machine"])
+    tables = {k: _matrix(rows[k], width) for k, width in _WIDTH.items()}
+    return DyrTables(mac_con=tables["machine"], exc_con=tables["exciter"],
+                     pss_con=tables["pss"], tg_con=tables["governor"],
+                     unsupported=tuple(r for r, _ in skipped))
+
+
+def _map_records(records, generators):
+    """Rows per kind {kind: {machine number: (record, row)}} and the unsupported records
+    with their reasons, in file order; raises CaseError for malformed records."""
     gens = {(int(g["bus"]), _machine_id(g["id"])): g for g in generators}
     rows: dict[str, dict[int, tuple[DyrRecord, list]]] = {k: {} for k in _MAPPERS}
     skipped = []
@@ -184,15 +202,7 @@ def dyr_tables(records, generators, on_unsupported: str = "error") -> DyrTables:
         rows[kind][number] = (rec, row)
     for number in [k for k in rows["pss"] if k not in rows["exciter"]]:
         skipped.append((rows["pss"].pop(number)[0], "its machine has no (supported) exciter"))
-    if skipped and on_unsupported == "error":
-        raise CaseError("unsupported DYR records (use on_unsupported='skip' to leave them "
-                        "out):\n" + "\n".join(f"  {r.label()}: {why}" for r, why in skipped))
-    _check_machines(generators, rows["machine"])
-    _set_fractions(generators, rows["machine"])
-    tables = {k: _matrix(rows[k], width) for k, width in _WIDTH.items()}
-    return DyrTables(mac_con=tables["machine"], exc_con=tables["exciter"],
-                     pss_con=tables["pss"], tg_con=tables["governor"],
-                     unsupported=tuple(r for r, _ in skipped))
+    return rows, sorted(skipped, key=lambda item: (item[0].file, item[0].line))
 
 
 def _check_count(rec: DyrRecord) -> None:
@@ -305,11 +315,18 @@ def exp_saturation(E1, SE1, E2, SE2) -> tuple[float, float]:
     return float(SE1 * np.exp(-B * E1)), float(B)
 
 
-def _dc(kind):
+#: ESDC2A's VRMAX = 0 read as no upper limit (ANDES; PST would compute it from E2)
+VRMAX_UNLIMITED = 999.0
+
+
+def _dc(kind, zero_vrmax_unlimited=False):
     def mapper(rec, gen):
-        """IEEEX1 (DC1, type 1) / EXDC2 (DC2, type 2): TR KA TA TB TC VRMAX VRMIN KE TE KF
-        TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; saturation as Asat, Bsat (E2 column 0)."""
+        """IEEEX1 (DC1, type 1) / EXDC2, ESDC2A (DC2, type 2): TR KA TA TB TC VRMAX VRMIN KE
+        TE KF TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; saturation as Asat, Bsat (E2
+        column 0); K_E = 0 is computed at initialisation (V_R0 = 0, docs 2.3)."""
         TR, KA, TA, TB, TC, VRMAX, VRMIN, KE, TE, KF, TF, switch, E1, SE1, E2, SE2 = rec.params
+        if zero_vrmax_unlimited and VRMAX == 0:
+            VRMAX = VRMAX_UNLIMITED
         if switch != 0:
             raise _Unsupported(f"Switch = {switch} is not modelled (only 0)")
         try:
@@ -437,7 +454,8 @@ def _ieeeg1(rec, gen):
 
 _MAPPERS = {
     "machine": {"GENROU": _genrou, "GENSAL": _gensal, "GENCLS": _gencls},
-    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2), "EXST1": _exst1,
+    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2),
+                "ESDC2A": _dc(2, zero_vrmax_unlimited=True), "EXST1": _exst1,
                 "ESST3A": _esst3a},
     "pss": {"IEEEST": _ieeest, "ST2CUT": _st2cut},
     "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1},

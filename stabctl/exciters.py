@@ -103,13 +103,12 @@ class ExciterParams:
 
     def has_state(self) -> np.ndarray:
         """Boolean (n_slots, n_exc): the slots that are states (docs/modal.md)."""
-        act = np.zeros((self.n_slots(), self.n), bool)
+        act = np.zeros((5, self.n), bool)
         act[0], act[1] = self.has_TR, self.has_TB
         act[2] = (self.kind == ST3) | self.has_TA
-        if act.shape[0] > 3:
-            act[3] = self.has_Rf
-            act[4] = self.is_dc
-        return act
+        act[3] = self.has_Rf
+        act[4] = self.is_dc
+        return act[:self.n_slots()]
 
     @property
     def has_Rf(self):
@@ -206,7 +205,7 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     machines' field voltage vex and terminal voltage eterm; VB is the ST3 source voltage
     (needed for type 3).  Raises CaseError when the initial point violates a limit PST
     checks (ST3: Efdmax or the V_I range; DC: the V_R limits)."""
-    x = np.zeros((p.n_slots(), p.n))
+    x = np.zeros((5, p.n))
     x[0] = eterm
     smp, st3, dc = p.kind == SMP, p.kind == ST3, p.is_dc
     VA_smp = vex / p.KA
@@ -226,12 +225,10 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     VA = np.where(st3, VA_st3, VA)
     x[1] = VA
     x[2] = np.where(smp | st1, vex, np.where(dc, VR_dc, VR))
-    if x.shape[0] > 3:
-        x[3] = np.where(p.has_Rf, vex, 0.0)
-    if x.shape[0] > 4:
-        x[4] = np.where(dc, vex, 0.0)
+    x[3] = np.where(p.has_Rf, vex, 0.0)
+    x[4] = np.where(dc, vex, 0.0)
     Vref = eterm + np.where(st3, VI, VA)
-    return x, Vref, p
+    return x[:p.n_slots()], Vref, p
 
 
 def _check_st1_initial(p: ExciterParams, Efd, eterm):

@@ -105,9 +105,9 @@ def governor_params(case: Case) -> GovernorParams:
     need = {TG: ("Ts", "Tc", "T5"), TGOV1: ("Ts", "Tc"), IEEEG1: ("Ts",)}
     for r in range(len(g)):
         for name in need[int(g.type[r])]:
-            if getattr(g, name)[r] < LBND:
-                raise CaseError(f"tg_con row {r + 1}, field '{name}': must be >= {LBND} s "
-                                f"for governor type {int(g.type[r])}")
+            if getattr(g, name)[r] == 0:
+                raise CaseError(f"tg_con row {r + 1}, field '{name}': must be non-zero for "
+                                f"governor type {int(g.type[r])}")
     K = np.column_stack([g.K1 + g.K2, g.K3 + g.K4, g.K5 + g.K6, g.K7 + g.K8]).reshape(len(g), 4)
     bad = np.nonzero((g.type == IEEEG1) & (K.sum(axis=1) <= 0))[0]
     if bad.size:

@@ -89,19 +89,17 @@ class PssParams:
 
     def has_state(self) -> np.ndarray:
         """Boolean (n_slots, n_pss): the slots that are states of each PSS."""
-        act = np.zeros((self.n_slots(), self.n), bool)
+        act = np.zeros((10, self.n), bool)
         pst, e = self.kind != PSSE, self.kind == PSSE
         act[0] = pst | (e & (self.Tr1 >= LBND))
         act[1] = pst | (e & (self.input2 != 0) & (self.Tr2 >= LBND))
-        act[2] = pst & self.has_T4
-        if act.shape[0] > 3:
-            act[2] |= e & (self.nf >= 1)
-            for r in range(3, 6):
-                act[r] = e & (self.nf >= r - 1)
-            act[W_PSSE] = e
-            for r, T in zip(range(LL_PSSE, LL_PSSE + 3), (self.T2, self.T4, self.T6)):
-                act[r] = e & (T >= LBND)
-        return act
+        act[2] = (pst & self.has_T4) | (e & (self.nf >= 1))
+        for r in range(3, 6):
+            act[r] = e & (self.nf >= r - 1)
+        act[W_PSSE] = e
+        for r, T in zip(range(LL_PSSE, LL_PSSE + 3), (self.T2, self.T4, self.T6)):
+            act[r] = e & (T >= LBND)
+        return act[:self.n_slots()]
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
@@ -181,17 +179,16 @@ def initialise(p: PssParams, u1, u2):
     """States (n_slots, n_pss) from the initial inputs (pss_inputs): every washout input
     state at its input, input lags at K u, filter state 1 at its input times the
     denominator's leading coefficient (controllable form, zero derivative), others 0."""
-    x = np.zeros((p.n_slots(), p.n))
+    x = np.zeros((10, p.n))
     e = p.kind == PSSE
     y1 = np.where(p.Tr1 >= LBND, p.K1 * u1, 0.0)
     y2 = np.where(p.Tr2 >= LBND, p.K2 * u2, 0.0)
     v = p.K1 * u1 + p.K2 * u2
     x[0] = np.where(e, y1, u1)
     x[1] = np.where(e, y2, 0.0)
-    if x.shape[0] > 3:
-        x[2] = np.where(e & (p.nf >= 1), v / np.where(p.nf >= 1, p.fa[:, 0], 1.0), 0.0)
-        x[W_PSSE] = np.where(e, v, 0.0)
-    return x
+    x[2] = np.where(e & (p.nf >= 1), v / np.where(p.nf >= 1, p.fa[:, 0], 1.0), 0.0)
+    x[W_PSSE] = np.where(e, v, 0.0)
+    return x[:p.n_slots()]
 
 
 @njit(cache=True)

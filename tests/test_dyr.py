@@ -91,16 +91,42 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
     np.testing.assert_allclose(p.K[0], [0, 0, 0.3, 0.7])
 
 
-def test_wecc_unsupported_records_are_listed_with_file_and_line():
-    recs = read_dyr(WECC_DYR)
+def test_unsupported_records_are_listed_with_file_and_line(tmp_path):
     with pytest.raises(CaseError) as e:
-        dyr_tables(recs, wecc_generators(recs))
-    msg = str(e.value)
-    assert "wecc_full.dyr:60 ESDC2A (bus 10, id 1): model ESDC2A is not mapped" in msg
-    assert "wecc_full.dyr:320 IEEEST (bus 111, id 1): its machine has no (supported) exciter" in msg
-    t = dyr_tables(recs, wecc_generators(recs), on_unsupported="skip")
-    assert {r.model for r in t.unsupported} == {"ESDC2A", "ST2CUT", "IEEEST"}
-    assert len(t.unsupported) == 8 + 8              # ESDC2A and the PSS of those machines
+        dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators())
+    assert str(e.value).endswith("kundur_full.dyr:37 TOGGLE (bus 0, id LINE_8): model TOGGLE "
+                                 "is not mapped")
+    text = ("1 'GENCLS' 1 3.0 0.0 /\n1 'ESAC1A' 1 0 0 /\n"
+            "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n")
+    with pytest.raises(CaseError) as e:
+        dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
+    assert str(e.value).splitlines()[1:] == [
+        "  t.dyr:2 ESAC1A (bus 1, id 1): model ESAC1A is not mapped",
+        "  t.dyr:3 IEEEST (bus 1, id 1): its machine has no (supported) exciter"]
+
+
+def test_wecc_imports_completely():
+    recs = read_dyr(WECC_DYR)
+    t = dyr_tables(recs, wecc_generators(recs))
+    assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
+        (29, 23), (29, 22), (29, 24), (29, 24)) and t.unsupported == ()
+    kinds = dict(zip(*np.unique(t.exc_con[:, 0], return_counts=True)))
+    assert kinds == {2: 8, 3: 4, 4: 17}                       # ESDC2A, ESST3A, EXST1
+
+
+def test_wecc_esdc2a_to_dc2():
+    """Line 60 (bus 10): TR .02 KA 50 TA .05 TB .02 TC 0 VRMAX 0 (no limit, as ANDES) VRMIN -3
+    KE 0 (computed at initialisation) TE .512 KF .07 TF1 1.3 Switch 0 E1 3.9825 SE1 .5
+    E2 5.31 SE2 1.049."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens)
+    n10 = [g["number"] for g in gens if g["bus"] == 10][0]
+    e = t.exc_con[t.exc_con[:, 1] == n10][0]
+    np.testing.assert_array_equal(e[:11], [2, n10, 0.02, 50, 0.05, 0.02, 0, 999, -3, 0, 0.512])
+    assert (e[15], e[16]) == (0.07, 1.3)
+    A, B = e[12], e[14]
+    np.testing.assert_allclose(A * np.exp(B * np.array([3.9825, 5.31])), [0.5, 1.049], rtol=1e-14)
 
 
 def test_wecc_esst3a_to_exc_st3():
@@ -127,7 +153,8 @@ def test_wecc_exst1_mapping():
     r = list(e.machine).index(next(g["number"] for g in gens if g["bus"] == 8))
     # line 44: TR .02 VIMAX 99 VIMIN -99 TC 0 TB .02 KA 50 TA .02 VRMAX 9999 VRMIN -9999
     # KC 0 KF .01 TF 1
-    assert (e.type[r], e.TR[r], e.VImax[r], e.VImin[r], e.TC[r], e.TB[r]) == (4, 0.02, 99, -99, 0, 0.02)
+    assert (e.type[r], e.TR[r], e.VImax[r], e.VImin[r]) == (4, 0.02, 99, -99)
+    assert (e.TC[r], e.TB[r]) == (0, 0.02)
     assert (e.KA[r], e.TA[r], e.Vrmax[r], e.Vrmin[r], e.KC[r]) == (50, 0.02, 9999, -9999, 0)
     assert (e.KF[r], e.TF[r]) == (0.01, 1.0)
 
@@ -163,10 +190,12 @@ def test_malformed_records_name_file_and_line(tmp_path, text, message):
 
 
 @pytest.mark.parametrize("text, message", [
-    ("1 'GENCLS' 1 3.0 /\n", r"t.dyr:1 GENCLS \(bus 1, id 1\): needs 2 parameters after the id, got 1"),
+    ("1 'GENCLS' 1 3.0 /\n",
+     r"t.dyr:1 GENCLS \(bus 1, id 1\): needs 2 parameters after the id, got 1"),
     ("1 'GENCLS' 1 3.0 0 /\n7 'GENCLS' 1 3.0 0 /\n",
      r"unsupported DYR .*\n  t.dyr:2 GENCLS \(bus 7, id 1\): no such generator in the RAW"),
-    ("1 'GENCLS' 1 3.0 0 /\n1 'GENCLS' 1 3.0 0 /\n", r"t.dyr:2 GENCLS .*second machine model .*t.dyr:1"),
+    ("1 'GENCLS' 1 3.0 0 /\n1 'GENCLS' 1 3.0 0 /\n",
+     r"t.dyr:2 GENCLS .*second machine model .*t.dyr:1"),
     ("1 'GENCLS' 1 0.0 0 /\n", r"H = 0.0 \(PSS/E infinite bus\)"),
     ("1 'GENCLS' 1 3.0 0 /\n1 'TGOV1' 1 0 0.5 1 0 1 2 0 /\n", r"t.dyr:2 TGOV1 .*droop R = 0.0"),
     ("1 'TGOV1' 1 0.05 0.5 1 0 1 2 0 /\n", r"machine 1 \(bus 1, id 1\)"),
@@ -277,7 +306,8 @@ def test_tgov1_pm_equals_pref_at_rated_speed_and_damps_with_dt():
 
 
 def test_tgov1_step_response_matches_closed_form():
-    """Pref step dP: Pm(t) = dP [1 - (T1 - T2)/(T1 - T3) e^(-t/T1) - (T3 - T2)/(T3 - T1) e^(-t/T3)]."""
+    """Pref step dP: Pm(t) = dP [1 - (T1 - T2)/(T1 - T3) e^(-t/T1)
+    - (T3 - T2)/(T3 - T1) e^(-t/T3)]."""
     p = tgov1_params()
     x0, Pref = gov.initialise(p, np.array([0.5]))
     dP, T1, T2, T3 = 0.1, 0.49, 2.1, 7.0
@@ -291,7 +321,8 @@ def test_tgov1_step_response_matches_closed_form():
     t = 3.0
     sol = solve_ivp(f, (0, t), x0.ravel(), rtol=1e-11, atol=1e-13)
     pm = gov.pmech(P, sol.y[:, -1].reshape(x0.shape), 0, 1.0) - 0.5
-    exact = dP * (1 - (T1 - T2) / (T1 - T3) * np.exp(-t / T1) - (T3 - T2) / (T3 - T1) * np.exp(-t / T3))
+    exact = dP * (1 - (T1 - T2) / (T1 - T3) * np.exp(-t / T1)
+                  - (T3 - T2) / (T3 - T1) * np.exp(-t / T3))
     assert pm == pytest.approx(exact, rel=1e-8)
 
 
@@ -365,6 +396,11 @@ def test_flat_run_with_ieeex1_and_ieeeg1_has_no_drift(kundur_tables):
     assert residual < 1e-9, where
     r = sim.run([], 10.0)
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.pmech - r.pmech[0]).max() < 1e-9
+    # per machine 6 + DC 5 + IEEEG1 4 (lead-lag, gate, T4, T7 lags; T5 = T6 = 0 pass through)
+    sys = linearise(sim)
+    assert sys.nstates == 4 * (6 + 5 + 4) and "tg_T7lag_G1" in sys.state_labels
+    B, s, i = np.asarray(sys.B), sys.state_labels, sys.input_labels
+    assert B[s.index("tg_gate_G2"), i.index("Pref_G2")] == pytest.approx(1 / 0.2, rel=1e-9)
 
 
 def test_flat_run_with_exst1_has_no_drift(kundur_tables):
@@ -379,6 +415,8 @@ def test_flat_run_with_exst1_has_no_drift(kundur_tables):
     assert residual < 1e-9, where
     r = sim.run([], 10.0)
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
+    sys = linearise(sim)                            # 6 + EXST1 4 (V_TR, V_As, V_R, R_f) + 2
+    assert sys.nstates == 4 * (6 + 4 + 2) and "exc_Rf_G3" in sys.state_labels
 
 
 def test_flat_run_with_esst3a_and_ieeest_has_no_drift():
@@ -497,10 +535,13 @@ def test_psse_stabiliser_transfer_function_matches_closed_form():
     B, D = (fp - fm) / (2 * h), (yp - ym) / (2 * h)
     s = 2j * np.pi
     H = C @ np.linalg.solve(s * np.eye(n) - A, B) + D
-    _, _, Kw, Tw, T1, T2, T3, T4, _, _, T5, T6, _, K1, Tr1, _, _, _, A1, A2, A3, A4, A5, A6 = PSSE_ROW
+    Kw, Tw, T1, T2, T3, T4 = PSSE_ROW[2:8]
+    T5, T6, K1, Tr1 = PSSE_ROW[10], PSSE_ROW[11], PSSE_ROW[13], PSSE_ROW[14]
+    A1, A2, A3, A4, A5, A6 = PSSE_ROW[18:]
     exact = (K1 / (1 + s * Tr1) * (1 + A5 * s + A6 * s**2)
              / ((1 + A1 * s + A2 * s**2) * (1 + A3 * s + A4 * s**2)) * Kw * s / (1 + s * Tw)
-             * (1 + s * T1) / (1 + s * T2) * (1 + s * T3) / (1 + s * T4) * (1 + s * T5) / (1 + s * T6))
+             * (1 + s * T1) / (1 + s * T2) * (1 + s * T3) / (1 + s * T4)
+             * (1 + s * T5) / (1 + s * T6))
     assert H == pytest.approx(exact, rel=1e-7)
     assert n == 2 + 4 + 1 + 3                                  # lags, 4th-order filter, ...
 
@@ -511,7 +552,8 @@ def test_psse_stabiliser_output_is_zero_and_steady_at_the_initial_point():
     assert (u1[0], u2[0]) == (0.0, 0.7)                       # speed deviation, power
     x = pss_.initialise(p, u1, u2)
     dx = np.full_like(x, np.nan)
-    assert pss_.output_and_derivatives(p.packed(), x, 0, 1.0, 0.7, dx) == pytest.approx(0, abs=1e-15)
+    y = pss_.output_and_derivatives(p.packed(), x, 0, 1.0, 0.7, dx)
+    assert y == pytest.approx(0, abs=1e-15)
     assert np.abs(dx).max() < 1e-14
 
 
@@ -540,7 +582,8 @@ def test_ieeest_with_filter_maps_to_psse_type_and_other_inputs_are_unsupported(t
     t = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:2], on_unsupported="skip")
     s = PssTable.from_matrix(t.pss_con)
     assert (s.type[0], s.input1[0], s.K1[0], s.KTw[0], s.Tw[0]) == (3, 3, 1.0, 20 * 1.5, 10)
-    assert (s.A1[0], s.A2[0], s.A5[0], s.T1[0], s.T2[0], s.T4[0]) == (0.1, 0.01, 0.05, 0.2, 0.02, 0.5)
+    assert (s.A1[0], s.A2[0], s.A5[0]) == (0.1, 0.01, 0.05)
+    assert (s.T1[0], s.T2[0], s.T4[0]) == (0.2, 0.02, 0.5)
     assert [r.line for r in t.unsupported] == [6]             # ICS 2: bus frequency
 
 
@@ -572,3 +615,58 @@ def test_initial_point_matches_andes_kundur_full():
     np.testing.assert_allclose(Vref, ss.EXDC2.vref0.v, atol=1e-12)
     _, Pref = gov.initialise(gov.governor_params(case), pm)
     np.testing.assert_allclose(Pref * 900 / 100, ss.TGOV1.pref0.v, rtol=1e-12)   # system base
+
+
+def test_flat_run_with_wecc_esdc2a_has_no_drift(kundur_tables):
+    """WECC's ESDC2A (K_E = 0 computed so that V_R0 = 0, exponential saturation) on Kundur's
+    machines: equilibrium, V_R0 = 0, no drift."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens)
+    n10 = [g["number"] for g in gens if g["bus"] == 10][0]
+    e = np.tile(t.exc_con[t.exc_con[:, 1] == n10], (4, 1))
+    e[:, 1] = [1, 2, 3, 4]
+    sim = Simulator(replaced_kundur(e, kundur_tables.tg_con))
+    m = sim.model_for([])
+    assert m.initial_residual[0] < 1e-9, m.initial_residual[1]
+    np.testing.assert_allclose(m.layout.view(m.x0, "exc")[2], 0.0, atol=1e-15)   # V_R0
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
+
+
+def test_exst1_and_ieeeg1_initialisation_match_andes_wecc():
+    """ANDES reference (wecc.raw + wecc_full.dyr, solved and initialised by ANDES): from
+    ANDES's field voltages, terminal voltages and mechanical powers, stabctl's EXST1 gives
+    ANDES's vref0 and IEEEG1 its pref0 (machine base here, system base in ANDES)."""
+    cases = CASES / "wecc"
+    ss = andes.load(str(cases / "wecc.raw"), addfile=str(cases / "wecc_full.dyr"),
+                    setup=True, no_output=True, default_config=True)
+    ss.PFlow.run()
+    ss.TDS.init()
+    g = ss.GENROU
+    gens = [dict(number=i + 1, bus=int(b), id="1", mbase=float(sn), ra=0.0, xsource=0.2)
+            for i, (b, sn) in enumerate(zip(g.bus.v, g.Sn.v))]
+    t = dyr_tables(read_dyr(WECC_DYR), gens)
+    st1 = [g.idx.v.index(s) for s in ss.EXST1.syn.v][:4]        # four EXST1 machines
+    rows = np.array([t.exc_con[t.exc_con[:, 1] == k + 1][0] for k in st1])
+    rows[:, 1] = [1, 2, 3, 4]
+    case = load_case("kundur").replace(exciters=ExciterTable.from_matrix(rows))
+    vt = ss.Bus.v.v[[ss.Bus.idx.v.index(g.bus.v[k]) for k in st1]]
+    _, Vref, _ = exc.initialise(exc.exciter_params(case), g.vf0.v[st1], vt)
+    np.testing.assert_allclose(Vref, ss.EXST1.vref0.v[:4], atol=1e-12)
+    tg = [g.idx.v.index(s) for s in ss.IEEEG1.syn.v][:4]
+    rows = np.array([t.tg_con[t.tg_con[:, 1] == k + 1][0] for k in tg])
+    rows[:, 1] = [1, 2, 3, 4]
+    case = load_case("kundur").replace(governors=GovernorTable.from_matrix(rows))
+    pm = g.tm0.v[tg] * 100 / g.Sn.v[tg]
+    _, Pref = gov.initialise(gov.governor_params(case), pm)
+    np.testing.assert_allclose(Pref * g.Sn.v[tg] / 100, ss.IEEEG1.pref0.v[:4], rtol=1e-12)
+    # ESST3A's source voltage V_E: PST's formula gives ANDES's value when fed, as ANDES
+    # does, system-base currents (mac_pot = 1); stabctl feeds machine-base ones (docs 12)
+    e = ss.ESST3A
+    for i, k in enumerate(g.idx.v.index(s) for s in e.syn.v):
+        b = ss.Bus.idx.v.index(g.bus.v[k])
+        KP = e.KP.v[i] * np.exp(1j * np.deg2rad(e.THETAP.v[i]))
+        VE = exc.st3_source_voltage(KP, e.KI.v[i], e.XL.v[i], 0.0, ss.Bus.v.v[b], ss.Bus.a.v[b],
+                                    g.Pe.v[k], g.Qe.v[k], 1.0, 0.0, True)
+        assert VE == pytest.approx(e.VE.v[i], rel=1e-12)
