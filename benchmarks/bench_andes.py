@@ -2,9 +2,9 @@
 ``pip install "stabctl[andes]"``).
 
 Cases: ANDES's Kundur (kundur.raw + kundur_full.dyr without its Toggle record) and
-WECC-179 (wecc.raw + wecc_full.dyr without the 8 ESDC2A exciters stabctl does not map and
-the stabilisers on those machines, GENROU saturation set to 0; for the eigenvalues without
-any exciter or stabiliser, as stabctl's linearisation fails on the EXST1/ESST3A mix),
+WECC-179 (wecc.raw + wecc_full.dyr, GENROU saturation set to 0; for the eigenvalues
+without exciters and stabilisers, as stabctl's linearisation of the whole case stops at a
+limiter),
 imported by ``stabctl.psse.load_psse`` and read by ANDES from the same files
 (``stabctl.andes_xval``). Fault: three-phase at one bus through j1e-4 pu from
 t = 1 s, cleared after 6 cycles without loss of a line; fixed step 5 ms in both tools.
@@ -48,7 +48,6 @@ from stabctl.simulation import Simulator
 
 STEP, T_FAULT, CYCLES, TOL = 0.005, 1.0, 6, 0.001
 CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
-ESDC2A_BUSES = (10, 17, 42, 76, 78, 111, 117, 139)
 CASES = (("kundur", "kundur", 7), ("wecc179", "wecc", 1))  # label, ANDES folder, fault bus
 
 
@@ -61,11 +60,9 @@ def case_files(folder: str, work: Path, controls: bool = True):
     dyr = work / f"{folder}{'' if controls else '_nc'}.dyr"
     if folder == "kundur":
         strip_dyr(src / f"{folder}_full.dyr", dyr, {"TOGGLE"})
-    elif controls:
-        strip_dyr(src / f"{folder}_full.dyr", dyr, {"ESDC2A", "ST2CUT", "IEEEST"},
-                  unsaturated=True, buses=ESDC2A_BUSES)
     else:
-        strip_dyr(src / f"{folder}_full.dyr", dyr, CONTROLS, unsaturated=True)
+        strip_dyr(src / f"{folder}_full.dyr", dyr, () if controls else CONTROLS,
+                  unsaturated=True)
     return src / f"{folder}.raw", dyr
 
 

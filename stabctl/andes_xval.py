@@ -52,15 +52,14 @@ def _andes():
     return andes
 
 
-def strip_dyr(src: str | Path, dst: str | Path, models, unsaturated: bool = False,
-              buses=None) -> tuple[str, ...]:
+def strip_dyr(src: str | Path, dst: str | Path, models, unsaturated: bool = False
+              ) -> tuple[str, ...]:
     """Copy the DYR file ``src`` to ``dst`` without the records of ``models`` (names in
-    upper case, e.g. ``{"EXST1", "TOGGLE"}``), only those at ``buses`` if given; returns
-    the removed model names in file order. ``unsaturated``: GENROU and GENSAL records get
-    S(1.0) = S(1.2) = 0 (their last two CONs), as the two tools' saturation functions
-    differ. A record ends at the line holding its ``/`` (PSS/E POM, Dynamics Data File)."""
+    upper case, e.g. ``{"EXST1", "TOGGLE"}``); returns the removed model names in file
+    order. ``unsaturated``: GENROU and GENSAL records get S(1.0) = S(1.2) = 0 (their last
+    two CONs), as the two tools' saturation functions differ. A record ends at the line
+    holding its ``/`` (PSS/E POM, Dynamics Data File)."""
     drop = {m.upper() for m in models}
-    at = None if buses is None else {str(int(b)) for b in buses}
     kept, record, removed = [], [], []
     for line in Path(src).read_text().splitlines(keepends=True):
         record.append(line)
@@ -68,7 +67,7 @@ def strip_dyr(src: str | Path, dst: str | Path, models, unsaturated: bool = Fals
             continue
         text = "".join(record)
         model = text.split("'")[1].strip().upper() if text.count("'") >= 2 else ""
-        if model in drop and (at is None or text.split()[0] in at):
+        if model in drop:
             removed.append(model)
         else:
             kept.append(_unsaturated(text) if unsaturated and model in _SATURATED else text)

@@ -4,14 +4,12 @@ WECC-179 (wecc.raw + wecc_full.dyr). Skipped without ANDES (``pip install
 "stabctl[andes]"``).
 
 Like for like (stabctl.andes_xval): loads constant impedance in both, ANDES's own Toggle
-record removed from Kundur's DYR; from WECC's, for both tools, the ESDC2A exciters stabctl
-does not map and the stabilisers (ST2CUT, IEEEST) on those 8 machines, leaving 21 EXST1 /
-ESST3A exciters with their stabilisers; the eigenvalue comparison also without those (so
-GENROU with constant field voltage and IEEEG1: stabctl's linearisation fails on the EXST1 /
-ESST3A mix, an IndexError in exciters.has_state). WECC's GENROU saturation (S(1.0) up to
-2.2, S(1.2) up to 11) is set to 0 in both: PSS/E's saturation function (ANDES) is not
-PST's, and with it ANDES finds two unstable modes (0.88 and 1.29 Hz) that stabctl does
-not; Kundur's machines have none.
+record removed from Kundur's DYR; WECC's DYR whole (29 GENROU, ESDC2A / EXST1 / ESST3A
+exciters, IEEEST / ST2CUT stabilisers, IEEEG1 governors) for the speeds; for the
+eigenvalues without exciters and stabilisers, as stabctl's linearisation of the whole case
+stops at a limiter. WECC's GENROU saturation (S(1.0) up to 2.2, S(1.2) up to 11) is set to
+0 in both: PSS/E's saturation function (ANDES) is not PST's, and with it ANDES finds two
+unstable modes (0.88 and 1.29 Hz) that stabctl does not; Kundur's machines have none.
 
 The bounds are the measured differences with a margin. Known model difference behind
 them: PST's machine (stabctl) takes mechanical torque as Pm/speed, ANDES's GENROU as the
@@ -36,7 +34,6 @@ from stabctl.simulation import Simulator  # noqa: E402
 
 CASES = Path(andes.__file__).parent / "cases"
 WECC_CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
-WECC_ESDC2A = (10, 17, 42, 76, 78, 111, 117, 139)  # buses of the ESDC2A exciters
 STEP = 0.005  # s, both tools
 
 
@@ -49,11 +46,9 @@ def kundur(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def wecc(tmp_path_factory):
-    """WECC-179 with the 21 EXST1 / ESST3A exciters and their stabilisers."""
+    """WECC-179's whole DYR, saturation zeroed."""
     dyr = tmp_path_factory.mktemp("wecc") / "wecc.dyr"
-    removed = strip_dyr(CASES / "wecc" / "wecc_full.dyr", dyr, {"ESDC2A", "ST2CUT", "IEEEST"},
-                        unsaturated=True, buses=WECC_ESDC2A)
-    assert len(removed) == 16  # 8 ESDC2A, 6 ST2CUT, 2 IEEEST
+    assert strip_dyr(CASES / "wecc" / "wecc_full.dyr", dyr, (), unsaturated=True) == ()
     return CASES / "wecc" / "wecc.raw", dyr
 
 
@@ -90,10 +85,10 @@ def test_kundur_fault_speeds_match_andes(kundur):
 
 
 def test_wecc_fault_speeds_match_andes(wecc):
-    # 6-cycle fault at bus 1 (Coronado 500 kV): 29 GENROU, IEEEG1, 21 exciters and PSS
+    # 6-cycle fault at bus 1 (Coronado 500 kV): 29 GENROU, exciters, PSS, IEEEG1
     t, w, wa = fault_speeds(wecc, 1, 6, 3.0)
     assert np.max(np.abs(w[t <= 2.0] - wa[t <= 2.0])) < 4e-4     # measured 2.8e-4
-    assert np.max(np.abs(w - wa)) < 8e-4                          # measured 6.5e-4
+    assert np.max(np.abs(w - wa)) < 8e-4                          # measured 6.1e-4
     assert np.max(np.abs(wa - 1)) > 5e-3
 
 
