@@ -1034,6 +1034,7 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, as_json):
     The case (stabctl's JSON format) is usable as CASE by simulate, cct, eig and screen.
     Unsupported records are named as FILE:LINE RECORD; without --skip-unsupported they
     stop the import (exit status 2, nothing written).
+
     \b
     Example:
       stabctl import-psse kundur.raw kundur_full.dyr -o kundur_psse.json
