@@ -23,7 +23,10 @@ Prints one table per study with each tool's wall time and the ratio ANDES / stab
   centre of inertia by more than pi or the run breaks down);
 * ``scaling``: stabctl's 20 s run on kundur (PST data), miniwecc (PST data) and WECC-179,
   and stabctl and ANDES on WECC-179 for 5, 10, 20, 40 s simulated, with the peak Python
-  memory of one run (tracemalloc, numpy buffers included).
+  memory of one run (tracemalloc, numpy buffers included; stabctl: model and run, ANDES:
+  loading, set-up and run).
+
+ANDES runs with its default configuration (equations not compiled with numba).
 
 Run: python benchmarks/bench_andes.py [--only sim eig cct scaling]
 """
