@@ -259,7 +259,7 @@ class DynamicModel:
                     V_bus=np.zeros(nb, complex), V_nc=np.array(V_nc_guess, complex),
                     efd=np.empty(nm), pmech=np.empty(nm), cur=np.empty(nm, complex))
         S = np.zeros(self.nc_idx.size, complex) if S_extra is None else np.asarray(S_extra, complex)
-        dx = np.empty_like(x)
+        dx = np.zeros_like(x)  # slots no kernel writes (e.g. a short PSS in long slots) stay 0
         it = evaluate_kernel(x, self.layout.n_mac, self.layout.n_exc, self.layout.n_pss,
                              self.layout.n_tg, self.params, net.Y11, net.Y12, net.Y21, net.Y22,
                              net.Z22, net.R, o.V_nc, S, want_vbus, dx, o.cur, o.pelect, o.qelect,

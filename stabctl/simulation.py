@@ -456,7 +456,7 @@ def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, 
     """
     n, nd = interval.size, sa.pmax.size
     x = xs.copy()
-    dx_k, dx_j = np.empty_like(x), np.empty_like(x)
+    dx_k, dx_j = np.zeros_like(x), np.zeros_like(x)  # slots no kernel writes stay 0
     cur = np.empty(nm, np.complex128)
     pel, qel, et, efd, pm = np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm)
     V_bus = np.zeros(R.shape[1], np.complex128)
