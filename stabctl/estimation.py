@@ -55,7 +55,7 @@ from numba import njit
 from scipy.stats import chi2
 
 from .case import Case
-from .errors import InputError
+from .errors import CaseError, InputError
 from .machines import EM, SUB, TRA, machine_params
 from .pmu import Frame, PMUSettings
 
@@ -130,7 +130,12 @@ class Governors:
 
     @classmethod
     def from_case(cls, case: Case) -> "Governors":
-        """The case's tg_con governors (none: every machine inactive)."""
+        """The case's tg_con governors (none: every machine inactive); raises CaseError
+        for a governor other than PST tg (type 1), which this linear model does not hold."""
+        other = np.nonzero(case.governors.type != 1)[0]
+        if other.size:
+            raise CaseError(f"tg_con row {other[0] + 1}: the estimator's governor model is PST "
+                            f"tg (type 1) only, got type {int(case.governors.type[other[0]])}")
         n = len(case.machines)
         A, b, c, gu = np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
         wf, invR, Tmax, active = np.ones(n), np.zeros(n), np.full(n, np.inf), np.zeros(n, bool)
