@@ -36,10 +36,6 @@ def interrupt(x):
     raise KeyboardInterrupt
 
 
-def die(x):
-    os._exit(3)            # the worker process dies (as on an out-of-memory kill)
-
-
 def sleepy(x):
     time.sleep(x)
     return {"slept": x}
@@ -206,11 +202,11 @@ def test_dask_cluster(tmp_path):
 def test_local_dask_cluster_records_a_dead_worker_as_failed_and_resumes(tmp_path):
     pytest.importorskip("distributed")
     out = tmp_path / "d.jsonl"
-    rep = run_sweep(jobs_of(square, 1, 2) + jobs_of(die, 3), out, scheduler="local",
+    rep = run_sweep(jobs_of(square, 1, 2) + jobs_of(crash, 3), out, scheduler="local",
                     workers=2, progress=False)
     assert (rep.ran, rep.failed) == (3, 1)
     assert rep.records["square/2"]["result"] == {"y": 4}
-    assert "die/3" in read_records(out) and "Killed" in rep.records["die/3"]["error"]
+    assert "crash/3" in read_records(out) and "Killed" in rep.records["crash/3"]["error"]
     again = run_sweep(jobs_of(square, 1, 2, 4), out, scheduler="local", workers=1,
                       progress=False)
     assert (again.ran, again.skipped) == (1, 2)
