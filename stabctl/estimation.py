@@ -237,13 +237,12 @@ def machine_models(case: Case, pmus) -> MachineModels:
     if missing:
         raise InputError(f"no PMU measures the current of machine(s) {missing}")
     idx = np.array([which[int(n)] for n in case.machines.number])
-    x = np.where(mp.kind == SUB, mp.xdpp, mp.xdp)
-    z = (np.where(mp.kind == EM, 0.0, mp.ra) + 1j * x) * mp.mac_pot
+    z = mp.z_internal.copy()              # the simulator's internal impedance, system base
     for k, j in enumerate(idx):
         z[k] += _series_impedance(case, int(case.machines.bus[k]), pmus[j].bus)
     return MachineModels(
         numbers=case.machines.number.astype(int), pmu=idx, H=mp.H.copy(), D=mp.D0.copy(),
-        pot=mp.mac_pot, ra=np.where(mp.kind == EM, 0.0, mp.ra), z_emf=z,
+        pot=mp.mac_pot, ra=mp.ra_network, z_emf=z,
         per_speed=mp.kind == SUB, inertia=mp.H * case.machines.mva, f0=case.freq_hz,
         governor=Governors.from_case(case), qaxis=QAxis.from_case(case))
 

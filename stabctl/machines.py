@@ -91,10 +91,29 @@ class MachineParams:
         return np.where(self.kind == SUB, self.xdpp, self.xdp)
 
     @property
+    def ra_network(self) -> np.ndarray:
+        """Armature resistance behind which the internal voltage feeds the network (machine
+        base): r_a for `mac_sub`/`mac_tra`, whose initialisation and stator equations use
+        it; 0 for `mac_em`, which has no r_a anywhere in its equations (PST mac_em: E' =
+        v + j x'_d I, pmech = pelect); also the estimators' machine model."""
+        return np.where(self.kind == EM, 0.0, self.ra)
+
+    @property
+    def z_internal(self) -> np.ndarray:
+        """Internal impedance on the system base, (r_a + j x) mac_pot (see y_internal)."""
+        return (self.ra_network + 1j * self.x_network) * self.mac_pot
+
+    @property
     def y_internal(self) -> np.ndarray:
-        """Internal-node admittance on the system base, 1/(r_a + j x mac_pot) as PST's
-        `red_ybus` (r_a is not converted to the system base there; zero in our cases)."""
-        return 1.0 / (self.ra + 1j * self.x_network * self.mac_pot)
+        """Internal-node admittance on the system base, 1/((r_a + j x) mac_pot) as PST's
+        `red_ybus`: the machine-base impedance r_a + j x converted to the system base, so
+        that the network current is the one the stator equations (machine base, currents
+        times mac_pot) and the flag-0 initialisation E = v + (r_a + j x) I assume.  With r_a
+        left on the machine base here a flat run drifts (Kundur, r_a = 0.003: 4e-4 pu speed
+        in 1 s).  Deviation from PST for `mac_em` with r_a != 0 only: PST's red_ybus puts
+        r_a into the network although mac_em ignores it, so PST drifts there; we use
+        `ra_network` (0) to keep the classical model's flat start exact."""
+        return 1.0 / self.z_internal
 
     # derived constants of mac_sub (PST mac_pot columns 6-15)
     @property
