@@ -453,10 +453,11 @@ class MachineTable(Table):
 
 @dataclass(frozen=True, eq=False)
 class ExciterTable(Table):
-    """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3).
+    """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3),
+    plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4).
 
     ==  ======  =======================================================================
-    1   type    0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3)
+    1   type    0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1
     2   machine machine number
     3   TR      input filter time constant, s
     4   KA      voltage regulator gain
@@ -476,12 +477,15 @@ class ExciterTable(Table):
     18  Efdmax  ST3: maximum field voltage, pu
     19  KG      ST3: inner loop feedback constant
     20  VGmax   ST3: maximum inner loop feedback, pu
+    21  KF      EXST1: rate feedback gain
+    22  TF      EXST1: rate feedback time constant, s
     ==  ======  =======================================================================
 
     Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2); use
-    ``col(k)`` for those. Omitted trailing columns are 0 (a simple exciter needs 9).
-    Validation: type in {0, 1, 2, 3}, one exciter per machine, TR, TA, TB >= 0 (machine
-    existence is checked by :class:`Case`).
+    ``col(k)`` for those.  EXST1 (type 4) uses columns 3-11 and KC (17) as named, with
+    Vrmax, Vrmin its output limits (times V_t) and KF, TF (21, 22).  Omitted trailing
+    columns are 0 (a simple exciter needs 9).  Validation: type in {0, 1, 2, 3, 4}, one
+    exciter per machine, TR, TA, TB >= 0 (machine existence is checked by :class:`Case`).
     """
 
     type: np.ndarray
@@ -504,6 +508,8 @@ class ExciterTable(Table):
     Efdmax: np.ndarray
     KG: np.ndarray
     VGmax: np.ndarray
+    KF: np.ndarray
+    TF: np.ndarray
 
     TABLE: ClassVar[str] = "exc_con"
     MIN_COLUMNS: ClassVar[int] = 9
@@ -512,19 +518,22 @@ class ExciterTable(Table):
     INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine")
 
     def _check(self):
-        self._require(np.isin(self.type, (0, 1, 2, 3)), "type", "exciter type must be 0, 1, 2 or 3")
+        self._require(np.isin(self.type, (0, 1, 2, 3, 4)), "type",
+                      "exciter type must be 0, 1, 2, 3 or 4")
         self._unique("machine", "exciter on machine")
         self._nonnegative("TR", "TA", "TB")  # filter and lag constants
 
 
 @dataclass(frozen=True, eq=False)
 class PssTable(Table):
-    """Power system stabilizer data: PST ``pss_con``, 10 columns (PST manual 3.30 Table 13).
+    """Power system stabilizer data: PST ``pss_con``, 10 columns (PST manual 3.30 Table 13),
+    extended by stabctl with type 3, the PSS/E stabilisers IEEEST and ST2CUT
+    (docs/pst_models.md 3.1).
 
     ==  =======  ==================================================================
-    1   type     input: 1 speed deviation, 2 electrical power
+    1   type     1 PST pss, speed input; 2 PST pss, electrical power input; 3 PSS/E
     2   machine  machine number
-    3   KTw      gain times washout time constant (K*Tw)
+    3   KTw      gain times washout time constant (K*Tw); type 3: washout gain K_w
     4   Tw       washout time constant, s
     5   T1       first lead time constant, s
     6   T2       first lag time constant, s
@@ -532,10 +541,24 @@ class PssTable(Table):
     8   T4       second lag time constant, s
     9   ymax     maximum output, pu
     10  ymin     minimum output, pu
+    11  T5       type 3: third lead time constant, s
+    12  T6       type 3: third lag time constant, s
+    13  input1   type 3: first input, PSS/E code (1 speed deviation, 3 electrical power)
+    14  K1       type 3: first input gain
+    15  Tr1      type 3: first input transducer time constant, s
+    16  input2   type 3: second input, PSS/E code (0 none)
+    17  K2       type 3: second input gain
+    18  Tr2      type 3: second input transducer time constant, s
+    19  A1       type 3: filter (1 + A5 s + A6 s^2)/((1 + A1 s + A2 s^2)(1 + A3 s + A4 s^2))
+    20  A2
+    21  A3
+    22  A4
+    23  A5
+    24  A6
     ==  =======  ==================================================================
 
-    Validation: type in {1, 2}, one PSS per machine, washout and lag constants (Tw, T2,
-    T4) >= 0.
+    Omitted columns are 0.  Validation: type in {1, 2, 3}, one PSS per machine, washout and
+    lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0.
     """
 
     type: np.ndarray
@@ -548,38 +571,70 @@ class PssTable(Table):
     T4: np.ndarray
     ymax: np.ndarray
     ymin: np.ndarray
+    T5: np.ndarray
+    T6: np.ndarray
+    input1: np.ndarray
+    K1: np.ndarray
+    Tr1: np.ndarray
+    input2: np.ndarray
+    K2: np.ndarray
+    Tr2: np.ndarray
+    A1: np.ndarray
+    A2: np.ndarray
+    A3: np.ndarray
+    A4: np.ndarray
+    A5: np.ndarray
+    A6: np.ndarray
 
     TABLE: ClassVar[str] = "pss_con"
     MIN_COLUMNS: ClassVar[int] = 10
     KEY: ClassVar[str] = "machine"
     KEY_LABEL: ClassVar[str] = "machine"
-    INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine")
+    INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine", "input1", "input2")
 
     def _check(self):
-        self._require(np.isin(self.type, (1, 2)), "type", "pss type must be 1 or 2")
+        self._require(np.isin(self.type, (1, 2, 3)), "type", "pss type must be 1, 2 or 3")
         self._unique("machine", "pss on machine")
-        self._nonnegative("Tw", "T2", "T4")  # washout and lag constants
+        self._nonnegative("Tw", "T2", "T4", "T6", "Tr1", "Tr2")  # washout and lag constants
 
 
 @dataclass(frozen=True, eq=False)
 class GovernorTable(Table):
-    """Turbine-governor data: PST ``tg_con``, 10 columns (PST manual 3.45, ``tg``).
+    """Turbine-governor data: PST ``tg_con`` (PST manual 3.45, ``tg``), extended by stabctl
+    with the PSS/E ``TGOV1`` and ``IEEEG1`` models (PSS/E Model Library; equations in
+    docs/pst_models.md section 4).
 
-    ==  =======  ==================================================================
-    1   type     turbine model number (1: tg)
+    ==  =======  =========================================================================
+    1   type     1 PST tg, 2 TGOV1, 3 IEEEG1
     2   machine  machine number
     3   wf       speed set point, pu
-    4   invR     steady-state gain 1/R, pu
-    5   Tmax     maximum power order, pu on machine base
-    6   Ts       servo time constant, s
-    7   Tc       governor time constant, s
-    8   T3       transient gain time constant, s
-    9   T4       HP section time constant, s
-    10  T5       reheater time constant, s
-    ==  =======  ==================================================================
+    4   invR     steady-state gain 1/R (IEEEG1: K), pu on machine base
+    5   Tmax     maximum power order (TGOV1: VMAX, IEEEG1: PMAX), pu on machine base
+    6   Ts       servo time constant (TGOV1: T1; IEEEG1: T3, gate servo), s
+    7   Tc       governor lag time constant (TGOV1: T3; IEEEG1: T1), s
+    8   T3       transient gain (lead) time constant (TGOV1: T2; IEEEG1: T2), s
+    9   T4       HP section time constant (IEEEG1: T4, steam chest), s
+    10  T5       reheater time constant (IEEEG1: T5), s
+    11  Tmin     minimum power order (tg: 0 as PST; TGOV1: VMIN; IEEEG1: PMIN), pu
+    12  Dt       turbine damping (TGOV1), pu power / pu speed on machine base
+    13  T6       IEEEG1 third turbine time constant, s
+    14  T7       IEEEG1 fourth turbine time constant, s
+    15  Uo       IEEEG1 maximum valve opening rate, pu/s
+    16  Uc       IEEEG1 maximum valve closing rate (< 0), pu/s
+    17  K1       IEEEG1 fraction of power after T4 (HP shaft)
+    18  K2       IEEEG1 fraction of power after T4 (LP shaft)
+    19  K3       IEEEG1 fraction after T5 (HP)
+    20  K4       IEEEG1 fraction after T5 (LP)
+    21  K5       IEEEG1 fraction after T6 (HP)
+    22  K6       IEEEG1 fraction after T6 (LP)
+    23  K7       IEEEG1 fraction after T7 (HP)
+    24  K8       IEEEG1 fraction after T7 (LP)
+    ==  =======  =========================================================================
 
-    Validation: one governor per machine, lag time constants Ts, Tc, T5 >= 0 (the lead
-    constants T3, T4 may be negative: miniWECC's hydro units use T4 = -1).
+    PST files give 10 columns; the omitted ones are 0 (Tmin = 0 is PST tg's lower clip).
+    Validation: type in {1, 2, 3}, one governor per machine, lag time constants Ts, Tc,
+    T5, T6, T7 >= 0 (the lead constants T3, T4 may be negative: miniWECC's hydro units use
+    T4 = -1).
     """
 
     type: np.ndarray
@@ -592,6 +647,20 @@ class GovernorTable(Table):
     T3: np.ndarray
     T4: np.ndarray
     T5: np.ndarray
+    Tmin: np.ndarray
+    Dt: np.ndarray
+    T6: np.ndarray
+    T7: np.ndarray
+    Uo: np.ndarray
+    Uc: np.ndarray
+    K1: np.ndarray
+    K2: np.ndarray
+    K3: np.ndarray
+    K4: np.ndarray
+    K5: np.ndarray
+    K6: np.ndarray
+    K7: np.ndarray
+    K8: np.ndarray
 
     TABLE: ClassVar[str] = "tg_con"
     MIN_COLUMNS: ClassVar[int] = 10
@@ -600,8 +669,9 @@ class GovernorTable(Table):
     INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine")
 
     def _check(self):
+        self._require(np.isin(self.type, (1, 2, 3)), "type", "governor type must be 1, 2 or 3")
         self._unique("machine", "governor on machine")
-        self._nonnegative("Ts", "Tc", "T5")  # T3, T4 are lead constants: T4 < 0 models hydro
+        self._nonnegative("Ts", "Tc", "T5", "T6", "T7")  # T3, T4 are leads: T4 < 0 is hydro
 
 
 @dataclass(frozen=True, eq=False)

@@ -65,19 +65,24 @@ class StageConfig:
 
 @dataclass
 class Layout:
-    """Slices of the flat state vector: machines (6, n_mac), exciters (3, n_exc),
-    pss (3, n_pss), governors (3, n_tg), each stored state-major."""
+    """Slices of the flat state vector: machines (6, n_mac), exciters (exc_rows, n_exc),
+    pss (pss_rows, n_pss), governors (tg_rows, n_tg), each stored state-major; the rows
+    are the most slots any exciter / PSS / governor type of the case uses."""
 
     n_mac: int
     n_exc: int
     n_pss: int
     n_tg: int
+    exc_rows: int = 3
+    pss_rows: int = 3
+    tg_rows: int = 3
     blocks: dict = field(default_factory=dict)
 
     def __post_init__(self):
         start = 0
-        for name, rows, n in (("mac", 6, self.n_mac), ("exc", 3, self.n_exc),
-                              ("pss", 3, self.n_pss), ("tg", 3, self.n_tg)):
+        for name, rows, n in (("mac", 6, self.n_mac), ("exc", self.exc_rows, self.n_exc),
+                              ("pss", self.pss_rows, self.n_pss),
+                              ("tg", self.tg_rows, self.n_tg)):
             self.blocks[name] = (slice(start, start + rows * n), (rows, n))
             start += rows * n
         self.size = start
@@ -104,7 +109,8 @@ class DynamicModel:
         self.ep = exc.exciter_params(case)
         self.pp = pss_.pss_params(case)
         self.gp = gov.governor_params(case)
-        self.layout = Layout(self.mp.n, self.ep.n, self.pp.n, self.gp.n)
+        self.layout = Layout(self.mp.n, self.ep.n, self.pp.n, self.gp.n,
+                             self.ep.n_slots(), self.pp.n_slots(), self.gp.n_slots())
         self._setup_loads(injection_buses)
         self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
         self._initialise()
@@ -190,10 +196,11 @@ class DynamicModel:
                                                eterm0[m], theta0[m], S0.real[m], S0.imag[m],
                                                mp.mac_pot[m], self.vex0[m], True)
                         for i, m in enumerate(em)])
-        xe, self.Vref = exc.initialise(ep, self.vex0[em], eterm0[em], VB0)
+        xe, self.Vref, self.ep = exc.initialise(ep, self.vex0[em], eterm0[em], VB0)
+        ep = self.ep
         L.view(x, "exc")[:] = xe
-        u0 = pss_.pss_input(self.pp, xm[1], S0.real, mp.mac_pot)
-        L.view(x, "pss")[:] = pss_.initialise(self.pp, u0)
+        L.view(x, "pss")[:] = pss_.initialise(self.pp, *pss_.pss_inputs(self.pp, xm[1], S0.real,
+                                                                       mp.mac_pot))
         xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac])
         L.view(x, "tg")[:] = xg
         self.x0 = x
@@ -207,6 +214,7 @@ class DynamicModel:
         self.params = KernelParams(
             MP=mp.packed(self.eqp0), basrad=mp.basrad, EP=ep.packed(self.Vref),
             SP=self.pp.packed(), GP=self.gp.packed(self.Pref), pss_of_exc=self.pss_of_exc,
+            exc_rows=L.exc_rows, pss_rows=L.pss_rows, tg_rows=L.tg_rows,
             mac_bus=mp.bus_idx.astype(np.int64), vex0=self.vex0, pmech0=self.pmech0,
             S_P=self.nc.S_P.astype(complex), I0=self.nc.I0.astype(complex),
             Y_low=self.nc.Y_low.astype(complex))
@@ -217,16 +225,18 @@ class DynamicModel:
 
     def state_name(self, k: int) -> str:
         """Name of flat state index k, e.g. 'mac.omega.G3' or 'exc.VTR.G1'."""
-        from . import exciters, governors, machines, pss
-        names = {"mac": machines.STATE_NAMES, "exc": exciters.STATE_NAMES,
-                 "pss": pss.STATE_NAMES, "tg": governors.STATE_NAMES}
         owners = {"mac": np.arange(self.mp.n), "exc": self.ep.mac, "pss": self.pp.mac,
                   "tg": self.gp.mac}
+        names = {"mac": lambda i: mac.STATE_NAMES,
+                 "pss": lambda i: pss_.STATE_NAMES[int(self.pp.kind[i])],
+                 "exc": lambda i: exc.STATE_NAMES[int(self.ep.kind[i])],
+                 "tg": lambda i: gov.STATE_NAMES[int(self.gp.kind[i])]}
         for block, (sl, (rows, n)) in self.layout.blocks.items():
             if sl.start <= k < sl.stop:
                 r, i = divmod(k - sl.start, n)
                 number = int(self.case.machines.number[owners[block][i]])
-                return f"{block}.{names[block][r]}.G{number}"
+                own = names[block](i)
+                return f"{block}.{own[r] if r < len(own) else f'unused{r}'}.G{number}"
         raise IndexError(f"state index {k} out of range")
 
     # -- one evaluation -----------------------------------------------------------------
@@ -249,7 +259,7 @@ class DynamicModel:
                     V_bus=np.zeros(nb, complex), V_nc=np.array(V_nc_guess, complex),
                     efd=np.empty(nm), pmech=np.empty(nm), cur=np.empty(nm, complex))
         S = np.zeros(self.nc_idx.size, complex) if S_extra is None else np.asarray(S_extra, complex)
-        dx = np.empty_like(x)
+        dx = np.zeros_like(x)  # slots no kernel writes (e.g. a short PSS in long slots) stay 0
         it = evaluate_kernel(x, self.layout.n_mac, self.layout.n_exc, self.layout.n_pss,
                              self.layout.n_tg, self.params, net.Y11, net.Y12, net.Y21, net.Y22,
                              net.Z22, net.R, o.V_nc, S, want_vbus, dx, o.cur, o.pelect, o.qelect,
@@ -269,6 +279,9 @@ class KernelParams(NamedTuple):
     SP: np.ndarray
     GP: np.ndarray
     pss_of_exc: np.ndarray
+    exc_rows: int
+    pss_rows: int
+    tg_rows: int
     mac_bus: np.ndarray
     vex0: np.ndarray
     pmech0: np.ndarray
@@ -286,13 +299,13 @@ def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, S_e
     Writes dx and the outputs; V_nc is updated in place.  Returns the load-iteration count,
     -1 without convergence.
     """
-    o = 6 * nm
+    o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
     xm, dxm = x[:o].reshape(6, nm), dx[:o].reshape(6, nm)
-    xe, dxe = x[o:o + 3 * ne].reshape(3, ne), dx[o:o + 3 * ne].reshape(3, ne)
-    o += 3 * ne
-    xp, dxp = x[o:o + 3 * nps].reshape(3, nps), dx[o:o + 3 * nps].reshape(3, nps)
-    o += 3 * nps
-    xg, dxg = x[o:o + 3 * ng].reshape(3, ng), dx[o:o + 3 * ng].reshape(3, ng)
+    xe, dxe = x[o:o + re * ne].reshape(re, ne), dx[o:o + re * ne].reshape(re, ne)
+    o += re * ne
+    xp, dxp = x[o:o + rp * nps].reshape(rp, nps), dx[o:o + rp * nps].reshape(rp, nps)
+    o += rp * nps
+    xg, dxg = x[o:o + rg * ng].reshape(rg, ng), dx[o:o + rg * ng].reshape(rg, ng)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
     it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra)
@@ -308,8 +321,8 @@ def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, S_e
     pss_out = np.empty(nps)
     for k in range(nps):
         m = int(p.SP[k, pss_.S_MAC])
-        u = xm[1, m] if p.SP[k, pss_.S_PWR] == 0 else (psi[m] * np.conj(cur[m])).real * p.MP[m, mac.K_POT]
-        pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, u, dxp)
+        pe = (psi[m] * np.conj(cur[m])).real * p.MP[m, mac.K_POT]
+        pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, xm[1, m], pe, dxp)
     vex = p.vex0.copy()
     efd_alg = np.empty(ne)
     pss_exc = np.zeros(ne)
@@ -326,11 +339,13 @@ def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, S_e
                                         p.EP[i, exc.E_KC], et, np.angle(V_bus[p.mac_bus[m]]),
                                         eq * cq + ed * cd, eq * cd - ed * cq, p.MP[m, mac.K_POT],
                                         mac.st3_field_current(p.MP, xm, cur, m), False)
-        efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB)
+        ifd = mac.field_current(p.MP, xm, cur, m) if p.EP[i, exc.E_KIND] == exc.ST1 else 0.0
+        efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB, ifd)
         vex[m] = efd_alg[i]
     pmech[:] = p.pmech0
     for k in range(ng):
-        pmech[int(p.GP[k, gov.G_MAC])] = gov.pmech(p.GP, xg, k)
+        m = int(p.GP[k, gov.G_MAC])
+        pmech[m] = gov.pmech(p.GP, xg, k, xm[1, m])
     mac.derivatives(p.MP, p.basrad, xm, cur, vex, pmech, dxm, pelect, qelect, eterm)
     efd[:] = p.vex0
     for i in range(ne):

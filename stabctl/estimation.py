@@ -55,7 +55,7 @@ from numba import njit
 from scipy.stats import chi2
 
 from .case import Case
-from .errors import InputError
+from .errors import CaseError, InputError
 from .machines import EM, SUB, TRA, machine_params
 from .pmu import Frame, PMUSettings
 
@@ -130,7 +130,12 @@ class Governors:
 
     @classmethod
     def from_case(cls, case: Case) -> "Governors":
-        """The case's tg_con governors (none: every machine inactive)."""
+        """The case's tg_con governors (none: every machine inactive); raises CaseError
+        for a governor other than PST tg (type 1), which this linear model does not hold."""
+        other = np.nonzero(case.governors.type != 1)[0]
+        if other.size:
+            raise CaseError(f"tg_con row {other[0] + 1}: the estimator's governor model is PST "
+                            f"tg (type 1) only, got type {int(case.governors.type[other[0]])}")
         n = len(case.machines)
         A, b, c, gu = np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
         wf, invR, Tmax, active = np.ones(n), np.zeros(n), np.full(n, np.inf), np.zeros(n, bool)
@@ -232,13 +237,12 @@ def machine_models(case: Case, pmus) -> MachineModels:
     if missing:
         raise InputError(f"no PMU measures the current of machine(s) {missing}")
     idx = np.array([which[int(n)] for n in case.machines.number])
-    x = np.where(mp.kind == SUB, mp.xdpp, mp.xdp)
-    z = (np.where(mp.kind == EM, 0.0, mp.ra) + 1j * x) * mp.mac_pot
+    z = mp.z_internal.copy()              # the simulator's internal impedance, system base
     for k, j in enumerate(idx):
         z[k] += _series_impedance(case, int(case.machines.bus[k]), pmus[j].bus)
     return MachineModels(
         numbers=case.machines.number.astype(int), pmu=idx, H=mp.H.copy(), D=mp.D0.copy(),
-        pot=mp.mac_pot, ra=np.where(mp.kind == EM, 0.0, mp.ra), z_emf=z,
+        pot=mp.mac_pot, ra=mp.ra_network, z_emf=z,
         per_speed=mp.kind == SUB, inertia=mp.H * case.machines.mva, f0=case.freq_hz,
         governor=Governors.from_case(case), qaxis=QAxis.from_case(case))
 

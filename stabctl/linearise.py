@@ -51,7 +51,8 @@ def active_states(model: DynamicModel) -> np.ndarray:
 
     Unused slots (derivative identically 0, never read as a state): machines mac_tra
     psikd/psikq, mac_em all but delta/omega; exciters V_TR without T_R, V_As without T_B,
-    the smpexc Efd without T_A; the third PSS lead-lag without T_4 (PSTess's lbnd = 1e-3 s).
+    the smpexc Efd without T_A; the third PSS lead-lag without T_4 (PSTess's lbnd = 1e-3 s);
+    slots a type does not use (`ExciterParams.has_state`, `GovernorParams.has_state`).
     """
     L, mp, ep, pp = model.layout, model.mp, model.ep, model.pp
     act = np.zeros(L.size, bool)
@@ -59,13 +60,9 @@ def active_states(model: DynamicModel) -> np.ndarray:
     m[[0, 1]] = True
     m[[2, 4]] = mp.kind != mac.EM
     m[[3, 5]] = mp.kind == mac.SUB
-    e = L.view(act, "exc")
-    e[0], e[1] = ep.has_TR, ep.has_TB
-    e[2] = (ep.kind == exc.ST3) | ep.has_TA
-    p = L.view(act, "pss")
-    p[[0, 1]] = True
-    p[2] = pp.has_T4
-    L.view(act, "tg")[:] = True
+    L.view(act, "exc")[:] = ep.has_state()
+    L.view(act, "pss")[:] = pp.has_state()
+    L.view(act, "tg")[:] = model.gp.has_state()
     return act
 
 

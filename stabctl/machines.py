@@ -68,6 +68,10 @@ class MachineParams:
 
     def packed(self, eqp0: np.ndarray) -> np.ndarray:
         """Parameter matrix (n_mac, K_NCOL) for the compiled kernels; eqp0 = initial E'q."""
+        with np.errstate(divide="ignore", invalid="ignore"):   # mac_em: 0/0 constants unused
+            return self._packed(eqp0)
+
+    def _packed(self, eqp0):
         cols = {K_KIND: self.kind, K_POT: self.mac_pot, K_RA: self.ra, K_XL: self.xl,
                 K_XD: self.xd, K_XDP: self.xdp, K_XDPP: self.xdpp, K_XQ: self.xq,
                 K_XQP: self.xqp, K_XQPP: self.xqpp, K_TDOP: self.Tdop, K_TDOPP: self.Tdopp,
@@ -78,8 +82,7 @@ class MachineParams:
                 K_SC: self.sat[:, 2], K_EQP0: eqp0}
         P = np.zeros((self.n, K_NCOL))
         for k, v in cols.items():
-            with np.errstate(divide="ignore", invalid="ignore"):
-                P[:, k] = np.nan_to_num(np.asarray(v, float))
+            P[:, k] = np.nan_to_num(np.asarray(v, float))
         return P
 
     @property
@@ -88,10 +91,29 @@ class MachineParams:
         return np.where(self.kind == SUB, self.xdpp, self.xdp)
 
     @property
+    def ra_network(self) -> np.ndarray:
+        """Armature resistance behind which the internal voltage feeds the network (machine
+        base): r_a for `mac_sub`/`mac_tra`, whose initialisation and stator equations use
+        it; 0 for `mac_em`, which has no r_a anywhere in its equations (PST mac_em: E' =
+        v + j x'_d I, pmech = pelect); also the estimators' machine model."""
+        return np.where(self.kind == EM, 0.0, self.ra)
+
+    @property
+    def z_internal(self) -> np.ndarray:
+        """Internal impedance on the system base, (r_a + j x) mac_pot (see y_internal)."""
+        return (self.ra_network + 1j * self.x_network) * self.mac_pot
+
+    @property
     def y_internal(self) -> np.ndarray:
-        """Internal-node admittance on the system base, 1/(r_a + j x mac_pot) as PST's
-        `red_ybus` (r_a is not converted to the system base there; zero in our cases)."""
-        return 1.0 / (self.ra + 1j * self.x_network * self.mac_pot)
+        """Internal-node admittance on the system base, 1/((r_a + j x) mac_pot) as PST's
+        `red_ybus`: the machine-base impedance r_a + j x converted to the system base, so
+        that the network current is the one the stator equations (machine base, currents
+        times mac_pot) and the flag-0 initialisation E = v + (r_a + j x) I assume.  With r_a
+        left on the machine base here a flat run drifts (Kundur, r_a = 0.003: 4e-4 pu speed
+        in 1 s).  Deviation from PST for `mac_em` with r_a != 0 only: PST's red_ybus puts
+        r_a into the network although mac_em ignores it, so PST drifts there; we use
+        `ra_network` (0) to keep the classical model's flat start exact."""
+        return 1.0 / self.z_internal
 
     # derived constants of mac_sub (PST mac_pot columns 6-15)
     @property
@@ -248,6 +270,28 @@ def internal_voltage(P, x, psi):
 
 
 @njit(cache=True)
+def _field_current(P, x, i, cdg):
+    """Field current of machine i (machine base, vex = it in steady state) for the d-axis
+    current cdg (machine base): subtransient E'q + p7 (i_d + p6 (E'q - psi_kd - p8 i_d))
+    (no saturation, docs 1.6); transient E_Isat(E'q) + (x_d - x'_d) i_d (docs 1.8, with
+    PST's test on the initial E'q); classical: E' (constant)."""
+    kind = P[i, K_KIND]
+    e = x[2, i]
+    if kind == SUB:
+        return e + P[i, K_P7] * (cdg + P[i, K_P6] * (e - x[3, i] - P[i, K_P8] * cdg))
+    if kind == TRA:
+        esat = e if P[i, K_EQP0] < 0.8 else P[i, K_SA] * e * e + P[i, K_SB] * e + P[i, K_SC]
+        return esat + (P[i, K_XD] - P[i, K_XDP]) * cdg
+    return e
+
+
+@njit(cache=True)
+def field_current(P, x, cur, i):
+    """Field current of machine i (machine base) at network current cur[i] (system base)."""
+    return _field_current(P, x, i, _dq(x[0, i], cur[i])[0] * P[i, K_POT])
+
+
+@njit(cache=True)
 def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
     """Machine derivatives into dx (6, n_mac) and outputs (PST flag 2, docs 1.6-1.9).
 
@@ -263,10 +307,10 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
         dx[0, i] = basrad * (w - 1.0)
         dx[3, i] = 0.0
         dx[5, i] = 0.0
+        fld = _field_current(P, x, i, cdg)
         if kind == SUB:
             psidpp, psiqpp = _fluxes(P, x, i)
             Eqpe = x[2, i] - x[3, i] - P[i, K_P8] * cdg
-            fld = x[2, i] + P[i, K_P7] * (cdg + P[i, K_P6] * Eqpe)
             Edpe = x[4, i] - x[5, i] - P[i, K_P13] * cqg
             ed = -P[i, K_RA] * cdg - (w * psiqpp - P[i, K_XQPP] * cqg)
             eq = -P[i, K_RA] * cqg + (w * psidpp - P[i, K_XDPP] * cdg)
@@ -276,9 +320,6 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
             dx[5, i] = Edpe / P[i, K_TQOPP]
             torque = pmech[i] / w - (psidpp * cqg - psiqpp * cdg)
         elif kind == TRA:
-            e = x[2, i]
-            esat = e if P[i, K_EQP0] < 0.8 else P[i, K_SA] * e * e + P[i, K_SB] * e + P[i, K_SC]
-            fld = esat + (P[i, K_XD] - P[i, K_XDP]) * cdg
             ed = x[4, i] - P[i, K_RA] * cdg + P[i, K_XDP] * cqg
             eq = x[2, i] - P[i, K_RA] * cqg - P[i, K_XDP] * cdg
             dx[2, i] = (vex[i] - fld) / P[i, K_TDOP]

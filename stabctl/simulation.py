@@ -97,17 +97,11 @@ def single_threaded_blas() -> None:
 
 def fastest_time_constant(model: DynamicModel) -> tuple[float, str]:
     """Smallest time constant among the states of the model (s) and where it is."""
-    from .exciters import LBND
     cands = []
     mp, ep, pp, gp = model.mp, model.ep, model.pp, model.gp
-    for name, arr, rows, active in (
-            ("mac_con T\"do", mp.Tdopp, mp.kind == 2, None), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2, None),
-            ("exc_con T_R", ep.TR, ep.has_TR, None), ("exc_con T_A", ep.TA, ep.has_TA, None),
-            ("exc_con T_B", ep.TB, ep.has_TB, None), ("pss_con T_w", pp.Tw, None, None),
-            ("pss_con T_2", pp.T2, None, None), ("pss_con T_4", pp.T4, pp.T4 >= LBND, None),
-            ("tg_con T_s", gp.Ts, None, None), ("tg_con T_c", gp.Tc, None, None),
-            ("tg_con T_5", gp.T5, None, None)):
-        sel = np.ones(arr.size, bool) if rows is None else rows
+    for name, arr, sel in (
+            ("mac_con T\"do", mp.Tdopp, mp.kind == 2), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2),
+            *pp.time_constants(), *ep.time_constants(), *gp.time_constants()):
         if np.any(sel):
             k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))
             cands.append((float(abs(arr[k])), f"{name} row {k + 1}"))
@@ -469,7 +463,7 @@ def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, 
     """
     n, nd = interval.size, sa.pmax.size
     x = xs.copy()
-    dx_k, dx_j = np.empty_like(x), np.empty_like(x)
+    dx_k, dx_j = np.zeros_like(x), np.zeros_like(x)  # slots no kernel writes stay 0
     cur = np.empty(nm, np.complex128)
     pel, qel, et, efd, pm = np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm)
     V_bus = np.zeros(R.shape[1], np.complex128)

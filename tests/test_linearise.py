@@ -115,7 +115,7 @@ def test_reference_inputs_enter_as_the_equations_say(sys_k):
     """d(dEfd/dt)/dVref = K_A/T_A (smpexc, no lead-lag); d(dtg1/dt)/dPref = 1/T_s."""
     B, s, i = np.asarray(sys_k.B), sys_k.state_labels, sys_k.input_labels
     KA_TA = 200 / 0.05
-    assert B[s.index("exc_Efd_or_VR_G2"), i.index("Vref_G2")] == pytest.approx(KA_TA, rel=1e-9)
+    assert B[s.index("exc_Efd_G2"), i.index("Vref_G2")] == pytest.approx(KA_TA, rel=1e-9)
     assert B[s.index("tg_servo_G3"), i.index("Pref_G3")] == pytest.approx(1 / 0.1, rel=1e-9)
     assert np.count_nonzero(B[:, i.index("Vref_G2")]) == 1
 

@@ -1,0 +1,135 @@
+"""The same PSS/E case and disturbance in ANDES, for cross-validation and benchmarks.
+
+ANDES (CURENT, ``pip install "stabctl[andes]"``) is an optional dependency: only this
+module imports it, and only when called. Conventions of the runs, chosen so that both
+tools solve the same problem:
+
+* power flow: ANDES's Newton-Raphson with tolerance 1e-12 and its defaults (PV buses
+  keep their voltage without Q limits, ``PV.config.pv2pq = 0``);
+* dynamics: loads constant impedance (ANDES's default ``PQ.config.p2z = q2z = 1``; import
+  the case with ``loads="impedance"``), implicit trapezoidal integration with a fixed step, Newton tolerance 1e-8;
+* fault: ANDES's ``Fault`` model, a shunt ``rf + j xf`` at the bus from ``tf`` to ``tc``
+  (no line lost);
+* records ANDES reads but stabctl does not map are removed from the DYR text for both
+  tools (:func:`strip_dyr`), so that the comparison is like for like; optionally the
+  machine saturation too (PSS/E's GENROU saturation, which ANDES follows, is not PST's).
+
+Source: ANDES 2.0 documentation (``andes.load``, ``System.add``, ``PFlow``, ``TDS``,
+``EIG`` routines; ``Fault`` and ``Toggle`` models).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from stabctl.errors import InputError
+
+__all__ = ["AndesFault", "strip_dyr", "andes_system", "andes_powerflow", "andes_speeds",
+           "andes_modes"]
+
+
+@dataclass(frozen=True)
+class AndesFault:
+    """Three-phase fault at ``bus`` from ``t_fault`` to ``t_clear`` (s) through
+    ``r + jx`` (pu, system base), cleared without loss of a line."""
+
+    bus: int
+    t_fault: float
+    t_clear: float
+    r: float = 0.0
+    x: float = 1e-4
+
+
+def _andes():
+    try:
+        import andes
+    except ImportError:
+        raise InputError("ANDES is not installed: pip install 'stabctl[andes]'") from None
+    andes.config_logger(stream_level=40)
+    return andes
+
+
+def strip_dyr(src: str | Path, dst: str | Path, models, unsaturated: bool = False
+              ) -> tuple[str, ...]:
+    """Copy the DYR file ``src`` to ``dst`` without the records of ``models`` (names in
+    upper case, e.g. ``{"EXST1", "TOGGLE"}``); returns the removed model names in file
+    order. ``unsaturated``: GENROU and GENSAL records get S(1.0) = S(1.2) = 0 (their last
+    two CONs), as the two tools' saturation functions differ. A record ends at the line
+    holding its ``/`` (PSS/E POM, Dynamics Data File)."""
+    drop = {m.upper() for m in models}
+    kept, record, removed = [], [], []
+    for line in Path(src).read_text().splitlines(keepends=True):
+        record.append(line)
+        if "/" not in line:
+            continue
+        text = "".join(record)
+        model = text.split("'")[1].strip().upper() if text.count("'") >= 2 else ""
+        if model in drop:
+            removed.append(model)
+        else:
+            kept.append(_unsaturated(text) if unsaturated and model in _SATURATED else text)
+        record = []
+    Path(dst).write_text("".join(kept + record))
+    return tuple(removed)
+
+
+_SATURATED = {"GENROU", "GENSAL"}
+
+
+def _unsaturated(text: str) -> str:
+    """The record with its last two numbers (S(1.0), S(1.2)) replaced by 0."""
+    body, slash, comment = text.partition("/")
+    head, quote, rest = body.rpartition("'")
+    fields = rest.split()
+    return f"{head}{quote} {' '.join(fields[:-2] + ['0.0', '0.0'])} {slash}{comment}"
+
+
+def andes_system(raw: str | Path, dyr: str | Path | None = None,
+                 fault: AndesFault | None = None):
+    """An ANDES ``System`` of the RAW (+ DYR) files with ``fault`` added, set up."""
+    andes = _andes()
+    kw = {} if dyr is None else {"addfile": str(dyr)}
+    ss = andes.load(str(raw), setup=False, no_output=True, default_config=True, **kw)
+    if fault is not None:
+        ss.add("Fault", {"bus": fault.bus, "tf": fault.t_fault, "tc": fault.t_clear,
+                         "rf": fault.r, "xf": fault.x})
+    ss.setup()
+    ss.PFlow.config.tol = 1e-12
+    return ss
+
+
+def andes_powerflow(ss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Run ANDES's power flow: (bus numbers, |V| pu, angle rad), each shape (n_bus,).
+    Raises :class:`RuntimeError` if it does not converge."""
+    if not ss.PFlow.run():
+        raise RuntimeError("ANDES power flow did not converge")
+    return np.array(ss.Bus.idx.v), np.array(ss.Bus.v.v), np.array(ss.Bus.a.v)
+
+
+def andes_speeds(ss, t_end: float, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Power flow and time-domain run to ``t_end`` (s) with fixed step ``step`` (s):
+    (t shape (n_t,), GENROU rotor speeds pu shape (n_t, n_gen), columns in RAW generator
+    order). Raises :class:`RuntimeError` if ANDES's run fails."""
+    andes_powerflow(ss)
+    ss.TDS.config.tf = t_end
+    ss.TDS.config.tstep = step
+    ss.TDS.config.fixt = 1
+    ss.TDS.config.tol = 1e-8
+    ss.TDS.config.no_tqdm = 1
+    if not ss.TDS.run():
+        raise RuntimeError("ANDES time-domain simulation failed")
+    order = np.argsort(np.array(ss.GENROU.gen.v, dtype=float))
+    t = np.array(ss.dae.ts.t)
+    return t, np.asarray(ss.dae.ts.x)[:, ss.GENROU.omega.a[order]]
+
+
+def andes_modes(ss) -> np.ndarray:
+    """Eigenvalues (1/s, complex, shape (n_states,)) of ANDES's linearisation at its
+    power flow (``EIG`` routine)."""
+    andes_powerflow(ss)
+    if not ss.EIG.run():
+        raise RuntimeError("ANDES eigenvalue analysis failed")
+    return np.asarray(ss.EIG.mu)
