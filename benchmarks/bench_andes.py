@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from _timing import best_of
 from stabctl.andes_xval import (AndesFault, andes_modes, andes_speeds, andes_system,
                                 strip_dyr)
 from stabctl.case import load_case
@@ -67,15 +68,6 @@ def case_files(folder: str, work: Path, controls: bool = True):
         strip_dyr(src / f"{folder}_full.dyr", dyr, () if controls else CONTROLS,
                   unsaturated=True)
     return src / f"{folder}.raw", dyr
-
-
-def best_of(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
 
 
 def ours_run(case, bus, t_end, clear=CYCLES / 60):
@@ -111,7 +103,7 @@ def study_sim(files):
     for label, (raw, dyr), bus in files:
         case = load_psse(raw, dyr)
         verdict = ours_run(case, bus, 20.0).stable  # and compile
-        ours = best_of(lambda: ours_run(case, bus, 20.0), 3)
+        ours, _ = best_of(lambda: ours_run(case, bus, 20.0), 3, warm_up=False)
         runs = [andes_timed(raw, dyr, bus, 20.0) for _ in range(2)]
         theirs = min(r[0] for r in runs)
         row(label, ours, theirs, theirs / ours, _word(verdict),
@@ -128,7 +120,7 @@ def study_eig(files):
     for label, (raw, dyr), _ in files:
         case = load_psse(raw, dyr)
         modal_analysis(linearise(case))
-        ours = best_of(lambda: modal_analysis(linearise(case)), 3)
+        ours, _ = best_of(lambda: modal_analysis(linearise(case)), 3, warm_up=False)
         ss = andes_system(raw, dyr)
         t0 = time.perf_counter()
         andes_modes(ss)
@@ -197,7 +189,7 @@ def study_scaling(files):
     ours = [(label, load_psse(raw, dyr), bus) for label, (raw, dyr), bus in files]
     for label, case, bus in pst + ours:
         ours_run(case, bus, 20.0)
-        wall = best_of(lambda: ours_run(case, bus, 20.0), 3)
+        wall, _ = best_of(lambda: ours_run(case, bus, 20.0), 3, warm_up=False)
         mem = peak_mib(lambda: ours_run(case, bus, 20.0))
         row(label, case.n_bus, len(case.machines), wall, mem)
     label, (raw, dyr), bus = files[-1]
@@ -205,7 +197,7 @@ def study_scaling(files):
     print(f"\n{label}: wall s and peak MiB vs simulated time")
     row("t_end s", "stabctl s", "ANDES s", "ANDES/ours", "stabctl MiB", "ANDES MiB")
     for t_end in (5.0, 10.0, 20.0, 40.0):
-        ours_s = best_of(lambda: ours_run(case, bus, t_end), 3)
+        ours_s, _ = best_of(lambda: ours_run(case, bus, t_end), 3, warm_up=False)
         theirs_s = andes_timed(raw, dyr, bus, t_end)[0]
         ours_m = peak_mib(lambda: ours_run(case, bus, t_end))
         theirs_m = peak_mib(lambda: andes_timed(raw, dyr, bus, t_end))

@@ -9,22 +9,12 @@ warm-up (compilation excluded), one core.  Target (issue): miniWECC linearise + 
 Run: python benchmarks/bench_eig.py
 """
 
-import time
 
+from _timing import best_of
 from stabctl.case import load_case
 from stabctl.linearise import linearise
 from stabctl.modal import modal_analysis, mode_sensitivity
 from stabctl.simulation import Simulator
-
-
-def best_of(fn, repeat=5):
-    out = fn()
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return min(times), out
 
 
 def main():
@@ -32,10 +22,10 @@ def main():
           f"{'analyse s':>9} {'residues s':>10} {'lin+analyse s':>13} {'target s':>8}")
     for name, target in (("kundur", float("nan")), ("miniwecc", 0.5)):
         case = load_case(name)
-        t_model, sim = best_of(lambda: Simulator(case))
-        t_lin, sys = best_of(lambda: linearise(sim))
-        t_ma, ma = best_of(lambda: modal_analysis(sys))
-        t_res, _ = best_of(lambda: mode_sensitivity(sys, ma))
+        t_model, sim = best_of(lambda: Simulator(case), 5)
+        t_lin, sys = best_of(lambda: linearise(sim), 5)
+        t_ma, ma = best_of(lambda: modal_analysis(sys), 5)
+        t_res, _ = best_of(lambda: mode_sensitivity(sys, ma), 5)
         total = t_lin + t_ma + t_res
         print(f"{name:10} {sys.nstates:6d} {sys.ninputs:6d} {t_model:8.3f} {t_lin:11.3f} "
               f"{t_ma:9.3f} {t_res:10.3f} {total:13.3f} {target:8.2f}")

@@ -5,8 +5,8 @@ time, and the issue's targets on one core: Kundur 20 s <= 0.05 s, miniWECC 20 s 
 Run: python benchmarks/bench_simulate.py
 """
 
-import time
 
+from _timing import best_of
 from stabctl.case import load_case
 from stabctl.events import fault_with_clearing
 from stabctl.simulation import Simulator, default_step
@@ -17,16 +17,6 @@ CASES = (  # name, fault bus, far bus, clearing cycles, target s, label
 )
 
 
-def best_of(fn, repeat=3):
-    fn()
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
-
-
 def main():
     print(f"{'case':10} {'run':44} {'step s':>9} {'wall s':>8} {'x real time':>12} {'target s':>9}")
     for name, bus, far, cyc, target, label in CASES:
@@ -35,7 +25,7 @@ def main():
         fault = [fault_with_clearing(case, bus, far, 1.0, cyc)]
         for h in (default_step(case), 1 / 240):
             for what, ev in ((label, fault), ("no disturbance", [])):
-                wall = best_of(lambda: sim.run(ev, t_end=20.0, h=h))
+                wall, _ = best_of(lambda: sim.run(ev, t_end=20.0, h=h))
                 print(f"{name:10} {what:44} {h:9.5f} {wall:8.3f} {20.0 / wall:12.0f} {target:9.2f}")
 
 
