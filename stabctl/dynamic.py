@@ -262,7 +262,8 @@ class DynamicModel:
         dx = np.zeros_like(x)  # slots no kernel writes (e.g. a short PSS in long slots) stay 0
         it = evaluate_kernel(x, self.layout.n_mac, self.layout.n_exc, self.layout.n_pss,
                              self.layout.n_tg, self.params, net.Y11, net.Y12, net.Y21, net.Y22,
-                             net.Z22, net.R, o.V_nc, S, want_vbus, dx, o.cur, o.pelect, o.qelect,
+                             net.Z22, net.R, o.V_nc, np.zeros(o.V_nc.size, np.bool_), S,
+                             want_vbus, dx, o.cur, o.pelect, o.qelect,
                              o.eterm, o.efd, o.pmech, o.V_bus)
         if it < 0:
             raise SimulationError("non-conforming load iteration did not converge")
@@ -291,13 +292,14 @@ class KernelParams(NamedTuple):
 
 
 @njit(cache=True)
-def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, S_extra, want_vbus,
-                    dx, cur, pelect, qelect, eterm, efd, pmech, V_bus):
+def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, held, S_extra,
+                    want_vbus, dx, cur, pelect, qelect, eterm, efd, pmech, V_bus):
     """One evaluation in PSTess's order (docs/pst_models.md 7.2): machine flag 1, network,
     PSS / exciter / governor flag 1, then flag 2 of machines, PSS, exciters, governors.
 
-    Writes dx and the outputs; V_nc is updated in place.  Returns the load-iteration count,
-    -1 without convergence.
+    Writes dx and the outputs; V_nc and held (loads held at their impedance model, see
+    `netsolve.solve_nc`) are updated in place.  Returns the load-iteration count, -1
+    without convergence.
     """
     o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
     xm, dxm = x[:o].reshape(6, nm), dx[:o].reshape(6, nm)
@@ -308,7 +310,7 @@ def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, S_e
     xg, dxg = x[o:o + rg * ng].reshape(rg, ng), dx[o:o + rg * ng].reshape(rg, ng)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
-    it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra)
+    it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, held)
     if it < 0:
         return -1
     cur[:] = Y11 @ psi + Y12 @ V_nc

@@ -25,6 +25,7 @@ from .errors import SimulationError
 from .network import build_ybus
 
 V_SWITCH = 0.5  # below this voltage PST turns non-conforming loads into impedances
+V_RELEASE = V_SWITCH + 0.1  # a load held at its impedance model is released above this
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,7 +127,7 @@ def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
 
 
 @njit(cache=True)
-def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, tol=1e-10, max_iter=50):
+def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, max_iter=50):
     """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
 
     I_load = conj((S_P + S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's
@@ -137,9 +138,16 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, tol=1e-10, max_iter
     in 30 steps, Newton's method in rectangular coordinates (as PST).  If Newton fails too,
     the switch has left the equations without a solution (a load at 0.5 pu draws twice as
     much just above the switch as just below; PSTess stops there): the loads within 0.05 pu
-    of the switch (at any iterate) are then held at their impedance model for this
-    evaluation.  Returns the
-    number of iterations, or -1 without convergence (the caller raises SimulationError).
+    of the switch (at any iterate) are then held at their impedance model.
+
+    held (n_nc, bool, in/out) carries that hold between calls: a call that needed it sets
+    it, and the next call first solves with the same loads held and keeps the answer while
+    every held load stays below V_RELEASE = 0.6 pu (a 0.1 pu hysteresis band: held loads
+    settle at 0.55-0.58 pu in a deep fault on miniWECC); otherwise it clears held and
+    starts over as above.  Without it every evaluation through a deep fault would first spend
+    a failing Newton run rediscovering that the switch has no solution.  The caller clears
+    held when the network changes.  Returns the number of iterations, or -1 without
+    convergence (the caller raises SimulationError).
     """
     n = V.size
     if n == 0:
@@ -147,20 +155,41 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, tol=1e-10, max_iter
     b = Y21 @ psi
     F = np.empty(n, np.complex128)
     V_start = V.copy()
-    low = np.zeros(n, np.bool_)
     vmin = np.abs(V_start)
+    if held.any():
+        it = _chord(b, Y22, Z22, V, S_P, I0, Y_low, S_extra, F, held, tol, vmin)
+        if it < 0:
+            V[:] = V_start
+            it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, held, vmin)
+        if it >= 0 and np.all(np.abs(V)[held] < V_RELEASE):
+            return it
+        held[:] = False
+        V[:] = V_start
+        vmin[:] = np.abs(V_start)
+    it = _chord(b, Y22, Z22, V, S_P, I0, Y_low, S_extra, F, held, tol, vmin)
+    if it >= 0:
+        return it
+    V[:] = V_start
+    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, held, vmin)
+    if it >= 0:
+        return it
+    low = vmin < V_SWITCH + 0.05         # every bus that came near the switch
+    V[:] = V_start
+    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin)
+    if it >= 0:
+        held[:] = low
+    return it
+
+
+@njit(cache=True)
+def _chord(b, Y22, Z22, V, S_P, I0, Y_low, S_extra, F, low, tol, vmin):
+    """Up to 30 chord steps V <- V - Z22 F(V); the step count, or -1 if not converged."""
     for it in range(30):
         if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low) < tol:
             return it
         V -= Z22 @ F
-        vmin = np.minimum(vmin, np.abs(V))
-    V[:] = V_start
-    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin)
-    if it >= 0:
-        return it
-    low[:] = vmin < V_SWITCH + 0.05      # every bus that came near the switch
-    V[:] = V_start
-    return _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin)
+        vmin[:] = np.minimum(vmin, np.abs(V))
+    return -1
 
 
 @njit(cache=True)

@@ -246,6 +246,8 @@ class _Run:
         self.P_rec, self.stats = np.zeros((N, nd)), np.zeros((nd, 3))
         self.log = np.full((4096, 4), np.nan)
         self.x, self.V_nc, self.ds = m.x0.copy(), m.V_nc0.copy(), device_state(sa)
+        self.held = np.zeros(self.V_nc.size, np.bool_)   # loads held low (solve_nc)
+        self.held_stage = np.full(1, -1)
         self.cmd_t = np.full(n_commands, np.inf)
         self.cmd_mode = np.zeros((n_commands, nd))
         self.mats = tuple(stack(n) for n in ("Y11", "Y12", "Y21", "Y22", "Z22", "R"))
@@ -262,7 +264,8 @@ class _Run:
         m, g = self.m, self.grid
         wall = time.perf_counter()
         self.status, k_end = integrate(
-            self.x, self.V_nc, g.t, g.interval, g.h, self.first, self.pst, *self.mats, m.params,
+            self.x, self.V_nc, self.held, self.held_stage, g.t, g.interval, g.h, self.first,
+            self.pst, *self.mats, m.params,
             m.layout.n_mac, m.layout.n_exc, m.layout.n_pss, m.layout.n_tg, self.sa, self.ds,
             self.cmd_t, self.cmd_mode, self.sim.inertia, self.limit, self.stop, self.k, k1,
             self.rec, self.P_rec, self.stats, self.log)
@@ -445,13 +448,15 @@ def _apply_commands(sa, ds, cmd_t, cmd_mode, t_now, log, stats, r):
 
 
 @njit(cache=True)
-def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, p, nm, ne,
-              nps, ng, sa, ds, cmd_t, cmd_mode, inertia, limit, stop, k0, k1, rec, P_rec,
+def integrate(xs, V_nc, held, held_stage, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22,
+              R, p, nm, ne, nps, ng, sa, ds, cmd_t, cmd_mode, inertia, limit, stop, k0, k1, rec, P_rec,
               stats, log):
     """PST's predictor-corrector from grid index k0 to k1 (see the module docstring), with
     the storage devices `sa` (stabctl.storage.StorageArrays) in state `ds` (DeviceState).
 
-    xs (the state) and V_nc are updated in place, so a run can be continued.  Stage
+    xs (the state), V_nc and held (the loads held at their impedance model, see
+    `netsolve.solve_nc`; cleared when the network stage changes, held_stage[0] is the stage
+    it belongs to) are updated in place, so a run can be continued.  Stage
     matrices are stacked by interval.  Stores the predictor-stage outputs, the states and
     the device powers at every index (rec, P_rec).  Bang-bang devices: a mode change
     within a step has its instant located (`storage.crossing`) and the step is
@@ -476,8 +481,11 @@ def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, 
     bang, external = sa.kind == st.BANG_BANG, sa.kind == st.EXTERNAL
 
     def ev(xx, st_, want, dx):
+        if st_ != held_stage[0]:
+            held[:] = False
+            held_stage[0] = st_
         return evaluate_kernel(xx, nm, ne, nps, ng, p, Y11[st_], Y12[st_], Y21[st_], Y22[st_],
-                               Z22[st_], R[st_], V_nc, S, want, dx, cur, pel, qel, et, efd, pm,
+                               Z22[st_], R[st_], V_nc, held, S, want, dx, cur, pel, qel, et, efd, pm,
                                V_bus)
 
     for k in range(k0, min(k1, n - 1)):
@@ -600,10 +608,10 @@ def integrate(xs, V_nc, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22, R, 
             P_rec[n - 1] = P
         return OK, n - 1
     # paused at k1: store its outputs from copies (the next call evaluates it for real)
-    V_keep = V_nc.copy()
+    V_keep, held_keep, stage_keep = V_nc.copy(), held.copy(), held_stage[0]
     _inject(sa, P, S)
     ev(x.copy(), interval[k1], True, dx_k)
-    V_nc[:] = V_keep
+    V_nc[:], held[:], held_stage[0] = V_keep, held_keep, stage_keep
     _store(rec, k1, x, nm, pel, pm, efd, V_bus)
     if nd > 0:
         P_rec[k1] = P
