@@ -403,9 +403,13 @@ class MachineTable(Table):
     21  S12         saturation factor S(1.2)
     22  pfrac       fraction of the bus generation P taken by this machine
     23  qfrac       fraction of the bus generation Q taken by this machine
+    24  speed_effects  stabctl's column for subtransient machines: 1 (PST ``mac_sub``)
+                    the stator voltage is proportional to rotor speed and the torque is
+                    Pm/omega; 0 speed 1 in both (ANDES's GENROU/GENSAL, which have no
+                    speed effects; docs/pst_models.md 1.5-1.6)
     ==  ==========  ===============================================================
 
-    Omitted columns: 0, except pfrac and qfrac 1 (PSTess ``mac_indx``). Validation: unique
+    Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``). Validation: unique
     positive integer machine numbers, mva > 0, H >= 0, reactances and ra >= 0.
     """
 
@@ -432,10 +436,11 @@ class MachineTable(Table):
     S12: np.ndarray
     pfrac: np.ndarray
     qfrac: np.ndarray
+    speed_effects: np.ndarray
 
     TABLE: ClassVar[str] = "mac_con"
     MIN_COLUMNS: ClassVar[int] = 16
-    DEFAULTS: ClassVar[Mapping[str, float]] = {"pfrac": 1.0, "qfrac": 1.0}
+    DEFAULTS: ClassVar[Mapping[str, float]] = {"pfrac": 1.0, "qfrac": 1.0, "speed_effects": 1.0}
     KEY: ClassVar[str] = "number"
     KEY_LABEL: ClassVar[str] = "machine"
     INTEGER: ClassVar[tuple[str, ...]] = ("number", "bus")
@@ -448,6 +453,8 @@ class MachineTable(Table):
         self._unique("number", "machine number")
         self._require(self.mva > 0, "mva", "machine base must be > 0")
         self._require(self.H >= 0, "H", "inertia constant must be >= 0")
+        self._require(np.isin(self.speed_effects, (0.0, 1.0)), "speed_effects",
+                      "speed_effects must be 0 or 1")
         self._nonnegative(*self.REACTANCES, *self.TIME_CONSTANTS)
 
 

@@ -1051,9 +1051,14 @@ def place(case_name, faults_src, target_cct_gain, zeta_min, max_sites, max_site_
               help="Load model in dynamic runs: all constant impedance, or the RAW "
                    "composition (constant power, current, admittance; PST's network "
                    "solution may fail with constant power under deep voltage dips).")
+@click.option("--conventions", type=click.Choice(["pst", "andes"]), default="pst",
+              show_default=True,
+              help="How to read the DYR models: PST's (machines with speed effects, "
+                   "EXDC2 limits times the terminal voltage) or ANDES 2.0's (neither), "
+                   "to compare with ANDES like for like.")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @_reports_errors
-def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, as_json):
+def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventions, as_json):
     """Convert a PSS/E RAW file (v32-34) and optionally a DYR file to a stabctl case.
 
     The case (stabctl's JSON format) is usable as CASE by simulate, cct, eig and screen.
@@ -1069,7 +1074,7 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, as_json):
 
     out = _check_suffix(out_path, (".json",), "--out")
     case, left_out = run_import(raw_path, dyr_path,
-                                "skip" if skip_unsupported else "error", loads)
+                                "skip" if skip_unsupported else "error", loads, conventions)
     _write_case_atomically(case, out)
     summary = {"case": str(out), "name": case.name, "buses": case.n_bus,
                "branches": len(case.branches), "machines": len(case.machines),

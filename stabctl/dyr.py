@@ -55,7 +55,7 @@ class DyrRecord:
 @dataclass(frozen=True)
 class DyrTables:
     """PST matrices built from DYR records, rows in machine order, columns as the case
-    tables (MachineTable, ExciterTable, PssTable, GovernorTable): mac_con (n_gen, 23),
+    tables (MachineTable, ExciterTable, PssTable, GovernorTable): mac_con (n_gen, 24),
     exc_con (n, 22), pss_con (n, 24), tg_con (n, 24) (None when no record of that kind);
     unsupported: the records skipped (`on_unsupported="skip"`), in file order."""
 
@@ -143,7 +143,8 @@ def _integer(tok: str) -> int | None:
 
 # -- mapping ------------------------------------------------------------------------------------
 
-def dyr_tables(records, generators, on_unsupported: str = "error") -> DyrTables:
+def dyr_tables(records, generators, on_unsupported: str = "error",
+               conventions: str = "pst") -> DyrTables:
     """PST matrices for the generators of a RAW file from their DYR records.
 
     Args:
@@ -154,6 +155,10 @@ def dyr_tables(records, generators, on_unsupported: str = "error") -> DyrTables:
             several machines (mac_con columns 22, 23).
         on_unsupported: "error" (raise, listing every unsupported record) or "skip" (leave
             those records out and return them in `unsupported`).
+        conventions: "pst" (PST's models as they are) or "andes" (ANDES 2.0's reading of
+            the PSS/E models, for like-for-like comparisons: GENROU/GENSAL without speed
+            effects, mac_con column 24 = 0; EXDC2's regulator limits not scaled by the
+            terminal voltage, i.e. PST's DC1 instead of DC2).
     Returns:
         DyrTables.
     Raises:
@@ -164,7 +169,9 @@ def dyr_tables(records, generators, on_unsupported: str = "error") -> DyrTables:
     """
     if on_unsupported not in ("error", "skip"):
         raise CaseError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
-    rows, skipped = _map_records(records, generators)
+    if conventions not in CONVENTIONS:
+        raise CaseError(f"conventions must be one of {CONVENTIONS}, got {conventions!r}")
+    rows, skipped = _map_records(records, generators, conventions)
     if skipped and on_unsupported == "error":
         raise CaseError("unsupported DYR records (use on_unsupported='skip' to leave them "
                         "out):\n" + "\n".join(f"  {r.label()}: {why}" for r, why in skipped))
@@ -176,9 +183,10 @@ def dyr_tables(records, generators, on_unsupported: str = "error") -> DyrTables:
                      unsupported=tuple(r for r, _ in skipped))
 
 
-def _map_records(records, generators):
+def _map_records(records, generators, conventions):
     """Rows per kind {kind: {machine number: (record, row)}} and the unsupported records
     with their reasons, in file order; raises CaseError for malformed records."""
+    andes = conventions == "andes"
     gens = {(int(g["bus"]), _machine_id(g["id"])): g for g in generators}
     rows: dict[str, dict[int, tuple[DyrRecord, list]]] = {k: {} for k in _MAPPERS}
     skipped = []
@@ -191,10 +199,13 @@ def _map_records(records, generators):
             gen = gens.get((rec.bus, rec.id))
             if gen is None:
                 raise _Unsupported("no such generator in the RAW data (or out of service)")
-            row = _MAPPERS[kind][rec.model](rec, gen)
+            mapper = _ANDES_MAPPERS.get(rec.model) if andes else None
+            row = (mapper or _MAPPERS[kind][rec.model])(rec, gen)
         except _Unsupported as why:
             skipped.append((rec, str(why)))
             continue
+        if kind == "machine" and andes:
+            row[MachineTable.columns().index("speed_effects")] = 0.0
         number = int(gen["number"])
         if number in rows[kind]:
             raise CaseError(f"{rec.label()}: second {kind} model for this generator (first at "
@@ -249,7 +260,7 @@ def _matrix(rows: dict, width: int) -> np.ndarray | None:
 def _mac_row(gen, **cols) -> list:
     row = [0.0] * len(MachineTable.columns())
     cols.update(number=gen["number"], bus=gen["bus"], mva=gen["mbase"], ra=gen["ra"],
-                col19=gen["number"], pfrac=1.0, qfrac=1.0)
+                col19=gen["number"], pfrac=1.0, qfrac=1.0, speed_effects=1.0)
     for name, v in cols.items():
         row[MachineTable.columns().index(name)] = float(v)
     return row
@@ -461,5 +472,9 @@ _MAPPERS = {
     "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1},
 }
 _KIND = {model: kind for kind, models in _MAPPERS.items() for model in models}
+#: conventions="andes": ANDES 2.0's EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
+#: terminal voltage as PSS/E's and IEEE DC2 (its ESDC2A does scale them)
+_ANDES_MAPPERS = {"EXDC2": _dc(1)}
+CONVENTIONS = ("pst", "andes")
 _WIDTH = {"machine": len(MachineTable.columns()), "exciter": len(ExciterTable.columns()),
           "pss": len(PssTable.columns()), "governor": len(GovernorTable.columns())}

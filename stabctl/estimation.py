@@ -192,7 +192,7 @@ class QAxis:
         A[tra, 0, 0] = -1 / Tq[tra]
         b[tra, 0] = ((mp.xq - mp.xqp) / Tq)[tra]
         c[tra, 0] = 1.0
-        return cls(LinearSystems(A, b), c, np.where(tra, -1.0, 1.0), sub, mp.kind, mp.xl,
+        return cls(LinearSystems(A, b), c, np.where(tra, -1.0, 1.0), mp.speed_effects, mp.kind, mp.xl,
                    mp.xq, mp.xqp, mp.xdp)
 
 
@@ -243,7 +243,7 @@ def machine_models(case: Case, pmus) -> MachineModels:
     return MachineModels(
         numbers=case.machines.number.astype(int), pmu=idx, H=mp.H.copy(), D=mp.D0.copy(),
         pot=mp.mac_pot, ra=mp.ra_network, z_emf=z,
-        per_speed=mp.kind == SUB, inertia=mp.H * case.machines.mva, f0=case.freq_hz,
+        per_speed=mp.speed_effects, inertia=mp.H * case.machines.mva, f0=case.freq_hz,
         governor=Governors.from_case(case), qaxis=QAxis.from_case(case))
 
 

@@ -27,7 +27,7 @@ STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
 # columns of the packed parameter matrix used by the compiled kernels
 (K_KIND, K_POT, K_RA, K_XL, K_XD, K_XDP, K_XDPP, K_XQ, K_XQP, K_XQPP, K_TDOP, K_TDOPP,
  K_TQOP, K_TQOPP, K_H, K_D0, K_P6, K_P7, K_P8, K_P9, K_P10, K_P11, K_P12, K_P13, K_P14,
- K_P15, K_SA, K_SB, K_SC, K_EQP0, K_NCOL) = range(31)
+ K_P15, K_SA, K_SB, K_SC, K_EQP0, K_SPEED, K_NCOL) = range(32)
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +61,7 @@ class MachineParams:
     qfrac: np.ndarray
     sat: np.ndarray  # (n_mac, 3) quadratic saturation a, b, c
     basrad: float
+    speed_effects: np.ndarray  # bool: subtransient with speed in stator voltage and torque
 
     @property
     def n(self) -> int:
@@ -79,7 +80,7 @@ class MachineParams:
                 K_P6: self.p6, K_P7: self.p7, K_P8: self.p8, K_P9: self.p9, K_P10: self.p10,
                 K_P11: self.p11, K_P12: self.p12, K_P13: self.p13, K_P14: self.p14,
                 K_P15: self.p15, K_SA: self.sat[:, 0], K_SB: self.sat[:, 1],
-                K_SC: self.sat[:, 2], K_EQP0: eqp0}
+                K_SC: self.sat[:, 2], K_EQP0: eqp0, K_SPEED: self.speed_effects}
         P = np.zeros((self.n, K_NCOL))
         for k, v in cols.items():
             P[:, k] = np.nan_to_num(np.asarray(v, float))
@@ -173,7 +174,7 @@ def machine_params(case: Case) -> MachineParams:
         xq=m.xq.copy(), xqp=xqp, xqpp=xqpp, Tdop=m.Tdop.copy(), Tdopp=m.Tdopp.copy(),
         Tqop=Tqop, Tqopp=Tqopp, H=m.H.copy(), D0=m.D0.copy(), pfrac=m.pfrac.copy(),
         qfrac=m.qfrac.copy(), sat=saturation_coefficients(m.S10, m.S12),
-        basrad=2 * np.pi * case.freq_hz)
+        basrad=2 * np.pi * case.freq_hz, speed_effects=sub & (m.speed_effects == 1))
 
 
 def saturation_coefficients(S10: np.ndarray, S12: np.ndarray) -> np.ndarray:
@@ -254,17 +255,24 @@ def _dq(delta, X):
 
 
 @njit(cache=True)
+def _stator_speed(P, x, i):
+    """Speed in the subtransient stator voltage and torque: omega with speed effects (PST
+    mac_sub), 1 without (ANDES GENROU)."""
+    return x[1, i] if P[i, K_SPEED] > 0 else 1.0
+
+
+@njit(cache=True)
 def internal_voltage(P, x, psi):
     """Voltage behind the network reactance, network frame (PST flag 1), into psi (n_mac,).
 
-    Subtransient: speed * exp(j delta) (psi"_d + j psi"_q); transient and classical:
-    exp(j delta) (E'q - j E'd).
+    Subtransient: speed * exp(j delta) (psi"_d + j psi"_q) (speed 1 without speed
+    effects); transient and classical: exp(j delta) (E'q - j E'd).
     """
     for i in range(P.shape[0]):
         e = np.exp(1j * x[0, i])
         if P[i, K_KIND] == SUB:
             psidpp, psiqpp = _fluxes(P, x, i)
-            psi[i] = x[1, i] * e * (psidpp + 1j * psiqpp)
+            psi[i] = _stator_speed(P, x, i) * e * (psidpp + 1j * psiqpp)
         else:
             psi[i] = e * (x[2, i] - 1j * x[4, i])
 
@@ -300,6 +308,7 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
     """
     for i in range(P.shape[0]):
         w = x[1, i]
+        ws = _stator_speed(P, x, i)
         curd, curq = _dq(x[0, i], cur[i])
         pot = P[i, K_POT]
         cdg, cqg = curd * pot, curq * pot
@@ -312,13 +321,13 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
             psidpp, psiqpp = _fluxes(P, x, i)
             Eqpe = x[2, i] - x[3, i] - P[i, K_P8] * cdg
             Edpe = x[4, i] - x[5, i] - P[i, K_P13] * cqg
-            ed = -P[i, K_RA] * cdg - (w * psiqpp - P[i, K_XQPP] * cqg)
-            eq = -P[i, K_RA] * cqg + (w * psidpp - P[i, K_XDPP] * cdg)
+            ed = -P[i, K_RA] * cdg - (ws * psiqpp - P[i, K_XQPP] * cqg)
+            eq = -P[i, K_RA] * cqg + (ws * psidpp - P[i, K_XDPP] * cdg)
             dx[2, i] = (vex[i] - fld) / P[i, K_TDOP]
             dx[3, i] = Eqpe / P[i, K_TDOPP]
             dx[4, i] = (-x[4, i] + P[i, K_P12] * (-cqg - P[i, K_P11] * Edpe)) / P[i, K_TQOP]
             dx[5, i] = Edpe / P[i, K_TQOPP]
-            torque = pmech[i] / w - (psidpp * cqg - psiqpp * cdg)
+            torque = pmech[i] / ws - (psidpp * cqg - psiqpp * cdg)
         elif kind == TRA:
             ed = x[4, i] - P[i, K_RA] * cdg + P[i, K_XDP] * cqg
             eq = x[2, i] - P[i, K_RA] * cqg - P[i, K_XDP] * cdg

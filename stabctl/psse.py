@@ -28,7 +28,8 @@ _MODES = ("error", "skip")
 
 
 def load_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
-              on_unsupported: str = "error", loads: str = "impedance") -> Case:
+              on_unsupported: str = "error", loads: str = "impedance",
+              conventions: str = "pst") -> Case:
     """Build a :class:`~stabctl.case.Case` from a PSS/E RAW (v32-34) and a DYR file.
 
     Args:
@@ -39,6 +40,10 @@ def load_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
             leaves them out and warns (:class:`UserWarning`) with the list.
         loads: ``"impedance"`` makes all loads constant impedance in the dynamic run,
             ``"raw"`` keeps the PSS/E load composition (see :mod:`stabctl.psse_raw`).
+        conventions: ``"pst"`` maps the DYR models onto PST's as they are (machines with
+            speed effects, EXDC2 limits scaled by the terminal voltage); ``"andes"``
+            follows ANDES 2.0's reading for like-for-like comparisons (no speed effects
+            in GENROU/GENSAL, EXDC2 limits constant; :func:`stabctl.dyr.dyr_tables`).
 
     Returns:
         the case, named after the RAW file, described by the RAW title lines; units as
@@ -52,12 +57,12 @@ def load_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
     Source: PSS/E POM "Power Flow Raw Data File Contents" and "Dynamics Data" (PSS/E
     Model Library for the DYR records); PST manual section 3.22 for ``mac_con``.
     """
-    return import_psse(raw_path, dyr_path, on_unsupported, loads)[0]
+    return import_psse(raw_path, dyr_path, on_unsupported, loads, conventions)[0]
 
 
 def import_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
-                on_unsupported: str = "error", loads: str = "impedance"
-                ) -> tuple[Case, tuple[str, ...]]:
+                on_unsupported: str = "error", loads: str = "impedance",
+                conventions: str = "pst") -> tuple[Case, tuple[str, ...]]:
     """:func:`load_psse` that also returns the records left out, each as
     ``"file:line record"`` (empty unless ``on_unsupported="skip"``). Same arguments and
     errors."""
@@ -67,7 +72,7 @@ def import_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
     mats = raw.matrices()
     unsupported = [str(s) for s in raw.unsupported]
     if dyr_path is not None:
-        dyn, dyr_unsupported = _dynamic_tables(raw, dyr_path)
+        dyn, dyr_unsupported = _dynamic_tables(raw, dyr_path, conventions)
         mats.update(dyn)
         unsupported += dyr_unsupported
     _report(unsupported, on_unsupported, _files(raw_path, dyr_path))
@@ -76,12 +81,12 @@ def import_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
     return case, tuple(unsupported)
 
 
-def _dynamic_tables(raw: RawData, dyr_path) -> tuple[dict, list[str]]:
+def _dynamic_tables(raw: RawData, dyr_path, conventions) -> tuple[dict, list[str]]:
     """PST dynamic matrices from the DYR file and its unsupported records (as text)."""
     from stabctl.dyr import dyr_tables, read_dyr
 
     tables = dyr_tables(read_dyr(dyr_path), [g.as_dyr() for g in raw.generators],
-                        on_unsupported="skip")
+                        on_unsupported="skip", conventions=conventions)
     mats = {}
     for key in ("mac_con", "exc_con", "pss_con", "tg_con"):
         if getattr(tables, key) is not None:

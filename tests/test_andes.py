@@ -61,11 +61,11 @@ def wecc_no_controls(tmp_path_factory):
     return CASES / "wecc" / "wecc.raw", dyr
 
 
-def fault_speeds(files, bus, cycles, t_end):
+def fault_speeds(files, bus, cycles, t_end, conventions="pst"):
     """Speeds (pu) of both tools on ANDES's time grid: (t, stabctl, ANDES)."""
     raw, dyr = files
     t_clear = 1.0 + cycles / 60.0
-    res = Simulator(load_psse(raw, dyr)).run([Fault(bus, 1.0, t_clear, x=1e-4)], t_end,
+    res = Simulator(load_psse(raw, dyr, conventions=conventions)).run([Fault(bus, 1.0, t_clear, x=1e-4)], t_end,
                                              h=STEP)
     t, w_andes = andes_speeds(andes_system(raw, dyr, AndesFault(bus, 1.0, t_clear)), t_end,
                               STEP)
@@ -92,10 +92,10 @@ def test_wecc_fault_speeds_match_andes(wecc):
     assert np.max(np.abs(wa - 1)) > 5e-3
 
 
-def em_modes(files):
+def em_modes(files, conventions="pst"):
     """stabctl's electromechanical eigenvalues and, for each, ANDES's nearest one."""
     raw, dyr = files
-    ma = modal_analysis(linearise(load_psse(raw, dyr)))
+    ma = modal_analysis(linearise(load_psse(raw, dyr, conventions=conventions)))
     ours = ma.eigenvalues[ma.electromechanical]
     theirs = andes_modes(andes_system(raw, dyr))
     return ours, np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])

@@ -86,8 +86,9 @@ def test_matrix_gives_pst_matrix_back_and_col_is_1_based():
     np.testing.assert_array_equal(c.buses.matrix(), np.array(BUS, float))
     np.testing.assert_array_equal(c.machines.matrix()[:, :21], np.array(MAC, float))
     assert c.machines.col(16) is c.machines.H
-    with pytest.raises(CaseError, match="no column 24"):
-        c.machines.col(24)
+    assert c.machines.speed_effects.tolist() == [1, 1]   # stabctl's column 24, PST default
+    with pytest.raises(CaseError, match="no column 25"):
+        c.machines.col(25)
 
 
 def test_tables_are_read_only():
