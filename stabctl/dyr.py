@@ -152,13 +152,15 @@ def dyr_tables(records, generators, on_unsupported: str = "error",
         generators: sequence of dicts in RAW order, keys "number" (1-based machine number,
             the row of mac_con), "bus", "id", "mbase" (MVA), "ra", "xsource" (ZSORCE on
             mbase, pu); optional "pg", "qg" (MW, Mvar) to split a bus's generation among
-            several machines (mac_con columns 22, 23).
+            several machines (mac_con columns 22, 23), "sbase" (system base, MVA, default
+            100; used by conventions="andes").
         on_unsupported: "error" (raise, listing every unsupported record) or "skip" (leave
             those records out and return them in `unsupported`).
         conventions: "pst" (PST's models as they are) or "andes" (ANDES 2.0's reading of
             the PSS/E models, for like-for-like comparisons: GENROU/GENSAL without speed
             effects, mac_con column 24 = 0; EXDC2's regulator limits not scaled by the
-            terminal voltage, i.e. PST's DC1 instead of DC2).
+            terminal voltage, i.e. PST's DC1 instead of DC2; IEEEG1's gate rate limits
+            Uo, Uc read on the system base, i.e. times SBASE/MBASE on the machine base).
     Returns:
         DyrTables.
     Raises:
@@ -472,9 +474,22 @@ _MAPPERS = {
     "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1},
 }
 _KIND = {model: kind for kind, models in _MAPPERS.items() for model in models}
+
+
+def _ieeeg1_andes(rec, gen):
+    """IEEEG1 as ANDES 2.0 reads it: Uo, Uc (pu/s) on the system base, not converted to
+    the machine base as its K, PMAX, PMIN are (``NumParam(power=True)``)."""
+    row = _ieeeg1(rec, gen)
+    scale = gen.get("sbase", 100.0) / gen["mbase"]
+    for name in ("Uo", "Uc"):
+        row[GovernorTable.columns().index(name)] *= scale
+    return row
+
+
 #: conventions="andes": ANDES 2.0's EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
-#: terminal voltage as PSS/E's and IEEE DC2 (its ESDC2A does scale them)
-_ANDES_MAPPERS = {"EXDC2": _dc(1)}
+#: terminal voltage as PSS/E's and IEEE DC2 (its ESDC2A does scale them); its IEEEG1 rate
+#: limits are on the system base
+_ANDES_MAPPERS = {"EXDC2": _dc(1), "IEEEG1": _ieeeg1_andes}
 CONVENTIONS = ("pst", "andes")
 _WIDTH = {"machine": len(MachineTable.columns()), "exciter": len(ExciterTable.columns()),
           "pss": len(PssTable.columns()), "governor": len(GovernorTable.columns())}

@@ -85,7 +85,8 @@ def _dynamic_tables(raw: RawData, dyr_path, conventions) -> tuple[dict, list[str
     """PST dynamic matrices from the DYR file and its unsupported records (as text)."""
     from stabctl.dyr import dyr_tables, read_dyr
 
-    tables = dyr_tables(read_dyr(dyr_path), [g.as_dyr() for g in raw.generators],
+    gens = [{**g.as_dyr(), "sbase": raw.base_mva} for g in raw.generators]
+    tables = dyr_tables(read_dyr(dyr_path), gens,
                         on_unsupported="skip", conventions=conventions)
     mats = {}
     for key in ("mac_con", "exc_con", "pss_con", "tg_con"):
