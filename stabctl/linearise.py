@@ -273,8 +273,8 @@ def _differences(kind, index, step, x0, V_nc0, p, nm, ne, nps, ng, Y11, Y12, Y21
     """Fill J, dV with central differences (see jacobian_columns) and curv with
     max|f+ - 2 f0 + f-| / max|f+ - f-| per column; V0 with the unperturbed bus voltages.
     Returns -1, or the column whose network did not solve (-2: the unperturbed one)."""
-    dx = np.empty_like(x0)
-    f0 = np.empty_like(x0)
+    dx = np.zeros_like(x0)   # slots no kernel writes (unused by a model type) must stay 0:
+    f0 = np.zeros_like(x0)   # the kink test below looks at every slot
     cur = np.empty(nm, np.complex128)
     pel, qel, et, efd, pm = np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm)
     V_bus = np.zeros(R.shape[0], np.complex128)
@@ -293,7 +293,7 @@ def _differences(kind, index, step, x0, V_nc0, p, nm, ne, nps, ng, Y11, Y12, Y21
         else:
             nominal = p.GP[j, gov.G_PREF]
         hi, lo = nominal + step[c], nominal - step[c]
-        fp = np.empty_like(x0)
+        fp = np.zeros_like(x0)
         for side in range(2):
             v = hi if side == 0 else lo
             x = x0.copy()
@@ -306,8 +306,9 @@ def _differences(kind, index, step, x0, V_nc0, p, nm, ne, nps, ng, Y11, Y12, Y21
                 p.EP[j, exc.E_VREF] = v
             else:
                 p.GP[j, gov.G_PREF] = v
-            it = evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R,
-                                 V_nc0.copy(), np.zeros(V_nc0.size, np.bool_), S, True, dx, cur, pel, qel, et, efd, pm, V_bus)
+            it = evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc0.copy(),
+                                 np.zeros(V_nc0.size, np.bool_), S, True, dx, cur, pel, qel, et,
+                                 efd, pm, V_bus)
             if kind[c] == VREF:
                 p.EP[j, exc.E_VREF] = nominal
             elif kind[c] == PREF:
