@@ -2,11 +2,10 @@
 ``pip install "stabctl[andes]"``).
 
 Cases: ANDES's Kundur (kundur.raw + kundur_full.dyr without its Toggle record) and
-WECC-179 (wecc.raw + wecc_full.dyr, GENROU saturation set to 0; for the eigenvalues
-without exciters and stabilisers, as stabctl's linearisation of the whole case stops at a
-limiter),
-imported by ``stabctl.psse.load_psse`` and read by ANDES from the same files
-(``stabctl.andes_xval``). Fault: three-phase at one bus through j1e-4 pu from
+WECC-179 (wecc.raw + wecc_full.dyr, GENROU saturation set to 0), imported by
+``stabctl.psse.load_psse`` with ``conventions="andes"`` (ANDES's reading of GENROU,
+EXDC2 and IEEEG1, so that both tools solve the same equations) and read by ANDES from the
+same files (``stabctl.andes_xval``). Fault: three-phase at one bus through j1e-4 pu from
 t = 1 s, cleared after 6 cycles without loss of a line; fixed step 5 ms in both tools.
 
 Prints one table per study with each tool's wall time and the ratio ANDES / stabctl:
@@ -16,7 +15,8 @@ Prints one table per study with each tool's wall time and the ratio ANDES / stab
   on a freshly loaded system, best of 2; loading and code set-up excluded for both), and
   each tool's verdict at 20 s (a rotor angle more than pi from the centre of inertia);
 * ``eig``: linearisation and eigenvalues (stabctl ``linearise`` + ``modal_analysis``;
-  ANDES ``PFlow`` + ``EIG``);
+  ANDES ``PFlow`` + ``EIG``), and the largest relative difference between each of
+  stabctl's electromechanical eigenvalues and ANDES's nearest one;
 * ``cct``: 1 ms critical clearing time by bisection (stabctl
   ``cct.critical_clearing_time``, a bolted fault; ANDES the same bisection over repeated
   runs to 5 s after the fault, fault j1e-4 pu, unstable when a rotor angle leaves the
@@ -51,22 +51,20 @@ from stabctl.psse import load_psse
 from stabctl.simulation import Simulator
 
 STEP, T_FAULT, CYCLES, TOL = 0.005, 1.0, 6, 0.001
-CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
+CONVENTIONS = "andes"
 CASES = (("kundur", "kundur", 7), ("wecc179", "wecc", 1))  # label, ANDES folder, fault bus
 
 
-def case_files(folder: str, work: Path, controls: bool = True):
-    """(RAW, DYR) of an ANDES case, the DYR made like for like (module doc); controls
-    False: WECC-179 without exciters and stabilisers."""
+def case_files(folder: str, work: Path):
+    """(RAW, DYR) of an ANDES case, the DYR made like for like (module doc)."""
     import andes
 
     src = Path(andes.__file__).parent / "cases" / folder
-    dyr = work / f"{folder}{'' if controls else '_nc'}.dyr"
+    dyr = work / f"{folder}.dyr"
     if folder == "kundur":
         strip_dyr(src / f"{folder}_full.dyr", dyr, {"TOGGLE"})
     else:
-        strip_dyr(src / f"{folder}_full.dyr", dyr, () if controls else CONTROLS,
-                  unsaturated=True)
+        strip_dyr(src / f"{folder}_full.dyr", dyr, (), unsaturated=True)
     return src / f"{folder}.raw", dyr
 
 
@@ -101,7 +99,7 @@ def study_sim(files):
     print("\n20 s simulation, 6-cycle bus fault (wall s; verdict at 20 s)")
     row("case", "stabctl", "ANDES", "ANDES/ours", "stabctl", "ANDES")
     for label, (raw, dyr), bus in files:
-        case = load_psse(raw, dyr)
+        case = load_psse(raw, dyr, conventions=CONVENTIONS)
         verdict = ours_run(case, bus, 20.0).stable  # and compile
         ours, _ = best_of(lambda: ours_run(case, bus, 20.0), 3, warm_up=False)
         runs = [andes_timed(raw, dyr, bus, 20.0) for _ in range(2)]
@@ -115,18 +113,20 @@ def _word(stable: bool) -> str:
 
 
 def study_eig(files):
-    print("\nEigenvalues at the power flow (wall s; WECC-179 without exciters and PSS)")
-    row("case", "stabctl", "ANDES", "ANDES/ours", "n modes EM")
+    print("\nEigenvalues at the power flow (wall s; electromechanical modes)")
+    row("case", "stabctl", "ANDES", "ANDES/ours", "n modes EM", "max rel diff")
     for label, (raw, dyr), _ in files:
-        case = load_psse(raw, dyr)
+        case = load_psse(raw, dyr, conventions=CONVENTIONS)
         modal_analysis(linearise(case))
         ours, _ = best_of(lambda: modal_analysis(linearise(case)), 3, warm_up=False)
         ss = andes_system(raw, dyr)
         t0 = time.perf_counter()
-        andes_modes(ss)
+        lam_andes = andes_modes(ss)
         theirs = time.perf_counter() - t0
-        n_em = len(modal_analysis(linearise(case)).electromechanical)
-        row(label, ours, theirs, theirs / ours, n_em)
+        ma = modal_analysis(linearise(case))
+        em = ma.eigenvalues[ma.electromechanical]
+        diff = max(np.min(np.abs(lam_andes - lam)) / abs(lam) for lam in em)
+        row(label, ours, theirs, theirs / ours, len(em), f"{100 * diff:.2f} %")
 
 
 def andes_stable(raw, dyr, bus, clear) -> bool:
@@ -162,7 +162,7 @@ def study_cct(files):
     print("\n1 ms CCT of the bus fault (bisection)")
     row("case", "stabctl s", "runs", "CCT ms", "ANDES s", "runs", "CCT ms", "ANDES/ours")
     for label, (raw, dyr), bus in files:
-        sim = Simulator(load_psse(raw, dyr))
+        sim = Simulator(load_psse(raw, dyr, conventions=CONVENTIONS))
         fault = LineFault(bus, None, T_FAULT)
         critical_clearing_time(sim, fault, tol=TOL, h=STEP)  # compile
         t0 = time.perf_counter()
@@ -186,14 +186,14 @@ def study_scaling(files):
     print("\nstabctl 20 s run vs system size (wall s, peak MiB)")
     row("case", "buses", "machines", "wall s", "peak MiB")
     pst = [("kundur (PST)", load_case("kundur"), 3), ("miniwecc (PST)", load_case("miniwecc"), 83)]
-    ours = [(label, load_psse(raw, dyr), bus) for label, (raw, dyr), bus in files]
+    ours = [(label, load_psse(raw, dyr, conventions=CONVENTIONS), bus) for label, (raw, dyr), bus in files]
     for label, case, bus in pst + ours:
         ours_run(case, bus, 20.0)
         wall, _ = best_of(lambda: ours_run(case, bus, 20.0), 3, warm_up=False)
         mem = peak_mib(lambda: ours_run(case, bus, 20.0))
         row(label, case.n_bus, len(case.machines), wall, mem)
     label, (raw, dyr), bus = files[-1]
-    case = load_psse(raw, dyr)
+    case = load_psse(raw, dyr, conventions=CONVENTIONS)
     print(f"\n{label}: wall s and peak MiB vs simulated time")
     row("t_end s", "stabctl s", "ANDES s", "ANDES/ours", "stabctl MiB", "ANDES MiB")
     for t_end in (5.0, 10.0, 20.0, 40.0):
@@ -213,10 +213,8 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         files = [(label, case_files(folder, Path(tmp)), bus) for label, folder, bus in CASES]
-        plain = [(label, case_files(folder, Path(tmp), controls=False), bus)
-                 for label, folder, bus in CASES]
         for name in args.only:
-            STUDIES[name](plain if name == "eig" else files)
+            STUDIES[name](files)
 
 
 if __name__ == "__main__":

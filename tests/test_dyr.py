@@ -64,7 +64,7 @@ def test_kundur_genrou_to_mac_sub(kundur_tables):
     assert row == dict(number=3, bus=3, mva=900, xl=0.06, ra=0, xd=1.8, xdp=0.3, xdpp=0.25,
                        Tdop=8.0, Tdopp=0.03, xq=1.7, xqp=0.55, xqpp=0.25, Tqop=0.4,
                        Tqopp=0.05, H=6.175, D0=0)
-    assert m.shape == (4, 23) and np.all(m[:, 21:] == 1.0)
+    assert m.shape == (4, 24) and np.all(m[:, 21:] == 1.0)   # pfrac, qfrac, speed effects
 
 
 def test_kundur_exdc2_to_dc2_and_tgov1(kundur_tables):
@@ -91,6 +91,28 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
     np.testing.assert_allclose(p.K[0], [0, 0, 0.3, 0.7])
 
 
+def test_andes_conventions_change_only_what_andes_reads_differently():
+    pst = dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip")
+    andes_ = dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip",
+                        conventions="andes")
+    speed = MachineTable.columns().index("speed_effects")
+    assert np.all(pst.mac_con[:, speed] == 1) and np.all(andes_.mac_con[:, speed] == 0)
+    assert np.all(pst.exc_con[:, 0] == 2) and np.all(andes_.exc_con[:, 0] == 1)  # EXDC2
+    others = np.ones(pst.mac_con.shape[1], bool)
+    others[speed] = False
+    np.testing.assert_array_equal(pst.mac_con[:, others], andes_.mac_con[:, others])
+    np.testing.assert_array_equal(pst.exc_con[:, 1:], andes_.exc_con[:, 1:])
+    # IEEEG1's rate limits Uo, Uc: machine base (PSS/E) or system base (ANDES)
+    recs = read_dyr(WECC_DYR)
+    gens = [dict(g, mbase=400.0, sbase=100.0) for g in wecc_generators(recs)]
+    g_pst = GovernorTable.from_matrix(dyr_tables(recs, gens).tg_con)
+    g_andes = GovernorTable.from_matrix(dyr_tables(recs, gens, conventions="andes").tg_con)
+    assert (g_pst.Uo[0], g_pst.Uc[0]) == (1.0, -1.0)
+    assert (g_andes.Uo[0], g_andes.Uc[0]) == (0.25, -0.25)
+    with pytest.raises(CaseError, match="conventions"):
+        dyr_tables(recs, gens, conventions="psse")
+
+
 def test_unsupported_records_are_listed_with_file_and_line(tmp_path):
     with pytest.raises(CaseError) as e:
         dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators())
@@ -109,7 +131,7 @@ def test_wecc_imports_completely():
     recs = read_dyr(WECC_DYR)
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
-        (29, 23), (29, 22), (29, 24), (29, 24)) and t.unsupported == ()
+        (29, 24), (29, 22), (29, 24), (29, 24)) and t.unsupported == ()
     kinds = dict(zip(*np.unique(t.exc_con[:, 0], return_counts=True)))
     assert kinds == {2: 8, 3: 4, 4: 17}                       # ESDC2A, ESST3A, EXST1
 
@@ -210,7 +232,7 @@ def test_ids_compare_without_quotes_and_other_models_parse_leniently(tmp_path):
     recs = read_dyr(write(tmp_path, text))
     assert recs[0].id == "1" and recs[1].model == "USRMDL" and np.isnan(recs[1].params[0])
     t = dyr_tables(recs, [dict(kundur_generators()[0], id="'1'")], on_unsupported="skip")
-    assert t.mac_con.shape == (1, 23) and [r.line for r in t.unsupported] == [2]
+    assert t.mac_con.shape == (1, 24) and [r.line for r in t.unsupported] == [2]
 
 
 def test_generator_without_machine_model_is_named(tmp_path):
