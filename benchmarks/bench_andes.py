@@ -186,7 +186,8 @@ def study_scaling(files):
     print("\nstabctl 20 s run vs system size (wall s, peak MiB)")
     row("case", "buses", "machines", "wall s", "peak MiB")
     pst = [("kundur (PST)", load_case("kundur"), 3), ("miniwecc (PST)", load_case("miniwecc"), 83)]
-    ours = [(label, load_psse(raw, dyr, conventions=CONVENTIONS), bus) for label, (raw, dyr), bus in files]
+    ours = [(label, load_psse(raw, dyr, conventions=CONVENTIONS), bus)
+            for label, (raw, dyr), bus in files]
     for label, case, bus in pst + ours:
         ours_run(case, bus, 20.0)
         wall, _ = best_of(lambda: ours_run(case, bus, 20.0), 3, warm_up=False)

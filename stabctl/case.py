@@ -409,8 +409,9 @@ class MachineTable(Table):
                     speed effects; docs/pst_models.md 1.5-1.6)
     ==  ==========  ===============================================================
 
-    Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``). Validation: unique
-    positive integer machine numbers, mva > 0, H >= 0, reactances and ra >= 0.
+    Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``).
+    Validation: unique positive integer machine numbers, mva > 0, H >= 0, reactances and
+    ra >= 0, speed_effects 0 or 1.
     """
 
     number: np.ndarray

@@ -192,8 +192,8 @@ class QAxis:
         A[tra, 0, 0] = -1 / Tq[tra]
         b[tra, 0] = ((mp.xq - mp.xqp) / Tq)[tra]
         c[tra, 0] = 1.0
-        return cls(LinearSystems(A, b), c, np.where(tra, -1.0, 1.0), mp.speed_effects, mp.kind, mp.xl,
-                   mp.xq, mp.xqp, mp.xdp)
+        return cls(LinearSystems(A, b), c, np.where(tra, -1.0, 1.0), mp.speed_effects, mp.kind,
+                   mp.xl, mp.xq, mp.xqp, mp.xdp)
 
 
 

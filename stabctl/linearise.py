@@ -280,7 +280,8 @@ def _differences(kind, index, step, x0, V_nc0, p, nm, ne, nps, ng, Y11, Y12, Y21
     V_bus = np.zeros(R.shape[0], np.complex128)
     S = np.zeros(V_nc0.size, np.complex128)
     if evaluate_kernel(x0.copy(), nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc0.copy(),
-                       np.zeros(V_nc0.size, np.bool_), S, True, f0, cur, pel, qel, et, efd, pm, V0) < 0:
+                       np.zeros(V_nc0.size, np.bool_), S, True, f0, cur, pel, qel, et, efd, pm,
+                       V0) < 0:
         return -2
     for c in range(kind.size):
         j = index[c]

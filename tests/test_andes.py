@@ -65,8 +65,8 @@ def fault_speeds(files, bus, cycles, t_end, conventions="pst"):
     """Speeds (pu) of both tools on ANDES's time grid: (t, stabctl, ANDES)."""
     raw, dyr = files
     t_clear = 1.0 + cycles / 60.0
-    res = Simulator(load_psse(raw, dyr, conventions=conventions)).run([Fault(bus, 1.0, t_clear, x=1e-4)], t_end,
-                                             h=STEP)
+    sim = Simulator(load_psse(raw, dyr, conventions=conventions))
+    res = sim.run([Fault(bus, 1.0, t_clear, x=1e-4)], t_end, h=STEP)
     t, w_andes = andes_speeds(andes_system(raw, dyr, AndesFault(bus, 1.0, t_clear)), t_end,
                               STEP)
     w = np.column_stack([np.interp(t, res.t, res.speed[:, k])
