@@ -26,7 +26,7 @@ andes = pytest.importorskip("andes")
 
 from stabctl.andes_xval import (AndesFault, andes_modes, andes_speeds,  # noqa: E402
                                 andes_system, strip_dyr)
-from stabctl.events import Fault  # noqa: E402
+from stabctl.events import Fault, LineTrip  # noqa: E402
 from stabctl.linearise import linearise  # noqa: E402
 from stabctl.modal import modal_analysis  # noqa: E402
 from stabctl.psse import load_psse  # noqa: E402
@@ -97,6 +97,28 @@ def test_wecc_fault_speeds_match_andes(wecc):
     t, w, wa = fault_speeds(wecc, 1, 6, 5.0)   # PST's models, IEEEG1 rate limits
     assert np.max(np.abs(w[t <= 2.0] - wa[t <= 2.0])) < 4e-4     # measured 2.8e-4
     assert np.max(np.abs(w - wa)) < 1.5e-3                        # measured 1.03e-3
+
+
+def test_kundur_line_trip_speeds_match_andes():
+    """ANDES's own disturbance of kundur_full.dyr: its Toggle record opens Line_8 (buses 8-9,
+    one of two circuits) at 2 s; stabctl reads the same DYR (Toggle reported unsupported
+    and left out) and trips that circuit."""
+    raw, dyr = CASES / "kundur" / "kundur.raw", CASES / "kundur" / "kundur_full.dyr"
+    ss = andes_system(raw, dyr)
+    line = list(ss.Line.idx.v).index(ss.Toggle.dev.v[0])
+    a, b = int(ss.Line.bus1.v[line]), int(ss.Line.bus2.v[line])
+    assert (ss.Toggle.t.v[0], a, b) == (2.0, 8, 9)
+    t, wa = andes_speeds(ss, 10.0, STEP)
+    gaps = {}
+    for conventions in ("andes", "pst"):
+        with pytest.warns(UserWarning, match="TOGGLE"):
+            case = load_psse(raw, dyr, on_unsupported="skip", conventions=conventions)
+        res = Simulator(case).run([LineTrip(a, b, 2.0)], 10.0, h=STEP)
+        w = np.column_stack([np.interp(t, res.t, res.speed[:, k]) for k in range(4)])
+        gaps[conventions] = np.max(np.abs(w - wa))
+    assert np.max(np.abs(wa - 1)) > 5e-3                          # a real swing
+    assert gaps["andes"] < 2e-4                                   # measured 1.06e-4
+    assert gaps["pst"] < 7e-4                                     # measured 4.6e-4
 
 
 def em_modes(files, conventions="pst"):
