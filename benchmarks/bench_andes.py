@@ -40,8 +40,8 @@ from pathlib import Path
 import numpy as np
 
 from _timing import best_of
-from stabctl.andes_xval import (AndesFault, andes_modes, andes_speeds, andes_system,
-                                strip_dyr)
+from stabctl.andes_xval import (AndesFault, andes_modes, andes_separated, andes_speeds,
+                                andes_stable, andes_system, strip_dyr)
 from stabctl.case import load_case
 from stabctl.cct import LineFault, critical_clearing_time
 from stabctl.events import Fault
@@ -87,14 +87,6 @@ def row(*cells):
     print("  ".join(f"{c:>12}" if not isinstance(c, float) else f"{c:12.3f}" for c in cells))
 
 
-def andes_separated(ss) -> bool:
-    """A rotor angle more than pi from the centre of inertia (stabctl's criterion)."""
-    delta = np.asarray(ss.dae.ts.x)[:, ss.GENROU.delta.a]
-    m = np.asarray(ss.GENROU.M.v) * np.asarray(ss.GENROU.Sn.v)  # 2H * MVA
-    coi = delta @ m / m.sum()
-    return bool(np.max(np.abs(delta - coi[:, None])) > np.pi)
-
-
 def study_sim(files):
     print("\n20 s simulation, 6-cycle bus fault (wall s; verdict at 20 s)")
     row("case", "stabctl", "ANDES", "ANDES/ours", "stabctl", "ANDES")
@@ -129,17 +121,6 @@ def study_eig(files):
         row(label, ours, theirs, theirs / ours, len(em), f"{100 * diff:.2f} %")
 
 
-def andes_stable(raw, dyr, bus, clear) -> bool:
-    """ANDES run to 5 s after the fault: no rotor angle more than pi from the COI."""
-    ss = andes_system(raw, dyr, AndesFault(bus, T_FAULT, T_FAULT + clear))
-    ss.TDS.config.criteria = 0
-    try:
-        andes_speeds(ss, T_FAULT + 5.0, STEP)
-    except RuntimeError:
-        return False  # the run broke down: machines slipping poles
-    return not andes_separated(ss)
-
-
 def andes_cct(raw, dyr, bus):
     """stabctl's search (1 ms lattice, upper bound doubled from 0.1 s) over ANDES runs:
     (CCT s, runs)."""
@@ -147,7 +128,8 @@ def andes_cct(raw, dyr, bus):
 
     def stable(k):
         runs[0] += 1
-        return andes_stable(raw, dyr, bus, k * TOL)
+        fault = AndesFault(bus, T_FAULT, T_FAULT + k * TOL)
+        return andes_stable(raw, dyr, fault, T_FAULT + 5.0, STEP)
 
     lo, hi = 0, 100
     while stable(hi):

@@ -28,7 +28,7 @@ import numpy as np
 from stabctl.errors import InputError
 
 __all__ = ["AndesFault", "strip_dyr", "andes_system", "andes_powerflow", "andes_speeds",
-           "andes_modes"]
+           "andes_modes", "andes_separated", "andes_stable"]
 
 
 @dataclass(frozen=True)
@@ -133,3 +133,26 @@ def andes_modes(ss) -> np.ndarray:
     if not ss.EIG.run():
         raise RuntimeError("ANDES eigenvalue analysis failed")
     return np.asarray(ss.EIG.mu)
+
+
+def andes_separated(ss) -> bool:
+    """After a run: a GENROU rotor angle more than pi rad from the centre of inertia
+    (inertia-weighted, M = 2H MVA) at any stored time, stabctl's default criterion."""
+    delta = np.asarray(ss.dae.ts.x)[:, ss.GENROU.delta.a]
+    m = np.asarray(ss.GENROU.M.v) * np.asarray(ss.GENROU.Sn.v)
+    coi = delta @ m / m.sum()
+    return bool(np.max(np.abs(delta - coi[:, None])) > np.pi)
+
+
+def andes_stable(raw: str | Path, dyr: str | Path, fault: AndesFault, t_end: float,
+                 step: float) -> bool:
+    """ANDES's verdict on ``fault``: a run to ``t_end`` (s, fixed ``step``) without its own
+    stop criterion, stable unless a rotor angle leaves the COI by more than pi rad or the
+    run breaks down (machines slipping poles)."""
+    ss = andes_system(raw, dyr, fault)
+    ss.TDS.config.criteria = 0
+    try:
+        andes_speeds(ss, t_end, step)
+    except RuntimeError:
+        return False
+    return not andes_separated(ss)

@@ -25,7 +25,8 @@ import pytest
 andes = pytest.importorskip("andes")
 
 from stabctl.andes_xval import (AndesFault, andes_modes, andes_speeds,  # noqa: E402
-                                andes_system, strip_dyr)
+                                andes_stable, andes_system, strip_dyr)
+from stabctl.cct import LineFault, critical_clearing_time  # noqa: E402
 from stabctl.events import Fault, LineTrip  # noqa: E402
 from stabctl.linearise import linearise  # noqa: E402
 from stabctl.modal import modal_analysis  # noqa: E402
@@ -119,6 +120,19 @@ def test_kundur_line_trip_speeds_match_andes():
     assert np.max(np.abs(wa - 1)) > 5e-3                          # a real swing
     assert gaps["andes"] < 2e-4                                   # measured 1.06e-4
     assert gaps["pst"] < 7e-4                                     # measured 4.6e-4
+
+
+def test_kundur_cct_matches_andes_verdicts(kundur):
+    """stabctl's 1 ms CCT of a bolted fault at bus 7 (cleared without line loss); ANDES
+    (j1e-4 pu fault) is stable 8 ms below it and unstable 8 ms above it (ANDES's own
+    bisection: 494 ms, benchmarks/bench_andes.py)."""
+    raw, dyr = kundur
+    sim = Simulator(load_psse(raw, dyr, conventions="andes"))
+    cct = critical_clearing_time(sim, LineFault(7, None, 1.0), tol=1e-3, h=STEP).cct_s
+    assert abs(cct - 0.491) < 2e-3                                 # measured 491 ms
+    for t_clear, stable in ((cct - 0.008, True), (cct + 0.008, False)):
+        fault = AndesFault(7, 1.0, 1.0 + t_clear)
+        assert andes_stable(raw, dyr, fault, 6.0, STEP) is stable
 
 
 def em_modes(files, conventions="pst"):
