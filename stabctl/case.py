@@ -462,7 +462,8 @@ class MachineTable(Table):
 @dataclass(frozen=True, eq=False)
 class ExciterTable(Table):
     """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3),
-    plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4).
+    plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4) and
+    23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3).
 
     ==  ======  =======================================================================
     1   type    0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1
@@ -487,6 +488,11 @@ class ExciterTable(Table):
     20  VGmax   ST3: maximum inner loop feedback, pu
     21  KF      EXST1: rate feedback gain
     22  TF      EXST1: rate feedback time constant, s
+    23  dc_sat  DC1/2: saturation through (E1, SE1), (E2, SE2): 0 PST's exponential
+                SE(E) = A exp(B |E|), 1 the quadratic SE(E) E = B (E - A)^2 above A
+                (PSS/E, ANDES)
+    24  ke_given DC1/2: 0 K_E = 0 is computed so that V_R starts at 0 (PST, PSS/E);
+                1 K_E is used as given (ANDES)
     ==  ======  =======================================================================
 
     Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2); use
@@ -518,6 +524,8 @@ class ExciterTable(Table):
     VGmax: np.ndarray
     KF: np.ndarray
     TF: np.ndarray
+    dc_sat: np.ndarray
+    ke_given: np.ndarray
 
     TABLE: ClassVar[str] = "exc_con"
     MIN_COLUMNS: ClassVar[int] = 9
@@ -530,6 +538,8 @@ class ExciterTable(Table):
                       "exciter type must be 0, 1, 2, 3 or 4")
         self._unique("machine", "exciter on machine")
         self._nonnegative("TR", "TA", "TB")  # filter and lag constants
+        for name in ("dc_sat", "ke_given"):
+            self._require(np.isin(getattr(self, name), (0.0, 1.0)), name, f"{name} must be 0 or 1")
 
 
 @dataclass(frozen=True, eq=False)

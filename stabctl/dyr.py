@@ -56,7 +56,7 @@ class DyrRecord:
 class DyrTables:
     """PST matrices built from DYR records, rows in machine order, columns as the case
     tables (MachineTable, ExciterTable, PssTable, GovernorTable): mac_con (n_gen, 24),
-    exc_con (n, 22), pss_con (n, 24), tg_con (n, 24) (None when no record of that kind);
+    exc_con (n, 24), pss_con (n, 24), tg_con (n, 24) (None when no record of that kind);
     unsupported: the records skipped (`on_unsupported="skip"`), in file order."""
 
     mac_con: np.ndarray
@@ -332,22 +332,26 @@ def exp_saturation(E1, SE1, E2, SE2) -> tuple[float, float]:
 VRMAX_UNLIMITED = 999.0
 
 
-def _dc(kind, zero_vrmax_unlimited=False):
+def _dc(kind, zero_vrmax_unlimited=False, andes=False):
     def mapper(rec, gen):
         """IEEEX1 (DC1, type 1) / EXDC2, ESDC2A (DC2, type 2): TR KA TA TB TC VRMAX VRMIN KE
         TE KF TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; saturation as Asat, Bsat (E2
-        column 0); K_E = 0 is computed at initialisation (V_R0 = 0, docs 2.3)."""
+        column 0); K_E = 0 is computed at initialisation (V_R0 = 0, docs 2.3).  andes: the
+        quadratic saturation through the points and K_E as given (exc_con columns 23, 24)."""
         TR, KA, TA, TB, TC, VRMAX, VRMIN, KE, TE, KF, TF, switch, E1, SE1, E2, SE2 = rec.params
         if zero_vrmax_unlimited and VRMAX == 0:
             VRMAX = VRMAX_UNLIMITED
         if switch != 0:
             raise _Unsupported(f"Switch = {switch} is not modelled (only 0)")
+        cols = {3: TR, 4: KA, 5: TA, 6: TB, 7: TC, 8: VRMAX, 9: VRMIN, 10: KE, 11: TE, 16: KF,
+                17: TF}
+        if andes:
+            return _exc_row(gen, kind, {**cols, 12: E1, 13: SE1, 14: E2, 15: SE2, 23: 1, 24: 1})
         try:
             A, B = exp_saturation(E1, SE1, E2, SE2)
         except CaseError as exc:
             raise CaseError(f"{rec.label()}: {exc}") from None
-        return _exc_row(gen, kind, {3: TR, 4: KA, 5: TA, 6: TB, 7: TC, 8: VRMAX, 9: VRMIN,
-                                    10: KE, 11: TE, 13: A, 14: 0.0, 15: B, 16: KF, 17: TF})
+        return _exc_row(gen, kind, {**cols, 13: A, 14: 0.0, 15: B})
     return mapper
 
 
@@ -486,10 +490,21 @@ def _ieeeg1_andes(rec, gen):
     return row
 
 
-#: conventions="andes": ANDES 2.0's EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
-#: terminal voltage as PSS/E's and IEEE DC2 (its ESDC2A does scale them); its IEEEG1 rate
+def _esdc2a_andes(rec, gen):
+    """ESDC2A as ANDES 2.0 solves it: quadratic saturation, K_E as given, and its voltage
+    error taken from the bus voltage itself, not the transducer lag (``vi = vref - v -
+    WF_y``), i.e. T_R = 0."""
+    row = _dc(2, zero_vrmax_unlimited=True, andes=True)(rec, gen)
+    row[2] = 0.0                                   # exc_con column 3, TR
+    return row
+
+
+#: conventions="andes": ANDES 2.0's DC exciters (EXDC2, ESDC2A) use the quadratic
+#: saturation and keep K_E = 0; its EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
+#: terminal voltage as PSS/E's and IEEE DC2; its ESDC2A bypasses T_R; its IEEEG1 rate
 #: limits are on the system base
-_ANDES_MAPPERS = {"EXDC2": _dc(1), "IEEEG1": _ieeeg1_andes}
+_ANDES_MAPPERS = {"EXDC2": _dc(1, andes=True), "ESDC2A": _esdc2a_andes,
+                  "IEEEG1": _ieeeg1_andes}
 CONVENTIONS = ("pst", "andes")
 _WIDTH = {"machine": len(MachineTable.columns()), "exciter": len(ExciterTable.columns()),
           "pss": len(PssTable.columns()), "governor": len(GovernorTable.columns())}

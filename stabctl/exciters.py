@@ -29,14 +29,16 @@ STATE_NAMES = {SMP: ("VTR", "VAs", "Efd"), ST3: ("VTR", "VAs", "VR"),
 # columns of the packed parameter matrix used by the compiled kernels
 (E_KIND, E_MAC, E_TR, E_KA, E_TA, E_TB, E_TC, E_VRMAX, E_VRMIN, E_VIMAX, E_VIMIN, E_KJ,
  E_KPR, E_KPI, E_KI, E_XL, E_KC, E_EFDMAX, E_KG, E_VGMAX, E_TCTB, E_KE, E_TE, E_ASAT, E_BSAT,
- E_KF, E_TF, E_VREF, E_NCOL) = range(29)
+ E_KF, E_TF, E_VREF, E_SATQ, E_NCOL) = range(30)
 
 
 @dataclass(frozen=True, eq=False)
 class ExciterParams:
     """Exciter data of a case, arrays of shape (n_exc,); `mac` is the machine index.
-    DC exciters (types 1, 2): KE, TE and the saturation SE(E) = Asat exp(Bsat |E|) (0 for
-    the other types); KF, TF: rate feedback of the DC exciters and EXST1."""
+    DC exciters (types 1, 2): KE, TE and the saturation SE(E) = Asat exp(Bsat |E|), or
+    with sat_quadratic SE(E) E = Bsat (E - Asat)^2 above Asat (0 for the other types);
+    ke_given: KE used as given (else 0 means computed at initialisation); KF, TF: rate
+    feedback of the DC exciters and EXST1."""
 
     kind: np.ndarray
     mac: np.ndarray
@@ -63,6 +65,8 @@ class ExciterParams:
     Bsat: np.ndarray
     KF: np.ndarray
     TF: np.ndarray
+    sat_quadratic: np.ndarray
+    ke_given: np.ndarray
 
     @property
     def n(self) -> int:
@@ -73,7 +77,8 @@ class ExciterParams:
         cols = (self.kind, self.mac, self.TR, self.KA, self.TA, self.TB, self.TC, self.Vrmax,
                 self.Vrmin, self.VImax, self.VImin, self.KJ, self.KP.real, self.KP.imag,
                 self.KI, self.XL, self.KC, self.Efdmax, self.KG, self.VGmax, self.tc_tb,
-                self.KE, self.TE, self.Asat, self.Bsat, self.KF, self.TF, Vref)
+                self.KE, self.TE, self.Asat, self.Bsat, self.KF, self.TF, Vref,
+                self.sat_quadratic)
         return np.column_stack([np.asarray(c, float) for c in cols]).reshape(self.n, E_NCOL)
 
     @property
@@ -123,16 +128,43 @@ class ExciterParams:
 
 
 def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
-    """PST exc_dc12 saturation SE(E) = Asat exp(Bsat |E|) from exc_con columns 12-15:
-    E2 (column 14) = 0 means columns 13, 15 are Asat, Bsat themselves; otherwise PST's fit
-    through (E1, SE1), (E2, SE2) -- **QUIRK**: Bsat = ln(SE2 E2 / (SE1 E1)) / (E2 - E1),
-    Asat = SE1 exp(-Bsat E1), so SE(E1) = SE1 but SE(E2) = SE2 E2 / E1 (docs 2.3)."""
+    """(Asat, Bsat) of the DC exciters' saturation from exc_con columns 12-15.
+
+    dc_sat 0, PST exc_dc12's SE(E) = Asat exp(Bsat |E|): E2 (column 14) = 0 means columns
+    13, 15 are Asat, Bsat themselves; otherwise PST's fit through (E1, SE1), (E2, SE2) --
+    **QUIRK**: Bsat = ln(SE2 E2 / (SE1 E1)) / (E2 - E1), Asat = SE1 exp(-Bsat E1), so
+    SE(E1) = SE1 but SE(E2) = SE2 E2 / E1 (docs 2.3).  dc_sat 1, the quadratic
+    SE(E) E = Bsat (E - Asat)^2 through both points (PSS/E; ANDES `ExcQuadSat`)."""
+    A, B = _exponential_fit(e)
+    quad = e.dc_sat == 1
+    if quad.any():
+        Aq, Bq = _quadratic_fit(e.col(12), e.col(13), e.col(14), e.col(15), quad)
+        A, B = np.where(quad, Aq, A), np.where(quad, Bq, B)
+    return A, B
+
+
+def _quadratic_fit(E1, SE1, E2, SE2, rows):
+    """Asat, Bsat of SE(E) E = Bsat (E - Asat)^2 with SE(E1) = SE1, SE(E2) = SE2 (0, 0
+    where a point is 0: no saturation); CaseError when the points allow no fit."""
+    off = (E1 * SE1 * E2 * SE2 == 0) | ~rows
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.sqrt(SE1 * E1 / (SE2 * E2))
+        A = E2 - (E1 - E2) / (a - 1)
+        B = SE2 * E2 * (a - 1) ** 2 / (E1 - E2) ** 2
+    bad = np.nonzero(~off & ~np.isfinite(A + B))[0]
+    if bad.size:
+        raise CaseError(f"exc_con row {bad[0] + 1}: DC exciter saturation points (E1, SE1, E2, "
+                        "SE2) give no quadratic fit (need E1 != E2, SE1 E1 != SE2 E2, same sign)")
+    return np.where(off, 0.0, A), np.where(off, 0.0, B)
+
+
+def _exponential_fit(e):
     E1, SE1, E2, SE2 = e.col(12), e.col(13), e.col(14), e.col(15)
-    fit = E2 != 0
+    fit = (E2 != 0) & (e.dc_sat == 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         B = np.where(fit, np.log(SE2 * E2 / (SE1 * E1)) / (E2 - E1), SE2)
         A = np.where(fit, SE1 / np.exp(B * E1), SE1)
-    bad = np.nonzero((e.type == DC1) | (e.type == DC2))[0]
+    bad = np.nonzero(((e.type == DC1) | (e.type == DC2)) & (e.dc_sat == 0))[0]
     bad = bad[~np.isfinite(A[bad] + B[bad])]
     if bad.size:
         raise CaseError(f"exc_con row {bad[0] + 1}: DC exciter saturation points (E1, SE1, E2, "
@@ -173,7 +205,8 @@ def exciter_params(case: Case) -> ExciterParams:
         VGmax=e.VGmax.copy(), KE=np.where(dc, e.col(10), 0.0), TE=np.where(dc, e.col(11), 0.0),
         Asat=np.where(dc, A, 0.0), Bsat=np.where(dc, B, 0.0),
         KF=np.where(dc, e.col(16), np.where(e.type == ST1, e.KF, 0.0)),
-        TF=np.where(dc, e.col(17), np.where(e.type == ST1, e.TF, 0.0)))
+        TF=np.where(dc, e.col(17), np.where(e.type == ST1, e.TF, 0.0)),
+        sat_quadratic=dc & (e.dc_sat == 1), ke_given=dc & (e.ke_given == 1))
 
 
 @njit(cache=True)
@@ -245,12 +278,16 @@ def _check_st1_initial(p: ExciterParams, Efd, eterm):
 
 
 def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
-    """DC exciters: KE resolved (0 -> -SE(Efd0)) and V_R0 = (KE + SE(Efd0)) Efd0, checked
-    against [Vrmin, Vrmax] times 1 (DC1) or eterm (DC2, bus fed)."""
+    """DC exciters: KE resolved (0 -> -SE(Efd0) unless ke_given) and V_R0 the exciter
+    feedback at Efd0 (`dc_feedback`), checked against [Vrmin, Vrmax] times 1 (DC1) or
+    eterm (DC2, bus fed)."""
     dc = p.is_dc
-    SE = np.sign(Efd) * p.Asat * np.exp(p.Bsat * np.abs(Efd))
-    KE = np.where(dc & (p.KE == 0), -SE, p.KE)
-    VR = np.where(dc, (KE + SE) * Efd, 0.0)
+    KE, VR = p.KE.copy(), np.zeros(p.n)
+    for r in np.nonzero(dc)[0]:
+        sat = (p.Asat[r], p.Bsat[r], float(p.sat_quadratic[r]), Efd[r])
+        if KE[r] == 0 and not p.ke_given[r] and Efd[r] != 0:   # V_R starts at 0
+            KE[r] = -dc_feedback(0.0, *sat) / Efd[r]
+        VR[r] = dc_feedback(KE[r], *sat)
     mult = np.where(p.kind == DC2, eterm, 1.0)
     bad = np.nonzero(dc & ((VR > p.Vrmax * mult) | (VR < p.Vrmin * mult)))[0]
     if bad.size:
@@ -341,13 +378,23 @@ def derivatives(P, x, i, eterm, pss_out, efd, dx):
 
 
 @njit(cache=True)
+def dc_feedback(KE, Asat, Bsat, quadratic, Efd):
+    """V_FE of a DC exciter: (K_E + S_E(Efd)) Efd with S_E = sign(Efd) Asat exp(Bsat |Efd|)
+    (PST), or with quadratic > 0: K_E Efd + Bsat (Efd - Asat)^2 above Asat (PSS/E)."""
+    if quadratic > 0:
+        return KE * Efd + (Bsat * (Efd - Asat) ** 2 if Efd > Asat else 0.0)
+    SE = np.sign(Efd) * Asat * np.exp(Bsat * abs(Efd))
+    return (KE + SE) * Efd
+
+
+@njit(cache=True)
 def _dc_exciter(P, x, i, dx):
     """DC exciter field and rate feedback (PST exc_dc12 flag 2):
-    T_E dEfd/dt = V_R - (K_E + S_E(Efd)) Efd, S_E = sign(Efd) Asat exp(Bsat |Efd|);
+    T_E dEfd/dt = V_R - V_FE(Efd) (`dc_feedback`);
     T_F dR_f/dt = Efd - R_f (the feedback K_F/T_F (Efd - R_f) = s K_F/(1 + s T_F) Efd)."""
     Efd = x[3, i]
-    SE = np.sign(Efd) * P[i, E_ASAT] * np.exp(P[i, E_BSAT] * abs(Efd))
-    dx[3, i] = (x[2, i] - (P[i, E_KE] + SE) * Efd) / P[i, E_TE]
+    dx[3, i] = (x[2, i] - dc_feedback(P[i, E_KE], P[i, E_ASAT], P[i, E_BSAT], P[i, E_SATQ],
+                                      Efd)) / P[i, E_TE]
     dx[4, i] = (Efd - x[4, i]) / P[i, E_TF]
 
 

@@ -101,12 +101,21 @@ def test_andes_conventions_change_only_what_andes_reads_differently():
     others = np.ones(pst.mac_con.shape[1], bool)
     others[speed] = False
     np.testing.assert_array_equal(pst.mac_con[:, others], andes_.mac_con[:, others])
-    np.testing.assert_array_equal(pst.exc_con[:, 1:], andes_.exc_con[:, 1:])
+    # EXDC2's saturation: PST's exponential (A, B stored) or the quadratic through the
+    # points (stored as given), K_E as given (columns 23, 24)
+    np.testing.assert_array_equal(pst.exc_con[:, 1:11], andes_.exc_con[:, 1:11])
+    np.testing.assert_array_equal(pst.exc_con[:, 15:20], andes_.exc_con[:, 15:20])
+    assert np.all(pst.exc_con[:, 22:] == 0) and np.all(andes_.exc_con[:, 22:] == 1)
+    np.testing.assert_array_equal(andes_.exc_con[0, 11:15], [0, 0, 1, 1])  # E1 SE1 E2 SE2
     # IEEEG1's rate limits Uo, Uc: machine base (PSS/E) or system base (ANDES)
     recs = read_dyr(WECC_DYR)
     gens = [dict(g, mbase=400.0, sbase=100.0) for g in wecc_generators(recs)]
     g_pst = GovernorTable.from_matrix(dyr_tables(recs, gens).tg_con)
-    g_andes = GovernorTable.from_matrix(dyr_tables(recs, gens, conventions="andes").tg_con)
+    t_andes = dyr_tables(recs, gens, conventions="andes")
+    g_andes = GovernorTable.from_matrix(t_andes.tg_con)
+    e = ExciterTable.from_matrix(t_andes.exc_con)
+    dc2 = e.type == exc.DC2                                           # WECC's 8 ESDC2A
+    assert dc2.sum() == 8 and np.all(e.TR[dc2] == 0) and np.all(e.dc_sat[dc2] == 1)
     assert (g_pst.Uo[0], g_pst.Uc[0]) == (1.0, -1.0)
     assert (g_andes.Uo[0], g_andes.Uc[0]) == (0.25, -0.25)
     with pytest.raises(CaseError, match="conventions"):
@@ -131,7 +140,7 @@ def test_wecc_imports_completely():
     recs = read_dyr(WECC_DYR)
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
-        (29, 24), (29, 22), (29, 24), (29, 24)) and t.unsupported == ()
+        (29, 24), (29, 24), (29, 24), (29, 24)) and t.unsupported == ()
     kinds = dict(zip(*np.unique(t.exc_con[:, 0], return_counts=True)))
     assert kinds == {2: 8, 3: 4, 4: 17}                       # ESDC2A, ESST3A, EXST1
 
@@ -269,6 +278,29 @@ def test_dc_exciter_steady_state_vr_equals_ke_plus_se_times_efd(KE):
     dx = np.zeros_like(x)
     exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx)
     assert np.abs(dx).max() < 1e-12
+
+
+def test_quadratic_saturation_passes_both_points_and_keeps_ke():
+    """ANDES's (and PSS/E's) DC saturation SE(E) E = B (E - A)^2 through (E1, SE1),
+    (E2, SE2) (WECC bus 111's ESDC2A data); with ke_given, K_E = 0 stays 0 and
+    V_R0 = B (Efd0 - A)^2; all derivatives zero at the initial point."""
+    E1, SE1, E2, SE2 = 2.625, 0.54, 20.0, 1.0
+    row = [exc.DC2, 1, 0.02, 40.5, 0.06, 0.02, 0, 999, -2, 0, 0.5, E1, SE1, E2, SE2, 0.05, 1.0,
+           0, 0, 0, 0, 0, 1, 1]
+    p = exc.exciter_params(load_case("kundur").replace(exciters=ExciterTable.from_matrix([row])))
+    A, B = p.Asat[0], p.Bsat[0]
+    np.testing.assert_allclose([B * (E1 - A) ** 2, B * (E2 - A) ** 2], [SE1 * E1, SE2 * E2],
+                               rtol=1e-13)
+    Efd, Vt = 1.9, 1.03
+    x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
+    assert p.KE[0] == 0.0 and x[2, 0] == pytest.approx(B * (Efd - A) ** 2, rel=1e-14)
+    dx = np.zeros_like(x)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx)
+    assert np.abs(dx).max() < 1e-12
+    row[23] = 0                                      # K_E = 0 computed: V_R0 = 0
+    p = exc.exciter_params(load_case("kundur").replace(exciters=ExciterTable.from_matrix([row])))
+    x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
+    assert p.KE[0] == pytest.approx(-B * (Efd - A) ** 2 / Efd) and abs(x[2, 0]) < 1e-15
 
 
 def test_dc2_limit_scales_with_terminal_voltage():
