@@ -449,8 +449,8 @@ def _apply_commands(sa, ds, cmd_t, cmd_mode, t_now, log, stats, r):
 
 @njit(cache=True)
 def integrate(xs, V_nc, held, held_stage, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22,
-              R, p, nm, ne, nps, ng, sa, ds, cmd_t, cmd_mode, inertia, limit, stop, k0, k1, rec, P_rec,
-              stats, log):
+              R, p, nm, ne, nps, ng, sa, ds, cmd_t, cmd_mode, inertia, limit, stop, k0, k1, rec,
+              P_rec, stats, log):
     """PST's predictor-corrector from grid index k0 to k1 (see the module docstring), with
     the storage devices `sa` (stabctl.storage.StorageArrays) in state `ds` (DeviceState).
 
@@ -485,8 +485,8 @@ def integrate(xs, V_nc, held, held_stage, t, interval, h, first, pst, Y11, Y12, 
             held[:] = False
             held_stage[0] = st_
         return evaluate_kernel(xx, nm, ne, nps, ng, p, Y11[st_], Y12[st_], Y21[st_], Y22[st_],
-                               Z22[st_], R[st_], V_nc, held, S, want, dx, cur, pel, qel, et, efd, pm,
-                               V_bus)
+                               Z22[st_], R[st_], V_nc, held, S, want, dx, cur, pel, qel, et,
+                               efd, pm, V_bus)
 
     for k in range(k0, min(k1, n - 1)):
         s = interval[k]
