@@ -35,6 +35,17 @@ def wecc_generators(records):
             for i, (b, d) in enumerate(keys)]
 
 
+def andes_initialised(folder):
+    """ANDES's own case <folder>.raw + <folder>_full.dyr, power flow solved, dynamics
+    initialised."""
+    cases = CASES / folder
+    ss = andes.load(str(cases / f"{folder}.raw"), addfile=str(cases / f"{folder}_full.dyr"),
+                    setup=True, no_output=True, default_config=True)
+    ss.PFlow.run()
+    ss.TDS.init()
+    return ss
+
+
 def write(tmp_path, text, name="t.dyr"):
     p = tmp_path / name
     p.write_text(text)
@@ -646,11 +657,7 @@ def test_initial_point_matches_andes_kundur_full():
     its bus voltages and generator powers, stabctl's mapping and initialisation give the
     same rotor angles, field voltages (GENROU vf0), mechanical powers (tm0, TGOV1 pref0)
     and EXDC2 voltage references (vref0)."""
-    cases = CASES / "kundur"
-    ss = andes.load(str(cases / "kundur.raw"), addfile=str(cases / "kundur_full.dyr"),
-                    setup=True, no_output=True, default_config=True)
-    ss.PFlow.run()
-    ss.TDS.init()
+    ss = andes_initialised("kundur")
     g = ss.GENROU
     rows = [ss.Bus.idx.v.index(b) for b in g.bus.v]
     t = dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip")
@@ -692,11 +699,7 @@ def test_exst1_and_ieeeg1_initialisation_match_andes_wecc():
     """ANDES reference (wecc.raw + wecc_full.dyr, solved and initialised by ANDES): from
     ANDES's field voltages, terminal voltages and mechanical powers, stabctl's EXST1 gives
     ANDES's vref0 and IEEEG1 its pref0 (machine base here, system base in ANDES)."""
-    cases = CASES / "wecc"
-    ss = andes.load(str(cases / "wecc.raw"), addfile=str(cases / "wecc_full.dyr"),
-                    setup=True, no_output=True, default_config=True)
-    ss.PFlow.run()
-    ss.TDS.init()
+    ss = andes_initialised("wecc")
     g = ss.GENROU
     gens = [dict(number=i + 1, bus=int(b), id="1", mbase=float(sn), ra=0.0, xsource=0.2)
             for i, (b, sn) in enumerate(zip(g.bus.v, g.Sn.v))]
