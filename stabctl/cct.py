@@ -20,6 +20,13 @@ clearing instant.  The bisection probes only clearing times k*tol (k integer), s
 are reproducible to the last digit and the final bracket is one lattice cell, exactly tol
 wide.  A tol far below h resolves the discretised model, not the physics.
 
+Numerical error bar: once bracketed at step h, the two ends of the bracket are run again
+at h/2; where a verdict changes, the search continues at h/2 (expanding away from the
+changed end, then bisecting) to the CCT at h/2.  `numerical_error_s` = |CCT(h/2) -
+CCT(h)|, resolved to tol (0: halving the step moves the CCT by less than tol).  Under the
+ieee conventions the default step keeps it below tol on the paper's faults
+(docs/conventions.md); under pstess it is the step artefact of PSTess's limiter.
+
 Sweeps of many faults or ratings (`cct_jobs`, `cct_job`) run through `stabctl.sweep`.
 """
 
@@ -35,11 +42,11 @@ from typing import Callable
 
 import numpy as np
 
-from .errors import InputError, SimulationError
+from .errors import InputError, NumericalInstabilityError, SimulationError
 from .events import Fault, LineTrip
 from .network import circuit_row
 from .results import SimulationResult
-from .simulation import Simulator, default_step
+from .simulation import Simulator
 
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
 #: to the limit), the limit, tolerance, and the run length after the fault.
@@ -92,7 +99,8 @@ class CCTResult:
     bound checks and expansion.  probes: every (clearing time s, stable) simulated, in
     order.  separated: machines that lose synchronism when cleared at t_unstable (empty if
     the criterion failed without separation).  step_s: integration step h; wall_time_s:
-    the whole search.
+    the whole search.  cct_half_step_s: the CCT at h/2 (module docstring; None when the
+    check was not asked for), half_step_probes: its runs; conventions: the model's.
     """
 
     fault: LineFault
@@ -107,6 +115,16 @@ class CCTResult:
     criterion: str
     probes: tuple[tuple[float, bool], ...] = field(repr=False)
     separated: tuple[int, ...] = ()
+    cct_half_step_s: float | None = None
+    half_step_probes: tuple[tuple[float, bool], ...] = field(default=(), repr=False)
+    conventions: str = "ieee"
+
+    @property
+    def numerical_error_s(self) -> float | None:
+        """|CCT(h/2) - CCT(h)| (s), resolved to tol_s; None without the check."""
+        if self.cct_half_step_s is None:
+            return None
+        return round(abs(self.cct_half_step_s - self.t_stable), 12)
 
     @property
     def cct_s(self) -> float:
@@ -126,13 +144,16 @@ class CCTResult:
     def to_dict(self) -> dict:
         """JSON-ready summary (times in s, cycles of the case frequency)."""
         return {"fault": asdict(self.fault), "cct_s": self.cct_s, "cct_cycles": self.cct_cycles,
+                "numerical_error_s": self.numerical_error_s,
+                "cct_half_step_s": self.cct_half_step_s, "conventions": self.conventions,
                 "t_stable_s": self.t_stable, "t_unstable_s": self.t_unstable,
                 "t_unstable_cycles": self.t_unstable * self.freq_hz,
                 "search_bracket_s": list(self.search_bracket), "tol_s": self.tol_s,
                 "step_s": self.step_s, "n_simulations": self.n_simulations,
                 "wall_time_s": self.wall_time_s, "criterion": self.criterion,
                 "separated_machines": list(self.separated),
-                "probes": [[t, ok] for t, ok in self.probes]}
+                "probes": [[t, ok] for t, ok in self.probes],
+                "half_step_probes": [[t, ok] for t, ok in self.half_step_probes]}
 
 
 def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL,
@@ -142,7 +163,7 @@ def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL
                            separation_limit: float = np.pi,
                            criterion: Callable[[SimulationResult], bool] | None = None,
                            stop_at_separation: bool | None = None,
-                           storage=None) -> CCTResult:
+                           storage=None, error_check: bool = True) -> CCTResult:
     """CCT of `fault` on `sim`'s case by bisection on the clearing time (see module doc).
 
     Args:
@@ -154,36 +175,41 @@ def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL
             while it is still stable.
         t_max: largest clearing time tried (s).
         t_end: run end (s, absolute; default t_fault + 5 s; must exceed t_fault + t_max).
-        h: integration step (s, default the case's); separation_limit: rad from the COI.
+        h: integration step (s, default `sim.default_h`); separation_limit: rad from the
+            COI.
         criterion: callable(result) -> True if stable; default `no_separation`.
         stop_at_separation: stop runs at separation; default True for the default
             criterion, False for a custom one (which then sees whole trajectories).
         storage: passed untouched to `Simulator.run` (a `stabctl.storage.StorageFleet`).
+        error_check: also search the CCT at h/2 from the final bracket
+            (`CCTResult.numerical_error_s`, module docstring).
 
-    A run that diverges after a machine has already separated counts as unstable; any
-    other divergence is raised.
+    A run whose network has no solution after a machine has separated or after the fault
+    is cleared counts as unstable (voltage collapse); a numerically unstable run
+    (NumericalInstabilityError) is never a verdict: it is raised.
 
     Raises:
         InputError: bad settings; unstable at t_lo (also at zero clearing); still stable
             at t_max (the CCT is above it).
-        UnknownBusError, CaseError: no such bus or line; SimulationError: divergence.
+        UnknownBusError, CaseError: no such bus or line; NumericalInstabilityError: the
+            step is too large; SimulationError: the network fails while the fault is on.
     """
     t_end = fault.t_fault + T_AFTER_FAULT if t_end is None else t_end
     t_hi = min(T_HI, t_max) if t_hi is None else t_hi
     _check_settings(fault, tol, t_lo, t_hi, t_max, t_end)
     _check_trips(sim.case, fault)
-    h = default_step(sim.case) if h is None else h
+    h = sim.default_h if h is None else h
     crit = no_separation if criterion is None else criterion
     stop = criterion is None if stop_at_separation is None else stop_at_separation
     extra = {} if storage is None else {"storage": storage}
-    probes, separated = [], {}
+    probes, separated = {h: [], h / 2: []}, {}
 
-    def stable_at(k: int) -> bool:
+    def stable_at(k: int, step: float = h) -> bool:
         t_clear = _lattice(k, tol)
-        res, diverged = _run(sim, fault, t_clear, t_end, h, separation_limit, stop, extra)
+        res, diverged = _run(sim, fault, t_clear, t_end, step, separation_limit, stop, extra)
         ok = not diverged and bool(crit(res))
-        probes.append((t_clear, ok))
-        if not ok:
+        probes[step].append((t_clear, ok))
+        if not ok and step == h:
             separated[k] = tuple(int(m) for m in res.separated)
         return ok
 
@@ -191,14 +217,50 @@ def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL
     k_lo, k_hi, k_max = _lattice_bounds(tol, t_lo, t_hi, t_max)
     k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
     start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
+    k_lo, k_hi = _bisect(stable_at, k_lo, k_hi)
+    half = None
+    if error_check:
+        half = _lattice(_half_step_cct(lambda k: stable_at(k, h / 2), k_lo, k_hi, k_max), tol)
+    return CCTResult(fault=fault, t_stable=_lattice(k_lo, tol), t_unstable=_lattice(k_hi, tol),
+                     search_bracket=start, tol_s=tol, step_s=h, freq_hz=sim.case.freq_hz,
+                     n_simulations=len(probes[h]) + len(probes[h / 2]),
+                     wall_time_s=time.perf_counter() - wall,
+                     criterion=getattr(crit, "__name__", repr(crit)), probes=tuple(probes[h]),
+                     separated=separated.get(k_hi, ()), cct_half_step_s=half,
+                     half_step_probes=tuple(probes[h / 2]), conventions=sim.conventions)
+
+
+def _bisect(stable_at, k_lo: int, k_hi: int) -> tuple[int, int]:
+    """Bisect a (stable, unstable) lattice bracket down to adjacent cells."""
     while k_hi - k_lo > 1:
         mid = (k_lo + k_hi) // 2
         k_lo, k_hi = (mid, k_hi) if stable_at(mid) else (k_lo, mid)
-    return CCTResult(fault=fault, t_stable=_lattice(k_lo, tol), t_unstable=_lattice(k_hi, tol),
-                     search_bracket=start, tol_s=tol, step_s=h, freq_hz=sim.case.freq_hz,
-                     n_simulations=len(probes), wall_time_s=time.perf_counter() - wall,
-                     criterion=getattr(crit, "__name__", repr(crit)), probes=tuple(probes),
-                     separated=separated.get(k_hi, ()))
+    return k_lo, k_hi
+
+
+def _half_step_cct(stable_half, k_lo: int, k_hi: int, k_max: int) -> int:
+    """Lattice index of the CCT at half the step, from the bracket (k_lo, k_hi = k_lo + 1)
+    found at the full step: both ends rerun; an end whose verdict changed is pushed away
+    (distance doubled each time, within [0, k_max]) until the verdict is restored, then
+    the new bracket is bisected.  An end pushed to the limit of the range is returned as
+    is (the CCT at h/2 lies beyond it)."""
+    if not stable_half(k_lo):
+        step, k_hi = 1, k_lo
+        while k_lo > 0:
+            k_hi, k_lo = k_lo, max(k_lo - step, 0)
+            step *= 2
+            if stable_half(k_lo):
+                return _bisect(stable_half, k_lo, k_hi)[0]
+        return 0
+    if stable_half(k_hi):
+        step, k_lo = 1, k_hi
+        while k_hi < k_max:
+            k_lo, k_hi = k_hi, min(k_hi + step, k_max)
+            step *= 2
+            if not stable_half(k_hi):
+                return _bisect(stable_half, k_lo, k_hi)[0]
+        return k_max
+    return k_lo
 
 
 def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
@@ -267,6 +329,9 @@ def _run(sim, fault: LineFault, t_clear, t_end, h, limit, stop, extra):
     try:
         return sim.run(fault.events(t_clear), t_end, h=h, separation_limit=limit,
                        stop_at_separation=stop, **extra), False
+    except NumericalInstabilityError as exc:
+        raise NumericalInstabilityError(f"{fault.describe()}, cleared after {t_clear:g} s: "
+                                        f"{exc}", result=exc.result) from exc
     except SimulationError as exc:
         res = exc.result
         t = getattr(res, "t", None)

@@ -92,19 +92,36 @@ class Layout:
         return x[sl].reshape(shape)
 
 
+#: Model conventions: "ieee" (default; limiters as IEEE Std 421.5-2016, results converge
+#: as the step shrinks) and "pstess" (PSTess 1.1 bit for bit, quirks included).
+CONVENTIONS = ("ieee", "pstess")
+
+
+def check_conventions(conventions: str) -> str:
+    """Return `conventions` if it is one of CONVENTIONS, else raise InputError."""
+    if conventions not in CONVENTIONS:
+        raise InputError(f"conventions must be one of {', '.join(CONVENTIONS)}, "
+                         f"got {conventions!r}")
+    return conventions
+
+
 class DynamicModel:
     """Dynamic model of a case at an operating point.
 
     Args:
         case: the case; op: its solved power flow; injection_buses: extra bus numbers to
-            keep in the reduced network for device injections (storage).
+            keep in the reduced network for device injections (storage); conventions:
+            "ieee" (limiters as IEEE Std 421.5-2016) or "pstess" (PSTess 1.1 exactly,
+            docs/pst_models.md 2.1); docs/conventions.md lists the differences.
     Raises:
         CaseError: unsupported models, limits violated at the initial point, a machine bus
-            without generation.
+            without generation; InputError: unknown conventions.
     """
 
-    def __init__(self, case: Case, op: OperatingPoint, injection_buses=()):
+    def __init__(self, case: Case, op: OperatingPoint, injection_buses=(),
+                 conventions: str = "ieee"):
         self.case, self.op = case, op
+        self.conventions = check_conventions(conventions)
         self.mp = mac.machine_params(case)
         self.ep = exc.exciter_params(case)
         self.pp = pss_.pss_params(case)
@@ -217,7 +234,7 @@ class DynamicModel:
             exc_rows=L.exc_rows, pss_rows=L.pss_rows, tg_rows=L.tg_rows,
             mac_bus=mp.bus_idx.astype(np.int64), vex0=self.vex0, pmech0=self.pmech0,
             S_P=self.nc.S_P.astype(complex), I0=self.nc.I0.astype(complex),
-            Y_low=self.nc.Y_low.astype(complex))
+            Y_low=self.nc.Y_low.astype(complex), ieee=self.conventions == "ieee")
         dx, _ = self.evaluate(self.x0.copy(), self.network(StageConfig()), self.V_nc0)
         k = int(np.argmax(np.abs(dx)))
         #: largest |derivative| at t = 0 and the state it belongs to (initialisation check)
@@ -289,6 +306,7 @@ class KernelParams(NamedTuple):
     S_P: np.ndarray
     I0: np.ndarray
     Y_low: np.ndarray
+    ieee: bool
 
 
 @njit(cache=True)
@@ -342,7 +360,7 @@ def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, hel
                                         eq * cq + ed * cd, eq * cd - ed * cq, p.MP[m, mac.K_POT],
                                         mac.st3_field_current(p.MP, xm, cur, m), False)
         ifd = mac.field_current(p.MP, xm, cur, m) if p.EP[i, exc.E_KIND] == exc.ST1 else 0.0
-        efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB, ifd)
+        efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB, ifd, p.ieee)
         vex[m] = efd_alg[i]
     pmech[:] = p.pmech0
     for k in range(ng):
@@ -352,7 +370,7 @@ def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, hel
     efd[:] = p.vex0
     for i in range(ne):
         m = int(p.EP[i, exc.E_MAC])
-        exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], dxe)
+        exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], dxe, p.ieee)
         efd[m] = exc.recorded_efd(p.EP, xe, i, efd_alg[i])
     for k in range(ng):
         gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G_MAC])], dxg)

@@ -34,3 +34,9 @@ class SimulationError(StabctlError, RuntimeError):
     def __init__(self, message, result=None):
         super().__init__(message)
         self.result = result
+
+
+class NumericalInstabilityError(SimulationError):
+    """The integration left its stability region (a state alternating from step to step,
+    a speed far outside any physical range, a non-finite state): a numerical failure, never
+    a stability verdict.  Names the time and the state; carries the partial result."""

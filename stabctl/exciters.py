@@ -299,24 +299,27 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
 
 
 @njit(cache=True)
-def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """Field voltage exciter i hands its machine (PST flag 1); VTR_alg: terminal voltage,
-    VB: ST3 source voltage, ifd: machine field current (EXST1).
+    VB: ST3 source voltage, ifd: machine field current (EXST1); ieee: the IEEE 421.5
+    convention (limited states are read clipped to their limits).
 
-    smpexc: the Efd state (unclamped) when T_A exists, else K_A times the (lead-lag of the)
-    error, without limits; exc_dc12: the Efd state; exc_st3: min(V_R V_B, Efdmax); EXST1:
-    V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd].
+    smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
+    ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error, without
+    limits; exc_dc12: the Efd state; exc_st3: min(V_R V_B, Efdmax) (ieee: V_R clipped);
+    EXST1: V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd].
     """
     kind = P[i, E_KIND]
     if kind == ST3:
-        return min(x[2, i] * VB, P[i, E_EFDMAX])
+        VR = min(max(x[2, i], P[i, E_VRMIN]), P[i, E_VRMAX]) if ieee else x[2, i]
+        return min(VR * VB, P[i, E_EFDMAX])
     if kind == ST1:
         hi = VTR_alg * P[i, E_VRMAX] - P[i, E_KC] * ifd
         return min(max(x[2, i], VTR_alg * P[i, E_VRMIN]), hi)
     if kind == DC1 or kind == DC2:
         return x[3, i]
     if P[i, E_TA] >= LBND:
-        return x[2, i]
+        return min(max(x[2, i], P[i, E_VRMIN]), P[i, E_VRMAX]) if ieee else x[2, i]
     VTR = x[0, i] if P[i, E_TR] >= LBND else VTR_alg
     err = P[i, E_VREF] - VTR + pss_out
     VA = P[i, E_TCTB] * err + (1 - P[i, E_TCTB]) * x[1, i] if P[i, E_TB] >= LBND else err
@@ -324,22 +327,28 @@ def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd):
 
 
 @njit(cache=True)
-def _nonwindup(x, dx, r, i, d, lo, hi):
-    """Non-windup limited lag (PST exc_st3, exc_dc12): zero an outward derivative beyond a
-    limit, then clamp the state."""
-    if (x[r, i] > hi and d > 0) or (x[r, i] < lo and d < 0):
+def _nonwindup(x, dx, r, i, d, lo, hi, ieee):
+    """Non-windup limited lag: zero an outward derivative beyond a limit (PST exc_st3,
+    exc_dc12; ieee: at or beyond it, IEEE Std 421.5-2016 annex E.5, so that a state held
+    at its limit stays there), then clamp the state."""
+    if ieee:
+        if (x[r, i] >= hi and d > 0) or (x[r, i] <= lo and d < 0):
+            d = 0.0
+    elif (x[r, i] > hi and d > 0) or (x[r, i] < lo and d < 0):
         d = 0.0
     dx[r, i] = d
     x[r, i] = min(max(x[r, i], lo), hi)
 
 
 @njit(cache=True)
-def derivatives(P, x, i, eterm, pss_out, efd, dx):
+def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee):
     """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
 
-    smpexc: the Efd state is clamped to [Vrmin, Vrmax] after its derivative is computed and
-    the derivative is kept (PST's misspelt dEFD, docs/pst_models.md 2.1).  exc_st3 and
-    exc_dc12: V_R is clamped and its derivative zeroed when it pushes outward.
+    smpexc: PSTess clamps the Efd state to [Vrmin, Vrmax] after its derivative is computed
+    and keeps the derivative (PST's misspelt dEFD, docs/pst_models.md 2.1); ieee: a
+    non-windup limit as IEEE Std 421.5-2016 (SEXS/ST1A lag), the derivative zeroed while
+    at the limit and driven outward.  exc_st3 and exc_dc12: V_R is clamped and its
+    derivative zeroed when it pushes outward (`_nonwindup`).
     """
     dx[:, i] = 0.0
     has_TR, has_TB = P[i, E_TR] >= LBND, P[i, E_TB] >= LBND
@@ -361,7 +370,9 @@ def derivatives(P, x, i, eterm, pss_out, efd, dx):
     VA = P[i, E_TCTB] * u + (1 - P[i, E_TCTB]) * x[1, i] if has_TB else u
     lo, hi = P[i, E_VRMIN], P[i, E_VRMAX]
     if smp:
-        if P[i, E_TA] >= LBND:
+        if P[i, E_TA] >= LBND and ieee:
+            _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo, hi, ieee)
+        elif P[i, E_TA] >= LBND:
             dx[2, i] = (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA]
             x[2, i] = min(max(x[2, i], lo), hi)
         else:
@@ -370,11 +381,12 @@ def derivatives(P, x, i, eterm, pss_out, efd, dx):
         dx[2, i] = (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA]
     elif dc:
         mult = eterm if kind == DC2 else 1.0
-        _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo * mult, hi * mult)
+        _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo * mult, hi * mult,
+                   ieee)
         _dc_exciter(P, x, i, dx)
     else:
         d = (P[i, E_KA] * (VA - min(P[i, E_VGMAX], P[i, E_KG] * efd)) - x[2, i]) / P[i, E_TA]
-        _nonwindup(x, dx, 2, i, d, lo, hi)
+        _nonwindup(x, dx, 2, i, d, lo, hi, ieee)
 
 
 @njit(cache=True)

@@ -2,20 +2,26 @@
 
 Integrator (PSTess 1.1 `s_simu.m`, docs/pst_models.md 7): explicit Heun (modified Euler),
 each state advanced by x_j = x_k + h/2 (f(x_k) + f(x_k + h f(x_k))) with the network solved
-at both stages.  Event times are grid points: each interval between events is divided into
-fix(length/h) equal steps, so the run restarts exactly at every event.  Two semantics:
+at both stages.  Event times are grid points, so the run restarts exactly at every event.
+The model conventions (`stabctl.dynamic.CONVENTIONS`, docs/conventions.md) also set the
+grid and the event semantics:
 
-- ``"pst"`` (default): PSTess's own, so that trajectories match PSTess; the corrector of the
-  step ending at an event already uses the post-event network, and the first step of each
-  interval after the first is evaluated once more before it is taken (its limiter clamps
-  persist), as PSTess does.
-- ``"exact"``: each step uses the network of the interval it lies in.
+- ``"ieee"`` (default): each interval between events gets ceil(length/h) equal steps (never
+  longer than h) and each step uses the network of the interval it lies in ("exact"
+  semantics); limiters as IEEE Std 421.5-2016.
+- ``"pstess"``: PSTess's own, so that trajectories match PSTess bit for bit: fix(length/h)
+  steps per interval, the corrector of the step ending at an event already uses the
+  post-event network, and the first step of each interval after the first is evaluated
+  once more before it is taken (its limiter clamps persist) ("pst" semantics).
 
 Loss of synchronism: a machine's angle leaves the centre of inertia (eq. 40, weights H*MVA)
 by more than `separation_limit` rad; the separated machines are the smaller coherent group
-(`separated_group`); the run can stop there.  A run that produces
-non-finite values or meets a singular network raises SimulationError carrying the
-trajectory up to that point.
+(`separated_group`); the run can stop there.  Numerical health is checked after every step
+(`integrate`): a non-finite state, a speed outside [1 - SPEED_BAND, 1 + SPEED_BAND] pu or a
+state that alternates in sign from step to step (the signature of an explicit method beyond
+its stability region) stops the run with a NumericalInstabilityError naming the time and
+the state, so that a loss of synchronism is only ever judged on a numerically healthy run.
+A singular network raises SimulationError; both carry the trajectory up to that point.
 """
 
 from __future__ import annotations
@@ -30,8 +36,8 @@ from numba import njit
 from . import events as ev_
 from .case import Case
 from . import storage as st
-from .dynamic import DynamicModel, OperatingPoint, evaluate_kernel
-from .errors import InputError, SimulationError
+from .dynamic import DynamicModel, OperatingPoint, check_conventions, evaluate_kernel
+from .errors import InputError, NumericalInstabilityError, SimulationError
 from .results import SimulationResult
 
 
@@ -47,19 +53,21 @@ class TimeGrid:
     starts: np.ndarray
 
 
-def time_grid(starts, t_end: float, h: float) -> TimeGrid:
-    """PST's grid: intervals between consecutive start times (the first 0, non-decreasing,
-    all below t_end), fix(length/h) steps each, at least one (so a zero-length interval
-    gets one step of h = 0 and its start time appears twice, as in PSTess).
+def time_grid(starts, t_end: float, h: float, pstess: bool = False) -> TimeGrid:
+    """The grid: intervals between consecutive start times (the first 0, non-decreasing,
+    all below t_end), each divided into equal steps, at least one (so a zero-length
+    interval gets one step of h = 0 and its start time appears twice, as in PSTess).
+    pstess: fix(length/h) steps (PSTess, steps in [h, 2h)); else ceil(length/h) (steps at
+    most h; a length within 1e-9 of a multiple of h takes that multiple).
 
-    Raises InputError for a non-positive step or end time.
+    Raises InputError for a non-positive or non-finite step or end time.
     """
-    if not (h > 0 and t_end > 0):
+    if not (0 < h < np.inf and 0 < t_end < np.inf):
         raise InputError(f"need a positive step and end time, got h={h}, t_end={t_end}")
     pts = [float(x) for x in starts] + [float(t_end)]
     ts, ids, hs = [], [], []
     for s, (a, b) in enumerate(zip(pts[:-1], pts[1:])):
-        n = max(1, int(np.trunc((b - a) / h)))
+        n = max(1, int(np.trunc((b - a) / h) if pstess else np.ceil((b - a) / h - 1e-9)))
         hs.append((b - a) / n)
         ts.append(a + hs[-1] * np.arange(n))
         ids.append(np.full(n, s))
@@ -68,12 +76,22 @@ def time_grid(starts, t_end: float, h: float) -> TimeGrid:
     return TimeGrid(t=t, interval=interval, h=np.array(hs), starts=np.array(pts[:-1]))
 
 
-def default_step(case: Case) -> float:
-    """The data file's own step (sw_con row 1, col 7), else 1/120 s (half a 60 Hz cycle)."""
+#: ieee default step: at most this fraction of the fastest time constant (`default_step`).
+STEP_PER_TIME_CONSTANT = 0.5
+
+
+def default_step(case: Case, conventions: str = "ieee") -> float:
+    """Default integration step (s).  pstess: the data file's own step (sw_con row 1, col
+    7), else 1/120 s (half a 60 Hz cycle), as PSTess.  ieee: the same, capped at
+    STEP_PER_TIME_CONSTANT times the case's fastest time constant, the largest step whose
+    CCTs agree with a converged (step-halved) run within the 1 ms CCT tolerance on the
+    paper's faults (docs/conventions.md, convergence table)."""
     sw = case.sw_con
-    if sw is not None and sw[0, 6] > 0:
-        return float(sw[0, 6])
-    return 0.5 / case.freq_hz
+    h = float(sw[0, 6]) if sw is not None and sw[0, 6] > 0 else 0.5 / case.freq_hz
+    if check_conventions(conventions) == "pstess":
+        return h
+    T, _ = fastest_time_constant(case)
+    return min(h, STEP_PER_TIME_CONSTANT * T)
 
 
 _BLAS_LIMITED = False
@@ -95,10 +113,13 @@ def single_threaded_blas() -> None:
         _BLAS_LIMITED = True
 
 
-def fastest_time_constant(model: DynamicModel) -> tuple[float, str]:
-    """Smallest time constant among the states of the model (s) and where it is."""
+def fastest_time_constant(case: Case) -> tuple[float, str]:
+    """Smallest time constant among the states of the case's models (s) and where it is
+    (table, field, row).  Raises CaseError for models stabctl does not have."""
+    from . import exciters, governors, machines, pss
     cands = []
-    mp, ep, pp, gp = model.mp, model.ep, model.pp, model.gp
+    mp, ep = machines.machine_params(case), exciters.exciter_params(case)
+    pp, gp = pss.pss_params(case), governors.governor_params(case)
     for name, arr, sel in (
             ("mac_con T\"do", mp.Tdopp, mp.kind == 2), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2),
             *pp.time_constants(), *ep.time_constants(), *gp.time_constants()):
@@ -108,10 +129,13 @@ def fastest_time_constant(model: DynamicModel) -> tuple[float, str]:
     return min(cands) if cands else (np.inf, "")
 
 
-def check_step(model: DynamicModel, h: float) -> None:
-    """Raise InputError when h exceeds twice the fastest time constant: the explicit
-    predictor-corrector is unstable there (its stability interval is h/T < 2)."""
-    T, where = fastest_time_constant(model)
+def check_step(fastest: tuple[float, str], h: float) -> None:
+    """Raise InputError when h is not a positive finite step or exceeds twice the fastest
+    time constant (`fastest_time_constant`): the explicit predictor-corrector is unstable
+    there (its stability interval is h/T < 2)."""
+    T, where = fastest
+    if not 0 < h < np.inf:
+        raise InputError(f"step must be a positive number of seconds, got {h}")
     if h >= 2 * T:
         raise InputError(f"step {h} s is too large: the fastest time constant is {T} s "
                          f"({where}); the predictor-corrector needs h < {2 * T} s")
@@ -122,15 +146,25 @@ class Simulator:
 
     Args:
         case: the case; op: its operating point (default: solved by `stabctl.powerflow`);
-        injection_buses: buses kept for device injections (storage).
+        injection_buses: buses kept for device injections (storage); conventions: "ieee"
+        (default) or "pstess" (module docstring, docs/conventions.md).
+    Attributes:
+        default_h: the default step of this case and conventions (s, `default_step`).
+    Raises:
+        InputError: unknown conventions; CaseError, PowerFlowError: as the case's models
+        and power flow.
     """
 
-    def __init__(self, case: Case, op: OperatingPoint | None = None, injection_buses=()):
+    def __init__(self, case: Case, op: OperatingPoint | None = None, injection_buses=(),
+                 conventions: str = "ieee"):
+        self.conventions = check_conventions(conventions)
         if op is None:
             from .powerflow import solve_powerflow
             op = OperatingPoint.from_bus_matrix(solve_powerflow(case).bus_matrix())
         single_threaded_blas()
         self.case, self.op = case, op
+        self.fastest = fastest_time_constant(case)
+        self.default_h = default_step(case, conventions)
         self._models: dict[frozenset, DynamicModel] = {}
         self.model = self.model_for(injection_buses)
         self.inertia = self.model.mp.H * case.machines.mva
@@ -140,20 +174,26 @@ class Simulator:
         storage devices need their buses kept."""
         key = frozenset(int(b) for b in buses)
         if key not in self._models:
-            self._models[key] = DynamicModel(self.case, self.op, sorted(key))
+            self._models[key] = DynamicModel(self.case, self.op, sorted(key), self.conventions)
         return self._models[key]
 
     def run(self, events=(), t_end: float = 5.0, h: float | None = None,
-            semantics: str = "pst", separation_limit: float = np.pi,
+            semantics: str | None = None, separation_limit: float = np.pi,
             stop_at_separation: bool = False, storage=None) -> SimulationResult:
-        """Simulate `events` (see `stabctl.events`) from t = 0 to t_end (s) with step h.
+        """Simulate `events` (see `stabctl.events`) from t = 0 to t_end (s) with step h
+        (default `default_h`).
 
+        semantics: "pst" or "exact" event semantics (module docstring; default: "pst"
+        under the pstess conventions, "exact" under ieee).
         storage: a `stabctl.storage.StorageFleet` (devices and controller) or None.
 
         Raises:
             InputError, UnknownBusError, CaseError: bad events or step;
-            SimulationError: divergence (carries the partial result as `.result`).
+            NumericalInstabilityError: the run left the integrator's stability region;
+            SimulationError: a singular network or non-convergent loads (both carry the
+            partial result as `.result`).
         """
+        semantics = self._semantics(semantics)
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
         run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
                    stop_at_separation)
@@ -167,16 +207,22 @@ class Simulator:
             raise InputError(f"semantics must be 'pst' or 'exact', got {semantics!r}")
         events = list(events)
         ev_.validate(self.case, events, t_end)
-        h = default_step(self.case) if h is None else h
+        h = self.default_h if h is None else h
         m = self.model_for(storage.buses if storage is not None else ())
         sa = st.pack(storage, self.case, m.nc_idx)
-        check_step(m, h)
+        check_step(self.fastest, h)
         starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
-        grid = time_grid(starts, t_end, h)
+        grid = time_grid(starts, t_end, h, self.conventions == "pstess")
         return m, sa, grid, [m.network(c) for c in configs]
 
+    def _semantics(self, semantics: str | None) -> str:
+        if semantics is None:
+            return "pst" if self.conventions == "pstess" else "exact"
+        return semantics
+
     def run_commanded(self, events, t_end: float, storage, frame_times, decide,
-                      latency: float = 0.0, h: float | None = None, semantics: str = "pst",
+                      latency: float = 0.0, h: float | None = None,
+                      semantics: str | None = None,
                       separation_limit: float = np.pi,
                       stop_at_separation: bool = False) -> SimulationResult:
         """Simulate with storage devices commanded from measurements (estimator in the loop).
@@ -200,6 +246,7 @@ class Simulator:
         frame_times = np.asarray(frame_times, float)
         if np.any(np.diff(frame_times) <= 0) or latency < 0:
             raise InputError("frame times must increase and the latency must be >= 0")
+        semantics = self._semantics(semantics)
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
         run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
                    stop_at_separation, n_commands=frame_times.size)
@@ -228,7 +275,7 @@ class Simulator:
             speed=rec.speed[:n], angle=angle, pelect=rec.pelect[:n], pmech=rec.pmech[:n],
             efd=rec.efd[:n], vmag=np.abs(rec.V[:n]), vang=np.angle(rec.V[:n]),
             inertia=self.inertia, stable=t_sep is None, t_separation=t_sep, separated=separated,
-            meta={"case": c.name, "wall_time_s": wall,
+            meta={"case": c.name, "conventions": self.conventions, "wall_time_s": wall,
                   "max_initial_derivative": self.model.initial_residual[0],
                   "max_initial_derivative_state": self.model.initial_residual[1]})
 
@@ -246,6 +293,7 @@ class _Run:
         self.P_rec, self.stats = np.zeros((N, nd)), np.zeros((nd, 3))
         self.log = np.full((4096, 4), np.nan)
         self.x, self.V_nc, self.ds = m.x0.copy(), m.V_nc0.copy(), device_state(sa)
+        self.health = Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3)))
         self.held = np.zeros(self.V_nc.size, np.bool_)   # loads held low (solve_nc)
         self.held_stage = np.full(1, -1)
         self.cmd_t = np.full(n_commands, np.inf)
@@ -268,7 +316,7 @@ class _Run:
             self.pst, *self.mats, m.params,
             m.layout.n_mac, m.layout.n_exc, m.layout.n_pss, m.layout.n_tg, self.sa, self.ds,
             self.cmd_t, self.cmd_mode, self.sim.inertia, self.limit, self.stop, self.k, k1,
-            self.rec, self.P_rec, self.stats, self.log)
+            self.rec, self.P_rec, self.stats, self.log, self.health)
         self.wall += time.perf_counter() - wall
         self.k = k_end
 
@@ -294,14 +342,30 @@ class _Run:
             _attach_storage(res, storage, self.P_rec[:k_end + 1], self.stats,
                             sim.case.base_mva, self.log[~np.isnan(self.log[:, 0])],
                             sim.case.freq_hz)
+        t_fail = g.t[min(k_end + 1, g.t.size - 1)]
+        if self.status == UNSTABLE_STEP:
+            q = int(self.health.bad[0])
+            raise NumericalInstabilityError(
+                f"case '{sim.case.name}': numerical instability in the step ending at t = "
+                f"{t_fail:.4f} s: state {self.m.state_name(q)} = {self.x[q]:.6g} "
+                f"({_symptom(self.x[q], q, self.m.mp.n)}); the step h = "
+                f"{g.h[g.interval[k_end]]:.6g} s is too large for this model: use a smaller "
+                f"step (trajectory kept up to {g.t[k_end]:.4f} s)", result=res)
         if self.status < 0:
-            why = "non-finite state" if self.status == DIVERGED else \
-                "the network/load equations did not converge (voltage collapse)"
-            t_fail = g.t[min(k_end + 1, g.t.size - 1)]
-            raise SimulationError(f"case '{sim.case.name}': {why} in the step ending at "
+            raise SimulationError(f"case '{sim.case.name}': the network/load equations did "
+                                  f"not converge (voltage collapse) in the step ending at "
                                   f"t = {t_fail:.4f} s (trajectory kept up to "
                                   f"{g.t[k_end]:.4f} s)", result=res)
         return res
+
+
+def _symptom(value: float, q: int, nm: int) -> str:
+    if not np.isfinite(value):
+        return "not finite"
+    if nm <= q < 2 * nm and abs(value - 1.0) > SPEED_BAND:
+        return f"speed more than {SPEED_BAND} pu from synchronous"
+    return (f"the largest local error estimate, above {EST_TOL} for {EST_STEPS} steps in a "
+            "row")
 
 
 #: Two switchings of a device closer than this (s) count as chattering.
@@ -349,7 +413,46 @@ class Recording(NamedTuple):
     V: np.ndarray
 
 
-OK, SEPARATED, DIVERGED, NO_LOAD_FLOW = 0, 1, -2, -1
+OK, SEPARATED, NO_LOAD_FLOW, UNSTABLE_STEP = 0, 1, -1, -3
+
+#: Numerical health (`_healthy`): a non-finite state, a speed more than SPEED_BAND pu from
+#: synchronous, or Heun's local error estimate (`_local_error`) above EST_TOL for more than
+#: EST_STEPS steps in a row marks a run that left the integrator's stability region.  On
+#: the paper's faults healthy runs stay above 0.1 for at most 6 steps (a field voltage
+#: reaching its ceiling inside a step); Kundur at h = 0.019 s (h/T_R = 1.9) sits above it
+#: from 1.5 s on at a spurious fixed point of the method (Efd at its ceiling, 0.3-9).
+SPEED_BAND, EST_TOL, EST_STEPS = 0.5, 0.1, 50
+
+
+@njit(cache=True)
+def _local_error(x, f_k, f_j, hh, where):
+    """Heun's local error estimate (the corrector minus the Euler predictor, hh/2 |f_j -
+    f_k|), largest over the states relative to 1 + |x|; its state index in where[0]."""
+    e = 0.0
+    for q in range(x.size):
+        eq = 0.5 * hh * abs(f_j[q] - f_k[q]) / (1.0 + abs(x[q]))
+        if eq > e:
+            e, where[0] = eq, q
+    return e
+
+
+@njit(cache=True)
+def _healthy(x, est, nm, health):
+    """Numerical health after a step with local error estimate est (module docstring);
+    returns False with the offending state index in health.bad[0]."""
+    for q in range(x.size):
+        if not np.isfinite(x[q]):
+            health.bad[0] = q
+            return False
+    for i in range(nm):
+        if abs(x[nm + i] - 1.0) > SPEED_BAND:
+            health.bad[0] = nm + i
+            return False
+    health.n_big[0] = health.n_big[0] + 1 if est > EST_TOL else 0
+    if health.n_big[0] > EST_STEPS:
+        health.bad[0] = health.worst[0]
+        return False
+    return True
 
 
 @njit(cache=True)
@@ -415,6 +518,17 @@ def _device_state(x, nm, inertia, sa, V_nc, dx, r, v, accel):
         v[d] = abs(V_nc[sa.pos[d]])
 
 
+class Health(NamedTuple):
+    """Numerical-health trackers of a run (`_healthy`): the local error estimate of the
+    step ending at each grid index (n_t,), the state it is largest in (1,), the number of
+    steps in a row above EST_TOL (1,), the offending state index (1,)."""
+
+    est: np.ndarray
+    worst: np.ndarray
+    n_big: np.ndarray
+    bad: np.ndarray
+
+
 class DeviceState(NamedTuple):
     """Controller and device state carried across `integrate` calls (n_dev entries):
     mode (-1, 0, +1; an external set-point in units of the rating), power P (pu), power
@@ -450,7 +564,7 @@ def _apply_commands(sa, ds, cmd_t, cmd_mode, t_now, log, stats, r):
 @njit(cache=True)
 def integrate(xs, V_nc, held, held_stage, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22,
               R, p, nm, ne, nps, ng, sa, ds, cmd_t, cmd_mode, inertia, limit, stop, k0, k1, rec,
-              P_rec, stats, log):
+              P_rec, stats, log, health):
     """PST's predictor-corrector from grid index k0 to k1 (see the module docstring), with
     the storage devices `sa` (stabctl.storage.StorageArrays) in state `ds` (DeviceState).
 
@@ -463,8 +577,10 @@ def integrate(xs, V_nc, held, held_stage, t, interval, h, first, pst, Y11, Y12, 
     re-integrated in two parts.  Externally commanded devices: each command of the
     schedule (cmd_t sorted, cmd_mode) takes effect at its exact time, splitting the step.
     stats[d] = (switchings, energy absorbed, energy delivered in pu*s); log rows (time,
-    device, new mode, relative speed pu) while there is room.  Returns (status, last
-    stored index): OK, SEPARATED (stopped at loss of synchronism), DIVERGED, NO_LOAD_FLOW.
+    device, new mode, relative speed pu) while there is room.  health (`Health`): the
+    numerical-health trackers, carried across calls.  Returns (status, last stored
+    index): OK, SEPARATED (stopped at loss of synchronism), UNSTABLE_STEP (`_healthy`
+    failed after the step from that index), NO_LOAD_FLOW.
     """
     n, nd = interval.size, sa.pmax.size
     x = xs.copy()
@@ -535,6 +651,8 @@ def integrate(xs, V_nc, held, held_stage, t, interval, h, first, pst, Y11, Y12, 
                 xs[:] = x
                 return NO_LOAD_FLOW, k
             x_b = x_a + 0.5 * hh * (dx_a + dx_j)
+            if hh == rem:
+                health.est[k + 1] = _local_error(x_b, dx_a, dx_j, hh, health.worst)
             theta, first_d = 2.0, -1
             if bang and hh == rem:
                 _device_state(x_b, nm, inertia, sa, V_nc, dx_j, rb, vb, accb)
@@ -590,9 +708,9 @@ def integrate(xs, V_nc, held, held_stage, t, interval, h, first, pst, Y11, Y12, 
         if nd > 0:
             P[:] = _advance(sa, P, target, e, rem, stats) if rem > 1e-15 else P
         x = x_b
-        if not np.all(np.isfinite(x)):
+        if not _healthy(x, health.est[k + 1], nm, health):
             xs[:] = x
-            return DIVERGED, k
+            return UNSTABLE_STEP, k
         if stop:
             coi = (x[:nm] * inertia).sum() / M
             if np.max(np.abs(x[:nm] - coi)) > limit:

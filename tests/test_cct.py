@@ -28,6 +28,11 @@ def kundur():
 
 
 @pytest.fixture(scope="module")
+def kundur_pstess():
+    return Simulator(load_case("kundur"), conventions="pstess")
+
+
+@pytest.fixture(scope="module")
 def case1(kundur):
     return critical_clearing_time(kundur, CASE1)
 
@@ -41,12 +46,36 @@ def stable_when_cleared_after(sim, cycles, t_end=6.0):
 # ------------------------------------------------------------------ Kundur, paper Case 1
 
 
-def test_case1_cct_between_16_and_17_cycles(case1):
-    assert case1.t_stable * 60 >= 16 and case1.t_stable < case1.t_unstable
-    assert case1.t_unstable * 60 <= 17
+def test_case1_cct_between_9_and_10_cycles(case1):
+    """IEEE 421.5 limiters (default): 157 ms = 9.42 cycles at the default 5 ms step; the
+    converged CCT (steps down to 0.16 ms, 0.1 ms bisection) is 158.0 ms
+    (docs/conventions.md)."""
+    assert case1.conventions == "ieee" and case1.step_s == 0.005
+    assert case1.t_stable * 60 >= 9 and case1.t_stable < case1.t_unstable
+    assert case1.t_unstable * 60 <= 10
     assert case1.cct_s == case1.t_stable and case1.cct_cycles == pytest.approx(case1.cct_s * 60)
     assert case1.bracket == (case1.t_stable, case1.t_unstable)
     assert case1.separated == (1, 2)            # area 1 swings away from area 2
+
+
+def test_case1_cct_converges_with_the_step(kundur, case1):
+    """Halving the default step moves the CCT by less than the tolerance (the search's own
+    error bar, `numerical_error_s`), and so do two more halvings."""
+    assert case1.numerical_error_s == 0.0 and case1.cct_half_step_s == case1.cct_s
+    assert case1.n_simulations == len(case1.probes) + len(case1.half_step_probes) == \
+        len(case1.probes) + 2
+    finer = [critical_clearing_time(kundur, CASE1, h=case1.step_s / k, error_check=False)
+             for k in (4, 8)]
+    assert all(abs(r.cct_s - case1.cct_s) <= case1.tol_s + 1e-12 for r in finer)
+
+
+def test_case1_pstess_cct_is_a_step_artefact(kundur_pstess):
+    """PSTess 1.1's smpexc limiter (docs/pst_models.md 2.1): 16.1 cycles at its own 10 ms
+    step, and halving the step removes more than a cycle: the error bar says so."""
+    res = critical_clearing_time(kundur_pstess, CASE1)
+    assert res.conventions == "pstess" and res.step_s == 0.01
+    assert 16 <= res.cct_cycles < 17 and res.separated == (1, 2)
+    assert res.numerical_error_s > 1 / 60
 
 
 def test_case1_bracket_within_tolerance_and_verified_by_rerunning(kundur, case1):
@@ -60,16 +89,16 @@ def test_case1_21_cycles_unstable(kundur):
 
 
 def test_probes_are_consistent_with_the_bracket(case1):
-    assert case1.n_simulations == len(case1.probes)
+    assert case1.n_simulations == len(case1.probes) + len(case1.half_step_probes)
     for t, ok in case1.probes:
         assert round(t / case1.tol_s, 6).is_integer()       # on the tolerance lattice
         assert (t <= case1.t_stable) if ok else (t >= case1.t_unstable)
     assert case1.probes[0] == (0.0, True)                   # the line trip alone is stable
     lo, hi = case1.search_bracket
     assert (lo, True) in case1.probes and (hi, False) in case1.probes
-    n_bracket = [t for t, _ in case1.probes].index(hi) + 1       # 0, 0.1, 0.2, 0.4
+    n_bracket = [t for t, _ in case1.probes].index(hi) + 1       # 0, 0.1, 0.2
     n_bisect = int(np.ceil(np.log2(round((hi - lo) / case1.tol_s))))
-    assert n_bracket == 4 and case1.n_simulations <= n_bracket + n_bisect
+    assert n_bracket == 3 and len(case1.probes) <= n_bracket + n_bisect
 
 
 def test_coarser_tolerance_gives_an_enclosing_bracket(kundur, case1):
@@ -81,19 +110,21 @@ def test_coarser_tolerance_gives_an_enclosing_bracket(kundur, case1):
 
 def test_upper_bound_doubles_until_unstable(kundur):
     res = critical_clearing_time(kundur, CASE1, t_hi=0.05, tol=0.01)
-    assert [t for t, _ in res.probes[:5]] == [0.0, 0.05, 0.1, 0.2, 0.4]
-    assert res.search_bracket == (0.2, 0.4)
-    assert res.bracket == (0.26, 0.27)
+    assert [t for t, _ in res.probes[:4]] == [0.0, 0.05, 0.1, 0.2]
+    assert res.search_bracket == (0.1, 0.2)
+    assert res.bracket == (0.15, 0.16)
 
 
 def test_to_dict_is_json(case1):
     d = json.loads(json.dumps(case1.to_dict()))
     assert d["fault"] == {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1, "trips": []}
     assert d["cct_s"] == case1.cct_s and d["n_simulations"] == case1.n_simulations
+    assert d["numerical_error_s"] == 0.0 and d["conventions"] == "ieee"
     assert d["criterion"] == "no_separation" and d["wall_time_s"] > 0
 
 
-def test_custom_criterion_sees_whole_runs(kundur, case1):
+def test_custom_criterion_sees_whole_runs(kundur_pstess):
+    kundur = kundur_pstess
     seen = []
 
     def within_1rad(result):
@@ -104,6 +135,7 @@ def test_custom_criterion_sees_whole_runs(kundur, case1):
     assert res.criterion == "within_1rad"
     assert 0.2 <= res.t_stable < res.t_unstable <= 0.25    # 0.96 rad at 0.2 s, 1.18 at 0.25
     assert all(t == pytest.approx(6.0) for t in seen)   # not stopped at separation
+    assert len(seen) == res.n_simulations
 
 
 def test_losing_both_tie_circuits_is_unstable_even_when_cleared_instantly(kundur):
@@ -132,8 +164,8 @@ def test_unstable_at_the_lower_bound_is_an_error(kundur):
 
 
 def test_cct_above_t_max_is_an_error(kundur):
-    with pytest.raises(InputError, match=r"above the search limit t_max = 0.2 s \(12 cycles\)"):
-        critical_clearing_time(kundur, CASE1, t_max=0.2)
+    with pytest.raises(InputError, match=r"above the search limit t_max = 0.1 s \(6 cycles\)"):
+        critical_clearing_time(kundur, CASE1, t_max=0.1)
     with pytest.raises(InputError, match=r"above the search limit t_max = 0.05 s"):
         critical_clearing_time(kundur, CASE1, t_max=0.05)      # below the first upper bound
 
@@ -163,6 +195,8 @@ def test_unknown_bus_and_line(kundur):
 class FakeSim:
     """Stable iff cleared before `cct` s; records the keyword arguments of every run."""
 
+    conventions, default_h = "ieee", 0.01
+
     def __init__(self, cct, diverge_after=None, separated_before_divergence=True):
         self.case = SimpleNamespace(freq_hz=50.0)
         self.cct, self.calls = cct, []
@@ -183,7 +217,9 @@ def test_bisection_lands_on_the_lattice_cell_of_the_cct():
     res = critical_clearing_time(sim, CASE1, h=0.01)
     assert res.bracket == (0.123, 0.124) and res.separated == (7,)
     assert res.cct_cycles == pytest.approx(0.123 * 50)          # the case's frequency
-    assert res.n_simulations == len(sim.calls) == 3 + 7          # 0, 0.1, 0.2, then 100 -> 1
+    assert res.n_simulations == len(sim.calls) == 3 + 7 + 2      # 0, 0.1, 0.2, 100 -> 1, h/2
+    assert [kw["h"] for kw in sim.calls[-2:]] == [0.005, 0.005]
+    assert res.numerical_error_s == 0.0
     assert all(kw["stop_at_separation"] for kw in sim.calls)
     assert all("storage" not in kw for kw in sim.calls)          # not passed when None
 
@@ -253,7 +289,8 @@ def test_cli_cct_json():
     res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--json")
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
-    assert d["cct_cycles"] >= 16 and d["cct_cycles"] < 17
+    assert d["cct_cycles"] >= 9 and d["cct_cycles"] < 10 and d["conventions"] == "ieee"
+    assert d["numerical_error_s"] == 0.0
     assert d["esd_pct"] is None and d["case"] == "kundur"
     assert d["t_unstable_s"] - d["t_stable_s"] == pytest.approx(1e-3)
 
@@ -261,7 +298,7 @@ def test_cli_cct_json():
 def test_cli_cct_text():
     res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--tol-ms", 5)
     assert res.exit_code == 0, res.output
-    assert "CCT 0.26" in res.stdout and "cycles" in res.stdout
+    assert "CCT 0.15" in res.stdout and "cycles" in res.stdout
     assert "simulations, wall" in res.stdout and "machine(s) 1, 2" in res.stdout
 
 
@@ -269,7 +306,7 @@ def test_cli_cct_text():
     (("--fault", 99, "--far-bus", 101), "bus 99"),
     (("--fault", 3, "--far-bus", 13), "no branch between bus 3 and bus 13"),
     (("--fault", 3, "--far-bus", 101, "--tol-ms", 0), "--tol-ms"),
-    (("--fault", 3, "--far-bus", 101, "--t-max", 0.2), "above the search limit"),
+    (("--fault", 3, "--far-bus", 101, "--t-max", 0.1), "above the search limit"),
     (("--fault", 3, "--far-bus", 101, "--tf", 1.5), "latest clearing"),
 ])
 def test_cli_cct_bad_input(args, needle):
