@@ -372,43 +372,53 @@ def storage_fleet(case, esd_pct: float | None):
 
 
 @functools.lru_cache(maxsize=None)
-def cached_simulator(case_name: str) -> Simulator:
-    """One Simulator per case per process (the power flow is solved once per worker)."""
+def cached_simulator(case_name: str, conventions: str = "ieee") -> Simulator:
+    """One Simulator per case and conventions per process (the power flow is solved once
+    per worker)."""
     from .case import load_case
 
-    return Simulator(load_case(case_name))
+    return Simulator(load_case(case_name), conventions=conventions)
 
 
 def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circuit: int = 1,
             trips=(), esd_pct: float | None = None, tol: float = TOL, t_max: float = T_MAX,
-            t_end: float | None = None) -> dict:
-    """Worker entry of a CCT sweep: the CCT of one fault at one storage rating.
+            t_end: float | None = None, conventions: str = "ieee",
+            h: float | None = None) -> dict:
+    """Worker entry of a CCT sweep: the CCT of one fault at one storage rating, with its
+    numerical error bar.
 
     Arguments are JSON-able (a sweep's recorded inputs; esd_pct: storage rating in %,
-    None = no storage); returns `CCTResult.to_dict()`.  Raises as
-    `critical_clearing_time` and `storage_fleet`.
+    None = no storage; conventions, h: model conventions and step, None = the default);
+    returns `CCTResult.to_dict()`.  Raises as `critical_clearing_time` and
+    `storage_fleet`.
     """
-    sim = cached_simulator(case)
+    sim = cached_simulator(case, conventions)
     fault = LineFault(int(bus), None if far_bus is None else int(far_bus), float(t_fault),
                       int(circuit),
                       tuple((int(a), int(b)) for a, b in trips))
-    res = critical_clearing_time(sim, fault, tol=tol, t_max=t_max, t_end=t_end,
+    res = critical_clearing_time(sim, fault, tol=tol, t_max=t_max, t_end=t_end, h=h,
                                  storage=storage_fleet(sim.case, esd_pct))
     return res.to_dict()
 
 
-def cct_key(case: str, fault: LineFault, esd_pct: float | None) -> str:
-    """Sweep key, e.g. 'kundur/3-101/t1/esd-none' or 'kundur/3-101#2+13-101/t1/esd20'."""
+def cct_key(case: str, fault: LineFault, esd_pct: float | None, conventions: str = "ieee",
+            h: float | None = None) -> str:
+    """Sweep key, e.g. 'kundur/3-101/t1/esd-none' or 'kundur/3-101#2+13-101/t1/esd20';
+    '/pstess' and '/h<step>' are appended for the pstess conventions and a given step."""
     line = f"bus{fault.bus}" if fault.far_bus is None else \
         f"{fault.bus}-{fault.far_bus}" + (f"#{fault.circuit}" if fault.circuit != 1 else "")
     line += "".join(f"+{a}-{b}" for a, b in fault.trips)
     rating = "none" if esd_pct is None else f"{esd_pct:g}"
-    return f"{case}/{line}/t{fault.t_fault:g}/esd{'-' if esd_pct is None else ''}{rating}"
+    tail = ("" if conventions == "ieee" else f"/{conventions}") + \
+        ("" if h is None else f"/h{h:g}")
+    return f"{case}/{line}/t{fault.t_fault:g}/esd{'-' if esd_pct is None else ''}{rating}{tail}"
 
 
 def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
-             t_max: float = T_MAX, t_end: float | None = None) -> list:
-    """One `stabctl.sweep.Job` per (fault, storage rating %, None = no storage) pair.
+             t_max: float = T_MAX, t_end: float | None = None, conventions: str = "ieee",
+             h: float | None = None) -> list:
+    """One `stabctl.sweep.Job` per (fault, storage rating %, None = no storage) pair, with
+    the model conventions and step h (None: the default) of every run.
 
     Checks every fault's bus and line against the case first (UnknownBusError, CaseError)
     so that bad input fails before any job runs.
@@ -417,12 +427,15 @@ def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
     from .events import validate
     from .sweep import Job
 
+    from .dynamic import check_conventions
+
+    check_conventions(conventions)
     case = load_case(case_name)
     faults = list(faults)
     for f in faults:
         validate(case, f.events(0.0), 0.0)
-    settings = {"tol": tol, "t_max": t_max, "t_end": t_end}
-    return [Job(key=cct_key(case_name, f, p), func=cct_job,
+    settings = {"tol": tol, "t_max": t_max, "t_end": t_end, "conventions": conventions, "h": h}
+    return [Job(key=cct_key(case_name, f, p, conventions, h), func=cct_job,
                 inputs={"case": case_name, "bus": f.bus, "far_bus": f.far_bus,
                         "t_fault": f.t_fault, "circuit": f.circuit,
                         "trips": [list(t) for t in f.trips], "esd_pct": p, **settings})

@@ -66,6 +66,24 @@ def _line_fault_options(func):
     return func
 
 
+def _model_options(func):
+    """--conventions and --step, the same on every command that simulates or linearises."""
+    func = click.option("--step", type=float, default=None, metavar="H",
+                        help="Integration step (s); default: the case's data-file step, "
+                             "under ieee capped at half its fastest time constant (Kundur "
+                             "5 ms, miniWECC 1/480 s; pstess: Kundur 10 ms).")(func)
+    return click.option("--conventions", type=click.Choice(["ieee", "pstess"]),
+                        default="ieee", show_default=True,
+                        help="Model conventions: ieee (IEEE 421.5 limiters, results converge "
+                             "with the step) or pstess (PSTess 1.1 bit for bit, quirks "
+                             "included); docs/conventions.md.")(func)
+
+
+def _check_step(step) -> None:
+    if step is not None and not 0 < step < float("inf"):
+        raise InputError(f"--step must be a positive number of seconds, got {step:g}")
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="stabctl")
 def main():
@@ -158,7 +176,6 @@ def _case_info(name: str) -> dict:
 def _describe_sw_con(case) -> str | None:
     """One line for the data file's own disturbance (what --pstess-default runs)."""
     from .events import from_sw_con
-    from .simulation import default_step
 
     if case.sw_con is None:
         return None
@@ -167,7 +184,7 @@ def _describe_sw_con(case) -> str | None:
     except StabctlError as exc:
         return f"unsupported ({exc})"
     what = "; ".join(_describe_event(e) for e in evs) or "no disturbance"
-    return f"{what}; {float(case.sw_con[-1, 0]):g} s, step {default_step(case):g} s"
+    return f"{what}; {float(case.sw_con[-1, 0]):g} s, data-file step {float(case.sw_con[0, 6]):g} s"
 
 
 def _describe_event(ev) -> str:
@@ -304,11 +321,7 @@ def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
                    "added); --tf then defaults to its end time.")
 @click.option("--tf", type=float, default=None, metavar="S",
               help="End time (s); default 5 s, or the sw_con end with --pstess-default.")
-@click.option("--step", type=float, default=None, metavar="H",
-              help="Integration step (s); default the data file's (sw_con) step, else half "
-                   "a cycle. Each interval between events gets fix(length/H) equal steps. "
-                   "The method is explicit (PST's Heun): H near twice the smallest time "
-                   "constant (Kundur T_R = 0.01 s) makes the run numerically unstable.")
+@_model_options
 @click.option("--separation-limit", type=float, default=3.141592653589793,
               show_default="pi", metavar="RAD",
               help="Loss of synchronism: a rotor angle more than RAD from the centre of "
@@ -333,8 +346,9 @@ def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
 @click.option("--json", "as_json", is_flag=True, help="Print the run summary as JSON.")
 @_reports_errors
 def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clear_cycles, trip,
-             t_trip, pstess_default, tf, step, separation_limit, stop_at_separation, out_path,
-             plot_path, esd_pct, deadband_hz, v_gate, coi, hysteresis_hz, as_json):
+             t_trip, pstess_default, tf, conventions, step, separation_limit,
+             stop_at_separation, out_path, plot_path, esd_pct, deadband_hz, v_gate, coi,
+             hysteresis_hz, as_json):
     """Nonlinear multi-machine time-domain simulation (PSTess models and integrator).
 
     CASE is a built-in name (see `stabctl cases`) or a case file (.json, PST .m). The run
@@ -369,12 +383,11 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     is written then (a diverged run reports where it stopped).
     """
     from .case import load_case
-    from .simulation import Simulator, default_step
+    from .simulation import Simulator
 
     out_p = _check_suffix(out_path, _OUT_SUFFIXES, "--out")
     plot_p = _check_suffix(plot_path, _PLOT_SUFFIXES, "--plot")
-    if step is not None and not step > 0:
-        raise InputError(f"--step must be > 0 s, got {step:g}")
+    _check_step(step)
     if not separation_limit > 0:
         raise InputError(f"--separation-limit must be > 0 rad, got {separation_limit:g}")
     case = load_case(case_name)
@@ -388,12 +401,12 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     if late:
         raise InputError(f"{_describe_event(late[0])}: starts at or after the end of the run "
                          f"(--tf {tf:g} s)")
-    h = default_step(case) if step is None else step
     fleet = None
     if esd_pct is not None:
         from .storage import BangBangCOI, uniform_fleet
         fleet = uniform_fleet(case, esd_pct, BangBangCOI(deadband_hz, v_gate, coi, hysteresis_hz))
-    sim = Simulator(case)
+    sim = Simulator(case, conventions=conventions)
+    h = sim.default_h if step is None else step
     result = sim.run(events, t_end=tf, h=h, separation_limit=separation_limit,
                      stop_at_separation=stop_at_separation, storage=fleet)
     written = []
@@ -409,11 +422,12 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
         written.insert(0, str(out_p))
     summary = result.summary()
     if as_json:
-        _print_json({**summary, "step_s": h,
+        _print_json({**summary, "step_s": h, "conventions": conventions,
                      "events": [_describe_event(e) for e in events], "files": written})
         return
     click.echo(f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
-               f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {h:g} s), "
+               f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {h:g} s, "
+               f"{conventions} conventions), "
                f"wall {summary.get('wall_time_s', float('nan')):.2f} s")
     for e in events or ["flat run (no disturbance)"]:
         click.echo(f"  {e if isinstance(e, str) else _describe_event(e)}")
@@ -450,7 +464,10 @@ def _print_cct(case_name, rating, d) -> None:
     click.echo(f"CCT {d['cct_s']:.3f} s = {d['cct_cycles']:.2f} cycles (stable at "
                f"{d['t_stable_s']:.3f} s, unstable at {d['t_unstable_s']:.3f} s = "
                f"{d['t_unstable_cycles']:.2f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
-               f"step {d['step_s']:g} s)")
+               f"step {d['step_s']:g} s, {d['conventions']} conventions)")
+    if d["numerical_error_s"] is not None:
+        click.echo(f"numerical error {1000 * d['numerical_error_s']:g} ms (CCT at half the "
+                   f"step {d['cct_half_step_s']:.3f} s)")
     if d["separated_machines"]:
         click.echo(f"machine(s) {', '.join(map(str, d['separated_machines']))} lose "
                    f"synchronism when cleared at {d['t_unstable_s']:.3f} s")
@@ -475,10 +492,11 @@ def _print_cct(case_name, rating, d) -> None:
               help="Longest clearing time tried (s); a CCT above it is an error.")
 @click.option("--tf", type=float, default=None, metavar="S",
               help="End of each run (s); default fault time + 5 s.")
+@_model_options
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @_reports_errors
 def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, tol_ms, t_max, tf,
-        as_json):
+        conventions, step, as_json):
     """Critical clearing time of a line fault by bisection on the clearing time.
 
     The fault at BUS on line BUS-FAR_BUS starts at --t-fault and is cleared at both ends
@@ -489,7 +507,9 @@ def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, tol_ms, t_ma
     more than pi rad before --tf (default fault time + 5 s); runs stop at separation.
     The search checks stability at zero clearing (the line trip alone), doubles the upper
     bound from 0.1 s while stable (up to --t-max), then bisects on multiples of --tol-ms.
-    The CCT printed is the stable end of the final bracket (conservative).
+    The CCT printed is the stable end of the final bracket (conservative).  Its numerical
+    error bar: the bracket's ends rerun at half the step (the search continued there if a
+    verdict changes); numerical_error_s = |CCT(h/2) - CCT(h)| (0: below the tolerance).
     \b
     Examples:
       stabctl cct kundur --fault 3 --far-bus 101
@@ -503,10 +523,12 @@ def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, tol_ms, t_ma
     from .simulation import Simulator
 
     settings = _cct_settings(tol_ms, t_max, tf)
+    _check_step(step)
     case = load_case(case_name)
     storage = storage_fleet(case, esd_pct)
     line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
-    res = critical_clearing_time(Simulator(case), line_fault, storage=storage, **settings)
+    res = critical_clearing_time(Simulator(case, conventions=conventions), line_fault,
+                                 storage=storage, h=step, **settings)
     out = {"case": case.name, "esd_pct": esd_pct, **res.to_dict()}
     if as_json:
         _print_json(out)
@@ -532,8 +554,10 @@ def _sweep_line(key, rec) -> str:
     if rec["status"] != "ok":
         return f"{key:<34} failed: {rec['error']}"
     r = rec["result"]
-    return (f"{key:<34} {r['cct_s']:7.3f} {r['cct_cycles']:8.2f} {r['n_simulations']:5d} "
-            f"{rec['wall_time_s']:7.2f}")
+    err = r.get("numerical_error_s")
+    err = "-" if err is None else f"{1000 * err:g}"
+    return (f"{key:<34} {r['cct_s']:7.3f} {r['cct_cycles']:8.2f} {err:>6} "
+            f"{r['n_simulations']:5d} {rec['wall_time_s']:7.2f}")
 
 
 @main.command("sweep-cct")
@@ -561,10 +585,11 @@ def _sweep_line(key, rec) -> str:
               help="Longest clearing time tried (s).")
 @click.option("--tf", type=float, default=None, metavar="S",
               help="End of each run (s); default fault time + 5 s.")
+@_model_options
 @click.option("--json", "as_json", is_flag=True, help="Print every record as JSON.")
 @_reports_errors
 def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retry_failed,
-              tol_ms, t_max, tf, as_json):
+              tol_ms, t_max, tf, conventions, step, as_json):
     """CCT of every (fault, storage rating) pair, in parallel, resumable.
 
     Each job is one `stabctl cct` search; its line in --out holds its key
@@ -582,6 +607,7 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
     from .sweep import read_records, run_sweep
 
     settings = _cct_settings(tol_ms, t_max, tf)
+    _check_step(step)
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
     if Path(out_path).is_dir():
@@ -591,7 +617,7 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
     for p in ratings:
         storage_fleet(case, p)
     faults = default_faults(case_name) if faults_src == "DEFAULT" else read_faults(faults_src)
-    jobs = cct_jobs(case_name, faults, ratings, **settings)
+    jobs = cct_jobs(case_name, faults, ratings, conventions=conventions, h=step, **settings)
     try:
         rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
                         retry_failed=retry_failed)
@@ -605,7 +631,8 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
                      "failed": rep.failed, "wall_time_s": rep.wall_time_s,
                      "records": list(rep.records.values())})
         return
-    click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'sims':>5} {'wall s':>7}")
+    click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'err ms':>6} {'sims':>5} "
+               f"{'wall s':>7}")
     for key, rec in rep.records.items():
         click.echo(_sweep_line(key, rec))
     n_bad = sum(r["status"] != "ok" for r in rep.records.values())
@@ -633,10 +660,11 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Dask distributed scheduler (tcp://host:8786), or 'local' for a local "
                    "Dask cluster of --workers processes.")
+@_model_options
 @click.option("--json", "as_json", is_flag=True, help="Print every row as JSON.")
 @_reports_errors
 def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers, scheduler,
-           as_json):
+           conventions, step, as_json):
     """Contingency screening: CCT of a three-phase fault at every bus (and with --lines of
     every branch fault with the branch tripped), in parallel and resumable.
 
@@ -652,8 +680,10 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
     bus_list = None if buses is None else [int(b) for b in buses.split(",") if b.strip()]
     plot_p = _check_suffix(plot_path, _PLOT_SUFFIXES, "--plot")
     settings = _cct_settings(tol_ms, t_max, None)
+    _check_step(step)
     rows = run_screen(case_name, out_path, buses=bus_list, lines=lines, tol=settings["tol"],
-                      t_max=t_max, workers=workers, scheduler=scheduler)
+                      t_max=t_max, workers=workers, scheduler=scheduler,
+                      conventions=conventions, h=step)
     rows.sort(key=lambda r: r.get("cct_s", float("inf")))
     if plot_p is not None:
         from . import plotting
@@ -661,11 +691,13 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
     if as_json:
         _print_json(rows)
         return
-    click.echo(f"{'fault':<22} {'CCT s':>7} {'cycles':>7}  separated / reason")
+    click.echo(f"{'fault':<22} {'CCT s':>7} {'cycles':>7} {'err ms':>6}  separated / reason")
     for r in rows:
         where = f"bus {r['bus']}" + (f" line to {r['far_bus']}" if r["far_bus"] else "")
         if r["status"] == "ok":
-            click.echo(f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f}  {r['separated']}")
+            err = "-" if r["numerical_error_s"] is None else f"{1000 * r['numerical_error_s']:g}"
+            click.echo(f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  "
+                       f"{r['separated']}")
         else:
             click.echo(f"{where:<22} {'-':>7} {'-':>7}  {r['error'][:70]}")
 
@@ -684,9 +716,12 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
                    "compass plots and participation bar charts (PNG).")
 @click.option("--out", "out_dir", default="reports", show_default=True, metavar="DIR",
               help="Report directory (with --report).")
+@click.option("--conventions", type=click.Choice(["ieee", "pstess"]), default="ieee",
+              show_default=True, help="Model conventions (docs/conventions.md); the same "
+                                      "linear model at a point inside every limit.")
 @click.option("--json", "as_json", is_flag=True, help="Print every mode as JSON.")
 @_reports_errors
-def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
+def eig(case_name, no_pss, n_areas, report, out_dir, conventions, as_json):
     """Small-signal modes: linearise CASE at its power flow and list its modes.
 
     The simulator's own equations are linearised by central differences (PSTess svm_mgen's
@@ -711,7 +746,7 @@ def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
 
     if Path(out_dir).exists() and not Path(out_dir).is_dir():
         raise InputError(f"--out {out_dir} is not a directory")
-    st = eig_study(load_case(case_name), no_pss=no_pss, n_areas=n_areas)
+    st = eig_study(load_case(case_name), no_pss=no_pss, n_areas=n_areas, conventions=conventions)
     written = [str(write_report(st, out_dir))] if report else []
     if as_json:
         _print_json({**study_json(st), "files": written})
@@ -786,12 +821,13 @@ def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
 @click.option("--cct", is_flag=True,
               help="Instead: CCT of the fault line with each estimator in the loop at "
                    "--esd-pct over --runs seeds, in parallel; mean and spread (cycles).")
+@_model_options
 @click.option("--json", "as_json", is_flag=True, help="Print the figures as JSON.")
 @_reports_errors
 def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms, drop,
              tve_pct, fe_hz, rfe_hz_s, k_sigma, pmu_at, esd_pct, runs, seed, settle_ms,
              ambient_s, ambient_pct, ambient_tau_s, ambient_runs, deadband_hz, coi,
-             closed_loop, cct, as_json):
+             closed_loop, cct, conventions, step, as_json):
     """Machine and COI speed estimation from simulated PMU data, against the truth.
 
     The fault run is simulated once (with --esd-pct, storage acts on the true speeds);
@@ -832,21 +868,23 @@ def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency
     ambient = am.AmbientLoad(ambient_pct, ambient_tau_s, seed)
     settings = PMUSettings(rate=rate, tve=tve_pct / 100, fe_hz=fe_hz, rfe_hz_s=rfe_hz_s,
                            k_sigma=k_sigma, latency_s=latency_ms / 1000, drop_prob=drop)
+    _check_step(step)
     case = load_case(case_name)
     ev = fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles)
     if closed_loop or cct:
         if esd_pct is None:
             raise InputError("--closed-loop and --cct need --esd-pct")
         out = _estimate_loop(case, ev, fault, far_bus, t_fault, tf, settings, esd_pct, runs,
-                             seed, deadband_hz, coi, cct)
+                             seed, deadband_hz, coi, cct, conventions, step)
         click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
         return
     window = (max(ev.times()) + settle_ms / 1000, tf)
     if not window[0] < tf:
         raise InputError(f"--tf {tf:g} s ends before the errors start ({window[0]:g} s)")
     fleet = None if esd_pct is None else uniform_fleet(case, esd_pct)
-    sim = Simulator(case, injection_buses=() if fleet is None else fleet.buses)
-    res = sim.run([ev], t_end=tf, storage=fleet)
+    sim = Simulator(case, injection_buses=() if fleet is None else fleet.buses,
+                    conventions=conventions)
+    res = sim.run([ev], t_end=tf, storage=fleet, h=step)
     figures = study.monte_carlo(case, res, settings, runs, seed, window, pmu_at, coi)
     actions = None
     if ambient_s > 0:
@@ -868,7 +906,7 @@ def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency
 
 
 def _estimate_loop(case, ev, fault, far_bus, t_fault, tf, settings, esd_pct, runs, seed,
-                   deadband_hz, coi, cct) -> dict:
+                   deadband_hz, coi, cct, conventions, step) -> dict:
     """`estimate --closed-loop` / `--cct`: figures and text lines."""
     from . import closed_loop as cl
     from .simulation import Simulator
@@ -878,18 +916,19 @@ def _estimate_loop(case, ev, fault, far_bus, t_fault, tf, settings, esd_pct, run
     if cct:
         with tempfile.TemporaryDirectory() as tmp:
             table = cl.cct_study(case.name, fault, far_bus, [esd_pct], runs, Path(tmp) / "cct.jsonl",
-                                 seed=seed, rate=rate, latency=lat)[esd_pct]
+                                 seed=seed, rate=rate, latency=lat, conventions=conventions,
+                                 h=step)[esd_pct]
         lines = [f"CCT of line {fault}-{far_bus}, ESD {esd_pct:g} %, {rate:g} frames/s, latency "
                  f"{1000 * lat:g} ms, {runs} seeds from {seed} (cycles):"]
         lines += [f"  {e:5} " + ("failed" if s["mean"] is None else
                                  f"{s['mean']:7.2f} +- {s['std']:.2f} ({s['min']:.2f}..{s['max']:.2f})")
                   + f"  runs {s['runs']}, failed {s['failed']}" for e, s in table.items()]
         return {"cct_cycles": table, "lines": lines}
-    sim, rows, lines = Simulator(case), {}, []
+    sim, rows, lines = Simulator(case, conventions=conventions), {}, []
     control = BangBangCOI(deadband_hz=deadband_hz, coi=coi)
     for e in cl.ESTIMATORS:
         run = cl.run_closed_loop(sim, [ev], tf, esd_pct, e, rate, lat, seed,
-                                 settings=settings, control=control)
+                                 settings=settings, control=control, h=step)
         rows[e] = {"stable": run.result.stable,
                    "switchings": len(run.result.meta.get("switchings", [])),
                    "false_actions": cl.false_actions(run, deadband_hz)}
@@ -978,10 +1017,12 @@ def _print_placement(case_name, d) -> None:
 @click.option("--workers", type=int, default=None, metavar="N",
               help="Worker processes (default: the available cores, at most one per "
                    "contingency).")
+@_model_options
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @_reports_errors
 def place(case_name, faults_src, target_cct_gain, zeta_min, max_sites, max_site_pct,
-          site_cost, amplitude_hz, hysteresis_hz, tol_ms, max_iter, workers, as_json):
+          site_cost, amplitude_hz, hysteresis_hz, tol_ms, max_iter, workers, conventions, step,
+          as_json):
     """Least-MW energy storage (sites and ratings) that raises the CCT of every contingency
     by --target-cct-gain, verified by nonlinear simulation.
 
@@ -1007,6 +1048,7 @@ def place(case_name, faults_src, target_cct_gain, zeta_min, max_sites, max_site_
     from .sweep import default_workers
 
     settings = _cct_settings(tol_ms, 1.0, None)
+    _check_step(step)
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
     if max_sites is not None and max_sites < 1:
@@ -1020,7 +1062,8 @@ def place(case_name, faults_src, target_cct_gain, zeta_min, max_sites, max_site_
     sites = candidate_sites(case, max_site_pct)
     ctrl = BangBangCOI(hysteresis_hz=hysteresis_hz)
     n = min(workers or default_workers(), len(faults))
-    kw = {"sites": sites, "tol": settings["tol"], "workers": n, "controller": ctrl}
+    kw = {"sites": sites, "tol": settings["tol"], "workers": n, "controller": ctrl,
+          "conventions": conventions, "h": step}
     say = (lambda msg: None) if as_json else (lambda msg: click.echo(msg, err=True))
     base = baseline(case_name, faults, **kw)
     result = run_place(case_name, with_gain(faults, base, target_cct_gain, settings["tol"]),

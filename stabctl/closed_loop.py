@@ -267,6 +267,14 @@ class LoopRunner:
     def case(self):
         return self.sim.case
 
+    @property
+    def conventions(self) -> str:
+        return self.sim.conventions
+
+    @property
+    def default_h(self) -> float:
+        return self.sim.default_h
+
     def run(self, events, t_end, h=None, separation_limit=np.pi, stop_at_separation=True):
         """The closed-loop SimulationResult (run_closed_loop's arguments)."""
         return run_closed_loop(self.sim, events, t_end, self.fleet_pct, self.estimator,
@@ -277,20 +285,24 @@ class LoopRunner:
 
 def cct_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str, seed: int,
             rate: float = 60.0, latency: float = 0.05, t_fault: float = 1.0,
-            tol: float = 1 / 240) -> dict:
+            tol: float = 1 / 240, conventions: str = "ieee", h: float | None = None) -> dict:
     """Worker entry (`stabctl.sweep`): CCT (s, cycles) of a line fault with the estimator
-    in the loop, PMU noise stream `seed`."""
+    in the loop, PMU noise stream `seed`, model conventions and step h (None: default).
+    The step's error bar is not searched here (the seed spread is the error bar of these
+    CCTs; `stabctl cct` gives the ideal-measurement one)."""
     from .cct import LineFault, cached_simulator, critical_clearing_time
 
-    runner = LoopRunner(cached_simulator(case), esd_pct, estimator, rate, latency, seed)
+    runner = LoopRunner(cached_simulator(case, conventions), esd_pct, estimator, rate,
+                        latency, seed)
     r = critical_clearing_time(runner, LineFault(int(bus), int(far_bus), float(t_fault)),
-                               tol=tol)
+                               tol=tol, h=h, error_check=False)
     return {"cct_s": r.cct_s, "cct_cycles": r.cct_cycles, "n_simulations": r.n_simulations}
 
 
 def cct_study(case: str, bus: int, far_bus: int, ratings, runs: int, out, *,
               estimators=ESTIMATORS, seed: int = 0, rate: float = 60.0, latency: float = 0.05,
-              workers: int | None = None, progress: bool = True) -> dict:
+              workers: int | None = None, progress: bool = True, conventions: str = "ieee",
+              h: float | None = None) -> dict:
     """CCTs per rating and estimator over `runs` noise seeds (seed .. seed + runs - 1; one
     run for "ideal", which has no noise), in parallel with `stabctl.sweep.run_sweep`
     (records appended to `out`, finished jobs reused).  Returns
@@ -299,9 +311,11 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs: int, out, *,
 
     if runs < 1:
         raise InputError(f"need at least one run, got {runs}")
-    jobs = [Job(f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s/seed{s}", cct_job,
-                dict(case=case, bus=bus, far_bus=far_bus, esd_pct=p, estimator=e, seed=s,
-                     rate=rate, latency=latency))
+    tail = ("" if conventions == "ieee" else f"/{conventions}") + ("" if h is None else f"/h{h:g}")
+    jobs = [Job(f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s/seed{s}{tail}",
+                cct_job, dict(case=case, bus=bus, far_bus=far_bus, esd_pct=p, estimator=e,
+                              seed=s, rate=rate, latency=latency, conventions=conventions,
+                              h=h))
             for p in ratings for e in estimators
             for s in ([seed] if e == "ideal" else range(seed, seed + runs))]
     rep = run_sweep(jobs, out, workers=workers, progress=progress)

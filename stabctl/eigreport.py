@@ -40,12 +40,14 @@ class EigStudy:
         return f"eig_{self.case.name}" + ("_nopss" if self.no_pss else "")
 
 
-def eig_study(case: Case, no_pss: bool = False, n_areas: int | None = None) -> EigStudy:
-    """Linearise `case` (with its pss_con emptied if no_pss) and analyse its modes."""
+def eig_study(case: Case, no_pss: bool = False, n_areas: int | None = None,
+              conventions: str = "ieee") -> EigStudy:
+    """Linearise `case` (with its pss_con emptied if no_pss) under the model conventions
+    and analyse its modes."""
     if no_pss:
         case = case.replace(pss=PssTable.empty())
     t0 = time.perf_counter()
-    sys = linearise(case)
+    sys = linearise(case, conventions=conventions)
     t1 = time.perf_counter()
     ma = modal_analysis(sys, n_areas=n_areas)
     sens = mode_sensitivity(sys, ma)

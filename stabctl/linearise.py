@@ -73,7 +73,8 @@ def default_esd_buses(case: Case) -> list[int]:
     return list(dict.fromkeys(hv_bus(case, int(k)) for k in case.machines.number))
 
 
-def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP):
+def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP,
+              conventions: str = "ieee"):
     """Linearised model of a case at its power-flow point, as a `control.StateSpace`.
 
     Args:
@@ -83,6 +84,9 @@ def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP
             extra_buses: further ESD buses on request (appended).
         rel_step: relative perturbation h / max(|value|, 1) (default PSTess's 1e-4; see
             docs/modal.md for the error study).
+        conventions: model conventions when target is a Case ("ieee" or "pstess"; a
+            Simulator keeps its own).  At a power-flow point inside every limit both give
+            the same linear model.
     Returns:
         control.StateSpace (continuous) with named states, inputs and outputs (module
         docstring); n_x = number of active states.
@@ -93,7 +97,8 @@ def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP
     """
     from .simulation import Simulator
 
-    sim = target if isinstance(target, Simulator) else Simulator(target)
+    sim = target if isinstance(target, Simulator) else Simulator(target,
+                                                                  conventions=conventions)
     case = sim.case
     buses = list(default_esd_buses(case) if esd_buses is None else esd_buses)
     buses = list(dict.fromkeys(int(b) for b in [*buses, *extra_buses]))

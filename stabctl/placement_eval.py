@@ -54,12 +54,13 @@ class Contingency:
 def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
              controller: dict, tol: float, t_max: float, scan_from: float | None = None,
              scan_to: float | None = None, scan_s: float = SCAN_S,
-             eps_s: float = EPS_S) -> dict:
+             eps_s: float = EPS_S, conventions: str = "ieee", h: float | None = None) -> dict:
     """CCT of one contingency with ESDs `devices` ([bus, machine, MW] each) and the
     gradient of that CCT in the rating of every candidate site ([bus, machine] each).
 
     beta: distribution factors (n_mac x n_sites, `sime.distribution_factors`);
-    controller: BangBangCOI fields.  Without scan_from the CCT is the bisection of
+    controller: BangBangCOI fields; conventions, h: the model conventions and step
+    (None: the default).  Without scan_from the CCT is the bisection of
     `stabctl.cct`; with it, `scanned_cct` (the first unstable clearing time on a scan_s
     grid from scan_from up to scan_to, then bisection).  JSON-able in and out (a
     process-pool job).
@@ -68,7 +69,8 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
     above t_max is returned as t_max with a zero gradient.
     Raises InputError (unstable at zero clearing, bad fault) and SimulationError.
     """
-    sim = cached_simulator(case)
+    sim = cached_simulator(case, conventions)
+    sim = _with_step(sim, h)
     far = None if fault["far_bus"] is None else int(fault["far_bus"])
     f = LineFault(int(fault["bus"]), far, float(fault["t_fault"]),
                   int(fault["circuit"]), tuple((int(a), int(b)) for a, b in fault["trips"]))
@@ -77,7 +79,7 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
                          ctrl) if devices else None
     try:
         if scan_from is None:
-            res, n_scan = critical_clearing_time(sim, f, tol=tol, t_max=t_max,
+            res, n_scan = critical_clearing_time(sim, f, tol=tol, t_max=t_max, error_check=False,
                                                  storage=fleet), 0
         else:
             res, n_scan = scanned_cct(sim, f, fleet, tol=tol, t_max=t_max, start=scan_from,
@@ -92,6 +94,23 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
     return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable,
             "n_simulations": n_scan + res.n_simulations + grad.pop("n_runs"),
             "separated": list(res.separated), "above_t_max": False, **grad}
+
+
+class _StepSim:
+    """A Simulator whose default step is h (for the placement's internal searches)."""
+
+    def __init__(self, sim, h: float):
+        self.sim, self.default_h = sim, h
+
+    def __getattr__(self, name):
+        return getattr(self.sim, name)
+
+    def run(self, *args, h=None, **kw):
+        return self.sim.run(*args, h=self.default_h if h is None else h, **kw)
+
+
+def _with_step(sim, h):
+    return sim if h is None else _StepSim(sim, h)
 
 
 def scanned_cct(sim, fault: LineFault, fleet, *, tol: float, t_max: float, start: float,
@@ -112,13 +131,14 @@ def scanned_cct(sim, fault: LineFault, fleet, *, tol: float, t_max: float, start
         runs += 1
         if not _run(sim, fault, t, fleet).stable:
             res = critical_clearing_time(sim, fault, tol=tol, t_lo=prev or 0.0, t_hi=t,
+                                         error_check=False,
                                          t_max=t, storage=fleet)
             return res, runs
         prev, t = t, round(t + step, 12)
     if prev is None or prev >= t_max:
         raise InputError(f"{fault.describe()}: the CCT is above the search limit t_max = "
                          f"{t_max:g} s")
-    res = critical_clearing_time(sim, fault, tol=tol, t_lo=prev,
+    res = critical_clearing_time(sim, fault, tol=tol, t_lo=prev, error_check=False,
                                  t_hi=min(prev + 4 * step, t_max), t_max=t_max, storage=fleet)
     return res, runs
 
@@ -205,7 +225,7 @@ def devices_of(sites, mw) -> list:
 
 def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangBangCOI,
            tol: float, t_max: float, base: dict | None = None, scan: str = "target",
-           scan_s: float = SCAN_S) -> dict:
+           scan_s: float = SCAN_S, model: dict | None = None) -> dict:
     """`evaluate` every contingency at ratings mw (MW per site), in parallel through
     run_map (`worker_pool`): name -> evaluation dict.
 
@@ -213,6 +233,7 @@ def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangB
     (`scanned_cct`) from the contingency's CCT without storage: up to its target
     (scan="target") or to t_max (scan="full", the first unstable clearing time however
     far); scan="none" or no storage: bisection only.
+    model: {"conventions", "h"} of the runs (default: ieee at the default step).
     Raises InputError for another scan value.
     """
     if scan not in ("target", "full", "none"):
@@ -222,7 +243,7 @@ def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangB
             "coi": controller.coi, "hysteresis_hz": controller.hysteresis_hz}
     common = {"case": case, "devices": devices, "sites": [[s.bus, s.machine] for s in sites],
               "beta": np.asarray(beta).tolist(), "controller": ctrl, "tol": tol,
-              "t_max": t_max, "scan_s": scan_s}
+              "t_max": t_max, "scan_s": scan_s, **(model or {})}
     scanning = devices and base is not None and scan != "none"
     jobs = [{**common, "fault": _fault_dict(c.fault),
              "scan_from": base[c.name]["cct_s"] if scanning else None,

@@ -118,11 +118,13 @@ class _Setup:
     t_max: float
     run_map: object = None
     base: dict | None = None
+    model: dict | None = None
 
     def verify(self, mw, which=None) -> dict:
         cons = self.contingencies if which is None else which
         return verify(self.run_map, self.case, cons, self.sites, mw, self.beta,
-                      self.controller, self.tol, self.t_max, base=self.base)
+                      self.controller, self.tol, self.t_max, base=self.base,
+                      model=self.model)
 
     @property
     def upper(self) -> np.ndarray:
@@ -153,7 +155,7 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
           tol: float = 1e-3, t_max: float = 1.0, max_iter: int = 10, rtol: float = 0.02,
           workers: int = 1, controller: BangBangCOI | None = None,
           amplitude_hz: float = 0.2, base: dict | None = None, start=None,
-          progress=None) -> PlacementResult:
+          progress=None, conventions: str = "ieee", h: float | None = None) -> PlacementResult:
     """Least-cost ESD allocation meeting every contingency's target CCT (and damping),
     verified by simulation (module docstring).
 
@@ -185,14 +187,15 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
     wall = time.perf_counter()
     contingencies = tuple(contingencies)
     _check_settings(contingencies, max_iter, tol, workers, zeta_min)
-    sim = cached_simulator(case)
+    sim = cached_simulator(case, conventions)
     _check_faults(sim.case, contingencies)
     sites = tuple(sites or candidate_sites(sim.case))
     controller = controller or DEFAULT_CONTROLLER
     beta, damping = _linear_models(sim, sites, controller, zeta_min, amplitude_hz)
     setup = _Setup(case, contingencies, sites, beta, controller, damping, zeta_min,
                    {"safety_s": 2 * tol if safety_s is None else safety_s,
-                    "max_sites": max_sites, "site_cost": site_cost}, tol, t_max)
+                    "max_sites": max_sites, "site_cost": site_cost}, tol, t_max,
+                   model={"conventions": conventions, "h": h})
     say = progress or (lambda msg: None)
     with worker_pool(workers) as run_map:
         setup.run_map = run_map
@@ -205,7 +208,8 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
 
 def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | None = None,
                 scan: str = "target", tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
-                controller: BangBangCOI | None = None) -> dict:
+                controller: BangBangCOI | None = None, conventions: str = "ieee",
+                h: float | None = None) -> dict:
     """Simulated CCT (and its gradient) of every contingency at ratings mw (MW per site of
     `sites`, default `candidate_sites`; None = no storage), in `workers` processes:
     name -> `placement_eval.evaluate` dict.  base and scan as `placement_eval.verify`
@@ -213,7 +217,7 @@ def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | N
     Raises as `place`.
     """
     contingencies = tuple(contingencies)
-    sim = cached_simulator(case)
+    sim = cached_simulator(case, conventions)
     _check_faults(sim.case, contingencies)
     sites = tuple(sites or candidate_sites(sim.case))
     controller = controller or DEFAULT_CONTROLLER
@@ -221,7 +225,7 @@ def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | N
     mw = np.zeros(len(sites)) if mw is None else np.asarray(mw, float)
     with worker_pool(workers) as run_map:
         return verify(run_map, case, contingencies, sites, mw, beta, controller, tol, t_max,
-                      base=base, scan=scan)
+                      base=base, scan=scan, model={"conventions": conventions, "h": h})
 
 
 def baseline(case: str, faults, **kw) -> dict:

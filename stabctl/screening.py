@@ -36,13 +36,16 @@ def screening_faults(case: Case, buses=None, lines: bool = False,
 
 def screen(case_name: str, out: str | Path, *, buses=None, lines: bool = False,
            tol: float = TOL, t_max: float = T_MAX, workers: int | None = None,
-           scheduler: str | None = None, progress: bool = True) -> list[dict]:
+           scheduler: str | None = None, progress: bool = True, conventions: str = "ieee",
+           h: float | None = None) -> list[dict]:
     """Run the screening; returns one row per fault: key, bus, far_bus, status, CCT (s and
-    cycles), separated machines, simulations, or the failure reason.  `out` is the
-    JSON-lines record (resumed if it exists).  Raises as `stabctl.sweep.run_sweep`."""
+    cycles) with its numerical error (s), separated machines, simulations, or the failure
+    reason.  `out` is the JSON-lines record (resumed if it exists); conventions, h: the
+    model conventions and step of every run.  Raises as `stabctl.sweep.run_sweep`."""
     case = load_case(case_name)
     faults = screening_faults(case, buses, lines)
-    report = run_sweep(cct_jobs(case_name, faults, tol=tol, t_max=t_max), out,
+    report = run_sweep(cct_jobs(case_name, faults, tol=tol, t_max=t_max,
+                                conventions=conventions, h=h), out,
                        workers=workers, scheduler=scheduler, progress=progress)
     rows = []
     for fault, rec in zip(faults, report.records.values()):
@@ -51,6 +54,7 @@ def screen(case_name: str, out: str | Path, *, buses=None, lines: bool = False,
         if rec["status"] == "ok":
             r = rec["result"]
             row.update(cct_s=r["cct_s"], cct_cycles=r["cct_cycles"],
+                       numerical_error_s=r.get("numerical_error_s"),
                        separated=r["separated_machines"], n_simulations=r["n_simulations"])
         else:
             row["error"] = rec.get("error", "")

@@ -30,8 +30,9 @@ from stabctl.simulation import Simulator, default_step
 
 DATA = Path(__file__).parent / "data" / "pstess"
 
-SPEED_TOL, ANGLE_TOL, VMAG_TOL = 2e-4, 0.02, 0.01   # the acceptance tolerances
+SPEED_TOL, ANGLE_TOL, VMAG_TOL = 2e-4, 0.02, 0.01   # acceptance tolerances
 REGRESSION = 1e-6                                     # we reach ~1e-9; guard against drift
+PSTESS_EXACT_SPEED = 1e-8    # the pstess conventions reproduce PSTess (reached: 5e-10, 7e-10)
 
 
 def reference(stem: str, quantity: str):
@@ -72,6 +73,7 @@ def check_agreement(err, record_property, label):
         record_property(f"{label}_{k}", f"{v:.3g}")
     print(f"\n{label} vs PSTess: " + ", ".join(f"{k} {v:.2e}" for k, v in err.items()))
     assert err["speed_pu"] < SPEED_TOL
+    assert err["speed_pu"] < PSTESS_EXACT_SPEED
     assert err["rel_angle_rad"] < ANGLE_TOL
     assert err["vmag_pu_outside_fault"] < VMAG_TOL
     for k, v in err.items():            # regression: the achieved agreement is ~1e-9
