@@ -69,9 +69,11 @@ def test_help_texts_state_units():
 
 def test_pstess_default_through_cli_matches_pstess(tmp_path):
     out, png = tmp_path / "kundur.csv", tmp_path / "kundur.png"
-    res = run("simulate", "kundur", "--pstess-default", "--out", out, "--plot", png, "--json")
+    res = run("simulate", "kundur", "--pstess-default", "--out", out, "--plot", png, "--json",
+              "--conventions", "pstess")
     assert res.exit_code == 0, res.output
     summary = json.loads(res.stdout)
+    assert summary["conventions"] == "pstess" and summary["step_s"] == 0.01
     assert summary["stable"] is True and summary["t_separation_s"] is None
     assert summary["separated_machines"] == [] and summary["t_end_s"] == 5.0
     assert summary["case"] == "kundur" and summary["wall_time_s"] > 0
@@ -103,11 +105,13 @@ def test_case1_fault_json_and_stop_at_separation(tmp_path):
     assert back.separated == [1, 2] and back.t[-1] == pytest.approx(s["t_separation_s"])
 
 
-def test_text_output_reports_verdict():
+@pytest.mark.parametrize("conventions, t_sep", [("ieee", "1.96"), ("pstess", "2.07")])
+def test_text_output_reports_verdict(conventions, t_sep):
     res = run("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 21,
-              "--far-clear-cycles", 21, "--stop-at-separation")
+              "--far-clear-cycles", 21, "--stop-at-separation", "--conventions", conventions)
     assert res.exit_code == 0, res.output
-    assert "loss of synchronism at t = 2.07" in res.stdout and "1, 2" in res.stdout
+    assert f"loss of synchronism at t = {t_sep}" in res.stdout and "1, 2" in res.stdout
+    assert f"{conventions} conventions" in res.stdout
 
 
 def test_flat_run_and_line_trips(tmp_path):
@@ -175,4 +179,4 @@ def test_diverging_run_exits_2_reports_stop_time(tmp_path):
     out_dir.mkdir()
     res = run("simulate", path, "--tf", 3, "--out", out_dir / "r.csv", "--plot",
               out_dir / "r.png", "--json")
-    assert_bad_input(res, out_dir, "did not converge", "t = ")
+    assert_bad_input(res, out_dir, "numerical instability", "t = ")

@@ -232,12 +232,13 @@ def test_a_feasible_uniform_start_is_only_ever_improved_and_verified():
     sites = candidate_sites(case)
     uniform = 0.05 * np.array([case.machines.mva[case.machine_index(s.machine)]
                                for s in sites])
-    res = place("kundur", [Contingency(CASE1, 0.290)], workers=1, start=uniform, max_iter=4)
+    # the uniform 5 % fleet clears the Case-1 fault up to 0.202 s (ieee conventions)
+    res = place("kundur", [Contingency(CASE1, 0.195)], workers=1, start=uniform, max_iter=4)
     assert res.verified
     assert res.allocation.total_mw <= uniform.sum() + 0.4
-    assert res.evaluations["3-101"]["cct_s"] >= 0.290
+    assert res.evaluations["3-101"]["cct_s"] >= 0.195
     with pytest.raises(InputError, match="start"):
-        place("kundur", [Contingency(CASE1, 0.290)], workers=1, start=uniform[:2])
+        place("kundur", [Contingency(CASE1, 0.195)], workers=1, start=uniform[:2])
 
 
 def test_infeasible_bounds_are_proven_by_simulation_and_name_the_contingency():
@@ -250,7 +251,7 @@ def test_infeasible_bounds_are_proven_by_simulation_and_name_the_contingency():
 
 def test_damping_target_is_confirmed_by_recomputed_eigenvalues():
     """A CCT target already met without storage: only zeta_min asks for storage."""
-    res = place("kundur", [Contingency(CASE1, 0.260)], zeta_min=0.15, workers=1, max_iter=4)
+    res = place("kundur", [Contingency(CASE1, 0.150)], zeta_min=0.15, workers=1, max_iter=4)
     assert res.verified
     assert res.allocation.total_mw > 0
     assert res.damping[1].min() >= 0.15 - 1e-4
