@@ -137,9 +137,11 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
                    "sweeps, placement screening; after an interruption); by default they "
                    "are recomputed.")
 @click.option("--only", multiple=True,
-              type=click.Choice(["analytic", "cases", "table4", "estimation", "placement"]),
+              type=click.Choice(["analytic", "cases", "convergence", "table4", "estimation",
+                                 "placement"]),
               help="Build only these parts (repeatable): analytic = Sections 2-4 (seconds); "
-                   "cases = Cases 1 and 2; table4 = CCT sweeps (minutes); estimation = "
+                   "cases = Cases 1 and 2; convergence = CCT against the step under both "
+                   "conventions (2 minutes); table4 = CCT sweeps (minutes); estimation = "
                    "estimator Monte Carlo (about 10 minutes on 2 cores); placement = ESD "
                    "sizing and placement studies (about 30 minutes). Default: all; "
                    "with --only, paper.md holds only those parts.")

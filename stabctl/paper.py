@@ -177,10 +177,44 @@ def section_placement(fig_dir: Path, records_dir: Path) -> str:
                       f"Pareto curve of total MW against target gain: {links}.", ""])
 
 
+def section_convergence(fig_dir: Path) -> str:
+    """Section 9: CCT of the paper's faults against the step under both conventions."""
+    from .convergence import PAPER_FAULTS, cct_versus_step, markdown_table
+
+    lines = ["## 9. Step convergence: IEEE 421.5 limiters against PSTess's", "",
+             "CCT of the Case-1 and Case-2 faults (bisection to 1 ms) at steps from 10 ms to "
+             "0.5 ms. ieee (the default): every limiter non-windup as IEEE Std 421.5-2016, "
+             "the step never longer than h, each step on the network of its interval. "
+             "pstess: PSTess 1.1 bit for bit, including the smpexc limiter that keeps the "
+             "field voltage's derivative at the ceiling (docs/conventions.md lists every "
+             "difference with its PSTess source line). Each CCT search also reruns its final "
+             "bracket at half the step: `numerical_error_s` in `stabctl cct --json`.", ""]
+    for name, fault in PAPER_FAULTS.items():
+        table = cct_versus_step(name, fault)
+        freq = 60.0
+        ieee = [c for _, c, _ in table["ieee"]["rows"]]
+        pst = [c for _, c, _ in table["pstess"]["rows"]]
+        lines += [f"### {name}: {fault.describe()}", ""]
+        lines += markdown_table(name, table, freq)
+        lines += ["", f"- ieee: {1000 * min(ieee):.0f}-{1000 * max(ieee):.0f} ms over the "
+                  f"steps ({1000 * (max(ieee) - min(ieee)):.0f} ms spread, the tolerance is "
+                  f"1 ms); pstess: {1000 * min(pst):.0f}-{1000 * max(pst):.0f} ms "
+                  f"({1000 * (max(pst) - min(pst)):.0f} ms spread).", ""]
+    lines += ["Under ieee the CCT moves by at most one 1 ms lattice cell between halvings "
+              "(resolved to 0.1 ms on Kundur: 156.8, 157.7, 157.9, 157.9, 158.0, 158.0 ms at "
+              "10, 5, 2.5, 1.25, 0.625, 0.3125 ms: differences shrinking about fourfold per "
+              "halving, second order). Kundur's default ieee step is half its fastest time "
+              "constant (T_R = 10 ms), so the default CCT is within the tolerance of the "
+              "converged one; miniWECC (ST3 exciters, whose PSTess limiter already zeroes the "
+              "derivative) converges under both conventions at its data-file step 1/480 s.", ""]
+    return "\n".join(lines)
+
+
 #: Report parts: key -> sections (each returns markdown and writes its figures).
 PARTS: dict[str, tuple[Callable[[Path], str], ...]] = {
     "analytic": (section_omib, section_feedback, section_two_machine_and_min_time),
     "cases": (paper_storage.section_case1, paper_storage.section_case2),
+    "convergence": (section_convergence,),
     "table4": (),
     "estimation": (),
     "placement": (),

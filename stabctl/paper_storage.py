@@ -15,23 +15,25 @@ import numpy as np
 
 from . import plotting
 from .case import load_case
-from .cct import LineFault, cct_jobs
+from .cct import LineFault, cct_jobs, critical_clearing_time
 from .events import fault_with_clearing
 from .simulation import Simulator
-from .storage import uniform_fleet
+from .storage import BangBangCOI, uniform_fleet
 from .sweep import run_sweep
 
 RATINGS_PCT = (5, 10, 15, 20, 25, 30)
-#: Paper Table 4 (Case 2): CCT increase (%) over no storage per rating (%).  The text we
-#: reproduce from prints the row as 0/20/40/60/60/60; we pair it with 5..30 %.
-PAPER_TABLE4 = {5: 0, 10: 20, 15: 40, 20: 60, 25: 60, 30: 60}
+#: Paper Table 4 (Case 2, miniWECC): CCT increase (%) over no storage per ESD rating (% of
+#: generator power), as printed: 0 -> 0, 5 -> 20, 15 -> 40, 20 -> 60, 25 -> 60, 30 -> 60
+#: (10 % is not in the table); the text: "5 % ... increased by 20 %", "at 20 % ... the
+#: maximum".
+PAPER_TABLE4 = {0: 0, 5: 20, 15: 40, 20: 60, 25: 60, 30: 60}
 CASES = {"case1": ("kundur", LineFault(3, 101, 1.0)),
          "case2": ("miniwecc", LineFault(83, 33, 1.0))}
 
 
-def _run_pair(name, bus, far, cycles, pct, t_end):
+def _run_pair(name, bus, far, cycles, pct, t_end, conventions="ieee"):
     case = load_case(name)
-    sim = Simulator(case)
+    sim = Simulator(case, conventions=conventions)
     fault = [fault_with_clearing(case, bus, far, 1.0, cycles)]
     return (sim.run(fault, t_end=t_end),
             sim.run(fault, t_end=t_end, storage=uniform_fleet(case, pct)), case)
@@ -59,23 +61,34 @@ def section_case1(fig_dir: Path) -> str:
     lines = ["## 4. Case 1: Kundur two-area system (paper Figs. 14-15)", "",
              "Three-phase fault at PST bus 3 (Kundur bus 7) on line 3-101 (Kundur 7-8) at "
              "t = 1 s, line tripped at clearing; ESDs at the generator HV buses 10, 20, 110, "
-             "120; bang-bang COI control, 100 mHz deadband, 0.8 pu voltage gate.", "",
-             "| clearing | ESD rating | without control | with control |", "|---|---|---|---|"]
+             "120; bang-bang COI control, 100 mHz deadband, 0.8 pu voltage gate; ieee "
+             "conventions (IEEE 421.5 limiters, 5 ms step) unless marked pstess (PSTess 1.1 "
+             "exactly, its 10 ms step).", "",
+             "| conventions | clearing | ESD rating | without control | with control |",
+             "|---|---|---|---|---|"]
     runs = {}
-    for cycles, pct in ((21, 5), (21, 20), (17, 5)):
-        without, with_, case = _run_pair("kundur", 3, 101, cycles, pct, 8.0)
-        runs[(cycles, pct)] = (without, with_)
-        lines.append(f"| {cycles} cycles | {pct} % | {_verdict(without)} | {_verdict(with_)} |")
-    without, with_ = runs[(17, 5)]
+    for conv, cycles, pct in (("ieee", 21, 5), ("ieee", 21, 30), ("ieee", 11, 5),
+                              ("pstess", 21, 5), ("pstess", 21, 20), ("pstess", 17, 5)):
+        without, with_, case = _run_pair("kundur", 3, 101, cycles, pct, 8.0, conv)
+        runs[(conv, cycles, pct)] = (without, with_)
+        lines.append(f"| {conv} | {cycles} cycles | {pct} % | {_verdict(without)} | "
+                     f"{_verdict(with_)} |")
+    without, with_ = runs[("ieee", 11, 5)]
     plotting.storage_case_figure(without, with_, fig_dir / "fig14_15_case1.png",
-                                 "Case 1, Kundur, 17-cycle fault, 5 % ESDs")
-    lines += ["", "In PSTess 1.1's d2asbegp (which our simulator reproduces to 1e-9 pu) the "
-              "no-storage CCT of this fault is 16 cycles and 5 % ESDs raise it to 18 cycles, so "
-              "the paper's 21-cycle Case 1 stays unstable with 5 % and needs 20 %; the paper's "
-              "qualitative result (area 1 separates without control, all machines stay in step "
-              "with it) is shown at 17 cycles. The paper's PST version, dispatch or exciter "
-              "settings must give a larger base CCT. As in the paper, C1 and C2 (area 1) absorb "
-              "and C3 and C4 inject after clearing:", ""]
+                                 "Case 1, Kundur, 11-cycle fault, 5 % ESDs (ieee conventions)")
+    lines += ["", "The paper's 21-cycle fault is far beyond this model's critical clearing "
+              "time. With IEEE 421.5 limiters the no-storage CCT is 9.4 cycles (157 ms at the "
+              "5 ms default step, 158 ms converged; section 9) and 5 % ESDs raise it to 12.1 "
+              "cycles; even 30 % ESDs clear only 20.6 cycles. PSTess 1.1's own model gives 16.1 "
+              "and 18.2 cycles at its 10 ms step, but that is its smpexc limiter: the field "
+              "voltage's derivative is never zeroed at the ceiling and the machine sees Efd_max "
+              "+ h dEfd/dt, several pu above the 5 pu ceiling with K_A = 200, so the field "
+              "forcing (and the CCT) grows with the step and shrinks towards ours as the step "
+              "is reduced (section 9). The paper, run on PST with a 10 ms step, most likely "
+              "carries the same inflation, which with its dispatch can put 21 cycles within "
+              "reach of 5 %. The qualitative result is reproduced at 11 cycles: area 1 "
+              "separates without control and every machine stays in step with it; as in the "
+              "paper, C1 and C2 (area 1) absorb and C3 and C4 inject after clearing:", ""]
     lines += _device_table(with_, only_active=False)
     lines += ["", "![Case 1](fig14_15_case1.png)", ""]
     return "\n".join(lines)
@@ -117,21 +130,24 @@ def table4(case_key: str, out_dir: Path, progress: bool = True) -> dict:
 def section_table4(fig_dir: Path, out_dir: Path) -> str:
     """Table 4: CCT versus ESD rating for Cases 1 and 2, with energy and peak power used."""
     lines = ["## 6. Table 4: CCT versus ESD rating", "",
-             "Bisection on the clearing time to 1 ms (`stabctl.cct`), stability = no rotor "
-             "angle leaves the COI by more than pi within 5 s of the fault. The energy and "
-             "peak power columns are from a run of the case's fault (Case 1: 17 cycles, "
-             "Case 2: 6 cycles) at that rating (what the paper does not give).", ""]
+             "Bisection on the clearing time to 1 ms (`stabctl.cct`, ieee conventions, each "
+             "CCT's numerical error from rerunning its bracket at half the step in the `err` "
+             "column), stability = no rotor angle leaves the COI by more than pi within 5 s "
+             "of the fault. The paper's Table 4 (miniWECC): ESD power 0 / 5 / 15 / 20 / 25 / "
+             "30 % of generator power gives a CCT increase of 0 / 20 / 40 / 60 / 60 / 60 %. "
+             "The energy and peak power columns are from a run of the case's fault (Case 1: 11 "
+             "cycles, Case 2: 6 cycles) at that rating (what the paper does not give).", ""]
     results = {}
-    for key, cycles in (("case2", 6), ("case1", 17)):
+    for key, cycles in (("case2", 6), ("case1", 11)):
         name, fault = CASES[key]
         res = results[key] = table4(key, out_dir)
         base = res[None]["cct_s"]
         lines += [f"### {key.replace('case', 'Case ')}: {name}, {fault.describe()}", "",
-                  "| ESD % of MVA | CCT s | CCT cycles | increase % | paper % | sims | "
+                  "| ESD % of MVA | CCT s | err ms | CCT cycles | increase % | paper % | sims | "
                   "absorbed MJ (all) | delivered MJ (all) | peak MW used (max device) |",
-                  "|---|---|---|---|---|---|---|---|---|",
-                  f"| 0 | {base:.3f} | {res[None]['cct_cycles']:.1f} | 0 | "
-                  f"{'0' if key == 'case2' else '-'} | {res[None]['n_simulations']} | | | |"]
+                  "|---|---|---|---|---|---|---|---|---|---|",
+                  f"| 0 | {base:.3f} | {_err_ms(res[None])} | {res[None]['cct_cycles']:.1f} | 0 "
+                  f"| {'0' if key == 'case2' else '-'} | {res[None]['n_simulations']} | | | |"]
         case = load_case(name)
         sim = Simulator(case)
         ev = [fault_with_clearing(case, fault.bus, fault.far_bus, 1.0, cycles)]
@@ -141,17 +157,63 @@ def section_table4(fig_dir: Path, out_dir: Path) -> str:
             st = run.meta["storage"]
             paper = PAPER_TABLE4.get(pct, "-") if key == "case2" else "-"
             lines.append(
-                f"| {pct} | {r['cct_s']:.3f} | {r['cct_cycles']:.1f} | "
+                f"| {pct} | {r['cct_s']:.3f} | {_err_ms(r)} | {r['cct_cycles']:.1f} | "
                 f"{100 * (r['cct_s'] / base - 1):.0f} | {paper} | {r['n_simulations']} | "
                 f"{sum(d['energy_absorbed_mj'] for d in st):.0f} | "
                 f"{sum(d['energy_delivered_mj'] for d in st):.0f} | "
                 f"{max(d['peak_power_mw'] for d in st):.0f} |")
         lines.append("")
     plotting.cct_versus_rating(results, RATINGS_PCT, fig_dir / "table4_cct_vs_rating.png")
-    lines += ["The increases differ from the paper's: our miniWECC is PSTess 1.1's "
-              "d_minniWECC_base exactly (power flow, ST3 exciters, PSS, governors), and the CCT "
-              "is resolved to 1 ms instead of whole cycles; the paper's printed row also "
-              "contradicts its own Case 2 (a 6-cycle fault made stable by 5 % ESDs cannot have "
-              "a 0 % CCT gain unless the gain is counted in coarse steps).", "",
-              "![CCT versus rating](table4_cct_vs_rating.png)", ""]
+    lines += _table4_hypotheses(results["case2"])
+    lines += ["", "![CCT versus rating](table4_cct_vs_rating.png)", ""]
     return "\n".join(lines)
+
+
+def _err_ms(r: dict) -> str:
+    e = r.get("numerical_error_s")
+    return "-" if e is None else f"{1000 * e:g}"
+
+
+def _table4_hypotheses(res: dict) -> list[str]:
+    """Why the miniWECC gains differ from the paper's Table 4, tested with runs: the CCT
+    counted in whole cycles, and the 0.8 pu voltage gate (ratings rerun without it)."""
+    name, fault = CASES["case2"]
+    base_cyc = int(res[None]["cct_cycles"])
+    whole = {p: 100 * (int(res[p]["cct_cycles"]) / base_cyc - 1) for p in RATINGS_PCT}
+    case = load_case(name)
+    sim = Simulator(case)
+    no_gate = {p: critical_clearing_time(sim, fault, error_check=False,
+                                         storage=uniform_fleet(case, p, BangBangCOI(v_gate_pu=0.0)))
+               for p in (5, 15, 20, 30)}
+    base = res[None]["cct_s"]
+    lines = ["Why our miniWECC gains differ from the paper's row, hypotheses tested with runs:",
+             "", "| ESD % | paper % | ours % (1 ms) | ours in whole cycles % | ours without the "
+             "0.8 pu voltage gate % |", "|---|---|---|---|---|"]
+    for p in RATINGS_PCT:
+        ng = f"{100 * (no_gate[p].cct_s / base - 1):.0f}" if p in no_gate else "-"
+        lines.append(f"| {p} | {PAPER_TABLE4.get(p, '-')} | "
+                     f"{100 * (res[p]['cct_s'] / base - 1):.0f} | {whole[p]:.0f} | {ng} |")
+    common = [p for p in RATINGS_PCT if p in PAPER_TABLE4]
+    larger = all(whole[p] > PAPER_TABLE4[p] for p in common)
+    gains = [res[p]["cct_s"] for p in RATINGS_PCT]
+    rising = all(b > a for a, b in zip(gains, gains[1:]))
+    ng = [no_gate[p].cct_s for p in sorted(no_gate)]
+    gate_caps = not all(b > a for a, b in zip(ng, ng[1:]))
+    lines += ["", f"- Whole cycles: our base CCT is {res[None]['cct_cycles']:.2f} cycles "
+              f"({base_cyc} whole cycles). The paper's 20 / 40 / 60 % are exactly 5 -> 6 -> 7 "
+              "-> 8 cycles on a 5-cycle base; counted that way ours give the fourth column: "
+              + ("coarse counting alone does not produce the paper's row, our gains are "
+                 "larger at every rating." if larger else
+                 "coarse counting brings them close to the paper's at some ratings."),
+              "- Voltage gate: without the gate the gains are those of the last column; "
+              + ("with or without it our CCT keeps rising up to 30 %, so the gate does not "
+                 "explain the paper's saturation." if not gate_caps and rising else
+                 "the gate changes where the gain stops growing: it is part of the "
+                 "saturation."),
+              "- What the runs support: " + (
+                  "the paper's saturation at 60 % and its smaller gains come from what we "
+                  "cannot reproduce (its dispatch, PST version, exciter data or ESD network "
+                  "model, none given in the paper); in our model every added percent still "
+                  "buys clearing time at 30 %." if rising else
+                  "our gains saturate too, at the rating where the CCT stops growing.")]
+    return lines
