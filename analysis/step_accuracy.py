@@ -37,7 +37,7 @@ def main(out="reports/step_accuracy.md"):
     for name, fault, tf in RUNS:
         case = load_case(name)
         sim = Simulator(case)
-        h0 = default_step(case)
+        h0 = default_step(case, "pstess")   # the data file's own step
         ref = sim.run([fault], t_end=tf, h=h0 / 16, semantics="exact")
         t_eval = np.arange(0.0, tf, 0.01)
         for f in (0.5, 1.0, 1.5):
