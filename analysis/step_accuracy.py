@@ -2,7 +2,8 @@
 
 For each built-in case and a stable fault, runs the predictor-corrector at several steps
 with both event semantics and compares with a reference at 1/16 of the data file's step
-("exact" semantics).  Writes reports/step_accuracy.md.
+("exact" semantics), under the pstess conventions (docs/conventions.md has the ieee
+convergence study).  Writes reports/step_accuracy.md.
 Run: python analysis/step_accuracy.py
 """
 
@@ -36,7 +37,7 @@ def main(out="reports/step_accuracy.md"):
              "|---|---|---|---|---|"]
     for name, fault, tf in RUNS:
         case = load_case(name)
-        sim = Simulator(case)
+        sim = Simulator(case, conventions="pstess")   # PSTess models; semantics varied below
         h0 = default_step(case, "pstess")   # the data file's own step
         ref = sim.run([fault], t_end=tf, h=h0 / 16, semantics="exact")
         t_eval = np.arange(0.0, tf, 0.01)
