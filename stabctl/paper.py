@@ -214,10 +214,10 @@ def section_convergence(fig_dir: Path) -> str:
 PARTS: dict[str, tuple[Callable[[Path], str], ...]] = {
     "analytic": (section_omib, section_feedback, section_two_machine_and_min_time),
     "cases": (paper_storage.section_case1, paper_storage.section_case2),
-    "convergence": (section_convergence,),
     "table4": (),
     "estimation": (),
     "placement": (),
+    "convergence": (section_convergence,),
 }
 #: Parts whose sweeps keep resumable records (JSON lines) in the report directory itself:
 #: key -> (section(fig_dir, records_dir), record files started afresh unless resume).
