@@ -372,12 +372,13 @@ def storage_fleet(case, esd_pct: float | None):
 
 
 @functools.lru_cache(maxsize=None)
-def cached_simulator(case_name: str, conventions: str = "ieee") -> Simulator:
-    """One Simulator per case and conventions per process (the power flow is solved once
-    per worker)."""
+def cached_simulator(case_name: str, conventions: str = "ieee",
+                     h: float | None = None) -> Simulator:
+    """One Simulator per case, conventions and step h (None: the default) per process
+    (the power flow is solved once per worker)."""
     from .case import load_case
 
-    return Simulator(load_case(case_name), conventions=conventions)
+    return Simulator(load_case(case_name), conventions=conventions, step=h)
 
 
 def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circuit: int = 1,
@@ -392,11 +393,11 @@ def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circ
     returns `CCTResult.to_dict()`.  Raises as `critical_clearing_time` and
     `storage_fleet`.
     """
-    sim = cached_simulator(case, conventions)
+    sim = cached_simulator(case, conventions, h)
     fault = LineFault(int(bus), None if far_bus is None else int(far_bus), float(t_fault),
                       int(circuit),
                       tuple((int(a), int(b)) for a, b in trips))
-    res = critical_clearing_time(sim, fault, tol=tol, t_max=t_max, t_end=t_end, h=h,
+    res = critical_clearing_time(sim, fault, tol=tol, t_max=t_max, t_end=t_end,
                                  storage=storage_fleet(sim.case, esd_pct))
     return res.to_dict()
 

@@ -292,10 +292,10 @@ def cct_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str, s
     CCTs; `stabctl cct` gives the ideal-measurement one)."""
     from .cct import LineFault, cached_simulator, critical_clearing_time
 
-    runner = LoopRunner(cached_simulator(case, conventions), esd_pct, estimator, rate,
+    runner = LoopRunner(cached_simulator(case, conventions, h), esd_pct, estimator, rate,
                         latency, seed)
     r = critical_clearing_time(runner, LineFault(int(bus), int(far_bus), float(t_fault)),
-                               tol=tol, h=h, error_check=False)
+                               tol=tol, error_check=False)
     return {"cct_s": r.cct_s, "cct_cycles": r.cct_cycles, "n_simulations": r.n_simulations}
 
 

@@ -69,8 +69,7 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
     above t_max is returned as t_max with a zero gradient.
     Raises InputError (unstable at zero clearing, bad fault) and SimulationError.
     """
-    sim = cached_simulator(case, conventions)
-    sim = _with_step(sim, h)
+    sim = cached_simulator(case, conventions, h)
     far = None if fault["far_bus"] is None else int(fault["far_bus"])
     f = LineFault(int(fault["bus"]), far, float(fault["t_fault"]),
                   int(fault["circuit"]), tuple((int(a), int(b)) for a, b in fault["trips"]))
@@ -94,23 +93,6 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
     return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable,
             "n_simulations": n_scan + res.n_simulations + grad.pop("n_runs"),
             "separated": list(res.separated), "above_t_max": False, **grad}
-
-
-class _StepSim:
-    """A Simulator whose default step is h (for the placement's internal searches)."""
-
-    def __init__(self, sim, h: float):
-        self.sim, self.default_h = sim, h
-
-    def __getattr__(self, name):
-        return getattr(self.sim, name)
-
-    def run(self, *args, h=None, **kw):
-        return self.sim.run(*args, h=self.default_h if h is None else h, **kw)
-
-
-def _with_step(sim, h):
-    return sim if h is None else _StepSim(sim, h)
 
 
 def scanned_cct(sim, fault: LineFault, fleet, *, tol: float, t_max: float, start: float,

@@ -187,7 +187,7 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
     wall = time.perf_counter()
     contingencies = tuple(contingencies)
     _check_settings(contingencies, max_iter, tol, workers, zeta_min)
-    sim = cached_simulator(case, conventions)
+    sim = cached_simulator(case, conventions, h)
     _check_faults(sim.case, contingencies)
     sites = tuple(sites or candidate_sites(sim.case))
     controller = controller or DEFAULT_CONTROLLER
@@ -217,7 +217,7 @@ def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | N
     Raises as `place`.
     """
     contingencies = tuple(contingencies)
-    sim = cached_simulator(case, conventions)
+    sim = cached_simulator(case, conventions, h)
     _check_faults(sim.case, contingencies)
     sites = tuple(sites or candidate_sites(sim.case))
     controller = controller or DEFAULT_CONTROLLER

@@ -147,16 +147,18 @@ class Simulator:
     Args:
         case: the case; op: its operating point (default: solved by `stabctl.powerflow`);
         injection_buses: buses kept for device injections (storage); conventions: "ieee"
-        (default) or "pstess" (module docstring, docs/conventions.md).
+        (default) or "pstess" (module docstring, docs/conventions.md); step: the step of
+        runs that give none (s; None: `default_step` of the case and conventions).
     Attributes:
-        default_h: the default step of this case and conventions (s, `default_step`).
+        default_h: that step (s).
     Raises:
-        InputError: unknown conventions; CaseError, PowerFlowError: as the case's models
-        and power flow.
+        InputError: unknown conventions, a step that is not positive or too large for the
+        case's fastest time constant; CaseError, PowerFlowError: as the case's models and
+        power flow.
     """
 
     def __init__(self, case: Case, op: OperatingPoint | None = None, injection_buses=(),
-                 conventions: str = "ieee"):
+                 conventions: str = "ieee", step: float | None = None):
         self.conventions = check_conventions(conventions)
         if op is None:
             from .powerflow import solve_powerflow
@@ -164,7 +166,8 @@ class Simulator:
         single_threaded_blas()
         self.case, self.op = case, op
         self.fastest = fastest_time_constant(case)
-        self.default_h = default_step(case, conventions)
+        self.default_h = default_step(case, conventions) if step is None else step
+        check_step(self.fastest, self.default_h)
         self._models: dict[frozenset, DynamicModel] = {}
         self.model = self.model_for(injection_buses)
         self.inertia = self.model.mp.H * case.machines.mva
