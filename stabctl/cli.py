@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import os
 import sys
 import tempfile
@@ -22,6 +23,7 @@ from .errors import InputError, SimulationError, StabctlError
 def _reports_errors(func):
     """Turn stabctl errors into a one-line message and exit status 2.
 
+    Numeric options are checked first (:func:`_check_numbers`: finite, in range).
     Python warnings raised meanwhile are held back: on success they are printed as
     `warning:` lines on stderr, on error only the `error:` line is printed."""
     @functools.wraps(func)
@@ -29,6 +31,7 @@ def _reports_errors(func):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("default")
             try:
+                _check_numbers(kwargs)
                 out = func(*args, **kwargs)
             except StabctlError as exc:
                 click.echo(f"error: {_one_line(exc)}", err=True)
@@ -37,6 +40,101 @@ def _reports_errors(func):
             click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
         return out
     return wrapper
+
+
+# -- numeric options checked at the edge -------------------------------------------------
+
+_INF = float("inf")
+#: allowed range of each numeric option: (low, high, low included, high included, unit).
+#: Every float option, listed or not, must also be finite (no nan, inf).
+_RANGES = {
+    "--fault-cycles": (0, 600, True, True, "cycles"),
+    "MORE_CYCLES": (0, 600, True, True, "cycles"),
+    "--H": (0, 100, False, True, "s"),
+    "--pm": (0, 100, True, True, "pu"),
+    "--delta0": (0, 1.5707963267948966, False, False, "rad"),
+    "--pmax": (0, 100, False, True, "pu"),
+    "--f0": (1, 1000, True, True, "Hz"),
+    "--t-fault": (0, 1000, True, True, "s"),
+    "--clear-cycles": (0, 600, True, True, "cycles"),
+    "--far-clear-cycles": (0, 600, True, True, "cycles"),
+    "--t-trip": (0, 1000, True, True, "s"),
+    "--tf": (0, 3600, False, True, "s"),
+    "--step": (0, 1, False, True, "s"),
+    "--separation-limit": (0, 100, False, True, "rad"),
+    "--esd-pct": (0, 100, False, True, "% of machine MVA"),
+    "--deadband-hz": (0, 10, True, True, "Hz"),
+    "--v-gate": (0, 2, True, True, "pu"),
+    "--hysteresis-hz": (0, 10, True, True, "Hz"),
+    "--tol-ms": (0, 1000, False, True, "ms"),
+    "--t-max": (0, 100, False, True, "s"),
+    "--workers": (1, 1024, True, True, ""),
+    "--circuit": (1, 99, True, True, ""),
+    "--areas": (1, 1000, True, True, ""),
+    "--target-cct-gain": (0, 1000, False, True, "%"),
+    "--zeta-min": (0, 1, True, False, ""),
+    "--max-sites": (1, 100000, True, True, ""),
+    "--max-site-pct": (0, 100, False, True, "% of machine MVA"),
+    "--site-cost": (0, 1e6, True, True, "MW"),
+    "--amplitude-hz": (0, 10, False, True, "Hz"),
+    "--max-iter": (1, 1000, True, True, ""),
+    "--rate": (1, 1000, True, True, "frames/s"),
+    "--latency-ms": (0, 10000, True, True, "ms"),
+    "--drop": (0, 1, True, False, ""),
+    "--tve-pct": (0, 100, True, True, "%"),
+    "--fe-hz": (0, 10, True, True, "Hz"),
+    "--rfe-hz-s": (0, 100, True, True, "Hz/s"),
+    "--k-sigma": (0, 100, False, True, ""),
+    "--runs": (1, 100000, True, True, ""),
+    "--seed": (0, 2**32 - 1, True, True, ""),
+    "--settle-ms": (0, 100000, True, True, "ms"),
+    "--ambient-s": (0, 36000, True, True, "s"),
+    "--ambient-pct": (0, 100, True, True, "%"),
+    "--ambient-tau-s": (0, 3600, False, True, "s"),
+    "--ambient-runs": (1, 10000, True, True, ""),
+}
+
+
+def _interval(spec) -> str:
+    lo, hi, lo_in, hi_in, unit = spec
+    return (f"{'[' if lo_in else '('}{lo:g}, {hi:g}{']' if hi_in else ')'}"
+            + (f" {unit}" if unit else ""))
+
+
+def check_number(label: str, value) -> None:
+    """InputError unless ``value`` is finite and inside the range of option ``label``
+    (:data:`_RANGES`); the message names the option, the value and the allowed range."""
+    spec = _RANGES.get(label)
+    allowed = f" in {_interval(spec)}" if spec else ""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise InputError(f"{label} {value}: must be a finite number{allowed}")
+    if spec is None:
+        return
+    lo, hi, lo_in, hi_in, _ = spec
+    if not ((value >= lo if lo_in else value > lo) and (value <= hi if hi_in else value < hi)):
+        raise InputError(f"{label} {value:g}: must be{allowed}")
+
+
+def _check_numbers(kwargs) -> None:
+    """Check every numeric option of the running command (:func:`check_number`)."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is None:
+        return
+    for param in ctx.command.params:
+        if param.name not in kwargs:
+            continue
+        label = next((o for o in param.opts if o.startswith("--")), None) or \
+            param.human_readable_name
+        for value in _numbers(kwargs[param.name]):
+            check_number(label, value)
+
+
+def _numbers(value):
+    if isinstance(value, (tuple, list)):
+        for v in value:
+            yield from _numbers(v)
+    elif isinstance(value, (int, float)) and not isinstance(value, bool):
+        yield value
 
 
 def _one_line(exc) -> str:
@@ -525,6 +623,8 @@ def _ratings(values) -> list:
                 out.append(None if item == "none" else float(item))
             except ValueError:
                 raise InputError(f"--esd-pct {item!r}: not a number or 'none'") from None
+            if out[-1] is not None:
+                check_number("--esd-pct", out[-1])
     return list(dict.fromkeys(out))
 
 
@@ -649,7 +749,7 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
     from .screening import screen as run_screen
 
     case = load_case(case_name)
-    bus_list = None if buses is None else [int(b) for b in buses.split(",") if b.strip()]
+    bus_list = None if buses is None else _bus_list(buses)
     plot_p = _check_suffix(plot_path, _PLOT_SUFFIXES, "--plot")
     settings = _cct_settings(tol_ms, t_max, None)
     rows = run_screen(case_name, out_path, buses=bus_list, lines=lines, tol=settings["tol"],
@@ -668,6 +768,20 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
             click.echo(f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f}  {r['separated']}")
         else:
             click.echo(f"{where:<22} {'-':>7} {'-':>7}  {r['error'][:70]}")
+
+
+def _bus_list(text: str) -> list[int]:
+    """--buses B1,B2,...: bus numbers (InputError naming the first that is not one)."""
+    out = []
+    for item in (b.strip() for b in text.split(",")):
+        if item:
+            try:
+                out.append(int(item))
+            except ValueError:
+                raise InputError(f"--buses {item!r}: not a bus number") from None
+    if not out:
+        raise InputError("--buses: no bus number given")
+    return out
 
 
 # -- small-signal modes ------------------------------------------------------------------
