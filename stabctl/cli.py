@@ -234,6 +234,7 @@ def paper(out_dir, resume, only):
     """
     from .paper import write_paper_report
 
+    check_writable(out_dir, "--out", directory=True)
     path = write_paper_report(out_dir, progress=lambda msg: click.echo(msg, err=True),
                               resume=resume, only=only)
     click.echo(f"wrote {path}")
@@ -326,7 +327,37 @@ def _check_suffix(path, allowed, option) -> Path | None:
         raise InputError(f"{option} {path}: the file name must end in {' or '.join(allowed)}")
     if p.exists() and p.is_dir():
         raise InputError(f"{option} {path} is a directory")
+    check_writable(p, option)
     return p
+
+
+def check_writable(path, option: str, directory: bool = False) -> None:
+    """InputError (before any work) unless ``path`` can be written: a file in an existing
+    directory where a file can be created (tried with a temporary file, removed at once),
+    not itself a directory and, if it exists, writable. ``directory``: ``path`` is an
+    output directory, which may be created, inside an existing one."""
+    p = Path(path)
+    if directory:
+        if p.exists() and not p.is_dir():
+            raise InputError(f"{option} {path}: not a directory")
+        where = p if p.is_dir() else p.parent
+    else:
+        if p.is_dir():
+            raise InputError(f"{option} {path} is a directory")
+        where = p.parent
+    where = where if str(where) else Path(".")
+    if not where.is_dir():
+        raise InputError(f"{option} {path}: directory {where} does not exist (create it "
+                         "first; it is not created for you)")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=where, prefix=".stabctl-write-test.")
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise InputError(f"{option} {path}: cannot write in {where} "
+                         f"({exc.strerror or exc})") from None
+    if not directory and p.exists() and not os.access(p, os.W_OK):
+        raise InputError(f"{option} {path}: the file is not writable")
 
 
 def _save_plot_atomically(result, path: Path, title: str) -> None:
@@ -684,8 +715,7 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
     settings = _cct_settings(tol_ms, t_max, tf)
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
-    if Path(out_path).is_dir():
-        raise InputError(f"--out {out_path} is a directory")
+    check_writable(out_path, "--out")
     case = load_case(case_name)
     ratings = _ratings(esd_pct)
     for p in ratings:
@@ -751,6 +781,7 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
     case = load_case(case_name)
     bus_list = None if buses is None else _bus_list(buses)
     plot_p = _check_suffix(plot_path, _PLOT_SUFFIXES, "--plot")
+    check_writable(out_path, "--out")
     settings = _cct_settings(tol_ms, t_max, None)
     rows = run_screen(case_name, out_path, buses=bus_list, lines=lines, tol=settings["tol"],
                       t_max=t_max, workers=workers, scheduler=scheduler)
@@ -825,6 +856,8 @@ def eig(case_name, no_pss, n_areas, report, out_dir, as_json):
 
     if Path(out_dir).exists() and not Path(out_dir).is_dir():
         raise InputError(f"--out {out_dir} is not a directory")
+    if report:
+        check_writable(out_dir, "--out", directory=True)
     st = eig_study(load_case(case_name), no_pss=no_pss, n_areas=n_areas)
     written = [str(write_report(st, out_dir))] if report else []
     if as_json:
