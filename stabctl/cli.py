@@ -10,6 +10,7 @@ import functools
 import json
 import math
 import os
+import shlex
 import sys
 import tempfile
 import warnings
@@ -36,6 +37,9 @@ def _reports_errors(func):
             except StabctlError as exc:
                 click.echo(f"error: {_one_line(exc)}", err=True)
                 sys.exit(2)
+            except KeyboardInterrupt:
+                click.echo(_interrupted(kwargs), err=True)
+                sys.exit(130)
         for w in caught:
             click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
         return out
@@ -135,6 +139,32 @@ def _numbers(value):
             yield from _numbers(v)
     elif isinstance(value, (int, float)) and not isinstance(value, bool):
         yield value
+
+
+#: what an interrupted command keeps, by command (default: nothing)
+_KEPT = {
+    "sweep-cct": "finished jobs are in {out}; they are skipped",
+    "screen": "finished searches are in {out}; they are skipped",
+    "paper": "finished sweep records in {out} are kept with --resume",
+}
+
+
+def _interrupted(kwargs) -> str:
+    """The one line printed on Ctrl-C (SIGINT) by every command: what was kept and the
+    command that resumes (paper: with --resume)."""
+    ctx = click.get_current_context(silent=True)
+    name = ctx.info_name if ctx is not None else ""
+    argv = ["stabctl", *sys.argv[1:]]
+    if name == "paper" and "--resume" not in argv:
+        argv.append("--resume")
+    out = kwargs.get("out_path") or kwargs.get("out_dir") or ""
+    if name in ("sweep-cct", "screen") and out:
+        from .sweep import read_records
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            out = f"{out} ({len(read_records(out))} recorded)"
+    kept = _KEPT.get(name, "nothing is kept; the work starts again").format(out=out)
+    return f"interrupted: {kept}; resume with: {shlex.join(argv)}"
 
 
 def _one_line(exc) -> str:
@@ -710,7 +740,7 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
     """
     from .case import load_case
     from .cct import cct_jobs, default_faults, read_faults, storage_fleet
-    from .sweep import read_records, run_sweep
+    from .sweep import run_sweep
 
     settings = _cct_settings(tol_ms, t_max, tf)
     if workers is not None and workers < 1:
@@ -722,14 +752,8 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
         storage_fleet(case, p)
     faults = default_faults(case_name) if faults_src == "DEFAULT" else read_faults(faults_src)
     jobs = cct_jobs(case_name, faults, ratings, **settings)
-    try:
-        rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
-                        retry_failed=retry_failed)
-    except KeyboardInterrupt:
-        n = len(read_records(out_path))
-        click.echo(f"interrupted: {n} job(s) recorded in {out_path}; rerun the same command "
-                   "to resume", err=True)
-        sys.exit(130)
+    rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
+                    retry_failed=retry_failed)      # Ctrl-C: _reports_errors, exit 130
     if as_json:
         _print_json({"out": str(rep.out), "ran": rep.ran, "skipped": rep.skipped,
                      "failed": rep.failed, "wall_time_s": rep.wall_time_s,
