@@ -101,6 +101,7 @@ def fastest_time_constant(model: DynamicModel) -> tuple[float, str]:
     mp, ep, pp, gp = model.mp, model.ep, model.pp, model.gp
     for name, arr, sel in (
             ("mac_con T\"do", mp.Tdopp, mp.kind == 2), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2),
+            ("mac_con T'do", mp.Tdop, mp.kind >= 1), ("mac_con T'qo", mp.Tqop, mp.kind >= 1),
             *pp.time_constants(), *ep.time_constants(), *gp.time_constants()):
         if np.any(sel):
             k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))
