@@ -77,6 +77,8 @@ _SECTIONS[34] = ("system-wide data", "bus", "load", "fixed shunt", "generator", 
 _SKIPPED = {"system-wide data", "area", "zone", "inter-area transfer", "owner",
             "substation", "impedance correction table"}
 _IDE_ISOLATED = 4
+#: largest magnitude of a RAW number (bus numbers, MW, kV, pu alike are far below)
+_LARGEST = 1e12
 _TOKEN = re.compile(r"'[^']*'?|/|,|[^,\s'/]+")
 
 
@@ -197,6 +199,8 @@ class _Rec:
             self.fail(f"field {k + 1} '{vals[k]}' is not a number")
         if not math.isfinite(v):
             self.fail(f"field {k + 1} '{vals[k]}' is not a finite number")
+        if abs(v) > _LARGEST:
+            self.fail(f"field {k + 1} '{vals[k]}' is out of range (|value| <= {_LARGEST:g})")
         return v
 
     def int(self, row: int, k: int, default: int | None = None) -> int:
@@ -631,7 +635,10 @@ def read_raw(path: str | Path, loads: str = "impedance") -> RawData:
 def _dispatch(b: _Builder, rec: _Rec):
     handler = _HANDLERS.get(rec.section)
     if handler is not None:
-        handler(b, rec)
+        try:
+            handler(b, rec)
+        except (OverflowError, ZeroDivisionError) as exc:   # values no case can hold
+            rec.fail(f"the values give no finite per-unit data ({exc})")
     elif rec.section not in _SKIPPED:
         b.skip(rec, f"{rec.section} record")
 
