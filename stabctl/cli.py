@@ -50,15 +50,17 @@ def _reports_errors(func):
 
 _INF = float("inf")
 #: allowed range of each numeric option: (low, high, low included, high included, unit).
-#: Every float option, listed or not, must also be finite (no nan, inf).
+#: Every float option, listed or not, must also be finite (no nan, inf). The OMIB ranges
+#: (H, Pmax, f0) keep the swing frequency below about 25 Hz, so that the CCT bisection's
+#: runs stay short (H = 0.001 s, f0 = 1000 Hz ran for many minutes).
 _RANGES = {
     "--fault-cycles": (0, 600, True, True, "cycles"),
     "MORE_CYCLES": (0, 600, True, True, "cycles"),
-    "--H": (0, 100, False, True, "s"),
-    "--pm": (0, 100, True, True, "pu"),
+    "--H": (0.5, 50, True, True, "s"),
+    "--pm": (0, 10, True, True, "pu"),
     "--delta0": (0, 1.5707963267948966, False, False, "rad"),
-    "--pmax": (0, 100, False, True, "pu"),
-    "--f0": (1, 1000, True, True, "Hz"),
+    "--pmax": (0, 10, False, True, "pu"),
+    "--f0": (10, 400, True, True, "Hz"),
     "--t-fault": (0, 1000, True, True, "s"),
     "--clear-cycles": (0, 600, True, True, "cycles"),
     "--far-clear-cycles": (0, 600, True, True, "cycles"),
