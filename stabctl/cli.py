@@ -225,6 +225,11 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 
     if pmax is None:
         system = OMIB.from_operating_point(H=H, Pm=pm, delta0=delta0, f0=f0)
+        lo, hi = _RANGES["--pmax"][:2]
+        if not lo < system.Pmax_pre <= hi:
+            raise InputError(f"--delta0 {delta0:g} with --pm {pm:g}: Pmax = Pm/sin(delta0) = "
+                             f"{system.Pmax_pre:g} pu, outside the --pmax range "
+                             f"{_interval(_RANGES['--pmax'])}")
     else:
         system = OMIB(H=H, Pm=pm, Pmax_pre=pmax, Pmax_fault=0.0, Pmax_post=pmax, f0=f0)
     cycles = tuple(fault_cycles) + tuple(more_cycles) or (6.0, 12.0, 15.0)

@@ -63,6 +63,9 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
     (("estimate", "kundur", "--fault", 3, "--far-bus", 101, "--drop", 1), "--drop 1: must be in [0, 1)"),
     (("omib", "--H", "nan"), "--H nan"),
     (("omib", "6", "inf"), "MORE_CYCLES inf"),
+    # found by the slow fuzzing: each ran the CCT bisection for minutes
+    (("omib", "--delta0", "1e-7"), "Pmax = Pm/sin(delta0) = 5e+06 pu, outside the --pmax range"),
+    (("omib", "--H", "0.001", "--f0", "1000"), "--H 0.001: must be in [0.5, 50] s"),
     (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "5,nan"), "--esd-pct nan"),
     (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "1e6"), "--esd-pct 1e+06"),
     (("screen", "kundur", "--buses", "3,x"), "--buses 'x': not a bus number"),
