@@ -57,7 +57,7 @@ _RANGES = {
     "--fault-cycles": (0, 600, True, True, "cycles"),
     "MORE_CYCLES": (0, 600, True, True, "cycles"),
     "--H": (0.5, 50, True, True, "s"),
-    "--pm": (0, 10, True, True, "pu"),
+    "--pm": (0, 10, False, True, "pu"),
     "--delta0": (0, 1.5707963267948966, False, False, "rad"),
     "--pmax": (0, 10, False, True, "pu"),
     "--f0": (10, 400, True, True, "Hz"),

@@ -66,6 +66,7 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
     # found by the slow fuzzing: each ran the CCT bisection for minutes
     (("omib", "--delta0", "1e-7"), "Pmax = Pm/sin(delta0) = 5e+06 pu, outside the --pmax range"),
     (("omib", "--H", "0.001", "--f0", "1000"), "--H 0.001: must be in [0.5, 50] s"),
+    (("omib", "--pm", "0", "--pmax", "1e-7"), "--pm 0: must be in (0, 10] pu"),
     (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "5,nan"), "--esd-pct nan"),
     (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "1e6"), "--esd-pct 1e+06"),
     (("screen", "kundur", "--buses", "3,x"), "--buses 'x': not a bus number"),

@@ -241,7 +241,7 @@ def cli_property(command, options):
             raise StabctlError(lines[0])
         assert res.exit_code == 0 and res.exception is None, (args, res.exit_code,
                                                               res.exception, res.output)
-    outcome("cli", invoke)
+    outcome(f"cli {command[0]}", invoke)
 
 
 def _options(names, most):
