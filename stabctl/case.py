@@ -410,8 +410,8 @@ class MachineTable(Table):
     ==  ==========  ===============================================================
 
     Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``).
-    Validation: unique positive integer machine numbers, mva > 0, H >= 0, reactances and
-    ra >= 0, speed_effects 0 or 1.
+    Validation: unique positive integer machine numbers, mva > 0, H > 0, reactances and
+    ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), speed_effects 0 or 1.
     """
 
     number: np.ndarray
@@ -453,10 +453,18 @@ class MachineTable(Table):
         self._require(self.number > 0, "number", "machine number must be a positive integer")
         self._unique("number", "machine number")
         self._require(self.mva > 0, "mva", "machine base must be > 0")
-        self._require(self.H >= 0, "H", "inertia constant must be >= 0")
+        self._require(self.H > 0, "H", "inertia constant must be > 0 s (H = 0, an "
+                      "infinite bus, is not modelled)")
         self._require(np.isin(self.speed_effects, (0.0, 1.0)), "speed_effects",
                       "speed_effects must be 0 or 1")
         self._nonnegative(*self.REACTANCES, *self.TIME_CONSTANTS)
+        # the open-circuit time constants a machine's model divides by (x_d = 0: classical,
+        # none; x"d = 0: transient, T'do; else subtransient, T'do and T"do); T'qo, T"qo of 0
+        # mean "no such circuit" (PST)
+        self._require((self.xd == 0) | (self.Tdop > 0), "Tdop",
+                      "T'do must be > 0 s for a transient or subtransient machine (x_d > 0)")
+        self._require((self.xd == 0) | (self.xdpp == 0) | (self.Tdopp > 0), "Tdopp",
+                      "T\"do must be > 0 s for a subtransient machine (x\"d > 0)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -576,7 +584,7 @@ class PssTable(Table):
     ==  =======  ==================================================================
 
     Omitted columns are 0.  Validation: type in {1, 2, 3}, one PSS per machine, washout and
-    lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0.
+    lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0, Tw > 0, T2 > 0 for types 1 and 2.
     """
 
     type: np.ndarray
@@ -614,6 +622,9 @@ class PssTable(Table):
         self._require(np.isin(self.type, (1, 2, 3)), "type", "pss type must be 1, 2 or 3")
         self._unique("machine", "pss on machine")
         self._nonnegative("Tw", "T2", "T4", "T6", "Tr1", "Tr2")  # washout and lag constants
+        self._require(self.Tw > 0, "Tw", "washout time constant must be > 0 s")
+        self._require((self.type == 3) | (self.T2 > 0), "T2",
+                      "first lag time constant must be > 0 s for PST's pss (types 1, 2)")
 
 
 @dataclass(frozen=True, eq=False)

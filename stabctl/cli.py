@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import os
+import shlex
 import sys
 import tempfile
 import warnings
@@ -22,6 +24,7 @@ from .errors import InputError, SimulationError, StabctlError
 def _reports_errors(func):
     """Turn stabctl errors into a one-line message and exit status 2.
 
+    Numeric options are checked first (:func:`_check_numbers`: finite, in range).
     Python warnings raised meanwhile are held back: on success they are printed as
     `warning:` lines on stderr, on error only the `error:` line is printed."""
     @functools.wraps(func)
@@ -29,14 +32,141 @@ def _reports_errors(func):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("default")
             try:
+                _check_numbers(kwargs)
                 out = func(*args, **kwargs)
             except StabctlError as exc:
                 click.echo(f"error: {_one_line(exc)}", err=True)
                 sys.exit(2)
+            except KeyboardInterrupt:
+                click.echo(_interrupted(kwargs), err=True)
+                sys.exit(130)
         for w in caught:
             click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
         return out
     return wrapper
+
+
+# -- numeric options checked at the edge -------------------------------------------------
+
+_INF = float("inf")
+#: allowed range of each numeric option: (low, high, low included, high included, unit).
+#: Every float option, listed or not, must also be finite (no nan, inf). The OMIB ranges
+#: (H, Pmax, f0) keep the swing frequency below about 25 Hz, so that the CCT bisection's
+#: runs stay short (H = 0.001 s, f0 = 1000 Hz ran for many minutes).
+_RANGES = {
+    "--fault-cycles": (0, 600, True, True, "cycles"),
+    "MORE_CYCLES": (0, 600, True, True, "cycles"),
+    "--H": (0.5, 50, True, True, "s"),
+    "--pm": (0, 10, False, True, "pu"),
+    "--delta0": (0, 1.5707963267948966, False, False, "rad"),
+    "--pmax": (0, 10, False, True, "pu"),
+    "--f0": (10, 400, True, True, "Hz"),
+    "--t-fault": (0, 1000, True, True, "s"),
+    "--clear-cycles": (0, 600, True, True, "cycles"),
+    "--far-clear-cycles": (0, 600, True, True, "cycles"),
+    "--t-trip": (0, 1000, True, True, "s"),
+    "--tf": (0, 3600, False, True, "s"),
+    "--step": (0, 1, False, True, "s"),
+    "--separation-limit": (0, 100, False, True, "rad"),
+    "--esd-pct": (0, 100, False, True, "% of machine MVA"),
+    "--deadband-hz": (0, 10, True, True, "Hz"),
+    "--v-gate": (0, 2, True, True, "pu"),
+    "--hysteresis-hz": (0, 10, True, True, "Hz"),
+    "--tol-ms": (0, 1000, False, True, "ms"),
+    "--t-max": (0, 100, False, True, "s"),
+    "--workers": (1, 1024, True, True, ""),
+    "--circuit": (1, 99, True, True, ""),
+    "--areas": (1, 1000, True, True, ""),
+    "--target-cct-gain": (0, 1000, False, True, "%"),
+    "--zeta-min": (0, 1, True, False, ""),
+    "--max-sites": (1, 100000, True, True, ""),
+    "--max-site-pct": (0, 100, False, True, "% of machine MVA"),
+    "--site-cost": (0, 1e6, True, True, "MW"),
+    "--amplitude-hz": (0, 10, False, True, "Hz"),
+    "--max-iter": (1, 1000, True, True, ""),
+    "--rate": (1, 1000, True, True, "frames/s"),
+    "--latency-ms": (0, 10000, True, True, "ms"),
+    "--drop": (0, 1, True, False, ""),
+    "--tve-pct": (0, 100, True, True, "%"),
+    "--fe-hz": (0, 10, True, True, "Hz"),
+    "--rfe-hz-s": (0, 100, True, True, "Hz/s"),
+    "--k-sigma": (0, 100, False, True, ""),
+    "--runs": (1, 100000, True, True, ""),
+    "--seed": (0, 2**32 - 1, True, True, ""),
+    "--settle-ms": (0, 100000, True, True, "ms"),
+    "--ambient-s": (0, 36000, True, True, "s"),
+    "--ambient-pct": (0, 100, True, True, "%"),
+    "--ambient-tau-s": (0, 3600, False, True, "s"),
+    "--ambient-runs": (1, 10000, True, True, ""),
+}
+
+
+def _interval(spec) -> str:
+    lo, hi, lo_in, hi_in, unit = spec
+    return (f"{'[' if lo_in else '('}{lo:g}, {hi:g}{']' if hi_in else ')'}"
+            + (f" {unit}" if unit else ""))
+
+
+def check_number(label: str, value) -> None:
+    """InputError unless ``value`` is finite and inside the range of option ``label``
+    (:data:`_RANGES`); the message names the option, the value and the allowed range."""
+    spec = _RANGES.get(label)
+    allowed = f" in {_interval(spec)}" if spec else ""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise InputError(f"{label} {value}: must be a finite number{allowed}")
+    if spec is None:
+        return
+    lo, hi, lo_in, hi_in, _ = spec
+    if not ((value >= lo if lo_in else value > lo) and (value <= hi if hi_in else value < hi)):
+        raise InputError(f"{label} {value:g}: must be{allowed}")
+
+
+def _check_numbers(kwargs) -> None:
+    """Check every numeric option of the running command (:func:`check_number`)."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is None:
+        return
+    for param in ctx.command.params:
+        if param.name not in kwargs:
+            continue
+        label = next((o for o in param.opts if o.startswith("--")), None) or \
+            param.human_readable_name
+        for value in _numbers(kwargs[param.name]):
+            check_number(label, value)
+
+
+def _numbers(value):
+    if isinstance(value, (tuple, list)):
+        for v in value:
+            yield from _numbers(v)
+    elif isinstance(value, (int, float)) and not isinstance(value, bool):
+        yield value
+
+
+#: what an interrupted command keeps, by command (default: nothing)
+_KEPT = {
+    "sweep-cct": "finished jobs are in {out}; they are skipped",
+    "screen": "finished searches are in {out}; they are skipped",
+    "paper": "finished sweep records in {out} are kept with --resume",
+}
+
+
+def _interrupted(kwargs) -> str:
+    """The one line printed on Ctrl-C (SIGINT) by every command: what was kept and the
+    command that resumes (paper: with --resume)."""
+    ctx = click.get_current_context(silent=True)
+    name = ctx.info_name if ctx is not None else ""
+    argv = ["stabctl", *sys.argv[1:]]
+    if name == "paper" and "--resume" not in argv:
+        argv.append("--resume")
+    out = kwargs.get("out_path") or kwargs.get("out_dir") or ""
+    if name in ("sweep-cct", "screen") and out:
+        from .sweep import read_records
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            out = f"{out} ({len(read_records(out))} recorded)"
+    kept = _KEPT.get(name, "nothing is kept; the work starts again").format(out=out)
+    return f"interrupted: {kept}; resume with: {shlex.join(argv)}"
 
 
 def _one_line(exc) -> str:
@@ -79,11 +209,6 @@ def _model_options(func):
                              "included); docs/conventions.md.")(func)
 
 
-def _check_step(step) -> None:
-    if step is not None and not 0 < step < float("inf"):
-        raise InputError(f"--step must be a positive number of seconds, got {step:g}")
-
-
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="stabctl")
 def main():
@@ -113,6 +238,11 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 
     if pmax is None:
         system = OMIB.from_operating_point(H=H, Pm=pm, delta0=delta0, f0=f0)
+        lo, hi = _RANGES["--pmax"][:2]
+        if not lo < system.Pmax_pre <= hi:
+            raise InputError(f"--delta0 {delta0:g} with --pm {pm:g}: Pmax = Pm/sin(delta0) = "
+                             f"{system.Pmax_pre:g} pu, outside the --pmax range "
+                             f"{_interval(_RANGES['--pmax'])}")
     else:
         system = OMIB(H=H, Pm=pm, Pmax_pre=pmax, Pmax_fault=0.0, Pmax_post=pmax, f0=f0)
     cycles = tuple(fault_cycles) + tuple(more_cycles) or (6.0, 12.0, 15.0)
@@ -156,6 +286,7 @@ def paper(out_dir, resume, only):
     """
     from .paper import write_paper_report
 
+    check_writable(out_dir, "--out", directory=True)
     path = write_paper_report(out_dir, progress=lambda msg: click.echo(msg, err=True),
                               resume=resume, only=only)
     click.echo(f"wrote {path}")
@@ -247,7 +378,37 @@ def _check_suffix(path, allowed, option) -> Path | None:
         raise InputError(f"{option} {path}: the file name must end in {' or '.join(allowed)}")
     if p.exists() and p.is_dir():
         raise InputError(f"{option} {path} is a directory")
+    check_writable(p, option)
     return p
+
+
+def check_writable(path, option: str, directory: bool = False) -> None:
+    """InputError (before any work) unless ``path`` can be written: a file in an existing
+    directory where a file can be created (tried with a temporary file, removed at once),
+    not itself a directory and, if it exists, writable. ``directory``: ``path`` is an
+    output directory, which may be created, inside an existing one."""
+    p = Path(path)
+    if directory:
+        if p.exists() and not p.is_dir():
+            raise InputError(f"{option} {path}: not a directory")
+        where = p if p.is_dir() else p.parent
+    else:
+        if p.is_dir():
+            raise InputError(f"{option} {path} is a directory")
+        where = p.parent
+    where = where if str(where) else Path(".")
+    if not where.is_dir():
+        raise InputError(f"{option} {path}: directory {where} does not exist (create it "
+                         "first; it is not created for you)")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=where, prefix=".stabctl-write-test.")
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise InputError(f"{option} {path}: cannot write in {where} "
+                         f"({exc.strerror or exc})") from None
+    if not directory and p.exists() and not os.access(p, os.W_OK):
+        raise InputError(f"{option} {path}: the file is not writable")
 
 
 def _save_plot_atomically(result, path: Path, title: str) -> None:
@@ -389,7 +550,6 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
 
     out_p = _check_suffix(out_path, _OUT_SUFFIXES, "--out")
     plot_p = _check_suffix(plot_path, _PLOT_SUFFIXES, "--plot")
-    _check_step(step)
     if not separation_limit > 0:
         raise InputError(f"--separation-limit must be > 0 rad, got {separation_limit:g}")
     case = load_case(case_name)
@@ -525,7 +685,6 @@ def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, tol_ms, t_ma
     from .simulation import Simulator
 
     settings = _cct_settings(tol_ms, t_max, tf)
-    _check_step(step)
     case = load_case(case_name)
     storage = storage_fleet(case, esd_pct)
     line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
@@ -549,6 +708,8 @@ def _ratings(values) -> list:
                 out.append(None if item == "none" else float(item))
             except ValueError:
                 raise InputError(f"--esd-pct {item!r}: not a number or 'none'") from None
+            if out[-1] is not None:
+                check_number("--esd-pct", out[-1])
     return list(dict.fromkeys(out))
 
 
@@ -606,28 +767,20 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
     """
     from .case import load_case
     from .cct import cct_jobs, default_faults, read_faults, storage_fleet
-    from .sweep import read_records, run_sweep
+    from .sweep import run_sweep
 
     settings = _cct_settings(tol_ms, t_max, tf)
-    _check_step(step)
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
-    if Path(out_path).is_dir():
-        raise InputError(f"--out {out_path} is a directory")
+    check_writable(out_path, "--out")
     case = load_case(case_name)
     ratings = _ratings(esd_pct)
     for p in ratings:
         storage_fleet(case, p)
     faults = default_faults(case_name) if faults_src == "DEFAULT" else read_faults(faults_src)
     jobs = cct_jobs(case_name, faults, ratings, conventions=conventions, h=step, **settings)
-    try:
-        rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
-                        retry_failed=retry_failed)
-    except KeyboardInterrupt:
-        n = len(read_records(out_path))
-        click.echo(f"interrupted: {n} job(s) recorded in {out_path}; rerun the same command "
-                   "to resume", err=True)
-        sys.exit(130)
+    rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
+                    retry_failed=retry_failed)      # Ctrl-C: _reports_errors, exit 130
     if as_json:
         _print_json({"out": str(rep.out), "ran": rep.ran, "skipped": rep.skipped,
                      "failed": rep.failed, "wall_time_s": rep.wall_time_s,
@@ -679,10 +832,10 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
     from .screening import screen as run_screen
 
     case = load_case(case_name)
-    bus_list = None if buses is None else [int(b) for b in buses.split(",") if b.strip()]
+    bus_list = None if buses is None else _bus_list(buses)
     plot_p = _check_suffix(plot_path, _PLOT_SUFFIXES, "--plot")
+    check_writable(out_path, "--out")
     settings = _cct_settings(tol_ms, t_max, None)
-    _check_step(step)
     rows = run_screen(case_name, out_path, buses=bus_list, lines=lines, tol=settings["tol"],
                       t_max=t_max, workers=workers, scheduler=scheduler,
                       conventions=conventions, h=step)
@@ -702,6 +855,20 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
                        f"{r['separated']}")
         else:
             click.echo(f"{where:<22} {'-':>7} {'-':>7}  {r['error'][:70]}")
+
+
+def _bus_list(text: str) -> list[int]:
+    """--buses B1,B2,...: bus numbers (InputError naming the first that is not one)."""
+    out = []
+    for item in (b.strip() for b in text.split(",")):
+        if item:
+            try:
+                out.append(int(item))
+            except ValueError:
+                raise InputError(f"--buses {item!r}: not a bus number") from None
+    if not out:
+        raise InputError("--buses: no bus number given")
+    return out
 
 
 # -- small-signal modes ------------------------------------------------------------------
@@ -748,6 +915,8 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, as_json):
 
     if Path(out_dir).exists() and not Path(out_dir).is_dir():
         raise InputError(f"--out {out_dir} is not a directory")
+    if report:
+        check_writable(out_dir, "--out", directory=True)
     st = eig_study(load_case(case_name), no_pss=no_pss, n_areas=n_areas, conventions=conventions)
     written = [str(write_report(st, out_dir))] if report else []
     if as_json:
@@ -870,7 +1039,6 @@ def estimate(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency
     ambient = am.AmbientLoad(ambient_pct, ambient_tau_s, seed)
     settings = PMUSettings(rate=rate, tve=tve_pct / 100, fe_hz=fe_hz, rfe_hz_s=rfe_hz_s,
                            k_sigma=k_sigma, latency_s=latency_ms / 1000, drop_prob=drop)
-    _check_step(step)
     case = load_case(case_name)
     ev = fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles)
     if closed_loop or cct:
@@ -1050,7 +1218,6 @@ def place(case_name, faults_src, target_cct_gain, zeta_min, max_sites, max_site_
     from .sweep import default_workers
 
     settings = _cct_settings(tol_ms, 1.0, None)
-    _check_step(step)
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
     if max_sites is not None and max_sites < 1:

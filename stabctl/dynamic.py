@@ -383,6 +383,9 @@ def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
+    if len(stage.machines) == 0:
+        raise InputError(f"case '{stage.name}' has no machines (mac_con is empty): a dynamic "
+                         "run or linearisation needs at least one")
     br = stage.branches
     closed = br.x < OPEN_X / 10
     f, t = stage.bus_indices(br.from_bus[closed]), stage.bus_indices(br.to_bus[closed])

@@ -16,6 +16,7 @@ Units: machine, exciter and governor data on the machine base `mbase` (MVA), as 
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -119,12 +120,17 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
     params = []
     for k, tok in enumerate(tokens[3:], 1):
         try:
-            params.append(float(tok.replace("D", "E").replace("d", "e")))
+            value = float(tok.replace("D", "E").replace("d", "e"))
         except ValueError:
             if model in N_PARAMS:
                 raise CaseError(f"{file}:{line}: {model} parameter {k} {tok!r} is not a "
                                 "number") from None
-            params.append(float("nan"))   # e.g. USRMDL's quoted names: reported unsupported
+            value = float("nan")          # e.g. USRMDL's quoted names: reported unsupported
+        else:
+            if model in N_PARAMS and not math.isfinite(value):
+                raise CaseError(f"{file}:{line}: {model} parameter {k} {tok!r} is not a "
+                                "finite number")
+        params.append(value)
     return DyrRecord(file, line, bus, model, _machine_id(tokens[2]), tuple(params))
 
 
@@ -138,7 +144,7 @@ def _integer(tok: str) -> int | None:
         v = float(tok.strip("'"))
     except ValueError:
         return None
-    return int(v) if v.is_integer() else None
+    return int(v) if math.isfinite(v) and v.is_integer() else None
 
 
 # -- mapping ------------------------------------------------------------------------------------

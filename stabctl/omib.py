@@ -205,6 +205,9 @@ class OMIB:
         (located by an integration event).
         """
         dcr = self.critical_clearing_angle()
+        if self.Pm == 0:
+            raise InputError("Pm = 0: the fault does not accelerate the machine, there is no "
+                             "critical clearing time")
         if self.Pmax_fault == 0 and self.D == 0:
             return float(np.sqrt(2 * self.M * (dcr - self.delta0) / self.Pm))
         event = lambda t, x: x[0] - dcr  # noqa: E731

@@ -15,8 +15,6 @@ are JSON-able jobs run in parallel worker processes (`worker_pool`, `verify`).
 
 from __future__ import annotations
 
-import multiprocessing
-from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -193,10 +191,15 @@ def worker_pool(workers: int):
     if workers == 1:
         yield lambda func, jobs: [func(**j) for j in jobs]
         return
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+    from .sweep import process_pool, stop_pool
+
+    pool = process_pool(workers)      # workers die with this process (SIGKILL included)
     try:
         yield lambda func, jobs: [f.result() for f in [pool.submit(func, **j) for j in jobs]]
-    finally:
+    except BaseException:
+        stop_pool(pool)               # Ctrl-C: running evaluations killed, not waited for
+        raise
+    else:
         pool.shutdown(cancel_futures=True)
 
 

@@ -113,8 +113,10 @@ class PMUSettings:
         if self.rate not in RATES:
             raise InputError(f"PMU rate must be one of {', '.join(f'{r:g}' for r in RATES)} "
                              f"frames/s, got {self.rate:g}")
-        if min(self.tve, self.fe_hz, self.rfe_hz_s, self.latency_s) < 0 or self.k_sigma <= 0:
-            raise InputError("PMU accuracy limits and latency must be >= 0, k_sigma > 0")
+        limits = (self.tve, self.fe_hz, self.rfe_hz_s, self.latency_s)
+        if not (all(0 <= v < float("inf") for v in limits) and 0 < self.k_sigma < float("inf")):
+            raise InputError("PMU accuracy limits and latency must be finite and >= 0, "
+                             "k_sigma finite and > 0")
         if not 0 <= self.drop_prob < 1:
             raise InputError(f"dropped-frame probability must be in [0, 1), got {self.drop_prob}")
 

@@ -237,6 +237,29 @@ def _fail(case, it, dp, dq, what):
     )
 
 
+def _check_islands(case: Case, drop=()) -> None:
+    """PowerFlowError naming the buses without a path to a swing bus (an island of the
+    case data, or left by the dropped branches): the Newton step would only report a
+    singular Jacobian and the worst mismatch somewhere else."""
+    from scipy.sparse.csgraph import connected_components
+
+    n = case.n_bus
+    keep = np.ones(len(case.branches), bool)
+    keep[[d for d in drop if 0 <= d < keep.size]] = False
+    f = case.bus_indices(case.branches.from_bus[keep])
+    t = case.bus_indices(case.branches.to_bus[keep])
+    _, label = connected_components(sp.coo_matrix((np.ones(f.size), (f, t)), shape=(n, n)),
+                                    directed=False)
+    dead = np.flatnonzero(~np.isin(label, label[case.buses.kind == SWING]))
+    if dead.size:
+        nums = [int(b) for b in case.buses.number[dead]]
+        listing = ", ".join(map(str, nums[:10])) + (f" and {len(nums) - 10} more"
+                                                    if len(nums) > 10 else "")
+        cause = "the dropped branch(es)" if drop else "the case data (no branch joins them)"
+        raise PowerFlowError(f"power flow of case '{case.name}': bus(es) {listing} have no "
+                             f"path to a swing bus: an island left by {cause}")
+
+
 def _move_taps(case: Case, vmag, taps) -> bool:
     """PST ``lftap``: step the taps of branches feeding a bus at a voltage limit.
 
@@ -332,6 +355,7 @@ def solve_powerflow(
     PST manual section 1.4.
     """
     drop = tuple(int(d) for d in drop)
+    _check_islands(case, drop)
     taps = case.branches.tap.copy()
     taps[taps == 0] = 1.0
     for tap_it in range(1, _TAP_ITER_MAX + 1):

@@ -77,6 +77,8 @@ _SECTIONS[34] = ("system-wide data", "bus", "load", "fixed shunt", "generator", 
 _SKIPPED = {"system-wide data", "area", "zone", "inter-area transfer", "owner",
             "substation", "impedance correction table"}
 _IDE_ISOLATED = 4
+#: largest magnitude of a RAW number (bus numbers, MW, kV, pu alike are far below)
+_LARGEST = 1e12
 _TOKEN = re.compile(r"'[^']*'?|/|,|[^,\s'/]+")
 
 
@@ -192,9 +194,14 @@ class _Rec:
                 self.fail(f"field {k + 1} missing")
             return float(default)
         try:
-            return float(vals[k].replace("D", "E").replace("d", "e"))
+            v = float(vals[k].replace("D", "E").replace("d", "e"))
         except ValueError:
             self.fail(f"field {k + 1} '{vals[k]}' is not a number")
+        if not math.isfinite(v):
+            self.fail(f"field {k + 1} '{vals[k]}' is not a finite number")
+        if abs(v) > _LARGEST:
+            self.fail(f"field {k + 1} '{vals[k]}' is out of range (|value| <= {_LARGEST:g})")
+        return v
 
     def int(self, row: int, k: int, default: int | None = None) -> int:
         """Field ``k`` of line ``row`` as an integer (see :meth:`num`)."""
@@ -236,26 +243,76 @@ def _record_lines(sec: str, first: list[str], rec_file: str, lineno: int) -> int
     return {"two-terminal dc line": 3, "vsc dc line": 3}.get(sec, 1)
 
 
+#: Fields per record line of the sections stabctl reads: (fewest, most) by version
+#: group (32/33, 34). The fewest are the fields up to the last one the reader uses (a
+#: shorter line would silently take PSS/E defaults for data that are in every file
+#: PSS/E writes); the most are the POM record layouts (with ownership data), so that a
+#: record of another section is not read as one of this section.
+_FIELDS = {
+    "bus": ((9, 13), (9, 13)),
+    "load": ((11, 15), (11, 20)),
+    "fixed shunt": ((5, 5), (5, 5)),
+    "generator": ((15, 28), (16, 30)),
+    "branch": ((14, 24), (24, 34)),
+    "switched shunt": ((10, 26), (11, 36)),
+}
+#: transformer record lines (line 1, 2, 3, 4) of a two-winding transformer: (fewest, most)
+_XFMR_FIELDS = (((12, 23), (2, 3), (3, 18), (2, 2)), ((12, 24), (2, 3), (3, 28), (2, 2)))
+#: sections that writers of an older version leave out: 'Q' may end the data before them
+_OPTIONAL_TAIL = {"gne device", "induction machine", "substation"}
+
+
+def _check_fields(rec: _Rec, version: int) -> None:
+    """CaseError naming file:line when a record line has fewer or more fields than its
+    section's layout (a cut or merged line, or a record of another section)."""
+    group = 1 if version >= 34 else 0
+    if rec.section in _FIELDS:
+        limits = [_FIELDS[rec.section][group]]
+    elif rec.section == "transformer" and len(rec.lines) == 4:
+        limits = _XFMR_FIELDS[group]
+    else:
+        return
+    for row, ((lo, hi), vals) in enumerate(zip(limits, rec.lines)):
+        if not lo <= len(vals) <= hi:
+            want = f"{lo}" if lo == hi else f"{lo} to {hi}"
+            where = f" (line {row + 1} of the record)" if len(limits) > 1 else ""
+            raise CaseError(f"{rec.file}:{rec.line + row} {rec.section} record{where}: "
+                            f"{len(vals)} field(s), the v{version} layout has {want}: a "
+                            "cut or merged line, or a missing '0 /' section terminator")
+
+
 def _records(lines: list[str], path: Path, version: int):
     """Yield records (``_Rec``, with ``section``) of the data sections, in file order.
 
     A record whose first field is ``0`` ends a section, ``Q`` ends the data, ``@!``
-    lines (v34 column headings) and blank lines are skipped.
+    lines (v34 column headings) and blank lines are skipped. Every section must be ended
+    by its ``0`` record before ``Q`` (sections that older writers leave out, GNE devices,
+    induction machines, substations, may be missing) and the file must end with ``Q`` or
+    after the last section: a file cut short is refused (CaseError naming file:line),
+    never read as a smaller case. Each record line must have its section's field count
+    (:data:`_FIELDS`).
     """
     sections = _SECTIONS[version]
-    k, pending, need = 0, None, 0
+    k, pending, need, last = 0, None, 0, 3
     for lineno, text in enumerate(lines[3:], start=4):
         if not text.strip() or text.lstrip().startswith("@!"):
             continue
+        last = lineno
         fields = split_fields(text)
         if pending is not None:
             pending.lines.append(fields)
             if len(pending.lines) == need:
+                _check_fields(pending, version)
                 yield pending
                 pending = None
             continue
         head = fields[0].strip() if fields else ""
         if head.upper() == "Q":
+            missing = sections[k:]
+            if missing and not set(missing) <= _OPTIONAL_TAIL:
+                raise CaseError(f"{path.name}:{lineno}: 'Q' (end of data) inside the "
+                                f"{sections[k]} data: {len(missing)} section(s) not ended by "
+                                "their '0 /' record (a terminator is missing)")
             return
         if k >= len(sections):
             raise CaseError(f"{path.name}:{lineno}: data after the last section "
@@ -266,10 +323,15 @@ def _records(lines: list[str], path: Path, version: int):
         pending = _Rec(path.name, lineno, [fields], sections[k])
         need = _record_lines(sections[k], fields, path.name, lineno)
         if need == 1:
+            _check_fields(pending, version)
             yield pending
             pending = None
     if pending is not None:
         pending.fail(f"file ends inside the record ({len(pending.lines)} of {need} lines)")
+    if k < len(sections):
+        raise CaseError(f"{path.name}:{last}: the file ends in the {sections[k]} data, "
+                        "without its '0 /' terminator and the 'Q' record: the file is cut "
+                        "short (nothing imported)")
 
 
 # --------------------------------------------------------------------------------------
@@ -292,6 +354,14 @@ class _Builder:
     gens: list = field(default_factory=list)
     gen_vs: dict = field(default_factory=dict)
     unsupported: list = field(default_factory=list)
+    seen: dict = field(default_factory=dict)       # (section, ids) -> first line
+
+    def once(self, rec: _Rec, key: tuple, what: str):
+        """CaseError when a record with the same identity came before (a duplicated
+        record: PSS/E refuses it, and a parallel circuit needs its own CKT id)."""
+        first = self.seen.setdefault((rec.section, *key), rec.line)
+        if first != rec.line:
+            rec.fail(f"{what} appears twice (first at line {first})")
 
     def skip(self, rec: _Rec, what: str):
         self.unsupported.append(rec.source(what))
@@ -329,6 +399,7 @@ def _bus(b: _Builder, rec: _Rec):
 def _load(b: _Builder, rec: _Rec):
     """Load: I, ID, STATUS, AREA, ZONE, PL, QL, IP, IQ, YP, YQ (POM Load Data)."""
     num = rec.int(0, 0)
+    b.once(rec, (num, rec.text(0, 1)), f"load at bus {num} '{rec.text(0, 1)}'")
     row = b.bus_row(rec, num, "load")
     if row is None or rec.int(0, 2, 1) == 0:
         return
@@ -344,6 +415,8 @@ def _load(b: _Builder, rec: _Rec):
 
 def _fixed_shunt(b: _Builder, rec: _Rec):
     """Fixed shunt: I, ID, STATUS, GL, BL (POM Fixed Shunt Data)."""
+    b.once(rec, (rec.int(0, 0), rec.text(0, 1)),
+           f"fixed shunt at bus {rec.int(0, 0)} '{rec.text(0, 1)}'")
     row = b.bus_row(rec, rec.int(0, 0), "fixed shunt")
     if row is not None and rec.int(0, 2, 1) != 0:
         row[7] += rec.num(0, 3, 0.0) / b.base
@@ -354,6 +427,7 @@ def _generator(b: _Builder, rec: _Rec):
     """Generator: I, ID, PG, QG, QT, QB, VS, IREG, [NREG (v34)], MBASE, ZR, ZX, RT, XT,
     GTAP, STAT (POM Generator Data)."""
     num, gid = rec.int(0, 0), rec.text(0, 1)
+    b.once(rec, (num, gid), f"generator at bus {num} '{gid}'")
     row = b.bus_row(rec, num, "generator")
     o = 1 if b.version >= 34 else 0  # v34 inserts NREG after IREG
     if row is None or rec.int(0, 14 + o, 1) == 0:
@@ -401,6 +475,7 @@ def _branch(b: _Builder, rec: _Rec):
     ST (POM Non-Transformer Branch Data; J < 0 marks the metered end)."""
     i, j, ckt = rec.int(0, 0), abs(rec.int(0, 1)), rec.text(0, 2)
     what = f"branch {i}-{j} '{ckt}'"
+    b.once(rec, (min(i, j), max(i, j), ckt), what)
     if _ends(b, rec, i, j, "branch") is None:
         return
     k = 19 if b.version >= 34 else 9  # GI
@@ -421,6 +496,7 @@ def _transformer(b: _Builder, rec: _Rec):
     TAB1 (field 14; v34: field 24, after 12 ratings and NODE1); line 4 WINDV2, NOMV2."""
     i, j, k3, ckt = rec.int(0, 0), rec.int(0, 1), rec.int(0, 2, 0), rec.text(0, 3)
     what = f"transformer {i}-{j}" + (f"-{k3}" if k3 else "") + f" '{ckt}'"
+    b.once(rec, (*sorted((i, j, k3)), ckt), what)
     if k3 != 0:
         return b.skip(rec, f"three-winding {what}")
     ends = _ends(b, rec, i, j, "transformer")
@@ -476,7 +552,10 @@ def _impedance(b: _Builder, rec: _Rec, bus_i: list, what: str) -> tuple[float, f
 
 def _switched_shunt(b: _Builder, rec: _Rec):
     """Switched shunt at its initial susceptance: I, MODSW, ADJM, STAT, VSWHI, VSWLO,
-    SWREM, [NREG (v34)], RMPCT, 'RMIDNT', BINIT (POM Switched Shunt Data)."""
+    SWREM, [NREG (v34)], RMPCT, 'RMIDNT', BINIT (POM Switched Shunt Data); v32/v33 have
+    one per bus."""
+    if b.version < 34:
+        b.once(rec, (rec.int(0, 0),), f"switched shunt at bus {rec.int(0, 0)}")
     row = b.bus_row(rec, rec.int(0, 0), "switched shunt")
     if row is not None and rec.int(0, 3, 1) != 0:
         row[8] += rec.num(0, 10 if b.version >= 34 else 9) / b.base
@@ -556,7 +635,10 @@ def read_raw(path: str | Path, loads: str = "impedance") -> RawData:
 def _dispatch(b: _Builder, rec: _Rec):
     handler = _HANDLERS.get(rec.section)
     if handler is not None:
-        handler(b, rec)
+        try:
+            handler(b, rec)
+        except (OverflowError, ZeroDivisionError) as exc:   # values no case can hold
+            rec.fail(f"the values give no finite per-unit data ({exc})")
     elif rec.section not in _SKIPPED:
         b.skip(rec, f"{rec.section} record")
 

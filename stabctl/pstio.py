@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import json
 import re
+import warnings
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -64,6 +65,8 @@ PST_TABLES: Mapping[str, str] = {
 _SCALARS = {"basmva": "base_mva", "sys_freq": "freq_hz"}
 _DEFAULT_BASE_MVA = 100.0
 _DEFAULT_FREQ_HZ = 60.0
+_DEFAULTS = {"base_mva": _DEFAULT_BASE_MVA, "freq_hz": _DEFAULT_FREQ_HZ}
+_UNITS = {"base_mva": "MVA", "freq_hz": "Hz"}
 
 
 # --------------------------------------------------------------------------------------
@@ -90,6 +93,11 @@ def case_from_matrices(
     tables = {field: TABLES[field].from_matrix(mats[key])
               for key, field in PST_TABLES.items() if key in mats}
     bases = {field: _scalar(mats[key], key) for key, field in _SCALARS.items() if key in mats}
+    for key, field in _SCALARS.items():
+        if field not in bases:  # PST data files leave the bases to the calling script
+            default = _DEFAULTS[field]
+            warnings.warn(f"{name}: the data defines no '{key}': {field} = {default:g} "
+                          f"{_UNITS[field]} (PST's default)", UserWarning, stacklevel=2)
     extra = {k: v for k, v in mats.items()
              if k not in PST_TABLES and k not in _SCALARS and k != "sw_con"
              and _is_numeric(v) and not _is_empty(v)}
@@ -118,7 +126,10 @@ def _is_numeric(v) -> bool:
 
 
 def _scalar(v, key: str) -> float:
-    arr = np.asarray(v, dtype=float).ravel()
+    try:
+        arr = np.asarray(v, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise CaseError(f"{key}: expected a number, got {_short(repr(v))}") from None
     if arr.size != 1:
         raise CaseError(f"{key}: expected a scalar, got {arr.size} values")
     return float(arr[0])
@@ -366,32 +377,60 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
             f"{where}: case format version {data.get('version')!r} not supported "
             f"(this stabctl reads version {FORMAT_VERSION})"
         )
-    raw_tables = data.get("tables", {})
+    raw_tables = data.get("tables")
+    if not isinstance(raw_tables, Mapping):
+        raise CaseError(f"{where}: no 'tables' object (the case's tables by name: "
+                        f"{', '.join(TABLES)}; at least buses and branches)")
     unknown = set(raw_tables) - set(TABLES)
     if unknown:
         raise CaseError(f"{where}: unknown table(s) {sorted(unknown)}; known: {list(TABLES)}")
+    for required in ("buses", "branches"):
+        if required not in raw_tables:
+            raise CaseError(f"{where}: tables: no '{required}' table")
     tables = {field: _table_from_json(TABLES[field], raw_tables[field], where)
               for field in TABLES if field in raw_tables}
-    try:
-        return Case(
-            name=str(data.get("name", Path(where).stem)),
-            base_mva=float(data.get("base_mva", _DEFAULT_BASE_MVA)),
-            freq_hz=float(data.get("freq_hz", _DEFAULT_FREQ_HZ)),
-            sw_con=data.get("sw_con"),
-            extra=data.get("extra") or {},
-            source=str(data.get("source", "")),
-            description=str(data.get("description", "")),
-            **tables,
-        )
-    except TypeError as exc:  # e.g. missing buses/branches
-        raise CaseError(f"{where}: {exc}") from None
+    extra = data.get("extra") or {}
+    if not isinstance(extra, Mapping):
+        raise CaseError(f"{where}: 'extra' must be an object of matrices by name")
+    for key, value in extra.items():
+        if not _is_numeric(value):
+            raise CaseError(f"{where}: extra matrix '{key}' is not a numeric matrix")
+    return Case(
+        name=str(data.get("name", Path(where).stem)),
+        base_mva=_field_number(data, "base_mva", where),
+        freq_hz=_field_number(data, "freq_hz", where),
+        sw_con=data.get("sw_con"),
+        extra=extra,
+        source=str(data.get("source", "")),
+        description=str(data.get("description", "")),
+        **tables,
+    )
+
+
+def _field_number(data: Mapping, key: str, where: str) -> float:
+    """A required positive finite number of the own format (base_mva, freq_hz): no silent
+    default."""
+    what = {"base_mva": "system base, MVA", "freq_hz": "nominal frequency, Hz"}[key]
+    if key not in data:
+        raise CaseError(f"{where}: no '{key}' ({what}, a number > 0)")
+    value = data[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise CaseError(f"{where}: '{key}' must be a number > 0 ({what}), got {value!r}")
+    return float(value)
 
 
 def _table_from_json(cls, raw: Mapping, where: str):
+    if not isinstance(raw, Mapping):
+        raise CaseError(f"{where}: table '{cls.TABLE}' must be an object with 'columns' "
+                        "and 'rows'")
     cols = raw.get("columns")
     rows = raw.get("rows", [])
-    if not isinstance(cols, list):
-        raise CaseError(f"{where}: table '{cls.TABLE}' has no 'columns' list")
+    if not isinstance(cols, list) or not all(isinstance(c, str) for c in cols):
+        raise CaseError(f"{where}: table '{cls.TABLE}' has no 'columns' list of names")
+    if len(set(cols)) != len(cols):
+        raise CaseError(f"{where}: table '{cls.TABLE}' names a column twice")
+    if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
+        raise CaseError(f"{where}: table '{cls.TABLE}': 'rows' must be a list of rows")
     known = cls.columns()
     bad = [c for c in cols if c not in known]
     if bad:

@@ -122,6 +122,7 @@ def fastest_time_constant(case: Case) -> tuple[float, str]:
     pp, gp = pss.pss_params(case), governors.governor_params(case)
     for name, arr, sel in (
             ("mac_con T\"do", mp.Tdopp, mp.kind == 2), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2),
+            ("mac_con T'do", mp.Tdop, mp.kind >= 1), ("mac_con T'qo", mp.Tqop, mp.kind >= 1),
             *pp.time_constants(), *ep.time_constants(), *gp.time_constants()):
         if np.any(sel):
             k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))
@@ -139,6 +140,24 @@ def check_step(fastest: tuple[float, str], h: float) -> None:
     if h >= 2 * T:
         raise InputError(f"step {h} s is too large: the fastest time constant is {T} s "
                          f"({where}); the predictor-corrector needs h < {2 * T} s")
+
+
+#: most integration steps one run may take: a smaller step (or a longer run) is refused
+#: at once instead of running silently for minutes and filling the memory with the
+#: trajectory (miniWECC: 200000 steps are about 10 s and 0.7 GB)
+MAX_STEPS = 200_000
+
+
+def check_step_count(t_end: float, h: float) -> None:
+    """Raise InputError when a run to t_end (s) with step h (s) needs more than MAX_STEPS
+    steps."""
+    if not 0 < h < float("inf"):
+        raise InputError(f"step must be a finite number > 0 s, got {h}")
+    n = t_end / h
+    if not n <= MAX_STEPS:
+        raise InputError(f"step {h:g} s: a run to {t_end:g} s needs {n:.3g} steps, more than "
+                         f"the limit {MAX_STEPS} (stabctl.simulation.MAX_STEPS); use a larger "
+                         "step (--step) or a shorter run (--tf)")
 
 
 class Simulator:
@@ -214,6 +233,7 @@ class Simulator:
         m = self.model_for(storage.buses if storage is not None else ())
         sa = st.pack(storage, self.case, m.nc_idx)
         check_step(self.fastest, h)
+        check_step_count(t_end, h)
         starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
         grid = time_grid(starts, t_end, h, self.conventions == "pstess")
         return m, sa, grid, [m.network(c) for c in configs]

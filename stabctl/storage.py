@@ -31,6 +31,13 @@ from .case import Case
 from .errors import CaseError, InputError
 
 
+#: largest storage rating of `uniform_fleet`, % of the machine's MVA (a device larger than
+#: its generator is outside the paper's use and its control law)
+MAX_ESD_PCT = 100.0
+#: largest voltage gate of the bang-bang law (pu)
+MAX_V_GATE_PU = 2.0
+
+
 @dataclass(frozen=True)
 class StorageDevice:
     """One ESD.
@@ -78,8 +85,12 @@ class BangBangCOI:
     def __post_init__(self):
         if self.coi not in ("system", "rest"):
             raise InputError(f"coi must be 'system' or 'rest', got {self.coi!r}")
-        if self.deadband_hz < 0 or not 0 <= self.hysteresis_hz <= self.deadband_hz:
-            raise InputError("need deadband >= 0 and 0 <= hysteresis <= deadband")
+        if not (0 <= self.deadband_hz < float("inf")
+                and 0 <= self.hysteresis_hz <= self.deadband_hz):
+            raise InputError("need deadband >= 0 and 0 <= hysteresis <= deadband (finite, Hz)")
+        if not 0 <= self.v_gate_pu <= MAX_V_GATE_PU:
+            raise InputError(f"voltage gate must be in [0, {MAX_V_GATE_PU:g}] pu, got "
+                             f"{self.v_gate_pu}")
 
 
 @dataclass(frozen=True)
@@ -129,8 +140,9 @@ def uniform_fleet(case: Case, pct: float, controller=None, at: str = "hv") -> St
 
     Raises InputError for a non-positive percentage.
     """
-    if not pct > 0:
-        raise InputError(f"storage rating must be > 0 % of machine MVA, got {pct}")
+    if not 0 < pct <= MAX_ESD_PCT:
+        raise InputError(f"storage rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, "
+                         f"got {pct}")
     devs = []
     for num, bus, mva in zip(case.machines.number, case.machines.bus, case.machines.mva):
         b = hv_bus(case, int(num)) if at == "hv" else int(bus)

@@ -22,11 +22,14 @@ Rerunning with the same file skips the keys already there (failed ones too, unle
 
 from __future__ import annotations
 
+import ctypes
 import json
 import multiprocessing
 import os
+import signal
 import socket
 import sys
+import tempfile
 import time
 import traceback
 import warnings
@@ -126,6 +129,78 @@ def read_records(path: str | Path) -> dict[str, dict]:
     return records
 
 
+def set_aside_damaged(path: str | Path) -> list[int]:
+    """Move the lines of an output file that are not sweep records (a last line cut by a
+    kill, a damaged line) to ``<path>.damaged`` with a warning, so that their jobs run
+    again and the file holds only whole records; returns their line numbers.  The file is
+    rewritten atomically (a temporary file renamed over it)."""
+    path = Path(path)
+    if not path.exists():
+        return []
+    good, bad = [], []
+    with path.open(errors="replace") as f:
+        for n, line in enumerate(f, start=1):
+            if not line.strip():
+                continue
+            try:
+                rec = json.loads(line)
+                ok = isinstance(rec, dict) and isinstance(rec.get("key"), str) \
+                    and rec.get("status") in ("ok", "failed")
+            except ValueError:
+                ok = False
+            (good if ok else bad).append((n, line if line.endswith("\n") else line + "\n"))
+    if not bad:
+        return []
+    aside = path.with_name(path.name + ".damaged")
+    with aside.open("a") as f:
+        f.writelines(line for _, line in bad)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    with os.fdopen(fd, "w") as f:
+        f.writelines(line for _, line in good)
+    os.replace(tmp, path)
+    numbers = [n for n, _ in bad]
+    warnings.warn(f"{path}: line(s) {', '.join(map(str, numbers))} not a whole sweep record "
+                  f"(cut by a kill?): moved to {aside}; their jobs run again")
+    return numbers
+
+
+def die_with_parent(parent: int) -> None:
+    """Initializer of every worker process: on Linux the kernel kills the worker when its
+    parent dies (prctl PR_SET_PDEATHSIG, SIGKILL), so a sweep killed with SIGKILL leaves
+    no worker running (nor the resource tracker, which exits once no process holds its
+    pipe); a worker whose parent is already gone exits at once.  Workers ignore SIGINT:
+    Ctrl-C reaches the whole process group, and the parent stops the pool itself."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):  # pragma: no cover - no libc prctl
+            pass
+    if os.getppid() != parent:
+        os._exit(1)
+
+
+_PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+
+
+def process_pool(workers: int) -> ProcessPoolExecutor:
+    """A spawned process pool whose workers die with this process (`die_with_parent`)."""
+    return ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=die_with_parent, initargs=(os.getpid(),))
+
+
+def stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Stop a pool at once (interrupted): pending jobs cancelled, running ones killed
+    (their workers terminated) instead of waited for."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        try:
+            proc.terminate()
+        except (OSError, ValueError, AttributeError):  # already gone
+            pass
+    pool.shutdown(wait=False, cancel_futures=True)
+
+
 def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
               scheduler: str | None = None, progress: bool = True,
               retry_failed: bool = False) -> SweepReport:
@@ -146,6 +221,7 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
     if workers is not None and workers < 1:
         raise InputError(f"workers must be >= 1, got {workers}")
     out = Path(out)
+    set_aside_damaged(out)
     done = read_records(out)
     _check_jobs(jobs, done, out)
     todo = [j for j in jobs if j.key not in done
@@ -236,7 +312,7 @@ def _local(jobs: list, workers: int | None) -> Iterator[dict]:
         for j in jobs:
             yield run_job(j.func, j.key, j.inputs)
         return
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+    pool = process_pool(workers)
     interrupted = False
     try:
         futures = {pool.submit(run_job, j.func, j.key, j.inputs): j for j in jobs}
@@ -249,7 +325,10 @@ def _local(jobs: list, workers: int | None) -> Iterator[dict]:
         interrupted = True
         raise
     finally:
-        pool.shutdown(wait=not interrupted, cancel_futures=True)
+        if interrupted:
+            stop_pool(pool)
+        else:
+            pool.shutdown(cancel_futures=True)
 
 
 def _dask(jobs: list, scheduler: str, workers: int | None) -> Iterator[dict]:

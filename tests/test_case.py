@@ -158,7 +158,7 @@ def test_machine_index():
         (dict(tg=modified(TG, 0, 1, 3)),
          r"tg_con row 1 \(machine 3\), field 'machine': machine 3 does not exist"),
         (dict(mac=modified(MAC, 1, 15, -6.5)),
-         r"mac_con row 2 \(machine 2\), field 'H': inertia constant must be >= 0, got -6.5"),
+         r"mac_con row 2 \(machine 2\), field 'H': inertia constant must be > 0 s \(H = 0, an infinite bus, is not modelled\), got -6.5"),
         (dict(mac=modified(MAC, 0, 6, -0.3)),
          r"mac_con row 1 \(machine 1\), field 'xdp': must be >= 0, got -0.3"),
         (dict(mac=modified(MAC, 1, 0, 1)),

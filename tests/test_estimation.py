@@ -239,7 +239,7 @@ def test_estimate_command_json_and_bad_input():
     assert d["window_s"] == pytest.approx([1.2, 4.0])
     neg = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
                                     "--ambient-pct", "-1"])
-    assert neg.exit_code == 2 and neg.stderr.startswith("error: ambient load needs pct >= 0")
+    assert neg.exit_code == 2 and neg.stderr.startswith("error: --ambient-pct -1: must be in [0, 100] %")
     bad = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
                                     "--rate", "50"])
     assert bad.exit_code == 2 and bad.stderr.startswith("error: PMU rate must be one of")

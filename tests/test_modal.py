@@ -156,7 +156,7 @@ def test_eig_report_files(tmp_path):
 
 @pytest.mark.parametrize("args, needle", [
     (("eig", "nosuch"), "unknown case"),
-    (("eig", "kundur", "--areas", "0"), "number of areas"),
+    (("eig", "kundur", "--areas", "0"), "--areas 0: must be in [1, 1000]"),
     (("eig", "kundur", "--report", "--out", "FILE"), "not a directory")])
 def test_eig_bad_input(args, needle, tmp_path):
     f = tmp_path / "FILE"

@@ -154,16 +154,31 @@ def test_ctrl_c_on_a_process_pool_keeps_finished_lines(tmp_path):
     assert (rest.ran, rest.skipped) == (2, 2)
 
 
-def test_line_cut_by_a_kill_is_skipped_and_appending_continues(tmp_path):
+def test_line_cut_by_a_kill_is_moved_aside_and_its_job_rerun(tmp_path):
     out = tmp_path / "cut.jsonl"
     run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
     with out.open("a") as f:
         f.write('{"key": "square/2", "inp')                          # killed mid-write
-    with pytest.warns(UserWarning, match="line 2: not a sweep record"):
+    with pytest.warns(UserWarning, match=r"line\(s\) 2 not a whole sweep record .*moved to "
+                                         r".*cut\.jsonl\.damaged; their jobs run again"):
         rep = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
     assert (rep.ran, rep.skipped) == (1, 1)
     text = out.read_text().splitlines()
-    assert len(text) == 3 and json.loads(text[2])["key"] == "square/2"
+    assert [json.loads(t)["key"] for t in text] == ["square/1", "square/2"]
+    assert (tmp_path / "cut.jsonl.damaged").read_text() == '{"key": "square/2", "inp\n'
+
+
+def test_damaged_line_in_the_middle_is_moved_aside_too(tmp_path):
+    out = tmp_path / "mid.jsonl"
+    run_sweep(jobs_of(square, 1, 2, 3), out, workers=1, progress=False)
+    text = out.read_text().splitlines()
+    text[1] = text[1][:20] + "\x00garbage"
+    out.write_text("\n".join(text) + "\n")
+    with pytest.warns(UserWarning, match=r"line\(s\) 2 not a whole sweep record"):
+        rep = run_sweep(jobs_of(square, 1, 2, 3), out, workers=1, progress=False)
+    assert (rep.ran, rep.skipped) == (1, 2)
+    assert sorted(json.loads(t)["key"] for t in out.read_text().splitlines()) == \
+        ["square/1", "square/2", "square/3"]
 
 
 # ---------------------------------------------------------------------------- errors
@@ -256,7 +271,7 @@ def test_cli_sweep_cct_faults_csv(tmp_path):
 @pytest.mark.parametrize("args, needle", [
     (("--faults", "missing.csv"), "fault list missing.csv"),
     (("--faults", "DEFAULT", "--esd-pct", "abc"), "--esd-pct 'abc'"),
-    (("--faults", "DEFAULT", "--workers", 0), "--workers must be >= 1"),
+    (("--faults", "DEFAULT", "--workers", 0), "--workers 0: must be in [1, 1024]"),
     (("--faults", "DEFAULT", "--tol-ms", -1), "--tol-ms"),
 ])
 def test_cli_sweep_cct_bad_input(tmp_path, args, needle):
