@@ -137,9 +137,12 @@ def andes_modes(ss) -> np.ndarray:
 
 def andes_separated(ss) -> bool:
     """After a run: a GENROU rotor angle more than pi rad from the centre of inertia
-    (inertia-weighted, M = 2H MVA) at any stored time, stabctl's default criterion."""
+    (inertia-weighted) at any stored time, stabctl's default criterion.  The weights are
+    ANDES's ``GENROU.M`` as it is: ANDES converts M = 2H to the system base at set-up
+    (``NumParam(power=True)``), so M is already proportional to H Sn (times Sn again
+    would weight by H Sn^2)."""
     delta = np.asarray(ss.dae.ts.x)[:, ss.GENROU.delta.a]
-    m = np.asarray(ss.GENROU.M.v) * np.asarray(ss.GENROU.Sn.v)
+    m = np.asarray(ss.GENROU.M.v)
     coi = delta @ m / m.sum()
     return bool(np.max(np.abs(delta - coi[:, None])) > np.pi)
 

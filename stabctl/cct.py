@@ -373,27 +373,28 @@ def storage_fleet(case, esd_pct: float | None):
 
 @functools.lru_cache(maxsize=None)
 def cached_simulator(case_name: str, conventions: str = "ieee",
-                     h: float | None = None) -> Simulator:
-    """One Simulator per case, conventions and step h (None: the default) per process
-    (the power flow is solved once per worker)."""
+                     h: float | None = None, q_limits: bool = True) -> Simulator:
+    """One Simulator per case, conventions, step h (None: the default) and power-flow Q
+    limits per process (the power flow is solved once per worker)."""
     from .case import load_case
 
-    return Simulator(load_case(case_name), conventions=conventions, step=h)
+    return Simulator(load_case(case_name), conventions=conventions, step=h, q_limits=q_limits)
 
 
 def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circuit: int = 1,
             trips=(), esd_pct: float | None = None, tol: float = TOL, t_max: float = T_MAX,
             t_end: float | None = None, conventions: str = "ieee",
-            h: float | None = None) -> dict:
+            h: float | None = None, q_limits: bool = True) -> dict:
     """Worker entry of a CCT sweep: the CCT of one fault at one storage rating, with its
     numerical error bar.
 
     Arguments are JSON-able (a sweep's recorded inputs; esd_pct: storage rating in %,
-    None = no storage; conventions, h: model conventions and step, None = the default);
+    None = no storage; conventions, h: model conventions and step, None = the default;
+    q_limits: PV Q limits in the power flow);
     returns `CCTResult.to_dict()`.  Raises as `critical_clearing_time` and
     `storage_fleet`.
     """
-    sim = cached_simulator(case, conventions, h)
+    sim = cached_simulator(case, conventions, h, q_limits)
     fault = LineFault(int(bus), None if far_bus is None else int(far_bus), float(t_fault),
                       int(circuit),
                       tuple((int(a), int(b)) for a, b in trips))
@@ -403,23 +404,25 @@ def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circ
 
 
 def cct_key(case: str, fault: LineFault, esd_pct: float | None, conventions: str = "ieee",
-            h: float | None = None) -> str:
+            h: float | None = None, q_limits: bool = True) -> str:
     """Sweep key, e.g. 'kundur/3-101/t1/esd-none' or 'kundur/3-101#2+13-101/t1/esd20';
-    '/pstess' and '/h<step>' are appended for the pstess conventions and a given step."""
+    '/pstess', '/h<step>' and '/no-q-limits' are appended for the pstess conventions, a
+    given step and a power flow without PV Q limits."""
     line = f"bus{fault.bus}" if fault.far_bus is None else \
         f"{fault.bus}-{fault.far_bus}" + (f"#{fault.circuit}" if fault.circuit != 1 else "")
     line += "".join(f"+{a}-{b}" for a, b in fault.trips)
     rating = "none" if esd_pct is None else f"{esd_pct:g}"
     tail = ("" if conventions == "ieee" else f"/{conventions}") + \
-        ("" if h is None else f"/h{h:g}")
+        ("" if h is None else f"/h{h:g}") + ("" if q_limits else "/no-q-limits")
     return f"{case}/{line}/t{fault.t_fault:g}/esd{'-' if esd_pct is None else ''}{rating}{tail}"
 
 
 def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
              t_max: float = T_MAX, t_end: float | None = None, conventions: str = "ieee",
-             h: float | None = None) -> list:
+             h: float | None = None, q_limits: bool = True) -> list:
     """One `stabctl.sweep.Job` per (fault, storage rating %, None = no storage) pair, with
-    the model conventions and step h (None: the default) of every run.
+    the model conventions, step h (None: the default) and power-flow Q limits of every
+    run (the inputs record q_limits only when off, so earlier records still resume).
 
     Checks every fault's bus and line against the case first (UnknownBusError, CaseError)
     so that bad input fails before any job runs.
@@ -435,8 +438,9 @@ def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
     faults = list(faults)
     for f in faults:
         validate(case, f.events(0.0), 0.0)
-    settings = {"tol": tol, "t_max": t_max, "t_end": t_end, "conventions": conventions, "h": h}
-    return [Job(key=cct_key(case_name, f, p, conventions, h), func=cct_job,
+    settings = {"tol": tol, "t_max": t_max, "t_end": t_end, "conventions": conventions, "h": h,
+                **({} if q_limits else {"q_limits": False})}
+    return [Job(key=cct_key(case_name, f, p, conventions, h, q_limits), func=cct_job,
                 inputs={"case": case_name, "bus": f.bus, "far_bus": f.far_bus,
                         "t_fault": f.t_fault, "circuit": f.circuit,
                         "trips": [list(t) for t in f.trips], "esd_pct": p, **settings})

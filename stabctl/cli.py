@@ -209,6 +209,15 @@ def _model_options(func):
                              "included); docs/conventions.md.")(func)
 
 
+def _q_limits_option(func):
+    """--q-limits/--no-q-limits on every command that starts a run or linearises."""
+    return click.option("--q-limits/--no-q-limits", "q_limits", default=True,
+                        show_default=True,
+                        help="Power flow: PV buses switch to PQ at their reactive limits "
+                             "(PST's chq_lim) or keep their voltage without limits (ANDES's "
+                             "default, for comparisons with ANDES).")(func)
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="stabctl")
 def main():
@@ -485,6 +494,7 @@ def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
 @click.option("--tf", type=float, default=None, metavar="S",
               help="End time (s); default 5 s, or the sw_con end with --pstess-default.")
 @_model_options
+@_q_limits_option
 @click.option("--separation-limit", type=float, default=3.141592653589793,
               show_default="pi", metavar="RAD",
               help="Loss of synchronism: a rotor angle more than RAD from the centre of "
@@ -509,7 +519,7 @@ def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
 @click.option("--json", "as_json", is_flag=True, help="Print the run summary as JSON.")
 @_reports_errors
 def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clear_cycles, trip,
-             t_trip, pstess_default, tf, conventions, step, separation_limit,
+             t_trip, pstess_default, tf, conventions, step, q_limits, separation_limit,
              stop_at_separation, out_path, plot_path, esd_pct, deadband_hz, v_gate, coi,
              hysteresis_hz, as_json):
     """Nonlinear multi-machine time-domain simulation (PSTess models and integrator).
@@ -567,7 +577,7 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     if esd_pct is not None:
         from .storage import BangBangCOI, uniform_fleet
         fleet = uniform_fleet(case, esd_pct, BangBangCOI(deadband_hz, v_gate, coi, hysteresis_hz))
-    sim = Simulator(case, conventions=conventions)
+    sim = Simulator(case, conventions=conventions, q_limits=q_limits)
     h = sim.default_h if step is None else step
     result = sim.run(events, t_end=tf, h=h, separation_limit=separation_limit,
                      stop_at_separation=stop_at_separation, storage=fleet)
@@ -584,7 +594,7 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
         written.insert(0, str(out_p))
     summary = result.summary()
     if as_json:
-        _print_json({**summary, "step_s": h, "conventions": conventions,
+        _print_json({**summary, "step_s": h, "conventions": conventions, "q_limits": q_limits,
                      "events": [_describe_event(e) for e in events], "files": written})
         return
     click.echo(f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
@@ -655,10 +665,11 @@ def _print_cct(case_name, rating, d) -> None:
 @click.option("--tf", type=float, default=None, metavar="S",
               help="End of each run (s); default fault time + 5 s.")
 @_model_options
+@_q_limits_option
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @_reports_errors
 def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, tol_ms, t_max, tf,
-        conventions, step, as_json):
+        conventions, step, q_limits, as_json):
     """Critical clearing time of a line fault by bisection on the clearing time.
 
     The fault at BUS on line BUS-FAR_BUS starts at --t-fault and is cleared at both ends
@@ -688,9 +699,10 @@ def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, tol_ms, t_ma
     case = load_case(case_name)
     storage = storage_fleet(case, esd_pct)
     line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
-    res = critical_clearing_time(Simulator(case, conventions=conventions), line_fault,
+    res = critical_clearing_time(Simulator(case, conventions=conventions, q_limits=q_limits),
+                                 line_fault,
                                  storage=storage, h=step, **settings)
-    out = {"case": case.name, "esd_pct": esd_pct, **res.to_dict()}
+    out = {"case": case.name, "esd_pct": esd_pct, **res.to_dict(), "q_limits": q_limits}
     if as_json:
         _print_json(out)
     else:
@@ -749,10 +761,11 @@ def _sweep_line(key, rec) -> str:
 @click.option("--tf", type=float, default=None, metavar="S",
               help="End of each run (s); default fault time + 5 s.")
 @_model_options
+@_q_limits_option
 @click.option("--json", "as_json", is_flag=True, help="Print every record as JSON.")
 @_reports_errors
 def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retry_failed,
-              tol_ms, t_max, tf, conventions, step, as_json):
+              tol_ms, t_max, tf, conventions, step, q_limits, as_json):
     """CCT of every (fault, storage rating) pair, in parallel, resumable.
 
     Each job is one `stabctl cct` search; its line in --out holds its key
@@ -778,7 +791,8 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
     for p in ratings:
         storage_fleet(case, p)
     faults = default_faults(case_name) if faults_src == "DEFAULT" else read_faults(faults_src)
-    jobs = cct_jobs(case_name, faults, ratings, conventions=conventions, h=step, **settings)
+    jobs = cct_jobs(case_name, faults, ratings, conventions=conventions, h=step,
+                    q_limits=q_limits, **settings)
     rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
                     retry_failed=retry_failed)      # Ctrl-C: _reports_errors, exit 130
     if as_json:
@@ -816,10 +830,11 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
               help="Dask distributed scheduler (tcp://host:8786), or 'local' for a local "
                    "Dask cluster of --workers processes.")
 @_model_options
+@_q_limits_option
 @click.option("--json", "as_json", is_flag=True, help="Print every row as JSON.")
 @_reports_errors
 def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers, scheduler,
-           conventions, step, as_json):
+           conventions, step, q_limits, as_json):
     """Contingency screening: CCT of a three-phase fault at every bus (and with --lines of
     every branch fault with the branch tripped), in parallel and resumable.
 
@@ -838,7 +853,7 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
     settings = _cct_settings(tol_ms, t_max, None)
     rows = run_screen(case_name, out_path, buses=bus_list, lines=lines, tol=settings["tol"],
                       t_max=t_max, workers=workers, scheduler=scheduler,
-                      conventions=conventions, h=step)
+                      conventions=conventions, h=step, q_limits=q_limits)
     rows.sort(key=lambda r: r.get("cct_s", float("inf")))
     if plot_p is not None:
         from . import plotting
@@ -888,9 +903,10 @@ def _bus_list(text: str) -> list[int]:
 @click.option("--conventions", type=click.Choice(["ieee", "pstess"]), default="ieee",
               show_default=True, help="Model conventions (docs/conventions.md); the same "
                                       "linear model at a point inside every limit.")
+@_q_limits_option
 @click.option("--json", "as_json", is_flag=True, help="Print every mode as JSON.")
 @_reports_errors
-def eig(case_name, no_pss, n_areas, report, out_dir, conventions, as_json):
+def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, as_json):
     """Small-signal modes: linearise CASE at its power flow and list its modes.
 
     The simulator's own equations are linearised by central differences (PSTess svm_mgen's
@@ -917,7 +933,8 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, as_json):
         raise InputError(f"--out {out_dir} is not a directory")
     if report:
         check_writable(out_dir, "--out", directory=True)
-    st = eig_study(load_case(case_name), no_pss=no_pss, n_areas=n_areas, conventions=conventions)
+    st = eig_study(load_case(case_name), no_pss=no_pss, n_areas=n_areas, conventions=conventions,
+                   q_limits=q_limits)
     written = [str(write_report(st, out_dir))] if report else []
     if as_json:
         _print_json({**study_json(st), "files": written})

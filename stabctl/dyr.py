@@ -165,7 +165,9 @@ def dyr_tables(records, generators, on_unsupported: str = "error",
         conventions: "pst" (PST's models as they are) or "andes" (ANDES 2.0's reading of
             the PSS/E models, for like-for-like comparisons: GENROU/GENSAL without speed
             effects, mac_con column 24 = 0; EXDC2's regulator limits not scaled by the
-            terminal voltage, i.e. PST's DC1 instead of DC2; IEEEG1's gate rate limits
+            terminal voltage, i.e. PST's DC1 instead of DC2; IEEEX1's scaled by it (PST's
+            DC2 instead of DC1); DC exciters with PSS/E's quadratic saturation and K_E as
+            given; IEEEG1's gate rate limits
             Uo, Uc read on the system base, i.e. times SBASE/MBASE on the machine base).
     Returns:
         DyrTables.
@@ -505,12 +507,13 @@ def _esdc2a_andes(rec, gen):
     return row
 
 
-#: conventions="andes": ANDES 2.0's DC exciters (EXDC2, ESDC2A) use the quadratic
+#: conventions="andes": ANDES 2.0's DC exciters (IEEEX1, EXDC2, ESDC2A) use the quadratic
 #: saturation and keep K_E = 0; its EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
-#: terminal voltage as PSS/E's and IEEE DC2; its ESDC2A bypasses T_R; its IEEEG1 rate
-#: limits are on the system base
-_ANDES_MAPPERS = {"EXDC2": _dc(1, andes=True), "ESDC2A": _esdc2a_andes,
-                  "IEEEG1": _ieeeg1_andes}
+#: terminal voltage as PSS/E's and IEEE DC2, while its IEEEX1 scales them by the terminal
+#: voltage (``ieeex1.py``: ``VRMAX * v``, so PST's DC2, not DC1); its ESDC2A bypasses T_R;
+#: its IEEEG1 rate limits are on the system base
+_ANDES_MAPPERS = {"IEEEX1": _dc(2, andes=True), "EXDC2": _dc(1, andes=True),
+                  "ESDC2A": _esdc2a_andes, "IEEEG1": _ieeeg1_andes}
 CONVENTIONS = ("pst", "andes")
 _WIDTH = {"machine": len(MachineTable.columns()), "exciter": len(ExciterTable.columns()),
           "pss": len(PssTable.columns()), "governor": len(GovernorTable.columns())}

@@ -41,13 +41,13 @@ class EigStudy:
 
 
 def eig_study(case: Case, no_pss: bool = False, n_areas: int | None = None,
-              conventions: str = "ieee") -> EigStudy:
-    """Linearise `case` (with its pss_con emptied if no_pss) under the model conventions
-    and analyse its modes."""
+              conventions: str = "ieee", q_limits: bool = True) -> EigStudy:
+    """Linearise `case` (with its pss_con emptied if no_pss) under the model conventions,
+    from a power flow with or without PV Q limits, and analyse its modes."""
     if no_pss:
         case = case.replace(pss=PssTable.empty())
     t0 = time.perf_counter()
-    sys = linearise(case, conventions=conventions)
+    sys = linearise(case, conventions=conventions, q_limits=q_limits)
     t1 = time.perf_counter()
     ma = modal_analysis(sys, n_areas=n_areas)
     sens = mode_sensitivity(sys, ma)

@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numba import njit
 
-from .case import Case
+from .case import Case, beyond
 from .errors import CaseError
 
 LBND = 1e-3
@@ -237,7 +237,8 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     (DC exciters with KE = 0 get KE = -SE(Efd0), so that V_R starts at 0) from the
     machines' field voltage vex and terminal voltage eterm; VB is the ST3 source voltage
     (needed for type 3).  Raises CaseError when the initial point violates a limit PST
-    checks (ST3: Efdmax or the V_I range; DC: the V_R limits)."""
+    checks (ST3: Efdmax or the V_I range; DC: the V_R limits) by more than
+    `case.START_LIMIT_TOL`."""
     x = np.zeros((5, p.n))
     x[0] = eterm
     smp, st3, dc = p.kind == SMP, p.kind == ST3, p.is_dc
@@ -246,7 +247,7 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     VR = vex / VB
     VA_st3 = VR / p.KA + np.minimum(p.VGmax, p.KG * vex)
     VI = VA_st3 / np.where(p.KJ == 0, 1.0, p.KJ)
-    bad = st3 & ((vex > p.Efdmax) | (VI > p.VImax) | (VI < p.VImin))
+    bad = st3 & (beyond(vex, -np.inf, p.Efdmax) | beyond(VI, p.VImin, p.VImax))
     if bad.any():
         i = int(np.nonzero(bad)[0][0])
         raise CaseError(f"exc_con row {i + 1}: initial field voltage {vex[i]:.3f} pu outside "
@@ -269,8 +270,8 @@ def _check_st1_initial(p: ExciterParams, Efd, eterm):
     Efd0) and the regulator input Efd0/K_A inside [VImin, VImax]; raises CaseError."""
     st1 = p.kind == ST1
     VI = Efd / p.KA
-    bad = np.nonzero(st1 & ((Efd > eterm * p.Vrmax - p.KC * Efd) | (Efd < eterm * p.Vrmin)
-                            | (VI > p.VImax) | (VI < p.VImin)))[0]
+    bad = np.nonzero(st1 & (beyond(Efd, eterm * p.Vrmin, eterm * p.Vrmax - p.KC * Efd)
+                            | beyond(VI, p.VImin, p.VImax)))[0]
     if bad.size:
         i = bad[0]
         raise CaseError(f"exc_con row {i + 1}: EXST1 initial field voltage {Efd[i]:.4f} pu "
@@ -289,7 +290,7 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
             KE[r] = -dc_feedback(0.0, *sat) / Efd[r]
         VR[r] = dc_feedback(KE[r], *sat)
     mult = np.where(p.kind == DC2, eterm, 1.0)
-    bad = np.nonzero(dc & ((VR > p.Vrmax * mult) | (VR < p.Vrmin * mult)))[0]
+    bad = np.nonzero(dc & beyond(VR, p.Vrmin * mult, p.Vrmax * mult))[0]
     if bad.size:
         i = bad[0]
         raise CaseError(f"exc_con row {i + 1}: initial DC regulator output V_R = {VR[i]:.4f} pu "

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .case import Case
+from .case import Case, beyond
 from .errors import CaseError
 
 LBND = 1e-3
@@ -127,11 +127,11 @@ def initialise(p: GovernorParams, pmech0):
     gate position (IEEEG1: pmech0 / sum K).
 
     Raises CaseError when the initial power order is outside [Tmin, Tmax] (PST's check
-    for tg, the non-windup limits for TGOV1 and IEEEG1)."""
+    for tg, the non-windup limits for TGOV1 and IEEEG1), beyond `case.START_LIMIT_TOL`."""
     x = np.zeros((N_STATES, p.n))
     tc = np.where(p.Tc >= LBND, p.Tc, 1.0)
     gate = pmech0 / np.where(p.kind == IEEEG1, p.K.sum(axis=1), 1.0)
-    bad = np.nonzero((gate > p.Tmax) | (gate < p.Tmin))[0]
+    bad = np.nonzero(beyond(gate, p.Tmin, p.Tmax))[0]
     if bad.size:
         raise CaseError(f"tg_con row {bad[0] + 1}: initial power order {gate[bad[0]]:.4f} pu "
                         "outside [Tmin, Tmax]")

@@ -74,7 +74,7 @@ def default_esd_buses(case: Case) -> list[int]:
 
 
 def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP,
-              conventions: str = "ieee"):
+              conventions: str = "ieee", q_limits: bool = True):
     """Linearised model of a case at its power-flow point, as a `control.StateSpace`.
 
     Args:
@@ -87,6 +87,7 @@ def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP
         conventions: model conventions when target is a Case ("ieee" or "pstess"; a
             Simulator keeps its own).  At a power-flow point inside every limit both give
             the same linear model.
+        q_limits: PV Q limits in the power flow when target is a Case (`Simulator`).
     Returns:
         control.StateSpace (continuous) with named states, inputs and outputs (module
         docstring); n_x = number of active states.
@@ -97,8 +98,8 @@ def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP
     """
     from .simulation import Simulator
 
-    sim = target if isinstance(target, Simulator) else Simulator(target,
-                                                                  conventions=conventions)
+    sim = target if isinstance(target, Simulator) else Simulator(
+        target, conventions=conventions, q_limits=q_limits)
     case = sim.case
     buses = list(default_esd_buses(case) if esd_buses is None else esd_buses)
     buses = list(dict.fromkeys(int(b) for b in [*buses, *extra_buses]))

@@ -37,15 +37,15 @@ def screening_faults(case: Case, buses=None, lines: bool = False,
 def screen(case_name: str, out: str | Path, *, buses=None, lines: bool = False,
            tol: float = TOL, t_max: float = T_MAX, workers: int | None = None,
            scheduler: str | None = None, progress: bool = True, conventions: str = "ieee",
-           h: float | None = None) -> list[dict]:
+           h: float | None = None, q_limits: bool = True) -> list[dict]:
     """Run the screening; returns one row per fault: key, bus, far_bus, status, CCT (s and
     cycles) with its numerical error (s), separated machines, simulations, or the failure
     reason.  `out` is the JSON-lines record (resumed if it exists); conventions, h: the
-    model conventions and step of every run.  Raises as `stabctl.sweep.run_sweep`."""
+    model conventions and step of every run; q_limits: PV Q limits in the power flow.  Raises as `stabctl.sweep.run_sweep`."""
     case = load_case(case_name)
     faults = screening_faults(case, buses, lines)
     report = run_sweep(cct_jobs(case_name, faults, tol=tol, t_max=t_max,
-                                conventions=conventions, h=h), out,
+                                conventions=conventions, h=h, q_limits=q_limits), out,
                        workers=workers, scheduler=scheduler, progress=progress)
     rows = []
     for fault, rec in zip(faults, report.records.values()):

@@ -167,7 +167,9 @@ class Simulator:
         case: the case; op: its operating point (default: solved by `stabctl.powerflow`);
         injection_buses: buses kept for device injections (storage); conventions: "ieee"
         (default) or "pstess" (module docstring, docs/conventions.md); step: the step of
-        runs that give none (s; None: `default_step` of the case and conventions).
+        runs that give none (s; None: `default_step` of the case and conventions);
+        q_limits: the power flow (when op is None) switches PV buses to PQ at their Q
+        limits (PST's ``chq_lim``, the default) or not (ANDES's default, ``pv2pq = 0``).
     Attributes:
         default_h: that step (s).
     Raises:
@@ -177,11 +179,14 @@ class Simulator:
     """
 
     def __init__(self, case: Case, op: OperatingPoint | None = None, injection_buses=(),
-                 conventions: str = "ieee", step: float | None = None):
+                 conventions: str = "ieee", step: float | None = None,
+                 q_limits: bool = True):
         self.conventions = check_conventions(conventions)
+        self.q_limits = bool(q_limits)
         if op is None:
             from .powerflow import solve_powerflow
-            op = OperatingPoint.from_bus_matrix(solve_powerflow(case).bus_matrix())
+            op = OperatingPoint.from_bus_matrix(
+                solve_powerflow(case, q_limits=self.q_limits).bus_matrix())
         single_threaded_blas()
         self.case, self.op = case, op
         self.fastest = fastest_time_constant(case)

@@ -287,7 +287,7 @@ def test_dc_exciter_steady_state_vr_equals_ke_plus_se_times_efd(KE):
     assert x[2, 0] == pytest.approx((KE_eff + SE) * Efd, abs=1e-15)
     assert Vref[0] == pytest.approx(Vt + x[2, 0] / 20, rel=1e-15)
     dx = np.zeros_like(x)
-    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx, True)
     assert np.abs(dx).max() < 1e-12
 
 
@@ -306,7 +306,7 @@ def test_quadratic_saturation_passes_both_points_and_keeps_ke():
     x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
     assert p.KE[0] == 0.0 and x[2, 0] == pytest.approx(B * (Efd - A) ** 2, rel=1e-14)
     dx = np.zeros_like(x)
-    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx, True)
     assert np.abs(dx).max() < 1e-12
     row[23] = 0                                      # K_E = 0 computed: V_R0 = 0
     p = exc.exciter_params(load_case("kundur").replace(exciters=ExciterTable.from_matrix([row])))
@@ -321,7 +321,7 @@ def test_dc2_limit_scales_with_terminal_voltage():
         x, Vref, p = exc.initialise(p, np.array([1.0]), np.array([1.0]))
         x[2, 0] = 10.0
         dx = np.zeros_like(x)
-        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, dx)
+        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, dx, True)
         assert x[2, 0] == pytest.approx(bound, rel=1e-15) and dx[2, 0] == 0.0
 
 
@@ -339,14 +339,14 @@ def test_exst1_steady_state_and_output_limit():
     x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
     assert (x[2, 0], x[3, 0]) == (Efd, Efd) and Vref[0] == pytest.approx(Vt + Efd / 50, rel=1e-15)
     P = p.packed(Vref)
-    assert exc.field_voltage(P, x, 0, Vt, 0.0, 1.0, Efd) == Efd
+    assert exc.field_voltage(P, x, 0, Vt, 0.0, 1.0, Efd, True) == Efd
     dx = np.full_like(x, np.nan)
-    exc.derivatives(P, x, 0, Vt, 0.0, Efd, dx)
+    exc.derivatives(P, x, 0, Vt, 0.0, Efd, dx, True)
     assert np.abs(dx).max() < 1e-12
     x[2, 0] = 10.0
-    assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0) == pytest.approx(0.9 * 4.0 - 0.1 * 2.0)
+    assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(0.9 * 4.0 - 0.1 * 2.0)
     x[2, 0] = -10.0
-    assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0) == pytest.approx(0.9 * -3.0)
+    assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(0.9 * -3.0)
 
 
 def test_exst1_initial_point_outside_limits_is_refused():
@@ -368,6 +368,23 @@ def test_tgov1_pm_equals_pref_at_rated_speed_and_damps_with_dt():
     dx = np.zeros_like(x)
     gov.derivatives(P, x, 0, 1.0, dx)
     assert np.abs(dx).max() < 1e-15
+
+
+def test_start_up_limit_checks_allow_round_off_only():
+    """A power order at TGOV1's limit up to the power flow's round-off (IEEE 14's bus-6
+    unit: Pm0 = 0.3 = Tmin lands at 0.3 - 3e-17) starts; 1e-3 pu beyond it is refused,
+    naming the row."""
+    p = tgov1_params()
+    for at in (p.Tmin[0], p.Tmax[0]):
+        for pm in (at - 3e-17, at + 3e-17, np.nextafter(at, -1), np.nextafter(at, 9)):
+            gov.initialise(p, np.array([pm]))
+    for pm in (p.Tmin[0] - 1e-3, p.Tmax[0] + 1e-3):
+        with pytest.raises(CaseError, match=r"tg_con row 1: .* outside \[Tmin, Tmax\]"):
+            gov.initialise(p, np.array([pm]))
+    e = dc_params(KE=1.0)                      # DC1: V_R0 = K_E Efd0 against Vrmax = 5.2
+    exc.initialise(e, np.array([5.2 * (1 + 1e-15)]), np.array([1.0]))
+    with pytest.raises(CaseError, match="exc_con row 1: initial DC regulator output"):
+        exc.initialise(e, np.array([5.21]), np.array([1.0]))
 
 
 def test_tgov1_step_response_matches_closed_form():
@@ -676,6 +693,37 @@ def test_initial_point_matches_andes_kundur_full():
     np.testing.assert_allclose(Vref, ss.EXDC2.vref0.v, atol=1e-12)
     _, Pref = gov.initialise(gov.governor_params(case), pm)
     np.testing.assert_allclose(Pref * 900 / 100, ss.TGOV1.pref0.v, rtol=1e-12)   # system base
+
+
+def test_ieeex1_initialisation_matches_andes_npcc():
+    """ANDES reference (npcc.raw + npcc_full.dyr, solved and initialised by ANDES): read as
+    ANDES reads it (conventions="andes": quadratic saturation, K_E as given, V_R limits
+    times V_t), IEEEX1 gives ANDES's vref0 from ANDES's field and terminal voltages; PST's
+    reading (exponential saturation, K_E = 0 -> V_R0 = 0) does not."""
+    ss = andes_initialised("npcc")
+    g, x1 = ss.GENROU, ss.IEEEX1
+    assert x1.n == 24
+    recs = [r for r in read_dyr(CASES / "npcc" / "npcc_full.dyr")
+            if r.model in ("GENROU", "IEEEX1")]
+    keys = [(r.bus, r.id) for r in recs if r.model == "GENROU"]
+    gens = [dict(number=i + 1, bus=b, id=d, mbase=100.0, ra=0.0, xsource=0.2, pg=1.0,
+                 qg=1.0) for i, (b, d) in enumerate(keys)]
+    # ANDES holds the records in file order: its k-th IEEEX1 is the file's k-th
+    number = [keys.index((r.bus, r.id)) + 1 for r in recs if r.model == "IEEEX1"]
+    k = [g.idx.v.index(s) for s in x1.syn.v]
+    vt = np.array(ss.Bus.v.v)[[ss.Bus.idx.v.index(g.bus.v[i]) for i in k]]
+    vref = {}
+    for conventions in ("andes", "pst"):
+        t = dyr_tables(recs, gens, conventions=conventions)
+        rows = np.array([t.exc_con[t.exc_con[:, 1] == n][0] for n in number])
+        rows[:, 1] = 1
+        assert np.all(rows[:, 0] == (2 if conventions == "andes" else 1))   # DC2 / DC1
+        kundur = load_case("kundur")           # one exciter at a time on its machine 1
+        vref[conventions] = np.array([exc.initialise(exc.exciter_params(kundur.replace(
+            exciters=ExciterTable.from_matrix(row[None]))), g.vf0.v[[i]], vt[[j]])[1][0]
+            for j, (i, row) in enumerate(zip(k, rows))])
+    np.testing.assert_allclose(vref["andes"], x1.vref0.v, atol=1e-12)
+    assert np.max(np.abs(vref["pst"] - x1.vref0.v)) > 1e-3
 
 
 def test_flat_run_with_wecc_esdc2a_has_no_drift(kundur_tables):

@@ -295,3 +295,35 @@ def test_phase_shifter_sign_matches_andes(tmp_path):
     idx = case.bus_indices(np.array(ss.Bus.idx.v))
     assert np.max(np.abs(pf.vang[idx] - ss.Bus.a.v)) < 1e-10
     assert abs(pf.vang[case.bus_index(5)] - pf.vang[case.bus_index(1)]) > 0.1
+
+
+def test_q_limits_switch_matches_andes_ieee14(tmp_path):
+    """IEEE 14 (ANDES's ieee14.raw + ieee14.dyr): without PV Q limits (ANDES's default,
+    `Simulator(q_limits=False)`, `--no-q-limits`) the simulator starts from ANDES's power
+    flow; with them (PST's chq_lim, the default) PV buses switch to PQ and the voltages
+    move.  The case starts at all: its bus-6 unit has Pm0 = 0.3 = TGOV1's Tmin, reached
+    up to round-off (the start-up check's tolerance)."""
+    from stabctl.andes_xval import strip_dyr
+    from stabctl.simulation import Simulator
+
+    andes, folder = _andes_case("ieee14")
+    raw, dyr = folder / "ieee14.raw", tmp_path / "ieee14.dyr"
+    strip_dyr(folder / "ieee14.dyr", dyr, {"TOGGLE"})
+    ss = _andes_pflow(andes, raw)
+    case = load_psse(raw, dyr, conventions="andes")
+    idx = case.bus_indices(np.array(ss.Bus.idx.v))
+    v_andes = np.array(ss.Bus.v.v) * np.exp(1j * np.array(ss.Bus.a.v))
+    free, limited = Simulator(case, q_limits=False), Simulator(case)
+    assert (free.q_limits, limited.q_limits) == (False, True)
+    assert np.max(np.abs(free.op.V[idx] - v_andes)) < 2e-5        # ANDES's R, X + 1e-8
+    assert np.max(np.abs(limited.op.V[idx] - v_andes)) > 0.01
+    assert np.sum(solve_powerflow(case).q_limited) == 4
+    assert not solve_powerflow(case, q_limits=False).q_limited.any()
+    out = tmp_path / "ieee14.json"
+    r = CliRunner().invoke(main, ["import-psse", str(raw), str(dyr), "-o", str(out),
+                                  "--conventions", "andes"])
+    assert r.exit_code == 0, r.output
+    for flag, expected in (("--no-q-limits", False), ("--q-limits", True)):
+        r = CliRunner().invoke(main, ["simulate", str(out), "--tf", "0.1", "--json", flag])
+        assert r.exit_code == 0, r.output
+        assert json.loads(r.output)["q_limits"] is expected
