@@ -4,7 +4,7 @@ Searches (defaults of `stabctl.cct.critical_clearing_time`: tol 1 ms, t_end = fa
 stop at separation) for the paper's Case 2 fault (miniWECC, bus 83, line 83-33, at 1 s)
 and Case 1 fault (Kundur, bus 3, line 3-101, at 1 s), pinned to one core, after a warm-up
 run (compilation and the power flow excluded; the Simulator build is printed apart).
-Target (issue 4): the miniWECC search <= 3 s on one core.
+Target: the miniWECC search <= 3 s on one core.
 Run: python benchmarks/bench_cct.py
 """
 

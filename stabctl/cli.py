@@ -231,18 +231,46 @@ def _check_suffix(path, allowed, option) -> Path | None:
     return p
 
 
-def _save_plot_atomically(result, path: Path, title: str) -> None:
+def _save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0) -> None:
     from .plotting import simulation_overview
 
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
     os.close(fd)
     try:
-        simulation_overview(result, tmp, title=title)
+        simulation_overview(result, tmp, title=title, base_mva=base_mva)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def _describe_esd(esd: dict, short: bool = False) -> str:
+    """One line on the storage of `simulate --esd-pct` (short: for a plot title)."""
+    where = "" if short else " at the generator HV buses"
+    control = "bang-bang COI control" if short else esd["control"]
+    return (f"storage: {esd['devices']} ESDs of {esd['pct_of_machine_mva']:g} % of machine MVA"
+            f"{where}, {control}, deadband {esd['deadband_hz']:g} Hz, "
+            f"{'gate' if short else 'voltage gate'} {esd['v_gate_pu']:g} pu, {esd['coi']} COI"
+            + (f", hysteresis {esd['hysteresis_hz']:g} Hz" if esd["hysteresis_hz"] else ""))
+
+
+def _print_storage(esd: dict, result) -> None:
+    """The storage lines of `simulate`'s text output: settings, totals, active devices."""
+    info = result.meta.get("storage", [])
+    active = [d for d in info if d["switchings"] > 0]
+    click.echo(f"  {_describe_esd(esd)}")
+    click.echo(f"  {sum(d['switchings'] for d in info)} switchings, {len(active)} of "
+               f"{len(info)} devices acted; absorbed "
+               f"{sum(d['energy_absorbed_mj'] for d in info):.1f} MJ, delivered "
+               f"{sum(d['energy_delivered_mj'] for d in info):.1f} MJ")
+    if active:
+        click.echo(f"  {'device':>6} {'bus':>6} {'machine':>7} {'MW':>7} {'switchings':>10} "
+                   f"{'absorbed MJ':>11} {'delivered MJ':>12} {'peak MW':>8}")
+    for d in active:
+        click.echo(f"  {d['device']:6d} {d['bus']:6d} {'G' + str(d['machine']):>7} "
+                   f"{d['pmax_mw']:7.1f} {d['switchings']:10d} {d['energy_absorbed_mj']:11.1f} "
+                   f"{d['energy_delivered_mj']:12.1f} {d['peak_power_mw']:8.1f}")
 
 
 def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit,
@@ -354,8 +382,11 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     \b
     CSV columns: t, speed_pu.G<k>, angle_rad.G<k>, pelect_pu.G<k>, pmech_pu.G<k>,
     efd_pu.G<k> per machine k, vmag_pu.B<n>, vang_rad.B<n> per bus n, and with
-    --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also lists, per device,
-    switchings, energy absorbed and delivered (MJ) and peak power used (MW).
+    --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also gives the storage
+    settings (`esd`), per device switchings, energy absorbed and delivered (MJ) and peak
+    power used (MW) (`storage`), and every switching as {t_s, device, bus, machine, mode
+    (absorb, idle, inject), mode_code (+1, 0, -1), rel_speed_hz (machine minus COI speed
+    seen by the controller)} (`switchings`).
 
     \b
     Examples:
@@ -396,10 +427,16 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     sim = Simulator(case)
     result = sim.run(events, t_end=tf, h=h, separation_limit=separation_limit,
                      stop_at_separation=stop_at_separation, storage=fleet)
+    esd = None if esd_pct is None else {
+        "pct_of_machine_mva": esd_pct, "devices": len(fleet.devices),
+        "control": "bang-bang COI (paper Table 3)", "deadband_hz": deadband_hz,
+        "v_gate_pu": v_gate, "coi": coi, "hysteresis_hz": hysteresis_hz}
     written = []
     if plot_p is not None:
-        _save_plot_atomically(result, plot_p, title=f"{case.name}: "
-                              + ("; ".join(_describe_event(e) for e in events) or "flat run"))
+        title = f"{case.name}: " + ("; ".join(_describe_event(e) for e in events) or "flat run")
+        if esd is not None:
+            title += "\n" + _describe_esd(esd, short=True)
+        _save_plot_atomically(result, plot_p, title=title, base_mva=case.base_mva)
         written.append(str(plot_p))
     if out_p is not None:
         if out_p.suffix.lower() == ".npz":
@@ -408,8 +445,10 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
             result.to_csv(out_p)
         written.insert(0, str(out_p))
     summary = result.summary()
+    if esd is not None:
+        summary["switchings"] = result.switching_records()
     if as_json:
-        _print_json({**summary, "step_s": h,
+        _print_json({**summary, "step_s": h, "esd": esd,
                      "events": [_describe_event(e) for e in events], "files": written})
         return
     click.echo(f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
@@ -417,6 +456,8 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
                f"wall {summary.get('wall_time_s', float('nan')):.2f} s")
     for e in events or ["flat run (no disturbance)"]:
         click.echo(f"  {e if isinstance(e, str) else _describe_event(e)}")
+    if esd is not None:
+        _print_storage(esd, result)
     if result.stable:
         click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
     else:

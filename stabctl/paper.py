@@ -104,12 +104,14 @@ def section_feedback(fig_dir: Path) -> str:
              "|---|---|---|---|---|---|"]
     for name, run in runs.items():
         k = run.t >= run.t_clear
-        ts = settling_time(run.t, run.omega, run.t_clear) if run.stable else float("nan")
+        ts = settling_time(run.t, run.omega, run.t_clear) if run.stable else float("inf")
         lines.append(f"| {name} | {'yes' if run.stable else 'no'} | {run.delta.max():.4f} | "
                      f"{np.abs(run.omega[k]).max():.4f} | "
                      f"{'never' if np.isinf(ts) else f'{ts:.2f}'} | {np.abs(run.P_C).max():.3f} |")
     plotting.feedback_phase_plane(sys_, runs, fig_dir / "fig07_feedback_phase_plane.png")
-    lines += ["", "The acceleration-only law changes the effective inertia but adds no damping, "
+    lines += ["", "Settling time \"never\": the speed does not stay inside the band within "
+              f"{t_end:g} s (an unstable run leaves it for good). "
+              "The acceleration-only law changes the effective inertia but adds no damping, "
               "so it never settles; the sign law always absorbs energy from the swing "
               "(P_C * omega >= 0).", "", "![feedback](fig07_feedback_phase_plane.png)", ""]
     return "\n".join(lines)
@@ -152,7 +154,7 @@ def section_two_machine_and_min_time(fig_dir: Path) -> str:
 
 
 def section_estimation(fig_dir: Path, records_dir: Path) -> str:
-    """PMU estimation and estimator-in-the-loop control (issue 7): separate reports."""
+    """PMU estimation and estimator-in-the-loop control: separate reports."""
     from .estimation_report import write_estimation_report
 
     paths = write_estimation_report(fig_dir, runs=20, records_dir=records_dir)
@@ -164,7 +166,7 @@ def section_estimation(fig_dir: Path, records_dir: Path) -> str:
 
 
 def section_placement(fig_dir: Path, records_dir: Path) -> str:
-    """ESD sizing and placement (issue 6): separate reports per case."""
+    """ESD sizing and placement: separate reports per case."""
     from .placement_study import placement_study
 
     paths = [placement_study(case, fig_dir, records_dir=records_dir)
