@@ -115,9 +115,9 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 @click.option("--out", "out_dir", default="reports", show_default=True,
               type=click.Path(file_okay=False), help="Report directory.")
 @click.option("--resume", is_flag=True,
-              help="Keep the sweep records already in OUT (Table 4 and estimator CCT "
-                   "sweeps, placement screening; after an interruption); by default they "
-                   "are recomputed.")
+              help="Continue the sweeps (Table 4 and estimator CCT sweeps, placement "
+                   "screening) from the records of an interrupted run in OUT/.paper-work, "
+                   "or else from the records in OUT; by default they are recomputed.")
 @click.option("--only", multiple=True,
               type=click.Choice(["analytic", "cases", "table4", "estimation", "placement"]),
               help="Build only these parts (repeatable): analytic = Sections 2-4 (seconds); "
@@ -130,9 +130,12 @@ def paper(out_dir, resume, only):
     """Reproduce the paper's tables and figures into OUT/paper.md (+ PNG figures).
 
     The Table 4 and estimator CCT sweeps and the placement screening record each finished
-    search in OUT/table4_<case>.jsonl, OUT/estimation_cct_<case>.jsonl and
-    OUT/placement_<case>_screening.jsonl as it completes; an interrupted run continues
-    from there with --resume.
+    search in OUT/.paper-work as it completes (an interrupted run continues from there
+    with --resume). Only when every section has succeeded are the reports moved into OUT
+    and the records written to OUT/table4_<case>.jsonl, OUT/estimation_cct_<case>.jsonl
+    and OUT/placement_<case>_screening.jsonl, replacing the old ones; reports and records
+    hold no timings or other run-dependent values (two runs give identical files), those
+    go to OUT/run_log.json (seconds per section, every progress line).
     """
     from .paper import write_paper_report
 

@@ -117,8 +117,10 @@ def table4(case_key: str, out_dir: Path, progress: bool = True) -> dict:
     return out
 
 
-def section_table4(fig_dir: Path, out_dir: Path) -> str:
-    """Table 4: CCT versus ESD rating for Cases 1 and 2, with energy and peak power used."""
+def section_table4(fig_dir: Path, out_dir: Path, progress=None) -> str:
+    """Table 4: CCT versus ESD rating for Cases 1 and 2, with energy and peak power used.
+
+    The sweep records go to out_dir; progress(str), if given, hears when a case is done."""
     lines = ["## 6. Table 4: CCT versus ESD rating", "",
              "Bisection on the clearing time to 1 ms (`stabctl.cct`), stability = no rotor "
              "angle leaves the COI by more than pi within 5 s of the fault. The energy and "
@@ -128,6 +130,8 @@ def section_table4(fig_dir: Path, out_dir: Path) -> str:
     for key, cycles in (("case2", 6), ("case1", 17)):
         name, fault = CASES[key]
         res = results[key] = table4(key, out_dir)
+        if progress is not None:
+            progress(f"Table 4, {name}: {len(res)} CCT searches done; energy runs follow")
         base = res[None]["cct_s"]
         lines += [f"### {key.replace('case', 'Case ')}: {name}, {fault.describe()}", "",
                   "| ESD % of MVA | CCT s | CCT cycles | increase % | paper % | sims | "
