@@ -575,9 +575,9 @@ def _ratings(values) -> list:
 def _sweep_line(key, rec) -> str:
     if rec["status"] != "ok":
         return f"{key:<34} failed: {rec['error']}"
-    r = rec["result"]
+    r, wall = rec["result"], rec.get("wall_time_s")    # none in a reproducible copy
     return (f"{key:<34} {r['cct_s']:7.3f} {r['cct_cycles']:8.2f} {r['n_simulations']:5d} "
-            f"{rec['wall_time_s']:7.2f}")
+            + ("      -" if wall is None else f"{wall:7.2f}"))
 
 
 @main.command("sweep-cct")
