@@ -59,6 +59,7 @@ from _timing import best_of
 from stabctl.andes_xval import AndesFault, andes_modes, strip_dyr
 from stabctl.cct import LineFault, critical_clearing_time
 from stabctl.events import Fault
+from stabctl.errors import InputError
 from stabctl.linearise import linearise
 from stabctl.modal import modal_analysis
 from stabctl.psse import load_psse
@@ -174,7 +175,12 @@ def study_sim(files, repeat):
               f"tol {REF_ANDES_TOL:g}; the two references differ by "
               f"{speed_error(ref_o[0], ref_o[1], ref_a):.1e} pu (model difference)")
         # the error of every step of the grid, for (b)
-        err_o = {h: speed_error(*ours_run(case, bus, T_END, h), ref_o) for h in GRID}
+        err_o = {}
+        for h in GRID:
+            try:
+                err_o[h] = speed_error(*ours_run(case, bus, T_END, h), ref_o)
+            except InputError:             # refused: explicit method, step too large
+                err_o[h] = float("inf")
         err_a = {}
         for h in GRID[:-1]:
             try:
@@ -183,9 +189,10 @@ def study_sim(files, repeat):
             except RuntimeError:
                 err_a[h] = float("inf")
         print("  step      " + "".join(f"{fmt_step(h):>11}" for h in GRID))
-        print("  stabctl   " + "".join(f"{err_o[h]:11.1e}" for h in GRID))
-        print("  ANDES     " + "".join(f"{err_a[h]:11.1e}" for h in GRID[:-1])
-              + f"  (ANDES tol {ANDES_DEFAULT['tol']:g})")
+        print("  stabctl   " + "".join(_err(err_o[h]) for h in GRID)
+              + "  (-: step refused, above twice the fastest time constant)")
+        print("  ANDES     " + "".join(_err(err_a[h]) for h in GRID[:-1])
+              + f"  (ANDES tol {ANDES_DEFAULT['tol']:g}; -: run failed)")
         h_o = max((h for h in GRID if err_o[h] <= ACCURACY), default=None)
         h_a = max((h for h in GRID[:-1] if err_a[h] <= ACCURACY), default=None)
         chosen[label] = (h_o, h_a)
@@ -207,6 +214,10 @@ def study_sim(files, repeat):
                          *_andes_timed(raw, dyr, bus, h_a, ref_a, repeat, True)))
         _table(rows)
     return chosen
+
+
+def _err(e: float) -> str:
+    return f"{'-':>11}" if not np.isfinite(e) else f"{e:11.1e}"
 
 
 def _ours_timed(case, bus, h, ref, repeat):
@@ -320,6 +331,9 @@ def main():
     ap.add_argument("--only", nargs="+", choices=STUDIES, default=list(STUDIES))
     ap.add_argument("--cases", nargs="+", choices=list(CASES), default=list(CASES))
     ap.add_argument("--repeat", type=int, default=REPEAT, help="timed runs (best of)")
+    ap.add_argument("--cct-steps", nargs=2, type=int, default=None, metavar=("N_OURS", "N_ANDES"),
+                    help="with --only cct (no sim study): the (b) steps 1/N_OURS and "
+                         "1/N_ANDES s found by an earlier sim study")
     args = ap.parse_args()
     andes_defaults_checked()
     import andes
@@ -332,8 +346,10 @@ def main():
                  for label in args.cases]
         chosen = {}
         if "sim" in args.only or "cct" in args.only:
+            steps = (None, None) if not args.cct_steps else \
+                tuple(1 / n for n in args.cct_steps)
             chosen = study_sim(files, args.repeat) if "sim" in args.only else \
-                {label: (None, None) for label, *_ in files}
+                {label: steps for label, *_ in files}
         if "eig" in args.only:
             study_eig(files, args.repeat)
         if "cct" in args.only:
