@@ -267,12 +267,14 @@ def study_eig(files, repeat):
 
 def andes_cct(raw, dyr, bus, tstep, tol):
     """stabctl's search (1 ms lattice, upper bound doubled from 0.1 s) over ANDES runs:
-    (CCT s, runs)."""
-    runs = [0]
+    (CCT s, runs, seconds spent loading and setting up the case for each run)."""
+    runs, loading = [0], [0.0]
 
     def stable(k):
         runs[0] += 1
+        t0 = time.perf_counter()
         ss = andes_load(raw, dyr, AndesFault(bus, T_FAULT, T_FAULT + k * TOL_CCT), True)
+        loading[0] += time.perf_counter() - t0
         ss.TDS.config.update(tf=T_FAULT + 5.0, tstep=tstep, tol=tol, criteria=0, no_tqdm=1)
         if not ss.PFlow.run() or not ss.TDS.run():
             return False
@@ -286,13 +288,13 @@ def andes_cct(raw, dyr, bus, tstep, tol):
     while hi - lo > 1:
         mid = (lo + hi) // 2
         lo, hi = (mid, hi) if stable(mid) else (lo, mid)
-    return lo * TOL_CCT, runs[0]
+    return lo * TOL_CCT, runs[0], loading[0]
 
 
 def study_cct(files, repeat, chosen):
     print(f"\n== {1e3 * TOL_CCT:g} ms CCT of the bus fault by bisection: wall s (stabctl best "
-          f"of {repeat}; ANDES one search: each of its runs loads the case afresh), CCT error "
-          "against the tool's own fine-step CCT")
+          f"of {repeat}; ANDES one search, whose runs each load and set up the case afresh: "
+          "that part shown apart), CCT error against the tool's own fine-step CCT")
     for label, raw, dyr, bus in files:
         sim = Simulator(load_psse(raw, dyr, conventions=CONVENTIONS))
         fault = LineFault(bus, None, T_FAULT)
@@ -308,19 +310,19 @@ def study_cct(files, repeat, chosen):
         if h_a:
             rows.append(("ANDES", f"(b) step of <= {ACCURACY:g} pu, numba on", h_a))
         print(f"  {'tool':<8} {'settings':<34} {'step':>9} {'wall s':>8} {'runs':>4} "
-              f"{'CCT ms':>7} {'error ms':>8}")
+              f"{'CCT ms':>7} {'error ms':>8} {'loading s':>9}")
         for tool, what, h in rows:
             if tool == "stabctl":
                 critical_clearing_time(sim, fault, tol=TOL_CCT, h=h)          # compile
                 wall, res = best_of(lambda: critical_clearing_time(sim, fault, tol=TOL_CCT,
                                                                    h=h), repeat, warm_up=False)
-                cct, n, ref = res.cct_s, res.n_simulations, ref_o
+                cct, n, ref, load = res.cct_s, res.n_simulations, ref_o, 0.0
             else:
                 t0 = time.perf_counter()
-                cct, n = andes_cct(raw, dyr, bus, h, ANDES_DEFAULT["tol"])
+                cct, n, load = andes_cct(raw, dyr, bus, h, ANDES_DEFAULT["tol"])
                 wall, ref = time.perf_counter() - t0, ref_a
             print(f"  {tool:<8} {what:<34} {fmt_step(h):>9} {wall:8.2f} {n:4d} "
-                  f"{1e3 * cct:7.0f} {1e3 * (cct - ref):+8.0f}")
+                  f"{1e3 * cct:7.0f} {1e3 * (cct - ref):+8.0f} {load:9.2f}")
 
 
 STUDIES = ("sim", "eig", "cct")
