@@ -41,7 +41,7 @@ def pstess_section(study, ref_file) -> list[str]:
     worst_f = max(abs(p["freq_err_pct"]) for p in pairs)
     worst_z = max(abs(p["damping_err"]) for p in pairs)
     lines += ["", f"Worst: frequency {worst_f:.1e} %, damping ratio {worst_z:.1e} "
-              "(issue tolerance 1 %, 0.01).", ""]
+              "(tolerance 1 %, 0.01).", ""]
     return lines
 
 

@@ -1,4 +1,4 @@
-"""ESD sizing and placement study (issue 6): writes reports/placement_<case>.md (+ JSON,
+"""ESD sizing and placement study: writes reports/placement_<case>.md (+ JSON,
 figures) per case with `stabctl.placement_study.placement_study`.
 
 Run: python analysis/placement_study.py [kundur] [miniwecc] [--out reports] [--workers 2]
@@ -18,7 +18,9 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args(argv)
     for name in args.cases:
-        print(f"wrote {placement_study(name, args.out, args.workers)}")
+        path = placement_study(name, args.out, args.workers,
+                               generated_by="python analysis/placement_study.py")
+        print(f"wrote {path}")
 
 
 if __name__ == "__main__":

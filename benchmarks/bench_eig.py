@@ -4,7 +4,7 @@ Phases: building the model (power flow, initialisation, reduced network: `Simula
 linearisation (`stabctl.linearise.linearise`, 2 evaluations per state and input),
 modal analysis (`stabctl.modal.modal_analysis`: eigenvalues, both eigenvector sets,
 participations, areas) and residues (`mode_sensitivity`).  Best of several runs after a
-warm-up (compilation excluded), one core.  Target (issue): miniWECC linearise + analyse
+warm-up (compilation excluded), one core.  Target: miniWECC linearise + analyse
 <= 0.5 s; PSTess svm_mgen takes 22 s.
 Run: python benchmarks/bench_eig.py
 """

@@ -6,7 +6,7 @@ estimator is fed every frame once after a warm-up pass (compilation excluded), p
 one core.  Per frame: `SwingEKF.step` (model-based, compiled) and the relative speeds with
 variances each ESD controller needs (`relative_speeds`), `FrequencyKF.step` (baseline), and
 the filterpy reference of the EKF for comparison.
-Target (issue 7): at least 100 times faster than real time at 60 frames/s, i.e. < 167 us
+Target: at least 100 times faster than real time at 60 frames/s, i.e. < 167 us
 per frame for all 34 machines.
 Run: python benchmarks/bench_estimator.py
 """

@@ -1,10 +1,10 @@
-"""Wall time of ESD placement (issue 6; not a test).
+"""Wall time of ESD placement (not a test).
 
 1. The convex program alone, 34 sites (miniWECC): 10 CCT cuts (gradients drawn at random,
    seed 0, like SIME's: a few sites per contingency), the 33 real damping rows of the
    linearised miniWECC (`stabctl.damping`, zeta_min 0.05), elastic rows and a trust region,
    as inside the loop; median of 20 solves: Clarabel's own time and the wall time with
-   cvxpy's canonicalisation.  Target (issue 6): well under 1 s.
+   cvxpy's canonicalisation.  Target: well under 1 s.
 2. The verified placement (`stabctl.placement_loop.place`) of each case's DEFAULT
    contingencies (`stabctl sweep-cct`), targets = CCT of the uniform 5 % fleet, 2 workers:
    wall time, allocations simulated, simulations, total MW.

@@ -1,7 +1,7 @@
 """Contingency screening of a whole case: the CCT (1 ms) of a three-phase fault at every
 bus, in parallel (not a test).
 
-Target (issue 8): miniWECC, all 122 bus faults at 1 ms tolerance in under 5 minutes on a
+Target: miniWECC, all 122 bus faults at 1 ms tolerance in under 5 minutes on a
 2-core machine.  Each run starts from an empty record file (nothing resumed); the wall
 time includes starting the workers and their first compilation.
 Run: python benchmarks/bench_screening.py [--case miniwecc] [--workers 2]

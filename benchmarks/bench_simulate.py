@@ -1,7 +1,7 @@
 """Wall time of 20 s simulations with the paper's Case 1 and Case 2 faults (not a test).
 
 Prints the best of several runs after a warm-up (compilation excluded), the ratio to real
-time, and the issue's targets on one core: Kundur 20 s <= 0.05 s, miniWECC 20 s <= 0.3 s.
+time, and the targets on one core: Kundur 20 s <= 0.05 s, miniWECC 20 s <= 0.3 s.
 Run: python benchmarks/bench_simulate.py
 """
 

@@ -1,4 +1,4 @@
-"""Issue 7 study: estimator RMSE, false ESD actions under ambient load fluctuation and CCT
+"""Estimation study: estimator RMSE, false ESD actions under ambient load fluctuation and CCT
 with the estimator in the loop for Kundur Case 1 and miniWECC Case 2 ->
 reports/estimation_{kundur,miniwecc}.md (+ estimation_cct_<case>.jsonl, whose finished CCT
 jobs are reused: delete it after a change of the loop).
@@ -20,5 +20,6 @@ if __name__ == "__main__":
     a = ap.parse_args()
     mini = a.runs if a.miniwecc_cct_runs is None else a.miniwecc_cct_runs
     for p in write_estimation_report("reports", a.runs, {"miniwecc": mini}, a.workers,
-                                     tuple(a.case or CASES)):
+                                     tuple(a.case or CASES),
+                                     generated_by="python sims/estimation_study.py"):
         print(f"wrote {p}")

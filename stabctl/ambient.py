@@ -1,5 +1,5 @@
 """Ambient load fluctuation: random real-power variations of the loads that drive the
-simulator (the "ambient noise without a fault" of issue 7).
+simulator (ambient noise without a fault).
 
 Every bus load with P > 0 in the power flow (`case.buses.pload`) gets a deviation x(t),
 relative to its P, from an Ornstein-Uhlenbeck process

@@ -355,7 +355,7 @@ DEFAULT_FAULTS = {
 def storage_fleet(case, esd_pct: float | None):
     """`stabctl.storage.uniform_fleet(case, esd_pct)`, or None for no storage.
 
-    Raises InputError if stabctl.storage (another part of issue 4) is not there yet.
+    Raises InputError if the stabctl.storage module is missing.
     """
     if esd_pct is None:
         return None

@@ -272,9 +272,9 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 @click.option("--out", "out_dir", default="reports", show_default=True,
               type=click.Path(file_okay=False), help="Report directory.")
 @click.option("--resume", is_flag=True,
-              help="Keep the sweep records already in OUT (Table 4 and estimator CCT "
-                   "sweeps, placement screening; after an interruption); by default they "
-                   "are recomputed.")
+              help="Continue the sweeps (Table 4 and estimator CCT sweeps, placement "
+                   "screening) from the records of an interrupted run in OUT/.paper-work, "
+                   "or else from the records in OUT; by default they are recomputed.")
 @click.option("--only", multiple=True,
               type=click.Choice(["analytic", "cases", "convergence", "table4", "estimation",
                                  "placement"]),
@@ -289,9 +289,12 @@ def paper(out_dir, resume, only):
     """Reproduce the paper's tables and figures into OUT/paper.md (+ PNG figures).
 
     The Table 4 and estimator CCT sweeps and the placement screening record each finished
-    search in OUT/table4_<case>.jsonl, OUT/estimation_cct_<case>.jsonl and
-    OUT/placement_<case>_screening.jsonl as it completes; an interrupted run continues
-    from there with --resume.
+    search in OUT/.paper-work as it completes (an interrupted run continues from there
+    with --resume). Only when every section has succeeded are the reports moved into OUT
+    and the records written to OUT/table4_<case>.jsonl, OUT/estimation_cct_<case>.jsonl
+    and OUT/placement_<case>_screening.jsonl, replacing the old ones; reports and records
+    hold no timings or other run-dependent values (two runs give identical files), those
+    go to OUT/run_log.json (seconds per section, every progress line).
     """
     from .paper import write_paper_report
 
@@ -420,18 +423,46 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         raise InputError(f"{option} {path}: the file is not writable")
 
 
-def _save_plot_atomically(result, path: Path, title: str) -> None:
+def _save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0) -> None:
     from .plotting import simulation_overview
 
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
     os.close(fd)
     try:
-        simulation_overview(result, tmp, title=title)
+        simulation_overview(result, tmp, title=title, base_mva=base_mva)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def _describe_esd(esd: dict, short: bool = False) -> str:
+    """One line on the storage of `simulate --esd-pct` (short: for a plot title)."""
+    where = "" if short else " at the generator HV buses"
+    control = "bang-bang COI control" if short else esd["control"]
+    return (f"storage: {esd['devices']} ESDs of {esd['pct_of_machine_mva']:g} % of machine MVA"
+            f"{where}, {control}, deadband {esd['deadband_hz']:g} Hz, "
+            f"{'gate' if short else 'voltage gate'} {esd['v_gate_pu']:g} pu, {esd['coi']} COI"
+            + (f", hysteresis {esd['hysteresis_hz']:g} Hz" if esd["hysteresis_hz"] else ""))
+
+
+def _print_storage(esd: dict, result) -> None:
+    """The storage lines of `simulate`'s text output: settings, totals, active devices."""
+    info = result.meta.get("storage", [])
+    active = [d for d in info if d["switchings"] > 0]
+    click.echo(f"  {_describe_esd(esd)}")
+    click.echo(f"  {sum(d['switchings'] for d in info)} switchings, {len(active)} of "
+               f"{len(info)} devices acted; absorbed "
+               f"{sum(d['energy_absorbed_mj'] for d in info):.1f} MJ, delivered "
+               f"{sum(d['energy_delivered_mj'] for d in info):.1f} MJ")
+    if active:
+        click.echo(f"  {'device':>6} {'bus':>6} {'machine':>7} {'MW':>7} {'switchings':>10} "
+                   f"{'absorbed MJ':>11} {'delivered MJ':>12} {'peak MW':>8}")
+    for d in active:
+        click.echo(f"  {d['device']:6d} {d['bus']:6d} {'G' + str(d['machine']):>7} "
+                   f"{d['pmax_mw']:7.1f} {d['switchings']:10d} {d['energy_absorbed_mj']:11.1f} "
+                   f"{d['energy_delivered_mj']:12.1f} {d['peak_power_mw']:8.1f}")
 
 
 def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit,
@@ -541,8 +572,11 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     \b
     CSV columns: t, speed_pu.G<k>, angle_rad.G<k>, pelect_pu.G<k>, pmech_pu.G<k>,
     efd_pu.G<k> per machine k, vmag_pu.B<n>, vang_rad.B<n> per bus n, and with
-    --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also lists, per device,
-    switchings, energy absorbed and delivered (MJ) and peak power used (MW).
+    --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also gives the storage
+    settings (`esd`), per device switchings, energy absorbed and delivered (MJ) and peak
+    power used (MW) (`storage`), and every switching as {t_s, device, bus, machine, mode
+    (absorb, idle, inject), mode_code (+1, 0, -1), rel_speed_hz (machine minus COI speed
+    seen by the controller)} (`switchings`).
 
     \b
     Examples:
@@ -581,10 +615,16 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     h = sim.default_h if step is None else step
     result = sim.run(events, t_end=tf, h=h, separation_limit=separation_limit,
                      stop_at_separation=stop_at_separation, storage=fleet)
+    esd = None if esd_pct is None else {
+        "pct_of_machine_mva": esd_pct, "devices": len(fleet.devices),
+        "control": "bang-bang COI (paper Table 3)", "deadband_hz": deadband_hz,
+        "v_gate_pu": v_gate, "coi": coi, "hysteresis_hz": hysteresis_hz}
     written = []
     if plot_p is not None:
-        _save_plot_atomically(result, plot_p, title=f"{case.name}: "
-                              + ("; ".join(_describe_event(e) for e in events) or "flat run"))
+        title = f"{case.name}: " + ("; ".join(_describe_event(e) for e in events) or "flat run")
+        if esd is not None:
+            title += "\n" + _describe_esd(esd, short=True)
+        _save_plot_atomically(result, plot_p, title=title, base_mva=case.base_mva)
         written.append(str(plot_p))
     if out_p is not None:
         if out_p.suffix.lower() == ".npz":
@@ -593,8 +633,11 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
             result.to_csv(out_p)
         written.insert(0, str(out_p))
     summary = result.summary()
+    if esd is not None:
+        summary["switchings"] = result.switching_records()
     if as_json:
         _print_json({**summary, "step_s": h, "conventions": conventions, "q_limits": q_limits,
+                     "esd": esd,
                      "events": [_describe_event(e) for e in events], "files": written})
         return
     click.echo(f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
@@ -603,6 +646,8 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
                f"wall {summary.get('wall_time_s', float('nan')):.2f} s")
     for e in events or ["flat run (no disturbance)"]:
         click.echo(f"  {e if isinstance(e, str) else _describe_event(e)}")
+    if esd is not None:
+        _print_storage(esd, result)
     if result.stable:
         click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
     else:
@@ -728,11 +773,11 @@ def _ratings(values) -> list:
 def _sweep_line(key, rec) -> str:
     if rec["status"] != "ok":
         return f"{key:<34} failed: {rec['error']}"
-    r = rec["result"]
+    r, wall = rec["result"], rec.get("wall_time_s")    # none in a reproducible copy
     err = r.get("numerical_error_s")
     err = "-" if err is None else f"{1000 * err:g}"
     return (f"{key:<34} {r['cct_s']:7.3f} {r['cct_cycles']:8.2f} {err:>6} "
-            f"{r['n_simulations']:5d} {rec['wall_time_s']:7.2f}")
+            f"{r['n_simulations']:5d} " + ("      -" if wall is None else f"{wall:7.2f}"))
 
 
 @main.command("sweep-cct")

@@ -1,4 +1,4 @@
-"""Storage control with the speed estimator in the loop (issue 7, closed-loop half).
+"""Storage control with the speed estimator in the loop (closed-loop half of the estimation study).
 
 The paper's ESDs (Table 3) act on f_i - f_COI.  Here they see it only through PMU frames:
 at each reporting instant t_f = k / rate the simulation (`Simulator.run_commanded`) is

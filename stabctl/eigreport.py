@@ -151,8 +151,8 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         "",
         f"- Linearised at the power-flow point by central differences of the simulator's own "
         f"equations (PSTess svm_mgen's perturbation 1e-4): {sys.nstates} states, "
-        f"{sys.ninputs} inputs, {sys.noutputs} outputs; {st.t_linearise:.2f} s to linearise, "
-        f"{st.t_analyse:.2f} s to analyse.",
+        f"{sys.ninputs} inputs, {sys.noutputs} outputs (timings: `stabctl eig` prints them; "
+        "the report holds no run-dependent values).",
         f"- Angle-reference mode (common rotation of all rotor angles, excluded from damping "
         f"statistics): lambda = {lam_ref.real:.2e} 1/s.",
         f"- {em.size} electromechanical modes ({n_inter} inter-area, {em.size - n_inter} local): "

@@ -1,4 +1,4 @@
-"""Offline evaluation of the speed estimators against the simulated truth (issue 7).
+"""Offline evaluation of the speed estimators against the simulated truth.
 
 A disturbance is simulated once (with storage acting on the true speeds if asked), then for
 each Monte-Carlo run a PMU frame stream is drawn (`stabctl.pmu.measure`, run r with seed

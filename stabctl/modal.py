@@ -236,7 +236,8 @@ def coherent_areas(shape: np.ndarray, freq_hz: np.ndarray, em: np.ndarray,
     sorted frequencies in their lower half (else the largest ratio there).  This is a
     heuristic (Kundur: r = 2, miniWECC: r = 3, docs/modal.md); planners who know their
     areas pass n_areas or `modal_analysis(areas=...)`.  Returns labels (g,), 0 for a
-    single area.
+    single area, numbered in the order of each area's first machine (machine order of the
+    data: Kundur's area 1 = G1, G2 as in his book).
     Raises InputError for n_areas outside [1, number of EM modes + 1] or above g.
     """
     g = shape.shape[0]
@@ -251,7 +252,15 @@ def coherent_areas(shape: np.ndarray, freq_hz: np.ndarray, em: np.ndarray,
     V = np.column_stack([np.ones(g), *(shape[:, i].real for i in em[:n_areas - 1])])
     _, _, piv = la.qr(V.T, pivoting=True)
     L = V @ np.linalg.inv(V[piv[:n_areas]])
-    return np.argmax(L, axis=1)
+    return _by_first_machine(np.argmax(L, axis=1))
+
+
+def _by_first_machine(labels: np.ndarray) -> np.ndarray:
+    """Area labels renumbered 0..r-1 in the order in which the areas first occur."""
+    _, first, inverse = np.unique(labels, return_index=True, return_inverse=True)
+    rank = np.empty(first.size, int)
+    rank[np.argsort(first)] = np.arange(first.size)
+    return rank[inverse]
 
 
 def _given_areas(areas: dict, machines: np.ndarray) -> np.ndarray:

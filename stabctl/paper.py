@@ -7,8 +7,13 @@ interrupted or failed run leaves no half-written report.
 
 from __future__ import annotations
 
+import json
 import os
+import platform
+import shutil
 import tempfile
+import time
+from datetime import datetime, timezone
 from pathlib import Path
 from typing import Callable
 
@@ -20,6 +25,7 @@ from .errors import InputError
 from .feedback import PAPER_LAWS, settling_time
 from .omib import PAPER_OMIB, clearing_table, eac_summary, simulate
 from .optimal import solve_min_time
+from .sweep import write_reproducible
 
 #: Paper Table 1: fault cycles -> (delta at clearing rad, d(delta)/dt rad/s, stable).
 PAPER_TABLE1 = {6: (0.6519, 3.1374, True), 12: (1.1228, 6.2747, True), 15: (1.4753, 7.8421, False)}
@@ -104,12 +110,14 @@ def section_feedback(fig_dir: Path) -> str:
              "|---|---|---|---|---|---|"]
     for name, run in runs.items():
         k = run.t >= run.t_clear
-        ts = settling_time(run.t, run.omega, run.t_clear) if run.stable else float("nan")
+        ts = settling_time(run.t, run.omega, run.t_clear) if run.stable else float("inf")
         lines.append(f"| {name} | {'yes' if run.stable else 'no'} | {run.delta.max():.4f} | "
                      f"{np.abs(run.omega[k]).max():.4f} | "
                      f"{'never' if np.isinf(ts) else f'{ts:.2f}'} | {np.abs(run.P_C).max():.3f} |")
     plotting.feedback_phase_plane(sys_, runs, fig_dir / "fig07_feedback_phase_plane.png")
-    lines += ["", "The acceleration-only law changes the effective inertia but adds no damping, "
+    lines += ["", "Settling time \"never\": the speed does not stay inside the band within "
+              f"{t_end:g} s (an unstable run leaves it for good). "
+              "The acceleration-only law changes the effective inertia but adds no damping, "
               "so it never settles; the sign law always absorbs energy from the swing "
               "(P_C * omega >= 0).", "", "![feedback](fig07_feedback_phase_plane.png)", ""]
     return "\n".join(lines)
@@ -151,8 +159,8 @@ def section_two_machine_and_min_time(fig_dir: Path) -> str:
     return "\n".join(lines)
 
 
-def section_estimation(fig_dir: Path, records_dir: Path) -> str:
-    """PMU estimation and estimator-in-the-loop control (issue 7): separate reports."""
+def section_estimation(fig_dir: Path, records_dir: Path, progress=None) -> str:
+    """PMU estimation and estimator-in-the-loop control: separate reports."""
     from .estimation_report import write_estimation_report
 
     paths = write_estimation_report(fig_dir, runs=20, records_dir=records_dir)
@@ -163,11 +171,11 @@ def section_estimation(fig_dir: Path, records_dir: Path) -> str:
                       f"PMU frequency and each estimator in the loop: {links}.", ""])
 
 
-def section_placement(fig_dir: Path, records_dir: Path) -> str:
-    """ESD sizing and placement (issue 6): separate reports per case."""
+def section_placement(fig_dir: Path, records_dir: Path, progress=None) -> str:
+    """ESD sizing and placement: separate reports per case."""
     from .placement_study import placement_study
 
-    paths = [placement_study(case, fig_dir, records_dir=records_dir)
+    paths = [placement_study(case, fig_dir, records_dir=records_dir, progress=progress)
              for case in ("kundur", "miniwecc")]
     links = ", ".join(f"[{p.stem}]({p.name})" for p in paths)
     return "\n".join(["## 8. Where to put how much storage", "",
@@ -219,11 +227,18 @@ PARTS: dict[str, tuple[Callable[[Path], str], ...]] = {
     "placement": (),
     "convergence": (section_convergence,),
 }
-#: Parts whose sweeps keep resumable records (JSON lines) in the report directory itself:
-#: key -> (section(fig_dir, records_dir), record files started afresh unless resume).
+#: Parts whose sweeps keep resumable records (JSON lines): key -> (section(fig_dir,
+#: records_dir, progress), record files).  The records are made in WORK_DIR and copied
+#: into the report directory, reproducibly (`sweep.write_reproducible`), at the end.
 RESUMABLE = {"table4": (paper_storage.section_table4, "table4_*.jsonl"),
              "estimation": (section_estimation, "estimation_cct_*.jsonl"),
              "placement": (section_placement, "placement_*_screening.jsonl")}
+#: Sub-directory of the report directory holding the records of the run in progress
+#: (with timings, for --resume); removed when the run completes.
+WORK_DIR = ".paper-work"
+#: The run's timings and other run-dependent values, in the report directory (the
+#: reports themselves hold none).
+RUN_LOG = "run_log.json"
 
 
 def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], None] = print,
@@ -232,8 +247,13 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
     with their PNG figures and sub-reports; returns the path.
 
     Files are written to a temporary directory first and moved into out_dir only when all
-    sections succeeded.  The Table 4 sweep records (out_dir/table4_*.jsonl) are started
-    afresh unless `resume`.
+    sections succeeded.  The sweeps of the RESUMABLE parts record each finished job in
+    out_dir/WORK_DIR (started afresh unless `resume`; with `resume`, a part without
+    records there starts from the records already in out_dir).  When every section has
+    succeeded, the records are written to out_dir without run-dependent fields, sorted
+    (each file replaced only when its new version is complete), WORK_DIR is removed and
+    the run's timings (seconds per section, per record file, every progress line) go to
+    out_dir/RUN_LOG: the reports and records of two runs of the same code are identical.
 
     Raises:
         InputError: an unknown part in `only`.
@@ -244,9 +264,29 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
         raise InputError(f"unknown report part(s) {bad}; choose from {list(PARTS)}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    for key in keys if not resume else ():
-        for f in out.glob(RESUMABLE[key][1]) if key in RESUMABLE else ():
-            f.unlink()
+    work = out / WORK_DIR
+    work.mkdir(exist_ok=True)
+    for key in keys:
+        if key not in RESUMABLE:
+            continue
+        pattern = RESUMABLE[key][1]
+        if not resume:
+            for f in work.glob(pattern):
+                f.unlink()
+        elif not any(work.glob(pattern)):
+            for f in out.glob(pattern):
+                shutil.copyfile(f, work / f.name)
+    t_start = time.perf_counter()
+    log = {"command": "stabctl paper", "parts": keys, "resume": bool(resume),
+           "started": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+           "stabctl": _version(), "python": platform.python_version(),
+           "cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+           else os.cpu_count(), "sections": [], "records": {}, "progress": []}
+
+    def say(msg: str) -> None:
+        log["progress"].append([round(time.perf_counter() - t_start, 1), msg])
+        progress(msg)
+
     with tempfile.TemporaryDirectory(dir=out, prefix=".paper-") as tmp:
         tmp = Path(tmp)
         parts = ["# stabctl: reproduction of the paper's results", "",
@@ -254,14 +294,41 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
                  ""]
         for key in keys:
             for section in PARTS[key]:
-                progress(f"paper: {section.__doc__.splitlines()[0]}")
-                parts.append(section(tmp))
+                parts.append(_timed(log, key, section, say, lambda s: s(tmp)))
             if key in RESUMABLE:
-                section = RESUMABLE[key][0]
-                progress(f"paper: {section.__doc__.splitlines()[0]} (resumable records in "
-                         "the report directory)")
-                parts.append(section(tmp, out))
+                parts.append(_timed(log, key, RESUMABLE[key][0], say,
+                                    lambda s: s(tmp, work, progress=say),
+                                    " (resumable records)"))
         (tmp / "paper.md").write_text("\n".join(parts))
         for f in tmp.iterdir():
             os.replace(f, out / f.name)
+    for key in keys:
+        for f in sorted(work.glob(RESUMABLE[key][1])) if key in RESUMABLE else ():
+            log["records"][f.name] = write_reproducible(f, out / f.name)
+            f.unlink()
+    try:
+        work.rmdir()
+    except OSError:              # something else left there: keep it
+        pass
+    log["total_s"] = round(time.perf_counter() - t_start, 1)
+    (out / RUN_LOG).write_text(json.dumps(log, indent=1) + "\n")
     return out / "paper.md"
+
+
+def _timed(log: dict, key: str, section, say, call, note: str = "") -> str:
+    """Run one section (`call(section)`), announcing it and logging its seconds."""
+    title = section.__doc__.splitlines()[0]
+    say(f"paper: {title}{note}")
+    t0 = time.perf_counter()
+    text = call(section)
+    log["sections"].append({"part": key, "section": title,
+                            "seconds": round(time.perf_counter() - t0, 1)})
+    return text
+
+
+def _version() -> str:
+    try:
+        from importlib.metadata import version
+        return version("stabctl")
+    except Exception:  # noqa: BLE001 - not installed (source tree)
+        return "unknown"

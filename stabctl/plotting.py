@@ -67,7 +67,8 @@ def feedback_phase_plane(system, runs: dict, path: Path) -> None:
     """Phase-plane comparison of the feedback laws (paper Fig. 7) and speed versus time."""
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
     d = np.linspace(-1.0, system.delta_u, 400)
-    ax1.plot(d, system.separatrix(d), "k--", lw=1, label="stability boundary")
+    ax1.plot(d, system.separatrix(d), "k--", lw=1,
+             label="stability boundary without control")
     ax1.plot(d, -system.separatrix(d), "k--", lw=1)
     for name, run in runs.items():
         ax1.plot(run.delta, run.omega, lw=1.3, label=name)
@@ -110,32 +111,71 @@ def min_time_figures(system, x_release, sols: dict, states_path: Path,
     _save(fig, costates_path)
 
 
-def simulation_overview(result, path, title: str | None = None, max_labels: int = 10) -> None:
-    """Three panels versus time for a `stabctl.results.SimulationResult`: machine speeds
-    (pu), rotor angles relative to the centre of inertia (rad, the result's own COI with
-    H*MVA weights) and bus voltage magnitudes (pu).  Loss of synchronism, if any, is marked
-    by a vertical line.  Legends only when there are at most `max_labels` series."""
+def simulation_overview(result, path, title: str | None = None, max_labels: int = 10,
+                        base_mva: float = 100.0) -> None:
+    """Panels versus time for a `stabctl.results.SimulationResult`: machine speeds (pu),
+    rotor angles relative to the centre of inertia (rad, the result's own COI with H*MVA
+    weights), bus voltage magnitudes (pu) and, when the run had storage, the device powers
+    (MW on `base_mva`, + absorbs).  Loss of synchronism, if any, is marked by a vertical
+    line.  Machines keep one colour in every panel; with more than `max_labels` machines
+    each has a distinct colour and line style and only the separated ones are drawn thick
+    and named (legend and a label at the end of the trace); buses are named only when
+    few."""
     t = result.t
-    fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+    storage = result.pesd is not None and result.devices.size > 0
+    fig, axes = plt.subplots(4 if storage else 3, 1, figsize=(9, 11.5 if storage else 9),
+                             sharex=True)
     rel = result.angle - result.coi_angle[:, None]
+    lost = set(int(m) for m in result.separated)
+    mstyles = _machine_styles(result.machines, lost, max_labels)
     series = ((axes[0], result.speed, "G", result.machines, "speed (pu)"),
               (axes[1], rel, "G", result.machines, "angle - COI angle (rad)"),
               (axes[2], result.vmag, "B", result.buses, "bus voltage (pu)"))
     for ax, data, prefix, numbers, ylabel in series:
         many = data.shape[1] > max_labels
-        lost = set(int(m) for m in result.separated) if prefix == "G" else set()
         for j, n in enumerate(numbers):
-            named = not many or int(n) in lost
-            ax.plot(t, data[:, j], lw=1.8 if int(n) in lost and many else (0.8 if many else 1.2),
-                    label=f"{prefix}{int(n)}" if named else None)
+            if prefix == "G":
+                st = mstyles[j]
+                ax.plot(t, data[:, j], **st)
+                if many and st["label"]:
+                    ax.annotate(st["label"], (t[-1], data[-1, j]), fontsize=8,
+                                color=st["color"], xytext=(2, 0), textcoords="offset points",
+                                va="center")
+            else:
+                ax.plot(t, data[:, j], lw=0.8 if many else 1.2,
+                        label=None if many else f"B{int(n)}")
+        if prefix == "G" and many:
+            ax.plot([], [], color="0.5", lw=0.7,
+                    label=f"other {len(numbers) - len(lost)} machines (thin)")
         if result.t_separation is not None:
             ax.axvline(result.t_separation, color="r", ls=":", lw=1.2,
-                       label="loss of synchronism" if not many or lost else None)
+                       label="loss of synchronism")
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
-        if not many or lost:
-            ax.legend(fontsize=7, ncol=min(5, data.shape[1] + 1), loc="best")
-    axes[2].set_xlabel("t (s)")
+        if prefix == "G" or not many:
+            ax.legend(fontsize=7, ncol=min(5, data.shape[1] + 1) if not many else 1,
+                      loc="best")
+    if storage:
+        ax = axes[3]
+        info = result.meta.get("storage", [])
+        active = [i for i, d in enumerate(info) if d.get("switchings", 1) > 0]
+        colour = {int(n): st["color"] for n, st in zip(result.machines, mstyles)}
+        for i in range(result.devices.size):
+            d = info[i] if i < len(info) else {}
+            named = i in active[:max_labels]
+            mach = d.get("machine")
+            ax.plot(t, result.pesd[:, i] * base_mva, lw=1.0,
+                    color=colour.get(int(mach)) if mach is not None and not many else None,
+                    label=(f"ESD {int(result.devices[i])} at bus {d.get('bus')} (G{mach})"
+                           if named and d else None))
+        ax.set_ylabel("ESD power (MW, + absorbs)")
+        ax.grid(True, alpha=0.3)
+        idle = result.devices.size - len(active)
+        ax.set_title(f"{result.devices.size} storage devices, {len(active)} switched"
+                     + (f", {idle} stayed idle" if idle else ""), fontsize=9)
+        if active:
+            ax.legend(fontsize=7, ncol=2, loc="best")
+    axes[-1].set_xlabel("t (s)")
     verdict = ("stable" if result.stable else
                f"loss of synchronism at {result.t_separation:.3f} s, machine(s) "
                + ", ".join(str(int(m)) for m in result.separated))
@@ -144,19 +184,73 @@ def simulation_overview(result, path, title: str | None = None, max_labels: int 
     _save(fig, Path(path))
 
 
-def storage_case_figure(without, with_, path: Path, title: str) -> None:
-    """Speeds without and with storage control, and the device powers (paper Figs. 14-19)."""
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+def _machine_styles(numbers, highlight=(), max_labels: int = 10) -> list[dict]:
+    """Plot style per machine: up to max_labels machines each a tab10 colour and a legend
+    entry; more machines each a distinct colour and line style (thin, unlabelled) except
+    the `highlight`ed ones (thick, black/red/..., labelled)."""
+    numbers = [int(n) for n in numbers]
+    if len(numbers) <= max_labels:
+        return [{"color": plt.get_cmap("tab10")(j % 10), "lw": 1.2, "ls": "-",
+                 "label": f"G{n}", "zorder": 2} for j, n in enumerate(numbers)]
+    cmap, styles = plt.get_cmap("tab20"), ("-", "--", ":")
+    loud = ("k", "tab:red", "tab:blue", "tab:green", "tab:purple")
+    shown = [n for n in numbers if n in set(int(h) for h in highlight)]
+    out = []
+    for j, n in enumerate(numbers):
+        if n in shown:
+            out.append({"color": loud[shown.index(n) % len(loud)], "lw": 2.2, "ls": "-",
+                        "label": f"G{n}", "zorder": 3})
+        else:
+            out.append({"color": cmap(j % 20), "lw": 0.7, "ls": styles[(j // 20) % 3],
+                        "label": None, "zorder": 2, "alpha": 0.8})
+    return out
+
+
+def _speed_panel(ax, res, styles, label: str) -> None:
+    """Machine speeds of one run with the given styles; highlighted machines named at the
+    end of their trace; a legend (with 'other N machines' when some are unlabelled)."""
+    for j, st in enumerate(styles):
+        ax.plot(res.t, res.speed[:, j], **st)
+        if st["label"] and len(styles) > 10:
+            ax.annotate(st["label"], (res.t[-1], res.speed[-1, j]), fontsize=8,
+                        color=st["color"], xytext=(2, 0), textcoords="offset points",
+                        va="center")
+    if len(styles) > 10:      # room for the names at the end of the traces
+        ax.set_xlim(res.t[0], res.t[-1] + 0.1 * (res.t[-1] - res.t[0]))
+    quiet = sum(1 for st in styles if not st["label"])
+    if quiet:
+        ax.plot([], [], color="0.5", lw=0.7, label=f"other {quiet} machines (thin)")
+    if res.t_separation is not None:
+        ax.axvline(res.t_separation, color="r", ls=":", lw=1.0, label="loss of synchronism")
+    ax.set(xlabel="t (s)", ylabel="speed (pu)", title=f"machine speeds, {label}")
+    ax.legend(fontsize=7, ncol=2 if len(styles) <= 10 else 1, loc="best")
+
+
+def storage_case_figure(without, with_, path: Path, title: str, highlight=()) -> None:
+    """Speeds without and with storage control, and the device powers (paper Figs. 14-19).
+
+    Every machine keeps its colour in both speed panels; with many machines the separated
+    ones (in either run) and `highlight` are drawn thick and named, the others thin in
+    distinct colours and line styles.  Device powers use their machine's colour."""
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
+    marked = [int(m) for m in (*without.separated, *with_.separated, *highlight)]
+    styles = _machine_styles(without.machines, dict.fromkeys(marked))
+    colour = {int(n): st["color"] for n, st in zip(without.machines, styles)}
     for ax, res, label in ((axes[0], without, "without control"), (axes[1], with_, "with control")):
-        ax.plot(res.t, res.speed, lw=1)
-        ax.set(xlabel="t (s)", ylabel="speed (pu)", title=f"machine speeds, {label}")
+        _speed_panel(ax, res, styles, label)
     active = [i for i, d in enumerate(with_.meta["storage"]) if d["switchings"] > 0]
+    many = len(styles) > 10
     for i in active[:12]:
         d = with_.meta["storage"][i]
+        named = not many or int(d["machine"]) in marked
         axes[2].plot(with_.t, with_.pesd[:, i] * 100, lw=1,
+                     color=colour.get(int(d["machine"])) if named else None,
                      label=f"ESD at bus {d['bus']} (G{d['machine']})")
-    axes[2].set(xlabel="t (s)", ylabel="ESD power (MW, + absorbs)", title="device powers")
-    axes[2].legend(fontsize=7)
+    axes[2].set(xlabel="t (s)", ylabel="ESD power (MW, + absorbs)",
+                title="device powers" + (f" ({min(len(active), 12)} of {len(active)} that "
+                                         "switched)" if len(active) > 12 else ""))
+    if active:
+        axes[2].legend(fontsize=7)
     for ax in axes[:2]:
         ax.set_ylim(min(a.speed.min() for a in (without, with_)) - 0.002,
                     max(a.speed.max() for a in (without, with_)) + 0.002)
@@ -164,16 +258,21 @@ def storage_case_figure(without, with_, path: Path, title: str) -> None:
     _save(fig, path)
 
 
-def cct_versus_rating(results: dict, ratings, path: Path) -> None:
-    """CCT increase (%) versus ESD rating (% of machine MVA) per case (Table 4)."""
-    fig, ax = plt.subplots(figsize=(6, 4))
+def cct_versus_rating(results: dict, ratings, path: Path, paper_row: dict | None = None,
+                      paper_label: str = "paper Table 4") -> None:
+    """CCT increase (%) versus ESD rating (% of machine MVA) per case (Table 4), with the
+    paper's printed row (rating % -> increase %) as its own series when given."""
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
     for key, res in results.items():
         base = res[None]["cct_s"]
         gains = [0] + [100 * (res[p]["cct_s"] / base - 1) for p in ratings]
-        ax.plot([0, *ratings], gains, "o-", label=key.replace("case", "Case "))
+        ax.plot([0, *ratings], gains, "o-", label=f"{key.replace('case', 'Case ')} (stabctl)")
+    if paper_row:
+        x = sorted(paper_row)
+        ax.plot(x, [paper_row[p] for p in x], "ks--", mfc="none", ms=7, label=paper_label)
     ax.set(xlabel="ESD rating (% of machine MVA)", ylabel="CCT increase (%)",
            title="Table 4: CCT gain versus storage rating")
-    ax.legend()
+    ax.legend(fontsize=8)
     _save(fig, path)
 
 

@@ -1,6 +1,6 @@
 """Labelled results of a dynamic run, with CSV and binary (.npz) export.
 
-Columns of the CSV (the issue's format): `t` (s), then per machine k (number as in the
+Columns of the CSV: `t` (s), then per machine k (number as in the
 data) `speed_pu.G<k>`, `angle_rad.G<k>` (absolute, synchronous frame, as PSTess),
 `pelect_pu.G<k>` (system base), `pmech_pu.G<k>` (machine base), `efd_pu.G<k>`, per bus n
 `vmag_pu.B<n>`, `vang_rad.B<n>`, and per storage device d `pesd_pu.D<d>` (+ absorbs).
@@ -86,6 +86,24 @@ class SimulationResult:
                 "separated_machines": [int(m) for m in self.separated],
                 "max_angle_spread_rad": self.max_angle_spread,
                 "t_end_s": float(self.t[-1]), "n_steps": int(self.t.size - 1), **self.meta}
+
+    def switching_records(self) -> list[dict]:
+        """The storage switching log (`meta["switchings"]`, rows (t, device, mode,
+        relative speed)) as records with named fields: `t_s` (s), `device` (number),
+        `bus` and `machine` of the device when known, `mode` ("absorb", "idle",
+        "inject", or the commanded set-point in units of the rating as text), `mode_code`
+        (+1, 0, -1, or that set-point) and `rel_speed_hz` (the device's machine speed
+        minus the COI speed seen by its controller, Hz).  Empty without storage."""
+        info = {int(d["device"]): d for d in self.meta.get("storage", [])}
+        names = {1: "absorb", 0: "idle", -1: "inject"}
+        out = []
+        for t, dev, mode, rel in self.meta.get("switchings", []):
+            d, m = info.get(int(dev), {}), float(mode)
+            code = int(m) if m.is_integer() else m
+            out.append({"t_s": float(t), "device": int(dev), "bus": d.get("bus"),
+                        "machine": d.get("machine"), "mode": names.get(code, f"{m:g}"),
+                        "mode_code": code, "rel_speed_hz": float(rel)})
+        return out
 
     # -- export -------------------------------------------------------------------------
     def columns(self) -> tuple[list[str], np.ndarray]:

@@ -27,6 +27,7 @@ import json
 import multiprocessing
 import os
 import signal
+import re
 import socket
 import sys
 import tempfile
@@ -245,6 +246,57 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
     return SweepReport(out=out, records={j.key: done[j.key] for j in jobs}, ran=len(todo),
                        skipped=len(jobs) - len(todo), failed=failed,
                        wall_time_s=time.perf_counter() - wall)
+
+
+#: Record fields that change from run to run (timings, process ids, tracebacks with the
+#: install's paths): left out of the reproducible copy written by `write_reproducible`.
+RUN_DEPENDENT = frozenset({"wall_time_s", "worker", "traceback", "solve_time_s",
+                           "solve_times_s", "solve_wall_s"})
+
+
+def strip_run_dependent(obj):
+    """A copy of a JSON-able object without the RUN_DEPENDENT keys (at any depth)."""
+    if isinstance(obj, dict):
+        return {k: strip_run_dependent(v) for k, v in obj.items() if k not in RUN_DEPENDENT}
+    if isinstance(obj, list):
+        return [strip_run_dependent(v) for v in obj]
+    return obj
+
+
+def natural_key(key: str) -> tuple:
+    """Sort key of a job key with its numbers compared as numbers (seed2 before seed10)."""
+    return tuple((0, int(t), "") if t.isdigit() else (1, 0, t)
+                 for t in re.split(r"(\d+)", key) if t)
+
+
+def write_reproducible(src: str | Path, dst: str | Path) -> dict:
+    """Write the records of the sweep file `src` (the last line of each key) to `dst` in
+    a form that depends only on the jobs' results: sorted by `natural_key`, without the
+    RUN_DEPENDENT fields, one line each.  `dst` is written to a temporary file in its
+    directory and renamed over any old file only when complete.  Returns what was left
+    out, for a run log: {"jobs", "failed", "job_wall_s" (sum), "longest_job_s",
+    "longest_job"}."""
+    records = read_records(src)
+    dst = Path(dst)
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=dst.parent, prefix=f".{dst.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            for key in sorted(records, key=natural_key):
+                f.write(json.dumps(strip_run_dependent(records[key]), default=_jsonable) + "\n")
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, dst)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    walls = {k: r.get("wall_time_s") for k, r in records.items()
+             if isinstance(r.get("wall_time_s"), (int, float))}
+    longest = max(walls, key=walls.get, default=None)
+    return {"jobs": len(records),
+            "failed": sum(r.get("status") == "failed" for r in records.values()),
+            "job_wall_s": round(sum(walls.values()), 3),
+            "longest_job_s": None if longest is None else round(walls[longest], 3),
+            "longest_job": longest}
 
 
 def _check_jobs(jobs, done: dict, out: Path) -> None:

@@ -11,8 +11,9 @@ from click.testing import CliRunner
 from stabctl.case import PssTable, load_case
 from stabctl.cli import main
 from stabctl.errors import InputError
+from stabctl.eigreport import _areas as study_areas
 from stabctl.linearise import linearise
-from stabctl.modal import modal_analysis, mode_sensitivity
+from stabctl.modal import _by_first_machine, modal_analysis, mode_sensitivity
 
 
 @pytest.fixture(scope="module")
@@ -67,7 +68,9 @@ def test_kundur_local_and_interarea_modes(nopss, expected, sys_k, sys_k_nopss):
     ma = modal_analysis(sys_k_nopss if nopss else sys_k)
     em = ma.electromechanical[np.argsort(ma.freq_hz[ma.electromechanical])]
     assert [(round(ma.freq_hz[i], 3), ma.kind[i]) for i in em] == expected
-    assert {tuple(ma.machines[ma.areas == a]) for a in (0, 1)} == {(1, 2), (3, 4)}
+    # numbered as Kundur's book: area 1 = G1, G2 (labels 0, 1 in the order of first machine)
+    assert [tuple(ma.machines[ma.areas == a]) for a in (0, 1)] == [(1, 2), (3, 4)]
+    assert study_areas(ma) == {"area 1": [1, 2], "area 2": [3, 4]}
     ia = em[0]
     assert {frozenset(g) for g in ma.groups(ia)} == {frozenset({1, 2}), frozenset({3, 4})}
     assert ma.eta[ia] > 0.9 and all(ma.eta[i] < 0.2 for i in em[1:])
@@ -81,6 +84,12 @@ def test_kundur_local_and_interarea_modes(nopss, expected, sys_k, sys_k_nopss):
     # with the two areas given explicitly the classification is the same
     given = modal_analysis(sys_k_nopss if nopss else sys_k, areas={1: "A", 2: "A", 3: "B", 4: "B"})
     assert list(given.kind[em]) == [k for _, k in expected]
+
+
+def test_areas_numbered_by_their_first_machine():
+    assert list(_by_first_machine(np.array([1, 1, 0, 0]))) == [0, 0, 1, 1]
+    assert list(_by_first_machine(np.array([2, 0, 2, 1, 0]))) == [0, 1, 0, 2, 1]
+    assert list(_by_first_machine(np.array([3, 3, 5]))) == [0, 0, 1]      # empty labels
 
 
 def test_residues_reproduce_the_transfer_function(sys_k, ma_k):

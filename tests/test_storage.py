@@ -155,6 +155,31 @@ def test_cli_simulate_with_storage(tmp_path):
     assert [d["bus"] for d in out["storage"]] == [10, 20, 110, 120]
     header = (tmp_path / "r.csv").read_text().splitlines()[0].split(",")
     assert header[-4:] == [f"pesd_pu.D{d}" for d in (1, 2, 3, 4)]
+    # the storage settings and every switching as a record with named fields
+    assert out["esd"]["pct_of_machine_mva"] == 5 and out["esd"]["devices"] == 4
+    assert out["esd"]["deadband_hz"] == 0.1 and out["esd"]["v_gate_pu"] == 0.8
+    sw = out["switchings"]
+    assert len(sw) == sum(d["switchings"] for d in out["storage"]) > 0
+    assert all(set(r) == {"t_s", "device", "bus", "machine", "mode", "mode_code",
+                          "rel_speed_hz"} for r in sw)
+    by_dev = {d["device"]: d for d in out["storage"]}
+    for r in sw:
+        assert 1.0 <= r["t_s"] <= 5.0 and r["bus"] == by_dev[r["device"]]["bus"]
+        assert (r["mode"], r["mode_code"]) in {("absorb", 1), ("idle", 0), ("inject", -1)}
+        # Table 3: a device starts absorbing only when its machine runs > 100 mHz fast
+        # (the crossing is located inside the step, to a fraction of a mHz)
+        if r["mode"] == "absorb":
+            assert r["rel_speed_hz"] > 0.1 - 1e-4
+        if r["mode"] == "inject":
+            assert r["rel_speed_hz"] < -0.1 + 1e-4
+    assert "switchings" not in plain and plain["esd"] is None
+    # the text output and the plot say that storage acted
+    text = CliRunner().invoke(main, args[:-1] + ["--esd-pct", "5", "--plot",
+                                                 str(tmp_path / "r.png")])
+    assert text.exit_code == 0, text.output
+    assert "storage: 4 ESDs of 5 % of machine MVA" in text.stdout
+    assert f"{len(sw)} switchings, 4 of 4 devices acted" in text.stdout
+    assert (tmp_path / "r.png").stat().st_size > 10000
     bad = CliRunner().invoke(main, args + ["--esd-pct", "-5"])
     assert bad.exit_code == 2
 
