@@ -56,7 +56,7 @@ from pathlib import Path
 import numpy as np
 
 from _timing import best_of
-from stabctl.andes_xval import AndesFault, andes_modes, strip_dyr
+from stabctl.andes_xval import AndesFault, andes_modes, andes_system, strip_dyr
 from stabctl.cct import LineFault, critical_clearing_time
 from stabctl.events import Fault
 from stabctl.errors import InputError
@@ -102,14 +102,7 @@ def andes_load(raw, dyr, fault: AndesFault | None, numba: bool):
     import andes
 
     andes.config_logger(stream_level=40)
-    ss = andes.load(str(raw), addfile=str(dyr), setup=False, no_output=True,
-                    default_config=True, config_option=[f"Runtime.numba={int(numba)}"])
-    if fault is not None:
-        ss.add("Fault", {"bus": fault.bus, "tf": fault.t_fault, "tc": fault.t_clear,
-                         "rf": fault.r, "xf": fault.x})
-    ss.setup()
-    ss.PFlow.config.tol = 1e-12
-    return ss
+    return andes_system(raw, dyr, fault, config_option=[f"Runtime.numba={int(numba)}"])
 
 
 def andes_defaults_checked() -> None:

@@ -88,10 +88,13 @@ def _unsaturated(text: str) -> str:
 
 
 def andes_system(raw: str | Path, dyr: str | Path | None = None,
-                 fault: AndesFault | None = None):
-    """An ANDES ``System`` of the RAW (+ DYR) files with ``fault`` added, set up."""
+                 fault: AndesFault | None = None, config_option=()):
+    """An ANDES ``System`` of the RAW (+ DYR) files with ``fault`` added, set up;
+    config_option: ANDES config overrides such as "Runtime.numba=1"."""
     andes = _andes()
     kw = {} if dyr is None else {"addfile": str(dyr)}
+    if config_option:
+        kw["config_option"] = list(config_option)
     ss = andes.load(str(raw), setup=False, no_output=True, default_config=True, **kw)
     if fault is not None:
         ss.add("Fault", {"bus": fault.bus, "tf": fault.t_fault, "tc": fault.t_clear,
