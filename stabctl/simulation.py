@@ -80,17 +80,19 @@ def time_grid(starts, t_end: float, h: float, pstess: bool = False) -> TimeGrid:
 STEP_PER_TIME_CONSTANT = 0.5
 
 
-def default_step(case: Case, conventions: str = "ieee") -> float:
+def default_step(case: Case, conventions: str = "ieee",
+                 fastest: tuple[float, str] | None = None) -> float:
     """Default integration step (s).  pstess: the data file's own step (sw_con row 1, col
     7), else 1/120 s (half a 60 Hz cycle), as PSTess.  ieee: the same, capped at
     STEP_PER_TIME_CONSTANT times the case's fastest time constant, the largest step whose
     CCTs agree with a converged (step-halved) run within the 1 ms CCT tolerance on the
-    paper's faults (docs/conventions.md, convergence table)."""
+    paper's faults (docs/conventions.md, convergence table).  fastest: the case's
+    `fastest_time_constant`, if already known."""
     sw = case.sw_con
     h = float(sw[0, 6]) if sw is not None and sw[0, 6] > 0 else 0.5 / case.freq_hz
     if check_conventions(conventions) == "pstess":
         return h
-    T, _ = fastest_time_constant(case)
+    T, _ = fastest_time_constant(case) if fastest is None else fastest
     return min(h, STEP_PER_TIME_CONSTANT * T)
 
 
@@ -190,7 +192,7 @@ class Simulator:
         single_threaded_blas()
         self.case, self.op = case, op
         self.fastest = fastest_time_constant(case)
-        self.default_h = default_step(case, conventions) if step is None else step
+        self.default_h = default_step(case, conventions, self.fastest) if step is None else step
         check_step(self.fastest, self.default_h)
         self._models: dict[frozenset, DynamicModel] = {}
         self.model = self.model_for(injection_buses)
