@@ -12,11 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.case import load_case
-from stabctl.eigreport import eig_study, write_report
-from stabctl.linearise import compare_pulse, linearise, perturbation_error
-from stabctl.modal import match_modes
-from stabctl.simulation import Simulator
+from stabctl.io import load_case
+from stabctl.studies.eigenvalues import eig_study, write_report
+from stabctl.smallsignal.linearise import compare_pulse, linearise, perturbation_error
+from stabctl.smallsignal.modal import match_modes
+from stabctl.dynamics.simulation import Simulator
 
 REF = Path(__file__).resolve().parent.parent / "tests" / "data" / "pstess"
 STUDIES = (("kundur", False, "kundur_d2asbegp_eigenvalues.csv"),

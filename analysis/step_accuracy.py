@@ -11,9 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.case import load_case
-from stabctl.events import Fault
-from stabctl.simulation import Simulator, default_step
+from stabctl.io import load_case
+from stabctl.dynamics.events import Fault
+from stabctl.dynamics.simulation import Simulator, default_step
 
 RUNS = (("kundur", Fault(3, 0.1, 0.15, 0.20, far_bus=101), 5.0),
         ("miniwecc", Fault(40, 1.0, 1.0667, 1.0708, far_bus=44), 10.0))

@@ -14,11 +14,11 @@ Run: python benchmarks/bench_estimator.py
 import os
 import time
 
-from stabctl import estimation as es
-from stabctl import pmu
-from stabctl.case import load_case
-from stabctl.events import fault_with_clearing
-from stabctl.simulation import Simulator
+from stabctl.estimation import filters as es
+from stabctl.estimation import pmu
+from stabctl.io import load_case
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator
 
 RATE = 60.0
 TARGET_US = 1e6 / RATE / 100

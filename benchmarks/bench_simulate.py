@@ -7,9 +7,9 @@ Run: python benchmarks/bench_simulate.py
 
 
 from _timing import best_of
-from stabctl.case import load_case
-from stabctl.events import fault_with_clearing
-from stabctl.simulation import Simulator, default_step
+from stabctl.io import load_case
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator, default_step
 
 CASES = (  # name, fault bus, far bus, clearing cycles, target s, label
     ("kundur", 3, 101, 21, 0.05, "Case 1: bus 3, line 3-101, 21 cycles"),

@@ -14,10 +14,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from stabctl.case import load_case
-from stabctl.events import fault_with_clearing
-from stabctl.plotting import simulation_overview
-from stabctl.simulation import Simulator
+from stabctl.io import load_case
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.plotting.figures import simulation_overview
+from stabctl.dynamics.simulation import Simulator
 
 FAULT_BUS, FAR_BUS, T_FAULT, CYCLES, T_END = 3, 101, 1.0, 21, 5.0
 

@@ -15,10 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.case import load_case
-from stabctl.events import fault_with_clearing
-from stabctl.plotting import simulation_overview
-from stabctl.simulation import Simulator
+from stabctl.io import load_case
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.plotting.figures import simulation_overview
+from stabctl.dynamics.simulation import Simulator
 
 FAULT_BUS, FAR_BUS, T_FAULT, CYCLES = 83, 33, 1.0, 6
 

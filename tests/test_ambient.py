@@ -1,14 +1,14 @@
-"""Ambient load fluctuation (stabctl.ambient): the Ornstein-Uhlenbeck statistics against
+"""Ambient load fluctuation (stabctl.estimation.ambient): the Ornstein-Uhlenbeck statistics against
 their closed forms, and the fluctuation driving the simulator."""
 
 import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from stabctl import ambient as am
-from stabctl.case import load_case
+from stabctl.estimation import ambient as am
+from stabctl.io import load_case
 from stabctl.errors import InputError
-from stabctl.simulation import Simulator
+from stabctl.dynamics.simulation import Simulator
 
 DT, TAU, SD, PATHS = 1 / 60, 2.0, 0.01, 4000
 

@@ -3,7 +3,7 @@ bus fault and the electromechanical eigenvalues, Kundur (kundur.raw + kundur_ful
 WECC-179 (wecc.raw + wecc_full.dyr). Skipped without ANDES (``pip install
 "stabctl[andes]"``).
 
-Like for like (stabctl.andes_xval): loads constant impedance in both, ANDES's own Toggle
+Like for like (stabctl.io.andes): loads constant impedance in both, ANDES's own Toggle
 record removed from Kundur's DYR; WECC's DYR whole (29 GENROU, ESDC2A / EXST1 / ESST3A
 exciters, IEEEST / ST2CUT stabilisers, IEEEG1 governors), or (the machines-and-governors
 test) without exciters and stabilisers. WECC's GENROU saturation (S(1.0) up to 2.2,
@@ -25,14 +25,14 @@ import pytest
 
 andes = pytest.importorskip("andes")
 
-from stabctl.andes_xval import (AndesFault, andes_modes, andes_speeds,  # noqa: E402
+from stabctl.io.andes import (AndesFault, andes_modes, andes_speeds,  # noqa: E402
                                 andes_stable, andes_system, strip_dyr)
-from stabctl.cct import LineFault, critical_clearing_time  # noqa: E402
-from stabctl.events import Fault, LineTrip  # noqa: E402
-from stabctl.linearise import linearise  # noqa: E402
-from stabctl.modal import modal_analysis  # noqa: E402
-from stabctl.psse import load_psse  # noqa: E402
-from stabctl.simulation import Simulator  # noqa: E402
+from stabctl.stability.cct import LineFault, critical_clearing_time  # noqa: E402
+from stabctl.dynamics.events import Fault, LineTrip  # noqa: E402
+from stabctl.smallsignal.linearise import linearise  # noqa: E402
+from stabctl.smallsignal.modal import modal_analysis  # noqa: E402
+from stabctl.io.psse import load_psse  # noqa: E402
+from stabctl.dynamics.simulation import Simulator  # noqa: E402
 
 CASES = Path(andes.__file__).parent / "cases"
 WECC_CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}

@@ -11,9 +11,9 @@ r_a; PSS/E imports usually do (ZSORCE R).
 import numpy as np
 import pytest
 
-from stabctl.case import load_case
-from stabctl.machines import EM, SUB, TRA, machine_params
-from stabctl.simulation import Simulator
+from stabctl.io import load_case
+from stabctl.models.machines import EM, SUB, TRA, machine_params
+from stabctl.dynamics.simulation import Simulator
 
 RA = 0.003
 KINDS = {"mac_sub": SUB, "mac_tra": TRA, "mac_em": EM}

@@ -11,11 +11,12 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from stabctl import pstio
-from stabctl.case import load_case
-from stabctl.cli import _RANGES, check_number, main
+from stabctl.io import pst as pstio
+from stabctl.io import load_case
+from stabctl.cli import main
+from stabctl.cli.commands import _RANGES, check_number
 from stabctl.errors import CaseError, InputError, StabctlError
-from stabctl.simulation import MAX_STEPS, Simulator
+from stabctl.dynamics.simulation import MAX_STEPS, Simulator
 
 PSSE = Path(__file__).parent / "data" / "psse"
 
@@ -208,8 +209,8 @@ def test_island_is_named_not_blamed_on_another_bus(tmp_path):
 def test_unwritable_output_is_refused_before_any_work(no_simulation, tmp_path, monkeypatch, args,
                                                        needle):
     monkeypatch.chdir(tmp_path)
-    import stabctl.sweep
-    monkeypatch.setattr(stabctl.sweep, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
+    import stabctl.parallel
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
     assert_error(run(*args), needle)
     assert list(tmp_path.iterdir()) == []
 

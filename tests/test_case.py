@@ -19,9 +19,8 @@ from stabctl.case import (
     LoadTable,
     MachineTable,
     PssTable,
-    list_cases,
-    load_case,
 )
+from stabctl.io import list_cases, load_case
 from stabctl.errors import CaseError, UnknownBusError
 
 # d2asbegp.m rows (bus 1, 2, 3; one line; machine 1; exciter; pss; tg)
@@ -223,7 +222,7 @@ def test_builtin_kundur_matches_d2asbegp():
     assert k.loads.bus.tolist() == [4, 14] and k.loads.p_current.tolist() == [0.5, 0.5]
     np.testing.assert_array_equal(k.sw_con[1], [0.1, 3, 101, 0, 0, 0, 0.01])
     assert k.extra["lmod_con"].shape == (2, 7)
-    assert "MIT" in (Path(stabctl.__file__).parent / "cases" / "LICENSE").read_text()
+    assert "MIT" in (Path(stabctl.__file__).parent / "case" / "data" / "LICENSE").read_text()
 
 
 def test_builtin_miniwecc_matches_d_minniwecc_base():
@@ -246,7 +245,7 @@ def test_load_case_errors():
 
 def test_case_layer_never_reads_shared():
     src = Path(stabctl.__file__).parent
-    for name in ("case.py", "pstio.py", "network.py", "powerflow.py"):
+    for name in ("case/system.py", "io/pst.py", "network/ybus.py", "network/powerflow.py"):
         py = src / name
         text = py.read_text()
         assert not re.search(r"(\.\./|/work/)shared", text), py

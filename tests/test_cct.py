@@ -3,21 +3,19 @@ simulator at both ends), the paper's Case 1 fault on Kundur, bracketing errors, 
 criteria, divergence handling, storage pass-through and the `stabctl cct` command."""
 
 import json
-import sys
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
-import stabctl
-from stabctl.case import load_case
-from stabctl.cct import (DEFAULT_FAULTS, LineFault, cached_simulator, critical_clearing_time,
+from stabctl.io import load_case
+from stabctl.stability.cct import (DEFAULT_FAULTS, LineFault, cached_simulator, critical_clearing_time,
                          read_faults, storage_fleet)
 from stabctl.cli import main
 from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
-from stabctl.events import fault_with_clearing, validate
-from stabctl.simulation import Simulator
+from stabctl.dynamics.events import fault_with_clearing, validate
+from stabctl.dynamics.simulation import Simulator
 
 CASE1 = LineFault(bus=3, far_bus=101, t_fault=1.0)   # paper Case 1: bus 3, line 3-101, 1 s
 
@@ -266,12 +264,10 @@ def test_read_faults(tmp_path):
         read_faults(p)
 
 
-def test_storage_missing_is_a_clear_error(monkeypatch):
-    monkeypatch.delattr(stabctl, "storage", raising=False)
-    monkeypatch.setitem(sys.modules, "stabctl.storage", None)
-    with pytest.raises(InputError, match="storage not available yet"):
-        storage_fleet(load_case("kundur"), 10.0)
+def test_storage_fleet_none_means_no_storage():
     assert storage_fleet(load_case("kundur"), None) is None
+    fleet = storage_fleet(load_case("kundur"), 10.0)
+    assert len(fleet.devices) == 4
 
 
 def test_simulator_cached_per_case():
@@ -317,16 +313,7 @@ def test_cli_cct_bad_input(args, needle):
     assert res.stdout == ""
 
 
-def test_cli_cct_storage_missing(monkeypatch):
-    monkeypatch.delattr(stabctl, "storage", raising=False)
-    monkeypatch.setitem(sys.modules, "stabctl.storage", None)
-    res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", 5)
-    assert res.exit_code == 2
-    assert res.stderr.startswith("error: storage not available yet")
-
-
 def test_cli_cct_with_storage():
-    pytest.importorskip("stabctl.storage")
     res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", 5, "--json",
               "--tol-ms", 5)
     assert res.exit_code == 0, res.output

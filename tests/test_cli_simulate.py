@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from stabctl import pstio
-from stabctl.case import load_case
+from stabctl.io import pst as pstio
+from stabctl.io import load_case
 from stabctl.cli import main
-from stabctl.results import SimulationResult
+from stabctl.dynamics.results import SimulationResult
 
 DATA = Path(__file__).parent / "data" / "pstess"
 

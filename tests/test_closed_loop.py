@@ -1,14 +1,14 @@
-"""ESD control with the speed estimator in the loop (stabctl.closed_loop)."""
+"""ESD control with the speed estimator in the loop (stabctl.estimation.closed_loop)."""
 
 import numpy as np
 import pytest
 
-from stabctl import closed_loop as cl
-from stabctl.case import load_case
-from stabctl.events import fault_with_clearing
-from stabctl.simulation import Simulator
-from stabctl.ambient import AmbientLoad
-from stabctl.storage import ExternalCommands, StorageFleet, uniform_fleet
+from stabctl.estimation import closed_loop as cl
+from stabctl.io import load_case
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator
+from stabctl.estimation.ambient import AmbientLoad
+from stabctl.storage.devices import ExternalCommands, StorageFleet, uniform_fleet
 
 
 @pytest.fixture(scope="module")

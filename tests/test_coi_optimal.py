@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from stabctl.coi import PAPER_TWO_MACHINE, PAPER_TWO_MACHINE_T_RELEASE, TwoMachineCOI
+from stabctl.smib.coi import PAPER_TWO_MACHINE, PAPER_TWO_MACHINE_T_RELEASE, TwoMachineCOI
 from stabctl.errors import InputError
-from stabctl.omib import simulate
-from stabctl.optimal import solve_min_time
+from stabctl.smib.omib import simulate
+from stabctl.smib.optimal import solve_min_time
 
 
 def release_state():

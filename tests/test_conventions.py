@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from stabctl import exciters as exc
-from stabctl.case import load_case
+from stabctl.models import exciters as exc
+from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.errors import InputError, NumericalInstabilityError
-from stabctl.events import fault_with_clearing
-from stabctl.simulation import Simulator, time_grid
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator, time_grid
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""PSS/E DYR import (stabctl.dyr) and the models it maps to: exc_dc12 (DC1/DC2), TGOV1,
+"""PSS/E DYR import (stabctl.io.dyr) and the models it maps to: exc_dc12 (DC1/DC2), TGOV1,
 IEEEG1.  Reference values: the ANDES DYR files (parameter order of the PSS/E Model
 Library), closed forms of the linear blocks, steady-state equalities of the models."""
 
@@ -8,15 +8,16 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from stabctl import exciters as exc
-from stabctl import governors as gov
-from stabctl import machines as mac
-from stabctl import pss as pss_
-from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable, load_case
-from stabctl.dyr import dyr_tables, exp_saturation, read_dyr
+from stabctl.models import exciters as exc
+from stabctl.models import governors as gov
+from stabctl.models import machines as mac
+from stabctl.models import pss as pss_
+from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable
+from stabctl.io import load_case
+from stabctl.io.dyr import dyr_tables, exp_saturation, read_dyr
 from stabctl.errors import CaseError
-from stabctl.linearise import linearise
-from stabctl.simulation import Simulator
+from stabctl.smallsignal.linearise import linearise
+from stabctl.dynamics.simulation import Simulator
 
 andes = pytest.importorskip("andes")
 CASES = Path(andes.__file__).parent / "cases"

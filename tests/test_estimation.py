@@ -9,15 +9,15 @@ import pytest
 import scipy.linalg
 from click.testing import CliRunner
 
-from stabctl import estimation as es
-from stabctl import estimation_study as study
-from stabctl import pmu
-from stabctl.case import load_case
+from stabctl.estimation import filters as es
+from stabctl.studies import estimation as study
+from stabctl.estimation import pmu
+from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.errors import InputError
-from stabctl.events import fault_with_clearing
-from stabctl.simulation import Simulator
-from stabctl.storage import BangBangCOI, pack, uniform_fleet
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator
+from stabctl.storage.devices import BangBangCOI, pack, uniform_fleet
 
 F0, WB = 60.0, 2 * np.pi * 60.0
 H, X, EMAG, VMAG, PM = 5.0, 0.3, 1.1, 1.0, 0.8

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from stabctl.errors import InputError
-from stabctl.feedback import PAPER_LAWS, FeedbackLaw, settling_time
-from stabctl.omib import PAPER_OMIB, simulate
+from stabctl.smib.feedback import PAPER_LAWS, FeedbackLaw, settling_time
+from stabctl.smib.omib import PAPER_OMIB, simulate
 
 T_CLEAR = 15 / 60
 

@@ -31,19 +31,20 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 
-from stabctl import pstio
-from stabctl.case import Case, load_case
+from stabctl.io import pst as pstio
+from stabctl.case import Case
+from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.errors import StabctlError
-from stabctl.psse import load_psse
-from stabctl.simulation import Simulator
+from stabctl.io.psse import load_psse
+from stabctl.dynamics.simulation import Simulator
 
 HERE = Path(__file__).parent
 PSSE = HERE / "data" / "psse"
 SEEDS = {
     "raw": [(PSSE / "five_bus_v33.raw").read_text(), (PSSE / "five_bus_v34.raw").read_text()],
     "dyr": [(PSSE / "five_bus.dyr").read_text()],
-    "case_json": [(Path(pstio.__file__).parent / "cases" / "kundur.json").read_text()],
+    "case_json": [(Path(pstio.__file__).parents[1] / "case" / "data" / "kundur.json").read_text()],
     "pst_m": [(HERE / "data" / "pstess" / "d2asbegp.m").read_text()],
 }
 TIME_BOX_S = 60          # no example may take longer (a hang fails the test)

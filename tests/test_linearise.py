@@ -1,4 +1,4 @@
-"""Linearisation of the simulator's own model (stabctl.linearise) against PSTess svm_mgen,
+"""Linearisation of the simulator's own model (stabctl.smallsignal.linearise) against PSTess svm_mgen,
 the nonlinear simulator (ESD power pulse) and its own perturbation error.
 
 References (tests/data/pstess/, copied from shared/reference/pstess; PSTess 1.1 svm_mgen
@@ -13,12 +13,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stabctl.case import PssTable, load_case
+from stabctl.case import PssTable
+from stabctl.io import load_case
 from stabctl.errors import InputError, SimulationError, UnknownBusError
-from stabctl.linearise import (STATE, active_states, compare_pulse, jacobian_columns,
+from stabctl.smallsignal.linearise import (STATE, active_states, compare_pulse, jacobian_columns,
                                linearise, linearise_model, perturbation_error)
-from stabctl.modal import match_modes
-from stabctl.simulation import Simulator
+from stabctl.smallsignal.modal import match_modes
+from stabctl.dynamics.simulation import Simulator
 
 DATA = Path(__file__).parent / "data" / "pstess"
 FREQ_TOL_PCT, DAMPING_TOL = 1.0, 0.01       # the issue's acceptance tolerances

@@ -1,4 +1,4 @@
-"""Modal analysis (stabctl.modal) and the `stabctl eig` command: normalisations, the
+"""Modal analysis (stabctl.smallsignal.modal) and the `stabctl eig` command: normalisations, the
 angle-reference mode, Kundur's local and inter-area modes, residues against the transfer
 function, areas, reports and bad input."""
 
@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from stabctl.case import PssTable, load_case
+from stabctl.case import PssTable
+from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.errors import InputError
-from stabctl.eigreport import _areas as study_areas
-from stabctl.linearise import linearise
-from stabctl.modal import _by_first_machine, modal_analysis, mode_sensitivity
+from stabctl.studies.eigenvalues import _areas as study_areas
+from stabctl.smallsignal.linearise import linearise
+from stabctl.smallsignal.modal import _by_first_machine, modal_analysis, mode_sensitivity
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""The kept-bus load solution (stabctl.netsolve.solve_nc, PST nc_load) on miniWECC's
+"""The kept-bus load solution (stabctl.network.solution.solve_nc, PST nc_load) on miniWECC's
 network with a bolted fault at bus 40, where PST's 0.5 pu load switch leaves the
 equations without a solution for some loads: the loads near the switch are held at their
 impedance model, the hold is carried to the next evaluation, and released when the
@@ -8,11 +8,11 @@ with the solution found from scratch."""
 import numpy as np
 import pytest
 
-from stabctl.case import load_case
-from stabctl.events import Fault
-from stabctl.machines import internal_voltage
-from stabctl.netsolve import V_RELEASE, V_SWITCH, _load_mismatch, solve_nc
-from stabctl.simulation import Simulator, _Run
+from stabctl.io import load_case
+from stabctl.dynamics.events import Fault
+from stabctl.models.machines import internal_voltage
+from stabctl.network.solution import V_RELEASE, V_SWITCH, _load_mismatch, solve_nc
+from stabctl.dynamics.simulation import Simulator, _Run
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from stabctl.errors import InputError
-from stabctl.omib import (OMIB, PAPER_OMIB, clearing_state_closed_form, clearing_table,
+from stabctl.smib.omib import (OMIB, PAPER_OMIB, clearing_state_closed_form, clearing_table,
                           critical_clearing_time_bisection, simulate)
 
 # paper Table 1: cycles -> (delta_cl rad, d(delta)/dt rad/s, stable)

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from stabctl import paper
-from stabctl.sweep import Job, natural_key, run_sweep, strip_run_dependent, write_reproducible
+from stabctl.studies import paper
+from stabctl.parallel import Job, natural_key, run_sweep, strip_run_dependent, write_reproducible
 
 
 def square(x: int) -> dict:
@@ -128,7 +128,7 @@ def test_analytic_part_is_byte_identical_twice(tmp_path):
 def test_placement_report_holds_no_timings(tmp_path):
     """The placement report and its JSON, from the committed study figures: no wall or
     solve times (they go to the run log through `timing_line`), named source command."""
-    from stabctl.placement_study import report, timing_line
+    from stabctl.studies.placement import report, timing_line
 
     root = Path(__file__).resolve().parents[1]
     d = json.loads((root / "reports" / "placement_kundur.json").read_text())

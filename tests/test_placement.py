@@ -1,7 +1,7 @@
 """ESD placement: SIME against the equal-area criterion, the convex program against the
 OMIB closed form, cuts and sparsity on small programs with known answers, the describing
 function and damping rows, infeasibility naming the contingency, and the verification loop
-really simulating (counted Simulator.run calls, CCTs equal independent `stabctl.cct` runs).
+really simulating (counted Simulator.run calls, CCTs equal independent `stabctl.stability.cct` runs).
 Simulation-based tests use Kundur only."""
 
 import json
@@ -10,21 +10,21 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from stabctl.case import load_case
-from stabctl.cct import LineFault, critical_clearing_time
+from stabctl.io import load_case
+from stabctl.stability.cct import LineFault, critical_clearing_time
 from stabctl.cli import main
 from stabctl.errors import InputError
-from stabctl.damping import DampingModel, relay_df
-from stabctl.linearise import linearise
-from stabctl.omib import PAPER_OMIB, clearing_state_closed_form, simulate
-from stabctl.placement import (CCTCut, InfeasibleError, Site, candidate_sites, diagnose,
+from stabctl.smallsignal.damping import DampingModel, relay_df
+from stabctl.smallsignal.linearise import linearise
+from stabctl.smib.omib import PAPER_OMIB, clearing_state_closed_form, simulate
+from stabctl.placement.program import (CCTCut, InfeasibleError, Site, candidate_sites, diagnose,
                                solve_allocation, sparse_allocation)
-from stabctl.placement_eval import Contingency
-from stabctl.placement_loop import place
-from stabctl.results import SimulationResult
-from stabctl.sime import omib_equivalent, storage_integrals, unstable_margin, unstable_point
-from stabctl.simulation import Simulator
-from stabctl.storage import BangBangCOI, StorageDevice, StorageFleet
+from stabctl.placement.evaluation import Contingency
+from stabctl.placement.loop import place
+from stabctl.dynamics.results import SimulationResult
+from stabctl.stability.sime import omib_equivalent, storage_integrals, unstable_margin, unstable_point
+from stabctl.dynamics.simulation import Simulator
+from stabctl.storage.devices import BangBangCOI, StorageDevice, StorageFleet
 
 BASE_MVA, F0 = 100.0, 60.0
 CASE1 = LineFault(3, 101)                       # Kundur, paper Case 1 (CCT 0.269 s)
@@ -214,7 +214,7 @@ def test_verified_cct_equals_an_independent_cct_search(counted_place):
 def test_first_order_critical_site_rating_is_twice_their_share_when_ratings_follow_inertia():
     """With ratings proportional to H * MVA, the SIME weights M_nc/M_T (critical) and
     M_c/M_T (others) make the critical sites alone need twice their own uniform rating."""
-    from stabctl.placement_study import critical_only_mw
+    from stabctl.studies.placement import critical_only_mw
 
     case = load_case("kundur")
     sites = candidate_sites(case)

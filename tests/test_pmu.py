@@ -5,12 +5,12 @@ currents)."""
 import numpy as np
 import pytest
 
-from stabctl import pmu
-from stabctl.case import load_case
+from stabctl.estimation import pmu
+from stabctl.io import load_case
 from stabctl.errors import InputError
-from stabctl.events import fault_with_clearing
-from stabctl.simulation import Simulator
-from stabctl.storage import uniform_fleet
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator
+from stabctl.storage.devices import uniform_fleet
 
 
 def constant_truth(n_pmu=2, t_end=100.0, f=60.0):

@@ -12,10 +12,11 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from stabctl import network
-from stabctl.case import PQ, PV, load_case
+from stabctl.network import ybus as network
+from stabctl.case import PQ, PV
+from stabctl.io import load_case
 from stabctl.errors import CaseError, PowerFlowError, UnknownBusError
-from stabctl.powerflow import solve_powerflow
+from stabctl.network.powerflow import solve_powerflow
 
 DATA = Path(__file__).parent / "data" / "pstess"
 REFS = {

@@ -10,14 +10,15 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from stabctl.case import PQ, PV, SWING, load_case
+from stabctl.case import PQ, PV, SWING
+from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.errors import CaseError
-from stabctl.network import branch_admittances
-from stabctl.powerflow import solve_powerflow
-from stabctl.psse import import_psse, load_psse
-from stabctl.psse_raw import read_raw, split_fields
-from stabctl.results import SimulationResult
+from stabctl.network.ybus import branch_admittances
+from stabctl.network.powerflow import solve_powerflow
+from stabctl.io.psse import import_psse, load_psse
+from stabctl.io.psse_raw import read_raw, split_fields
+from stabctl.dynamics.results import SimulationResult
 
 DATA = Path(__file__).parent / "data" / "psse"
 V33 = DATA / "five_bus_v33.raw"
@@ -87,7 +88,7 @@ def test_five_bus_branches_and_transformer_bases(path):
     np.testing.assert_allclose(line[2, :7], [2, 3, 0.001 * t2**2, 0.016 * t2**2, 0,
                                              t1 / t2, 0], rtol=1e-14)
     # T2: CW 3 (pu of NOMV1 = 120 kV on a 115 kV bus): t1 = 1.02 * 120/115; ANG1 = 30 deg
-    # is PST's phase -30 (stabctl.network)
+    # is PST's phase -30 (stabctl.network.ybus)
     np.testing.assert_allclose(line[3, :7], [4, 2, 0, 0.05, 0, 1.02 * 120 / 115, -30],
                                rtol=1e-14)
 
@@ -303,8 +304,8 @@ def test_q_limits_switch_matches_andes_ieee14(tmp_path):
     flow; with them (PST's chq_lim, the default) PV buses switch to PQ and the voltages
     move.  The case starts at all: its bus-6 unit has Pm0 = 0.3 = TGOV1's Tmin, reached
     up to round-off (the start-up check's tolerance)."""
-    from stabctl.andes_xval import strip_dyr
-    from stabctl.simulation import Simulator
+    from stabctl.io.andes import strip_dyr
+    from stabctl.dynamics.simulation import Simulator
 
     andes, folder = _andes_case("ieee14")
     raw, dyr = folder / "ieee14.raw", tmp_path / "ieee14.dyr"

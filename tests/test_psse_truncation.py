@@ -5,10 +5,10 @@ from pathlib import Path
 
 import pytest
 
-from stabctl.dyr import read_dyr
+from stabctl.io.dyr import read_dyr
 from stabctl.errors import CaseError
-from stabctl.psse import load_psse
-from stabctl.psse_raw import read_raw
+from stabctl.io.psse import load_psse
+from stabctl.io.psse_raw import read_raw
 
 DATA = Path(__file__).parent / "data" / "psse"
 V33, V34, DYR = DATA / "five_bus_v33.raw", DATA / "five_bus_v34.raw", DATA / "five_bus.dyr"

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stabctl import pstio
-from stabctl.case import load_case
+from stabctl.io import pst as pstio
+from stabctl.io import load_case
 from stabctl.errors import CaseError
 
 DATA = Path(__file__).parent / "data" / "pstess"

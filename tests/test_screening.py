@@ -4,11 +4,12 @@ import json
 
 from click.testing import CliRunner
 
-from stabctl.case import load_case
-from stabctl.cct import LineFault, critical_clearing_time
+from stabctl.io import load_case
+from stabctl.stability.cct import LineFault, critical_clearing_time
 from stabctl.cli import main
-from stabctl.screening import screen, screening_faults, spectral_layout
-from stabctl.simulation import Simulator
+from stabctl.plotting.layout import spectral_layout
+from stabctl.stability.screening import screen, screening_faults
+from stabctl.dynamics.simulation import Simulator
 
 
 def test_screening_faults_cover_every_bus_and_every_circuit():

@@ -22,11 +22,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stabctl.case import load_case
+from stabctl.io import load_case
 from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
-from stabctl.events import Fault, LineTrip, fault_with_clearing, from_sw_con
-from stabctl.results import SimulationResult
-from stabctl.simulation import Simulator, default_step
+from stabctl.dynamics.events import Fault, LineTrip, fault_with_clearing, from_sw_con
+from stabctl.dynamics.results import SimulationResult
+from stabctl.dynamics.simulation import Simulator, default_step
 
 DATA = Path(__file__).parent / "data" / "pstess"
 

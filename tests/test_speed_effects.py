@@ -7,9 +7,10 @@ mechanical torques balance."""
 import numpy as np
 import pytest
 
-from stabctl.case import CaseError, load_case
-from stabctl.dynamic import StageConfig
-from stabctl.simulation import Simulator
+from stabctl.errors import CaseError
+from stabctl.io import load_case
+from stabctl.dynamics.model import StageConfig
+from stabctl.dynamics.simulation import Simulator
 
 DW = 0.01  # speed offset of machine 1, pu
 

@@ -12,10 +12,10 @@ import pytest
 from click.testing import CliRunner
 
 import stabctl
-from stabctl.cct import DEFAULT_FAULTS, LineFault, cached_simulator, cct_job, cct_jobs
+from stabctl.stability.cct import DEFAULT_FAULTS, LineFault, cached_simulator, cct_job, cct_jobs
 from stabctl.cli import main
 from stabctl.errors import InputError
-from stabctl.sweep import Job, read_records, run_sweep
+from stabctl.parallel import Job, read_records, run_sweep
 
 # -- job functions (module level: spawned workers import them by name) -------------------
 
@@ -289,14 +289,14 @@ def test_cli_sweep_cct_unknown_line_fails_before_any_job(tmp_path):
 
 def test_cli_sweep_cct_storage_missing(tmp_path, monkeypatch):
     monkeypatch.delattr(stabctl, "storage", raising=False)
-    monkeypatch.setitem(sys.modules, "stabctl.storage", None)
+    monkeypatch.setitem(sys.modules, "stabctl.storage.devices", None)
     res = run("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "none,10",
               "--out", tmp_path / "o.jsonl")
     assert_bad_input(res, tmp_path, "storage not available yet")
 
 
 def test_ratings_parse_none_and_lists():
-    from stabctl.cli import _ratings
+    from stabctl.cli.commands import _ratings
 
     assert _ratings(()) == [None]
     assert _ratings(("none,5", "10", "5")) == [None, 5.0, 10.0]

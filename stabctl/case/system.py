@@ -1,0 +1,1003 @@
+"""stabctl's case model: the static and dynamic data of one power system.
+
+A :class:`Case` holds the system base and one table per kind of data. Every table is a
+small frozen dataclass of read-only 1-D numpy arrays, one array per PST column, named in
+the field's terms (``case.buses.vmag``, ``case.machines.xdp``, ``case.exciters.KA``).
+Row ``i`` of every array of a table is row ``i`` of the PST matrix. ``table.matrix()``
+gives the PST matrix back (columns in PST order), so a PST model can be written against
+either form.
+
+Units: per unit on the system base (``Case.base_mva``) for network and load data, per unit
+on the machine base (``machines.mva``) for machine and controller data, seconds for time
+constants, kV for ``buses.kv``, degrees where a name ends in ``_deg`` (as in PST's data
+files).
+
+Values are PST's raw data: nothing is replaced by a model default (a T'qo of 0 stays 0, a
+tap of 0 stays 0 and means 1 in :mod:`stabctl.network.ybus`, a Q limit of 0 stays 0 and means
+"no limit" in :mod:`stabctl.network.powerflow`). Trailing columns that a PST matrix may omit are
+filled with PST's own defaults (given per table below).
+
+Source of the column lists: the PST manual (Power System Toolbox 3.0, Rogers & Chow,
+``shared/reference/pstess/pst_man.pdf``): bus and line, section 1.3 and the ``loadflow``
+description; ``mac_con`` section 3.22 Table 10; ``exc_con`` sections 3.38 Table 15 (type 0),
+3.11 Table 2 (types 1, 2) and 3.13 Table 3 (type 3); ``pss_con`` section 3.30 Table 13;
+``tg_con`` section 3.45; ``load_con`` section 3.29 Table 12; ``sw_con`` section 2.5; and the
+comments of the PSTess data files (``d2asbegp.m``, ``d_minniWECC_base.m``).
+
+Construction validates the data and raises :class:`~stabctl.errors.CaseError` naming the
+table, the row (1-based, with its bus or machine number) and the field.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import ClassVar, Mapping
+
+import numpy as np
+
+from stabctl.errors import CaseError, UnknownBusError
+
+__all__ = [
+    "Table",
+    "BusTable",
+    "BranchTable",
+    "MachineTable",
+    "ExciterTable",
+    "PssTable",
+    "GovernorTable",
+    "LoadTable",
+    "InjectionTable",
+    "Case",
+    "SWING",
+    "PV",
+    "PQ",
+    "CASE_DIR",
+]
+
+#: PST bus types (bus matrix column 10).
+SWING, PV, PQ = 1, 2, 3
+
+
+# --------------------------------------------------------------------------------------
+# generic table
+# --------------------------------------------------------------------------------------
+
+
+def _where(table: str, row: int, key: str | None, value, fld: str) -> str:
+    """Location prefix of an error: table, 1-based row, its bus/machine number, field."""
+    ident = "" if key is None or value is None else f" ({key} {_fmt(value)})"
+    return f"{table} row {row + 1}{ident}, field '{fld}'"
+
+
+def _fmt(x) -> str:
+    x = float(x)
+    return str(int(x)) if x.is_integer() else repr(x)
+
+
+@dataclass(frozen=True, eq=False)
+class Table:
+    """Base of all case tables: one read-only float64 array per PST column.
+
+    Subclasses declare their fields in PST column order and set:
+
+    * ``TABLE`` -- the PST matrix name (used in error messages),
+    * ``MIN_COLUMNS`` -- fewest columns a PST matrix may give,
+    * ``DEFAULTS`` -- value of each omitted trailing column (by field name),
+    * ``KEY`` -- field that identifies a row in messages (bus or machine number),
+    * ``KEY_LABEL`` -- what that field is called in messages ("bus", "machine"),
+    * ``INTEGER`` -- fields that must hold integers (numbers, types).
+
+    Raises :class:`CaseError` on construction if arrays differ in length, are not 1-D,
+    hold non-finite values, or an integer field holds a non-integer.
+    """
+
+    TABLE: ClassVar[str] = "table"
+    MIN_COLUMNS: ClassVar[int] = 0
+    DEFAULTS: ClassVar[Mapping[str, float]] = {}
+    KEY: ClassVar[str | None] = None
+    KEY_LABEL: ClassVar[str] = ""
+    INTEGER: ClassVar[tuple[str, ...]] = ()
+
+    def __post_init__(self):
+        n = None
+        for name in self.columns():
+            arr = np.array(getattr(self, name), dtype=float, copy=True)
+            if arr.ndim == 0:
+                arr = arr.reshape(1)
+            if arr.ndim != 1:
+                raise CaseError(f"{self.TABLE}: field '{name}' must be 1-D, has shape {arr.shape}")
+            if n is None:
+                n = arr.size
+            elif arr.size != n:
+                raise CaseError(
+                    f"{self.TABLE}: field '{name}' has {arr.size} rows, expected {n}"
+                )
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        for name in self.columns():
+            arr = getattr(self, name)
+            bad = np.flatnonzero(~np.isfinite(arr))
+            if bad.size:
+                self._fail(bad[0], name, f"non-finite value {arr[bad[0]]}")
+            if name in self.INTEGER:
+                bad = np.flatnonzero(arr != np.round(arr))
+                if bad.size:
+                    self._fail(bad[0], name, f"must be an integer, got {arr[bad[0]]}")
+        self._check()
+
+    # -- construction ---------------------------------------------------------------
+
+    @classmethod
+    def columns(cls) -> tuple[str, ...]:
+        """Field names in PST column order (column k+1 of the PST matrix is ``columns()[k]``)."""
+        return tuple(f.name for f in dataclasses.fields(cls))
+
+    @classmethod
+    def from_matrix(cls, matrix) -> "Table":
+        """Build the table from a PST matrix (rows x columns, PST column order).
+
+        Omitted trailing columns (down to ``MIN_COLUMNS``) take ``DEFAULTS``; an empty
+        matrix (``[]``) gives an empty table. Raises :class:`CaseError` on a wrong column
+        count or a ragged matrix.
+        """
+        cols = cls.columns()
+        mat = _as_matrix(matrix, cls.TABLE)
+        nrow, ncol = mat.shape
+        if nrow == 0:
+            return cls(**{c: np.zeros(0) for c in cols})
+        if not cls.MIN_COLUMNS <= ncol <= len(cols):
+            want = (
+                f"{len(cols)}"
+                if cls.MIN_COLUMNS == len(cols)
+                else f"{cls.MIN_COLUMNS} to {len(cols)}"
+            )
+            raise CaseError(
+                f"{cls.TABLE}: wrong column count {ncol}, expected {want} "
+                f"({', '.join(cols)})"
+            )
+        data = {c: mat[:, k] for k, c in enumerate(cols[:ncol])}
+        for c in cols[ncol:]:
+            data[c] = np.full(nrow, float(cls.DEFAULTS.get(c, 0.0)))
+        return cls(**data)
+
+    @classmethod
+    def empty(cls) -> "Table":
+        """A table with no rows."""
+        return cls.from_matrix(np.zeros((0, len(cls.columns()))))
+
+    # -- access -----------------------------------------------------------------------
+
+    def __len__(self) -> int:
+        return int(getattr(self, self.columns()[0]).size)
+
+    def matrix(self) -> np.ndarray:
+        """The PST matrix, shape (rows, len(columns())), float64, a fresh writable copy."""
+        return np.column_stack([getattr(self, c) for c in self.columns()]).reshape(
+            len(self), len(self.columns())
+        )
+
+    def col(self, k: int) -> np.ndarray:
+        """PST column ``k`` (1-based, as in the PST manual), read-only array of shape (rows,)."""
+        cols = self.columns()
+        if not 1 <= k <= len(cols):
+            raise CaseError(f"{self.TABLE}: no column {k} (has 1..{len(cols)})")
+        return getattr(self, cols[k - 1])
+
+    def replace(self, **changes) -> "Table":
+        """A copy with some columns replaced (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    def select(self, rows) -> "Table":
+        """A copy holding only ``rows`` (index array or boolean mask)."""
+        rows = np.asarray(rows)
+        return type(self)(**{c: getattr(self, c)[rows] for c in self.columns()})
+
+    def equals(self, other: "Table") -> bool:
+        """True if ``other`` is the same kind of table with identical values."""
+        return type(self) is type(other) and all(
+            np.array_equal(getattr(self, c), getattr(other, c)) for c in self.columns()
+        )
+
+    # -- validation helpers -----------------------------------------------------------
+
+    def _key_value(self, row: int):
+        if self.KEY is None:
+            return None
+        return getattr(self, self.KEY)[row]
+
+    def _fail(self, row: int, fld: str, what: str):
+        where = _where(self.TABLE, int(row), self.KEY_LABEL, self._key_value(int(row)), fld)
+        raise CaseError(f"{where}: {what}")
+
+    def _require(self, mask: np.ndarray, fld: str, what: str):
+        """Raise for the first row where ``mask`` is False."""
+        bad = np.flatnonzero(~np.asarray(mask, dtype=bool))
+        if bad.size:
+            val = getattr(self, fld)[bad[0]]
+            self._fail(bad[0], fld, f"{what}, got {_fmt(val)}")
+
+    def _nonnegative(self, *fields: str):
+        for f in fields:
+            self._require(getattr(self, f) >= 0, f, "must be >= 0")
+
+    def _unique(self, fld: str, what: str):
+        vals = getattr(self, fld)
+        _, first, counts = np.unique(vals, return_index=True, return_counts=True)
+        if np.any(counts > 1):
+            seen: dict[float, int] = {}
+            for i, v in enumerate(vals):
+                if v in seen:
+                    self._fail(i, fld, f"duplicate {what} {_fmt(v)} (first at row {seen[v] + 1})")
+                seen[v] = i
+
+    def _check(self):
+        """Table-local validation (subclasses)."""
+
+
+def _as_matrix(matrix, table: str) -> np.ndarray:
+    """A 2-D float array from a nested list / array; [] -> shape (0, 0)."""
+    if isinstance(matrix, np.ndarray) and matrix.ndim == 2:
+        return matrix.astype(float)
+    rows = list(matrix) if matrix is not None else []
+    if not rows:
+        return np.zeros((0, 0))
+    if np.isscalar(rows[0]):  # a single row given flat
+        rows = [rows]
+    lengths = {len(r) for r in rows}
+    if len(lengths) != 1:
+        for i, r in enumerate(rows):
+            if len(r) != len(rows[0]):
+                raise CaseError(
+                    f"{table} row {i + 1}: wrong column count {len(r)}, "
+                    f"row 1 has {len(rows[0])}"
+                )
+    try:
+        return np.array(rows, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise CaseError(f"{table}: not a numeric matrix ({exc})") from None
+
+
+# --------------------------------------------------------------------------------------
+# the tables
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class BusTable(Table):
+    """Bus data: PST ``bus`` matrix, 15 columns (PST manual section 1.3, ``loadflow``).
+
+    ==  ==========  ===============================================================
+    1   number      bus number (PST numbering, any positive integers)
+    2   vmag        voltage magnitude, pu (setpoint at PV/swing buses, start value else)
+    3   vang_deg    voltage angle, degrees (fixed at the swing bus, start value else)
+    4   pgen        generation P, pu on system base
+    5   qgen        generation Q, pu
+    6   pload       load P, pu
+    7   qload       load Q, pu
+    8   gshunt      shunt conductance G, pu (at 1 pu voltage)
+    9   bshunt      shunt susceptance B, pu (capacitive > 0)
+    10  kind        bus type: 1 swing, 2 generator (PV), 3 load (PQ)
+    11  qmax        generator Q upper limit, pu (0: no limit, as PST's loadflow)
+    12  qmin        generator Q lower limit, pu (0: no limit)
+    13  kv          rated voltage, kV (0: 1, as PST's loadflow)
+    14  vmax        upper voltage limit, pu (0: 1.5)
+    15  vmin        lower voltage limit, pu (0: 0.5)
+    ==  ==========  ===============================================================
+
+    Omitted columns (PST's ``loadflow`` defaults): qmax 9999, qmin -9999, kv 1, vmax 1.5,
+    vmin 0.5. Validation: unique positive integer numbers, kind in {1, 2, 3}, vmag > 0.
+    """
+
+    number: np.ndarray
+    vmag: np.ndarray
+    vang_deg: np.ndarray
+    pgen: np.ndarray
+    qgen: np.ndarray
+    pload: np.ndarray
+    qload: np.ndarray
+    gshunt: np.ndarray
+    bshunt: np.ndarray
+    kind: np.ndarray
+    qmax: np.ndarray
+    qmin: np.ndarray
+    kv: np.ndarray
+    vmax: np.ndarray
+    vmin: np.ndarray
+
+    TABLE: ClassVar[str] = "bus"
+    MIN_COLUMNS: ClassVar[int] = 10
+    DEFAULTS: ClassVar[Mapping[str, float]] = {
+        "qmax": 9999.0, "qmin": -9999.0, "kv": 1.0, "vmax": 1.5, "vmin": 0.5
+    }
+    KEY: ClassVar[str] = "number"
+    KEY_LABEL: ClassVar[str] = "bus"
+    INTEGER: ClassVar[tuple[str, ...]] = ("number", "kind")
+
+    def _check(self):
+        self._require(self.number > 0, "number", "bus number must be a positive integer")
+        self._unique("number", "bus number")
+        self._require(np.isin(self.kind, (SWING, PV, PQ)), "kind", "bus type must be 1, 2 or 3")
+        self._require(self.vmag > 0, "vmag", "voltage magnitude must be > 0")
+
+
+@dataclass(frozen=True, eq=False)
+class BranchTable(Table):
+    """Branch (line and transformer) data: PST ``line`` matrix (PST manual section 1.3).
+
+    ==  ==========  ===============================================================
+    1   from_bus    from bus number (tap side)
+    2   to_bus      to bus number
+    3   r           series resistance, pu on system base
+    4   x           series reactance, pu
+    5   b           total line charging susceptance, pu (half at each end)
+    6   tap         off-nominal tap ratio on the from side (0 means 1)
+    7   phase_deg   phase shift, degrees (from side)
+    8   tapmax      maximum tap (0: tap fixed in the power flow)
+    9   tapmin      minimum tap
+    10  tapstep     tap step size
+    ==  ==========  ===============================================================
+
+    Parallel circuits are separate rows. Omitted columns: tap 1, the rest 0 (the miniWECC
+    ``line`` matrix has 5 columns). Validation: from/to are integers, r >= 0, the series
+    impedance is not zero, from != to.
+    """
+
+    from_bus: np.ndarray
+    to_bus: np.ndarray
+    r: np.ndarray
+    x: np.ndarray
+    b: np.ndarray
+    tap: np.ndarray
+    phase_deg: np.ndarray
+    tapmax: np.ndarray
+    tapmin: np.ndarray
+    tapstep: np.ndarray
+
+    TABLE: ClassVar[str] = "line"
+    MIN_COLUMNS: ClassVar[int] = 5
+    DEFAULTS: ClassVar[Mapping[str, float]] = {"tap": 1.0}
+    KEY: ClassVar[str | None] = None
+    INTEGER: ClassVar[tuple[str, ...]] = ("from_bus", "to_bus")
+
+    def _fail(self, row: int, fld: str, what: str):
+        row = int(row)
+        ident = f" ({_fmt(self.from_bus[row])}-{_fmt(self.to_bus[row])})" if len(self) else ""
+        raise CaseError(f"line row {row + 1}{ident}, field '{fld}': {what}")
+
+    def _check(self):
+        self._nonnegative("r")
+        self._require((self.r != 0) | (self.x != 0), "x", "series impedance r+jx must not be 0")
+        self._require(self.from_bus != self.to_bus, "to_bus", "branch must join two different buses")
+
+
+@dataclass(frozen=True, eq=False)
+class MachineTable(Table):
+    """Synchronous machine data: PST ``mac_con`` (PST manual section 3.22 Table 10).
+
+    ==  ==========  ===============================================================
+    1   number      machine number
+    2   bus         bus number
+    3   mva         machine base, MVA
+    4   xl          leakage reactance, pu on machine base
+    5   ra          armature resistance, pu
+    6   xd          d-axis synchronous reactance, pu (0: classical model)
+    7   xdp         d-axis transient reactance x'd, pu
+    8   xdpp        d-axis subtransient reactance x"d, pu (0: transient model)
+    9   Tdop        d-axis open-circuit transient time constant T'do, s
+    10  Tdopp       d-axis open-circuit subtransient time constant T"do, s
+    11  xq          q-axis synchronous reactance, pu
+    12  xqp         q-axis transient reactance x'q, pu
+    13  xqpp        q-axis subtransient reactance x"q, pu
+    14  Tqop        q-axis open-circuit transient time constant T'qo, s (0 kept as 0)
+    15  Tqopp       q-axis open-circuit subtransient time constant T"qo, s
+    16  H           inertia constant, s (MW s / MVA on machine base)
+    17  D0          local damping coefficient d_o, pu
+    18  D1          system damping coefficient d_1, pu
+    19  col19       column 19, "bus number" in the manual; unused by PSTess (the data
+                    files put the machine number there); kept as given
+    20  S10         saturation factor S(1.0)
+    21  S12         saturation factor S(1.2)
+    22  pfrac       fraction of the bus generation P taken by this machine
+    23  qfrac       fraction of the bus generation Q taken by this machine
+    24  speed_effects  stabctl's column for subtransient machines: 1 (PST ``mac_sub``)
+                    the stator voltage is proportional to rotor speed and the torque is
+                    Pm/omega; 0 speed 1 in both (ANDES's GENROU/GENSAL, which have no
+                    speed effects; docs/pst_models.md 1.5-1.6)
+    ==  ==========  ===============================================================
+
+    Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``).
+    Validation: unique positive integer machine numbers, mva > 0, H > 0, reactances and
+    ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), speed_effects 0 or 1.
+    """
+
+    number: np.ndarray
+    bus: np.ndarray
+    mva: np.ndarray
+    xl: np.ndarray
+    ra: np.ndarray
+    xd: np.ndarray
+    xdp: np.ndarray
+    xdpp: np.ndarray
+    Tdop: np.ndarray
+    Tdopp: np.ndarray
+    xq: np.ndarray
+    xqp: np.ndarray
+    xqpp: np.ndarray
+    Tqop: np.ndarray
+    Tqopp: np.ndarray
+    H: np.ndarray
+    D0: np.ndarray
+    D1: np.ndarray
+    col19: np.ndarray
+    S10: np.ndarray
+    S12: np.ndarray
+    pfrac: np.ndarray
+    qfrac: np.ndarray
+    speed_effects: np.ndarray
+
+    TABLE: ClassVar[str] = "mac_con"
+    MIN_COLUMNS: ClassVar[int] = 16
+    DEFAULTS: ClassVar[Mapping[str, float]] = {"pfrac": 1.0, "qfrac": 1.0, "speed_effects": 1.0}
+    KEY: ClassVar[str] = "number"
+    KEY_LABEL: ClassVar[str] = "machine"
+    INTEGER: ClassVar[tuple[str, ...]] = ("number", "bus")
+
+    REACTANCES: ClassVar[tuple[str, ...]] = ("xl", "ra", "xd", "xdp", "xdpp", "xq", "xqp", "xqpp")
+    TIME_CONSTANTS: ClassVar[tuple[str, ...]] = ("Tdop", "Tdopp", "Tqop", "Tqopp")
+
+    def _check(self):
+        self._require(self.number > 0, "number", "machine number must be a positive integer")
+        self._unique("number", "machine number")
+        self._require(self.mva > 0, "mva", "machine base must be > 0")
+        self._require(self.H > 0, "H", "inertia constant must be > 0 s (H = 0, an "
+                      "infinite bus, is not modelled)")
+        self._require(np.isin(self.speed_effects, (0.0, 1.0)), "speed_effects",
+                      "speed_effects must be 0 or 1")
+        self._nonnegative(*self.REACTANCES, *self.TIME_CONSTANTS)
+        # the open-circuit time constants a machine's model divides by (x_d = 0: classical,
+        # none; x"d = 0: transient, T'do; else subtransient, T'do and T"do); T'qo, T"qo of 0
+        # mean "no such circuit" (PST)
+        self._require((self.xd == 0) | (self.Tdop > 0), "Tdop",
+                      "T'do must be > 0 s for a transient or subtransient machine (x_d > 0)")
+        self._require((self.xd == 0) | (self.xdpp == 0) | (self.Tdopp > 0), "Tdopp",
+                      "T\"do must be > 0 s for a subtransient machine (x\"d > 0)")
+
+
+@dataclass(frozen=True, eq=False)
+class ExciterTable(Table):
+    """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3),
+    plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4) and
+    23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3).
+
+    ==  ======  =======================================================================
+    1   type    0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1
+    2   machine machine number
+    3   TR      input filter time constant, s
+    4   KA      voltage regulator gain
+    5   TA      voltage regulator time constant, s
+    6   TB      transient gain reduction time constant, s
+    7   TC      transient gain reduction time constant, s
+    8   Vrmax   maximum regulator output, pu
+    9   Vrmin   minimum regulator output, pu
+    10  VImax   ST3: max internal signal, pu       | DC1/2: KE exciter constant
+    11  VImin   ST3: min internal signal, pu       | DC1/2: TE exciter time constant, s
+    12  KJ      ST3: first stage regulator gain    | DC1/2: E1, pu
+    13  KP      ST3: potential circuit gain        | DC1/2: SE(E1)
+    14  thetaP  ST3: potential circuit angle, deg  | DC1/2: E2, pu
+    15  KI      ST3: current circuit gain          | DC1/2: SE(E2)
+    16  XL      ST3: potential source reactance, pu| DC1/2: KF stabilizer gain
+    17  KC      ST3: rectifier loading factor      | DC1/2: TF stabilizer time constant, s
+    18  Efdmax  ST3: maximum field voltage, pu
+    19  KG      ST3: inner loop feedback constant
+    20  VGmax   ST3: maximum inner loop feedback, pu
+    21  KF      EXST1: rate feedback gain
+    22  TF      EXST1: rate feedback time constant, s
+    23  dc_sat  DC1/2: saturation through (E1, SE1), (E2, SE2): 0 PST's exponential
+                SE(E) = A exp(B |E|), 1 the quadratic SE(E) E = B (E - A)^2 above A
+                (PSS/E, ANDES)
+    24  ke_given DC1/2: 0 K_E = 0 is computed so that V_R starts at 0 (PST, PSS/E);
+                1 K_E is used as given (ANDES)
+    ==  ======  =======================================================================
+
+    Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2); use
+    ``col(k)`` for those.  EXST1 (type 4) uses columns 3-11 and KC (17) as named, with
+    Vrmax, Vrmin its output limits (times V_t) and KF, TF (21, 22).  Omitted trailing
+    columns are 0 (a simple exciter needs 9).  Validation: type in {0, 1, 2, 3, 4}, one
+    exciter per machine, TR, TA, TB >= 0 (machine existence is checked by :class:`Case`).
+    """
+
+    type: np.ndarray
+    machine: np.ndarray
+    TR: np.ndarray
+    KA: np.ndarray
+    TA: np.ndarray
+    TB: np.ndarray
+    TC: np.ndarray
+    Vrmax: np.ndarray
+    Vrmin: np.ndarray
+    VImax: np.ndarray
+    VImin: np.ndarray
+    KJ: np.ndarray
+    KP: np.ndarray
+    thetaP: np.ndarray
+    KI: np.ndarray
+    XL: np.ndarray
+    KC: np.ndarray
+    Efdmax: np.ndarray
+    KG: np.ndarray
+    VGmax: np.ndarray
+    KF: np.ndarray
+    TF: np.ndarray
+    dc_sat: np.ndarray
+    ke_given: np.ndarray
+
+    TABLE: ClassVar[str] = "exc_con"
+    MIN_COLUMNS: ClassVar[int] = 9
+    KEY: ClassVar[str] = "machine"
+    KEY_LABEL: ClassVar[str] = "machine"
+    INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine")
+
+    def _check(self):
+        self._require(np.isin(self.type, (0, 1, 2, 3, 4)), "type",
+                      "exciter type must be 0, 1, 2, 3 or 4")
+        self._unique("machine", "exciter on machine")
+        self._nonnegative("TR", "TA", "TB")  # filter and lag constants
+        for name in ("dc_sat", "ke_given"):
+            self._require(np.isin(getattr(self, name), (0.0, 1.0)), name, f"{name} must be 0 or 1")
+
+
+@dataclass(frozen=True, eq=False)
+class PssTable(Table):
+    """Power system stabilizer data: PST ``pss_con``, 10 columns (PST manual 3.30 Table 13),
+    extended by stabctl with type 3, the PSS/E stabilisers IEEEST and ST2CUT
+    (docs/pst_models.md 3.1).
+
+    ==  =======  ==================================================================
+    1   type     1 PST pss, speed input; 2 PST pss, electrical power input; 3 PSS/E
+    2   machine  machine number
+    3   KTw      gain times washout time constant (K*Tw); type 3: washout gain K_w
+    4   Tw       washout time constant, s
+    5   T1       first lead time constant, s
+    6   T2       first lag time constant, s
+    7   T3       second lead time constant, s
+    8   T4       second lag time constant, s
+    9   ymax     maximum output, pu
+    10  ymin     minimum output, pu
+    11  T5       type 3: third lead time constant, s
+    12  T6       type 3: third lag time constant, s
+    13  input1   type 3: first input, PSS/E code (1 speed deviation, 3 electrical power)
+    14  K1       type 3: first input gain
+    15  Tr1      type 3: first input transducer time constant, s
+    16  input2   type 3: second input, PSS/E code (0 none)
+    17  K2       type 3: second input gain
+    18  Tr2      type 3: second input transducer time constant, s
+    19  A1       type 3: filter (1 + A5 s + A6 s^2)/((1 + A1 s + A2 s^2)(1 + A3 s + A4 s^2))
+    20  A2
+    21  A3
+    22  A4
+    23  A5
+    24  A6
+    ==  =======  ==================================================================
+
+    Omitted columns are 0.  Validation: type in {1, 2, 3}, one PSS per machine, washout and
+    lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0, Tw > 0, T2 > 0 for types 1 and 2.
+    """
+
+    type: np.ndarray
+    machine: np.ndarray
+    KTw: np.ndarray
+    Tw: np.ndarray
+    T1: np.ndarray
+    T2: np.ndarray
+    T3: np.ndarray
+    T4: np.ndarray
+    ymax: np.ndarray
+    ymin: np.ndarray
+    T5: np.ndarray
+    T6: np.ndarray
+    input1: np.ndarray
+    K1: np.ndarray
+    Tr1: np.ndarray
+    input2: np.ndarray
+    K2: np.ndarray
+    Tr2: np.ndarray
+    A1: np.ndarray
+    A2: np.ndarray
+    A3: np.ndarray
+    A4: np.ndarray
+    A5: np.ndarray
+    A6: np.ndarray
+
+    TABLE: ClassVar[str] = "pss_con"
+    MIN_COLUMNS: ClassVar[int] = 10
+    KEY: ClassVar[str] = "machine"
+    KEY_LABEL: ClassVar[str] = "machine"
+    INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine", "input1", "input2")
+
+    def _check(self):
+        self._require(np.isin(self.type, (1, 2, 3)), "type", "pss type must be 1, 2 or 3")
+        self._unique("machine", "pss on machine")
+        self._nonnegative("Tw", "T2", "T4", "T6", "Tr1", "Tr2")  # washout and lag constants
+        self._require(self.Tw > 0, "Tw", "washout time constant must be > 0 s")
+        self._require((self.type == 3) | (self.T2 > 0), "T2",
+                      "first lag time constant must be > 0 s for PST's pss (types 1, 2)")
+
+
+@dataclass(frozen=True, eq=False)
+class GovernorTable(Table):
+    """Turbine-governor data: PST ``tg_con`` (PST manual 3.45, ``tg``), extended by stabctl
+    with the PSS/E ``TGOV1`` and ``IEEEG1`` models (PSS/E Model Library; equations in
+    docs/pst_models.md section 4).
+
+    ==  =======  =========================================================================
+    1   type     1 PST tg, 2 TGOV1, 3 IEEEG1
+    2   machine  machine number
+    3   wf       speed set point, pu
+    4   invR     steady-state gain 1/R (IEEEG1: K), pu on machine base
+    5   Tmax     maximum power order (TGOV1: VMAX, IEEEG1: PMAX), pu on machine base
+    6   Ts       servo time constant (TGOV1: T1; IEEEG1: T3, gate servo), s
+    7   Tc       governor lag time constant (TGOV1: T3; IEEEG1: T1), s
+    8   T3       transient gain (lead) time constant (TGOV1: T2; IEEEG1: T2), s
+    9   T4       HP section time constant (IEEEG1: T4, steam chest), s
+    10  T5       reheater time constant (IEEEG1: T5), s
+    11  Tmin     minimum power order (tg: 0 as PST; TGOV1: VMIN; IEEEG1: PMIN), pu
+    12  Dt       turbine damping (TGOV1), pu power / pu speed on machine base
+    13  T6       IEEEG1 third turbine time constant, s
+    14  T7       IEEEG1 fourth turbine time constant, s
+    15  Uo       IEEEG1 maximum valve opening rate, pu/s
+    16  Uc       IEEEG1 maximum valve closing rate (< 0), pu/s
+    17  K1       IEEEG1 fraction of power after T4 (HP shaft)
+    18  K2       IEEEG1 fraction of power after T4 (LP shaft)
+    19  K3       IEEEG1 fraction after T5 (HP)
+    20  K4       IEEEG1 fraction after T5 (LP)
+    21  K5       IEEEG1 fraction after T6 (HP)
+    22  K6       IEEEG1 fraction after T6 (LP)
+    23  K7       IEEEG1 fraction after T7 (HP)
+    24  K8       IEEEG1 fraction after T7 (LP)
+    ==  =======  =========================================================================
+
+    PST files give 10 columns; the omitted ones are 0 (Tmin = 0 is PST tg's lower clip).
+    Validation: type in {1, 2, 3}, one governor per machine, lag time constants Ts, Tc,
+    T5, T6, T7 >= 0 (the lead constants T3, T4 may be negative: miniWECC's hydro units use
+    T4 = -1).
+    """
+
+    type: np.ndarray
+    machine: np.ndarray
+    wf: np.ndarray
+    invR: np.ndarray
+    Tmax: np.ndarray
+    Ts: np.ndarray
+    Tc: np.ndarray
+    T3: np.ndarray
+    T4: np.ndarray
+    T5: np.ndarray
+    Tmin: np.ndarray
+    Dt: np.ndarray
+    T6: np.ndarray
+    T7: np.ndarray
+    Uo: np.ndarray
+    Uc: np.ndarray
+    K1: np.ndarray
+    K2: np.ndarray
+    K3: np.ndarray
+    K4: np.ndarray
+    K5: np.ndarray
+    K6: np.ndarray
+    K7: np.ndarray
+    K8: np.ndarray
+
+    TABLE: ClassVar[str] = "tg_con"
+    MIN_COLUMNS: ClassVar[int] = 10
+    KEY: ClassVar[str] = "machine"
+    KEY_LABEL: ClassVar[str] = "machine"
+    INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine")
+
+    def _check(self):
+        self._require(np.isin(self.type, (1, 2, 3)), "type", "governor type must be 1, 2 or 3")
+        self._unique("machine", "governor on machine")
+        self._nonnegative("Ts", "Tc", "T5", "T6", "T7")  # T3, T4 are leads: T4 < 0 is hydro
+
+
+@dataclass(frozen=True, eq=False)
+class LoadTable(Table):
+    """Non-conforming load data: PST ``load_con``, 5 columns (PST manual 3.29 Table 12).
+
+    ==  ==========  ===============================================================
+    1   bus         bus number
+    2   p_power     fraction of the bus P load that is constant power
+    3   q_power     fraction of the bus Q load that is constant power
+    4   p_current   fraction of the bus P load that is constant current
+    5   q_current   fraction of the bus Q load that is constant current
+    ==  ==========  ===============================================================
+
+    The remainder (``p_impedance``, ``q_impedance``) is constant impedance; buses not
+    listed are all constant impedance. Validation: one row per bus, fractions in [0, 1]
+    with power + current <= 1.
+    """
+
+    bus: np.ndarray
+    p_power: np.ndarray
+    q_power: np.ndarray
+    p_current: np.ndarray
+    q_current: np.ndarray
+
+    TABLE: ClassVar[str] = "load_con"
+    MIN_COLUMNS: ClassVar[int] = 5
+    KEY: ClassVar[str] = "bus"
+    KEY_LABEL: ClassVar[str] = "bus"
+    INTEGER: ClassVar[tuple[str, ...]] = ("bus",)
+
+    @property
+    def p_impedance(self) -> np.ndarray:
+        """Constant-impedance fraction of P, 1 - p_power - p_current, shape (rows,)."""
+        return 1.0 - self.p_power - self.p_current
+
+    @property
+    def q_impedance(self) -> np.ndarray:
+        """Constant-impedance fraction of Q, 1 - q_power - q_current, shape (rows,)."""
+        return 1.0 - self.q_power - self.q_current
+
+    def _check(self):
+        self._unique("bus", "load bus")
+        for f in ("p_power", "q_power", "p_current", "q_current"):
+            v = getattr(self, f)
+            self._require((v >= 0) & (v <= 1), f, "fraction must be in [0, 1]")
+        tol = 1e-12
+        self._require(self.p_impedance >= -tol, "p_current", "p_power + p_current must be <= 1")
+        self._require(self.q_impedance >= -tol, "q_current", "q_power + q_current must be <= 1")
+
+
+@dataclass(frozen=True, eq=False)
+class InjectionTable(Table):
+    """Fixed (constant-power) injections not in the bus table, e.g. storage or HVDC set points.
+
+    ==  =====  =====================================================================
+    1   bus    bus number
+    2   p      injected P, pu on system base (generation > 0)
+    3   q      injected Q, pu
+    ==  =====  =====================================================================
+
+    The power flow adds them to the bus generation. PST data files carry their fixed
+    injections inside the bus loads (miniWECC's ``PDC`` is in ``bus`` column 6), so the
+    importer leaves this table empty.
+    """
+
+    bus: np.ndarray
+    p: np.ndarray
+    q: np.ndarray
+
+    TABLE: ClassVar[str] = "injections"
+    MIN_COLUMNS: ClassVar[int] = 2
+    KEY: ClassVar[str] = "bus"
+    KEY_LABEL: ClassVar[str] = "bus"
+    INTEGER: ClassVar[tuple[str, ...]] = ("bus",)
+
+
+#: table field of Case -> table class, in file order
+TABLES: Mapping[str, type[Table]] = MappingProxyType(
+    {
+        "buses": BusTable,
+        "branches": BranchTable,
+        "machines": MachineTable,
+        "exciters": ExciterTable,
+        "pss": PssTable,
+        "governors": GovernorTable,
+        "loads": LoadTable,
+        "injections": InjectionTable,
+    }
+)
+
+
+# --------------------------------------------------------------------------------------
+# the case
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class Case:
+    """One power system: bases, network, machines, controllers, loads.
+
+    Attributes:
+        name: short identifier (e.g. ``"kundur"``).
+        base_mva: system base, MVA.
+        freq_hz: nominal frequency, Hz.
+        buses, branches, machines, exciters, pss, governors, loads, injections: tables
+            (see their classes for columns and units).
+        sw_con: the data file's own switching (disturbance) matrix, shape (rows, 7), PST
+            format (PST manual 2.5), or None.
+        extra: other PST matrices of the data file kept as given (``lmod_con``, ``PDC``,
+            ...), name -> read-only 2-D float array.
+        source: where the data came from (file, licence).
+        description: one line.
+
+    Raises :class:`CaseError` on construction for bus numbers referenced but not in
+    ``buses`` (branches, machines, loads, injections), controllers on machines not in
+    ``machines``, no swing bus, a malformed ``sw_con``, or a non-positive base.
+    """
+
+    name: str
+    base_mva: float
+    freq_hz: float
+    buses: BusTable
+    branches: BranchTable
+    machines: MachineTable = field(default_factory=MachineTable.empty)
+    exciters: ExciterTable = field(default_factory=ExciterTable.empty)
+    pss: PssTable = field(default_factory=PssTable.empty)
+    governors: GovernorTable = field(default_factory=GovernorTable.empty)
+    loads: LoadTable = field(default_factory=LoadTable.empty)
+    injections: InjectionTable = field(default_factory=InjectionTable.empty)
+    sw_con: np.ndarray | None = None
+    extra: Mapping[str, np.ndarray] = field(default_factory=dict)
+    source: str = ""
+    description: str = ""
+    _bus_map: Mapping[int, int] = field(init=False, repr=False, compare=False)
+    _mac_map: Mapping[int, int] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        for fname, cls in TABLES.items():
+            if not isinstance(getattr(self, fname), cls):
+                raise CaseError(f"case '{self.name}': {fname} must be a {cls.__name__}")
+        if not (np.isfinite(self.base_mva) and self.base_mva > 0):
+            raise CaseError(f"case '{self.name}': base_mva must be > 0, got {self.base_mva}")
+        if not (np.isfinite(self.freq_hz) and self.freq_hz > 0):
+            raise CaseError(f"case '{self.name}': freq_hz must be > 0, got {self.freq_hz}")
+        object.__setattr__(self, "base_mva", float(self.base_mva))
+        object.__setattr__(self, "freq_hz", float(self.freq_hz))
+        object.__setattr__(
+            self, "_bus_map", MappingProxyType({int(b): i for i, b in enumerate(self.buses.number)})
+        )
+        object.__setattr__(
+            self, "_mac_map", MappingProxyType({int(m): i for i, m in enumerate(self.machines.number)})
+        )
+        object.__setattr__(self, "sw_con", _check_sw_con(self.sw_con))
+        object.__setattr__(self, "extra", _freeze_extra(self.extra))
+        self._check_references()
+
+    # -- validation -------------------------------------------------------------------
+
+    def _check_references(self):
+        if not np.any(self.buses.kind == SWING):
+            raise CaseError("bus: no swing bus (no row with field 'kind' = 1)")
+        known = self.buses.number
+        self._check_buses(self.branches, "from_bus", known)
+        self._check_buses(self.branches, "to_bus", known)
+        self._check_buses(self.machines, "bus", known)
+        self._check_buses(self.loads, "bus", known)
+        self._check_buses(self.injections, "bus", known)
+        macs = self.machines.number
+        for tab in (self.exciters, self.pss, self.governors):
+            bad = np.flatnonzero(~np.isin(tab.machine, macs))
+            if bad.size:
+                tab._fail(bad[0], "machine", f"machine {_fmt(tab.machine[bad[0]])} does not exist in mac_con")
+
+    @staticmethod
+    def _check_buses(tab: Table, fld: str, known: np.ndarray):
+        vals = getattr(tab, fld)
+        bad = np.flatnonzero(~np.isin(vals, known))
+        if bad.size:
+            tab._fail(bad[0], fld, f"bus {_fmt(vals[bad[0]])} does not exist in bus")
+
+    # -- lookup -----------------------------------------------------------------------
+
+    @property
+    def n_bus(self) -> int:
+        """Number of buses."""
+        return len(self.buses)
+
+    @property
+    def bus_map(self) -> Mapping[int, int]:
+        """Read-only mapping bus number -> 0-based row of ``buses``."""
+        return self._bus_map
+
+    def bus_index(self, number) -> int:
+        """0-based row of bus ``number`` in ``buses``.
+
+        Raises :class:`UnknownBusError` (a :class:`CaseError` and ``KeyError``) naming the
+        bus if it is not in the case.
+        """
+        try:
+            return self._bus_map[int(number)]
+        except (KeyError, ValueError, TypeError):
+            raise UnknownBusError(f"bus {number} is not in case '{self.name}'") from None
+
+    def bus_indices(self, numbers) -> np.ndarray:
+        """0-based rows of many bus numbers, int array of the shape of ``numbers``.
+
+        Raises :class:`UnknownBusError` naming the first unknown bus.
+        """
+        numbers = np.asarray(numbers)
+        flat = numbers.ravel()
+        order = np.argsort(self.buses.number, kind="stable")
+        sorted_nums = self.buses.number[order]
+        pos = np.searchsorted(sorted_nums, flat)
+        pos = np.clip(pos, 0, max(len(sorted_nums) - 1, 0))
+        ok = sorted_nums[pos] == flat if len(sorted_nums) else np.zeros(flat.shape, bool)
+        if not np.all(ok):
+            self.bus_index(flat[np.flatnonzero(~ok)[0]])
+        return order[pos].reshape(numbers.shape)
+
+    def machine_index(self, number) -> int:
+        """0-based row of machine ``number`` in ``machines``; :class:`CaseError` if absent."""
+        try:
+            return self._mac_map[int(number)]
+        except (KeyError, ValueError, TypeError):
+            raise CaseError(f"machine {number} is not in case '{self.name}'") from None
+
+    @property
+    def swing_index(self) -> np.ndarray:
+        """0-based rows of the swing bus(es), int array."""
+        return np.flatnonzero(self.buses.kind == SWING)
+
+    def replace(self, **changes) -> "Case":
+        """A copy with some fields replaced (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    def equals(self, other: "Case") -> bool:
+        """True if every table, base, sw_con and extra matrix is identical."""
+        if not isinstance(other, Case):
+            return False
+        same_scalars = (self.name, self.base_mva, self.freq_hz) == (
+            other.name, other.base_mva, other.freq_hz
+        )
+        same_tables = all(getattr(self, t).equals(getattr(other, t)) for t in TABLES)
+        same_sw = (self.sw_con is None and other.sw_con is None) or (
+            self.sw_con is not None and other.sw_con is not None
+            and np.array_equal(self.sw_con, other.sw_con)
+        )
+        same_extra = self.extra.keys() == other.extra.keys() and all(
+            np.array_equal(self.extra[k], other.extra[k]) for k in self.extra
+        )
+        return same_scalars and same_tables and same_sw and same_extra
+
+
+def _check_sw_con(sw) -> np.ndarray | None:
+    if sw is None:
+        return None
+    mat = _as_matrix(sw, "sw_con")
+    if mat.size == 0:
+        return None
+    if mat.shape[1] != 7:
+        raise CaseError(f"sw_con: wrong column count {mat.shape[1]}, expected 7")
+    bad = np.argwhere(~np.isfinite(mat))
+    if bad.size:
+        raise CaseError(f"sw_con row {bad[0][0] + 1}, column {bad[0][1] + 1}: non-finite value")
+    mat.setflags(write=False)
+    return mat
+
+
+def _freeze_extra(extra: Mapping | None) -> Mapping[str, np.ndarray]:
+    out = {}
+    for k, v in (extra or {}).items():
+        arr = np.array(v, dtype=float)
+        if arr.ndim < 2:
+            arr = arr.reshape(-1, 1) if arr.size else arr.reshape(0, 0)
+        arr.setflags(write=False)
+        out[str(k)] = arr
+    return MappingProxyType(out)
+
+
+# --------------------------------------------------------------------------------------
+# built-in cases
+# --------------------------------------------------------------------------------------
+
+#: tolerance of every start-up limit check (pu): an initial value this close to a limit,
+#: outside it by round-off of the power flow (solved to 1e-8 by default, 1e-12 when
+#: compared with ANDES), is at the limit, not beyond it (IEEE 14's bus-6 unit: Pm0 = 0.3
+#: exactly at TGOV1's lower limit lands at 0.3 - 3e-17)
+START_LIMIT_TOL = 1e-6
+
+
+def beyond(value, lo, hi, tol: float = START_LIMIT_TOL):
+    """Boolean array: ``value`` outside ``[lo, hi]`` by more than ``tol`` (pu; relative to
+    the limit's size above 1) -- the start-up limit checks of the dynamic models."""
+    value, lo, hi = (np.asarray(a, float) for a in (value, lo, hi))
+    return ((value > hi + tol * np.maximum(1.0, np.abs(hi)))
+            | (value < lo - tol * np.maximum(1.0, np.abs(lo))))
+
+
+#: directory of the built-in cases (stabctl JSON, converted from PSTess; MIT LICENSE, NOTICE)
+CASE_DIR = Path(__file__).with_name("data")

@@ -1,0 +1,1 @@
+from stabctl.cli.commands import main  # noqa: F401

@@ -1,0 +1,206 @@
+"""Disturbances of a dynamic run and the network configuration they give at each time.
+
+Faults follow PST's switching sequence (`y_switch.m`, PST manual section 2.5): a
+three-phase fault at a bus, cleared at the near end (the faulted circuit opens there and the
+far end keeps feeding the fault through it) and later at the far end (the circuit is out);
+a fault without a far bus is cleared without loss of a line.  A line is opened as PST does:
+its reactance becomes 1e7 pu and its charging stays connected.  Any number of events per run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from stabctl.case import Case
+from stabctl.dynamics.model import FAULT_B, StageConfig
+from stabctl.errors import CaseError, InputError
+from stabctl.network.ybus import circuit_row
+
+
+@dataclass(frozen=True)
+class Fault:
+    """Three-phase fault at `bus` from `t` (s).
+
+    clear_near / clear_far: absolute clearing times (s) at the near and far end (far
+    defaults to near; None: never cleared).  far_bus: the other end of the faulted line,
+    tripped at clearing (`circuit`-th of parallel circuits); None clears the fault without
+    loss of a line.  r, x: fault impedance (pu, system base); 0, 0 is PST's bolted fault
+    (shunt susceptance -1e7 pu).
+    """
+
+    bus: int
+    t: float
+    clear_near: float | None = None
+    clear_far: float | None = None
+    far_bus: int | None = None
+    circuit: int = 1
+    r: float = 0.0
+    x: float = 0.0
+
+    @property
+    def admittance(self) -> complex:
+        if self.r == 0 and self.x == 0:
+            return -1j * FAULT_B
+        return 1.0 / complex(self.r, max(self.x, 0.0))
+
+    def times(self):
+        return [t for t in (self.t, self.clear_near, self.far_clear) if t is not None]
+
+    @property
+    def far_clear(self):
+        return self.clear_near if self.clear_far is None else self.clear_far
+
+
+@dataclass(frozen=True)
+class LineTrip:
+    """Open one circuit of the line from_bus-to_bus at t (s), without fault."""
+
+    from_bus: int
+    to_bus: int
+    t: float
+    circuit: int = 1
+
+    def times(self):
+        return [self.t]
+
+
+@dataclass(frozen=True)
+class GeneratorTrip:
+    """Disconnect machine `machine` (number as in the data) at t (s)."""
+
+    machine: int
+    t: float
+
+    def times(self):
+        return [self.t]
+
+
+@dataclass(frozen=True)
+class LoadStep:
+    """Add P + jQ (pu, system base) of constant-impedance load at `bus` from t (s)."""
+
+    bus: int
+    t: float
+    P: float
+    Q: float = 0.0
+
+    def times(self):
+        return [self.t]
+
+
+def validate(case: Case, events, t_end: float) -> None:
+    """Check every event against the case (buses, lines, machines, times >= 0); raises
+    UnknownBusError, CaseError, InputError.  Events after t_end are allowed (not reached)."""
+    for ev in events:
+        if isinstance(ev, Fault):
+            case.bus_index(ev.bus)
+            if ev.clear_near is not None and ev.clear_near < ev.t:
+                raise InputError(f"fault at bus {ev.bus}: cleared at {ev.clear_near} s "
+                                 f"before it starts at {ev.t} s")
+            if ev.far_clear is not None and ev.clear_near is not None and ev.far_clear < ev.clear_near:
+                raise InputError(f"fault at bus {ev.bus}: far end clears before near end")
+            if ev.far_bus is not None:
+                circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
+        elif isinstance(ev, LineTrip):
+            circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit)
+        elif isinstance(ev, GeneratorTrip):
+            case.machine_index(ev.machine)
+        elif isinstance(ev, LoadStep):
+            case.bus_index(ev.bus)
+        else:
+            raise InputError(f"unknown event {ev!r}")
+        if any(t < 0 for t in ev.times()):
+            raise InputError(f"event {ev} has a negative time (events after t_end = {t_end} s "
+                             "simply do not happen)")
+
+
+def stage_boundaries(events, t_end: float) -> list[tuple[float, int, int]]:
+    """Every change of network configuration before t_end, in time order:
+    (time, event index, phase), phase counting the event's own changes (a fault: 1 on,
+    2 near end cleared, 3 far end cleared).  A fault cleared at both ends at the same
+    instant keeps its two changes, as PSTess keeps the zero-length interval between them
+    (one step of h = 0 in the near-end-cleared network)."""
+    out = []
+    for i, ev in enumerate(events):
+        if isinstance(ev, Fault):
+            times = [ev.t] if ev.clear_near is None else \
+                [ev.t, ev.clear_near] + ([ev.far_clear] if ev.far_bus is not None else [])
+        else:
+            times = ev.times()
+        out += [(float(t), i, k + 1) for k, t in enumerate(times) if t < t_end]
+    return sorted(out)
+
+
+def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
+    """Network configuration with phases[i] changes of event i applied (see
+    `stage_boundaries`)."""
+    faults, opened, feeds, tripped, loads = [], [], [], [], []
+    for ev, n in zip(events, phases):
+        if n == 0:
+            continue
+        if isinstance(ev, Fault):
+            if n == 1:
+                faults.append((case.bus_index(ev.bus), ev.admittance))
+            elif ev.far_bus is not None:
+                row = circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
+                feeds.append((row, ev.far_bus, n == 2))
+        elif isinstance(ev, LineTrip):
+            opened.append(circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit))
+        elif isinstance(ev, GeneratorTrip):
+            tripped.append(case.machine_index(ev.machine))
+        elif isinstance(ev, LoadStep):
+            b = case.bus_index(ev.bus)
+            loads.append((b, complex(ev.P, -ev.Q) / abs(V0[b]) ** 2))
+    return StageConfig(faults=tuple(faults), opened=tuple(sorted(set(opened))),
+                       fault_feeds=tuple(feeds), tripped_machines=tuple(sorted(set(tripped))),
+                       load_steps=tuple(loads))
+
+
+def stages(case: Case, events, t_end: float, V0: np.ndarray):
+    """(start times, configurations) of the run's intervals, the first starting at 0.  A
+    start time repeats only between the phases of one fault (PSTess's zero-length
+    interval); simultaneous changes of different events form one stage."""
+    phases = [0] * len(events)
+    starts, configs, last = [0.0], [configuration(case, events, phases, V0)], None
+    for t, i, k in stage_boundaries(events, t_end):
+        phases[i] = k
+        merge = t == starts[-1] and (len(starts) == 1 or last != i)   # t = 0, or another event
+        if merge:
+            configs[-1] = configuration(case, events, phases, V0)
+        else:
+            starts.append(t)
+            configs.append(configuration(case, events, phases, V0))
+        last = i
+    return starts, configs
+
+
+def fault_with_clearing(case: Case, bus: int, far_bus: int | None, t_fault: float,
+                        clear_cycles: float, far_clear_cycles: float | None = None,
+                        circuit: int = 1) -> Fault:
+    """A fault cleared after N cycles at the near end and M cycles at the far end (the
+    CLI's --clear-cycles / --far-clear-cycles), cycles of the case frequency."""
+    if clear_cycles < 0 or (far_clear_cycles is not None and far_clear_cycles < clear_cycles):
+        raise InputError("clearing cycles must be >= 0 and the far end no earlier than the near end")
+    cyc = 1.0 / case.freq_hz
+    far = clear_cycles if far_clear_cycles is None else far_clear_cycles
+    return Fault(bus=bus, t=t_fault, clear_near=t_fault + clear_cycles * cyc,
+                 clear_far=t_fault + far * cyc, far_bus=far_bus, circuit=circuit)
+
+
+def from_sw_con(case: Case) -> list:
+    """The disturbance of the case's own PST sw_con (types 0 fault, 4 line trip, 6 none)."""
+    sw = case.sw_con
+    if sw is None or len(sw) < 4:
+        return []
+    ftype = int(sw[1, 5])
+    if ftype == 0:
+        far = int(sw[1, 2]) if sw[1, 2] else None
+        return [Fault(bus=int(sw[1, 1]), t=float(sw[1, 0]), clear_near=float(sw[2, 0]),
+                      clear_far=float(sw[3, 0]), far_bus=far)]
+    if ftype == 4:
+        return [LineTrip(int(sw[1, 1]), int(sw[1, 2]), float(sw[1, 0]))]
+    if ftype == 6:
+        return []
+    raise CaseError(f"sw_con fault type {ftype} is not supported (0, 4 and 6 are)")

@@ -1,0 +1,769 @@
+"""Time-domain simulation: PST's predictor-corrector on a grid that lands on every event.
+
+Integrator (PSTess 1.1 `s_simu.m`, docs/pst_models.md 7): explicit Heun (modified Euler),
+each state advanced by x_j = x_k + h/2 (f(x_k) + f(x_k + h f(x_k))) with the network solved
+at both stages.  Event times are grid points, so the run restarts exactly at every event.
+The model conventions (`stabctl.dynamics.model.CONVENTIONS`, docs/conventions.md) also set the
+grid and the event semantics:
+
+- ``"ieee"`` (default): each interval between events gets ceil(length/h) equal steps (never
+  longer than h) and each step uses the network of the interval it lies in ("exact"
+  semantics); limiters as IEEE Std 421.5-2016.
+- ``"pstess"``: PSTess's own, so that trajectories match PSTess bit for bit: fix(length/h)
+  steps per interval, the corrector of the step ending at an event already uses the
+  post-event network, and the first step of each interval after the first is evaluated
+  once more before it is taken (its limiter clamps persist) ("pst" semantics).
+
+Loss of synchronism: a machine's angle leaves the centre of inertia (eq. 40, weights H*MVA)
+by more than `separation_limit` rad; the separated machines are the smaller coherent group
+(`separated_group`); the run can stop there.  Numerical health is checked after every step
+(`integrate`): a non-finite state, a speed outside [1 - SPEED_BAND, 1 + SPEED_BAND] pu or a
+state that alternates in sign from step to step (the signature of an explicit method beyond
+its stability region) stops the run with a NumericalInstabilityError naming the time and
+the state, so that a loss of synchronism is only ever judged on a numerically healthy run.
+A singular network raises SimulationError; both carry the trajectory up to that point.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from stabctl._jitcache import njit
+
+from stabctl.dynamics import events as ev_
+from stabctl.case import Case
+from stabctl.storage import devices as st
+from stabctl.dynamics.model import DynamicModel, OperatingPoint, check_conventions, evaluate_kernel
+from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
+from stabctl.dynamics.results import SimulationResult
+
+
+@dataclass(frozen=True)
+class TimeGrid:
+    """Integration grid: t (N+1,), interval id of each point (a point at an event belongs to
+    the interval that starts there; a time repeats after a zero-length interval), step h
+    of each interval (0 for a zero-length one), and the interval start times."""
+
+    t: np.ndarray
+    interval: np.ndarray
+    h: np.ndarray
+    starts: np.ndarray
+
+
+def time_grid(starts, t_end: float, h: float, pstess: bool = False) -> TimeGrid:
+    """The grid: intervals between consecutive start times (the first 0, non-decreasing,
+    all below t_end), each divided into equal steps, at least one (so a zero-length
+    interval gets one step of h = 0 and its start time appears twice, as in PSTess).
+    pstess: fix(length/h) steps (PSTess, steps in [h, 2h)); else ceil(length/h) (steps at
+    most h; a length within 1e-9 of a multiple of h takes that multiple).
+
+    Raises InputError for a non-positive or non-finite step or end time.
+    """
+    if not (0 < h < np.inf and 0 < t_end < np.inf):
+        raise InputError(f"need a positive step and end time, got h={h}, t_end={t_end}")
+    pts = [float(x) for x in starts] + [float(t_end)]
+    ts, ids, hs = [], [], []
+    for s, (a, b) in enumerate(zip(pts[:-1], pts[1:])):
+        n = max(1, int(np.trunc((b - a) / h) if pstess else np.ceil((b - a) / h - 1e-9)))
+        hs.append((b - a) / n)
+        ts.append(a + hs[-1] * np.arange(n))
+        ids.append(np.full(n, s))
+    t = np.concatenate(ts + [[pts[-1]]])
+    interval = np.concatenate(ids + [[len(pts) - 2]])
+    return TimeGrid(t=t, interval=interval, h=np.array(hs), starts=np.array(pts[:-1]))
+
+
+#: ieee default step: at most this fraction of the fastest time constant (`default_step`).
+STEP_PER_TIME_CONSTANT = 0.5
+
+
+def default_step(case: Case, conventions: str = "ieee",
+                 fastest: tuple[float, str] | None = None) -> float:
+    """Default integration step (s).  pstess: the data file's own step (sw_con row 1, col
+    7), else 1/120 s (half a 60 Hz cycle), as PSTess.  ieee: the same, capped at
+    STEP_PER_TIME_CONSTANT times the case's fastest time constant, the largest step whose
+    CCTs agree with a converged (step-halved) run within the 1 ms CCT tolerance on the
+    paper's faults (docs/conventions.md, convergence table).  fastest: the case's
+    `fastest_time_constant`, if already known."""
+    sw = case.sw_con
+    h = float(sw[0, 6]) if sw is not None and sw[0, 6] > 0 else 0.5 / case.freq_hz
+    if check_conventions(conventions) == "pstess":
+        return h
+    T, _ = fastest_time_constant(case) if fastest is None else fastest
+    return min(h, STEP_PER_TIME_CONSTANT * T)
+
+
+_BLAS_LIMITED = False
+
+
+def single_threaded_blas() -> None:
+    """Limit BLAS/LAPACK to one thread in this process (once).
+
+    The kernels solve many tiny dense systems; OpenBLAS threads make each solve 10-20 times
+    slower and oversubscribe the cores when sweeps run one simulation per process.  The
+    environment defaults set in `stabctl/__init__` do not reach a BLAS that numpy loaded
+    before stabctl was imported, hence this run-time limit (threadpoolctl).
+    """
+    global _BLAS_LIMITED
+    if not _BLAS_LIMITED:
+        import scipy.linalg.cython_lapack  # noqa: F401  the LAPACK numba calls: load it first
+        from threadpoolctl import threadpool_limits
+        threadpool_limits(limits=1, user_api="blas")
+        _BLAS_LIMITED = True
+
+
+def fastest_time_constant(case: Case) -> tuple[float, str]:
+    """Smallest time constant among the states of the case's models (s) and where it is
+    (table, field, row).  Raises CaseError for models stabctl does not have."""
+    from stabctl.models import exciters
+    from stabctl.models import governors
+    from stabctl.models import machines
+    from stabctl.models import pss
+    cands = []
+    mp, ep = machines.machine_params(case), exciters.exciter_params(case)
+    pp, gp = pss.pss_params(case), governors.governor_params(case)
+    for name, arr, sel in (
+            ("mac_con T\"do", mp.Tdopp, mp.kind == 2), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2),
+            ("mac_con T'do", mp.Tdop, mp.kind >= 1), ("mac_con T'qo", mp.Tqop, mp.kind >= 1),
+            *pp.time_constants(), *ep.time_constants(), *gp.time_constants()):
+        if np.any(sel):
+            k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))
+            cands.append((float(abs(arr[k])), f"{name} row {k + 1}"))
+    return min(cands) if cands else (np.inf, "")
+
+
+def check_step(fastest: tuple[float, str], h: float) -> None:
+    """Raise InputError when h is not a positive finite step or exceeds twice the fastest
+    time constant (`fastest_time_constant`): the explicit predictor-corrector is unstable
+    there (its stability interval is h/T < 2)."""
+    T, where = fastest
+    if not 0 < h < np.inf:
+        raise InputError(f"step must be a positive number of seconds, got {h}")
+    if h >= 2 * T:
+        raise InputError(f"step {h} s is too large: the fastest time constant is {T} s "
+                         f"({where}); the predictor-corrector needs h < {2 * T} s")
+
+
+#: most integration steps one run may take: a smaller step (or a longer run) is refused
+#: at once instead of running silently for minutes and filling the memory with the
+#: trajectory (miniWECC: 200000 steps are about 10 s and 0.7 GB)
+MAX_STEPS = 200_000
+
+
+def check_step_count(t_end: float, h: float) -> None:
+    """Raise InputError when a run to t_end (s) with step h (s) needs more than MAX_STEPS
+    steps."""
+    if not 0 < h < float("inf"):
+        raise InputError(f"step must be a finite number > 0 s, got {h}")
+    n = t_end / h
+    if not n <= MAX_STEPS:
+        raise InputError(f"step {h:g} s: a run to {t_end:g} s needs {n:.3g} steps, more than "
+                         f"the limit {MAX_STEPS} (stabctl.dynamics.simulation.MAX_STEPS); use a larger "
+                         "step (--step) or a shorter run (--tf)")
+
+
+class Simulator:
+    """Runs disturbances on one case from its solved power flow.
+
+    Args:
+        case: the case; op: its operating point (default: solved by `stabctl.network.powerflow`);
+        injection_buses: buses kept for device injections (storage); conventions: "ieee"
+        (default) or "pstess" (module docstring, docs/conventions.md); step: the step of
+        runs that give none (s; None: `default_step` of the case and conventions);
+        q_limits: the power flow (when op is None) switches PV buses to PQ at their Q
+        limits (PST's ``chq_lim``, the default) or not (ANDES's default, ``pv2pq = 0``).
+    Attributes:
+        default_h: that step (s).
+    Raises:
+        InputError: unknown conventions, a step that is not positive or too large for the
+        case's fastest time constant; CaseError, PowerFlowError: as the case's models and
+        power flow.
+    """
+
+    def __init__(self, case: Case, op: OperatingPoint | None = None, injection_buses=(),
+                 conventions: str = "ieee", step: float | None = None,
+                 q_limits: bool = True):
+        self.conventions = check_conventions(conventions)
+        self.q_limits = bool(q_limits)
+        if op is None:
+            from stabctl.network.powerflow import solve_powerflow
+            op = OperatingPoint.from_bus_matrix(
+                solve_powerflow(case, q_limits=self.q_limits).bus_matrix())
+        single_threaded_blas()
+        self.case, self.op = case, op
+        self.fastest = fastest_time_constant(case)
+        self.default_h = default_step(case, conventions, self.fastest) if step is None else step
+        check_step(self.fastest, self.default_h)
+        self._models: dict[frozenset, DynamicModel] = {}
+        self.model = self.model_for(injection_buses)
+        self.inertia = self.model.mp.H * case.machines.mva
+
+    def model_for(self, buses=()) -> DynamicModel:
+        """The dynamic model keeping `buses` (bus numbers) in the reduced network (cached);
+        storage devices need their buses kept."""
+        key = frozenset(int(b) for b in buses)
+        if key not in self._models:
+            self._models[key] = DynamicModel(self.case, self.op, sorted(key), self.conventions)
+        return self._models[key]
+
+    def run(self, events=(), t_end: float = 5.0, h: float | None = None,
+            semantics: str | None = None, separation_limit: float = np.pi,
+            stop_at_separation: bool = False, storage=None) -> SimulationResult:
+        """Simulate `events` (see `stabctl.dynamics.events`) from t = 0 to t_end (s) with step h
+        (default `default_h`).
+
+        semantics: "pst" or "exact" event semantics (module docstring; default: "pst"
+        under the pstess conventions, "exact" under ieee).
+        storage: a `stabctl.storage.devices.StorageFleet` (devices and controller) or None.
+
+        Raises:
+            InputError, UnknownBusError, CaseError: bad events or step;
+            NumericalInstabilityError: the run left the integrator's stability region;
+            SimulationError: a singular network or non-convergent loads (both carry the
+            partial result as `.result`).
+        """
+        semantics = self._semantics(semantics)
+        m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
+        run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
+                   stop_at_separation)
+        run.advance(grid.t.size - 1)
+        return run.finish(storage)
+
+    def _prepare(self, events, t_end, h, storage, semantics):
+        """Validate, choose the model (storage buses kept), pack the devices, build the
+        event grid and the network of every interval."""
+        if semantics not in ("pst", "exact"):
+            raise InputError(f"semantics must be 'pst' or 'exact', got {semantics!r}")
+        events = list(events)
+        ev_.validate(self.case, events, t_end)
+        h = self.default_h if h is None else h
+        m = self.model_for(storage.buses if storage is not None else ())
+        sa = st.pack(storage, self.case, m.nc_idx)
+        check_step(self.fastest, h)
+        check_step_count(t_end, h)
+        starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
+        grid = time_grid(starts, t_end, h, self.conventions == "pstess")
+        return m, sa, grid, [m.network(c) for c in configs]
+
+    def _semantics(self, semantics: str | None) -> str:
+        if semantics is None:
+            return "pst" if self.conventions == "pstess" else "exact"
+        return semantics
+
+    def run_commanded(self, events, t_end: float, storage, frame_times, decide,
+                      latency: float = 0.0, h: float | None = None,
+                      semantics: str | None = None,
+                      separation_limit: float = np.pi,
+                      stop_at_separation: bool = False) -> SimulationResult:
+        """Simulate with storage devices commanded from measurements (estimator in the loop).
+
+        At each frame time t_f (s, increasing) the run is advanced to the first grid point at
+        or after t_f and `decide(t_f, partial)` is called with the trajectory so far (a
+        SimulationResult up to that grid point, so a measurement at t_f can be interpolated);
+        it returns the device set-points (n_dev,) in units of each rating (Table 3 modes
+        -1 inject, 0 idle, +1 absorb; any real value for a scaled power, e.g. an ambient
+        load deviation) that take effect at exactly t_f + latency (the step is split there).
+        `storage.controller` must be `stabctl.storage.devices.ExternalCommands`.  With
+        stop_at_separation the run ends at the first step after which a rotor angle is more
+        than separation_limit rad from the COI, as `run` (no further frame is decided).
+
+        Raises:
+            InputError: wrong controller, frame times not increasing, negative latency;
+            SimulationError: as `run`.
+        """
+        if storage is None or not isinstance(storage.controller, st.ExternalCommands):
+            raise InputError("run_commanded needs a fleet whose controller is ExternalCommands")
+        frame_times = np.asarray(frame_times, float)
+        if np.any(np.diff(frame_times) <= 0) or latency < 0:
+            raise InputError("frame times must increase and the latency must be >= 0")
+        semantics = self._semantics(semantics)
+        m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
+        run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
+                   stop_at_separation, n_commands=frame_times.size)
+        for i, t_f in enumerate(frame_times[frame_times <= t_end]):
+            k = int(np.searchsorted(grid.t, t_f - 1e-12))
+            run.advance(k)
+            if run.status != OK:
+                break
+            run.command(i, t_f + latency, np.asarray(decide(float(t_f), run.partial(k)), float))
+        run.advance(grid.t.size - 1)
+        return run.finish(storage)
+
+    def _result(self, t, rec: "Recording", n, wall, limit) -> SimulationResult:
+        c = self.case
+        angle = rec.angle[:n]
+        dev = np.abs(angle - (angle @ self.inertia / self.inertia.sum())[:, None])
+        lost = np.nonzero(dev.max(axis=1) > limit)[0]
+        t_sep, separated = None, []
+        if lost.size:
+            k = int(lost[0])
+            t_sep = float(t[k])
+            group = separated_group(angle[k], self.inertia)
+            separated = [int(x) for x in c.machines.number[group]]
+        return SimulationResult(
+            t=t[:n].copy(), machines=c.machines.number.astype(int), buses=c.buses.number.astype(int),
+            speed=rec.speed[:n], angle=angle, pelect=rec.pelect[:n], pmech=rec.pmech[:n],
+            efd=rec.efd[:n], vmag=np.abs(rec.V[:n]), vang=np.angle(rec.V[:n]),
+            inertia=self.inertia, stable=t_sep is None, t_separation=t_sep, separated=separated,
+            meta={"case": c.name, "conventions": self.conventions, "wall_time_s": wall,
+                  "max_initial_derivative": self.model.initial_residual[0],
+                  "max_initial_derivative_state": self.model.initial_residual[1]})
+
+
+class _Run:
+    """One simulation in progress: the compiled loop advanced piecewise (see `integrate`)."""
+
+    def __init__(self, sim: "Simulator", m, sa, grid, nets, pst, limit, stop, n_commands=0):
+        stack = lambda name: np.ascontiguousarray(np.stack([getattr(n, name) for n in nets]))  # noqa: E731
+        self.sim, self.m, self.sa, self.grid = sim, m, sa, grid
+        N, nm, nb, nd = grid.t.size, m.mp.n, sim.case.n_bus, sa.pmax.size
+        self.rec = Recording(speed=np.zeros((N, nm)), angle=np.zeros((N, nm)),
+                             pelect=np.zeros((N, nm)), pmech=np.zeros((N, nm)),
+                             efd=np.zeros((N, nm)), V=np.zeros((N, nb), np.complex128))
+        self.P_rec, self.stats = np.zeros((N, nd)), np.zeros((nd, 3))
+        self.log = np.full((4096, 4), np.nan)
+        self.x, self.V_nc, self.ds = m.x0.copy(), m.V_nc0.copy(), device_state(sa)
+        self.health = Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3)))
+        self.held = np.zeros(self.V_nc.size, np.bool_)   # loads held low (solve_nc)
+        self.held_stage = np.full(1, -1)
+        self.cmd_t = np.full(n_commands, np.inf)
+        self.cmd_mode = np.zeros((n_commands, nd))
+        self.mats = tuple(stack(n) for n in ("Y11", "Y12", "Y21", "Y22", "Z22", "R"))
+        self.first = np.r_[False, np.diff(grid.interval) > 0]
+        self.pst, self.limit, self.stop = pst, limit, stop
+        self.k, self.status, self.wall, self.stored = 0, OK, 0.0, False
+
+    def advance(self, k1: int) -> None:
+        """Integrate up to grid index k1 and store its outputs (nothing after a stop);
+        advance(0) at the start stores the initial point."""
+        if self.status != OK or k1 < self.k or (k1 == self.k and self.stored):
+            return
+        self.stored = True
+        m, g = self.m, self.grid
+        wall = time.perf_counter()
+        self.status, k_end = integrate(
+            self.x, self.V_nc, self.held, self.held_stage, g.t, g.interval, g.h, self.first,
+            self.pst, *self.mats, m.params,
+            m.layout.n_mac, m.layout.n_exc, m.layout.n_pss, m.layout.n_tg, self.sa, self.ds,
+            self.cmd_t, self.cmd_mode, self.sim.inertia, self.limit, self.stop, self.k, k1,
+            self.rec, self.P_rec, self.stats, self.log, self.health)
+        self.wall += time.perf_counter() - wall
+        self.k = k_end
+
+    def command(self, i: int, t_apply: float, modes) -> None:
+        """Schedule command i: device set-points (units of each rating) from t_apply (s)."""
+        self.cmd_t[i], self.cmd_mode[i] = t_apply, modes
+
+    def partial(self, k: int) -> SimulationResult:
+        """The trajectory up to grid index k (views, no verdict)."""
+        r, c, n = self.rec, self.sim.case, k + 1
+        return SimulationResult(
+            t=self.grid.t[:n], machines=c.machines.number.astype(int),
+            buses=c.buses.number.astype(int), speed=r.speed[:n], angle=r.angle[:n],
+            pelect=r.pelect[:n], pmech=r.pmech[:n], efd=r.efd[:n], vmag=np.abs(r.V[:n]),
+            vang=np.angle(r.V[:n]), inertia=self.sim.inertia, devices=np.arange(1, self.sa.pmax.size + 1),
+            pesd=self.P_rec[:n])
+
+    def finish(self, storage) -> SimulationResult:
+        """The result; raises SimulationError (with the partial result) after a divergence."""
+        sim, g, k_end = self.sim, self.grid, self.k
+        res = sim._result(g.t, self.rec, k_end + 1, self.wall, self.limit)
+        if storage is not None:
+            _attach_storage(res, storage, self.P_rec[:k_end + 1], self.stats,
+                            sim.case.base_mva, self.log[~np.isnan(self.log[:, 0])],
+                            sim.case.freq_hz)
+        t_fail = g.t[min(k_end + 1, g.t.size - 1)]
+        if self.status == UNSTABLE_STEP:
+            q = int(self.health.bad[0])
+            raise NumericalInstabilityError(
+                f"case '{sim.case.name}': numerical instability in the step ending at t = "
+                f"{t_fail:.4f} s: state {self.m.state_name(q)} = {self.x[q]:.6g} "
+                f"({_symptom(self.x[q], q, self.m.mp.n)}); the step h = "
+                f"{g.h[g.interval[k_end]]:.6g} s is too large for this model: use a smaller "
+                f"step (trajectory kept up to {g.t[k_end]:.4f} s)", result=res)
+        if self.status < 0:
+            raise SimulationError(f"case '{sim.case.name}': the network/load equations did "
+                                  f"not converge (voltage collapse) in the step ending at "
+                                  f"t = {t_fail:.4f} s (trajectory kept up to "
+                                  f"{g.t[k_end]:.4f} s)", result=res)
+        return res
+
+
+def _symptom(value: float, q: int, nm: int) -> str:
+    if not np.isfinite(value):
+        return "not finite"
+    if nm <= q < 2 * nm and abs(value - 1.0) > SPEED_BAND:
+        return f"speed more than {SPEED_BAND} pu from synchronous"
+    return (f"the largest local error estimate, above {EST_TOL} for {EST_STEPS} steps in a "
+            "row")
+
+
+#: Two switchings of a device closer than this (s) count as chattering.
+CHATTER_S = 0.02
+
+
+def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva, log, f0) -> None:
+    """Device powers and per-device figures: switchings, chattering (switchings within
+    CHATTER_S of the previous one), energy absorbed and delivered (MJ), peak power actually
+    used (MW); the switching log (time s, device number, new mode, relative speed Hz) in
+    res.meta["switchings"]."""
+    res.devices = np.arange(1, len(fleet.devices) + 1)
+    res.pesd = P
+    res.meta["switchings"] = [(float(t), int(d) + 1, int(m), float(r * f0)) for t, d, m, r in log]
+    res.meta["storage"] = [
+        {"device": i + 1, "bus": d.bus, "machine": d.machine, "pmax_mw": d.pmax_mw,
+         "switchings": int(stats[i, 0]),
+         "chattering": int(np.sum(np.diff(log[log[:, 1] == i, 0]) < CHATTER_S)),
+         "energy_absorbed_mj": float(stats[i, 1] * base_mva),
+         "energy_delivered_mj": float(stats[i, 2] * base_mva),
+         "peak_power_mw": float(np.abs(P[:, i]).max() * base_mva) if P.size else 0.0}
+        for i, d in enumerate(fleet.devices)]
+
+
+def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """Machines that lost synchronism: split the rotor angles at their largest gap into two
+    coherent groups and return the indices of the group with the smaller inertia (the
+    leading group on a tie), sorted."""
+    order = np.argsort(delta)
+    cut = int(np.argmax(np.diff(delta[order]))) + 1
+    lagging, leading = order[:cut], order[cut:]
+    m_lag, m_lead = inertia[lagging].sum(), inertia[leading].sum()
+    group = leading if m_lead <= m_lag * (1 + 1e-9) else lagging
+    return np.sort(group)
+
+
+class Recording(NamedTuple):
+    """Preallocated trajectories filled by `integrate` (n_t rows)."""
+
+    speed: np.ndarray
+    angle: np.ndarray
+    pelect: np.ndarray
+    pmech: np.ndarray
+    efd: np.ndarray
+    V: np.ndarray
+
+
+OK, SEPARATED, NO_LOAD_FLOW, UNSTABLE_STEP = 0, 1, -1, -3
+
+#: Numerical health (`_healthy`): a non-finite state, a speed more than SPEED_BAND pu from
+#: synchronous, or Heun's local error estimate (`_local_error`) above EST_TOL for more than
+#: EST_STEPS steps in a row marks a run that left the integrator's stability region.  On
+#: the paper's faults healthy runs stay above 0.1 for at most 6 steps (a field voltage
+#: reaching its ceiling inside a step); Kundur at h = 0.019 s (h/T_R = 1.9) sits above it
+#: from 1.5 s on at a spurious fixed point of the method (Efd at its ceiling, 0.3-9).
+SPEED_BAND, EST_TOL, EST_STEPS = 0.5, 0.1, 50
+
+
+@njit(cache=True)
+def _local_error(x, f_k, f_j, hh, where):
+    """Heun's local error estimate (the corrector minus the Euler predictor, hh/2 |f_j -
+    f_k|), largest over the states relative to 1 + |x|; its state index in where[0]."""
+    e = 0.0
+    for q in range(x.size):
+        eq = 0.5 * hh * abs(f_j[q] - f_k[q]) / (1.0 + abs(x[q]))
+        if eq > e:
+            e, where[0] = eq, q
+    return e
+
+
+@njit(cache=True)
+def _healthy(x, est, nm, health):
+    """Numerical health after a step with local error estimate est (module docstring);
+    returns False with the offending state index in health.bad[0]."""
+    for q in range(x.size):
+        if not np.isfinite(x[q]):
+            health.bad[0] = q
+            return False
+    for i in range(nm):
+        if abs(x[nm + i] - 1.0) > SPEED_BAND:
+            health.bad[0] = nm + i
+            return False
+    health.n_big[0] = health.n_big[0] + 1 if est > EST_TOL else 0
+    if health.n_big[0] > EST_STEPS:
+        health.bad[0] = health.worst[0]
+        return False
+    return True
+
+
+@njit(cache=True)
+def _store(rec, k, x, nm, pelect, pmech, efd, V_bus):
+    for i in range(nm):
+        rec.angle[k, i] = x[i]
+        rec.speed[k, i] = x[nm + i]
+    rec.pelect[k] = pelect
+    rec.pmech[k] = pmech
+    rec.efd[k] = efd
+    rec.V[k] = V_bus
+
+
+@njit(cache=True)
+def _log(log, stats, d, time_, mode, r):
+    """Count a switching of device d and log it (time s, device, new mode, rel. speed)."""
+    row = int(stats[:, 0].sum())
+    stats[d, 0] += 1
+    if row < log.shape[0]:
+        log[row, 0], log[row, 1], log[row, 2], log[row, 3] = time_, d, mode, r
+
+
+@njit(cache=True)
+def _inject(sa, P, S):
+    """Complex power drawn at the kept buses by the devices (absorbing is +)."""
+    S[:] = 0.0
+    for d in range(P.size):
+        S[sa.pos[d]] += P[d]
+
+
+@njit(cache=True)
+def _targets(sa, mode, r, v, accel, out):
+    """Device power set-points: bang-bang modes times ratings, or the linear law."""
+    for d in range(out.size):
+        if sa.kind == st.BANG_BANG:
+            out[d] = mode[d] * sa.pmax[d]
+        elif sa.kind == st.EXTERNAL:
+            out[d] = mode[d] * sa.pmax[d] if v[d] >= sa.vgate else 0.0
+        elif v[d] < sa.vgate:
+            out[d] = 0.0
+        else:
+            out[d] = min(max(sa.Kv * r[d] + sa.Ka * accel[d], -sa.pmax[d]), sa.pmax[d])
+
+
+@njit(cache=True)
+def _advance(sa, P, target, e, hh, stats):
+    """Device powers after hh seconds; energy (SOC, absorbed, delivered) by trapezoid."""
+    Pn = np.empty_like(P)
+    for d in range(P.size):
+        Pn[d] = st.device_power(sa, d, target[d], P[d], e[d], hh)
+        e[d] += 0.5 * hh * (P[d] + Pn[d])
+        stats[d, 1] += 0.5 * hh * (max(P[d], 0.0) + max(Pn[d], 0.0))
+        stats[d, 2] += 0.5 * hh * (max(-P[d], 0.0) + max(-Pn[d], 0.0))
+    return Pn
+
+
+@njit(cache=True)
+def _device_state(x, nm, inertia, sa, V_nc, dx, r, v, accel):
+    """Relative speeds, bus voltages and relative accelerations seen by the devices."""
+    st.relative_speeds(x, nm, inertia, sa, r)
+    st.relative_speeds(dx, nm, inertia, sa, accel)
+    for d in range(r.size):
+        v[d] = abs(V_nc[sa.pos[d]])
+
+
+class Health(NamedTuple):
+    """Numerical-health trackers of a run (`_healthy`): the local error estimate of the
+    step ending at each grid index (n_t,), the state it is largest in (1,), the number of
+    steps in a row above EST_TOL (1,), the offending state index (1,)."""
+
+    est: np.ndarray
+    worst: np.ndarray
+    n_big: np.ndarray
+    bad: np.ndarray
+
+
+class DeviceState(NamedTuple):
+    """Controller and device state carried across `integrate` calls (n_dev entries):
+    mode (-1, 0, +1; an external set-point in units of the rating), power P (pu), power
+    target, energy content e (pu*s), the next entry of the command schedule (cmd_next[0])
+    for externally commanded devices."""
+
+    mode: np.ndarray
+    P: np.ndarray
+    target: np.ndarray
+    e: np.ndarray
+    cmd_next: np.ndarray
+
+
+def device_state(sa) -> DeviceState:
+    nd = sa.pmax.size
+    return DeviceState(np.zeros(nd), np.zeros(nd), np.zeros(nd), sa.e0.copy(),
+                       np.zeros(1, np.int64))
+
+
+@njit(cache=True)
+def _apply_commands(sa, ds, cmd_t, cmd_mode, t_now, log, stats, r):
+    """Apply every scheduled command due by t_now (externally commanded devices); a
+    change of the set-point's sign (idle, absorb, inject) is logged as a switching."""
+    while ds.cmd_next[0] < cmd_t.size and cmd_t[ds.cmd_next[0]] <= t_now + 1e-12:
+        c = ds.cmd_next[0]
+        for d in range(ds.mode.size):
+            if np.sign(cmd_mode[c, d]) != np.sign(ds.mode[d]):
+                _log(log, stats, d, cmd_t[c], np.sign(cmd_mode[c, d]), r[d])
+            ds.mode[d] = cmd_mode[c, d]
+        ds.cmd_next[0] += 1
+
+
+@njit(cache=True)
+def integrate(xs, V_nc, held, held_stage, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22,
+              R, p, nm, ne, nps, ng, sa, ds, cmd_t, cmd_mode, inertia, limit, stop, k0, k1, rec,
+              P_rec, stats, log, health):
+    """PST's predictor-corrector from grid index k0 to k1 (see the module docstring), with
+    the storage devices `sa` (stabctl.storage.devices.StorageArrays) in state `ds` (DeviceState).
+
+    xs (the state), V_nc and held (the loads held at their impedance model, see
+    `netsolve.solve_nc`; cleared when the network stage changes, held_stage[0] is the stage
+    it belongs to) are updated in place, so a run can be continued.  Stage
+    matrices are stacked by interval.  Stores the predictor-stage outputs, the states and
+    the device powers at every index (rec, P_rec).  Bang-bang devices: a mode change
+    within a step has its instant located (`storage.crossing`) and the step is
+    re-integrated in two parts.  Externally commanded devices: each command of the
+    schedule (cmd_t sorted, cmd_mode) takes effect at its exact time, splitting the step.
+    stats[d] = (switchings, energy absorbed, energy delivered in pu*s); log rows (time,
+    device, new mode, relative speed pu) while there is room.  health (`Health`): the
+    numerical-health trackers, carried across calls.  Returns (status, last stored
+    index): OK, SEPARATED (stopped at loss of synchronism), UNSTABLE_STEP (`_healthy`
+    failed after the step from that index), NO_LOAD_FLOW.
+    """
+    n, nd = interval.size, sa.pmax.size
+    x = xs.copy()
+    dx_k, dx_j = np.zeros_like(x), np.zeros_like(x)  # slots no kernel writes stay 0
+    cur = np.empty(nm, np.complex128)
+    pel, qel, et, efd, pm = np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm)
+    V_bus = np.zeros(R.shape[1], np.complex128)
+    S = np.zeros(V_nc.size, np.complex128)
+    mode, P, target, e = ds.mode, ds.P, ds.target, ds.e
+    switched = np.zeros(nd, np.bool_)
+    r, v, acc = np.zeros(nd), np.zeros(nd), np.zeros(nd)
+    rb, vb, accb = np.zeros(nd), np.zeros(nd), np.zeros(nd)
+    M = inertia.sum()
+    bang, external = sa.kind == st.BANG_BANG, sa.kind == st.EXTERNAL
+
+    def ev(xx, st_, want, dx):
+        if st_ != held_stage[0]:
+            held[:] = False
+            held_stage[0] = st_
+        return evaluate_kernel(xx, nm, ne, nps, ng, p, Y11[st_], Y12[st_], Y21[st_], Y22[st_],
+                               Z22[st_], R[st_], V_nc, held, S, want, dx, cur, pel, qel, et,
+                               efd, pm, V_bus)
+
+    for k in range(k0, min(k1, n - 1)):
+        s = interval[k]
+        j = interval[k + 1] if pst else s
+        _inject(sa, P, S)
+        if first[k] and pst:   # PSTess computes this step twice; the first pass's clamps stay
+            V_keep = V_nc.copy()
+            ev(x, s, False, dx_k)
+            V_nc[:] = V_keep
+        if ev(x, s, True, dx_k) < 0:
+            xs[:] = x
+            return NO_LOAD_FLOW, max(k - 1, 0)
+        switched[:] = False
+        if nd > 0:   # controller at the grid point (events make voltages jump here)
+            _device_state(x, nm, inertia, sa, V_nc, dx_k, r, v, acc)
+            if external:
+                _apply_commands(sa, ds, cmd_t, cmd_mode, t[k], log, stats, r)
+            for d in range(nd):
+                want = st.desired_mode(sa, d, mode[d], r[d], v[d])
+                if bang and want != mode[d]:
+                    mode[d] = want
+                    switched[d] = True
+                    _log(log, stats, d, t[k], want, r[d])
+            _targets(sa, mode, r, v, acc, target)
+            changed = False
+            for d in range(nd):
+                Pn = st.device_power(sa, d, target[d], P[d], e[d], 0.0)
+                changed = changed or Pn != P[d]
+                P[d] = Pn
+            if changed:
+                _inject(sa, P, S)
+                ev(x, s, True, dx_k)
+        _store(rec, k, x, nm, pel, pm, efd, V_bus)
+        if nd > 0:
+            P_rec[k] = P
+        x_a, dx_a, rem = x, dx_k, h[s]
+        while True:   # ends: each device switches at most once per step, commands are finite
+            t_a = t[k + 1] - rem
+            hh = rem
+            if external and ds.cmd_next[0] < cmd_t.size and cmd_t[ds.cmd_next[0]] < t[k + 1] - 1e-12:
+                hh = max(cmd_t[ds.cmd_next[0]] - t_a, 0.0)   # a command falls in this step
+            Pb = _advance(sa, P, target, e.copy(), hh, np.zeros((nd, 3)))
+            _inject(sa, Pb, S)
+            xp = x_a + hh * dx_a
+            if ev(xp, j if hh == rem else s, k == n - 2 and hh == rem, dx_j) < 0:
+                xs[:] = x
+                return NO_LOAD_FLOW, k
+            x_b = x_a + 0.5 * hh * (dx_a + dx_j)
+            if hh == rem:
+                health.est[k + 1] = _local_error(x_b, dx_a, dx_j, hh, health.worst)
+            theta, first_d = 2.0, -1
+            if bang and hh == rem:
+                _device_state(x_b, nm, inertia, sa, V_nc, dx_j, rb, vb, accb)
+                at_event = interval[k + 1] != s
+                for d in range(nd):
+                    if switched[d]:    # one switching per device and step: no chattering loop
+                        continue
+                    want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
+                    gate_jump = (v[d] >= sa.vgate) != (vb[d] >= sa.vgate)
+                    if want != mode[d] and not (at_event and gate_jump):  # events: at t_k+1
+                        th, _ = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
+                        if th < theta:
+                            theta, first_d = th, d
+            if hh == rem and first_d < 0:
+                break
+            if first_d >= 0:           # re-integrate up to the first switching instant
+                hh = theta * rem
+                Pm = _advance(sa, P, target, e, hh, stats)
+                _inject(sa, Pm, S)
+                if ev(x_a + hh * dx_a, s, False, dx_j) < 0:
+                    xs[:] = x
+                    return NO_LOAD_FLOW, k
+                x_a = x_a + 0.5 * hh * (dx_a + dx_j)
+            else:                      # up to the scheduled command
+                Pm = _advance(sa, P, target, e, hh, stats)
+                x_a = x_b
+            rem -= hh
+            P[:] = Pm
+            _device_state(x_a, nm, inertia, sa, V_nc, dx_j, r, v, acc)
+            if external:
+                _apply_commands(sa, ds, cmd_t, cmd_mode, t[k + 1] - rem, log, stats, r)
+            for d in range(nd):
+                if first_d < 0:
+                    break
+                want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
+                if want != mode[d] and not switched[d]:
+                    th, new = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
+                    if d == first_d or th <= 1e-9:
+                        mode[d] = new
+                        switched[d] = True
+                        _log(log, stats, d, t[k + 1] - rem, new, r[d])
+            _targets(sa, mode, r, v, acc, target)
+            for d in range(nd):
+                P[d] = st.device_power(sa, d, target[d], P[d], e[d], 0.0)
+            _inject(sa, P, S)
+            dx_a = np.empty_like(x)
+            if ev(x_a, s, False, dx_a) < 0:
+                xs[:] = x
+                return NO_LOAD_FLOW, k
+            x_b = x_a
+            if rem <= 1e-15:
+                break
+        if nd > 0:
+            P[:] = _advance(sa, P, target, e, rem, stats) if rem > 1e-15 else P
+        x = x_b
+        if not _healthy(x, health.est[k + 1], nm, health):
+            xs[:] = x
+            return UNSTABLE_STEP, k
+        if stop:
+            coi = (x[:nm] * inertia).sum() / M
+            if np.max(np.abs(x[:nm] - coi)) > limit:
+                _store(rec, k + 1, x, nm, pel, pm, efd, V_bus)
+                if nd > 0:
+                    P_rec[k + 1] = P
+                xs[:] = x
+                return SEPARATED, k + 1
+    xs[:] = x
+    if k1 >= n - 1:
+        _store(rec, n - 1, x, nm, pel, pm, efd, V_bus)
+        if nd > 0:
+            P_rec[n - 1] = P
+        return OK, n - 1
+    # paused at k1: store its outputs from copies (the next call evaluates it for real)
+    V_keep, held_keep, stage_keep = V_nc.copy(), held.copy(), held_stage[0]
+    _inject(sa, P, S)
+    ev(x.copy(), interval[k1], True, dx_k)
+    V_nc[:], held[:], held_stage[0] = V_keep, held_keep, stage_keep
+    _store(rec, k1, x, nm, pel, pm, efd, V_bus)
+    if nd > 0:
+        P_rec[k1] = P
+    return OK, k1
