@@ -11,6 +11,7 @@ clearing, the relative speed the controller acted on against the truth (mHz).
 
 import numpy as np
 
+from stabctl.studies.cases import CASE1
 from stabctl.estimation import closed_loop as cl
 from stabctl.estimation import filters as es
 from stabctl.io import load_case
@@ -39,7 +40,7 @@ def run(sim, events, estimator, extrapolate=False):
 def main():
     case = load_case("kundur")
     sim = Simulator(case)
-    events = [fault_with_clearing(case, 3, 101, 1.0, 20)]
+    events = [fault_with_clearing(case, CASE1.bus, CASE1.far_bus, CASE1.fault.t_fault, 20)]
     t_clear = max(events[0].times())
     for label, est, ext in (("ideal", "ideal", False), ("kf, ROCOF extrapolated", "kf", True),
                             ("kf, held (baseline)", "kf", False)):

@@ -16,12 +16,13 @@ import os
 import time
 
 from stabctl.io import load_case
-from stabctl.stability.cct import LineFault, critical_clearing_time
+from stabctl.stability.cct import critical_clearing_time
+from stabctl.studies.cases import CASE1, CASE2
 from stabctl.dynamics.simulation import Simulator
 
 SEARCHES = (  # case, fault, target s (None: no target), label
-    ("miniwecc", LineFault(83, 33, 1.0), 3.0, "Case 2: bus 83, line 83-33"),
-    ("kundur", LineFault(3, 101, 1.0), None, "Case 1: bus 3, line 3-101"),
+    ("miniwecc", CASE2.fault, 3.0, "Case 2: bus 83, line 83-33"),
+    ("kundur", CASE1.fault, None, "Case 1: bus 3, line 3-101"),
 )
 
 

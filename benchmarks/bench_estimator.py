@@ -14,6 +14,7 @@ Run: python benchmarks/bench_estimator.py
 import os
 import time
 
+from stabctl.studies.cases import CASE2
 from stabctl.estimation import filters as es
 from stabctl.estimation import pmu
 from stabctl.io import load_case
@@ -39,7 +40,7 @@ def main():
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     case = load_case("miniwecc")
-    res = Simulator(case).run([fault_with_clearing(case, 83, 33, 1.0, 4)], t_end=10.0)
+    res = Simulator(case).run([fault_with_clearing(case, CASE2.bus, CASE2.far_bus, CASE2.fault.t_fault, CASE2.cycles["estimation"])], t_end=10.0)
     pmus = pmu.machine_pmus(case)
     settings = pmu.PMUSettings(rate=RATE, drop_prob=0.05)
     frames = list(pmu.measure(pmu.phasor_truth(case, res, pmus), settings, seed=1))

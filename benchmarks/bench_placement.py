@@ -19,7 +19,8 @@ import time
 import numpy as np
 
 from stabctl.io import load_case
-from stabctl.stability.cct import DEFAULT_FAULTS, cached_simulator
+from stabctl.studies.cases import DEFAULT_FAULTS
+from stabctl.stability.cct import cached_simulator
 from stabctl.smallsignal.damping import DampingModel, relay_df
 from stabctl.smallsignal.linearise import linearise
 from stabctl.placement.program import CCTCut, candidate_sites, solve_allocation

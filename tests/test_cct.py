@@ -10,7 +10,8 @@ import pytest
 from click.testing import CliRunner
 
 from stabctl.io import load_case
-from stabctl.stability.cct import (DEFAULT_FAULTS, LineFault, cached_simulator, critical_clearing_time,
+from stabctl.studies.cases import DEFAULT_FAULTS
+from stabctl.stability.cct import (LineFault, cached_simulator, critical_clearing_time,
                          read_faults, storage_fleet)
 from stabctl.cli import main
 from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError

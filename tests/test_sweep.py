@@ -12,7 +12,8 @@ import pytest
 from click.testing import CliRunner
 
 import stabctl
-from stabctl.stability.cct import DEFAULT_FAULTS, LineFault, cached_simulator, cct_job, cct_jobs
+from stabctl.studies.cases import DEFAULT_FAULTS
+from stabctl.stability.cct import LineFault, cached_simulator, cct_job, cct_jobs
 from stabctl.cli import main
 from stabctl.errors import InputError
 from stabctl.parallel import Job, read_records, run_sweep

@@ -344,14 +344,6 @@ def _run(sim, fault: LineFault, t_clear, t_end, h, limit, stop, extra):
 
 # -- CCT sweeps (jobs for stabctl.parallel) -------------------------------------------------
 
-#: Built-in fault lists of `stabctl sweep-cct CASE --faults DEFAULT`: the paper's Case 1
-#: (Kundur) and Case 2 (miniWECC) faults and one more tie-line fault each.
-DEFAULT_FAULTS = {
-    "kundur": (LineFault(3, 101), LineFault(13, 101)),
-    "miniwecc": (LineFault(83, 33), LineFault(40, 44)),
-}
-
-
 def storage_fleet(case, esd_pct: float | None):
     """:func:`stabctl.storage.uniform_fleet` of ``esd_pct`` % at every generator's HV bus,
     or None for no storage (``esd_pct`` None)."""
@@ -460,13 +452,3 @@ def _fault_row(path, line: int, row: dict) -> LineFault:
                          circuit=int(row.get("circuit") or 1))
     except (TypeError, ValueError) as exc:
         raise InputError(f"fault list {path} line {line}: {exc}") from None
-
-
-def default_faults(case_name: str) -> tuple[LineFault, ...]:
-    """`DEFAULT_FAULTS` of a built-in case; InputError for any other case."""
-    try:
-        return DEFAULT_FAULTS[case_name]
-    except KeyError:
-        raise InputError(f"no DEFAULT fault list for case '{case_name}' (there is one for "
-                         f"{', '.join(DEFAULT_FAULTS)}); give --faults FILE.csv") from None
-

@@ -13,11 +13,12 @@ from stabctl.io import load_case
 from stabctl.stability.cct import LineFault, critical_clearing_time
 from stabctl.dynamics.model import CONVENTIONS
 from stabctl.dynamics.simulation import Simulator
+from stabctl.studies.cases import PAPER_CASES
 
 #: Steps of the convergence table (s): 10, 5, 2.5, 1 and 0.5 ms.
 STEPS = (0.01, 0.005, 0.0025, 0.001, 0.0005)
 #: The paper's Case-1 (Kundur) and Case-2 (miniWECC) faults.
-PAPER_FAULTS = {"kundur": LineFault(3, 101, 1.0), "miniwecc": LineFault(83, 33, 1.0)}
+PAPER_FAULTS = {name: pc.fault for name, pc in PAPER_CASES.items()}
 
 
 def cct_versus_step(case_name: str, fault: LineFault, steps=STEPS,

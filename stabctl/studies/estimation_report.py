@@ -23,9 +23,11 @@ from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.estimation.pmu import PMUSettings
 from stabctl.dynamics.simulation import Simulator
+from stabctl.studies.cases import PAPER_CASES
 
-CASES = {"kundur": (3, 101, 7.0), "miniwecc": (83, 33, 4.0)}   # bus, far bus, cycles (RMSE):
-# faults well inside the CCT under the ieee conventions (Kundur 9.4 cycles, miniWECC 4.6)
+#: the paper's cases by case name; the RMSE runs clear after pc.cycles["estimation"]:
+#: faults well inside the CCT under the ieee conventions (Kundur 9.4 cycles, miniWECC 4.6)
+CASES = PAPER_CASES
 RATINGS = (5.0, 20.0)
 AMBIENT, AMBIENT_RUNS, AMBIENT_S = am.AmbientLoad(pct=1.0, tau_s=2.0), 5, 60.0
 
@@ -34,9 +36,10 @@ def case_figures(name: str, runs: int, cct_runs: int, records_dir: Path,
                  workers=None) -> dict:
     """RMSE, false actions and CCT table of one case (see the module docstring); the CCT
     sweep's resumable records go to records_dir."""
-    bus, far, cycles = CASES[name]
+    pc = CASES[name]
+    bus, far, cycles = pc.bus, pc.far_bus, pc.cycles["estimation"]
     case = load_case(name)
-    ev = fault_with_clearing(case, bus, far, 1.0, cycles)
+    ev = fault_with_clearing(case, bus, far, pc.fault.t_fault, cycles)
     res = Simulator(case).run([ev], t_end=10.0)
     window = (max(ev.times()) + 0.1, 10.0)
     rmse = study.monte_carlo(case, res, PMUSettings(), runs, 0, window)

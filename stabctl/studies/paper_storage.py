@@ -11,11 +11,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 from stabctl.plotting import figures as plotting
 from stabctl.io import load_case
-from stabctl.stability.cct import LineFault, cct_jobs, critical_clearing_time
+from stabctl.stability.cct import cct_jobs, critical_clearing_time
+from stabctl.studies.cases import CASE1, CASE2, PaperCase
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.simulation import Simulator
 from stabctl.storage.devices import BangBangCOI, uniform_fleet
@@ -26,19 +25,18 @@ RATINGS_PCT = (5, 10, 15, 20, 25, 30)
 #: generator power), as printed: 0, 5, 15, 20, 25, 30 % -> 0, 20, 40, 60, 60, 60 % (the
 #: paper gives no 10 % row; its text: "5% ... increased by 20%", the maximum reached at 20 %).
 PAPER_TABLE4 = {0: 0, 5: 20, 15: 40, 20: 60, 25: 60, 30: 60}
-CASES = {"case1": ("kundur", LineFault(3, 101, 1.0)),
-         "case2": ("miniwecc", LineFault(83, 33, 1.0))}
+CASES = {"case1": (CASE1.case, CASE1.fault), "case2": (CASE2.case, CASE2.fault)}
 
 
-def _run_pair(name, bus, far, cycles, pct, t_end, conventions="ieee", halve=False):
-    """The fault without and with pct % ESDs at the default step (at half of it with
-    halve), and the case."""
-    case = load_case(name)
+def _run_pair(pc: PaperCase, cycles, pct, conventions="ieee", halve=False):
+    """The paper case's fault cleared after `cycles`, without and with pct % ESDs at the
+    default step (at half of it with halve), and the case."""
+    case = load_case(pc.case)
     sim = Simulator(case, conventions=conventions)
     h = sim.default_h / 2 if halve else None
-    fault = [fault_with_clearing(case, bus, far, 1.0, cycles)]
-    return (sim.run(fault, t_end=t_end, h=h),
-            sim.run(fault, t_end=t_end, h=h, storage=uniform_fleet(case, pct)), case)
+    fault = [fault_with_clearing(case, pc.bus, pc.far_bus, pc.fault.t_fault, cycles)]
+    return (sim.run(fault, t_end=pc.t_end, h=h),
+            sim.run(fault, t_end=pc.t_end, h=h, storage=uniform_fleet(case, pct)), case)
 
 
 def _halved(pair, *args, **kw) -> str:
@@ -78,14 +76,15 @@ def section_case1(fig_dir: Path) -> str:
              "| conventions | clearing | ESD rating | without control | with control | "
              "verdicts at half the step |", "|---|---|---|---|---|---|"]
     runs = {}
-    for conv, cycles, pct in (("ieee", 21, 5), ("ieee", 21, 30), ("ieee", 11, 5),
-                              ("pstess", 21, 5), ("pstess", 21, 20), ("pstess", 17, 5)):
-        without, with_, case = _run_pair("kundur", 3, 101, cycles, pct, 8.0, conv)
+    paper, fig = CASE1.cycles["paper"], CASE1.cycles["figure"]
+    for conv, cycles, pct in (("ieee", paper, 5), ("ieee", paper, 30), ("ieee", fig, 5),
+                              ("pstess", paper, 5), ("pstess", paper, 20), ("pstess", 17, 5)):
+        without, with_, case = _run_pair(CASE1, cycles, pct, conv)
         runs[(conv, cycles, pct)] = (without, with_)
-        half = _halved((without, with_), "kundur", 3, 101, cycles, pct, 8.0, conv)
+        half = _halved((without, with_), CASE1, cycles, pct, conv)
         lines.append(f"| {conv} | {cycles} cycles | {pct} % | {_verdict(without)} | "
                      f"{_verdict(with_)} | {half} |")
-    without, with_ = runs[("ieee", 11, 5)]
+    without, with_ = runs[("ieee", fig, 5)]
     plotting.storage_case_figure(without, with_, fig_dir / "fig14_15_case1.png",
                                  "Case 1, Kundur, 11-cycle fault, 5 % ESDs (ieee conventions)")
     lines += ["", "The paper's 21-cycle fault is far beyond this model's critical clearing "
@@ -108,7 +107,7 @@ def section_case1(fig_dir: Path) -> str:
 
 def section_case2(fig_dir: Path) -> str:
     """Case 2 (miniWECC): the Colstrip unit without and with 5 % ESDs (Figs. 17-19)."""
-    without, with_, case = _run_pair("miniwecc", 83, 33, 6, 5, 10.0)
+    without, with_, case = _run_pair(CASE2, CASE2.cycles["figure"], 5)
     plotting.storage_case_figure(without, with_, fig_dir / "fig17_19_case2.png",
                                  "Case 2, miniWECC, 6-cycle fault at bus 83, 5 % ESDs "
                                  "(thick: machines 13 and 14, named by the paper)",
@@ -119,7 +118,7 @@ def section_case2(fig_dir: Path) -> str:
              f"- without control: {_verdict(without)}",
              f"- with control: {_verdict(with_)}",
              "- verdicts at half the step: "
-             + _halved((without, with_), "miniwecc", 83, 33, 6, 5, 10.0), "",
+             + _halved((without, with_), CASE2, CASE2.cycles["figure"], 5), "",
              "Only machine 14 (Colstrip, bus 32) separates without control, as in PSTess; the "
              "paper names machines 13 and 14. Devices that switched (the others stay inside "
              "the deadband):", ""]
@@ -156,7 +155,7 @@ def section_table4(fig_dir: Path, out_dir: Path, progress=None) -> str:
              "The energy and peak power columns are from a run of the case's fault (Case 1: 11 "
              "cycles, Case 2: 6 cycles) at that rating (what the paper does not give).", ""]
     results = {}
-    for key, cycles in (("case2", 6), ("case1", 11)):
+    for key, cycles in (("case2", CASE2.cycles["figure"]), ("case1", CASE1.cycles["figure"])):
         name, fault = CASES[key]
         res = results[key] = table4(key, out_dir)
         if progress is not None:

@@ -29,7 +29,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from stabctl.io import load_case  # noqa: E402
-from stabctl.stability.cct import DEFAULT_FAULTS, LineFault, cct_jobs  # noqa: E402
+from stabctl.stability.cct import LineFault, cct_jobs  # noqa: E402
+from stabctl.studies.cases import DEFAULT_FAULTS  # noqa: E402
 from stabctl.placement.program import candidate_sites  # noqa: E402
 from stabctl.placement.evaluation import Contingency  # noqa: E402
 from stabctl.placement.loop import baseline, evaluations, place  # noqa: E402
@@ -391,7 +392,7 @@ def _screening_text(d: dict) -> str:
 def placement_study(case_name: str, out_dir="reports", workers: int = 2, progress=None,
                     records_dir=None, generated_by: str = "stabctl paper") -> Path:
     """Run the study for one case (kundur or miniwecc: the paper's fault must be in
-    `stabctl.stability.cct.DEFAULT_FAULTS`) and write its report into out_dir; returns the markdown
+    `stabctl.studies.cases.DEFAULT_FAULTS`) and write its report into out_dir; returns the markdown
     path.  workers: processes; progress: callable(str) (default: stderr); records_dir:
     where the resumable screening records go (default out_dir); generated_by: the command
     the report names as its source.  Raises as
