@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.andes
 andes = pytest.importorskip("andes")
 
 from stabctl.io.andes import (AndesFault, andes_modes, andes_speeds,  # noqa: E402

@@ -22,16 +22,6 @@ CASE1 = LineFault(bus=3, far_bus=101, t_fault=1.0)   # paper Case 1: bus 3, line
 
 
 @pytest.fixture(scope="module")
-def kundur():
-    return Simulator(load_case("kundur"))
-
-
-@pytest.fixture(scope="module")
-def kundur_pstess():
-    return Simulator(load_case("kundur"), conventions="pstess")
-
-
-@pytest.fixture(scope="module")
 def case1(kundur):
     return critical_clearing_time(kundur, CASE1)
 

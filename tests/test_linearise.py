@@ -27,11 +27,6 @@ REGRESSION_FREQ_PCT, REGRESSION_DAMPING = 0.05, 1e-3   # we reach 3e-2 % / 2e-4:
 
 
 @pytest.fixture(scope="module")
-def kundur():
-    return Simulator(load_case("kundur"))
-
-
-@pytest.fixture(scope="module")
 def kundur_nopss():
     return Simulator(load_case("kundur").replace(pss=PssTable.empty()))
 

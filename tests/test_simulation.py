@@ -81,26 +81,6 @@ def check_agreement(err, record_property, label):
 
 
 @pytest.fixture(scope="module")
-def kundur():
-    return Simulator(load_case("kundur"))
-
-
-@pytest.fixture(scope="module")
-def wecc():
-    return Simulator(load_case("miniwecc"))
-
-
-@pytest.fixture(scope="module")
-def kundur_pstess():
-    return Simulator(load_case("kundur"), conventions="pstess")
-
-
-@pytest.fixture(scope="module")
-def wecc_pstess():
-    return Simulator(load_case("miniwecc"), conventions="pstess")
-
-
-@pytest.fixture(scope="module")
 def case1(kundur):
     """Paper Case 1 without storage: fault at PST bus 3 (Kundur bus 7) on line 3-101 at
     1 s, cleared after 21 cycles at both ends, the line tripped; 5 s."""

@@ -206,6 +206,7 @@ def test_scheduler_without_dask_is_a_clear_error(tmp_path, monkeypatch):
     assert not (tmp_path / "d.jsonl").exists()
 
 
+@pytest.mark.dask
 def test_dask_cluster(tmp_path):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=1, processes=False, dashboard_address=None) as c:
@@ -216,6 +217,7 @@ def test_dask_cluster(tmp_path):
     assert rep.records["boom/3"]["error"] == "ValueError: bad x = 3"
 
 
+@pytest.mark.dask
 def test_local_dask_cluster_records_a_dead_worker_as_failed_and_resumes(tmp_path):
     pytest.importorskip("distributed")
     out = tmp_path / "d.jsonl"
