@@ -11,7 +11,6 @@ import time
 import pytest
 from click.testing import CliRunner
 
-import stabctl
 from stabctl.studies.cases import DEFAULT_FAULTS
 from stabctl.stability.cct import LineFault, cached_simulator, cct_job, cct_jobs
 from stabctl.cli import main
@@ -288,14 +287,6 @@ def test_cli_sweep_cct_unknown_line_fails_before_any_job(tmp_path):
     res = run("sweep-cct", "kundur", "--faults", faults, "--out", tmp_path / "o.jsonl")
     assert res.exit_code == 2 and "no branch between bus 3 and bus 13" in res.stderr
     assert not (tmp_path / "o.jsonl").exists()
-
-
-def test_cli_sweep_cct_storage_missing(tmp_path, monkeypatch):
-    monkeypatch.delattr(stabctl, "storage", raising=False)
-    monkeypatch.setitem(sys.modules, "stabctl.storage.devices", None)
-    res = run("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "none,10",
-              "--out", tmp_path / "o.jsonl")
-    assert_bad_input(res, tmp_path, "storage not available yet")
 
 
 def test_ratings_parse_none_and_lists():
