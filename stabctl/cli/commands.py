@@ -829,7 +829,8 @@ def sweep_cct(case_name, faults_src, esd_pct, out_path, workers, scheduler, retr
       stabctl sweep-cct miniwecc --faults faults.csv --scheduler tcp://10.0.0.5:8786
     """
     from stabctl.io import load_case
-    from stabctl.stability.cct import cct_jobs, default_faults, read_faults, storage_fleet
+    from stabctl.stability.cct import cct_jobs, read_faults, storage_fleet
+    from stabctl.studies.cases import default_faults
     from stabctl.parallel import run_sweep
 
     settings = _cct_settings(tol_ms, t_max, tf)
@@ -1278,7 +1279,8 @@ def place(case_name, faults_src, target_cct_gain, zeta_min, max_sites, max_site_
     (the `error:` line names the contingency).
     """
     from stabctl.io import load_case
-    from stabctl.stability.cct import default_faults, read_faults
+    from stabctl.stability.cct import read_faults
+    from stabctl.studies.cases import default_faults
     from stabctl.placement.program import candidate_sites
     from stabctl.placement.loop import baseline, place as run_place, with_gain
     from stabctl.storage.devices import BangBangCOI
