@@ -149,9 +149,9 @@ class Family:
             if p.col != k + 1:
                 raise ValueError(f"{self.table}: parameter {p.name} declared as column {p.col}, "
                                  f"is column {k + 1}")
-        names = [p.name for p in self.params]
+        names = [p.name for p in self.params] + [p.alt for p in self.params if p.alt]
         if len(set(names)) != len(names):
-            raise ValueError(f"{self.table}: repeated parameter name")
+            raise ValueError(f"{self.table}: a parameter name or alternative name repeats")
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -208,7 +208,7 @@ class Family:
         Returns
         -------
         list of float
-            The row, ``len(params)`` long, PST column order.
+            The row, one value per declared column, PST column order.
         """
         row = [0.0] * len(self.params)
         vals = model.values(params)

@@ -8,8 +8,11 @@ Record syntax (PSS/E Program Operation Manual, "Dynamics Data File"): ``IBUS 'MO
 CON(J) ... CON(J+n) /`` over one or more lines, fields separated by blanks or commas;
 ICONs of IEEEG1 (JBUS, M), IEEEST (ICS, IB) and ST2CUT (MODE, BUSR, MODE2, BUSR2) come
 first among the numbers.  Parameter
-order per model: PSS/E Model Library (as ANDES `andes/io/psse-dyr.yaml`).  Mapping and
-the known modelling differences: docs/pst_models.md section 12.
+order per model (PSS/E Model Library, as ANDES `andes/io/psse-dyr.yaml`) and the table
+field each parameter is copied to are declared once, with the table columns, in
+`stabctl.case.params` (`DyrModel`); the mappers here only compute what is not a copy
+(unit changes, products, saturation fits, the PSS type).  Mapping and the known
+modelling differences: docs/pst_models.md section 12.
 
 Units: machine, exciter and governor data on the machine base `mbase` (MVA), as PSS/E.
 """

@@ -38,7 +38,7 @@ PACKED = (("KIND", "kind"), ("MAC", "mac"),
           *((_SUFFIX.get(n, n.upper()), n) for n in TABLE_FIELDS), ("NF", "nf"), ("FE", "fe"),
           *((f"FA{i}", f"fa_{i}") for i in range(4)), *((f"FC{i}", f"fc_{i}") for i in range(4)))
 globals().update(column_constants("S_", PACKED))      # S_KIND, S_MAC, S_KTW, ..., S_NCOL
-S_FA, S_FC = S_FA0, S_FC0                     # filter a_0..a_3, then c_0..c_3  # noqa: F821
+S_FA, S_FC = S_FA0, S_FC0                     # filter a_0..a_3, then c_0..c_3
 W_PSSE, LL_PSSE = 6, 7                        # type 3 washout and first lead-lag slots
 
 
