@@ -249,3 +249,83 @@ def test_case_layer_never_reads_shared():
         py = src / name
         text = py.read_text()
         assert not re.search(r"(\.\./|/work/)shared", text), py
+
+
+# -- one declaration per parameter (stabctl.case.params) ----------------------------------------
+
+from stabctl.case import params as decl  # noqa: E402
+from stabctl.models import exciters as exc_m  # noqa: E402
+from stabctl.models import governors as gov_m  # noqa: E402
+from stabctl.models import machines as mac_m  # noqa: E402
+from stabctl.models import pss as pss_m  # noqa: E402
+from stabctl.io import dyr as dyr_io  # noqa: E402
+
+DECLARED_TABLES = {"machines": MachineTable, "exciters": ExciterTable, "pss": PssTable,
+                   "governors": GovernorTable}
+
+
+@pytest.mark.parametrize("kind", sorted(DECLARED_TABLES))
+def test_tables_are_their_declaration(kind):
+    fam, cls = decl.FAMILIES[kind], DECLARED_TABLES[kind]
+    assert cls.columns() == fam.names == tuple(p.name for p in fam.params)
+    assert [p.col for p in fam.params] == list(range(1, len(fam.params) + 1))
+    assert (cls.TABLE, cls.MIN_COLUMNS, cls.FAMILY) == (fam.table, fam.min_columns, fam)
+    assert cls.INTEGER == tuple(p.name for p in fam.params if p.integer)
+    tab = cls.from_matrix(np.ones((1, fam.min_columns)))   # omitted columns: the defaults
+    for p in fam.params[fam.min_columns:]:
+        assert getattr(tab, p.name)[0] == p.default
+    for p in fam.params:
+        assert p.name in cls.__doc__                  # the docstring table comes from it
+
+
+@pytest.mark.parametrize("fam, table, row", [(decl.EXCITER, ExciterTable, EXC[0]),
+                                              (decl.PSS, PssTable, None),
+                                              (decl.GOVERNOR, GovernorTable, TG[0]),
+                                              (decl.MACHINE, MachineTable, MAC[0])])
+def test_declared_bound_violated_names_the_field(fam, table, row):
+    row = list(row if row is not None else [1, 1, 100, 10, 0.05, 0.01, 0.05, 0.01, 0.2, -0.05])
+    for p in [p for p in fam.params if p.lo is not None]:
+        bad = row + [0.0] * (len(fam.params) - len(row))
+        bad[p.col - 1] = p.lo - 1.0
+        with pytest.raises(CaseError, match=rf"{fam.table} row 1 \(machine 1\), field "
+                                            rf"'{p.name}': must be >= 0, got -1"):
+            table.from_matrix([bad])
+    for p in [p for p in fam.params if p.choices]:
+        bad = row + [0.0] * (len(fam.params) - len(row))
+        bad[p.col - 1] = 7
+        with pytest.raises(CaseError, match=rf"field '{p.name}': {p.label or p.name} must be "
+                                            r".* or .*, got 7"):
+            table.from_matrix([bad])
+
+
+def test_packed_kernel_columns_come_from_the_declaration():
+    case = load_case("kundur").replace(
+        exciters=ExciterTable.from_matrix([[3, 1] + list(np.arange(3.0, 21.0)) + [0, 0, 0, 0]]))
+    ep = exc_m.exciter_params(case)
+    P = ep.packed(np.zeros(1))
+    assert P.shape == (1, exc_m.E_NCOL) == (1, len(exc_m.PACKED))
+    for name in exc_m.TABLE_FIELDS:                # given columns as the table holds them
+        if name not in ("KP", "KA"):
+            assert P[0, getattr(exc_m, "E_" + name.upper())] == getattr(case.exciters, name)[0]
+            assert decl.EXCITER.param(name).col - 1 == getattr(exc_m, "E_" + name.upper())
+    gp = gov_m.governor_params(load_case("kundur"))
+    G = gp.packed(np.zeros(gp.n))
+    for name in gov_m.TABLE_FIELDS:
+        np.testing.assert_array_equal(G[:, getattr(gov_m, "G_" + name.upper())],
+                                      getattr(load_case("kundur").governors, name))
+        assert decl.GOVERNOR.col(name) - 1 == getattr(gov_m, "G_" + name.upper())
+    assert set(pss_m.TABLE_FIELDS) <= set(decl.PSS.names)
+    assert set(mac_m.TABLE_FIELDS) <= set(decl.MACHINE.names)
+
+
+def test_dyr_field_maps_come_from_the_declaration():
+    for fam in decl.FAMILIES.values():
+        for model in fam.dyr:
+            assert dyr_io.N_PARAMS[model.name] == len(model.fields)
+            assert dyr_io.DYR_MODELS[model.name] is model
+            for target in model.copy:                # every copy lands in a declared column
+                fam.col(target)
+            row = fam.dyr_row(model, np.arange(1.0, len(model.fields) + 1))
+            assert len(row) == len(fam.params)
+            for target, src in model.copy.items():
+                assert row[fam.col(target) - 1] == model.fields.index(src) + 1

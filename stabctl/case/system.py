@@ -38,6 +38,7 @@ from typing import ClassVar, Mapping
 
 import numpy as np
 
+from stabctl.case.params import EXCITER, GOVERNOR, MACHINE, PSS, Family, choices_message
 from stabctl.errors import CaseError, UnknownBusError
 
 __all__ = [
@@ -90,8 +91,13 @@ class Table:
     * ``KEY_LABEL`` -- what that field is called in messages ("bus", "machine"),
     * ``INTEGER`` -- fields that must hold integers (numbers, types).
 
+    The dynamic-data tables (machines, exciters, PSS, governors) get all of these, and
+    their fields, from a :class:`~stabctl.case.params.Family` declaration (``FAMILY``,
+    see :func:`_declared`), which also gives each column's bounds and allowed values.
+
     Raises :class:`CaseError` on construction if arrays differ in length, are not 1-D,
-    hold non-finite values, or an integer field holds a non-integer.
+    hold non-finite values, an integer field holds a non-integer, or a declared bound or
+    choice is violated.
     """
 
     TABLE: ClassVar[str] = "table"
@@ -100,6 +106,7 @@ class Table:
     KEY: ClassVar[str | None] = None
     KEY_LABEL: ClassVar[str] = ""
     INTEGER: ClassVar[tuple[str, ...]] = ()
+    FAMILY: ClassVar[Family | None] = None
 
     def __post_init__(self):
         n = None
@@ -126,6 +133,7 @@ class Table:
                 bad = np.flatnonzero(arr != np.round(arr))
                 if bad.size:
                     self._fail(bad[0], name, f"must be an integer, got {arr[bad[0]]}")
+        self._check_declared()
         self._check()
 
     # -- construction ---------------------------------------------------------------
@@ -233,8 +241,49 @@ class Table:
                     self._fail(i, fld, f"duplicate {what} {_fmt(v)} (first at row {seen[v] + 1})")
                 seen[v] = i
 
+    def _check_declared(self):
+        """The declared choices and bounds of ``FAMILY``, in column order."""
+        for p in self.FAMILY.params if self.FAMILY else ():
+            arr = getattr(self, p.name)
+            if p.choices:
+                self._require(np.isin(arr, p.choices), p.name, choices_message(p))
+            if p.lo is not None:
+                self._require(arr >= p.lo, p.name, f"must be >= {_fmt(p.lo)}")
+            if p.hi is not None:
+                self._require(arr <= p.hi, p.name, f"must be <= {_fmt(p.hi)}")
+
     def _check(self):
         """Table-local validation (subclasses)."""
+
+
+def _declared(family: Family):
+    """Class decorator: a frozen :class:`Table` dataclass whose fields, column order and
+    class constants come from ``family``.
+
+    Parameters
+    ----------
+    family : Family
+        The declaration (:mod:`stabctl.case.params`): one ``np.ndarray`` field per
+        :class:`~stabctl.case.params.Param` in column order; ``TABLE``, ``MIN_COLUMNS``,
+        ``DEFAULTS``, ``KEY``, ``KEY_LABEL``, ``INTEGER`` and ``FAMILY`` set from it; the
+        ``{columns}`` mark of the class docstring replaced by the declaration's column
+        table.
+
+    Returns
+    -------
+    callable
+        The decorator.
+    """
+    def wrap(cls):
+        own = dict(cls.__dict__.get("__annotations__", {}))
+        cls.__annotations__ = {**{p.name: "np.ndarray" for p in family.params}, **own}
+        cls.TABLE, cls.MIN_COLUMNS, cls.FAMILY = family.table, family.min_columns, family
+        cls.DEFAULTS, cls.INTEGER = family.defaults, family.integer
+        cls.KEY, cls.KEY_LABEL = family.key, family.key_label
+        if cls.__doc__:
+            cls.__doc__ = cls.__doc__.replace("{columns}", family.rst_table())
+        return dataclass(frozen=True, eq=False)(cls)
+    return wrap
 
 
 def _as_matrix(matrix, table: str) -> np.ndarray:
@@ -373,80 +422,21 @@ class BranchTable(Table):
         self._require(self.from_bus != self.to_bus, "to_bus", "branch must join two different buses")
 
 
-@dataclass(frozen=True, eq=False)
+@_declared(MACHINE)
 class MachineTable(Table):
-    """Synchronous machine data: PST ``mac_con`` (PST manual section 3.22 Table 10).
+    """Synchronous machine data: PST ``mac_con`` (PST manual section 3.22 Table 10), plus
+    stabctl's column 24 ``speed_effects`` for subtransient machines: 1 (PST ``mac_sub``)
+    the stator voltage is proportional to rotor speed and the torque is Pm/omega; 0 speed
+    1 in both (ANDES's GENROU/GENSAL, which have no speed effects; docs/pst_models.md
+    1.5-1.6).  Columns (declared in :data:`stabctl.case.params.MACHINE`; reactances on the
+    machine base):
 
-    ==  ==========  ===============================================================
-    1   number      machine number
-    2   bus         bus number
-    3   mva         machine base, MVA
-    4   xl          leakage reactance, pu on machine base
-    5   ra          armature resistance, pu
-    6   xd          d-axis synchronous reactance, pu (0: classical model)
-    7   xdp         d-axis transient reactance x'd, pu
-    8   xdpp        d-axis subtransient reactance x"d, pu (0: transient model)
-    9   Tdop        d-axis open-circuit transient time constant T'do, s
-    10  Tdopp       d-axis open-circuit subtransient time constant T"do, s
-    11  xq          q-axis synchronous reactance, pu
-    12  xqp         q-axis transient reactance x'q, pu
-    13  xqpp        q-axis subtransient reactance x"q, pu
-    14  Tqop        q-axis open-circuit transient time constant T'qo, s (0 kept as 0)
-    15  Tqopp       q-axis open-circuit subtransient time constant T"qo, s
-    16  H           inertia constant, s (MW s / MVA on machine base)
-    17  D0          local damping coefficient d_o, pu
-    18  D1          system damping coefficient d_1, pu
-    19  col19       column 19, "bus number" in the manual; unused by PSTess (the data
-                    files put the machine number there); kept as given
-    20  S10         saturation factor S(1.0)
-    21  S12         saturation factor S(1.2)
-    22  pfrac       fraction of the bus generation P taken by this machine
-    23  qfrac       fraction of the bus generation Q taken by this machine
-    24  speed_effects  stabctl's column for subtransient machines: 1 (PST ``mac_sub``)
-                    the stator voltage is proportional to rotor speed and the torque is
-                    Pm/omega; 0 speed 1 in both (ANDES's GENROU/GENSAL, which have no
-                    speed effects; docs/pst_models.md 1.5-1.6)
-    ==  ==========  ===============================================================
+{columns}
 
     Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``).
     Validation: unique positive integer machine numbers, mva > 0, H > 0, reactances and
     ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), speed_effects 0 or 1.
     """
-
-    number: np.ndarray
-    bus: np.ndarray
-    mva: np.ndarray
-    xl: np.ndarray
-    ra: np.ndarray
-    xd: np.ndarray
-    xdp: np.ndarray
-    xdpp: np.ndarray
-    Tdop: np.ndarray
-    Tdopp: np.ndarray
-    xq: np.ndarray
-    xqp: np.ndarray
-    xqpp: np.ndarray
-    Tqop: np.ndarray
-    Tqopp: np.ndarray
-    H: np.ndarray
-    D0: np.ndarray
-    D1: np.ndarray
-    col19: np.ndarray
-    S10: np.ndarray
-    S12: np.ndarray
-    pfrac: np.ndarray
-    qfrac: np.ndarray
-    speed_effects: np.ndarray
-
-    TABLE: ClassVar[str] = "mac_con"
-    MIN_COLUMNS: ClassVar[int] = 16
-    DEFAULTS: ClassVar[Mapping[str, float]] = {"pfrac": 1.0, "qfrac": 1.0, "speed_effects": 1.0}
-    KEY: ClassVar[str] = "number"
-    KEY_LABEL: ClassVar[str] = "machine"
-    INTEGER: ClassVar[tuple[str, ...]] = ("number", "bus")
-
-    REACTANCES: ClassVar[tuple[str, ...]] = ("xl", "ra", "xd", "xdp", "xdpp", "xq", "xqp", "xqpp")
-    TIME_CONSTANTS: ClassVar[tuple[str, ...]] = ("Tdop", "Tdopp", "Tqop", "Tqopp")
 
     def _check(self):
         self._require(self.number > 0, "number", "machine number must be a positive integer")
@@ -454,9 +444,6 @@ class MachineTable(Table):
         self._require(self.mva > 0, "mva", "machine base must be > 0")
         self._require(self.H > 0, "H", "inertia constant must be > 0 s (H = 0, an "
                       "infinite bus, is not modelled)")
-        self._require(np.isin(self.speed_effects, (0.0, 1.0)), "speed_effects",
-                      "speed_effects must be 0 or 1")
-        self._nonnegative(*self.REACTANCES, *self.TIME_CONSTANTS)
         # the open-circuit time constants a machine's model divides by (x_d = 0: classical,
         # none; x"d = 0: transient, T'do; else subtransient, T'do and T"do); T'qo, T"qo of 0
         # mean "no such circuit" (PST)
@@ -466,198 +453,55 @@ class MachineTable(Table):
                       "T\"do must be > 0 s for a subtransient machine (x\"d > 0)")
 
 
-@dataclass(frozen=True, eq=False)
+@_declared(EXCITER)
 class ExciterTable(Table):
     """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3),
     plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4) and
     23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3).
+    Columns (declared in :data:`stabctl.case.params.EXCITER`):
 
-    ==  ======  =======================================================================
-    1   type    0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1
-    2   machine machine number
-    3   TR      input filter time constant, s
-    4   KA      voltage regulator gain
-    5   TA      voltage regulator time constant, s
-    6   TB      transient gain reduction time constant, s
-    7   TC      transient gain reduction time constant, s
-    8   Vrmax   maximum regulator output, pu
-    9   Vrmin   minimum regulator output, pu
-    10  VImax   ST3: max internal signal, pu       | DC1/2: KE exciter constant
-    11  VImin   ST3: min internal signal, pu       | DC1/2: TE exciter time constant, s
-    12  KJ      ST3: first stage regulator gain    | DC1/2: E1, pu
-    13  KP      ST3: potential circuit gain        | DC1/2: SE(E1)
-    14  thetaP  ST3: potential circuit angle, deg  | DC1/2: E2, pu
-    15  KI      ST3: current circuit gain          | DC1/2: SE(E2)
-    16  XL      ST3: potential source reactance, pu| DC1/2: KF stabilizer gain
-    17  KC      ST3: rectifier loading factor      | DC1/2: TF stabilizer time constant, s
-    18  Efdmax  ST3: maximum field voltage, pu
-    19  KG      ST3: inner loop feedback constant
-    20  VGmax   ST3: maximum inner loop feedback, pu
-    21  KF      EXST1: rate feedback gain
-    22  TF      EXST1: rate feedback time constant, s
-    23  dc_sat  DC1/2: saturation through (E1, SE1), (E2, SE2): 0 PST's exponential
-                SE(E) = A exp(B |E|), 1 the quadratic SE(E) E = B (E - A)^2 above A
-                (PSS/E, ANDES)
-    24  ke_given DC1/2: 0 K_E = 0 is computed so that V_R starts at 0 (PST, PSS/E);
-                1 K_E is used as given (ANDES)
-    ==  ======  =======================================================================
+{columns}
 
-    Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2); use
-    ``col(k)`` for those.  EXST1 (type 4) uses columns 3-11 and KC (17) as named, with
-    Vrmax, Vrmin its output limits (times V_t) and KF, TF (21, 22).  Omitted trailing
-    columns are 0 (a simple exciter needs 9).  Validation: type in {0, 1, 2, 3, 4}, one
-    exciter per machine, TR, TA, TB >= 0 (machine existence is checked by :class:`Case`).
+    Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2; their
+    names there are the declaration's ``alt`` names KE, TE, E1, SE1, E2, SE2, KF_dc,
+    TF_dc); use ``col(k)`` for those.  EXST1 (type 4) uses columns 3-11 and KC (17) as
+    named, with Vrmax, Vrmin its output limits (times V_t) and KF, TF (21, 22).  Omitted
+    trailing columns are 0 (a simple exciter needs 9).  Validation: type in {0, 1, 2, 3,
+    4}, one exciter per machine, TR, TA, TB >= 0, dc_sat and ke_given 0 or 1 (machine
+    existence is checked by :class:`Case`).
     """
 
-    type: np.ndarray
-    machine: np.ndarray
-    TR: np.ndarray
-    KA: np.ndarray
-    TA: np.ndarray
-    TB: np.ndarray
-    TC: np.ndarray
-    Vrmax: np.ndarray
-    Vrmin: np.ndarray
-    VImax: np.ndarray
-    VImin: np.ndarray
-    KJ: np.ndarray
-    KP: np.ndarray
-    thetaP: np.ndarray
-    KI: np.ndarray
-    XL: np.ndarray
-    KC: np.ndarray
-    Efdmax: np.ndarray
-    KG: np.ndarray
-    VGmax: np.ndarray
-    KF: np.ndarray
-    TF: np.ndarray
-    dc_sat: np.ndarray
-    ke_given: np.ndarray
-
-    TABLE: ClassVar[str] = "exc_con"
-    MIN_COLUMNS: ClassVar[int] = 9
-    KEY: ClassVar[str] = "machine"
-    KEY_LABEL: ClassVar[str] = "machine"
-    INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine")
-
     def _check(self):
-        self._require(np.isin(self.type, (0, 1, 2, 3, 4)), "type",
-                      "exciter type must be 0, 1, 2, 3 or 4")
         self._unique("machine", "exciter on machine")
-        self._nonnegative("TR", "TA", "TB")  # filter and lag constants
-        for name in ("dc_sat", "ke_given"):
-            self._require(np.isin(getattr(self, name), (0.0, 1.0)), name, f"{name} must be 0 or 1")
 
 
-@dataclass(frozen=True, eq=False)
+@_declared(PSS)
 class PssTable(Table):
     """Power system stabilizer data: PST ``pss_con``, 10 columns (PST manual 3.30 Table 13),
     extended by stabctl with type 3, the PSS/E stabilisers IEEEST and ST2CUT
-    (docs/pst_models.md 3.1).
+    (docs/pst_models.md 3.1).  Columns (declared in :data:`stabctl.case.params.PSS`):
 
-    ==  =======  ==================================================================
-    1   type     1 PST pss, speed input; 2 PST pss, electrical power input; 3 PSS/E
-    2   machine  machine number
-    3   KTw      gain times washout time constant (K*Tw); type 3: washout gain K_w
-    4   Tw       washout time constant, s
-    5   T1       first lead time constant, s
-    6   T2       first lag time constant, s
-    7   T3       second lead time constant, s
-    8   T4       second lag time constant, s
-    9   ymax     maximum output, pu
-    10  ymin     minimum output, pu
-    11  T5       type 3: third lead time constant, s
-    12  T6       type 3: third lag time constant, s
-    13  input1   type 3: first input, PSS/E code (1 speed deviation, 3 electrical power)
-    14  K1       type 3: first input gain
-    15  Tr1      type 3: first input transducer time constant, s
-    16  input2   type 3: second input, PSS/E code (0 none)
-    17  K2       type 3: second input gain
-    18  Tr2      type 3: second input transducer time constant, s
-    19  A1       type 3: filter (1 + A5 s + A6 s^2)/((1 + A1 s + A2 s^2)(1 + A3 s + A4 s^2))
-    20  A2
-    21  A3
-    22  A4
-    23  A5
-    24  A6
-    ==  =======  ==================================================================
+{columns}
 
     Omitted columns are 0.  Validation: type in {1, 2, 3}, one PSS per machine, washout and
     lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0, Tw > 0, T2 > 0 for types 1 and 2.
     """
 
-    type: np.ndarray
-    machine: np.ndarray
-    KTw: np.ndarray
-    Tw: np.ndarray
-    T1: np.ndarray
-    T2: np.ndarray
-    T3: np.ndarray
-    T4: np.ndarray
-    ymax: np.ndarray
-    ymin: np.ndarray
-    T5: np.ndarray
-    T6: np.ndarray
-    input1: np.ndarray
-    K1: np.ndarray
-    Tr1: np.ndarray
-    input2: np.ndarray
-    K2: np.ndarray
-    Tr2: np.ndarray
-    A1: np.ndarray
-    A2: np.ndarray
-    A3: np.ndarray
-    A4: np.ndarray
-    A5: np.ndarray
-    A6: np.ndarray
-
-    TABLE: ClassVar[str] = "pss_con"
-    MIN_COLUMNS: ClassVar[int] = 10
-    KEY: ClassVar[str] = "machine"
-    KEY_LABEL: ClassVar[str] = "machine"
-    INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine", "input1", "input2")
-
     def _check(self):
-        self._require(np.isin(self.type, (1, 2, 3)), "type", "pss type must be 1, 2 or 3")
         self._unique("machine", "pss on machine")
-        self._nonnegative("Tw", "T2", "T4", "T6", "Tr1", "Tr2")  # washout and lag constants
         self._require(self.Tw > 0, "Tw", "washout time constant must be > 0 s")
         self._require((self.type == 3) | (self.T2 > 0), "T2",
                       "first lag time constant must be > 0 s for PST's pss (types 1, 2)")
 
 
-@dataclass(frozen=True, eq=False)
+@_declared(GOVERNOR)
 class GovernorTable(Table):
     """Turbine-governor data: PST ``tg_con`` (PST manual 3.45, ``tg``), extended by stabctl
     with the PSS/E ``TGOV1`` and ``IEEEG1`` models (PSS/E Model Library; equations in
-    docs/pst_models.md section 4).
+    docs/pst_models.md section 4).  Columns (declared in
+    :data:`stabctl.case.params.GOVERNOR`; powers on the machine base):
 
-    ==  =======  =========================================================================
-    1   type     1 PST tg, 2 TGOV1, 3 IEEEG1
-    2   machine  machine number
-    3   wf       speed set point, pu
-    4   invR     steady-state gain 1/R (IEEEG1: K), pu on machine base
-    5   Tmax     maximum power order (TGOV1: VMAX, IEEEG1: PMAX), pu on machine base
-    6   Ts       servo time constant (TGOV1: T1; IEEEG1: T3, gate servo), s
-    7   Tc       governor lag time constant (TGOV1: T3; IEEEG1: T1), s
-    8   T3       transient gain (lead) time constant (TGOV1: T2; IEEEG1: T2), s
-    9   T4       HP section time constant (IEEEG1: T4, steam chest), s
-    10  T5       reheater time constant (IEEEG1: T5), s
-    11  Tmin     minimum power order (tg: 0 as PST; TGOV1: VMIN; IEEEG1: PMIN), pu
-    12  Dt       turbine damping (TGOV1), pu power / pu speed on machine base
-    13  T6       IEEEG1 third turbine time constant, s
-    14  T7       IEEEG1 fourth turbine time constant, s
-    15  Uo       IEEEG1 maximum valve opening rate, pu/s
-    16  Uc       IEEEG1 maximum valve closing rate (< 0), pu/s
-    17  K1       IEEEG1 fraction of power after T4 (HP shaft)
-    18  K2       IEEEG1 fraction of power after T4 (LP shaft)
-    19  K3       IEEEG1 fraction after T5 (HP)
-    20  K4       IEEEG1 fraction after T5 (LP)
-    21  K5       IEEEG1 fraction after T6 (HP)
-    22  K6       IEEEG1 fraction after T6 (LP)
-    23  K7       IEEEG1 fraction after T7 (HP)
-    24  K8       IEEEG1 fraction after T7 (LP)
-    ==  =======  =========================================================================
+{columns}
 
     PST files give 10 columns; the omitted ones are 0 (Tmin = 0 is PST tg's lower clip).
     Validation: type in {1, 2, 3}, one governor per machine, lag time constants Ts, Tc,
@@ -665,41 +509,8 @@ class GovernorTable(Table):
     T4 = -1).
     """
 
-    type: np.ndarray
-    machine: np.ndarray
-    wf: np.ndarray
-    invR: np.ndarray
-    Tmax: np.ndarray
-    Ts: np.ndarray
-    Tc: np.ndarray
-    T3: np.ndarray
-    T4: np.ndarray
-    T5: np.ndarray
-    Tmin: np.ndarray
-    Dt: np.ndarray
-    T6: np.ndarray
-    T7: np.ndarray
-    Uo: np.ndarray
-    Uc: np.ndarray
-    K1: np.ndarray
-    K2: np.ndarray
-    K3: np.ndarray
-    K4: np.ndarray
-    K5: np.ndarray
-    K6: np.ndarray
-    K7: np.ndarray
-    K8: np.ndarray
-
-    TABLE: ClassVar[str] = "tg_con"
-    MIN_COLUMNS: ClassVar[int] = 10
-    KEY: ClassVar[str] = "machine"
-    KEY_LABEL: ClassVar[str] = "machine"
-    INTEGER: ClassVar[tuple[str, ...]] = ("type", "machine")
-
     def _check(self):
-        self._require(np.isin(self.type, (1, 2, 3)), "type", "governor type must be 1, 2 or 3")
         self._unique("machine", "governor on machine")
-        self._nonnegative("Ts", "Tc", "T5", "T6", "T7")  # T3, T4 are leads: T4 < 0 is hydro
 
 
 @dataclass(frozen=True, eq=False)

@@ -8,8 +8,11 @@ Record syntax (PSS/E Program Operation Manual, "Dynamics Data File"): ``IBUS 'MO
 CON(J) ... CON(J+n) /`` over one or more lines, fields separated by blanks or commas;
 ICONs of IEEEG1 (JBUS, M), IEEEST (ICS, IB) and ST2CUT (MODE, BUSR, MODE2, BUSR2) come
 first among the numbers.  Parameter
-order per model: PSS/E Model Library (as ANDES `andes/io/psse-dyr.yaml`).  Mapping and
-the known modelling differences: docs/pst_models.md section 12.
+order per model (PSS/E Model Library, as ANDES `andes/io/psse-dyr.yaml`) and the table
+field each parameter is copied to are declared once, with the table columns, in
+`stabctl.case.params` (`DyrModel`); the mappers here only compute what is not a copy
+(unit changes, products, saturation fits, the PSS type).  Mapping and the known
+modelling differences: docs/pst_models.md section 12.
 
 Units: machine, exciter and governor data on the machine base `mbase` (MVA), as PSS/E.
 """
@@ -23,14 +26,17 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable
+from stabctl.case.params import EXCITER, GOVERNOR, MACHINE, PSS, DyrModel, Family
 from stabctl.errors import CaseError
 
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
+#: table kind -> the declaration of its columns and DYR models (stabctl.case.params)
+FAMILY: dict[str, Family] = {"machine": MACHINE, "exciter": EXCITER, "pss": PSS,
+                             "governor": GOVERNOR}
+#: DYR model -> its declaration (parameter names and order, fields copied to the table)
+DYR_MODELS: dict[str, DyrModel] = {m.name: m for f in FAMILY.values() for m in f.dyr}
 #: numbers after the id per model (PSS/E Model Library: ICONs, then CONs)
-N_PARAMS = {"GENROU": 14, "GENSAL": 12, "GENCLS": 2, "SEXS": 6, "IEEEX1": 16, "EXDC2": 16,
-            "ESDC2A": 16, "EXST1": 12, "ESST3A": 21, "IEEEST": 19, "ST2CUT": 20, "TGOV1": 7,
-            "IEEEG1": 22}
+N_PARAMS = {name: len(m.fields) for name, m in DYR_MODELS.items()}
 
 
 @dataclass(frozen=True)
@@ -215,7 +221,7 @@ def _map_records(records, generators, conventions):
             skipped.append((rec, str(why)))
             continue
         if kind == "machine" and andes:
-            row[MachineTable.columns().index("speed_effects")] = 0.0
+            row[MACHINE.col("speed_effects") - 1] = 0.0
         number = int(gen["number"])
         if number in rows[kind]:
             raise CaseError(f"{rec.label()}: second {kind} model for this generator (first at "
@@ -252,7 +258,7 @@ def _set_fractions(generators, machines) -> None:
         if any("pg" not in g or "qg" not in g for g in gs):
             raise CaseError(f"bus {bus} has {len(gs)} generators: give 'pg' and 'qg' of each to "
                             "split the bus generation (mac_con pfrac, qfrac)")
-        for key, col in (("pg", 21), ("qg", 22)):
+        for key, col in (("pg", MACHINE.col("pfrac") - 1), ("qg", MACHINE.col("qfrac") - 1)):
             total = sum(float(g[key]) for g in gs)
             for g in gs:
                 share = float(g[key]) / total if total else 1.0 / len(gs)
@@ -267,13 +273,12 @@ def _matrix(rows: dict, width: int) -> np.ndarray | None:
 
 # -- machines (PST mac_con, MachineTable) -----------------------------------------------------
 
-def _mac_row(gen, **cols) -> list:
-    row = [0.0] * len(MachineTable.columns())
+def _mac_row(rec, gen, **cols) -> list:
+    """mac_con row of a machine record: the declared copies (stabctl.case.params.MACHINE),
+    the RAW data (number, bus, mbase, ra) and ``cols``."""
     cols.update(number=gen["number"], bus=gen["bus"], mva=gen["mbase"], ra=gen["ra"],
                 col19=gen["number"], pfrac=1.0, qfrac=1.0, speed_effects=1.0)
-    for name, v in cols.items():
-        row[MachineTable.columns().index(name)] = float(v)
-    return row
+    return MACHINE.dyr_row(DYR_MODELS[rec.model], rec.params, **cols)
 
 
 def _positive_h(rec, H) -> None:
@@ -285,43 +290,40 @@ def _positive_h(rec, H) -> None:
 def _genrou(rec, gen):
     """GENROU: T'do T''do T'qo T''qo H D Xd Xq X'd X'q X''d Xl S(1.0) S(1.2) -> mac_sub
     with x''q = x''d (as PSS/E)."""
-    Tdop, Tdopp, Tqop, Tqopp, H, D, xd, xq, xdp, xqp, xdpp, xl, S10, S12 = rec.params
-    _positive_h(rec, H)
-    return _mac_row(gen, xl=xl, xd=xd, xdp=xdp, xdpp=xdpp, Tdop=Tdop, Tdopp=Tdopp, xq=xq,
-                    xqp=xqp, xqpp=xdpp, Tqop=Tqop, Tqopp=Tqopp, H=H, D0=D, S10=S10, S12=S12)
+    v = DYR_MODELS["GENROU"].values(rec.params)
+    _positive_h(rec, v["H"])
+    return _mac_row(rec, gen, xqpp=v["X''d"])
 
 
 def _gensal(rec, gen):
     """GENSAL: T'do T''do T''qo H D Xd Xq X'd X''d Xl S(1.0) S(1.2) -> mac_sub without the
     q-axis transient circuit: x'q = x_q, T'qo = 0 (E'd stays 0, docs 12.1)."""
-    Tdop, Tdopp, Tqopp, H, D, xd, xq, xdp, xdpp, xl, S10, S12 = rec.params
-    _positive_h(rec, H)
-    return _mac_row(gen, xl=xl, xd=xd, xdp=xdp, xdpp=xdpp, Tdop=Tdop, Tdopp=Tdopp, xq=xq,
-                    xqp=xq, xqpp=xdpp, Tqop=0.0, Tqopp=Tqopp, H=H, D0=D, S10=S10, S12=S12)
+    v = DYR_MODELS["GENSAL"].values(rec.params)
+    _positive_h(rec, v["H"])
+    return _mac_row(rec, gen, xqp=v["Xq"], xqpp=v["X''d"], Tqop=0.0)
 
 
 def _gencls(rec, gen):
     """GENCLS: H D -> PST classical mac_em (x_d = 0) behind x'd = ZSORCE X."""
-    H, D = rec.params
-    _positive_h(rec, H)
-    return _mac_row(gen, xdp=gen["xsource"], H=H, D0=D)
+    _positive_h(rec, DYR_MODELS["GENCLS"].values(rec.params)["H"])
+    return _mac_row(rec, gen, xdp=gen["xsource"])
 
 
 # -- exciters (PST exc_con, ExciterTable) ------------------------------------------------------
 
-def _exc_row(gen, kind, vals: dict) -> list:
-    row = [0.0] * len(ExciterTable.columns())
-    row[0], row[1] = kind, gen["number"]
-    for col, v in vals.items():
-        row[col - 1] = float(v)
-    return row
+def _exc_row(rec, gen, model=None, **cols) -> list:
+    """exc_con row of an exciter record: type and copies as declared for ``model`` (default
+    the record's; stabctl.case.params.EXCITER), the machine number and ``cols`` (table
+    names or the DC exciters' ``alt`` names)."""
+    return EXCITER.dyr_row(model or DYR_MODELS[rec.model], rec.params,
+                           machine=gen["number"], **cols)
 
 
 def _sexs(rec, gen):
     """SEXS: TA/TB TB K TE EMIN EMAX -> smpexc (type 0): lead-lag T_C = (TA/TB) TB over
     T_B, K_A = K, T_A = TE, limits [EMIN, EMAX] (PST's limiter, docs 12.2)."""
-    TATB, TB, K, TE, EMIN, EMAX = rec.params
-    return _exc_row(gen, 0, {4: K, 5: TE, 6: TB, 7: TATB * TB, 8: EMAX, 9: EMIN})
+    v = DYR_MODELS["SEXS"].values(rec.params)
+    return _exc_row(rec, gen, TC=v["TA/TB"] * v["TB"])
 
 
 def exp_saturation(E1, SE1, E2, SE2) -> tuple[float, float]:
@@ -340,35 +342,37 @@ def exp_saturation(E1, SE1, E2, SE2) -> tuple[float, float]:
 VRMAX_UNLIMITED = 999.0
 
 
-def _dc(kind, zero_vrmax_unlimited=False, andes=False):
+def _dc(model, zero_vrmax_unlimited=False, andes=False):
+    """Mapper of a DC exciter record read as DYR model ``model`` (its PST type)."""
+    decl = DYR_MODELS[model]
+
     def mapper(rec, gen):
         """IEEEX1 (DC1, type 1) / EXDC2, ESDC2A (DC2, type 2): TR KA TA TB TC VRMAX VRMIN KE
         TE KF TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; saturation as Asat, Bsat (E2
         column 0); K_E = 0 is computed at initialisation (V_R0 = 0, docs 2.3).  andes: the
         quadratic saturation through the points and K_E as given (exc_con columns 23, 24)."""
-        TR, KA, TA, TB, TC, VRMAX, VRMIN, KE, TE, KF, TF, switch, E1, SE1, E2, SE2 = rec.params
-        if zero_vrmax_unlimited and VRMAX == 0:
-            VRMAX = VRMAX_UNLIMITED
-        if switch != 0:
-            raise _Unsupported(f"Switch = {switch} is not modelled (only 0)")
-        cols = {3: TR, 4: KA, 5: TA, 6: TB, 7: TC, 8: VRMAX, 9: VRMIN, 10: KE, 11: TE, 16: KF,
-                17: TF}
+        v = decl.values(rec.params)
+        cols = {}
+        if zero_vrmax_unlimited and v["VRMAX"] == 0:
+            cols["Vrmax"] = VRMAX_UNLIMITED
+        if v["Switch"] != 0:
+            raise _Unsupported(f"Switch = {v['Switch']} is not modelled (only 0)")
+        points = (v["E1"], v["SE(E1)"], v["E2"], v["SE(E2)"])
         if andes:
-            return _exc_row(gen, kind, {**cols, 12: E1, 13: SE1, 14: E2, 15: SE2, 23: 1, 24: 1})
+            return _exc_row(rec, gen, decl, **cols, **dict(zip(("E1", "SE1", "E2", "SE2"),
+                                                               points)), dc_sat=1, ke_given=1)
         try:
-            A, B = exp_saturation(E1, SE1, E2, SE2)
+            A, B = exp_saturation(*points)
         except CaseError as exc:
             raise CaseError(f"{rec.label()}: {exc}") from None
-        return _exc_row(gen, kind, {**cols, 13: A, 14: 0.0, 15: B})
+        return _exc_row(rec, gen, decl, **cols, SE1=A, E2=0.0, SE2=B)
     return mapper
 
 
 def _exst1(rec, gen):
     """EXST1: TR VIMAX VIMIN TC TB KA TA VRMAX VRMIN KC KF TF -> stabctl type 4 (columns
-    as ExciterTable: VImax, VImin 10-11, KC 17, KF, TF 21-22)."""
-    TR, VIMAX, VIMIN, TC, TB, KA, TA, VRMAX, VRMIN, KC, KF, TF = rec.params
-    return _exc_row(gen, 4, {3: TR, 4: KA, 5: TA, 6: TB, 7: TC, 8: VRMAX, 9: VRMIN, 10: VIMAX,
-                             11: VIMIN, 17: KC, 21: KF, 22: TF})
+    as declared: VImax, VImin 10-11, KC 17, KF, TF 21-22)."""
+    return _exc_row(rec, gen)
 
 
 def _esst3a(rec, gen):
@@ -377,24 +381,19 @@ def _esst3a(rec, gen):
     loop KM/(1 + s TM) limited [VMMIN, VMMAX] is PST's K_A/(1 + s T_A) limited [Vrmin,
     Vrmax]; VRMAX/VRMIN and VBMAX have no PST counterpart (Efdmax = VBMAX VMMAX; docs
     12.2)."""
-    (TR, VIMAX, VIMIN, KM, TC, TB, KA, TA, VRMAX, VRMIN, KG, KP, KI, VBMAX, KC, XL, VGMAX,
-     THETAP, TM, VMMAX, VMMIN) = rec.params
-    if TA >= 1e-3:
-        raise _Unsupported(f"TA = {TA:g} s: the regulator lag before the inner loop has no PST "
-                           "exc_st3 counterpart (only TA = 0)")
-    return _exc_row(gen, 3, {3: TR, 4: KM, 5: TM, 6: TB, 7: TC, 8: VMMAX, 9: VMMIN, 10: VIMAX,
-                             11: VIMIN, 12: KA, 13: KP, 14: THETAP, 15: KI, 16: XL, 17: KC,
-                             18: VBMAX * VMMAX, 19: KG, 20: VGMAX})
+    v = DYR_MODELS["ESST3A"].values(rec.params)
+    if v["TA"] >= 1e-3:
+        raise _Unsupported(f"TA = {v['TA']:g} s: the regulator lag before the inner loop has "
+                           "no PST exc_st3 counterpart (only TA = 0)")
+    return _exc_row(rec, gen, Efdmax=v["VBMAX"] * v["VMMAX"])
 
 
 # -- PSS (PST pss_con, PssTable) ----------------------------------------------------------------
 
-def _pss_row(gen, **cols) -> list:
-    row = [0.0] * len(PssTable.columns())
-    cols.update(machine=gen["number"])
-    for name, v in cols.items():
-        row[PssTable.columns().index(name)] = float(v)
-    return row
+def _pss_row(rec, gen, **cols) -> list:
+    """pss_con row of a PSS record: the declared copies (stabctl.case.params.PSS), the
+    machine number and ``cols``."""
+    return PSS.dyr_row(DYR_MODELS[rec.model], rec.params, machine=gen["number"], **cols)
 
 
 def _local_inputs(*pairs) -> None:
@@ -416,71 +415,67 @@ def _ieeest(rec, gen):
     power) when exactly equivalent (A1..A6 = 0, a lead-lag with lag >= 1e-3 s): washout
     KS sT5/(1 + sT6) = K_Tw s/(1 + s T_w), K_Tw = KS T5, T_w = T6; else stabctl's PSS/E
     stabiliser (type 3).  VCU/VCL cut-off unsupported (docs 12.3)."""
-    ics, ib, *A, T1, T2, T3, T4, T5, T6, KS, LSMAX, LSMIN, VCU, VCL = rec.params
-    _local_inputs((ics, ib))
-    _washout(T5, T6)
-    if ics == 0 or VCU or VCL:
+    v = DYR_MODELS["IEEEST"].values(rec.params)
+    ics, A = v["ICS"], [v[f"A{k}"] for k in range(1, 7)]
+    _local_inputs((ics, v["IB"]))
+    _washout(v["T5"], v["T6"])
+    if ics == 0 or v["VCU"] or v["VCL"]:
         raise _Unsupported("no input (ICS 0) or VCU/VCL cut-off")
-    stages = [(a, b) for a, b in ((T1, T2), (T3, T4)) if a or b]
+    KTw = v["KS"] * v["T5"]
+    lead_lags = [(v[a], v[b]) for a, b in (("T1", "T2"), ("T3", "T4"))]
+    stages = [(a, b) for a, b in lead_lags if a or b]
     if not any(A) and stages and all(b >= 1e-3 for _, b in stages):
         (a1, b1), (a2, b2) = (stages + [(0.0, 0.0)])[:2]
-        return _pss_row(gen, type={1.0: 1, 3.0: 2}[ics], KTw=KS * T5, Tw=T6, T1=a1, T2=b1,
-                        T3=a2, T4=b2, ymax=LSMAX, ymin=LSMIN)
-    return _pss_row(gen, type=3, input1=ics, K1=1.0, KTw=KS * T5, Tw=T6, T1=T1, T2=T2, T3=T3,
-                    T4=T4, ymax=LSMAX, ymin=LSMIN, **dict(zip(("A1", "A2", "A3", "A4", "A5",
-                                                                "A6"), A)))
+        return _pss_row(rec, gen, type={1.0: 1, 3.0: 2}[ics], KTw=KTw, T1=a1, T2=b1, T3=a2,
+                        T4=b2)
+    (a1, b1), (a2, b2) = lead_lags
+    return _pss_row(rec, gen, type=3, input1=ics, K1=1.0, KTw=KTw, T1=a1, T2=b1, T3=a2, T4=b2,
+                    **{f"A{k}": a for k, a in enumerate(A, 1)})
 
 
 def _st2cut(rec, gen):
     """ST2CUT: MODE BUSR MODE2 BUSR2 K1 K2 T1..T10 LSMAX LSMIN VCU VCL -> stabctl's PSS/E
     stabiliser (type 3): K1/(1 + sT1) + K2/(1 + sT2) inputs, washout sT3/(1 + sT4), lead-lags
     T5/T6, T7/T8, T9/T10.  VCU/VCL cut-off unsupported."""
-    (mode, busr, mode2, busr2, K1, K2, T1, T2, T3, T4, T5, T6, T7, T8, T9, T10, LSMAX, LSMIN,
-     VCU, VCL) = rec.params
-    _local_inputs((mode, busr), (mode2, busr2))
-    _washout(T3, T4)
-    if mode == 0 or VCU or VCL:
+    v = DYR_MODELS["ST2CUT"].values(rec.params)
+    _local_inputs((v["MODE"], v["BUSR"]), (v["MODE2"], v["BUSR2"]))
+    _washout(v["T3"], v["T4"])
+    if v["MODE"] == 0 or v["VCU"] or v["VCL"]:
         raise _Unsupported("no first input (MODE 0) or VCU/VCL cut-off")
-    return _pss_row(gen, type=3, input1=mode, K1=K1, Tr1=T1, input2=mode2, K2=K2, Tr2=T2,
-                    KTw=T3, Tw=T4, T1=T5, T2=T6, T3=T7, T4=T8, T5=T9, T6=T10, ymax=LSMAX,
-                    ymin=LSMIN)
+    return _pss_row(rec, gen)
 
 
 # -- governors (PST tg_con, GovernorTable) ----------------------------------------------------
 
-def _tg_row(gen, kind, **cols) -> list:
-    row = [0.0] * len(GovernorTable.columns())
-    cols.update(type=kind, machine=gen["number"], wf=1.0)
-    for name, v in cols.items():
-        row[GovernorTable.columns().index(name)] = float(v)
-    return row
+def _tg_row(rec, gen, **cols) -> list:
+    """tg_con row of a governor record: type and copies as declared
+    (stabctl.case.params.GOVERNOR), the machine number, speed set point 1 and ``cols``."""
+    return GOVERNOR.dyr_row(DYR_MODELS[rec.model], rec.params, machine=gen["number"], wf=1.0,
+                            **cols)
 
 
 def _tgov1(rec, gen):
     """TGOV1: R T1 VMAX VMIN T2 T3 Dt -> tg_con type 2 (1/R, valve T1 with non-windup
     [VMIN, VMAX], lead-lag T2/T3, damping Dt)."""
-    R, T1, VMAX, VMIN, T2, T3, Dt = rec.params
+    R = DYR_MODELS["TGOV1"].values(rec.params)["R"]
     if R <= 0:
         raise CaseError(f"{rec.label()}: droop R = {R} must be > 0")
-    return _tg_row(gen, 2, invR=1 / R, Tmax=VMAX, Tmin=VMIN, Ts=T1, Tc=T3, T3=T2, Dt=Dt)
+    return _tg_row(rec, gen, invR=1 / R)
 
 
 def _ieeeg1(rec, gen):
     """IEEEG1: JBUS M K T1 T2 T3 Uo Uc PMAX PMIN T4 K1 K2 T5 K3 K4 T6 K5 K6 T7 K7 K8 ->
     tg_con type 3 (HP and LP powers summed on the one shaft; JBUS must be 0)."""
-    jbus, _m, K, T1, T2, T3, Uo, Uc, PMAX, PMIN, T4, K1, K2, T5, K3, K4, T6, K5, K6, T7, K7, K8 \
-        = rec.params
+    jbus = DYR_MODELS["IEEEG1"].values(rec.params)["JBUS"]
     if jbus != 0:
         raise _Unsupported(f"cross-compound unit (JBUS = {jbus:g}): LP shaft on another machine")
-    return _tg_row(gen, 3, invR=K, Tc=T1, T3=T2, Ts=T3, Uo=Uo, Uc=Uc, Tmax=PMAX, Tmin=PMIN,
-                   T4=T4, T5=T5, T6=T6, T7=T7, K1=K1, K2=K2, K3=K3, K4=K4, K5=K5, K6=K6,
-                   K7=K7, K8=K8)
+    return _tg_row(rec, gen)
 
 
 _MAPPERS = {
     "machine": {"GENROU": _genrou, "GENSAL": _gensal, "GENCLS": _gencls},
-    "exciter": {"SEXS": _sexs, "IEEEX1": _dc(1), "EXDC2": _dc(2),
-                "ESDC2A": _dc(2, zero_vrmax_unlimited=True), "EXST1": _exst1,
+    "exciter": {"SEXS": _sexs, "IEEEX1": _dc("IEEEX1"), "EXDC2": _dc("EXDC2"),
+                "ESDC2A": _dc("ESDC2A", zero_vrmax_unlimited=True), "EXST1": _exst1,
                 "ESST3A": _esst3a},
     "pss": {"IEEEST": _ieeest, "ST2CUT": _st2cut},
     "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1},
@@ -494,7 +489,7 @@ def _ieeeg1_andes(rec, gen):
     row = _ieeeg1(rec, gen)
     scale = gen.get("sbase", 100.0) / gen["mbase"]
     for name in ("Uo", "Uc"):
-        row[GovernorTable.columns().index(name)] *= scale
+        row[GOVERNOR.col(name) - 1] *= scale
     return row
 
 
@@ -502,8 +497,8 @@ def _esdc2a_andes(rec, gen):
     """ESDC2A as ANDES 2.0 solves it: quadratic saturation, K_E as given, and its voltage
     error taken from the bus voltage itself, not the transducer lag (``vi = vref - v -
     WF_y``), i.e. T_R = 0."""
-    row = _dc(2, zero_vrmax_unlimited=True, andes=True)(rec, gen)
-    row[2] = 0.0                                   # exc_con column 3, TR
+    row = _dc("ESDC2A", zero_vrmax_unlimited=True, andes=True)(rec, gen)
+    row[EXCITER.col("TR") - 1] = 0.0
     return row
 
 
@@ -512,8 +507,7 @@ def _esdc2a_andes(rec, gen):
 #: terminal voltage as PSS/E's and IEEE DC2, while its IEEEX1 scales them by the terminal
 #: voltage (``ieeex1.py``: ``VRMAX * v``, so PST's DC2, not DC1); its ESDC2A bypasses T_R;
 #: its IEEEG1 rate limits are on the system base
-_ANDES_MAPPERS = {"IEEEX1": _dc(2, andes=True), "EXDC2": _dc(1, andes=True),
+_ANDES_MAPPERS = {"IEEEX1": _dc("EXDC2", andes=True), "EXDC2": _dc("IEEEX1", andes=True),
                   "ESDC2A": _esdc2a_andes, "IEEEG1": _ieeeg1_andes}
 CONVENTIONS = ("pst", "andes")
-_WIDTH = {"machine": len(MachineTable.columns()), "exciter": len(ExciterTable.columns()),
-          "pss": len(PssTable.columns()), "governor": len(GovernorTable.columns())}
+_WIDTH = {kind: len(family.params) for kind, family in FAMILY.items()}

@@ -12,13 +12,15 @@ V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f).  Units: pu on the machine base; ti
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 from stabctl._jitcache import njit
 
 from stabctl.case import Case, beyond
+from stabctl.case.params import EXCITER
 from stabctl.errors import CaseError
+from stabctl.models._declared import column_constants, pack, params_class
 
 LBND = 1e-3
 SMP, DC1, DC2, ST3, ST1 = 0, 1, 2, 3, 4
@@ -26,39 +28,33 @@ STATE_NAMES = {SMP: ("VTR", "VAs", "Efd"), ST3: ("VTR", "VAs", "VR"),
                DC1: ("VTR", "VAs", "VR", "Efd", "Rf"), DC2: ("VTR", "VAs", "VR", "Efd", "Rf"),
                ST1: ("VTR", "VAs", "VR", "Rf")}
 
-# columns of the packed parameter matrix used by the compiled kernels
-(E_KIND, E_MAC, E_TR, E_KA, E_TA, E_TB, E_TC, E_VRMAX, E_VRMIN, E_VIMAX, E_VIMIN, E_KJ,
- E_KPR, E_KPI, E_KI, E_XL, E_KC, E_EFDMAX, E_KG, E_VGMAX, E_TCTB, E_KE, E_TE, E_ASAT, E_BSAT,
- E_KF, E_TF, E_VREF, E_SATQ, E_NCOL) = range(30)
+#: exc_con fields (stabctl.case.params.EXCITER) the kernels take as the table gives them:
+#: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P))
+TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] if n != "thetaP")
+#: the packed parameter matrix of the compiled kernels, (constant suffix, ExciterParams
+#: attribute) per column: exc_con columns 1-20 in declared order (the machine's row for
+#: the machine number, K_P exp(j theta_P) as its real and imaginary parts), then the
+#: derived parameters and V_ref; the constants E_<suffix> are generated from it
+PACKED = (("KIND", "kind"), ("MAC", "mac"),
+          *((n.upper(), n) for n in TABLE_FIELDS[:TABLE_FIELDS.index("KP")]),
+          ("KPR", "KP.real"), ("KPI", "KP.imag"),
+          *((n.upper(), n) for n in TABLE_FIELDS[TABLE_FIELDS.index("KP") + 1:]),
+          ("TCTB", "tc_tb"), ("KE", "KE"), ("TE", "TE"), ("ASAT", "Asat"), ("BSAT", "Bsat"),
+          ("KF", "KF"), ("TF", "TF"), ("VREF", "Vref"), ("SATQ", "sat_quadratic"))
+globals().update(column_constants("E_", PACKED))      # E_KIND, E_MAC, E_TR, ..., E_NCOL
 
 
-@dataclass(frozen=True, eq=False)
+@params_class(("kind", "mac"), TABLE_FIELDS)
 class ExciterParams:
-    """Exciter data of a case, arrays of shape (n_exc,); `mac` is the machine index.
+    """Exciter data of a case, arrays of shape (n_exc,): ``kind`` the exc_con type,
+    ``mac`` the machine's row (index), then the exc_con fields :data:`TABLE_FIELDS` under
+    their declared names (stabctl.case.params.EXCITER; KP the complex K_P exp(j
+    theta_P), KA = 0 read as 1 for the regulated types), then the derived fields below.
     DC exciters (types 1, 2): KE, TE and the saturation SE(E) = Asat exp(Bsat |E|), or
     with sat_quadratic SE(E) E = Bsat (E - Asat)^2 above Asat (0 for the other types);
     ke_given: KE used as given (else 0 means computed at initialisation); KF, TF: rate
     feedback of the DC exciters and EXST1."""
 
-    kind: np.ndarray
-    mac: np.ndarray
-    TR: np.ndarray
-    KA: np.ndarray
-    TA: np.ndarray
-    TB: np.ndarray
-    TC: np.ndarray
-    Vrmax: np.ndarray
-    Vrmin: np.ndarray
-    VImax: np.ndarray
-    VImin: np.ndarray
-    KJ: np.ndarray
-    KP: np.ndarray  # complex K_P exp(j theta_P)
-    KI: np.ndarray
-    XL: np.ndarray
-    KC: np.ndarray
-    Efdmax: np.ndarray
-    KG: np.ndarray
-    VGmax: np.ndarray
     KE: np.ndarray
     TE: np.ndarray
     Asat: np.ndarray
@@ -73,13 +69,9 @@ class ExciterParams:
         return self.kind.size
 
     def packed(self, Vref: np.ndarray) -> np.ndarray:
-        """Parameter matrix (n_exc, E_NCOL) for the compiled kernels, with Vref."""
-        cols = (self.kind, self.mac, self.TR, self.KA, self.TA, self.TB, self.TC, self.Vrmax,
-                self.Vrmin, self.VImax, self.VImin, self.KJ, self.KP.real, self.KP.imag,
-                self.KI, self.XL, self.KC, self.Efdmax, self.KG, self.VGmax, self.tc_tb,
-                self.KE, self.TE, self.Asat, self.Bsat, self.KF, self.TF, Vref,
-                self.sat_quadratic)
-        return np.column_stack([np.asarray(c, float) for c in cols]).reshape(self.n, E_NCOL)
+        """Parameter matrix (n_exc, E_NCOL) for the compiled kernels, with Vref, columns
+        as :data:`PACKED`."""
+        return pack(self, PACKED, Vref=Vref)
 
     @property
     def has_TR(self):
@@ -138,7 +130,7 @@ def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
     A, B = _exponential_fit(e)
     quad = e.dc_sat == 1
     if quad.any():
-        Aq, Bq = _quadratic_fit(e.col(12), e.col(13), e.col(14), e.col(15), quad)
+        Aq, Bq = _quadratic_fit(*_dc_points(e), quad)
         A, B = np.where(quad, Aq, A), np.where(quad, Bq, B)
     return A, B
 
@@ -158,8 +150,19 @@ def _quadratic_fit(E1, SE1, E2, SE2, rows):
     return np.where(off, 0.0, A), np.where(off, 0.0, B)
 
 
+def _dc(e, name: str) -> np.ndarray:
+    """exc_con column of a DC exciter quantity by its PST manual 3.11 Table 2 name (the
+    declaration's ``alt`` name: KE, TE, E1, SE1, E2, SE2, KF_dc, TF_dc)."""
+    return e.col(EXCITER.col(name))
+
+
+def _dc_points(e):
+    """The DC exciters' saturation points E1, SE1, E2, SE2 (exc_con columns 12-15)."""
+    return tuple(_dc(e, name) for name in ("E1", "SE1", "E2", "SE2"))
+
+
 def _exponential_fit(e):
-    E1, SE1, E2, SE2 = e.col(12), e.col(13), e.col(14), e.col(15)
+    E1, SE1, E2, SE2 = _dc_points(e)
     fit = (E2 != 0) & (e.dc_sat == 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         B = np.where(fit, np.log(SE2 * E2 / (SE1 * E1)) / (E2 - E1), SE2)
@@ -175,12 +178,13 @@ def _exponential_fit(e):
 def _check_dc(e) -> None:
     """DC exciter and EXST1 options stabctl does not model: raise CaseError naming row and
     field (T_A, T_E, T_F must exist; Vrmax = 0 is PST's 'compute it')."""
-    need = {DC1: (("TA", 5), ("TE", 11), ("TF", 17)), DC2: (("TA", 5), ("TE", 11), ("TF", 17)),
-            ST1: (("TA", 5),)}
+    dc = (("TA", "TA"), ("TE", "TE"), ("TF", "TF_dc"))      # (name in messages, declared)
+    need = {DC1: dc, DC2: dc, ST1: (("TA", "TA"),)}
     for r in np.nonzero(np.isin(e.type, (DC1, DC2, ST1)))[0]:
         kind = int(e.type[r])
-        extra = (("TF", 22),) if kind == ST1 and e.KF[r] != 0 else ()
-        for name, k in need[kind] + extra:
+        extra = (("TF", "TF"),) if kind == ST1 and e.KF[r] != 0 else ()
+        for name, declared in need[kind] + extra:
+            k = EXCITER.col(declared)
             if e.col(k)[r] < LBND:
                 raise CaseError(f"exc_con row {r + 1}, field '{name}' (column {k}): exciter "
                                 f"type {kind} needs {name} >= {LBND} s")
@@ -196,16 +200,14 @@ def exciter_params(case: Case) -> ExciterParams:
     A, B = _dc_saturation(e)
     dc = (e.type == DC1) | (e.type == DC2)
     KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
+    given = {n: getattr(e, n).copy() for n in TABLE_FIELDS}
+    given.update(KA=KA, KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)))
     return ExciterParams(
         kind=e.type.astype(int), mac=np.array([case.machine_index(m) for m in e.machine], int),
-        TR=e.TR.copy(), KA=KA, TA=e.TA.copy(), TB=e.TB.copy(), TC=e.TC.copy(),
-        Vrmax=e.Vrmax.copy(), Vrmin=e.Vrmin.copy(), VImax=e.VImax.copy(), VImin=e.VImin.copy(),
-        KJ=e.KJ.copy(), KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)), KI=e.KI.copy(),
-        XL=e.XL.copy(), KC=e.KC.copy(), Efdmax=e.Efdmax.copy(), KG=e.KG.copy(),
-        VGmax=e.VGmax.copy(), KE=np.where(dc, e.col(10), 0.0), TE=np.where(dc, e.col(11), 0.0),
+        **given, KE=np.where(dc, _dc(e, "KE"), 0.0), TE=np.where(dc, _dc(e, "TE"), 0.0),
         Asat=np.where(dc, A, 0.0), Bsat=np.where(dc, B, 0.0),
-        KF=np.where(dc, e.col(16), np.where(e.type == ST1, e.KF, 0.0)),
-        TF=np.where(dc, e.col(17), np.where(e.type == ST1, e.TF, 0.0)),
+        KF=np.where(dc, _dc(e, "KF_dc"), np.where(e.type == ST1, e.KF, 0.0)),
+        TF=np.where(dc, _dc(e, "TF_dc"), np.where(e.type == ST1, e.TF, 0.0)),
         sat_quadratic=dc & (e.dc_sat == 1), ke_given=dc & (e.ke_given == 1))
 
 

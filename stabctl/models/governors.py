@@ -18,13 +18,13 @@ type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from stabctl._jitcache import njit
 
 from stabctl.case import Case, beyond
+from stabctl.case.params import GOVERNOR
 from stabctl.errors import CaseError
+from stabctl.models._declared import column_constants, pack, params_class
 
 LBND = 1e-3
 TG, TGOV1, IEEEG1 = 1, 2, 3
@@ -32,31 +32,23 @@ N_STATES = 6
 STATE_NAMES = {TG: ("servo", "transient", "turbine"),
                TGOV1: ("valve", "leadlag"),
                IEEEG1: ("leadlag", "gate", "T4lag", "T5lag", "T6lag", "T7lag")}
-(G_KIND, G_MAC, G_WF, G_INVR, G_TMAX, G_TS, G_TC, G_T3, G_T4, G_T5, G_TMIN, G_DT, G_T6,
- G_T7, G_UO, G_UC, G_KA, G_KB, G_KC, G_KD, G_PREF, G_NCOL) = range(22)
+#: tg_con fields (stabctl.case.params.GOVERNOR) the kernels take as given: columns 3-16
+#: (the IEEEG1 fractions K1..K8 enter summed per shaft stage, K)
+TABLE_FIELDS = GOVERNOR.names[2:16]
+#: packed parameter matrix of the kernels, (constant suffix, GovernorParams attribute) per
+#: column: tg_con columns 1-16 in declared order, K's four columns, P_ref; constants G_<suffix>
+PACKED = (("KIND", "kind"), ("MAC", "mac"), *((n.upper(), n) for n in TABLE_FIELDS),
+          *((f"K{s}", f"K_{i}") for i, s in enumerate("ABCD")), ("PREF", "Pref"))
+globals().update(column_constants("G_", PACKED))      # G_KIND, G_MAC, G_WF, ..., G_NCOL
 
 
-@dataclass(frozen=True, eq=False)
+@params_class(("kind", "mac"), TABLE_FIELDS)
 class GovernorParams:
-    """Governor data, arrays of shape (n_tg,) (tg_con columns, GovernorTable); `mac` is
-    the machine index; K (n_tg, 4): IEEEG1 K1+K2, K3+K4, K5+K6, K7+K8."""
+    """Governor data, arrays of shape (n_tg,): ``kind`` the tg_con type, ``mac`` the
+    machine's row (index), the tg_con fields :data:`TABLE_FIELDS` under their declared
+    names (stabctl.case.params.GOVERNOR); K (n_tg, 4): IEEEG1 K1+K2, K3+K4, K5+K6,
+    K7+K8."""
 
-    kind: np.ndarray
-    mac: np.ndarray
-    wf: np.ndarray
-    invR: np.ndarray
-    Tmax: np.ndarray
-    Ts: np.ndarray
-    Tc: np.ndarray
-    T3: np.ndarray
-    T4: np.ndarray
-    T5: np.ndarray
-    Tmin: np.ndarray
-    Dt: np.ndarray
-    T6: np.ndarray
-    T7: np.ndarray
-    Uo: np.ndarray
-    Uc: np.ndarray
     K: np.ndarray
 
     @property
@@ -64,11 +56,9 @@ class GovernorParams:
         return self.mac.size
 
     def packed(self, Pref: np.ndarray) -> np.ndarray:
-        """Parameter matrix (n_tg, G_NCOL) for the compiled kernels, with P_ref."""
-        cols = (self.kind, self.mac, self.wf, self.invR, self.Tmax, self.Ts, self.Tc, self.T3,
-                self.T4, self.T5, self.Tmin, self.Dt, self.T6, self.T7, self.Uo, self.Uc,
-                *self.K.T, Pref)
-        return np.column_stack([np.asarray(c, float) for c in cols]).reshape(self.n, G_NCOL)
+        """Parameter matrix (n_tg, G_NCOL) for the compiled kernels, with P_ref, columns
+        as :data:`PACKED`."""
+        return pack(self, PACKED, Pref=Pref, **{f"K_{i}": self.K[:, i] for i in range(4)})
 
     def n_slots(self) -> int:
         """State slots per governor: the most any governor of the case uses (3 if none)."""
@@ -115,9 +105,7 @@ def governor_params(case: Case) -> GovernorParams:
                         "must sum to > 0")
     return GovernorParams(
         kind=g.type.astype(int), mac=np.array([case.machine_index(m) for m in g.machine], int),
-        wf=g.wf.copy(), invR=g.invR.copy(), Tmax=g.Tmax.copy(), Ts=g.Ts.copy(), Tc=g.Tc.copy(),
-        T3=g.T3.copy(), T4=g.T4.copy(), T5=g.T5.copy(), Tmin=g.Tmin.copy(), Dt=g.Dt.copy(),
-        T6=g.T6.copy(), T7=g.T7.copy(), Uo=g.Uo.copy(), Uc=g.Uc.copy(), K=K)
+        **{n: getattr(g, n).copy() for n in TABLE_FIELDS}, K=K)
 
 
 def initialise(p: GovernorParams, pmech0):

@@ -14,51 +14,43 @@ psi_kq; `mac_tra` uses the first four, `mac_em` the first two (the others stay c
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from stabctl._jitcache import njit
 
 from stabctl.case import Case
+from stabctl.case.params import MACHINE
+from stabctl.models._declared import column_constants, pack, params_class
 
 SUB, TRA, EM = 2, 1, 0
 STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
 
-# columns of the packed parameter matrix used by the compiled kernels
-(K_KIND, K_POT, K_RA, K_XL, K_XD, K_XDP, K_XDPP, K_XQ, K_XQP, K_XQPP, K_TDOP, K_TDOPP,
- K_TQOP, K_TQOPP, K_H, K_D0, K_P6, K_P7, K_P8, K_P9, K_P10, K_P11, K_P12, K_P13, K_P14,
- K_P15, K_SA, K_SB, K_SC, K_EQP0, K_SPEED, K_NCOL) = range(32)
+#: mac_con fields (stabctl.case.params.MACHINE) of MachineParams: columns 4-17 (xl .. D0,
+#: after PST's substitutions) and the generation fractions pfrac, qfrac (22, 23)
+TABLE_FIELDS = (*MACHINE.names[MACHINE.col("xl") - 1:MACHINE.col("D0")], "pfrac", "qfrac")
+#: packed parameter matrix of the kernels, (constant suffix, MachineParams attribute) per
+#: column: kind, mac_pot, mac_con columns 4-17 in declared order, PST's derived constants
+#: (mac_pot columns 6-15), saturation, initial E'q, speed effects; constants K_<suffix>
+PACKED = (("KIND", "kind"), ("POT", "mac_pot"),
+          *((n.upper(), n) for n in TABLE_FIELDS[:-2]),
+          *((f"P{k}", f"p{k}") for k in range(6, 16)),
+          ("SA", "sat_a"), ("SB", "sat_b"), ("SC", "sat_c"), ("EQP0", "eqp0"),
+          ("SPEED", "speed_effects"))
+globals().update(column_constants("K_", PACKED))      # K_KIND, K_POT, K_XL, ..., K_NCOL
 
 
-@dataclass(frozen=True, eq=False)
+@params_class(("kind", "bus_idx", "mac_pot"), TABLE_FIELDS)
 class MachineParams:
     """Machine data after PST's substitutions, arrays of shape (n_mac,).
 
     `kind` is SUB/TRA/EM as PST's `mac_indx` chooses it: x_d = 0 -> classical; x"_d = 0 ->
     transient; otherwise subtransient.  Substitutions (docs/pst_models.md 1.2, 1.8):
     subtransient x"_q := x"_d, T'qo = 0 -> 999, T"qo = 0 -> 999 with x'_q := x"_q;
-    transient x'_q := x'_d, T'qo = 0 -> 999.
+    transient x'_q := x'_d, T'qo = 0 -> 999.  Fields: ``kind``, ``bus_idx`` (the bus's
+    row), ``mac_pot`` (system base / machine base), the mac_con fields
+    :data:`TABLE_FIELDS` under their declared names (stabctl.case.params.MACHINE), then
+    the derived ones below.
     """
 
-    kind: np.ndarray
-    bus_idx: np.ndarray
-    mac_pot: np.ndarray
-    ra: np.ndarray
-    xl: np.ndarray
-    xd: np.ndarray
-    xdp: np.ndarray
-    xdpp: np.ndarray
-    xq: np.ndarray
-    xqp: np.ndarray
-    xqpp: np.ndarray
-    Tdop: np.ndarray
-    Tdopp: np.ndarray
-    Tqop: np.ndarray
-    Tqopp: np.ndarray
-    H: np.ndarray
-    D0: np.ndarray
-    pfrac: np.ndarray
-    qfrac: np.ndarray
     sat: np.ndarray  # (n_mac, 3) quadratic saturation a, b, c
     basrad: float
     speed_effects: np.ndarray  # bool: subtransient with speed in stator voltage and torque
@@ -73,18 +65,8 @@ class MachineParams:
             return self._packed(eqp0)
 
     def _packed(self, eqp0):
-        cols = {K_KIND: self.kind, K_POT: self.mac_pot, K_RA: self.ra, K_XL: self.xl,
-                K_XD: self.xd, K_XDP: self.xdp, K_XDPP: self.xdpp, K_XQ: self.xq,
-                K_XQP: self.xqp, K_XQPP: self.xqpp, K_TDOP: self.Tdop, K_TDOPP: self.Tdopp,
-                K_TQOP: self.Tqop, K_TQOPP: self.Tqopp, K_H: self.H, K_D0: self.D0,
-                K_P6: self.p6, K_P7: self.p7, K_P8: self.p8, K_P9: self.p9, K_P10: self.p10,
-                K_P11: self.p11, K_P12: self.p12, K_P13: self.p13, K_P14: self.p14,
-                K_P15: self.p15, K_SA: self.sat[:, 0], K_SB: self.sat[:, 1],
-                K_SC: self.sat[:, 2], K_EQP0: eqp0, K_SPEED: self.speed_effects}
-        P = np.zeros((self.n, K_NCOL))
-        for k, v in cols.items():
-            P[:, k] = np.nan_to_num(np.asarray(v, float))
-        return P
+        sat = {f"sat_{c}": self.sat[:, k] for k, c in enumerate("abc")}
+        return np.nan_to_num(pack(self, PACKED, eqp0=eqp0, **sat))
 
     @property
     def x_network(self) -> np.ndarray:

@@ -13,13 +13,13 @@ the same machine.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from stabctl._jitcache import njit
 
 from stabctl.case import Case
+from stabctl.case.params import PSS
 from stabctl.errors import CaseError
+from stabctl.models._declared import column_constants, pack, params_class
 
 LBND = 1e-3
 PST_SPEED, PST_POWER, PSSE = 1, 2, 3
@@ -28,37 +28,28 @@ STATE_NAMES = {PST_SPEED: ("washout", "leadlag1", "leadlag2"),
                PST_POWER: ("washout", "leadlag1", "leadlag2"),
                PSSE: ("lag1", "lag2", "filter1", "filter2", "filter3", "filter4", "washout",
                       "leadlag1", "leadlag2", "leadlag3")}
-(S_KIND, S_MAC, S_KTW, S_TW, S_T1, S_T2, S_T3, S_T4, S_MAX, S_MIN, S_T5, S_T6, S_IN1, S_K1,
- S_TR1, S_IN2, S_K2, S_TR2, S_NF, S_FE, S_FA) = range(21)
-S_FC = S_FA + 4                               # filter a_0..a_3, then c_0..c_3
-S_NCOL = S_FC + 4
+#: pss_con fields (stabctl.case.params.PSS) the kernels take: columns 3-18 (type 3's
+#: filter A1..A6 enters as its canonical form nf, fe, fa, fc)
+TABLE_FIELDS = PSS.names[2:18]
+#: packed parameter matrix of the kernels, (constant suffix, PssParams attribute) per
+#: column: pss_con columns 1-18 in declared order, then the filter; constants S_<suffix>
+_SUFFIX = {"ymax": "MAX", "ymin": "MIN", "input1": "IN1", "input2": "IN2"}
+PACKED = (("KIND", "kind"), ("MAC", "mac"),
+          *((_SUFFIX.get(n, n.upper()), n) for n in TABLE_FIELDS), ("NF", "nf"), ("FE", "fe"),
+          *((f"FA{i}", f"fa_{i}") for i in range(4)), *((f"FC{i}", f"fc_{i}") for i in range(4)))
+globals().update(column_constants("S_", PACKED))      # S_KIND, S_MAC, S_KTW, ..., S_NCOL
+S_FA, S_FC = S_FA0, S_FC0                     # filter a_0..a_3, then c_0..c_3
 W_PSSE, LL_PSSE = 6, 7                        # type 3 washout and first lead-lag slots
 
 
-@dataclass(frozen=True, eq=False)
+@params_class(("kind", "mac"), TABLE_FIELDS)
 class PssParams:
-    """PSS data, arrays of shape (n_pss,); `mac` is the machine index.  Type 3: the filter
-    in controllable canonical form of order nf (<= 4): fa (n, 4) the monic denominator
+    """PSS data, arrays of shape (n_pss,): ``kind`` the pss_con type, ``mac`` the machine's
+    row (index), the pss_con fields :data:`TABLE_FIELDS` under their declared names
+    (stabctl.case.params.PSS; input1, input2 0 for types 1, 2).  Type 3: the filter in
+    controllable canonical form of order nf (<= 4): fa (n, 4) the monic denominator
     coefficients a_0..a_3, fc (n, 4) output coefficients, fe the feedthrough."""
 
-    kind: np.ndarray
-    mac: np.ndarray
-    KTw: np.ndarray
-    Tw: np.ndarray
-    T1: np.ndarray
-    T2: np.ndarray
-    T3: np.ndarray
-    T4: np.ndarray
-    vmax: np.ndarray
-    vmin: np.ndarray
-    T5: np.ndarray
-    T6: np.ndarray
-    input1: np.ndarray
-    K1: np.ndarray
-    Tr1: np.ndarray
-    input2: np.ndarray
-    K2: np.ndarray
-    Tr2: np.ndarray
     nf: np.ndarray
     fa: np.ndarray
     fc: np.ndarray
@@ -73,11 +64,10 @@ class PssParams:
         return self.kind == PST_POWER
 
     def packed(self) -> np.ndarray:
-        """Parameter matrix (n_pss, S_NCOL) for the compiled kernels."""
-        cols = (self.kind, self.mac, self.KTw, self.Tw, self.T1, self.T2, self.T3, self.T4,
-                self.vmax, self.vmin, self.T5, self.T6, self.input1, self.K1, self.Tr1,
-                self.input2, self.K2, self.Tr2, self.nf, self.fe, *self.fa.T, *self.fc.T)
-        return np.column_stack([np.asarray(c, float) for c in cols]).reshape(self.n, S_NCOL)
+        """Parameter matrix (n_pss, S_NCOL) for the compiled kernels, columns as
+        :data:`PACKED`."""
+        return pack(self, PACKED, **{f"fa_{i}": self.fa[:, i] for i in range(4)},
+                    **{f"fc_{i}": self.fc[:, i] for i in range(4)})
 
     @property
     def has_T4(self):
@@ -122,13 +112,11 @@ def pss_params(case: Case) -> PssParams:
     e = s.type == PSSE
     _check_psse(s)
     nf, fa, fc, fe = _filters(s)
+    given = {n: getattr(s, n).copy() for n in TABLE_FIELDS}
+    given.update(input1=np.where(e, s.input1, 0), input2=np.where(e, s.input2, 0))
     return PssParams(kind=s.type.astype(int),
                      mac=np.array([case.machine_index(m) for m in s.machine], int),
-                     KTw=s.KTw.copy(), Tw=s.Tw.copy(), T1=s.T1.copy(), T2=s.T2.copy(),
-                     T3=s.T3.copy(), T4=s.T4.copy(), vmax=s.ymax.copy(), vmin=s.ymin.copy(),
-                     T5=s.T5.copy(), T6=s.T6.copy(), input1=np.where(e, s.input1, 0),
-                     K1=s.K1.copy(), Tr1=s.Tr1.copy(), input2=np.where(e, s.input2, 0),
-                     K2=s.K2.copy(), Tr2=s.Tr2.copy(), nf=nf, fa=fa, fc=fc, fe=fe)
+                     **given, nf=nf, fa=fa, fc=fc, fe=fe)
 
 
 def _check_psse(s) -> None:
