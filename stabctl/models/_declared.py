@@ -4,7 +4,7 @@ declarations of :mod:`stabctl.case.params`.
 Each model family (exciters, PSS, governors, machines) lists, once, which declared
 table fields its kernels take as given (``TABLE_FIELDS``) and the layout of its packed
 parameter matrix (``PACKED``: constant suffix and attribute per column).  From these,
-:func:`params_class` gives the parameter dataclass its fields, :func:`column_constants`
+:func:`params_class` gives the parameter dataclass its fields, :func:`columns`
 the kernels' column constants (``E_KA``, ``S_TW``, ...) and :func:`pack` the matrix.
 """
 
@@ -37,13 +37,18 @@ def params_class(leading: tuple[str, ...], declared: tuple[str, ...]):
     return wrap
 
 
-def column_constants(prefix: str, layout) -> dict[str, int]:
-    """``{prefix + suffix: column}`` for a packed layout of (suffix, attribute) pairs, plus
-    ``prefix + "NCOL"``: the kernels' column constants (numba reads module globals as
-    compile-time constants)."""
-    consts = {f"{prefix}{suffix}": k for k, (suffix, _) in enumerate(layout)}
-    consts[f"{prefix}NCOL"] = len(layout)
-    return consts
+def columns(layout, *suffixes: str) -> tuple[int, ...]:
+    """Column of each named constant suffix in a packed layout of (suffix, attribute)
+    pairs: the kernels' column constants (numba reads module globals as compile-time
+    constants).
+
+    Raises
+    ------
+    KeyError
+        A suffix the layout does not hold.
+    """
+    index = {suffix: k for k, (suffix, _) in enumerate(layout)}
+    return tuple(index[s] for s in suffixes)
 
 
 def pack(obj, layout, **values) -> np.ndarray:

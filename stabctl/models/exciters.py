@@ -20,7 +20,7 @@ from stabctl._jitcache import njit
 from stabctl.case import Case, beyond
 from stabctl.case.params import EXCITER
 from stabctl.errors import CaseError
-from stabctl.models._declared import column_constants, pack, params_class
+from stabctl.models._declared import columns, pack, params_class
 
 LBND = 1e-3
 SMP, DC1, DC2, ST3, ST1 = 0, 1, 2, 3, 4
@@ -41,7 +41,13 @@ PACKED = (("KIND", "kind"), ("MAC", "mac"),
           *((n.upper(), n) for n in TABLE_FIELDS[TABLE_FIELDS.index("KP") + 1:]),
           ("TCTB", "tc_tb"), ("KE", "KE"), ("TE", "TE"), ("ASAT", "Asat"), ("BSAT", "Bsat"),
           ("KF", "KF"), ("TF", "TF"), ("VREF", "Vref"), ("SATQ", "sat_quadratic"))
-globals().update(column_constants("E_", PACKED))      # E_KIND, E_MAC, E_TR, ..., E_NCOL
+(E_KIND, E_MAC, E_TR, E_KA, E_TA, E_TB, E_TC, E_VRMAX, E_VRMIN, E_VIMAX, E_VIMIN, E_KJ,
+ E_KPR, E_KPI, E_KI, E_XL, E_KC, E_EFDMAX, E_KG, E_VGMAX, E_TCTB, E_KE, E_TE, E_ASAT,
+ E_BSAT, E_KF, E_TF, E_VREF, E_SATQ) = \
+    columns(PACKED, "KIND", "MAC", "TR", "KA", "TA", "TB", "TC", "VRMAX", "VRMIN", "VIMAX",
+            "VIMIN", "KJ", "KPR", "KPI", "KI", "XL", "KC", "EFDMAX", "KG", "VGMAX", "TCTB",
+            "KE", "TE", "ASAT", "BSAT", "KF", "TF", "VREF", "SATQ")
+E_NCOL = len(PACKED)
 
 
 @params_class(("kind", "mac"), TABLE_FIELDS)

@@ -24,7 +24,7 @@ from stabctl._jitcache import njit
 from stabctl.case import Case, beyond
 from stabctl.case.params import GOVERNOR
 from stabctl.errors import CaseError
-from stabctl.models._declared import column_constants, pack, params_class
+from stabctl.models._declared import columns, pack, params_class
 
 LBND = 1e-3
 TG, TGOV1, IEEEG1 = 1, 2, 3
@@ -39,7 +39,11 @@ TABLE_FIELDS = GOVERNOR.names[2:16]
 #: column: tg_con columns 1-16 in declared order, K's four columns, P_ref; constants G_<suffix>
 PACKED = (("KIND", "kind"), ("MAC", "mac"), *((n.upper(), n) for n in TABLE_FIELDS),
           *((f"K{s}", f"K_{i}") for i, s in enumerate("ABCD")), ("PREF", "Pref"))
-globals().update(column_constants("G_", PACKED))      # G_KIND, G_MAC, G_WF, ..., G_NCOL
+(G_KIND, G_MAC, G_WF, G_INVR, G_TMAX, G_TS, G_TC, G_T3, G_T4, G_T5, G_TMIN, G_DT, G_T6,
+ G_T7, G_UO, G_UC, G_KA, G_KB, G_KC, G_KD, G_PREF) = \
+    columns(PACKED, "KIND", "MAC", "WF", "INVR", "TMAX", "TS", "TC", "T3", "T4", "T5",
+            "TMIN", "DT", "T6", "T7", "UO", "UC", "KA", "KB", "KC", "KD", "PREF")
+G_NCOL = len(PACKED)
 
 
 @params_class(("kind", "mac"), TABLE_FIELDS)

@@ -19,7 +19,7 @@ from stabctl._jitcache import njit
 
 from stabctl.case import Case
 from stabctl.case.params import MACHINE
-from stabctl.models._declared import column_constants, pack, params_class
+from stabctl.models._declared import columns, pack, params_class
 
 SUB, TRA, EM = 2, 1, 0
 STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
@@ -35,7 +35,13 @@ PACKED = (("KIND", "kind"), ("POT", "mac_pot"),
           *((f"P{k}", f"p{k}") for k in range(6, 16)),
           ("SA", "sat_a"), ("SB", "sat_b"), ("SC", "sat_c"), ("EQP0", "eqp0"),
           ("SPEED", "speed_effects"))
-globals().update(column_constants("K_", PACKED))      # K_KIND, K_POT, K_XL, ..., K_NCOL
+(K_KIND, K_POT, K_XL, K_RA, K_XD, K_XDP, K_XDPP, K_TDOP, K_TDOPP, K_XQ, K_XQP, K_XQPP,
+ K_TQOP, K_TQOPP, K_H, K_D0, K_P6, K_P7, K_P8, K_P9, K_P10, K_P11, K_P12, K_P13, K_P14,
+ K_P15, K_SA, K_SB, K_SC, K_EQP0, K_SPEED) = \
+    columns(PACKED, "KIND", "POT", "XL", "RA", "XD", "XDP", "XDPP", "TDOP", "TDOPP", "XQ",
+            "XQP", "XQPP", "TQOP", "TQOPP", "H", "D0", "P6", "P7", "P8", "P9", "P10",
+            "P11", "P12", "P13", "P14", "P15", "SA", "SB", "SC", "EQP0", "SPEED")
+K_NCOL = len(PACKED)
 
 
 @params_class(("kind", "bus_idx", "mac_pot"), TABLE_FIELDS)

@@ -19,7 +19,7 @@ from stabctl._jitcache import njit
 from stabctl.case import Case
 from stabctl.case.params import PSS
 from stabctl.errors import CaseError
-from stabctl.models._declared import column_constants, pack, params_class
+from stabctl.models._declared import columns, pack, params_class
 
 LBND = 1e-3
 PST_SPEED, PST_POWER, PSSE = 1, 2, 3
@@ -37,7 +37,13 @@ _SUFFIX = {"ymax": "MAX", "ymin": "MIN", "input1": "IN1", "input2": "IN2"}
 PACKED = (("KIND", "kind"), ("MAC", "mac"),
           *((_SUFFIX.get(n, n.upper()), n) for n in TABLE_FIELDS), ("NF", "nf"), ("FE", "fe"),
           *((f"FA{i}", f"fa_{i}") for i in range(4)), *((f"FC{i}", f"fc_{i}") for i in range(4)))
-globals().update(column_constants("S_", PACKED))      # S_KIND, S_MAC, S_KTW, ..., S_NCOL
+(S_KIND, S_MAC, S_KTW, S_TW, S_T1, S_T2, S_T3, S_T4, S_MAX, S_MIN, S_T5, S_T6, S_IN1, S_K1,
+ S_TR1, S_IN2, S_K2, S_TR2, S_NF, S_FE, S_FA0, S_FA1, S_FA2, S_FA3, S_FC0, S_FC1, S_FC2,
+ S_FC3) = \
+    columns(PACKED, "KIND", "MAC", "KTW", "TW", "T1", "T2", "T3", "T4", "MAX", "MIN", "T5",
+            "T6", "IN1", "K1", "TR1", "IN2", "K2", "TR2", "NF", "FE", "FA0", "FA1", "FA2",
+            "FA3", "FC0", "FC1", "FC2", "FC3")
+S_NCOL = len(PACKED)
 S_FA, S_FC = S_FA0, S_FC0                     # filter a_0..a_3, then c_0..c_3
 W_PSSE, LL_PSSE = 6, 7                        # type 3 washout and first lead-lag slots
 
