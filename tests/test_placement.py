@@ -260,7 +260,7 @@ def test_damping_target_is_confirmed_by_recomputed_eigenvalues():
 # -- command line --------------------------------------------------------------------------
 
 def test_cli_place_json_meets_the_gain_and_bad_input_exits_2():
-    r = CliRunner().invoke(main, ["place", "kundur", "--contingencies", "DEFAULT",
+    r = CliRunner().invoke(main, ["place", "kundur", "--faults", "DEFAULT",
                                   "--target-cct-gain", "3", "--workers", "1", "--json"])
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)

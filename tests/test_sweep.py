@@ -296,7 +296,7 @@ def test_cli_sweep_cct_storage_missing(tmp_path, monkeypatch):
 
 
 def test_ratings_parse_none_and_lists():
-    from stabctl.cli.commands import _ratings
+    from stabctl.cli.stability import _ratings
 
     assert _ratings(()) == [None]
     assert _ratings(("none,5", "10", "5")) == [None, 5.0, 10.0]
