@@ -108,8 +108,10 @@ def test_out_is_a_file_out_dir_a_directory():
         opts = _options(cmd)
         if "--out" in opts:
             assert not opts["--out"].type.dir_okay, cname
+            assert opts["--out"].help.startswith("Output file"), cname
         if "--out-dir" in opts:
-            assert not opts["--out-dir"].type.file_okay, cname
+            assert opts["--out-dir"].metavar == "DIR", cname
+            assert opts["--out-dir"].help.startswith("Output directory"), cname
 
 
 @pytest.mark.parametrize("command,alias", [

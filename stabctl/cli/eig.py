@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from stabctl.errors import InputError
-from stabctl.cli.format import print_json
+from stabctl.cli.format import print_json, print_modes
 from stabctl.cli.checks import check_writable
 from stabctl.cli.options import (conventions_option, json_option, out_dir_option, q_limits_option,
                                  reports_errors)
@@ -48,8 +48,6 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, as_j
     Bad input (unknown case, --areas out of range, --out-dir a file) exits with status 2 and
     one `error:` line; nothing is written then.
     """
-    import numpy as np
-
     from stabctl.io import load_case
     from stabctl.studies.eigenvalues import eig_study, study_json, write_report
 
@@ -63,17 +61,6 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, as_j
     if as_json:
         print_json({**study_json(st), "files": written})
         return
-    ma = st.ma
-    click.echo(f"case {st.case.name}{' without PSS' if no_pss else ''}: {st.sys.nstates} "
-               f"states; linearised in {st.t_linearise:.2f} s, analysed in {st.t_analyse:.2f} s")
-    click.echo(f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
-               "(excluded from damping statistics)")
-    click.echo(f"{'mode':>5} {'f Hz':>7} {'damping':>8}  {'kind':<10} machines")
-    em = ma.electromechanical
-    for i in em[np.argsort(ma.freq_hz[em])]:
-        g1, g2 = ma.groups(i)
-        against = " ".join(f"G{k}" for k in g2[:6]) or "-"
-        click.echo(f"{i:5d} {ma.freq_hz[i]:7.3f} {ma.damping[i]:8.4f}  {ma.kind[i]:<10} "
-                   f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}")
+    print_modes(st, no_pss)
     for w in written:
         click.echo(f"wrote {w}")

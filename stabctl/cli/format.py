@@ -224,6 +224,69 @@ def sweep_line(key, rec) -> str:
 
 
 
+def print_sweep(rep, n_jobs: int) -> None:
+    """Print the `sweep-cct` table and its summary line.
+
+    Parameters
+    ----------
+    rep : stabctl.parallel.SweepReport
+    n_jobs : int
+        Jobs in the sweep.
+    """
+    click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'err ms':>6} {'sims':>5} "
+               f"{'wall s':>7}")
+    for key, rec in rep.records.items():
+        click.echo(sweep_line(key, rec))
+    n_bad = sum(r["status"] != "ok" for r in rep.records.values())
+    click.echo(f"{n_jobs} job(s): {rep.ran} run now, {rep.skipped} already in {rep.out}; "
+               f"{n_bad} failed; wall {rep.wall_time_s:.1f} s")
+
+
+def print_screening(rows) -> None:
+    """Print the `screen` table, one row per fault in the given order.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Screening rows (`stabctl.stability.screening.screen`).
+    """
+    click.echo(f"{'fault':<22} {'CCT s':>7} {'cycles':>7} {'err ms':>6}  separated / reason")
+    for r in rows:
+        where = f"bus {r['bus']}" + (f" line to {r['far_bus']}" if r["far_bus"] else "")
+        if r["status"] == "ok":
+            err = "-" if r["numerical_error_s"] is None else f"{1000 * r['numerical_error_s']:g}"
+            click.echo(f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  "
+                       f"{r['separated']}")
+        else:
+            click.echo(f"{where:<22} {'-':>7} {'-':>7}  {r['error'][:70]}")
+
+
+def print_modes(st, no_pss: bool) -> None:
+    """Print the electromechanical modes of an `eig` study, by frequency.
+
+    Parameters
+    ----------
+    st : stabctl.studies.eigenvalues study
+        :func:`stabctl.studies.eigenvalues.eig_study`'s result.
+    no_pss : bool
+        The case was analysed without its PSS.
+    """
+    import numpy as np
+
+    ma = st.ma
+    click.echo(f"case {st.case.name}{' without PSS' if no_pss else ''}: {st.sys.nstates} "
+               f"states; linearised in {st.t_linearise:.2f} s, analysed in {st.t_analyse:.2f} s")
+    click.echo(f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
+               "(excluded from damping statistics)")
+    click.echo(f"{'mode':>5} {'f Hz':>7} {'damping':>8}  {'kind':<10} machines")
+    em = ma.electromechanical
+    for i in em[np.argsort(ma.freq_hz[em])]:
+        g1, g2 = ma.groups(i)
+        against = " ".join(f"G{k}" for k in g2[:6]) or "-"
+        click.echo(f"{i:5d} {ma.freq_hz[i]:7.3f} {ma.damping[i]:8.4f}  {ma.kind[i]:<10} "
+                   f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}")
+
+
 def print_estimate(d) -> None:
     """Print the `estimate rmse` report as text.
 

@@ -81,8 +81,6 @@ def reports_errors(func):
     return wrapper
 
 
-_reports_errors = reports_errors     # the old private name
-
 # -- numeric options checked at the edge -------------------------------------------------
 
 _INF = float("inf")
@@ -154,8 +152,6 @@ def interval(spec) -> str:
     return (f"{'[' if lo_in else '('}{lo:g}, {hi:g}{']' if hi_in else ')'}"
             + (f" {unit}" if unit else ""))
 
-
-_interval = interval
 
 
 def check_number(label: str, value) -> None:
@@ -255,8 +251,9 @@ def out_file_option(default=None, metavar="FILE", help="Output file."):
 
 def out_dir_option(help="Report directory."):
     """``--out-dir DIR`` (hidden alias ``--out``): an output directory, into ``out_dir``."""
+    # a path, checked by the command (check_writable): a file there is one `error:` line
     return click.option("--out-dir", "--out", "out_dir", cls=AliasedOption, default="reports",
-                        show_default=True, metavar="DIR", type=click.Path(file_okay=False),
+                        show_default=True, metavar="DIR", type=click.Path(),
                         help=f"Output directory: {help[0].lower()}{help[1:]}")
 
 

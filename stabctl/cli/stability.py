@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from stabctl.errors import InputError
-from stabctl.cli.format import print_cct, print_json, sweep_line
+from stabctl.cli.format import print_cct, print_json, print_screening, print_sweep
 from stabctl.cli.checks import PLOT_SUFFIXES, cct_settings, check_suffix, check_writable
 from stabctl.cli.options import (check_number, circuit_option, controller, fault_options,
                                  faults_option, json_option, model_options, out_file_option,
@@ -73,7 +73,23 @@ def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, deadband_hz,
 
 
 def _ratings(values) -> list:
-    """--esd-pct values (repeatable, comma-separated, 'none' = no storage) -> list."""
+    """The storage ratings of sweep-cct's --esd-pct.
+
+    Parameters
+    ----------
+    values : sequence of str
+        The option's values (repeatable, comma-separated, 'none' = no storage).
+
+    Returns
+    -------
+    list of float or None
+        Distinct ratings in order (None: no storage; default ``[None]``).
+
+    Raises
+    ------
+    InputError
+        Not a number or 'none', or out of range.
+    """
     out = []
     for v in values or ("none",):
         for item in str(v).split(","):
@@ -135,19 +151,13 @@ def sweep_cct(case_name, faults_src, esd_pct, deadband_hz, v_gate, coi, hysteres
     jobs = controlled_cct_jobs(case_name, faults, ratings, ctrl, conventions=conventions,
                                h=step, q_limits=q_limits, **settings)
     rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
-                    retry_failed=retry_failed)      # Ctrl-C: _reports_errors, exit 130
+                    retry_failed=retry_failed)      # Ctrl-C: reports_errors, exit 130
     if as_json:
         print_json({"out": str(rep.out), "ran": rep.ran, "skipped": rep.skipped,
                      "failed": rep.failed, "wall_time_s": rep.wall_time_s,
                      "records": list(rep.records.values())})
         return
-    click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'err ms':>6} {'sims':>5} "
-               f"{'wall s':>7}")
-    for key, rec in rep.records.items():
-        click.echo(sweep_line(key, rec))
-    n_bad = sum(r["status"] != "ok" for r in rep.records.values())
-    click.echo(f"{len(jobs)} job(s): {rep.ran} run now, {rep.skipped} already in {rep.out}; "
-               f"{n_bad} failed; wall {rep.wall_time_s:.1f} s")
+    print_sweep(rep, len(jobs))
 
 
 @click.command()
@@ -193,15 +203,7 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
     if as_json:
         print_json(rows)
         return
-    click.echo(f"{'fault':<22} {'CCT s':>7} {'cycles':>7} {'err ms':>6}  separated / reason")
-    for r in rows:
-        where = f"bus {r['bus']}" + (f" line to {r['far_bus']}" if r["far_bus"] else "")
-        if r["status"] == "ok":
-            err = "-" if r["numerical_error_s"] is None else f"{1000 * r['numerical_error_s']:g}"
-            click.echo(f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  "
-                       f"{r['separated']}")
-        else:
-            click.echo(f"{where:<22} {'-':>7} {'-':>7}  {r['error'][:70]}")
+    print_screening(rows)
 
 
 def _bus_list(text: str) -> list[int]:
