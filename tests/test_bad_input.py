@@ -14,7 +14,7 @@ from click.testing import CliRunner
 from stabctl.io import pst as pstio
 from stabctl.io import load_case
 from stabctl.cli import main
-from stabctl.cli.commands import _RANGES, check_number
+from stabctl.cli.options import _RANGES, check_number
 from stabctl.errors import CaseError, InputError, StabctlError
 from stabctl.dynamics.simulation import MAX_STEPS, Simulator
 
@@ -71,7 +71,7 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
     (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "5,nan"), "--esd-pct nan"),
     (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "1e6"), "--esd-pct 1e+06"),
     (("screen", "kundur", "--buses", "3,x"), "--buses 'x': not a bus number"),
-    (("place", "kundur", "--contingencies", "DEFAULT", "--target-cct-gain", "nan"),
+    (("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "nan"),
      "--target-cct-gain nan"),
 ])
 def test_bad_number_is_refused_before_any_work(no_simulation, tmp_path, monkeypatch, args, needle):
@@ -203,8 +203,8 @@ def test_island_is_named_not_blamed_on_another_bus(tmp_path):
     (("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "missing/x.jsonl"), "directory missing"),
     (("screen", "kundur", "--out", "/proc/s.jsonl"), "--out /proc/s.jsonl"),
     (("screen", "kundur", "--plot", "missing/m.png"), "--plot missing/m.png"),
-    (("eig", "kundur", "--report", "--out", "/proc/rep"), "--out /proc/rep"),
-    (("paper", "--out", "missing/reports"), "--out missing/reports: directory missing"),
+    (("eig", "kundur", "--report", "--out-dir", "/proc/rep"), "--out-dir /proc/rep"),
+    (("paper", "--out-dir", "missing/reports"), "--out-dir missing/reports: directory missing"),
 ])
 def test_unwritable_output_is_refused_before_any_work(no_simulation, tmp_path, monkeypatch, args,
                                                        needle):

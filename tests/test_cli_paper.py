@@ -25,7 +25,7 @@ def test_bad_arguments_exit_nonzero_with_message():
 
 
 def test_paper_report_written(tmp_path):
-    res = CliRunner().invoke(main, ["paper", "--out", str(tmp_path), "--only", "analytic"])
+    res = CliRunner().invoke(main, ["paper", "--out-dir", str(tmp_path), "--only", "analytic"])
     assert res.exit_code == 0, res.output
     text = (tmp_path / "paper.md").read_text()
     assert "Table 1" in text and "1.0734" in text

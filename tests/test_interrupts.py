@@ -102,11 +102,11 @@ def test_sigint_of_a_screening_exits_130_with_the_resume_command(tmp_path):
 
 
 @pytest.mark.parametrize("command,target,kept", [
-    (["paper", "--out", "rep", "--only", "analytic"], "stabctl.studies.paper.write_paper_report",
+    (["paper", "--out-dir", "rep", "--only", "analytic"], "stabctl.studies.paper.write_paper_report",
      "finished sweep records in rep are kept with --resume; resume with: stabctl "),
-    (["place", "kundur", "--contingencies", "DEFAULT", "--target-cct-gain", "10"],
+    (["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "10"],
      "stabctl.placement.loop.baseline", "nothing is kept; the work starts again"),
-    (["estimate", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5", "--cct"],
+    (["estimate", "cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"],
      "stabctl.estimation.closed_loop.cct_study", "nothing is kept; the work starts again"),
     (["sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "o.jsonl"],
      "stabctl.parallel.run_sweep", "finished jobs are in o.jsonl (0 recorded); they are skipped; resume with:"),

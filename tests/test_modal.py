@@ -152,7 +152,7 @@ def test_eig_json_lists_every_mode():
 
 
 def test_eig_report_files(tmp_path):
-    res = run("eig", "kundur", "--report", "--out", tmp_path)
+    res = run("eig", "kundur", "--report", "--out-dir", tmp_path)
     assert res.exit_code == 0, res.output
     assert "inter-area" in res.stdout and "local" in res.stdout
     names = sorted(p.name for p in tmp_path.iterdir())

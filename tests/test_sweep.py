@@ -290,9 +290,26 @@ def test_cli_sweep_cct_unknown_line_fails_before_any_job(tmp_path):
 
 
 def test_ratings_parse_none_and_lists():
-    from stabctl.cli.commands import _ratings
+    from stabctl.cli.stability import _ratings
 
     assert _ratings(()) == [None]
     assert _ratings(("none,5", "10", "5")) == [None, 5.0, 10.0]
     assert [j.key for j in cct_jobs("kundur", [LineFault(3, 101)], [None, 5.0])] == \
         ["kundur/3-101/t1/esd-none", "kundur/3-101/t1/esd5"]
+
+
+def test_sweep_jobs_with_another_controller_are_keyed_apart():
+    # the paper's controller: exactly cct_jobs' jobs (earlier records resume); another:
+    # the ratings' jobs carry it in their inputs and keys
+    from stabctl.stability.cct import cct_jobs, default_faults
+    from stabctl.storage.devices import BangBangCOI
+    from stabctl.studies.sweeps import controlled_cct_job, controlled_cct_jobs
+
+    faults = default_faults("kundur")[:1]
+    plain = cct_jobs("kundur", faults, [None, 5.0])
+    assert controlled_cct_jobs("kundur", faults, [None, 5.0], BangBangCOI()) == plain
+    other = controlled_cct_jobs("kundur", faults, [None, 5.0], BangBangCOI(deadband_hz=0.05))
+    assert other[0] == plain[0]
+    assert other[1].key == plain[1].key + "/ctrl-db0.05-vg0.8-system-hy0"
+    assert other[1].func is controlled_cct_job
+    assert other[1].inputs["controller"]["deadband_hz"] == 0.05

@@ -1,5 +1,6 @@
-"""`python -m stabctl.cli ...`: the stabctl command line."""
+"""`python -m stabctl.cli`: the `stabctl` command."""
 
 from stabctl.cli import main
 
-main()
+if __name__ == "__main__":  # pragma: no cover
+    main()

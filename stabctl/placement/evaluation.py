@@ -184,10 +184,16 @@ def _run(sim, fault: LineFault, t_clear: float, fleet):
 # -- parallel evaluation ---------------------------------------------------------------
 
 @contextmanager
-def worker_pool(workers: int):
+def worker_pool(workers: int, scheduler: str | None = None):
     """A function map(func, list of kwargs) -> list of results: in this process for
     workers == 1, else in a process pool (spawned, kept for the whole loop so that each
-    worker's simulator is built once)."""
+    worker's simulator is built once); with a Dask `scheduler` (as
+    `stabctl.parallel.run_sweep`: 'tcp://host:8786', or 'local' for a local cluster of
+    `workers` single-threaded processes) on that cluster instead."""
+    if scheduler:
+        with _dask_pool(scheduler, workers) as run_map:
+            yield run_map
+        return
     if workers == 1:
         yield lambda func, jobs: [func(**j) for j in jobs]
         return
@@ -201,6 +207,37 @@ def worker_pool(workers: int):
         raise
     else:
         pool.shutdown(cancel_futures=True)
+
+
+def _call(func, kwargs: dict):
+    return func(**kwargs)
+
+
+@contextmanager
+def _dask_pool(scheduler: str, workers: int):
+    """`worker_pool` on a Dask distributed cluster (connects at once, so that a missing
+    Dask or a wrong address fails before any work; InputError)."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise InputError(f"--scheduler {scheduler} needs Dask distributed, which is not "
+                         "installed: pip install 'stabctl[dask]'") from None
+    try:
+        if scheduler == "local":
+            client = Client(LocalCluster(n_workers=workers, threads_per_worker=1,
+                                         processes=True, dashboard_address=None))
+        else:
+            client = Client(scheduler)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise InputError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
+    try:
+        yield lambda func, jobs: client.gather([client.submit(_call, func, j, pure=False)
+                                                for j in jobs])
+    finally:
+        cluster = client.cluster            # ours (scheduler="local") or None
+        client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 def devices_of(sites, mw) -> list:

@@ -153,8 +153,9 @@ class _Point:
 def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None,
           max_sites: int | None = None, site_cost: float = 0.0, safety_s: float | None = None,
           tol: float = 1e-3, t_max: float = 1.0, max_iter: int = 10, rtol: float = 0.02,
-          workers: int = 1, controller: BangBangCOI | None = None,
-          amplitude_hz: float = 0.2, base: dict | None = None, start=None,
+          workers: int = 1, scheduler: str | None = None,
+          controller: BangBangCOI | None = None, amplitude_hz: float = 0.2,
+          base: dict | None = None, start=None,
           progress=None, conventions: str = "ieee", h: float | None = None) -> PlacementResult:
     """Least-cost ESD allocation meeting every contingency's target CCT (and damping),
     verified by simulation (module docstring).
@@ -173,6 +174,8 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
         max_iter: allocations simulated at most; rtol: relative saving below which the
             loop stops once the targets are met.
         workers: processes for the evaluations (1: in this process).
+        scheduler: Dask scheduler address, or 'local', to run the evaluations on instead
+            (`placement_eval.worker_pool`); None: local processes.
         controller: the bang-bang law of every ESD (default `DEFAULT_CONTROLLER`).
         base: evaluations without storage if already done (`verify` at zero ratings).
         start: first allocation (MW per site, shape (n_sites,)) instead of none, e.g. a
@@ -197,7 +200,7 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
                     "max_sites": max_sites, "site_cost": site_cost}, tol, t_max,
                    model={"conventions": conventions, "h": h})
     say = progress or (lambda msg: None)
-    with worker_pool(workers) as run_map:
+    with worker_pool(workers, scheduler) as run_map:
         setup.run_map = run_map
         base = setup.base = base or setup.verify(np.zeros(len(sites)))
         say("no storage: " + _cct_line(contingencies, base))
@@ -208,10 +211,11 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
 
 def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | None = None,
                 scan: str = "target", tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
-                controller: BangBangCOI | None = None, conventions: str = "ieee",
-                h: float | None = None) -> dict:
+                scheduler: str | None = None, controller: BangBangCOI | None = None,
+                conventions: str = "ieee", h: float | None = None) -> dict:
     """Simulated CCT (and its gradient) of every contingency at ratings mw (MW per site of
-    `sites`, default `candidate_sites`; None = no storage), in `workers` processes:
+    `sites`, default `candidate_sites`; None = no storage), in `workers` processes (or
+    on the Dask `scheduler`, as `place`):
     name -> `placement_eval.evaluate` dict.  base and scan as `placement_eval.verify`
     (scan="full" with base: the first unstable clearing time, e.g. of a uniform fleet).
     Raises as `place`.
@@ -223,7 +227,7 @@ def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | N
     controller = controller or DEFAULT_CONTROLLER
     beta, _ = _linear_models(sim, sites, controller, None, 0.0)
     mw = np.zeros(len(sites)) if mw is None else np.asarray(mw, float)
-    with worker_pool(workers) as run_map:
+    with worker_pool(workers, scheduler) as run_map:
         return verify(run_map, case, contingencies, sites, mw, beta, controller, tol, t_max,
                       base=base, scan=scan, model={"conventions": conventions, "h": h})
 
