@@ -16,7 +16,6 @@ from stabctl.stability.cct import (LineFault, cached_simulator, critical_clearin
 from stabctl.cli import main
 from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
 from stabctl.dynamics.events import fault_with_clearing, validate
-from stabctl.dynamics.simulation import Simulator
 
 CASE1 = LineFault(bus=3, far_bus=101, t_fault=1.0)   # paper Case 1: bus 3, line 3-101, 1 s
 

@@ -2,7 +2,6 @@
 SIGINT (Ctrl-C) ends every long command the same way: exit 130 and one line saying what was
 kept and the command that resumes."""
 
-import os
 import signal
 import subprocess
 import sys
