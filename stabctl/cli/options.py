@@ -1,7 +1,7 @@
 """The shared vocabulary of the `stabctl` commands: option decorators, checks, errors.
 
 One concept, one option: the same name, type, unit and default on every command that
-takes it (tests/test_cli_vocabulary.py checks this by introspecting the commands).
+takes it (tests/cli/test_cli_vocabulary.py checks this by introspecting the commands).
 
 Conventions:
 

@@ -28,7 +28,7 @@ from stabctl.dynamics.events import Fault, LineTrip, fault_with_clearing, from_s
 from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.simulation import Simulator, default_step
 
-DATA = Path(__file__).parent / "data" / "pstess"
+DATA = Path(__file__).parents[1] / "data" / "pstess"
 
 SPEED_TOL, ANGLE_TOL, VMAG_TOL = 2e-4, 0.02, 0.01   # acceptance tolerances
 REGRESSION = 1e-6                                     # we reach ~1e-9; guard against drift

@@ -10,7 +10,7 @@ from stabctl.errors import CaseError
 from stabctl.io.psse import load_psse
 from stabctl.io.psse_raw import read_raw
 
-DATA = Path(__file__).parent / "data" / "psse"
+DATA = Path(__file__).parents[1] / "data" / "psse"
 V33, V34, DYR = DATA / "five_bus_v33.raw", DATA / "five_bus_v34.raw", DATA / "five_bus.dyr"
 
 

@@ -13,7 +13,7 @@ from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.dynamics.results import SimulationResult
 
-DATA = Path(__file__).parent / "data" / "pstess"
+DATA = Path(__file__).parents[1] / "data" / "pstess"
 
 
 def run(*args):

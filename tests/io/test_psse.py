@@ -20,7 +20,7 @@ from stabctl.io.psse import import_psse, load_psse
 from stabctl.io.psse_raw import read_raw, split_fields
 from stabctl.dynamics.results import SimulationResult
 
-DATA = Path(__file__).parent / "data" / "psse"
+DATA = Path(__file__).parents[1] / "data" / "psse"
 V33 = DATA / "five_bus_v33.raw"
 V34 = DATA / "five_bus_v34.raw"
 

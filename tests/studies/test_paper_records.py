@@ -130,7 +130,7 @@ def test_placement_report_holds_no_timings(tmp_path):
     solve times (they go to the run log through `timing_line`), named source command."""
     from stabctl.studies.placement import report, timing_line
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     d = json.loads((root / "reports" / "placement_kundur.json").read_text())
     d["wall_time_s"], d["runs"]["1.0"]["wall_time_s"] = 12.0, 3.0   # as a fresh study has
     for r in d["runs"].values():

@@ -18,7 +18,7 @@ from stabctl.cli.options import _RANGES, check_number
 from stabctl.errors import CaseError, InputError, StabctlError
 from stabctl.dynamics.simulation import MAX_STEPS, Simulator
 
-PSSE = Path(__file__).parent / "data" / "psse"
+PSSE = Path(__file__).parents[1] / "data" / "psse"
 
 
 def run(*args):

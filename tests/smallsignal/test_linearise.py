@@ -21,7 +21,7 @@ from stabctl.smallsignal.linearise import (STATE, active_states, compare_pulse, 
 from stabctl.smallsignal.modal import match_modes
 from stabctl.dynamics.simulation import Simulator
 
-DATA = Path(__file__).parent / "data" / "pstess"
+DATA = Path(__file__).parents[1] / "data" / "pstess"
 FREQ_TOL_PCT, DAMPING_TOL = 1.0, 0.01       # the acceptance tolerances
 REGRESSION_FREQ_PCT, REGRESSION_DAMPING = 0.05, 1e-3   # we reach 3e-2 % / 2e-4: guard
 

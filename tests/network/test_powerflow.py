@@ -18,7 +18,7 @@ from stabctl.io import load_case
 from stabctl.errors import CaseError, PowerFlowError, UnknownBusError
 from stabctl.network.powerflow import solve_powerflow
 
-DATA = Path(__file__).parent / "data" / "pstess"
+DATA = Path(__file__).parents[1] / "data" / "pstess"
 REFS = {
     "kundur": "kundur_d2asbegp_default_loadflow_bus.csv",
     "miniwecc": "miniwecc_base_default_loadflow_bus.csv",

@@ -9,7 +9,7 @@ runs longer than its time box (a hang).
 Two profiles: the quick one runs in the normal test run (a few seconds per reader); the
 ``slow`` one, at least 1000 examples per reader, is
 
-    python -m pytest -m slow tests/test_fuzz.py
+    python -m pytest -m slow tests/io/test_fuzz.py
 
 Set STABCTL_FUZZ_REPORT=FILE to append each example's outcome (reader, "error" or
 "valid") to FILE as JSON lines, e.g. to count them.
@@ -39,7 +39,7 @@ from stabctl.errors import StabctlError
 from stabctl.io.psse import load_psse
 from stabctl.dynamics.simulation import Simulator
 
-HERE = Path(__file__).parent
+HERE = Path(__file__).parents[1]
 PSSE = HERE / "data" / "psse"
 SEEDS = {
     "raw": [(PSSE / "five_bus_v33.raw").read_text(), (PSSE / "five_bus_v34.raw").read_text()],

@@ -14,7 +14,7 @@ from stabctl.io import pst as pstio
 from stabctl.io import load_case
 from stabctl.errors import CaseError
 
-DATA = Path(__file__).parent / "data" / "pstess"
+DATA = Path(__file__).parents[1] / "data" / "pstess"
 
 
 # ---------------------------------------------------------------------------- .m files
