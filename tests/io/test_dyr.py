@@ -19,6 +19,7 @@ from stabctl.errors import CaseError
 from stabctl.smallsignal.linearise import linearise
 from stabctl.dynamics.simulation import Simulator
 
+pytestmark = pytest.mark.andes  # every test reads ANDES's case files
 andes = pytest.importorskip("andes")
 CASES = Path(andes.__file__).parent / "cases"
 KUNDUR_DYR = CASES / "kundur" / "kundur_full.dyr"

@@ -182,6 +182,7 @@ def test_unsupported_records_skipped_with_a_warning(tmp_path):
     assert len(case.branches) == 4  # the case without them
 
 
+@pytest.mark.andes
 def test_unsupported_dyr_records_are_listed_with_the_raw_ones():
     andes, raw = _andes_case("kundur/kundur.raw")
     dyr = raw.with_name("kundur_full.dyr")  # ends with ANDES's own Toggle record (line 37)
@@ -264,6 +265,7 @@ def _andes_pflow(andes, raw):
     return ss
 
 
+@pytest.mark.andes
 @pytest.mark.parametrize("name", ["kundur/kundur.raw", "wecc/wecc.raw"])
 def test_power_flow_matches_andes(name):
     andes, raw = _andes_case(name)
@@ -281,6 +283,7 @@ def test_power_flow_matches_andes(name):
         assert np.max(np.abs(pf.vang[idx] - ss.Bus.a.v)) < atol
 
 
+@pytest.mark.andes
 def test_phase_shifter_sign_matches_andes(tmp_path):
     andes, raw = _andes_case("kundur/kundur.raw")
     # transformer 1-5 with ANG1 = 10 deg (winding 1 leads, PSS/E POM)
@@ -298,6 +301,7 @@ def test_phase_shifter_sign_matches_andes(tmp_path):
     assert abs(pf.vang[case.bus_index(5)] - pf.vang[case.bus_index(1)]) > 0.1
 
 
+@pytest.mark.andes
 def test_q_limits_switch_matches_andes_ieee14(tmp_path):
     """IEEE 14 (ANDES's ieee14.raw + ieee14.dyr): without PV Q limits (ANDES's default,
     `Simulator(q_limits=False)`, `--no-q-limits`) the simulator starts from ANDES's power
