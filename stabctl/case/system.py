@@ -612,22 +612,48 @@ TABLES: Mapping[str, type[Table]] = MappingProxyType(
 class Case:
     """One power system: bases, network, machines, controllers, loads.
 
-    Attributes:
-        name: short identifier (e.g. ``"kundur"``).
-        base_mva: system base, MVA.
-        freq_hz: nominal frequency, Hz.
-        buses, branches, machines, exciters, pss, governors, loads, injections: tables
-            (see their classes for columns and units).
-        sw_con: the data file's own switching (disturbance) matrix, shape (rows, 7), PST
-            format (PST manual 2.5), or None.
-        extra: other PST matrices of the data file kept as given (``lmod_con``, ``PDC``,
-            ...), name -> read-only 2-D float array.
-        source: where the data came from (file, licence).
-        description: one line.
+    Attributes
+    ----------
+    name : str
+        Short identifier (e.g. ``"kundur"``).
+    base_mva : float
+        System base, MVA; > 0.
+    freq_hz : float
+        Nominal frequency, Hz; > 0.
+    buses : BusTable
+        Bus data, one row per bus (PST ``bus``, manual section 1.3); per unit on the
+        system base, kV for ``kv``.
+    branches : BranchTable
+        Line and transformer data, one row per branch (PST ``line``, section 1.3); per
+        unit on the system base.
+    machines, exciters, pss, governors : MachineTable, ExciterTable, PssTable, GovernorTable
+        Dynamic data, one row per unit (PST ``mac_con``, ``exc_con``, ``pss_con``,
+        ``tg_con``); per unit on the machine base, s for time constants (see their
+        classes for columns and units).  Empty tables by default.
+    loads : LoadTable
+        Non-conforming load fractions, one row per bus (PST ``load_con``, manual 3.29
+        Table 12); empty by default.
+    injections : InjectionTable
+        Fixed constant-power injections not in the bus table (storage or HVDC set
+        points), one row each, pu on the system base; empty by default.
+    sw_con : numpy.ndarray or None
+        The data file's own switching (disturbance) matrix, shape (rows, 7), PST format
+        (PST manual 2.5), read-only; None if the file has none.
+    extra : Mapping[str, numpy.ndarray]
+        Other PST matrices of the data file kept as given (``lmod_con``, ``PDC``, ...),
+        name -> read-only 2-D float array (units as in the file).
+    source : str
+        Where the data came from (file, licence).
+    description : str
+        One line.
 
-    Raises :class:`CaseError` on construction for bus numbers referenced but not in
-    ``buses`` (branches, machines, loads, injections), controllers on machines not in
-    ``machines``, no swing bus, a malformed ``sw_con``, or a non-positive base.
+    Raises
+    ------
+    CaseError
+        On construction: bus numbers referenced but not in ``buses`` (branches, machines,
+        loads, injections), controllers on machines not in ``machines``, no swing bus, a
+        malformed ``sw_con``, a table of the wrong class, or a non-positive base or
+        frequency.
     """
 
     name: str
@@ -707,8 +733,21 @@ class Case:
     def bus_index(self, number) -> int:
         """0-based row of bus ``number`` in ``buses``.
 
-        Raises :class:`UnknownBusError` (a :class:`CaseError` and ``KeyError``) naming the
-        bus if it is not in the case.
+        Parameters
+        ----------
+        number : int
+            Bus number (PST bus matrix column 1), a scalar; anything ``int()`` accepts.
+
+        Returns
+        -------
+        int
+            0-based row of the bus in ``buses`` (and in every per-bus array).
+
+        Raises
+        ------
+        UnknownBusError
+            The bus is not in the case (a :class:`CaseError` and ``KeyError``); the
+            message names the bus.
         """
         try:
             return self._bus_map[int(number)]
@@ -716,9 +755,22 @@ class Case:
             raise UnknownBusError(f"bus {number} is not in case '{self.name}'") from None
 
     def bus_indices(self, numbers) -> np.ndarray:
-        """0-based rows of many bus numbers, int array of the shape of ``numbers``.
+        """0-based rows of many bus numbers.
 
-        Raises :class:`UnknownBusError` naming the first unknown bus.
+        Parameters
+        ----------
+        numbers : array_like of int
+            Bus numbers (PST bus matrix column 1), any shape.
+
+        Returns
+        -------
+        numpy.ndarray
+            int array of the shape of ``numbers``: the 0-based row in ``buses`` of each.
+
+        Raises
+        ------
+        UnknownBusError
+            A number is not a bus of the case; the message names the first unknown bus.
         """
         numbers = np.asarray(numbers)
         flat = numbers.ravel()
@@ -732,7 +784,23 @@ class Case:
         return order[pos].reshape(numbers.shape)
 
     def machine_index(self, number) -> int:
-        """0-based row of machine ``number`` in ``machines``; :class:`CaseError` if absent."""
+        """0-based row of machine ``number`` in ``machines``.
+
+        Parameters
+        ----------
+        number : int
+            Machine number (PST ``mac_con`` column 1), a scalar; anything ``int()`` accepts.
+
+        Returns
+        -------
+        int
+            0-based row of the machine in ``machines``.
+
+        Raises
+        ------
+        CaseError
+            The machine is not in the case; the message names it.
+        """
         try:
             return self._mac_map[int(number)]
         except (KeyError, ValueError, TypeError):
@@ -744,11 +812,43 @@ class Case:
         return np.flatnonzero(self.buses.kind == SWING)
 
     def replace(self, **changes) -> "Case":
-        """A copy with some fields replaced (validated again)."""
+        """A copy with some fields replaced (validated again).
+
+        Parameters
+        ----------
+        **changes : object
+            Field name -> new value (any of the fields under Attributes of :class:`Case`,
+            same types and units).
+
+        Returns
+        -------
+        Case
+            A new case; ``self`` is unchanged.
+
+        Raises
+        ------
+        CaseError
+            The new data fail the checks of construction (see :class:`Case`).
+        TypeError
+            A name is not a field of :class:`Case`.
+        """
         return dataclasses.replace(self, **changes)
 
     def equals(self, other: "Case") -> bool:
-        """True if every table, base, sw_con and extra matrix is identical."""
+        """Compare two cases value by value.
+
+        Parameters
+        ----------
+        other : Case
+            The case to compare with; anything else compares unequal.
+
+        Returns
+        -------
+        bool
+            True if the name, every table, base, frequency, ``sw_con`` and extra matrix
+            are identical (exact float equality; ``source`` and ``description`` are not
+            compared).
+        """
         if not isinstance(other, Case):
             return False
         same_scalars = (self.name, self.base_mva, self.freq_hz) == (

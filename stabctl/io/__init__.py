@@ -16,7 +16,14 @@ __all__ = ["load_case", "list_cases"]
 
 
 def list_cases() -> dict[str, str]:
-    """Built-in cases: name -> one-line description (from the packaged JSON files)."""
+    """The built-in cases.
+
+    Returns
+    -------
+    dict[str, str]
+        Case name (as :func:`load_case` takes it) -> one-line description, read from the
+        packaged JSON files, sorted by name.
+    """
     out = {}
     for path in sorted(CASE_DIR.glob("*.json")):
         out[path.stem] = pstio.read_case_header(path).get("description", "")
@@ -26,11 +33,23 @@ def list_cases() -> dict[str, str]:
 def load_case(name_or_path: str | Path) -> Case:
     """Load a case: a built-in by name (``"kundur"``, ``"miniwecc"``) or a file path.
 
-    Files: ``.json`` in stabctl's own format or PSTess's evaluated-matrix JSON (told apart
-    by content), or a PST ``.m`` data file of literal matrices.
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        A built-in case name (see :func:`list_cases`), or the path of a file: ``.json`` in
+        stabctl's own format or PSTess's evaluated-matrix JSON (told apart by content), or
+        a PST ``.m`` data file of literal matrices.  A text with a path separator or a
+        ``.json``/``.m`` suffix is always taken as a path.
 
-    Raises :class:`CaseError` if the name is neither a built-in nor an existing file, or
-    the file is malformed.
+    Returns
+    -------
+    Case
+        The validated case (units as in :class:`~stabctl.case.Case`).
+
+    Raises
+    ------
+    CaseError
+        The name is neither a built-in nor an existing file, or the file is malformed.
     """
     text = str(name_or_path)
     builtin = CASE_DIR / f"{text}.json"

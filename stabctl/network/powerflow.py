@@ -334,23 +334,44 @@ def solve_powerflow(
 ) -> PowerFlowResult:
     """Solve the AC power flow of ``case`` (Newton-Raphson, polar, PST conventions).
 
-    Args:
-        case: the case; start values from its bus table.
-        tol: convergence tolerance on ``max|dP| + max|dQ|``, pu (PSTess ``s_simu``: 1e-8).
-        max_iter: Newton iterations allowed per solve (PSTess: 50).
-        q_limits: apply PV -> PQ switching at generator Q limits (PST ``chq_lim``).
-        tap_changing: move on-load taps of branches with ``tapmax != 0`` (PST ``lftap``).
-        drop: 0-based branch rows out of service.
+    Parameters
+    ----------
+    case : Case
+        The case; start values from its bus table.
+    tol : float, optional
+        Convergence tolerance on ``max|dP| + max|dQ|``, pu on the system base (PSTess
+        ``s_simu``: 1e-8).
+    max_iter : int, optional
+        Newton iterations allowed per solve (PSTess: 50).
+    q_limits : bool, optional
+        Apply PV -> PQ switching at generator Q limits (PST ``chq_lim``).
+    tap_changing : bool, optional
+        Move on-load taps of branches with ``tapmax != 0`` (PST ``lftap``).
+    drop : iterable of int, optional
+        0-based rows of ``case.branches`` out of service; empty by default.
 
-    Returns:
-        :class:`PowerFlowResult`.
+    Returns
+    -------
+    PowerFlowResult
+        The solution: bus voltages (pu, rad), generation and load per bus (pu on the
+        system base), arrays of shape (n_bus,) in ``case.buses`` order.
 
-    Raises:
-        PowerFlowError: no convergence within ``max_iter`` iterations or a singular
-            Jacobian; the message names the iteration count and the bus with the worst
-            mismatch.
-        CaseError: a dropped branch row does not exist.
+    Raises
+    ------
+    PowerFlowError
+        No convergence within ``max_iter`` iterations or a singular Jacobian (the message
+        names the iteration count and the bus with the worst mismatch), or buses with no
+        path to a swing bus (an island of the case data, or left by ``drop``).
+    CaseError
+        A dropped branch row does not exist.
 
+    Warns
+    -----
+    RuntimeWarning
+        Voltages still at their limits after the last allowed tap-changer iteration.
+
+    Notes
+    -----
     Source: PSTess ``loadflow.m``, ``calc.m``, ``form_jac.m``, ``chq_lim.m``, ``lftap.m``;
     PST manual section 1.4.
     """

@@ -136,18 +136,36 @@ def modal_analysis(sys, inertia=None, n_areas: int | None = None,
                    areas: dict | None = None) -> ModalAnalysis:
     """Modes of a linearised model (a control.StateSpace from `stabctl.smallsignal.linearise`).
 
-    Args:
-        sys: the model; its state names identify machine angle/speed states
-            ('mac_delta_G<k>', 'mac_omega_G<k>').
-        inertia: H*MVA per machine for the coherency weights (default: the weights of the
-            model's 'omega_coi' output, i.e. the ones `linearise` used).
-        n_areas: number of coherent areas (default: from the largest gap between
-            consecutive electromechanical frequencies, `coherent_areas`).
-        areas: the planner's own areas, machine number -> label (every machine), instead
-            of coherency.
-    Raises:
-        InputError: a model without machine speed states, n_areas out of range, areas
-            missing a machine.
+    Parameters
+    ----------
+    sys : control.StateSpace
+        The model, n states; its state names identify machine angle/speed states
+        ('mac_delta_G<k>', 'mac_omega_G<k>').
+    inertia : array_like or None, optional
+        H*MVA per machine (shape (g,), s*MVA, in the order of the speed states) for the
+        coherency weights (default: the weights of the model's 'omega_coi' output, i.e.
+        the ones `linearise` used).
+    n_areas : int or None, optional
+        Number of coherent areas (default: from the largest gap between consecutive
+        electromechanical frequencies, `coherent_areas`).
+    areas : dict or None, optional
+        The planner's own areas, machine number -> label (every machine), instead of
+        coherency.
+
+    Returns
+    -------
+    ModalAnalysis
+        m modes (one per conjugate pair): eigenvalues, frequencies (Hz), damping ratios,
+        right (n, m) and left (m, n) eigenvectors, participation factors (n, m), speed
+        mode shapes (g, m), the angle-reference mode, the electromechanical modes
+        (0.1-2.5 Hz) and their local / inter-area classification (Kundur, Power System
+        Stability and Control, 12.2; conventions in the module docstring).
+
+    Raises
+    ------
+    InputError
+        A model without machine speed states, n_areas out of range, areas missing a
+        machine, or a numerically singular eigenvector matrix (defective A).
     """
     states = np.array(sys.state_labels)
     speed = np.array([i for i, n in enumerate(states) if n.startswith("mac_omega_G")])

@@ -30,20 +30,28 @@ CYCLE_S_60HZ = 1.0 / 60.0
 class OMIB:
     """OMIB system with three network stages (paper eqs. 1-4).
 
-    Attributes:
-        H: inertia constant (s, on the system base), > 0.
-        Pm: mechanical power (pu), 0 <= Pm < Pmax_post.
-        Pmax_pre, Pmax_fault, Pmax_post: peak electrical power E*V/X of the pre-fault,
-            fault-on and post-fault network (pu); Pmax_fault = 0 for a bolted fault at the
-            generator bus.
-        f0: nominal frequency (Hz).
-        D: damping (pu power per rad/s of speed deviation), 0 in the paper.
-        k_C: share of the storage power that acts on this angle: 1 for the OMIB, and
-            H_rest / (H1 + H_rest) for the two-machine COI equivalent (`stabctl.smib.coi`).
+    Attributes
+    ----------
+    H : float
+        Inertia constant, s (on the system base), > 0.
+    Pm : float
+        Mechanical power, pu, 0 <= Pm < Pmax_post.
+    Pmax_pre, Pmax_fault, Pmax_post : float
+        Peak electrical power E*V/X of the pre-fault, fault-on and post-fault network, pu
+        (>= 0); Pmax_fault = 0 for a bolted fault at the generator bus.
+    f0 : float, optional
+        Nominal frequency, Hz, > 0; default 60.
+    D : float, optional
+        Damping, pu power per rad/s of speed deviation (>= 0); 0 in the paper.
+    k_C : float, optional
+        Share of the storage power that acts on this angle: 1 for the OMIB, and
+        H_rest / (H1 + H_rest) for the two-machine COI equivalent (`stabctl.smib.coi`).
 
-    Raises:
-        InputError: H or f0 not positive, Pm negative, or Pm >= Pmax of the pre- or
-            post-fault network (no equilibrium).
+    Raises
+    ------
+    InputError
+        H or f0 not positive, Pm, D or a Pmax negative, or Pm >= Pmax of the pre- or
+        post-fault network (no equilibrium).
     """
 
     H: float
@@ -79,8 +87,34 @@ class OMIB:
         Pmax_pre = Pm / sin(delta0) (so that Pe = Pm at delta0, i.e. X = V0*V1/Pmax_pre);
         the fault-on and post-fault peaks are fault_ratio and post_ratio times Pmax_pre.
 
-        Raises:
-            InputError: delta0 outside (0, pi/2) (no stable pre-fault equilibrium).
+        Parameters
+        ----------
+        H : float
+            Inertia constant, s (on the system base), > 0.
+        Pm : float
+            Mechanical power = pre-fault electrical power, pu.
+        delta0 : float
+            Pre-fault rotor angle, rad, in (0, pi/2).
+        V0, V1 : float, optional
+            Generator internal and infinite-bus voltage magnitudes, pu, > 0; default 1.
+            They fix the implied reactance X only; the model uses Pmax.
+        fault_ratio : float, optional
+            Pmax_fault / Pmax_pre; default 0 (bolted fault at the generator bus).
+        post_ratio : float, optional
+            Pmax_post / Pmax_pre; default 1 (post-fault network = pre-fault).
+        f0 : float, optional
+            Nominal frequency, Hz; default 60.
+
+        Returns
+        -------
+        OMIB
+            The system, D = 0 and k_C = 1.
+
+        Raises
+        ------
+        InputError
+            delta0 outside (0, pi/2) (no stable pre-fault equilibrium), a voltage not
+            positive, or the parameters rejected by :class:`OMIB`.
         """
         if not 0 < delta0 < np.pi / 2:
             raise InputError(f"delta0 = {delta0} rad is not a stable equilibrium angle (0, pi/2)")
@@ -122,15 +156,58 @@ class OMIB:
         return float(np.pi - self.delta_s)
 
     def pe(self, delta, stage: str = "post"):
-        """Electrical power Pmax_stage * sin(delta) (pu); stage in pre/fault/post."""
+        """Electrical power Pmax_stage * sin(delta), paper eq. (1).
+
+        Parameters
+        ----------
+        delta : float or array_like
+            Rotor angle, rad, any shape.
+        stage : {'pre', 'fault', 'post'}, optional
+            Network stage; default 'post'.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            Pe, pu, of the shape of `delta`.
+        """
         return getattr(self, f"Pmax_{stage}") * np.sin(delta)
 
     def accelerating_power(self, delta, omega=0.0, stage: str = "post"):
-        """Pm - Pe - D*omega (pu), the right-hand side of eq. (1) without storage."""
+        """Pm - Pe - D*omega, the right-hand side of eq. (1) without storage.
+
+        Parameters
+        ----------
+        delta : float or array_like
+            Rotor angle, rad.
+        omega : float or array_like, optional
+            Rotor speed deviation, electrical rad/s; default 0.  Broadcasts with `delta`.
+        stage : {'pre', 'fault', 'post'}, optional
+            Network stage; default 'post'.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            Accelerating power, pu, of the broadcast shape of `delta` and `omega`.
+        """
         return self.Pm - self.pe(delta, stage) - self.D * omega
 
     def rhs(self, stage: str, P_C: float = 0.0):
-        """f(t, x) for x = [delta, omega] of one stage with a constant storage power P_C."""
+        """Right-hand side of eq. (1) of one stage with a constant storage power P_C.
+
+        Parameters
+        ----------
+        stage : {'pre', 'fault', 'post'}
+            Network stage.
+        P_C : float, optional
+            Storage power at the generator bus, pu (+ absorbs, as the paper), scaled by
+            `k_C`; default 0.
+
+        Returns
+        -------
+        callable
+            ``f(t, x)`` for x = [delta (rad), omega (rad/s)], returning
+            [d(delta)/dt (rad/s), d(omega)/dt (rad/s^2)] (scipy ``solve_ivp`` form).
+        """
         M = self.M
 
         def f(t, x):
@@ -140,11 +217,23 @@ class OMIB:
 
     # -- energy function and equal-area criterion ---------------------------------------
     def energy(self, delta, omega):
-        """Transient energy function of the post-fault system, paper eq. (10) (pu*s).
+        """Transient energy function of the post-fault system, paper eq. (10).
 
         V = M*omega^2/2 - Pm*(delta - delta_s) - Pmax_post*(cos(delta) - cos(delta_s));
         constant along undamped, uncontrolled post-fault trajectories; zero at the stable
-        equilibrium.  Arrays broadcast.
+        equilibrium.
+
+        Parameters
+        ----------
+        delta : float or array_like
+            Rotor angle, rad.
+        omega : float or array_like
+            Rotor speed deviation, electrical rad/s; broadcasts with `delta`.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            V, pu*s (pu power times rad), of the broadcast shape.
         """
         ds = self.delta_s
         return (0.5 * self.M * np.asarray(omega) ** 2 - self.Pm * (np.asarray(delta) - ds)
@@ -156,10 +245,21 @@ class OMIB:
         return float(self.energy(self.delta_u, 0.0))
 
     def separatrix(self, delta):
-        """Upper branch of the stability-region boundary through delta_u (rad/s).
+        """Upper branch of the stability-region boundary through delta_u.
 
-        The level set V(delta, omega) = V(delta_u, 0) of the undamped post-fault system;
-        NaN where the level set has no real speed.  The lower branch is its negative.
+        The level set V(delta, omega) = V(delta_u, 0) of the undamped post-fault system
+        (paper eq. 10).  The lower branch is its negative.
+
+        Parameters
+        ----------
+        delta : float or array_like
+            Rotor angle, rad, any shape.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            Speed deviation omega on the boundary, rad/s, of the shape of `delta`; NaN
+            where the level set has no real speed.
         """
         ds = self.delta_s
         kinetic = self.critical_energy + self.Pm * (np.asarray(delta) - ds) + \
@@ -168,24 +268,57 @@ class OMIB:
             return np.sqrt(2 * kinetic / self.M)
 
     def accelerating_area(self, delta_cl: float) -> float:
-        """A1 = integral of (Pm - Pmax_fault sin d) dd from delta0 to delta_cl, eq. (11)."""
+        """Accelerating area of the equal-area criterion, paper eq. (11).
+
+        A1 = integral of (Pm - Pmax_fault sin d) dd from delta0 to delta_cl.
+
+        Parameters
+        ----------
+        delta_cl : float
+            Clearing angle, rad.
+
+        Returns
+        -------
+        float
+            A1, pu*rad.
+        """
         d0 = self.delta0
         return self.Pm * (delta_cl - d0) + self.Pmax_fault * (np.cos(delta_cl) - np.cos(d0))
 
     def decelerating_area(self, delta_cl: float) -> float:
-        """Available A2 = integral of (Pmax_post sin d - Pm) dd from delta_cl to delta_u."""
+        """Available decelerating area of the equal-area criterion.
+
+        A2 = integral of (Pmax_post sin d - Pm) dd from delta_cl to delta_u.
+
+        Parameters
+        ----------
+        delta_cl : float
+            Clearing angle, rad.
+
+        Returns
+        -------
+        float
+            A2, pu*rad.
+        """
         du = self.delta_u
         return self.Pmax_post * (np.cos(delta_cl) - np.cos(du)) - self.Pm * (du - delta_cl)
 
     def critical_clearing_angle(self) -> float:
-        """Critical clearing angle from A1 = A2 (rad), closed form (equal-area criterion).
+        """Critical clearing angle from A1 = A2, closed form (equal-area criterion).
 
         cos(delta_cr) = [Pm (delta_u - delta0) + Pmax_post cos(delta_u)
                          - Pmax_fault cos(delta0)] / (Pmax_post - Pmax_fault).
 
-        Raises:
-            InputError: the fault-on network is at least as strong as the post-fault one, or
-                no clearing angle satisfies the criterion (always/never stable).
+        Returns
+        -------
+        float
+            delta_cr, rad.
+
+        Raises
+        ------
+        InputError
+            The fault-on network is at least as strong as the post-fault one, or no
+            clearing angle satisfies the criterion (always/never stable).
         """
         d0, du = self.delta0, self.delta_u
         den = self.Pmax_post - self.Pmax_fault
@@ -198,11 +331,23 @@ class OMIB:
         return float(np.arccos(c))
 
     def critical_clearing_time(self) -> float:
-        """Critical clearing time (s) from the critical clearing angle.
+        """Critical clearing time from the critical clearing angle.
 
-        Closed form t_cr = sqrt(2 M (delta_cr - delta0) / Pm) when Pmax_fault = 0 (constant
-        fault-on acceleration); otherwise the time the fault-on trajectory reaches delta_cr
-        (located by an integration event).
+        Closed form t_cr = sqrt(2 M (delta_cr - delta0) / Pm) when Pmax_fault = 0 and
+        D = 0 (constant fault-on acceleration); otherwise the time the fault-on trajectory
+        reaches delta_cr (located by an integration event).
+
+        Returns
+        -------
+        float
+            t_cr, s after the fault start.
+
+        Raises
+        ------
+        InputError
+            No critical clearing angle (see :meth:`critical_clearing_angle`), Pm = 0 (the
+            fault does not accelerate the machine), or the fault-on trajectory never
+            reaches the critical angle.
         """
         dcr = self.critical_clearing_angle()
         if self.Pm == 0:

@@ -56,11 +56,27 @@ T_LO, T_HI, T_MAX, TOL, T_AFTER_FAULT = 0.0, 0.1, 1.0, 1e-3, 5.0
 @dataclass(frozen=True)
 class LineFault:
     """A three-phase fault at `bus` on circuit `circuit` of line `bus`-`far_bus`, starting
-    at `t_fault` (s), cleared at both ends at the same instant (the line stays out);
-    far_bus None: a bus fault cleared without loss of a line (PST sw_con type 7).
+    at `t_fault` (s), cleared at both ends at the same instant (the line stays out).
 
-    trips: further lines (from_bus, to_bus), circuit 1 of each, opened at the clearing
-    instant; both circuits of a double line: circuit=2 and trips=((bus, far_bus),).
+    The clearing time is not part of the fault: it is the unknown of
+    :func:`critical_clearing_time` (see :meth:`events`).
+
+    Attributes
+    ----------
+    bus : int
+        Faulted bus number (the near end of the line).
+    far_bus : int or None
+        Far-end bus number of the faulted line; None: a bus fault cleared without loss of
+        a line (PST sw_con type 7).
+    t_fault : float, optional
+        Fault start, s (absolute run time, >= 0); default 1.0 s.
+    circuit : int, optional
+        Circuit number of the faulted line between `bus` and `far_bus` (1 = the first
+        branch row joining them); default 1.
+    trips : tuple of (int, int), optional
+        Further lines (from_bus, to_bus), circuit 1 of each, opened at the clearing
+        instant; default none.  Both circuits of a double line: ``circuit=2`` and
+        ``trips=((bus, far_bus),)``.
     """
 
     bus: int
@@ -70,13 +86,35 @@ class LineFault:
     trips: tuple[tuple[int, int], ...] = ()
 
     def events(self, t_clear: float) -> list:
-        """The run's events for clearing time `t_clear` (s after the fault start)."""
+        """The run's events for one clearing time.
+
+        Parameters
+        ----------
+        t_clear : float
+            Clearing time, s after the fault start (>= 0); both ends open at
+            ``t_fault + t_clear``.
+
+        Returns
+        -------
+        list
+            A :class:`~stabctl.dynamics.events.Fault` (equal near and far clearing, PST
+            sw_con type 0, or 7 for a bus fault) followed by one
+            :class:`~stabctl.dynamics.events.LineTrip` per entry of `trips`, all at the
+            clearing instant.
+        """
         tc = self.t_fault + t_clear
         fault = Fault(bus=self.bus, t=self.t_fault, clear_near=tc, clear_far=tc,
                       far_bus=self.far_bus, circuit=self.circuit)
         return [fault] + [LineTrip(a, b, tc) for a, b in self.trips]
 
     def describe(self) -> str:
+        """One line naming the fault, for messages and reports.
+
+        Returns
+        -------
+        str
+            E.g. ``"fault at bus 7 on line 7-8 (circuit 2) at 1 s, 8-9 also opened"``.
+        """
         circ = f" (circuit {self.circuit})" if self.circuit != 1 else ""
         extra = "".join(f", {a}-{b} also opened" for a, b in self.trips)
         where = "" if self.far_bus is None else f" on line {self.bus}-{self.far_bus}{circ}"
@@ -166,33 +204,65 @@ def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL
                            storage=None, error_check: bool = True) -> CCTResult:
     """CCT of `fault` on `sim`'s case by bisection on the clearing time (see module doc).
 
-    Args:
-        sim: the simulator of the case (its power flow is solved once).
-        fault: the fault; its clearing time is the unknown.
-        tol: width of the final bracket (s, > 0).
-        t_lo: clearing time that must be stable (s, >= 0; 0 = the line trip alone).
-        t_hi: first upper bound (s, default min(0.1 s, t_max)); doubled (capped at t_max)
-            while it is still stable.
-        t_max: largest clearing time tried (s).
-        t_end: run end (s, absolute; default t_fault + 5 s; must exceed t_fault + t_max).
-        h: integration step (s, default `sim.default_h`); separation_limit: rad from the
-            COI.
-        criterion: callable(result) -> True if stable; default `no_separation`.
-        stop_at_separation: stop runs at separation; default True for the default
-            criterion, False for a custom one (which then sees whole trajectories).
-        storage: passed untouched to `Simulator.run` (a `stabctl.storage.devices.StorageFleet`).
-        error_check: also search the CCT at h/2 from the final bracket
-            (`CCTResult.numerical_error_s`, module docstring).
+    Parameters
+    ----------
+    sim : Simulator
+        The simulator of the case (its power flow is solved once).
+    fault : LineFault
+        The fault; its clearing time is the unknown.
+    tol : float, optional
+        Width of the final bracket, s (> 0); default 1e-3 s.
+    t_lo : float, optional
+        Clearing time that must be stable, s (>= 0; 0 = the line trip alone); default 0.
+    t_hi : float or None, optional
+        First upper bound, s (default min(0.1 s, t_max)); doubled (capped at t_max) while
+        it is still stable.
+    t_max : float, optional
+        Largest clearing time tried, s; default 1.0 s.
+    t_end : float or None, optional
+        Run end, s (absolute; default t_fault + 5 s; must exceed t_fault + t_max).
+    h : float or None, optional
+        Integration step, s (default `sim.default_h`).
+    separation_limit : float, optional
+        Angle from the centre of inertia (paper eq. 40) beyond which a machine has
+        separated, rad; default pi.
+    criterion : callable or None, optional
+        ``callable(SimulationResult) -> bool``, True if stable; default `no_separation`.
+    stop_at_separation : bool or None, optional
+        Stop runs at separation; default True for the default criterion, False for a
+        custom one (which then sees whole trajectories).
+    storage : StorageFleet or None, optional
+        Passed untouched to `Simulator.run` (a `stabctl.storage.devices.StorageFleet`).
+    error_check : bool, optional
+        Also search the CCT at h/2 from the final bracket
+        (`CCTResult.numerical_error_s`, module docstring); default True.
 
+    Returns
+    -------
+    CCTResult
+        The bracket ``(t_stable, t_unstable)`` (s after the fault start, exactly `tol`
+        apart; the CCT is ``t_stable``), the probes, the separated machines and, with
+        `error_check`, the CCT at h/2.
+
+    Raises
+    ------
+    InputError
+        Bad settings; unstable at t_lo (also at zero clearing); still stable at t_max (the
+        CCT is above it).
+    UnknownBusError, CaseError
+        No such bus or line.
+    NumericalInstabilityError
+        The step is too large: a numerically unstable run is never a verdict, it is
+        raised.
+    SimulationError
+        The network fails while the fault is on.
+
+    Notes
+    -----
     A run whose network has no solution after a machine has separated or after the fault
-    is cleared counts as unstable (voltage collapse); a numerically unstable run
-    (NumericalInstabilityError) is never a verdict: it is raised.
-
-    Raises:
-        InputError: bad settings; unstable at t_lo (also at zero clearing); still stable
-            at t_max (the CCT is above it).
-        UnknownBusError, CaseError: no such bus or line; NumericalInstabilityError: the
-            step is too large; SimulationError: the network fails while the fault is on.
+    is cleared counts as unstable (voltage collapse).  Sources: Kundur, Power System
+    Stability and Control, 1994, sec. 13.3; Pai, Energy Function Analysis for Power System
+    Stability, 1989, ch. 1.
     """
     t_end = fault.t_fault + T_AFTER_FAULT if t_end is None else t_end
     t_hi = min(T_HI, t_max) if t_hi is None else t_hi
