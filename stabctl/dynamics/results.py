@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from stabctl.dynamics.coi import coi_angle, coi_speed
+
 SERIES = ("speed", "angle", "pelect", "pmech", "efd")
 SERIES_UNITS = {"speed": "speed_pu", "angle": "angle_rad", "pelect": "pelect_pu",
                 "pmech": "pmech_pu", "efd": "efd_pu"}
@@ -54,12 +56,12 @@ class SimulationResult:
     @property
     def coi_angle(self) -> np.ndarray:
         """Inertia-weighted mean rotor angle (rad), shape (n_t,)."""
-        return self.angle @ self.inertia / self.inertia.sum()
+        return coi_angle(self.angle, self.inertia)
 
     @property
     def coi_speed(self) -> np.ndarray:
         """Inertia-weighted mean speed (pu), shape (n_t,)."""
-        return self.speed @ self.inertia / self.inertia.sum()
+        return coi_speed(self.speed, self.inertia)
 
     @property
     def max_angle_spread(self) -> float:
