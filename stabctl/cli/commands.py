@@ -429,17 +429,11 @@ def check_writable(path, option: str, directory: bool = False) -> None:
 
 
 def _save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0) -> None:
+    from stabctl.parallel import atomic_write
     from stabctl.plotting.figures import simulation_overview
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        simulation_overview(result, tmp, title=title, base_mva=base_mva)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(path, lambda tmp: simulation_overview(result, tmp, title=title,
+                                                       base_mva=base_mva), mode=None)
 
 
 def _describe_esd(esd: dict, short: bool = False) -> str:
@@ -1372,16 +1366,9 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventio
 def _write_case_atomically(case, path: Path) -> None:
     """Write the case JSON to a temporary file beside ``path``, then rename it."""
     from stabctl.io.pst import write_case_json
+    from stabctl.parallel import atomic_write
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".json")
-    os.close(fd)
-    try:
-        write_case_json(case, tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(path, lambda tmp: write_case_json(case, tmp), mode=None)
 
 
 if __name__ == "__main__":  # pragma: no cover

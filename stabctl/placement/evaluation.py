@@ -10,12 +10,11 @@ cleared just beyond it (SIME, `stabctl.stability.sime`):
 where eta is the SIME unstable margin, d eta / d P_j its first-order change from the
 trajectory (`sime.storage_integrals`, weights `OmibEquivalent.group_weights`) and
 d eta / d t_clear a difference over `EPS_S` of clearing time (a second run).  Evaluations
-are JSON-able jobs run in parallel worker processes (`worker_pool`, `verify`).
+are JSON-able jobs run in parallel worker processes (`stabctl.parallel.worker_pool`, `verify`).
 """
 
 from __future__ import annotations
 
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -182,26 +181,6 @@ def _run(sim, fault: LineFault, t_clear: float, fleet):
 
 
 # -- parallel evaluation ---------------------------------------------------------------
-
-@contextmanager
-def worker_pool(workers: int):
-    """A function map(func, list of kwargs) -> list of results: in this process for
-    workers == 1, else in a process pool (spawned, kept for the whole loop so that each
-    worker's simulator is built once)."""
-    if workers == 1:
-        yield lambda func, jobs: [func(**j) for j in jobs]
-        return
-    from stabctl.parallel import process_pool, stop_pool
-
-    pool = process_pool(workers)      # workers die with this process (SIGKILL included)
-    try:
-        yield lambda func, jobs: [f.result() for f in [pool.submit(func, **j) for j in jobs]]
-    except BaseException:
-        stop_pool(pool)               # Ctrl-C: running evaluations killed, not waited for
-        raise
-    else:
-        pool.shutdown(cancel_futures=True)
-
 
 def devices_of(sites, mw) -> list:
     """[bus, machine, MW] of every site with a rating > 0."""

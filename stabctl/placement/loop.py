@@ -44,7 +44,8 @@ from stabctl.stability.cct import cached_simulator
 from stabctl.errors import InputError
 from stabctl.placement.program import (Allocation, InfeasibleError, candidate_sites, solve_allocation,
                         sparse_allocation)
-from stabctl.placement.evaluation import Contingency, cuts_from, verify, worker_pool
+from stabctl.parallel import worker_pool
+from stabctl.placement.evaluation import Contingency, cuts_from, verify
 from stabctl.storage.devices import BangBangCOI
 
 MIN_MW = 1.0        # ratings below this are not installed (MW)
