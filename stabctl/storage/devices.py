@@ -112,7 +112,7 @@ class StorageArrays(NamedTuple):
     ramp: np.ndarray      # pu/s
     emax: np.ndarray      # pu*s
     e0: np.ndarray        # pu*s
-    kind: int             # 0 none, 1 bang-bang, 2 linear
+    kind: int             # law kind (stabctl.storage.control: NO_STORAGE, BANG_BANG, ...)
     db: float             # deadband, pu speed
     hyst: float           # hysteresis, pu speed
     vgate: float
