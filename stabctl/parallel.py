@@ -35,7 +35,7 @@ import time
 import traceback
 import warnings
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from contextlib import closing
+from contextlib import closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator, Mapping
@@ -155,14 +155,59 @@ def set_aside_damaged(path: str | Path) -> list[int]:
     aside = path.with_name(path.name + ".damaged")
     with aside.open("a") as f:
         f.writelines(line for _, line in bad)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    with os.fdopen(fd, "w") as f:
-        f.writelines(line for _, line in good)
-    os.replace(tmp, path)
+    atomic_write(path, lambda f: f.writelines(line for _, line in good))
     numbers = [n for n, _ in bad]
     warnings.warn(f"{path}: line(s) {', '.join(map(str, numbers))} not a whole sweep record "
                   f"(cut by a kill?): moved to {aside}; their jobs run again")
     return numbers
+
+
+def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w",
+                 permissions: int | None = None) -> Path:
+    """Write a file atomically: into a temporary file beside it (hidden, same suffix, so
+    that writers choosing the format by extension still do), renamed over `path` only when
+    complete; the temporary file is removed if writing fails.  The one atomic write of
+    stabctl.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file; its directory is created if missing.
+    write : callable
+        ``write(f)`` with the temporary file open in `mode`, or, with ``mode=None``,
+        ``write(tmp_path)`` with the temporary file's path (a str; the file exists, empty).
+    mode : {"w", "wb", None}
+        How the temporary file is opened for `write`.
+    permissions : int, optional
+        File mode bits to set before the rename (default: the temporary file's 0o600).
+
+    Returns
+    -------
+    Path
+        `path`.
+
+    Raises
+    ------
+    OSError
+        The directory cannot be created or written; whatever `write` raises.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+    try:
+        if mode is None:
+            os.close(fd)
+            write(tmp)
+        else:
+            with os.fdopen(fd, mode) as f:
+                write(f)
+        if permissions is not None:
+            os.chmod(tmp, permissions)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
 
 
 def die_with_parent(parent: int) -> None:
@@ -200,6 +245,78 @@ def stop_pool(pool: ProcessPoolExecutor) -> None:
         except (OSError, ValueError, AttributeError):  # already gone
             pass
     pool.shutdown(wait=False, cancel_futures=True)
+
+
+@contextmanager
+def pooled(workers: int) -> Iterator[ProcessPoolExecutor]:
+    """A spawned process pool (`process_pool`) for the duration of a with block: shut down
+    normally at its end, stopped at once (`stop_pool`, running jobs killed) when the
+    block is left by an exception (Ctrl-C included) or a generator holding it is closed.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes, >= 1.
+
+    Yields
+    ------
+    ProcessPoolExecutor
+    """
+    pool = process_pool(workers)      # workers die with this process (SIGKILL included)
+    try:
+        yield pool
+    except BaseException:
+        stop_pool(pool)
+        raise
+    else:
+        pool.shutdown(cancel_futures=True)
+
+
+@contextmanager
+def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable]:
+    """A function ``map(func, jobs) -> results``, each job a dict of keyword arguments,
+    results in job order: in this process for workers == 1, else in a `pooled` process
+    pool kept for the whole with block (so that each worker's caches, e.g. a simulator,
+    are built once), or on a Dask cluster.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes, >= 1.
+    scheduler : str, optional
+        Dask scheduler address ('tcp://host:8786'), or 'local' for a local cluster of
+        `workers` single-threaded processes (as :func:`run_sweep`).
+
+    Yields
+    ------
+    callable
+        ``map(func, jobs: list[dict]) -> list``; func must be a module-level function.
+
+    Raises
+    ------
+    InputError
+        Dask not installed or its scheduler unreachable.
+    """
+    if scheduler:
+        client = _dask_client(scheduler, workers)
+        try:
+            yield lambda func, jobs: client.gather([client.submit(_call, func, j, pure=False)
+                                                    for j in jobs])
+        finally:
+            cluster = client.cluster            # ours (scheduler="local") or None
+            client.close()
+            if cluster is not None:
+                cluster.close()
+        return
+    if workers == 1:
+        yield lambda func, jobs: [func(**j) for j in jobs]
+        return
+    with pooled(workers) as pool:
+        yield lambda func, jobs: [f.result() for f in [pool.submit(func, **j) for j in jobs]]
+
+
+def _call(func, kwargs: dict):
+    return func(**kwargs)
 
 
 def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
@@ -277,18 +394,9 @@ def write_reproducible(src: str | Path, dst: str | Path) -> dict:
     out, for a run log: {"jobs", "failed", "job_wall_s" (sum), "longest_job_s",
     "longest_job"}."""
     records = read_records(src)
-    dst = Path(dst)
-    dst.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=dst.parent, prefix=f".{dst.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            for key in sorted(records, key=natural_key):
-                f.write(json.dumps(strip_run_dependent(records[key]), default=_jsonable) + "\n")
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, dst)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(dst, lambda f: f.writelines(
+        json.dumps(strip_run_dependent(records[key]), default=_jsonable) + "\n"
+        for key in sorted(records, key=natural_key)), permissions=0o644)
     walls = {k: r.get("wall_time_s") for k, r in records.items()
              if isinstance(r.get("wall_time_s"), (int, float))}
     longest = max(walls, key=walls.get, default=None)
@@ -364,29 +472,19 @@ def _local(jobs: list, workers: int | None) -> Iterator[dict]:
         for j in jobs:
             yield run_job(j.func, j.key, j.inputs)
         return
-    pool = process_pool(workers)
-    interrupted = False
-    try:
+    with pooled(workers) as pool:
         futures = {pool.submit(run_job, j.func, j.key, j.inputs): j for j in jobs}
         for fut in as_completed(futures):
             try:
                 yield fut.result()
             except Exception as exc:  # noqa: BLE001 - e.g. BrokenProcessPool
                 yield _lost(futures[fut], exc)
-    except BaseException:
-        interrupted = True
-        raise
-    finally:
-        if interrupted:
-            stop_pool(pool)
-        else:
-            pool.shutdown(cancel_futures=True)
 
 
-def _dask(jobs: list, scheduler: str, workers: int | None) -> Iterator[dict]:
-    """Records in completion order from a Dask distributed cluster: at `scheduler`, or a
-    local cluster of `workers` single-threaded processes for scheduler="local" (connects
-    at once, so that a missing Dask or a wrong address fails before anything is written)."""
+def _dask_client(scheduler: str, workers: int):
+    """A Dask distributed client: of the cluster at `scheduler`, or for scheduler="local"
+    of a new local cluster of `workers` single-threaded processes (connects at once, so
+    that a missing Dask or a wrong address fails before anything is written; InputError)."""
     try:
         from distributed import Client, LocalCluster
     except ImportError:
@@ -394,14 +492,17 @@ def _dask(jobs: list, scheduler: str, workers: int | None) -> Iterator[dict]:
                          "installed: pip install 'stabctl[dask]'") from None
     try:
         if scheduler == "local":
-            n = min(workers or default_workers(), len(jobs))
-            client = Client(LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                         dashboard_address=None))
-        else:
-            client = Client(scheduler)
+            return Client(LocalCluster(n_workers=workers, threads_per_worker=1,
+                                       processes=True, dashboard_address=None))
+        return Client(scheduler)
     except (OSError, TimeoutError, ValueError) as exc:
         raise InputError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
-    return _dask_records(client, jobs)
+
+
+def _dask(jobs: list, scheduler: str, workers: int | None) -> Iterator[dict]:
+    """Records in completion order from a Dask distributed cluster (`_dask_client`)."""
+    n = min(workers or default_workers(), len(jobs))
+    return _dask_records(_dask_client(scheduler, n), jobs)
 
 
 def _dask_records(client, jobs: list) -> Iterator[dict]:

@@ -302,7 +302,7 @@ def test_sweep_jobs_with_another_controller_are_keyed_apart():
     # the paper's controller: exactly cct_jobs' jobs (earlier records resume); another:
     # the ratings' jobs carry it in their inputs and keys
     from stabctl.stability.cct import cct_jobs, default_faults
-    from stabctl.storage.devices import BangBangCOI
+    from stabctl.storage.control import BangBangCOI
     from stabctl.studies.sweeps import controlled_cct_job, controlled_cct_jobs
 
     faults = default_faults("kundur")[:1]

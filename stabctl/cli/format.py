@@ -6,8 +6,6 @@ Every function here formats; none computes a result.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import click
@@ -109,17 +107,11 @@ def save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0
     title : str
     base_mva : float
     """
+    from stabctl.parallel import atomic_write
     from stabctl.plotting.figures import simulation_overview
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        simulation_overview(result, tmp, title=title, base_mva=base_mva)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(path, lambda tmp: simulation_overview(result, tmp, title=title,
+                                                       base_mva=base_mva), mode=None)
 
 
 def describe_esd(esd: dict, short: bool = False) -> str:

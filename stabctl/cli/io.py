@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import click
@@ -106,13 +104,6 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventio
 def _write_case_atomically(case, path: Path) -> None:
     """Write the case JSON to a temporary file beside ``path``, then rename it."""
     from stabctl.io.pst import write_case_json
+    from stabctl.parallel import atomic_write
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".json")
-    os.close(fd)
-    try:
-        write_case_json(case, tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(path, lambda tmp: write_case_json(case, tmp), mode=None)

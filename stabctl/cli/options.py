@@ -394,7 +394,7 @@ def controller(deadband_hz, v_gate, coi, hysteresis_hz):
     -------
     stabctl.storage.devices.BangBangCOI
     """
-    from stabctl.storage.devices import BangBangCOI
+    from stabctl.storage.control import BangBangCOI
 
     return BangBangCOI(deadband_hz, v_gate, coi, hysteresis_hz)
 

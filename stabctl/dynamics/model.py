@@ -234,7 +234,8 @@ class DynamicModel:
             exc_rows=L.exc_rows, pss_rows=L.pss_rows, tg_rows=L.tg_rows,
             mac_bus=mp.bus_idx.astype(np.int64), vex0=self.vex0, pmech0=self.pmech0,
             S_P=self.nc.S_P.astype(complex), I0=self.nc.I0.astype(complex),
-            Y_low=self.nc.Y_low.astype(complex), ieee=self.conventions == "ieee")
+            Y_low=self.nc.Y_low.astype(complex), ieee=self.conventions == "ieee",
+            n_mac=L.n_mac, n_exc=L.n_exc, n_pss=L.n_pss, n_tg=L.n_tg)
         dx, _ = self.evaluate(self.x0.copy(), self.network(StageConfig()), self.V_nc0)
         k = int(np.argmax(np.abs(dx)))
         #: largest |derivative| at t = 0 and the state it belongs to (initialisation check)
@@ -271,25 +272,22 @@ class DynamicModel:
         Raises:
             SimulationError: the non-conforming load iteration did not converge.
         """
-        nm, nb = self.mp.n, self.case.n_bus
-        o = Outputs(pelect=np.empty(nm), qelect=np.empty(nm), eterm=np.empty(nm),
-                    V_bus=np.zeros(nb, complex), V_nc=np.array(V_nc_guess, complex),
-                    efd=np.empty(nm), pmech=np.empty(nm), cur=np.empty(nm, complex))
+        ko = kernel_outputs(self.mp.n, self.case.n_bus)
         S = np.zeros(self.nc_idx.size, complex) if S_extra is None else np.asarray(S_extra, complex)
+        kept = KeptBuses(V=np.array(V_nc_guess, complex), held=np.zeros(S.size, np.bool_),
+                         S_extra=S)
         dx = np.zeros_like(x)  # slots no kernel writes (e.g. a short PSS in long slots) stay 0
-        it = evaluate_kernel(x, self.layout.n_mac, self.layout.n_exc, self.layout.n_pss,
-                             self.layout.n_tg, self.params, net.Y11, net.Y12, net.Y21, net.Y22,
-                             net.Z22, net.R, o.V_nc, np.zeros(o.V_nc.size, np.bool_), S,
-                             want_vbus, dx, o.cur, o.pelect, o.qelect,
-                             o.eterm, o.efd, o.pmech, o.V_bus)
-        if it < 0:
+        if evaluate_kernel(x, self.params, kernel_network(net), kept, want_vbus, dx, ko) < 0:
             raise SimulationError("non-conforming load iteration did not converge")
-        return dx, o
+        return dx, Outputs(pelect=ko.pelect, qelect=ko.qelect, eterm=ko.eterm, V_bus=ko.V_bus,
+                           V_nc=kept.V, efd=ko.efd, pmech=ko.pmech, cur=ko.cur)
 
 
 class KernelParams(NamedTuple):
     """Packed parameters of every model for the compiled kernels (see each model's
-    `packed`), plus the non-conforming load data of the kept buses."""
+    `packed`), the non-conforming load data of the kept buses (S_P, I0, Y_low, (n_nc,)
+    complex pu) and the numbers of machines, exciters, PSSs and governors (the state
+    layout, `Layout`)."""
 
     MP: np.ndarray
     basrad: float
@@ -307,18 +305,135 @@ class KernelParams(NamedTuple):
     I0: np.ndarray
     Y_low: np.ndarray
     ieee: bool
+    n_mac: int
+    n_exc: int
+    n_pss: int
+    n_tg: int
+
+
+class KernelNetwork(NamedTuple):
+    """The matrices of a reduced network stage for the kernels (`ReducedNetwork`; in
+    `stabctl.dynamics.simulation.integrate` each is stacked by stage on a first axis):
+    Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 and Z22 = inv(Y22)
+    (n_nc, n_nc), R (n_bus, n_mac + n_nc); complex pu on the system base."""
+
+    Y11: np.ndarray
+    Y12: np.ndarray
+    Y21: np.ndarray
+    Y22: np.ndarray
+    Z22: np.ndarray
+    R: np.ndarray
+
+
+def kernel_network(net: ReducedNetwork) -> KernelNetwork:
+    """The kernel matrices of one reduced network stage.
+
+    Parameters
+    ----------
+    net : ReducedNetwork
+        A stage from `DynamicModel.network`.
+
+    Returns
+    -------
+    KernelNetwork
+        The same arrays (no copy).
+    """
+    return KernelNetwork(*(getattr(net, f) for f in KernelNetwork._fields))
+
+
+def stacked_networks(nets) -> KernelNetwork:
+    """The stages' matrices stacked on a first axis (stage index), C-contiguous.
+
+    Parameters
+    ----------
+    nets : sequence of ReducedNetwork, length n_stage
+        Stages of equal dimensions.
+
+    Returns
+    -------
+    KernelNetwork
+        Each field of shape (n_stage, ...) of the single-stage shape.
+    """
+    return KernelNetwork(*(np.ascontiguousarray(np.stack([getattr(n, f) for n in nets]))
+                           for f in KernelNetwork._fields))
+
+
+class KeptBuses(NamedTuple):
+    """State of the kept (non-conforming load and device) buses through an evaluation,
+    each (n_nc,): V the complex voltages (pu; the guess in, the solution out), held the
+    loads held at their impedance model (`stabctl.network.solution.solve_nc`; updated in
+    place), S_extra the complex power the devices draw there (pu, + absorbs)."""
+
+    V: np.ndarray
+    held: np.ndarray
+    S_extra: np.ndarray
+
+
+class KernelOutputs(NamedTuple):
+    """Algebraic outputs written by `evaluate_kernel`: per machine cur (complex, system
+    base), pelect, qelect (system base), eterm, efd, pmech (machine base), all (n_mac,);
+    V_bus (n_bus,) complex pu."""
+
+    cur: np.ndarray
+    pelect: np.ndarray
+    qelect: np.ndarray
+    eterm: np.ndarray
+    efd: np.ndarray
+    pmech: np.ndarray
+    V_bus: np.ndarray
 
 
 @njit(cache=True)
-def evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc, held, S_extra,
-                    want_vbus, dx, cur, pelect, qelect, eterm, efd, pmech, V_bus):
+def kernel_outputs(nm, nb):
+    """Output buffers for `evaluate_kernel`: (n_mac,) each, V_bus (nb,) zeros.
+
+    Parameters
+    ----------
+    nm : int
+        Number of machines.
+    nb : int
+        Number of buses.
+
+    Returns
+    -------
+    KernelOutputs
+    """
+    return KernelOutputs(np.empty(nm, np.complex128), np.empty(nm), np.empty(nm),
+                         np.empty(nm), np.empty(nm), np.empty(nm), np.zeros(nb, np.complex128))
+
+
+@njit(cache=True)
+def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     """One evaluation in PSTess's order (docs/pst_models.md 7.2): machine flag 1, network,
     PSS / exciter / governor flag 1, then flag 2 of machines, PSS, exciters, governors.
 
-    Writes dx and the outputs; V_nc and held (loads held at their impedance model, see
-    `netsolve.solve_nc`) are updated in place.  Returns the load-iteration count, -1
-    without convergence.
+    Parameters
+    ----------
+    x : ndarray, shape (n_state,)
+        Flat state (`Layout`); limited states are clamped in place as PST does.
+    p : KernelParams
+        Model parameters and sizes.
+    net : KernelNetwork
+        Matrices of the network stage.
+    kept : KeptBuses
+        Kept-bus voltages (guess in, solution out) and held loads, updated in place; the
+        device powers drawn there.
+    want_vbus : bool
+        Compute every bus voltage (else only the machine buses of out.V_bus are valid).
+    dx : ndarray, shape (n_state,)
+        Written with the derivatives (slots no model uses are left as they are).
+    out : KernelOutputs
+        Written with the algebraic outputs.
+
+    Returns
+    -------
+    int
+        The load-iteration count, -1 without convergence.
     """
+    nm, ne, nps, ng = p.n_mac, p.n_exc, p.n_pss, p.n_tg
+    Y11, Y12, Y21, Y22, Z22, R = net
+    V_nc, held, S_extra = kept
+    cur, pelect, qelect, eterm, efd, pmech, V_bus = out
     o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
     xm, dxm = x[:o].reshape(6, nm), dx[:o].reshape(6, nm)
     xe, dxe = x[o:o + re * ne].reshape(re, ne), dx[o:o + re * ne].reshape(re, ne)

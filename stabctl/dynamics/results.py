@@ -9,11 +9,13 @@ data) `speed_pu.G<k>`, `angle_rad.G<k>` (absolute, synchronous frame, as PSTess)
 from __future__ import annotations
 
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from stabctl.dynamics.coi import coi_angle, coi_speed
+from stabctl.parallel import atomic_write
 
 SERIES = ("speed", "angle", "pelect", "pmech", "efd")
 SERIES_UNITS = {"speed": "speed_pu", "angle": "angle_rad", "pelect": "pelect_pu",
@@ -54,12 +56,12 @@ class SimulationResult:
     @property
     def coi_angle(self) -> np.ndarray:
         """Inertia-weighted mean rotor angle (rad), shape (n_t,)."""
-        return self.angle @ self.inertia / self.inertia.sum()
+        return coi_angle(self.angle, self.inertia)
 
     @property
     def coi_speed(self) -> np.ndarray:
         """Inertia-weighted mean speed (pu), shape (n_t,)."""
-        return self.speed @ self.inertia / self.inertia.sum()
+        return coi_speed(self.speed, self.inertia)
 
     @property
     def max_angle_spread(self) -> float:
@@ -130,15 +132,15 @@ class SimulationResult:
     def to_csv(self, path: str | os.PathLike) -> Path:
         """Write the CSV atomically (temporary file then rename)."""
         names, data = self.columns()
-        return _atomic(path, lambda f: np.savetxt(f, data, delimiter=",", header=",".join(names),
-                                                  comments="", fmt="%.10g"))
+        return atomic_write(path, lambda f: np.savetxt(f, data, delimiter=",", header=",".join(names),
+                                                       comments="", fmt="%.10g"))
 
     def to_npz(self, path: str | os.PathLike) -> Path:
         """Write every array and the verdict to a compressed .npz, atomically."""
         arrays = {k: v for k, v in self.__dict__.items() if isinstance(v, np.ndarray)}
         arrays["verdict"] = np.array([self.stable, self.t_separation or np.nan], float)
         arrays["separated"] = np.asarray(self.separated, int)
-        return _atomic(path, lambda f: np.savez_compressed(f, **arrays), binary=True)
+        return atomic_write(path, lambda f: np.savez_compressed(f, **arrays), mode="wb")
 
     @classmethod
     def from_npz(cls, path: str | os.PathLike) -> "SimulationResult":
@@ -149,17 +151,3 @@ class SimulationResult:
         sep = list(d.pop("separated"))
         return cls(**d, stable=bool(stable), t_separation=None if np.isnan(tsep) else tsep,
                    separated=sep)
-
-
-def _atomic(path, write, binary: bool = False) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb" if binary else "w") as f:
-            write(f)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path

@@ -35,8 +35,12 @@ from stabctl._jitcache import njit
 
 from stabctl.dynamics import events as ev_
 from stabctl.case import Case
+from stabctl.storage import control as law
 from stabctl.storage import devices as st
-from stabctl.dynamics.model import DynamicModel, OperatingPoint, check_conventions, evaluate_kernel
+from stabctl.dynamics.coi import coi_angle, coi_value
+from stabctl.dynamics.model import (DynamicModel, KeptBuses, KernelNetwork, KernelOutputs,
+                                    OperatingPoint, check_conventions, evaluate_kernel,
+                                    kernel_outputs, stacked_networks)
 from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
 from stabctl.dynamics.results import SimulationResult
 
@@ -274,7 +278,7 @@ class Simulator:
             InputError: wrong controller, frame times not increasing, negative latency;
             SimulationError: as `run`.
         """
-        if storage is None or not isinstance(storage.controller, st.ExternalCommands):
+        if storage is None or storage.controller.kind != law.EXTERNAL:
             raise InputError("run_commanded needs a fleet whose controller is ExternalCommands")
         frame_times = np.asarray(frame_times, float)
         if np.any(np.diff(frame_times) <= 0) or latency < 0:
@@ -295,7 +299,7 @@ class Simulator:
     def _result(self, t, rec: "Recording", n, wall, limit) -> SimulationResult:
         c = self.case
         angle = rec.angle[:n]
-        dev = np.abs(angle - (angle @ self.inertia / self.inertia.sum())[:, None])
+        dev = np.abs(angle - coi_angle(angle, self.inertia)[:, None])
         lost = np.nonzero(dev.max(axis=1) > limit)[0]
         t_sep, separated = None, []
         if lost.size:
@@ -317,24 +321,29 @@ class _Run:
     """One simulation in progress: the compiled loop advanced piecewise (see `integrate`)."""
 
     def __init__(self, sim: "Simulator", m, sa, grid, nets, pst, limit, stop, n_commands=0):
-        stack = lambda name: np.ascontiguousarray(np.stack([getattr(n, name) for n in nets]))  # noqa: E731
         self.sim, self.m, self.sa, self.grid = sim, m, sa, grid
-        N, nm, nb, nd = grid.t.size, m.mp.n, sim.case.n_bus, sa.pmax.size
-        self.rec = Recording(speed=np.zeros((N, nm)), angle=np.zeros((N, nm)),
-                             pelect=np.zeros((N, nm)), pmech=np.zeros((N, nm)),
-                             efd=np.zeros((N, nm)), V=np.zeros((N, nb), np.complex128))
-        self.P_rec, self.stats = np.zeros((N, nd)), np.zeros((nd, 3))
-        self.log = np.full((4096, 4), np.nan)
-        self.x, self.V_nc, self.ds = m.x0.copy(), m.V_nc0.copy(), device_state(sa)
-        self.health = Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3)))
-        self.held = np.zeros(self.V_nc.size, np.bool_)   # loads held low (solve_nc)
-        self.held_stage = np.full(1, -1)
-        self.cmd_t = np.full(n_commands, np.inf)
-        self.cmd_mode = np.zeros((n_commands, nd))
-        self.mats = tuple(stack(n) for n in ("Y11", "Y12", "Y21", "Y22", "Z22", "R"))
-        self.first = np.r_[False, np.diff(grid.interval) > 0]
-        self.pst, self.limit, self.stop = pst, limit, stop
+        n_nc = m.V_nc0.size
+        self.rec = recording(grid.t.size, m.mp.n, sim.case.n_bus, sa.pmax.size)
+        self.carry = Carry(
+            x=m.x0.copy(),
+            kept=KeptBuses(V=m.V_nc0.copy(), held=np.zeros(n_nc, np.bool_),  # loads held low
+                           S_extra=np.zeros(n_nc, np.complex128)),
+            held_stage=np.full(1, -1), devices=device_state(sa, n_commands),
+            health=Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3))))
+        self.nets, self.steps = stacked_networks(nets), step_grid(grid)
+        self.opts = RunOptions(pst=pst, inertia=sim.inertia, limit=limit, stop=stop)
+        self.limit = limit
         self.k, self.status, self.wall, self.stored = 0, OK, 0.0, False
+
+    @property
+    def x(self) -> np.ndarray:
+        """The flat state at the last stored grid index (n_state,)."""
+        return self.carry.x
+
+    @property
+    def V_nc(self) -> np.ndarray:
+        """The kept-bus voltages (n_nc,) complex pu."""
+        return self.carry.kept.V
 
     def advance(self, k1: int) -> None:
         """Integrate up to grid index k1 and store its outputs (nothing after a stop);
@@ -342,20 +351,16 @@ class _Run:
         if self.status != OK or k1 < self.k or (k1 == self.k and self.stored):
             return
         self.stored = True
-        m, g = self.m, self.grid
         wall = time.perf_counter()
-        self.status, k_end = integrate(
-            self.x, self.V_nc, self.held, self.held_stage, g.t, g.interval, g.h, self.first,
-            self.pst, *self.mats, m.params,
-            m.layout.n_mac, m.layout.n_exc, m.layout.n_pss, m.layout.n_tg, self.sa, self.ds,
-            self.cmd_t, self.cmd_mode, self.sim.inertia, self.limit, self.stop, self.k, k1,
-            self.rec, self.P_rec, self.stats, self.log, self.health)
+        self.status, k_end = integrate(self.carry, self.k, k1, self.steps, self.nets,
+                                       self.m.params, self.sa, self.opts, self.rec)
         self.wall += time.perf_counter() - wall
         self.k = k_end
 
     def command(self, i: int, t_apply: float, modes) -> None:
         """Schedule command i: device set-points (units of each rating) from t_apply (s)."""
-        self.cmd_t[i], self.cmd_mode[i] = t_apply, modes
+        ds = self.carry.devices
+        ds.cmd_t[i], ds.cmd_mode[i] = t_apply, modes
 
     def partial(self, k: int) -> SimulationResult:
         """The trajectory up to grid index k (views, no verdict)."""
@@ -365,23 +370,23 @@ class _Run:
             buses=c.buses.number.astype(int), speed=r.speed[:n], angle=r.angle[:n],
             pelect=r.pelect[:n], pmech=r.pmech[:n], efd=r.efd[:n], vmag=np.abs(r.V[:n]),
             vang=np.angle(r.V[:n]), inertia=self.sim.inertia, devices=np.arange(1, self.sa.pmax.size + 1),
-            pesd=self.P_rec[:n])
+            pesd=self.rec.P[:n])
 
     def finish(self, storage) -> SimulationResult:
         """The result; raises SimulationError (with the partial result) after a divergence."""
         sim, g, k_end = self.sim, self.grid, self.k
         res = sim._result(g.t, self.rec, k_end + 1, self.wall, self.limit)
         if storage is not None:
-            _attach_storage(res, storage, self.P_rec[:k_end + 1], self.stats,
-                            sim.case.base_mva, self.log[~np.isnan(self.log[:, 0])],
-                            sim.case.freq_hz)
+            log = self.rec.log
+            _attach_storage(res, storage, self.rec.P[:k_end + 1], self.rec.stats,
+                            sim.case.base_mva, log[~np.isnan(log[:, 0])], sim.case.freq_hz)
         t_fail = g.t[min(k_end + 1, g.t.size - 1)]
         if self.status == UNSTABLE_STEP:
-            q = int(self.health.bad[0])
+            q, x = int(self.carry.health.bad[0]), self.carry.x
             raise NumericalInstabilityError(
                 f"case '{sim.case.name}': numerical instability in the step ending at t = "
-                f"{t_fail:.4f} s: state {self.m.state_name(q)} = {self.x[q]:.6g} "
-                f"({_symptom(self.x[q], q, self.m.mp.n)}); the step h = "
+                f"{t_fail:.4f} s: state {self.m.state_name(q)} = {x[q]:.6g} "
+                f"({_symptom(x[q], q, self.m.mp.n)}); the step h = "
                 f"{g.h[g.interval[k_end]]:.6g} s is too large for this model: use a smaller "
                 f"step (trajectory kept up to {g.t[k_end]:.4f} s)", result=res)
         if self.status < 0:
@@ -436,7 +441,11 @@ def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:
 
 
 class Recording(NamedTuple):
-    """Preallocated trajectories filled by `integrate` (n_t rows)."""
+    """Preallocated buffers filled by `integrate` (`recording`): speed, angle, pelect,
+    pmech, efd (n_t, n_mac) and V (n_t, n_bus) complex at every grid index (the predictor
+    stage's outputs); the device powers P (n_t, n_dev) pu; per device stats (n_dev, 3) =
+    (switchings, energy absorbed, energy delivered in pu*s); the switching log (rows: time
+    s, device, new mode, relative speed pu; NaN rows unused)."""
 
     speed: np.ndarray
     angle: np.ndarray
@@ -444,6 +453,34 @@ class Recording(NamedTuple):
     pmech: np.ndarray
     efd: np.ndarray
     V: np.ndarray
+    P: np.ndarray
+    stats: np.ndarray
+    log: np.ndarray
+
+
+#: rows of the switching log of a run (switchings beyond it are counted, not logged)
+LOG_ROWS = 4096
+
+
+def recording(n_t: int, nm: int, nb: int, nd: int) -> Recording:
+    """Zeroed buffers for a run.
+
+    Parameters
+    ----------
+    n_t : int
+        Grid points.
+    nm, nb, nd : int
+        Machines, buses, storage devices.
+
+    Returns
+    -------
+    Recording
+    """
+    return Recording(speed=np.zeros((n_t, nm)), angle=np.zeros((n_t, nm)),
+                     pelect=np.zeros((n_t, nm)), pmech=np.zeros((n_t, nm)),
+                     efd=np.zeros((n_t, nm)), V=np.zeros((n_t, nb), np.complex128),
+                     P=np.zeros((n_t, nd)), stats=np.zeros((nd, 3)),
+                     log=np.full((LOG_ROWS, 4), np.nan))
 
 
 OK, SEPARATED, NO_LOAD_FLOW, UNSTABLE_STEP = 0, 1, -1, -3
@@ -456,6 +493,142 @@ OK, SEPARATED, NO_LOAD_FLOW, UNSTABLE_STEP = 0, 1, -1, -3
 #: from 1.5 s on at a spurious fixed point of the method (Efd at its ceiling, 0.3-9).
 SPEED_BAND, EST_TOL, EST_STEPS = 0.5, 0.1, 50
 
+
+class Health(NamedTuple):
+    """Numerical-health trackers of a run (`_healthy`): the local error estimate of the
+    step ending at each grid index (n_t,), the state it is largest in (1,), the number of
+    steps in a row above EST_TOL (1,), the offending state index (1,)."""
+
+    est: np.ndarray
+    worst: np.ndarray
+    n_big: np.ndarray
+    bad: np.ndarray
+
+
+class DeviceState(NamedTuple):
+    """Controller and device state carried across `integrate` calls (n_dev entries):
+    mode (-1, 0, +1; an external set-point in units of the rating), power P (pu), power
+    target, energy content e (pu*s); the command schedule of externally commanded devices:
+    cmd_t (n_cmd,) times (s, inf until scheduled), cmd_mode (n_cmd, n_dev) set-points, and
+    its next entry cmd_next[0]."""
+
+    mode: np.ndarray
+    P: np.ndarray
+    target: np.ndarray
+    e: np.ndarray
+    cmd_next: np.ndarray
+    cmd_t: np.ndarray
+    cmd_mode: np.ndarray
+
+
+def device_state(sa, n_commands: int = 0) -> DeviceState:
+    """Initial device state: idle, no power, the initial energy sa.e0.
+
+    Parameters
+    ----------
+    sa : stabctl.storage.devices.StorageArrays
+        The packed fleet (n_dev devices).
+    n_commands : int
+        Room in the command schedule.
+
+    Returns
+    -------
+    DeviceState
+    """
+    nd = sa.pmax.size
+    return DeviceState(np.zeros(nd), np.zeros(nd), np.zeros(nd), sa.e0.copy(),
+                       np.zeros(1, np.int64), np.full(n_commands, np.inf),
+                       np.zeros((n_commands, nd)))
+
+
+class StepGrid(NamedTuple):
+    """The grid as `integrate` reads it (`TimeGrid`): t (n_t,) s, interval (n_t,) stage
+    index of each point, h (n_stage,) step of each interval (s), first (n_t,) whether the
+    step from a point is the first of an interval after the first."""
+
+    t: np.ndarray
+    interval: np.ndarray
+    h: np.ndarray
+    first: np.ndarray
+
+
+def step_grid(grid: TimeGrid) -> StepGrid:
+    """The kernel view of a `TimeGrid`.
+
+    Parameters
+    ----------
+    grid : TimeGrid
+
+    Returns
+    -------
+    StepGrid
+    """
+    return StepGrid(grid.t, grid.interval, grid.h, np.r_[False, np.diff(grid.interval) > 0])
+
+
+class RunOptions(NamedTuple):
+    """Settings of a run: pst event semantics (module docstring); inertia (n_mac,) the COI
+    weights H * MVA; limit (rad) and stop: end the run when an angle leaves the COI by more
+    than limit."""
+
+    pst: bool
+    inertia: np.ndarray
+    limit: float
+    stop: bool
+
+
+class Carry(NamedTuple):
+    """What `integrate` updates in place, so that a run can be continued: the flat state x
+    (n_state,), the kept buses (`KeptBuses`: voltages, held loads, device injections),
+    held_stage[0] the network stage the held loads belong to (they are cleared when it
+    changes), the devices (`DeviceState`) and the numerical health (`Health`)."""
+
+    x: np.ndarray
+    kept: KeptBuses
+    held_stage: np.ndarray
+    devices: DeviceState
+    health: Health
+
+
+class _Kernel(NamedTuple):
+    """What one network evaluation inside `integrate` needs (`_evaluate`)."""
+
+    p: object
+    nets: KernelNetwork
+    kept: KeptBuses
+    held_stage: np.ndarray
+    out: KernelOutputs
+
+
+class _Seen(NamedTuple):
+    """What the devices see at one point (n_dev each): speed relative to the COI r (pu),
+    bus voltage v (pu), relative acceleration acc (pu/s)."""
+
+    r: np.ndarray
+    v: np.ndarray
+    acc: np.ndarray
+
+
+class _Workspace(NamedTuple):
+    """Scratch arrays of `integrate`: derivatives at the step start (dx_k) and at the
+    predictor (dx_j), what the devices see at the sub-step start (a) and end (b), and which
+    devices switched in the current step."""
+
+    dx_k: np.ndarray
+    dx_j: np.ndarray
+    a: _Seen
+    b: _Seen
+    switched: np.ndarray
+
+
+@njit(cache=True)
+def _workspace(x, nd):
+    return _Workspace(np.zeros_like(x), np.zeros_like(x),  # slots no kernel writes stay 0
+                      _Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)),
+                      _Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)), np.zeros(nd, np.bool_))
+
+
+# -- health and separation -----------------------------------------------------------------
 
 @njit(cache=True)
 def _local_error(x, f_k, f_j, hh, where):
@@ -489,23 +662,54 @@ def _healthy(x, est, nm, health):
 
 
 @njit(cache=True)
-def _store(rec, k, x, nm, pelect, pmech, efd, V_bus):
+def _separated(x, nm, opts):
+    """Whether a rotor angle is more than opts.limit from the COI angle (eq. 40)."""
+    return np.max(np.abs(x[:nm] - coi_value(x[:nm], opts.inertia))) > opts.limit
+
+
+# -- recording -------------------------------------------------------------------------------
+
+@njit(cache=True)
+def _record(rec, k, x, out, P):
+    """Store grid index k: angles and speeds of x, the evaluation outputs, device powers."""
+    nm = out.pelect.size
     for i in range(nm):
         rec.angle[k, i] = x[i]
         rec.speed[k, i] = x[nm + i]
-    rec.pelect[k] = pelect
-    rec.pmech[k] = pmech
-    rec.efd[k] = efd
-    rec.V[k] = V_bus
+    rec.pelect[k] = out.pelect
+    rec.pmech[k] = out.pmech
+    rec.efd[k] = out.efd
+    rec.V[k] = out.V_bus
+    if P.size > 0:
+        rec.P[k] = P
 
 
 @njit(cache=True)
-def _log(log, stats, d, time_, mode, r):
+def _log(rec, d, time_, mode, r):
     """Count a switching of device d and log it (time s, device, new mode, rel. speed)."""
-    row = int(stats[:, 0].sum())
-    stats[d, 0] += 1
-    if row < log.shape[0]:
-        log[row, 0], log[row, 1], log[row, 2], log[row, 3] = time_, d, mode, r
+    row = int(rec.stats[:, 0].sum())
+    rec.stats[d, 0] += 1
+    if row < rec.log.shape[0]:
+        rec.log[row, 0], rec.log[row, 1], rec.log[row, 2], rec.log[row, 3] = time_, d, mode, r
+
+
+# -- network solution ----------------------------------------------------------------------
+
+@njit(cache=True)
+def _stage(nets, s):
+    """The matrices of network stage s from the stacked ones."""
+    return KernelNetwork(nets.Y11[s], nets.Y12[s], nets.Y21[s], nets.Y22[s], nets.Z22[s],
+                         nets.R[s])
+
+
+@njit(cache=True)
+def _evaluate(kn, x, stage, want, dx):
+    """`evaluate_kernel` with the network of `stage`; the held loads are released when
+    the stage changes.  Returns its iteration count (< 0: no convergence)."""
+    if stage != kn.held_stage[0]:
+        kn.kept.held[:] = False
+        kn.held_stage[0] = stage
+    return evaluate_kernel(x, kn.p, _stage(kn.nets, stage), kn.kept, want, dx, kn.out)
 
 
 @njit(cache=True)
@@ -516,18 +720,32 @@ def _inject(sa, P, S):
         S[sa.pos[d]] += P[d]
 
 
+# -- device control and energy accounting --------------------------------------------------
+
 @njit(cache=True)
 def _targets(sa, mode, r, v, accel, out):
     """Device power set-points: bang-bang modes times ratings, or the linear law."""
     for d in range(out.size):
-        if sa.kind == st.BANG_BANG:
+        if sa.kind == law.BANG_BANG:
             out[d] = mode[d] * sa.pmax[d]
-        elif sa.kind == st.EXTERNAL:
+        elif sa.kind == law.EXTERNAL:
             out[d] = mode[d] * sa.pmax[d] if v[d] >= sa.vgate else 0.0
         elif v[d] < sa.vgate:
             out[d] = 0.0
         else:
             out[d] = min(max(sa.Kv * r[d] + sa.Ka * accel[d], -sa.pmax[d]), sa.pmax[d])
+
+
+@njit(cache=True)
+def _powers_now(sa, ds):
+    """Device powers at once on their targets (ideal devices; lags and ramps keep them);
+    returns whether any changed."""
+    changed = False
+    for d in range(ds.P.size):
+        Pn = st.device_power(sa, d, ds.target[d], ds.P[d], ds.e[d], 0.0)
+        changed = changed or Pn != ds.P[d]
+        ds.P[d] = Pn
+    return changed
 
 
 @njit(cache=True)
@@ -543,227 +761,266 @@ def _advance(sa, P, target, e, hh, stats):
 
 
 @njit(cache=True)
-def _device_state(x, nm, inertia, sa, V_nc, dx, r, v, accel):
+def _observe(x, dx, nm, inertia, sa, V_nc, seen):
     """Relative speeds, bus voltages and relative accelerations seen by the devices."""
-    st.relative_speeds(x, nm, inertia, sa, r)
-    st.relative_speeds(dx, nm, inertia, sa, accel)
-    for d in range(r.size):
-        v[d] = abs(V_nc[sa.pos[d]])
+    law.relative_speeds(x, nm, inertia, sa, seen.r)
+    law.relative_speeds(dx, nm, inertia, sa, seen.acc)
+    for d in range(seen.r.size):
+        seen.v[d] = abs(V_nc[sa.pos[d]])
 
 
-class Health(NamedTuple):
-    """Numerical-health trackers of a run (`_healthy`): the local error estimate of the
-    step ending at each grid index (n_t,), the state it is largest in (1,), the number of
-    steps in a row above EST_TOL (1,), the offending state index (1,)."""
-
-    est: np.ndarray
-    worst: np.ndarray
-    n_big: np.ndarray
-    bad: np.ndarray
-
-
-class DeviceState(NamedTuple):
-    """Controller and device state carried across `integrate` calls (n_dev entries):
-    mode (-1, 0, +1; an external set-point in units of the rating), power P (pu), power
-    target, energy content e (pu*s), the next entry of the command schedule (cmd_next[0])
-    for externally commanded devices."""
-
-    mode: np.ndarray
-    P: np.ndarray
-    target: np.ndarray
-    e: np.ndarray
-    cmd_next: np.ndarray
-
-
-def device_state(sa) -> DeviceState:
-    nd = sa.pmax.size
-    return DeviceState(np.zeros(nd), np.zeros(nd), np.zeros(nd), sa.e0.copy(),
-                       np.zeros(1, np.int64))
-
+# -- commands ------------------------------------------------------------------------------
 
 @njit(cache=True)
-def _apply_commands(sa, ds, cmd_t, cmd_mode, t_now, log, stats, r):
+def _apply_commands(ds, t_now, rec, r):
     """Apply every scheduled command due by t_now (externally commanded devices); a
     change of the set-point's sign (idle, absorb, inject) is logged as a switching."""
-    while ds.cmd_next[0] < cmd_t.size and cmd_t[ds.cmd_next[0]] <= t_now + 1e-12:
+    while ds.cmd_next[0] < ds.cmd_t.size and ds.cmd_t[ds.cmd_next[0]] <= t_now + 1e-12:
         c = ds.cmd_next[0]
         for d in range(ds.mode.size):
-            if np.sign(cmd_mode[c, d]) != np.sign(ds.mode[d]):
-                _log(log, stats, d, cmd_t[c], np.sign(cmd_mode[c, d]), r[d])
-            ds.mode[d] = cmd_mode[c, d]
+            if np.sign(ds.cmd_mode[c, d]) != np.sign(ds.mode[d]):
+                _log(rec, d, ds.cmd_t[c], np.sign(ds.cmd_mode[c, d]), r[d])
+            ds.mode[d] = ds.cmd_mode[c, d]
         ds.cmd_next[0] += 1
 
 
 @njit(cache=True)
-def integrate(xs, V_nc, held, held_stage, t, interval, h, first, pst, Y11, Y12, Y21, Y22, Z22,
-              R, p, nm, ne, nps, ng, sa, ds, cmd_t, cmd_mode, inertia, limit, stop, k0, k1, rec,
-              P_rec, stats, log, health):
-    """PST's predictor-corrector from grid index k0 to k1 (see the module docstring), with
-    the storage devices `sa` (stabctl.storage.devices.StorageArrays) in state `ds` (DeviceState).
+def _substep_length(grid, sa, ds, k, rem):
+    """Length of the next sub-step of step k with rem seconds left: the rest, or up to the
+    next scheduled command if one falls inside."""
+    if (sa.kind == law.EXTERNAL and ds.cmd_next[0] < ds.cmd_t.size
+            and ds.cmd_t[ds.cmd_next[0]] < grid.t[k + 1] - 1e-12):
+        return max(ds.cmd_t[ds.cmd_next[0]] - (grid.t[k + 1] - rem), 0.0)
+    return rem
 
-    xs (the state), V_nc and held (the loads held at their impedance model, see
-    `netsolve.solve_nc`; cleared when the network stage changes, held_stage[0] is the stage
-    it belongs to) are updated in place, so a run can be continued.  Stage
-    matrices are stacked by interval.  Stores the predictor-stage outputs, the states and
-    the device powers at every index (rec, P_rec).  Bang-bang devices: a mode change
-    within a step has its instant located (`storage.crossing`) and the step is
-    re-integrated in two parts.  Externally commanded devices: each command of the
-    schedule (cmd_t sorted, cmd_mode) takes effect at its exact time, splitting the step.
-    stats[d] = (switchings, energy absorbed, energy delivered in pu*s); log rows (time,
-    device, new mode, relative speed pu) while there is room.  health (`Health`): the
-    numerical-health trackers, carried across calls.  Returns (status, last stored
-    index): OK, SEPARATED (stopped at loss of synchronism), UNSTABLE_STEP (`_healthy`
-    failed after the step from that index), NO_LOAD_FLOW.
+
+# -- the controller at a grid point and at a split point -----------------------------------
+
+@njit(cache=True)
+def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
+    """The controller at grid index k (events make voltages jump here): commands due,
+    Table 3 modes, targets and powers; the network is solved again if a power changed."""
+    _observe(x, w.dx_k, kn.p.n_mac, opts.inertia, sa, kn.kept.V, w.a)
+    if sa.kind == law.EXTERNAL:
+        _apply_commands(ds, grid.t[k], rec, w.a.r)
+    for d in range(sa.pmax.size):
+        want = law.desired_mode(sa, d, ds.mode[d], w.a.r[d], w.a.v[d])
+        if sa.kind == law.BANG_BANG and want != ds.mode[d]:
+            ds.mode[d] = want
+            w.switched[d] = True
+            _log(rec, d, grid.t[k], want, w.a.r[d])
+    _targets(sa, ds.mode, w.a.r, w.a.v, w.a.acc, ds.target)
+    if _powers_now(sa, ds):
+        _inject(sa, ds.P, kn.kept.S_extra)
+        _evaluate(kn, x, grid.interval[k], True, w.dx_k)
+
+
+@njit(cache=True)
+def _locate_switching(kn, grid, sa, ds, opts, w, x_b, k):
+    """First bang-bang switching inside the step from grid index k (state x_b and w.dx_j at
+    its end): (fraction of the step, device), (2.0, -1) if none.  A device switches at most
+    once per step; a voltage-gate jump at an event is taken at the grid point."""
+    _observe(x_b, w.dx_j, kn.p.n_mac, opts.inertia, sa, kn.kept.V, w.b)
+    at_event = grid.interval[k + 1] != grid.interval[k]
+    theta, first_d = 2.0, -1
+    for d in range(sa.pmax.size):
+        if w.switched[d]:    # one switching per device and step: no chattering loop
+            continue
+        want = law.desired_mode(sa, d, ds.mode[d], w.b.r[d], w.b.v[d])
+        gate_jump = (w.a.v[d] >= sa.vgate) != (w.b.v[d] >= sa.vgate)
+        if want != ds.mode[d] and not (at_event and gate_jump):  # events: at t_k+1
+            th, _ = law.crossing(sa, ds.mode[d], want, w.a.r[d], w.b.r[d], w.a.v[d], w.b.v[d])
+            if th < theta:
+                theta, first_d = th, d
+    return theta, first_d
+
+
+@njit(cache=True)
+def _switch_located(sa, ds, w, rec, first_d, t_now):
+    """At the located instant t_now: switch device first_d, and any other whose crossing
+    falls there too (within 1e-9 of the step)."""
+    for d in range(sa.pmax.size):
+        want = law.desired_mode(sa, d, ds.mode[d], w.b.r[d], w.b.v[d])
+        if want != ds.mode[d] and not w.switched[d]:
+            th, new = law.crossing(sa, ds.mode[d], want, w.a.r[d], w.b.r[d], w.a.v[d], w.b.v[d])
+            if d == first_d or th <= 1e-9:
+                ds.mode[d] = new
+                w.switched[d] = True
+                _log(rec, d, t_now, new, w.a.r[d])
+
+
+@njit(cache=True)
+def _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d):
+    """The controller at a split point of step k (a switching or a command, rem seconds
+    before t_k+1): commands, switchings, targets, powers, then the derivatives there.
+    Returns (network solved, derivatives)."""
+    t_now = grid.t[k + 1] - rem
+    _observe(x_a, w.dx_j, kn.p.n_mac, opts.inertia, sa, kn.kept.V, w.a)
+    if sa.kind == law.EXTERNAL:
+        _apply_commands(ds, t_now, rec, w.a.r)
+    if first_d >= 0:
+        _switch_located(sa, ds, w, rec, first_d, t_now)
+    _targets(sa, ds.mode, w.a.r, w.a.v, w.a.acc, ds.target)
+    _powers_now(sa, ds)
+    _inject(sa, ds.P, kn.kept.S_extra)
+    dx_a = np.empty_like(x_a)
+    return _evaluate(kn, x_a, grid.interval[k], False, dx_a) >= 0, dx_a
+
+
+# -- the step ------------------------------------------------------------------------------
+
+@njit(cache=True)
+def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
+    """Heun's predictor-corrector over hh from x_a (derivatives dx_a), the devices' powers
+    advanced on a copy of their energy: (network solved, corrected state); dx_j is written
+    with the derivatives at the predictor (network of `stage`)."""
+    Pb = _advance(sa, ds.P, ds.target, ds.e.copy(), hh, np.zeros((sa.pmax.size, 3)))
+    _inject(sa, Pb, kn.kept.S_extra)
+    xp = x_a + hh * dx_a
+    if _evaluate(kn, xp, stage, want, dx_j) < 0:
+        return False, x_a
+    return True, x_a + 0.5 * hh * (dx_a + dx_j)
+
+
+@njit(cache=True)
+def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
+    """The step from grid index k, split at located switchings and scheduled commands
+    (each device switches at most once per step, commands are finite: it ends).  Returns
+    (status, index, state after the step; x itself when the network failed)."""
+    s = grid.interval[k]
+    j = grid.interval[k + 1] if opts.pst else s
+    last = k == grid.interval.size - 2
+    x_a, dx_a, rem = x, w.dx_k, grid.h[s]
+    x_b = x
+    while True:
+        hh = _substep_length(grid, sa, ds, k, rem)
+        ok, x_b = _heun(kn, sa, ds, x_a, dx_a, hh, j if hh == rem else s, last and hh == rem,
+                        w.dx_j)
+        if not ok:
+            return NO_LOAD_FLOW, k, x
+        if hh == rem:
+            health.est[k + 1] = _local_error(x_b, dx_a, w.dx_j, hh, health.worst)
+        theta, first_d = 2.0, -1
+        if sa.kind == law.BANG_BANG and hh == rem:
+            theta, first_d = _locate_switching(kn, grid, sa, ds, opts, w, x_b, k)
+        if hh == rem and first_d < 0:
+            break
+        if first_d >= 0:           # re-integrate up to the first switching instant
+            hh = theta * rem
+        Pm = _advance(sa, ds.P, ds.target, ds.e, hh, rec.stats)
+        if first_d >= 0:
+            _inject(sa, Pm, kn.kept.S_extra)
+            if _evaluate(kn, x_a + hh * dx_a, s, False, w.dx_j) < 0:
+                return NO_LOAD_FLOW, k, x
+            x_a = x_a + 0.5 * hh * (dx_a + w.dx_j)
+        else:                      # up to the scheduled command
+            x_a = x_b
+        rem -= hh
+        ds.P[:] = Pm
+        ok, dx_a = _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d)
+        if not ok:
+            return NO_LOAD_FLOW, k, x
+        x_b = x_a
+        if rem <= 1e-15:
+            break
+    if sa.pmax.size > 0 and rem > 1e-15:
+        ds.P[:] = _advance(sa, ds.P, ds.target, ds.e, rem, rec.stats)
+    return OK, k, x_b
+
+
+@njit(cache=True)
+def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
+    """One step from grid index k: the network at t_k (PSTess evaluates an interval's first
+    step twice; the first pass's clamps stay), the controller there, the record of t_k,
+    then the sub-steps.  Returns (status, index, state)."""
+    s = grid.interval[k]
+    _inject(sa, ds.P, kn.kept.S_extra)
+    if grid.first[k] and opts.pst:
+        V_keep = kn.kept.V.copy()
+        _evaluate(kn, x, s, False, w.dx_k)
+        kn.kept.V[:] = V_keep
+    if _evaluate(kn, x, s, True, w.dx_k) < 0:
+        return NO_LOAD_FLOW, max(k - 1, 0), x
+    w.switched[:] = False
+    if sa.pmax.size > 0:
+        _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k)
+    _record(rec, k, x, kn.out, ds.P)
+    return _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k)
+
+
+@njit(cache=True)
+def _after_step(kn, sa, ds, opts, rec, health, x, k):
+    """Numerical health and loss of synchronism after the step from k: (status, index)."""
+    if not _healthy(x, health.est[k + 1], kn.p.n_mac, health):
+        return UNSTABLE_STEP, k
+    if opts.stop and _separated(x, kn.p.n_mac, opts):
+        _record(rec, k + 1, x, kn.out, ds.P)
+        return SEPARATED, k + 1
+    return OK, k
+
+
+@njit(cache=True)
+def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
+    """Store the outputs at k1 where a run pauses, from copies (the next call evaluates it
+    for real)."""
+    V_keep, held_keep, stage_keep = kn.kept.V.copy(), kn.kept.held.copy(), kn.held_stage[0]
+    _inject(sa, ds.P, kn.kept.S_extra)
+    _evaluate(kn, x.copy(), grid.interval[k1], True, w.dx_k)
+    kn.kept.V[:], kn.kept.held[:], kn.held_stage[0] = V_keep, held_keep, stage_keep
+    _record(rec, k1, x, kn.out, ds.P)
+
+
+@njit(cache=True)
+def integrate(c, k0, k1, grid, nets, p, sa, opts, rec):
+    """PST's predictor-corrector from grid index k0 to k1 (module docstring).
+
+    Parameters
+    ----------
+    c : Carry
+        State, kept buses, devices and health; updated in place, so that a run can be
+        continued.
+    k0, k1 : int
+        First and last grid index.
+    grid : StepGrid
+        The grid (`step_grid`).
+    nets : KernelNetwork
+        Network matrices stacked by interval (`stabctl.dynamics.model.stacked_networks`).
+    p : stabctl.dynamics.model.KernelParams
+        Model parameters.
+    sa : stabctl.storage.devices.StorageArrays
+        The storage devices.  Bang-bang devices: a mode change within a step has its
+        instant located (`stabctl.storage.control.crossing`) and the step is
+        re-integrated in two parts.  Externally commanded devices: each command of the
+        schedule (c.devices.cmd_t sorted) takes effect at its exact time, splitting the
+        step.
+    opts : RunOptions
+        Event semantics, COI weights, separation limit and stop.
+    rec : Recording
+        Filled at every index with the predictor-stage outputs, the states, the device
+        powers, their switching and energy statistics and the switching log.
+
+    Returns
+    -------
+    status : int
+        OK, SEPARATED (stopped at loss of synchronism), UNSTABLE_STEP (`_healthy` failed
+        after the step from the index), NO_LOAD_FLOW.
+    k : int
+        The last stored grid index.
     """
-    n, nd = interval.size, sa.pmax.size
-    x = xs.copy()
-    dx_k, dx_j = np.zeros_like(x), np.zeros_like(x)  # slots no kernel writes stay 0
-    cur = np.empty(nm, np.complex128)
-    pel, qel, et, efd, pm = np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm)
-    V_bus = np.zeros(R.shape[1], np.complex128)
-    S = np.zeros(V_nc.size, np.complex128)
-    mode, P, target, e = ds.mode, ds.P, ds.target, ds.e
-    switched = np.zeros(nd, np.bool_)
-    r, v, acc = np.zeros(nd), np.zeros(nd), np.zeros(nd)
-    rb, vb, accb = np.zeros(nd), np.zeros(nd), np.zeros(nd)
-    M = inertia.sum()
-    bang, external = sa.kind == st.BANG_BANG, sa.kind == st.EXTERNAL
-
-    def ev(xx, st_, want, dx):
-        if st_ != held_stage[0]:
-            held[:] = False
-            held_stage[0] = st_
-        return evaluate_kernel(xx, nm, ne, nps, ng, p, Y11[st_], Y12[st_], Y21[st_], Y22[st_],
-                               Z22[st_], R[st_], V_nc, held, S, want, dx, cur, pel, qel, et,
-                               efd, pm, V_bus)
-
+    n = grid.interval.size
+    kn = _Kernel(p, nets, c.kept, c.held_stage, kernel_outputs(p.n_mac, nets.R.shape[1]))
+    w = _workspace(c.x, sa.pmax.size)
+    x = c.x.copy()
     for k in range(k0, min(k1, n - 1)):
-        s = interval[k]
-        j = interval[k + 1] if pst else s
-        _inject(sa, P, S)
-        if first[k] and pst:   # PSTess computes this step twice; the first pass's clamps stay
-            V_keep = V_nc.copy()
-            ev(x, s, False, dx_k)
-            V_nc[:] = V_keep
-        if ev(x, s, True, dx_k) < 0:
-            xs[:] = x
-            return NO_LOAD_FLOW, max(k - 1, 0)
-        switched[:] = False
-        if nd > 0:   # controller at the grid point (events make voltages jump here)
-            _device_state(x, nm, inertia, sa, V_nc, dx_k, r, v, acc)
-            if external:
-                _apply_commands(sa, ds, cmd_t, cmd_mode, t[k], log, stats, r)
-            for d in range(nd):
-                want = st.desired_mode(sa, d, mode[d], r[d], v[d])
-                if bang and want != mode[d]:
-                    mode[d] = want
-                    switched[d] = True
-                    _log(log, stats, d, t[k], want, r[d])
-            _targets(sa, mode, r, v, acc, target)
-            changed = False
-            for d in range(nd):
-                Pn = st.device_power(sa, d, target[d], P[d], e[d], 0.0)
-                changed = changed or Pn != P[d]
-                P[d] = Pn
-            if changed:
-                _inject(sa, P, S)
-                ev(x, s, True, dx_k)
-        _store(rec, k, x, nm, pel, pm, efd, V_bus)
-        if nd > 0:
-            P_rec[k] = P
-        x_a, dx_a, rem = x, dx_k, h[s]
-        while True:   # ends: each device switches at most once per step, commands are finite
-            t_a = t[k + 1] - rem
-            hh = rem
-            if external and ds.cmd_next[0] < cmd_t.size and cmd_t[ds.cmd_next[0]] < t[k + 1] - 1e-12:
-                hh = max(cmd_t[ds.cmd_next[0]] - t_a, 0.0)   # a command falls in this step
-            Pb = _advance(sa, P, target, e.copy(), hh, np.zeros((nd, 3)))
-            _inject(sa, Pb, S)
-            xp = x_a + hh * dx_a
-            if ev(xp, j if hh == rem else s, k == n - 2 and hh == rem, dx_j) < 0:
-                xs[:] = x
-                return NO_LOAD_FLOW, k
-            x_b = x_a + 0.5 * hh * (dx_a + dx_j)
-            if hh == rem:
-                health.est[k + 1] = _local_error(x_b, dx_a, dx_j, hh, health.worst)
-            theta, first_d = 2.0, -1
-            if bang and hh == rem:
-                _device_state(x_b, nm, inertia, sa, V_nc, dx_j, rb, vb, accb)
-                at_event = interval[k + 1] != s
-                for d in range(nd):
-                    if switched[d]:    # one switching per device and step: no chattering loop
-                        continue
-                    want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
-                    gate_jump = (v[d] >= sa.vgate) != (vb[d] >= sa.vgate)
-                    if want != mode[d] and not (at_event and gate_jump):  # events: at t_k+1
-                        th, _ = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
-                        if th < theta:
-                            theta, first_d = th, d
-            if hh == rem and first_d < 0:
-                break
-            if first_d >= 0:           # re-integrate up to the first switching instant
-                hh = theta * rem
-                Pm = _advance(sa, P, target, e, hh, stats)
-                _inject(sa, Pm, S)
-                if ev(x_a + hh * dx_a, s, False, dx_j) < 0:
-                    xs[:] = x
-                    return NO_LOAD_FLOW, k
-                x_a = x_a + 0.5 * hh * (dx_a + dx_j)
-            else:                      # up to the scheduled command
-                Pm = _advance(sa, P, target, e, hh, stats)
-                x_a = x_b
-            rem -= hh
-            P[:] = Pm
-            _device_state(x_a, nm, inertia, sa, V_nc, dx_j, r, v, acc)
-            if external:
-                _apply_commands(sa, ds, cmd_t, cmd_mode, t[k + 1] - rem, log, stats, r)
-            for d in range(nd):
-                if first_d < 0:
-                    break
-                want = st.desired_mode(sa, d, mode[d], rb[d], vb[d])
-                if want != mode[d] and not switched[d]:
-                    th, new = st.crossing(sa, mode[d], want, r[d], rb[d], v[d], vb[d])
-                    if d == first_d or th <= 1e-9:
-                        mode[d] = new
-                        switched[d] = True
-                        _log(log, stats, d, t[k + 1] - rem, new, r[d])
-            _targets(sa, mode, r, v, acc, target)
-            for d in range(nd):
-                P[d] = st.device_power(sa, d, target[d], P[d], e[d], 0.0)
-            _inject(sa, P, S)
-            dx_a = np.empty_like(x)
-            if ev(x_a, s, False, dx_a) < 0:
-                xs[:] = x
-                return NO_LOAD_FLOW, k
-            x_b = x_a
-            if rem <= 1e-15:
-                break
-        if nd > 0:
-            P[:] = _advance(sa, P, target, e, rem, stats) if rem > 1e-15 else P
-        x = x_b
-        if not _healthy(x, health.est[k + 1], nm, health):
-            xs[:] = x
-            return UNSTABLE_STEP, k
-        if stop:
-            coi = (x[:nm] * inertia).sum() / M
-            if np.max(np.abs(x[:nm] - coi)) > limit:
-                _store(rec, k + 1, x, nm, pel, pm, efd, V_bus)
-                if nd > 0:
-                    P_rec[k + 1] = P
-                xs[:] = x
-                return SEPARATED, k + 1
-    xs[:] = x
+        status, k_end, x = _step(kn, grid, sa, c.devices, opts, w, rec, c.health, x, k)
+        if status == OK:
+            status, k_end = _after_step(kn, sa, c.devices, opts, rec, c.health, x, k)
+        if status != OK:
+            c.x[:] = x
+            return status, k_end
+    c.x[:] = x
     if k1 >= n - 1:
-        _store(rec, n - 1, x, nm, pel, pm, efd, V_bus)
-        if nd > 0:
-            P_rec[n - 1] = P
+        _record(rec, n - 1, x, kn.out, c.devices.P)
         return OK, n - 1
-    # paused at k1: store its outputs from copies (the next call evaluates it for real)
-    V_keep, held_keep, stage_keep = V_nc.copy(), held.copy(), held_stage[0]
-    _inject(sa, P, S)
-    ev(x.copy(), interval[k1], True, dx_k)
-    V_nc[:], held[:], held_stage[0] = V_keep, held_keep, stage_keep
-    _store(rec, k1, x, nm, pel, pm, efd, V_bus)
-    if nd > 0:
-        P_rec[k1] = P
+    _record_paused(kn, grid, sa, c.devices, rec, w, x, k1)
     return OK, k1

@@ -38,7 +38,8 @@ from scipy.signal import lfilter
 from stabctl.case import Case
 from stabctl.errors import InputError
 from stabctl.dynamics.results import SimulationResult
-from stabctl.storage.devices import ExternalCommands, StorageDevice, StorageFleet
+from stabctl.storage.devices import StorageDevice, StorageFleet
+from stabctl.storage.control import ExternalCommands
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from stabctl.estimation import filters as es
+from stabctl.storage import control as law
 from stabctl.storage import devices as st
 from stabctl.estimation.ambient import AmbientLoad
 from stabctl.errors import InputError
@@ -68,7 +69,7 @@ class LoopController:
     """
 
     def __init__(self, case, devices, estimator: str, settings: PMUSettings, seed: int,
-                 t_end: float, control: st.BangBangCOI = st.BangBangCOI(),
+                 t_end: float, control: law.BangBangCOI = law.BangBangCOI(),
                  at: str = "terminal"):
         if estimator not in ESTIMATORS:
             raise InputError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {estimator!r}")
@@ -91,7 +92,7 @@ class LoopController:
         speed = self._speeds(t_f, partial)
         rel = es.relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
         rel = np.nan_to_num(rel)
-        self.mode = np.array([st.desired_mode(self.sa, d, self.mode[d], rel[self.sa.mac[d]], 1.0)
+        self.mode = np.array([law.desired_mode(self.sa, d, self.mode[d], rel[self.sa.mac[d]], 1.0)
                               for d in range(self.mode.size)], np.int64)
         self.rows.append((t_f, rel * self.case.freq_hz, self.mode.copy()))
         return self.mode
@@ -200,7 +201,7 @@ class ClosedLoopRun:
 def run_closed_loop(sim, events, t_end: float, fleet_pct: float, estimator: str,
                     rate: float = 60.0, latency: float = 0.05, seed: int = 0, *,
                     settings: PMUSettings | None = None,
-                    control: st.BangBangCOI = st.BangBangCOI(), at: str = "terminal",
+                    control: law.BangBangCOI = law.BangBangCOI(), at: str = "terminal",
                     h: float | None = None, separation_limit: float = np.pi,
                     stop_at_separation: bool = True,
                     ambient: AmbientLoad | None = None) -> ClosedLoopRun:
@@ -224,7 +225,7 @@ def run_closed_loop(sim, events, t_end: float, fleet_pct: float, estimator: str,
         loads, set_points = ambient.schedule(sim.case, frames.size, rate)
         devices = devices + loads
         decide = lambda t, p: np.r_[ctrl(t, p), set_points(t)]  # noqa: E731
-    gate = st.ExternalCommands(v_gate_pu=control.v_gate_pu)
+    gate = law.ExternalCommands(v_gate_pu=control.v_gate_pu)
     res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), frames, decide,
                             latency=latency, h=h, separation_limit=separation_limit,
                             stop_at_separation=stop_at_separation)

@@ -57,6 +57,8 @@ from scipy.stats import chi2
 from stabctl.case import Case
 from stabctl.errors import CaseError, InputError
 from stabctl.models.machines import EM, SUB, TRA, machine_params
+from stabctl.models.machines import _dq as rotor_dq  # the one compiled dq transform
+from stabctl.dynamics.coi import coi_weights
 from stabctl.estimation.pmu import Frame, PMUSettings
 
 
@@ -263,7 +265,7 @@ def coi_speed(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray):
     """COI speed sum(M_i w_i) / sum(M_i) (paper eq. 40, M = H*MVA) and its variance, the
     machine estimates taken as independent (one filter per machine, independent PMU
     noise).  speed, var: (..., n) pu, pu^2, machines on the last axis; returns (...)."""
-    w = inertia / inertia.sum()
+    w = coi_weights(inertia)
     return speed @ w, var @ w ** 2
 
 
@@ -277,7 +279,7 @@ def relative_speeds(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray,
     sum_j w_j^2 s_j^2 (system); s_i^2 + sum_{j != i} w_j^2 s_j^2 / (1 - w_i)^2 (rest).
     Raises InputError for another coi.
     """
-    w = inertia / inertia.sum()
+    w = coi_weights(inertia)
     c, cv = coi_speed(speed, var, inertia)
     if coi == "system":
         return speed - c[..., None], (1 - 2 * w) * var + cv[..., None]
@@ -335,13 +337,6 @@ def _wrap(a):
 
 
 @njit(cache=True)
-def _to_dq(delta, X):
-    """(d, q) of the network phasor X in the rotor frame: d + jq = j exp(-j delta) X."""
-    z = 1j * cmath.exp(-1j * delta) * X
-    return z.real, z.imag
-
-
-@njit(cache=True)
 def swing_measure(v, i, pr, sig2):
     """One machine's measurement quantities from its PMU phasors v, i (complex pu, system
     base): (theta, |E|, P_ag, var P_ag, var I_q, var theta) with E = V + Z I.
@@ -370,14 +365,14 @@ def swing_start(v, i, freq, r, pr, tv):
         delta = cmath.phase(v + 1j * pr[C_XDP] * i_m)
     else:
         delta = cmath.phase(v + complex(pr[C_RA], pr[C_XQ]) * i_m)
-    curd, curq = _to_dq(delta, i_m)
-    edra = -_to_dq(delta, v)[0] - pr[C_RA] * curd
+    curd, curq = rotor_dq(delta, i_m)
+    edra = -rotor_dq(delta, v)[0] - pr[C_RA] * curd
     x = np.zeros(5)
     x[0], x[1] = delta, freq / tv[T_F0] - 1.0
     if kind == SUB:
         x[3], x[4] = edra + pr[C_XQP] * curq, edra + pr[C_XL] * curq
     elif kind == TRA:
-        x[3] = _to_dq(delta, v + complex(pr[C_RA], pr[C_XDP]) * i_m)[0]
+        x[3] = rotor_dq(delta, v + complex(pr[C_RA], pr[C_XDP]) * i_m)[0]
     P = np.zeros((5, 5))
     P[0, 0] = r + tv[T_ANGLE] ** 2
     P[1, 1] = (tv[T_SIGF] / tv[T_F0]) ** 2

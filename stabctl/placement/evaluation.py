@@ -10,12 +10,11 @@ cleared just beyond it (SIME, `stabctl.stability.sime`):
 where eta is the SIME unstable margin, d eta / d P_j its first-order change from the
 trajectory (`sime.storage_integrals`, weights `OmibEquivalent.group_weights`) and
 d eta / d t_clear a difference over `EPS_S` of clearing time (a second run).  Evaluations
-are JSON-able jobs run in parallel worker processes (`worker_pool`, `verify`).
+are JSON-able jobs run in parallel worker processes (`stabctl.parallel.worker_pool`, `verify`).
 """
 
 from __future__ import annotations
 
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,7 +24,8 @@ from stabctl.errors import InputError, SimulationError
 from stabctl.placement.program import CCTCut
 from stabctl.stability.sime import (clearing_energy_rate, critical_machines, device_modes, omib_equivalent,
                    storage_integrals, unstable_margin, unstable_point)
-from stabctl.storage.devices import BangBangCOI, StorageDevice, StorageFleet
+from stabctl.storage.devices import StorageDevice, StorageFleet
+from stabctl.storage.control import BangBangCOI
 
 EPS_S = 0.005       # clearing-time step of d eta / d t_clear (s)
 SCAN_S = 0.005      # clearing-time grid of the first-unstable scan (s)
@@ -182,63 +182,6 @@ def _run(sim, fault: LineFault, t_clear: float, fleet):
 
 
 # -- parallel evaluation ---------------------------------------------------------------
-
-@contextmanager
-def worker_pool(workers: int, scheduler: str | None = None):
-    """A function map(func, list of kwargs) -> list of results: in this process for
-    workers == 1, else in a process pool (spawned, kept for the whole loop so that each
-    worker's simulator is built once); with a Dask `scheduler` (as
-    `stabctl.parallel.run_sweep`: 'tcp://host:8786', or 'local' for a local cluster of
-    `workers` single-threaded processes) on that cluster instead."""
-    if scheduler:
-        with _dask_pool(scheduler, workers) as run_map:
-            yield run_map
-        return
-    if workers == 1:
-        yield lambda func, jobs: [func(**j) for j in jobs]
-        return
-    from stabctl.parallel import process_pool, stop_pool
-
-    pool = process_pool(workers)      # workers die with this process (SIGKILL included)
-    try:
-        yield lambda func, jobs: [f.result() for f in [pool.submit(func, **j) for j in jobs]]
-    except BaseException:
-        stop_pool(pool)               # Ctrl-C: running evaluations killed, not waited for
-        raise
-    else:
-        pool.shutdown(cancel_futures=True)
-
-
-def _call(func, kwargs: dict):
-    return func(**kwargs)
-
-
-@contextmanager
-def _dask_pool(scheduler: str, workers: int):
-    """`worker_pool` on a Dask distributed cluster (connects at once, so that a missing
-    Dask or a wrong address fails before any work; InputError)."""
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError:
-        raise InputError(f"--scheduler {scheduler} needs Dask distributed, which is not "
-                         "installed: pip install 'stabctl[dask]'") from None
-    try:
-        if scheduler == "local":
-            client = Client(LocalCluster(n_workers=workers, threads_per_worker=1,
-                                         processes=True, dashboard_address=None))
-        else:
-            client = Client(scheduler)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise InputError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
-    try:
-        yield lambda func, jobs: client.gather([client.submit(_call, func, j, pure=False)
-                                                for j in jobs])
-    finally:
-        cluster = client.cluster            # ours (scheduler="local") or None
-        client.close()
-        if cluster is not None:
-            cluster.close()
-
 
 def devices_of(sites, mw) -> list:
     """[bus, machine, MW] of every site with a rating > 0."""

@@ -44,8 +44,9 @@ from stabctl.stability.cct import cached_simulator
 from stabctl.errors import InputError
 from stabctl.placement.program import (Allocation, InfeasibleError, candidate_sites, solve_allocation,
                         sparse_allocation)
-from stabctl.placement.evaluation import Contingency, cuts_from, verify, worker_pool
-from stabctl.storage.devices import BangBangCOI
+from stabctl.parallel import worker_pool
+from stabctl.placement.evaluation import Contingency, cuts_from, verify
+from stabctl.storage.control import BangBangCOI
 
 MIN_MW = 1.0        # ratings below this are not installed (MW)
 #: The paper's Table 3 law (`stabctl.storage.devices.BangBangCOI` defaults: 100 mHz deadband, 0.8 pu
@@ -175,7 +176,7 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
             loop stops once the targets are met.
         workers: processes for the evaluations (1: in this process).
         scheduler: Dask scheduler address, or 'local', to run the evaluations on instead
-            (`placement_eval.worker_pool`); None: local processes.
+            (`stabctl.parallel.worker_pool`); None: local processes.
         controller: the bang-bang law of every ESD (default `DEFAULT_CONTROLLER`).
         base: evaluations without storage if already done (`verify` at zero ratings).
         start: first allocation (MW per site, shape (n_sites,)) instead of none, e.g. a

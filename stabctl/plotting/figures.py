@@ -16,7 +16,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
-def _save(fig, path: Path) -> None:
+def save_figure(fig, path) -> None:
+    """Save a figure as the reports do (tight layout, 110 dpi, format from the suffix) and
+    close it.  The one figure-saving helper of stabctl.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    path : str or Path
+        The image file.
+    """
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -42,7 +51,7 @@ def omib_phase_plane(system, runs: dict, path: Path) -> None:
     ax.set(xlim=(-1, 4), ylim=(-12, 12), xlabel="delta (rad)", ylabel="d(delta)/dt (rad/s)",
            title="OMIB phase plane (paper Figs. 4-5)")
     ax.legend(loc="lower left", fontsize=8)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def omib_equal_area(system, run, path: Path) -> None:
@@ -60,7 +69,7 @@ def omib_equal_area(system, run, path: Path) -> None:
     ax.set(xlabel="delta (rad)", ylabel="power (pu)",
            title=f"Equal-area criterion, clearing at {run.t_clear * 60:.0f} cycles")
     ax.legend(fontsize=8)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def feedback_phase_plane(system, runs: dict, path: Path) -> None:
@@ -77,7 +86,7 @@ def feedback_phase_plane(system, runs: dict, path: Path) -> None:
             title="15-cycle fault: feedback laws (paper Fig. 7)")
     ax2.set(xlim=(0, 6), ylim=(-12, 12), xlabel="t (s)", ylabel="d(delta)/dt (rad/s)")
     ax1.legend(fontsize=7, loc="lower left")
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def min_time_figures(system, x_release, sols: dict, states_path: Path,
@@ -98,7 +107,7 @@ def min_time_figures(system, x_release, sols: dict, states_path: Path,
             title="Minimum-time control: speed (paper Fig. 10)")
     ax2.set(xlabel="x1 = delta (rad)", ylabel="x2 (rad/s)", title="phase plane")
     ax1.legend(fontsize=8)
-    _save(fig, states_path)
+    save_figure(fig, states_path)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
     for pc, s in sols.items():
         ax1.plot(s.t, s.l1, label=f"P_Cmax = {pc} pu")
@@ -108,7 +117,7 @@ def min_time_figures(system, x_release, sols: dict, states_path: Path,
     ax2.set(xlabel="time after release (s)", ylabel="lambda2",
             title="co-state lambda2 > 0: P_C = P_Cmax throughout")
     ax1.legend(fontsize=8)
-    _save(fig, costates_path)
+    save_figure(fig, costates_path)
 
 
 def simulation_overview(result, path, title: str | None = None, max_labels: int = 10,
@@ -181,7 +190,7 @@ def simulation_overview(result, path, title: str | None = None, max_labels: int 
                + ", ".join(str(int(m)) for m in result.separated))
     head = title or str(result.meta.get("case", "simulation"))
     axes[0].set_title(f"{head}\n{verdict}", fontsize=9)
-    _save(fig, Path(path))
+    save_figure(fig, Path(path))
 
 
 def _machine_styles(numbers, highlight=(), max_labels: int = 10) -> list[dict]:
@@ -255,7 +264,7 @@ def storage_case_figure(without, with_, path: Path, title: str, highlight=()) ->
         ax.set_ylim(min(a.speed.min() for a in (without, with_)) - 0.002,
                     max(a.speed.max() for a in (without, with_)) + 0.002)
     fig.suptitle(title)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def cct_versus_rating(results: dict, ratings, path: Path, paper_row: dict | None = None,
@@ -273,7 +282,7 @@ def cct_versus_rating(results: dict, ratings, path: Path, paper_row: dict | None
     ax.set(xlabel="ESD rating (% of machine MVA)", ylabel="CCT increase (%)",
            title="Table 4: CCT gain versus storage rating")
     ax.legend(fontsize=8)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 # -- modal analysis (stabctl.smallsignal.modal) --------------------------------------------------------
@@ -312,7 +321,7 @@ def eigenvalue_plot(ma, path, title: str, dampings=(0.03, 0.05, 0.1, 0.2)) -> No
             title="electromechanical region, dotted: constant damping ratio")
     ax2.legend(fontsize=8, loc="upper left")
     fig.suptitle(title)
-    _save(fig, Path(path))
+    save_figure(fig, Path(path))
 
 
 def _mode_title(ma, i) -> str:
@@ -344,7 +353,7 @@ def mode_shape_compass(ma, modes, path, max_labels: int = 6) -> None:
         ax.set_yticklabels([])
         ax.set_title(_mode_title(ma, i), fontsize=9)
     fig.suptitle("speed mode shapes (colour = coherent area)")
-    _save(fig, Path(path))
+    save_figure(fig, Path(path))
 
 
 def participation_bars(ma, modes, path, n_bars: int = 12) -> None:
@@ -364,7 +373,7 @@ def participation_bars(ma, modes, path, n_bars: int = 12) -> None:
     for ax in axes.flat[len(modes):]:
         ax.set_visible(False)
     fig.suptitle("participation factors per machine (each mode sums to 1; colour = area)")
-    _save(fig, Path(path))
+    save_figure(fig, Path(path))
 
 
 def screening_map(case, rows, path: Path) -> None:
@@ -389,4 +398,4 @@ def screening_map(case, rows, path: Path) -> None:
     fig.colorbar(sc, ax=ax, label="CCT of a bus fault (cycles)")
     ax.set(title=f"{case.name}: critical clearing time of a fault at each bus", xticks=[],
            yticks=[])
-    _save(fig, path)
+    save_figure(fig, path)

@@ -38,7 +38,9 @@ from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
 from stabctl.case import Case
-from stabctl.dynamics.model import DynamicModel, StageConfig, evaluate_kernel
+from stabctl.dynamics.coi import coi_weights
+from stabctl.dynamics.model import (DynamicModel, KeptBuses, KernelOutputs, StageConfig,
+                                    evaluate_kernel, kernel_network, kernel_outputs)
 from stabctl.errors import InputError, SimulationError
 
 REL_STEP = 1e-4          # PSTess svm_mgen's relative perturbation
@@ -251,8 +253,7 @@ def jacobian_columns(model: DynamicModel, kind, index, step):
     curv = np.zeros(n_col)
     V0 = np.zeros(n_bus, np.complex128)
     bad = _differences(np.asarray(kind, np.int64), np.asarray(index, np.int64),
-                       np.asarray(step, float), model.x0, model.V_nc0, p, L.n_mac, L.n_exc,
-                       L.n_pss, L.n_tg, net.Y11, net.Y12, net.Y21, net.Y22, net.Z22, net.R,
+                       np.asarray(step, float), model.x0, model.V_nc0, p, kernel_network(net),
                        J, dV, curv, V0)
     if bad >= 0:
         raise SimulationError(f"the network did not solve with {_what(model, kind, index, bad)} "
@@ -274,20 +275,17 @@ def _what(model, kind, index, c) -> str:
 
 
 @njit(cache=True)
-def _differences(kind, index, step, x0, V_nc0, p, nm, ne, nps, ng, Y11, Y12, Y21, Y22, Z22, R,
-                 J, dV, curv, V0):
+def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0):
     """Fill J, dV with central differences (see jacobian_columns) and curv with
     max|f+ - 2 f0 + f-| / max|f+ - f-| per column; V0 with the unperturbed bus voltages.
     Returns -1, or the column whose network did not solve (-2: the unperturbed one)."""
     dx = np.zeros_like(x0)   # slots no kernel writes (unused by a model type) must stay 0:
     f0 = np.zeros_like(x0)   # the kink test below looks at every slot
-    cur = np.empty(nm, np.complex128)
-    pel, qel, et, efd, pm = np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm), np.empty(nm)
-    V_bus = np.zeros(R.shape[0], np.complex128)
+    out = kernel_outputs(p.n_mac, net.R.shape[0])
     S = np.zeros(V_nc0.size, np.complex128)
-    if evaluate_kernel(x0.copy(), nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc0.copy(),
-                       np.zeros(V_nc0.size, np.bool_), S, True, f0, cur, pel, qel, et, efd, pm,
-                       V0) < 0:
+    at_op = KernelOutputs(out.cur, out.pelect, out.qelect, out.eterm, out.efd, out.pmech, V0)
+    if evaluate_kernel(x0.copy(), p, net, KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_),
+                                                    S), True, f0, at_op) < 0:
         return -2
     for c in range(kind.size):
         j = index[c]
@@ -313,9 +311,8 @@ def _differences(kind, index, step, x0, V_nc0, p, nm, ne, nps, ng, Y11, Y12, Y21
                 p.EP[j, exc.E_VREF] = v
             else:
                 p.GP[j, gov.G_PREF] = v
-            it = evaluate_kernel(x, nm, ne, nps, ng, p, Y11, Y12, Y21, Y22, Z22, R, V_nc0.copy(),
-                                 np.zeros(V_nc0.size, np.bool_), S, True, dx, cur, pel, qel, et,
-                                 efd, pm, V_bus)
+            it = evaluate_kernel(x, p, net, KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_),
+                                                      S), True, dx, out)
             if kind[c] == VREF:
                 p.EP[j, exc.E_VREF] = nominal
             elif kind[c] == PREF:
@@ -324,10 +321,10 @@ def _differences(kind, index, step, x0, V_nc0, p, nm, ne, nps, ng, Y11, Y12, Y21
                 return c
             if side == 0:
                 fp[:] = dx
-                dV[c] = V_bus
+                dV[c] = out.V_bus
             else:
                 J[c] = (fp - dx) / (hi - lo)
-                dV[c] = (dV[c] - V_bus) / (hi - lo)
+                dV[c] = (dV[c] - out.V_bus) / (hi - lo)
                 curv[c] = np.max(np.abs(fp - 2.0 * f0 + dx)) / max(np.max(np.abs(fp - dx)), 1e-300)
     return -1
 
@@ -343,11 +340,11 @@ def output_matrices(model: DynamicModel, act, A, B, dVx, dVu, V0):
     S = np.zeros((nm, act.size))                       # omega_k = S x
     S[np.arange(nm), [pos[nm + k] for k in range(nm)]] = 1.0
     w = model.mp.H * model.case.machines.mva
-    coi = (w / w.sum()) @ S
+    coi = coi_weights(w) @ S
     Vm = np.abs(V0)[:, None]
     dmag = lambda dV: (np.conj(V0)[:, None] * dV).real / Vm         # noqa: E731
     dang = lambda dV: (np.conj(V0)[:, None] * dV).imag / Vm ** 2    # noqa: E731
-    Tx, Tu = dang(dVx), dang(dVu)
+    Tx = dang(dVx)
     two_pi = 2 * np.pi
     C = np.vstack([S, coi, S - coi, dmag(dVx), Tx @ A / two_pi])
     D = np.vstack([np.zeros((2 * nm + 1, B.shape[1])), dmag(dVu), Tx @ B / two_pi])

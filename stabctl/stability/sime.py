@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from stabctl.dynamics.coi import coi_angle, coi_of_rest, coi_speed
 from stabctl.errors import InputError
 from stabctl.dynamics.results import SimulationResult
 
@@ -86,9 +87,8 @@ def omib_equivalent(result: SimulationResult, critical, base_mva: float,
     ws = 2 * np.pi * freq_hz
     Mk = 2 * np.asarray(result.inertia, float) / (base_mva * ws)
     MC, MN = Mk[C].sum(), Mk[~C].sum()
-    coi = lambda x, sel, m: x[:, sel] @ Mk[sel] / m  # noqa: E731
-    delta = coi(result.angle, C, MC) - coi(result.angle, ~C, MN)
-    omega = ws * (coi(result.speed, C, MC) - coi(result.speed, ~C, MN))
+    delta = coi_angle(result.angle[:, C], Mk[C]) - coi_angle(result.angle[:, ~C], Mk[~C])
+    omega = ws * (coi_speed(result.speed[:, C], Mk[C]) - coi_speed(result.speed[:, ~C], Mk[~C]))
     sigma = 1 if delta[-1] >= delta[0] else -1
     return OmibEquivalent(t=result.t, delta=sigma * delta, omega=sigma * omega,
                           M=MC * MN / (MC + MN), critical=tuple(int(k) for k in critical),
@@ -160,8 +160,7 @@ def device_modes(result: SimulationResult, buses, machines, controller,
     idx = np.array([result.machine(int(k)) for k in machines], int)
     w, Mk = result.speed, np.asarray(result.inertia, float)
     if controller.coi == "rest":
-        tot = w @ Mk
-        coi = (tot[:, None] - w[:, idx] * Mk[idx]) / (Mk.sum() - Mk[idx])
+        coi = coi_of_rest(w, Mk, idx)
     else:
         coi = result.coi_speed[:, None]
     rel = (w[:, idx] - coi) * freq_hz

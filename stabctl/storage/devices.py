@@ -1,23 +1,10 @@
-"""Energy-storage devices (ESDs) and their controllers (paper Section 5, Table 3).
+"""Energy-storage devices (ESDs), fleets and their packing for the compiled loop (paper
+Section 5).
 
 An ESD at a bus is a real-power sink/source P in [-Pmax, +Pmax] (pu on the system base,
 + absorbs, as the paper), drawn at its bus in the network solution.  Ideal (instant) by
 default; optionally a first-order lag, a ramp limit and an energy (state-of-charge) range.
-
-Controllers:
-- `BangBangCOI`, the paper's: each device watches its own generator's speed relative to the
-  centre of inertia (eq. 40, inertia-weighted, of the whole system or of the rest of it):
-  absorb +Pmax above the deadband (100 mHz), inject -Pmax below minus the deadband, nothing
-  inside; only while its bus voltage is at least the gate (0.8 pu).  Optional hysteresis:
-  a device switches off only when the relative speed is back inside deadband - hysteresis.
-- `LinearFeedback`, the Section 3 laws in multi-machine form: P = Kv (omega_i - omega_COI)
-  + Ka d(omega_i - omega_COI)/dt (rad/s and rad/s^2 of electrical speed), clipped to
-  +-Pmax; the acceleration is the one of the latest evaluation (the algebraic loop is
-  broken by one stage).
-
-Switching instants of the bang-bang law are located inside the step (linear interpolation
-of the switching function between the step ends) and the step is re-integrated in two
-parts (`stabctl.dynamics.simulation.integrate`); the number of switchings per device is reported.
+The control laws a fleet shares are in `stabctl.storage.control` (re-exported here).
 """
 
 from __future__ import annotations
@@ -27,15 +14,15 @@ from typing import NamedTuple
 
 import numpy as np
 
+from stabctl._jitcache import njit
 from stabctl.case import Case
 from stabctl.errors import CaseError, InputError
+from stabctl.storage.control import NO_LAW, NO_STORAGE, BangBangCOI, ControlLaw
 
 
 #: largest storage rating of `uniform_fleet`, % of the machine's MVA (a device larger than
 #: its generator is outside the paper's use and its control law)
 MAX_ESD_PCT = 100.0
-#: largest voltage gate of the bang-bang law (pu)
-MAX_V_GATE_PU = 2.0
 
 
 @dataclass(frozen=True)
@@ -69,49 +56,11 @@ class StorageDevice:
 
 
 @dataclass(frozen=True)
-class BangBangCOI:
-    """The paper's controller (Table 3); see the module docstring.
-
-    deadband_hz: |f_i - f_COI| below which the device is idle (Hz); v_gate_pu: minimum bus
-    voltage for the device to act; coi: "system" (eq. 40 over all machines) or "rest"
-    (excluding the device's own machine); hysteresis_hz: switch-off margin inside the band.
-    """
-
-    deadband_hz: float = 0.1
-    v_gate_pu: float = 0.8
-    coi: str = "system"
-    hysteresis_hz: float = 0.0
-
-    def __post_init__(self):
-        if self.coi not in ("system", "rest"):
-            raise InputError(f"coi must be 'system' or 'rest', got {self.coi!r}")
-        if not (0 <= self.deadband_hz < float("inf")
-                and 0 <= self.hysteresis_hz <= self.deadband_hz):
-            raise InputError("need deadband >= 0 and 0 <= hysteresis <= deadband (finite, Hz)")
-        if not 0 <= self.v_gate_pu <= MAX_V_GATE_PU:
-            raise InputError(f"voltage gate must be in [0, {MAX_V_GATE_PU:g}] pu, got "
-                             f"{self.v_gate_pu}")
-
-
-@dataclass(frozen=True)
-class LinearFeedback:
-    """Section 3 laws for many machines: P = Kv * dw + Ka * d(dw)/dt, clipped to +-Pmax.
-
-    Kv in pu per rad/s, Ka in pu per rad/s^2, dw = omega_i - omega_COI in electrical rad/s.
-    """
-
-    Kv: float = 0.0
-    Ka: float = 0.0
-    coi: str = "system"
-    v_gate_pu: float = 0.0
-
-
-@dataclass(frozen=True)
 class StorageFleet:
     """Devices and the controller they share."""
 
     devices: tuple = ()
-    controller: object = field(default_factory=BangBangCOI)
+    controller: ControlLaw = field(default_factory=BangBangCOI)
 
     @property
     def buses(self) -> list[int]:
@@ -161,27 +110,13 @@ class StorageArrays(NamedTuple):
     ramp: np.ndarray      # pu/s
     emax: np.ndarray      # pu*s
     e0: np.ndarray        # pu*s
-    kind: int             # 0 none, 1 bang-bang, 2 linear
+    kind: int             # law kind (stabctl.storage.control: NO_STORAGE, BANG_BANG, ...)
     db: float             # deadband, pu speed
     hyst: float           # hysteresis, pu speed
     vgate: float
     rest: bool
     Kv: float             # pu per pu speed
     Ka: float             # pu per pu speed per s
-
-
-NO_STORAGE, BANG_BANG, LINEAR, EXTERNAL = 0, 1, 2, 3
-
-
-@dataclass(frozen=True)
-class ExternalCommands:
-    """Devices commanded from outside the simulation (estimator in the loop): their
-    set-points in units of the rating (Table 3 modes -1 inject, 0 idle, +1 absorb; other
-    values for a scaled power such as an ambient load deviation) come from
-    `Simulator.run_commanded` at measurement-frame arrival times; the voltage gate
-    (v_gate_pu, the same for every device of the fleet) still applies."""
-
-    v_gate_pu: float = 0.8
 
 
 def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageArrays:
@@ -199,79 +134,18 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageA
         raise CaseError(f"storage bus {devs[int(np.argmin(pos))].bus} is not kept in the "
                         "reduced network: pass the fleet to the Simulator")
     f = lambda attr: np.array([getattr(d, attr) for d in devs], float)  # noqa: E731
-    ctrl = None if fleet is None else fleet.controller
-    kind = NO_STORAGE if not devs else (BANG_BANG if isinstance(ctrl, BangBangCOI) else
-                                        EXTERNAL if isinstance(ctrl, ExternalCommands) else LINEAR)
-    ws = 2 * np.pi * f0
+    law = NO_LAW if fleet is None else fleet.controller.packed(f0)
     return StorageArrays(
         pos=pos, bus=bus, mac=np.array([-1 if d.machine is None else case.machine_index(d.machine)
                                         for d in devs], np.int64),
         pmax=f("pmax_mw") / base, lag=f("lag_s"), ramp=f("ramp_mw_s") / base,
         emax=f("energy_mj") / base,
-        e0=np.where(np.isfinite(f("energy_mj")), f("soc0") * f("energy_mj"), 0.0) / base, kind=kind,
-        db=getattr(ctrl, "deadband_hz", 0.0) / f0, hyst=getattr(ctrl, "hysteresis_hz", 0.0) / f0,
-        vgate=getattr(ctrl, "v_gate_pu", 0.0), rest=getattr(ctrl, "coi", "system") == "rest",
-        Kv=getattr(ctrl, "Kv", 0.0) * ws, Ka=getattr(ctrl, "Ka", 0.0) * ws)
+        e0=np.where(np.isfinite(f("energy_mj")), f("soc0") * f("energy_mj"), 0.0) / base,
+        kind=law.kind if devs else NO_STORAGE, db=law.db, hyst=law.hyst, vgate=law.vgate,
+        rest=law.rest, Kv=law.Kv, Ka=law.Ka)
 
 
-# -- compiled controller kernels (used by stabctl.dynamics.simulation.integrate) -------------------
-from stabctl._jitcache import njit  # noqa: E402
-
-
-@njit(cache=True)
-def relative_speeds(x, nm, inertia, sa, out):
-    """omega_i - omega_COI (pu) of each device's machine: COI of all machines (eq. 40) or of
-    the rest of the system (sa.rest); 0 for a device without a machine."""
-    M = inertia.sum()
-    coi = (x[nm:2 * nm] * inertia).sum() / M
-    for d in range(sa.mac.size):
-        i = sa.mac[d]
-        w = x[nm + i]
-        if i < 0:
-            out[d] = 0.0
-        elif sa.rest:
-            out[d] = w - (coi * M - w * inertia[i]) / (M - inertia[i])
-        else:
-            out[d] = w - coi
-
-
-@njit(cache=True)
-def desired_mode(sa, d, mode, r, v):
-    """Table 3: +1 absorb above the deadband, -1 inject below, 0 inside or below the voltage
-    gate; with hysteresis a running device stops only inside deadband - hysteresis."""
-    if v < sa.vgate:
-        return 0
-    if mode == 1 and r > sa.db - sa.hyst:
-        return 1
-    if mode == -1 and r < -(sa.db - sa.hyst):
-        return -1
-    if r > sa.db:
-        return 1
-    if r < -sa.db:
-        return -1
-    return 0
-
-
-@njit(cache=True)
-def crossing(sa, mode, want, r_a, r_b, v_a, v_b):
-    """Where, as a fraction of the step, a device left `mode` for `want`, and the mode it
-    takes there: linear interpolation of the switching function between the step ends
-    (the voltage gate if it changed side, else the speed boundary of the transition; a
-    jump from +1 to -1 first crosses into 0)."""
-    if (v_a >= sa.vgate) != (v_b >= sa.vgate):
-        ga, gb = v_a - sa.vgate, v_b - sa.vgate
-        new = want
-    else:
-        if mode == 1:
-            thr, new = sa.db - sa.hyst, (0 if want == -1 else want)
-        elif mode == -1:
-            thr, new = -(sa.db - sa.hyst), (0 if want == 1 else want)
-        else:
-            thr, new = (sa.db if want == 1 else -sa.db), want
-        ga, gb = r_a - thr, r_b - thr
-    theta = ga / (ga - gb) if ga != gb else 1.0
-    return min(max(theta, 0.0), 1.0), new
-
+# -- compiled device kernel (used by stabctl.dynamics.simulation.integrate) -------------------
 
 @njit(cache=True)
 def device_power(sa, d, target, P, e, h):

@@ -29,6 +29,7 @@ import numpy as np
 from stabctl._jitcache import njit
 
 from stabctl.estimation import filters as es
+from stabctl.storage import control as law
 from stabctl.storage import devices as st
 from stabctl.case import Case
 from stabctl.errors import InputError
@@ -141,7 +142,7 @@ def _summary(values) -> dict:
 
 
 def false_actions(case: Case, results, settings: PMUSettings, seed: int,
-                  controller: st.BangBangCOI = st.BangBangCOI(),
+                  controller: law.BangBangCOI = law.BangBangCOI(),
                   at: str = "terminal") -> dict:
     """ESD actions of every estimator on runs without fault (module docstring).
 
@@ -181,7 +182,7 @@ def _count_actions(sa, rel):
     for d in range(rel.shape[1]):
         mode = 0
         for k in range(rel.shape[0]):
-            want = st.desired_mode(sa, d, mode, rel[k, d], 1.0)
+            want = law.desired_mode(sa, d, mode, rel[k, d], 1.0)
             if mode == 0 and want != 0:
                 n += 1
             mode = want

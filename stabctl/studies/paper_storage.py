@@ -17,7 +17,8 @@ from stabctl.stability.cct import cct_jobs, critical_clearing_time
 from stabctl.studies.cases import CASE1, CASE2, PaperCase
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.simulation import Simulator
-from stabctl.storage.devices import BangBangCOI, uniform_fleet
+from stabctl.storage.devices import uniform_fleet
+from stabctl.storage.control import BangBangCOI
 from stabctl.parallel import run_sweep
 
 RATINGS_PCT = (5, 10, 15, 20, 25, 30)

@@ -29,6 +29,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from stabctl.io import load_case  # noqa: E402
+from stabctl.plotting.figures import save_figure as _save  # noqa: E402
 from stabctl.stability.cct import LineFault, cct_jobs  # noqa: E402
 from stabctl.studies.cases import DEFAULT_FAULTS  # noqa: E402
 from stabctl.placement.program import candidate_sites  # noqa: E402
@@ -259,12 +260,6 @@ def _uniform_fraction(d: dict, pct: str) -> float:
         if gain > 0:
             fr.append((d["uniform_cct_s"][pct][c["name"]] - c["cct_none_s"]) / gain)
     return min(fr) if fr else 1.0
-
-
-def _save(fig, path: Path) -> None:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def report(d: dict, out_dir: Path, generated_by: str = "stabctl paper") -> Path:

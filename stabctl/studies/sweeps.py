@@ -14,7 +14,8 @@ from __future__ import annotations
 
 from stabctl.stability.cct import (LineFault, cached_simulator, cct_jobs,
                                    critical_clearing_time)
-from stabctl.storage.devices import BangBangCOI, uniform_fleet
+from stabctl.storage.devices import uniform_fleet
+from stabctl.storage.control import BangBangCOI
 
 
 def controlled_cct_job(case: str, bus: int, far_bus: int | None, controller: dict,

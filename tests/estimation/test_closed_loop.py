@@ -8,7 +8,8 @@ from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.simulation import Simulator
 from stabctl.estimation.ambient import AmbientLoad
-from stabctl.storage.devices import ExternalCommands, StorageFleet, uniform_fleet
+from stabctl.storage.devices import StorageFleet, uniform_fleet
+from stabctl.storage.control import ExternalCommands
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,8 @@ from stabctl.cli import main
 from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.simulation import Simulator
-from stabctl.storage.devices import BangBangCOI, pack, uniform_fleet
+from stabctl.storage.devices import pack, uniform_fleet
+from stabctl.storage.control import BangBangCOI
 
 F0, WB = 60.0, 2 * np.pi * 60.0
 H, X, EMAG, VMAG, PM = 5.0, 0.3, 1.1, 1.0, 0.8

@@ -24,7 +24,8 @@ from stabctl.placement.loop import place
 from stabctl.dynamics.results import SimulationResult
 from stabctl.stability.sime import omib_equivalent, storage_integrals, unstable_margin, unstable_point
 from stabctl.dynamics.simulation import Simulator
-from stabctl.storage.devices import BangBangCOI, StorageDevice, StorageFleet
+from stabctl.storage.devices import StorageDevice, StorageFleet
+from stabctl.storage.control import BangBangCOI
 
 BASE_MVA, F0 = 100.0, 60.0
 CASE1 = LineFault(3, 101)                       # Kundur, paper Case 1 (CCT 0.269 s)

@@ -7,8 +7,8 @@ from stabctl.io import load_case
 from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.simulation import Simulator
-from stabctl.storage.devices import (BangBangCOI, LinearFeedback, StorageDevice, StorageFleet,
-                             desired_mode, hv_bus, pack, uniform_fleet)
+from stabctl.storage.devices import StorageDevice, StorageFleet, hv_bus, pack, uniform_fleet
+from stabctl.storage.control import BangBangCOI, LinearFeedback, desired_mode
 
 DB_PU = 0.1 / 60  # 100 mHz deadband in pu speed
 
@@ -188,7 +188,7 @@ def test_commanded_devices_follow_the_schedule_at_exact_times(kundur):
     """Estimator-in-the-loop hook: modes decided at 60 frames/s from the (here ideal)
     speeds take effect exactly at frame time + latency, and reproduce the internal
     controller's verdict."""
-    from stabctl.storage.devices import ExternalCommands
+    from stabctl.storage.control import ExternalCommands
 
     case, sim = kundur
     fleet = uniform_fleet(case, 5)
