@@ -21,13 +21,38 @@ from stabctl.network.ybus import circuit_row
 
 @dataclass(frozen=True)
 class Fault:
-    """Three-phase fault at `bus` from `t` (s).
+    """Three-phase fault at `bus` from `t`, cleared as PST's ``sw_con`` sequence
+    (``y_switch.m``, PST manual section 2.5).
 
-    clear_near / clear_far: absolute clearing times (s) at the near and far end (far
-    defaults to near; None: never cleared).  far_bus: the other end of the faulted line,
-    tripped at clearing (`circuit`-th of parallel circuits); None clears the fault without
-    loss of a line.  r, x: fault impedance (pu, system base); 0, 0 is PST's bolted fault
-    (shunt susceptance -1e7 pu).
+    At `clear_near` the faulted circuit opens at the near end (`bus`), the far end still
+    feeding the fault through it; at `clear_far` it opens at the far end too and the fault is
+    gone, the circuit staying out (a line opened as PST: reactance 1e7 pu, charging kept):
+    PST's fault type 0.  With equal near and far times the zero-length interval between
+    the two openings is kept, as PSTess does.  The times are checked against the case when the
+    run starts (`Simulator.run`): InputError for a clearing before the fault or a far end
+    before the near end, CaseError / UnknownBusError for an unknown bus or line.
+
+    Attributes
+    ----------
+    bus : int
+        Faulted bus number (as in the data; the near end of the faulted line).
+    t : float
+        Fault start, s (absolute run time, >= 0).
+    clear_near : float or None, optional
+        Absolute time the near end clears, s (>= `t`); None (default): never cleared.
+    clear_far : float or None, optional
+        Absolute time the far end clears, s (>= `clear_near`); None (default): with the
+        near end.
+    far_bus : int or None, optional
+        Bus number of the far end of the faulted line, tripped at clearing; None (default):
+        the fault is cleared at `clear_near` without loss of a line.
+    circuit : int, optional
+        Which of the parallel circuits between `bus` and `far_bus` is faulted (1 = the
+        first branch row joining them); default 1.
+    r, x : float, optional
+        Fault resistance and reactance, pu on the system base; ``r = x = 0`` (default) is
+        PST's bolted fault (shunt susceptance -1e7 pu at the bus).  A negative `x` is
+        taken as 0.
     """
 
     bus: int
@@ -41,21 +66,44 @@ class Fault:
 
     @property
     def admittance(self) -> complex:
+        """Fault shunt admittance (pu, system base): ``-1j * 1e7`` for a bolted fault, else
+        ``1 / (r + j max(x, 0))``."""
         if self.r == 0 and self.x == 0:
             return -1j * FAULT_B
         return 1.0 / complex(self.r, max(self.x, 0.0))
 
     def times(self):
+        """The event's times that are set.
+
+        Returns
+        -------
+        list of float
+            Fault start, near-end clearing and far-end clearing (`far_clear`), s, those
+            that are not None, in that order.
+        """
         return [t for t in (self.t, self.clear_near, self.far_clear) if t is not None]
 
     @property
     def far_clear(self):
+        """Far-end clearing time (s): `clear_far`, or `clear_near` when that is None."""
         return self.clear_near if self.clear_far is None else self.clear_far
 
 
 @dataclass(frozen=True)
 class LineTrip:
-    """Open one circuit of the line from_bus-to_bus at t (s), without fault."""
+    """Open one circuit of the line `from_bus`-`to_bus` at `t`, without fault (PST's
+    ``sw_con`` type 4; the line opened as PST: reactance 1e7 pu, charging kept).
+
+    Attributes
+    ----------
+    from_bus, to_bus : int
+        Bus numbers (as in the data) of the line's ends, in either order.
+    t : float
+        Opening time, s (absolute run time, >= 0).
+    circuit : int, optional
+        Which of the parallel circuits between the two buses (1 = the first branch row
+        joining them); default 1.  An unknown line raises CaseError when the run starts.
+    """
 
     from_bus: int
     to_bus: int
@@ -63,23 +111,63 @@ class LineTrip:
     circuit: int = 1
 
     def times(self):
+        """The event's times.
+
+        Returns
+        -------
+        list of float
+            ``[t]``, s.
+        """
         return [self.t]
 
 
 @dataclass(frozen=True)
 class GeneratorTrip:
-    """Disconnect machine `machine` (number as in the data) at t (s)."""
+    """Disconnect a generator at `t`.
+
+    Attributes
+    ----------
+    machine : int
+        Machine number (as in the data, PST ``mac_con`` column 1); an unknown machine
+        raises CaseError when the run starts.
+    t : float
+        Disconnection time, s (absolute run time, >= 0).
+    """
 
     machine: int
     t: float
 
     def times(self):
+        """The event's times.
+
+        Returns
+        -------
+        list of float
+            ``[t]``, s.
+        """
         return [self.t]
 
 
 @dataclass(frozen=True)
 class LoadStep:
-    """Add P + jQ (pu, system base) of constant-impedance load at `bus` from t (s)."""
+    """Add P + jQ of constant-impedance load at `bus` from `t`.
+
+    The load is the shunt admittance (P - jQ) / |V0|^2, V0 the bus voltage of the power
+    flow, so it draws P + jQ at that voltage and scales with |V|^2; negative values remove
+    load (a pulse is two steps of opposite sign).
+
+    Attributes
+    ----------
+    bus : int
+        Bus number (as in the data); an unknown bus raises UnknownBusError when the run
+        starts.
+    t : float
+        Time of the step, s (absolute run time, >= 0).
+    P : float
+        Real power added, pu on the system base (+ drawn from the network).
+    Q : float, optional
+        Reactive power added, pu on the system base (+ inductive, drawn); default 0.
+    """
 
     bus: int
     t: float
@@ -87,6 +175,13 @@ class LoadStep:
     Q: float = 0.0
 
     def times(self):
+        """The event's times.
+
+        Returns
+        -------
+        list of float
+            ``[t]``, s.
+        """
         return [self.t]
 
 
@@ -179,8 +274,39 @@ def stages(case: Case, events, t_end: float, V0: np.ndarray):
 def fault_with_clearing(case: Case, bus: int, far_bus: int | None, t_fault: float,
                         clear_cycles: float, far_clear_cycles: float | None = None,
                         circuit: int = 1) -> Fault:
-    """A fault cleared after N cycles at the near end and M cycles at the far end (the
-    CLI's --clear-cycles / --far-clear-cycles), cycles of the case frequency."""
+    """A fault cleared after a number of cycles at the near end and at the far end (the
+    CLI's ``--clear-cycles`` / ``--far-clear-cycles``).
+
+    Parameters
+    ----------
+    case : Case
+        The case; its nominal frequency `freq_hz` (Hz) sets the cycle length 1 / freq_hz s.
+    bus : int
+        Faulted bus number (as in the data; the near end of the line).
+    far_bus : int or None
+        Far-end bus number of the faulted line, tripped at clearing; None: the fault is
+        cleared without loss of a line.
+    t_fault : float
+        Fault start, s (absolute run time).
+    clear_cycles : float
+        Near-end clearing time, cycles of the case frequency after `t_fault` (>= 0).
+    far_clear_cycles : float or None, optional
+        Far-end clearing time, cycles after `t_fault` (>= `clear_cycles`); None (default):
+        with the near end.
+    circuit : int, optional
+        Which of the parallel circuits between `bus` and `far_bus`; default 1.
+
+    Returns
+    -------
+    Fault
+        With ``clear_near = t_fault + clear_cycles / freq_hz`` and ``clear_far = t_fault +
+        far_clear_cycles / freq_hz`` (s).  Buses and lines are checked when the run starts.
+
+    Raises
+    ------
+    InputError
+        `clear_cycles` negative, or `far_clear_cycles` below `clear_cycles`.
+    """
     if clear_cycles < 0 or (far_clear_cycles is not None and far_clear_cycles < clear_cycles):
         raise InputError("clearing cycles must be >= 0 and the far end no earlier than the near end")
     cyc = 1.0 / case.freq_hz

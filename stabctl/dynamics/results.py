@@ -24,14 +24,58 @@ SERIES_UNITS = {"speed": "speed_pu", "angle": "angle_rad", "pelect": "pelect_pu"
 
 @dataclass
 class SimulationResult:
-    """Trajectories of one run, shape (n_t,) for t and (n_t, n) per machine/bus/device.
+    """Trajectories of one run (`Simulator.run`), per machine, bus and storage device.
 
-    Attributes:
-        t: time (s); machines, buses, devices: numbers as in the data;
-        speed (pu), angle (rad), pelect (pu system base), pmech (pu machine base), efd (pu),
-        vmag (pu), vang (rad), pesd (pu, + absorbs); inertia: H*MVA per machine (MJ) for
-        the centre of inertia; stable, t_separation, separated: loss-of-synchronism verdict
-        (machines whose angle left the COI by more than the limit), meta: run description.
+    n_t is the number of recorded times (the integration grid, which lands on every event
+    time; a time appears twice only around a zero-length interval, e.g. a fault cleared at
+    both ends at the same instant, as PSTess), n_mac the number of machines, n_bus
+    of buses, n_dev of storage devices.
+    The loss-of-synchronism verdict uses the centre of inertia (paper eq. 40, weights
+    `inertia`).
+
+    Attributes
+    ----------
+    t : ndarray, shape (n_t,)
+        Times, s, non-decreasing, from 0 to the end of the run (or its stop).
+    machines : ndarray of int, shape (n_mac,)
+        Machine numbers as in the data, the column order of the per-machine arrays.
+    buses : ndarray of int, shape (n_bus,)
+        Bus numbers as in the data, the column order of `vmag` and `vang`.
+    speed : ndarray, shape (n_t, n_mac)
+        Rotor speeds, pu (1 = synchronous).
+    angle : ndarray, shape (n_t, n_mac)
+        Rotor angles, rad, absolute (synchronous reference frame, as PSTess).
+    pelect : ndarray, shape (n_t, n_mac)
+        Electrical power, pu on the system base.
+    pmech : ndarray, shape (n_t, n_mac)
+        Mechanical power, pu on the machine base.
+    efd : ndarray, shape (n_t, n_mac)
+        Field voltage, pu.
+    vmag : ndarray, shape (n_t, n_bus)
+        Bus voltage magnitudes, pu.
+    vang : ndarray, shape (n_t, n_bus)
+        Bus voltage angles, rad.
+    inertia : ndarray, shape (n_mac,)
+        COI weights H * MVA per machine, MW s (MJ).
+    devices : ndarray of int, shape (n_dev,), optional
+        Storage device numbers (1, 2, ... in the fleet's order); empty (default) without
+        storage.
+    pesd : ndarray, shape (n_t, n_dev), or None, optional
+        Storage device powers, pu on the system base (+ absorbs); None (default) without
+        storage.
+    stable : bool, optional
+        False when some rotor angle left the COI by more than the separation limit
+        (`Simulator.run`, default pi rad); default True.
+    t_separation : float or None, optional
+        First recorded time the limit was exceeded, s; None (default) if never.
+    separated : list of int, optional
+        Numbers of the machines that lost synchronism (the smaller coherent group,
+        `stabctl.dynamics.simulation.separated_group`); empty (default) if none.
+    meta : dict, optional
+        Run description: ``case``, ``conventions``, ``wall_time_s`` (s),
+        ``max_initial_derivative`` and its state, and with storage ``switchings`` (the
+        switching log, see `switching_records`) and ``storage`` (per-device figures:
+        switchings, chattering, energy absorbed / delivered in MJ, peak power in MW).
     """
 
     t: np.ndarray
@@ -69,40 +113,99 @@ class SimulationResult:
         return float(np.max(np.abs(self.angle - self.coi_angle[:, None])))
 
     def speed_at(self, t: np.ndarray) -> np.ndarray:
-        """Rotor speeds (pu) at times ``t`` (s, shape (n,)) by linear interpolation,
-        shape (n, n_mac); at an event time (recorded twice) the value after it."""
+        """Rotor speeds at given times, by linear interpolation in the trajectory.
+
+        Parameters
+        ----------
+        t : ndarray, shape (n,)
+            Times, s, within ``[t[0], t[-1]]`` (outside: the end values).
+
+        Returns
+        -------
+        ndarray, shape (n, n_mac)
+            Speeds, pu; at a time recorded twice (a zero-length interval) the value
+            after it.
+        """
         keep = np.r_[np.diff(self.t) > 0, True]
         return np.stack([np.interp(t, self.t[keep], self.speed[keep, k])
                          for k in range(self.speed.shape[1])], axis=1)
 
     def machine(self, number: int) -> int:
-        """Column index of machine `number`; KeyError names it if absent."""
+        """Column index of a machine in the per-machine arrays.
+
+        Parameters
+        ----------
+        number : int
+            Machine number as in the data.
+
+        Returns
+        -------
+        int
+            0-based column of `speed`, `angle`, `pelect`, `pmech`, `efd`.
+
+        Raises
+        ------
+        KeyError
+            The machine is not in the result; the message names it.
+        """
         hit = np.nonzero(self.machines == number)[0]
         if hit.size == 0:
             raise KeyError(f"machine {number} is not in the result")
         return int(hit[0])
 
     def bus(self, number: int) -> int:
-        """Column index of bus `number`; KeyError names it if absent."""
+        """Column index of a bus in `vmag` and `vang`.
+
+        Parameters
+        ----------
+        number : int
+            Bus number as in the data.
+
+        Returns
+        -------
+        int
+            0-based column of `vmag` and `vang`.
+
+        Raises
+        ------
+        KeyError
+            The bus is not in the result; the message names it.
+        """
         hit = np.nonzero(self.buses == number)[0]
         if hit.size == 0:
             raise KeyError(f"bus {number} is not in the result")
         return int(hit[0])
 
     def summary(self) -> dict:
-        """Verdict and figures for `--json`."""
+        """Verdict and figures, as the CLI prints them with ``--json``.
+
+        Returns
+        -------
+        dict
+            ``stable`` (bool), ``t_separation_s`` (s or None), ``separated_machines``
+            (machine numbers), ``max_angle_spread_rad`` (largest |delta_i - delta_COI|,
+            rad), ``t_end_s`` (last recorded time, s), ``n_steps`` (recorded times - 1),
+            then every entry of `meta`.
+        """
         return {"stable": self.stable, "t_separation_s": self.t_separation,
                 "separated_machines": [int(m) for m in self.separated],
                 "max_angle_spread_rad": self.max_angle_spread,
                 "t_end_s": float(self.t[-1]), "n_steps": int(self.t.size - 1), **self.meta}
 
     def switching_records(self) -> list[dict]:
-        """The storage switching log (`meta["switchings"]`, rows (t, device, mode,
-        relative speed)) as records with named fields: `t_s` (s), `device` (number),
-        `bus` and `machine` of the device when known, `mode` ("absorb", "idle",
-        "inject", or the commanded set-point in units of the rating as text), `mode_code`
-        (+1, 0, -1, or that set-point) and `rel_speed_hz` (the device's machine speed
-        minus the COI speed seen by its controller, Hz).  Empty without storage."""
+        """The storage switching log as records with named fields.
+
+        Returns
+        -------
+        list of dict
+            One record per row (t, device, mode, relative speed) of
+            ``meta["switchings"]``, in time order: ``t_s`` (s), ``device`` (number),
+            ``bus`` and ``machine`` of the device when known (else None), ``mode``
+            ("absorb", "idle", "inject", or the commanded set-point in units of the
+            rating as text), ``mode_code`` (+1, 0, -1, or that set-point) and
+            ``rel_speed_hz`` (the device's machine speed minus the COI speed seen by its
+            controller, Hz).  Empty without storage.
+        """
         info = {int(d["device"]): d for d in self.meta.get("storage", [])}
         names = {1: "absorb", 0: "idle", -1: "inject"}
         out = []
@@ -116,7 +219,18 @@ class SimulationResult:
 
     # -- export -------------------------------------------------------------------------
     def columns(self) -> tuple[list[str], np.ndarray]:
-        """CSV header and data matrix (n_t, n_columns)."""
+        """CSV header and data matrix (column names in the module docstring).
+
+        Returns
+        -------
+        names : list of str
+            Column names, n_columns = 1 + 5 n_mac + 2 n_bus (+ n_dev with storage): ``t``,
+            then ``speed_pu.G<k>``, ``angle_rad.G<k>``, ``pelect_pu.G<k>``,
+            ``pmech_pu.G<k>``, ``efd_pu.G<k>`` per machine k, ``vmag_pu.B<n>`` and
+            ``vang_rad.B<n>`` per bus n, ``pesd_pu.D<d>`` per device d.
+        data : ndarray, shape (n_t, n_columns)
+            The values, units as in the names (s, pu, rad).
+        """
         names, blocks = ["t"], [self.t[:, None]]
         for s in SERIES:
             names += [f"{SERIES_UNITS[s]}.G{int(k)}" for k in self.machines]
@@ -130,13 +244,37 @@ class SimulationResult:
         return names, np.hstack(blocks)
 
     def to_csv(self, path: str | os.PathLike) -> Path:
-        """Write the CSV atomically (temporary file then rename)."""
+        """Write the trajectories as CSV (`columns`; 10 significant digits), atomically
+        (temporary file beside it, then rename).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The CSV file; its directory is created if missing.
+
+        Returns
+        -------
+        Path
+            `path`.
+        """
         names, data = self.columns()
         return atomic_write(path, lambda f: np.savetxt(f, data, delimiter=",", header=",".join(names),
                                                        comments="", fmt="%.10g"))
 
     def to_npz(self, path: str | os.PathLike) -> Path:
-        """Write every array and the verdict to a compressed .npz, atomically."""
+        """Write every array and the verdict to a compressed .npz, atomically (temporary
+        file beside it, then rename); `meta` is not written.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The .npz file; its directory is created if missing.
+
+        Returns
+        -------
+        Path
+            `path`.
+        """
         arrays = {k: v for k, v in self.__dict__.items() if isinstance(v, np.ndarray)}
         arrays["verdict"] = np.array([self.stable, self.t_separation or np.nan], float)
         arrays["separated"] = np.asarray(self.separated, int)
@@ -144,7 +282,18 @@ class SimulationResult:
 
     @classmethod
     def from_npz(cls, path: str | os.PathLike) -> "SimulationResult":
-        """Read a result written by `to_npz`."""
+        """Read a result written by `to_npz`.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The .npz file.
+
+        Returns
+        -------
+        SimulationResult
+            The arrays and verdict as written; `meta` is empty (it is not stored).
+        """
         with np.load(path) as z:
             d = {k: z[k] for k in z.files}
         stable, tsep = d.pop("verdict")

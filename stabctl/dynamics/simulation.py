@@ -172,19 +172,52 @@ def check_step_count(t_end: float, h: float) -> None:
 class Simulator:
     """Runs disturbances on one case from its solved power flow.
 
-    Args:
-        case: the case; op: its operating point (default: solved by `stabctl.network.powerflow`);
-        injection_buses: buses kept for device injections (storage); conventions: "ieee"
-        (default) or "pstess" (module docstring, docs/conventions.md); step: the step of
-        runs that give none (s; None: `default_step` of the case and conventions);
-        q_limits: the power flow (when op is None) switches PV buses to PQ at their Q
-        limits (PST's ``chq_lim``, the default) or not (ANDES's default, ``pv2pq = 0``).
-    Attributes:
-        default_h: that step (s).
-    Raises:
-        InputError: unknown conventions, a step that is not positive or too large for the
-        case's fastest time constant; CaseError, PowerFlowError: as the case's models and
-        power flow.
+    Parameters
+    ----------
+    case : Case
+        The case (its dynamic data: machines, exciters, PSS, governors, loads).
+    op : OperatingPoint or None, optional
+        Its solved power flow (complex bus voltages, generation and load, pu on the
+        system base); None (default): solved by
+        `stabctl.network.powerflow.solve_powerflow`.
+    injection_buses : sequence of int, optional
+        Bus numbers kept in the reduced network of `model` for device injections
+        (storage); default none.  Each run builds (and caches) the model its storage
+        needs (`model_for`).
+    conventions : {"ieee", "pstess"}, optional
+        Model conventions (module docstring, docs/conventions.md): ``"ieee"`` (default,
+        limiters as IEEE Std 421.5-2016) or ``"pstess"`` (PSTess 1.1 bit for bit).
+    step : float or None, optional
+        Integration step of runs that give none, s; None (default): `default_step` of
+        the case and conventions.
+    q_limits : bool, optional
+        When `op` is None, the power flow switches PV buses to PQ at their Q limits (PST's
+        ``chq_lim``, True, the default) or not (ANDES's default, ``pv2pq = 0``).
+
+    Attributes
+    ----------
+    default_h : float
+        The step of runs that give none, s.
+    model : DynamicModel
+        The model keeping `injection_buses`.
+    inertia : ndarray, shape (n_mac,)
+        COI weights H * MVA per machine, MW s (paper eq. 40).
+    fastest : tuple of (float, str)
+        The case's fastest time constant (s) and where it is (`fastest_time_constant`).
+    conventions : str
+        ``"ieee"`` or ``"pstess"``.
+
+    Raises
+    ------
+    InputError
+        Unknown conventions; a step that is not positive and finite or not below twice
+        the case's fastest time constant (the predictor-corrector's stability interval).
+    CaseError
+        Models stabctl does not have, limits violated at the initial point (as
+        `stabctl.dynamics.model.DynamicModel`); UnknownBusError (a CaseError) for an
+        injection bus not in the case.
+    PowerFlowError
+        The power flow (when `op` is None) did not converge.
     """
 
     def __init__(self, case: Case, op: OperatingPoint | None = None, injection_buses=(),
@@ -206,8 +239,19 @@ class Simulator:
         self.inertia = self.model.mp.H * case.machines.mva
 
     def model_for(self, buses=()) -> DynamicModel:
-        """The dynamic model keeping `buses` (bus numbers) in the reduced network (cached);
-        storage devices need their buses kept."""
+        """The dynamic model keeping given buses in the reduced network (built once per set
+        of buses, then cached); storage devices need their buses kept.
+
+        Parameters
+        ----------
+        buses : iterable of int, optional
+            Bus numbers to keep, in any order, repeats ignored; default none.
+
+        Returns
+        -------
+        DynamicModel
+            The case's model at this simulator's operating point and conventions.
+        """
         key = frozenset(int(b) for b in buses)
         if key not in self._models:
             self._models[key] = DynamicModel(self.case, self.op, sorted(key), self.conventions)
@@ -216,18 +260,56 @@ class Simulator:
     def run(self, events=(), t_end: float = 5.0, h: float | None = None,
             semantics: str | None = None, separation_limit: float = np.pi,
             stop_at_separation: bool = False, storage=None) -> SimulationResult:
-        """Simulate `events` (see `stabctl.dynamics.events`) from t = 0 to t_end (s) with step h
-        (default `default_h`).
+        """Simulate disturbances from the power-flow point, t = 0 to `t_end`.
 
-        semantics: "pst" or "exact" event semantics (module docstring; default: "pst"
-        under the pstess conventions, "exact" under ieee).
-        storage: a `stabctl.storage.devices.StorageFleet` (devices and controller) or None.
+        Parameters
+        ----------
+        events : iterable, optional
+            `Fault`, `LineTrip`, `GeneratorTrip` and `LoadStep` events
+            (`stabctl.dynamics.events`), any number, in any order; events at or after
+            `t_end` do not happen.  Default none (a flat run).
+        t_end : float, optional
+            End of the run, s (> 0); default 5.
+        h : float or None, optional
+            Integration step, s; None (default): `default_h`.  Every event time is a grid
+            point: under ieee each interval between events gets ceil(length/h) equal
+            steps (at most h), under pstess fix(length/h) (PSTess, in [h, 2h)).
+        semantics : {"pst", "exact"} or None, optional
+            Event semantics (module docstring): ``"pst"``, the corrector of the step
+            ending at an event uses the post-event network (PSTess); ``"exact"``, each
+            step uses the network of its own interval.  None (default): "pst" under the
+            pstess conventions, "exact" under ieee.
+        separation_limit : float, optional
+            Loss of synchronism: a rotor angle more than this from the COI angle (paper
+            eq. 40), rad; default pi.
+        stop_at_separation : bool, optional
+            End the run at the first step after which the limit is exceeded (default
+            False: run to `t_end`).
+        storage : StorageFleet or None, optional
+            Energy-storage devices and their controller (`stabctl.storage.devices`); their
+            buses are kept in the reduced network.  None (default): no storage.
 
-        Raises:
-            InputError, UnknownBusError, CaseError: bad events or step;
-            NumericalInstabilityError: the run left the integrator's stability region;
-            SimulationError: a singular network or non-convergent loads (both carry the
-            partial result as `.result`).
+        Returns
+        -------
+        SimulationResult
+            Trajectories of every machine and bus (and device), the loss-of-synchronism
+            verdict and, with storage, the switching log and per-device figures in
+            `meta`.
+
+        Raises
+        ------
+        InputError
+            Bad semantics, events (clearing before the fault, negative time), `t_end` or
+            step (not positive and finite, too large for the case's fastest time
+            constant, or more than MAX_STEPS steps).
+        UnknownBusError, CaseError
+            An event or storage device naming a bus, line or machine not in the case.
+        NumericalInstabilityError
+            The run left the integrator's stability region (names the time and the
+            state).
+        SimulationError
+            A singular network or non-convergent loads (voltage collapse).  Both carry
+            the partial result as ``.result``.
         """
         semantics = self._semantics(semantics)
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
@@ -264,19 +346,56 @@ class Simulator:
                       stop_at_separation: bool = False) -> SimulationResult:
         """Simulate with storage devices commanded from measurements (estimator in the loop).
 
-        At each frame time t_f (s, increasing) the run is advanced to the first grid point at
-        or after t_f and `decide(t_f, partial)` is called with the trajectory so far (a
-        SimulationResult up to that grid point, so a measurement at t_f can be interpolated);
-        it returns the device set-points (n_dev,) in units of each rating (Table 3 modes
-        -1 inject, 0 idle, +1 absorb; any real value for a scaled power, e.g. an ambient
-        load deviation) that take effect at exactly t_f + latency (the step is split there).
-        `storage.controller` must be `stabctl.storage.devices.ExternalCommands`.  With
-        stop_at_separation the run ends at the first step after which a rotor angle is more
-        than separation_limit rad from the COI, as `run` (no further frame is decided).
+        At each frame time t_f (s, increasing) the run is advanced to the first grid point
+        at or after t_f and ``decide(t_f, partial)`` is called with the trajectory so far
+        (a SimulationResult up to that grid point, so a measurement at t_f can be
+        interpolated; no verdict); it returns the device set-points, which take effect at
+        exactly t_f + `latency` (the step is split there) and hold until the next ones.
+        With `stop_at_separation` the run ends at the first step after which a rotor angle
+        is more than `separation_limit` rad from the COI, as `run` (no further frame is
+        decided).
 
-        Raises:
-            InputError: wrong controller, frame times not increasing, negative latency;
-            SimulationError: as `run`.
+        Parameters
+        ----------
+        events : iterable
+            Disturbances, as `run`.
+        t_end : float
+            End of the run, s (> 0).
+        storage : StorageFleet
+            The devices; its controller must be
+            `stabctl.storage.control.ExternalCommands`.
+        frame_times : array_like of float, shape (n_frames,)
+            Measurement-frame arrival times, s, strictly increasing; those after `t_end`
+            are ignored.
+        decide : callable
+            ``decide(t_f, partial) -> set-points``: `t_f` a float (s), `partial` a
+            SimulationResult; returns array_like, shape (n_dev,), each device's set-point
+            in units of its rating (Table 3 modes -1 inject, 0 idle, +1 absorb; any real
+            value for a scaled power, e.g. an ambient load deviation).
+        latency : float, optional
+            Delay from a frame's arrival to its set-points taking effect, s (>= 0);
+            default 0.
+        h : float or None, optional
+            Integration step, s, as `run`.
+        semantics : {"pst", "exact"} or None, optional
+            Event semantics, as `run`.
+        separation_limit : float, optional
+            Loss-of-synchronism limit, rad, as `run`; default pi.
+        stop_at_separation : bool, optional
+            End the run at separation, as `run`; default False.
+
+        Returns
+        -------
+        SimulationResult
+            As `run`, with the devices' powers and switching log.
+
+        Raises
+        ------
+        InputError
+            No fleet or a controller other than ExternalCommands, frame times not
+            increasing, a negative latency; and as `run`.
+        UnknownBusError, CaseError, NumericalInstabilityError, SimulationError
+            As `run`.
         """
         if storage is None or storage.controller.kind != law.EXTERNAL:
             raise InputError("run_commanded needs a fleet whose controller is ExternalCommands")

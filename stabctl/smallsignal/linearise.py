@@ -79,24 +79,52 @@ def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP
               conventions: str = "ieee", q_limits: bool = True):
     """Linearised model of a case at its power-flow point, as a `control.StateSpace`.
 
-    Args:
-        target: a Case (its power flow is solved) or a `stabctl.dynamics.simulation.Simulator`
-            (its operating point and cached models are used).
-        esd_buses: bus numbers with an ESD power input (default: every generator's HV bus);
-            extra_buses: further ESD buses on request (appended).
-        rel_step: relative perturbation h / max(|value|, 1) (default PSTess's 1e-4; see
-            docs/modal.md for the error study).
-        conventions: model conventions when target is a Case ("ieee" or "pstess"; a
-            Simulator keeps its own).  At a power-flow point inside every limit both give
-            the same linear model.
-        q_limits: PV Q limits in the power flow when target is a Case (`Simulator`).
-    Returns:
-        control.StateSpace (continuous) with named states, inputs and outputs (module
-        docstring); n_x = number of active states.
-    Raises:
-        UnknownBusError: an ESD bus not in the case; InputError: rel_step not in (0, 0.1);
-        SimulationError: the network did not solve at a perturbed point, or a perturbation
-            crossed a limiter (the linearisation would be meaningless there).
+    Central differences of the simulator's own equations (PSTess ``svm_mgen``,
+    docs/pst_models.md 9; module docstring for the signals, docs/modal.md for the error
+    study).
+
+    Parameters
+    ----------
+    target : Case or Simulator
+        A Case (its power flow is solved and a Simulator built) or a
+        `stabctl.dynamics.simulation.Simulator` (its operating point, conventions and
+        cached models are used).
+    esd_buses : iterable of int or None, optional
+        Bus numbers with an ESD power input ``P_esd_B<n>`` (pu on the system base,
+        + absorbs); None (default): every generator's HV bus (`default_esd_buses`).
+    extra_buses : iterable of int, optional
+        Further ESD buses, appended (repeats ignored); default none.
+    rel_step : float, optional
+        Relative perturbation h / max(|value|, 1), in (0, 0.1); default PSTess's 1e-4
+        (REL_STEP).
+    conventions : {"ieee", "pstess"}, optional
+        Model conventions when `target` is a Case (a Simulator keeps its own); default
+        "ieee".  At a power-flow point inside every limit both give the same linear model.
+    q_limits : bool, optional
+        PV Q limits in the power flow when `target` is a Case (as `Simulator`); default
+        True.
+
+    Returns
+    -------
+    control.StateSpace
+        Continuous-time model with named states, inputs and outputs (module docstring):
+        A (n_x, n_x), B (n_x, n_u), C (n_y, n_x), D (n_y, n_u), n_x the number of active
+        states, n_u = n_esd + n_exciters + n_governors inputs (``P_esd_B<n>``,
+        ``Vref_G<k>``, ``Pref_G<k>``), n_y = 2 n_mac + 1 + 2 n_bus outputs
+        (``omega_G<k>``, ``omega_coi``, ``omega_rel_G<k>`` in pu speed, ``vmag_B<n>`` in
+        pu, ``f_bus_B<n>`` in Hz), deviations from the operating point.
+
+    Raises
+    ------
+    UnknownBusError
+        An ESD bus not in the case.
+    InputError
+        `rel_step` not in (0, 0.1); unknown conventions.
+    SimulationError
+        The network did not solve at a perturbed point, or a perturbation crossed a
+        limiter (the linearisation would be meaningless there).
+    CaseError, PowerFlowError
+        As `Simulator` when `target` is a Case.
     """
     from stabctl.dynamics.simulation import Simulator
 

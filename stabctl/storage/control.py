@@ -124,7 +124,20 @@ class BangBangCOI:
                              f"{self.v_gate_pu}")
 
     def packed(self, f0: float) -> LawConstants:
-        """Deadband and hysteresis in pu speed (divided by f0, Hz), the gate, the COI."""
+        """The law's constants for the kernels.
+
+        Parameters
+        ----------
+        f0 : float
+            Nominal frequency of the case, Hz (> 0), to turn Hz into pu speed.
+
+        Returns
+        -------
+        LawConstants
+            Kind BANG_BANG, deadband and hysteresis in pu speed (`deadband_hz / f0`,
+            `hysteresis_hz / f0`), the voltage gate (pu), the COI choice (``rest`` True
+            for ``coi="rest"``), gains 0.
+        """
         return LawConstants(self.kind, self.deadband_hz / f0, self.hysteresis_hz / f0,
                             self.v_gate_pu, self.coi == "rest", 0.0, 0.0)
 

@@ -4,7 +4,8 @@ Section 5).
 An ESD at a bus is a real-power sink/source P in [-Pmax, +Pmax] (pu on the system base,
 + absorbs, as the paper), drawn at its bus in the network solution.  Ideal (instant) by
 default; optionally a first-order lag, a ramp limit and an energy (state-of-charge) range.
-The control laws a fleet shares are in `stabctl.storage.control` (re-exported here).
+The control laws a fleet shares are in `stabctl.storage.control` (re-exported by
+`stabctl.storage`).
 """
 
 from __future__ import annotations
@@ -27,16 +28,35 @@ MAX_ESD_PCT = 100.0
 
 @dataclass(frozen=True)
 class StorageDevice:
-    """One ESD.
+    """One energy-storage device (paper Section 5): a real-power sink/source at a bus,
+    P in [-Pmax, +Pmax] (+ absorbs), ideal (instant) unless a lag, a ramp limit or a finite
+    energy is given.  Converted to pu on the system base when packed for a run.
 
-    Attributes:
-        bus: bus number where it connects.
-        machine: number of the generator whose relative speed drives it (None: a device
-            commanded from outside, e.g. an ambient load fluctuation, `stabctl.estimation.ambient`).
-        pmax_mw: rating (MW), > 0.
-        lag_s: first-order power lag (s), 0 = ideal.
-        ramp_mw_s: ramp limit (MW/s), inf = none.
-        energy_mj: usable energy (MJ), inf = unlimited; soc0: initial state of charge (0..1).
+    Attributes
+    ----------
+    bus : int
+        Bus number (as in the data) where it connects.
+    machine : int or None
+        Number of the generator whose speed relative to the COI drives it; None: a device
+        commanded from outside (`stabctl.storage.control.ExternalCommands`, e.g. an
+        ambient load fluctuation, `stabctl.estimation.ambient`).
+    pmax_mw : float
+        Rating, MW, > 0.
+    lag_s : float, optional
+        First-order power lag time constant, s, >= 0; 0 (default) = ideal.
+    ramp_mw_s : float, optional
+        Ramp limit, MW/s, > 0; inf (default) = none.
+    energy_mj : float, optional
+        Usable energy, MJ, > 0; inf (default) = unlimited.  A full device does not absorb,
+        an empty one does not inject.
+    soc0 : float, optional
+        Initial state of charge, fraction of `energy_mj` in [0, 1]; default 0.5.
+
+    Raises
+    ------
+    InputError
+        A rating that is not > 0, a negative lag, a ramp limit or energy that is not > 0,
+        or soc0 outside [0, 1].
     """
 
     bus: int
@@ -57,13 +77,24 @@ class StorageDevice:
 
 @dataclass(frozen=True)
 class StorageFleet:
-    """Devices and the controller they share."""
+    """Storage devices and the control law they share.
+
+    Attributes
+    ----------
+    devices : tuple of StorageDevice, optional
+        The devices, numbered 1, 2, ... in this order in the results; default none.
+    controller : ControlLaw, optional
+        The law driving every device (`stabctl.storage.control`: `BangBangCOI`, the
+        paper's, by default; `LinearFeedback`; `ExternalCommands` for
+        `Simulator.run_commanded`).
+    """
 
     devices: tuple = ()
     controller: ControlLaw = field(default_factory=BangBangCOI)
 
     @property
     def buses(self) -> list[int]:
+        """Bus numbers of the devices, in device order (kept in the reduced network)."""
         return [d.bus for d in self.devices]
 
 
@@ -85,9 +116,31 @@ def hv_bus(case: Case, machine: int) -> int:
 
 
 def uniform_fleet(case: Case, pct: float, controller=None, at: str = "hv") -> StorageFleet:
-    """An ESD of pct % of each generator's MVA at its HV bus (at="hv") or terminal bus.
+    """One ideal ESD per generator, rated pct % of the generator's MVA, at its HV
+    bus or its terminal bus.
 
-    Raises InputError for a non-positive percentage.
+    Parameters
+    ----------
+    case : Case
+        The case; one device per row of its machine table, in that order.
+    pct : float
+        Rating of each device, % of its generator's MVA rating, in (0, MAX_ESD_PCT] (100).
+    controller : ControlLaw or None, optional
+        The fleet's control law; None (default): `BangBangCOI()` (paper Table 3).
+    at : str, optional
+        ``"hv"`` (default): the generator's high-voltage bus (`hv_bus`: the neighbour of
+        its terminal bus with the highest rated kV); any other value: the terminal bus.
+
+    Returns
+    -------
+    StorageFleet
+        Devices driven by their own generator's speed, unlimited energy, no lag or ramp
+        limit.
+
+    Raises
+    ------
+    InputError
+        `pct` not in (0, MAX_ESD_PCT].
     """
     if not 0 < pct <= MAX_ESD_PCT:
         raise InputError(f"storage rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, "
