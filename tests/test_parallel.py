@@ -313,3 +313,13 @@ def test_sweep_jobs_with_another_controller_are_keyed_apart():
     assert other[1].key == plain[1].key + "/ctrl-db0.05-vg0.8-system-hy0"
     assert other[1].func is controlled_cct_job
     assert other[1].inputs["controller"]["deadband_hz"] == 0.05
+
+
+@pytest.mark.dask
+def test_worker_pool_runs_on_a_local_dask_cluster():
+    # `place --scheduler local`: the evaluations go to Dask, results in job order
+    pytest.importorskip("distributed")
+    from stabctl.parallel import worker_pool
+
+    with worker_pool(1, "local") as run_map:
+        assert run_map(dict, [{"a": 1}, {"b": 2}]) == [{"a": 1}, {"b": 2}]

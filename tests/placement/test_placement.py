@@ -273,12 +273,3 @@ def test_cli_place_json_meets_the_gain_and_bad_input_exits_2():
         bad = CliRunner().invoke(main, ["place", "kundur", "--contingencies", "DEFAULT", *args])
         assert bad.exit_code == 2
         assert bad.output.startswith("error:") and bad.output.count("\n") == 1
-
-
-def test_worker_pool_runs_on_a_local_dask_cluster():
-    # `place --scheduler local`: the evaluations go to Dask, results in job order
-    pytest.importorskip("distributed")
-    from stabctl.placement.evaluation import worker_pool
-
-    with worker_pool(1, "local") as run_map:
-        assert run_map(dict, [{"a": 1}, {"b": 2}]) == [{"a": 1}, {"b": 2}]
