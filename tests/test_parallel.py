@@ -301,7 +301,8 @@ def test_ratings_parse_none_and_lists():
 def test_sweep_jobs_with_another_controller_are_keyed_apart():
     # the paper's controller: exactly cct_jobs' jobs (earlier records resume); another:
     # the ratings' jobs carry it in their inputs and keys
-    from stabctl.stability.cct import cct_jobs, default_faults
+    from stabctl.stability.cct import cct_jobs
+    from stabctl.studies.cases import default_faults
     from stabctl.storage.control import BangBangCOI
     from stabctl.studies.sweeps import controlled_cct_job, controlled_cct_jobs
 
