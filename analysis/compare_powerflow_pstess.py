@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.case import load_case
-from stabctl.powerflow import solve_powerflow
+from stabctl.io import load_case
+from stabctl.network.powerflow import solve_powerflow
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data" / "pstess"
 REFS = {"kundur": "kundur_d2asbegp_default_loadflow_bus.csv",

@@ -11,12 +11,12 @@ clearing, the relative speed the controller acted on against the truth (mHz).
 
 import numpy as np
 
-from stabctl import closed_loop as cl
-from stabctl import estimation as es
-from stabctl.case import load_case
-from stabctl.estimation_study import true_speeds
-from stabctl.events import fault_with_clearing
-from stabctl.simulation import Simulator
+from stabctl.studies.cases import CASE1
+from stabctl.estimation import closed_loop as cl
+from stabctl.estimation import filters as es
+from stabctl.io import load_case
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator
 
 
 class ExtrapolatingKF(es.FrequencyKF):
@@ -40,7 +40,7 @@ def run(sim, events, estimator, extrapolate=False):
 def main():
     case = load_case("kundur")
     sim = Simulator(case)
-    events = [fault_with_clearing(case, 3, 101, 1.0, 20)]
+    events = [fault_with_clearing(case, CASE1.bus, CASE1.far_bus, CASE1.fault.t_fault, 20)]
     t_clear = max(events[0].times())
     for label, est, ext in (("ideal", "ideal", False), ("kf, ROCOF extrapolated", "kf", True),
                             ("kf, held (baseline)", "kf", False)):
@@ -48,7 +48,7 @@ def main():
         d, res = r.diagnostics, r.result
         print(f"{label}: stable {res.stable}, {len(res.meta['switchings'])} switchings, "
               f"run end {res.t[-1]:.2f} s")
-        true = true_speeds(res, np.minimum(d.t + d.latency, res.t[-1]))
+        true = res.speed_at(np.minimum(d.t + d.latency, res.t[-1]))
         rel = es.relative_speeds(true, true, res.inertia, d.coi)[0] * d.f0
         for k in np.flatnonzero((d.t > t_clear) & (d.t < t_clear + 0.2)):
             print(f"  t {d.t[k]:.3f} s  acted on {np.round(d.rel[k] * 1e3).astype(int)}  "

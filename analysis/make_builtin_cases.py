@@ -1,11 +1,11 @@
-"""Regenerate the built-in cases stabctl/cases/*.json from the PSTess data in shared/.
+"""Regenerate the built-in cases stabctl/case/data/*.json from the PSTess data in shared/.
 
 Run from the repository root (development only; the package never reads shared/):
 
     /work/venv/bin/python analysis/make_builtin_cases.py [path/to/shared/data/pstess]
 
-Writes stabctl/cases/kundur.json (from d2asbegp.m, checked against Octave's d2asbegp.json)
-and stabctl/cases/miniwecc.json (from d_minniWECC_base.json: the .m file computes its
+Writes stabctl/case/data/kundur.json (from d2asbegp.m, checked against Octave's d2asbegp.json)
+and stabctl/case/data/miniwecc.json (from d_minniWECC_base.json: the .m file computes its
 matrices, so the Octave-evaluated JSON is the source), and copies PSTess's LICENSE and NOTICE.
 """
 
@@ -15,10 +15,10 @@ import shutil
 import sys
 from pathlib import Path
 
-from stabctl import pstio
+from stabctl.io import pst as pstio
 
 ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "stabctl" / "cases"
+OUT = ROOT / "stabctl" / "case" / "data"
 LICENCE = (
     "MIT. Data from PSTess 1.1 (Sandia National Laboratories, sandialabs/snl-pstess; "
     "(c) 2021 NTESS), which derives from the Power System Toolbox (PST, (c) Joe Chow / Cherry "

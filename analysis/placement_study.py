@@ -1,5 +1,5 @@
 """ESD sizing and placement study: writes reports/placement_<case>.md (+ JSON,
-figures) per case with `stabctl.placement_study.placement_study`.
+figures) per case with `stabctl.studies.placement.placement_study`.
 
 Run: python analysis/placement_study.py [kundur] [miniwecc] [--out reports] [--workers 2]
 Takes ~2 min (Kundur) and ~20 min (miniWECC, of which ~10 min screening, resumed from
@@ -8,7 +8,7 @@ reports/placement_miniwecc_screening.jsonl) on two cores.
 
 import argparse
 
-from stabctl.placement_study import placement_study
+from stabctl.studies.placement import placement_study
 
 
 def main(argv=None):

@@ -3,9 +3,9 @@ needs ``pip install "stabctl[andes]"``).
 
 Cases: ANDES's Kundur (kundur.raw + kundur_full.dyr without its Toggle record) and
 WECC-179 (wecc.raw + wecc_full.dyr, GENROU saturation set to 0), imported by
-``stabctl.psse.load_psse`` with ``conventions="andes"`` (ANDES's reading of GENROU,
+``stabctl.io.psse.load_psse`` with ``conventions="andes"`` (ANDES's reading of GENROU,
 EXDC2 and IEEEG1, so that both tools solve the same equations) and read by ANDES from the
-same files (``stabctl.andes_xval``). Fault: three-phase at one bus through j1e-4 pu from
+same files (``stabctl.io.andes``). Fault: three-phase at one bus through j1e-4 pu from
 t = 1 s, cleared after 6 cycles without loss of a line.
 
 Each tool is timed in two settings, and each one's error is measured against its own
@@ -56,14 +56,14 @@ from pathlib import Path
 import numpy as np
 
 from _timing import best_of
-from stabctl.andes_xval import AndesFault, andes_modes, andes_system, strip_dyr
-from stabctl.cct import LineFault, critical_clearing_time
-from stabctl.events import Fault
+from stabctl.io.andes import AndesFault, andes_modes, andes_system, strip_dyr
+from stabctl.stability.cct import LineFault, critical_clearing_time
+from stabctl.dynamics.events import Fault
 from stabctl.errors import InputError
-from stabctl.linearise import linearise
-from stabctl.modal import modal_analysis
-from stabctl.psse import load_psse
-from stabctl.simulation import Simulator, default_step
+from stabctl.smallsignal.linearise import linearise
+from stabctl.smallsignal.modal import modal_analysis
+from stabctl.io.psse import load_psse
+from stabctl.dynamics.simulation import Simulator, default_step
 
 T_FAULT, CYCLES, T_END, TOL_CCT = 1.0, 6, 20.0, 0.001
 ACCURACY = 1e-4                                   # pu rotor speed, for settings (b)

@@ -1,7 +1,7 @@
 """Wall time and number of simulations of one CCT search per case and model conventions
 (not a test).
 
-Searches (defaults of `stabctl.cct.critical_clearing_time`: tol 1 ms, t_end = fault + 5 s,
+Searches (defaults of `stabctl.stability.cct.critical_clearing_time`: tol 1 ms, t_end = fault + 5 s,
 stop at separation, each convention's default step) for the paper's Case 2 fault
 (miniWECC, bus 83, line 83-33, at 1 s) and Case 1 fault (Kundur, bus 3, line 3-101, at
 1 s), pinned to one core, after a warm-up run (compilation and the power flow excluded;
@@ -15,13 +15,14 @@ Run: python benchmarks/bench_cct.py
 import os
 import time
 
-from stabctl.case import load_case
-from stabctl.cct import LineFault, critical_clearing_time
-from stabctl.simulation import Simulator
+from stabctl.io import load_case
+from stabctl.stability.cct import critical_clearing_time
+from stabctl.studies.cases import CASE1, CASE2
+from stabctl.dynamics.simulation import Simulator
 
 SEARCHES = (  # case, fault, target s (None: no target), label
-    ("miniwecc", LineFault(83, 33, 1.0), 3.0, "Case 2: bus 83, line 83-33"),
-    ("kundur", LineFault(3, 101, 1.0), None, "Case 1: bus 3, line 3-101"),
+    ("miniwecc", CASE2.fault, 3.0, "Case 2: bus 83, line 83-33"),
+    ("kundur", CASE1.fault, None, "Case 1: bus 3, line 3-101"),
 )
 
 

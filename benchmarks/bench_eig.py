@@ -1,8 +1,8 @@
 """Wall time to linearise and analyse miniWECC and Kundur (not a test).
 
 Phases: building the model (power flow, initialisation, reduced network: `Simulator`),
-linearisation (`stabctl.linearise.linearise`, 2 evaluations per state and input),
-modal analysis (`stabctl.modal.modal_analysis`: eigenvalues, both eigenvector sets,
+linearisation (`stabctl.smallsignal.linearise.linearise`, 2 evaluations per state and input),
+modal analysis (`stabctl.smallsignal.modal.modal_analysis`: eigenvalues, both eigenvector sets,
 participations, areas) and residues (`mode_sensitivity`).  Best of several runs after a
 warm-up (compilation excluded), one core.  Target: miniWECC linearise + analyse
 <= 0.5 s; PSTess svm_mgen takes 22 s.
@@ -11,10 +11,10 @@ Run: python benchmarks/bench_eig.py
 
 
 from _timing import best_of
-from stabctl.case import load_case
-from stabctl.linearise import linearise
-from stabctl.modal import modal_analysis, mode_sensitivity
-from stabctl.simulation import Simulator
+from stabctl.io import load_case
+from stabctl.smallsignal.linearise import linearise
+from stabctl.smallsignal.modal import modal_analysis, mode_sensitivity
+from stabctl.dynamics.simulation import Simulator
 
 
 def main():

@@ -14,11 +14,12 @@ Run: python benchmarks/bench_estimator.py
 import os
 import time
 
-from stabctl import estimation as es
-from stabctl import pmu
-from stabctl.case import load_case
-from stabctl.events import fault_with_clearing
-from stabctl.simulation import Simulator
+from stabctl.studies.cases import CASE2
+from stabctl.estimation import filters as es
+from stabctl.estimation import pmu
+from stabctl.io import load_case
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator
 
 RATE = 60.0
 TARGET_US = 1e6 / RATE / 100
@@ -39,7 +40,7 @@ def main():
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     case = load_case("miniwecc")
-    res = Simulator(case).run([fault_with_clearing(case, 83, 33, 1.0, 4)], t_end=10.0)
+    res = Simulator(case).run([fault_with_clearing(case, CASE2.bus, CASE2.far_bus, CASE2.fault.t_fault, CASE2.cycles["estimation"])], t_end=10.0)
     pmus = pmu.machine_pmus(case)
     settings = pmu.PMUSettings(rate=RATE, drop_prob=0.05)
     frames = list(pmu.measure(pmu.phasor_truth(case, res, pmus), settings, seed=1))

@@ -2,13 +2,13 @@
 
 1. The convex program alone, 34 sites (miniWECC): 10 CCT cuts (gradients drawn at random,
    seed 0, like SIME's: a few sites per contingency), the 33 real damping rows of the
-   linearised miniWECC (`stabctl.damping`, zeta_min 0.05), elastic rows and a trust region,
+   linearised miniWECC (`stabctl.smallsignal.damping`, zeta_min 0.05), elastic rows and a trust region,
    as inside the loop; median of 20 solves: Clarabel's own time and the wall time with
    cvxpy's canonicalisation.  Target: well under 1 s.
-2. The verified placement (`stabctl.placement_loop.place`) of each case's DEFAULT
+2. The verified placement (`stabctl.placement.loop.place`) of each case's DEFAULT
    contingencies (`stabctl sweep-cct`), targets = CCT of the uniform 5 % fleet, 2 workers:
    wall time, allocations simulated, simulations, total MW.
-3. With --study: the whole study (`stabctl.placement_study`, into reports/) per case.
+3. With --study: the whole study (`stabctl.studies.placement`, into reports/) per case.
 
 Run: python benchmarks/bench_placement.py [--study]
 """
@@ -18,13 +18,14 @@ import time
 
 import numpy as np
 
-from stabctl.case import load_case
-from stabctl.cct import DEFAULT_FAULTS, cached_simulator
-from stabctl.damping import DampingModel, relay_df
-from stabctl.linearise import linearise
-from stabctl.placement import CCTCut, candidate_sites, solve_allocation
-from stabctl.placement_eval import Contingency
-from stabctl.placement_loop import baseline, evaluations, place
+from stabctl.io import load_case
+from stabctl.studies.cases import DEFAULT_FAULTS
+from stabctl.stability.cct import cached_simulator
+from stabctl.smallsignal.damping import DampingModel, relay_df
+from stabctl.smallsignal.linearise import linearise
+from stabctl.placement.program import CCTCut, candidate_sites, solve_allocation
+from stabctl.placement.evaluation import Contingency
+from stabctl.placement.loop import baseline, evaluations, place
 
 
 def convex_solve_time(n_rep: int = 20) -> None:
@@ -76,7 +77,7 @@ def main():
     for name in ("kundur", "miniwecc"):
         verified_placement(name)
     if "--study" in sys.argv:
-        from stabctl.placement_study import placement_study
+        from stabctl.studies.placement import placement_study
         for name in ("kundur", "miniwecc"):
             t = time.perf_counter()
             path = placement_study(name, "reports", progress=lambda msg: None)

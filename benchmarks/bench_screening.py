@@ -14,7 +14,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from stabctl.screening import screen
+from stabctl.stability.screening import screen
 
 TARGET_S = {"miniwecc": 300.0}
 

@@ -7,22 +7,22 @@ Run: python benchmarks/bench_simulate.py
 
 
 from _timing import best_of
-from stabctl.case import load_case
-from stabctl.events import fault_with_clearing
-from stabctl.simulation import Simulator, default_step
+from stabctl.io import load_case
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator, default_step
+from stabctl.studies.cases import CASE1, CASE2
 
-CASES = (  # name, fault bus, far bus, clearing cycles, target s, label
-    ("kundur", 3, 101, 21, 0.05, "Case 1: bus 3, line 3-101, 21 cycles"),
-    ("miniwecc", 83, 33, 6, 0.3, "Case 2: bus 83, line 83-33, 6 cycles"),
-)
+CASES = ((CASE1, 0.05), (CASE2, 0.3))  # paper case, target s (20 s run, one core)
 
 
 def main():
     print(f"{'case':10} {'run':44} {'step s':>9} {'wall s':>8} {'x real time':>12} {'target s':>9}")
-    for name, bus, far, cyc, target, label in CASES:
+    for pc, target in CASES:
+        name, cyc = pc.case, pc.cycles["paper"]
+        label = f"{pc.label}: {pc.fault.describe()}, {cyc} cycles"
         case = load_case(name)
         sim = Simulator(case)
-        fault = [fault_with_clearing(case, bus, far, 1.0, cyc)]
+        fault = [fault_with_clearing(case, pc.bus, pc.far_bus, pc.fault.t_fault, cyc)]
         for h in (default_step(case), 1 / 240):
             for what, ev in ((label, fault), ("no disturbance", [])):
                 wall, _ = best_of(lambda: sim.run(ev, t_end=20.0, h=h))

@@ -8,7 +8,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from stabctl.paper_storage import CASES, RATINGS_PCT, table4
+from stabctl.studies.paper_storage import CASES, RATINGS_PCT, table4
 
 
 def main():

@@ -9,7 +9,7 @@ Usage: python sims/estimation_study.py [RUNS] [MINIWECC_CCT_RUNS] [--workers N]
 
 import argparse
 
-from stabctl.estimation_report import CASES, write_estimation_report
+from stabctl.studies.estimation_report import CASES, write_estimation_report
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -6,7 +6,7 @@ Run: python sims/paper_cases_with_storage.py
 
 from pathlib import Path
 
-from stabctl.paper_storage import section_case1, section_case2, section_table4
+from stabctl.studies.paper_storage import section_case1, section_case2, section_table4
 
 
 def main(out=Path("reports")):

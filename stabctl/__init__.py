@@ -2,18 +2,59 @@
 
 Per unit on the system base unless a name says otherwise; time in s; angles in rad;
 frequencies in Hz.
+
+The names in ``__all__`` are the public entry points; they are imported on first use, so
+``import stabctl`` is cheap and has no side effects (no environment variables set, no file
+touched, nothing compiled).  Layers, lowest first: :mod:`stabctl.case`, :mod:`stabctl.io`
+and :mod:`stabctl.network`, :mod:`stabctl.models`, :mod:`stabctl.storage`,
+:mod:`stabctl.dynamics`, :mod:`stabctl.stability` and :mod:`stabctl.smallsignal`,
+:mod:`stabctl.placement` and :mod:`stabctl.estimation`, :mod:`stabctl.studies`,
+:mod:`stabctl.cli` (the import-linter contract in ``pyproject.toml``).
 """
 
-import os
+from __future__ import annotations
 
-# The simulator works on many small dense matrices: multi-threaded BLAS only adds overhead
-# there, and oversubscribes the cores when sweeps run one simulation per process.  Users can
-# still choose by setting these variables before importing stabctl.
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
-
-from ._jitcache import ensure_fresh_cache  # noqa: E402
-
-ensure_fresh_cache()
+import importlib
 
 __version__ = "0.1.0"
+
+_EXPORTS = {
+    "Case": "stabctl.case",
+    "load_case": "stabctl.io",
+    "list_cases": "stabctl.io",
+    "solve_powerflow": "stabctl.network.powerflow",
+    "Simulator": "stabctl.dynamics.simulation",
+    "SimulationResult": "stabctl.dynamics.results",
+    "Fault": "stabctl.dynamics.events",
+    "LineTrip": "stabctl.dynamics.events",
+    "GeneratorTrip": "stabctl.dynamics.events",
+    "LoadStep": "stabctl.dynamics.events",
+    "fault_with_clearing": "stabctl.dynamics.events",
+    "coi_speed": "stabctl.dynamics.coi",
+    "StorageDevice": "stabctl.storage",
+    "StorageFleet": "stabctl.storage",
+    "BangBangCOI": "stabctl.storage",
+    "uniform_fleet": "stabctl.storage",
+    "LineFault": "stabctl.stability.cct",
+    "critical_clearing_time": "stabctl.stability.cct",
+    "linearise": "stabctl.smallsignal.linearise",
+    "modal_analysis": "stabctl.smallsignal.modal",
+    "OMIB": "stabctl.smib.omib",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    """Import a public name from its module on first use (PEP 562)."""
+    try:
+        module = _EXPORTS[name]
+    except KeyError:
+        raise AttributeError(f"module 'stabctl' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -1,0 +1,914 @@
+"""stabctl's case model: the static and dynamic data of one power system.
+
+A :class:`Case` holds the system base and one table per kind of data. Every table is a
+small frozen dataclass of read-only 1-D numpy arrays, one array per PST column, named in
+the field's terms (``case.buses.vmag``, ``case.machines.xdp``, ``case.exciters.KA``).
+Row ``i`` of every array of a table is row ``i`` of the PST matrix. ``table.matrix()``
+gives the PST matrix back (columns in PST order), so a PST model can be written against
+either form.
+
+Units: per unit on the system base (``Case.base_mva``) for network and load data, per unit
+on the machine base (``machines.mva``) for machine and controller data, seconds for time
+constants, kV for ``buses.kv``, degrees where a name ends in ``_deg`` (as in PST's data
+files).
+
+Values are PST's raw data: nothing is replaced by a model default (a T'qo of 0 stays 0, a
+tap of 0 stays 0 and means 1 in :mod:`stabctl.network.ybus`, a Q limit of 0 stays 0 and means
+"no limit" in :mod:`stabctl.network.powerflow`). Trailing columns that a PST matrix may omit are
+filled with PST's own defaults (given per table below).
+
+Source of the column lists: the PST manual (Power System Toolbox 3.0, Rogers & Chow,
+``shared/reference/pstess/pst_man.pdf``): bus and line, section 1.3 and the ``loadflow``
+description; ``mac_con`` section 3.22 Table 10; ``exc_con`` sections 3.38 Table 15 (type 0),
+3.11 Table 2 (types 1, 2) and 3.13 Table 3 (type 3); ``pss_con`` section 3.30 Table 13;
+``tg_con`` section 3.45; ``load_con`` section 3.29 Table 12; ``sw_con`` section 2.5; and the
+comments of the PSTess data files (``d2asbegp.m``, ``d_minniWECC_base.m``).
+
+Construction validates the data and raises :class:`~stabctl.errors.CaseError` naming the
+table, the row (1-based, with its bus or machine number) and the field.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import ClassVar, Mapping
+
+import numpy as np
+
+from stabctl.case.params import EXCITER, GOVERNOR, MACHINE, PSS, Family, choices_message
+from stabctl.errors import CaseError, UnknownBusError
+
+__all__ = [
+    "Table",
+    "BusTable",
+    "BranchTable",
+    "MachineTable",
+    "ExciterTable",
+    "PssTable",
+    "GovernorTable",
+    "LoadTable",
+    "InjectionTable",
+    "Case",
+    "SWING",
+    "PV",
+    "PQ",
+    "CASE_DIR",
+]
+
+#: PST bus types (bus matrix column 10).
+SWING, PV, PQ = 1, 2, 3
+
+
+# --------------------------------------------------------------------------------------
+# generic table
+# --------------------------------------------------------------------------------------
+
+
+def _where(table: str, row: int, key: str | None, value, fld: str) -> str:
+    """Location prefix of an error: table, 1-based row, its bus/machine number, field."""
+    ident = "" if key is None or value is None else f" ({key} {_fmt(value)})"
+    return f"{table} row {row + 1}{ident}, field '{fld}'"
+
+
+def _fmt(x) -> str:
+    x = float(x)
+    return str(int(x)) if x.is_integer() else repr(x)
+
+
+@dataclass(frozen=True, eq=False)
+class Table:
+    """Base of all case tables: one read-only float64 array per PST column.
+
+    Subclasses declare their fields in PST column order and set:
+
+    * ``TABLE`` -- the PST matrix name (used in error messages),
+    * ``MIN_COLUMNS`` -- fewest columns a PST matrix may give,
+    * ``DEFAULTS`` -- value of each omitted trailing column (by field name),
+    * ``KEY`` -- field that identifies a row in messages (bus or machine number),
+    * ``KEY_LABEL`` -- what that field is called in messages ("bus", "machine"),
+    * ``INTEGER`` -- fields that must hold integers (numbers, types).
+
+    The dynamic-data tables (machines, exciters, PSS, governors) get all of these, and
+    their fields, from a :class:`~stabctl.case.params.Family` declaration (``FAMILY``,
+    see :func:`_declared`), which also gives each column's bounds and allowed values.
+
+    Raises :class:`CaseError` on construction if arrays differ in length, are not 1-D,
+    hold non-finite values, an integer field holds a non-integer, or a declared bound or
+    choice is violated.
+    """
+
+    TABLE: ClassVar[str] = "table"
+    MIN_COLUMNS: ClassVar[int] = 0
+    DEFAULTS: ClassVar[Mapping[str, float]] = {}
+    KEY: ClassVar[str | None] = None
+    KEY_LABEL: ClassVar[str] = ""
+    INTEGER: ClassVar[tuple[str, ...]] = ()
+    FAMILY: ClassVar[Family | None] = None
+
+    def __post_init__(self):
+        n = None
+        for name in self.columns():
+            arr = np.array(getattr(self, name), dtype=float, copy=True)
+            if arr.ndim == 0:
+                arr = arr.reshape(1)
+            if arr.ndim != 1:
+                raise CaseError(f"{self.TABLE}: field '{name}' must be 1-D, has shape {arr.shape}")
+            if n is None:
+                n = arr.size
+            elif arr.size != n:
+                raise CaseError(
+                    f"{self.TABLE}: field '{name}' has {arr.size} rows, expected {n}"
+                )
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        for name in self.columns():
+            arr = getattr(self, name)
+            bad = np.flatnonzero(~np.isfinite(arr))
+            if bad.size:
+                self._fail(bad[0], name, f"non-finite value {arr[bad[0]]}")
+            if name in self.INTEGER:
+                bad = np.flatnonzero(arr != np.round(arr))
+                if bad.size:
+                    self._fail(bad[0], name, f"must be an integer, got {arr[bad[0]]}")
+        self._check_declared()
+        self._check()
+
+    # -- construction ---------------------------------------------------------------
+
+    @classmethod
+    def columns(cls) -> tuple[str, ...]:
+        """Field names in PST column order (column k+1 of the PST matrix is ``columns()[k]``)."""
+        return tuple(f.name for f in dataclasses.fields(cls))
+
+    @classmethod
+    def from_matrix(cls, matrix) -> "Table":
+        """Build the table from a PST matrix (rows x columns, PST column order).
+
+        Omitted trailing columns (down to ``MIN_COLUMNS``) take ``DEFAULTS``; an empty
+        matrix (``[]``) gives an empty table. Raises :class:`CaseError` on a wrong column
+        count or a ragged matrix.
+        """
+        cols = cls.columns()
+        mat = _as_matrix(matrix, cls.TABLE)
+        nrow, ncol = mat.shape
+        if nrow == 0:
+            return cls(**{c: np.zeros(0) for c in cols})
+        if not cls.MIN_COLUMNS <= ncol <= len(cols):
+            want = (
+                f"{len(cols)}"
+                if cls.MIN_COLUMNS == len(cols)
+                else f"{cls.MIN_COLUMNS} to {len(cols)}"
+            )
+            raise CaseError(
+                f"{cls.TABLE}: wrong column count {ncol}, expected {want} "
+                f"({', '.join(cols)})"
+            )
+        data = {c: mat[:, k] for k, c in enumerate(cols[:ncol])}
+        for c in cols[ncol:]:
+            data[c] = np.full(nrow, float(cls.DEFAULTS.get(c, 0.0)))
+        return cls(**data)
+
+    @classmethod
+    def empty(cls) -> "Table":
+        """A table with no rows."""
+        return cls.from_matrix(np.zeros((0, len(cls.columns()))))
+
+    # -- access -----------------------------------------------------------------------
+
+    def __len__(self) -> int:
+        return int(getattr(self, self.columns()[0]).size)
+
+    def matrix(self) -> np.ndarray:
+        """The PST matrix, shape (rows, len(columns())), float64, a fresh writable copy."""
+        return np.column_stack([getattr(self, c) for c in self.columns()]).reshape(
+            len(self), len(self.columns())
+        )
+
+    def col(self, k: int) -> np.ndarray:
+        """PST column ``k`` (1-based, as in the PST manual), read-only array of shape (rows,)."""
+        cols = self.columns()
+        if not 1 <= k <= len(cols):
+            raise CaseError(f"{self.TABLE}: no column {k} (has 1..{len(cols)})")
+        return getattr(self, cols[k - 1])
+
+    def replace(self, **changes) -> "Table":
+        """A copy with some columns replaced (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    def select(self, rows) -> "Table":
+        """A copy holding only ``rows`` (index array or boolean mask)."""
+        rows = np.asarray(rows)
+        return type(self)(**{c: getattr(self, c)[rows] for c in self.columns()})
+
+    def equals(self, other: "Table") -> bool:
+        """True if ``other`` is the same kind of table with identical values."""
+        return type(self) is type(other) and all(
+            np.array_equal(getattr(self, c), getattr(other, c)) for c in self.columns()
+        )
+
+    # -- validation helpers -----------------------------------------------------------
+
+    def _key_value(self, row: int):
+        if self.KEY is None:
+            return None
+        return getattr(self, self.KEY)[row]
+
+    def _fail(self, row: int, fld: str, what: str):
+        where = _where(self.TABLE, int(row), self.KEY_LABEL, self._key_value(int(row)), fld)
+        raise CaseError(f"{where}: {what}")
+
+    def _require(self, mask: np.ndarray, fld: str, what: str):
+        """Raise for the first row where ``mask`` is False."""
+        bad = np.flatnonzero(~np.asarray(mask, dtype=bool))
+        if bad.size:
+            val = getattr(self, fld)[bad[0]]
+            self._fail(bad[0], fld, f"{what}, got {_fmt(val)}")
+
+    def _nonnegative(self, *fields: str):
+        for f in fields:
+            self._require(getattr(self, f) >= 0, f, "must be >= 0")
+
+    def _unique(self, fld: str, what: str):
+        vals = getattr(self, fld)
+        _, first, counts = np.unique(vals, return_index=True, return_counts=True)
+        if np.any(counts > 1):
+            seen: dict[float, int] = {}
+            for i, v in enumerate(vals):
+                if v in seen:
+                    self._fail(i, fld, f"duplicate {what} {_fmt(v)} (first at row {seen[v] + 1})")
+                seen[v] = i
+
+    def _check_declared(self):
+        """The declared choices and bounds of ``FAMILY``, in column order."""
+        for p in self.FAMILY.params if self.FAMILY else ():
+            arr = getattr(self, p.name)
+            if p.choices:
+                self._require(np.isin(arr, p.choices), p.name, choices_message(p))
+            if p.lo is not None:
+                self._require(arr >= p.lo, p.name, f"must be >= {_fmt(p.lo)}")
+            if p.hi is not None:
+                self._require(arr <= p.hi, p.name, f"must be <= {_fmt(p.hi)}")
+
+    def _check(self):
+        """Table-local validation (subclasses)."""
+
+
+def _declared(family: Family):
+    """Class decorator: a frozen :class:`Table` dataclass whose fields, column order and
+    class constants come from ``family``.
+
+    Parameters
+    ----------
+    family : Family
+        The declaration (:mod:`stabctl.case.params`): one ``np.ndarray`` field per
+        :class:`~stabctl.case.params.Param` in column order; ``TABLE``, ``MIN_COLUMNS``,
+        ``DEFAULTS``, ``KEY``, ``KEY_LABEL``, ``INTEGER`` and ``FAMILY`` set from it; the
+        ``{columns}`` mark of the class docstring replaced by the declaration's column
+        table.
+
+    Returns
+    -------
+    callable
+        The decorator.
+    """
+    def wrap(cls):
+        own = dict(cls.__dict__.get("__annotations__", {}))
+        cls.__annotations__ = {**{p.name: "np.ndarray" for p in family.params}, **own}
+        cls.TABLE, cls.MIN_COLUMNS, cls.FAMILY = family.table, family.min_columns, family
+        cls.DEFAULTS, cls.INTEGER = family.defaults, family.integer
+        cls.KEY, cls.KEY_LABEL = family.key, family.key_label
+        if cls.__doc__:
+            cls.__doc__ = cls.__doc__.replace("{columns}", family.rst_table())
+        return dataclass(frozen=True, eq=False)(cls)
+    return wrap
+
+
+def _as_matrix(matrix, table: str) -> np.ndarray:
+    """A 2-D float array from a nested list / array; [] -> shape (0, 0)."""
+    if isinstance(matrix, np.ndarray) and matrix.ndim == 2:
+        return matrix.astype(float)
+    rows = list(matrix) if matrix is not None else []
+    if not rows:
+        return np.zeros((0, 0))
+    if np.isscalar(rows[0]):  # a single row given flat
+        rows = [rows]
+    lengths = {len(r) for r in rows}
+    if len(lengths) != 1:
+        for i, r in enumerate(rows):
+            if len(r) != len(rows[0]):
+                raise CaseError(
+                    f"{table} row {i + 1}: wrong column count {len(r)}, "
+                    f"row 1 has {len(rows[0])}"
+                )
+    try:
+        return np.array(rows, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise CaseError(f"{table}: not a numeric matrix ({exc})") from None
+
+
+# --------------------------------------------------------------------------------------
+# the tables
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class BusTable(Table):
+    """Bus data: PST ``bus`` matrix, 15 columns (PST manual section 1.3, ``loadflow``).
+
+    ==  ==========  ===============================================================
+    1   number      bus number (PST numbering, any positive integers)
+    2   vmag        voltage magnitude, pu (setpoint at PV/swing buses, start value else)
+    3   vang_deg    voltage angle, degrees (fixed at the swing bus, start value else)
+    4   pgen        generation P, pu on system base
+    5   qgen        generation Q, pu
+    6   pload       load P, pu
+    7   qload       load Q, pu
+    8   gshunt      shunt conductance G, pu (at 1 pu voltage)
+    9   bshunt      shunt susceptance B, pu (capacitive > 0)
+    10  kind        bus type: 1 swing, 2 generator (PV), 3 load (PQ)
+    11  qmax        generator Q upper limit, pu (0: no limit, as PST's loadflow)
+    12  qmin        generator Q lower limit, pu (0: no limit)
+    13  kv          rated voltage, kV (0: 1, as PST's loadflow)
+    14  vmax        upper voltage limit, pu (0: 1.5)
+    15  vmin        lower voltage limit, pu (0: 0.5)
+    ==  ==========  ===============================================================
+
+    Omitted columns (PST's ``loadflow`` defaults): qmax 9999, qmin -9999, kv 1, vmax 1.5,
+    vmin 0.5. Validation: unique positive integer numbers, kind in {1, 2, 3}, vmag > 0.
+    """
+
+    number: np.ndarray
+    vmag: np.ndarray
+    vang_deg: np.ndarray
+    pgen: np.ndarray
+    qgen: np.ndarray
+    pload: np.ndarray
+    qload: np.ndarray
+    gshunt: np.ndarray
+    bshunt: np.ndarray
+    kind: np.ndarray
+    qmax: np.ndarray
+    qmin: np.ndarray
+    kv: np.ndarray
+    vmax: np.ndarray
+    vmin: np.ndarray
+
+    TABLE: ClassVar[str] = "bus"
+    MIN_COLUMNS: ClassVar[int] = 10
+    DEFAULTS: ClassVar[Mapping[str, float]] = {
+        "qmax": 9999.0, "qmin": -9999.0, "kv": 1.0, "vmax": 1.5, "vmin": 0.5
+    }
+    KEY: ClassVar[str] = "number"
+    KEY_LABEL: ClassVar[str] = "bus"
+    INTEGER: ClassVar[tuple[str, ...]] = ("number", "kind")
+
+    def _check(self):
+        self._require(self.number > 0, "number", "bus number must be a positive integer")
+        self._unique("number", "bus number")
+        self._require(np.isin(self.kind, (SWING, PV, PQ)), "kind", "bus type must be 1, 2 or 3")
+        self._require(self.vmag > 0, "vmag", "voltage magnitude must be > 0")
+
+
+@dataclass(frozen=True, eq=False)
+class BranchTable(Table):
+    """Branch (line and transformer) data: PST ``line`` matrix (PST manual section 1.3).
+
+    ==  ==========  ===============================================================
+    1   from_bus    from bus number (tap side)
+    2   to_bus      to bus number
+    3   r           series resistance, pu on system base
+    4   x           series reactance, pu
+    5   b           total line charging susceptance, pu (half at each end)
+    6   tap         off-nominal tap ratio on the from side (0 means 1)
+    7   phase_deg   phase shift, degrees (from side)
+    8   tapmax      maximum tap (0: tap fixed in the power flow)
+    9   tapmin      minimum tap
+    10  tapstep     tap step size
+    ==  ==========  ===============================================================
+
+    Parallel circuits are separate rows. Omitted columns: tap 1, the rest 0 (the miniWECC
+    ``line`` matrix has 5 columns). Validation: from/to are integers, r >= 0, the series
+    impedance is not zero, from != to.
+    """
+
+    from_bus: np.ndarray
+    to_bus: np.ndarray
+    r: np.ndarray
+    x: np.ndarray
+    b: np.ndarray
+    tap: np.ndarray
+    phase_deg: np.ndarray
+    tapmax: np.ndarray
+    tapmin: np.ndarray
+    tapstep: np.ndarray
+
+    TABLE: ClassVar[str] = "line"
+    MIN_COLUMNS: ClassVar[int] = 5
+    DEFAULTS: ClassVar[Mapping[str, float]] = {"tap": 1.0}
+    KEY: ClassVar[str | None] = None
+    INTEGER: ClassVar[tuple[str, ...]] = ("from_bus", "to_bus")
+
+    def _fail(self, row: int, fld: str, what: str):
+        row = int(row)
+        ident = f" ({_fmt(self.from_bus[row])}-{_fmt(self.to_bus[row])})" if len(self) else ""
+        raise CaseError(f"line row {row + 1}{ident}, field '{fld}': {what}")
+
+    def _check(self):
+        self._nonnegative("r")
+        self._require((self.r != 0) | (self.x != 0), "x", "series impedance r+jx must not be 0")
+        self._require(self.from_bus != self.to_bus, "to_bus", "branch must join two different buses")
+
+
+@_declared(MACHINE)
+class MachineTable(Table):
+    """Synchronous machine data: PST ``mac_con`` (PST manual section 3.22 Table 10), plus
+    stabctl's column 24 ``speed_effects`` for subtransient machines: 1 (PST ``mac_sub``)
+    the stator voltage is proportional to rotor speed and the torque is Pm/omega; 0 speed
+    1 in both (ANDES's GENROU/GENSAL, which have no speed effects; docs/pst_models.md
+    1.5-1.6).  Columns (declared in :data:`stabctl.case.params.MACHINE`; reactances on the
+    machine base):
+
+{columns}
+
+    Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``).
+    Validation: unique positive integer machine numbers, mva > 0, H > 0, reactances and
+    ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), speed_effects 0 or 1.
+    """
+
+    def _check(self):
+        self._require(self.number > 0, "number", "machine number must be a positive integer")
+        self._unique("number", "machine number")
+        self._require(self.mva > 0, "mva", "machine base must be > 0")
+        self._require(self.H > 0, "H", "inertia constant must be > 0 s (H = 0, an "
+                      "infinite bus, is not modelled)")
+        # the open-circuit time constants a machine's model divides by (x_d = 0: classical,
+        # none; x"d = 0: transient, T'do; else subtransient, T'do and T"do); T'qo, T"qo of 0
+        # mean "no such circuit" (PST)
+        self._require((self.xd == 0) | (self.Tdop > 0), "Tdop",
+                      "T'do must be > 0 s for a transient or subtransient machine (x_d > 0)")
+        self._require((self.xd == 0) | (self.xdpp == 0) | (self.Tdopp > 0), "Tdopp",
+                      "T\"do must be > 0 s for a subtransient machine (x\"d > 0)")
+
+
+@_declared(EXCITER)
+class ExciterTable(Table):
+    """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3),
+    plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4) and
+    23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3).
+    Columns (declared in :data:`stabctl.case.params.EXCITER`):
+
+{columns}
+
+    Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2; their
+    names there are the declaration's ``alt`` names KE, TE, E1, SE1, E2, SE2, KF_dc,
+    TF_dc); use ``col(k)`` for those.  EXST1 (type 4) uses columns 3-11 and KC (17) as
+    named, with Vrmax, Vrmin its output limits (times V_t) and KF, TF (21, 22).  Omitted
+    trailing columns are 0 (a simple exciter needs 9).  Validation: type in {0, 1, 2, 3,
+    4}, one exciter per machine, TR, TA, TB >= 0, dc_sat and ke_given 0 or 1 (machine
+    existence is checked by :class:`Case`).
+    """
+
+    def _check(self):
+        self._unique("machine", "exciter on machine")
+
+
+@_declared(PSS)
+class PssTable(Table):
+    """Power system stabilizer data: PST ``pss_con``, 10 columns (PST manual 3.30 Table 13),
+    extended by stabctl with type 3, the PSS/E stabilisers IEEEST and ST2CUT
+    (docs/pst_models.md 3.1).  Columns (declared in :data:`stabctl.case.params.PSS`):
+
+{columns}
+
+    Omitted columns are 0.  Validation: type in {1, 2, 3}, one PSS per machine, washout and
+    lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0, Tw > 0, T2 > 0 for types 1 and 2.
+    """
+
+    def _check(self):
+        self._unique("machine", "pss on machine")
+        self._require(self.Tw > 0, "Tw", "washout time constant must be > 0 s")
+        self._require((self.type == 3) | (self.T2 > 0), "T2",
+                      "first lag time constant must be > 0 s for PST's pss (types 1, 2)")
+
+
+@_declared(GOVERNOR)
+class GovernorTable(Table):
+    """Turbine-governor data: PST ``tg_con`` (PST manual 3.45, ``tg``), extended by stabctl
+    with the PSS/E ``TGOV1`` and ``IEEEG1`` models (PSS/E Model Library; equations in
+    docs/pst_models.md section 4).  Columns (declared in
+    :data:`stabctl.case.params.GOVERNOR`; powers on the machine base):
+
+{columns}
+
+    PST files give 10 columns; the omitted ones are 0 (Tmin = 0 is PST tg's lower clip).
+    Validation: type in {1, 2, 3}, one governor per machine, lag time constants Ts, Tc,
+    T5, T6, T7 >= 0 (the lead constants T3, T4 may be negative: miniWECC's hydro units use
+    T4 = -1).
+    """
+
+    def _check(self):
+        self._unique("machine", "governor on machine")
+
+
+@dataclass(frozen=True, eq=False)
+class LoadTable(Table):
+    """Non-conforming load data: PST ``load_con``, 5 columns (PST manual 3.29 Table 12).
+
+    ==  ==========  ===============================================================
+    1   bus         bus number
+    2   p_power     fraction of the bus P load that is constant power
+    3   q_power     fraction of the bus Q load that is constant power
+    4   p_current   fraction of the bus P load that is constant current
+    5   q_current   fraction of the bus Q load that is constant current
+    ==  ==========  ===============================================================
+
+    The remainder (``p_impedance``, ``q_impedance``) is constant impedance; buses not
+    listed are all constant impedance. Validation: one row per bus, fractions in [0, 1]
+    with power + current <= 1.
+    """
+
+    bus: np.ndarray
+    p_power: np.ndarray
+    q_power: np.ndarray
+    p_current: np.ndarray
+    q_current: np.ndarray
+
+    TABLE: ClassVar[str] = "load_con"
+    MIN_COLUMNS: ClassVar[int] = 5
+    KEY: ClassVar[str] = "bus"
+    KEY_LABEL: ClassVar[str] = "bus"
+    INTEGER: ClassVar[tuple[str, ...]] = ("bus",)
+
+    @property
+    def p_impedance(self) -> np.ndarray:
+        """Constant-impedance fraction of P, 1 - p_power - p_current, shape (rows,)."""
+        return 1.0 - self.p_power - self.p_current
+
+    @property
+    def q_impedance(self) -> np.ndarray:
+        """Constant-impedance fraction of Q, 1 - q_power - q_current, shape (rows,)."""
+        return 1.0 - self.q_power - self.q_current
+
+    def _check(self):
+        self._unique("bus", "load bus")
+        for f in ("p_power", "q_power", "p_current", "q_current"):
+            v = getattr(self, f)
+            self._require((v >= 0) & (v <= 1), f, "fraction must be in [0, 1]")
+        tol = 1e-12
+        self._require(self.p_impedance >= -tol, "p_current", "p_power + p_current must be <= 1")
+        self._require(self.q_impedance >= -tol, "q_current", "q_power + q_current must be <= 1")
+
+
+@dataclass(frozen=True, eq=False)
+class InjectionTable(Table):
+    """Fixed (constant-power) injections not in the bus table, e.g. storage or HVDC set points.
+
+    ==  =====  =====================================================================
+    1   bus    bus number
+    2   p      injected P, pu on system base (generation > 0)
+    3   q      injected Q, pu
+    ==  =====  =====================================================================
+
+    The power flow adds them to the bus generation. PST data files carry their fixed
+    injections inside the bus loads (miniWECC's ``PDC`` is in ``bus`` column 6), so the
+    importer leaves this table empty.
+    """
+
+    bus: np.ndarray
+    p: np.ndarray
+    q: np.ndarray
+
+    TABLE: ClassVar[str] = "injections"
+    MIN_COLUMNS: ClassVar[int] = 2
+    KEY: ClassVar[str] = "bus"
+    KEY_LABEL: ClassVar[str] = "bus"
+    INTEGER: ClassVar[tuple[str, ...]] = ("bus",)
+
+
+#: table field of Case -> table class, in file order
+TABLES: Mapping[str, type[Table]] = MappingProxyType(
+    {
+        "buses": BusTable,
+        "branches": BranchTable,
+        "machines": MachineTable,
+        "exciters": ExciterTable,
+        "pss": PssTable,
+        "governors": GovernorTable,
+        "loads": LoadTable,
+        "injections": InjectionTable,
+    }
+)
+
+
+# --------------------------------------------------------------------------------------
+# the case
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class Case:
+    """One power system: bases, network, machines, controllers, loads.
+
+    Attributes
+    ----------
+    name : str
+        Short identifier (e.g. ``"kundur"``).
+    base_mva : float
+        System base, MVA; > 0.
+    freq_hz : float
+        Nominal frequency, Hz; > 0.
+    buses : BusTable
+        Bus data, one row per bus (PST ``bus``, manual section 1.3); per unit on the
+        system base, kV for ``kv``.
+    branches : BranchTable
+        Line and transformer data, one row per branch (PST ``line``, section 1.3); per
+        unit on the system base.
+    machines, exciters, pss, governors : MachineTable, ExciterTable, PssTable, GovernorTable
+        Dynamic data, one row per unit (PST ``mac_con``, ``exc_con``, ``pss_con``,
+        ``tg_con``); per unit on the machine base, s for time constants (see their
+        classes for columns and units).  Empty tables by default.
+    loads : LoadTable
+        Non-conforming load fractions, one row per bus (PST ``load_con``, manual 3.29
+        Table 12); empty by default.
+    injections : InjectionTable
+        Fixed constant-power injections not in the bus table (storage or HVDC set
+        points), one row each, pu on the system base; empty by default.
+    sw_con : numpy.ndarray or None
+        The data file's own switching (disturbance) matrix, shape (rows, 7), PST format
+        (PST manual 2.5), read-only; None if the file has none.
+    extra : Mapping[str, numpy.ndarray]
+        Other PST matrices of the data file kept as given (``lmod_con``, ``PDC``, ...),
+        name -> read-only 2-D float array (units as in the file).
+    source : str
+        Where the data came from (file, licence).
+    description : str
+        One line.
+
+    Raises
+    ------
+    CaseError
+        On construction: bus numbers referenced but not in ``buses`` (branches, machines,
+        loads, injections), controllers on machines not in ``machines``, no swing bus, a
+        malformed ``sw_con``, a table of the wrong class, or a non-positive base or
+        frequency.
+    """
+
+    name: str
+    base_mva: float
+    freq_hz: float
+    buses: BusTable
+    branches: BranchTable
+    machines: MachineTable = field(default_factory=MachineTable.empty)
+    exciters: ExciterTable = field(default_factory=ExciterTable.empty)
+    pss: PssTable = field(default_factory=PssTable.empty)
+    governors: GovernorTable = field(default_factory=GovernorTable.empty)
+    loads: LoadTable = field(default_factory=LoadTable.empty)
+    injections: InjectionTable = field(default_factory=InjectionTable.empty)
+    sw_con: np.ndarray | None = None
+    extra: Mapping[str, np.ndarray] = field(default_factory=dict)
+    source: str = ""
+    description: str = ""
+    _bus_map: Mapping[int, int] = field(init=False, repr=False, compare=False)
+    _mac_map: Mapping[int, int] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        for fname, cls in TABLES.items():
+            if not isinstance(getattr(self, fname), cls):
+                raise CaseError(f"case '{self.name}': {fname} must be a {cls.__name__}")
+        if not (np.isfinite(self.base_mva) and self.base_mva > 0):
+            raise CaseError(f"case '{self.name}': base_mva must be > 0, got {self.base_mva}")
+        if not (np.isfinite(self.freq_hz) and self.freq_hz > 0):
+            raise CaseError(f"case '{self.name}': freq_hz must be > 0, got {self.freq_hz}")
+        object.__setattr__(self, "base_mva", float(self.base_mva))
+        object.__setattr__(self, "freq_hz", float(self.freq_hz))
+        object.__setattr__(
+            self, "_bus_map", MappingProxyType({int(b): i for i, b in enumerate(self.buses.number)})
+        )
+        object.__setattr__(
+            self, "_mac_map", MappingProxyType({int(m): i for i, m in enumerate(self.machines.number)})
+        )
+        object.__setattr__(self, "sw_con", _check_sw_con(self.sw_con))
+        object.__setattr__(self, "extra", _freeze_extra(self.extra))
+        self._check_references()
+
+    # -- validation -------------------------------------------------------------------
+
+    def _check_references(self):
+        if not np.any(self.buses.kind == SWING):
+            raise CaseError("bus: no swing bus (no row with field 'kind' = 1)")
+        known = self.buses.number
+        self._check_buses(self.branches, "from_bus", known)
+        self._check_buses(self.branches, "to_bus", known)
+        self._check_buses(self.machines, "bus", known)
+        self._check_buses(self.loads, "bus", known)
+        self._check_buses(self.injections, "bus", known)
+        macs = self.machines.number
+        for tab in (self.exciters, self.pss, self.governors):
+            bad = np.flatnonzero(~np.isin(tab.machine, macs))
+            if bad.size:
+                tab._fail(bad[0], "machine", f"machine {_fmt(tab.machine[bad[0]])} does not exist in mac_con")
+
+    @staticmethod
+    def _check_buses(tab: Table, fld: str, known: np.ndarray):
+        vals = getattr(tab, fld)
+        bad = np.flatnonzero(~np.isin(vals, known))
+        if bad.size:
+            tab._fail(bad[0], fld, f"bus {_fmt(vals[bad[0]])} does not exist in bus")
+
+    # -- lookup -----------------------------------------------------------------------
+
+    @property
+    def n_bus(self) -> int:
+        """Number of buses."""
+        return len(self.buses)
+
+    @property
+    def bus_map(self) -> Mapping[int, int]:
+        """Read-only mapping bus number -> 0-based row of ``buses``."""
+        return self._bus_map
+
+    def bus_index(self, number) -> int:
+        """0-based row of bus ``number`` in ``buses``.
+
+        Parameters
+        ----------
+        number : int
+            Bus number (PST bus matrix column 1), a scalar; anything ``int()`` accepts.
+
+        Returns
+        -------
+        int
+            0-based row of the bus in ``buses`` (and in every per-bus array).
+
+        Raises
+        ------
+        UnknownBusError
+            The bus is not in the case (a :class:`CaseError` and ``KeyError``); the
+            message names the bus.
+        """
+        try:
+            return self._bus_map[int(number)]
+        except (KeyError, ValueError, TypeError):
+            raise UnknownBusError(f"bus {number} is not in case '{self.name}'") from None
+
+    def bus_indices(self, numbers) -> np.ndarray:
+        """0-based rows of many bus numbers.
+
+        Parameters
+        ----------
+        numbers : array_like of int
+            Bus numbers (PST bus matrix column 1), any shape.
+
+        Returns
+        -------
+        numpy.ndarray
+            int array of the shape of ``numbers``: the 0-based row in ``buses`` of each.
+
+        Raises
+        ------
+        UnknownBusError
+            A number is not a bus of the case; the message names the first unknown bus.
+        """
+        numbers = np.asarray(numbers)
+        flat = numbers.ravel()
+        order = np.argsort(self.buses.number, kind="stable")
+        sorted_nums = self.buses.number[order]
+        pos = np.searchsorted(sorted_nums, flat)
+        pos = np.clip(pos, 0, max(len(sorted_nums) - 1, 0))
+        ok = sorted_nums[pos] == flat if len(sorted_nums) else np.zeros(flat.shape, bool)
+        if not np.all(ok):
+            self.bus_index(flat[np.flatnonzero(~ok)[0]])
+        return order[pos].reshape(numbers.shape)
+
+    def machine_index(self, number) -> int:
+        """0-based row of machine ``number`` in ``machines``.
+
+        Parameters
+        ----------
+        number : int
+            Machine number (PST ``mac_con`` column 1), a scalar; anything ``int()`` accepts.
+
+        Returns
+        -------
+        int
+            0-based row of the machine in ``machines``.
+
+        Raises
+        ------
+        CaseError
+            The machine is not in the case; the message names it.
+        """
+        try:
+            return self._mac_map[int(number)]
+        except (KeyError, ValueError, TypeError):
+            raise CaseError(f"machine {number} is not in case '{self.name}'") from None
+
+    @property
+    def swing_index(self) -> np.ndarray:
+        """0-based rows of the swing bus(es), int array."""
+        return np.flatnonzero(self.buses.kind == SWING)
+
+    def replace(self, **changes) -> "Case":
+        """A copy with some fields replaced (validated again).
+
+        Parameters
+        ----------
+        **changes : object
+            Field name -> new value (any of the fields under Attributes of :class:`Case`,
+            same types and units).
+
+        Returns
+        -------
+        Case
+            A new case; ``self`` is unchanged.
+
+        Raises
+        ------
+        CaseError
+            The new data fail the checks of construction (see :class:`Case`).
+        TypeError
+            A name is not a field of :class:`Case`.
+        """
+        return dataclasses.replace(self, **changes)
+
+    def equals(self, other: "Case") -> bool:
+        """Compare two cases value by value.
+
+        Parameters
+        ----------
+        other : Case
+            The case to compare with; anything else compares unequal.
+
+        Returns
+        -------
+        bool
+            True if the name, every table, base, frequency, ``sw_con`` and extra matrix
+            are identical (exact float equality; ``source`` and ``description`` are not
+            compared).
+        """
+        if not isinstance(other, Case):
+            return False
+        same_scalars = (self.name, self.base_mva, self.freq_hz) == (
+            other.name, other.base_mva, other.freq_hz
+        )
+        same_tables = all(getattr(self, t).equals(getattr(other, t)) for t in TABLES)
+        same_sw = (self.sw_con is None and other.sw_con is None) or (
+            self.sw_con is not None and other.sw_con is not None
+            and np.array_equal(self.sw_con, other.sw_con)
+        )
+        same_extra = self.extra.keys() == other.extra.keys() and all(
+            np.array_equal(self.extra[k], other.extra[k]) for k in self.extra
+        )
+        return same_scalars and same_tables and same_sw and same_extra
+
+
+def _check_sw_con(sw) -> np.ndarray | None:
+    if sw is None:
+        return None
+    mat = _as_matrix(sw, "sw_con")
+    if mat.size == 0:
+        return None
+    if mat.shape[1] != 7:
+        raise CaseError(f"sw_con: wrong column count {mat.shape[1]}, expected 7")
+    bad = np.argwhere(~np.isfinite(mat))
+    if bad.size:
+        raise CaseError(f"sw_con row {bad[0][0] + 1}, column {bad[0][1] + 1}: non-finite value")
+    mat.setflags(write=False)
+    return mat
+
+
+def _freeze_extra(extra: Mapping | None) -> Mapping[str, np.ndarray]:
+    out = {}
+    for k, v in (extra or {}).items():
+        arr = np.array(v, dtype=float)
+        if arr.ndim < 2:
+            arr = arr.reshape(-1, 1) if arr.size else arr.reshape(0, 0)
+        arr.setflags(write=False)
+        out[str(k)] = arr
+    return MappingProxyType(out)
+
+
+# --------------------------------------------------------------------------------------
+# built-in cases
+# --------------------------------------------------------------------------------------
+
+#: tolerance of every start-up limit check (pu): an initial value this close to a limit,
+#: outside it by round-off of the power flow (solved to 1e-8 by default, 1e-12 when
+#: compared with ANDES), is at the limit, not beyond it (IEEE 14's bus-6 unit: Pm0 = 0.3
+#: exactly at TGOV1's lower limit lands at 0.3 - 3e-17)
+START_LIMIT_TOL = 1e-6
+
+
+def beyond(value, lo, hi, tol: float = START_LIMIT_TOL):
+    """Boolean array: ``value`` outside ``[lo, hi]`` by more than ``tol`` (pu; relative to
+    the limit's size above 1) -- the start-up limit checks of the dynamic models."""
+    value, lo, hi = (np.asarray(a, float) for a in (value, lo, hi))
+    return ((value > hi + tol * np.maximum(1.0, np.abs(hi)))
+            | (value < lo - tol * np.maximum(1.0, np.abs(lo))))
+
+
+#: directory of the built-in cases (stabctl JSON, converted from PSTess; MIT LICENSE, NOTICE)
+CASE_DIR = Path(__file__).with_name("data")

@@ -1,0 +1,42 @@
+"""The `stabctl` command line: one subcommand per study, `--json` where figures come out.
+
+The click group :func:`main` (the console script ``stabctl = stabctl.cli:main``) and its
+commands, one module per family: :mod:`~stabctl.cli.omib` (omib), :mod:`~stabctl.cli.paper`
+(paper), :mod:`~stabctl.cli.io` (cases, import-psse), :mod:`~stabctl.cli.simulate`,
+:mod:`~stabctl.cli.stability` (cct, sweep-cct, screen), :mod:`~stabctl.cli.eig`,
+:mod:`~stabctl.cli.place` and :mod:`~stabctl.cli.estimate`. Shared options, checks and
+error handling are in :mod:`~stabctl.cli.options`, text and JSON output in
+:mod:`~stabctl.cli.format`.
+
+Errors in the input (stabctl.errors.StabctlError) are printed as one line naming what and
+where, with exit status 2; nothing is written in that case.
+"""
+
+from __future__ import annotations
+
+import os
+
+import click
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="stabctl")
+def main():
+    """stabctl: transient-stability control with distributed energy storage."""
+    # The simulator works on many small dense matrices: multi-threaded BLAS only adds
+    # overhead there and oversubscribes the cores when sweeps run one simulation per
+    # process.  Set before any command imports numpy; a user's own setting wins.
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+
+
+def _register() -> None:
+    from stabctl.cli import eig, estimate, io, omib, paper, place, simulate, stability
+
+    for cmd in (omib.omib, paper.paper, io.cases, simulate.simulate, stability.cct,
+                stability.sweep_cct, stability.screen, eig.eig, estimate.estimate,
+                place.place, io.import_psse):
+        main.add_command(cmd)
+
+
+_register()

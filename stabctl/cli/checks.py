@@ -1,0 +1,116 @@
+"""Checks of the `stabctl` command line made before any work: output files, CCT settings.
+
+Each raises stabctl.errors.InputError naming the option (printed as one `error:` line,
+exit status 2, by :func:`stabctl.cli.options.reports_errors`).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from stabctl.errors import InputError
+
+
+def check_writable(path, option: str, directory: bool = False) -> None:
+    """Check, before any work, that an output file or directory can be written.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output file, or with ``directory`` the output directory (which may be
+        created, inside an existing one).
+    option : str
+        The option named in the error message.
+    directory : bool
+        ``path`` is a directory.
+
+    Raises
+    ------
+    InputError
+        Unless a file can be created where ``path`` is (tried with a temporary file,
+        removed at once); ``path`` is a directory (a file is wanted) or a file (a
+        directory is wanted); or it exists and is not writable.
+    """
+    p = Path(path)
+    if directory:
+        if p.exists() and not p.is_dir():
+            raise InputError(f"{option} {path}: not a directory")
+        where = p if p.is_dir() else p.parent
+    else:
+        if p.is_dir():
+            raise InputError(f"{option} {path} is a directory")
+        where = p.parent
+    where = where if str(where) else Path(".")
+    if not where.is_dir():
+        raise InputError(f"{option} {path}: directory {where} does not exist (create it "
+                         "first; it is not created for you)")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=where, prefix=".stabctl-write-test.")
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise InputError(f"{option} {path}: cannot write in {where} "
+                         f"({exc.strerror or exc})") from None
+    if not directory and p.exists() and not os.access(p, os.W_OK):
+        raise InputError(f"{option} {path}: the file is not writable")
+
+
+OUT_SUFFIXES = (".csv", ".npz")
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def check_suffix(path, allowed, option) -> Path | None:
+    """The output file ``path`` (None: none) once its suffix and writability are checked.
+
+    Parameters
+    ----------
+    path : str or None
+    allowed : tuple of str
+        Allowed suffixes, lower case with the dot.
+    option : str
+        The option named in error messages.
+
+    Returns
+    -------
+    Path or None
+
+    Raises
+    ------
+    InputError
+        Another suffix, a directory, or a place that cannot be written.
+    """
+    if path is None:
+        return None
+    p = Path(path)
+    if p.suffix.lower() not in allowed:
+        raise InputError(f"{option} {path}: the file name must end in {' or '.join(allowed)}")
+    if p.exists() and p.is_dir():
+        raise InputError(f"{option} {path} is a directory")
+    check_writable(p, option)
+    return p
+
+
+
+
+def cct_settings(tol_ms, t_max, tf) -> dict:
+    """The CCT search settings of ``--tol-ms``, ``--t-max`` and ``--tf``.
+
+    Returns
+    -------
+    dict
+        ``tol`` (s), ``t_max`` (s) and ``t_end`` (s, None: fault start + 5 s).
+
+    Raises
+    ------
+    InputError
+        A value not > 0.
+    """
+    if not tol_ms > 0:
+        raise InputError(f"--tol-ms must be > 0, got {tol_ms:g}")
+    if not t_max > 0:
+        raise InputError(f"--t-max must be > 0 s, got {t_max:g}")
+    if tf is not None and not tf > 0:
+        raise InputError(f"--tf must be > 0 s, got {tf:g}")
+    return {"tol": tol_ms / 1000.0, "t_max": t_max, "t_end": tf}

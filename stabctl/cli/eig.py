@@ -1,0 +1,66 @@
+"""`stabctl eig`: small-signal modes of a case."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from stabctl.errors import InputError
+from stabctl.cli.format import print_json, print_modes
+from stabctl.cli.checks import check_writable
+from stabctl.cli.options import (conventions_option, json_option, out_dir_option, q_limits_option,
+                                 reports_errors)
+
+
+@click.command()
+@click.argument("case_name", metavar="CASE")
+@click.option("--no-pss", is_flag=True,
+              help="Analyse the case with its PSS removed (pss_con empty).")
+@click.option("--areas", "n_areas", type=int, default=None, metavar="N",
+              help="Number of coherent areas for the local/inter-area classification "
+                   "(default: from a gap in the electromechanical frequencies, docs/modal.md).")
+@click.option("--report", is_flag=True,
+              help="Write OUT_DIR/eig_<case>[_nopss].md with the eigenvalue plot, mode-shape "
+                   "compass plots and participation bar charts (PNG).")
+@out_dir_option("The report directory (with --report).")
+@conventions_option
+@q_limits_option
+@json_option("every mode")
+@reports_errors
+def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, as_json):
+    """Small-signal modes: linearise CASE at its power flow and list its modes.
+
+    The simulator's own equations are linearised by central differences (PSTess svm_mgen's
+    method; docs/modal.md). Printed: the electromechanical modes (0.1-2.5 Hz, dominated by
+    rotor angle and speed states) with frequency (Hz), damping ratio, dominant machines,
+    and local / inter-area by their mode shapes; --json prints every mode (eigenvalue,
+    frequency, damping, kind, dominant states, and for electromechanical modes the
+    coherent groups, speed mode shape and the ESD bus with the largest residue).
+    Under either --conventions the linear model is the same (a point inside every
+    limit; docs/conventions.md).
+    \b
+    Examples:
+      stabctl eig kundur --report
+      stabctl eig kundur --no-pss --json
+      stabctl eig miniwecc --areas 3 --report
+
+    Bad input (unknown case, --areas out of range, --out-dir a file) exits with status 2 and
+    one `error:` line; nothing is written then.
+    """
+    from stabctl.io import load_case
+    from stabctl.studies.eigenvalues import eig_study, study_json, write_report
+
+    if Path(out_dir).exists() and not Path(out_dir).is_dir():
+        raise InputError(f"--out-dir {out_dir} is not a directory")
+    if report:
+        check_writable(out_dir, "--out-dir", directory=True)
+    st = eig_study(load_case(case_name), no_pss=no_pss, n_areas=n_areas, conventions=conventions,
+                   q_limits=q_limits)
+    written = [str(write_report(st, out_dir))] if report else []
+    if as_json:
+        print_json({**study_json(st), "files": written})
+        return
+    print_modes(st, no_pss)
+    for w in written:
+        click.echo(f"wrote {w}")

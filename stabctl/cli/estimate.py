@@ -1,0 +1,248 @@
+"""`stabctl estimate rmse|closed-loop|cct`: speed estimation from simulated PMU data.
+
+The old form ``stabctl estimate CASE ...`` still works: it runs ``estimate rmse``, or with
+the old flags ``--closed-loop`` / ``--cct`` the subcommand of that name.
+"""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from stabctl.errors import InputError
+from stabctl.cli.format import (closed_loop_lines, estimator_cct_lines, print_estimate,
+                                print_json)
+from stabctl.cli.options import (TF_AFTER_FAULT_S, _apply, clear_cycles_option, controller,
+                                 fault_options, json_option, model_options, reports_errors,
+                                 storage_options, tf_option)
+
+#: the old mode flags of `estimate CASE`, by the subcommand they select (first wins)
+_LEGACY_FLAGS = (("--cct", "cct"), ("--closed-loop", "closed-loop"))
+
+
+class _EstimateGroup(click.Group):
+    """The `estimate` subcommands; arguments not starting with one (the old
+    `estimate CASE ...`) go to `rmse`, or with the old --cct / --closed-loop flag to that
+    subcommand."""
+
+    def parse_args(self, ctx, args):
+        if args and args[0] not in self.commands and args[0] not in ctx.help_option_names:
+            mode = next((m for flag, m in _LEGACY_FLAGS if flag in args), "rmse")
+            args = [mode, *(a for a in args if a not in dict(_LEGACY_FLAGS))]
+        return super().parse_args(ctx, args)
+
+
+@click.group(cls=_EstimateGroup)
+def estimate():
+    """Machine and COI speed estimation from simulated PMU data, against the truth.
+
+    \b
+    rmse         errors of the raw PMU frequency, the Kalman filter (kf) and the
+                 swing-equation EKF (ekf) against the true speeds, false ESD actions
+    closed-loop  the fault with the ESDs commanded by each estimator in the loop
+    cct          the fault's CCT with each estimator in the loop over noise seeds
+
+    `stabctl estimate CASE ...` (no subcommand) is `stabctl estimate rmse CASE ...`;
+    the old flags --closed-loop and --cct select those subcommands.
+    """
+
+
+def _rate_latency(func):
+    return _apply(func, (
+        click.option("--rate", type=float, default=60.0, show_default=True, metavar="FPS",
+                     help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120."),
+        click.option("--latency-ms", type=float, default=50.0, show_default=True,
+                     metavar="MS", help="Delay from a frame's time stamp to its arrival (ms).")))
+
+
+def _pmu_noise(func):
+    return _apply(func, (
+        click.option("--drop", type=float, default=0.0, show_default=True, metavar="P",
+                     help="Probability that a frame is lost."),
+        click.option("--tve-pct", type=float, default=1.0, show_default=True,
+                     help="Total vector error limit (%), C37.118.1 Table 3."),
+        click.option("--fe-hz", type=float, default=0.005, show_default=True,
+                     help="Frequency error limit (Hz), C37.118.1 Table 4."),
+        click.option("--rfe-hz-s", type=float, default=0.01, show_default=True,
+                     help="ROCOF error limit (Hz/s), C37.118.1 Table 4."),
+        click.option("--k-sigma", type=float, default=3.0, show_default=True,
+                     help="The limits are this many standard deviations of the errors.")))
+
+
+def _runs_seed(func):
+    return _apply(func, (
+        click.option("--runs", type=int, default=20, show_default=True, metavar="N",
+                     help="Monte-Carlo runs (PMU noise seeds S, S+1, ..., S+N-1)."),
+        click.option("--seed", type=int, default=0, show_default=True, metavar="S",
+                     help="Seed of the first run.")))
+
+
+def _settings(rate, latency_ms, drop=0.0, tve_pct=1.0, fe_hz=0.005, rfe_hz_s=0.01,
+              k_sigma=3.0):
+    from stabctl.estimation.pmu import PMUSettings
+
+    return PMUSettings(rate=rate, tve=tve_pct / 100, fe_hz=fe_hz, rfe_hz_s=rfe_hz_s,
+                       k_sigma=k_sigma, latency_s=latency_ms / 1000, drop_prob=drop)
+
+
+def _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
+    """The case, the fault event and the end of the run (default: fault + 5 s)."""
+    from stabctl.io import load_case
+    from stabctl.dynamics.events import fault_with_clearing
+
+    tf = t_fault + TF_AFTER_FAULT_S if tf is None else tf
+    if not tf > 0:
+        raise InputError(f"--tf must be > 0, got {tf:g}")
+    case = load_case(case_name)
+    return case, fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles), tf
+
+
+@estimate.command()
+@click.argument("case_name", metavar="CASE")
+@fault_options(required=True)
+@clear_cycles_option("Clearing after N cycles, both ends")
+@tf_option()
+@_rate_latency
+@_pmu_noise
+@click.option("--pmu-at", type=click.Choice(["terminal", "hv"]), default="terminal",
+              show_default=True, help="PMU of each generator at its terminal or HV bus.")
+@storage_options(" In the fault run, controlled on the true speeds with the paper's "
+                 "settings; the controller options set the rule of the false actions.")
+@_runs_seed
+@click.option("--settle-ms", type=float, default=100.0, show_default=True, metavar="MS",
+              help="Errors are taken from this long after the clearing to the end (ms).")
+@click.option("--ambient-s", type=float, default=60.0, show_default=True, metavar="S",
+              help="Length of the runs without fault for the false ESD actions (s; 0: skip).")
+@click.option("--ambient-pct", type=float, default=1.0, show_default=True, metavar="P",
+              help="Ambient load fluctuation in the runs without fault: standard deviation "
+                   "of every load's P (%; 0: PMU noise only).")
+@click.option("--ambient-tau-s", type=float, default=2.0, show_default=True, metavar="T",
+              help="Correlation time of the ambient load fluctuation (s).")
+@click.option("--ambient-runs", type=int, default=5, show_default=True, metavar="N",
+              help="Runs without fault (load and PMU noise seeds S..S+N-1).")
+@model_options
+@json_option("the figures")
+@reports_errors
+def rmse(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms, drop,
+         tve_pct, fe_hz, rfe_hz_s, k_sigma, pmu_at, esd_pct, deadband_hz, v_gate, coi,
+         hysteresis_hz, runs, seed, settle_ms, ambient_s, ambient_pct, ambient_tau_s,
+         ambient_runs, conventions, step, as_json):
+    """Errors of the speed estimators against the truth, and false ESD actions.
+
+    The fault run is simulated once (with --esd-pct, storage acts on the true speeds);
+    then, per Monte-Carlo run, every generator's PMU stream is drawn (IEEE C37.118.1
+    noise limits read as k-sigma bounds, latency, lost frames) and fed frame by frame to
+    the raw PMU frequency, the baseline Kalman filter on frequency/ROCOF (kf) and the
+    swing-equation EKF (ekf).
+
+    \b
+    Printed per estimator, mean +- standard deviation over the runs (mHz): RMSE of the
+    machine speeds, of the COI speed and of the relative speeds f_i - f_COI the ESD
+    controllers use, at the frame time stamps from --settle-ms after the clearing to
+    --tf; the relative-speed RMSE at each frame's arrival (latency included), as
+    delivered and forecast to the arrival; the fraction of normalised innovations
+    squared inside their 95 % chi-square interval (consistency: about 0.95).  Then, on
+    --ambient-runs runs without fault of --ambient-s with ambient load fluctuation (every
+    load's P an Ornstein-Uhlenbeck process of --ambient-pct standard deviation and
+    --ambient-tau-s correlation time, stabctl.estimation.ambient), the number of ESD
+    actions (Table 3 rule with --deadband-hz) each estimate would trigger (all are
+    false), the largest |f_i - f_COI| and the largest standard deviation of f_i - f_COI
+    (true: the ambient spread).
+    """
+    from stabctl.estimation import ambient as am
+    from stabctl.studies.estimate import estimator_errors
+
+    _check_positive(tf=tf, runs=runs, deadband_hz=deadband_hz)
+    if min(settle_ms, ambient_s, seed) < 0 or ambient_runs < 1:
+        raise InputError("--settle-ms, --ambient-s and --seed must be >= 0, --ambient-runs >= 1")
+    ambient = am.AmbientLoad(ambient_pct, ambient_tau_s, seed)
+    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma)
+    case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    d = estimator_errors(case, ev, settings=settings, esd_pct=esd_pct, runs=runs, seed=seed,
+                         settle_s=settle_ms / 1000, t_end=tf, pmu_at=pmu_at, coi=coi,
+                         control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
+                         ambient=ambient, ambient_s=ambient_s, ambient_runs=ambient_runs,
+                         conventions=conventions, h=step)
+    out = {"case": case.name, "fault": {"bus": fault, "far_bus": far_bus, "t_fault_s": t_fault,
+                                        "clear_cycles": clear_cycles},
+           "esd_pct": esd_pct, "pmu": {**settings.__dict__, "at": pmu_at}, "runs": runs,
+           "seed": seed, "window_s": d["window_s"], "stable": d["stable"],
+           "estimators": d["estimators"], "false_actions": d["false_actions"],
+           "ambient": {"t_s": ambient_s, "deadband_hz": deadband_hz, "pct": ambient_pct,
+                       "tau_s": ambient_tau_s, "runs": ambient_runs}}
+    if as_json:
+        print_json(out)
+        return
+    print_estimate(out)
+
+
+def _check_positive(**values) -> None:
+    for name, value in values.items():
+        if value is not None and not value > 0:
+            raise InputError(f"--{name.replace('_', '-')} must be > 0, got {value:g}")
+
+
+@estimate.command("closed-loop")
+@click.argument("case_name", metavar="CASE")
+@fault_options(required=True)
+@clear_cycles_option("Clearing after N cycles, both ends")
+@tf_option()
+@_rate_latency
+@_pmu_noise
+@storage_options(" Required: the ESDs the estimators command.")
+@click.option("--seed", type=int, default=0, show_default=True, metavar="S",
+              help="Seed of the PMU noise.")
+@model_options
+@json_option("the verdicts")
+@reports_errors
+def closed_loop(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms, drop,
+                tve_pct, fe_hz, rfe_hz_s, k_sigma, esd_pct, deadband_hz, v_gate, coi,
+                hysteresis_hz, seed, conventions, step, as_json):
+    """The fault simulated with the ESDs commanded by each estimator in the loop.
+
+    For each estimator (ideal, raw, kf, ekf; PMU noise seed --seed) the verdict, the
+    number of ESD switchings and the false actions.
+    """
+    from stabctl.studies.estimate import closed_loop_verdicts
+
+    _check_positive(tf=tf, deadband_hz=deadband_hz)
+    if esd_pct is None:
+        raise InputError("estimate closed-loop needs --esd-pct")
+    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma)
+    case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    rows = closed_loop_verdicts(case, ev, t_end=tf, settings=settings, esd_pct=esd_pct,
+                                seed=seed,
+                                control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
+                                deadband_hz=deadband_hz, conventions=conventions, h=step)
+    out = {"closed_loop": rows, "lines": closed_loop_lines(rows, fault, far_bus, esd_pct, seed)}
+    click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
+
+
+@estimate.command("cct")
+@click.argument("case_name", metavar="CASE")
+@fault_options(required=True, t_fault=False)
+@_rate_latency
+@click.option("--esd-pct", type=float, required=True, default=None, metavar="P",
+              help="ESD of P % of each generator's MVA at its HV bus (% of machine MVA), "
+                   "the paper's bang-bang COI control (Table 3).")
+@_runs_seed
+@model_options
+@json_option("the CCTs")
+@reports_errors
+def cct(case_name, fault, far_bus, rate, latency_ms, esd_pct, runs, seed, conventions, step,
+        as_json):
+    """CCT of the fault line with each estimator in the loop, over --runs noise seeds.
+
+    The CCT searches run in parallel; printed per estimator: mean and spread (cycles).
+    """
+    from stabctl.studies.estimate import estimator_ccts
+
+    _check_positive(runs=runs)
+    settings = _settings(rate, latency_ms)
+    case, _, _ = _fault_event(case_name, fault, far_bus, 1.0, 6.0, None)  # checks the line
+    table = estimator_ccts(case.name, fault, far_bus, esd_pct=esd_pct, runs=runs, seed=seed,
+                           settings=settings, conventions=conventions, h=step)
+    out = {"cct_cycles": table,
+           "lines": estimator_cct_lines(table, fault, far_bus, esd_pct, settings, runs, seed)}
+    click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))

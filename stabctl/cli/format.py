@@ -1,0 +1,391 @@
+"""Text and JSON output of the `stabctl` commands, in one place.
+
+Every function here formats; none computes a result.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from stabctl.errors import SimulationError, StabctlError
+
+
+def one_line(exc) -> str:
+    """The error message on one line; a diverged run also says where it stopped.
+
+    Parameters
+    ----------
+    exc : Exception
+
+    Returns
+    -------
+    str
+    """
+    msg = " ".join(str(exc).split())
+    res = getattr(exc, "result", None)
+    if isinstance(exc, SimulationError) and res is not None and len(res.t) and "t = " not in msg:
+        msg += f" (run stopped; last computed point t = {float(res.t[-1]):.4f} s)"
+    return msg
+
+
+def print_json(obj) -> None:
+    """Print ``obj`` as indented JSON (numpy numbers as floats).
+
+    Parameters
+    ----------
+    obj : JSON-able object
+    """
+    click.echo(json.dumps(obj, indent=2, default=float))
+
+
+def describe_sw_con(case) -> str | None:
+    """One line for the data file's own disturbance (what --pstess-default runs).
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+
+    Returns
+    -------
+    str or None
+        None when the case has no sw_con.
+    """
+    from stabctl.dynamics.events import from_sw_con
+
+    if case.sw_con is None:
+        return None
+    try:
+        evs = from_sw_con(case)
+    except StabctlError as exc:
+        return f"unsupported ({exc})"
+    what = "; ".join(describe_event(e) for e in evs) or "no disturbance"
+    return f"{what}; {float(case.sw_con[-1, 0]):g} s, data-file step {float(case.sw_con[0, 6]):g} s"
+
+
+def describe_event(ev) -> str:
+    """One line describing a disturbance event (fault, line trip, machine trip, load step).
+
+    Parameters
+    ----------
+    ev : stabctl.dynamics.events event
+
+    Returns
+    -------
+    str
+    """
+    from stabctl.dynamics.events import Fault, GeneratorTrip, LineTrip, LoadStep
+
+    if isinstance(ev, Fault):
+        s = f"3-phase fault at bus {ev.bus} at {ev.t:g} s"
+        if ev.clear_near is None:
+            return s + ", never cleared"
+        if ev.far_bus is None:
+            return s + f", cleared at {ev.clear_near:g} s without loss of a line"
+        return (s + f" on line {ev.bus}-{ev.far_bus} (circuit {ev.circuit}), cleared at "
+                f"{ev.clear_near:g} s near / {ev.far_clear:g} s far end, line tripped")
+    if isinstance(ev, LineTrip):
+        return f"line {ev.from_bus}-{ev.to_bus} (circuit {ev.circuit}) tripped at {ev.t:g} s"
+    if isinstance(ev, GeneratorTrip):
+        return f"machine {ev.machine} tripped at {ev.t:g} s"
+    if isinstance(ev, LoadStep):
+        return f"load step {ev.P:g}{ev.Q:+g}j pu at bus {ev.bus} at {ev.t:g} s"
+    return repr(ev)
+
+
+
+def save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0) -> None:
+    """Plot a run (stabctl.plotting.figures.simulation_overview) to a temporary file
+    beside ``path``, then rename it, so that ``path`` is whole or absent.
+
+    Parameters
+    ----------
+    result : SimulationResult
+    path : Path
+    title : str
+    base_mva : float
+    """
+    from stabctl.parallel import atomic_write
+    from stabctl.plotting.figures import simulation_overview
+
+    atomic_write(path, lambda tmp: simulation_overview(result, tmp, title=title,
+                                                       base_mva=base_mva), mode=None)
+
+
+def describe_esd(esd: dict, short: bool = False) -> str:
+    """One line on the storage of `simulate --esd-pct` (short: for a plot title).
+
+    Parameters
+    ----------
+    esd : dict
+        The ``esd`` settings of `simulate --json`.
+    short : bool
+
+    Returns
+    -------
+    str
+    """
+    where = "" if short else " at the generator HV buses"
+    control = "bang-bang COI control" if short else esd["control"]
+    return (f"storage: {esd['devices']} ESDs of {esd['pct_of_machine_mva']:g} % of machine MVA"
+            f"{where}, {control}, deadband {esd['deadband_hz']:g} Hz, "
+            f"{'gate' if short else 'voltage gate'} {esd['v_gate_pu']:g} pu, {esd['coi']} COI"
+            + (f", hysteresis {esd['hysteresis_hz']:g} Hz" if esd["hysteresis_hz"] else ""))
+
+
+def print_storage(esd: dict, result) -> None:
+    """Print the storage lines of `simulate`'s text output: settings, totals, devices.
+
+    Parameters
+    ----------
+    esd : dict
+        The ``esd`` settings of `simulate --json`.
+    result : SimulationResult
+    """
+    info = result.meta.get("storage", [])
+    active = [d for d in info if d["switchings"] > 0]
+    click.echo(f"  {describe_esd(esd)}")
+    click.echo(f"  {sum(d['switchings'] for d in info)} switchings, {len(active)} of "
+               f"{len(info)} devices acted; absorbed "
+               f"{sum(d['energy_absorbed_mj'] for d in info):.1f} MJ, delivered "
+               f"{sum(d['energy_delivered_mj'] for d in info):.1f} MJ")
+    if active:
+        click.echo(f"  {'device':>6} {'bus':>6} {'machine':>7} {'MW':>7} {'switchings':>10} "
+                   f"{'absorbed MJ':>11} {'delivered MJ':>12} {'peak MW':>8}")
+    for d in active:
+        click.echo(f"  {d['device']:6d} {d['bus']:6d} {'G' + str(d['machine']):>7} "
+                   f"{d['pmax_mw']:7.1f} {d['switchings']:10d} {d['energy_absorbed_mj']:11.1f} "
+                   f"{d['energy_delivered_mj']:12.1f} {d['peak_power_mw']:8.1f}")
+
+
+
+def print_cct(case_name, rating, d) -> None:
+    """Print the `cct` result as text.
+
+    Parameters
+    ----------
+    case_name : str
+    rating : float or None
+        Storage rating (% of machine MVA), None: no storage.
+    d : dict
+        `CCTResult.to_dict()` with the command's fields.
+    """
+    f = d["fault"]
+    circ = f" (circuit {f['circuit']})" if f["circuit"] != 1 else ""
+    click.echo(f"case {case_name}: fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']}"
+               f"{circ} at {f['t_fault']:g} s, cleared at both ends, line tripped"
+               + "".join(f", {a}-{b} also opened" for a, b in f["trips"])
+               + ("; no storage" if rating is None else f"; storage {rating:g} % of machine MVA"))
+    click.echo(f"CCT {d['cct_s']:.3f} s = {d['cct_cycles']:.2f} cycles (stable at "
+               f"{d['t_stable_s']:.3f} s, unstable at {d['t_unstable_s']:.3f} s = "
+               f"{d['t_unstable_cycles']:.2f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
+               f"step {d['step_s']:g} s, {d['conventions']} conventions)")
+    if d["numerical_error_s"] is not None:
+        click.echo(f"numerical error {1000 * d['numerical_error_s']:g} ms (CCT at half the "
+                   f"step {d['cct_half_step_s']:.3f} s)")
+    if d["separated_machines"]:
+        click.echo(f"machine(s) {', '.join(map(str, d['separated_machines']))} lose "
+                   f"synchronism when cleared at {d['t_unstable_s']:.3f} s")
+    click.echo(f"{d['n_simulations']} simulations, wall {d['wall_time_s']:.2f} s")
+
+
+
+def sweep_line(key, rec) -> str:
+    """One line of the `sweep-cct` table.
+
+    Parameters
+    ----------
+    key : str
+        The job key.
+    rec : dict
+        Its record.
+
+    Returns
+    -------
+    str
+    """
+    if rec["status"] != "ok":
+        return f"{key:<34} failed: {rec['error']}"
+    r, wall = rec["result"], rec.get("wall_time_s")    # none in a reproducible copy
+    err = r.get("numerical_error_s")
+    err = "-" if err is None else f"{1000 * err:g}"
+    return (f"{key:<34} {r['cct_s']:7.3f} {r['cct_cycles']:8.2f} {err:>6} "
+            f"{r['n_simulations']:5d} " + ("      -" if wall is None else f"{wall:7.2f}"))
+
+
+
+def print_sweep(rep, n_jobs: int) -> None:
+    """Print the `sweep-cct` table and its summary line.
+
+    Parameters
+    ----------
+    rep : stabctl.parallel.SweepReport
+    n_jobs : int
+        Jobs in the sweep.
+    """
+    click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'err ms':>6} {'sims':>5} "
+               f"{'wall s':>7}")
+    for key, rec in rep.records.items():
+        click.echo(sweep_line(key, rec))
+    n_bad = sum(r["status"] != "ok" for r in rep.records.values())
+    click.echo(f"{n_jobs} job(s): {rep.ran} run now, {rep.skipped} already in {rep.out}; "
+               f"{n_bad} failed; wall {rep.wall_time_s:.1f} s")
+
+
+def print_screening(rows) -> None:
+    """Print the `screen` table, one row per fault in the given order.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Screening rows (`stabctl.stability.screening.screen`).
+    """
+    click.echo(f"{'fault':<22} {'CCT s':>7} {'cycles':>7} {'err ms':>6}  separated / reason")
+    for r in rows:
+        where = f"bus {r['bus']}" + (f" line to {r['far_bus']}" if r["far_bus"] else "")
+        if r["status"] == "ok":
+            err = "-" if r["numerical_error_s"] is None else f"{1000 * r['numerical_error_s']:g}"
+            click.echo(f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  "
+                       f"{r['separated']}")
+        else:
+            click.echo(f"{where:<22} {'-':>7} {'-':>7}  {r['error'][:70]}")
+
+
+def print_modes(st, no_pss: bool) -> None:
+    """Print the electromechanical modes of an `eig` study, by frequency.
+
+    Parameters
+    ----------
+    st : stabctl.studies.eigenvalues study
+        :func:`stabctl.studies.eigenvalues.eig_study`'s result.
+    no_pss : bool
+        The case was analysed without its PSS.
+    """
+    import numpy as np
+
+    ma = st.ma
+    click.echo(f"case {st.case.name}{' without PSS' if no_pss else ''}: {st.sys.nstates} "
+               f"states; linearised in {st.t_linearise:.2f} s, analysed in {st.t_analyse:.2f} s")
+    click.echo(f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
+               "(excluded from damping statistics)")
+    click.echo(f"{'mode':>5} {'f Hz':>7} {'damping':>8}  {'kind':<10} machines")
+    em = ma.electromechanical
+    for i in em[np.argsort(ma.freq_hz[em])]:
+        g1, g2 = ma.groups(i)
+        against = " ".join(f"G{k}" for k in g2[:6]) or "-"
+        click.echo(f"{i:5d} {ma.freq_hz[i]:7.3f} {ma.damping[i]:8.4f}  {ma.kind[i]:<10} "
+                   f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}")
+
+
+def print_estimate(d) -> None:
+    """Print the `estimate rmse` report as text.
+
+    Parameters
+    ----------
+    d : dict
+        The report (`estimate rmse --json`).
+    """
+    f, p = d["fault"], d["pmu"]
+    click.echo(f"case {d['case']}: fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']} "
+               f"at {f['t_fault_s']:g} s, cleared after {f['clear_cycles']:g} cycles"
+               + ("" if d["esd_pct"] is None else f"; storage {d['esd_pct']:g} % (true speeds)")
+               + ("" if d["stable"] else "; the run loses synchronism"))
+    click.echo(f"PMUs at the {p['at']} buses: {p['rate']:g} frames/s, TVE {100 * p['tve']:g} %, "
+               f"FE {p['fe_hz']:g} Hz, RFE {p['rfe_hz_s']:g} Hz/s ({p['k_sigma']:g} sigma), "
+               f"latency {1000 * p['latency_s']:g} ms, lost {p['drop_prob']:g}; "
+               f"{d['runs']} runs, seeds {d['seed']}..{d['seed'] + d['runs'] - 1}")
+    w = d["window_s"]
+    click.echo(f"errors in mHz from {w[0]:.3f} s to {w[1]:g} s, mean +- std over the runs:")
+    cols = (("speed", "speed_rmse_mhz"), ("COI", "coi_rmse_mhz"), ("relative", "rel_rmse_mhz"),
+            ("rel. max", "rel_max_mhz"), ("at arrival", "rel_arrival_rmse_mhz"),
+            ("forecast", "rel_forecast_rmse_mhz"), ("NIS in 95%", "nis_inside"))
+    click.echo(f"{'estimator':9}" + "".join(f"{c:>17}" for c, _ in cols))
+    for name, fig in d["estimators"].items():
+        cells = [f"{'-':>17}" if fig[k]["mean"] is None else
+                 f"{fig[k]['mean']:>10.3f} +-{fig[k]['std']:<5.3f}" for _, k in cols]
+        click.echo(f"{name:9}" + "".join(cells))
+    if d["false_actions"] is not None:
+        a = d["ambient"]
+        click.echo(f"no fault, {a['runs']} runs of {a['t_s']:g} s, ambient load {a['pct']:g} % "
+                   f"(tau {a['tau_s']:g} s), deadband {1000 * a['deadband_hz']:g} mHz: false ESD "
+                   "actions per run (largest |f_i - f_COI|, largest std of f_i - f_COI; mHz)")
+        for name, fig in d["false_actions"].items():
+            click.echo(f"  {name:5} {fig['actions']['mean']:8.2f}  "
+                       f"({fig['max_rel_mhz']['mean']:.2f}, {fig['std_rel_mhz']['mean']:.2f})")
+
+
+def print_placement(case_name, d) -> None:
+    """Print the `place` result as text.
+
+    Parameters
+    ----------
+    case_name : str
+    d : dict
+        The result (`place --json`).
+    """
+    click.echo(f"case {case_name}: {d['total_mw']:.1f} MW of storage at {d['n_sites']} "
+               f"site(s); {'VERIFIED' if d['verified'] else 'NOT verified'} by simulation "
+               f"({d['message']})")
+    click.echo(f"{'bus':>6} {'machine':>8} {'MW':>9}")
+    for r in d["allocation"]:
+        click.echo(f"{r['bus']:>6} {r['machine']:>8} {r['mw']:9.1f}")
+    click.echo(f"{'contingency':<16} {'no ESD s':>9} {'target s':>9} {'with s':>8}  met")
+    for c in d["contingencies"]:
+        click.echo(f"{c['name']:<16} {c['cct_no_storage_s']:9.3f} {c['target_cct_s']:9.3f} "
+                   f"{c['cct_s']:8.3f}  {'yes' if c['met'] else 'NO'}")
+    for m in d.get("damping", []):
+        click.echo(f"mode {m['freq_hz']:.3f} Hz: damping {m['damping']:.4f}")
+    solve = max(d["solve_times_s"], default=0.0)
+    click.echo(f"{len(d['iterations'])} allocation(s) simulated, wall {d['wall_time_s']:.1f} s, "
+               f"longest convex solve {1000 * solve:.1f} ms")
+
+
+
+def estimator_cct_lines(table: dict, bus: int, far_bus: int, esd_pct: float, settings,
+                        runs: int, seed: int) -> list:
+    """The text lines of `estimate cct`.
+
+    Parameters
+    ----------
+    table : dict
+        Estimator -> CCT statistics (cycles), `stabctl.studies.estimate.estimator_ccts`.
+    bus, far_bus : int
+    esd_pct : float
+    settings : stabctl.estimation.pmu.PMUSettings
+    runs, seed : int
+
+    Returns
+    -------
+    list of str
+    """
+    rate, lat = settings.rate, settings.latency_s
+    lines = [f"CCT of line {bus}-{far_bus}, ESD {esd_pct:g} %, {rate:g} frames/s, latency "
+             f"{1000 * lat:g} ms, {runs} seeds from {seed} (cycles):"]
+    lines += [f"  {e:5} " + ("failed" if s["mean"] is None else
+                             f"{s['mean']:7.2f} +- {s['std']:.2f} ({s['min']:.2f}..{s['max']:.2f})")
+              + f"  runs {s['runs']}, failed {s['failed']}" for e, s in table.items()]
+    return lines
+
+
+def closed_loop_lines(rows: dict, bus: int, far_bus: int, esd_pct: float, seed: int) -> list:
+    """The text lines of `estimate closed-loop`.
+
+    Parameters
+    ----------
+    rows : dict
+        Estimator -> verdict, `stabctl.studies.estimate.closed_loop_verdicts`.
+    bus, far_bus : int
+    esd_pct : float
+    seed : int
+
+    Returns
+    -------
+    list of str
+    """
+    head = (f"closed loop, fault at bus {bus} line {bus}-{far_bus}, ESD {esd_pct:g} %, "
+            f"seed {seed}:")
+    return [head] + [f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} switchings "
+                     f"{r['switchings']:5d}  false actions {r['false_actions']}"
+                     for e, r in rows.items()]

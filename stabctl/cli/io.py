@@ -1,0 +1,109 @@
+"""`stabctl cases` and `stabctl import-psse`: the cases and their files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from stabctl.cli.format import describe_sw_con, print_json
+from stabctl.cli.checks import check_suffix
+from stabctl.cli.options import AliasedOption, json_option, reports_errors
+
+
+def _case_info(name: str) -> dict:
+    from stabctl.io import load_case
+
+    case = load_case(name)
+    return {"name": name, "description": case.description,
+            "buses": case.n_bus, "branches": len(case.branches),
+            "machines": len(case.machines), "exciters": len(case.exciters),
+            "pss": len(case.pss), "governors": len(case.governors),
+            "nonconforming_loads": len(case.loads), "base_mva": case.base_mva,
+            "freq_hz": case.freq_hz, "sw_con": describe_sw_con(case)}
+
+
+@click.command()
+@json_option("the list of cases")
+@reports_errors
+def cases(as_json):
+    """List the built-in cases (usable as CASE in `stabctl simulate`).
+
+    For each: name, description, numbers of buses, branches (every circuit counted),
+    machines, exciters, PSS, governors and non-conforming load buses, the base (MVA) and
+    frequency (Hz), and the data file's own disturbance (PST sw_con, run by
+    `simulate --pstess-default`).
+    """
+    from stabctl.io import list_cases
+
+    rows = [_case_info(name) for name in list_cases()]
+    if as_json:
+        print_json(rows)
+        return
+    for r in rows:
+        click.echo(f"{r['name']}: {r['buses']} buses, {r['branches']} branches, "
+                   f"{r['machines']} machines, {r['governors']} governors, "
+                   f"{r['base_mva']:g} MVA base, {r['freq_hz']:g} Hz")
+        click.echo(f"    {r['description']}")
+        if r["sw_con"]:
+            click.echo(f"    data file disturbance: {r['sw_con']}")
+
+
+@click.command("import-psse")
+@click.argument("raw_path", metavar="RAW", type=click.Path(dir_okay=False))
+@click.argument("dyr_path", metavar="[DYR]", required=False, type=click.Path(dir_okay=False))
+@click.option("--out", "-o", "out_path", required=True, metavar="CASE.json",
+              type=click.Path(dir_okay=False), help="Output file: the stabctl case to write.")
+@click.option("--skip-unsupported", is_flag=True,
+              help="Leave out records stabctl cannot represent (listed as warnings) "
+                   "instead of refusing the files.")
+@click.option("--loads", type=click.Choice(["impedance", "raw"]), default="impedance",
+              show_default=True,
+              help="Load model in dynamic runs: all constant impedance, or the RAW "
+                   "composition (constant power, current, admittance; PST's network "
+                   "solution may fail with constant power under deep voltage dips).")
+@click.option("--dyr-conventions", "--conventions", "conventions", cls=AliasedOption,
+              type=click.Choice(["pst", "andes"]), default="pst", show_default=True,
+              help="How to read the DYR models: PST's (machines with speed effects, "
+                   "EXDC2 limits times the terminal voltage) or ANDES 2.0's (neither), "
+                   "to compare with ANDES like for like.")
+@json_option("the summary")
+@reports_errors
+def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventions, as_json):
+    """Convert a PSS/E RAW file (v32-34) and optionally a DYR file to a stabctl case.
+
+    The case (stabctl's JSON format) is usable as CASE by simulate, cct, eig and screen.
+    Unsupported records are named as FILE:LINE RECORD; without --skip-unsupported they
+    stop the import (exit status 2, nothing written).
+
+    \b
+    Example:
+      stabctl import-psse kundur.raw kundur_full.dyr -o kundur_psse.json
+      stabctl simulate kundur_psse.json --fault 7 --far-bus 8 --tf 5
+    """
+    from stabctl.io.psse import import_psse as run_import
+
+    out = check_suffix(out_path, (".json",), "--out")
+    case, left_out = run_import(raw_path, dyr_path,
+                                "skip" if skip_unsupported else "error", loads, conventions)
+    _write_case_atomically(case, out)
+    summary = {"case": str(out), "name": case.name, "buses": case.n_bus,
+               "branches": len(case.branches), "machines": len(case.machines),
+               "exciters": len(case.exciters), "pss": len(case.pss),
+               "governors": len(case.governors), "nonconforming_loads": len(case.loads),
+               "left_out": list(left_out)}
+    if as_json:
+        print_json(summary)
+        return
+    click.echo(f"wrote {out}: {case.n_bus} buses, {len(case.branches)} branches, "
+               f"{len(case.machines)} machines, {len(case.exciters)} exciters, "
+               f"{len(case.pss)} PSS, {len(case.governors)} governors; "
+               f"{len(left_out)} record(s) left out")
+
+
+def _write_case_atomically(case, path: Path) -> None:
+    """Write the case JSON to a temporary file beside ``path``, then rename it."""
+    from stabctl.io.pst import write_case_json
+    from stabctl.parallel import atomic_write
+
+    atomic_write(path, lambda tmp: write_case_json(case, tmp), mode=None)

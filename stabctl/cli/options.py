@@ -1,0 +1,412 @@
+"""The shared vocabulary of the `stabctl` commands: option decorators, checks, errors.
+
+One concept, one option: the same name, type, unit and default on every command that
+takes it (tests/cli/test_cli_vocabulary.py checks this by introspecting the commands).
+
+Conventions:
+
+* ``--out FILE`` is always an output *file*, ``--out-dir DIR`` always a directory.
+* ``--tf`` is the end of each run (s), by default the fault start + 5 s.
+* ``--faults FILE.csv|DEFAULT`` is a CSV of line faults (``--contingencies``: hidden,
+  deprecated alias).
+* ``--scheduler`` comes with ``--workers`` wherever jobs run in parallel.
+* The storage options (``--esd-pct``, ``--deadband-hz``, ``--v-gate``, ``--coi``,
+  ``--hysteresis-hz``) come as one set (:func:`storage_options`).
+
+Errors in the input (stabctl.errors.StabctlError) are printed as one line naming what
+and where, with exit status 2; nothing is written in that case (:func:`reports_errors`).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import shlex
+import sys
+import warnings
+
+import click
+
+from stabctl.errors import InputError, StabctlError
+from stabctl.cli.format import one_line
+
+#: seconds a run continues after the fault start when --tf is not given
+TF_AFTER_FAULT_S = 5.0
+
+
+class AliasedOption(click.Option):
+    """A click option whose second and later long names are hidden, deprecated aliases:
+    they still work, but ``--help`` shows only the first name."""
+
+    def get_help_record(self, ctx):
+        shown, self.opts = self.opts, self.opts[:1]
+        try:
+            return super().get_help_record(ctx)
+        finally:
+            self.opts = shown
+
+
+def reports_errors(func):
+    """Decorate a command so that stabctl errors become one line and exit status 2.
+
+    Parameters
+    ----------
+    func : callable
+        The command's callback.
+
+    Returns
+    -------
+    callable
+        The wrapped callback: numeric options are checked first (:func:`check_number`:
+        finite, in range); Python warnings raised meanwhile are held back and printed as
+        ``warning:`` lines on stderr on success (on error only the ``error:`` line); Ctrl-C
+        prints what was kept (exit status 130).
+    """
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")
+            try:
+                _check_numbers(kwargs)
+                out = func(*args, **kwargs)
+            except StabctlError as exc:
+                click.echo(f"error: {one_line(exc)}", err=True)
+                sys.exit(2)
+            except KeyboardInterrupt:
+                click.echo(_interrupted(kwargs), err=True)
+                sys.exit(130)
+        for w in caught:
+            click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
+        return out
+    return wrapper
+
+
+# -- numeric options checked at the edge -------------------------------------------------
+
+_INF = float("inf")
+#: allowed range of each numeric option: (low, high, low included, high included, unit).
+#: Every float option, listed or not, must also be finite (no nan, inf). The OMIB ranges
+#: (H, Pmax, f0) keep the swing frequency below about 25 Hz, so that the CCT bisection's
+#: runs stay short (H = 0.001 s, f0 = 1000 Hz ran for many minutes).
+_RANGES = {
+    "--fault-cycles": (0, 600, True, True, "cycles"),
+    "MORE_CYCLES": (0, 600, True, True, "cycles"),
+    "--H": (0.5, 50, True, True, "s"),
+    "--pm": (0, 10, False, True, "pu"),
+    "--delta0": (0, 1.5707963267948966, False, False, "rad"),
+    "--pmax": (0, 10, False, True, "pu"),
+    "--f0": (10, 400, True, True, "Hz"),
+    "--t-fault": (0, 1000, True, True, "s"),
+    "--clear-cycles": (0, 600, True, True, "cycles"),
+    "--far-clear-cycles": (0, 600, True, True, "cycles"),
+    "--t-trip": (0, 1000, True, True, "s"),
+    "--tf": (0, 3600, False, True, "s"),
+    "--step": (0, 1, False, True, "s"),
+    "--separation-limit": (0, 100, False, True, "rad"),
+    "--esd-pct": (0, 100, False, True, "% of machine MVA"),
+    "--deadband-hz": (0, 10, True, True, "Hz"),
+    "--v-gate": (0, 2, True, True, "pu"),
+    "--hysteresis-hz": (0, 10, True, True, "Hz"),
+    "--tol-ms": (0, 1000, False, True, "ms"),
+    "--t-max": (0, 100, False, True, "s"),
+    "--workers": (1, 1024, True, True, ""),
+    "--circuit": (1, 99, True, True, ""),
+    "--areas": (1, 1000, True, True, ""),
+    "--target-cct-gain": (0, 1000, False, True, "%"),
+    "--zeta-min": (0, 1, True, False, ""),
+    "--max-sites": (1, 100000, True, True, ""),
+    "--max-site-pct": (0, 100, False, True, "% of machine MVA"),
+    "--site-cost": (0, 1e6, True, True, "MW"),
+    "--amplitude-hz": (0, 10, False, True, "Hz"),
+    "--max-iter": (1, 1000, True, True, ""),
+    "--rate": (1, 1000, True, True, "frames/s"),
+    "--latency-ms": (0, 10000, True, True, "ms"),
+    "--drop": (0, 1, True, False, ""),
+    "--tve-pct": (0, 100, True, True, "%"),
+    "--fe-hz": (0, 10, True, True, "Hz"),
+    "--rfe-hz-s": (0, 100, True, True, "Hz/s"),
+    "--k-sigma": (0, 100, False, True, ""),
+    "--runs": (1, 100000, True, True, ""),
+    "--seed": (0, 2**32 - 1, True, True, ""),
+    "--settle-ms": (0, 100000, True, True, "ms"),
+    "--ambient-s": (0, 36000, True, True, "s"),
+    "--ambient-pct": (0, 100, True, True, "%"),
+    "--ambient-tau-s": (0, 3600, False, True, "s"),
+    "--ambient-runs": (1, 10000, True, True, ""),
+}
+
+
+def interval(spec) -> str:
+    """The allowed range of a :data:`_RANGES` entry as text, e.g. ``(0, 10] pu``.
+
+    Parameters
+    ----------
+    spec : tuple
+        (low, high, low included, high included, unit).
+
+    Returns
+    -------
+    str
+    """
+    lo, hi, lo_in, hi_in, unit = spec
+    return (f"{'[' if lo_in else '('}{lo:g}, {hi:g}{']' if hi_in else ')'}"
+            + (f" {unit}" if unit else ""))
+
+
+
+def check_number(label: str, value) -> None:
+    """Check one numeric option value against its allowed range.
+
+    Parameters
+    ----------
+    label : str
+        The option (``--tf``) or argument name, a key of :data:`_RANGES` or not.
+    value : int or float
+        The value given.
+
+    Raises
+    ------
+    InputError
+        Unless ``value`` is finite and inside the range of ``label``; the message names
+        the option, the value and the allowed range.
+    """
+    spec = _RANGES.get(label)
+    allowed = f" in {interval(spec)}" if spec else ""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise InputError(f"{label} {value}: must be a finite number{allowed}")
+    if spec is None:
+        return
+    lo, hi, lo_in, hi_in, _ = spec
+    if not ((value >= lo if lo_in else value > lo) and (value <= hi if hi_in else value < hi)):
+        raise InputError(f"{label} {value:g}: must be{allowed}")
+
+
+def _check_numbers(kwargs) -> None:
+    """Check every numeric option of the running command (:func:`check_number`)."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is None:
+        return
+    for param in ctx.command.params:
+        if param.name not in kwargs:
+            continue
+        label = next((o for o in param.opts if o.startswith("--")), None) or \
+            param.human_readable_name
+        for value in _numbers(kwargs[param.name]):
+            check_number(label, value)
+
+
+def _numbers(value):
+    if isinstance(value, (tuple, list)):
+        for v in value:
+            yield from _numbers(v)
+    elif isinstance(value, (int, float)) and not isinstance(value, bool):
+        yield value
+
+
+#: what an interrupted command keeps, by command (default: nothing)
+_KEPT = {
+    "sweep-cct": "finished jobs are in {out}; they are skipped",
+    "screen": "finished searches are in {out}; they are skipped",
+    "paper": "finished sweep records in {out} are kept with --resume",
+}
+
+
+def _interrupted(kwargs) -> str:
+    """The one line printed on Ctrl-C (SIGINT) by every command: what was kept and the
+    command that resumes (paper: with --resume)."""
+    ctx = click.get_current_context(silent=True)
+    name = ctx.info_name if ctx is not None else ""
+    argv = ["stabctl", *sys.argv[1:]]
+    if name == "paper" and "--resume" not in argv:
+        argv.append("--resume")
+    out = kwargs.get("out_path") or kwargs.get("out_dir") or ""
+    if name in ("sweep-cct", "screen") and out:
+        from stabctl.parallel import read_records
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            out = f"{out} ({len(read_records(out))} recorded)"
+    kept = _KEPT.get(name, "nothing is kept; the work starts again").format(out=out)
+    return f"interrupted: {kept}; resume with: {shlex.join(argv)}"
+
+
+# -- option decorators -------------------------------------------------------------------
+
+def _apply(func, options):
+    for opt in reversed(options):
+        func = opt(func)
+    return func
+
+
+def json_option(what: str = "the result"):
+    """``--json``: print ``what`` as JSON instead of text."""
+    return click.option("--json", "as_json", is_flag=True, help=f"Print {what} as JSON.")
+
+
+def out_file_option(default=None, metavar="FILE", help="Output file."):
+    """``--out FILE``: an output file (never a directory), into ``out_path``."""
+    return click.option("--out", "out_path", type=click.Path(dir_okay=False),
+                        default=default, show_default=default is not None, metavar=metavar,
+                        help=f"Output file: {help[0].lower()}{help[1:]}")
+
+
+def out_dir_option(help="Report directory."):
+    """``--out-dir DIR`` (hidden alias ``--out``): an output directory, into ``out_dir``."""
+    # a path, checked by the command (check_writable): a file there is one `error:` line
+    return click.option("--out-dir", "--out", "out_dir", cls=AliasedOption, default="reports",
+                        show_default=True, metavar="DIR", type=click.Path(),
+                        help=f"Output directory: {help[0].lower()}{help[1:]}")
+
+
+def plot_option(what: str):
+    """``--plot FILE.png``: a figure file (.png, .pdf or .svg) of ``what``, into
+    ``plot_path``."""
+    return click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+                        metavar="FILE.png", help=f"Figure file (.png, .pdf or .svg): {what}.")
+
+
+def conventions_option(func):
+    """``--conventions ieee|pstess``, the model conventions."""
+    return click.option("--conventions", type=click.Choice(["ieee", "pstess"]),
+                        default="ieee", show_default=True,
+                        help="Model conventions: ieee (IEEE 421.5 limiters, results converge "
+                             "with the step) or pstess (PSTess 1.1 bit for bit, quirks "
+                             "included); docs/conventions.md.")(func)
+
+
+def model_options(func):
+    """``--conventions`` and ``--step``, the same on every command that simulates."""
+    func = click.option("--step", type=float, default=None, metavar="H",
+                        help="Integration step (s); default: the case's data-file step, "
+                             "under ieee capped at half its fastest time constant (Kundur "
+                             "5 ms, miniWECC 1/480 s; pstess: Kundur 10 ms).")(func)
+    return conventions_option(func)
+
+
+def q_limits_option(func):
+    """``--q-limits/--no-q-limits`` on every command that starts a run or linearises."""
+    return click.option("--q-limits/--no-q-limits", "q_limits", default=True,
+                        show_default=True,
+                        help="Power flow: PV buses switch to PQ at their reactive limits "
+                             "(PST's chq_lim) or keep their voltage without limits (ANDES's "
+                             "default, for comparisons with ANDES).")(func)
+
+
+def tf_option(extra: str = ""):
+    """``--tf S``: end of each run (s), default the fault start + 5 s (into ``tf``)."""
+    return click.option("--tf", type=float, default=None, metavar="S",
+                        help=f"End of each run (s); default: the fault start + "
+                             f"{TF_AFTER_FAULT_S:g} s{extra}.")
+
+
+def fault_options(required: bool, t_fault: bool = True):
+    """``--fault BUS --far-bus BUS`` and (``t_fault``) ``--t-fault S``: a bolted fault."""
+    return lambda func: _apply(func, (
+        click.option("--fault", type=int, required=required, default=None, metavar="BUS",
+                     help="Three-phase (bolted) fault at bus BUS (bus number as in the data)."),
+        click.option("--far-bus", type=int, required=required, default=None, metavar="BUS",
+                     help="Far end of the faulted line BUS-FAR_BUS, tripped at clearing."
+                          + ("" if required else " Without it the fault is cleared "
+                                                 "without loss of a line.")),
+        *([click.option("--t-fault", type=float, default=1.0, show_default=True,
+                        metavar="S", help="Fault start time (s).")] if t_fault else [])))
+
+
+def circuit_option(func):
+    """``--circuit K``: which of parallel circuits BUS-FAR_BUS is faulted."""
+    return click.option("--circuit", type=int, default=1, show_default=True, metavar="K",
+                        help="Which of parallel circuits BUS-FAR_BUS (in data order) is "
+                             "faulted.")(func)
+
+
+def clear_cycles_option(help="Clearing after N cycles of the case frequency."):
+    """``--clear-cycles N`` (cycles)."""
+    return click.option("--clear-cycles", type=float, default=6.0, show_default=True,
+                        metavar="N", help=f"{help} (cycles).")
+
+
+def faults_option(func):
+    """``--faults FILE.csv|DEFAULT`` (hidden, deprecated alias ``--contingencies``)."""
+    return click.option(
+        "--faults", "--contingencies", "faults_src", cls=AliasedOption, required=True,
+        metavar="FILE.csv|DEFAULT",
+        help="CSV with a header bus,far_bus[,t_fault,circuit], one line fault per row "
+             "(cleared at both ends, line tripped); DEFAULT: the built-in list (kundur: "
+             "3-101, 13-101; miniwecc: 83-33, 40-44; faults at 1 s).")(func)
+
+
+def read_fault_list(case_name: str, src: str):
+    """The faults of ``--faults``: the built-in list for DEFAULT, else the CSV file.
+
+    Parameters
+    ----------
+    case_name : str
+    src : str
+        ``DEFAULT`` or a CSV path.
+
+    Returns
+    -------
+    sequence of stabctl.stability.cct.LineFault
+    """
+    # the one place the CLI imports the paper's default fault lists
+    from stabctl.stability.cct import read_faults
+    from stabctl.studies.cases import default_faults
+
+    return default_faults(case_name) if src == "DEFAULT" else read_faults(src)
+
+
+def tol_options(t_max: float = 1.0, t_max_help: str = "a CCT above it is an error"):
+    """``--tol-ms MS`` and ``--t-max S`` of the CCT searches."""
+    return lambda func: _apply(func, (
+        click.option("--tol-ms", type=float, default=1.0, show_default=True, metavar="MS",
+                     help="Width of the final bracket of each CCT search (ms)."),
+        click.option("--t-max", type=float, default=t_max, show_default=True, metavar="S",
+                     help=f"Longest clearing time tried (s); {t_max_help}.")))
+
+
+def storage_options(rating_help: str = "", multiple: bool = False, with_rating: bool = True):
+    """The storage option set: ``--esd-pct`` (one rating, or with ``multiple`` a list),
+    ``--deadband-hz``, ``--v-gate``, ``--coi``, ``--hysteresis-hz``: the paper's bang-bang
+    COI control (Table 3). ``with_rating`` False: the controller options only (`place`
+    sizes the storage itself)."""
+    esd = click.option("--esd-pct", multiple=True, metavar="P",
+                       help="Storage ratings (% of machine MVA): repeat or comma-separate; "
+                            "'none' = no storage (the default)." + rating_help) if multiple \
+        else click.option("--esd-pct", type=float, default=None, metavar="P",
+                          help="ESD of P % of each generator's MVA at its HV bus (% of "
+                               "machine MVA), the paper's bang-bang COI control (Table 3)."
+                               + rating_help)
+    return lambda func: _apply(func, (
+        *([esd] if with_rating else []),
+        click.option("--deadband-hz", type=float, default=0.1, show_default=True,
+                     help="ESD controller deadband on f_i - f_COI (Hz)."),
+        click.option("--v-gate", type=float, default=0.8, show_default=True,
+                     help="ESDs act only while their bus voltage is at least this (pu)."),
+        click.option("--coi", type=click.Choice(["system", "rest"]), default="system",
+                     show_default=True, help="COI of the whole system or of the rest of it."),
+        click.option("--hysteresis-hz", type=float, default=0.0, show_default=True,
+                     help="A running ESD stops only inside deadband - hysteresis (Hz).")))
+
+
+def controller(deadband_hz, v_gate, coi, hysteresis_hz):
+    """The ESD controller of the storage options.
+
+    Returns
+    -------
+    stabctl.storage.devices.BangBangCOI
+    """
+    from stabctl.storage.control import BangBangCOI
+
+    return BangBangCOI(deadband_hz, v_gate, coi, hysteresis_hz)
+
+
+def parallel_options(func):
+    """``--workers N`` and ``--scheduler ADDRESS``, the runner of
+    :func:`stabctl.parallel.run_sweep`."""
+    return _apply(func, (
+        click.option("--workers", type=int, default=None, metavar="N",
+                     help="Local worker processes (default: the available cores, at most "
+                          "one per job); with --scheduler local, the Dask workers."),
+        click.option("--scheduler", default=None, metavar="ADDRESS",
+                     help="Dask distributed scheduler (tcp://host:8786) to run on instead, "
+                          "or 'local' for a local Dask cluster of --workers processes "
+                          "(needs pip install 'stabctl[dask]').")))

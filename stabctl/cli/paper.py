@@ -1,0 +1,44 @@
+"""`stabctl paper`: the paper's tables and figures."""
+
+from __future__ import annotations
+
+import click
+
+from stabctl.cli.checks import check_writable
+from stabctl.cli.options import out_dir_option, reports_errors
+
+
+@click.command()
+@out_dir_option("The report directory (paper.md, figures, records).")
+@click.option("--resume", is_flag=True,
+              help="Continue the sweeps (Table 4 and estimator CCT sweeps, placement "
+                   "screening) from the records of an interrupted run in OUT_DIR/.paper-work, "
+                   "or else from the records in OUT_DIR; by default they are recomputed.")
+@click.option("--only", multiple=True,
+              type=click.Choice(["analytic", "cases", "convergence", "table4", "estimation",
+                                 "placement"]),
+              help="Build only these parts (repeatable): analytic = Sections 2-4 (seconds); "
+                   "cases = Cases 1 and 2; convergence = CCT against the step under both "
+                   "conventions (2 minutes); table4 = CCT sweeps (minutes); estimation = "
+                   "estimator Monte Carlo (about 10 minutes on 2 cores); placement = ESD "
+                   "sizing and placement studies (about 30 minutes). Default: all; "
+                   "with --only, paper.md holds only those parts.")
+@reports_errors
+def paper(out_dir, resume, only):
+    """Reproduce the paper's tables and figures into OUT_DIR/paper.md (+ PNG figures).
+
+    The Table 4 and estimator CCT sweeps and the placement screening record each finished
+    search in OUT_DIR/.paper-work as it completes (an interrupted run continues from there
+    with --resume). Only when every section has succeeded are the reports moved into OUT_DIR
+    and the records written to OUT_DIR/table4_<case>.jsonl, OUT_DIR/estimation_cct_<case>.jsonl
+    and OUT_DIR/placement_<case>_screening.jsonl, replacing the old ones; reports and records
+    hold no timings or other run-dependent values (two runs give identical files), those
+    go to OUT_DIR/run_log.json (seconds per section, every progress line).
+    """
+    from stabctl.studies.paper import write_paper_report
+
+    check_writable(out_dir, "--out-dir", directory=True)
+    path = write_paper_report(out_dir, progress=lambda msg: click.echo(msg, err=True),
+                              resume=resume, only=only)
+    click.echo(f"wrote {path}")
+

@@ -1,0 +1,188 @@
+"""`stabctl simulate`: one nonlinear time-domain run of a case."""
+
+from __future__ import annotations
+
+import click
+
+from stabctl.errors import InputError
+from stabctl.cli.format import (describe_esd, describe_event, print_json, print_storage,
+                                save_plot_atomically)
+from stabctl.cli.checks import OUT_SUFFIXES, PLOT_SUFFIXES, check_suffix
+from stabctl.cli.options import (TF_AFTER_FAULT_S, circuit_option, clear_cycles_option, controller,
+                                 fault_options, json_option, model_options, out_file_option,
+                                 plot_option, q_limits_option, reports_errors, storage_options,
+                                 tf_option)
+
+
+def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit,
+                  trips, t_trips, pstess_default):
+    from stabctl.dynamics.events import LineTrip, fault_with_clearing, from_sw_con
+
+    events = list(from_sw_con(case)) if pstess_default else []
+    if fault is None:
+        given = {"--far-bus": far_bus, "--far-clear-cycles": far_clear_cycles}
+        stray = [k for k, v in given.items() if v is not None]
+        if stray:
+            raise InputError(f"{', '.join(stray)} given without --fault")
+    else:
+        if clear_cycles < 0:
+            raise InputError(f"--clear-cycles must be >= 0, got {clear_cycles:g}")
+        if far_clear_cycles is not None and far_clear_cycles < 0:
+            raise InputError(f"--far-clear-cycles must be >= 0, got {far_clear_cycles:g}")
+        if t_fault < 0:
+            raise InputError(f"--t-fault must be >= 0 s, got {t_fault:g}")
+        events.append(fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles,
+                                          far_clear_cycles, circuit=circuit))
+    if trips:
+        times = list(t_trips) or [1.0]
+        if len(times) == 1:
+            times = times * len(trips)
+        if len(times) != len(trips):
+            raise InputError(f"{len(trips)} --trip but {len(t_trips)} --t-trip: give one "
+                             "--t-trip for all or one per --trip")
+        for (a, b), t in zip(trips, times):
+            if t < 0:
+                raise InputError(f"--t-trip must be >= 0 s, got {t:g}")
+            events.append(LineTrip(a, b, t))
+    elif t_trips:
+        raise InputError("--t-trip given without --trip")
+    return events
+
+
+@click.command()
+@click.argument("case_name", metavar="CASE")
+@fault_options(required=False)
+@circuit_option
+@clear_cycles_option("Near-end clearing after N cycles of the case frequency")
+@click.option("--far-clear-cycles", type=float, default=None, metavar="M",
+              help="Far-end clearing after M cycles from fault start (cycles; default: N).")
+@click.option("--trip", type=(int, int), multiple=True, metavar="FROM TO",
+              help="Trip one circuit of line FROM-TO without fault (repeatable).")
+@click.option("--t-trip", type=float, multiple=True, metavar="S",
+              help="Trip time (s): once for all trips or once per --trip (default 1.0).")
+@click.option("--pstess-default", is_flag=True,
+              help="Run the case file's own PST sw_con disturbance (with any of the above "
+                   "added); --tf then defaults to its end time.")
+@tf_option("; no disturbance: 5 s; with --pstess-default: the end of the data file's run")
+@model_options
+@q_limits_option
+@click.option("--separation-limit", type=float, default=3.141592653589793,
+              show_default="pi", metavar="RAD",
+              help="Loss of synchronism: a rotor angle more than RAD from the centre of "
+                   "inertia (rad).")
+@click.option("--stop-at-separation", is_flag=True,
+              help="Stop the run at loss of synchronism.")
+@out_file_option(metavar="FILE.csv|FILE.npz", help="The trajectories (CSV or numpy .npz).")
+@plot_option("speeds, angles from the COI and bus voltages")
+@storage_options()
+@json_option("the run summary")
+@reports_errors
+def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clear_cycles, trip,
+             t_trip, pstess_default, tf, conventions, step, q_limits, separation_limit,
+             stop_at_separation, out_path, plot_path, esd_pct, deadband_hz, v_gate, coi,
+             hysteresis_hz, as_json):
+    """Nonlinear multi-machine time-domain simulation (PSTess models and integrator).
+
+    CASE is a built-in name (see `stabctl cases`) or a case file (.json, PST .m). The run
+    starts from the solved power flow. With no disturbance option the run is flat (no
+    disturbance); --pstess-default runs the data file's own sw_con.
+
+    \b
+    Fault (as PST's sw_con, y_switch): a bolted three-phase fault at BUS from --t-fault;
+    after N cycles the near end of line BUS-FAR_BUS opens (the far end keeps feeding the
+    fault through the line), after M cycles the far end opens too and the line stays out.
+
+    \b
+    Units: times s, cycles of the case frequency (60 Hz: 1 cycle = 16.67 ms), speeds pu,
+    angles rad (absolute, synchronous frame, as PSTess), pelect pu on the system base,
+    pmech pu on the machine base, efd pu, bus voltages pu and rad.
+
+    \b
+    CSV columns: t, speed_pu.G<k>, angle_rad.G<k>, pelect_pu.G<k>, pmech_pu.G<k>,
+    efd_pu.G<k> per machine k, vmag_pu.B<n>, vang_rad.B<n> per bus n, and with
+    --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also gives the storage
+    settings (`esd`), per device switchings, energy absorbed and delivered (MJ) and peak
+    power used (MW) (`storage`), and every switching as {t_s, device, bus, machine, mode
+    (absorb, idle, inject), mode_code (+1, 0, -1), rel_speed_hz (machine minus COI speed
+    seen by the controller)} (`switchings`).
+
+    \b
+    Examples:
+      stabctl simulate kundur --pstess-default --out kundur.csv
+      stabctl simulate kundur --fault 3 --far-bus 101 --t-fault 1 --clear-cycles 21 --json
+      stabctl simulate miniwecc --trip 40 44 --t-trip 1 --tf 10 --plot wecc.png
+      stabctl simulate miniwecc --fault 83 --far-bus 33 --clear-cycles 6 --esd-pct 5 --json
+
+    Bad input (unknown case or bus, no such line, negative cycles, power flow not
+    converging) and a run that diverges exit with status 2 and one `error:` line; no file
+    is written then (a diverged run reports where it stopped).
+    """
+    from stabctl.io import load_case
+    from stabctl.dynamics.simulation import Simulator
+
+    out_p = check_suffix(out_path, OUT_SUFFIXES, "--out")
+    plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
+    if not separation_limit > 0:
+        raise InputError(f"--separation-limit must be > 0 rad, got {separation_limit:g}")
+    case = load_case(case_name)
+    events = _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
+                           circuit, trip, t_trip, pstess_default)
+    if tf is None and pstess_default and case.sw_con is not None:
+        tf = float(case.sw_con[-1, 0])
+    elif tf is None:
+        tf = min((min(e.times()) for e in events), default=0.0) + TF_AFTER_FAULT_S
+    if not tf > 0:
+        raise InputError(f"--tf must be > 0 s, got {tf:g}")
+    late = [e for e in events if min(e.times()) >= tf]
+    if late:
+        raise InputError(f"{describe_event(late[0])}: starts at or after the end of the run "
+                         f"(--tf {tf:g} s)")
+    fleet = None
+    if esd_pct is not None:
+        from stabctl.storage.devices import uniform_fleet
+        fleet = uniform_fleet(case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz))
+    sim = Simulator(case, conventions=conventions, q_limits=q_limits)
+    h = sim.default_h if step is None else step
+    result = sim.run(events, t_end=tf, h=h, separation_limit=separation_limit,
+                     stop_at_separation=stop_at_separation, storage=fleet)
+    esd = None if esd_pct is None else {
+        "pct_of_machine_mva": esd_pct, "devices": len(fleet.devices),
+        "control": "bang-bang COI (paper Table 3)", "deadband_hz": deadband_hz,
+        "v_gate_pu": v_gate, "coi": coi, "hysteresis_hz": hysteresis_hz}
+    written = []
+    if plot_p is not None:
+        title = f"{case.name}: " + ("; ".join(describe_event(e) for e in events) or "flat run")
+        if esd is not None:
+            title += "\n" + describe_esd(esd, short=True)
+        save_plot_atomically(result, plot_p, title=title, base_mva=case.base_mva)
+        written.append(str(plot_p))
+    if out_p is not None:
+        if out_p.suffix.lower() == ".npz":
+            result.to_npz(out_p)
+        else:
+            result.to_csv(out_p)
+        written.insert(0, str(out_p))
+    summary = result.summary()
+    if esd is not None:
+        summary["switchings"] = result.switching_records()
+    if as_json:
+        print_json({**summary, "step_s": h, "conventions": conventions, "q_limits": q_limits,
+                     "esd": esd,
+                     "events": [describe_event(e) for e in events], "files": written})
+        return
+    click.echo(f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
+               f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {h:g} s, "
+               f"{conventions} conventions), "
+               f"wall {summary.get('wall_time_s', float('nan')):.2f} s")
+    for e in events or ["flat run (no disturbance)"]:
+        click.echo(f"  {e if isinstance(e, str) else describe_event(e)}")
+    if esd is not None:
+        print_storage(esd, result)
+    if result.stable:
+        click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
+    else:
+        machines = ", ".join(str(m) for m in result.separated)
+        click.echo(f"loss of synchronism at t = {result.t_separation:.4f} s: machine(s) "
+                   f"{machines} separate" + (" (run stopped)" if stop_at_separation else ""))
+    for w in written:
+        click.echo(f"wrote {w}")

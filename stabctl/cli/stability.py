@@ -1,0 +1,220 @@
+"""`stabctl cct`, `stabctl sweep-cct` and `stabctl screen`: critical clearing times."""
+
+from __future__ import annotations
+
+import click
+
+from stabctl.errors import InputError
+from stabctl.cli.format import print_cct, print_json, print_screening, print_sweep
+from stabctl.cli.checks import PLOT_SUFFIXES, cct_settings, check_suffix, check_writable
+from stabctl.cli.options import (check_number, circuit_option, controller, fault_options,
+                                 faults_option, json_option, model_options, out_file_option,
+                                 parallel_options, plot_option, q_limits_option, read_fault_list,
+                                 reports_errors, storage_options, tf_option, tol_options)
+
+
+@click.command()
+@click.argument("case_name", metavar="CASE")
+@fault_options(required=True)
+@circuit_option
+@click.option("--trip", type=(int, int), multiple=True, metavar="FROM TO",
+              help="Also open circuit 1 of line FROM-TO at the clearing instant "
+                   "(repeatable); both circuits of a double line: --circuit 2 --trip "
+                   "BUS FAR_BUS.")
+@storage_options()
+@tol_options()
+@tf_option()
+@model_options
+@q_limits_option
+@json_option()
+@reports_errors
+def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, deadband_hz, v_gate, coi,
+        hysteresis_hz, tol_ms, t_max, tf, conventions, step, q_limits, as_json):
+    """Critical clearing time of a line fault by bisection on the clearing time.
+
+    The fault at BUS on line BUS-FAR_BUS starts at --t-fault and is cleared at both ends
+    at once after the clearing time (s after the fault start); the line stays out.
+
+    \b
+    Criterion: unstable if a rotor angle leaves the centre of inertia (H*MVA weights) by
+    more than pi rad before --tf (default fault time + 5 s); runs stop at separation.
+    The search checks stability at zero clearing (the line trip alone), doubles the upper
+    bound from 0.1 s while stable (up to --t-max), then bisects on multiples of --tol-ms.
+    The CCT printed is the stable end of the final bracket (conservative).  Its numerical
+    error bar: the bracket's ends rerun at half the step (the search continued there if a
+    verdict changes); numerical_error_s = |CCT(h/2) - CCT(h)| (0: below the tolerance).
+    \b
+    Examples:
+      stabctl cct kundur --fault 3 --far-bus 101
+      stabctl cct miniwecc --fault 83 --far-bus 33 --json
+
+    Bad input (unknown bus or line, unstable at zero clearing, CCT above --t-max, storage
+    not available) exits with status 2 and one `error:` line.
+    """
+    from stabctl.io import load_case
+    from stabctl.stability.cct import LineFault, critical_clearing_time
+    from stabctl.storage.devices import uniform_fleet
+    from stabctl.dynamics.simulation import Simulator
+
+    settings = cct_settings(tol_ms, t_max, tf)
+    case = load_case(case_name)
+    storage = None if esd_pct is None else uniform_fleet(
+        case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz))
+    line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
+    res = critical_clearing_time(Simulator(case, conventions=conventions, q_limits=q_limits),
+                                 line_fault,
+                                 storage=storage, h=step, **settings)
+    out = {"case": case.name, "esd_pct": esd_pct, **res.to_dict(), "q_limits": q_limits}
+    if as_json:
+        print_json(out)
+    else:
+        print_cct(case.name, esd_pct, out)
+
+
+
+def _ratings(values) -> list:
+    """The storage ratings of sweep-cct's --esd-pct.
+
+    Parameters
+    ----------
+    values : sequence of str
+        The option's values (repeatable, comma-separated, 'none' = no storage).
+
+    Returns
+    -------
+    list of float or None
+        Distinct ratings in order (None: no storage; default ``[None]``).
+
+    Raises
+    ------
+    InputError
+        Not a number or 'none', or out of range.
+    """
+    out = []
+    for v in values or ("none",):
+        for item in str(v).split(","):
+            item = item.strip().lower()
+            try:
+                out.append(None if item == "none" else float(item))
+            except ValueError:
+                raise InputError(f"--esd-pct {item!r}: not a number or 'none'") from None
+            if out[-1] is not None:
+                check_number("--esd-pct", out[-1])
+    return list(dict.fromkeys(out))
+
+
+@click.command("sweep-cct")
+@click.argument("case_name", metavar="CASE")
+@faults_option
+@storage_options(multiple=True, rating_help=" Every fault runs at every rating.")
+@out_file_option("results.jsonl", "FILE.jsonl", "JSON lines, one per finished job; "
+                 "rerunning with it skips the jobs already there.")
+@parallel_options
+@click.option("--retry-failed", is_flag=True, help="Rerun the jobs recorded as failed.")
+@tol_options()
+@tf_option()
+@model_options
+@q_limits_option
+@json_option("every record")
+@reports_errors
+def sweep_cct(case_name, faults_src, esd_pct, deadband_hz, v_gate, coi, hysteresis_hz,
+              out_path, workers, scheduler, retry_failed, tol_ms, t_max, tf, conventions,
+              step, q_limits, as_json):
+    """CCT of every (fault, storage rating) pair, in parallel, resumable.
+
+    Each job is one `stabctl cct` search; its line in --out holds its key
+    (CASE/BUS-FAR/tT_FAULT/esdP, + /ctrl-... with other controller options than the
+    paper's), inputs and result, or `failed` with the reason (e.g. a
+    diverging run). Lines are written as jobs finish, so an interrupted sweep (Ctrl-C)
+    keeps them; rerun the same command to finish it. A progress bar goes to stderr.
+    Criterion and search as `stabctl cct` (see its --help).
+    \b
+    Examples:
+      stabctl sweep-cct kundur --faults DEFAULT --esd-pct none,5,10 --out kundur.jsonl
+      stabctl sweep-cct miniwecc --faults faults.csv --scheduler tcp://10.0.0.5:8786
+    """
+    from stabctl.io import load_case
+    from stabctl.stability.cct import storage_fleet
+    from stabctl.studies.sweeps import controlled_cct_jobs
+    from stabctl.parallel import run_sweep
+
+    settings = cct_settings(tol_ms, t_max, tf)
+    ctrl = controller(deadband_hz, v_gate, coi, hysteresis_hz)
+    if workers is not None and workers < 1:
+        raise InputError(f"--workers must be >= 1, got {workers}")
+    check_writable(out_path, "--out")
+    case = load_case(case_name)
+    ratings = _ratings(esd_pct)
+    for p in ratings:
+        storage_fleet(case, p)
+    faults = read_fault_list(case_name, faults_src)
+    jobs = controlled_cct_jobs(case_name, faults, ratings, ctrl, conventions=conventions,
+                               h=step, q_limits=q_limits, **settings)
+    rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
+                    retry_failed=retry_failed)      # Ctrl-C: reports_errors, exit 130
+    if as_json:
+        print_json({"out": str(rep.out), "ran": rep.ran, "skipped": rep.skipped,
+                     "failed": rep.failed, "wall_time_s": rep.wall_time_s,
+                     "records": list(rep.records.values())})
+        return
+    print_sweep(rep, len(jobs))
+
+
+@click.command()
+@click.argument("case_name", metavar="CASE")
+@click.option("--buses", default=None, metavar="B1,B2,...",
+              help="Buses to fault (default: every bus).")
+@click.option("--lines", is_flag=True,
+              help="Also fault the from-end of every branch with the branch tripped (N-1).")
+@tol_options(0.5, "a CCT above it is recorded as failed")
+@out_file_option("screening.jsonl", "FILE.jsonl", "JSON lines, one per finished search "
+                 "(rerunning resumes).")
+@plot_option("network map with buses coloured by CCT")
+@parallel_options
+@model_options
+@q_limits_option
+@json_option("every row")
+@reports_errors
+def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers, scheduler,
+           conventions, step, q_limits, as_json):
+    """Contingency screening: CCT of a three-phase fault at every bus (and with --lines of
+    every branch fault with the branch tripped), in parallel and resumable.
+
+    Bus faults are cleared without loss of a line (PST sw_con type 7); the CCT search and
+    its stability criterion are `stabctl cct`'s. Rows are sorted by CCT, most critical
+    first; a failed search (e.g. voltage collapse during the fault) is listed with its
+    reason.
+    """
+    from stabctl.io import load_case
+    from stabctl.stability.screening import screen as run_screen
+
+    case = load_case(case_name)
+    bus_list = None if buses is None else _bus_list(buses)
+    plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
+    check_writable(out_path, "--out")
+    settings = cct_settings(tol_ms, t_max, None)
+    rows = run_screen(case_name, out_path, buses=bus_list, lines=lines, tol=settings["tol"],
+                      t_max=t_max, workers=workers, scheduler=scheduler,
+                      conventions=conventions, h=step, q_limits=q_limits)
+    rows.sort(key=lambda r: r.get("cct_s", float("inf")))
+    if plot_p is not None:
+        from stabctl.plotting import figures as plotting
+        plotting.screening_map(case, rows, plot_p)
+    if as_json:
+        print_json(rows)
+        return
+    print_screening(rows)
+
+
+def _bus_list(text: str) -> list[int]:
+    """--buses B1,B2,...: bus numbers (InputError naming the first that is not one)."""
+    out = []
+    for item in (b.strip() for b in text.split(",")):
+        if item:
+            try:
+                out.append(int(item))
+            except ValueError:
+                raise InputError(f"--buses {item!r}: not a bus number") from None
+    if not out:
+        raise InputError("--buses: no bus number given")
+    return out

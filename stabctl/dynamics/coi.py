@@ -1,0 +1,89 @@
+"""Centre of inertia (paper eq. 40): the inertia-weighted mean of the machines' rotor
+angles or speeds, weights M_i = H_i * MVA_i.
+
+The one implementation of the COI for the layers from `stabctl.dynamics` up (results,
+simulation, SIME, linearisation, estimation).  The compiled loop's counterpart,
+`coi_value`, lives in the storage layer, the lowest that needs it (its controller
+kernels), and is re-exported here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from stabctl.storage.control import coi_value  # noqa: F401  the compiled variant
+
+__all__ = ["coi_weights", "coi_angle", "coi_speed", "coi_of_rest", "coi_value"]
+
+
+def coi_weights(inertia: np.ndarray) -> np.ndarray:
+    """Normalised COI weights w_i = M_i / sum(M) (paper eq. 40).
+
+    Parameters
+    ----------
+    inertia : ndarray, shape (n_mac,)
+        M_i = H_i * MVA_i (MW s), or any quantity proportional to it.
+
+    Returns
+    -------
+    ndarray, shape (n_mac,)
+        The weights, summing to 1.
+    """
+    return inertia / inertia.sum()
+
+
+def coi_angle(angle: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """COI angle delta_COI = sum(M_i delta_i) / sum(M_i) (paper eq. 40).
+
+    Parameters
+    ----------
+    angle : ndarray, shape (..., n_mac)
+        Rotor angles (rad), machines on the last axis.
+    inertia : ndarray, shape (n_mac,)
+        Weights M_i = H_i * MVA_i.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The COI angle (rad).
+    """
+    return angle @ inertia / inertia.sum()
+
+
+def coi_speed(speed: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """COI speed omega_COI = sum(M_i omega_i) / sum(M_i) (paper eq. 40).
+
+    Parameters
+    ----------
+    speed : ndarray, shape (..., n_mac)
+        Rotor speeds (pu), machines on the last axis.
+    inertia : ndarray, shape (n_mac,)
+        Weights M_i = H_i * MVA_i.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The COI speed (pu).
+    """
+    return coi_angle(speed, inertia)
+
+
+def coi_of_rest(values: np.ndarray, inertia: np.ndarray, idx) -> np.ndarray:
+    """COI of all machines but one, for each machine of idx: (sum_j M_j x_j - M_i x_i) /
+    (sum_j M_j - M_i) (the "rest" COI of `stabctl.storage.BangBangCOI`).
+
+    Parameters
+    ----------
+    values : ndarray, shape (n_t, n_mac)
+        Rotor speeds (pu) or angles (rad).
+    inertia : ndarray, shape (n_mac,)
+        Weights M_i = H_i * MVA_i.
+    idx : array of int, shape (k,)
+        Machine indices.
+
+    Returns
+    -------
+    ndarray, shape (n_t, k)
+    """
+    total = values @ inertia
+    return (total[:, None] - values[:, idx] * inertia[idx]) / (inertia.sum() - inertia[idx])

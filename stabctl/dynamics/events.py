@@ -1,0 +1,332 @@
+"""Disturbances of a dynamic run and the network configuration they give at each time.
+
+Faults follow PST's switching sequence (`y_switch.m`, PST manual section 2.5): a
+three-phase fault at a bus, cleared at the near end (the faulted circuit opens there and the
+far end keeps feeding the fault through it) and later at the far end (the circuit is out);
+a fault without a far bus is cleared without loss of a line.  A line is opened as PST does:
+its reactance becomes 1e7 pu and its charging stays connected.  Any number of events per run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from stabctl.case import Case
+from stabctl.dynamics.model import FAULT_B, StageConfig
+from stabctl.errors import CaseError, InputError
+from stabctl.network.ybus import circuit_row
+
+
+@dataclass(frozen=True)
+class Fault:
+    """Three-phase fault at `bus` from `t`, cleared as PST's ``sw_con`` sequence
+    (``y_switch.m``, PST manual section 2.5).
+
+    At `clear_near` the faulted circuit opens at the near end (`bus`), the far end still
+    feeding the fault through it; at `clear_far` it opens at the far end too and the fault is
+    gone, the circuit staying out (a line opened as PST: reactance 1e7 pu, charging kept):
+    PST's fault type 0.  With equal near and far times the zero-length interval between
+    the two openings is kept, as PSTess does.  The times are checked against the case when the
+    run starts (`Simulator.run`): InputError for a clearing before the fault or a far end
+    before the near end, CaseError / UnknownBusError for an unknown bus or line.
+
+    Attributes
+    ----------
+    bus : int
+        Faulted bus number (as in the data; the near end of the faulted line).
+    t : float
+        Fault start, s (absolute run time, >= 0).
+    clear_near : float or None, optional
+        Absolute time the near end clears, s (>= `t`); None (default): never cleared.
+    clear_far : float or None, optional
+        Absolute time the far end clears, s (>= `clear_near`); None (default): with the
+        near end.
+    far_bus : int or None, optional
+        Bus number of the far end of the faulted line, tripped at clearing; None (default):
+        the fault is cleared at `clear_near` without loss of a line.
+    circuit : int, optional
+        Which of the parallel circuits between `bus` and `far_bus` is faulted (1 = the
+        first branch row joining them); default 1.
+    r, x : float, optional
+        Fault resistance and reactance, pu on the system base; ``r = x = 0`` (default) is
+        PST's bolted fault (shunt susceptance -1e7 pu at the bus).  A negative `x` is
+        taken as 0.
+    """
+
+    bus: int
+    t: float
+    clear_near: float | None = None
+    clear_far: float | None = None
+    far_bus: int | None = None
+    circuit: int = 1
+    r: float = 0.0
+    x: float = 0.0
+
+    @property
+    def admittance(self) -> complex:
+        """Fault shunt admittance (pu, system base): ``-1j * 1e7`` for a bolted fault, else
+        ``1 / (r + j max(x, 0))``."""
+        if self.r == 0 and self.x == 0:
+            return -1j * FAULT_B
+        return 1.0 / complex(self.r, max(self.x, 0.0))
+
+    def times(self):
+        """The event's times that are set.
+
+        Returns
+        -------
+        list of float
+            Fault start, near-end clearing and far-end clearing (`far_clear`), s, those
+            that are not None, in that order.
+        """
+        return [t for t in (self.t, self.clear_near, self.far_clear) if t is not None]
+
+    @property
+    def far_clear(self):
+        """Far-end clearing time (s): `clear_far`, or `clear_near` when that is None."""
+        return self.clear_near if self.clear_far is None else self.clear_far
+
+
+@dataclass(frozen=True)
+class LineTrip:
+    """Open one circuit of the line `from_bus`-`to_bus` at `t`, without fault (PST's
+    ``sw_con`` type 4; the line opened as PST: reactance 1e7 pu, charging kept).
+
+    Attributes
+    ----------
+    from_bus, to_bus : int
+        Bus numbers (as in the data) of the line's ends, in either order.
+    t : float
+        Opening time, s (absolute run time, >= 0).
+    circuit : int, optional
+        Which of the parallel circuits between the two buses (1 = the first branch row
+        joining them); default 1.  An unknown line raises CaseError when the run starts.
+    """
+
+    from_bus: int
+    to_bus: int
+    t: float
+    circuit: int = 1
+
+    def times(self):
+        """The event's times.
+
+        Returns
+        -------
+        list of float
+            ``[t]``, s.
+        """
+        return [self.t]
+
+
+@dataclass(frozen=True)
+class GeneratorTrip:
+    """Disconnect a generator at `t`.
+
+    Attributes
+    ----------
+    machine : int
+        Machine number (as in the data, PST ``mac_con`` column 1); an unknown machine
+        raises CaseError when the run starts.
+    t : float
+        Disconnection time, s (absolute run time, >= 0).
+    """
+
+    machine: int
+    t: float
+
+    def times(self):
+        """The event's times.
+
+        Returns
+        -------
+        list of float
+            ``[t]``, s.
+        """
+        return [self.t]
+
+
+@dataclass(frozen=True)
+class LoadStep:
+    """Add P + jQ of constant-impedance load at `bus` from `t`.
+
+    The load is the shunt admittance (P - jQ) / |V0|^2, V0 the bus voltage of the power
+    flow, so it draws P + jQ at that voltage and scales with |V|^2; negative values remove
+    load (a pulse is two steps of opposite sign).
+
+    Attributes
+    ----------
+    bus : int
+        Bus number (as in the data); an unknown bus raises UnknownBusError when the run
+        starts.
+    t : float
+        Time of the step, s (absolute run time, >= 0).
+    P : float
+        Real power added, pu on the system base (+ drawn from the network).
+    Q : float, optional
+        Reactive power added, pu on the system base (+ inductive, drawn); default 0.
+    """
+
+    bus: int
+    t: float
+    P: float
+    Q: float = 0.0
+
+    def times(self):
+        """The event's times.
+
+        Returns
+        -------
+        list of float
+            ``[t]``, s.
+        """
+        return [self.t]
+
+
+def validate(case: Case, events, t_end: float) -> None:
+    """Check every event against the case (buses, lines, machines, times >= 0); raises
+    UnknownBusError, CaseError, InputError.  Events after t_end are allowed (not reached)."""
+    for ev in events:
+        if isinstance(ev, Fault):
+            case.bus_index(ev.bus)
+            if ev.clear_near is not None and ev.clear_near < ev.t:
+                raise InputError(f"fault at bus {ev.bus}: cleared at {ev.clear_near} s "
+                                 f"before it starts at {ev.t} s")
+            if ev.far_clear is not None and ev.clear_near is not None and ev.far_clear < ev.clear_near:
+                raise InputError(f"fault at bus {ev.bus}: far end clears before near end")
+            if ev.far_bus is not None:
+                circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
+        elif isinstance(ev, LineTrip):
+            circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit)
+        elif isinstance(ev, GeneratorTrip):
+            case.machine_index(ev.machine)
+        elif isinstance(ev, LoadStep):
+            case.bus_index(ev.bus)
+        else:
+            raise InputError(f"unknown event {ev!r}")
+        if any(t < 0 for t in ev.times()):
+            raise InputError(f"event {ev} has a negative time (events after t_end = {t_end} s "
+                             "simply do not happen)")
+
+
+def stage_boundaries(events, t_end: float) -> list[tuple[float, int, int]]:
+    """Every change of network configuration before t_end, in time order:
+    (time, event index, phase), phase counting the event's own changes (a fault: 1 on,
+    2 near end cleared, 3 far end cleared).  A fault cleared at both ends at the same
+    instant keeps its two changes, as PSTess keeps the zero-length interval between them
+    (one step of h = 0 in the near-end-cleared network)."""
+    out = []
+    for i, ev in enumerate(events):
+        if isinstance(ev, Fault):
+            times = [ev.t] if ev.clear_near is None else \
+                [ev.t, ev.clear_near] + ([ev.far_clear] if ev.far_bus is not None else [])
+        else:
+            times = ev.times()
+        out += [(float(t), i, k + 1) for k, t in enumerate(times) if t < t_end]
+    return sorted(out)
+
+
+def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
+    """Network configuration with phases[i] changes of event i applied (see
+    `stage_boundaries`)."""
+    faults, opened, feeds, tripped, loads = [], [], [], [], []
+    for ev, n in zip(events, phases):
+        if n == 0:
+            continue
+        if isinstance(ev, Fault):
+            if n == 1:
+                faults.append((case.bus_index(ev.bus), ev.admittance))
+            elif ev.far_bus is not None:
+                row = circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
+                feeds.append((row, ev.far_bus, n == 2))
+        elif isinstance(ev, LineTrip):
+            opened.append(circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit))
+        elif isinstance(ev, GeneratorTrip):
+            tripped.append(case.machine_index(ev.machine))
+        elif isinstance(ev, LoadStep):
+            b = case.bus_index(ev.bus)
+            loads.append((b, complex(ev.P, -ev.Q) / abs(V0[b]) ** 2))
+    return StageConfig(faults=tuple(faults), opened=tuple(sorted(set(opened))),
+                       fault_feeds=tuple(feeds), tripped_machines=tuple(sorted(set(tripped))),
+                       load_steps=tuple(loads))
+
+
+def stages(case: Case, events, t_end: float, V0: np.ndarray):
+    """(start times, configurations) of the run's intervals, the first starting at 0.  A
+    start time repeats only between the phases of one fault (PSTess's zero-length
+    interval); simultaneous changes of different events form one stage."""
+    phases = [0] * len(events)
+    starts, configs, last = [0.0], [configuration(case, events, phases, V0)], None
+    for t, i, k in stage_boundaries(events, t_end):
+        phases[i] = k
+        merge = t == starts[-1] and (len(starts) == 1 or last != i)   # t = 0, or another event
+        if merge:
+            configs[-1] = configuration(case, events, phases, V0)
+        else:
+            starts.append(t)
+            configs.append(configuration(case, events, phases, V0))
+        last = i
+    return starts, configs
+
+
+def fault_with_clearing(case: Case, bus: int, far_bus: int | None, t_fault: float,
+                        clear_cycles: float, far_clear_cycles: float | None = None,
+                        circuit: int = 1) -> Fault:
+    """A fault cleared after a number of cycles at the near end and at the far end (the
+    CLI's ``--clear-cycles`` / ``--far-clear-cycles``).
+
+    Parameters
+    ----------
+    case : Case
+        The case; its nominal frequency `freq_hz` (Hz) sets the cycle length 1 / freq_hz s.
+    bus : int
+        Faulted bus number (as in the data; the near end of the line).
+    far_bus : int or None
+        Far-end bus number of the faulted line, tripped at clearing; None: the fault is
+        cleared without loss of a line.
+    t_fault : float
+        Fault start, s (absolute run time).
+    clear_cycles : float
+        Near-end clearing time, cycles of the case frequency after `t_fault` (>= 0).
+    far_clear_cycles : float or None, optional
+        Far-end clearing time, cycles after `t_fault` (>= `clear_cycles`); None (default):
+        with the near end.
+    circuit : int, optional
+        Which of the parallel circuits between `bus` and `far_bus`; default 1.
+
+    Returns
+    -------
+    Fault
+        With ``clear_near = t_fault + clear_cycles / freq_hz`` and ``clear_far = t_fault +
+        far_clear_cycles / freq_hz`` (s).  Buses and lines are checked when the run starts.
+
+    Raises
+    ------
+    InputError
+        `clear_cycles` negative, or `far_clear_cycles` below `clear_cycles`.
+    """
+    if clear_cycles < 0 or (far_clear_cycles is not None and far_clear_cycles < clear_cycles):
+        raise InputError("clearing cycles must be >= 0 and the far end no earlier than the near end")
+    cyc = 1.0 / case.freq_hz
+    far = clear_cycles if far_clear_cycles is None else far_clear_cycles
+    return Fault(bus=bus, t=t_fault, clear_near=t_fault + clear_cycles * cyc,
+                 clear_far=t_fault + far * cyc, far_bus=far_bus, circuit=circuit)
+
+
+def from_sw_con(case: Case) -> list:
+    """The disturbance of the case's own PST sw_con (types 0 fault, 4 line trip, 6 none)."""
+    sw = case.sw_con
+    if sw is None or len(sw) < 4:
+        return []
+    ftype = int(sw[1, 5])
+    if ftype == 0:
+        far = int(sw[1, 2]) if sw[1, 2] else None
+        return [Fault(bus=int(sw[1, 1]), t=float(sw[1, 0]), clear_near=float(sw[2, 0]),
+                      clear_far=float(sw[3, 0]), far_bus=far)]
+    if ftype == 4:
+        return [LineTrip(int(sw[1, 1]), int(sw[1, 2]), float(sw[1, 0]))]
+    if ftype == 6:
+        return []
+    raise CaseError(f"sw_con fault type {ftype} is not supported (0, 4 and 6 are)")

@@ -1,0 +1,529 @@
+"""The dynamic model of a case: state layout, initialisation from the power flow, network
+stages, and one evaluation of all right-hand sides (PST flag 1, network solution, flag 2).
+
+This is the single implementation of the multi-machine equations: the time-domain
+integrator, the linearisation, the CCT search and the estimators all call
+`DynamicModel.evaluate`.  Source: PSTess 1.1 `s_simu.m` (order of model calls),
+docs/pst_models.md sections 1-7.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+from stabctl._jitcache import njit
+
+from stabctl.models import exciters as exc
+from stabctl.models import governors as gov
+from stabctl.models import machines as mac
+from stabctl.models import pss as pss_
+from stabctl.case import BranchTable, BusTable, Case
+from stabctl.errors import CaseError, InputError, SimulationError
+from stabctl.network.solution import NonConformingLoads, ReducedNetwork, reduce_network, solve_nc
+
+FAULT_B = 1e7      # PST's bolted-fault shunt susceptance (1/1e-7)
+OPEN_X = 1e7       # PST opens a branch by giving it this reactance (charging stays)
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    """Solved power flow as the dynamic model needs it, arrays of shape (n_bus,):
+    V complex bus voltage (pu), S_gen and S_load complex generation and load (pu)."""
+
+    V: np.ndarray
+    S_gen: np.ndarray
+    S_load: np.ndarray
+
+    @classmethod
+    def from_bus_matrix(cls, bus: np.ndarray) -> "OperatingPoint":
+        """From a solved PST bus matrix (columns: number, |V|, angle deg, Pg, Qg, Pl, Ql...)."""
+        bus = np.asarray(bus, float)
+        V = bus[:, 1] * np.exp(1j * np.deg2rad(bus[:, 2]))
+        return cls(V=V, S_gen=bus[:, 3] + 1j * bus[:, 4], S_load=bus[:, 5] + 1j * bus[:, 6])
+
+
+@dataclass(frozen=True)
+class StageConfig:
+    """Network configuration of one interval (hashable; built by `stabctl.dynamics.events`).
+
+    faults: (bus index, shunt admittance) pairs replacing the bus shunt (PST sw_con fault);
+    opened: branch rows opened by PST's x = 1e7 (line charging stays connected);
+    fault_feeds: (branch row, far-end bus number, still_faulted) for a line cleared at the
+        near end: a copy of the line feeds a fault node from the far end until the far end
+        clears too (PST y_switch);
+    tripped_machines: machine indices disconnected; load_steps: (bus index, admittance).
+    """
+
+    faults: tuple = ()
+    opened: tuple = ()
+    fault_feeds: tuple = ()
+    tripped_machines: tuple = ()
+    load_steps: tuple = ()
+
+
+@dataclass
+class Layout:
+    """Slices of the flat state vector: machines (6, n_mac), exciters (exc_rows, n_exc),
+    pss (pss_rows, n_pss), governors (tg_rows, n_tg), each stored state-major; the rows
+    are the most slots any exciter / PSS / governor type of the case uses."""
+
+    n_mac: int
+    n_exc: int
+    n_pss: int
+    n_tg: int
+    exc_rows: int = 3
+    pss_rows: int = 3
+    tg_rows: int = 3
+    blocks: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        start = 0
+        for name, rows, n in (("mac", 6, self.n_mac), ("exc", self.exc_rows, self.n_exc),
+                              ("pss", self.pss_rows, self.n_pss),
+                              ("tg", self.tg_rows, self.n_tg)):
+            self.blocks[name] = (slice(start, start + rows * n), (rows, n))
+            start += rows * n
+        self.size = start
+
+    def view(self, x, name):
+        sl, shape = self.blocks[name]
+        return x[sl].reshape(shape)
+
+
+#: Model conventions: "ieee" (default; limiters as IEEE Std 421.5-2016, results converge
+#: as the step shrinks) and "pstess" (PSTess 1.1 bit for bit, quirks included).
+CONVENTIONS = ("ieee", "pstess")
+
+
+def check_conventions(conventions: str) -> str:
+    """Return `conventions` if it is one of CONVENTIONS, else raise InputError."""
+    if conventions not in CONVENTIONS:
+        raise InputError(f"conventions must be one of {', '.join(CONVENTIONS)}, "
+                         f"got {conventions!r}")
+    return conventions
+
+
+class DynamicModel:
+    """Dynamic model of a case at an operating point.
+
+    Args:
+        case: the case; op: its solved power flow; injection_buses: extra bus numbers to
+            keep in the reduced network for device injections (storage); conventions:
+            "ieee" (limiters as IEEE Std 421.5-2016) or "pstess" (PSTess 1.1 exactly,
+            docs/pst_models.md 2.1); docs/conventions.md lists the differences.
+    Raises:
+        CaseError: unsupported models, limits violated at the initial point, a machine bus
+            without generation; InputError: unknown conventions.
+    """
+
+    def __init__(self, case: Case, op: OperatingPoint, injection_buses=(),
+                 conventions: str = "ieee"):
+        self.case, self.op = case, op
+        self.conventions = check_conventions(conventions)
+        self.mp = mac.machine_params(case)
+        self.ep = exc.exciter_params(case)
+        self.pp = pss_.pss_params(case)
+        self.gp = gov.governor_params(case)
+        self.layout = Layout(self.mp.n, self.ep.n, self.pp.n, self.gp.n,
+                             self.ep.n_slots(), self.pp.n_slots(), self.gp.n_slots())
+        self._setup_loads(injection_buses)
+        self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
+        self._initialise()
+
+    # -- loads and kept buses ---------------------------------------------------------
+    def _setup_loads(self, injection_buses):
+        case, op = self.case, self.op
+        V0 = np.abs(op.V)
+        lc = case.loads.matrix()
+        frac = np.zeros((case.n_bus, 4))
+        if lc.size:
+            frac[case.bus_indices(lc[:, 0])] = lc[:, 1:5]
+        has_mac = np.zeros(case.n_bus, bool)
+        has_mac[self.mp.bus_idx] = True
+        S_L = op.S_load - np.where(has_mac, 0.0, op.S_gen)   # generation without machine
+        fP, fQ, fIP, fIQ = frac.T
+        S_Z = (1 - fP - fIP) * S_L.real + 1j * (1 - fQ - fIQ) * S_L.imag
+        self.y_load = np.conj(S_Z) / V0 ** 2
+        extra = case.bus_indices(list(injection_buses)) if len(injection_buses) else []
+        nc = np.asarray(case.bus_indices(lc[:, 0]) if lc.size else [], int)
+        self.nc_idx = np.unique(np.concatenate([nc, np.asarray(extra, int)])).astype(int)
+        i = self.nc_idx
+        S_P = fP[i] * S_L[i].real + 1j * fQ[i] * S_L[i].imag
+        S_I = fIP[i] * S_L[i].real + 1j * fIQ[i] * S_L[i].imag
+        self.nc = NonConformingLoads(S_P=S_P, I0=S_I / V0[i],
+                                     Y_low=np.conj(S_P + S_I) / V0[i] ** 2)
+
+    # -- network stages ---------------------------------------------------------------
+    def network(self, config: StageConfig = StageConfig()) -> ReducedNetwork:
+        """Reduced network of a stage (cached)."""
+        if config not in self._stage_cache:
+            self._stage_cache[config] = self._reduce(config)
+        return self._stage_cache[config]
+
+    def _reduce(self, config: StageConfig) -> ReducedNetwork:
+        case = self.case
+        bus = case.buses.matrix().copy()
+        line = case.branches.matrix().copy()
+        y_shunt = self.y_load.copy()
+        for b, y in config.faults:
+            bus[b, 7], bus[b, 8] = y.real, y.imag
+        for b, y in config.load_steps:
+            y_shunt[b] += y
+        for row in config.opened:
+            line[row, 3] = OPEN_X
+        new_bus, new_line = [], []
+        next_number = bus[:, 0].max() + 10
+        for row, far, faulted in config.fault_feeds:
+            line[row, 3] = OPEN_X
+            nb = np.zeros(bus.shape[1])
+            nb[[0, 1, 9]] = next_number, 1.0, 3
+            nb[8] = -FAULT_B if faulted else 0.0
+            nl = line[row].copy()
+            nl[0], nl[1] = next_number, far
+            nl[3] = case.branches.x[row] if faulted else OPEN_X
+            new_bus.append(nb)
+            new_line.append(nl)
+            next_number += 10
+        if new_bus:
+            bus = np.vstack([bus, new_bus])
+            line = np.vstack([line, new_line])
+            y_shunt = np.concatenate([y_shunt, np.zeros(len(new_bus))])
+        stage = case.replace(buses=BusTable.from_matrix(bus), branches=BranchTable.from_matrix(line))
+        online = np.ones(self.mp.n, bool)
+        online[list(config.tripped_machines)] = False
+        _check_islands(stage, self.mp.bus_idx[online], case.n_bus)
+        return reduce_network(stage, y_shunt, self.mp.y_internal, self.mp.bus_idx, online,
+                              self.nc_idx, case.n_bus)
+
+    # -- initialisation ---------------------------------------------------------------
+    def _initialise(self):
+        mp, ep, op, L = self.mp, self.ep, self.op, self.layout
+        xm, self.vex0, self.pmech0 = mac.initialise(mp, op.V, op.S_gen)
+        self.eqp0 = xm[2].copy()
+        x = np.zeros(L.size)
+        L.view(x, "mac")[:] = xm
+        eterm0 = np.abs(op.V[mp.bus_idx])
+        S0 = op.S_gen[mp.bus_idx]
+        S0 = S0.real * mp.pfrac + 1j * S0.imag * mp.qfrac
+        em = ep.mac
+        theta0 = np.angle(op.V[mp.bus_idx])
+        VB0 = np.array([exc.st3_source_voltage(ep.KP[i], ep.KI[i], ep.XL[i], ep.KC[i],
+                                               eterm0[m], theta0[m], S0.real[m], S0.imag[m],
+                                               mp.mac_pot[m], self.vex0[m], True)
+                        for i, m in enumerate(em)])
+        xe, self.Vref, self.ep = exc.initialise(ep, self.vex0[em], eterm0[em], VB0)
+        ep = self.ep
+        L.view(x, "exc")[:] = xe
+        L.view(x, "pss")[:] = pss_.initialise(self.pp, *pss_.pss_inputs(self.pp, xm[1], S0.real,
+                                                                       mp.mac_pot))
+        xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac])
+        L.view(x, "tg")[:] = xg
+        self.x0 = x
+        self.V_nc0 = op.V[self.nc_idx].astype(complex)
+        self.pss_of_exc = np.full(ep.n, -1)
+        for k, m in enumerate(self.pp.mac):
+            hit = np.nonzero(ep.mac == m)[0]
+            if hit.size == 0:
+                raise CaseError(f"pss_con row {k + 1}: machine has no exciter for the PSS output")
+            self.pss_of_exc[hit] = k
+        self.params = KernelParams(
+            MP=mp.packed(self.eqp0), basrad=mp.basrad, EP=ep.packed(self.Vref),
+            SP=self.pp.packed(), GP=self.gp.packed(self.Pref), pss_of_exc=self.pss_of_exc,
+            exc_rows=L.exc_rows, pss_rows=L.pss_rows, tg_rows=L.tg_rows,
+            mac_bus=mp.bus_idx.astype(np.int64), vex0=self.vex0, pmech0=self.pmech0,
+            S_P=self.nc.S_P.astype(complex), I0=self.nc.I0.astype(complex),
+            Y_low=self.nc.Y_low.astype(complex), ieee=self.conventions == "ieee",
+            n_mac=L.n_mac, n_exc=L.n_exc, n_pss=L.n_pss, n_tg=L.n_tg)
+        dx, _ = self.evaluate(self.x0.copy(), self.network(StageConfig()), self.V_nc0)
+        k = int(np.argmax(np.abs(dx)))
+        #: largest |derivative| at t = 0 and the state it belongs to (initialisation check)
+        self.initial_residual = (float(abs(dx[k])), self.state_name(k))
+
+    def state_name(self, k: int) -> str:
+        """Name of flat state index k, e.g. 'mac.omega.G3' or 'exc.VTR.G1'."""
+        owners = {"mac": np.arange(self.mp.n), "exc": self.ep.mac, "pss": self.pp.mac,
+                  "tg": self.gp.mac}
+        names = {"mac": lambda i: mac.STATE_NAMES,
+                 "pss": lambda i: pss_.STATE_NAMES[int(self.pp.kind[i])],
+                 "exc": lambda i: exc.STATE_NAMES[int(self.ep.kind[i])],
+                 "tg": lambda i: gov.STATE_NAMES[int(self.gp.kind[i])]}
+        for block, (sl, (rows, n)) in self.layout.blocks.items():
+            if sl.start <= k < sl.stop:
+                r, i = divmod(k - sl.start, n)
+                number = int(self.case.machines.number[owners[block][i]])
+                own = names[block](i)
+                return f"{block}.{own[r] if r < len(own) else f'unused{r}'}.G{number}"
+        raise IndexError(f"state index {k} out of range")
+
+    # -- one evaluation -----------------------------------------------------------------
+    def evaluate(self, x, net: ReducedNetwork, V_nc_guess, S_extra=None, want_vbus=True):
+        """All derivatives at state x with network stage `net` (PST flag 1 + 2).
+
+        Args:
+            x: flat state vector (modified in place where PST clamps limited states).
+            net: reduced network of the stage; V_nc_guess: kept-bus voltages to start the
+                load iteration from; S_extra: extra complex power drawn at the kept buses
+                (storage devices), shape (n_nc,), or None; want_vbus: also compute every
+                bus voltage (else only the machine buses are valid in V_bus).
+        Returns:
+            (dx flat array, Outputs).
+        Raises:
+            SimulationError: the non-conforming load iteration did not converge.
+        """
+        ko = kernel_outputs(self.mp.n, self.case.n_bus)
+        S = np.zeros(self.nc_idx.size, complex) if S_extra is None else np.asarray(S_extra, complex)
+        kept = KeptBuses(V=np.array(V_nc_guess, complex), held=np.zeros(S.size, np.bool_),
+                         S_extra=S)
+        dx = np.zeros_like(x)  # slots no kernel writes (e.g. a short PSS in long slots) stay 0
+        if evaluate_kernel(x, self.params, kernel_network(net), kept, want_vbus, dx, ko) < 0:
+            raise SimulationError("non-conforming load iteration did not converge")
+        return dx, Outputs(pelect=ko.pelect, qelect=ko.qelect, eterm=ko.eterm, V_bus=ko.V_bus,
+                           V_nc=kept.V, efd=ko.efd, pmech=ko.pmech, cur=ko.cur)
+
+
+class KernelParams(NamedTuple):
+    """Packed parameters of every model for the compiled kernels (see each model's
+    `packed`), the non-conforming load data of the kept buses (S_P, I0, Y_low, (n_nc,)
+    complex pu) and the numbers of machines, exciters, PSSs and governors (the state
+    layout, `Layout`)."""
+
+    MP: np.ndarray
+    basrad: float
+    EP: np.ndarray
+    SP: np.ndarray
+    GP: np.ndarray
+    pss_of_exc: np.ndarray
+    exc_rows: int
+    pss_rows: int
+    tg_rows: int
+    mac_bus: np.ndarray
+    vex0: np.ndarray
+    pmech0: np.ndarray
+    S_P: np.ndarray
+    I0: np.ndarray
+    Y_low: np.ndarray
+    ieee: bool
+    n_mac: int
+    n_exc: int
+    n_pss: int
+    n_tg: int
+
+
+class KernelNetwork(NamedTuple):
+    """The matrices of a reduced network stage for the kernels (`ReducedNetwork`; in
+    `stabctl.dynamics.simulation.integrate` each is stacked by stage on a first axis):
+    Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 and Z22 = inv(Y22)
+    (n_nc, n_nc), R (n_bus, n_mac + n_nc); complex pu on the system base."""
+
+    Y11: np.ndarray
+    Y12: np.ndarray
+    Y21: np.ndarray
+    Y22: np.ndarray
+    Z22: np.ndarray
+    R: np.ndarray
+
+
+def kernel_network(net: ReducedNetwork) -> KernelNetwork:
+    """The kernel matrices of one reduced network stage.
+
+    Parameters
+    ----------
+    net : ReducedNetwork
+        A stage from `DynamicModel.network`.
+
+    Returns
+    -------
+    KernelNetwork
+        The same arrays (no copy).
+    """
+    return KernelNetwork(*(getattr(net, f) for f in KernelNetwork._fields))
+
+
+def stacked_networks(nets) -> KernelNetwork:
+    """The stages' matrices stacked on a first axis (stage index), C-contiguous.
+
+    Parameters
+    ----------
+    nets : sequence of ReducedNetwork, length n_stage
+        Stages of equal dimensions.
+
+    Returns
+    -------
+    KernelNetwork
+        Each field of shape (n_stage, ...) of the single-stage shape.
+    """
+    return KernelNetwork(*(np.ascontiguousarray(np.stack([getattr(n, f) for n in nets]))
+                           for f in KernelNetwork._fields))
+
+
+class KeptBuses(NamedTuple):
+    """State of the kept (non-conforming load and device) buses through an evaluation,
+    each (n_nc,): V the complex voltages (pu; the guess in, the solution out), held the
+    loads held at their impedance model (`stabctl.network.solution.solve_nc`; updated in
+    place), S_extra the complex power the devices draw there (pu, + absorbs)."""
+
+    V: np.ndarray
+    held: np.ndarray
+    S_extra: np.ndarray
+
+
+class KernelOutputs(NamedTuple):
+    """Algebraic outputs written by `evaluate_kernel`: per machine cur (complex, system
+    base), pelect, qelect (system base), eterm, efd, pmech (machine base), all (n_mac,);
+    V_bus (n_bus,) complex pu."""
+
+    cur: np.ndarray
+    pelect: np.ndarray
+    qelect: np.ndarray
+    eterm: np.ndarray
+    efd: np.ndarray
+    pmech: np.ndarray
+    V_bus: np.ndarray
+
+
+@njit(cache=True)
+def kernel_outputs(nm, nb):
+    """Output buffers for `evaluate_kernel`: (n_mac,) each, V_bus (nb,) zeros.
+
+    Parameters
+    ----------
+    nm : int
+        Number of machines.
+    nb : int
+        Number of buses.
+
+    Returns
+    -------
+    KernelOutputs
+    """
+    return KernelOutputs(np.empty(nm, np.complex128), np.empty(nm), np.empty(nm),
+                         np.empty(nm), np.empty(nm), np.empty(nm), np.zeros(nb, np.complex128))
+
+
+@njit(cache=True)
+def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
+    """One evaluation in PSTess's order (docs/pst_models.md 7.2): machine flag 1, network,
+    PSS / exciter / governor flag 1, then flag 2 of machines, PSS, exciters, governors.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n_state,)
+        Flat state (`Layout`); limited states are clamped in place as PST does.
+    p : KernelParams
+        Model parameters and sizes.
+    net : KernelNetwork
+        Matrices of the network stage.
+    kept : KeptBuses
+        Kept-bus voltages (guess in, solution out) and held loads, updated in place; the
+        device powers drawn there.
+    want_vbus : bool
+        Compute every bus voltage (else only the machine buses of out.V_bus are valid).
+    dx : ndarray, shape (n_state,)
+        Written with the derivatives (slots no model uses are left as they are).
+    out : KernelOutputs
+        Written with the algebraic outputs.
+
+    Returns
+    -------
+    int
+        The load-iteration count, -1 without convergence.
+    """
+    nm, ne, nps, ng = p.n_mac, p.n_exc, p.n_pss, p.n_tg
+    Y11, Y12, Y21, Y22, Z22, R = net
+    V_nc, held, S_extra = kept
+    cur, pelect, qelect, eterm, efd, pmech, V_bus = out
+    o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
+    xm, dxm = x[:o].reshape(6, nm), dx[:o].reshape(6, nm)
+    xe, dxe = x[o:o + re * ne].reshape(re, ne), dx[o:o + re * ne].reshape(re, ne)
+    o += re * ne
+    xp, dxp = x[o:o + rp * nps].reshape(rp, nps), dx[o:o + rp * nps].reshape(rp, nps)
+    o += rp * nps
+    xg, dxg = x[o:o + rg * ng].reshape(rg, ng), dx[o:o + rg * ng].reshape(rg, ng)
+    psi = np.empty(nm, np.complex128)
+    mac.internal_voltage(p.MP, xm, psi)
+    it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, held)
+    if it < 0:
+        return -1
+    cur[:] = Y11 @ psi + Y12 @ V_nc
+    z = np.concatenate((psi, V_nc))
+    if want_vbus:
+        V_bus[:] = R @ z
+    else:
+        for m in range(nm):
+            V_bus[p.mac_bus[m]] = R[p.mac_bus[m]] @ z
+    pss_out = np.empty(nps)
+    for k in range(nps):
+        m = int(p.SP[k, pss_.S_MAC])
+        pe = (psi[m] * np.conj(cur[m])).real * p.MP[m, mac.K_POT]
+        pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, xm[1, m], pe, dxp)
+    vex = p.vex0.copy()
+    efd_alg = np.empty(ne)
+    pss_exc = np.zeros(ne)
+    for i in range(ne):
+        m = int(p.EP[i, exc.E_MAC])
+        if p.pss_of_exc[i] >= 0:
+            pss_exc[i] = pss_out[p.pss_of_exc[i]]
+        ed, eq, cd, cq = mac.stator_without_speed(p.MP, xm, cur, m)
+        et = np.hypot(ed, eq)
+        VB = 1.0
+        if p.EP[i, exc.E_KIND] == exc.ST3:
+            KP = p.EP[i, exc.E_KPR] + 1j * p.EP[i, exc.E_KPI]
+            VB = exc.st3_source_voltage(KP, p.EP[i, exc.E_KI], p.EP[i, exc.E_XL],
+                                        p.EP[i, exc.E_KC], et, np.angle(V_bus[p.mac_bus[m]]),
+                                        eq * cq + ed * cd, eq * cd - ed * cq, p.MP[m, mac.K_POT],
+                                        mac.st3_field_current(p.MP, xm, cur, m), False)
+        ifd = mac.field_current(p.MP, xm, cur, m) if p.EP[i, exc.E_KIND] == exc.ST1 else 0.0
+        efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB, ifd, p.ieee)
+        vex[m] = efd_alg[i]
+    pmech[:] = p.pmech0
+    for k in range(ng):
+        m = int(p.GP[k, gov.G_MAC])
+        pmech[m] = gov.pmech(p.GP, xg, k, xm[1, m])
+    mac.derivatives(p.MP, p.basrad, xm, cur, vex, pmech, dxm, pelect, qelect, eterm)
+    efd[:] = p.vex0
+    for i in range(ne):
+        m = int(p.EP[i, exc.E_MAC])
+        exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], dxe, p.ieee)
+        efd[m] = exc.recorded_efd(p.EP, xe, i, efd_alg[i])
+    for k in range(ng):
+        gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G_MAC])], dxg)
+    return it
+
+
+def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:
+    """Raise InputError when a stage leaves buses without a path to any online machine
+    (PST cannot solve such an island either); names the buses."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    if len(stage.machines) == 0:
+        raise InputError(f"case '{stage.name}' has no machines (mac_con is empty): a dynamic "
+                         "run or linearisation needs at least one")
+    br = stage.branches
+    closed = br.x < OPEN_X / 10
+    f, t = stage.bus_indices(br.from_bus[closed]), stage.bus_indices(br.to_bus[closed])
+    n = stage.n_bus
+    graph = coo_matrix((np.ones(f.size), (f, t)), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    live = np.isin(label, label[source_buses])
+    dead = np.nonzero(~live[:n_orig])[0]
+    if dead.size:
+        raise InputError("the disturbance islands bus(es) "
+                         f"{[int(b) for b in stage.buses.number[dead]]} from every generator")
+
+
+@dataclass
+class Outputs:
+    """Algebraic outputs of one evaluation: per machine pelect, qelect (system base), eterm,
+    efd, pmech (machine base), cur (complex, system base); V_bus (n_bus,), V_nc."""
+
+    pelect: np.ndarray
+    qelect: np.ndarray
+    eterm: np.ndarray
+    V_bus: np.ndarray
+    V_nc: np.ndarray
+    efd: np.ndarray
+    pmech: np.ndarray
+    cur: np.ndarray

@@ -1,0 +1,302 @@
+"""Labelled results of a dynamic run, with CSV and binary (.npz) export.
+
+Columns of the CSV: `t` (s), then per machine k (number as in the
+data) `speed_pu.G<k>`, `angle_rad.G<k>` (absolute, synchronous frame, as PSTess),
+`pelect_pu.G<k>` (system base), `pmech_pu.G<k>` (machine base), `efd_pu.G<k>`, per bus n
+`vmag_pu.B<n>`, `vang_rad.B<n>`, and per storage device d `pesd_pu.D<d>` (+ absorbs).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from stabctl.dynamics.coi import coi_angle, coi_speed
+from stabctl.parallel import atomic_write
+
+SERIES = ("speed", "angle", "pelect", "pmech", "efd")
+SERIES_UNITS = {"speed": "speed_pu", "angle": "angle_rad", "pelect": "pelect_pu",
+                "pmech": "pmech_pu", "efd": "efd_pu"}
+
+
+@dataclass
+class SimulationResult:
+    """Trajectories of one run (`Simulator.run`), per machine, bus and storage device.
+
+    n_t is the number of recorded times (the integration grid, which lands on every event
+    time; a time appears twice only around a zero-length interval, e.g. a fault cleared at
+    both ends at the same instant, as PSTess), n_mac the number of machines, n_bus
+    of buses, n_dev of storage devices.
+    The loss-of-synchronism verdict uses the centre of inertia (paper eq. 40, weights
+    `inertia`).
+
+    Attributes
+    ----------
+    t : ndarray, shape (n_t,)
+        Times, s, non-decreasing, from 0 to the end of the run (or its stop).
+    machines : ndarray of int, shape (n_mac,)
+        Machine numbers as in the data, the column order of the per-machine arrays.
+    buses : ndarray of int, shape (n_bus,)
+        Bus numbers as in the data, the column order of `vmag` and `vang`.
+    speed : ndarray, shape (n_t, n_mac)
+        Rotor speeds, pu (1 = synchronous).
+    angle : ndarray, shape (n_t, n_mac)
+        Rotor angles, rad, absolute (synchronous reference frame, as PSTess).
+    pelect : ndarray, shape (n_t, n_mac)
+        Electrical power, pu on the system base.
+    pmech : ndarray, shape (n_t, n_mac)
+        Mechanical power, pu on the machine base.
+    efd : ndarray, shape (n_t, n_mac)
+        Field voltage, pu.
+    vmag : ndarray, shape (n_t, n_bus)
+        Bus voltage magnitudes, pu.
+    vang : ndarray, shape (n_t, n_bus)
+        Bus voltage angles, rad.
+    inertia : ndarray, shape (n_mac,)
+        COI weights H * MVA per machine, MW s (MJ).
+    devices : ndarray of int, shape (n_dev,), optional
+        Storage device numbers (1, 2, ... in the fleet's order); empty (default) without
+        storage.
+    pesd : ndarray, shape (n_t, n_dev), or None, optional
+        Storage device powers, pu on the system base (+ absorbs); None (default) without
+        storage.
+    stable : bool, optional
+        False when some rotor angle left the COI by more than the separation limit
+        (`Simulator.run`, default pi rad); default True.
+    t_separation : float or None, optional
+        First recorded time the limit was exceeded, s; None (default) if never.
+    separated : list of int, optional
+        Numbers of the machines that lost synchronism (the smaller coherent group,
+        `stabctl.dynamics.simulation.separated_group`); empty (default) if none.
+    meta : dict, optional
+        Run description: ``case``, ``conventions``, ``wall_time_s`` (s),
+        ``max_initial_derivative`` and its state, and with storage ``switchings`` (the
+        switching log, see `switching_records`) and ``storage`` (per-device figures:
+        switchings, chattering, energy absorbed / delivered in MJ, peak power in MW).
+    """
+
+    t: np.ndarray
+    machines: np.ndarray
+    buses: np.ndarray
+    speed: np.ndarray
+    angle: np.ndarray
+    pelect: np.ndarray
+    pmech: np.ndarray
+    efd: np.ndarray
+    vmag: np.ndarray
+    vang: np.ndarray
+    inertia: np.ndarray
+    devices: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    pesd: np.ndarray | None = None
+    stable: bool = True
+    t_separation: float | None = None
+    separated: list = field(default_factory=list)
+    meta: dict = field(default_factory=dict)
+
+    # -- centre of inertia (paper eq. 40) ----------------------------------------------
+    @property
+    def coi_angle(self) -> np.ndarray:
+        """Inertia-weighted mean rotor angle (rad), shape (n_t,)."""
+        return coi_angle(self.angle, self.inertia)
+
+    @property
+    def coi_speed(self) -> np.ndarray:
+        """Inertia-weighted mean speed (pu), shape (n_t,)."""
+        return coi_speed(self.speed, self.inertia)
+
+    @property
+    def max_angle_spread(self) -> float:
+        """Largest |delta_i - delta_COI| over the run (rad)."""
+        return float(np.max(np.abs(self.angle - self.coi_angle[:, None])))
+
+    def speed_at(self, t: np.ndarray) -> np.ndarray:
+        """Rotor speeds at given times, by linear interpolation in the trajectory.
+
+        Parameters
+        ----------
+        t : ndarray, shape (n,)
+            Times, s, within ``[t[0], t[-1]]`` (outside: the end values).
+
+        Returns
+        -------
+        ndarray, shape (n, n_mac)
+            Speeds, pu; at a time recorded twice (a zero-length interval) the value
+            after it.
+        """
+        keep = np.r_[np.diff(self.t) > 0, True]
+        return np.stack([np.interp(t, self.t[keep], self.speed[keep, k])
+                         for k in range(self.speed.shape[1])], axis=1)
+
+    def machine(self, number: int) -> int:
+        """Column index of a machine in the per-machine arrays.
+
+        Parameters
+        ----------
+        number : int
+            Machine number as in the data.
+
+        Returns
+        -------
+        int
+            0-based column of `speed`, `angle`, `pelect`, `pmech`, `efd`.
+
+        Raises
+        ------
+        KeyError
+            The machine is not in the result; the message names it.
+        """
+        hit = np.nonzero(self.machines == number)[0]
+        if hit.size == 0:
+            raise KeyError(f"machine {number} is not in the result")
+        return int(hit[0])
+
+    def bus(self, number: int) -> int:
+        """Column index of a bus in `vmag` and `vang`.
+
+        Parameters
+        ----------
+        number : int
+            Bus number as in the data.
+
+        Returns
+        -------
+        int
+            0-based column of `vmag` and `vang`.
+
+        Raises
+        ------
+        KeyError
+            The bus is not in the result; the message names it.
+        """
+        hit = np.nonzero(self.buses == number)[0]
+        if hit.size == 0:
+            raise KeyError(f"bus {number} is not in the result")
+        return int(hit[0])
+
+    def summary(self) -> dict:
+        """Verdict and figures, as the CLI prints them with ``--json``.
+
+        Returns
+        -------
+        dict
+            ``stable`` (bool), ``t_separation_s`` (s or None), ``separated_machines``
+            (machine numbers), ``max_angle_spread_rad`` (largest |delta_i - delta_COI|,
+            rad), ``t_end_s`` (last recorded time, s), ``n_steps`` (recorded times - 1),
+            then every entry of `meta`.
+        """
+        return {"stable": self.stable, "t_separation_s": self.t_separation,
+                "separated_machines": [int(m) for m in self.separated],
+                "max_angle_spread_rad": self.max_angle_spread,
+                "t_end_s": float(self.t[-1]), "n_steps": int(self.t.size - 1), **self.meta}
+
+    def switching_records(self) -> list[dict]:
+        """The storage switching log as records with named fields.
+
+        Returns
+        -------
+        list of dict
+            One record per row (t, device, mode, relative speed) of
+            ``meta["switchings"]``, in time order: ``t_s`` (s), ``device`` (number),
+            ``bus`` and ``machine`` of the device when known (else None), ``mode``
+            ("absorb", "idle", "inject", or the commanded set-point in units of the
+            rating as text), ``mode_code`` (+1, 0, -1, or that set-point) and
+            ``rel_speed_hz`` (the device's machine speed minus the COI speed seen by its
+            controller, Hz).  Empty without storage.
+        """
+        info = {int(d["device"]): d for d in self.meta.get("storage", [])}
+        names = {1: "absorb", 0: "idle", -1: "inject"}
+        out = []
+        for t, dev, mode, rel in self.meta.get("switchings", []):
+            d, m = info.get(int(dev), {}), float(mode)
+            code = int(m) if m.is_integer() else m
+            out.append({"t_s": float(t), "device": int(dev), "bus": d.get("bus"),
+                        "machine": d.get("machine"), "mode": names.get(code, f"{m:g}"),
+                        "mode_code": code, "rel_speed_hz": float(rel)})
+        return out
+
+    # -- export -------------------------------------------------------------------------
+    def columns(self) -> tuple[list[str], np.ndarray]:
+        """CSV header and data matrix (column names in the module docstring).
+
+        Returns
+        -------
+        names : list of str
+            Column names, n_columns = 1 + 5 n_mac + 2 n_bus (+ n_dev with storage): ``t``,
+            then ``speed_pu.G<k>``, ``angle_rad.G<k>``, ``pelect_pu.G<k>``,
+            ``pmech_pu.G<k>``, ``efd_pu.G<k>`` per machine k, ``vmag_pu.B<n>`` and
+            ``vang_rad.B<n>`` per bus n, ``pesd_pu.D<d>`` per device d.
+        data : ndarray, shape (n_t, n_columns)
+            The values, units as in the names (s, pu, rad).
+        """
+        names, blocks = ["t"], [self.t[:, None]]
+        for s in SERIES:
+            names += [f"{SERIES_UNITS[s]}.G{int(k)}" for k in self.machines]
+            blocks.append(getattr(self, s))
+        names += [f"vmag_pu.B{int(n)}" for n in self.buses]
+        names += [f"vang_rad.B{int(n)}" for n in self.buses]
+        blocks += [self.vmag, self.vang]
+        if self.pesd is not None and self.devices.size:
+            names += [f"pesd_pu.D{int(d)}" for d in self.devices]
+            blocks.append(self.pesd)
+        return names, np.hstack(blocks)
+
+    def to_csv(self, path: str | os.PathLike) -> Path:
+        """Write the trajectories as CSV (`columns`; 10 significant digits), atomically
+        (temporary file beside it, then rename).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The CSV file; its directory is created if missing.
+
+        Returns
+        -------
+        Path
+            `path`.
+        """
+        names, data = self.columns()
+        return atomic_write(path, lambda f: np.savetxt(f, data, delimiter=",", header=",".join(names),
+                                                       comments="", fmt="%.10g"))
+
+    def to_npz(self, path: str | os.PathLike) -> Path:
+        """Write every array and the verdict to a compressed .npz, atomically (temporary
+        file beside it, then rename); `meta` is not written.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The .npz file; its directory is created if missing.
+
+        Returns
+        -------
+        Path
+            `path`.
+        """
+        arrays = {k: v for k, v in self.__dict__.items() if isinstance(v, np.ndarray)}
+        arrays["verdict"] = np.array([self.stable, self.t_separation or np.nan], float)
+        arrays["separated"] = np.asarray(self.separated, int)
+        return atomic_write(path, lambda f: np.savez_compressed(f, **arrays), mode="wb")
+
+    @classmethod
+    def from_npz(cls, path: str | os.PathLike) -> "SimulationResult":
+        """Read a result written by `to_npz`.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The .npz file.
+
+        Returns
+        -------
+        SimulationResult
+            The arrays and verdict as written; `meta` is empty (it is not stored).
+        """
+        with np.load(path) as z:
+            d = {k: z[k] for k in z.files}
+        stable, tsep = d.pop("verdict")
+        sep = list(d.pop("separated"))
+        return cls(**d, stable=bool(stable), t_separation=None if np.isnan(tsep) else tsep,
+                   separated=sep)

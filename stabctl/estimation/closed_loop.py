@@ -1,0 +1,337 @@
+"""Storage control with the speed estimator in the loop (closed-loop half of the estimation study).
+
+The paper's ESDs (Table 3) act on f_i - f_COI.  Here they see it only through PMU frames:
+at each reporting instant t_f = k / rate the simulation (`Simulator.run_commanded`) is
+advanced to t_f, the frame of every generator's PMU is made from the trajectory so far
+(`stabctl.estimation.pmu` model: true values at t_f plus the C37.118.1 noise of a seeded stream),
+fed to an estimator, and the Table 3 modes (`stabctl.storage.devices.desired_mode`, on the
+estimator's `forecast` over the latency) take effect at t_f + latency (docs/estimation.md 5).
+
+Estimators (`ESTIMATORS`): ``ideal`` (true rotor speeds at t_f, no noise, no forecast),
+``raw`` (the PMU frequency, the last valid frame held), ``kf`` (`FrequencyKF`, its estimate
+held over the latency), ``ekf`` (`SwingEKF`, forecast with the swing equation).  The voltage
+gate (0.8 pu) is applied by the devices themselves.  Optional ambient load fluctuation
+(`stabctl.estimation.ambient`) rides on the same commanded fleet.
+
+Frames are made incrementally: the noise of the whole run is drawn once per seed (the same
+draws as `pmu.measure` gives for a run of that length), and each frame's true values come
+from the last few grid points only, so a run costs O(frames).  Unlike the offline model
+(centred differences on the whole trajectory), the bus frequency is causal: the mean over
+the last two cycles, as a P-class PMU estimates it; a derivative at the end of the
+trajectory would spike at every ESD switching and feed those spikes back.  The first frame
+(t = 0, before the run has a recorded point) is skipped: the devices stay idle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from stabctl.estimation import filters as es
+from stabctl.storage import control as law
+from stabctl.storage import devices as st
+from stabctl.estimation.ambient import AmbientLoad
+from stabctl.errors import InputError
+from stabctl.network.ybus import branch_admittances
+from stabctl.estimation.pmu import Frame, PhasorTruth, PMUSettings, machine_pmus, measure
+from stabctl.dynamics.results import SimulationResult
+
+ESTIMATORS = ("ideal", "raw", "kf", "ekf")
+PMU_WINDOW_CYCLES = 2.0    # frequency estimation window of a P-class PMU (C37.118.1 annex)
+
+
+@dataclass
+class Diagnostics:
+    """What the controller saw, per frame: t (n_f,) s time stamps; rel (n_f, n_mac) the
+    relative speeds f_i - f_COI it acted on (Hz, the estimator's forecast to t + latency); modes
+    (n_f, n_dev) the commanded modes; mac: each device's machine index; latency (s), f0
+    (Hz), coi ("system" or "rest") of the loop."""
+
+    t: np.ndarray
+    rel: np.ndarray
+    modes: np.ndarray
+    mac: np.ndarray
+    latency: float
+    f0: float
+    coi: str
+
+
+class LoopController:
+    """The `decide(t_f, partial)` callback of `Simulator.run_commanded`.
+
+    case: the case; devices: the fleet's `StorageDevice`s; estimator: one of
+    `ESTIMATORS`; settings: the PMUs (rate, noise, latency = the loop's latency); seed:
+    noise stream; t_end: run end (s, the noise is drawn for frames in [0, t_end]);
+    control: `BangBangCOI` giving the deadband, hysteresis and COI of Table 3 (its voltage
+    gate is ignored here: the devices apply theirs); at: PMUs at the "terminal" or "hv"
+    buses.
+    """
+
+    def __init__(self, case, devices, estimator: str, settings: PMUSettings, seed: int,
+                 t_end: float, control: law.BangBangCOI = law.BangBangCOI(),
+                 at: str = "terminal"):
+        if estimator not in ESTIMATORS:
+            raise InputError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {estimator!r}")
+        self.case, self.estimator, self.settings = case, estimator, settings
+        self.coi = control.coi
+        self.pmus = machine_pmus(case, at)
+        self.models = es.machine_models(case, self.pmus)
+        self.cols = case.bus_indices([p.bus for p in self.pmus])
+        self.C = current_map(case, self.pmus)
+        self.noise = _unit_noise(self.pmus, settings, seed, t_end, case.freq_hz)
+        self.sa = st.pack(st.StorageFleet(tuple(devices), replace(control, v_gate_pu=0.0)),
+                          case, np.arange(case.n_bus))
+        self.filter = _make_filter(estimator, self.models, settings)
+        self.mode = np.zeros(len(devices), np.int64)
+        self.held = np.full(self.models.n, np.nan)
+        self.rows: list = []
+
+    def __call__(self, t_f: float, partial: SimulationResult) -> np.ndarray:
+        """Modes (n_dev,) to take effect at t_f + latency."""
+        speed = self._speeds(t_f, partial)
+        rel = es.relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
+        rel = np.nan_to_num(rel)
+        self.mode = np.array([law.desired_mode(self.sa, d, self.mode[d], rel[self.sa.mac[d]], 1.0)
+                              for d in range(self.mode.size)], np.int64)
+        self.rows.append((t_f, rel * self.case.freq_hz, self.mode.copy()))
+        return self.mode
+
+    def _speeds(self, t_f: float, partial: SimulationResult) -> np.ndarray:
+        """Speed estimates (n_mac,) pu for the instant the modes take effect."""
+        if self.estimator == "ideal":
+            return partial.speed_at(np.array([t_f]))[0]
+        if partial.t.size < 2:          # the run start is not recorded yet: no frame
+            return np.ones(self.models.n)
+        frame = self._frame(t_f, partial)
+        if self.estimator == "raw":
+            f = frame.freq[self.models.pmu] / self.models.f0
+            self.held = np.where(np.isfinite(f), f, self.held)
+            return self.held
+        self.filter.step(frame)
+        return self.filter.forecast(self.settings.latency_s)[0]
+
+    def _frame(self, t_f: float, partial: SimulationResult) -> Frame:
+        """The measured frame at t_f: true values from the trajectory's tail, plus noise."""
+        k = int(round(t_f * self.settings.rate))
+        f0 = self.case.freq_hz
+        v, i, f, rocof = _tail_truth(partial, self.cols, self.C, t_f, PMU_WINDOW_CYCLES / f0, f0)
+        n = self.noise
+        nan = np.where(n.valid[k], 1.0, np.nan)
+        return Frame(t_f, n.valid[k], v * (1 + n.v[k]) * nan, i * (1 + n.i[k]) * nan,
+                     (f + n.freq[k]) * nan, (rocof + n.rocof[k]) * nan)
+
+    def diagnostics(self) -> Diagnostics:
+        t, rel, modes = (np.array(a) for a in zip(*self.rows)) if self.rows else \
+            (np.zeros(0), np.zeros((0, self.models.n)), np.zeros((0, self.mode.size), int))
+        return Diagnostics(t=t, rel=rel, modes=modes, mac=np.asarray(self.sa.mac),
+                           latency=self.settings.latency_s, f0=self.case.freq_hz, coi=self.coi)
+
+
+def _make_filter(estimator: str, models: es.MachineModels, settings: PMUSettings):
+    """The online filter of an estimator (None for ideal and raw)."""
+    if estimator == "kf":
+        return es.FrequencyKF(models.pmu, settings, f0=models.f0)
+    if estimator == "ekf":
+        return es.SwingEKF(models, settings)
+    return None
+
+
+def _unit_noise(pmus, settings: PMUSettings, seed: int, t_end: float, f0: float):
+    """The errors of every frame in [0, t_end]: a stream measured on a constant truth
+    (v = i = 1, f = ROCOF = 0), so v - 1, i - 1, freq, rocof are the errors and `valid`
+    the losses, exactly as `measure` draws them for a run of that length."""
+    n = len(pmus)
+    one = np.ones((2, n), complex)
+    truth = PhasorTruth(t=np.array([0.0, t_end]), pmus=tuple(pmus), v=one, i=one,
+                        freq=np.zeros((2, n)), rocof=np.zeros((2, n)), f0=f0)
+    s = measure(truth, settings, seed)
+    return replace(s, v=np.nan_to_num(s.v - 1), i=np.nan_to_num(s.i - 1),
+                   freq=np.nan_to_num(s.freq), rocof=np.nan_to_num(s.rocof))
+
+
+def current_map(case, pmus) -> np.ndarray:
+    """C (n_pmu, n_bus) complex with I_pmu = C @ V_bus (pu): each machine PMU's current as
+    `pmu.phasor_truth` computes it (base-case branches: Kirchhoff at the terminal bus, or
+    the current through the branches from the terminal bus into the PMU's bus)."""
+    ba, C = branch_admittances(case), np.zeros((len(pmus), case.n_bus), complex)
+    for p, pmu in enumerate(pmus):
+        term = case.bus_index(int(case.machines.bus[case.machine_index(pmu.machine)]))
+        b = case.bus_index(pmu.bus)
+        for j in range(ba.f.size):
+            f, t = ba.f[j], ba.t[j]
+            if b == term and term in (f, t):
+                C[p, f] += ba.yff[j] if f == term else ba.ytf[j]
+                C[p, t] += ba.yft[j] if f == term else ba.ytt[j]
+            elif b != term and {f, t} == {b, term}:
+                C[p, f] -= ba.ytf[j] if t == b else ba.yff[j]
+                C[p, t] -= ba.ytt[j] if t == b else ba.yft[j]
+        if b == term:
+            C[p, term] += case.buses.gshunt[term] + 1j * case.buses.bshunt[term]
+    return C
+
+
+def _tail_truth(partial: SimulationResult, cols, C, t_f: float, window: float, f0: float):
+    """Noise-free PMU values at t_f from the end of the run so far (up to the first grid
+    point at or after t_f): bus voltages interpolated by magnitude and unwrapped angle, the
+    currents C @ V; frequency the mean over the last `window` s (phase advance / window, a
+    P-class PMU's estimate: causal, and without the one-step spikes of a derivative at the
+    end of the trajectory), ROCOF the change of that frequency over one more window.
+    Times before the start take the initial (steady) state.  cols: the PMU buses' indices."""
+    lo = max(int(np.searchsorted(partial.t, t_f - 2 * window)) - 1, 0)
+    t = partial.t[lo:]
+    keep = np.r_[np.diff(t) > 0, True]
+    ang = np.unwrap(partial.vang[lo:][keep], axis=0)
+    at = lambda y, x: np.array([np.interp(x, t[keep], y[:, j]) for j in range(y.shape[1])]).T  # noqa: E731
+    now = at(partial.vmag[lo:][keep], [t_f])[0] * np.exp(1j * at(ang, [t_f])[0])
+    phase = at(ang[:, cols], t_f - window * np.arange(2, -1, -1.0))
+    f = f0 + np.diff(phase, axis=0) / (2 * np.pi * window)
+    return now[cols], C @ now, f[1], (f[1] - f[0]) / window
+
+
+@dataclass
+class ClosedLoopRun:
+    """One closed-loop run: the SimulationResult (its meta["switchings"] and
+    meta["storage"] as `Simulator.run_commanded` gives them) and what the controller saw."""
+
+    result: SimulationResult
+    diagnostics: Diagnostics
+
+
+def run_closed_loop(sim, events, t_end: float, fleet_pct: float, estimator: str,
+                    rate: float = 60.0, latency: float = 0.05, seed: int = 0, *,
+                    settings: PMUSettings | None = None,
+                    control: law.BangBangCOI = law.BangBangCOI(), at: str = "terminal",
+                    h: float | None = None, separation_limit: float = np.pi,
+                    stop_at_separation: bool = True,
+                    ambient: AmbientLoad | None = None) -> ClosedLoopRun:
+    """Simulate `events` to t_end (s) with ESDs of fleet_pct % of each generator's MVA at
+    its HV bus, commanded by Table 3 on the relative speeds from `estimator` (frames at
+    `rate` frames/s, modes effective `latency` s after each time stamp, PMU noise stream
+    `seed`).  settings: the PMUs (default C37.118.1 limits; its rate and latency are
+    replaced by `rate`, `latency`).  The run stops once a rotor angle is more than
+    separation_limit rad from the COI unless stop_at_separation is False
+    (`Simulator.run_commanded`).  ambient: load fluctuations (`stabctl.estimation.ambient`) added to
+    the fleet after the ESDs (the result's `pesd` and meta["storage"] list the ESDs, then
+    the loads; the ESDs' voltage gate applies to both).  Raises InputError for a bad
+    estimator, rate, latency, rating; SimulationError as `Simulator.run_commanded`.
+    """
+    settings = replace(settings or PMUSettings(), rate=rate, latency_s=latency)
+    fleet = st.uniform_fleet(sim.case, fleet_pct)
+    ctrl = LoopController(sim.case, fleet.devices, estimator, settings, seed, t_end, control, at)
+    frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
+    devices, decide = fleet.devices, ctrl
+    if ambient is not None:
+        loads, set_points = ambient.schedule(sim.case, frames.size, rate)
+        devices = devices + loads
+        decide = lambda t, p: np.r_[ctrl(t, p), set_points(t)]  # noqa: E731
+    gate = law.ExternalCommands(v_gate_pu=control.v_gate_pu)
+    res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), frames, decide,
+                            latency=latency, h=h, separation_limit=separation_limit,
+                            stop_at_separation=stop_at_separation)
+    return ClosedLoopRun(res, ctrl.diagnostics())
+
+
+def false_actions(run: ClosedLoopRun, deadband_hz: float = 0.1) -> int:
+    """Commands from idle to a running mode that Table 3 on the true relative speed at the
+    instant they take effect (time stamp + latency) would not give (idle or the opposite
+    mode); commands taking effect after the run's end are not counted."""
+    d, res = run.diagnostics, run.result
+    t_eff = d.t + d.latency
+    inside = t_eff <= res.t[-1]
+    if not inside.any():
+        return 0
+    prev = np.vstack([np.zeros((1, d.modes.shape[1]), int), d.modes[:-1]])
+    start = ((prev == 0) & (d.modes != 0))[inside]
+    true = res.speed_at(t_eff[inside])
+    rel = es.relative_speeds(true, true, res.inertia, d.coi)[0][:, d.mac] * d.f0
+    want = np.where(rel > deadband_hz, 1, np.where(rel < -deadband_hz, -1, 0))
+    return int(np.sum(start & (want != d.modes[inside])))
+
+
+# -- CCT with the estimator in the loop ---------------------------------------------------
+
+@dataclass(frozen=True)
+class LoopRunner:
+    """What `cct.critical_clearing_time` needs of a simulator (`.case`, `.run`), with the
+    ESDs (fleet_pct % of each MVA) commanded through `run_closed_loop`."""
+
+    sim: object
+    fleet_pct: float
+    estimator: str
+    rate: float = 60.0
+    latency: float = 0.05
+    seed: int = 0
+
+    @property
+    def case(self):
+        return self.sim.case
+
+    @property
+    def conventions(self) -> str:
+        return self.sim.conventions
+
+    @property
+    def default_h(self) -> float:
+        return self.sim.default_h
+
+    def run(self, events, t_end, h=None, separation_limit=np.pi, stop_at_separation=True):
+        """The closed-loop SimulationResult (run_closed_loop's arguments)."""
+        return run_closed_loop(self.sim, events, t_end, self.fleet_pct, self.estimator,
+                               self.rate, self.latency, self.seed, h=h,
+                               separation_limit=separation_limit,
+                               stop_at_separation=stop_at_separation).result
+
+
+def cct_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str, seed: int,
+            rate: float = 60.0, latency: float = 0.05, t_fault: float = 1.0,
+            tol: float = 1 / 240, conventions: str = "ieee", h: float | None = None) -> dict:
+    """Worker entry (`stabctl.parallel`): CCT (s, cycles) of a line fault with the estimator
+    in the loop, PMU noise stream `seed`, model conventions and step h (None: default).
+    The step's error bar is not searched here (the seed spread is the error bar of these
+    CCTs; `stabctl cct` gives the ideal-measurement one)."""
+    from stabctl.stability.cct import LineFault, cached_simulator, critical_clearing_time
+
+    runner = LoopRunner(cached_simulator(case, conventions, h), esd_pct, estimator, rate,
+                        latency, seed)
+    r = critical_clearing_time(runner, LineFault(int(bus), int(far_bus), float(t_fault)),
+                               tol=tol, error_check=False)
+    return {"cct_s": r.cct_s, "cct_cycles": r.cct_cycles, "n_simulations": r.n_simulations}
+
+
+def cct_study(case: str, bus: int, far_bus: int, ratings, runs: int, out, *,
+              estimators=ESTIMATORS, seed: int = 0, rate: float = 60.0, latency: float = 0.05,
+              workers: int | None = None, progress: bool = True, conventions: str = "ieee",
+              h: float | None = None) -> dict:
+    """CCTs per rating and estimator over `runs` noise seeds (seed .. seed + runs - 1; one
+    run for "ideal", which has no noise), in parallel with `stabctl.parallel.run_sweep`
+    (records appended to `out`, finished jobs reused).  Returns
+    {rating: {estimator: {"mean", "std", "min", "max", "runs"} of the CCT in cycles}}."""
+    from stabctl.parallel import Job, run_sweep
+
+    if runs < 1:
+        raise InputError(f"need at least one run, got {runs}")
+    tail = ("" if conventions == "ieee" else f"/{conventions}") + ("" if h is None else f"/h{h:g}")
+    jobs = [Job(f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s/seed{s}{tail}",
+                cct_job, dict(case=case, bus=bus, far_bus=far_bus, esd_pct=p, estimator=e,
+                              seed=s, rate=rate, latency=latency, conventions=conventions,
+                              h=h))
+            for p in ratings for e in estimators
+            for s in ([seed] if e == "ideal" else range(seed, seed + runs))]
+    rep = run_sweep(jobs, out, workers=workers, progress=progress)
+    table = {}
+    for j in jobs:
+        rec = rep.records[j.key]
+        val = rec["result"]["cct_cycles"] if rec["status"] == "ok" else np.nan
+        table.setdefault(j.inputs["esd_pct"], {}).setdefault(j.inputs["estimator"], []).append(val)
+    return {p: {e: _spread(v) for e, v in row.items()} for p, row in table.items()}
+
+
+def _spread(values) -> dict:
+    """Mean, standard deviation, range of finite values (failed runs: NaN, counted)."""
+    v = np.asarray(values, float)
+    ok = v[np.isfinite(v)]
+    stats = (float(ok.mean()), float(ok.std()), float(ok.min()), float(ok.max())) if ok.size \
+        else (None,) * 4
+    return {**dict(zip(("mean", "std", "min", "max"), stats)), "runs": int(v.size),
+            "failed": int(v.size - ok.size)}

@@ -1,0 +1,824 @@
+"""Kalman-filter estimation of machine speeds and of the centre-of-inertia (COI) speed from
+PMU frames (`stabctl.estimation.pmu`), frame by frame, for the ESD controllers (paper Table 3).
+
+Estimators, one filter per machine, all machines advanced together (docs/estimation.md):
+
+- `FrequencyKF`, baseline: linear Kalman filter on the PMU frequency and ROCOF of the
+  machine's bus; state [f - f0 (Hz), df/dt (Hz/s)], the ROCOF a random walk.  The speed
+  estimate is 1 + (f - f0)/f0, i.e. the bus frequency is taken for the rotor speed; its
+  forecast over the latency holds it (the bus ROCOF is not extrapolated).
+- `SwingEKF`, model-based: extended Kalman filter on the swing equation of PSTess's machine
+  models (docs/pst_models.md 1.6-1.9) driven by the measured electrical power; state
+  [delta (rad), w = omega - 1 (pu), dPm (pu machine base), q1, q2 (q-axis rotor fluxes,
+  pu)].  Over a frame interval dt, with the air-gap power P_ag = P + r_a |I|^2 (machine
+  base, from the PMU phasors) and the mechanical power P_m of the turbine-governor model
+  (PST tg, started in equilibrium at the first measured P_ag, driven by the estimated
+  speed), both averaged over the interval's ends (trapezoid):
+      a = ((P_m + dPm - P_ag) / omega - D w) / 2H     (subtransient; transient and
+                                                        classical machines without 1/omega)
+      w' = w + dt a,   delta' = delta + omega_b dt (w + dt a / 2),   dPm' = dPm,
+      q' = A_d q + b_d (I_q(delta, I) + I_q(delta', I')) / 2
+  (A_d, b_d: exact zero-order-hold discretisation of the machine's linear q-axis circuits,
+  I_q = Re(exp(-j delta) I) the q-axis current, machine base).  Measurement: the angle of
+  the internal voltage E = V + Z I computed from the PMU phasors (Z = r_a + j x"_d,
+  subtransient; r_a + j x'_d otherwise; plus the step-up branch for a PMU at the HV bus),
+  h(x) = delta + asin(omega psi"_q / |E|) with psi"_q = c.q the q-axis subtransient flux
+  (transient machines: delta - asin(E'_d / |E|); classical: delta).  The bus frequency is
+  not used: during swings it differs from the rotor speed by tens of mHz.
+
+The one-machine equations (`swing_*`) are compiled (numba) and shared by two paths:
+`FrequencyKFReference` and `SwingEKFReference` run one filterpy filter per machine (filterpy
+does the Kalman algebra); `FrequencyKF` and `SwingEKF` run the same algebra (Joseph form, as
+filterpy) in one compiled loop over the machines, the fast path (tests check that both agree
+to rounding; `benchmarks/bench_estimator.py`).  Sources: filterpy 1.4 `KalmanFilter`,
+`ExtendedKalmanFilter`; IEEE C37.118.1-2011 for the PMU noise (`stabctl.estimation.pmu`).
+
+Online interface: `step(frame) -> (speed, variance)`, speed (n_mac,) pu, variance pu^2,
+NaN until a machine's first valid frame; frames in increasing time-stamp order; where a
+frame was dropped the filter predicts only.  `nis` holds the normalised innovation squared
+of the last step (NaN where no update), chi-square with `dof` degrees of freedom when the
+filter is consistent (`nis_bounds`).  `coi_speed` and `relative_speeds` turn the machine
+estimates into what each ESD controller needs (paper eq. 40), with variances.
+"""
+
+from __future__ import annotations
+
+import cmath
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+from filterpy.common import Q_continuous_white_noise
+from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
+from stabctl._jitcache import njit
+from scipy.stats import chi2
+
+from stabctl.case import Case
+from stabctl.errors import CaseError, InputError
+from stabctl.models.machines import EM, SUB, TRA, machine_params
+from stabctl.models.machines import _dq as rotor_dq  # the one compiled dq transform
+from stabctl.dynamics.coi import coi_weights
+from stabctl.estimation.pmu import Frame, PMUSettings
+
+
+# -- tuning ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class FrequencyTuning:
+    """Baseline filter: rocof_walk, spectral density of the ROCOF random walk ((Hz/s)^2
+    per s), sized for post-fault swings (the ROCOF of a 0.2 Hz swing at 1 Hz changes by
+    about 8 Hz/s within a second).  The measurement noise comes from the PMU settings."""
+
+    rocof_walk: float = 50.0
+
+
+@dataclass(frozen=True)
+class SwingTuning:
+    """Model-based filter (docs/estimation.md, tuning).  The measurement noise and the
+    noise of the measured power and current come from the PMU settings (TVE); added here:
+
+    angle_model_rad: standard deviation of unmodelled internal-angle error (rad);
+    accel_psd: white unmodelled acceleration ((pu speed)^2/s); pm_walk: random walk of the
+    mechanical-power correction ((pu machine base)^2/s); pm0_sd, flux0_sd: initial
+    standard deviations of dPm and of the q-axis fluxes (pu); jump_pu: a change of P_ag
+    between two frames above this (pu machine base) is taken for a network event at an
+    unknown instant of the interval, adding dP^2/12 (the trapezoid's error variance) to the
+    power noise.
+    """
+
+    angle_model_rad: float = 0.002
+    accel_psd: float = 1e-9
+    pm_walk: float = 1e-6
+    pm0_sd: float = 0.005
+    flux0_sd: float = 0.01
+    jump_pu: float = 0.1
+
+
+# -- machine models -------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class LinearSystems:
+    """n linear systems dx/dt = A x + b u with a scalar input: A (n, k, k), b (n, k)."""
+
+    A: np.ndarray
+    b: np.ndarray
+    _zoh: dict = field(default_factory=dict, repr=False)
+
+    def discrete(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """Exact zero-order-hold discretisation (A_d (n, k, k), b_d (n, k)) over dt (s),
+        cached per dt."""
+        key = round(dt, 12)
+        if key not in self._zoh:
+            n, k = self.b.shape
+            M = np.zeros((n, k + 1, k + 1))
+            M[:, :k, :k], M[:, :k, k] = self.A * dt, self.b * dt
+            E = np.stack([scipy.linalg.expm(a) for a in M])
+            self._zoh[key] = (np.ascontiguousarray(E[:, :k, :k]), np.ascontiguousarray(E[:, :k, k]))
+        return self._zoh[key]
+
+
+@dataclass(frozen=True, eq=False)
+class Governors:
+    """PST `tg` turbine-governors (stabctl.models.governors) as linear systems per machine:
+    dg/dt = A g + b u, P_m = c.g, u = clip(P_ref + (wf - omega) / R, 0, T_max); in
+    equilibrium g = P_m g_unit.  Machines without a governor (active False) keep P_m."""
+
+    sys: LinearSystems
+    c: np.ndarray
+    g_unit: np.ndarray
+    wf: np.ndarray
+    invR: np.ndarray
+    Tmax: np.ndarray
+    active: np.ndarray
+
+    @classmethod
+    def from_case(cls, case: Case) -> "Governors":
+        """The case's tg_con governors (none: every machine inactive); raises CaseError
+        for a governor other than PST tg (type 1), which this linear model does not hold."""
+        other = np.nonzero(case.governors.type != 1)[0]
+        if other.size:
+            raise CaseError(f"tg_con row {other[0] + 1}: the estimator's governor model is PST "
+                            f"tg (type 1) only, got type {int(case.governors.type[other[0]])}")
+        n = len(case.machines)
+        A, b, c, gu = np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+        wf, invR, Tmax, active = np.ones(n), np.zeros(n), np.full(n, np.inf), np.zeros(n, bool)
+        g = case.governors
+        for r in range(len(g)):
+            k = case.machine_index(g.machine[r])
+            Ts, Tc, T3, T4, T5 = g.Ts[r], g.Tc[r], g.T3[r], g.T4[r], g.T5[r]
+            A[k] = [[-1 / Ts, 0, 0], [(1 - T3 / Tc) / Tc, -1 / Tc, 0],
+                    [(1 - T4 / T5) * T3 / Tc / T5, (1 - T4 / T5) / T5, -1 / T5]]
+            b[k, 0] = 1 / Ts
+            c[k] = [T4 / T5 * T3 / Tc, T4 / T5, 1.0]
+            gu[k] = [1.0, 1 - T3 / Tc, 1 - T4 / T5]
+            wf[k], invR[k], Tmax[k], active[k] = g.wf[r], g.invR[r], g.Tmax[r], True
+        return cls(LinearSystems(A, b), c, gu, wf, invR, Tmax, active)
+
+    def output(self, g: np.ndarray) -> np.ndarray:
+        """Mechanical power (machine base), (n,); 0 for inactive machines."""
+        return np.einsum("ni,ni->n", self.c, g)
+
+
+@dataclass(frozen=True, eq=False)
+class QAxis:
+    """q-axis rotor circuits of PST's machine models, linear in q (n, 2) with the q-axis
+    current I_q (machine base) as input, dq/dt = A q + b I_q (subtransient: q = (E'_d in
+    PST's sign, psi_kq), psi"_q = p14 q1 + p15 q2; transient: q1 = E'_d, q2 unused;
+    classical: none), and the angle of the internal voltage E behind Z:
+    angle(E) = delta + sign asin(omega^speed (c.q) / |E|); kind (PST model) and the
+    reactances that locate the rotor in steady state (`swing_start`).  Arrays (n, ...)."""
+
+    sys: LinearSystems
+    c: np.ndarray
+    sign: np.ndarray
+    speed: np.ndarray
+    kind: np.ndarray
+    xl: np.ndarray
+    xq: np.ndarray
+    xqp: np.ndarray
+    xdp: np.ndarray
+
+    @classmethod
+    def from_case(cls, case: Case) -> "QAxis":
+        """From the case's machine data with PST's substitutions (`machine_params`)."""
+        mp = machine_params(case)
+        n, sub, tra = mp.n, mp.kind == SUB, mp.kind == TRA
+        with np.errstate(divide="ignore", invalid="ignore"):
+            p11, p12, p13 = (np.nan_to_num(v) for v in (mp.p11, mp.p12, mp.p13))
+            p14, p15 = np.nan_to_num(mp.p14), np.nan_to_num(mp.p15)
+        A, b, c = np.zeros((n, 2, 2)), np.zeros((n, 2)), np.zeros((n, 2))
+        Tq, Tqq = mp.Tqop, mp.Tqopp
+        A[sub] = np.stack([np.stack([-(1 + p12 * p11) / Tq, p12 * p11 / Tq], -1),
+                           np.stack([1 / Tqq, -1 / Tqq], -1)], 1)[sub]
+        b[sub] = np.stack([(p12 * p11 * p13 - p12) / Tq, -p13 / Tqq], -1)[sub]
+        c[sub] = np.stack([p14, p15], -1)[sub]
+        A[tra, 0, 0] = -1 / Tq[tra]
+        b[tra, 0] = ((mp.xq - mp.xqp) / Tq)[tra]
+        c[tra, 0] = 1.0
+        return cls(LinearSystems(A, b), c, np.where(tra, -1.0, 1.0), mp.speed_effects, mp.kind,
+                   mp.xl, mp.xq, mp.xqp, mp.xdp)
+
+
+
+@dataclass(frozen=True, eq=False)
+class MachineModels:
+    """What the swing filter knows of each machine, arrays of shape (n,).
+
+    numbers: machine numbers; pmu: index of the PMU measuring its current; H (s), D (pu)
+    machine base; pot = base MVA / machine MVA; ra: armature resistance in the torque (pu
+    machine base; 0 for classical machines); z_emf: impedance from the PMU bus to the
+    internal voltage (complex pu, system base); per_speed: torque = power / omega (PST's
+    subtransient model); inertia: H * MVA (MJ), the COI weights; f0 (Hz); governor,
+    qaxis: `Governors`, `QAxis`.
+    """
+
+    numbers: np.ndarray
+    pmu: np.ndarray
+    H: np.ndarray
+    D: np.ndarray
+    pot: np.ndarray
+    ra: np.ndarray
+    z_emf: np.ndarray
+    per_speed: np.ndarray
+    inertia: np.ndarray
+    f0: float
+    governor: Governors
+    qaxis: QAxis
+
+    @property
+    def n(self) -> int:
+        return self.numbers.size
+
+def machine_models(case: Case, pmus) -> MachineModels:
+    """Swing-filter models of every machine of the case from its data (mac_con, tg_con)
+    and the PMU measuring its current: at its terminal bus, or at a bus joined to the
+    terminal by branches whose series impedance r + jx is added to Z (taps and charging
+    ignored).  Raises InputError if a machine has no PMU measuring its current."""
+    mp = machine_params(case)
+    which = {p.machine: j for j, p in enumerate(pmus) if p.machine is not None}
+    missing = [int(n) for n in case.machines.number if int(n) not in which]
+    if missing:
+        raise InputError(f"no PMU measures the current of machine(s) {missing}")
+    idx = np.array([which[int(n)] for n in case.machines.number])
+    z = mp.z_internal.copy()              # the simulator's internal impedance, system base
+    for k, j in enumerate(idx):
+        z[k] += _series_impedance(case, int(case.machines.bus[k]), pmus[j].bus)
+    return MachineModels(
+        numbers=case.machines.number.astype(int), pmu=idx, H=mp.H.copy(), D=mp.D0.copy(),
+        pot=mp.mac_pot, ra=mp.ra_network, z_emf=z,
+        per_speed=mp.speed_effects, inertia=mp.H * case.machines.mva, f0=case.freq_hz,
+        governor=Governors.from_case(case), qaxis=QAxis.from_case(case))
+
+
+def _series_impedance(case: Case, term: int, bus: int) -> complex:
+    """Series impedance (pu) of the branches joining bus numbers term and bus, in
+    parallel; 0 when they are the same bus."""
+    if term == bus:
+        return 0j
+    br = case.branches
+    sel = ((br.from_bus == term) & (br.to_bus == bus)) | \
+        ((br.from_bus == bus) & (br.to_bus == term))
+    return complex(1.0 / np.sum(1.0 / (br.r[sel] + 1j * br.x[sel])))
+
+
+# -- centre of inertia ------------------------------------------------------------------------
+def coi_speed(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray):
+    """COI speed sum(M_i w_i) / sum(M_i) (paper eq. 40, M = H*MVA) and its variance, the
+    machine estimates taken as independent (one filter per machine, independent PMU
+    noise).  speed, var: (..., n) pu, pu^2, machines on the last axis; returns (...)."""
+    w = coi_weights(inertia)
+    return speed @ w, var @ w ** 2
+
+
+def relative_speeds(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray,
+                    coi: str = "system") -> tuple[np.ndarray, np.ndarray]:
+    """omega_i - omega_COI of every machine (pu) and its variance (pu^2), the COI of all
+    machines (coi="system") or of the others (coi="rest"), as `stabctl.storage.devices.BangBangCOI`.
+    speed, var: (..., n), machines on the last axis.
+
+    With weights w = M / sum(M) and independent estimates: var = (1 - 2 w_i) s_i^2 +
+    sum_j w_j^2 s_j^2 (system); s_i^2 + sum_{j != i} w_j^2 s_j^2 / (1 - w_i)^2 (rest).
+    Raises InputError for another coi.
+    """
+    w = coi_weights(inertia)
+    c, cv = coi_speed(speed, var, inertia)
+    if coi == "system":
+        return speed - c[..., None], (1 - 2 * w) * var + cv[..., None]
+    if coi == "rest":
+        rest = (c[..., None] - w * speed) / (1 - w)
+        return speed - rest, var + (cv[..., None] - w ** 2 * var) / (1 - w) ** 2
+    raise InputError(f"coi must be 'system' or 'rest', got {coi!r}")
+
+
+def nis_bounds(dof: int, coverage: float = 0.95) -> tuple[float, float]:
+    """Two-sided chi-square interval holding `coverage` of a consistent filter's NIS."""
+    a = (1 - coverage) / 2
+    return float(chi2.ppf(a, dof)), float(chi2.ppf(1 - a, dof))
+
+
+# -- packed parameters for the compiled kernels ----------------------------------------------
+(C_H, C_D, C_POT, C_RA, C_ZRE, C_ZIM, C_PERSPEED, C_QC1, C_QC2, C_QSIGN, C_QSPEED, C_KIND,
+ C_XL, C_XQ, C_XQP, C_XDP, C_GACT, C_WF, C_INVR, C_TMAX, C_GC, C_GU, C_NCOL) = \
+    tuple(range(20)) + (20, 23, 26)
+(T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP, T_SIG2, T_SIGF, T_F0, T_NCOL) = range(10)
+# held values per machine: P_ag at the previous frame (measured or held) and its variance,
+# its last measured change between frames, the variance of I_q, P_m at the start
+(H_PAG, H_PAGVAR, H_DPAG, H_IQVAR, H_PM0, H_NCOL) = range(6)
+
+
+def _packed(m: MachineModels) -> np.ndarray:
+    """Parameter matrix (n, C_NCOL) of the swing filter's compiled kernels."""
+    P = np.zeros((m.n, C_NCOL))
+    q, g = m.qaxis, m.governor
+    for col, val in ((C_H, m.H), (C_D, m.D), (C_POT, m.pot), (C_RA, m.ra), (C_ZRE, m.z_emf.real),
+                     (C_ZIM, m.z_emf.imag), (C_PERSPEED, m.per_speed), (C_QC1, q.c[:, 0]),
+                     (C_QC2, q.c[:, 1]), (C_QSIGN, q.sign), (C_QSPEED, q.speed),
+                     (C_KIND, q.kind), (C_XL, q.xl), (C_XQ, q.xq), (C_XQP, q.xqp),
+                     (C_XDP, q.xdp), (C_GACT, g.active), (C_WF, g.wf), (C_INVR, g.invR),
+                     (C_TMAX, g.Tmax)):
+        P[:, col] = val
+    P[:, C_GC:C_GC + 3], P[:, C_GU:C_GU + 3] = g.c, g.g_unit
+    return P
+
+
+def _tuning_vector(tun: SwingTuning, s: PMUSettings, f0: float) -> np.ndarray:
+    """Tuning and PMU noise of the swing filter's compiled kernels, (T_NCOL,)."""
+    v = np.zeros(T_NCOL)
+    v[[T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP]] = (
+        tun.angle_model_rad, tun.accel_psd, tun.pm_walk, tun.pm0_sd, tun.flux0_sd, tun.jump_pu)
+    v[T_SIG2], v[T_SIGF], v[T_F0] = s.sigma_phasor ** 2, s.sigma_freq, f0
+    return v
+
+
+# -- swing filter equations, one machine (shared by the compiled and the filterpy paths) ---
+@njit(cache=True)
+def _wrap(a):
+    """Angle wrapped to [-pi, pi)."""
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+@njit(cache=True)
+def swing_measure(v, i, pr, sig2):
+    """One machine's measurement quantities from its PMU phasors v, i (complex pu, system
+    base): (theta, |E|, P_ag, var P_ag, var I_q, var theta) with E = V + Z I.
+
+    To first order in the relative phasor errors (std s, sig2 = s^2, per component): angle
+    of E: s^2 (|V|^2 + |Z I|^2) / |E|^2; P = Re(V conj I): 2 s^2 |S|^2; I_q: s^2 |I|^2
+    (machine base, pot^2 |I|^2)."""
+    pot = pr[C_POT]
+    zi = complex(pr[C_ZRE], pr[C_ZIM]) * i
+    e = v + zi
+    S = v * np.conj(i)
+    ia2 = (abs(i) * pot) ** 2
+    emag = abs(e)
+    return (math.atan2(e.imag, e.real), emag, pot * S.real + pr[C_RA] * ia2,
+            2 * sig2 * (pot * abs(S)) ** 2, sig2 * ia2,
+            sig2 * (abs(v) ** 2 + abs(zi) ** 2) / emag ** 2)
+
+
+@njit(cache=True)
+def swing_start(v, i, freq, r, pr, tv):
+    """Initial state (5,) and covariance (5, 5) of one machine: steady state as PST's
+    initialisation (docs/pst_models.md 1.7), speed from the bus frequency."""
+    i_m = i * pr[C_POT]
+    kind = int(pr[C_KIND])
+    if kind == EM:
+        delta = cmath.phase(v + 1j * pr[C_XDP] * i_m)
+    else:
+        delta = cmath.phase(v + complex(pr[C_RA], pr[C_XQ]) * i_m)
+    curd, curq = rotor_dq(delta, i_m)
+    edra = -rotor_dq(delta, v)[0] - pr[C_RA] * curd
+    x = np.zeros(5)
+    x[0], x[1] = delta, freq / tv[T_F0] - 1.0
+    if kind == SUB:
+        x[3], x[4] = edra + pr[C_XQP] * curq, edra + pr[C_XL] * curq
+    elif kind == TRA:
+        x[3] = rotor_dq(delta, v + complex(pr[C_RA], pr[C_XDP]) * i_m)[0]
+    P = np.zeros((5, 5))
+    P[0, 0] = r + tv[T_ANGLE] ** 2
+    P[1, 1] = (tv[T_SIGF] / tv[T_F0]) ** 2
+    P[2, 2] = tv[T_PM0] ** 2
+    P[3, 3] = P[4, 4] = tv[T_FLUX0] ** 2
+    return x, P
+
+
+@njit(cache=True)
+def swing_begin(k, v, i, freq, pag, pag_var, iq_var, r, pr, tv, hold, cur_hold, g):
+    """Start machine k at its first valid frame: initial state and covariance
+    (`swing_start`); held values (in place) with P_m = P_ag and the governor in equilibrium."""
+    hold[k, H_PAG], hold[k, H_PAGVAR], hold[k, H_DPAG], hold[k, H_IQVAR], hold[k, H_PM0] = \
+        pag, pag_var, 0.0, iq_var, pag
+    cur_hold[k] = i
+    g[k] = pr[C_GU:C_GU + 3] * pag
+    return swing_start(v, i, freq, r, pr, tv)
+
+
+@njit(cache=True)
+def swing_inputs(k, valid, pag, pag_var, cur, iq_var, hold, cur_hold, g, w, pr, Adg, bdg, tv):
+    """Inputs of machine k over one interval: (mean P_m, mean P_ag, variance of the mean
+    P_ag, current at both ends, variance of I_q).
+
+    Advances its governor (demand from the estimated speed 1 + w, P_ref such that the start
+    was an equilibrium at nominal speed) and its held values (in place: hold (n, H_NCOL),
+    cur_hold (n,), g (n, 3)).  For a dropped frame the last P_ag and current are held and
+    the variance of P_ag grows by the square of its last change between frames dP; a
+    change of a measured P_ag above jump_pu adds dP^2 / 12 (event at an unknown instant)."""
+    pm0 = hold[k, H_PM0]
+    pm_before, pm_after = pm0, pm0
+    if pr[C_GACT] > 0:
+        pm_before = _dot(g[k], pr[C_GC:C_GC + 3])
+        u = pm0 - (pr[C_WF] - 1.0) * pr[C_INVR] + (pr[C_WF] - 1.0 - w) * pr[C_INVR]
+        g[k] = _mv(Adg, g[k]) + bdg * min(max(u, 0.0), pr[C_TMAX])
+        pm_after = _dot(g[k], pr[C_GC:C_GC + 3])
+    p0, v0, cur0, iq0 = hold[k, H_PAG], hold[k, H_PAGVAR], cur_hold[k], hold[k, H_IQVAR]
+    if valid:
+        dp = pag - p0
+        var = 0.25 * (v0 + pag_var) + (dp * dp / 12 if abs(dp) > tv[T_JUMP] else 0.0)
+        hold[k, H_DPAG], hold[k, H_IQVAR], cur_hold[k] = dp, iq_var, cur
+    else:
+        pag, pag_var = p0, v0 + hold[k, H_DPAG] ** 2
+        var = 0.25 * (v0 + pag_var)
+    hold[k, H_PAG], hold[k, H_PAGVAR] = pag, pag_var
+    return (0.5 * (pm_before + pm_after), 0.5 * (p0 + pag), var, cur0, cur_hold[k],
+            0.5 * (iq0 + hold[k, H_IQVAR]))
+
+
+@njit(cache=True)
+def swing_transition(x, pm, pag, cur0, cur1, dt, pr, Adq, bdq, f0):
+    """Propagated state (5,), Jacobian F (5, 5) and sensitivity g (5,) to the mean P_ag
+    of one machine over dt (module docstring)."""
+    d, w, p = x[0], x[1], x[2]
+    wb = 2 * math.pi * f0
+    omega = 1.0 + w if pr[C_PERSPEED] > 0 else 1.0
+    c = 1.0 / (2 * pr[C_H] * omega)
+    acc = c * (pm + p - pag) - pr[C_D] * w / (2 * pr[C_H])
+    da_dw = -pr[C_D] / (2 * pr[C_H])
+    if pr[C_PERSPEED] > 0:
+        da_dw -= c * (pm + p - pag) / omega
+    d1 = d + wb * dt * (w + 0.5 * dt * acc)
+    r0 = cmath.exp(-1j * d) * cur0 * pr[C_POT]
+    r1 = cmath.exp(-1j * d1) * cur1 * pr[C_POT]
+    iq = 0.5 * (r0.real + r1.real)
+    xn = np.empty(5)
+    xn[0], xn[1], xn[2] = d1, w + dt * acc, p
+    xn[3:] = _mv(Adq, x[3:]) + bdq * iq
+    F = np.zeros((5, 5))
+    F[0, 0] = F[2, 2] = 1.0
+    F[0, 1] = wb * dt * (1 + 0.5 * dt * da_dw)
+    F[0, 2] = wb * dt * 0.5 * dt * c
+    F[1, 1] = 1 + dt * da_dw
+    F[1, 2] = dt * c
+    F[3:, 3:] = Adq
+    for j in range(3):                       # I_q(delta') depends on (delta, w, dPm)
+        dIq = 0.5 * r1.imag * F[0, j] + (0.5 * r0.imag if j == 0 else 0.0)
+        F[3, j], F[4, j] = bdq[0] * dIq, bdq[1] * dIq
+    g = np.zeros(5)
+    g[0], g[1] = -wb * 0.5 * dt * dt * c, -dt * c
+    return xn, F, g
+
+
+@njit(cache=True)
+def swing_Q(g, pag_var, iq_var, bdq, dt, tv):
+    """Process noise (5, 5) of one machine: measured-power noise through g, I_q noise
+    through b_d, white unmodelled acceleration on (delta, w), random walk of dPm."""
+    wb = 2 * math.pi * tv[T_F0]
+    Q = np.zeros((5, 5))
+    for a in range(5):
+        for b in range(5):
+            Q[a, b] = g[a] * g[b] * pag_var
+    for a in range(2):
+        for b in range(2):
+            Q[3 + a, 3 + b] += bdq[a] * bdq[b] * iq_var
+    q = tv[T_ACCEL]
+    Q[0, 0] += q * wb * wb * dt ** 3 / 3
+    Q[0, 1] += q * wb * dt * dt / 2
+    Q[1, 0] += q * wb * dt * dt / 2
+    Q[1, 1] += q * dt
+    Q[2, 2] += tv[T_PMWALK] * dt
+    return Q
+
+
+@njit(cache=True)
+def swing_h(x, emag, pr):
+    """Predicted internal-voltage angle of one machine and its Jacobian H (5,)."""
+    omega = 1.0 + x[1] if pr[C_QSPEED] > 0 else 1.0
+    psi = pr[C_QC1] * x[3] + pr[C_QC2] * x[4]
+    s = min(max(omega * psi / emag, -0.99), 0.99)
+    k = pr[C_QSIGN] / (emag * math.sqrt(1 - s * s))
+    H = np.zeros(5)
+    H[0] = 1.0
+    if pr[C_QSPEED] > 0:
+        H[1] = k * psi
+    H[3], H[4] = k * omega * pr[C_QC1], k * omega * pr[C_QC2]
+    return x[0] + pr[C_QSIGN] * math.asin(s), H
+
+
+# -- compiled filters, all machines ---------------------------------------------------------
+@njit(cache=True)
+def _dot(a, b):
+    acc = 0.0
+    for j in range(a.size):
+        acc += a[j] * b[j]
+    return acc
+
+
+@njit(cache=True)
+def _mv(A, x):
+    """A x for small matrices (explicit loops: BLAS calls cost more at this size)."""
+    y = np.zeros(A.shape[0])
+    for a in range(A.shape[0]):
+        for b in range(A.shape[1]):
+            y[a] += A[a, b] * x[b]
+    return y
+
+
+@njit(cache=True)
+def _mm(A, B):
+    C = np.zeros((A.shape[0], B.shape[1]))
+    for a in range(A.shape[0]):
+        for b in range(B.shape[1]):
+            for c in range(A.shape[1]):
+                C[a, b] += A[a, c] * B[c, b]
+    return C
+
+
+@njit(cache=True)
+def _inv2(S):
+    """Inverse of a 2 x 2 matrix."""
+    det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
+    return np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det
+
+
+@njit(cache=True)
+def _sandwich(F, P):
+    """F P F' for small square matrices."""
+    n = F.shape[0]
+    FP = np.zeros((n, n))
+    for a in range(n):
+        for b in range(n):
+            acc = 0.0
+            for c in range(n):
+                acc += F[a, c] * P[c, b]
+            FP[a, b] = acc
+    out = np.zeros((n, n))
+    for a in range(n):
+        for b in range(n):
+            acc = 0.0
+            for c in range(n):
+                acc += FP[a, c] * F[b, c]
+            out[a, b] = acc
+    return out
+
+
+@njit(cache=True)
+def _scalar_update(x, P, y, H, R):
+    """Kalman update with one measurement (filterpy's equations, Joseph form); returns
+    x, P and the NIS y^2 / S."""
+    n = x.size
+    PHt = _mv(P, H)
+    S = _dot(H, PHt) + R
+    K = PHt / S
+    IKH = np.zeros((n, n))
+    for a in range(n):
+        IKH[a, a] = 1.0
+        for b in range(n):
+            IKH[a, b] -= K[a] * H[b]
+    P1 = _sandwich(IKH, P)
+    for a in range(n):
+        for b in range(n):
+            P1[a, b] += R * K[a] * K[b]
+    return x + K * y, P1, y * y / S
+
+
+@njit(cache=True)
+def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par, Adq, bdq,
+                 Adg, bdg, tv):
+    """One frame of the swing filter for every machine (in place): predict the machines
+    already started over dt, update those with a valid frame, start the others."""
+    for k in range(x.shape[0]):
+        nis[k] = np.nan
+        pr = par[k]
+        if not (ready[k] or valid[k]):
+            continue
+        theta = emag = pag = pag_var = iq_var = r = np.nan
+        if valid[k]:
+            theta, emag, pag, pag_var, iq_var, r = swing_measure(v[k], i[k], pr, tv[T_SIG2])
+        if not ready[k]:
+            x[k], P[k] = swing_begin(k, v[k], i[k], freq[k], pag, pag_var, iq_var, r, pr, tv,
+                                     hold, cur_hold, g)
+            ready[k] = True
+            continue
+        pm, pbar, pvar, c0, c1, iqv = swing_inputs(k, valid[k], pag, pag_var, i[k], iq_var,
+                                                   hold, cur_hold, g, x[k, 1], pr, Adg[k],
+                                                   bdg[k], tv)
+        xn, F, gs = swing_transition(x[k], pm, pbar, c0, c1, dt, pr, Adq[k], bdq[k], tv[T_F0])
+        Pp = _sandwich(F, P[k]) + swing_Q(gs, pvar, iqv, bdq[k], dt, tv)
+        if valid[k]:
+            h, H = swing_h(xn, emag, pr)
+            x[k], P[k], nis[k] = _scalar_update(xn, Pp, _wrap(theta - h), H,
+                                                r + tv[T_ANGLE] ** 2)
+        else:
+            x[k], P[k] = xn, Pp
+
+
+@njit(cache=True)
+def _freq_batch(x, P, nis, ready, z, valid, dt, q, R):
+    """One frame of the baseline filter for every machine (in place); z (n, 2) =
+    [f - f0, ROCOF], R (2, 2)."""
+    F = np.array([[1.0, dt], [0.0, 1.0]])
+    Q = q * np.array([[dt ** 3 / 3, dt ** 2 / 2], [dt ** 2 / 2, dt]])
+    for k in range(x.shape[0]):
+        nis[k] = np.nan
+        if not ready[k]:
+            if valid[k]:
+                x[k], P[k], ready[k] = z[k], R, True
+            continue
+        xn, Pp = _mv(F, x[k]), _sandwich(F, P[k]) + Q
+        if not valid[k]:
+            x[k], P[k] = xn, Pp
+            continue
+        y = z[k] - xn
+        SI = _inv2(Pp + R)
+        nis[k] = _dot(y, _mv(SI, y))
+        K = _mm(Pp, SI)
+        IK = np.eye(2) - K
+        x[k], P[k] = xn + _mv(K, y), _sandwich(IK, Pp) + _mm(_mm(K, R), K.T)
+
+
+# -- filters --------------------------------------------------------------------------------
+class _MachineFilters:
+    """Frame bookkeeping shared by the estimators: frames in increasing time-stamp order,
+    each machine starting at its first valid frame.  Subclasses implement
+    `_advance(frame, dt)`, `_output()` and `_rate()` (or their own `forecast`); x, P are
+    the states and covariances."""
+
+    dof = 1
+
+    def __init__(self, n: int, nx: int):
+        self.t: float | None = None
+        self.ready = np.zeros(n, bool)
+        self.nis = np.full(n, np.nan)
+        self.x, self.P = np.full((n, nx), np.nan), np.full((n, nx, nx), np.nan)
+
+    def step(self, frame: Frame) -> tuple[np.ndarray, np.ndarray]:
+        """Advance to the frame's time stamp and use its valid measurements.
+
+        Returns the speed estimates (n,) pu and their variances (n,) pu^2 (NaN before a
+        machine's first valid frame).  Raises InputError for a time stamp not after the
+        previous one.
+        """
+        if self.t is not None and not frame.t > self.t:
+            raise InputError(f"frame at t = {frame.t} s is not after the previous one "
+                             f"({self.t} s): frames must come in time-stamp order")
+        self._advance(frame, 0.0 if self.t is None else frame.t - self.t)
+        self.t = frame.t
+        return self._output()
+
+    def forecast(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
+        """Speed estimates (n,) pu and variances (n,) pu^2 `horizon` s after the last
+        frame's time stamp, without changing the filter (e.g. to the instant a controller
+        acts, latency included): the last rate of change of speed held."""
+        speed, var = self._output()
+        rate, rate_var, cov = self._rate()
+        return speed + horizon * rate, var + 2 * horizon * cov + horizon ** 2 * rate_var
+
+
+class FrequencyKF(_MachineFilters):
+    """Baseline filter on PMU frequency and ROCOF (compiled, all machines).
+
+    pmu: (n,) index of each machine's PMU in the frames; settings: the PMUs' (noise);
+    tuning: `FrequencyTuning`; f0: nominal frequency (Hz).
+    """
+
+    name = "kf"
+    dof = 2
+
+    def __init__(self, pmu, settings: PMUSettings, tuning: FrequencyTuning = FrequencyTuning(),
+                 f0: float = 60.0):
+        self.pmu, self.tun, self.f0 = np.asarray(pmu), tuning, f0
+        super().__init__(self.pmu.size, 2)
+        self.R = np.diag([settings.sigma_freq ** 2, settings.sigma_rocof ** 2])
+
+    def _measure(self, frame: Frame):
+        """z (n, 2) = [f - f0 (Hz), ROCOF (Hz/s)] and the valid mask (n,)."""
+        z = np.stack([frame.freq[self.pmu] - self.f0, frame.rocof[self.pmu]], axis=1)
+        return z, frame.valid[self.pmu] & np.isfinite(z).all(axis=1)
+
+    def _advance(self, frame, dt):
+        z, ok = self._measure(frame)
+        _freq_batch(self.x, self.P, self.nis, self.ready, z, ok, dt, self.tun.rocof_walk,
+                    self.R)
+
+    def _output(self):
+        return 1.0 + self.x[:, 0] / self.f0, self.P[:, 0, 0] / self.f0 ** 2
+
+    def forecast(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
+        """The filtered frequency as the speed `horizon` s ahead, held, not extrapolated
+        with the ROCOF state: every ESD switching steps the bus angle, the PMU's ROCOF
+        then swings +-dtheta / (2 pi w^2) (w its window), and extrapolating that over the
+        latency fed the steps back into the commands (docs/estimation.md 2.1).  Variance:
+        the filter's plus horizon^2 times that of the ROCOF (the unextrapolated change)."""
+        speed, var = self._output()
+        return speed, var + horizon ** 2 * self.P[:, 1, 1] / self.f0 ** 2
+
+
+class SwingEKF(_MachineFilters):
+    """Model-based filter on the swing equation (compiled, all machines).
+
+    models: `MachineModels` (`machine_models`); settings: the PMUs'; tuning: `SwingTuning`.
+    """
+
+    name = "ekf"
+
+    def __init__(self, models: MachineModels, settings: PMUSettings,
+                 tuning: SwingTuning = SwingTuning()):
+        self.m = models
+        super().__init__(models.n, 5)
+        self.par, self.tv = _packed(models), _tuning_vector(tuning, settings, models.f0)
+        self.hold = np.full((models.n, H_NCOL), np.nan)      # H_* columns
+        self.cur_hold = np.full(models.n, np.nan + 0j)
+        self.g = np.zeros((models.n, 3))                      # governor states
+
+    def _frame(self, frame: Frame):
+        """This filter's machines' voltage, current, frequency and valid mask."""
+        p = self.m.pmu
+        v, i, f = frame.v[p], frame.i[p], frame.freq[p]
+        return v, i, f, frame.valid[p] & np.isfinite(v) & np.isfinite(i) & np.isfinite(f)
+
+    def _discrete(self, dt):
+        return (*self.m.qaxis.sys.discrete(dt), *self.m.governor.sys.discrete(dt))
+
+    def _advance(self, frame, dt):
+        v, i, f, ok = self._frame(frame)
+        _swing_batch(self.x, self.P, self.nis, self.ready, self.hold, self.cur_hold, self.g,
+                     v, i, f, ok, dt, self.par, *self._discrete(dt), self.tv)
+
+    def _output(self):
+        return 1.0 + self.x[:, 1], self.P[:, 1, 1]
+
+    def _rate(self):
+        """Acceleration (pu/s) from the swing equation at the last frame's powers, its
+        variance (from those of dPm and P_ag) and its covariance with the speed."""
+        m, w = self.m, self.x[:, 1]
+        gov = m.governor
+        pm = np.where(gov.active, gov.output(self.g), self.hold[:, H_PM0])
+        c = 1.0 / (2 * m.H * np.where(m.per_speed, 1.0 + w, 1.0))
+        acc = c * (pm + self.x[:, 2] - self.hold[:, H_PAG]) - m.D * w / (2 * m.H)
+        return acc, c ** 2 * (self.P[:, 2, 2] + self.hold[:, H_PAGVAR]), c * self.P[:, 1, 2]
+
+
+# -- filterpy reference implementations -----------------------------------------------------
+class FrequencyKFReference(FrequencyKF):
+    """`FrequencyKF` with one filterpy `KalmanFilter` per machine (reference, slow)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.kfs = [KalmanFilter(dim_x=2, dim_z=2) for _ in range(self.pmu.size)]
+
+    def _advance(self, frame, dt):
+        z, ok = self._measure(frame)
+        self.nis[:] = np.nan
+        for k, kf in enumerate(self.kfs):
+            if not self.ready[k]:
+                if ok[k]:
+                    kf.x, kf.P, self.ready[k] = z[k].copy(), self.R.copy(), True
+                    self.x[k], self.P[k] = kf.x, kf.P
+                continue
+            kf.F, kf.Q = np.array([[1.0, dt], [0.0, 1.0]]), \
+                Q_continuous_white_noise(2, dt, self.tun.rocof_walk)
+            kf.predict()
+            if ok[k]:
+                kf.update(z[k], R=self.R, H=np.eye(2))
+                self.nis[k] = kf.y @ kf.SI @ kf.y
+            self.x[k], self.P[k] = kf.x, kf.P
+
+
+class _SwingEKF1(ExtendedKalmanFilter):
+    """filterpy EKF of one machine; its nonlinear transition is evaluated by the shared
+    swing equations and handed to `predict` as u."""
+
+    def predict_x(self, u=0):
+        self.x = u
+
+
+class SwingEKFReference(SwingEKF):
+    """`SwingEKF` with one filterpy `ExtendedKalmanFilter` per machine (reference, slow),
+    on the same one-machine equations (`swing_*`)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.ekfs = [_SwingEKF1(dim_x=5, dim_z=1) for _ in range(self.m.n)]
+
+    def _advance(self, frame, dt):
+        v, i, f, ok = self._frame(frame)
+        disc = self._discrete(dt)
+        self.nis[:] = np.nan
+        for k, ekf in enumerate(self.ekfs):
+            pr = self.par[k]
+            if not (self.ready[k] or ok[k]):
+                continue
+            meas = swing_measure(v[k], i[k], pr, self.tv[T_SIG2]) if ok[k] else (np.nan,) * 6
+            if not self.ready[k]:
+                ekf.x, ekf.P = swing_begin(k, v[k], i[k], f[k], *meas[2:], pr, self.tv,
+                                           self.hold, self.cur_hold, self.g)
+                self.ready[k] = True
+            else:
+                self._predict(ekf, k, ok[k], meas, i[k], dt, *(d[k] for d in disc))
+                if ok[k]:
+                    self._update(ekf, k, meas[0], meas[1], meas[5])
+            self.x[k], self.P[k] = ekf.x, ekf.P
+
+    def _predict(self, ekf, k, ok, meas, cur, dt, Adq, bdq, Adg, bdg):
+        pr, tv = self.par[k], self.tv
+        u = swing_inputs(k, ok, meas[2], meas[3], cur, meas[4], self.hold, self.cur_hold,
+                         self.g, ekf.x[1], pr, Adg, bdg, tv)
+        xn, F, gs = swing_transition(ekf.x, u[0], u[1], u[3], u[4], dt, pr, Adq, bdq, tv[T_F0])
+        ekf.F, ekf.Q = F, swing_Q(gs, u[2], u[5], bdq, dt, tv)
+        ekf.predict(u=xn)
+
+    def _update(self, ekf, k, theta, emag, r):
+        pr, tv = self.par[k], self.tv
+        ekf.update(np.array([theta]), HJacobian=lambda x: swing_h(x, emag, pr)[1][None, :],
+                   Hx=lambda x: np.array([swing_h(x, emag, pr)[0]]),
+                   R=np.array([[r + tv[T_ANGLE] ** 2]]),
+                   residual=lambda a, b: np.array([_wrap(a[0] - b[0])]))
+        self.nis[k] = ekf.y @ ekf.SI @ ekf.y

@@ -1,0 +1,372 @@
+"""Phasor measurement units (PMUs): what the ESD controllers see in the field.
+
+A PMU at a bus reports, at a fixed rate, the positive-sequence voltage phasor of the bus, the
+current phasor of one generator or storage device there (P and Q follow from the two),
+the frequency and the rate of change of frequency (ROCOF), each with a time stamp
+(IEEE C37.118.1-2011, clause 4: synchrophasor, frequency and ROCOF definitions).  The frames
+reach the controller late (communication latency) and some never arrive (dropped).
+
+True values come from a `SimulationResult`, on its step grid, then linearly interpolated to
+the reporting instants (magnitude and unwrapped angle separately):
+
+- voltage: `vmag`, `vang` of the bus (angles in the synchronous frame, as C37.118's
+  synchrophasor against a nominal-frequency reference, clause 4.2);
+- current of a generator at its terminal bus: the sum of the currents injected into the
+  branches at that bus (Kirchhoff at the terminal bus, which carries no load in the PSTess
+  cases); checked against the simulated electrical power, `P = Re(V conj(I))` (but at
+  the last point, see `phasor_truth`); at another
+  bus (normally its high-voltage bus): the current flowing into that bus through the
+  branches from the terminal bus; of a storage device: `-P_esd / conj(V)` (the device
+  draws real power only; generator sign convention: current into the network);
+- frequency: f = f0 + (1/2 pi) d(theta)/dt of the unwrapped bus voltage angle theta, by
+  second-order centred differences on the step grid (`numpy.gradient`, one-sided at the
+  ends); ROCOF = df/dt the same way.  A network event makes theta jump, so the frequency
+  shows a spike one step wide there, as a real PMU shows one (C37.118.1 excludes such
+  intervals from its compliance limits).
+
+Noise (`PMUSettings`): the accuracy limits of C37.118.1-2011 clause 5.5 (steady-state
+Table 3: total vector error TVE <= 1 %; Table 4: frequency error FE <= 0.005 Hz, ROCOF
+error RFE <= 0.01 Hz/s), or the user's values, are read as k-sigma bounds (k = 3 by
+default).  A phasor X is reported as X (1 + e), e complex, circular Gaussian with
+independent real and imaginary parts of standard deviation s = TVE / (k sqrt 2): to first
+order the magnitude has relative error Re(e) and the angle error Im(e) rad, both of standard
+deviation s (k = 3: s = 0.236 %, 2.36 mrad), and TVE = |e| is Rayleigh distributed with
+RMS value TVE_limit / k, so P(TVE > limit) = exp(-k^2) (1.2e-4 for k = 3).  Frequency
+and ROCOF get independent Gaussian errors of standard deviation FE / k and RFE / k.
+Errors are white: independent between frames, channels and PMUs (a compliance-limit
+worst case for the noise level; real PMU errors are smaller and correlated in time).
+
+Reporting rates: C37.118.1 clause 5.3 (Table 1) lists 10 to 60 frames/s for 60 Hz systems
+and allows higher rates; 30, 60 and 120 frames/s are the ones used here.  Frame k is
+stamped t_k = k / rate; it arrives at t_k + latency, or never with probability `drop_prob`
+(independent per frame and PMU).  Every PMU draws from its own random stream
+(`numpy.random.SeedSequence(seed).spawn`), so a stream is reproducible from its seed and
+adding PMUs at the end does not change the noise of the others.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from stabctl.case import Case
+from stabctl.errors import InputError
+from stabctl.network.ybus import branch_admittances
+from stabctl.dynamics.results import SimulationResult
+from stabctl.storage.devices import hv_bus
+
+RATES = (10.0, 12.0, 15.0, 20.0, 30.0, 60.0, 120.0)   # frames/s at 60 Hz (C37.118.1 5.3)
+KCL_TOLERANCE_PU = 1e-6
+
+
+@dataclass(frozen=True)
+class PMU:
+    """One PMU: the bus whose voltage it reports and whose current it reports.
+
+    bus: bus number; machine: number of the generator whose current is measured (at its
+    terminal bus or at a bus joined to it by a branch); device: number of the storage
+    device (as in `SimulationResult.devices`) whose current is measured instead; neither:
+    voltage, frequency and ROCOF only.
+    """
+
+    bus: int
+    machine: int | None = None
+    device: int | None = None
+
+    def __post_init__(self):
+        if self.machine is not None and self.device is not None:
+            raise InputError(f"PMU at bus {self.bus}: measure a machine or a device, not both")
+
+    @property
+    def label(self) -> str:
+        what = f"G{self.machine}" if self.machine is not None else \
+            f"D{self.device}" if self.device is not None else "V"
+        return f"B{self.bus}:{what}"
+
+
+@dataclass(frozen=True)
+class PMUSettings:
+    """Reporting rate, accuracy limits, latency and losses of a set of PMUs.
+
+    Attributes:
+        rate: frames per second (one of `RATES`).
+        tve: total vector error limit (fraction, 0.01 = 1 %), C37.118.1 Table 3.
+        fe_hz: frequency error limit (Hz), Table 4.
+        rfe_hz_s: ROCOF error limit (Hz/s), Table 4.
+        k_sigma: the limits are k standard deviations (see the module docstring).
+        latency_s: delay from a frame's time stamp to its arrival (s), >= 0.
+        drop_prob: probability that a frame never arrives, in [0, 1).
+    Raises InputError for values out of range.
+    """
+
+    rate: float = 60.0
+    tve: float = 0.01
+    fe_hz: float = 0.005
+    rfe_hz_s: float = 0.01
+    k_sigma: float = 3.0
+    latency_s: float = 0.05
+    drop_prob: float = 0.0
+
+    def __post_init__(self):
+        if self.rate not in RATES:
+            raise InputError(f"PMU rate must be one of {', '.join(f'{r:g}' for r in RATES)} "
+                             f"frames/s, got {self.rate:g}")
+        limits = (self.tve, self.fe_hz, self.rfe_hz_s, self.latency_s)
+        if not (all(0 <= v < float("inf") for v in limits) and 0 < self.k_sigma < float("inf")):
+            raise InputError("PMU accuracy limits and latency must be finite and >= 0, "
+                             "k_sigma finite and > 0")
+        if not 0 <= self.drop_prob < 1:
+            raise InputError(f"dropped-frame probability must be in [0, 1), got {self.drop_prob}")
+
+    @property
+    def sigma_phasor(self) -> float:
+        """Standard deviation of the real and of the imaginary part of the relative phasor
+        error e (so of the relative magnitude error and of the angle error in rad)."""
+        return self.tve / (self.k_sigma * np.sqrt(2.0))
+
+    @property
+    def sigma_freq(self) -> float:
+        """Standard deviation of the frequency error (Hz)."""
+        return self.fe_hz / self.k_sigma
+
+    @property
+    def sigma_rocof(self) -> float:
+        """Standard deviation of the ROCOF error (Hz/s)."""
+        return self.rfe_hz_s / self.k_sigma
+
+
+@dataclass(frozen=True)
+class PhasorTruth:
+    """Noise-free PMU quantities on a time grid: t (n_t,) s; v, i (n_t, n_pmu) complex pu
+    (system base; i is NaN for a PMU without current channel); freq (Hz), rocof (Hz/s)
+    (n_t, n_pmu); f0 nominal frequency (Hz)."""
+
+    t: np.ndarray
+    pmus: tuple
+    v: np.ndarray
+    i: np.ndarray
+    freq: np.ndarray
+    rocof: np.ndarray
+    f0: float
+
+    def at(self, t: np.ndarray) -> "PhasorTruth":
+        """The same quantities linearly interpolated to times t (magnitudes and unwrapped
+        angles separately for the phasors); t within the grid."""
+        return PhasorTruth(t=np.asarray(t, float), pmus=self.pmus,
+                           v=_interp_phasor(t, self.t, self.v), i=_interp_phasor(t, self.t, self.i),
+                           freq=_interp_columns(t, self.t, self.freq),
+                           rocof=_interp_columns(t, self.t, self.rocof), f0=self.f0)
+
+
+class Frame(NamedTuple):
+    """One reporting instant of every PMU: t time stamp (s); valid (n_pmu,) bool (False:
+    the frame was dropped, its values are NaN); v, i complex pu; freq Hz; rocof Hz/s."""
+
+    t: float
+    valid: np.ndarray
+    v: np.ndarray
+    i: np.ndarray
+    freq: np.ndarray
+    rocof: np.ndarray
+
+
+@dataclass(frozen=True)
+class FrameStream:
+    """The measured frames of a set of PMUs, in time-stamp order.
+
+    Attributes:
+        pmus: the PMUs (labels: `labels`); settings: their `PMUSettings`; seed: entropy of
+        the random streams; t (n_f,) time stamps (s); arrival (n_f, n_pmu) arrival times
+        (s, inf for dropped frames); valid (n_f, n_pmu) bool; v, i (n_f, n_pmu) measured
+        phasors (complex pu, NaN where dropped or no current channel); freq (Hz), rocof
+        (Hz/s) (n_f, n_pmu); true: the noise-free values at the time stamps.
+    """
+
+    pmus: tuple
+    settings: PMUSettings
+    seed: int
+    t: np.ndarray
+    arrival: np.ndarray
+    valid: np.ndarray
+    v: np.ndarray
+    i: np.ndarray
+    freq: np.ndarray
+    rocof: np.ndarray
+    true: PhasorTruth
+
+    @property
+    def labels(self) -> list[str]:
+        return [p.label for p in self.pmus]
+
+    @property
+    def power(self) -> np.ndarray:
+        """Measured complex power S = V conj(I) (pu system base, generator convention),
+        (n_f, n_pmu); P = S.real, Q = S.imag."""
+        return self.v * np.conj(self.i)
+
+    def __len__(self) -> int:
+        return self.t.size
+
+    def frame(self, k: int) -> Frame:
+        """Frame k (all PMUs at time stamp t[k])."""
+        return Frame(float(self.t[k]), self.valid[k], self.v[k], self.i[k], self.freq[k],
+                     self.rocof[k])
+
+    def __iter__(self):
+        return (self.frame(k) for k in range(self.t.size))
+
+
+# -- true quantities from a simulation --------------------------------------------------
+def machine_pmus(case: Case, at: str = "terminal") -> tuple:
+    """One PMU per generator measuring its current: at its terminal bus (at="terminal") or
+    its high-voltage bus (at="hv", `stabctl.storage.devices.hv_bus`). Raises InputError otherwise."""
+    if at not in ("terminal", "hv"):
+        raise InputError(f"PMU placement must be 'terminal' or 'hv', got {at!r}")
+    nums = [int(n) for n in case.machines.number]
+    buses = [int(b) for b in case.machines.bus] if at == "terminal" else \
+        [hv_bus(case, n) for n in nums]
+    return tuple(PMU(bus=b, machine=n) for b, n in zip(buses, nums))
+
+
+def bus_frequency(t: np.ndarray, vang: np.ndarray, f0: float) -> tuple[np.ndarray, np.ndarray]:
+    """Frequency (Hz) and ROCOF (Hz/s) of bus voltages from their angles.
+
+    t (n_t,) strictly increasing s; vang (n_t, n) rad (wrapped or not).  f = f0 +
+    d(unwrap(vang))/dt / (2 pi), ROCOF = df/dt, both by second-order differences on the
+    (possibly non-uniform) grid, centred inside and one-sided at the ends
+    (`numpy.gradient`, edge_order 2).  Raises InputError for fewer than 3 points or a
+    non-increasing grid.
+    """
+    if t.size < 3 or np.any(np.diff(t) <= 0):
+        raise InputError("bus frequency needs at least 3 strictly increasing time points")
+    f = f0 + np.gradient(np.unwrap(vang, axis=0), t, axis=0, edge_order=2) / (2 * np.pi)
+    return f, np.gradient(f, t, axis=0, edge_order=2)
+
+
+def phasor_truth(case: Case, result: SimulationResult, pmus) -> PhasorTruth:
+    """True PMU quantities of `pmus` on the result's step grid (see the module docstring).
+
+    A repeated time point (a zero-length interval at an event) keeps its last value.  The
+    check of generator currents against pelect leaves out the run's last point, whose
+    pelect and voltages the simulator may take from different evaluations (storage
+    switching in the last step).  Raises UnknownBusError / CaseError for unknown buses or
+    machines, InputError for a device not in the result or not at the PMU's bus, or a
+    generator current that cannot be reconstructed (P from the phasors differs from the
+    simulated pelect by more than 1e-6 pu: load at the terminal bus, or a branch there
+    tripped or faulted).
+    """
+    keep = np.r_[np.diff(result.t) > 0, True]
+    t = result.t[keep]
+    V = (result.vmag * np.exp(1j * result.vang))[keep]
+    cols = case.bus_indices([p.bus for p in pmus])
+    cur = np.stack([_current(case, result, p, V, keep) for p in pmus], axis=1)
+    freq, rocof = bus_frequency(t, np.angle(V[:, cols]), case.freq_hz)
+    return PhasorTruth(t=t, pmus=tuple(pmus), v=V[:, cols], i=cur, freq=freq, rocof=rocof,
+                       f0=case.freq_hz)
+
+
+def _current(case: Case, result: SimulationResult, pmu: PMU, V: np.ndarray, keep) -> np.ndarray:
+    """True current phasor (n_t,) of the PMU's current channel (NaN if none)."""
+    n = V.shape[0]
+    b = case.bus_index(pmu.bus)
+    if pmu.device is not None:
+        return _device_current(result, pmu, V[:, b], keep)
+    if pmu.machine is None:
+        return np.full(n, np.nan + 0j)
+    k = case.machine_index(pmu.machine)
+    term = case.bus_index(int(case.machines.bus[k]))
+    ba = branch_admittances(case)
+    if b == term:   # Kirchhoff at the terminal bus: everything leaving it into the network
+        cur = V[:, term] * (case.buses.gshunt[term] + 1j * case.buses.bshunt[term])
+        for j in np.flatnonzero(ba.f == term):
+            cur = cur + ba.yff[j] * V[:, term] + ba.yft[j] * V[:, ba.t[j]]
+        for j in np.flatnonzero(ba.t == term):
+            cur = cur + ba.ytf[j] * V[:, ba.f[j]] + ba.ytt[j] * V[:, term]
+        # the last point is left out: with storage switching in the last step the simulator
+        # records its pelect and bus voltages from different evaluations
+        p_err = np.abs((V[:, term] * np.conj(cur)).real - result.pelect[keep, k])[:-1].max()
+        if p_err > KCL_TOLERANCE_PU:
+            raise InputError(f"PMU at bus {pmu.bus}: the current of machine {pmu.machine} "
+                             f"is not the sum of its terminal branch currents (P differs "
+                             f"from pelect by {p_err:.2e} pu: load, fault or trip at the bus)")
+        return cur
+    rows = np.flatnonzero(((ba.f == term) & (ba.t == b)) | ((ba.f == b) & (ba.t == term)))
+    if rows.size == 0:
+        raise InputError(f"PMU at bus {pmu.bus}: no branch joins it to the terminal bus "
+                         f"{int(case.machines.bus[k])} of machine {pmu.machine}")
+    cur = np.zeros(n, complex)
+    for j in rows:   # current into bus b = minus the current injected into the branch at b
+        cur -= (ba.ytf[j] * V[:, term] + ba.ytt[j] * V[:, b]) if ba.t[j] == b else \
+            (ba.yff[j] * V[:, b] + ba.yft[j] * V[:, term])
+    return cur
+
+
+def _device_current(result: SimulationResult, pmu: PMU, v: np.ndarray, keep) -> np.ndarray:
+    """Current injected by a storage device (it draws real power P_esd only)."""
+    info = {d["device"]: d for d in result.meta.get("storage", [])}
+    if pmu.device not in info:
+        raise InputError(f"PMU at bus {pmu.bus}: storage device {pmu.device} is not in the result")
+    if info[pmu.device]["bus"] != pmu.bus:
+        raise InputError(f"PMU at bus {pmu.bus}: storage device {pmu.device} is at bus "
+                         f"{info[pmu.device]['bus']}")
+    col = int(np.flatnonzero(result.devices == pmu.device)[0])
+    return -result.pesd[keep, col] / np.conj(v)
+
+
+# -- measurement ------------------------------------------------------------------------
+def frame_times(t_end: float, rate: float) -> np.ndarray:
+    """Reporting instants k / rate in [0, t_end] (s); the integer arithmetic keeps
+    multiples of 1/60 s exact, so events at whole cycles fall on frames."""
+    return np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
+
+
+def measure(truth: PhasorTruth, settings: PMUSettings = PMUSettings(),
+            seed: int = 0) -> FrameStream:
+    """The frame stream of the PMUs of `truth`: true values at the reporting instants
+    within the truth's time span, plus noise, latency and dropped frames (module docstring).
+
+    seed: non-negative integer; the same seed gives the same stream.  Raises InputError
+    for a negative seed or a truth shorter than one frame interval.
+    """
+    if seed < 0:
+        raise InputError(f"seed must be >= 0, got {seed}")
+    t = truth.t[0] + frame_times(truth.t[-1] - truth.t[0], settings.rate)
+    if t.size < 2:
+        raise InputError("the run is shorter than one PMU frame interval")
+    true = truth.at(t)
+    n_f, n_p = true.v.shape
+    noise = [_pmu_noise(np.random.default_rng(s), n_f, settings)
+             for s in np.random.SeedSequence(seed).spawn(n_p)]
+    ev, ei, ef, er, drop = (np.stack(a, axis=1) for a in zip(*noise))
+    valid = ~drop
+    nan = np.where(valid, 1.0, np.nan)
+    return FrameStream(
+        pmus=truth.pmus, settings=settings, seed=seed, t=t,
+        arrival=np.where(valid, t[:, None] + settings.latency_s, np.inf), valid=valid,
+        v=true.v * (1 + ev) * nan, i=true.i * (1 + ei) * nan,
+        freq=(true.freq + ef) * nan, rocof=(true.rocof + er) * nan, true=true)
+
+
+def _pmu_noise(rng: np.random.Generator, n: int, s: PMUSettings):
+    """One PMU's errors for n frames, drawn in a fixed order: relative voltage and current
+    phasor errors (complex), frequency (Hz) and ROCOF (Hz/s) errors, dropped mask."""
+    ev = rng.normal(0.0, s.sigma_phasor, (n, 2)) @ np.array([1.0, 1j])
+    ei = rng.normal(0.0, s.sigma_phasor, (n, 2)) @ np.array([1.0, 1j])
+    ef = rng.normal(0.0, s.sigma_freq, n)
+    er = rng.normal(0.0, s.sigma_rocof, n)
+    drop = rng.random(n) < s.drop_prob
+    return ev, ei, ef, er, drop
+
+
+def _interp_columns(t, tp, y):
+    """Linear interpolation of every column of y (n_tp, n) to times t."""
+    return np.stack([np.interp(t, tp, y[:, j]) for j in range(y.shape[1])], axis=1)
+
+
+def _interp_phasor(t, tp, z):
+    """Interpolate complex columns by magnitude and unwrapped angle (NaN columns stay)."""
+    mag = _interp_columns(t, tp, np.abs(z))
+    ang = _interp_columns(t, tp, np.unwrap(np.nan_to_num(np.angle(z)), axis=0))
+    return np.where(np.isnan(mag), np.nan + 0j, mag * np.exp(1j * ang))

@@ -1,0 +1,65 @@
+"""Readers and writers of case data: PST/PSTess (``.m``, evaluated JSON, stabctl JSON),
+PSS/E RAW and DYR, and ANDES's cases (cross-validation).
+
+:func:`load_case` is the one entry point for a case by name or path.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from stabctl.case import CASE_DIR, Case
+from stabctl.errors import CaseError
+from stabctl.io import pst as pstio
+
+__all__ = ["load_case", "list_cases"]
+
+
+def list_cases() -> dict[str, str]:
+    """The built-in cases.
+
+    Returns
+    -------
+    dict[str, str]
+        Case name (as :func:`load_case` takes it) -> one-line description, read from the
+        packaged JSON files, sorted by name.
+    """
+    out = {}
+    for path in sorted(CASE_DIR.glob("*.json")):
+        out[path.stem] = pstio.read_case_header(path).get("description", "")
+    return out
+
+
+def load_case(name_or_path: str | Path) -> Case:
+    """Load a case: a built-in by name (``"kundur"``, ``"miniwecc"``) or a file path.
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        A built-in case name (see :func:`list_cases`), or the path of a file: ``.json`` in
+        stabctl's own format or PSTess's evaluated-matrix JSON (told apart by content), or
+        a PST ``.m`` data file of literal matrices.  A text with a path separator or a
+        ``.json``/``.m`` suffix is always taken as a path.
+
+    Returns
+    -------
+    Case
+        The validated case (units as in :class:`~stabctl.case.Case`).
+
+    Raises
+    ------
+    CaseError
+        The name is neither a built-in nor an existing file, or the file is malformed.
+    """
+    text = str(name_or_path)
+    builtin = CASE_DIR / f"{text}.json"
+    if "/" not in text and "\\" not in text and not text.endswith((".json", ".m")):
+        if builtin.is_file():
+            return pstio.read_case_json(builtin)
+        raise CaseError(
+            f"unknown case '{text}': built-ins are {', '.join(list_cases()) or 'none'}"
+        )
+    path = Path(name_or_path)
+    if not path.is_file():
+        raise CaseError(f"case file not found: {path}")
+    return pstio.read_any(path)

@@ -1,0 +1,513 @@
+"""PSS/E dynamic data (.dyr) to PST tables: machines, exciters, PSS and governors.
+
+`read_dyr` parses the records of a DYR file; `dyr_tables` maps them, per generator of the
+RAW file, to the PST matrices `mac_con`, `exc_con`, `pss_con`, `tg_con` that
+`stabctl.case` accepts (MachineTable, ExciterTable, PssTable, GovernorTable).
+
+Record syntax (PSS/E Program Operation Manual, "Dynamics Data File"): ``IBUS 'MODEL' ID
+CON(J) ... CON(J+n) /`` over one or more lines, fields separated by blanks or commas;
+ICONs of IEEEG1 (JBUS, M), IEEEST (ICS, IB) and ST2CUT (MODE, BUSR, MODE2, BUSR2) come
+first among the numbers.  Parameter
+order per model (PSS/E Model Library, as ANDES `andes/io/psse-dyr.yaml`) and the table
+field each parameter is copied to are declared once, with the table columns, in
+`stabctl.case.params` (`DyrModel`); the mappers here only compute what is not a copy
+(unit changes, products, saturation fits, the PSS type).  Mapping and the known
+modelling differences: docs/pst_models.md section 12.
+
+Units: machine, exciter and governor data on the machine base `mbase` (MVA), as PSS/E.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from stabctl.case.params import EXCITER, GOVERNOR, MACHINE, PSS, DyrModel, Family
+from stabctl.errors import CaseError
+
+_TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
+#: table kind -> the declaration of its columns and DYR models (stabctl.case.params)
+FAMILY: dict[str, Family] = {"machine": MACHINE, "exciter": EXCITER, "pss": PSS,
+                             "governor": GOVERNOR}
+#: DYR model -> its declaration (parameter names and order, fields copied to the table)
+DYR_MODELS: dict[str, DyrModel] = {m.name: m for f in FAMILY.values() for m in f.dyr}
+#: numbers after the id per model (PSS/E Model Library: ICONs, then CONs)
+N_PARAMS = {name: len(m.fields) for name, m in DYR_MODELS.items()}
+
+
+@dataclass(frozen=True)
+class DyrRecord:
+    """One DYR record: file and 1-based line where it starts, bus number, model name
+    (upper case), machine id (quotes and blanks stripped, upper case), the numbers after
+    the id (ICONs then CONs; NaN for a non-number of a model stabctl does not map)."""
+
+    file: str
+    line: int
+    bus: int
+    model: str
+    id: str
+    params: tuple[float, ...]
+
+    def where(self) -> str:
+        return f"{self.file}:{self.line}"
+
+    def label(self) -> str:
+        return f"{self.where()} {self.model} (bus {self.bus}, id {self.id})"
+
+
+@dataclass(frozen=True)
+class DyrTables:
+    """PST matrices built from DYR records, rows in machine order, columns as the case
+    tables (MachineTable, ExciterTable, PssTable, GovernorTable): mac_con (n_gen, 24),
+    exc_con (n, 24), pss_con (n, 24), tg_con (n, 24) (None when no record of that kind);
+    unsupported: the records skipped (`on_unsupported="skip"`), in file order."""
+
+    mac_con: np.ndarray
+    exc_con: np.ndarray | None
+    pss_con: np.ndarray | None
+    tg_con: np.ndarray | None
+    unsupported: tuple[DyrRecord, ...]
+
+
+class _Unsupported(Exception):
+    """A record of a model (or model option) stabctl does not represent."""
+
+
+# -- parsing ----------------------------------------------------------------------------------
+
+def read_dyr(path) -> list[DyrRecord]:
+    """Records of a PSS/E DYR file, in file order.
+
+    Args:
+        path: the .dyr file.
+    Returns:
+        list of DyrRecord.
+    Raises:
+        CaseError "{file}:{line}: ..." for an unreadable file, a record not ended by '/'
+        or without a quoted model name after the bus, and, for the models stabctl maps, a
+        non-integer bus or a parameter that is not a number (other models' records are
+        kept, with bus 0 and NaN parameters there, for the unsupported report).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(errors="replace")
+    except OSError as exc:
+        raise CaseError(f"{path}: cannot read DYR file: {exc.strerror or exc}") from None
+    records, tokens, start = [], [], 0
+    for n, line in enumerate(text.splitlines(), 1):
+        for tok in _TOKEN.findall(line):
+            if tok == "/":
+                if tokens:
+                    records.append(_record(path.name, start, tokens))
+                tokens = []
+                break                      # the rest of the line after '/' is a comment
+            if not tokens:
+                start = n
+            tokens.append(tok)
+    if tokens:
+        raise CaseError(f"{path.name}:{start}: record not terminated by '/'")
+    return records
+
+
+def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
+    if len(tokens) < 3 or not tokens[1].startswith("'"):
+        raise CaseError(f"{file}:{line}: malformed record {' '.join(tokens)[:60]!r}: expected "
+                        "IBUS 'MODEL' ID parameters /")
+    model = tokens[1].strip("'").strip().upper()
+    bus = _integer(tokens[0])
+    if bus is None:
+        if model in N_PARAMS:
+            raise CaseError(f"{file}:{line}: {model} bus field {tokens[0]!r} is not an integer")
+        bus = 0
+    params = []
+    for k, tok in enumerate(tokens[3:], 1):
+        try:
+            value = float(tok.replace("D", "E").replace("d", "e"))
+        except ValueError:
+            if model in N_PARAMS:
+                raise CaseError(f"{file}:{line}: {model} parameter {k} {tok!r} is not a "
+                                "number") from None
+            value = float("nan")          # e.g. USRMDL's quoted names: reported unsupported
+        else:
+            if model in N_PARAMS and not math.isfinite(value):
+                raise CaseError(f"{file}:{line}: {model} parameter {k} {tok!r} is not a "
+                                "finite number")
+        params.append(value)
+    return DyrRecord(file, line, bus, model, _machine_id(tokens[2]), tuple(params))
+
+
+def _machine_id(tok) -> str:
+    """Machine id as compared between RAW and DYR: quotes and blanks stripped, upper case."""
+    return str(tok).strip().strip("'").strip().upper()
+
+
+def _integer(tok: str) -> int | None:
+    try:
+        v = float(tok.strip("'"))
+    except ValueError:
+        return None
+    return int(v) if math.isfinite(v) and v.is_integer() else None
+
+
+# -- mapping ------------------------------------------------------------------------------------
+
+def dyr_tables(records, generators, on_unsupported: str = "error",
+               conventions: str = "pst") -> DyrTables:
+    """PST matrices for the generators of a RAW file from their DYR records.
+
+    Args:
+        records: DyrRecord sequence (`read_dyr`).
+        generators: sequence of dicts in RAW order, keys "number" (1-based machine number,
+            the row of mac_con), "bus", "id", "mbase" (MVA), "ra", "xsource" (ZSORCE on
+            mbase, pu); optional "pg", "qg" (MW, Mvar) to split a bus's generation among
+            several machines (mac_con columns 22, 23), "sbase" (system base, MVA, default
+            100; used by conventions="andes").
+        on_unsupported: "error" (raise, listing every unsupported record) or "skip" (leave
+            those records out and return them in `unsupported`).
+        conventions: "pst" (PST's models as they are) or "andes" (ANDES 2.0's reading of
+            the PSS/E models, for like-for-like comparisons: GENROU/GENSAL without speed
+            effects, mac_con column 24 = 0; EXDC2's regulator limits not scaled by the
+            terminal voltage, i.e. PST's DC1 instead of DC2; IEEEX1's scaled by it (PST's
+            DC2 instead of DC1); DC exciters with PSS/E's quadratic saturation and K_E as
+            given; IEEEG1's gate rate limits
+            Uo, Uc read on the system base, i.e. times SBASE/MBASE on the machine base).
+    Returns:
+        DyrTables.
+    Raises:
+        CaseError naming file:line, model and (bus, id): wrong parameter count, a value the
+        model cannot take (R = 0, H = 0, ...), two records of one kind for a generator, a
+        generator without machine model, or (on_unsupported="error") unsupported records:
+        models or options not mapped, records for a generator not among `generators`.
+    """
+    if on_unsupported not in ("error", "skip"):
+        raise CaseError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
+    if conventions not in CONVENTIONS:
+        raise CaseError(f"conventions must be one of {CONVENTIONS}, got {conventions!r}")
+    rows, skipped = _map_records(records, generators, conventions)
+    if skipped and on_unsupported == "error":
+        raise CaseError("unsupported DYR records (use on_unsupported='skip' to leave them "
+                        "out):\n" + "\n".join(f"  {r.label()}: {why}" for r, why in skipped))
+    _check_machines(generators, rows["machine"])
+    _set_fractions(generators, rows["machine"])
+    tables = {k: _matrix(rows[k], width) for k, width in _WIDTH.items()}
+    return DyrTables(mac_con=tables["machine"], exc_con=tables["exciter"],
+                     pss_con=tables["pss"], tg_con=tables["governor"],
+                     unsupported=tuple(r for r, _ in skipped))
+
+
+def _map_records(records, generators, conventions):
+    """Rows per kind {kind: {machine number: (record, row)}} and the unsupported records
+    with their reasons, in file order; raises CaseError for malformed records."""
+    andes = conventions == "andes"
+    gens = {(int(g["bus"]), _machine_id(g["id"])): g for g in generators}
+    rows: dict[str, dict[int, tuple[DyrRecord, list]]] = {k: {} for k in _MAPPERS}
+    skipped = []
+    for rec in records:
+        kind = _KIND.get(rec.model)
+        try:
+            if kind is None:
+                raise _Unsupported(f"model {rec.model} is not mapped")
+            _check_count(rec)
+            gen = gens.get((rec.bus, rec.id))
+            if gen is None:
+                raise _Unsupported("no such generator in the RAW data (or out of service)")
+            mapper = _ANDES_MAPPERS.get(rec.model) if andes else None
+            row = (mapper or _MAPPERS[kind][rec.model])(rec, gen)
+        except _Unsupported as why:
+            skipped.append((rec, str(why)))
+            continue
+        if kind == "machine" and andes:
+            row[MACHINE.col("speed_effects") - 1] = 0.0
+        number = int(gen["number"])
+        if number in rows[kind]:
+            raise CaseError(f"{rec.label()}: second {kind} model for this generator (first at "
+                            f"{rows[kind][number][0].where()})")
+        rows[kind][number] = (rec, row)
+    for number in [k for k in rows["pss"] if k not in rows["exciter"]]:
+        skipped.append((rows["pss"].pop(number)[0], "its machine has no (supported) exciter"))
+    return rows, sorted(skipped, key=lambda item: (item[0].file, item[0].line))
+
+
+def _check_count(rec: DyrRecord) -> None:
+    want = N_PARAMS[rec.model]
+    if len(rec.params) != want:
+        raise CaseError(f"{rec.label()}: needs {want} parameters after the id, got "
+                        f"{len(rec.params)}")
+
+
+def _check_machines(generators, machines) -> None:
+    missing = [g for g in generators if int(g["number"]) not in machines]
+    if missing:
+        raise CaseError("generator(s) without a machine model record in the DYR data: "
+                        + ", ".join(f"machine {g['number']} (bus {g['bus']}, id {g['id']})"
+                                    for g in missing))
+
+
+def _set_fractions(generators, machines) -> None:
+    """mac_con columns 22, 23: each machine's share of its bus's P and Q generation."""
+    by_bus: dict[int, list] = {}
+    for g in generators:
+        by_bus.setdefault(int(g["bus"]), []).append(g)
+    for bus, gs in by_bus.items():
+        if len(gs) == 1:
+            continue
+        if any("pg" not in g or "qg" not in g for g in gs):
+            raise CaseError(f"bus {bus} has {len(gs)} generators: give 'pg' and 'qg' of each to "
+                            "split the bus generation (mac_con pfrac, qfrac)")
+        for key, col in (("pg", MACHINE.col("pfrac") - 1), ("qg", MACHINE.col("qfrac") - 1)):
+            total = sum(float(g[key]) for g in gs)
+            for g in gs:
+                share = float(g[key]) / total if total else 1.0 / len(gs)
+                machines[int(g["number"])][1][col] = share
+
+
+def _matrix(rows: dict, width: int) -> np.ndarray | None:
+    if not rows:
+        return None
+    return np.array([rows[k][1] for k in sorted(rows)], float).reshape(len(rows), width)
+
+
+# -- machines (PST mac_con, MachineTable) -----------------------------------------------------
+
+def _mac_row(rec, gen, **cols) -> list:
+    """mac_con row of a machine record: the declared copies (stabctl.case.params.MACHINE),
+    the RAW data (number, bus, mbase, ra) and ``cols``."""
+    cols.update(number=gen["number"], bus=gen["bus"], mva=gen["mbase"], ra=gen["ra"],
+                col19=gen["number"], pfrac=1.0, qfrac=1.0, speed_effects=1.0)
+    return MACHINE.dyr_row(DYR_MODELS[rec.model], rec.params, **cols)
+
+
+def _positive_h(rec, H) -> None:
+    if H <= 0:
+        raise CaseError(f"{rec.label()}: H = {H} (PSS/E infinite bus) is not supported; "
+                        "H must be > 0")
+
+
+def _genrou(rec, gen):
+    """GENROU: T'do T''do T'qo T''qo H D Xd Xq X'd X'q X''d Xl S(1.0) S(1.2) -> mac_sub
+    with x''q = x''d (as PSS/E)."""
+    v = DYR_MODELS["GENROU"].values(rec.params)
+    _positive_h(rec, v["H"])
+    return _mac_row(rec, gen, xqpp=v["X''d"])
+
+
+def _gensal(rec, gen):
+    """GENSAL: T'do T''do T''qo H D Xd Xq X'd X''d Xl S(1.0) S(1.2) -> mac_sub without the
+    q-axis transient circuit: x'q = x_q, T'qo = 0 (E'd stays 0, docs 12.1)."""
+    v = DYR_MODELS["GENSAL"].values(rec.params)
+    _positive_h(rec, v["H"])
+    return _mac_row(rec, gen, xqp=v["Xq"], xqpp=v["X''d"], Tqop=0.0)
+
+
+def _gencls(rec, gen):
+    """GENCLS: H D -> PST classical mac_em (x_d = 0) behind x'd = ZSORCE X."""
+    _positive_h(rec, DYR_MODELS["GENCLS"].values(rec.params)["H"])
+    return _mac_row(rec, gen, xdp=gen["xsource"])
+
+
+# -- exciters (PST exc_con, ExciterTable) ------------------------------------------------------
+
+def _exc_row(rec, gen, model=None, **cols) -> list:
+    """exc_con row of an exciter record: type and copies as declared for ``model`` (default
+    the record's; stabctl.case.params.EXCITER), the machine number and ``cols`` (table
+    names or the DC exciters' ``alt`` names)."""
+    return EXCITER.dyr_row(model or DYR_MODELS[rec.model], rec.params,
+                           machine=gen["number"], **cols)
+
+
+def _sexs(rec, gen):
+    """SEXS: TA/TB TB K TE EMIN EMAX -> smpexc (type 0): lead-lag T_C = (TA/TB) TB over
+    T_B, K_A = K, T_A = TE, limits [EMIN, EMAX] (PST's limiter, docs 12.2)."""
+    v = DYR_MODELS["SEXS"].values(rec.params)
+    return _exc_row(rec, gen, TC=v["TA/TB"] * v["TB"])
+
+
+def exp_saturation(E1, SE1, E2, SE2) -> tuple[float, float]:
+    """(Asat, Bsat) of SE(E) = Asat exp(Bsat E) through (E1, SE1), (E2, SE2); (0, 0) when a
+    point is 0 (no saturation, as PSS/E and ANDES).  Raises CaseError for E1 = E2 or
+    SE of opposite signs."""
+    if 0 in (E1, SE1, E2, SE2):
+        return 0.0, 0.0
+    if E1 == E2 or SE1 * SE2 < 0:
+        raise CaseError(f"saturation points ({E1}, {SE1}), ({E2}, {SE2}) give no exponential fit")
+    B = np.log(SE2 / SE1) / (E2 - E1)
+    return float(SE1 * np.exp(-B * E1)), float(B)
+
+
+#: ESDC2A's VRMAX = 0 read as no upper limit (ANDES; PST would compute it from E2)
+VRMAX_UNLIMITED = 999.0
+
+
+def _dc(model, zero_vrmax_unlimited=False, andes=False):
+    """Mapper of a DC exciter record read as DYR model ``model`` (its PST type)."""
+    decl = DYR_MODELS[model]
+
+    def mapper(rec, gen):
+        """IEEEX1 (DC1, type 1) / EXDC2, ESDC2A (DC2, type 2): TR KA TA TB TC VRMAX VRMIN KE
+        TE KF TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; saturation as Asat, Bsat (E2
+        column 0); K_E = 0 is computed at initialisation (V_R0 = 0, docs 2.3).  andes: the
+        quadratic saturation through the points and K_E as given (exc_con columns 23, 24)."""
+        v = decl.values(rec.params)
+        cols = {}
+        if zero_vrmax_unlimited and v["VRMAX"] == 0:
+            cols["Vrmax"] = VRMAX_UNLIMITED
+        if v["Switch"] != 0:
+            raise _Unsupported(f"Switch = {v['Switch']} is not modelled (only 0)")
+        points = (v["E1"], v["SE(E1)"], v["E2"], v["SE(E2)"])
+        if andes:
+            return _exc_row(rec, gen, decl, **cols, **dict(zip(("E1", "SE1", "E2", "SE2"),
+                                                               points)), dc_sat=1, ke_given=1)
+        try:
+            A, B = exp_saturation(*points)
+        except CaseError as exc:
+            raise CaseError(f"{rec.label()}: {exc}") from None
+        return _exc_row(rec, gen, decl, **cols, SE1=A, E2=0.0, SE2=B)
+    return mapper
+
+
+def _exst1(rec, gen):
+    """EXST1: TR VIMAX VIMIN TC TB KA TA VRMAX VRMIN KC KF TF -> stabctl type 4 (columns
+    as declared: VImax, VImin 10-11, KC 17, KF, TF 21-22)."""
+    return _exc_row(rec, gen)
+
+
+def _esst3a(rec, gen):
+    """ESST3A: TR VIMAX VIMIN KM TC TB KA TA VRMAX VRMIN KG KP KI VBMAX KC XL VGMAX THETAP TM
+    VMMAX VMMIN -> PST exc_st3 (type 3) when TA = 0: ST3A's gain KA is PST's K_J, its inner
+    loop KM/(1 + s TM) limited [VMMIN, VMMAX] is PST's K_A/(1 + s T_A) limited [Vrmin,
+    Vrmax]; VRMAX/VRMIN and VBMAX have no PST counterpart (Efdmax = VBMAX VMMAX; docs
+    12.2)."""
+    v = DYR_MODELS["ESST3A"].values(rec.params)
+    if v["TA"] >= 1e-3:
+        raise _Unsupported(f"TA = {v['TA']:g} s: the regulator lag before the inner loop has "
+                           "no PST exc_st3 counterpart (only TA = 0)")
+    return _exc_row(rec, gen, Efdmax=v["VBMAX"] * v["VMMAX"])
+
+
+# -- PSS (PST pss_con, PssTable) ----------------------------------------------------------------
+
+def _pss_row(rec, gen, **cols) -> list:
+    """pss_con row of a PSS record: the declared copies (stabctl.case.params.PSS), the
+    machine number and ``cols``."""
+    return PSS.dyr_row(DYR_MODELS[rec.model], rec.params, machine=gen["number"], **cols)
+
+
+def _local_inputs(*pairs) -> None:
+    """PSS/E input codes and remote buses: only local speed (1) or electrical power (3)."""
+    for code, bus in pairs:
+        if code not in (0.0, 1.0, 3.0) or bus != 0:
+            raise _Unsupported(f"input code {code:g} at bus {bus:g} (only local speed 1 or "
+                               "electrical power 3)")
+
+
+def _washout(gain_T, T):
+    if gain_T == 0 or T < 1e-3:
+        raise _Unsupported("washout numerator time constant 0 (a lag instead) or washout "
+                           "time constant below 1e-3 s")
+
+
+def _ieeest(rec, gen):
+    """IEEEST: ICS IB A1..A6 T1..T6 KS LSMAX LSMIN VCU VCL -> PST pss (type 1 speed, 2
+    power) when exactly equivalent (A1..A6 = 0, a lead-lag with lag >= 1e-3 s): washout
+    KS sT5/(1 + sT6) = K_Tw s/(1 + s T_w), K_Tw = KS T5, T_w = T6; else stabctl's PSS/E
+    stabiliser (type 3).  VCU/VCL cut-off unsupported (docs 12.3)."""
+    v = DYR_MODELS["IEEEST"].values(rec.params)
+    ics, A = v["ICS"], [v[f"A{k}"] for k in range(1, 7)]
+    _local_inputs((ics, v["IB"]))
+    _washout(v["T5"], v["T6"])
+    if ics == 0 or v["VCU"] or v["VCL"]:
+        raise _Unsupported("no input (ICS 0) or VCU/VCL cut-off")
+    KTw = v["KS"] * v["T5"]
+    lead_lags = [(v[a], v[b]) for a, b in (("T1", "T2"), ("T3", "T4"))]
+    stages = [(a, b) for a, b in lead_lags if a or b]
+    if not any(A) and stages and all(b >= 1e-3 for _, b in stages):
+        (a1, b1), (a2, b2) = (stages + [(0.0, 0.0)])[:2]
+        return _pss_row(rec, gen, type={1.0: 1, 3.0: 2}[ics], KTw=KTw, T1=a1, T2=b1, T3=a2,
+                        T4=b2)
+    (a1, b1), (a2, b2) = lead_lags
+    return _pss_row(rec, gen, type=3, input1=ics, K1=1.0, KTw=KTw, T1=a1, T2=b1, T3=a2, T4=b2,
+                    **{f"A{k}": a for k, a in enumerate(A, 1)})
+
+
+def _st2cut(rec, gen):
+    """ST2CUT: MODE BUSR MODE2 BUSR2 K1 K2 T1..T10 LSMAX LSMIN VCU VCL -> stabctl's PSS/E
+    stabiliser (type 3): K1/(1 + sT1) + K2/(1 + sT2) inputs, washout sT3/(1 + sT4), lead-lags
+    T5/T6, T7/T8, T9/T10.  VCU/VCL cut-off unsupported."""
+    v = DYR_MODELS["ST2CUT"].values(rec.params)
+    _local_inputs((v["MODE"], v["BUSR"]), (v["MODE2"], v["BUSR2"]))
+    _washout(v["T3"], v["T4"])
+    if v["MODE"] == 0 or v["VCU"] or v["VCL"]:
+        raise _Unsupported("no first input (MODE 0) or VCU/VCL cut-off")
+    return _pss_row(rec, gen)
+
+
+# -- governors (PST tg_con, GovernorTable) ----------------------------------------------------
+
+def _tg_row(rec, gen, **cols) -> list:
+    """tg_con row of a governor record: type and copies as declared
+    (stabctl.case.params.GOVERNOR), the machine number, speed set point 1 and ``cols``."""
+    return GOVERNOR.dyr_row(DYR_MODELS[rec.model], rec.params, machine=gen["number"], wf=1.0,
+                            **cols)
+
+
+def _tgov1(rec, gen):
+    """TGOV1: R T1 VMAX VMIN T2 T3 Dt -> tg_con type 2 (1/R, valve T1 with non-windup
+    [VMIN, VMAX], lead-lag T2/T3, damping Dt)."""
+    R = DYR_MODELS["TGOV1"].values(rec.params)["R"]
+    if R <= 0:
+        raise CaseError(f"{rec.label()}: droop R = {R} must be > 0")
+    return _tg_row(rec, gen, invR=1 / R)
+
+
+def _ieeeg1(rec, gen):
+    """IEEEG1: JBUS M K T1 T2 T3 Uo Uc PMAX PMIN T4 K1 K2 T5 K3 K4 T6 K5 K6 T7 K7 K8 ->
+    tg_con type 3 (HP and LP powers summed on the one shaft; JBUS must be 0)."""
+    jbus = DYR_MODELS["IEEEG1"].values(rec.params)["JBUS"]
+    if jbus != 0:
+        raise _Unsupported(f"cross-compound unit (JBUS = {jbus:g}): LP shaft on another machine")
+    return _tg_row(rec, gen)
+
+
+_MAPPERS = {
+    "machine": {"GENROU": _genrou, "GENSAL": _gensal, "GENCLS": _gencls},
+    "exciter": {"SEXS": _sexs, "IEEEX1": _dc("IEEEX1"), "EXDC2": _dc("EXDC2"),
+                "ESDC2A": _dc("ESDC2A", zero_vrmax_unlimited=True), "EXST1": _exst1,
+                "ESST3A": _esst3a},
+    "pss": {"IEEEST": _ieeest, "ST2CUT": _st2cut},
+    "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1},
+}
+_KIND = {model: kind for kind, models in _MAPPERS.items() for model in models}
+
+
+def _ieeeg1_andes(rec, gen):
+    """IEEEG1 as ANDES 2.0 reads it: Uo, Uc (pu/s) on the system base, not converted to
+    the machine base as its K, PMAX, PMIN are (``NumParam(power=True)``)."""
+    row = _ieeeg1(rec, gen)
+    scale = gen.get("sbase", 100.0) / gen["mbase"]
+    for name in ("Uo", "Uc"):
+        row[GOVERNOR.col(name) - 1] *= scale
+    return row
+
+
+def _esdc2a_andes(rec, gen):
+    """ESDC2A as ANDES 2.0 solves it: quadratic saturation, K_E as given, and its voltage
+    error taken from the bus voltage itself, not the transducer lag (``vi = vref - v -
+    WF_y``), i.e. T_R = 0."""
+    row = _dc("ESDC2A", zero_vrmax_unlimited=True, andes=True)(rec, gen)
+    row[EXCITER.col("TR") - 1] = 0.0
+    return row
+
+
+#: conventions="andes": ANDES 2.0's DC exciters (IEEEX1, EXDC2, ESDC2A) use the quadratic
+#: saturation and keep K_E = 0; its EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
+#: terminal voltage as PSS/E's and IEEE DC2, while its IEEEX1 scales them by the terminal
+#: voltage (``ieeex1.py``: ``VRMAX * v``, so PST's DC2, not DC1); its ESDC2A bypasses T_R;
+#: its IEEEG1 rate limits are on the system base
+_ANDES_MAPPERS = {"IEEEX1": _dc("EXDC2", andes=True), "EXDC2": _dc("IEEEX1", andes=True),
+                  "ESDC2A": _esdc2a_andes, "IEEEG1": _ieeeg1_andes}
+CONVENTIONS = ("pst", "andes")
+_WIDTH = {kind: len(family.params) for kind, family in FAMILY.items()}

@@ -1,0 +1,659 @@
+"""PSS/E RAW power-flow data (versions 32, 33, 34) as stabctl's PST tables.
+
+Source of the record layouts: PSS/E Program Operation Manual (POM), chapter "Power Flow
+Raw Data File Contents" of versions 32, 33 and 34 (sections "Case Identification Data",
+"Bus Data", "Load Data", "Fixed Shunt Data", "Generator Data", "Non-Transformer Branch
+Data", "Transformer Data", "Switched Shunt Data"), and MATPOWER's ``psse_convert_xfmr``
+for the transformer base conversions.
+
+Read (everything in per unit on the system base ``SBASE`` after conversion):
+
+* case identification: SBASE, version, BASFRQ (60 Hz when absent), the two title lines;
+* buses: number, BASKV, IDE (1 load, 2 generator, 3 swing; 4 isolated buses are dropped
+  with every record at them, as PSS/E leaves them out of the solution), VM, VA;
+* loads (in service): PL + jQL constant power, IP + jIQ constant current (MW/Mvar at
+  1 pu), YP + jYQ constant admittance (MW/Mvar at 1 pu, YQ < 0 inductive). The admittance
+  part is exact as a bus shunt ``G + jB = (YP + jYQ) / SBASE``. The constant-current part
+  enters the bus load at the bus's RAW voltage VM (``IP * VM``), as PST and ANDES do. In
+  the dynamic run (PSS/E converts loads with CONL before dynamics; the RAW file does not
+  say how): ``loads="impedance"`` (default) makes every bus load constant impedance (no
+  ``load_con`` rows: PST's default, ANDES's default ``p2z = q2z = 1``); ``loads="raw"``
+  keeps the RAW composition in PST's non-conforming load model (``load_con``):
+  ``p_power = PL / (PL + IP*VM)``, ``p_current = IP*VM / (PL + IP*VM)`` (Q alike). PST's
+  network solution can fail under deep voltage dips with constant-power loads (PSS/E
+  switches them to constant impedance below PQBRAK; stabctl does not);
+* fixed shunts (in service): GL + jBL (MW/Mvar at 1 pu) into the bus shunt;
+* generators (in service): PG, QG, QT, QB, VS, IREG, MBASE, ZSORCE = ZR + jZX (pu on
+  MBASE). Several generators at one bus add up; the bus is PV (IDE 2) or swing (IDE 3) at
+  VS, with Q limits the sums of QT and QB (a sum of exactly 0 reads as "no limit", PST's
+  convention). An IDE 2 bus without generator in service is a load bus;
+* non-transformer branches (in service): R, X, B; line shunts GI, BI, GJ, BJ only when
+  they are a symmetric susceptance (BI = BJ, GI = GJ = 0: added to B);
+* two-winding transformers (in service): CW 1 (pu of bus base kV), 2 (kV), 3 (pu of
+  NOMV); CZ 1 (system base), 2 (SBASE1-2 and NOMV1 base), 3 (load loss W and |Z|);
+  WINDV1, WINDV2, ANG1. The circuit bus I - ideal t1:1 - Z - ideal 1:t2 - bus J is PST's
+  branch with tap t1/t2 on the I side and impedance Z*t2^2 (MATPOWER's convention when
+  t2 = 1); the phase is PST's, the opposite sign of ANG1 (:mod:`stabctl.network.ybus`). Taps
+  stay at WINDV (automatic adjustment COD is not modelled, as ANDES); magnetizing
+  admittance MAG1/MAG2, impedance correction tables (TAB1) are unsupported;
+* switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt.
+
+Skipped without a word: area, zone, owner, inter-area transfer, substation and system
+switching device data (v34 breakers: none is accepted either, see below), v34 system-wide
+data. Unsupported, reported as ``file:line record``: three-winding transformers, dc lines,
+FACTS, GNE, induction machines, multi-section lines, v34 system switching devices,
+generators with a step-up transformer in the record (RT, XT) or remote voltage
+regulation (IREG), and the transformer features above.
+
+Bus numbers stay as in the RAW file. Branch rows: lines in file order, then transformers;
+``--circuit K`` of stabctl's commands is the K-th record of a bus pair in that order.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from stabctl.case import PQ, PV, SWING
+from stabctl.errors import CaseError
+
+__all__ = ["RawSource", "Generator", "RawData", "read_raw", "split_fields"]
+
+_SECTIONS = {
+    32: ("bus", "load", "fixed shunt", "generator", "branch", "transformer", "area",
+         "two-terminal dc line", "vsc dc line", "impedance correction table",
+         "multi-terminal dc line", "multi-section line", "zone", "inter-area transfer",
+         "owner", "facts device", "switched shunt", "gne device"),
+}
+_SECTIONS[33] = _SECTIONS[32] + ("induction machine",)
+_SECTIONS[34] = ("system-wide data", "bus", "load", "fixed shunt", "generator", "branch",
+                 "system switching device", "transformer") + _SECTIONS[32][6:] + (
+                     "induction machine", "substation")
+
+_SKIPPED = {"system-wide data", "area", "zone", "inter-area transfer", "owner",
+            "substation", "impedance correction table"}
+_IDE_ISOLATED = 4
+#: largest magnitude of a RAW number (bus numbers, MW, kV, pu alike are far below)
+_LARGEST = 1e12
+_TOKEN = re.compile(r"'[^']*'?|/|,|[^,\s'/]+")
+
+
+@dataclass(frozen=True)
+class RawSource:
+    """Where a record is: file, 1-based line, record name (``"generator at bus 3 '1'"``)."""
+
+    file: str
+    line: int
+    record: str
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line} {self.record}"
+
+
+@dataclass(frozen=True)
+class Generator:
+    """One in-service generator of the RAW file (RAW order).
+
+    Attributes: number (1-based position, the machine number of ``mac_con``), bus, id
+    (the RAW ID, stripped), mbase (MVA), ra and xsource (ZSORCE, pu on MBASE), pg and qg
+    (MW, Mvar, as in the RAW), source (:class:`RawSource`).
+    """
+
+    number: int
+    bus: int
+    id: str
+    mbase: float
+    ra: float
+    xsource: float
+    pg: float
+    qg: float
+    source: RawSource
+
+    def as_dyr(self) -> dict:
+        """The dict ``stabctl.io.dyr.dyr_tables`` takes for this generator (pg and qg split
+        a bus's generation among its machines)."""
+        return {"number": self.number, "bus": self.bus, "id": self.id, "mbase": self.mbase,
+                "ra": self.ra, "xsource": self.xsource, "pg": self.pg, "qg": self.qg}
+
+
+@dataclass(frozen=True, eq=False)
+class RawData:
+    """A RAW file as PST matrices.
+
+    Attributes:
+        name: case name (file stem); title: the two title lines joined by " / ".
+        version: RAW version (32, 33, 34); base_mva: SBASE (MVA); freq_hz: BASFRQ (Hz).
+        bus: PST ``bus`` matrix, shape (n_bus, 15) (:class:`stabctl.case.BusTable`).
+        line: PST ``line`` matrix, shape (n_branch, 10).
+        load_con: PST ``load_con`` rows, shape (n, 5) (empty unless ``loads="raw"``).
+        generators: in-service generators in RAW order.
+        unsupported: records that could not be represented, in file order.
+    """
+
+    name: str
+    title: str
+    version: int
+    base_mva: float
+    freq_hz: float
+    bus: np.ndarray
+    line: np.ndarray
+    load_con: np.ndarray
+    generators: tuple[Generator, ...]
+    unsupported: tuple[RawSource, ...]
+
+    def matrices(self) -> dict:
+        """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``)
+        for :func:`stabctl.io.pst.case_from_matrices`."""
+        return {"bus": self.bus, "line": self.line, "load_con": self.load_con,
+                "basmva": self.base_mva, "sys_freq": self.freq_hz}
+
+
+# --------------------------------------------------------------------------------------
+# tokens and records
+# --------------------------------------------------------------------------------------
+
+
+def split_fields(text: str) -> list[str]:
+    """Fields of one RAW data line (POM "Power Flow Raw Data File Contents"): separated by
+    commas or blanks, ``'...'`` strings kept whole (quotes removed, blanks inside kept),
+    a ``/`` outside quotes starts a comment; two commas in a row give an empty field (the
+    PSS/E default value)."""
+    fields, expect_value = [], True
+    for tok in _TOKEN.findall(text):
+        if tok == "/":
+            break
+        if tok == ",":
+            if expect_value:
+                fields.append("")
+            expect_value = True
+        else:
+            fields.append(tok[1:].removesuffix("'") if tok.startswith("'") else tok)
+            expect_value = False
+    return fields
+
+
+@dataclass
+class _Rec:
+    """One RAW record: its lines' fields, the file and its first line number."""
+
+    file: str
+    line: int
+    lines: list[list[str]]
+    section: str = ""
+
+    def num(self, row: int, k: int, default: float | None = None) -> float:
+        """Field ``k`` (0-based) of the record's line ``row`` as a float; a missing or
+        empty field takes ``default`` (an error when None)."""
+        vals = self.lines[row]
+        if k >= len(vals) or vals[k] == "":
+            if default is None:
+                self.fail(f"field {k + 1} missing")
+            return float(default)
+        try:
+            v = float(vals[k].replace("D", "E").replace("d", "e"))
+        except ValueError:
+            self.fail(f"field {k + 1} '{vals[k]}' is not a number")
+        if not math.isfinite(v):
+            self.fail(f"field {k + 1} '{vals[k]}' is not a finite number")
+        if abs(v) > _LARGEST:
+            self.fail(f"field {k + 1} '{vals[k]}' is out of range (|value| <= {_LARGEST:g})")
+        return v
+
+    def int(self, row: int, k: int, default: int | None = None) -> int:
+        """Field ``k`` of line ``row`` as an integer (see :meth:`num`)."""
+        v = self.num(row, k, default)
+        if not float(v).is_integer():
+            self.fail(f"field {k + 1} '{self.lines[row][k]}' is not an integer")
+        return int(v)
+
+    def text(self, row: int, k: int, default: str = "1") -> str:
+        """Field ``k`` of line ``row`` as a stripped string (an ID)."""
+        vals = self.lines[row]
+        return vals[k].strip() if k < len(vals) and vals[k].strip() else default
+
+    def source(self, what: str) -> RawSource:
+        return RawSource(self.file, self.line, what)
+
+    def fail(self, what: str):
+        raise CaseError(f"{self.file}:{self.line} {self.section} record: {what}")
+
+
+def _header(lines: list[str], path: Path) -> tuple[float, int, float]:
+    """(SBASE, version, BASFRQ) from the case identification record."""
+    if len(lines) < 3:
+        raise CaseError(f"{path}:1 case identification: a RAW file starts with three lines")
+    rec = _Rec(path.name, 1, [split_fields(lines[0])], "case identification")
+    sbase, rev, freq = rec.num(0, 1), rec.int(0, 2, 33), rec.num(0, 5, 60.0)
+    if rev not in _SECTIONS:
+        rec.fail(f"RAW version {rev} is not supported (32, 33 or 34)")
+    if sbase <= 0 or freq <= 0:
+        rec.fail(f"SBASE {sbase:g} MVA and BASFRQ {freq:g} Hz must be > 0")
+    return sbase, rev, freq
+
+
+def _record_lines(sec: str, first: list[str], rec_file: str, lineno: int) -> int:
+    """Lines of a record that starts with ``first`` in section ``sec``."""
+    if sec == "transformer":
+        k = _Rec(rec_file, lineno, [first], sec).int(0, 2, 0)
+        return 5 if k != 0 else 4
+    return {"two-terminal dc line": 3, "vsc dc line": 3}.get(sec, 1)
+
+
+#: Fields per record line of the sections stabctl reads: (fewest, most) by version
+#: group (32/33, 34). The fewest are the fields up to the last one the reader uses (a
+#: shorter line would silently take PSS/E defaults for data that are in every file
+#: PSS/E writes); the most are the POM record layouts (with ownership data), so that a
+#: record of another section is not read as one of this section.
+_FIELDS = {
+    "bus": ((9, 13), (9, 13)),
+    "load": ((11, 15), (11, 20)),
+    "fixed shunt": ((5, 5), (5, 5)),
+    "generator": ((15, 28), (16, 30)),
+    "branch": ((14, 24), (24, 34)),
+    "switched shunt": ((10, 26), (11, 36)),
+}
+#: transformer record lines (line 1, 2, 3, 4) of a two-winding transformer: (fewest, most)
+_XFMR_FIELDS = (((12, 23), (2, 3), (3, 18), (2, 2)), ((12, 24), (2, 3), (3, 28), (2, 2)))
+#: sections that writers of an older version leave out: 'Q' may end the data before them
+_OPTIONAL_TAIL = {"gne device", "induction machine", "substation"}
+
+
+def _check_fields(rec: _Rec, version: int) -> None:
+    """CaseError naming file:line when a record line has fewer or more fields than its
+    section's layout (a cut or merged line, or a record of another section)."""
+    group = 1 if version >= 34 else 0
+    if rec.section in _FIELDS:
+        limits = [_FIELDS[rec.section][group]]
+    elif rec.section == "transformer" and len(rec.lines) == 4:
+        limits = _XFMR_FIELDS[group]
+    else:
+        return
+    for row, ((lo, hi), vals) in enumerate(zip(limits, rec.lines)):
+        if not lo <= len(vals) <= hi:
+            want = f"{lo}" if lo == hi else f"{lo} to {hi}"
+            where = f" (line {row + 1} of the record)" if len(limits) > 1 else ""
+            raise CaseError(f"{rec.file}:{rec.line + row} {rec.section} record{where}: "
+                            f"{len(vals)} field(s), the v{version} layout has {want}: a "
+                            "cut or merged line, or a missing '0 /' section terminator")
+
+
+def _records(lines: list[str], path: Path, version: int):
+    """Yield records (``_Rec``, with ``section``) of the data sections, in file order.
+
+    A record whose first field is ``0`` ends a section, ``Q`` ends the data, ``@!``
+    lines (v34 column headings) and blank lines are skipped. Every section must be ended
+    by its ``0`` record before ``Q`` (sections that older writers leave out, GNE devices,
+    induction machines, substations, may be missing) and the file must end with ``Q`` or
+    after the last section: a file cut short is refused (CaseError naming file:line),
+    never read as a smaller case. Each record line must have its section's field count
+    (:data:`_FIELDS`).
+    """
+    sections = _SECTIONS[version]
+    k, pending, need, last = 0, None, 0, 3
+    for lineno, text in enumerate(lines[3:], start=4):
+        if not text.strip() or text.lstrip().startswith("@!"):
+            continue
+        last = lineno
+        fields = split_fields(text)
+        if pending is not None:
+            pending.lines.append(fields)
+            if len(pending.lines) == need:
+                _check_fields(pending, version)
+                yield pending
+                pending = None
+            continue
+        head = fields[0].strip() if fields else ""
+        if head.upper() == "Q":
+            missing = sections[k:]
+            if missing and not set(missing) <= _OPTIONAL_TAIL:
+                raise CaseError(f"{path.name}:{lineno}: 'Q' (end of data) inside the "
+                                f"{sections[k]} data: {len(missing)} section(s) not ended by "
+                                "their '0 /' record (a terminator is missing)")
+            return
+        if k >= len(sections):
+            raise CaseError(f"{path.name}:{lineno}: data after the last section "
+                            f"({sections[-1]}) and no 'Q' record")
+        if head == "0":
+            k += 1
+            continue
+        pending = _Rec(path.name, lineno, [fields], sections[k])
+        need = _record_lines(sections[k], fields, path.name, lineno)
+        if need == 1:
+            _check_fields(pending, version)
+            yield pending
+            pending = None
+    if pending is not None:
+        pending.fail(f"file ends inside the record ({len(pending.lines)} of {need} lines)")
+    if k < len(sections):
+        raise CaseError(f"{path.name}:{last}: the file ends in the {sections[k]} data, "
+                        "without its '0 /' terminator and the 'Q' record: the file is cut "
+                        "short (nothing imported)")
+
+
+# --------------------------------------------------------------------------------------
+# building the tables
+# --------------------------------------------------------------------------------------
+
+
+@dataclass
+class _Builder:
+    """Accumulates the PST tables while the records are read."""
+
+    version: int
+    base: float
+    loads: str
+    buses: dict = field(default_factory=dict)      # number -> bus row (list of 15)
+    load_src: dict = field(default_factory=dict)   # bus -> its first load record
+    isolated: set = field(default_factory=set)
+    load_parts: dict = field(default_factory=dict)  # bus -> [Pp, Qp, Pi, Qi]
+    branches: list = field(default_factory=list)
+    gens: list = field(default_factory=list)
+    gen_vs: dict = field(default_factory=dict)
+    unsupported: list = field(default_factory=list)
+    seen: dict = field(default_factory=dict)       # (section, ids) -> first line
+
+    def once(self, rec: _Rec, key: tuple, what: str):
+        """CaseError when a record with the same identity came before (a duplicated
+        record: PSS/E refuses it, and a parallel circuit needs its own CKT id)."""
+        first = self.seen.setdefault((rec.section, *key), rec.line)
+        if first != rec.line:
+            rec.fail(f"{what} appears twice (first at line {first})")
+
+    def skip(self, rec: _Rec, what: str):
+        self.unsupported.append(rec.source(what))
+
+    def bus_row(self, rec: _Rec, number: int, role: str):
+        """The bus row of ``number``, None for an isolated bus; CaseError if unknown."""
+        if number in self.isolated:
+            return None
+        if number not in self.buses:
+            rec.fail(f"{role} bus {number} is not in the bus data")
+        return self.buses[number]
+
+    def v0(self, number: int) -> float:
+        return self.buses[number][1]
+
+
+def _bus(b: _Builder, rec: _Rec):
+    """Bus: I, 'NAME', BASKV, IDE, AREA, ZONE, OWNER, VM, VA (POM Bus Data)."""
+    num, ide = rec.int(0, 0), rec.int(0, 3, 1)
+    if num <= 0 or num in b.buses or num in b.isolated:
+        rec.fail(f"bus number {num} must be a positive integer used once")
+    if ide == _IDE_ISOLATED:
+        b.isolated.add(num)
+        return
+    if ide not in (1, 2, 3):
+        rec.fail(f"bus {num}: IDE {ide} must be 1, 2, 3 or 4")
+    vm = rec.num(0, 7, 1.0)
+    if vm <= 0:
+        rec.fail(f"bus {num}: VM {vm:g} must be > 0")
+    kind = {1: PQ, 2: PV, 3: SWING}[ide]
+    b.buses[num] = [num, vm, rec.num(0, 8, 0.0), 0, 0, 0, 0, 0, 0, kind, 0, 0,
+                    rec.num(0, 2, 0.0), 0, 0]
+
+
+def _load(b: _Builder, rec: _Rec):
+    """Load: I, ID, STATUS, AREA, ZONE, PL, QL, IP, IQ, YP, YQ (POM Load Data)."""
+    num = rec.int(0, 0)
+    b.once(rec, (num, rec.text(0, 1)), f"load at bus {num} '{rec.text(0, 1)}'")
+    row = b.bus_row(rec, num, "load")
+    if row is None or rec.int(0, 2, 1) == 0:
+        return
+    pl, ql, ip, iq, yp, yq = (rec.num(0, k, 0.0) for k in range(5, 11))
+    v0 = b.v0(num)
+    b.load_src.setdefault(num, rec)
+    parts = b.load_parts.setdefault(num, [0.0, 0.0, 0.0, 0.0])
+    for i, v in enumerate((pl, ql, ip * v0, iq * v0)):
+        parts[i] += v / b.base
+    row[7] += yp / b.base
+    row[8] += yq / b.base
+
+
+def _fixed_shunt(b: _Builder, rec: _Rec):
+    """Fixed shunt: I, ID, STATUS, GL, BL (POM Fixed Shunt Data)."""
+    b.once(rec, (rec.int(0, 0), rec.text(0, 1)),
+           f"fixed shunt at bus {rec.int(0, 0)} '{rec.text(0, 1)}'")
+    row = b.bus_row(rec, rec.int(0, 0), "fixed shunt")
+    if row is not None and rec.int(0, 2, 1) != 0:
+        row[7] += rec.num(0, 3, 0.0) / b.base
+        row[8] += rec.num(0, 4, 0.0) / b.base
+
+
+def _generator(b: _Builder, rec: _Rec):
+    """Generator: I, ID, PG, QG, QT, QB, VS, IREG, [NREG (v34)], MBASE, ZR, ZX, RT, XT,
+    GTAP, STAT (POM Generator Data)."""
+    num, gid = rec.int(0, 0), rec.text(0, 1)
+    b.once(rec, (num, gid), f"generator at bus {num} '{gid}'")
+    row = b.bus_row(rec, num, "generator")
+    o = 1 if b.version >= 34 else 0  # v34 inserts NREG after IREG
+    if row is None or rec.int(0, 14 + o, 1) == 0:
+        return
+    what = f"generator at bus {num} '{gid}'"
+    ireg = rec.int(0, 7, 0)
+    if ireg not in (0, num):
+        return b.skip(rec, f"{what}: remote voltage regulation of bus {ireg}")
+    if rec.num(0, 11 + o, 0.0) != 0 or rec.num(0, 12 + o, 0.0) != 0:
+        return b.skip(rec, f"{what}: step-up transformer in the generator record (RT, XT)")
+    if row[9] == PQ:
+        return b.skip(rec, f"{what}: generator at a load bus (IDE 1)")
+    vs = rec.num(0, 6, 1.0)
+    if b.gen_vs.setdefault(num, vs) != vs:
+        return b.skip(rec, f"{what}: VS {vs:g} differs from bus {num}'s first generator")
+    _add_generator(b, rec, row, vs, o, gid)
+
+
+def _add_generator(b: _Builder, rec: _Rec, row: list, vs: float, o: int, gid: str):
+    pg, qg = rec.num(0, 2, 0.0), rec.num(0, 3, 0.0)
+    row[1] = vs
+    row[3] += pg / b.base
+    row[4] += qg / b.base
+    row[10] += rec.num(0, 4, 9999.0) / b.base
+    row[11] += rec.num(0, 5, -9999.0) / b.base
+    mbase = rec.num(0, 8 + o, b.base)
+    if mbase <= 0:
+        rec.fail(f"generator at bus {row[0]} '{gid}': MBASE {mbase:g} must be > 0")
+    b.gens.append(Generator(
+        number=len(b.gens) + 1, bus=int(row[0]), id=gid, mbase=mbase,
+        ra=rec.num(0, 9 + o, 0.0), xsource=rec.num(0, 10 + o, 1.0), pg=pg, qg=qg,
+        source=rec.source(f"generator at bus {row[0]} '{gid}'")))
+
+
+def _ends(b: _Builder, rec: _Rec, i: int, j: int, what: str):
+    """Both end rows of a branch, or None if one end is an isolated bus."""
+    fi, tj = b.bus_row(rec, i, f"{what} from"), b.bus_row(rec, j, f"{what} to")
+    if i == j:
+        rec.fail(f"{what} joins bus {i} to itself")
+    return None if fi is None or tj is None else (fi, tj)
+
+
+def _branch(b: _Builder, rec: _Rec):
+    """Non-transformer branch: I, J, CKT, R, X, B, [NAME (v34)], ratings, GI, BI, GJ, BJ,
+    ST (POM Non-Transformer Branch Data; J < 0 marks the metered end)."""
+    i, j, ckt = rec.int(0, 0), abs(rec.int(0, 1)), rec.text(0, 2)
+    what = f"branch {i}-{j} '{ckt}'"
+    b.once(rec, (min(i, j), max(i, j), ckt), what)
+    if _ends(b, rec, i, j, "branch") is None:
+        return
+    k = 19 if b.version >= 34 else 9  # GI
+    if rec.int(0, k + 4, 1) == 0:
+        return
+    r, x, bc = rec.num(0, 3), rec.num(0, 4), rec.num(0, 5, 0.0)
+    gi, bi, gj, bj = (rec.num(0, k + n, 0.0) for n in range(4))
+    if gi != 0 or gj != 0 or bi != bj:
+        return b.skip(rec, f"{what}: line shunts GI, BI, GJ, BJ other than BI = BJ")
+    if r < 0 or (r == 0 and x == 0):
+        rec.fail(f"{what}: R = {r:g} must be >= 0 and R + jX not 0")
+    b.branches.append([i, j, r, x, bc + bi + bj, 0, 0, 0, 0, 0])
+
+
+def _transformer(b: _Builder, rec: _Rec):
+    """Transformer (POM Transformer Data): line 1 I, J, K, CKT, CW, CZ, CM, MAG1, MAG2,
+    NMETR, 'NAME', STAT; line 2 R1-2, X1-2, SBASE1-2; line 3 WINDV1, NOMV1, ANG1, ...,
+    TAB1 (field 14; v34: field 24, after 12 ratings and NODE1); line 4 WINDV2, NOMV2."""
+    i, j, k3, ckt = rec.int(0, 0), rec.int(0, 1), rec.int(0, 2, 0), rec.text(0, 3)
+    what = f"transformer {i}-{j}" + (f"-{k3}" if k3 else "") + f" '{ckt}'"
+    b.once(rec, (*sorted((i, j, k3)), ckt), what)
+    if k3 != 0:
+        return b.skip(rec, f"three-winding {what}")
+    ends = _ends(b, rec, i, j, "transformer")
+    if ends is None or rec.int(0, 11, 1) == 0:
+        return
+    tab = rec.int(2, 23 if b.version >= 34 else 13, 0)
+    if rec.num(0, 7, 0.0) != 0 or rec.num(0, 8, 0.0) != 0 or tab != 0:
+        return b.skip(rec, f"{what}: magnetizing admittance (MAG1, MAG2) or impedance "
+                           "correction table (TAB1)")
+    t1, t2 = _windings(rec, ends, what)
+    r, x = _impedance(b, rec, ends[0], what)
+    r2, x2 = r * t2 ** 2, x * t2 ** 2
+    if r2 < 0 or (r2 == 0 and x2 == 0):
+        rec.fail(f"{what}: R1-2 must be >= 0 and R1-2 + jX1-2 not 0")
+    ang = rec.num(2, 2, 0.0)
+    b.branches.append([i, j, r2, x2, 0, t1 / t2, -ang if ang else 0.0, 0, 0, 0])
+
+
+def _windings(rec: _Rec, ends, what: str) -> tuple[float, float]:
+    """Turns ratios (t1, t2) in pu of the bus base voltages from CW, WINDV, NOMV."""
+    cw = rec.int(0, 4, 1)
+    if cw not in (1, 2, 3):
+        rec.fail(f"{what}: CW {cw} must be 1, 2 or 3")
+    out = []
+    for row, bus in ((2, ends[0]), (3, ends[1])):
+        kv = bus[12] or 1.0
+        windv, nomv = rec.num(row, 0, 1.0) or 1.0, rec.num(row, 1, 0.0) or kv
+        out.append({1: windv, 2: windv / kv, 3: windv * nomv / kv}[cw])
+    return out[0], out[1]
+
+
+def _impedance(b: _Builder, rec: _Rec, bus_i: list, what: str) -> tuple[float, float]:
+    """R1-2, X1-2 on the system base and bus I's base voltage from CZ."""
+    cz = rec.int(0, 5, 1)
+    r, x = rec.num(1, 0), rec.num(1, 1)
+    if cz == 1:
+        return r, x
+    if cz not in (2, 3):
+        rec.fail(f"{what}: CZ {cz} must be 1, 2 or 3")
+    sbase = rec.num(1, 2, b.base)
+    if sbase <= 0:
+        rec.fail(f"{what}: SBASE1-2 {sbase:g} must be > 0")
+    if cz == 3:  # R1-2 is the load loss in W, X1-2 the impedance magnitude
+        r = r / 1e6 / sbase
+        if x < r:
+            rec.fail(f"{what}: |Z| {x:g} pu below the loss resistance {r:g} pu (CZ 3)")
+        x = math.sqrt(x * x - r * r)
+    kv = bus_i[12] or 1.0
+    nomv = rec.num(2, 1, 0.0) or kv
+    scale = (b.base / sbase) * (nomv / kv) ** 2
+    return r * scale, x * scale
+
+
+def _switched_shunt(b: _Builder, rec: _Rec):
+    """Switched shunt at its initial susceptance: I, MODSW, ADJM, STAT, VSWHI, VSWLO,
+    SWREM, [NREG (v34)], RMPCT, 'RMIDNT', BINIT (POM Switched Shunt Data); v32/v33 have
+    one per bus."""
+    if b.version < 34:
+        b.once(rec, (rec.int(0, 0),), f"switched shunt at bus {rec.int(0, 0)}")
+    row = b.bus_row(rec, rec.int(0, 0), "switched shunt")
+    if row is not None and rec.int(0, 3, 1) != 0:
+        row[8] += rec.num(0, 10 if b.version >= 34 else 9) / b.base
+
+
+_HANDLERS = {"bus": _bus, "load": _load, "fixed shunt": _fixed_shunt,
+             "generator": _generator, "branch": _branch, "transformer": _transformer,
+             "switched shunt": _switched_shunt}
+
+
+def _load_con(b: _Builder) -> np.ndarray:
+    """Bus loads into the bus rows and the PST ``load_con`` fractions (see module doc)."""
+    rows = []
+    for num, (pp, qp, pi, qi) in b.load_parts.items():
+        bus = b.buses[num]
+        bus[5], bus[6] = pp + pi, qp + qi
+        if b.loads != "raw":
+            continue
+        fp, fq = _fraction(pp, pi), _fraction(qp, qi)
+        if fp is None or fq is None:
+            b.skip(b.load_src[num], f"loads at bus {num}: constant-power and constant-"
+                                    "current parts of opposite sign (no load_con fractions)")
+        else:
+            rows.append([num, fp, fq, 1.0 - fp, 1.0 - fq])
+    return np.array(rows, dtype=float).reshape(-1, 5)
+
+
+def _fraction(power: float, current: float) -> float | None:
+    """Constant-power share of ``power + current``; None if the two differ in sign."""
+    if power * current < 0:
+        return None
+    total = power + current
+    return 1.0 if total == 0 else power / total
+
+
+def _demote_idle_pv(b: _Builder):
+    """IDE 2 buses without an in-service generator are load buses (PSS/E)."""
+    with_gen = {g.bus for g in b.gens}
+    for num, row in b.buses.items():
+        if row[9] == PV and num not in with_gen:
+            row[9] = PQ
+
+
+def read_raw(path: str | Path, loads: str = "impedance") -> RawData:
+    """Read a PSS/E RAW file (version 32, 33 or 34) into PST matrices.
+
+    Args:
+        path: the ``.raw`` file.
+        loads: ``"impedance"`` makes every load constant impedance in the dynamic run;
+            ``"raw"`` keeps each load's PSS/E composition there (``load_con``).
+
+    Returns:
+        :class:`RawData` (bus, line, load_con matrices in pu on SBASE, the generators,
+        the unsupported records).
+
+    Raises:
+        CaseError: unreadable file, unsupported version, a malformed record (a field that
+            is not a number, a bus number not in the bus data, a zero impedance, ...),
+            naming ``file:line`` and the record; no swing bus.
+
+    Source: PSS/E POM v32-v34 "Power Flow Raw Data File Contents" (see module doc).
+    """
+    if loads not in ("raw", "impedance"):
+        raise CaseError(f"loads must be 'raw' or 'impedance', got {loads!r}")
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    except OSError as exc:
+        raise CaseError(f"cannot read {path}: {exc}") from None
+    base, version, freq = _header(lines, path)
+    b = _Builder(version, base, loads)
+    for rec in _records(lines, path, version):
+        _dispatch(b, rec)
+    return _finish(b, path, lines, version, freq)
+
+
+def _dispatch(b: _Builder, rec: _Rec):
+    handler = _HANDLERS.get(rec.section)
+    if handler is not None:
+        try:
+            handler(b, rec)
+        except (OverflowError, ZeroDivisionError) as exc:   # values no case can hold
+            rec.fail(f"the values give no finite per-unit data ({exc})")
+    elif rec.section not in _SKIPPED:
+        b.skip(rec, f"{rec.section} record")
+
+
+def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawData:
+    if not b.buses:
+        raise CaseError(f"{path.name}: no bus data")
+    _demote_idle_pv(b)
+    load_con = _load_con(b)
+    bus = np.array(list(b.buses.values()), dtype=float)
+    if not np.any(bus[:, 9] == SWING):
+        raise CaseError(f"{path.name}: no swing bus (IDE 3) in the bus data")
+    line = np.array(b.branches, dtype=float).reshape(-1, 10)
+    title = " / ".join(t.strip() for t in lines[1:3] if t.strip())
+    return RawData(name=path.stem, title=title, version=version, base_mva=b.base,
+                   freq_hz=freq, bus=bus, line=line, load_con=load_con,
+                   generators=tuple(b.gens),
+                   unsupported=tuple(sorted(b.unsupported, key=lambda s: s.line)))

@@ -1,0 +1,509 @@
+"""Reading and writing cases: PST/PSTess data files and stabctl's own JSON format.
+
+Three inputs give a :class:`~stabctl.case.Case`:
+
+* PSTess evaluated-matrix JSON (``{"bus": [[...]], "line": [[...]], "mac_con": ...}``),
+  one key per matrix the data file defines (as written by GNU Octave from a PSTess ``.m``);
+* PST ``.m`` data files made only of literal matrices (``name = [ ... ];`` with ``...``
+  continuations, ``%`` comments, ``;`` or newline row separators, ``disp(...)`` lines);
+  anything computed (expressions, variables, loops, ``if``) is refused with the line;
+* stabctl's own JSON case format (:func:`write_case_json` / :func:`read_case_json`):
+  named columns per table, a format version, the source and the licence note.
+
+PST matrix names mapped to tables: ``bus`` -> buses, ``line`` -> branches, ``mac_con`` ->
+machines, ``exc_con`` -> exciters, ``pss_con`` -> pss, ``tg_con`` -> governors,
+``load_con`` -> loads; ``sw_con`` is kept as ``Case.sw_con``; every other numeric matrix
+(``lmod_con``, ``PDC``, ...) goes to ``Case.extra``. Bus and machine numbers stay as in the
+data. ``basmva`` and ``sys_freq`` are read when the file defines them (PST defaults 100 MVA,
+60 Hz otherwise). Source: PST manual sections 1.3 and 2.1 (data file structure).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import warnings
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from stabctl.case import TABLES, Case
+from stabctl.errors import CaseError
+
+__all__ = [
+    "FORMAT",
+    "FORMAT_VERSION",
+    "PST_TABLES",
+    "case_from_matrices",
+    "parse_m",
+    "read_pst_m",
+    "read_pstess_json",
+    "read_any",
+    "write_case_json",
+    "read_case_json",
+    "read_case_header",
+    "case_to_dict",
+    "case_from_dict",
+]
+
+#: Identifier and version of stabctl's own JSON case format.
+FORMAT = "stabctl-case"
+FORMAT_VERSION = 1
+
+#: PST matrix name -> Case table field.
+PST_TABLES: Mapping[str, str] = {
+    "bus": "buses",
+    "line": "branches",
+    "mac_con": "machines",
+    "exc_con": "exciters",
+    "pss_con": "pss",
+    "tg_con": "governors",
+    "load_con": "loads",
+}
+
+_SCALARS = {"basmva": "base_mva", "sys_freq": "freq_hz"}
+_DEFAULT_BASE_MVA = 100.0
+_DEFAULT_FREQ_HZ = 60.0
+_DEFAULTS = {"base_mva": _DEFAULT_BASE_MVA, "freq_hz": _DEFAULT_FREQ_HZ}
+_UNITS = {"base_mva": "MVA", "freq_hz": "Hz"}
+
+
+# --------------------------------------------------------------------------------------
+# PST matrices -> Case
+# --------------------------------------------------------------------------------------
+
+
+def case_from_matrices(
+    mats: Mapping[str, Any],
+    name: str,
+    *,
+    source: str = "",
+    description: str = "",
+) -> Case:
+    """Build a Case from PST matrices by PST name (``bus``, ``line``, ``mac_con``, ...).
+
+    ``mats`` values are nested lists or arrays (rows x columns); ``bus`` and ``line`` are
+    required. ``basmva``/``sys_freq`` scalars set the bases. Raises :class:`CaseError`
+    for a missing ``bus``/``line`` or any invalid table (see :mod:`stabctl.case`).
+    """
+    for key in ("bus", "line"):
+        if key not in mats or _is_empty(mats[key]):
+            raise CaseError(f"{name}: the data defines no '{key}' matrix")
+    tables = {field: TABLES[field].from_matrix(mats[key])
+              for key, field in PST_TABLES.items() if key in mats}
+    bases = {field: _scalar(mats[key], key) for key, field in _SCALARS.items() if key in mats}
+    for key, field in _SCALARS.items():
+        if field not in bases:  # PST data files leave the bases to the calling script
+            default = _DEFAULTS[field]
+            warnings.warn(f"{name}: the data defines no '{key}': {field} = {default:g} "
+                          f"{_UNITS[field]} (PST's default)", UserWarning, stacklevel=2)
+    extra = {k: v for k, v in mats.items()
+             if k not in PST_TABLES and k not in _SCALARS and k != "sw_con"
+             and _is_numeric(v) and not _is_empty(v)}
+    return Case(
+        name=name,
+        base_mva=bases.get("base_mva", _DEFAULT_BASE_MVA),
+        freq_hz=bases.get("freq_hz", _DEFAULT_FREQ_HZ),
+        sw_con=mats.get("sw_con"),
+        extra=extra,
+        source=source,
+        description=description,
+        **tables,
+    )
+
+
+def _is_empty(v) -> bool:
+    return np.asarray(v, dtype=object).size == 0
+
+
+def _is_numeric(v) -> bool:
+    try:
+        arr = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return arr.ndim <= 2
+
+
+def _scalar(v, key: str) -> float:
+    try:
+        arr = np.asarray(v, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise CaseError(f"{key}: expected a number, got {_short(repr(v))}") from None
+    if arr.size != 1:
+        raise CaseError(f"{key}: expected a scalar, got {arr.size} values")
+    return float(arr[0])
+
+
+def read_pstess_json(path: str | Path, name: str | None = None, description: str = "") -> Case:
+    """Read a PSTess evaluated-matrix JSON file (``shared/data/pstess/*.json`` form).
+
+    Args:
+        path: the ``.json`` file; top-level object of matrix name -> nested list.
+        name: case name (default: the file stem).
+        description: one line for :func:`stabctl.case.list_cases`.
+
+    Raises :class:`CaseError` if the file is not such an object or a table is invalid.
+    """
+    path = Path(path)
+    data = _load_json(path)
+    if not isinstance(data, dict) or "bus" not in data:
+        raise CaseError(f"{path}: not a PSTess matrix JSON (no 'bus' key)")
+    return case_from_matrices(data, name or path.stem, source=f"PSTess data {path.name}",
+                              description=description)
+
+
+def read_pst_m(path: str | Path, name: str | None = None, description: str = "") -> Case:
+    """Read a PST ``.m`` data file of literal matrices (see :func:`parse_m`).
+
+    Raises :class:`CaseError` naming the line of the first statement that is not a
+    literal assignment, or any invalid table.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise CaseError(f"cannot read {path}: {exc}") from None
+    mats = parse_m(text, str(path))
+    return case_from_matrices(mats, name or path.stem, source=f"PST data file {path.name}",
+                              description=description)
+
+
+def read_any(path: str | Path) -> Case:
+    """Read a case file of any supported kind, told apart by suffix and content.
+
+    ``.m`` -> :func:`read_pst_m`; ``.json`` with ``"format": "stabctl-case"`` ->
+    :func:`read_case_json`, with a ``bus`` key -> :func:`read_pstess_json`. Raises
+    :class:`CaseError` otherwise.
+    """
+    path = Path(path)
+    if path.suffix == ".m":
+        return read_pst_m(path)
+    if path.suffix == ".json":
+        data = _load_json(path)
+        if isinstance(data, dict) and data.get("format") == FORMAT:
+            return case_from_dict(data, str(path))
+        if isinstance(data, dict) and "bus" in data:
+            return read_pstess_json(path)
+        raise CaseError(f"{path}: neither a stabctl case nor a PSTess matrix JSON")
+    raise CaseError(f"{path}: unknown case file type (expected .json or .m)")
+
+
+def _load_json(path: Path):
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return json.load(fh)
+    except OSError as exc:
+        raise CaseError(f"cannot read {path}: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise CaseError(f"{path}: invalid JSON at line {exc.lineno}: {exc.msg}") from None
+
+
+# --------------------------------------------------------------------------------------
+# .m parser (literal matrices only)
+# --------------------------------------------------------------------------------------
+
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?\Z")
+_ASSIGN = re.compile(r"([A-Za-z]\w*)\s*=\s*(.*)\Z", re.S)
+_DISP = re.compile(r"(?:disp|fprintf)\s*\(.*\)\s*;?\s*\Z")
+
+
+def _strip_comment(line: str) -> str:
+    """Drop a ``%`` comment, ignoring ``%`` inside single-quoted strings."""
+    quote = False
+    for i, ch in enumerate(line):
+        if ch == "'" and (quote or i == 0 or not (line[i - 1].isalnum() or line[i - 1] in ")]_.'")):
+            quote = not quote
+        elif ch == "%" and not quote:
+            return line[:i]
+    return line
+
+
+def _logical_lines(text: str):
+    """Yield (first line number, statement text) with ``...`` continuations joined.
+
+    Newlines inside brackets are kept (they separate matrix rows), each tagged with its
+    line number through a ``\\n<lineno>\\n`` marker understood by :func:`_parse_matrix`.
+    """
+    buf: list[str] = []
+    start = 0
+    depth = 0
+    block = False  # inside a %{ ... %} block comment
+    for lineno, raw in enumerate(text.splitlines(), start=1):
+        stripped = raw.strip()
+        if stripped in ("%{", "%}") or block:
+            block = (stripped == "%{") or (block and stripped != "%}")
+            continue
+        if not buf and (stripped.startswith("%") or not stripped):
+            continue
+        if not buf and _DISP.match(stripped):
+            continue
+        line = _strip_comment(raw)
+        cont = "..." in line
+        if cont:
+            line = line[: line.index("...")]
+        if not buf:
+            start = lineno
+        buf.append(f"\x00{lineno}\x00{line}")
+        depth += line.count("[") - line.count("]")
+        if cont or depth > 0:
+            if not cont:
+                buf.append(";")  # a newline inside brackets ends a row
+            continue
+        yield start, " ".join(buf)
+        buf, depth = [], 0
+    if buf:
+        raise CaseError(f"line {start}: unterminated matrix (missing ']')")
+
+
+def parse_m(text: str, where: str = "<m-file>") -> dict[str, np.ndarray]:
+    """Parse a PST data file made only of literal assignments.
+
+    Accepted statements: ``name = [ rows ];`` (numbers separated by blanks or commas,
+    rows by ``;`` or newlines, ``...`` continuations), ``name = [];``, ``name = number;``;
+    ``%`` comments, ``%{ ... %}`` block comments, blank lines and ``disp(...)`` lines are
+    skipped. Returns name -> 2-D
+    float array (a scalar as shape (1, 1)); a later assignment replaces an earlier one.
+
+    Raises :class:`CaseError` naming ``where`` and the line of the first statement or
+    token that is not a literal (expressions such as ``22-2`` or ``PDC(1)``, variables,
+    ``if``/``for``/``function``, transposes, ragged rows).
+    """
+    out: dict[str, np.ndarray] = {}
+    for start, stmt in _logical_lines(text):
+        clean = re.sub(r"\x00\d+\x00", "", stmt).strip()
+        m = _ASSIGN.match(clean)
+        if not m:
+            raise CaseError(f"{where} line {start}: not a literal assignment: {_short(clean)}")
+        name = m.group(1)
+        body = stmt[stmt.index("=") + 1:]
+        out[name] = _parse_value(body, start, where, name)
+    return out
+
+
+def _short(s: str, n: int = 60) -> str:
+    s = " ".join(s.split())
+    return s if len(s) <= n else s[: n - 3] + "..."
+
+
+def _parse_value(body: str, start: int, where: str, name: str) -> np.ndarray:
+    """A literal scalar or ``[ ... ]`` matrix, with its trailing ``;``."""
+    clean = re.sub(r"\x00\d+\x00", "", body).strip()
+    clean = clean[:-1].rstrip() if clean.endswith(";") else clean
+    if _NUMBER.match(clean):
+        return np.array([[_to_float(clean)]])
+    if not (clean.startswith("[") and clean.endswith("]")):
+        raise CaseError(
+            f"{where} line {start}: '{name}' is not a literal matrix or number: {_short(clean)}"
+        )
+    return _parse_matrix(body, start, where, name)
+
+
+def _parse_matrix(body: str, start: int, where: str, name: str) -> np.ndarray:
+    inner = body[body.index("[") + 1: body.rindex("]")]
+    rows: list[list[float]] = []
+    row_lines: list[int] = []
+    row: list[float] = []
+    lineno = start
+    for tok in re.split(r"(\x00\d+\x00|;|,|\s+)", inner):
+        if not tok or tok.isspace() or tok == ",":
+            continue
+        if tok.startswith("\x00"):
+            lineno = int(tok.strip("\x00"))
+        elif tok == ";":
+            if row:
+                rows.append(row)
+                row_lines.append(lineno)
+            row = []
+        elif _NUMBER.match(tok):
+            row.append(_to_float(tok))
+        else:
+            raise CaseError(
+                f"{where} line {lineno}: '{name}': '{tok}' is not a number "
+                "(only literal matrices are read; evaluate the file with Octave first)"
+            )
+    if row:
+        rows.append(row)
+        row_lines.append(lineno)
+    if not rows:
+        return np.zeros((0, 0))
+    for r, ln in zip(rows, row_lines):
+        if len(r) != len(rows[0]):
+            raise CaseError(
+                f"{where} line {ln}: '{name}': row has {len(r)} columns, first row has {len(rows[0])}"
+            )
+    return np.array(rows, dtype=float)
+
+
+def _to_float(tok: str) -> float:
+    return float(tok.replace("d", "e").replace("D", "e"))
+
+
+# --------------------------------------------------------------------------------------
+# stabctl's own JSON format
+# --------------------------------------------------------------------------------------
+
+_LICENCE_DEFAULT = ""
+
+
+def case_to_dict(case: Case, licence: str = "") -> dict:
+    """The own-format dict of a case (see :func:`write_case_json` for the layout)."""
+    tables = {
+        field: {"columns": list(cls.columns()), "rows": getattr(case, field).matrix().tolist()}
+        for field, cls in TABLES.items()
+    }
+    return {
+        "format": FORMAT,
+        "version": FORMAT_VERSION,
+        "name": case.name,
+        "description": case.description,
+        "source": case.source,
+        "licence": licence,
+        "base_mva": case.base_mva,
+        "freq_hz": case.freq_hz,
+        "tables": tables,
+        "sw_con": None if case.sw_con is None else case.sw_con.tolist(),
+        "extra": {k: v.tolist() for k, v in case.extra.items()},
+    }
+
+
+def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
+    """A Case from the own-format dict. Raises :class:`CaseError` on a wrong format or
+    version, an unknown table or column name, or invalid data."""
+    if data.get("format") != FORMAT:
+        raise CaseError(f"{where}: not a stabctl case (format is {data.get('format')!r})")
+    if data.get("version") != FORMAT_VERSION:
+        raise CaseError(
+            f"{where}: case format version {data.get('version')!r} not supported "
+            f"(this stabctl reads version {FORMAT_VERSION})"
+        )
+    raw_tables = data.get("tables")
+    if not isinstance(raw_tables, Mapping):
+        raise CaseError(f"{where}: no 'tables' object (the case's tables by name: "
+                        f"{', '.join(TABLES)}; at least buses and branches)")
+    unknown = set(raw_tables) - set(TABLES)
+    if unknown:
+        raise CaseError(f"{where}: unknown table(s) {sorted(unknown)}; known: {list(TABLES)}")
+    for required in ("buses", "branches"):
+        if required not in raw_tables:
+            raise CaseError(f"{where}: tables: no '{required}' table")
+    tables = {field: _table_from_json(TABLES[field], raw_tables[field], where)
+              for field in TABLES if field in raw_tables}
+    extra = data.get("extra") or {}
+    if not isinstance(extra, Mapping):
+        raise CaseError(f"{where}: 'extra' must be an object of matrices by name")
+    for key, value in extra.items():
+        if not _is_numeric(value):
+            raise CaseError(f"{where}: extra matrix '{key}' is not a numeric matrix")
+    return Case(
+        name=str(data.get("name", Path(where).stem)),
+        base_mva=_field_number(data, "base_mva", where),
+        freq_hz=_field_number(data, "freq_hz", where),
+        sw_con=data.get("sw_con"),
+        extra=extra,
+        source=str(data.get("source", "")),
+        description=str(data.get("description", "")),
+        **tables,
+    )
+
+
+def _field_number(data: Mapping, key: str, where: str) -> float:
+    """A required positive finite number of the own format (base_mva, freq_hz): no silent
+    default."""
+    what = {"base_mva": "system base, MVA", "freq_hz": "nominal frequency, Hz"}[key]
+    if key not in data:
+        raise CaseError(f"{where}: no '{key}' ({what}, a number > 0)")
+    value = data[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise CaseError(f"{where}: '{key}' must be a number > 0 ({what}), got {value!r}")
+    return float(value)
+
+
+def _table_from_json(cls, raw: Mapping, where: str):
+    if not isinstance(raw, Mapping):
+        raise CaseError(f"{where}: table '{cls.TABLE}' must be an object with 'columns' "
+                        "and 'rows'")
+    cols = raw.get("columns")
+    rows = raw.get("rows", [])
+    if not isinstance(cols, list) or not all(isinstance(c, str) for c in cols):
+        raise CaseError(f"{where}: table '{cls.TABLE}' has no 'columns' list of names")
+    if len(set(cols)) != len(cols):
+        raise CaseError(f"{where}: table '{cls.TABLE}' names a column twice")
+    if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
+        raise CaseError(f"{where}: table '{cls.TABLE}': 'rows' must be a list of rows")
+    known = cls.columns()
+    bad = [c for c in cols if c not in known]
+    if bad:
+        raise CaseError(f"{where}: table '{cls.TABLE}' has unknown column(s) {bad}; known: {list(known)}")
+    from stabctl.case.system import _as_matrix
+
+    mat = _as_matrix(rows, cls.TABLE)
+    if mat.shape[0] == 0:
+        return cls.empty()
+    if mat.shape[1] != len(cols):
+        raise CaseError(
+            f"{where}: table '{cls.TABLE}' rows have {mat.shape[1]} values, {len(cols)} columns named"
+        )
+    n = mat.shape[0]
+    data = {c: mat[:, cols.index(c)] if c in cols else np.full(n, float(cls.DEFAULTS.get(c, 0.0)))
+            for c in known}
+    return cls(**data)
+
+
+def _dump_matrix(rows: list, indent: str) -> str:
+    """One JSON row per line, integers without a decimal point."""
+    if not rows:
+        return "[]"
+    lines = [indent + "  " + json.dumps([_num(v) for v in r]) for r in rows]
+    return "[\n" + ",\n".join(lines) + "\n" + indent + "]"
+
+
+def _num(v: float):
+    v = float(v)
+    return int(v) if v.is_integer() and abs(v) < 2**53 else v
+
+
+def write_case_json(case: Case, path: str | Path, licence: str = "") -> Path:
+    """Write ``case`` in stabctl's own JSON format; returns the path.
+
+    Layout: ``format`` ("stabctl-case"), ``version`` (1), ``name``, ``description``,
+    ``source``, ``licence``, ``base_mva`` (MVA), ``freq_hz`` (Hz), ``tables`` (table field
+    -> ``{"columns": [names in PST order], "rows": [[...], ...]}``, one row per line),
+    ``sw_con`` (PST rows or null), ``extra`` (name -> rows). Floats are written with
+    Python's shortest round-trip repr, so reading gives back identical values.
+    """
+    d = case_to_dict(case, licence)
+    head = {k: d[k] for k in ("format", "version", "name", "description", "source", "licence",
+                               "base_mva", "freq_hz")}
+    parts = ["{"]
+    for k, v in head.items():
+        parts.append(f"  {json.dumps(k)}: {json.dumps(v)},")
+    parts.append('  "tables": {')
+    tparts = []
+    for field, t in d["tables"].items():
+        tparts.append(
+            f'    {json.dumps(field)}: {{\n      "columns": {json.dumps(t["columns"])},\n'
+            f'      "rows": {_dump_matrix(t["rows"], "      ")}\n    }}'
+        )
+    parts.append(",\n".join(tparts))
+    parts.append("  },")
+    sw = "null" if d["sw_con"] is None else _dump_matrix(d["sw_con"], "  ")
+    parts.append(f'  "sw_con": {sw},')
+    eparts = [f"    {json.dumps(k)}: {_dump_matrix(v, '    ')}" for k, v in d["extra"].items()]
+    parts.append('  "extra": {' + ("\n" + ",\n".join(eparts) + "\n  " if eparts else "") + "}")
+    parts.append("}")
+    path = Path(path)
+    path.write_text("\n".join(parts) + "\n", encoding="utf-8")
+    return path
+
+
+def read_case_json(path: str | Path) -> Case:
+    """Read a case in stabctl's own JSON format. Raises :class:`CaseError` if invalid."""
+    path = Path(path)
+    return case_from_dict(_load_json(path), str(path))
+
+
+def read_case_header(path: str | Path) -> dict:
+    """The scalar header of an own-format case file (name, description, source, ...)."""
+    data = _load_json(Path(path))
+    return {k: v for k, v in data.items() if k not in ("tables", "sw_con", "extra")}

@@ -1,0 +1,431 @@
+"""Exciter models: PST `smpexc` (type 0, simple static), `exc_dc12` (types 1 and 2, IEEE
+DC1 / DC2 dc commutator exciters), `exc_st3` (type 3, IEEE ST3) and stabctl's PSS/E
+`EXST1` (type 4, IEEE ST1 simplified).
+
+Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
+Table 2, 3.13 Table 3); PSS/E Model Library EXST1 (IEEE Std 421.5 ST1A simplified);
+equations, limits and PST's quirks in docs/pst_models.md section 2.  A time constant
+below 1e-3 s means the block is absent (no state).  States, named per type in
+STATE_NAMES: smpexc (V_TR, V_As, Efd); exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As,
+V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f).  Units: pu on the machine base; times in s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from stabctl._jitcache import njit
+
+from stabctl.case import Case, beyond
+from stabctl.case.params import EXCITER
+from stabctl.errors import CaseError
+from stabctl.models._declared import columns, pack, params_class
+
+LBND = 1e-3
+SMP, DC1, DC2, ST3, ST1 = 0, 1, 2, 3, 4
+STATE_NAMES = {SMP: ("VTR", "VAs", "Efd"), ST3: ("VTR", "VAs", "VR"),
+               DC1: ("VTR", "VAs", "VR", "Efd", "Rf"), DC2: ("VTR", "VAs", "VR", "Efd", "Rf"),
+               ST1: ("VTR", "VAs", "VR", "Rf")}
+
+#: exc_con fields (stabctl.case.params.EXCITER) the kernels take as the table gives them:
+#: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P))
+TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] if n != "thetaP")
+#: the packed parameter matrix of the compiled kernels, (constant suffix, ExciterParams
+#: attribute) per column: exc_con columns 1-20 in declared order (the machine's row for
+#: the machine number, K_P exp(j theta_P) as its real and imaginary parts), then the
+#: derived parameters and V_ref; the constants E_<suffix> are generated from it
+PACKED = (("KIND", "kind"), ("MAC", "mac"),
+          *((n.upper(), n) for n in TABLE_FIELDS[:TABLE_FIELDS.index("KP")]),
+          ("KPR", "KP.real"), ("KPI", "KP.imag"),
+          *((n.upper(), n) for n in TABLE_FIELDS[TABLE_FIELDS.index("KP") + 1:]),
+          ("TCTB", "tc_tb"), ("KE", "KE"), ("TE", "TE"), ("ASAT", "Asat"), ("BSAT", "Bsat"),
+          ("KF", "KF"), ("TF", "TF"), ("VREF", "Vref"), ("SATQ", "sat_quadratic"))
+(E_KIND, E_MAC, E_TR, E_KA, E_TA, E_TB, E_TC, E_VRMAX, E_VRMIN, E_VIMAX, E_VIMIN, E_KJ,
+ E_KPR, E_KPI, E_KI, E_XL, E_KC, E_EFDMAX, E_KG, E_VGMAX, E_TCTB, E_KE, E_TE, E_ASAT,
+ E_BSAT, E_KF, E_TF, E_VREF, E_SATQ) = \
+    columns(PACKED, "KIND", "MAC", "TR", "KA", "TA", "TB", "TC", "VRMAX", "VRMIN", "VIMAX",
+            "VIMIN", "KJ", "KPR", "KPI", "KI", "XL", "KC", "EFDMAX", "KG", "VGMAX", "TCTB",
+            "KE", "TE", "ASAT", "BSAT", "KF", "TF", "VREF", "SATQ")
+E_NCOL = len(PACKED)
+
+
+@params_class(("kind", "mac"), TABLE_FIELDS)
+class ExciterParams:
+    """Exciter data of a case, arrays of shape (n_exc,): ``kind`` the exc_con type,
+    ``mac`` the machine's row (index), then the exc_con fields :data:`TABLE_FIELDS` under
+    their declared names (stabctl.case.params.EXCITER; KP the complex K_P exp(j
+    theta_P), KA = 0 read as 1 for the regulated types), then the derived fields below.
+    DC exciters (types 1, 2): KE, TE and the saturation SE(E) = Asat exp(Bsat |E|), or
+    with sat_quadratic SE(E) E = Bsat (E - Asat)^2 above Asat (0 for the other types);
+    ke_given: KE used as given (else 0 means computed at initialisation); KF, TF: rate
+    feedback of the DC exciters and EXST1."""
+
+    KE: np.ndarray
+    TE: np.ndarray
+    Asat: np.ndarray
+    Bsat: np.ndarray
+    KF: np.ndarray
+    TF: np.ndarray
+    sat_quadratic: np.ndarray
+    ke_given: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.kind.size
+
+    def packed(self, Vref: np.ndarray) -> np.ndarray:
+        """Parameter matrix (n_exc, E_NCOL) for the compiled kernels, with Vref, columns
+        as :data:`PACKED`."""
+        return pack(self, PACKED, Vref=Vref)
+
+    @property
+    def has_TR(self):
+        return self.TR >= LBND
+
+    @property
+    def has_TB(self):
+        return self.TB >= LBND
+
+    @property
+    def has_TA(self):
+        return self.TA >= LBND
+
+    @property
+    def is_dc(self):
+        return (self.kind == DC1) | (self.kind == DC2)
+
+    @property
+    def tc_tb(self):
+        """T_C/T_B where the lead-lag exists, 1 otherwise (PST exc_pot column 5)."""
+        return np.where(self.has_TB, self.TC / np.where(self.has_TB, self.TB, 1.0), 1.0)
+
+    def n_slots(self) -> int:
+        """State slots per exciter: the most any exciter of the case uses (3 if none)."""
+        return max([3, *(len(STATE_NAMES[int(k)]) for k in self.kind)])
+
+    def has_state(self) -> np.ndarray:
+        """Boolean (n_slots, n_exc): the slots that are states (docs/modal.md)."""
+        act = np.zeros((5, self.n), bool)
+        act[0], act[1] = self.has_TR, self.has_TB
+        act[2] = (self.kind == ST3) | self.has_TA
+        act[3] = self.has_Rf
+        act[4] = self.is_dc
+        return act[:self.n_slots()]
+
+    @property
+    def has_Rf(self):
+        """The rate-feedback state exists: DC exciters, EXST1 with K_F != 0."""
+        return self.is_dc | ((self.kind == ST1) & (self.KF != 0))
+
+    def time_constants(self):
+        """(label, values, mask) of every time constant that sets a state's speed."""
+        return (("exc_con T_R", self.TR, self.has_TR), ("exc_con T_A", self.TA, self.has_TA),
+                ("exc_con T_B", self.TB, self.has_TB), ("exc_con T_E", self.TE, self.is_dc),
+                ("exc_con T_F", self.TF, self.has_Rf))
+
+
+def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
+    """(Asat, Bsat) of the DC exciters' saturation from exc_con columns 12-15.
+
+    dc_sat 0, PST exc_dc12's SE(E) = Asat exp(Bsat |E|): E2 (column 14) = 0 means columns
+    13, 15 are Asat, Bsat themselves; otherwise PST's fit through (E1, SE1), (E2, SE2) --
+    **QUIRK**: Bsat = ln(SE2 E2 / (SE1 E1)) / (E2 - E1), Asat = SE1 exp(-Bsat E1), so
+    SE(E1) = SE1 but SE(E2) = SE2 E2 / E1 (docs 2.3).  dc_sat 1, the quadratic
+    SE(E) E = Bsat (E - Asat)^2 through both points (PSS/E; ANDES `ExcQuadSat`)."""
+    A, B = _exponential_fit(e)
+    quad = e.dc_sat == 1
+    if quad.any():
+        Aq, Bq = _quadratic_fit(*_dc_points(e), quad)
+        A, B = np.where(quad, Aq, A), np.where(quad, Bq, B)
+    return A, B
+
+
+def _quadratic_fit(E1, SE1, E2, SE2, rows):
+    """Asat, Bsat of SE(E) E = Bsat (E - Asat)^2 with SE(E1) = SE1, SE(E2) = SE2 (0, 0
+    where a point is 0: no saturation); CaseError when the points allow no fit."""
+    off = (E1 * SE1 * E2 * SE2 == 0) | ~rows
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.sqrt(SE1 * E1 / (SE2 * E2))
+        A = E2 - (E1 - E2) / (a - 1)
+        B = SE2 * E2 * (a - 1) ** 2 / (E1 - E2) ** 2
+    bad = np.nonzero(~off & ~np.isfinite(A + B))[0]
+    if bad.size:
+        raise CaseError(f"exc_con row {bad[0] + 1}: DC exciter saturation points (E1, SE1, E2, "
+                        "SE2) give no quadratic fit (need E1 != E2, SE1 E1 != SE2 E2, same sign)")
+    return np.where(off, 0.0, A), np.where(off, 0.0, B)
+
+
+def _dc(e, name: str) -> np.ndarray:
+    """exc_con column of a DC exciter quantity by its PST manual 3.11 Table 2 name (the
+    declaration's ``alt`` name: KE, TE, E1, SE1, E2, SE2, KF_dc, TF_dc)."""
+    return e.col(EXCITER.col(name))
+
+
+def _dc_points(e):
+    """The DC exciters' saturation points E1, SE1, E2, SE2 (exc_con columns 12-15)."""
+    return tuple(_dc(e, name) for name in ("E1", "SE1", "E2", "SE2"))
+
+
+def _exponential_fit(e):
+    E1, SE1, E2, SE2 = _dc_points(e)
+    fit = (E2 != 0) & (e.dc_sat == 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        B = np.where(fit, np.log(SE2 * E2 / (SE1 * E1)) / (E2 - E1), SE2)
+        A = np.where(fit, SE1 / np.exp(B * E1), SE1)
+    bad = np.nonzero(((e.type == DC1) | (e.type == DC2)) & (e.dc_sat == 0))[0]
+    bad = bad[~np.isfinite(A[bad] + B[bad])]
+    if bad.size:
+        raise CaseError(f"exc_con row {bad[0] + 1}: DC exciter saturation points (E1, SE1, E2, "
+                        "SE2) give no exponential fit (need E1 != E2, SE1 E1 > 0, SE2 E2 > 0)")
+    return A, B
+
+
+def _check_dc(e) -> None:
+    """DC exciter and EXST1 options stabctl does not model: raise CaseError naming row and
+    field (T_A, T_E, T_F must exist; Vrmax = 0 is PST's 'compute it')."""
+    dc = (("TA", "TA"), ("TE", "TE"), ("TF", "TF_dc"))      # (name in messages, declared)
+    need = {DC1: dc, DC2: dc, ST1: (("TA", "TA"),)}
+    for r in np.nonzero(np.isin(e.type, (DC1, DC2, ST1)))[0]:
+        kind = int(e.type[r])
+        extra = (("TF", "TF"),) if kind == ST1 and e.KF[r] != 0 else ()
+        for name, declared in need[kind] + extra:
+            k = EXCITER.col(declared)
+            if e.col(k)[r] < LBND:
+                raise CaseError(f"exc_con row {r + 1}, field '{name}' (column {k}): exciter "
+                                f"type {kind} needs {name} >= {LBND} s")
+        if kind != ST1 and e.Vrmax[r] == 0:
+            raise CaseError(f"exc_con row {r + 1}, field 'Vrmax': 0 (PST computes it from E2) "
+                            "is not supported; give the limit")
+
+
+def exciter_params(case: Case) -> ExciterParams:
+    """Exciter parameters; raises CaseError for a type or option stabctl does not model."""
+    e = case.exciters
+    _check_dc(e)
+    A, B = _dc_saturation(e)
+    dc = (e.type == DC1) | (e.type == DC2)
+    KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
+    given = {n: getattr(e, n).copy() for n in TABLE_FIELDS}
+    given.update(KA=KA, KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)))
+    return ExciterParams(
+        kind=e.type.astype(int), mac=np.array([case.machine_index(m) for m in e.machine], int),
+        **given, KE=np.where(dc, _dc(e, "KE"), 0.0), TE=np.where(dc, _dc(e, "TE"), 0.0),
+        Asat=np.where(dc, A, 0.0), Bsat=np.where(dc, B, 0.0),
+        KF=np.where(dc, _dc(e, "KF_dc"), np.where(e.type == ST1, e.KF, 0.0)),
+        TF=np.where(dc, _dc(e, "TF_dc"), np.where(e.type == ST1, e.TF, 0.0)),
+        sat_quadratic=dc & (e.dc_sat == 1), ke_given=dc & (e.ke_given == 1))
+
+
+@njit(cache=True)
+def _fex(IN, init):
+    """Rectifier loading factor F_EX(I_N) of the ST3 (PST, with its initialisation quirk:
+    sqrt(0.75 - I_N^0.2) and 1.708 in flag 0)."""
+    if IN < 0.433:
+        return 1.0 - 0.5771 * IN
+    if 0.433 < IN < 0.75:
+        return np.sqrt(max(0.75 - (IN ** 0.2 if init else IN * IN), 0.0))
+    if IN > 0.75:
+        return max(0.0, (1.708 if init else 1.732) * (1.0 - IN))
+    return 0.0
+
+
+@njit(cache=True)
+def st3_source_voltage(KP, KI, XL, KC, eterm, theta, pelect, qelect, mac_pot, fldcur, init):
+    """V_B = V_E F_EX of the ST3 potential/compound source (PST exc_st3 flag 0/1); KP is
+    the complex K_P exp(j theta_P); pelect, qelect on the system base."""
+    i_t = (pelect - 1j * qelect) / (eterm * np.exp(-1j * theta)) * mac_pot
+    VE = np.abs(KP * eterm * np.exp(1j * theta) + 1j * (KI + KP * XL) * i_t)
+    IN = KC * fldcur / VE if VE > 0 else 0.0
+    return VE * _fex(IN, init)
+
+
+def initialise(p: ExciterParams, vex, eterm, VB=None):
+    """States (n_slots, n_exc), Vref (n_exc,) and the parameters with PSS/E's computed KE
+    (DC exciters with KE = 0 get KE = -SE(Efd0), so that V_R starts at 0) from the
+    machines' field voltage vex and terminal voltage eterm; VB is the ST3 source voltage
+    (needed for type 3).  Raises CaseError when the initial point violates a limit PST
+    checks (ST3: Efdmax or the V_I range; DC: the V_R limits) by more than
+    `case.START_LIMIT_TOL`."""
+    x = np.zeros((5, p.n))
+    x[0] = eterm
+    smp, st3, dc = p.kind == SMP, p.kind == ST3, p.is_dc
+    VA_smp = vex / p.KA
+    VB = np.ones(p.n) if VB is None else np.where(st3, VB, 1.0)
+    VR = vex / VB
+    VA_st3 = VR / p.KA + np.minimum(p.VGmax, p.KG * vex)
+    VI = VA_st3 / np.where(p.KJ == 0, 1.0, p.KJ)
+    bad = st3 & (beyond(vex, -np.inf, p.Efdmax) | beyond(VI, p.VImin, p.VImax))
+    if bad.any():
+        i = int(np.nonzero(bad)[0][0])
+        raise CaseError(f"exc_con row {i + 1}: initial field voltage {vex[i]:.3f} pu outside "
+                        "the ST3 limits (Efdmax or VI range)")
+    p, VR_dc = _dc_initial_regulator(p, vex, eterm)
+    st1 = p.kind == ST1
+    _check_st1_initial(p, vex, eterm)
+    VA = np.where(smp, VA_smp, np.where(dc, VR_dc, vex) / p.KA)
+    VA = np.where(st3, VA_st3, VA)
+    x[1] = VA
+    x[2] = np.where(smp | st1, vex, np.where(dc, VR_dc, VR))
+    x[3] = np.where(p.has_Rf, vex, 0.0)
+    x[4] = np.where(dc, vex, 0.0)
+    Vref = eterm + np.where(st3, VI, VA)
+    return x[:p.n_slots()], Vref, p
+
+
+def _check_st1_initial(p: ExciterParams, Efd, eterm):
+    """EXST1 at the initial point: Efd0 inside [V_t Vrmin, V_t Vrmax - K_C I_fd0] (I_fd0 =
+    Efd0) and the regulator input Efd0/K_A inside [VImin, VImax]; raises CaseError."""
+    st1 = p.kind == ST1
+    VI = Efd / p.KA
+    bad = np.nonzero(st1 & (beyond(Efd, eterm * p.Vrmin, eterm * p.Vrmax - p.KC * Efd)
+                            | beyond(VI, p.VImin, p.VImax)))[0]
+    if bad.size:
+        i = bad[0]
+        raise CaseError(f"exc_con row {i + 1}: EXST1 initial field voltage {Efd[i]:.4f} pu "
+                        "outside its output limits or regulator input outside [VImin, VImax]")
+
+
+def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
+    """DC exciters: KE resolved (0 -> -SE(Efd0) unless ke_given) and V_R0 the exciter
+    feedback at Efd0 (`dc_feedback`), checked against [Vrmin, Vrmax] times 1 (DC1) or
+    eterm (DC2, bus fed)."""
+    dc = p.is_dc
+    KE, VR = p.KE.copy(), np.zeros(p.n)
+    for r in np.nonzero(dc)[0]:
+        sat = (p.Asat[r], p.Bsat[r], float(p.sat_quadratic[r]), Efd[r])
+        if KE[r] == 0 and not p.ke_given[r] and Efd[r] != 0:   # V_R starts at 0
+            KE[r] = -dc_feedback(0.0, *sat) / Efd[r]
+        VR[r] = dc_feedback(KE[r], *sat)
+    mult = np.where(p.kind == DC2, eterm, 1.0)
+    bad = np.nonzero(dc & beyond(VR, p.Vrmin * mult, p.Vrmax * mult))[0]
+    if bad.size:
+        i = bad[0]
+        raise CaseError(f"exc_con row {i + 1}: initial DC regulator output V_R = {VR[i]:.4f} pu "
+                        f"outside [Vrmin, Vrmax] = [{p.Vrmin[i] * mult[i]:.4f}, "
+                        f"{p.Vrmax[i] * mult[i]:.4f}]")
+    return replace(p, KE=KE), VR
+
+
+@njit(cache=True)
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
+    """Field voltage exciter i hands its machine (PST flag 1); VTR_alg: terminal voltage,
+    VB: ST3 source voltage, ifd: machine field current (EXST1); ieee: the IEEE 421.5
+    convention (limited states are read clipped to their limits).
+
+    smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
+    ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error, without
+    limits; exc_dc12: the Efd state; exc_st3: min(V_R V_B, Efdmax) (ieee: V_R clipped);
+    EXST1: V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd].
+    """
+    kind = P[i, E_KIND]
+    if kind == ST3:
+        VR = min(max(x[2, i], P[i, E_VRMIN]), P[i, E_VRMAX]) if ieee else x[2, i]
+        return min(VR * VB, P[i, E_EFDMAX])
+    if kind == ST1:
+        hi = VTR_alg * P[i, E_VRMAX] - P[i, E_KC] * ifd
+        return min(max(x[2, i], VTR_alg * P[i, E_VRMIN]), hi)
+    if kind == DC1 or kind == DC2:
+        return x[3, i]
+    if P[i, E_TA] >= LBND:
+        return min(max(x[2, i], P[i, E_VRMIN]), P[i, E_VRMAX]) if ieee else x[2, i]
+    VTR = x[0, i] if P[i, E_TR] >= LBND else VTR_alg
+    err = P[i, E_VREF] - VTR + pss_out
+    VA = P[i, E_TCTB] * err + (1 - P[i, E_TCTB]) * x[1, i] if P[i, E_TB] >= LBND else err
+    return P[i, E_KA] * VA
+
+
+@njit(cache=True)
+def _nonwindup(x, dx, r, i, d, lo, hi, ieee):
+    """Non-windup limited lag: zero an outward derivative beyond a limit (PST exc_st3,
+    exc_dc12; ieee: at or beyond it, IEEE Std 421.5-2016 annex E.5, so that a state held
+    at its limit stays there), then clamp the state."""
+    if ieee:
+        if (x[r, i] >= hi and d > 0) or (x[r, i] <= lo and d < 0):
+            d = 0.0
+    elif (x[r, i] > hi and d > 0) or (x[r, i] < lo and d < 0):
+        d = 0.0
+    dx[r, i] = d
+    x[r, i] = min(max(x[r, i], lo), hi)
+
+
+@njit(cache=True)
+def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee):
+    """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
+
+    smpexc: PSTess clamps the Efd state to [Vrmin, Vrmax] after its derivative is computed
+    and keeps the derivative (PST's misspelt dEFD, docs/pst_models.md 2.1); ieee: a
+    non-windup limit as IEEE Std 421.5-2016 (SEXS/ST1A lag), the derivative zeroed while
+    at the limit and driven outward.  exc_st3 and exc_dc12: V_R is clamped and its
+    derivative zeroed when it pushes outward (`_nonwindup`).
+    """
+    dx[:, i] = 0.0
+    has_TR, has_TB = P[i, E_TR] >= LBND, P[i, E_TB] >= LBND
+    VTR = x[0, i] if has_TR else eterm
+    dx[0, i] = (eterm - x[0, i]) / P[i, E_TR] if has_TR else 0.0
+    kind = P[i, E_KIND]
+    smp, dc, st1 = kind == SMP, kind == DC1 or kind == DC2, kind == ST1
+    VI = P[i, E_VREF] - VTR + pss_out
+    if dc:
+        VI -= P[i, E_KF] / P[i, E_TF] * (x[3, i] - x[4, i])
+    elif st1 and P[i, E_KF] != 0:
+        VI = min(max(VI - P[i, E_KF] / P[i, E_TF] * (efd - x[3, i]), P[i, E_VIMIN]),
+                 P[i, E_VIMAX])
+        dx[3, i] = (efd - x[3, i]) / P[i, E_TF]
+    elif not smp:
+        VI = min(max(VI, P[i, E_VIMIN]), P[i, E_VIMAX])
+    u = P[i, E_KJ] * VI if kind == ST3 else VI
+    dx[1, i] = (u - x[1, i]) / P[i, E_TB] if has_TB else 0.0
+    VA = P[i, E_TCTB] * u + (1 - P[i, E_TCTB]) * x[1, i] if has_TB else u
+    lo, hi = P[i, E_VRMIN], P[i, E_VRMAX]
+    if smp:
+        if P[i, E_TA] >= LBND and ieee:
+            _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo, hi, ieee)
+        elif P[i, E_TA] >= LBND:
+            dx[2, i] = (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA]
+            x[2, i] = min(max(x[2, i], lo), hi)
+        else:
+            dx[2, i] = 0.0
+    elif st1:
+        dx[2, i] = (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA]
+    elif dc:
+        mult = eterm if kind == DC2 else 1.0
+        _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo * mult, hi * mult,
+                   ieee)
+        _dc_exciter(P, x, i, dx)
+    else:
+        d = (P[i, E_KA] * (VA - min(P[i, E_VGMAX], P[i, E_KG] * efd)) - x[2, i]) / P[i, E_TA]
+        _nonwindup(x, dx, 2, i, d, lo, hi, ieee)
+
+
+@njit(cache=True)
+def dc_feedback(KE, Asat, Bsat, quadratic, Efd):
+    """V_FE of a DC exciter: (K_E + S_E(Efd)) Efd with S_E = sign(Efd) Asat exp(Bsat |Efd|)
+    (PST), or with quadratic > 0: K_E Efd + Bsat (Efd - Asat)^2 above Asat (PSS/E)."""
+    if quadratic > 0:
+        return KE * Efd + (Bsat * (Efd - Asat) ** 2 if Efd > Asat else 0.0)
+    SE = np.sign(Efd) * Asat * np.exp(Bsat * abs(Efd))
+    return (KE + SE) * Efd
+
+
+@njit(cache=True)
+def _dc_exciter(P, x, i, dx):
+    """DC exciter field and rate feedback (PST exc_dc12 flag 2):
+    T_E dEfd/dt = V_R - V_FE(Efd) (`dc_feedback`);
+    T_F dR_f/dt = Efd - R_f (the feedback K_F/T_F (Efd - R_f) = s K_F/(1 + s T_F) Efd)."""
+    Efd = x[3, i]
+    dx[3, i] = (x[2, i] - dc_feedback(P[i, E_KE], P[i, E_ASAT], P[i, E_BSAT], P[i, E_SATQ],
+                                      Efd)) / P[i, E_TE]
+    dx[4, i] = (Efd - x[4, i]) / P[i, E_TF]
+
+
+@njit(cache=True)
+def recorded_efd(P, x, i, efd_alg):
+    """Efd as PST records it: the (clamped) smpexc state, the DC Efd state, or the ST3
+    algebraic value."""
+    kind = P[i, E_KIND]
+    if kind == DC1 or kind == DC2:
+        return x[3, i]
+    if kind == SMP and P[i, E_TA] >= LBND:
+        return x[2, i]
+    return efd_alg

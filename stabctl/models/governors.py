@@ -1,0 +1,212 @@
+"""Turbine-governors: PST `tg` (type 1) and the PSS/E models TGOV1 (type 2) and IEEEG1
+(type 3).
+
+Sources: PSTess 1.1 `tg_indx.m`, `tg.m` (docs/pst_models.md section 4); PSS/E Model
+Library `TGOV1`, `IEEEG1` (IEEE Committee Report 1973 steam turbine model), as
+implemented in ANDES (`andes/models/governor/tgov1.py`, `ieeeg1.py`); equations in
+docs/pst_models.md section 4.1-4.2.
+
+tg: demand = clip(P_ref + (w_f - omega)/R, Tmin, T_max) -> 1/(1 + s T_s)
+-> (1 + s T_3)/(1 + s T_c) -> (1 + s T_4)/(1 + s T_5) -> pmech (machine base).  T_4 may
+be negative (hydro).  TGOV1: P_ref + (w_f - omega)/R -> 1/(1 + s T1) non-windup [VMIN,
+VMAX] -> (1 + s T2)/(1 + s T3) -> minus Dt (omega - 1).  IEEEG1: K (1 + s T2)/(1 + s T1)
+on the speed deviation, gate servo 1/T3 with rate limits [Uc, Uo] and position limits
+[PMIN, PMAX], four lags T4..T7, power fractions K1..K8 (HP + LP summed: one shaft).
+States: up to N_STATES slots per governor (the most any type present uses), named per
+type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from stabctl._jitcache import njit
+
+from stabctl.case import Case, beyond
+from stabctl.case.params import GOVERNOR
+from stabctl.errors import CaseError
+from stabctl.models._declared import columns, pack, params_class
+
+LBND = 1e-3
+TG, TGOV1, IEEEG1 = 1, 2, 3
+N_STATES = 6
+STATE_NAMES = {TG: ("servo", "transient", "turbine"),
+               TGOV1: ("valve", "leadlag"),
+               IEEEG1: ("leadlag", "gate", "T4lag", "T5lag", "T6lag", "T7lag")}
+#: tg_con fields (stabctl.case.params.GOVERNOR) the kernels take as given: columns 3-16
+#: (the IEEEG1 fractions K1..K8 enter summed per shaft stage, K)
+TABLE_FIELDS = GOVERNOR.names[2:16]
+#: packed parameter matrix of the kernels, (constant suffix, GovernorParams attribute) per
+#: column: tg_con columns 1-16 in declared order, K's four columns, P_ref; constants G_<suffix>
+PACKED = (("KIND", "kind"), ("MAC", "mac"), *((n.upper(), n) for n in TABLE_FIELDS),
+          *((f"K{s}", f"K_{i}") for i, s in enumerate("ABCD")), ("PREF", "Pref"))
+(G_KIND, G_MAC, G_WF, G_INVR, G_TMAX, G_TS, G_TC, G_T3, G_T4, G_T5, G_TMIN, G_DT, G_T6,
+ G_T7, G_UO, G_UC, G_KA, G_KB, G_KC, G_KD, G_PREF) = \
+    columns(PACKED, "KIND", "MAC", "WF", "INVR", "TMAX", "TS", "TC", "T3", "T4", "T5",
+            "TMIN", "DT", "T6", "T7", "UO", "UC", "KA", "KB", "KC", "KD", "PREF")
+G_NCOL = len(PACKED)
+
+
+@params_class(("kind", "mac"), TABLE_FIELDS)
+class GovernorParams:
+    """Governor data, arrays of shape (n_tg,): ``kind`` the tg_con type, ``mac`` the
+    machine's row (index), the tg_con fields :data:`TABLE_FIELDS` under their declared
+    names (stabctl.case.params.GOVERNOR); K (n_tg, 4): IEEEG1 K1+K2, K3+K4, K5+K6,
+    K7+K8."""
+
+    K: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.mac.size
+
+    def packed(self, Pref: np.ndarray) -> np.ndarray:
+        """Parameter matrix (n_tg, G_NCOL) for the compiled kernels, with P_ref, columns
+        as :data:`PACKED`."""
+        return pack(self, PACKED, Pref=Pref, **{f"K_{i}": self.K[:, i] for i in range(4)})
+
+    def n_slots(self) -> int:
+        """State slots per governor: the most any governor of the case uses (3 if none)."""
+        return max([2, *(len(STATE_NAMES[int(k)]) for k in self.kind)]) if self.n else 3
+
+    def has_state(self) -> np.ndarray:
+        """Boolean (n_slots, n_tg): the slots that are states of each governor."""
+        act = np.zeros((N_STATES, self.n), bool)
+        tg, t1, g1 = self.kind == TG, self.kind == TGOV1, self.kind == IEEEG1
+        act[:3] |= tg
+        act[:2] |= t1
+        act[0] |= g1 & (self.Tc >= LBND)
+        act[1] |= g1
+        for r, T in zip(range(2, 6), (self.T4, self.T5, self.T6, self.T7)):
+            act[r] |= g1 & (T >= LBND)
+        return act[:self.n_slots()]
+
+    def time_constants(self):
+        """(label, values, mask) of every time constant that sets a state's speed."""
+        tg, t1, g1 = self.kind == TG, self.kind == TGOV1, self.kind == IEEEG1
+        lag = {name: g1 & (getattr(self, name) >= LBND) for name in ("Tc", "T4", "T5", "T6", "T7")}
+        return (("tg_con T_s", self.Ts, tg | t1 | g1), ("tg_con T_c", self.Tc, tg | t1 | lag["Tc"]),
+                ("tg_con T_5", self.T5, tg | lag["T5"]), ("tg_con T_4", self.T4, lag["T4"]),
+                ("tg_con T_6", self.T6, lag["T6"]), ("tg_con T_7", self.T7, lag["T7"]))
+
+
+def governor_params(case: Case) -> GovernorParams:
+    """Governor parameters.
+
+    Raises CaseError (tg_con row, field) for a zero time constant the model divides by
+    (tg: Ts, Tc, T5; TGOV1: T1 = Ts, T3 = Tc; IEEEG1: T3 = Ts) or an IEEEG1 without power
+    fractions."""
+    g = case.governors
+    need = {TG: ("Ts", "Tc", "T5"), TGOV1: ("Ts", "Tc"), IEEEG1: ("Ts",)}
+    for r in range(len(g)):
+        for name in need[int(g.type[r])]:
+            if getattr(g, name)[r] == 0:
+                raise CaseError(f"tg_con row {r + 1}, field '{name}': must be non-zero for "
+                                f"governor type {int(g.type[r])}")
+    K = np.column_stack([g.K1 + g.K2, g.K3 + g.K4, g.K5 + g.K6, g.K7 + g.K8]).reshape(len(g), 4)
+    bad = np.nonzero((g.type == IEEEG1) & (K.sum(axis=1) <= 0))[0]
+    if bad.size:
+        raise CaseError(f"tg_con row {bad[0] + 1}, fields 'K1'..'K8': IEEEG1 power fractions "
+                        "must sum to > 0")
+    return GovernorParams(
+        kind=g.type.astype(int), mac=np.array([case.machine_index(m) for m in g.machine], int),
+        **{n: getattr(g, n).copy() for n in TABLE_FIELDS}, K=K)
+
+
+def initialise(p: GovernorParams, pmech0):
+    """States (n_slots, n_tg) and P_ref (n_tg,) from the initial mechanical power pmech0
+    (machine base) at rated speed: every lag at its input, lead-lag states at
+    (1 - T_lead/T_lag) times their input.  P_ref is the power order (tg, TGOV1) or the
+    gate position (IEEEG1: pmech0 / sum K).
+
+    Raises CaseError when the initial power order is outside [Tmin, Tmax] (PST's check
+    for tg, the non-windup limits for TGOV1 and IEEEG1), beyond `case.START_LIMIT_TOL`."""
+    x = np.zeros((N_STATES, p.n))
+    tc = np.where(p.Tc >= LBND, p.Tc, 1.0)
+    gate = pmech0 / np.where(p.kind == IEEEG1, p.K.sum(axis=1), 1.0)
+    bad = np.nonzero(beyond(gate, p.Tmin, p.Tmax))[0]
+    if bad.size:
+        raise CaseError(f"tg_con row {bad[0] + 1}: initial power order {gate[bad[0]]:.4f} pu "
+                        "outside [Tmin, Tmax]")
+    tg, t1, g1 = p.kind == TG, p.kind == TGOV1, p.kind == IEEEG1
+    x[0] = np.where(g1, 0.0, pmech0)
+    x[1] = np.where(tg | t1, (1 - p.T3 / tc) * pmech0, gate)
+    x[2] = np.where(tg, (1 - p.T4 / np.where(tg, p.T5, 1.0)) * pmech0, gate)
+    x[3:] = np.where(g1, gate, 0.0)
+    x = x[:p.n_slots()]
+    x[2:] *= p.has_state()[2:] | tg
+    return x, gate
+
+
+@njit(cache=True)
+def _ieeeg1_lags(P, x, k):
+    """Outputs of the IEEEG1 lags T4..T7 (a lag below 1e-3 s passes its input)."""
+    y = np.empty(4)
+    u = x[1, k]
+    for r in range(4):
+        T = P[k, (G_T4, G_T5, G_T6, G_T7)[r]]
+        y[r] = x[2 + r, k] if T >= LBND else u
+        u = y[r]
+    return y
+
+
+@njit(cache=True)
+def pmech(P, x, k, omega):
+    """Mechanical power of governor k (machine base) at machine speed omega (pu), flag 1."""
+    kind = P[k, G_KIND]
+    if kind == IEEEG1:
+        y = _ieeeg1_lags(P, x, k)
+        return (P[k, G_KA] * y[0] + P[k, G_KB] * y[1] + P[k, G_KC] * y[2]
+                + P[k, G_KD] * y[3])
+    y2 = x[1, k] + P[k, G_T3] / P[k, G_TC] * x[0, k]
+    if kind == TGOV1:
+        return y2 - P[k, G_DT] * (omega - 1.0)
+    return x[2, k] + P[k, G_T4] / P[k, G_T5] * y2
+
+
+@njit(cache=True)
+def _nonwindup(x, dx, r, k, d, lo, hi):
+    """Non-windup limited integrator/lag: clamp the state, zero an outward derivative."""
+    if (x[r, k] >= hi and d > 0) or (x[r, k] <= lo and d < 0):
+        d = 0.0
+    dx[r, k] = d
+    x[r, k] = min(max(x[r, k], lo), hi)
+
+
+@njit(cache=True)
+def derivatives(P, x, k, omega, dx):
+    """Derivatives of governor k into dx[:, k] for its machine speed omega (pu), flag 2;
+    clamps the limited TGOV1 valve and IEEEG1 gate states in x."""
+    kind = P[k, G_KIND]
+    dx[:, k] = 0.0
+    if kind == IEEEG1:
+        _ieeeg1_derivatives(P, x, k, omega, dx)
+        return
+    order = P[k, G_PREF] + (P[k, G_WF] - omega) * P[k, G_INVR]
+    lo, hi = P[k, G_TMIN], P[k, G_TMAX]
+    r3 = P[k, G_T3] / P[k, G_TC]
+    if kind == TGOV1:
+        _nonwindup(x, dx, 0, k, (order - x[0, k]) / P[k, G_TS], lo, hi)
+    else:
+        dx[0, k] = (min(max(order, lo), hi) - x[0, k]) / P[k, G_TS]
+    dx[1, k] = ((1 - r3) * x[0, k] - x[1, k]) / P[k, G_TC]
+    if kind == TG:
+        y2 = x[1, k] + r3 * x[0, k]
+        dx[2, k] = ((1 - P[k, G_T4] / P[k, G_T5]) * y2 - x[2, k]) / P[k, G_T5]
+
+
+@njit(cache=True)
+def _ieeeg1_derivatives(P, x, k, omega, dx):
+    """IEEEG1: lead-lag on K (omega - 1), rate- and position-limited gate, lags T4..T7."""
+    u = P[k, G_INVR] * (omega - 1.0)
+    if P[k, G_TC] >= LBND:
+        r = P[k, G_T3] / P[k, G_TC]
+        dx[0, k] = ((1 - r) * u - x[0, k]) / P[k, G_TC]
+        u = x[0, k] + r * u
+    rate = min(max((P[k, G_PREF] - u - x[1, k]) / P[k, G_TS], P[k, G_UC]), P[k, G_UO])
+    _nonwindup(x, dx, 1, k, rate, P[k, G_TMIN], P[k, G_TMAX])
+    y = _ieeeg1_lags(P, x, k)
+    inp = x[1, k]
+    for r in range(4):
+        T = P[k, (G_T4, G_T5, G_T6, G_T7)[r]]
+        dx[2 + r, k] = (inp - x[2 + r, k]) / T if T >= LBND else 0.0
+        inp = y[r]

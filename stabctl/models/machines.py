@@ -1,0 +1,355 @@
+"""Synchronous machine models: PST `mac_sub` (subtransient), `mac_tra` (transient), `mac_em`
+(classical), vectorised over all machines of a case.
+
+Source: PSTess 1.1 `mac_indx.m`, `mac_sub.m`, `mac_tra.m`, `mac_em.m`; the equations and
+PST's parameter substitutions are written out in docs/pst_models.md section 1.
+
+Frames: network phasors X (system frame, rotating at omega_s) and rotor dq quantities are
+related by d + jq = j exp(-j delta) X, X = exp(j delta) (q - j d).
+Bases: machine currents, reactances, H, D, pmech, Efd on the machine base; pelect and the
+network currents on the system base; mac_pot = base_mva / machine MVA.
+States per machine (6 slots): delta (rad), omega (pu speed), E'q, psi_kd, E'd (PST sign),
+psi_kq; `mac_tra` uses the first four, `mac_em` the first two (the others stay constant).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from stabctl._jitcache import njit
+
+from stabctl.case import Case
+from stabctl.case.params import MACHINE
+from stabctl.models._declared import columns, pack, params_class
+
+SUB, TRA, EM = 2, 1, 0
+STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
+
+#: mac_con fields (stabctl.case.params.MACHINE) of MachineParams: columns 4-17 (xl .. D0,
+#: after PST's substitutions) and the generation fractions pfrac, qfrac (22, 23)
+TABLE_FIELDS = (*MACHINE.names[MACHINE.col("xl") - 1:MACHINE.col("D0")], "pfrac", "qfrac")
+#: packed parameter matrix of the kernels, (constant suffix, MachineParams attribute) per
+#: column: kind, mac_pot, mac_con columns 4-17 in declared order, PST's derived constants
+#: (mac_pot columns 6-15), saturation, initial E'q, speed effects; constants K_<suffix>
+PACKED = (("KIND", "kind"), ("POT", "mac_pot"),
+          *((n.upper(), n) for n in TABLE_FIELDS[:-2]),
+          *((f"P{k}", f"p{k}") for k in range(6, 16)),
+          ("SA", "sat_a"), ("SB", "sat_b"), ("SC", "sat_c"), ("EQP0", "eqp0"),
+          ("SPEED", "speed_effects"))
+(K_KIND, K_POT, K_XL, K_RA, K_XD, K_XDP, K_XDPP, K_TDOP, K_TDOPP, K_XQ, K_XQP, K_XQPP,
+ K_TQOP, K_TQOPP, K_H, K_D0, K_P6, K_P7, K_P8, K_P9, K_P10, K_P11, K_P12, K_P13, K_P14,
+ K_P15, K_SA, K_SB, K_SC, K_EQP0, K_SPEED) = \
+    columns(PACKED, "KIND", "POT", "XL", "RA", "XD", "XDP", "XDPP", "TDOP", "TDOPP", "XQ",
+            "XQP", "XQPP", "TQOP", "TQOPP", "H", "D0", "P6", "P7", "P8", "P9", "P10",
+            "P11", "P12", "P13", "P14", "P15", "SA", "SB", "SC", "EQP0", "SPEED")
+K_NCOL = len(PACKED)
+
+
+@params_class(("kind", "bus_idx", "mac_pot"), TABLE_FIELDS)
+class MachineParams:
+    """Machine data after PST's substitutions, arrays of shape (n_mac,).
+
+    `kind` is SUB/TRA/EM as PST's `mac_indx` chooses it: x_d = 0 -> classical; x"_d = 0 ->
+    transient; otherwise subtransient.  Substitutions (docs/pst_models.md 1.2, 1.8):
+    subtransient x"_q := x"_d, T'qo = 0 -> 999, T"qo = 0 -> 999 with x'_q := x"_q;
+    transient x'_q := x'_d, T'qo = 0 -> 999.  Fields: ``kind``, ``bus_idx`` (the bus's
+    row), ``mac_pot`` (system base / machine base), the mac_con fields
+    :data:`TABLE_FIELDS` under their declared names (stabctl.case.params.MACHINE), then
+    the derived ones below.
+    """
+
+    sat: np.ndarray  # (n_mac, 3) quadratic saturation a, b, c
+    basrad: float
+    speed_effects: np.ndarray  # bool: subtransient with speed in stator voltage and torque
+
+    @property
+    def n(self) -> int:
+        return self.kind.size
+
+    def packed(self, eqp0: np.ndarray) -> np.ndarray:
+        """Parameter matrix (n_mac, K_NCOL) for the compiled kernels; eqp0 = initial E'q."""
+        with np.errstate(divide="ignore", invalid="ignore"):   # mac_em: 0/0 constants unused
+            return self._packed(eqp0)
+
+    def _packed(self, eqp0):
+        sat = {f"sat_{c}": self.sat[:, k] for k, c in enumerate("abc")}
+        return np.nan_to_num(pack(self, PACKED, eqp0=eqp0, **sat))
+
+    @property
+    def x_network(self) -> np.ndarray:
+        """Reactance behind which the internal voltage feeds the network (machine base)."""
+        return np.where(self.kind == SUB, self.xdpp, self.xdp)
+
+    @property
+    def ra_network(self) -> np.ndarray:
+        """Armature resistance behind which the internal voltage feeds the network (machine
+        base): r_a for `mac_sub`/`mac_tra`, whose initialisation and stator equations use
+        it; 0 for `mac_em`, which has no r_a anywhere in its equations (PST mac_em: E' =
+        v + j x'_d I, pmech = pelect); also the estimators' machine model."""
+        return np.where(self.kind == EM, 0.0, self.ra)
+
+    @property
+    def z_internal(self) -> np.ndarray:
+        """Internal impedance on the system base, (r_a + j x) mac_pot (see y_internal)."""
+        return (self.ra_network + 1j * self.x_network) * self.mac_pot
+
+    @property
+    def y_internal(self) -> np.ndarray:
+        """Internal-node admittance on the system base, 1/((r_a + j x) mac_pot) as PST's
+        `red_ybus`: the machine-base impedance r_a + j x converted to the system base, so
+        that the network current is the one the stator equations (machine base, currents
+        times mac_pot) and the flag-0 initialisation E = v + (r_a + j x) I assume.  With r_a
+        left on the machine base here a flat run drifts (Kundur, r_a = 0.003: 4e-4 pu speed
+        in 1 s).  Deviation from PST for `mac_em` with r_a != 0 only: PST's red_ybus puts
+        r_a into the network although mac_em ignores it, so PST drifts there; we use
+        `ra_network` (0) to keep the classical model's flat start exact."""
+        return 1.0 / self.z_internal
+
+    # derived constants of mac_sub (PST mac_pot columns 6-15)
+    @property
+    def p7(self):
+        return self.xd - self.xdp
+
+    @property
+    def p8(self):
+        return self.xdp - self.xl
+
+    @property
+    def p9(self):
+        return (self.xdpp - self.xl) / self.p8
+
+    @property
+    def p10(self):
+        return (self.xdp - self.xdpp) / self.p8
+
+    @property
+    def p6(self):
+        return self.p10 / self.p8
+
+    @property
+    def p12(self):
+        return self.xq - self.xqp
+
+    @property
+    def p13(self):
+        return self.xqp - self.xl
+
+    @property
+    def p14(self):
+        return (self.xqpp - self.xl) / self.p13
+
+    @property
+    def p15(self):
+        return (self.xqp - self.xqpp) / self.p13
+
+    @property
+    def p11(self):
+        return self.p15 / self.p13
+
+
+def machine_params(case: Case) -> MachineParams:
+    """PST machine parameters of a case, with PST's substitutions (see MachineParams)."""
+    m = case.machines
+    kind = np.where(m.xd == 0, EM, np.where(m.xdpp == 0, TRA, SUB))
+    sub, tra = kind == SUB, kind == TRA
+    xqpp = np.where(sub, m.xdpp, m.xqpp)
+    Tqopp0 = sub & (m.Tqopp == 0)
+    xqp = np.where(Tqopp0, xqpp, np.where(tra, m.xdp, m.xqp))
+    Tqop = np.where(m.Tqop == 0, 999.0, m.Tqop)
+    Tqopp = np.where(m.Tqopp == 0, 999.0, m.Tqopp)
+    return MachineParams(
+        kind=kind, bus_idx=case.bus_indices(m.bus), mac_pot=case.base_mva / m.mva,
+        ra=m.ra.copy(), xl=m.xl.copy(), xd=m.xd.copy(), xdp=m.xdp.copy(), xdpp=m.xdpp.copy(),
+        xq=m.xq.copy(), xqp=xqp, xqpp=xqpp, Tdop=m.Tdop.copy(), Tdopp=m.Tdopp.copy(),
+        Tqop=Tqop, Tqopp=Tqopp, H=m.H.copy(), D0=m.D0.copy(), pfrac=m.pfrac.copy(),
+        qfrac=m.qfrac.copy(), sat=saturation_coefficients(m.S10, m.S12),
+        basrad=2 * np.pi * case.freq_hz, speed_effects=sub & (m.speed_effects == 1))
+
+
+def saturation_coefficients(S10: np.ndarray, S12: np.ndarray) -> np.ndarray:
+    """Quadratic E_sat(e) = a e^2 + b e + c through (0.8, 0.8), (1, 1 + S10),
+    (1.2, 1.2 (1 + S12)) (PST `mac_sub`/`mac_tra` flag 0); shape (n, 3)."""
+    A = np.array([[0.64, 0.8, 1.0], [1.0, 1.0, 1.0], [1.44, 1.2, 1.0]])
+    rhs = np.vstack([np.full_like(S10, 0.8), 1 + S10, 1.2 * (1 + S12)])
+    return np.linalg.solve(A, rhs).T
+
+
+def to_dq(delta, X):
+    """(d, q) components of network phasors X in the rotor frame of angle delta."""
+    z = 1j * np.exp(-1j * delta) * X
+    return z.real, z.imag
+
+
+def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
+    """Machine states, field voltage and mechanical power from the solved power flow.
+
+    Args:
+        p: machine parameters.
+        V: complex bus voltages (pu), shape (n_bus,).
+        S_gen: complex generation per bus (pu, system base), shape (n_bus,).
+    Returns:
+        x (6, n_mac) states, vex (n_mac,) field voltage, pmech (n_mac,) machine base.
+    Source: docs/pst_models.md 1.7-1.9 (PST flag 0).
+    """
+    v = V[p.bus_idx]
+    S = S_gen[p.bus_idx].real * p.pfrac + 1j * S_gen[p.bus_idx].imag * p.qfrac
+    I = np.conj(S / v) * p.mac_pot                       # terminal current, machine base
+    x = np.zeros((6, p.n))
+    x[1] = 1.0
+    sub = p.kind == SUB
+    E_q = v + (p.ra + 1j * p.xq) * I                    # locates the q axis (sub, tra)
+    E_tr = v + (p.ra + 1j * p.xdp) * I
+    E_em = v + 1j * p.xdp * I
+    x[0] = np.where(p.kind == EM, np.angle(E_em), np.angle(E_q))
+    curdg, curqg = to_dq(x[0], I)
+    ed, eq = to_dq(x[0], v)
+    pmech = np.where(p.kind == EM, S.real * p.mac_pot, S.real * p.mac_pot + p.ra * np.abs(I) ** 2)
+    # subtransient
+    eqra = eq + p.ra * curqg
+    edra = -ed - p.ra * curdg
+    eqp_sub, psikd = eqra + p.xdp * curdg, eqra + p.xl * curdg
+    edp_sub, psikq = edra + p.xqp * curqg, edra + p.xl * curqg
+    Eqpe = eqp_sub - psikd - p.p8 * curdg
+    vex_sub = eqp_sub + p.p7 * (curdg + p.p6 * Eqpe)
+    # transient / classical: E' in the rotor frame
+    E = np.where(p.kind == EM, E_em, E_tr)
+    edp_t, eqp_t = to_dq(x[0], E)
+    a, b, c = p.sat.T
+    esat = np.where(eqp_t < 0.8, eqp_t, a * eqp_t ** 2 + b * eqp_t + c)
+    vex_tra = np.where(p.kind == EM, eqp_t, esat + (p.xd - p.xdp) * curdg)
+    x[2] = np.where(sub, eqp_sub, eqp_t)
+    x[3] = np.where(sub, psikd, 0.0)
+    x[4] = np.where(sub, edp_sub, edp_t)
+    x[5] = np.where(sub, psikq, 0.0)
+    vex = np.where(sub, vex_sub, vex_tra)
+    return x, vex, pmech
+
+
+# -- compiled runtime kernels (PST flag 1 and flag 2), one loop over machines -----------
+# P is MachineParams.packed(); x the machine block of the state vector, shape (6, n_mac).
+
+
+@njit(cache=True)
+def _fluxes(P, x, i):
+    """psi"_d, psi"_q of machine i (subtransient model)."""
+    return (P[i, K_P9] * x[2, i] + P[i, K_P10] * x[3, i],
+            P[i, K_P14] * x[4, i] + P[i, K_P15] * x[5, i])
+
+
+@njit(cache=True)
+def _dq(delta, X):
+    """(d, q) of the network phasor X in the rotor frame: d + jq = j exp(-j delta) X."""
+    z = 1j * np.exp(-1j * delta) * X
+    return z.real, z.imag
+
+
+@njit(cache=True)
+def _stator_speed(P, x, i):
+    """Speed in the subtransient stator voltage and torque: omega with speed effects (PST
+    mac_sub), 1 without (ANDES GENROU)."""
+    return x[1, i] if P[i, K_SPEED] > 0 else 1.0
+
+
+@njit(cache=True)
+def internal_voltage(P, x, psi):
+    """Voltage behind the network reactance, network frame (PST flag 1), into psi (n_mac,).
+
+    Subtransient: speed * exp(j delta) (psi"_d + j psi"_q) (speed 1 without speed
+    effects); transient and classical: exp(j delta) (E'q - j E'd).
+    """
+    for i in range(P.shape[0]):
+        e = np.exp(1j * x[0, i])
+        if P[i, K_KIND] == SUB:
+            psidpp, psiqpp = _fluxes(P, x, i)
+            psi[i] = _stator_speed(P, x, i) * e * (psidpp + 1j * psiqpp)
+        else:
+            psi[i] = e * (x[2, i] - 1j * x[4, i])
+
+
+@njit(cache=True)
+def _field_current(P, x, i, cdg):
+    """Field current of machine i (machine base, vex = it in steady state) for the d-axis
+    current cdg (machine base): subtransient E'q + p7 (i_d + p6 (E'q - psi_kd - p8 i_d))
+    (no saturation, docs 1.6); transient E_Isat(E'q) + (x_d - x'_d) i_d (docs 1.8, with
+    PST's test on the initial E'q); classical: E' (constant)."""
+    kind = P[i, K_KIND]
+    e = x[2, i]
+    if kind == SUB:
+        return e + P[i, K_P7] * (cdg + P[i, K_P6] * (e - x[3, i] - P[i, K_P8] * cdg))
+    if kind == TRA:
+        esat = e if P[i, K_EQP0] < 0.8 else P[i, K_SA] * e * e + P[i, K_SB] * e + P[i, K_SC]
+        return esat + (P[i, K_XD] - P[i, K_XDP]) * cdg
+    return e
+
+
+@njit(cache=True)
+def field_current(P, x, cur, i):
+    """Field current of machine i (machine base) at network current cur[i] (system base)."""
+    return _field_current(P, x, i, _dq(x[0, i], cur[i])[0] * P[i, K_POT])
+
+
+@njit(cache=True)
+def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
+    """Machine derivatives into dx (6, n_mac) and outputs (PST flag 2, docs 1.6-1.9).
+
+    cur: terminal currents (system base, network frame); vex: field voltages; pmech:
+    mechanical power (machine base).  pelect, qelect on the system base; eterm in pu.
+    """
+    for i in range(P.shape[0]):
+        w = x[1, i]
+        ws = _stator_speed(P, x, i)
+        curd, curq = _dq(x[0, i], cur[i])
+        pot = P[i, K_POT]
+        cdg, cqg = curd * pot, curq * pot
+        kind = P[i, K_KIND]
+        dx[0, i] = basrad * (w - 1.0)
+        dx[3, i] = 0.0
+        dx[5, i] = 0.0
+        fld = _field_current(P, x, i, cdg)
+        if kind == SUB:
+            psidpp, psiqpp = _fluxes(P, x, i)
+            Eqpe = x[2, i] - x[3, i] - P[i, K_P8] * cdg
+            Edpe = x[4, i] - x[5, i] - P[i, K_P13] * cqg
+            ed = -P[i, K_RA] * cdg - (ws * psiqpp - P[i, K_XQPP] * cqg)
+            eq = -P[i, K_RA] * cqg + (ws * psidpp - P[i, K_XDPP] * cdg)
+            dx[2, i] = (vex[i] - fld) / P[i, K_TDOP]
+            dx[3, i] = Eqpe / P[i, K_TDOPP]
+            dx[4, i] = (-x[4, i] + P[i, K_P12] * (-cqg - P[i, K_P11] * Edpe)) / P[i, K_TQOP]
+            dx[5, i] = Edpe / P[i, K_TQOPP]
+            torque = pmech[i] / ws - (psidpp * cqg - psiqpp * cdg)
+        elif kind == TRA:
+            ed = x[4, i] - P[i, K_RA] * cdg + P[i, K_XDP] * cqg
+            eq = x[2, i] - P[i, K_RA] * cqg - P[i, K_XDP] * cdg
+            dx[2, i] = (vex[i] - fld) / P[i, K_TDOP]
+            dx[4, i] = (-x[4, i] + (P[i, K_XQ] - P[i, K_XQP]) * cqg) / P[i, K_TQOP]
+            torque = pmech[i] - ((eq * curq + ed * curd) * pot + P[i, K_RA] * (cdg ** 2 + cqg ** 2))
+        else:
+            ed = x[4, i] + P[i, K_XDP] * cqg
+            eq = x[2, i] - P[i, K_XDP] * cdg
+            dx[2, i] = 0.0
+            dx[4, i] = 0.0
+            torque = pmech[i] - (eq * curq + ed * curd) * pot
+        pelect[i] = eq * curq + ed * curd
+        qelect[i] = eq * curd - ed * curq
+        eterm[i] = np.hypot(ed, eq)
+        dx[1, i] = (torque - P[i, K_D0] * (w - 1.0)) / (2.0 * P[i, K_H])
+
+
+@njit(cache=True)
+def stator_without_speed(P, x, cur, i):
+    """(ed, eq, curd, curq) of machine i from the subtransient stator equations without the
+    speed factor (PST `exc_st3` flag 1 recomputes them this way); currents system base."""
+    curd, curq = _dq(x[0, i], cur[i])
+    pot = P[i, K_POT]
+    psidpp, psiqpp = _fluxes(P, x, i)
+    ed = -P[i, K_RA] * curd * pot - (psiqpp - P[i, K_XQPP] * curq * pot)
+    eq = -P[i, K_RA] * curq * pot + (psidpp - P[i, K_XDPP] * curd * pot)
+    return ed, eq, curd, curq
+
+
+@njit(cache=True)
+def st3_field_current(P, x, cur, i):
+    """PST exc_st3's own field-current estimate E_Isat + p6 (E'q - psi_kd) + p7 i_d."""
+    e = x[2, i]
+    esat = max(e, P[i, K_SA] * e * e + P[i, K_SB] * e + P[i, K_SC])
+    curd = _dq(x[0, i], cur[i])[0]
+    return esat + P[i, K_P6] * (e - x[3, i]) + P[i, K_P7] * curd * P[i, K_POT]

@@ -1,0 +1,257 @@
+"""Power system stabilisers: PST `pss` (types 1 and 2: speed or power input, washout, two
+lead-lags, output limits) and stabctl's PSS/E stabiliser (type 3: IEEEST and ST2CUT).
+
+Sources: PSTess 1.1 `pss_indx.m`, `pss.m` (docs/pst_models.md section 3); PSS/E Model
+Library IEEEST (IEEE Std 421.5 PSS1A-type with its filter) and ST2CUT (as ANDES
+`andes/models/pss/ieeest.py`, `st2cut.py`), docs/pst_models.md 3.1.  Column 3 of
+pss_con is the gain times the washout time constant (K*T_w) for PST's pss, the washout
+gain for type 3.  PST pss states: washout, lead-lag 1, lead-lag 2 (only when
+T_4 >= 1e-3).  Type 3 states: input lags 1, 2, filter 1-4, washout, lead-lags 1-3 (each
+only where its block exists).  Output in pu, added to the exciter summing junction of
+the same machine.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from stabctl._jitcache import njit
+
+from stabctl.case import Case
+from stabctl.case.params import PSS
+from stabctl.errors import CaseError
+from stabctl.models._declared import columns, pack, params_class
+
+LBND = 1e-3
+PST_SPEED, PST_POWER, PSSE = 1, 2, 3
+SPEED, POWER = 1, 3                           # PSS/E input codes (ICS, MODE)
+STATE_NAMES = {PST_SPEED: ("washout", "leadlag1", "leadlag2"),
+               PST_POWER: ("washout", "leadlag1", "leadlag2"),
+               PSSE: ("lag1", "lag2", "filter1", "filter2", "filter3", "filter4", "washout",
+                      "leadlag1", "leadlag2", "leadlag3")}
+#: pss_con fields (stabctl.case.params.PSS) the kernels take: columns 3-18 (type 3's
+#: filter A1..A6 enters as its canonical form nf, fe, fa, fc)
+TABLE_FIELDS = PSS.names[2:18]
+#: packed parameter matrix of the kernels, (constant suffix, PssParams attribute) per
+#: column: pss_con columns 1-18 in declared order, then the filter; constants S_<suffix>
+_SUFFIX = {"ymax": "MAX", "ymin": "MIN", "input1": "IN1", "input2": "IN2"}
+PACKED = (("KIND", "kind"), ("MAC", "mac"),
+          *((_SUFFIX.get(n, n.upper()), n) for n in TABLE_FIELDS), ("NF", "nf"), ("FE", "fe"),
+          *((f"FA{i}", f"fa_{i}") for i in range(4)), *((f"FC{i}", f"fc_{i}") for i in range(4)))
+(S_KIND, S_MAC, S_KTW, S_TW, S_T1, S_T2, S_T3, S_T4, S_MAX, S_MIN, S_T5, S_T6, S_IN1, S_K1,
+ S_TR1, S_IN2, S_K2, S_TR2, S_NF, S_FE, S_FA0, S_FA1, S_FA2, S_FA3, S_FC0, S_FC1, S_FC2,
+ S_FC3) = \
+    columns(PACKED, "KIND", "MAC", "KTW", "TW", "T1", "T2", "T3", "T4", "MAX", "MIN", "T5",
+            "T6", "IN1", "K1", "TR1", "IN2", "K2", "TR2", "NF", "FE", "FA0", "FA1", "FA2",
+            "FA3", "FC0", "FC1", "FC2", "FC3")
+S_NCOL = len(PACKED)
+S_FA, S_FC = S_FA0, S_FC0                     # filter a_0..a_3, then c_0..c_3
+W_PSSE, LL_PSSE = 6, 7                        # type 3 washout and first lead-lag slots
+
+
+@params_class(("kind", "mac"), TABLE_FIELDS)
+class PssParams:
+    """PSS data, arrays of shape (n_pss,): ``kind`` the pss_con type, ``mac`` the machine's
+    row (index), the pss_con fields :data:`TABLE_FIELDS` under their declared names
+    (stabctl.case.params.PSS; input1, input2 0 for types 1, 2).  Type 3: the filter in
+    controllable canonical form of order nf (<= 4): fa (n, 4) the monic denominator
+    coefficients a_0..a_3, fc (n, 4) output coefficients, fe the feedthrough."""
+
+    nf: np.ndarray
+    fa: np.ndarray
+    fc: np.ndarray
+    fe: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.mac.size
+
+    @property
+    def power_input(self):
+        return self.kind == PST_POWER
+
+    def packed(self) -> np.ndarray:
+        """Parameter matrix (n_pss, S_NCOL) for the compiled kernels, columns as
+        :data:`PACKED`."""
+        return pack(self, PACKED, **{f"fa_{i}": self.fa[:, i] for i in range(4)},
+                    **{f"fc_{i}": self.fc[:, i] for i in range(4)})
+
+    @property
+    def has_T4(self):
+        return self.T4 >= LBND
+
+    def n_slots(self) -> int:
+        """State slots per PSS: 3, or 10 when a PSS/E stabiliser is present."""
+        return 10 if np.any(self.kind == PSSE) else 3
+
+    def has_state(self) -> np.ndarray:
+        """Boolean (n_slots, n_pss): the slots that are states of each PSS."""
+        act = np.zeros((10, self.n), bool)
+        pst, e = self.kind != PSSE, self.kind == PSSE
+        act[0] = pst | (e & (self.Tr1 >= LBND))
+        act[1] = pst | (e & (self.input2 != 0) & (self.Tr2 >= LBND))
+        act[2] = (pst & self.has_T4) | (e & (self.nf >= 1))
+        for r in range(3, 6):
+            act[r] = e & (self.nf >= r - 1)
+        act[W_PSSE] = e
+        for r, T in zip(range(LL_PSSE, LL_PSSE + 3), (self.T2, self.T4, self.T6)):
+            act[r] = e & (T >= LBND)
+        return act[:self.n_slots()]
+
+    def time_constants(self):
+        """(label, values, mask) of every time constant that sets a state's speed."""
+        e = self.kind == PSSE
+        return (("pss_con T_w", self.Tw, np.ones(self.n, bool)),
+                ("pss_con T_2", self.T2, ~e | (self.T2 >= LBND)),
+                ("pss_con T_4", self.T4, self.T4 >= LBND),
+                ("pss_con T_6", self.T6, e & (self.T6 >= LBND)),
+                ("pss_con Tr1", self.Tr1, e & (self.Tr1 >= LBND)),
+                ("pss_con Tr2", self.Tr2, e & (self.input2 != 0) & (self.Tr2 >= LBND)))
+
+
+def pss_params(case: Case) -> PssParams:
+    """PSS parameters of a case.
+
+    Raises CaseError (pss_con row) for a type-3 lead-lag with a lead but no lag, an input
+    code other than 1 (speed) or 3 (power), or an improper filter (A6 without a
+    second-order denominator)."""
+    s = case.pss
+    e = s.type == PSSE
+    _check_psse(s)
+    nf, fa, fc, fe = _filters(s)
+    given = {n: getattr(s, n).copy() for n in TABLE_FIELDS}
+    given.update(input1=np.where(e, s.input1, 0), input2=np.where(e, s.input2, 0))
+    return PssParams(kind=s.type.astype(int),
+                     mac=np.array([case.machine_index(m) for m in s.machine], int),
+                     **given, nf=nf, fa=fa, fc=fc, fe=fe)
+
+
+def _check_psse(s) -> None:
+    for r in np.nonzero(s.type == PSSE)[0]:
+        if s.input1[r] not in (SPEED, POWER) or s.input2[r] not in (0, SPEED, POWER):
+            raise CaseError(f"pss_con row {r + 1}, fields 'input1', 'input2': PSS/E input codes "
+                            "1 (speed) or 3 (electrical power) only (input2 may be 0)")
+        if s.Tw[r] < LBND:
+            raise CaseError(f"pss_con row {r + 1}, field 'Tw': washout needs Tw >= {LBND} s")
+        for lead, lag in (("T1", "T2"), ("T3", "T4"), ("T5", "T6")):
+            if getattr(s, lag)[r] < LBND and getattr(s, lead)[r] != 0:
+                raise CaseError(f"pss_con row {r + 1}, field '{lag}': lead {lead} without lag")
+
+
+def _filters(s):
+    """IEEEST filter N(s)/D(s), N = 1 + A5 s + A6 s^2, D = (1 + A1 s + A2 s^2)(1 + A3 s +
+    A4 s^2), in controllable canonical form (DC gain 1): order nf, monic denominator
+    coefficients fa, output coefficients fc, feedthrough fe."""
+    n = len(s)
+    nf, fa, fc, fe = np.zeros(n, int), np.zeros((n, 4)), np.zeros((n, 4)), np.ones(n)
+    for r in np.nonzero(s.type == PSSE)[0]:
+        den = np.polymul([s.A4[r], s.A3[r], 1.0], [s.A2[r], s.A1[r], 1.0])[::-1]  # ascending
+        num = np.array([1.0, s.A5[r], s.A6[r]])
+        order = int(np.max(np.nonzero(den)[0]))
+        if np.any(num[order + 1:] != 0):
+            raise CaseError(f"pss_con row {r + 1}, fields 'A5', 'A6': filter numerator of "
+                            f"higher order than its denominator ({order})")
+        if order == 0:
+            continue
+        a, b = den[:order] / den[order], np.append(num, np.zeros(3))[:order + 1] / den[order]
+        nf[r], fe[r] = order, b[order]
+        fa[r, :order] = a
+        fc[r, :order] = b[:order] - b[order] * a
+    return nf, fa, fc, fe
+
+
+def pss_inputs(p: PssParams, omega, pelect, mac_pot):
+    """Signals 1 and 2 of each PSS (n_pss,): PST types: speed (pu) or electrical power on
+    the machine base, then 0; type 3: its PSS/E inputs (speed deviation or power)."""
+    w, pe = omega[p.mac], pelect[p.mac] * mac_pot[p.mac]
+    u1 = np.where(p.kind == PST_SPEED, w, pe)
+    u1 = np.where(p.kind == PSSE, np.where(p.input1 == SPEED, w - 1.0, pe), u1)
+    u2 = np.where(p.input2 == SPEED, w - 1.0, np.where(p.input2 == POWER, pe, 0.0))
+    return u1, u2
+
+
+def initialise(p: PssParams, u1, u2):
+    """States (n_slots, n_pss) from the initial inputs (pss_inputs): every washout input
+    state at its input, input lags at K u, filter state 1 at its input times the
+    denominator's leading coefficient (controllable form, zero derivative), others 0."""
+    x = np.zeros((10, p.n))
+    e = p.kind == PSSE
+    y1 = np.where(p.Tr1 >= LBND, p.K1 * u1, 0.0)
+    y2 = np.where(p.Tr2 >= LBND, p.K2 * u2, 0.0)
+    v = p.K1 * u1 + p.K2 * u2
+    x[0] = np.where(e, y1, u1)
+    x[1] = np.where(e, y2, 0.0)
+    x[2] = np.where(e & (p.nf >= 1), v / np.where(p.nf >= 1, p.fa[:, 0], 1.0), 0.0)
+    x[W_PSSE] = np.where(e, v, 0.0)
+    return x[:p.n_slots()]
+
+
+@njit(cache=True)
+def _leadlag(P, x, dx, r, k, u, lead, lag):
+    """PST-form lead-lag (1 + s T_lead)/(1 + s T_lag) with state slot r; output."""
+    if P[k, lag] < LBND:
+        dx[r, k] = 0.0
+        return u
+    ratio = P[k, lead] / P[k, lag]
+    dx[r, k] = ((1 - ratio) * u - x[r, k]) / P[k, lag]
+    return ratio * u + x[r, k]
+
+
+@njit(cache=True)
+def output_and_derivatives(P, x, k, omega, pe, dx):
+    """Output of PSS k at machine speed omega (pu) and electrical power pe (machine base),
+    PST flag 1/2; its derivatives into dx[:, k]."""
+    if P[k, S_KIND] == PSSE:
+        return _psse(P, x, k, omega, pe, dx)
+    u = pe if P[k, S_KIND] == PST_POWER else omega
+    var1 = (u - x[0, k]) / P[k, S_TW]
+    r12 = P[k, S_T1] / P[k, S_T2]
+    var2 = r12 * P[k, S_KTW] * var1 + x[1, k]
+    dx[0, k] = var1
+    dx[1, k] = ((1 - r12) * P[k, S_KTW] * var1 - x[1, k]) / P[k, S_T2]
+    if P[k, S_T4] >= LBND:
+        r34 = P[k, S_T3] / P[k, S_T4]
+        var3 = r34 * var2 + x[2, k]
+        dx[2, k] = ((1 - r34) * var2 - x[2, k]) / P[k, S_T4]
+    else:
+        var3 = var2
+        dx[2, k] = 0.0
+    return min(max(var3, P[k, S_MIN]), P[k, S_MAX])
+
+
+@njit(cache=True)
+def _signal(code, omega, pe):
+    if code == SPEED:
+        return omega - 1.0
+    if code == POWER:
+        return pe
+    return 0.0
+
+
+@njit(cache=True)
+def _psse(P, x, k, omega, pe, dx):
+    """PSS/E stabiliser: input lags K_i/(1 + s Tr_i) summed, filter N/D, washout
+    K_w s/(1 + s T_w), three lead-lags, output limits (docs 3.1)."""
+    dx[:, k] = 0.0
+    v = 0.0
+    for r, code, K, T in ((0, S_IN1, S_K1, S_TR1), (1, S_IN2, S_K2, S_TR2)):
+        u = P[k, K] * _signal(P[k, code], omega, pe)
+        if P[k, T] >= LBND:
+            dx[r, k] = (u - x[r, k]) / P[k, T]
+            u = x[r, k]
+        v += u
+    nf = int(P[k, S_NF])
+    w = P[k, S_FE] * v
+    if nf > 0:
+        acc = v
+        for i in range(nf):
+            w += P[k, S_FC + i] * x[2 + i, k]
+            acc -= P[k, S_FA + i] * x[2 + i, k]
+            if i < nf - 1:
+                dx[2 + i, k] = x[3 + i, k]
+        dx[1 + nf, k] = acc
+    y = P[k, S_KTW] * (w - x[W_PSSE, k]) / P[k, S_TW]
+    dx[W_PSSE, k] = (w - x[W_PSSE, k]) / P[k, S_TW]
+    y = _leadlag(P, x, dx, LL_PSSE, k, y, S_T1, S_T2)
+    y = _leadlag(P, x, dx, LL_PSSE + 1, k, y, S_T3, S_T4)
+    y = _leadlag(P, x, dx, LL_PSSE + 2, k, y, S_T5, S_T6)
+    return min(max(y, P[k, S_MIN]), P[k, S_MAX])

@@ -1,0 +1,399 @@
+"""Newton-Raphson AC power flow with PST's ``loadflow`` conventions.
+
+Polar coordinates, sparse Jacobian, sparse LU solve. Conventions (PSTess ``loadflow.m``,
+``calc.m``, ``chq_lim.m``, ``lftap.m``; PST manual section 1.4):
+
+* start values are the bus table's ``vmag`` and ``vang_deg`` (not a flat start); the
+  swing bus keeps its magnitude and angle; PV buses keep their magnitude;
+* specified injection ``Pg - Pl`` (and ``Qg - Ql`` at PQ buses), loads at PV and swing
+  buses are kept as given; bus shunts are constant admittances in Ybus;
+* convergence when ``max|dP| + max|dQ| <= tol`` over non-swing (P) and PQ (Q) buses;
+* after each update the magnitudes are clipped to [vmin, vmax] (0 means 0.5 / 1.5), so a
+  solution with a voltage outside its limits does not converge unless a tap moves;
+* Q limits: after each iteration a PV bus whose ``Q + Ql`` leaves [qmin, qmax] (0 means
+  no limit, i.e. +-9999) becomes PQ with its generation fixed at the limit, for good;
+* on-load tap changers (branches with ``tapmax != 0``): after a solution, a bus at or
+  beyond its voltage limit moves the tap of the branches whose to-bus it is, in steps of
+  ``tapstep`` within [tapmin, tapmax], and the flow is solved again from the start values
+  (at most 10 times); an inner solve that ran out of iterations is not an error while a
+  tap still moves;
+* the solved bus matrix (:meth:`PowerFlowResult.bus_matrix`) follows ``bus_sol``:
+  generation at PV and swing buses and loads at PQ buses are recomputed from the
+  solution, limited generators are listed as PQ buses with ``qgen`` at the limit.
+
+Fixed injections (``case.injections``) add to the specified generation and are not part
+of the reported ``pgen``/``qgen``.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from stabctl.case import PQ, PV, SWING, Case
+from stabctl.errors import PowerFlowError
+from stabctl.network.ybus import branch_flows, build_ybus
+
+__all__ = ["PowerFlowResult", "solve_powerflow", "power_injections", "jacobian"]
+
+_NO_LIMIT = 9999.0
+_TAP_ITER_MAX = 10
+
+
+@dataclass(frozen=True, eq=False)
+class PowerFlowResult:
+    """A solved power flow. Arrays have shape (n_bus,) in ``case.buses`` order, pu on the
+    system base.
+
+    Attributes:
+        case: the case solved (its bus table holds the data, not the solution).
+        vmag: voltage magnitude, pu.
+        vang: voltage angle, rad.
+        pgen, qgen: generation per bus (PST's ``bus_sol`` columns 4, 5).
+        pload, qload: load per bus (columns 6, 7).
+        kind: bus type after Q-limit switching (1 swing, 2 PV, 3 PQ).
+        q_limited: True where a PV bus was switched to PQ at a Q limit.
+        iterations: Newton iterations of the last solve.
+        max_mismatch: ``max|dP| + max|dQ|`` at the solution, pu.
+        taps: branch tap ratios used (after tap changing), shape (n_branches,).
+        tap_iterations: outer tap-changer iterations (1 when no tap moved).
+        dropped: 0-based branch rows left out of the network.
+    """
+
+    case: Case
+    vmag: np.ndarray
+    vang: np.ndarray
+    pgen: np.ndarray
+    qgen: np.ndarray
+    pload: np.ndarray
+    qload: np.ndarray
+    kind: np.ndarray
+    q_limited: np.ndarray
+    iterations: int
+    max_mismatch: float
+    taps: np.ndarray
+    tap_iterations: int = 1
+    dropped: tuple[int, ...] = field(default=())
+
+    @property
+    def v(self) -> np.ndarray:
+        """Complex bus voltages, pu, shape (n_bus,)."""
+        return self.vmag * np.exp(1j * self.vang)
+
+    @property
+    def vang_deg(self) -> np.ndarray:
+        """Voltage angles in degrees, shape (n_bus,)."""
+        return np.rad2deg(self.vang)
+
+    def bus_matrix(self) -> np.ndarray:
+        """PST's solved bus matrix ``bus_sol``, shape (n_bus, 15).
+
+        Columns as :class:`~stabctl.case.BusTable`; column 3 in degrees, column 10 the
+        final bus type, columns 11-15 with PST's defaults for zero entries (Q limits
+        +-9999, kV 1, vmax 1.5, vmin 0.5). Source: PSTess ``loadflow.m``.
+        """
+        b = self.case.buses
+        qmax, qmin, vmax, vmin = _limits(self.case)
+        kv = np.where(b.kv == 0, 1.0, b.kv)
+        return np.column_stack([
+            b.number, self.vmag, self.vang_deg, self.pgen, self.qgen, self.pload,
+            self.qload, b.gshunt, b.bshunt, self.kind, qmax, qmin, kv, vmax, vmin,
+        ])
+
+    def solved_case(self) -> Case:
+        """The case with its bus table replaced by :meth:`bus_matrix` and the final taps
+        (what PST's drivers do before a dynamic run: ``bus = bus_sol``)."""
+        buses = type(self.case.buses).from_matrix(self.bus_matrix())
+        branches = self.case.branches.replace(tap=self.taps)
+        return self.case.replace(buses=buses, branches=branches)
+
+    def branch_flows(self):
+        """Branch power flows at the solution; see :func:`stabctl.network.ybus.branch_flows`."""
+        return branch_flows(self.case, self.v, drop=self.dropped, taps=self.taps)
+
+
+def _limits(case: Case):
+    """PST's defaults for zero entries: Q limits +-9999, voltage limits 1.5 / 0.5."""
+    b = case.buses
+    qmax = np.where(b.qmax == 0, _NO_LIMIT, b.qmax)
+    qmin = np.where(b.qmin == 0, -_NO_LIMIT, b.qmin)
+    vmax = np.where(b.vmax == 0, 1.5, b.vmax)
+    vmin = np.where(b.vmin == 0, 0.5, b.vmin)
+    return qmax, qmin, vmax, vmin
+
+
+def power_injections(ybus: sp.spmatrix, v: np.ndarray) -> np.ndarray:
+    """Complex power injected into the network at each bus, ``V * conj(Ybus V)``, shape (n,)."""
+    return v * np.conj(ybus @ v)
+
+
+def jacobian(ybus: sp.csr_matrix, v: np.ndarray, ang_idx: np.ndarray, mag_idx: np.ndarray):
+    """Sparse power-flow Jacobian d(P[ang_idx], Q[mag_idx]) / d(angle[ang_idx], |V|[mag_idx]).
+
+    Args:
+        ybus: complex CSR (n, n); v: complex voltages (n,); ang_idx: buses whose angle is
+        unknown (non-swing); mag_idx: buses whose magnitude is unknown (PQ).
+    Returns:
+        CSC matrix of shape (len(ang_idx) + len(mag_idx),) * 2.
+    """
+    i = ybus @ v
+    vn = v / np.abs(v)
+    dv = sp.diags(v)
+    ds_dang = 1j * dv @ np.conj(sp.diags(i) - ybus @ dv)
+    ds_dmag = dv @ np.conj(ybus @ sp.diags(vn)) + np.conj(sp.diags(i)) @ sp.diags(vn)
+    ds_dang = ds_dang.tocsr()
+    ds_dmag = ds_dmag.tocsr()
+    j11 = ds_dang[ang_idx][:, ang_idx].real
+    j12 = ds_dmag[ang_idx][:, mag_idx].real
+    j21 = ds_dang[mag_idx][:, ang_idx].imag
+    j22 = ds_dmag[mag_idx][:, mag_idx].imag
+    return sp.bmat([[j11, j12], [j21, j22]], format="csc")
+
+
+@dataclass
+class _State:
+    """Mutable Newton state (PST's working vectors)."""
+
+    vmag: np.ndarray
+    vang: np.ndarray
+    pg: np.ndarray
+    qg: np.ndarray
+    pl: np.ndarray
+    ql: np.ndarray
+    kind: np.ndarray
+
+
+def _mismatch(ybus, st: _State):
+    """(dP, dQ, S) with dP zero at swing buses and dQ zero at swing and PV buses."""
+    s = power_injections(ybus, st.vmag * np.exp(1j * st.vang))
+    dp = st.pg - st.pl - s.real
+    dq = st.qg - st.ql - s.imag
+    dp[st.kind == SWING] = 0.0
+    dq[st.kind != PQ] = 0.0
+    return dp, dq, s
+
+
+def _norm(dp, dq) -> float:
+    return float(np.max(np.abs(dp), initial=0.0) + np.max(np.abs(dq), initial=0.0))
+
+
+def _apply_q_limits(st: _State, s, qmax, qmin) -> bool:
+    """PST ``chq_lim``: PV buses outside [qmin, qmax] become PQ at the limit. True if any."""
+    pv = st.kind == PV
+    st.qg[pv] = s.imag[pv] + st.ql[pv]
+    over = pv & (st.qg > qmax)
+    under = pv & (st.qg < qmin)
+    for mask, lim in ((over, qmax), (under, qmin)):
+        st.qg[mask] = 0.0
+        st.ql[mask] -= lim[mask]
+        st.kind[mask] = PQ
+    return bool(np.any(over | under))
+
+
+def _newton(case, ybus, st: _State, tol, max_iter, q_limits):
+    """Newton iterations in place on ``st``.
+
+    Returns (iterations, mismatch norm, S, converged, dP, dQ). A singular Jacobian or a
+    non-finite step raises :class:`PowerFlowError` at once; running out of iterations
+    does not (PST then tries its tap changer before giving up).
+    """
+    qmax, qmin, vmax, vmin = _limits(case)
+    dp, dq, s = _mismatch(ybus, st)
+    it = 0
+    while _norm(dp, dq) > tol and it < max_iter:
+        it += 1
+        ang_idx = np.flatnonzero(st.kind != SWING)
+        mag_idx = np.flatnonzero(st.kind == PQ)
+        jac = jacobian(ybus, st.vmag * np.exp(1j * st.vang), ang_idx, mag_idx)
+        rhs = np.concatenate([dp[ang_idx], dq[mag_idx]])
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error", spla.MatrixRankWarning)
+                dx = spla.splu(jac).solve(rhs)
+        except (RuntimeError, spla.MatrixRankWarning):
+            _fail(case, it, dp, dq, "singular Jacobian (islanded bus or voltage collapse)")
+        if not np.all(np.isfinite(dx)):
+            _fail(case, it, dp, dq, "non-finite Newton step")
+        st.vang[ang_idx] += dx[: ang_idx.size]
+        st.vmag[mag_idx] += dx[ang_idx.size:]
+        np.clip(st.vmag, vmin, vmax, out=st.vmag)
+        dp, dq, s = _mismatch(ybus, st)
+        if q_limits and _apply_q_limits(st, s, qmax, qmin):
+            dp, dq, s = _mismatch(ybus, st)
+    mism = _norm(dp, dq)
+    return it, mism, s, mism <= tol, dp, dq
+
+
+def _fail(case, it, dp, dq, what):
+    worst = int(np.argmax(np.maximum(np.abs(dp), np.abs(dq))))
+    raise PowerFlowError(
+        f"power flow of case '{case.name}' {what} after {it} iteration(s): "
+        f"worst mismatch {max(abs(dp[worst]), abs(dq[worst])):.3g} pu at bus "
+        f"{int(case.buses.number[worst])} (max|dP|+max|dQ| = {_norm(dp, dq):.3g})"
+    )
+
+
+def _check_islands(case: Case, drop=()) -> None:
+    """PowerFlowError naming the buses without a path to a swing bus (an island of the
+    case data, or left by the dropped branches): the Newton step would only report a
+    singular Jacobian and the worst mismatch somewhere else."""
+    from scipy.sparse.csgraph import connected_components
+
+    n = case.n_bus
+    keep = np.ones(len(case.branches), bool)
+    keep[[d for d in drop if 0 <= d < keep.size]] = False
+    f = case.bus_indices(case.branches.from_bus[keep])
+    t = case.bus_indices(case.branches.to_bus[keep])
+    _, label = connected_components(sp.coo_matrix((np.ones(f.size), (f, t)), shape=(n, n)),
+                                    directed=False)
+    dead = np.flatnonzero(~np.isin(label, label[case.buses.kind == SWING]))
+    if dead.size:
+        nums = [int(b) for b in case.buses.number[dead]]
+        listing = ", ".join(map(str, nums[:10])) + (f" and {len(nums) - 10} more"
+                                                    if len(nums) > 10 else "")
+        cause = "the dropped branch(es)" if drop else "the case data (no branch joins them)"
+        raise PowerFlowError(f"power flow of case '{case.name}': bus(es) {listing} have no "
+                             f"path to a swing bus: an island left by {cause}")
+
+
+def _move_taps(case: Case, vmag, taps) -> bool:
+    """PST ``lftap``: step the taps of branches feeding a bus at a voltage limit.
+
+    Returns True if a tap moved (PST also solves again when a voltage sits at a limit
+    but no tap can move; that repeats the same solution, so we stop instead).
+    """
+    br = case.branches
+    _, _, vmax, vmin = _limits(case)
+    high = vmag >= vmax
+    low = vmag <= vmin
+    if not (high.any() or low.any()):
+        return False
+    old = taps.copy()
+    to_idx = case.bus_indices(br.to_bus)
+    adj = br.tapmax != 0
+    for k in np.flatnonzero(adj & (high[to_idx] | low[to_idx])):
+        i, step, tmin, tmax = to_idx[k], br.tapstep[k], br.tapmin[k], br.tapmax[k]
+        if high[i]:
+            err = (vmag[i] - vmax[i]) / vmax[i]
+            tap = taps[k] + step if err < step else (
+                np.ceil((taps[k] + err - tmin) / step) * step + tmin)
+        else:
+            err = (vmin[i] - vmag[i]) / vmin[i]
+            tap = taps[k] - step if err < step else (
+                np.fix((taps[k] - err - tmin) / step) * step + tmin)
+        taps[k] = min(tmax, max(tap, tmin))
+    return bool(np.any(taps != old))
+
+
+def _initial_state(case: Case) -> tuple[_State, np.ndarray, np.ndarray]:
+    """Start state from the bus table, and the fixed injections per bus (P, Q)."""
+    b = case.buses
+    inj_p = np.zeros(case.n_bus)
+    inj_q = np.zeros(case.n_bus)
+    if len(case.injections):
+        idx = case.bus_indices(case.injections.bus)
+        np.add.at(inj_p, idx, case.injections.p)
+        np.add.at(inj_q, idx, case.injections.q)
+    return _State(
+        vmag=b.vmag.copy(), vang=np.deg2rad(b.vang_deg), pg=b.pgen + inj_p, qg=b.qgen + inj_q,
+        pl=b.pload.copy(), ql=b.qload.copy(), kind=b.kind.astype(int),
+    ), inj_p, inj_q
+
+
+def _report(case: Case, st: _State, s, inj_p, inj_q):
+    """PST's end-of-loadflow bookkeeping: (pgen, qgen, pload, qload, q_limited)."""
+    b = case.buses
+    pg, qg, pl, ql = st.pg.copy(), st.qg.copy(), st.pl.copy(), st.ql.copy()
+    gen = st.kind == PV
+    pg[gen] = s.real[gen] + pl[gen]
+    qg[gen] = s.imag[gen] + ql[gen]
+    limited = (b.kind == PV) & (st.kind != PV)
+    qg[limited] -= ql[limited] - b.qload[limited]  # back to the limit value
+    ql[limited] = b.qload[limited]
+    load = st.kind == PQ
+    pl[load] = pg[load] - s.real[load]
+    ql[load] = qg[load] - s.imag[load]
+    sw = st.kind == SWING
+    pg[sw] = s.real[sw] + pl[sw]
+    qg[sw] = s.imag[sw] + ql[sw]
+    return pg - inj_p, qg - inj_q, pl, ql, limited
+
+
+def solve_powerflow(
+    case: Case,
+    *,
+    tol: float = 1e-8,
+    max_iter: int = 50,
+    q_limits: bool = True,
+    tap_changing: bool = True,
+    drop=(),
+) -> PowerFlowResult:
+    """Solve the AC power flow of ``case`` (Newton-Raphson, polar, PST conventions).
+
+    Parameters
+    ----------
+    case : Case
+        The case; start values from its bus table.
+    tol : float, optional
+        Convergence tolerance on ``max|dP| + max|dQ|``, pu on the system base (PSTess
+        ``s_simu``: 1e-8).
+    max_iter : int, optional
+        Newton iterations allowed per solve (PSTess: 50).
+    q_limits : bool, optional
+        Apply PV -> PQ switching at generator Q limits (PST ``chq_lim``).
+    tap_changing : bool, optional
+        Move on-load taps of branches with ``tapmax != 0`` (PST ``lftap``).
+    drop : iterable of int, optional
+        0-based rows of ``case.branches`` out of service; empty by default.
+
+    Returns
+    -------
+    PowerFlowResult
+        The solution: bus voltages (pu, rad), generation and load per bus (pu on the
+        system base), arrays of shape (n_bus,) in ``case.buses`` order.
+
+    Raises
+    ------
+    PowerFlowError
+        No convergence within ``max_iter`` iterations or a singular Jacobian (the message
+        names the iteration count and the bus with the worst mismatch), or buses with no
+        path to a swing bus (an island of the case data, or left by ``drop``).
+    CaseError
+        A dropped branch row does not exist.
+
+    Warns
+    -----
+    RuntimeWarning
+        Voltages still at their limits after the last allowed tap-changer iteration.
+
+    Notes
+    -----
+    Source: PSTess ``loadflow.m``, ``calc.m``, ``form_jac.m``, ``chq_lim.m``, ``lftap.m``;
+    PST manual section 1.4.
+    """
+    drop = tuple(int(d) for d in drop)
+    _check_islands(case, drop)
+    taps = case.branches.tap.copy()
+    taps[taps == 0] = 1.0
+    for tap_it in range(1, _TAP_ITER_MAX + 1):
+        ybus = build_ybus(case, drop=drop, taps=taps)
+        st, inj_p, inj_q = _initial_state(case)
+        iters, mism, s, converged, dp, dq = _newton(case, ybus, st, tol, max_iter, q_limits)
+        if not (tap_changing and _move_taps(case, st.vmag, taps)):
+            break
+    else:
+        warnings.warn(
+            f"power flow of case '{case.name}': voltages still at limits after "
+            f"{_TAP_ITER_MAX} tap iterations", RuntimeWarning, stacklevel=2)
+    if not converged:
+        _fail(case, iters, dp, dq, "did not converge")
+    pg, qg, pl, ql, limited = _report(case, st, s, inj_p, inj_q)
+    return PowerFlowResult(
+        case=case, vmag=st.vmag, vang=st.vang, pgen=pg, qgen=qg, pload=pl, qload=ql,
+        kind=st.kind, q_limited=limited, iterations=iters, max_mismatch=mism, taps=taps,
+        tap_iterations=tap_it, dropped=drop,
+    )

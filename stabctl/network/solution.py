@@ -1,0 +1,231 @@
+"""Network solution of the dynamic simulation: Kron-reduced admittance matrices per network
+stage and the non-conforming (constant-P / constant-I) load iteration.
+
+Source: PSTess 1.1 `red_ybus.m`, `i_simu.m`, `nc_load.m`; docs/pst_models.md sections 5-6.
+Each machine is an internal node (voltage psi from `stabctl.models.machines.internal_voltage`)
+behind its admittance; constant-impedance loads sit in Ybus; buses with non-conforming load
+or an injection (storage) are kept, all other buses are eliminated:
+
+    I_mac = Y11 psi + Y12 V_nc,      I_nc(V_nc) = Y21 psi + Y22 V_nc,
+    V_bus = R @ [psi; V_nc]          (every original bus),
+
+with I_nc the current injected at the kept buses by their loads and devices.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as la
+from stabctl._jitcache import njit
+
+from stabctl.case import Case
+from stabctl.errors import SimulationError
+from stabctl.network.ybus import build_ybus
+
+V_SWITCH = 0.5  # below this voltage PST turns non-conforming loads into impedances
+V_RELEASE = V_SWITCH + 0.1  # a load held at its impedance model is released above this
+
+
+@dataclass(frozen=True, eq=False)
+class ReducedNetwork:
+    """Reduced matrices of one network stage (dense complex, pu on the system base).
+
+    Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 (n_nc, n_nc); R (n_bus,
+    n_mac + n_nc) gives every original bus voltage from [psi; V_nc]; Z22 = inv(Y22), the
+    chord of the load iteration.
+    """
+
+    Y11: np.ndarray
+    Y12: np.ndarray
+    Y21: np.ndarray
+    Y22: np.ndarray
+    R: np.ndarray
+    Z22: np.ndarray
+
+
+def reduce_network(case: Case, y_shunt: np.ndarray, y_mac: np.ndarray, mac_bus: np.ndarray,
+                   mac_online: np.ndarray, nc_idx: np.ndarray, n_bus_orig: int) -> ReducedNetwork:
+    """Kron-reduce the network of `case` (a stage variant, possibly with extra fault buses).
+
+    Args:
+        case: the stage's case (branches and bus shunts as modified for the stage).
+        y_shunt: extra shunt admittance per bus of `case` (constant-impedance loads), (n_bus,).
+        y_mac: machine internal admittances (system base), (n_mac,); mac_bus their bus indices.
+        mac_online: False for tripped machines (their node is disconnected).
+        nc_idx: indices of the kept buses; n_bus_orig: number of buses of the base case
+            (buses beyond it are stage-only fault nodes, not reported).
+    Raises:
+        SimulationError: the eliminated part of the network is singular (an island with no
+            path to ground or a machine).
+    """
+    n_mac, n_bus = y_mac.size, case.n_bus
+    Y = build_ybus(case).toarray()
+    Y[np.diag_indices(n_bus)] += y_shunt
+    y = np.where(mac_online, y_mac, 0.0)
+    np.add.at(Y, (mac_bus, mac_bus), y)
+    N = n_mac + n_bus
+    full = np.zeros((N, N), complex)
+    full[n_mac:, n_mac:] = Y
+    full[np.arange(n_mac), np.arange(n_mac)] = y
+    full[np.arange(n_mac), n_mac + mac_bus] = -y
+    full[n_mac + mac_bus, np.arange(n_mac)] = -y
+    if not np.all(mac_online):  # keep the matrix regular: isolated node to ground
+        off = np.nonzero(~mac_online)[0]
+        full[off, off] = 1.0
+    keep = np.concatenate([np.arange(n_mac), n_mac + np.asarray(nc_idx, int)])
+    elim = np.setdiff1d(np.arange(N), keep)
+    Ykk, Yke = full[np.ix_(keep, keep)], full[np.ix_(keep, elim)]
+    Yek, Yee = full[np.ix_(elim, keep)], full[np.ix_(elim, elim)]
+    try:
+        lu = la.lu_factor(Yee, check_finite=True)
+        rec = -la.lu_solve(lu, Yek)            # eliminated voltages from kept ones
+    except (la.LinAlgError, ValueError) as exc:
+        raise SimulationError(f"singular network in stage of case '{case.name}': {exc}") from exc
+    if not np.all(np.isfinite(rec)):
+        raise SimulationError(f"singular network (island without a source) in case '{case.name}'")
+    Yred = Ykk + Yke @ rec
+    R = np.zeros((n_bus, keep.size), complex)
+    R[np.asarray(nc_idx, int), n_mac + np.arange(len(nc_idx))] = 1.0
+    bus_elim = elim[elim >= n_mac] - n_mac
+    R[bus_elim] = rec[elim >= n_mac]
+    c = np.ascontiguousarray
+    Y22 = c(Yred[n_mac:, n_mac:])
+    return ReducedNetwork(Y11=c(Yred[:n_mac, :n_mac]), Y12=c(Yred[:n_mac, n_mac:]),
+                          Y21=c(Yred[n_mac:, :n_mac]), Y22=Y22, R=c(R[:n_bus_orig]),
+                          Z22=c(np.linalg.inv(Y22)) if Y22.size else Y22.copy())
+
+
+@dataclass(frozen=True, eq=False)
+class NonConformingLoads:
+    """Non-conforming part of the loads at the kept buses (PST `nc_load` flag 0), (n_nc,).
+
+    S_P: constant-power part (complex pu); I0: constant-current part as power per pu
+    voltage (load power = I0 |V|); Y_low: admittance used below 0.5 pu, (S_P + S_I)*/V0^2.
+    """
+
+    S_P: np.ndarray
+    I0: np.ndarray
+    Y_low: np.ndarray
+
+
+@njit(cache=True)
+def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
+    """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|.  Buses with low[i]
+    are held at their low-voltage impedance model."""
+    F[:] = b + Y22 @ V
+    worst = 0.0
+    for i in range(V.size):
+        m = abs(V[i])
+        if m > V_SWITCH and not low[i]:
+            F[i] += np.conj(S_P[i] + S_extra[i] + I0[i] * m) / np.conj(V[i])
+        else:
+            F[i] += np.conj(Y_low[i]) * V[i]
+        worst = max(worst, abs(F[i]))
+    return worst
+
+
+@njit(cache=True)
+def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, max_iter=50):
+    """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
+
+    I_load = conj((S_P + S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's
+    low-voltage switch; S_extra, e.g. storage power, is dropped below 0.5 pu with the
+    rest).  V (n_nc,) is the starting point and is updated in place.  First the chord
+    iteration V <- V - Z22 F(V) (the loads are small beside the network admittance, so it
+    contracts fast and costs one matrix-vector product per step); if that has not converged
+    in 30 steps, Newton's method in rectangular coordinates (as PST).  If Newton fails too,
+    the switch has left the equations without a solution (a load at 0.5 pu draws twice as
+    much just above the switch as just below; PSTess stops there): the loads within 0.05 pu
+    of the switch (at any iterate) are then held at their impedance model.
+
+    held (n_nc, bool, in/out) carries that hold between calls: a call that needed it sets
+    it, and the next call first solves with the same loads held and keeps the answer while
+    every held load stays below V_RELEASE = 0.6 pu (a 0.1 pu hysteresis band: held loads
+    settle at 0.55-0.58 pu in a deep fault on miniWECC); otherwise it clears held and
+    starts over as above.  Without it every evaluation through a deep fault would first spend
+    a failing Newton run rediscovering that the switch has no solution.  The caller clears
+    held when the network changes.  Returns the number of iterations, or -1 without
+    convergence (the caller raises SimulationError).
+    """
+    n = V.size
+    if n == 0:
+        return 0
+    b = Y21 @ psi
+    F = np.empty(n, np.complex128)
+    V_start = V.copy()
+    vmin = np.abs(V_start)
+    if held.any():
+        it = _chord(b, Y22, Z22, V, S_P, I0, Y_low, S_extra, F, held, tol, vmin)
+        if it < 0:
+            V[:] = V_start
+            it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, held, vmin)
+        if it >= 0 and np.all(np.abs(V)[held] < V_RELEASE):
+            return it
+        held[:] = False
+        V[:] = V_start
+        vmin[:] = np.abs(V_start)
+    it = _chord(b, Y22, Z22, V, S_P, I0, Y_low, S_extra, F, held, tol, vmin)
+    if it >= 0:
+        return it
+    V[:] = V_start
+    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, held, vmin)
+    if it >= 0:
+        return it
+    low = vmin < V_SWITCH + 0.05         # every bus that came near the switch
+    V[:] = V_start
+    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin)
+    if it >= 0:
+        held[:] = low
+    return it
+
+
+@njit(cache=True)
+def _chord(b, Y22, Z22, V, S_P, I0, Y_low, S_extra, F, low, tol, vmin):
+    """Up to 30 chord steps V <- V - Z22 F(V); the step count, or -1 if not converged."""
+    for it in range(30):
+        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low) < tol:
+            return it
+        V -= Z22 @ F
+        vmin[:] = np.minimum(vmin, np.abs(V))
+    return -1
+
+
+@njit(cache=True)
+def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin):
+    """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load);
+    vmin keeps the smallest magnitude each bus reached."""
+    n = V.size
+    J = np.empty((2 * n, 2 * n))
+    rhs = np.empty(2 * n)
+    F = np.empty(n, np.complex128)
+    for it in range(max_iter):
+        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low) < tol:
+            return it
+        # Wirtinger derivatives: d(load current) = A dV + B conj(dV), A, B diagonal
+        for r in range(n):
+            for c in range(n):
+                J[r, c] = Y22[r, c].real
+                J[r, n + c] = -Y22[r, c].imag
+                J[n + r, c] = Y22[r, c].imag
+                J[n + r, n + c] = Y22[r, c].real
+            m = abs(V[r])
+            Vc = np.conj(V[r])
+            if m > V_SWITCH and not low[r]:
+                A = np.conj(I0[r]) / (2 * m)
+                B = -np.conj(S_P[r] + S_extra[r]) / Vc ** 2 - np.conj(I0[r]) * m / (2 * Vc ** 2)
+            else:
+                A = np.conj(Y_low[r])
+                B = 0.0 + 0.0j
+            J[r, r] += (A + B).real
+            J[r, n + r] -= (A - B).imag
+            J[n + r, r] += (A + B).imag
+            J[n + r, n + r] += (A - B).real
+            rhs[r] = -F[r].real
+            rhs[n + r] = -F[r].imag
+        d = np.linalg.solve(J, rhs)
+        for i in range(n):
+            V[i] += d[i] + 1j * d[n + i]
+            vmin[i] = min(vmin[i], abs(V[i]))
+    return -1

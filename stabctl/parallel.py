@@ -1,0 +1,523 @@
+"""Run many independent jobs in parallel, recording each as it finishes (resumable).
+
+A `Job` is a key, a top-level (picklable) function and its JSON-able keyword inputs; the
+function returns a JSON-able dict.  `run_sweep` runs the jobs in local processes
+(`concurrent.futures.ProcessPoolExecutor`, one worker per available core, started with
+"spawn" so that no thread or lock of the parent is inherited) or, given a scheduler
+address, on a Dask distributed cluster (optional: `pip install "stabctl[dask]"`; stabctl
+must be installed on the workers).
+
+Output: a JSON-lines file, one line per finished job, appended and flushed as each job
+completes, so an interrupted sweep (Ctrl-C, a killed job) keeps every finished job:
+
+    {"key": ..., "inputs": {...}, "status": "ok", "result": {...}, "wall_time_s": ...,
+     "worker": "host:pid"}          (one line in the file)
+    {"key": ..., "inputs": {...}, "status": "failed", "error": "SimulationError: ...", ...}
+
+A job that raises is recorded as failed with the exception's type and message (and the
+traceback for anything but a stabctl error), never dropped; so is a job whose worker died.
+Rerunning with the same file skips the keys already there (failed ones too, unless
+`retry_failed`); the last line of a key wins.  One sweep per file at a time.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import json
+import multiprocessing
+import os
+import signal
+import re
+import socket
+import sys
+import tempfile
+import time
+import traceback
+import warnings
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from contextlib import closing, contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterator, Mapping
+
+from tqdm import tqdm
+
+from stabctl.errors import InputError, StabctlError
+
+
+@dataclass(frozen=True)
+class Job:
+    """One unit of work: `func(**inputs)` -> JSON-able dict, identified by `key` in the
+    output file.  func must be importable by name (a module-level function)."""
+
+    key: str
+    func: Callable[..., dict]
+    inputs: Mapping = field(default_factory=dict)
+
+
+@dataclass
+class SweepReport:
+    """Outcome of `run_sweep`: `records` maps every job key (in job order) to its line in
+    the output file (finished now or before); ran / skipped / failed count this call's
+    jobs (failed: among those run now); wall_time_s is this call's."""
+
+    out: Path
+    records: dict
+    ran: int
+    skipped: int
+    failed: int
+    wall_time_s: float
+
+
+#: Dask resubmits a job whose worker died this many times (a job's own errors are recorded
+#: by `run_job` and never retried); after that the job is recorded as failed, with why.
+DASK_RETRIES = 1
+
+
+def default_workers() -> int:
+    """Cores available to this process."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def run_job(func: Callable[..., dict], key: str, inputs: Mapping) -> dict:
+    """Run one job (in a worker) and return its output record; never raises an Exception."""
+    wall = time.perf_counter()
+    try:
+        rec = {"status": "ok", "result": func(**inputs)}
+    except Exception as exc:  # noqa: BLE001 - every failure is recorded with its reason
+        rec = _failure_fields(exc)
+    return {"key": key, "inputs": dict(inputs), **rec,
+            "wall_time_s": time.perf_counter() - wall,
+            "worker": f"{socket.gethostname()}:{os.getpid()}"}
+
+
+def _failure_fields(exc: BaseException) -> dict:
+    msg = " ".join(str(exc).split())
+    fields = {"status": "failed", "error": f"{type(exc).__name__}: {msg}" if msg
+              else type(exc).__name__}
+    if not isinstance(exc, StabctlError):
+        fields["traceback"] = "".join(traceback.format_exception(exc))
+    return fields
+
+
+def _lost(job: Job, exc: BaseException) -> dict:
+    """Record of a job whose worker failed outside the job (died, was lost)."""
+    fields = _failure_fields(exc)
+    fields["error"] = f"worker failed: {fields['error']}"
+    return {"key": job.key, "inputs": dict(job.inputs), **fields, "wall_time_s": None,
+            "worker": None}
+
+
+def read_records(path: str | Path) -> dict[str, dict]:
+    """Records of an output file: key -> last line of that key.  Lines that do not parse
+    (a line cut by a kill) are skipped with a warning; a missing file gives {}."""
+    path = Path(path)
+    if not path.exists():
+        return {}
+    records = {}
+    with path.open() as f:
+        for n, line in enumerate(f, start=1):
+            if not line.strip():
+                continue
+            try:
+                rec = json.loads(line)
+                records[rec["key"]] = rec
+            except (ValueError, KeyError, TypeError):
+                warnings.warn(f"{path} line {n}: not a sweep record, ignored")
+    return records
+
+
+def set_aside_damaged(path: str | Path) -> list[int]:
+    """Move the lines of an output file that are not sweep records (a last line cut by a
+    kill, a damaged line) to ``<path>.damaged`` with a warning, so that their jobs run
+    again and the file holds only whole records; returns their line numbers.  The file is
+    rewritten atomically (a temporary file renamed over it)."""
+    path = Path(path)
+    if not path.exists():
+        return []
+    good, bad = [], []
+    with path.open(errors="replace") as f:
+        for n, line in enumerate(f, start=1):
+            if not line.strip():
+                continue
+            try:
+                rec = json.loads(line)
+                ok = isinstance(rec, dict) and isinstance(rec.get("key"), str) \
+                    and rec.get("status") in ("ok", "failed")
+            except ValueError:
+                ok = False
+            (good if ok else bad).append((n, line if line.endswith("\n") else line + "\n"))
+    if not bad:
+        return []
+    aside = path.with_name(path.name + ".damaged")
+    with aside.open("a") as f:
+        f.writelines(line for _, line in bad)
+    atomic_write(path, lambda f: f.writelines(line for _, line in good))
+    numbers = [n for n, _ in bad]
+    warnings.warn(f"{path}: line(s) {', '.join(map(str, numbers))} not a whole sweep record "
+                  f"(cut by a kill?): moved to {aside}; their jobs run again")
+    return numbers
+
+
+def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w",
+                 permissions: int | None = None) -> Path:
+    """Write a file atomically: into a temporary file beside it (hidden, same suffix, so
+    that writers choosing the format by extension still do), renamed over `path` only when
+    complete; the temporary file is removed if writing fails.  The one atomic write of
+    stabctl.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file; its directory is created if missing.
+    write : callable
+        ``write(f)`` with the temporary file open in `mode`, or, with ``mode=None``,
+        ``write(tmp_path)`` with the temporary file's path (a str; the file exists, empty).
+    mode : {"w", "wb", None}
+        How the temporary file is opened for `write`.
+    permissions : int, optional
+        File mode bits to set before the rename (default: the temporary file's 0o600).
+
+    Returns
+    -------
+    Path
+        `path`.
+
+    Raises
+    ------
+    OSError
+        The directory cannot be created or written; whatever `write` raises.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+    try:
+        if mode is None:
+            os.close(fd)
+            write(tmp)
+        else:
+            with os.fdopen(fd, mode) as f:
+                write(f)
+        if permissions is not None:
+            os.chmod(tmp, permissions)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def die_with_parent(parent: int) -> None:
+    """Initializer of every worker process: on Linux the kernel kills the worker when its
+    parent dies (prctl PR_SET_PDEATHSIG, SIGKILL), so a sweep killed with SIGKILL leaves
+    no worker running (nor the resource tracker, which exits once no process holds its
+    pipe); a worker whose parent is already gone exits at once.  Workers ignore SIGINT:
+    Ctrl-C reaches the whole process group, and the parent stops the pool itself."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):  # pragma: no cover - no libc prctl
+            pass
+    if os.getppid() != parent:
+        os._exit(1)
+
+
+_PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+
+
+def process_pool(workers: int) -> ProcessPoolExecutor:
+    """A spawned process pool whose workers die with this process (`die_with_parent`)."""
+    return ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=die_with_parent, initargs=(os.getpid(),))
+
+
+def stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Stop a pool at once (interrupted): pending jobs cancelled, running ones killed
+    (their workers terminated) instead of waited for."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        try:
+            proc.terminate()
+        except (OSError, ValueError, AttributeError):  # already gone
+            pass
+    pool.shutdown(wait=False, cancel_futures=True)
+
+
+@contextmanager
+def pooled(workers: int) -> Iterator[ProcessPoolExecutor]:
+    """A spawned process pool (`process_pool`) for the duration of a with block: shut down
+    normally at its end, stopped at once (`stop_pool`, running jobs killed) when the
+    block is left by an exception (Ctrl-C included) or a generator holding it is closed.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes, >= 1.
+
+    Yields
+    ------
+    ProcessPoolExecutor
+    """
+    pool = process_pool(workers)      # workers die with this process (SIGKILL included)
+    try:
+        yield pool
+    except BaseException:
+        stop_pool(pool)
+        raise
+    else:
+        pool.shutdown(cancel_futures=True)
+
+
+@contextmanager
+def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable]:
+    """A function ``map(func, jobs) -> results``, each job a dict of keyword arguments,
+    results in job order: in this process for workers == 1, else in a `pooled` process
+    pool kept for the whole with block (so that each worker's caches, e.g. a simulator,
+    are built once), or on a Dask cluster.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes, >= 1.
+    scheduler : str, optional
+        Dask scheduler address ('tcp://host:8786'), or 'local' for a local cluster of
+        `workers` single-threaded processes (as :func:`run_sweep`).
+
+    Yields
+    ------
+    callable
+        ``map(func, jobs: list[dict]) -> list``; func must be a module-level function.
+
+    Raises
+    ------
+    InputError
+        Dask not installed or its scheduler unreachable.
+    """
+    if scheduler:
+        client = _dask_client(scheduler, workers)
+        try:
+            yield lambda func, jobs: client.gather([client.submit(_call, func, j, pure=False)
+                                                    for j in jobs])
+        finally:
+            cluster = client.cluster            # ours (scheduler="local") or None
+            client.close()
+            if cluster is not None:
+                cluster.close()
+        return
+    if workers == 1:
+        yield lambda func, jobs: [func(**j) for j in jobs]
+        return
+    with pooled(workers) as pool:
+        yield lambda func, jobs: [f.result() for f in [pool.submit(func, **j) for j in jobs]]
+
+
+def _call(func, kwargs: dict):
+    return func(**kwargs)
+
+
+def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
+              scheduler: str | None = None, progress: bool = True,
+              retry_failed: bool = False) -> SweepReport:
+    """Run `jobs` (Job) not yet recorded in `out`, appending one JSON line per job.
+
+    Args:
+        workers: local processes (default: the available cores); 1 runs in this process.
+        scheduler: Dask scheduler address ('tcp://host:8786'): run there instead;
+            'local': a Dask LocalCluster of `workers` single-threaded processes.
+        progress: tqdm bar on stderr.  retry_failed: rerun keys recorded as failed.
+
+    Raises:
+        InputError: duplicate keys; `out` holds a key with other inputs; workers < 1;
+            Dask not installed or its scheduler unreachable.
+        KeyboardInterrupt: after cancelling pending jobs; finished ones are in `out`.
+    """
+    jobs = list(jobs)
+    if workers is not None and workers < 1:
+        raise InputError(f"workers must be >= 1, got {workers}")
+    out = Path(out)
+    set_aside_damaged(out)
+    done = read_records(out)
+    _check_jobs(jobs, done, out)
+    todo = [j for j in jobs if j.key not in done
+            or (retry_failed and done[j.key].get("status") == "failed")]
+    wall = time.perf_counter()
+    failed = 0
+    if todo:
+        results = _dask(todo, scheduler, workers) if scheduler else _local(todo, workers)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        bar = tqdm(total=len(todo), desc=out.name, unit="job", file=sys.stderr,
+                   disable=not progress)
+        with closing(results), _appender(out) as f, bar:
+            for rec in results:
+                line = _line(rec)
+                f.write(line)
+                f.flush()
+                rec = done[rec["key"]] = json.loads(line)      # as it reads back
+                failed += rec["status"] == "failed"
+                bar.update()
+                bar.set_postfix(failed=failed)
+    return SweepReport(out=out, records={j.key: done[j.key] for j in jobs}, ran=len(todo),
+                       skipped=len(jobs) - len(todo), failed=failed,
+                       wall_time_s=time.perf_counter() - wall)
+
+
+#: Record fields that change from run to run (timings, process ids, tracebacks with the
+#: install's paths): left out of the reproducible copy written by `write_reproducible`.
+RUN_DEPENDENT = frozenset({"wall_time_s", "worker", "traceback", "solve_time_s",
+                           "solve_times_s", "solve_wall_s"})
+
+
+def strip_run_dependent(obj):
+    """A copy of a JSON-able object without the RUN_DEPENDENT keys (at any depth)."""
+    if isinstance(obj, dict):
+        return {k: strip_run_dependent(v) for k, v in obj.items() if k not in RUN_DEPENDENT}
+    if isinstance(obj, list):
+        return [strip_run_dependent(v) for v in obj]
+    return obj
+
+
+def natural_key(key: str) -> tuple:
+    """Sort key of a job key with its numbers compared as numbers (seed2 before seed10)."""
+    return tuple((0, int(t), "") if t.isdigit() else (1, 0, t)
+                 for t in re.split(r"(\d+)", key) if t)
+
+
+def write_reproducible(src: str | Path, dst: str | Path) -> dict:
+    """Write the records of the sweep file `src` (the last line of each key) to `dst` in
+    a form that depends only on the jobs' results: sorted by `natural_key`, without the
+    RUN_DEPENDENT fields, one line each.  `dst` is written to a temporary file in its
+    directory and renamed over any old file only when complete.  Returns what was left
+    out, for a run log: {"jobs", "failed", "job_wall_s" (sum), "longest_job_s",
+    "longest_job"}."""
+    records = read_records(src)
+    atomic_write(dst, lambda f: f.writelines(
+        json.dumps(strip_run_dependent(records[key]), default=_jsonable) + "\n"
+        for key in sorted(records, key=natural_key)), permissions=0o644)
+    walls = {k: r.get("wall_time_s") for k, r in records.items()
+             if isinstance(r.get("wall_time_s"), (int, float))}
+    longest = max(walls, key=walls.get, default=None)
+    return {"jobs": len(records),
+            "failed": sum(r.get("status") == "failed" for r in records.values()),
+            "job_wall_s": round(sum(walls.values()), 3),
+            "longest_job_s": None if longest is None else round(walls[longest], 3),
+            "longest_job": longest}
+
+
+def _check_jobs(jobs, done: dict, out: Path) -> None:
+    seen = set()
+    for j in jobs:
+        if j.key in seen:
+            raise InputError(f"duplicate job key {j.key!r}")
+        seen.add(j.key)
+        if j.key in done and done[j.key].get("inputs") != _normalised(j.inputs):
+            raise InputError(f"{out} already holds job {j.key!r} with other inputs ("
+                             f"{_differences(done[j.key].get('inputs') or {}, j.inputs)}); "
+                             "use another output file")
+
+
+def _differences(old: dict, new: Mapping) -> str:
+    new = _normalised(new)
+    return ", ".join(f"{k}: {old.get(k)!r} there, {new.get(k)!r} now"
+                     for k in sorted(set(old) | set(new)) if old.get(k) != new.get(k))
+
+
+def _normalised(inputs: Mapping) -> dict:
+    """Inputs as they read back from the file (tuples become lists)."""
+    return json.loads(json.dumps(dict(inputs)))
+
+
+def _line(rec: dict) -> str:
+    try:
+        return json.dumps(rec, default=_jsonable) + "\n"
+    except (TypeError, ValueError) as exc:
+        bad = {k: rec[k] for k in ("key", "inputs", "wall_time_s", "worker")}
+        bad.update(status="failed", error=f"result is not JSON-serialisable: {exc}")
+        return json.dumps(bad, default=str) + "\n"
+
+
+def _jsonable(x):
+    """numpy scalars and arrays -> Python numbers and lists; anything else is an error."""
+    if hasattr(x, "tolist"):
+        return x.tolist()
+    raise TypeError(f"{type(x).__name__} is not JSON-serialisable")
+
+
+class _appender:
+    """Append mode, first ending a last line cut short by a kill (so records stay one per
+    line)."""
+
+    def __init__(self, path: Path):
+        self.path = path
+
+    def __enter__(self):
+        cut = self.path.exists() and self.path.stat().st_size > 0 and \
+            self.path.read_bytes()[-1:] != b"\n"
+        self.f = self.path.open("a")
+        if cut:
+            self.f.write("\n")
+        return self.f
+
+    def __exit__(self, *exc):
+        self.f.close()
+
+
+def _local(jobs: list, workers: int | None) -> Iterator[dict]:
+    """Records in completion order from a process pool (in this process if workers == 1)."""
+    workers = min(workers or default_workers(), len(jobs))
+    if workers == 1:
+        for j in jobs:
+            yield run_job(j.func, j.key, j.inputs)
+        return
+    with pooled(workers) as pool:
+        futures = {pool.submit(run_job, j.func, j.key, j.inputs): j for j in jobs}
+        for fut in as_completed(futures):
+            try:
+                yield fut.result()
+            except Exception as exc:  # noqa: BLE001 - e.g. BrokenProcessPool
+                yield _lost(futures[fut], exc)
+
+
+def _dask_client(scheduler: str, workers: int):
+    """A Dask distributed client: of the cluster at `scheduler`, or for scheduler="local"
+    of a new local cluster of `workers` single-threaded processes (connects at once, so
+    that a missing Dask or a wrong address fails before anything is written; InputError)."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise InputError(f"--scheduler {scheduler} needs Dask distributed, which is not "
+                         "installed: pip install 'stabctl[dask]'") from None
+    try:
+        if scheduler == "local":
+            return Client(LocalCluster(n_workers=workers, threads_per_worker=1,
+                                       processes=True, dashboard_address=None))
+        return Client(scheduler)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise InputError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
+
+
+def _dask(jobs: list, scheduler: str, workers: int | None) -> Iterator[dict]:
+    """Records in completion order from a Dask distributed cluster (`_dask_client`)."""
+    n = min(workers or default_workers(), len(jobs))
+    return _dask_records(_dask_client(scheduler, n), jobs)
+
+
+def _dask_records(client, jobs: list) -> Iterator[dict]:
+    from distributed import as_completed
+
+    try:
+        futures = {client.submit(run_job, j.func, j.key, dict(j.inputs), pure=False,
+                                 retries=DASK_RETRIES): j for j in jobs}
+        for fut in as_completed(futures):
+            try:
+                yield fut.result()
+            except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker, cancelled
+                yield _lost(futures[fut], exc)
+    finally:
+        cluster = client.cluster            # ours (scheduler="local") or None
+        client.close()
+        if cluster is not None:
+            cluster.close()

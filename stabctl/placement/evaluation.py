@@ -1,0 +1,230 @@
+"""Simulation-based evaluation of a contingency at an ESD allocation: its CCT and the
+gradient of that CCT in the rating of every candidate site (docs/placement.md, section 3).
+
+The CCT comes from `stabctl.stability.cct.critical_clearing_time` (bisection), with storage after a
+scan for the first unstable clearing time (`scanned_cct`); the gradient from the run
+cleared just beyond it (SIME, `stabctl.stability.sime`):
+
+    d CCT / d P_j = - (d eta / d P_j) / (d eta / d t_clear)     (s/MW)
+
+where eta is the SIME unstable margin, d eta / d P_j its first-order change from the
+trajectory (`sime.storage_integrals`, weights `OmibEquivalent.group_weights`) and
+d eta / d t_clear a difference over `EPS_S` of clearing time (a second run).  Evaluations
+are JSON-able jobs run in parallel worker processes (`stabctl.parallel.worker_pool`, `verify`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from stabctl.stability.cct import LineFault, cached_simulator, critical_clearing_time
+from stabctl.errors import InputError, SimulationError
+from stabctl.placement.program import CCTCut
+from stabctl.stability.sime import (clearing_energy_rate, critical_machines, device_modes, omib_equivalent,
+                   storage_integrals, unstable_margin, unstable_point)
+from stabctl.storage.devices import StorageDevice, StorageFleet
+from stabctl.storage.control import BangBangCOI
+
+EPS_S = 0.005       # clearing-time step of d eta / d t_clear (s)
+SCAN_S = 0.005      # clearing-time grid of the first-unstable scan (s)
+
+
+@dataclass(frozen=True)
+class Contingency:
+    """A fault (`LineFault`, cleared at both ends, line tripped, plus its trips) and the
+    CCT it must reach (s after the fault start)."""
+
+    fault: LineFault
+    target_cct_s: float
+
+    @property
+    def name(self) -> str:
+        f = self.fault
+        where = f"{f.bus}" if f.far_bus is None else f"{f.bus}-{f.far_bus}"
+        return where + (f"#{f.circuit}" if f.circuit != 1 else "") + \
+            "".join(f"+{a}-{b}" for a, b in f.trips)
+
+
+# -- one contingency at one allocation (runs in a worker) ------------------------------
+
+def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
+             controller: dict, tol: float, t_max: float, scan_from: float | None = None,
+             scan_to: float | None = None, scan_s: float = SCAN_S,
+             eps_s: float = EPS_S, conventions: str = "ieee", h: float | None = None) -> dict:
+    """CCT of one contingency with ESDs `devices` ([bus, machine, MW] each) and the
+    gradient of that CCT in the rating of every candidate site ([bus, machine] each).
+
+    beta: distribution factors (n_mac x n_sites, `sime.distribution_factors`);
+    controller: BangBangCOI fields; conventions, h: the model conventions and step
+    (None: the default).  Without scan_from the CCT is the bisection of
+    `stabctl.stability.cct`; with it, `scanned_cct` (the first unstable clearing time on a scan_s
+    grid from scan_from up to scan_to, then bisection).  JSON-able in and out (a
+    process-pool job).
+    Returns {"cct_s", "t_unstable_s", "n_simulations", "separated", "critical",
+    "margin", "dmargin_dtc", "gradient_s_per_mw" (n_sites,), "above_t_max"}; a CCT
+    above t_max is returned as t_max with a zero gradient.
+    Raises InputError (unstable at zero clearing, bad fault) and SimulationError.
+    """
+    sim = cached_simulator(case, conventions, h)
+    far = None if fault["far_bus"] is None else int(fault["far_bus"])
+    f = LineFault(int(fault["bus"]), far, float(fault["t_fault"]),
+                  int(fault["circuit"]), tuple((int(a), int(b)) for a, b in fault["trips"]))
+    ctrl = BangBangCOI(**controller)
+    fleet = StorageFleet(tuple(StorageDevice(int(b), int(k), float(p)) for b, k, p in devices),
+                         ctrl) if devices else None
+    try:
+        if scan_from is None:
+            res, n_scan = critical_clearing_time(sim, f, tol=tol, t_max=t_max, error_check=False,
+                                                 storage=fleet), 0
+        else:
+            res, n_scan = scanned_cct(sim, f, fleet, tol=tol, t_max=t_max, start=scan_from,
+                                      stop=scan_to, step=scan_s)
+    except InputError as exc:
+        if "above the search limit" not in str(exc):
+            raise
+        return {"cct_s": t_max, "t_unstable_s": None, "n_simulations": None, "separated": [],
+                "critical": [], "margin": None, "dmargin_dtc": None, "above_t_max": True,
+                "gradient_s_per_mw": [0.0] * len(sites)}
+    grad = cct_gradient(sim, f, res.t_unstable, fleet, sites, np.asarray(beta), ctrl, eps_s)
+    return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable,
+            "n_simulations": n_scan + res.n_simulations + grad.pop("n_runs"),
+            "separated": list(res.separated), "above_t_max": False, **grad}
+
+
+def scanned_cct(sim, fault: LineFault, fleet, *, tol: float, t_max: float, start: float,
+                stop: float | None, step: float):
+    """CCT as the FIRST unstable clearing time: runs cleared at start, start + step, ...
+    (up to stop, default t_max) until one is unstable, then `critical_clearing_time`
+    bisects between it and the last stable one (from 0 if `start` itself is unstable);
+    when all are stable it bisects upward from the last one.  Bisection alone can land in
+    a stable island above an unstable window (stability is not always monotonic in the
+    clearing time with bang-bang storage), which this scan rules out on its grid.
+    Clearing times below `start` are taken as stable (the caller passes a CCT without
+    storage).  Returns (CCTResult, scan runs).  Raises as critical_clearing_time
+    (InputError "above the search limit" when stable up to t_max).
+    """
+    limit = t_max if stop is None else min(stop, t_max)
+    prev, t, runs = None, round(start, 12), 0
+    while t <= limit + 1e-12:
+        runs += 1
+        if not _run(sim, fault, t, fleet).stable:
+            res = critical_clearing_time(sim, fault, tol=tol, t_lo=prev or 0.0, t_hi=t,
+                                         error_check=False,
+                                         t_max=t, storage=fleet)
+            return res, runs
+        prev, t = t, round(t + step, 12)
+    if prev is None or prev >= t_max:
+        raise InputError(f"{fault.describe()}: the CCT is above the search limit t_max = "
+                         f"{t_max:g} s")
+    res = critical_clearing_time(sim, fault, tol=tol, t_lo=prev, error_check=False,
+                                 t_hi=min(prev + 4 * step, t_max), t_max=t_max, storage=fleet)
+    return res, runs
+
+
+def cct_gradient(sim, fault: LineFault, t_clear: float, fleet, sites, beta: np.ndarray,
+                 controller: BangBangCOI, eps_s: float = EPS_S) -> dict:
+    """Gradient of the CCT in the site ratings (s/MW) from the run cleared at t_clear (just
+    beyond the CCT) and a later unstable one (t_clear + eps_s, the step doubled up to 3
+    times while that run is stable or the margin does not fall).  When no later run gives
+    a falling margin (a run-away from rest on a later swing has margin 0 at every
+    clearing time), d eta / d t_clear is taken as minus the OMIB's kinetic energy rate at
+    clearing (`sime.clearing_energy_rate`): what one more second of fault adds.
+
+    Returns {"gradient_s_per_mw", "margin" (pu*rad), "dmargin_dtc" (pu*rad/s),
+    "slope_from" ("difference" or "clearing energy"), "critical" (machine numbers),
+    "n_runs"}.  Raises InputError when neither slope is negative.
+    """
+    case = sim.case
+    r1 = _run(sim, fault, t_clear, fleet)
+    crit = critical_machines(r1)
+    eta1, eq, ku = _margin(r1, crit, fault.t_fault + t_clear, case)
+    buses, macs = [s[0] for s in sites], [s[1] for s in sites]
+    modes = device_modes(r1, buses, macs, controller, case.freq_hz)
+    deta_dp = eq.group_weights(beta) * storage_integrals(eq, modes, ku) / case.base_mva
+    slope, how, runs = 0.0, "difference", 1
+    for k in range(4):
+        eps = eps_s * 2 ** k
+        runs += 1
+        r2 = _run(sim, fault, t_clear + eps, fleet)
+        if not r2.stable:
+            slope = (_margin(r2, crit, fault.t_fault + t_clear + eps, case)[0] - eta1) / eps
+            if slope < 0:
+                break
+    if not slope < 0:
+        slope, how = -clearing_energy_rate(eq, fault.t_fault + t_clear), "clearing energy"
+    if not slope < 0:
+        raise InputError(f"{fault.describe()}: no SIME margin slope in the clearing time "
+                         f"near {t_clear:g} s")
+    return {"gradient_s_per_mw": (-deta_dp / slope).tolist(), "margin": eta1,
+            "dmargin_dtc": slope, "slope_from": how, "critical": crit, "n_runs": runs}
+
+
+def _margin(result, crit, t_clear_abs: float, case):
+    """(SIME margin, OMIB equivalent, index of the unstable point) of one run."""
+    eq = omib_equivalent(result, crit, case.base_mva, case.freq_hz)
+    k_u = unstable_point(eq, t_clear_abs)
+    return unstable_margin(eq, k_u), eq, k_u
+
+
+def _run(sim, fault: LineFault, t_clear: float, fleet):
+    """A run to fault + 5 s stopped at separation; after a divergence (voltage collapse
+    or a machine lost) its partial trajectory."""
+    try:
+        return sim.run(fault.events(t_clear), fault.t_fault + 5.0, storage=fleet,
+                       stop_at_separation=True)
+    except SimulationError as exc:
+        if exc.result is None or len(exc.result.t) < 3:
+            raise
+        exc.result.stable = False
+        return exc.result
+
+
+# -- parallel evaluation ---------------------------------------------------------------
+
+def devices_of(sites, mw) -> list:
+    """[bus, machine, MW] of every site with a rating > 0."""
+    return [[s.bus, s.machine, float(p)] for s, p in zip(sites, mw) if p > 0]
+
+
+def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangBangCOI,
+           tol: float, t_max: float, base: dict | None = None, scan: str = "target",
+           scan_s: float = SCAN_S, model: dict | None = None) -> dict:
+    """`evaluate` every contingency at ratings mw (MW per site), in parallel through
+    run_map (`worker_pool`): name -> evaluation dict.
+
+    With storage and `base` (evaluations without storage) the CCT is scanned
+    (`scanned_cct`) from the contingency's CCT without storage: up to its target
+    (scan="target") or to t_max (scan="full", the first unstable clearing time however
+    far); scan="none" or no storage: bisection only.
+    model: {"conventions", "h"} of the runs (default: ieee at the default step).
+    Raises InputError for another scan value.
+    """
+    if scan not in ("target", "full", "none"):
+        raise InputError(f"scan must be 'target', 'full' or 'none', got {scan!r}")
+    devices = devices_of(sites, mw)
+    ctrl = {"deadband_hz": controller.deadband_hz, "v_gate_pu": controller.v_gate_pu,
+            "coi": controller.coi, "hysteresis_hz": controller.hysteresis_hz}
+    common = {"case": case, "devices": devices, "sites": [[s.bus, s.machine] for s in sites],
+              "beta": np.asarray(beta).tolist(), "controller": ctrl, "tol": tol,
+              "t_max": t_max, "scan_s": scan_s, **(model or {})}
+    scanning = devices and base is not None and scan != "none"
+    jobs = [{**common, "fault": _fault_dict(c.fault),
+             "scan_from": base[c.name]["cct_s"] if scanning else None,
+             "scan_to": c.target_cct_s if scan == "target" else None}
+            for c in contingencies]
+    return dict(zip([c.name for c in contingencies], run_map(evaluate, jobs)))
+
+
+def _fault_dict(f: LineFault) -> dict:
+    return {"bus": f.bus, "far_bus": f.far_bus, "t_fault": f.t_fault, "circuit": f.circuit,
+            "trips": [list(t) for t in f.trips]}
+
+
+def cuts_from(contingencies, evaluations: dict, mw) -> list[CCTCut]:
+    """One CCTCut per contingency from its evaluation at ratings mw."""
+    return [CCTCut(contingency=c.name, target_s=c.target_cct_s,
+                   cct_s=evaluations[c.name]["cct_s"],
+                   gradient=np.asarray(evaluations[c.name]["gradient_s_per_mw"], float),
+                   at_mw=np.asarray(mw, float)) for c in contingencies]

@@ -1,0 +1,535 @@
+"""ESD placement verified by nonlinear simulation: a trust-region loop around the convex
+program of `stabctl.placement.program` (docs/placement.md, section 4).
+
+Every allocation proposed is simulated (`stabctl.placement.evaluation.verify`: the CCT of every
+contingency by bisection, in parallel, and its gradient in the ratings from the SIME
+margin).  The loop is sequential linear programming with a trust region on an exact
+penalty merit (Nocedal, Wright, Numerical Optimization, 2nd ed., 2006, sec. 18.5):
+
+    merit(P) = cost . P + site_cost * sites(P) + mu_t sum_c max(0, target_c - CCT_c(P))
+               + mu_d * damping shortfall
+
+1. P = 0 (or a given start, e.g. a uniform fleet known to meet the targets) is simulated;
+   each contingency's CCT is linearised there (a cut).
+2. The program is solved with the cuts of the current allocation P (elastic at the merit's
+   prices), the damping rows (refined at the trial by recomputed eigenvalues until they
+   stop improving, `stabctl.smallsignal.damping`), and |P' - P| <= radius; the trial P' is rounded.
+3. P' is simulated.  rho = (merit(P) - merit(P')) / (its linearised prediction): if
+   rho >= 0.1 P' is accepted and every cut replaced by its linearisation at P' (the
+   constraints updated from the new trajectories); the radius doubles when the step was
+   good (rho >= 0.75) and reached it; otherwise P stays, the radius becomes half the step
+   and the cuts at P are corrected to pass through the CCTs simulated at P' (scaled
+   multi-secant, `CCTCut.through`; so are the cuts of an accepted P' through the P it
+   came from).
+4. Stop when the program predicts less than `rtol` of the current cost as further saving
+   (converged if the current allocation meets every target, stuck otherwise), or after
+   `max_iter` simulated allocations.
+5. Feasibility restoration: the cheapest allocation that missed by at most a few
+   tolerances is scaled up by 3, 6 and 10 % and simulated while cheaper than the best
+   verified one (`_restore`).
+The cheapest allocation that met every target in simulation is returned.  Whenever the
+hard program (no slack) is infeasible, the contingencies it names (`placement.diagnose`)
+are simulated with every site at its bound: still below target there proves the
+infeasibility (`InfeasibleError` naming them).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from stabctl.stability.cct import cached_simulator
+from stabctl.errors import InputError
+from stabctl.placement.program import (Allocation, InfeasibleError, candidate_sites, solve_allocation,
+                        sparse_allocation)
+from stabctl.parallel import worker_pool
+from stabctl.placement.evaluation import Contingency, cuts_from, verify
+from stabctl.storage.control import BangBangCOI
+
+MIN_MW = 1.0        # ratings below this are not installed (MW)
+#: The paper's Table 3 law (`stabctl.storage.devices.BangBangCOI` defaults: 100 mHz deadband, 0.8 pu
+#: voltage gate, system COI, no hysteresis).
+DEFAULT_CONTROLLER = BangBangCOI()
+ACCEPT, GOOD = 0.1, 0.75
+#: Feasibility restoration (`_restore`): near miss = CCT shortfall <= RESTORE_MISS
+#: tolerances in all; scale factors tried on it, in order.
+RESTORE_MISS, RESTORE_SCALE = 3, (1.03, 1.06, 1.1)
+
+
+@dataclass
+class PlacementResult:
+    """Outcome of `place`.
+
+    allocation: the cheapest verified Allocation (or the last accepted one when none met
+    every target); verified: every contingency's simulated CCT reaches its target (and,
+    with zeta_min, the recomputed damping); evaluations: contingency name -> evaluation
+    (`placement_eval.evaluate`) at that allocation; base: the same without storage;
+    iterations: one dict per allocation simulated; damping: (frequency Hz, damping ratio)
+    of the electromechanical modes at the allocation, or None; message: why it stopped;
+    solve_times_s: Clarabel's time of every program solved.
+    """
+
+    allocation: Allocation
+    verified: bool
+    evaluations: dict
+    base: dict
+    iterations: list
+    contingencies: tuple
+    damping: tuple | None = None
+    wall_time_s: float = 0.0
+    message: str = ""
+    solve_times_s: list = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (MW, s)."""
+        a = self.allocation
+        out = {"verified": self.verified, "message": self.message,
+               "allocation": a.rows(), "total_mw": a.total_mw, "n_sites": a.n_sites,
+               "contingencies": [self.row(c) for c in self.contingencies],
+               "iterations": self.iterations, "wall_time_s": self.wall_time_s,
+               "solve_times_s": self.solve_times_s}
+        if self.damping is not None:
+            out["damping"] = [{"freq_hz": float(f), "damping": float(z)}
+                              for f, z in zip(*self.damping)]
+        return out
+
+    def row(self, c: Contingency) -> dict:
+        """One contingency: target, CCT without and with the allocation (s), met."""
+        cct = self.evaluations[c.name]["cct_s"]
+        return {"name": c.name, "fault": c.fault.describe(), "target_cct_s": c.target_cct_s,
+                "cct_no_storage_s": self.base[c.name]["cct_s"], "cct_s": cct,
+                "met": cct >= c.target_cct_s - 1e-9}
+
+
+@dataclass
+class _Setup:
+    """What every iteration needs (see `place`)."""
+
+    case: str
+    contingencies: tuple
+    sites: tuple
+    beta: np.ndarray
+    controller: BangBangCOI
+    damping: object
+    zeta_min: float | None
+    solve_kw: dict
+    tol: float
+    t_max: float
+    run_map: object = None
+    base: dict | None = None
+    model: dict | None = None
+
+    def verify(self, mw, which=None) -> dict:
+        cons = self.contingencies if which is None else which
+        return verify(self.run_map, self.case, cons, self.sites, mw, self.beta,
+                      self.controller, self.tol, self.t_max, base=self.base,
+                      model=self.model)
+
+    @property
+    def upper(self) -> np.ndarray:
+        return np.array([s.max_mw for s in self.sites])
+
+    @property
+    def cost(self) -> np.ndarray:
+        return np.array([s.cost for s in self.sites])
+
+    @property
+    def site_cost(self) -> float:
+        return self.solve_kw["site_cost"]
+
+
+@dataclass
+class _Point:
+    """A simulated allocation: ratings (MW), evaluations, EM damping (or None), merit."""
+
+    mw: np.ndarray
+    ev: dict
+    zeta: tuple | None
+    merit: float
+    feasible: bool
+
+
+def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None,
+          max_sites: int | None = None, site_cost: float = 0.0, safety_s: float | None = None,
+          tol: float = 1e-3, t_max: float = 1.0, max_iter: int = 10, rtol: float = 0.02,
+          workers: int = 1, scheduler: str | None = None,
+          controller: BangBangCOI | None = None, amplitude_hz: float = 0.2,
+          base: dict | None = None, start=None,
+          progress=None, conventions: str = "ieee", h: float | None = None) -> PlacementResult:
+    """Least-cost ESD allocation meeting every contingency's target CCT (and damping),
+    verified by simulation (module docstring).
+
+    Args:
+        case: built-in case name or case file (workers load it by name).
+        contingencies: `placement_eval.Contingency` sequence (distinct names).
+        sites: candidate sites (default `placement.candidate_sites`: every generator's HV
+            bus, up to 50 % of its MVA).
+        zeta_min: least damping ratio of every electromechanical mode (None: no
+            small-signal constraint); amplitude_hz: relative-speed amplitude (Hz) at
+            which the bang-bang law's describing function is taken (`stabctl.smallsignal.damping`).
+        max_sites, site_cost: fewer sites (`placement.sparse_allocation`).
+        safety_s: CCT margin the program asks above each target (s, default 2 tol).
+        tol, t_max: CCT bisection tolerance and search limit (s).
+        max_iter: allocations simulated at most; rtol: relative saving below which the
+            loop stops once the targets are met.
+        workers: processes for the evaluations (1: in this process).
+        scheduler: Dask scheduler address, or 'local', to run the evaluations on instead
+            (`stabctl.parallel.worker_pool`); None: local processes.
+        controller: the bang-bang law of every ESD (default `DEFAULT_CONTROLLER`).
+        base: evaluations without storage if already done (`verify` at zero ratings).
+        start: first allocation (MW per site, shape (n_sites,)) instead of none, e.g. a
+            uniform fleet that meets every target: the loop then starts feasible and
+            every allocation it returns is at most as costly.
+        progress: callable(str), one line per step.
+    Raises:
+        InfeasibleError: a contingency misses its target even with every site at its
+            bound (simulated), or the damping rows cannot be met.
+        InputError: bad settings or contingencies; SimulationError: as the CCT search.
+    """
+    wall = time.perf_counter()
+    contingencies = tuple(contingencies)
+    _check_settings(contingencies, max_iter, tol, workers, zeta_min)
+    sim = cached_simulator(case, conventions, h)
+    _check_faults(sim.case, contingencies)
+    sites = tuple(sites or candidate_sites(sim.case))
+    controller = controller or DEFAULT_CONTROLLER
+    beta, damping = _linear_models(sim, sites, controller, zeta_min, amplitude_hz)
+    setup = _Setup(case, contingencies, sites, beta, controller, damping, zeta_min,
+                   {"safety_s": 2 * tol if safety_s is None else safety_s,
+                    "max_sites": max_sites, "site_cost": site_cost}, tol, t_max,
+                   model={"conventions": conventions, "h": h})
+    say = progress or (lambda msg: None)
+    with worker_pool(workers, scheduler) as run_map:
+        setup.run_map = run_map
+        base = setup.base = base or setup.verify(np.zeros(len(sites)))
+        say("no storage: " + _cct_line(contingencies, base))
+        result = _iterate(setup, base, _start(setup, start, base, say), max_iter, rtol, say)
+    result.wall_time_s = time.perf_counter() - wall
+    return result
+
+
+def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | None = None,
+                scan: str = "target", tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
+                scheduler: str | None = None, controller: BangBangCOI | None = None,
+                conventions: str = "ieee", h: float | None = None) -> dict:
+    """Simulated CCT (and its gradient) of every contingency at ratings mw (MW per site of
+    `sites`, default `candidate_sites`; None = no storage), in `workers` processes (or
+    on the Dask `scheduler`, as `place`):
+    name -> `placement_eval.evaluate` dict.  base and scan as `placement_eval.verify`
+    (scan="full" with base: the first unstable clearing time, e.g. of a uniform fleet).
+    Raises as `place`.
+    """
+    contingencies = tuple(contingencies)
+    sim = cached_simulator(case, conventions, h)
+    _check_faults(sim.case, contingencies)
+    sites = tuple(sites or candidate_sites(sim.case))
+    controller = controller or DEFAULT_CONTROLLER
+    beta, _ = _linear_models(sim, sites, controller, None, 0.0)
+    mw = np.zeros(len(sites)) if mw is None else np.asarray(mw, float)
+    with worker_pool(workers, scheduler) as run_map:
+        return verify(run_map, case, contingencies, sites, mw, beta, controller, tol, t_max,
+                      base=base, scan=scan, model={"conventions": conventions, "h": h})
+
+
+def baseline(case: str, faults, **kw) -> dict:
+    """`evaluations` of every fault (`LineFault`) without storage: CCT by bisection and
+    its gradient, by contingency name.  kw as `evaluations`."""
+    return evaluations(case, [Contingency(f, kw.get("t_max", 1.0)) for f in faults], **kw)
+
+
+def with_gain(faults, base: dict, gain_pct: float, tol: float = 1e-3) -> tuple:
+    """Contingencies whose target is the CCT without storage (`base`, by name) raised by
+    gain_pct %, rounded up to the tolerance lattice (s).  Raises InputError for
+    gain_pct <= 0."""
+    if not gain_pct > 0:
+        raise InputError(f"target CCT gain must be > 0 %, got {gain_pct:g}")
+    out = []
+    for f in faults:
+        name = Contingency(f, 1.0).name
+        t = base[name]["cct_s"] * (1 + gain_pct / 100)
+        out.append(Contingency(f, round(np.ceil(t / tol - 1e-9) * tol, 12)))
+    return tuple(out)
+
+
+def _check_faults(case, contingencies) -> None:
+    """Every fault's buses and lines exist (before any simulation)."""
+    from stabctl.dynamics.events import validate
+
+    for c in contingencies:
+        validate(case, c.fault.events(0.0), 0.0)
+
+
+def _linear_models(sim, sites, controller, zeta_min, amplitude_hz):
+    """Distribution factors (`sime.distribution_factors`) and, with zeta_min, the
+    `damping.DampingModel`, both from one linearisation with an ESD input at every site."""
+    from stabctl.smallsignal.damping import DampingModel, relay_df
+    from stabctl.smallsignal.linearise import linearise
+    from stabctl.stability.sime import distribution_factors
+
+    case = sim.case
+    sys = linearise(sim, esd_buses=list(dict.fromkeys(s.bus for s in sites)))
+    beta = distribution_factors(sys, [s.bus for s in sites], case.machines.number,
+                                sim.inertia, case.base_mva)
+    if zeta_min is None:
+        return beta, None
+    gain = relay_df(controller.deadband_hz, amplitude_hz, case.freq_hz,
+                    controller.hysteresis_hz).real
+    if not gain > 0:
+        raise InputError(f"oscillation amplitude {amplitude_hz:g} Hz is inside the ESD "
+                         f"deadband ({controller.deadband_hz:g} Hz): the devices are idle "
+                         "there and add no damping")
+    return beta, DampingModel(sys, sites, gain, case.base_mva)
+
+
+def _check_settings(contingencies, max_iter, tol, workers, zeta_min) -> None:
+    if not contingencies:
+        raise InputError("no contingency given")
+    names = [c.name for c in contingencies]
+    if len(set(names)) != len(names):
+        raise InputError(f"contingencies must differ, got {names}")
+    if max_iter < 1 or not tol > 0 or workers < 1:
+        raise InputError("need max_iter >= 1, tol > 0 and workers >= 1")
+    if zeta_min is not None and not 0 <= zeta_min < 1:
+        raise InputError(f"zeta_min must be in [0, 1), got {zeta_min:g}")
+    bad = [c.name for c in contingencies if not c.target_cct_s > 0]
+    if bad:
+        raise InputError(f"contingency {', '.join(bad)}: the target CCT must be > 0 s")
+
+
+# -- the trust-region loop ---------------------------------------------------------------
+
+def _start(setup: _Setup, start, base: dict, say) -> tuple[np.ndarray, dict]:
+    """The first allocation and its evaluations (no storage unless `start` is given)."""
+    n = len(setup.sites)
+    if start is None:
+        return np.zeros(n), base
+    start = np.asarray(start, float)
+    if start.shape != (n,) or np.any(start < 0) or np.any(start > setup.upper + 1e-9):
+        raise InputError(f"start: need {n} ratings within the site bounds (MW)")
+    mw = _rounded(start, setup.sites)
+    ev = setup.verify(mw)
+    say(f"start {mw.sum():.1f} MW: " + _cct_line(setup.contingencies, ev))
+    return mw, ev
+
+
+def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float,
+             say) -> PlacementResult:
+    mw0, ev0 = start
+    cuts = cuts_from(setup.contingencies, ev0, mw0)
+    prices = _prices(setup, cuts_from(setup.contingencies, base, np.zeros_like(mw0)))
+    cur = _point(setup, mw0, ev0, prices)
+    best = cur if cur.feasible else None
+    radius, checked, iterations, solve_times = float(setup.upper.max()), set(), [], []
+    seen, tried = [], []
+    message = f"stopped after {max_iter} simulated allocation(s) (cap)"
+    for it in range(1, max_iter + 1):
+        _prove_infeasible(setup, cuts, checked)
+        alloc, rows = _trial(setup, cuts, cur.mw, radius, prices, solve_times)
+        trial = _rounded(alloc.mw, setup.sites)
+        predicted = cur.merit - _model_merit(setup, cuts, rows, trial, prices)
+        if predicted <= rtol * max(setup.cost @ cur.mw, 1e-9) or np.array_equal(trial, cur.mw):
+            message = (f"converged: the program predicts < {rtol:.0%} further saving"
+                       if cur.feasible else "stuck: the linearised program predicts no "
+                       "progress from the current allocation")
+            break
+        new = _point(setup, trial, setup.verify(trial), prices)
+        rho = (cur.merit - new.merit) / predicted
+        iterations.append(_record(it, setup, new, alloc, rho, radius))
+        say(f"iteration {it}: {trial.sum():.1f} MW at {np.count_nonzero(trial)} site(s), "
+            f"{'meets every target' if new.feasible else 'misses'}, rho {rho:.2f}; "
+            + _cct_line(setup.contingencies, new.ev))
+        if new.feasible and (best is None or setup.cost @ new.mw < setup.cost @ best.mw):
+            best = new
+        tried.append(new)
+        step = float(np.max(np.abs(trial - cur.mw)))
+        if rho >= ACCEPT:
+            cur, seen = new, [cur]
+            radius = min(2 * radius, setup.upper.max()) if rho >= GOOD and \
+                step >= 0.9 * radius else radius
+        else:
+            seen.append(new)
+            radius = step / 2
+        cuts = _secant_cuts(setup, cur, seen)
+    restored = _restore(setup, tried, best, prices, iterations, say)
+    if restored is not None:
+        best, message = restored, message + "; then restored by scaling a near miss"
+    if best is None:
+        message = f"no allocation met every target in {len(iterations)} simulated allocation(s)"
+    end = best or cur
+    return PlacementResult(
+        allocation=_as_allocation(setup.sites, end.mw, solve_times), verified=best is not None,
+        evaluations=end.ev, base=base, iterations=iterations,
+        contingencies=setup.contingencies, damping=end.zeta, message=message,
+        solve_times_s=solve_times)
+
+
+def _restore(setup: _Setup, tried, best, prices, iterations, say):
+    """Feasibility restoration along a ray: the cheapest simulated allocation that missed
+    only by a little (CCT shortfall summed <= RESTORE_MISS tolerances, no damping
+    shortfall) is scaled up by each RESTORE_SCALE factor (within the site bounds) while
+    still cheaper than the best verified allocation; the first scaled allocation that
+    meets every target in simulation is returned (None if none does).  Each one
+    simulated is recorded in `iterations`."""
+    def cost(p):
+        return float(setup.cost @ p)
+
+    near = [p for p in tried if not p.feasible
+            and _misses_by(setup, p) <= RESTORE_MISS * setup.tol
+            and (best is None or cost(p.mw) < cost(best.mw))]
+    if not near:
+        return None
+    p0 = min(near, key=lambda p: cost(p.mw))
+    for k in RESTORE_SCALE:
+        mw = _rounded(np.minimum(k * p0.mw, setup.upper), setup.sites)
+        if best is not None and cost(mw) >= cost(best.mw):
+            return None
+        new = _point(setup, mw, setup.verify(mw), prices)
+        iterations.append(_record(len(iterations) + 1, setup, new,
+                                  _as_allocation(setup.sites, mw, []), float("nan"), 0.0))
+        say(f"restoration x{k:g}: {mw.sum():.1f} MW, "
+            f"{'meets every target' if new.feasible else 'misses'}; "
+            + _cct_line(setup.contingencies, new.ev))
+        if new.feasible:
+            return new
+    return None
+
+
+def _misses_by(setup: _Setup, p: _Point) -> float:
+    """CCT shortfall summed over the contingencies (s); inf with a damping shortfall."""
+    if p.zeta is not None and damping_shortfall(p.zeta[1], setup.zeta_min) > 1e-4:
+        return float("inf")
+    return sum(max(0.0, c.target_cct_s - p.ev[c.name]["cct_s"]) for c in setup.contingencies)
+
+
+def _secant_cuts(setup: _Setup, cur: _Point, seen) -> list:
+    """Cuts at the current allocation, corrected through the allocations simulated since
+    it was accepted and the one it was accepted from (`CCTCut.through`)."""
+    return [c.through([(p.mw, p.ev[c.contingency]["cct_s"]) for p in seen])
+            for c in cuts_from(setup.contingencies, cur.ev, cur.mw)]
+
+
+def _prices(setup: _Setup, cuts) -> tuple[float, float]:
+    """Exact-penalty prices: mu_t (cost per s of CCT shortfall) ten times the dearest
+    contingency's cheapest marginal cost of CCT at P = 0; mu_d (cost per unit damping
+    shortfall) ten times the cost of every site at its bound."""
+    cost = setup.cost
+    rates = [np.min(cost[c.gradient > 0] / c.gradient[c.gradient > 0])
+             for c in cuts if np.any(c.gradient > 0)]
+    full = float(cost @ setup.upper)
+    mu_t = 10 * max(rates) if rates else full / setup.tol
+    return mu_t, 10 * full
+
+
+def _point(setup: _Setup, mw, ev: dict, prices) -> _Point:
+    """Merit and feasibility of a simulated allocation."""
+    zeta = None if setup.damping is None else setup.damping.em_damping(mw)
+    short_t = sum(max(0.0, c.target_cct_s - ev[c.name]["cct_s"]) for c in setup.contingencies)
+    short_d = 0.0 if zeta is None else damping_shortfall(zeta[1], setup.zeta_min)
+    merit = float(setup.cost @ mw + setup.site_cost * np.count_nonzero(mw)
+                  + prices[0] * short_t + prices[1] * short_d)
+    return _Point(mw=np.asarray(mw, float), ev=ev, zeta=zeta, merit=merit,
+                  feasible=short_t <= 1e-9 and short_d <= 1e-4)
+
+
+def damping_shortfall(zeta, zeta_min: float) -> float:
+    """max over modes of kappa sqrt(1 - zeta^2) - zeta (>= 0), kappa = zeta_min /
+    sqrt(1 - zeta_min^2): the normalised distance of the worst eigenvalue beyond the
+    zeta_min line (the measure of `damping.DampingModel.rows`; ~ zeta_min - zeta)."""
+    z = np.asarray(zeta, float)
+    if not z.size:
+        return 0.0
+    kappa = zeta_min / np.sqrt(1 - zeta_min ** 2)
+    return float(max(0.0, np.max(kappa * np.sqrt(1 - z ** 2) - z)))
+
+
+def _model_merit(setup: _Setup, cuts, rows, mw, prices) -> float:
+    """The merit as the program sees it at ratings mw (linearised CCTs and damping)."""
+    short_t = sum(max(0.0, c.target_s - c.predicted(mw)) for c in cuts)
+    short_d = 0.0 if rows is None or not len(rows.b) else \
+        float(max(0.0, np.max(rows.A @ mw - rows.b)))
+    return float(setup.cost @ mw + setup.site_cost * np.count_nonzero(mw)
+                 + prices[0] * short_t + prices[1] * short_d)
+
+
+def _trial(setup: _Setup, cuts, centre, radius, prices, solve_times, max_steps: int = 8):
+    """The program's step from `centre` within `radius`; with damping rows, re-linearised
+    at the step and solved again (same centre and radius) while the recomputed damping
+    shortfall decreases: (allocation, damping rows used or None)."""
+    kw = dict(setup.solve_kw, cct_penalty=prices[0], penalty=prices[1],
+              trust=(centre, radius))
+    dm = setup.damping
+    rows = None if dm is None else dm.rows(centre, setup.zeta_min)
+    alloc = sparse_allocation(setup.sites, cuts, damping=rows, **kw)
+    solve_times.append(alloc.solve_time_s)
+    if dm is None:
+        return alloc, None
+    short = damping_shortfall(dm.em_damping(alloc.mw)[1], setup.zeta_min)
+    for _ in range(max_steps):
+        if short <= 1e-4:
+            break
+        new_rows = dm.rows(alloc.mw, setup.zeta_min)
+        new = sparse_allocation(setup.sites, cuts, damping=new_rows, **kw)
+        solve_times.append(new.solve_time_s)
+        new_short = damping_shortfall(dm.em_damping(new.mw)[1], setup.zeta_min)
+        if new_short >= short:
+            break
+        alloc, rows, short = new, new_rows, new_short
+    return alloc, rows
+
+
+def _prove_infeasible(setup: _Setup, cuts, checked: set) -> None:
+    """If the hard program over the whole box is infeasible, simulate the contingencies it
+    names (not simulated so before) with every site at its bound; InfeasibleError when one
+    still misses its target."""
+    try:
+        solve_allocation(setup.sites, cuts)
+        return
+    except InfeasibleError as exc:
+        names = [n for n in exc.contingencies if n not in checked]
+    if not names:
+        return
+    checked.update(names)
+    ub = setup.upper
+    which = [c for c in setup.contingencies if c.name in names]
+    ev = setup.verify(ub, which)
+    failing = [c for c in which if ev[c.name]["cct_s"] < c.target_cct_s - 1e-9]
+    if failing:
+        raise InfeasibleError("infeasible: " + "; ".join(
+            f"contingency {c.name} ({c.fault.describe()}) reaches a CCT of only "
+            f"{ev[c.name]['cct_s']:.3f} s against its target {c.target_cct_s:.3f} s even with "
+            f"every candidate site at its bound ({ub.sum():.0f} MW), simulated"
+            for c in failing), [c.name for c in failing])
+
+
+def _rounded(mw, sites) -> np.ndarray:
+    """Ratings rounded up to 0.1 MW (within the bounds); below MIN_MW not installed."""
+    mw = np.asarray(mw, float)
+    ub = np.array([s.max_mw for s in sites])
+    up = np.minimum(np.ceil(mw * 10 - 1e-6) / 10, ub)
+    return np.where(mw >= MIN_MW, up, 0.0)
+
+
+def _record(it, setup: _Setup, p: _Point, alloc: Allocation, rho, radius) -> dict:
+    return {"iteration": it, "total_mw": float(p.mw.sum()),
+            "n_sites": int(np.count_nonzero(p.mw)), "mw_by_site": [float(x) for x in p.mw],
+            "meets_targets": p.feasible, "rho": float(rho), "radius_mw": float(radius),
+            "cct_s": {c.name: p.ev[c.name]["cct_s"] for c in setup.contingencies},
+            "n_simulations": sum(p.ev[c.name]["n_simulations"] or 0
+                                 for c in setup.contingencies),
+            "predicted_cct_s": alloc.predicted_cct_s,
+            "min_damping": None if p.zeta is None else float(np.min(p.zeta[1])),
+            "solve_time_s": alloc.solve_time_s, "solve_wall_s": alloc.wall_time_s}
+
+
+def _as_allocation(sites, mw, solve_times) -> Allocation:
+    cost = np.array([s.cost for s in sites])
+    return Allocation(sites=tuple(sites), mw=np.asarray(mw, float), objective=float(cost @ mw),
+                      solve_time_s=float(solve_times[-1]) if solve_times else 0.0,
+                      wall_time_s=0.0)
+
+
+def _cct_line(contingencies, ev) -> str:
+    return ", ".join(f"{c.name} {ev[c.name]['cct_s']:.3f}/{c.target_cct_s:.3f} s"
+                     for c in contingencies)

@@ -1,0 +1,399 @@
+"""Linearised multi-machine model: the simulator's own equations differentiated numerically
+at the power-flow point and handed to python-control as a `control.StateSpace`.
+
+Method (PSTess `svm_mgen`, docs/pst_models.md 9; details and error study in docs/modal.md):
+every active state, then every input, is perturbed by +-h, h = rel_step * max(|value|, 1)
+(PSTess: rel_step = 1e-4); each perturbed point is evaluated by `evaluate_kernel`, the
+compiled single evaluation behind `DynamicModel.evaluate`, which re-solves the algebraic
+network (non-conforming loads included) from the kept-bus voltages of the power flow, so
+the network is eliminated exactly as in the simulation; columns are central differences
+(f(+h) - f(-h)) / 2h.  The model equations are not written a second time here.
+
+Signal names use '_' where `DynamicModel.state_name` has '.' (python-control reserves '.').
+Inputs (columns of B and D, in this order):
+    P_esd_B<n>  real power drawn by an energy-storage device at bus n (pu on the system
+                base, + absorbs as `stabctl.storage.devices`), injected through `S_extra` at a kept
+                bus; by default at every generator's HV bus (`storage.hv_bus`);
+    Vref_G<k>   voltage reference of machine k's exciter (pu);
+    Pref_G<k>   power reference of machine k's governor (pu on the machine base).
+Outputs (rows of C and D, deviations from the operating point):
+    omega_G<k>      machine speed (pu);
+    omega_coi       centre-of-inertia speed, weights H*MVA (paper eq. 40) (pu);
+    omega_rel_G<k>  omega_k - omega_coi (pu);
+    vmag_B<n>       bus voltage magnitude (pu);
+    f_bus_B<n>      bus frequency deviation (Hz) = (d theta_n / dt) / 2 pi, by the chain rule
+                    (C, D) = dtheta/dx (A, B) / 2 pi; the term dtheta/du du/dt (an impulse at
+                    a step of an ESD input) is not representable and is left out.
+States: the active slots of the simulator's state vector in its own (block-major) order,
+named by `DynamicModel.state_name`; unused slots (docs/modal.md, "State counts") are left out.
+"""
+
+from __future__ import annotations
+
+import control as ct
+import numpy as np
+from stabctl._jitcache import njit
+
+from stabctl.models import exciters as exc
+from stabctl.models import governors as gov
+from stabctl.models import machines as mac
+from stabctl.case import Case
+from stabctl.dynamics.coi import coi_weights
+from stabctl.dynamics.model import (DynamicModel, KeptBuses, KernelOutputs, StageConfig,
+                                    evaluate_kernel, kernel_network, kernel_outputs)
+from stabctl.errors import InputError, SimulationError
+
+REL_STEP = 1e-4          # PSTess svm_mgen's relative perturbation
+KINK_RATIO = 1e-2        # one-sided slopes differing more than this: a limit was crossed
+STATE, ESD, VREF, PREF = 0, 1, 2, 3
+
+
+def active_states(model: DynamicModel) -> np.ndarray:
+    """Boolean mask (n_x,) of the state slots that are states of the model.
+
+    Unused slots (derivative identically 0, never read as a state): machines mac_tra
+    psikd/psikq, mac_em all but delta/omega; exciters V_TR without T_R, V_As without T_B,
+    the smpexc Efd without T_A; the third PSS lead-lag without T_4 (PSTess's lbnd = 1e-3 s);
+    slots a type does not use (`ExciterParams.has_state`, `GovernorParams.has_state`).
+    """
+    L, mp, ep, pp = model.layout, model.mp, model.ep, model.pp
+    act = np.zeros(L.size, bool)
+    m = L.view(act, "mac")
+    m[[0, 1]] = True
+    m[[2, 4]] = mp.kind != mac.EM
+    m[[3, 5]] = mp.kind == mac.SUB
+    L.view(act, "exc")[:] = ep.has_state()
+    L.view(act, "pss")[:] = pp.has_state()
+    L.view(act, "tg")[:] = model.gp.has_state()
+    return act
+
+
+def default_esd_buses(case: Case) -> list[int]:
+    """The HV bus of every generator (`storage.hv_bus`), each bus once, in machine order."""
+    from stabctl.storage.devices import hv_bus
+
+    return list(dict.fromkeys(hv_bus(case, int(k)) for k in case.machines.number))
+
+
+def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP,
+              conventions: str = "ieee", q_limits: bool = True):
+    """Linearised model of a case at its power-flow point, as a `control.StateSpace`.
+
+    Central differences of the simulator's own equations (PSTess ``svm_mgen``,
+    docs/pst_models.md 9; module docstring for the signals, docs/modal.md for the error
+    study).
+
+    Parameters
+    ----------
+    target : Case or Simulator
+        A Case (its power flow is solved and a Simulator built) or a
+        `stabctl.dynamics.simulation.Simulator` (its operating point, conventions and
+        cached models are used).
+    esd_buses : iterable of int or None, optional
+        Bus numbers with an ESD power input ``P_esd_B<n>`` (pu on the system base,
+        + absorbs); None (default): every generator's HV bus (`default_esd_buses`).
+    extra_buses : iterable of int, optional
+        Further ESD buses, appended (repeats ignored); default none.
+    rel_step : float, optional
+        Relative perturbation h / max(|value|, 1), in (0, 0.1); default PSTess's 1e-4
+        (REL_STEP).
+    conventions : {"ieee", "pstess"}, optional
+        Model conventions when `target` is a Case (a Simulator keeps its own); default
+        "ieee".  At a power-flow point inside every limit both give the same linear model.
+    q_limits : bool, optional
+        PV Q limits in the power flow when `target` is a Case (as `Simulator`); default
+        True.
+
+    Returns
+    -------
+    control.StateSpace
+        Continuous-time model with named states, inputs and outputs (module docstring):
+        A (n_x, n_x), B (n_x, n_u), C (n_y, n_x), D (n_y, n_u), n_x the number of active
+        states, n_u = n_esd + n_exciters + n_governors inputs (``P_esd_B<n>``,
+        ``Vref_G<k>``, ``Pref_G<k>``), n_y = 2 n_mac + 1 + 2 n_bus outputs
+        (``omega_G<k>``, ``omega_coi``, ``omega_rel_G<k>`` in pu speed, ``vmag_B<n>`` in
+        pu, ``f_bus_B<n>`` in Hz), deviations from the operating point.
+
+    Raises
+    ------
+    UnknownBusError
+        An ESD bus not in the case.
+    InputError
+        `rel_step` not in (0, 0.1); unknown conventions.
+    SimulationError
+        The network did not solve at a perturbed point, or a perturbation crossed a
+        limiter (the linearisation would be meaningless there).
+    CaseError, PowerFlowError
+        As `Simulator` when `target` is a Case.
+    """
+    from stabctl.dynamics.simulation import Simulator
+
+    sim = target if isinstance(target, Simulator) else Simulator(
+        target, conventions=conventions, q_limits=q_limits)
+    case = sim.case
+    buses = list(default_esd_buses(case) if esd_buses is None else esd_buses)
+    buses = list(dict.fromkeys(int(b) for b in [*buses, *extra_buses]))
+    case.bus_indices(buses)
+    return linearise_model(sim.model_for(buses), buses, rel_step)
+
+
+def linearise_model(model: DynamicModel, esd_buses=(), rel_step: float = REL_STEP):
+    """`linearise` on a built model whose reduced network keeps every bus of esd_buses.
+
+    Raises InputError when an ESD bus is not kept, plus the errors of `linearise`.
+    """
+    if not 0 < rel_step < 0.1:
+        raise InputError(f"rel_step must be in (0, 0.1), got {rel_step}")
+    case = model.case
+    pos = _kept_positions(model, esd_buses)
+    act = np.nonzero(active_states(model))[0]
+    kind, index, values = _columns(model, act, pos)
+    J, dV, V0 = jacobian_columns(model, kind, index, rel_step * np.maximum(np.abs(values), 1.0))
+    n = act.size
+    A, B = J[:n, act].T, J[n:, act].T
+    C, D = output_matrices(model, act, A, B, dV[:n].T, dV[n:].T, V0)
+    return ct.ss(A, B, C, D, states=[signal_name(model.state_name(int(k))) for k in act],
+                 inputs=_input_names(case, esd_buses, model), outputs=output_names(case),
+                 name=f"{case.name} linearised")
+
+
+def perturbation_error(target, rel_step: float = REL_STEP, factor: float = 10.0, **kw) -> dict:
+    """Estimated finite-difference error of `linearise(target, rel_step=rel_step)`.
+
+    Linearises again with rel_step / factor and compares: the truncation error of central
+    differences falls as h^2 and the round-off of the network solution (load iteration to
+    1e-10) grows as 1/h, so the difference bounds the error at the step where the larger of
+    the two dominates (docs/modal.md, "Perturbation error").  kw go to `linearise`.
+
+    Returns {"rel_step", "compare_step", "A", "B", "C", "D": max |difference| / max |entry|
+    of each matrix, "eig": max |delta lambda| / max(|lambda|, 1) over all eigenvalues,
+    "freq_hz", "damping": max change of the frequency and damping ratio of the
+    oscillatory modes between F_MIN_HZ and F_MAX_HZ (stabctl.smallsignal.modal)}.
+    """
+    from stabctl.smallsignal.modal import F_MAX_HZ, F_MIN_HZ
+
+    a = linearise(target, rel_step=rel_step, **kw)
+    b = linearise(target, rel_step=rel_step / factor, **kw)
+    out = {"rel_step": rel_step, "compare_step": rel_step / factor}
+    for key in "ABCD":
+        x, y = np.asarray(getattr(a, key)), np.asarray(getattr(b, key))
+        out[key] = float(np.abs(x - y).max() / max(np.abs(x).max(), 1e-300)) if x.size else 0.0
+    la_, lb = np.linalg.eigvals(a.A), np.linalg.eigvals(b.A)
+    match = lb[np.argmin(np.abs(la_[:, None] - lb[None, :]), axis=1)]
+    out["eig"] = float(np.max(np.abs(la_ - match) / np.maximum(np.abs(la_), 1.0)))
+    f = lambda z: np.abs(z.imag) / (2 * np.pi)  # noqa: E731
+    osc = (f(la_) >= F_MIN_HZ) & (f(la_) <= F_MAX_HZ)
+    out["freq_hz"] = float(np.max(np.abs(f(la_) - f(match))[osc], initial=0.0))
+    zeta = lambda z: -z.real / np.abs(z)  # noqa: E731
+    out["damping"] = float(np.max(np.abs(zeta(la_[osc]) - zeta(match[osc])), initial=0.0))
+    return out
+
+
+def compare_pulse(sim, sys, bus: int, P: float = 0.05, t_on: float = 0.5, width: float = 0.125,
+                  t_end: float = 6.0, h: float = 1 / 1024, edge: float = 0.02) -> dict:
+    """Responses of the linear model `sys` and of the nonlinear simulator `sim` to a power
+    pulse drawn at `bus`: P pu (system base) from t_on for `width` s.
+
+    Nonlinear: two `LoadStep` events (a constant conductance G = P / |V0|^2 switched in and
+    out, so the power drawn is P (|V| / |V0|)^2, equal to P to first order) with 'exact'
+    event semantics and step h.  Linear: the 'P_esd_B<bus>' column of sys discretised with
+    a zero-order hold, exact for the piecewise-constant pulse.  Times must be multiples of h.
+
+    Returns, per output group ("omega", "omega_rel", "vmag", "f_bus"), (max |linear -
+    nonlinear|, max |nonlinear deviation|); f_bus of the simulation is the time derivative
+    of the unwrapped bus angles / 2 pi, compared outside +-edge s of the pulse edges (the
+    linear model leaves out the angle jump there, module docstring).
+    Raises InputError when bus is not an ESD input of sys or a time is not on the grid.
+    """
+    from stabctl.dynamics.events import LoadStep
+
+    name = f"P_esd_B{int(bus)}"
+    if name not in sys.input_labels:
+        raise InputError(f"{name} is not an input of the linear model")
+    if any(abs(v / h - round(v / h)) > 1e-9 for v in (t_on, width, t_end)):
+        raise InputError("t_on, width and t_end must be multiples of the step h")
+    res = sim.run([LoadStep(int(bus), t_on, P), LoadStep(int(bus), t_on + width, -P)],
+                  t_end=t_end, h=h, semantics="exact")
+    j = sys.input_labels.index(name)
+    col = ct.ss(sys.A, sys.B[:, [j]], sys.C, sys.D[:, [j]])
+    k = np.arange(res.t.size)
+    u = np.where((k >= round(t_on / h)) & (k < round((t_on + width) / h)), P, 0.0)
+    y = ct.forced_response(ct.sample_system(col, h, method="zoh"), k * h, u).outputs.T
+    lab = sys.output_labels
+    pick = lambda prefix, nums: y[:, [lab.index(f"{prefix}_{n}") for n in nums]]  # noqa: E731
+    G = [f"G{int(m)}" for m in res.machines]
+    B = [f"B{int(b)}" for b in res.buses]
+    f_nl = np.gradient(np.unwrap(res.vang, axis=0), res.t, axis=0) / (2 * np.pi)
+    away = (np.abs(res.t - t_on) > edge) & (np.abs(res.t - t_on - width) > edge)
+    pairs = {"omega": (pick("omega", G), res.speed - 1.0),
+             "omega_rel": (pick("omega_rel", G), res.speed - res.coi_speed[:, None]),
+             "vmag": (pick("vmag", B), res.vmag - res.vmag[0]),
+             "f_bus": (pick("f_bus", B)[away], f_nl[away])}
+    return {key: (float(np.abs(lin - nl).max()), float(np.abs(nl).max()))
+            for key, (lin, nl) in pairs.items()}
+
+
+def _kept_positions(model: DynamicModel, buses) -> np.ndarray:
+    """Positions of the ESD buses among the model's kept buses; InputError if not kept."""
+    idx = model.case.bus_indices(list(buses)) if len(buses) else np.zeros(0, int)
+    pos = np.array([np.searchsorted(model.nc_idx, i) for i in idx], np.int64)
+    bad = [b for b, p, i in zip(buses, pos, idx)
+           if p >= model.nc_idx.size or model.nc_idx[p] != i]
+    if bad:
+        raise InputError(f"ESD bus(es) {bad} are not kept in the reduced network: build the "
+                         "model with them as injection buses (Simulator.model_for)")
+    return pos
+
+
+def _columns(model: DynamicModel, act: np.ndarray, pos: np.ndarray):
+    """What each difference column perturbs: (kind, index, nominal value) arrays, states
+    first, then ESD powers, Vref of every exciter, Pref of every governor."""
+    p = model.params
+    n_e, n_g = p.EP.shape[0], p.GP.shape[0]
+    kind = np.concatenate([np.full(act.size, STATE), np.full(pos.size, ESD),
+                           np.full(n_e, VREF), np.full(n_g, PREF)]).astype(np.int64)
+    index = np.concatenate([act, pos, np.arange(n_e), np.arange(n_g)]).astype(np.int64)
+    values = np.concatenate([model.x0[act], np.zeros(pos.size), p.EP[:, exc.E_VREF],
+                             p.GP[:, gov.G_PREF]])
+    return kind, index, values
+
+
+def jacobian_columns(model: DynamicModel, kind, index, step):
+    """Central differences of all derivatives and bus voltages, one column per perturbation.
+
+    Args:
+        model: the dynamic model (pre-disturbance network); kind, index: what to perturb
+            (STATE: flat state index; ESD: kept-bus position; VREF: exciter row; PREF:
+            governor row), step: h per column, shape (n_col,).
+    Returns:
+        J (n_col, n_x) d(dx/dt)/d(column), dV (n_col, n_bus) complex d(V_bus)/d(column),
+        V0 (n_bus,) bus voltages at the operating point.
+    Raises:
+        SimulationError: a perturbed network did not solve, or a column's forward and
+            backward slopes differ by more than KINK_RATIO (a limiter was crossed).
+    """
+    net = model.network(StageConfig())
+    p = model.params._replace(EP=model.params.EP.copy(), GP=model.params.GP.copy())
+    L = model.layout
+    n_col, n_bus = len(kind), model.case.n_bus
+    J = np.zeros((n_col, L.size))
+    dV = np.zeros((n_col, n_bus), np.complex128)
+    curv = np.zeros(n_col)
+    V0 = np.zeros(n_bus, np.complex128)
+    bad = _differences(np.asarray(kind, np.int64), np.asarray(index, np.int64),
+                       np.asarray(step, float), model.x0, model.V_nc0, p, kernel_network(net),
+                       J, dV, curv, V0)
+    if bad >= 0:
+        raise SimulationError(f"the network did not solve with {_what(model, kind, index, bad)} "
+                              "perturbed")
+    k = int(np.argmax(curv))
+    if curv[k] > KINK_RATIO:
+        raise SimulationError(f"perturbing {_what(model, kind, index, k)} by +-{step[k]:.3g} "
+                              f"crosses a limiter (one-sided slopes differ by {curv[k]:.1%}); "
+                              "use a smaller rel_step")
+    return J, dV, V0
+
+
+def _what(model, kind, index, c) -> str:
+    names = {ESD: "ESD power at kept bus", VREF: "Vref of exciter row",
+             PREF: "Pref of governor row"}
+    if kind[c] == STATE:
+        return f"state {model.state_name(int(index[c]))}"
+    return f"{names[int(kind[c])]} {int(index[c]) + 1}"
+
+
+@njit(cache=True)
+def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0):
+    """Fill J, dV with central differences (see jacobian_columns) and curv with
+    max|f+ - 2 f0 + f-| / max|f+ - f-| per column; V0 with the unperturbed bus voltages.
+    Returns -1, or the column whose network did not solve (-2: the unperturbed one)."""
+    dx = np.zeros_like(x0)   # slots no kernel writes (unused by a model type) must stay 0:
+    f0 = np.zeros_like(x0)   # the kink test below looks at every slot
+    out = kernel_outputs(p.n_mac, net.R.shape[0])
+    S = np.zeros(V_nc0.size, np.complex128)
+    at_op = KernelOutputs(out.cur, out.pelect, out.qelect, out.eterm, out.efd, out.pmech, V0)
+    if evaluate_kernel(x0.copy(), p, net, KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_),
+                                                    S), True, f0, at_op) < 0:
+        return -2
+    for c in range(kind.size):
+        j = index[c]
+        if kind[c] == STATE:
+            nominal = x0[j]
+        elif kind[c] == ESD:
+            nominal = 0.0
+        elif kind[c] == VREF:
+            nominal = p.EP[j, exc.E_VREF]
+        else:
+            nominal = p.GP[j, gov.G_PREF]
+        hi, lo = nominal + step[c], nominal - step[c]
+        fp = np.zeros_like(x0)
+        for side in range(2):
+            v = hi if side == 0 else lo
+            x = x0.copy()
+            S[:] = 0.0
+            if kind[c] == STATE:
+                x[j] = v
+            elif kind[c] == ESD:
+                S[j] = v
+            elif kind[c] == VREF:
+                p.EP[j, exc.E_VREF] = v
+            else:
+                p.GP[j, gov.G_PREF] = v
+            it = evaluate_kernel(x, p, net, KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_),
+                                                      S), True, dx, out)
+            if kind[c] == VREF:
+                p.EP[j, exc.E_VREF] = nominal
+            elif kind[c] == PREF:
+                p.GP[j, gov.G_PREF] = nominal
+            if it < 0:
+                return c
+            if side == 0:
+                fp[:] = dx
+                dV[c] = out.V_bus
+            else:
+                J[c] = (fp - dx) / (hi - lo)
+                dV[c] = (dV[c] - out.V_bus) / (hi - lo)
+                curv[c] = np.max(np.abs(fp - 2.0 * f0 + dx)) / max(np.max(np.abs(fp - dx)), 1e-300)
+    return -1
+
+
+def output_matrices(model: DynamicModel, act, A, B, dVx, dVu, V0):
+    """C (n_out, n_x) and D (n_out, n_u) of the outputs (module docstring).
+
+    dVx (n_bus, n_x), dVu (n_bus, n_u): d V_bus / d(state, input), complex; V0 (n_bus,).
+    |V| and theta from dV: d|V| = Re(conj(V0) dV) / |V0|, dtheta = Im(conj(V0) dV) / |V0|^2.
+    """
+    nm = model.mp.n
+    pos = {int(k): i for i, k in enumerate(act)}
+    S = np.zeros((nm, act.size))                       # omega_k = S x
+    S[np.arange(nm), [pos[nm + k] for k in range(nm)]] = 1.0
+    w = model.mp.H * model.case.machines.mva
+    coi = coi_weights(w) @ S
+    Vm = np.abs(V0)[:, None]
+    dmag = lambda dV: (np.conj(V0)[:, None] * dV).real / Vm         # noqa: E731
+    dang = lambda dV: (np.conj(V0)[:, None] * dV).imag / Vm ** 2    # noqa: E731
+    Tx = dang(dVx)
+    two_pi = 2 * np.pi
+    C = np.vstack([S, coi, S - coi, dmag(dVx), Tx @ A / two_pi])
+    D = np.vstack([np.zeros((2 * nm + 1, B.shape[1])), dmag(dVu), Tx @ B / two_pi])
+    return C, D
+
+
+def signal_name(name: str) -> str:
+    """python-control reserves '.' for subsystem paths: 'mac.omega.G1' -> 'mac_omega_G1'."""
+    return name.replace(".", "_")
+
+
+def output_names(case: Case) -> list[str]:
+    """Output names in order: omega_G<k>, omega_coi, omega_rel_G<k>, vmag_B<n>, f_bus_B<n>."""
+    g = [f"G{int(k)}" for k in case.machines.number]
+    b = [f"B{int(n)}" for n in case.buses.number]
+    return ([f"omega_{x}" for x in g] + ["omega_coi"] + [f"omega_rel_{x}" for x in g]
+            + [f"vmag_{x}" for x in b] + [f"f_bus_{x}" for x in b])
+
+
+def _input_names(case: Case, esd_buses, model: DynamicModel) -> list[str]:
+    num = case.machines.number
+    return ([f"P_esd_B{int(b)}" for b in esd_buses]
+            + [f"Vref_G{int(num[m])}" for m in model.ep.mac]
+            + [f"Pref_G{int(num[m])}" for m in model.gp.mac])

@@ -1,0 +1,369 @@
+"""Modal analysis of a linearised model (`stabctl.smallsignal.linearise`): eigenvalues, eigenvectors,
+participation factors, mode shapes, electromechanical modes and their local / inter-area
+classification, residues, controllability and observability.
+
+Conventions (docs/modal.md):
+- right eigenvectors phi_i (columns of `right`) have unit 2-norm; left eigenvectors psi_i
+  (rows of `left`) are the rows of inv(right), so psi_i phi_j = delta_ij (Kundur, Power
+  System Stability and Control, 12.2);
+- participation factors p_ki = |phi_ki psi_ik| / sum_k |phi_ki psi_ik|: each MODE's
+  participations (a column) sum to 1 over the states.  (ANDES 2.0's `pfactors` divides by
+  the sum over the modes for each state instead, i.e. along the wrong axis.);
+- one mode per complex-conjugate pair (imaginary part >= 0); frequency |Im lambda| / 2 pi
+  (Hz), damping ratio -Re lambda / |lambda|;
+- the angle-reference mode (the common rotation of all rotor angles, A e = 0 analytically
+  since no machine is taken as reference) is the mode whose right eigenvector is closest
+  in direction to e; it is excluded from damping statistics.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as la
+
+from stabctl.errors import InputError
+
+F_MIN_HZ, F_MAX_HZ = 0.1, 2.5     # electromechanical band
+INTER_AREA_ETA = 0.5              # area-momentum fraction above which a mode is inter-area
+GAP_RATIO = 1.3                   # consecutive EM frequencies this far apart: time-scale gap
+SIGNIFICANT = 0.2                 # |speed shape| (of the largest) to count in a coherent group
+STATE_GROUPS = ("rotor angle/speed", "rotor flux", "exciter", "pss", "governor")
+
+
+@dataclass(frozen=True, eq=False)
+class ModalAnalysis:
+    """Modes of a linearised model.
+
+    Attributes (n states, m modes = one per conjugate pair, g machines):
+        eigenvalues (m,) complex (Im >= 0), ordered by frequency then real part;
+        freq_hz, damping (m,); right (n, m) phi_i, left (m, n) psi_i (psi_i phi_i = 1);
+        participation (n, m) real, columns sum to 1; states (n,) names; machines (g,)
+        numbers; inertia (g,) H*MVA weights; speed_shape (g, m) complex omega components of
+        phi_i scaled so the largest is 1 + 0j; reference_mode: index of the angle-reference
+        mode; electromechanical: indices of the electromechanical modes; areas (g,) area
+        label (0..r-1) of each machine; kind (m,) 'angle reference', 'inter-area', 'local'
+        or 'other'; eta (m,) area-momentum fraction (NaN outside the EM modes).
+    """
+
+    eigenvalues: np.ndarray
+    freq_hz: np.ndarray
+    damping: np.ndarray
+    right: np.ndarray
+    left: np.ndarray
+    participation: np.ndarray
+    states: np.ndarray
+    machines: np.ndarray
+    inertia: np.ndarray
+    speed_shape: np.ndarray
+    reference_mode: int
+    electromechanical: np.ndarray
+    areas: np.ndarray
+    kind: np.ndarray
+    eta: np.ndarray
+
+    def groups(self, i: int) -> tuple[list[int], list[int]]:
+        """Coherent groups of mode i: machine numbers swinging with the largest speed
+        component and those swinging against it (components >= SIGNIFICANT of the largest;
+        in phase = within 90 degrees), each sorted by decreasing amplitude."""
+        s = self.speed_shape[:, i]
+        big = np.abs(s) >= SIGNIFICANT
+        order = np.argsort(-np.abs(s))
+        sel = lambda m: [int(self.machines[k]) for k in order if big[k] and m[k]]  # noqa: E731
+        return sel(s.real >= 0), sel(s.real < 0)
+
+    def machine_participation(self, i: int) -> np.ndarray:
+        """Participation of each machine in mode i, (g,): the sum over all states of the
+        machine and of its controls (exciter, PSS, governor)."""
+        owner = np.array([int(n.rsplit("_G", 1)[1]) for n in self.states])
+        return np.array([self.participation[owner == k, i].sum() for k in self.machines])
+
+    def group_shares(self, i: int) -> dict[str, float]:
+        """Participation of mode i summed per state group (STATE_GROUPS)."""
+        g = np.array([state_group(n) for n in self.states])
+        return {name: float(self.participation[g == name, i].sum()) for name in STATE_GROUPS}
+
+    def dominant_states(self, i: int, n: int = 3) -> list[tuple[str, float]]:
+        """The n states with the largest participation in mode i."""
+        k = np.argsort(-self.participation[:, i])[:n]
+        return [(str(self.states[j]), float(self.participation[j, i])) for j in k]
+
+    def dominant_machines(self, i: int, frac: float = 0.5, n: int = 5) -> list[int]:
+        """Machines whose participation in mode i is at least frac of the largest (at most n)."""
+        p = self.machine_participation(i)
+        k = [j for j in np.argsort(-p)[:n] if p[j] >= frac * p.max()]
+        return [int(self.machines[j]) for j in k]
+
+    def damping_statistics(self) -> dict:
+        """Least damping ratio and its mode, over all modes but the angle reference, and
+        over the electromechanical modes."""
+        rest = np.setdiff1d(np.arange(self.eigenvalues.size), [self.reference_mode])
+        out = {}
+        for key, idx in (("all", rest), ("electromechanical", self.electromechanical)):
+            if idx.size:
+                j = int(idx[np.argmin(self.damping[idx])])
+                out[key] = {"mode": j, "damping": float(self.damping[j]),
+                            "freq_hz": float(self.freq_hz[j])}
+        return out
+
+    def mode_record(self, i: int) -> dict:
+        """Everything about mode i, JSON-ready."""
+        lam = self.eigenvalues[i]
+        rec = {"mode": i, "real": float(lam.real), "imag": float(lam.imag),
+               "freq_hz": float(self.freq_hz[i]), "damping": float(self.damping[i]),
+               "kind": str(self.kind[i]),
+               "dominant_states": [{"state": s, "participation": p}
+                                   for s, p in self.dominant_states(i)]}
+        if i in self.electromechanical:
+            g1, g2 = self.groups(i)
+            rec.update(dominant_machines=self.dominant_machines(i), group=g1, against=g2,
+                       area_momentum_fraction=float(self.eta[i]),
+                       speed_shape={f"G{int(k)}": [float(abs(z)), float(np.degrees(np.angle(z)))]
+                                    for k, z in zip(self.machines, self.speed_shape[:, i])})
+        return rec
+
+
+def state_group(name: str) -> str:
+    """STATE_GROUPS entry of a state name such as 'mac_omega_G3' or 'exc_VTR_G1'."""
+    block, var = name.split("_", 2)[:2]
+    if block == "mac":
+        return STATE_GROUPS[0] if var in ("delta", "omega") else STATE_GROUPS[1]
+    return {"exc": STATE_GROUPS[2], "pss": STATE_GROUPS[3], "tg": STATE_GROUPS[4]}[block]
+
+
+def modal_analysis(sys, inertia=None, n_areas: int | None = None,
+                   areas: dict | None = None) -> ModalAnalysis:
+    """Modes of a linearised model (a control.StateSpace from `stabctl.smallsignal.linearise`).
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+        The model, n states; its state names identify machine angle/speed states
+        ('mac_delta_G<k>', 'mac_omega_G<k>').
+    inertia : array_like or None, optional
+        H*MVA per machine (shape (g,), s*MVA, in the order of the speed states) for the
+        coherency weights (default: the weights of the model's 'omega_coi' output, i.e.
+        the ones `linearise` used).
+    n_areas : int or None, optional
+        Number of coherent areas (default: from the largest gap between consecutive
+        electromechanical frequencies, `coherent_areas`).
+    areas : dict or None, optional
+        The planner's own areas, machine number -> label (every machine), instead of
+        coherency.
+
+    Returns
+    -------
+    ModalAnalysis
+        m modes (one per conjugate pair): eigenvalues, frequencies (Hz), damping ratios,
+        right (n, m) and left (m, n) eigenvectors, participation factors (n, m), speed
+        mode shapes (g, m), the angle-reference mode, the electromechanical modes
+        (0.1-2.5 Hz) and their local / inter-area classification (Kundur, Power System
+        Stability and Control, 12.2; conventions in the module docstring).
+
+    Raises
+    ------
+    InputError
+        A model without machine speed states, n_areas out of range, areas missing a
+        machine, or a numerically singular eigenvector matrix (defective A).
+    """
+    states = np.array(sys.state_labels)
+    speed = np.array([i for i, n in enumerate(states) if n.startswith("mac_omega_G")])
+    angle = np.array([i for i, n in enumerate(states) if n.startswith("mac_delta_G")])
+    if speed.size == 0:
+        raise InputError("the model has no machine speed states ('mac_omega_G<k>')")
+    machines = np.array([int(states[i].rsplit("_G", 1)[1]) for i in speed])
+    if inertia is None:
+        inertia = sys.C[sys.output_labels.index("omega_coi"), speed]
+    lam, right, left = eigen(np.asarray(sys.A))
+    P = participation_factors(right, left)
+    shape = _normalised(right[speed])
+    e = np.zeros(states.size)
+    e[angle] = 1.0
+    ref = int(np.argmax(np.abs(e @ right)))
+    f, mag = np.abs(lam.imag) / (2 * np.pi), np.abs(lam)
+    zeta = np.divide(-lam.real, mag, out=np.ones_like(mag), where=mag > 0)   # lambda = 0: 1
+    em = electromechanical_modes(f, P, states)
+    if areas is None:
+        areas = coherent_areas(shape, f, em, n_areas)
+    else:
+        areas = _given_areas(areas, machines)
+    eta = np.full(lam.size, np.nan)
+    eta[em] = area_momentum_fraction(shape[:, em], inertia, areas)
+    kind = np.full(lam.size, "other", dtype=object)
+    kind[em] = np.where(eta[em] > INTER_AREA_ETA, "inter-area", "local")
+    kind[ref] = "angle reference"
+    return ModalAnalysis(eigenvalues=lam, freq_hz=f, damping=zeta, right=right, left=left,
+                         participation=P, states=states, machines=machines,
+                         inertia=np.asarray(inertia, float), speed_shape=shape,
+                         reference_mode=ref, electromechanical=em, areas=areas,
+                         kind=kind.astype(str), eta=eta)
+
+
+def electromechanical_modes(freq_hz: np.ndarray, P: np.ndarray, states) -> np.ndarray:
+    """Indices of the modes with F_MIN_HZ <= f <= F_MAX_HZ whose participation summed over
+    the rotor angle/speed states is the largest of the STATE_GROUPS."""
+    groups = np.array([state_group(n) for n in states])
+    shares = np.stack([P[groups == g].sum(axis=0) for g in STATE_GROUPS])   # (groups, modes)
+    band = (freq_hz >= F_MIN_HZ) & (freq_hz <= F_MAX_HZ)
+    return np.nonzero(band & (shares[0] >= shares.max(axis=0)))[0]
+
+
+def eigen(A: np.ndarray):
+    """Eigenvalues with Im >= 0 (one per conjugate pair), right eigenvectors (unit 2-norm
+    columns) and the matching rows of inv(right-eigenvector matrix) as left eigenvectors.
+
+    Returns lam (m,), right (n, m), left (m, n), ordered by |Im| then real part.
+    Raises InputError when the eigenvector matrix is numerically singular (defective A).
+    """
+    lam, V = la.eig(A)
+    V /= np.linalg.norm(V, axis=0)
+    try:
+        W = la.solve(V, np.eye(V.shape[0], dtype=complex))
+    except la.LinAlgError as exc:
+        raise InputError(f"the state matrix is defective (no eigenvector basis): {exc}") from None
+    keep = np.nonzero(lam.imag >= 0)[0]
+    keep = keep[np.lexsort((lam[keep].real, np.round(np.abs(lam[keep].imag), 9)))]
+    return lam[keep], V[:, keep], W[keep]
+
+
+def participation_factors(right: np.ndarray, left: np.ndarray) -> np.ndarray:
+    """|phi_ki psi_ik| normalised so that each mode's participations (columns) sum to 1;
+    shape (n_states, n_modes)."""
+    P = np.abs(right * left.T)
+    return P / P.sum(axis=0)
+
+
+def _normalised(shape: np.ndarray) -> np.ndarray:
+    """Columns scaled so that the largest component is 1 + 0j (zero columns stay zero)."""
+    k = np.argmax(np.abs(shape), axis=0)
+    top = shape[k, np.arange(shape.shape[1])]
+    return shape / np.where(top == 0, 1.0, top)
+
+
+def coherent_areas(shape: np.ndarray, freq_hz: np.ndarray, em: np.ndarray,
+                   n_areas: int | None = None) -> np.ndarray:
+    """Coherent areas of the machines by slow coherency (Chow et al., grouping by
+    pivoting): the rigid-body direction and the speed shapes of the r - 1 slowest
+    electromechanical modes span V (g, r); the r machines chosen by QR with column pivoting
+    of V^T are the area references; machine k joins the area j maximising
+    (V V_ref^-1)_kj (invariant to the basis of the span).
+
+    r (n_areas) defaults to 1 + the number of slow modes: the electromechanical modes below
+    a time-scale gap, taken as the highest ratio of at least GAP_RATIO between consecutive
+    sorted frequencies in their lower half (else the largest ratio there).  This is a
+    heuristic (Kundur: r = 2, miniWECC: r = 3, docs/modal.md); planners who know their
+    areas pass n_areas or `modal_analysis(areas=...)`.  Returns labels (g,), 0 for a
+    single area, numbered in the order of each area's first machine (machine order of the
+    data: Kundur's area 1 = G1, G2 as in his book).
+    Raises InputError for n_areas outside [1, number of EM modes + 1] or above g.
+    """
+    g = shape.shape[0]
+    em = em[np.argsort(freq_hz[em])]
+    if n_areas is None:
+        n_areas = 1 + _slow_mode_count(freq_hz[em])
+    if not 1 <= n_areas <= min(em.size + 1, g):
+        raise InputError(f"the number of areas must be between 1 and {min(em.size + 1, g)} "
+                         f"(electromechanical modes + 1, at most the machines), got {n_areas}")
+    if n_areas == 1:
+        return np.zeros(g, int)
+    V = np.column_stack([np.ones(g), *(shape[:, i].real for i in em[:n_areas - 1])])
+    _, _, piv = la.qr(V.T, pivoting=True)
+    L = V @ np.linalg.inv(V[piv[:n_areas]])
+    return _by_first_machine(np.argmax(L, axis=1))
+
+
+def _by_first_machine(labels: np.ndarray) -> np.ndarray:
+    """Area labels renumbered 0..r-1 in the order in which the areas first occur."""
+    _, first, inverse = np.unique(labels, return_index=True, return_inverse=True)
+    rank = np.empty(first.size, int)
+    rank[np.argsort(first)] = np.arange(first.size)
+    return rank[inverse]
+
+
+def _given_areas(areas: dict, machines: np.ndarray) -> np.ndarray:
+    """Labels 0..r-1 per machine from a machine number -> area mapping."""
+    missing = [int(k) for k in machines if int(k) not in areas]
+    if missing:
+        raise InputError(f"areas: no area given for machine(s) {missing}")
+    _, labels = np.unique([str(areas[int(k)]) for k in machines], return_inverse=True)
+    return labels
+
+
+def _slow_mode_count(f_sorted: np.ndarray) -> int:
+    """Number of slow modes: those below the highest frequency gap of at least GAP_RATIO
+    among the lower half of the sorted frequencies, else below the largest gap there."""
+    if f_sorted.size < 2:
+        return f_sorted.size
+    ratios = f_sorted[1:] / f_sorted[:-1]
+    lower = ratios[:max(1, f_sorted.size // 2)]
+    wide = np.nonzero(lower >= GAP_RATIO)[0]
+    return int(wide[-1] if wide.size else np.argmax(lower)) + 1
+
+
+def area_momentum_fraction(shape: np.ndarray, inertia: np.ndarray, areas: np.ndarray):
+    """eta_i = sum_a |sum_{k in a} M_k s_ki| / sum_k M_k |s_ki| for speed shapes s (g, m).
+
+    Near 1 when whole areas swing against each other (their centres of inertia move:
+    inter-area), near 0 when machines swing against others of their own area (local)."""
+    M = np.asarray(inertia, float)[:, None]
+    num = sum(np.abs((M * shape)[areas == a].sum(axis=0)) for a in np.unique(areas))
+    return num / (M * np.abs(shape)).sum(axis=0)
+
+
+@dataclass(frozen=True, eq=False)
+class ModeSensitivity:
+    """Residues of every mode between chosen inputs and outputs.
+
+    residues (m, n_out, n_in) complex R_i = (C phi_i)(psi_i B); controllability (m, n_in)
+    |psi_i b_j|; observability (m, n_out) |c_k phi_i| (with ||phi_i||_2 = 1,
+    psi_i phi_i = 1, so |R_i,kj| = observability * controllability); inputs, outputs: names.
+    """
+
+    residues: np.ndarray
+    controllability: np.ndarray
+    observability: np.ndarray
+    inputs: list
+    outputs: list
+
+
+def mode_sensitivity(sys, ma: ModalAnalysis, inputs: str = "P_esd_",
+                     outputs: str = "omega_rel_") -> ModeSensitivity:
+    """Residues, controllability and observability of each mode from the inputs whose
+    names start with `inputs` to the outputs starting with `outputs` (default: every ESD
+    power input to every relative speed).  G(s) = D + sum over all eigenvalues of
+    R_i / (s - lambda_i) (the conjugate modes contribute conj(R_i) / (s - conj(lambda_i))).
+
+    Raises InputError when no input or output matches.
+    """
+    ins = [j for j, n in enumerate(sys.input_labels) if n.startswith(inputs)]
+    outs = [k for k, n in enumerate(sys.output_labels) if n.startswith(outputs)]
+    if not ins or not outs:
+        raise InputError(f"no input starting with {inputs!r} or output with {outputs!r}")
+    cphi = np.asarray(sys.C)[outs] @ ma.right            # (n_out, m)
+    psib = ma.left @ np.asarray(sys.B)[:, ins]           # (m, n_in)
+    R = cphi.T[:, :, None] * psib[:, None, :]
+    return ModeSensitivity(residues=R, controllability=np.abs(psib), observability=np.abs(cphi.T),
+                           inputs=[sys.input_labels[j] for j in ins],
+                           outputs=[sys.output_labels[k] for k in outs])
+
+
+def match_modes(ours: np.ndarray, reference: np.ndarray, f_min: float = F_MIN_HZ,
+                f_max: float = F_MAX_HZ) -> list[dict]:
+    """Pair every reference eigenvalue with Im > 0 and frequency in [f_min, f_max] Hz with
+    the nearest of ours (complex arrays, any order, conjugates allowed); each pair as
+    {"reference", "ours" (complex), "freq_ref_hz", "freq_err_pct", "damping_ref",
+    "damping_err"} (ours minus reference)."""
+    ours = np.asarray(ours, complex)
+    out = []
+    for r in np.asarray(reference, complex):
+        f_r = r.imag / (2 * np.pi)
+        if not f_min <= f_r <= f_max:
+            continue
+        o = ours[np.argmin(np.abs(ours - r))]
+        f_o = abs(o.imag) / (2 * np.pi)
+        z_r = -r.real / abs(r)
+        out.append({"reference": r, "ours": o, "freq_ref_hz": f_r,
+                    "freq_err_pct": 100 * (f_o - f_r) / f_r,
+                    "damping_ref": z_r, "damping_err": -o.real / abs(o) - z_r})
+    return out

@@ -1,0 +1,524 @@
+"""Critical clearing time (CCT) of a line fault by bisection on the clearing time.
+
+The fault (`LineFault`) is a bolted three-phase fault at `bus` on the line `bus`-`far_bus`
+from `t_fault`, cleared at both ends at once after a clearing time tc (s, counted from the
+fault start), the line staying out (PST's sw_con fault type 0 with equal near and far
+clearing, `stabctl.dynamics.events.Fault`).  The CCT is the longest tc for which the system stays
+stable; `critical_clearing_time` brackets it between a stable and an unstable tc at most
+`tol` apart (Kundur, Power System Stability and Control, 1994, sec. 13.3; Pai, Energy
+Function Analysis for Power System Stability, 1989, ch. 1, for the time-domain definition).
+
+Stability criterion (default `no_separation`): no machine's rotor angle leaves the centre of
+inertia (paper eq. 40, weights H*MVA) by more than `separation_limit` (pi rad) before
+`t_end` (default fault time + 5 s); the runs stop at separation to save time.  Any
+callable(SimulationResult) -> bool (True = stable) can replace it.
+
+Grid: the simulator's grid lands on every event time (`stabctl.dynamics.simulation.time_grid`), so a
+clearing time is never rounded to a multiple of the step h: the fault-on interval of length
+tc gets fix(tc/h) equal steps (each in [h, 2h)) and the post-fault interval restarts at the
+clearing instant.  The bisection probes only clearing times k*tol (k integer), so results
+are reproducible to the last digit and the final bracket is one lattice cell, exactly tol
+wide.  A tol far below h resolves the discretised model, not the physics.
+
+Numerical error bar: once bracketed at step h, the two ends of the bracket are run again
+at h/2; where a verdict changes, the search continues at h/2 (expanding away from the
+changed end, then bisecting) to the CCT at h/2.  `numerical_error_s` = |CCT(h/2) -
+CCT(h)|, resolved to tol (0: halving the step moves the CCT by less than tol).  Under the
+ieee conventions the default step keeps it below tol on the paper's faults
+(docs/conventions.md); under pstess it is the step artefact of PSTess's limiter.
+
+Sweeps of many faults or ratings (`cct_jobs`, `cct_job`) run through `stabctl.parallel`.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
+from stabctl.dynamics.events import Fault, LineTrip
+from stabctl.network.ybus import circuit_row
+from stabctl.dynamics.results import SimulationResult
+from stabctl.dynamics.simulation import Simulator
+
+#: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
+#: to the limit), the limit, tolerance, and the run length after the fault.
+T_LO, T_HI, T_MAX, TOL, T_AFTER_FAULT = 0.0, 0.1, 1.0, 1e-3, 5.0
+
+
+@dataclass(frozen=True)
+class LineFault:
+    """A three-phase fault at `bus` on circuit `circuit` of line `bus`-`far_bus`, starting
+    at `t_fault` (s), cleared at both ends at the same instant (the line stays out).
+
+    The clearing time is not part of the fault: it is the unknown of
+    :func:`critical_clearing_time` (see :meth:`events`).
+
+    Attributes
+    ----------
+    bus : int
+        Faulted bus number (the near end of the line).
+    far_bus : int or None
+        Far-end bus number of the faulted line; None: a bus fault cleared without loss of
+        a line (PST sw_con type 7).
+    t_fault : float, optional
+        Fault start, s (absolute run time, >= 0); default 1.0 s.
+    circuit : int, optional
+        Circuit number of the faulted line between `bus` and `far_bus` (1 = the first
+        branch row joining them); default 1.
+    trips : tuple of (int, int), optional
+        Further lines (from_bus, to_bus), circuit 1 of each, opened at the clearing
+        instant; default none.  Both circuits of a double line: ``circuit=2`` and
+        ``trips=((bus, far_bus),)``.
+    """
+
+    bus: int
+    far_bus: int | None
+    t_fault: float = 1.0
+    circuit: int = 1
+    trips: tuple[tuple[int, int], ...] = ()
+
+    def events(self, t_clear: float) -> list:
+        """The run's events for one clearing time.
+
+        Parameters
+        ----------
+        t_clear : float
+            Clearing time, s after the fault start (>= 0); both ends open at
+            ``t_fault + t_clear``.
+
+        Returns
+        -------
+        list
+            A :class:`~stabctl.dynamics.events.Fault` (equal near and far clearing, PST
+            sw_con type 0, or 7 for a bus fault) followed by one
+            :class:`~stabctl.dynamics.events.LineTrip` per entry of `trips`, all at the
+            clearing instant.
+        """
+        tc = self.t_fault + t_clear
+        fault = Fault(bus=self.bus, t=self.t_fault, clear_near=tc, clear_far=tc,
+                      far_bus=self.far_bus, circuit=self.circuit)
+        return [fault] + [LineTrip(a, b, tc) for a, b in self.trips]
+
+    def describe(self) -> str:
+        """One line naming the fault, for messages and reports.
+
+        Returns
+        -------
+        str
+            E.g. ``"fault at bus 7 on line 7-8 (circuit 2) at 1 s, 8-9 also opened"``.
+        """
+        circ = f" (circuit {self.circuit})" if self.circuit != 1 else ""
+        extra = "".join(f", {a}-{b} also opened" for a, b in self.trips)
+        where = "" if self.far_bus is None else f" on line {self.bus}-{self.far_bus}{circ}"
+        return f"fault at bus {self.bus}{where} at {self.t_fault:g} s{extra}"
+
+
+def no_separation(result: SimulationResult) -> bool:
+    """Default criterion: True if no rotor angle left the COI by more than the run's
+    separation limit (`SimulationResult.stable`)."""
+    return result.stable
+
+
+@dataclass(frozen=True)
+class CCTResult:
+    """Outcome of a CCT search.  Times are clearing times in s after the fault start.
+
+    t_stable, t_unstable: the closest stable and unstable clearing times found
+    (t_unstable - t_stable = tol); the CCT is t_stable (the conservative end).
+    search_bracket: the (stable, unstable) interval the bisection started from, after the
+    bound checks and expansion.  probes: every (clearing time s, stable) simulated, in
+    order.  separated: machines that lose synchronism when cleared at t_unstable (empty if
+    the criterion failed without separation).  step_s: integration step h; wall_time_s:
+    the whole search.  cct_half_step_s: the CCT at h/2 (module docstring; None when the
+    check was not asked for), half_step_probes: its runs; conventions: the model's.
+    """
+
+    fault: LineFault
+    t_stable: float
+    t_unstable: float
+    search_bracket: tuple[float, float]
+    tol_s: float
+    step_s: float
+    freq_hz: float
+    n_simulations: int
+    wall_time_s: float
+    criterion: str
+    probes: tuple[tuple[float, bool], ...] = field(repr=False)
+    separated: tuple[int, ...] = ()
+    cct_half_step_s: float | None = None
+    half_step_probes: tuple[tuple[float, bool], ...] = field(default=(), repr=False)
+    conventions: str = "ieee"
+
+    @property
+    def numerical_error_s(self) -> float | None:
+        """|CCT(h/2) - CCT(h)| (s), resolved to tol_s; None without the check."""
+        if self.cct_half_step_s is None:
+            return None
+        return round(abs(self.cct_half_step_s - self.t_stable), 12)
+
+    @property
+    def cct_s(self) -> float:
+        """Critical clearing time (s): the longest clearing time found stable."""
+        return self.t_stable
+
+    @property
+    def cct_cycles(self) -> float:
+        """CCT in cycles of the case frequency."""
+        return self.t_stable * self.freq_hz
+
+    @property
+    def bracket(self) -> tuple[float, float]:
+        """(stable, unstable) clearing times (s) that bound the CCT."""
+        return self.t_stable, self.t_unstable
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (times in s, cycles of the case frequency)."""
+        return {"fault": asdict(self.fault), "cct_s": self.cct_s, "cct_cycles": self.cct_cycles,
+                "numerical_error_s": self.numerical_error_s,
+                "cct_half_step_s": self.cct_half_step_s, "conventions": self.conventions,
+                "t_stable_s": self.t_stable, "t_unstable_s": self.t_unstable,
+                "t_unstable_cycles": self.t_unstable * self.freq_hz,
+                "search_bracket_s": list(self.search_bracket), "tol_s": self.tol_s,
+                "step_s": self.step_s, "n_simulations": self.n_simulations,
+                "wall_time_s": self.wall_time_s, "criterion": self.criterion,
+                "separated_machines": list(self.separated),
+                "probes": [[t, ok] for t, ok in self.probes],
+                "half_step_probes": [[t, ok] for t, ok in self.half_step_probes]}
+
+
+def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL,
+                           t_lo: float = T_LO, t_hi: float | None = None,
+                           t_max: float = T_MAX,
+                           t_end: float | None = None, h: float | None = None,
+                           separation_limit: float = np.pi,
+                           criterion: Callable[[SimulationResult], bool] | None = None,
+                           stop_at_separation: bool | None = None,
+                           storage=None, error_check: bool = True) -> CCTResult:
+    """CCT of `fault` on `sim`'s case by bisection on the clearing time (see module doc).
+
+    Parameters
+    ----------
+    sim : Simulator
+        The simulator of the case (its power flow is solved once).
+    fault : LineFault
+        The fault; its clearing time is the unknown.
+    tol : float, optional
+        Width of the final bracket, s (> 0); default 1e-3 s.
+    t_lo : float, optional
+        Clearing time that must be stable, s (>= 0; 0 = the line trip alone); default 0.
+    t_hi : float or None, optional
+        First upper bound, s (default min(0.1 s, t_max)); doubled (capped at t_max) while
+        it is still stable.
+    t_max : float, optional
+        Largest clearing time tried, s; default 1.0 s.
+    t_end : float or None, optional
+        Run end, s (absolute; default t_fault + 5 s; must exceed t_fault + t_max).
+    h : float or None, optional
+        Integration step, s (default `sim.default_h`).
+    separation_limit : float, optional
+        Angle from the centre of inertia (paper eq. 40) beyond which a machine has
+        separated, rad; default pi.
+    criterion : callable or None, optional
+        ``callable(SimulationResult) -> bool``, True if stable; default `no_separation`.
+    stop_at_separation : bool or None, optional
+        Stop runs at separation; default True for the default criterion, False for a
+        custom one (which then sees whole trajectories).
+    storage : StorageFleet or None, optional
+        Passed untouched to `Simulator.run` (a `stabctl.storage.devices.StorageFleet`).
+    error_check : bool, optional
+        Also search the CCT at h/2 from the final bracket
+        (`CCTResult.numerical_error_s`, module docstring); default True.
+
+    Returns
+    -------
+    CCTResult
+        The bracket ``(t_stable, t_unstable)`` (s after the fault start, exactly `tol`
+        apart; the CCT is ``t_stable``), the probes, the separated machines and, with
+        `error_check`, the CCT at h/2.
+
+    Raises
+    ------
+    InputError
+        Bad settings; unstable at t_lo (also at zero clearing); still stable at t_max (the
+        CCT is above it).
+    UnknownBusError, CaseError
+        No such bus or line.
+    NumericalInstabilityError
+        The step is too large: a numerically unstable run is never a verdict, it is
+        raised.
+    SimulationError
+        The network fails while the fault is on.
+
+    Notes
+    -----
+    A run whose network has no solution after a machine has separated or after the fault
+    is cleared counts as unstable (voltage collapse).  Sources: Kundur, Power System
+    Stability and Control, 1994, sec. 13.3; Pai, Energy Function Analysis for Power System
+    Stability, 1989, ch. 1.
+    """
+    t_end = fault.t_fault + T_AFTER_FAULT if t_end is None else t_end
+    t_hi = min(T_HI, t_max) if t_hi is None else t_hi
+    _check_settings(fault, tol, t_lo, t_hi, t_max, t_end)
+    _check_trips(sim.case, fault)
+    h = sim.default_h if h is None else h
+    crit = no_separation if criterion is None else criterion
+    stop = criterion is None if stop_at_separation is None else stop_at_separation
+    extra = {} if storage is None else {"storage": storage}
+    probes, separated = {h: [], h / 2: []}, {}
+
+    def stable_at(k: int, step: float = h) -> bool:
+        t_clear = _lattice(k, tol)
+        res, diverged = _run(sim, fault, t_clear, t_end, step, separation_limit, stop, extra)
+        ok = not diverged and bool(crit(res))
+        probes[step].append((t_clear, ok))
+        if not ok and step == h:
+            separated[k] = tuple(int(m) for m in res.separated)
+        return ok
+
+    wall = time.perf_counter()
+    k_lo, k_hi, k_max = _lattice_bounds(tol, t_lo, t_hi, t_max)
+    k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
+    start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
+    k_lo, k_hi = _bisect(stable_at, k_lo, k_hi)
+    half = None
+    if error_check:
+        half = _lattice(_half_step_cct(lambda k: stable_at(k, h / 2), k_lo, k_hi, k_max), tol)
+    return CCTResult(fault=fault, t_stable=_lattice(k_lo, tol), t_unstable=_lattice(k_hi, tol),
+                     search_bracket=start, tol_s=tol, step_s=h, freq_hz=sim.case.freq_hz,
+                     n_simulations=len(probes[h]) + len(probes[h / 2]),
+                     wall_time_s=time.perf_counter() - wall,
+                     criterion=getattr(crit, "__name__", repr(crit)), probes=tuple(probes[h]),
+                     separated=separated.get(k_hi, ()), cct_half_step_s=half,
+                     half_step_probes=tuple(probes[h / 2]), conventions=sim.conventions)
+
+
+def _bisect(stable_at, k_lo: int, k_hi: int) -> tuple[int, int]:
+    """Bisect a (stable, unstable) lattice bracket down to adjacent cells."""
+    while k_hi - k_lo > 1:
+        mid = (k_lo + k_hi) // 2
+        k_lo, k_hi = (mid, k_hi) if stable_at(mid) else (k_lo, mid)
+    return k_lo, k_hi
+
+
+def _half_step_cct(stable_half, k_lo: int, k_hi: int, k_max: int) -> int:
+    """Lattice index of the CCT at half the step, from the bracket (k_lo, k_hi = k_lo + 1)
+    found at the full step: both ends rerun; an end whose verdict changed is pushed away
+    (distance doubled each time, within [0, k_max]) until the verdict is restored, then
+    the new bracket is bisected.  An end pushed to the limit of the range is returned as
+    is (the CCT at h/2 lies beyond it)."""
+    if not stable_half(k_lo):
+        step, k_hi = 1, k_lo
+        while k_lo > 0:
+            k_hi, k_lo = k_lo, max(k_lo - step, 0)
+            step *= 2
+            if stable_half(k_lo):
+                return _bisect(stable_half, k_lo, k_hi)[0]
+        return 0
+    if stable_half(k_hi):
+        step, k_lo = 1, k_hi
+        while k_hi < k_max:
+            k_lo, k_hi = k_hi, min(k_hi + step, k_max)
+            step *= 2
+            if not stable_half(k_hi):
+                return _bisect(stable_half, k_lo, k_hi)[0]
+        return k_max
+    return k_lo
+
+
+def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
+    if not tol > 0:
+        raise InputError(f"CCT tolerance must be > 0 s, got {tol:g}")
+    if not 0 <= t_lo < t_hi <= t_max:
+        raise InputError(f"CCT search bounds need 0 <= t_lo < t_hi <= t_max, got "
+                         f"{t_lo:g}, {t_hi:g}, {t_max:g} s")
+    if fault.t_fault < 0:
+        raise InputError(f"fault time must be >= 0 s, got {fault.t_fault:g}")
+    if not t_end > fault.t_fault + t_max:
+        raise InputError(f"run end {t_end:g} s must come after the latest clearing "
+                         f"(fault at {fault.t_fault:g} s + t_max {t_max:g} s)")
+
+
+def _check_trips(case, fault: LineFault) -> None:
+    """A further trip must not name the faulted circuit itself (it would do nothing)."""
+    if not fault.trips:
+        return
+    faulted = circuit_row(case, fault.bus, fault.far_bus, fault.circuit)
+    for a, b in fault.trips:
+        if circuit_row(case, a, b) == faulted:
+            raise InputError(f"{fault.describe()}: trip {a}-{b} is the faulted circuit itself; "
+                             f"to open both circuits fault circuit 2 and trip circuit 1")
+
+
+def _lattice(k: int, tol: float) -> float:
+    """Clearing time k*tol (s), rounded to 1e-12 s so that printed values are exact."""
+    return round(k * tol, 12)
+
+
+def _lattice_bounds(tol, t_lo, t_hi, t_max) -> tuple[int, int, int]:
+    """Lattice indices: t_lo rounded down, t_hi up, t_max down (within 1e-9 of a cell)."""
+    k_lo = math.floor(t_lo / tol + 1e-9)
+    k_max = math.floor(t_max / tol + 1e-9)
+    k_hi = min(max(math.ceil(t_hi / tol - 1e-9), k_lo + 1), k_max)
+    if k_hi <= k_lo:
+        raise InputError(f"CCT search range {t_lo:g}-{t_max:g} s is narrower than the "
+                         f"tolerance {tol:g} s")
+    return k_lo, k_hi, k_max
+
+
+def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple[int, int]:
+    """Check stable at k_lo, then double k_hi (up to k_max) until it is unstable."""
+    if not stable_at(k_lo):
+        if k_lo == 0:
+            raise InputError(f"{fault.describe()}: unstable even when cleared instantly "
+                             "(the line trip alone loses synchronism), no CCT")
+        raise InputError(f"{fault.describe()}: unstable already at the lower bound "
+                         f"{_lattice(k_lo, tol):g} s; lower it")
+    while stable_at(k_hi):
+        if k_hi == k_max:
+            t = _lattice(k_max, tol)
+            raise InputError(f"{fault.describe()}: the CCT is above the search limit "
+                             f"t_max = {t:g} s "
+                             f"({t * freq:.4g} cycles): still stable when cleared there")
+        k_lo, k_hi = k_hi, min(2 * k_hi, k_max)
+    return k_lo, k_hi
+
+
+def _run(sim, fault: LineFault, t_clear, t_end, h, limit, stop, extra):
+    """One probe: (result, diverged).  A run that diverged after a machine separated, or
+    whose network has no solution after the fault is cleared (voltage collapse), gives its
+    partial result and True (unstable); a failure while the fault is on is raised, naming
+    the fault and the clearing time (the model's limit, not a verdict)."""
+    try:
+        return sim.run(fault.events(t_clear), t_end, h=h, separation_limit=limit,
+                       stop_at_separation=stop, **extra), False
+    except NumericalInstabilityError as exc:
+        raise NumericalInstabilityError(f"{fault.describe()}, cleared after {t_clear:g} s: "
+                                        f"{exc}", result=exc.result) from exc
+    except SimulationError as exc:
+        res = exc.result
+        t = getattr(res, "t", None)
+        cleared = t is not None and len(t) > 0 and t[-1] >= fault.t_fault + t_clear
+        if res is not None and (not res.stable or cleared):
+            return res, True
+        raise SimulationError(f"{fault.describe()}, cleared after {t_clear:g} s: {exc}",
+                              result=exc.result) from exc
+
+
+# -- CCT sweeps (jobs for stabctl.parallel) -------------------------------------------------
+
+def storage_fleet(case, esd_pct: float | None):
+    """:func:`stabctl.storage.uniform_fleet` of ``esd_pct`` % at every generator's HV bus,
+    or None for no storage (``esd_pct`` None)."""
+    if esd_pct is None:
+        return None
+    from stabctl.storage import devices as storage
+
+    return storage.uniform_fleet(case, esd_pct)
+
+
+@functools.lru_cache(maxsize=None)
+def cached_simulator(case_name: str, conventions: str = "ieee",
+                     h: float | None = None, q_limits: bool = True) -> Simulator:
+    """One Simulator per case, conventions, step h (None: the default) and power-flow Q
+    limits per process (the power flow is solved once per worker)."""
+    from stabctl.io import load_case
+
+    return Simulator(load_case(case_name), conventions=conventions, step=h, q_limits=q_limits)
+
+
+def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circuit: int = 1,
+            trips=(), esd_pct: float | None = None, tol: float = TOL, t_max: float = T_MAX,
+            t_end: float | None = None, conventions: str = "ieee",
+            h: float | None = None, q_limits: bool = True) -> dict:
+    """Worker entry of a CCT sweep: the CCT of one fault at one storage rating, with its
+    numerical error bar.
+
+    Arguments are JSON-able (a sweep's recorded inputs; esd_pct: storage rating in %,
+    None = no storage; conventions, h: model conventions and step, None = the default;
+    q_limits: PV Q limits in the power flow);
+    returns `CCTResult.to_dict()`.  Raises as `critical_clearing_time` and
+    `storage_fleet`.
+    """
+    sim = cached_simulator(case, conventions, h, q_limits)
+    fault = LineFault(int(bus), None if far_bus is None else int(far_bus), float(t_fault),
+                      int(circuit),
+                      tuple((int(a), int(b)) for a, b in trips))
+    res = critical_clearing_time(sim, fault, tol=tol, t_max=t_max, t_end=t_end,
+                                 storage=storage_fleet(sim.case, esd_pct))
+    return res.to_dict()
+
+
+def cct_key(case: str, fault: LineFault, esd_pct: float | None, conventions: str = "ieee",
+            h: float | None = None, q_limits: bool = True) -> str:
+    """Sweep key, e.g. 'kundur/3-101/t1/esd-none' or 'kundur/3-101#2+13-101/t1/esd20';
+    '/pstess', '/h<step>' and '/no-q-limits' are appended for the pstess conventions, a
+    given step and a power flow without PV Q limits."""
+    line = f"bus{fault.bus}" if fault.far_bus is None else \
+        f"{fault.bus}-{fault.far_bus}" + (f"#{fault.circuit}" if fault.circuit != 1 else "")
+    line += "".join(f"+{a}-{b}" for a, b in fault.trips)
+    rating = "none" if esd_pct is None else f"{esd_pct:g}"
+    tail = ("" if conventions == "ieee" else f"/{conventions}") + \
+        ("" if h is None else f"/h{h:g}") + ("" if q_limits else "/no-q-limits")
+    return f"{case}/{line}/t{fault.t_fault:g}/esd{'-' if esd_pct is None else ''}{rating}{tail}"
+
+
+def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
+             t_max: float = T_MAX, t_end: float | None = None, conventions: str = "ieee",
+             h: float | None = None, q_limits: bool = True) -> list:
+    """One `stabctl.parallel.Job` per (fault, storage rating %, None = no storage) pair, with
+    the model conventions, step h (None: the default) and power-flow Q limits of every
+    run (the inputs record q_limits only when off, so earlier records still resume).
+
+    Checks every fault's bus and line against the case first (UnknownBusError, CaseError)
+    so that bad input fails before any job runs.
+    """
+    from stabctl.io import load_case
+    from stabctl.dynamics.events import validate
+    from stabctl.parallel import Job
+
+    from stabctl.dynamics.model import check_conventions
+
+    check_conventions(conventions)
+    case = load_case(case_name)
+    faults = list(faults)
+    for f in faults:
+        validate(case, f.events(0.0), 0.0)
+    settings = {"tol": tol, "t_max": t_max, "t_end": t_end, "conventions": conventions, "h": h,
+                **({} if q_limits else {"q_limits": False})}
+    return [Job(key=cct_key(case_name, f, p, conventions, h, q_limits), func=cct_job,
+                inputs={"case": case_name, "bus": f.bus, "far_bus": f.far_bus,
+                        "t_fault": f.t_fault, "circuit": f.circuit,
+                        "trips": [list(t) for t in f.trips], "esd_pct": p, **settings})
+            for f in faults for p in ratings]
+
+
+def read_faults(path: str | Path) -> list[LineFault]:
+    """Faults from a CSV file with a header: bus, far_bus[, t_fault (s, default 1)]
+    [, circuit (default 1)], one fault per row.  Raises InputError naming the row."""
+    path = Path(path)
+    try:
+        with path.open(newline="") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as exc:
+        raise InputError(f"fault list {path}: {exc.strerror or exc}") from None
+    if not rows or not {"bus", "far_bus"} <= set(rows[0]):
+        raise InputError(f"fault list {path}: needs a header with columns bus,far_bus "
+                         "[,t_fault,circuit] and at least one row")
+    return [_fault_row(path, i, r) for i, r in enumerate(rows, start=2)]
+
+
+def _fault_row(path, line: int, row: dict) -> LineFault:
+    try:
+        return LineFault(bus=int(row["bus"]), far_bus=int(row["far_bus"]),
+                         t_fault=float(row.get("t_fault") or 1.0),
+                         circuit=int(row.get("circuit") or 1))
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"fault list {path} line {line}: {exc}") from None

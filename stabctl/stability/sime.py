@@ -1,0 +1,203 @@
+"""Single-machine equivalent (SIME) of a multi-machine trajectory and the first-order effect
+of storage on its transient-stability margin (docs/placement.md, sections 2-3).
+
+SIME (Pavella, Ernst, Ruiz-Vega, Transient Stability of Power Systems: A Unified Approach
+to Assessment and Control, Kluwer 2000, ch. 2-3) maps a simulated multi-machine run onto
+the paper's OMIB (Sections 2-4): the machines that lose synchronism (critical group C)
+against the rest (N), each group lumped at its centre of inertia (paper eq. 40, weights
+M_k = 2 H_k S_k / (S_base omega_s), pu*s^2/rad),
+
+    delta = sigma (delta_C - delta_N),   omega = d(delta)/dt,   M = M_C M_N / (M_C + M_N),
+
+sigma = +1 when C runs ahead, -1 when it falls behind, so that the run-away is always in
++delta.  The OMIB obeys M d(omega)/dt = P_a(t) (its accelerating power); an ESD j drawing
+P_j s_j(t) (s_j in {-1, 0, +1}: the bang-bang mode; pu) changes it by
+-sigma g_j P_j s_j(t) with g_j = M (sum_C beta_kj / M_C - sum_N beta_kj / M_N), where
+beta_kj is the share of machine k in a power drawn at the ESD bus (`distribution_factors`).
+
+Unstable margin (SIME's): on the swing where synchronism is lost, omega passes through a
+positive minimum at the OMIB's unstable angle delta_u, where P_a = 0; the margin is the
+kinetic energy left there, eta = -M omega(t_u)^2 / 2 (pu*rad, the equal-area excess of
+the accelerating over the decelerating area).  First order in the ratings (trajectory and
+switching held, the shift of t_u is second order because P_a(t_u) = 0):
+
+    d eta / d P_j = g_j * integral_{t_0}^{t_u} s_j(t) sigma omega(t) dt    (rad)
+
+from the start of the run: the ESD's absorbed power adds g_j P_j to the decelerating power
+of the critical group while it is on, i.e. g_j P_j times the angle it is on for, on every
+swing up to the one that runs away (exact for a conservative OMIB whose unstable angle
+stays put; the first swing alone for a first-swing instability).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from stabctl.dynamics.coi import coi_angle, coi_of_rest, coi_speed
+from stabctl.errors import InputError
+from stabctl.dynamics.results import SimulationResult
+
+
+@dataclass(frozen=True)
+class OmibEquivalent:
+    """The OMIB of one run: t (n_t,) s; delta (n_t,) rad and omega (n_t,) electrical rad/s
+    oriented so that the critical group runs away in +delta; M (pu*s^2/rad); critical:
+    machine numbers of C; sigma: +1 if C leads N, -1 if it lags; in_critical (n_mac,) bool;
+    M_machine (n_mac,) pu*s^2/rad of every machine."""
+
+    t: np.ndarray
+    delta: np.ndarray
+    omega: np.ndarray
+    M: float
+    critical: tuple
+    sigma: int
+    in_critical: np.ndarray
+    M_machine: np.ndarray
+
+    def group_weights(self, beta: np.ndarray) -> np.ndarray:
+        """g (n_dev,): effect of 1 pu drawn by each ESD on the OMIB accelerating power
+        (dimensionless; beta (n_mac, n_dev) as `distribution_factors`)."""
+        C, Mk = self.in_critical, self.M_machine
+        return self.M * (beta[C].sum(axis=0) / Mk[C].sum() - beta[~C].sum(axis=0) / Mk[~C].sum())
+
+
+def critical_machines(result: SimulationResult) -> list[int]:
+    """Machines that lost synchronism (`result.separated`); after a divergence without
+    separation, the smaller coherent group at the last computed point (largest angle gap,
+    as `stabctl.dynamics.simulation.separated_group`)."""
+    if result.separated:
+        return [int(k) for k in result.separated]
+    from stabctl.dynamics.simulation import separated_group
+
+    return [int(k) for k in result.machines[separated_group(result.angle[-1], result.inertia)]]
+
+
+def omib_equivalent(result: SimulationResult, critical, base_mva: float,
+                    freq_hz: float) -> OmibEquivalent:
+    """The OMIB of `result` for the critical machines `critical` (numbers).
+
+    Raises InputError when the critical group is empty or holds every machine.
+    """
+    C = np.isin(result.machines, list(critical))
+    if not C.any() or C.all():
+        raise InputError(f"critical group {list(critical)} must be a proper, non-empty "
+                         "subset of the machines")
+    ws = 2 * np.pi * freq_hz
+    Mk = 2 * np.asarray(result.inertia, float) / (base_mva * ws)
+    MC, MN = Mk[C].sum(), Mk[~C].sum()
+    delta = coi_angle(result.angle[:, C], Mk[C]) - coi_angle(result.angle[:, ~C], Mk[~C])
+    omega = ws * (coi_speed(result.speed[:, C], Mk[C]) - coi_speed(result.speed[:, ~C], Mk[~C]))
+    sigma = 1 if delta[-1] >= delta[0] else -1
+    return OmibEquivalent(t=result.t, delta=sigma * delta, omega=sigma * omega,
+                          M=MC * MN / (MC + MN), critical=tuple(int(k) for k in critical),
+                          sigma=sigma, in_critical=C, M_machine=Mk)
+
+
+def unstable_point(eq: OmibEquivalent, t_clear: float) -> int:
+    """Grid index k_u of the OMIB's unstable angle (P_a = 0) on the swing that runs away.
+
+    That swing is the last stretch of omega > 0 after clearing.  Going back from the end
+    over a final fall to the last speed peak, then over the rise before it to the last
+    local minimum: if that rise exceeds the final fall, the run-away dominates and k_u is
+    that minimum (the clearing instant when omega only rises: all of the swing
+    accelerates); otherwise the run ended (machines judged separated from the centre of
+    inertia, or a run stopped at the unstable angle) while the OMIB was still slowing
+    down, and k_u is the last point: the kinetic energy left there bounds the margin.
+    """
+    w = eq.omega
+    k_cl = int(np.searchsorted(eq.t, t_clear - 1e-9))
+    rest = np.nonzero(w[:-1] <= 0)[0]
+    k_a = min(max(k_cl, int(rest[-1]) + 1 if rest.size else 0), w.size - 1)
+    k = w.size - 1
+    while k > k_a and w[k - 1] >= w[k]:
+        k -= 1
+    k_pk = k
+    while k > k_a and w[k - 1] <= w[k]:
+        k -= 1
+    return int(k) if w[k_pk] - w[k] > w[k_pk] - w[-1] else w.size - 1
+
+
+def unstable_margin(eq: OmibEquivalent, k_u: int) -> float:
+    """SIME unstable margin -M max(omega(t_u), 0)^2 / 2 (pu*rad, <= 0)."""
+    return -0.5 * eq.M * max(float(eq.omega[k_u]), 0.0) ** 2
+
+
+def clearing_energy_rate(eq: OmibEquivalent, t_clear: float) -> float:
+    """M omega dw/dt just before clearing (pu*rad/s): the OMIB kinetic energy that one more
+    second of fault adds; 0 when clearing is at the first point."""
+    k = int(np.searchsorted(eq.t, t_clear - 1e-9))
+    if k < 2:
+        return 0.0
+    dw = (eq.omega[k - 1] - eq.omega[k - 2]) / (eq.t[k - 1] - eq.t[k - 2])
+    return float(eq.M * eq.omega[k - 1] * dw)
+
+
+def storage_integrals(eq: OmibEquivalent, modes: np.ndarray, k_u: int) -> np.ndarray:
+    """integral of s_j(t) * sigma * omega(t) dt from the start of the run to t_u per device
+    (n_dev,), rad; modes (n_t, n_dev) in {-1, 0, +1}, each held over the step that starts
+    at its grid point (as the simulator holds a device's mode), omega by the trapezoid
+    rule.  Over every swing up to the one that runs away: a device absorbing while its
+    group runs ahead and injecting while it falls behind removes energy on each swing."""
+    if k_u <= 0:
+        return np.zeros(modes.shape[1])
+    w = eq.sigma * eq.omega[:k_u + 1]
+    area = 0.5 * (w[1:] + w[:-1]) * np.diff(eq.t[:k_u + 1])
+    return area @ modes[:k_u]
+
+
+def device_modes(result: SimulationResult, buses, machines, controller,
+                 freq_hz: float) -> np.ndarray:
+    """The paper's Table 3 mode (+1 absorb, -1 inject, 0 idle) that a bang-bang ESD at each
+    of `buses`, driven by the matching machine of `machines`, would take along `result`
+    (whether or not it is installed), on the run's grid: (n_t, n_dev).
+
+    controller: `stabctl.storage.devices.BangBangCOI` (deadband, voltage gate, system/rest COI,
+    hysteresis); freq_hz: the case frequency.  Switching instants are those of the grid
+    (the simulator locates them inside the step; the difference is below one step).
+    """
+    idx = np.array([result.machine(int(k)) for k in machines], int)
+    w, Mk = result.speed, np.asarray(result.inertia, float)
+    if controller.coi == "rest":
+        coi = coi_of_rest(w, Mk, idx)
+    else:
+        coi = result.coi_speed[:, None]
+    rel = (w[:, idx] - coi) * freq_hz
+    v = result.vmag[:, [result.bus(int(b)) for b in buses]]
+    return _table3(rel, v >= controller.v_gate_pu, controller.deadband_hz,
+                   controller.hysteresis_hz)
+
+
+def _table3(rel_hz: np.ndarray, gate: np.ndarray, db: float, hyst: float) -> np.ndarray:
+    """Modes along the grid: outside +-db switch on, back inside +-(db - hyst) switch off,
+    idle below the voltage gate (stateful only when hyst > 0)."""
+    on = np.sign(rel_hz) * (np.abs(rel_hz) > db)
+    if hyst == 0:
+        return np.where(gate, on, 0).astype(int)
+    out = np.zeros(rel_hz.shape, int)
+    mode = np.zeros(rel_hz.shape[1], int)
+    for k in range(rel_hz.shape[0]):
+        keep = ((mode == 1) & (rel_hz[k] > db - hyst)) | ((mode == -1) & (rel_hz[k] < hyst - db))
+        mode = np.where(gate[k], np.where(keep, mode, on[k]), 0).astype(int)
+        out[k] = mode
+    return out
+
+
+def distribution_factors(sys, buses, machines, inertia, base_mva: float) -> np.ndarray:
+    """beta (n_mac, n_dev): share of each machine's electrical power in 1 pu drawn at each
+    bus of `buses`, at the operating point, from a linearised model (`stabctl.smallsignal.linearise`,
+    ESD inputs at those buses): beta_kj = -(2 H_k S_k / S_base) B[omega_k, P_esd_j]
+    (B in pu speed/s per pu; inertia = H_k S_k in MJ, machines: numbers, in that order).
+    Columns sum to ~1 (less the change of losses and voltage-dependent loads).
+
+    Raises InputError when a bus has no ESD input in the model.
+    """
+    states, inputs = list(sys.state_labels), list(sys.input_labels)
+    rows = [states.index(f"mac_omega_G{int(k)}") for k in machines]
+    missing = [int(b) for b in buses if f"P_esd_B{int(b)}" not in inputs]
+    if missing:
+        raise InputError(f"the linearised model has no ESD input at bus(es) {missing}")
+    cols = [inputs.index(f"P_esd_B{int(b)}") for b in buses]
+    B = np.asarray(sys.B)[np.ix_(rows, cols)]
+    return -(2 * np.asarray(inertia, float) / base_mva)[:, None] * B

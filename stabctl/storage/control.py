@@ -1,0 +1,258 @@
+"""Control laws of the energy-storage devices (paper Section 5, Table 3; Section 3) and
+their compiled kernels.
+
+Every law implements the `ControlLaw` protocol: a `kind` (how `integrate` treats it) and
+`packed(f0)`, its constants in the units of the compiled loop (`LawConstants`).  The
+fleet packing (`stabctl.storage.devices.pack`) asks the law, never tests its class.
+
+- `BangBangCOI`, the paper's: each device watches its own generator's speed relative to the
+  centre of inertia (eq. 40, inertia-weighted, of the whole system or of the rest of it):
+  absorb +Pmax above the deadband (100 mHz), inject -Pmax below minus the deadband, nothing
+  inside; only while its bus voltage is at least the gate (0.8 pu).  Optional hysteresis:
+  a device switches off only when the relative speed is back inside deadband - hysteresis.
+- `LinearFeedback`, the Section 3 laws in multi-machine form: P = Kv (omega_i - omega_COI)
+  + Ka d(omega_i - omega_COI)/dt (rad/s and rad/s^2 of electrical speed), clipped to
+  +-Pmax; the acceleration is the one of the latest evaluation (the algebraic loop is
+  broken by one stage).
+- `ExternalCommands`: set-points decided outside the simulation (estimator in the loop).
+
+Switching instants of the bang-bang law are located inside the step (`crossing`, linear
+interpolation of the switching function between the step ends) and the step is
+re-integrated in two parts (`stabctl.dynamics.simulation.integrate`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar, NamedTuple, Protocol, runtime_checkable
+
+import numpy as np
+
+from stabctl._jitcache import njit
+from stabctl.errors import InputError
+
+#: largest voltage gate of the bang-bang law (pu)
+MAX_V_GATE_PU = 2.0
+
+#: law kinds of the compiled loop
+NO_STORAGE, BANG_BANG, LINEAR, EXTERNAL = 0, 1, 2, 3
+
+
+class LawConstants(NamedTuple):
+    """A control law's constants in the compiled loop's units (`ControlLaw.packed`).
+
+    kind: NO_STORAGE, BANG_BANG, LINEAR or EXTERNAL; db, hyst: deadband and hysteresis
+    (pu speed); vgate: voltage gate (pu); rest: COI of the other machines (else of all);
+    Kv: pu power per pu speed; Ka: pu power per pu speed per s.
+    """
+
+    kind: int
+    db: float
+    hyst: float
+    vgate: float
+    rest: bool
+    Kv: float
+    Ka: float
+
+
+#: the constants of no law (a run without storage)
+NO_LAW = LawConstants(NO_STORAGE, 0.0, 0.0, 0.0, False, 0.0, 0.0)
+
+
+@runtime_checkable
+class ControlLaw(Protocol):
+    """What a storage control law tells the compiled loop.
+
+    Attributes
+    ----------
+    kind : int
+        BANG_BANG, LINEAR or EXTERNAL: which branch of `integrate` drives the devices.
+    """
+
+    kind: ClassVar[int]
+
+    def packed(self, f0: float) -> LawConstants:
+        """The law's constants for the kernels.
+
+        Parameters
+        ----------
+        f0 : float
+            Nominal frequency of the case (Hz), to turn Hz into pu speed.
+
+        Returns
+        -------
+        LawConstants
+        """
+        ...
+
+
+@dataclass(frozen=True)
+class BangBangCOI:
+    """The paper's controller (Table 3); see the module docstring.
+
+    Parameters
+    ----------
+    deadband_hz : float
+        |f_i - f_COI| below which the device is idle (Hz), >= 0.
+    v_gate_pu : float
+        Minimum bus voltage for the device to act (pu), in [0, MAX_V_GATE_PU].
+    coi : {"system", "rest"}
+        COI of all machines (eq. 40) or of all but the device's own machine.
+    hysteresis_hz : float
+        Switch-off margin inside the band (Hz), in [0, deadband_hz].
+
+    Raises
+    ------
+    InputError
+        Any value outside its range.
+    """
+
+    deadband_hz: float = 0.1
+    v_gate_pu: float = 0.8
+    coi: str = "system"
+    hysteresis_hz: float = 0.0
+    kind: ClassVar[int] = BANG_BANG
+
+    def __post_init__(self):
+        if self.coi not in ("system", "rest"):
+            raise InputError(f"coi must be 'system' or 'rest', got {self.coi!r}")
+        if not (0 <= self.deadband_hz < float("inf")
+                and 0 <= self.hysteresis_hz <= self.deadband_hz):
+            raise InputError("need deadband >= 0 and 0 <= hysteresis <= deadband (finite, Hz)")
+        if not 0 <= self.v_gate_pu <= MAX_V_GATE_PU:
+            raise InputError(f"voltage gate must be in [0, {MAX_V_GATE_PU:g}] pu, got "
+                             f"{self.v_gate_pu}")
+
+    def packed(self, f0: float) -> LawConstants:
+        """The law's constants for the kernels.
+
+        Parameters
+        ----------
+        f0 : float
+            Nominal frequency of the case, Hz (> 0), to turn Hz into pu speed.
+
+        Returns
+        -------
+        LawConstants
+            Kind BANG_BANG, deadband and hysteresis in pu speed (`deadband_hz / f0`,
+            `hysteresis_hz / f0`), the voltage gate (pu), the COI choice (``rest`` True
+            for ``coi="rest"``), gains 0.
+        """
+        return LawConstants(self.kind, self.deadband_hz / f0, self.hysteresis_hz / f0,
+                            self.v_gate_pu, self.coi == "rest", 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class LinearFeedback:
+    """Section 3 laws for many machines: P = Kv * dw + Ka * d(dw)/dt, clipped to +-Pmax.
+
+    Parameters
+    ----------
+    Kv : float
+        Gain in pu power per electrical rad/s of dw = omega_i - omega_COI.
+    Ka : float
+        Gain in pu power per electrical rad/s^2.
+    coi : {"system", "rest"}
+        As `BangBangCOI`.
+    v_gate_pu : float
+        Minimum bus voltage for the device to act (pu).
+    """
+
+    Kv: float = 0.0
+    Ka: float = 0.0
+    coi: str = "system"
+    v_gate_pu: float = 0.0
+    kind: ClassVar[int] = LINEAR
+
+    def packed(self, f0: float) -> LawConstants:
+        """Gains per pu speed (times 2 pi f0), the gate, the COI."""
+        ws = 2 * np.pi * f0
+        return LawConstants(self.kind, 0.0, 0.0, self.v_gate_pu, self.coi == "rest",
+                            self.Kv * ws, self.Ka * ws)
+
+
+@dataclass(frozen=True)
+class ExternalCommands:
+    """Devices commanded from outside the simulation (estimator in the loop): their
+    set-points in units of the rating (Table 3 modes -1 inject, 0 idle, +1 absorb; other
+    values for a scaled power such as an ambient load deviation) come from
+    `Simulator.run_commanded` at measurement-frame arrival times.
+
+    Parameters
+    ----------
+    v_gate_pu : float
+        Voltage gate (pu), the same for every device of the fleet; it still applies.
+    """
+
+    v_gate_pu: float = 0.8
+    kind: ClassVar[int] = EXTERNAL
+
+    def packed(self, f0: float) -> LawConstants:
+        """Only the gate."""
+        return LawConstants(self.kind, 0.0, 0.0, self.v_gate_pu, False, 0.0, 0.0)
+
+
+# -- compiled kernels (used by stabctl.dynamics.simulation.integrate) ----------------------
+
+@njit(cache=True)
+def coi_value(values, inertia):
+    """Centre-of-inertia value (paper eq. 40) of per-machine values (n_mac,) with weights
+    inertia (n_mac,) (H * MVA): sum(values * inertia) / sum(inertia).  The compiled
+    counterpart of `stabctl.dynamics.coi.coi_speed` (same value, summed in this order)."""
+    return (values * inertia).sum() / inertia.sum()
+
+
+@njit(cache=True)
+def relative_speeds(x, nm, inertia, sa, out):
+    """omega_i - omega_COI (pu) of each device's machine: COI of all machines (eq. 40) or of
+    the rest of the system (sa.rest); 0 for a device without a machine.  x: flat state
+    (speeds in x[nm:2 nm]); out (n_dev,) is written."""
+    M = inertia.sum()
+    coi = coi_value(x[nm:2 * nm], inertia)
+    for d in range(sa.mac.size):
+        i = sa.mac[d]
+        w = x[nm + i]
+        if i < 0:
+            out[d] = 0.0
+        elif sa.rest:
+            out[d] = w - (coi * M - w * inertia[i]) / (M - inertia[i])
+        else:
+            out[d] = w - coi
+
+
+@njit(cache=True)
+def desired_mode(sa, d, mode, r, v):
+    """Table 3: +1 absorb above the deadband, -1 inject below, 0 inside or below the voltage
+    gate; with hysteresis a running device stops only inside deadband - hysteresis."""
+    if v < sa.vgate:
+        return 0
+    if mode == 1 and r > sa.db - sa.hyst:
+        return 1
+    if mode == -1 and r < -(sa.db - sa.hyst):
+        return -1
+    if r > sa.db:
+        return 1
+    if r < -sa.db:
+        return -1
+    return 0
+
+
+@njit(cache=True)
+def crossing(sa, mode, want, r_a, r_b, v_a, v_b):
+    """Where, as a fraction of the step, a device left `mode` for `want`, and the mode it
+    takes there: linear interpolation of the switching function between the step ends
+    (the voltage gate if it changed side, else the speed boundary of the transition; a
+    jump from +1 to -1 first crosses into 0)."""
+    if (v_a >= sa.vgate) != (v_b >= sa.vgate):
+        ga, gb = v_a - sa.vgate, v_b - sa.vgate
+        new = want
+    else:
+        if mode == 1:
+            thr, new = sa.db - sa.hyst, (0 if want == -1 else want)
+        elif mode == -1:
+            thr, new = -(sa.db - sa.hyst), (0 if want == 1 else want)
+        else:
+            thr, new = (sa.db if want == 1 else -sa.db), want
+        ga, gb = r_a - thr, r_b - thr
+    theta = ga / (ga - gb) if ga != gb else 1.0
+    return min(max(theta, 0.0), 1.0), new

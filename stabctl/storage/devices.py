@@ -1,0 +1,215 @@
+"""Energy-storage devices (ESDs), fleets and their packing for the compiled loop (paper
+Section 5).
+
+An ESD at a bus is a real-power sink/source P in [-Pmax, +Pmax] (pu on the system base,
++ absorbs, as the paper), drawn at its bus in the network solution.  Ideal (instant) by
+default; optionally a first-order lag, a ramp limit and an energy (state-of-charge) range.
+The control laws a fleet shares are in `stabctl.storage.control` (re-exported by
+`stabctl.storage`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from stabctl._jitcache import njit
+from stabctl.case import Case
+from stabctl.errors import CaseError, InputError
+from stabctl.storage.control import NO_LAW, NO_STORAGE, BangBangCOI, ControlLaw
+
+
+#: largest storage rating of `uniform_fleet`, % of the machine's MVA (a device larger than
+#: its generator is outside the paper's use and its control law)
+MAX_ESD_PCT = 100.0
+
+
+@dataclass(frozen=True)
+class StorageDevice:
+    """One energy-storage device (paper Section 5): a real-power sink/source at a bus,
+    P in [-Pmax, +Pmax] (+ absorbs), ideal (instant) unless a lag, a ramp limit or a finite
+    energy is given.  Converted to pu on the system base when packed for a run.
+
+    Attributes
+    ----------
+    bus : int
+        Bus number (as in the data) where it connects.
+    machine : int or None
+        Number of the generator whose speed relative to the COI drives it; None: a device
+        commanded from outside (`stabctl.storage.control.ExternalCommands`, e.g. an
+        ambient load fluctuation, `stabctl.estimation.ambient`).
+    pmax_mw : float
+        Rating, MW, > 0.
+    lag_s : float, optional
+        First-order power lag time constant, s, >= 0; 0 (default) = ideal.
+    ramp_mw_s : float, optional
+        Ramp limit, MW/s, > 0; inf (default) = none.
+    energy_mj : float, optional
+        Usable energy, MJ, > 0; inf (default) = unlimited.  A full device does not absorb,
+        an empty one does not inject.
+    soc0 : float, optional
+        Initial state of charge, fraction of `energy_mj` in [0, 1]; default 0.5.
+
+    Raises
+    ------
+    InputError
+        A rating that is not > 0, a negative lag, a ramp limit or energy that is not > 0,
+        or soc0 outside [0, 1].
+    """
+
+    bus: int
+    machine: int | None
+    pmax_mw: float
+    lag_s: float = 0.0
+    ramp_mw_s: float = float("inf")
+    energy_mj: float = float("inf")
+    soc0: float = 0.5
+
+    def __post_init__(self):
+        if not self.pmax_mw > 0:
+            raise InputError(f"storage at bus {self.bus}: rating must be > 0 MW, got {self.pmax_mw}")
+        if self.lag_s < 0 or self.ramp_mw_s <= 0 or self.energy_mj <= 0 or not 0 <= self.soc0 <= 1:
+            raise InputError(f"storage at bus {self.bus}: lag >= 0, ramp > 0, energy > 0 and "
+                             "0 <= soc0 <= 1 are required")
+
+
+@dataclass(frozen=True)
+class StorageFleet:
+    """Storage devices and the control law they share.
+
+    Attributes
+    ----------
+    devices : tuple of StorageDevice, optional
+        The devices, numbered 1, 2, ... in this order in the results; default none.
+    controller : ControlLaw, optional
+        The law driving every device (`stabctl.storage.control`: `BangBangCOI`, the
+        paper's, by default; `LinearFeedback`; `ExternalCommands` for
+        `Simulator.run_commanded`).
+    """
+
+    devices: tuple = ()
+    controller: ControlLaw = field(default_factory=BangBangCOI)
+
+    @property
+    def buses(self) -> list[int]:
+        """Bus numbers of the devices, in device order (kept in the reduced network)."""
+        return [d.bus for d in self.devices]
+
+
+def hv_bus(case: Case, machine: int) -> int:
+    """High-voltage bus of a generator: the neighbour of its terminal bus (through a
+    branch) with the highest rated kV; the terminal bus itself if none is higher.
+
+    Raises CaseError for an unknown machine.
+    """
+    i = case.machine_index(machine)
+    term = int(case.machines.bus[i])
+    br = case.branches
+    nbrs = np.concatenate([br.to_bus[br.from_bus == term], br.from_bus[br.to_bus == term]])
+    if nbrs.size == 0:
+        return term
+    kv = case.buses.kv[case.bus_indices(nbrs)]
+    best = int(nbrs[int(np.argmax(kv))])
+    return best if kv.max() > case.buses.kv[case.bus_index(term)] else term
+
+
+def uniform_fleet(case: Case, pct: float, controller=None, at: str = "hv") -> StorageFleet:
+    """One ideal ESD per generator, rated pct % of the generator's MVA, at its HV
+    bus or its terminal bus.
+
+    Parameters
+    ----------
+    case : Case
+        The case; one device per row of its machine table, in that order.
+    pct : float
+        Rating of each device, % of its generator's MVA rating, in (0, MAX_ESD_PCT] (100).
+    controller : ControlLaw or None, optional
+        The fleet's control law; None (default): `BangBangCOI()` (paper Table 3).
+    at : str, optional
+        ``"hv"`` (default): the generator's high-voltage bus (`hv_bus`: the neighbour of
+        its terminal bus with the highest rated kV); any other value: the terminal bus.
+
+    Returns
+    -------
+    StorageFleet
+        Devices driven by their own generator's speed, unlimited energy, no lag or ramp
+        limit.
+
+    Raises
+    ------
+    InputError
+        `pct` not in (0, MAX_ESD_PCT].
+    """
+    if not 0 < pct <= MAX_ESD_PCT:
+        raise InputError(f"storage rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, "
+                         f"got {pct}")
+    devs = []
+    for num, bus, mva in zip(case.machines.number, case.machines.bus, case.machines.mva):
+        b = hv_bus(case, int(num)) if at == "hv" else int(bus)
+        devs.append(StorageDevice(bus=b, machine=int(num), pmax_mw=pct / 100.0 * mva))
+    return StorageFleet(tuple(devs), controller or BangBangCOI())
+
+
+class StorageArrays(NamedTuple):
+    """Fleet packed for the compiled loop (n_dev entries each; system-base pu, s)."""
+
+    pos: np.ndarray       # index of the device bus among the kept buses
+    bus: np.ndarray       # bus index (for its voltage)
+    mac: np.ndarray       # machine index (-1: none)
+    pmax: np.ndarray
+    lag: np.ndarray
+    ramp: np.ndarray      # pu/s
+    emax: np.ndarray      # pu*s
+    e0: np.ndarray        # pu*s
+    kind: int             # law kind (stabctl.storage.control: NO_STORAGE, BANG_BANG, ...)
+    db: float             # deadband, pu speed
+    hyst: float           # hysteresis, pu speed
+    vgate: float
+    rest: bool
+    Kv: float             # pu per pu speed
+    Ka: float             # pu per pu speed per s
+
+
+def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageArrays:
+    """Pack a fleet for the kernels; nc_idx are the kept buses of the dynamic model.
+
+    Raises CaseError when a device bus is not kept (build the Simulator with the fleet's
+    buses as injection buses) or names an unknown machine.
+    """
+    base, f0 = case.base_mva, case.freq_hz
+    devs = () if fleet is None else fleet.devices
+    bus = np.array([case.bus_index(d.bus) for d in devs], np.int64)
+    pos = np.array([int(np.nonzero(nc_idx == b)[0][0]) if np.any(nc_idx == b) else -1
+                    for b in bus], np.int64)
+    if np.any(pos < 0):
+        raise CaseError(f"storage bus {devs[int(np.argmin(pos))].bus} is not kept in the "
+                        "reduced network: pass the fleet to the Simulator")
+    f = lambda attr: np.array([getattr(d, attr) for d in devs], float)  # noqa: E731
+    law = NO_LAW if fleet is None else fleet.controller.packed(f0)
+    return StorageArrays(
+        pos=pos, bus=bus, mac=np.array([-1 if d.machine is None else case.machine_index(d.machine)
+                                        for d in devs], np.int64),
+        pmax=f("pmax_mw") / base, lag=f("lag_s"), ramp=f("ramp_mw_s") / base,
+        emax=f("energy_mj") / base,
+        e0=np.where(np.isfinite(f("energy_mj")), f("soc0") * f("energy_mj"), 0.0) / base,
+        kind=law.kind if devs else NO_STORAGE, db=law.db, hyst=law.hyst, vgate=law.vgate,
+        rest=law.rest, Kv=law.Kv, Ka=law.Ka)
+
+
+# -- compiled device kernel (used by stabctl.dynamics.simulation.integrate) -------------------
+
+@njit(cache=True)
+def device_power(sa, d, target, P, e, h):
+    """Device power after h seconds following `target` from P (ideal, lag or ramp), with the
+    energy range: no absorption when full, no injection when empty."""
+    if sa.lag[d] > 0:
+        Pn = target + (P - target) * np.exp(-h / sa.lag[d])
+    else:
+        Pn = target
+    step = sa.ramp[d] * h
+    Pn = min(max(Pn, P - step), P + step)
+    if np.isfinite(sa.emax[d]) and ((Pn > 0 and e >= sa.emax[d]) or (Pn < 0 and e <= 0)):
+        Pn = 0.0
+    return Pn

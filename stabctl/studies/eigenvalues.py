@@ -1,0 +1,194 @@
+"""Eigenvalue study of a case (`stabctl eig`): linearise, analyse, and report the
+electromechanical modes as Markdown with figures, or every mode as JSON.
+
+Files: `<out>/eig_<case>[_nopss].md` with `eig_<case>[_nopss]_{eigs,shapes,pf}.png`, all
+written to temporary files first and renamed only when every one is complete.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from stabctl.case import Case, PssTable
+from stabctl.smallsignal.linearise import linearise
+from stabctl.smallsignal.modal import ModalAnalysis, ModeSensitivity, modal_analysis, mode_sensitivity
+
+N_FIGURE_MODES = 6   # EM modes drawn in the compass and bar charts
+
+
+@dataclass(frozen=True, eq=False)
+class EigStudy:
+    """A linearised case and its modes: `sys` (control.StateSpace), `ma`, `sens` (ESD
+    power inputs to relative speeds), `no_pss`, timings in s (`t_linearise`, `t_analyse`)."""
+
+    case: Case
+    no_pss: bool
+    sys: object
+    ma: ModalAnalysis
+    sens: ModeSensitivity
+    t_linearise: float
+    t_analyse: float
+
+    @property
+    def stem(self) -> str:
+        return f"eig_{self.case.name}" + ("_nopss" if self.no_pss else "")
+
+
+def eig_study(case: Case, no_pss: bool = False, n_areas: int | None = None,
+              conventions: str = "ieee", q_limits: bool = True) -> EigStudy:
+    """Linearise `case` (with its pss_con emptied if no_pss) under the model conventions,
+    from a power flow with or without PV Q limits, and analyse its modes."""
+    if no_pss:
+        case = case.replace(pss=PssTable.empty())
+    t0 = time.perf_counter()
+    sys = linearise(case, conventions=conventions, q_limits=q_limits)
+    t1 = time.perf_counter()
+    ma = modal_analysis(sys, n_areas=n_areas)
+    sens = mode_sensitivity(sys, ma)
+    return EigStudy(case, no_pss, sys, ma, sens, t1 - t0, time.perf_counter() - t1)
+
+
+def best_esd(st: EigStudy, i: int) -> tuple[str, float]:
+    """ESD input with the largest residue magnitude in mode i (over the relative-speed
+    outputs) and that magnitude (pu speed per pu power per s)."""
+    r = np.abs(st.sens.residues[i]).max(axis=0)
+    j = int(np.argmax(r))
+    return st.sens.inputs[j].removeprefix("P_esd_"), float(r[j])
+
+
+def study_json(st: EigStudy) -> dict:
+    """Every mode (`ModalAnalysis.mode_record`) plus the model summary, JSON-ready."""
+    ma = st.ma
+    modes = [ma.mode_record(i) for i in range(ma.eigenvalues.size)]
+    for i in ma.electromechanical:
+        bus, r = best_esd(st, i)
+        modes[i].update(best_esd_bus=bus, best_esd_residue=r)
+    return {"case": st.case.name, "pss": not st.no_pss, "n_states": st.sys.nstates,
+            "inputs": list(st.sys.input_labels), "reference_mode": ma.reference_mode,
+            "areas": _areas(ma), "damping_statistics": ma.damping_statistics(),
+            "electromechanical_modes": [int(i) for i in ma.electromechanical],
+            "time_linearise_s": st.t_linearise, "time_analyse_s": st.t_analyse,
+            "modes": modes}
+
+
+def _areas(ma: ModalAnalysis) -> dict:
+    return {f"area {a + 1}": [int(k) for k in ma.machines[ma.areas == a]]
+            for a in np.unique(ma.areas)}
+
+
+def figure_modes(ma: ModalAnalysis) -> list[int]:
+    """Up to N_FIGURE_MODES electromechanical modes, by frequency: the inter-area ones
+    first, then the least-damped local ones."""
+    em = ma.electromechanical
+    order = np.lexsort((ma.damping[em], ma.kind[em] != "inter-area"))
+    pick = em[order[:N_FIGURE_MODES]]
+    return [int(i) for i in pick[np.argsort(ma.freq_hz[pick])]]
+
+
+def write_report(st: EigStudy, out_dir) -> Path:
+    """Write the Markdown report and its three figures into out_dir atomically; returns
+    the report path."""
+    from stabctl.plotting.figures import eigenvalue_plot, mode_shape_compass, participation_bars
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    names = {k: f"{st.stem}_{k}.png" for k in ("eigs", "shapes", "pf")}
+    title = f"{st.case.name}" + (" without PSS" if st.no_pss else "")
+    modes = figure_modes(st.ma)
+    tmp = {}
+    try:
+        for key, draw in (("eigs", lambda p: eigenvalue_plot(st.ma, p, title)),
+                          ("shapes", lambda p: mode_shape_compass(st.ma, modes, p)),
+                          ("pf", lambda p: participation_bars(st.ma, modes, p))):
+            tmp[names[key]] = _temp(out, names[key])
+            if modes or key == "eigs":
+                draw(tmp[names[key]])
+        md = out / f"{st.stem}.md"
+        tmp[md.name] = _temp(out, md.name)
+        Path(tmp[md.name]).write_text(report_markdown(st, names, bool(modes)))
+        for final, t in tmp.items():
+            if Path(t).stat().st_size:
+                os.chmod(t, 0o644)
+                os.replace(t, out / final)
+            else:
+                Path(t).unlink()
+    finally:
+        for t in tmp.values():
+            Path(t).unlink(missing_ok=True)
+    return md
+
+
+def _temp(out: Path, name: str) -> str:
+    fd, path = tempfile.mkstemp(dir=out, prefix=f".{name}.", suffix=Path(name).suffix)
+    os.close(fd)
+    return path
+
+
+def _machines(numbers, most: int = 8) -> str:
+    """'G1, G2, ...' (at most `most` machines), '-' for none."""
+    text = ", ".join(f"G{k}" for k in numbers[:most]) or "-"
+    return text + (" ..." if len(numbers) > most else "")
+
+
+def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str:
+    """The report text (electromechanical-mode table, areas, statistics, figures)."""
+    ma, sys = st.ma, st.sys
+    lam_ref = ma.eigenvalues[ma.reference_mode]
+    stats = ma.damping_statistics()
+    em = ma.electromechanical
+    n_inter = int(np.sum(ma.kind[em] == "inter-area"))
+    lines = [
+        f"# Small-signal modes: {st.case.name}" + (" without PSS" if st.no_pss else ""),
+        "",
+        f"Generated by `stabctl eig {st.case.name}{' --no-pss' if st.no_pss else ''} --report`"
+        " (stabctl.smallsignal.linearise, stabctl.smallsignal.modal; method in docs/modal.md).",
+        "",
+        f"- Linearised at the power-flow point by central differences of the simulator's own "
+        f"equations (PSTess svm_mgen's perturbation 1e-4): {sys.nstates} states, "
+        f"{sys.ninputs} inputs, {sys.noutputs} outputs (timings: `stabctl eig` prints them; "
+        "the report holds no run-dependent values).",
+        f"- Angle-reference mode (common rotation of all rotor angles, excluded from damping "
+        f"statistics): lambda = {lam_ref.real:.2e} 1/s.",
+        f"- {em.size} electromechanical modes ({n_inter} inter-area, {em.size - n_inter} local): "
+        f"0.1-2.5 Hz, rotor angle/speed the largest participating state group.",
+    ]
+    if "electromechanical" in stats:
+        s = stats["electromechanical"]
+        lines.append(f"- Least-damped electromechanical mode: {s['freq_hz']:.3f} Hz, "
+                     f"damping ratio {s['damping']:.4f}"
+                     + (" (unstable)" if s["damping"] < 0 else "") + ".")
+    lines += ["", "## Coherent areas", "",
+              "Slow coherency on the rigid-body direction and the slowest electromechanical "
+              "mode shapes (docs/modal.md); a mode is inter-area when it moves the areas' "
+              "centres of inertia against each other (area-momentum fraction eta > 0.5).", ""]
+    lines += [f"- {name}: " + ", ".join(f"G{k}" for k in ks) for name, ks in _areas(ma).items()]
+    lines += ["", "## Electromechanical modes", "",
+              "| # | eigenvalue (1/s) | f (Hz) | damping | kind | eta | dominant machines | "
+              "swing together | against | best ESD bus (abs residue) |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
+    for i in em[np.argsort(ma.freq_hz[em])]:
+        lam = ma.eigenvalues[i]
+        g1, g2 = ma.groups(i)
+        bus, r = best_esd(st, i)
+        lines.append(f"| {i} | {lam.real:.4f} ± j{lam.imag:.4f} | {ma.freq_hz[i]:.4f} | "
+                     f"{ma.damping[i]:.4f} | {ma.kind[i]} | {ma.eta[i]:.2f} | "
+                     f"{_machines(ma.dominant_machines(i))} | {_machines(g1)} | {_machines(g2)} | "
+                     f"{bus} ({r:.2e}) |")
+    lines += ["", "Dominant machines: participation at least half the largest machine's "
+              "(states and controls of a machine summed). Groups: speed mode-shape components "
+              "of at least 0.2 of the largest, in phase (within 90 degrees) with it or against "
+              "it. Best ESD bus: the ESD power input with the largest residue to the "
+              "relative speeds.", "", "## Figures", "",
+              f"![eigenvalues]({figures['eigs']})", ""]
+    if with_mode_figures:
+        lines += [f"Mode shapes and participations of {min(N_FIGURE_MODES, em.size)} "
+                  "electromechanical modes (the inter-area ones, then the least-damped local "
+                  "ones):", "", f"![mode shapes]({figures['shapes']})", "",
+                  f"![participation]({figures['pf']})", ""]
+    return "\n".join(lines)

@@ -1,0 +1,161 @@
+"""The three studies of `stabctl estimate`, callable without the command line.
+
+- :func:`estimator_errors` (`estimate rmse`): one fault run, then Monte-Carlo PMU
+  streams fed to every estimator, errors against the truth, and false ESD actions on
+  runs without fault (:mod:`stabctl.studies.estimation`);
+- :func:`closed_loop_verdicts` (`estimate closed-loop`): the fault simulated with the
+  ESDs commanded by each estimator in the loop;
+- :func:`estimator_ccts` (`estimate cct`): the fault's CCT with each estimator in the
+  loop over noise seeds (:func:`stabctl.estimation.closed_loop.cct_study`).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import replace
+from pathlib import Path
+
+from stabctl.errors import InputError
+
+
+def estimator_errors(case, event, *, settings, esd_pct, runs: int, seed: int,
+                     settle_s: float, t_end: float, pmu_at: str, coi: str,
+                     control, ambient, ambient_s: float, ambient_runs: int,
+                     conventions: str = "ieee", h: float | None = None) -> dict:
+    """Errors of every estimator against the simulated truth, and false ESD actions.
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+    event : stabctl.dynamics.events.Fault
+        The fault (with its clearing) of the fault run.
+    settings : stabctl.estimation.pmu.PMUSettings
+    esd_pct : float or None
+        Storage in the fault run (% of machine MVA, paper's controller on the true
+        speeds); None: none.
+    runs, seed : int
+        Monte-Carlo runs with PMU noise seeds seed .. seed + runs - 1.
+    settle_s, t_end : float
+        Errors are taken from ``settle_s`` after the clearing to ``t_end`` (s), the end of
+        the fault run.
+    pmu_at : {"terminal", "hv"}
+    coi : {"system", "rest"}
+    control : stabctl.storage.devices.BangBangCOI
+        The ESD rule whose false actions are counted.
+    ambient : stabctl.estimation.ambient.AmbientLoad
+        Ambient load fluctuation of the runs without fault (run r: seed + r).
+    ambient_s : float
+        Length of the runs without fault (s; 0: no false-action count).
+    ambient_runs : int
+    conventions : str
+    h : float or None
+        Integration step (None: the default).
+
+    Returns
+    -------
+    dict
+        ``window_s``, ``stable`` (the fault run), ``estimators`` (figures per estimator,
+        :func:`stabctl.studies.estimation.monte_carlo`) and ``false_actions`` (None
+        without ambient runs).
+
+    Raises
+    ------
+    InputError
+        ``t_end`` before the errors start.
+    """
+    from stabctl.dynamics.simulation import Simulator
+    from stabctl.estimation import ambient as am
+    from stabctl.storage.devices import uniform_fleet
+    from stabctl.studies import estimation as study
+
+    window = (max(event.times()) + settle_s, t_end)
+    if not window[0] < t_end:
+        raise InputError(f"--tf {t_end:g} s ends before the errors start ({window[0]:g} s)")
+    fleet = None if esd_pct is None else uniform_fleet(case, esd_pct)
+    sim = Simulator(case, injection_buses=() if fleet is None else fleet.buses,
+                    conventions=conventions)
+    res = sim.run([event], t_end=t_end, storage=fleet, h=h)
+    figures = study.monte_carlo(case, res, settings, runs, seed, window, pmu_at, coi)
+    actions = None
+    if ambient_s > 0:
+        flat = [am.simulate(sim, ambient_s, replace(ambient, seed=seed + r), settings.rate)
+                for r in range(ambient_runs)]
+        actions = study.false_actions(case, flat, settings, seed, control, pmu_at)
+    return {"window_s": list(window), "stable": res.stable, "estimators": figures,
+            "false_actions": actions}
+
+
+def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float, seed: int,
+                         control, deadband_hz: float, conventions: str = "ieee",
+                         h: float | None = None) -> dict:
+    """The fault simulated with the ESDs commanded by each estimator in the loop.
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+    event : stabctl.dynamics.events.Fault
+    t_end : float
+        End of the run (s).
+    settings : stabctl.estimation.pmu.PMUSettings
+    esd_pct : float
+        Storage rating (% of machine MVA).
+    seed : int
+        PMU noise seed.
+    control : stabctl.storage.devices.BangBangCOI
+    deadband_hz : float
+        Deadband of the false-action count (Hz).
+    conventions : str
+    h : float or None
+
+    Returns
+    -------
+    dict
+        Per estimator (`stabctl.estimation.closed_loop.ESTIMATORS`): ``stable``,
+        ``switchings`` and ``false_actions``.
+    """
+    from stabctl.dynamics.simulation import Simulator
+    from stabctl.estimation import closed_loop as cl
+
+    sim, rows = Simulator(case, conventions=conventions), {}
+    for e in cl.ESTIMATORS:
+        run = cl.run_closed_loop(sim, [event], t_end, esd_pct, e, settings.rate,
+                                 settings.latency_s, seed, settings=settings, control=control,
+                                 h=h)
+        rows[e] = {"stable": run.result.stable,
+                   "switchings": len(run.result.meta.get("switchings", [])),
+                   "false_actions": cl.false_actions(run, deadband_hz)}
+    return rows
+
+
+def estimator_ccts(case_name: str, bus: int, far_bus: int, *, esd_pct: float, runs: int,
+                   seed: int, settings, conventions: str = "ieee",
+                   h: float | None = None) -> dict:
+    """CCT of a line fault with each estimator in the loop, over ``runs`` noise seeds.
+
+    Parameters
+    ----------
+    case_name : str
+    bus, far_bus : int
+        The faulted line.
+    esd_pct : float
+        Storage rating (% of machine MVA).
+    runs, seed : int
+        Noise seeds seed .. seed + runs - 1.
+    settings : stabctl.estimation.pmu.PMUSettings
+        Its rate and latency are used.
+    conventions : str
+    h : float or None
+
+    Returns
+    -------
+    dict
+        Estimator -> statistics of the CCT in cycles (mean, std, min, max, runs, failed),
+        :func:`stabctl.estimation.closed_loop.cct_study` (its records in a temporary
+        file, removed).
+    """
+    from stabctl.estimation import closed_loop as cl
+
+    with tempfile.TemporaryDirectory() as tmp:
+        return cl.cct_study(case_name, bus, far_bus, [esd_pct], runs, Path(tmp) / "cct.jsonl",
+                            seed=seed, rate=settings.rate, latency=settings.latency_s,
+                            conventions=conventions, h=h)[esd_pct]

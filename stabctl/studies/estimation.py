@@ -1,0 +1,189 @@
+"""Offline evaluation of the speed estimators against the simulated truth.
+
+A disturbance is simulated once (with storage acting on the true speeds if asked), then for
+each Monte-Carlo run a PMU frame stream is drawn (`stabctl.estimation.pmu.measure`, run r with seed
+S + r) and fed frame by frame to every estimator:
+
+- ``raw``: the PMU frequency taken for the speed (the last valid frame held when one is
+  dropped; variance (FE / k)^2);
+- ``kf``: `stabctl.estimation.filters.FrequencyKF` (baseline);
+- ``ekf``: `stabctl.estimation.filters.SwingEKF` (model-based).
+
+Errors against the true rotor speeds (mHz, 1 pu speed = f0 Hz) over a window (the
+post-fault swing: from the last network event to the end): RMSE of the machine speeds, of
+the COI speed (paper eq. 40) and of the relative speeds omega_i - omega_COI the ESD
+controllers use, each at the frame time stamps; the relative-speed RMSE a controller sees
+at the arrival of each frame (latency included), with the estimate as delivered and
+forecast to the arrival instant (`forecast`); the fraction of NIS values inside the
+two-sided 95 % chi-square interval.  False ESD actions: the paper's Table 3 rule
+(`stabctl.storage.devices.desired_mode`: absorb above +deadband, inject below -deadband) applied to
+each estimate of the relative speed on runs without fault (with ambient load fluctuation,
+`stabctl.estimation.ambient`); every switching from idle to a running mode is a false action.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from stabctl._jitcache import njit
+
+from stabctl.estimation import filters as es
+from stabctl.storage import control as law
+from stabctl.storage import devices as st
+from stabctl.case import Case
+from stabctl.errors import InputError
+from stabctl.estimation.pmu import FrameStream, PMUSettings, machine_pmus, measure, phasor_truth
+from stabctl.dynamics.results import SimulationResult
+
+ESTIMATORS = ("raw", "kf", "ekf")
+METRICS = ("speed_rmse_mhz", "coi_rmse_mhz", "rel_rmse_mhz", "rel_max_mhz",
+           "rel_arrival_rmse_mhz", "rel_forecast_rmse_mhz", "nis_inside")
+
+
+@dataclass(frozen=True)
+class Track:
+    """One estimator's output over a stream: speed, var (n_f, n_mac) pu, pu^2 at the frame
+    time stamps; ahead, ahead_var: the same forecast to each frame's arrival; nis
+    (n_f, n_mac), NaN where no update; dof of the NIS."""
+
+    speed: np.ndarray
+    var: np.ndarray
+    ahead: np.ndarray
+    ahead_var: np.ndarray
+    nis: np.ndarray
+    dof: int
+
+
+def run_estimators(stream: FrameStream, models: es.MachineModels,
+                   kf_tuning: es.FrequencyTuning = es.FrequencyTuning(),
+                   ekf_tuning: es.SwingTuning = es.SwingTuning()) -> dict[str, Track]:
+    """Tracks of the raw PMU frequency and of both filters fed every frame in order."""
+    filters = {"kf": es.FrequencyKF(models.pmu, stream.settings, kf_tuning, models.f0),
+               "ekf": es.SwingEKF(models, stream.settings, ekf_tuning)}
+    out = {"raw": _raw_track(stream, models)}
+    lat = stream.settings.latency_s
+    for name, f in filters.items():
+        rows = []
+        for fr in stream:
+            s, v = f.step(fr)
+            rows.append((s, v, *f.forecast(lat), f.nis.copy()))
+        out[name] = Track(*(np.array(a) for a in zip(*rows)), dof=f.dof)
+    return out
+
+
+def _raw_track(stream: FrameStream, models: es.MachineModels) -> Track:
+    """The PMU frequency of each machine's PMU as its speed, dropped frames held."""
+    f = stream.freq[:, models.pmu]
+    idx = np.where(np.isfinite(f), np.arange(len(stream))[:, None], 0)
+    speed = np.take_along_axis(f, np.maximum.accumulate(idx, axis=0), axis=0) / models.f0
+    var = np.full_like(speed, (stream.settings.sigma_freq / models.f0) ** 2)
+    return Track(speed, var, speed, var, np.full_like(speed, np.nan), dof=0)
+
+
+def errors(track: Track, result: SimulationResult, stream: FrameStream,
+           window: tuple[float, float], coi: str = "system") -> dict:
+    """Error figures of one track (module docstring), mHz; nis_inside NaN for a track
+    without NIS.  window: (start, end) s of the time stamps evaluated."""
+    f0 = stream.true.f0
+    sel = (stream.t >= window[0]) & (stream.t <= window[1])
+    if not sel.any():
+        raise InputError(f"no PMU frame in the window {window} s")
+    M = result.inertia
+    true = result.speed_at(stream.t[sel])
+    late = result.speed_at(stream.t[sel] + stream.settings.latency_s)
+    rel = lambda s: es.relative_speeds(s, s, M, coi)[0]  # noqa: E731
+    rms = lambda e: float(np.sqrt(np.nanmean(e ** 2)) * f0 * 1e3)  # noqa: E731
+    e_rel = rel(track.speed[sel]) - rel(true)
+    out = {"speed_rmse_mhz": rms(track.speed[sel] - true),
+           "coi_rmse_mhz": rms((track.speed[sel] - true) @ M / M.sum()),
+           "rel_rmse_mhz": rms(e_rel),
+           "rel_max_mhz": float(np.nanmax(np.abs(e_rel)) * f0 * 1e3),
+           "rel_arrival_rmse_mhz": rms(rel(track.speed[sel]) - rel(late)),
+           "rel_forecast_rmse_mhz": rms(rel(track.ahead[sel]) - rel(late))}
+    nis = track.nis[sel]
+    nis = nis[np.isfinite(nis)]
+    if track.dof and nis.size:
+        lo, hi = es.nis_bounds(track.dof)
+        out["nis_inside"] = float(np.mean((nis > lo) & (nis < hi)))
+    else:
+        out["nis_inside"] = float("nan")
+    return out
+
+
+def monte_carlo(case: Case, result: SimulationResult, settings: PMUSettings, runs: int,
+                seed: int, window: tuple[float, float], at: str = "terminal",
+                coi: str = "system") -> dict:
+    """Errors of every estimator over `runs` PMU streams (seeds seed .. seed + runs - 1).
+
+    Returns {estimator: {metric: {"mean", "std", "min", "max", "runs": [...]}}}.
+    Raises InputError for runs < 1.
+    """
+    if runs < 1:
+        raise InputError(f"need at least one Monte-Carlo run, got {runs}")
+    pmus = machine_pmus(case, at)
+    models = es.machine_models(case, pmus)
+    truth = phasor_truth(case, result, pmus)
+    per_run = {name: [] for name in ESTIMATORS}
+    for r in range(runs):
+        stream = measure(truth, settings, seed + r)
+        for name, track in run_estimators(stream, models).items():
+            per_run[name].append(errors(track, result, stream, window, coi))
+    return {name: {m: _summary([e[m] for e in rows]) for m in METRICS}
+            for name, rows in per_run.items()}
+
+
+def _summary(values) -> dict:
+    v = np.asarray(values, float)
+    if np.all(np.isnan(v)):
+        return {"mean": None, "std": None, "min": None, "max": None, "runs": [None] * v.size}
+    return {"mean": float(np.nanmean(v)), "std": float(np.nanstd(v)), "min": float(np.nanmin(v)),
+            "max": float(np.nanmax(v)), "runs": [float(x) for x in v]}
+
+
+def false_actions(case: Case, results, settings: PMUSettings, seed: int,
+                  controller: law.BangBangCOI = law.BangBangCOI(),
+                  at: str = "terminal") -> dict:
+    """ESD actions of every estimator on runs without fault (module docstring).
+
+    results: the runs without fault (e.g. with ambient load fluctuation,
+    `stabctl.estimation.ambient.simulate`); run r is measured with PMU noise seed seed + r.
+    Returns {estimate: {"actions": summary of the actions per run, "max_rel_mhz": of the
+    largest |f_i - f_COI| seen, "std_rel_mhz": of the largest standard deviation of a
+    machine's f_i - f_COI over the run}}; "true" uses the simulated speeds (its
+    std_rel_mhz is the ambient spread itself).  Raises InputError without a run.
+    """
+    if not results:
+        raise InputError("need at least one run without fault")
+    pmus = machine_pmus(case, at)
+    models = es.machine_models(case, pmus)
+    sa = st.pack(st.uniform_fleet(case, 1.0, controller), case, np.arange(case.n_bus))
+    figs = {name: {"actions": [], "max_rel_mhz": [], "std_rel_mhz": []}
+            for name in ("true", *ESTIMATORS)}
+    for r, result in enumerate(results):
+        stream = measure(phasor_truth(case, result, pmus), settings, seed + r)
+        tracks = {k: v.speed for k, v in run_estimators(stream, models).items()}
+        tracks["true"] = result.speed_at(stream.t)
+        for name, speed in tracks.items():
+            rel = es.relative_speeds(speed, speed, models.inertia, controller.coi)[0]
+            mhz = rel * models.f0 * 1e3
+            figs[name]["actions"].append(_count_actions(sa, np.nan_to_num(rel)))
+            figs[name]["max_rel_mhz"].append(float(np.nanmax(np.abs(mhz))))
+            figs[name]["std_rel_mhz"].append(float(np.nanstd(mhz, axis=0).max()))
+    return {name: {k: _summary(v) for k, v in fig.items()} for name, fig in figs.items()}
+
+
+@njit(cache=True)
+def _count_actions(sa, rel):
+    """Switchings from idle to a running mode under Table 3 (`storage.desired_mode`) of
+    every device along its relative speed rel (n_f, n_dev) pu; without fault the bus
+    voltages stay near 1 pu, above the gate."""
+    n = 0
+    for d in range(rel.shape[1]):
+        mode = 0
+        for k in range(rel.shape[0]):
+            want = law.desired_mode(sa, d, mode, rel[k, d], 1.0)
+            if mode == 0 and want != 0:
+                n += 1
+            mode = want
+    return n

@@ -1,0 +1,335 @@
+"""`stabctl paper`: reproduce the paper's tables and figures into a markdown report.
+
+Each section is a function returning markdown and saving its figures; `write_paper_report`
+assembles them in a temporary directory and moves the finished files into place, so an
+interrupted or failed run leaves no half-written report.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import shutil
+import tempfile
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from stabctl.studies import paper_storage
+from stabctl.plotting import figures as plotting
+from stabctl.smib.coi import PAPER_TWO_MACHINE, PAPER_TWO_MACHINE_T_RELEASE
+from stabctl.errors import InputError
+from stabctl.smib.feedback import PAPER_LAWS, settling_time
+from stabctl.smib.omib import PAPER_OMIB, clearing_table, eac_summary, simulate
+from stabctl.smib.optimal import solve_min_time
+from stabctl.parallel import write_reproducible
+
+#: Paper Table 1: fault cycles -> (delta at clearing rad, d(delta)/dt rad/s, stable).
+PAPER_TABLE1 = {6: (0.6519, 3.1374, True), 12: (1.1228, 6.2747, True), 15: (1.4753, 7.8421, False)}
+#: Paper Table 2: states of the two-machine equivalent at fault release.
+PAPER_TABLE2 = {"x1_rad": 1.0734, "x2_rad_s": 10.9956}
+#: Storage rating used for the minimum-time study (pu); the paper's value is not given in
+#: the text we reproduce from, so we show three ratings.
+MIN_TIME_RATINGS_PU = (0.1, 0.2, 0.5)
+
+
+def _rel(ours: float, ref: float) -> str:
+    return f"{100 * abs(ours - ref) / abs(ref):.2f} %"
+
+
+def section_omib(fig_dir: Path) -> str:
+    """Section 2: Table 1, phase plane (Figs. 4-5), EAC and energy-function checks."""
+    sys_ = PAPER_OMIB
+    rows = clearing_table(sys_, PAPER_TABLE1)
+    eac = eac_summary(sys_)
+    lines = ["## 1. One-machine infinite bus (paper Section 2, Table 1)", "",
+             f"H = {sys_.H} s, f0 = {sys_.f0} Hz, Pm = {sys_.Pm} pu, delta0 = {sys_.delta0:.4f} rad, "
+             f"Pmax = {sys_.Pmax_pre:.4f} pu (X = {sys_.X:.4f} pu), bolted fault at the generator "
+             "bus, post-fault network = pre-fault.", "",
+             "| cycles | delta_cl (rad) | paper | error | d(delta)/dt (rad/s) | paper | error "
+             "| verdict | paper |", "|---|---|---|---|---|---|---|---|---|"]
+    runs = {}
+    for r in rows:
+        cyc = int(r["cycles"])
+        d_ref, w_ref, st_ref = PAPER_TABLE1[cyc]
+        runs[cyc] = simulate(sys_, r["t_clear_s"], t_end=2.0)
+        lines.append(
+            f"| {cyc} | {r['delta_cl_rad']:.4f} | {d_ref} | {_rel(r['delta_cl_rad'], d_ref)} | "
+            f"{r['omega_cl_rad_s']:.4f} | {w_ref} | {_rel(r['omega_cl_rad_s'], w_ref)} | "
+            f"{'stable' if r['stable'] else 'unstable'} | {'stable' if st_ref else 'unstable'} |")
+    drift = _energy_drift(sys_, runs)
+    lines += ["", "Equal-area criterion (eq. 11) and energy function (eq. 10):", "",
+              f"- critical clearing angle {eac['delta_cr_rad']:.4f} rad; CCT closed form "
+              f"{eac['t_cr_s']:.5f} s ({eac['t_cr_cycles']:.2f} cycles), time-domain bisection "
+              f"{eac['t_cr_bisection_s']:.5f} s ({eac['bisection_runs']} runs): difference "
+              f"{1e3 * abs(eac['t_cr_s'] - eac['t_cr_bisection_s']):.3f} ms.",
+              "- accelerating area A1 versus kinetic energy at clearing M*omega_cl^2/2 "
+              "(pu*s), and the decelerating area still available:", "",
+              "| cycles | A1 | kinetic energy | available A2 | max energy drift after clearing |",
+              "|---|---|---|---|---|"]
+    for cyc, run in runs.items():
+        a1 = sys_.accelerating_area(run.delta_cl)
+        ke = 0.5 * sys_.M * run.omega_cl ** 2
+        lines.append(f"| {cyc} | {a1:.6f} | {ke:.6f} | {sys_.decelerating_area(run.delta_cl):.6f} "
+                     f"| {drift[cyc]:.1e} |")
+    plotting.omib_phase_plane(sys_, runs, fig_dir / "fig04_omib_phase_plane.png")
+    plotting.omib_equal_area(sys_, runs[12], fig_dir / "fig05_omib_equal_area.png")
+    lines += ["", "![phase plane](fig04_omib_phase_plane.png)",
+              "![equal area](fig05_omib_equal_area.png)", ""]
+    return "\n".join(lines)
+
+
+def _energy_drift(sys_, runs) -> dict[int, float]:
+    """Largest |V(t) - V(t_clear)| after clearing along each run (pu*s), eq. (10)."""
+    out = {}
+    for cyc, run in runs.items():
+        k = run.t >= run.t_clear
+        v = sys_.energy(run.delta[k], run.omega[k])
+        out[cyc] = float(np.max(np.abs(v - v[0])))
+    return out
+
+
+def section_feedback(fig_dir: Path) -> str:
+    """Section 3: the four feedback laws on the 15-cycle case (Fig. 7 and a table)."""
+    sys_ = PAPER_OMIB
+    t_cl, t_end = 15 / sys_.f0, 10.0
+    runs = {"no control": simulate(sys_, t_cl, t_end=t_end)}
+    for law in PAPER_LAWS:
+        law.check(sys_.M)
+        runs[law.name] = simulate(sys_, t_cl, t_end=t_end, law=law)
+    lines = ["## 2. Feedback laws (paper Section 3, 15-cycle fault, control after clearing)", "",
+             "Eq. (14) is garbled in the source text; we read it as "
+             "P_eC = Ka |d2delta/dt2| sgn(d delta/dt), consistent with the paper's description. "
+             "Laws using the acceleration form an algebraic loop with the swing equation, "
+             "resolved exactly (see `stabctl.smib.feedback`).", "",
+             "| law | stable | max angle (rad) | max speed dev. after clearing (rad/s) | "
+             f"settling time, 5 % band (s, within {t_end} s) | peak |P_C| (pu) |",
+             "|---|---|---|---|---|---|"]
+    for name, run in runs.items():
+        k = run.t >= run.t_clear
+        ts = settling_time(run.t, run.omega, run.t_clear) if run.stable else float("inf")
+        lines.append(f"| {name} | {'yes' if run.stable else 'no'} | {run.delta.max():.4f} | "
+                     f"{np.abs(run.omega[k]).max():.4f} | "
+                     f"{'never' if np.isinf(ts) else f'{ts:.2f}'} | {np.abs(run.P_C).max():.3f} |")
+    plotting.feedback_phase_plane(sys_, runs, fig_dir / "fig07_feedback_phase_plane.png")
+    lines += ["", "Settling time \"never\": the speed does not stay inside the band within "
+              f"{t_end:g} s (an unstable run leaves it for good). "
+              "The acceleration-only law changes the effective inertia but adds no damping, "
+              "so it never settles; the sign law always absorbs energy from the swing "
+              "(P_C * omega >= 0).", "", "![feedback](fig07_feedback_phase_plane.png)", ""]
+    return "\n".join(lines)
+
+
+def section_two_machine_and_min_time(fig_dir: Path) -> str:
+    """Section 4: Table 2 (two-machine COI equivalent) and minimum-time control (Figs. 10-11)."""
+    tm = PAPER_TWO_MACHINE
+    eq = tm.equivalent()
+    rel = simulate(eq, PAPER_TWO_MACHINE_T_RELEASE, t_end=PAPER_TWO_MACHINE_T_RELEASE + 0.01)
+    x_r = (rel.delta_cl, rel.omega_cl)
+    lines = ["## 3. Two-machine COI equivalent and minimum-time control (paper Section 4)", "",
+             f"H1 = {tm.H1} s against the rest H_rest = {tm.H_rest} s (H = {tm.H:.4f} s), "
+             f"Pm = {tm.Pm} pu, Pmax = {tm.Pmax_pre} pu, delta0 = {eq.delta0:.4f} rad, "
+             f"{PAPER_TWO_MACHINE_T_RELEASE * 60:.0f}-cycle bolted fault. Table 2 fixes only "
+             "H, delta0 and the fault duration; the split of H only sets the storage share "
+             f"k_C = {tm.k_C:.4f}.", "",
+             "| state at release | ours | paper | error |", "|---|---|---|---|",
+             f"| x1(tr) (rad) | {x_r[0]:.4f} | {PAPER_TABLE2['x1_rad']} | "
+             f"{_rel(x_r[0], PAPER_TABLE2['x1_rad'])} |",
+             f"| x2(tr) (rad/s) | {x_r[1]:.4f} | {PAPER_TABLE2['x2_rad_s']} | "
+             f"{_rel(x_r[1], PAPER_TABLE2['x2_rad_s'])} |", "",
+             "Minimum-time problem (eqs. 27-39), solved as a free-final-time two-point BVP "
+             "(scipy solve_bvp): lambda2 > 0 on the whole interval, so the optimal input is the "
+             "full absorbing pulse P_C = P_Cmax.", "",
+             "| P_Cmax (pu) | T from BVP (s) | T of simulated full pulse (s) | T without storage (s) "
+             "| min lambda2 | max abs(H) | lambda2 > 0 |", "|---|---|---|---|---|---|---|"]
+    sols = {}
+    for pc in MIN_TIME_RATINGS_PU:
+        s = solve_min_time(eq, x_r, pc)
+        sols[pc] = s
+        lines.append(f"| {pc} | {s.T:.5f} | {s.T_pulse:.5f} | {s.T_uncontrolled:.5f} | "
+                     f"{s.l2.min():.3e} | {np.abs(s.hamiltonian).max():.1e} | "
+                     f"{'yes' if s.lambda2_positive else 'no'} |")
+    plotting.min_time_figures(eq, x_r, sols, fig_dir / "fig10_min_time_states.png",
+                              fig_dir / "fig11_min_time_costates.png")
+    lines += ["", "![states](fig10_min_time_states.png)", "![costates](fig11_min_time_costates.png)",
+              ""]
+    return "\n".join(lines)
+
+
+def section_estimation(fig_dir: Path, records_dir: Path, progress=None) -> str:
+    """PMU estimation and estimator-in-the-loop control: separate reports."""
+    from stabctl.studies.estimation_report import write_estimation_report
+
+    paths = write_estimation_report(fig_dir, runs=20, records_dir=records_dir)
+    links = ", ".join(f"[{p.stem}]({p.name})" for p in paths)
+    return "\n".join(["## 7. Estimated speeds in the control loop", "",
+                      "PMU model (IEEE C37.118.1 limits), Kalman filters, RMSE versus truth, "
+                      "false actions in ambient noise and CCT with ideal measurements, raw "
+                      f"PMU frequency and each estimator in the loop: {links}.", ""])
+
+
+def section_placement(fig_dir: Path, records_dir: Path, progress=None) -> str:
+    """ESD sizing and placement: separate reports per case."""
+    from stabctl.studies.placement import placement_study
+
+    paths = [placement_study(case, fig_dir, records_dir=records_dir, progress=progress)
+             for case in ("kundur", "miniwecc")]
+    links = ", ".join(f"[{p.stem}]({p.name})" for p in paths)
+    return "\n".join(["## 8. Where to put how much storage", "",
+                      "Least total ESD rating (convex program, cvxpy + Clarabel) that gives, "
+                      "on the paper's fault and the most severe screened faults, the CCT of "
+                      "5 % storage at every generator, verified by simulation, with the "
+                      f"Pareto curve of total MW against target gain: {links}.", ""])
+
+
+def section_convergence(fig_dir: Path) -> str:
+    """Section 9: CCT of the paper's faults against the step under both conventions."""
+    from stabctl.studies.convergence import PAPER_FAULTS, cct_versus_step, markdown_table
+
+    lines = ["## 9. Step convergence: IEEE 421.5 limiters against PSTess's", "",
+             "CCT of the Case-1 and Case-2 faults (bisection to 1 ms) at steps from 10 ms to "
+             "0.5 ms. ieee (the default): every limiter non-windup as IEEE Std 421.5-2016, "
+             "the step never longer than h, each step on the network of its interval. "
+             "pstess: PSTess 1.1 bit for bit, including the smpexc limiter that keeps the "
+             "field voltage's derivative at the ceiling (docs/conventions.md lists every "
+             "difference with its PSTess source line). Each CCT search also reruns its final "
+             "bracket at half the step: `numerical_error_s` in `stabctl cct --json`.", ""]
+    for name, fault in PAPER_FAULTS.items():
+        table = cct_versus_step(name, fault)
+        freq = 60.0
+        ieee = [c for _, c, _ in table["ieee"]["rows"]]
+        pst = [c for _, c, _ in table["pstess"]["rows"]]
+        lines += [f"### {name}: {fault.describe()}", ""]
+        lines += markdown_table(name, table, freq)
+        lines += ["", f"- ieee: {1000 * min(ieee):.0f}-{1000 * max(ieee):.0f} ms over the "
+                  f"steps ({1000 * (max(ieee) - min(ieee)):.0f} ms spread, the tolerance is "
+                  f"1 ms); pstess: {1000 * min(pst):.0f}-{1000 * max(pst):.0f} ms "
+                  f"({1000 * (max(pst) - min(pst)):.0f} ms spread).", ""]
+    lines += ["Under ieee the CCT moves by at most one 1 ms lattice cell between halvings "
+              "(resolved to 0.1 ms on Kundur: 156.8, 157.7, 157.9, 157.9, 158.0, 158.0 ms at "
+              "10, 5, 2.5, 1.25, 0.625, 0.3125 ms: differences shrinking about fourfold per "
+              "halving, second order). Kundur's default ieee step is half its fastest time "
+              "constant (T_R = 10 ms), so the default CCT is within the tolerance of the "
+              "converged one; miniWECC (ST3 exciters, whose PSTess limiter already zeroes the "
+              "derivative) converges under both conventions at its data-file step 1/480 s.", ""]
+    return "\n".join(lines)
+
+
+#: Report parts: key -> sections (each returns markdown and writes its figures).
+PARTS: dict[str, tuple[Callable[[Path], str], ...]] = {
+    "analytic": (section_omib, section_feedback, section_two_machine_and_min_time),
+    "cases": (paper_storage.section_case1, paper_storage.section_case2),
+    "table4": (),
+    "estimation": (),
+    "placement": (),
+    "convergence": (section_convergence,),
+}
+#: Parts whose sweeps keep resumable records (JSON lines): key -> (section(fig_dir,
+#: records_dir, progress), record files).  The records are made in WORK_DIR and copied
+#: into the report directory, reproducibly (`sweep.write_reproducible`), at the end.
+RESUMABLE = {"table4": (paper_storage.section_table4, "table4_*.jsonl"),
+             "estimation": (section_estimation, "estimation_cct_*.jsonl"),
+             "placement": (section_placement, "placement_*_screening.jsonl")}
+#: Sub-directory of the report directory holding the records of the run in progress
+#: (with timings, for --resume); removed when the run completes.
+WORK_DIR = ".paper-work"
+#: The run's timings and other run-dependent values, in the report directory (the
+#: reports themselves hold none).
+RUN_LOG = "run_log.json"
+
+
+def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], None] = print,
+                       resume: bool = False, only=None) -> Path:
+    """Build the report parts (`PARTS`; all, or the keys in `only`) into out_dir/paper.md
+    with their PNG figures and sub-reports; returns the path.
+
+    Files are written to a temporary directory first and moved into out_dir only when all
+    sections succeeded.  The sweeps of the RESUMABLE parts record each finished job in
+    out_dir/WORK_DIR (started afresh unless `resume`; with `resume`, a part without
+    records there starts from the records already in out_dir).  When every section has
+    succeeded, the records are written to out_dir without run-dependent fields, sorted
+    (each file replaced only when its new version is complete), WORK_DIR is removed and
+    the run's timings (seconds per section, per record file, every progress line) go to
+    out_dir/RUN_LOG: the reports and records of two runs of the same code are identical.
+
+    Raises:
+        InputError: an unknown part in `only`.
+    """
+    keys = list(PARTS) if not only else list(only)
+    bad = [k for k in keys if k not in PARTS]
+    if bad:
+        raise InputError(f"unknown report part(s) {bad}; choose from {list(PARTS)}")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    work = out / WORK_DIR
+    work.mkdir(exist_ok=True)
+    for key in keys:
+        if key not in RESUMABLE:
+            continue
+        pattern = RESUMABLE[key][1]
+        if not resume:
+            for f in work.glob(pattern):
+                f.unlink()
+        elif not any(work.glob(pattern)):
+            for f in out.glob(pattern):
+                shutil.copyfile(f, work / f.name)
+    t_start = time.perf_counter()
+    log = {"command": "stabctl paper", "parts": keys, "resume": bool(resume),
+           "started": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+           "stabctl": _version(), "python": platform.python_version(),
+           "cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+           else os.cpu_count(), "sections": [], "records": {}, "progress": []}
+
+    def say(msg: str) -> None:
+        log["progress"].append([round(time.perf_counter() - t_start, 1), msg])
+        progress(msg)
+
+    with tempfile.TemporaryDirectory(dir=out, prefix=".paper-") as tmp:
+        tmp = Path(tmp)
+        parts = ["# stabctl: reproduction of the paper's results", "",
+                 "Generated by `stabctl paper`. Errors are relative to the paper's printed values.",
+                 ""]
+        for key in keys:
+            for section in PARTS[key]:
+                parts.append(_timed(log, key, section, say, lambda s: s(tmp)))
+            if key in RESUMABLE:
+                parts.append(_timed(log, key, RESUMABLE[key][0], say,
+                                    lambda s: s(tmp, work, progress=say),
+                                    " (resumable records)"))
+        (tmp / "paper.md").write_text("\n".join(parts))
+        for f in tmp.iterdir():
+            os.replace(f, out / f.name)
+    for key in keys:
+        for f in sorted(work.glob(RESUMABLE[key][1])) if key in RESUMABLE else ():
+            log["records"][f.name] = write_reproducible(f, out / f.name)
+            f.unlink()
+    try:
+        work.rmdir()
+    except OSError:              # something else left there: keep it
+        pass
+    log["total_s"] = round(time.perf_counter() - t_start, 1)
+    (out / RUN_LOG).write_text(json.dumps(log, indent=1) + "\n")
+    return out / "paper.md"
+
+
+def _timed(log: dict, key: str, section, say, call, note: str = "") -> str:
+    """Run one section (`call(section)`), announcing it and logging its seconds."""
+    title = section.__doc__.splitlines()[0]
+    say(f"paper: {title}{note}")
+    t0 = time.perf_counter()
+    text = call(section)
+    log["sections"].append({"part": key, "section": title,
+                            "seconds": round(time.perf_counter() - t0, 1)})
+    return text
+
+
+def _version() -> str:
+    try:
+        from importlib.metadata import version
+        return version("stabctl")
+    except Exception:  # noqa: BLE001 - not installed (source tree)
+        return "unknown"

@@ -1,0 +1,90 @@
+"""CCT sweeps with another ESD controller than the paper's (`stabctl sweep-cct` with the
+controller options).
+
+:func:`stabctl.stability.cct.cct_jobs` runs every rating with the paper's bang-bang
+controller (Table 3). :func:`controlled_cct_jobs` gives the same jobs with another
+controller: each job then builds its fleet with that controller, and its key says so
+(``/ctrl-db<deadband>-vg<gate>-<coi>-hy<hysteresis>``), so that records of different
+controllers never mix in one output file. With the paper's controller the jobs are
+exactly :func:`~stabctl.stability.cct.cct_jobs`' (same keys and inputs: earlier records
+resume).
+"""
+
+from __future__ import annotations
+
+from stabctl.stability.cct import (LineFault, cached_simulator, cct_jobs,
+                                   critical_clearing_time)
+from stabctl.storage.devices import uniform_fleet
+from stabctl.storage.control import BangBangCOI
+
+
+def controlled_cct_job(case: str, bus: int, far_bus: int | None, controller: dict,
+                       t_fault: float = 1.0, circuit: int = 1, trips=(),
+                       esd_pct: float | None = None, **settings) -> dict:
+    """Worker entry: :func:`stabctl.stability.cct.cct_job` with the ESD ``controller``.
+
+    Parameters
+    ----------
+    case : str
+    bus, far_bus : int
+        The faulted line (far_bus None: a bus fault).
+    controller : dict
+        :class:`~stabctl.storage.devices.BangBangCOI` fields (deadband_hz, v_gate_pu,
+        coi, hysteresis_hz).
+    t_fault : float
+    circuit : int
+    trips : sequence of (int, int)
+    esd_pct : float or None
+        Storage rating (% of machine MVA); None: no storage (the controller unused).
+    **settings
+        tol, t_max, t_end, conventions, h, q_limits as `cct_job`.
+
+    Returns
+    -------
+    dict
+        `CCTResult.to_dict()`.
+    """
+    sim = cached_simulator(case, settings.pop("conventions", "ieee"), settings.pop("h", None),
+                           settings.pop("q_limits", True))
+    fault = LineFault(int(bus), None if far_bus is None else int(far_bus), float(t_fault),
+                      int(circuit), tuple((int(a), int(b)) for a, b in trips))
+    fleet = None if esd_pct is None else uniform_fleet(sim.case, esd_pct,
+                                                       BangBangCOI(**controller))
+    return critical_clearing_time(sim, fault, storage=fleet, **settings).to_dict()
+
+
+def controlled_cct_jobs(case_name: str, faults, ratings, controller: BangBangCOI,
+                        **settings) -> list:
+    """The jobs of a CCT sweep whose ESDs run ``controller``.
+
+    Parameters
+    ----------
+    case_name : str
+    faults : sequence of LineFault
+    ratings : sequence of float or None
+        Storage ratings (% of machine MVA; None: no storage).
+    controller : BangBangCOI
+    **settings
+        As :func:`stabctl.stability.cct.cct_jobs` (tol, t_max, t_end, conventions, h,
+        q_limits).
+
+    Returns
+    -------
+    list of stabctl.parallel.Job
+        :func:`~stabctl.stability.cct.cct_jobs`' jobs for the paper's controller (or no
+        storage); else run by :func:`controlled_cct_job`, the controller in their inputs
+        and keys.
+    """
+    from stabctl.parallel import Job
+
+    jobs = cct_jobs(case_name, faults, ratings, **settings)
+    if controller == BangBangCOI():
+        return jobs
+    ctrl = {"deadband_hz": controller.deadband_hz, "v_gate_pu": controller.v_gate_pu,
+            "coi": controller.coi, "hysteresis_hz": controller.hysteresis_hz}
+    tag = (f"/ctrl-db{controller.deadband_hz:g}-vg{controller.v_gate_pu:g}-{controller.coi}"
+           f"-hy{controller.hysteresis_hz:g}")
+    return [j if j.inputs["esd_pct"] is None else
+            Job(key=j.key + tag, func=controlled_cct_job,
+                inputs={**j.inputs, "controller": ctrl})
+            for j in jobs]

@@ -1,0 +1,182 @@
+"""The `cases` and `simulate` commands: JSON summaries, output files, PSTess agreement through
+the CLI, and bad input (exit status 2, one `error:` line, no file written)."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from stabctl.io import pst as pstio
+from stabctl.io import load_case
+from stabctl.cli import main
+from stabctl.dynamics.results import SimulationResult
+
+DATA = Path(__file__).parents[1] / "data" / "pstess"
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def assert_bad_input(res, directory: Path, *needles):
+    """Exit 2, exactly one line on stderr starting with 'error:', nothing written."""
+    assert res.exit_code == 2, res.output
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), res.stderr
+    for n in needles:
+        assert n in lines[0], (n, lines[0])
+    assert res.stdout == ""
+    assert list(directory.iterdir()) == [], list(directory.iterdir())
+
+
+# ----------------------------------------------------------------------------- cases
+
+
+def test_cases_json_lists_builtins_with_counts():
+    res = run("cases", "--json")
+    assert res.exit_code == 0, res.output
+    rows = {r["name"]: r for r in json.loads(res.stdout)}
+    assert set(rows) == {"kundur", "miniwecc"}
+    k, w = rows["kundur"], rows["miniwecc"]
+    assert (k["buses"], k["branches"], k["machines"]) == (13, 14, 4)
+    assert (w["buses"], w["branches"], w["machines"], w["governors"]) == (122, 171, 34, 21)
+    assert "Kundur" in k["description"] and k["freq_hz"] == 60.0
+    assert "bus 3" in k["sw_con"] and "3-101" in k["sw_con"]
+
+
+def test_cases_text():
+    res = run("cases")
+    assert res.exit_code == 0
+    assert "kundur: 13 buses, 14 branches, 4 machines" in res.stdout
+    assert "miniwecc: 122 buses, 171 branches, 34 machines" in res.stdout
+
+
+def test_help_texts_state_units():
+    res = run("simulate", "--help")
+    assert res.exit_code == 0
+    for s in ("--fault BUS", "--far-bus", "--clear-cycles N", "--far-clear-cycles M",
+              "--trip FROM TO", "--t-trip", "--tf S", "--step H", "--pstess-default",
+              "--stop-at-separation", "--out", "--plot", "--json", "(s)", "pu", "rad",
+              "cycles"):
+        assert s in res.stdout, s
+    assert run("cases", "--help").exit_code == 0
+
+
+# --------------------------------------------------------------------------- simulate
+
+
+def test_pstess_default_through_cli_matches_pstess(tmp_path):
+    out, png = tmp_path / "kundur.csv", tmp_path / "kundur.png"
+    res = run("simulate", "kundur", "--pstess-default", "--out", out, "--plot", png, "--json",
+              "--conventions", "pstess")
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    assert summary["conventions"] == "pstess" and summary["step_s"] == 0.01
+    assert summary["stable"] is True and summary["t_separation_s"] is None
+    assert summary["separated_machines"] == [] and summary["t_end_s"] == 5.0
+    assert summary["case"] == "kundur" and summary["wall_time_s"] > 0
+    assert summary["files"] == [str(out), str(png)]
+    assert png.stat().st_size > 20000
+    header = out.read_text().splitlines()[0].split(",")
+    assert header[:5] == ["t", "speed_pu.G1", "speed_pu.G2", "speed_pu.G3", "speed_pu.G4"]
+    assert header[5] == "angle_rad.G1" and "efd_pu.G4" in header and "vmag_pu.B101" in header
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    ref = np.loadtxt(DATA / "kundur_d2asbegp_default_speed_pu.csv", delimiter=",", skiprows=1)
+    assert data.shape[0] == ref.shape[0]
+    np.testing.assert_allclose(data[:, 0], ref[:, 0], atol=1e-8)
+    assert np.abs(data[:, 1:5] - ref[:, 1:5]).max() < 2e-4
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kundur.csv", "kundur.png"]
+
+
+def test_case1_fault_json_and_stop_at_separation(tmp_path):
+    out = tmp_path / "case1.npz"
+    res = run("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--t-fault", 1,
+              "--clear-cycles", 21, "--stop-at-separation", "--json", "--out", out)
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert s["stable"] is False and s["separated_machines"] == [1, 2]
+    assert s["t_separation_s"] > 1.35 and s["t_separation_s"] < 3.0
+    assert s["t_end_s"] == pytest.approx(s["t_separation_s"])        # stopped there
+    assert s["max_angle_spread_rad"] > np.pi
+    assert "3-101" in s["events"][0] and "1.35 s" in s["events"][0]
+    back = SimulationResult.from_npz(out)
+    assert back.separated == [1, 2] and back.t[-1] == pytest.approx(s["t_separation_s"])
+
+
+@pytest.mark.parametrize("conventions, t_sep", [("ieee", "1.96"), ("pstess", "2.07")])
+def test_text_output_reports_verdict(conventions, t_sep):
+    res = run("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 21,
+              "--far-clear-cycles", 21, "--stop-at-separation", "--conventions", conventions)
+    assert res.exit_code == 0, res.output
+    assert f"loss of synchronism at t = {t_sep}" in res.stdout and "1, 2" in res.stdout
+    assert f"{conventions} conventions" in res.stdout
+
+
+def test_flat_run_and_line_trips(tmp_path):
+    res = run("simulate", "kundur", "--tf", 2, "--json")
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert s["stable"] and s["events"] == [] and s["t_end_s"] == 2.0
+    res = run("simulate", "kundur", "--trip", 3, 101, "--trip", 13, 101, "--t-trip", 0.5,
+              "--t-trip", 1.0, "--tf", 3, "--step", 0.005, "--json")
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert s["stable"] and s["step_s"] == 0.005 and s["n_steps"] == 600
+    assert s["events"] == ["line 3-101 (circuit 1) tripped at 0.5 s",
+                           "line 13-101 (circuit 1) tripped at 1 s"]
+
+
+# -------------------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize("args, needles", [
+    (["kundur", "--fault", 999], ["bus 999"]),
+    (["kundur", "--fault", 3, "--far-bus", 14], ["no branch between bus 3 and bus 14"]),
+    (["kundur", "--trip", 1, 2], ["no branch between bus 1 and bus 2"]),
+    (["kundur", "--fault", 3, "--far-bus", 101, "--circuit", 3], ["circuit 3"]),
+    (["kundur", "--fault", 3, "--clear-cycles", -1], ["--clear-cycles"]),
+    (["kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 6, "--far-clear-cycles", 3],
+     ["far end"]),
+    (["kundur", "--far-bus", 101], ["without --fault"]),
+    (["kundur", "--fault", 3, "--t-fault", 6, "--tf", 5], ["after the end of the run"]),
+    (["kundur", "--trip", 3, 101, "--t-trip", -1], ["--t-trip"]),
+    (["kundur", "--step", 0], ["--step"]),
+    (["nonesuch"], ["unknown case 'nonesuch'"]),
+])
+def test_bad_input_exits_2_and_writes_nothing(tmp_path, args, needles):
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    res = run("simulate", *args, "--out", out_dir / "r.csv", "--plot", out_dir / "r.png")
+    assert_bad_input(res, out_dir, *needles)
+
+
+def test_bad_output_name_rejected_before_running(tmp_path):
+    res = run("simulate", "kundur", "--out", tmp_path / "r.txt")
+    assert_bad_input(res, tmp_path, "--out", ".csv")
+
+
+def test_nonconvergent_powerflow_exits_2(tmp_path):
+    case = load_case("kundur")
+    buses = case.buses.replace(pload=case.buses.pload * 8, qload=case.buses.qload * 8)
+    path = pstio.write_case_json(case.replace(buses=buses), tmp_path / "heavy.json")
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    res = run("simulate", path, "--out", out_dir / "r.csv")
+    assert_bad_input(res, out_dir, "power flow")
+
+
+def test_diverging_run_exits_2_reports_stop_time(tmp_path):
+    """A real numerical divergence (machine 1 of Kundur with H = 1e-5 s, as in
+    test_simulation): exit 2, nothing written, the stop time told."""
+    case = load_case("kundur")
+    H = case.machines.H.copy()
+    H[0] = 1e-5
+    path = pstio.write_case_json(case.replace(machines=case.machines.replace(H=H)),
+                                 tmp_path / "tiny_h.json")
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    res = run("simulate", path, "--tf", 3, "--out", out_dir / "r.csv", "--plot",
+              out_dir / "r.png", "--json")
+    assert_bad_input(res, out_dir, "numerical instability", "t = ")

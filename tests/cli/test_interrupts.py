@@ -1,0 +1,132 @@
+"""Issue 15: interruptions. SIGKILL of a sweep's main process leaves no worker running;
+SIGINT (Ctrl-C) ends every long command the same way: exit 130 and one line saying what was
+kept and the command that resumes."""
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from stabctl.cli import main
+
+STABCTL = [sys.executable, "-m", "stabctl.cli"]
+
+
+def _children(pid: int) -> set[int]:
+    """Every live descendant of pid (from /proc)."""
+    kids: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            ppid = int(stat.rsplit(")", 1)[1].split()[1])
+            kids.setdefault(ppid, []).append(int(entry.name))
+    out, todo = set(), [pid]
+    while todo:
+        for k in kids.get(todo.pop(), []):
+            out.add(k)
+            todo.append(k)
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def _wait_for(cond, timeout: float) -> bool:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if cond():
+            return True
+        time.sleep(0.1)
+    return cond()
+
+
+def _start(args, tmp_path):
+    return subprocess.Popen(STABCTL + [str(a) for a in args], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and prctl: Linux")
+def test_sigkill_of_a_sweep_leaves_no_worker_running(tmp_path):
+    proc = _start(["sweep-cct", "miniwecc", "--faults", "DEFAULT", "--esd-pct", "none,5,10",
+                   "--workers", "2", "--out", "k.jsonl"], tmp_path)
+    try:
+        # two workers (and the resource tracker) started
+        assert _wait_for(lambda: len(_children(proc.pid)) >= 3, 60), _children(proc.pid)
+        time.sleep(1.0)                      # the workers are inside their jobs
+        kids = _children(proc.pid)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(10)
+        assert _wait_for(lambda: not any(_alive(k) for k in kids), 10), \
+            [k for k in kids if _alive(k)]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
+def test_sigint_of_a_screening_exits_130_with_the_resume_command(tmp_path):
+    args = ["screen", "kundur", "--tol-ms", "0.05", "--workers", "2", "--out", "s.jsonl"]
+    proc = _start(args, tmp_path)
+    out = tmp_path / "s.jsonl"
+    try:
+        assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
+        kids = _children(proc.pid)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("interrupted: finished searches are in s.jsonl (")
+    assert last.endswith("resume with: stabctl " + " ".join(args)), last
+    assert "Traceback" not in err and "Aborted" not in err
+    assert _wait_for(lambda: not any(_alive(k) for k in kids), 10)
+    # every line left is a whole record
+    import json
+    assert all(json.loads(line)["status"] in ("ok", "failed")
+               for line in out.read_text().splitlines())
+
+
+@pytest.mark.parametrize("command,target,kept", [
+    (["paper", "--out-dir", "rep", "--only", "analytic"], "stabctl.studies.paper.write_paper_report",
+     "finished sweep records in rep are kept with --resume; resume with: stabctl "),
+    (["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "10"],
+     "stabctl.placement.loop.baseline", "nothing is kept; the work starts again"),
+    (["estimate", "cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"],
+     "stabctl.estimation.closed_loop.cct_study", "nothing is kept; the work starts again"),
+    (["sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "o.jsonl"],
+     "stabctl.parallel.run_sweep", "finished jobs are in o.jsonl (0 recorded); they are skipped; resume with:"),
+    (["screen", "kundur", "--out", "s.jsonl"], "stabctl.stability.screening.screen",
+     "finished searches are in s.jsonl (0 recorded); they are skipped; resume with:"),
+])
+def test_every_long_command_ends_the_same_way_on_ctrl_c(tmp_path, monkeypatch, command, target,
+                                                        kept):
+    monkeypatch.chdir(tmp_path)
+    module, name = target.rsplit(".", 1)
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sys.modules[module] if module in sys.modules
+                        else __import__(module, fromlist=[name]), name, interrupted)
+    monkeypatch.setattr(sys, "argv", ["stabctl", *command])
+    res = CliRunner().invoke(main, command)
+    assert res.exit_code == 130, (res.output, res.exception)
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("interrupted: "), res.stderr
+    assert kept in lines[0]
+    resume = " ".join(command) + (" --resume" if command[0] == "paper" else "")
+    assert lines[0].endswith("resume with: stabctl " + resume)

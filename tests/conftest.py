@@ -1,0 +1,56 @@
+"""Shared fixtures and markers of the test suite.
+
+Session fixtures load each built-in case and build each Simulator once for the whole run
+(a Simulator is immutable after construction: its runs never change it).
+
+Markers (registered in pyproject.toml):
+
+* ``slow``  -- long property-based fuzzing, deselected by default (``-m slow`` runs it);
+* ``andes`` -- cross-validation against ANDES (needs the ``andes`` extra; skipped without);
+* ``dask``  -- sweeps on a Dask cluster (needs ``distributed``; skipped without).
+
+A quick run: ``python -m pytest -m "not andes and not dask"``.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from stabctl.dynamics.simulation import Simulator
+from stabctl.io import load_case
+
+
+@pytest.fixture(scope="session")
+def kundur_case():
+    """The built-in Kundur two-area case (PSTess d2asbegp)."""
+    return load_case("kundur")
+
+
+@pytest.fixture(scope="session")
+def miniwecc_case():
+    """The built-in miniWECC case (PSTess d_minniWECC_base)."""
+    return load_case("miniwecc")
+
+
+@pytest.fixture(scope="session")
+def kundur(kundur_case):
+    """Simulator of Kundur under the default (ieee) conventions."""
+    return Simulator(kundur_case)
+
+
+@pytest.fixture(scope="session")
+def kundur_pstess(kundur_case):
+    """Simulator of Kundur under the PSTess 1.1 conventions."""
+    return Simulator(kundur_case, conventions="pstess")
+
+
+@pytest.fixture(scope="session")
+def wecc(miniwecc_case):
+    """Simulator of the miniWECC under the default (ieee) conventions."""
+    return Simulator(miniwecc_case)
+
+
+@pytest.fixture(scope="session")
+def wecc_pstess(miniwecc_case):
+    """Simulator of the miniWECC under the PSTess 1.1 conventions."""
+    return Simulator(miniwecc_case, conventions="pstess")

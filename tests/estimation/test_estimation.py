@@ -1,0 +1,269 @@
+"""Speed estimators: synthetic swings with known truth (bias, RMSE, NIS consistency), dropped
+frames, the filterpy reference against the compiled path, COI and relative speeds with
+variances, latency forecast, a real Kundur run, false ESD actions and `stabctl estimate`."""
+
+import json
+
+import numpy as np
+import pytest
+import scipy.linalg
+from click.testing import CliRunner
+
+from stabctl.estimation import filters as es
+from stabctl.studies import estimation as study
+from stabctl.estimation import pmu
+from stabctl.io import load_case
+from stabctl.cli import main
+from stabctl.errors import InputError
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator
+from stabctl.storage.devices import pack, uniform_fleet
+from stabctl.storage.control import BangBangCOI
+
+F0, WB = 60.0, 2 * np.pi * 60.0
+H, X, EMAG, VMAG, PM = 5.0, 0.3, 1.1, 1.0, 0.8
+
+
+def linear_swing(t_end=10.0, f_m=1.0, zeta=0.05, dP=0.5, t_on=1.0, t_off=1.1, amp=1.0):
+    """A classical machine's linearised swing with known truth on a 1 ms grid.
+
+    2H dw/dt = P_m - P_ag, P_ag = P_m + K (delta - delta0) + De w - dP (t_on <= t < t_off):
+    a power pulse (a fault) rings the swing mode at f_m Hz with damping ratio zeta.  Its
+    terminal phasors: E = EMAG at delta behind X, V = VMAG at delta - asin(P_ag X / (E V)).
+    Returns t, speed (pu), P_ag and the PhasorTruth of its PMU.
+    """
+    wn = 2 * np.pi * f_m
+    K, De = wn ** 2 * 2 * H / WB, 4 * H * zeta * wn / WB
+    A = np.array([[0.0, WB], [-K / (2 * H), -De / (2 * H)]])
+    dt = 1e-3
+    t = np.round(np.arange(0, t_end + dt / 2, dt), 9)
+    E = scipy.linalg.expm(np.block([[A * dt, np.array([[0.0], [dt / (2 * H)]])],
+                                    [np.zeros((1, 3))]]))
+    x, xs = np.zeros(2), []
+    for tk in t:
+        xs.append(x)
+        x = E[:2, :2] @ x + E[:2, 2] * (amp * dP if t_on <= tk < t_off else 0.0)
+    dd, w = np.array(xs).T
+    pulse = np.where((t >= t_on) & (t < t_off), amp * dP, 0.0)
+    pag = PM + K * dd + De * w - pulse
+    delta = 0.5 + dd
+    theta = delta - np.arcsin(pag * X / (EMAG * VMAG))
+    e, v = EMAG * np.exp(1j * delta), VMAG * np.exp(1j * theta)
+    cur = (e - v) / (1j * X)
+    freq, rocof = pmu.bus_frequency(t, theta[:, None], F0)
+    truth = pmu.PhasorTruth(t=t, pmus=(pmu.PMU(bus=1, machine=1),), v=v[:, None],
+                            i=cur[:, None], freq=freq, rocof=rocof, f0=F0)
+    return t, 1 + w, pag, truth
+
+
+def classical_models():
+    """MachineModels of the synthetic machine: classical, no governor, system base."""
+    z1 = np.zeros(1)
+    gov = es.Governors(es.LinearSystems(np.zeros((1, 3, 3)), np.zeros((1, 3))), np.zeros((1, 3)),
+                       np.zeros((1, 3)), np.ones(1), z1, np.full(1, np.inf), np.zeros(1, bool))
+    qax = es.QAxis(es.LinearSystems(np.zeros((1, 2, 2)), np.zeros((1, 2))), np.zeros((1, 2)),
+                   np.ones(1), np.zeros(1, bool), np.zeros(1, int), z1, z1, z1, np.full(1, X))
+    return es.MachineModels(numbers=np.array([1]), pmu=np.array([0]), H=np.full(1, H), D=z1,
+                            pot=np.ones(1), ra=z1, z_emf=np.full(1, 1j * X),
+                            per_speed=np.zeros(1, bool), inertia=np.full(1, H * 100.0), f0=F0,
+                            governor=gov, qaxis=qax)
+
+
+def feed(f, stream):
+    """Speeds, variances and NIS (n_f, n) of an estimator fed every frame."""
+    rows = [(*f.step(fr), f.nis.copy()) for fr in stream]
+    return tuple(np.array(a) for a in zip(*rows))
+
+
+@pytest.fixture(scope="module")
+def swing():
+    t, speed, _, truth = linear_swing()
+    return truth, lambda tt: np.interp(tt, t, speed)
+
+
+def test_ekf_on_a_linear_swing_is_unbiased_accurate_and_consistent(swing):
+    truth, true_speed = swing
+    st, models = pmu.PMUSettings(), classical_models()
+    tun = es.SwingTuning(angle_model_rad=0.0)
+    bias, rmse, inside = [], [], []
+    for seed in range(4):
+        stream = pmu.measure(truth, st, seed)
+        speed, var, nis = feed(es.SwingEKF(models, st, tun), stream)
+        sel = stream.t > 1.2
+        err = (speed[sel, 0] - true_speed(stream.t[sel])) * F0 * 1e3          # mHz
+        bias.append(err.mean())
+        rmse.append(np.sqrt(np.mean(err ** 2)))
+        lo, hi = es.nis_bounds(1)
+        inside.append(np.mean((nis[sel] > lo) & (nis[sel] < hi)))
+        # the filter's own variance matches its error
+        assert np.mean(err ** 2 / (var[sel, 0] * (F0 * 1e3) ** 2)) == pytest.approx(1, abs=0.35)
+    assert abs(np.mean(bias)) < 0.1 and np.mean(rmse) < 2.0     # mHz; the swing is 300 mHz
+    assert np.mean(inside) == pytest.approx(0.95, abs=0.02)
+
+
+def test_baseline_kf_smooths_the_pmu_frequency_consistently():
+    t = np.linspace(0, 60, 60001)
+    f = 60 + 0.05 * np.sin(2 * np.pi * 0.2 * t)                 # 0.2 Hz, 50 mHz
+    rocof = 0.05 * 2 * np.pi * 0.2 * np.cos(2 * np.pi * 0.2 * t)
+    ones = np.ones((t.size, 1))
+    truth = pmu.PhasorTruth(t=t, pmus=(pmu.PMU(bus=1),), v=ones + 0j, i=ones * np.nan,
+                            freq=f[:, None], rocof=rocof[:, None], f0=F0)
+    st = pmu.PMUSettings()
+    stream = pmu.measure(truth, st, seed=2)
+    speed, var, nis = feed(es.FrequencyKF([0], st, es.FrequencyTuning(rocof_walk=0.001)), stream)
+    sel = stream.t > 2
+    e_kf = (speed[sel, 0] * F0 - stream.true.freq[sel, 0]) * 1e3
+    e_raw = (stream.freq[sel, 0] - stream.true.freq[sel, 0]) * 1e3
+    assert abs(e_kf.mean()) < 0.05
+    assert np.sqrt(np.mean(e_kf ** 2)) < 0.3 * np.sqrt(np.mean(e_raw ** 2))
+    lo, hi = es.nis_bounds(2)
+    assert np.mean((nis[sel] > lo) & (nis[sel] < hi)) == pytest.approx(0.95, abs=0.02)
+
+
+def test_dropped_frames_are_predicted_over(swing):
+    truth, true_speed = swing
+    st = pmu.PMUSettings(drop_prob=0.1)
+    stream = pmu.measure(truth, st, seed=5)
+    f = es.SwingEKF(classical_models(), st)
+    speed, var, nis = feed(f, stream)
+    start = np.argmax(stream.valid[:, 0])
+    assert np.all(np.isfinite(speed[start:]))
+    assert np.all(np.isnan(nis[~stream.valid[:, 0]]))           # no update without a frame
+    sel = stream.t > 1.2
+    err = (speed[sel, 0] - true_speed(stream.t[sel])) * F0 * 1e3
+    assert np.sqrt(np.mean(err ** 2)) < 4.0
+    lo, hi = es.nis_bounds(1)
+    n = nis[sel, 0][np.isfinite(nis[sel, 0])]
+    assert 0.93 < np.mean((n > lo) & (n < hi)) < 0.99          # still consistent
+
+
+def test_frames_must_come_in_time_order(swing):
+    stream = pmu.measure(swing[0], seed=0)
+    f = es.FrequencyKF([0], stream.settings)
+    f.step(stream.frame(3))
+    with pytest.raises(InputError, match="time-stamp order"):
+        f.step(stream.frame(3))
+
+
+def test_forecast_extrapolates_the_speed_over_the_latency(swing):
+    truth, true_speed = swing
+    stream = pmu.measure(truth, pmu.PMUSettings(tve=0, fe_hz=0, rfe_hz_s=0), seed=0)
+    f = es.SwingEKF(classical_models(), stream.settings)
+    late, ahead = [], []
+    for fr in stream:
+        s, _ = f.step(fr)
+        if fr.t > 1.5:
+            late.append(s[0] - true_speed(fr.t + 0.05))
+            ahead.append(f.forecast(0.05)[0][0] - true_speed(fr.t + 0.05))
+    assert np.sqrt(np.mean(np.square(ahead))) < 0.2 * np.sqrt(np.mean(np.square(late)))
+
+
+def test_coi_and_relative_speeds_with_variances():
+    M = np.array([1.0, 2.0, 5.0])
+    speed, var = np.array([1.001, 0.999, 1.0]), np.array([1e-8, 4e-8, 9e-8])
+    c, cv = es.coi_speed(speed, var, M)
+    assert c == pytest.approx((1.001 + 2 * 0.999 + 5) / 8)
+    assert cv == pytest.approx((1e-8 + 4 * 4e-8 + 25 * 9e-8) / 64)
+    rng = np.random.default_rng(0)
+    draws = speed + rng.normal(size=(200000, 3)) * np.sqrt(var)
+    for coi in ("system", "rest"):
+        r, rv = es.relative_speeds(speed, var, M, coi)
+        rd = es.relative_speeds(draws, draws, M, coi)[0]           # (..., n) stacks work
+        np.testing.assert_allclose(rd.mean(axis=0), r, atol=2e-6)
+        np.testing.assert_allclose(rd.var(axis=0), rv, rtol=0.02)
+    rest0 = speed[0] - (2 * 0.999 + 5 * 1.0) / 7
+    assert es.relative_speeds(speed, var, M, "rest")[0][0] == pytest.approx(rest0)
+    with pytest.raises(InputError):
+        es.relative_speeds(speed, var, M, "area")
+
+
+# -- real Kundur run -----------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def kundur():
+    case = load_case("kundur")
+    res = Simulator(case).run([fault_with_clearing(case, 3, 101, 1.0, 12)], t_end=8.0)
+    pmus = pmu.machine_pmus(case)
+    return case, res, pmus, es.machine_models(case, pmus), pmu.phasor_truth(case, res, pmus)
+
+
+def test_kundur_relative_speed_well_inside_the_deadband(kundur):
+    case, res, pmus, models, truth = kundur
+    st = pmu.PMUSettings(drop_prob=0.02)
+    stream = pmu.measure(truth, st, seed=3)
+    tracks = study.run_estimators(stream, models)
+    fig = {k: study.errors(v, res, stream, (1.3, 8.0)) for k, v in tracks.items()}
+    assert fig["ekf"]["rel_rmse_mhz"] < 3.0                      # deadband: 100 mHz
+    assert fig["ekf"]["coi_rmse_mhz"] < 3.0
+    assert fig["ekf"]["rel_rmse_mhz"] < fig["kf"]["rel_rmse_mhz"] / 3
+    assert fig["ekf"]["rel_forecast_rmse_mhz"] < fig["ekf"]["rel_arrival_rmse_mhz"] / 2
+    assert fig["ekf"]["nis_inside"] == pytest.approx(0.95, abs=0.03)
+
+
+def test_compiled_filters_equal_the_filterpy_reference(kundur):
+    case, res, pmus, models, truth = kundur
+    st = pmu.PMUSettings(drop_prob=0.1)
+    stream = pmu.measure(truth, st, seed=1)
+    for fast, ref in ((es.FrequencyKF(models.pmu, st), es.FrequencyKFReference(models.pmu, st)),
+                      (es.SwingEKF(models, st), es.SwingEKFReference(models, st))):
+        a, b = feed(fast, stream), feed(ref, stream)
+        for x, y in zip(a, b):
+            np.testing.assert_allclose(x, y, rtol=1e-9, atol=1e-14)
+
+
+def test_same_seed_same_estimates(kundur):
+    case, res, pmus, models, truth = kundur
+    runs = [study.run_estimators(pmu.measure(truth, seed=9), models)["ekf"].speed for _ in range(2)]
+    np.testing.assert_array_equal(*runs)
+
+
+def test_false_actions_follow_table_3():
+    case = load_case("kundur")
+    sa = pack(uniform_fleet(case, 1.0, BangBangCOI()), case, np.arange(case.n_bus))
+    db = 0.1 / 60
+    rel = np.zeros((6, 4))
+    rel[:, 0] = [0, 2 * db, 2 * db, 0, -2 * db, 0.5 * db]       # two actions
+    rel[:, 3] = [0, 0.9 * db, -0.9 * db, 0, 0, 0]               # inside the band: none
+    assert study._count_actions(sa, rel) == 2
+
+
+def test_estimate_command_json_and_bad_input():
+    res = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
+                                    "--tf", "4", "--runs", "2", "--ambient-s", "3", "--json"])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert set(d["estimators"]) == {"raw", "kf", "ekf"} and d["runs"] == 2
+    assert d["estimators"]["ekf"]["rel_rmse_mhz"]["mean"] < 3.0
+    assert len(d["estimators"]["ekf"]["rel_rmse_mhz"]["runs"]) == 2
+    assert d["false_actions"]["true"]["actions"]["mean"] == 0
+    assert d["false_actions"]["true"]["std_rel_mhz"]["mean"] > 0      # the loads move it
+    assert d["ambient"]["pct"] == 1.0 and d["ambient"]["runs"] == 5
+    assert d["window_s"] == pytest.approx([1.2, 4.0])
+    neg = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
+                                    "--ambient-pct", "-1"])
+    assert neg.exit_code == 2 and neg.stderr.startswith("error: --ambient-pct -1: must be in [0, 100] %")
+    bad = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
+                                    "--rate", "50"])
+    assert bad.exit_code == 2 and bad.stderr.startswith("error: PMU rate must be one of")
+
+
+def test_baseline_kf_forecast_does_not_amplify_a_bus_angle_step():
+    # An ESD switching steps the bus angle by dtheta: the P-class frequency over a window
+    # w is then f0 + dtheta / (2 pi w) for one window, the ROCOF +-that / w.  The KF's
+    # forecast over the 50 ms latency must stay at the pulse the PMU itself reports (an
+    # extrapolated ROCOF would add 50 ms * A / w = 1.5 A) and return once both windows
+    # have passed.
+    st, w, dth, t_step = pmu.PMUSettings(), 2 / F0, 0.05, 1.0 + 1 / 240
+    pulse = dth / (2 * np.pi * w)                                          # Hz, 239 mHz
+    phase = lambda t: dth * (t >= t_step)                                  # noqa: E731
+    freq = lambda t: F0 + (phase(t) - phase(t - w)) / (2 * np.pi * w)      # noqa: E731
+    rng = np.random.default_rng(0)
+    kf, out = es.FrequencyKF([0], st, f0=F0), []
+    for t in np.arange(1, 150) / F0:
+        z = freq(t) + rng.normal() * st.sigma_freq
+        r = (freq(t) - freq(t - w)) / w + rng.normal() * st.sigma_rocof
+        kf.step(pmu.Frame(t, np.array([True]), np.ones(1, complex), np.ones(1, complex),
+                          np.array([z]), np.array([r])))
+        out.append((t, (kf.forecast(st.latency_s)[0][0] - 1) * F0))
+    t, dev = np.array(out).T
+    assert np.abs(dev).max() <= 1.1 * pulse
+    assert np.abs(dev[t > t_step + 2 * w + 3 / F0]).max() < 6 * st.sigma_freq

@@ -1,0 +1,158 @@
+"""PMU measurement model: C37.118.1 noise statistics, seeds, dropped frames, latency, rates,
+bus frequency, and the true phasors taken from a simulation (generator and device
+currents)."""
+
+import numpy as np
+import pytest
+
+from stabctl.estimation import pmu
+from stabctl.io import load_case
+from stabctl.errors import InputError
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.simulation import Simulator
+from stabctl.storage.devices import uniform_fleet
+
+
+def constant_truth(n_pmu=2, t_end=100.0, f=60.0):
+    """Steady phasors on a 1 kHz grid: V = 1.02 at 0.3 rad, I = 0.8 at -0.2 rad."""
+    t = np.linspace(0.0, t_end, int(t_end * 1000) + 1)
+    ones = np.ones((t.size, n_pmu))
+    return pmu.PhasorTruth(t=t, pmus=tuple(pmu.PMU(bus=b + 1, machine=b + 1) for b in range(n_pmu)),
+                           v=1.02 * np.exp(0.3j) * ones, i=0.8 * np.exp(-0.2j) * ones,
+                           freq=f * ones, rocof=0 * ones, f0=60.0)
+
+
+@pytest.fixture(scope="module")
+def steady_stream():
+    return pmu.measure(constant_truth(), pmu.PMUSettings(), seed=7)
+
+
+def test_phasor_noise_matches_the_tve_limit_as_a_3_sigma_bound(steady_stream):
+    s = steady_stream
+    e = s.v / s.true.v - 1                                     # relative phasor error
+    sigma = 0.01 / (3 * np.sqrt(2))                            # 0.236 %
+    assert np.std(np.abs(s.v) / np.abs(s.true.v) - 1) == pytest.approx(sigma, rel=0.03)
+    assert np.std(np.angle(s.v / s.true.v)) == pytest.approx(sigma, rel=0.03)   # rad
+    assert abs(np.mean(e.real)) < 4 * sigma / np.sqrt(e.size)
+    tve = np.abs(e)
+    assert np.sqrt(np.mean(tve ** 2)) == pytest.approx(0.01 / 3, rel=0.03)      # RMS = limit/k
+    assert np.mean(tve <= 0.01) > 0.999                        # P(TVE > 1 %) = exp(-9)
+    ei = s.i / s.true.i - 1
+    assert np.std(ei.imag) == pytest.approx(sigma, rel=0.03)
+    assert abs(np.corrcoef(e.real.ravel(), ei.real.ravel())[0, 1]) < 0.03   # independent
+
+
+def test_frequency_and_rocof_noise(steady_stream):
+    s = steady_stream
+    assert np.std(s.freq - 60.0) == pytest.approx(0.005 / 3, rel=0.03)
+    assert np.std(s.rocof) == pytest.approx(0.01 / 3, rel=0.03)
+    assert np.mean(np.abs(s.freq - 60.0) <= 0.005) > 0.99
+
+
+def test_user_limits_and_sigma_level():
+    st = pmu.PMUSettings(tve=0.002, fe_hz=0.001, rfe_hz_s=0.1, k_sigma=1.0)
+    s = pmu.measure(constant_truth(1, 20.0), st, seed=1)
+    assert np.std(np.angle(s.v / s.true.v)) == pytest.approx(0.002 / np.sqrt(2), rel=0.05)
+    assert np.std(s.freq - 60) == pytest.approx(0.001, rel=0.05)
+    assert np.std(s.rocof) == pytest.approx(0.1, rel=0.05)
+
+
+def test_same_seed_same_stream_and_independent_pmus():
+    truth = constant_truth(3, 5.0)
+    a, b = pmu.measure(truth, seed=11), pmu.measure(truth, seed=11)
+    c = pmu.measure(truth, seed=12)
+    for name in ("v", "i", "freq", "rocof", "valid"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert not np.allclose(a.freq, c.freq)
+    more = pmu.measure(constant_truth(4, 5.0), seed=11)         # a PMU added at the end
+    np.testing.assert_array_equal(more.freq[:, :3], a.freq)
+    assert abs(np.corrcoef(a.freq[:, 0], a.freq[:, 1])[0, 1]) < 0.15
+
+
+def test_dropped_frames_are_nan_invalid_and_never_arrive():
+    s = pmu.measure(constant_truth(2, 50.0), pmu.PMUSettings(drop_prob=0.2), seed=3)
+    lost = ~s.valid
+    assert lost.mean() == pytest.approx(0.2, abs=0.01)
+    assert np.all(np.isnan(s.v[lost])) and np.all(np.isnan(s.freq[lost]))
+    assert np.all(np.isinf(s.arrival[lost]))
+    assert np.all(np.isfinite(s.v[s.valid]))
+
+
+@pytest.mark.parametrize("latency", [0.0, 0.05, 0.2])
+def test_latency_shifts_arrivals(latency):
+    s = pmu.measure(constant_truth(2, 2.0), pmu.PMUSettings(latency_s=latency), seed=0)
+    np.testing.assert_allclose(s.arrival, np.broadcast_to(s.t[:, None] + latency, s.arrival.shape))
+    fr = s.frame(5)
+    assert fr.t == s.t[5] and fr.v.shape == (2,)
+
+
+@pytest.mark.parametrize("rate", [30.0, 60.0, 120.0])
+def test_reporting_rates(rate):
+    s = pmu.measure(constant_truth(1, 2.0), pmu.PMUSettings(rate=rate), seed=0)
+    assert len(s) == int(2 * rate) + 1
+    np.testing.assert_allclose(np.diff(s.t), 1 / rate)
+    assert 60 / rate * s.t[int(rate)] == pytest.approx(60.0 / rate)
+
+
+@pytest.mark.parametrize("bad", [dict(rate=50.0), dict(tve=-0.01), dict(drop_prob=1.0),
+                                 dict(latency_s=-1.0), dict(k_sigma=0.0)])
+def test_bad_settings(bad):
+    with pytest.raises(InputError):
+        pmu.PMUSettings(**bad)
+
+
+def test_bus_frequency_is_the_angle_derivative_plus_nominal():
+    t = np.linspace(0, 2, 2001)
+    ang = 2 * np.pi * 0.5 * t + 0.1 * t ** 2                 # 60.5 Hz, ROCOF 0.2/(2 pi) Hz/s
+    f, r = pmu.bus_frequency(t, np.angle(np.exp(1j * ang))[:, None], 60.0)
+    np.testing.assert_allclose(f[:, 0], 60.5 + 0.2 * t / (2 * np.pi), atol=1e-9)
+    np.testing.assert_allclose(r[:, 0], 0.2 / (2 * np.pi), atol=1e-6)
+    with pytest.raises(InputError):
+        pmu.bus_frequency(t[:2], ang[:2, None], 60.0)
+
+
+@pytest.fixture(scope="module")
+def kundur_esd():
+    case = load_case("kundur")
+    fleet = uniform_fleet(case, 5)
+    res = Simulator(case, injection_buses=fleet.buses).run(
+        [fault_with_clearing(case, 3, 101, 1.0, 6)], t_end=3.0, storage=fleet)
+    return case, res
+
+
+@pytest.mark.parametrize("at", ["terminal", "hv"])
+def test_generator_currents_carry_the_simulated_power(kundur_esd, at):
+    case, res = kundur_esd
+    pmus = pmu.machine_pmus(case, at)
+    assert [p.bus for p in pmus] == ([1, 2, 11, 12] if at == "terminal" else [10, 20, 110, 120])
+    truth = pmu.phasor_truth(case, res, pmus)
+    keep = np.r_[np.diff(res.t) > 0, True]                   # the repeated clearing instant
+    P = (truth.v * np.conj(truth.i)).real
+    np.testing.assert_allclose(P, res.pelect[keep], atol=1e-9)   # lossless step-up branches
+    np.testing.assert_allclose(truth.freq[0], 60.0, atol=1e-9)
+
+
+def test_device_current_and_labels(kundur_esd):
+    case, res = kundur_esd
+    pmus = (pmu.PMU(bus=10, device=1), pmu.PMU(bus=20))
+    truth = pmu.phasor_truth(case, res, pmus)
+    keep = np.r_[np.diff(res.t) > 0, True]
+    np.testing.assert_allclose((truth.v[:, 0] * np.conj(truth.i[:, 0])).real,
+                               -res.pesd[keep, 0], atol=1e-12)    # absorbing is + for ESDs
+    assert np.all(np.isnan(truth.i[:, 1]))
+    s = pmu.measure(truth, seed=0)
+    assert s.labels == ["B10:D1", "B20:V"]
+    assert np.all(np.isnan(s.power[:, 1]))
+
+
+@pytest.mark.parametrize("p, match", [
+    (pmu.PMU(bus=20, device=1), "device 1 is at bus 10"),
+    (pmu.PMU(bus=10, device=9), "device 9 is not in the result"),
+    (pmu.PMU(bus=3, machine=1), "no branch joins it"),
+])
+def test_bad_pmus(kundur_esd, p, match):
+    case, res = kundur_esd
+    with pytest.raises(InputError, match=match):
+        pmu.phasor_truth(case, res, (p,))
+    with pytest.raises(InputError):
+        pmu.PMU(bus=1, machine=1, device=1)

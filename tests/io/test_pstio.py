@@ -1,0 +1,161 @@
+"""PST/PSTess importers and stabctl's own JSON case format.
+
+tests/data/pstess/d2asbegp.m and d2asbegp.json are PSTess 1.1 files (MIT, see LICENSE and
+NOTICE there); the .json is GNU Octave's evaluation of the .m.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from stabctl.io import pst as pstio
+from stabctl.io import load_case
+from stabctl.errors import CaseError
+
+DATA = Path(__file__).parents[1] / "data" / "pstess"
+
+
+# ---------------------------------------------------------------------------- .m files
+
+
+def test_m_file_parses_to_octaves_matrices():
+    mats = pstio.parse_m((DATA / "d2asbegp.m").read_text())
+    octave = json.loads((DATA / "d2asbegp.json").read_text())
+    for key, value in octave.items():
+        np.testing.assert_array_equal(mats[key], np.array(value, float), err_msg=key)
+    assert mats["ind_con"].size == 0 and mats["mld_con"].size == 0   # `= [];`
+    assert mats["mac_con"].shape == (4, 21)     # rows continued with `...`
+    assert mats["sw_con"].shape == (5, 7)       # commented-out rows skipped
+
+
+def test_m_and_json_give_the_same_case_and_keep_sw_con():
+    a = pstio.read_pst_m(DATA / "d2asbegp.m")
+    b = pstio.read_pstess_json(DATA / "d2asbegp.json")
+    assert a.name == b.name == "d2asbegp"
+    assert a.equals(b)
+    np.testing.assert_array_equal(a.sw_con[3], [0.2, 0, 0, 0, 0, 0, 0.01])
+    assert set(a.extra) == {"lmod_con", "rlmod_con"}   # empty ind_con/mld_con dropped
+
+
+def test_builtin_kundur_equals_fresh_import():
+    fresh = pstio.read_pstess_json(DATA / "d2asbegp.json").replace(name="kundur")
+    assert load_case("kundur").equals(fresh)
+
+
+def test_m_syntax_accepted():
+    text = """
+% comment
+disp('50% constant current load')
+basmva = 100;   % scalar literal
+a = [1, 2 3;  % commas or blanks
+     4 -5 .6e1
+     7 ...
+     8 9];
+b = [];
+%{
+x = anything(1);
+%}
+c = [1.5e-3 -2 +3];
+"""
+    m = pstio.parse_m(text)
+    np.testing.assert_array_equal(m["a"], [[1, 2, 3], [4, -5, 6], [7, 8, 9]])
+    assert m["b"].size == 0 and m["basmva"].item() == 100
+    np.testing.assert_array_equal(m["c"], [[1.5e-3, -2, 3]])
+
+
+@pytest.mark.parametrize(
+    "text, pattern",
+    [
+        ("x = [1 2];\nbus = [1 22.0-2 3];\n", r"line 2: 'bus': '22.0-2' is not a number"),
+        ("bus = [1 2 3;\n  4 PDC(1) 6];\n", r"line 2: 'bus': 'PDC\(1\)' is not a number"),
+        ("x = [1 2];\n\ny = x;\n", r"line 3: 'y' is not a literal matrix or number: x"),
+        ("a = 1;\nif a == 1\n b = 2;\nend\n", r"line 2: not a literal assignment: if a == 1"),
+        ("for k = 1:3\n  z(k) = k;\nend\n", r"line 1: not a literal assignment: for k"),
+        ("p = (1:1:34).';\n", r"line 1: 'p' is not a literal matrix or number"),
+        ("q = [1 2]';\n", r"line 1: 'q' is not a literal matrix or number"),
+        ("m = [1 2 3;\n 4 5];\n", r"line 2: 'm': row has 2 columns, first row has 3"),
+        ("m = [1 2 3;\n 4 5 6;\n", r"line 1: unterminated matrix"),
+        ("r = [1 2] * 3;\n", r"line 1: 'r' is not a literal matrix or number"),
+        ("s = [1 - 2];\n", r"line 1: 's': '-' is not a number"),
+    ],
+)
+def test_m_non_literal_statements_are_refused_with_line(text, pattern):
+    with pytest.raises(CaseError, match=pattern):
+        pstio.parse_m(text, "f.m")
+
+
+def test_m_error_names_file(tmp_path):
+    p = tmp_path / "bad.m"
+    p.write_text("bus = [1 1 0 0 0 0 0 0 0 1];\nline = [1 2 0 x 0];\n")
+    with pytest.raises(CaseError, match=r"bad\.m line 2: 'line': 'x' is not a number"):
+        pstio.read_pst_m(p)
+
+
+def test_m_without_line_matrix_is_refused(tmp_path):
+    p = tmp_path / "noline.m"
+    p.write_text("bus = [1 1 0 0 0 0 0 0 0 1];\n")
+    with pytest.raises(CaseError, match="no 'line' matrix"):
+        pstio.read_pst_m(p)
+
+
+# ---------------------------------------------------------------------------- own format
+
+
+@pytest.mark.parametrize("name", ["kundur", "miniwecc"])
+def test_own_format_round_trip(tmp_path, name):
+    case = load_case(name)
+    path = pstio.write_case_json(case, tmp_path / f"{name}.json", licence="MIT, test")
+    back = pstio.read_case_json(path)
+    assert back.equals(case)
+    assert (back.source, back.description) == (case.source, case.description)
+    raw = json.loads(path.read_text())
+    assert (raw["format"], raw["version"], raw["licence"]) == ("stabctl-case", 1, "MIT, test")
+    assert raw["tables"]["machines"]["columns"][:8] == [
+        "number", "bus", "mva", "xl", "ra", "xd", "xdp", "xdpp"]
+    assert load_case(path).equals(case)            # load_case by path, dispatch on content
+
+
+def test_own_format_is_one_row_per_line(tmp_path):
+    path = pstio.write_case_json(load_case("kundur"), tmp_path / "k.json")
+    lines = path.read_text().splitlines()
+    assert "        [1, 1.01, 18.5, 7.2615, 1.274, 0, 0, 0, 0, 1, 5, -2, 22, 1.1, 0.9]," in lines
+
+
+def test_own_format_rejects_wrong_version_and_unknown_column(tmp_path):
+    data = pstio.case_to_dict(load_case("kundur"))
+    data["version"] = 99
+    with pytest.raises(CaseError, match="version 99 not supported"):
+        pstio.case_from_dict(data)
+    data = pstio.case_to_dict(load_case("kundur"))
+    data["tables"]["buses"]["columns"][1] = "voltage"
+    with pytest.raises(CaseError, match=r"table 'bus' has unknown column\(s\) \['voltage'\]"):
+        pstio.case_from_dict(data)
+
+
+def test_own_format_columns_by_name_in_any_order():
+    data = pstio.case_to_dict(load_case("kundur"))
+    t = data["tables"]["pss"]
+    t["columns"] = t["columns"][::-1]
+    t["rows"] = [r[::-1] for r in t["rows"]]
+    assert pstio.case_from_dict(data).pss.equals(load_case("kundur").pss)
+
+
+def test_validation_errors_surface_through_the_readers(tmp_path):
+    data = pstio.case_to_dict(load_case("kundur"))
+    data["tables"]["machines"]["rows"][2][15] = -1.0
+    p = tmp_path / "negH.json"
+    p.write_text(json.dumps(data))
+    with pytest.raises(CaseError, match=r"mac_con row 3 \(machine 3\), field 'H'"):
+        load_case(p)
+
+
+def test_read_any_rejects_unknown_content(tmp_path):
+    p = tmp_path / "x.json"
+    p.write_text('{"hello": 1}')
+    with pytest.raises(CaseError, match="neither a stabctl case nor a PSTess"):
+        pstio.read_any(p)
+    p.write_text("{not json")
+    with pytest.raises(CaseError, match="invalid JSON at line 1"):
+        pstio.read_any(p)

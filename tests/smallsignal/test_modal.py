@@ -1,0 +1,178 @@
+"""Modal analysis (stabctl.smallsignal.modal) and the `stabctl eig` command: normalisations, the
+angle-reference mode, Kundur's local and inter-area modes, residues against the transfer
+function, areas, reports and bad input."""
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from stabctl.case import PssTable
+from stabctl.io import load_case
+from stabctl.cli import main
+from stabctl.errors import InputError
+from stabctl.studies.eigenvalues import _areas as study_areas
+from stabctl.smallsignal.linearise import linearise
+from stabctl.smallsignal.modal import _by_first_machine, modal_analysis, mode_sensitivity
+
+
+@pytest.fixture(scope="module")
+def sys_k():
+    return linearise(load_case("kundur"))
+
+
+@pytest.fixture(scope="module")
+def ma_k(sys_k):
+    return modal_analysis(sys_k)
+
+
+@pytest.fixture(scope="module")
+def sys_k_nopss():
+    return linearise(load_case("kundur").replace(pss=PssTable.empty()))
+
+
+def test_eigenvectors_and_participation_normalisation(sys_k, ma_k):
+    A = np.asarray(sys_k.A)
+    n = A.shape[0]
+    lam, V, W = ma_k.eigenvalues, ma_k.right, ma_k.left
+    assert np.all(lam.imag >= 0) and lam.size == n - np.sum(np.linalg.eigvals(A).imag < 0)
+    np.testing.assert_allclose(A @ V, V * lam, atol=1e-8 * np.abs(A).max())
+    np.testing.assert_allclose(W @ A, lam[:, None] * W, atol=1e-8 * np.abs(A).max())
+    np.testing.assert_allclose(W @ V, np.eye(lam.size), atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(V, axis=0), 1.0)
+    P = ma_k.participation
+    assert P.shape == (n, lam.size) and np.all(P >= 0)
+    np.testing.assert_allclose(P.sum(axis=0), 1.0, rtol=1e-12)      # per mode (not per state)
+    assert np.abs(P.sum(axis=1) - 1).max() > 0.1
+    f, z = ma_k.freq_hz, ma_k.damping
+    np.testing.assert_allclose(f, lam.imag / (2 * np.pi))
+    np.testing.assert_allclose(z[lam != 0], -lam.real[lam != 0] / np.abs(lam[lam != 0]))
+
+
+def test_angle_reference_mode_identified_and_excluded(sys_k, ma_k):
+    i = ma_k.reference_mode
+    assert abs(ma_k.eigenvalues[i]) < 1e-5 and ma_k.kind[i] == "angle reference"
+    phi = np.real_if_close(ma_k.right[:, i] / ma_k.right[0, i])
+    angles = [k for k, s in enumerate(sys_k.state_labels) if s.startswith("mac_delta")]
+    np.testing.assert_allclose(phi[angles], 1.0, atol=1e-6)          # common rotation
+    assert np.abs(np.delete(phi, angles)).max() < 1e-6
+    stats = ma_k.damping_statistics()
+    assert stats["all"]["mode"] != i
+    assert stats["electromechanical"]["freq_hz"] == pytest.approx(0.612, abs=1e-3)
+
+
+@pytest.mark.parametrize("nopss, expected", [
+    (False, [(0.612, "inter-area"), (1.292, "local"), (1.340, "local")]),
+    (True, [(0.634, "inter-area"), (1.149, "local"), (1.157, "local")])])
+def test_kundur_local_and_interarea_modes(nopss, expected, sys_k, sys_k_nopss):
+    ma = modal_analysis(sys_k_nopss if nopss else sys_k)
+    em = ma.electromechanical[np.argsort(ma.freq_hz[ma.electromechanical])]
+    assert [(round(ma.freq_hz[i], 3), ma.kind[i]) for i in em] == expected
+    # numbered as Kundur's book: area 1 = G1, G2 (labels 0, 1 in the order of first machine)
+    assert [tuple(ma.machines[ma.areas == a]) for a in (0, 1)] == [(1, 2), (3, 4)]
+    assert study_areas(ma) == {"area 1": [1, 2], "area 2": [3, 4]}
+    ia = em[0]
+    assert {frozenset(g) for g in ma.groups(ia)} == {frozenset({1, 2}), frozenset({3, 4})}
+    assert ma.eta[ia] > 0.9 and all(ma.eta[i] < 0.2 for i in em[1:])
+    if nopss:
+        assert ma.damping[ia] < 0                    # the unstable inter-area mode
+        assert ma.damping_statistics()["electromechanical"]["mode"] == ia
+    for i in em:
+        s = ma.speed_shape[:, i]
+        assert s[np.argmax(np.abs(s))] == pytest.approx(1.0 + 0j, abs=1e-12)
+        assert ma.group_shares(i)["rotor angle/speed"] == max(ma.group_shares(i).values())
+    # with the two areas given explicitly the classification is the same
+    given = modal_analysis(sys_k_nopss if nopss else sys_k, areas={1: "A", 2: "A", 3: "B", 4: "B"})
+    assert list(given.kind[em]) == [k for _, k in expected]
+
+
+def test_areas_numbered_by_their_first_machine():
+    assert list(_by_first_machine(np.array([1, 1, 0, 0]))) == [0, 0, 1, 1]
+    assert list(_by_first_machine(np.array([2, 0, 2, 1, 0]))) == [0, 1, 0, 2, 1]
+    assert list(_by_first_machine(np.array([3, 3, 5]))) == [0, 0, 1]      # empty labels
+
+
+def test_residues_reproduce_the_transfer_function(sys_k, ma_k):
+    sens = mode_sensitivity(sys_k, ma_k)
+    assert sens.inputs == ["P_esd_B10", "P_esd_B20", "P_esd_B110", "P_esd_B120"]
+    assert sens.outputs == [f"omega_rel_G{g}" for g in range(1, 5)]
+    R = sens.residues
+    np.testing.assert_allclose(np.abs(R), sens.observability[:, :, None]
+                               * sens.controllability[:, None, :], rtol=1e-12)
+    C, B = np.asarray(sys_k.C)[5:9], np.asarray(sys_k.B)[:, :4]
+    i = ma_k.electromechanical[0]
+    np.testing.assert_allclose(R[i], np.outer(C @ ma_k.right[:, i], ma_k.left[i] @ B), rtol=1e-12)
+    for s0 in (2j * np.pi * 0.6, 0.5 + 3j):
+        G = sys_k(s0)[5:9, :4]
+        lam = ma_k.eigenvalues
+        part = sum(R[k] / (s0 - lam[k]) + (np.conj(R[k]) / (s0 - np.conj(lam[k]))
+                                           if lam[k].imag > 0 else 0) for k in range(lam.size))
+        np.testing.assert_allclose(part, G, rtol=1e-7, atol=1e-12 * np.abs(G).max())
+
+
+def test_miniwecc_modes_and_default_areas():
+    ma = modal_analysis(linearise(load_case("miniwecc")))
+    em = ma.electromechanical[np.argsort(ma.freq_hz[ma.electromechanical])]
+    assert em.size > 25 and ma.freq_hz[em[0]] == pytest.approx(0.207, abs=2e-3)
+    assert len(np.unique(ma.areas)) == 3
+    assert [ma.kind[i] for i in em[:2]] == ["inter-area", "inter-area"]
+    assert abs(ma.eigenvalues[ma.reference_mode]) < 1e-5
+    json.dumps([ma.mode_record(int(i)) for i in range(ma.eigenvalues.size)])
+
+
+def test_bad_input(sys_k, ma_k):
+    with pytest.raises(InputError, match="number of areas"):
+        modal_analysis(sys_k, n_areas=5)
+    with pytest.raises(InputError, match="machine"):
+        modal_analysis(sys_k, areas={1: "A", 2: "A", 3: "B"})
+    with pytest.raises(InputError, match="no input"):
+        mode_sensitivity(sys_k, ma_k, inputs="Q_esd")
+
+
+# -------------------------------------------------------------------------- stabctl eig
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_eig_json_lists_every_mode():
+    res = run("eig", "kundur", "--no-pss", "--json")
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["n_states"] == 44 and out["pss"] is False and out["files"] == []
+    modes = out["modes"]
+    assert len(modes) > 25 and [m["mode"] for m in modes] == list(range(len(modes)))
+    assert all({"real", "imag", "freq_hz", "damping", "kind"} <= set(m) for m in modes)
+    em = [modes[i] for i in out["electromechanical_modes"]]
+    ia = [m for m in em if m["kind"] == "inter-area"]
+    assert len(ia) == 1 and ia[0]["damping"] < 0 and ia[0]["best_esd_bus"].startswith("B")
+    assert out["modes"][out["reference_mode"]]["kind"] == "angle reference"
+
+
+def test_eig_report_files(tmp_path):
+    res = run("eig", "kundur", "--report", "--out-dir", tmp_path)
+    assert res.exit_code == 0, res.output
+    assert "inter-area" in res.stdout and "local" in res.stdout
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["eig_kundur.md", "eig_kundur_eigs.png", "eig_kundur_pf.png",
+                     "eig_kundur_shapes.png"]
+    md = (tmp_path / "eig_kundur.md").read_text()
+    assert "| inter-area |" in md and md.count("| local |") == 2
+    for png in names[1:]:
+        assert f"({png})" in md
+
+
+@pytest.mark.parametrize("args, needle", [
+    (("eig", "nosuch"), "unknown case"),
+    (("eig", "kundur", "--areas", "0"), "--areas 0: must be in [1, 1000]"),
+    (("eig", "kundur", "--report", "--out", "FILE"), "not a directory")])
+def test_eig_bad_input(args, needle, tmp_path):
+    f = tmp_path / "FILE"
+    f.write_text("")
+    res = CliRunner().invoke(main, [str(f) if a == "FILE" else a for a in args])
+    assert res.exit_code == 2, res.output
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0]
+    assert res.stdout == "" and [p.name for p in tmp_path.iterdir()] == ["FILE"]

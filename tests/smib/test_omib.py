@@ -1,0 +1,70 @@
+"""OMIB swing equation, EAC and energy function against the paper's Table 1 and closed forms."""
+
+import numpy as np
+import pytest
+
+from stabctl.errors import InputError
+from stabctl.smib.omib import (OMIB, PAPER_OMIB, clearing_state_closed_form, clearing_table,
+                          critical_clearing_time_bisection, simulate)
+
+# paper Table 1: cycles -> (delta_cl rad, d(delta)/dt rad/s, stable)
+TABLE1 = {6: (0.6519, 3.1374, True), 12: (1.1228, 6.2747, True), 15: (1.4753, 7.8421, False)}
+
+
+@pytest.mark.parametrize("cycles", sorted(TABLE1))
+def test_table1_clearing_state_and_verdict(cycles):
+    (row,) = clearing_table(PAPER_OMIB, [cycles])
+    d_ref, w_ref, stable_ref = TABLE1[cycles]
+    assert row["delta_cl_rad"] == pytest.approx(d_ref, rel=5e-3)
+    assert row["omega_cl_rad_s"] == pytest.approx(w_ref, rel=5e-3)
+    assert row["stable"] is stable_ref
+
+
+def test_simulated_clearing_state_matches_constant_acceleration_closed_form():
+    run = simulate(PAPER_OMIB, 0.2, t_end=0.3)
+    d, w = clearing_state_closed_form(PAPER_OMIB, 0.2)
+    assert run.delta_cl == pytest.approx(d, abs=1e-8)
+    assert run.omega_cl == pytest.approx(w, abs=1e-8)
+
+
+def test_eac_closed_form_cct_agrees_with_time_domain_bisection_within_1ms():
+    t_cr = PAPER_OMIB.critical_clearing_time()
+    t_bis, runs = critical_clearing_time_bisection(PAPER_OMIB, tol=1e-4)
+    assert abs(t_cr - t_bis) < 1e-3
+    assert runs > 5
+    # the critical angle satisfies A1 = A2 exactly
+    dcr = PAPER_OMIB.critical_clearing_angle()
+    assert PAPER_OMIB.accelerating_area(dcr) == pytest.approx(PAPER_OMIB.decelerating_area(dcr))
+
+
+def test_eac_with_nonzero_fault_on_transfer_agrees_with_bisection():
+    sys_ = OMIB.from_operating_point(H=3.0, Pm=0.5, delta0=0.4950, fault_ratio=0.3,
+                                     post_ratio=0.8)
+    t_bis, _ = critical_clearing_time_bisection(sys_, tol=1e-4)
+    assert abs(sys_.critical_clearing_time() - t_bis) < 1e-3
+
+
+@pytest.mark.parametrize("cycles", [6, 12])
+def test_accelerating_area_equals_kinetic_energy_and_energy_is_conserved(cycles):
+    run = simulate(PAPER_OMIB, cycles / 60, t_end=3.0)
+    ke = 0.5 * PAPER_OMIB.M * run.omega_cl ** 2
+    assert PAPER_OMIB.accelerating_area(run.delta_cl) == pytest.approx(ke, rel=1e-8)
+    post = run.t >= run.t_clear
+    v = PAPER_OMIB.energy(run.delta[post], run.omega[post])
+    assert np.max(np.abs(v - v[0])) < 1e-8 * PAPER_OMIB.critical_energy
+    assert v[0] < PAPER_OMIB.critical_energy  # stable: inside the stability region
+
+
+def test_separatrix_passes_through_the_unstable_equilibrium():
+    assert PAPER_OMIB.separatrix(PAPER_OMIB.delta_u) == pytest.approx(0.0, abs=1e-6)
+    # the 15-cycle clearing state lies outside the region bounded by the separatrix
+    run = simulate(PAPER_OMIB, 15 / 60, t_end=1.0)
+    assert run.omega_cl > PAPER_OMIB.separatrix(run.delta_cl)
+
+
+@pytest.mark.parametrize("kwargs", [dict(H=-1.0, Pm=0.5, Pmax_pre=1, Pmax_fault=0, Pmax_post=1),
+                                    dict(H=3.0, Pm=1.2, Pmax_pre=1, Pmax_fault=0, Pmax_post=1),
+                                    dict(H=3.0, Pm=0.5, Pmax_pre=1, Pmax_fault=0, Pmax_post=0.4)])
+def test_bad_parameters_are_rejected(kwargs):
+    with pytest.raises(InputError):
+        OMIB(**kwargs)

@@ -1,0 +1,310 @@
+"""Critical clearing time by bisection: bracket and tolerance (checked by re-running the
+simulator at both ends), the paper's Case 1 fault on Kundur, bracketing errors, custom
+criteria, divergence handling, storage pass-through and the `stabctl cct` command."""
+
+import json
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from stabctl.io import load_case
+from stabctl.studies.cases import DEFAULT_FAULTS
+from stabctl.stability.cct import (LineFault, cached_simulator, critical_clearing_time,
+                         read_faults, storage_fleet)
+from stabctl.cli import main
+from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
+from stabctl.dynamics.events import fault_with_clearing, validate
+
+CASE1 = LineFault(bus=3, far_bus=101, t_fault=1.0)   # paper Case 1: bus 3, line 3-101, 1 s
+
+
+@pytest.fixture(scope="module")
+def case1(kundur):
+    return critical_clearing_time(kundur, CASE1)
+
+
+def stable_when_cleared_after(sim, cycles, t_end=6.0):
+    """Independent check: the CLI's fault construction (cycles), full run, no stopping."""
+    res = sim.run([fault_with_clearing(sim.case, 3, 101, 1.0, cycles)], t_end=t_end)
+    return res.stable
+
+
+# ------------------------------------------------------------------ Kundur, paper Case 1
+
+
+def test_case1_cct_between_9_and_10_cycles(case1):
+    """IEEE 421.5 limiters (default): 157 ms = 9.42 cycles at the default 5 ms step; the
+    converged CCT (steps down to 0.16 ms, 0.1 ms bisection) is 158.0 ms
+    (docs/conventions.md)."""
+    assert case1.conventions == "ieee" and case1.step_s == 0.005
+    assert case1.t_stable * 60 >= 9 and case1.t_stable < case1.t_unstable
+    assert case1.t_unstable * 60 <= 10
+    assert case1.cct_s == case1.t_stable and case1.cct_cycles == pytest.approx(case1.cct_s * 60)
+    assert case1.bracket == (case1.t_stable, case1.t_unstable)
+    assert case1.separated == (1, 2)            # area 1 swings away from area 2
+
+
+def test_case1_cct_converges_with_the_step(kundur, case1):
+    """Halving the default step moves the CCT by less than the tolerance (the search's own
+    error bar, `numerical_error_s`), and so do two more halvings."""
+    assert case1.numerical_error_s == 0.0 and case1.cct_half_step_s == case1.cct_s
+    assert case1.n_simulations == len(case1.probes) + len(case1.half_step_probes) == \
+        len(case1.probes) + 2
+    finer = [critical_clearing_time(kundur, CASE1, h=case1.step_s / k, error_check=False)
+             for k in (4, 8)]
+    assert all(abs(r.cct_s - case1.cct_s) <= case1.tol_s + 1e-12 for r in finer)
+
+
+def test_case1_pstess_cct_is_a_step_artefact(kundur_pstess):
+    """PSTess 1.1's smpexc limiter (docs/pst_models.md 2.1): 16.1 cycles at its own 10 ms
+    step, and halving the step removes more than a cycle: the error bar says so."""
+    res = critical_clearing_time(kundur_pstess, CASE1)
+    assert res.conventions == "pstess" and res.step_s == 0.01
+    assert res.cct_cycles >= 16 and res.cct_cycles < 17 and res.separated == (1, 2)
+    assert res.numerical_error_s > 1 / 60
+
+
+def test_case1_bracket_within_tolerance_and_verified_by_rerunning(kundur, case1):
+    assert case1.t_unstable - case1.t_stable <= case1.tol_s + 1e-12
+    assert stable_when_cleared_after(kundur, case1.t_stable * 60)
+    assert not stable_when_cleared_after(kundur, case1.t_unstable * 60)
+
+
+def test_case1_21_cycles_unstable(kundur):
+    assert not stable_when_cleared_after(kundur, 21)
+
+
+def test_probes_are_consistent_with_the_bracket(case1):
+    assert case1.n_simulations == len(case1.probes) + len(case1.half_step_probes)
+    for t, ok in case1.probes:
+        assert round(t / case1.tol_s, 6).is_integer()       # on the tolerance lattice
+        assert (t <= case1.t_stable) if ok else (t >= case1.t_unstable)
+    assert case1.probes[0] == (0.0, True)                   # the line trip alone is stable
+    lo, hi = case1.search_bracket
+    assert (lo, True) in case1.probes and (hi, False) in case1.probes
+    n_bracket = [t for t, _ in case1.probes].index(hi) + 1       # 0, 0.1, 0.2
+    n_bisect = int(np.ceil(np.log2(round((hi - lo) / case1.tol_s))))
+    assert n_bracket == 3 and len(case1.probes) <= n_bracket + n_bisect
+
+
+def test_coarser_tolerance_gives_an_enclosing_bracket(kundur, case1):
+    coarse = critical_clearing_time(kundur, CASE1, tol=5e-3)
+    assert coarse.t_unstable - coarse.t_stable == pytest.approx(5e-3)
+    assert coarse.t_stable <= case1.t_stable < case1.t_unstable <= coarse.t_unstable
+    assert coarse.n_simulations < case1.n_simulations
+
+
+def test_upper_bound_doubles_until_unstable(kundur):
+    res = critical_clearing_time(kundur, CASE1, t_hi=0.05, tol=0.01)
+    assert [t for t, _ in res.probes[:4]] == [0.0, 0.05, 0.1, 0.2]
+    assert res.search_bracket == (0.1, 0.2)
+    assert res.bracket == (0.15, 0.16)
+
+
+def test_to_dict_is_json(case1):
+    d = json.loads(json.dumps(case1.to_dict()))
+    assert d["fault"] == {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1, "trips": []}
+    assert d["cct_s"] == case1.cct_s and d["n_simulations"] == case1.n_simulations
+    assert d["numerical_error_s"] == 0.0 and d["conventions"] == "ieee"
+    assert d["criterion"] == "no_separation" and d["wall_time_s"] > 0
+
+
+def test_custom_criterion_sees_whole_runs(kundur_pstess):
+    kundur = kundur_pstess
+    seen = []
+
+    def within_1rad(result):
+        seen.append(float(result.t[-1]))
+        return result.max_angle_spread < 1.0
+
+    res = critical_clearing_time(kundur, CASE1, criterion=within_1rad)
+    assert res.criterion == "within_1rad"
+    assert 0.2 <= res.t_stable < res.t_unstable <= 0.25    # 0.96 rad at 0.2 s, 1.18 at 0.25
+    assert all(t == pytest.approx(6.0) for t in seen)   # not stopped at separation
+    assert len(seen) == res.n_simulations
+
+
+def test_losing_both_tie_circuits_is_unstable_even_when_cleared_instantly(kundur):
+    both = LineFault(3, 101, circuit=2, trips=((3, 101),))   # areas 1 and 2 islanded
+    with pytest.raises(InputError, match="3-101 also opened: unstable even when cleared "
+                                         "instantly"):
+        critical_clearing_time(kundur, both)
+
+
+def test_tripping_the_faulted_circuit_again_is_an_error(kundur):
+    with pytest.raises(InputError, match="101-3 is the faulted circuit itself"):
+        critical_clearing_time(kundur, LineFault(3, 101, trips=((101, 3),)))
+
+
+# --------------------------------------------------------------------------- errors
+
+
+def test_unstable_at_zero_clearing_is_an_error(kundur):
+    with pytest.raises(InputError, match="unstable even when cleared instantly"):
+        critical_clearing_time(kundur, CASE1, criterion=lambda r: False)
+
+
+def test_unstable_at_the_lower_bound_is_an_error(kundur):
+    with pytest.raises(InputError, match="unstable already at the lower bound 0.3 s"):
+        critical_clearing_time(kundur, CASE1, t_lo=0.3, t_hi=0.4)
+
+
+def test_cct_above_t_max_is_an_error(kundur):
+    with pytest.raises(InputError, match=r"above the search limit t_max = 0.1 s \(6 cycles\)"):
+        critical_clearing_time(kundur, CASE1, t_max=0.1)
+    with pytest.raises(InputError, match=r"above the search limit t_max = 0.05 s"):
+        critical_clearing_time(kundur, CASE1, t_max=0.05)      # below the first upper bound
+
+
+@pytest.mark.parametrize("kw, msg", [
+    ({"tol": 0}, "tolerance must be > 0"),
+    ({"t_lo": 0.2, "t_hi": 0.1}, "0 <= t_lo < t_hi <= t_max"),
+    ({"t_hi": 2.0}, "0 <= t_lo < t_hi <= t_max"),
+    ({"t_end": 1.5}, "must come after the latest clearing"),
+    ({"tol": 0.5, "t_hi": 0.1, "t_max": 0.2}, "narrower than the tolerance"),
+])
+def test_bad_settings(kundur, kw, msg):
+    with pytest.raises(InputError, match=msg):
+        critical_clearing_time(kundur, CASE1, **kw)
+
+
+def test_unknown_bus_and_line(kundur):
+    with pytest.raises(UnknownBusError):
+        critical_clearing_time(kundur, LineFault(99, 101))
+    with pytest.raises(CaseError, match="no branch between bus 3 and bus 13"):
+        critical_clearing_time(kundur, LineFault(3, 13))
+
+
+# ------------------------------------------------- search logic on a stand-in simulator
+
+
+class FakeSim:
+    """Stable iff cleared before `cct` s; records the keyword arguments of every run."""
+
+    conventions, default_h = "ieee", 0.01
+
+    def __init__(self, cct, diverge_after=None, separated_before_divergence=True):
+        self.case = SimpleNamespace(freq_hz=50.0)
+        self.cct, self.calls = cct, []
+        self.diverge_after, self.sep = diverge_after, separated_before_divergence
+
+    def run(self, events, t_end, **kw):
+        self.calls.append(kw)
+        tc = events[0].clear_near - events[0].t
+        res = SimpleNamespace(stable=tc < self.cct, separated=[] if tc < self.cct else [7])
+        if self.diverge_after is not None and tc > self.diverge_after:
+            partial = SimpleNamespace(stable=not self.sep, separated=[7] if self.sep else [])
+            raise SimulationError("non-finite state at t = 9 s", result=partial)
+        return res
+
+
+def test_bisection_lands_on_the_lattice_cell_of_the_cct():
+    sim = FakeSim(cct=0.1234)
+    res = critical_clearing_time(sim, CASE1, h=0.01)
+    assert res.bracket == (0.123, 0.124) and res.separated == (7,)
+    assert res.cct_cycles == pytest.approx(0.123 * 50)          # the case's frequency
+    assert res.n_simulations == len(sim.calls) == 3 + 7 + 2      # 0, 0.1, 0.2, 100 -> 1, h/2
+    assert [kw["h"] for kw in sim.calls[-2:]] == [0.005, 0.005]
+    assert res.numerical_error_s == 0.0
+    assert all(kw["stop_at_separation"] for kw in sim.calls)
+    assert all("storage" not in kw for kw in sim.calls)          # not passed when None
+
+
+def test_storage_is_passed_untouched():
+    fleet = object()
+    sim = FakeSim(cct=0.05)
+    critical_clearing_time(sim, CASE1, h=0.01, storage=fleet)
+    assert all(kw["storage"] is fleet for kw in sim.calls)
+
+
+def test_divergence_after_separation_counts_unstable():
+    sim = FakeSim(cct=0.1234, diverge_after=0.15)
+    assert critical_clearing_time(sim, CASE1, h=0.01).bracket == (0.123, 0.124)
+
+
+def test_other_divergence_is_raised_naming_the_clearing_time():
+    sim = FakeSim(cct=0.5, diverge_after=0.15, separated_before_divergence=False)
+    with pytest.raises(SimulationError, match=r"line 3-101 at 1 s, cleared after 0.2 s: "
+                                              "non-finite state"):
+        critical_clearing_time(sim, CASE1, h=0.01)
+
+
+# ----------------------------------------------------------- fault lists, storage, cache
+
+
+def test_default_faults_exist_in_their_cases():
+    for name, faults in DEFAULT_FAULTS.items():
+        case = load_case(name)
+        for f in faults:
+            validate(case, f.events(0.1), 6.0)     # raises for an unknown bus or line
+    assert DEFAULT_FAULTS["kundur"][0] == CASE1
+
+
+def test_read_faults(tmp_path):
+    p = tmp_path / "f.csv"
+    p.write_text("bus,far_bus,t_fault\n3,101,0.5\n13,101,\n")
+    assert read_faults(p) == [LineFault(3, 101, 0.5), LineFault(13, 101, 1.0)]
+    p.write_text("bus,far_bus\n3,x\n")
+    with pytest.raises(InputError, match="line 2"):
+        read_faults(p)
+    p.write_text("from,to\n3,101\n")
+    with pytest.raises(InputError, match="header"):
+        read_faults(p)
+
+
+def test_storage_fleet_none_means_no_storage():
+    assert storage_fleet(load_case("kundur"), None) is None
+    fleet = storage_fleet(load_case("kundur"), 10.0)
+    assert len(fleet.devices) == 4
+
+
+def test_simulator_cached_per_case():
+    assert cached_simulator("kundur") is cached_simulator("kundur")
+
+
+# ------------------------------------------------------------------------------- CLI
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_cli_cct_json():
+    res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--json")
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert d["cct_cycles"] >= 9 and d["cct_cycles"] < 10 and d["conventions"] == "ieee"
+    assert d["numerical_error_s"] == 0.0
+    assert d["esd_pct"] is None and d["case"] == "kundur"
+    assert d["t_unstable_s"] - d["t_stable_s"] == pytest.approx(1e-3)
+
+
+def test_cli_cct_text():
+    res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--tol-ms", 5)
+    assert res.exit_code == 0, res.output
+    assert "CCT 0.15" in res.stdout and "cycles" in res.stdout
+    assert "simulations, wall" in res.stdout and "machine(s) 1, 2" in res.stdout
+
+
+@pytest.mark.parametrize("args, needle", [
+    (("--fault", 99, "--far-bus", 101), "bus 99"),
+    (("--fault", 3, "--far-bus", 13), "no branch between bus 3 and bus 13"),
+    (("--fault", 3, "--far-bus", 101, "--tol-ms", 0), "--tol-ms"),
+    (("--fault", 3, "--far-bus", 101, "--t-max", 0.1), "above the search limit"),
+    (("--fault", 3, "--far-bus", 101, "--tf", 1.5), "latest clearing"),
+])
+def test_cli_cct_bad_input(args, needle):
+    res = run("cct", "kundur", *args)
+    assert res.exit_code == 2, res.output
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0]
+    assert res.stdout == ""
+
+
+def test_cli_cct_with_storage():
+    res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", 5, "--json",
+              "--tol-ms", 5)
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["esd_pct"] == 5

@@ -1,0 +1,52 @@
+"""Contingency screening: CCT of a fault at every bus, resumable, with a map."""
+
+import json
+
+from click.testing import CliRunner
+
+from stabctl.io import load_case
+from stabctl.stability.cct import LineFault, critical_clearing_time
+from stabctl.cli import main
+from stabctl.plotting.layout import spectral_layout
+from stabctl.stability.screening import screen, screening_faults
+from stabctl.dynamics.simulation import Simulator
+
+
+def test_screening_faults_cover_every_bus_and_every_circuit():
+    case = load_case("kundur")
+    faults = screening_faults(case, lines=True)
+    assert [f.bus for f in faults[:case.n_bus]] == list(case.buses.number)
+    assert all(f.far_bus is None for f in faults[:case.n_bus])
+    lines = faults[case.n_bus:]
+    assert len(lines) == len(case.branches)
+    assert sorted(f.circuit for f in lines if (f.bus, f.far_bus) == (3, 101)) == [1, 2]
+
+
+def test_screening_rows_match_single_searches_and_resume(tmp_path):
+    out = tmp_path / "s.jsonl"
+    rows = screen("kundur", out, buses=[3, 12], t_max=0.5, workers=1, progress=False)
+    sim = Simulator(load_case("kundur"))
+    for row in rows:
+        ref = critical_clearing_time(sim, LineFault(row["bus"], None), t_max=0.5)
+        assert row["status"] == "ok" and row["cct_s"] == ref.cct_s
+    n = len(out.read_text().splitlines())
+    screen("kundur", out, buses=[3, 12], t_max=0.5, workers=1, progress=False)
+    assert len(out.read_text().splitlines()) == n          # resumed: nothing rerun
+
+
+def test_cli_screen_writes_map_and_reports_failures(tmp_path):
+    res = CliRunner().invoke(main, ["screen", "kundur", "--buses", "3,101", "--t-max", "0.4",
+                                    "--workers", "1", "--out", str(tmp_path / "s.jsonl"),
+                                    "--plot", str(tmp_path / "m.png"), "--json"])
+    assert res.exit_code == 0, res.output
+    rows = json.loads(res.stdout)
+    by_bus = {r["bus"]: r for r in rows}
+    assert by_bus[3]["status"] == "ok" and by_bus[3]["separated"] == [1, 2]
+    assert by_bus[101]["status"] == "failed" and "above the search limit" in by_bus[101]["error"]
+    assert (tmp_path / "m.png").stat().st_size > 10000
+
+
+def test_spectral_layout_is_finite_and_distinct():
+    xy = spectral_layout(load_case("miniwecc"))
+    assert xy.shape == (122, 2) and (abs(xy) < 1e6).all()
+    assert len({tuple(p.round(9)) for p in xy}) > 100

@@ -1,0 +1,44 @@
+"""The package's layers (pyproject.toml [tool.importlinter]) hold: a layer imports only
+the layers below it, and ``import stabctl`` has no side effects."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_import_linter_contract_is_kept():
+    exe = shutil.which("lint-imports") or str(Path(sys.executable).with_name("lint-imports"))
+    if not Path(exe).exists():
+        pytest.skip("import-linter not installed (the test extra installs it)")
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    res = subprocess.run([exe, "--config", str(ROOT / "pyproject.toml")], cwd=ROOT, env=env,
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-2000:]
+    assert "1 kept, 0 broken" in res.stdout
+
+
+def test_import_stabctl_leaves_environment_and_files_alone(tmp_path):
+    """``import stabctl`` sets no environment variable, imports no numerics and compiles
+    nothing (the public names load on first use)."""
+    code = ("import os, sys, json; before = dict(os.environ); import stabctl; "
+            "print(json.dumps([dict(os.environ) == before, 'numpy' in sys.modules, "
+            "'numba' in sys.modules, sorted(stabctl.__all__)]))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=tmp_path).stdout
+    same_env, numpy_loaded, numba_loaded, names = json.loads(out)
+    assert same_env and not numpy_loaded and not numba_loaded
+    assert {"Simulator", "load_case", "critical_clearing_time", "linearise"} <= set(names)
+
+
+def test_at_most_eight_top_level_modules():
+    modules = sorted(p.name for p in (ROOT / "stabctl").glob("*.py"))
+    assert len(modules) <= 8, modules

@@ -1,0 +1,326 @@
+"""Parallel sweeps: one JSON line per job written as it finishes, resume, failures recorded
+with their reason, interrupt safety (in process and through a real SIGINT to a process
+pool), Dask, and the `stabctl sweep-cct` command.  Kundur only, to keep it short."""
+
+import json
+import os
+import signal
+import sys
+import time
+
+import pytest
+from click.testing import CliRunner
+
+from stabctl.studies.cases import DEFAULT_FAULTS
+from stabctl.stability.cct import LineFault, cached_simulator, cct_job, cct_jobs
+from stabctl.cli import main
+from stabctl.errors import InputError
+from stabctl.parallel import Job, read_records, run_sweep
+
+# -- job functions (module level: spawned workers import them by name) -------------------
+
+
+def square(x):
+    return {"y": x * x}
+
+
+def boom(x):
+    raise ValueError(f"bad x = {x}")
+
+
+def refuse(x):
+    raise InputError(f"no result for {x}")
+
+
+def interrupt(x):
+    raise KeyboardInterrupt
+
+
+def sleepy(x):
+    time.sleep(x)
+    return {"slept": x}
+
+
+def ctrl_c_parent(x):
+    """Press Ctrl-C on the sweep's own process (the pool's parent) after x s."""
+    time.sleep(x)
+    os.kill(os.getppid(), signal.SIGINT)
+    return {}
+
+
+def crash(x):
+    os._exit(x)                     # the worker process dies (as on a segfault or OOM kill)
+
+
+def simulator_identity(case):
+    return {"id": id(cached_simulator(case)), "pid": os.getpid()}
+
+
+def jobs_of(func, *args):
+    return [Job(f"{func.__name__}/{a}", func, {"x": a}) for a in args]
+
+
+def lines(path):
+    return [json.loads(s) for s in path.read_text().splitlines()]
+
+
+# ------------------------------------------------------------------------- CCT sweeps
+
+
+def test_kundur_cct_sweep_in_processes_then_resume(tmp_path):
+    out = tmp_path / "cct.jsonl"
+    jobs = cct_jobs("kundur", DEFAULT_FAULTS["kundur"])
+    rep = run_sweep(jobs, out, workers=2, progress=False)
+    assert (rep.ran, rep.skipped, rep.failed) == (2, 0, 0)
+    recs = lines(out)
+    assert sorted(r["key"] for r in recs) == sorted(j.key for j in jobs) == sorted(rep.records)
+    by_key = {r["key"]: r for r in recs}
+    case1 = by_key["kundur/3-101/t1/esd-none"]
+    assert case1["status"] == "ok" and case1["inputs"]["bus"] == 3
+    res1 = case1["result"]
+    assert res1["cct_cycles"] >= 9 and res1["cct_cycles"] < res1["t_unstable_cycles"] <= 10
+    assert res1["numerical_error_s"] == 0.0 and res1["conventions"] == "ieee"
+    assert len({r["worker"] for r in recs}) == 2                   # ran in two processes
+    before = out.read_bytes()
+    again = run_sweep(jobs, out, workers=2, progress=False)
+    assert (again.ran, again.skipped) == (0, 2) and out.read_bytes() == before
+    assert again.records == rep.records
+
+
+def test_failures_are_recorded_with_their_reason(tmp_path):
+    out = tmp_path / "mixed.jsonl"
+    too_low = Job("cct-above-limit", cct_job, {"case": "kundur", "bus": 3, "far_bus": 101,
+                                               "t_max": 0.1})
+    jobs = jobs_of(square, 2) + jobs_of(boom, 3) + jobs_of(refuse, 4) + [too_low]
+    rep = run_sweep(jobs, out, workers=2, progress=False)
+    assert (rep.ran, rep.failed) == (4, 3)
+    recs = {r["key"]: r for r in lines(out)}
+    assert recs["square/2"] == {**recs["square/2"], "status": "ok", "result": {"y": 4}}
+    bad = recs["boom/3"]
+    assert bad["status"] == "failed" and bad["error"] == "ValueError: bad x = 3"
+    assert "in boom" in bad["traceback"] and bad["inputs"] == {"x": 3}
+    assert recs["refuse/4"]["error"] == "InputError: no result for 4"
+    assert "traceback" not in recs["refuse/4"]                      # stabctl errors: reason only
+    assert "above the search limit t_max = 0.1 s" in recs["cct-above-limit"]["error"]
+    # failed jobs are finished: skipped on resume unless retried
+    assert run_sweep(jobs, out, workers=1, progress=False).ran == 0
+    retry = run_sweep(jobs, out, workers=1, progress=False, retry_failed=True)
+    assert (retry.ran, retry.failed) == (3, 3)
+    assert len(lines(out)) == 7 and read_records(out)["boom/3"]["status"] == "failed"
+
+
+def test_a_dying_worker_is_recorded_not_dropped(tmp_path):
+    out = tmp_path / "crash.jsonl"
+    rep = run_sweep(jobs_of(crash, 3) + jobs_of(square, 1, 2), out, workers=2, progress=False)
+    assert sorted(r["key"] for r in lines(out)) == ["crash/3", "square/1", "square/2"]
+    died = rep.records["crash/3"]
+    assert died["status"] == "failed" and died["error"].startswith("worker failed: Broken")
+    again = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False, retry_failed=True)
+    assert all(r["status"] == "ok" for r in again.records.values())
+
+
+def test_simulator_built_once_per_case_per_process(tmp_path):
+    jobs = [Job(f"id/{i}", simulator_identity, {"case": "kundur"}) for i in range(3)]
+    rep = run_sweep(jobs, tmp_path / "ids.jsonl", workers=1, progress=False)
+    assert len({r["result"]["id"] for r in rep.records.values()}) == 1
+
+
+# --------------------------------------------------------------------- interruptions
+
+
+def test_interrupt_keeps_finished_lines_and_resume_runs_the_rest(tmp_path):
+    out = tmp_path / "partial.jsonl"
+    jobs = jobs_of(square, 1, 2) + jobs_of(interrupt, 0) + jobs_of(square, 3)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(jobs, out, workers=1, progress=False)
+    assert [r["key"] for r in lines(out)] == ["square/1", "square/2"]
+    rest = run_sweep(jobs_of(square, 1, 2, 3), out, workers=1, progress=False)
+    assert (rest.ran, rest.skipped) == (1, 2)
+    assert [r["key"] for r in lines(out)] == ["square/1", "square/2", "square/3"]
+
+
+def test_ctrl_c_on_a_process_pool_keeps_finished_lines(tmp_path):
+    out = tmp_path / "ctrl_c.jsonl"
+    slow = jobs_of(sleepy, 2.0, 2.5)
+    jobs = jobs_of(square, 1, 2) + jobs_of(ctrl_c_parent, 0.5) + slow
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(jobs, out, workers=2, progress=False)
+    assert time.perf_counter() - t0 < 10
+    keys = [r["key"] for r in lines(out)]
+    assert {"square/1", "square/2"} <= set(keys) and not any(k.startswith("sleepy") for k in keys)
+    rest = run_sweep(jobs_of(square, 1, 2) + jobs_of(sleepy, 0.01, 0.02), out, workers=1,
+                     progress=False)
+    assert (rest.ran, rest.skipped) == (2, 2)
+
+
+def test_line_cut_by_a_kill_is_moved_aside_and_its_job_rerun(tmp_path):
+    out = tmp_path / "cut.jsonl"
+    run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
+    with out.open("a") as f:
+        f.write('{"key": "square/2", "inp')                          # killed mid-write
+    with pytest.warns(UserWarning, match=r"line\(s\) 2 not a whole sweep record .*moved to "
+                                         r".*cut\.jsonl\.damaged; their jobs run again"):
+        rep = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+    assert (rep.ran, rep.skipped) == (1, 1)
+    text = out.read_text().splitlines()
+    assert [json.loads(t)["key"] for t in text] == ["square/1", "square/2"]
+    assert (tmp_path / "cut.jsonl.damaged").read_text() == '{"key": "square/2", "inp\n'
+
+
+def test_damaged_line_in_the_middle_is_moved_aside_too(tmp_path):
+    out = tmp_path / "mid.jsonl"
+    run_sweep(jobs_of(square, 1, 2, 3), out, workers=1, progress=False)
+    text = out.read_text().splitlines()
+    text[1] = text[1][:20] + "\x00garbage"
+    out.write_text("\n".join(text) + "\n")
+    with pytest.warns(UserWarning, match=r"line\(s\) 2 not a whole sweep record"):
+        rep = run_sweep(jobs_of(square, 1, 2, 3), out, workers=1, progress=False)
+    assert (rep.ran, rep.skipped) == (1, 2)
+    assert sorted(json.loads(t)["key"] for t in out.read_text().splitlines()) == \
+        ["square/1", "square/2", "square/3"]
+
+
+# ---------------------------------------------------------------------------- errors
+
+
+def test_duplicate_keys_changed_inputs_and_bad_workers_write_nothing(tmp_path):
+    out = tmp_path / "e.jsonl"
+    with pytest.raises(InputError, match="duplicate job key 'square/1'"):
+        run_sweep(jobs_of(square, 1, 1), out, progress=False)
+    with pytest.raises(InputError, match="workers must be >= 1"):
+        run_sweep(jobs_of(square, 1), out, workers=0, progress=False)
+    assert not out.exists()
+    run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
+    changed = [Job("square/1", square, {"x": 5})]
+    with pytest.raises(InputError, match="'square/1' with other inputs \\(x: 1 there, 5 now\\)"):
+        run_sweep(changed, out, workers=1, progress=False)
+
+
+def test_scheduler_without_dask_is_a_clear_error(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)
+    with pytest.raises(InputError, match=r"needs Dask distributed.*stabctl\[dask\]"):
+        run_sweep(jobs_of(square, 1), tmp_path / "d.jsonl", scheduler="tcp://127.0.0.1:8786",
+                  progress=False)
+    assert not (tmp_path / "d.jsonl").exists()
+
+
+@pytest.mark.dask
+def test_dask_cluster(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=1, processes=False, dashboard_address=None) as c:
+        rep = run_sweep(jobs_of(square, 1, 2) + jobs_of(boom, 3), tmp_path / "d.jsonl",
+                        scheduler=c.scheduler_address, progress=False)
+    assert (rep.ran, rep.failed) == (3, 1)
+    assert rep.records["square/2"]["result"] == {"y": 4}
+    assert rep.records["boom/3"]["error"] == "ValueError: bad x = 3"
+
+
+@pytest.mark.dask
+def test_local_dask_cluster_records_a_dead_worker_as_failed_and_resumes(tmp_path):
+    pytest.importorskip("distributed")
+    out = tmp_path / "d.jsonl"
+    rep = run_sweep(jobs_of(square, 1, 2) + jobs_of(crash, 3), out, scheduler="local",
+                    workers=2, progress=False)
+    assert (rep.ran, rep.failed) == (3, 1)
+    assert rep.records["square/2"]["result"] == {"y": 4}
+    assert "crash/3" in read_records(out) and "Killed" in rep.records["crash/3"]["error"]
+    again = run_sweep(jobs_of(square, 1, 2, 4), out, scheduler="local", workers=1,
+                      progress=False)
+    assert (again.ran, again.skipped) == (1, 2)
+
+
+# ------------------------------------------------------------------------------- CLI
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def assert_bad_input(res, tmp_path, needle):
+    assert res.exit_code == 2, res.output
+    err = res.stderr.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: ") and needle in err[0], res.stderr
+    assert res.stdout == "" and list(tmp_path.iterdir()) == []
+
+
+def test_cli_sweep_cct_default_faults_json_then_resume(tmp_path):
+    out = tmp_path / "k.jsonl"
+    res = run("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", out, "--workers", 1,
+              "--tol-ms", 5, "--json")
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert (d["ran"], d["skipped"], d["failed"]) == (2, 0, 0)
+    assert [r["key"] for r in d["records"]] == ["kundur/3-101/t1/esd-none",
+                                                "kundur/13-101/t1/esd-none"]
+    assert len(lines(out)) == 2
+    res = run("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", out, "--tol-ms", 5)
+    assert res.exit_code == 0, res.output
+    assert "kundur/3-101/t1/esd-none" in res.stdout
+    assert "2 job(s): 0 run now, 2 already in" in res.stdout
+
+
+def test_cli_sweep_cct_faults_csv(tmp_path):
+    faults = tmp_path / "faults.csv"
+    faults.write_text("bus,far_bus,t_fault\n3,101,0.5\n")
+    res = run("sweep-cct", "kundur", "--faults", faults, "--out", tmp_path / "o.jsonl",
+              "--workers", 1, "--tol-ms", 5, "--json")
+    assert res.exit_code == 0, res.output
+    rec = json.loads(res.stdout)["records"][0]
+    assert rec["key"] == "kundur/3-101/t0.5/esd-none" and rec["status"] == "ok"
+
+
+@pytest.mark.parametrize("args, needle", [
+    (("--faults", "missing.csv"), "fault list missing.csv"),
+    (("--faults", "DEFAULT", "--esd-pct", "abc"), "--esd-pct 'abc'"),
+    (("--faults", "DEFAULT", "--workers", 0), "--workers 0: must be in [1, 1024]"),
+    (("--faults", "DEFAULT", "--tol-ms", -1), "--tol-ms"),
+])
+def test_cli_sweep_cct_bad_input(tmp_path, args, needle):
+    res = run("sweep-cct", "kundur", "--out", tmp_path / "o.jsonl", *args)
+    assert_bad_input(res, tmp_path, needle)
+
+
+def test_cli_sweep_cct_unknown_line_fails_before_any_job(tmp_path):
+    faults = tmp_path / "faults.csv"
+    faults.write_text("bus,far_bus\n3,13\n")
+    res = run("sweep-cct", "kundur", "--faults", faults, "--out", tmp_path / "o.jsonl")
+    assert res.exit_code == 2 and "no branch between bus 3 and bus 13" in res.stderr
+    assert not (tmp_path / "o.jsonl").exists()
+
+
+def test_ratings_parse_none_and_lists():
+    from stabctl.cli.stability import _ratings
+
+    assert _ratings(()) == [None]
+    assert _ratings(("none,5", "10", "5")) == [None, 5.0, 10.0]
+    assert [j.key for j in cct_jobs("kundur", [LineFault(3, 101)], [None, 5.0])] == \
+        ["kundur/3-101/t1/esd-none", "kundur/3-101/t1/esd5"]
+
+
+def test_sweep_jobs_with_another_controller_are_keyed_apart():
+    # the paper's controller: exactly cct_jobs' jobs (earlier records resume); another:
+    # the ratings' jobs carry it in their inputs and keys
+    from stabctl.stability.cct import cct_jobs
+    from stabctl.studies.cases import default_faults
+    from stabctl.storage.control import BangBangCOI
+    from stabctl.studies.sweeps import controlled_cct_job, controlled_cct_jobs
+
+    faults = default_faults("kundur")[:1]
+    plain = cct_jobs("kundur", faults, [None, 5.0])
+    assert controlled_cct_jobs("kundur", faults, [None, 5.0], BangBangCOI()) == plain
+    other = controlled_cct_jobs("kundur", faults, [None, 5.0], BangBangCOI(deadband_hz=0.05))
+    assert other[0] == plain[0]
+    assert other[1].key == plain[1].key + "/ctrl-db0.05-vg0.8-system-hy0"
+    assert other[1].func is controlled_cct_job
+    assert other[1].inputs["controller"]["deadband_hz"] == 0.05
+
+
+@pytest.mark.dask
+def test_worker_pool_runs_on_a_local_dask_cluster():
+    # `place --scheduler local`: the evaluations go to Dask, results in job order
+    pytest.importorskip("distributed")
+    from stabctl.parallel import worker_pool
+
+    with worker_pool(1, "local") as run_map:
+        assert run_map(dict, [{"a": 1}, {"b": 2}]) == [{"a": 1}, {"b": 2}]
