@@ -48,6 +48,17 @@ def ensure_fresh_cache() -> None:
         pass
 
 
+def is_warm() -> bool:
+    """True if the compiled kernels of this source tree are on disk (the first call of a
+    simulating command then loads them in a second or two instead of compiling them)."""
+    stamp = _PKG / "__pycache__" / "numba-sources.sha256"
+    try:
+        return (stamp.read_text() == source_digest()
+                and any(_PKG.glob("dynamics/__pycache__/simulation.integrate-*.nbi")))
+    except OSError:
+        return False
+
+
 ensure_fresh_cache()
 
 #: ``numba.njit`` with ``cache=True``: the decorator of every stabctl kernel.

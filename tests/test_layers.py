@@ -42,3 +42,22 @@ def test_import_stabctl_leaves_environment_and_files_alone(tmp_path):
 def test_at_most_eight_top_level_modules():
     modules = sorted(p.name for p in (ROOT / "stabctl").glob("*.py"))
     assert len(modules) <= 8, modules
+
+
+def test_compile_notice_only_when_the_kernel_cache_is_cold(tmp_path, monkeypatch):
+    """`is_warm` (the CLI's one-line compile notice): False until the integrator's cache
+    index exists for the current sources, False again after any source change."""
+    from stabctl import _jitcache
+
+    pkg = tmp_path / "stabctl"
+    (pkg / "dynamics" / "__pycache__").mkdir(parents=True)
+    (pkg / "a.py").write_text("x = 1\n")
+    monkeypatch.setattr(_jitcache, "_PKG", pkg)
+    _jitcache.ensure_fresh_cache()
+    assert not _jitcache.is_warm()                                   # nothing compiled
+    (pkg / "dynamics" / "__pycache__" / "simulation.integrate-9.py311.nbi").write_text("")
+    assert _jitcache.is_warm()
+    (pkg / "a.py").write_text("x = 2\n")                             # a source change
+    assert not _jitcache.is_warm()
+    _jitcache.ensure_fresh_cache()                                   # stale kernels deleted
+    assert not any(pkg.rglob("*.nbi")) and not _jitcache.is_warm()

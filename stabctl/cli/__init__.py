@@ -15,19 +15,32 @@ where, with exit status 2; nothing is written in that case.
 from __future__ import annotations
 
 import os
+import sys
 
 import click
 
 
+#: commands that run the compiled simulator (the others never compile anything)
+_SIMULATING = {"paper", "simulate", "cct", "sweep-cct", "screen", "eig", "place", "estimate"}
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="stabctl")
-def main():
+@click.pass_context
+def main(ctx):
     """stabctl: transient-stability control with distributed energy storage."""
     # The simulator works on many small dense matrices: multi-threaded BLAS only adds
     # overhead there and oversubscribes the cores when sweeps run one simulation per
     # process.  Set before any command imports numpy; a user's own setting wins.
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
+    if ctx.invoked_subcommand in _SIMULATING and "--help" not in sys.argv:
+        from stabctl._jitcache import is_warm
+
+        if not is_warm():
+            click.echo("stabctl: compiling the simulator's kernels (once after installation "
+                       "or a source change, about a minute; later runs load them in seconds)",
+                       err=True)
 
 
 def _register() -> None:

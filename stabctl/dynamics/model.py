@@ -402,6 +402,12 @@ def kernel_outputs(nm, nb):
                          np.empty(nm), np.empty(nm), np.empty(nm), np.zeros(nb, np.complex128))
 
 
+#: the ``want_vbus`` flags of `evaluate_kernel` for compiled callers, as numpy booleans: a
+#: Python True/False passed from compiled code is typed as a literal, and numba would
+#: compile `evaluate_kernel` (and its callers) once per value
+BUS_VOLTAGES, NO_BUS_VOLTAGES = np.bool_(True), np.bool_(False)
+
+
 @njit(cache=True)
 def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     """One evaluation in PSTess's order (docs/pst_models.md 7.2): machine flag 1, network,

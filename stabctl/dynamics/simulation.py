@@ -38,9 +38,10 @@ from stabctl.case import Case
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
 from stabctl.dynamics.coi import coi_angle, coi_value
-from stabctl.dynamics.model import (DynamicModel, KeptBuses, KernelNetwork, KernelOutputs,
-                                    OperatingPoint, check_conventions, evaluate_kernel,
-                                    kernel_outputs, stacked_networks)
+from stabctl.dynamics.model import (BUS_VOLTAGES, NO_BUS_VOLTAGES, DynamicModel, KeptBuses,
+                                    KernelNetwork, KernelOutputs, OperatingPoint,
+                                    check_conventions, evaluate_kernel, kernel_outputs,
+                                    stacked_networks)
 from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
 from stabctl.dynamics.results import SimulationResult
 
@@ -343,13 +344,14 @@ class Simulator:
                       latency: float = 0.0, h: float | None = None,
                       semantics: str | None = None,
                       separation_limit: float = np.pi,
-                      stop_at_separation: bool = False) -> SimulationResult:
+                      stop_at_separation: bool = False,
+                      history_s: float = 1.0) -> SimulationResult:
         """Simulate with storage devices commanded from measurements (estimator in the loop).
 
         At each frame time t_f (s, increasing) the run is advanced to the first grid point
-        at or after t_f and ``decide(t_f, partial)`` is called with the trajectory so far
-        (a SimulationResult up to that grid point, so a measurement at t_f can be
-        interpolated; no verdict); it returns the device set-points, which take effect at
+        at or after t_f and ``decide(t_f, partial)`` is called with the recent trajectory
+        (a SimulationResult of the last `history_s` seconds up to that grid point, so a
+        measurement at t_f can be interpolated; no verdict); it returns the device set-points, which take effect at
         exactly t_f + `latency` (the step is split there) and hold until the next ones.
         With `stop_at_separation` the run ends at the first step after which a rotor angle
         is more than `separation_limit` rad from the COI, as `run` (no further frame is
@@ -383,6 +385,9 @@ class Simulator:
             Loss-of-synchronism limit, rad, as `run`; default pi.
         stop_at_separation : bool, optional
             End the run at separation, as `run`; default False.
+        history_s : float, optional
+            Length of the trajectory handed to `decide`, s; default 1 s (a PMU window
+            is a few cycles).
 
         Returns
         -------
@@ -411,7 +416,8 @@ class Simulator:
             run.advance(k)
             if run.status != OK:
                 break
-            run.command(i, t_f + latency, np.asarray(decide(float(t_f), run.partial(k)), float))
+            run.command(i, t_f + latency,
+                        np.asarray(decide(float(t_f), run.partial(k, history_s)), float))
         run.advance(grid.t.size - 1)
         return run.finish(storage)
 
@@ -481,15 +487,18 @@ class _Run:
         ds = self.carry.devices
         ds.cmd_t[i], ds.cmd_mode[i] = t_apply, modes
 
-    def partial(self, k: int) -> SimulationResult:
-        """The trajectory up to grid index k (views, no verdict)."""
+    def partial(self, k: int, history_s: float) -> SimulationResult:
+        """The trajectory of the last `history_s` seconds up to grid index k (views, no
+        verdict): a callback at every frame then costs the same late in a long run as
+        early (the whole trajectory would make a run's cost grow with its length squared)."""
         r, c, n = self.rec, self.sim.case, k + 1
+        lo = max(int(np.searchsorted(self.grid.t[:n], self.grid.t[k] - history_s)) - 1, 0)
         return SimulationResult(
-            t=self.grid.t[:n], machines=c.machines.number.astype(int),
-            buses=c.buses.number.astype(int), speed=r.speed[:n], angle=r.angle[:n],
-            pelect=r.pelect[:n], pmech=r.pmech[:n], efd=r.efd[:n], vmag=np.abs(r.V[:n]),
-            vang=np.angle(r.V[:n]), inertia=self.sim.inertia, devices=np.arange(1, self.sa.pmax.size + 1),
-            pesd=self.rec.P[:n])
+            t=self.grid.t[lo:n], machines=c.machines.number.astype(int),
+            buses=c.buses.number.astype(int), speed=r.speed[lo:n], angle=r.angle[lo:n],
+            pelect=r.pelect[lo:n], pmech=r.pmech[lo:n], efd=r.efd[lo:n],
+            vmag=np.abs(r.V[lo:n]), vang=np.angle(r.V[lo:n]), inertia=self.sim.inertia,
+            devices=np.arange(1, self.sa.pmax.size + 1), pesd=self.rec.P[lo:n])
 
     def finish(self, storage) -> SimulationResult:
         """The result; raises SimulationError (with the partial result) after a divergence."""
@@ -931,7 +940,7 @@ def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
     _targets(sa, ds.mode, w.a.r, w.a.v, w.a.acc, ds.target)
     if _powers_now(sa, ds):
         _inject(sa, ds.P, kn.kept.S_extra)
-        _evaluate(kn, x, grid.interval[k], True, w.dx_k)
+        _evaluate(kn, x, grid.interval[k], BUS_VOLTAGES, w.dx_k)
 
 
 @njit(cache=True)
@@ -983,7 +992,7 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d):
     _powers_now(sa, ds)
     _inject(sa, ds.P, kn.kept.S_extra)
     dx_a = np.empty_like(x_a)
-    return _evaluate(kn, x_a, grid.interval[k], False, dx_a) >= 0, dx_a
+    return _evaluate(kn, x_a, grid.interval[k], NO_BUS_VOLTAGES, dx_a) >= 0, dx_a
 
 
 # -- the step ------------------------------------------------------------------------------
@@ -1029,7 +1038,7 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
         Pm = _advance(sa, ds.P, ds.target, ds.e, hh, rec.stats)
         if first_d >= 0:
             _inject(sa, Pm, kn.kept.S_extra)
-            if _evaluate(kn, x_a + hh * dx_a, s, False, w.dx_j) < 0:
+            if _evaluate(kn, x_a + hh * dx_a, s, NO_BUS_VOLTAGES, w.dx_j) < 0:
                 return NO_LOAD_FLOW, k, x
             x_a = x_a + 0.5 * hh * (dx_a + w.dx_j)
         else:                      # up to the scheduled command
@@ -1056,9 +1065,9 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     _inject(sa, ds.P, kn.kept.S_extra)
     if grid.first[k] and opts.pst:
         V_keep = kn.kept.V.copy()
-        _evaluate(kn, x, s, False, w.dx_k)
+        _evaluate(kn, x, s, NO_BUS_VOLTAGES, w.dx_k)
         kn.kept.V[:] = V_keep
-    if _evaluate(kn, x, s, True, w.dx_k) < 0:
+    if _evaluate(kn, x, s, BUS_VOLTAGES, w.dx_k) < 0:
         return NO_LOAD_FLOW, max(k - 1, 0), x
     w.switched[:] = False
     if sa.pmax.size > 0:
@@ -1084,7 +1093,7 @@ def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
     for real)."""
     V_keep, held_keep, stage_keep = kn.kept.V.copy(), kn.kept.held.copy(), kn.held_stage[0]
     _inject(sa, ds.P, kn.kept.S_extra)
-    _evaluate(kn, x.copy(), grid.interval[k1], True, w.dx_k)
+    _evaluate(kn, x.copy(), grid.interval[k1], BUS_VOLTAGES, w.dx_k)
     kn.kept.V[:], kn.kept.held[:], kn.held_stage[0] = V_keep, held_keep, stage_keep
     _record(rec, k1, x, kn.out, ds.P)
 

@@ -39,7 +39,7 @@ from stabctl.models import governors as gov
 from stabctl.models import machines as mac
 from stabctl.case import Case
 from stabctl.dynamics.coi import coi_weights
-from stabctl.dynamics.model import (DynamicModel, KeptBuses, KernelOutputs, StageConfig,
+from stabctl.dynamics.model import (BUS_VOLTAGES, DynamicModel, KeptBuses, KernelOutputs, StageConfig,
                                     evaluate_kernel, kernel_network, kernel_outputs)
 from stabctl.errors import InputError, SimulationError
 
@@ -313,7 +313,7 @@ def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0):
     S = np.zeros(V_nc0.size, np.complex128)
     at_op = KernelOutputs(out.cur, out.pelect, out.qelect, out.eterm, out.efd, out.pmech, V0)
     if evaluate_kernel(x0.copy(), p, net, KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_),
-                                                    S), True, f0, at_op) < 0:
+                                                    S), BUS_VOLTAGES, f0, at_op) < 0:
         return -2
     for c in range(kind.size):
         j = index[c]
@@ -340,7 +340,7 @@ def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0):
             else:
                 p.GP[j, gov.G_PREF] = v
             it = evaluate_kernel(x, p, net, KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_),
-                                                      S), True, dx, out)
+                                                      S), BUS_VOLTAGES, dx, out)
             if kind[c] == VREF:
                 p.EP[j, exc.E_VREF] = nominal
             elif kind[c] == PREF:
