@@ -33,19 +33,26 @@ AMBIENT, AMBIENT_RUNS, AMBIENT_S = am.AmbientLoad(pct=1.0, tau_s=2.0), 5, 60.0
 
 
 def case_figures(name: str, runs: int, cct_runs: int, records_dir: Path,
-                 workers=None) -> dict:
+                 workers=None, progress=None) -> dict:
     """RMSE, false actions and CCT table of one case (see the module docstring); the CCT
-    sweep's resumable records go to records_dir."""
+    sweep's resumable records go to records_dir; progress: callable(str) told each stage
+    and each ambient run (the CCT sweep has its own bar)."""
+    say = progress or (lambda msg: None)
     pc = CASES[name]
     bus, far, cycles = pc.bus, pc.far_bus, pc.cycles["estimation"]
     case = load_case(name)
     ev = fault_with_clearing(case, bus, far, pc.fault.t_fault, cycles)
+    say(f"estimation {name}: RMSE, {runs} PMU noise runs")
     res = Simulator(case).run([ev], t_end=10.0)
     window = (max(ev.times()) + 0.1, 10.0)
     rmse = study.monte_carlo(case, res, PMUSettings(), runs, 0, window)
     sim = Simulator(case)
-    flat = [am.simulate(sim, AMBIENT_S, replace(AMBIENT, seed=r)) for r in range(AMBIENT_RUNS)]
+    flat = []
+    for r in range(AMBIENT_RUNS):
+        say(f"estimation {name}: ambient load run {r + 1}/{AMBIENT_RUNS} ({AMBIENT_S:g} s)")
+        flat.append(am.simulate(sim, AMBIENT_S, replace(AMBIENT, seed=r)))
     false = study.false_actions(case, flat, PMUSettings(), 0)
+    say(f"estimation {name}: CCT with the estimators in the loop, {cct_runs} noise seeds")
     cct = cl.cct_study(name, bus, far, RATINGS, cct_runs,
                        records_dir / f"estimation_cct_{name}.jsonl", workers=workers)
     return {"rmse": rmse, "false": false, "cct": cct, "cycles": cycles, "bus": bus, "far": far,
@@ -93,12 +100,12 @@ def markdown(name: str, fig: dict, generated_by: str = "stabctl paper") -> str:
 
 def write_estimation_report(out_dir="reports", runs: int = 20, cct_runs=None,
                             workers=None, cases=tuple(CASES), records_dir=None,
-                            generated_by: str = "stabctl paper") -> list[Path]:
+                            generated_by: str = "stabctl paper", progress=None) -> list[Path]:
     """Write reports/estimation_<case>.md for each of `cases` (default both).  runs:
     Monte-Carlo runs of the RMSE and CCT studies; cct_runs: {case: runs} to cut the CCT
     runs of a case (miniWECC is heavy); workers: processes of the CCT sweep; records_dir:
     where the CCT sweeps keep their resumable records (default out_dir); generated_by: the
-    command the report names as its source.  Returns the paths.  Raises InputError for an unknown case."""
+    command the report names as its source; progress: callable(str) told each stage.  Returns the paths.  Raises InputError for an unknown case."""
     unknown = set(cases) - set(CASES)
     if unknown:
         raise InputError(f"no estimation study for case(s) {sorted(unknown)}")
@@ -109,7 +116,7 @@ def write_estimation_report(out_dir="reports", runs: int = 20, cct_runs=None,
     for name in cases:
         records = Path(records_dir or out_dir)
         records.mkdir(parents=True, exist_ok=True)
-        fig = case_figures(name, runs, cct_runs.get(name, runs), records, workers)
+        fig = case_figures(name, runs, cct_runs.get(name, runs), records, workers, progress)
         path = out_dir / f"estimation_{name}.md"
         path.write_text(markdown(name, fig, generated_by))
         paths.append(path)

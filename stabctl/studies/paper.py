@@ -164,7 +164,8 @@ def section_estimation(fig_dir: Path, records_dir: Path, progress=None) -> str:
     """PMU estimation and estimator-in-the-loop control: separate reports."""
     from stabctl.studies.estimation_report import write_estimation_report
 
-    paths = write_estimation_report(fig_dir, runs=20, records_dir=records_dir)
+    paths = write_estimation_report(fig_dir, runs=20, records_dir=records_dir,
+                                    progress=progress)
     links = ", ".join(f"[{p.stem}]({p.name})" for p in paths)
     return "\n".join(["## 7. Estimated speeds in the control loop", "",
                       "PMU model (IEEE C37.118.1 limits), Kalman filters, RMSE versus truth, "

@@ -81,3 +81,33 @@ def test_no_false_action_in_the_loop_under_ambient_load_noise(kundur):
         assert np.abs(run.diagnostics.rel).max() < 0.1                    # Hz, the deadband
     rel = (res.speed - res.coi_speed[:, None]) * case.freq_hz
     assert np.abs(rel).max() > 1e-3                    # the loads do move the machines (Hz)
+
+
+def test_search_from_finds_the_bracket_of_a_monotone_verdict_from_any_hint():
+    # stable up to cell 37: the bracket (37, 38) from below, above, at the CCT, and in
+    # 2 runs when the hint is the CCT itself
+    stable = lambda k: k <= 37  # noqa: E731
+    for hint in (0, 5, 36, 37, 38, 60, 240):
+        lo, hi, n = cl.search_from(stable, hint, 240)
+        assert (lo, hi) == (37, 38)
+    assert cl.search_from(stable, 37, 240)[2] == 2
+    with pytest.raises(Exception, match="search limit"):
+        cl.search_from(lambda k: True, 3, 10)
+    with pytest.raises(Exception, match="cleared instantly"):
+        cl.search_from(lambda k: False, 3, 10)
+
+
+def test_warm_started_cct_equals_the_cold_bisection_where_the_verdict_is_monotone():
+    # stabctl.stability.cct.critical_clearing_time (bisection from scratch) against the
+    # chain job warm-started from hints below and above: Kundur, line 3-101, 5 % ESDs,
+    # ideal speeds in the loop (cold CCT 12 cycles, reports/estimation_kundur.md)
+    from stabctl.stability.cct import LineFault, cached_simulator, critical_clearing_time
+
+    runner = cl.LoopRunner(cached_simulator("kundur"), 5.0, "ideal")
+    cold = critical_clearing_time(runner, LineFault(3, 101, 1.0), tol=1 / 240,
+                                  error_check=False)
+    warm = cl.cct_chain_job("kundur", 3, 101, 5.0, "ideal", [0, 1], hint_cycles=10.0)
+    assert cold.cct_cycles == 12.0
+    assert warm["cct_cycles"] == [12.0, 12.0]
+    assert warm["n_simulations"][1] == 2 < cold.n_simulations      # from the previous seed
+    assert 0 < warm["latest_separation_s"] < 5.0
