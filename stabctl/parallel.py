@@ -320,7 +320,7 @@ def _call(func, kwargs: dict):
 
 
 def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
-              scheduler: str | None = None, progress: bool = True,
+              scheduler: str | None = None, progress: bool | Callable = True,
               retry_failed: bool = False) -> SweepReport:
     """Run `jobs` (Job) not yet recorded in `out`, appending one JSON line per job.
 
@@ -328,7 +328,9 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
         workers: local processes (default: the available cores); 1 runs in this process.
         scheduler: Dask scheduler address ('tcp://host:8786'): run there instead;
             'local': a Dask LocalCluster of `workers` single-threaded processes.
-        progress: tqdm bar on stderr.  retry_failed: rerun keys recorded as failed.
+        progress: tqdm bar on stderr (True), none (False), or a callable(done, total)
+            called after each record written.  retry_failed: rerun keys recorded as
+            failed.
 
     Raises:
         InputError: duplicate keys; `out` holds a key with other inputs; workers < 1;
@@ -345,12 +347,12 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
     todo = [j for j in jobs if j.key not in done
             or (retry_failed and done[j.key].get("status") == "failed")]
     wall = time.perf_counter()
-    failed = 0
+    failed = written = 0
     if todo:
         results = _dask(todo, scheduler, workers) if scheduler else _local(todo, workers)
         out.parent.mkdir(parents=True, exist_ok=True)
         bar = tqdm(total=len(todo), desc=out.name, unit="job", file=sys.stderr,
-                   disable=not progress)
+                   disable=progress is not True)
         with closing(results), _appender(out) as f, bar:
             for rec in results:
                 line = _line(rec)
@@ -360,6 +362,9 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
                 failed += rec["status"] == "failed"
                 bar.update()
                 bar.set_postfix(failed=failed)
+                written += 1
+                if callable(progress):
+                    progress(written, len(todo))
     return SweepReport(out=out, records={j.key: done[j.key] for j in jobs}, ran=len(todo),
                        skipped=len(jobs) - len(todo), failed=failed,
                        wall_time_s=time.perf_counter() - wall)

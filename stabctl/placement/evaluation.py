@@ -52,7 +52,8 @@ class Contingency:
 def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
              controller: dict, tol: float, t_max: float, scan_from: float | None = None,
              scan_to: float | None = None, scan_s: float = SCAN_S,
-             eps_s: float = EPS_S, conventions: str = "ieee", h: float | None = None) -> dict:
+             eps_s: float = EPS_S, conventions: str = "ieee", h: float | None = None,
+             bracket: list | None = None) -> dict:
     """CCT of one contingency with ESDs `devices` ([bus, machine, MW] each) and the
     gradient of that CCT in the rating of every candidate site ([bus, machine] each).
 
@@ -61,13 +62,19 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
     (None: the default).  Without scan_from the CCT is the bisection of
     `stabctl.stability.cct`; with it, `scanned_cct` (the first unstable clearing time on a scan_s
     grid from scan_from up to scan_to, then bisection).  JSON-able in and out (a
-    process-pool job).
+    process-pool job).  bracket: [stable, unstable] clearing times (s) known from a
+    coarser search of the same fault and fleet (e.g. the screening): the bisection
+    starts there, both ends simulated again (a stable end found unstable falls back to
+    the bisection from 0; an unstable end found stable is pushed up as
+    `critical_clearing_time` does).  Runs repeated within one evaluation (the scan's
+    and the bisection's bracket ends, the gradient's run beyond the CCT) are simulated
+    once (`_Memo`); n_simulations counts the runs simulated.
     Returns {"cct_s", "t_unstable_s", "n_simulations", "separated", "critical",
     "margin", "dmargin_dtc", "gradient_s_per_mw" (n_sites,), "above_t_max"}; a CCT
     above t_max is returned as t_max with a zero gradient.
     Raises InputError (unstable at zero clearing, bad fault) and SimulationError.
     """
-    sim = cached_simulator(case, conventions, h)
+    sim = _Memo(cached_simulator(case, conventions, h))
     far = None if fault["far_bus"] is None else int(fault["far_bus"])
     f = LineFault(int(fault["bus"]), far, float(fault["t_fault"]),
                   int(fault["circuit"]), tuple((int(a), int(b)) for a, b in fault["trips"]))
@@ -76,10 +83,9 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
                          ctrl) if devices else None
     try:
         if scan_from is None:
-            res, n_scan = critical_clearing_time(sim, f, tol=tol, t_max=t_max, error_check=False,
-                                                 storage=fleet), 0
+            res = _bisection(sim, f, fleet, tol, t_max, bracket)
         else:
-            res, n_scan = scanned_cct(sim, f, fleet, tol=tol, t_max=t_max, start=scan_from,
+            res, _ = scanned_cct(sim, f, fleet, tol=tol, t_max=t_max, start=scan_from,
                                       stop=scan_to, step=scan_s)
     except InputError as exc:
         if "above the search limit" not in str(exc):
@@ -88,9 +94,52 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
                 "critical": [], "margin": None, "dmargin_dtc": None, "above_t_max": True,
                 "gradient_s_per_mw": [0.0] * len(sites)}
     grad = cct_gradient(sim, f, res.t_unstable, fleet, sites, np.asarray(beta), ctrl, eps_s)
-    return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable,
-            "n_simulations": n_scan + res.n_simulations + grad.pop("n_runs"),
+    grad.pop("n_runs")
+    return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable, "n_simulations": sim.n_runs,
             "separated": list(res.separated), "above_t_max": False, **grad}
+
+
+def _bisection(sim, fault: LineFault, fleet, tol: float, t_max: float, bracket):
+    """`critical_clearing_time` from 0, or from a known [stable, unstable] bracket (the
+    whole search again from 0 if its stable end is not stable)."""
+    if bracket is not None:
+        lo, hi = (float(t) for t in bracket)
+        if 0 < lo < hi <= t_max:
+            try:
+                return critical_clearing_time(sim, fault, tol=tol, t_lo=lo, t_hi=hi,
+                                              t_max=t_max, error_check=False, storage=fleet)
+            except InputError as exc:
+                if "unstable already at the lower bound" not in str(exc):
+                    raise
+    return critical_clearing_time(sim, fault, tol=tol, t_max=t_max, error_check=False,
+                                  storage=fleet)
+
+
+class _Memo:
+    """A Simulator whose `run` simulates each distinct call once (events, end, step,
+    separation settings, fleet) and counts the runs simulated (`n_runs`); a run that
+    raised is not kept (its caller may mark the partial result).  The simulator is
+    deterministic: a repeated run would give the same trajectory."""
+
+    def __init__(self, sim):
+        self._sim, self._done, self.n_runs = sim, {}, 0
+
+    def __getattr__(self, name):
+        return getattr(self._sim, name)
+
+    def run(self, events=(), t_end: float = 5.0, h: float | None = None, semantics=None,
+            separation_limit: float = np.pi, stop_at_separation: bool = False,
+            storage=None):
+        h = self._sim.default_h if h is None else h
+        key = (repr(list(events)), round(t_end, 12), h, semantics, separation_limit,
+               stop_at_separation, id(storage))
+        if key not in self._done:
+            self.n_runs += 1
+            self._done[key] = self._sim.run(events, t_end, h=h, semantics=semantics,
+                                            separation_limit=separation_limit,
+                                            stop_at_separation=stop_at_separation,
+                                            storage=storage)
+        return self._done[key]
 
 
 def scanned_cct(sim, fault: LineFault, fleet, *, tol: float, t_max: float, start: float,
@@ -190,7 +239,8 @@ def devices_of(sites, mw) -> list:
 
 def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangBangCOI,
            tol: float, t_max: float, base: dict | None = None, scan: str = "target",
-           scan_s: float = SCAN_S, model: dict | None = None) -> dict:
+           scan_s: float = SCAN_S, model: dict | None = None,
+           brackets: dict | None = None) -> dict:
     """`evaluate` every contingency at ratings mw (MW per site), in parallel through
     run_map (`worker_pool`): name -> evaluation dict.
 
@@ -199,6 +249,9 @@ def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangB
     (scan="target") or to t_max (scan="full", the first unstable clearing time however
     far); scan="none" or no storage: bisection only.
     model: {"conventions", "h"} of the runs (default: ieee at the default step).
+    brackets: name -> [stable, unstable] clearing times (s) of a coarser search at the
+    same ratings, where a bisection starts (`evaluate`).  The jobs are submitted
+    longest scan first (so that the pool's last jobs are short).
     Raises InputError for another scan value.
     """
     if scan not in ("target", "full", "none"):
@@ -210,11 +263,18 @@ def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangB
               "beta": np.asarray(beta).tolist(), "controller": ctrl, "tol": tol,
               "t_max": t_max, "scan_s": scan_s, **(model or {})}
     scanning = devices and base is not None and scan != "none"
+    brackets = brackets or {}
     jobs = [{**common, "fault": _fault_dict(c.fault),
              "scan_from": base[c.name]["cct_s"] if scanning else None,
-             "scan_to": c.target_cct_s if scan == "target" else None}
+             "scan_to": c.target_cct_s if scan == "target" else None,
+             **({"bracket": list(brackets[c.name])}
+                if c.name in brackets and not scanning else {})}
             for c in contingencies]
-    return dict(zip([c.name for c in contingencies], run_map(evaluate, jobs)))
+    spans = [(j["scan_to"] or t_max) - j["scan_from"] if j["scan_from"] is not None else 0.0
+             for j in jobs]
+    order = sorted(range(len(jobs)), key=lambda i: -spans[i])
+    done = dict(zip(order, run_map(evaluate, [jobs[i] for i in order])))
+    return {c.name: done[i] for i, c in enumerate(contingencies)}
 
 
 def _fault_dict(f: LineFault) -> dict:

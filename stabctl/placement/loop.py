@@ -35,7 +35,9 @@ infeasibility (`InfeasibleError` naming them).
 
 from __future__ import annotations
 
+import threading
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -56,6 +58,9 @@ ACCEPT, GOOD = 0.1, 0.75
 #: Feasibility restoration (`_restore`): near miss = CCT shortfall <= RESTORE_MISS
 #: tolerances in all; scale factors tried on it, in order.
 RESTORE_MISS, RESTORE_SCALE = 3, (1.03, 1.06, 1.1)
+#: One linearisation of a shared (cached) simulator at a time: `place` and `evaluations`
+#: may run in threads of one process (`stabctl.studies.placement`).
+_LINEARISE = threading.Lock()
 
 
 @dataclass
@@ -156,8 +161,9 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
           tol: float = 1e-3, t_max: float = 1.0, max_iter: int = 10, rtol: float = 0.02,
           workers: int = 1, scheduler: str | None = None,
           controller: BangBangCOI | None = None, amplitude_hz: float = 0.2,
-          base: dict | None = None, start=None,
-          progress=None, conventions: str = "ieee", h: float | None = None) -> PlacementResult:
+          base: dict | None = None, start=None, start_evaluations: dict | None = None,
+          progress=None, conventions: str = "ieee", h: float | None = None,
+          run_map=None) -> PlacementResult:
     """Least-cost ESD allocation meeting every contingency's target CCT (and damping),
     verified by simulation (module docstring).
 
@@ -182,7 +188,14 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
         start: first allocation (MW per site, shape (n_sites,)) instead of none, e.g. a
             uniform fleet that meets every target: the loop then starts feasible and
             every allocation it returns is at most as costly.
+        start_evaluations: evaluations of every contingency at `start` already simulated
+            (e.g. a uniform fleet's first unstable clearing times, `evaluations` with
+            scan="full"), used instead of simulating it again when `start` is on the
+            0.1 MW grid (unchanged by rounding) and every contingency is there.
         progress: callable(str), one line per step.
+        run_map: a `stabctl.parallel.worker_pool` map to run the evaluations on (kept
+            open by the caller, so that workers and their caches serve many calls);
+            None: a pool of `workers` processes (or `scheduler`) for this call.
     Raises:
         InfeasibleError: a contingency misses its target even with every site at its
             bound (simulated), or the damping rows cannot be met.
@@ -195,17 +208,19 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
     _check_faults(sim.case, contingencies)
     sites = tuple(sites or candidate_sites(sim.case))
     controller = controller or DEFAULT_CONTROLLER
-    beta, damping = _linear_models(sim, sites, controller, zeta_min, amplitude_hz)
+    with _LINEARISE:
+        beta, damping = _linear_models(sim, sites, controller, zeta_min, amplitude_hz)
     setup = _Setup(case, contingencies, sites, beta, controller, damping, zeta_min,
                    {"safety_s": 2 * tol if safety_s is None else safety_s,
                     "max_sites": max_sites, "site_cost": site_cost}, tol, t_max,
                    model={"conventions": conventions, "h": h})
     say = progress or (lambda msg: None)
-    with worker_pool(workers, scheduler) as run_map:
-        setup.run_map = run_map
+    with _pool(run_map, workers, scheduler) as rm:
+        setup.run_map = rm
         base = setup.base = base or setup.verify(np.zeros(len(sites)))
         say("no storage: " + _cct_line(contingencies, base))
-        result = _iterate(setup, base, _start(setup, start, base, say), max_iter, rtol, say)
+        result = _iterate(setup, base, _start(setup, start, base, say, start_evaluations),
+                          max_iter, rtol, say)
     result.wall_time_s = time.perf_counter() - wall
     return result
 
@@ -213,12 +228,15 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
 def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | None = None,
                 scan: str = "target", tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
                 scheduler: str | None = None, controller: BangBangCOI | None = None,
-                conventions: str = "ieee", h: float | None = None) -> dict:
+                conventions: str = "ieee", h: float | None = None, run_map=None,
+                brackets: dict | None = None) -> dict:
     """Simulated CCT (and its gradient) of every contingency at ratings mw (MW per site of
     `sites`, default `candidate_sites`; None = no storage), in `workers` processes (or
     on the Dask `scheduler`, as `place`):
     name -> `placement_eval.evaluate` dict.  base and scan as `placement_eval.verify`
-    (scan="full" with base: the first unstable clearing time, e.g. of a uniform fleet).
+    (scan="full" with base: the first unstable clearing time, e.g. of a uniform fleet);
+    run_map as `place`; brackets: name -> [stable, unstable] clearing times (s) from a
+    coarser search where each bisection starts (`placement_eval.verify`).
     Raises as `place`.
     """
     contingencies = tuple(contingencies)
@@ -226,11 +244,13 @@ def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | N
     _check_faults(sim.case, contingencies)
     sites = tuple(sites or candidate_sites(sim.case))
     controller = controller or DEFAULT_CONTROLLER
-    beta, _ = _linear_models(sim, sites, controller, None, 0.0)
+    with _LINEARISE:
+        beta, _ = _linear_models(sim, sites, controller, None, 0.0)
     mw = np.zeros(len(sites)) if mw is None else np.asarray(mw, float)
-    with worker_pool(workers, scheduler) as run_map:
-        return verify(run_map, case, contingencies, sites, mw, beta, controller, tol, t_max,
-                      base=base, scan=scan, model={"conventions": conventions, "h": h})
+    with _pool(run_map, workers, scheduler) as rm:
+        return verify(rm, case, contingencies, sites, mw, beta, controller, tol, t_max,
+                      base=base, scan=scan, model={"conventions": conventions, "h": h},
+                      brackets=brackets)
 
 
 def baseline(case: str, faults, **kw) -> dict:
@@ -251,6 +271,11 @@ def with_gain(faults, base: dict, gain_pct: float, tol: float = 1e-3) -> tuple:
         t = base[name]["cct_s"] * (1 + gain_pct / 100)
         out.append(Contingency(f, round(np.ceil(t / tol - 1e-9) * tol, 12)))
     return tuple(out)
+
+
+def _pool(run_map, workers: int, scheduler: str | None):
+    """The caller's run_map as is, or a `worker_pool` for one call."""
+    return nullcontext(run_map) if run_map is not None else worker_pool(workers, scheduler)
 
 
 def _check_faults(case, contingencies) -> None:
@@ -300,8 +325,10 @@ def _check_settings(contingencies, max_iter, tol, workers, zeta_min) -> None:
 
 # -- the trust-region loop ---------------------------------------------------------------
 
-def _start(setup: _Setup, start, base: dict, say) -> tuple[np.ndarray, dict]:
-    """The first allocation and its evaluations (no storage unless `start` is given)."""
+def _start(setup: _Setup, start, base: dict, say,
+           known: dict | None = None) -> tuple[np.ndarray, dict]:
+    """The first allocation and its evaluations (no storage unless `start` is given;
+    `known`: its evaluations already simulated, by contingency name)."""
     n = len(setup.sites)
     if start is None:
         return np.zeros(n), base
@@ -309,7 +336,11 @@ def _start(setup: _Setup, start, base: dict, say) -> tuple[np.ndarray, dict]:
     if start.shape != (n,) or np.any(start < 0) or np.any(start > setup.upper + 1e-9):
         raise InputError(f"start: need {n} ratings within the site bounds (MW)")
     mw = _rounded(start, setup.sites)
-    ev = setup.verify(mw)
+    if known is not None and np.array_equal(mw, start) and \
+            all(c.name in known for c in setup.contingencies):
+        ev = {c.name: known[c.name] for c in setup.contingencies}
+    else:
+        ev = setup.verify(mw)
     say(f"start {mw.sum():.1f} MW: " + _cct_line(setup.contingencies, ev))
     return mw, ev
 

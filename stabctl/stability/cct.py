@@ -437,9 +437,9 @@ def cached_simulator(case_name: str, conventions: str = "ieee",
 def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circuit: int = 1,
             trips=(), esd_pct: float | None = None, tol: float = TOL, t_max: float = T_MAX,
             t_end: float | None = None, conventions: str = "ieee",
-            h: float | None = None, q_limits: bool = True) -> dict:
+            h: float | None = None, q_limits: bool = True, error_check: bool = True) -> dict:
     """Worker entry of a CCT sweep: the CCT of one fault at one storage rating, with its
-    numerical error bar.
+    numerical error bar (unless error_check is False, e.g. a coarse screening).
 
     Arguments are JSON-able (a sweep's recorded inputs; esd_pct: storage rating in %,
     None = no storage; conventions, h: model conventions and step, None = the default;
@@ -452,7 +452,8 @@ def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circ
                       int(circuit),
                       tuple((int(a), int(b)) for a, b in trips))
     res = critical_clearing_time(sim, fault, tol=tol, t_max=t_max, t_end=t_end,
-                                 storage=storage_fleet(sim.case, esd_pct))
+                                 storage=storage_fleet(sim.case, esd_pct),
+                                 error_check=error_check)
     return res.to_dict()
 
 
@@ -472,10 +473,12 @@ def cct_key(case: str, fault: LineFault, esd_pct: float | None, conventions: str
 
 def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
              t_max: float = T_MAX, t_end: float | None = None, conventions: str = "ieee",
-             h: float | None = None, q_limits: bool = True) -> list:
+             h: float | None = None, q_limits: bool = True,
+             error_check: bool = True) -> list:
     """One `stabctl.parallel.Job` per (fault, storage rating %, None = no storage) pair, with
     the model conventions, step h (None: the default) and power-flow Q limits of every
-    run (the inputs record q_limits only when off, so earlier records still resume).
+    run (the inputs record q_limits only when off, so earlier records still resume), and
+    error_check (the half-step rerun of the final bracket, recorded only when off).
 
     Checks every fault's bus and line against the case first (UnknownBusError, CaseError)
     so that bad input fails before any job runs.
@@ -492,7 +495,8 @@ def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
     for f in faults:
         validate(case, f.events(0.0), 0.0)
     settings = {"tol": tol, "t_max": t_max, "t_end": t_end, "conventions": conventions, "h": h,
-                **({} if q_limits else {"q_limits": False})}
+                **({} if q_limits else {"q_limits": False}),
+                **({} if error_check else {"error_check": False})}
     return [Job(key=cct_key(case_name, f, p, conventions, h, q_limits), func=cct_job,
                 inputs={"case": case_name, "bus": f.bus, "far_bus": f.far_bus,
                         "t_fault": f.t_fault, "circuit": f.circuit,

@@ -19,7 +19,10 @@ from __future__ import annotations
 
 import json
 import sys
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from pathlib import Path
 
 import matplotlib
@@ -34,9 +37,9 @@ from stabctl.stability.cct import LineFault, cct_jobs  # noqa: E402
 from stabctl.studies.cases import DEFAULT_FAULTS  # noqa: E402
 from stabctl.placement.program import candidate_sites  # noqa: E402
 from stabctl.placement.evaluation import Contingency  # noqa: E402
-from stabctl.placement.loop import baseline, evaluations, place  # noqa: E402
+from stabctl.placement.loop import _rounded, baseline, evaluations, place  # noqa: E402
 from stabctl.storage.devices import hv_bus  # noqa: E402
-from stabctl.parallel import run_sweep, strip_run_dependent  # noqa: E402
+from stabctl.parallel import run_sweep, strip_run_dependent, worker_pool  # noqa: E402
 
 UNIFORM_PCT, BUDGET = 5.0, 0.25          # the paper's fleet; MW budget (fraction of it)
 N_FAULTS = 10
@@ -44,6 +47,7 @@ GAIN_FRACTIONS = (0.25, 0.5, 0.75)        # Pareto points below the full uniform
 UNIFORM_PCTS = (1.25, 2.5)                # smaller uniform fleets for comparison
 SCREEN_TOL, SCREEN_T_MAX, TOL = 0.005, 0.5, 1e-3
 MAX_ITER, MAX_ITER_SIDE = 8, 4            # simulated allocations: the main run; the others
+HEARTBEAT_S = 8.0                         # longest silence of the progress callback (s)
 
 
 # -- contingencies -----------------------------------------------------------------------
@@ -66,17 +70,20 @@ def candidate_faults(case) -> list[LineFault]:
     return faults
 
 
-def screen(case_name: str, out_dir: Path, workers: int) -> list[dict]:
-    """Coarse CCT of every candidate fault (resumable JSON lines in out_dir):
-    [{"fault", "cct_s"} or {"fault", "error"}]."""
+def screen(case_name: str, out_dir: Path, workers: int, progress=None) -> list[dict]:
+    """Coarse CCT of every candidate fault (resumable JSON lines in out_dir; no half-step
+    error check, which a ranking does not use): [{"fault", "cct_s", "t_unstable_s"} or
+    {"fault", "error"}].  progress: callable(done, total) after each fault."""
     faults = candidate_faults(load_case(case_name))
-    rep = run_sweep(cct_jobs(case_name, faults, tol=SCREEN_TOL, t_max=SCREEN_T_MAX),
+    rep = run_sweep(cct_jobs(case_name, faults, tol=SCREEN_TOL, t_max=SCREEN_T_MAX,
+                             error_check=False),
                     out_dir / f"placement_{case_name}_screening.jsonl", workers=workers,
-                    progress=False)
+                    progress=progress or False)
     rows = []
     for f, rec in zip(faults, rep.records.values()):
         ok = rec["status"] == "ok"
         rows.append({"fault": f, "cct_s": rec["result"]["cct_s"] if ok else None,
+                     "t_unstable_s": rec["result"]["t_unstable_s"] if ok else None,
                      "error": None if ok else rec.get("error", "")})
     return rows
 
@@ -113,34 +120,60 @@ def targets(faults, base: dict, reference: dict, fraction: float) -> tuple:
 # -- the study ---------------------------------------------------------------------------
 
 def study(case_name: str, records_dir: Path, workers: int, say) -> dict:
-    """Every number of the report (JSON-able)."""
+    """Every number of the report (JSON-able).  One pool of `workers` processes serves
+    every simulation after the screening; the uniform fleets, then the placement runs,
+    are simulated concurrently (each is deterministic, so the numbers do not depend on
+    the order the pool serves them in).  The CCT without storage starts from the
+    screening's 5 ms bracket; the uniform fleets (rounded up to 0.1 MW per site, as every
+    allocation) are the placement runs' starts and their first unstable clearing times
+    the start evaluations."""
     case = load_case(case_name)
     sites = candidate_sites(case)
     mva = np.array([float(case.machines.mva[case.machine_index(s.machine)]) for s in sites])
     wall = time.perf_counter()
-    rows = screen(case_name, records_dir, workers)
-    faults = choose(rows, DEFAULT_FAULTS[case_name][0])
-    say(f"{case_name}: screened {len(rows)} faults in {time.perf_counter() - wall:.0f} s; "
-        f"kept {', '.join(Contingency(f, 1).name for f in faults)}")
-    kw = {"sites": sites, "tol": TOL, "workers": workers}
-    base = baseline(case_name, faults, **kw)
-    plain = targets(faults, base, base, 0.0)       # targets unused by a full scan
-    uniform = {p: evaluations(case_name, plain, p / 100 * mva, base=base, scan="full", **kw)
-               for p in (UNIFORM_PCT, *UNIFORM_PCTS)}
-    say(f"{case_name}: uniform CCTs done at {time.perf_counter() - wall:.0f} s")
-    runs = {}
-    paper = targets(faults[:1], base, uniform[UNIFORM_PCT], 1.0)
-    single = place(case_name, paper, base=base, start=UNIFORM_PCT / 100 * mva, progress=say,
-                   max_iter=MAX_ITER_SIDE, **kw)
+    with _heartbeat(say, case_name) as beat:
+        say = beat.say
+        rows = screen(case_name, records_dir, workers,
+                      lambda k, n: beat.note(f"screening {k}/{n} faults"))
+        faults = choose(rows, DEFAULT_FAULTS[case_name][0])
+        say(f"{case_name}: screened {len(rows)} faults in {time.perf_counter() - wall:.0f} s;"
+            f" kept {', '.join(Contingency(f, 1).name for f in faults)}")
+        with worker_pool(workers) as pool_map:
+            run_map = beat.counting(pool_map)
+            kw = {"sites": sites, "tol": TOL, "run_map": run_map}
+            brackets = {Contingency(r["fault"], 1).name: (r["cct_s"], r["t_unstable_s"])
+                        for r in rows if r["cct_s"] is not None}
+            beat.note("CCT without storage")
+            base = baseline(case_name, faults, brackets=brackets, **kw)
+            plain = targets(faults, base, base, 0.0)       # targets unused by a full scan
+            fleets = {p: _rounded(p / 100 * mva, sites) for p in (UNIFORM_PCT, *UNIFORM_PCTS)}
+            beat.note("uniform fleets")
+            uniform = _concurrently({p: (lambda p=p: evaluations(
+                case_name, plain, fleets[p], base=base, scan="full", **kw)) for p in fleets})
+            say(f"{case_name}: uniform CCTs done at {time.perf_counter() - wall:.0f} s")
+            paper = targets(faults[:1], base, uniform[UNIFORM_PCT], 1.0)
+
+            def run(label, frac, cons, max_iter):
+                pct = frac * UNIFORM_PCT
+                start = fleets.get(pct, _rounded(pct / 100 * mva, sites))
+                return place(case_name, cons, base=base, start=start,
+                             start_evaluations=uniform.get(pct), max_iter=max_iter,
+                             progress=lambda m: say(f"{case_name} {label}: {m}"), **kw)
+
+            beat.note("placement runs")
+            jobs = {"paper": lambda: run("paper's fault", 1.0, paper, MAX_ITER_SIDE)}
+            for frac in (1.0, *GAIN_FRACTIONS):
+                jobs[frac] = (lambda frac=frac: run(
+                    f"{frac:.0%}", frac, targets(faults, base, uniform[UNIFORM_PCT], frac),
+                    MAX_ITER if frac == 1.0 else MAX_ITER_SIDE))
+            done = _concurrently(jobs)
+    single = done.pop("paper")
+    runs = {frac: done[frac] for frac in (1.0, *GAIN_FRACTIONS)}
     say(f"{case_name}: the paper's fault alone: {single.allocation.total_mw:.1f} MW")
-    for frac in (1.0, *GAIN_FRACTIONS):
-        cons = targets(faults, base, uniform[UNIFORM_PCT], frac)
-        start = frac * UNIFORM_PCT / 100 * mva       # a uniform fleet: a feasible start
-        runs[frac] = place(case_name, cons, base=base, start=start, progress=say,
-                           max_iter=MAX_ITER if frac == 1.0 else MAX_ITER_SIDE, **kw)
-        say(f"{case_name}: {frac:.0%} of the uniform gain: {runs[frac].allocation.total_mw:.1f}"
-            f" MW, {'verified' if runs[frac].verified else 'NOT verified'}")
-    d = _summary(case_name, rows, faults, sites, mva, base, uniform, runs,
+    for frac, r in runs.items():
+        say(f"{case_name}: {frac:.0%} of the uniform gain: {r.allocation.total_mw:.1f}"
+            f" MW, {'verified' if r.verified else 'NOT verified'}")
+    d = _summary(case_name, rows, faults, sites, mva, fleets, base, uniform, runs,
                  time.perf_counter() - wall)
     d["paper_alone"] = {"name": paper[0].name, "total_mw": single.allocation.total_mw,
                         "verified": single.verified, "allocation": single.allocation.rows(),
@@ -151,6 +184,63 @@ def study(case_name: str, records_dir: Path, workers: int, say) -> dict:
         c["first_order_mw"] = critical_only_mw(case, sites, UNIFORM_PCT / 100 * mva, inertia,
                                                c["critical"])
     return d
+
+
+def _concurrently(calls: dict) -> dict:
+    """Run the callables of `calls` (key -> callable()) in threads: key -> result (the
+    first exception raised is raised)."""
+    with ThreadPoolExecutor(len(calls)) as ex:
+        futures = {k: ex.submit(f) for k, f in calls.items()}
+        return {k: f.result() for k, f in futures.items()}
+
+
+class _Beat:
+    """The progress callback, repeated with the latest status line (`note`) whenever
+    nothing was said for HEARTBEAT_S; `counting` wraps a run_map to count evaluations."""
+
+    def __init__(self, say, case_name: str):
+        self._say, self.case, self.status, self.n = say, case_name, "", 0
+        self.last = time.monotonic()
+        self.lock = threading.Lock()
+
+    def say(self, msg: str) -> None:
+        with self.lock:
+            self.last = time.monotonic()
+        self._say(msg)
+
+    def note(self, status: str) -> None:
+        self.status = status
+
+    def counting(self, run_map):
+        def counted(func, jobs):
+            out = run_map(func, jobs)
+            with self.lock:
+                self.n += len(jobs)
+            return out
+        return counted
+
+    def tick(self) -> None:
+        if time.monotonic() - self.last >= HEARTBEAT_S:
+            extra = f", {self.n} contingency evaluations done" if self.n else ""
+            self.say(f"{self.case}: {self.status}{extra} ...")
+
+
+@contextmanager
+def _heartbeat(say, case_name: str):
+    beat = _Beat(say, case_name)
+    stop = threading.Event()
+
+    def loop():
+        while not stop.wait(0.5):
+            beat.tick()
+
+    thread = threading.Thread(target=loop, daemon=True)
+    thread.start()
+    try:
+        yield beat
+    finally:
+        stop.set()
+        thread.join()
 
 
 def critical_only_mw(case, sites, uniform_mw, inertia, critical) -> float:
@@ -167,7 +257,7 @@ def critical_only_mw(case, sites, uniform_mw, inertia, critical) -> float:
     return float(effect / (m_t - m_c))
 
 
-def _summary(case_name, rows, faults, sites, mva, base, uniform, runs, wall) -> dict:
+def _summary(case_name, rows, faults, sites, mva, fleets, base, uniform, runs, wall) -> dict:
     names = [Contingency(f, 1).name for f in faults]
     main = runs[1.0]
     return {
@@ -182,7 +272,7 @@ def _summary(case_name, rows, faults, sites, mva, base, uniform, runs, wall) -> 
                            "target_s": c.target_cct_s,
                            "critical": main.base[n]["critical"]}
                           for n, f, c in zip(names, faults, main.contingencies)],
-        "uniform_total_mw": {str(p): float(p / 100 * mva.sum()) for p in uniform},
+        "uniform_total_mw": {str(p): float(fleets[p].sum()) for p in uniform},
         "uniform_cct_s": {str(p): {n: ev[n]["cct_s"] for n in names} for p, ev in uniform.items()},
         "runs": {str(frac): {"verified": r.verified, "message": r.message,
                              "total_mw": r.allocation.total_mw, "n_sites": r.allocation.n_sites,

@@ -273,3 +273,60 @@ def test_cli_place_json_meets_the_gain_and_bad_input_exits_2():
         bad = CliRunner().invoke(main, ["place", "kundur", "--contingencies", "DEFAULT", *args])
         assert bad.exit_code == 2
         assert bad.output.startswith("error:") and bad.output.count("\n") == 1
+
+
+# -- warm starts and shared runs (the placement study's speed) ------------------------------
+
+def test_bisection_warm_started_from_a_coarse_bracket_equals_the_cold_one():
+    """The CCT without storage started from a 5 ms bracket (as the screening gives) equals
+    the bisection from 0 to the 1 ms tolerance, on Kundur faults with and without a line
+    trip, in fewer runs."""
+    from stabctl.placement.loop import baseline
+
+    sim = Simulator(load_case("kundur"))
+    faults = [CASE1, LineFault(13, 101), LineFault(1, None), LineFault(110, None)]
+    brackets = {}
+    for f in faults:
+        coarse = critical_clearing_time(sim, f, tol=0.005, t_max=0.5, error_check=False)
+        brackets[Contingency(f, 1).name] = coarse.bracket
+    cold = baseline("kundur", faults, workers=1)
+    warm = baseline("kundur", faults, workers=1, brackets=brackets)
+    for name in cold:
+        assert warm[name]["cct_s"] == pytest.approx(cold[name]["cct_s"], abs=1e-9)
+        assert warm[name]["n_simulations"] < cold[name]["n_simulations"]
+    assert cold["3-101"]["cct_s"] == pytest.approx(critical_clearing_time(sim, CASE1).cct_s)
+    # a wrong bracket (stable end unstable) falls back to the search from 0
+    bad = baseline("kundur", [CASE1], workers=1, brackets={"3-101": (0.3, 0.305)})
+    assert bad["3-101"]["cct_s"] == pytest.approx(cold["3-101"]["cct_s"])
+
+
+def test_a_start_already_evaluated_is_not_simulated_again():
+    """place() from the uniform fleet with that fleet's first unstable clearing times
+    (evaluations, scan="full") simulates the start no more and ends as from scratch."""
+    from stabctl.placement.loop import evaluations
+
+    case = load_case("kundur")
+    sites = candidate_sites(case)
+    uniform = 0.05 * np.array([case.machines.mva[case.machine_index(s.machine)]
+                               for s in sites])
+    cons = [Contingency(CASE1, 0.195)]
+    base = evaluations("kundur", cons, workers=1)
+    known = evaluations("kundur", cons, uniform, base=base, scan="full", workers=1)
+    calls = []
+    original = Simulator.run
+
+    def run(self, *a, **kw):
+        calls.append(1)
+        return original(self, *a, **kw)
+
+    Simulator.run = run
+    try:
+        res = place("kundur", cons, workers=1, start=uniform, max_iter=2, base=base,
+                    start_evaluations=known)
+    finally:
+        Simulator.run = original
+    again = place("kundur", cons, workers=1, start=uniform, max_iter=2, base=base)
+    assert len(calls) == sum(r["n_simulations"] for r in res.iterations)
+    assert res.allocation.total_mw == pytest.approx(again.allocation.total_mw)
+    assert res.evaluations["3-101"]["cct_s"] == pytest.approx(again.evaluations["3-101"]["cct_s"],
+                                                            abs=1e-9)
