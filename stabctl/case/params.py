@@ -472,3 +472,25 @@ GOVERNOR = Family(
 #: table field of Case -> family, for the four dynamic-data tables
 FAMILIES: Mapping[str, Family] = MappingProxyType(
     {"machines": MACHINE, "exciters": EXCITER, "pss": PSS, "governors": GOVERNOR})
+
+
+def array_dataclass(cls, names):
+    """``cls`` as a frozen dataclass whose fields are one ``np.ndarray`` per name in
+    `names`, then the class's own annotated fields (the case tables and the models'
+    parameter classes, whose fields come from the declarations).
+
+    Parameters
+    ----------
+    cls : type
+        The class to decorate.
+    names : iterable of str
+        Field names, in order.
+
+    Returns
+    -------
+    type
+        The dataclass.
+    """
+    own = dict(cls.__dict__.get("__annotations__", {}))
+    cls.__annotations__ = {**{n: "np.ndarray" for n in names}, **own}
+    return dataclass(frozen=True, eq=False)(cls)

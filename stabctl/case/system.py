@@ -38,7 +38,8 @@ from typing import ClassVar, Mapping
 
 import numpy as np
 
-from stabctl.case.params import EXCITER, GOVERNOR, MACHINE, PSS, Family, choices_message
+from stabctl.case.params import (EXCITER, GOVERNOR, MACHINE, PSS, Family, array_dataclass,
+                                 choices_message)
 from stabctl.errors import CaseError, UnknownBusError
 
 __all__ = [
@@ -275,14 +276,12 @@ def _declared(family: Family):
         The decorator.
     """
     def wrap(cls):
-        own = dict(cls.__dict__.get("__annotations__", {}))
-        cls.__annotations__ = {**{p.name: "np.ndarray" for p in family.params}, **own}
         cls.TABLE, cls.MIN_COLUMNS, cls.FAMILY = family.table, family.min_columns, family
         cls.DEFAULTS, cls.INTEGER = family.defaults, family.integer
         cls.KEY, cls.KEY_LABEL = family.key, family.key_label
         if cls.__doc__:
             cls.__doc__ = cls.__doc__.replace("{columns}", family.rst_table())
-        return dataclass(frozen=True, eq=False)(cls)
+        return array_dataclass(cls, [p.name for p in family.params])
     return wrap
 
 

@@ -19,6 +19,20 @@ from stabctl.errors import CaseError, InputError
 from stabctl.network.ybus import circuit_row
 
 
+class _AtOneTime:
+    """An event that happens at one instant ``self.t`` (s)."""
+
+    def times(self):
+        """The event's times.
+
+        Returns
+        -------
+        list of float
+            ``[t]``, s.
+        """
+        return [self.t]
+
+
 @dataclass(frozen=True)
 class Fault:
     """Three-phase fault at `bus` from `t`, cleared as PST's ``sw_con`` sequence
@@ -90,7 +104,7 @@ class Fault:
 
 
 @dataclass(frozen=True)
-class LineTrip:
+class LineTrip(_AtOneTime):
     """Open one circuit of the line `from_bus`-`to_bus` at `t`, without fault (PST's
     ``sw_con`` type 4; the line opened as PST: reactance 1e7 pu, charging kept).
 
@@ -110,19 +124,9 @@ class LineTrip:
     t: float
     circuit: int = 1
 
-    def times(self):
-        """The event's times.
-
-        Returns
-        -------
-        list of float
-            ``[t]``, s.
-        """
-        return [self.t]
-
 
 @dataclass(frozen=True)
-class GeneratorTrip:
+class GeneratorTrip(_AtOneTime):
     """Disconnect a generator at `t`.
 
     Attributes
@@ -137,19 +141,9 @@ class GeneratorTrip:
     machine: int
     t: float
 
-    def times(self):
-        """The event's times.
-
-        Returns
-        -------
-        list of float
-            ``[t]``, s.
-        """
-        return [self.t]
-
 
 @dataclass(frozen=True)
-class LoadStep:
+class LoadStep(_AtOneTime):
     """Add P + jQ of constant-impedance load at `bus` from `t`.
 
     The load is the shunt admittance (P - jQ) / |V0|^2, V0 the bus voltage of the power
@@ -173,16 +167,6 @@ class LoadStep:
     t: float
     P: float
     Q: float = 0.0
-
-    def times(self):
-        """The event's times.
-
-        Returns
-        -------
-        list of float
-            ``[t]``, s.
-        """
-        return [self.t]
 
 
 def validate(case: Case, events, t_end: float) -> None:

@@ -10,9 +10,9 @@ the kernels' column constants (``E_KA``, ``S_TW``, ...) and :func:`pack` the mat
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
+
+from stabctl.case.params import array_dataclass
 
 
 def params_class(leading: tuple[str, ...], declared: tuple[str, ...]):
@@ -30,11 +30,7 @@ def params_class(leading: tuple[str, ...], declared: tuple[str, ...]):
     callable
         The decorator.
     """
-    def wrap(cls):
-        own = dict(cls.__dict__.get("__annotations__", {}))
-        cls.__annotations__ = {**{n: "np.ndarray" for n in (*leading, *declared)}, **own}
-        return dataclass(frozen=True, eq=False)(cls)
-    return wrap
+    return lambda cls: array_dataclass(cls, (*leading, *declared))
 
 
 def columns(layout, *suffixes: str) -> tuple[int, ...]:
