@@ -48,15 +48,28 @@ def ensure_fresh_cache() -> None:
         pass
 
 
-def is_warm() -> bool:
-    """True if the compiled kernels of this source tree are on disk (the first call of a
-    simulating command then loads them in a second or two instead of compiling them)."""
-    stamp = _PKG / "__pycache__" / "numba-sources.sha256"
-    try:
-        return (stamp.read_text() == source_digest()
-                and any(_PKG.glob("dynamics/__pycache__/simulation.integrate-*.nbi")))
-    except OSError:
-        return False
+def on_first_compile(notify) -> None:
+    """Call ``notify()`` once, when numba starts compiling the first stabctl kernel of
+    this process (numba's event API, ``numba:compile``); loading cached kernels does not
+    count.
+
+    Parameters
+    ----------
+    notify : callable
+        Called with no arguments.
+    """
+    from numba.core import event
+
+    class _Once(event.Listener):
+        def on_start(self, ev):
+            if ev.data["dispatcher"].py_func.__module__.startswith("stabctl."):
+                event.unregister("numba:compile", self)
+                notify()
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", _Once())
 
 
 ensure_fresh_cache()

@@ -44,20 +44,22 @@ def test_at_most_eight_top_level_modules():
     assert len(modules) <= 8, modules
 
 
-def test_compile_notice_only_when_the_kernel_cache_is_cold(tmp_path, monkeypatch):
-    """`is_warm` (the CLI's one-line compile notice): False until the integrator's cache
-    index exists for the current sources, False again after any source change."""
-    from stabctl import _jitcache
+def test_compile_notice_once_and_only_when_a_stabctl_kernel_compiles():
+    """`on_first_compile` (the CLI's one-line compile notice): called once, when the first
+    stabctl kernel compiles; compiling code of other packages does not count."""
+    import numba
 
-    pkg = tmp_path / "stabctl"
-    (pkg / "dynamics" / "__pycache__").mkdir(parents=True)
-    (pkg / "a.py").write_text("x = 1\n")
-    monkeypatch.setattr(_jitcache, "_PKG", pkg)
-    _jitcache.ensure_fresh_cache()
-    assert not _jitcache.is_warm()                                   # nothing compiled
-    (pkg / "dynamics" / "__pycache__" / "simulation.integrate-9.py311.nbi").write_text("")
-    assert _jitcache.is_warm()
-    (pkg / "a.py").write_text("x = 2\n")                             # a source change
-    assert not _jitcache.is_warm()
-    _jitcache.ensure_fresh_cache()                                   # stale kernels deleted
-    assert not any(pkg.rglob("*.nbi")) and not _jitcache.is_warm()
+    from stabctl._jitcache import on_first_compile
+
+    def kernel(x):
+        return x + 1
+
+    def other(x):
+        return x - 1
+
+    kernel.__module__ = "stabctl.kernel_for_the_test"
+    calls = []
+    on_first_compile(lambda: calls.append(1))
+    assert numba.njit(other)(1) == 0 and calls == []                 # not stabctl
+    assert numba.njit(kernel)(1) == 2 and calls == [1]
+    assert numba.njit(kernel)(2.0) == 3.0 and calls == [1]           # once only

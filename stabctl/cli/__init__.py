@@ -35,12 +35,12 @@ def main(ctx):
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
     if ctx.invoked_subcommand in _SIMULATING and "--help" not in sys.argv:
-        from stabctl._jitcache import is_warm
+        from stabctl._jitcache import on_first_compile
 
-        if not is_warm():
-            click.echo("stabctl: compiling the simulator's kernels (once after installation "
-                       "or a source change, about a minute; later runs load them in seconds)",
-                       err=True)
+        # said when compiling starts (never for cached kernels; bad input fails before)
+        on_first_compile(lambda: click.echo(
+            "stabctl: compiling the simulator's kernels (once after installation or a "
+            "source change, about a minute; later runs load them in seconds)", err=True))
 
 
 def _register() -> None:
