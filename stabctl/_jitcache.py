@@ -48,7 +48,7 @@ def ensure_fresh_cache() -> None:
         pass
 
 
-def on_first_compile(notify) -> None:
+def on_first_compile(notify):
     """Call ``notify()`` once, when numba starts compiling the first stabctl kernel of
     this process (numba's event API, ``numba:compile``); loading cached kernels does not
     count.
@@ -57,19 +57,33 @@ def on_first_compile(notify) -> None:
     ----------
     notify : callable
         Called with no arguments.
+
+    Returns
+    -------
+    callable
+        Stops listening (no call after it).
     """
     from numba.core import event
 
     class _Once(event.Listener):
+        done = False
+
         def on_start(self, ev):
-            if ev.data["dispatcher"].py_func.__module__.startswith("stabctl."):
-                event.unregister("numba:compile", self)
+            if not self.done and ev.data["dispatcher"].py_func.__module__.startswith("stabctl."):
+                self.stop()
                 notify()
 
         def on_end(self, ev):
             pass
 
-    event.register("numba:compile", _Once())
+        def stop(self):
+            if not self.done:
+                self.done = True
+                event.unregister("numba:compile", self)
+
+    listener = _Once()
+    event.register("numba:compile", listener)
+    return listener.stop
 
 
 ensure_fresh_cache()

@@ -63,3 +63,6 @@ def test_compile_notice_once_and_only_when_a_stabctl_kernel_compiles():
     assert numba.njit(other)(1) == 0 and calls == []                 # not stabctl
     assert numba.njit(kernel)(1) == 2 and calls == [1]
     assert numba.njit(kernel)(2.0) == 3.0 and calls == [1]           # once only
+    stop = on_first_compile(lambda: calls.append(2))
+    stop()                                                           # the command ended
+    assert numba.njit(kernel)(3j) == 1 + 3j and calls == [1]

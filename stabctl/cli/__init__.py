@@ -38,9 +38,9 @@ def main(ctx):
         from stabctl._jitcache import on_first_compile
 
         # said when compiling starts (never for cached kernels; bad input fails before)
-        on_first_compile(lambda: click.echo(
+        ctx.call_on_close(on_first_compile(lambda: click.echo(
             "stabctl: compiling the simulator's kernels (once after installation or a "
-            "source change, about a minute; later runs load them in seconds)", err=True))
+            "source change, about a minute; later runs load them in seconds)", err=True)))
 
 
 def _register() -> None:
