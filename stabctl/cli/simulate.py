@@ -118,7 +118,7 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     is written then (a diverged run reports where it stopped).
     """
     from stabctl.io import load_case
-    from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.simulation import Simulator, check_step_count
 
     out_p = check_suffix(out_path, OUT_SUFFIXES, "--out")
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
@@ -137,6 +137,8 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     if late:
         raise InputError(f"{describe_event(late[0])}: starts at or after the end of the run "
                          f"(--tf {tf:g} s)")
+    if step is not None:
+        check_step_count(tf, step)          # refused before any work (building the model)
     fleet = None
     if esd_pct is not None:
         from stabctl.storage.devices import uniform_fleet
