@@ -98,13 +98,19 @@ def _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
     return case, fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles), tf
 
 
+def _fault_run(func):
+    """The options of a PMU run through a fault (rmse, closed-loop): case, fault, clearing,
+    end time, PMU rate and latency, PMU noise."""
+    for option in reversed((click.argument("case_name", metavar="CASE"),
+                            fault_options(required=True),
+                            clear_cycles_option("Clearing after N cycles, both ends"),
+                            tf_option(), _rate_latency, _pmu_noise)):
+        func = option(func)
+    return func
+
+
 @estimate.command()
-@click.argument("case_name", metavar="CASE")
-@fault_options(required=True)
-@clear_cycles_option("Clearing after N cycles, both ends")
-@tf_option()
-@_rate_latency
-@_pmu_noise
+@_fault_run
 @click.option("--pmu-at", type=click.Choice(["terminal", "hv"]), default="terminal",
               show_default=True, help="PMU of each generator at its terminal or HV bus.")
 @storage_options(" In the fault run, controlled on the true speeds with the paper's "
@@ -184,12 +190,7 @@ def _check_positive(**values) -> None:
 
 
 @estimate.command("closed-loop")
-@click.argument("case_name", metavar="CASE")
-@fault_options(required=True)
-@clear_cycles_option("Clearing after N cycles, both ends")
-@tf_option()
-@_rate_latency
-@_pmu_noise
+@_fault_run
 @storage_options(" Required: the ESDs the estimators command.")
 @click.option("--seed", type=int, default=0, show_default=True, metavar="S",
               help="Seed of the PMU noise.")
