@@ -383,11 +383,16 @@ def _scrx(rec, gen):
     return _exc_row(rec, gen, TC=v["TA/TB"] * v["TB"], bus_fed=float(v["CSWITCH"] == 0))
 
 
+#: ANDES 2.0's SEXS defaults (``sexs.py``): TA/TB, TB, K, TE, EMIN, EMAX
+ANDES_SEXS_DEFAULTS = (0.4, 5.0, 20.0, 1.0, -99.0, 99.0)
+
+
 def _scrx_andes(rec, gen):
-    """SCRX as ANDES 2.0 reads it: its SEXS (``psse-dyr.yaml``), CSWITCH and rc/rfd
-    ignored, so never bus fed."""
-    v = DYR_MODELS["SCRX"].values(rec.params)
-    return _exc_row(rec, gen, TC=v["TA/TB"] * v["TB"])
+    """SCRX as ANDES 2.0 reads it: its ``psse-dyr.yaml`` makes an SCRX record a SEXS
+    passing only the machine, so every parameter takes SEXS's default
+    (:data:`ANDES_SEXS_DEFAULTS`), never bus fed."""
+    return EXCITER.dyr_row(DYR_MODELS["SEXS"], ANDES_SEXS_DEFAULTS, machine=gen["number"],
+                           TC=ANDES_SEXS_DEFAULTS[0] * ANDES_SEXS_DEFAULTS[1])
 
 
 def _exst1(rec, gen):
