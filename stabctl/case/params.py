@@ -308,8 +308,9 @@ MACHINE = Family(
 EXCITER = Family(
     table="exc_con", min_columns=9, key="machine", key_label="machine",
     params=(
-        Param("type", "code", 1, integer=True, choices=(0, 1, 2, 3, 4), label="exciter type",
-              doc="0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1"),
+        Param("type", "code", 1, integer=True, choices=(0, 1, 2, 3, 4, 5), label="exciter type",
+              doc="0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1, "
+                  "5 IEEET2 (DC1 with a two-lag rate feedback)"),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("TR", "s", 3, lo=0.0, doc="input filter time constant"),
         Param("KA", "", 4, doc="voltage regulator gain"),
@@ -332,8 +333,12 @@ EXCITER = Family(
         Param("KC", "", 17, alt="TF_dc",
               doc="ST3, EXST1: rectifier loading factor | DC1/2: TF stabilizer time "
                   "constant, s"),
-        Param("Efdmax", "pu", 18, doc="ST3: maximum field voltage"),
-        Param("KG", "", 19, doc="ST3: inner loop feedback constant"),
+        Param("Efdmax", "pu", 18, alt="TF2",
+              doc="ST3: maximum field voltage | IEEET2: second rate feedback time constant "
+                  "TF2, s"),
+        Param("KG", "", 19, alt="bus_fed",
+              doc="ST3: inner loop feedback constant | smpexc: 1 the output times the "
+                  "terminal voltage (bus-fed SCRX), 0 not"),
         Param("VGmax", "pu", 20, doc="ST3: maximum inner loop feedback"),
         Param("KF", "", 21, doc="EXST1: rate feedback gain"),
         Param("TF", "s", 22, doc="EXST1: rate feedback time constant"),
@@ -354,6 +359,14 @@ EXCITER = Family(
                     "Vrmax": "VRMAX", "Vrmin": "VRMIN", "KE": "KE", "TE": "TE", "KF_dc": "KF",
                     "TF_dc": "TF1"}, kind=kind)
           for name, kind in (("IEEEX1", 1), ("EXDC2", 2), ("ESDC2A", 2))),
+        # IEEET2 -> DC1 (type 5) with the rate feedback s KF/((1 + s TF1)(1 + s TF2))
+        DyrModel("IEEET2", ("TR", "KA", "TA", "VRMAX", "VRMIN", "KE", "TE", "KF", "TF1", "TF2",
+                            "E1", "SE(E1)", "E2", "SE(E2)"),
+                 {"TR": "TR", "KA": "KA", "TA": "TA", "Vrmax": "VRMAX", "Vrmin": "VRMIN",
+                  "KE": "KE", "TE": "TE", "KF_dc": "KF", "TF_dc": "TF1", "TF2": "TF2"}, kind=5),
+        # SCRX -> smpexc: T_C = (TA/TB) TB computed; CSWITCH 0 (bus fed): bus_fed = 1
+        DyrModel("SCRX", ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX", "CSWITCH", "rc/rfd"),
+                 {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"}, kind=0),
         DyrModel("EXST1", ("TR", "VIMAX", "VIMIN", "TC", "TB", "KA", "TA", "VRMAX", "VRMIN",
                            "KC", "KF", "TF"),
                  {"TR": "TR", "KA": "KA", "TA": "TA", "TB": "TB", "TC": "TC", "Vrmax": "VRMAX",
@@ -379,8 +392,9 @@ EXCITER = Family(
 PSS = Family(
     table="pss_con", min_columns=10, key="machine", key_label="machine",
     params=(
-        Param("type", "code", 1, integer=True, choices=(1, 2, 3), label="pss type",
-              doc="1 PST pss, speed input; 2 PST pss, electrical power input; 3 PSS/E"),
+        Param("type", "code", 1, integer=True, choices=(1, 2, 3, 4), label="pss type",
+              doc="1 PST pss, speed input; 2 PST pss, electrical power input; 3 PSS/E; "
+                  "4 PSS/E STAB2A"),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("KTw", "", 3, doc="gain times washout time constant (K*Tw); type 3: washout "
                                 "gain K_w"),
@@ -391,7 +405,8 @@ PSS = Family(
         Param("T4", "s", 8, lo=0.0, doc="second lag time constant"),
         Param("ymax", "pu", 9, doc="maximum output"),
         Param("ymin", "pu", 10, doc="minimum output"),
-        Param("T5", "s", 11, doc="type 3: third lead time constant"),
+        Param("T5", "s", 11, alt="K5", doc="type 3: third lead time constant | type 4: "
+                                            "output lag gain K5"),
         Param("T6", "s", 12, lo=0.0, doc="type 3: third lag time constant"),
         Param("input1", "code", 13, integer=True,
               doc="type 3: first input, PSS/E code (1 speed deviation, 3 electrical power)"),
@@ -419,6 +434,11 @@ PSS = Family(
                   "Tr2": "T2", "KTw": "T3", "Tw": "T4", "T1": "T5", "T2": "T6", "T3": "T7",
                   "T4": "T8", "T5": "T9", "T6": "T10", "ymax": "LSMAX", "ymin": "LSMIN"},
                  kind=3),
+        # STAB2A -> type 4: three washouts K2 T2 s/(1 + s T2) (KTw = K2 T2 computed), K3/(1 +
+        # s T3) + K4, two lags K5/(1 + s T5), output limits +-HLIM
+        DyrModel("STAB2A", ("K2", "T2", "K3", "T3", "K4", "K5", "T5", "HLIM"),
+                 {"Tw": "T2", "K1": "K3", "Tr1": "T3", "K2": "K4", "K5": "K5", "T6": "T5",
+                  "ymax": "HLIM"}, kind=4),
     ),
 )
 
@@ -427,11 +447,19 @@ PSS = Family(
 # tg_con: turbine-governors (PST manual 3.45; PSS/E TGOV1, IEEEG1; docs section 4)
 # --------------------------------------------------------------------------------------
 
+#: tg_con columns 17-21 (IEEEG1's K1..K5) as HYGOV reads them: (alternative name, doc)
+_HYGOV_ALT = {1: ("Rp", " | HYGOV: permanent droop R, pu"),
+              2: ("rt", " | HYGOV: temporary droop r, pu"),
+              3: ("qNL", " | HYGOV: no-load flow qNL, pu"),
+              4: ("Kg", " | HYGOV: gate integrator gain, 1/s (PSS/E: 1/(r Tr))"),
+              5: ("velm_rel", " | HYGOV: 1 gate rate limits [-VELM, VELM] - e/r (ANDES), "
+                              "0 [-VELM, VELM]")}
+
 GOVERNOR = Family(
     table="tg_con", min_columns=10, key="machine", key_label="machine",
     params=(
-        Param("type", "code", 1, integer=True, choices=(1, 2, 3), label="governor type",
-              doc="1 PST tg, 2 TGOV1, 3 IEEEG1"),
+        Param("type", "code", 1, integer=True, choices=(1, 2, 3, 4, 5), label="governor type",
+              doc="1 PST tg, 2 TGOV1, 3 IEEEG1, 4 HYGOV, 5 IEESGO"),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("wf", "pu", 3, doc="speed set point"),
         Param("invR", "pu", 4, doc="steady-state gain 1/R (IEEEG1: K), on machine base"),
@@ -440,9 +468,10 @@ GOVERNOR = Family(
                                         "servo)"),
         Param("Tc", "s", 7, lo=0.0, doc="governor lag time constant (TGOV1: T3; IEEEG1: T1)"),
         Param("T3", "s", 8, doc="transient gain (lead) time constant (TGOV1, IEEEG1: T2)"),
-        Param("T4", "s", 9, doc="HP section time constant (IEEEG1: T4, steam chest); < 0 "
-                                "hydro"),
-        Param("T5", "s", 10, lo=0.0, doc="reheater time constant (IEEEG1: T5)"),
+        Param("T4", "s", 9, alt="Tw", doc="HP section time constant (IEEEG1: T4, steam "
+                                          "chest); < 0 hydro | HYGOV: water time constant Tw"),
+        Param("T5", "s", 10, lo=0.0, alt="At",
+              doc="reheater time constant (IEEEG1: T5) | HYGOV: turbine gain At"),
         Param("Tmin", "pu", 11, doc="minimum power order (tg: 0 as PST; TGOV1: VMIN; "
                                     "IEEEG1: PMIN)"),
         Param("Dt", "pu", 12, doc="turbine damping (TGOV1), pu power / pu speed"),
@@ -450,9 +479,9 @@ GOVERNOR = Family(
         Param("T7", "s", 14, lo=0.0, doc="IEEEG1 fourth turbine time constant"),
         Param("Uo", "pu/s", 15, doc="IEEEG1 maximum valve opening rate"),
         Param("Uc", "pu/s", 16, doc="IEEEG1 maximum valve closing rate (< 0)"),
-        *(Param(f"K{k}", "", 16 + k,
+        *(Param(f"K{k}", "", 16 + k, alt=_HYGOV_ALT.get(k, ("", ""))[0],
                 doc=f"IEEEG1 fraction of power after T{3 + (k + 1) // 2} "
-                    f"({'HP' if k % 2 else 'LP'} shaft)")
+                    f"({'HP' if k % 2 else 'LP'} shaft)" + _HYGOV_ALT.get(k, ("", ""))[1])
           for k in range(1, 9)),
     ),
     dyr=(
@@ -466,6 +495,18 @@ GOVERNOR = Family(
                  {"invR": "K", "Tc": "T1", "T3": "T2", "Ts": "T3", "Uo": "Uo", "Uc": "Uc",
                   "Tmax": "PMAX", "Tmin": "PMIN", "T4": "T4", "T5": "T5", "T6": "T6",
                   "T7": "T7", **{f"K{k}": f"K{k}" for k in range(1, 9)}}, kind=3),
+        # HYGOV -> type 4: Kg = 1/(r Tr) and Uc = -VELM computed
+        DyrModel("HYGOV", ("R", "r", "Tr", "Tf", "Tg", "VELM", "GMAX", "GMIN", "TW", "At",
+                           "Dturb", "qNL"),
+                 {"Rp": "R", "rt": "r", "T3": "Tr", "Tc": "Tf", "Ts": "Tg", "Uo": "VELM",
+                  "Tmax": "GMAX", "Tmin": "GMIN", "Tw": "TW", "At": "At", "Dt": "Dturb",
+                  "qNL": "qNL"}, kind=4),
+        # IEESGO -> type 5: K1 (speed gain), lag T1, lead-lag T2/T3, limits, lags T4-T6;
+        # the power fractions after T4, T5, T6 (1 - K2, (1 - K3) K2, K2 K3) computed
+        DyrModel("IEESGO", ("T1", "T2", "T3", "T4", "T5", "T6", "K1", "K2", "K3", "PMAX",
+                            "PMIN"),
+                 {"Tc": "T1", "T3": "T2", "Ts": "T3", "T4": "T4", "T5": "T5", "T6": "T6",
+                  "invR": "K1", "Tmax": "PMAX", "Tmin": "PMIN"}, kind=5),
     ),
 )
 

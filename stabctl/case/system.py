@@ -386,10 +386,15 @@ class BranchTable(Table):
     8   tapmax      maximum tap (0: tap fixed in the power flow)
     9   tapmin      minimum tap
     10  tapstep     tap step size
+    11  g_from      line-end shunt conductance at the from end, pu (PSS/E GI)
+    12  b_from      line-end shunt susceptance at the from end, pu (PSS/E BI)
+    13  g_to        line-end shunt conductance at the to end, pu (PSS/E GJ)
+    14  b_to        line-end shunt susceptance at the to end, pu (PSS/E BJ)
     ==  ==========  ===============================================================
 
     Parallel circuits are separate rows. Omitted columns: tap 1, the rest 0 (the miniWECC
-    ``line`` matrix has 5 columns). Validation: from/to are integers, r >= 0, the series
+    ``line`` matrix has 5 columns, PST's 10).  Line-end shunts (columns 11-14, stabctl's)
+    are switched with the branch, in addition to the charging ``b``. Validation: from/to are integers, r >= 0, the series
     impedance is not zero, from != to.
     """
 
@@ -403,6 +408,10 @@ class BranchTable(Table):
     tapmax: np.ndarray
     tapmin: np.ndarray
     tapstep: np.ndarray
+    g_from: np.ndarray
+    b_from: np.ndarray
+    g_to: np.ndarray
+    b_to: np.ndarray
 
     TABLE: ClassVar[str] = "line"
     MIN_COLUMNS: ClassVar[int] = 5
@@ -463,10 +472,12 @@ class ExciterTable(Table):
 
     Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2; their
     names there are the declaration's ``alt`` names KE, TE, E1, SE1, E2, SE2, KF_dc,
-    TF_dc); use ``col(k)`` for those.  EXST1 (type 4) uses columns 3-11 and KC (17) as
-    named, with Vrmax, Vrmin its output limits (times V_t) and KF, TF (21, 22).  Omitted
-    trailing columns are 0 (a simple exciter needs 9).  Validation: type in {0, 1, 2, 3,
-    4}, one exciter per machine, TR, TA, TB >= 0, dc_sat and ke_given 0 or 1 (machine
+    TF_dc); use ``col(k)`` for those.  IEEET2 (type 5) reads them as types 1, 2 do, and
+    column 18 as its second rate feedback time constant TF2; a simple exciter (type 0)
+    reads column 19 as ``bus_fed`` (PSS/E SCRX, output times V_t).  EXST1 (type 4) uses
+    columns 3-11 and KC (17) as named, with Vrmax, Vrmin its output limits (times V_t) and
+    KF, TF (21, 22).  Omitted trailing columns are 0 (a simple exciter needs 9).
+    Validation: type in {0, ..., 5}, one exciter per machine, TR, TA, TB >= 0, dc_sat and ke_given 0 or 1 (machine
     existence is checked by :class:`Case`).
     """
 
@@ -477,33 +488,34 @@ class ExciterTable(Table):
 @_declared(PSS)
 class PssTable(Table):
     """Power system stabilizer data: PST ``pss_con``, 10 columns (PST manual 3.30 Table 13),
-    extended by stabctl with type 3, the PSS/E stabilisers IEEEST and ST2CUT
-    (docs/pst_models.md 3.1).  Columns (declared in :data:`stabctl.case.params.PSS`):
+    extended by stabctl with type 3, the PSS/E stabilisers IEEEST and ST2CUT, and type 4,
+    PSS/E's STAB2A (docs/pst_models.md 3.1-3.2).  Columns (declared in
+    :data:`stabctl.case.params.PSS`):
 
 {columns}
 
-    Omitted columns are 0.  Validation: type in {1, 2, 3}, one PSS per machine, washout and
-    lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0, Tw > 0, T2 > 0 for types 1 and 2.
+    Omitted columns are 0.  Validation: type in {1, 2, 3, 4}, one PSS per machine, washout
+    and lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0, Tw > 0, T2 > 0 for types 1 and 2.
     """
 
     def _check(self):
         self._unique("machine", "pss on machine")
         self._require(self.Tw > 0, "Tw", "washout time constant must be > 0 s")
-        self._require((self.type == 3) | (self.T2 > 0), "T2",
+        self._require((self.type >= 3) | (self.T2 > 0), "T2",
                       "first lag time constant must be > 0 s for PST's pss (types 1, 2)")
 
 
 @_declared(GOVERNOR)
 class GovernorTable(Table):
     """Turbine-governor data: PST ``tg_con`` (PST manual 3.45, ``tg``), extended by stabctl
-    with the PSS/E ``TGOV1`` and ``IEEEG1`` models (PSS/E Model Library; equations in
-    docs/pst_models.md section 4).  Columns (declared in
+    with the PSS/E ``TGOV1``, ``IEEEG1``, ``HYGOV`` and ``IEESGO`` models (PSS/E Model
+    Library; equations in docs/pst_models.md section 4).  Columns (declared in
     :data:`stabctl.case.params.GOVERNOR`; powers on the machine base):
 
 {columns}
 
     PST files give 10 columns; the omitted ones are 0 (Tmin = 0 is PST tg's lower clip).
-    Validation: type in {1, 2, 3}, one governor per machine, lag time constants Ts, Tc,
+    Validation: type in {1, ..., 5}, one governor per machine, lag time constants Ts, Tc,
     T5, T6, T7 >= 0 (the lead constants T3, T4 may be negative: miniWECC's hydro units use
     T4 = -1).
     """

@@ -10,6 +10,14 @@ tools solve the same problem:
   the case with ``loads="impedance"``), implicit trapezoidal integration with a fixed step, Newton tolerance 1e-8;
 * fault: ANDES's ``Fault`` model, a shunt ``rf + j xf`` at the bus from ``tf`` to ``tc``
   (no line lost);
+* network: ANDES 2.0's PSS/E reader leaves a non-transformer branch on a 100 MVA base
+  while its RAW data are on SBASE, and drops the line-end shunts GI, BI, GJ, BJ (and its
+  ``Line`` power-flow equations put the from-end shunt at both ends); before set-up
+  (:func:`andes_system`) the branches are put on SBASE and each line-end shunt becomes an
+  ANDES ``Shunt`` at its bus, so that ANDES solves the RAW's network (exact while no line
+  is switched; a no-op for SBASE = 100 MVA cases without line-end shunts); machines: its
+  DYR reader leaves GENROU's and GENCLS's rated frequency ``fn`` at 60 Hz, set to the
+  RAW's BASFRQ (N44: 50 Hz);
 * records ANDES reads but stabctl does not map are removed from the DYR text for both
   tools (:func:`strip_dyr`), so that the comparison is like for like; optionally the
   machine saturation too (PSS/E's GENROU saturation, which ANDES follows, is not PST's).
@@ -96,12 +104,36 @@ def andes_system(raw: str | Path, dyr: str | Path | None = None,
     if config_option:
         kw["config_option"] = list(config_option)
     ss = andes.load(str(raw), setup=False, no_output=True, default_config=True, **kw)
+    _raw_network(ss, raw)
     if fault is not None:
         ss.add("Fault", {"bus": fault.bus, "tf": fault.t_fault, "tc": fault.t_clear,
                          "rf": fault.r, "xf": fault.x})
     ss.setup()
     ss.PFlow.config.tol = 1e-12
     return ss
+
+
+def _raw_network(ss, raw) -> None:
+    """Before set-up: ANDES's non-transformer ``Line`` rows on the system base (its PSS/E
+    reader leaves ``Sn`` at 100 MVA, scaling R, X by SBASE/100 and B by 100/SBASE) and the
+    RAW's line-end shunts (dropped by its reader) as ``Shunt`` devices at their buses
+    (ANDES's ``Line`` equations would apply ``g1 + j b1`` at both ends); the machines'
+    ``fn`` at the RAW's frequency."""
+    from stabctl.io.psse_raw import read_raw
+
+    line, mva = ss.Line, ss.config.mva
+    for k in range(line.n):
+        if not line.trans.v[k]:
+            line.Sn.v[k] = mva
+    data = read_raw(raw)
+    for model in (ss.GENROU, ss.GENCLS):
+        model.fn.v = [float(data.freq_hz)] * model.n
+    rows = data.line
+    vn = dict(zip(ss.Bus.idx.v, ss.Bus.Vn.v))
+    for r in rows[np.any(rows[:, 10:14] != 0, axis=1)] if rows.shape[1] > 10 else ():
+        for bus, g, b in ((int(r[0]), r[10], r[11]), (int(r[1]), r[12], r[13])):
+            ss.add("Shunt", {"bus": bus, "g": float(g), "b": float(b), "Sn": mva,
+                             "Vn": vn[bus]})
 
 
 def andes_powerflow(ss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -348,14 +348,16 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False):
 
     def mapper(rec, gen):
         """IEEEX1 (DC1, type 1) / EXDC2, ESDC2A (DC2, type 2): TR KA TA TB TC VRMAX VRMIN KE
-        TE KF TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; saturation as Asat, Bsat (E2
+        TE KF TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; IEEET2 (type 5): TR KA TA VRMAX
+        VRMIN KE TE KF TF1 TF2 E1 SE(E1) E2 SE(E2), DC1 without the lead-lag and with the
+        rate feedback's second lag TF2 (exc_con column 18); saturation as Asat, Bsat (E2
         column 0); K_E = 0 is computed at initialisation (V_R0 = 0, docs 2.3).  andes: the
         quadratic saturation through the points and K_E as given (exc_con columns 23, 24)."""
         v = decl.values(rec.params)
         cols = {}
         if zero_vrmax_unlimited and v["VRMAX"] == 0:
             cols["Vrmax"] = VRMAX_UNLIMITED
-        if v["Switch"] != 0:
+        if v.get("Switch", 0.0) != 0:
             raise _Unsupported(f"Switch = {v['Switch']} is not modelled (only 0)")
         points = (v["E1"], v["SE(E1)"], v["E2"], v["SE(E2)"])
         if andes:
@@ -367,6 +369,30 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False):
             raise CaseError(f"{rec.label()}: {exc}") from None
         return _exc_row(rec, gen, decl, **cols, SE1=A, E2=0.0, SE2=B)
     return mapper
+
+
+def _scrx(rec, gen):
+    """SCRX: TA/TB TB K TE EMIN EMAX CSWITCH rc/rfd -> smpexc (type 0) as SEXS, bus fed
+    (output times the terminal voltage, exc_con column 19 = 1) when CSWITCH = 0.  PSS/E's
+    negative field current logic is not modelled: rc/rfd = 0 (no negative current; no
+    effect while the field current stays positive) only."""
+    v = DYR_MODELS["SCRX"].values(rec.params)
+    if v["rc/rfd"] != 0:
+        raise _Unsupported(f"rc/rfd = {v['rc/rfd']:g}: the field discharge resistor is not "
+                           "modelled (only 0)")
+    return _exc_row(rec, gen, TC=v["TA/TB"] * v["TB"], bus_fed=float(v["CSWITCH"] == 0))
+
+
+#: ANDES 2.0's SEXS defaults (``sexs.py``): TA/TB, TB, K, TE, EMIN, EMAX
+ANDES_SEXS_DEFAULTS = (0.4, 5.0, 20.0, 1.0, -99.0, 99.0)
+
+
+def _scrx_andes(rec, gen):
+    """SCRX as ANDES 2.0 reads it: its ``psse-dyr.yaml`` makes an SCRX record a SEXS
+    passing only the machine, so every parameter takes SEXS's default
+    (:data:`ANDES_SEXS_DEFAULTS`), never bus fed."""
+    return EXCITER.dyr_row(DYR_MODELS["SEXS"], ANDES_SEXS_DEFAULTS, machine=gen["number"],
+                           TC=ANDES_SEXS_DEFAULTS[0] * ANDES_SEXS_DEFAULTS[1])
 
 
 def _exst1(rec, gen):
@@ -445,6 +471,13 @@ def _st2cut(rec, gen):
     return _pss_row(rec, gen)
 
 
+def _stab2a(rec, gen):
+    """STAB2A: K2 T2 K3 T3 K4 K5 T5 HLIM -> type 4: washouts K_Tw s/(1 + s T_w) with K_Tw =
+    K2 T2, T_w = T2; limits [-HLIM, HLIM]."""
+    v = DYR_MODELS["STAB2A"].values(rec.params)
+    return _pss_row(rec, gen, KTw=v["K2"] * v["T2"], ymin=-v["HLIM"])
+
+
 # -- governors (PST tg_con, GovernorTable) ----------------------------------------------------
 
 def _tg_row(rec, gen, **cols) -> list:
@@ -472,13 +505,42 @@ def _ieeeg1(rec, gen):
     return _tg_row(rec, gen)
 
 
+def _hygov(rec, gen, andes=False):
+    """HYGOV: R r Tr Tf Tg VELM GMAX GMIN TW At Dturb qNL -> type 4 with the gate integrator
+    gain K_g = 1/(r Tr) and the rate limits [-VELM, VELM] (PSS/E).  andes: as ANDES 2.0
+    solves it on the system base (``hygov.py``: the integrator without 1/(r Tr), the rate
+    limits shifted by -e/r, the water column and D_turb power-scaled), on the machine base
+    K_g = SBASE/MBASE, T_w and D_turb times MBASE/SBASE, rate limits relative."""
+    v = DYR_MODELS["HYGOV"].values(rec.params)
+    for name in ("r", "Tr", "TW"):
+        if v[name] <= 0:
+            raise CaseError(f"{rec.label()}: {name} = {v[name]} must be > 0")
+    cols = dict(Uc=-v["VELM"], Kg=1 / (v["r"] * v["Tr"]))
+    if andes:
+        s = gen["mbase"] / gen.get("sbase", 100.0)
+        cols.update(Kg=1 / s, velm_rel=1.0, Tw=v["TW"] * s, Dt=v["Dturb"] * s)
+    return _tg_row(rec, gen, **cols)
+
+
+def _ieesgo(rec, gen, andes=False):
+    """IEESGO: T1 T2 T3 T4 T5 T6 K1 K2 K3 PMAX PMIN -> type 5, the power after T4, T5, T6
+    weighted 1 - K2, (1 - K3) K2, K2 K3 (tg_con K1, K3, K5).  andes: K1 on the system base
+    as ANDES 2.0 (``ieesgo.py``, not power-scaled): times SBASE/MBASE on the machine base."""
+    v = DYR_MODELS["IEESGO"].values(rec.params)
+    K2, K3 = v["K2"], v["K3"]
+    cols = dict(K1=1 - K2, K3=(1 - K3) * K2, K5=K2 * K3)
+    if andes:
+        cols["invR"] = v["K1"] * gen.get("sbase", 100.0) / gen["mbase"]
+    return _tg_row(rec, gen, **cols)
+
+
 _MAPPERS = {
     "machine": {"GENROU": _genrou, "GENSAL": _gensal, "GENCLS": _gencls},
     "exciter": {"SEXS": _sexs, "IEEEX1": _dc("IEEEX1"), "EXDC2": _dc("EXDC2"),
                 "ESDC2A": _dc("ESDC2A", zero_vrmax_unlimited=True), "EXST1": _exst1,
-                "ESST3A": _esst3a},
-    "pss": {"IEEEST": _ieeest, "ST2CUT": _st2cut},
-    "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1},
+                "ESST3A": _esst3a, "IEEET2": _dc("IEEET2"), "SCRX": _scrx},
+    "pss": {"IEEEST": _ieeest, "ST2CUT": _st2cut, "STAB2A": _stab2a},
+    "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1, "HYGOV": _hygov, "IEESGO": _ieesgo},
 }
 _KIND = {model: kind for kind, models in _MAPPERS.items() for model in models}
 
@@ -502,12 +564,25 @@ def _esdc2a_andes(rec, gen):
     return row
 
 
+def _gensal_andes(rec, gen):
+    """GENSAL as ANDES 2.0 reads it (``psse-dyr.yaml``): its GENROU with X'q = X'd,
+    T'qo = T'do and X''q = X''d."""
+    v = DYR_MODELS["GENSAL"].values(rec.params)
+    _positive_h(rec, v["H"])
+    return _mac_row(rec, gen, xqp=v["X'd"], Tqop=v["T'do"], xqpp=v["X''d"])
+
+
 #: conventions="andes": ANDES 2.0's DC exciters (IEEEX1, EXDC2, ESDC2A) use the quadratic
 #: saturation and keep K_E = 0; its EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
 #: terminal voltage as PSS/E's and IEEE DC2, while its IEEEX1 scales them by the terminal
 #: voltage (``ieeex1.py``: ``VRMAX * v``, so PST's DC2, not DC1); its ESDC2A bypasses T_R;
-#: its IEEEG1 rate limits are on the system base
+#: its IEEEG1 rate limits are on the system base; GENSAL is its GENROU, SCRX its SEXS; HYGOV
+#: and IEESGO as ANDES solves them (``_hygov``, ``_ieesgo``); IEEET2, which ANDES lacks,
+#: with the quadratic saturation of its other DC exciters
 _ANDES_MAPPERS = {"IEEEX1": _dc("EXDC2", andes=True), "EXDC2": _dc("IEEEX1", andes=True),
-                  "ESDC2A": _esdc2a_andes, "IEEEG1": _ieeeg1_andes}
+                  "ESDC2A": _esdc2a_andes, "IEEEG1": _ieeeg1_andes, "GENSAL": _gensal_andes,
+                  "SCRX": _scrx_andes, "IEEET2": _dc("IEEET2", andes=True),
+                  "HYGOV": lambda rec, gen: _hygov(rec, gen, andes=True),
+                  "IEESGO": lambda rec, gen: _ieesgo(rec, gen, andes=True)}
 CONVENTIONS = ("pst", "andes")
 _WIDTH = {kind: len(family.params) for kind, family in FAMILY.items()}

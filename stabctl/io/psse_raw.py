@@ -27,8 +27,9 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   MBASE). Several generators at one bus add up; the bus is PV (IDE 2) or swing (IDE 3) at
   VS, with Q limits the sums of QT and QB (a sum of exactly 0 reads as "no limit", PST's
   convention). An IDE 2 bus without generator in service is a load bus;
-* non-transformer branches (in service): R, X, B; line shunts GI, BI, GJ, BJ only when
-  they are a symmetric susceptance (BI = BJ, GI = GJ = 0: added to B);
+* non-transformer branches (in service): R, X, B; line shunts GI + jBI, GJ + jBJ at their
+  ends (``line`` columns 11-14, switched with the branch; the ``line`` matrix has these
+  columns only when a branch has them);
 * two-winding transformers (in service): CW 1 (pu of bus base kV), 2 (kV), 3 (pu of
   NOMV); CZ 1 (system base), 2 (SBASE1-2 and NOMV1 base), 3 (load loss W and |Z|);
   WINDV1, WINDV2, ANG1. The circuit bus I - ideal t1:1 - Z - ideal 1:t2 - bus J is PST's
@@ -128,7 +129,8 @@ class RawData:
         name: case name (file stem); title: the two title lines joined by " / ".
         version: RAW version (32, 33, 34); base_mva: SBASE (MVA); freq_hz: BASFRQ (Hz).
         bus: PST ``bus`` matrix, shape (n_bus, 15) (:class:`stabctl.case.BusTable`).
-        line: PST ``line`` matrix, shape (n_branch, 10).
+        line: PST ``line`` matrix, shape (n_branch, 10), or (n_branch, 14) when a branch
+            has line-end shunts (:class:`stabctl.case.BranchTable` columns 11-14).
         load_con: PST ``load_con`` rows, shape (n, 5) (empty unless ``loads="raw"``).
         generators: in-service generators in RAW order.
         unsupported: records that could not be represented, in file order.
@@ -483,11 +485,12 @@ def _branch(b: _Builder, rec: _Rec):
         return
     r, x, bc = rec.num(0, 3), rec.num(0, 4), rec.num(0, 5, 0.0)
     gi, bi, gj, bj = (rec.num(0, k + n, 0.0) for n in range(4))
-    if gi != 0 or gj != 0 or bi != bj:
-        return b.skip(rec, f"{what}: line shunts GI, BI, GJ, BJ other than BI = BJ")
     if r < 0 or (r == 0 and x == 0):
         rec.fail(f"{what}: R = {r:g} must be >= 0 and R + jX not 0")
-    b.branches.append([i, j, r, x, bc + bi + bj, 0, 0, 0, 0, 0])
+    if gi == 0 and gj == 0 and bi == bj:      # a symmetric susceptance: part of the charging
+        b.branches.append([i, j, r, x, bc + bi + bj, 0, 0, 0, 0, 0])
+    else:
+        b.branches.append([i, j, r, x, bc, 0, 0, 0, 0, 0, gi, bi, gj, bj])
 
 
 def _transformer(b: _Builder, rec: _Rec):
@@ -651,7 +654,9 @@ def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawDat
     bus = np.array(list(b.buses.values()), dtype=float)
     if not np.any(bus[:, 9] == SWING):
         raise CaseError(f"{path.name}: no swing bus (IDE 3) in the bus data")
-    line = np.array(b.branches, dtype=float).reshape(-1, 10)
+    width = max([10, *(len(row) for row in b.branches)])
+    line = np.array([row + [0.0] * (width - len(row)) for row in b.branches],
+                    dtype=float).reshape(-1, width)
     title = " / ".join(t.strip() for t in lines[1:3] if t.strip())
     return RawData(name=path.stem, title=title, version=version, base_mva=b.base,
                    freq_hz=freq, bus=bus, line=line, load_con=load_con,

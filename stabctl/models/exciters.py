@@ -1,13 +1,17 @@
 """Exciter models: PST `smpexc` (type 0, simple static), `exc_dc12` (types 1 and 2, IEEE
-DC1 / DC2 dc commutator exciters), `exc_st3` (type 3, IEEE ST3) and stabctl's PSS/E
-`EXST1` (type 4, IEEE ST1 simplified).
+DC1 / DC2 dc commutator exciters), `exc_st3` (type 3, IEEE ST3), stabctl's PSS/E
+`EXST1` (type 4, IEEE ST1 simplified) and `IEEET2` (type 5: DC1 whose rate feedback has a
+second lag, s K_F/((1 + s T_F1)(1 + s T_F2))); smpexc also serves PSS/E's SCRX (bus fed:
+the output times the terminal voltage, exc_con column 19 ``bus_fed``).
 
 Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
-Table 2, 3.13 Table 3); PSS/E Model Library EXST1 (IEEE Std 421.5 ST1A simplified);
+Table 2, 3.13 Table 3); PSS/E Model Library EXST1 (IEEE Std 421.5 ST1A simplified),
+IEEET2 (IEEE Committee Report 1968 type 2) and SCRX (bus-fed or solid-fed static exciter);
 equations, limits and PST's quirks in docs/pst_models.md section 2.  A time constant
 below 1e-3 s means the block is absent (no state).  States, named per type in
 STATE_NAMES: smpexc (V_TR, V_As, Efd); exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As,
-V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f).  Units: pu on the machine base; times in s.
+V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f); IEEET2 (exc_dc12's and V_F, the second
+feedback lag).  Units: pu on the machine base; times in s.
 """
 
 from __future__ import annotations
@@ -23,10 +27,10 @@ from stabctl.errors import CaseError
 from stabctl.models._declared import columns, pack, params_class
 
 LBND = 1e-3
-SMP, DC1, DC2, ST3, ST1 = 0, 1, 2, 3, 4
+SMP, DC1, DC2, ST3, ST1, T2 = 0, 1, 2, 3, 4, 5
 STATE_NAMES = {SMP: ("VTR", "VAs", "Efd"), ST3: ("VTR", "VAs", "VR"),
                DC1: ("VTR", "VAs", "VR", "Efd", "Rf"), DC2: ("VTR", "VAs", "VR", "Efd", "Rf"),
-               ST1: ("VTR", "VAs", "VR", "Rf")}
+               ST1: ("VTR", "VAs", "VR", "Rf"), T2: ("VTR", "VAs", "VR", "Efd", "Rf", "VF")}
 
 #: exc_con fields (stabctl.case.params.EXCITER) the kernels take as the table gives them:
 #: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P))
@@ -48,6 +52,7 @@ PACKED = (("KIND", "kind"), ("MAC", "mac"),
             "VIMIN", "KJ", "KPR", "KPI", "KI", "XL", "KC", "EFDMAX", "KG", "VGMAX", "TCTB",
             "KE", "TE", "ASAT", "BSAT", "KF", "TF", "VREF", "SATQ")
 E_NCOL = len(PACKED)
+DC_KINDS = (DC1, DC2, T2)
 
 
 @params_class(("kind", "mac"), TABLE_FIELDS)
@@ -93,7 +98,13 @@ class ExciterParams:
 
     @property
     def is_dc(self):
-        return (self.kind == DC1) | (self.kind == DC2)
+        """DC exciters: DC1, DC2 and IEEET2."""
+        return np.isin(self.kind, DC_KINDS)
+
+    @property
+    def has_VF(self):
+        """IEEET2 with a second rate-feedback lag (T_F2 >= 1e-3 s, exc_con column 18)."""
+        return (self.kind == T2) & (self.Efdmax >= LBND)
 
     @property
     def tc_tb(self):
@@ -106,11 +117,12 @@ class ExciterParams:
 
     def has_state(self) -> np.ndarray:
         """Boolean (n_slots, n_exc): the slots that are states (docs/modal.md)."""
-        act = np.zeros((5, self.n), bool)
+        act = np.zeros((6, self.n), bool)
         act[0], act[1] = self.has_TR, self.has_TB
         act[2] = (self.kind == ST3) | self.has_TA
         act[3] = self.has_Rf
         act[4] = self.is_dc
+        act[5] = self.has_VF
         return act[:self.n_slots()]
 
     @property
@@ -122,7 +134,8 @@ class ExciterParams:
         """(label, values, mask) of every time constant that sets a state's speed."""
         return (("exc_con T_R", self.TR, self.has_TR), ("exc_con T_A", self.TA, self.has_TA),
                 ("exc_con T_B", self.TB, self.has_TB), ("exc_con T_E", self.TE, self.is_dc),
-                ("exc_con T_F", self.TF, self.has_Rf))
+                ("exc_con T_F", self.TF, self.has_Rf),
+                ("exc_con T_F2", self.Efdmax, self.has_VF))
 
 
 def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
@@ -173,7 +186,7 @@ def _exponential_fit(e):
     with np.errstate(divide="ignore", invalid="ignore"):
         B = np.where(fit, np.log(SE2 * E2 / (SE1 * E1)) / (E2 - E1), SE2)
         A = np.where(fit, SE1 / np.exp(B * E1), SE1)
-    bad = np.nonzero(((e.type == DC1) | (e.type == DC2)) & (e.dc_sat == 0))[0]
+    bad = np.nonzero(np.isin(e.type, DC_KINDS) & (e.dc_sat == 0))[0]
     bad = bad[~np.isfinite(A[bad] + B[bad])]
     if bad.size:
         raise CaseError(f"exc_con row {bad[0] + 1}: DC exciter saturation points (E1, SE1, E2, "
@@ -185,8 +198,8 @@ def _check_dc(e) -> None:
     """DC exciter and EXST1 options stabctl does not model: raise CaseError naming row and
     field (T_A, T_E, T_F must exist; Vrmax = 0 is PST's 'compute it')."""
     dc = (("TA", "TA"), ("TE", "TE"), ("TF", "TF_dc"))      # (name in messages, declared)
-    need = {DC1: dc, DC2: dc, ST1: (("TA", "TA"),)}
-    for r in np.nonzero(np.isin(e.type, (DC1, DC2, ST1)))[0]:
+    need = {DC1: dc, DC2: dc, T2: dc, ST1: (("TA", "TA"),)}
+    for r in np.nonzero(np.isin(e.type, (*DC_KINDS, ST1)))[0]:
         kind = int(e.type[r])
         extra = (("TF", "TF"),) if kind == ST1 and e.KF[r] != 0 else ()
         for name, declared in need[kind] + extra:
@@ -204,7 +217,7 @@ def exciter_params(case: Case) -> ExciterParams:
     e = case.exciters
     _check_dc(e)
     A, B = _dc_saturation(e)
-    dc = (e.type == DC1) | (e.type == DC2)
+    dc = np.isin(e.type, DC_KINDS)
     KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
     given = {n: getattr(e, n).copy() for n in TABLE_FIELDS}
     given.update(KA=KA, KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)))
@@ -247,10 +260,12 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     (needed for type 3).  Raises CaseError when the initial point violates a limit PST
     checks (ST3: Efdmax or the V_I range; DC: the V_R limits) by more than
     `case.START_LIMIT_TOL`."""
-    x = np.zeros((5, p.n))
+    x = np.zeros((6, p.n))
     x[0] = eterm
     smp, st3, dc = p.kind == SMP, p.kind == ST3, p.is_dc
-    VA_smp = vex / p.KA
+    bus_fed = smp & (p.KG == 1)
+    vex_smp = vex / np.where(bus_fed, eterm, 1.0)      # SCRX bus fed: Efd = V_t x Efd state
+    VA_smp = vex_smp / p.KA
     VB = np.ones(p.n) if VB is None else np.where(st3, VB, 1.0)
     VR = vex / VB
     VA_st3 = VR / p.KA + np.minimum(p.VGmax, p.KG * vex)
@@ -266,7 +281,7 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     VA = np.where(smp, VA_smp, np.where(dc, VR_dc, vex) / p.KA)
     VA = np.where(st3, VA_st3, VA)
     x[1] = VA
-    x[2] = np.where(smp | st1, vex, np.where(dc, VR_dc, VR))
+    x[2] = np.where(smp, vex_smp, np.where(st1, vex, np.where(dc, VR_dc, VR)))
     x[3] = np.where(p.has_Rf, vex, 0.0)
     x[4] = np.where(dc, vex, 0.0)
     Vref = eterm + np.where(st3, VI, VA)
@@ -316,7 +331,8 @@ def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
     ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error, without
     limits; exc_dc12: the Efd state; exc_st3: min(V_R V_B, Efdmax) (ieee: V_R clipped);
-    EXST1: V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd].
+    EXST1: V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd]; smpexc bus fed (SCRX,
+    exc_con column 19 = 1): its output times VTR_alg.
     """
     kind = P[i, E_KIND]
     if kind == ST3:
@@ -325,14 +341,15 @@ def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     if kind == ST1:
         hi = VTR_alg * P[i, E_VRMAX] - P[i, E_KC] * ifd
         return min(max(x[2, i], VTR_alg * P[i, E_VRMIN]), hi)
-    if kind == DC1 or kind == DC2:
+    if kind == DC1 or kind == DC2 or kind == T2:
         return x[3, i]
+    mult = VTR_alg if P[i, E_KG] == 1 else 1.0
     if P[i, E_TA] >= LBND:
-        return min(max(x[2, i], P[i, E_VRMIN]), P[i, E_VRMAX]) if ieee else x[2, i]
+        return (min(max(x[2, i], P[i, E_VRMIN]), P[i, E_VRMAX]) if ieee else x[2, i]) * mult
     VTR = x[0, i] if P[i, E_TR] >= LBND else VTR_alg
     err = P[i, E_VREF] - VTR + pss_out
     VA = P[i, E_TCTB] * err + (1 - P[i, E_TCTB]) * x[1, i] if P[i, E_TB] >= LBND else err
-    return P[i, E_KA] * VA
+    return P[i, E_KA] * VA * mult
 
 
 @njit(cache=True)
@@ -364,10 +381,14 @@ def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee):
     VTR = x[0, i] if has_TR else eterm
     dx[0, i] = (eterm - x[0, i]) / P[i, E_TR] if has_TR else 0.0
     kind = P[i, E_KIND]
-    smp, dc, st1 = kind == SMP, kind == DC1 or kind == DC2, kind == ST1
+    smp, dc, st1 = kind == SMP, kind == DC1 or kind == DC2 or kind == T2, kind == ST1
     VI = P[i, E_VREF] - VTR + pss_out
     if dc:
-        VI -= P[i, E_KF] / P[i, E_TF] * (x[3, i] - x[4, i])
+        VF = P[i, E_KF] / P[i, E_TF] * (x[3, i] - x[4, i])
+        if kind == T2 and P[i, E_EFDMAX] >= LBND:     # IEEET2: second lag T_F2
+            dx[5, i] = (VF - x[5, i]) / P[i, E_EFDMAX]
+            VF = x[5, i]
+        VI -= VF
     elif st1 and P[i, E_KF] != 0:
         VI = min(max(VI - P[i, E_KF] / P[i, E_TF] * (efd - x[3, i]), P[i, E_VIMIN]),
                  P[i, E_VIMAX])
@@ -422,10 +443,10 @@ def _dc_exciter(P, x, i, dx):
 @njit(cache=True)
 def recorded_efd(P, x, i, efd_alg):
     """Efd as PST records it: the (clamped) smpexc state, the DC Efd state, or the ST3
-    algebraic value."""
+    (and bus-fed smpexc) algebraic value."""
     kind = P[i, E_KIND]
-    if kind == DC1 or kind == DC2:
+    if kind == DC1 or kind == DC2 or kind == T2:
         return x[3, i]
-    if kind == SMP and P[i, E_TA] >= LBND:
+    if kind == SMP and P[i, E_TA] >= LBND and P[i, E_KG] != 1:
         return x[2, i]
     return efd_alg

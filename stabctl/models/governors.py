@@ -1,10 +1,10 @@
-"""Turbine-governors: PST `tg` (type 1) and the PSS/E models TGOV1 (type 2) and IEEEG1
-(type 3).
+"""Turbine-governors: PST `tg` (type 1) and the PSS/E models TGOV1 (type 2), IEEEG1
+(type 3), HYGOV (type 4) and IEESGO (type 5).
 
 Sources: PSTess 1.1 `tg_indx.m`, `tg.m` (docs/pst_models.md section 4); PSS/E Model
 Library `TGOV1`, `IEEEG1` (IEEE Committee Report 1973 steam turbine model), as
-implemented in ANDES (`andes/models/governor/tgov1.py`, `ieeeg1.py`); equations in
-docs/pst_models.md section 4.1-4.2.
+implemented in ANDES (`andes/models/governor/tgov1.py`, `ieeeg1.py`, `hygov.py`, `ieesgo.py`); equations in
+docs/pst_models.md section 4.1-4.3.
 
 tg: demand = clip(P_ref + (w_f - omega)/R, Tmin, T_max) -> 1/(1 + s T_s)
 -> (1 + s T_3)/(1 + s T_c) -> (1 + s T_4)/(1 + s T_5) -> pmech (machine base).  T_4 may
@@ -12,6 +12,13 @@ be negative (hydro).  TGOV1: P_ref + (w_f - omega)/R -> 1/(1 + s T1) non-windup 
 VMAX] -> (1 + s T2)/(1 + s T3) -> minus Dt (omega - 1).  IEEEG1: K (1 + s T2)/(1 + s T1)
 on the speed deviation, gate servo 1/T3 with rate limits [Uc, Uo] and position limits
 [PMIN, PMAX], four lags T4..T7, power fractions K1..K8 (HP + LP summed: one shaft).
+HYGOV (machine base): filter T_f on e = P_ref - (omega - 1) - R c, desired gate c = x_g +
+e/r with the gate integrator dx_g/dt = K_g e (PSS/E: K_g = 1/(r T_r)) rate-limited to
+[-VELM, VELM] (ANDES: minus e/r) and held in [GMIN, GMAX], gate g = c/(1 + s T_g), water
+column T_w dq/dt = 1 - (q/g)^2, pmech = A_t (q/g)^2 (q - q_NL) - D_turb (omega - 1) g.
+IEESGO: K_1 (omega - 1) through 1/(1 + s T_1) and (1 + s T_2)/(1 + s T_3), P_ref minus it
+limited to [PMIN, PMAX], lags T_4, T_5, T_6, pmech = (1 - K_2) y_4 + (1 - K_3) K_2 y_5 +
+K_2 K_3 y_6 (the IEEEG1 fraction columns K1, K3, K5).
 States: up to N_STATES slots per governor (the most any type present uses), named per
 type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 """
@@ -27,22 +34,28 @@ from stabctl.errors import CaseError
 from stabctl.models._declared import columns, pack, params_class
 
 LBND = 1e-3
-TG, TGOV1, IEEEG1 = 1, 2, 3
+TG, TGOV1, IEEEG1, HYGOV, IEESGO = 1, 2, 3, 4, 5
 N_STATES = 6
 STATE_NAMES = {TG: ("servo", "transient", "turbine"),
                TGOV1: ("valve", "leadlag"),
-               IEEEG1: ("leadlag", "gate", "T4lag", "T5lag", "T6lag", "T7lag")}
+               IEEEG1: ("leadlag", "gate", "T4lag", "T5lag", "T6lag", "T7lag"),
+               HYGOV: ("filter", "gate_integrator", "gate", "flow"),
+               IEESGO: ("lag", "leadlag", "T4lag", "T5lag", "T6lag")}
+#: HYGOV's fields in tg_con columns 17-21 (alternative names of K1..K5)
+HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel")
 #: tg_con fields (stabctl.case.params.GOVERNOR) the kernels take as given: columns 3-16
 #: (the IEEEG1 fractions K1..K8 enter summed per shaft stage, K)
 TABLE_FIELDS = GOVERNOR.names[2:16]
 #: packed parameter matrix of the kernels, (constant suffix, GovernorParams attribute) per
 #: column: tg_con columns 1-16 in declared order, K's four columns, P_ref; constants G_<suffix>
 PACKED = (("KIND", "kind"), ("MAC", "mac"), *((n.upper(), n) for n in TABLE_FIELDS),
-          *((f"K{s}", f"K_{i}") for i, s in enumerate("ABCD")), ("PREF", "Pref"))
+          *((f"K{s}", f"K_{i}") for i, s in enumerate("ABCD")), ("PREF", "Pref"),
+          *((n.upper(), n) for n in HYGOV_FIELDS))
 (G_KIND, G_MAC, G_WF, G_INVR, G_TMAX, G_TS, G_TC, G_T3, G_T4, G_T5, G_TMIN, G_DT, G_T6,
- G_T7, G_UO, G_UC, G_KA, G_KB, G_KC, G_KD, G_PREF) = \
+ G_T7, G_UO, G_UC, G_KA, G_KB, G_KC, G_KD, G_PREF, G_RP, G_RT, G_QNL, G_KG, G_VELM_REL) = \
     columns(PACKED, "KIND", "MAC", "WF", "INVR", "TMAX", "TS", "TC", "T3", "T4", "T5",
-            "TMIN", "DT", "T6", "T7", "UO", "UC", "KA", "KB", "KC", "KD", "PREF")
+            "TMIN", "DT", "T6", "T7", "UO", "UC", "KA", "KB", "KC", "KD", "PREF", "RP", "RT",
+            "QNL", "KG", "VELM_REL")
 G_NCOL = len(PACKED)
 
 
@@ -50,10 +63,16 @@ G_NCOL = len(PACKED)
 class GovernorParams:
     """Governor data, arrays of shape (n_tg,): ``kind`` the tg_con type, ``mac`` the
     machine's row (index), the tg_con fields :data:`TABLE_FIELDS` under their declared
-    names (stabctl.case.params.GOVERNOR); K (n_tg, 4): IEEEG1 K1+K2, K3+K4, K5+K6,
-    K7+K8."""
+    names (stabctl.case.params.GOVERNOR); K (n_tg, 4): IEEEG1 (and IEESGO) K1+K2, K3+K4,
+    K5+K6, K7+K8; Rp, rt, qNL, Kg, velm_rel: HYGOV's columns 17-21 (0 for other types;
+    T4 is its T_w, T5 its A_t)."""
 
     K: np.ndarray
+    Rp: np.ndarray
+    rt: np.ndarray
+    qNL: np.ndarray
+    Kg: np.ndarray
+    velm_rel: np.ndarray
 
     @property
     def n(self) -> int:
@@ -72,31 +91,41 @@ class GovernorParams:
         """Boolean (n_slots, n_tg): the slots that are states of each governor."""
         act = np.zeros((N_STATES, self.n), bool)
         tg, t1, g1 = self.kind == TG, self.kind == TGOV1, self.kind == IEEEG1
+        hy, sg = self.kind == HYGOV, self.kind == IEESGO
         act[:3] |= tg
         act[:2] |= t1
         act[0] |= g1 & (self.Tc >= LBND)
         act[1] |= g1
         for r, T in zip(range(2, 6), (self.T4, self.T5, self.T6, self.T7)):
             act[r] |= g1 & (T >= LBND)
+        act[:4] |= hy
+        act[0] |= sg & (self.Tc >= LBND)
+        act[1] |= sg & (self.Ts >= LBND)
+        for r, T in zip(range(2, 5), (self.T4, self.T5, self.T6)):
+            act[r] |= sg & (T >= LBND)
         return act[:self.n_slots()]
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
         tg, t1, g1 = self.kind == TG, self.kind == TGOV1, self.kind == IEEEG1
-        lag = {name: g1 & (getattr(self, name) >= LBND) for name in ("Tc", "T4", "T5", "T6", "T7")}
-        return (("tg_con T_s", self.Ts, tg | t1 | g1), ("tg_con T_c", self.Tc, tg | t1 | lag["Tc"]),
-                ("tg_con T_5", self.T5, tg | lag["T5"]), ("tg_con T_4", self.T4, lag["T4"]),
-                ("tg_con T_6", self.T6, lag["T6"]), ("tg_con T_7", self.T7, lag["T7"]))
+        hy, sg = self.kind == HYGOV, self.kind == IEESGO
+        lag = {name: (g1 | sg) & (getattr(self, name) >= LBND)
+               for name in ("Tc", "Ts", "T4", "T5", "T6", "T7")}
+        return (("tg_con T_s", self.Ts, tg | t1 | g1 | hy | lag["Ts"]),
+                ("tg_con T_c", self.Tc, tg | t1 | hy | lag["Tc"]),
+                ("tg_con T_5", self.T5, tg | lag["T5"]), ("tg_con T_4", self.T4, hy | lag["T4"]),
+                ("tg_con T_6", self.T6, lag["T6"]), ("tg_con T_7", self.T7, lag["T7"] & g1))
 
 
 def governor_params(case: Case) -> GovernorParams:
     """Governor parameters.
 
-    Raises CaseError (tg_con row, field) for a zero time constant the model divides by
-    (tg: Ts, Tc, T5; TGOV1: T1 = Ts, T3 = Tc; IEEEG1: T3 = Ts) or an IEEEG1 without power
-    fractions."""
+    Raises CaseError (tg_con row, field) for a zero time constant or gain the model
+    divides by (tg: Ts, Tc, T5; TGOV1: T1 = Ts, T3 = Tc; IEEEG1: T3 = Ts; HYGOV: T_g = Ts,
+    T_f = Tc, T_w = T4, r = K2) or an IEEEG1 without power fractions."""
     g = case.governors
-    need = {TG: ("Ts", "Tc", "T5"), TGOV1: ("Ts", "Tc"), IEEEG1: ("Ts",)}
+    need = {TG: ("Ts", "Tc", "T5"), TGOV1: ("Ts", "Tc"), IEEEG1: ("Ts",),
+            HYGOV: ("Ts", "Tc", "T4", "K2"), IEESGO: ()}
     for r in range(len(g)):
         for name in need[int(g.type[r])]:
             if getattr(g, name)[r] == 0:
@@ -107,22 +136,27 @@ def governor_params(case: Case) -> GovernorParams:
     if bad.size:
         raise CaseError(f"tg_con row {bad[0] + 1}, fields 'K1'..'K8': IEEEG1 power fractions "
                         "must sum to > 0")
+    hy = g.type == HYGOV
     return GovernorParams(
         kind=g.type.astype(int), mac=np.array([case.machine_index(m) for m in g.machine], int),
-        **{n: getattr(g, n).copy() for n in TABLE_FIELDS}, K=K)
+        **{n: getattr(g, n).copy() for n in TABLE_FIELDS}, K=np.where(hy[:, None], 0.0, K),
+        **{n: np.where(hy, g.col(17 + i), 0.0) for i, n in enumerate(HYGOV_FIELDS)})
 
 
 def initialise(p: GovernorParams, pmech0):
     """States (n_slots, n_tg) and P_ref (n_tg,) from the initial mechanical power pmech0
     (machine base) at rated speed: every lag at its input, lead-lag states at
-    (1 - T_lead/T_lag) times their input.  P_ref is the power order (tg, TGOV1) or the
-    gate position (IEEEG1: pmech0 / sum K).
+    (1 - T_lead/T_lag) times their input.  P_ref is the power order (tg, TGOV1), the
+    gate position (IEEEG1, IEESGO: pmech0 / sum K) or R q_0 (HYGOV: flow, gate and gate
+    integrator at q_0 = pmech0/A_t + q_NL, head 1).
 
     Raises CaseError when the initial power order is outside [Tmin, Tmax] (PST's check
     for tg, the non-windup limits for TGOV1 and IEEEG1), beyond `case.START_LIMIT_TOL`."""
     x = np.zeros((N_STATES, p.n))
     tc = np.where(p.Tc >= LBND, p.Tc, 1.0)
-    gate = pmech0 / np.where(p.kind == IEEEG1, p.K.sum(axis=1), 1.0)
+    hy, sg = p.kind == HYGOV, p.kind == IEESGO
+    gate = pmech0 / np.where((p.kind == IEEEG1) | sg, p.K.sum(axis=1), 1.0)
+    gate = np.where(hy, pmech0 / np.where(hy, p.T5, 1.0) + p.qNL, gate)
     bad = np.nonzero(beyond(gate, p.Tmin, p.Tmax))[0]
     if bad.size:
         raise CaseError(f"tg_con row {bad[0] + 1}: initial power order {gate[bad[0]]:.4f} pu "
@@ -132,9 +166,11 @@ def initialise(p: GovernorParams, pmech0):
     x[1] = np.where(tg | t1, (1 - p.T3 / tc) * pmech0, gate)
     x[2] = np.where(tg, (1 - p.T4 / np.where(tg, p.T5, 1.0)) * pmech0, gate)
     x[3:] = np.where(g1, gate, 0.0)
+    x[:5] = np.where(sg, np.array([0.0, 0.0, 1.0, 1.0, 1.0])[:, None] * gate, x[:5])
+    x[:4] = np.where(hy, np.array([0.0, 1.0, 1.0, 1.0])[:, None] * gate, x[:4])
     x = x[:p.n_slots()]
     x[2:] *= p.has_state()[2:] | tg
-    return x, gate
+    return x, np.where(hy, p.Rp * gate, gate)
 
 
 @njit(cache=True)
@@ -153,10 +189,14 @@ def _ieeeg1_lags(P, x, k):
 def pmech(P, x, k, omega):
     """Mechanical power of governor k (machine base) at machine speed omega (pu), flag 1."""
     kind = P[k, G_KIND]
-    if kind == IEEEG1:
-        y = _ieeeg1_lags(P, x, k)
+    if kind == IEEEG1 or kind == IEESGO:
+        y = _ieeeg1_lags(P, x, k) if kind == IEEEG1 else _ieesgo_lags(P, x, k, omega)
         return (P[k, G_KA] * y[0] + P[k, G_KB] * y[1] + P[k, G_KC] * y[2]
                 + P[k, G_KD] * y[3])
+    if kind == HYGOV:
+        g, q = x[2, k], x[3, k]
+        h = (q / g) ** 2 if g > 0 else 0.0
+        return P[k, G_T5] * h * (q - P[k, G_QNL]) - P[k, G_DT] * (omega - 1.0) * g
     y2 = x[1, k] + P[k, G_T3] / P[k, G_TC] * x[0, k]
     if kind == TGOV1:
         return y2 - P[k, G_DT] * (omega - 1.0)
@@ -180,6 +220,12 @@ def derivatives(P, x, k, omega, dx):
     dx[:, k] = 0.0
     if kind == IEEEG1:
         _ieeeg1_derivatives(P, x, k, omega, dx)
+        return
+    if kind == HYGOV:
+        _hygov_derivatives(P, x, k, omega, dx)
+        return
+    if kind == IEESGO:
+        _ieesgo_lags(P, x, k, omega, dx)
         return
     order = P[k, G_PREF] + (P[k, G_WF] - omega) * P[k, G_INVR]
     lo, hi = P[k, G_TMIN], P[k, G_TMAX]
@@ -210,3 +256,45 @@ def _ieeeg1_derivatives(P, x, k, omega, dx):
         T = P[k, (G_T4, G_T5, G_T6, G_T7)[r]]
         dx[2 + r, k] = (inp - x[2 + r, k]) / T if T >= LBND else 0.0
         inp = y[r]
+
+
+@njit(cache=True)
+def _hygov_derivatives(P, x, k, omega, dx):
+    """HYGOV: filter, rate- and position-limited gate integrator, gate servo, water column
+    (module docstring; ANDES ``hygov.py``)."""
+    e = x[0, k]
+    c = x[1, k] + e / P[k, G_RT]
+    dx[0, k] = (P[k, G_PREF] - (omega - 1.0) - P[k, G_RP] * c - e) / P[k, G_TC]
+    shift = P[k, G_VELM_REL] * e / P[k, G_RT]
+    rate = min(max(P[k, G_KG] * e, P[k, G_UC] - shift), P[k, G_UO] - shift)
+    _nonwindup(x, dx, 1, k, rate, P[k, G_TMIN], P[k, G_TMAX])
+    dx[2, k] = (c - x[2, k]) / P[k, G_TS]
+    g = x[2, k]
+    h = (x[3, k] / g) ** 2 if g > 0 else 0.0
+    dx[3, k] = (1.0 - h) / P[k, G_T4]
+
+
+@njit(cache=True)
+def _ieesgo_lags(P, x, k, omega, dx=None):
+    """IEESGO: outputs of the lags T4, T5, T6 (module docstring; a time constant below
+    1e-3 s passes its input) and, given dx, the derivatives of its five states."""
+    u = P[k, G_INVR] * (omega - 1.0)
+    if P[k, G_TC] >= LBND:
+        if dx is not None:
+            dx[0, k] = (u - x[0, k]) / P[k, G_TC]
+        u = x[0, k]
+    if P[k, G_TS] >= LBND:
+        r = P[k, G_T3] / P[k, G_TS]
+        if dx is not None:
+            dx[1, k] = ((1 - r) * u - x[1, k]) / P[k, G_TS]
+        u = x[1, k] + r * u
+    u = min(max(P[k, G_PREF] - u, P[k, G_TMIN]), P[k, G_TMAX])
+    y = np.zeros(4)
+    for r in range(3):
+        T = P[k, (G_T4, G_T5, G_T6)[r]]
+        if T >= LBND:
+            if dx is not None:
+                dx[2 + r, k] = (u - x[2 + r, k]) / T
+            u = x[2 + r, k]
+        y[r] = u
+    return y

@@ -1,13 +1,19 @@
 """Power system stabilisers: PST `pss` (types 1 and 2: speed or power input, washout, two
-lead-lags, output limits) and stabctl's PSS/E stabiliser (type 3: IEEEST and ST2CUT).
+lead-lags, output limits), stabctl's PSS/E stabiliser (type 3: IEEEST and ST2CUT) and
+PSS/E's STAB2A (type 4).
 
 Sources: PSTess 1.1 `pss_indx.m`, `pss.m` (docs/pst_models.md section 3); PSS/E Model
 Library IEEEST (IEEE Std 421.5 PSS1A-type with its filter) and ST2CUT (as ANDES
-`andes/models/pss/ieeest.py`, `st2cut.py`), docs/pst_models.md 3.1.  Column 3 of
+`andes/models/pss/ieeest.py`, `st2cut.py`), docs/pst_models.md 3.1; STAB2A (ASEA power
+sensitive stabilising unit, PSS/E Model Library; block diagram as OpenIPSL
+``OpenIPSL.Electrical.Controls.PSSE.PSS.STAB2A``): electrical power (machine base) through
+-(K_2 T_2 s/(1 + s T_2))^3, then K_3/(1 + s T_3) + K_4, then (K_5/(1 + s T_5))^2, limited
+to +-HLIM.  Column 3 of
 pss_con is the gain times the washout time constant (K*T_w) for PST's pss, the washout
 gain for type 3.  PST pss states: washout, lead-lag 1, lead-lag 2 (only when
 T_4 >= 1e-3).  Type 3 states: input lags 1, 2, filter 1-4, washout, lead-lags 1-3 (each
-only where its block exists).  Output in pu, added to the exciter summing junction of
+only where its block exists).  Type 4 states: washouts 1-3, the T_3 lag, the two T_5 lags
+(a lag below 1e-3 s passes its input).  Output in pu, added to the exciter summing junction of
 the same machine.
 """
 
@@ -22,12 +28,13 @@ from stabctl.errors import CaseError
 from stabctl.models._declared import columns, pack, params_class
 
 LBND = 1e-3
-PST_SPEED, PST_POWER, PSSE = 1, 2, 3
+PST_SPEED, PST_POWER, PSSE, STAB2A = 1, 2, 3, 4
 SPEED, POWER = 1, 3                           # PSS/E input codes (ICS, MODE)
 STATE_NAMES = {PST_SPEED: ("washout", "leadlag1", "leadlag2"),
                PST_POWER: ("washout", "leadlag1", "leadlag2"),
                PSSE: ("lag1", "lag2", "filter1", "filter2", "filter3", "filter4", "washout",
-                      "leadlag1", "leadlag2", "leadlag3")}
+                      "leadlag1", "leadlag2", "leadlag3"),
+               STAB2A: ("washout1", "washout2", "washout3", "lag3", "lag5a", "lag5b")}
 #: pss_con fields (stabctl.case.params.PSS) the kernels take: columns 3-18 (type 3's
 #: filter A1..A6 enters as its canonical form nf, fe, fa, fc)
 TABLE_FIELDS = PSS.names[2:18]
@@ -80,13 +87,13 @@ class PssParams:
         return self.T4 >= LBND
 
     def n_slots(self) -> int:
-        """State slots per PSS: 3, or 10 when a PSS/E stabiliser is present."""
-        return 10 if np.any(self.kind == PSSE) else 3
+        """State slots per PSS: 3, or 10 when a PSS/E stabiliser (type 3 or 4) is present."""
+        return 10 if np.any(self.kind >= PSSE) else 3
 
     def has_state(self) -> np.ndarray:
         """Boolean (n_slots, n_pss): the slots that are states of each PSS."""
         act = np.zeros((10, self.n), bool)
-        pst, e = self.kind != PSSE, self.kind == PSSE
+        pst, e = self.kind <= PST_POWER, self.kind == PSSE
         act[0] = pst | (e & (self.Tr1 >= LBND))
         act[1] = pst | (e & (self.input2 != 0) & (self.Tr2 >= LBND))
         act[2] = (pst & self.has_T4) | (e & (self.nf >= 1))
@@ -95,13 +102,17 @@ class PssParams:
         act[W_PSSE] = e
         for r, T in zip(range(LL_PSSE, LL_PSSE + 3), (self.T2, self.T4, self.T6)):
             act[r] = e & (T >= LBND)
+        s2 = self.kind == STAB2A
+        act[:3] |= s2
+        act[3] |= s2 & (self.Tr1 >= LBND)
+        act[4:6] |= s2 & (self.T6 >= LBND)
         return act[:self.n_slots()]
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
-        e = self.kind == PSSE
+        e = self.kind >= PSSE
         return (("pss_con T_w", self.Tw, np.ones(self.n, bool)),
-                ("pss_con T_2", self.T2, ~e | (self.T2 >= LBND)),
+                ("pss_con T_2", self.T2, (self.kind <= PST_POWER) | (e & (self.T2 >= LBND))),
                 ("pss_con T_4", self.T4, self.T4 >= LBND),
                 ("pss_con T_6", self.T6, e & (self.T6 >= LBND)),
                 ("pss_con Tr1", self.Tr1, e & (self.Tr1 >= LBND)),
@@ -111,7 +122,8 @@ class PssParams:
 def pss_params(case: Case) -> PssParams:
     """PSS parameters of a case.
 
-    Raises CaseError (pss_con row) for a type-3 lead-lag with a lead but no lag, an input
+    Raises CaseError (pss_con row) for a type-3 or 4 washout below 1e-3 s, a type-3
+    lead-lag with a lead but no lag, an input
     code other than 1 (speed) or 3 (power), or an improper filter (A6 without a
     second-order denominator)."""
     s = case.pss
@@ -126,6 +138,8 @@ def pss_params(case: Case) -> PssParams:
 
 
 def _check_psse(s) -> None:
+    for r in np.nonzero((s.type >= PSSE) & (s.Tw < LBND))[0]:
+        raise CaseError(f"pss_con row {r + 1}, field 'Tw': washout needs Tw >= {LBND} s")
     for r in np.nonzero(s.type == PSSE)[0]:
         if s.input1[r] not in (SPEED, POWER) or s.input2[r] not in (0, SPEED, POWER):
             raise CaseError(f"pss_con row {r + 1}, fields 'input1', 'input2': PSS/E input codes "
@@ -202,6 +216,8 @@ def output_and_derivatives(P, x, k, omega, pe, dx):
     PST flag 1/2; its derivatives into dx[:, k]."""
     if P[k, S_KIND] == PSSE:
         return _psse(P, x, k, omega, pe, dx)
+    if P[k, S_KIND] == STAB2A:
+        return _stab2a(P, x, k, pe, dx)
     u = pe if P[k, S_KIND] == PST_POWER else omega
     var1 = (u - x[0, k]) / P[k, S_TW]
     r12 = P[k, S_T1] / P[k, S_T2]
@@ -254,4 +270,31 @@ def _psse(P, x, k, omega, pe, dx):
     y = _leadlag(P, x, dx, LL_PSSE, k, y, S_T1, S_T2)
     y = _leadlag(P, x, dx, LL_PSSE + 1, k, y, S_T3, S_T4)
     y = _leadlag(P, x, dx, LL_PSSE + 2, k, y, S_T5, S_T6)
+    return min(max(y, P[k, S_MIN]), P[k, S_MAX])
+
+
+@njit(cache=True)
+def _lag(P, x, dx, r, k, u, T):
+    """Lag 1/(1 + s T) of u with state slot r (T below 1e-3 s: u itself); output."""
+    if P[k, T] < LBND:
+        dx[r, k] = 0.0
+        return u
+    dx[r, k] = (u - x[r, k]) / P[k, T]
+    return x[r, k]
+
+
+@njit(cache=True)
+def _stab2a(P, x, k, pe, dx):
+    """STAB2A: -(K_Tw s/(1 + s T_w))^3 on pe (K_Tw = K_2 T_2, T_w = T_2), then
+    K_3/(1 + s T_3) + K_4 (columns K1, Tr1, K2), then (K_5/(1 + s T_5))^2 (columns K5 = T5,
+    T6), limited to [ymin, ymax]."""
+    dx[:, k] = 0.0
+    y = pe
+    for r in range(3):
+        dx[r, k] = (y - x[r, k]) / P[k, S_TW]
+        y = P[k, S_KTW] * dx[r, k]
+    y = -y
+    y = _lag(P, x, dx, 3, k, P[k, S_K1] * y, S_TR1) + P[k, S_K2] * y
+    y = _lag(P, x, dx, 4, k, P[k, S_T5] * y, S_T6)
+    y = _lag(P, x, dx, 5, k, P[k, S_T5] * y, S_T6)
     return min(max(y, P[k, S_MIN]), P[k, S_MAX])

@@ -13,7 +13,10 @@ This is PST's matrix ``C_from*chrg*C_from' + C_to*chrg*C_to' + C_line*y*C_line'`
 ``C_from`` holding ``1/t`` and ``'`` the conjugate transpose (PSTess ``y_sparse.m``). For a
 real tap it is the textbook off-nominal-tap model; for a phase shifter PST's convention
 is the textbook one (e.g. MATPOWER's) with the sign of the phase reversed, and we follow
-PST. Bus shunts ``gshunt + j*bshunt`` (pu at 1 pu voltage) add to the diagonal.
+PST. Line-end shunts ``y_f = g_from + j b_from``, ``y_t = g_to + j b_to`` (PSS/E's GI + jBI,
+GJ + jBJ; ANDES ``Line`` g1 + jb1, g2 + jb2) add to ``(y + jb/2)/|t|^2`` and ``y + jb/2``,
+at the bus side of the tap. Bus shunts ``gshunt + j*bshunt`` (pu at 1 pu voltage) add to
+the diagonal.
 
 The dynamic simulator reuses :func:`build_ybus` / :class:`Network` and adds generator,
 load and fault admittances with :func:`add_shunts`; a line trip is ``drop=[row]`` or
@@ -103,14 +106,19 @@ def branch_admittances(
     y = 1.0 / (br.r[rows] + 1j * br.x[rows])
     half_b = 0.5j * br.b[rows]
     t = complex_taps(case, taps)[rows]
+    yff, ytt = (y + half_b) / (t * np.conj(t)).real, y + half_b
+    ends = (br.g_from[rows] != 0) | (br.b_from[rows] != 0) | (br.g_to[rows] != 0) | (br.b_to[rows] != 0)
+    if ends.any():
+        yff = yff + (br.g_from[rows] + 1j * br.b_from[rows])
+        ytt = ytt + (br.g_to[rows] + 1j * br.b_to[rows])
     return BranchAdmittances(
         rows=rows,
         f=case.bus_indices(br.from_bus[rows]),
         t=case.bus_indices(br.to_bus[rows]),
-        yff=(y + half_b) / (t * np.conj(t)).real,
+        yff=yff,
         yft=-y / t,
         ytf=-y / np.conj(t),
-        ytt=y + half_b,
+        ytt=ytt,
     )
 
 
