@@ -39,6 +39,9 @@ from stabctl.dynamics.results import SimulationResult
 
 ESTIMATORS = ("ideal", "raw", "kf", "ekf")
 PMU_WINDOW_CYCLES = 2.0    # frequency estimation window of a P-class PMU (C37.118.1 annex)
+#: trajectory handed to the controller at each frame (cycles): the two frequency windows a
+#: frame reads (`_tail_truth`) and one more of margin; a longer tail only costs time
+HISTORY_CYCLES = 3 * PMU_WINDOW_CYCLES
 
 
 @dataclass
@@ -96,8 +99,7 @@ class LoopController:
         speed = self._speeds(t_f, partial)
         rel = es.relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
         rel = np.nan_to_num(rel)
-        self.mode = np.array([law.desired_mode(self.sa, d, self.mode[d], rel[self.sa.mac[d]], 1.0)
-                              for d in range(self.mode.size)], np.int64)
+        self.mode = law.desired_modes(self.sa, self.mode, rel)
         self.rows.append((t_f, rel * self.case.freq_hz, self.mode.copy()))
         return self.mode
 
@@ -251,7 +253,8 @@ def run_closed_loop(sim, events, t_end: float, fleet_pct: float, estimator: str,
     gate = law.ExternalCommands(v_gate_pu=control.v_gate_pu)
     res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), frames, decide,
                             latency=latency, h=h, separation_limit=separation_limit,
-                            stop_at_separation=stop_at_separation)
+                            stop_at_separation=stop_at_separation,
+                            history_s=HISTORY_CYCLES / sim.case.freq_hz)
     return ClosedLoopRun(res, ctrl.diagnostics())
 
 
