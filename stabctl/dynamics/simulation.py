@@ -830,7 +830,11 @@ def _stage(nets, s):
                          nets.R[s])
 
 
-@njit(cache=True)
+# The stages that reach `evaluate_kernel` are inlined into `integrate` at numba IR level
+# (inline="always"): compiled as functions of their own, each carried its own linked copy of
+# the model for LLVM to optimise and emit again, and a cold first run compiled for about
+# 53 s of CPU instead of about 35 s.  The compiled arithmetic, and so every result, is the same.
+@njit(cache=True, inline="always")
 def _evaluate(kn, x, stage, want, dx):
     """`evaluate_kernel` with the network of `stage`; the held loads are released when
     the stage changes.  Returns its iteration count (< 0: no convergence)."""
@@ -924,7 +928,7 @@ def _substep_length(grid, sa, ds, k, rem):
 
 # -- the controller at a grid point and at a split point -----------------------------------
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
     """The controller at grid index k (events make voltages jump here): commands due,
     Table 3 modes, targets and powers; the network is solved again if a power changed."""
@@ -943,7 +947,7 @@ def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
         _evaluate(kn, x, grid.interval[k], BUS_VOLTAGES, w.dx_k)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _locate_switching(kn, grid, sa, ds, opts, w, x_b, k):
     """First bang-bang switching inside the step from grid index k (state x_b and w.dx_j at
     its end): (fraction of the step, device), (2.0, -1) if none.  A device switches at most
@@ -977,7 +981,7 @@ def _switch_located(sa, ds, w, rec, first_d, t_now):
                 _log(rec, d, t_now, new, w.a.r[d])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d):
     """The controller at a split point of step k (a switching or a command, rem seconds
     before t_k+1): commands, switchings, targets, powers, then the derivatives there.
@@ -997,7 +1001,7 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d):
 
 # -- the step ------------------------------------------------------------------------------
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
     """Heun's predictor-corrector over hh from x_a (derivatives dx_a), the devices' powers
     advanced on a copy of their energy: (network solved, corrected state); dx_j is written
@@ -1010,7 +1014,7 @@ def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
     return True, x_a + 0.5 * hh * (dx_a + dx_j)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
     """The step from grid index k, split at located switchings and scheduled commands
     (each device switches at most once per step, commands are finite: it ends).  Returns
@@ -1056,7 +1060,7 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
     return OK, k, x_b
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     """One step from grid index k: the network at t_k (PSTess evaluates an interval's first
     step twice; the first pass's clamps stay), the controller there, the record of t_k,
@@ -1076,7 +1080,7 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     return _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _after_step(kn, sa, ds, opts, rec, health, x, k):
     """Numerical health and loss of synchronism after the step from k: (status, index)."""
     if not _healthy(x, health.est[k + 1], kn.p.n_mac, health):
@@ -1087,7 +1091,7 @@ def _after_step(kn, sa, ds, opts, rec, health, x, k):
     return OK, k
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
     """Store the outputs at k1 where a run pauses, from copies (the next call evaluates it
     for real)."""

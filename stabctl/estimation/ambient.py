@@ -96,4 +96,5 @@ def simulate(sim, t_end: float, ambient: AmbientLoad, rate: float = 60.0, events
     frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
     devs, set_points = ambient.schedule(sim.case, frames.size, rate)
     fleet = StorageFleet(devs, ExternalCommands(v_gate_pu=0.0))
-    return sim.run_commanded(events, t_end, fleet, frames, lambda t, _: set_points(t), h=h)
+    return sim.run_commanded(events, t_end, fleet, frames, lambda t, _: set_points(t), h=h,
+                             history_s=0.0)              # the set points read no trajectory

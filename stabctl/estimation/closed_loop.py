@@ -39,6 +39,9 @@ from stabctl.dynamics.results import SimulationResult
 
 ESTIMATORS = ("ideal", "raw", "kf", "ekf")
 PMU_WINDOW_CYCLES = 2.0    # frequency estimation window of a P-class PMU (C37.118.1 annex)
+#: trajectory handed to the controller at each frame (cycles): the two frequency windows a
+#: frame reads (`_tail_truth`) and one more of margin; a longer tail only costs time
+HISTORY_CYCLES = 3 * PMU_WINDOW_CYCLES
 
 
 @dataclass
@@ -96,8 +99,7 @@ class LoopController:
         speed = self._speeds(t_f, partial)
         rel = es.relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
         rel = np.nan_to_num(rel)
-        self.mode = np.array([law.desired_mode(self.sa, d, self.mode[d], rel[self.sa.mac[d]], 1.0)
-                              for d in range(self.mode.size)], np.int64)
+        self.mode = law.desired_modes(self.sa, self.mode, rel)
         self.rows.append((t_f, rel * self.case.freq_hz, self.mode.copy()))
         return self.mode
 
@@ -251,7 +253,8 @@ def run_closed_loop(sim, events, t_end: float, fleet_pct: float, estimator: str,
     gate = law.ExternalCommands(v_gate_pu=control.v_gate_pu)
     res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), frames, decide,
                             latency=latency, h=h, separation_limit=separation_limit,
-                            stop_at_separation=stop_at_separation)
+                            stop_at_separation=stop_at_separation,
+                            history_s=HISTORY_CYCLES / sim.case.freq_hz)
     return ClosedLoopRun(res, ctrl.diagnostics())
 
 
@@ -306,13 +309,26 @@ class LoopRunner:
                                stop_at_separation=stop_at_separation).result
 
 
+#: Clearing-time resolution of the CCT searches with the estimator in the loop (s): 1/4
+#: cycle at 60 Hz, the lattice the cold bisection searches on.
+CCT_TOL_S = 1 / 240
+
+
 def cct_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str, seed: int,
             rate: float = 60.0, latency: float = 0.05, t_fault: float = 1.0,
-            tol: float = 1 / 240, conventions: str = "ieee", h: float | None = None) -> dict:
+            tol: float = CCT_TOL_S, conventions: str = "ieee", h: float | None = None) -> dict:
     """Worker entry (`stabctl.parallel`): CCT (s, cycles) of a line fault with the estimator
     in the loop, PMU noise stream `seed`, model conventions and step h (None: default).
     The step's error bar is not searched here (the seed spread is the error bar of these
-    CCTs; `stabctl cct` gives the ideal-measurement one)."""
+    CCTs; `stabctl cct` gives the ideal-measurement one).
+
+    The CCT is the cold bisection's (`stabctl.stability.cct.critical_clearing_time`, the
+    search of the ideal row).  With an estimator in the loop the verdict need not be
+    monotone in the clearing time: Kundur, 20 % ESDs, raw PMU frequency, seed 0 is stable at
+    53, 56 and 60 cells of 1/240 s and unstable at 54, 55 and 57-59; the bisection reports
+    60 cells (15 cycles), the longest clearing with every shorter one stable is 53.
+    A search started elsewhere (from a neighbouring seed's CCT) can land on another
+    stable island, so every seed is searched from scratch."""
     from stabctl.stability.cct import LineFault, cached_simulator, critical_clearing_time
 
     runner = LoopRunner(cached_simulator(case, conventions, h), esd_pct, estimator, rate,
@@ -322,161 +338,140 @@ def cct_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str, s
     return {"cct_s": r.cct_s, "cct_cycles": r.cct_cycles, "n_simulations": r.n_simulations}
 
 
-def search_from(stable_at, k: int, k_max: int) -> tuple[int, int, int]:
-    """Warm-started CCT search on the clearing-time lattice: from a hint k (e.g. the ideal
-    controller's or the previous seed's CCT index), step away from k (1, 2, 4, ... cells,
-    within [0, k_max]) until the verdict changes, then bisect.  Returns (k_lo, k_hi =
-    k_lo + 1, simulations).  Where the verdict is monotone in the clearing time (stable
-    below the CCT, unstable above) this is the bracket the cold bisection of
-    `stabctl.stability.cct.critical_clearing_time` finds, in 2 runs when the hint is the
-    CCT instead of about log2(t_max / tol).  Raises InputError when it is unstable at zero
-    clearing or still stable at k_max."""
-    n = [0]
+@dataclass(frozen=True)
+class SeedRule:
+    """How many PMU noise seeds a row (rating, estimator) of `cct_study` gets: batches of
+    `batch` seeds until the confidence interval of the row's mean CCT is within
+    +-half_width_cycles, at most max_runs seeds.
 
-    def probe(j: int) -> bool:
-        n[0] += 1
-        return stable_at(j)
+    The half-width (`half_width`) is Student's t_{(1+c)/2, n-1} s / sqrt(n) (s the sample
+    standard deviation of the n CCTs, c the confidence), but never below the lattice floor
+    (1 - (1 - c)^(1/n)) tol: the CCTs lie on the search lattice (tol cycles apart), and
+    when n seeds agree, a CCT one cell away has a frequency below 1 - (1 - c)^(1/n) at
+    confidence c (binomial, no occurrence in n draws), which bounds the mean's shift.
+    With the defaults a row whose 5 seeds agree is done (floor 0.113 cycle at tol 1/4).
 
-    if probe(k):
-        lo, step = k, 1
-        while True:
-            if lo == k_max:
-                raise InputError(f"still stable at the search limit ({k_max} cells)")
-            hi = min(lo + step, k_max)
-            if not probe(hi):
-                break
-            lo, step = hi, 2 * step
-    else:
-        hi, step = k, 1
-        while True:
-            if hi == 0:
-                raise InputError("unstable even when cleared instantly: no CCT")
-            lo = max(hi - step, 0)
-            if probe(lo):
-                break
-            hi, step = lo, 2 * step
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        lo, hi = (mid, hi) if probe(mid) else (lo, mid)
-    return lo, hi, n[0]
+    Parameters
+    ----------
+    batch : int
+        Seeds added per round (and the first round's count), >= 1.
+    max_runs : int
+        Most seeds of a row, >= batch.
+    half_width_cycles : float
+        Target half-width of the interval (cycles).
+    confidence : float
+        In (0, 1).
 
+    Raises
+    ------
+    InputError
+        A count below 1, max_runs < batch, or a confidence outside (0, 1).
+    """
 
-def cct_chain_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str,
-                  seeds, hint_cycles: float, rate: float = 60.0, latency: float = 0.05,
-                  t_fault: float = 1.0, tol: float = 1 / 240, conventions: str = "ieee",
-                  h: float | None = None, t_max: float = 1.0,
-                  t_after: float = 5.0) -> dict:
-    """Worker entry (`stabctl.parallel`): the CCTs of `seeds` (PMU noise streams, in
-    order), each searched with `search_from` from the previous seed's CCT (the first from
-    hint_cycles, the ideal controller's CCT), runs stopped at separation, t_after s long
-    after the fault (`stabctl.stability.cct` default 5 s).  Returns {"cct_cycles": [...],
-    "n_simulations": [...], "latest_separation_s": the latest separation (s after the
-    fault) of an unstable probe, the margin of the horizon}."""
-    from stabctl.stability.cct import LineFault, _run, cached_simulator
+    batch: int = 5
+    max_runs: int = 20
+    half_width_cycles: float = 0.125
+    confidence: float = 0.95
 
-    fault = LineFault(int(bus), int(far_bus), float(t_fault))
-    sim = cached_simulator(case, conventions, h)
-    step = sim.default_h if h is None else h
-    k_max = int(np.floor(t_max / tol + 1e-9))
-    k = int(round(hint_cycles / sim.case.freq_hz / tol))
-    out = {"cct_cycles": [], "n_simulations": [], "latest_separation_s": 0.0}
-    for seed in seeds:
-        runner = LoopRunner(sim, esd_pct, estimator, rate, latency, int(seed))
+    def __post_init__(self):
+        if self.batch < 1 or self.max_runs < self.batch:
+            raise InputError(f"need 1 <= batch <= max_runs seeds, got {self.batch}, "
+                             f"{self.max_runs}")
+        if not 0.0 < self.confidence < 1.0:
+            raise InputError(f"confidence must be in (0, 1), got {self.confidence}")
 
-        def stable_at(j: int) -> bool:
-            res, diverged = _run(runner, fault, round(j * tol, 12), t_fault + t_after, step,
-                                 np.pi, True, {})
-            if not res.stable and res.t_separation is not None:
-                out["latest_separation_s"] = max(out["latest_separation_s"],
-                                                 round(res.t_separation - t_fault, 6))
-            return not diverged and bool(res.stable)
+    def half_width(self, values, tol_cycles: float) -> float:
+        """Half-width (cycles) of the interval of the mean of `values` (CCTs in cycles;
+        NaN: a failed run, not counted); inf with fewer than two finite values."""
+        from scipy.stats import t as student
 
-        k, _, n = search_from(stable_at, k, k_max)
-        out["cct_cycles"].append(round(k * tol, 12) * sim.case.freq_hz)
-        out["n_simulations"].append(n)
-    return out
+        v = np.asarray(values, float)
+        v = v[np.isfinite(v)]
+        n = v.size
+        if n < 2:
+            return np.inf
+        spread = student.ppf(0.5 + 0.5 * self.confidence, n - 1) * v.std(ddof=1) / np.sqrt(n)
+        return float(max(spread, (1.0 - (1.0 - self.confidence) ** (1.0 / n)) * tol_cycles))
 
 
-#: Noise seeds per warm-started job of `cct_study` (a job's seeds run in order, each
-#: starting from the previous seed's CCT; short jobs keep the progress bar moving).
-CHAIN = 5
-
-
-def cct_study(case: str, bus: int, far_bus: int, ratings, runs: int, out, *,
+def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
               estimators=ESTIMATORS, seed: int = 0, rate: float = 60.0, latency: float = 0.05,
               workers: int | None = None, progress: bool = True, conventions: str = "ieee",
-              h: float | None = None, warm: bool = False, t_after: float = 5.0) -> dict:
-    """CCTs per rating and estimator over `runs` noise seeds (seed .. seed + runs - 1; one
-    run for "ideal", which has no noise), in parallel with `stabctl.parallel.run_sweep`
-    (records appended to `out`, finished jobs reused), each by the cold bisection of
-    `cct_job`.  With `warm`, only the ideal CCT is searched cold; the estimators' are
-    warm-started from it (`cct_chain_job`: chains of CHAIN seeds, each from the previous
-    seed's CCT), runs t_after s long after the fault.  Warm and cold searches agree where
-    the verdict is monotone in the clearing time; with an estimator in the loop it need
-    not be (Kundur, 20 %, raw, seed 0: stable at 53, 56 and 60 cells of 1/240 s, unstable
-    at 54, 55, 57-59, 61-: the cold bisection lands on 60, a search from 72 on 53), so the
-    paper's report keeps the cold search.  Returns {rating: {estimator: {"mean", "std",
-    "min", "max", "runs", "failed", "values", "latest_separation_s" (warm only)}}} of the
-    CCT in cycles."""
+              h: float | None = None) -> dict:
+    """CCTs per rating and estimator over noise seeds, each by the cold bisection of
+    `cct_job`, in parallel with `stabctl.parallel.run_sweep` (records appended to `out`,
+    finished jobs reused).
+
+    Parameters
+    ----------
+    case : str
+        Built-in case name.
+    bus, far_bus : int
+        The faulted line (fault at `bus`).
+    ratings : sequence of float
+        ESD ratings (% of machine MVA).
+    runs : int or SeedRule
+        Noise seeds per estimator row (seed .. seed + runs - 1), or a `SeedRule` choosing
+        each row's count from the confidence interval of its mean.  "ideal" has no noise:
+        one run.
+    out : path
+        The sweep's JSON-lines records.
+    estimators : sequence of str
+        Of `ESTIMATORS`.
+    seed : int
+        First noise seed.
+    rate, latency : float
+        PMU frames per s, loop latency (s).
+    workers, progress, conventions, h
+        As `stabctl.parallel.run_sweep` and `stabctl.dynamics.simulation.Simulator`.
+
+    Returns
+    -------
+    dict
+        {rating: {estimator: {"mean", "std", "min", "max", "runs", "failed", "values",
+        "half_width"}}}: the CCT in cycles; half_width is the `SeedRule` half-width of the
+        mean (cycles; None for a fixed count).
+
+    Raises
+    ------
+    InputError
+        runs below 1.
+    """
+    from stabctl.io import load_case
     from stabctl.parallel import Job, run_sweep
 
-    if runs < 1:
+    rule = runs if isinstance(runs, SeedRule) else None
+    if rule is None and runs < 1:
         raise InputError(f"need at least one run, got {runs}")
+    tol_cycles = CCT_TOL_S * load_case(case).freq_hz
     tail = ("" if conventions == "ieee" else f"/{conventions}") + ("" if h is None else f"/h{h:g}")
-    if not warm:
-        jobs = [Job(f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s/seed{s}{tail}",
-                    cct_job, dict(case=case, bus=bus, far_bus=far_bus, esd_pct=p, estimator=e,
-                                  seed=s, rate=rate, latency=latency, conventions=conventions,
-                                  h=h))
-                for p in ratings for e in estimators
-                for s in ([seed] if e == "ideal" else range(seed, seed + runs))]
-        rep = run_sweep(jobs, out, workers=workers, progress=progress)
-        table = {}
-        for j in jobs:
-            rec = rep.records[j.key]
-            val = rec["result"]["cct_cycles"] if rec["status"] == "ok" else np.nan
-            table.setdefault(j.inputs["esd_pct"], {}).setdefault(j.inputs["estimator"],
-                                                                  []).append(val)
-        return {p: {e: _spread(v) for e, v in row.items()} for p, row in table.items()}
-    common = dict(case=case, bus=bus, far_bus=far_bus, rate=rate, latency=latency,
-                  conventions=conventions, h=h)
-    stem = lambda p, e: f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s"  # noqa: E731
-    ideal = [Job(f"{stem(p, 'ideal')}/seed{seed}{tail}", cct_job,
-                 dict(common, esd_pct=p, estimator="ideal", seed=seed))
-             for p in ratings]
-    rep = run_sweep(ideal, out, workers=workers, progress=progress)
-    table = {}
-    for p, j in zip(ratings, ideal):
-        rec = rep.records[j.key]
-        table.setdefault(p, {})["ideal"] = [rec["result"]["cct_cycles"]
-                                            if rec["status"] == "ok" else np.nan]
-    chains = []
-    for p, j in zip(ratings, ideal):
-        hint = table[p]["ideal"][0]
-        if not np.isfinite(hint):
-            hint = 0.0
-        for e in estimators:
-            if e == "ideal":
-                continue
-            for a in range(seed, seed + runs, CHAIN):
-                seeds = list(range(a, min(a + CHAIN, seed + runs)))
-                chains.append(Job(f"{stem(p, e)}/seeds{seeds[0]}-{seeds[-1]}/warm"
-                                  f"{'' if t_after == 5.0 else f'/{t_after:g}s'}{tail}",
-                                  cct_chain_job,
-                                  dict(common, esd_pct=p, estimator=e, seeds=seeds,
-                                       hint_cycles=hint, t_after=t_after)))
-    rep = run_sweep(chains, out, workers=workers, progress=progress)
-    late = {}
-    for j in chains:
-        rec, n = rep.records[j.key], len(j.inputs["seeds"])
-        ok = rec["status"] == "ok"
-        vals = rec["result"]["cct_cycles"] if ok else [np.nan] * n
-        key = (j.inputs["esd_pct"], j.inputs["estimator"])
-        table.setdefault(key[0], {}).setdefault(key[1], []).extend(vals)
-        if ok:
-            late[key] = max(late.get(key, 0.0), rec["result"]["latest_separation_s"])
-    return {p: {e: {**_spread(v), "latest_separation_s": late.get((p, e))}
-                for e, v in row.items() if e in estimators} for p, row in table.items()}
+
+    def job(p: float, e: str, s: int) -> Job:
+        return Job(f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s/seed{s}{tail}",
+                   cct_job, dict(case=case, bus=bus, far_bus=far_bus, esd_pct=p, estimator=e,
+                                 seed=s, rate=rate, latency=latency, conventions=conventions,
+                                 h=h))
+
+    first = runs if rule is None else rule.batch
+    count = {(p, e): 1 if e == "ideal" else first for p in ratings for e in estimators}
+    while True:
+        jobs = {pe: [job(*pe, s) for s in range(seed, seed + n)] for pe, n in count.items()}
+        rep = run_sweep([j for row in jobs.values() for j in row], out, workers=workers,
+                        progress=progress)
+        values = {pe: [rep.records[j.key]["result"]["cct_cycles"]
+                       if rep.records[j.key]["status"] == "ok" else np.nan for j in row]
+                  for pe, row in jobs.items()}
+        more = {} if rule is None else {
+            pe: min(n + rule.batch, rule.max_runs) for pe, n in count.items()
+            if pe[1] != "ideal" and n < rule.max_runs
+            and rule.half_width(values[pe], tol_cycles) > rule.half_width_cycles}
+        if not more:
+            break
+        count.update(more)
+    return {p: {e: {**_spread(values[p, e]),
+                    "half_width": None if rule is None or e == "ideal"
+                    else rule.half_width(values[p, e], tol_cycles)}
+                for e in estimators} for p in ratings}
 
 
 def _spread(values) -> dict:

@@ -238,6 +238,17 @@ def desired_mode(sa, d, mode, r, v):
 
 
 @njit(cache=True)
+def desired_modes(sa, modes, rel_mac):
+    """`desired_mode` of every device (n_dev,) int from its present mode (n_dev,) and the
+    relative speed of each machine rel_mac (n_mac,) pu, the voltage gate open: the
+    commands of a controller that sees speeds only (`stabctl.estimation.closed_loop`)."""
+    out = np.empty(modes.size, np.int64)
+    for d in range(modes.size):
+        out[d] = desired_mode(sa, d, modes[d], rel_mac[sa.mac[d]], 1.0)
+    return out
+
+
+@njit(cache=True)
 def crossing(sa, mode, want, r_a, r_b, v_a, v_b):
     """Where, as a fraction of the step, a device left `mode` for `want`, and the mode it
     takes there: linear interpolation of the switching function between the step ends

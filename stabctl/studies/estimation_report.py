@@ -7,13 +7,15 @@ Sources: RMSE during the post-fault swing, `estimation_study.monte_carlo` (PMU n
 `estimation_study.false_actions` on 60 s without fault with ambient load fluctuation
 (`stabctl.estimation.ambient`, AMBIENT: standard deviation 1 % of each load, correlation time 2 s,
 seeds 0..AMBIENT_RUNS-1); CCT, `closed_loop.cct_study` (estimators in the loop, ESDs of 5 %
-and 20 % of each generator's MVA).
+and 20 % of each generator's MVA; noise seeds per row by `closed_loop.SeedRule`).
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
+
+import numpy as np
 
 from stabctl.estimation import ambient as am
 from stabctl.estimation import closed_loop as cl
@@ -32,11 +34,12 @@ RATINGS = (5.0, 20.0)
 AMBIENT, AMBIENT_RUNS, AMBIENT_S = am.AmbientLoad(pct=1.0, tau_s=2.0), 5, 60.0
 
 
-def case_figures(name: str, runs: int, cct_runs: int, records_dir: Path,
+def case_figures(name: str, runs: int, cct_runs, records_dir: Path,
                  workers=None, progress=None) -> dict:
-    """RMSE, false actions and CCT table of one case (see the module docstring); the CCT
-    sweep's resumable records go to records_dir; progress: callable(str) told each stage
-    and each ambient run (the CCT sweep has its own bar)."""
+    """RMSE, false actions and CCT table of one case (see the module docstring); cct_runs:
+    noise seeds per CCT row, a count or a `closed_loop.SeedRule`; the CCT sweep's resumable
+    records go to records_dir; progress: callable(str) told each stage and each ambient run
+    (the CCT sweep has its own bar)."""
     say = progress or (lambda msg: None)
     pc = CASES[name]
     bus, far, cycles = pc.bus, pc.far_bus, pc.cycles["estimation"]
@@ -52,11 +55,20 @@ def case_figures(name: str, runs: int, cct_runs: int, records_dir: Path,
         say(f"estimation {name}: ambient load run {r + 1}/{AMBIENT_RUNS} ({AMBIENT_S:g} s)")
         flat.append(am.simulate(sim, AMBIENT_S, replace(AMBIENT, seed=r)))
     false = study.false_actions(case, flat, PMUSettings(), 0)
-    say(f"estimation {name}: CCT with the estimators in the loop, {cct_runs} noise seeds")
+    say(f"estimation {name}: CCT with the estimators in the loop, {_seeds_text(cct_runs)}")
     cct = cl.cct_study(name, bus, far, RATINGS, cct_runs,
                        records_dir / f"estimation_cct_{name}.jsonl", workers=workers)
     return {"rmse": rmse, "false": false, "cct": cct, "cycles": cycles, "bus": bus, "far": far,
             "runs": runs, "cct_runs": cct_runs}
+
+
+def _seeds_text(cct_runs) -> str:
+    """The noise seeds of the CCT rows, in words."""
+    if not isinstance(cct_runs, cl.SeedRule):
+        return f"{cct_runs} noise seeds"
+    r = cct_runs
+    return (f"noise seeds in batches of {r.batch} until the {100 * r.confidence:g} % interval "
+            f"of the mean CCT is within +-{r.half_width_cycles:g} cycle (at most {r.max_runs})")
 
 
 def markdown(name: str, fig: dict, generated_by: str = "stabctl paper") -> str:
@@ -84,26 +96,34 @@ def markdown(name: str, fig: dict, generated_by: str = "stabctl paper") -> str:
     for e, m in fig["false"].items():
         lines.append(f"| {e} | {m['actions']['mean']:.2f} | {m['max_rel_mhz']['mean']:.2f}, "
                      f"{m['max_rel_mhz']['max']:.2f} | {m['std_rel_mhz']['mean']:.2f} |")
-    lines += ["", f"## CCT with the estimator in the loop (cycles; {fig['cct_runs']} noise seeds, "
-              "ideal: one run; tolerance 1/4 cycle)", "",
-              "| rating | estimator | mean | std | min | max | mean vs ideal | runs (failed) |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += ["", f"## CCT with the estimator in the loop (cycles; {_seeds_text(fig['cct_runs'])}"
+              "; ideal: one run; bisection tolerance 1/4 cycle)", "",
+              "Each CCT is the cold bisection's on the 1/4-cycle lattice, the search of the ideal "
+              "row. With an estimator in the loop the verdict need not be monotone in the "
+              "clearing time (a longer clearing can be stable where a shorter one is not), so a "
+              "CCT is the bisection's answer, not the longest clearing with every shorter one "
+              "stable. Interval: Student t over the seeds, at least the lattice bound "
+              "(`stabctl.estimation.closed_loop.SeedRule`).", "",
+              "| rating | estimator | mean | interval of the mean | std | min | max | "
+              "mean vs ideal | runs (failed) |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for p, row in fig["cct"].items():
         for e, s in row.items():
             num = (lambda k: "-" if s[k] is None else f"{s[k]:.2f}")  # noqa: E731
             ideal = row.get("ideal", {}).get("mean")
             rel = "-" if None in (s["mean"], ideal) else f"{100 * (s['mean'] / ideal - 1):+.1f} %"
-            lines.append(f"| {p:g} % | {e} | {num('mean')} | {num('std')} | {num('min')} | "
-                         f"{num('max')} | {rel} | {s['runs']} ({s['failed']}) |")
+            ci = "-" if s.get("half_width") in (None, np.inf) else f"+-{s['half_width']:.2f}"
+            lines.append(f"| {p:g} % | {e} | {num('mean')} | {ci} | {num('std')} | "
+                         f"{num('min')} | {num('max')} | {rel} | {s['runs']} ({s['failed']}) |")
     return "\n".join(lines) + "\n"
 
 
-def write_estimation_report(out_dir="reports", runs: int = 20, cct_runs=None,
+def write_estimation_report(out_dir="reports", runs: int = 20, cct_runs=cl.SeedRule(),
                             workers=None, cases=tuple(CASES), records_dir=None,
                             generated_by: str = "stabctl paper", progress=None) -> list[Path]:
     """Write reports/estimation_<case>.md for each of `cases` (default both).  runs:
-    Monte-Carlo runs of the RMSE and CCT studies; cct_runs: {case: runs} to cut the CCT
-    runs of a case (miniWECC is heavy); workers: processes of the CCT sweep; records_dir:
+    Monte-Carlo runs of the RMSE study; cct_runs: noise seeds per CCT row, a count or a
+    `closed_loop.SeedRule`; workers: processes of the CCT sweep; records_dir:
     where the CCT sweeps keep their resumable records (default out_dir); generated_by: the
     command the report names as its source; progress: callable(str) told each stage.  Returns the paths.  Raises InputError for an unknown case."""
     unknown = set(cases) - set(CASES)
@@ -111,12 +131,11 @@ def write_estimation_report(out_dir="reports", runs: int = 20, cct_runs=None,
         raise InputError(f"no estimation study for case(s) {sorted(unknown)}")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    cct_runs = cct_runs or {}
     paths = []
     for name in cases:
         records = Path(records_dir or out_dir)
         records.mkdir(parents=True, exist_ok=True)
-        fig = case_figures(name, runs, cct_runs.get(name, runs), records, workers, progress)
+        fig = case_figures(name, runs, cct_runs, records, workers, progress)
         path = out_dir / f"estimation_{name}.md"
         path.write_text(markdown(name, fig, generated_by))
         paths.append(path)

@@ -8,7 +8,7 @@ from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.simulation import Simulator
 from stabctl.storage.devices import StorageDevice, StorageFleet, hv_bus, pack, uniform_fleet
-from stabctl.storage.control import BangBangCOI, LinearFeedback, desired_mode
+from stabctl.storage.control import BangBangCOI, LinearFeedback, desired_mode, desired_modes
 
 DB_PU = 0.1 / 60  # 100 mHz deadband in pu speed
 
@@ -39,6 +39,16 @@ def arrays(case, controller=BangBangCOI()):
 def test_table3_decisions(kundur, mode, r, v, expected):
     case, _ = kundur
     assert desired_mode(arrays(case), 0, mode, r, v) == expected
+
+
+def test_table3_decisions_of_every_device_at_once(kundur):
+    # one device per machine (G1..G4): each reads its own machine's relative speed
+    case, _ = kundur
+    sa = arrays(case)
+    rel = np.array([2, -2, 0.5, 0.5]) * DB_PU                 # per machine
+    mac = np.asarray(sa.mac)
+    modes = desired_modes(sa, np.where(mac == 3, 1, 0), rel)    # G4's device running
+    assert list(modes) == [[1, -1, 0, 0][m] for m in mac]
 
 
 def test_hysteresis_keeps_a_running_device_on_inside_the_band(kundur):
