@@ -23,18 +23,10 @@ import tempfile
 import time
 from pathlib import Path
 
+from stabctl._jitcache import clear_cache
+from stabctl.studies.paper import run_summary
+
 PARTS = ("analytic", "cases", "table4", "estimation", "placement")
-
-
-def clear_kernel_cache() -> int:
-    """Delete stabctl's numba cache files; returns how many."""
-    import stabctl
-
-    cache = Path(stabctl.__file__).resolve().parent / "__pycache__"
-    files = list(cache.glob("*.nbi")) + list(cache.glob("*.nbc"))
-    for f in files:
-        f.unlink(missing_ok=True)
-    return len(files)
 
 
 def run(parts, out: Path) -> tuple[float, dict]:
@@ -60,7 +52,7 @@ def main():
     args = ap.parse_args()
     if args.keep is not None and args.keep.exists() and any(args.keep.iterdir()):
         sys.exit(f"--keep {args.keep}: not empty (the run must not reuse earlier records)")
-    cleared = clear_kernel_cache() if args.cold else None
+    cleared = clear_cache() if args.cold else None
     tmp = None if args.keep else tempfile.mkdtemp(prefix="bench-paper-")
     out = args.keep or Path(tmp)
     try:
@@ -72,15 +64,12 @@ def main():
     print(f"stabctl paper --only {' '.join(args.only)}: {wall:.1f} s wall on {cores} cores "
           f"(kernel cache {'cleared: ' + str(cleared) + ' files' if args.cold else 'as found'};"
           f" one run, fresh output directory)")
-    print(f"{'part':<11} {'seconds':>8}  section")
-    for s in log["sections"]:
-        print(f"{s['part']:<11} {s['seconds']:8.1f}  {s['section']}")
+    print(run_summary(log))
     inside = sum(s["seconds"] for s in log["sections"])
-    print(f"{'':<11} {inside:8.1f}  sum of sections; {wall - inside:.1f} s start-up, imports "
-          "and file moves outside them")
+    print(f"{wall - inside:.1f} s start-up, imports and file moves outside the sections")
     for name, r in log["records"].items():
-        print(f"records {name}: {r['jobs']} jobs ({r['failed']} failed), job time summed "
-              f"{r['job_wall_s']} s, longest {r['longest_job_s']} s")
+        print(f"records {name}: job time summed {r['job_wall_s']} s, longest "
+              f"{r['longest_job_s']} s")
     gaps = [b[0] - a[0] for a, b in zip(log["progress"], log["progress"][1:])]
     if gaps:
         print(f"longest stretch between two progress lines: {max(gaps):.0f} s")

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import os
 from pathlib import Path
 
 import numba
@@ -30,60 +31,99 @@ def source_digest() -> str:
     return digest.hexdigest()
 
 
+def cache_dirs() -> list[Path]:
+    """The directories numba keeps stabctl's compiled kernels in: each source directory's
+    ``__pycache__``, or, when ``NUMBA_CACHE_DIR`` is set, its ``<dir name>_<sha1 of the
+    directory path>`` directory there (numba's ``UserProvidedCacheLocator``)."""
+    sources = sorted({f.parent for f in _PKG.rglob("*.py")})
+    root = numba.config.CACHE_DIR
+    if not root:
+        return [d / "__pycache__" for d in sources]
+    return [Path(root) / f"{d.name}_{hashlib.sha1(os.path.abspath(d).encode()).hexdigest()}"
+            for d in sources]
+
+
+def clear_cache() -> int:
+    """Delete stabctl's compiled kernels (``*.nbi``, ``*.nbc`` in `cache_dirs`), as after
+    a fresh installation; returns how many files."""
+    files = [f for d in cache_dirs() for f in (*d.glob("*.nbi"), *d.glob("*.nbc"))]
+    for f in files:
+        f.unlink(missing_ok=True)
+    return len(files)
+
+
 def ensure_fresh_cache() -> None:
-    """Delete stabctl's numba cache files (``*.nbi``, ``*.nbc`` in every ``__pycache__``)
-    if any source file changed since they were written.  A read-only installation is left
-    alone (numba then compiles in memory)."""
-    stamp = _PKG / "__pycache__" / "numba-sources.sha256"
+    """Delete stabctl's compiled kernels (`clear_cache`) if any source file changed since
+    they were written (the stamp sits beside the first cache directory).  A read-only
+    installation is left alone (numba then compiles in memory)."""
+    stamp = cache_dirs()[0] / "numba-sources.sha256"
     now = source_digest()
     try:
         if stamp.exists() and stamp.read_text() == now:
             return
-        for cache in _PKG.rglob("__pycache__"):
-            for f in list(cache.glob("*.nbi")) + list(cache.glob("*.nbc")):
-                f.unlink(missing_ok=True)
-        stamp.parent.mkdir(exist_ok=True)
+        clear_cache()
+        stamp.parent.mkdir(parents=True, exist_ok=True)
         stamp.write_text(now)
     except OSError:
         pass
 
 
-def on_first_compile(notify):
+def on_first_compile(notify, still=None, every_s: float = 10.0):
     """Call ``notify()`` once, when numba starts compiling the first stabctl kernel of
     this process (numba's event API, ``numba:compile``); loading cached kernels does not
-    count.
+    count.  Then, while compiling goes on, call ``still(seconds since the notice)`` every
+    `every_s` seconds, so that a long compile is never a silent wait.
 
     Parameters
     ----------
     notify : callable
         Called with no arguments.
+    still : callable, optional
+        Called with the seconds (float) since the notice, from a background thread.
+    every_s : float
+        Interval of the `still` calls (s).
 
     Returns
     -------
     callable
         Stops listening (no call after it).
     """
+    import threading
+    import time
+
     from numba.core import event
 
-    class _Once(event.Listener):
-        done = False
+    class _Compiles(event.Listener):
+        depth, t_notice, last = 0, None, 0.0
 
         def on_start(self, ev):
-            if not self.done and ev.data["dispatcher"].py_func.__module__.startswith("stabctl."):
-                self.stop()
+            self.depth += 1                  # numba's own overloads nest inside ours
+            if self.t_notice is None and ev.data["dispatcher"].py_func.__module__.startswith(
+                    "stabctl."):
+                self.t_notice = self.last = time.perf_counter()
                 notify()
+                if still is not None:
+                    threading.Thread(target=self.beat, daemon=True).start()
 
         def on_end(self, ev):
-            pass
+            self.depth -= 1
 
-        def stop(self):
-            if not self.done:
-                self.done = True
-                event.unregister("numba:compile", self)
+        def beat(self):
+            while not halt.wait(min(1.0, every_s)):
+                now = time.perf_counter()
+                if self.depth > 0 and now - self.last >= every_s:
+                    self.last = now
+                    still(now - self.t_notice)
 
-    listener = _Once()
+    listener, halt = _Compiles(), threading.Event()
+
+    def stop():
+        if not halt.is_set():
+            halt.set()
+            event.unregister("numba:compile", listener)
+
     event.register("numba:compile", listener)
-    return listener.stop
+    return stop
 
 
 ensure_fresh_cache()

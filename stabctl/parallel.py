@@ -321,11 +321,13 @@ def _call(func, kwargs: dict):
 
 def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
               scheduler: str | None = None, progress: bool | Callable = True,
-              retry_failed: bool = False) -> SweepReport:
+              retry_failed: bool = False, pool=None) -> SweepReport:
     """Run `jobs` (Job) not yet recorded in `out`, appending one JSON line per job.
 
     Args:
         workers: local processes (default: the available cores); 1 runs in this process.
+        pool: a `pooled` process pool to run on (kept open, so that sweeps run one after
+            the other reuse its workers and their caches); overrides `workers`.
         scheduler: Dask scheduler address ('tcp://host:8786'): run there instead;
             'local': a Dask LocalCluster of `workers` single-threaded processes.
         progress: tqdm bar on stderr (True), none (False), or a callable(done, total)
@@ -349,7 +351,7 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
     wall = time.perf_counter()
     failed = written = 0
     if todo:
-        results = _dask(todo, scheduler, workers) if scheduler else _local(todo, workers)
+        results = _dask(todo, scheduler, workers) if scheduler else _local(todo, workers, pool)
         out.parent.mkdir(parents=True, exist_ok=True)
         bar = tqdm(total=len(todo), desc=out.name, unit="job", file=sys.stderr,
                    disable=progress is not True)
@@ -470,20 +472,28 @@ class _appender:
         self.f.close()
 
 
-def _local(jobs: list, workers: int | None) -> Iterator[dict]:
-    """Records in completion order from a process pool (in this process if workers == 1)."""
+def _local(jobs: list, workers: int | None, pool=None) -> Iterator[dict]:
+    """Records in completion order from a process pool: `pool` if given, else one of
+    `workers` processes for these jobs (in this process if workers == 1)."""
+    if pool is not None:
+        yield from _completed(pool, jobs)
+        return
     workers = min(workers or default_workers(), len(jobs))
     if workers == 1:
         for j in jobs:
             yield run_job(j.func, j.key, j.inputs)
         return
     with pooled(workers) as pool:
-        futures = {pool.submit(run_job, j.func, j.key, j.inputs): j for j in jobs}
-        for fut in as_completed(futures):
-            try:
-                yield fut.result()
-            except Exception as exc:  # noqa: BLE001 - e.g. BrokenProcessPool
-                yield _lost(futures[fut], exc)
+        yield from _completed(pool, jobs)
+
+
+def _completed(pool, jobs: list) -> Iterator[dict]:
+    futures = {pool.submit(run_job, j.func, j.key, j.inputs): j for j in jobs}
+    for fut in as_completed(futures):
+        try:
+            yield fut.result()
+        except Exception as exc:  # noqa: BLE001 - e.g. BrokenProcessPool
+            yield _lost(futures[fut], exc)
 
 
 def _dask_client(scheduler: str, workers: int):

@@ -66,3 +66,39 @@ def test_compile_notice_once_and_only_when_a_stabctl_kernel_compiles():
     stop = on_first_compile(lambda: calls.append(2))
     stop()                                                           # the command ended
     assert numba.njit(kernel)(3j) == 1 + 3j and calls == [1]
+
+
+def test_a_long_compile_is_announced_again_while_it_lasts():
+    """`on_first_compile(still=...)`: while compiling lasts, `still` hears the seconds
+    since the notice at every interval; nothing once the compile is over."""
+    import time
+
+    import numba
+
+    from stabctl._jitcache import on_first_compile
+
+    def slow(x):
+        return x + 1
+
+    slow.__module__ = "stabctl.kernel_for_the_test"
+    heard = []
+    stop = on_first_compile(lambda: None, still=heard.append, every_s=0.05)
+    from numba.core import event
+    real_start = event.start_event
+
+    def stretched(kind, data=None):                  # make each compile take 0.3 s
+        real_start(kind, data)
+        if kind == "numba:compile":
+            time.sleep(0.3)
+
+    event.start_event = stretched
+    try:
+        numba.njit(slow)(1)
+    finally:
+        event.start_event = real_start
+    time.sleep(0.2)
+    n = len(heard)
+    time.sleep(0.2)
+    stop()
+    assert n >= 2 and heard == sorted(heard) and heard[0] >= 0.05
+    assert len(heard) == n                           # quiet once compiling is over

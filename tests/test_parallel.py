@@ -15,7 +15,7 @@ from stabctl.studies.cases import DEFAULT_FAULTS
 from stabctl.stability.cct import LineFault, cached_simulator, cct_job, cct_jobs
 from stabctl.cli import main
 from stabctl.errors import InputError
-from stabctl.parallel import Job, read_records, run_sweep
+from stabctl.parallel import Job, pooled, read_records, run_sweep
 
 # -- job functions (module level: spawned workers import them by name) -------------------
 
@@ -54,6 +54,10 @@ def crash(x):
 
 def simulator_identity(case):
     return {"id": id(cached_simulator(case)), "pid": os.getpid()}
+
+
+def pid(x):
+    return {"pid": os.getpid()}
 
 
 def jobs_of(func, *args):
@@ -123,6 +127,14 @@ def test_simulator_built_once_per_case_per_process(tmp_path):
     jobs = [Job(f"id/{i}", simulator_identity, {"case": "kundur"}) for i in range(3)]
     rep = run_sweep(jobs, tmp_path / "ids.jsonl", workers=1, progress=False)
     assert len({r["result"]["id"] for r in rep.records.values()}) == 1
+
+
+def test_sweeps_on_one_pool_reuse_its_workers(tmp_path):
+    with pooled(1) as pool:
+        a = run_sweep(jobs_of(pid, 1), tmp_path / "a.jsonl", progress=False, pool=pool)
+        b = run_sweep(jobs_of(pid, 2), tmp_path / "b.jsonl", progress=False, pool=pool)
+    pids = {r["result"]["pid"] for rep in (a, b) for r in rep.records.values()}
+    assert len(pids) == 1 and os.getpid() not in pids
 
 
 # --------------------------------------------------------------------- interruptions

@@ -38,9 +38,11 @@ def main(ctx):
         from stabctl._jitcache import on_first_compile
 
         # said when compiling starts (never for cached kernels; bad input fails before)
-        ctx.call_on_close(on_first_compile(lambda: click.echo(
-            "stabctl: compiling the simulator's kernels (once after installation or a "
-            "source change, 20-50 s; later runs load them in about a second)", err=True)))
+        ctx.call_on_close(on_first_compile(
+            lambda: click.echo("stabctl: compiling the simulator's kernels (once after "
+                               "installation or a source change, 20-50 s; later runs load "
+                               "them in about a second)", err=True),
+            still=lambda s: click.echo(f"stabctl: still compiling ({s:.0f} s)", err=True)))
 
 
 def _register() -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import click
 
 from stabctl.cli.checks import check_writable
@@ -35,10 +37,11 @@ def paper(out_dir, resume, only):
     hold no timings or other run-dependent values (two runs give identical files), those
     go to OUT_DIR/run_log.json (seconds per section, every progress line).
     """
-    from stabctl.studies.paper import write_paper_report
+    from stabctl.studies.paper import RUN_LOG, run_summary, write_paper_report
 
     check_writable(out_dir, "--out-dir", directory=True)
     path = write_paper_report(out_dir, progress=lambda msg: click.echo(msg, err=True),
                               resume=resume, only=only)
+    click.echo(run_summary(json.loads((path.parent / RUN_LOG).read_text())))
     click.echo(f"wrote {path}")
 

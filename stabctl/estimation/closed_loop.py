@@ -437,8 +437,10 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
     InputError
         runs below 1.
     """
+    from contextlib import nullcontext
+
     from stabctl.io import load_case
-    from stabctl.parallel import Job, run_sweep
+    from stabctl.parallel import Job, default_workers, pooled, run_sweep
 
     rule = runs if isinstance(runs, SeedRule) else None
     if rule is None and runs < 1:
@@ -454,20 +456,22 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
 
     first = runs if rule is None else rule.batch
     count = {(p, e): 1 if e == "ideal" else first for p in ratings for e in estimators}
-    while True:
-        jobs = {pe: [job(*pe, s) for s in range(seed, seed + n)] for pe, n in count.items()}
-        rep = run_sweep([j for row in jobs.values() for j in row], out, workers=workers,
-                        progress=progress)
-        values = {pe: [rep.records[j.key]["result"]["cct_cycles"]
-                       if rep.records[j.key]["status"] == "ok" else np.nan for j in row]
-                  for pe, row in jobs.items()}
-        more = {} if rule is None else {
-            pe: min(n + rule.batch, rule.max_runs) for pe, n in count.items()
-            if pe[1] != "ideal" and n < rule.max_runs
-            and rule.half_width(values[pe], tol_cycles) > rule.half_width_cycles}
-        if not more:
-            break
-        count.update(more)
+    n_workers = workers or default_workers()
+    with pooled(n_workers) if n_workers > 1 else nullcontext() as pool:  # one for all rounds
+        while True:
+            jobs = {pe: [job(*pe, s) for s in range(seed, seed + n)] for pe, n in count.items()}
+            rep = run_sweep([j for row in jobs.values() for j in row], out, workers=workers,
+                            progress=progress, pool=pool)
+            values = {pe: [rep.records[j.key]["result"]["cct_cycles"]
+                           if rep.records[j.key]["status"] == "ok" else np.nan for j in row]
+                      for pe, row in jobs.items()}
+            more = {} if rule is None else {
+                pe: min(n + rule.batch, rule.max_runs) for pe, n in count.items()
+                if pe[1] != "ideal" and n < rule.max_runs
+                and rule.half_width(values[pe], tol_cycles) > rule.half_width_cycles}
+            if not more:
+                break
+            count.update(more)
     return {p: {e: {**_spread(values[p, e]),
                     "half_width": None if rule is None or e == "ideal"
                     else rule.half_width(values[p, e], tol_cycles)}

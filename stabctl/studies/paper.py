@@ -26,7 +26,7 @@ from stabctl.errors import InputError
 from stabctl.smib.feedback import PAPER_LAWS, settling_time
 from stabctl.smib.omib import PAPER_OMIB, clearing_table, eac_summary, simulate
 from stabctl.smib.optimal import solve_min_time
-from stabctl.parallel import write_reproducible
+from stabctl.parallel import read_records, write_reproducible
 
 #: Paper Table 1: fault cycles -> (delta at clearing rad, d(delta)/dt rad/s, stable).
 PAPER_TABLE1 = {6: (0.6519, 3.1374, True), 12: (1.1228, 6.2747, True), 15: (1.4753, 7.8421, False)}
@@ -306,7 +306,8 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
             os.replace(f, out / f.name)
     for key in keys:
         for f in sorted(work.glob(RESUMABLE[key][1])) if key in RESUMABLE else ():
-            log["records"][f.name] = write_reproducible(f, out / f.name)
+            log["records"][f.name] = {**write_reproducible(f, out / f.name),
+                                      "simulations": _simulations(out / f.name)}
             f.unlink()
     try:
         work.rmdir()
@@ -315,6 +316,27 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
     log["total_s"] = round(time.perf_counter() - t_start, 1)
     (out / RUN_LOG).write_text(json.dumps(log, indent=1) + "\n")
     return out / "paper.md"
+
+
+def _simulations(records: Path) -> int:
+    """Simulations the finished jobs of a sweep record file ran (their results'
+    ``n_simulations``, a count or a list of counts)."""
+    n = 0
+    for rec in read_records(records).values():
+        count = (rec.get("result") or {}).get("n_simulations", 0)
+        n += sum(count) if isinstance(count, list) else int(count)
+    return n
+
+
+def run_summary(log: dict) -> str:
+    """The end-of-run summary of `stabctl paper` from its run log (`RUN_LOG`): seconds per
+    section, jobs and simulations per sweep record file, the total."""
+    lines = [f"{'seconds':>8}  section"]
+    lines += [f"{s['seconds']:8.1f}  {s['section']}" for s in log["sections"]]
+    lines += [f"{'':8}  {name}: {r['jobs']} jobs ({r['failed']} failed), "
+              f"{r['simulations']} simulations" for name, r in log["records"].items()]
+    lines.append(f"{log['total_s']:8.1f}  in all, on {log['cores']} cores")
+    return "\n".join(lines)
 
 
 def _timed(log: dict, key: str, section, say, call, note: str = "") -> str:

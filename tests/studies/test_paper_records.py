@@ -91,7 +91,7 @@ def test_resume_starts_from_the_records_in_out(tmp_path, fake_parts):
     log = json.loads((tmp_path / paper.RUN_LOG).read_text())
     assert log["records"]["fake_squares.jsonl"] == {"jobs": 6, "failed": 0, "job_wall_s": 0,
                                                     "longest_job_s": None,
-                                                    "longest_job": None}
+                                                    "longest_job": None, "simulations": 0}
 
 
 def test_strip_and_natural_order():
