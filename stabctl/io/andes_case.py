@@ -99,14 +99,13 @@ class AndesImport:
 
 
 def import_andes(path: str | Path, conventions: str = "andes",
-                 on_unsupported: str = "error") -> Case:
+                 on_unsupported: str = "error", dyr: str | Path | None = None) -> Case:
     """Read a case through ANDES's own parser into a :class:`~stabctl.case.Case`.
 
     Parameters
     ----------
     path : str or pathlib.Path
-        Any case ANDES 2.0 loads: ``.xlsx``, ``.json``, PSS/E ``.raw`` (its DYR file is not
-        read here; use :func:`stabctl.io.psse.load_psse` for RAW + DYR), MATPOWER ``.m``.
+        Any case ANDES 2.0 loads: ``.xlsx``, ``.json``, PSS/E ``.raw``, MATPOWER ``.m``.
     conventions : {"andes", "pst"}, optional
         How the PSS/E models are read (:func:`stabctl.io.dyr.dyr_tables`): ``"andes"``
         (default) as ANDES 2.0 solves them, so that both tools solve the same equations;
@@ -114,6 +113,11 @@ def import_andes(path: str | Path, conventions: str = "andes",
     on_unsupported : {"error", "skip"}, optional
         Refuse models (and model options) stabctl lacks, or leave them out with one
         :class:`UserWarning` listing them.
+    dyr : str or pathlib.Path, optional
+        A PSS/E DYR file ANDES adds to a RAW case (its ``addfile``).  Note that ANDES's
+        PSS/E reader builds a different network from the RAW's when SBASE is not 100 MVA
+        or lines have line-end shunts (:mod:`stabctl.io.andes`);
+        :func:`stabctl.io.psse.load_psse` reads the RAW's.
 
     Returns
     -------
@@ -132,11 +136,12 @@ def import_andes(path: str | Path, conventions: str = "andes",
 
     Source: ANDES 2.0 documentation and ``psse-dyr.yaml`` (see module doc).
     """
-    return read_andes_case(path, conventions, on_unsupported).case
+    return read_andes_case(path, conventions, on_unsupported, dyr).case
 
 
 def read_andes_case(path: str | Path, conventions: str = "andes",
-                    on_unsupported: str = "error") -> AndesImport:
+                    on_unsupported: str = "error", dyr: str | Path | None = None
+                    ) -> AndesImport:
     """:func:`import_andes` with what was left out, what was ignored and ANDES's power
     flow (:class:`AndesImport`). Same arguments and errors."""
     if conventions not in CONVENTIONS:
@@ -144,7 +149,7 @@ def read_andes_case(path: str | Path, conventions: str = "andes",
     if on_unsupported not in ("error", "skip"):
         raise InputError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
     path = Path(path)
-    ss = _load(path)
+    ss = _load(path, dyr)
     counts = {name: m.n for name, m in ss.models.items() if m.n}
     lacking = [f"{name} ({n})" for name, n in counts.items()
                if name not in _NETWORK and name not in MAPPED_MODELS
@@ -160,12 +165,12 @@ def read_andes_case(path: str | Path, conventions: str = "andes",
                      if getattr(tables, k) is not None})
     left_out = tuple(lacking + refused)
     if left_out:
-        listing = "; ".join(left_out)
+        listing = "; ".join(
+            ([f"ANDES models stabctl lacks (devices): {', '.join(lacking)}"] if lacking
+             else []) + ([f"devices refused: {'; '.join(refused)}"] if refused else []))
         if on_unsupported == "error":
-            raise InputError(f"{path.name}: stabctl lacks {len(lacking)} ANDES model(s) and "
-                             f"refuses {len(refused)} device option(s) (use "
-                             f"on_unsupported='skip' / --skip-unsupported to leave them "
-                             f"out): {listing}")
+            raise InputError(f"{path.name}: {listing} (use on_unsupported='skip' / "
+                             "--skip-unsupported to leave them out)")
         bare = [r for r in refused if r.endswith(_NO_MACHINE)]
         if bare:
             raise CaseError(f"{path.name}: a static generator cannot be left out without "
@@ -177,13 +182,19 @@ def read_andes_case(path: str | Path, conventions: str = "andes",
     return AndesImport(case, left_out, ignored, *_powerflow(ss, numbers))
 
 
-def _load(path: Path):
-    """ANDES's ``System`` of ``path``, set up; InputError if ANDES cannot read it."""
+def _load(path: Path, dyr):
+    """ANDES's ``System`` of ``path`` (+ ``dyr``), set up; InputError if ANDES cannot read
+    it."""
     andes = _andes()
-    if not path.is_file():
-        raise InputError(f"case file not found: {path}")
+    for file in (path,) if dyr is None else (path, Path(dyr)):
+        if not file.is_file():
+            raise InputError(f"case file not found: {file}")
+    kw = {} if dyr is None else {"addfile": str(dyr)}
     try:
-        ss = andes.load(str(path), setup=True, no_output=True, default_config=True)
+        with warnings.catch_warnings():   # ANDES's own deprecation notices
+            warnings.simplefilter("ignore")
+            ss = andes.load(str(path), setup=True, no_output=True, default_config=True,
+                            **kw)
     except Exception as exc:  # ANDES raises many kinds for a file it cannot parse
         raise InputError(f"{path.name}: ANDES cannot read the case: {exc}") from None
     if ss is None or not ss.is_setup:
