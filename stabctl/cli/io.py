@@ -104,19 +104,21 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventio
 
 @click.command("import-andes")
 @click.argument("case_path", metavar="CASE", type=click.Path(dir_okay=False))
+@click.argument("dyr_path", metavar="[DYR]", required=False, type=click.Path(dir_okay=False))
 @click.option("--out", "-o", "out_path", required=True, metavar="CASE.json",
               type=click.Path(dir_okay=False), help="Output file: the stabctl case to write.")
 @click.option("--skip-unsupported", is_flag=True,
               help="Leave out the ANDES models stabctl lacks (listed as warnings) instead "
                    "of refusing the case.")
-@click.option("--conventions", type=click.Choice(["andes", "pst"]), default="andes",
-              show_default=True,
-              help="How to read the PSS/E models: as ANDES 2.0 solves them (machines "
-                   "without speed effects, ...; the same equations as ANDES) or as PST's.")
+@click.option("--dyr-conventions", "--conventions", "conventions", cls=AliasedOption,
+              type=click.Choice(["pst", "andes"]), default="andes", show_default=True,
+              help="How to read the PSS/E models: as ANDES 2.0 solves them (the same "
+                   "equations as ANDES: machines without speed effects, ...) or as PST's.")
 @json_option("the summary")
 @reports_errors
-def import_andes(case_path, out_path, skip_unsupported, conventions, as_json):
-    """Convert any case ANDES 2.0 loads (xlsx, json, PSS/E RAW, MATPOWER) to a stabctl case.
+def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, as_json):
+    """Convert any case ANDES 2.0 loads (xlsx, json, PSS/E RAW [+ DYR], MATPOWER) to a
+    stabctl case.
 
     The case is read by ANDES's own parser (the optional `andes` extra: pip install
     "stabctl[andes]") and written in stabctl's JSON format, usable as CASE by simulate,
@@ -134,7 +136,7 @@ def import_andes(case_path, out_path, skip_unsupported, conventions, as_json):
 
     out = check_suffix(out_path, (".json",), "--out")
     imported = read_andes_case(case_path, conventions,
-                               "skip" if skip_unsupported else "error")
+                               "skip" if skip_unsupported else "error", dyr_path)
     case = imported.case
     dv, da = _powerflow_gap(imported)
     _write_case_atomically(case, out)
