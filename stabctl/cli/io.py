@@ -50,11 +50,29 @@ def cases(as_json):
             click.echo(f"    data file disturbance: {r['sw_con']}")
 
 
+def _dyr_and_out(func):
+    """The optional DYR argument and the --out option of the import commands."""
+    func = click.option("--out", "-o", "out_path", required=True, metavar="CASE.json",
+                        type=click.Path(dir_okay=False),
+                        help="Output file: the stabctl case to write.")(func)
+    return click.argument("dyr_path", metavar="[DYR]", required=False,
+                          type=click.Path(dir_okay=False))(func)
+
+
+def _imported(case, out) -> tuple[dict, str]:
+    """The summary of an imported case written to ``out``: (JSON fields, text)."""
+    summary = {"case": str(out), "name": case.name, "buses": case.n_bus,
+               "branches": len(case.branches), "machines": len(case.machines),
+               "exciters": len(case.exciters), "pss": len(case.pss),
+               "governors": len(case.governors)}
+    return summary, (f"wrote {out}: {case.n_bus} buses, {len(case.branches)} branches, "
+                     f"{len(case.machines)} machines, {len(case.exciters)} exciters, "
+                     f"{len(case.pss)} PSS, {len(case.governors)} governors")
+
+
 @click.command("import-psse")
 @click.argument("raw_path", metavar="RAW", type=click.Path(dir_okay=False))
-@click.argument("dyr_path", metavar="[DYR]", required=False, type=click.Path(dir_okay=False))
-@click.option("--out", "-o", "out_path", required=True, metavar="CASE.json",
-              type=click.Path(dir_okay=False), help="Output file: the stabctl case to write.")
+@_dyr_and_out
 @click.option("--skip-unsupported", is_flag=True,
               help="Leave out records stabctl cannot represent (listed as warnings) "
                    "instead of refusing the files.")
@@ -88,25 +106,17 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventio
     case, left_out = run_import(raw_path, dyr_path,
                                 "skip" if skip_unsupported else "error", loads, conventions)
     _write_case_atomically(case, out)
-    summary = {"case": str(out), "name": case.name, "buses": case.n_bus,
-               "branches": len(case.branches), "machines": len(case.machines),
-               "exciters": len(case.exciters), "pss": len(case.pss),
-               "governors": len(case.governors), "nonconforming_loads": len(case.loads),
-               "left_out": list(left_out)}
+    summary, text = _imported(case, out)
+    summary.update(nonconforming_loads=len(case.loads), left_out=list(left_out))
     if as_json:
         print_json(summary)
         return
-    click.echo(f"wrote {out}: {case.n_bus} buses, {len(case.branches)} branches, "
-               f"{len(case.machines)} machines, {len(case.exciters)} exciters, "
-               f"{len(case.pss)} PSS, {len(case.governors)} governors; "
-               f"{len(left_out)} record(s) left out")
+    click.echo(f"{text}; {len(left_out)} record(s) left out")
 
 
 @click.command("import-andes")
 @click.argument("case_path", metavar="CASE", type=click.Path(dir_okay=False))
-@click.argument("dyr_path", metavar="[DYR]", required=False, type=click.Path(dir_okay=False))
-@click.option("--out", "-o", "out_path", required=True, metavar="CASE.json",
-              type=click.Path(dir_okay=False), help="Output file: the stabctl case to write.")
+@_dyr_and_out
 @click.option("--skip-unsupported", is_flag=True,
               help="Leave out the ANDES models stabctl lacks (listed as warnings) instead "
                    "of refusing the case.")
@@ -140,19 +150,13 @@ def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, a
     case = imported.case
     dv, da = _powerflow_gap(imported)
     _write_case_atomically(case, out)
-    summary = {"case": str(out), "name": case.name, "buses": case.n_bus,
-               "branches": len(case.branches), "machines": len(case.machines),
-               "exciters": len(case.exciters), "pss": len(case.pss),
-               "governors": len(case.governors), "left_out": list(imported.left_out),
-               "ignored": list(imported.ignored), "powerflow_vmag_diff_pu": dv,
-               "powerflow_angle_diff_rad": da}
+    summary, text = _imported(case, out)
+    summary.update(left_out=list(imported.left_out), ignored=list(imported.ignored),
+                   powerflow_vmag_diff_pu=dv, powerflow_angle_diff_rad=da)
     if as_json:
         print_json(summary)
         return
-    click.echo(f"wrote {out}: {case.n_bus} buses, {len(case.branches)} branches, "
-               f"{len(case.machines)} machines, {len(case.exciters)} exciters, "
-               f"{len(case.pss)} PSS, {len(case.governors)} governors; "
-               f"{len(imported.left_out)} left out"
+    click.echo(f"{text}; {len(imported.left_out)} left out"
                + (f"; ignored (no effect on the dynamics): {', '.join(imported.ignored)}"
                   if imported.ignored else ""))
     if dv is not None:
