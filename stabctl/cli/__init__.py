@@ -2,7 +2,7 @@
 
 The click group :func:`main` (the console script ``stabctl = stabctl.cli:main``) and its
 commands, one module per family: :mod:`~stabctl.cli.omib` (omib), :mod:`~stabctl.cli.paper`
-(paper), :mod:`~stabctl.cli.io` (cases, import-psse), :mod:`~stabctl.cli.simulate`,
+(paper), :mod:`~stabctl.cli.io` (cases, import-psse, import-andes), :mod:`~stabctl.cli.simulate`,
 :mod:`~stabctl.cli.stability` (cct, sweep-cct, screen), :mod:`~stabctl.cli.eig`,
 :mod:`~stabctl.cli.place` and :mod:`~stabctl.cli.estimate`. Shared options, checks and
 error handling are in :mod:`~stabctl.cli.options`, text and JSON output in
@@ -50,7 +50,7 @@ def _register() -> None:
 
     for cmd in (omib.omib, paper.paper, io.cases, simulate.simulate, stability.cct,
                 stability.sweep_cct, stability.screen, eig.eig, estimate.estimate,
-                place.place, io.import_psse):
+                place.place, io.import_psse, io.import_andes):
         main.add_command(cmd)
 
 

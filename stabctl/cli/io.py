@@ -1,4 +1,5 @@
-"""`stabctl cases` and `stabctl import-psse`: the cases and their files."""
+"""`stabctl cases`, `stabctl import-psse` and `stabctl import-andes`: the cases and their
+files."""
 
 from __future__ import annotations
 
@@ -49,11 +50,29 @@ def cases(as_json):
             click.echo(f"    data file disturbance: {r['sw_con']}")
 
 
+def _dyr_and_out(func):
+    """The optional DYR argument and the --out option of the import commands."""
+    func = click.option("--out", "-o", "out_path", required=True, metavar="CASE.json",
+                        type=click.Path(dir_okay=False),
+                        help="Output file: the stabctl case to write.")(func)
+    return click.argument("dyr_path", metavar="[DYR]", required=False,
+                          type=click.Path(dir_okay=False))(func)
+
+
+def _imported(case, out) -> tuple[dict, str]:
+    """The summary of an imported case written to ``out``: (JSON fields, text)."""
+    summary = {"case": str(out), "name": case.name, "buses": case.n_bus,
+               "branches": len(case.branches), "machines": len(case.machines),
+               "exciters": len(case.exciters), "pss": len(case.pss),
+               "governors": len(case.governors)}
+    return summary, (f"wrote {out}: {case.n_bus} buses, {len(case.branches)} branches, "
+                     f"{len(case.machines)} machines, {len(case.exciters)} exciters, "
+                     f"{len(case.pss)} PSS, {len(case.governors)} governors")
+
+
 @click.command("import-psse")
 @click.argument("raw_path", metavar="RAW", type=click.Path(dir_okay=False))
-@click.argument("dyr_path", metavar="[DYR]", required=False, type=click.Path(dir_okay=False))
-@click.option("--out", "-o", "out_path", required=True, metavar="CASE.json",
-              type=click.Path(dir_okay=False), help="Output file: the stabctl case to write.")
+@_dyr_and_out
 @click.option("--skip-unsupported", is_flag=True,
               help="Leave out records stabctl cannot represent (listed as warnings) "
                    "instead of refusing the files.")
@@ -87,18 +106,95 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventio
     case, left_out = run_import(raw_path, dyr_path,
                                 "skip" if skip_unsupported else "error", loads, conventions)
     _write_case_atomically(case, out)
-    summary = {"case": str(out), "name": case.name, "buses": case.n_bus,
-               "branches": len(case.branches), "machines": len(case.machines),
-               "exciters": len(case.exciters), "pss": len(case.pss),
-               "governors": len(case.governors), "nonconforming_loads": len(case.loads),
-               "left_out": list(left_out)}
+    summary, text = _imported(case, out)
+    summary.update(nonconforming_loads=len(case.loads), left_out=list(left_out))
     if as_json:
         print_json(summary)
         return
-    click.echo(f"wrote {out}: {case.n_bus} buses, {len(case.branches)} branches, "
-               f"{len(case.machines)} machines, {len(case.exciters)} exciters, "
-               f"{len(case.pss)} PSS, {len(case.governors)} governors; "
-               f"{len(left_out)} record(s) left out")
+    click.echo(f"{text}; {len(left_out)} record(s) left out")
+
+
+@click.command("import-andes")
+@click.argument("case_path", metavar="CASE", type=click.Path(dir_okay=False))
+@_dyr_and_out
+@click.option("--skip-unsupported", is_flag=True,
+              help="Leave out the ANDES models stabctl lacks (listed as warnings) instead "
+                   "of refusing the case.")
+@click.option("--dyr-conventions", "--conventions", "conventions", cls=AliasedOption,
+              type=click.Choice(["pst", "andes"]), default="andes", show_default=True,
+              help="How to read the PSS/E models: as ANDES 2.0 solves them (the same "
+                   "equations as ANDES: machines without speed effects, ...) or as PST's.")
+@json_option("the summary")
+@reports_errors
+def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, as_json):
+    """Convert any case ANDES 2.0 loads (xlsx, json, PSS/E RAW [+ DYR], MATPOWER) to a
+    stabctl case.
+
+    The case is read by ANDES's own parser (the optional `andes` extra: pip install
+    "stabctl[andes]") and written in stabctl's JSON format, usable as CASE by simulate,
+    cct, eig and screen (with --no-q-limits to solve ANDES's power flow). ANDES models
+    stabctl lacks are named with their device counts; without --skip-unsupported they
+    stop the import (exit status 2, nothing written). The power flow of the case is
+    compared with ANDES's (PV Q limits off in both) and the largest differences reported.
+
+    \b
+    Example:
+      stabctl import-andes ieee39_full.xlsx -o ieee39.json --skip-unsupported
+      stabctl simulate ieee39.json --fault 16 --no-q-limits --tf 5
+    """
+    from stabctl.io.andes_case import read_andes_case
+
+    out = check_suffix(out_path, (".json",), "--out")
+    imported = read_andes_case(case_path, conventions,
+                               "skip" if skip_unsupported else "error", dyr_path)
+    case = imported.case
+    dv, da = _powerflow_gap(imported)
+    _write_case_atomically(case, out)
+    summary, text = _imported(case, out)
+    summary.update(left_out=list(imported.left_out), ignored=list(imported.ignored),
+                   powerflow_vmag_diff_pu=dv, powerflow_angle_diff_rad=da)
+    if as_json:
+        print_json(summary)
+        return
+    click.echo(f"{text}; {len(imported.left_out)} left out"
+               + (f"; ignored (no effect on the dynamics): {', '.join(imported.ignored)}"
+                  if imported.ignored else ""))
+    if dv is not None:
+        click.echo(f"power flow against ANDES's: max |dV| {dv:.1e} pu, max |d angle| "
+                   f"{da:.1e} rad")
+
+
+#: largest power-flow difference to ANDES's (pu, rad) accepted without a warning
+_PF_AGREEMENT = 1e-4
+
+
+def _powerflow_gap(imported) -> tuple[float | None, float | None]:
+    """Largest |V| (pu) and angle (rad) differences between stabctl's power flow of the
+    imported case (Q limits off, as ANDES's default) and ANDES's; a warning when either
+    exceeds 1e-4 or one of the two does not converge."""
+    import warnings
+
+    import numpy as np
+
+    from stabctl.errors import PowerFlowError
+    from stabctl.network.powerflow import solve_powerflow
+
+    if imported.pf_bus is None:
+        warnings.warn("ANDES's power flow of the case did not converge: not compared")
+        return None, None
+    case = imported.case
+    try:
+        pf = solve_powerflow(case, q_limits=False, tol=1e-10)
+    except PowerFlowError as exc:
+        warnings.warn(f"stabctl's power flow of the case did not converge: {exc}")
+        return None, None
+    rows = case.bus_indices(imported.pf_bus)
+    dv = float(np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)))
+    da = float(np.max(np.abs(pf.vang[rows] - imported.pf_vang)))
+    if max(dv, da) > _PF_AGREEMENT:
+        warnings.warn(f"the power flow differs from ANDES's by up to {dv:.1e} pu, {da:.1e} "
+                      "rad: check the network data")
+    return dv, da
 
 
 def _write_case_atomically(case, path: Path) -> None:

@@ -36,7 +36,7 @@ import numpy as np
 from stabctl.errors import InputError
 
 __all__ = ["AndesFault", "strip_dyr", "andes_system", "andes_powerflow", "andes_speeds",
-           "andes_modes", "andes_separated", "andes_stable"]
+           "andes_machine_buses", "andes_modes", "andes_separated", "andes_stable"]
 
 
 @dataclass(frozen=True)
@@ -96,15 +96,22 @@ def _unsaturated(text: str) -> str:
 
 
 def andes_system(raw: str | Path, dyr: str | Path | None = None,
-                 fault: AndesFault | None = None, config_option=()):
-    """An ANDES ``System`` of the RAW (+ DYR) files with ``fault`` added, set up;
-    config_option: ANDES config overrides such as "Runtime.numba=1"."""
+                 fault: AndesFault | None = None, config_option=(), off=()):
+    """An ANDES ``System`` of the RAW (+ DYR) files, or of any case file ANDES reads
+    (xlsx, json, MATPOWER: ``dyr`` None), with ``fault`` added, set up; config_option:
+    ANDES config overrides such as "Runtime.numba=1"; off: ANDES models whose devices are
+    switched off (``u = 0``) before set-up, e.g. ``("Toggle",)`` for a case's own
+    disturbance.  Only a RAW file gets :func:`_raw_network`'s corrections."""
     andes = _andes()
     kw = {} if dyr is None else {"addfile": str(dyr)}
     if config_option:
         kw["config_option"] = list(config_option)
     ss = andes.load(str(raw), setup=False, no_output=True, default_config=True, **kw)
-    _raw_network(ss, raw)
+    for name in off:
+        model = ss.models[name]
+        model.u.v = [0] * model.n
+    if Path(raw).suffix.lower() == ".raw":
+        _raw_network(ss, raw)
     if fault is not None:
         ss.add("Fault", {"bus": fault.bus, "tf": fault.t_fault, "tc": fault.t_clear,
                          "rf": fault.r, "xf": fault.x})
@@ -159,6 +166,13 @@ def andes_speeds(ss, t_end: float, step: float) -> tuple[np.ndarray, np.ndarray]
     order = np.argsort(np.array(ss.GENROU.gen.v, dtype=float))
     t = np.array(ss.dae.ts.t)
     return t, np.asarray(ss.dae.ts.x)[:, ss.GENROU.omega.a[order]]
+
+
+def andes_machine_buses(ss) -> np.ndarray:
+    """Bus numbers of :func:`andes_speeds`'s columns (GENROU in static-generator order),
+    shape (n_gen,), to pair them with stabctl's machines."""
+    order = np.argsort(np.array(ss.GENROU.gen.v, dtype=float))
+    return np.array(ss.GENROU.bus.v, dtype=int)[order]
 
 
 def andes_modes(ss) -> np.ndarray:

@@ -173,7 +173,8 @@ def dyr_tables(records, generators, on_unsupported: str = "error",
             effects, mac_con column 24 = 0; EXDC2's regulator limits not scaled by the
             terminal voltage, i.e. PST's DC1 instead of DC2; IEEEX1's scaled by it (PST's
             DC2 instead of DC1); DC exciters with PSS/E's quadratic saturation and K_E as
-            given; IEEEG1's gate rate limits
+            given; ESST3A's source voltage from system-base currents (K_I, X_L times
+            MBASE/SBASE); IEEEG1's gate rate limits
             Uo, Uc read on the system base, i.e. times SBASE/MBASE on the machine base).
     Returns:
         DyrTables.
@@ -564,6 +565,17 @@ def _esdc2a_andes(rec, gen):
     return row
 
 
+def _esst3a_andes(rec, gen):
+    """ESST3A as ANDES 2.0 solves it: its source voltage ``V_E = |K_P e^(j theta_P) V_t +
+    j (K_I + K_P X_L) I_t|`` (``esst3a.py``) takes the stator current on the system base,
+    i.e. K_I and X_L times MBASE/SBASE with the machine-base current."""
+    row = _esst3a(rec, gen)
+    scale = gen["mbase"] / gen.get("sbase", 100.0)
+    for name in ("KI", "XL"):
+        row[EXCITER.col(name) - 1] *= scale
+    return row
+
+
 def _gensal_andes(rec, gen):
     """GENSAL as ANDES 2.0 reads it (``psse-dyr.yaml``): its GENROU with X'q = X'd,
     T'qo = T'do and X''q = X''d."""
@@ -576,11 +588,13 @@ def _gensal_andes(rec, gen):
 #: saturation and keep K_E = 0; its EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
 #: terminal voltage as PSS/E's and IEEE DC2, while its IEEEX1 scales them by the terminal
 #: voltage (``ieeex1.py``: ``VRMAX * v``, so PST's DC2, not DC1); its ESDC2A bypasses T_R;
-#: its IEEEG1 rate limits are on the system base; GENSAL is its GENROU, SCRX its SEXS; HYGOV
+#: its IEEEG1 rate limits are on the system base, its ESST3A forms V_E from system-base
+#: stator currents; GENSAL is its GENROU, SCRX its SEXS; HYGOV
 #: and IEESGO as ANDES solves them (``_hygov``, ``_ieesgo``); IEEET2, which ANDES lacks,
 #: with the quadratic saturation of its other DC exciters
 _ANDES_MAPPERS = {"IEEEX1": _dc("EXDC2", andes=True), "EXDC2": _dc("IEEEX1", andes=True),
-                  "ESDC2A": _esdc2a_andes, "IEEEG1": _ieeeg1_andes, "GENSAL": _gensal_andes,
+                  "ESDC2A": _esdc2a_andes, "ESST3A": _esst3a_andes, "IEEEG1": _ieeeg1_andes,
+                  "GENSAL": _gensal_andes,
                   "SCRX": _scrx_andes, "IEEET2": _dc("IEEET2", andes=True),
                   "HYGOV": lambda rec, gen: _hygov(rec, gen, andes=True),
                   "IEESGO": lambda rec, gen: _ieesgo(rec, gen, andes=True)}

@@ -227,3 +227,12 @@ def test_read_only_existing_output_is_refused(tmp_path):
 
 def test_errors_are_stabctl_errors():
     assert issubclass(CaseError, StabctlError) and issubclass(InputError, StabctlError)
+
+
+def test_import_andes_without_andes_says_how_to_install_and_writes_nothing(
+        monkeypatch, tmp_path):
+    monkeypatch.setitem(__import__("sys").modules, "andes", None)   # import andes fails
+    out = tmp_path / "case.json"
+    res = run("import-andes", PSSE / "five_bus_v33.raw", "-o", out)
+    assert_error(res, "ANDES is not installed", "pip install 'stabctl[andes]'")
+    assert not out.exists()

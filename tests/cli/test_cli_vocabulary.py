@@ -22,6 +22,8 @@ DIFFERENCES = {
     ("screen", "--t-max"): "bus faults cleared without loss of a line: CCTs above 0.5 s "
                            "are recorded as failed, not searched",
     ("sweep-cct", "--esd-pct"): "a list of ratings (repeatable, comma-separated, 'none')",
+    ("import-andes", "--dyr-conventions"): "an ANDES case is read as ANDES solves it unless "
+                                           "told otherwise",
 }
 #: options whose default is each command's own (an output file name)
 OWN_DEFAULT = {"--out"}
@@ -61,7 +63,7 @@ COMMANDS = dict(_commands())
 
 def test_every_command_is_introspected():
     assert {"simulate", "cct", "sweep-cct", "screen", "place", "eig", "paper", "omib",
-            "cases", "import-psse", "estimate rmse", "estimate closed-loop",
+            "cases", "import-psse", "import-andes", "estimate rmse", "estimate closed-loop",
             "estimate cct"} <= set(COMMANDS)
 
 
@@ -116,7 +118,7 @@ def test_out_is_a_file_out_dir_a_directory():
 
 @pytest.mark.parametrize("command,alias", [
     ("place", "--contingencies"), ("eig", "--out"), ("paper", "--out"),
-    ("import-psse", "--conventions")])
+    ("import-psse", "--conventions"), ("import-andes", "--conventions")])
 def test_deprecated_aliases_are_hidden_but_accepted(command, alias):
     res = CliRunner().invoke(main, [command, "--help"])
     assert res.exit_code == 0 and f"{alias} " not in res.output.replace("--out-dir", "")

@@ -1,0 +1,392 @@
+"""A stabctl case from any case ANDES can load, read through ANDES's own parser.
+
+ANDES 2.0 (CURENT, the optional ``andes`` extra) reads its xlsx and json cases, PSS/E RAW
+(+ DYR) and MATPOWER files into one ``System``; :func:`import_andes` maps that system onto
+stabctl's case tables, so that a case whose dynamic data exist only in ANDES's formats (IEEE
+39's ``ieee39_full.xlsx``) can be simulated, linearised and screened here.
+
+Network (ANDES's values after set-up, pu on the system base):
+
+* ``Bus``: number (its ``idx``, which must be an integer), ``Vn`` (kV), ``v0``, ``a0``,
+  ``vmax``, ``vmin``;
+* ``PQ``: ``p0 + j q0`` into the bus load (constant impedance in dynamic runs: ANDES's
+  default ``PQ.config.p2z = q2z = 1``, stabctl's default);
+* ``Shunt``: ``g + j b`` into the bus shunt;
+* ``PV`` / ``Slack``: ``p0``, ``q0``, ``v0``, ``qmax``, ``qmin`` (added up per bus; the
+  bus becomes PV or swing);
+* ``Line`` (lines and transformers): ``r``, ``x``, tap ``tap`` on the from side, phase
+  ``phi`` (PST's phase is its opposite, :mod:`stabctl.network.ybus`), and the shunts as
+  ANDES's ``Line`` equations apply them: ``g1 + g/2 + j (b1 + b/2)`` at both ends, the
+  from end behind the tap (ANDES 2.0 ignores ``g2``, ``b2``), i.e. stabctl's charging
+  ``b + 2 b1``, ``g_from = (g1 + g/2)/tap^2`` and ``g_to = g1 + g/2``.
+
+Dynamic models: each ANDES model whose parameters are PSS/E's (ANDES's
+``andes/io/psse-dyr.yaml`` maps every PSS/E parameter of the model onto one ANDES parameter)
+is turned back into its PSS/E record through that file and mapped by the DYR mappers of
+:mod:`stabctl.io.dyr` (each parameter declared once, :mod:`stabctl.case.params`):
+GENROU, GENCLS, SEXS, IEEEX1, EXDC2, ESDC2A, EXST1, ESST3A, IEEEST, ST2CUT, TGOV1 (and
+TGOV1N, its variant with the reference after the droop: the same dynamics at a constant
+reference), IEEEG1, HYGOV, IEESGO.  Values are ANDES's inputs (``vin``: machine data on
+the machine base ``Sn``, as PSS/E).  Machine ``k`` of the case is the ``k``-th synchronous
+generator in the order of ANDES's static generators (``PV`` rows, then ``Slack``).
+
+Models with no effect on the network and machines are ignored: ``Area``, and the
+measurements ``BusFreq``, ``BusROCOF``, ``ACEc`` (read by no model stabctl maps).  Every
+other model is refused by name (:class:`~stabctl.errors.InputError` listing each with its
+device count), disturbances (``Toggle``, ``Fault``, ``Alter``) included, or left out with
+``on_unsupported="skip"``.
+
+Source: ANDES 2.0 documentation (``andes.load``; model reference of ``Bus``, ``PQ``,
+``PV``, ``Slack``, ``Line``, ``Shunt``, ``GENROU``, ``GENCLS``, the exciters, stabilisers
+and governors above) and its ``psse-dyr.yaml``; PSS/E Model Library for the parameters.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from stabctl.case import PQ, PV, SWING, Case
+from stabctl.errors import CaseError, InputError
+from stabctl.io.andes import _andes
+from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
+from stabctl.io.pst import case_from_matrices
+
+__all__ = ["AndesImport", "import_andes", "read_andes_case", "MAPPED_MODELS",
+           "IGNORED_MODELS"]
+
+#: ANDES model -> the PSS/E model its parameters are read as
+MAPPED_MODELS = {**{m: m for m in ("GENROU", "GENCLS", "SEXS", "IEEEX1", "EXDC2", "ESDC2A",
+                                   "EXST1", "ESST3A", "IEEEST", "ST2CUT", "TGOV1", "IEEEG1",
+                                   "HYGOV", "IEESGO")}, "TGOV1N": "TGOV1"}
+#: ANDES models with no effect on the network or the machines
+IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc")
+_NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
+_NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt")
+_MACHINES = ("GENROU", "GENCLS")
+#: ANDES parameters outside PSS/E's data that must keep the value stabctl's models have
+_FIXED = {"GENROU": {"kp": 0.0, "kw": 0.0}, "GENCLS": {"kp": 0.0, "kw": 0.0},
+          **{g: {"wref0": 1.0} for g in ("TGOV1", "TGOV1N", "IEEEG1", "HYGOV", "IEESGO")}}
+
+
+@dataclass(frozen=True, eq=False)
+class AndesImport:
+    """The result of :func:`read_andes_case`.
+
+    Attributes
+    ----------
+    case : Case
+        The stabctl case.
+    left_out : tuple of str
+        What was left out (``on_unsupported="skip"``): ``"MODEL (count)"`` per ANDES model,
+        then each DYR-level refusal as ``file:row MODEL (bus, id): why``.
+    ignored : tuple of str
+        ANDES models ignored as without effect, ``"MODEL (count)"``.
+    pf_bus, pf_vmag, pf_vang : numpy.ndarray
+        ANDES's own power flow: bus numbers, |V| (pu), angle (rad), each shape (n_bus,),
+        in the case's bus order (None when ANDES's power flow did not converge).
+    """
+
+    case: Case
+    left_out: tuple[str, ...]
+    ignored: tuple[str, ...]
+    pf_bus: np.ndarray | None
+    pf_vmag: np.ndarray | None
+    pf_vang: np.ndarray | None
+
+
+def import_andes(path: str | Path, conventions: str = "andes",
+                 on_unsupported: str = "error", dyr: str | Path | None = None) -> Case:
+    """Read a case through ANDES's own parser into a :class:`~stabctl.case.Case`.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Any case ANDES 2.0 loads: ``.xlsx``, ``.json``, PSS/E ``.raw``, MATPOWER ``.m``.
+    conventions : {"andes", "pst"}, optional
+        How the PSS/E models are read (:func:`stabctl.io.dyr.dyr_tables`): ``"andes"``
+        (default) as ANDES 2.0 solves them, so that both tools solve the same equations;
+        ``"pst"`` as PST's models.
+    on_unsupported : {"error", "skip"}, optional
+        Refuse models (and model options) stabctl lacks, or leave them out with one
+        :class:`UserWarning` listing them.
+    dyr : str or pathlib.Path, optional
+        A PSS/E DYR file ANDES adds to a RAW case (its ``addfile``).  Note that ANDES's
+        PSS/E reader builds a different network from the RAW's when SBASE is not 100 MVA
+        or lines have line-end shunts (:mod:`stabctl.io.andes`);
+        :func:`stabctl.io.psse.load_psse` reads the RAW's.
+
+    Returns
+    -------
+    Case
+        Named after the file; units as :mod:`stabctl.case`.
+
+    Raises
+    ------
+    InputError
+        ANDES is not installed, ANDES cannot read the file, a bad option value, or
+        (``on_unsupported="error"``) models stabctl lacks: one message naming every such
+        ANDES model with its device count, and every refused model option.
+    CaseError
+        Data stabctl's tables refuse (a bus ``idx`` that is not an integer, a generator
+        without machine model, a value out of range), naming the device.
+
+    Source: ANDES 2.0 documentation and ``psse-dyr.yaml`` (see module doc).
+    """
+    return read_andes_case(path, conventions, on_unsupported, dyr).case
+
+
+def read_andes_case(path: str | Path, conventions: str = "andes",
+                    on_unsupported: str = "error", dyr: str | Path | None = None
+                    ) -> AndesImport:
+    """:func:`import_andes` with what was left out, what was ignored and ANDES's power
+    flow (:class:`AndesImport`). Same arguments and errors."""
+    if conventions not in CONVENTIONS:
+        raise InputError(f"conventions must be one of {CONVENTIONS}, got {conventions!r}")
+    if on_unsupported not in ("error", "skip"):
+        raise InputError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
+    path = Path(path)
+    ss = _load(path, dyr)
+    counts = {name: m.n for name, m in ss.models.items() if m.n}
+    lacking = [f"{name} ({n})" for name, n in counts.items()
+               if name not in _NETWORK and name not in MAPPED_MODELS
+               and name not in IGNORED_MODELS]
+    ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
+    mats, numbers = _network(ss, path.name)
+    gens, records, refused = _dynamic_records(ss, path.name, numbers)
+    if records:
+        tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
+        refused += [f"{r.label()}" for r in tables.unsupported]
+        mats.update({k: getattr(tables, k) for k in ("mac_con", "exc_con", "pss_con",
+                                                       "tg_con")
+                     if getattr(tables, k) is not None})
+    left_out = tuple(lacking + refused)
+    if left_out:
+        listing = "; ".join(
+            ([f"ANDES models stabctl lacks (devices): {', '.join(lacking)}"] if lacking
+             else []) + ([f"devices refused: {'; '.join(refused)}"] if refused else []))
+        if on_unsupported == "error":
+            raise InputError(f"{path.name}: {listing} (use on_unsupported='skip' / "
+                             "--skip-unsupported to leave them out)")
+        bare = [r for r in refused if r.endswith(_NO_MACHINE)]
+        if bare:
+            raise CaseError(f"{path.name}: a static generator cannot be left out without "
+                            f"changing the power flow: {'; '.join(bare)}")
+        warnings.warn(f"{path.name}: left out {listing}", UserWarning, stacklevel=3)
+    case = case_from_matrices(mats, path.stem, description=f"ANDES case {path.name}",
+                              source=f"ANDES case {path.name}, imported by "
+                                     "stabctl.io.andes_case.import_andes")
+    return AndesImport(case, left_out, ignored, *_powerflow(ss, numbers))
+
+
+def _load(path: Path, dyr):
+    """ANDES's ``System`` of ``path`` (+ ``dyr``), set up; InputError if ANDES cannot read
+    it."""
+    andes = _andes()
+    for file in (path,) if dyr is None else (path, Path(dyr)):
+        if not file.is_file():
+            raise InputError(f"case file not found: {file}")
+    kw = {} if dyr is None else {"addfile": str(dyr)}
+    try:
+        with warnings.catch_warnings():   # ANDES's own deprecation notices
+            warnings.simplefilter("ignore")
+            ss = andes.load(str(path), setup=True, no_output=True, default_config=True,
+                            **kw)
+    except Exception as exc:  # ANDES raises many kinds for a file it cannot parse
+        raise InputError(f"{path.name}: ANDES cannot read the case: {exc}") from None
+    if ss is None or not ss.is_setup:
+        raise InputError(f"{path.name}: ANDES cannot read the case (its parser or set-up "
+                         "failed; run `andes run` on it for ANDES's own message)")
+    return ss
+
+
+def _network(ss, file: str) -> tuple[dict, dict]:
+    """PST ``bus`` and ``line`` matrices and the bases; bus idx -> bus number."""
+    numbers = {}
+    for k, idx in enumerate(ss.Bus.idx.v):
+        number = _integer(idx)
+        if number is None or number <= 0:
+            raise CaseError(f"{file}: Bus row {k + 1} idx {idx!r} is not a positive integer "
+                            "(stabctl numbers buses)")
+        if not ss.Bus.u.v[k]:
+            raise CaseError(f"{file}: Bus {number} is out of service (u = 0): not supported")
+        numbers[idx] = number
+    b = ss.Bus
+    bus = np.zeros((b.n, 15))
+    bus[:, 0] = [numbers[i] for i in b.idx.v]
+    bus[:, 1], bus[:, 2] = b.v0.v, np.rad2deg(b.a0.v)
+    bus[:, 9] = PQ
+    bus[:, 12], bus[:, 13], bus[:, 14] = b.Vn.v, b.vmax.v, b.vmin.v
+    row = {idx: k for k, idx in enumerate(b.idx.v)}
+    for m, cols in ((ss.PQ, ((5, "p0"), (6, "q0"))), (ss.Shunt, ((7, "g"), (8, "b")))):
+        for k in _in_service(m):
+            for col, name in cols:
+                bus[row[m.bus.v[k]], col] += getattr(m, name).v[k]
+    for m, kind in ((ss.PV, PV), (ss.Slack, SWING)):
+        for k in _in_service(m):
+            r = row[m.bus.v[k]]
+            bus[r, 1], bus[r, 9] = m.v0.v[k], kind
+            if kind == SWING:
+                bus[r, 2] = np.rad2deg(m.a0.v[k])
+            for col, name in ((3, "p0"), (4, "q0"), (10, "qmax"), (11, "qmin")):
+                bus[r, col] += getattr(m, name).v[k]
+    ln = ss.Line
+    lines = []
+    for k in _in_service(ln):
+        tap = ln.tap.v[k] or 1.0
+        gh, bh = ln.g1.v[k] + ln.g.v[k] / 2, ln.b1.v[k] + ln.b.v[k] / 2
+        lines.append([numbers[ln.bus1.v[k]], numbers[ln.bus2.v[k]], ln.r.v[k], ln.x.v[k],
+                      2 * bh, tap, -np.rad2deg(ln.phi.v[k]), 0, 0, 0, gh / tap ** 2, 0, gh,
+                      0])
+    line = np.array(lines, float).reshape(-1, 14)
+    if not np.any(line[:, 10:14]):
+        line = line[:, :10]
+    return ({"bus": bus, "line": line, "basmva": float(ss.config.mva),
+             "sys_freq": float(ss.config.freq)}, numbers)
+
+
+def _in_service(model) -> list[int]:
+    return [k for k in range(model.n) if model.u.v[k]]
+
+
+def _integer(value) -> int | None:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return None
+    return int(v) if np.isfinite(v) and v.is_integer() else None
+
+
+def _dynamic_records(ss, file: str, numbers: dict):
+    """The generators (dicts for :func:`stabctl.io.dyr.dyr_tables`), the PSS/E records of
+    the mapped ANDES devices, and the devices refused here (with why)."""
+    dyr = _psse_yaml()
+    static = [(m, k) for m in (ss.PV, ss.Slack) for k in range(m.n)]
+    position = {m.idx.v[k]: n for n, (m, k) in enumerate(static)}
+    machines, refused = [], []
+    for name in _MACHINES:
+        m = ss.models[name]
+        for k in _in_service(m):
+            machines.append((position.get(m.gen.v[k], len(static)), name, k))
+    machines.sort()
+    with_machine = {ss.models[name].gen.v[k] for _, name, k in machines}
+    bare = [f"{sg.class_name} {sg.idx.v[k]} (bus {numbers[sg.bus.v[k]]})" for sg, k in static
+            if sg.u.v[k] and sg.idx.v[k] not in with_machine]
+    if machines:
+        refused += [f"{b}: {_NO_MACHINE}" for b in bare]
+    gens, by_syn = [], {}
+    for number, (_, name, k) in enumerate(machines, 1):
+        m = ss.models[name]
+        sg = ss.PV if m.gen.v[k] in ss.PV.idx.v else ss.Slack
+        j = list(sg.idx.v).index(m.gen.v[k])
+        gid = str(m.idx.v[k])
+        gens.append({"number": number, "bus": numbers[m.bus.v[k]], "id": gid,
+                     "mbase": float(m.Sn.v[k]), "ra": float(m.ra.vin[k]),
+                     "xsource": float(m.xd1.vin[k]),
+                     "pg": float(m.gammap.v[k] * sg.p0.v[j]),
+                     "qg": float(m.gammaq.v[k] * sg.q0.v[j]),
+                     "sbase": float(ss.config.mva)})
+        by_syn[m.idx.v[k]] = gens[-1]
+        if m.fn.v[k] != ss.config.freq:
+            refused.append(f"{name} {m.idx.v[k]}: fn = {m.fn.v[k]:g} Hz differs from the "
+                           f"system frequency {ss.config.freq:g} Hz (one frequency in "
+                           "stabctl)")
+        if name == "GENROU" and m.xq2.vin[k] != m.xd2.vin[k]:
+            refused.append(f"GENROU {m.idx.v[k]}: xq2 = {m.xq2.vin[k]:g} differs from xd2 = "
+                           f"{m.xd2.vin[k]:g} (PSS/E's GENROU, and ANDES's, need them equal)")
+    avr_syn = {}
+    for name, psse in MAPPED_MODELS.items():
+        m = ss.models.get(name)
+        if m is None or psse in _MACHINES:
+            continue
+        for k in _in_service(m):
+            if "syn" in m.params:
+                avr_syn[m.idx.v[k]] = m.syn.v[k]
+    records = []
+    for name, psse in MAPPED_MODELS.items():
+        m = ss.models.get(name)
+        if m is None or not m.n:
+            continue
+        for k in _in_service(m):
+            syn = m.idx.v[k] if psse in _MACHINES else (
+                m.syn.v[k] if "syn" in m.params else avr_syn.get(m.avr.v[k]))
+            gen = by_syn.get(syn)
+            why = _fixed_differs(m, name, k)
+            if gen is None or why:
+                refused.append(f"{name} {m.idx.v[k]}: " + (why or "its machine is not mapped"))
+                continue
+            params = _psse_params(ss, m, dyr[psse], DYR_MODELS[psse].fields, k)
+            records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(),
+                                     params))
+    return gens, records, refused
+
+
+def _fixed_differs(m, name: str, k: int) -> str:
+    """Why device ``k`` cannot be mapped: a parameter outside PSS/E's data away from the
+    value stabctl's model has (empty if none)."""
+    for p, want in _FIXED.get(name, {}).items():
+        if m.params[p].vin[k] != want:
+            return f"{p} = {m.params[p].vin[k]:g} (stabctl's model has {want:g})"
+    tn = m.params.get("Tn")
+    if tn is not None and tn.vin[k] not in (0.0, m.Sg.v[k]):
+        return f"turbine rating Tn = {tn.vin[k]:g} MW differs from the machine's"
+    return ""
+
+
+def _psse_yaml() -> dict:
+    """ANDES's PSS/E DYR mapping (``andes/io/psse-dyr.yaml``)."""
+    import andes.io
+    import yaml
+
+    with open(Path(andes.io.__file__).parent / "psse-dyr.yaml") as fh:
+        return yaml.safe_load(fh)
+
+
+def _psse_params(ss, m, spec: dict, fields, k: int) -> tuple[float, ...]:
+    """The PSS/E record's numbers (``fields`` order) of ANDES device ``k`` of model ``m``,
+    inverting the model's ``outputs`` of ``psse-dyr.yaml``: a parameter copied from a PSS/E
+    input gives it back; H is M/2 (``M: "H; lambda x: 2 * x"``); remote buses None -> 0;
+    EXDC2's and IEEEX1's Switch, which ANDES lacks, is 0; IEEEG1's second machine (JBUS)
+    is its bus number (0 without one)."""
+    inputs = spec["inputs"][2:]
+    if len(inputs) != len(fields):
+        raise InputError(f"ANDES's psse-dyr.yaml gives {len(inputs)} {m.class_name} "
+                         f"parameters, the PSS/E Model Library {len(fields)}")
+    source = {}
+    for param, expr in spec["outputs"].items():
+        if isinstance(expr, str) and ";" in expr:
+            source.setdefault(expr.split(";")[0].split(".")[-1].strip(), param)
+        else:
+            source.setdefault(expr, param)
+    values = []
+    for name in inputs:
+        param = source.get(name)
+        if name == "H" and param == "M":
+            values.append(m.M.vin[k] / 2)
+        elif param is not None and param in m.params:
+            v = m.params[param]
+            values.append(_number(v.vin[k] if hasattr(v, "vin") else v.v[k]))
+        elif name == "BUS2":
+            syn2 = m.syn2.v[k] if "syn2" in m.params else None
+            values.append(0.0 if syn2 is None else float(ss.SynGen.get("bus", syn2)))
+        else:  # Switch, ID2: not in ANDES's model
+            values.append(0.0)
+    return tuple(values)
+
+
+def _number(v) -> float:
+    return 0.0 if v is None else float(v)
+
+
+def _powerflow(ss, numbers: dict):
+    """ANDES's power flow (tolerance 1e-12) in the case's bus order; Nones if it fails."""
+    ss.PFlow.config.tol = 1e-12
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if not ss.PFlow.run():
+            return None, None, None
+    return (np.array([numbers[i] for i in ss.Bus.idx.v]), np.array(ss.Bus.v.v, float),
+            np.array(ss.Bus.a.v, float))
