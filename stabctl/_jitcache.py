@@ -52,6 +52,14 @@ def clear_cache() -> int:
     return len(files)
 
 
+def simulator_cached() -> bool:
+    """Whether the simulator's main kernel (`stabctl.dynamics.simulation.integrate`, which
+    links the whole model) is in the cache, i.e. a new process loads it instead of
+    compiling it."""
+    return any(any(d.glob("simulation.integrate-*.nbi")) for d in cache_dirs()
+               if d.name.startswith("dynamics") or d.parent.name == "dynamics")
+
+
 def ensure_fresh_cache() -> None:
     """Delete stabctl's compiled kernels (`clear_cache`) if any source file changed since
     they were written (the stamp sits beside the first cache directory).  A read-only

@@ -34,3 +34,18 @@ def test_a_source_change_clears_the_kernels_under_numba_cache_dir(tmp_path, monk
     (kernels / "f-1.py311.nbi").write_text("fresh")
     _jitcache.ensure_fresh_cache()                      # same sources: kept
     assert (kernels / "f-1.py311.nbi").exists()
+
+
+def test_simulator_cached_reads_numbas_own_index_of_the_integrator():
+    # the parent of a sweep compiles the simulator (`compile_here`) so that its workers load
+    # it: afterwards the index numba wrote for `integrate` is the one `simulator_cached` finds
+    from pathlib import Path
+
+    from stabctl.dynamics.simulation import integrate
+    from stabctl.stability.cct import compile_here
+
+    cache = integrate._cache
+    assert Path(cache._cache_path) in _jitcache.cache_dirs()
+    compile_here("kundur")
+    assert (Path(cache._cache_path) / cache._cache_file._index_name).exists()
+    assert _jitcache.simulator_cached()

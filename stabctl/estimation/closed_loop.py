@@ -441,6 +441,7 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
 
     from stabctl.io import load_case
     from stabctl.parallel import Job, default_workers, pooled, run_sweep
+    from stabctl.stability.cct import compile_here
 
     rule = runs if isinstance(runs, SeedRule) else None
     if rule is None and runs < 1:
@@ -454,6 +455,7 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
                                  seed=s, rate=rate, latency=latency, conventions=conventions,
                                  h=h))
 
+    compile_here(case, conventions, h)
     first = runs if rule is None else rule.batch
     count = {(p, e): 1 if e == "ideal" else first for p in ratings for e in estimators}
     n_workers = workers or default_workers()

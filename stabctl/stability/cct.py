@@ -434,6 +434,23 @@ def cached_simulator(case_name: str, conventions: str = "ieee",
     return Simulator(load_case(case_name), conventions=conventions, step=h, q_limits=q_limits)
 
 
+def compile_here(case_name: str, conventions: str = "ieee", h: float | None = None,
+                 q_limits: bool = True) -> None:
+    """Compile the simulator's kernels in this process (a 0.1 s run of the case) unless
+    they are cached (`stabctl._jitcache.simulator_cached`), so that the workers a sweep
+    starts next load them instead of each compiling them at the same time, silently.
+
+    Parameters
+    ----------
+    case_name, conventions, h, q_limits
+        As `cached_simulator` (the run's simulator is kept there).
+    """
+    from stabctl._jitcache import simulator_cached
+
+    if not simulator_cached():
+        cached_simulator(case_name, conventions, h, q_limits).run((), t_end=0.1)
+
+
 def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circuit: int = 1,
             trips=(), esd_pct: float | None = None, tol: float = TOL, t_max: float = T_MAX,
             t_end: float | None = None, conventions: str = "ieee",
@@ -481,7 +498,8 @@ def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
     error_check (the half-step rerun of the final bracket, recorded only when off).
 
     Checks every fault's bus and line against the case first (UnknownBusError, CaseError)
-    so that bad input fails before any job runs.
+    so that bad input fails before any job runs, then compiles the simulator's kernels in
+    this process if they are not cached (`compile_here`).
     """
     from stabctl.io import load_case
     from stabctl.dynamics.events import validate
@@ -494,6 +512,7 @@ def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
     faults = list(faults)
     for f in faults:
         validate(case, f.events(0.0), 0.0)
+    compile_here(case_name, conventions, h, q_limits)
     settings = {"tol": tol, "t_max": t_max, "t_end": t_end, "conventions": conventions, "h": h,
                 **({} if q_limits else {"q_limits": False}),
                 **({} if error_check else {"error_check": False})}
