@@ -193,10 +193,11 @@ def _tail_truth(partial: SimulationResult, cols, C, t_f: float, window: float, f
     t = partial.t[lo:]
     keep = np.r_[np.diff(t) > 0, True]
     ang = np.unwrap(partial.vang[lo:, bus][keep], axis=0)
-    tk = t[keep]
-    now = _interp(np.array([t_f]), tk, partial.vmag[lo:, bus][keep])[0] * \
-        np.exp(1j * _interp(np.array([t_f]), tk, ang)[0])
-    phase = _interp(t_f - window * np.arange(2, -1, -1.0), tk, ang[:, cols_in])
+    nb = ang.shape[1]               # one interpolation for |V| and angle at the 3 instants
+    at = _interp(t_f - window * np.arange(2, -1, -1.0), t[keep],
+                 np.hstack((partial.vmag[lo:, bus][keep], ang)))
+    now = at[2, :nb] * np.exp(1j * at[2, nb:])
+    phase = at[:, nb:][:, cols_in]
     f = f0 + np.diff(phase, axis=0) / (2 * np.pi * window)
     return now[cols_in], C_in @ now, f[1], (f[1] - f[0]) / window
 
