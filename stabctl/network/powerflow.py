@@ -397,3 +397,56 @@ def solve_powerflow(
         kind=st.kind, q_limited=limited, iterations=iters, max_mismatch=mism, taps=taps,
         tap_iterations=tap_it, dropped=drop,
     )
+
+
+def scale_load(case: Case, factor: float, *, q_limits: bool = True) -> Case:
+    """The case at another load level: every bus load (P and Q) and every generator's
+    dispatch P scaled by `factor`, the power flow re-solved (the swing bus takes the
+    losses).
+
+    Parameters
+    ----------
+    case : Case
+        The base case (its bus table's ``pload``, ``qload`` and ``pgen``, pu).
+    factor : float
+        Load level, fraction of the base load (e.g. 1.1 for 110 %), > 0.
+    q_limits : bool, optional
+        PV Q limits in the re-solved power flow (as `solve_powerflow`); default True.
+
+    Returns
+    -------
+    Case
+        A new case named ``"<name>@<factor>"`` with the scaled loads and dispatch, whose
+        power flow was solved here (a `Simulator` built on it solves it again from the
+        same data and starts from the scaled operating point).  ``factor == 1`` returns
+        `case` unchanged.
+
+    Raises
+    ------
+    InputError
+        factor not > 0 (or not finite).
+    PowerFlowError
+        The scaled power flow does not converge; the message names the load level.
+
+    Notes
+    -----
+    Fixed injections (`Case.injections`) and shunts are not scaled; a PST case that books
+    an HVDC set point as a bus load (miniWECC's ``PDC``) scales it with the load.
+    """
+    from stabctl.errors import InputError
+
+    factor = float(factor)
+    if not (np.isfinite(factor) and factor > 0):
+        raise InputError(f"load level must be a number > 0, got {factor:g}")
+    if factor == 1.0:
+        return case
+    b = case.buses
+    scaled = case.replace(name=f"{case.name}@{factor:g}",
+                          buses=b.replace(pload=b.pload * factor, qload=b.qload * factor,
+                                          pgen=b.pgen * factor))
+    try:
+        solve_powerflow(scaled, q_limits=q_limits)
+    except PowerFlowError as exc:
+        raise PowerFlowError(f"load level {factor:g} ({100 * factor:g} % of the base load "
+                             f"of case '{case.name}'): {exc}") from None
+    return scaled

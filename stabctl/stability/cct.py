@@ -426,12 +426,27 @@ def storage_fleet(case, esd_pct: float | None):
 
 @functools.lru_cache(maxsize=None)
 def cached_simulator(case_name: str, conventions: str = "ieee",
-                     h: float | None = None, q_limits: bool = True) -> Simulator:
-    """One Simulator per case, conventions, step h (None: the default) and power-flow Q
-    limits per process (the power flow is solved once per worker)."""
-    from stabctl.io import load_case
+                     h: float | None = None, q_limits: bool = True,
+                     load: float = 1.0) -> Simulator:
+    """One Simulator per case, conventions, step h (None: the default), power-flow Q
+    limits and load level per process (the power flow is solved once per worker).
 
-    return Simulator(load_case(case_name), conventions=conventions, step=h, q_limits=q_limits)
+    load: fraction of the base load (`stabctl.network.powerflow.scale_load`: loads and
+    dispatch scaled, power flow re-solved).  Raises PowerFlowError or CaseError naming
+    the load level when the scaled case has no power flow or no valid initial state.
+    """
+    from stabctl.errors import CaseError
+    from stabctl.io import load_case
+    from stabctl.network.powerflow import scale_load
+
+    case = load_case(case_name)
+    if float(load) == 1.0:
+        return Simulator(case, conventions=conventions, step=h, q_limits=q_limits)
+    scaled = scale_load(case, load, q_limits=q_limits)
+    try:
+        return Simulator(scaled, conventions=conventions, step=h, q_limits=q_limits)
+    except CaseError as exc:
+        raise CaseError(f"load level {float(load):g} of case '{case_name}': {exc}") from None
 
 
 def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circuit: int = 1,
