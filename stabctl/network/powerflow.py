@@ -430,8 +430,12 @@ def scale_load(case: Case, factor: float, *, q_limits: bool = True) -> Case:
 
     Notes
     -----
-    Fixed injections (`Case.injections`) and shunts are not scaled; a PST case that books
-    an HVDC set point as a bus load (miniWECC's ``PDC``) scales it with the load.
+    Dispatch: every PV bus's generation is scaled by `factor`, but no bus beyond the
+    largest power order of its governors (``Tmax`` times the machine MVA, less 2 % for
+    the losses); what a capped bus cannot take is shared by the others in proportion to
+    their dispatch (the total scaled by `factor` whenever the headroom allows).  Fixed
+    injections (`Case.injections`) and shunts are not scaled; a PST case that books an
+    HVDC set point as a bus load (miniWECC's ``PDC``) scales it with the load.
     """
     from stabctl.errors import InputError
 
@@ -443,10 +447,36 @@ def scale_load(case: Case, factor: float, *, q_limits: bool = True) -> Case:
     b = case.buses
     scaled = case.replace(name=f"{case.name}@{factor:g}",
                           buses=b.replace(pload=b.pload * factor, qload=b.qload * factor,
-                                          pgen=b.pgen * factor))
+                                          pgen=_dispatch(case, factor)))
     try:
         solve_powerflow(scaled, q_limits=q_limits)
     except PowerFlowError as exc:
         raise PowerFlowError(f"load level {factor:g} ({100 * factor:g} % of the base load "
                              f"of case '{case.name}'): {exc}") from None
     return scaled
+
+
+def _dispatch(case: Case, factor: float) -> np.ndarray:
+    """Generation P per bus (pu) scaled by factor, capped at the governors' power orders
+    and the rest shared in proportion (`scale_load`)."""
+    b = case.buses
+    pg = b.pgen * factor
+    cap = np.full(len(pg), np.inf)
+    g, m = case.governors, case.machines
+    for k, tmax in zip(g.machine, g.Tmax):
+        i = case.bus_index(m.bus[case.machine_index(k)])
+        mva = float(m.mva[case.machine_index(k)])
+        cap[i] = (0.0 if not np.isfinite(cap[i]) else cap[i]) + 0.98 * tmax * mva / case.base_mva
+    pv = b.kind == PV
+    want = float(pg[pv].sum())
+    for _ in range(len(pg)):
+        over = pv & (pg > cap)
+        if not over.any():
+            break
+        pg[over] = cap[over]
+        free = pv & (pg < cap) & (pg > 0)
+        short = want - float(pg[pv].sum())
+        if not free.any() or short <= 0:
+            break
+        pg[free] += short * pg[free] / pg[free].sum()
+    return pg
