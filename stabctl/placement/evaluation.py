@@ -62,7 +62,7 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
              scan_to: float | None = None, scan_s: float = SCAN_S,
              eps_s: float = EPS_S, conventions: str = "ieee", h: float | None = None,
              bracket: list | None = None, load: float = 1.0,
-             check_s: float | None = None) -> dict:
+             check_s: float | None = None, gradient: bool = True) -> dict:
     """CCT of one contingency with ESDs `devices` ([bus, machine, MW] each) and the
     gradient of that CCT in the rating of every candidate site ([bus, machine] each).
 
@@ -80,6 +80,7 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
     once (`_Memo`); n_simulations counts the runs simulated.  load: load level
     (`cached_simulator`).  check_s: a required clearing time (s): the run cleared there
     is also simulated (`check`: its verdict and the devices' energy figures).
+    gradient: False skips the gradient runs (a CCT only; the gradient is then zero).
     Returns {"cct_s", "t_unstable_s", "n_simulations", "separated", "critical",
     "margin", "dmargin_dtc", "gradient_s_per_mw" (n_sites,), "above_t_max"} (and with
     check_s the keys of `check`); a CCT above t_max is returned as t_max with a zero
@@ -105,6 +106,11 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
         return {"cct_s": t_max, "t_unstable_s": None, "n_simulations": sim.n_runs,
                 "separated": [], "critical": [], "margin": None, "dmargin_dtc": None,
                 "above_t_max": True, "gradient_s_per_mw": [0.0] * len(sites), **checked}
+    if not gradient:
+        return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable, "n_simulations": sim.n_runs,
+                "separated": list(res.separated), "above_t_max": False, "critical": [],
+                "margin": None, "dmargin_dtc": None, "gradient_s_per_mw": [0.0] * len(sites),
+                **checked}
     grad = cct_gradient(sim, f, res.t_unstable, fleet, sites, np.asarray(beta), ctrl, eps_s)
     grad.pop("n_runs")
     return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable, "n_simulations": sim.n_runs,
@@ -308,7 +314,8 @@ def devices_of(sites, mw) -> list:
 def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangBangCOI,
            tol: float, t_max: float, base: dict | None = None, scan: str = "target",
            scan_s: float = SCAN_S, model: dict | None = None,
-           brackets: dict | None = None, check: bool = False) -> dict:
+           brackets: dict | None = None, check: bool = False,
+           gradient: bool = True) -> dict:
     """`evaluate` every contingency at ratings mw (MW per site), in parallel through
     run_map (`worker_pool`): name -> evaluation dict.
 
@@ -321,7 +328,7 @@ def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangB
     same ratings, where a bisection starts (`evaluate`).  Each contingency is simulated
     at its own load level.  The scan starts at the lesser of the CCT without storage and
     the target (a contingency met without storage is still checked with it).  check:
-    also the run cleared at each target (`check`).  The jobs are submitted longest scan
+    also the run cleared at each target (`check`); gradient: False for CCTs only.  The jobs are submitted longest scan
     first (so that the pool's last jobs are short).
     Raises InputError for another scan value.
     """
@@ -334,7 +341,7 @@ def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangB
               "t_max": t_max, "scan_s": scan_s, **(model or {})}
     scanning = devices and base is not None and scan != "none"
     brackets = brackets or {}
-    jobs = [{**common, "fault": _fault_dict(c.fault), "load": c.load,
+    jobs = [{**common, "fault": _fault_dict(c.fault), "load": c.load, "gradient": gradient,
              **({"check_s": c.target_cct_s} if check else {}),
              "scan_from": min(base[c.name]["cct_s"], c.target_cct_s) if scanning else None,
              "scan_to": c.target_cct_s if scan == "target" else None,

@@ -232,14 +232,15 @@ def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | N
                 scan: str = "target", tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
                 scheduler: str | None = None, controller: BangBangCOI | None = None,
                 conventions: str = "ieee", h: float | None = None, run_map=None,
-                brackets: dict | None = None) -> dict:
+                brackets: dict | None = None, gradient: bool = True) -> dict:
     """Simulated CCT (and its gradient) of every contingency at ratings mw (MW per site of
     `sites`, default `candidate_sites`; None = no storage), in `workers` processes (or
     on the Dask `scheduler`, as `place`):
     name -> `placement_eval.evaluate` dict.  base and scan as `placement_eval.verify`
     (scan="full" with base: the first unstable clearing time, e.g. of a uniform fleet);
     run_map as `place`; brackets: name -> [stable, unstable] clearing times (s) from a
-    coarser search where each bisection starts (`placement_eval.verify`).
+    coarser search where each bisection starts (`placement_eval.verify`); gradient:
+    False for CCTs only (no gradient runs).
     Raises as `place`.
     """
     contingencies = tuple(contingencies)
@@ -253,7 +254,7 @@ def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | N
     with _pool(run_map, workers, scheduler) as rm:
         return verify(rm, case, contingencies, sites, mw, beta, controller, tol, t_max,
                       base=base, scan=scan, model={"conventions": conventions, "h": h},
-                      brackets=brackets)
+                      brackets=brackets, gradient=gradient)
 
 
 def baseline(case: str, faults, **kw) -> dict:

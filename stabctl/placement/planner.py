@@ -53,6 +53,8 @@ from stabctl.placement.program import InfeasibleError, candidate_sites
 #: Relative margin on the sized energy (the simulator integrates the state of charge
 #: within its steps, the sizing on the recorded grid).
 ENERGY_MARGIN = 0.05
+#: Longest silence of the progress callback during a batch of runs (s).
+HEARTBEAT_S = 8.0
 #: Uniform fleet bisection: resolution (% of MVA).
 UNIFORM_RES_PCT = 0.1
 
@@ -269,6 +271,7 @@ class PlanResult:
     n_simulations: int = 0
     wall_time_s: float = 0.0
     energy: list = field(default_factory=list)
+    out_of_scope: list = field(default_factory=list)
     uniform: dict | None = None
     alone: list = field(default_factory=list)
 
@@ -300,6 +303,7 @@ class PlanResult:
                 "total_mwh": self.total_mwh, "n_sites": int(np.count_nonzero(self.mw)),
                 "cost": self.cost, "n_contingencies": len(self.contingencies),
                 "n_met": len(met), "active": self.active,
+                "out_of_scope": self.out_of_scope,
                 "contingencies": self.contingencies, "rounds": self.rounds,
                 "n_simulations": self.n_simulations, "wall_time_s": self.wall_time_s,
                 "uniform": self.uniform, "alone": self.alone}
@@ -323,6 +327,7 @@ class _Plan:
     n_runs: int = 0
     base: dict = field(default_factory=dict)
     energy_rate: np.ndarray | None = None
+    loop_kw: dict = field(default_factory=dict)
 
     def check(self, contingencies, mw, energy_mj=None) -> dict:
         """`check` of every contingency at ratings mw (one run each, in parallel): name ->
@@ -353,9 +358,12 @@ class _Plan:
                                          + self.cost.of(s.machine)[1] * e, 1e-9))
                      for s, e in zip(self.sites, mwh_per_mw))
 
-    def counting(self, run_map):
-        """run_map that adds the simulations its jobs report to n_runs."""
+    def counting(self, run_map, beat):
+        """run_map that adds the simulations its jobs report to n_runs (and tells the
+        heartbeat `beat`)."""
         def counted(func, jobs):
+            beat.note(f"{len(jobs)} {func.__name__} job(s) running, {self.n_runs} runs "
+                      "simulated before them")
             out = run_map(func, jobs)
             self.n_runs += sum(o.get("n_simulations") or 0 for o in out)
             return out
@@ -390,7 +398,8 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
          max_iter: int = 6, tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
          scheduler: str | None = None, controller=None, conventions: str = "ieee",
          h: float | None = None, run_map=None, progress=None, uniform: bool = False,
-         alone: bool = False) -> PlanResult:
+         alone: bool = False, margins_tol: float | None = None,
+         scope_stable_at_once: bool = True, **loop_kw) -> PlanResult:
     """Least-cost ESD sites, MW and MWh meeting `requirement` on every fault at every load
     level, verified by simulation (module docstring).
 
@@ -426,6 +435,18 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
     uniform, alone : bool, optional
         Also the least uniform fleet (`least_uniform`) and each fault's own least
         allocation (`alone`) meeting the same requirements.
+    scope_stable_at_once : bool, optional
+        Leave out (and list in `PlanResult.out_of_scope`) the contingencies unstable
+        already when cleared at once (the line trip alone, at their load level), which no
+        required clearing time can describe; default True.  False: they stay in, and
+        are infeasible unless storage makes the trip alone stable.
+    margins_tol : float or None, optional
+        Also the CCT with the allocation of every contingency the program was not solved
+        for, to this tolerance (s; a bisection from its required time, `margins`); None:
+        those are only checked at their required time (margin >= 0 known, not its size).
+    **loop_kw
+        zeta_min, amplitude_hz, max_sites: passed to every `place` (the damping is
+        verified by the loop, for the allocation as a whole).
 
     Returns
     -------
@@ -457,11 +478,11 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
     sim = cached_simulator(case, conventions, h)
     sites = tuple(sites or candidate_sites(sim.case))
     cost = cost or CostModel()
-    say = progress or (lambda msg: None)
-    with _pool(run_map, workers, scheduler) as pool_map:
+    with _pool(run_map, workers, scheduler) as pool_map, _Heartbeat(progress) as say:
         pl = _Plan(case, sites, cost, controller or DEFAULT_CONTROLLER,
-                   {"conventions": conventions, "h": h}, None, tol, t_max, say)
-        rm = pl.run_map = pl.counting(pool_map)
+                   {"conventions": conventions, "h": h}, None, tol, t_max, say,
+                   loop_kw=loop_kw)
+        rm = pl.run_map = pl.counting(pool_map, say)
         kw = {"sites": sites, "tol": tol, "t_max": t_max, "run_map": rm,
               "controller": pl.controller, "conventions": conventions, "h": h}
         base = pl.base
@@ -472,16 +493,29 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
             base.update(_base(pl, every, brackets, kw))
         cons = contingencies_of(faults, requirement, sim.case.freq_hz, tol, levels,
                                 overrides, base)
+        known = _stable_by_screening(cons, brackets)
         say(f"{len(cons)} contingencies ({len(faults)} faults x {len(levels)} load "
-            f"level(s)): each cleared at its required time without storage")
-        checks = pl.check(cons, np.zeros(len(sites)))
-        failing = [c for c in cons if not checks[c.name]["stable_at_check"]]
+            f"level(s)): each cleared at its required time without storage ({len(known)} "
+            "known stable there from the screening)")
+        checks = pl.check([c for c in cons if c.name not in known], np.zeros(len(sites)))
+        failing = [c for c in cons if c.name in checks and
+                   not checks[c.name]["stable_at_check"]]
+        out = _out_of_scope(pl, failing) if scope_stable_at_once else set()
+        if out:
+            say(f"out of scope (unstable even when cleared at once, the line trip alone): "
+                + ", ".join(sorted(out)))
+        cons = tuple(c for c in cons if c.name not in out)
+        failing = [c for c in failing if c.name not in out]
+        checks = {**{n: _STABLE for n in known}, **checks}
         say(f"{len(failing)} of {len(cons)} unstable without storage: "
             + ", ".join(c.name for c in failing[:12]) + (" ..." if len(failing) > 12 else ""))
         result = _generate(pl, cons, failing, checks, base, brackets, n_active, max_rounds,
                            max_iter, kw)
+        result.out_of_scope = sorted(out)
         result.requirement = _describe(requirement, overrides)
         result.load_levels = levels
+        if margins_tol is not None:
+            margins(pl, cons, result, margins_tol, brackets, kw)
         if uniform:
             result.uniform = least_uniform(pl, cons, failing, kw)
         if alone:
@@ -489,6 +523,29 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
     result.n_simulations = pl.n_runs
     result.wall_time_s = time.perf_counter() - wall
     return result
+
+
+#: A check known without a run (stable, no energy figures).
+_STABLE = {"stable_at_check": True, "energy_mj": [], "site_excursion_s": [], "check_s": None}
+
+
+def _stable_by_screening(cons, brackets) -> set:
+    """Names of base-load contingencies the screening found stable when cleared at their
+    required time or later without storage (its stable end is at least the requirement).
+    """
+    return {c.name for c in cons if brackets and c.load == 1.0 and c.fault_name in brackets
+            and brackets[c.fault_name][0] is not None
+            and brackets[c.fault_name][0] >= c.target_cct_s - 1e-9}
+
+
+def _out_of_scope(pl: _Plan, failing) -> set:
+    """Names of the contingencies of `failing` unstable without storage even when cleared
+    at once (one run each, the line trip alone)."""
+    if not failing:
+        return set()
+    at_once = pl.check([replace(c, target_cct_s=0.0) for c in failing],
+                       np.zeros(len(pl.sites)))
+    return {n for n, ck in at_once.items() if not ck["stable_at_check"]}
 
 
 def _describe(requirement: Requirement, overrides) -> str:
@@ -506,15 +563,21 @@ def _base(pl: _Plan, cons, brackets, kw) -> dict:
     return evaluations(pl.case, cons, None, brackets=br, **kw)
 
 
-def _most_binding(failing, base: dict, n: int) -> list:
-    """One contingency per fault (its load level with the least CCT without storage
-    relative to the requirement), the n with the least such ratio."""
+def _most_binding(failing, brackets, n: int) -> list:
+    """One contingency per fault, at its heaviest failing load level, for the n faults
+    with the least ratio of the screening's CCT without storage (base load; none: last)
+    to the requirement.  No run: the CCTs without storage of the rest are simulated only
+    if constraint generation adds them."""
     worst = {}
     for c in failing:
-        r = base[c.name]["cct_s"] / c.target_cct_s
-        if c.fault_name not in worst or r < worst[c.fault_name][0]:
-            worst[c.fault_name] = (r, c)
-    return [c for _, c in sorted(worst.values(), key=lambda x: x[0])[:n]]
+        if c.fault_name not in worst or c.load > worst[c.fault_name].load:
+            worst[c.fault_name] = c
+
+    def severity(c):
+        cct = (brackets or {}).get(c.fault_name, (None,))[0]
+        return (np.inf if cct is None else cct / c.target_cct_s, c.fault_name)
+
+    return sorted(worst.values(), key=severity)[:n]
 
 
 def _generate(pl: _Plan, cons, failing, checks0, base, brackets, n_active, max_rounds,
@@ -526,8 +589,8 @@ def _generate(pl: _Plan, cons, failing, checks0, base, brackets, n_active, max_r
     evs, active, rounds = {}, [], []
     verified, message = not failing, "every contingency is stable without storage"
     if failing:
-        base.update(_base(pl, [c for c in failing if c.name not in base], brackets, kw))
-        active = _most_binding(failing, base, n_active)
+        active = _most_binding(failing, brackets, n_active)
+        base.update(_base(pl, [c for c in active if c.name not in base], brackets, kw))
         message = f"not verified after {max_rounds} round(s) of constraint generation"
     for rnd in range(1, max_rounds + 1 if failing else 1):
         pl.energy_rate = pl.mwh_per_mw(checks)
@@ -538,7 +601,7 @@ def _generate(pl: _Plan, cons, failing, checks0, base, brackets, n_active, max_r
                     base={c.name: base[c.name] for c in active},
                     start=None if not mw.any() else mw, start_evaluations=evs,
                     progress=lambda m, r=rnd: pl.say(f"round {r}: {m}"),
-                    **{**kw, "sites": sites})
+                    **{**kw, **pl.loop_kw, "sites": sites})
         mw, evs = res.allocation.mw, dict(res.evaluations)
         checks = pl.check(cons, mw)
         fails = [c for c in cons if not checks[c.name]["stable_at_check"]]
@@ -618,6 +681,67 @@ def _rows(cons, checks, evs, base) -> list:
                     "cct_no_storage_s": base.get(c.name, {}).get("cct_s"),
                     "cct_s": cct, "margin_s": None if cct is None else cct - c.target_cct_s})
     return out
+
+
+class _Heartbeat:
+    """progress(str) as a callable that also repeats the latest status (`note`) whenever
+    nothing was said for HEARTBEAT_S (a thread), so that long batches are never silent."""
+
+    def __init__(self, progress):
+        import threading
+
+        self._say = progress
+        self.status, self.last = "", time.monotonic()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._loop, daemon=True)
+
+    def __enter__(self):
+        if self._say is not None:
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join()
+
+    def __call__(self, msg: str) -> None:
+        self.last = time.monotonic()
+        if self._say is not None:
+            self._say(msg)
+
+    def note(self, status: str) -> None:
+        self.status = status
+
+    def _loop(self):
+        while not self._stop.wait(0.5):
+            if self.status and time.monotonic() - self.last >= HEARTBEAT_S:
+                self(f"... {self.status}")
+
+
+def margins(pl: _Plan, cons, result: PlanResult, tol: float, brackets, kw) -> None:
+    """Fill the CCT and margin of every contingency row without one (those only checked
+    at their required time): bisection with the allocation between the required time
+    (found stable by its check) and the unstable end of the screening bracket (base
+    load) or twice the required time, widened while stable (`critical_clearing_time`),
+    to `tol` (s); no gradient runs.  Rows still stable at t_max get t_max."""
+    rows = {r["name"]: r for r in result.contingencies}
+    todo = [c for c in cons if rows[c.name]["cct_s"] is None and rows[c.name]["met"]]
+    if not todo:
+        return
+    pl.say(f"clearing margins of {len(todo)} contingencies ({1000 * tol:g} ms)")
+    br = {}
+    for c in todo:
+        hi = brackets.get(c.fault_name, (None, None))[1] if brackets and c.load == 1.0 \
+            else None
+        hi = hi if hi is not None and hi > c.target_cct_s + tol else 2 * c.target_cct_s
+        br[c.name] = (c.target_cct_s, min(hi, pl.t_max))
+    ev = evaluations(pl.case, todo, result.mw, brackets=br, gradient=False,
+                     **{**kw, "tol": tol})
+    for c in todo:
+        r = rows[c.name]
+        r["cct_s"], r["cct_tol_s"] = ev[c.name]["cct_s"], tol
+        r["margin_s"] = ev[c.name]["cct_s"] - c.target_cct_s
 
 
 # -- references ------------------------------------------------------------------------------
