@@ -36,7 +36,6 @@ allocation.
 
 from __future__ import annotations
 
-import csv
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -46,8 +45,8 @@ import numpy as np
 from stabctl.errors import InputError
 from stabctl.placement.evaluation import (Contingency, _fault_dict, check, controller_dict,
                                           devices_of)
-from stabctl.placement.loop import (DEFAULT_CONTROLLER, _pool, _rounded, evaluations,
-                                    place)
+from stabctl.placement.loop import (DEFAULT_CONTROLLER, _as_allocation, _pool, _rounded,
+                                    evaluations, place)
 from stabctl.placement.program import InfeasibleError, candidate_sites
 
 #: Relative margin on the sized energy (the simulator integrates the state of charge
@@ -149,12 +148,11 @@ def read_requirements(path) -> dict:
     InputError
         Unreadable file or a value that is not a number > 0 (naming the line).
     """
-    from stabctl.stability.cct import read_faults
+    from stabctl.stability.cct import csv_rows, read_faults
 
     path = Path(path)
     faults = read_faults(path)
-    with path.open(newline="") as f:
-        rows = list(csv.DictReader(f))
+    rows = csv_rows(path, "fault list", ("bus", "far_bus"))
     out = {}
     for line, (fault, row) in enumerate(zip(faults, rows), start=2):
         vals = {k: (row.get(c) or "").strip() for k, c in
@@ -221,15 +219,9 @@ def read_site_costs(path) -> dict:
     """Per-site cost overrides from a CSV with a ``machine`` column and any of
     ``cost_mw``, ``cost_mwh``, ``cost_site``: machine -> {"per_mw", ...}.  Raises
     InputError naming the line."""
-    path = Path(path)
-    try:
-        with path.open(newline="") as f:
-            rows = list(csv.DictReader(f))
-    except OSError as exc:
-        raise InputError(f"site costs {path}: {exc.strerror or exc}") from None
-    if not rows or "machine" not in rows[0]:
-        raise InputError(f"site costs {path}: needs a header with a machine column and "
-                         "any of cost_mw, cost_mwh, cost_site")
+    from stabctl.stability.cct import csv_rows
+
+    rows = csv_rows(path, "site costs", ("machine",), " and any of cost_mw,cost_mwh,cost_site")
     out = {}
     for line, row in enumerate(rows, start=2):
         try:
@@ -268,31 +260,25 @@ class PlanResult:
     rounds: list
     active: list
     message: str
-    n_simulations: int = 0
-    wall_time_s: float = 0.0
     energy: list = field(default_factory=list)
     out_of_scope: list = field(default_factory=list)
     uniform: dict | None = None
     alone: list = field(default_factory=list)
+    n_simulations: int = 0
+    wall_time_s: float = 0.0
 
     @property
     def total_mw(self) -> float:
-        return float(self.mw.sum())
-
-    @property
-    def total_mwh(self) -> float:
-        return float(self.mwh.sum())
+        """Rating of every device, MW."""
+        return _as_allocation(self.sites, self.mw, []).total_mw
 
     def allocation(self) -> list[dict]:
         """Installed sites: bus, machine, MW, MWh, energy absorbed and delivered (MJ, the
         largest over the verifying runs)."""
-        out = []
-        for j, (s, p) in enumerate(zip(self.sites, self.mw)):
-            if p > 0:
-                e = self.energy[j] if self.energy else {}
-                out.append({"bus": s.bus, "machine": s.machine, "mw": float(p),
-                            "mwh": float(self.mwh[j]), **e})
-        return out
+        rows = _as_allocation(self.sites, self.mw, []).rows()
+        for r, j in zip(rows, np.nonzero(self.mw > 0)[0]):
+            r.update(mwh=float(self.mwh[j]), **(self.energy[j] if self.energy else {}))
+        return rows
 
     def to_dict(self) -> dict:
         """JSON-ready summary (MW, MWh, s, cost units)."""
@@ -300,7 +286,7 @@ class PlanResult:
         return {"verified": self.verified, "message": self.message,
                 "requirement": self.requirement, "load_levels": list(self.load_levels),
                 "allocation": self.allocation(), "total_mw": self.total_mw,
-                "total_mwh": self.total_mwh, "n_sites": int(np.count_nonzero(self.mw)),
+                "total_mwh": float(self.mwh.sum()), "n_sites": int(np.count_nonzero(self.mw)),
                 "cost": self.cost, "n_contingencies": len(self.contingencies),
                 "n_met": len(met), "active": self.active,
                 "out_of_scope": self.out_of_scope,
@@ -502,7 +488,7 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
                    not checks[c.name]["stable_at_check"]]
         out = _out_of_scope(pl, failing) if scope_stable_at_once else set()
         if out:
-            say(f"out of scope (unstable even when cleared at once, the line trip alone): "
+            say("out of scope (unstable even when cleared at once, the line trip alone): "
                 + ", ".join(sorted(out)))
         cons = tuple(c for c in cons if c.name not in out)
         failing = [c for c in failing if c.name not in out]
@@ -563,18 +549,19 @@ def _base(pl: _Plan, cons, brackets, kw) -> dict:
     return evaluations(pl.case, cons, None, brackets=br, **kw)
 
 
-def _most_binding(failing, brackets, n: int) -> list:
+def _most_binding(failing, brackets, base: dict, n: int) -> list:
     """One contingency per fault, at its heaviest failing load level, for the n faults
-    with the least ratio of the screening's CCT without storage (base load; none: last)
-    to the requirement.  No run: the CCTs without storage of the rest are simulated only
-    if constraint generation adds them."""
+    with the least ratio of the CCT without storage to the requirement: simulated (base)
+    or else the screening's (base load; none: last).  With a screening no run is needed:
+    the CCTs without storage of the rest are simulated only if they are added."""
     worst = {}
     for c in failing:
         if c.fault_name not in worst or c.load > worst[c.fault_name].load:
             worst[c.fault_name] = c
 
     def severity(c):
-        cct = (brackets or {}).get(c.fault_name, (None,))[0]
+        cct = base[c.name]["cct_s"] if c.name in base else \
+            (brackets or {}).get(c.fault_name, (None,))[0]
         return (np.inf if cct is None else cct / c.target_cct_s, c.fault_name)
 
     return sorted(worst.values(), key=severity)[:n]
@@ -589,7 +576,9 @@ def _generate(pl: _Plan, cons, failing, checks0, base, brackets, n_active, max_r
     evs, active, rounds = {}, [], []
     verified, message = not failing, "every contingency is stable without storage"
     if failing:
-        active = _most_binding(failing, brackets, n_active)
+        if not brackets:            # no screening to rank by: simulate every failing one
+            base.update(_base(pl, [c for c in failing if c.name not in base], None, kw))
+        active = _most_binding(failing, brackets, base, n_active)
         base.update(_base(pl, [c for c in active if c.name not in base], brackets, kw))
         message = f"not verified after {max_rounds} round(s) of constraint generation"
     for rnd in range(1, max_rounds + 1 if failing else 1):

@@ -523,15 +523,39 @@ def read_faults(path: str | Path) -> list[LineFault]:
     """Faults from a CSV file with a header: bus, far_bus[, t_fault (s, default 1)]
     [, circuit (default 1)], one fault per row.  Raises InputError naming the row."""
     path = Path(path)
+    rows = csv_rows(path, "fault list", ("bus", "far_bus"), "[,t_fault,circuit]")
+    return [_fault_row(path, i, r) for i, r in enumerate(rows, start=2)]
+
+
+def csv_rows(path: str | Path, what: str, columns, more: str = "") -> list[dict]:
+    """The rows of a CSV file with a header, as dicts (column -> text).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    what : str
+        What it is, for messages (e.g. ``"fault list"``).
+    columns : sequence of str
+        Columns the header must have.
+    more : str, optional
+        Optional columns, for the message (e.g. ``"[,t_fault,circuit]"``).
+
+    Raises
+    ------
+    InputError
+        Unreadable file, or no such header and at least one row.
+    """
+    path = Path(path)
     try:
         with path.open(newline="") as f:
             rows = list(csv.DictReader(f))
     except OSError as exc:
-        raise InputError(f"fault list {path}: {exc.strerror or exc}") from None
-    if not rows or not {"bus", "far_bus"} <= set(rows[0]):
-        raise InputError(f"fault list {path}: needs a header with columns bus,far_bus "
-                         "[,t_fault,circuit] and at least one row")
-    return [_fault_row(path, i, r) for i, r in enumerate(rows, start=2)]
+        raise InputError(f"{what} {path}: {exc.strerror or exc}") from None
+    if not rows or not set(columns) <= set(rows[0]):
+        raise InputError(f"{what} {path}: needs a header with columns {','.join(columns)}"
+                         f"{more} and at least one row")
+    return rows
 
 
 def _fault_row(path, line: int, row: dict) -> LineFault:

@@ -1,17 +1,17 @@
-"""ESD sizing and placement study: least total MW that reaches, on every severe
-contingency, the CCT gain of 5 % storage at every generator, against that uniform fleet
+"""ESD sizing and placement study, a planner's question: least-cost sites, MW and MWh so
+that every screened fault is stable when cleared after REQUIRED_CYCLES cycles at every
+load level of LOAD_LEVELS, against the least uniform fleet meeting the same requirement
 (`stabctl paper`, or `python analysis/placement_study.py`; `placement_study(case, out_dir)`
 for reports).
 
 For each case: (1) screen line faults at both ends of every line (in miniWECC of every line
 at a generator's HV bus; in Kundur also bus faults; coarse CCT: 5 ms, t_max 0.5 s;
-resumable, `stabctl.parallel`), keep the paper's fault and the most severe others (smallest
-CCT, distinct lines first), up to 10; (2) CCT without storage (bisection, 1 ms) and with
-the uniform 5 % fleet (first unstable clearing time, `placement_eval.scanned_cct`);
-(3) `stabctl.placement.loop.place` from the uniform fleet with its CCTs as targets, for
-all contingencies and for the paper's alone; (4) the Pareto curve: total MW for
-25/50/75 % of each contingency's uniform gain (from uniform fleets of 1.25/2.5/3.75 %);
-(5) the first-order SIME estimate of the MW the critical machines' sites need.  Writes
+resumable, `stabctl.parallel`); every fault stable when cleared at once is a contingency
+at each load level; (2) `stabctl.placement.planner.plan` by constraint generation, with
+the least uniform fleet (bisection), each binding fault alone and the clearing margin of
+every contingency; (3) the Pareto curve of cost against the required clearing time
+(PARETO_CYCLES, at the base load: the fast variant `stabctl paper` runs); (4) the paper's
+fault with today's target (the CCT of the uniform 5 % fleet), for continuity.  Writes
 reports/placement_<case>.md, its JSON and three figures.
 """
 
@@ -21,7 +21,6 @@ import json
 import sys
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -37,16 +36,21 @@ from stabctl.stability.cct import LineFault, cct_jobs  # noqa: E402
 from stabctl.studies.cases import DEFAULT_FAULTS  # noqa: E402
 from stabctl.placement.program import candidate_sites  # noqa: E402
 from stabctl.placement.evaluation import Contingency  # noqa: E402
-from stabctl.placement.loop import _rounded, baseline, evaluations, place  # noqa: E402
+from stabctl.placement.loop import _rounded, evaluations, place  # noqa: E402
+from stabctl.placement.planner import CostModel, Requirement, plan  # noqa: E402
 from stabctl.storage.devices import hv_bus  # noqa: E402
 from stabctl.parallel import run_sweep, strip_run_dependent, worker_pool  # noqa: E402
 
-UNIFORM_PCT, BUDGET = 5.0, 0.25          # the paper's fleet; MW budget (fraction of it)
-N_FAULTS = 10
-GAIN_FRACTIONS = (0.25, 0.5, 0.75)        # Pareto points below the full uniform gain
-UNIFORM_PCTS = (1.25, 2.5)                # smaller uniform fleets for comparison
-SCREEN_TOL, SCREEN_T_MAX, TOL = 0.005, 0.5, 1e-3
-MAX_ITER, MAX_ITER_SIDE = 8, 4            # simulated allocations: the main run; the others
+UNIFORM_PCT = 5.0                         # the paper's fleet (continuity section)
+N_FAULTS = 10                             # a case with more than 2 N_FAULTS lines: HV only
+REQUIRED_CYCLES = 5.0                     # normal clearing plus a margin (TPL-001 spirit)
+LOAD_LEVELS = (0.9, 1.0, 1.1)             # fractions of the base load
+PARETO_CYCLES = {"miniwecc": (4.0, 6.0), "kundur": (10.0, 12.0)}
+#: Illustrative prices (M$): power conversion per MW, energy per MWh, per site
+COSTS = CostModel(per_mw=0.3, per_mwh=0.4, per_site=2.0)
+SCREEN_TOL, SCREEN_T_MAX, TOL, MARGIN_TOL = 0.005, 0.5, 1e-3, 0.005
+T_MAX_PLACE = 1.0                         # CCT search limit of the placement runs (s)
+MAX_ITER, MAX_ITER_SIDE = 6, 4            # simulated allocations: per round; the others
 HEARTBEAT_S = 8.0                         # longest silence of the progress callback (s)
 
 
@@ -179,19 +183,11 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
 def _pareto_point(cycles: float, r, levels=(1.0,)) -> dict:
     u = r.uniform or {}
     return {"cycles": cycles, "load_levels": list(levels), "total_mw": r.total_mw,
-            "total_mwh": r.total_mwh, "cost": r.cost["total"], "verified": r.verified,
+            "total_mwh": float(r.mwh.sum()), "cost": r.cost["total"], "verified": r.verified,
             "n_sites": int(np.count_nonzero(r.mw)),
             "uniform_pct": u.get("pct"), "uniform_mw": u.get("total_mw"),
             "uniform_cost": (u.get("cost") or {}).get("total"),
             "uniform_verified": u.get("verified")}
-
-def _concurrently(calls: dict) -> dict:
-    """Run the callables of `calls` (key -> callable()) in threads: key -> result (the
-    first exception raised is raised)."""
-    with ThreadPoolExecutor(len(calls)) as ex:
-        futures = {k: ex.submit(f) for k, f in calls.items()}
-        return {k: f.result() for k, f in futures.items()}
-
 
 class _Beat:
     """The progress callback, repeated with the latest status line (`note`) whenever

@@ -62,7 +62,7 @@ def test_energy_of_a_bang_bang_device_over_the_first_swing_is_its_rating_times_i
     closed_mj = P_C * BASE_MVA * t1
     assert e["absorbed_mj"] == pytest.approx(closed_mj, rel=2e-3)
     assert e["soc_high_mj"] == pytest.approx(closed_mj, rel=2e-3)
-    assert e["delivered_mj"] == pytest.approx(0.0, abs=1e-9)
+    assert e["delivered_mj"] <= P_C * BASE_MVA * 2e-5       # the last half step only
     # started half full, the device needs twice its largest excursion
     assert e["need_mwh"] == pytest.approx(2 * closed_mj / 3600, rel=2e-3)
     # over the whole run (back swing injecting) the state of charge is the running
@@ -70,7 +70,7 @@ def test_energy_of_a_bang_bang_device_over_the_first_swing_is_its_rating_times_i
     whole = energy_excursion(run.t, run.P_C * BASE_MVA)
     assert whole["soc_high_mj"] == pytest.approx(closed_mj, rel=2e-3)
     assert whole["absorbed_mj"] - whole["delivered_mj"] == pytest.approx(
-        np.trapz(run.P_C, run.t) * BASE_MVA, rel=1e-9, abs=1e-9)
+        np.trapezoid(run.P_C, run.t) * BASE_MVA, rel=1e-9, abs=1e-9)
 
 
 def test_a_device_sized_by_its_excursion_follows_the_unlimited_trajectory(kundur):
@@ -155,7 +155,7 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
     most binding): the other fails the check at that allocation, is added, and the end
     allocation holds both, as an independent simulation at each required time confirms."""
     faults = [LineFault(3, 101), LineFault(20, None)]
-    over = {"20": Requirement(cycles=14)}                        # 233 ms for the bus-20 fault
+    over = {"20": Requirement(cycles=15)}                        # 250 ms for the bus-20 fault
     res = plan("kundur", faults, Requirement(cycles=12), overrides=over, n_active=1,
                workers=1, max_iter=6)
     assert len(res.rounds) >= 2
@@ -164,7 +164,7 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
     assert res.active == ["3-101", "20"]
     assert res.verified and res.total_mw > 0
     rows = res.allocation()
-    for f, t in ((faults[0], 0.2), (faults[1], 0.234)):
+    for f, t in ((faults[0], 0.2), (faults[1], 0.25)):
         assert independently_stable("kundur", f, t, rows)
     assert all(c["met"] for c in res.contingencies)
     assert all(r["mwh"] > 0 for r in rows)
