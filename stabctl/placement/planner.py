@@ -262,6 +262,7 @@ class PlanResult:
     message: str
     energy: list = field(default_factory=list)
     out_of_scope: list = field(default_factory=list)
+    infeasible: list = field(default_factory=list)
     uniform: dict | None = None
     alone: list = field(default_factory=list)
     n_simulations: int = 0
@@ -289,7 +290,7 @@ class PlanResult:
                 "total_mwh": float(self.mwh.sum()), "n_sites": int(np.count_nonzero(self.mw)),
                 "cost": self.cost, "n_contingencies": len(self.contingencies),
                 "n_met": len(met), "active": self.active,
-                "out_of_scope": self.out_of_scope,
+                "out_of_scope": self.out_of_scope, "infeasible": self.infeasible,
                 "contingencies": self.contingencies, "rounds": self.rounds,
                 "n_simulations": self.n_simulations, "wall_time_s": self.wall_time_s,
                 "uniform": self.uniform, "alone": self.alone}
@@ -313,6 +314,8 @@ class _Plan:
     n_runs: int = 0
     base: dict = field(default_factory=dict)
     energy_rate: np.ndarray | None = None
+    drop_infeasible: bool = False
+    infeasible: list = field(default_factory=list)
     loop_kw: dict = field(default_factory=dict)
 
     def check(self, contingencies, mw, energy_mj=None) -> dict:
@@ -384,8 +387,9 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
          max_iter: int = 6, tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
          scheduler: str | None = None, controller=None, conventions: str = "ieee",
          h: float | None = None, run_map=None, progress=None, uniform: bool = False,
-         alone: bool = False, margins_tol: float | None = None,
-         scope_stable_at_once: bool = True, **loop_kw) -> PlanResult:
+         alone: bool = False, margins_tol: float | None = None, margins_cap_s: float = 0.1,
+         scope_stable_at_once: bool = True, drop_infeasible: bool = False,
+         **loop_kw) -> PlanResult:
     """Least-cost ESD sites, MW and MWh meeting `requirement` on every fault at every load
     level, verified by simulation (module docstring).
 
@@ -426,10 +430,14 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
         already when cleared at once (the line trip alone, at their load level), which no
         required clearing time can describe; default True.  False: they stay in, and
         are infeasible unless storage makes the trip alone stable.
-    margins_tol : float or None, optional
-        Also the CCT with the allocation of every contingency the program was not solved
-        for, to this tolerance (s; a bisection from its required time, `margins`); None:
-        those are only checked at their required time (margin >= 0 known, not its size).
+    drop_infeasible : bool, optional
+        A contingency proven infeasible (named by `InfeasibleError`) is set aside, listed
+        in `PlanResult.infeasible`, and the others are planned for; default False: the
+        error is raised.
+    margins_tol, margins_cap_s : float or None, float, optional
+        Also the clearing margin with the allocation of every contingency the program
+        was not solved for, to margins_tol (s), up to margins_cap_s (s; `margins`);
+        None: those are only checked at their required time (margin >= 0 known).
     **loop_kw
         zeta_min, amplitude_hz, max_sites: passed to every `place` (the damping is
         verified by the loop, for the allocation as a whole).
@@ -467,7 +475,7 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
     with _pool(run_map, workers, scheduler) as pool_map, _Heartbeat(progress) as say:
         pl = _Plan(case, sites, cost, controller or DEFAULT_CONTROLLER,
                    {"conventions": conventions, "h": h}, None, tol, t_max, say,
-                   loop_kw=loop_kw)
+                   loop_kw=loop_kw, drop_infeasible=drop_infeasible)
         rm = pl.run_map = pl.counting(pool_map, say)
         kw = {"sites": sites, "tol": tol, "t_max": t_max, "run_map": rm,
               "controller": pl.controller, "conventions": conventions, "h": h}
@@ -498,10 +506,14 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
         result = _generate(pl, cons, failing, checks, base, brackets, n_active, max_rounds,
                            max_iter, kw)
         result.out_of_scope = sorted(out)
+        result.infeasible = list(pl.infeasible)
+        kept = {r["name"] for r in result.contingencies}
+        cons = tuple(c for c in cons if c.name in kept)
+        failing = [c for c in failing if c.name in kept]
         result.requirement = _describe(requirement, overrides)
         result.load_levels = levels
         if margins_tol is not None:
-            margins(pl, cons, result, margins_tol, brackets, kw)
+            margins(pl, cons, result, margins_tol, margins_cap_s, kw)
         if uniform:
             result.uniform = least_uniform(pl, cons, failing, kw)
         if alone:
@@ -586,11 +598,33 @@ def _generate(pl: _Plan, cons, failing, checks0, base, brackets, n_active, max_r
         sites = pl.priced(pl.energy_rate)
         pl.say(f"round {rnd}: solving for {len(active)} contingencies ("
                + ", ".join(c.name for c in active) + ")")
-        res = place(pl.case, active, site_cost=pl.site_costs, max_iter=max_iter,
-                    base={c.name: base[c.name] for c in active},
-                    start=None if not mw.any() else mw, start_evaluations=evs,
-                    progress=lambda m, r=rnd: pl.say(f"round {r}: {m}"),
-                    **{**kw, **pl.loop_kw, "sites": sites})
+        try:
+            res = place(pl.case, active, site_cost=pl.site_costs, max_iter=max_iter,
+                        base={c.name: base[c.name] for c in active},
+                        start=None if not mw.any() else mw, start_evaluations=evs,
+                        progress=lambda m, r=rnd: pl.say(f"round {r}: {m}"),
+                        **{**kw, **pl.loop_kw, "sites": sites})
+        except InfeasibleError as exc:
+            if not pl.drop_infeasible or not exc.contingencies:
+                raise
+            pl.infeasible.append(str(exc))
+            gone = set(exc.contingencies)
+            pl.say(f"round {rnd}: set aside as infeasible: {', '.join(sorted(gone))}")
+            cons = tuple(c for c in cons if c.name not in gone)
+            active = [c for c in active if c.name not in gone]
+            evs = {k: v for k, v in evs.items() if k not in gone}
+            if active:
+                continue
+            res = None
+        if res is None:             # nothing left to solve for: check the allocation
+            checks = pl.check(cons, mw)
+            fails = [c for c in cons if not checks[c.name]["stable_at_check"]]
+            if not fails:
+                verified, message = True, f"verified on every contingency after {rnd} round(s)"
+                break
+            active = _most_binding(fails, brackets, base, n_active)
+            base.update(_base(pl, [c for c in active if c.name not in base], brackets, kw))
+            continue
         mw, evs = res.allocation.mw, dict(res.evaluations)
         checks = pl.check(cons, mw)
         fails = [c for c in cons if not checks[c.name]["stable_at_check"]]
@@ -668,7 +702,8 @@ def _rows(cons, checks, evs, base) -> list:
                     "met": bool(checks[c.name]["stable_at_check"])
                     and (cct is None or cct >= c.target_cct_s - 1e-9),
                     "cct_no_storage_s": base.get(c.name, {}).get("cct_s"),
-                    "cct_s": cct, "margin_s": None if cct is None else cct - c.target_cct_s})
+                    "cct_s": cct, "margin_s": None if cct is None else cct - c.target_cct_s,
+                    "margin_at_least": False})
     return out
 
 
@@ -708,29 +743,32 @@ class _Heartbeat:
                 self(f"... {self.status}")
 
 
-def margins(pl: _Plan, cons, result: PlanResult, tol: float, brackets, kw) -> None:
+def margins(pl: _Plan, cons, result: PlanResult, tol: float, cap_s: float, kw) -> None:
     """Fill the CCT and margin of every contingency row without one (those only checked
-    at their required time): bisection with the allocation between the required time
-    (found stable by its check) and the unstable end of the screening bracket (base
-    load) or twice the required time, widened while stable (`critical_clearing_time`),
-    to `tol` (s); no gradient runs.  Rows still stable at t_max get t_max."""
+    at their required time T): a run cleared at T + cap_s; stable there, the margin is
+    reported as at least cap_s (``margin_at_least``); otherwise a bisection with the
+    allocation between T (stable, its check) and T + cap_s to `tol` (s), no gradient
+    runs (`critical_clearing_time`)."""
     rows = {r["name"]: r for r in result.contingencies}
     todo = [c for c in cons if rows[c.name]["cct_s"] is None and rows[c.name]["met"]]
     if not todo:
         return
-    pl.say(f"clearing margins of {len(todo)} contingencies ({1000 * tol:g} ms)")
-    br = {}
+    pl.say(f"clearing margins of {len(todo)} contingencies (up to {1000 * cap_s:g} ms, "
+           f"{1000 * tol:g} ms)")
+    top = {c.name: round(min(c.target_cct_s + cap_s, pl.t_max), 12) for c in todo}
+    far = pl.check([replace(c, target_cct_s=top[c.name]) for c in todo], result.mw)
+    near = [c for c in todo if not far[c.name]["stable_at_check"]]
     for c in todo:
-        hi = brackets.get(c.fault_name, (None, None))[1] if brackets and c.load == 1.0 \
-            else None
-        hi = hi if hi is not None and hi > c.target_cct_s + tol else 2 * c.target_cct_s
-        br[c.name] = (c.target_cct_s, min(hi, pl.t_max))
-    ev = evaluations(pl.case, todo, result.mw, brackets=br, gradient=False,
+        if far[c.name]["stable_at_check"]:
+            rows[c.name].update(margin_s=top[c.name] - c.target_cct_s, margin_at_least=True)
+    if not near:
+        return
+    ev = evaluations(pl.case, near, result.mw, gradient=False,
+                     brackets={c.name: (c.target_cct_s, top[c.name]) for c in near},
                      **{**kw, "tol": tol})
-    for c in todo:
-        r = rows[c.name]
-        r["cct_s"], r["cct_tol_s"] = ev[c.name]["cct_s"], tol
-        r["margin_s"] = ev[c.name]["cct_s"] - c.target_cct_s
+    for c in near:
+        rows[c.name].update(cct_s=ev[c.name]["cct_s"], cct_tol_s=tol,
+                            margin_s=ev[c.name]["cct_s"] - c.target_cct_s)
 
 
 # -- references ------------------------------------------------------------------------------

@@ -48,7 +48,8 @@ LOAD_LEVELS = (0.9, 1.0, 1.1)             # fractions of the base load
 PARETO_CYCLES = {"miniwecc": (4.0, 6.0), "kundur": (10.0, 12.0)}
 #: Illustrative prices (M$): power conversion per MW, energy per MWh, per site
 COSTS = CostModel(per_mw=0.3, per_mwh=0.4, per_site=2.0)
-SCREEN_TOL, SCREEN_T_MAX, TOL, MARGIN_TOL = 0.005, 0.5, 1e-3, 0.005
+SCREEN_TOL, SCREEN_T_MAX, TOL = 0.005, 0.5, 1e-3
+MARGIN_TOL, MARGIN_CAP_S = 0.005, 0.1     # clearing margins: resolution, largest shown (s)
 T_MAX_PLACE = 1.0                         # CCT search limit of the placement runs (s)
 MAX_ITER, MAX_ITER_SIDE = 6, 4            # simulated allocations: per round; the others
 HEARTBEAT_S = 8.0                         # longest silence of the progress callback (s)
@@ -147,18 +148,18 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
         with worker_pool(workers) as pool_map:
             run_map = beat.counting(pool_map)
             kw = {"sites": sites, "tol": TOL, "t_max": T_MAX_PLACE, "run_map": run_map}
-            common = {"brackets": brackets, "cost": COSTS, "max_iter": MAX_ITER,
-                      "uniform": True, **kw}
+            common = {"brackets": brackets, "cost": COSTS, "max_iter": MAX_ITER, **kw}
             beat.note(f"plan for {REQUIRED_CYCLES:g} cycles")
             main = plan(case_name, faults, Requirement(cycles=REQUIRED_CYCLES),
                         load_levels=LOAD_LEVELS, alone=True, margins_tol=MARGIN_TOL,
+                        margins_cap_s=MARGIN_CAP_S, uniform=True, drop_infeasible=True,
                         progress=lambda m: say(f"{case_name} {REQUIRED_CYCLES:g} cycles: {m}"),
                         **common)
             pareto = []
             for cyc in PARETO_CYCLES[case_name]:
                 beat.note(f"Pareto point {cyc:g} cycles")
-                r = plan(case_name, faults, Requirement(cycles=cyc),
-                         load_levels=(1.0,) if fast else LOAD_LEVELS,
+                r = plan(case_name, faults, Requirement(cycles=cyc), drop_infeasible=True,
+                         load_levels=(1.0,) if fast else LOAD_LEVELS, uniform=not fast,
                          progress=lambda m, c=cyc: say(f"{case_name} {c:g} cycles: {m}"),
                          **common)
                 pareto.append(_pareto_point(cyc, r))
@@ -390,9 +391,10 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
                      f"{', '.join(r['failing']) or 'none'} |")
     lines += ["", "## Clearing margin of every contingency at every load level", "",
               "CCT with the allocation (ms; 1 ms for the contingencies solved for, "
-              f"{1000 * MARGIN_TOL:g} ms for the others) minus the required {cyc:g}-cycle "
-              "clearing time; every contingency was also simulated cleared at the required "
-              "time (stable).", "",
+              f"{1000 * MARGIN_TOL:g} ms for the others, shown up to "
+              f"{1000 * MARGIN_CAP_S:g} ms: '>' = still stable there) minus the required "
+              f"{cyc:g}-cycle clearing time; every contingency was also simulated cleared at "
+              "the required time.", "",
               "| fault | CCT without storage, base load (ms) | "
               + " | ".join(f"margin at {x:g} (ms)" for x in d["load_levels"]) + " |",
               "|---|---|" + "---|" * len(d["load_levels"])]
@@ -411,7 +413,8 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
             elif r["margin_s"] is None:
                 cells.append("stable" if r["met"] else "FAILS")
             else:
-                cells.append(f"{1000 * r['margin_s']:+.0f}" + ("" if r["met"] else " FAILS"))
+                cells.append((">" if r.get("margin_at_least") else "")
+                             + f"{1000 * r['margin_s']:+.0f}" + ("" if r["met"] else " FAILS"))
         lines.append(f"| {f} | {_ms(screen_cct.get(f))} | " + " | ".join(cells) + " |")
     lines += ["", f"![margins]({figs['margins']})", "",
               "## Cost against the required clearing time", "",
@@ -459,6 +462,13 @@ def _screening_text(d: dict) -> str:
             f"{SCREEN_T_MAX:g} s: {len(ok)} with a CCT.  Every fault stable when cleared at "
             f"once ({d['n_faults']}) is a contingency at each of the "
             f"{len(d['load_levels'])} load levels: {p['n_contingencies']} in all.  "
+            + (f"Out of scope, unstable without storage even when cleared at once (the "
+               f"line trip alone) at that load level, which no clearing time can help "
+               f"(N-1 insecure there): {', '.join(p['out_of_scope'])}.  "
+               if p["out_of_scope"] else "")
+            + ("Set aside as infeasible with storage at the candidate sites (every site at "
+               "its bound, simulated): " + "; ".join(p["infeasible"]) + ".  "
+               if p.get("infeasible") else "") +
             "Constraint generation: simulated once without storage cleared at the required "
             "time, the most binding failing faults (one load level each) are solved for; "
             "every contingency is then simulated with the allocation cleared at the "
