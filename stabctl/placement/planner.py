@@ -13,8 +13,8 @@ required clearing time is stable; the contingencies the program is solved for (t
 set) are moreover met by their first unstable clearing time (`stabctl.placement.loop`).
 
 Constraint generation (`plan`): every contingency is first simulated once without storage,
-cleared at its required time; those that fail are the candidates, the most binding few
-(smallest CCT without storage relative to the requirement, one load level per fault) the
+cleared at its required time; those that fail are the candidates, the most binding of
+them (smallest CCT without storage relative to the requirement, up to `n_active`) the
 first active set.  Each round solves the verified trust-region loop
 (`stabctl.placement.loop.place`) for the active set, warm-started from the last
 allocation with the evaluations already simulated, then checks every contingency at the
@@ -383,7 +383,7 @@ def contingencies_of(faults, requirement: Requirement, freq_hz: float, tol: floa
 
 def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
          overrides: dict | None = None, cost: CostModel | None = None, sites=None,
-         brackets: dict | None = None, n_active: int = 6, max_rounds: int = 6,
+         brackets: dict | None = None, n_active: int = 12, max_rounds: int = 6,
          max_iter: int = 6, tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
          scheduler: str | None = None, controller=None, conventions: str = "ieee",
          h: float | None = None, run_map=None, progress=None, uniform: bool = False,
@@ -412,7 +412,8 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
         Fault name -> [stable, unstable] clearing times without storage at the base load
         (s), e.g. a screening's, where the CCT searches start.
     n_active : int, optional
-        Faults in the first active set (the most binding); default 6.
+        Contingencies in the first active set (the most binding of those unstable
+        without storage); default 12.
     max_rounds : int, optional
         Rounds of constraint generation at most; max_iter: allocations simulated per
         round at most (`place`).
@@ -562,21 +563,16 @@ def _base(pl: _Plan, cons, brackets, kw) -> dict:
 
 
 def _most_binding(failing, brackets, base: dict, n: int) -> list:
-    """One contingency per fault, at its heaviest failing load level, for the n faults
-    with the least ratio of the CCT without storage to the requirement: simulated (base)
-    or else the screening's (base load; none: last).  With a screening no run is needed:
-    the CCTs without storage of the rest are simulated only if they are added."""
-    worst = {}
-    for c in failing:
-        if c.fault_name not in worst or c.load > worst[c.fault_name].load:
-            worst[c.fault_name] = c
-
+    """The n contingencies of `failing` with the least ratio of the CCT without storage to
+    the requirement: simulated (base) or else the screening's (base load; none: last),
+    the heavier load level first among equals.  With a screening no run is needed: the
+    CCTs without storage of the rest are simulated only if they are added."""
     def severity(c):
         cct = base[c.name]["cct_s"] if c.name in base else \
             (brackets or {}).get(c.fault_name, (None,))[0]
-        return (np.inf if cct is None else cct / c.target_cct_s, c.fault_name)
+        return (np.inf if cct is None else cct / c.target_cct_s, -c.load, c.name)
 
-    return sorted(worst.values(), key=severity)[:n]
+    return sorted(failing, key=severity)[:n]
 
 
 def _generate(pl: _Plan, cons, failing, checks0, base, brackets, n_active, max_rounds,
