@@ -56,6 +56,16 @@ from stabctl.cli.options import (AliasedOption, controller, faults_option, json_
                    "meeting the same requirements.")
 @click.option("--alone", is_flag=True,
               help="Also each binding fault's own least allocation.")
+@click.option("--screening", type=click.Path(dir_okay=False, exists=True), default=None,
+              metavar="FILE.jsonl",
+              help="Records of a screening without storage (`stabctl screen --out`): its "
+                   "CCT brackets are reused (faults known stable at the requirement are "
+                   "not simulated again, CCT searches start there, the most binding are "
+                   "ranked by them).")
+@click.option("--set-aside-infeasible", is_flag=True,
+              help="A contingency that storage at the candidate sites cannot make meet its "
+                   "requirement (proven by simulation with every site at its bound) is "
+                   "listed and the others are planned for (default: error, exit 2).")
 @storage_options(with_rating=False)
 @tol_options()
 @click.option("--max-iter", type=int, default=10, show_default=True,
@@ -70,7 +80,9 @@ from stabctl.cli.options import (AliasedOption, controller, faults_option, json_
 @reports_errors
 def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, target_cct_s,
           load_levels, cost_mw, cost_mwh, cost_site, site_costs, zeta_min, max_sites,
-          max_site_pct, amplitude_hz, uniform_reference, alone, deadband_hz, v_gate, coi,
+          max_site_pct, amplitude_hz, uniform_reference, alone, screening,
+          set_aside_infeasible,
+          deadband_hz, v_gate, coi,
           hysteresis_hz, tol_ms, t_max, max_iter, max_rounds, workers, scheduler,
           conventions, step, out_path, as_json):
     """Least-cost energy storage (sites, MW and MWh) such that every contingency meets its
@@ -96,7 +108,7 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     from stabctl.io import load_case
     from stabctl.parallel import atomic_write, default_workers
     from stabctl.placement.planner import (CostModel, Requirement, plan, read_requirements,
-                                           read_site_costs)
+                                           read_site_costs, screening_brackets)
     from stabctl.placement.program import candidate_sites
 
     settings = cct_settings(tol_ms, t_max, None)
@@ -119,6 +131,7 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     levels = _load_levels(load_levels)
     cost = CostModel(cost_mw, cost_mwh, cost_site,
                      read_site_costs(site_costs) if site_costs else {})
+    brackets = screening_brackets(screening) if screening else None
     if out_path:
         check_writable(out_path, "--out")
     case = load_case(case_name)
@@ -128,12 +141,13 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     n = min(workers or default_workers(), len(faults) * len(levels))
     say = (lambda msg: None) if as_json else (lambda msg: click.echo(msg, err=True))
     result = plan(case_name, faults, req, load_levels=levels, overrides=overrides, cost=cost,
-                  sites=sites, max_rounds=max_rounds, max_iter=max_iter,
+                  sites=sites, max_rounds=max_rounds, max_iter=max_iter, brackets=brackets,
                   tol=settings["tol"], t_max=settings["t_max"], workers=n,
                   scheduler=scheduler,
                   controller=controller(deadband_hz, v_gate, coi, hysteresis_hz),
                   conventions=conventions, h=step, progress=say, uniform=uniform_reference,
-                  alone=alone, zeta_min=zeta_min, max_sites=max_sites,
+                  alone=alone, drop_infeasible=set_aside_infeasible, zeta_min=zeta_min,
+                  max_sites=max_sites,
                   amplitude_hz=amplitude_hz)
     out = {"case": case.name, **result.to_dict()}
     if out_path:

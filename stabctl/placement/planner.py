@@ -233,6 +233,33 @@ def read_site_costs(path) -> dict:
     return out
 
 
+def screening_brackets(path) -> dict:
+    """The [stable, unstable] clearing times without storage (s) of every fault a
+    screening (`stabctl screen --out`, or a placement study's records) bracketed: fault
+    name (`Contingency.fault_name`) -> (t_stable, t_unstable), for `plan`'s `brackets`.
+    Records with storage or without a CCT are skipped.  Raises InputError for a file
+    that is not sweep records."""
+    from stabctl.parallel import read_records
+    from stabctl.stability.cct import LineFault
+
+    try:
+        records = read_records(path)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"screening records {path}: {exc}") from None
+    out = {}
+    for rec in records.values():
+        r = rec.get("result") or {}
+        if rec.get("status") != "ok" or (rec.get("inputs") or {}).get("esd_pct") is not None \
+                or "t_stable_s" not in r:
+            continue
+        f = r["fault"]
+        fault = LineFault(int(f["bus"]), None if f["far_bus"] is None else int(f["far_bus"]),
+                          float(f["t_fault"]), int(f["circuit"]),
+                          tuple((int(a), int(b)) for a, b in f["trips"]))
+        out[Contingency(fault, 1.0).fault_name] = (r["t_stable_s"], r["t_unstable_s"])
+    return out
+
+
 # -- the result --------------------------------------------------------------------------------
 
 @dataclass
