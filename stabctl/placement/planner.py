@@ -342,6 +342,7 @@ class _Plan:
     base: dict = field(default_factory=dict)
     energy_rate: np.ndarray | None = None
     drop_infeasible: bool = False
+    brackets: dict | None = None
     infeasible: list = field(default_factory=list)
     loop_kw: dict = field(default_factory=dict)
 
@@ -503,7 +504,7 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
     with _pool(run_map, workers, scheduler) as pool_map, _Heartbeat(progress) as say:
         pl = _Plan(case, sites, cost, controller or DEFAULT_CONTROLLER,
                    {"conventions": conventions, "h": h}, None, tol, t_max, say,
-                   loop_kw=loop_kw, drop_infeasible=drop_infeasible)
+                   loop_kw=loop_kw, drop_infeasible=drop_infeasible, brackets=brackets)
         rm = pl.run_map = pl.counting(pool_map, say)
         kw = {"sites": sites, "tol": tol, "t_max": t_max, "run_map": rm,
               "controller": pl.controller, "conventions": conventions, "h": h}
@@ -831,6 +832,8 @@ def least_uniform(pl: _Plan, cons, failing, kw) -> dict:
     while True:
         ok, ck = meets(hi, cons)
         if ok:
+            pl.base.update(_base(pl, [c for c in failing if c.name not in pl.base],
+                                 pl.brackets, kw))
             ev = evaluations(pl.case, failing, fleet(hi), base=pl.base, **kw)
             ok = all(ev[c.name]["cct_s"] >= c.target_cct_s - 1e-9 for c in failing)
         if ok or hi >= pct_max:
