@@ -470,7 +470,7 @@ def _screening_text(d: dict) -> str:
                "its bound, simulated): " + "; ".join(p["infeasible"]) + ".  "
                if p.get("infeasible") else "") +
             "Constraint generation: simulated once without storage cleared at the required "
-            "time, the most binding failing faults (one load level each) are solved for; "
+            "time, the most binding failing contingencies (up to 12) are solved for; "
             "every contingency is then simulated with the allocation cleared at the "
             "required time, and those that fail are added.")
 
