@@ -520,8 +520,9 @@ def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
 
 
 def read_faults(path: str | Path) -> list[LineFault]:
-    """Faults from a CSV file with a header: bus, far_bus[, t_fault (s, default 1)]
-    [, circuit (default 1)], one fault per row.  Raises InputError naming the row."""
+    """Faults from a CSV file with a header: bus, far_bus (empty: a bus fault cleared
+    without a trip)[, t_fault (s, default 1)][, circuit (default 1)], one fault per row.
+    Raises InputError naming the row."""
     path = Path(path)
     rows = csv_rows(path, "fault list", ("bus", "far_bus"), "[,t_fault,circuit]")
     return [_fault_row(path, i, r) for i, r in enumerate(rows, start=2)]
@@ -560,7 +561,8 @@ def csv_rows(path: str | Path, what: str, columns, more: str = "") -> list[dict]
 
 def _fault_row(path, line: int, row: dict) -> LineFault:
     try:
-        return LineFault(bus=int(row["bus"]), far_bus=int(row["far_bus"]),
+        far = (row["far_bus"] or "").strip()
+        return LineFault(bus=int(row["bus"]), far_bus=int(far) if far else None,
                          t_fault=float(row.get("t_fault") or 1.0),
                          circuit=int(row.get("circuit") or 1))
     except (TypeError, ValueError) as exc:
