@@ -197,3 +197,28 @@ def test_cli_place_with_a_clearing_time_requirement_and_bad_input(tmp_path):
         assert bad.exit_code == 2, bad.output
         assert bad.output.startswith("error:") and bad.output.count("\n") == 1
         assert not out.exists()
+
+
+def test_screening_brackets_and_requirement_overrides_are_read_from_their_files(tmp_path):
+    from stabctl.placement.planner import read_requirements, screening_brackets
+
+    rec = tmp_path / "s.jsonl"
+    ok = {"key": "k1", "status": "ok", "inputs": {"esd_pct": None},
+          "result": {"fault": {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1,
+                               "trips": []}, "t_stable_s": 0.155, "t_unstable_s": 0.16}}
+    bus = {**ok, "key": "k2", "result": {**ok["result"], "fault": {
+        "bus": 1, "far_bus": None, "t_fault": 1.0, "circuit": 1, "trips": []}}}
+    stored = {**ok, "key": "k3", "inputs": {"esd_pct": 5.0}}            # with storage
+    failed = {"key": "k4", "status": "failed", "inputs": {"esd_pct": None}, "error": "x"}
+    rec.write_text("\n".join(json.dumps(r) for r in (ok, bus, stored, failed)) + "\n")
+    assert screening_brackets(rec) == {"3-101": (0.155, 0.16), "1": (0.155, 0.16)}
+    csv = tmp_path / "f.csv"
+    csv.write_text("bus,far_bus,required_clearing_cycles,target_cct_s\n3,101,6,\n1,,,0.3\n"
+                   "13,101,,\n")
+    req = read_requirements(csv)
+    assert set(req) == {"3-101", "1"}
+    assert req["3-101"].target_s(60.0, 1e-3) == pytest.approx(0.1)
+    assert req["1"].target_s(60.0, 1e-3) == pytest.approx(0.3)
+    csv.write_text("bus,far_bus,required_clearing_cycles\n3,101,-2\n")
+    with pytest.raises(InputError, match="line 2"):
+        read_requirements(csv)
