@@ -272,7 +272,9 @@ class PlanResult:
     contingencies: one row per contingency (`rows`); rounds: one dict per round of
     constraint generation; active: names of the contingencies the program was solved
     for; message: why it stopped; n_simulations: runs simulated in all; wall_time_s.
-    uniform, alone: the references when asked (`least_uniform`, `alone`).
+    uniform, alone: the references when asked (`least_uniform`, `alone`); out_of_scope:
+    contingencies unstable when cleared at once; infeasible, set_aside: the proofs and
+    names of those set aside as infeasible.
     """
 
     case: str
@@ -290,6 +292,7 @@ class PlanResult:
     energy: list = field(default_factory=list)
     out_of_scope: list = field(default_factory=list)
     infeasible: list = field(default_factory=list)
+    set_aside: list = field(default_factory=list)
     uniform: dict | None = None
     alone: list = field(default_factory=list)
     n_simulations: int = 0
@@ -318,6 +321,7 @@ class PlanResult:
                 "cost": self.cost, "n_contingencies": len(self.contingencies),
                 "n_met": len(met), "active": self.active,
                 "out_of_scope": self.out_of_scope, "infeasible": self.infeasible,
+                "set_aside": self.set_aside,
                 "contingencies": self.contingencies, "rounds": self.rounds,
                 "n_simulations": self.n_simulations, "wall_time_s": self.wall_time_s,
                 "uniform": self.uniform, "alone": self.alone}
@@ -344,6 +348,7 @@ class _Plan:
     drop_infeasible: bool = False
     brackets: dict | None = None
     infeasible: list = field(default_factory=list)
+    set_aside: list = field(default_factory=list)
     loop_kw: dict = field(default_factory=dict)
 
     def check(self, contingencies, mw, energy_mj=None) -> dict:
@@ -536,6 +541,7 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
                            max_iter, kw)
         result.out_of_scope = sorted(out)
         result.infeasible = list(pl.infeasible)
+        result.set_aside = list(pl.set_aside)
         kept = {r["name"] for r in result.contingencies}
         cons = tuple(c for c in cons if c.name in kept)
         failing = [c for c in failing if c.name in kept]
@@ -633,6 +639,10 @@ def _generate(pl: _Plan, cons, failing, checks0, base, brackets, n_active, max_r
                 raise
             pl.infeasible.append(str(exc))
             gone = set(exc.contingencies)
+            pl.set_aside.extend(sorted(gone))
+            rounds.append({"round": rnd, "active": [c.name for c in active],
+                           "total_mw": None, "set_aside": sorted(gone), "failing": [],
+                           "iterations": 0})
             pl.say(f"round {rnd}: set aside as infeasible: {', '.join(sorted(gone))}")
             cons = tuple(c for c in cons if c.name not in gone)
             active = [c for c in active if c.name not in gone]

@@ -188,7 +188,9 @@ def _pareto_point(cycles: float, r, levels=(1.0,)) -> dict:
             "n_sites": int(np.count_nonzero(r.mw)),
             "uniform_pct": u.get("pct"), "uniform_mw": u.get("total_mw"),
             "uniform_cost": (u.get("cost") or {}).get("total"),
-            "uniform_verified": u.get("verified")}
+            "uniform_verified": u.get("verified"),
+            "set_aside": list(r.set_aside)}
+
 
 class _Beat:
     """The progress callback, repeated with the latest status line (`note`) whenever
@@ -387,6 +389,10 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
     lines += ["", "## Constraint generation", "",
               "| round | solved for | MW | failing the check after it |", "|---|---|---|---|"]
     for r in p["rounds"]:
+        if r["total_mw"] is None:
+            lines.append(f"| {r['round']} | {', '.join(r['active'])} | - | set aside as "
+                         f"infeasible: {', '.join(r.get('set_aside', []))} |")
+            continue
         lines.append(f"| {r['round']} | {', '.join(r['active'])} | {r['total_mw']:.1f} | "
                      f"{', '.join(r['failing']) or 'none'} |")
     lines += ["", "## Clearing margin of every contingency at every load level", "",
@@ -419,15 +425,16 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
     lines += ["", f"![margins]({figs['margins']})", "",
               "## Cost against the required clearing time", "",
               "| required (cycles) | load levels | optimised MW | MWh | sites | cost | "
-              "least uniform % | uniform MW | uniform cost | verified |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
+              "least uniform % | uniform MW | uniform cost | verified | set aside as "
+              "infeasible |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for q in d["pareto"]:
         lines.append(f"| {q['cycles']:g} | {', '.join(f'{x:g}' for x in q['load_levels'])} | "
                      f"{q['total_mw']:.1f} | {q['total_mwh']:.2f} | {q['n_sites']} | "
                      f"{q['cost']:.1f} | {_num(q['uniform_pct'], 'g')} | "
                      f"{_num(q['uniform_mw'], '.0f')} | "
                      f"{_num(q['uniform_cost'], '.1f')} | "
-                     f"{'yes' if q['verified'] else 'no'} |")
+                     f"{'yes' if q['verified'] else 'no'} | "
+                     f"{', '.join(q.get('set_aside') or []) or 'none'} |")
     pa = d["paper_alone"]
     lines += ["", f"![Pareto]({figs['pareto']})", "",
               "## Continuity: the paper's fault with the uniform 5 % target", "",
