@@ -174,6 +174,12 @@ def test_infeasible_requirement_names_the_contingency_and_its_load_level():
         plan("kundur", [LineFault(3, 101)], Requirement(cycles=12), load_levels=(1.1,),
              sites=sites, workers=1)
     assert exc.value.contingencies == ("3-101@110%",)
+    # set aside instead: named, and the rest planned for (9 cycles = 150 ms: the base load
+    # needs no storage, CCT 157 ms; at 110 % the CCT without storage is 100 ms)
+    res = plan("kundur", [LineFault(3, 101)], Requirement(cycles=9), load_levels=(1.0, 1.1),
+               sites=sites, workers=1, drop_infeasible=True)
+    assert res.set_aside == ["3-101@110%"] and "load 110 %" in res.infeasible[0]
+    assert [c["name"] for c in res.contingencies] == ["3-101"] and res.verified
 
 
 def test_cli_place_with_a_clearing_time_requirement_and_bad_input(tmp_path):
