@@ -424,6 +424,10 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
         lines.append(f"| {f} | {_ms(screen_cct.get(f))} | " + " | ".join(cells) + " |")
     lines += ["", f"![margins]({figs['margins']})", "",
               "## Cost against the required clearing time", "",
+              ("The other points at the base load only and without their uniform "
+               "reference (the fast variant that `stabctl paper` runs)."
+               if d.get("pareto_load_levels") == [1.0] else
+               "Every point at every load level."), "",
               "| required (cycles) | load levels | optimised MW | MWh | sites | cost | "
               "least uniform % | uniform MW | uniform cost | verified | set aside as "
               "infeasible |", "|---|---|---|---|---|---|---|---|---|---|---|"]
