@@ -372,9 +372,10 @@ def print_plan(case_name, d) -> None:
         f = lambda x: "-" if x is None else f"{x:.3f}"  # noqa: E731
         click.echo(f"{r['name']:<18} {r['required_s']:10.3f} {f(r['cct_no_storage_s']):>9} "
                    f"{f(r['cct_s']):>8}  {'yes' if r['met'] else 'NO'}")
-    for what in ("out_of_scope", "infeasible"):
-        if d.get(what):
-            click.echo(f"{what.replace('_', ' ')}: " + "; ".join(d[what]))
+    if d.get("out_of_scope"):
+        click.echo("out of scope (unstable when cleared at once): " + ", ".join(d["out_of_scope"]))
+    for proof in d.get("infeasible") or []:
+        click.echo("set aside as " + proof)
     u = d.get("uniform")
     if u and u.get("pct") is not None:
         click.echo(f"least uniform fleet: {u['pct']:g} % of every MVA = {u['total_mw']:.0f} MW,"
