@@ -194,8 +194,8 @@ class CostModel:
         for k, o in [(None, {"per_mw": self.per_mw, "per_mwh": self.per_mwh,
                              "per_site": self.per_site}), *self.overrides.items()]:
             if any(not (np.isfinite(v) and v >= 0) for v in o.values()):
-                raise InputError(f"costs must be numbers >= 0{'' if k is None else f' (site of G{k})'}"
-                                 f", got {o}")
+                where = "" if k is None else f" (site of G{k})"
+                raise InputError(f"costs must be numbers >= 0{where}, got {o}")
         if not self.per_mw + self.per_mwh > 0:
             raise InputError("need a cost per MW or per MWh > 0")
 
@@ -812,9 +812,10 @@ def least_uniform(pl: _Plan, cons, failing, kw) -> dict:
     per site) meeting every contingency: bisection on the % (to UNIFORM_RES_PCT) with
     the check runs of the contingencies that fail without storage, then every
     contingency checked at the result and those failing without storage verified by
-    their first unstable clearing time, as the active set of `plan`; a miss there moves the % up one resolution step
-    and checks again.  Returns {"pct", "total_mw", "mwh", "cost", "verified",
-    "n_checked"}; verified False when even the site bounds fail."""
+    their first unstable clearing time, as the active set of `plan`; a miss there moves
+    the % up one resolution step and checks again.  Returns {"pct" (%), "total_mw",
+    "mw_by_site" (MW), "mwh", "cost" (`CostModel.split`), "verified"}; pct None and
+    verified False when even the site bounds fail."""
     mva = _mva(pl)
     upper = np.array([s.max_mw for s in pl.sites])
     pct_max = float(np.min(100 * upper / mva))
