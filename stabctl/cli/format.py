@@ -343,6 +343,49 @@ def print_placement(case_name, d) -> None:
 
 
 
+def print_plan(case_name, d) -> None:
+    """Print the `place` result as text.
+
+    Parameters
+    ----------
+    case_name : str
+    d : dict
+        The result (`place --json`, `stabctl.placement.planner.PlanResult.to_dict`).
+    """
+    c = d["cost"]
+    click.echo(f"case {case_name} ({d['requirement']}; load levels "
+               f"{', '.join(f'{x:g}' for x in d['load_levels'])}): {d['total_mw']:.1f} MW, "
+               f"{d['total_mwh']:.2f} MWh at {d['n_sites']} site(s), cost {c['total']:.1f} "
+               f"(MW {c['mw']:.1f}, MWh {c['mwh']:.1f}, sites {c['site']:.1f}); "
+               f"{'VERIFIED' if d['verified'] else 'NOT verified'} ({d['message']})")
+    click.echo(f"{'bus':>6} {'machine':>8} {'MW':>9} {'MWh':>8} {'absorbed MJ':>12} "
+               f"{'delivered MJ':>13}")
+    for r in d["allocation"]:
+        click.echo(f"{r['bus']:>6} {r['machine']:>8} {r['mw']:9.1f} {r['mwh']:8.2f} "
+                   f"{r.get('absorbed_mj', 0.0):12.1f} {r.get('delivered_mj', 0.0):13.1f}")
+    click.echo(f"{d['n_met']} of {d['n_contingencies']} contingencies stable at their "
+               f"required clearing time; solved for: {', '.join(d['active']) or 'none'}")
+    click.echo(f"{'contingency':<18} {'required s':>10} {'no ESD s':>9} {'with s':>8}  met")
+    for r in d["contingencies"]:
+        if r["cct_s"] is None and r["met"]:
+            continue
+        f = lambda x: "-" if x is None else f"{x:.3f}"  # noqa: E731
+        click.echo(f"{r['name']:<18} {r['required_s']:10.3f} {f(r['cct_no_storage_s']):>9} "
+                   f"{f(r['cct_s']):>8}  {'yes' if r['met'] else 'NO'}")
+    if d.get("out_of_scope"):
+        click.echo("out of scope (unstable when cleared at once): " + ", ".join(d["out_of_scope"]))
+    for proof in d.get("infeasible") or []:
+        click.echo("set aside as " + proof)
+    u = d.get("uniform")
+    if u and u.get("pct") is not None:
+        click.echo(f"least uniform fleet: {u['pct']:g} % of every MVA = {u['total_mw']:.0f} MW,"
+                   f" {u['mwh']:.2f} MWh, cost {u['cost']['total']:.1f}")
+    for a in d.get("alone") or []:
+        mw = "infeasible" if a["total_mw"] is None else f"{a['total_mw']:.1f} MW"
+        click.echo(f"fault {a['fault']} alone: {mw}")
+    click.echo(f"{d['n_simulations']} runs simulated, wall {d['wall_time_s']:.1f} s")
+
+
 def estimator_cct_lines(table: dict, bus: int, far_bus: int, esd_pct: float, settings,
                         runs: int, seed: int) -> list:
     """The text lines of `estimate cct`.

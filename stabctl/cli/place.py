@@ -1,68 +1,115 @@
-"""`stabctl place`: least-MW storage sites and ratings for target CCTs."""
+"""`stabctl place`: least-cost storage sites, MW and MWh meeting clearing-time or CCT
+requirements on every fault, at every load level, verified by simulation."""
 
 from __future__ import annotations
 
+import json
 import sys
 
 import click
 
 from stabctl.errors import InputError
-from stabctl.cli.format import print_json, print_placement
-from stabctl.cli.checks import cct_settings
-from stabctl.cli.options import (controller, faults_option, json_option, model_options,
-                                 parallel_options, read_fault_list, reports_errors,
-                                 storage_options, tol_options)
+from stabctl.cli.format import print_json, print_plan
+from stabctl.cli.checks import cct_settings, check_writable
+from stabctl.cli.options import (AliasedOption, controller, faults_option, json_option,
+                                 model_options, out_file_option, parallel_options,
+                                 read_fault_list, reports_errors, storage_options,
+                                 tol_options)
 
 
 @click.command()
 @click.argument("case_name", metavar="CASE")
 @faults_option
-@click.option("--target-cct-gain", type=float, required=True, metavar="PCT",
+@click.option("--required-clearing-cycles", type=float, default=None, metavar="N",
+              help="Every contingency stable when cleared after N cycles (cycles).")
+@click.option("--target-cct-gain", type=float, default=None, metavar="PCT",
               help="Required CCT of every contingency: its CCT without storage raised by "
                    "PCT (%).")
+@click.option("--target-cct-s", type=float, default=None, metavar="S",
+              help="Required CCT of every contingency (s).  Any mix of the three: the "
+                   "strictest wins; a --faults CSV may override them per fault (columns "
+                   "required_clearing_cycles, target_cct_gain, target_cct_s).")
+@click.option("--load-levels", default="1", show_default=True, metavar="LIST",
+              help="Load levels, comma-separated fractions of the base load (e.g. "
+                   "0.9,1.0,1.1): loads and dispatch scaled, power flow re-solved; every "
+                   "contingency is verified at each.")
+@click.option("--cost-mw", type=float, default=1.0, show_default=True, metavar="C",
+              help="Cost per MW of rating.")
+@click.option("--cost-mwh", type=float, default=0.0, show_default=True, metavar="C",
+              help="Cost per MWh of usable energy (sized from the verifying runs).")
+@click.option("--cost-site", "--site-cost", "cost_site", cls=AliasedOption, type=float,
+              default=0.0, show_default=True, metavar="C", help="Cost per site used.")
+@click.option("--site-costs", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Per-site costs: CSV with a machine column and any of cost_mw, "
+                   "cost_mwh, cost_site.")
 @click.option("--zeta-min", type=float, default=None, metavar="Z",
               help="Least damping ratio of every electromechanical mode (bang-bang ESDs "
                    "as their describing-function gain at --amplitude-hz).")
 @click.option("--max-sites", type=int, default=None, metavar="N",
-              help="At most N sites (reweighted l1, then the N largest).")
+              help="At most N sites (greedy elimination).")
 @click.option("--max-site-pct", type=float, default=50.0, show_default=True, metavar="P",
               help="Largest rating per site (% of its generator's MVA).")
-@click.option("--site-cost", type=float, default=0.0, show_default=True, metavar="C",
-              help="Cost of each site in MW-equivalents (fewer, larger sites).")
 @click.option("--amplitude-hz", type=float, default=0.2, show_default=True,
               help="Relative-speed amplitude at which the damping is required (Hz).")
+@click.option("--uniform-reference", is_flag=True,
+              help="Also the least uniform fleet (same % at every generator, bisection) "
+                   "meeting the same requirements.")
+@click.option("--alone", is_flag=True,
+              help="Also each binding fault's own least allocation.")
+@click.option("--screening", type=click.Path(dir_okay=False, exists=True), default=None,
+              metavar="FILE.jsonl",
+              help="Records of a screening without storage (`stabctl screen --out`): its "
+                   "CCT brackets are reused (faults known stable at the requirement are "
+                   "not simulated again, CCT searches start there, the most binding are "
+                   "ranked by them).")
+@click.option("--set-aside-infeasible", is_flag=True,
+              help="A contingency that storage at the candidate sites cannot make meet its "
+                   "requirement (proven by simulation with every site at its bound) is "
+                   "listed and the others are planned for (default: error, exit 2).")
 @storage_options(with_rating=False)
 @tol_options()
 @click.option("--max-iter", type=int, default=10, show_default=True,
-              help="Allocations simulated at most.")
+              help="Allocations simulated at most per round of constraint generation.")
+@click.option("--max-rounds", type=int, default=6, show_default=True,
+              help="Rounds of constraint generation at most (solve, check every "
+                   "contingency, add those that fail).")
 @parallel_options
 @model_options
+@out_file_option(metavar="FILE.json", help="The result as JSON (written when done).")
 @json_option()
 @reports_errors
-def place(case_name, faults_src, target_cct_gain, zeta_min, max_sites, max_site_pct,
-          site_cost, amplitude_hz, deadband_hz, v_gate, coi, hysteresis_hz, tol_ms, t_max,
-          max_iter, workers, scheduler, conventions, step, as_json):
-    """Least-MW energy storage (sites and ratings) that raises the CCT of every contingency
-    by --target-cct-gain, verified by nonlinear simulation.
+def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, target_cct_s,
+          load_levels, cost_mw, cost_mwh, cost_site, site_costs, zeta_min, max_sites,
+          max_site_pct, amplitude_hz, uniform_reference, alone, screening,
+          set_aside_infeasible,
+          deadband_hz, v_gate, coi,
+          hysteresis_hz, tol_ms, t_max, max_iter, max_rounds, workers, scheduler,
+          conventions, step, out_path, as_json):
+    """Least-cost energy storage (sites, MW and MWh) such that every contingency meets its
+    requirement at every load level, verified by nonlinear simulation.
 
     \b
     Candidate sites: every generator's HV bus, the ESD driven by that generator (the
-    paper's bang-bang law). Each iteration solves a linear program (cvxpy, Clarabel)
-    whose constraints are the CCTs linearised in the ratings (SIME margin of simulated
-    runs), then simulates the CCT of every contingency at the proposed allocation (in
-    parallel) and updates the constraints from those runs (docs/placement.md).
+    paper's bang-bang law). Constraint generation: the most binding few contingencies
+    are solved for (a trust-region loop of linear programs, cvxpy + Clarabel, whose
+    constraints are CCTs linearised in the ratings and verified by simulation), every
+    contingency is then simulated cleared at its required time, those that fail are
+    added, and so on. Each device's energy (MWh) is sized from the state of charge
+    along the verifying runs and checked by simulation (docs/placement.md).
     \b
     Examples:
       stabctl place kundur --faults DEFAULT --target-cct-gain 10
-      stabctl place miniwecc --faults faults.csv --target-cct-gain 40 --max-sites 3
+      stabctl place miniwecc --faults faults.csv --required-clearing-cycles 5 \\
+          --load-levels 0.9,1.0,1.1 --cost-mw 1 --cost-mwh 0.3 --uniform-reference
 
-    Exit status: 0 verified; 1 not verified within --max-iter; 2 bad input or infeasible
-    (the `error:` line names the contingency).
+    Exit status: 0 verified; 1 not verified within --max-rounds/--max-iter; 2 bad input
+    or infeasible (the `error:` line names the contingency and its load level).
     """
     from stabctl.io import load_case
+    from stabctl.parallel import atomic_write, default_workers
+    from stabctl.placement.planner import (CostModel, Requirement, plan, read_requirements,
+                                           read_site_costs, screening_brackets)
     from stabctl.placement.program import candidate_sites
-    from stabctl.placement.loop import baseline, place as run_place, with_gain
-    from stabctl.parallel import default_workers
 
     settings = cct_settings(tol_ms, t_max, None)
     if workers is not None and workers < 1:
@@ -71,25 +118,56 @@ def place(case_name, faults_src, target_cct_gain, zeta_min, max_sites, max_site_
         raise InputError(f"--max-sites must be >= 1, got {max_sites}")
     if zeta_min is not None and not 0 <= zeta_min < 1:
         raise InputError(f"--zeta-min must be in [0, 1), got {zeta_min:g}")
-    if not target_cct_gain > 0:
-        raise InputError(f"--target-cct-gain must be > 0 %, got {target_cct_gain:g}")
+    if max_rounds < 1:
+        raise InputError(f"--max-rounds must be >= 1, got {max_rounds}")
+    if all(v is None for v in (required_clearing_cycles, target_cct_gain, target_cct_s)):
+        raise InputError("give a requirement: --required-clearing-cycles, "
+                         "--target-cct-gain or --target-cct-s")
+    for opt, v in (("--required-clearing-cycles", required_clearing_cycles),
+                   ("--target-cct-gain", target_cct_gain), ("--target-cct-s", target_cct_s)):
+        if v is not None and not v > 0:
+            raise InputError(f"{opt} must be > 0, got {v:g}")
+    req = Requirement(required_clearing_cycles, target_cct_gain, target_cct_s)
+    levels = _load_levels(load_levels)
+    cost = CostModel(cost_mw, cost_mwh, cost_site,
+                     read_site_costs(site_costs) if site_costs else {})
+    brackets = screening_brackets(screening) if screening else None
+    if out_path:
+        check_writable(out_path, "--out")
     case = load_case(case_name)
     faults = read_fault_list(case_name, faults_src)
+    overrides = read_requirements(faults_src) if faults_src != "DEFAULT" else {}
     sites = candidate_sites(case, max_site_pct)
-    ctrl = controller(deadband_hz, v_gate, coi, hysteresis_hz)
-    n = min(workers or default_workers(), len(faults))
-    kw = {"sites": sites, "tol": settings["tol"], "t_max": settings["t_max"], "workers": n,
-          "scheduler": scheduler, "controller": ctrl, "conventions": conventions, "h": step}
+    n = min(workers or default_workers(), len(faults) * len(levels))
     say = (lambda msg: None) if as_json else (lambda msg: click.echo(msg, err=True))
-    base = baseline(case_name, faults, **kw)
-    result = run_place(case_name, with_gain(faults, base, target_cct_gain, settings["tol"]),
-                       zeta_min=zeta_min, max_sites=max_sites, site_cost=site_cost,
-                       amplitude_hz=amplitude_hz, max_iter=max_iter, base=base,
-                       progress=say, **kw)
-    out = {"case": case.name, "target_cct_gain_pct": target_cct_gain, **result.to_dict()}
+    result = plan(case_name, faults, req, load_levels=levels, overrides=overrides, cost=cost,
+                  sites=sites, max_rounds=max_rounds, max_iter=max_iter, brackets=brackets,
+                  tol=settings["tol"], t_max=settings["t_max"], workers=n,
+                  scheduler=scheduler,
+                  controller=controller(deadband_hz, v_gate, coi, hysteresis_hz),
+                  conventions=conventions, h=step, progress=say, uniform=uniform_reference,
+                  alone=alone, drop_infeasible=set_aside_infeasible, zeta_min=zeta_min,
+                  max_sites=max_sites,
+                  amplitude_hz=amplitude_hz)
+    out = {"case": case.name, **result.to_dict()}
+    if out_path:
+        atomic_write(out_path, lambda f: json.dump(out, f, indent=1, default=float))
     if as_json:
         print_json(out)
     else:
-        print_placement(case.name, out)
+        print_plan(case.name, out)
     if not result.verified:
         sys.exit(1)
+
+
+def _load_levels(text: str) -> tuple:
+    """The --load-levels list: numbers > 0.  Raises InputError."""
+    try:
+        levels = tuple(float(x) for x in str(text).split(",") if x.strip())
+    except ValueError:
+        raise InputError(f"--load-levels: not a comma-separated list of numbers: "
+                         f"{text!r}") from None
+    if not levels or any(not x > 0 for x in levels):
+        raise InputError(f"--load-levels: need numbers > 0 (fractions of the base load), "
+                         f"got {text!r}")
+    return levels

@@ -397,3 +397,86 @@ def solve_powerflow(
         kind=st.kind, q_limited=limited, iterations=iters, max_mismatch=mism, taps=taps,
         tap_iterations=tap_it, dropped=drop,
     )
+
+
+def scale_load(case: Case, factor: float, *, q_limits: bool = True) -> Case:
+    """The case at another load level: every bus load (P and Q) and every generator's
+    dispatch P scaled by `factor`, the power flow re-solved (the swing bus takes the
+    losses).
+
+    Parameters
+    ----------
+    case : Case
+        The base case (its bus table's ``pload``, ``qload`` and ``pgen``, pu).
+    factor : float
+        Load level, fraction of the base load (e.g. 1.1 for 110 %), > 0.
+    q_limits : bool, optional
+        PV Q limits in the re-solved power flow (as `solve_powerflow`); default True.
+
+    Returns
+    -------
+    Case
+        A new case named ``"<name>@<factor>"`` with the scaled loads and dispatch, whose
+        power flow was solved here (a `Simulator` built on it solves it again from the
+        same data and starts from the scaled operating point).  ``factor == 1`` returns
+        `case` unchanged.
+
+    Raises
+    ------
+    InputError
+        factor not > 0 (or not finite).
+    PowerFlowError
+        The scaled power flow does not converge; the message names the load level.
+
+    Notes
+    -----
+    Dispatch: every PV bus's generation is scaled by `factor`, but no bus beyond the
+    largest power order of its governors (``Tmax`` times the machine MVA, less 2 % for
+    the losses); what a capped bus cannot take is shared by the others in proportion to
+    their dispatch (the total scaled by `factor` whenever the headroom allows).  Fixed
+    injections (`Case.injections`) and shunts are not scaled; a PST case that books an
+    HVDC set point as a bus load (miniWECC's ``PDC``) scales it with the load.
+    """
+    from stabctl.errors import InputError
+
+    factor = float(factor)
+    if not (np.isfinite(factor) and factor > 0):
+        raise InputError(f"load level must be a number > 0, got {factor:g}")
+    if factor == 1.0:
+        return case
+    b = case.buses
+    scaled = case.replace(name=f"{case.name}@{factor:g}",
+                          buses=b.replace(pload=b.pload * factor, qload=b.qload * factor,
+                                          pgen=_dispatch(case, factor)))
+    try:
+        solve_powerflow(scaled, q_limits=q_limits)
+    except PowerFlowError as exc:
+        raise PowerFlowError(f"load level {factor:g} ({100 * factor:g} % of the base load "
+                             f"of case '{case.name}'): {exc}") from None
+    return scaled
+
+
+def _dispatch(case: Case, factor: float) -> np.ndarray:
+    """Generation P per bus (pu) scaled by factor, capped at the governors' power orders
+    and the rest shared in proportion (`scale_load`)."""
+    b = case.buses
+    pg = b.pgen * factor
+    cap = np.full(len(pg), np.inf)
+    g, m = case.governors, case.machines
+    for k, tmax in zip(g.machine, g.Tmax):
+        i = case.bus_index(m.bus[case.machine_index(k)])
+        mva = float(m.mva[case.machine_index(k)])
+        cap[i] = (0.0 if not np.isfinite(cap[i]) else cap[i]) + 0.98 * tmax * mva / case.base_mva
+    pv = b.kind == PV
+    want = float(pg[pv].sum())
+    for _ in range(len(pg)):
+        over = pv & (pg > cap)
+        if not over.any():
+            break
+        pg[over] = cap[over]
+        free = pv & (pg < cap) & (pg > 0)
+        short = want - float(pg[pv].sum())
+        if not free.any() or short <= 0:
+            break
+        pg[free] += short * pg[free] / pg[free].sum()
+    return pg

@@ -33,18 +33,26 @@ SCAN_S = 0.005      # clearing-time grid of the first-unstable scan (s)
 
 @dataclass(frozen=True)
 class Contingency:
-    """A fault (`LineFault`, cleared at both ends, line tripped, plus its trips) and the
-    CCT it must reach (s after the fault start)."""
+    """A fault (`LineFault`, cleared at both ends, line tripped, plus its trips), the CCT
+    it must reach (s after the fault start) and the load level it is simulated at
+    (fraction of the base load, `stabctl.network.powerflow.scale_load`; default 1)."""
 
     fault: LineFault
     target_cct_s: float
+    load: float = 1.0
 
     @property
-    def name(self) -> str:
+    def fault_name(self) -> str:
+        """The fault's short name (e.g. ``83-33``), without the load level."""
         f = self.fault
         where = f"{f.bus}" if f.far_bus is None else f"{f.bus}-{f.far_bus}"
         return where + (f"#{f.circuit}" if f.circuit != 1 else "") + \
             "".join(f"+{a}-{b}" for a, b in f.trips)
+
+    @property
+    def name(self) -> str:
+        """Unique name: the fault's, with ``@<load> %`` when not at the base load."""
+        return self.fault_name + ("" if self.load == 1.0 else f"@{100 * self.load:g}%")
 
 
 # -- one contingency at one allocation (runs in a worker) ------------------------------
@@ -53,7 +61,8 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
              controller: dict, tol: float, t_max: float, scan_from: float | None = None,
              scan_to: float | None = None, scan_s: float = SCAN_S,
              eps_s: float = EPS_S, conventions: str = "ieee", h: float | None = None,
-             bracket: list | None = None) -> dict:
+             bracket: list | None = None, load: float = 1.0,
+             check_s: float | None = None, gradient: bool = True) -> dict:
     """CCT of one contingency with ESDs `devices` ([bus, machine, MW] each) and the
     gradient of that CCT in the rating of every candidate site ([bus, machine] each).
 
@@ -68,19 +77,23 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
     the bisection from 0; an unstable end found stable is pushed up as
     `critical_clearing_time` does).  Runs repeated within one evaluation (the scan's
     and the bisection's bracket ends, the gradient's run beyond the CCT) are simulated
-    once (`_Memo`); n_simulations counts the runs simulated.
+    once (`_Memo`); n_simulations counts the runs simulated.  load: load level
+    (`cached_simulator`).  check_s: a required clearing time (s): the run cleared there
+    is also simulated (`check`: its verdict and the devices' energy figures).
+    gradient: False skips the gradient runs (a CCT only; the gradient is then zero).
     Returns {"cct_s", "t_unstable_s", "n_simulations", "separated", "critical",
-    "margin", "dmargin_dtc", "gradient_s_per_mw" (n_sites,), "above_t_max"}; a CCT
-    above t_max is returned as t_max with a zero gradient.
+    "margin", "dmargin_dtc", "gradient_s_per_mw" (n_sites,), "above_t_max"} (and with
+    check_s the keys of `check`); a CCT above t_max is returned as t_max with a zero
+    gradient.
     Raises InputError (unstable at zero clearing, bad fault) and SimulationError.
     """
-    sim = _Memo(cached_simulator(case, conventions, h))
-    far = None if fault["far_bus"] is None else int(fault["far_bus"])
-    f = LineFault(int(fault["bus"]), far, float(fault["t_fault"]),
-                  int(fault["circuit"]), tuple((int(a), int(b)) for a, b in fault["trips"]))
+    sim = _Memo(cached_simulator(case, conventions, h, load=load))
+    f = _fault_of(fault)
     ctrl = BangBangCOI(**controller)
     fleet = StorageFleet(tuple(StorageDevice(int(b), int(k), float(p)) for b, k, p in devices),
                          ctrl) if devices else None
+    checked = {} if check_s is None else \
+        _check_run(sim, f, fleet, float(check_s), sites, ctrl)
     try:
         if scan_from is None:
             res = _bisection(sim, f, fleet, tol, t_max, bracket)
@@ -90,13 +103,74 @@ def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
     except InputError as exc:
         if "above the search limit" not in str(exc):
             raise
-        return {"cct_s": t_max, "t_unstable_s": None, "n_simulations": None, "separated": [],
-                "critical": [], "margin": None, "dmargin_dtc": None, "above_t_max": True,
-                "gradient_s_per_mw": [0.0] * len(sites)}
+        return {"cct_s": t_max, "t_unstable_s": None, "n_simulations": sim.n_runs,
+                "separated": [], "critical": [], "margin": None, "dmargin_dtc": None,
+                "above_t_max": True, "gradient_s_per_mw": [0.0] * len(sites), **checked}
+    if not gradient:
+        return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable, "n_simulations": sim.n_runs,
+                "separated": list(res.separated), "above_t_max": False, "critical": [],
+                "margin": None, "dmargin_dtc": None, "gradient_s_per_mw": [0.0] * len(sites),
+                **checked}
     grad = cct_gradient(sim, f, res.t_unstable, fleet, sites, np.asarray(beta), ctrl, eps_s)
     grad.pop("n_runs")
     return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable, "n_simulations": sim.n_runs,
-            "separated": list(res.separated), "above_t_max": False, **grad}
+            "separated": list(res.separated), "above_t_max": False, **grad, **checked}
+
+
+def check(case: str, fault: dict, devices: list, sites: list, controller: dict,
+          t_clear: float, conventions: str = "ieee", h: float | None = None,
+          load: float = 1.0) -> dict:
+    """One run of a fault cleared at t_clear (s after its start) with ESDs `devices`
+    ([bus, machine, MW] each, or [bus, machine, MW, usable energy MJ] for a device of
+    finite energy started half full) at load level `load`: the verification of a required
+    clearing time, and the energy each device (and each candidate site of `sites`,
+    [bus, machine] each) moves over the run.  JSON-able in and out (a process-pool job).
+
+    Returns {"stable_at_check" (bool), "check_s", "n_simulations" (1),
+    "energy_mj" (per device: [absorbed, delivered, highest, lowest state of charge
+    relative to the start], MJ; `stabctl.storage.devices.energy_excursion`),
+    "site_excursion_s" (per site: the largest state-of-charge excursion per MW of
+    rating, s = MJ/MW, of a device at that site along this run's modes,
+    `stabctl.stability.sime.device_modes`)}.
+    Raises SimulationError (the network fails while the fault is on).
+    """
+    sim = _Memo(cached_simulator(case, conventions, h, load=load))
+    f = _fault_of(fault)
+    ctrl = BangBangCOI(**controller)
+    fleet = StorageFleet(tuple(
+        StorageDevice(int(d[0]), int(d[1]), float(d[2]),
+                      **({"energy_mj": float(d[3])} if len(d) > 3 else {}))
+        for d in devices), ctrl) if devices else None
+    out = _check_run(sim, f, fleet, float(t_clear), sites, ctrl)
+    return {**out, "n_simulations": sim.n_runs}
+
+
+def _check_run(sim, f: LineFault, fleet, t_clear: float, sites, ctrl) -> dict:
+    """The run of `check` (on a `_Memo` simulator, shared with the CCT search)."""
+    from stabctl.storage.devices import energy_excursion
+
+    r = _run(sim, f, t_clear, fleet)
+    energy = []
+    if fleet is not None and getattr(r, "pesd", None) is not None:
+        for d in range(len(fleet.devices)):
+            e = energy_excursion(r.t, r.pesd[:, d] * sim.case.base_mva)
+            energy.append([e["absorbed_mj"], e["delivered_mj"], e["soc_high_mj"],
+                           e["soc_low_mj"]])
+    per_mw = []
+    if sites:
+        modes = device_modes(r, [s[0] for s in sites], [s[1] for s in sites], ctrl,
+                             sim.case.freq_hz)
+        for j in range(modes.shape[1]):
+            e = energy_excursion(r.t, modes[:, j].astype(float))
+            per_mw.append(max(e["soc_high_mj"], -e["soc_low_mj"]))
+    return {"stable_at_check": bool(r.stable), "check_s": t_clear, "energy_mj": energy,
+            "site_excursion_s": per_mw}
+
+
+def _fault_of(fault: dict) -> LineFault:
+    far = None if fault["far_bus"] is None else int(fault["far_bus"])
+    return LineFault(int(fault["bus"]), far, float(fault["t_fault"]),
+                     int(fault["circuit"]), tuple((int(a), int(b)) for a, b in fault["trips"]))
 
 
 def _bisection(sim, fault: LineFault, fleet, tol: float, t_max: float, bracket):
@@ -240,7 +314,8 @@ def devices_of(sites, mw) -> list:
 def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangBangCOI,
            tol: float, t_max: float, base: dict | None = None, scan: str = "target",
            scan_s: float = SCAN_S, model: dict | None = None,
-           brackets: dict | None = None) -> dict:
+           brackets: dict | None = None, check: bool = False,
+           gradient: bool = True) -> dict:
     """`evaluate` every contingency at ratings mw (MW per site), in parallel through
     run_map (`worker_pool`): name -> evaluation dict.
 
@@ -250,22 +325,25 @@ def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangB
     far); scan="none" or no storage: bisection only.
     model: {"conventions", "h"} of the runs (default: ieee at the default step).
     brackets: name -> [stable, unstable] clearing times (s) of a coarser search at the
-    same ratings, where a bisection starts (`evaluate`).  The jobs are submitted
-    longest scan first (so that the pool's last jobs are short).
+    same ratings, where a bisection starts (`evaluate`).  Each contingency is simulated
+    at its own load level.  The scan starts at the lesser of the CCT without storage and
+    the target (a contingency met without storage is still checked with it).  check:
+    also the run cleared at each target (`check`); gradient: False for CCTs only.  The jobs are submitted longest scan
+    first (so that the pool's last jobs are short).
     Raises InputError for another scan value.
     """
     if scan not in ("target", "full", "none"):
         raise InputError(f"scan must be 'target', 'full' or 'none', got {scan!r}")
     devices = devices_of(sites, mw)
-    ctrl = {"deadband_hz": controller.deadband_hz, "v_gate_pu": controller.v_gate_pu,
-            "coi": controller.coi, "hysteresis_hz": controller.hysteresis_hz}
+    ctrl = controller_dict(controller)
     common = {"case": case, "devices": devices, "sites": [[s.bus, s.machine] for s in sites],
               "beta": np.asarray(beta).tolist(), "controller": ctrl, "tol": tol,
               "t_max": t_max, "scan_s": scan_s, **(model or {})}
     scanning = devices and base is not None and scan != "none"
     brackets = brackets or {}
-    jobs = [{**common, "fault": _fault_dict(c.fault),
-             "scan_from": base[c.name]["cct_s"] if scanning else None,
+    jobs = [{**common, "fault": _fault_dict(c.fault), "load": c.load, "gradient": gradient,
+             **({"check_s": c.target_cct_s} if check else {}),
+             "scan_from": min(base[c.name]["cct_s"], c.target_cct_s) if scanning else None,
              "scan_to": c.target_cct_s if scan == "target" else None,
              **({"bracket": list(brackets[c.name])}
                 if c.name in brackets and not scanning else {})}
@@ -275,6 +353,12 @@ def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangB
     order = sorted(range(len(jobs)), key=lambda i: -spans[i])
     done = dict(zip(order, run_map(evaluate, [jobs[i] for i in order])))
     return {c.name: done[i] for i, c in enumerate(contingencies)}
+
+
+def controller_dict(controller: BangBangCOI) -> dict:
+    """The fields of a bang-bang law as a JSON-able dict (a worker job's `controller`)."""
+    return {"deadband_hz": controller.deadband_hz, "v_gate_pu": controller.v_gate_pu,
+            "coi": controller.coi, "hysteresis_hz": controller.hysteresis_hz}
 
 
 def _fault_dict(f: LineFault) -> dict:

@@ -140,9 +140,10 @@ class _Setup:
     def cost(self) -> np.ndarray:
         return np.array([s.cost for s in self.sites])
 
-    @property
-    def site_cost(self) -> float:
-        return self.solve_kw["site_cost"]
+    def sites_cost(self, mw) -> float:
+        """Cost of the sites used by ratings mw (per-site costs)."""
+        return float(np.broadcast_to(self.solve_kw["site_cost"], (len(self.sites),))
+                     @ (np.asarray(mw) > 0))
 
 
 @dataclass
@@ -157,7 +158,7 @@ class _Point:
 
 
 def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None,
-          max_sites: int | None = None, site_cost: float = 0.0, safety_s: float | None = None,
+          max_sites: int | None = None, site_cost=0.0, safety_s: float | None = None,
           tol: float = 1e-3, t_max: float = 1.0, max_iter: int = 10, rtol: float = 0.02,
           workers: int = 1, scheduler: str | None = None,
           controller: BangBangCOI | None = None, amplitude_hz: float = 0.2,
@@ -175,7 +176,8 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
         zeta_min: least damping ratio of every electromechanical mode (None: no
             small-signal constraint); amplitude_hz: relative-speed amplitude (Hz) at
             which the bang-bang law's describing function is taken (`stabctl.smallsignal.damping`).
-        max_sites, site_cost: fewer sites (`placement.sparse_allocation`).
+        max_sites, site_cost: fewer sites (`placement.sparse_allocation`; site_cost a
+            number or one per site).
         safety_s: CCT margin the program asks above each target (s, default 2 tol).
         tol, t_max: CCT bisection tolerance and search limit (s).
         max_iter: allocations simulated at most; rtol: relative saving below which the
@@ -190,8 +192,9 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
             every allocation it returns is at most as costly.
         start_evaluations: evaluations of every contingency at `start` already simulated
             (e.g. a uniform fleet's first unstable clearing times, `evaluations` with
-            scan="full"), used instead of simulating it again when `start` is on the
-            0.1 MW grid (unchanged by rounding) and every contingency is there.
+            scan="full"), used instead of simulating them again when `start` is on the
+            0.1 MW grid (unchanged by rounding); only the contingencies missing from it
+            are simulated at `start`.
         progress: callable(str), one line per step.
         run_map: a `stabctl.parallel.worker_pool` map to run the evaluations on (kept
             open by the caller, so that workers and their caches serve many calls);
@@ -229,14 +232,15 @@ def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | N
                 scan: str = "target", tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
                 scheduler: str | None = None, controller: BangBangCOI | None = None,
                 conventions: str = "ieee", h: float | None = None, run_map=None,
-                brackets: dict | None = None) -> dict:
+                brackets: dict | None = None, gradient: bool = True) -> dict:
     """Simulated CCT (and its gradient) of every contingency at ratings mw (MW per site of
     `sites`, default `candidate_sites`; None = no storage), in `workers` processes (or
     on the Dask `scheduler`, as `place`):
     name -> `placement_eval.evaluate` dict.  base and scan as `placement_eval.verify`
     (scan="full" with base: the first unstable clearing time, e.g. of a uniform fleet);
     run_map as `place`; brackets: name -> [stable, unstable] clearing times (s) from a
-    coarser search where each bisection starts (`placement_eval.verify`).
+    coarser search where each bisection starts (`placement_eval.verify`); gradient:
+    False for CCTs only (no gradient runs).
     Raises as `place`.
     """
     contingencies = tuple(contingencies)
@@ -250,7 +254,7 @@ def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | N
     with _pool(run_map, workers, scheduler) as rm:
         return verify(rm, case, contingencies, sites, mw, beta, controller, tol, t_max,
                       base=base, scan=scan, model={"conventions": conventions, "h": h},
-                      brackets=brackets)
+                      brackets=brackets, gradient=gradient)
 
 
 def baseline(case: str, faults, **kw) -> dict:
@@ -336,11 +340,10 @@ def _start(setup: _Setup, start, base: dict, say,
     if start.shape != (n,) or np.any(start < 0) or np.any(start > setup.upper + 1e-9):
         raise InputError(f"start: need {n} ratings within the site bounds (MW)")
     mw = _rounded(start, setup.sites)
-    if known is not None and np.array_equal(mw, start) and \
-            all(c.name in known for c in setup.contingencies):
-        ev = {c.name: known[c.name] for c in setup.contingencies}
-    else:
-        ev = setup.verify(mw)
+    known = known if known is not None and np.array_equal(mw, start) else {}
+    missing = [c for c in setup.contingencies if c.name not in known]
+    ev = {**{c.name: known[c.name] for c in setup.contingencies if c.name in known},
+          **(setup.verify(mw, missing) if missing else {})}
     say(f"start {mw.sum():.1f} MW: " + _cct_line(setup.contingencies, ev))
     return mw, ev
 
@@ -458,7 +461,7 @@ def _point(setup: _Setup, mw, ev: dict, prices) -> _Point:
     zeta = None if setup.damping is None else setup.damping.em_damping(mw)
     short_t = sum(max(0.0, c.target_cct_s - ev[c.name]["cct_s"]) for c in setup.contingencies)
     short_d = 0.0 if zeta is None else damping_shortfall(zeta[1], setup.zeta_min)
-    merit = float(setup.cost @ mw + setup.site_cost * np.count_nonzero(mw)
+    merit = float(setup.cost @ mw + setup.sites_cost(mw)
                   + prices[0] * short_t + prices[1] * short_d)
     return _Point(mw=np.asarray(mw, float), ev=ev, zeta=zeta, merit=merit,
                   feasible=short_t <= 1e-9 and short_d <= 1e-4)
@@ -480,7 +483,7 @@ def _model_merit(setup: _Setup, cuts, rows, mw, prices) -> float:
     short_t = sum(max(0.0, c.target_s - c.predicted(mw)) for c in cuts)
     short_d = 0.0 if rows is None or not len(rows.b) else \
         float(max(0.0, np.max(rows.A @ mw - rows.b)))
-    return float(setup.cost @ mw + setup.site_cost * np.count_nonzero(mw)
+    return float(setup.cost @ mw + setup.sites_cost(mw)
                  + prices[0] * short_t + prices[1] * short_d)
 
 
@@ -528,7 +531,9 @@ def _prove_infeasible(setup: _Setup, cuts, checked: set) -> None:
     failing = [c for c in which if ev[c.name]["cct_s"] < c.target_cct_s - 1e-9]
     if failing:
         raise InfeasibleError("infeasible: " + "; ".join(
-            f"contingency {c.name} ({c.fault.describe()}) reaches a CCT of only "
+            f"contingency {c.name} ({c.fault.describe()}"
+            f"{'' if c.load == 1.0 else f', load {100 * c.load:g} % of the base'}) "
+            "reaches a CCT of only "
             f"{ev[c.name]['cct_s']:.3f} s against its target {c.target_cct_s:.3f} s even with "
             f"every candidate site at its bound ({ub.sum():.0f} MW), simulated"
             for c in failing), [c.name for c in failing])

@@ -221,9 +221,10 @@ def _infeasible(cuts, ub, safety_s, status) -> InfeasibleError:
 
 
 def sparse_allocation(sites, cuts, *, max_sites: int | None = None,
-                      site_cost: float = 0.0, upper=None, **kw) -> Allocation:
+                      site_cost=0.0, upper=None, **kw) -> Allocation:
     """Fewer sites by greedy backward elimination: while more than max_sites sites are
-    used, or while leaving one out lowers objective + site_cost * sites, the used site
+    used, or while leaving one out lowers objective + the cost of the sites used
+    (site_cost: one number for every site, or one per site, shape (n_sites,)), the used site
     whose removal raises the objective least is removed (its bound set to 0; one program
     per used site per removal).  A heuristic: the site count is not convex.  (Reweighted
     l1 cannot do this on a linear program: its solution is already a vertex, and the
@@ -235,14 +236,15 @@ def sparse_allocation(sites, cuts, *, max_sites: int | None = None,
     """
     if max_sites is not None and max_sites < 1:
         raise InputError(f"max_sites must be >= 1, got {max_sites}")
-    if site_cost < 0:
-        raise InputError(f"site cost must be >= 0, got {site_cost:g}")
+    per_site = np.broadcast_to(np.asarray(site_cost, float), (len(sites),))
+    if np.any(per_site < 0):
+        raise InputError(f"site cost must be >= 0, got {per_site.min():g}")
     ub = np.array([s.max_mw for s in sites]) if upper is None else np.asarray(upper, float)
     alloc = solve_allocation(sites, cuts, upper=ub, **kw)
-    total = lambda a: a.objective + site_cost * a.n_sites  # noqa: E731
+    total = lambda a: a.objective + float(per_site @ (a.mw > 0))  # noqa: E731
     while alloc.n_sites > 0:
         over = max_sites is not None and alloc.n_sites > max_sites
-        if not over and site_cost == 0:
+        if not over and not np.any(per_site > 0):
             break
         best = _drop_one_site(sites, cuts, alloc, ub, kw)
         if over and best is None:

@@ -426,12 +426,27 @@ def storage_fleet(case, esd_pct: float | None):
 
 @functools.lru_cache(maxsize=None)
 def cached_simulator(case_name: str, conventions: str = "ieee",
-                     h: float | None = None, q_limits: bool = True) -> Simulator:
-    """One Simulator per case, conventions, step h (None: the default) and power-flow Q
-    limits per process (the power flow is solved once per worker)."""
-    from stabctl.io import load_case
+                     h: float | None = None, q_limits: bool = True,
+                     load: float = 1.0) -> Simulator:
+    """One Simulator per case, conventions, step h (None: the default), power-flow Q
+    limits and load level per process (the power flow is solved once per worker).
 
-    return Simulator(load_case(case_name), conventions=conventions, step=h, q_limits=q_limits)
+    load: fraction of the base load (`stabctl.network.powerflow.scale_load`: loads and
+    dispatch scaled, power flow re-solved).  Raises PowerFlowError or CaseError naming
+    the load level when the scaled case has no power flow or no valid initial state.
+    """
+    from stabctl.errors import CaseError
+    from stabctl.io import load_case
+    from stabctl.network.powerflow import scale_load
+
+    case = load_case(case_name)
+    if float(load) == 1.0:
+        return Simulator(case, conventions=conventions, step=h, q_limits=q_limits)
+    scaled = scale_load(case, load, q_limits=q_limits)
+    try:
+        return Simulator(scaled, conventions=conventions, step=h, q_limits=q_limits)
+    except CaseError as exc:
+        raise CaseError(f"load level {float(load):g} of case '{case_name}': {exc}") from None
 
 
 def compile_here(case_name: str, conventions: str = "ieee", h: float | None = None,
@@ -524,23 +539,49 @@ def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
 
 
 def read_faults(path: str | Path) -> list[LineFault]:
-    """Faults from a CSV file with a header: bus, far_bus[, t_fault (s, default 1)]
-    [, circuit (default 1)], one fault per row.  Raises InputError naming the row."""
+    """Faults from a CSV file with a header: bus, far_bus (empty: a bus fault cleared
+    without a trip)[, t_fault (s, default 1)][, circuit (default 1)], one fault per row.
+    Raises InputError naming the row."""
+    path = Path(path)
+    rows = csv_rows(path, "fault list", ("bus", "far_bus"), "[,t_fault,circuit]")
+    return [_fault_row(path, i, r) for i, r in enumerate(rows, start=2)]
+
+
+def csv_rows(path: str | Path, what: str, columns, more: str = "") -> list[dict]:
+    """The rows of a CSV file with a header, as dicts (column -> text).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    what : str
+        What it is, for messages (e.g. ``"fault list"``).
+    columns : sequence of str
+        Columns the header must have.
+    more : str, optional
+        Optional columns, for the message (e.g. ``"[,t_fault,circuit]"``).
+
+    Raises
+    ------
+    InputError
+        Unreadable file, or no such header and at least one row.
+    """
     path = Path(path)
     try:
         with path.open(newline="") as f:
             rows = list(csv.DictReader(f))
     except OSError as exc:
-        raise InputError(f"fault list {path}: {exc.strerror or exc}") from None
-    if not rows or not {"bus", "far_bus"} <= set(rows[0]):
-        raise InputError(f"fault list {path}: needs a header with columns bus,far_bus "
-                         "[,t_fault,circuit] and at least one row")
-    return [_fault_row(path, i, r) for i, r in enumerate(rows, start=2)]
+        raise InputError(f"{what} {path}: {exc.strerror or exc}") from None
+    if not rows or not set(columns) <= set(rows[0]):
+        raise InputError(f"{what} {path}: needs a header with columns {','.join(columns)}"
+                         f"{more} and at least one row")
+    return rows
 
 
 def _fault_row(path, line: int, row: dict) -> LineFault:
     try:
-        return LineFault(bus=int(row["bus"]), far_bus=int(row["far_bus"]),
+        far = (row["far_bus"] or "").strip()
+        return LineFault(bus=int(row["bus"]), far_bus=int(far) if far else None,
                          t_fault=float(row.get("t_fault") or 1.0),
                          circuit=int(row.get("circuit") or 1))
     except (TypeError, ValueError) as exc:

@@ -152,6 +152,46 @@ def uniform_fleet(case: Case, pct: float, controller=None, at: str = "hv") -> St
     return StorageFleet(tuple(devs), controller or BangBangCOI())
 
 
+def energy_excursion(t, p_mw) -> dict:
+    """Energy a device moves along one run, from its power trajectory.
+
+    Parameters
+    ----------
+    t : array_like, shape (n_t,)
+        Time, s (increasing).
+    p_mw : array_like, shape (n_t,)
+        Device power, MW, + absorbing (the paper's sign; `SimulationResult.pesd` times the
+        system base).  A mode trajectory (+1, 0, -1) gives the figures per MW of rating.
+
+    Returns
+    -------
+    dict
+        ``absorbed_mj`` and ``delivered_mj`` (>= 0): the integrals of the positive and
+        negative parts of the power; ``soc_high_mj`` (>= 0) and ``soc_low_mj`` (<= 0):
+        the highest and lowest stored energy relative to the start (the running integral
+        of the power, trapezoid rule, as the simulator's state of charge); ``need_mwh``:
+        the usable energy of a device started half full (`StorageDevice.soc0` = 0.5) that
+        never reaches either end, 2 max(soc_high, -soc_low) / 3600.
+
+    Notes
+    -----
+    A device whose usable energy exceeds ``need_mwh`` (and starts half full) follows
+    exactly the unlimited trajectory: the simulator only clips absorption when full and
+    injection when empty (`device_power`).
+    """
+    t = np.asarray(t, float)
+    p = np.asarray(p_mw, float)
+    dt = np.diff(t)
+    mid = 0.5 * (p[1:] + p[:-1])
+    e = np.concatenate([[0.0], np.cumsum(mid * dt)])
+    pos = 0.5 * (np.maximum(p[1:], 0) + np.maximum(p[:-1], 0))
+    neg = 0.5 * (np.maximum(-p[1:], 0) + np.maximum(-p[:-1], 0))
+    high, low = float(e.max()), float(e.min())
+    return {"absorbed_mj": float(pos @ dt), "delivered_mj": float(neg @ dt),
+            "soc_high_mj": high, "soc_low_mj": low,
+            "need_mwh": 2 * max(high, -low) / 3600.0}
+
+
 class StorageArrays(NamedTuple):
     """Fleet packed for the compiled loop (n_dev entries each; system-base pu, s)."""
 

@@ -1,17 +1,17 @@
-"""ESD sizing and placement study: least total MW that reaches, on every severe
-contingency, the CCT gain of 5 % storage at every generator, against that uniform fleet
+"""ESD sizing and placement study, a planner's question: least-cost sites, MW and MWh so
+that every screened fault is stable when cleared after REQUIRED_CYCLES cycles at every
+load level of LOAD_LEVELS, against the least uniform fleet meeting the same requirement
 (`stabctl paper`, or `python analysis/placement_study.py`; `placement_study(case, out_dir)`
 for reports).
 
 For each case: (1) screen line faults at both ends of every line (in miniWECC of every line
 at a generator's HV bus; in Kundur also bus faults; coarse CCT: 5 ms, t_max 0.5 s;
-resumable, `stabctl.parallel`), keep the paper's fault and the most severe others (smallest
-CCT, distinct lines first), up to 10; (2) CCT without storage (bisection, 1 ms) and with
-the uniform 5 % fleet (first unstable clearing time, `placement_eval.scanned_cct`);
-(3) `stabctl.placement.loop.place` from the uniform fleet with its CCTs as targets, for
-all contingencies and for the paper's alone; (4) the Pareto curve: total MW for
-25/50/75 % of each contingency's uniform gain (from uniform fleets of 1.25/2.5/3.75 %);
-(5) the first-order SIME estimate of the MW the critical machines' sites need.  Writes
+resumable, `stabctl.parallel`); every fault stable when cleared at once is a contingency
+at each load level; (2) `stabctl.placement.planner.plan` by constraint generation, with
+the least uniform fleet (bisection), each binding fault alone and the clearing margin of
+every contingency; (3) the Pareto curve of cost against the required clearing time
+(PARETO_CYCLES, at the base load: the fast variant `stabctl paper` runs); (4) the paper's
+fault with today's target (the CCT of the uniform 5 % fleet), for continuity.  Writes
 reports/placement_<case>.md, its JSON and three figures.
 """
 
@@ -21,7 +21,6 @@ import json
 import sys
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -37,16 +36,22 @@ from stabctl.stability.cct import LineFault, cct_jobs  # noqa: E402
 from stabctl.studies.cases import DEFAULT_FAULTS  # noqa: E402
 from stabctl.placement.program import candidate_sites  # noqa: E402
 from stabctl.placement.evaluation import Contingency  # noqa: E402
-from stabctl.placement.loop import _rounded, baseline, evaluations, place  # noqa: E402
+from stabctl.placement.loop import _rounded, evaluations, place  # noqa: E402
+from stabctl.placement.planner import CostModel, Requirement, plan  # noqa: E402
 from stabctl.storage.devices import hv_bus  # noqa: E402
 from stabctl.parallel import run_sweep, strip_run_dependent, worker_pool  # noqa: E402
 
-UNIFORM_PCT, BUDGET = 5.0, 0.25          # the paper's fleet; MW budget (fraction of it)
-N_FAULTS = 10
-GAIN_FRACTIONS = (0.25, 0.5, 0.75)        # Pareto points below the full uniform gain
-UNIFORM_PCTS = (1.25, 2.5)                # smaller uniform fleets for comparison
+UNIFORM_PCT = 5.0                         # the paper's fleet (continuity section)
+N_FAULTS = 10                             # a case with more than 2 N_FAULTS lines: HV only
+REQUIRED_CYCLES = 5.0                     # normal clearing plus a margin (TPL-001 spirit)
+LOAD_LEVELS = (0.9, 1.0, 1.1)             # fractions of the base load
+PARETO_CYCLES = {"miniwecc": (4.0, 6.0), "kundur": (10.0, 12.0)}
+#: Illustrative prices (M$): power conversion per MW, energy per MWh, per site
+COSTS = CostModel(per_mw=0.3, per_mwh=0.4, per_site=2.0)
 SCREEN_TOL, SCREEN_T_MAX, TOL = 0.005, 0.5, 1e-3
-MAX_ITER, MAX_ITER_SIDE = 8, 4            # simulated allocations: the main run; the others
+MARGIN_TOL, MARGIN_CAP_S = 0.005, 0.1     # clearing margins: resolution, largest shown (s)
+T_MAX_PLACE = 1.0                         # CCT search limit of the placement runs (s)
+MAX_ITER, MAX_ITER_SIDE = 6, 4            # simulated allocations: per round; the others
 HEARTBEAT_S = 8.0                         # longest silence of the progress callback (s)
 
 
@@ -88,45 +93,46 @@ def screen(case_name: str, out_dir: Path, workers: int, progress=None) -> list[d
     return rows
 
 
-def choose(rows, paper: LineFault, n: int = N_FAULTS) -> list[LineFault]:
-    """The paper's fault and the n - 1 screened faults with the smallest CCT, one per
-    line first, then second ends."""
-    ranked = sorted((r for r in rows if r["cct_s"] is not None and r["fault"] != paper),
-                    key=lambda r: r["cct_s"])
-    line = lambda f: frozenset((f.bus, f.far_bus))  # noqa: E731
-    chosen, lines = [paper], {line(paper)}
-    for r in ranked:
-        if len(chosen) < n and line(r["fault"]) not in lines:
-            chosen.append(r["fault"])
-            lines.add(line(r["fault"]))
-    for r in ranked:
-        if len(chosen) < n and r["fault"] not in chosen:
-            chosen.append(r["fault"])
-    return chosen
+def in_scope(rows) -> list[dict]:
+    """The screened faults the planner must meet: those stable when cleared at once (a
+    CCT, or still stable at the screening's limit)."""
+    return [r for r in rows if r["cct_s"] is not None or
+            "still stable" in (r["error"] or "")]
 
 
-def targets(faults, base: dict, reference: dict, fraction: float) -> tuple:
-    """Contingencies whose target is the CCT without storage plus `fraction` of the gain
-    of the reference evaluations (by name), rounded up to the tolerance (s)."""
-    out = []
-    for f in faults:
-        name = Contingency(f, 1.0).name
-        b, r = base[name]["cct_s"], reference[name]["cct_s"]
-        t = b + fraction * max(r - b, 0.0)
-        out.append(Contingency(f, round(np.ceil(t / TOL - 1e-6) * TOL, 9)))
-    return tuple(out)
+def brackets_of(rows) -> dict:
+    """Fault name -> the screening's [stable, unstable] clearing times (s)."""
+    return {Contingency(r["fault"], 1).fault_name: (r["cct_s"], r["t_unstable_s"])
+            for r in rows if r["cct_s"] is not None}
 
 
-# -- the study ---------------------------------------------------------------------------
+def paper_continuity(case_name: str, sites, mva, kw, say) -> dict:
+    """The paper's fault alone with today's target: the CCT of the uniform 5 % fleet (its
+    first unstable clearing time), from that fleet (`place`, MAX_ITER_SIDE allocations)."""
+    fault = DEFAULT_FAULTS[case_name][0]
+    plain = (Contingency(fault, T_MAX_PLACE),)
+    base = evaluations(case_name, plain, None, **kw)
+    fleet = _rounded(UNIFORM_PCT / 100 * mva, sites)
+    uni = evaluations(case_name, plain, fleet, base=base, scan="full", **kw)
+    name = plain[0].name
+    target = (Contingency(fault, uni[name]["cct_s"]),)
+    res = place(case_name, target, base=base, start=fleet, start_evaluations=uni,
+                max_iter=MAX_ITER_SIDE, progress=lambda m: say(f"{case_name} paper's fault: {m}"),
+                **kw)
+    return {"name": name, "cct_none_s": base[name]["cct_s"], "target_s": uni[name]["cct_s"],
+            "uniform_mw": float(fleet.sum()), "total_mw": res.allocation.total_mw,
+            "verified": res.verified, "allocation": res.allocation.rows(),
+            "cct_s": res.evaluations[name]["cct_s"]}
 
-def study(case_name: str, records_dir: Path, workers: int, say) -> dict:
+
+def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = True) -> dict:
     """Every number of the report (JSON-able).  One pool of `workers` processes serves
-    every simulation after the screening; the uniform fleets, then the placement runs,
-    are simulated concurrently (each is deterministic, so the numbers do not depend on
-    the order the pool serves them in).  The CCT without storage starts from the
-    screening's 5 ms bracket; the uniform fleets (rounded up to 0.1 MW per site, as every
-    allocation) are the placement runs' starts and their first unstable clearing times
-    the start evaluations."""
+    every simulation after the screening (resumable records).  The main plan: every
+    screened fault stable when cleared at once, REQUIRED_CYCLES cycles, every load level
+    of LOAD_LEVELS, with the least uniform fleet, each binding fault alone and the
+    clearing margins (MARGIN_TOL); the Pareto points (PARETO_CYCLES[case]) at the base
+    load with their least uniform fleets; the paper's fault with today's uniform-5 %
+    target.  fast: the Pareto points at the base load only (the paper's study)."""
     case = load_case(case_name)
     sites = candidate_sites(case)
     mva = np.array([float(case.machines.mva[case.machine_index(s.machine)]) for s in sites])
@@ -135,63 +141,55 @@ def study(case_name: str, records_dir: Path, workers: int, say) -> dict:
         say = beat.say
         rows = screen(case_name, records_dir, workers,
                       lambda k, n: beat.note(f"screening {k}/{n} faults"))
-        faults = choose(rows, DEFAULT_FAULTS[case_name][0])
+        scope = in_scope(rows)
+        faults, brackets = [r["fault"] for r in scope], brackets_of(rows)
         say(f"{case_name}: screened {len(rows)} faults in {time.perf_counter() - wall:.0f} s;"
-            f" kept {', '.join(Contingency(f, 1).name for f in faults)}")
+            f" {len(faults)} stable when cleared at once")
         with worker_pool(workers) as pool_map:
             run_map = beat.counting(pool_map)
-            kw = {"sites": sites, "tol": TOL, "run_map": run_map}
-            brackets = {Contingency(r["fault"], 1).name: (r["cct_s"], r["t_unstable_s"])
-                        for r in rows if r["cct_s"] is not None}
-            beat.note("CCT without storage")
-            base = baseline(case_name, faults, brackets=brackets, **kw)
-            plain = targets(faults, base, base, 0.0)       # targets unused by a full scan
-            fleets = {p: _rounded(p / 100 * mva, sites) for p in (UNIFORM_PCT, *UNIFORM_PCTS)}
-            beat.note("uniform fleets")
-            uniform = _concurrently({p: (lambda p=p: evaluations(
-                case_name, plain, fleets[p], base=base, scan="full", **kw)) for p in fleets})
-            say(f"{case_name}: uniform CCTs done at {time.perf_counter() - wall:.0f} s")
-            paper = targets(faults[:1], base, uniform[UNIFORM_PCT], 1.0)
-
-            def run(label, frac, cons, max_iter):
-                pct = frac * UNIFORM_PCT
-                start = fleets.get(pct, _rounded(pct / 100 * mva, sites))
-                return place(case_name, cons, base=base, start=start,
-                             start_evaluations=uniform.get(pct), max_iter=max_iter,
-                             progress=lambda m: say(f"{case_name} {label}: {m}"), **kw)
-
-            beat.note("placement runs")
-            jobs = {"paper": lambda: run("paper's fault", 1.0, paper, MAX_ITER_SIDE)}
-            for frac in (1.0, *GAIN_FRACTIONS):
-                jobs[frac] = (lambda frac=frac: run(
-                    f"{frac:.0%}", frac, targets(faults, base, uniform[UNIFORM_PCT], frac),
-                    MAX_ITER if frac == 1.0 else MAX_ITER_SIDE))
-            done = _concurrently(jobs)
-    single = done.pop("paper")
-    runs = {frac: done[frac] for frac in (1.0, *GAIN_FRACTIONS)}
-    say(f"{case_name}: the paper's fault alone: {single.allocation.total_mw:.1f} MW")
-    for frac, r in runs.items():
-        say(f"{case_name}: {frac:.0%} of the uniform gain: {r.allocation.total_mw:.1f}"
-            f" MW, {'verified' if r.verified else 'NOT verified'}")
-    d = _summary(case_name, rows, faults, sites, mva, fleets, base, uniform, runs,
-                 time.perf_counter() - wall)
-    d["paper_alone"] = {"name": paper[0].name, "total_mw": single.allocation.total_mw,
-                        "verified": single.verified, "allocation": single.allocation.rows(),
-                        "cct_s": single.evaluations[paper[0].name]["cct_s"],
-                        "target_s": paper[0].target_cct_s}
-    inertia = np.asarray(case.machines.H * case.machines.mva, float)
-    for c in d["contingencies"]:
-        c["first_order_mw"] = critical_only_mw(case, sites, UNIFORM_PCT / 100 * mva, inertia,
-                                               c["critical"])
-    return d
+            kw = {"sites": sites, "tol": TOL, "t_max": T_MAX_PLACE, "run_map": run_map}
+            common = {"brackets": brackets, "cost": COSTS, "max_iter": MAX_ITER, **kw}
+            beat.note(f"plan for {REQUIRED_CYCLES:g} cycles")
+            main = plan(case_name, faults, Requirement(cycles=REQUIRED_CYCLES),
+                        load_levels=LOAD_LEVELS, alone=True, margins_tol=MARGIN_TOL,
+                        margins_cap_s=MARGIN_CAP_S, uniform=True, drop_infeasible=True,
+                        progress=lambda m: say(f"{case_name} {REQUIRED_CYCLES:g} cycles: {m}"),
+                        **common)
+            pareto = []
+            for cyc in PARETO_CYCLES[case_name]:
+                beat.note(f"Pareto point {cyc:g} cycles")
+                r = plan(case_name, faults, Requirement(cycles=cyc), drop_infeasible=True,
+                         load_levels=(1.0,) if fast else LOAD_LEVELS, uniform=not fast,
+                         progress=lambda m, c=cyc: say(f"{case_name} {c:g} cycles: {m}"),
+                         **common)
+                pareto.append(_pareto_point(cyc, r))
+            beat.note("the paper's fault with the uniform 5 % target")
+            paper = paper_continuity(case_name, sites, mva, kw, say)
+    pareto.append(_pareto_point(REQUIRED_CYCLES, main, LOAD_LEVELS))
+    return {"case": case_name, "wall_time_s": time.perf_counter() - wall,
+            "required_cycles": REQUIRED_CYCLES, "load_levels": list(LOAD_LEVELS),
+            "costs": {"per_mw": COSTS.per_mw, "per_mwh": COSTS.per_mwh,
+                      "per_site": COSTS.per_site},
+            "pareto_load_levels": [1.0] if fast else list(LOAD_LEVELS),
+            "screening": [{"fault": r["fault"].describe(),
+                           "name": Contingency(r["fault"], 1).name, "cct_s": r["cct_s"],
+                           "error": r["error"]} for r in rows],
+            "n_faults": len(faults),
+            "sites": [{"bus": s.bus, "machine": s.machine, "max_mw": s.max_mw, "mva": m}
+                      for s, m in zip(sites, mva)],
+            "plan": main.to_dict(), "mw_by_site": main.mw.tolist(),
+            "pareto": sorted(pareto, key=lambda p: p["cycles"]), "paper_alone": paper}
 
 
-def _concurrently(calls: dict) -> dict:
-    """Run the callables of `calls` (key -> callable()) in threads: key -> result (the
-    first exception raised is raised)."""
-    with ThreadPoolExecutor(len(calls)) as ex:
-        futures = {k: ex.submit(f) for k, f in calls.items()}
-        return {k: f.result() for k, f in futures.items()}
+def _pareto_point(cycles: float, r, levels=(1.0,)) -> dict:
+    u = r.uniform or {}
+    return {"cycles": cycles, "load_levels": list(levels), "total_mw": r.total_mw,
+            "total_mwh": float(r.mwh.sum()), "cost": r.cost["total"], "verified": r.verified,
+            "n_sites": int(np.count_nonzero(r.mw)),
+            "uniform_pct": u.get("pct"), "uniform_mw": u.get("total_mw"),
+            "uniform_cost": (u.get("cost") or {}).get("total"),
+            "uniform_verified": u.get("verified"),
+            "set_aside": list(r.set_aside)}
 
 
 class _Beat:
@@ -257,99 +255,57 @@ def critical_only_mw(case, sites, uniform_mw, inertia, critical) -> float:
     return float(effect / (m_t - m_c))
 
 
-def _summary(case_name, rows, faults, sites, mva, fleets, base, uniform, runs, wall) -> dict:
-    names = [Contingency(f, 1).name for f in faults]
-    main = runs[1.0]
-    return {
-        "case": case_name, "wall_time_s": wall, "uniform_pct": UNIFORM_PCT,
-        "screening": [{"fault": r["fault"].describe(), "name": Contingency(r["fault"], 1).name,
-                       "cct_s": r["cct_s"], "error": r["error"]} for r in rows],
-        "sites": [{"bus": s.bus, "machine": s.machine, "max_mw": s.max_mw, "mva": m}
-                  for s, m in zip(sites, mva)],
-        "contingencies": [{"name": n, "fault": f.describe(), "cct_none_s": base[n]["cct_s"],
-                           "cct_uniform_s": uniform[UNIFORM_PCT][n]["cct_s"],
-                           "cct_optimised_s": main.evaluations[n]["cct_s"],
-                           "target_s": c.target_cct_s,
-                           "critical": main.base[n]["critical"]}
-                          for n, f, c in zip(names, faults, main.contingencies)],
-        "uniform_total_mw": {str(p): float(fleets[p].sum()) for p in uniform},
-        "uniform_cct_s": {str(p): {n: ev[n]["cct_s"] for n in names} for p, ev in uniform.items()},
-        "runs": {str(frac): {"verified": r.verified, "message": r.message,
-                             "total_mw": r.allocation.total_mw, "n_sites": r.allocation.n_sites,
-                             "mw_by_site": r.allocation.mw.tolist(),
-                             "allocation": r.allocation.rows(),
-                             "cct_s": {n: r.evaluations[n]["cct_s"] for n in names},
-                             "targets_s": {c.name: c.target_cct_s for c in r.contingencies},
-                             "iterations": r.iterations, "wall_time_s": r.wall_time_s,
-                             "solve_times_s": r.solve_times_s}
-                 for frac, r in runs.items()},
-    }
-
-
 # -- figures and report ------------------------------------------------------------------
 
 def figure_allocation(d: dict, path: Path) -> None:
-    """Bars per site: optimised rating and the uniform 5 % rating (MW)."""
+    """Bars per site: optimised rating and the least uniform fleet's (MW)."""
     labels = [f"{s['bus']}\nG{s['machine']}" for s in d["sites"]]
-    opt = np.array(d["runs"]["1.0"]["mw_by_site"])
-    uni = np.array([s["mva"] for s in d["sites"]]) * d["uniform_pct"] / 100
+    opt = np.array(d["mw_by_site"])
+    u = d["plan"]["uniform"] or {}
+    uni = np.array(u.get("mw_by_site") or np.zeros(len(opt)))
     x = np.arange(len(labels))
     fig, ax = plt.subplots(figsize=(max(6, 0.35 * len(x) + 2), 4))
-    ax.bar(x - 0.2, uni, 0.4, label=f"uniform {d['uniform_pct']:g} % ({uni.sum():.0f} MW)",
-           color="0.7")
+    ax.bar(x - 0.2, uni, 0.4, color="0.7",
+           label=f"least uniform, {u.get('pct') or 0:g} % ({uni.sum():.0f} MW)")
     ax.bar(x + 0.2, opt, 0.4, label=f"optimised ({opt.sum():.0f} MW)", color="C3")
     ax.set_xticks(x, labels, fontsize=7)
     ax.set_xlabel("site (HV bus, generator)")
     ax.set_ylabel("ESD rating (MW)")
-    ax.set_title(f"{d['case']}: ESD allocation per site")
+    ax.set_title(f"{d['case']}: allocation for {d['required_cycles']:g}-cycle clearing")
     ax.legend()
     _save(fig, path)
 
 
-def figure_cct(d: dict, path: Path) -> None:
-    """CCT per contingency: no storage, uniform 5 % (the target), optimised."""
-    cs = d["contingencies"]
-    x = np.arange(len(cs))
-    fig, ax = plt.subplots(figsize=(max(6, 0.7 * len(x) + 2), 4))
-    for k, (key, label, color) in enumerate((
-            ("cct_none_s", "no storage", "0.6"),
-            ("cct_uniform_s", f"uniform {d['uniform_pct']:g} % = target", "C0"),
-            ("cct_optimised_s", "optimised", "C3"))):
-        ax.bar(x + (k - 1) * 0.27, [1000 * c[key] for c in cs], 0.27, label=label, color=color)
-    ax.set_xticks(x, [c["name"] for c in cs], rotation=30, fontsize=8)
-    ax.set_ylabel("CCT (ms), verified by simulation")
-    ax.set_title(f"{d['case']}: CCT per contingency")
+def figure_margins(d: dict, path: Path) -> None:
+    """Verified clearing margin (CCT with the allocation minus the required clearing
+    time, ms) of every contingency, per load level, sorted."""
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for k, load in enumerate(d["load_levels"]):
+        m = sorted(1000 * r["margin_s"] for r in d["plan"]["contingencies"]
+                   if r["load"] == load and r["margin_s"] is not None)
+        ax.plot(np.arange(len(m)), m, ".-", ms=3, color=f"C{k}", label=f"load {load:g}")
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_xlabel("contingency (sorted by margin)")
+    ax.set_ylabel("clearing margin (ms)")
+    ax.set_title(f"{d['case']}: margin over the {d['required_cycles']:g}-cycle requirement")
     ax.legend(fontsize=8)
     _save(fig, path)
 
 
 def figure_pareto(d: dict, path: Path) -> None:
-    """Total MW against the fraction of the uniform gain reached on every contingency."""
-    fr = sorted(float(f) for f in d["runs"])
-    opt = [d["runs"][str(f)]["total_mw"] for f in fr]
-    uni = sorted((_uniform_fraction(d, p), d["uniform_total_mw"][p]) for p in d["uniform_total_mw"])
+    """Cost against the required clearing time: optimised and least uniform."""
+    p = d["pareto"]
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot([100 * f for f in fr], opt, "o-", color="C3", label="optimised placement")
-    ax.plot([100 * f for f, _ in uni], [m for _, m in uni], "s--", color="C0",
-            label="uniform fleets (1.25, 2.5, 5 %)")
-    ax.axhline(BUDGET * d["uniform_total_mw"][str(d["uniform_pct"])], color="k", lw=0.8,
-               ls=":", label=f"{BUDGET:.0%} of the uniform 5 % total")
-    ax.set_xlabel("CCT gain reached on every contingency (% of the uniform 5 % gain)")
-    ax.set_ylabel("total ESD rating (MW)")
-    ax.set_title(f"{d['case']}: total MW against target gain")
+    ax.plot([q["cycles"] for q in p], [q["cost"] for q in p], "o-", color="C3",
+            label="optimised placement")
+    uni = [(q["cycles"], q["uniform_cost"]) for q in p if q["uniform_cost"] is not None]
+    ax.plot([c for c, _ in uni], [v for _, v in uni], "s--", color="C0",
+            label="least uniform fleet")
+    ax.set_xlabel("required clearing time (cycles)")
+    ax.set_ylabel("cost (M$, illustrative prices)")
+    ax.set_title(f"{d['case']}: cost against required clearing time")
     ax.legend(fontsize=8)
     _save(fig, path)
-
-
-def _uniform_fraction(d: dict, pct: str) -> float:
-    """Smallest fraction of its uniform-5 % gain that a uniform fleet reaches over the
-    contingencies that have a gain."""
-    fr = []
-    for c in d["contingencies"]:
-        gain = c["cct_uniform_s"] - c["cct_none_s"]
-        if gain > 0:
-            fr.append((d["uniform_cct_s"][pct][c["name"]] - c["cct_none_s"]) / gain)
-    return min(fr) if fr else 1.0
 
 
 def report(d: dict, out_dir: Path, generated_by: str = "stabctl paper") -> Path:
@@ -357,9 +313,9 @@ def report(d: dict, out_dir: Path, generated_by: str = "stabctl paper") -> Path:
     generated_by: the command the report names as its source.  The files hold no
     run-dependent values (timings: `timing_line`)."""
     case = d["case"]
-    figs = {k: f"placement_{case}_{k}.png" for k in ("allocation", "cct", "pareto")}
+    figs = {k: f"placement_{case}_{k}.png" for k in ("allocation", "margins", "pareto")}
     figure_allocation(d, out_dir / figs["allocation"])
-    figure_cct(d, out_dir / figs["cct"])
+    figure_margins(d, out_dir / figs["margins"])
     figure_pareto(d, out_dir / figs["pareto"])
     (out_dir / f"placement_{case}.json").write_text(
         json.dumps(strip_run_dependent(d), indent=1, default=float))
@@ -368,125 +324,184 @@ def report(d: dict, out_dir: Path, generated_by: str = "stabctl paper") -> Path:
     return path
 
 
+def _num(x, fmt: str) -> str:
+    return "-" if x is None else format(x, fmt)
+
+
+def _ms(x) -> str:
+    return "-" if x is None else f"{1000 * x:.0f}"
+
+
 def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[str]:
-    main, case = d["runs"]["1.0"], d["case"]
-    u_total = d["uniform_total_mw"][str(d["uniform_pct"])]
-    ok = main["verified"] and main["total_mw"] <= BUDGET * u_total   # the study's target
-    lines = [f"# ESD sizing and placement: {case}", "",
-             f"Generated by `{generated_by}` (method in docs/placement.md).  Every CCT below "
-             "is simulated (PSTess models), with the paper's bang-bang law (100 mHz "
-             "deadband, 0.8 pu gate, system COI).", "",
-             f"**Result**: {main['total_mw']:.1f} MW at {main['n_sites']} site(s) reaches, on "
-             f"all {len(d['contingencies'])} contingencies, the CCT that "
-             f"{d['uniform_pct']:g} % storage at every generator ({u_total:.0f} MW) gives: "
-             f"{100 * main['total_mw'] / u_total:.1f} % of the uniform total; the study's "
-             f"target (at most {BUDGET:.0%} of it, verified) is {'met' if ok else 'not met'}"
-             f"{'' if main['verified'] else ' (allocation not verified: ' + main['message'] + ')'}.",
-             "", "## Contingencies", "", _screening_text(d), "",
-             "| contingency | critical machines | CCT none (ms) | uniform 5 % = target (ms) "
-             "| gain | optimised (ms) | met | first-order MW at critical sites |",
-             "|---|---|---|---|---|---|---|---|"]
-    for c in d["contingencies"]:
-        gain = (c["cct_uniform_s"] - c["cct_none_s"]) / c["cct_none_s"]
-        lines.append(f"| {c['name']} | {', '.join(f'G{k}' for k in c['critical'])} | "
-                     f"{1000 * c['cct_none_s']:.0f} | {1000 * c['cct_uniform_s']:.0f} | "
-                     f"{100 * gain:+.0f} % | {1000 * c['cct_optimised_s']:.0f} | "
-                     f"{'yes' if c['cct_optimised_s'] >= c['target_s'] - 1e-9 else 'NO'} | "
-                     f"{c['first_order_mw']:.0f} |")
-    lines += ["", _first_order_text(d)]
-    lines += ["", f"![CCT per contingency]({figs['cct']})", "", "## Allocation", "",
-              "| HV bus | generator | MW | % of its MVA |", "|---|---|---|---|"]
+    p, case, cyc = d["plan"], d["case"], d["required_cycles"]
+    u = p["uniform"] or {}
     mva = {s["machine"]: s["mva"] for s in d["sites"]}
-    for a in main["allocation"]:
+    c = p["cost"]
+    ratio = (100 * p["total_mw"] / u["total_mw"]) if u.get("total_mw") else None
+    loads = ", ".join(f"{x:g}" for x in d["load_levels"])
+    lines = [f"# ESD sizing and placement: {case}", "",
+             f"Generated by `{generated_by}` (method in docs/placement.md, section 7).  "
+             "Every verdict below is simulated (PSTess models) with the paper's bang-bang "
+             "law (100 mHz deadband, 0.8 pu gate, system COI).", "",
+             f"**Requirement**: every screened fault stable when cleared after {cyc:g} "
+             f"cycles ({1000 * cyc / 60:.1f} ms), at load levels {loads} (loads and "
+             "dispatch scaled, power flow re-solved).  "
+             f"**Result**: {p['total_mw']:.1f} MW and {p['total_mwh']:.2f} MWh at "
+             f"{p['n_sites']} site(s), cost {c['total']:.1f} M$; "
+             + (f"{ratio:.1f} % of the MW of the least uniform fleet meeting the same "
+                f"requirement ({u['pct']:g} % of every MVA = {u['total_mw']:.0f} MW, cost "
+                f"{u['cost']['total']:.1f} M$)" if ratio is not None else
+                "no uniform fleet needed") + "; "
+             + ("verified on" if p["verified"] else "NOT verified on")
+             + f" {p['n_met']} of {p['n_contingencies']} contingencies ({p['message']}).",
+             "", f"Costs (illustrative): {d['costs']['per_mw']:g} M$/MW, "
+             f"{d['costs']['per_mwh']:g} M$/MWh, {d['costs']['per_site']:g} M$ per site.", "",
+             "## Contingencies", "", _screening_text(d), "",
+             "## Allocation", "",
+             "| HV bus | generator | MW | % of its MVA | MWh | absorbed MJ | delivered MJ "
+             "| energy set by |", "|---|---|---|---|---|---|---|---|"]
+    for a in p["allocation"]:
         lines.append(f"| {a['bus']} | G{a['machine']} | {a['mw']:.1f} | "
-                     f"{100 * a['mw'] / mva[a['machine']]:.1f} |")
-    lines += ["", f"Total {main['total_mw']:.1f} MW against {u_total:.0f} MW uniform.", "",
-              f"![allocation]({figs['allocation']})", "", "## Iterations (target: full gain)",
-              "", "| allocation | MW | sites | meets all | rho | simulations |",
-              "|---|---|---|---|---|---|"]
-    for it in main["iterations"]:
-        rho = "restoration" if np.isnan(it["rho"]) else f"{it['rho']:.2f}"
-        lines.append(f"| {it['iteration']} | {it['total_mw']:.1f} | {it['n_sites']} | "
-                     f"{'yes' if it['meets_targets'] else 'no'} | {rho} | "
-                     f"{it['n_simulations']} |")
-    lines += ["", f"Stopped: {main['message']}.", "", "## Total MW against target gain", "",
-              "| target (% of each contingency's uniform gain) | optimised MW | sites | "
-              "verified |", "|---|---|---|---|"]
-    for f in sorted(d["runs"], key=float):
-        r = d["runs"][f]
-        lines.append(f"| {100 * float(f):.0f} % | {r['total_mw']:.1f} | {r['n_sites']} | "
-                     f"{'yes' if r['verified'] else 'no'} |")
-    for p in sorted(d["uniform_total_mw"], key=float):
-        lines.append(f"| uniform {float(p):g} %: {100 * _uniform_fraction(d, p):.0f} % "
-                     f"reached | {d['uniform_total_mw'][p]:.0f} (uniform) | "
-                     f"{len(d['sites'])} | yes |")
-    lines += ["", f"![Pareto]({figs['pareto']})"]
+                     f"{100 * a['mw'] / mva[a['machine']]:.1f} | {a['mwh']:.2f} | "
+                     f"{a.get('absorbed_mj', 0):.0f} | {a.get('delivered_mj', 0):.0f} | "
+                     f"{a.get('set_by', '-')} |")
+    lines += ["", "| | MW | MWh | sites | cost MW | cost MWh | cost sites | total (M$) |",
+              "|---|---|---|---|---|---|---|---|",
+              f"| optimised | {p['total_mw']:.1f} | {p['total_mwh']:.2f} | {p['n_sites']} | "
+              f"{c['mw']:.1f} | {c['mwh']:.2f} | {c['site']:.1f} | {c['total']:.1f} |"]
+    if u.get("total_mw") is not None:
+        uc = u["cost"]
+        lines.append(f"| least uniform ({u['pct']:g} %) | {u['total_mw']:.1f} | "
+                     f"{u['mwh']:.2f} | {len(d['sites'])} | {uc['mw']:.1f} | "
+                     f"{uc['mwh']:.2f} | {uc['site']:.1f} | {uc['total']:.1f} |")
+    lines += ["", "The energy of each device is twice the largest state-of-charge excursion "
+              f"along the runs cleared at {cyc:g} cycles (a device started half full), plus 5 "
+              "%; the runs that set it were simulated again with that finite energy.", "",
+              f"![allocation]({figs['allocation']})", "",
+              "## What drives it: each binding fault alone", "",
+              "| fault | load levels solved | least MW alone | sites | verified |",
+              "|---|---|---|---|---|"]
+    for a in p["alone"]:
+        mw = "infeasible" if a["total_mw"] is None else f"{a['total_mw']:.1f}"
+        where = ", ".join(f"G{x['machine']} {x['mw']:.0f}" for x in a.get("allocation", []))
+        lines.append(f"| {a['fault']} | {', '.join(a.get('contingencies', []))} | {mw} | "
+                     f"{where} | {'yes' if a['verified'] else 'no'} |")
+    lines += ["", "## Constraint generation", "",
+              "| round | solved for | MW | failing the check after it |", "|---|---|---|---|"]
+    for r in p["rounds"]:
+        if r["total_mw"] is None:
+            lines.append(f"| {r['round']} | {', '.join(r['active'])} | - | set aside as "
+                         f"infeasible: {', '.join(r.get('set_aside', []))} |")
+            continue
+        lines.append(f"| {r['round']} | {', '.join(r['active'])} | {r['total_mw']:.1f} | "
+                     f"{', '.join(r['failing']) or 'none'} |")
+    lines += ["", "## Clearing margin of every contingency at every load level", "",
+              "CCT with the allocation (ms; 1 ms for the contingencies solved for, "
+              f"{1000 * MARGIN_TOL:g} ms for the others, shown up to "
+              f"{1000 * MARGIN_CAP_S:g} ms: '>' = still stable there) minus the required "
+              f"{cyc:g}-cycle clearing time; every contingency was also simulated cleared at "
+              "the required time.", "",
+              "| fault | CCT without storage, base load (ms) | "
+              + " | ".join(f"margin at {x:g} (ms)" for x in d["load_levels"]) + " |",
+              "|---|---|" + "---|" * len(d["load_levels"])]
+    by = {}
+    for r in p["contingencies"]:
+        by.setdefault(r["fault_name"], {})[r["load"]] = r
+    screen_cct = {r["name"]: r["cct_s"] for r in d["screening"]}
+    order = sorted(by, key=lambda f: min((x["margin_s"] if x["margin_s"] is not None
+                                          else 9.0) for x in by[f].values()))
+    for f in order:
+        cells = []
+        for x in d["load_levels"]:
+            r = by[f].get(x)
+            if r is None:
+                cells.append("-")
+            elif r["margin_s"] is None:
+                cells.append("stable" if r["met"] else "FAILS")
+            else:
+                cells.append((">" if r.get("margin_at_least") else "")
+                             + f"{1000 * r['margin_s']:+.0f}" + ("" if r["met"] else " FAILS"))
+        lines.append(f"| {f} | {_ms(screen_cct.get(f))} | " + " | ".join(cells) + " |")
+    lines += ["", f"![margins]({figs['margins']})", "",
+              "## Cost against the required clearing time", "",
+              ("The other points at the base load only and without their uniform "
+               "reference (the fast variant that `stabctl paper` runs)."
+               if d.get("pareto_load_levels") == [1.0] else
+               "Every point at every load level."), "",
+              "| required (cycles) | load levels | optimised MW | MWh | sites | cost | "
+              "least uniform % | uniform MW | uniform cost | verified | set aside as "
+              "infeasible |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for q in d["pareto"]:
+        lines.append(f"| {q['cycles']:g} | {', '.join(f'{x:g}' for x in q['load_levels'])} | "
+                     f"{q['total_mw']:.1f} | {q['total_mwh']:.2f} | {q['n_sites']} | "
+                     f"{q['cost']:.1f} | {_num(q['uniform_pct'], 'g')} | "
+                     f"{_num(q['uniform_mw'], '.0f')} | "
+                     f"{_num(q['uniform_cost'], '.1f')} | "
+                     f"{'yes' if q['verified'] else 'no'} | "
+                     f"{', '.join(q.get('set_aside') or []) or 'none'} |")
+    pa = d["paper_alone"]
+    lines += ["", f"![Pareto]({figs['pareto']})", "",
+              "## Continuity: the paper's fault with the uniform 5 % target", "",
+              f"The paper's fault {pa['name']} alone, target the first unstable clearing "
+              f"time of 5 % storage at every generator ({pa['uniform_mw']:.0f} MW): "
+              f"{1000 * pa['target_s']:.0f} ms (without storage {1000 * pa['cct_none_s']:.0f}"
+              f" ms).  Least allocation from that fleet: {pa['total_mw']:.1f} MW = "
+              f"{100 * pa['total_mw'] / pa['uniform_mw']:.1f} % of it, verified CCT "
+              f"{1000 * pa['cct_s']:.0f} ms ({'verified' if pa['verified'] else 'NOT verified'}"
+              "; " + ", ".join(f"{a['mw']:.0f} MW at bus {a['bus']} (G{a['machine']})"
+                               for a in pa["allocation"]) + ")."]
     return lines
 
 
 def timing_line(d: dict) -> str:
     """The study's run-dependent figures (for a run log, not the report): wall times of
-    the main loop and the study, and Clarabel's solve times."""
-    main = d["runs"]["1.0"]
-    solve = [t for r in d["runs"].values() for t in r["solve_times_s"]] or [float("nan")]
-    return (f"{d['case']}: placement loop wall time {main['wall_time_s']:.0f} s (study "
-            f"{d['wall_time_s']:.0f} s); convex solves: median {1000 * np.median(solve):.1f} "
-            f"ms, longest {1000 * max(solve):.1f} ms (Clarabel's own time)")
-
-
-def _first_order_text(d: dict) -> str:
-    """The SIME first-order reading of the result (docs/placement.md section 6)."""
-    groups = {}
-    for c in d["contingencies"]:
-        key = tuple(sorted(c["critical"]))
-        groups[key] = max(groups.get(key, 0.0), c["first_order_mw"])
-    bound = sum(groups.values())
-    u_total = d["uniform_total_mw"][str(d["uniform_pct"])]
-    pa = d["paper_alone"]
-    return (f"Last column: the MW that the critical machines' own sites need for the uniform "
-            f"fleet's effect on the single-machine equivalent, to first order (an ESD at a "
-            f"critical machine weighs M_nc/M_T, elsewhere M_c/M_T).  Summed over the "
-            f"{len(groups)} distinct critical groups: {bound:.0f} MW = "
-            f"{100 * bound / u_total:.0f} % of the uniform total, which is what this "
-            f"contingency set asks at best to first order.  The paper's fault alone "
-            f"({pa['name']}) needs {pa['total_mw']:.1f} MW = "
-            f"{100 * pa['total_mw'] / u_total:.1f} % of the uniform total (verified CCT "
-            f"{1000 * pa['cct_s']:.0f} ms, target {1000 * pa['target_s']:.0f} ms; "
-            + ", ".join(f"{a['mw']:.0f} MW at bus {a['bus']} (G{a['machine']})"
-                        for a in pa["allocation"]) + ").")
+    the main plan and the study, and the runs simulated."""
+    p = d["plan"]
+    return (f"{d['case']}: placement plan wall time {p['wall_time_s']:.0f} s, "
+            f"{p['n_simulations']} runs (study {d['wall_time_s']:.0f} s)")
 
 
 def _screening_text(d: dict) -> str:
     ok = [r for r in d["screening"] if r["cct_s"] is not None]
-    fail = len(d["screening"]) - len(ok)
     n_bus = sum(1 for r in d["screening"] if "-" not in r["name"])
     n_line = len(d["screening"]) - n_bus
     scope = " at a generator HV bus" if n_line > 4 * N_FAULTS else ""
     buses = f" and {n_bus} bus faults cleared without a trip" if n_bus else ""
+    p = d["plan"]
     return (f"Screened {n_line} line faults (each end of every line{scope}, line tripped)"
-            f"{buses}; coarse CCT, {1000 * SCREEN_TOL:g} ms, up to "
-            f"{SCREEN_T_MAX:g} s: {len(ok)} with a CCT, {fail} without one (unstable even "
-            "when cleared at once, or still stable at the limit).  Kept: the paper's "
-            f"fault and the {len(d['contingencies']) - 1} most severe others (distinct "
-            "lines first).  Targets: the CCT of the uniform fleet, taken as the first "
-            "unstable clearing time (scan from the CCT without storage in 5 ms steps, then "
-            "1 ms bisection), as for every optimised allocation.  The loop starts from the "
-            "uniform fleet (which meets every target) and only accepts verified savings.")
+            f"{buses}; coarse CCT without storage, {1000 * SCREEN_TOL:g} ms, up to "
+            f"{SCREEN_T_MAX:g} s: {len(ok)} with a CCT.  Every fault stable when cleared at "
+            f"once ({d['n_faults']}) is a contingency at each of the "
+            f"{len(d['load_levels'])} load levels: {p['n_contingencies']} in all.  "
+            + (f"Out of scope, unstable without storage even when cleared at once (the "
+               f"line trip alone) at that load level, which no clearing time can help "
+               f"(N-1 insecure there): {', '.join(p['out_of_scope'])}.  "
+               if p["out_of_scope"] else "")
+            + ("Set aside as infeasible with storage at the candidate sites (every site at "
+               "its bound, simulated): " + "; ".join(p["infeasible"]) + ".  "
+               if p.get("infeasible") else "") +
+            "Constraint generation: simulated once without storage cleared at the required "
+            "time, the most binding failing contingencies (up to 12) are solved for; "
+            "every contingency is then simulated with the allocation cleared at the "
+            "required time, and those that fail are added.")
 
 
 def placement_study(case_name: str, out_dir="reports", workers: int = 2, progress=None,
-                    records_dir=None, generated_by: str = "stabctl paper") -> Path:
+                    records_dir=None, generated_by: str = "stabctl paper",
+                    fast: bool = True) -> Path:
     """Run the study for one case (kundur or miniwecc: the paper's fault must be in
-    `stabctl.studies.cases.DEFAULT_FAULTS`) and write its report into out_dir; returns the markdown
-    path.  workers: processes; progress: callable(str) (default: stderr); records_dir:
-    where the resumable screening records go (default out_dir); generated_by: the command
-    the report names as its source.  Raises as
-    `stabctl.placement.loop.place` (InfeasibleError, InputError, SimulationError)."""
+    `stabctl.studies.cases.DEFAULT_FAULTS`) and write its report into out_dir; returns the
+    markdown path.  workers: processes; progress: callable(str) (default: stderr);
+    records_dir: where the resumable screening records go (default out_dir);
+    generated_by: the command the report names as its source; fast: the Pareto points at
+    the base load only (`study`).  Raises as `stabctl.placement.planner.plan`
+    (InfeasibleError, InputError, SimulationError)."""
     out = Path(out_dir)
     records = Path(records_dir or out)
     for d in (out, records):
         d.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda msg: print(msg, file=sys.stderr, flush=True))
-    d = study(case_name, records, workers, say)
+    d = study(case_name, records, workers, say, fast)
     say(timing_line(d))
     return report(d, out, generated_by)
+

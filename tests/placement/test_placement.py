@@ -267,7 +267,9 @@ def test_cli_place_json_meets_the_gain_and_bad_input_exits_2():
     d = json.loads(r.stdout)
     assert d["verified"] and d["total_mw"] > 0 and d["n_sites"] == len(d["allocation"])
     for c in d["contingencies"]:
-        assert c["cct_s"] >= c["target_cct_s"] >= 1.03 * c["cct_no_storage_s"] - 1e-9
+        assert c["met"]
+        if c["cct_s"] is not None:           # solved for: its CCT was simulated
+            assert c["cct_s"] >= c["required_s"] >= 1.03 * c["cct_no_storage_s"] - 1e-9
     for args in (["--target-cct-gain", "0"], ["--target-cct-gain", "5", "--max-sites", "0"],
                  ["--target-cct-gain", "5", "--zeta-min", "1"]):
         bad = CliRunner().invoke(main, ["place", "kundur", "--contingencies", "DEFAULT", *args])
