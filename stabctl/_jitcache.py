@@ -79,15 +79,17 @@ def ensure_fresh_cache() -> None:
 def on_first_compile(notify, still=None, every_s: float = 10.0):
     """Call ``notify()`` once, when numba starts compiling the first stabctl kernel of
     this process (numba's event API, ``numba:compile``); loading cached kernels does not
-    count.  Then, while compiling goes on, call ``still(seconds since the notice)`` every
-    `every_s` seconds, so that a long compile is never a silent wait.
+    count.  Then, whenever compiling has gone on for `every_s` seconds, call
+    ``still(seconds since that compile began)``, and again every `every_s` seconds, so that
+    a long compile is never a silent wait.
 
     Parameters
     ----------
     notify : callable
         Called with no arguments.
     still : callable, optional
-        Called with the seconds (float) since the notice, from a background thread.
+        Called with the seconds (float) the compile under way has lasted, from a
+        background thread.
     every_s : float
         Interval of the `still` calls (s).
 
@@ -102,13 +104,15 @@ def on_first_compile(notify, still=None, every_s: float = 10.0):
     from numba.core import event
 
     class _Compiles(event.Listener):
-        depth, t_notice, last = 0, None, 0.0
+        depth, noticed, t_begin, last = 0, False, 0.0, 0.0
 
         def on_start(self, ev):
-            self.depth += 1                  # numba's own overloads nest inside ours
-            if self.t_notice is None and ev.data["dispatcher"].py_func.__module__.startswith(
+            if self.depth == 0:              # a compile begins (numba's overloads nest)
+                self.t_begin = self.last = time.perf_counter()
+            self.depth += 1
+            if not self.noticed and ev.data["dispatcher"].py_func.__module__.startswith(
                     "stabctl."):
-                self.t_notice = self.last = time.perf_counter()
+                self.noticed = True
                 notify()
                 if still is not None:
                     threading.Thread(target=self.beat, daemon=True).start()
@@ -121,7 +125,7 @@ def on_first_compile(notify, still=None, every_s: float = 10.0):
                 now = time.perf_counter()
                 if self.depth > 0 and now - self.last >= every_s:
                     self.last = now
-                    still(now - self.t_notice)
+                    still(now - self.t_begin)
 
     listener, halt = _Compiles(), threading.Event()
 

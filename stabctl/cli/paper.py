@@ -19,12 +19,13 @@ from stabctl.cli.options import out_dir_option, reports_errors
 @click.option("--only", multiple=True,
               type=click.Choice(["analytic", "cases", "convergence", "table4", "estimation",
                                  "placement"]),
-              help="Build only these parts (repeatable): analytic = Sections 2-4 (seconds); "
-                   "cases = Cases 1 and 2; convergence = CCT against the step under both "
-                   "conventions (2 minutes); table4 = CCT sweeps (minutes); estimation = "
-                   "estimator Monte Carlo (about 10 minutes on 2 cores); placement = ESD "
-                   "sizing and placement studies (about 30 minutes). Default: all; "
-                   "with --only, paper.md holds only those parts.")
+              help="Build only these parts (repeatable; times on 2 cores): analytic = "
+                   "Sections 2-4 (seconds); cases = Cases 1 and 2 (under a minute, with the "
+                   "first compilation); table4 = CCT sweeps (half a minute); estimation = "
+                   "estimator Monte Carlo and in-the-loop CCTs (2-3 minutes); placement = "
+                   "the planner's ESD sizing and placement studies (about 15 minutes); "
+                   "convergence = CCT against the step under both conventions (2 minutes). "
+                   "Default: all; with --only, paper.md holds only those parts.")
 @reports_errors
 def paper(out_dir, resume, only):
     """Reproduce the paper's tables and figures into OUT_DIR/paper.md (+ PNG figures).

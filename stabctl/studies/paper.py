@@ -189,8 +189,10 @@ def section_placement(fig_dir: Path, records_dir: Path, progress=None) -> str:
                       f"clearing time: {links}.", ""])
 
 
-def section_convergence(fig_dir: Path) -> str:
-    """Section 9: CCT of the paper's faults against the step under both conventions."""
+def section_convergence(fig_dir: Path, progress=None) -> str:
+    """Section 9: CCT of the paper's faults against the step under both conventions.
+
+    progress(str), if given, hears each CCT search (case, conventions, step)."""
     from stabctl.studies.convergence import PAPER_FAULTS, cct_versus_step, markdown_table
 
     lines = ["## 9. Step convergence: IEEE 421.5 limiters against PSTess's", "",
@@ -202,7 +204,7 @@ def section_convergence(fig_dir: Path) -> str:
              "difference with its PSTess source line). Each CCT search also reruns its final "
              "bracket at half the step: `numerical_error_s` in `stabctl cct --json`.", ""]
     for name, fault in PAPER_FAULTS.items():
-        table = cct_versus_step(name, fault)
+        table = cct_versus_step(name, fault, progress=progress)
         freq = 60.0
         ieee = [c for _, c, _ in table["ieee"]["rows"]]
         pst = [c for _, c, _ in table["pstess"]["rows"]]
@@ -231,6 +233,8 @@ PARTS: dict[str, tuple[Callable[[Path], str], ...]] = {
     "placement": (),
     "convergence": (section_convergence,),
 }
+#: Sections of PARTS long enough to report their progress (called with progress=...)
+TALKING = {section_convergence}
 #: Parts whose sweeps keep resumable records (JSON lines): key -> (section(fig_dir,
 #: records_dir, progress), record files).  The records are made in WORK_DIR and copied
 #: into the report directory, reproducibly (`sweep.write_reproducible`), at the end.
@@ -298,7 +302,8 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
                  ""]
         for key in keys:
             for section in PARTS[key]:
-                parts.append(_timed(log, key, section, say, lambda s: s(tmp)))
+                parts.append(_timed(log, key, section, say, lambda s: s(
+                    tmp, **({"progress": say} if s in TALKING else {}))))
             if key in RESUMABLE:
                 parts.append(_timed(log, key, RESUMABLE[key][0], say,
                                     lambda s: s(tmp, work, progress=say),
