@@ -26,7 +26,7 @@ penalty merit (Nocedal, Wright, Numerical Optimization, 2nd ed., 2006, sec. 18.5
    `max_iter` simulated allocations.
 5. Feasibility restoration: the cheapest allocation that missed by at most a few
    tolerances is scaled up by 3, 6 and 10 % and simulated while cheaper than the best
-   verified one (`_restore`).
+   verified one, the contingencies it missed first (`_restore`).
 The cheapest allocation that met every target in simulation is returned.  Whenever the
 hard program (no slack) is infeasible, the contingencies it names (`placement.diagnose`)
 are simulated with every site at its bound: still below target there proves the
@@ -404,8 +404,10 @@ def _restore(setup: _Setup, tried, best, prices, iterations, say):
     only by a little (CCT shortfall summed <= RESTORE_MISS tolerances, no damping
     shortfall) is scaled up by each RESTORE_SCALE factor (within the site bounds) while
     still cheaper than the best verified allocation; the first scaled allocation that
-    meets every target in simulation is returned (None if none does).  Each one
-    simulated is recorded in `iterations`."""
+    meets every target in simulation is returned (None if none does).  Each scaled
+    allocation simulates first the contingencies the near miss missed, and the others
+    only when those meet their targets (a miss there settles it).  Each one simulated is
+    recorded in `iterations`."""
     def cost(p):
         return float(setup.cost @ p)
 
@@ -415,11 +417,23 @@ def _restore(setup: _Setup, tried, best, prices, iterations, say):
     if not near:
         return None
     p0 = min(near, key=lambda p: cost(p.mw))
+    missed = [c for c in setup.contingencies
+              if p0.ev[c.name]["cct_s"] < c.target_cct_s - 1e-9]
     for k in RESTORE_SCALE:
         mw = _rounded(np.minimum(k * p0.mw, setup.upper), setup.sites)
         if best is not None and cost(mw) >= cost(best.mw):
             return None
-        new = _point(setup, mw, setup.verify(mw), prices)
+        ev = setup.verify(mw, missed) if missed else {}
+        short = [c for c in missed if ev[c.name]["cct_s"] < c.target_cct_s - 1e-9]
+        if short:
+            iterations.append(_record(len(iterations) + 1, setup,
+                                      _Point(mw, ev, None, float("nan"), False),
+                                      _as_allocation(setup.sites, mw, []), float("nan"), 0.0,
+                                      which=missed))
+            say(f"restoration x{k:g}: {mw.sum():.1f} MW, misses; " + _cct_line(missed, ev))
+            continue
+        rest = [c for c in setup.contingencies if c.name not in ev]
+        new = _point(setup, mw, {**ev, **(setup.verify(mw, rest) if rest else {})}, prices)
         iterations.append(_record(len(iterations) + 1, setup, new,
                                   _as_allocation(setup.sites, mw, []), float("nan"), 0.0))
         say(f"restoration x{k:g}: {mw.sum():.1f} MW, "
@@ -547,13 +561,16 @@ def _rounded(mw, sites) -> np.ndarray:
     return np.where(mw >= MIN_MW, up, 0.0)
 
 
-def _record(it, setup: _Setup, p: _Point, alloc: Allocation, rho, radius) -> dict:
+def _record(it, setup: _Setup, p: _Point, alloc: Allocation, rho, radius,
+            which=None) -> dict:
+    """One simulated allocation for `PlacementResult.iterations`; which: the contingencies
+    simulated there (default all)."""
+    which = setup.contingencies if which is None else which
     return {"iteration": it, "total_mw": float(p.mw.sum()),
             "n_sites": int(np.count_nonzero(p.mw)), "mw_by_site": [float(x) for x in p.mw],
             "meets_targets": p.feasible, "rho": float(rho), "radius_mw": float(radius),
-            "cct_s": {c.name: p.ev[c.name]["cct_s"] for c in setup.contingencies},
-            "n_simulations": sum(p.ev[c.name]["n_simulations"] or 0
-                                 for c in setup.contingencies),
+            "cct_s": {c.name: p.ev[c.name]["cct_s"] for c in which},
+            "n_simulations": sum(p.ev[c.name]["n_simulations"] or 0 for c in which),
             "predicted_cct_s": alloc.predicted_cct_s,
             "min_damping": None if p.zeta is None else float(np.min(p.zeta[1])),
             "solve_time_s": alloc.solve_time_s, "solve_wall_s": alloc.wall_time_s}

@@ -36,6 +36,7 @@ allocation.
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -272,7 +273,8 @@ class PlanResult:
     contingencies: one row per contingency (`rows`); rounds: one dict per round of
     constraint generation; active: names of the contingencies the program was solved
     for; message: why it stopped; n_simulations: runs simulated in all; wall_time_s.
-    uniform, alone: the references when asked (`least_uniform`, `alone`); out_of_scope:
+    uniform, alone: the references when asked (`least_uniform`, `alone`); half_step: the
+    tightest contingencies again at half the step (`half_step`) when asked; out_of_scope:
     contingencies unstable when cleared at once; infeasible, set_aside: the proofs and
     names of those set aside as infeasible.
     """
@@ -295,6 +297,7 @@ class PlanResult:
     set_aside: list = field(default_factory=list)
     uniform: dict | None = None
     alone: list = field(default_factory=list)
+    half_step: dict | None = None
     n_simulations: int = 0
     wall_time_s: float = 0.0
 
@@ -324,7 +327,7 @@ class PlanResult:
                 "set_aside": self.set_aside,
                 "contingencies": self.contingencies, "rounds": self.rounds,
                 "n_simulations": self.n_simulations, "wall_time_s": self.wall_time_s,
-                "uniform": self.uniform, "alone": self.alone}
+                "uniform": self.uniform, "alone": self.alone, "half_step": self.half_step}
 
 
 # -- the planner -------------------------------------------------------------------------------
@@ -350,10 +353,12 @@ class _Plan:
     infeasible: list = field(default_factory=list)
     set_aside: list = field(default_factory=list)
     loop_kw: dict = field(default_factory=dict)
+    lock: object = field(default_factory=threading.Lock)
 
-    def check(self, contingencies, mw, energy_mj=None) -> dict:
+    def check(self, contingencies, mw, energy_mj=None, h: float | None = None) -> dict:
         """`check` of every contingency at ratings mw (one run each, in parallel): name ->
-        check dict.  energy_mj: usable energy per site (MJ) of finite devices."""
+        check dict.  energy_mj: usable energy per site (MJ) of finite devices; h: another
+        integration step (s) than the plan's."""
         devs = devices_of(self.sites, mw)
         if energy_mj is not None:
             used = [j for j, p in enumerate(mw) if p > 0]
@@ -362,7 +367,8 @@ class _Plan:
         sites = [[s.bus, s.machine] for s in self.sites]
         jobs = [{"case": self.case, "fault": _fault_dict(c.fault), "devices": devs,
                  "sites": sites, "controller": ctrl, "t_clear": c.target_cct_s,
-                 "load": c.load, **self.model} for c in contingencies]
+                 "load": c.load, **self.model, **({} if h is None else {"h": h})}
+                for c in contingencies]
         return dict(zip((c.name for c in contingencies), self.run_map(check, jobs)))
 
     def mwh_per_mw(self, checks) -> np.ndarray:
@@ -387,7 +393,8 @@ class _Plan:
             beat.note(f"{len(jobs)} {func.__name__} job(s) running, {self.n_runs} runs "
                       "simulated before them")
             out = run_map(func, jobs)
-            self.n_runs += sum(o.get("n_simulations") or 0 for o in out)
+            with self.lock:         # `_alone` runs batches from several threads
+                self.n_runs += sum(o.get("n_simulations") or 0 for o in out)
             return out
         return counted
 
@@ -422,7 +429,7 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
          h: float | None = None, run_map=None, progress=None, uniform: bool = False,
          alone: bool = False, margins_tol: float | None = None, margins_cap_s: float = 0.1,
          scope_stable_at_once: bool = True, drop_infeasible: bool = False,
-         **loop_kw) -> PlanResult:
+         half_step_n: int = 0, **loop_kw) -> PlanResult:
     """Least-cost ESD sites, MW and MWh meeting `requirement` on every fault at every load
     level, verified by simulation (module docstring).
 
@@ -443,7 +450,8 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
         its MVA).
     brackets : dict or None, optional
         Fault name -> [stable, unstable] clearing times without storage at the base load
-        (s), e.g. a screening's, where the CCT searches start.
+        (s), e.g. a screening's, where the CCT searches start; [t, None]: still stable
+        when cleared at t (a screening's limit), known stable at any requirement up to t.
     n_active : int, optional
         Contingencies in the first active set (the most binding of those unstable
         without storage); default 12.
@@ -472,6 +480,9 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
         Also the clearing margin with the allocation of every contingency the program
         was not solved for, to margins_tol (s), up to margins_cap_s (s; `margins`);
         None: those are only checked at their required time (margin >= 0 known).
+    half_step_n : int, optional
+        Also simulate the half_step_n contingencies of least clearing margin again at
+        half the integration step (`half_step`); default 0: not done.
     **loop_kw
         zeta_min, amplitude_hz, max_sites: passed to every `place` (the damping is
         verified by the loop, for the allocation as a whole).
@@ -549,6 +560,8 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
         result.load_levels = levels
         if margins_tol is not None:
             margins(pl, cons, result, margins_tol, margins_cap_s, kw)
+        if half_step_n > 0 and result.verified:
+            result.half_step = half_step(pl, cons, result, half_step_n, kw)
         if uniform:
             result.uniform = least_uniform(pl, cons, failing, kw)
         if alone:
@@ -592,7 +605,8 @@ def _base(pl: _Plan, cons, brackets, kw) -> dict:
     if not cons:
         return {}
     br = {c.name: tuple(brackets[c.fault_name]) for c in cons
-          if brackets and c.load == 1.0 and c.fault_name in brackets}
+          if brackets and c.load == 1.0 and c.fault_name in brackets
+          and None not in brackets[c.fault_name]}
     return evaluations(pl.case, cons, None, brackets=br, **kw)
 
 
@@ -805,6 +819,43 @@ def margins(pl: _Plan, cons, result: PlanResult, tol: float, cap_s: float, kw) -
                             margin_s=ev[c.name]["cct_s"] - c.target_cct_s)
 
 
+def half_step(pl: _Plan, cons, result: PlanResult, n: int, kw) -> dict:
+    """The allocation's n contingencies of least clearing margin (those with a simulated
+    CCT) simulated again at half the integration step: each cleared at its required time
+    (the verdict), and its CCT with the allocation to the plan's tolerance, the bisection
+    starting from two tolerances either side of the CCT at the full step (shown converged
+    in the step, as every figure that depends on it).
+
+    Returns {"h_s" (the full step, s), "rows": [{"name", "required_s", "cct_s" (full
+    step), "cct_tol_s" (its resolution), "cct_half_s", "stable_half" (at the required
+    time)}], "all_stable", "max_cct_diff_s" (largest |cct_half - cct| beyond the coarser
+    resolution, s)}."""
+    from stabctl.stability.cct import cached_simulator
+
+    h = cached_simulator(pl.case, pl.model["conventions"], pl.model["h"]).default_h \
+        if pl.model["h"] is None else pl.model["h"]
+    by_name = {c.name: c for c in cons}
+    rows = sorted((r for r in result.contingencies if r["cct_s"] is not None),
+                  key=lambda r: r["margin_s"])[:n]
+    tight = [by_name[r["name"]] for r in rows]
+    res_of = {r["name"]: r.get("cct_tol_s", pl.tol) for r in rows}
+    checks = pl.check(tight, result.mw, h=h / 2)
+    ev = evaluations(pl.case, tight, result.mw, gradient=False,
+                     brackets={r["name"]: (r["cct_s"] - 2 * res_of[r["name"]],
+                                          r["cct_s"] + 2 * res_of[r["name"]]) for r in rows},
+                     **{**kw, "h": h / 2})
+    out = [{"name": r["name"], "required_s": r["required_s"], "cct_s": r["cct_s"],
+            "cct_tol_s": res_of[r["name"]], "cct_half_s": ev[r["name"]]["cct_s"],
+            "stable_half": bool(checks[r["name"]]["stable_at_check"])} for r in rows]
+    diff = max((max(0.0, abs(o["cct_half_s"] - o["cct_s"]) - o["cct_tol_s"]) for o in out),
+               default=0.0)
+    ok = all(o["stable_half"] for o in out)
+    pl.say(f"half step ({1000 * h / 2:.3g} ms): {len(out)} tightest contingencies "
+           f"{'all stable' if ok else 'NOT all stable'} at their required time; CCTs within "
+           f"{1000 * diff:.0f} ms beyond their resolution")
+    return {"h_s": h, "rows": out, "all_stable": ok, "max_cct_diff_s": diff}
+
+
 # -- references ------------------------------------------------------------------------------
 
 def least_uniform(pl: _Plan, cons, failing, kw) -> dict:
@@ -869,24 +920,29 @@ def _mva(pl: _Plan) -> np.ndarray:
 
 def _alone(pl: _Plan, cons, result: PlanResult, max_iter: int, kw) -> list:
     """Each fault of the final active set alone (all its load levels that fail without
-    storage): its own least allocation, verified by `place` (MW, sites, verified)."""
+    storage): its own least allocation, verified by `place` (MW, sites, verified).  The
+    faults are solved at the same time (one thread each, sharing the worker pool: a
+    single fault's batches are too small to keep every worker busy)."""
+    from concurrent.futures import ThreadPoolExecutor
+
     by_name = {c.name: c for c in cons}
     faults = list(dict.fromkeys(by_name[n].fault_name for n in result.active))
-    out = []
-    for fname in faults:
+    if not faults:
+        return []
+    sites = pl.priced(pl.energy_rate)
+
+    def one(fname):
         mine = [by_name[n] for n in result.active if by_name[n].fault_name == fname]
         base = {c.name: pl.base[c.name] for c in mine}
         try:
             res = place(pl.case, mine, base=base, max_iter=max_iter,
-                        site_cost=pl.site_costs, **{**kw, "sites": pl.priced(pl.energy_rate)})
+                        site_cost=pl.site_costs, **{**kw, "sites": sites})
         except InfeasibleError as exc:
-            out.append({"fault": fname, "total_mw": None, "verified": False,
-                        "message": str(exc)})
-            continue
-        out.append({"fault": fname, "contingencies": [c.name for c in mine],
-                    "total_mw": res.allocation.total_mw, "allocation": res.allocation.rows(),
-                    "verified": res.verified})
+            return {"fault": fname, "total_mw": None, "verified": False, "message": str(exc)}
         pl.say(f"alone: {fname}: {res.allocation.total_mw:.1f} MW")
-    return out
+        return {"fault": fname, "contingencies": [c.name for c in mine],
+                "total_mw": res.allocation.total_mw, "allocation": res.allocation.rows(),
+                "verified": res.verified}
 
-
+    with ThreadPoolExecutor(max_workers=len(faults)) as threads:
+        return list(threads.map(one, faults))

@@ -155,7 +155,7 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
     faults = [LineFault(3, 101), LineFault(20, None)]
     over = {"20": Requirement(cycles=15)}                        # 250 ms for the bus-20 fault
     res = plan("kundur", faults, Requirement(cycles=12), overrides=over, n_active=1,
-               workers=1, max_iter=6)
+               workers=1, max_iter=6, half_step_n=2)
     assert len(res.rounds) >= 2
     first = res.rounds[0]
     assert first["active"] == ["3-101"] and "20" in first["failing"]
@@ -166,6 +166,14 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
         assert independently_stable("kundur", f, t, rows)
     assert all(c["met"] for c in res.contingencies)
     assert all(r["mwh"] > 0 for r in rows)
+    # at half the step both stay stable at their required times and their CCTs move by
+    # no more than the resolution (the ieee default step's convergence claim: CCTs within
+    # the 1 ms tolerance of a step-halved run, docs/conventions.md)
+    hs = res.half_step
+    assert [r["name"] for r in hs["rows"]] == sorted(["3-101", "20"], key=lambda n: next(
+        c["margin_s"] for c in res.contingencies if c["name"] == n))
+    assert hs["all_stable"] and hs["max_cct_diff_s"] <= 1e-9
+    assert hs["h_s"] == Simulator(load_case("kundur")).default_h
 
 
 def test_infeasible_requirement_names_the_contingency_and_its_load_level():
