@@ -558,17 +558,34 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
         failing = [c for c in failing if c.name in kept]
         result.requirement = _describe(requirement, overrides)
         result.load_levels = levels
+        _references(pl, cons, failing, result, kw, margins_tol, margins_cap_s, half_step_n,
+                    uniform, alone, max_iter)
+    result.n_simulations = pl.n_runs
+    result.wall_time_s = time.perf_counter() - wall
+    return result
+
+
+def _references(pl: _Plan, cons, failing, result: PlanResult, kw, margins_tol,
+                margins_cap_s, half_step_n, uniform, alone, max_iter) -> None:
+    """What `plan` adds to a result when asked: the clearing margins (then the half-step
+    check, which ranks by them), the least uniform fleet and each binding fault alone.
+    They are independent, so they run at the same time (one thread each, sharing the
+    worker pool: fewer idle workers at the end of each one's batches)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    def margins_and_half_step():
         if margins_tol is not None:
             margins(pl, cons, result, margins_tol, margins_cap_s, kw)
         if half_step_n > 0 and result.verified:
             result.half_step = half_step(pl, cons, result, half_step_n, kw)
-        if uniform:
-            result.uniform = least_uniform(pl, cons, failing, kw)
-        if alone:
-            result.alone = _alone(pl, cons, result, max_iter, kw)
-    result.n_simulations = pl.n_runs
-    result.wall_time_s = time.perf_counter() - wall
-    return result
+
+    with ThreadPoolExecutor(max_workers=3) as threads:
+        done = [threads.submit(margins_and_half_step)]
+        u = threads.submit(least_uniform, pl, cons, failing, kw) if uniform else None
+        a = threads.submit(_alone, pl, cons, result, max_iter, kw) if alone else None
+        done[0].result()
+        result.uniform = None if u is None else u.result()
+        result.alone = [] if a is None else a.result()
 
 
 #: A check known without a run (stable, no energy figures).
