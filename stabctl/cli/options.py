@@ -276,9 +276,10 @@ def conventions_option(func):
 def model_options(func):
     """``--conventions`` and ``--step``, the same on every command that simulates."""
     func = click.option("--step", type=float, default=None, metavar="H",
-                        help="Integration step (s); default: the case's data-file step, "
-                             "under ieee capped at half its fastest time constant (Kundur "
-                             "5 ms, miniWECC 1/480 s; pstess: Kundur 10 ms).")(func)
+                        help="Integration step (s); default: ieee half a cycle capped at "
+                             "half the case's fastest time constant (Kundur and miniWECC "
+                             "5 ms); pstess the data file's step (Kundur 10 ms, miniWECC "
+                             "1/480 s).")(func)
     return conventions_option(func)
 
 

@@ -87,18 +87,24 @@ STEP_PER_TIME_CONSTANT = 0.5
 
 def default_step(case: Case, conventions: str = "ieee",
                  fastest: tuple[float, str] | None = None) -> float:
-    """Default integration step (s).  pstess: the data file's own step (sw_con row 1, col
-    7), else 1/120 s (half a 60 Hz cycle), as PSTess.  ieee: the same, capped at
-    STEP_PER_TIME_CONSTANT times the case's fastest time constant, the largest step whose
-    CCTs agree with a converged (step-halved) run within the 1 ms CCT tolerance on the
-    paper's faults (docs/conventions.md, convergence table).  fastest: the case's
-    `fastest_time_constant`, if already known."""
+    """Default integration step (s).
+
+    pstess: the data file's own step (sw_con row 1, col 7), else half a cycle of the case
+    frequency (1/120 s at 60 Hz), as PSTess.  ieee: from the model, not from a PSTess run
+    setting: half a cycle, capped at STEP_PER_TIME_CONSTANT times the case's fastest time
+    constant, the largest step whose CCTs agree with a converged (step-halved) run within
+    the 1 ms CCT tolerance on the paper's faults (docs/conventions.md, convergence table;
+    docs/simulator.md, default step).  Kundur 5 ms either way (T_R = 0.01 s); miniWECC
+    5 ms instead of its data file's 1/480 s (fastest 0.01 s: a governor's T_5), whose CCTs
+    are the same to the millisecond (docs/simulator.md).  fastest: the case's
+    `fastest_time_constant`, if already known.
+    """
     sw = case.sw_con
-    h = float(sw[0, 6]) if sw is not None and sw[0, 6] > 0 else 0.5 / case.freq_hz
+    half_cycle = 0.5 / case.freq_hz
     if check_conventions(conventions) == "pstess":
-        return h
+        return float(sw[0, 6]) if sw is not None and sw[0, 6] > 0 else half_cycle
     T, _ = fastest_time_constant(case) if fastest is None else fastest
-    return min(h, STEP_PER_TIME_CONSTANT * T)
+    return min(half_cycle, STEP_PER_TIME_CONSTANT * T)
 
 
 _BLAS_LIMITED = False
