@@ -171,8 +171,9 @@ def dyr_tables(records, generators, on_unsupported: str = "error",
         conventions: "pst" (PST's models as they are) or "andes" (ANDES 2.0's reading of
             the PSS/E models, for like-for-like comparisons: GENROU/GENSAL without speed
             effects, mac_con column 24 = 0; EXDC2's regulator limits not scaled by the
-            terminal voltage, i.e. PST's DC1 instead of DC2; IEEEX1's scaled by it (PST's
-            DC2 instead of DC1); DC exciters with PSS/E's quadratic saturation and K_E as
+            terminal voltage, i.e. PST's DC1 instead of DC2, and IEEEX1's neither (DC1:
+            its ``ieeex1.py`` computes VRMAX v but its limiter keeps VRMAX, see
+            `_ANDES_MAPPERS`); DC exciters with PSS/E's quadratic saturation and K_E as
             given; ESST3A's source voltage from system-base currents (K_I, X_L times
             MBASE/SBASE); IEEEG1's gate rate limits
             Uo, Uc read on the system base, i.e. times SBASE/MBASE on the machine base).
@@ -586,13 +587,17 @@ def _gensal_andes(rec, gen):
 
 #: conventions="andes": ANDES 2.0's DC exciters (IEEEX1, EXDC2, ESDC2A) use the quadratic
 #: saturation and keep K_E = 0; its EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
-#: terminal voltage as PSS/E's and IEEE DC2, while its IEEEX1 scales them by the terminal
-#: voltage (``ieeex1.py``: ``VRMAX * v``, so PST's DC2, not DC1); its ESDC2A bypasses T_R;
+#: terminal voltage as PSS/E's and IEEE DC2, and so does its IEEEX1 (PST's DC1): ANDES
+#: 2.0's ``ieeex1.py`` defines VRTMAX = VRMAX v and sets ``LA.upper``, ``LA.lower`` to
+#: them after EXDC2's ``LagAntiWindup`` LA has built its ``AntiWindup`` limiter
+#: ``LA.lim`` on VRMAX, VRMIN; the limiter keeps those (on NPCC ``LA.lim.upper.v`` =
+#: VRMAX, e.g. 6.5 for bus 25, where VRTMAX = 6.89), so the scaled limits are never
+#: applied (read as DC2, NPCC differed from ANDES by 6.2e-3 pu in speed); its ESDC2A bypasses T_R;
 #: its IEEEG1 rate limits are on the system base, its ESST3A forms V_E from system-base
 #: stator currents; GENSAL is its GENROU, SCRX its SEXS; HYGOV
 #: and IEESGO as ANDES solves them (``_hygov``, ``_ieesgo``); IEEET2, which ANDES lacks,
 #: with the quadratic saturation of its other DC exciters
-_ANDES_MAPPERS = {"IEEEX1": _dc("EXDC2", andes=True), "EXDC2": _dc("IEEEX1", andes=True),
+_ANDES_MAPPERS = {"IEEEX1": _dc("IEEEX1", andes=True), "EXDC2": _dc("IEEEX1", andes=True),
                   "ESDC2A": _esdc2a_andes, "ESST3A": _esst3a_andes, "IEEEG1": _ieeeg1_andes,
                   "GENSAL": _gensal_andes,
                   "SCRX": _scrx_andes, "IEEET2": _dc("IEEET2", andes=True),
