@@ -45,6 +45,22 @@ WECC_CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
 STEP = 0.005  # s, both tools
 
 
+def paired_rows(ours, theirs):
+    """stabctl's machine row for each ANDES machine, given the machines' buses in each
+    tool's order: the k-th ANDES unit at a bus is the k-th stabctl unit there (NPCC has
+    two units at buses 23 and 54)."""
+    rows = {}
+    for k, b in enumerate(ours):
+        rows.setdefault(int(b), []).append(k)
+    return [rows[int(b)].pop(0) for b in theirs]
+
+
+def speeds_on(t, res, case, ss):
+    """stabctl's speeds on ANDES's time grid, columns in ANDES's machine order."""
+    rows = paired_rows(case.machines.bus, andes_machine_buses(ss))
+    return np.column_stack([np.interp(t, res.t, res.speed[:, k]) for k in rows])
+
+
 @pytest.fixture(scope="module")
 def kundur(tmp_path_factory):
     dyr = tmp_path_factory.mktemp("kundur") / "kundur.dyr"
@@ -73,13 +89,11 @@ def fault_speeds(files, bus, cycles, t_end, conventions="pst"):
     """Speeds (pu) of both tools on ANDES's time grid: (t, stabctl, ANDES)."""
     raw, dyr = files
     t_clear = 1.0 + cycles / 60.0
-    sim = Simulator(load_psse(raw, dyr, conventions=conventions))
-    res = sim.run([Fault(bus, 1.0, t_clear, x=1e-4)], t_end, h=STEP)
-    t, w_andes = andes_speeds(andes_system(raw, dyr, AndesFault(bus, 1.0, t_clear)), t_end,
-                              STEP)
-    w = np.column_stack([np.interp(t, res.t, res.speed[:, k])
-                         for k in range(res.speed.shape[1])])
-    return t, w, w_andes
+    case = load_psse(raw, dyr, conventions=conventions)
+    res = Simulator(case).run([Fault(bus, 1.0, t_clear, x=1e-4)], t_end, h=STEP)
+    ss = andes_system(raw, dyr, AndesFault(bus, 1.0, t_clear))
+    t, w_andes = andes_speeds(ss, t_end, STEP)
+    return t, speeds_on(t, res, case, ss), w_andes
 
 
 def test_kundur_fault_speeds_match_andes(kundur):
@@ -123,7 +137,7 @@ def test_kundur_line_trip_speeds_match_andes():
         with pytest.warns(UserWarning, match="TOGGLE"):
             case = load_psse(raw, dyr, on_unsupported="skip", conventions=conventions)
         res = Simulator(case).run([LineTrip(a, b, 2.0)], 10.0, h=STEP)
-        w = np.column_stack([np.interp(t, res.t, res.speed[:, k]) for k in range(4)])
+        w = speeds_on(t, res, case, ss)
         gaps[conventions] = np.max(np.abs(w - wa))
     assert np.max(np.abs(wa - 1)) > 5e-3                          # a real swing
     assert gaps["andes"] < 2e-4                                   # measured 1.06e-4
@@ -218,11 +232,12 @@ def test_ieee14_fault_speeds_and_modes_match_andes(ieee14):
     not explained yet): speeds 3.3e-4 pu, electromechanical modes within 2.9 %."""
     raw, dyr = ieee14
     t_clear = 1.0 + 6 / 60
-    sim = Simulator(load_psse(raw, dyr, conventions="andes"), q_limits=False)
+    case = load_psse(raw, dyr, conventions="andes")
+    sim = Simulator(case, q_limits=False)
     res = sim.run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
-    t, wa = andes_speeds(andes_system(raw, dyr, AndesFault(9, 1.0, t_clear, x=1e-3)), 5.0,
-                         STEP)
-    w = np.column_stack([np.interp(t, res.t, res.speed[:, k]) for k in range(5)])
+    ss = andes_system(raw, dyr, AndesFault(9, 1.0, t_clear, x=1e-3))
+    t, wa = andes_speeds(ss, 5.0, STEP)
+    w = speeds_on(t, res, case, ss)
     assert np.max(np.abs(wa - 1)) > 4e-3                          # a real swing
     assert np.max(np.abs(w - wa)) < 4e-4                          # measured 3.33e-4
     ma = modal_analysis(linearise(sim))
@@ -252,11 +267,12 @@ def test_n44_fault_speeds_verdict_and_modes_match_andes(n44):
     j1e-3 pu, 5 ms step in both."""
     raw, dyr = n44
     t_clear = 1.0 + 6 / 60
-    sim = Simulator(load_psse(raw, dyr, conventions="andes"), q_limits=False)
+    case = load_psse(raw, dyr, conventions="andes")
+    sim = Simulator(case, q_limits=False)
     res = sim.run([Fault(5101, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
     ss = andes_system(raw, dyr, AndesFault(5101, 1.0, t_clear, x=1e-3))
     t, wa = andes_speeds(ss, 5.0, STEP)
-    w = np.column_stack([np.interp(t, res.t, res.speed[:, k]) for k in range(80)])
+    w = speeds_on(t, res, case, ss)
     assert np.max(np.abs(wa - 1)) > 3e-3                          # a real swing
     assert np.max(np.abs(w - wa)) < 5e-5                          # measured 9.6e-6
     assert res.stable and not andes_separated(ss)
@@ -269,6 +285,37 @@ def test_n44_fault_speeds_verdict_and_modes_match_andes(n44):
     # ANDES's reading of N44 (no stabilisers, default SEXS for SCRX) has an unstable
     # 0.39 Hz mode; both tools find it
     assert np.sum(ours.real > 0) == np.sum(near.real > 0) == 1
+
+
+@pytest.fixture(scope="module")
+def npcc(tmp_path_factory):
+    """NPCC 140-bus (ANDES's npcc.raw + npcc_full.dyr: 48 GENROU, IEEEX1 exciters, TGOV1
+    governors), any Toggle record removed."""
+    dyr = tmp_path_factory.mktemp("npcc") / "npcc.dyr"
+    strip_dyr(CASES / "npcc" / "npcc_full.dyr", dyr, {"TOGGLE"})
+    return CASES / "npcc" / "npcc.raw", dyr
+
+
+def test_npcc_fault_speeds_verdict_and_modes_match_andes(npcc):
+    """The DYR read as ANDES reads it (IEEEX1 as PST's DC1), PV Q limits off; 6-cycle
+    fault at bus 6 through j1e-3 pu, 5 ms step in both.  Two units at buses 23 and 54:
+    paired in order (paired with one stabctl unit each, the speeds were 6.2e-3 pu apart)."""
+    raw, dyr = npcc
+    case = load_psse(raw, dyr, conventions="andes")
+    sim = Simulator(case, q_limits=False)
+    res = sim.run([Fault(6, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
+    ss = andes_system(raw, dyr, AndesFault(6, 1.0, 1.1, x=1e-3))
+    t, wa = andes_speeds(ss, 5.0, STEP)
+    w = speeds_on(t, res, case, ss)
+    assert np.max(np.abs(wa - 1)) > 5e-3                          # a real swing (9.4e-3)
+    assert np.max(np.abs(w - wa)) < 5e-5                          # measured 2.95e-5
+    assert res.stable and not andes_separated(ss)
+    ma = modal_analysis(linearise(sim))
+    ours = ma.eigenvalues[ma.electromechanical]
+    theirs = andes_modes(andes_system(raw, dyr))
+    near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
+    assert len(ours) >= 40                                        # 42 of 48 machines
+    assert np.max(relative_gaps(ours, near)) < 1e-5               # measured 1.7e-7
 
 
 def test_n44_whole_case_imports_simulates_and_linearises():
@@ -305,9 +352,7 @@ def andes_case_run(name, bus, t_end=5.0, conventions="andes"):
     res = sim.run([Fault(bus, 1.0, t_clear, x=1e-3)], t_end, h=STEP)
     ss = andes_system(path, fault=AndesFault(bus, 1.0, t_clear, x=1e-3), off=("Toggle",))
     t, wa = andes_speeds(ss, t_end, STEP)
-    rows = [list(case.machines.bus).index(b) for b in andes_machine_buses(ss)]
-    w = np.column_stack([np.interp(t, res.t, res.speed[:, k]) for k in rows])
-    return sim, res, ss, t, w, wa
+    return sim, res, ss, t, speeds_on(t, res, case, ss), wa
 
 
 def test_ieee39_fault_speeds_verdict_and_modes_match_andes():
