@@ -80,8 +80,9 @@ def on_first_compile(notify, still=None, every_s: float = 10.0):
     """Call ``notify()`` once, when numba starts compiling the first stabctl kernel of
     this process (numba's event API, ``numba:compile``); loading cached kernels does not
     count.  Then, whenever compiling has gone on for `every_s` seconds, call
-    ``still(seconds since that compile began)``, and again every `every_s` seconds, so that
-    a long compile is never a silent wait.
+    ``still(seconds since that compile began)``, and again every `every_s` seconds (also
+    across compiles that follow one another), so that a long compile is never a silent
+    wait.
 
     Parameters
     ----------
@@ -108,7 +109,9 @@ def on_first_compile(notify, still=None, every_s: float = 10.0):
 
         def on_start(self, ev):
             if self.depth == 0:              # a compile begins (numba's overloads nest)
-                self.t_begin = self.last = time.perf_counter()
+                self.t_begin = now = time.perf_counter()
+                if now - self.last > every_s:   # else it follows the last one: keep the
+                    self.last = now             # beat, never more than every_s apart
             self.depth += 1
             if not self.noticed and ev.data["dispatcher"].py_func.__module__.startswith(
                     "stabctl."):

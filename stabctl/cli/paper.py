@@ -21,10 +21,11 @@ from stabctl.cli.options import out_dir_option, reports_errors
                                  "placement"]),
               help="Build only these parts (repeatable; times on 2 cores): analytic = "
                    "Sections 2-4 (seconds); cases = Cases 1 and 2 (under a minute, with the "
-                   "first compilation); table4 = CCT sweeps (half a minute); estimation = "
-                   "estimator Monte Carlo and in-the-loop CCTs (2-3 minutes); placement = "
-                   "the planner's ESD sizing and placement studies (about 15 minutes); "
-                   "convergence = CCT against the step under both conventions (2 minutes). "
+                   "first compilation); table4 = CCT sweeps (15 s); estimation = "
+                   "estimator Monte Carlo and in-the-loop CCTs (under 2 minutes); placement = "
+                   "the planner's ESD sizing and placement studies (about 4.5 minutes); "
+                   "convergence = CCT against the step under both conventions (half a "
+                   "minute).  All: about 8 minutes. "
                    "Default: all; with --only, paper.md holds only those parts.")
 @reports_errors
 def paper(out_dir, resume, only):
