@@ -107,16 +107,6 @@ def default_step(case: Case, conventions: str = "ieee",
     return min(half_cycle, STEP_PER_TIME_CONSTANT * T)
 
 
-def frame_step(h: float, frame_times) -> float:
-    """The largest step not above h (s) that divides the spacing of evenly spaced frame
-    times (s), so that every frame is a grid point (60 frames/s: 1/240 s for h = 5 ms);
-    h itself for fewer than two frames or uneven spacing (`Simulator.run_commanded`)."""
-    d = np.diff(np.asarray(frame_times, float))
-    if d.size == 0 or not np.allclose(d, d[0], rtol=0, atol=1e-12):
-        return h
-    return float(d[0] / np.ceil(d[0] / h - 1e-9))
-
-
 _BLAS_LIMITED = False
 
 
@@ -394,11 +384,7 @@ class Simulator:
             Delay from a frame's arrival to its set-points taking effect, s (>= 0);
             default 0.
         h : float or None, optional
-            Integration step, s; default (`frame_step`): with evenly spaced frames, the
-            largest step not above `default_h` that divides their spacing, so that every
-            frame time is a grid point (a measurement there is then a recorded value, not
-            an interpolation across the set-points changed at the frames); else
-            `default_h`.
+            Integration step, s, as `run`.
         semantics : {"pst", "exact"} or None, optional
             Event semantics, as `run`.
         separation_limit : float, optional
@@ -428,7 +414,6 @@ class Simulator:
         if np.any(np.diff(frame_times) <= 0) or latency < 0:
             raise InputError("frame times must increase and the latency must be >= 0")
         semantics = self._semantics(semantics)
-        h = frame_step(self.default_h, frame_times) if h is None else h
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
         run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
                    stop_at_separation, n_commands=frame_times.size)

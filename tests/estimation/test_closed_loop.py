@@ -53,7 +53,7 @@ def test_stop_at_separation_ends_the_commanded_run_where_run_does(kundur):
     fleet = StorageFleet(uniform_fleet(case, 5).devices, ExternalCommands())
     frames = np.arange(361) / 60
     idle = sim.run_commanded(ev, 6.0, fleet, frames, lambda t, p: np.zeros(4),
-                             stop_at_separation=True, h=sim.default_h)  # run's step
+                             stop_at_separation=True)
     plain = sim.run(ev, t_end=6.0, stop_at_separation=True)
     assert not idle.stable and not plain.stable
     assert idle.t[-1] == idle.t_separation < 6.0
