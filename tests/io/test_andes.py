@@ -266,25 +266,33 @@ def test_n44_fault_speeds_verdict_and_modes_match_andes(n44):
     as a default SEXS, HYGOV's system-base integrator); 6-cycle fault at bus 5101 through
     j1e-3 pu, 5 ms step in both."""
     raw, dyr = n44
-    t_clear = 1.0 + 6 / 60
-    case = load_psse(raw, dyr, conventions="andes")
-    sim = Simulator(case, q_limits=False)
-    res = sim.run([Fault(5101, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
-    ss = andes_system(raw, dyr, AndesFault(5101, 1.0, t_clear, x=1e-3))
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    w = speeds_on(t, res, case, ss)
+    res, ss, wa, w, ours, near = fault_and_modes(raw, dyr, 5101, 1.0 + 6 / 60)
     assert np.max(np.abs(wa - 1)) > 3e-3                          # a real swing
     assert np.max(np.abs(w - wa)) < 5e-5                          # measured 9.6e-6
     assert res.stable and not andes_separated(ss)
-    ma = modal_analysis(linearise(sim))
-    ours = ma.eigenvalues[ma.electromechanical]
-    theirs = andes_modes(andes_system(raw, dyr))
-    near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
     assert len(ours) >= 70
     assert np.max(relative_gaps(ours, near)) < 1e-5               # measured 6e-8
     # ANDES's reading of N44 (no stabilisers, default SEXS for SCRX) has an unstable
     # 0.39 Hz mode; both tools find it
     assert np.sum(ours.real > 0) == np.sum(near.real > 0) == 1
+
+
+def fault_and_modes(raw, dyr, bus: int, t_clear: float):
+    """A PSS/E case (DYR read as ANDES reads it, PV Q limits off) in both tools: a bus
+    fault from 1 s to t_clear through j1e-3 pu, 5 s at STEP, and the electromechanical
+    eigenvalues.  Returns (stabctl result, ANDES system, ANDES speeds, stabctl speeds on
+    ANDES's grid and machine order, stabctl EM eigenvalues, the nearest ANDES one to each)."""
+    case = load_psse(raw, dyr, conventions="andes")
+    sim = Simulator(case, q_limits=False)
+    res = sim.run([Fault(bus, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
+    ss = andes_system(raw, dyr, AndesFault(bus, 1.0, t_clear, x=1e-3))
+    t, wa = andes_speeds(ss, 5.0, STEP)
+    w = speeds_on(t, res, case, ss)
+    ma = modal_analysis(linearise(sim))
+    ours = ma.eigenvalues[ma.electromechanical]
+    theirs = andes_modes(andes_system(raw, dyr))
+    near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
+    return res, ss, wa, w, ours, near
 
 
 @pytest.fixture(scope="module")
@@ -301,19 +309,10 @@ def test_npcc_fault_speeds_verdict_and_modes_match_andes(npcc):
     fault at bus 6 through j1e-3 pu, 5 ms step in both.  Two units at buses 23 and 54:
     paired in order (paired with one stabctl unit each, the speeds were 6.2e-3 pu apart)."""
     raw, dyr = npcc
-    case = load_psse(raw, dyr, conventions="andes")
-    sim = Simulator(case, q_limits=False)
-    res = sim.run([Fault(6, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
-    ss = andes_system(raw, dyr, AndesFault(6, 1.0, 1.1, x=1e-3))
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    w = speeds_on(t, res, case, ss)
+    res, ss, wa, w, ours, near = fault_and_modes(raw, dyr, 6, 1.1)
     assert np.max(np.abs(wa - 1)) > 5e-3                          # a real swing (9.4e-3)
     assert np.max(np.abs(w - wa)) < 5e-5                          # measured 2.95e-5
     assert res.stable and not andes_separated(ss)
-    ma = modal_analysis(linearise(sim))
-    ours = ma.eigenvalues[ma.electromechanical]
-    theirs = andes_modes(andes_system(raw, dyr))
-    near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
     assert len(ours) >= 40                                        # 42 of 48 machines
     assert np.max(relative_gaps(ours, near)) < 1e-5               # measured 1.7e-7
 
