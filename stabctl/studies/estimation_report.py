@@ -90,7 +90,11 @@ def markdown(name: str, fig: dict, generated_by: str = "stabctl paper") -> str:
               f"process, standard deviation {AMBIENT.pct:g} %, correlation time "
               f"{AMBIENT.tau_s:g} s; {AMBIENT_RUNS} runs (load and PMU noise seeds 0.."
               f"{AMBIENT_RUNS - 1}). The `true` row is the simulated truth: its spread is the "
-              "ambient spread of the relative speeds.", "",
+              "ambient spread of the relative speeds.  Not converged in the step: the raw and "
+              "kf rows (bus frequency: the angle's derivative on the step grid, whose spike at "
+              "each load step grows as 1/h; Kundur raw 12.4, 13.3, 19.8, 35.9 mHz at 5, 4.17, "
+              "2.08, 1.04 ms; docs/estimation.md).  Converged: the true and ekf rows (the same "
+              "to 0.01 mHz at those steps).", "",
               "| estimate | actions per run | largest abs(f_i - f_COI), mHz (mean, max over runs) "
               "| largest std of f_i - f_COI, mHz |", "|---|---|---|---|"]
     for e, m in fig["false"].items():
