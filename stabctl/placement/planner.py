@@ -237,9 +237,10 @@ def read_site_costs(path) -> dict:
 def screening_brackets(path) -> dict:
     """The [stable, unstable] clearing times without storage (s) of every fault a
     screening (`stabctl screen --out`, or a placement study's records) bracketed: fault
-    name (`Contingency.fault_name`) -> (t_stable, t_unstable), for `plan`'s `brackets`.
-    Records with storage or without a CCT are skipped.  Raises InputError for a file
-    that is not sweep records."""
+    name (`Contingency.fault_name`) -> (t_stable, t_unstable), for `plan`'s `brackets`; a
+    fault still stable at the screening's limit t_max: (t_max, None).  Records with
+    storage or with another outcome are skipped.  Raises InputError for a file that is not
+    sweep records."""
     from stabctl.parallel import read_records
     from stabctl.stability.cct import LineFault
 
@@ -249,15 +250,17 @@ def screening_brackets(path) -> dict:
         raise InputError(f"screening records {path}: {exc}") from None
     out = {}
     for rec in records.values():
-        r = rec.get("result") or {}
-        if rec.get("status") != "ok" or (rec.get("inputs") or {}).get("esd_pct") is not None \
-                or "t_stable_s" not in r:
+        r, inputs = rec.get("result") or {}, rec.get("inputs") or {}
+        still = "still stable" in (rec.get("error") or "") and "t_max" in inputs
+        if inputs.get("esd_pct") is not None or not (
+                (rec.get("status") == "ok" and "t_stable_s" in r) or still):
             continue
-        f = r["fault"]
+        f = r.get("fault") or inputs
         fault = LineFault(int(f["bus"]), None if f["far_bus"] is None else int(f["far_bus"]),
                           float(f["t_fault"]), int(f["circuit"]),
                           tuple((int(a), int(b)) for a, b in f["trips"]))
-        out[Contingency(fault, 1.0).fault_name] = (r["t_stable_s"], r["t_unstable_s"])
+        out[Contingency(fault, 1.0).fault_name] = \
+            (float(inputs["t_max"]), None) if still else (r["t_stable_s"], r["t_unstable_s"])
     return out
 
 
