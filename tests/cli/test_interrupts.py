@@ -77,9 +77,7 @@ def test_sigkill_of_a_sweep_leaves_no_worker_running(tmp_path):
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
 def test_sigint_of_a_screening_exits_130_with_the_resume_command(tmp_path):
-    # miniWECC's 134 faults: still running when the first line is in, however fast the
-    # runs (Kundur's 13 could all finish before the signal arrived on a loaded machine)
-    args = ["screen", "miniwecc", "--tol-ms", "5", "--workers", "2", "--out", "s.jsonl"]
+    args = ["screen", "kundur", "--tol-ms", "0.05", "--workers", "2", "--out", "s.jsonl"]
     proc = _start(args, tmp_path)
     out = tmp_path / "s.jsonl"
     try:
