@@ -583,10 +583,10 @@ def _references(pl: _Plan, cons, failing, result: PlanResult, kw, margins_tol,
             result.half_step = half_step(pl, cons, result, half_step_n, kw)
 
     with ThreadPoolExecutor(max_workers=3) as threads:
-        done = [threads.submit(margins_and_half_step)]
+        m = threads.submit(margins_and_half_step)
         u = threads.submit(least_uniform, pl, cons, failing, kw) if uniform else None
         a = threads.submit(_alone, pl, cons, result, max_iter, kw) if alone else None
-        done[0].result()
+        m.result()
         result.uniform = None if u is None else u.result()
         result.alone = [] if a is None else a.result()
 

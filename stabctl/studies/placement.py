@@ -38,7 +38,8 @@ from stabctl.studies.cases import DEFAULT_FAULTS  # noqa: E402
 from stabctl.placement.program import candidate_sites  # noqa: E402
 from stabctl.placement.evaluation import Contingency  # noqa: E402
 from stabctl.placement.loop import _rounded, evaluations, place  # noqa: E402
-from stabctl.placement.planner import CostModel, Requirement, plan  # noqa: E402
+from stabctl.placement.planner import (CostModel, Requirement, plan,  # noqa: E402
+                                       screening_brackets)
 from stabctl.storage.devices import hv_bus  # noqa: E402
 from stabctl.parallel import run_sweep, strip_run_dependent, worker_pool  # noqa: E402
 
@@ -105,14 +106,6 @@ def in_scope(rows) -> list[dict]:
             "still stable" in (r["error"] or "")]
 
 
-def brackets_of(rows) -> dict:
-    """Fault name -> the screening's [stable, unstable] clearing times (s); a fault still
-    stable at the screening's limit: [SCREEN_T_MAX, None]."""
-    return {Contingency(r["fault"], 1).fault_name:
-            (r["cct_s"], r["t_unstable_s"]) if r["cct_s"] is not None else (SCREEN_T_MAX, None)
-            for r in in_scope(rows)}
-
-
 def paper_continuity(case_name: str, sites, mva, kw, say) -> dict:
     """The paper's fault alone with today's target: the CCT of the uniform 5 % fleet (its
     first unstable clearing time), from that fleet (`place`, MAX_ITER_SIDE allocations)."""
@@ -149,7 +142,8 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
         rows = screen(case_name, records_dir, workers,
                       lambda k, n: beat.note(f"screening {k}/{n} faults"))
         scope = in_scope(rows)
-        faults, brackets = [r["fault"] for r in scope], brackets_of(rows)
+        faults = [r["fault"] for r in scope]
+        brackets = screening_brackets(records_dir / f"placement_{case_name}_screening.jsonl")
         say(f"{case_name}: screened {len(rows)} faults in {time.perf_counter() - wall:.0f} s;"
             f" {len(faults)} stable when cleared at once")
         with worker_pool(workers) as pool_map:
