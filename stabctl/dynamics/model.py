@@ -234,7 +234,7 @@ class DynamicModel:
             exc_rows=L.exc_rows, pss_rows=L.pss_rows, tg_rows=L.tg_rows,
             mac_bus=mp.bus_idx.astype(np.int64), vex0=self.vex0, pmech0=self.pmech0,
             S_P=self.nc.S_P.astype(complex), I0=self.nc.I0.astype(complex),
-            Y_low=self.nc.Y_low.astype(complex), ieee=self.conventions == "ieee",
+            Y_low=self.nc.Y_low.astype(complex), ieee=self.conventions == "ieee", reach=0.0,
             n_mac=L.n_mac, n_exc=L.n_exc, n_pss=L.n_pss, n_tg=L.n_tg)
         dx, _ = self.evaluate(self.x0.copy(), self.network(StageConfig()), self.V_nc0)
         k = int(np.argmax(np.abs(dx)))
@@ -305,6 +305,8 @@ class KernelParams(NamedTuple):
     I0: np.ndarray
     Y_low: np.ndarray
     ieee: bool
+    #: limiter reach (s): the run's step in a simulation, 0 elsewhere (`exc._nonwindup`)
+    reach: float
     n_mac: int
     n_exc: int
     n_pss: int
@@ -491,7 +493,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     efd[:] = p.vex0
     for i in range(ne):
         m = int(p.EP[i, exc.E_MAC])
-        exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], dxe, p.ieee)
+        exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], dxe, p.ieee, p.reach)
         efd[m] = exc.recorded_efd(p.EP, xe, i, efd_alg[i])
     for k in range(ng):
         gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G_MAC])], dxg)

@@ -464,6 +464,8 @@ class _Run:
         self.nets, self.steps = stacked_networks(nets), step_grid(grid)
         self.opts = RunOptions(pst=pst, inertia=sim.inertia, limit=limit, stop=stop)
         self.limit = limit
+        #: the model's parameters with the run's largest step as the limiters' reach
+        self.params = m.params._replace(reach=float(np.max(grid.h)))
         self.k, self.status, self.wall, self.stored = 0, OK, 0.0, False
 
     @property
@@ -484,7 +486,7 @@ class _Run:
         self.stored = True
         wall = time.perf_counter()
         self.status, k_end = integrate(self.carry, self.k, k1, self.steps, self.nets,
-                                       self.m.params, self.sa, self.opts, self.rec)
+                                       self.params, self.sa, self.opts, self.rec)
         self.wall += time.perf_counter() - wall
         self.k = k_end
 

@@ -353,13 +353,23 @@ def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
 
 
 @njit(cache=True)
-def _nonwindup(x, dx, r, i, d, lo, hi, ieee):
+def _nonwindup(x, dx, r, i, d, lo, hi, ieee, reach):
     """Non-windup limited lag: zero an outward derivative beyond a limit (PST exc_st3,
     exc_dc12; ieee: at or beyond it, IEEE Std 421.5-2016 annex E.5, so that a state held
-    at its limit stays there), then clamp the state."""
+    at its limit stays there), then clamp the state.
+
+    reach (s, >= 0; ieee only): a state that its derivative drives into a limit within
+    `reach` is held on it (set to the limit, derivative zero).  For a limit that moves
+    with the terminal voltage (DC2) the run's step is passed: the held state is otherwise
+    left a hair inside the limit after each step, the derivative there is the full
+    (K_A V_A - V_R)/T_A, and the predictor-corrector alternates between it and zero (a
+    false NumericalInstabilityError from its local error estimate).  With reach = 0 it is
+    the plain annex E.5 limiter; as the step shrinks both converge to it."""
     if ieee:
-        if (x[r, i] >= hi and d > 0) or (x[r, i] <= lo and d < 0):
-            d = 0.0
+        if d > 0 and x[r, i] + reach * d >= hi:
+            x[r, i], d = hi, 0.0
+        elif d < 0 and x[r, i] + reach * d <= lo:
+            x[r, i], d = lo, 0.0
     elif (x[r, i] > hi and d > 0) or (x[r, i] < lo and d < 0):
         d = 0.0
     dx[r, i] = d
@@ -367,8 +377,10 @@ def _nonwindup(x, dx, r, i, d, lo, hi, ieee):
 
 
 @njit(cache=True)
-def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee):
+def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee, reach):
     """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
+    reach (s): DC2's V_t-scaled V_R limits hold a state within that reach (`_nonwindup`;
+    the run's step, 0 in the linearisation).
 
     smpexc: PSTess clamps the Efd state to [Vrmin, Vrmax] after its derivative is computed
     and keeps the derivative (PST's misspelt dEFD, docs/pst_models.md 2.1); ieee: a
@@ -401,7 +413,8 @@ def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee):
     lo, hi = P[i, E_VRMIN], P[i, E_VRMAX]
     if smp:
         if P[i, E_TA] >= LBND and ieee:
-            _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo, hi, ieee)
+            _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo, hi, ieee,
+                       0.0)
         elif P[i, E_TA] >= LBND:
             dx[2, i] = (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA]
             x[2, i] = min(max(x[2, i], lo), hi)
@@ -412,11 +425,11 @@ def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee):
     elif dc:
         mult = eterm if kind == DC2 else 1.0
         _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo * mult, hi * mult,
-                   ieee)
+                   ieee, reach if kind == DC2 else 0.0)
         _dc_exciter(P, x, i, dx)
     else:
         d = (P[i, E_KA] * (VA - min(P[i, E_VGMAX], P[i, E_KG] * efd)) - x[2, i]) / P[i, E_TA]
-        _nonwindup(x, dx, 2, i, d, lo, hi, ieee)
+        _nonwindup(x, dx, 2, i, d, lo, hi, ieee, 0.0)
 
 
 @njit(cache=True)

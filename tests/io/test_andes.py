@@ -122,6 +122,23 @@ def test_wecc_fault_speeds_match_andes(wecc):
     assert np.max(np.abs(w - wa)) < 1.5e-3                        # measured 1.03e-3
 
 
+def test_kundur_dc2_exciters_converge_in_the_step(kundur):
+    """Kundur's EXDC2 read as PSS/E's (conventions="pst": DC2, V_R limits times V_t), the
+    ieee model: line 5-6 faulted at bus 5 and cleared after 0.3 s, the line lost.  G1 and G2
+    separate, their regulators sitting on a limit that moves with V_t (0.55 pu); at the
+    default step 1/120 s and at 1/960 s the run gives the same verdict, separation time
+    (within two steps) and end speeds (measured 3.0e-5 pu).  Without holding a state on a
+    limit within the step's reach the 1/120 s and 1/240 s runs stopped with a
+    NumericalInstabilityError on exc.VR.G2 (every line fault of a CCT sweep did)."""
+    raw, dyr = kundur
+    sim = Simulator(load_psse(raw, dyr, conventions="pst"))
+    runs = [sim.run([Fault(5, 1.0, 1.3, 1.3, far_bus=6)], 4.0, h=h) for h in (1 / 120, 1 / 960)]
+    assert not runs[0].stable and not runs[1].stable
+    assert sorted(runs[0].separated) == sorted(runs[1].separated)
+    assert abs(runs[0].t_separation - runs[1].t_separation) <= 2 / 120
+    assert np.max(np.abs(runs[0].speed[-1] - runs[1].speed[-1])) < 1e-4
+
+
 def test_kundur_line_trip_speeds_match_andes():
     """ANDES's own disturbance of kundur_full.dyr: its Toggle record opens Line_8 (buses 8-9,
     one of two circuits) at 2 s; stabctl reads the same DYR (Toggle reported unsupported

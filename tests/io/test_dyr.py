@@ -289,7 +289,7 @@ def test_dc_exciter_steady_state_vr_equals_ke_plus_se_times_efd(KE):
     assert x[2, 0] == pytest.approx((KE_eff + SE) * Efd, abs=1e-15)
     assert Vref[0] == pytest.approx(Vt + x[2, 0] / 20, rel=1e-15)
     dx = np.zeros_like(x)
-    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx, True)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
 
 
@@ -308,7 +308,7 @@ def test_quadratic_saturation_passes_both_points_and_keeps_ke():
     x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
     assert p.KE[0] == 0.0 and x[2, 0] == pytest.approx(B * (Efd - A) ** 2, rel=1e-14)
     dx = np.zeros_like(x)
-    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx, True)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
     row[23] = 0                                      # K_E = 0 computed: V_R0 = 0
     p = exc.exciter_params(load_case("kundur").replace(exciters=ExciterTable.from_matrix([row])))
@@ -323,8 +323,29 @@ def test_dc2_limit_scales_with_terminal_voltage():
         x, Vref, p = exc.initialise(p, np.array([1.0]), np.array([1.0]))
         x[2, 0] = 10.0
         dx = np.zeros_like(x)
-        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, dx, True)
+        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, dx, True, 0.0)
         assert x[2, 0] == pytest.approx(bound, rel=1e-15) and dx[2, 0] == 0.0
+
+
+def test_dc2_state_held_on_a_limit_that_rose_within_reach():
+    """DC2 under ieee: V_R held at VRMAX V_t = 5.2 x 0.5 when V_t then rises to 0.51 is
+    inside the new limit 2.652 by 0.052 pu while K_A V_A drives it out at (K_A V_A - V_R)/T_A
+    pu/s; within one step's reach it is set on the limit with a zero derivative (no
+    alternation between the full derivative and zero); with no reach (the linearisation,
+    or a step too short to get there) it keeps its derivative.  DC1's fixed limit never
+    moves: no reach is applied."""
+    p = dc_params(exc.DC2)
+    x0, Vref, p = exc.initialise(p, np.array([1.0]), np.array([1.0]))
+    P = p.packed(Vref + 1.0)
+    for reach, held in ((0.01, True), (0.0, False), (1e-6, False)):
+        x = x0.copy()
+        x[2, 0] = 5.2 * 0.5
+        dx = np.zeros_like(x)
+        exc.derivatives(P, x, 0, 0.51, 0.0, 1.0, dx, True, reach)
+        if held:
+            assert x[2, 0] == pytest.approx(5.2 * 0.51, rel=1e-15) and dx[2, 0] == 0.0
+        else:
+            assert x[2, 0] == 5.2 * 0.5 and dx[2, 0] > 0.052 / 0.01
 
 
 def st1_params(KC=0.1, KF=0.01):
@@ -343,7 +364,7 @@ def test_exst1_steady_state_and_output_limit():
     P = p.packed(Vref)
     assert exc.field_voltage(P, x, 0, Vt, 0.0, 1.0, Efd, True) == Efd
     dx = np.full_like(x, np.nan)
-    exc.derivatives(P, x, 0, Vt, 0.0, Efd, dx, True)
+    exc.derivatives(P, x, 0, Vt, 0.0, Efd, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
     x[2, 0] = 10.0
     assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(0.9 * 4.0 - 0.1 * 2.0)
