@@ -49,17 +49,28 @@ def case_figures(name: str, runs: int, cct_runs, records_dir: Path,
     res = Simulator(case).run([ev], t_end=10.0)
     window = (max(ev.times()) + 0.1, 10.0)
     rmse = study.monte_carlo(case, res, PMUSettings(), runs, 0, window)
-    sim = Simulator(case)
-    flat = []
-    for r in range(AMBIENT_RUNS):
-        say(f"estimation {name}: ambient load run {r + 1}/{AMBIENT_RUNS} ({AMBIENT_S:g} s)")
-        flat.append(am.simulate(sim, AMBIENT_S, replace(AMBIENT, seed=r)))
-    false = study.false_actions(case, flat, PMUSettings(), 0)
+    false = ambient_figures(case, progress=lambda r: say(
+        f"estimation {name}: ambient load run {r + 1}/{AMBIENT_RUNS} ({AMBIENT_S:g} s)"))
     say(f"estimation {name}: CCT with the estimators in the loop, {_seeds_text(cct_runs)}")
     cct = cl.cct_study(name, bus, far, RATINGS, cct_runs,
                        records_dir / f"estimation_cct_{name}.jsonl", workers=workers)
     return {"rmse": rmse, "false": false, "cct": cct, "cycles": cycles, "bus": bus, "far": far,
             "runs": runs, "cct_runs": cct_runs}
+
+
+def ambient_figures(case, h: float | None = None, runs: int = AMBIENT_RUNS,
+                    t_end: float = AMBIENT_S, progress=None) -> dict:
+    """The false-actions figures (`estimation_study.false_actions`, default PMUs, noise seeds
+    0..runs-1) of `runs` runs of t_end s without fault with the AMBIENT load fluctuation
+    (load seeds 0..runs-1), integrated with step h (s; None: the case's default).
+    progress: callable(r) told before run r.  Raises as `ambient.simulate`."""
+    sim = Simulator(case, step=h)
+    flat = []
+    for r in range(runs):
+        if progress:
+            progress(r)
+        flat.append(am.simulate(sim, t_end, replace(AMBIENT, seed=r)))
+    return study.false_actions(case, flat, PMUSettings(), 0)
 
 
 def _seeds_text(cct_runs) -> str:
