@@ -67,7 +67,10 @@ def _pmu_noise(func):
         click.option("--rfe-hz-s", type=float, default=0.01, show_default=True,
                      help="ROCOF error limit (Hz/s), C37.118.1 Table 4."),
         click.option("--k-sigma", type=float, default=3.0, show_default=True,
-                     help="The limits are this many standard deviations of the errors.")))
+                     help="The limits are this many standard deviations of the errors."),
+        click.option("--window-cycles", type=float, default=2.0, show_default=True,
+                     metavar="C", help="Frequency and ROCOF estimation window (cycles): the "
+                     "phase advance over it; 2 = P class (C37.118.1-2011 Annex C).")))
 
 
 def _runs_seed(func):
@@ -79,11 +82,12 @@ def _runs_seed(func):
 
 
 def _settings(rate, latency_ms, drop=0.0, tve_pct=1.0, fe_hz=0.005, rfe_hz_s=0.01,
-              k_sigma=3.0):
+              k_sigma=3.0, window_cycles=2.0):
     from stabctl.estimation.pmu import PMUSettings
 
     return PMUSettings(rate=rate, tve=tve_pct / 100, fe_hz=fe_hz, rfe_hz_s=rfe_hz_s,
-                       k_sigma=k_sigma, latency_s=latency_ms / 1000, drop_prob=drop)
+                       k_sigma=k_sigma, latency_s=latency_ms / 1000, drop_prob=drop,
+                       window_cycles=window_cycles)
 
 
 def _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
@@ -131,8 +135,8 @@ def _fault_run(func):
 @json_option("the figures")
 @reports_errors
 def rmse(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms, drop,
-         tve_pct, fe_hz, rfe_hz_s, k_sigma, pmu_at, esd_pct, deadband_hz, v_gate, coi,
-         hysteresis_hz, runs, seed, settle_ms, ambient_s, ambient_pct, ambient_tau_s,
+         tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles, pmu_at, esd_pct, deadband_hz,
+         v_gate, coi, hysteresis_hz, runs, seed, settle_ms, ambient_s, ambient_pct, ambient_tau_s,
          ambient_runs, conventions, step, as_json):
     """Errors of the speed estimators against the truth, and false ESD actions.
 
@@ -163,7 +167,8 @@ def rmse(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms,
     if min(settle_ms, ambient_s, seed) < 0 or ambient_runs < 1:
         raise InputError("--settle-ms, --ambient-s and --seed must be >= 0, --ambient-runs >= 1")
     ambient = am.AmbientLoad(ambient_pct, ambient_tau_s, seed)
-    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma)
+    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma,
+                         window_cycles)
     case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     d = estimator_errors(case, ev, settings=settings, esd_pct=esd_pct, runs=runs, seed=seed,
                          settle_s=settle_ms / 1000, t_end=tf, pmu_at=pmu_at, coi=coi,
@@ -198,8 +203,8 @@ def _check_positive(**values) -> None:
 @json_option("the verdicts")
 @reports_errors
 def closed_loop(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms, drop,
-                tve_pct, fe_hz, rfe_hz_s, k_sigma, esd_pct, deadband_hz, v_gate, coi,
-                hysteresis_hz, seed, conventions, step, as_json):
+                tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles, esd_pct, deadband_hz,
+                v_gate, coi, hysteresis_hz, seed, conventions, step, as_json):
     """The fault simulated with the ESDs commanded by each estimator in the loop.
 
     For each estimator (ideal, raw, kf, ekf; PMU noise seed --seed) the verdict, the
@@ -210,7 +215,8 @@ def closed_loop(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, late
     _check_positive(tf=tf, deadband_hz=deadband_hz)
     if esd_pct is None:
         raise InputError("estimate closed-loop needs --esd-pct")
-    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma)
+    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma,
+                         window_cycles)
     case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     rows = closed_loop_verdicts(case, ev, t_end=tf, settings=settings, esd_pct=esd_pct,
                                 seed=seed,

@@ -294,7 +294,7 @@ def print_estimate(d) -> None:
                + ("" if d["stable"] else "; the run loses synchronism"))
     click.echo(f"PMUs at the {p['at']} buses: {p['rate']:g} frames/s, TVE {100 * p['tve']:g} %, "
                f"FE {p['fe_hz']:g} Hz, RFE {p['rfe_hz_s']:g} Hz/s ({p['k_sigma']:g} sigma), "
-               f"latency {1000 * p['latency_s']:g} ms, lost {p['drop_prob']:g}; "
+               f"frequency window {p['window_cycles']:g} cycles, latency {1000 * p['latency_s']:g} ms, lost {p['drop_prob']:g}; "
                f"{d['runs']} runs, seeds {d['seed']}..{d['seed'] + d['runs'] - 1}")
     w = d["window_s"]
     click.echo(f"errors in mHz from {w[0]:.3f} s to {w[1]:g} s, mean +- std over the runs:")

@@ -15,10 +15,10 @@ gate (0.8 pu) is applied by the devices themselves.  Optional ambient load fluct
 
 Frames are made incrementally: the noise of the whole run is drawn once per seed (the same
 draws as `pmu.measure` gives for a run of that length), and each frame's true values come
-from the last few grid points only, so a run costs O(frames).  Unlike the offline model
-(centred differences on the whole trajectory), the bus frequency is causal: the mean over
-the last two cycles, as a P-class PMU estimates it; a derivative at the end of the
-trajectory would spike at every ESD switching and feed those spikes back.  The first frame
+from the last few grid points only, so a run costs O(frames).  The bus frequency and ROCOF
+are the PMU's window estimates (`pmu.window_estimates`, `PMUSettings.window_cycles`, two
+cycles by default) as in the offline model, but causal: over the last complete windows
+before the time stamp, where the offline model centres them on it.  The first frame
 (t = 0, before the run has a recorded point) is skipped: the devices stay idle.
 """
 
@@ -34,14 +34,14 @@ from stabctl.storage import devices as st
 from stabctl.estimation.ambient import AmbientLoad
 from stabctl.errors import InputError
 from stabctl.network.ybus import branch_admittances
-from stabctl.estimation.pmu import Frame, PhasorTruth, PMUSettings, machine_pmus, measure
+from stabctl.estimation.pmu import (Frame, PhasorTruth, PMUSettings, interp_columns,
+                                   machine_pmus, measure, window_estimates)
 from stabctl.dynamics.results import SimulationResult
 
 ESTIMATORS = ("ideal", "raw", "kf", "ekf")
-PMU_WINDOW_CYCLES = 2.0    # frequency estimation window of a P-class PMU (C37.118.1 annex)
-#: trajectory handed to the controller at each frame (cycles): the two frequency windows a
-#: frame reads (`_tail_truth`) and one more of margin; a longer tail only costs time
-HISTORY_CYCLES = 3 * PMU_WINDOW_CYCLES
+#: trajectory handed to the controller at each frame (PMU estimation windows): the two
+#: windows a frame reads (`_tail_truth`) and one more of margin; a longer tail only costs time
+HISTORY_WINDOWS = 3
 
 
 @dataclass
@@ -121,7 +121,8 @@ class LoopController:
         """The measured frame at t_f: true values from the trajectory's tail, plus noise."""
         k = int(round(t_f * self.settings.rate))
         f0 = self.case.freq_hz
-        v, i, f, rocof = _tail_truth(partial, self.cols, self.C, t_f, PMU_WINDOW_CYCLES / f0, f0,
+        v, i, f, rocof = _tail_truth(partial, self.cols, self.C, t_f,
+                                     self.settings.window_s(f0), f0,
                                      need=(self.need, self.need_cols, self.C_need))
         n = self.noise
         nan = np.where(n.valid[k], 1.0, np.nan)
@@ -182,9 +183,8 @@ def _tail_truth(partial: SimulationResult, cols, C, t_f: float, window: float, f
                 need=None):
     """Noise-free PMU values at t_f from the end of the run so far (up to the first grid
     point at or after t_f): bus voltages interpolated by magnitude and unwrapped angle, the
-    currents C @ V; frequency the mean over the last `window` s (phase advance / window, a
-    P-class PMU's estimate: causal, and without the one-step spikes of a derivative at the
-    end of the trajectory), ROCOF the change of that frequency over one more window.
+    currents C @ V; frequency over the last `window` s before t_f and ROCOF over the last
+    two (`pmu.window_estimates` centred at t_f - window / 2 and t_f - window: causal).
     Times before the start take the initial (steady) state.  cols: the PMU buses' indices;
     need: (buses, cols within them, C on them) to interpolate only the buses the frame
     uses (`LoopController`; default all buses), the same values at a fraction of the cost."""
@@ -193,26 +193,12 @@ def _tail_truth(partial: SimulationResult, cols, C, t_f: float, window: float, f
     t = partial.t[lo:]
     keep = np.r_[np.diff(t) > 0, True]
     ang = np.unwrap(partial.vang[lo:, bus][keep], axis=0)
-    nb = ang.shape[1]               # one interpolation for |V| and angle at the 3 instants
-    at = _interp(t_f - window * np.arange(2, -1, -1.0), t[keep],
-                 np.hstack((partial.vmag[lo:, bus][keep], ang)))
-    now = at[2, :nb] * np.exp(1j * at[2, nb:])
-    phase = at[:, nb:][:, cols_in]
-    f = f0 + np.diff(phase, axis=0) / (2 * np.pi * window)
-    return now[cols_in], C_in @ now, f[1], (f[1] - f[0]) / window
-
-
-def _interp(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
-    """`numpy.interp` of every column of fp (n, m) at x (k,) -> (k, m), in one pass: the
-    same formula (fp[j] + slope (x - xp[j]), clamped to the end values outside xp)."""
-    if xp.size == 1:
-        return np.repeat(fp[:1], x.size, axis=0)
-    j = np.clip(np.searchsorted(xp, x, side="right") - 1, 0, xp.size - 2)
-    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])[:, None]
-    out = slope * (x - xp[j])[:, None] + fp[j]
-    out[x <= xp[0]] = fp[0]
-    out[x >= xp[-1]] = fp[-1]
-    return out
+    nb = ang.shape[1]               # one interpolation for |V| and angle
+    at = interp_columns(np.array([t_f]), t[keep], np.hstack((partial.vmag[lo:, bus][keep], ang)))
+    now = at[0, :nb] * np.exp(1j * at[0, nb:])
+    f, rocof = window_estimates(t[keep], ang[:, cols_in], [t_f - window / 2], [t_f - window],
+                                window, f0)
+    return now[cols_in], C_in @ now, f[0], rocof[0]
 
 
 @dataclass
@@ -255,7 +241,7 @@ def run_closed_loop(sim, events, t_end: float, fleet_pct: float, estimator: str,
     res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), frames, decide,
                             latency=latency, h=h, separation_limit=separation_limit,
                             stop_at_separation=stop_at_separation,
-                            history_s=HISTORY_CYCLES / sim.case.freq_hz)
+                            history_s=HISTORY_WINDOWS * settings.window_s(sim.case.freq_hz))
     return ClosedLoopRun(res, ctrl.diagnostics())
 
 

@@ -18,11 +18,18 @@ the reporting instants (magnitude and unwrapped angle separately):
   bus (normally its high-voltage bus): the current flowing into that bus through the
   branches from the terminal bus; of a storage device: `-P_esd / conj(V)` (the device
   draws real power only; generator sign convention: current into the network);
-- frequency: f = f0 + (1/2 pi) d(theta)/dt of the unwrapped bus voltage angle theta, by
-  second-order centred differences on the step grid (`numpy.gradient`, one-sided at the
-  ends); ROCOF = df/dt the same way.  A network event makes theta jump, so the frequency
-  shows a spike one step wide there, as a real PMU shows one (C37.118.1 excludes such
-  intervals from its compliance limits).
+- frequency and ROCOF: over the PMU's estimation window W (`PMUSettings.window_cycles`
+  cycles of f0, two by default, the P-class filter length of the C37.118.1-2011 Annex C
+  reference model), from the unwrapped bus voltage angle theta, linear between grid points
+  (`window_estimates`): f = f0 + (theta(c + W/2) - theta(c - W/2)) / (2 pi W) over the
+  window centred at c, ROCOF = the change of f between the windows centred at c -+ W/2,
+  over W.  The offline model centres the windows on the frame's time stamp (C37.118.1-2011
+  clause 4 and Annex C: a measurement is time-tagged at the centre of its window), moved
+  inside the run near its ends; the in-loop model (`closed_loop`) takes the last complete
+  windows before the time stamp (causal).  A network event makes theta jump by d; the
+  frequency then errs by d / (2 pi W) for the frames whose window holds the jump, whatever
+  the integration step, as a real PMU's does (C37.118.1 excludes such intervals from its
+  compliance limits).
 
 Noise (`PMUSettings`): the accuracy limits of C37.118.1-2011 clause 5.5 (steady-state
 Table 3: total vector error TVE <= 1 %; Table 4: frequency error FE <= 0.005 Hz, ROCOF
@@ -98,6 +105,10 @@ class PMUSettings:
         k_sigma: the limits are k standard deviations (see the module docstring).
         latency_s: delay from a frame's time stamp to its arrival (s), >= 0.
         drop_prob: probability that a frame never arrives, in [0, 1).
+        window_cycles: frequency and ROCOF estimation window (cycles of the nominal
+            frequency), > 0; 2 is the P-class filter length of the reference model of
+            IEEE C37.118.1-2011 Annex C (kept by IEC/IEEE 60255-118-1:2018); see
+            `window_estimates`.
     Raises InputError for values out of range.
     """
 
@@ -108,6 +119,7 @@ class PMUSettings:
     k_sigma: float = 3.0
     latency_s: float = 0.05
     drop_prob: float = 0.0
+    window_cycles: float = 2.0
 
     def __post_init__(self):
         if self.rate not in RATES:
@@ -119,6 +131,12 @@ class PMUSettings:
                              "k_sigma finite and > 0")
         if not 0 <= self.drop_prob < 1:
             raise InputError(f"dropped-frame probability must be in [0, 1), got {self.drop_prob}")
+        if not 0 < self.window_cycles < float("inf"):
+            raise InputError(f"PMU estimation window must be > 0 cycles, got {self.window_cycles}")
+
+    def window_s(self, f0: float) -> float:
+        """The frequency estimation window (s) at nominal frequency f0 (Hz)."""
+        return self.window_cycles / f0
 
     @property
     def sigma_phasor(self) -> float:
@@ -141,7 +159,10 @@ class PMUSettings:
 class PhasorTruth:
     """Noise-free PMU quantities on a time grid: t (n_t,) s; v, i (n_t, n_pmu) complex pu
     (system base; i is NaN for a PMU without current channel); freq (Hz), rocof (Hz/s)
-    (n_t, n_pmu); f0 nominal frequency (Hz)."""
+    (n_t, n_pmu); f0 nominal frequency (Hz); window: None if freq and rocof are given on
+    the grid (they are interpolated between grid points), else the PMU estimation window
+    (s) they are measured over from the angle of v (`angle_truth`; `at` evaluates them at
+    any instant)."""
 
     t: np.ndarray
     pmus: tuple
@@ -150,14 +171,21 @@ class PhasorTruth:
     freq: np.ndarray
     rocof: np.ndarray
     f0: float
+    window: float | None = None
 
     def at(self, t: np.ndarray) -> "PhasorTruth":
-        """The same quantities linearly interpolated to times t (magnitudes and unwrapped
-        angles separately for the phasors); t within the grid."""
-        return PhasorTruth(t=np.asarray(t, float), pmus=self.pmus,
-                           v=_interp_phasor(t, self.t, self.v), i=_interp_phasor(t, self.t, self.i),
-                           freq=_interp_columns(t, self.t, self.freq),
-                           rocof=_interp_columns(t, self.t, self.rocof), f0=self.f0)
+        """The same quantities at times t (k,) within the grid (window None in the result):
+        phasors linearly interpolated (magnitudes and unwrapped angles separately);
+        frequency and ROCOF interpolated, or with a window the PMU's estimates at t
+        (`centred_estimates`)."""
+        t = np.asarray(t, float)
+        if self.window is None:
+            freq, rocof = interp_columns(t, self.t, self.freq), interp_columns(t, self.t, self.rocof)
+        else:
+            freq, rocof = centred_estimates(self.t, np.angle(self.v), t, self.window, self.f0)
+        return PhasorTruth(t=t, pmus=self.pmus, v=_interp_phasor(t, self.t, self.v),
+                           i=_interp_phasor(t, self.t, self.i), freq=freq, rocof=rocof,
+                           f0=self.f0)
 
 
 class Frame(NamedTuple):
@@ -230,23 +258,66 @@ def machine_pmus(case: Case, at: str = "terminal") -> tuple:
     return tuple(PMU(bus=b, machine=n) for b, n in zip(buses, nums))
 
 
-def bus_frequency(t: np.ndarray, vang: np.ndarray, f0: float) -> tuple[np.ndarray, np.ndarray]:
-    """Frequency (Hz) and ROCOF (Hz/s) of bus voltages from their angles.
+def window_estimates(t: np.ndarray, ang: np.ndarray, f_at, rocof_at, window: float,
+                     f0: float) -> tuple[np.ndarray, np.ndarray]:
+    """A PMU's frequency (Hz) and ROCOF (Hz/s) over its estimation window, from bus angles.
 
-    t (n_t,) strictly increasing s; vang (n_t, n) rad (wrapped or not).  f = f0 +
-    d(unwrap(vang))/dt / (2 pi), ROCOF = df/dt, both by second-order differences on the
-    (possibly non-uniform) grid, centred inside and one-sided at the ends
-    (`numpy.gradient`, edge_order 2).  Raises InputError for fewer than 3 points or a
-    non-increasing grid.
+    The phase advance over the window (IEEE C37.118.1-2011 clause 4.3, frequency as the
+    derivative of the phase, taken over the estimation window of the Annex C reference
+    model, two cycles for P class):
+
+        f(c) = f0 + (theta(c + W/2) - theta(c - W/2)) / (2 pi W)
+        ROCOF(r) = (f(r + W/2) - f(r - W/2)) / W
+                 = (theta(r + W) - 2 theta(r) + theta(r - W)) / (2 pi W^2)
+
+    with theta the unwrapped angle, linear between grid points and held at its first and
+    last values outside the grid (a run starts from steady state).  A jump d of theta
+    inside a window adds d / (2 pi W) to f, independent of the grid.
+
+    t (n_t,) strictly increasing s; ang (n_t, n) rad, wrapped or not; f_at (k,) centres of
+    the frequency windows, rocof_at (k,) centres of the ROCOF window pairs (s); window W s.
+    Returns f, rocof (k, n).  Raises InputError for an empty or non-increasing grid or a
+    window not > 0.
     """
-    if t.size < 3 or np.any(np.diff(t) <= 0):
-        raise InputError("bus frequency needs at least 3 strictly increasing time points")
-    f = f0 + np.gradient(np.unwrap(vang, axis=0), t, axis=0, edge_order=2) / (2 * np.pi)
-    return f, np.gradient(f, t, axis=0, edge_order=2)
+    if t.size < 1 or np.any(np.diff(t) <= 0):
+        raise InputError("PMU frequency needs a strictly increasing time grid")
+    if not 0 < window < np.inf:
+        raise InputError(f"PMU estimation window must be > 0 s, got {window}")
+    f_at, rocof_at = np.atleast_1d(np.asarray(f_at, float)), np.atleast_1d(np.asarray(rocof_at, float))
+    k, half = f_at.size, window / 2
+    x = np.concatenate((f_at - half, f_at + half, rocof_at - window, rocof_at, rocof_at + window))
+    th = interp_columns(x, t, np.unwrap(ang, axis=0))
+    f = f0 + (th[k:2 * k] - th[:k]) / (2 * np.pi * window)
+    r = th[2 * k:].reshape(3, rocof_at.size, -1)
+    return f, (r[2] - 2 * r[1] + r[0]) / (2 * np.pi * window ** 2)
 
 
-def phasor_truth(case: Case, result: SimulationResult, pmus) -> PhasorTruth:
-    """True PMU quantities of `pmus` on the result's step grid (see the module docstring).
+def centred_estimates(t: np.ndarray, ang: np.ndarray, at, window: float,
+                      f0: float) -> tuple[np.ndarray, np.ndarray]:
+    """`window_estimates` time-tagged at the window centres `at` (k,) s (C37.118.1-2011
+    Annex C), the windows moved inside the grid [t0, t_end] near its ends (one-sided
+    there; a grid shorter than two windows holds its end values).  Returns f, rocof
+    (k, n); raises as `window_estimates`."""
+    at = np.asarray(at, float)
+    inside = lambda w: np.minimum(np.maximum(at, t[0] + w), t[-1] - w)  # noqa: E731
+    return window_estimates(t, ang, inside(window / 2), inside(window), window, f0)
+
+
+def angle_truth(t: np.ndarray, pmus, v: np.ndarray, i: np.ndarray, f0: float,
+                window: float) -> PhasorTruth:
+    """The `PhasorTruth` of phasors v, i (n_t, n_pmu) on grid t (n_t,) s, its frequency and
+    ROCOF the PMU's over `window` s from the angle of v (`centred_estimates`).  Raises as
+    `window_estimates`."""
+    freq, rocof = centred_estimates(t, np.angle(v), t, window, f0)
+    return PhasorTruth(t=t, pmus=tuple(pmus), v=v, i=i, freq=freq, rocof=rocof, f0=f0,
+                       window=window)
+
+
+def phasor_truth(case: Case, result: SimulationResult, pmus,
+                 window_cycles: float = PMUSettings.window_cycles) -> PhasorTruth:
+    """True PMU quantities of `pmus` on the result's step grid (see the module docstring),
+    frequency and ROCOF over a window of window_cycles cycles (`angle_truth`; measure it
+    with `PMUSettings` of the same window).
 
     A repeated time point (a zero-length interval at an event) keeps its last value.  The
     check of generator currents against pelect leaves out the run's last point, whose
@@ -262,9 +333,7 @@ def phasor_truth(case: Case, result: SimulationResult, pmus) -> PhasorTruth:
     V = (result.vmag * np.exp(1j * result.vang))[keep]
     cols = case.bus_indices([p.bus for p in pmus])
     cur = np.stack([_current(case, result, p, V, keep) for p in pmus], axis=1)
-    freq, rocof = bus_frequency(t, np.angle(V[:, cols]), case.freq_hz)
-    return PhasorTruth(t=t, pmus=tuple(pmus), v=V[:, cols], i=cur, freq=freq, rocof=rocof,
-                       f0=case.freq_hz)
+    return angle_truth(t, pmus, V[:, cols], cur, case.freq_hz, window_cycles / case.freq_hz)
 
 
 def _current(case: Case, result: SimulationResult, pmu: PMU, V: np.ndarray, keep) -> np.ndarray:
@@ -328,10 +397,15 @@ def measure(truth: PhasorTruth, settings: PMUSettings = PMUSettings(),
     within the truth's time span, plus noise, latency and dropped frames (module docstring).
 
     seed: non-negative integer; the same seed gives the same stream.  Raises InputError
-    for a negative seed or a truth shorter than one frame interval.
+    for a negative seed, a truth shorter than one frame interval, or a truth whose
+    frequency window (`PhasorTruth.window`) is not the settings' `window_cycles`.
     """
     if seed < 0:
         raise InputError(f"seed must be >= 0, got {seed}")
+    if truth.window is not None and not np.isclose(truth.window, settings.window_s(truth.f0),
+                                                   rtol=1e-12, atol=0.0):
+        raise InputError(f"the truth's frequency window is {truth.window * truth.f0:g} cycles, "
+                         f"the PMU settings' {settings.window_cycles:g}")
     t = truth.t[0] + frame_times(truth.t[-1] - truth.t[0], settings.rate)
     if t.size < 2:
         raise InputError("the run is shorter than one PMU frame interval")
@@ -360,13 +434,22 @@ def _pmu_noise(rng: np.random.Generator, n: int, s: PMUSettings):
     return ev, ei, ef, er, drop
 
 
-def _interp_columns(t, tp, y):
-    """Linear interpolation of every column of y (n_tp, n) to times t."""
-    return np.stack([np.interp(t, tp, y[:, j]) for j in range(y.shape[1])], axis=1)
+def interp_columns(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
+    """`numpy.interp` of every column of fp (n, m) at x (k,) -> (k, m), in one pass: the
+    same formula (fp[j] + slope (x - xp[j]), held at the end values outside xp); xp (n,)
+    strictly increasing."""
+    if xp.size == 1:
+        return np.repeat(fp[:1], x.size, axis=0)
+    j = np.clip(np.searchsorted(xp, x, side="right") - 1, 0, xp.size - 2)
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])[:, None]
+    out = slope * (x - xp[j])[:, None] + fp[j]
+    out[x <= xp[0]] = fp[0]
+    out[x >= xp[-1]] = fp[-1]
+    return out
 
 
 def _interp_phasor(t, tp, z):
     """Interpolate complex columns by magnitude and unwrapped angle (NaN columns stay)."""
-    mag = _interp_columns(t, tp, np.abs(z))
-    ang = _interp_columns(t, tp, np.unwrap(np.nan_to_num(np.angle(z)), axis=0))
+    mag = interp_columns(t, tp, np.abs(z))
+    ang = interp_columns(t, tp, np.unwrap(np.nan_to_num(np.angle(z)), axis=0))
     return np.where(np.isnan(mag), np.nan + 0j, mag * np.exp(1j * ang))

@@ -123,7 +123,7 @@ def monte_carlo(case: Case, result: SimulationResult, settings: PMUSettings, run
         raise InputError(f"need at least one Monte-Carlo run, got {runs}")
     pmus = machine_pmus(case, at)
     models = es.machine_models(case, pmus)
-    truth = phasor_truth(case, result, pmus)
+    truth = phasor_truth(case, result, pmus, settings.window_cycles)
     per_run = {name: [] for name in ESTIMATORS}
     for r in range(runs):
         stream = measure(truth, settings, seed + r)
@@ -161,7 +161,8 @@ def false_actions(case: Case, results, settings: PMUSettings, seed: int,
     figs = {name: {"actions": [], "max_rel_mhz": [], "std_rel_mhz": []}
             for name in ("true", *ESTIMATORS)}
     for r, result in enumerate(results):
-        stream = measure(phasor_truth(case, result, pmus), settings, seed + r)
+        stream = measure(phasor_truth(case, result, pmus, settings.window_cycles), settings,
+                         seed + r)
         tracks = {k: v.speed for k, v in run_estimators(stream, models).items()}
         tracks["true"] = result.speed_at(stream.t)
         for name, speed in tracks.items():

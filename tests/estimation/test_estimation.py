@@ -50,9 +50,8 @@ def linear_swing(t_end=10.0, f_m=1.0, zeta=0.05, dP=0.5, t_on=1.0, t_off=1.1, am
     theta = delta - np.arcsin(pag * X / (EMAG * VMAG))
     e, v = EMAG * np.exp(1j * delta), VMAG * np.exp(1j * theta)
     cur = (e - v) / (1j * X)
-    freq, rocof = pmu.bus_frequency(t, theta[:, None], F0)
-    truth = pmu.PhasorTruth(t=t, pmus=(pmu.PMU(bus=1, machine=1),), v=v[:, None],
-                            i=cur[:, None], freq=freq, rocof=rocof, f0=F0)
+    truth = pmu.angle_truth(t, (pmu.PMU(bus=1, machine=1),), v[:, None], cur[:, None], F0,
+                            pmu.PMUSettings().window_s(F0))
     return t, 1 + w, pag, truth
 
 

@@ -95,20 +95,65 @@ def test_reporting_rates(rate):
 
 
 @pytest.mark.parametrize("bad", [dict(rate=50.0), dict(tve=-0.01), dict(drop_prob=1.0),
-                                 dict(latency_s=-1.0), dict(k_sigma=0.0)])
+                                 dict(latency_s=-1.0), dict(k_sigma=0.0),
+                                 dict(window_cycles=-1.0)])
 def test_bad_settings(bad):
     with pytest.raises(InputError):
         pmu.PMUSettings(**bad)
 
 
-def test_bus_frequency_is_the_angle_derivative_plus_nominal():
+def test_window_frequency_of_an_angle_parabola_is_exact():
+    # theta = 2 pi 0.5 t + a t^2: f = 60.5 + a t / pi Hz, ROCOF a / pi Hz/s.  The window
+    # difference of a parabola is its derivative at the window centre, exactly.
     t = np.linspace(0, 2, 2001)
-    ang = 2 * np.pi * 0.5 * t + 0.1 * t ** 2                 # 60.5 Hz, ROCOF 0.2/(2 pi) Hz/s
-    f, r = pmu.bus_frequency(t, np.angle(np.exp(1j * ang))[:, None], 60.0)
-    np.testing.assert_allclose(f[:, 0], 60.5 + 0.2 * t / (2 * np.pi), atol=1e-9)
-    np.testing.assert_allclose(r[:, 0], 0.2 / (2 * np.pi), atol=1e-6)
+    a = 0.1
+    ang = 2 * np.pi * 0.5 * t + a * t ** 2
+    st = pmu.PMUSettings()
+    w = st.window_s(60.0)
+    c = np.array([0.5, 1.0, 1.5])
+    f, r = pmu.window_estimates(t, np.angle(np.exp(1j * ang))[:, None], c, c, w, 60.0)
+    np.testing.assert_allclose(f[:, 0], 60.5 + a * c / np.pi, atol=1e-6)   # linear interp.
+    np.testing.assert_allclose(r[:, 0], a / np.pi, atol=1e-4)
     with pytest.raises(InputError):
-        pmu.bus_frequency(t[:2], ang[:2, None], 60.0)
+        pmu.window_estimates(t[::-1], ang[:, None], c, c, w, 60.0)
+    with pytest.raises(InputError):
+        pmu.window_estimates(t, ang[:, None], c, c, 0.0, 60.0)
+    with pytest.raises(InputError):
+        pmu.PMUSettings(window_cycles=0.0)
+
+
+@pytest.mark.parametrize("cycles", [1.0, 2.0, 4.0])
+def test_an_angle_jump_adds_jump_over_2_pi_window_whatever_the_step(cycles):
+    # A ramp at 60.3 Hz whose angle jumps by d at t_j (a network event, grid point kept
+    # with its last value, as phasor_truth keeps it).  Frames whose window misses the jump
+    # read the ramp's 60.3 Hz; those whose window holds it read 60.3 + d / (2 pi W) at most,
+    # at every step h: the error does not grow as 1/h.
+    d, t_j, f_ramp = 0.05, 1.0, 60.3
+    w = pmu.PMUSettings(window_cycles=cycles).window_s(60.0)
+    frames = pmu.frame_times(2.0, 60.0)
+    bound = d / (2 * np.pi * w)
+    for h in (1 / 200, 1 / 240, 1 / 480, 1 / 960, 1 / 3840):
+        t = np.unique(np.r_[np.arange(0, 2 + h / 2, h), t_j])
+        ang = 2 * np.pi * (f_ramp - 60.0) * t + np.where(t >= t_j, d, 0.0)
+        f, r = pmu.centred_estimates(t, ang[:, None], frames, w, 60.0)
+        err = f[:, 0] - f_ramp
+        away = np.abs(frames - t_j) >= w / 2 + h      # window clear of the smeared jump
+        np.testing.assert_allclose(err[away], 0.0, atol=1e-9)
+        assert np.all((err > -1e-9) & (err <= bound + 1e-9))
+        assert err.max() == pytest.approx(bound, rel=1e-9)         # the frame at the jump
+        assert np.abs(r[:, 0]).max() <= bound / w + 1e-6            # ROCOF: one window more
+
+
+def test_truth_frequency_is_evaluated_at_the_frames_and_checks_the_window():
+    t = np.linspace(0, 2, 2001)
+    v = np.exp(1j * 2 * np.pi * 0.2 * t)[:, None]                    # 60.2 Hz
+    w = pmu.PMUSettings().window_s(60.0)
+    truth = pmu.angle_truth(t, (pmu.PMU(bus=1),), v, v * np.nan, 60.0, w)
+    s = pmu.measure(truth, pmu.PMUSettings(fe_hz=0.0, rfe_hz_s=0.0), seed=0)
+    np.testing.assert_allclose(s.true.freq, 60.2, atol=1e-9)         # ends included
+    np.testing.assert_allclose(s.true.rocof, 0.0, atol=1e-6)
+    with pytest.raises(InputError, match="window"):
+        pmu.measure(truth, pmu.PMUSettings(window_cycles=4.0), seed=0)
 
 
 @pytest.fixture(scope="module")

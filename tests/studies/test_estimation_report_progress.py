@@ -7,7 +7,7 @@ from stabctl.studies import estimation_report as er
 
 def test_case_figures_reports_every_stage_and_ambient_run(tmp_path, monkeypatch):
     fake_sim = SimpleNamespace(run=lambda *a, **k: None)
-    monkeypatch.setattr(er, "Simulator", lambda case: fake_sim)
+    monkeypatch.setattr(er, "Simulator", lambda case, **options: fake_sim)
     monkeypatch.setattr(er.study, "monte_carlo", lambda *a, **k: {})
     monkeypatch.setattr(er.study, "false_actions", lambda *a, **k: {})
     monkeypatch.setattr(er.am, "simulate", lambda *a, **k: None)
