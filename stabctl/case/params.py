@@ -281,6 +281,10 @@ MACHINE = Family(
         Param("speed_effects", "code", 24, default=1.0, choices=(0.0, 1.0),
               doc="subtransient: 1 stator voltage and torque with speed (PST mac_sub), "
                   "0 without (ANDES GENROU/GENSAL)"),
+        Param("psse_sat", "code", 25, default=0.0, choices=(0.0, 1.0),
+              doc="subtransient: 0 no saturation (PST mac_sub as modelled here), 1 PSS/E's "
+                  "GENROU saturation of the air-gap flux |psi\"| through S(1.0), S(1.2) "
+                  "(ANDES GENROU/GENSAL)"),
     ),
     dyr=(
         # GENROU -> mac_sub with x"q = x"d (set by the importer)

@@ -25,6 +25,7 @@ from stabctl.case import Case, beyond
 from stabctl.case.params import EXCITER
 from stabctl.errors import CaseError
 from stabctl.models._declared import columns, pack, params_class
+from stabctl.models.saturation import quadratic_fit
 
 LBND = 1e-3
 SMP, DC1, DC2, ST3, ST1, T2 = 0, 1, 2, 3, 4, 5
@@ -149,24 +150,10 @@ def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
     A, B = _exponential_fit(e)
     quad = e.dc_sat == 1
     if quad.any():
-        Aq, Bq = _quadratic_fit(*_dc_points(e), quad)
+        Aq, Bq = quadratic_fit(*_dc_points(e), quad, "exc_con row {row}: DC exciter "
+                               "saturation points (E1, SE1, E2, SE2)")
         A, B = np.where(quad, Aq, A), np.where(quad, Bq, B)
     return A, B
-
-
-def _quadratic_fit(E1, SE1, E2, SE2, rows):
-    """Asat, Bsat of SE(E) E = Bsat (E - Asat)^2 with SE(E1) = SE1, SE(E2) = SE2 (0, 0
-    where a point is 0: no saturation); CaseError when the points allow no fit."""
-    off = (E1 * SE1 * E2 * SE2 == 0) | ~rows
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a = np.sqrt(SE1 * E1 / (SE2 * E2))
-        A = E2 - (E1 - E2) / (a - 1)
-        B = SE2 * E2 * (a - 1) ** 2 / (E1 - E2) ** 2
-    bad = np.nonzero(~off & ~np.isfinite(A + B))[0]
-    if bad.size:
-        raise CaseError(f"exc_con row {bad[0] + 1}: DC exciter saturation points (E1, SE1, E2, "
-                        "SE2) give no quadratic fit (need E1 != E2, SE1 E1 != SE2 E2, same sign)")
-    return np.where(off, 0.0, A), np.where(off, 0.0, B)
 
 
 def _dc(e, name: str) -> np.ndarray:
