@@ -466,7 +466,8 @@ class MachineTable(Table):
 class ExciterTable(Table):
     """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3),
     plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4) and
-    23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3).
+    23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3), 25 for
+    the ST3's field current in I_N (2.2).
     Columns (declared in :data:`stabctl.case.params.EXCITER`):
 
 {columns}

@@ -121,7 +121,7 @@ def test_andes_conventions_change_only_what_andes_reads_differently():
     # points (stored as given), K_E as given (columns 23, 24)
     np.testing.assert_array_equal(pst.exc_con[:, 1:11], andes_.exc_con[:, 1:11])
     np.testing.assert_array_equal(pst.exc_con[:, 15:20], andes_.exc_con[:, 15:20])
-    assert np.all(pst.exc_con[:, 22:] == 0) and np.all(andes_.exc_con[:, 22:] == 1)
+    assert np.all(pst.exc_con[:, 22:] == 0) and np.all(andes_.exc_con[:, 22:24] == 1)
     np.testing.assert_array_equal(andes_.exc_con[0, 11:15], [0, 0, 1, 1])  # E1 SE1 E2 SE2
     # IEEEG1's rate limits Uo, Uc: machine base (PSS/E) or system base (ANDES)
     recs = read_dyr(WECC_DYR)
@@ -132,6 +132,9 @@ def test_andes_conventions_change_only_what_andes_reads_differently():
     e = ExciterTable.from_matrix(t_andes.exc_con)
     dc2 = e.type == exc.DC2                                           # WECC's 8 ESDC2A
     assert dc2.sum() == 8 and np.all(e.TR[dc2] == 0) and np.all(e.dc_sat[dc2] == 1)
+    st3 = e.type == exc.ST3                       # WECC's 4 ESST3A: I_N from the machine's I_fd
+    assert st3.sum() == 4 and np.all(e.ifd_machine[st3] == 1) and np.all(e.ifd_machine[~st3] == 0)
+    assert np.all(ExciterTable.from_matrix(dyr_tables(recs, gens).exc_con).ifd_machine == 0)
     assert (g_pst.Uo[0], g_pst.Uc[0]) == (1.0, -1.0)
     assert (g_andes.Uo[0], g_andes.Uc[0]) == (0.25, -0.25)
     with pytest.raises(CaseError, match="conventions"):
@@ -156,7 +159,7 @@ def test_wecc_imports_completely():
     recs = read_dyr(WECC_DYR)
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
-        (29, 25), (29, 24), (29, 24), (29, 24)) and t.unsupported == ()
+        (29, 25), (29, 25), (29, 24), (29, 24)) and t.unsupported == ()
     kinds = dict(zip(*np.unique(t.exc_con[:, 0], return_counts=True)))
     assert kinds == {2: 8, 3: 4, 4: 17}                       # ESDC2A, ESST3A, EXST1
 
