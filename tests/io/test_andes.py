@@ -250,7 +250,7 @@ def test_ieee14_fault_speeds_and_modes_match_andes(ieee14):
     # start (with PST exc_st3's estimate, 0.022 on a V_R derivative)
     assert sim.model_for(()).initial_residual[0] < 1e-9           # measured 4e-14
     assert np.max(np.abs(wa - 1)) > 4e-3                          # a real swing
-    assert np.max(np.abs(w - wa)) < 1e-5                          # measured 4.6e-6
+    assert np.max(np.abs(w - wa)) < 1e-5                          # measured 4.5e-6
     ma = modal_analysis(linearise(sim))
     ours = ma.eigenvalues[ma.electromechanical]
     theirs = andes_modes(andes_system(raw, dyr))
