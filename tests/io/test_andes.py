@@ -232,7 +232,8 @@ def test_ieee14_fault_speeds_and_modes_match_andes(ieee14):
     (S(1.0) = 0.09, S(1.2) = 0.38): read as ANDES's GENROU, PSS/E's quadratic saturation of
     the air-gap flux (mac_con column 25; without it, as PST's mac_sub, the speeds were
     3.3e-4 pu and the electromechanical modes 2.9 % apart, the same as with S = 0 in ANDES
-    alone)."""
+    alone).  The 0.3 % left: the bus-6 TGOV1 starting exactly at VMIN (held there in
+    ANDES's state matrix) and bus 3's power-input IEEEST (docs/pst_models.md 12.4)."""
     raw, dyr = ieee14
     t_clear = 1.0 + 6 / 60
     case = load_psse(raw, dyr, conventions="andes")
