@@ -437,7 +437,8 @@ class MachineTable(Table):
     the stator voltage is proportional to rotor speed and the torque is Pm/omega; 0 speed
     1 in both (ANDES's GENROU/GENSAL, which have no speed effects; docs/pst_models.md
     1.5-1.6), and column 25 ``psse_sat``: 1 PSS/E's GENROU saturation of the air-gap flux
-    through S(1.0), S(1.2) as ANDES solves it, 0 none (PST ``mac_sub``; docs 1.6a).  Columns (declared in :data:`stabctl.case.params.MACHINE`; reactances on the
+    through S(1.0), S(1.2) as ANDES solves it, 0 none (PST ``mac_sub``; docs 1.6a).
+    Columns (declared in :data:`stabctl.case.params.MACHINE`; reactances on the
     machine base):
 
 {columns}

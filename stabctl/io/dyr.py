@@ -600,8 +600,9 @@ def _gensal_andes(rec, gen):
 #: VRMAX, e.g. 6.5 for bus 25, where VRTMAX = 6.89), so the scaled limits are never
 #: applied (read as DC2, NPCC differed from ANDES by 6.2e-3 pu in speed); its ESDC2A bypasses T_R;
 #: its IEEEG1 rate limits are on the system base, its ESST3A forms V_E from system-base
-#: stator currents and I_N from the machine's field current; its GENROU (and GENSAL) saturates the air-gap flux (``genrou.py``, the
-#: machine rows' column 25, set in `_map_records`); GENSAL is its GENROU, SCRX its SEXS; HYGOV
+#: stator currents and I_N from the machine's field current; its GENROU (and GENSAL)
+#: saturates the air-gap flux (``genrou.py``, the machine rows' column 25, set in
+#: `_map_records`); GENSAL is its GENROU, SCRX its SEXS; HYGOV
 #: and IEESGO as ANDES solves them (``_hygov``, ``_ieesgo``); IEEET2, which ANDES lacks,
 #: with the quadratic saturation of its other DC exciters
 _ANDES_MAPPERS = {"IEEEX1": _dc("IEEEX1", andes=True), "EXDC2": _dc("IEEEX1", andes=True),
