@@ -281,6 +281,10 @@ MACHINE = Family(
         Param("speed_effects", "code", 24, default=1.0, choices=(0.0, 1.0),
               doc="subtransient: 1 stator voltage and torque with speed (PST mac_sub), "
                   "0 without (ANDES GENROU/GENSAL)"),
+        Param("psse_sat", "code", 25, default=0.0, choices=(0.0, 1.0),
+              doc="subtransient: 0 no saturation (PST mac_sub as modelled here), 1 PSS/E's "
+                  "GENROU saturation of the air-gap flux |psi\"| through S(1.0), S(1.2) "
+                  "(ANDES GENROU/GENSAL)"),
     ),
     dyr=(
         # GENROU -> mac_sub with x"q = x"d (set by the importer)
@@ -348,6 +352,10 @@ EXCITER = Family(
         Param("ke_given", "code", 24, choices=(0, 1),
               doc="DC1/2: 0 K_E = 0 computed so that V_R starts at 0 (PST), 1 as given "
                   "(ANDES)"),
+        Param("ifd_machine", "code", 25, choices=(0, 1),
+              doc="ST3: field current of I_N = K_C I_fd / V_E, 0 PST exc_st3's own estimate "
+                  "E_Isat(E'q) + p6 (E'q - psi_kd) + p7 i_d, 1 the machine's (IEEE 421.5 "
+                  "I_FD; ANDES esst3a.py XadIfd)"),
     ),
     dyr=(
         # SEXS -> smpexc: T_C = (TA/TB) TB is computed

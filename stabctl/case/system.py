@@ -436,14 +436,16 @@ class MachineTable(Table):
     stabctl's column 24 ``speed_effects`` for subtransient machines: 1 (PST ``mac_sub``)
     the stator voltage is proportional to rotor speed and the torque is Pm/omega; 0 speed
     1 in both (ANDES's GENROU/GENSAL, which have no speed effects; docs/pst_models.md
-    1.5-1.6).  Columns (declared in :data:`stabctl.case.params.MACHINE`; reactances on the
+    1.5-1.6), and column 25 ``psse_sat``: 1 PSS/E's GENROU saturation of the air-gap flux
+    through S(1.0), S(1.2) as ANDES solves it, 0 none (PST ``mac_sub``; docs 1.6a).
+    Columns (declared in :data:`stabctl.case.params.MACHINE`; reactances on the
     machine base):
 
 {columns}
 
     Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``).
     Validation: unique positive integer machine numbers, mva > 0, H > 0, reactances and
-    ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), speed_effects 0 or 1.
+    ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), speed_effects and psse_sat 0 or 1.
     """
 
     def _check(self):
@@ -465,7 +467,8 @@ class MachineTable(Table):
 class ExciterTable(Table):
     """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3),
     plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4) and
-    23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3).
+    23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3), 25 for
+    the ST3's field current in I_N (2.2).
     Columns (declared in :data:`stabctl.case.params.EXCITER`):
 
 {columns}

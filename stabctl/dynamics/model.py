@@ -476,13 +476,16 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         ed, eq, cd, cq = mac.stator_without_speed(p.MP, xm, cur, m)
         et = np.hypot(ed, eq)
         VB = 1.0
-        if p.EP[i, exc.E_KIND] == exc.ST3:
+        kind = p.EP[i, exc.E_KIND]
+        own = kind == exc.ST1 or (kind == exc.ST3 and p.EP[i, exc.E_IFDM] > 0)
+        ifd = mac.field_current(p.MP, xm, cur, m) if own else 0.0
+        if kind == exc.ST3:
             KP = p.EP[i, exc.E_KPR] + 1j * p.EP[i, exc.E_KPI]
+            fld = ifd if own else mac.st3_field_current(p.MP, xm, cur, m)
             VB = exc.st3_source_voltage(KP, p.EP[i, exc.E_KI], p.EP[i, exc.E_XL],
                                         p.EP[i, exc.E_KC], et, np.angle(V_bus[p.mac_bus[m]]),
                                         eq * cq + ed * cd, eq * cd - ed * cq, p.MP[m, mac.K_POT],
-                                        mac.st3_field_current(p.MP, xm, cur, m), False)
-        ifd = mac.field_current(p.MP, xm, cur, m) if p.EP[i, exc.E_KIND] == exc.ST1 else 0.0
+                                        fld, False)
         efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB, ifd, p.ieee)
         vex[m] = efd_alg[i]
     pmech[:] = p.pmech0

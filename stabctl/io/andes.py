@@ -20,7 +20,8 @@ tools solve the same problem:
   RAW's BASFRQ (N44: 50 Hz);
 * records ANDES reads but stabctl does not map are removed from the DYR text for both
   tools (:func:`strip_dyr`), so that the comparison is like for like; optionally the
-  machine saturation too (PSS/E's GENROU saturation, which ANDES follows, is not PST's).
+  machine saturation too (PSS/E's GENROU saturation, which ANDES follows, is not PST's
+  ``mac_sub``, which has none; ``conventions="andes"`` reads it as ANDES does).
 
 Source: ANDES 2.0 documentation (``andes.load``, ``System.add``, ``PFlow``, ``TDS``,
 ``EIG`` routines; ``Fault`` and ``Toggle`` models).
@@ -65,7 +66,8 @@ def strip_dyr(src: str | Path, dst: str | Path, models, unsaturated: bool = Fals
     """Copy the DYR file ``src`` to ``dst`` without the records of ``models`` (names in
     upper case, e.g. ``{"EXST1", "TOGGLE"}``); returns the removed model names in file
     order. ``unsaturated``: GENROU and GENSAL records get S(1.0) = S(1.2) = 0 (their last
-    two CONs), as the two tools' saturation functions differ. A record ends at the line
+    two CONs), as PST's machines have none (``conventions="andes"`` reads it as ANDES
+    does, docs/pst_models.md 1.6a). A record ends at the line
     holding its ``/`` (PSS/E POM, Dynamics Data File)."""
     drop = {m.upper() for m in models}
     kept, record, removed = [], [], []

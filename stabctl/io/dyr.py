@@ -170,12 +170,14 @@ def dyr_tables(records, generators, on_unsupported: str = "error",
             those records out and return them in `unsupported`).
         conventions: "pst" (PST's models as they are) or "andes" (ANDES 2.0's reading of
             the PSS/E models, for like-for-like comparisons: GENROU/GENSAL without speed
-            effects, mac_con column 24 = 0; EXDC2's regulator limits not scaled by the
-            terminal voltage, i.e. PST's DC1 instead of DC2, and IEEEX1's neither (DC1:
-            its ``ieeex1.py`` computes VRMAX v but its limiter keeps VRMAX, see
-            `_ANDES_MAPPERS`); DC exciters with PSS/E's quadratic saturation and K_E as
+            effects, mac_con column 24 = 0, and with PSS/E's saturation of the air-gap flux
+            through S(1.0), S(1.2) (column 25 = 1; ANDES ``genrou.py``); EXDC2's regulator
+            limits not scaled by the terminal voltage, i.e. PST's DC1 instead of DC2, and
+            IEEEX1's neither (DC1: its ``ieeex1.py`` computes VRMAX v but its limiter keeps
+            VRMAX, see `_ANDES_MAPPERS`); DC exciters with PSS/E's quadratic saturation and K_E as
             given; ESST3A's source voltage from system-base currents (K_I, X_L times
-            MBASE/SBASE); IEEEG1's gate rate limits
+            MBASE/SBASE) and its I_N from the machine's field current (exc_con column 25 =
+            1); IEEEG1's gate rate limits
             Uo, Uc read on the system base, i.e. times SBASE/MBASE on the machine base).
     Returns:
         DyrTables.
@@ -224,6 +226,7 @@ def _map_records(records, generators, conventions):
             continue
         if kind == "machine" and andes:
             row[MACHINE.col("speed_effects") - 1] = 0.0
+            row[MACHINE.col("psse_sat") - 1] = 1.0
         number = int(gen["number"])
         if number in rows[kind]:
             raise CaseError(f"{rec.label()}: second {kind} model for this generator (first at "
@@ -569,11 +572,14 @@ def _esdc2a_andes(rec, gen):
 def _esst3a_andes(rec, gen):
     """ESST3A as ANDES 2.0 solves it: its source voltage ``V_E = |K_P e^(j theta_P) V_t +
     j (K_I + K_P X_L) I_t|`` (``esst3a.py``) takes the stator current on the system base,
-    i.e. K_I and X_L times MBASE/SBASE with the machine-base current."""
+    i.e. K_I and X_L times MBASE/SBASE with the machine-base current; its rectifier
+    loading ``I_N = K_C XadIfd / V_E`` (``esst3a.py`` lines 190-191) the machine's field
+    current, as at initialisation, not PST exc_st3's estimate (exc_con column 25 = 1)."""
     row = _esst3a(rec, gen)
     scale = gen["mbase"] / gen.get("sbase", 100.0)
     for name in ("KI", "XL"):
         row[EXCITER.col(name) - 1] *= scale
+    row[EXCITER.col("ifd_machine") - 1] = 1.0
     return row
 
 
@@ -594,7 +600,9 @@ def _gensal_andes(rec, gen):
 #: VRMAX, e.g. 6.5 for bus 25, where VRTMAX = 6.89), so the scaled limits are never
 #: applied (read as DC2, NPCC differed from ANDES by 6.2e-3 pu in speed); its ESDC2A bypasses T_R;
 #: its IEEEG1 rate limits are on the system base, its ESST3A forms V_E from system-base
-#: stator currents; GENSAL is its GENROU, SCRX its SEXS; HYGOV
+#: stator currents and I_N from the machine's field current; its GENROU (and GENSAL)
+#: saturates the air-gap flux (``genrou.py``, the machine rows' column 25, set in
+#: `_map_records`); GENSAL is its GENROU, SCRX its SEXS; HYGOV
 #: and IEESGO as ANDES solves them (``_hygov``, ``_ieesgo``); IEEET2, which ANDES lacks,
 #: with the quadratic saturation of its other DC exciters
 _ANDES_MAPPERS = {"IEEEX1": _dc("IEEEX1", andes=True), "EXDC2": _dc("IEEEX1", andes=True),

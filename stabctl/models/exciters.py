@@ -25,6 +25,7 @@ from stabctl.case import Case, beyond
 from stabctl.case.params import EXCITER
 from stabctl.errors import CaseError
 from stabctl.models._declared import columns, pack, params_class
+from stabctl.models.saturation import quadratic_fit
 
 LBND = 1e-3
 SMP, DC1, DC2, ST3, ST1, T2 = 0, 1, 2, 3, 4, 5
@@ -44,13 +45,14 @@ PACKED = (("KIND", "kind"), ("MAC", "mac"),
           ("KPR", "KP.real"), ("KPI", "KP.imag"),
           *((n.upper(), n) for n in TABLE_FIELDS[TABLE_FIELDS.index("KP") + 1:]),
           ("TCTB", "tc_tb"), ("KE", "KE"), ("TE", "TE"), ("ASAT", "Asat"), ("BSAT", "Bsat"),
-          ("KF", "KF"), ("TF", "TF"), ("VREF", "Vref"), ("SATQ", "sat_quadratic"))
+          ("KF", "KF"), ("TF", "TF"), ("VREF", "Vref"), ("SATQ", "sat_quadratic"),
+          ("IFDM", "ifd_machine"))
 (E_KIND, E_MAC, E_TR, E_KA, E_TA, E_TB, E_TC, E_VRMAX, E_VRMIN, E_VIMAX, E_VIMIN, E_KJ,
  E_KPR, E_KPI, E_KI, E_XL, E_KC, E_EFDMAX, E_KG, E_VGMAX, E_TCTB, E_KE, E_TE, E_ASAT,
- E_BSAT, E_KF, E_TF, E_VREF, E_SATQ) = \
+ E_BSAT, E_KF, E_TF, E_VREF, E_SATQ, E_IFDM) = \
     columns(PACKED, "KIND", "MAC", "TR", "KA", "TA", "TB", "TC", "VRMAX", "VRMIN", "VIMAX",
             "VIMIN", "KJ", "KPR", "KPI", "KI", "XL", "KC", "EFDMAX", "KG", "VGMAX", "TCTB",
-            "KE", "TE", "ASAT", "BSAT", "KF", "TF", "VREF", "SATQ")
+            "KE", "TE", "ASAT", "BSAT", "KF", "TF", "VREF", "SATQ", "IFDM")
 E_NCOL = len(PACKED)
 DC_KINDS = (DC1, DC2, T2)
 
@@ -64,7 +66,8 @@ class ExciterParams:
     DC exciters (types 1, 2): KE, TE and the saturation SE(E) = Asat exp(Bsat |E|), or
     with sat_quadratic SE(E) E = Bsat (E - Asat)^2 above Asat (0 for the other types);
     ke_given: KE used as given (else 0 means computed at initialisation); KF, TF: rate
-    feedback of the DC exciters and EXST1."""
+    feedback of the DC exciters and EXST1; ifd_machine: ST3 whose I_N takes the machine's
+    field current, not PST exc_st3's estimate (exc_con column 25)."""
 
     KE: np.ndarray
     TE: np.ndarray
@@ -74,6 +77,7 @@ class ExciterParams:
     TF: np.ndarray
     sat_quadratic: np.ndarray
     ke_given: np.ndarray
+    ifd_machine: np.ndarray
 
     @property
     def n(self) -> int:
@@ -149,24 +153,10 @@ def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
     A, B = _exponential_fit(e)
     quad = e.dc_sat == 1
     if quad.any():
-        Aq, Bq = _quadratic_fit(*_dc_points(e), quad)
+        Aq, Bq = quadratic_fit(*_dc_points(e), quad, "exc_con row {row}: DC exciter "
+                               "saturation points (E1, SE1, E2, SE2)")
         A, B = np.where(quad, Aq, A), np.where(quad, Bq, B)
     return A, B
-
-
-def _quadratic_fit(E1, SE1, E2, SE2, rows):
-    """Asat, Bsat of SE(E) E = Bsat (E - Asat)^2 with SE(E1) = SE1, SE(E2) = SE2 (0, 0
-    where a point is 0: no saturation); CaseError when the points allow no fit."""
-    off = (E1 * SE1 * E2 * SE2 == 0) | ~rows
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a = np.sqrt(SE1 * E1 / (SE2 * E2))
-        A = E2 - (E1 - E2) / (a - 1)
-        B = SE2 * E2 * (a - 1) ** 2 / (E1 - E2) ** 2
-    bad = np.nonzero(~off & ~np.isfinite(A + B))[0]
-    if bad.size:
-        raise CaseError(f"exc_con row {bad[0] + 1}: DC exciter saturation points (E1, SE1, E2, "
-                        "SE2) give no quadratic fit (need E1 != E2, SE1 E1 != SE2 E2, same sign)")
-    return np.where(off, 0.0, A), np.where(off, 0.0, B)
 
 
 def _dc(e, name: str) -> np.ndarray:
@@ -227,7 +217,8 @@ def exciter_params(case: Case) -> ExciterParams:
         Asat=np.where(dc, A, 0.0), Bsat=np.where(dc, B, 0.0),
         KF=np.where(dc, _dc(e, "KF_dc"), np.where(e.type == ST1, e.KF, 0.0)),
         TF=np.where(dc, _dc(e, "TF_dc"), np.where(e.type == ST1, e.TF, 0.0)),
-        sat_quadratic=dc & (e.dc_sat == 1), ke_given=dc & (e.ke_given == 1))
+        sat_quadratic=dc & (e.dc_sat == 1), ke_given=dc & (e.ke_given == 1),
+        ifd_machine=(e.type == ST3) & (e.ifd_machine == 1))
 
 
 @njit(cache=True)

@@ -20,6 +20,7 @@ from stabctl._jitcache import njit
 from stabctl.case import Case
 from stabctl.case.params import MACHINE
 from stabctl.models._declared import columns, pack, params_class
+from stabctl.models.saturation import quadratic_fit
 
 SUB, TRA, EM = 2, 1, 0
 STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
@@ -29,18 +30,20 @@ STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
 TABLE_FIELDS = (*MACHINE.names[MACHINE.col("xl") - 1:MACHINE.col("D0")], "pfrac", "qfrac")
 #: packed parameter matrix of the kernels, (constant suffix, MachineParams attribute) per
 #: column: kind, mac_pot, mac_con columns 4-17 in declared order, PST's derived constants
-#: (mac_pot columns 6-15), saturation, initial E'q, speed effects; constants K_<suffix>
+#: (mac_pot columns 6-15), saturation, initial E'q, speed effects, the air-gap saturation
+#: A, B and gamma_qd of PSS/E's GENROU; constants K_<suffix>
 PACKED = (("KIND", "kind"), ("POT", "mac_pot"),
           *((n.upper(), n) for n in TABLE_FIELDS[:-2]),
           *((f"P{k}", f"p{k}") for k in range(6, 16)),
           ("SA", "sat_a"), ("SB", "sat_b"), ("SC", "sat_c"), ("EQP0", "eqp0"),
-          ("SPEED", "speed_effects"))
+          ("SPEED", "speed_effects"), ("GA", "gap_a"), ("GB", "gap_b"), ("GQD", "gqd"))
 (K_KIND, K_POT, K_XL, K_RA, K_XD, K_XDP, K_XDPP, K_TDOP, K_TDOPP, K_XQ, K_XQP, K_XQPP,
  K_TQOP, K_TQOPP, K_H, K_D0, K_P6, K_P7, K_P8, K_P9, K_P10, K_P11, K_P12, K_P13, K_P14,
- K_P15, K_SA, K_SB, K_SC, K_EQP0, K_SPEED) = \
+ K_P15, K_SA, K_SB, K_SC, K_EQP0, K_SPEED, K_GA, K_GB, K_GQD) = \
     columns(PACKED, "KIND", "POT", "XL", "RA", "XD", "XDP", "XDPP", "TDOP", "TDOPP", "XQ",
             "XQP", "XQPP", "TQOP", "TQOPP", "H", "D0", "P6", "P7", "P8", "P9", "P10",
-            "P11", "P12", "P13", "P14", "P15", "SA", "SB", "SC", "EQP0", "SPEED")
+            "P11", "P12", "P13", "P14", "P15", "SA", "SB", "SC", "EQP0", "SPEED", "GA",
+            "GB", "GQD")
 K_NCOL = len(PACKED)
 
 
@@ -60,6 +63,7 @@ class MachineParams:
     sat: np.ndarray  # (n_mac, 3) quadratic saturation a, b, c
     basrad: float
     speed_effects: np.ndarray  # bool: subtransient with speed in stator voltage and torque
+    air_gap_sat: np.ndarray  # (n_mac, 2) A, B of PSS/E's GENROU saturation (0, 0: none)
 
     @property
     def n(self) -> int:
@@ -72,7 +76,8 @@ class MachineParams:
 
     def _packed(self, eqp0):
         sat = {f"sat_{c}": self.sat[:, k] for k, c in enumerate("abc")}
-        return np.nan_to_num(pack(self, PACKED, eqp0=eqp0, **sat))
+        return np.nan_to_num(pack(self, PACKED, eqp0=eqp0, gap_a=self.air_gap_sat[:, 0],
+                                  gap_b=self.air_gap_sat[:, 1], **sat))
 
     @property
     def x_network(self) -> np.ndarray:
@@ -145,6 +150,19 @@ class MachineParams:
     def p11(self):
         return self.p15 / self.p13
 
+    @property
+    def gqd(self):
+        """gamma_qd = (x_q - x_l) / (x_d - x_l): the q-axis share of the air-gap saturation
+        (ANDES ``genrou.py`` ``gqd``)."""
+        return (self.xq - self.xl) / (self.xd - self.xl)
+
+    def air_gap_saturation(self, psi):
+        """S_e(|psi"|) = B (|psi"| - A)^2 / |psi"| of PSS/E's GENROU, 0 for |psi"| <= A
+        (ANDES ``genrou.py`` ``Se``, ``Se0``); psi: air-gap flux magnitudes (n_mac,)."""
+        A, B = self.air_gap_sat.T
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(psi > A, B * (psi - A) ** 2 / psi, 0.0)
+
 
 def machine_params(case: Case) -> MachineParams:
     """PST machine parameters of a case, with PST's substitutions (see MachineParams)."""
@@ -162,7 +180,10 @@ def machine_params(case: Case) -> MachineParams:
         xq=m.xq.copy(), xqp=xqp, xqpp=xqpp, Tdop=m.Tdop.copy(), Tdopp=m.Tdopp.copy(),
         Tqop=Tqop, Tqopp=Tqopp, H=m.H.copy(), D0=m.D0.copy(), pfrac=m.pfrac.copy(),
         qfrac=m.qfrac.copy(), sat=saturation_coefficients(m.S10, m.S12),
-        basrad=2 * np.pi * case.freq_hz, speed_effects=sub & (m.speed_effects == 1))
+        basrad=2 * np.pi * case.freq_hz, speed_effects=sub & (m.speed_effects == 1),
+        air_gap_sat=np.column_stack(quadratic_fit(
+            1.0, m.S10, 1.2, m.S12, sub & (m.psse_sat == 1),
+            "mac_con row {row}: GENROU saturation points (1.0, S(1.0)), (1.2, S(1.2))")))
 
 
 def saturation_coefficients(S10: np.ndarray, S12: np.ndarray) -> np.ndarray:
@@ -196,7 +217,15 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     x = np.zeros((6, p.n))
     x[1] = 1.0
     sub = p.kind == SUB
-    E_q = v + (p.ra + 1j * p.xq) * I                    # locates the q axis (sub, tra)
+    # the q axis (sub, tra): along v + (r_a + j x_q) I, i.e. psi" + j (x_q - x"q) I with the
+    # air-gap flux psi" = v + (r_a + j x"q) I; with PSS/E's GENROU saturation along
+    # (1 + gamma_qd S_e0) psi" + j (x_q - x"q) I (ANDES genrou.py delta0: |psi"| (1 + S_e0
+    # gamma_qd) against |I| (x"q - x_q)), where the q-axis flux equation is 0
+    psi_pp = v + (p.ra + 1j * p.xqpp) * I
+    Se0 = np.where(sub, p.air_gap_saturation(np.abs(psi_pp)), 0.0)
+    with np.errstate(invalid="ignore"):
+        gap_q = np.where(Se0 > 0, p.gqd * Se0, 0.0)
+    E_q = (1 + gap_q) * psi_pp + 1j * (p.xq - p.xqpp) * I
     E_tr = v + (p.ra + 1j * p.xdp) * I
     E_em = v + 1j * p.xdp * I
     x[0] = np.where(p.kind == EM, np.angle(E_em), np.angle(E_q))
@@ -209,7 +238,7 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     eqp_sub, psikd = eqra + p.xdp * curdg, eqra + p.xl * curdg
     edp_sub, psikq = edra + p.xqp * curqg, edra + p.xl * curqg
     Eqpe = eqp_sub - psikd - p.p8 * curdg
-    vex_sub = eqp_sub + p.p7 * (curdg + p.p6 * Eqpe)
+    vex_sub = eqp_sub + p.p7 * (curdg + p.p6 * Eqpe) + Se0 * to_dq(x[0], psi_pp)[1]
     # transient / classical: E' in the rotor frame
     E = np.where(p.kind == EM, E_em, E_tr)
     edp_t, eqp_t = to_dq(x[0], E)
@@ -266,15 +295,28 @@ def internal_voltage(P, x, psi):
 
 
 @njit(cache=True)
+def _gap_saturation(P, i, psidpp, psiqpp):
+    """S_e(|psi"|) = B (|psi"| - A)^2 / |psi"| of machine i, PSS/E's GENROU saturation of
+    the air-gap flux (ANDES ``genrou.py`` ``Se``; 0 for |psi"| <= A and without it)."""
+    if P[i, K_GB] == 0.0:
+        return 0.0
+    psi = np.hypot(psidpp, psiqpp)
+    return P[i, K_GB] * (psi - P[i, K_GA]) ** 2 / psi if psi > P[i, K_GA] else 0.0
+
+
+@njit(cache=True)
 def _field_current(P, x, i, cdg):
     """Field current of machine i (machine base, vex = it in steady state) for the d-axis
     current cdg (machine base): subtransient E'q + p7 (i_d + p6 (E'q - psi_kd - p8 i_d))
-    (no saturation, docs 1.6); transient E_Isat(E'q) + (x_d - x'_d) i_d (docs 1.8, with
+    (no saturation, docs 1.6) + S_e psi"_d with PSS/E's GENROU saturation (ANDES
+    ``genrou.py`` ``XadIfd``); transient E_Isat(E'q) + (x_d - x'_d) i_d (docs 1.8, with
     PST's test on the initial E'q); classical: E' (constant)."""
     kind = P[i, K_KIND]
     e = x[2, i]
     if kind == SUB:
-        return e + P[i, K_P7] * (cdg + P[i, K_P6] * (e - x[3, i] - P[i, K_P8] * cdg))
+        psidpp, psiqpp = _fluxes(P, x, i)
+        return (e + P[i, K_P7] * (cdg + P[i, K_P6] * (e - x[3, i] - P[i, K_P8] * cdg))
+                + _gap_saturation(P, i, psidpp, psiqpp) * psidpp)
     if kind == TRA:
         esat = e if P[i, K_EQP0] < 0.8 else P[i, K_SA] * e * e + P[i, K_SB] * e + P[i, K_SC]
         return esat + (P[i, K_XD] - P[i, K_XDP]) * cdg
@@ -313,7 +355,11 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
             eq = -P[i, K_RA] * cqg + (ws * psidpp - P[i, K_XDPP] * cdg)
             dx[2, i] = (vex[i] - fld) / P[i, K_TDOP]
             dx[3, i] = Eqpe / P[i, K_TDOPP]
-            dx[4, i] = (-x[4, i] + P[i, K_P12] * (-cqg - P[i, K_P11] * Edpe)) / P[i, K_TQOP]
+            # PSS/E's GENROU saturation: - gamma_qd S_e psi"_q (ANDES genrou.py XaqI1q, whose
+            # e'_d, psi"_q are -E'd, -psi"_q here)
+            dx[4, i] = (-x[4, i] + P[i, K_P12] * (-cqg - P[i, K_P11] * Edpe)
+                        - P[i, K_GQD] * _gap_saturation(P, i, psidpp, psiqpp) * psiqpp
+                        ) / P[i, K_TQOP]
             dx[5, i] = Edpe / P[i, K_TQOPP]
             torque = pmech[i] / ws - (psidpp * cqg - psiqpp * cdg)
         elif kind == TRA:

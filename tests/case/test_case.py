@@ -86,8 +86,9 @@ def test_matrix_gives_pst_matrix_back_and_col_is_1_based():
     np.testing.assert_array_equal(c.machines.matrix()[:, :21], np.array(MAC, float))
     assert c.machines.col(16) is c.machines.H
     assert c.machines.speed_effects.tolist() == [1, 1]   # stabctl's column 24, PST default
-    with pytest.raises(CaseError, match="no column 25"):
-        c.machines.col(25)
+    assert c.machines.psse_sat.tolist() == [0, 0]        # column 25: PST's mac_sub, unsaturated
+    with pytest.raises(CaseError, match="no column 26"):
+        c.machines.col(26)
 
 
 def test_tables_are_read_only():

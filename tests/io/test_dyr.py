@@ -77,7 +77,8 @@ def test_kundur_genrou_to_mac_sub(kundur_tables):
     assert row == dict(number=3, bus=3, mva=900, xl=0.06, ra=0, xd=1.8, xdp=0.3, xdpp=0.25,
                        Tdop=8.0, Tdopp=0.03, xq=1.7, xqp=0.55, xqpp=0.25, Tqop=0.4,
                        Tqopp=0.05, H=6.175, D0=0)
-    assert m.shape == (4, 24) and np.all(m[:, 21:] == 1.0)   # pfrac, qfrac, speed effects
+    assert m.shape == (4, 25) and np.all(m[:, 21:24] == 1.0)  # pfrac, qfrac, speed effects
+    assert np.all(m[:, 24] == 0)                              # PST's mac_sub: no saturation
 
 
 def test_kundur_exdc2_to_dc2_and_tgov1(kundur_tables):
@@ -109,16 +110,18 @@ def test_andes_conventions_change_only_what_andes_reads_differently():
     andes_ = dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip",
                         conventions="andes")
     speed = MachineTable.columns().index("speed_effects")
+    sat = MachineTable.columns().index("psse_sat")              # GENROU's air-gap saturation
     assert np.all(pst.mac_con[:, speed] == 1) and np.all(andes_.mac_con[:, speed] == 0)
+    assert np.all(pst.mac_con[:, sat] == 0) and np.all(andes_.mac_con[:, sat] == 1)
     assert np.all(pst.exc_con[:, 0] == 2) and np.all(andes_.exc_con[:, 0] == 1)  # EXDC2
     others = np.ones(pst.mac_con.shape[1], bool)
-    others[speed] = False
+    others[[speed, sat]] = False
     np.testing.assert_array_equal(pst.mac_con[:, others], andes_.mac_con[:, others])
     # EXDC2's saturation: PST's exponential (A, B stored) or the quadratic through the
     # points (stored as given), K_E as given (columns 23, 24)
     np.testing.assert_array_equal(pst.exc_con[:, 1:11], andes_.exc_con[:, 1:11])
     np.testing.assert_array_equal(pst.exc_con[:, 15:20], andes_.exc_con[:, 15:20])
-    assert np.all(pst.exc_con[:, 22:] == 0) and np.all(andes_.exc_con[:, 22:] == 1)
+    assert np.all(pst.exc_con[:, 22:] == 0) and np.all(andes_.exc_con[:, 22:24] == 1)
     np.testing.assert_array_equal(andes_.exc_con[0, 11:15], [0, 0, 1, 1])  # E1 SE1 E2 SE2
     # IEEEG1's rate limits Uo, Uc: machine base (PSS/E) or system base (ANDES)
     recs = read_dyr(WECC_DYR)
@@ -129,6 +132,9 @@ def test_andes_conventions_change_only_what_andes_reads_differently():
     e = ExciterTable.from_matrix(t_andes.exc_con)
     dc2 = e.type == exc.DC2                                           # WECC's 8 ESDC2A
     assert dc2.sum() == 8 and np.all(e.TR[dc2] == 0) and np.all(e.dc_sat[dc2] == 1)
+    st3 = e.type == exc.ST3                       # WECC's 4 ESST3A: I_N from the machine's I_fd
+    assert st3.sum() == 4 and np.all(e.ifd_machine[st3] == 1) and np.all(e.ifd_machine[~st3] == 0)
+    assert np.all(ExciterTable.from_matrix(dyr_tables(recs, gens).exc_con).ifd_machine == 0)
     assert (g_pst.Uo[0], g_pst.Uc[0]) == (1.0, -1.0)
     assert (g_andes.Uo[0], g_andes.Uc[0]) == (0.25, -0.25)
     with pytest.raises(CaseError, match="conventions"):
@@ -153,7 +159,7 @@ def test_wecc_imports_completely():
     recs = read_dyr(WECC_DYR)
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
-        (29, 24), (29, 24), (29, 24), (29, 24)) and t.unsupported == ()
+        (29, 25), (29, 25), (29, 24), (29, 24)) and t.unsupported == ()
     kinds = dict(zip(*np.unique(t.exc_con[:, 0], return_counts=True)))
     assert kinds == {2: 8, 3: 4, 4: 17}                       # ESDC2A, ESST3A, EXST1
 
@@ -254,7 +260,7 @@ def test_ids_compare_without_quotes_and_other_models_parse_leniently(tmp_path):
     recs = read_dyr(write(tmp_path, text))
     assert recs[0].id == "1" and recs[1].model == "USRMDL" and np.isnan(recs[1].params[0])
     t = dyr_tables(recs, [dict(kundur_generators()[0], id="'1'")], on_unsupported="skip")
-    assert t.mac_con.shape == (1, 24) and [r.line for r in t.unsupported] == [2]
+    assert t.mac_con.shape == (1, 25) and [r.line for r in t.unsupported] == [2]
 
 
 def test_generator_without_machine_model_is_named(tmp_path):
