@@ -119,6 +119,7 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     """
     from stabctl.io import load_case
     from stabctl.dynamics.simulation import Simulator, check_step_count
+    from stabctl.dynamics.events import validate as validate_events
 
     out_p = check_suffix(out_path, OUT_SUFFIXES, "--out")
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
@@ -143,6 +144,7 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     if esd_pct is not None:
         from stabctl.storage.devices import uniform_fleet
         fleet = uniform_fleet(case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz))
+    validate_events(case, events, tf)       # an unknown bus or line before compiling
     sim = Simulator(case, conventions=conventions, q_limits=q_limits)
     h = sim.default_h if step is None else step
     result = sim.run(events, t_end=tf, h=h, separation_limit=separation_limit,

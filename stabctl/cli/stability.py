@@ -55,12 +55,14 @@ def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, deadband_hz,
     from stabctl.stability.cct import LineFault, critical_clearing_time
     from stabctl.storage.devices import uniform_fleet
     from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.events import validate as validate_events
 
     settings = cct_settings(tol_ms, t_max, tf)
     case = load_case(case_name)
     storage = None if esd_pct is None else uniform_fleet(
         case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz))
     line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
+    validate_events(case, line_fault.events(0.0), t_fault + 1.0)   # before compiling
     res = critical_clearing_time(Simulator(case, conventions=conventions, q_limits=q_limits),
                                  line_fault,
                                  storage=storage, h=step, **settings)

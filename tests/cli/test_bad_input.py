@@ -236,3 +236,18 @@ def test_import_andes_without_andes_says_how_to_install_and_writes_nothing(
     res = run("import-andes", PSSE / "five_bus_v33.raw", "-o", out)
     assert_error(res, "ANDES is not installed", "pip install 'stabctl[andes]'")
     assert not out.exists()
+
+
+@pytest.mark.parametrize("args", [
+    ("simulate", "kundur", "--fault", 7, "--far-bus", 8),
+    ("simulate", "kundur", "--fault", 3, "--far-bus", 13),
+    ("cct", "kundur", "--fault", 3, "--far-bus", 7),
+])
+def test_unknown_bus_or_line_is_refused_before_the_model_is_built(args, monkeypatch):
+    """An unknown bus or line is named before the simulator is built (which compiles the
+    kernels on a first call: 20 s of a cold `stabctl simulate` went by before the error)."""
+    def built(*a, **k):
+        raise AssertionError("Simulator built before the events were checked")
+    monkeypatch.setattr("stabctl.dynamics.simulation.Simulator.__init__", built)
+    res = run(*args)
+    assert res.exit_code == 2 and re.search(r"bus \d+|line", res.stderr), res.stderr
