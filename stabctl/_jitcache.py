@@ -6,18 +6,28 @@ Our kernels call across modules and subpackages, so before the first kernel is c
 hash every stabctl source file (all subpackages) and delete the cached kernels of the
 whole package whenever the hash differs from the one they were compiled with.
 
-Every compiled kernel of stabctl is declared with :func:`njit` from this module; importing
-``stabctl`` itself compiles nothing and touches no file.
+Every compiled kernel of stabctl is declared with :func:`njit` (callable from Python too)
+or :func:`kernel` (called only from other kernels) from this module; importing ``stabctl``
+itself compiles nothing and touches no file.
 """
 
 from __future__ import annotations
 
+import atexit
 import functools
 import hashlib
+import importlib
 import os
+import pickle
+import subprocess
+import sys
+import tempfile
+import warnings
 from pathlib import Path
 
 import numba
+from numba.core import event
+from numba.core.registry import CPUDispatcher
 
 _PKG = Path(__file__).resolve().parent
 
@@ -102,8 +112,6 @@ def on_first_compile(notify, still=None, every_s: float = 10.0):
     import threading
     import time
 
-    from numba.core import event
-
     class _Compiles(event.Listener):
         depth, noticed, t_begin, last = 0, False, 0.0, 0.0
 
@@ -141,7 +149,143 @@ def on_first_compile(notify, still=None, every_s: float = 10.0):
     return stop
 
 
+def _writable(directory: Path) -> bool:
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=directory):
+            return True
+    except OSError:
+        return False
+
+
+#: compiles under way in child processes (`compile_in_background`), by dispatcher name
+_BACKGROUND: dict[str, tuple[subprocess.Popen, object]] = {}
+
+
+def _name(dispatcher) -> str:
+    return f"{dispatcher.py_func.__module__}.{dispatcher.py_func.__qualname__}"
+
+
+def compile_in_background(dispatcher, argtypes) -> bool:
+    """Start compiling a kernel for given argument types in a child process, which writes
+    it to the on-disk cache; `await_background` then waits for it and the kernel loads
+    from the cache.  This process meanwhile compiles other kernels: the simulator's
+    integrator (`stabctl.dynamics.simulation.integrate`) and the model's evaluation do not
+    link each other (`stabctl.dynamics.model.call_evaluate`), so on two cores a cold first
+    run compiles them side by side.
+
+    Nothing is started (returns False) when the kernel is already compiled in this process,
+    or a compile of it is under way, or its cache directory cannot be written (the child's
+    work could not reach this process).  A child still running when this process exits is
+    stopped (no orphan process).
+
+    Parameters
+    ----------
+    dispatcher : numba dispatcher
+        A kernel with ``cache=True`` defined at module level.
+    argtypes : sequence of numba types
+        Its argument types, e.g. ``[numba.typeof(a) for a in args]``.
+
+    Returns
+    -------
+    bool
+        Whether a child process was started.
+    """
+    name = _name(dispatcher)
+    where = Path(dispatcher.stats.cache_path)
+    if name in _BACKGROUND or dispatcher.signatures or not _writable(where):
+        return False
+    err = tempfile.TemporaryFile()
+    proc = subprocess.Popen([sys.executable, "-m", "stabctl._jitcache",
+                             dispatcher.py_func.__module__, dispatcher.py_func.__qualname__],
+                            stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=err)
+    proc.stdin.write(pickle.dumps(tuple(argtypes)))
+    proc.stdin.close()
+    _BACKGROUND[name] = (proc, err)
+    atexit.register(_stop, proc)
+    return True
+
+
+def await_background(dispatcher) -> None:
+    """Wait for the child process compiling `dispatcher` (`compile_in_background`), if
+    one was started, so that its next call loads the kernel from the cache.  The wait is
+    announced as a numba compile event (the CLI's notice and its heartbeat go on).  If
+    the child failed, a RuntimeWarning gives its last error line and the kernel is
+    compiled here, as without a child.
+    """
+    started = _BACKGROUND.pop(_name(dispatcher), None)
+    if started is None:
+        return
+    proc, err = started
+    if proc.poll() is None:
+        data = {"dispatcher": dispatcher, "args": None, "return_type": None}
+        event.start_event("numba:compile", data=data)
+        try:
+            proc.wait()
+        finally:
+            event.end_event("numba:compile", data=data)
+    if proc.returncode != 0:
+        err.seek(0)
+        lines = err.read().decode(errors="replace").strip().splitlines() or ["no message"]
+        warnings.warn(f"compiling {_name(dispatcher)} in a child process failed "
+                      f"(exit {proc.returncode}: {lines[-1]}); compiling it here",
+                      RuntimeWarning, stacklevel=2)
+    err.close()
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    if proc.poll() is None:
+        proc.terminate()
+        proc.wait()
+
+
 ensure_fresh_cache()
 
-#: ``numba.njit`` with ``cache=True``: the decorator of every stabctl kernel.
-njit = functools.partial(numba.njit, cache=True)
+#: ``numba.njit`` with ``cache=True``: the decorator of a kernel that Python code calls.
+#: No C-callable (``cfunc``) wrapper: nothing takes a kernel's C address.
+njit = functools.partial(numba.njit, cache=True, no_cfunc_wrapper=True)
+
+
+class CompiledOnly(CPUDispatcher):
+    """A numba dispatcher compiled without a Python entry point (`kernel`): calling it from
+    Python raises TypeError instead of crashing the interpreter."""
+
+    def __call__(self, *args, **kwargs):
+        raise TypeError(f"{self.py_func.__module__}.{self.py_func.__qualname__} is compiled "
+                        "for calls from compiled stabctl code only (declared with "
+                        "stabctl._jitcache.kernel); declare it with njit to call it from "
+                        "Python")
+
+
+def kernel(func=None, **options):
+    """Decorator of a kernel called only from other kernels: ``numba.njit`` with
+    ``cache=True`` and without the CPython and C wrappers that a call from Python needs.
+    Each wrapper unpacks every argument (a NamedTuple of arrays field by field); leaving
+    them out takes about 4 s off a cold first simulation (39 -> 35 s on this 2-core
+    machine, benchmarks/bench_compile.py).
+
+    Parameters
+    ----------
+    func : callable, optional
+        The function (``@kernel``), or None (``@kernel(inline="always")``).
+    **options
+        Further ``numba.njit`` options (e.g. ``inline="always"``).
+
+    Returns
+    -------
+    CompiledOnly
+        The dispatcher; calling it from Python raises TypeError.
+    """
+    def declare(f):
+        dispatcher = numba.njit(f, cache=True, no_cpython_wrapper=True,
+                                no_cfunc_wrapper=True, **options)
+        dispatcher.__class__ = CompiledOnly
+        return dispatcher
+
+    return declare if func is None else declare(func)
+
+
+if __name__ == "__main__":       # the child of `compile_in_background`
+    _module, _qualname = sys.argv[1:3]
+    getattr(importlib.import_module(_module), _qualname).compile(
+        pickle.load(sys.stdin.buffer))

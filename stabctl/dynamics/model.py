@@ -9,10 +9,15 @@ docs/pst_models.md sections 1-7.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
+from numba import types
+from numba.core.errors import TypingError
+from numba.extending import intrinsic
+
 from stabctl._jitcache import njit
 
 from stabctl.models import exciters as exc
@@ -236,10 +241,20 @@ class DynamicModel:
             S_P=self.nc.S_P.astype(complex), I0=self.nc.I0.astype(complex),
             Y_low=self.nc.Y_low.astype(complex), ieee=self.conventions == "ieee", reach=0.0,
             n_mac=L.n_mac, n_exc=L.n_exc, n_pss=L.n_pss, n_tg=L.n_tg)
+
+    @functools.cached_property
+    def initial_residual(self) -> tuple[float, str]:
+        """Largest |derivative| at t = 0 and the state it belongs to (the initialisation
+        check; evaluated on first use, the model's first compiled evaluation).
+
+        Raises
+        ------
+        SimulationError
+            The non-conforming load iteration did not converge at the initial point.
+        """
         dx, _ = self.evaluate(self.x0.copy(), self.network(StageConfig()), self.V_nc0)
         k = int(np.argmax(np.abs(dx)))
-        #: largest |derivative| at t = 0 and the state it belongs to (initialisation check)
-        self.initial_residual = (float(abs(dx[k])), self.state_name(k))
+        return float(abs(dx[k])), self.state_name(k)
 
     def state_name(self, k: int) -> str:
         """Name of flat state index k, e.g. 'mac.omega.G3' or 'exc.VTR.G1'."""
@@ -501,6 +516,76 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     for k in range(ng):
         gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G_MAC])], dxg)
     return it
+
+
+def evaluate_address(x, p, net, kept, out) -> int:
+    """Machine-code address of `evaluate_kernel` compiled for these argument types (loaded
+    from the cache or compiled here), for `call_evaluate`.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n_state,)
+        A state of the run (only its type counts, as for the others).
+    p : KernelParams
+    net : KernelNetwork
+        One stage, 2-D matrices.
+    kept : KeptBuses
+    out : KernelOutputs
+
+    Returns
+    -------
+    int
+        The address; valid while this process lives (the dispatcher keeps the code).
+
+    Raises
+    ------
+    RuntimeError
+        The compiled code defines no such function, or it does not return an intp (what
+        `call_evaluate` reads).
+    """
+    from numba import typeof
+
+    sig = (typeof(x), typeof(p), typeof(net), typeof(kept), types.boolean, typeof(x),
+           typeof(out))
+    evaluate_kernel.compile(sig)
+    cres = evaluate_kernel.overloads[sig]
+    address = cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
+    if not address or cres.signature.return_type != types.intp:
+        raise RuntimeError("evaluate_kernel: no compiled function for " + str(sig))
+    return address
+
+
+@intrinsic
+def call_evaluate(typingctx, address, x, p, net, kept, want_vbus, dx, out):
+    """``evaluate_kernel(x, p, net, kept, want_vbus, dx, out)`` through its machine-code
+    address (`evaluate_address`), inside compiled code; its exceptions propagate.
+
+    Calling by address instead of by name keeps the model out of the caller's compiled
+    unit: `stabctl.dynamics.simulation.integrate` compiles without it (in a child
+    process when neither is cached, `stabctl._jitcache.compile_in_background`, while this
+    process compiles the model) and LLVM does not optimise and emit the model a second
+    time.  The argument types must be those of `evaluate_address` (every array
+    C-contiguous; TypingError otherwise), or the call would read its arguments wrongly.
+    """
+    argtypes = (x, p, net, kept, want_vbus, dx, out)
+    for name, t in zip(("x", "dx"), (x, dx)):
+        if not (isinstance(t, types.Array) and t.layout == "C" and t.mutable):
+            raise TypingError(f"call_evaluate: {name} must be a writable C-contiguous "
+                              f"array, got {t}")
+    if not isinstance(address, types.Integer) or want_vbus != types.boolean:
+        raise TypingError("call_evaluate: needs an integer address and a boolean want_vbus")
+    sig = types.intp(address, *argtypes)
+
+    def codegen(context, builder, signature, args):
+        fnty = context.call_conv.get_function_type(types.intp, argtypes)
+        fn = builder.inttoptr(args[0], fnty.as_pointer())
+        status, res = context.call_conv.call_function(builder, fn, types.intp, argtypes,
+                                                      args[1:])
+        with builder.if_then(status.is_error, likely=False):
+            context.call_conv.return_status_propagate(builder, status)
+        return res
+
+    return sig, codegen
 
 
 def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:

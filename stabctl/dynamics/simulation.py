@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from stabctl._jitcache import njit
+from stabctl._jitcache import await_background, compile_in_background, kernel, njit
 
 from stabctl.dynamics import events as ev_
 from stabctl.case import Case
@@ -40,8 +40,8 @@ from stabctl.storage import devices as st
 from stabctl.dynamics.coi import coi_angle, coi_value
 from stabctl.dynamics.model import (BUS_VOLTAGES, NO_BUS_VOLTAGES, DynamicModel, KeptBuses,
                                     KernelNetwork, KernelOutputs, OperatingPoint,
-                                    check_conventions, evaluate_kernel, kernel_outputs,
-                                    stacked_networks)
+                                    StageConfig, call_evaluate, check_conventions,
+                                    evaluate_address, kernel_outputs, stacked_networks)
 from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
 from stabctl.dynamics.results import SimulationResult
 
@@ -200,6 +200,11 @@ class Simulator:
     q_limits : bool, optional
         When `op` is None, the power flow switches PV buses to PQ at their Q limits (PST's
         ``chq_lim``, True, the default) or not (ANDES's default, ``pv2pq = 0``).
+    background_compile : bool, optional
+        When the integrator's kernel is neither compiled in this process nor cached,
+        compile it in a child process while this one compiles the model's evaluation
+        (True, the default: a cold first run then costs about the longer of the two, not
+        their sum, on two cores); False for a simulator that never runs (linearisation).
 
     Attributes
     ----------
@@ -229,7 +234,7 @@ class Simulator:
 
     def __init__(self, case: Case, op: OperatingPoint | None = None, injection_buses=(),
                  conventions: str = "ieee", step: float | None = None,
-                 q_limits: bool = True):
+                 q_limits: bool = True, background_compile: bool = True):
         self.conventions = check_conventions(conventions)
         self.q_limits = bool(q_limits)
         if op is None:
@@ -244,6 +249,27 @@ class Simulator:
         self._models: dict[frozenset, DynamicModel] = {}
         self.model = self.model_for(injection_buses)
         self.inertia = self.model.mp.H * case.machines.mva
+        if background_compile:
+            self._compile_runs_elsewhere()
+        self.model.initial_residual  # noqa: B018  the initialisation check (compiles it)
+
+    def _compile_runs_elsewhere(self) -> None:
+        """When `integrate` is neither compiled in this process nor cached, start compiling
+        it in a child process for the argument types of this simulator's runs
+        (`stabctl._jitcache.compile_in_background`), while this process compiles the
+        model's evaluation: a cold first run takes the longer of the two instead of
+        their sum."""
+        from numba import typeof
+
+        from stabctl._jitcache import simulator_cached
+
+        if integrate.signatures or simulator_cached():
+            return
+        m = self.model
+        probe = _Run(self, m, st.pack(None, self.case, m.nc_idx),
+                     time_grid([0.0], self.default_h, self.default_h),
+                     [m.network(StageConfig())], False, np.pi, False)
+        compile_in_background(integrate, [typeof(a) for a in probe.arguments(1)])
 
     def model_for(self, buses=()) -> DynamicModel:
         """The dynamic model keeping given buses in the reduced network (built once per set
@@ -467,6 +493,7 @@ class _Run:
         #: the model's parameters with the run's largest step as the limiters' reach
         self.params = m.params._replace(reach=float(np.max(grid.h)))
         self.k, self.status, self.wall, self.stored = 0, OK, 0.0, False
+        self.evaluate: int | None = None
 
     @property
     def x(self) -> np.ndarray:
@@ -484,11 +511,21 @@ class _Run:
         if self.status != OK or k1 < self.k or (k1 == self.k and self.stored):
             return
         self.stored = True
+        if self.evaluate is None:      # the model's evaluation: compiled or loaded here
+            self.evaluate = evaluate_address(
+                self.carry.x, self.params, KernelNetwork(*(a[0] for a in self.nets)),
+                self.carry.kept, kernel_outputs(self.m.mp.n, self.sim.case.n_bus))
+        await_background(integrate)
         wall = time.perf_counter()
-        self.status, k_end = integrate(self.carry, self.k, k1, self.steps, self.nets,
-                                       self.params, self.sa, self.opts, self.rec)
+        self.status, k_end = integrate(*self.arguments(k1))
         self.wall += time.perf_counter() - wall
         self.k = k_end
+
+    def arguments(self, k1: int) -> tuple:
+        """The arguments of `integrate` from the last stored grid index to k1 (an address
+        of 0 before the first `advance`)."""
+        return (self.carry, self.k, k1, self.steps, self.nets, self.params, self.sa,
+                self.opts, self.rec, self.evaluate or 0)
 
     def command(self, i: int, t_apply: float, modes) -> None:
         """Schedule command i: device set-points (units of each rating) from t_apply (s)."""
@@ -734,6 +771,8 @@ class _Kernel(NamedTuple):
     kept: KeptBuses
     held_stage: np.ndarray
     out: KernelOutputs
+    #: machine-code address of the model's evaluation (`stabctl.dynamics.model.call_evaluate`)
+    evaluate: int
 
 
 class _Seen(NamedTuple):
@@ -757,7 +796,7 @@ class _Workspace(NamedTuple):
     switched: np.ndarray
 
 
-@njit(cache=True)
+@kernel
 def _workspace(x, nd):
     return _Workspace(np.zeros_like(x), np.zeros_like(x),  # slots no kernel writes stay 0
                       _Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)),
@@ -766,7 +805,7 @@ def _workspace(x, nd):
 
 # -- health and separation -----------------------------------------------------------------
 
-@njit(cache=True)
+@kernel
 def _local_error(x, f_k, f_j, hh, where):
     """Heun's local error estimate (the corrector minus the Euler predictor, hh/2 |f_j -
     f_k|), largest over the states relative to 1 + |x|; its state index in where[0]."""
@@ -778,7 +817,7 @@ def _local_error(x, f_k, f_j, hh, where):
     return e
 
 
-@njit(cache=True)
+@kernel
 def _healthy(x, est, nm, health):
     """Numerical health after a step with local error estimate est (module docstring);
     returns False with the offending state index in health.bad[0]."""
@@ -797,7 +836,7 @@ def _healthy(x, est, nm, health):
     return True
 
 
-@njit(cache=True)
+@kernel
 def _separated(x, nm, opts):
     """Whether a rotor angle is more than opts.limit from the COI angle (eq. 40)."""
     return np.max(np.abs(x[:nm] - coi_value(x[:nm], opts.inertia))) > opts.limit
@@ -805,7 +844,7 @@ def _separated(x, nm, opts):
 
 # -- recording -------------------------------------------------------------------------------
 
-@njit(cache=True)
+@kernel
 def _record(rec, k, x, out, P):
     """Store grid index k: angles and speeds of x, the evaluation outputs, device powers."""
     nm = out.pelect.size
@@ -820,7 +859,7 @@ def _record(rec, k, x, out, P):
         rec.P[k] = P
 
 
-@njit(cache=True)
+@kernel
 def _log(rec, d, time_, mode, r):
     """Count a switching of device d and log it (time s, device, new mode, rel. speed)."""
     row = int(rec.stats[:, 0].sum())
@@ -831,7 +870,7 @@ def _log(rec, d, time_, mode, r):
 
 # -- network solution ----------------------------------------------------------------------
 
-@njit(cache=True)
+@kernel
 def _stage(nets, s):
     """The matrices of network stage s from the stacked ones."""
     return KernelNetwork(nets.Y11[s], nets.Y12[s], nets.Y21[s], nets.Y22[s], nets.Z22[s],
@@ -842,17 +881,18 @@ def _stage(nets, s):
 # (inline="always"): compiled as functions of their own, each carried its own linked copy of
 # the model for LLVM to optimise and emit again, and a cold first run compiled for about
 # 53 s of CPU instead of about 35 s.  The compiled arithmetic, and so every result, is the same.
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _evaluate(kn, x, stage, want, dx):
     """`evaluate_kernel` with the network of `stage`; the held loads are released when
     the stage changes.  Returns its iteration count (< 0: no convergence)."""
     if stage != kn.held_stage[0]:
         kn.kept.held[:] = False
         kn.held_stage[0] = stage
-    return evaluate_kernel(x, kn.p, _stage(kn.nets, stage), kn.kept, want, dx, kn.out)
+    return call_evaluate(kn.evaluate, x, kn.p, _stage(kn.nets, stage), kn.kept, want, dx,
+                         kn.out)
 
 
-@njit(cache=True)
+@kernel
 def _inject(sa, P, S):
     """Complex power drawn at the kept buses by the devices (absorbing is +)."""
     S[:] = 0.0
@@ -862,7 +902,7 @@ def _inject(sa, P, S):
 
 # -- device control and energy accounting --------------------------------------------------
 
-@njit(cache=True)
+@kernel
 def _targets(sa, mode, r, v, accel, out):
     """Device power set-points: bang-bang modes times ratings, or the linear law."""
     for d in range(out.size):
@@ -876,7 +916,7 @@ def _targets(sa, mode, r, v, accel, out):
             out[d] = min(max(sa.Kv * r[d] + sa.Ka * accel[d], -sa.pmax[d]), sa.pmax[d])
 
 
-@njit(cache=True)
+@kernel
 def _powers_now(sa, ds):
     """Device powers at once on their targets (ideal devices; lags and ramps keep them);
     returns whether any changed."""
@@ -888,7 +928,7 @@ def _powers_now(sa, ds):
     return changed
 
 
-@njit(cache=True)
+@kernel
 def _advance(sa, P, target, e, hh, stats):
     """Device powers after hh seconds; energy (SOC, absorbed, delivered) by trapezoid."""
     Pn = np.empty_like(P)
@@ -900,7 +940,7 @@ def _advance(sa, P, target, e, hh, stats):
     return Pn
 
 
-@njit(cache=True)
+@kernel
 def _observe(x, dx, nm, inertia, sa, V_nc, seen):
     """Relative speeds, bus voltages and relative accelerations seen by the devices."""
     law.relative_speeds(x, nm, inertia, sa, seen.r)
@@ -911,7 +951,7 @@ def _observe(x, dx, nm, inertia, sa, V_nc, seen):
 
 # -- commands ------------------------------------------------------------------------------
 
-@njit(cache=True)
+@kernel
 def _apply_commands(ds, t_now, rec, r):
     """Apply every scheduled command due by t_now (externally commanded devices); a
     change of the set-point's sign (idle, absorb, inject) is logged as a switching."""
@@ -924,7 +964,7 @@ def _apply_commands(ds, t_now, rec, r):
         ds.cmd_next[0] += 1
 
 
-@njit(cache=True)
+@kernel
 def _substep_length(grid, sa, ds, k, rem):
     """Length of the next sub-step of step k with rem seconds left: the rest, or up to the
     next scheduled command if one falls inside."""
@@ -936,7 +976,7 @@ def _substep_length(grid, sa, ds, k, rem):
 
 # -- the controller at a grid point and at a split point -----------------------------------
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
     """The controller at grid index k (events make voltages jump here): commands due,
     Table 3 modes, targets and powers; the network is solved again if a power changed."""
@@ -955,7 +995,7 @@ def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
         _evaluate(kn, x, grid.interval[k], BUS_VOLTAGES, w.dx_k)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _locate_switching(kn, grid, sa, ds, opts, w, x_b, k):
     """First bang-bang switching inside the step from grid index k (state x_b and w.dx_j at
     its end): (fraction of the step, device), (2.0, -1) if none.  A device switches at most
@@ -975,7 +1015,7 @@ def _locate_switching(kn, grid, sa, ds, opts, w, x_b, k):
     return theta, first_d
 
 
-@njit(cache=True)
+@kernel
 def _switch_located(sa, ds, w, rec, first_d, t_now):
     """At the located instant t_now: switch device first_d, and any other whose crossing
     falls there too (within 1e-9 of the step)."""
@@ -989,7 +1029,7 @@ def _switch_located(sa, ds, w, rec, first_d, t_now):
                 _log(rec, d, t_now, new, w.a.r[d])
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d):
     """The controller at a split point of step k (a switching or a command, rem seconds
     before t_k+1): commands, switchings, targets, powers, then the derivatives there.
@@ -1009,7 +1049,7 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d):
 
 # -- the step ------------------------------------------------------------------------------
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
     """Heun's predictor-corrector over hh from x_a (derivatives dx_a), the devices' powers
     advanced on a copy of their energy: (network solved, corrected state); dx_j is written
@@ -1022,7 +1062,7 @@ def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
     return True, x_a + 0.5 * hh * (dx_a + dx_j)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
     """The step from grid index k, split at located switchings and scheduled commands
     (each device switches at most once per step, commands are finite: it ends).  Returns
@@ -1068,7 +1108,7 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
     return OK, k, x_b
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     """One step from grid index k: the network at t_k (PSTess evaluates an interval's first
     step twice; the first pass's clamps stay), the controller there, the record of t_k,
@@ -1088,7 +1128,7 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     return _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _after_step(kn, sa, ds, opts, rec, health, x, k):
     """Numerical health and loss of synchronism after the step from k: (status, index)."""
     if not _healthy(x, health.est[k + 1], kn.p.n_mac, health):
@@ -1099,7 +1139,7 @@ def _after_step(kn, sa, ds, opts, rec, health, x, k):
     return OK, k
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
     """Store the outputs at k1 where a run pauses, from copies (the next call evaluates it
     for real)."""
@@ -1110,8 +1150,8 @@ def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
     _record(rec, k1, x, kn.out, ds.P)
 
 
-@njit(cache=True)
-def integrate(c, k0, k1, grid, nets, p, sa, opts, rec):
+@njit
+def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
     """PST's predictor-corrector from grid index k0 to k1 (module docstring).
 
     Parameters
@@ -1138,6 +1178,9 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec):
     rec : Recording
         Filled at every index with the predictor-stage outputs, the states, the device
         powers, their switching and energy statistics and the switching log.
+    evaluate : int
+        Machine-code address of `stabctl.dynamics.model.evaluate_kernel` for these
+        arguments (`stabctl.dynamics.model.evaluate_address`).
 
     Returns
     -------
@@ -1148,7 +1191,8 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec):
         The last stored grid index.
     """
     n = grid.interval.size
-    kn = _Kernel(p, nets, c.kept, c.held_stage, kernel_outputs(p.n_mac, nets.R.shape[1]))
+    kn = _Kernel(p, nets, c.kept, c.held_stage, kernel_outputs(p.n_mac, nets.R.shape[1]),
+                 evaluate)
     w = _workspace(c.x, sa.pmax.size)
     x = c.x.copy()
     for k in range(k0, min(k1, n - 1)):

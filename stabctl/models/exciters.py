@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from stabctl._jitcache import njit
+from stabctl._jitcache import kernel, njit
 
 from stabctl.case import Case, beyond
 from stabctl.case.params import EXCITER
@@ -221,7 +221,7 @@ def exciter_params(case: Case) -> ExciterParams:
         ifd_machine=(e.type == ST3) & (e.ifd_machine == 1))
 
 
-@njit(cache=True)
+@kernel
 def _fex(IN, init):
     """Rectifier loading factor F_EX(I_N) of the ST3 (PST, with its initialisation quirk:
     sqrt(0.75 - I_N^0.2) and 1.708 in flag 0)."""
@@ -234,7 +234,7 @@ def _fex(IN, init):
     return 0.0
 
 
-@njit(cache=True)
+@njit
 def st3_source_voltage(KP, KI, XL, KC, eterm, theta, pelect, qelect, mac_pot, fldcur, init):
     """V_B = V_E F_EX of the ST3 potential/compound source (PST exc_st3 flag 0/1); KP is
     the complex K_P exp(j theta_P); pelect, qelect on the system base."""
@@ -313,7 +313,7 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
     return replace(p, KE=KE), VR
 
 
-@njit(cache=True)
+@njit
 def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """Field voltage exciter i hands its machine (PST flag 1); VTR_alg: terminal voltage,
     VB: ST3 source voltage, ifd: machine field current (EXST1); ieee: the IEEE 421.5
@@ -343,7 +343,7 @@ def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     return P[i, E_KA] * VA * mult
 
 
-@njit(cache=True)
+@kernel
 def _nonwindup(x, dx, r, i, d, lo, hi, ieee, reach):
     """Non-windup limited lag: zero an outward derivative beyond a limit (PST exc_st3,
     exc_dc12; ieee: at or beyond it, IEEE Std 421.5-2016 annex E.5, so that a state held
@@ -367,7 +367,7 @@ def _nonwindup(x, dx, r, i, d, lo, hi, ieee, reach):
     x[r, i] = min(max(x[r, i], lo), hi)
 
 
-@njit(cache=True)
+@njit
 def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee, reach):
     """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
     reach (s): DC2's V_t-scaled V_R limits hold a state within that reach (`_nonwindup`;
@@ -423,7 +423,7 @@ def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee, reach):
         _nonwindup(x, dx, 2, i, d, lo, hi, ieee, 0.0)
 
 
-@njit(cache=True)
+@njit
 def dc_feedback(KE, Asat, Bsat, quadratic, Efd):
     """V_FE of a DC exciter: (K_E + S_E(Efd)) Efd with S_E = sign(Efd) Asat exp(Bsat |Efd|)
     (PST), or with quadratic > 0: K_E Efd + Bsat (Efd - Asat)^2 above Asat (PSS/E)."""
@@ -433,7 +433,7 @@ def dc_feedback(KE, Asat, Bsat, quadratic, Efd):
     return (KE + SE) * Efd
 
 
-@njit(cache=True)
+@kernel
 def _dc_exciter(P, x, i, dx):
     """DC exciter field and rate feedback (PST exc_dc12 flag 2):
     T_E dEfd/dt = V_R - V_FE(Efd) (`dc_feedback`);
@@ -444,7 +444,7 @@ def _dc_exciter(P, x, i, dx):
     dx[4, i] = (Efd - x[4, i]) / P[i, E_TF]
 
 
-@njit(cache=True)
+@kernel
 def recorded_efd(P, x, i, efd_alg):
     """Efd as PST records it: the (clamped) smpexc state, the DC Efd state, or the ST3
     (and bus-fed smpexc) algebraic value."""

@@ -26,7 +26,7 @@ type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jitcache import njit
+from stabctl._jitcache import kernel, njit
 
 from stabctl.case import Case, beyond
 from stabctl.case.params import GOVERNOR
@@ -173,7 +173,7 @@ def initialise(p: GovernorParams, pmech0):
     return x, np.where(hy, p.Rp * gate, gate)
 
 
-@njit(cache=True)
+@kernel
 def _ieeeg1_lags(P, x, k):
     """Outputs of the IEEEG1 lags T4..T7 (a lag below 1e-3 s passes its input)."""
     y = np.empty(4)
@@ -185,7 +185,7 @@ def _ieeeg1_lags(P, x, k):
     return y
 
 
-@njit(cache=True)
+@njit
 def pmech(P, x, k, omega):
     """Mechanical power of governor k (machine base) at machine speed omega (pu), flag 1."""
     kind = P[k, G_KIND]
@@ -203,7 +203,7 @@ def pmech(P, x, k, omega):
     return x[2, k] + P[k, G_T4] / P[k, G_T5] * y2
 
 
-@njit(cache=True)
+@kernel
 def _nonwindup(x, dx, r, k, d, lo, hi):
     """Non-windup limited integrator/lag: clamp the state, zero an outward derivative."""
     if (x[r, k] >= hi and d > 0) or (x[r, k] <= lo and d < 0):
@@ -212,7 +212,7 @@ def _nonwindup(x, dx, r, k, d, lo, hi):
     x[r, k] = min(max(x[r, k], lo), hi)
 
 
-@njit(cache=True)
+@njit
 def derivatives(P, x, k, omega, dx):
     """Derivatives of governor k into dx[:, k] for its machine speed omega (pu), flag 2;
     clamps the limited TGOV1 valve and IEEEG1 gate states in x."""
@@ -240,7 +240,7 @@ def derivatives(P, x, k, omega, dx):
         dx[2, k] = ((1 - P[k, G_T4] / P[k, G_T5]) * y2 - x[2, k]) / P[k, G_T5]
 
 
-@njit(cache=True)
+@kernel
 def _ieeeg1_derivatives(P, x, k, omega, dx):
     """IEEEG1: lead-lag on K (omega - 1), rate- and position-limited gate, lags T4..T7."""
     u = P[k, G_INVR] * (omega - 1.0)
@@ -258,7 +258,7 @@ def _ieeeg1_derivatives(P, x, k, omega, dx):
         inp = y[r]
 
 
-@njit(cache=True)
+@kernel
 def _hygov_derivatives(P, x, k, omega, dx):
     """HYGOV: filter, rate- and position-limited gate integrator, gate servo, water column
     (module docstring; ANDES ``hygov.py``)."""
@@ -274,7 +274,7 @@ def _hygov_derivatives(P, x, k, omega, dx):
     dx[3, k] = (1.0 - h) / P[k, G_T4]
 
 
-@njit(cache=True)
+@kernel
 def _ieesgo_lags(P, x, k, omega, dx=None):
     """IEESGO: outputs of the lags T4, T5, T6 (module docstring; a time constant below
     1e-3 s passes its input) and, given dx, the derivatives of its five states."""

@@ -15,7 +15,7 @@ psi_kq; `mac_tra` uses the first four, `mac_em` the first two (the others stay c
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jitcache import njit
+from stabctl._jitcache import kernel, njit
 
 from stabctl.case import Case
 from stabctl.case.params import MACHINE
@@ -257,28 +257,28 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
 # P is MachineParams.packed(); x the machine block of the state vector, shape (6, n_mac).
 
 
-@njit(cache=True)
+@kernel
 def _fluxes(P, x, i):
     """psi"_d, psi"_q of machine i (subtransient model)."""
     return (P[i, K_P9] * x[2, i] + P[i, K_P10] * x[3, i],
             P[i, K_P14] * x[4, i] + P[i, K_P15] * x[5, i])
 
 
-@njit(cache=True)
+@kernel
 def _dq(delta, X):
     """(d, q) of the network phasor X in the rotor frame: d + jq = j exp(-j delta) X."""
     z = 1j * np.exp(-1j * delta) * X
     return z.real, z.imag
 
 
-@njit(cache=True)
+@kernel
 def _stator_speed(P, x, i):
     """Speed in the subtransient stator voltage and torque: omega with speed effects (PST
     mac_sub), 1 without (ANDES GENROU)."""
     return x[1, i] if P[i, K_SPEED] > 0 else 1.0
 
 
-@njit(cache=True)
+@njit
 def internal_voltage(P, x, psi):
     """Voltage behind the network reactance, network frame (PST flag 1), into psi (n_mac,).
 
@@ -294,7 +294,7 @@ def internal_voltage(P, x, psi):
             psi[i] = e * (x[2, i] - 1j * x[4, i])
 
 
-@njit(cache=True)
+@kernel
 def _gap_saturation(P, i, psidpp, psiqpp):
     """S_e(|psi"|) = B (|psi"| - A)^2 / |psi"| of machine i, PSS/E's GENROU saturation of
     the air-gap flux (ANDES ``genrou.py`` ``Se``; 0 for |psi"| <= A and without it)."""
@@ -304,7 +304,7 @@ def _gap_saturation(P, i, psidpp, psiqpp):
     return P[i, K_GB] * (psi - P[i, K_GA]) ** 2 / psi if psi > P[i, K_GA] else 0.0
 
 
-@njit(cache=True)
+@kernel
 def _field_current(P, x, i, cdg):
     """Field current of machine i (machine base, vex = it in steady state) for the d-axis
     current cdg (machine base): subtransient E'q + p7 (i_d + p6 (E'q - psi_kd - p8 i_d))
@@ -323,13 +323,13 @@ def _field_current(P, x, i, cdg):
     return e
 
 
-@njit(cache=True)
+@kernel
 def field_current(P, x, cur, i):
     """Field current of machine i (machine base) at network current cur[i] (system base)."""
     return _field_current(P, x, i, _dq(x[0, i], cur[i])[0] * P[i, K_POT])
 
 
-@njit(cache=True)
+@njit
 def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
     """Machine derivatives into dx (6, n_mac) and outputs (PST flag 2, docs 1.6-1.9).
 
@@ -380,7 +380,7 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
         dx[1, i] = (torque - P[i, K_D0] * (w - 1.0)) / (2.0 * P[i, K_H])
 
 
-@njit(cache=True)
+@kernel
 def stator_without_speed(P, x, cur, i):
     """(ed, eq, curd, curq) of machine i from the subtransient stator equations without the
     speed factor (PST `exc_st3` flag 1 recomputes them this way); currents system base."""
@@ -392,7 +392,7 @@ def stator_without_speed(P, x, cur, i):
     return ed, eq, curd, curq
 
 
-@njit(cache=True)
+@kernel
 def st3_field_current(P, x, cur, i):
     """PST exc_st3's own field-current estimate E_Isat + p6 (E'q - psi_kd) + p7 i_d."""
     e = x[2, i]

@@ -20,7 +20,7 @@ the same machine.
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jitcache import njit
+from stabctl._jitcache import kernel, njit
 
 from stabctl.case import Case
 from stabctl.case.params import PSS
@@ -199,7 +199,7 @@ def initialise(p: PssParams, u1, u2):
     return x[:p.n_slots()]
 
 
-@njit(cache=True)
+@kernel
 def _leadlag(P, x, dx, r, k, u, lead, lag):
     """PST-form lead-lag (1 + s T_lead)/(1 + s T_lag) with state slot r; output."""
     if P[k, lag] < LBND:
@@ -210,7 +210,7 @@ def _leadlag(P, x, dx, r, k, u, lead, lag):
     return ratio * u + x[r, k]
 
 
-@njit(cache=True)
+@njit
 def output_and_derivatives(P, x, k, omega, pe, dx):
     """Output of PSS k at machine speed omega (pu) and electrical power pe (machine base),
     PST flag 1/2; its derivatives into dx[:, k]."""
@@ -234,7 +234,7 @@ def output_and_derivatives(P, x, k, omega, pe, dx):
     return min(max(var3, P[k, S_MIN]), P[k, S_MAX])
 
 
-@njit(cache=True)
+@kernel
 def _signal(code, omega, pe):
     if code == SPEED:
         return omega - 1.0
@@ -243,7 +243,7 @@ def _signal(code, omega, pe):
     return 0.0
 
 
-@njit(cache=True)
+@kernel
 def _psse(P, x, k, omega, pe, dx):
     """PSS/E stabiliser: input lags K_i/(1 + s Tr_i) summed, filter N/D, washout
     K_w s/(1 + s T_w), three lead-lags, output limits (docs 3.1)."""
@@ -273,7 +273,7 @@ def _psse(P, x, k, omega, pe, dx):
     return min(max(y, P[k, S_MIN]), P[k, S_MAX])
 
 
-@njit(cache=True)
+@kernel
 def _lag(P, x, dx, r, k, u, T):
     """Lag 1/(1 + s T) of u with state slot r (T below 1e-3 s: u itself); output."""
     if P[k, T] < LBND:
@@ -283,7 +283,7 @@ def _lag(P, x, dx, r, k, u, T):
     return x[r, k]
 
 
-@njit(cache=True)
+@kernel
 def _stab2a(P, x, k, pe, dx):
     """STAB2A: -(K_Tw s/(1 + s T_w))^3 on pe (K_Tw = K_2 T_2, T_w = T_2), then
     K_3/(1 + s T_3) + K_4 (columns K1, Tr1, K2), then (K_5/(1 + s T_5))^2 (columns K5 = T5,

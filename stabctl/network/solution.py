@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as la
-from stabctl._jitcache import njit
+from stabctl._jitcache import kernel, njit
 
 from stabctl.case import Case
 from stabctl.errors import SimulationError
@@ -113,7 +113,7 @@ class NonConformingLoads:
     Y_low: np.ndarray
 
 
-@njit(cache=True)
+@kernel
 def _load_currents(V, S_P, I0, Y_low, S_extra, low, out):
     """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out)."""
     for i in range(V.size):
@@ -124,7 +124,7 @@ def _load_currents(V, S_P, I0, Y_low, S_extra, low, out):
             out[i] = np.conj(Y_low[i]) * V[i]
 
 
-@njit(cache=True)
+@njit
 def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
     """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|.  Buses with low[i]
     are held at their low-voltage impedance model."""
@@ -133,7 +133,7 @@ def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
     return np.max(np.abs(F))
 
 
-@njit(cache=True)
+@njit
 def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, max_iter=50):
     """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
 
@@ -188,7 +188,7 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, ma
     return it
 
 
-@njit(cache=True)
+@kernel
 def _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, low, vmin):
     """Up to 30 chord steps V <- V - Z22 F(V); the step count, or -1 if not converged.
 
@@ -210,7 +210,7 @@ def _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, low, vmin):
     return -1
 
 
-@njit(cache=True)
+@kernel
 def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin):
     """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load);
     vmin keeps the smallest magnitude each bus reached."""

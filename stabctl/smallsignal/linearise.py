@@ -129,7 +129,7 @@ def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP
     from stabctl.dynamics.simulation import Simulator
 
     sim = target if isinstance(target, Simulator) else Simulator(
-        target, conventions=conventions, q_limits=q_limits)
+        target, conventions=conventions, q_limits=q_limits, background_compile=False)
     case = sim.case
     buses = list(default_esd_buses(case) if esd_buses is None else esd_buses)
     buses = list(dict.fromkeys(int(b) for b in [*buses, *extra_buses]))

@@ -28,7 +28,7 @@ from typing import ClassVar, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
-from stabctl._jitcache import njit
+from stabctl._jitcache import kernel, njit
 from stabctl.errors import InputError
 
 #: largest voltage gate of the bang-bang law (pu)
@@ -194,7 +194,7 @@ class ExternalCommands:
 
 # -- compiled kernels (used by stabctl.dynamics.simulation.integrate) ----------------------
 
-@njit(cache=True)
+@kernel
 def coi_value(values, inertia):
     """Centre-of-inertia value (paper eq. 40) of per-machine values (n_mac,) with weights
     inertia (n_mac,) (H * MVA): sum(values * inertia) / sum(inertia).  The compiled
@@ -202,7 +202,7 @@ def coi_value(values, inertia):
     return (values * inertia).sum() / inertia.sum()
 
 
-@njit(cache=True)
+@njit
 def relative_speeds(x, nm, inertia, sa, out):
     """omega_i - omega_COI (pu) of each device's machine: COI of all machines (eq. 40) or of
     the rest of the system (sa.rest); 0 for a device without a machine.  x: flat state
@@ -220,7 +220,7 @@ def relative_speeds(x, nm, inertia, sa, out):
             out[d] = w - coi
 
 
-@njit(cache=True)
+@njit
 def desired_mode(sa, d, mode, r, v):
     """Table 3: +1 absorb above the deadband, -1 inject below, 0 inside or below the voltage
     gate; with hysteresis a running device stops only inside deadband - hysteresis."""
@@ -237,7 +237,7 @@ def desired_mode(sa, d, mode, r, v):
     return 0
 
 
-@njit(cache=True)
+@njit
 def desired_modes(sa, modes, rel_mac):
     """`desired_mode` of every device (n_dev,) int from its present mode (n_dev,) and the
     relative speed of each machine rel_mac (n_mac,) pu, the voltage gate open: the
@@ -248,7 +248,7 @@ def desired_modes(sa, modes, rel_mac):
     return out
 
 
-@njit(cache=True)
+@kernel
 def crossing(sa, mode, want, r_a, r_b, v_a, v_b):
     """Where, as a fraction of the step, a device left `mode` for `want`, and the mode it
     takes there: linear interpolation of the switching function between the step ends

@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from stabctl._jitcache import njit
+from stabctl._jitcache import kernel
 from stabctl.case import Case
 from stabctl.errors import CaseError, InputError
 from stabctl.storage.control import NO_LAW, NO_STORAGE, BangBangCOI, ControlLaw
@@ -240,7 +240,7 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageA
 
 # -- compiled device kernel (used by stabctl.dynamics.simulation.integrate) -------------------
 
-@njit(cache=True)
+@kernel
 def device_power(sa, d, target, P, e, h):
     """Device power after h seconds following `target` from P (ideal, lag or ramp), with the
     energy range: no absorption when full, no injection when empty."""
