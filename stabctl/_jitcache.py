@@ -62,12 +62,13 @@ def clear_cache() -> int:
     return len(files)
 
 
-def simulator_cached() -> bool:
-    """Whether the simulator's main kernel (`stabctl.dynamics.simulation.integrate`, which
-    links the whole model) is in the cache, i.e. a new process loads it instead of
-    compiling it."""
-    return any(any(d.glob("simulation.integrate-*.nbi")) for d in cache_dirs()
-               if d.name.startswith("dynamics") or d.parent.name == "dynamics")
+def cached(dispatcher) -> bool:
+    """Whether a kernel has an entry in the on-disk cache (numba's index file of it), i.e.
+    a new process loads it instead of compiling it (for the argument types it was compiled
+    for; stale entries are gone, `ensure_fresh_cache`)."""
+    py = dispatcher.py_func
+    stem = f"{py.__module__.rsplit('.', 1)[-1]}.{py.__qualname__}-"
+    return any(Path(dispatcher.stats.cache_path).glob(stem + "*.nbi"))
 
 
 def ensure_fresh_cache() -> None:
@@ -174,9 +175,9 @@ def compile_in_background(dispatcher, argtypes) -> bool:
     link each other (`stabctl.dynamics.model.call_evaluate`), so on two cores a cold first
     run compiles them side by side.
 
-    Nothing is started (returns False) when the kernel is already compiled in this process,
-    or a compile of it is under way, or its cache directory cannot be written (the child's
-    work could not reach this process).  A child still running when this process exits is
+    Nothing is started (returns False) when the kernel is already compiled in this process
+    or cached (`cached`), or a compile of it is under way, or its cache directory cannot be
+    written (the child's work could not reach this process).  A child still running when this process exits is
     stopped (no orphan process).
 
     Parameters
@@ -192,8 +193,8 @@ def compile_in_background(dispatcher, argtypes) -> bool:
         Whether a child process was started.
     """
     name = _name(dispatcher)
-    where = Path(dispatcher.stats.cache_path)
-    if name in _BACKGROUND or dispatcher.signatures or not _writable(where):
+    if (name in _BACKGROUND or dispatcher.signatures or cached(dispatcher)
+            or not _writable(Path(dispatcher.stats.cache_path))):
         return False
     err = tempfile.TemporaryFile()
     proc = subprocess.Popen([sys.executable, "-m", "stabctl._jitcache",

@@ -41,11 +41,86 @@ def test_simulator_cached_reads_numbas_own_index_of_the_integrator():
     # it: afterwards the index numba wrote for `integrate` is the one `simulator_cached` finds
     from pathlib import Path
 
-    from stabctl.dynamics.simulation import integrate
+    from stabctl.dynamics.simulation import integrate, simulator_cached
     from stabctl.stability.cct import compile_here
 
     cache = integrate._cache
     assert Path(cache._cache_path) in _jitcache.cache_dirs()
     compile_here("kundur")
     assert (Path(cache._cache_path) / cache._cache_file._index_name).exists()
-    assert _jitcache.simulator_cached()
+    assert simulator_cached()
+
+
+def test_a_kernel_for_compiled_callers_refuses_a_python_call():
+    # `kernel` drops the CPython wrapper; a Python call would jump into missing code, so the
+    # dispatcher raises instead of crashing the interpreter
+    import pytest
+
+    from stabctl.storage.control import coi_value
+
+    with pytest.raises(TypeError, match="compiled stabctl code only"):
+        coi_value([1.0], [1.0])
+
+
+def test_the_probe_types_are_those_of_runs_with_storage_and_commands():
+    # the child process compiles `integrate` for `run_argument_types`; a run with storage or
+    # an estimator's commands must call that same compiled version, not compile another
+    import numpy as np
+    from numba import typeof
+
+    from stabctl.dynamics.model import StageConfig
+    from stabctl.dynamics.simulation import Simulator, _Run, time_grid
+    from stabctl.io import load_case
+    from stabctl.storage import devices
+    from stabctl.stability.cct import storage_fleet
+
+    sim = Simulator(load_case("kundur"), background_compile=False)
+    fleet = storage_fleet(sim.case, 5.0)
+    m = sim.model_for(fleet.buses)
+    sa = devices.pack(fleet, sim.case, m.nc_idx)
+    for n_commands in (0, 3):
+        nets = [m.network(StageConfig()), m.network(StageConfig(faults=((2, 1e7j),)))]
+        run = _Run(sim, m, sa, time_grid([0.0, 1.0], 2.0, sim.default_h), nets, True, np.pi,
+                   True, n_commands=n_commands)
+        assert [typeof(a) for a in run.arguments(5)] == sim.run_argument_types()
+
+
+_COLD_RUN = """
+import json, sys
+from stabctl import _jitcache
+from stabctl.dynamics.events import Fault
+from stabctl.dynamics.simulation import Simulator, integrate
+from stabctl.io import load_case
+sim = Simulator(load_case("kundur"))
+started = sorted(_jitcache._BACKGROUND)
+res = sim.run([Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0)
+print(json.dumps({"started": started, "hits": sum(integrate.stats.cache_hits.values()),
+                  "misses": sum(integrate.stats.cache_misses.values()),
+                  "speed": res.speed[-1].tolist()}))
+"""
+
+
+def test_a_cold_first_run_compiles_the_integrator_in_a_child_and_loads_it(tmp_path):
+    # on an empty cache, the integrator compiles in a child process while this one compiles
+    # the model; the run then loads the child's kernel (a cache hit, no compile here) and
+    # gives the trajectory of the kernels this test process uses
+    import json
+    import os
+    import subprocess
+    import sys
+
+    import numpy as np
+
+    from stabctl.dynamics.events import Fault
+    from stabctl.dynamics.simulation import Simulator
+    from stabctl.io import load_case
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    out = subprocess.run([sys.executable, "-c", _COLD_RUN], env=env, capture_output=True,
+                         text=True, check=True)
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert got["started"] == ["stabctl.dynamics.simulation.integrate"]
+    assert (got["hits"], got["misses"]) == (1, 0)
+    here = Simulator(load_case("kundur")).run(
+        [Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0)
+    np.testing.assert_allclose(got["speed"], here.speed[-1], rtol=0, atol=1e-13)

@@ -40,7 +40,7 @@ def main(ctx):
         # said when compiling starts (never for cached kernels; bad input fails before)
         ctx.call_on_close(on_first_compile(
             lambda: click.echo("stabctl: compiling the simulator's kernels (once after "
-                               "installation or a source change, 20-50 s; later runs load "
+                               "installation or a source change, 15-30 s; later runs load "
                                "them in about a second)", err=True),
             still=lambda s: click.echo(f"stabctl: still compiling ({s:.0f} s)", err=True)))
 

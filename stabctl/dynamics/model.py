@@ -423,6 +423,8 @@ def kernel_outputs(nm, nb):
 #: Python True/False passed from compiled code is typed as a literal, and numba would
 #: compile `evaluate_kernel` (and its callers) once per value
 BUS_VOLTAGES, NO_BUS_VOLTAGES = np.bool_(True), np.bool_(False)
+#: ``init=False`` of `stabctl.models.exciters.st3_source_voltage`, non-literal likewise
+_RUNNING = np.bool_(False)
 
 
 @njit(cache=True)
@@ -500,7 +502,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
             VB = exc.st3_source_voltage(KP, p.EP[i, exc.E_KI], p.EP[i, exc.E_XL],
                                         p.EP[i, exc.E_KC], et, np.angle(V_bus[p.mac_bus[m]]),
                                         eq * cq + ed * cd, eq * cd - ed * cq, p.MP[m, mac.K_POT],
-                                        fld, False)
+                                        fld, _RUNNING)
         efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB, ifd, p.ieee)
         vex[m] = efd_alg[i]
     pmech[:] = p.pmech0

@@ -251,25 +251,35 @@ class Simulator:
         self.inertia = self.model.mp.H * case.machines.mva
         if background_compile:
             self._compile_runs_elsewhere()
-        self.model.initial_residual  # noqa: B018  the initialisation check (compiles it)
 
     def _compile_runs_elsewhere(self) -> None:
         """When `integrate` is neither compiled in this process nor cached, start compiling
         it in a child process for the argument types of this simulator's runs
         (`stabctl._jitcache.compile_in_background`), while this process compiles the
-        model's evaluation: a cold first run takes the longer of the two instead of
-        their sum."""
+        model's evaluation at the first run: a cold first run takes the longer of the two
+        instead of their sum."""
+        from stabctl._jitcache import cached
+
+        if not (integrate.signatures or cached(integrate)):
+            compile_in_background(integrate, self.run_argument_types())
+
+    def run_argument_types(self) -> list:
+        """The numba types of `integrate`'s arguments in this simulator's runs, from a
+        one-step probe run without events or storage (the types depend on neither; nothing
+        is compiled).
+
+        Returns
+        -------
+        list of numba types
+            One per argument of `integrate`.
+        """
         from numba import typeof
 
-        from stabctl._jitcache import simulator_cached
-
-        if integrate.signatures or simulator_cached():
-            return
         m = self.model
         probe = _Run(self, m, st.pack(None, self.case, m.nc_idx),
                      time_grid([0.0], self.default_h, self.default_h),
                      [m.network(StageConfig())], False, np.pi, False)
-        compile_in_background(integrate, [typeof(a) for a in probe.arguments(1)])
+        return [typeof(a) for a in probe.arguments(1)]
 
     def model_for(self, buses=()) -> DynamicModel:
         """The dynamic model keeping given buses in the reduced network (built once per set
@@ -472,6 +482,16 @@ class Simulator:
             meta={"case": c.name, "conventions": self.conventions, "wall_time_s": wall,
                   "max_initial_derivative": self.model.initial_residual[0],
                   "max_initial_derivative_state": self.model.initial_residual[1]})
+
+
+def simulator_cached() -> bool:
+    """Whether the simulator's kernels, the integrator (`integrate`) and the model's
+    evaluation (`stabctl.dynamics.model.evaluate_kernel`), are in the on-disk cache
+    (`stabctl._jitcache.cached`): a new process loads them instead of compiling them."""
+    from stabctl._jitcache import cached
+    from stabctl.dynamics.model import evaluate_kernel
+
+    return cached(integrate) and cached(evaluate_kernel)
 
 
 class _Run:

@@ -51,7 +51,7 @@ import numpy as np
 import scipy.linalg
 from filterpy.common import Q_continuous_white_noise
 from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
-from stabctl._jitcache import njit
+from stabctl._jitcache import kernel, njit
 from scipy.stats import chi2
 
 from stabctl.case import Case
@@ -493,7 +493,7 @@ def swing_h(x, emag, pr):
 
 
 # -- compiled filters, all machines ---------------------------------------------------------
-@njit(cache=True)
+@kernel
 def _dot(a, b):
     acc = 0.0
     for j in range(a.size):
@@ -501,7 +501,7 @@ def _dot(a, b):
     return acc
 
 
-@njit(cache=True)
+@kernel
 def _mv(A, x):
     """A x for small matrices (explicit loops: BLAS calls cost more at this size)."""
     y = np.zeros(A.shape[0])
@@ -511,7 +511,7 @@ def _mv(A, x):
     return y
 
 
-@njit(cache=True)
+@kernel
 def _mm(A, B):
     C = np.zeros((A.shape[0], B.shape[1]))
     for a in range(A.shape[0]):
@@ -521,14 +521,14 @@ def _mm(A, B):
     return C
 
 
-@njit(cache=True)
+@kernel
 def _inv2(S):
     """Inverse of a 2 x 2 matrix."""
     det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
     return np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det
 
 
-@njit(cache=True)
+@kernel
 def _sandwich(F, P):
     """F P F' for small square matrices."""
     n = F.shape[0]
@@ -549,7 +549,7 @@ def _sandwich(F, P):
     return out
 
 
-@njit(cache=True)
+@kernel
 def _scalar_update(x, P, y, H, R):
     """Kalman update with one measurement (filterpy's equations, Joseph form); returns
     x, P and the NIS y^2 / S."""

@@ -231,7 +231,7 @@ def derivatives(P, x, k, omega, dx):
     lo, hi = P[k, G_TMIN], P[k, G_TMAX]
     r3 = P[k, G_T3] / P[k, G_TC]
     if kind == TGOV1:
-        _nonwindup(x, dx, 0, k, (order - x[0, k]) / P[k, G_TS], lo, hi)
+        _nonwindup(x, dx, np.int64(0), k, (order - x[0, k]) / P[k, G_TS], lo, hi)
     else:
         dx[0, k] = (min(max(order, lo), hi) - x[0, k]) / P[k, G_TS]
     dx[1, k] = ((1 - r3) * x[0, k] - x[1, k]) / P[k, G_TC]
@@ -249,7 +249,7 @@ def _ieeeg1_derivatives(P, x, k, omega, dx):
         dx[0, k] = ((1 - r) * u - x[0, k]) / P[k, G_TC]
         u = x[0, k] + r * u
     rate = min(max((P[k, G_PREF] - u - x[1, k]) / P[k, G_TS], P[k, G_UC]), P[k, G_UO])
-    _nonwindup(x, dx, 1, k, rate, P[k, G_TMIN], P[k, G_TMAX])
+    _nonwindup(x, dx, np.int64(1), k, rate, P[k, G_TMIN], P[k, G_TMAX])
     y = _ieeeg1_lags(P, x, k)
     inp = x[1, k]
     for r in range(4):
@@ -267,7 +267,7 @@ def _hygov_derivatives(P, x, k, omega, dx):
     dx[0, k] = (P[k, G_PREF] - (omega - 1.0) - P[k, G_RP] * c - e) / P[k, G_TC]
     shift = P[k, G_VELM_REL] * e / P[k, G_RT]
     rate = min(max(P[k, G_KG] * e, P[k, G_UC] - shift), P[k, G_UO] - shift)
-    _nonwindup(x, dx, 1, k, rate, P[k, G_TMIN], P[k, G_TMAX])
+    _nonwindup(x, dx, np.int64(1), k, rate, P[k, G_TMIN], P[k, G_TMAX])
     dx[2, k] = (c - x[2, k]) / P[k, G_TS]
     g = x[2, k]
     h = (x[3, k] / g) ** 2 if g > 0 else 0.0

@@ -267,9 +267,11 @@ def _psse(P, x, k, omega, pe, dx):
         dx[1 + nf, k] = acc
     y = P[k, S_KTW] * (w - x[W_PSSE, k]) / P[k, S_TW]
     dx[W_PSSE, k] = (w - x[W_PSSE, k]) / P[k, S_TW]
-    y = _leadlag(P, x, dx, LL_PSSE, k, y, S_T1, S_T2)
-    y = _leadlag(P, x, dx, LL_PSSE + 1, k, y, S_T3, S_T4)
-    y = _leadlag(P, x, dx, LL_PSSE + 2, k, y, S_T5, S_T6)
+    # column and slot numbers as int64, not literals: one compiled _leadlag, not three
+    i64 = np.int64
+    y = _leadlag(P, x, dx, i64(LL_PSSE), k, y, i64(S_T1), i64(S_T2))
+    y = _leadlag(P, x, dx, i64(LL_PSSE + 1), k, y, i64(S_T3), i64(S_T4))
+    y = _leadlag(P, x, dx, i64(LL_PSSE + 2), k, y, i64(S_T5), i64(S_T6))
     return min(max(y, P[k, S_MIN]), P[k, S_MAX])
 
 
@@ -294,7 +296,8 @@ def _stab2a(P, x, k, pe, dx):
         dx[r, k] = (y - x[r, k]) / P[k, S_TW]
         y = P[k, S_KTW] * dx[r, k]
     y = -y
-    y = _lag(P, x, dx, 3, k, P[k, S_K1] * y, S_TR1) + P[k, S_K2] * y
-    y = _lag(P, x, dx, 4, k, P[k, S_T5] * y, S_T6)
-    y = _lag(P, x, dx, 5, k, P[k, S_T5] * y, S_T6)
+    i64 = np.int64          # slot and column numbers as int64: one compiled _lag, not three
+    y = _lag(P, x, dx, i64(3), k, P[k, S_K1] * y, i64(S_TR1)) + P[k, S_K2] * y
+    y = _lag(P, x, dx, i64(4), k, P[k, S_T5] * y, i64(S_T6))
+    y = _lag(P, x, dx, i64(5), k, P[k, S_T5] * y, i64(S_T6))
     return min(max(y, P[k, S_MIN]), P[k, S_MAX])

@@ -32,15 +32,18 @@ from __future__ import annotations
 
 import control as ct
 import numpy as np
-from stabctl._jitcache import njit
+from numba import typeof
+
+from stabctl._jitcache import await_background, compile_in_background, njit
 
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
 from stabctl.case import Case
 from stabctl.dynamics.coi import coi_weights
-from stabctl.dynamics.model import (BUS_VOLTAGES, DynamicModel, KeptBuses, KernelOutputs, StageConfig,
-                                    evaluate_kernel, kernel_network, kernel_outputs)
+from stabctl.dynamics.model import (BUS_VOLTAGES, DynamicModel, KeptBuses, KernelOutputs,
+                                    StageConfig, call_evaluate, evaluate_address,
+                                    kernel_network, kernel_outputs)
 from stabctl.errors import InputError, SimulationError
 
 REL_STEP = 1e-4          # PSTess svm_mgen's relative perturbation
@@ -280,9 +283,17 @@ def jacobian_columns(model: DynamicModel, kind, index, step):
     dV = np.zeros((n_col, n_bus), np.complex128)
     curv = np.zeros(n_col)
     V0 = np.zeros(n_bus, np.complex128)
-    bad = _differences(np.asarray(kind, np.int64), np.asarray(index, np.int64),
-                       np.asarray(step, float), model.x0, model.V_nc0, p, kernel_network(net),
-                       J, dV, curv, V0)
+    kn, n_nc = kernel_network(net), model.V_nc0.size
+    args = [np.asarray(kind, np.int64), np.asarray(index, np.int64), np.asarray(step, float),
+            model.x0, model.V_nc0, p, kn, J, dV, curv, V0, 0]
+    # cold: _differences compiles in a child process while this one compiles the model
+    compile_in_background(_differences, [typeof(a) for a in args])
+    args[-1] = evaluate_address(model.x0, p, kn, KeptBuses(model.V_nc0.copy(),
+                                                          np.zeros(n_nc, np.bool_),
+                                                          np.zeros(n_nc, np.complex128)),
+                                kernel_outputs(model.mp.n, n_bus))
+    await_background(_differences)
+    bad = _differences(*args)
     if bad >= 0:
         raise SimulationError(f"the network did not solve with {_what(model, kind, index, bad)} "
                               "perturbed")
@@ -303,17 +314,20 @@ def _what(model, kind, index, c) -> str:
 
 
 @njit(cache=True)
-def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0):
+def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0, evaluate):
     """Fill J, dV with central differences (see jacobian_columns) and curv with
     max|f+ - 2 f0 + f-| / max|f+ - f-| per column; V0 with the unperturbed bus voltages.
-    Returns -1, or the column whose network did not solve (-2: the unperturbed one)."""
+    evaluate: the address of the model's evaluation (`call_evaluate`; the model is not
+    compiled again into this kernel).  Returns -1, or the column whose network did not
+    solve (-2: the unperturbed one)."""
     dx = np.zeros_like(x0)   # slots no kernel writes (unused by a model type) must stay 0:
     f0 = np.zeros_like(x0)   # the kink test below looks at every slot
     out = kernel_outputs(p.n_mac, net.R.shape[0])
     S = np.zeros(V_nc0.size, np.complex128)
     at_op = KernelOutputs(out.cur, out.pelect, out.qelect, out.eterm, out.efd, out.pmech, V0)
-    if evaluate_kernel(x0.copy(), p, net, KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_),
-                                                    S), BUS_VOLTAGES, f0, at_op) < 0:
+    if call_evaluate(evaluate, x0.copy(), p, net,
+                     KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_), S), BUS_VOLTAGES,
+                     f0, at_op) < 0:
         return -2
     for c in range(kind.size):
         j = index[c]
@@ -339,8 +353,9 @@ def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0):
                 p.EP[j, exc.E_VREF] = v
             else:
                 p.GP[j, gov.G_PREF] = v
-            it = evaluate_kernel(x, p, net, KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_),
-                                                      S), BUS_VOLTAGES, dx, out)
+            it = call_evaluate(evaluate, x, p, net,
+                               KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_), S),
+                               BUS_VOLTAGES, dx, out)
             if kind[c] == VREF:
                 p.EP[j, exc.E_VREF] = nominal
             elif kind[c] == PREF:

@@ -452,7 +452,7 @@ def cached_simulator(case_name: str, conventions: str = "ieee",
 def compile_here(case_name: str, conventions: str = "ieee", h: float | None = None,
                  q_limits: bool = True) -> None:
     """Compile the simulator's kernels in this process (a 0.1 s run of the case) unless
-    they are cached (`stabctl._jitcache.simulator_cached`), so that the workers a sweep
+    they are cached (`stabctl.dynamics.simulation.simulator_cached`), so that the workers a sweep
     starts next load them instead of each compiling them at the same time, silently.
 
     Parameters
@@ -460,7 +460,7 @@ def compile_here(case_name: str, conventions: str = "ieee", h: float | None = No
     case_name, conventions, h, q_limits
         As `cached_simulator` (the run's simulator is kept there).
     """
-    from stabctl._jitcache import simulator_cached
+    from stabctl.dynamics.simulation import simulator_cached
 
     if not simulator_cached():
         cached_simulator(case_name, conventions, h, q_limits).run((), t_end=0.1)
