@@ -248,14 +248,19 @@ njit = functools.partial(numba.njit, cache=True, no_cfunc_wrapper=True)
 
 
 class CompiledOnly(CPUDispatcher):
-    """A numba dispatcher compiled without a Python entry point (`kernel`): calling it from
-    Python raises TypeError instead of crashing the interpreter."""
+    """A numba dispatcher compiled without a Python entry point (`kernel`).  A call from
+    Python (tests, a one-off check) goes through a compiled trampoline built on its first
+    use, instead of jumping into the missing entry point."""
 
     def __call__(self, *args, **kwargs):
-        raise TypeError(f"{self.py_func.__module__}.{self.py_func.__qualname__} is compiled "
-                        "for calls from compiled stabctl code only (declared with "
-                        "stabctl._jitcache.kernel); declare it with njit to call it from "
-                        "Python")
+        if kwargs:
+            raise TypeError(f"{self.py_func.__qualname__}: keyword arguments from Python "
+                            "are not supported (a kernel for compiled callers)")
+        trampoline = self.__dict__.get("_from_python")
+        if trampoline is None:
+            target = self
+            trampoline = self._from_python = numba.njit(lambda *a: target(*a))
+        return trampoline(*args)
 
 
 def kernel(func=None, **options):
@@ -275,7 +280,7 @@ def kernel(func=None, **options):
     Returns
     -------
     CompiledOnly
-        The dispatcher; calling it from Python raises TypeError.
+        The dispatcher (a call from Python compiles a trampoline first).
     """
     def declare(f):
         dispatcher = numba.njit(f, cache=True, no_cpython_wrapper=True,

@@ -51,15 +51,17 @@ def test_simulator_cached_reads_numbas_own_index_of_the_integrator():
     assert simulator_cached()
 
 
-def test_a_kernel_for_compiled_callers_refuses_a_python_call():
-    # `kernel` drops the CPython wrapper; a Python call would jump into missing code, so the
-    # dispatcher raises instead of crashing the interpreter
+def test_a_kernel_for_compiled_callers_answers_python_through_a_trampoline():
+    # `kernel` drops the CPython wrapper; a Python call goes through a compiled trampoline
+    # (a direct call would jump into missing code) and gives the kernel's value
+    import numpy as np
     import pytest
 
     from stabctl.storage.control import coi_value
 
-    with pytest.raises(TypeError, match="compiled stabctl code only"):
-        coi_value([1.0], [1.0])
+    assert coi_value(np.array([1.0, 3.0]), np.array([1.0, 3.0])) == pytest.approx(2.5)
+    with pytest.raises(TypeError, match="keyword"):
+        coi_value(np.ones(1), inertia=np.ones(1))
 
 
 def test_the_probe_types_are_those_of_runs_with_storage_and_commands():

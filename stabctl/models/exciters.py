@@ -313,7 +313,7 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
     return replace(p, KE=KE), VR
 
 
-@njit
+@kernel
 def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """Field voltage exciter i hands its machine (PST flag 1); VTR_alg: terminal voltage,
     VB: ST3 source voltage, ifd: machine field current (EXST1); ieee: the IEEE 421.5
@@ -367,7 +367,7 @@ def _nonwindup(x, dx, r, i, d, lo, hi, ieee, reach):
     x[r, i] = min(max(x[r, i], lo), hi)
 
 
-@njit
+@kernel
 def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee, reach):
     """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
     reach (s): DC2's V_t-scaled V_R limits hold a state within that reach (`_nonwindup`;

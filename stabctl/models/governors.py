@@ -26,7 +26,7 @@ type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jitcache import kernel, njit
+from stabctl._jitcache import kernel
 
 from stabctl.case import Case, beyond
 from stabctl.case.params import GOVERNOR
@@ -185,7 +185,7 @@ def _ieeeg1_lags(P, x, k):
     return y
 
 
-@njit
+@kernel
 def pmech(P, x, k, omega):
     """Mechanical power of governor k (machine base) at machine speed omega (pu), flag 1."""
     kind = P[k, G_KIND]
@@ -212,7 +212,7 @@ def _nonwindup(x, dx, r, k, d, lo, hi):
     x[r, k] = min(max(x[r, k], lo), hi)
 
 
-@njit
+@kernel
 def derivatives(P, x, k, omega, dx):
     """Derivatives of governor k into dx[:, k] for its machine speed omega (pu), flag 2;
     clamps the limited TGOV1 valve and IEEEG1 gate states in x."""

@@ -15,7 +15,7 @@ psi_kq; `mac_tra` uses the first four, `mac_em` the first two (the others stay c
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jitcache import kernel, njit
+from stabctl._jitcache import kernel
 
 from stabctl.case import Case
 from stabctl.case.params import MACHINE
@@ -278,7 +278,7 @@ def _stator_speed(P, x, i):
     return x[1, i] if P[i, K_SPEED] > 0 else 1.0
 
 
-@njit
+@kernel
 def internal_voltage(P, x, psi):
     """Voltage behind the network reactance, network frame (PST flag 1), into psi (n_mac,).
 
@@ -329,7 +329,7 @@ def field_current(P, x, cur, i):
     return _field_current(P, x, i, _dq(x[0, i], cur[i])[0] * P[i, K_POT])
 
 
-@njit
+@kernel
 def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
     """Machine derivatives into dx (6, n_mac) and outputs (PST flag 2, docs 1.6-1.9).
 

@@ -20,7 +20,7 @@ the same machine.
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jitcache import kernel, njit
+from stabctl._jitcache import kernel
 
 from stabctl.case import Case
 from stabctl.case.params import PSS
@@ -210,7 +210,7 @@ def _leadlag(P, x, dx, r, k, u, lead, lag):
     return ratio * u + x[r, k]
 
 
-@njit
+@kernel
 def output_and_derivatives(P, x, k, omega, pe, dx):
     """Output of PSS k at machine speed omega (pu) and electrical power pe (machine base),
     PST flag 1/2; its derivatives into dx[:, k]."""

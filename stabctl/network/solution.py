@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as la
-from stabctl._jitcache import kernel, njit
+from stabctl._jitcache import kernel
 
 from stabctl.case import Case
 from stabctl.errors import SimulationError
@@ -124,7 +124,7 @@ def _load_currents(V, S_P, I0, Y_low, S_extra, low, out):
             out[i] = np.conj(Y_low[i]) * V[i]
 
 
-@njit
+@kernel
 def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
     """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|.  Buses with low[i]
     are held at their low-voltage impedance model."""
@@ -133,7 +133,7 @@ def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
     return np.max(np.abs(F))
 
 
-@njit
+@kernel
 def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, max_iter=50):
     """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
 
