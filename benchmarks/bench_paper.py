@@ -23,10 +23,18 @@ import tempfile
 import time
 from pathlib import Path
 
-from stabctl._jitcache import clear_cache
 from stabctl.studies.paper import run_summary
 
 PARTS = ("analytic", "cases", "table4", "estimation", "placement")
+
+
+def _clear_cache() -> int:
+    """Clear the compiled kernels of the stabctl that `run`'s subprocess imports (from the
+    working directory when it holds a source tree, else the installed one), as after a
+    fresh installation; the number of files deleted."""
+    code = "from stabctl._jitcache import clear_cache; print(clear_cache())"
+    return int(subprocess.run([sys.executable, "-c", code], check=True, text=True,
+                              stdout=subprocess.PIPE).stdout)
 
 
 def run(parts, out: Path) -> tuple[float, dict]:
@@ -52,7 +60,7 @@ def main():
     args = ap.parse_args()
     if args.keep is not None and args.keep.exists() and any(args.keep.iterdir()):
         sys.exit(f"--keep {args.keep}: not empty (the run must not reuse earlier records)")
-    cleared = clear_cache() if args.cold else None
+    cleared = _clear_cache() if args.cold else None
     tmp = None if args.keep else tempfile.mkdtemp(prefix="bench-paper-")
     out = args.keep or Path(tmp)
     try:
