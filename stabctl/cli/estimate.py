@@ -68,9 +68,12 @@ def _pmu_noise(func):
                      help="ROCOF error limit (Hz/s), C37.118.1 Table 4."),
         click.option("--k-sigma", type=float, default=3.0, show_default=True,
                      help="The limits are this many standard deviations of the errors."),
-        click.option("--window-cycles", type=float, default=2.0, show_default=True,
-                     metavar="C", help="Frequency and ROCOF estimation window (cycles): the "
-                     "phase advance over it; 2 = P class (C37.118.1-2011 Annex C).")))
+        _WINDOW))
+
+
+_WINDOW = click.option("--window-cycles", type=float, default=2.0, show_default=True,
+                       metavar="C", help="Frequency and ROCOF estimation window (cycles): "
+                       "the phase advance over it; 2 = P class (C37.118.1-2011 Annex C).")
 
 
 def _runs_seed(func):
@@ -233,12 +236,13 @@ def closed_loop(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, late
 @click.option("--esd-pct", type=float, required=True, default=None, metavar="P",
               help="ESD of P % of each generator's MVA at its HV bus (% of machine MVA), "
                    "the paper's bang-bang COI control (Table 3).")
+@_WINDOW
 @_runs_seed
 @model_options
 @json_option("the CCTs")
 @reports_errors
-def cct(case_name, fault, far_bus, rate, latency_ms, esd_pct, runs, seed, conventions, step,
-        as_json):
+def cct(case_name, fault, far_bus, rate, latency_ms, esd_pct, window_cycles, runs, seed,
+        conventions, step, as_json):
     """CCT of the fault line with each estimator in the loop, over --runs noise seeds.
 
     The CCT searches run in parallel; printed per estimator: mean and spread (cycles).
@@ -246,7 +250,7 @@ def cct(case_name, fault, far_bus, rate, latency_ms, esd_pct, runs, seed, conven
     from stabctl.studies.estimate import estimator_ccts
 
     _check_positive(runs=runs)
-    settings = _settings(rate, latency_ms)
+    settings = _settings(rate, latency_ms, window_cycles=window_cycles)
     case, _, _ = _fault_event(case_name, fault, far_bus, 1.0, 6.0, None)  # checks the line
     table = estimator_ccts(case.name, fault, far_bus, esd_pct=esd_pct, runs=runs, seed=seed,
                            settings=settings, conventions=conventions, h=step)

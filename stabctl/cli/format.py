@@ -405,7 +405,8 @@ def estimator_cct_lines(table: dict, bus: int, far_bus: int, esd_pct: float, set
     """
     rate, lat = settings.rate, settings.latency_s
     lines = [f"CCT of line {bus}-{far_bus}, ESD {esd_pct:g} %, {rate:g} frames/s, latency "
-             f"{1000 * lat:g} ms, {runs} seeds from {seed} (cycles):"]
+             f"{1000 * lat:g} ms, frequency window {settings.window_cycles:g} cycles, {runs} "
+             f"seeds from {seed} (cycles):"]
     lines += [f"  {e:5} " + ("failed" if s["mean"] is None else
                              f"{s['mean']:7.2f} +- {s['std']:.2f} ({s['min']:.2f}..{s['max']:.2f})")
               + f"  runs {s['runs']}, failed {s['failed']}" for e, s in table.items()]

@@ -275,6 +275,8 @@ class LoopRunner:
     rate: float = 60.0
     latency: float = 0.05
     seed: int = 0
+    #: the PMUs' frequency and ROCOF window (cycles, `PMUSettings.window_cycles`)
+    window_cycles: float = 2.0
 
     @property
     def case(self):
@@ -292,6 +294,7 @@ class LoopRunner:
         """The closed-loop SimulationResult (run_closed_loop's arguments)."""
         return run_closed_loop(self.sim, events, t_end, self.fleet_pct, self.estimator,
                                self.rate, self.latency, self.seed, h=h,
+                               settings=PMUSettings(window_cycles=self.window_cycles),
                                separation_limit=separation_limit,
                                stop_at_separation=stop_at_separation).result
 
@@ -303,9 +306,11 @@ CCT_TOL_S = 1 / 240
 
 def cct_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str, seed: int,
             rate: float = 60.0, latency: float = 0.05, t_fault: float = 1.0,
-            tol: float = CCT_TOL_S, conventions: str = "ieee", h: float | None = None) -> dict:
+            tol: float = CCT_TOL_S, conventions: str = "ieee", h: float | None = None,
+            window_cycles: float = 2.0) -> dict:
     """Worker entry (`stabctl.parallel`): CCT (s, cycles) of a line fault with the estimator
-    in the loop, PMU noise stream `seed`, model conventions and step h (None: default).
+    in the loop, PMU noise stream `seed`, model conventions and step h (None: default), the
+    PMUs' frequency window `window_cycles` (cycles).
     The step's error bar is not searched here (the seed spread is the error bar of these
     CCTs; `stabctl cct` gives the ideal-measurement one).
 
@@ -319,7 +324,7 @@ def cct_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str, s
     from stabctl.stability.cct import LineFault, cached_simulator, critical_clearing_time
 
     runner = LoopRunner(cached_simulator(case, conventions, h), esd_pct, estimator, rate,
-                        latency, seed)
+                        latency, seed, window_cycles)
     r = critical_clearing_time(runner, LineFault(int(bus), int(far_bus), float(t_fault)),
                                tol=tol, error_check=False)
     return {"cct_s": r.cct_s, "cct_cycles": r.cct_cycles, "n_simulations": r.n_simulations}
@@ -384,7 +389,7 @@ class SeedRule:
 def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
               estimators=ESTIMATORS, seed: int = 0, rate: float = 60.0, latency: float = 0.05,
               workers: int | None = None, progress: bool = True, conventions: str = "ieee",
-              h: float | None = None) -> dict:
+              h: float | None = None, window_cycles: float = 2.0) -> dict:
     """CCTs per rating and estimator over noise seeds, each by the cold bisection of
     `cct_job`, in parallel with `stabctl.parallel.run_sweep` (records appended to `out`,
     finished jobs reused).
@@ -409,6 +414,9 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
         First noise seed.
     rate, latency : float
         PMU frames per s, loop latency (s).
+    window_cycles : float
+        The PMUs' frequency and ROCOF window (cycles, `PMUSettings.window_cycles`); a
+        value other than the default 2 is part of each job's key and inputs.
     workers, progress, conventions, h
         As `stabctl.parallel.run_sweep` and `stabctl.dynamics.simulation.Simulator`.
 
@@ -435,12 +443,14 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
         raise InputError(f"need at least one run, got {runs}")
     tol_cycles = CCT_TOL_S * load_case(case).freq_hz
     tail = ("" if conventions == "ieee" else f"/{conventions}") + ("" if h is None else f"/h{h:g}")
+    window = {} if window_cycles == 2.0 else {"window_cycles": float(window_cycles)}
+    tail += "".join(f"/w{w:g}c" for w in window.values())
 
     def job(p: float, e: str, s: int) -> Job:
         return Job(f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s/seed{s}{tail}",
                    cct_job, dict(case=case, bus=bus, far_bus=far_bus, esd_pct=p, estimator=e,
                                  seed=s, rate=rate, latency=latency, conventions=conventions,
-                                 h=h))
+                                 h=h, **window))
 
     compile_here(case, conventions, h)
     first = runs if rule is None else rule.batch

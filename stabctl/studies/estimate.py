@@ -142,7 +142,7 @@ def estimator_ccts(case_name: str, bus: int, far_bus: int, *, esd_pct: float, ru
     runs, seed : int
         Noise seeds seed .. seed + runs - 1.
     settings : stabctl.estimation.pmu.PMUSettings
-        Its rate and latency are used.
+        Its rate, latency and frequency window are used.
     conventions : str
     h : float or None
 
@@ -158,4 +158,5 @@ def estimator_ccts(case_name: str, bus: int, far_bus: int, *, esd_pct: float, ru
     with tempfile.TemporaryDirectory() as tmp:
         return cl.cct_study(case_name, bus, far_bus, [esd_pct], runs, Path(tmp) / "cct.jsonl",
                             seed=seed, rate=settings.rate, latency=settings.latency_s,
-                            conventions=conventions, h=h)[esd_pct]
+                            conventions=conventions, h=h,
+                            window_cycles=settings.window_cycles)[esd_pct]

@@ -111,3 +111,34 @@ def test_cct_study_adds_seed_batches_until_the_interval_is_narrow(tmp_path):
     assert table["raw"]["half_width"] == pytest.approx((1 - 0.05 ** (1 / 6)) / 4)
 
 
+
+
+def test_cct_study_passes_the_pmu_window_to_every_run_and_names_it_when_not_default(
+        tmp_path, monkeypatch):
+    # the default window keeps the records' keys and inputs as they were (committed records
+    # stay valid); another window is part of both, and reaches the PMUs of every loop run
+    from types import SimpleNamespace
+
+    import stabctl.parallel as par
+
+    seen = {}
+
+    def fake_sweep(jobs, out, **kw):
+        seen["jobs"] = jobs
+        return SimpleNamespace(records={j.key: {"status": "ok",
+                                                "result": {"cct_cycles": 12.0}} for j in jobs})
+
+    monkeypatch.setattr(par, "run_sweep", fake_sweep)
+    for window, tail in ((2.0, "seed0"), (4.0, "seed0/w4c")):
+        cl.cct_study("kundur", 3, 101, [5.0], 1, tmp_path / "cct.jsonl", estimators=("raw",),
+                     progress=False, window_cycles=window, workers=1)
+        job, = seen["jobs"]
+        assert job.key.endswith(tail)
+        assert job.inputs.get("window_cycles", 2.0) == window
+        assert ("window_cycles" in job.inputs) == (window != 2.0)
+    got = {}
+    monkeypatch.setattr(cl, "run_closed_loop",
+                        lambda *a, settings=None, **k: got.setdefault("w", settings.window_cycles))
+    with pytest.raises(AttributeError):          # the fake returns a float, not a run
+        cl.LoopRunner(None, 5.0, "raw", window_cycles=4.0).run([], 1.0)
+    assert got["w"] == 4.0
