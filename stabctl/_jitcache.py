@@ -177,8 +177,8 @@ def compile_in_background(dispatcher, argtypes) -> bool:
 
     Nothing is started (returns False) when the kernel is already compiled in this process
     or cached (`cached`), or a compile of it is under way, or its cache directory cannot be
-    written (the child's work could not reach this process).  A child still running when this process exits is
-    stopped (no orphan process).
+    written (the child's work could not reach this process).  A child still running when
+    this process exits is stopped (no orphan process).
 
     Parameters
     ----------
@@ -267,8 +267,8 @@ def kernel(func=None, **options):
     """Decorator of a kernel called only from other kernels: ``numba.njit`` with
     ``cache=True`` and without the CPython and C wrappers that a call from Python needs.
     Each wrapper unpacks every argument (a NamedTuple of arrays field by field); leaving
-    them out takes about 4 s off a cold first simulation (39 -> 35 s on this 2-core
-    machine, benchmarks/bench_compile.py).
+    them out took about 4 s off a cold first simulation when it compiled in one process
+    (39 -> 35 s on this 2-core machine).
 
     Parameters
     ----------

@@ -355,7 +355,7 @@ def kernel_network(net: ReducedNetwork) -> KernelNetwork:
     KernelNetwork
         The same arrays (no copy).
     """
-    return KernelNetwork(*(getattr(net, f) for f in KernelNetwork._fields))
+    return KernelNetwork(*(np.ascontiguousarray(getattr(net, f)) for f in KernelNetwork._fields))
 
 
 def stacked_networks(nets) -> KernelNetwork:
@@ -520,19 +520,25 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     return it
 
 
-def evaluate_address(x, p, net, kept, out) -> int:
-    """Machine-code address of `evaluate_kernel` compiled for these argument types (loaded
-    from the cache or compiled here), for `call_evaluate`.
+@functools.cache
+def _evaluate_arg_types() -> tuple:
+    """The types of every argument of `evaluate_kernel` but p, as `call_evaluate` passes
+    them: x, net (2-D matrices), kept, want_vbus, dx, out, every array C-contiguous."""
+    from numba import typeof
+
+    z, c = np.zeros(1), np.zeros(1, np.complex128)
+    net = KernelNetwork(*[np.zeros((1, 1), np.complex128)] * len(KernelNetwork._fields))
+    return (typeof(z), typeof(net), typeof(KeptBuses(c, np.zeros(1, np.bool_), c)),
+            types.boolean, typeof(z), typeof(KernelOutputs(c, z, z, z, z, z, c)))
+
+
+def evaluate_address(p) -> int:
+    """Machine-code address of `evaluate_kernel` compiled for parameters p and the
+    argument types of `call_evaluate` (loaded from the cache or compiled here).
 
     Parameters
     ----------
-    x : ndarray, shape (n_state,)
-        A state of the run (only its type counts, as for the others).
     p : KernelParams
-    net : KernelNetwork
-        One stage, 2-D matrices.
-    kept : KeptBuses
-    out : KernelOutputs
 
     Returns
     -------
@@ -547,8 +553,8 @@ def evaluate_address(x, p, net, kept, out) -> int:
     """
     from numba import typeof
 
-    sig = (typeof(x), typeof(p), typeof(net), typeof(kept), types.boolean, typeof(x),
-           typeof(out))
+    x, *rest = _evaluate_arg_types()
+    sig = (x, typeof(p), *rest)
     evaluate_kernel.compile(sig)
     cres = evaluate_kernel.overloads[sig]
     address = cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
@@ -566,16 +572,17 @@ def call_evaluate(typingctx, address, x, p, net, kept, want_vbus, dx, out):
     unit: `stabctl.dynamics.simulation.integrate` compiles without it (in a child
     process when neither is cached, `stabctl._jitcache.compile_in_background`, while this
     process compiles the model) and LLVM does not optimise and emit the model a second
-    time.  The argument types must be those of `evaluate_address` (every array
-    C-contiguous; TypingError otherwise), or the call would read its arguments wrongly.
+    time.  Every argument but p must have the type `evaluate_address` compiled for
+    (`_evaluate_arg_types`: C-contiguous arrays, a boolean want_vbus; TypingError
+    otherwise), or the call would read its arguments wrongly.
     """
     argtypes = (x, p, net, kept, want_vbus, dx, out)
-    for name, t in zip(("x", "dx"), (x, dx)):
-        if not (isinstance(t, types.Array) and t.layout == "C" and t.mutable):
-            raise TypingError(f"call_evaluate: {name} must be a writable C-contiguous "
-                              f"array, got {t}")
-    if not isinstance(address, types.Integer) or want_vbus != types.boolean:
-        raise TypingError("call_evaluate: needs an integer address and a boolean want_vbus")
+    if not isinstance(address, types.Integer):
+        raise TypingError(f"call_evaluate: the address must be an integer, got {address}")
+    for name, got, want in zip(("x", "net", "kept", "want_vbus", "dx", "out"),
+                               (x, net, kept, want_vbus, dx, out), _evaluate_arg_types()):
+        if got != want:
+            raise TypingError(f"call_evaluate: {name} must be {want}, got {got}")
     sig = types.intp(address, *argtypes)
 
     def codegen(context, builder, signature, args):

@@ -532,9 +532,7 @@ class _Run:
             return
         self.stored = True
         if self.evaluate is None:      # the model's evaluation: compiled or loaded here
-            self.evaluate = evaluate_address(
-                self.carry.x, self.params, KernelNetwork(*(a[0] for a in self.nets)),
-                self.carry.kept, kernel_outputs(self.m.mp.n, self.sim.case.n_bus))
+            self.evaluate = evaluate_address(self.params)
         await_background(integrate)
         wall = time.perf_counter()
         self.status, k_end = integrate(*self.arguments(k1))

@@ -276,7 +276,7 @@ class LoopRunner:
     latency: float = 0.05
     seed: int = 0
     #: the PMUs' frequency and ROCOF window (cycles, `PMUSettings.window_cycles`)
-    window_cycles: float = 2.0
+    window_cycles: float = PMUSettings.window_cycles
 
     @property
     def case(self):
@@ -307,7 +307,7 @@ CCT_TOL_S = 1 / 240
 def cct_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str, seed: int,
             rate: float = 60.0, latency: float = 0.05, t_fault: float = 1.0,
             tol: float = CCT_TOL_S, conventions: str = "ieee", h: float | None = None,
-            window_cycles: float = 2.0) -> dict:
+            window_cycles: float = PMUSettings.window_cycles) -> dict:
     """Worker entry (`stabctl.parallel`): CCT (s, cycles) of a line fault with the estimator
     in the loop, PMU noise stream `seed`, model conventions and step h (None: default), the
     PMUs' frequency window `window_cycles` (cycles).
@@ -389,7 +389,8 @@ class SeedRule:
 def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
               estimators=ESTIMATORS, seed: int = 0, rate: float = 60.0, latency: float = 0.05,
               workers: int | None = None, progress: bool = True, conventions: str = "ieee",
-              h: float | None = None, window_cycles: float = 2.0) -> dict:
+              h: float | None = None,
+              window_cycles: float = PMUSettings.window_cycles) -> dict:
     """CCTs per rating and estimator over noise seeds, each by the cold bisection of
     `cct_job`, in parallel with `stabctl.parallel.run_sweep` (records appended to `out`,
     finished jobs reused).
@@ -416,7 +417,7 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
         PMU frames per s, loop latency (s).
     window_cycles : float
         The PMUs' frequency and ROCOF window (cycles, `PMUSettings.window_cycles`); a
-        value other than the default 2 is part of each job's key and inputs.
+        value other than that default is part of each job's key and inputs.
     workers, progress, conventions, h
         As `stabctl.parallel.run_sweep` and `stabctl.dynamics.simulation.Simulator`.
 
@@ -443,7 +444,8 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
         raise InputError(f"need at least one run, got {runs}")
     tol_cycles = CCT_TOL_S * load_case(case).freq_hz
     tail = ("" if conventions == "ieee" else f"/{conventions}") + ("" if h is None else f"/h{h:g}")
-    window = {} if window_cycles == 2.0 else {"window_cycles": float(window_cycles)}
+    window = ({} if window_cycles == PMUSettings.window_cycles
+              else {"window_cycles": float(window_cycles)})
     tail += "".join(f"/w{w:g}c" for w in window.values())
 
     def job(p: float, e: str, s: int) -> Job:

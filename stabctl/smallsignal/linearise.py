@@ -283,15 +283,11 @@ def jacobian_columns(model: DynamicModel, kind, index, step):
     dV = np.zeros((n_col, n_bus), np.complex128)
     curv = np.zeros(n_col)
     V0 = np.zeros(n_bus, np.complex128)
-    kn, n_nc = kernel_network(net), model.V_nc0.size
     args = [np.asarray(kind, np.int64), np.asarray(index, np.int64), np.asarray(step, float),
-            model.x0, model.V_nc0, p, kn, J, dV, curv, V0, 0]
+            model.x0, model.V_nc0, p, kernel_network(net), J, dV, curv, V0, 0]
     # cold: _differences compiles in a child process while this one compiles the model
     compile_in_background(_differences, [typeof(a) for a in args])
-    args[-1] = evaluate_address(model.x0, p, kn, KeptBuses(model.V_nc0.copy(),
-                                                          np.zeros(n_nc, np.bool_),
-                                                          np.zeros(n_nc, np.complex128)),
-                                kernel_outputs(model.mp.n, n_bus))
+    args[-1] = evaluate_address(p)
     await_background(_differences)
     bad = _differences(*args)
     if bad >= 0:
