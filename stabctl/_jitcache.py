@@ -291,6 +291,24 @@ def kernel(func=None, **options):
     return declare if func is None else declare(func)
 
 
+@kernel
+def assign(dst, src) -> None:
+    """``dst[...] = src`` inside a kernel, element by element (arrays of one size, any
+    layout; no check).  numba's slice assignment from an array compiles a formatter for
+    its shape-mismatch message (f-strings, ``str.join``, integer reprs): about 2-3 s of
+    a cold first call in every process that compiles one.  Kernels use this instead.
+
+    Parameters
+    ----------
+    dst : ndarray
+        Written in place (a view, e.g. ``x[k]`` or ``F[3:, 3:]``).
+    src : ndarray
+        Same size and element order (C order for more than one dimension).
+    """
+    for j in range(dst.size):
+        dst.flat[j] = src.flat[j]
+
+
 if __name__ == "__main__":       # the child of `compile_in_background`
     _module, _qualname = sys.argv[1:3]
     getattr(importlib.import_module(_module), _qualname).compile(

@@ -126,3 +126,57 @@ def test_a_cold_first_run_compiles_the_integrator_in_a_child_and_loads_it(tmp_pa
     here = Simulator(load_case("kundur")).run(
         [Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0)
     np.testing.assert_allclose(got["speed"], here.speed[-1], rtol=0, atol=1e-13)
+
+
+def test_assign_writes_views_as_numpys_slice_assignment_does():
+    # `assign` stands for dst[...] = src in kernels: rows, column blocks, 1-D tails
+    import numpy as np
+
+    from stabctl.estimation.filters import _store
+
+    rng = np.random.default_rng(1)
+    x, P = rng.normal(size=(3, 5)), rng.normal(size=(3, 5, 5))
+    xk, Pk = rng.normal(size=5), rng.normal(size=(5, 5))
+    want_x, want_P = x.copy(), P.copy()
+    want_x[1], want_P[1] = xk, Pk
+    _store(x, P, 1, xk, Pk)
+    assert np.array_equal(x, want_x) and np.array_equal(P, want_P)
+    F, A = np.zeros((5, 5)), rng.normal(size=(2, 2))
+    _jitcache.assign(F[3:, 3:], A)          # a block that is not contiguous
+    want = np.zeros((5, 5))
+    want[3:, 3:] = A
+    assert np.array_equal(F, want)
+
+
+def test_no_kernel_compiles_numbas_slice_assignment_message():
+    # the point of `assign`: numba's shape-mismatch formatter (2-3 s of a cold first call)
+    # is compiled by none of the simulator's, the linearisation's or the filters' kernels
+    import os
+    import subprocess
+    import sys
+    import tempfile
+
+    code = (
+        "import numba.np.arrayobj as ao\n"
+        "from numba.core import types\n"
+        "seen = []\n"
+        "orig = ao.fancy_setslice\n"
+        "def spy(ctx, b, sig, args, it, ix):\n"
+        "    if isinstance(sig.args[2], types.Buffer): seen.append(b.function.name)\n"
+        "    return orig(ctx, b, sig, args, it, ix)\n"
+        "ao.fancy_setslice = spy\n"
+        "from stabctl.io import load_case\n"
+        "from stabctl.dynamics.simulation import Simulator, integrate\n"
+        "from stabctl.dynamics.model import evaluate_address\n"
+        "from stabctl.estimation import filters as es\n"
+        "from stabctl.estimation.pmu import machine_pmus\n"
+        "case = load_case('kundur')\n"
+        "sim = Simulator(case, background_compile=False)\n"
+        "evaluate_address(sim.model.params)\n"
+        "integrate.compile(tuple(sim.run_argument_types()))\n"
+        "es.compile_filters(es.machine_models(case, machine_pmus(case)))\n"
+        "print(len(seen), seen[:3])\n")
+    with tempfile.TemporaryDirectory() as cache:
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             env={**os.environ, "NUMBA_CACHE_DIR": cache}, check=True).stdout
+    assert out.startswith("0 "), out

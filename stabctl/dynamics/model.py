@@ -18,7 +18,7 @@ from numba import types
 from numba.core.errors import TypingError
 from numba.extending import intrinsic
 
-from stabctl._jitcache import njit
+from stabctl._jitcache import assign, njit
 
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
@@ -471,10 +471,10 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, held)
     if it < 0:
         return -1
-    cur[:] = Y11 @ psi + Y12 @ V_nc
+    assign(cur, Y11 @ psi + Y12 @ V_nc)
     z = np.concatenate((psi, V_nc))
     if want_vbus:
-        V_bus[:] = R @ z
+        assign(V_bus, R @ z)
     else:
         for m in range(nm):
             V_bus[p.mac_bus[m]] = R[p.mac_bus[m]] @ z
@@ -505,12 +505,12 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
                                         fld, _RUNNING)
         efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB, ifd, p.ieee)
         vex[m] = efd_alg[i]
-    pmech[:] = p.pmech0
+    assign(pmech, p.pmech0)
     for k in range(ng):
         m = int(p.GP[k, gov.G_MAC])
         pmech[m] = gov.pmech(p.GP, xg, k, xm[1, m])
     mac.derivatives(p.MP, p.basrad, xm, cur, vex, pmech, dxm, pelect, qelect, eterm)
-    efd[:] = p.vex0
+    assign(efd, p.vex0)
     for i in range(ne):
         m = int(p.EP[i, exc.E_MAC])
         exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], dxe, p.ieee, p.reach)

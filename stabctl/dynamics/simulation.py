@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from stabctl._jitcache import await_background, compile_in_background, kernel, njit
+from stabctl._jitcache import assign, await_background, compile_in_background, kernel, njit
 
 from stabctl.dynamics import events as ev_
 from stabctl.case import Case
@@ -869,12 +869,12 @@ def _record(rec, k, x, out, P):
     for i in range(nm):
         rec.angle[k, i] = x[i]
         rec.speed[k, i] = x[nm + i]
-    rec.pelect[k] = out.pelect
-    rec.pmech[k] = out.pmech
-    rec.efd[k] = out.efd
-    rec.V[k] = out.V_bus
+    assign(rec.pelect[k], out.pelect)
+    assign(rec.pmech[k], out.pmech)
+    assign(rec.efd[k], out.efd)
+    assign(rec.V[k], out.V_bus)
     if P.size > 0:
-        rec.P[k] = P
+        assign(rec.P[k], P)
 
 
 @kernel
@@ -1115,7 +1115,7 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
         else:                      # up to the scheduled command
             x_a = x_b
         rem -= hh
-        ds.P[:] = Pm
+        assign(ds.P, Pm)
         ok, dx_a = _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d)
         if not ok:
             return NO_LOAD_FLOW, k, x
@@ -1123,7 +1123,7 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
         if rem <= 1e-15:
             break
     if sa.pmax.size > 0 and rem > 1e-15:
-        ds.P[:] = _advance(sa, ds.P, ds.target, ds.e, rem, rec.stats)
+        assign(ds.P, _advance(sa, ds.P, ds.target, ds.e, rem, rec.stats))
     return OK, k, x_b
 
 
@@ -1137,7 +1137,7 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     if grid.first[k] and opts.pst:
         V_keep = kn.kept.V.copy()
         _evaluate(kn, x, s, NO_BUS_VOLTAGES, w.dx_k)
-        kn.kept.V[:] = V_keep
+        assign(kn.kept.V, V_keep)
     if _evaluate(kn, x, s, BUS_VOLTAGES, w.dx_k) < 0:
         return NO_LOAD_FLOW, max(k - 1, 0), x
     w.switched[:] = False
@@ -1165,7 +1165,9 @@ def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
     V_keep, held_keep, stage_keep = kn.kept.V.copy(), kn.kept.held.copy(), kn.held_stage[0]
     _inject(sa, ds.P, kn.kept.S_extra)
     _evaluate(kn, x.copy(), grid.interval[k1], BUS_VOLTAGES, w.dx_k)
-    kn.kept.V[:], kn.kept.held[:], kn.held_stage[0] = V_keep, held_keep, stage_keep
+    assign(kn.kept.V, V_keep)
+    assign(kn.kept.held, held_keep)
+    kn.held_stage[0] = stage_keep
     _record(rec, k1, x, kn.out, ds.P)
 
 
@@ -1219,9 +1221,9 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
         if status == OK:
             status, k_end = _after_step(kn, sa, c.devices, opts, rec, c.health, x, k)
         if status != OK:
-            c.x[:] = x
+            assign(c.x, x)
             return status, k_end
-    c.x[:] = x
+    assign(c.x, x)
     if k1 >= n - 1:
         _record(rec, n - 1, x, kn.out, c.devices.P)
         return OK, n - 1

@@ -51,7 +51,7 @@ import numpy as np
 import scipy.linalg
 from filterpy.common import Q_continuous_white_noise
 from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
-from stabctl._jitcache import kernel, njit
+from stabctl._jitcache import assign, kernel, njit
 from scipy.stats import chi2
 
 from stabctl.case import Case
@@ -388,7 +388,7 @@ def swing_begin(k, v, i, freq, pag, pag_var, iq_var, r, pr, tv, hold, cur_hold, 
     hold[k, H_PAG], hold[k, H_PAGVAR], hold[k, H_DPAG], hold[k, H_IQVAR], hold[k, H_PM0] = \
         pag, pag_var, 0.0, iq_var, pag
     cur_hold[k] = i
-    g[k] = pr[C_GU:C_GU + 3] * pag
+    assign(g[k], pr[C_GU:C_GU + 3] * pag)
     return swing_start(v, i, freq, r, pr, tv)
 
 
@@ -407,7 +407,7 @@ def swing_inputs(k, valid, pag, pag_var, cur, iq_var, hold, cur_hold, g, w, pr, 
     if pr[C_GACT] > 0:
         pm_before = _dot(g[k], pr[C_GC:C_GC + 3])
         u = pm0 - (pr[C_WF] - 1.0) * pr[C_INVR] + (pr[C_WF] - 1.0 - w) * pr[C_INVR]
-        g[k] = _mv(Adg, g[k]) + bdg * min(max(u, 0.0), pr[C_TMAX])
+        assign(g[k], _mv(Adg, g[k]) + bdg * min(max(u, 0.0), pr[C_TMAX]))
         pm_after = _dot(g[k], pr[C_GC:C_GC + 3])
     p0, v0, cur0, iq0 = hold[k, H_PAG], hold[k, H_PAGVAR], cur_hold[k], hold[k, H_IQVAR]
     if valid:
@@ -440,14 +440,14 @@ def swing_transition(x, pm, pag, cur0, cur1, dt, pr, Adq, bdq, f0):
     iq = 0.5 * (r0.real + r1.real)
     xn = np.empty(5)
     xn[0], xn[1], xn[2] = d1, w + dt * acc, p
-    xn[3:] = _mv(Adq, x[3:]) + bdq * iq
+    assign(xn[3:], _mv(Adq, x[3:]) + bdq * iq)
     F = np.zeros((5, 5))
     F[0, 0] = F[2, 2] = 1.0
     F[0, 1] = wb * dt * (1 + 0.5 * dt * da_dw)
     F[0, 2] = wb * dt * 0.5 * dt * c
     F[1, 1] = 1 + dt * da_dw
     F[1, 2] = dt * c
-    F[3:, 3:] = Adq
+    assign(F[3:, 3:], Adq)
     for j in range(3):                       # I_q(delta') depends on (delta, w, dPm)
         dIq = 0.5 * r1.imag * F[0, j] + (0.5 * r0.imag if j == 0 else 0.0)
         F[3, j], F[4, j] = bdq[0] * dIq, bdq[1] * dIq
@@ -569,6 +569,13 @@ def _scalar_update(x, P, y, H, R):
     return x + K * y, P1, y * y / S
 
 
+@kernel
+def _store(x, P, k, xk, Pk):
+    """x[k], P[k] = xk, Pk (`stabctl._jitcache.assign`)."""
+    assign(x[k], xk)
+    assign(P[k], Pk)
+
+
 @njit(cache=True)
 def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par, Adq, bdq,
                  Adg, bdg, tv):
@@ -583,8 +590,8 @@ def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par
         if valid[k]:
             theta, emag, pag, pag_var, iq_var, r = swing_measure(v[k], i[k], pr, tv[T_SIG2])
         if not ready[k]:
-            x[k], P[k] = swing_begin(k, v[k], i[k], freq[k], pag, pag_var, iq_var, r, pr, tv,
-                                     hold, cur_hold, g)
+            _store(x, P, k, *swing_begin(k, v[k], i[k], freq[k], pag, pag_var, iq_var, r, pr,
+                                         tv, hold, cur_hold, g))
             ready[k] = True
             continue
         pm, pbar, pvar, c0, c1, iqv = swing_inputs(k, valid[k], pag, pag_var, i[k], iq_var,
@@ -594,10 +601,10 @@ def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par
         Pp = _sandwich(F, P[k]) + swing_Q(gs, pvar, iqv, bdq[k], dt, tv)
         if valid[k]:
             h, H = swing_h(xn, emag, pr)
-            x[k], P[k], nis[k] = _scalar_update(xn, Pp, _wrap(theta - h), H,
-                                                r + tv[T_ANGLE] ** 2)
+            xu, Pu, nis[k] = _scalar_update(xn, Pp, _wrap(theta - h), H, r + tv[T_ANGLE] ** 2)
+            _store(x, P, k, xu, Pu)
         else:
-            x[k], P[k] = xn, Pp
+            _store(x, P, k, xn, Pp)
 
 
 @njit(cache=True)
@@ -610,18 +617,19 @@ def _freq_batch(x, P, nis, ready, z, valid, dt, q, R):
         nis[k] = np.nan
         if not ready[k]:
             if valid[k]:
-                x[k], P[k], ready[k] = z[k], R, True
+                _store(x, P, k, z[k], R)
+                ready[k] = True
             continue
         xn, Pp = _mv(F, x[k]), _sandwich(F, P[k]) + Q
         if not valid[k]:
-            x[k], P[k] = xn, Pp
+            _store(x, P, k, xn, Pp)
             continue
         y = z[k] - xn
         SI = _inv2(Pp + R)
         nis[k] = _dot(y, _mv(SI, y))
         K = _mm(Pp, SI)
         IK = np.eye(2) - K
-        x[k], P[k] = xn + _mv(K, y), _sandwich(IK, Pp) + _mm(_mm(K, R), K.T)
+        _store(x, P, k, xn + _mv(K, y), _sandwich(IK, Pp) + _mm(_mm(K, R), K.T))
 
 
 # -- filters --------------------------------------------------------------------------------
@@ -744,6 +752,27 @@ class SwingEKF(_MachineFilters):
         c = 1.0 / (2 * m.H * np.where(m.per_speed, 1.0 + w, 1.0))
         acc = c * (pm + self.x[:, 2] - self.hold[:, H_PAG]) - m.D * w / (2 * m.H)
         return acc, c ** 2 * (self.P[:, 2, 2] + self.hold[:, H_PAGVAR]), c * self.P[:, 1, 2]
+
+
+def compile_filters(models: MachineModels) -> None:
+    """Compile the kernels of `FrequencyKF` and `SwingEKF` now, or load them from the
+    on-disk cache: each filter of these machines takes one frame with every measurement
+    lost (the types of a real run; nothing is estimated).  A study calls this before its
+    first simulation, so that on a cold cache they compile here while the simulator's
+    integrator compiles in a child process (`stabctl.dynamics.simulation.Simulator`),
+    instead of after it.
+
+    Parameters
+    ----------
+    models : MachineModels
+        As `machine_models` gives them.
+    """
+    n_pmu = int(models.pmu.max()) + 1
+    lost = Frame(0.0, np.zeros(n_pmu, bool), np.full(n_pmu, np.nan + 0j),
+                 np.full(n_pmu, np.nan + 0j), np.full(n_pmu, np.nan), np.full(n_pmu, np.nan))
+    settings = PMUSettings()
+    for f in (FrequencyKF(models.pmu, settings, f0=models.f0), SwingEKF(models, settings)):
+        f.step(lost)
 
 
 # -- filterpy reference implementations -----------------------------------------------------

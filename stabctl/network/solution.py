@@ -16,9 +16,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import llvmlite.binding as llvm
 import numpy as np
 import scipy.linalg as la
-from stabctl._jitcache import kernel
+from numba import types
+from numba.extending import get_cython_function_address
+from stabctl._jitcache import assign, kernel
 
 from stabctl.case import Case
 from stabctl.errors import SimulationError
@@ -29,6 +32,16 @@ V_RELEASE = V_SWITCH + 0.1  # a load held at its impedance model is released abo
 #: chord iteration of the kept-bus voltages: converged when a step moves no voltage by
 #: more than this (pu)
 TOL_V = 1e-11
+
+# LAPACK's dgesv (scipy's, `scipy.linalg.cython_lapack`) for the kernels, called by symbol
+# name: numba links the symbol in each process that loads a kernel calling it, so they stay
+# cacheable (a ctypes pointer would not).  np.linalg.solve in a kernel compiled numba's
+# copy-in and shape-message code as well: about 3 s of a cold first call.
+llvm.add_symbol("stabctl_dgesv",
+                get_cython_function_address("scipy.linalg.cython_lapack", "dgesv"))
+_INT, _F8 = types.CPointer(types.intc), types.CPointer(types.float64)
+_dgesv = types.ExternalFunction("stabctl_dgesv",
+                                types.void(_INT, _INT, _F8, _INT, _INT, _F8, _INT, _INT))
 
 
 @dataclass(frozen=True, eq=False)
@@ -166,25 +179,25 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, ma
     if held.any():
         it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, held, vmin)
         if it < 0:
-            V[:] = V_start
+            assign(V, V_start)
             it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, held, vmin)
         if it >= 0 and np.all(np.abs(V)[held] < V_RELEASE):
             return it
         held[:] = False
-        V[:] = V_start
-        vmin[:] = np.abs(V_start)
+        assign(V, V_start)
+        assign(vmin, np.abs(V_start))
     it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, held, vmin)
     if it >= 0:
         return it
-    V[:] = V_start
+    assign(V, V_start)
     it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, held, vmin)
     if it >= 0:
         return it
     low = vmin < V_SWITCH + 0.05         # every bus that came near the switch
-    V[:] = V_start
+    assign(V, V_start)
     it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin)
     if it >= 0:
-        held[:] = low
+        assign(held, low)
     return it
 
 
@@ -203,11 +216,25 @@ def _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, low, vmin):
         _load_currents(V, S_P, I0, Y_low, S_extra, low, F)
         V_new = w - Z22 @ F
         step = np.max(np.abs(V_new - V))
-        V[:] = V_new
-        vmin[:] = np.minimum(vmin, np.abs(V))
+        assign(V, V_new)
+        assign(vmin, np.minimum(vmin, np.abs(V)))
         if step < TOL_V:
             return it + 1
     return -1
+
+
+@kernel
+def _lapack_solve(A, b):
+    """x with A x = b by LAPACK's dgesv (LU with partial pivoting), and dgesv's info (0:
+    solved; > 0: A is exactly singular).  A (n, n), b (n,) float64, left unchanged."""
+    n = A.shape[0]
+    a = np.asfortranarray(A)
+    x = b.copy()
+    dims = np.array([n, 1, 0], np.intc)    # n (also the leading dimensions), nrhs, info
+    ipiv = np.empty(n, np.intc)
+    _dgesv(dims.ctypes, dims[1:].ctypes, a.ctypes, dims.ctypes, ipiv.ctypes, x.ctypes,
+           dims.ctypes, dims[2:].ctypes)
+    return x, dims[2]
 
 
 @kernel
@@ -242,7 +269,9 @@ def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin):
             J[n + r, n + r] += (A - B).real
             rhs[r] = -F[r].real
             rhs[n + r] = -F[r].imag
-        d = np.linalg.solve(J, rhs)
+        d, info = _lapack_solve(J, rhs)
+        if info != 0:
+            return -1
         for i in range(n):
             V[i] += d[i] + 1j * d[n + i]
             vmin[i] = min(vmin[i], abs(V[i]))

@@ -68,3 +68,16 @@ def test_hold_is_released_when_the_voltage_recovers(fault_network):
     solve(m, prefault, psi, V_free, free)
     np.testing.assert_allclose(V_held, V_free, atol=1e-9)
     assert np.all(np.abs(V_free) > V_SWITCH)
+
+
+def test_lapack_solve_matches_numpy_and_reports_a_singular_matrix():
+    from stabctl.network.solution import _lapack_solve
+
+    rng = np.random.default_rng(3)
+    A, b = rng.normal(size=(12, 12)), rng.normal(size=12)
+    A_before = A.copy()
+    x, info = _lapack_solve(A, b)
+    assert info == 0 and np.allclose(A @ x, b, atol=1e-12)
+    assert np.array_equal(A, A_before)                      # the input is left alone
+    _, info = _lapack_solve(np.array([[1.0, 2.0], [2.0, 4.0]]), np.ones(2))
+    assert info == 2                                        # U[1, 1] = 0 (dgesv's INFO)
