@@ -167,7 +167,7 @@ def _name(dispatcher) -> str:
     return f"{dispatcher.py_func.__module__}.{dispatcher.py_func.__qualname__}"
 
 
-def compile_in_background(dispatcher, argtypes) -> bool:
+def compile_in_background(dispatcher, argtypes, opt: int | None = None) -> bool:
     """Start compiling a kernel for given argument types in a child process, which writes
     it to the on-disk cache; `await_background` then waits for it and the kernel loads
     from the cache.  This process meanwhile compiles other kernels: the simulator's
@@ -186,6 +186,9 @@ def compile_in_background(dispatcher, argtypes) -> bool:
         A kernel with ``cache=True`` defined at module level.
     argtypes : sequence of numba types
         Its argument types, e.g. ``[numba.typeof(a) for a in args]``.
+    opt : int, optional
+        LLVM optimisation level of the child (``NUMBA_OPT``, 0-3); default numba's (3).
+        The kernel and the kernels it compiles with it are cached at that level.
 
     Returns
     -------
@@ -197,9 +200,11 @@ def compile_in_background(dispatcher, argtypes) -> bool:
             or not _writable(Path(dispatcher.stats.cache_path))):
         return False
     err = tempfile.TemporaryFile()
+    env = dict(os.environ, **({} if opt is None else {"NUMBA_OPT": str(opt)}))
     proc = subprocess.Popen([sys.executable, "-m", "stabctl._jitcache",
                              dispatcher.py_func.__module__, dispatcher.py_func.__qualname__],
-                            stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=err)
+                            stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=err,
+                            env=env)
     proc.stdin.write(pickle.dumps(tuple(argtypes)))
     proc.stdin.close()
     _BACKGROUND[name] = (proc, err)
