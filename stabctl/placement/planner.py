@@ -747,6 +747,7 @@ def _size_energy(pl: _Plan, cons, mw, checks) -> tuple:
             e["delivered_mj"] = max(e.get("delivered_mj", 0.0), d)
             if need >= mwh[j]:
                 mwh[j], setter[j] = need, c
+                e["excursion_mwh"] = need
     mwh = np.where(mw > 0, np.ceil(100 * (1 + ENERGY_MARGIN) * mwh - 1e-9) / 100, 0.0)
     mwh = np.where(mw > 0, np.maximum(mwh, 0.01), 0.0)
     for j in used:
@@ -846,10 +847,14 @@ def half_step(pl: _Plan, cons, result: PlanResult, n: int, kw) -> dict:
     starting from two tolerances either side of the CCT at the full step (shown converged
     in the step, as every figure that depends on it).
 
+    The runs that set each site's energy (`_size_energy`) are simulated again at half the
+    step too: the energy is shown converged in the step as well.
+
     Returns {"h_s" (the full step, s), "rows": [{"name", "required_s", "cct_s" (full
     step), "cct_tol_s" (its resolution), "cct_half_s", "stable_half" (at the required
     time)}], "all_stable", "max_cct_diff_s" (largest |cct_half - cct| beyond the coarser
-    resolution, s)}."""
+    resolution, s), "max_energy_diff_mwh" (largest change of a site's twice largest
+    state-of-charge excursion, before the margin and rounding, MWh)}."""
     from stabctl.stability.cct import cached_simulator
 
     h = cached_simulator(pl.case, pl.model["conventions"], pl.model["h"]).default_h \
@@ -870,10 +875,29 @@ def half_step(pl: _Plan, cons, result: PlanResult, n: int, kw) -> dict:
     diff = max((max(0.0, abs(o["cct_half_s"] - o["cct_s"]) - o["cct_tol_s"]) for o in out),
                default=0.0)
     ok = all(o["stable_half"] for o in out)
+    energy_diff = _half_step_energy(pl, by_name, result, h / 2)
     pl.say(f"half step ({1000 * h / 2:.3g} ms): {len(out)} tightest contingencies "
            f"{'all stable' if ok else 'NOT all stable'} at their required time; CCTs within "
-           f"{1000 * diff:.0f} ms beyond their resolution")
-    return {"h_s": h, "rows": out, "all_stable": ok, "max_cct_diff_s": diff}
+           f"{1000 * diff:.0f} ms beyond their resolution; energies within "
+           f"{energy_diff:.3f} MWh")
+    return {"h_s": h, "rows": out, "all_stable": ok, "max_cct_diff_s": diff,
+            "max_energy_diff_mwh": energy_diff}
+
+
+def _half_step_energy(pl: _Plan, by_name: dict, result: PlanResult, h: float) -> float:
+    """Largest change (MWh) of a site's energy need (twice its largest state-of-charge
+    excursion, `_size_energy`) when the run that set it is simulated again at step h."""
+    used = [j for j, p in enumerate(result.mw) if p > 0]
+    setters = sorted({result.energy[j]["set_by"] for j in used})
+    if not setters:
+        return 0.0
+    checks = pl.check([by_name[n] for n in setters], result.mw, h=h)
+    diff = 0.0
+    for k, j in enumerate(used):
+        e = result.energy[j]
+        _, _, hi, lo = checks[e["set_by"]]["energy_mj"][k]
+        diff = max(diff, abs(2 * max(hi, -lo) / 3600 - e["excursion_mwh"]))
+    return diff
 
 
 # -- references ------------------------------------------------------------------------------

@@ -16,7 +16,7 @@ from stabctl.dynamics.simulation import Simulator
 from stabctl.errors import InputError, PowerFlowError
 from stabctl.io import load_case
 from stabctl.network.powerflow import scale_load, solve_powerflow
-from stabctl.placement.planner import CostModel, Requirement, plan
+from stabctl.placement.planner import ENERGY_MARGIN, CostModel, Requirement, plan
 from stabctl.placement.program import InfeasibleError, candidate_sites
 from stabctl.smib.omib import PAPER_OMIB, simulate
 from stabctl.stability.cct import LineFault
@@ -174,6 +174,10 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
         c["margin_s"] for c in res.contingencies if c["name"] == n))
     assert hs["all_stable"] and hs["max_cct_diff_s"] <= 1e-9
     assert hs["h_s"] == Simulator(load_case("kundur")).default_h
+    # the sized energies converge too: the half-step change of each site's energy need is
+    # inside the ENERGY_MARGIN added on top of it
+    need = [e["excursion_mwh"] for e in res.energy if e]
+    assert 0 <= hs["max_energy_diff_mwh"] <= ENERGY_MARGIN * min(need)
 
 
 def test_infeasible_requirement_names_the_contingency_and_its_load_level():
