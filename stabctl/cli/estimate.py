@@ -11,6 +11,7 @@ import json
 import click
 
 from stabctl.errors import InputError
+from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are the CLI's
 from stabctl.cli.format import (closed_loop_lines, estimator_cct_lines, print_estimate,
                                 print_json)
 from stabctl.cli.options import (TF_AFTER_FAULT_S, _apply, clear_cycles_option, controller,
@@ -50,28 +51,28 @@ def estimate():
 
 def _rate_latency(func):
     return _apply(func, (
-        click.option("--rate", type=float, default=60.0, show_default=True, metavar="FPS",
+        click.option("--rate", type=float, default=_PMU.rate, show_default=True, metavar="FPS",
                      help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120."),
-        click.option("--latency-ms", type=float, default=50.0, show_default=True,
+        click.option("--latency-ms", type=float, default=1000 * _PMU.latency_s, show_default=True,
                      metavar="MS", help="Delay from a frame's time stamp to its arrival (ms).")))
 
 
 def _pmu_noise(func):
     return _apply(func, (
-        click.option("--drop", type=float, default=0.0, show_default=True, metavar="P",
+        click.option("--drop", type=float, default=_PMU.drop_prob, show_default=True, metavar="P",
                      help="Probability that a frame is lost."),
-        click.option("--tve-pct", type=float, default=1.0, show_default=True,
+        click.option("--tve-pct", type=float, default=100 * _PMU.tve, show_default=True,
                      help="Total vector error limit (%), C37.118.1 Table 3."),
-        click.option("--fe-hz", type=float, default=0.005, show_default=True,
+        click.option("--fe-hz", type=float, default=_PMU.fe_hz, show_default=True,
                      help="Frequency error limit (Hz), C37.118.1 Table 4."),
-        click.option("--rfe-hz-s", type=float, default=0.01, show_default=True,
+        click.option("--rfe-hz-s", type=float, default=_PMU.rfe_hz_s, show_default=True,
                      help="ROCOF error limit (Hz/s), C37.118.1 Table 4."),
-        click.option("--k-sigma", type=float, default=3.0, show_default=True,
+        click.option("--k-sigma", type=float, default=_PMU.k_sigma, show_default=True,
                      help="The limits are this many standard deviations of the errors."),
         _WINDOW))
 
 
-_WINDOW = click.option("--window-cycles", type=float, default=2.0, show_default=True,
+_WINDOW = click.option("--window-cycles", type=float, default=_PMU.window_cycles, show_default=True,
                        metavar="C", help="Frequency and ROCOF estimation window (cycles): "
                        "the phase advance over it; 2 = P class (C37.118.1-2011 Annex C).")
 
@@ -84,13 +85,13 @@ def _runs_seed(func):
                      help="Seed of the first run.")))
 
 
-def _settings(rate, latency_ms, drop=0.0, tve_pct=1.0, fe_hz=0.005, rfe_hz_s=0.01,
-              k_sigma=3.0, window_cycles=2.0):
-    from stabctl.estimation.pmu import PMUSettings
-
-    return PMUSettings(rate=rate, tve=tve_pct / 100, fe_hz=fe_hz, rfe_hz_s=rfe_hz_s,
-                       k_sigma=k_sigma, latency_s=latency_ms / 1000, drop_prob=drop,
-                       window_cycles=window_cycles)
+def _settings(rate, latency_ms, drop=_PMU.drop_prob, tve_pct=100 * _PMU.tve,
+              fe_hz=_PMU.fe_hz, rfe_hz_s=_PMU.rfe_hz_s, k_sigma=_PMU.k_sigma,
+              window_cycles=_PMU.window_cycles):
+    """The PMUSettings of the command line's values (its units: %, ms)."""
+    return _PMU(rate=rate, tve=tve_pct / 100, fe_hz=fe_hz, rfe_hz_s=rfe_hz_s,
+                k_sigma=k_sigma, latency_s=latency_ms / 1000, drop_prob=drop,
+                window_cycles=window_cycles)
 
 
 def _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):

@@ -854,7 +854,8 @@ def half_step(pl: _Plan, cons, result: PlanResult, n: int, kw) -> dict:
     step), "cct_tol_s" (its resolution), "cct_half_s", "stable_half" (at the required
     time)}], "all_stable", "max_cct_diff_s" (largest |cct_half - cct| beyond the coarser
     resolution, s), "max_energy_diff_mwh" (largest change of a site's twice largest
-    state-of-charge excursion, before the margin and rounding, MWh)}."""
+    state-of-charge excursion, before the margin and rounding, MWh; None without
+    sites)}."""
     from stabctl.stability.cct import cached_simulator
 
     h = cached_simulator(pl.case, pl.model["conventions"], pl.model["h"]).default_h \
@@ -878,19 +879,21 @@ def half_step(pl: _Plan, cons, result: PlanResult, n: int, kw) -> dict:
     energy_diff = _half_step_energy(pl, by_name, result, h / 2)
     pl.say(f"half step ({1000 * h / 2:.3g} ms): {len(out)} tightest contingencies "
            f"{'all stable' if ok else 'NOT all stable'} at their required time; CCTs within "
-           f"{1000 * diff:.0f} ms beyond their resolution; energies within "
-           f"{energy_diff:.3f} MWh")
+           f"{1000 * diff:.0f} ms beyond their resolution"
+           + ("" if energy_diff is None else f"; energies within {energy_diff:.3f} MWh"))
     return {"h_s": h, "rows": out, "all_stable": ok, "max_cct_diff_s": diff,
             "max_energy_diff_mwh": energy_diff}
 
 
-def _half_step_energy(pl: _Plan, by_name: dict, result: PlanResult, h: float) -> float:
+def _half_step_energy(pl: _Plan, by_name: dict, result: PlanResult,
+                      h: float) -> float | None:
     """Largest change (MWh) of a site's energy need (twice its largest state-of-charge
-    excursion, `_size_energy`) when the run that set it is simulated again at step h."""
+    excursion, `_size_energy`) when the run that set it is simulated again at step h;
+    None when no site has storage."""
     used = [j for j, p in enumerate(result.mw) if p > 0]
     setters = sorted({result.energy[j]["set_by"] for j in used})
     if not setters:
-        return 0.0
+        return None
     checks = pl.check([by_name[n] for n in setters], result.mw, h=h)
     diff = 0.0
     for k, j in enumerate(used):

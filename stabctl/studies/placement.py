@@ -480,10 +480,11 @@ def _half_step_lines(hs) -> list[str]:
            f"allocation at half the step ({h / 2:.3g} ms instead of {h:.3g} ms): "
            + ("all stable" if hs["all_stable"] else "**not all stable**")
            + " when cleared at the required time; their CCTs differ from the full step's by "
-           f"at most {1000 * hs['max_cct_diff_s']:.0f} ms beyond the resolution of each. "
-           "The runs that set each site's energy, simulated again at half the step, change "
-           "its twice largest state-of-charge excursion by at most "
-           f"{hs['max_energy_diff_mwh']:.3f} MWh.", "",
+           f"at most {1000 * hs['max_cct_diff_s']:.0f} ms beyond the resolution of each."
+           + ("" if hs["max_energy_diff_mwh"] is None else
+              " The runs that set each site's energy, simulated again at half the step, "
+              "change its twice largest state-of-charge excursion by at most "
+              f"{hs['max_energy_diff_mwh']:.3f} MWh."), "",
            "| contingency | required (ms) | CCT, step h (ms) | CCT, step h/2 (ms) | "
            "stable at the required time, h/2 |", "|---|---|---|---|---|"]
     for r in hs["rows"]:
