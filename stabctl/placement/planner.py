@@ -727,6 +727,13 @@ def _generate(pl: _Plan, cons, failing, checks0, base, brackets, n_active, max_r
                       active=[c.name for c in active], message=message, energy=energy)
 
 
+def _energy_need(check: dict, k: int) -> float:
+    """Energy need (MWh) of the k-th site with storage in a check run: twice its largest
+    state-of-charge excursion (a device started half full)."""
+    _, _, hi, lo = check["energy_mj"][k]
+    return 2 * max(hi, -lo) / 3600
+
+
 def _size_energy(pl: _Plan, cons, mw, checks) -> tuple:
     """Usable energy per site (MWh) from the check runs at ratings mw: twice the largest
     state-of-charge excursion (device started half full) plus ENERGY_MARGIN, rounded up
@@ -740,8 +747,8 @@ def _size_energy(pl: _Plan, cons, mw, checks) -> tuple:
     setter = {}
     for c in cons:
         for k, j in enumerate(used):
-            a, d, hi, lo = checks[c.name]["energy_mj"][k]
-            need = 2 * max(hi, -lo) / 3600
+            a, d, _, _ = checks[c.name]["energy_mj"][k]
+            need = _energy_need(checks[c.name], k)
             e = energy[j]
             e["absorbed_mj"] = max(e.get("absorbed_mj", 0.0), a)
             e["delivered_mj"] = max(e.get("delivered_mj", 0.0), d)
@@ -865,7 +872,11 @@ def half_step(pl: _Plan, cons, result: PlanResult, n: int, kw) -> dict:
                   key=lambda r: r["margin_s"])[:n]
     tight = [by_name[r["name"]] for r in rows]
     res_of = {r["name"]: r.get("cct_tol_s", pl.tol) for r in rows}
-    checks = pl.check(tight, result.mw, h=h / 2)
+    used = [j for j, p in enumerate(result.mw) if p > 0]
+    setters = [by_name[n] for n in sorted({result.energy[j]["set_by"] for j in used})]
+    # one batch: the tightest contingencies and those that set an energy (often the same)
+    checks = pl.check(list({c.name: c for c in tight + setters}.values()), result.mw,
+                      h=h / 2)
     ev = evaluations(pl.case, tight, result.mw, gradient=False,
                      brackets={r["name"]: (r["cct_s"] - 2 * res_of[r["name"]],
                                           r["cct_s"] + 2 * res_of[r["name"]]) for r in rows},
@@ -876,31 +887,15 @@ def half_step(pl: _Plan, cons, result: PlanResult, n: int, kw) -> dict:
     diff = max((max(0.0, abs(o["cct_half_s"] - o["cct_s"]) - o["cct_tol_s"]) for o in out),
                default=0.0)
     ok = all(o["stable_half"] for o in out)
-    energy_diff = _half_step_energy(pl, by_name, result, h / 2)
+    energy_diff = max((abs(_energy_need(checks[result.energy[j]["set_by"]], k)
+                           - result.energy[j]["excursion_mwh"]) for k, j in enumerate(used)),
+                      default=None)
     pl.say(f"half step ({1000 * h / 2:.3g} ms): {len(out)} tightest contingencies "
            f"{'all stable' if ok else 'NOT all stable'} at their required time; CCTs within "
            f"{1000 * diff:.0f} ms beyond their resolution"
            + ("" if energy_diff is None else f"; energies within {energy_diff:.3f} MWh"))
     return {"h_s": h, "rows": out, "all_stable": ok, "max_cct_diff_s": diff,
             "max_energy_diff_mwh": energy_diff}
-
-
-def _half_step_energy(pl: _Plan, by_name: dict, result: PlanResult,
-                      h: float) -> float | None:
-    """Largest change (MWh) of a site's energy need (twice its largest state-of-charge
-    excursion, `_size_energy`) when the run that set it is simulated again at step h;
-    None when no site has storage."""
-    used = [j for j, p in enumerate(result.mw) if p > 0]
-    setters = sorted({result.energy[j]["set_by"] for j in used})
-    if not setters:
-        return None
-    checks = pl.check([by_name[n] for n in setters], result.mw, h=h)
-    diff = 0.0
-    for k, j in enumerate(used):
-        e = result.energy[j]
-        _, _, hi, lo = checks[e["set_by"]]["energy_mj"][k]
-        diff = max(diff, abs(2 * max(hi, -lo) / 3600 - e["excursion_mwh"]))
-    return diff
 
 
 # -- references ------------------------------------------------------------------------------
