@@ -31,7 +31,8 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from stabctl._jitcache import assign, await_background, compile_in_background, kernel, njit
+from stabctl._jitcache import (assign, await_background, compile_in_background, kernel, max_abs,
+                               njit)
 
 from stabctl.dynamics import events as ev_
 from stabctl.case import Case
@@ -863,7 +864,7 @@ def _healthy(x, est, nm, health):
 @kernel
 def _separated(x, nm, opts):
     """Whether a rotor angle is more than opts.limit from the COI angle (eq. 40)."""
-    return np.max(np.abs(x[:nm] - coi_value(x[:nm], opts.inertia))) > opts.limit
+    return max_abs(x[:nm] - coi_value(x[:nm], opts.inertia)) > opts.limit
 
 
 # -- recording -------------------------------------------------------------------------------

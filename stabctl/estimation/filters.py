@@ -330,13 +330,13 @@ def _tuning_vector(tun: SwingTuning, s: PMUSettings, f0: float) -> np.ndarray:
 
 
 # -- swing filter equations, one machine (shared by the compiled and the filterpy paths) ---
-@njit(cache=True)
+@kernel
 def _wrap(a):
     """Angle wrapped to [-pi, pi)."""
     return (a + math.pi) % (2 * math.pi) - math.pi
 
 
-@njit(cache=True)
+@kernel
 def swing_measure(v, i, pr, sig2):
     """One machine's measurement quantities from its PMU phasors v, i (complex pu, system
     base): (theta, |E|, P_ag, var P_ag, var I_q, var theta) with E = V + Z I.
@@ -355,7 +355,7 @@ def swing_measure(v, i, pr, sig2):
             sig2 * (abs(v) ** 2 + abs(zi) ** 2) / emag ** 2)
 
 
-@njit(cache=True)
+@kernel
 def swing_start(v, i, freq, r, pr, tv):
     """Initial state (5,) and covariance (5, 5) of one machine: steady state as PST's
     initialisation (docs/pst_models.md 1.7), speed from the bus frequency."""
@@ -381,7 +381,7 @@ def swing_start(v, i, freq, r, pr, tv):
     return x, P
 
 
-@njit(cache=True)
+@kernel
 def swing_begin(k, v, i, freq, pag, pag_var, iq_var, r, pr, tv, hold, cur_hold, g):
     """Start machine k at its first valid frame: initial state and covariance
     (`swing_start`); held values (in place) with P_m = P_ag and the governor in equilibrium."""
@@ -392,7 +392,7 @@ def swing_begin(k, v, i, freq, pag, pag_var, iq_var, r, pr, tv, hold, cur_hold, 
     return swing_start(v, i, freq, r, pr, tv)
 
 
-@njit(cache=True)
+@kernel
 def swing_inputs(k, valid, pag, pag_var, cur, iq_var, hold, cur_hold, g, w, pr, Adg, bdg, tv):
     """Inputs of machine k over one interval: (mean P_m, mean P_ag, variance of the mean
     P_ag, current at both ends, variance of I_q).
@@ -422,7 +422,7 @@ def swing_inputs(k, valid, pag, pag_var, cur, iq_var, hold, cur_hold, g, w, pr, 
             0.5 * (iq0 + hold[k, H_IQVAR]))
 
 
-@njit(cache=True)
+@kernel
 def swing_transition(x, pm, pag, cur0, cur1, dt, pr, Adq, bdq, f0):
     """Propagated state (5,), Jacobian F (5, 5) and sensitivity g (5,) to the mean P_ag
     of one machine over dt (module docstring)."""
@@ -456,7 +456,7 @@ def swing_transition(x, pm, pag, cur0, cur1, dt, pr, Adq, bdq, f0):
     return xn, F, g
 
 
-@njit(cache=True)
+@kernel
 def swing_Q(g, pag_var, iq_var, bdq, dt, tv):
     """Process noise (5, 5) of one machine: measured-power noise through g, I_q noise
     through b_d, white unmodelled acceleration on (delta, w), random walk of dPm."""
@@ -477,7 +477,7 @@ def swing_Q(g, pag_var, iq_var, bdq, dt, tv):
     return Q
 
 
-@njit(cache=True)
+@kernel
 def swing_h(x, emag, pr):
     """Predicted internal-voltage angle of one machine and its Jacobian H (5,)."""
     omega = 1.0 + x[1] if pr[C_QSPEED] > 0 else 1.0
@@ -525,7 +525,10 @@ def _mm(A, B):
 def _inv2(S):
     """Inverse of a 2 x 2 matrix."""
     det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
-    return np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det
+    out = np.empty((2, 2))
+    out[0, 0], out[0, 1], out[1, 0], out[1, 1] = S[1, 1] / det, -S[0, 1] / det, \
+        -S[1, 0] / det, S[0, 0] / det
+    return out
 
 
 @kernel
@@ -611,8 +614,9 @@ def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par
 def _freq_batch(x, P, nis, ready, z, valid, dt, q, R):
     """One frame of the baseline filter for every machine (in place); z (n, 2) =
     [f - f0, ROCOF], R (2, 2)."""
-    F = np.array([[1.0, dt], [0.0, 1.0]])
-    Q = q * np.array([[dt ** 3 / 3, dt ** 2 / 2], [dt ** 2 / 2, dt]])
+    F, Q = np.zeros((2, 2)), np.empty((2, 2))
+    F[0, 0], F[0, 1], F[1, 1] = 1.0, dt, 1.0
+    Q[0, 0], Q[0, 1], Q[1, 0], Q[1, 1] = q * dt ** 3 / 3, q * dt ** 2 / 2, q * dt ** 2 / 2, q * dt
     for k in range(x.shape[0]):
         nis[k] = np.nan
         if not ready[k]:
@@ -628,8 +632,10 @@ def _freq_batch(x, P, nis, ready, z, valid, dt, q, R):
         SI = _inv2(Pp + R)
         nis[k] = _dot(y, _mv(SI, y))
         K = _mm(Pp, SI)
-        IK = np.eye(2) - K
-        _store(x, P, k, xn + _mv(K, y), _sandwich(IK, Pp) + _mm(_mm(K, R), K.T))
+        IK = -K
+        IK[0, 0] += 1.0
+        IK[1, 1] += 1.0
+        _store(x, P, k, xn + _mv(K, y), _sandwich(IK, Pp) + _sandwich(K, R))
 
 
 # -- filters --------------------------------------------------------------------------------

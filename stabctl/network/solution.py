@@ -21,7 +21,7 @@ import numpy as np
 import scipy.linalg as la
 from numba import types
 from numba.extending import get_cython_function_address
-from stabctl._jitcache import assign, kernel
+from stabctl._jitcache import assign, kernel, max_abs
 
 from stabctl.case import Case
 from stabctl.errors import SimulationError
@@ -143,7 +143,16 @@ def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
     are held at their low-voltage impedance model."""
     _load_currents(V, S_P, I0, Y_low, S_extra, low, F)
     F += b + Y22 @ V
-    return np.max(np.abs(F))
+    return max_abs(F)
+
+
+@kernel
+def _held_below(V, held, limit):
+    """Whether |V| < limit at every held bus (False at a NaN voltage)."""
+    for i in range(V.size):
+        if held[i] and not abs(V[i]) < limit:
+            return False
+    return True
 
 
 @kernel
@@ -181,7 +190,7 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, ma
         if it < 0:
             assign(V, V_start)
             it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, held, vmin)
-        if it >= 0 and np.all(np.abs(V)[held] < V_RELEASE):
+        if it >= 0 and _held_below(V, held, V_RELEASE):
             return it
         held[:] = False
         assign(V, V_start)
@@ -215,7 +224,7 @@ def _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, low, vmin):
     for it in range(30):
         _load_currents(V, S_P, I0, Y_low, S_extra, low, F)
         V_new = w - Z22 @ F
-        step = np.max(np.abs(V_new - V))
+        step = max_abs(V_new - V)
         assign(V, V_new)
         assign(vmin, np.minimum(vmin, np.abs(V)))
         if step < TOL_V:
