@@ -610,9 +610,10 @@ CHATTER_S = 0.02
 
 def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva, log, f0) -> None:
     """Device powers and per-device figures: switchings, chattering (switchings within
-    CHATTER_S of the previous one), energy absorbed and delivered (MJ), peak power actually
-    used (MW); the switching log (time s, device number, new mode, relative speed Hz) in
-    res.meta["switchings"]."""
+    CHATTER_S of the previous one), energy absorbed and delivered (MJ), highest and lowest
+    stored energy relative to the start (MJ, exact at located switchings: `_advance`),
+    peak power actually used (MW); the switching log (time s, device number, new mode,
+    relative speed Hz) in res.meta["switchings"]."""
     res.devices = np.arange(1, len(fleet.devices) + 1)
     res.pesd = P
     res.meta["switchings"] = [(float(t), int(d) + 1, int(m), float(r * f0)) for t, d, m, r in log]
@@ -622,6 +623,8 @@ def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva, log, f0) -
          "chattering": int(np.sum(np.diff(log[log[:, 1] == i, 0]) < CHATTER_S)),
          "energy_absorbed_mj": float(stats[i, 1] * base_mva),
          "energy_delivered_mj": float(stats[i, 2] * base_mva),
+         "soc_high_mj": float(stats[i, 3] * base_mva),
+         "soc_low_mj": float(stats[i, 4] * base_mva),
          "peak_power_mw": float(np.abs(P[:, i]).max() * base_mva) if P.size else 0.0}
         for i, d in enumerate(fleet.devices)]
 
@@ -641,9 +644,10 @@ def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:
 class Recording(NamedTuple):
     """Preallocated buffers filled by `integrate` (`recording`): speed, angle, pelect,
     pmech, efd (n_t, n_mac) and V (n_t, n_bus) complex at every grid index (the predictor
-    stage's outputs); the device powers P (n_t, n_dev) pu; per device stats (n_dev, 3) =
-    (switchings, energy absorbed, energy delivered in pu*s); the switching log (rows: time
-    s, device, new mode, relative speed pu; NaN rows unused)."""
+    stage's outputs); the device powers P (n_t, n_dev) pu; per device stats (n_dev, 5) =
+    (switchings, energy absorbed, energy delivered, highest and lowest stored energy
+    relative to the start, all in pu*s; `_advance`); the switching log (rows: time s,
+    device, new mode, relative speed pu; NaN rows unused)."""
 
     speed: np.ndarray
     angle: np.ndarray
@@ -677,7 +681,7 @@ def recording(n_t: int, nm: int, nb: int, nd: int) -> Recording:
     return Recording(speed=np.zeros((n_t, nm)), angle=np.zeros((n_t, nm)),
                      pelect=np.zeros((n_t, nm)), pmech=np.zeros((n_t, nm)),
                      efd=np.zeros((n_t, nm)), V=np.zeros((n_t, nb), np.complex128),
-                     P=np.zeros((n_t, nd)), stats=np.zeros((nd, 3)),
+                     P=np.zeros((n_t, nd)), stats=np.zeros((nd, 5)),
                      log=np.full((LOG_ROWS, 4), np.nan))
 
 
@@ -956,13 +960,18 @@ def _powers_now(sa, ds):
 
 @kernel
 def _advance(sa, P, target, e, hh, stats):
-    """Device powers after hh seconds; energy (SOC, absorbed, delivered) by trapezoid."""
+    """Device powers after hh seconds; energy (SOC, absorbed, delivered) by trapezoid, and
+    the extremes of the SOC relative to its start.  Sub-steps end at every located
+    switching, so for ideal devices (power constant within a sub-step, the SOC linear)
+    these extremes are exact, not sampled at grid points."""
     Pn = np.empty_like(P)
     for d in range(P.size):
         Pn[d] = st.device_power(sa, d, target[d], P[d], e[d], hh)
         e[d] += 0.5 * hh * (P[d] + Pn[d])
         stats[d, 1] += 0.5 * hh * (max(P[d], 0.0) + max(Pn[d], 0.0))
         stats[d, 2] += 0.5 * hh * (max(-P[d], 0.0) + max(-Pn[d], 0.0))
+        stats[d, 3] = max(stats[d, 3], e[d] - sa.e0[d])
+        stats[d, 4] = min(stats[d, 4], e[d] - sa.e0[d])
     return Pn
 
 
@@ -1080,7 +1089,7 @@ def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
     """Heun's predictor-corrector over hh from x_a (derivatives dx_a), the devices' powers
     advanced on a copy of their energy: (network solved, corrected state); dx_j is written
     with the derivatives at the predictor (network of `stage`)."""
-    Pb = _advance(sa, ds.P, ds.target, ds.e.copy(), hh, np.zeros((sa.pmax.size, 3)))
+    Pb = _advance(sa, ds.P, ds.target, ds.e.copy(), hh, np.zeros((sa.pmax.size, 5)))
     _inject(sa, Pb, kn.kept.S_extra)
     xp = x_a + hh * dx_a
     if _evaluate(kn, xp, stage, want, dx_j) < 0:

@@ -128,7 +128,8 @@ def check(case: str, fault: dict, devices: list, sites: list, controller: dict,
 
     Returns {"stable_at_check" (bool), "check_s", "n_simulations" (1),
     "energy_mj" (per device: [absorbed, delivered, highest, lowest state of charge
-    relative to the start], MJ; `stabctl.storage.devices.energy_excursion`),
+    relative to the start], MJ, as the simulator integrates them between located
+    switchings: `SimulationResult.meta["storage"]`),
     "site_excursion_s" (per site: the largest state-of-charge excursion per MW of
     rating, s = MJ/MW, of a device at that site along this run's modes,
     `stabctl.stability.sime.device_modes`)}.
@@ -150,12 +151,8 @@ def _check_run(sim, f: LineFault, fleet, t_clear: float, sites, ctrl) -> dict:
     from stabctl.storage.devices import energy_excursion
 
     r = _run(sim, f, t_clear, fleet)
-    energy = []
-    if fleet is not None and getattr(r, "pesd", None) is not None:
-        for d in range(len(fleet.devices)):
-            e = energy_excursion(r.t, r.pesd[:, d] * sim.case.base_mva)
-            energy.append([e["absorbed_mj"], e["delivered_mj"], e["soc_high_mj"],
-                           e["soc_low_mj"]])
+    energy = [[d["energy_absorbed_mj"], d["energy_delivered_mj"], d["soc_high_mj"],
+               d["soc_low_mj"]] for d in (r.meta.get("storage", []) if fleet else [])]
     per_mw = []
     if sites:
         modes = device_modes(r, [s[0] for s in sites], [s[1] for s in sites], ctrl,

@@ -22,8 +22,9 @@ allocation (one run each) and adds those that fail; it ends when none fails.
 
 Sizing and cost (`CostModel`): cost = sum_j (c_mw,j MW_j + c_mwh,j MWh_j + c_site,j [MW_j
 > 0]).  The energy of each device comes from the verifying runs: its state of charge along
-every run cleared at the required time (`stabctl.storage.devices.energy_excursion`), the
-largest excursion over the contingencies, doubled (a device started half full) with
+every run cleared at the required time (integrated by the simulator between located
+switchings, `SimulationResult.meta["storage"]`), the largest excursion over the
+contingencies, doubled (a device started half full) with
 ENERGY_MARGIN; the runs that set each device's energy are then simulated again with that
 finite energy (`check`).  Inside the program the energy is priced per MW: at each site
 the excursion per MW of its bang-bang modes along the latest runs (also where no device is
@@ -860,21 +861,15 @@ def half_step(pl: _Plan, cons, result: PlanResult, n: int, kw) -> dict:
     Returns {"h_s" (the full step, s), "rows": [{"name", "required_s", "cct_s" (full
     step), "cct_tol_s" (its resolution), "cct_half_s", "stable_half" (at the required
     time)}], "all_stable", "max_cct_diff_s" (largest |cct_half - cct| beyond the coarser
-    resolution, s), "max_energy_diff_mwh" (largest change of a site's twice largest
-    state-of-charge excursion, before the margin and rounding, MWh; None without
-    sites)}."""
-    from stabctl.stability.cct import cached_simulator
-
-    h = cached_simulator(pl.case, pl.model["conventions"], pl.model["h"]).default_h \
-        if pl.model["h"] is None else pl.model["h"]
+    resolution, s), and the energy's half-step figures (`_energy_half_step`)}."""
+    h = _step_s(pl)
     by_name = {c.name: c for c in cons}
     rows = sorted((r for r in result.contingencies if r["cct_s"] is not None),
                   key=lambda r: r["margin_s"])[:n]
     tight = [by_name[r["name"]] for r in rows]
     res_of = {r["name"]: r.get("cct_tol_s", pl.tol) for r in rows}
-    used = [j for j, p in enumerate(result.mw) if p > 0]
-    setters = [by_name[n] for n in sorted({result.energy[j]["set_by"] for j in used})]
     # one batch: the tightest contingencies and those that set an energy (often the same)
+    setters = _energy_setters(by_name, result.mw, result.energy)
     checks = pl.check(list({c.name: c for c in tight + setters}.values()), result.mw,
                       h=h / 2)
     ev = evaluations(pl.case, tight, result.mw, gradient=False,
@@ -887,15 +882,53 @@ def half_step(pl: _Plan, cons, result: PlanResult, n: int, kw) -> dict:
     diff = max((max(0.0, abs(o["cct_half_s"] - o["cct_s"]) - o["cct_tol_s"]) for o in out),
                default=0.0)
     ok = all(o["stable_half"] for o in out)
-    energy_diff = max((abs(_energy_need(checks[result.energy[j]["set_by"]], k)
-                           - result.energy[j]["excursion_mwh"]) for k, j in enumerate(used)),
-                      default=None)
+    energy = _energy_half_step(checks, result.mw, result.mwh, result.energy)
     pl.say(f"half step ({1000 * h / 2:.3g} ms): {len(out)} tightest contingencies "
            f"{'all stable' if ok else 'NOT all stable'} at their required time; CCTs within "
-           f"{1000 * diff:.0f} ms beyond their resolution"
-           + ("" if energy_diff is None else f"; energies within {energy_diff:.3f} MWh"))
-    return {"h_s": h, "rows": out, "all_stable": ok, "max_cct_diff_s": diff,
-            "max_energy_diff_mwh": energy_diff}
+           f"{1000 * diff:.0f} ms beyond their resolution" + _energy_note(energy))
+    return {"h_s": h, "rows": out, "all_stable": ok, "max_cct_diff_s": diff, **energy}
+
+
+def _step_s(pl: _Plan) -> float:
+    """The integration step of the plan's runs (s)."""
+    from stabctl.stability.cct import cached_simulator
+
+    return cached_simulator(pl.case, pl.model["conventions"], pl.model["h"]).default_h \
+        if pl.model["h"] is None else pl.model["h"]
+
+
+def _energy_setters(by_name: dict, mw, energy) -> list:
+    """The contingencies whose check runs set a site's energy (`_size_energy`), each once,
+    in name order."""
+    return [by_name[n] for n in sorted({energy[j]["set_by"] for j, p in enumerate(mw)
+                                        if p > 0})]
+
+
+def _energy_half_step(checks: dict, mw, mwh, energy) -> dict:
+    """The sized energies against `checks`, the runs that set them (`_size_energy`)
+    simulated again at half the step: {"max_energy_diff_mwh" (largest change of a site's
+    energy need, `_energy_need`, MWh), "max_energy_diff_pct" (the largest change relative
+    to that site's need, %), "energy_covered_half" (every site's sized energy, margin and
+    rounding included, at least its need at half the step)}; None each without sites."""
+    used = [j for j, p in enumerate(mw) if p > 0]
+    if not used:
+        return {"max_energy_diff_mwh": None, "max_energy_diff_pct": None,
+                "energy_covered_half": None}
+    half = {j: _energy_need(checks[energy[j]["set_by"]], k) for k, j in enumerate(used)}
+    diff = {j: abs(half[j] - energy[j]["excursion_mwh"]) for j in used}
+    return {"max_energy_diff_mwh": max(diff.values()),
+            "max_energy_diff_pct": max(100 * diff[j] / energy[j]["excursion_mwh"]
+                                       for j in used),
+            "energy_covered_half": all(half[j] <= mwh[j] for j in used)}
+
+
+def _energy_note(e: dict) -> str:
+    """Progress text of `_energy_half_step`'s figures ('' without sites)."""
+    if e["max_energy_diff_mwh"] is None:
+        return ""
+    return (f"; energies within {e['max_energy_diff_mwh']:.3f} MWh "
+            f"({e['max_energy_diff_pct']:.1f} %) at half the step, "
+            + ("covered by the sizing" if e["energy_covered_half"] else "NOT covered"))
 
 
 # -- references ------------------------------------------------------------------------------
@@ -906,9 +939,12 @@ def least_uniform(pl: _Plan, cons, failing, kw) -> dict:
     the check runs of the contingencies that fail without storage, then every
     contingency checked at the result and those failing without storage verified by
     their first unstable clearing time, as the active set of `plan`; a miss there moves
-    the % up one resolution step and checks again.  Returns {"pct" (%), "total_mw",
-    "mw_by_site" (MW), "mwh", "cost" (`CostModel.split`), "verified"}; pct None and
-    verified False when even the site bounds fail."""
+    the % up one resolution step and checks again.  The runs that set each site's energy
+    are simulated again at half the step (shown converged, as the optimised allocation's
+    in `half_step`).  Returns {"pct" (%), "total_mw", "mw_by_site" (MW), "mwh", "cost"
+    (`CostModel.split`), "verified", "energy" (per site, as `PlanResult.energy`), and the
+    energy's half-step figures (`_energy_half_step`)}; pct None
+    and verified False when even the site bounds fail."""
     mva = _mva(pl)
     upper = np.array([s.max_mw for s in pl.sites])
     pct_max = float(np.min(100 * upper / mva))
@@ -945,11 +981,13 @@ def least_uniform(pl: _Plan, cons, failing, kw) -> dict:
         hi = round(hi + UNIFORM_RES_PCT, 6)
     mw = fleet(hi)
     mwh, energy, e_ok = _size_energy(pl, cons, mw, ck)
+    setters = _energy_setters({c.name: c for c in cons}, mw, energy)
+    half = _energy_half_step(pl.check(setters, mw, h=_step_s(pl) / 2), mw, mwh, energy)
     pl.say(f"uniform: {hi:g} % = {mw.sum():.0f} MW, "
-           f"{'verified' if ok and e_ok else 'NOT verified'}")
+           f"{'verified' if ok and e_ok else 'NOT verified'}" + _energy_note(half))
     return {"pct": hi, "total_mw": float(mw.sum()), "mw_by_site": mw.tolist(),
             "mwh": float(mwh.sum()), "cost": pl.cost.split(pl.sites, mw, mwh),
-            "verified": bool(ok and e_ok)}
+            "verified": bool(ok and e_ok), "energy": energy, **half}
 
 
 def _mva(pl: _Plan) -> np.ndarray:

@@ -169,12 +169,17 @@ def energy_excursion(t, p_mw) -> dict:
         ``absorbed_mj`` and ``delivered_mj`` (>= 0): the integrals of the positive and
         negative parts of the power; ``soc_high_mj`` (>= 0) and ``soc_low_mj`` (<= 0):
         the highest and lowest stored energy relative to the start (the running integral
-        of the power, trapezoid rule, as the simulator's state of charge); ``need_mwh``:
+        of the power, trapezoid rule, over the samples given); ``need_mwh``:
         the usable energy of a device started half full (`StorageDevice.soc0` = 0.5) that
         never reaches either end, 2 max(soc_high, -soc_low) / 3600.
 
     Notes
     -----
+    For a simulated device, `SimulationResult.meta["storage"]` holds these figures
+    integrated between its located switchings; from power sampled on the grid, a step
+    containing a switching is averaged across it (an error up to half a step at full power
+    per switching).
+
     A device whose usable energy exceeds ``need_mwh`` (and starts half full) follows
     exactly the unlimited trajectory: the simulator only clips absorption when full and
     injection when empty (`device_power`).

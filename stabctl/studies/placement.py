@@ -382,7 +382,10 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
                      f"{uc['mwh']:.2f} | {uc['site']:.1f} | {uc['total']:.1f} |")
     lines += ["", "The energy of each device is twice the largest state-of-charge excursion "
               f"along the runs cleared at {cyc:g} cycles (a device started half full), plus 5 "
-              "%; the runs that set it were simulated again with that finite energy.", "",
+              "%; the runs that set it were simulated again with that finite energy."
+              + ("" if u.get("max_energy_diff_mwh") is None else
+                 " For the least uniform fleet those runs" + _energy_sentence(u)
+                 + " (the optimised allocation's: see the half-step check)."), "",
               f"![allocation]({figs['allocation']})", "",
               "## What drives it: each binding fault alone", "",
               "| fault | load levels solved | least MW alone | sites | verified |",
@@ -470,6 +473,16 @@ def timing_line(d: dict) -> str:
             f"{p['n_simulations']} runs (study {d['wall_time_s']:.0f} s)")
 
 
+def _energy_sentence(e: dict) -> str:
+    """The energy's half-step figures (`planner._energy_half_step`) as the end of a
+    sentence about the runs that set each site's energy."""
+    return (", simulated again at half the step, change a site's energy need (twice its "
+            f"largest state-of-charge excursion) by at most {e['max_energy_diff_mwh']:.3f} "
+            f"MWh ({e['max_energy_diff_pct']:.1f} % of it); the sized energies, margin and "
+            "rounding included, " + ("cover" if e["energy_covered_half"] else "do **not** cover")
+            + " the half-step needs")
+
+
 def _half_step_lines(hs) -> list[str]:
     """The half-step check of the tightest contingencies (`planner.half_step`)."""
     if not hs:
@@ -482,9 +495,7 @@ def _half_step_lines(hs) -> list[str]:
            + " when cleared at the required time; their CCTs differ from the full step's by "
            f"at most {1000 * hs['max_cct_diff_s']:.0f} ms beyond the resolution of each."
            + ("" if hs["max_energy_diff_mwh"] is None else
-              " The runs that set each site's energy, simulated again at half the step, "
-              "change its twice largest state-of-charge excursion by at most "
-              f"{hs['max_energy_diff_mwh']:.3f} MWh."), "",
+              " The runs that set each site's energy" + _energy_sentence(hs) + "."), "",
            "| contingency | required (ms) | CCT, step h (ms) | CCT, step h/2 (ms) | "
            "stable at the required time, h/2 |", "|---|---|---|---|---|"]
     for r in hs["rows"]:
