@@ -909,7 +909,8 @@ def _energy_half_step(checks: dict, mw, mwh, energy) -> dict:
     simulated again at half the step: {"max_energy_diff_mwh" (largest change of a site's
     energy need, `_energy_need`, MWh), "max_energy_diff_pct" (the largest change relative
     to that site's need, %), "energy_covered_half" (every site's sized energy, margin and
-    rounding included, at least its need at half the step)}; None each without sites."""
+    rounding included, at least its need at half the step)}; None each without sites (the
+    percentage also when no site needed any energy at the full step)."""
     used = [j for j, p in enumerate(mw) if p > 0]
     if not used:
         return {"max_energy_diff_mwh": None, "max_energy_diff_pct": None,
@@ -917,8 +918,9 @@ def _energy_half_step(checks: dict, mw, mwh, energy) -> dict:
     half = {j: _energy_need(checks[energy[j]["set_by"]], k) for k, j in enumerate(used)}
     diff = {j: abs(half[j] - energy[j]["excursion_mwh"]) for j in used}
     return {"max_energy_diff_mwh": max(diff.values()),
-            "max_energy_diff_pct": max(100 * diff[j] / energy[j]["excursion_mwh"]
-                                       for j in used),
+            "max_energy_diff_pct": max((100 * diff[j] / energy[j]["excursion_mwh"]
+                                        for j in used if energy[j]["excursion_mwh"] > 0),
+                                       default=None),
             "energy_covered_half": all(half[j] <= mwh[j] for j in used)}
 
 
@@ -926,8 +928,9 @@ def _energy_note(e: dict) -> str:
     """Progress text of `_energy_half_step`'s figures ('' without sites)."""
     if e["max_energy_diff_mwh"] is None:
         return ""
-    return (f"; energies within {e['max_energy_diff_mwh']:.3f} MWh "
-            f"({e['max_energy_diff_pct']:.1f} %) at half the step, "
+    pct = e["max_energy_diff_pct"]
+    return (f"; energies within {e['max_energy_diff_mwh']:.3f} MWh"
+            + ("" if pct is None else f" ({pct:.1f} %)") + " at half the step, "
             + ("covered by the sizing" if e["energy_covered_half"] else "NOT covered"))
 
 

@@ -476,10 +476,12 @@ def timing_line(d: dict) -> str:
 def _energy_sentence(e: dict) -> str:
     """The energy's half-step figures (`planner._energy_half_step`) as the end of a
     sentence about the runs that set each site's energy."""
+    pct = e["max_energy_diff_pct"]
     return (", simulated again at half the step, change a site's energy need (twice its "
-            f"largest state-of-charge excursion) by at most {e['max_energy_diff_mwh']:.3f} "
-            f"MWh ({e['max_energy_diff_pct']:.1f} % of it); the sized energies, margin and "
-            "rounding included, " + ("cover" if e["energy_covered_half"] else "do **not** cover")
+            f"largest state-of-charge excursion) by at most {e['max_energy_diff_mwh']:.3f} MWh"
+            + ("" if pct is None else f" ({pct:.1f} % of it)") + "; the sized energies, "
+            "margin and rounding included, "
+            + ("cover" if e["energy_covered_half"] else "do **not** cover")
             + " the half-step needs")
 
 

@@ -190,6 +190,30 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
     assert u["max_energy_diff_mwh"] > 0
 
 
+def test_energy_half_step_figures_by_hand():
+    """`_energy_half_step` on hand-made check results (energy_mj rows: absorbed, delivered,
+    highest, lowest SOC, MJ; need = 2 max(high, -low) / 3600 MWh): changes in MWh and in %
+    of each site's own need, a site with no need left out of the %, and the cover test
+    against the sized MWh (margin and rounding included)."""
+    from stabctl.placement.planner import _energy_half_step
+    mw = np.array([10.0, 0.0, 5.0, 2.0])
+    energy = [{"set_by": "a", "excursion_mwh": 0.02}, {},
+              {"set_by": "b", "excursion_mwh": 0.01}, {"set_by": "b", "excursion_mwh": 0.0}]
+    # the k-th site with storage reads row k of its setter's run (sites 0, 2, 3)
+    half = {"a": {"energy_mj": [[0, 0, 36.0, -9.0], [], []]},      # need 0.02 -> 0.02
+            "b": {"energy_mj": [[], [0, 0, 0.0, -27.0],             # 0.01 -> 0.015 (+50 %)
+                                [0, 0, 1.8, 0.0]]}}                 # 0 -> 0.001 (no %)
+    e = _energy_half_step(half, mw, np.array([0.03, 0.0, 0.02, 0.01]), energy)
+    assert e["max_energy_diff_mwh"] == pytest.approx(0.005)
+    assert e["max_energy_diff_pct"] == pytest.approx(50.0)
+    assert e["energy_covered_half"]
+    assert not _energy_half_step(half, mw, np.array([0.03, 0.0, 0.012, 0.01]),
+                                 energy)["energy_covered_half"]
+    assert _energy_half_step({}, np.zeros(4), np.zeros(4), [{}] * 4) == {
+        "max_energy_diff_mwh": None, "max_energy_diff_pct": None,
+        "energy_covered_half": None}
+
+
 def test_infeasible_requirement_names_the_contingency_and_its_load_level():
     sites = candidate_sites(load_case("kundur"), max_pct=0.5)       # 4.5 MW per site
     with pytest.raises(InfeasibleError, match=r"3-101@110%.*load 110 %") as exc:
