@@ -396,7 +396,7 @@ def estimator_cct_lines(table: dict, bus: int, far_bus: int, esd_pct: float, set
         Estimator -> CCT statistics (cycles), `stabctl.studies.estimate.estimator_ccts`.
     bus, far_bus : int
     esd_pct : float
-    settings : stabctl.estimation.pmu.PMUSettings
+    settings : stabctl.estimation.settings.PMUSettings
     runs, seed : int
 
     Returns

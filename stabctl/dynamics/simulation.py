@@ -970,8 +970,9 @@ def _advance(sa, P, target, e, hh, stats):
         e[d] += 0.5 * hh * (P[d] + Pn[d])
         stats[d, 1] += 0.5 * hh * (max(P[d], 0.0) + max(Pn[d], 0.0))
         stats[d, 2] += 0.5 * hh * (max(-P[d], 0.0) + max(-Pn[d], 0.0))
-        stats[d, 3] = max(stats[d, 3], e[d] - sa.e0[d])
-        stats[d, 4] = min(stats[d, 4], e[d] - sa.e0[d])
+        soc = e[d] - sa.e0[d]
+        stats[d, 3] = max(stats[d, 3], soc)
+        stats[d, 4] = min(stats[d, 4], soc)
     return Pn
 
 

@@ -34,8 +34,9 @@ from stabctl.storage import devices as st
 from stabctl.estimation.ambient import AmbientLoad
 from stabctl.errors import InputError
 from stabctl.network.ybus import branch_admittances
-from stabctl.estimation.pmu import (Frame, PhasorTruth, PMUSettings, interp_columns,
-                                   machine_pmus, measure, window_estimates)
+from stabctl.estimation.pmu import (Frame, PhasorTruth, interp_columns, machine_pmus, measure,
+                                   window_estimates)
+from stabctl.estimation.settings import PMUSettings
 from stabctl.dynamics.results import SimulationResult
 
 ESTIMATORS = ("ideal", "raw", "kf", "ekf")

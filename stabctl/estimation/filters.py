@@ -59,7 +59,8 @@ from stabctl.errors import CaseError, InputError
 from stabctl.models.machines import EM, SUB, TRA, machine_params
 from stabctl.models.machines import _dq as rotor_dq  # the one compiled dq transform
 from stabctl.dynamics.coi import coi_weights
-from stabctl.estimation.pmu import Frame, PMUSettings
+from stabctl.estimation.pmu import Frame
+from stabctl.estimation.settings import PMUSettings
 
 
 # -- tuning ---------------------------------------------------------------------------------

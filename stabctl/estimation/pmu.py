@@ -63,7 +63,7 @@ from stabctl.errors import InputError
 from stabctl.network.ybus import branch_admittances
 from stabctl.dynamics.results import SimulationResult
 from stabctl.storage.devices import hv_bus
-from stabctl.estimation.settings import RATES, PMUSettings  # noqa: F401 (the PMUs' settings)
+from stabctl.estimation.settings import PMUSettings
 
 KCL_TOLERANCE_PU = 1e-6
 

@@ -760,7 +760,7 @@ def _size_energy(pl: _Plan, cons, mw, checks) -> tuple:
     mwh = np.where(mw > 0, np.maximum(mwh, 0.01), 0.0)
     for j in used:
         energy[j]["set_by"] = setter[j].name
-    again = list({c.name: c for c in setter.values()}.values())
+    again = _energy_setters({c.name: c for c in cons}, mw, energy)
     rerun = pl.check(again, mw, energy_mj=3600 * mwh)
     ok = all(r["stable_at_check"] for r in rerun.values())
     pl.say(f"energy: {mwh.sum():.2f} MWh at {len(used)} site(s); {len(again)} run(s) "

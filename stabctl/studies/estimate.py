@@ -29,7 +29,7 @@ def estimator_errors(case, event, *, settings, esd_pct, runs: int, seed: int,
     case : stabctl.case.Case
     event : stabctl.dynamics.events.Fault
         The fault (with its clearing) of the fault run.
-    settings : stabctl.estimation.pmu.PMUSettings
+    settings : stabctl.estimation.settings.PMUSettings
     esd_pct : float or None
         Storage in the fault run (% of machine MVA, paper's controller on the true
         speeds); None: none.
@@ -99,7 +99,7 @@ def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float,
     event : stabctl.dynamics.events.Fault
     t_end : float
         End of the run (s).
-    settings : stabctl.estimation.pmu.PMUSettings
+    settings : stabctl.estimation.settings.PMUSettings
     esd_pct : float
         Storage rating (% of machine MVA).
     seed : int
@@ -147,7 +147,7 @@ def estimator_ccts(case_name: str, bus: int, far_bus: int, *, esd_pct: float, ru
         Storage rating (% of machine MVA).
     runs, seed : int
         Noise seeds seed .. seed + runs - 1.
-    settings : stabctl.estimation.pmu.PMUSettings
+    settings : stabctl.estimation.settings.PMUSettings
         Its rate, latency and frequency window are used.
     conventions : str
     h : float or None

@@ -33,7 +33,8 @@ from stabctl.storage import control as law
 from stabctl.storage import devices as st
 from stabctl.case import Case
 from stabctl.errors import InputError
-from stabctl.estimation.pmu import FrameStream, PMUSettings, machine_pmus, measure, phasor_truth
+from stabctl.estimation.pmu import FrameStream, machine_pmus, measure, phasor_truth
+from stabctl.estimation.settings import PMUSettings
 from stabctl.dynamics.results import SimulationResult
 
 ESTIMATORS = ("raw", "kf", "ekf")

@@ -23,7 +23,7 @@ from stabctl.studies import estimation as study
 from stabctl.io import load_case
 from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.estimation.pmu import PMUSettings
+from stabctl.estimation.settings import PMUSettings
 from stabctl.dynamics.simulation import Simulator
 from stabctl.studies.cases import PAPER_CASES
 
