@@ -150,7 +150,9 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         " (stabctl.smallsignal.linearise, stabctl.smallsignal.modal; method in docs/modal.md).",
         "",
         f"- Linearised at the power-flow point by central differences of the simulator's own "
-        f"equations (PSTess svm_mgen's perturbation 1e-4): {sys.nstates} states, "
+        f"equations (PSTess svm_mgen's perturbation 1e-4, shown converged against 1e-5 in "
+        "eig_validation.md, 'Perturbation error'"
+        + (", for the case with its PSS" if st.no_pss else "") + f"): {sys.nstates} states, "
         f"{sys.ninputs} inputs, {sys.noutputs} outputs (timings: `stabctl eig` prints them; "
         "the report holds no run-dependent values).",
         f"- Angle-reference mode (common rotation of all rotor angles, excluded from damping "
