@@ -32,7 +32,7 @@ def run(sim, events, estimator, extrapolate=False):
     if extrapolate:
         cl._make_filter = lambda e, m, s: ExtrapolatingKF(m.pmu, s, f0=m.f0)
     try:
-        return cl.run_closed_loop(sim, events, 6.0, 20, estimator, seed=0)
+        return cl.run_closed_loop(sim, events, 6.0, cl.LoopOptions(20, estimator, seed=0))
     finally:
         cl._make_filter = make
 

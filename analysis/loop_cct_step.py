@@ -7,7 +7,10 @@ Run: python analysis/loop_cct_step.py miniwecc 83 33 20 raw 0.005 0.0025 --runs 
 
 import argparse
 
+from stabctl.dynamics.options import ModelOptions
 from stabctl.estimation import closed_loop as cl
+from stabctl.parallel import RunnerOptions
+from stabctl.stability.cct import LineFault
 
 
 def main(argv=None):
@@ -27,9 +30,9 @@ def main(argv=None):
     print("| step (ms) | mean | std | min | max | values |")
     print("|---|---|---|---|---|---|")
     for h in a.steps:
-        r = cl.cct_study(a.case, a.bus, a.far_bus, [a.esd_pct], a.runs, a.records,
-                         estimators=(a.estimator,), h=h, workers=a.workers,
-                         progress=False)[a.esd_pct][a.estimator]
+        r = cl.cct_study(a.case, LineFault(a.bus, a.far_bus), [a.esd_pct], a.runs, a.records,
+                         estimators=(a.estimator,), model=ModelOptions(h=h),
+                         runner=RunnerOptions(a.workers, progress=False))[a.esd_pct][a.estimator]
         print(f"| {h * 1e3:.4g} | {r['mean']:.3f} | {r['std']:.3f} | {r['min']:.2f} | "
               f"{r['max']:.2f} | {' '.join(f'{v:g}' for v in r['values'])} |", flush=True)
 

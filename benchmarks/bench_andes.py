@@ -57,7 +57,7 @@ import numpy as np
 
 from _timing import best_of
 from stabctl.io.andes import AndesFault, andes_modes, andes_system, strip_dyr
-from stabctl.stability.cct import LineFault, critical_clearing_time
+from stabctl.stability.cct import SearchOptions, LineFault, critical_clearing_time
 from stabctl.dynamics.events import Fault
 from stabctl.errors import InputError
 from stabctl.smallsignal.linearise import linearise
@@ -291,7 +291,7 @@ def study_cct(files, repeat, chosen):
     for label, raw, dyr, bus in files:
         sim = Simulator(load_psse(raw, dyr, conventions=CONVENTIONS))
         fault = LineFault(bus, None, T_FAULT)
-        ref_o = critical_clearing_time(sim, fault, tol=TOL_CCT, h=CCT_REF_OURS).cct_s
+        ref_o = critical_clearing_time(sim, fault, SearchOptions(tol=TOL_CCT), h=CCT_REF_OURS).cct_s
         ref_a = andes_cct(raw, dyr, bus, CCT_REF_ANDES, REF_ANDES_TOL)[0]
         print(f"\n{label}: references stabctl {1e3 * ref_o:.0f} ms ({fmt_step(CCT_REF_OURS)}), "
               f"ANDES {1e3 * ref_a:.0f} ms ({fmt_step(CCT_REF_ANDES)}, tol {REF_ANDES_TOL:g})")
@@ -306,9 +306,8 @@ def study_cct(files, repeat, chosen):
               f"{'CCT ms':>7} {'error ms':>8} {'loading s':>9}")
         for tool, what, h in rows:
             if tool == "stabctl":
-                critical_clearing_time(sim, fault, tol=TOL_CCT, h=h)          # compile
-                wall, res = best_of(lambda: critical_clearing_time(sim, fault, tol=TOL_CCT,
-                                                                   h=h), repeat, warm_up=False)
+                critical_clearing_time(sim, fault, SearchOptions(tol=TOL_CCT), h=h)          # compile
+                wall, res = best_of(lambda: critical_clearing_time(sim, fault, SearchOptions(tol=TOL_CCT), h=h), repeat, warm_up=False)
                 cct, n, ref, load = res.cct_s, res.n_simulations, ref_o, 0.0
             else:
                 t0 = time.perf_counter()

@@ -16,7 +16,7 @@ import os
 import time
 
 from stabctl.io import load_case
-from stabctl.stability.cct import critical_clearing_time
+from stabctl.stability.cct import SearchOptions, critical_clearing_time
 from stabctl.studies.cases import CASE1, CASE2
 from stabctl.dynamics.simulation import Simulator
 
@@ -38,7 +38,7 @@ def main():
             build = time.perf_counter() - t
             sim.run(fault.events(0.05), t_end=fault.t_fault + 1.0)   # warm-up (compilation)
             for check in (False, True):
-                res = min((critical_clearing_time(sim, fault, error_check=check)
+                res = min((critical_clearing_time(sim, fault, SearchOptions(error_check=check))
                            for _ in range(3)), key=lambda r: r.wall_time_s)
                 verdict = "" if target is None or conv == "pstess" else \
                     f"{target:9.1f} {'ok' if res.wall_time_s <= target else 'MISSED'}"

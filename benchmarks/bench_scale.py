@@ -162,7 +162,7 @@ def ours(label: str, repeat: int) -> dict:
     from stabctl.errors import NumericalInstabilityError
     from stabctl.smallsignal.linearise import linearise
     from stabctl.smallsignal.modal import modal_analysis
-    from stabctl.stability.cct import LineFault, critical_clearing_time
+    from stabctl.stability.cct import SearchOptions, LineFault, critical_clearing_time
 
     with tempfile.TemporaryDirectory() as work:
         case, q_limits, bus, _ = load_system(label, work)
@@ -208,8 +208,7 @@ def ours(label: str, repeat: int) -> dict:
     for h in sim.default_h / np.array([1, 2, 4]):   # a finer step if a probe blows up
         try:
             t = time.perf_counter()
-            cct = critical_clearing_time(sim, LineFault(bus, None, T_FAULT), tol=TOL_CCT,
-                                         h=h, error_check=False)
+            cct = critical_clearing_time(sim, LineFault(bus, None, T_FAULT), SearchOptions(tol=TOL_CCT, error_check=False), h=h)
             out.update(cct_s=time.perf_counter() - t, cct_ms=1e3 * cct.cct_s,
                        cct_runs=cct.n_simulations, cct_h=h)
             out.pop("cct_error", None)

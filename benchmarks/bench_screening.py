@@ -14,6 +14,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
+from stabctl.parallel import RunnerOptions
 from stabctl.stability.screening import screen
 
 TARGET_S = {"miniwecc": 300.0}
@@ -30,8 +31,8 @@ def main(argv=None):
     scheduler = None if args.scheduler == "processes" else args.scheduler
     with tempfile.TemporaryDirectory() as tmp:
         t = time.perf_counter()
-        rows = screen(args.case, Path(tmp) / "screen.jsonl", workers=args.workers,
-                      scheduler=scheduler)
+        rows = screen(args.case, Path(tmp) / "screen.jsonl",
+                      runner=RunnerOptions(args.workers, scheduler))
         wall = time.perf_counter() - t
     status = Counter(r["status"] for r in rows)
     sims = sum(r.get("n_simulations") or 0 for r in rows)

@@ -1,7 +1,7 @@
 """Run many independent jobs in parallel, recording each as it finishes (resumable).
 
-A `Job` is a key, a top-level (picklable) function and its JSON-able keyword inputs; the
-function returns a JSON-able dict.  `run_sweep` runs the jobs in local processes
+A `Job` is a key, a top-level (picklable) function and its JSON-able inputs (a dict the
+function takes as its one argument); the function returns a JSON-able dict.  `run_sweep` runs the jobs in local processes
 (`concurrent.futures.ProcessPoolExecutor`, one worker per available core, started with
 "spawn" so that no thread or lock of the parent is inherited) or, given a scheduler
 address, on a Dask distributed cluster (optional: `pip install "stabctl[dask]"`; stabctl
@@ -47,12 +47,44 @@ from stabctl.errors import InputError, StabctlError
 
 @dataclass(frozen=True)
 class Job:
-    """One unit of work: `func(**inputs)` -> JSON-able dict, identified by `key` in the
-    output file.  func must be importable by name (a module-level function)."""
+    """One unit of work: `func(inputs)` -> JSON-able dict, identified by `key` in the
+    output file.  func must be importable by name (a module-level function); `inputs` is
+    recorded with its result, so a rerun resumes only jobs with the same inputs."""
 
     key: str
     func: Callable[..., dict]
     inputs: Mapping = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class RunnerOptions:
+    """Where and how a study's many runs go (the CLI's ``--workers``, ``--scheduler``).
+
+    Attributes
+    ----------
+    workers : int or None
+        Local worker processes (None: one per available core; 1: in this process), or the
+        size of a ``scheduler="local"`` Dask cluster.
+    scheduler : str or None
+        Dask scheduler address ('tcp://host:8786'), 'local' for a local Dask cluster, or
+        None for local processes.
+    progress : bool or callable
+        A progress bar on stderr (True), none (False), or ``callable(done, total)`` called
+        after each finished job.
+
+    Raises
+    ------
+    InputError
+        workers < 1.
+    """
+
+    workers: int | None = None
+    scheduler: str | None = None
+    progress: bool | Callable = True
+
+    def __post_init__(self) -> None:
+        if self.workers is not None and self.workers < 1:
+            raise InputError(f"workers must be >= 1, got {self.workers}")
 
 
 @dataclass
@@ -86,7 +118,7 @@ def run_job(func: Callable[..., dict], key: str, inputs: Mapping) -> dict:
     """Run one job (in a worker) and return its output record; never raises an Exception."""
     wall = time.perf_counter()
     try:
-        rec = {"status": "ok", "result": func(**inputs)}
+        rec = {"status": "ok", "result": func(dict(inputs))}
     except Exception as exc:  # noqa: BLE001 - every failure is recorded with its reason
         rec = _failure_fields(exc)
     return {"key": key, "inputs": dict(inputs), **rec,
@@ -274,8 +306,8 @@ def pooled(workers: int) -> Iterator[ProcessPoolExecutor]:
 
 @contextmanager
 def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable]:
-    """A function ``map(func, jobs) -> results``, each job a dict of keyword arguments,
-    results in job order: in this process for workers == 1, else in a `pooled` process
+    """A function ``map(func, jobs) -> results``, each job a dict passed as func's one
+    argument, results in job order: in this process for workers == 1, else in a `pooled` process
     pool kept for the whole with block (so that each worker's caches, e.g. a simulator,
     are built once), or on a Dask cluster.
 
@@ -290,7 +322,8 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
     Yields
     ------
     callable
-        ``map(func, jobs: list[dict]) -> list``; func must be a module-level function.
+        ``map(func, jobs: list[dict]) -> list``; func must be a module-level function
+        taking one dict.
 
     Raises
     ------
@@ -300,7 +333,7 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
     if scheduler:
         client = _dask_client(scheduler, workers)
         try:
-            yield lambda func, jobs: client.gather([client.submit(_call, func, j, pure=False)
+            yield lambda func, jobs: client.gather([client.submit(func, j, pure=False)
                                                     for j in jobs])
         finally:
             cluster = client.cluster            # ours (scheduler="local") or None
@@ -309,14 +342,10 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
                 cluster.close()
         return
     if workers == 1:
-        yield lambda func, jobs: [func(**j) for j in jobs]
+        yield lambda func, jobs: [func(j) for j in jobs]
         return
     with pooled(workers) as pool:
-        yield lambda func, jobs: [f.result() for f in [pool.submit(func, **j) for j in jobs]]
-
-
-def _call(func, kwargs: dict):
-    return func(**kwargs)
+        yield lambda func, jobs: [f.result() for f in [pool.submit(func, j) for j in jobs]]
 
 
 def run_sweep(jobs, out: str | Path, *, workers: int | None = None,

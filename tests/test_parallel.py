@@ -17,46 +17,52 @@ from stabctl.cli import main
 from stabctl.errors import InputError
 from stabctl.parallel import Job, pooled, read_records, run_sweep
 
-# -- job functions (module level: spawned workers import them by name) -------------------
+# -- job functions (module level: spawned workers import them by name; one inputs dict) --
 
 
-def square(x):
+def square(inputs):
+    x = inputs["x"]
     return {"y": x * x}
 
 
-def boom(x):
+def boom(inputs):
+    x = inputs["x"]
     raise ValueError(f"bad x = {x}")
 
 
-def refuse(x):
+def refuse(inputs):
+    x = inputs["x"]
     raise InputError(f"no result for {x}")
 
 
-def interrupt(x):
+def interrupt(inputs):
     raise KeyboardInterrupt
 
 
-def sleepy(x):
+def sleepy(inputs):
+    x = inputs["x"]
     time.sleep(x)
     return {"slept": x}
 
 
-def ctrl_c_parent(x):
+def ctrl_c_parent(inputs):
     """Press Ctrl-C on the sweep's own process (the pool's parent) after x s."""
+    x = inputs["x"]
     time.sleep(x)
     os.kill(os.getppid(), signal.SIGINT)
     return {}
 
 
-def crash(x):
+def crash(inputs):
+    x = inputs["x"]
     os._exit(x)                     # the worker process dies (as on a segfault or OOM kill)
 
 
-def simulator_identity(case):
-    return {"id": id(cached_simulator(case)), "pid": os.getpid()}
+def simulator_identity(inputs):
+    return {"id": id(cached_simulator(inputs["case"])), "pid": os.getpid()}
 
 
-def pid(x):
+def pid(inputs):
     return {"pid": os.getpid()}
 
 

@@ -94,12 +94,12 @@ def check_suffix(path, allowed, option) -> Path | None:
 
 
 
-def cct_settings(tol_ms, t_max, tf) -> dict:
+def search_settings(tol_ms, t_max, tf):
     """The CCT search settings of ``--tol-ms``, ``--t-max`` and ``--tf``.
 
     Returns
     -------
-    dict
+    stabctl.stability.cct.SearchOptions
         ``tol`` (s), ``t_max`` (s) and ``t_end`` (s, None: fault start + 5 s).
 
     Raises
@@ -113,4 +113,23 @@ def cct_settings(tol_ms, t_max, tf) -> dict:
         raise InputError(f"--t-max must be > 0 s, got {t_max:g}")
     if tf is not None and not tf > 0:
         raise InputError(f"--tf must be > 0 s, got {tf:g}")
-    return {"tol": tol_ms / 1000.0, "t_max": t_max, "t_end": tf}
+    from stabctl.stability.cct import SearchOptions
+
+    return SearchOptions(tol=tol_ms / 1000.0, t_max=t_max, t_end=tf)
+
+
+def model_settings(conventions: str, step, q_limits: bool = True):
+    """The model settings of ``--conventions``, ``--step`` and ``--no-q-limits``.
+
+    Returns
+    -------
+    stabctl.dynamics.options.ModelOptions
+
+    Raises
+    ------
+    InputError
+        Unknown conventions or a step not > 0.
+    """
+    from stabctl.dynamics.options import ModelOptions
+
+    return ModelOptions(conventions=conventions, h=step, q_limits=q_limits)

@@ -10,6 +10,7 @@ import json
 
 import click
 
+from stabctl.cli.checks import model_settings
 from stabctl.errors import InputError
 from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are the CLI's
 from stabctl.cli.format import (closed_loop_lines, estimator_cct_lines, print_estimate,
@@ -165,7 +166,7 @@ def rmse(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms,
     (true: the ambient spread).
     """
     from stabctl.estimation import ambient as am
-    from stabctl.studies.estimate import estimator_errors
+    from stabctl.studies.estimate import ErrorRuns, estimator_errors
 
     _check_positive(tf=tf, runs=runs, deadband_hz=deadband_hz)
     if min(settle_ms, ambient_s, seed) < 0 or ambient_runs < 1:
@@ -174,11 +175,12 @@ def rmse(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms,
     settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma,
                          window_cycles)
     case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
-    d = estimator_errors(case, ev, settings=settings, esd_pct=esd_pct, runs=runs, seed=seed,
-                         settle_s=settle_ms / 1000, t_end=tf, pmu_at=pmu_at, coi=coi,
-                         control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
-                         ambient=ambient, ambient_s=ambient_s, ambient_runs=ambient_runs,
-                         conventions=conventions, h=step)
+    mc = ErrorRuns(runs=runs, seed=seed, pmu_at=pmu_at, coi=coi,
+                   control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
+                   ambient=ambient, ambient_s=ambient_s, ambient_runs=ambient_runs)
+    d = estimator_errors(case, ev, mc, settings=settings, esd_pct=esd_pct,
+                         settle_s=settle_ms / 1000, t_end=tf,
+                         model=model_settings(conventions, step))
     out = {"case": case.name, "fault": {"bus": fault, "far_bus": far_bus, "t_fault_s": t_fault,
                                         "clear_cycles": clear_cycles},
            "esd_pct": esd_pct, "pmu": {**settings.__dict__, "at": pmu_at}, "runs": runs,
@@ -225,7 +227,7 @@ def closed_loop(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, late
     rows = closed_loop_verdicts(case, ev, t_end=tf, settings=settings, esd_pct=esd_pct,
                                 seed=seed,
                                 control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
-                                deadband_hz=deadband_hz, conventions=conventions, h=step)
+                                deadband_hz=deadband_hz, model=model_settings(conventions, step))
     out = {"closed_loop": rows, "lines": closed_loop_lines(rows, fault, far_bus, esd_pct, seed)}
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
 
@@ -254,7 +256,7 @@ def cct(case_name, fault, far_bus, rate, latency_ms, esd_pct, window_cycles, run
     settings = _settings(rate, latency_ms, window_cycles=window_cycles)
     case, _, _ = _fault_event(case_name, fault, far_bus, 1.0, 6.0, None)  # checks the line
     table = estimator_ccts(case.name, fault, far_bus, esd_pct=esd_pct, runs=runs, seed=seed,
-                           settings=settings, conventions=conventions, h=step)
+                           settings=settings, model=model_settings(conventions, step))
     out = {"cct_cycles": table,
            "lines": estimator_cct_lines(table, fault, far_bus, esd_pct, settings, runs, seed)}
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))

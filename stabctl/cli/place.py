@@ -10,7 +10,7 @@ import click
 
 from stabctl.errors import InputError
 from stabctl.cli.format import print_json, print_plan
-from stabctl.cli.checks import cct_settings, check_writable
+from stabctl.cli.checks import check_writable, search_settings
 from stabctl.cli.options import (AliasedOption, controller, faults_option, json_option,
                                  model_options, out_file_option, parallel_options,
                                  read_fault_list, reports_errors, storage_options,
@@ -111,7 +111,7 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
                                            read_site_costs, screening_brackets)
     from stabctl.placement.program import candidate_sites
 
-    settings = cct_settings(tol_ms, t_max, None)
+    search = search_settings(tol_ms, t_max, None)
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
     if max_sites is not None and max_sites < 1:
@@ -142,7 +142,7 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     say = (lambda msg: None) if as_json else (lambda msg: click.echo(msg, err=True))
     result = plan(case_name, faults, req, load_levels=levels, overrides=overrides, cost=cost,
                   sites=sites, max_rounds=max_rounds, max_iter=max_iter, brackets=brackets,
-                  tol=settings["tol"], t_max=settings["t_max"], workers=n,
+                  tol=search.tol, t_max=search.t_max, workers=n,
                   scheduler=scheduler,
                   controller=controller(deadband_hz, v_gate, coi, hysteresis_hz),
                   conventions=conventions, h=step, progress=say, uniform=uniform_reference,

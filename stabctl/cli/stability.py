@@ -6,7 +6,8 @@ import click
 
 from stabctl.errors import InputError
 from stabctl.cli.format import print_cct, print_json, print_screening, print_sweep
-from stabctl.cli.checks import PLOT_SUFFIXES, cct_settings, check_suffix, check_writable
+from stabctl.cli.checks import (PLOT_SUFFIXES, check_suffix, check_writable, model_settings,
+                                search_settings)
 from stabctl.cli.options import (check_number, circuit_option, controller, fault_options,
                                  faults_option, json_option, model_options, out_file_option,
                                  parallel_options, plot_option, q_limits_option, read_fault_list,
@@ -54,18 +55,17 @@ def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, deadband_hz,
     from stabctl.io import load_case
     from stabctl.stability.cct import LineFault, critical_clearing_time
     from stabctl.storage.devices import uniform_fleet
-    from stabctl.dynamics.simulation import Simulator
     from stabctl.dynamics.events import validate as validate_events
 
-    settings = cct_settings(tol_ms, t_max, tf)
+    search = search_settings(tol_ms, t_max, tf)
+    model = model_settings(conventions, None, q_limits)
     case = load_case(case_name)
     storage = None if esd_pct is None else uniform_fleet(
         case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz))
     line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
     validate_events(case, line_fault.events(0.0), t_fault + 1.0)   # before compiling
-    res = critical_clearing_time(Simulator(case, conventions=conventions, q_limits=q_limits),
-                                 line_fault,
-                                 storage=storage, h=step, **settings)
+    res = critical_clearing_time(model.simulator(case), line_fault, search, storage=storage,
+                                 h=step)
     out = {"case": case.name, "esd_pct": esd_pct, **res.to_dict(), "q_limits": q_limits}
     if as_json:
         print_json(out)
@@ -140,7 +140,8 @@ def sweep_cct(case_name, faults_src, esd_pct, deadband_hz, v_gate, coi, hysteres
     from stabctl.studies.sweeps import controlled_cct_jobs
     from stabctl.parallel import run_sweep
 
-    settings = cct_settings(tol_ms, t_max, tf)
+    search = search_settings(tol_ms, t_max, tf)
+    model = model_settings(conventions, step, q_limits)
     ctrl = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
@@ -150,8 +151,7 @@ def sweep_cct(case_name, faults_src, esd_pct, deadband_hz, v_gate, coi, hysteres
     for p in ratings:
         storage_fleet(case, p)
     faults = read_fault_list(case_name, faults_src)
-    jobs = controlled_cct_jobs(case_name, faults, ratings, ctrl, conventions=conventions,
-                               h=step, q_limits=q_limits, **settings)
+    jobs = controlled_cct_jobs(case_name, faults, ratings, ctrl, search=search, model=model)
     rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
                     retry_failed=retry_failed)      # Ctrl-C: reports_errors, exit 130
     if as_json:
@@ -188,16 +188,17 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
     reason.
     """
     from stabctl.io import load_case
+    from stabctl.parallel import RunnerOptions
     from stabctl.stability.screening import screen as run_screen
 
     case = load_case(case_name)
     bus_list = None if buses is None else _bus_list(buses)
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
     check_writable(out_path, "--out")
-    settings = cct_settings(tol_ms, t_max, None)
-    rows = run_screen(case_name, out_path, buses=bus_list, lines=lines, tol=settings["tol"],
-                      t_max=t_max, workers=workers, scheduler=scheduler,
-                      conventions=conventions, h=step, q_limits=q_limits)
+    rows = run_screen(case_name, out_path, buses=bus_list, lines=lines,
+                      search=search_settings(tol_ms, t_max, None),
+                      model=model_settings(conventions, step, q_limits),
+                      runner=RunnerOptions(workers, scheduler))
     rows.sort(key=lambda r: r.get("cct_s", float("inf")))
     if plot_p is not None:
         from stabctl.plotting import figures as plotting

@@ -211,36 +211,85 @@ class ClosedLoopRun:
     diagnostics: Diagnostics
 
 
-def run_closed_loop(sim, events, t_end: float, fleet_pct: float, estimator: str,
-                    rate: float = 60.0, latency: float = 0.05, seed: int = 0, *,
-                    settings: PMUSettings | None = None,
-                    control: law.BangBangCOI = law.BangBangCOI(), at: str = "terminal",
-                    h: float | None = None, separation_limit: float = np.pi,
-                    stop_at_separation: bool = True,
-                    ambient: AmbientLoad | None = None) -> ClosedLoopRun:
-    """Simulate `events` to t_end (s) with ESDs of fleet_pct % of each generator's MVA at
-    its HV bus, commanded by Table 3 on the relative speeds from `estimator` (frames at
-    `rate` frames/s, modes effective `latency` s after each time stamp, PMU noise stream
-    `seed`).  settings: the PMUs (default C37.118.1 limits; its rate and latency are
-    replaced by `rate`, `latency`).  The run stops once a rotor angle is more than
-    separation_limit rad from the COI unless stop_at_separation is False
-    (`Simulator.run_commanded`).  ambient: load fluctuations (`stabctl.estimation.ambient`) added to
-    the fleet after the ESDs (the result's `pesd` and meta["storage"] list the ESDs, then
-    the loads; the ESDs' voltage gate applies to both).  Raises InputError for a bad
-    estimator, rate, latency, rating; SimulationError as `Simulator.run_commanded`.
+@dataclass(frozen=True)
+class LoopOptions:
+    """The estimator in the storage control loop.
+
+    Attributes
+    ----------
+    fleet_pct : float
+        ESD rating, % of each generator's MVA (one ESD per generator, at its HV bus).
+    estimator : str
+        One of `ESTIMATORS`.
+    pmu : PMUSettings
+        The PMUs: frames per s (``rate``), loop latency from a time stamp to the modes
+        taking effect (``latency_s``, s), noise limits and frequency window.
+    seed : int
+        PMU noise stream.
+    control : BangBangCOI
+        The Table 3 law (deadband, voltage gate, COI).
+    at : str
+        Where the PMUs measure: ``"terminal"`` or ``"hv"``.
     """
-    settings = replace(settings or PMUSettings(), rate=rate, latency_s=latency)
-    fleet = st.uniform_fleet(sim.case, fleet_pct)
-    ctrl = LoopController(sim.case, fleet.devices, estimator, settings, seed, t_end, control, at)
+
+    fleet_pct: float
+    estimator: str
+    pmu: PMUSettings = PMUSettings()
+    seed: int = 0
+    control: law.BangBangCOI = law.BangBangCOI()
+    at: str = "terminal"
+
+
+def run_closed_loop(sim, events, t_end: float, loop: LoopOptions, *, h: float | None = None,
+                    separation_limit: float = np.pi, stop_at_separation: bool = True,
+                    ambient: AmbientLoad | None = None) -> ClosedLoopRun:
+    """Simulate `events` to t_end (s) with the ESDs commanded by Table 3 on the relative
+    speeds the loop's estimator gives.
+
+    Parameters
+    ----------
+    sim : Simulator
+    events : sequence of events
+    t_end : float
+        Run end, s.
+    loop : LoopOptions
+        Rating, estimator, PMUs (frames at ``pmu.rate`` per s, modes effective
+        ``pmu.latency_s`` after each time stamp), noise seed, control law.
+    h : float or None, optional
+        Integration step, s (None: the simulator's).
+    separation_limit : float, optional
+        The run stops once a rotor angle is more than this from the COI (rad) unless
+        stop_at_separation is False (`Simulator.run_commanded`).
+    stop_at_separation : bool, optional
+    ambient : AmbientLoad or None, optional
+        Load fluctuations (`stabctl.estimation.ambient`) added to the fleet after the ESDs
+        (the result's `pesd` and meta["storage"] list the ESDs, then the loads; the ESDs'
+        voltage gate applies to both).
+
+    Returns
+    -------
+    ClosedLoopRun
+
+    Raises
+    ------
+    InputError
+        A bad estimator or rating.
+    SimulationError
+        As `Simulator.run_commanded`.
+    """
+    settings, rate = loop.pmu, loop.pmu.rate
+    fleet = st.uniform_fleet(sim.case, loop.fleet_pct)
+    ctrl = LoopController(sim.case, fleet.devices, loop.estimator, settings, loop.seed, t_end,
+                          loop.control, loop.at)
     frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
     devices, decide = fleet.devices, ctrl
     if ambient is not None:
         loads, set_points = ambient.schedule(sim.case, frames.size, rate)
         devices = devices + loads
         decide = lambda t, p: np.r_[ctrl(t, p), set_points(t)]  # noqa: E731
-    gate = law.ExternalCommands(v_gate_pu=control.v_gate_pu)
+    gate = law.ExternalCommands(v_gate_pu=loop.control.v_gate_pu)
     res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), frames, decide,
-                            latency=latency, h=h, separation_limit=separation_limit,
+                            latency=settings.latency_s, h=h, separation_limit=separation_limit,
                             stop_at_separation=stop_at_separation,
                             history_s=HISTORY_WINDOWS * settings.window_s(sim.case.freq_hz))
     return ClosedLoopRun(res, ctrl.diagnostics())
@@ -268,16 +317,10 @@ def false_actions(run: ClosedLoopRun, deadband_hz: float = 0.1) -> int:
 @dataclass(frozen=True)
 class LoopRunner:
     """What `cct.critical_clearing_time` needs of a simulator (`.case`, `.run`), with the
-    ESDs (fleet_pct % of each MVA) commanded through `run_closed_loop`."""
+    ESDs commanded through `run_closed_loop` as `loop` says."""
 
     sim: object
-    fleet_pct: float
-    estimator: str
-    rate: float = 60.0
-    latency: float = 0.05
-    seed: int = 0
-    #: the PMUs' frequency and ROCOF window (cycles, `PMUSettings.window_cycles`)
-    window_cycles: float = PMUSettings.window_cycles
+    loop: LoopOptions
 
     @property
     def case(self):
@@ -293,9 +336,7 @@ class LoopRunner:
 
     def run(self, events, t_end, h=None, separation_limit=np.pi, stop_at_separation=True):
         """The closed-loop SimulationResult (run_closed_loop's arguments)."""
-        return run_closed_loop(self.sim, events, t_end, self.fleet_pct, self.estimator,
-                               self.rate, self.latency, self.seed, h=h,
-                               settings=PMUSettings(window_cycles=self.window_cycles),
+        return run_closed_loop(self.sim, events, t_end, self.loop, h=h,
                                separation_limit=separation_limit,
                                stop_at_separation=stop_at_separation).result
 
@@ -305,29 +346,47 @@ class LoopRunner:
 CCT_TOL_S = 1 / 240
 
 
-def cct_job(case: str, bus: int, far_bus: int, esd_pct: float, estimator: str, seed: int,
-            rate: float = 60.0, latency: float = 0.05, t_fault: float = 1.0,
-            tol: float = CCT_TOL_S, conventions: str = "ieee", h: float | None = None,
-            window_cycles: float = PMUSettings.window_cycles) -> dict:
+def cct_job(inputs: dict) -> dict:
     """Worker entry (`stabctl.parallel`): CCT (s, cycles) of a line fault with the estimator
-    in the loop, PMU noise stream `seed`, model conventions and step h (None: default), the
-    PMUs' frequency window `window_cycles` (cycles).
+    in the loop.
+
+    Parameters
+    ----------
+    inputs : dict
+        The job's recorded inputs (`cct_study`): case, bus, far_bus, esd_pct, estimator,
+        seed (PMU noise stream), rate (frames/s), latency (s), window_cycles (the PMUs'
+        frequency window, default 2), conventions, h (step, None: default), q_limits
+        (default True), t_fault (s, default 1) and tol (s, default `CCT_TOL_S`).
+
+    Returns
+    -------
+    dict
+        cct_s, cct_cycles, n_simulations.
+
+    Notes
+    -----
     The step's error bar is not searched here (the seed spread is the error bar of these
-    CCTs; `stabctl cct` gives the ideal-measurement one).
+    CCTs; `stabctl cct` gives the ideal-measurement one).  The CCT is the cold
+    bisection's (`stabctl.stability.cct.critical_clearing_time`, the search of the ideal
+    row).  With an estimator in the loop the verdict need not be monotone in the clearing
+    time: Kundur, 20 % ESDs, raw PMU frequency, seed 0 is stable at 53, 56 and 60 cells of
+    1/240 s and unstable at 54, 55 and 57-59; the bisection reports 60 cells (15 cycles),
+    the longest clearing with every shorter one stable is 53.  A search started elsewhere
+    (from a neighbouring seed's CCT) can land on another stable island, so every seed is
+    searched from scratch.
+    """
+    from stabctl.dynamics.options import ModelOptions
+    from stabctl.stability.cct import (LineFault, SearchOptions, cached_simulator,
+                                       critical_clearing_time)
 
-    The CCT is the cold bisection's (`stabctl.stability.cct.critical_clearing_time`, the
-    search of the ideal row).  With an estimator in the loop the verdict need not be
-    monotone in the clearing time: Kundur, 20 % ESDs, raw PMU frequency, seed 0 is stable at
-    53, 56 and 60 cells of 1/240 s and unstable at 54, 55 and 57-59; the bisection reports
-    60 cells (15 cycles), the longest clearing with every shorter one stable is 53.
-    A search started elsewhere (from a neighbouring seed's CCT) can land on another
-    stable island, so every seed is searched from scratch."""
-    from stabctl.stability.cct import LineFault, cached_simulator, critical_clearing_time
-
-    runner = LoopRunner(cached_simulator(case, conventions, h), esd_pct, estimator, rate,
-                        latency, seed, window_cycles)
-    r = critical_clearing_time(runner, LineFault(int(bus), int(far_bus), float(t_fault)),
-                               tol=tol, error_check=False)
+    pmu = PMUSettings(rate=inputs.get("rate", 60.0), latency_s=inputs.get("latency", 0.05),
+                      window_cycles=inputs.get("window_cycles", PMUSettings.window_cycles))
+    loop = LoopOptions(inputs["esd_pct"], inputs["estimator"], pmu, inputs["seed"])
+    runner = LoopRunner(cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs)), loop)
+    fault = LineFault(int(inputs["bus"]), int(inputs["far_bus"]),
+                      float(inputs.get("t_fault", 1.0)))
+    r = critical_clearing_time(runner, fault, SearchOptions(tol=inputs.get("tol", CCT_TOL_S),
+                                                            error_check=False))
     return {"cct_s": r.cct_s, "cct_cycles": r.cct_cycles, "n_simulations": r.n_simulations}
 
 
@@ -387,11 +446,9 @@ class SeedRule:
         return float(max(spread, (1.0 - (1.0 - self.confidence) ** (1.0 / n)) * tol_cycles))
 
 
-def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
-              estimators=ESTIMATORS, seed: int = 0, rate: float = 60.0, latency: float = 0.05,
-              workers: int | None = None, progress: bool = True, conventions: str = "ieee",
-              h: float | None = None,
-              window_cycles: float = PMUSettings.window_cycles) -> dict:
+def cct_study(case: str, fault, ratings, runs, out, *, estimators=ESTIMATORS,
+              seed: int = 0, pmu: PMUSettings = PMUSettings(), model=None,
+              runner=None) -> dict:
     """CCTs per rating and estimator over noise seeds, each by the cold bisection of
     `cct_job`, in parallel with `stabctl.parallel.run_sweep` (records appended to `out`,
     finished jobs reused).
@@ -400,8 +457,8 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
     ----------
     case : str
         Built-in case name.
-    bus, far_bus : int
-        The faulted line (fault at `bus`).
+    fault : LineFault
+        The faulted line (fault at ``fault.bus``, at ``fault.t_fault``).
     ratings : sequence of float
         ESD ratings (% of machine MVA).
     runs : int or SeedRule
@@ -414,13 +471,14 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
         Of `ESTIMATORS`.
     seed : int
         First noise seed.
-    rate, latency : float
-        PMU frames per s, loop latency (s).
-    window_cycles : float
-        The PMUs' frequency and ROCOF window (cycles, `PMUSettings.window_cycles`); a
-        value other than that default is part of each job's key and inputs.
-    workers, progress, conventions, h
-        As `stabctl.parallel.run_sweep` and `stabctl.dynamics.simulation.Simulator`.
+    pmu : PMUSettings
+        The PMUs' rate, latency and frequency window (each job records these three; a
+        window other than the default is part of each job's key; the other fields must
+        keep their defaults).
+    model : ModelOptions or None
+        Conventions, step and Q limits of every run (None: the defaults).
+    runner : RunnerOptions or None
+        Workers and progress (None: the defaults; no Dask scheduler here).
 
     Returns
     -------
@@ -432,38 +490,45 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
     Raises
     ------
     InputError
-        runs below 1.
+        runs below 1; PMU settings the records cannot hold.
     """
     from contextlib import nullcontext
 
+    from stabctl.dynamics.options import ModelOptions
     from stabctl.io import load_case
-    from stabctl.parallel import Job, default_workers, pooled, run_sweep
+    from stabctl.parallel import Job, RunnerOptions, default_workers, pooled, run_sweep
     from stabctl.stability.cct import compile_here
 
+    model = ModelOptions() if model is None else model
+    runner = RunnerOptions() if runner is None else runner
+    if replace(pmu, rate=60.0, latency_s=0.05, window_cycles=2.0) != PMUSettings():
+        raise InputError("the estimator CCT sweep records the PMU rate, latency and window "
+                         "only; keep the other PMU settings at their defaults")
     rule = runs if isinstance(runs, SeedRule) else None
     if rule is None and runs < 1:
         raise InputError(f"need at least one run, got {runs}")
     tol_cycles = CCT_TOL_S * load_case(case).freq_hz
-    tail = ("" if conventions == "ieee" else f"/{conventions}") + ("" if h is None else f"/h{h:g}")
-    window = ({} if window_cycles == PMUSettings.window_cycles
-              else {"window_cycles": float(window_cycles)})
-    tail += "".join(f"/w{w:g}c" for w in window.values())
+    rate, latency, bus, far_bus = pmu.rate, pmu.latency_s, fault.bus, fault.far_bus
+    window = ({} if pmu.window_cycles == PMUSettings.window_cycles
+              else {"window_cycles": float(pmu.window_cycles)})
+    tail = model.key_suffix() + "".join(f"/w{w:g}c" for w in window.values())
+    at = {} if fault.t_fault == 1.0 else {"t_fault": fault.t_fault}
 
     def job(p: float, e: str, s: int) -> Job:
         return Job(f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s/seed{s}{tail}",
                    cct_job, dict(case=case, bus=bus, far_bus=far_bus, esd_pct=p, estimator=e,
-                                 seed=s, rate=rate, latency=latency, conventions=conventions,
-                                 h=h, **window))
+                                 seed=s, rate=rate, latency=latency, **model.to_inputs(),
+                                 **window, **at))
 
-    compile_here(case, conventions, h)
+    compile_here(case, model)
     first = runs if rule is None else rule.batch
     count = {(p, e): 1 if e == "ideal" else first for p in ratings for e in estimators}
-    n_workers = workers or default_workers()
+    n_workers = runner.workers or default_workers()
     with pooled(n_workers) if n_workers > 1 else nullcontext() as pool:  # one for all rounds
         while True:
             jobs = {pe: [job(*pe, s) for s in range(seed, seed + n)] for pe, n in count.items()}
-            rep = run_sweep([j for row in jobs.values() for j in row], out, workers=workers,
-                            progress=progress, pool=pool)
+            rep = run_sweep([j for row in jobs.values() for j in row], out,
+                            workers=runner.workers, progress=runner.progress, pool=pool)
             values = {pe: [rep.records[j.key]["result"]["cct_cycles"]
                            if rep.records[j.key]["status"] == "ok" else np.nan for j in row]
                       for pe, row in jobs.items()}

@@ -32,6 +32,9 @@ V_RELEASE = V_SWITCH + 0.1  # a load held at its impedance model is released abo
 #: chord iteration of the kept-bus voltages: converged when a step moves no voltage by
 #: more than this (pu)
 TOL_V = 1e-11
+#: Newton fallback of the kept-bus solution (`_newton_nc`): largest mismatch (pu) and
+#: iterations (PST nc_load's)
+NEWTON_TOL, NEWTON_MAX_ITER = 1e-10, 50
 
 # LAPACK's dgesv (scipy's, `scipy.linalg.cython_lapack`) for the kernels, called by symbol
 # name: numba links the symbol in each process that loads a kernel calling it, so they stay
@@ -156,7 +159,7 @@ def _held_below(V, held, limit):
 
 
 @kernel
-def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, max_iter=50):
+def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held):
     """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
 
     I_load = conj((S_P + S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's
@@ -189,7 +192,7 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, ma
         it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, held, vmin)
         if it < 0:
             assign(V, V_start)
-            it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, held, vmin)
+            it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, held, vmin)
         if it >= 0 and _held_below(V, held, V_RELEASE):
             return it
         held[:] = False
@@ -199,12 +202,12 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held, tol=1e-10, ma
     if it >= 0:
         return it
     assign(V, V_start)
-    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, held, vmin)
+    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, held, vmin)
     if it >= 0:
         return it
     low = vmin < V_SWITCH + 0.05         # every bus that came near the switch
     assign(V, V_start)
-    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin)
+    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, low, vmin)
     if it >= 0:
         assign(held, low)
     return it
@@ -247,15 +250,16 @@ def _lapack_solve(A, b):
 
 
 @kernel
-def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, tol, max_iter, low, vmin):
+def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, low, vmin):
     """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load);
-    vmin keeps the smallest magnitude each bus reached."""
+    vmin keeps the smallest magnitude each bus reached.  Converged when the mismatch is
+    below NEWTON_TOL (pu), within NEWTON_MAX_ITER iterations (else -1)."""
     n = V.size
     J = np.empty((2 * n, 2 * n))
     rhs = np.empty(2 * n)
     F = np.empty(n, np.complex128)
-    for it in range(max_iter):
-        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low) < tol:
+    for it in range(NEWTON_MAX_ITER):
+        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low) < NEWTON_TOL:
             return it
         # Wirtinger derivatives: d(load current) = A dV + B conj(dV), A, B diagonal
         for r in range(n):

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stabctl.stability.cct import LineFault, cached_simulator, critical_clearing_time
+from stabctl.dynamics.options import ModelOptions
+from stabctl.stability.cct import LineFault, SearchOptions, cached_simulator, critical_clearing_time
 from stabctl.errors import InputError, SimulationError
 from stabctl.placement.program import CCTCut
 from stabctl.stability.sime import (clearing_energy_rate, critical_machines, device_modes, omib_equivalent,
@@ -57,92 +58,115 @@ class Contingency:
 
 # -- one contingency at one allocation (runs in a worker) ------------------------------
 
-def evaluate(case: str, fault: dict, devices: list, sites: list, beta: list,
-             controller: dict, tol: float, t_max: float, scan_from: float | None = None,
-             scan_to: float | None = None, scan_s: float = SCAN_S,
-             eps_s: float = EPS_S, conventions: str = "ieee", h: float | None = None,
-             bracket: list | None = None, load: float = 1.0,
-             check_s: float | None = None, gradient: bool = True) -> dict:
-    """CCT of one contingency with ESDs `devices` ([bus, machine, MW] each) and the
-    gradient of that CCT in the rating of every candidate site ([bus, machine] each).
+def evaluate(job: dict) -> dict:
+    """CCT of one contingency with ESDs and the gradient of that CCT in the rating of
+    every candidate site (a worker job of `verify`; JSON-able in and out).
 
-    beta: distribution factors (n_mac x n_sites, `sime.distribution_factors`);
-    controller: BangBangCOI fields; conventions, h: the model conventions and step
-    (None: the default).  Without scan_from the CCT is the bisection of
-    `stabctl.stability.cct`; with it, `scanned_cct` (the first unstable clearing time on a scan_s
-    grid from scan_from up to scan_to, then bisection).  JSON-able in and out (a
-    process-pool job).  bracket: [stable, unstable] clearing times (s) known from a
-    coarser search of the same fault and fleet (e.g. the screening): the bisection
-    starts there, both ends simulated again (a stable end found unstable falls back to
-    the bisection from 0; an unstable end found stable is pushed up as
-    `critical_clearing_time` does).  Runs repeated within one evaluation (the scan's
-    and the bisection's bracket ends, the gradient's run beyond the CCT) are simulated
-    once (`_Memo`); n_simulations counts the runs simulated.  load: load level
-    (`cached_simulator`).  check_s: a required clearing time (s): the run cleared there
-    is also simulated (`check`: its verdict and the devices' energy figures).
-    gradient: False skips the gradient runs (a CCT only; the gradient is then zero).
-    Returns {"cct_s", "t_unstable_s", "n_simulations", "separated", "critical",
-    "margin", "dmargin_dtc", "gradient_s_per_mw" (n_sites,), "above_t_max"} (and with
-    check_s the keys of `check`); a CCT above t_max is returned as t_max with a zero
-    gradient.
-    Raises InputError (unstable at zero clearing, bad fault) and SimulationError.
+    Parameters
+    ----------
+    job : dict
+        case (str); fault (`_fault_dict`); devices ([bus, machine, MW] each); sites
+        ([bus, machine] each); beta (distribution factors, n_mac x n_sites,
+        `sime.distribution_factors`); controller (BangBangCOI fields); tol, t_max (s, the
+        search); conventions, h (model conventions and step, None: the default); load
+        (load level, `cached_simulator`, default 1).  Optional: scan_from, scan_to,
+        scan_s (without scan_from the CCT is the bisection of `stabctl.stability.cct`;
+        with it `scanned_cct`: the first unstable clearing time on a scan_s grid from
+        scan_from up to scan_to, then bisection); eps_s (the gradient's clearing-time
+        difference); bracket ([stable, unstable] clearing times, s, known from a coarser
+        search of the same fault and fleet, e.g. the screening: the bisection starts
+        there, both ends simulated again; a stable end found unstable falls back to the
+        bisection from 0, an unstable end found stable is pushed up as
+        `critical_clearing_time` does); check_s (a required clearing time, s: the run
+        cleared there is also simulated, `check`); gradient (False: a CCT only, the
+        gradient zero).
+
+    Returns
+    -------
+    dict
+        {"cct_s", "t_unstable_s", "n_simulations", "separated", "critical", "margin",
+        "dmargin_dtc", "gradient_s_per_mw" (n_sites,), "above_t_max"} and with check_s the
+        keys of `check`; a CCT above t_max is returned as t_max with a zero gradient.
+        Runs repeated within one evaluation (the scan's and the bisection's bracket
+        ends, the gradient's run beyond the CCT) are simulated once (`_Memo`);
+        n_simulations counts the runs simulated.
+
+    Raises
+    ------
+    InputError
+        Unstable at zero clearing, bad fault.
+    SimulationError
+        The network fails while the fault is on.
     """
-    sim = _Memo(cached_simulator(case, conventions, h, load=load))
-    f = _fault_of(fault)
-    ctrl = BangBangCOI(**controller)
-    fleet = StorageFleet(tuple(StorageDevice(int(b), int(k), float(p)) for b, k, p in devices),
-                         ctrl) if devices else None
-    checked = {} if check_s is None else \
-        _check_run(sim, f, fleet, float(check_s), sites, ctrl)
+    sim = _Memo(cached_simulator(job["case"], ModelOptions.from_inputs(job),
+                                 load=job.get("load", 1.0)))
+    f, sites, tol, t_max = _fault_of(job["fault"]), job["sites"], job["tol"], job["t_max"]
+    ctrl = BangBangCOI(**job["controller"])
+    fleet = StorageFleet(tuple(StorageDevice(int(b), int(k), float(p))
+                               for b, k, p in job["devices"]), ctrl) if job["devices"] else None
+    check_s = job.get("check_s")
+    checked = {} if check_s is None else _check_run(sim, f, fleet, float(check_s), sites, ctrl)
     try:
-        if scan_from is None:
-            res = _bisection(sim, f, fleet, tol, t_max, bracket)
+        if job.get("scan_from") is None:
+            res = _bisection(sim, f, fleet, tol, t_max, job.get("bracket"))
         else:
-            res, _ = scanned_cct(sim, f, fleet, tol=tol, t_max=t_max, start=scan_from,
-                                      stop=scan_to, step=scan_s)
+            res, _ = scanned_cct(sim, f, fleet, tol=tol, t_max=t_max, start=job["scan_from"],
+                                 stop=job.get("scan_to"), step=job.get("scan_s", SCAN_S))
     except InputError as exc:
         if "above the search limit" not in str(exc):
             raise
         return {"cct_s": t_max, "t_unstable_s": None, "n_simulations": sim.n_runs,
                 "separated": [], "critical": [], "margin": None, "dmargin_dtc": None,
                 "above_t_max": True, "gradient_s_per_mw": [0.0] * len(sites), **checked}
-    if not gradient:
+    if not job.get("gradient", True):
         return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable, "n_simulations": sim.n_runs,
                 "separated": list(res.separated), "above_t_max": False, "critical": [],
                 "margin": None, "dmargin_dtc": None, "gradient_s_per_mw": [0.0] * len(sites),
                 **checked}
-    grad = cct_gradient(sim, f, res.t_unstable, fleet, sites, np.asarray(beta), ctrl, eps_s)
+    grad = cct_gradient(sim, f, res.t_unstable, fleet, sites, np.asarray(job["beta"]), ctrl,
+                        job.get("eps_s", EPS_S))
     grad.pop("n_runs")
     return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable, "n_simulations": sim.n_runs,
             "separated": list(res.separated), "above_t_max": False, **grad, **checked}
 
 
-def check(case: str, fault: dict, devices: list, sites: list, controller: dict,
-          t_clear: float, conventions: str = "ieee", h: float | None = None,
-          load: float = 1.0) -> dict:
-    """One run of a fault cleared at t_clear (s after its start) with ESDs `devices`
-    ([bus, machine, MW] each, or [bus, machine, MW, usable energy MJ] for a device of
-    finite energy started half full) at load level `load`: the verification of a required
-    clearing time, and the energy each device (and each candidate site of `sites`,
-    [bus, machine] each) moves over the run.  JSON-able in and out (a process-pool job).
+def check(job: dict) -> dict:
+    """One run of a fault cleared at a required clearing time with ESDs: the
+    verification of that clearing time, and the energy each device (and each candidate
+    site) moves over the run (a worker job; JSON-able in and out).
 
-    Returns {"stable_at_check" (bool), "check_s", "n_simulations" (1),
-    "energy_mj" (per device: [absorbed, delivered, highest, lowest state of charge
-    relative to the start], MJ, as the simulator integrates them between located
-    switchings: `SimulationResult.meta["storage"]`),
-    "site_excursion_s" (per site: the largest state-of-charge excursion per MW of
-    rating, s = MJ/MW, of a device at that site along this run's modes,
-    `stabctl.stability.sime.device_modes`)}.
-    Raises SimulationError (the network fails while the fault is on).
+    Parameters
+    ----------
+    job : dict
+        case, fault (`_fault_dict`), devices ([bus, machine, MW] each, or [bus, machine,
+        MW, usable energy MJ] for a device of finite energy started half full), sites
+        ([bus, machine] each), controller (BangBangCOI fields), t_clear (s after the
+        fault start), conventions, h (None: the default), load (load level, default 1).
+
+    Returns
+    -------
+    dict
+        {"stable_at_check" (bool), "check_s", "n_simulations" (1), "energy_mj" (per
+        device: [absorbed, delivered, highest, lowest state of charge relative to the
+        start], MJ, as the simulator integrates them between located switchings:
+        `SimulationResult.meta["storage"]`), "site_excursion_s" (per site: the largest
+        state-of-charge excursion per MW of rating, s = MJ/MW, of a device at that site
+        along this run's modes, `stabctl.stability.sime.device_modes`)}.
+
+    Raises
+    ------
+    SimulationError
+        The network fails while the fault is on.
     """
-    sim = _Memo(cached_simulator(case, conventions, h, load=load))
-    f = _fault_of(fault)
-    ctrl = BangBangCOI(**controller)
+    sim = _Memo(cached_simulator(job["case"], ModelOptions.from_inputs(job),
+                                 load=job.get("load", 1.0)))
+    ctrl = BangBangCOI(**job["controller"])
     fleet = StorageFleet(tuple(
         StorageDevice(int(d[0]), int(d[1]), float(d[2]),
                       **({"energy_mj": float(d[3])} if len(d) > 3 else {}))
-        for d in devices), ctrl) if devices else None
-    out = _check_run(sim, f, fleet, float(t_clear), sites, ctrl)
+        for d in job["devices"]), ctrl) if job["devices"] else None
+    out = _check_run(sim, _fault_of(job["fault"]), fleet, float(job["t_clear"]), job["sites"],
+                     ctrl)
     return {**out, "n_simulations": sim.n_runs}
 
 
@@ -177,13 +201,11 @@ def _bisection(sim, fault: LineFault, fleet, tol: float, t_max: float, bracket):
         lo, hi = (float(t) for t in bracket)
         if 0 < lo < hi <= t_max:
             try:
-                return critical_clearing_time(sim, fault, tol=tol, t_lo=lo, t_hi=hi,
-                                              t_max=t_max, error_check=False, storage=fleet)
+                return critical_clearing_time(sim, fault, SearchOptions(tol=tol, t_lo=lo, t_hi=hi, t_max=t_max, error_check=False), storage=fleet)
             except InputError as exc:
                 if "unstable already at the lower bound" not in str(exc):
                     raise
-    return critical_clearing_time(sim, fault, tol=tol, t_max=t_max, error_check=False,
-                                  storage=fleet)
+    return critical_clearing_time(sim, fault, SearchOptions(tol=tol, t_max=t_max, error_check=False), storage=fleet)
 
 
 class _Memo:
@@ -230,16 +252,13 @@ def scanned_cct(sim, fault: LineFault, fleet, *, tol: float, t_max: float, start
     while t <= limit + 1e-12:
         runs += 1
         if not _run(sim, fault, t, fleet).stable:
-            res = critical_clearing_time(sim, fault, tol=tol, t_lo=prev or 0.0, t_hi=t,
-                                         error_check=False,
-                                         t_max=t, storage=fleet)
+            res = critical_clearing_time(sim, fault, SearchOptions(tol=tol, t_lo=prev or 0.0, t_hi=t, error_check=False, t_max=t), storage=fleet)
             return res, runs
         prev, t = t, round(t + step, 12)
     if prev is None or prev >= t_max:
         raise InputError(f"{fault.describe()}: the CCT is above the search limit t_max = "
                          f"{t_max:g} s")
-    res = critical_clearing_time(sim, fault, tol=tol, t_lo=prev, error_check=False,
-                                 t_hi=min(prev + 4 * step, t_max), t_max=t_max, storage=fleet)
+    res = critical_clearing_time(sim, fault, SearchOptions(tol=tol, t_lo=prev, error_check=False, t_hi=min(prev + 4 * step, t_max), t_max=t_max), storage=fleet)
     return res, runs
 
 

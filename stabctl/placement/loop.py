@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from stabctl.dynamics.options import ModelOptions
 from stabctl.stability.cct import cached_simulator
 from stabctl.errors import InputError
 from stabctl.placement.program import (Allocation, InfeasibleError, candidate_sites, solve_allocation,
@@ -207,7 +208,7 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
     wall = time.perf_counter()
     contingencies = tuple(contingencies)
     _check_settings(contingencies, max_iter, tol, workers, zeta_min)
-    sim = cached_simulator(case, conventions, h)
+    sim = cached_simulator(case, ModelOptions(conventions, h))
     _check_faults(sim.case, contingencies)
     sites = tuple(sites or candidate_sites(sim.case))
     controller = controller or DEFAULT_CONTROLLER
@@ -244,7 +245,7 @@ def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | N
     Raises as `place`.
     """
     contingencies = tuple(contingencies)
-    sim = cached_simulator(case, conventions, h)
+    sim = cached_simulator(case, ModelOptions(conventions, h))
     _check_faults(sim.case, contingencies)
     sites = tuple(sites or candidate_sites(sim.case))
     controller = controller or DEFAULT_CONTROLLER

@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import InputError
 from stabctl.placement.evaluation import (Contingency, _fault_dict, check, controller_dict,
                                           devices_of)
@@ -517,8 +518,8 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
     from stabctl.stability.cct import cached_simulator
 
     for x in levels:            # a load level without a power flow fails here, named
-        cached_simulator(case, conventions, h, load=x)
-    sim = cached_simulator(case, conventions, h)
+        cached_simulator(case, ModelOptions(conventions, h), load=x)
+    sim = cached_simulator(case, ModelOptions(conventions, h))
     sites = tuple(sites or candidate_sites(sim.case))
     cost = cost or CostModel()
     with _pool(run_map, workers, scheduler) as pool_map, _Heartbeat(progress) as say:
@@ -893,7 +894,7 @@ def _step_s(pl: _Plan) -> float:
     """The integration step of the plan's runs (s)."""
     from stabctl.stability.cct import cached_simulator
 
-    return cached_simulator(pl.case, pl.model["conventions"], pl.model["h"]).default_h \
+    return cached_simulator(pl.case, ModelOptions.from_inputs(pl.model)).default_h \
         if pl.model["h"] is None else pl.model["h"]
 
 
@@ -996,7 +997,7 @@ def least_uniform(pl: _Plan, cons, failing, kw) -> dict:
 def _mva(pl: _Plan) -> np.ndarray:
     from stabctl.stability.cct import cached_simulator
 
-    case = cached_simulator(pl.case, pl.model["conventions"], pl.model["h"]).case
+    case = cached_simulator(pl.case, ModelOptions.from_inputs(pl.model)).case
     return np.array([float(case.machines.mva[case.machine_index(s.machine)])
                      for s in pl.sites])
 

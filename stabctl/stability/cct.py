@@ -46,6 +46,7 @@ from stabctl.errors import InputError, NumericalInstabilityError, SimulationErro
 from stabctl.dynamics.events import Fault, LineTrip
 from stabctl.network.ybus import circuit_row
 from stabctl.dynamics.results import SimulationResult
+from stabctl.dynamics.options import ModelOptions
 from stabctl.dynamics.simulation import Simulator
 
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
@@ -194,14 +195,71 @@ class CCTResult:
                 "half_step_probes": [[t, ok] for t, ok in self.half_step_probes]}
 
 
-def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL,
-                           t_lo: float = T_LO, t_hi: float | None = None,
-                           t_max: float = T_MAX,
-                           t_end: float | None = None, h: float | None = None,
-                           separation_limit: float = np.pi,
-                           criterion: Callable[[SimulationResult], bool] | None = None,
-                           stop_at_separation: bool | None = None,
-                           storage=None, error_check: bool = True) -> CCTResult:
+@dataclass(frozen=True)
+class SearchOptions:
+    """Settings of a CCT search (`critical_clearing_time`, module docstring).
+
+    Attributes
+    ----------
+    tol : float
+        Width of the final bracket, s (> 0); default 1e-3 s.
+    t_lo : float
+        Clearing time that must be stable, s (>= 0; 0 = the line trip alone); default 0.
+    t_hi : float or None
+        First upper bound, s (default min(0.1 s, t_max)); doubled (capped at t_max) while
+        it is still stable.
+    t_max : float
+        Largest clearing time tried, s; default 1.0 s.
+    t_end : float or None
+        Run end, s (absolute; default t_fault + 5 s; must exceed t_fault + t_max).
+    separation_limit : float
+        Angle from the centre of inertia (paper eq. 40) beyond which a machine has
+        separated, rad; default pi.
+    criterion : callable or None
+        ``callable(SimulationResult) -> bool``, True if stable; default `no_separation`.
+    stop_at_separation : bool or None
+        Stop runs at separation; default True for the default criterion, False for a
+        custom one (which then sees whole trajectories).
+    error_check : bool
+        Also search the CCT at h/2 from the final bracket
+        (`CCTResult.numerical_error_s`, module docstring); default True.
+
+    A sweep (`cct_jobs`) records tol, t_max, t_end and error_check (when off) in each
+    job's inputs (`to_inputs`); the other fields must keep their defaults there.
+    """
+
+    tol: float = TOL
+    t_lo: float = T_LO
+    t_hi: float | None = None
+    t_max: float = T_MAX
+    t_end: float | None = None
+    separation_limit: float = np.pi
+    criterion: Callable[[SimulationResult], bool] | None = None
+    stop_at_separation: bool | None = None
+    error_check: bool = True
+
+    def to_inputs(self) -> dict:
+        """Fields of a sweep job's recorded inputs: tol, t_max, t_end, and error_check
+        when off.  Raises InputError when a field a record cannot hold is not its
+        default."""
+        default = SearchOptions()
+        for name in ("t_lo", "t_hi", "separation_limit", "criterion", "stop_at_separation"):
+            if getattr(self, name) != getattr(default, name):
+                raise InputError(f"a CCT sweep records tol, t_max, t_end and error_check "
+                                 f"only; {name} must keep its default")
+        return {"tol": self.tol, "t_max": self.t_max, "t_end": self.t_end,
+                **({} if self.error_check else {"error_check": False})}
+
+    @classmethod
+    def from_inputs(cls, inputs) -> SearchOptions:
+        """The settings recorded in a job's inputs (`to_inputs`; absent fields default)."""
+        return cls(tol=inputs.get("tol", TOL), t_max=inputs.get("t_max", T_MAX),
+                   t_end=inputs.get("t_end"), error_check=inputs.get("error_check", True))
+
+
+def critical_clearing_time(sim: Simulator, fault: LineFault,
+                           search: SearchOptions | None = None, *, h: float | None = None,
+                           storage=None) -> CCTResult:
     """CCT of `fault` on `sim`'s case by bisection on the clearing time (see module doc).
 
     Parameters
@@ -210,32 +268,13 @@ def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL
         The simulator of the case (its power flow is solved once).
     fault : LineFault
         The fault; its clearing time is the unknown.
-    tol : float, optional
-        Width of the final bracket, s (> 0); default 1e-3 s.
-    t_lo : float, optional
-        Clearing time that must be stable, s (>= 0; 0 = the line trip alone); default 0.
-    t_hi : float or None, optional
-        First upper bound, s (default min(0.1 s, t_max)); doubled (capped at t_max) while
-        it is still stable.
-    t_max : float, optional
-        Largest clearing time tried, s; default 1.0 s.
-    t_end : float or None, optional
-        Run end, s (absolute; default t_fault + 5 s; must exceed t_fault + t_max).
+    search : SearchOptions or None, optional
+        Search settings (tolerance, bounds, run end, criterion, half-step check); default
+        `SearchOptions()`.
     h : float or None, optional
         Integration step, s (default `sim.default_h`).
-    separation_limit : float, optional
-        Angle from the centre of inertia (paper eq. 40) beyond which a machine has
-        separated, rad; default pi.
-    criterion : callable or None, optional
-        ``callable(SimulationResult) -> bool``, True if stable; default `no_separation`.
-    stop_at_separation : bool or None, optional
-        Stop runs at separation; default True for the default criterion, False for a
-        custom one (which then sees whole trajectories).
     storage : StorageFleet or None, optional
         Passed untouched to `Simulator.run` (a `stabctl.storage.devices.StorageFleet`).
-    error_check : bool, optional
-        Also search the CCT at h/2 from the final bracket
-        (`CCTResult.numerical_error_s`, module docstring); default True.
 
     Returns
     -------
@@ -264,19 +303,22 @@ def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL
     Stability and Control, 1994, sec. 13.3; Pai, Energy Function Analysis for Power System
     Stability, 1989, ch. 1.
     """
-    t_end = fault.t_fault + T_AFTER_FAULT if t_end is None else t_end
-    t_hi = min(T_HI, t_max) if t_hi is None else t_hi
-    _check_settings(fault, tol, t_lo, t_hi, t_max, t_end)
+    o = SearchOptions() if search is None else search
+    tol, t_max = o.tol, o.t_max
+    t_end = fault.t_fault + T_AFTER_FAULT if o.t_end is None else o.t_end
+    t_hi = min(T_HI, t_max) if o.t_hi is None else o.t_hi
+    _check_settings(fault, tol, o.t_lo, t_hi, t_max, t_end)
     _check_trips(sim.case, fault)
     h = sim.default_h if h is None else h
-    crit = no_separation if criterion is None else criterion
-    stop = criterion is None if stop_at_separation is None else stop_at_separation
+    crit = no_separation if o.criterion is None else o.criterion
+    stop = o.criterion is None if o.stop_at_separation is None else o.stop_at_separation
     extra = {} if storage is None else {"storage": storage}
     probes, separated = {h: [], h / 2: []}, {}
 
     def stable_at(k: int, step: float = h) -> bool:
         t_clear = _lattice(k, tol)
-        res, diverged = _run(sim, fault, t_clear, t_end, step, separation_limit, stop, extra)
+        res, diverged = _run(sim, fault, t_clear, t_end, step, o.separation_limit, stop,
+                             extra)
         ok = not diverged and bool(crit(res))
         probes[step].append((t_clear, ok))
         if not ok and step == h:
@@ -284,12 +326,12 @@ def critical_clearing_time(sim: Simulator, fault: LineFault, *, tol: float = TOL
         return ok
 
     wall = time.perf_counter()
-    k_lo, k_hi, k_max = _lattice_bounds(tol, t_lo, t_hi, t_max)
+    k_lo, k_hi, k_max = _lattice_bounds(tol, o.t_lo, t_hi, t_max)
     k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
     start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
     k_lo, k_hi = _bisect(stable_at, k_lo, k_hi)
     half = None
-    if error_check:
+    if o.error_check:
         half = _lattice(_half_step_cct(lambda k: stable_at(k, h / 2), k_lo, k_hi, k_max), tol)
     return CCTResult(fault=fault, t_stable=_lattice(k_lo, tol), t_unstable=_lattice(k_hi, tol),
                      search_bracket=start, tol_s=tol, step_s=h, freq_hz=sim.case.freq_hz,
@@ -425,15 +467,30 @@ def storage_fleet(case, esd_pct: float | None):
 
 
 @functools.lru_cache(maxsize=None)
-def cached_simulator(case_name: str, conventions: str = "ieee",
-                     h: float | None = None, q_limits: bool = True,
+def cached_simulator(case_name: str, model: ModelOptions = ModelOptions(),
                      load: float = 1.0) -> Simulator:
-    """One Simulator per case, conventions, step h (None: the default), power-flow Q
-    limits and load level per process (the power flow is solved once per worker).
+    """One Simulator per case, model settings and load level per process (the power flow
+    is solved once per worker).
 
-    load: fraction of the base load (`stabctl.network.powerflow.scale_load`: loads and
-    dispatch scaled, power flow re-solved).  Raises PowerFlowError or CaseError naming
-    the load level when the scaled case has no power flow or no valid initial state.
+    Parameters
+    ----------
+    case_name : str
+        A built-in case name or case file (`stabctl.io.load_case`).
+    model : ModelOptions, optional
+        Conventions, step (None: the default) and power-flow Q limits.
+    load : float, optional
+        Fraction of the base load (`stabctl.network.powerflow.scale_load`: loads and
+        dispatch scaled, power flow re-solved).
+
+    Returns
+    -------
+    Simulator
+
+    Raises
+    ------
+    PowerFlowError, CaseError
+        The scaled case has no power flow or no valid initial state (naming the load
+        level).
     """
     from stabctl.errors import CaseError
     from stabctl.io import load_case
@@ -441,76 +498,95 @@ def cached_simulator(case_name: str, conventions: str = "ieee",
 
     case = load_case(case_name)
     if float(load) == 1.0:
-        return Simulator(case, conventions=conventions, step=h, q_limits=q_limits)
-    scaled = scale_load(case, load, q_limits=q_limits)
+        return model.simulator(case)
+    scaled = scale_load(case, load, q_limits=model.q_limits)
     try:
-        return Simulator(scaled, conventions=conventions, step=h, q_limits=q_limits)
+        return model.simulator(scaled)
     except CaseError as exc:
         raise CaseError(f"load level {float(load):g} of case '{case_name}': {exc}") from None
 
 
-def compile_here(case_name: str, conventions: str = "ieee", h: float | None = None,
-                 q_limits: bool = True) -> None:
+def compile_here(case_name: str, model: ModelOptions = ModelOptions()) -> None:
     """Compile the simulator's kernels in this process (a 0.1 s run of the case) unless
     they are cached (`stabctl.dynamics.simulation.simulator_cached`), so that the workers a sweep
     starts next load them instead of each compiling them at the same time, silently.
 
     Parameters
     ----------
-    case_name, conventions, h, q_limits
+    case_name : str
+    model : ModelOptions, optional
         As `cached_simulator` (the run's simulator is kept there).
     """
     from stabctl.dynamics.simulation import simulator_cached
 
     if not simulator_cached():
-        cached_simulator(case_name, conventions, h, q_limits).run((), t_end=0.1)
+        cached_simulator(case_name, model).run((), t_end=0.1)
 
 
-def cct_job(case: str, bus: int, far_bus: int | None, t_fault: float = 1.0, circuit: int = 1,
-            trips=(), esd_pct: float | None = None, tol: float = TOL, t_max: float = T_MAX,
-            t_end: float | None = None, conventions: str = "ieee",
-            h: float | None = None, q_limits: bool = True, error_check: bool = True) -> dict:
+def fault_of_inputs(inputs) -> LineFault:
+    """The fault recorded in a sweep job's inputs (bus, far_bus, t_fault, circuit, trips;
+    `fault_inputs`)."""
+    far = inputs["far_bus"]
+    return LineFault(int(inputs["bus"]), None if far is None else int(far),
+                     float(inputs.get("t_fault", 1.0)), int(inputs.get("circuit", 1)),
+                     tuple((int(a), int(b)) for a, b in inputs.get("trips", ())))
+
+
+def fault_inputs(fault: LineFault) -> dict:
+    """A fault as a sweep job records it (`fault_of_inputs` reads it back)."""
+    return {"bus": fault.bus, "far_bus": fault.far_bus, "t_fault": fault.t_fault,
+            "circuit": fault.circuit, "trips": [list(t) for t in fault.trips]}
+
+
+def cct_job(inputs: dict) -> dict:
     """Worker entry of a CCT sweep: the CCT of one fault at one storage rating, with its
-    numerical error bar (unless error_check is False, e.g. a coarse screening).
+    numerical error bar (unless error_check is off, e.g. a coarse screening).
 
-    Arguments are JSON-able (a sweep's recorded inputs; esd_pct: storage rating in %,
-    None = no storage; conventions, h: model conventions and step, None = the default;
-    q_limits: PV Q limits in the power flow);
-    returns `CCTResult.to_dict()`.  Raises as `critical_clearing_time` and
-    `storage_fleet`.
+    Parameters
+    ----------
+    inputs : dict
+        The job's JSON-able recorded inputs (`cct_jobs`): case; the fault (bus, far_bus,
+        t_fault, circuit, trips); esd_pct (storage rating in %, None = no storage); the
+        search settings (`SearchOptions.to_inputs`) and model settings
+        (`ModelOptions.to_inputs`).
+
+    Returns
+    -------
+    dict
+        `CCTResult.to_dict()`.
+
+    Raises
+    ------
+    InputError, SimulationError
+        As `critical_clearing_time` and `storage_fleet`.
     """
-    sim = cached_simulator(case, conventions, h, q_limits)
-    fault = LineFault(int(bus), None if far_bus is None else int(far_bus), float(t_fault),
-                      int(circuit),
-                      tuple((int(a), int(b)) for a, b in trips))
-    res = critical_clearing_time(sim, fault, tol=tol, t_max=t_max, t_end=t_end,
-                                 storage=storage_fleet(sim.case, esd_pct),
-                                 error_check=error_check)
+    sim = cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs))
+    res = critical_clearing_time(sim, fault_of_inputs(inputs), SearchOptions.from_inputs(inputs),
+                                 storage=storage_fleet(sim.case, inputs.get("esd_pct")))
     return res.to_dict()
 
 
-def cct_key(case: str, fault: LineFault, esd_pct: float | None, conventions: str = "ieee",
-            h: float | None = None, q_limits: bool = True) -> str:
+def cct_key(case: str, fault: LineFault, esd_pct: float | None,
+            model: ModelOptions = ModelOptions()) -> str:
     """Sweep key, e.g. 'kundur/3-101/t1/esd-none' or 'kundur/3-101#2+13-101/t1/esd20';
     '/pstess', '/h<step>' and '/no-q-limits' are appended for the pstess conventions, a
-    given step and a power flow without PV Q limits."""
+    given step and a power flow without PV Q limits (`ModelOptions.key_suffix`)."""
     line = f"bus{fault.bus}" if fault.far_bus is None else \
         f"{fault.bus}-{fault.far_bus}" + (f"#{fault.circuit}" if fault.circuit != 1 else "")
     line += "".join(f"+{a}-{b}" for a, b in fault.trips)
     rating = "none" if esd_pct is None else f"{esd_pct:g}"
-    tail = ("" if conventions == "ieee" else f"/{conventions}") + \
-        ("" if h is None else f"/h{h:g}") + ("" if q_limits else "/no-q-limits")
-    return f"{case}/{line}/t{fault.t_fault:g}/esd{'-' if esd_pct is None else ''}{rating}{tail}"
+    return (f"{case}/{line}/t{fault.t_fault:g}/esd{'-' if esd_pct is None else ''}{rating}"
+            f"{model.key_suffix()}")
 
 
-def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
-             t_max: float = T_MAX, t_end: float | None = None, conventions: str = "ieee",
-             h: float | None = None, q_limits: bool = True,
-             error_check: bool = True) -> list:
-    """One `stabctl.parallel.Job` per (fault, storage rating %, None = no storage) pair, with
-    the model conventions, step h (None: the default) and power-flow Q limits of every
-    run (the inputs record q_limits only when off, so earlier records still resume), and
-    error_check (the half-step rerun of the final bracket, recorded only when off).
+def cct_jobs(case_name: str, faults, ratings=(None,), *,
+             search: SearchOptions = SearchOptions(),
+             model: ModelOptions = ModelOptions()) -> list:
+    """One `stabctl.parallel.Job` per (fault, storage rating %, None = no storage) pair.
+
+    Each job's inputs record the case, the fault, the rating, the search settings
+    (`SearchOptions.to_inputs`: error_check only when off) and the model settings
+    (`ModelOptions.to_inputs`: q_limits only when off), so earlier records still resume.
 
     Checks every fault's bus and line against the case first (UnknownBusError, CaseError)
     so that bad input fails before any job runs, then compiles the simulator's kernels in
@@ -520,21 +596,16 @@ def cct_jobs(case_name: str, faults, ratings=(None,), *, tol: float = TOL,
     from stabctl.dynamics.events import validate
     from stabctl.parallel import Job
 
-    from stabctl.dynamics.model import check_conventions
-
-    check_conventions(conventions)
     case = load_case(case_name)
     faults = list(faults)
     for f in faults:
         validate(case, f.events(0.0), 0.0)
-    compile_here(case_name, conventions, h, q_limits)
-    settings = {"tol": tol, "t_max": t_max, "t_end": t_end, "conventions": conventions, "h": h,
-                **({} if q_limits else {"q_limits": False}),
-                **({} if error_check else {"error_check": False})}
-    return [Job(key=cct_key(case_name, f, p, conventions, h, q_limits), func=cct_job,
-                inputs={"case": case_name, "bus": f.bus, "far_bus": f.far_bus,
-                        "t_fault": f.t_fault, "circuit": f.circuit,
-                        "trips": [list(t) for t in f.trips], "esd_pct": p, **settings})
+    recorded = search.to_inputs()            # the records' field order, kept since v0.1:
+    checked = {"error_check": recorded.pop("error_check")} if "error_check" in recorded else {}
+    settings = {**recorded, **model.to_inputs(), **checked}
+    compile_here(case_name, model)
+    return [Job(key=cct_key(case_name, f, p, model), func=cct_job,
+                inputs={"case": case_name, **fault_inputs(f), "esd_pct": p, **settings})
             for f in faults for p in ratings]
 
 

@@ -12,9 +12,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from stabctl.case import Case
+from stabctl.dynamics.options import ModelOptions
 from stabctl.io import load_case
-from stabctl.stability.cct import T_MAX, TOL, LineFault, cct_jobs
-from stabctl.parallel import run_sweep
+from stabctl.parallel import RunnerOptions, run_sweep
+from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs
 
 
 def screening_faults(case: Case, buses=None, lines: bool = False,
@@ -34,18 +35,40 @@ def screening_faults(case: Case, buses=None, lines: bool = False,
 
 
 def screen(case_name: str, out: str | Path, *, buses=None, lines: bool = False,
-           tol: float = TOL, t_max: float = T_MAX, workers: int | None = None,
-           scheduler: str | None = None, progress: bool = True, conventions: str = "ieee",
-           h: float | None = None, q_limits: bool = True) -> list[dict]:
-    """Run the screening; returns one row per fault: key, bus, far_bus, status, CCT (s and
-    cycles) with its numerical error (s), separated machines, simulations, or the failure
-    reason.  `out` is the JSON-lines record (resumed if it exists); conventions, h: the
-    model conventions and step of every run; q_limits: PV Q limits in the power flow.  Raises as `stabctl.parallel.run_sweep`."""
+           search: SearchOptions = SearchOptions(), model: ModelOptions = ModelOptions(),
+           runner: RunnerOptions = RunnerOptions()) -> list[dict]:
+    """Run the screening.
+
+    Parameters
+    ----------
+    case_name : str
+        Built-in case name or case file.
+    out : str or Path
+        The JSON-lines record (resumed if it exists).
+    buses : sequence of int or None, optional
+        Faulted buses (default all).
+    lines : bool, optional
+        Also every branch fault with the branch tripped (`screening_faults`).
+    search, model, runner : SearchOptions, ModelOptions, RunnerOptions, optional
+        The CCT search (tol, t_max; recorded), the model conventions, step and Q limits of
+        every run, and where the runs go.
+
+    Returns
+    -------
+    list of dict
+        One row per fault: key, bus, far_bus, status, CCT (s and cycles) with its
+        numerical error (s), separated machines, simulations, or the failure reason.
+
+    Raises
+    ------
+    InputError, UnknownBusError
+        As `stabctl.stability.cct.cct_jobs` and `stabctl.parallel.run_sweep`.
+    """
     case = load_case(case_name)
     faults = screening_faults(case, buses, lines)
-    report = run_sweep(cct_jobs(case_name, faults, tol=tol, t_max=t_max,
-                                conventions=conventions, h=h, q_limits=q_limits), out,
-                       workers=workers, scheduler=scheduler, progress=progress)
+    report = run_sweep(cct_jobs(case_name, faults, search=search, model=model), out,
+                       workers=runner.workers, scheduler=runner.scheduler,
+                       progress=runner.progress)
     rows = []
     for fault, rec in zip(faults, report.records.values()):
         row = {"key": rec["key"], "bus": fault.bus, "far_bus": fault.far_bus,

@@ -15,7 +15,7 @@ import numpy as np
 
 from stabctl.dynamics.events import Fault
 from stabctl.io import load_case
-from stabctl.stability.cct import LineFault, critical_clearing_time
+from stabctl.stability.cct import SearchOptions, LineFault, critical_clearing_time
 from stabctl.dynamics.model import CONVENTIONS
 from stabctl.dynamics.simulation import Simulator, default_step
 from stabctl.studies.cases import PAPER_CASES
@@ -38,7 +38,7 @@ def cct_versus_step(case_name: str, fault: LineFault, steps=STEPS,
         for h in sorted({*steps, sim.default_h}, reverse=True):
             if progress:
                 progress(f"convergence: {case_name}, {conv}, h = {1000 * h:g} ms")
-            r = critical_clearing_time(sim, fault, h=h, tol=tol, error_check=False)
+            r = critical_clearing_time(sim, fault, SearchOptions(tol=tol, error_check=False), h=h)
             rows.append((h, r.cct_s, r.n_simulations))
         out[conv] = {"default_h": sim.default_h, "rows": rows}
     return out

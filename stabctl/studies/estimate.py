@@ -12,16 +12,46 @@
 from __future__ import annotations
 
 import tempfile
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from stabctl.errors import InputError
 
 
-def estimator_errors(case, event, *, settings, esd_pct, runs: int, seed: int,
-                     settle_s: float, t_end: float, pmu_at: str, coi: str,
-                     control, ambient, ambient_s: float, ambient_runs: int,
-                     conventions: str = "ieee", h: float | None = None) -> dict:
+@dataclass(frozen=True)
+class ErrorRuns:
+    """The Monte-Carlo set-up of `estimator_errors`.
+
+    Attributes
+    ----------
+    runs, seed : int
+        Monte-Carlo runs with PMU noise seeds seed .. seed + runs - 1.
+    pmu_at : {"terminal", "hv"}
+        Where the PMUs measure.
+    coi : {"system", "rest"}
+        The centre of inertia the relative speeds are taken from.
+    control : stabctl.storage.control.BangBangCOI
+        The ESD rule whose false actions are counted.
+    ambient : stabctl.estimation.ambient.AmbientLoad
+        Ambient load fluctuation of the runs without fault (run r: seed + r).
+    ambient_s : float
+        Length of the runs without fault (s; 0: no false-action count).
+    ambient_runs : int
+        Runs without fault.
+    """
+
+    runs: int
+    seed: int
+    pmu_at: str
+    coi: str
+    control: object
+    ambient: object
+    ambient_s: float
+    ambient_runs: int
+
+
+def estimator_errors(case, event, mc: ErrorRuns, *, settings, esd_pct, settle_s: float,
+                     t_end: float, model=None) -> dict:
     """Errors of every estimator against the simulated truth, and false ESD actions.
 
     Parameters
@@ -29,27 +59,17 @@ def estimator_errors(case, event, *, settings, esd_pct, runs: int, seed: int,
     case : stabctl.case.Case
     event : stabctl.dynamics.events.Fault
         The fault (with its clearing) of the fault run.
+    mc : ErrorRuns
+        Noise runs and seed, PMU placement, COI, ESD rule, ambient runs.
     settings : stabctl.estimation.settings.PMUSettings
     esd_pct : float or None
         Storage in the fault run (% of machine MVA, paper's controller on the true
         speeds); None: none.
-    runs, seed : int
-        Monte-Carlo runs with PMU noise seeds seed .. seed + runs - 1.
     settle_s, t_end : float
         Errors are taken from ``settle_s`` after the clearing to ``t_end`` (s), the end of
         the fault run.
-    pmu_at : {"terminal", "hv"}
-    coi : {"system", "rest"}
-    control : stabctl.storage.devices.BangBangCOI
-        The ESD rule whose false actions are counted.
-    ambient : stabctl.estimation.ambient.AmbientLoad
-        Ambient load fluctuation of the runs without fault (run r: seed + r).
-    ambient_s : float
-        Length of the runs without fault (s; 0: no false-action count).
-    ambient_runs : int
-    conventions : str
-    h : float or None
-        Integration step (None: the default).
+    model : stabctl.dynamics.options.ModelOptions or None
+        Conventions, step and Q limits (None: the defaults).
 
     Returns
     -------
@@ -63,7 +83,7 @@ def estimator_errors(case, event, *, settings, esd_pct, runs: int, seed: int,
     InputError
         ``t_end`` before the errors start.
     """
-    from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import ambient as am
     from stabctl.estimation import filters as es
     from stabctl.estimation.pmu import machine_pmus
@@ -74,23 +94,22 @@ def estimator_errors(case, event, *, settings, esd_pct, runs: int, seed: int,
     if not window[0] < t_end:
         raise InputError(f"--tf {t_end:g} s ends before the errors start ({window[0]:g} s)")
     fleet = None if esd_pct is None else uniform_fleet(case, esd_pct)
-    sim = Simulator(case, injection_buses=() if fleet is None else fleet.buses,
-                    conventions=conventions)
-    es.compile_filters(es.machine_models(case, machine_pmus(case, pmu_at)))
-    res = sim.run([event], t_end=t_end, storage=fleet, h=h)
-    figures = study.monte_carlo(case, res, settings, runs, seed, window, pmu_at, coi)
+    sim = (model or ModelOptions()).simulator(
+        case, injection_buses=() if fleet is None else fleet.buses)
+    es.compile_filters(es.machine_models(case, machine_pmus(case, mc.pmu_at)))
+    res = sim.run([event], t_end=t_end, storage=fleet)
+    figures = study.monte_carlo(case, res, settings, mc.runs, mc.seed, window, mc.pmu_at, mc.coi)
     actions = None
-    if ambient_s > 0:
-        flat = [am.simulate(sim, ambient_s, replace(ambient, seed=seed + r), settings.rate)
-                for r in range(ambient_runs)]
-        actions = study.false_actions(case, flat, settings, seed, control, pmu_at)
+    if mc.ambient_s > 0:
+        flat = [am.simulate(sim, mc.ambient_s, replace(mc.ambient, seed=mc.seed + r),
+                            settings.rate) for r in range(mc.ambient_runs)]
+        actions = study.false_actions(case, flat, settings, mc.seed, mc.control, mc.pmu_at)
     return {"window_s": list(window), "stable": res.stable, "estimators": figures,
             "false_actions": actions}
 
 
 def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float, seed: int,
-                         control, deadband_hz: float, conventions: str = "ieee",
-                         h: float | None = None) -> dict:
+                         control, deadband_hz: float, model=None) -> dict:
     """The fault simulated with the ESDs commanded by each estimator in the loop.
 
     Parameters
@@ -107,8 +126,8 @@ def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float,
     control : stabctl.storage.devices.BangBangCOI
     deadband_hz : float
         Deadband of the false-action count (Hz).
-    conventions : str
-    h : float or None
+    model : stabctl.dynamics.options.ModelOptions or None
+        Conventions, step and Q limits (None: the defaults).
 
     Returns
     -------
@@ -116,17 +135,16 @@ def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float,
         Per estimator (`stabctl.estimation.closed_loop.ESTIMATORS`): ``stable``,
         ``switchings`` and ``false_actions``.
     """
-    from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation import filters as es
     from stabctl.estimation.pmu import machine_pmus
 
-    sim, rows = Simulator(case, conventions=conventions), {}
+    sim, rows = (model or ModelOptions()).simulator(case), {}
     es.compile_filters(es.machine_models(case, machine_pmus(case)))
     for e in cl.ESTIMATORS:
-        run = cl.run_closed_loop(sim, [event], t_end, esd_pct, e, settings.rate,
-                                 settings.latency_s, seed, settings=settings, control=control,
-                                 h=h)
+        run = cl.run_closed_loop(sim, [event], t_end, cl.LoopOptions(esd_pct, e, settings, seed,
+                                                                     control))
         rows[e] = {"stable": run.result.stable,
                    "switchings": len(run.result.meta.get("switchings", [])),
                    "false_actions": cl.false_actions(run, deadband_hz)}
@@ -134,8 +152,7 @@ def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float,
 
 
 def estimator_ccts(case_name: str, bus: int, far_bus: int, *, esd_pct: float, runs: int,
-                   seed: int, settings, conventions: str = "ieee",
-                   h: float | None = None) -> dict:
+                   seed: int, settings, model=None) -> dict:
     """CCT of a line fault with each estimator in the loop, over ``runs`` noise seeds.
 
     Parameters
@@ -149,8 +166,8 @@ def estimator_ccts(case_name: str, bus: int, far_bus: int, *, esd_pct: float, ru
         Noise seeds seed .. seed + runs - 1.
     settings : stabctl.estimation.settings.PMUSettings
         Its rate, latency and frequency window are used.
-    conventions : str
-    h : float or None
+    model : stabctl.dynamics.options.ModelOptions or None
+        Conventions, step and Q limits (None: the defaults).
 
     Returns
     -------
@@ -160,9 +177,11 @@ def estimator_ccts(case_name: str, bus: int, far_bus: int, *, esd_pct: float, ru
         file, removed).
     """
     from stabctl.estimation import closed_loop as cl
+    from stabctl.estimation.settings import PMUSettings
+    from stabctl.stability.cct import LineFault
 
+    pmu = PMUSettings(rate=settings.rate, latency_s=settings.latency_s,
+                      window_cycles=settings.window_cycles)
     with tempfile.TemporaryDirectory() as tmp:
-        return cl.cct_study(case_name, bus, far_bus, [esd_pct], runs, Path(tmp) / "cct.jsonl",
-                            seed=seed, rate=settings.rate, latency=settings.latency_s,
-                            conventions=conventions, h=h,
-                            window_cycles=settings.window_cycles)[esd_pct]
+        return cl.cct_study(case_name, LineFault(bus, far_bus), [esd_pct], runs,
+                            Path(tmp) / "cct.jsonl", seed=seed, pmu=pmu, model=model)[esd_pct]

@@ -26,6 +26,8 @@ from stabctl.dynamics.events import fault_with_clearing
 from stabctl.estimation.settings import PMUSettings
 from stabctl.dynamics.simulation import Simulator
 from stabctl.studies.cases import PAPER_CASES
+from stabctl.parallel import RunnerOptions
+from stabctl.stability.cct import LineFault
 
 #: the paper's cases by case name; the RMSE runs clear after pc.cycles["estimation"]:
 #: faults well inside the CCT under the ieee conventions (Kundur 9.4 cycles, miniWECC 4.6)
@@ -52,8 +54,9 @@ def case_figures(name: str, runs: int, cct_runs, records_dir: Path,
     false = ambient_figures(case, progress=lambda r: say(
         f"estimation {name}: ambient load run {r + 1}/{AMBIENT_RUNS} ({AMBIENT_S:g} s)"))
     say(f"estimation {name}: CCT with the estimators in the loop, {_seeds_text(cct_runs)}")
-    cct = cl.cct_study(name, bus, far, RATINGS, cct_runs,
-                       records_dir / f"estimation_cct_{name}.jsonl", workers=workers)
+    cct = cl.cct_study(name, LineFault(bus, far), RATINGS, cct_runs,
+                       records_dir / f"estimation_cct_{name}.jsonl",
+                       runner=RunnerOptions(workers))
     return {"rmse": rmse, "false": false, "cct": cct, "cycles": cycles, "bus": bus, "far": far,
             "runs": runs, "cct_runs": cct_runs}
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from stabctl.plotting import figures as plotting
 from stabctl.io import load_case
-from stabctl.stability.cct import cached_simulator, cct_jobs, critical_clearing_time
+from stabctl.stability.cct import SearchOptions, cached_simulator, cct_jobs, critical_clearing_time
 from stabctl.studies.cases import CASE1, CASE2, PaperCase
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.simulation import Simulator
@@ -213,12 +213,13 @@ def _err_ms(r: dict) -> str:
 NO_GATE_PCT = (5, 15, 20, 30)
 
 
-def no_gate_cct(pct: float) -> float:
-    """CCT (s) of the Case-2 fault with uniform ESDs of pct % and no 0.8 pu voltage gate
-    (worker entry of `stabctl.parallel.worker_pool`; bisection to 1 ms)."""
+def no_gate_cct(job: dict) -> float:
+    """CCT (s) of the Case-2 fault with uniform ESDs of job["pct"] % and no 0.8 pu
+    voltage gate (worker entry of `stabctl.parallel.worker_pool`; bisection to 1 ms)."""
     name, fault = CASES["case2"]
+    pct = job["pct"]
     sim = cached_simulator(name)
-    return critical_clearing_time(sim, fault, error_check=False, storage=uniform_fleet(
+    return critical_clearing_time(sim, fault, SearchOptions(error_check=False), storage=uniform_fleet(
         sim.case, pct, BangBangCOI(v_gate_pu=0.0))).cct_s
 
 

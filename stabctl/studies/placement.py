@@ -33,7 +33,7 @@ import numpy as np  # noqa: E402
 
 from stabctl.io import load_case  # noqa: E402
 from stabctl.plotting.figures import save_figure as _save  # noqa: E402
-from stabctl.stability.cct import LineFault, cct_jobs  # noqa: E402
+from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs  # noqa: E402
 from stabctl.studies.cases import DEFAULT_FAULTS  # noqa: E402
 from stabctl.placement.program import candidate_sites  # noqa: E402
 from stabctl.placement.evaluation import Contingency  # noqa: E402
@@ -86,8 +86,8 @@ def screen(case_name: str, out_dir: Path, workers: int, progress=None) -> list[d
     error check, which a ranking does not use): [{"fault", "cct_s", "t_unstable_s"} or
     {"fault", "error"}].  progress: callable(done, total) after each fault."""
     faults = candidate_faults(load_case(case_name))
-    rep = run_sweep(cct_jobs(case_name, faults, tol=SCREEN_TOL, t_max=SCREEN_T_MAX,
-                             error_check=False),
+    search = SearchOptions(tol=SCREEN_TOL, t_max=SCREEN_T_MAX, error_check=False)
+    rep = run_sweep(cct_jobs(case_name, faults, search=search),
                     out_dir / f"placement_{case_name}_screening.jsonl", workers=workers,
                     progress=progress or False)
     rows = []

@@ -12,49 +12,40 @@ resume).
 
 from __future__ import annotations
 
-from stabctl.stability.cct import (LineFault, cached_simulator, cct_jobs,
-                                   critical_clearing_time)
+from stabctl.dynamics.options import ModelOptions
+from stabctl.stability.cct import (SearchOptions, cached_simulator, cct_jobs,
+                                   critical_clearing_time, fault_of_inputs)
 from stabctl.storage.devices import uniform_fleet
 from stabctl.storage.control import BangBangCOI
 
 
-def controlled_cct_job(case: str, bus: int, far_bus: int | None, controller: dict,
-                       t_fault: float = 1.0, circuit: int = 1, trips=(),
-                       esd_pct: float | None = None, **settings) -> dict:
-    """Worker entry: :func:`stabctl.stability.cct.cct_job` with the ESD ``controller``.
+def controlled_cct_job(inputs: dict) -> dict:
+    """Worker entry: :func:`stabctl.stability.cct.cct_job` with the ESD controller of the
+    inputs.
 
     Parameters
     ----------
-    case : str
-    bus, far_bus : int
-        The faulted line (far_bus None: a bus fault).
-    controller : dict
+    inputs : dict
+        :func:`~stabctl.stability.cct.cct_job`'s inputs and ``controller``: the
         :class:`~stabctl.storage.devices.BangBangCOI` fields (deadband_hz, v_gate_pu,
-        coi, hysteresis_hz).
-    t_fault : float
-    circuit : int
-    trips : sequence of (int, int)
-    esd_pct : float or None
-        Storage rating (% of machine MVA); None: no storage (the controller unused).
-    **settings
-        tol, t_max, t_end, conventions, h, q_limits as `cct_job`.
+        coi, hysteresis_hz); esd_pct None: no storage (the controller unused).
 
     Returns
     -------
     dict
         `CCTResult.to_dict()`.
     """
-    sim = cached_simulator(case, settings.pop("conventions", "ieee"), settings.pop("h", None),
-                           settings.pop("q_limits", True))
-    fault = LineFault(int(bus), None if far_bus is None else int(far_bus), float(t_fault),
-                      int(circuit), tuple((int(a), int(b)) for a, b in trips))
+    sim = cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs))
+    esd_pct = inputs.get("esd_pct")
     fleet = None if esd_pct is None else uniform_fleet(sim.case, esd_pct,
-                                                       BangBangCOI(**controller))
-    return critical_clearing_time(sim, fault, storage=fleet, **settings).to_dict()
+                                                       BangBangCOI(**inputs["controller"]))
+    return critical_clearing_time(sim, fault_of_inputs(inputs), SearchOptions.from_inputs(inputs),
+                                  storage=fleet).to_dict()
 
 
-def controlled_cct_jobs(case_name: str, faults, ratings, controller: BangBangCOI,
-                        **settings) -> list:
+def controlled_cct_jobs(case_name: str, faults, ratings, controller: BangBangCOI, *,
+                        search: SearchOptions = SearchOptions(),
+                        model: ModelOptions = ModelOptions()) -> list:
     """The jobs of a CCT sweep whose ESDs run ``controller``.
 
     Parameters
@@ -64,9 +55,8 @@ def controlled_cct_jobs(case_name: str, faults, ratings, controller: BangBangCOI
     ratings : sequence of float or None
         Storage ratings (% of machine MVA; None: no storage).
     controller : BangBangCOI
-    **settings
-        As :func:`stabctl.stability.cct.cct_jobs` (tol, t_max, t_end, conventions, h,
-        q_limits).
+    search, model : SearchOptions, ModelOptions, optional
+        As :func:`stabctl.stability.cct.cct_jobs`.
 
     Returns
     -------
@@ -77,7 +67,7 @@ def controlled_cct_jobs(case_name: str, faults, ratings, controller: BangBangCOI
     """
     from stabctl.parallel import Job
 
-    jobs = cct_jobs(case_name, faults, ratings, **settings)
+    jobs = cct_jobs(case_name, faults, ratings, search=search, model=model)
     if controller == BangBangCOI():
         return jobs
     ctrl = {"deadband_hz": controller.deadband_hz, "v_gate_pu": controller.v_gate_pu,

@@ -9,6 +9,9 @@ from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.simulation import Simulator
 from stabctl.estimation.ambient import AmbientLoad
+from stabctl.estimation.settings import PMUSettings
+from stabctl.parallel import RunnerOptions
+from stabctl.stability.cct import LineFault
 from stabctl.storage.devices import StorageFleet, uniform_fleet
 from stabctl.storage.control import ExternalCommands
 
@@ -22,8 +25,8 @@ def kundur():
 
 def test_ekf_in_the_loop_keeps_the_17_cycle_fault_stable_like_the_ideal_controller(kundur):
     case, sim, ev = kundur
-    ekf = cl.run_closed_loop(sim, ev, 6.0, 5, "ekf", rate=60, latency=0.05, seed=3)
-    ideal = cl.run_closed_loop(sim, ev, 6.0, 5, "ideal", rate=60, latency=0.05)
+    ekf = cl.run_closed_loop(sim, ev, 6.0, cl.LoopOptions(5, "ekf", PMUSettings(rate=60, latency_s=0.05), 3))
+    ideal = cl.run_closed_loop(sim, ev, 6.0, cl.LoopOptions(5, "ideal", PMUSettings(rate=60, latency_s=0.05)))
     assert ekf.result.stable and ideal.result.stable
     assert not sim.run(ev, t_end=6.0).stable                      # without storage
     assert len(ekf.result.meta["switchings"]) >= 8
@@ -32,7 +35,7 @@ def test_ekf_in_the_loop_keeps_the_17_cycle_fault_stable_like_the_ideal_controll
 
 def test_ideal_closed_loop_reproduces_the_internal_controller_verdict(kundur):
     case, sim, ev = kundur
-    loop = cl.run_closed_loop(sim, ev, 6.0, 5, "ideal", rate=120, latency=0.0)
+    loop = cl.run_closed_loop(sim, ev, 6.0, cl.LoopOptions(5, "ideal", PMUSettings(rate=120, latency_s=0.0)))
     inner = sim.run(ev, t_end=6.0, storage=uniform_fleet(case, 5))
     assert loop.result.stable == inner.stable is True
     assert np.abs(loop.result.speed[-1] - inner.speed[-1]).max() < 2e-3
@@ -40,12 +43,12 @@ def test_ideal_closed_loop_reproduces_the_internal_controller_verdict(kundur):
 
 def test_same_seed_same_switchings_other_seed_other_noise(kundur):
     case, sim, ev = kundur
-    runs = [cl.run_closed_loop(sim, ev, 3.0, 5, "kf", seed=s) for s in (7, 7, 8)]
+    runs = [cl.run_closed_loop(sim, ev, 3.0, cl.LoopOptions(5, "kf", seed=s)) for s in (7, 7, 8)]
     assert runs[0].result.meta["switchings"] == runs[1].result.meta["switchings"]
     assert np.array_equal(runs[0].diagnostics.rel, runs[1].diagnostics.rel)
     assert not np.array_equal(runs[0].diagnostics.rel, runs[2].diagnostics.rel)
     with pytest.raises(Exception, match="estimator"):
-        cl.run_closed_loop(sim, ev, 3.0, 5, "oracle")
+        cl.run_closed_loop(sim, ev, 3.0, cl.LoopOptions(5, "oracle"))
 
 
 def test_stop_at_separation_ends_the_commanded_run_where_run_does(kundur):
@@ -68,14 +71,14 @@ def test_kf_in_the_loop_keeps_the_20_cycle_fault_at_20_percent_stable(kundur):
     case, sim, _ = kundur
     ev = [fault_with_clearing(case, 3, 101, 1.0, 20)]
     assert not sim.run(ev, t_end=6.0, storage=uniform_fleet(case, 5)).stable
-    assert cl.run_closed_loop(sim, ev, 6.0, 20, "kf", seed=0).result.stable
+    assert cl.run_closed_loop(sim, ev, 6.0, cl.LoopOptions(20, "kf", seed=0)).result.stable
 
 
 def test_no_false_action_in_the_loop_under_ambient_load_noise(kundur):
     case, sim, _ = kundur
     amb = AmbientLoad(pct=1.0, tau_s=2.0, seed=1)
     for est in ("raw", "kf", "ekf"):
-        run = cl.run_closed_loop(sim, [], 10.0, 5, est, seed=1, ambient=amb)
+        run = cl.run_closed_loop(sim, [], 10.0, cl.LoopOptions(5, est, seed=1), ambient=amb)
         res = run.result
         assert [s["switchings"] for s in res.meta["storage"][:4]] == [0, 0, 0, 0]
         assert cl.false_actions(run) == 0
@@ -103,8 +106,9 @@ def test_cct_study_adds_seed_batches_until_the_interval_is_narrow(tmp_path):
     # cycles (reports/estimation_kundur.md, 20 seeds).  With batches of 2 the lattice floor
     # is 0.194 cycle at 2 seeds, 0.132 at 4 and 0.099 at 6 (< 0.125): three rounds
     rule = cl.SeedRule(batch=2, max_runs=8)
-    table = cl.cct_study("kundur", 3, 101, [5.0], rule, tmp_path / "cct.jsonl",
-                         estimators=("ideal", "raw"), progress=False)[5.0]
+    table = cl.cct_study("kundur", LineFault(3, 101), [5.0], rule, tmp_path / "cct.jsonl",
+                         estimators=("ideal", "raw"),
+                         runner=RunnerOptions(progress=False))[5.0]
     assert table["ideal"]["runs"] == 1 and table["ideal"]["half_width"] is None
     assert table["raw"]["runs"] == 6
     assert table["raw"]["values"] == [12.0] * 6
@@ -130,15 +134,17 @@ def test_cct_study_passes_the_pmu_window_to_every_run_and_names_it_when_not_defa
 
     monkeypatch.setattr(par, "run_sweep", fake_sweep)
     for window, tail in ((2.0, "seed0"), (4.0, "seed0/w4c")):
-        cl.cct_study("kundur", 3, 101, [5.0], 1, tmp_path / "cct.jsonl", estimators=("raw",),
-                     progress=False, window_cycles=window, workers=1)
+        cl.cct_study("kundur", LineFault(3, 101), [5.0], 1, tmp_path / "cct.jsonl",
+                     estimators=("raw",), pmu=PMUSettings(window_cycles=window),
+                     runner=RunnerOptions(workers=1, progress=False))
         job, = seen["jobs"]
         assert job.key.endswith(tail)
         assert job.inputs.get("window_cycles", 2.0) == window
         assert ("window_cycles" in job.inputs) == (window != 2.0)
     got = {}
     monkeypatch.setattr(cl, "run_closed_loop",
-                        lambda *a, settings=None, **k: got.setdefault("w", settings.window_cycles))
+                        lambda sim, ev, t, loop, **k: got.setdefault("w", loop.pmu.window_cycles))
     with pytest.raises(AttributeError):          # the fake returns a float, not a run
-        cl.LoopRunner(None, 5.0, "raw", window_cycles=4.0).run([], 1.0)
+        cl.cct_job({"case": "kundur", "bus": 3, "far_bus": 101, "esd_pct": 5.0,
+                    "estimator": "raw", "seed": 0, "window_cycles": 4.0})
     assert got["w"] == 4.0

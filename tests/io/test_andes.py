@@ -34,7 +34,7 @@ from stabctl.io.andes import (AndesFault, andes_machine_buses,  # noqa: E402
                               andes_system, strip_dyr)
 from stabctl.io.andes_case import import_andes, read_andes_case  # noqa: E402
 from stabctl.errors import CaseError, InputError  # noqa: E402
-from stabctl.stability.cct import LineFault, critical_clearing_time  # noqa: E402
+from stabctl.stability.cct import SearchOptions, LineFault, critical_clearing_time  # noqa: E402
 from stabctl.dynamics.events import Fault, LineTrip  # noqa: E402
 from stabctl.smallsignal.linearise import linearise  # noqa: E402
 from stabctl.smallsignal.modal import modal_analysis  # noqa: E402
@@ -168,7 +168,7 @@ def test_kundur_cct_matches_andes_verdicts(kundur):
     bisection: 494 ms, benchmarks/bench_andes.py)."""
     raw, dyr = kundur
     sim = Simulator(load_psse(raw, dyr, conventions="andes"))
-    cct = critical_clearing_time(sim, LineFault(7, None, 1.0), tol=1e-3, h=STEP).cct_s
+    cct = critical_clearing_time(sim, LineFault(7, None, 1.0), SearchOptions(tol=1e-3), h=STEP).cct_s
     assert abs(cct - 0.491) < 2e-3                                 # measured 491 ms
     for t_clear, stable in ((cct - 0.008, True), (cct + 0.008, False)):
         fault = AndesFault(7, 1.0, 1.0 + t_clear)

@@ -11,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 
 from stabctl.io import load_case
-from stabctl.stability.cct import LineFault, critical_clearing_time
+from stabctl.stability.cct import SearchOptions, LineFault, critical_clearing_time
 from stabctl.cli import main
 from stabctl.errors import InputError
 from stabctl.smallsignal.damping import DampingModel, relay_df
@@ -289,7 +289,7 @@ def test_bisection_warm_started_from_a_coarse_bracket_equals_the_cold_one():
     faults = [CASE1, LineFault(13, 101), LineFault(1, None), LineFault(110, None)]
     brackets = {}
     for f in faults:
-        coarse = critical_clearing_time(sim, f, tol=0.005, t_max=0.5, error_check=False)
+        coarse = critical_clearing_time(sim, f, SearchOptions(tol=0.005, t_max=0.5, error_check=False))
         brackets[Contingency(f, 1).name] = coarse.bracket
     cold = baseline("kundur", faults, workers=1)
     warm = baseline("kundur", faults, workers=1, brackets=brackets)

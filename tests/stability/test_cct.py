@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from stabctl.io import load_case
 from stabctl.studies.cases import DEFAULT_FAULTS
-from stabctl.stability.cct import (LineFault, cached_simulator, critical_clearing_time,
+from stabctl.stability.cct import (SearchOptions, LineFault, cached_simulator, critical_clearing_time,
                          read_faults, storage_fleet)
 from stabctl.cli import main
 from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
@@ -52,7 +52,7 @@ def test_case1_cct_converges_with_the_step(kundur, case1):
     assert case1.numerical_error_s == 0.0 and case1.cct_half_step_s == case1.cct_s
     assert case1.n_simulations == len(case1.probes) + len(case1.half_step_probes) == \
         len(case1.probes) + 2
-    finer = [critical_clearing_time(kundur, CASE1, h=case1.step_s / k, error_check=False)
+    finer = [critical_clearing_time(kundur, CASE1, SearchOptions(error_check=False), h=case1.step_s / k)
              for k in (4, 8)]
     assert all(abs(r.cct_s - case1.cct_s) <= case1.tol_s + 1e-12 for r in finer)
 
@@ -90,14 +90,14 @@ def test_probes_are_consistent_with_the_bracket(case1):
 
 
 def test_coarser_tolerance_gives_an_enclosing_bracket(kundur, case1):
-    coarse = critical_clearing_time(kundur, CASE1, tol=5e-3)
+    coarse = critical_clearing_time(kundur, CASE1, SearchOptions(tol=5e-3))
     assert coarse.t_unstable - coarse.t_stable == pytest.approx(5e-3)
     assert coarse.t_stable <= case1.t_stable < case1.t_unstable <= coarse.t_unstable
     assert coarse.n_simulations < case1.n_simulations
 
 
 def test_upper_bound_doubles_until_unstable(kundur):
-    res = critical_clearing_time(kundur, CASE1, t_hi=0.05, tol=0.01)
+    res = critical_clearing_time(kundur, CASE1, SearchOptions(t_hi=0.05, tol=0.01))
     assert [t for t, _ in res.probes[:4]] == [0.0, 0.05, 0.1, 0.2]
     assert res.search_bracket == (0.1, 0.2)
     assert res.bracket == (0.15, 0.16)
@@ -119,7 +119,7 @@ def test_custom_criterion_sees_whole_runs(kundur_pstess):
         seen.append(float(result.t[-1]))
         return result.max_angle_spread < 1.0
 
-    res = critical_clearing_time(kundur, CASE1, criterion=within_1rad)
+    res = critical_clearing_time(kundur, CASE1, SearchOptions(criterion=within_1rad))
     assert res.criterion == "within_1rad"
     assert 0.2 <= res.t_stable < res.t_unstable <= 0.25    # 0.96 rad at 0.2 s, 1.18 at 0.25
     assert all(t == pytest.approx(6.0) for t in seen)   # not stopped at separation
@@ -143,19 +143,19 @@ def test_tripping_the_faulted_circuit_again_is_an_error(kundur):
 
 def test_unstable_at_zero_clearing_is_an_error(kundur):
     with pytest.raises(InputError, match="unstable even when cleared instantly"):
-        critical_clearing_time(kundur, CASE1, criterion=lambda r: False)
+        critical_clearing_time(kundur, CASE1, SearchOptions(criterion=lambda r: False))
 
 
 def test_unstable_at_the_lower_bound_is_an_error(kundur):
     with pytest.raises(InputError, match="unstable already at the lower bound 0.3 s"):
-        critical_clearing_time(kundur, CASE1, t_lo=0.3, t_hi=0.4)
+        critical_clearing_time(kundur, CASE1, SearchOptions(t_lo=0.3, t_hi=0.4))
 
 
 def test_cct_above_t_max_is_an_error(kundur):
     with pytest.raises(InputError, match=r"above the search limit t_max = 0.1 s \(6 cycles\)"):
-        critical_clearing_time(kundur, CASE1, t_max=0.1)
+        critical_clearing_time(kundur, CASE1, SearchOptions(t_max=0.1))
     with pytest.raises(InputError, match=r"above the search limit t_max = 0.05 s"):
-        critical_clearing_time(kundur, CASE1, t_max=0.05)      # below the first upper bound
+        critical_clearing_time(kundur, CASE1, SearchOptions(t_max=0.05))      # below the first upper bound
 
 
 @pytest.mark.parametrize("kw, msg", [
@@ -167,7 +167,7 @@ def test_cct_above_t_max_is_an_error(kundur):
 ])
 def test_bad_settings(kundur, kw, msg):
     with pytest.raises(InputError, match=msg):
-        critical_clearing_time(kundur, CASE1, **kw)
+        critical_clearing_time(kundur, CASE1, SearchOptions(**kw))
 
 
 def test_unknown_bus_and_line(kundur):

@@ -5,7 +5,8 @@ import json
 from click.testing import CliRunner
 
 from stabctl.io import load_case
-from stabctl.stability.cct import LineFault, critical_clearing_time
+from stabctl.parallel import RunnerOptions
+from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
 from stabctl.cli import main
 from stabctl.plotting.layout import spectral_layout
 from stabctl.stability.screening import screen, screening_faults
@@ -24,13 +25,15 @@ def test_screening_faults_cover_every_bus_and_every_circuit():
 
 def test_screening_rows_match_single_searches_and_resume(tmp_path):
     out = tmp_path / "s.jsonl"
-    rows = screen("kundur", out, buses=[3, 12], t_max=0.5, workers=1, progress=False)
+    rows = screen("kundur", out, buses=[3, 12], search=SearchOptions(t_max=0.5),
+                  runner=RunnerOptions(workers=1, progress=False))
     sim = Simulator(load_case("kundur"))
     for row in rows:
-        ref = critical_clearing_time(sim, LineFault(row["bus"], None), t_max=0.5)
+        ref = critical_clearing_time(sim, LineFault(row["bus"], None), SearchOptions(t_max=0.5))
         assert row["status"] == "ok" and row["cct_s"] == ref.cct_s
     n = len(out.read_text().splitlines())
-    screen("kundur", out, buses=[3, 12], t_max=0.5, workers=1, progress=False)
+    screen("kundur", out, buses=[3, 12], search=SearchOptions(t_max=0.5),
+           runner=RunnerOptions(workers=1, progress=False))
     assert len(out.read_text().splitlines()) == n          # resumed: nothing rerun
 
 

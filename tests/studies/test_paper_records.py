@@ -11,7 +11,8 @@ from stabctl.studies import paper
 from stabctl.parallel import Job, natural_key, run_sweep, strip_run_dependent, write_reproducible
 
 
-def square(x: int) -> dict:
+def square(inputs: dict) -> dict:
+    x = inputs["x"]
     return {"y": x * x, "wall_time_s": 0.001 * x}          # a run-dependent field inside
 
 

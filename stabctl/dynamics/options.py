@@ -1,0 +1,71 @@
+"""How a case is simulated: model conventions, integration step and power-flow Q limits,
+one settings object passed from the CLI to the searches, sweeps, placement and estimation
+studies instead of three parameters in every signature.
+
+A sweep records these settings in each job's inputs (`to_inputs`, `from_inputs`) exactly
+as the flat fields it always wrote (``conventions``, ``h``, and ``q_limits`` only when
+off), so records written before stay valid for resuming.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping
+
+from stabctl.dynamics.model import check_conventions
+from stabctl.errors import InputError
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    """Model settings of every run of a study.
+
+    Attributes
+    ----------
+    conventions : str
+        ``"ieee"`` (IEEE Std 421.5 limiters, the default) or ``"pstess"`` (PSTess 1.1 bit
+        for bit), docs/conventions.md.
+    h : float or None
+        Integration step, s; None: the simulator's default (`Simulator.default_h`).
+    q_limits : bool
+        PV generators' reactive-power limits enforced in the power flow.
+
+    Raises
+    ------
+    InputError
+        Unknown conventions, or a step that is not > 0.
+    """
+
+    conventions: str = "ieee"
+    h: float | None = None
+    q_limits: bool = True
+
+    def __post_init__(self) -> None:
+        check_conventions(self.conventions)
+        if self.h is not None and not self.h > 0:
+            raise InputError(f"integration step must be > 0 s, got {self.h:g}")
+
+    def simulator(self, case, **kwargs):
+        """A `stabctl.dynamics.simulation.Simulator` of `case` with these settings
+        (``kwargs``: its other arguments, e.g. ``injection_buses``)."""
+        from stabctl.dynamics.simulation import Simulator
+
+        return Simulator(case, conventions=self.conventions, step=self.h,
+                         q_limits=self.q_limits, **kwargs)
+
+    def key_suffix(self) -> str:
+        """Sweep-key tail: '/pstess', '/h<step>', '/no-q-limits' for non-default fields."""
+        return (("" if self.conventions == "ieee" else f"/{self.conventions}")
+                + ("" if self.h is None else f"/h{self.h:g}")
+                + ("" if self.q_limits else "/no-q-limits"))
+
+    def to_inputs(self) -> dict:
+        """Fields of a job's recorded inputs: conventions, h, and q_limits when off."""
+        return {"conventions": self.conventions, "h": self.h,
+                **({} if self.q_limits else {"q_limits": False})}
+
+    @classmethod
+    def from_inputs(cls, inputs: Mapping) -> ModelOptions:
+        """The settings recorded in a job's inputs (`to_inputs`; absent fields default)."""
+        return cls(conventions=inputs.get("conventions", "ieee"), h=inputs.get("h"),
+                   q_limits=bool(inputs.get("q_limits", True)))
