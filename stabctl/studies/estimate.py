@@ -65,7 +65,8 @@ def estimator_errors(case, event, *, settings, esd_pct, runs: int, seed: int,
     """
     from stabctl.dynamics.simulation import Simulator
     from stabctl.estimation import ambient as am
-    from stabctl.estimation import filters as es
+    from stabctl.estimation.filters import compile_filters
+    from stabctl.estimation.models import machine_models
     from stabctl.estimation.pmu import machine_pmus
     from stabctl.storage.devices import uniform_fleet
     from stabctl.studies import estimation as study
@@ -76,7 +77,7 @@ def estimator_errors(case, event, *, settings, esd_pct, runs: int, seed: int,
     fleet = None if esd_pct is None else uniform_fleet(case, esd_pct)
     sim = Simulator(case, injection_buses=() if fleet is None else fleet.buses,
                     conventions=conventions)
-    es.compile_filters(es.machine_models(case, machine_pmus(case, pmu_at)))
+    compile_filters(machine_models(case, machine_pmus(case, pmu_at)))
     res = sim.run([event], t_end=t_end, storage=fleet, h=h)
     figures = study.monte_carlo(case, res, settings, runs, seed, window, pmu_at, coi)
     actions = None
@@ -118,11 +119,12 @@ def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float,
     """
     from stabctl.dynamics.simulation import Simulator
     from stabctl.estimation import closed_loop as cl
-    from stabctl.estimation import filters as es
+    from stabctl.estimation.filters import compile_filters
+    from stabctl.estimation.models import machine_models
     from stabctl.estimation.pmu import machine_pmus
 
     sim, rows = Simulator(case, conventions=conventions), {}
-    es.compile_filters(es.machine_models(case, machine_pmus(case)))
+    compile_filters(machine_models(case, machine_pmus(case)))
     for e in cl.ESTIMATORS:
         run = cl.run_closed_loop(sim, [event], t_end, esd_pct, e, settings.rate,
                                  settings.latency_s, seed, settings=settings, control=control,
