@@ -25,7 +25,7 @@ class PlanContext:
     controller; model: {"conventions", "h" (s or None)}; run_map: callable(func, jobs) ->
     results (`counting`); tol, t_max: CCT tolerance and search limit (s); say: progress
     callable (`stabctl.progress.Heartbeat`); n_runs: simulations counted; base: name ->
-    evaluation without storage; energy_rate: usable energy per MW at each site (MWh/MW,
+    evaluation without storage (`add_base`); energy_rate: usable energy per MW at each site (MWh/MW,
     `stabctl.placement.energy.mwh_per_mw`); drop_infeasible, brackets: as `plan`;
     infeasible, set_aside: what was set aside; loop_kw: passed to every `place`.
     """
@@ -88,16 +88,18 @@ class PlanContext:
         """Cost per site (installed or not) at each candidate, (n_sites,)."""
         return np.array([self.cost.of(s.machine)[2] for s in self.sites])
 
-    def base_evaluations(self, cons, brackets, kw) -> dict:
-        """Evaluations without storage (CCT by bisection, from the screening's bracket when
-        known, and its gradient) of `cons`, counted: name -> evaluation
-        (`stabctl.placement.loop.evaluations`, keyword arguments kw)."""
-        if not cons:
-            return {}
-        br = {c.name: tuple(brackets[c.fault_name]) for c in cons
+    def add_base(self, cons, brackets, kw) -> None:
+        """Add to `base` the evaluations without storage (CCT by bisection, from the
+        screening's bracket when known, and its gradient; counted) of the contingencies
+        of `cons` it lacks (`stabctl.placement.loop.evaluations`, keyword arguments kw).
+        brackets: fault name -> [stable, unstable] clearing times (s), or None."""
+        todo = [c for c in cons if c.name not in self.base]
+        if not todo:
+            return
+        br = {c.name: tuple(brackets[c.fault_name]) for c in todo
               if brackets and c.load == 1.0 and c.fault_name in brackets
               and None not in brackets[c.fault_name]}
-        return evaluations(self.case, cons, None, brackets=br, **kw)
+        self.base.update(evaluations(self.case, todo, None, brackets=br, **kw))
 
     def step_s(self) -> float:
         """The integration step of the plan's runs (s)."""

@@ -192,62 +192,86 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
         raise InputError("no contingency given")
     if n_active < 1 or max_rounds < 1 or max_iter < 1:
         raise InputError("need n_active, max_rounds and max_iter >= 1")
-    levels = tuple(dict.fromkeys(float(x) for x in load_levels))
-    if not levels or any(not (np.isfinite(x) and x > 0) for x in levels):
-        raise InputError(f"load levels must be numbers > 0, got {list(load_levels)}")
-    from stabctl.stability.cct import cached_simulator
-
-    for x in levels:            # a load level without a power flow fails here, named
-        cached_simulator(case, conventions, h, load=x)
-    sim = cached_simulator(case, conventions, h)
-    sites = tuple(sites or candidate_sites(sim.case))
-    cost = cost or CostModel()
-    with _pool(run_map, workers, scheduler) as pool_map, Heartbeat(progress or logger.info) as say:
-        pl = PlanContext(case, sites, cost, controller or DEFAULT_CONTROLLER,
-                   {"conventions": conventions, "h": h}, None, tol, t_max, say,
-                   loop_kw=loop_kw, drop_infeasible=drop_infeasible, brackets=brackets)
-        rm = pl.run_map = pl.counting(pool_map, say)
-        kw = {"sites": sites, "tol": tol, "t_max": t_max, "run_map": rm,
+    levels = _load_levels(load_levels)
+    freq_hz, sites = _case_at_levels(case, conventions, h, levels, sites)
+    say = Heartbeat(progress or logger.info)
+    with _pool(run_map, workers, scheduler) as pool_map, say:
+        pl = PlanContext(case, sites, cost or CostModel(), controller or DEFAULT_CONTROLLER,
+                         {"conventions": conventions, "h": h}, None, tol, t_max, say,
+                         loop_kw=loop_kw, drop_infeasible=drop_infeasible, brackets=brackets)
+        pl.run_map = pl.counting(pool_map, say)
+        kw = {"sites": sites, "tol": tol, "t_max": t_max, "run_map": pl.run_map,
               "controller": pl.controller, "conventions": conventions, "h": h}
-        base = pl.base
-        if requirement.needs_base or any(r.needs_base for r in (overrides or {}).values()):
-            every = contingencies_of(faults, Requirement(cct_s=t_max), sim.case.freq_hz, tol,
-                                     levels)
-            say(f"CCT without storage of {len(every)} contingencies")
-            base.update(pl.base_evaluations(every, brackets, kw))
-        cons = contingencies_of(faults, requirement, sim.case.freq_hz, tol, levels,
-                                overrides, base)
-        known = _stable_by_screening(cons, brackets)
-        say(f"{len(cons)} contingencies ({len(faults)} faults x {len(levels)} load "
-            f"level(s)): each cleared at its required time without storage ({len(known)} "
-            "known stable there from the screening)")
-        checks = pl.check([c for c in cons if c.name not in known], np.zeros(len(sites)))
-        failing = [c for c in cons if c.name in checks and
-                   not checks[c.name]["stable_at_check"]]
-        out = _out_of_scope(pl, failing) if scope_stable_at_once else set()
-        if out:
-            say("out of scope (unstable even when cleared at once, the line trip alone): "
-                + ", ".join(sorted(out)))
-        cons = tuple(c for c in cons if c.name not in out)
-        failing = [c for c in failing if c.name not in out]
-        checks = {**{n: _STABLE for n in known}, **checks}
-        say(f"{len(failing)} of {len(cons)} unstable without storage: "
-            + ", ".join(c.name for c in failing[:12]) + (" ..." if len(failing) > 12 else ""))
-        result = _generate(pl, cons, failing, checks, base, brackets, n_active, max_rounds,
-                           max_iter, kw)
-        result.out_of_scope = sorted(out)
-        result.infeasible = list(pl.infeasible)
-        result.set_aside = list(pl.set_aside)
-        kept = {r["name"] for r in result.contingencies}
-        cons = tuple(c for c in cons if c.name in kept)
-        failing = [c for c in failing if c.name in kept]
+        cons = _contingencies(pl, faults, requirement, overrides, freq_hz, levels, kw)
+        cons, failing, checks, out = _without_storage(pl, cons, len(faults), len(levels),
+                                                      scope_stable_at_once)
+        result = _generate(pl, cons, failing, checks, n_active, max_rounds, max_iter, kw)
+        result.out_of_scope, result.load_levels = sorted(out), levels
         result.requirement = describe(requirement, overrides)
-        result.load_levels = levels
-        _references(pl, cons, failing, result, kw, margins_tol, margins_cap_s, half_step_n,
-                    uniform, alone, max_iter)
+        result.infeasible, result.set_aside = list(pl.infeasible), list(pl.set_aside)
+        kept = {r["name"] for r in result.contingencies}
+        _references(pl, tuple(c for c in cons if c.name in kept),
+                    [c for c in failing if c.name in kept], result, kw, margins_tol,
+                    margins_cap_s, half_step_n, uniform, alone, max_iter)
     result.n_simulations = pl.n_runs
     result.wall_time_s = time.perf_counter() - wall
     return result
+
+
+def _load_levels(load_levels) -> tuple:
+    """The load levels (fractions of the base load), each once, in the order given.
+    Raises InputError for none or one that is not a number > 0."""
+    levels = tuple(dict.fromkeys(float(x) for x in load_levels))
+    if not levels or any(not (np.isfinite(x) and x > 0) for x in levels):
+        raise InputError(f"load levels must be numbers > 0, got {list(load_levels)}")
+    return levels
+
+
+def _case_at_levels(case: str, conventions: str, h, levels, sites) -> tuple:
+    """The case's frequency (Hz) and the candidate sites (given, or `candidate_sites`),
+    once its power flow at every load level is known to solve.  Raises PowerFlowError or
+    CaseError naming the load level."""
+    from stabctl.stability.cct import cached_simulator
+
+    for x in levels:
+        cached_simulator(case, conventions, h, load=x)
+    sim = cached_simulator(case, conventions, h)
+    return sim.case.freq_hz, tuple(sites or candidate_sites(sim.case))
+
+
+def _contingencies(pl: PlanContext, faults, requirement: Requirement, overrides, freq_hz,
+                   levels, kw) -> tuple:
+    """Every fault at every load level with its required clearing time
+    (`contingencies_of`); where a requirement is a CCT gain, the CCTs without storage of
+    every contingency are simulated first (into pl.base)."""
+    if requirement.needs_base or any(r.needs_base for r in (overrides or {}).values()):
+        every = contingencies_of(faults, Requirement(cct_s=pl.t_max), freq_hz, pl.tol, levels)
+        pl.say(f"CCT without storage of {len(every)} contingencies")
+        pl.add_base(every, pl.brackets, kw)
+    return contingencies_of(faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base)
+
+
+def _without_storage(pl: PlanContext, cons, n_faults: int, n_levels: int,
+                     scope_stable_at_once: bool) -> tuple:
+    """Each contingency cleared at its required time without storage (one run each, but
+    those the screening knows stable): (the contingencies in scope, those failing, name ->
+    check, names out of scope: unstable even when cleared at once, when
+    scope_stable_at_once)."""
+    known = _stable_by_screening(cons, pl.brackets)
+    pl.say(f"{len(cons)} contingencies ({n_faults} faults x {n_levels} load "
+           f"level(s)): each cleared at its required time without storage ({len(known)} "
+           "known stable there from the screening)")
+    checks = pl.check([c for c in cons if c.name not in known], np.zeros(len(pl.sites)))
+    failing = [c for c in cons if c.name in checks and not checks[c.name]["stable_at_check"]]
+    out = _out_of_scope(pl, failing) if scope_stable_at_once else set()
+    if out:
+        pl.say("out of scope (unstable even when cleared at once, the line trip alone): "
+               + ", ".join(sorted(out)))
+    cons = tuple(c for c in cons if c.name not in out)
+    failing = [c for c in failing if c.name not in out]
+    pl.say(f"{len(failing)} of {len(cons)} unstable without storage: "
+           + ", ".join(c.name for c in failing[:12]) + (" ..." if len(failing) > 12 else ""))
+    return cons, failing, {**{n: _STABLE for n in known}, **checks}, out
 
 
 def _references(pl: PlanContext, cons, failing, result: PlanResult, kw, margins_tol,
@@ -307,89 +331,127 @@ def _most_binding(failing, brackets, base: dict, n: int) -> list:
     return sorted(failing, key=severity)[:n]
 
 
-def _generate(pl: PlanContext, cons, failing, checks0, base, brackets, n_active, max_rounds,
-              max_iter, kw) -> PlanResult:
-    """The rounds of constraint generation (module docstring)."""
-    n = len(pl.sites)
-    mw = np.zeros(n)
-    checks = checks0
-    evs, active, rounds = {}, [], []
-    verified, message = not failing, "every contingency is stable without storage"
-    if failing:
-        if not brackets:            # no screening to rank by: simulate every failing one
-            base.update(pl.base_evaluations([c for c in failing if c.name not in base], None, kw))
-        active = _most_binding(failing, brackets, base, n_active)
-        base.update(pl.base_evaluations([c for c in active if c.name not in base], brackets, kw))
-        message = f"not verified after {max_rounds} round(s) of constraint generation"
+@dataclass
+class _Rounds:
+    """Constraint generation between rounds: the contingencies still planned for (cons),
+    the allocation (mw, MW per site) and its checks (name -> check dict), the active set
+    and its evaluations (evs), one dict per round, and the verdict so far."""
+
+    cons: tuple
+    checks: dict
+    mw: np.ndarray
+    active: list = field(default_factory=list)
+    evs: dict = field(default_factory=dict)
+    rounds: list = field(default_factory=list)
+    verified: bool = False
+    message: str = ""
+
+
+def _generate(pl: PlanContext, cons, failing, checks, n_active, max_rounds, max_iter,
+              kw) -> PlanResult:
+    """The rounds of constraint generation (module docstring), then the energies."""
+    st = _Rounds(cons, checks, np.zeros(len(pl.sites)))
+    if not failing:
+        st.verified, st.message = True, "every contingency is stable without storage"
+    else:
+        if not pl.brackets:         # no screening to rank by: simulate every failing one
+            pl.add_base(failing, None, kw)
+        st.active = _most_binding(failing, pl.brackets, pl.base, n_active)
+        pl.add_base(st.active, pl.brackets, kw)
+        st.message = f"not verified after {max_rounds} round(s) of constraint generation"
     for rnd in range(1, max_rounds + 1 if failing else 1):
-        pl.energy_rate = mwh_per_mw(len(pl.sites), checks)
-        sites = pl.priced(pl.energy_rate)
-        pl.say(f"round {rnd}: solving for {len(active)} contingencies ("
-               + ", ".join(c.name for c in active) + ")")
-        try:
-            res = place(pl.case, active, site_cost=pl.site_costs, max_iter=max_iter,
-                        base={c.name: base[c.name] for c in active},
-                        start=None if not mw.any() else mw, start_evaluations=evs,
-                        progress=lambda m, r=rnd: pl.say(f"round {r}: {m}"),
-                        **{**kw, **pl.loop_kw, "sites": sites})
-        except InfeasibleError as exc:
-            if not pl.drop_infeasible or not exc.contingencies:
-                raise
-            pl.infeasible.append(str(exc))
-            gone = set(exc.contingencies)
-            pl.set_aside.extend(sorted(gone))
-            rounds.append({"round": rnd, "active": [c.name for c in active],
-                           "total_mw": None, "set_aside": sorted(gone), "failing": [],
-                           "iterations": 0})
-            pl.say(f"round {rnd}: set aside as infeasible: {', '.join(sorted(gone))}")
-            cons = tuple(c for c in cons if c.name not in gone)
-            active = [c for c in active if c.name not in gone]
-            evs = {k: v for k, v in evs.items() if k not in gone}
-            if active:
-                continue
-            res = None
-        if res is None:             # nothing left to solve for: check the allocation
-            checks = pl.check(cons, mw)
-            fails = [c for c in cons if not checks[c.name]["stable_at_check"]]
-            if not fails:
-                verified, message = True, f"verified on every contingency after {rnd} round(s)"
-                break
-            active = _most_binding(fails, brackets, base, n_active)
-            base.update(pl.base_evaluations([c for c in active if c.name not in base],
-                                            brackets, kw))
-            continue
-        mw, evs = res.allocation.mw, dict(res.evaluations)
-        checks = pl.check(cons, mw)
-        fails = [c for c in cons if not checks[c.name]["stable_at_check"]]
-        rounds.append({"round": rnd, "active": [c.name for c in active],
-                       "total_mw": float(mw.sum()), "loop_verified": res.verified,
-                       "loop_message": res.message, "failing": [c.name for c in fails],
-                       "iterations": len(res.iterations)})
-        pl.say(f"round {rnd}: {mw.sum():.1f} MW, checked {len(cons)} contingencies: "
-               + (f"{len(fails)} fail (" + ", ".join(c.name for c in fails[:8]) + ")"
-                  if fails else "all stable"))
-        if not res.verified:
-            message = f"round {rnd}: the loop did not verify an allocation ({res.message})"
-            verified = False
+        if _round(pl, st, rnd, n_active, max_iter, kw):
             break
-        if not fails:
-            verified, message = True, f"verified on every contingency after {rnd} round(s)"
-            break
-        new = [c for c in fails if c.name not in {a.name for a in active}]
-        if not new:
-            verified = False
-            message = (f"round {rnd}: contingencies of the active set fail their check "
-                       f"run: {', '.join(c.name for c in fails)}")
-            break
-        base.update(pl.base_evaluations([c for c in new if c.name not in base], brackets, kw))
-        active = active + new
-    mwh, energy, ok = size_energy(pl, cons, mw, checks)
-    if verified and not ok:
-        verified, message = False, message + "; the sized energies fail a check run"
-    return PlanResult(case=pl.case, requirement="", load_levels=(), sites=pl.sites, mw=mw,
-                      mwh=mwh, cost=pl.cost.split(pl.sites, mw, mwh), verified=verified,
-                      contingencies=_rows(cons, checks, evs, base), rounds=rounds,
-                      active=[c.name for c in active], message=message, energy=energy)
+    mwh, energy, ok = size_energy(pl, st.cons, st.mw, st.checks)
+    if st.verified and not ok:
+        st.verified, st.message = False, st.message + "; the sized energies fail a check run"
+    return PlanResult(case=pl.case, requirement="", load_levels=(), sites=pl.sites, mw=st.mw,
+                      mwh=mwh, cost=pl.cost.split(pl.sites, st.mw, mwh), verified=st.verified,
+                      contingencies=_rows(st.cons, st.checks, st.evs, pl.base),
+                      rounds=st.rounds, active=[c.name for c in st.active],
+                      message=st.message, energy=energy)
+
+
+def _round(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, max_iter: int,
+           kw) -> bool:
+    """Round rnd: the verified loop (`place`) for the active set, priced with the energy
+    per MW of the latest checks, then every contingency checked at its allocation.  A
+    contingency proven infeasible is set aside when the plan drops them.  Returns whether
+    constraint generation ends (st.verified and st.message say how)."""
+    pl.energy_rate = mwh_per_mw(len(pl.sites), st.checks)
+    sites = pl.priced(pl.energy_rate)
+    pl.say(f"round {rnd}: solving for {len(st.active)} contingencies ("
+           + ", ".join(c.name for c in st.active) + ")")
+    try:
+        res = place(pl.case, st.active, site_cost=pl.site_costs, max_iter=max_iter,
+                    base={c.name: pl.base[c.name] for c in st.active},
+                    start=None if not st.mw.any() else st.mw, start_evaluations=st.evs,
+                    progress=lambda m: pl.say(f"round {rnd}: {m}"),
+                    **{**kw, **pl.loop_kw, "sites": sites})
+    except InfeasibleError as exc:
+        if not pl.drop_infeasible or not exc.contingencies:
+            raise
+        _set_aside(pl, st, rnd, exc)
+        return False if st.active else _recheck(pl, st, rnd, n_active, kw)
+    return _add_failing(pl, st, rnd, res, kw)
+
+
+def _set_aside(pl: PlanContext, st: _Rounds, rnd: int, exc: InfeasibleError) -> None:
+    """Set aside the contingencies exc proves infeasible (listed in the plan and in this
+    round's record), out of every later round."""
+    gone = set(exc.contingencies)
+    pl.infeasible.append(str(exc))
+    pl.set_aside.extend(sorted(gone))
+    st.rounds.append({"round": rnd, "active": [c.name for c in st.active], "total_mw": None,
+                      "set_aside": sorted(gone), "failing": [], "iterations": 0})
+    pl.say(f"round {rnd}: set aside as infeasible: {', '.join(sorted(gone))}")
+    st.cons = tuple(c for c in st.cons if c.name not in gone)
+    st.active = [c for c in st.active if c.name not in gone]
+    st.evs = {k: v for k, v in st.evs.items() if k not in gone}
+
+
+def _recheck(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw) -> bool:
+    """Nothing left to solve for: every contingency checked at the allocation; the most
+    binding of those that fail are the next active set.  Returns whether none fails."""
+    st.checks = pl.check(st.cons, st.mw)
+    fails = [c for c in st.cons if not st.checks[c.name]["stable_at_check"]]
+    if not fails:
+        st.verified, st.message = True, f"verified on every contingency after {rnd} round(s)"
+        return True
+    st.active = _most_binding(fails, pl.brackets, pl.base, n_active)
+    pl.add_base(st.active, pl.brackets, kw)
+    return False
+
+
+def _add_failing(pl: PlanContext, st: _Rounds, rnd: int, res, kw) -> bool:
+    """The loop's allocation (res, `stabctl.placement.loop.PlacementResult`) checked at
+    every contingency; those that fail join the active set.  Returns whether constraint
+    generation ends: verified (none fails), or not (the loop did not verify, or only
+    active contingencies fail)."""
+    st.mw, st.evs = res.allocation.mw, dict(res.evaluations)
+    st.checks = pl.check(st.cons, st.mw)
+    fails = [c for c in st.cons if not st.checks[c.name]["stable_at_check"]]
+    st.rounds.append({"round": rnd, "active": [c.name for c in st.active],
+                      "total_mw": float(st.mw.sum()), "loop_verified": res.verified,
+                      "loop_message": res.message, "failing": [c.name for c in fails],
+                      "iterations": len(res.iterations)})
+    pl.say(f"round {rnd}: {st.mw.sum():.1f} MW, checked {len(st.cons)} contingencies: "
+           + (f"{len(fails)} fail (" + ", ".join(c.name for c in fails[:8]) + ")"
+              if fails else "all stable"))
+    if not res.verified:
+        st.message = f"round {rnd}: the loop did not verify an allocation ({res.message})"
+        return True
+    if not fails:
+        st.verified, st.message = True, f"verified on every contingency after {rnd} round(s)"
+        return True
+    new = [c for c in fails if c.name not in {a.name for a in st.active}]
+    if not new:
+        st.message = (f"round {rnd}: contingencies of the active set fail their check run: "
+                      f"{', '.join(c.name for c in fails)}")
+        return True
+    pl.add_base(new, pl.brackets, kw)
+    st.active = st.active + new
+    return False
 
 
 def _rows(cons, checks, evs, base) -> list:

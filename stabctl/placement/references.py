@@ -107,47 +107,78 @@ def least_uniform(pl: PlanContext, cons, failing, kw) -> dict:
     (`CostModel.split`), "verified", "energy" (per site, as `PlanResult.energy`), and the
     energy's half-step figures (`energy_half_step`)}; pct None
     and verified False when even the site bounds fail."""
+    fleet, pct_max = _uniform_fleet(pl)
+    if not failing:
+        zero = np.zeros(len(pl.sites))
+        return {"pct": 0.0, "total_mw": 0.0, "mwh": 0.0,
+                "cost": pl.cost.split(pl.sites, zero, zero), "verified": True}
+    pct = _least_pct(pl, failing, fleet, pct_max)
+    if pct is None:
+        pl.say(f"uniform: not met even at {pct_max:g} % of every MVA")
+        return {"pct": None, "total_mw": None, "verified": False}
+    pl.say(f"uniform: {pct:g} % meets the contingencies unstable without storage; "
+           "checking every contingency")
+    pct, ok, checks = _verified_pct(pl, cons, failing, pct, fleet, pct_max, kw)
+    return _uniform_result(pl, cons, pct, fleet(pct), ok, checks)
+
+
+def _uniform_fleet(pl: PlanContext) -> tuple:
+    """(fleet, pct_max): fleet(pct) the MW per site (n_sites,) of pct % of each site's
+    machine MVA, within the site bounds and rounded (`stabctl.placement.loop._rounded`);
+    pct_max the largest % every site bound allows."""
     mva = _mva(pl)
     upper = np.array([s.max_mw for s in pl.sites])
-    pct_max = float(np.min(100 * upper / mva))
-    fleet = lambda p: _rounded(np.minimum(p / 100 * mva, upper), pl.sites)  # noqa: E731
-    if not failing:
-        return {"pct": 0.0, "total_mw": 0.0, "mwh": 0.0, "cost": pl.cost.split(
-            pl.sites, np.zeros(len(mva)), np.zeros(len(mva))), "verified": True}
+    return (lambda p: _rounded(np.minimum(p / 100 * mva, upper), pl.sites),
+            float(np.min(100 * upper / mva)))
 
-    def meets(p, which):
-        ck = pl.check(which, fleet(p))
-        return all(r["stable_at_check"] for r in ck.values()), ck
 
+def _stable(pl: PlanContext, which, mw) -> tuple:
+    """(every contingency of `which` stable at its required time at ratings mw, the
+    checks: name -> check dict)."""
+    checks = pl.check(which, mw)
+    return all(r["stable_at_check"] for r in checks.values()), checks
+
+
+def _least_pct(pl: PlanContext, failing, fleet, pct_max: float) -> float | None:
+    """The least % (rounded up to UNIFORM_RES_PCT) whose fleet makes every contingency of
+    `failing` stable at its required time: doubling from 5 %, then bisection; None when
+    not even pct_max does."""
     lo, hi = 0.0, min(5.0, pct_max)
-    while not meets(hi, failing)[0]:
+    while not _stable(pl, failing, fleet(hi))[0]:
         if hi >= pct_max:
-            pl.say(f"uniform: not met even at {pct_max:g} % of every MVA")
-            return {"pct": None, "total_mw": None, "verified": False}
+            return None
         lo, hi = hi, min(2 * hi, pct_max)
     while hi - lo > UNIFORM_RES_PCT + 1e-9:
         mid = round(0.5 * (lo + hi), 6)
-        lo, hi = (lo, mid) if meets(mid, failing)[0] else (mid, hi)
-    hi = float(np.ceil(hi / UNIFORM_RES_PCT - 1e-6) * UNIFORM_RES_PCT)
-    pl.say(f"uniform: {hi:g} % meets the contingencies unstable without storage; "
-           "checking every contingency")
+        lo, hi = (lo, mid) if _stable(pl, failing, fleet(mid))[0] else (mid, hi)
+    return float(np.ceil(hi / UNIFORM_RES_PCT - 1e-6) * UNIFORM_RES_PCT)
+
+
+def _verified_pct(pl: PlanContext, cons, failing, pct: float, fleet, pct_max: float,
+                  kw) -> tuple:
+    """From pct up by UNIFORM_RES_PCT (at most to pct_max) until every contingency is
+    stable at its required time and those of `failing` meet it by their CCT: (the %,
+    verified, the checks of every contingency at it)."""
     while True:
-        ok, ck = meets(hi, cons)
+        ok, checks = _stable(pl, cons, fleet(pct))
         if ok:
-            pl.base.update(pl.base_evaluations([c for c in failing if c.name not in pl.base],
-                                 pl.brackets, kw))
-            ev = evaluations(pl.case, failing, fleet(hi), base=pl.base, **kw)
+            pl.add_base(failing, pl.brackets, kw)
+            ev = evaluations(pl.case, failing, fleet(pct), base=pl.base, **kw)
             ok = all(ev[c.name]["cct_s"] >= c.target_cct_s - 1e-9 for c in failing)
-        if ok or hi >= pct_max:
-            break
-        hi = round(hi + UNIFORM_RES_PCT, 6)
-    mw = fleet(hi)
-    mwh, energy, e_ok = size_energy(pl, cons, mw, ck)
+        if ok or pct >= pct_max:
+            return pct, ok, checks
+        pct = round(pct + UNIFORM_RES_PCT, 6)
+
+
+def _uniform_result(pl: PlanContext, cons, pct: float, mw, ok: bool, checks) -> dict:
+    """`least_uniform`'s figures of the fleet mw (MW per site) at pct %: its energies
+    sized from `checks` and checked at half the step."""
+    mwh, energy, e_ok = size_energy(pl, cons, mw, checks)
     setters = energy_setters({c.name: c for c in cons}, mw, energy)
     half = energy_half_step(pl.check(setters, mw, h=pl.step_s() / 2), mw, mwh, energy)
-    pl.say(f"uniform: {hi:g} % = {mw.sum():.0f} MW, "
+    pl.say(f"uniform: {pct:g} % = {mw.sum():.0f} MW, "
            f"{'verified' if ok and e_ok else 'NOT verified'}" + energy_note(half))
-    return {"pct": hi, "total_mw": float(mw.sum()), "mw_by_site": mw.tolist(),
+    return {"pct": pct, "total_mw": float(mw.sum()), "mw_by_site": mw.tolist(),
             "mwh": float(mwh.sum()), "cost": pl.cost.split(pl.sites, mw, mwh),
             "verified": bool(ok and e_ok), "energy": energy, **half}
 
