@@ -330,9 +330,9 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
             the other reuse its workers and their caches); overrides `workers`.
         scheduler: Dask scheduler address ('tcp://host:8786'): run there instead;
             'local': a Dask LocalCluster of `workers` single-threaded processes.
-        progress: tqdm bar on stderr (True), none (False), or a callable(done, total)
-            called after each record written.  retry_failed: rerun keys recorded as
-            failed.
+        progress: a bar on stderr (True, `stabctl.progress.bar`), none (False), or a
+            callable(done, total) called after each record written.  retry_failed: rerun
+            keys recorded as failed.
 
     Raises:
         InputError: duplicate keys; `out` holds a key with other inputs; workers < 1;
