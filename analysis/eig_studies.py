@@ -6,6 +6,7 @@ eig_miniwecc.md (with their figures) and reports/eig_validation.md.
 Run: python analysis/eig_studies.py
 """
 
+import logging
 from pathlib import Path
 
 from stabctl.studies.eig_validation import write_validation
@@ -14,4 +15,5 @@ from stabctl.studies.eig_validation import write_validation
 REF = Path(__file__).resolve().parent.parent / "tests" / "data" / "pstess"
 
 if __name__ == "__main__":
+    logging.basicConfig(level=logging.INFO, format="%(message)s")   # the files written
     write_validation("reports", REF)

@@ -13,13 +13,14 @@ import numpy as np
 
 from stabctl.studies.cases import CASE1
 from stabctl.estimation import closed_loop as cl
-from stabctl.estimation import filters as es
+from stabctl.estimation.filters import FrequencyKF
+from stabctl.estimation.models import relative_speeds
 from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.simulation import Simulator
 
 
-class ExtrapolatingKF(es.FrequencyKF):
+class ExtrapolatingKF(FrequencyKF):
     """The previous baseline: speed + horizon * ROCOF state."""
 
     def forecast(self, horizon):
@@ -49,7 +50,7 @@ def main():
         print(f"{label}: stable {res.stable}, {len(res.meta['switchings'])} switchings, "
               f"run end {res.t[-1]:.2f} s")
         true = res.speed_at(np.minimum(d.t + d.latency, res.t[-1]))
-        rel = es.relative_speeds(true, true, res.inertia, d.coi)[0] * d.f0
+        rel = relative_speeds(true, true, res.inertia, d.coi)[0] * d.f0
         for k in np.flatnonzero((d.t > t_clear) & (d.t < t_clear + 0.2)):
             print(f"  t {d.t[k]:.3f} s  acted on {np.round(d.rel[k] * 1e3).astype(int)}  "
                   f"true {np.round(rel[k] * 1e3).astype(int)}  modes {d.modes[k]}")

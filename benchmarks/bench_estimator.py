@@ -15,7 +15,9 @@ import os
 import time
 
 from stabctl.studies.cases import CASE2
-from stabctl.estimation import filters as es
+from stabctl.estimation.filters import FrequencyKF, SwingEKF
+from stabctl.estimation.models import machine_models, relative_speeds
+from stabctl.estimation.reference import SwingEKFReference
 from stabctl.estimation import pmu
 from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
@@ -44,12 +46,12 @@ def main():
     pmus = pmu.machine_pmus(case)
     settings = pmu.PMUSettings(rate=RATE, drop_prob=0.05)
     frames = list(pmu.measure(pmu.phasor_truth(case, res, pmus), settings, seed=1))
-    models = es.machine_models(case, pmus)
-    relative = lambda out: es.relative_speeds(*out, models.inertia)  # noqa: E731
+    models = machine_models(case, pmus)
+    relative = lambda out: relative_speeds(*out, models.inertia)  # noqa: E731
     rows = [
-        ("SwingEKF + relative speeds", lambda: es.SwingEKF(models, settings), relative),
-        ("FrequencyKF + relative speeds", lambda: es.FrequencyKF(models.pmu, settings), relative),
-        ("SwingEKFReference (filterpy)", lambda: es.SwingEKFReference(models, settings),
+        ("SwingEKF + relative speeds", lambda: SwingEKF(models, settings), relative),
+        ("FrequencyKF + relative speeds", lambda: FrequencyKF(models.pmu, settings), relative),
+        ("SwingEKFReference (filterpy)", lambda: SwingEKFReference(models, settings),
          lambda out: None),
     ]
     print(f"miniWECC, {models.n} machines, {len(frames)} frames at {RATE:g} frames/s; "

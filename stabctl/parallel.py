@@ -40,9 +40,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator, Mapping
 
-from tqdm import tqdm
 
 from stabctl.errors import InputError, StabctlError
+from stabctl.progress import bar as progress_bar
 
 
 @dataclass(frozen=True)
@@ -359,9 +359,9 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
             the other reuse its workers and their caches); overrides `workers`.
         scheduler: Dask scheduler address ('tcp://host:8786'): run there instead;
             'local': a Dask LocalCluster of `workers` single-threaded processes.
-        progress: tqdm bar on stderr (True), none (False), or a callable(done, total)
-            called after each record written.  retry_failed: rerun keys recorded as
-            failed.
+        progress: a bar on stderr (True, `stabctl.progress.bar`), none (False), or a
+            callable(done, total) called after each record written.  retry_failed: rerun
+            keys recorded as failed.
 
     Raises:
         InputError: duplicate keys; `out` holds a key with other inputs; workers < 1;
@@ -382,9 +382,8 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
     if todo:
         results = _dask(todo, scheduler, workers) if scheduler else _local(todo, workers, pool)
         out.parent.mkdir(parents=True, exist_ok=True)
-        bar = tqdm(total=len(todo), desc=out.name, unit="job", file=sys.stderr,
-                   disable=progress is not True)
-        with closing(results), _appender(out) as f, bar:
+        with closing(results), _appender(out) as f, \
+                progress_bar(len(todo), out.name, show=progress is True) as bar:
             for rec in results:
                 line = _line(rec)
                 f.write(line)

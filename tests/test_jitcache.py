@@ -168,13 +168,14 @@ def test_no_kernel_compiles_numbas_slice_assignment_message():
         "from stabctl.io import load_case\n"
         "from stabctl.dynamics.simulation import Simulator, integrate\n"
         "from stabctl.dynamics.model import evaluate_address\n"
-        "from stabctl.estimation import filters as es\n"
+        "from stabctl.estimation.filters import compile_filters\n"
+        "from stabctl.estimation.models import machine_models\n"
         "from stabctl.estimation.pmu import machine_pmus\n"
         "case = load_case('kundur')\n"
         "sim = Simulator(case, background_compile=False)\n"
         "evaluate_address(sim.model.params)\n"
         "integrate.compile(tuple(sim.run_argument_types()))\n"
-        "es.compile_filters(es.machine_models(case, machine_pmus(case)))\n"
+        "compile_filters(machine_models(case, machine_pmus(case)))\n"
         "print(len(seen), seen[:3])\n")
     with tempfile.TemporaryDirectory() as cache:
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

@@ -9,11 +9,14 @@ error handling are in :mod:`~stabctl.cli.options`, text and JSON output in
 :mod:`~stabctl.cli.format`.
 
 Errors in the input (stabctl.errors.StabctlError) are printed as one line naming what and
-where, with exit status 2; nothing is written in that case.
+where, with exit status 2; nothing is written in that case.  The library's progress lines
+(its ``stabctl.*`` loggers at level INFO, `stabctl.progress`) go to stderr as lines of
+their own.
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 
@@ -34,6 +37,7 @@ def main(ctx):
     # process.  Set before any command imports numpy; a user's own setting wins.
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
+    _log_to_stderr()
     if ctx.invoked_subcommand in _SIMULATING and "--help" not in sys.argv:
         from stabctl._jitcache import on_first_compile
 
@@ -43,6 +47,27 @@ def main(ctx):
                                "installation or a source change, 15-30 s; later runs load "
                                "them in about a second)", err=True),
             still=lambda s: click.echo(f"stabctl: still compiling ({s:.0f} s)", err=True)))
+
+
+class _Echo(logging.Handler):
+    """A log record as one line on stderr (`click.echo`), as the commands' own lines."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            click.echo(self.format(record), err=True)
+        except Exception:
+            self.handleError(record)
+
+
+_ECHO = _Echo(logging.INFO)
+
+
+def _log_to_stderr() -> None:
+    """Show the library's loggers (``stabctl.*``) from level INFO on stderr (once)."""
+    logger = logging.getLogger("stabctl")
+    logger.setLevel(logging.INFO)
+    if _ECHO not in logger.handlers:
+        logger.addHandler(_ECHO)
 
 
 def _register() -> None:

@@ -350,7 +350,7 @@ def print_plan(case_name, d) -> None:
     ----------
     case_name : str
     d : dict
-        The result (`place --json`, `stabctl.placement.planner.PlanResult.to_dict`).
+        The result (`place --json`, `stabctl.placement.plan.PlanResult.to_dict`).
     """
     c = d["cost"]
     click.echo(f"case {case_name} ({d['requirement']}; load levels "

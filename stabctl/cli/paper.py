@@ -42,8 +42,7 @@ def paper(out_dir, resume, only):
     from stabctl.studies.paper import RUN_LOG, run_summary, write_paper_report
 
     check_writable(out_dir, "--out-dir", directory=True)
-    path = write_paper_report(out_dir, progress=lambda msg: click.echo(msg, err=True),
-                              resume=resume, only=only)
+    path = write_paper_report(out_dir, resume=resume, only=only)
     click.echo(run_summary(json.loads((path.parent / RUN_LOG).read_text())))
     click.echo(f"wrote {path}")
 

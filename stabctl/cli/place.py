@@ -107,9 +107,10 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     """
     from stabctl.io import load_case
     from stabctl.parallel import atomic_write, default_workers
-    from stabctl.placement.planner import (CostModel, Requirement, plan, read_requirements,
-                                           read_site_costs, screening_brackets)
+    from stabctl.placement.plan import plan
     from stabctl.placement.program import candidate_sites
+    from stabctl.placement.requirements import (CostModel, Requirement, read_requirements,
+                                                read_site_costs, screening_brackets)
 
     search = search_settings(tol_ms, t_max, None)
     if workers is not None and workers < 1:
@@ -139,13 +140,14 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     overrides = read_requirements(faults_src) if faults_src != "DEFAULT" else {}
     sites = candidate_sites(case, max_site_pct)
     n = min(workers or default_workers(), len(faults) * len(levels))
-    say = (lambda msg: None) if as_json else (lambda msg: click.echo(msg, err=True))
+    # without --json the progress lines go to the log, which the CLI shows on stderr
     result = plan(case_name, faults, req, load_levels=levels, overrides=overrides, cost=cost,
                   sites=sites, max_rounds=max_rounds, max_iter=max_iter, brackets=brackets,
                   tol=search.tol, t_max=search.t_max, workers=n,
                   scheduler=scheduler,
                   controller=controller(deadband_hz, v_gate, coi, hysteresis_hz),
-                  conventions=conventions, h=step, progress=say, uniform=uniform_reference,
+                  conventions=conventions, h=step, uniform=uniform_reference,
+                  progress=(lambda msg: None) if as_json else None,
                   alone=alone, drop_infeasible=set_aside_infeasible, zeta_min=zeta_min,
                   max_sites=max_sites,
                   amplitude_hz=amplitude_hz)

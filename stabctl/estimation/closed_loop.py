@@ -28,7 +28,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from stabctl.estimation import filters as es
+from stabctl.estimation.filters import FrequencyKF, SwingEKF
+from stabctl.estimation.models import MachineModels, machine_models, relative_speeds
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
 from stabctl.estimation.ambient import AmbientLoad
@@ -80,7 +81,7 @@ class LoopController:
         self.case, self.estimator, self.settings = case, estimator, settings
         self.coi = control.coi
         self.pmus = machine_pmus(case, at)
-        self.models = es.machine_models(case, self.pmus)
+        self.models = machine_models(case, self.pmus)
         self.cols = case.bus_indices([p.bus for p in self.pmus])
         self.C = current_map(case, self.pmus)
         # the buses a frame needs: the PMU buses and those the currents are made from
@@ -98,7 +99,7 @@ class LoopController:
     def __call__(self, t_f: float, partial: SimulationResult) -> np.ndarray:
         """Modes (n_dev,) to take effect at t_f + latency."""
         speed = self._speeds(t_f, partial)
-        rel = es.relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
+        rel = relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
         rel = np.nan_to_num(rel)
         self.mode = law.desired_modes(self.sa, self.mode, rel)
         self.rows.append((t_f, rel * self.case.freq_hz, self.mode.copy()))
@@ -137,12 +138,12 @@ class LoopController:
                            latency=self.settings.latency_s, f0=self.case.freq_hz, coi=self.coi)
 
 
-def _make_filter(estimator: str, models: es.MachineModels, settings: PMUSettings):
+def _make_filter(estimator: str, models: MachineModels, settings: PMUSettings):
     """The online filter of an estimator (None for ideal and raw)."""
     if estimator == "kf":
-        return es.FrequencyKF(models.pmu, settings, f0=models.f0)
+        return FrequencyKF(models.pmu, settings, f0=models.f0)
     if estimator == "ekf":
-        return es.SwingEKF(models, settings)
+        return SwingEKF(models, settings)
     return None
 
 
@@ -307,7 +308,7 @@ def false_actions(run: ClosedLoopRun, deadband_hz: float = 0.1) -> int:
     prev = np.vstack([np.zeros((1, d.modes.shape[1]), int), d.modes[:-1]])
     start = ((prev == 0) & (d.modes != 0))[inside]
     true = res.speed_at(t_eff[inside])
-    rel = es.relative_speeds(true, true, res.inertia, d.coi)[0][:, d.mac] * d.f0
+    rel = relative_speeds(true, true, res.inertia, d.coi)[0][:, d.mac] * d.f0
     want = np.where(rel > deadband_hz, 1, np.where(rel < -deadband_hz, -1, 0))
     return int(np.sum(start & (want != d.modes[inside])))
 

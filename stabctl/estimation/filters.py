@@ -26,268 +26,39 @@ Estimators, one filter per machine, all machines advanced together (docs/estimat
   (transient machines: delta - asin(E'_d / |E|); classical: delta).  The bus frequency is
   not used: during swings it differs from the rotor speed by tens of mHz.
 
-The one-machine equations (`swing_*`) are compiled (numba) and shared by two paths:
-`FrequencyKFReference` and `SwingEKFReference` run one filterpy filter per machine (filterpy
-does the Kalman algebra); `FrequencyKF` and `SwingEKF` run the same algebra (Joseph form, as
-filterpy) in one compiled loop over the machines, the fast path (tests check that both agree
-to rounding; `benchmarks/bench_estimator.py`).  Sources: filterpy 1.4 `KalmanFilter`,
-`ExtendedKalmanFilter`; IEEE C37.118.1-2011 for the PMU noise (`stabctl.estimation.pmu`).
+The machines' models and the filters' tunings are in `stabctl.estimation.models`.  The
+one-machine equations (`swing_*`) are compiled (numba) and shared by two paths:
+`FrequencyKF` and `SwingEKF` run the Kalman algebra (Joseph form, as filterpy) in one
+compiled loop over the machines, the fast path; their references in
+`stabctl.estimation.reference` run one filterpy filter per machine (filterpy does the
+algebra; tests check that both agree to rounding; `benchmarks/bench_estimator.py`).
+Sources: filterpy 1.4 `KalmanFilter`, `ExtendedKalmanFilter`; IEEE C37.118.1-2011 for the
+PMU noise (`stabctl.estimation.pmu`).
 
 Online interface: `step(frame) -> (speed, variance)`, speed (n_mac,) pu, variance pu^2,
 NaN until a machine's first valid frame; frames in increasing time-stamp order; where a
 frame was dropped the filter predicts only.  `nis` holds the normalised innovation squared
 of the last step (NaN where no update), chi-square with `dof` degrees of freedom when the
-filter is consistent (`nis_bounds`).  `coi_speed` and `relative_speeds` turn the machine
-estimates into what each ESD controller needs (paper eq. 40), with variances.
+filter is consistent (`nis_bounds`).  `stabctl.estimation.models.coi_speed` and
+`relative_speeds` turn the machine estimates into what each ESD controller needs (paper
+eq. 40), with variances.
 """
 
 from __future__ import annotations
 
 import cmath
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
-from filterpy.common import Q_continuous_white_noise
-from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
-from stabctl._jitcache import assign, kernel, njit
 from scipy.stats import chi2
 
-from stabctl.case import Case
-from stabctl.errors import CaseError, InputError
-from stabctl.models.machines import EM, SUB, TRA, machine_params
-from stabctl.models.machines import _dq as rotor_dq  # the one compiled dq transform
-from stabctl.dynamics.coi import coi_weights
+from stabctl._jitcache import assign, kernel, njit
+from stabctl.errors import InputError
+from stabctl.estimation.models import FrequencyTuning, MachineModels, SwingTuning
 from stabctl.estimation.pmu import Frame
 from stabctl.estimation.settings import PMUSettings
-
-
-# -- tuning ---------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class FrequencyTuning:
-    """Baseline filter: rocof_walk, spectral density of the ROCOF random walk ((Hz/s)^2
-    per s), sized for post-fault swings (the ROCOF of a 0.2 Hz swing at 1 Hz changes by
-    about 8 Hz/s within a second).  The measurement noise comes from the PMU settings."""
-
-    rocof_walk: float = 50.0
-
-
-@dataclass(frozen=True)
-class SwingTuning:
-    """Model-based filter (docs/estimation.md, tuning).  The measurement noise and the
-    noise of the measured power and current come from the PMU settings (TVE); added here:
-
-    angle_model_rad: standard deviation of unmodelled internal-angle error (rad);
-    accel_psd: white unmodelled acceleration ((pu speed)^2/s); pm_walk: random walk of the
-    mechanical-power correction ((pu machine base)^2/s); pm0_sd, flux0_sd: initial
-    standard deviations of dPm and of the q-axis fluxes (pu); jump_pu: a change of P_ag
-    between two frames above this (pu machine base) is taken for a network event at an
-    unknown instant of the interval, adding dP^2/12 (the trapezoid's error variance) to the
-    power noise.
-    """
-
-    angle_model_rad: float = 0.002
-    accel_psd: float = 1e-9
-    pm_walk: float = 1e-6
-    pm0_sd: float = 0.005
-    flux0_sd: float = 0.01
-    jump_pu: float = 0.1
-
-
-# -- machine models -------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class LinearSystems:
-    """n linear systems dx/dt = A x + b u with a scalar input: A (n, k, k), b (n, k)."""
-
-    A: np.ndarray
-    b: np.ndarray
-    _zoh: dict = field(default_factory=dict, repr=False)
-
-    def discrete(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """Exact zero-order-hold discretisation (A_d (n, k, k), b_d (n, k)) over dt (s),
-        cached per dt."""
-        key = round(dt, 12)
-        if key not in self._zoh:
-            n, k = self.b.shape
-            M = np.zeros((n, k + 1, k + 1))
-            M[:, :k, :k], M[:, :k, k] = self.A * dt, self.b * dt
-            E = np.stack([scipy.linalg.expm(a) for a in M])
-            self._zoh[key] = (np.ascontiguousarray(E[:, :k, :k]), np.ascontiguousarray(E[:, :k, k]))
-        return self._zoh[key]
-
-
-@dataclass(frozen=True, eq=False)
-class Governors:
-    """PST `tg` turbine-governors (stabctl.models.governors) as linear systems per machine:
-    dg/dt = A g + b u, P_m = c.g, u = clip(P_ref + (wf - omega) / R, 0, T_max); in
-    equilibrium g = P_m g_unit.  Machines without a governor (active False) keep P_m."""
-
-    sys: LinearSystems
-    c: np.ndarray
-    g_unit: np.ndarray
-    wf: np.ndarray
-    invR: np.ndarray
-    Tmax: np.ndarray
-    active: np.ndarray
-
-    @classmethod
-    def from_case(cls, case: Case) -> "Governors":
-        """The case's tg_con governors (none: every machine inactive); raises CaseError
-        for a governor other than PST tg (type 1), which this linear model does not hold."""
-        other = np.nonzero(case.governors.type != 1)[0]
-        if other.size:
-            raise CaseError(f"tg_con row {other[0] + 1}: the estimator's governor model is PST "
-                            f"tg (type 1) only, got type {int(case.governors.type[other[0]])}")
-        n = len(case.machines)
-        A, b, c, gu = np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
-        wf, invR, Tmax, active = np.ones(n), np.zeros(n), np.full(n, np.inf), np.zeros(n, bool)
-        g = case.governors
-        for r in range(len(g)):
-            k = case.machine_index(g.machine[r])
-            Ts, Tc, T3, T4, T5 = g.Ts[r], g.Tc[r], g.T3[r], g.T4[r], g.T5[r]
-            A[k] = [[-1 / Ts, 0, 0], [(1 - T3 / Tc) / Tc, -1 / Tc, 0],
-                    [(1 - T4 / T5) * T3 / Tc / T5, (1 - T4 / T5) / T5, -1 / T5]]
-            b[k, 0] = 1 / Ts
-            c[k] = [T4 / T5 * T3 / Tc, T4 / T5, 1.0]
-            gu[k] = [1.0, 1 - T3 / Tc, 1 - T4 / T5]
-            wf[k], invR[k], Tmax[k], active[k] = g.wf[r], g.invR[r], g.Tmax[r], True
-        return cls(LinearSystems(A, b), c, gu, wf, invR, Tmax, active)
-
-    def output(self, g: np.ndarray) -> np.ndarray:
-        """Mechanical power (machine base), (n,); 0 for inactive machines."""
-        return np.einsum("ni,ni->n", self.c, g)
-
-
-@dataclass(frozen=True, eq=False)
-class QAxis:
-    """q-axis rotor circuits of PST's machine models, linear in q (n, 2) with the q-axis
-    current I_q (machine base) as input, dq/dt = A q + b I_q (subtransient: q = (E'_d in
-    PST's sign, psi_kq), psi"_q = p14 q1 + p15 q2; transient: q1 = E'_d, q2 unused;
-    classical: none), and the angle of the internal voltage E behind Z:
-    angle(E) = delta + sign asin(omega^speed (c.q) / |E|); kind (PST model) and the
-    reactances that locate the rotor in steady state (`swing_start`).  Arrays (n, ...)."""
-
-    sys: LinearSystems
-    c: np.ndarray
-    sign: np.ndarray
-    speed: np.ndarray
-    kind: np.ndarray
-    xl: np.ndarray
-    xq: np.ndarray
-    xqp: np.ndarray
-    xdp: np.ndarray
-
-    @classmethod
-    def from_case(cls, case: Case) -> "QAxis":
-        """From the case's machine data with PST's substitutions (`machine_params`)."""
-        mp = machine_params(case)
-        n, sub, tra = mp.n, mp.kind == SUB, mp.kind == TRA
-        with np.errstate(divide="ignore", invalid="ignore"):
-            p11, p12, p13 = (np.nan_to_num(v) for v in (mp.p11, mp.p12, mp.p13))
-            p14, p15 = np.nan_to_num(mp.p14), np.nan_to_num(mp.p15)
-        A, b, c = np.zeros((n, 2, 2)), np.zeros((n, 2)), np.zeros((n, 2))
-        Tq, Tqq = mp.Tqop, mp.Tqopp
-        A[sub] = np.stack([np.stack([-(1 + p12 * p11) / Tq, p12 * p11 / Tq], -1),
-                           np.stack([1 / Tqq, -1 / Tqq], -1)], 1)[sub]
-        b[sub] = np.stack([(p12 * p11 * p13 - p12) / Tq, -p13 / Tqq], -1)[sub]
-        c[sub] = np.stack([p14, p15], -1)[sub]
-        A[tra, 0, 0] = -1 / Tq[tra]
-        b[tra, 0] = ((mp.xq - mp.xqp) / Tq)[tra]
-        c[tra, 0] = 1.0
-        return cls(LinearSystems(A, b), c, np.where(tra, -1.0, 1.0), mp.speed_effects, mp.kind,
-                   mp.xl, mp.xq, mp.xqp, mp.xdp)
-
-
-
-@dataclass(frozen=True, eq=False)
-class MachineModels:
-    """What the swing filter knows of each machine, arrays of shape (n,).
-
-    numbers: machine numbers; pmu: index of the PMU measuring its current; H (s), D (pu)
-    machine base; pot = base MVA / machine MVA; ra: armature resistance in the torque (pu
-    machine base; 0 for classical machines); z_emf: impedance from the PMU bus to the
-    internal voltage (complex pu, system base); per_speed: torque = power / omega (PST's
-    subtransient model); inertia: H * MVA (MJ), the COI weights; f0 (Hz); governor,
-    qaxis: `Governors`, `QAxis`.
-    """
-
-    numbers: np.ndarray
-    pmu: np.ndarray
-    H: np.ndarray
-    D: np.ndarray
-    pot: np.ndarray
-    ra: np.ndarray
-    z_emf: np.ndarray
-    per_speed: np.ndarray
-    inertia: np.ndarray
-    f0: float
-    governor: Governors
-    qaxis: QAxis
-
-    @property
-    def n(self) -> int:
-        return self.numbers.size
-
-def machine_models(case: Case, pmus) -> MachineModels:
-    """Swing-filter models of every machine of the case from its data (mac_con, tg_con)
-    and the PMU measuring its current: at its terminal bus, or at a bus joined to the
-    terminal by branches whose series impedance r + jx is added to Z (taps and charging
-    ignored).  Raises InputError if a machine has no PMU measuring its current."""
-    mp = machine_params(case)
-    which = {p.machine: j for j, p in enumerate(pmus) if p.machine is not None}
-    missing = [int(n) for n in case.machines.number if int(n) not in which]
-    if missing:
-        raise InputError(f"no PMU measures the current of machine(s) {missing}")
-    idx = np.array([which[int(n)] for n in case.machines.number])
-    z = mp.z_internal.copy()              # the simulator's internal impedance, system base
-    for k, j in enumerate(idx):
-        z[k] += _series_impedance(case, int(case.machines.bus[k]), pmus[j].bus)
-    return MachineModels(
-        numbers=case.machines.number.astype(int), pmu=idx, H=mp.H.copy(), D=mp.D0.copy(),
-        pot=mp.mac_pot, ra=mp.ra_network, z_emf=z,
-        per_speed=mp.speed_effects, inertia=mp.H * case.machines.mva, f0=case.freq_hz,
-        governor=Governors.from_case(case), qaxis=QAxis.from_case(case))
-
-
-def _series_impedance(case: Case, term: int, bus: int) -> complex:
-    """Series impedance (pu) of the branches joining bus numbers term and bus, in
-    parallel; 0 when they are the same bus."""
-    if term == bus:
-        return 0j
-    br = case.branches
-    sel = ((br.from_bus == term) & (br.to_bus == bus)) | \
-        ((br.from_bus == bus) & (br.to_bus == term))
-    return complex(1.0 / np.sum(1.0 / (br.r[sel] + 1j * br.x[sel])))
-
-
-# -- centre of inertia ------------------------------------------------------------------------
-def coi_speed(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray):
-    """COI speed sum(M_i w_i) / sum(M_i) (paper eq. 40, M = H*MVA) and its variance, the
-    machine estimates taken as independent (one filter per machine, independent PMU
-    noise).  speed, var: (..., n) pu, pu^2, machines on the last axis; returns (...)."""
-    w = coi_weights(inertia)
-    return speed @ w, var @ w ** 2
-
-
-def relative_speeds(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray,
-                    coi: str = "system") -> tuple[np.ndarray, np.ndarray]:
-    """omega_i - omega_COI of every machine (pu) and its variance (pu^2), the COI of all
-    machines (coi="system") or of the others (coi="rest"), as `stabctl.storage.devices.BangBangCOI`.
-    speed, var: (..., n), machines on the last axis.
-
-    With weights w = M / sum(M) and independent estimates: var = (1 - 2 w_i) s_i^2 +
-    sum_j w_j^2 s_j^2 (system); s_i^2 + sum_{j != i} w_j^2 s_j^2 / (1 - w_i)^2 (rest).
-    Raises InputError for another coi.
-    """
-    w = coi_weights(inertia)
-    c, cv = coi_speed(speed, var, inertia)
-    if coi == "system":
-        return speed - c[..., None], (1 - 2 * w) * var + cv[..., None]
-    if coi == "rest":
-        rest = (c[..., None] - w * speed) / (1 - w)
-        return speed - rest, var + (cv[..., None] - w ** 2 * var) / (1 - w) ** 2
-    raise InputError(f"coi must be 'system' or 'rest', got {coi!r}")
+from stabctl.models.machines import EM, SUB, TRA
+from stabctl.models.machines import _dq as rotor_dq  # the one compiled dq transform
 
 
 def nis_bounds(dof: int, coverage: float = 0.95) -> tuple[float, float]:
@@ -332,7 +103,7 @@ def _tuning_vector(tun: SwingTuning, s: PMUSettings, f0: float) -> np.ndarray:
 
 # -- swing filter equations, one machine (shared by the compiled and the filterpy paths) ---
 @kernel
-def _wrap(a):
+def wrap_angle(a):
     """Angle wrapped to [-pi, pi)."""
     return (a + math.pi) % (2 * math.pi) - math.pi
 
@@ -605,7 +376,8 @@ def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par
         Pp = _sandwich(F, P[k]) + swing_Q(gs, pvar, iqv, bdq[k], dt, tv)
         if valid[k]:
             h, H = swing_h(xn, emag, pr)
-            xu, Pu, nis[k] = _scalar_update(xn, Pp, _wrap(theta - h), H, r + tv[T_ANGLE] ** 2)
+            xu, Pu, nis[k] = _scalar_update(xn, Pp, wrap_angle(theta - h), H,
+                                            r + tv[T_ANGLE] ** 2)
             _store(x, P, k, xu, Pu)
         else:
             _store(x, P, k, xn, Pp)
@@ -782,79 +554,3 @@ def compile_filters(models: MachineModels) -> None:
         f.step(lost)
 
 
-# -- filterpy reference implementations -----------------------------------------------------
-class FrequencyKFReference(FrequencyKF):
-    """`FrequencyKF` with one filterpy `KalmanFilter` per machine (reference, slow)."""
-
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
-        self.kfs = [KalmanFilter(dim_x=2, dim_z=2) for _ in range(self.pmu.size)]
-
-    def _advance(self, frame, dt):
-        z, ok = self._measure(frame)
-        self.nis[:] = np.nan
-        for k, kf in enumerate(self.kfs):
-            if not self.ready[k]:
-                if ok[k]:
-                    kf.x, kf.P, self.ready[k] = z[k].copy(), self.R.copy(), True
-                    self.x[k], self.P[k] = kf.x, kf.P
-                continue
-            kf.F, kf.Q = np.array([[1.0, dt], [0.0, 1.0]]), \
-                Q_continuous_white_noise(2, dt, self.tun.rocof_walk)
-            kf.predict()
-            if ok[k]:
-                kf.update(z[k], R=self.R, H=np.eye(2))
-                self.nis[k] = kf.y @ kf.SI @ kf.y
-            self.x[k], self.P[k] = kf.x, kf.P
-
-
-class _SwingEKF1(ExtendedKalmanFilter):
-    """filterpy EKF of one machine; its nonlinear transition is evaluated by the shared
-    swing equations and handed to `predict` as u."""
-
-    def predict_x(self, u=0):
-        self.x = u
-
-
-class SwingEKFReference(SwingEKF):
-    """`SwingEKF` with one filterpy `ExtendedKalmanFilter` per machine (reference, slow),
-    on the same one-machine equations (`swing_*`)."""
-
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
-        self.ekfs = [_SwingEKF1(dim_x=5, dim_z=1) for _ in range(self.m.n)]
-
-    def _advance(self, frame, dt):
-        v, i, f, ok = self._frame(frame)
-        disc = self._discrete(dt)
-        self.nis[:] = np.nan
-        for k, ekf in enumerate(self.ekfs):
-            pr = self.par[k]
-            if not (self.ready[k] or ok[k]):
-                continue
-            meas = swing_measure(v[k], i[k], pr, self.tv[T_SIG2]) if ok[k] else (np.nan,) * 6
-            if not self.ready[k]:
-                ekf.x, ekf.P = swing_begin(k, v[k], i[k], f[k], *meas[2:], pr, self.tv,
-                                           self.hold, self.cur_hold, self.g)
-                self.ready[k] = True
-            else:
-                self._predict(ekf, k, ok[k], meas, i[k], dt, *(d[k] for d in disc))
-                if ok[k]:
-                    self._update(ekf, k, meas[0], meas[1], meas[5])
-            self.x[k], self.P[k] = ekf.x, ekf.P
-
-    def _predict(self, ekf, k, ok, meas, cur, dt, Adq, bdq, Adg, bdg):
-        pr, tv = self.par[k], self.tv
-        u = swing_inputs(k, ok, meas[2], meas[3], cur, meas[4], self.hold, self.cur_hold,
-                         self.g, ekf.x[1], pr, Adg, bdg, tv)
-        xn, F, gs = swing_transition(ekf.x, u[0], u[1], u[3], u[4], dt, pr, Adq, bdq, tv[T_F0])
-        ekf.F, ekf.Q = F, swing_Q(gs, u[2], u[5], bdq, dt, tv)
-        ekf.predict(u=xn)
-
-    def _update(self, ekf, k, theta, emag, r):
-        pr, tv = self.par[k], self.tv
-        ekf.update(np.array([theta]), HJacobian=lambda x: swing_h(x, emag, pr)[1][None, :],
-                   Hx=lambda x: np.array([swing_h(x, emag, pr)[0]]),
-                   R=np.array([[r + tv[T_ANGLE] ** 2]]),
-                   residual=lambda a, b: np.array([_wrap(a[0] - b[0])]))
-        self.nis[k] = ekf.y @ ekf.SI @ ekf.y

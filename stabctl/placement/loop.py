@@ -35,6 +35,7 @@ infeasibility (`InfeasibleError` naming them).
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from contextlib import nullcontext
@@ -50,6 +51,8 @@ from stabctl.placement.program import (Allocation, InfeasibleError, candidate_si
 from stabctl.parallel import worker_pool
 from stabctl.placement.evaluation import Contingency, cuts_from, verify
 from stabctl.storage.control import BangBangCOI
+
+logger = logging.getLogger(__name__)
 
 MIN_MW = 1.0        # ratings below this are not installed (MW)
 #: The paper's Table 3 law (`stabctl.storage.devices.BangBangCOI` defaults: 100 mHz deadband, 0.8 pu
@@ -218,7 +221,7 @@ def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None
                    {"safety_s": 2 * tol if safety_s is None else safety_s,
                     "max_sites": max_sites, "site_cost": site_cost}, tol, t_max,
                    model={"conventions": conventions, "h": h})
-    say = progress or (lambda msg: None)
+    say = progress or logger.info
     with _pool(run_map, workers, scheduler) as rm:
         setup.run_map = rm
         base = setup.base = base or setup.verify(np.zeros(len(sites)))

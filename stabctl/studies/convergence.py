@@ -9,6 +9,7 @@ depend on the step.  Used by `stabctl paper` (section 9) and docs/conventions.md
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +21,8 @@ from stabctl.dynamics.model import CONVENTIONS
 from stabctl.dynamics.simulation import Simulator, default_step
 from stabctl.studies.cases import PAPER_CASES
 
+logger = logging.getLogger(__name__)
+
 #: Steps of the convergence table (s): 10, 5, 2.5, 1 and 0.5 ms.
 STEPS = (0.01, 0.005, 0.0025, 0.001, 0.0005)
 #: The paper's Case-1 (Kundur) and Case-2 (miniWECC) faults.
@@ -29,15 +32,16 @@ PAPER_FAULTS = {name: pc.fault for name, pc in PAPER_CASES.items()}
 def cct_versus_step(case_name: str, fault: LineFault, steps=STEPS,
                     conventions=CONVENTIONS, tol: float = 1e-3, progress=None) -> dict:
     """{conventions: {"default_h": s, "rows": [(h s, CCT s, n runs), ...]}} for each step
-    and the convention's default step.  Raises as `critical_clearing_time`."""
+    and the convention's default step; progress: callable(str) told each CCT search
+    (None: this module's logger, `stabctl.progress`).  Raises as
+    `critical_clearing_time`."""
     case = load_case(case_name)
     out = {}
     for conv in conventions:
         sim = Simulator(case, conventions=conv)
         rows = []
         for h in sorted({*steps, sim.default_h}, reverse=True):
-            if progress:
-                progress(f"convergence: {case_name}, {conv}, h = {1000 * h:g} ms")
+            (progress or logger.info)(f"convergence: {case_name}, {conv}, h = {1000 * h:g} ms")
             r = critical_clearing_time(sim, fault, SearchOptions(tol=tol, error_check=False), h=h)
             rows.append((h, r.cct_s, r.n_simulations))
         out[conv] = {"default_h": sim.default_h, "rows": rows}

@@ -85,7 +85,8 @@ def estimator_errors(case, event, mc: ErrorRuns, *, settings, esd_pct, settle_s:
     """
     from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import ambient as am
-    from stabctl.estimation import filters as es
+    from stabctl.estimation.filters import compile_filters
+    from stabctl.estimation.models import machine_models
     from stabctl.estimation.pmu import machine_pmus
     from stabctl.storage.devices import uniform_fleet
     from stabctl.studies import estimation as study
@@ -96,7 +97,7 @@ def estimator_errors(case, event, mc: ErrorRuns, *, settings, esd_pct, settle_s:
     fleet = None if esd_pct is None else uniform_fleet(case, esd_pct)
     sim = (model or ModelOptions()).simulator(
         case, injection_buses=() if fleet is None else fleet.buses)
-    es.compile_filters(es.machine_models(case, machine_pmus(case, mc.pmu_at)))
+    compile_filters(machine_models(case, machine_pmus(case, mc.pmu_at)))
     res = sim.run([event], t_end=t_end, storage=fleet)
     figures = study.monte_carlo(case, res, settings, mc.runs, mc.seed, window, mc.pmu_at, mc.coi)
     actions = None
@@ -137,11 +138,12 @@ def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float,
     """
     from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import closed_loop as cl
-    from stabctl.estimation import filters as es
+    from stabctl.estimation.filters import compile_filters
+    from stabctl.estimation.models import machine_models
     from stabctl.estimation.pmu import machine_pmus
 
     sim, rows = (model or ModelOptions()).simulator(case), {}
-    es.compile_filters(es.machine_models(case, machine_pmus(case)))
+    compile_filters(machine_models(case, machine_pmus(case)))
     for e in cl.ESTIMATORS:
         run = cl.run_closed_loop(sim, [event], t_end, cl.LoopOptions(esd_pct, e, settings, seed,
                                                                      control))

@@ -28,7 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 from stabctl._jitcache import njit
 
-from stabctl.estimation import filters as es
+from stabctl.estimation.filters import FrequencyKF, SwingEKF, nis_bounds
+from stabctl.estimation.models import (FrequencyTuning, MachineModels, SwingTuning, machine_models,
+                                       relative_speeds)
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
 from stabctl.case import Case
@@ -56,12 +58,12 @@ class Track:
     dof: int
 
 
-def run_estimators(stream: FrameStream, models: es.MachineModels,
-                   kf_tuning: es.FrequencyTuning = es.FrequencyTuning(),
-                   ekf_tuning: es.SwingTuning = es.SwingTuning()) -> dict[str, Track]:
+def run_estimators(stream: FrameStream, models: MachineModels,
+                   kf_tuning: FrequencyTuning = FrequencyTuning(),
+                   ekf_tuning: SwingTuning = SwingTuning()) -> dict[str, Track]:
     """Tracks of the raw PMU frequency and of both filters fed every frame in order."""
-    filters = {"kf": es.FrequencyKF(models.pmu, stream.settings, kf_tuning, models.f0),
-               "ekf": es.SwingEKF(models, stream.settings, ekf_tuning)}
+    filters = {"kf": FrequencyKF(models.pmu, stream.settings, kf_tuning, models.f0),
+               "ekf": SwingEKF(models, stream.settings, ekf_tuning)}
     out = {"raw": _raw_track(stream, models)}
     lat = stream.settings.latency_s
     for name, f in filters.items():
@@ -73,7 +75,7 @@ def run_estimators(stream: FrameStream, models: es.MachineModels,
     return out
 
 
-def _raw_track(stream: FrameStream, models: es.MachineModels) -> Track:
+def _raw_track(stream: FrameStream, models: MachineModels) -> Track:
     """The PMU frequency of each machine's PMU as its speed, dropped frames held."""
     f = stream.freq[:, models.pmu]
     idx = np.where(np.isfinite(f), np.arange(len(stream))[:, None], 0)
@@ -93,7 +95,7 @@ def errors(track: Track, result: SimulationResult, stream: FrameStream,
     M = result.inertia
     true = result.speed_at(stream.t[sel])
     late = result.speed_at(stream.t[sel] + stream.settings.latency_s)
-    rel = lambda s: es.relative_speeds(s, s, M, coi)[0]  # noqa: E731
+    rel = lambda s: relative_speeds(s, s, M, coi)[0]  # noqa: E731
     rms = lambda e: float(np.sqrt(np.nanmean(e ** 2)) * f0 * 1e3)  # noqa: E731
     e_rel = rel(track.speed[sel]) - rel(true)
     out = {"speed_rmse_mhz": rms(track.speed[sel] - true),
@@ -105,7 +107,7 @@ def errors(track: Track, result: SimulationResult, stream: FrameStream,
     nis = track.nis[sel]
     nis = nis[np.isfinite(nis)]
     if track.dof and nis.size:
-        lo, hi = es.nis_bounds(track.dof)
+        lo, hi = nis_bounds(track.dof)
         out["nis_inside"] = float(np.mean((nis > lo) & (nis < hi)))
     else:
         out["nis_inside"] = float("nan")
@@ -123,7 +125,7 @@ def monte_carlo(case: Case, result: SimulationResult, settings: PMUSettings, run
     if runs < 1:
         raise InputError(f"need at least one Monte-Carlo run, got {runs}")
     pmus = machine_pmus(case, at)
-    models = es.machine_models(case, pmus)
+    models = machine_models(case, pmus)
     truth = phasor_truth(case, result, pmus, settings.window_cycles)
     per_run = {name: [] for name in ESTIMATORS}
     for r in range(runs):
@@ -157,7 +159,7 @@ def false_actions(case: Case, results, settings: PMUSettings, seed: int,
     if not results:
         raise InputError("need at least one run without fault")
     pmus = machine_pmus(case, at)
-    models = es.machine_models(case, pmus)
+    models = machine_models(case, pmus)
     sa = st.pack(st.uniform_fleet(case, 1.0, controller), case, np.arange(case.n_bus))
     figs = {name: {"actions": [], "max_rel_mhz": [], "std_rel_mhz": []}
             for name in ("true", *ESTIMATORS)}
@@ -167,7 +169,7 @@ def false_actions(case: Case, results, settings: PMUSettings, seed: int,
         tracks = {k: v.speed for k, v in run_estimators(stream, models).items()}
         tracks["true"] = result.speed_at(stream.t)
         for name, speed in tracks.items():
-            rel = es.relative_speeds(speed, speed, models.inertia, controller.coi)[0]
+            rel = relative_speeds(speed, speed, models.inertia, controller.coi)[0]
             mhz = rel * models.f0 * 1e3
             figs[name]["actions"].append(_count_actions(sa, np.nan_to_num(rel)))
             figs[name]["max_rel_mhz"].append(float(np.nanmax(np.abs(mhz))))

@@ -12,6 +12,7 @@ and 20 % of each generator's MVA; noise seeds per row by `closed_loop.SeedRule`)
 
 from __future__ import annotations
 
+import logging
 from dataclasses import replace
 from pathlib import Path
 
@@ -29,6 +30,8 @@ from stabctl.studies.cases import PAPER_CASES
 from stabctl.parallel import RunnerOptions
 from stabctl.stability.cct import LineFault
 
+logger = logging.getLogger(__name__)
+
 #: the paper's cases by case name; the RMSE runs clear after pc.cycles["estimation"]:
 #: faults well inside the CCT under the ieee conventions (Kundur 9.4 cycles, miniWECC 4.6)
 CASES = PAPER_CASES
@@ -41,8 +44,8 @@ def case_figures(name: str, runs: int, cct_runs, records_dir: Path,
     """RMSE, false actions and CCT table of one case (see the module docstring); cct_runs:
     noise seeds per CCT row, a count or a `closed_loop.SeedRule`; the CCT sweep's resumable
     records go to records_dir; progress: callable(str) told each stage and each ambient run
-    (the CCT sweep has its own bar)."""
-    say = progress or (lambda msg: None)
+    (None: this module's logger, `stabctl.progress`; the CCT sweep has its own bar)."""
+    say = progress or logger.info
     pc = CASES[name]
     bus, far, cycles = pc.bus, pc.far_bus, pc.cycles["estimation"]
     case = load_case(name)

@@ -8,6 +8,7 @@ interrupted or failed run leaves no half-written report.
 from __future__ import annotations
 
 import json
+import logging
 import os
 import platform
 import shutil
@@ -27,6 +28,8 @@ from stabctl.smib.feedback import PAPER_LAWS, settling_time
 from stabctl.smib.omib import PAPER_OMIB, clearing_table, eac_summary, simulate
 from stabctl.smib.optimal import solve_min_time
 from stabctl.parallel import read_records, write_reproducible
+
+logger = logging.getLogger(__name__)
 
 #: Paper Table 1: fault cycles -> (delta at clearing rad, d(delta)/dt rad/s, stable).
 PAPER_TABLE1 = {6: (0.6519, 3.1374, True), 12: (1.1228, 6.2747, True), 15: (1.4753, 7.8421, False)}
@@ -250,7 +253,7 @@ WORK_DIR = ".paper-work"
 RUN_LOG = "run_log.json"
 
 
-def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], None] = print,
+def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], None] | None = None,
                        resume: bool = False, only=None) -> Path:
     """Build the report parts (`PARTS`; all, or the keys in `only`) into out_dir/paper.md
     with their PNG figures and sub-reports; returns the path.
@@ -263,6 +266,8 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
     (each file replaced only when its new version is complete), WORK_DIR is removed and
     the run's timings (seconds per section, per record file, every progress line) go to
     out_dir/RUN_LOG: the reports and records of two runs of the same code are identical.
+    progress: callable(str) told every progress line (None: this module's logger, level
+    INFO, `stabctl.progress`).
 
     Raises:
         InputError: an unknown part in `only`.
@@ -294,7 +299,7 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
 
     def say(msg: str) -> None:
         log["progress"].append([round(time.perf_counter() - t_start, 1), msg])
-        progress(msg)
+        (progress or logger.info)(msg)
 
     with tempfile.TemporaryDirectory(dir=out, prefix=".paper-") as tmp:
         tmp = Path(tmp)

@@ -9,6 +9,7 @@ stay in `<report dir>/table4_<case>.jsonl`.
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 from stabctl.plotting import figures as plotting
@@ -20,6 +21,8 @@ from stabctl.dynamics.simulation import Simulator
 from stabctl.storage.devices import uniform_fleet
 from stabctl.storage.control import BangBangCOI
 from stabctl.parallel import default_workers, run_sweep, worker_pool
+
+logger = logging.getLogger(__name__)
 
 RATINGS_PCT = (5, 10, 15, 20, 25, 30)
 #: Paper Table 4 (Case 2, miniWECC): CCT increase (%) over no storage per ESD rating (% of
@@ -146,7 +149,9 @@ def table4(case_key: str, out_dir: Path, progress: bool = True) -> dict:
 def section_table4(fig_dir: Path, out_dir: Path, progress=None) -> str:
     """Table 4: CCT versus ESD rating for Cases 1 and 2, with energy and peak power used.
 
-    The sweep records go to out_dir; progress(str), if given, hears when a case is done."""
+    The sweep records go to out_dir; progress(str) hears when a case is done (None: this
+    module's logger, `stabctl.progress`)."""
+    say = progress or logger.info
     lines = ["## 6. Table 4: CCT versus ESD rating", "",
              "Bisection on the clearing time to 1 ms (`stabctl.stability.cct`, ieee conventions, each "
              "CCT's numerical error from rerunning its bracket at half the step in the `err` "
@@ -163,8 +168,7 @@ def section_table4(fig_dir: Path, out_dir: Path, progress=None) -> str:
     for key, cycles in (("case2", CASE2.cycles["figure"]), ("case1", CASE1.cycles["figure"])):
         name, fault = CASES[key]
         res = results[key] = table4(key, out_dir)
-        if progress is not None:
-            progress(f"Table 4, {name}: {len(res)} CCT searches done; energy runs follow")
+        say(f"Table 4, {name}: {len(res)} CCT searches done; energy runs follow")
         base = res[None]["cct_s"]
         lines += [f"### {key.replace('case', 'Case ')}: {name}, {fault.describe()}", "",
                   "| ESD % of MVA | CCT s | err ms | CCT cycles | increase % | paper % | sims | "
@@ -187,9 +191,8 @@ def section_table4(fig_dir: Path, out_dir: Path, progress=None) -> str:
         lines.append("")
     plotting.cct_versus_rating(results, RATINGS_PCT, fig_dir / "table4_cct_vs_rating.png",
                                paper_row=PAPER_TABLE4, paper_label="paper Table 4 (Case 2)")
-    if progress is not None:
-        progress(f"Table 4, {CASES['case2'][0]}: ratings {', '.join(map(str, NO_GATE_PCT))} % "
-                 "rerun without the 0.8 pu voltage gate")
+    say(f"Table 4, {CASES['case2'][0]}: ratings {', '.join(map(str, NO_GATE_PCT))} % "
+        "rerun without the 0.8 pu voltage gate")
     lines += _table4_hypotheses(results["case2"])
     lines += ["", "The figure shows the paper's row beside ours.", "",
               "![CCT versus rating](table4_cct_vs_rating.png)", ""]

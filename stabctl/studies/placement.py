@@ -7,7 +7,7 @@ for reports).
 For each case: (1) screen line faults at both ends of every line (in miniWECC of every line
 at a generator's HV bus; in Kundur also bus faults; coarse CCT: 5 ms, t_max 0.5 s;
 resumable, `stabctl.parallel`); every fault stable when cleared at once is a contingency
-at each load level; (2) `stabctl.placement.planner.plan` by constraint generation, with
+at each load level; (2) `stabctl.placement.plan.plan` by constraint generation, with
 the least uniform fleet (bisection), each binding fault alone and the clearing margin of
 every contingency; (3) the Pareto curve of cost against the required clearing time
 (PARETO_CYCLES, at the base load: the fast variant `stabctl paper` runs); (4) the paper's
@@ -18,11 +18,10 @@ reports/placement_<case>.md, its JSON and three figures.
 from __future__ import annotations
 
 import json
-import sys
 import threading
+import logging
 import time
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
 from pathlib import Path
 
 import matplotlib
@@ -38,10 +37,14 @@ from stabctl.studies.cases import DEFAULT_FAULTS  # noqa: E402
 from stabctl.placement.program import candidate_sites  # noqa: E402
 from stabctl.placement.evaluation import Contingency  # noqa: E402
 from stabctl.placement.loop import _rounded, evaluations, place  # noqa: E402
-from stabctl.placement.planner import (CostModel, Requirement, plan,  # noqa: E402
-                                       screening_brackets)
+from stabctl.placement.plan import plan  # noqa: E402
+from stabctl.placement.requirements import (CostModel, Requirement,  # noqa: E402
+                                            screening_brackets)
 from stabctl.storage.devices import hv_bus  # noqa: E402
 from stabctl.parallel import run_sweep, strip_run_dependent, worker_pool  # noqa: E402
+from stabctl.progress import Heartbeat  # noqa: E402
+
+logger = logging.getLogger(__name__)
 
 UNIFORM_PCT = 5.0                         # the paper's fleet (continuity section)
 N_FAULTS = 10                             # a case with more than 2 N_FAULTS lines: HV only
@@ -57,7 +60,6 @@ SCREEN_TOL, SCREEN_T_MAX, TOL = 0.005, 0.2, 1e-3
 MARGIN_TOL, MARGIN_CAP_S = 0.005, 0.1     # clearing margins: resolution, largest shown (s)
 T_MAX_PLACE = 1.0                         # CCT search limit of the placement runs (s)
 MAX_ITER, MAX_ITER_SIDE = 6, 4            # simulated allocations: per round; the others
-HEARTBEAT_S = 8.0                         # longest silence of the progress callback (s)
 HALF_STEP_N = 10                          # tightest contingencies simulated at h/2
 
 
@@ -137,8 +139,10 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
     sites = candidate_sites(case)
     mva = np.array([float(case.machines.mva[case.machine_index(s.machine)]) for s in sites])
     wall = time.perf_counter()
-    with _heartbeat(say, case_name) as beat:
-        say = beat.say
+    done = _Evaluations(case_name)
+    with Heartbeat(say, done.line) as beat:
+        say = beat
+        beat.note("screening")
         rows = screen(case_name, records_dir, workers,
                       lambda k, n: beat.note(f"screening {k}/{n} faults"))
         scope = in_scope(rows)
@@ -147,7 +151,7 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
         say(f"{case_name}: screened {len(rows)} faults in {time.perf_counter() - wall:.0f} s;"
             f" {len(faults)} stable when cleared at once")
         with worker_pool(workers) as pool_map:
-            run_map = beat.counting(pool_map)
+            run_map = done.counting(pool_map)
             kw = {"sites": sites, "tol": TOL, "t_max": T_MAX_PLACE, "run_map": run_map}
             common = {"brackets": brackets, "cost": COSTS, "max_iter": MAX_ITER, **kw}
             beat.note(f"plan for {REQUIRED_CYCLES:g} cycles")
@@ -198,53 +202,26 @@ def _pareto_point(cycles: float, r, levels=(1.0,)) -> dict:
             "set_aside": list(r.set_aside)}
 
 
-class _Beat:
-    """The progress callback, repeated with the latest status line (`note`) whenever
-    nothing was said for HEARTBEAT_S; `counting` wraps a run_map to count evaluations."""
+class _Evaluations:
+    """Counts the contingency evaluations a run_map (`counting`) was given, for the
+    heartbeat's line (`line`) of one case; thread-safe."""
 
-    def __init__(self, say, case_name: str):
-        self._say, self.case, self.status, self.n = say, case_name, "", 0
-        self.last = time.monotonic()
-        self.lock = threading.Lock()
-
-    def say(self, msg: str) -> None:
-        with self.lock:
-            self.last = time.monotonic()
-        self._say(msg)
-
-    def note(self, status: str) -> None:
-        self.status = status
+    def __init__(self, case_name: str):
+        self.case, self.n, self._lock = case_name, 0, threading.Lock()
 
     def counting(self, run_map):
+        """run_map that counts its jobs."""
         def counted(func, jobs):
             out = run_map(func, jobs)
-            with self.lock:
+            with self._lock:
                 self.n += len(jobs)
             return out
         return counted
 
-    def tick(self) -> None:
-        if time.monotonic() - self.last >= HEARTBEAT_S:
-            extra = f", {self.n} contingency evaluations done" if self.n else ""
-            self.say(f"{self.case}: {self.status}{extra} ...")
-
-
-@contextmanager
-def _heartbeat(say, case_name: str):
-    beat = _Beat(say, case_name)
-    stop = threading.Event()
-
-    def loop():
-        while not stop.wait(0.5):
-            beat.tick()
-
-    thread = threading.Thread(target=loop, daemon=True)
-    thread.start()
-    try:
-        yield beat
-    finally:
-        stop.set()
-        thread.join()
+    def line(self, status: str) -> str:
+        """The heartbeat's line of a status."""
+        extra = f", {self.n} contingency evaluations done" if self.n else ""
+        return f"{self.case}: {status}{extra} ..."
 
 
 def critical_only_mw(case, sites, uniform_mw, inertia, critical) -> float:
@@ -474,7 +451,7 @@ def timing_line(d: dict) -> str:
 
 
 def _energy_sentence(e: dict) -> str:
-    """The energy's half-step figures (`planner._energy_half_step`) as the end of a
+    """The energy's half-step figures (`stabctl.placement.energy.energy_half_step`) as the end of a
     sentence about the runs that set each site's energy."""
     pct = e["max_energy_diff_pct"]
     return (", simulated again at half the step, change a site's energy need (twice its "
@@ -486,7 +463,7 @@ def _energy_sentence(e: dict) -> str:
 
 
 def _half_step_lines(hs) -> list[str]:
-    """The half-step check of the tightest contingencies (`planner.half_step`)."""
+    """The half-step check of the tightest contingencies (`stabctl.placement.references.half_step`)."""
     if not hs:
         return []
     h = 1000 * hs["h_s"]
@@ -537,16 +514,17 @@ def placement_study(case_name: str, out_dir="reports", workers: int = 2, progres
                     fast: bool = True) -> Path:
     """Run the study for one case (kundur or miniwecc: the paper's fault must be in
     `stabctl.studies.cases.DEFAULT_FAULTS`) and write its report into out_dir; returns the
-    markdown path.  workers: processes; progress: callable(str) (default: stderr);
+    markdown path.  workers: processes; progress: callable(str) (default: this module's
+    logger, level INFO, `stabctl.progress`);
     records_dir: where the resumable screening records go (default out_dir);
     generated_by: the command the report names as its source; fast: the Pareto points at
-    the base load only (`study`).  Raises as `stabctl.placement.planner.plan`
+    the base load only (`study`).  Raises as `stabctl.placement.plan.plan`
     (InfeasibleError, InputError, SimulationError)."""
     out = Path(out_dir)
     records = Path(records_dir or out)
     for d in (out, records):
         d.mkdir(parents=True, exist_ok=True)
-    say = progress or (lambda msg: print(msg, file=sys.stderr, flush=True))
+    say = progress or logger.info
     d = study(case_name, records, workers, say, fast)
     say(timing_line(d))
     return report(d, out, generated_by)

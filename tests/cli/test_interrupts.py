@@ -104,7 +104,7 @@ def test_sigint_of_a_screening_exits_130_with_the_resume_command(tmp_path):
     (["paper", "--out-dir", "rep", "--only", "analytic"], "stabctl.studies.paper.write_paper_report",
      "finished sweep records in rep are kept with --resume; resume with: stabctl "),
     (["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "10"],
-     "stabctl.placement.planner.plan", "nothing is kept; the work starts again"),
+     "stabctl.placement.plan.plan", "nothing is kept; the work starts again"),
     (["estimate", "cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"],
      "stabctl.estimation.closed_loop.cct_study", "nothing is kept; the work starts again"),
     (["sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "o.jsonl"],

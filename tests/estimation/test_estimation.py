@@ -9,7 +9,11 @@ import pytest
 import scipy.linalg
 from click.testing import CliRunner
 
-from stabctl.estimation import filters as es
+from stabctl.estimation.filters import FrequencyKF, SwingEKF, nis_bounds
+from stabctl.estimation.models import (FrequencyTuning, Governors, LinearSystems, MachineModels,
+                                       QAxis, SwingTuning, coi_speed, machine_models,
+                                       relative_speeds)
+from stabctl.estimation.reference import FrequencyKFReference, SwingEKFReference
 from stabctl.studies import estimation as study
 from stabctl.estimation import pmu
 from stabctl.io import load_case
@@ -58,11 +62,11 @@ def linear_swing(t_end=10.0, f_m=1.0, zeta=0.05, dP=0.5, t_on=1.0, t_off=1.1, am
 def classical_models():
     """MachineModels of the synthetic machine: classical, no governor, system base."""
     z1 = np.zeros(1)
-    gov = es.Governors(es.LinearSystems(np.zeros((1, 3, 3)), np.zeros((1, 3))), np.zeros((1, 3)),
+    gov = Governors(LinearSystems(np.zeros((1, 3, 3)), np.zeros((1, 3))), np.zeros((1, 3)),
                        np.zeros((1, 3)), np.ones(1), z1, np.full(1, np.inf), np.zeros(1, bool))
-    qax = es.QAxis(es.LinearSystems(np.zeros((1, 2, 2)), np.zeros((1, 2))), np.zeros((1, 2)),
+    qax = QAxis(LinearSystems(np.zeros((1, 2, 2)), np.zeros((1, 2))), np.zeros((1, 2)),
                    np.ones(1), np.zeros(1, bool), np.zeros(1, int), z1, z1, z1, np.full(1, X))
-    return es.MachineModels(numbers=np.array([1]), pmu=np.array([0]), H=np.full(1, H), D=z1,
+    return MachineModels(numbers=np.array([1]), pmu=np.array([0]), H=np.full(1, H), D=z1,
                             pot=np.ones(1), ra=z1, z_emf=np.full(1, 1j * X),
                             per_speed=np.zeros(1, bool), inertia=np.full(1, H * 100.0), f0=F0,
                             governor=gov, qaxis=qax)
@@ -83,16 +87,16 @@ def swing():
 def test_ekf_on_a_linear_swing_is_unbiased_accurate_and_consistent(swing):
     truth, true_speed = swing
     st, models = pmu.PMUSettings(), classical_models()
-    tun = es.SwingTuning(angle_model_rad=0.0)
+    tun = SwingTuning(angle_model_rad=0.0)
     bias, rmse, inside = [], [], []
     for seed in range(4):
         stream = pmu.measure(truth, st, seed)
-        speed, var, nis = feed(es.SwingEKF(models, st, tun), stream)
+        speed, var, nis = feed(SwingEKF(models, st, tun), stream)
         sel = stream.t > 1.2
         err = (speed[sel, 0] - true_speed(stream.t[sel])) * F0 * 1e3          # mHz
         bias.append(err.mean())
         rmse.append(np.sqrt(np.mean(err ** 2)))
-        lo, hi = es.nis_bounds(1)
+        lo, hi = nis_bounds(1)
         inside.append(np.mean((nis[sel] > lo) & (nis[sel] < hi)))
         # the filter's own variance matches its error
         assert np.mean(err ** 2 / (var[sel, 0] * (F0 * 1e3) ** 2)) == pytest.approx(1, abs=0.35)
@@ -109,13 +113,13 @@ def test_baseline_kf_smooths_the_pmu_frequency_consistently():
                             freq=f[:, None], rocof=rocof[:, None], f0=F0)
     st = pmu.PMUSettings()
     stream = pmu.measure(truth, st, seed=2)
-    speed, var, nis = feed(es.FrequencyKF([0], st, es.FrequencyTuning(rocof_walk=0.001)), stream)
+    speed, var, nis = feed(FrequencyKF([0], st, FrequencyTuning(rocof_walk=0.001)), stream)
     sel = stream.t > 2
     e_kf = (speed[sel, 0] * F0 - stream.true.freq[sel, 0]) * 1e3
     e_raw = (stream.freq[sel, 0] - stream.true.freq[sel, 0]) * 1e3
     assert abs(e_kf.mean()) < 0.05
     assert np.sqrt(np.mean(e_kf ** 2)) < 0.3 * np.sqrt(np.mean(e_raw ** 2))
-    lo, hi = es.nis_bounds(2)
+    lo, hi = nis_bounds(2)
     assert np.mean((nis[sel] > lo) & (nis[sel] < hi)) == pytest.approx(0.95, abs=0.02)
 
 
@@ -123,7 +127,7 @@ def test_dropped_frames_are_predicted_over(swing):
     truth, true_speed = swing
     st = pmu.PMUSettings(drop_prob=0.1)
     stream = pmu.measure(truth, st, seed=5)
-    f = es.SwingEKF(classical_models(), st)
+    f = SwingEKF(classical_models(), st)
     speed, var, nis = feed(f, stream)
     start = np.argmax(stream.valid[:, 0])
     assert np.all(np.isfinite(speed[start:]))
@@ -131,14 +135,14 @@ def test_dropped_frames_are_predicted_over(swing):
     sel = stream.t > 1.2
     err = (speed[sel, 0] - true_speed(stream.t[sel])) * F0 * 1e3
     assert np.sqrt(np.mean(err ** 2)) < 4.0
-    lo, hi = es.nis_bounds(1)
+    lo, hi = nis_bounds(1)
     n = nis[sel, 0][np.isfinite(nis[sel, 0])]
     assert 0.93 < np.mean((n > lo) & (n < hi)) < 0.99          # still consistent
 
 
 def test_frames_must_come_in_time_order(swing):
     stream = pmu.measure(swing[0], seed=0)
-    f = es.FrequencyKF([0], stream.settings)
+    f = FrequencyKF([0], stream.settings)
     f.step(stream.frame(3))
     with pytest.raises(InputError, match="time-stamp order"):
         f.step(stream.frame(3))
@@ -147,7 +151,7 @@ def test_frames_must_come_in_time_order(swing):
 def test_forecast_extrapolates_the_speed_over_the_latency(swing):
     truth, true_speed = swing
     stream = pmu.measure(truth, pmu.PMUSettings(tve=0, fe_hz=0, rfe_hz_s=0), seed=0)
-    f = es.SwingEKF(classical_models(), stream.settings)
+    f = SwingEKF(classical_models(), stream.settings)
     late, ahead = [], []
     for fr in stream:
         s, _ = f.step(fr)
@@ -160,20 +164,20 @@ def test_forecast_extrapolates_the_speed_over_the_latency(swing):
 def test_coi_and_relative_speeds_with_variances():
     M = np.array([1.0, 2.0, 5.0])
     speed, var = np.array([1.001, 0.999, 1.0]), np.array([1e-8, 4e-8, 9e-8])
-    c, cv = es.coi_speed(speed, var, M)
+    c, cv = coi_speed(speed, var, M)
     assert c == pytest.approx((1.001 + 2 * 0.999 + 5) / 8)
     assert cv == pytest.approx((1e-8 + 4 * 4e-8 + 25 * 9e-8) / 64)
     rng = np.random.default_rng(0)
     draws = speed + rng.normal(size=(200000, 3)) * np.sqrt(var)
     for coi in ("system", "rest"):
-        r, rv = es.relative_speeds(speed, var, M, coi)
-        rd = es.relative_speeds(draws, draws, M, coi)[0]           # (..., n) stacks work
+        r, rv = relative_speeds(speed, var, M, coi)
+        rd = relative_speeds(draws, draws, M, coi)[0]           # (..., n) stacks work
         np.testing.assert_allclose(rd.mean(axis=0), r, atol=2e-6)
         np.testing.assert_allclose(rd.var(axis=0), rv, rtol=0.02)
     rest0 = speed[0] - (2 * 0.999 + 5 * 1.0) / 7
-    assert es.relative_speeds(speed, var, M, "rest")[0][0] == pytest.approx(rest0)
+    assert relative_speeds(speed, var, M, "rest")[0][0] == pytest.approx(rest0)
     with pytest.raises(InputError):
-        es.relative_speeds(speed, var, M, "area")
+        relative_speeds(speed, var, M, "area")
 
 
 # -- real Kundur run -----------------------------------------------------------------------
@@ -182,7 +186,7 @@ def kundur():
     case = load_case("kundur")
     res = Simulator(case).run([fault_with_clearing(case, 3, 101, 1.0, 12)], t_end=8.0)
     pmus = pmu.machine_pmus(case)
-    return case, res, pmus, es.machine_models(case, pmus), pmu.phasor_truth(case, res, pmus)
+    return case, res, pmus, machine_models(case, pmus), pmu.phasor_truth(case, res, pmus)
 
 
 def test_kundur_relative_speed_well_inside_the_deadband(kundur):
@@ -202,8 +206,8 @@ def test_compiled_filters_equal_the_filterpy_reference(kundur):
     case, res, pmus, models, truth = kundur
     st = pmu.PMUSettings(drop_prob=0.1)
     stream = pmu.measure(truth, st, seed=1)
-    for fast, ref in ((es.FrequencyKF(models.pmu, st), es.FrequencyKFReference(models.pmu, st)),
-                      (es.SwingEKF(models, st), es.SwingEKFReference(models, st))):
+    for fast, ref in ((FrequencyKF(models.pmu, st), FrequencyKFReference(models.pmu, st)),
+                      (SwingEKF(models, st), SwingEKFReference(models, st))):
         a, b = feed(fast, stream), feed(ref, stream)
         for x, y in zip(a, b):
             np.testing.assert_allclose(x, y, rtol=1e-9, atol=1e-14)
@@ -256,7 +260,7 @@ def test_baseline_kf_forecast_does_not_amplify_a_bus_angle_step():
     phase = lambda t: dth * (t >= t_step)                                  # noqa: E731
     freq = lambda t: F0 + (phase(t) - phase(t - w)) / (2 * np.pi * w)      # noqa: E731
     rng = np.random.default_rng(0)
-    kf, out = es.FrequencyKF([0], st, f0=F0), []
+    kf, out = FrequencyKF([0], st, f0=F0), []
     for t in np.arange(1, 150) / F0:
         z = freq(t) + rng.normal() * st.sigma_freq
         r = (freq(t) - freq(t - w)) / w + rng.normal() * st.sigma_rocof

@@ -16,7 +16,9 @@ from stabctl.dynamics.simulation import Simulator
 from stabctl.errors import InputError, PowerFlowError
 from stabctl.io import load_case
 from stabctl.network.powerflow import scale_load, solve_powerflow
-from stabctl.placement.planner import ENERGY_MARGIN, CostModel, Requirement, plan
+from stabctl.placement.energy import ENERGY_MARGIN
+from stabctl.placement.plan import plan
+from stabctl.placement.requirements import CostModel, Requirement
 from stabctl.placement.program import InfeasibleError, candidate_sites
 from stabctl.smib.omib import PAPER_OMIB, simulate
 from stabctl.stability.cct import LineFault
@@ -190,12 +192,12 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
     assert u["max_energy_diff_mwh"] > 0
 
 
-def test_energy_half_step_figures_by_hand():
-    """`_energy_half_step` on hand-made check results (energy_mj rows: absorbed, delivered,
+def testenergy_half_step_figures_by_hand():
+    """`energy_half_step` on hand-made check results (energy_mj rows: absorbed, delivered,
     highest, lowest SOC, MJ; need = 2 max(high, -low) / 3600 MWh): changes in MWh and in %
     of each site's own need, a site with no need left out of the %, and the cover test
     against the sized MWh (margin and rounding included)."""
-    from stabctl.placement.planner import _energy_half_step
+    from stabctl.placement.energy import energy_half_step
     mw = np.array([10.0, 0.0, 5.0, 2.0])
     energy = [{"set_by": "a", "excursion_mwh": 0.02}, {},
               {"set_by": "b", "excursion_mwh": 0.01}, {"set_by": "b", "excursion_mwh": 0.0}]
@@ -203,13 +205,13 @@ def test_energy_half_step_figures_by_hand():
     half = {"a": {"energy_mj": [[0, 0, 36.0, -9.0], [], []]},      # need 0.02 -> 0.02
             "b": {"energy_mj": [[], [0, 0, 0.0, -27.0],             # 0.01 -> 0.015 (+50 %)
                                 [0, 0, 1.8, 0.0]]}}                 # 0 -> 0.001 (no %)
-    e = _energy_half_step(half, mw, np.array([0.03, 0.0, 0.02, 0.01]), energy)
+    e = energy_half_step(half, mw, np.array([0.03, 0.0, 0.02, 0.01]), energy)
     assert e["max_energy_diff_mwh"] == pytest.approx(0.005)
     assert e["max_energy_diff_pct"] == pytest.approx(50.0)
     assert e["energy_covered_half"]
-    assert not _energy_half_step(half, mw, np.array([0.03, 0.0, 0.012, 0.01]),
+    assert not energy_half_step(half, mw, np.array([0.03, 0.0, 0.012, 0.01]),
                                  energy)["energy_covered_half"]
-    assert _energy_half_step({}, np.zeros(4), np.zeros(4), [{}] * 4) == {
+    assert energy_half_step({}, np.zeros(4), np.zeros(4), [{}] * 4) == {
         "max_energy_diff_mwh": None, "max_energy_diff_pct": None,
         "energy_covered_half": None}
 
@@ -252,7 +254,7 @@ def test_cli_place_with_a_clearing_time_requirement_and_bad_input(tmp_path):
 
 
 def test_screening_brackets_and_requirement_overrides_are_read_from_their_files(tmp_path):
-    from stabctl.placement.planner import read_requirements, screening_brackets
+    from stabctl.placement.requirements import read_requirements, screening_brackets
 
     rec = tmp_path / "s.jsonl"
     ok = {"key": "k1", "status": "ok", "inputs": {"esd_pct": None},

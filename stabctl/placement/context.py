@@ -1,0 +1,111 @@
+"""What every step of a plan shares (`PlanContext`): the case, candidate sites, costs,
+controller and model settings, the worker map that counts the simulations, what is known
+without storage, and the check runs (docs/placement.md, section 7).  Used by the
+constraint generation (`stabctl.placement.plan`), the energy sizing
+(`stabctl.placement.energy`) and the references (`stabctl.placement.references`).
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from stabctl.dynamics.options import ModelOptions
+from stabctl.placement.evaluation import _fault_dict, check, controller_dict, devices_of
+from stabctl.placement.loop import evaluations
+from stabctl.placement.requirements import CostModel
+
+
+@dataclass
+class PlanContext:
+    """What every round of a plan needs.
+
+    case: case name; sites: candidate sites; cost: `CostModel`; controller: the ESD
+    controller; model: {"conventions", "h" (s or None)}; run_map: callable(func, jobs) ->
+    results (`counting`); tol, t_max: CCT tolerance and search limit (s); say: progress
+    callable (`stabctl.progress.Heartbeat`); n_runs: simulations counted; base: name ->
+    evaluation without storage (`add_base`); energy_rate: usable energy per MW at each site (MWh/MW,
+    `stabctl.placement.energy.mwh_per_mw`); drop_infeasible, brackets: as `plan`;
+    infeasible, set_aside: what was set aside; loop_kw: passed to every `place`.
+    """
+
+    case: str
+    sites: tuple
+    cost: CostModel
+    controller: object
+    model: dict
+    run_map: object
+    tol: float
+    t_max: float
+    say: object
+    n_runs: int = 0
+    base: dict = field(default_factory=dict)
+    energy_rate: np.ndarray | None = None
+    drop_infeasible: bool = False
+    brackets: dict | None = None
+    infeasible: list = field(default_factory=list)
+    set_aside: list = field(default_factory=list)
+    loop_kw: dict = field(default_factory=dict)
+    lock: object = field(default_factory=threading.Lock)
+
+    def check(self, contingencies, mw, energy_mj=None, h: float | None = None) -> dict:
+        """`stabctl.placement.evaluation.check` of every contingency at ratings mw (one
+        run each, in parallel): name -> check dict.  energy_mj: usable energy per site
+        (MJ) of finite devices; h: another integration step (s) than the plan's."""
+        devs = devices_of(self.sites, mw)
+        if energy_mj is not None:
+            used = [j for j, p in enumerate(mw) if p > 0]
+            devs = [d + [float(energy_mj[j])] for d, j in zip(devs, used)]
+        ctrl = controller_dict(self.controller)
+        sites = [[s.bus, s.machine] for s in self.sites]
+        jobs = [{"case": self.case, "fault": _fault_dict(c.fault), "devices": devs,
+                 "sites": sites, "controller": ctrl, "t_clear": c.target_cct_s,
+                 "load": c.load, **self.model, **({} if h is None else {"h": h})}
+                for c in contingencies]
+        return dict(zip((c.name for c in contingencies), self.run_map(check, jobs)))
+
+    def priced(self, mwh_per_mw) -> tuple:
+        """Sites whose cost per MW includes their energy at mwh_per_mw (MWh/MW)."""
+        return tuple(replace(s, cost=max(self.cost.of(s.machine)[0]
+                                         + self.cost.of(s.machine)[1] * e, 1e-9))
+                     for s, e in zip(self.sites, mwh_per_mw))
+
+    def counting(self, run_map, beat):
+        """run_map that adds the simulations its jobs report to n_runs (and tells the
+        heartbeat `beat`)."""
+        def counted(func, jobs):
+            beat.note(f"{len(jobs)} {func.__name__} job(s) running, {self.n_runs} runs "
+                      "simulated before them")
+            out = run_map(func, jobs)
+            with self.lock:         # `faults_alone` runs batches from several threads
+                self.n_runs += sum(o.get("n_simulations") or 0 for o in out)
+            return out
+        return counted
+
+    @property
+    def site_costs(self) -> np.ndarray:
+        """Cost per site (installed or not) at each candidate, (n_sites,)."""
+        return np.array([self.cost.of(s.machine)[2] for s in self.sites])
+
+    def add_base(self, cons, brackets, kw) -> None:
+        """Add to `base` the evaluations without storage (CCT by bisection, from the
+        screening's bracket when known, and its gradient; counted) of the contingencies
+        of `cons` it lacks (`stabctl.placement.loop.evaluations`, keyword arguments kw).
+        brackets: fault name -> [stable, unstable] clearing times (s), or None."""
+        todo = [c for c in cons if c.name not in self.base]
+        if not todo:
+            return
+        br = {c.name: tuple(brackets[c.fault_name]) for c in todo
+              if brackets and c.load == 1.0 and c.fault_name in brackets
+              and None not in brackets[c.fault_name]}
+        self.base.update(evaluations(self.case, todo, None, brackets=br, **kw))
+
+    def step_s(self) -> float:
+        """The integration step of the plan's runs (s)."""
+        from stabctl.stability.cct import cached_simulator
+
+        if self.model["h"] is not None:
+            return self.model["h"]
+        return cached_simulator(self.case, ModelOptions(self.model["conventions"])).default_h

@@ -1,0 +1,473 @@
+"""A planner's placement: least-cost ESD sites, MW and MWh such that every screened fault
+is stable when cleared at its required clearing time, at every load level planned for
+(docs/placement.md, section 7).
+
+Verification (`stabctl.placement.evaluation.check`): a contingency is met at an allocation
+when the run cleared at its required clearing time (`stabctl.placement.requirements`) is
+stable; the contingencies the program is solved for (the active set) are moreover met by
+their first unstable clearing time (`stabctl.placement.loop`).
+
+Constraint generation (`plan`): every contingency is first simulated once without storage,
+cleared at its required time; those that fail are the candidates, the most binding of
+them (smallest CCT without storage relative to the requirement, up to `n_active`) the
+first active set.  Each round solves the verified trust-region loop
+(`stabctl.placement.loop.place`) for the active set, warm-started from the last
+allocation with the evaluations already simulated, then checks every contingency at the
+allocation (one run each) and adds those that fail; it ends when none fails.  The
+energies are then sized (`stabctl.placement.energy`) and, when asked, the references
+computed (`stabctl.placement.references`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from stabctl.dynamics.options import ModelOptions
+from stabctl.errors import InputError
+from stabctl.placement.context import PlanContext
+from stabctl.placement.energy import mwh_per_mw, size_energy
+from stabctl.placement.loop import DEFAULT_CONTROLLER, _as_allocation, _pool, place
+from stabctl.placement.program import InfeasibleError, candidate_sites
+from stabctl.placement.references import faults_alone, half_step, least_uniform, margins
+from stabctl.placement.requirements import CostModel, Requirement, contingencies_of, describe
+from stabctl.progress import Heartbeat
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass
+class PlanResult:
+    """Outcome of `plan`.
+
+    sites: candidate sites; mw, mwh: rating (MW) and usable energy (MWh) per site
+    (n_sites,); cost: `CostModel.split`; verified: every contingency checked stable at its
+    required clearing time (and the active ones by their CCT, and the sized energies);
+    contingencies: one row per contingency (`rows`); rounds: one dict per round of
+    constraint generation; active: names of the contingencies the program was solved
+    for; message: why it stopped; n_simulations: runs simulated in all; wall_time_s.
+    uniform, alone: the references when asked (`least_uniform`, `faults_alone`); half_step: the
+    tightest contingencies again at half the step (`half_step`) when asked; out_of_scope:
+    contingencies unstable when cleared at once; infeasible, set_aside: the proofs and
+    names of those set aside as infeasible.
+    """
+
+    case: str
+    requirement: str
+    load_levels: tuple
+    sites: tuple
+    mw: np.ndarray
+    mwh: np.ndarray
+    cost: dict
+    verified: bool
+    contingencies: list
+    rounds: list
+    active: list
+    message: str
+    energy: list = field(default_factory=list)
+    out_of_scope: list = field(default_factory=list)
+    infeasible: list = field(default_factory=list)
+    set_aside: list = field(default_factory=list)
+    uniform: dict | None = None
+    alone: list = field(default_factory=list)
+    half_step: dict | None = None
+    n_simulations: int = 0
+    wall_time_s: float = 0.0
+
+    @property
+    def total_mw(self) -> float:
+        """Rating of every device, MW."""
+        return _as_allocation(self.sites, self.mw, []).total_mw
+
+    def allocation(self) -> list[dict]:
+        """Installed sites: bus, machine, MW, MWh, energy absorbed and delivered (MJ, the
+        largest over the verifying runs)."""
+        rows = _as_allocation(self.sites, self.mw, []).rows()
+        for r, j in zip(rows, np.nonzero(self.mw > 0)[0]):
+            r.update(mwh=float(self.mwh[j]), **(self.energy[j] if self.energy else {}))
+        return rows
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (MW, MWh, s, cost units)."""
+        met = [c for c in self.contingencies if c["met"]]
+        return {"verified": self.verified, "message": self.message,
+                "requirement": self.requirement, "load_levels": list(self.load_levels),
+                "allocation": self.allocation(), "total_mw": self.total_mw,
+                "total_mwh": float(self.mwh.sum()), "n_sites": int(np.count_nonzero(self.mw)),
+                "cost": self.cost, "n_contingencies": len(self.contingencies),
+                "n_met": len(met), "active": self.active,
+                "out_of_scope": self.out_of_scope, "infeasible": self.infeasible,
+                "set_aside": self.set_aside,
+                "contingencies": self.contingencies, "rounds": self.rounds,
+                "n_simulations": self.n_simulations, "wall_time_s": self.wall_time_s,
+                "uniform": self.uniform, "alone": self.alone, "half_step": self.half_step}
+
+
+def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
+         overrides: dict | None = None, cost: CostModel | None = None, sites=None,
+         brackets: dict | None = None, n_active: int = 12, max_rounds: int = 6,
+         max_iter: int = 6, tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
+         scheduler: str | None = None, controller=None, conventions: str = "ieee",
+         h: float | None = None, run_map=None, progress=None, uniform: bool = False,
+         alone: bool = False, margins_tol: float | None = None, margins_cap_s: float = 0.1,
+         scope_stable_at_once: bool = True, drop_infeasible: bool = False,
+         half_step_n: int = 0, **loop_kw) -> PlanResult:
+    """Least-cost ESD sites, MW and MWh meeting `requirement` on every fault at every load
+    level, verified by simulation (module docstring).
+
+    Parameters
+    ----------
+    case : str
+        Built-in case name or case file (workers load it by name).
+    faults : sequence of LineFault
+        Every contingency to meet (e.g. a whole screening).
+    requirement : Requirement
+        Global requirement; overrides: fault name -> Requirement (`read_requirements`).
+    load_levels : sequence of float, optional
+        Load levels (fractions of the base load) every fault is verified at; default (1,).
+    cost : CostModel or None, optional
+        Costs (default 1 per MW: least MW).
+    sites : sequence of Site or None, optional
+        Candidates (default `candidate_sites`: every generator's HV bus, up to 50 % of
+        its MVA).
+    brackets : dict or None, optional
+        Fault name -> [stable, unstable] clearing times without storage at the base load
+        (s), e.g. a screening's, where the CCT searches start; [t, None]: still stable
+        when cleared at t (a screening's limit), known stable at any requirement up to t.
+    n_active : int, optional
+        Contingencies in the first active set (the most binding of those unstable
+        without storage); default 12.
+    max_rounds : int, optional
+        Rounds of constraint generation at most; max_iter: allocations simulated per
+        round at most (`place`).
+    tol, t_max : float, optional
+        CCT tolerance and search limit, s.
+    workers, scheduler, run_map, controller, conventions, h
+        As `stabctl.placement.loop.place`.
+    progress : callable(str) or None
+        One line per step; None: to this module's logger (level INFO, `stabctl.progress`).
+    uniform, alone : bool, optional
+        Also the least uniform fleet and each fault's own least allocation meeting the
+        same requirements (`stabctl.placement.references`).
+    scope_stable_at_once : bool, optional
+        Leave out (and list in `PlanResult.out_of_scope`) the contingencies unstable
+        already when cleared at once (the line trip alone, at their load level), which no
+        required clearing time can describe; default True.  False: they stay in, and
+        are infeasible unless storage makes the trip alone stable.
+    drop_infeasible : bool, optional
+        A contingency proven infeasible (named by `InfeasibleError`) is set aside, listed
+        in `PlanResult.infeasible`, and the others are planned for; default False: the
+        error is raised.
+    margins_tol, margins_cap_s : float or None, float, optional
+        Also the clearing margin with the allocation of every contingency the program
+        was not solved for, to margins_tol (s), up to margins_cap_s (s; `margins`);
+        None: those are only checked at their required time (margin >= 0 known).
+    half_step_n : int, optional
+        Also simulate the half_step_n contingencies of least clearing margin again at
+        half the integration step (`half_step`); default 0: not done.
+    **loop_kw
+        zeta_min, amplitude_hz, max_sites: passed to every `place` (the damping is
+        verified by the loop, for the allocation as a whole).
+
+    Returns
+    -------
+    PlanResult
+
+    Raises
+    ------
+    InfeasibleError
+        A contingency misses its requirement even with every site at its bound (named
+        with its load level).
+    InputError
+        No faults, bad settings, a fault unstable already when cleared at once.
+    PowerFlowError, CaseError
+        A load level without a power flow or a valid initial state (named).
+    """
+    wall = time.perf_counter()
+    faults = list(faults)
+    if not faults:
+        raise InputError("no contingency given")
+    if n_active < 1 or max_rounds < 1 or max_iter < 1:
+        raise InputError("need n_active, max_rounds and max_iter >= 1")
+    levels = _load_levels(load_levels)
+    freq_hz, sites = _case_at_levels(case, conventions, h, levels, sites)
+    say = Heartbeat(progress or logger.info)
+    with _pool(run_map, workers, scheduler) as pool_map, say:
+        pl = PlanContext(case, sites, cost or CostModel(), controller or DEFAULT_CONTROLLER,
+                         {"conventions": conventions, "h": h}, None, tol, t_max, say,
+                         loop_kw=loop_kw, drop_infeasible=drop_infeasible, brackets=brackets)
+        pl.run_map = pl.counting(pool_map, say)
+        kw = {"sites": sites, "tol": tol, "t_max": t_max, "run_map": pl.run_map,
+              "controller": pl.controller, "conventions": conventions, "h": h}
+        cons = _contingencies(pl, faults, requirement, overrides, freq_hz, levels, kw)
+        cons, failing, checks, out = _without_storage(pl, cons, len(faults), len(levels),
+                                                      scope_stable_at_once)
+        result = _generate(pl, cons, failing, checks, n_active, max_rounds, max_iter, kw)
+        result.out_of_scope, result.load_levels = sorted(out), levels
+        result.requirement = describe(requirement, overrides)
+        result.infeasible, result.set_aside = list(pl.infeasible), list(pl.set_aside)
+        kept = {r["name"] for r in result.contingencies}
+        _references(pl, tuple(c for c in cons if c.name in kept),
+                    [c for c in failing if c.name in kept], result, kw, margins_tol,
+                    margins_cap_s, half_step_n, uniform, alone, max_iter)
+    result.n_simulations = pl.n_runs
+    result.wall_time_s = time.perf_counter() - wall
+    return result
+
+
+def _load_levels(load_levels) -> tuple:
+    """The load levels (fractions of the base load), each once, in the order given.
+    Raises InputError for none or one that is not a number > 0."""
+    levels = tuple(dict.fromkeys(float(x) for x in load_levels))
+    if not levels or any(not (np.isfinite(x) and x > 0) for x in levels):
+        raise InputError(f"load levels must be numbers > 0, got {list(load_levels)}")
+    return levels
+
+
+def _case_at_levels(case: str, conventions: str, h, levels, sites) -> tuple:
+    """The case's frequency (Hz) and the candidate sites (given, or `candidate_sites`),
+    once its power flow at every load level is known to solve.  Raises PowerFlowError or
+    CaseError naming the load level."""
+    from stabctl.stability.cct import cached_simulator
+
+    for x in levels:
+        cached_simulator(case, ModelOptions(conventions, h), load=x)
+    sim = cached_simulator(case, ModelOptions(conventions, h))
+    return sim.case.freq_hz, tuple(sites or candidate_sites(sim.case))
+
+
+def _contingencies(pl: PlanContext, faults, requirement: Requirement, overrides, freq_hz,
+                   levels, kw) -> tuple:
+    """Every fault at every load level with its required clearing time
+    (`contingencies_of`); where a requirement is a CCT gain, the CCTs without storage of
+    every contingency are simulated first (into pl.base)."""
+    if requirement.needs_base or any(r.needs_base for r in (overrides or {}).values()):
+        every = contingencies_of(faults, Requirement(cct_s=pl.t_max), freq_hz, pl.tol, levels)
+        pl.say(f"CCT without storage of {len(every)} contingencies")
+        pl.add_base(every, pl.brackets, kw)
+    return contingencies_of(faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base)
+
+
+def _without_storage(pl: PlanContext, cons, n_faults: int, n_levels: int,
+                     scope_stable_at_once: bool) -> tuple:
+    """Each contingency cleared at its required time without storage (one run each, but
+    those the screening knows stable): (the contingencies in scope, those failing, name ->
+    check, names out of scope: unstable even when cleared at once, when
+    scope_stable_at_once)."""
+    known = _stable_by_screening(cons, pl.brackets)
+    pl.say(f"{len(cons)} contingencies ({n_faults} faults x {n_levels} load "
+           f"level(s)): each cleared at its required time without storage ({len(known)} "
+           "known stable there from the screening)")
+    checks = pl.check([c for c in cons if c.name not in known], np.zeros(len(pl.sites)))
+    failing = [c for c in cons if c.name in checks and not checks[c.name]["stable_at_check"]]
+    out = _out_of_scope(pl, failing) if scope_stable_at_once else set()
+    if out:
+        pl.say("out of scope (unstable even when cleared at once, the line trip alone): "
+               + ", ".join(sorted(out)))
+    cons = tuple(c for c in cons if c.name not in out)
+    failing = [c for c in failing if c.name not in out]
+    pl.say(f"{len(failing)} of {len(cons)} unstable without storage: "
+           + ", ".join(c.name for c in failing[:12]) + (" ..." if len(failing) > 12 else ""))
+    return cons, failing, {**{n: _STABLE for n in known}, **checks}, out
+
+
+def _references(pl: PlanContext, cons, failing, result: PlanResult, kw, margins_tol,
+                margins_cap_s, half_step_n, uniform, alone, max_iter) -> None:
+    """What `plan` adds to a result when asked: the clearing margins (then the half-step
+    check, which ranks by them), the least uniform fleet and each binding fault alone.
+    They are independent, so they run at the same time (one thread each, sharing the
+    worker pool: fewer idle workers at the end of each one's batches)."""
+    def margins_and_half_step():
+        if margins_tol is not None:
+            margins(pl, cons, result, margins_tol, margins_cap_s, kw)
+        if half_step_n > 0 and result.verified:
+            result.half_step = half_step(pl, cons, result, half_step_n, kw)
+
+    with ThreadPoolExecutor(max_workers=3) as threads:
+        m = threads.submit(margins_and_half_step)
+        u = threads.submit(least_uniform, pl, cons, failing, kw) if uniform else None
+        a = threads.submit(faults_alone, pl, cons, result, max_iter, kw) if alone else None
+        m.result()
+        result.uniform = None if u is None else u.result()
+        result.alone = [] if a is None else a.result()
+
+
+#: A check known without a run (stable, no energy figures).
+_STABLE = {"stable_at_check": True, "energy_mj": [], "site_excursion_s": [], "check_s": None}
+
+
+def _stable_by_screening(cons, brackets) -> set:
+    """Names of base-load contingencies the screening found stable when cleared at their
+    required time or later without storage (its stable end is at least the requirement).
+    """
+    return {c.name for c in cons if brackets and c.load == 1.0 and c.fault_name in brackets
+            and brackets[c.fault_name][0] is not None
+            and brackets[c.fault_name][0] >= c.target_cct_s - 1e-9}
+
+
+def _out_of_scope(pl: PlanContext, failing) -> set:
+    """Names of the contingencies of `failing` unstable without storage even when cleared
+    at once (one run each, the line trip alone)."""
+    if not failing:
+        return set()
+    at_once = pl.check([replace(c, target_cct_s=0.0) for c in failing],
+                       np.zeros(len(pl.sites)))
+    return {n for n, ck in at_once.items() if not ck["stable_at_check"]}
+
+
+def _most_binding(failing, brackets, base: dict, n: int) -> list:
+    """The n contingencies of `failing` with the least ratio of the CCT without storage to
+    the requirement: simulated (base) or else the screening's (base load; none: last),
+    the heavier load level first among equals.  With a screening no run is needed: the
+    CCTs without storage of the rest are simulated only if they are added."""
+    def severity(c):
+        cct = base[c.name]["cct_s"] if c.name in base else \
+            (brackets or {}).get(c.fault_name, (None,))[0]
+        return (np.inf if cct is None else cct / c.target_cct_s, -c.load, c.name)
+
+    return sorted(failing, key=severity)[:n]
+
+
+@dataclass
+class _Rounds:
+    """Constraint generation between rounds: the contingencies still planned for (cons),
+    the allocation (mw, MW per site) and its checks (name -> check dict), the active set
+    and its evaluations (evs), one dict per round, and the verdict so far."""
+
+    cons: tuple
+    checks: dict
+    mw: np.ndarray
+    active: list = field(default_factory=list)
+    evs: dict = field(default_factory=dict)
+    rounds: list = field(default_factory=list)
+    verified: bool = False
+    message: str = ""
+
+
+def _generate(pl: PlanContext, cons, failing, checks, n_active, max_rounds, max_iter,
+              kw) -> PlanResult:
+    """The rounds of constraint generation (module docstring), then the energies."""
+    st = _Rounds(cons, checks, np.zeros(len(pl.sites)))
+    if not failing:
+        st.verified, st.message = True, "every contingency is stable without storage"
+    else:
+        if not pl.brackets:         # no screening to rank by: simulate every failing one
+            pl.add_base(failing, None, kw)
+        st.active = _most_binding(failing, pl.brackets, pl.base, n_active)
+        pl.add_base(st.active, pl.brackets, kw)
+        st.message = f"not verified after {max_rounds} round(s) of constraint generation"
+    for rnd in range(1, max_rounds + 1 if failing else 1):
+        if _round(pl, st, rnd, n_active, max_iter, kw):
+            break
+    mwh, energy, ok = size_energy(pl, st.cons, st.mw, st.checks)
+    if st.verified and not ok:
+        st.verified, st.message = False, st.message + "; the sized energies fail a check run"
+    return PlanResult(case=pl.case, requirement="", load_levels=(), sites=pl.sites, mw=st.mw,
+                      mwh=mwh, cost=pl.cost.split(pl.sites, st.mw, mwh), verified=st.verified,
+                      contingencies=_rows(st.cons, st.checks, st.evs, pl.base),
+                      rounds=st.rounds, active=[c.name for c in st.active],
+                      message=st.message, energy=energy)
+
+
+def _round(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, max_iter: int,
+           kw) -> bool:
+    """Round rnd: the verified loop (`place`) for the active set, priced with the energy
+    per MW of the latest checks, then every contingency checked at its allocation.  A
+    contingency proven infeasible is set aside when the plan drops them.  Returns whether
+    constraint generation ends (st.verified and st.message say how)."""
+    pl.energy_rate = mwh_per_mw(len(pl.sites), st.checks)
+    sites = pl.priced(pl.energy_rate)
+    pl.say(f"round {rnd}: solving for {len(st.active)} contingencies ("
+           + ", ".join(c.name for c in st.active) + ")")
+    try:
+        res = place(pl.case, st.active, site_cost=pl.site_costs, max_iter=max_iter,
+                    base={c.name: pl.base[c.name] for c in st.active},
+                    start=None if not st.mw.any() else st.mw, start_evaluations=st.evs,
+                    progress=lambda m: pl.say(f"round {rnd}: {m}"),
+                    **{**kw, **pl.loop_kw, "sites": sites})
+    except InfeasibleError as exc:
+        if not pl.drop_infeasible or not exc.contingencies:
+            raise
+        _set_aside(pl, st, rnd, exc)
+        return False if st.active else _recheck(pl, st, rnd, n_active, kw)
+    return _add_failing(pl, st, rnd, res, kw)
+
+
+def _set_aside(pl: PlanContext, st: _Rounds, rnd: int, exc: InfeasibleError) -> None:
+    """Set aside the contingencies exc proves infeasible (listed in the plan and in this
+    round's record), out of every later round."""
+    gone = set(exc.contingencies)
+    pl.infeasible.append(str(exc))
+    pl.set_aside.extend(sorted(gone))
+    st.rounds.append({"round": rnd, "active": [c.name for c in st.active], "total_mw": None,
+                      "set_aside": sorted(gone), "failing": [], "iterations": 0})
+    pl.say(f"round {rnd}: set aside as infeasible: {', '.join(sorted(gone))}")
+    st.cons = tuple(c for c in st.cons if c.name not in gone)
+    st.active = [c for c in st.active if c.name not in gone]
+    st.evs = {k: v for k, v in st.evs.items() if k not in gone}
+
+
+def _recheck(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw) -> bool:
+    """Nothing left to solve for: every contingency checked at the allocation; the most
+    binding of those that fail are the next active set.  Returns whether none fails."""
+    st.checks = pl.check(st.cons, st.mw)
+    fails = [c for c in st.cons if not st.checks[c.name]["stable_at_check"]]
+    if not fails:
+        st.verified, st.message = True, f"verified on every contingency after {rnd} round(s)"
+        return True
+    st.active = _most_binding(fails, pl.brackets, pl.base, n_active)
+    pl.add_base(st.active, pl.brackets, kw)
+    return False
+
+
+def _add_failing(pl: PlanContext, st: _Rounds, rnd: int, res, kw) -> bool:
+    """The loop's allocation (res, `stabctl.placement.loop.PlacementResult`) checked at
+    every contingency; those that fail join the active set.  Returns whether constraint
+    generation ends: verified (none fails), or not (the loop did not verify, or only
+    active contingencies fail)."""
+    st.mw, st.evs = res.allocation.mw, dict(res.evaluations)
+    st.checks = pl.check(st.cons, st.mw)
+    fails = [c for c in st.cons if not st.checks[c.name]["stable_at_check"]]
+    st.rounds.append({"round": rnd, "active": [c.name for c in st.active],
+                      "total_mw": float(st.mw.sum()), "loop_verified": res.verified,
+                      "loop_message": res.message, "failing": [c.name for c in fails],
+                      "iterations": len(res.iterations)})
+    pl.say(f"round {rnd}: {st.mw.sum():.1f} MW, checked {len(st.cons)} contingencies: "
+           + (f"{len(fails)} fail (" + ", ".join(c.name for c in fails[:8]) + ")"
+              if fails else "all stable"))
+    if not res.verified:
+        st.message = f"round {rnd}: the loop did not verify an allocation ({res.message})"
+        return True
+    if not fails:
+        st.verified, st.message = True, f"verified on every contingency after {rnd} round(s)"
+        return True
+    new = [c for c in fails if c.name not in {a.name for a in st.active}]
+    if not new:
+        st.message = (f"round {rnd}: contingencies of the active set fail their check run: "
+                      f"{', '.join(c.name for c in fails)}")
+        return True
+    pl.add_base(new, pl.brackets, kw)
+    st.active = st.active + new
+    return False
+
+
+def _rows(cons, checks, evs, base) -> list:
+    """One row per contingency: name, fault, load, required time, stable at it, CCT
+    without storage and with the allocation where simulated, margin (s)."""
+    out = []
+    for c in cons:
+        cct = evs.get(c.name, {}).get("cct_s")
+        out.append({"name": c.name, "fault": c.fault.describe(), "fault_name": c.fault_name,
+                    "load": c.load, "required_s": c.target_cct_s,
+                    "met": bool(checks[c.name]["stable_at_check"])
+                    and (cct is None or cct >= c.target_cct_s - 1e-9),
+                    "cct_no_storage_s": base.get(c.name, {}).get("cct_s"),
+                    "cct_s": cct, "margin_s": None if cct is None else cct - c.target_cct_s,
+                    "margin_at_least": False})
+    return out
+
+

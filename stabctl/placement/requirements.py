@@ -1,0 +1,255 @@
+"""What a planner asks of the storage (docs/placement.md, section 7): the requirement each
+contingency must withstand, the cost of the devices, and what a screening already knows.
+
+Requirements (`Requirement`, any mix, the strictest wins): a required clearing time in
+cycles (every contingency stable when cleared after N cycles, in the spirit of NERC
+TPL-001: normal clearing plus a margin), a CCT gain over the CCT without storage (%), or
+an absolute CCT (s); per-contingency overrides (`read_requirements`).  A contingency is a
+fault at one load level (`Contingency.load`, `stabctl.network.powerflow.scale_load`), with
+its required clearing time (`contingencies_of`).
+
+Costs (`CostModel`): cost = sum_j (c_mw,j MW_j + c_mwh,j MWh_j + c_site,j [MW_j > 0]),
+per-site overrides (`read_site_costs`).
+
+Screening (`screening_brackets`): the clearing times without storage a screening
+bracketed, where the planner's CCT searches start.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from stabctl.errors import InputError
+from stabctl.placement.evaluation import Contingency
+
+
+@dataclass(frozen=True)
+class Requirement:
+    """What a contingency must withstand; any mix of the three, the strictest wins.
+
+    Attributes
+    ----------
+    cycles : float or None
+        Required clearing time, cycles of the case frequency: stable when cleared then.
+    gain_pct : float or None
+        CCT raised by this % over the CCT without storage.
+    cct_s : float or None
+        Required CCT, s.
+
+    Raises
+    ------
+    InputError
+        None given, or one not > 0.
+    """
+
+    cycles: float | None = None
+    gain_pct: float | None = None
+    cct_s: float | None = None
+
+    def __post_init__(self):
+        given = [v for v in (self.cycles, self.gain_pct, self.cct_s) if v is not None]
+        if not given:
+            raise InputError("no requirement given: need a required clearing time "
+                             "(cycles), a CCT gain (%) or a target CCT (s)")
+        if not all(np.isfinite(v) and v > 0 for v in given):
+            raise InputError(f"requirements must be > 0, got cycles={self.cycles}, "
+                             f"gain={self.gain_pct} %, cct={self.cct_s} s")
+
+    @property
+    def needs_base(self) -> bool:
+        """Whether the target depends on the CCT without storage (a gain)."""
+        return self.gain_pct is not None
+
+    def target_s(self, freq_hz: float, tol: float, base_cct_s: float | None = None) -> float:
+        """The required clearing time (s), rounded up to the tolerance lattice.
+
+        Parameters
+        ----------
+        freq_hz : float
+            Case frequency, Hz.
+        tol : float
+            CCT tolerance, s.
+        base_cct_s : float or None
+            CCT without storage, s (needed with a gain).
+
+        Raises
+        ------
+        InputError
+            A gain without base_cct_s.
+        """
+        t = []
+        if self.cycles is not None:
+            t.append(self.cycles / freq_hz)
+        if self.cct_s is not None:
+            t.append(self.cct_s)
+        if self.gain_pct is not None:
+            if base_cct_s is None:
+                raise InputError("a CCT gain needs the CCT without storage")
+            t.append(base_cct_s * (1 + self.gain_pct / 100))
+        return round(float(np.ceil(max(t) / tol - 1e-6)) * tol, 12)
+
+    def describe(self) -> str:
+        """E.g. ``"5 cycles"``, ``"CCT +10 %"``."""
+        parts = ([f"{self.cycles:g} cycles"] if self.cycles is not None else []) + \
+            ([f"CCT +{self.gain_pct:g} %"] if self.gain_pct is not None else []) + \
+            ([f"CCT {1000 * self.cct_s:g} ms"] if self.cct_s is not None else [])
+        return ", ".join(parts)
+
+
+def read_requirements(path) -> dict:
+    """Per-fault requirement overrides from a fault list CSV (`stabctl.stability.cct.
+    read_faults`'s columns plus any of ``required_clearing_cycles``,
+    ``target_cct_gain``, ``target_cct_s``; a row with none keeps the global one).
+
+    Returns
+    -------
+    dict
+        Fault name (`Contingency.fault_name`, e.g. ``"83-33"``) -> `Requirement`.
+
+    Raises
+    ------
+    InputError
+        Unreadable file or a value that is not a number > 0 (naming the line).
+    """
+    from stabctl.stability.cct import csv_rows, read_faults
+
+    path = Path(path)
+    faults = read_faults(path)
+    rows = csv_rows(path, "fault list", ("bus", "far_bus"))
+    out = {}
+    for line, (fault, row) in enumerate(zip(faults, rows), start=2):
+        vals = {k: (row.get(c) or "").strip() for k, c in
+                (("cycles", "required_clearing_cycles"), ("gain_pct", "target_cct_gain"),
+                 ("cct_s", "target_cct_s"))}
+        if not any(vals.values()):
+            continue
+        try:
+            req = Requirement(**{k: float(v) if v else None for k, v in vals.items()})
+        except (ValueError, InputError) as exc:
+            raise InputError(f"fault list {path} line {line}: {exc}") from None
+        out[Contingency(fault, 1.0).fault_name] = req
+    return out
+
+
+@dataclass(frozen=True)
+class CostModel:
+    """Cost of an ESD: per MW, per MWh of usable energy and per site (any currency).
+
+    Attributes
+    ----------
+    per_mw, per_mwh, per_site : float
+        Defaults for every site (>= 0; per_mw + per_mwh > 0).
+    overrides : dict
+        Machine number -> {"per_mw", "per_mwh", "per_site"} (any subset) for its site.
+
+    Raises
+    ------
+    InputError
+        A negative cost, or no cost per MW nor per MWh.
+    """
+
+    per_mw: float = 1.0
+    per_mwh: float = 0.0
+    per_site: float = 0.0
+    overrides: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for k, o in [(None, {"per_mw": self.per_mw, "per_mwh": self.per_mwh,
+                             "per_site": self.per_site}), *self.overrides.items()]:
+            if any(not (np.isfinite(v) and v >= 0) for v in o.values()):
+                where = "" if k is None else f" (site of G{k})"
+                raise InputError(f"costs must be numbers >= 0{where}, got {o}")
+        if not self.per_mw + self.per_mwh > 0:
+            raise InputError("need a cost per MW or per MWh > 0")
+
+    def of(self, machine: int) -> tuple[float, float, float]:
+        """(per MW, per MWh, per site) at the site of `machine`."""
+        o = self.overrides.get(int(machine), {})
+        return (o.get("per_mw", self.per_mw), o.get("per_mwh", self.per_mwh),
+                o.get("per_site", self.per_site))
+
+    def split(self, sites, mw, mwh) -> dict:
+        """{"mw", "mwh", "site", "total"} cost of ratings mw and energies mwh per site."""
+        c = np.array([self.of(s.machine) for s in sites]).reshape(len(sites), 3)
+        mw, mwh = np.asarray(mw, float), np.asarray(mwh, float)
+        out = {"mw": float(c[:, 0] @ mw), "mwh": float(c[:, 1] @ mwh),
+               "site": float(c[:, 2] @ (mw > 0))}
+        out["total"] = out["mw"] + out["mwh"] + out["site"]
+        return out
+
+
+def read_site_costs(path) -> dict:
+    """Per-site cost overrides from a CSV with a ``machine`` column and any of
+    ``cost_mw``, ``cost_mwh``, ``cost_site``: machine -> {"per_mw", ...}.  Raises
+    InputError naming the line."""
+    from stabctl.stability.cct import csv_rows
+
+    rows = csv_rows(path, "site costs", ("machine",), " and any of cost_mw,cost_mwh,cost_site")
+    out = {}
+    for line, row in enumerate(rows, start=2):
+        try:
+            out[int(row["machine"])] = {k: float(row[c]) for k, c in
+                                        (("per_mw", "cost_mw"), ("per_mwh", "cost_mwh"),
+                                         ("per_site", "cost_site")) if (row.get(c) or "").strip()}
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"site costs {path} line {line}: {exc}") from None
+    return out
+
+
+def screening_brackets(path) -> dict:
+    """The [stable, unstable] clearing times without storage (s) of every fault a
+    screening (`stabctl screen --out`, or a placement study's records) bracketed: fault
+    name (`Contingency.fault_name`) -> (t_stable, t_unstable), for `plan`'s `brackets`; a
+    fault still stable at the screening's limit t_max: (t_max, None).  Records with
+    storage or with another outcome are skipped.  Raises InputError for a file that is not
+    sweep records."""
+    from stabctl.parallel import read_records
+    from stabctl.stability.cct import LineFault
+
+    try:
+        records = read_records(path)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"screening records {path}: {exc}") from None
+    out = {}
+    for rec in records.values():
+        r, inputs = rec.get("result") or {}, rec.get("inputs") or {}
+        still = "still stable" in (rec.get("error") or "") and "t_max" in inputs
+        if inputs.get("esd_pct") is not None or not (
+                (rec.get("status") == "ok" and "t_stable_s" in r) or still):
+            continue
+        f = r.get("fault") or inputs
+        fault = LineFault(int(f["bus"]), None if f["far_bus"] is None else int(f["far_bus"]),
+                          float(f["t_fault"]), int(f["circuit"]),
+                          tuple((int(a), int(b)) for a, b in f["trips"]))
+        out[Contingency(fault, 1.0).fault_name] = \
+            (float(inputs["t_max"]), None) if still else (r["t_stable_s"], r["t_unstable_s"])
+    return out
+
+
+def contingencies_of(faults, requirement: Requirement, freq_hz: float, tol: float,
+                     load_levels=(1.0,), overrides: dict | None = None,
+                     base: dict | None = None) -> tuple:
+    """One `Contingency` per fault and load level with its required clearing time (s):
+    the fault's override (by fault name) or `requirement`; base (name -> evaluation
+    without storage) for gain requirements.  Raises InputError (a gain without base)."""
+    overrides = overrides or {}
+    out = []
+    for f in faults:
+        name = Contingency(f, 1.0).fault_name
+        req = overrides.get(name, requirement)
+        for load in load_levels:
+            c = Contingency(f, 1.0, float(load))
+            b = None if base is None or c.name not in base else base[c.name]["cct_s"]
+            out.append(replace(c, target_cct_s=req.target_s(freq_hz, tol, b)))
+    return tuple(out)
+
+
+def describe(requirement: Requirement, overrides) -> str:
+    """The requirement in words (`Requirement.describe`), with the number of faults that
+    have their own (overrides, fault name -> Requirement, `read_requirements`)."""
+    extra = f" ({len(overrides)} fault(s) with their own)" if overrides else ""
+    return requirement.describe() + extra
+
