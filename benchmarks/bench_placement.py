@@ -24,8 +24,9 @@ from stabctl.stability.cct import cached_simulator
 from stabctl.smallsignal.damping import DampingModel, relay_df
 from stabctl.smallsignal.linearise import linearise
 from stabctl.placement.program import CCTCut, candidate_sites, solve_allocation
-from stabctl.placement.evaluation import Contingency
-from stabctl.placement.loop import baseline, evaluations, place
+from stabctl.parallel import RunnerOptions
+from stabctl.placement.evaluation import Contingency, VerifyOptions
+from stabctl.placement.loop import Study, WarmStart, baseline, evaluations, place
 
 
 def convex_solve_time(n_rep: int = 20) -> None:
@@ -59,12 +60,13 @@ def verified_placement(case_name: str, workers: int = 2) -> None:
     sites = candidate_sites(case)
     mva = np.array([float(case.machines.mva[case.machine_index(s.machine)]) for s in sites])
     t = time.perf_counter()
-    base = baseline(case_name, faults, workers=workers)
+    study = Study(runner=RunnerOptions(workers))
+    base = baseline(case_name, faults, study)
     plain = [Contingency(f, 1.0) for f in faults]
-    uni = evaluations(case_name, plain, 0.05 * mva, base=base, scan="full", workers=workers)
+    uni = evaluations(case_name, plain, 0.05 * mva, study, VerifyOptions(base=base, scan="full"))
     cons = [Contingency(c.fault, uni[c.name]["cct_s"]) for c in plain]
     t_targets = time.perf_counter() - t
-    res = place(case_name, cons, base=base, workers=workers)
+    res = place(case_name, cons, study, warm=WarmStart(base=base))
     sims = sum(r["n_simulations"] for r in res.iterations)
     print(f"{case_name}: targets (no storage + uniform 5 %) {t_targets:.1f} s; verified "
           f"placement {res.wall_time_s:.1f} s, {len(res.iterations)} allocations, {sims} "

@@ -10,7 +10,7 @@ import click
 
 from stabctl.errors import InputError
 from stabctl.cli.format import print_json, print_plan
-from stabctl.cli.checks import check_writable, search_settings
+from stabctl.cli.checks import check_writable, model_settings, search_settings
 from stabctl.cli.options import (AliasedOption, controller, faults_option, json_option,
                                  model_options, out_file_option, parallel_options,
                                  read_fault_list, reports_errors, storage_options,
@@ -106,8 +106,9 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     or infeasible (the `error:` line names the contingency and its load level).
     """
     from stabctl.io import load_case
-    from stabctl.parallel import atomic_write, default_workers
-    from stabctl.placement.plan import plan
+    from stabctl.parallel import RunnerOptions, atomic_write, default_workers
+    from stabctl.placement.loop import PlaceOptions, Study
+    from stabctl.placement.plan import PlanOptions, plan
     from stabctl.placement.program import candidate_sites
     from stabctl.placement.requirements import (CostModel, Requirement, read_requirements,
                                                 read_site_costs, screening_brackets)
@@ -141,16 +142,16 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     sites = candidate_sites(case, max_site_pct)
     n = min(workers or default_workers(), len(faults) * len(levels))
     # without --json the progress lines go to the log, which the CLI shows on stderr
-    result = plan(case_name, faults, req, load_levels=levels, overrides=overrides, cost=cost,
-                  sites=sites, max_rounds=max_rounds, max_iter=max_iter, brackets=brackets,
-                  tol=search.tol, t_max=search.t_max, workers=n,
-                  scheduler=scheduler,
-                  controller=controller(deadband_hz, v_gate, coi, hysteresis_hz),
-                  conventions=conventions, h=step, uniform=uniform_reference,
-                  progress=(lambda msg: None) if as_json else None,
-                  alone=alone, drop_infeasible=set_aside_infeasible, zeta_min=zeta_min,
-                  max_sites=max_sites,
-                  amplitude_hz=amplitude_hz)
+    options = PlanOptions(load_levels=levels, overrides=overrides, cost=cost,
+                          brackets=brackets, max_rounds=max_rounds, uniform=uniform_reference,
+                          alone=alone, drop_infeasible=set_aside_infeasible,
+                          place=PlaceOptions(zeta_min=zeta_min, amplitude_hz=amplitude_hz,
+                                             max_sites=max_sites, max_iter=max_iter))
+    study = Study(sites=sites, controller=controller(deadband_hz, v_gate, coi, hysteresis_hz),
+                  search=search, model=model_settings(conventions, step),
+                  runner=RunnerOptions(n, scheduler))
+    result = plan(case_name, faults, req, options, study,
+                  progress=(lambda msg: None) if as_json else None)
     out = {"case": case.name, **result.to_dict()}
     if out_path:
         atomic_write(out_path, lambda f: json.dump(out, f, indent=1, default=float))

@@ -13,8 +13,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.placement.evaluation import _fault_dict, check, controller_dict, devices_of
-from stabctl.placement.loop import evaluations
+from stabctl.placement.evaluation import (VerifyOptions, _fault_dict, check, controller_dict,
+                                          devices_of)
+from stabctl.placement.loop import PlaceOptions, Study, evaluations
 from stabctl.placement.requirements import CostModel
 
 
@@ -23,19 +24,20 @@ class PlanContext:
     """What every round of a plan needs.
 
     case: case name; sites: candidate sites; cost: `CostModel`; controller: the ESD
-    controller; model: {"conventions", "h" (s or None)}; run_map: callable(func, jobs) ->
+    controller; model: `ModelOptions` of the runs; run_map: callable(func, jobs) ->
     results (`counting`); tol, t_max: CCT tolerance and search limit (s); say: progress
     callable (`stabctl.progress.Heartbeat`); n_runs: simulations counted; base: name ->
     evaluation without storage (`add_base`); energy_rate: usable energy per MW at each site (MWh/MW,
     `stabctl.placement.energy.mwh_per_mw`); drop_infeasible, brackets: as `plan`;
-    infeasible, set_aside: what was set aside; loop_kw: passed to every `place`.
+    infeasible, set_aside: what was set aside; place: the `PlaceOptions` of every
+    round's `place` (damping, sparsity, iterations).
     """
 
     case: str
     sites: tuple
     cost: CostModel
     controller: object
-    model: dict
+    model: ModelOptions
     run_map: object
     tol: float
     t_max: float
@@ -47,7 +49,7 @@ class PlanContext:
     brackets: dict | None = None
     infeasible: list = field(default_factory=list)
     set_aside: list = field(default_factory=list)
-    loop_kw: dict = field(default_factory=dict)
+    place: PlaceOptions = PlaceOptions()
     lock: object = field(default_factory=threading.Lock)
 
     def check(self, contingencies, mw, energy_mj=None, h: float | None = None) -> dict:
@@ -62,7 +64,7 @@ class PlanContext:
         sites = [[s.bus, s.machine] for s in self.sites]
         jobs = [{"case": self.case, "fault": _fault_dict(c.fault), "devices": devs,
                  "sites": sites, "controller": ctrl, "t_clear": c.target_cct_s,
-                 "load": c.load, **self.model, **({} if h is None else {"h": h})}
+                 "load": c.load, **self.model.to_inputs(), **({} if h is None else {"h": h})}
                 for c in contingencies]
         return dict(zip((c.name for c in contingencies), self.run_map(check, jobs)))
 
@@ -89,10 +91,10 @@ class PlanContext:
         """Cost per site (installed or not) at each candidate, (n_sites,)."""
         return np.array([self.cost.of(s.machine)[2] for s in self.sites])
 
-    def add_base(self, cons, brackets, kw) -> None:
+    def add_base(self, cons, brackets, study: Study) -> None:
         """Add to `base` the evaluations without storage (CCT by bisection, from the
         screening's bracket when known, and its gradient; counted) of the contingencies
-        of `cons` it lacks (`stabctl.placement.loop.evaluations`, keyword arguments kw).
+        of `cons` it lacks (`stabctl.placement.loop.evaluations` of `study`).
         brackets: fault name -> [stable, unstable] clearing times (s), or None."""
         todo = [c for c in cons if c.name not in self.base]
         if not todo:
@@ -100,12 +102,12 @@ class PlanContext:
         br = {c.name: tuple(brackets[c.fault_name]) for c in todo
               if brackets and c.load == 1.0 and c.fault_name in brackets
               and None not in brackets[c.fault_name]}
-        self.base.update(evaluations(self.case, todo, None, brackets=br, **kw))
+        self.base.update(evaluations(self.case, todo, None, study, VerifyOptions(brackets=br)))
 
     def step_s(self) -> float:
         """The integration step of the plan's runs (s)."""
         from stabctl.stability.cct import cached_simulator
 
-        if self.model["h"] is not None:
-            return self.model["h"]
-        return cached_simulator(self.case, ModelOptions(self.model["conventions"])).default_h
+        if self.model.h is not None:
+            return self.model.h
+        return cached_simulator(self.case, self.model).default_h

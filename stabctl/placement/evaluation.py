@@ -327,38 +327,107 @@ def devices_of(sites, mw) -> list:
     return [[s.bus, s.machine, float(p)] for s, p in zip(sites, mw) if p > 0]
 
 
-def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangBangCOI,
-           tol: float, t_max: float, base: dict | None = None, scan: str = "target",
-           scan_s: float = SCAN_S, model: dict | None = None,
-           brackets: dict | None = None, check: bool = False,
-           gradient: bool = True) -> dict:
-    """`evaluate` every contingency at ratings mw (MW per site), in parallel through
-    run_map (`worker_pool`): name -> evaluation dict.
+@dataclass(frozen=True)
+class VerifyOptions:
+    """How `verify` evaluates the contingencies at one allocation.
 
-    With storage and `base` (evaluations without storage) the CCT is scanned
-    (`scanned_cct`) from the contingency's CCT without storage: up to its target
-    (scan="target") or to t_max (scan="full", the first unstable clearing time however
-    far); scan="none" or no storage: bisection only.
-    model: {"conventions", "h"} of the runs (default: ieee at the default step).
-    brackets: name -> [stable, unstable] clearing times (s) of a coarser search at the
-    same ratings, where a bisection starts (`evaluate`).  Each contingency is simulated
-    at its own load level.  The scan starts at the lesser of the CCT without storage and
-    the target (a contingency met without storage is still checked with it).  check:
-    also the run cleared at each target (`check`); gradient: False for CCTs only.  The jobs are submitted longest scan
-    first (so that the pool's last jobs are short).
-    Raises InputError for another scan value.
+    Attributes
+    ----------
+    base : dict or None
+        Evaluations without storage (name -> `evaluate` dict).  With storage and base the
+        CCT is scanned (`scanned_cct`) from the contingency's CCT without storage (or its
+        target, the lesser): up to its target (scan="target") or to t_max (scan="full",
+        the first unstable clearing time however far); scan="none" or no storage:
+        bisection only.
+    scan : {"target", "full", "none"}
+    brackets : dict or None
+        Name -> [stable, unstable] clearing times (s) of a coarser search at the same
+        ratings, where a bisection starts (`evaluate`).
+    check : bool
+        Also the run cleared at each target (`check`).
+    gradient : bool
+        False for CCTs only.
+
+    Raises
+    ------
+    InputError
+        Another scan value.
     """
-    if scan not in ("target", "full", "none"):
-        raise InputError(f"scan must be 'target', 'full' or 'none', got {scan!r}")
-    devices = devices_of(sites, mw)
-    ctrl = controller_dict(controller)
-    common = {"case": case, "devices": devices, "sites": [[s.bus, s.machine] for s in sites],
-              "beta": np.asarray(beta).tolist(), "controller": ctrl, "tol": tol,
-              "t_max": t_max, "scan_s": scan_s, **(model or {})}
+
+    base: dict | None = None
+    scan: str = "target"
+    brackets: dict | None = None
+    check: bool = False
+    gradient: bool = True
+
+    def __post_init__(self) -> None:
+        if self.scan not in ("target", "full", "none"):
+            raise InputError(f"scan must be 'target', 'full' or 'none', got {self.scan!r}")
+
+
+@dataclass(frozen=True)
+class Evaluator:
+    """What every evaluation of one study shares (`verify`).
+
+    Attributes
+    ----------
+    run_map : callable
+        ``run_map(func, jobs) -> results`` (`stabctl.parallel.worker_pool`).
+    case : str
+        Case name or file (workers load it by name).
+    sites : sequence of Site
+        Candidate sites.
+    beta : ndarray, shape (n_mac, n_sites)
+        Distribution factors (`sime.distribution_factors`).
+    controller : BangBangCOI
+        The ESDs' law.
+    search : SearchOptions
+        CCT tolerance and search limit (``tol``, ``t_max``).
+    model : ModelOptions
+        Conventions and step of the runs (each contingency at its own load level).
+    scan_s : float
+        Clearing-time grid of the first-unstable scan (s).
+    """
+
+    run_map: object
+    case: str
+    sites: tuple
+    beta: np.ndarray
+    controller: BangBangCOI
+    search: SearchOptions = SearchOptions()
+    model: ModelOptions = ModelOptions()
+    scan_s: float = SCAN_S
+
+
+def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions()) -> dict:
+    """`evaluate` every contingency at ratings mw (MW per site), in parallel through
+    ``ev.run_map``.
+
+    Parameters
+    ----------
+    ev : Evaluator
+    contingencies : sequence of Contingency
+    mw : array_like, shape (n_sites,)
+        Ratings (MW).
+    opts : VerifyOptions, optional
+        Scan, brackets, check runs, gradients.
+
+    Returns
+    -------
+    dict
+        Name -> evaluation dict.  The jobs are submitted longest scan first (so that the
+        pool's last jobs are short).
+    """
+    devices = devices_of(ev.sites, mw)
+    t_max, base, scan = ev.search.t_max, opts.base, opts.scan
+    common = {"case": ev.case, "devices": devices, "sites": [[s.bus, s.machine] for s in ev.sites],
+              "beta": np.asarray(ev.beta).tolist(), "controller": controller_dict(ev.controller),
+              "tol": ev.search.tol, "t_max": t_max, "scan_s": ev.scan_s,
+              **ev.model.to_inputs()}
     scanning = devices and base is not None and scan != "none"
-    brackets = brackets or {}
-    jobs = [{**common, "fault": _fault_dict(c.fault), "load": c.load, "gradient": gradient,
-             **({"check_s": c.target_cct_s} if check else {}),
+    brackets = opts.brackets or {}
+    jobs = [{**common, "fault": _fault_dict(c.fault), "load": c.load, "gradient": opts.gradient,
+             **({"check_s": c.target_cct_s} if opts.check else {}),
              "scan_from": min(base[c.name]["cct_s"], c.target_cct_s) if scanning else None,
              "scan_to": c.target_cct_s if scan == "target" else None,
              **({"bracket": list(brackets[c.name])}
@@ -367,7 +436,7 @@ def verify(run_map, case: str, contingencies, sites, mw, beta, controller: BangB
     spans = [(j["scan_to"] or t_max) - j["scan_from"] if j["scan_from"] is not None else 0.0
              for j in jobs]
     order = sorted(range(len(jobs)), key=lambda i: -spans[i])
-    done = dict(zip(order, run_map(evaluate, [jobs[i] for i in order])))
+    done = dict(zip(order, ev.run_map(evaluate, [jobs[i] for i in order])))
     return {c.name: done[i] for i, c in enumerate(contingencies)}
 
 

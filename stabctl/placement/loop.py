@@ -48,8 +48,10 @@ from stabctl.stability.cct import cached_simulator
 from stabctl.errors import InputError
 from stabctl.placement.program import (Allocation, InfeasibleError, candidate_sites, solve_allocation,
                         sparse_allocation)
-from stabctl.parallel import worker_pool
-from stabctl.placement.evaluation import Contingency, cuts_from, verify
+from stabctl.parallel import RunnerOptions, worker_pool
+from stabctl.placement.evaluation import (Contingency, Evaluator, VerifyOptions, cuts_from,
+                                          verify)
+from stabctl.stability.cct import SearchOptions
 from stabctl.storage.control import BangBangCOI
 
 logger = logging.getLogger(__name__)
@@ -112,29 +114,122 @@ class PlacementResult:
                 "met": cct >= c.target_cct_s - 1e-9}
 
 
+@dataclass(frozen=True)
+class Study:
+    """What the evaluations and loops of one placement study share.
+
+    Attributes
+    ----------
+    sites : tuple of Site or None
+        Candidate sites (None: `candidate_sites`, every generator's HV bus, up to 50 % of
+        its MVA).
+    controller : BangBangCOI or None
+        The bang-bang law of every ESD (None: `DEFAULT_CONTROLLER`).
+    search : SearchOptions
+        CCT bisection tolerance and search limit (``tol``, ``t_max``, s).
+    model : ModelOptions
+        Conventions and step of every run.
+    runner : RunnerOptions
+        Processes (1: in this process) or the Dask scheduler of the evaluations
+        (`stabctl.parallel.worker_pool`), when no run_map is given.
+    run_map : callable or None
+        A `stabctl.parallel.worker_pool` map kept open by the caller (so that workers and
+        their caches serve many calls); None: a pool per call, as `runner` says.
+    """
+
+    sites: tuple | None = None
+    controller: BangBangCOI | None = None
+    search: SearchOptions = SearchOptions()
+    model: ModelOptions = ModelOptions()
+    runner: RunnerOptions = RunnerOptions(workers=1)
+    run_map: object = None
+
+    @property
+    def law(self) -> BangBangCOI:
+        """The ESDs' law (`DEFAULT_CONTROLLER` when none is given)."""
+        return self.controller or DEFAULT_CONTROLLER
+
+
+@dataclass(frozen=True)
+class PlaceOptions:
+    """Settings of the verified loop (`place`).
+
+    Attributes
+    ----------
+    zeta_min : float or None
+        Least damping ratio of every electromechanical mode (None: no small-signal
+        constraint).
+    amplitude_hz : float
+        Relative-speed amplitude (Hz) at which the bang-bang law's describing function is
+        taken (`stabctl.smallsignal.damping`).
+    max_sites : int or None
+        At most this many sites (`placement.sparse_allocation`).
+    site_cost : float or array_like
+        Cost per site used (one number or one per site).
+    safety_s : float or None
+        CCT margin the program asks above each target (s, default 2 tol).
+    max_iter : int
+        Allocations simulated at most.
+    rtol : float
+        Relative saving below which the loop stops once the targets are met.
+    """
+
+    zeta_min: float | None = None
+    amplitude_hz: float = 0.2
+    max_sites: int | None = None
+    site_cost: object = 0.0
+    safety_s: float | None = None
+    max_iter: int = 10
+    rtol: float = 0.02
+
+
+@dataclass(frozen=True)
+class WarmStart:
+    """Where `place` starts from.
+
+    Attributes
+    ----------
+    base : dict or None
+        Evaluations without storage if already done (`evaluations` at zero ratings).
+    start : array_like or None, shape (n_sites,)
+        First allocation (MW per site) instead of none, e.g. a uniform fleet that meets
+        every target: the loop then starts feasible and every allocation it returns is
+        at most as costly.
+    evaluations : dict or None
+        Evaluations of every contingency at `start` already simulated (e.g. a uniform
+        fleet's first unstable clearing times, `evaluations` with scan="full"), used
+        instead of simulating them again when `start` is on the 0.1 MW grid (unchanged
+        by rounding); only the contingencies missing from it are simulated at `start`.
+    """
+
+    base: dict | None = None
+    start: object = None
+    evaluations: dict | None = None
+
+
 @dataclass
 class _Setup:
-    """What every iteration needs (see `place`)."""
+    """What every iteration needs (see `place`): the evaluator (case, sites, pool,
+    search), the contingencies, the damping model and the program's settings."""
 
-    case: str
+    ev: Evaluator
     contingencies: tuple
-    sites: tuple
-    beta: np.ndarray
-    controller: BangBangCOI
     damping: object
     zeta_min: float | None
     solve_kw: dict
-    tol: float
-    t_max: float
-    run_map: object = None
     base: dict | None = None
-    model: dict | None = None
 
     def verify(self, mw, which=None) -> dict:
         cons = self.contingencies if which is None else which
-        return verify(self.run_map, self.case, cons, self.sites, mw, self.beta,
-                      self.controller, self.tol, self.t_max, base=self.base,
-                      model=self.model)
+        return verify(self.ev, cons, mw, VerifyOptions(base=self.base))
+
+    @property
+    def sites(self) -> tuple:
+        return self.ev.sites
+
+    @property
+    def tol(self) -> float:
+        return self.ev.search.tol
 
     @property
     def upper(self) -> np.ndarray:
@@ -161,110 +256,109 @@ class _Point:
     feasible: bool
 
 
-def place(case: str, contingencies, sites=None, *, zeta_min: float | None = None,
-          max_sites: int | None = None, site_cost=0.0, safety_s: float | None = None,
-          tol: float = 1e-3, t_max: float = 1.0, max_iter: int = 10, rtol: float = 0.02,
-          workers: int = 1, scheduler: str | None = None,
-          controller: BangBangCOI | None = None, amplitude_hz: float = 0.2,
-          base: dict | None = None, start=None, start_evaluations: dict | None = None,
-          progress=None, conventions: str = "ieee", h: float | None = None,
-          run_map=None) -> PlacementResult:
+def place(case: str, contingencies, study: Study = Study(),
+          options: PlaceOptions = PlaceOptions(), warm: WarmStart = WarmStart(),
+          progress=None) -> PlacementResult:
     """Least-cost ESD allocation meeting every contingency's target CCT (and damping),
     verified by simulation (module docstring).
 
-    Args:
-        case: built-in case name or case file (workers load it by name).
-        contingencies: `placement_eval.Contingency` sequence (distinct names).
-        sites: candidate sites (default `placement.candidate_sites`: every generator's HV
-            bus, up to 50 % of its MVA).
-        zeta_min: least damping ratio of every electromechanical mode (None: no
-            small-signal constraint); amplitude_hz: relative-speed amplitude (Hz) at
-            which the bang-bang law's describing function is taken (`stabctl.smallsignal.damping`).
-        max_sites, site_cost: fewer sites (`placement.sparse_allocation`; site_cost a
-            number or one per site).
-        safety_s: CCT margin the program asks above each target (s, default 2 tol).
-        tol, t_max: CCT bisection tolerance and search limit (s).
-        max_iter: allocations simulated at most; rtol: relative saving below which the
-            loop stops once the targets are met.
-        workers: processes for the evaluations (1: in this process).
-        scheduler: Dask scheduler address, or 'local', to run the evaluations on instead
-            (`stabctl.parallel.worker_pool`); None: local processes.
-        controller: the bang-bang law of every ESD (default `DEFAULT_CONTROLLER`).
-        base: evaluations without storage if already done (`verify` at zero ratings).
-        start: first allocation (MW per site, shape (n_sites,)) instead of none, e.g. a
-            uniform fleet that meets every target: the loop then starts feasible and
-            every allocation it returns is at most as costly.
-        start_evaluations: evaluations of every contingency at `start` already simulated
-            (e.g. a uniform fleet's first unstable clearing times, `evaluations` with
-            scan="full"), used instead of simulating them again when `start` is on the
-            0.1 MW grid (unchanged by rounding); only the contingencies missing from it
-            are simulated at `start`.
-        progress: callable(str), one line per step.
-        run_map: a `stabctl.parallel.worker_pool` map to run the evaluations on (kept
-            open by the caller, so that workers and their caches serve many calls);
-            None: a pool of `workers` processes (or `scheduler`) for this call.
-    Raises:
-        InfeasibleError: a contingency misses its target even with every site at its
-            bound (simulated), or the damping rows cannot be met.
-        InputError: bad settings or contingencies; SimulationError: as the CCT search.
+    Parameters
+    ----------
+    case : str
+        Built-in case name or case file (workers load it by name).
+    contingencies : sequence of Contingency
+        Distinct names.
+    study : Study, optional
+        Sites, controller, CCT search, model settings and where the evaluations run.
+    options : PlaceOptions, optional
+        Damping requirement, sparsity, site costs, safety margin, iterations.
+    warm : WarmStart, optional
+        Evaluations without storage and a first allocation already known.
+    progress : callable(str) or None, optional
+        One line per step; None: this module's logger (INFO).
+
+    Returns
+    -------
+    PlacementResult
+
+    Raises
+    ------
+    InfeasibleError
+        A contingency misses its target even with every site at its bound (simulated),
+        or the damping rows cannot be met.
+    InputError
+        Bad settings or contingencies.
+    SimulationError
+        As the CCT search.
     """
     wall = time.perf_counter()
     contingencies = tuple(contingencies)
-    _check_settings(contingencies, max_iter, tol, workers, zeta_min)
-    sim = cached_simulator(case, ModelOptions(conventions, h))
+    o, tol = options, study.search.tol
+    _check_settings(contingencies, o.max_iter, tol, study.runner.workers or 1, o.zeta_min)
+    sim = cached_simulator(case, study.model)
     _check_faults(sim.case, contingencies)
-    sites = tuple(sites or candidate_sites(sim.case))
-    controller = controller or DEFAULT_CONTROLLER
+    sites = tuple(study.sites or candidate_sites(sim.case))
     with _LINEARISE:
-        beta, damping = _linear_models(sim, sites, controller, zeta_min, amplitude_hz)
-    setup = _Setup(case, contingencies, sites, beta, controller, damping, zeta_min,
-                   {"safety_s": 2 * tol if safety_s is None else safety_s,
-                    "max_sites": max_sites, "site_cost": site_cost}, tol, t_max,
-                   model={"conventions": conventions, "h": h})
+        beta, damping = _linear_models(sim, sites, study.law, o.zeta_min, o.amplitude_hz)
     say = progress or logger.info
-    with _pool(run_map, workers, scheduler) as rm:
-        setup.run_map = rm
-        base = setup.base = base or setup.verify(np.zeros(len(sites)))
+    with _pool(study) as rm:
+        setup = _Setup(Evaluator(rm, case, sites, beta, study.law, study.search, study.model),
+                       contingencies, damping, o.zeta_min,
+                       {"safety_s": 2 * tol if o.safety_s is None else o.safety_s,
+                        "max_sites": o.max_sites, "site_cost": o.site_cost})
+        base = setup.base = warm.base or setup.verify(np.zeros(len(sites)))
         say("no storage: " + _cct_line(contingencies, base))
-        result = _iterate(setup, base, _start(setup, start, base, say, start_evaluations),
-                          max_iter, rtol, say)
+        result = _iterate(setup, base, _start(setup, warm.start, base, say, warm.evaluations),
+                          o.max_iter, o.rtol, say)
     result.wall_time_s = time.perf_counter() - wall
     return result
 
 
-def evaluations(case: str, contingencies, mw=None, *, sites=None, base: dict | None = None,
-                scan: str = "target", tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
-                scheduler: str | None = None, controller: BangBangCOI | None = None,
-                conventions: str = "ieee", h: float | None = None, run_map=None,
-                brackets: dict | None = None, gradient: bool = True) -> dict:
-    """Simulated CCT (and its gradient) of every contingency at ratings mw (MW per site of
-    `sites`, default `candidate_sites`; None = no storage), in `workers` processes (or
-    on the Dask `scheduler`, as `place`):
-    name -> `placement_eval.evaluate` dict.  base and scan as `placement_eval.verify`
-    (scan="full" with base: the first unstable clearing time, e.g. of a uniform fleet);
-    run_map as `place`; brackets: name -> [stable, unstable] clearing times (s) from a
-    coarser search where each bisection starts (`placement_eval.verify`); gradient:
-    False for CCTs only (no gradient runs).
-    Raises as `place`.
+def evaluations(case: str, contingencies, mw=None, study: Study = Study(),
+                opts: VerifyOptions = VerifyOptions()) -> dict:
+    """Simulated CCT (and its gradient) of every contingency at ratings mw.
+
+    Parameters
+    ----------
+    case : str
+    contingencies : sequence of Contingency
+    mw : array_like or None, optional
+        MW per site of ``study.sites`` (default `candidate_sites`); None: no storage.
+    study : Study, optional
+        Sites, controller, search, model and where the runs go (as `place`).
+    opts : VerifyOptions, optional
+        base and scan (scan="full" with base: the first unstable clearing time, e.g. of
+        a uniform fleet), brackets (where each bisection starts), gradient (False: CCTs
+        only, no gradient runs).
+
+    Returns
+    -------
+    dict
+        Name -> `stabctl.placement.evaluation.evaluate` dict.
+
+    Raises
+    ------
+    InputError, SimulationError
+        As `place`.
     """
     contingencies = tuple(contingencies)
-    sim = cached_simulator(case, ModelOptions(conventions, h))
+    sim = cached_simulator(case, study.model)
     _check_faults(sim.case, contingencies)
-    sites = tuple(sites or candidate_sites(sim.case))
-    controller = controller or DEFAULT_CONTROLLER
+    sites = tuple(study.sites or candidate_sites(sim.case))
     with _LINEARISE:
-        beta, _ = _linear_models(sim, sites, controller, None, 0.0)
+        beta, _ = _linear_models(sim, sites, study.law, None, 0.0)
     mw = np.zeros(len(sites)) if mw is None else np.asarray(mw, float)
-    with _pool(run_map, workers, scheduler) as rm:
-        return verify(rm, case, contingencies, sites, mw, beta, controller, tol, t_max,
-                      base=base, scan=scan, model={"conventions": conventions, "h": h},
-                      brackets=brackets, gradient=gradient)
+    with _pool(study) as rm:
+        ev = Evaluator(rm, case, sites, beta, study.law, study.search, study.model)
+        return verify(ev, contingencies, mw, opts)
 
 
-def baseline(case: str, faults, **kw) -> dict:
+def baseline(case: str, faults, study: Study = Study(),
+             opts: VerifyOptions = VerifyOptions()) -> dict:
     """`evaluations` of every fault (`LineFault`) without storage: CCT by bisection and
-    its gradient, by contingency name.  kw as `evaluations`."""
-    return evaluations(case, [Contingency(f, kw.get("t_max", 1.0)) for f in faults], **kw)
+    its gradient, by contingency name (study, opts as `evaluations`)."""
+    return evaluations(case, [Contingency(f, study.search.t_max) for f in faults], None,
+                       study, opts)
 
 
 def with_gain(faults, base: dict, gain_pct: float, tol: float = 1e-3) -> tuple:
@@ -281,9 +375,11 @@ def with_gain(faults, base: dict, gain_pct: float, tol: float = 1e-3) -> tuple:
     return tuple(out)
 
 
-def _pool(run_map, workers: int, scheduler: str | None):
-    """The caller's run_map as is, or a `worker_pool` for one call."""
-    return nullcontext(run_map) if run_map is not None else worker_pool(workers, scheduler)
+def _pool(study: Study):
+    """The study's run_map as is, or a `worker_pool` for one call."""
+    if study.run_map is not None:
+        return nullcontext(study.run_map)
+    return worker_pool(study.runner.workers or 1, study.runner.scheduler)
 
 
 def _check_faults(case, contingencies) -> None:

@@ -31,7 +31,8 @@ from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import InputError
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import mwh_per_mw, size_energy
-from stabctl.placement.loop import DEFAULT_CONTROLLER, _as_allocation, _pool, place
+from stabctl.placement.loop import (PlaceOptions, Study, WarmStart, _as_allocation, _pool,
+                                    place)
 from stabctl.placement.program import InfeasibleError, candidate_sites
 from stabctl.placement.references import faults_alone, half_step, least_uniform, margins
 from stabctl.placement.requirements import CostModel, Requirement, contingencies_of, describe
@@ -107,15 +108,72 @@ class PlanResult:
                 "uniform": self.uniform, "alone": self.alone, "half_step": self.half_step}
 
 
-def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
-         overrides: dict | None = None, cost: CostModel | None = None, sites=None,
-         brackets: dict | None = None, n_active: int = 12, max_rounds: int = 6,
-         max_iter: int = 6, tol: float = 1e-3, t_max: float = 1.0, workers: int = 1,
-         scheduler: str | None = None, controller=None, conventions: str = "ieee",
-         h: float | None = None, run_map=None, progress=None, uniform: bool = False,
-         alone: bool = False, margins_tol: float | None = None, margins_cap_s: float = 0.1,
-         scope_stable_at_once: bool = True, drop_infeasible: bool = False,
-         half_step_n: int = 0, **loop_kw) -> PlanResult:
+@dataclass(frozen=True)
+class PlanOptions:
+    """Settings of a plan (`plan`).
+
+    Attributes
+    ----------
+    load_levels : tuple of float
+        Load levels (fractions of the base load) every fault is verified at; default (1,).
+    overrides : dict or None
+        Fault name -> Requirement (`read_requirements`) instead of the global one.
+    cost : CostModel or None
+        Costs (default 1 per MW: least MW).
+    brackets : dict or None
+        Fault name -> [stable, unstable] clearing times without storage at the base load
+        (s), e.g. a screening's, where the CCT searches start; [t, None]: still stable
+        when cleared at t (a screening's limit), known stable at any requirement up to t.
+    n_active : int
+        Contingencies in the first active set (the most binding of those unstable
+        without storage); default 12.
+    max_rounds : int
+        Rounds of constraint generation at most.
+    place : PlaceOptions
+        Every round's verified loop (`stabctl.placement.loop.place`): allocations simulated
+        per round at most (``max_iter``, default 6), damping (``zeta_min``,
+        ``amplitude_hz``, verified by the loop for the allocation as a whole) and
+        sparsity (``max_sites``).
+    uniform, alone : bool
+        Also the least uniform fleet and each fault's own least allocation meeting the
+        same requirements (`stabctl.placement.references`).
+    margins_tol : float or None
+        Also the clearing margin with the allocation of every contingency the program
+        was not solved for, to margins_tol (s), up to margins_cap_s (s; `margins`);
+        None: those are only checked at their required time (margin >= 0 known).
+    margins_cap_s : float
+    scope_stable_at_once : bool
+        Leave out (and list in `PlanResult.out_of_scope`) the contingencies unstable
+        already when cleared at once (the line trip alone, at their load level), which no
+        required clearing time can describe; default True.  False: they stay in, and
+        are infeasible unless storage makes the trip alone stable.
+    drop_infeasible : bool
+        A contingency proven infeasible (named by `InfeasibleError`) is set aside, listed
+        in `PlanResult.infeasible`, and the others are planned for; default False: the
+        error is raised.
+    half_step_n : int
+        Also simulate the half_step_n contingencies of least clearing margin again at
+        half the integration step (`half_step`); default 0: not done.
+    """
+
+    load_levels: tuple = (1.0,)
+    overrides: dict | None = None
+    cost: CostModel | None = None
+    brackets: dict | None = None
+    n_active: int = 12
+    max_rounds: int = 6
+    place: PlaceOptions = PlaceOptions(max_iter=6)
+    uniform: bool = False
+    alone: bool = False
+    margins_tol: float | None = None
+    margins_cap_s: float = 0.1
+    scope_stable_at_once: bool = True
+    drop_infeasible: bool = False
+    half_step_n: int = 0
+
+
+def plan(case: str, faults, requirement: Requirement, options: PlanOptions = PlanOptions(),
+         study: Study = Study(), progress=None) -> PlanResult:
     """Least-cost ESD sites, MW and MWh meeting `requirement` on every fault at every load
     level, verified by simulation (module docstring).
 
@@ -126,52 +184,15 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
     faults : sequence of LineFault
         Every contingency to meet (e.g. a whole screening).
     requirement : Requirement
-        Global requirement; overrides: fault name -> Requirement (`read_requirements`).
-    load_levels : sequence of float, optional
-        Load levels (fractions of the base load) every fault is verified at; default (1,).
-    cost : CostModel or None, optional
-        Costs (default 1 per MW: least MW).
-    sites : sequence of Site or None, optional
-        Candidates (default `candidate_sites`: every generator's HV bus, up to 50 % of
-        its MVA).
-    brackets : dict or None, optional
-        Fault name -> [stable, unstable] clearing times without storage at the base load
-        (s), e.g. a screening's, where the CCT searches start; [t, None]: still stable
-        when cleared at t (a screening's limit), known stable at any requirement up to t.
-    n_active : int, optional
-        Contingencies in the first active set (the most binding of those unstable
-        without storage); default 12.
-    max_rounds : int, optional
-        Rounds of constraint generation at most; max_iter: allocations simulated per
-        round at most (`place`).
-    tol, t_max : float, optional
-        CCT tolerance and search limit, s.
-    workers, scheduler, run_map, controller, conventions, h
-        As `stabctl.placement.loop.place`.
+        Global requirement (``options.overrides`` per fault).
+    options : PlanOptions, optional
+        Load levels, costs, screening brackets, rounds, the loop's settings, references.
+    study : Study, optional
+        Candidate sites, controller, CCT tolerance and search limit, model settings,
+        workers or Dask scheduler, or a run_map kept open by the caller
+        (`stabctl.placement.loop.Study`).
     progress : callable(str) or None
         One line per step; None: to this module's logger (level INFO, `stabctl.progress`).
-    uniform, alone : bool, optional
-        Also the least uniform fleet and each fault's own least allocation meeting the
-        same requirements (`stabctl.placement.references`).
-    scope_stable_at_once : bool, optional
-        Leave out (and list in `PlanResult.out_of_scope`) the contingencies unstable
-        already when cleared at once (the line trip alone, at their load level), which no
-        required clearing time can describe; default True.  False: they stay in, and
-        are infeasible unless storage makes the trip alone stable.
-    drop_infeasible : bool, optional
-        A contingency proven infeasible (named by `InfeasibleError`) is set aside, listed
-        in `PlanResult.infeasible`, and the others are planned for; default False: the
-        error is raised.
-    margins_tol, margins_cap_s : float or None, float, optional
-        Also the clearing margin with the allocation of every contingency the program
-        was not solved for, to margins_tol (s), up to margins_cap_s (s; `margins`);
-        None: those are only checked at their required time (margin >= 0 known).
-    half_step_n : int, optional
-        Also simulate the half_step_n contingencies of least clearing margin again at
-        half the integration step (`half_step`); default 0: not done.
-    **loop_kw
-        zeta_min, amplitude_hz, max_sites: passed to every `place` (the damping is
-        verified by the loop, for the allocation as a whole).
 
     Returns
     -------
@@ -188,32 +209,31 @@ def plan(case: str, faults, requirement: Requirement, *, load_levels=(1.0,),
         A load level without a power flow or a valid initial state (named).
     """
     wall = time.perf_counter()
+    o = options
     faults = list(faults)
     if not faults:
         raise InputError("no contingency given")
-    if n_active < 1 or max_rounds < 1 or max_iter < 1:
+    if o.n_active < 1 or o.max_rounds < 1 or o.place.max_iter < 1:
         raise InputError("need n_active, max_rounds and max_iter >= 1")
-    levels = _load_levels(load_levels)
-    freq_hz, sites = _case_at_levels(case, conventions, h, levels, sites)
+    levels = _load_levels(o.load_levels)
+    freq_hz, sites = _case_at_levels(case, study.model, levels, study.sites)
     say = Heartbeat(progress or logger.info)
-    with _pool(run_map, workers, scheduler) as pool_map, say:
-        pl = PlanContext(case, sites, cost or CostModel(), controller or DEFAULT_CONTROLLER,
-                         {"conventions": conventions, "h": h}, None, tol, t_max, say,
-                         loop_kw=loop_kw, drop_infeasible=drop_infeasible, brackets=brackets)
+    with _pool(study) as pool_map, say:
+        pl = PlanContext(case, sites, o.cost or CostModel(), study.law, study.model, None,
+                         study.search.tol, study.search.t_max, say, place=o.place,
+                         drop_infeasible=o.drop_infeasible, brackets=o.brackets)
         pl.run_map = pl.counting(pool_map, say)
-        kw = {"sites": sites, "tol": tol, "t_max": t_max, "run_map": pl.run_map,
-              "controller": pl.controller, "conventions": conventions, "h": h}
-        cons = _contingencies(pl, faults, requirement, overrides, freq_hz, levels, kw)
+        kw = replace(study, sites=sites, run_map=pl.run_map, controller=pl.controller)
+        cons = _contingencies(pl, faults, requirement, o.overrides, freq_hz, levels, kw)
         cons, failing, checks, out = _without_storage(pl, cons, len(faults), len(levels),
-                                                      scope_stable_at_once)
-        result = _generate(pl, cons, failing, checks, n_active, max_rounds, max_iter, kw)
+                                                      o.scope_stable_at_once)
+        result = _generate(pl, cons, failing, checks, o.n_active, o.max_rounds, kw)
         result.out_of_scope, result.load_levels = sorted(out), levels
-        result.requirement = describe(requirement, overrides)
+        result.requirement = describe(requirement, o.overrides)
         result.infeasible, result.set_aside = list(pl.infeasible), list(pl.set_aside)
         kept = {r["name"] for r in result.contingencies}
         _references(pl, tuple(c for c in cons if c.name in kept),
-                    [c for c in failing if c.name in kept], result, kw, margins_tol,
-                    margins_cap_s, half_step_n, uniform, alone, max_iter)
+                    [c for c in failing if c.name in kept], result, kw, o)
     result.n_simulations = pl.n_runs
     result.wall_time_s = time.perf_counter() - wall
     return result
@@ -228,15 +248,15 @@ def _load_levels(load_levels) -> tuple:
     return levels
 
 
-def _case_at_levels(case: str, conventions: str, h, levels, sites) -> tuple:
+def _case_at_levels(case: str, model: ModelOptions, levels, sites) -> tuple:
     """The case's frequency (Hz) and the candidate sites (given, or `candidate_sites`),
     once its power flow at every load level is known to solve.  Raises PowerFlowError or
     CaseError naming the load level."""
     from stabctl.stability.cct import cached_simulator
 
     for x in levels:
-        cached_simulator(case, ModelOptions(conventions, h), load=x)
-    sim = cached_simulator(case, ModelOptions(conventions, h))
+        cached_simulator(case, model, load=x)
+    sim = cached_simulator(case, model)
     return sim.case.freq_hz, tuple(sites or candidate_sites(sim.case))
 
 
@@ -275,22 +295,23 @@ def _without_storage(pl: PlanContext, cons, n_faults: int, n_levels: int,
     return cons, failing, {**{n: _STABLE for n in known}, **checks}, out
 
 
-def _references(pl: PlanContext, cons, failing, result: PlanResult, kw, margins_tol,
-                margins_cap_s, half_step_n, uniform, alone, max_iter) -> None:
+def _references(pl: PlanContext, cons, failing, result: PlanResult, kw: Study,
+                o: PlanOptions) -> None:
     """What `plan` adds to a result when asked: the clearing margins (then the half-step
     check, which ranks by them), the least uniform fleet and each binding fault alone.
     They are independent, so they run at the same time (one thread each, sharing the
     worker pool: fewer idle workers at the end of each one's batches)."""
     def margins_and_half_step():
-        if margins_tol is not None:
-            margins(pl, cons, result, margins_tol, margins_cap_s, kw)
-        if half_step_n > 0 and result.verified:
-            result.half_step = half_step(pl, cons, result, half_step_n, kw)
+        if o.margins_tol is not None:
+            margins(pl, cons, result, o.margins_tol, o.margins_cap_s, kw)
+        if o.half_step_n > 0 and result.verified:
+            result.half_step = half_step(pl, cons, result, o.half_step_n, kw)
 
     with ThreadPoolExecutor(max_workers=3) as threads:
         m = threads.submit(margins_and_half_step)
-        u = threads.submit(least_uniform, pl, cons, failing, kw) if uniform else None
-        a = threads.submit(faults_alone, pl, cons, result, max_iter, kw) if alone else None
+        u = threads.submit(least_uniform, pl, cons, failing, kw) if o.uniform else None
+        a = (threads.submit(faults_alone, pl, cons, result, o.place.max_iter, kw)
+             if o.alone else None)
         m.result()
         result.uniform = None if u is None else u.result()
         result.alone = [] if a is None else a.result()
@@ -348,8 +369,8 @@ class _Rounds:
     message: str = ""
 
 
-def _generate(pl: PlanContext, cons, failing, checks, n_active, max_rounds, max_iter,
-              kw) -> PlanResult:
+def _generate(pl: PlanContext, cons, failing, checks, n_active, max_rounds,
+              kw: Study) -> PlanResult:
     """The rounds of constraint generation (module docstring), then the energies."""
     st = _Rounds(cons, checks, np.zeros(len(pl.sites)))
     if not failing:
@@ -361,7 +382,7 @@ def _generate(pl: PlanContext, cons, failing, checks, n_active, max_rounds, max_
         pl.add_base(st.active, pl.brackets, kw)
         st.message = f"not verified after {max_rounds} round(s) of constraint generation"
     for rnd in range(1, max_rounds + 1 if failing else 1):
-        if _round(pl, st, rnd, n_active, max_iter, kw):
+        if _round(pl, st, rnd, n_active, kw):
             break
     mwh, energy, ok = size_energy(pl, st.cons, st.mw, st.checks)
     if st.verified and not ok:
@@ -373,8 +394,7 @@ def _generate(pl: PlanContext, cons, failing, checks, n_active, max_rounds, max_
                       message=st.message, energy=energy)
 
 
-def _round(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, max_iter: int,
-           kw) -> bool:
+def _round(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw: Study) -> bool:
     """Round rnd: the verified loop (`place`) for the active set, priced with the energy
     per MW of the latest checks, then every contingency checked at its allocation.  A
     contingency proven infeasible is set aside when the plan drops them.  Returns whether
@@ -384,11 +404,11 @@ def _round(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, max_iter: int,
     pl.say(f"round {rnd}: solving for {len(st.active)} contingencies ("
            + ", ".join(c.name for c in st.active) + ")")
     try:
-        res = place(pl.case, st.active, site_cost=pl.site_costs, max_iter=max_iter,
-                    base={c.name: pl.base[c.name] for c in st.active},
-                    start=None if not st.mw.any() else st.mw, start_evaluations=st.evs,
-                    progress=lambda m: pl.say(f"round {rnd}: {m}"),
-                    **{**kw, **pl.loop_kw, "sites": sites})
+        res = place(pl.case, st.active, replace(kw, sites=sites),
+                    replace(pl.place, site_cost=pl.site_costs),
+                    WarmStart(base={c.name: pl.base[c.name] for c in st.active},
+                              start=None if not st.mw.any() else st.mw, evaluations=st.evs),
+                    progress=lambda m: pl.say(f"round {rnd}: {m}"))
     except InfeasibleError as exc:
         if not pl.drop_infeasible or not exc.contingencies:
             raise

@@ -17,10 +17,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from stabctl.dynamics.options import ModelOptions
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import energy_half_step, energy_note, energy_setters, size_energy
-from stabctl.placement.loop import _rounded, evaluations, place
+from stabctl.placement.evaluation import VerifyOptions
+from stabctl.placement.loop import PlaceOptions, WarmStart, _rounded, evaluations, place
 from stabctl.placement.program import InfeasibleError
 
 #: Uniform fleet bisection: resolution (% of MVA).
@@ -47,9 +47,9 @@ def margins(pl: PlanContext, cons, result, tol: float, cap_s: float, kw) -> None
             rows[c.name].update(margin_s=top[c.name] - c.target_cct_s, margin_at_least=True)
     if not near:
         return
-    ev = evaluations(pl.case, near, result.mw, gradient=False,
-                     brackets={c.name: (c.target_cct_s, top[c.name]) for c in near},
-                     **{**kw, "tol": tol})
+    ev = evaluations(pl.case, near, result.mw, replace(kw, search=replace(kw.search, tol=tol)),
+                     VerifyOptions(brackets={c.name: (c.target_cct_s, top[c.name])
+                                             for c in near}, gradient=False))
     for c in near:
         rows[c.name].update(cct_s=ev[c.name]["cct_s"], cct_tol_s=tol,
                             margin_s=ev[c.name]["cct_s"] - c.target_cct_s)
@@ -79,10 +79,10 @@ def half_step(pl: PlanContext, cons, result, n: int, kw) -> dict:
     setters = energy_setters(by_name, result.mw, result.energy)
     checks = pl.check(list({c.name: c for c in tight + setters}.values()), result.mw,
                       h=h / 2)
-    ev = evaluations(pl.case, tight, result.mw, gradient=False,
-                     brackets={r["name"]: (r["cct_s"] - 2 * res_of[r["name"]],
-                                          r["cct_s"] + 2 * res_of[r["name"]]) for r in rows},
-                     **{**kw, "h": h / 2})
+    ev = evaluations(pl.case, tight, result.mw, replace(kw, model=replace(kw.model, h=h / 2)),
+                     VerifyOptions(brackets={r["name"]: (r["cct_s"] - 2 * res_of[r["name"]],
+                                                         r["cct_s"] + 2 * res_of[r["name"]])
+                                             for r in rows}, gradient=False))
     out = [{"name": r["name"], "required_s": r["required_s"], "cct_s": r["cct_s"],
             "cct_tol_s": res_of[r["name"]], "cct_half_s": ev[r["name"]]["cct_s"],
             "stable_half": bool(checks[r["name"]]["stable_at_check"])} for r in rows]
@@ -164,7 +164,7 @@ def _verified_pct(pl: PlanContext, cons, failing, pct: float, fleet, pct_max: fl
         ok, checks = _stable(pl, cons, fleet(pct))
         if ok:
             pl.add_base(failing, pl.brackets, kw)
-            ev = evaluations(pl.case, failing, fleet(pct), base=pl.base, **kw)
+            ev = evaluations(pl.case, failing, fleet(pct), kw, VerifyOptions(base=pl.base))
             ok = all(ev[c.name]["cct_s"] >= c.target_cct_s - 1e-9 for c in failing)
         if ok or pct >= pct_max:
             return pct, ok, checks
@@ -188,7 +188,7 @@ def _mva(pl: PlanContext) -> np.ndarray:
     """MVA of the machine of each candidate site, (n_sites,)."""
     from stabctl.stability.cct import cached_simulator
 
-    case = cached_simulator(pl.case, ModelOptions.from_inputs(pl.model)).case
+    case = cached_simulator(pl.case, pl.model).case
     return np.array([float(case.machines.mva[case.machine_index(s.machine)])
                      for s in pl.sites])
 
@@ -208,8 +208,9 @@ def faults_alone(pl: PlanContext, cons, result, max_iter: int, kw) -> list:
         mine = [by_name[n] for n in result.active if by_name[n].fault_name == fname]
         base = {c.name: pl.base[c.name] for c in mine}
         try:
-            res = place(pl.case, mine, base=base, max_iter=max_iter,
-                        site_cost=pl.site_costs, **{**kw, "sites": sites})
+            res = place(pl.case, mine, replace(kw, sites=sites),
+                        PlaceOptions(max_iter=max_iter, site_cost=pl.site_costs),
+                        WarmStart(base=base))
         except InfeasibleError as exc:
             return {"fault": fname, "total_mw": None, "verified": False, "message": str(exc)}
         pl.say(f"alone: {fname}: {res.allocation.total_mw:.1f} MW")

@@ -22,6 +22,7 @@ import threading
 import logging
 import time
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 from pathlib import Path
 
 import matplotlib
@@ -35,9 +36,10 @@ from stabctl.plotting.figures import save_figure as _save  # noqa: E402
 from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs  # noqa: E402
 from stabctl.studies.cases import DEFAULT_FAULTS  # noqa: E402
 from stabctl.placement.program import candidate_sites  # noqa: E402
-from stabctl.placement.evaluation import Contingency  # noqa: E402
-from stabctl.placement.loop import _rounded, evaluations, place  # noqa: E402
-from stabctl.placement.plan import plan  # noqa: E402
+from stabctl.placement.evaluation import Contingency, VerifyOptions  # noqa: E402
+from stabctl.placement.loop import (PlaceOptions, Study, WarmStart, _rounded,  # noqa: E402
+                                    evaluations, place)
+from stabctl.placement.plan import PlanOptions, plan  # noqa: E402
 from stabctl.placement.requirements import (CostModel, Requirement,  # noqa: E402
                                             screening_brackets)
 from stabctl.storage.devices import hv_bus  # noqa: E402
@@ -108,19 +110,19 @@ def in_scope(rows) -> list[dict]:
             "still stable" in (r["error"] or "")]
 
 
-def paper_continuity(case_name: str, sites, mva, kw, say) -> dict:
+def paper_continuity(case_name: str, sites, mva, kw: Study, say) -> dict:
     """The paper's fault alone with today's target: the CCT of the uniform 5 % fleet (its
     first unstable clearing time), from that fleet (`place`, MAX_ITER_SIDE allocations)."""
     fault = DEFAULT_FAULTS[case_name][0]
     plain = (Contingency(fault, T_MAX_PLACE),)
-    base = evaluations(case_name, plain, None, **kw)
+    base = evaluations(case_name, plain, None, kw)
     fleet = _rounded(UNIFORM_PCT / 100 * mva, sites)
-    uni = evaluations(case_name, plain, fleet, base=base, scan="full", **kw)
+    uni = evaluations(case_name, plain, fleet, kw, VerifyOptions(base=base, scan="full"))
     name = plain[0].name
     target = (Contingency(fault, uni[name]["cct_s"]),)
-    res = place(case_name, target, base=base, start=fleet, start_evaluations=uni,
-                max_iter=MAX_ITER_SIDE, progress=lambda m: say(f"{case_name} paper's fault: {m}"),
-                **kw)
+    res = place(case_name, target, kw, PlaceOptions(max_iter=MAX_ITER_SIDE),
+                WarmStart(base=base, start=fleet, evaluations=uni),
+                progress=lambda m: say(f"{case_name} paper's fault: {m}"))
     return {"name": name, "cct_none_s": base[name]["cct_s"], "target_s": uni[name]["cct_s"],
             "uniform_mw": float(fleet.sum()), "total_mw": res.allocation.total_mw,
             "verified": res.verified, "allocation": res.allocation.rows(),
@@ -152,20 +154,22 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
             f" {len(faults)} stable when cleared at once")
         with worker_pool(workers) as pool_map:
             run_map = done.counting(pool_map)
-            kw = {"sites": sites, "tol": TOL, "t_max": T_MAX_PLACE, "run_map": run_map}
-            common = {"brackets": brackets, "cost": COSTS, "max_iter": MAX_ITER, **kw}
+            kw = Study(sites=sites, search=SearchOptions(tol=TOL, t_max=T_MAX_PLACE),
+                       run_map=run_map)
+            common = PlanOptions(brackets=brackets, cost=COSTS, drop_infeasible=True,
+                                 place=PlaceOptions(max_iter=MAX_ITER))
             beat.note(f"plan for {REQUIRED_CYCLES:g} cycles")
             main = plan(case_name, faults, Requirement(cycles=REQUIRED_CYCLES),
-                        load_levels=LOAD_LEVELS, alone=True, margins_tol=MARGIN_TOL,
-                        half_step_n=HALF_STEP_N,
-                        margins_cap_s=MARGIN_CAP_S, uniform=True, drop_infeasible=True,
-                        progress=lambda m: say(f"{case_name} {REQUIRED_CYCLES:g} cycles: {m}"),
-                        **common)
+                        replace(common, load_levels=LOAD_LEVELS, alone=True,
+                                margins_tol=MARGIN_TOL, half_step_n=HALF_STEP_N,
+                                margins_cap_s=MARGIN_CAP_S, uniform=True), kw,
+                        progress=lambda m: say(f"{case_name} {REQUIRED_CYCLES:g} cycles: {m}"))
+
             def point(cyc):
-                r = plan(case_name, faults, Requirement(cycles=cyc), drop_infeasible=True,
-                         load_levels=(1.0,) if fast else LOAD_LEVELS, uniform=not fast,
-                         progress=lambda m: say(f"{case_name} {cyc:g} cycles: {m}"),
-                         **common)
+                r = plan(case_name, faults, Requirement(cycles=cyc),
+                         replace(common, load_levels=(1.0,) if fast else LOAD_LEVELS,
+                                 uniform=not fast), kw,
+                         progress=lambda m: say(f"{case_name} {cyc:g} cycles: {m}"))
                 return _pareto_point(cyc, r)
 
             # the Pareto points and the paper's fault at the same time (one thread each,

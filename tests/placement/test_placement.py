@@ -19,8 +19,8 @@ from stabctl.smallsignal.linearise import linearise
 from stabctl.smib.omib import PAPER_OMIB, clearing_state_closed_form, simulate
 from stabctl.placement.program import (CCTCut, InfeasibleError, Site, candidate_sites, diagnose,
                                solve_allocation, sparse_allocation)
-from stabctl.placement.evaluation import Contingency
-from stabctl.placement.loop import place
+from stabctl.placement.evaluation import Contingency, VerifyOptions
+from stabctl.placement.loop import PlaceOptions, Study, WarmStart, place
 from stabctl.dynamics.results import SimulationResult
 from stabctl.stability.sime import omib_equivalent, storage_integrals, unstable_margin, unstable_point
 from stabctl.dynamics.simulation import Simulator
@@ -186,7 +186,7 @@ def counted_place():
 
     Simulator.run = run
     try:
-        res = place("kundur", [Contingency(CASE1, 0.280)], workers=1)
+        res = place("kundur", [Contingency(CASE1, 0.280)])
     finally:
         Simulator.run = original
     return res, calls
@@ -234,25 +234,27 @@ def test_a_feasible_uniform_start_is_only_ever_improved_and_verified():
     uniform = 0.05 * np.array([case.machines.mva[case.machine_index(s.machine)]
                                for s in sites])
     # the uniform 5 % fleet clears the Case-1 fault up to 0.202 s (ieee conventions)
-    res = place("kundur", [Contingency(CASE1, 0.195)], workers=1, start=uniform, max_iter=4)
+    res = place("kundur", [Contingency(CASE1, 0.195)], options=PlaceOptions(max_iter=4),
+                warm=WarmStart(start=uniform))
     assert res.verified
     assert res.allocation.total_mw <= uniform.sum() + 0.4
     assert res.evaluations["3-101"]["cct_s"] >= 0.195
     with pytest.raises(InputError, match="start"):
-        place("kundur", [Contingency(CASE1, 0.195)], workers=1, start=uniform[:2])
+        place("kundur", [Contingency(CASE1, 0.195)], warm=WarmStart(start=uniform[:2]))
 
 
 def test_infeasible_bounds_are_proven_by_simulation_and_name_the_contingency():
     sites = candidate_sites(load_case("kundur"), max_pct=0.5)       # 4.5 MW per site
     with pytest.raises(InfeasibleError, match="contingency 3-101") as exc:
-        place("kundur", [Contingency(CASE1, 0.300)], sites=sites, workers=1)
+        place("kundur", [Contingency(CASE1, 0.300)], Study(sites=sites))
     assert exc.value.contingencies == ("3-101",)
     assert "simulated" in str(exc.value)
 
 
 def test_damping_target_is_confirmed_by_recomputed_eigenvalues():
     """A CCT target already met without storage: only zeta_min asks for storage."""
-    res = place("kundur", [Contingency(CASE1, 0.150)], zeta_min=0.15, workers=1, max_iter=4)
+    res = place("kundur", [Contingency(CASE1, 0.150)],
+                options=PlaceOptions(zeta_min=0.15, max_iter=4))
     assert res.verified
     assert res.allocation.total_mw > 0
     assert res.damping[1].min() >= 0.15 - 1e-4
@@ -291,14 +293,14 @@ def test_bisection_warm_started_from_a_coarse_bracket_equals_the_cold_one():
     for f in faults:
         coarse = critical_clearing_time(sim, f, SearchOptions(tol=0.005, t_max=0.5, error_check=False))
         brackets[Contingency(f, 1).name] = coarse.bracket
-    cold = baseline("kundur", faults, workers=1)
-    warm = baseline("kundur", faults, workers=1, brackets=brackets)
+    cold = baseline("kundur", faults)
+    warm = baseline("kundur", faults, opts=VerifyOptions(brackets=brackets))
     for name in cold:
         assert warm[name]["cct_s"] == pytest.approx(cold[name]["cct_s"], abs=1e-9)
         assert warm[name]["n_simulations"] < cold[name]["n_simulations"]
     assert cold["3-101"]["cct_s"] == pytest.approx(critical_clearing_time(sim, CASE1).cct_s)
     # a wrong bracket (stable end unstable) falls back to the search from 0
-    bad = baseline("kundur", [CASE1], workers=1, brackets={"3-101": (0.3, 0.305)})
+    bad = baseline("kundur", [CASE1], opts=VerifyOptions(brackets={"3-101": (0.3, 0.305)}))
     assert bad["3-101"]["cct_s"] == pytest.approx(cold["3-101"]["cct_s"])
 
 
@@ -312,8 +314,8 @@ def test_a_start_already_evaluated_is_not_simulated_again():
     uniform = 0.05 * np.array([case.machines.mva[case.machine_index(s.machine)]
                                for s in sites])
     cons = [Contingency(CASE1, 0.195)]
-    base = evaluations("kundur", cons, workers=1)
-    known = evaluations("kundur", cons, uniform, base=base, scan="full", workers=1)
+    base = evaluations("kundur", cons)
+    known = evaluations("kundur", cons, uniform, opts=VerifyOptions(base=base, scan="full"))
     calls = []
     original = Simulator.run
 
@@ -323,11 +325,12 @@ def test_a_start_already_evaluated_is_not_simulated_again():
 
     Simulator.run = run
     try:
-        res = place("kundur", cons, workers=1, start=uniform, max_iter=2, base=base,
-                    start_evaluations=known)
+        res = place("kundur", cons, options=PlaceOptions(max_iter=2),
+                    warm=WarmStart(base=base, start=uniform, evaluations=known))
     finally:
         Simulator.run = original
-    again = place("kundur", cons, workers=1, start=uniform, max_iter=2, base=base)
+    again = place("kundur", cons, options=PlaceOptions(max_iter=2),
+                  warm=WarmStart(base=base, start=uniform))
     assert len(calls) == sum(r["n_simulations"] for r in res.iterations)
     assert res.allocation.total_mw == pytest.approx(again.allocation.total_mw)
     assert res.evaluations["3-101"]["cct_s"] == pytest.approx(again.evaluations["3-101"]["cct_s"],

@@ -17,7 +17,8 @@ from stabctl.errors import InputError, PowerFlowError
 from stabctl.io import load_case
 from stabctl.network.powerflow import scale_load, solve_powerflow
 from stabctl.placement.energy import ENERGY_MARGIN
-from stabctl.placement.plan import plan
+from stabctl.placement.loop import Study
+from stabctl.placement.plan import PlanOptions, plan
 from stabctl.placement.requirements import CostModel, Requirement
 from stabctl.placement.program import InfeasibleError, candidate_sites
 from stabctl.smib.omib import PAPER_OMIB, simulate
@@ -156,8 +157,8 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
     allocation holds both, as an independent simulation at each required time confirms."""
     faults = [LineFault(3, 101), LineFault(20, None)]
     over = {"20": Requirement(cycles=15)}                        # 250 ms for the bus-20 fault
-    res = plan("kundur", faults, Requirement(cycles=12), overrides=over, n_active=1,
-               workers=1, max_iter=6, half_step_n=2, uniform=True)
+    res = plan("kundur", faults, Requirement(cycles=12),
+               PlanOptions(overrides=over, n_active=1, half_step_n=2, uniform=True))
     assert len(res.rounds) >= 2
     first = res.rounds[0]
     assert first["active"] == ["3-101"] and "20" in first["failing"]
@@ -219,13 +220,13 @@ def testenergy_half_step_figures_by_hand():
 def test_infeasible_requirement_names_the_contingency_and_its_load_level():
     sites = candidate_sites(load_case("kundur"), max_pct=0.5)       # 4.5 MW per site
     with pytest.raises(InfeasibleError, match=r"3-101@110%.*load 110 %") as exc:
-        plan("kundur", [LineFault(3, 101)], Requirement(cycles=12), load_levels=(1.1,),
-             sites=sites, workers=1)
+        plan("kundur", [LineFault(3, 101)], Requirement(cycles=12),
+             PlanOptions(load_levels=(1.1,)), Study(sites=sites))
     assert exc.value.contingencies == ("3-101@110%",)
     # set aside instead: named, and the rest planned for (9 cycles = 150 ms: the base load
     # needs no storage, CCT 157 ms; at 110 % the CCT without storage is 100 ms)
-    res = plan("kundur", [LineFault(3, 101)], Requirement(cycles=9), load_levels=(1.0, 1.1),
-               sites=sites, workers=1, drop_infeasible=True)
+    res = plan("kundur", [LineFault(3, 101)], Requirement(cycles=9),
+               PlanOptions(load_levels=(1.0, 1.1), drop_infeasible=True), Study(sites=sites))
     assert res.set_aside == ["3-101@110%"] and "load 110 %" in res.infeasible[0]
     assert [c["name"] for c in res.contingencies] == ["3-101"] and res.verified
 
