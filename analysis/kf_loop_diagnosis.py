@@ -16,7 +16,7 @@ from stabctl.estimation import closed_loop as cl
 from stabctl.estimation import filters as es
 from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 
 class ExtrapolatingKF(es.FrequencyKF):

@@ -19,7 +19,7 @@ from stabctl.estimation import filters as es
 from stabctl.estimation import pmu
 from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 RATE = 60.0
 TARGET_US = 1e6 / RATE / 100

@@ -35,7 +35,7 @@ def main(ctx):
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
     if ctx.invoked_subcommand in _SIMULATING and "--help" not in sys.argv:
-        from stabctl._jitcache import on_first_compile
+        from stabctl._jit.notify import on_first_compile
 
         # said when compiling starts (never for cached kernels; bad input fails before)
         ctx.call_on_close(on_first_compile(

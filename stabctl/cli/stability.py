@@ -54,7 +54,7 @@ def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, deadband_hz,
     from stabctl.io import load_case
     from stabctl.stability.cct import LineFault, critical_clearing_time
     from stabctl.storage.devices import uniform_fleet
-    from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.driver import Simulator
     from stabctl.dynamics.events import validate as validate_events
 
     settings = cct_settings(tol_ms, t_max, tf)

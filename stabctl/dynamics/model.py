@@ -18,7 +18,8 @@ from numba import types
 from numba.core.errors import TypingError
 from numba.extending import intrinsic
 
-from stabctl._jitcache import assign, njit
+from stabctl._jit.arrays import assign
+from stabctl._jit.decorators import njit
 
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
@@ -330,7 +331,7 @@ class KernelParams(NamedTuple):
 
 class KernelNetwork(NamedTuple):
     """The matrices of a reduced network stage for the kernels (`ReducedNetwork`; in
-    `stabctl.dynamics.simulation.integrate` each is stacked by stage on a first axis):
+    `stabctl.dynamics.integrator.integrate` each is stacked by stage on a first axis):
     Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 and Z22 = inv(Y22)
     (n_nc, n_nc), R (n_bus, n_mac + n_nc); complex pu on the system base."""
 
@@ -569,9 +570,9 @@ def call_evaluate(typingctx, address, x, p, net, kept, want_vbus, dx, out):
     address (`evaluate_address`), inside compiled code; its exceptions propagate.
 
     Calling by address instead of by name keeps the model out of the caller's compiled
-    unit: `stabctl.dynamics.simulation.integrate` compiles without it (in a child
-    process when neither is cached, `stabctl._jitcache.compile_in_background`, while this
-    process compiles the model) and LLVM does not optimise and emit the model a second
+    unit: `stabctl.dynamics.integrator.integrate` compiles without it (in a child
+    process when neither is cached, `stabctl._jit.background.compile_in_background`, while
+    this process compiles the model) and LLVM does not optimise and emit the model a second
     time.  Every argument but p must have the type `evaluate_address` compiled for
     (`_evaluate_arg_types`: C-contiguous arrays, a boolean want_vbus; TypingError
     otherwise), or the call would read its arguments wrongly.

@@ -420,7 +420,7 @@ def cct_study(case: str, bus: int, far_bus: int, ratings, runs, out, *,
         The PMUs' frequency and ROCOF window (cycles, `PMUSettings.window_cycles`); a
         value other than that default is part of each job's key and inputs.
     workers, progress, conventions, h
-        As `stabctl.parallel.run_sweep` and `stabctl.dynamics.simulation.Simulator`.
+        As `stabctl.parallel.run_sweep` and `stabctl.dynamics.driver.Simulator`.
 
     Returns
     -------

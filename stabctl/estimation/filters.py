@@ -51,7 +51,8 @@ import numpy as np
 import scipy.linalg
 from filterpy.common import Q_continuous_white_noise
 from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
-from stabctl._jitcache import assign, kernel, njit
+from stabctl._jit.arrays import assign
+from stabctl._jit.decorators import kernel, njit
 from scipy.stats import chi2
 
 from stabctl.case import Case

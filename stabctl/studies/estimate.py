@@ -63,7 +63,7 @@ def estimator_errors(case, event, *, settings, esd_pct, runs: int, seed: int,
     InputError
         ``t_end`` before the errors start.
     """
-    from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.driver import Simulator
     from stabctl.estimation import ambient as am
     from stabctl.estimation import filters as es
     from stabctl.estimation.pmu import machine_pmus
@@ -116,7 +116,7 @@ def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float,
         Per estimator (`stabctl.estimation.closed_loop.ESTIMATORS`): ``stable``,
         ``switchings`` and ``false_actions``.
     """
-    from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.driver import Simulator
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation import filters as es
     from stabctl.estimation.pmu import machine_pmus

@@ -26,7 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from stabctl._jitcache import njit
+from stabctl._jit.decorators import njit
 
 from stabctl.estimation import filters as es
 from stabctl.storage import control as law

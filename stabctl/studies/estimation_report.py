@@ -24,7 +24,7 @@ from stabctl.io import load_case
 from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.estimation.settings import PMUSettings
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.studies.cases import PAPER_CASES
 
 #: the paper's cases by case name; the RMSE runs clear after pc.cycles["estimation"]:
