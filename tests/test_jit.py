@@ -211,6 +211,8 @@ def test_no_kernel_compiles_numbas_slice_assignment_message():
         "sim = Simulator(case, background_compile=False)\n"
         "evaluate_address(sim.model.params)\n"
         "integrate.compile(tuple(sim.run_argument_types()))\n"
+        "from stabctl.smallsignal.linearise import compile_differences\n"
+        "compile_differences(sim.model)\n"
         "es.compile_filters(es.machine_models(case, machine_pmus(case)))\n"
         "print(len(seen), seen[:3])\n")
     with tempfile.TemporaryDirectory() as cache:

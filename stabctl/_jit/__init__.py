@@ -22,16 +22,17 @@ checks each rule):
    :mod:`~stabctl._jit.decorators` (``cache=True``): a bare ``numba.njit`` would not be
    cached, or be cached without the package-wide key.
 2. A `kernel` is called only from compiled code; package code never calls one from Python
-   (the trampoline of `CompiledOnly` is for tests and one-off checks).
+   (the trampoline of `CompiledOnly` is for tests, one-off checks and the filterpy
+   reference implementations, classes named ``*Reference``).
 3. No kernel assigns an array into a slice (``a[:] = b``, ``F[3:, 3:] = A``): it calls
    `stabctl._jit.arrays.assign`.  numba's slice assignment from an array compiles a
    formatter for its shape-mismatch message, 2-3 s of a cold first call.  A scalar fill
    (``a[:] = 0.0``) is fine.
-4. Flags and column numbers passed from a kernel to a kernel are numpy scalars
+4. Flags and row or column numbers passed from a kernel to a kernel are numpy scalars
    (``np.bool_(True)``, ``np.int64(0)``, or module constants holding them such as
-   `stabctl.dynamics.model.BUS_VOLTAGES`), never Python ``True``/``False`` or int
-   literals: numba types a Python constant as a literal and compiles the callee (and its
-   callers) once per value.
+   `stabctl.dynamics.model.BUS_VOLTAGES`), not Python ``True``/``False`` or ints, literal
+   or module constants: numba types those as literals and compiles the callee (and its
+   callers) once per value, and once more for a caller passing a variable.
 5. No ``np.linalg`` in kernels: its numba implementation copies its inputs with a slice
    assignment (rule 3); LAPACK is called by symbol name (`stabctl.network.solution`'s
    ``dgesv``), which keeps the kernels cacheable.
