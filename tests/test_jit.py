@@ -219,3 +219,36 @@ def test_no_kernel_compiles_numbas_slice_assignment_message():
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                              env={**os.environ, "NUMBA_CACHE_DIR": cache}, check=True).stdout
     assert out.startswith("0 "), out
+
+
+def test_a_kernel_called_by_address_returns_raises_and_checks_its_types():
+    # `by_address`: the callee's value and exceptions come through; an argument of
+    # another type than the address was compiled for is refused when typing the caller
+    import numba
+    import numpy as np
+    import pytest
+    from numba import types, typeof
+
+    from stabctl._jit.address import address_of, by_address
+
+    @numba.njit
+    def callee(x, k, flag):
+        x[0] += k
+        if flag:
+            raise ValueError("boom")
+        return k + 1
+
+    vector = typeof(np.zeros(2))
+    call = by_address("call_callee", ("x", "k", "flag"), lambda: (vector, None, types.boolean))
+
+    @numba.njit
+    def caller(address, x, k, flag):
+        return call(address, x, k, flag)
+
+    address = address_of(callee, (vector, types.int64, types.boolean))
+    x = np.zeros(2)
+    assert caller(address, x, 2, np.bool_(False)) == 3 and x[0] == 2.0
+    with pytest.raises(ValueError, match="boom"):
+        caller(address, x, 2, np.bool_(True))
+    with pytest.raises(numba.core.errors.TypingError, match="x must be"):
+        caller(address, np.zeros(2, np.int64), 2, np.bool_(False))

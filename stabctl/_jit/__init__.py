@@ -8,6 +8,7 @@
 - :mod:`~stabctl._jit.background`: compiling a kernel in a child process while this one
   compiles another;
 - :mod:`~stabctl._jit.notify`: the notice and heartbeat while the first kernels compile;
+- :mod:`~stabctl._jit.address`: calling a kernel by its machine-code address (rule 7);
 - :mod:`~stabctl._jit.arrays`: `assign` and `max_abs`, the loops kernels use instead of
   numpy idioms that are slow to compile.
 
@@ -39,7 +40,7 @@ checks each rule):
 6. No numba generic reductions where a loop says the same: ``np.max(np.abs(a))`` is
    `stabctl._jit.arrays.max_abs`.
 7. Two large units do not link each other: the integrator and the linearisation call the
-   model's evaluation by machine-code address (`stabctl.dynamics.model.call_evaluate`), so
-   LLVM emits the model once and the units can compile in parallel processes
-   (:mod:`~stabctl._jit.background`).
+   model's evaluation by machine-code address (`stabctl.dynamics.model.call_evaluate`,
+   made by :mod:`~stabctl._jit.address`), so LLVM emits the model once and the units can
+   compile in parallel processes (:mod:`~stabctl._jit.background`).
 """

@@ -92,6 +92,29 @@ def _declares_kernels(text: str) -> bool:
     return False
 
 
+def _sources(root: Path) -> tuple[dict[str, Path], dict[str, str]]:
+    """Every module of the package: its file and its text, by module name."""
+    modules = {_dotted(root, f): f for f in root.rglob("*.py")}
+    return modules, {name: f.read_text("utf-8") for name, f in modules.items()}
+
+
+def declaring_modules(root: Path = _PKG) -> list[str]:
+    """Names of the package's modules that declare a kernel (`KERNEL_DECORATORS`).
+
+    Parameters
+    ----------
+    root : Path
+        The package directory (default: stabctl's).
+
+    Returns
+    -------
+    list of str
+        Sorted dotted names, e.g. ``"stabctl.dynamics.integrator"``.
+    """
+    _, texts = _sources(root)
+    return sorted(name for name, text in texts.items() if _declares_kernels(text))
+
+
 def kernel_sources(root: Path = _PKG) -> list[Path]:
     """The source files whose contents the compiled kernels depend on (module docstring):
     the modules declaring a kernel and the package modules they import at module level.
@@ -106,12 +129,11 @@ def kernel_sources(root: Path = _PKG) -> list[Path]:
     list of Path
         Sorted, each once.
     """
-    modules = {_dotted(root, f): f for f in root.rglob("*.py")}
+    modules, texts = _sources(root)
     files = set()
-    for name, source in modules.items():
-        text = source.read_text("utf-8")
+    for name, text in texts.items():
         if _declares_kernels(text):
-            files |= {source, *_imported_modules(modules, name, text)}
+            files |= {modules[name], *_imported_modules(modules, name, text)}
     return sorted(files)
 
 

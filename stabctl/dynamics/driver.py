@@ -24,7 +24,8 @@ from stabctl.dynamics.coi import coi_angle
 from stabctl.dynamics.grid import (check_step, check_step_count, default_step,
                                    fastest_time_constant, time_grid)
 from stabctl.dynamics.model import (DynamicModel, KeptBuses, OperatingPoint, StageConfig,
-                                    check_conventions, evaluate_address, stacked_networks)
+                                    check_conventions, evaluate_address, evaluate_kernel,
+                                    stacked_networks)
 from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
@@ -272,8 +273,9 @@ class Simulator:
         At each frame time t_f (s, increasing) the run is advanced to the first grid point
         at or after t_f and ``decide(t_f, partial)`` is called with the recent trajectory
         (a SimulationResult of the last `history_s` seconds up to that grid point, so a
-        measurement at t_f can be interpolated; no verdict); it returns the device set-points, which take effect at
-        exactly t_f + `latency` (the step is split there) and hold until the next ones.
+        measurement at t_f can be interpolated; no verdict); it returns the device
+        set-points, which take effect at exactly t_f + `latency` (the step is split there)
+        and hold until the next ones.
         With `stop_at_separation` the run ends at the first step after which a rotor angle
         is more than `separation_limit` rad from the COI, as `run` (no further frame is
         decided).
@@ -354,7 +356,8 @@ class Simulator:
             group = separated_group(angle[k], self.inertia)
             separated = [int(x) for x in c.machines.number[group]]
         return SimulationResult(
-            t=t[:n].copy(), machines=c.machines.number.astype(int), buses=c.buses.number.astype(int),
+            t=t[:n].copy(), machines=c.machines.number.astype(int),
+            buses=c.buses.number.astype(int),
             speed=rec.speed[:n], angle=angle, pelect=rec.pelect[:n], pmech=rec.pmech[:n],
             efd=rec.efd[:n], vmag=np.abs(rec.V[:n]), vang=np.angle(rec.V[:n]),
             inertia=self.inertia, stable=t_sep is None, t_separation=t_sep, separated=separated,
@@ -364,11 +367,10 @@ class Simulator:
 
 
 def simulator_cached() -> bool:
-    """Whether the simulator's kernels, the integrator (`integrate`) and the model's
-    evaluation (`stabctl.dynamics.model.evaluate_kernel`), are in the on-disk cache
+    """Whether the simulator's kernels, the integrator
+    (`stabctl.dynamics.integrator.integrate`) and the model's evaluation
+    (`stabctl.dynamics.model.evaluate_kernel`), are in the on-disk cache
     (`stabctl._jit.cache.cached`): a new process loads them instead of compiling them."""
-    from stabctl.dynamics.model import evaluate_kernel
-
     return cached(ig.integrate) and cached(evaluate_kernel)
 
 
