@@ -17,7 +17,7 @@ from stabctl.estimation.filters import FrequencyKF
 from stabctl.estimation.models import relative_speeds
 from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 
 class ExtrapolatingKF(FrequencyKF):

@@ -63,7 +63,8 @@ from stabctl.errors import InputError
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import modal_analysis
 from stabctl.io.psse import load_psse
-from stabctl.dynamics.simulation import Simulator, default_step
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.grid import default_step
 
 T_FAULT, CYCLES, T_END, TOL_CCT = 1.0, 6, 20.0, 0.001
 ACCURACY = 1e-4                                   # pu rotor speed, for settings (b)

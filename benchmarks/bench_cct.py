@@ -18,7 +18,7 @@ import time
 from stabctl.io import load_case
 from stabctl.stability.cct import SearchOptions, critical_clearing_time
 from stabctl.studies.cases import CASE1, CASE2
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 SEARCHES = (  # case, fault, target s (None: no target), label
     ("miniwecc", CASE2.fault, 3.0, "Case 2: bus 83, line 83-33"),

@@ -14,7 +14,7 @@ from _timing import best_of
 from stabctl.io import load_case
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import modal_analysis, mode_sensitivity
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 
 def main():

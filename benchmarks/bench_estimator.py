@@ -21,7 +21,7 @@ from stabctl.estimation.reference import SwingEKFReference
 from stabctl.estimation import pmu
 from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 RATE = 60.0
 TARGET_US = 1e6 / RATE / 100

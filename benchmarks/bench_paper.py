@@ -32,7 +32,7 @@ def _clear_cache() -> int:
     """Clear the compiled kernels of the stabctl that `run`'s subprocess imports (from the
     working directory when it holds a source tree, else the installed one), as after a
     fresh installation; the number of files deleted."""
-    code = "from stabctl._jitcache import clear_cache; print(clear_cache())"
+    code = "from stabctl._jit.cache import clear_cache; print(clear_cache())"
     return int(subprocess.run([sys.executable, "-c", code], check=True, text=True,
                               stdout=subprocess.PIPE).stdout)
 

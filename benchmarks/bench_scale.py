@@ -158,7 +158,7 @@ def ours(label: str, repeat: int) -> dict:
     import tracemalloc
 
     from stabctl.dynamics.events import Fault
-    from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.driver import Simulator
     from stabctl.errors import NumericalInstabilityError
     from stabctl.smallsignal.linearise import linearise
     from stabctl.smallsignal.modal import modal_analysis
@@ -292,7 +292,7 @@ def screen_gb(n_jobs: int, workers: int = 2) -> dict:
                         progress=False)
         wall = time.perf_counter() - t
         t = time.perf_counter()
-        from stabctl.dynamics.simulation import Simulator
+        from stabctl.dynamics.driver import Simulator
         Simulator(case, q_limits=q_limits)
         setup = time.perf_counter() - t
     recs = list(rep.records.values())

@@ -9,7 +9,8 @@ Run: python benchmarks/bench_simulate.py
 from _timing import best_of
 from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator, default_step
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.grid import default_step
 from stabctl.studies.cases import CASE1, CASE2
 
 CASES = ((CASE1, 0.05), (CASE2, 0.3))  # paper case, target s (20 s run, one core)

@@ -23,7 +23,7 @@ _EXPORTS = {
     "load_case": "stabctl.io",
     "list_cases": "stabctl.io",
     "solve_powerflow": "stabctl.network.powerflow",
-    "Simulator": "stabctl.dynamics.simulation",
+    "Simulator": "stabctl.dynamics.driver",
     "SimulationResult": "stabctl.dynamics.results",
     "Fault": "stabctl.dynamics.events",
     "LineTrip": "stabctl.dynamics.events",

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import pytest
 
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
 
 

@@ -49,7 +49,7 @@ def test_compile_notice_once_and_only_when_a_stabctl_kernel_compiles():
     stabctl kernel compiles; compiling code of other packages does not count."""
     import numba
 
-    from stabctl._jitcache import on_first_compile
+    from stabctl._jit.notify import on_first_compile
 
     def kernel(x):
         return x + 1
@@ -75,7 +75,7 @@ def test_a_long_compile_is_announced_again_while_it_lasts():
 
     import numba
 
-    from stabctl._jitcache import on_first_compile
+    from stabctl._jit.notify import on_first_compile
 
     def slow(x):
         return x + 1

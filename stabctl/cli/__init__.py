@@ -4,9 +4,9 @@ The click group :func:`main` (the console script ``stabctl = stabctl.cli:main``)
 commands, one module per family: :mod:`~stabctl.cli.omib` (omib), :mod:`~stabctl.cli.paper`
 (paper), :mod:`~stabctl.cli.io` (cases, import-psse, import-andes), :mod:`~stabctl.cli.simulate`,
 :mod:`~stabctl.cli.stability` (cct, sweep-cct, screen), :mod:`~stabctl.cli.eig`,
-:mod:`~stabctl.cli.place` and :mod:`~stabctl.cli.estimate`. Shared options, checks and
-error handling are in :mod:`~stabctl.cli.options`, text and JSON output in
-:mod:`~stabctl.cli.format`.
+:mod:`~stabctl.cli.place`, :mod:`~stabctl.cli.estimate` and :mod:`~stabctl.cli.compile`
+(compile: the kernel cache). Shared options, checks and error handling are in
+:mod:`~stabctl.cli.options`, text and JSON output in :mod:`~stabctl.cli.format`.
 
 Errors in the input (stabctl.errors.StabctlError) are printed as one line naming what and
 where, with exit status 2; nothing is written in that case.  The library's progress lines
@@ -39,7 +39,7 @@ def main(ctx):
         os.environ.setdefault(var, "1")
     _log_to_stderr()
     if ctx.invoked_subcommand in _SIMULATING and "--help" not in sys.argv:
-        from stabctl._jitcache import on_first_compile
+        from stabctl._jit.notify import on_first_compile
 
         # said when compiling starts (never for cached kernels; bad input fails before)
         ctx.call_on_close(on_first_compile(
@@ -71,11 +71,12 @@ def _log_to_stderr() -> None:
 
 
 def _register() -> None:
+    from stabctl.cli import compile as compile_
     from stabctl.cli import eig, estimate, io, omib, paper, place, simulate, stability
 
     for cmd in (omib.omib, paper.paper, io.cases, simulate.simulate, stability.cct,
                 stability.sweep_cct, stability.screen, eig.eig, estimate.estimate,
-                place.place, io.import_psse, io.import_andes):
+                place.place, io.import_psse, io.import_andes, compile_.compile_kernels):
         main.add_command(cmd)
 
 

@@ -118,7 +118,8 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     is written then (a diverged run reports where it stopped).
     """
     from stabctl.io import load_case
-    from stabctl.dynamics.simulation import Simulator, check_step_count
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.grid import check_step_count
     from stabctl.dynamics.events import validate as validate_events
 
     out_p = check_suffix(out_path, OUT_SUFFIXES, "--out")

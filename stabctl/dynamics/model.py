@@ -15,10 +15,10 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import types
-from numba.core.errors import TypingError
-from numba.extending import intrinsic
 
-from stabctl._jitcache import assign, njit
+from stabctl._jit.address import address_of, by_address
+from stabctl._jit.arrays import assign
+from stabctl._jit.decorators import njit
 
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
@@ -330,7 +330,7 @@ class KernelParams(NamedTuple):
 
 class KernelNetwork(NamedTuple):
     """The matrices of a reduced network stage for the kernels (`ReducedNetwork`; in
-    `stabctl.dynamics.simulation.integrate` each is stacked by stage on a first axis):
+    `stabctl.dynamics.integrator.integrate` each is stacked by stage on a first axis):
     Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 and Z22 = inv(Y22)
     (n_nc, n_nc), R (n_bus, n_mac + n_nc); complex pu on the system base."""
 
@@ -534,7 +534,8 @@ def _evaluate_arg_types() -> tuple:
 
 def evaluate_address(p) -> int:
     """Machine-code address of `evaluate_kernel` compiled for parameters p and the
-    argument types of `call_evaluate` (loaded from the cache or compiled here).
+    argument types of `call_evaluate` (loaded from the cache or compiled here;
+    `stabctl._jit.address.address_of`).
 
     Parameters
     ----------
@@ -544,57 +545,29 @@ def evaluate_address(p) -> int:
     -------
     int
         The address; valid while this process lives (the dispatcher keeps the code).
-
-    Raises
-    ------
-    RuntimeError
-        The compiled code defines no such function, or it does not return an intp (what
-        `call_evaluate` reads).
     """
     from numba import typeof
 
     x, *rest = _evaluate_arg_types()
-    sig = (x, typeof(p), *rest)
-    evaluate_kernel.compile(sig)
-    cres = evaluate_kernel.overloads[sig]
-    address = cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
-    if not address or cres.signature.return_type != types.intp:
-        raise RuntimeError("evaluate_kernel: no compiled function for " + str(sig))
-    return address
+    return address_of(evaluate_kernel, (x, typeof(p), *rest))
 
 
-@intrinsic
-def call_evaluate(typingctx, address, x, p, net, kept, want_vbus, dx, out):
-    """``evaluate_kernel(x, p, net, kept, want_vbus, dx, out)`` through its machine-code
-    address (`evaluate_address`), inside compiled code; its exceptions propagate.
+def _call_evaluate_types() -> tuple:
+    x, *rest = _evaluate_arg_types()
+    return (x, None, *rest)
 
-    Calling by address instead of by name keeps the model out of the caller's compiled
-    unit: `stabctl.dynamics.simulation.integrate` compiles without it (in a child
-    process when neither is cached, `stabctl._jitcache.compile_in_background`, while this
-    process compiles the model) and LLVM does not optimise and emit the model a second
-    time.  Every argument but p must have the type `evaluate_address` compiled for
-    (`_evaluate_arg_types`: C-contiguous arrays, a boolean want_vbus; TypingError
-    otherwise), or the call would read its arguments wrongly.
-    """
-    argtypes = (x, p, net, kept, want_vbus, dx, out)
-    if not isinstance(address, types.Integer):
-        raise TypingError(f"call_evaluate: the address must be an integer, got {address}")
-    for name, got, want in zip(("x", "net", "kept", "want_vbus", "dx", "out"),
-                               (x, net, kept, want_vbus, dx, out), _evaluate_arg_types()):
-        if got != want:
-            raise TypingError(f"call_evaluate: {name} must be {want}, got {got}")
-    sig = types.intp(address, *argtypes)
 
-    def codegen(context, builder, signature, args):
-        fnty = context.call_conv.get_function_type(types.intp, argtypes)
-        fn = builder.inttoptr(args[0], fnty.as_pointer())
-        status, res = context.call_conv.call_function(builder, fn, types.intp, argtypes,
-                                                      args[1:])
-        with builder.if_then(status.is_error, likely=False):
-            context.call_conv.return_status_propagate(builder, status)
-        return res
-
-    return sig, codegen
+#: ``call_evaluate(address, x, p, net, kept, want_vbus, dx, out)``: `evaluate_kernel`
+#: through its machine-code address (`evaluate_address`), inside compiled code; its
+#: exceptions propagate.  Calling by address instead of by name keeps the model out of the
+#: caller's compiled unit: `stabctl.dynamics.integrator.integrate` compiles without it (in a
+#: child process when neither is cached, `stabctl._jit.background.compile_in_background`,
+#: while this process compiles the model) and LLVM does not optimise and emit the model a
+#: second time.  Every argument but p must have the type `evaluate_address` compiled for
+#: (`_evaluate_arg_types`: C-contiguous arrays, a boolean want_vbus; TypingError
+#: otherwise), or the call would read its arguments wrongly.
+call_evaluate = by_address("call_evaluate", ("x", "p", "net", "kept", "want_vbus", "dx", "out"),
+                           _call_evaluate_types)
 
 
 def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:

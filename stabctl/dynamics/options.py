@@ -46,9 +46,9 @@ class ModelOptions:
             raise InputError(f"integration step must be > 0 s, got {self.h:g}")
 
     def simulator(self, case, **kwargs):
-        """A `stabctl.dynamics.simulation.Simulator` of `case` with these settings
+        """A `stabctl.dynamics.driver.Simulator` of `case` with these settings
         (``kwargs``: its other arguments, e.g. ``injection_buses``)."""
-        from stabctl.dynamics.simulation import Simulator
+        from stabctl.dynamics.driver import Simulator
 
         return Simulator(case, conventions=self.conventions, step=self.h,
                          q_limits=self.q_limits, **kwargs)

@@ -70,7 +70,7 @@ class SimulationResult:
         First recorded time the limit was exceeded, s; None (default) if never.
     separated : list of int, optional
         Numbers of the machines that lost synchronism (the smaller coherent group,
-        `stabctl.dynamics.simulation.separated_group`); empty (default) if none.
+        `stabctl.dynamics.driver.separated_group`); empty (default) if none.
     meta : dict, optional
         Run description: ``case``, ``conventions``, ``wall_time_s`` (s),
         ``max_initial_derivative`` and its state, and with storage ``switchings`` (the

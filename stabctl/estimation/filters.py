@@ -52,7 +52,8 @@ import math
 import numpy as np
 from scipy.stats import chi2
 
-from stabctl._jitcache import assign, kernel, njit
+from stabctl._jit.arrays import assign
+from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import InputError
 from stabctl.estimation.models import FrequencyTuning, MachineModels, SwingTuning
 from stabctl.estimation.pmu import Frame
@@ -346,7 +347,7 @@ def _scalar_update(x, P, y, H, R):
 
 @kernel
 def _store(x, P, k, xk, Pk):
-    """x[k], P[k] = xk, Pk (`stabctl._jitcache.assign`)."""
+    """x[k], P[k] = xk, Pk (`stabctl._jit.arrays.assign`)."""
     assign(x[k], xk)
     assign(P[k], Pk)
 
@@ -538,7 +539,7 @@ def compile_filters(models: MachineModels) -> None:
     on-disk cache: each filter of these machines takes one frame with every measurement
     lost (the types of a real run; nothing is estimated).  A study calls this before its
     first simulation, so that on a cold cache they compile here while the simulator's
-    integrator compiles in a child process (`stabctl.dynamics.simulation.Simulator`),
+    integrator compiles in a child process (`stabctl.dynamics.driver.Simulator`),
     instead of after it.
 
     Parameters

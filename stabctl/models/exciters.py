@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from stabctl._jitcache import kernel, njit
+from stabctl._jit.decorators import kernel, njit
 
 from stabctl.case import Case, beyond
 from stabctl.case.params import EXCITER

@@ -26,7 +26,7 @@ type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jitcache import kernel
+from stabctl._jit.decorators import kernel
 
 from stabctl.case import Case, beyond
 from stabctl.case.params import GOVERNOR

@@ -15,7 +15,7 @@ psi_kq; `mac_tra` uses the first four, `mac_em` the first two (the others stay c
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jitcache import kernel
+from stabctl._jit.decorators import kernel
 
 from stabctl.case import Case
 from stabctl.case.params import MACHINE

@@ -20,7 +20,7 @@ the same machine.
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jitcache import kernel
+from stabctl._jit.decorators import kernel
 
 from stabctl.case import Case
 from stabctl.case.params import PSS

@@ -21,7 +21,8 @@ import numpy as np
 import scipy.linalg as la
 from numba import types
 from numba.extending import get_cython_function_address
-from stabctl._jitcache import assign, kernel, max_abs
+from stabctl._jit.arrays import assign, max_abs
+from stabctl._jit.decorators import kernel
 
 from stabctl.case import Case
 from stabctl.errors import SimulationError

@@ -34,7 +34,9 @@ import control as ct
 import numpy as np
 from numba import typeof
 
-from stabctl._jitcache import await_background, compile_in_background, njit
+from stabctl._jit.arrays import assign, max_abs
+from stabctl._jit.background import await_background, compile_in_background
+from stabctl._jit.decorators import njit
 
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
@@ -90,7 +92,7 @@ def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP
     ----------
     target : Case or Simulator
         A Case (its power flow is solved and a Simulator built) or a
-        `stabctl.dynamics.simulation.Simulator` (its operating point, conventions and
+        `stabctl.dynamics.driver.Simulator` (its operating point, conventions and
         cached models are used).
     esd_buses : iterable of int or None, optional
         Bus numbers with an ESD power input ``P_esd_B<n>`` (pu on the system base,
@@ -129,7 +131,7 @@ def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP
     CaseError, PowerFlowError
         As `Simulator` when `target` is a Case.
     """
-    from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.driver import Simulator
 
     sim = target if isinstance(target, Simulator) else Simulator(
         target, conventions=conventions, q_limits=q_limits, background_compile=False)
@@ -275,21 +277,13 @@ def jacobian_columns(model: DynamicModel, kind, index, step):
         SimulationError: a perturbed network did not solve, or a column's forward and
             backward slopes differ by more than KINK_RATIO (a limiter was crossed).
     """
-    net = model.network(StageConfig())
-    p = model.params._replace(EP=model.params.EP.copy(), GP=model.params.GP.copy())
-    L = model.layout
-    n_col, n_bus = len(kind), model.case.n_bus
-    J = np.zeros((n_col, L.size))
-    dV = np.zeros((n_col, n_bus), np.complex128)
-    curv = np.zeros(n_col)
-    V0 = np.zeros(n_bus, np.complex128)
-    args = [np.asarray(kind, np.int64), np.asarray(index, np.int64), np.asarray(step, float),
-            model.x0, model.V_nc0, p, kernel_network(net), J, dV, curv, V0, 0]
+    args = _difference_arguments(model, kind, index, step)
     # cold: _differences compiles in a child process while this one compiles the model
     compile_in_background(_differences, [typeof(a) for a in args])
-    args[-1] = evaluate_address(p)
+    args[-1] = evaluate_address(args[5])
     await_background(_differences)
     bad = _differences(*args)
+    J, dV, curv, V0 = args[7:11]
     if bad >= 0:
         raise SimulationError(f"the network did not solve with {_what(model, kind, index, bad)} "
                               "perturbed")
@@ -299,6 +293,32 @@ def jacobian_columns(model: DynamicModel, kind, index, step):
                               f"crosses a limiter (one-sided slopes differ by {curv[k]:.1%}); "
                               "use a smaller rel_step")
     return J, dV, V0
+
+
+def _difference_arguments(model: DynamicModel, kind, index, step) -> list:
+    """The arguments of `_differences` for `jacobian_columns` (its outputs J, dV, curv, V0
+    zeroed at positions 7-10; the model's address 0 at the end, to be filled in)."""
+    net = model.network(StageConfig())
+    p = model.params._replace(EP=model.params.EP.copy(), GP=model.params.GP.copy())
+    n_col, n_bus = len(kind), model.case.n_bus
+    return [np.asarray(kind, np.int64), np.asarray(index, np.int64), np.asarray(step, float),
+            model.x0, model.V_nc0, p, kernel_network(net), np.zeros((n_col, model.layout.size)),
+            np.zeros((n_col, n_bus), np.complex128), np.zeros(n_col),
+            np.zeros(n_bus, np.complex128), 0]
+
+
+def compile_differences(model: DynamicModel) -> None:
+    """Compile the linearisation's kernel (`_differences`) for this model's argument types
+    in this process, or load it from the on-disk cache, without linearising
+    (``stabctl compile``).  The model's evaluation is compiled separately
+    (`stabctl.dynamics.model.evaluate_address`): the kernel calls it by address.
+
+    Parameters
+    ----------
+    model : DynamicModel
+    """
+    args = _difference_arguments(model, [STATE], [0], [1.0])
+    _differences.compile(tuple(typeof(a) for a in args))
 
 
 def _what(model, kind, index, c) -> str:
@@ -359,12 +379,12 @@ def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0, evaluate
             if it < 0:
                 return c
             if side == 0:
-                fp[:] = dx
-                dV[c] = out.V_bus
+                assign(fp, dx)
+                assign(dV[c], out.V_bus)
             else:
-                J[c] = (fp - dx) / (hi - lo)
-                dV[c] = (dV[c] - out.V_bus) / (hi - lo)
-                curv[c] = np.max(np.abs(fp - 2.0 * f0 + dx)) / max(np.max(np.abs(fp - dx)), 1e-300)
+                assign(J[c], (fp - dx) / (hi - lo))
+                assign(dV[c], (dV[c] - out.V_bus) / (hi - lo))
+                curv[c] = max_abs(fp - 2.0 * f0 + dx) / max(max_abs(fp - dx), 1e-300)
     return -1
 
 

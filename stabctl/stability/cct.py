@@ -13,7 +13,7 @@ inertia (paper eq. 40, weights H*MVA) by more than `separation_limit` (pi rad) b
 `t_end` (default fault time + 5 s); the runs stop at separation to save time.  Any
 callable(SimulationResult) -> bool (True = stable) can replace it.
 
-Grid: the simulator's grid lands on every event time (`stabctl.dynamics.simulation.time_grid`), so a
+Grid: the simulator's grid lands on every event time (`stabctl.dynamics.grid.time_grid`), so a
 clearing time is never rounded to a multiple of the step h: the fault-on interval of length
 tc gets fix(tc/h) equal steps (each in [h, 2h)) and the post-fault interval restarts at the
 clearing instant.  The bisection probes only clearing times k*tol (k integer), so results
@@ -46,8 +46,8 @@ from stabctl.errors import InputError, NumericalInstabilityError, SimulationErro
 from stabctl.dynamics.events import Fault, LineTrip
 from stabctl.network.ybus import circuit_row
 from stabctl.dynamics.results import SimulationResult
+from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.options import ModelOptions
-from stabctl.dynamics.simulation import Simulator
 
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
 #: to the limit), the limit, tolerance, and the run length after the fault.
@@ -508,7 +508,7 @@ def cached_simulator(case_name: str, model: ModelOptions = ModelOptions(),
 
 def compile_here(case_name: str, model: ModelOptions = ModelOptions()) -> None:
     """Compile the simulator's kernels in this process (a 0.1 s run of the case) unless
-    they are cached (`stabctl.dynamics.simulation.simulator_cached`), so that the workers a sweep
+    they are cached (`stabctl.dynamics.driver.simulator_cached`), so that the workers a sweep
     starts next load them instead of each compiling them at the same time, silently.
 
     Parameters
@@ -517,7 +517,7 @@ def compile_here(case_name: str, model: ModelOptions = ModelOptions()) -> None:
     model : ModelOptions, optional
         As `cached_simulator` (the run's simulator is kept there).
     """
-    from stabctl.dynamics.simulation import simulator_cached
+    from stabctl.dynamics.driver import simulator_cached
 
     if not simulator_cached():
         cached_simulator(case_name, model).run((), t_end=0.1)

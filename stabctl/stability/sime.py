@@ -66,10 +66,10 @@ class OmibEquivalent:
 def critical_machines(result: SimulationResult) -> list[int]:
     """Machines that lost synchronism (`result.separated`); after a divergence without
     separation, the smaller coherent group at the last computed point (largest angle gap,
-    as `stabctl.dynamics.simulation.separated_group`)."""
+    as `stabctl.dynamics.driver.separated_group`)."""
     if result.separated:
         return [int(k) for k in result.separated]
-    from stabctl.dynamics.simulation import separated_group
+    from stabctl.dynamics.driver import separated_group
 
     return [int(k) for k in result.machines[separated_group(result.angle[-1], result.inertia)]]
 

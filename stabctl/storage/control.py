@@ -18,7 +18,7 @@ fleet packing (`stabctl.storage.devices.pack`) asks the law, never tests its cla
 
 Switching instants of the bang-bang law are located inside the step (`crossing`, linear
 interpolation of the switching function between the step ends) and the step is
-re-integrated in two parts (`stabctl.dynamics.simulation.integrate`).
+re-integrated in two parts (`stabctl.dynamics.integrator.integrate`).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from typing import ClassVar, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
-from stabctl._jitcache import kernel, njit
+from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import InputError
 
 #: largest voltage gate of the bang-bang law (pu)
@@ -192,7 +192,7 @@ class ExternalCommands:
         return LawConstants(self.kind, 0.0, 0.0, self.v_gate_pu, False, 0.0, 0.0)
 
 
-# -- compiled kernels (used by stabctl.dynamics.simulation.integrate) ----------------------
+# -- compiled kernels (used by stabctl.dynamics.integrator.integrate) ----------------------
 
 @kernel
 def coi_value(values, inertia):

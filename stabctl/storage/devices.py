@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from stabctl._jitcache import kernel
+from stabctl._jit.decorators import kernel
 from stabctl.case import Case
 from stabctl.errors import CaseError, InputError
 from stabctl.storage.control import NO_LAW, NO_STORAGE, BangBangCOI, ControlLaw
@@ -243,7 +243,7 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageA
         rest=law.rest, Kv=law.Kv, Ka=law.Ka)
 
 
-# -- compiled device kernel (used by stabctl.dynamics.simulation.integrate) -------------------
+# -- compiled device kernel (used by stabctl.dynamics.integrator.integrate) -------------------
 
 @kernel
 def device_power(sa, d, target, P, e, h):

@@ -18,7 +18,8 @@ from stabctl.dynamics.events import Fault
 from stabctl.io import load_case
 from stabctl.stability.cct import SearchOptions, LineFault, critical_clearing_time
 from stabctl.dynamics.model import CONVENTIONS
-from stabctl.dynamics.simulation import Simulator, default_step
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.grid import default_step
 from stabctl.studies.cases import PAPER_CASES
 
 logger = logging.getLogger(__name__)

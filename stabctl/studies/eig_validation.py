@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
 from stabctl.smallsignal.linearise import compare_pulse, linearise, perturbation_error
 from stabctl.smallsignal.modal import match_modes

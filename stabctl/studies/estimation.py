@@ -26,7 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from stabctl._jitcache import njit
+from stabctl._jit.decorators import njit
 
 from stabctl.estimation.filters import FrequencyKF, SwingEKF, nis_bounds
 from stabctl.estimation.models import (FrequencyTuning, MachineModels, SwingTuning, machine_models,

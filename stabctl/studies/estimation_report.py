@@ -25,7 +25,7 @@ from stabctl.io import load_case
 from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.estimation.settings import PMUSettings
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.studies.cases import PAPER_CASES
 from stabctl.parallel import RunnerOptions
 from stabctl.stability.cct import LineFault

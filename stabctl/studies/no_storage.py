@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
 from stabctl.plotting.figures import simulation_overview
 from stabctl.studies.cases import CASE1, CASE2, PaperCase

@@ -17,7 +17,7 @@ from stabctl.io import load_case
 from stabctl.stability.cct import SearchOptions, cached_simulator, cct_jobs, critical_clearing_time
 from stabctl.studies.cases import CASE1, CASE2, PaperCase
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.storage.devices import uniform_fleet
 from stabctl.storage.control import BangBangCOI
 from stabctl.parallel import default_workers, run_sweep, worker_pool

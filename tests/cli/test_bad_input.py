@@ -16,7 +16,8 @@ from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.cli.options import _RANGES, check_number
 from stabctl.errors import CaseError, InputError, StabctlError
-from stabctl.dynamics.simulation import MAX_STEPS, Simulator
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.grid import MAX_STEPS
 
 PSSE = Path(__file__).parents[1] / "data" / "psse"
 
@@ -248,6 +249,6 @@ def test_unknown_bus_or_line_is_refused_before_the_model_is_built(args, monkeypa
     kernels on a first call: 20 s of a cold `stabctl simulate` went by before the error)."""
     def built(*a, **k):
         raise AssertionError("Simulator built before the events were checked")
-    monkeypatch.setattr("stabctl.dynamics.simulation.Simulator.__init__", built)
+    monkeypatch.setattr("stabctl.dynamics.driver.Simulator.__init__", built)
     res = run(*args)
     assert res.exit_code == 2 and re.search(r"bus \d+|line", res.stderr), res.stderr

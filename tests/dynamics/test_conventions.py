@@ -11,7 +11,8 @@ from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.errors import InputError, NumericalInstabilityError
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator, time_grid
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.grid import time_grid
 
 
 @pytest.fixture(scope="module")

@@ -26,7 +26,8 @@ from stabctl.io import load_case
 from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
 from stabctl.dynamics.events import Fault, LineTrip, fault_with_clearing, from_sw_con
 from stabctl.dynamics.results import SimulationResult
-from stabctl.dynamics.simulation import Simulator, default_step
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.grid import default_step
 
 DATA = Path(__file__).parents[1] / "data" / "pstess"
 

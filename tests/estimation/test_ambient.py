@@ -8,7 +8,7 @@ from scipy.stats import chi2
 from stabctl.estimation import ambient as am
 from stabctl.io import load_case
 from stabctl.errors import InputError
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 DT, TAU, SD, PATHS = 1 / 60, 2.0, 0.01, 4000
 

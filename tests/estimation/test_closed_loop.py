@@ -7,7 +7,7 @@ from stabctl.errors import InputError
 from stabctl.estimation import closed_loop as cl
 from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.estimation.ambient import AmbientLoad
 from stabctl.estimation.settings import PMUSettings
 from stabctl.parallel import RunnerOptions

@@ -20,7 +20,7 @@ from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.storage.devices import pack, uniform_fleet
 from stabctl.storage.control import BangBangCOI
 

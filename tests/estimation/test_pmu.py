@@ -9,7 +9,7 @@ from stabctl.estimation import pmu
 from stabctl.io import load_case
 from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.storage.devices import uniform_fleet
 
 

@@ -39,7 +39,7 @@ from stabctl.dynamics.events import Fault, LineTrip  # noqa: E402
 from stabctl.smallsignal.linearise import linearise  # noqa: E402
 from stabctl.smallsignal.modal import modal_analysis  # noqa: E402
 from stabctl.io.psse import load_psse  # noqa: E402
-from stabctl.dynamics.simulation import Simulator  # noqa: E402
+from stabctl.dynamics.driver import Simulator  # noqa: E402
 
 CASES = Path(andes.__file__).parent / "cases"
 WECC_CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}

@@ -17,7 +17,7 @@ from stabctl.io import load_case
 from stabctl.io.dyr import dyr_tables, exp_saturation, read_dyr
 from stabctl.errors import CaseError
 from stabctl.smallsignal.linearise import linearise
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 pytestmark = pytest.mark.andes  # every test reads ANDES's case files
 andes = pytest.importorskip("andes")

@@ -37,7 +37,7 @@ from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.errors import StabctlError
 from stabctl.io.psse import load_psse
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 HERE = Path(__file__).parents[1]
 PSSE = HERE / "data" / "psse"

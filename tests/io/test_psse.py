@@ -309,7 +309,7 @@ def test_q_limits_switch_matches_andes_ieee14(tmp_path):
     move.  The case starts at all: its bus-6 unit has Pm0 = 0.3 = TGOV1's Tmin, reached
     up to round-off (the start-up check's tolerance)."""
     from stabctl.io.andes import strip_dyr
-    from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.driver import Simulator
 
     andes, folder = _andes_case("ieee14")
     raw, dyr = folder / "ieee14.raw", tmp_path / "ieee14.dyr"

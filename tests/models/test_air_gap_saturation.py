@@ -9,7 +9,7 @@ import pytest
 
 from stabctl.errors import CaseError
 from stabctl.io import load_case
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 S10, S12 = 0.09, 0.38
 

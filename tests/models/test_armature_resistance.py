@@ -13,7 +13,7 @@ import pytest
 
 from stabctl.io import load_case
 from stabctl.models.machines import EM, SUB, TRA, machine_params
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 RA = 0.003
 KINDS = {"mac_sub": SUB, "mac_tra": TRA, "mac_em": EM}

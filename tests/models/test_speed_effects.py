@@ -10,7 +10,7 @@ import pytest
 from stabctl.errors import CaseError
 from stabctl.io import load_case
 from stabctl.dynamics.model import StageConfig
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 DW = 0.01  # speed offset of machine 1, pu
 

@@ -12,7 +12,7 @@ from stabctl.io import load_case
 from stabctl.dynamics.events import Fault
 from stabctl.models.machines import internal_voltage
 from stabctl.network.solution import V_RELEASE, V_SWITCH, _load_mismatch, solve_nc
-from stabctl.dynamics.simulation import Simulator, _Run
+from stabctl.dynamics.driver import Simulator, _Run
 
 
 @pytest.fixture(scope="module")

@@ -23,7 +23,7 @@ from stabctl.placement.evaluation import Contingency, VerifyOptions
 from stabctl.placement.loop import PlaceOptions, Study, WarmStart, place
 from stabctl.dynamics.results import SimulationResult
 from stabctl.stability.sime import omib_equivalent, storage_integrals, unstable_margin, unstable_point
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.storage.devices import StorageDevice, StorageFleet
 from stabctl.storage.control import BangBangCOI
 

@@ -12,7 +12,7 @@ from click.testing import CliRunner
 from scipy.integrate import quad
 
 from stabctl.cli import main
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.errors import InputError, PowerFlowError
 from stabctl.io import load_case
 from stabctl.network.powerflow import scale_load, solve_powerflow

@@ -19,7 +19,7 @@ from stabctl.errors import InputError, SimulationError, UnknownBusError
 from stabctl.smallsignal.linearise import (STATE, active_states, compare_pulse, jacobian_columns,
                                linearise, linearise_model, perturbation_error)
 from stabctl.smallsignal.modal import match_modes
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 DATA = Path(__file__).parents[1] / "data" / "pstess"
 FREQ_TOL_PCT, DAMPING_TOL = 1.0, 0.01       # the acceptance tolerances

@@ -10,7 +10,7 @@ from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_ti
 from stabctl.cli import main
 from stabctl.plotting.layout import spectral_layout
 from stabctl.stability.screening import screen, screening_faults
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 
 
 def test_screening_faults_cover_every_bus_and_every_circuit():

@@ -6,7 +6,7 @@ import pytest
 from stabctl.io import load_case
 from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.simulation import Simulator
+from stabctl.dynamics.driver import Simulator
 from stabctl.storage.devices import (StorageDevice, StorageFleet, energy_excursion, hv_bus,
                                      pack, uniform_fleet)
 from stabctl.storage.control import BangBangCOI, LinearFeedback, desired_mode, desired_modes

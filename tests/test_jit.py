@@ -1,11 +1,12 @@
-"""Where stabctl's compiled kernels are cached, and that a source change clears them."""
+"""Where stabctl's compiled kernels are cached, that a change of a kernel source clears
+them, and how they compile (`stabctl._jit`)."""
 
 import inspect
 
 import numba
 from numba.core.caching import InTreeCacheLocator, UserProvidedCacheLocator
 
-from stabctl import _jitcache
+from stabctl._jit import cache as jc
 from stabctl.storage import control
 
 
@@ -15,25 +16,56 @@ def _numba_dir(locator):
 
 
 def test_cache_dirs_are_where_numba_puts_the_kernels(tmp_path, monkeypatch):
-    assert _numba_dir(InTreeCacheLocator) in map(str, _jitcache.cache_dirs())
+    assert _numba_dir(InTreeCacheLocator) in map(str, jc.cache_dirs())
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
-    assert _numba_dir(UserProvidedCacheLocator) in map(str, _jitcache.cache_dirs())
+    assert _numba_dir(UserProvidedCacheLocator) in map(str, jc.cache_dirs())
 
 
 def test_a_source_change_clears_the_kernels_under_numba_cache_dir(tmp_path, monkeypatch):
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
-    kernels = _jitcache.cache_dirs()[3]
+    kernels = jc.cache_dirs()[3]
     kernels.mkdir(parents=True)
     (kernels / "f-1.py311.nbi").write_text("stale")
-    stamp = _jitcache.cache_dirs()[0] / "numba-sources.sha256"
+    stamp = jc.cache_dirs()[0] / "numba-sources.sha256"
     stamp.parent.mkdir(parents=True, exist_ok=True)
     stamp.write_text("a digest of other sources")
-    _jitcache.ensure_fresh_cache()
+    jc.ensure_fresh_cache()
     assert not (kernels / "f-1.py311.nbi").exists()
-    assert stamp.read_text() == _jitcache.source_digest()
+    assert stamp.read_text() == jc.source_digest()
     (kernels / "f-1.py311.nbi").write_text("fresh")
-    _jitcache.ensure_fresh_cache()                      # same sources: kept
+    jc.ensure_fresh_cache()                      # same sources: kept
     assert (kernels / "f-1.py311.nbi").exists()
+
+
+def test_the_cache_key_hashes_the_kernel_sources_only(tmp_path):
+    # the modules declaring kernels and what they import; not the CLI, the driver, reports
+    import shutil
+
+    pkg = tmp_path / "stabctl"
+    shutil.copytree(jc._PKG, pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    names = {str(f.relative_to(pkg)) for f in jc.kernel_sources(pkg)}
+    assert {"_jit/arrays.py", "_jit/decorators.py", "dynamics/integrator.py",
+            "dynamics/switching.py", "dynamics/model.py", "storage/control.py",
+            "network/solution.py", "models/machines.py", "errors.py"} <= names
+    assert not names & {"cli/simulate.py", "dynamics/driver.py", "dynamics/grid.py",
+                        "_jit/cache.py", "_jit/notify.py"}
+    assert not any(n.startswith(("cli/", "placement/", "plotting/")) for n in names)
+
+    def edited(path, old, new):
+        f = pkg / path
+        f.write_text(f.read_text().replace(old, new, 1))
+        return jc.source_digest(pkg)
+
+    key = jc.source_digest(pkg)
+    assert edited("cli/simulate.py", "Nonlinear", "Non-linear") == key      # a help string
+    assert edited("dynamics/driver.py", "class Simulator", "class Simulator ") == key
+    assert edited("errors.py", '"""', '""" ') != key                      # imported by kernels
+    key = jc.source_digest(pkg)
+    assert edited("dynamics/integrator.py", "SPEED_BAND, EST_TOL, EST_STEPS = 0.5",
+                  "SPEED_BAND, EST_TOL, EST_STEPS = 0.4") != key
+    key = jc.source_digest(pkg)
+    assert edited("cli/simulate.py", "\n\n\n", "\n\n\n@kernel\ndef f():\n    pass\n\n\n") != key
+    assert "cli/simulate.py" in {str(f.relative_to(pkg)) for f in jc.kernel_sources(pkg)}
 
 
 def test_simulator_cached_reads_numbas_own_index_of_the_integrator():
@@ -41,11 +73,12 @@ def test_simulator_cached_reads_numbas_own_index_of_the_integrator():
     # it: afterwards the index numba wrote for `integrate` is the one `simulator_cached` finds
     from pathlib import Path
 
-    from stabctl.dynamics.simulation import integrate, simulator_cached
+    from stabctl.dynamics.driver import simulator_cached
+    from stabctl.dynamics.integrator import integrate
     from stabctl.stability.cct import compile_here
 
     cache = integrate._cache
-    assert Path(cache._cache_path) in _jitcache.cache_dirs()
+    assert Path(cache._cache_path) in jc.cache_dirs()
     compile_here("kundur")
     assert (Path(cache._cache_path) / cache._cache_file._index_name).exists()
     assert simulator_cached()
@@ -71,7 +104,8 @@ def test_the_probe_types_are_those_of_runs_with_storage_and_commands():
     from numba import typeof
 
     from stabctl.dynamics.model import StageConfig
-    from stabctl.dynamics.simulation import Simulator, _Run, time_grid
+    from stabctl.dynamics.driver import Simulator, _Run
+    from stabctl.dynamics.grid import time_grid
     from stabctl.io import load_case
     from stabctl.storage import devices
     from stabctl.stability.cct import storage_fleet
@@ -89,12 +123,13 @@ def test_the_probe_types_are_those_of_runs_with_storage_and_commands():
 
 _COLD_RUN = """
 import json, sys
-from stabctl import _jitcache
+from stabctl._jit import background
 from stabctl.dynamics.events import Fault
-from stabctl.dynamics.simulation import Simulator, integrate
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.integrator import integrate
 from stabctl.io import load_case
 sim = Simulator(load_case("kundur"))
-started = sorted(_jitcache._BACKGROUND)
+started = sorted(background._BACKGROUND)
 res = sim.run([Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0)
 print(json.dumps({"started": started, "hits": sum(integrate.stats.cache_hits.values()),
                   "misses": sum(integrate.stats.cache_misses.values()),
@@ -114,14 +149,14 @@ def test_a_cold_first_run_compiles_the_integrator_in_a_child_and_loads_it(tmp_pa
     import numpy as np
 
     from stabctl.dynamics.events import Fault
-    from stabctl.dynamics.simulation import Simulator
+    from stabctl.dynamics.driver import Simulator
     from stabctl.io import load_case
 
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     out = subprocess.run([sys.executable, "-c", _COLD_RUN], env=env, capture_output=True,
                          text=True, check=True)
     got = json.loads(out.stdout.strip().splitlines()[-1])
-    assert got["started"] == ["stabctl.dynamics.simulation.integrate"]
+    assert got["started"] == ["stabctl.dynamics.integrator.integrate"]
     assert (got["hits"], got["misses"]) == (1, 0)
     here = Simulator(load_case("kundur")).run(
         [Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0)
@@ -132,6 +167,7 @@ def test_assign_writes_views_as_numpys_slice_assignment_does():
     # `assign` stands for dst[...] = src in kernels: rows, column blocks, 1-D tails
     import numpy as np
 
+    from stabctl._jit.arrays import assign
     from stabctl.estimation.filters import _store
 
     rng = np.random.default_rng(1)
@@ -142,7 +178,7 @@ def test_assign_writes_views_as_numpys_slice_assignment_does():
     _store(x, P, 1, xk, Pk)
     assert np.array_equal(x, want_x) and np.array_equal(P, want_P)
     F, A = np.zeros((5, 5)), rng.normal(size=(2, 2))
-    _jitcache.assign(F[3:, 3:], A)          # a block that is not contiguous
+    assign(F[3:, 3:], A)          # a block that is not contiguous
     want = np.zeros((5, 5))
     want[3:, 3:] = A
     assert np.array_equal(F, want)
@@ -166,7 +202,8 @@ def test_no_kernel_compiles_numbas_slice_assignment_message():
         "    return orig(ctx, b, sig, args, it, ix)\n"
         "ao.fancy_setslice = spy\n"
         "from stabctl.io import load_case\n"
-        "from stabctl.dynamics.simulation import Simulator, integrate\n"
+        "from stabctl.dynamics.driver import Simulator\n"
+        "from stabctl.dynamics.integrator import integrate\n"
         "from stabctl.dynamics.model import evaluate_address\n"
         "from stabctl.estimation.filters import compile_filters\n"
         "from stabctl.estimation.models import machine_models\n"
@@ -175,9 +212,44 @@ def test_no_kernel_compiles_numbas_slice_assignment_message():
         "sim = Simulator(case, background_compile=False)\n"
         "evaluate_address(sim.model.params)\n"
         "integrate.compile(tuple(sim.run_argument_types()))\n"
+        "from stabctl.smallsignal.linearise import compile_differences\n"
+        "compile_differences(sim.model)\n"
         "compile_filters(machine_models(case, machine_pmus(case)))\n"
         "print(len(seen), seen[:3])\n")
     with tempfile.TemporaryDirectory() as cache:
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                              env={**os.environ, "NUMBA_CACHE_DIR": cache}, check=True).stdout
     assert out.startswith("0 "), out
+
+
+def test_a_kernel_called_by_address_returns_raises_and_checks_its_types():
+    # `by_address`: the callee's value and exceptions come through; an argument of
+    # another type than the address was compiled for is refused when typing the caller
+    import numba
+    import numpy as np
+    import pytest
+    from numba import types, typeof
+
+    from stabctl._jit.address import address_of, by_address
+
+    @numba.njit
+    def callee(x, k, flag):
+        x[0] += k
+        if flag:
+            raise ValueError("boom")
+        return k + 1
+
+    vector = typeof(np.zeros(2))
+    call = by_address("call_callee", ("x", "k", "flag"), lambda: (vector, None, types.boolean))
+
+    @numba.njit
+    def caller(address, x, k, flag):
+        return call(address, x, k, flag)
+
+    address = address_of(callee, (vector, types.int64, types.boolean))
+    x = np.zeros(2)
+    assert caller(address, x, 2, np.bool_(False)) == 3 and x[0] == 2.0
+    with pytest.raises(ValueError, match="boom"):
+        caller(address, x, 2, np.bool_(True))
+    with pytest.raises(numba.core.errors.TypingError, match="x must be"):
+        caller(address, np.zeros(2, np.int64), 2, np.bool_(False))

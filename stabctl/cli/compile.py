@@ -1,0 +1,144 @@
+"""`stabctl compile`: warm the on-disk kernel cache for the built-in cases, or check it."""
+
+from __future__ import annotations
+
+import importlib
+import time
+
+import click
+
+from stabctl.cli.options import reports_errors
+
+
+def _filter_kernels() -> list:
+    """The estimation filters' kernels that Python calls (`njit`, not `CompiledOnly`):
+    those of the estimation modules that declare kernels."""
+    from numba.core.dispatcher import Dispatcher
+
+    from stabctl._jit.cache import declaring_modules
+    from stabctl._jit.decorators import CompiledOnly
+
+    found = []
+    for name in declaring_modules():
+        if name.startswith("stabctl.estimation."):
+            found += [d for d in vars(importlib.import_module(name)).values()
+                      if isinstance(d, Dispatcher) and not isinstance(d, CompiledOnly)
+                      and d.py_func.__module__ == name]
+    return found
+
+
+def _kernels() -> dict[str, list]:
+    """What a first command compiles, by name: the dispatchers of each part."""
+    from stabctl.dynamics.integrator import integrate
+    from stabctl.dynamics.model import evaluate_kernel
+    from stabctl.smallsignal.linearise import _differences
+
+    return {"model evaluation": [evaluate_kernel], "filters": _filter_kernels(),
+            "linearisation": [_differences], "integrator": [integrate]}
+
+
+def _warm_steps(case):
+    """(part, action) in the order a cold first command takes them: the integrator
+    compiles in a child process (`stabctl.dynamics.driver.Simulator`) while this process
+    compiles the model's evaluation, the filters and the linearisation; then it is loaded
+    here, for this case's argument types."""
+    from stabctl._jit.background import await_background
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.integrator import integrate
+    from stabctl.dynamics.model import evaluate_address
+    from stabctl.estimation.filters import compile_filters
+    from stabctl.estimation.models import machine_models
+    from stabctl.estimation.pmu import machine_pmus
+    from stabctl.smallsignal.linearise import compile_differences
+
+    sim = Simulator(case)
+
+    def integrator():
+        await_background(integrate)
+        integrate.compile(tuple(sim.run_argument_types()))
+
+    return [("model evaluation", lambda: evaluate_address(sim.model.params)),
+            ("filters", lambda: compile_filters(machine_models(case, machine_pmus(case)))),
+            ("linearisation", lambda: compile_differences(sim.model)),
+            ("integrator", integrator)]
+
+
+def _misses(dispatchers) -> int:
+    return sum(sum(d.stats.cache_misses.values()) for d in dispatchers)
+
+
+def _warm(names) -> None:
+    """Compile (or load) every part for each case, one line per part and case: compiled
+    if a kernel of the part was not in the cache before or numba compiled one (new
+    argument types)."""
+    from stabctl._jit.cache import cached
+    from stabctl.io import load_case
+
+    kernels, t_all, n_compiled = _kernels(), time.perf_counter(), 0
+    for name in names:
+        case = load_case(name)
+        cold = {part: not all(map(cached, ds)) for part, ds in kernels.items()}
+        for part, action in _warm_steps(case):
+            misses, t0 = _misses(kernels[part]), time.perf_counter()
+            action()
+            compiled = cold[part] or _misses(kernels[part]) > misses
+            n_compiled += compiled
+            beside = "  (in a child process, beside the above)" if (
+                compiled and part == "integrator") else ""
+            click.echo(f"{name:<10} {part:<17} {'compiled' if compiled else 'loaded':<9}"
+                       f"{time.perf_counter() - t0:6.1f} s{beside}")
+    click.echo(f"kernel cache warm ({_location()}): {n_compiled} compiled, "
+               f"{time.perf_counter() - t_all:.1f} s in all")
+
+
+def _location() -> str:
+    import numba
+
+    return numba.config.CACHE_DIR or "the package's __pycache__ directories"
+
+
+def _check() -> bool:
+    """Print whether each part's kernels are in the on-disk cache; True if all are."""
+    from stabctl._jit.cache import cached
+
+    warm = True
+    for part, dispatchers in _kernels().items():
+        missing = [d.py_func.__qualname__ for d in dispatchers if not cached(d)]
+        warm = warm and not missing
+        click.echo(f"{part:<17} " + (f"not cached: {', '.join(missing)}" if missing else
+                                      "cached"))
+    click.echo(f"kernel cache {'warm' if warm else 'cold'} ({_location()})")
+    return warm
+
+
+@click.command("compile")
+@click.argument("case_names", metavar="[CASE]...", nargs=-1)
+@click.option("--check", is_flag=True,
+              help="Only report whether the kernels are in the on-disk cache (exit status 1 "
+                   "if any is not); compile nothing.")
+@reports_errors
+def compile_kernels(case_names, check):
+    """Compile the kernels of the simulator, the linearisation and the estimation
+    filters into the on-disk cache, so that the first real command loads them (about a
+    second) instead of compiling them (15-60 s).
+
+    CASE: built-in cases (`stabctl cases`) whose argument types to compile for; default
+    every one.  Printed per case and part (model evaluation, filters, linearisation,
+    integrator): compiled or loaded from the cache, and the seconds.  The integrator
+    compiles in a child process beside the other parts, as in a first simulation.  The
+    cache is NUMBA_CACHE_DIR if set, else the package's __pycache__ directories; a change
+    of a kernel source empties it (the next command, or this one, compiles again).
+
+    \b
+    Examples:
+      stabctl compile
+      stabctl compile kundur
+      stabctl compile --check
+    """
+    from stabctl.io import list_cases
+
+    if check:
+        if not _check():
+            raise SystemExit(1)
+        return
+    _warm(list(case_names) or list(list_cases()))

@@ -1,0 +1,505 @@
+"""The simulator: `Simulator` runs disturbances on one case from its solved power flow,
+driving the compiled loop (`stabctl.dynamics.integrator.integrate`) piecewise (`_Run`) and
+turning its recording into a `SimulationResult`.
+
+Loss of synchronism: a machine's angle leaves the centre of inertia (eq. 40, weights H*MVA)
+by more than `separation_limit` rad; the separated machines are the smaller coherent group
+(`separated_group`); the run can stop there.  A run that leaves the integrator's stability
+region raises NumericalInstabilityError naming the time and the state; a singular network
+raises SimulationError; both carry the trajectory up to that point.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from stabctl._jit.background import await_background, compile_in_background
+from stabctl._jit.cache import cached
+from stabctl.case import Case
+from stabctl.dynamics import events as ev_
+from stabctl.dynamics import integrator as ig
+from stabctl.dynamics.coi import coi_angle
+from stabctl.dynamics.grid import (check_step, check_step_count, default_step,
+                                   fastest_time_constant, time_grid)
+from stabctl.dynamics.model import (DynamicModel, KeptBuses, OperatingPoint, StageConfig,
+                                    check_conventions, evaluate_address, evaluate_kernel,
+                                    stacked_networks)
+from stabctl.dynamics.results import SimulationResult
+from stabctl.dynamics.switching import device_state
+from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
+from stabctl.storage import control as law
+from stabctl.storage import devices as st
+
+
+_BLAS_LIMITED = False
+
+
+def single_threaded_blas() -> None:
+    """Limit BLAS/LAPACK to one thread in this process (once).
+
+    The kernels solve many tiny dense systems; OpenBLAS threads make each solve 10-20 times
+    slower and oversubscribe the cores when sweeps run one simulation per process.  The
+    environment defaults set in `stabctl/__init__` do not reach a BLAS that numpy loaded
+    before stabctl was imported, hence this run-time limit (threadpoolctl).
+    """
+    global _BLAS_LIMITED
+    if not _BLAS_LIMITED:
+        import scipy.linalg.cython_lapack  # noqa: F401  the LAPACK numba calls: load it first
+        from threadpoolctl import threadpool_limits
+        threadpool_limits(limits=1, user_api="blas")
+        _BLAS_LIMITED = True
+
+
+class Simulator:
+    """Runs disturbances on one case from its solved power flow.
+
+    Parameters
+    ----------
+    case : Case
+        The case (its dynamic data: machines, exciters, PSS, governors, loads).
+    op : OperatingPoint or None, optional
+        Its solved power flow (complex bus voltages, generation and load, pu on the
+        system base); None (default): solved by
+        `stabctl.network.powerflow.solve_powerflow`.
+    injection_buses : sequence of int, optional
+        Bus numbers kept in the reduced network of `model` for device injections
+        (storage); default none.  Each run builds (and caches) the model its storage
+        needs (`model_for`).
+    conventions : {"ieee", "pstess"}, optional
+        Model conventions (`stabctl.dynamics.grid`, docs/conventions.md): ``"ieee"`` (default,
+        limiters as IEEE Std 421.5-2016) or ``"pstess"`` (PSTess 1.1 bit for bit).
+    step : float or None, optional
+        Integration step of runs that give none, s; None (default): `default_step` of
+        the case and conventions.
+    q_limits : bool, optional
+        When `op` is None, the power flow switches PV buses to PQ at their Q limits (PST's
+        ``chq_lim``, True, the default) or not (ANDES's default, ``pv2pq = 0``).
+    background_compile : bool, optional
+        When the integrator's kernel is neither compiled in this process nor cached,
+        compile it in a child process while this one compiles the model's evaluation
+        (True, the default: a cold first run then costs about the longer of the two, not
+        their sum, on two cores); False for a simulator that never runs (linearisation).
+
+    Attributes
+    ----------
+    default_h : float
+        The step of runs that give none, s.
+    model : DynamicModel
+        The model keeping `injection_buses`.
+    inertia : ndarray, shape (n_mac,)
+        COI weights H * MVA per machine, MW s (paper eq. 40).
+    fastest : tuple of (float, str)
+        The case's fastest time constant (s) and where it is (`fastest_time_constant`).
+    conventions : str
+        ``"ieee"`` or ``"pstess"``.
+
+    Raises
+    ------
+    InputError
+        Unknown conventions; a step that is not positive and finite or not below twice
+        the case's fastest time constant (the predictor-corrector's stability interval).
+    CaseError
+        Models stabctl does not have, limits violated at the initial point (as
+        `stabctl.dynamics.model.DynamicModel`); UnknownBusError (a CaseError) for an
+        injection bus not in the case.
+    PowerFlowError
+        The power flow (when `op` is None) did not converge.
+    """
+
+    def __init__(self, case: Case, op: OperatingPoint | None = None, injection_buses=(),
+                 conventions: str = "ieee", step: float | None = None,
+                 q_limits: bool = True, background_compile: bool = True):
+        self.conventions = check_conventions(conventions)
+        self.q_limits = bool(q_limits)
+        if op is None:
+            from stabctl.network.powerflow import solve_powerflow
+            op = OperatingPoint.from_bus_matrix(
+                solve_powerflow(case, q_limits=self.q_limits).bus_matrix())
+        single_threaded_blas()
+        self.case, self.op = case, op
+        self.fastest = fastest_time_constant(case)
+        self.default_h = default_step(case, conventions, self.fastest) if step is None else step
+        check_step(self.fastest, self.default_h)
+        self._models: dict[frozenset, DynamicModel] = {}
+        self.model = self.model_for(injection_buses)
+        self.inertia = self.model.mp.H * case.machines.mva
+        if background_compile:
+            self._compile_runs_elsewhere()
+
+    def _compile_runs_elsewhere(self) -> None:
+        """When `stabctl.dynamics.integrator.integrate` is neither compiled in this process
+        nor cached, start compiling it in a child process for the argument types of this
+        simulator's runs (`stabctl._jit.background.compile_in_background`), while this
+        process compiles the model's evaluation at the first run: a cold first run takes the
+        longer of the two instead of their sum.
+
+        The child optimises at LLVM level 1 (``NUMBA_OPT=1``): `integrate` is the longer of
+        the two (15.7 s instead of 16.4-19.6 s at numba's level 3, cold, on this 2-core
+        machine), and its run time goes into the evaluation it calls by address, which
+        stays at level 3: run times equal within noise, results bit-identical (no
+        fast-math, so no level reorders floating-point arithmetic)."""
+        if not (ig.integrate.signatures or cached(ig.integrate)):
+            compile_in_background(ig.integrate, self.run_argument_types(), opt=1)
+
+    def run_argument_types(self) -> list:
+        """The numba types of `integrate`'s arguments in this simulator's runs, from a
+        one-step probe run without events or storage (the types depend on neither; nothing
+        is compiled).
+
+        Returns
+        -------
+        list of numba types
+            One per argument of `integrate`.
+        """
+        from numba import typeof
+
+        m = self.model
+        probe = _Run(self, m, st.pack(None, self.case, m.nc_idx),
+                     time_grid([0.0], self.default_h, self.default_h),
+                     [m.network(StageConfig())], False, np.pi, False)
+        return [typeof(a) for a in probe.arguments(1)]
+
+    def model_for(self, buses=()) -> DynamicModel:
+        """The dynamic model keeping given buses in the reduced network (built once per set
+        of buses, then cached); storage devices need their buses kept.
+
+        Parameters
+        ----------
+        buses : iterable of int, optional
+            Bus numbers to keep, in any order, repeats ignored; default none.
+
+        Returns
+        -------
+        DynamicModel
+            The case's model at this simulator's operating point and conventions.
+        """
+        key = frozenset(int(b) for b in buses)
+        if key not in self._models:
+            self._models[key] = DynamicModel(self.case, self.op, sorted(key), self.conventions)
+        return self._models[key]
+
+    def run(self, events=(), t_end: float = 5.0, h: float | None = None,
+            semantics: str | None = None, separation_limit: float = np.pi,
+            stop_at_separation: bool = False, storage=None) -> SimulationResult:
+        """Simulate disturbances from the power-flow point, t = 0 to `t_end`.
+
+        Parameters
+        ----------
+        events : iterable, optional
+            `Fault`, `LineTrip`, `GeneratorTrip` and `LoadStep` events
+            (`stabctl.dynamics.events`), any number, in any order; events at or after
+            `t_end` do not happen.  Default none (a flat run).
+        t_end : float, optional
+            End of the run, s (> 0); default 5.
+        h : float or None, optional
+            Integration step, s; None (default): `default_h`.  Every event time is a grid
+            point: under ieee each interval between events gets ceil(length/h) equal
+            steps (at most h), under pstess fix(length/h) (PSTess, in [h, 2h)).
+        semantics : {"pst", "exact"} or None, optional
+            Event semantics (`stabctl.dynamics.integrator`): ``"pst"``, the corrector of
+            the step ending at an event uses the post-event network (PSTess); ``"exact"``,
+            each step uses the network of its own interval.  None (default): "pst" under the
+            pstess conventions, "exact" under ieee.
+        separation_limit : float, optional
+            Loss of synchronism: a rotor angle more than this from the COI angle (paper
+            eq. 40), rad; default pi.
+        stop_at_separation : bool, optional
+            End the run at the first step after which the limit is exceeded (default
+            False: run to `t_end`).
+        storage : StorageFleet or None, optional
+            Energy-storage devices and their controller (`stabctl.storage.devices`); their
+            buses are kept in the reduced network.  None (default): no storage.
+
+        Returns
+        -------
+        SimulationResult
+            Trajectories of every machine and bus (and device), the loss-of-synchronism
+            verdict and, with storage, the switching log and per-device figures in
+            `meta`.
+
+        Raises
+        ------
+        InputError
+            Bad semantics, events (clearing before the fault, negative time), `t_end` or
+            step (not positive and finite, too large for the case's fastest time
+            constant, or more than MAX_STEPS steps).
+        UnknownBusError, CaseError
+            An event or storage device naming a bus, line or machine not in the case.
+        NumericalInstabilityError
+            The run left the integrator's stability region (names the time and the
+            state).
+        SimulationError
+            A singular network or non-convergent loads (voltage collapse).  Both carry
+            the partial result as ``.result``.
+        """
+        semantics = self._semantics(semantics)
+        m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
+        run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
+                   stop_at_separation)
+        run.advance(grid.t.size - 1)
+        return run.finish(storage)
+
+    def _prepare(self, events, t_end, h, storage, semantics):
+        """Validate, choose the model (storage buses kept), pack the devices, build the
+        event grid and the network of every interval."""
+        if semantics not in ("pst", "exact"):
+            raise InputError(f"semantics must be 'pst' or 'exact', got {semantics!r}")
+        events = list(events)
+        ev_.validate(self.case, events, t_end)
+        h = self.default_h if h is None else h
+        m = self.model_for(storage.buses if storage is not None else ())
+        sa = st.pack(storage, self.case, m.nc_idx)
+        check_step(self.fastest, h)
+        check_step_count(t_end, h)
+        starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
+        grid = time_grid(starts, t_end, h, self.conventions == "pstess")
+        return m, sa, grid, [m.network(c) for c in configs]
+
+    def _semantics(self, semantics: str | None) -> str:
+        if semantics is None:
+            return "pst" if self.conventions == "pstess" else "exact"
+        return semantics
+
+    def run_commanded(self, events, t_end: float, storage, frame_times, decide,
+                      latency: float = 0.0, h: float | None = None,
+                      semantics: str | None = None,
+                      separation_limit: float = np.pi,
+                      stop_at_separation: bool = False,
+                      history_s: float = 1.0) -> SimulationResult:
+        """Simulate with storage devices commanded from measurements (estimator in the loop).
+
+        At each frame time t_f (s, increasing) the run is advanced to the first grid point
+        at or after t_f and ``decide(t_f, partial)`` is called with the recent trajectory
+        (a SimulationResult of the last `history_s` seconds up to that grid point, so a
+        measurement at t_f can be interpolated; no verdict); it returns the device
+        set-points, which take effect at exactly t_f + `latency` (the step is split there)
+        and hold until the next ones.
+        With `stop_at_separation` the run ends at the first step after which a rotor angle
+        is more than `separation_limit` rad from the COI, as `run` (no further frame is
+        decided).
+
+        Parameters
+        ----------
+        events : iterable
+            Disturbances, as `run`.
+        t_end : float
+            End of the run, s (> 0).
+        storage : StorageFleet
+            The devices; its controller must be
+            `stabctl.storage.control.ExternalCommands`.
+        frame_times : array_like of float, shape (n_frames,)
+            Measurement-frame arrival times, s, strictly increasing; those after `t_end`
+            are ignored.
+        decide : callable
+            ``decide(t_f, partial) -> set-points``: `t_f` a float (s), `partial` a
+            SimulationResult; returns array_like, shape (n_dev,), each device's set-point
+            in units of its rating (Table 3 modes -1 inject, 0 idle, +1 absorb; any real
+            value for a scaled power, e.g. an ambient load deviation).
+        latency : float, optional
+            Delay from a frame's arrival to its set-points taking effect, s (>= 0);
+            default 0.
+        h : float or None, optional
+            Integration step, s, as `run`.
+        semantics : {"pst", "exact"} or None, optional
+            Event semantics, as `run`.
+        separation_limit : float, optional
+            Loss-of-synchronism limit, rad, as `run`; default pi.
+        stop_at_separation : bool, optional
+            End the run at separation, as `run`; default False.
+        history_s : float, optional
+            Length of the trajectory handed to `decide`, s; default 1 s (a PMU window
+            is a few cycles).
+
+        Returns
+        -------
+        SimulationResult
+            As `run`, with the devices' powers and switching log.
+
+        Raises
+        ------
+        InputError
+            No fleet or a controller other than ExternalCommands, frame times not
+            increasing, a negative latency; and as `run`.
+        UnknownBusError, CaseError, NumericalInstabilityError, SimulationError
+            As `run`.
+        """
+        if storage is None or storage.controller.kind != law.EXTERNAL:
+            raise InputError("run_commanded needs a fleet whose controller is ExternalCommands")
+        frame_times = np.asarray(frame_times, float)
+        if np.any(np.diff(frame_times) <= 0) or latency < 0:
+            raise InputError("frame times must increase and the latency must be >= 0")
+        semantics = self._semantics(semantics)
+        m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
+        run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
+                   stop_at_separation, n_commands=frame_times.size)
+        for i, t_f in enumerate(frame_times[frame_times <= t_end]):
+            k = int(np.searchsorted(grid.t, t_f - 1e-12))
+            run.advance(k)
+            if run.status != ig.OK:
+                break
+            run.command(i, t_f + latency,
+                        np.asarray(decide(float(t_f), run.partial(k, history_s)), float))
+        run.advance(grid.t.size - 1)
+        return run.finish(storage)
+
+    def _result(self, t, rec: "ig.Recording", n, wall, limit) -> SimulationResult:
+        c = self.case
+        angle = rec.angle[:n]
+        dev = np.abs(angle - coi_angle(angle, self.inertia)[:, None])
+        lost = np.nonzero(dev.max(axis=1) > limit)[0]
+        t_sep, separated = None, []
+        if lost.size:
+            k = int(lost[0])
+            t_sep = float(t[k])
+            group = separated_group(angle[k], self.inertia)
+            separated = [int(x) for x in c.machines.number[group]]
+        return SimulationResult(
+            t=t[:n].copy(), machines=c.machines.number.astype(int),
+            buses=c.buses.number.astype(int),
+            speed=rec.speed[:n], angle=angle, pelect=rec.pelect[:n], pmech=rec.pmech[:n],
+            efd=rec.efd[:n], vmag=np.abs(rec.V[:n]), vang=np.angle(rec.V[:n]),
+            inertia=self.inertia, stable=t_sep is None, t_separation=t_sep, separated=separated,
+            meta={"case": c.name, "conventions": self.conventions, "wall_time_s": wall,
+                  "max_initial_derivative": self.model.initial_residual[0],
+                  "max_initial_derivative_state": self.model.initial_residual[1]})
+
+
+def simulator_cached() -> bool:
+    """Whether the simulator's kernels, the integrator
+    (`stabctl.dynamics.integrator.integrate`) and the model's evaluation
+    (`stabctl.dynamics.model.evaluate_kernel`), are in the on-disk cache
+    (`stabctl._jit.cache.cached`): a new process loads them instead of compiling them."""
+    return cached(ig.integrate) and cached(evaluate_kernel)
+
+
+class _Run:
+    """One simulation in progress: the compiled loop advanced piecewise (see `integrate`)."""
+
+    def __init__(self, sim: "Simulator", m, sa, grid, nets, pst, limit, stop, n_commands=0):
+        self.sim, self.m, self.sa, self.grid = sim, m, sa, grid
+        n_nc = m.V_nc0.size
+        self.rec = ig.recording(grid.t.size, m.mp.n, sim.case.n_bus, sa.pmax.size)
+        self.carry = ig.Carry(
+            x=m.x0.copy(),
+            kept=KeptBuses(V=m.V_nc0.copy(), held=np.zeros(n_nc, np.bool_),  # loads held low
+                           S_extra=np.zeros(n_nc, np.complex128)),
+            held_stage=np.full(1, -1), devices=device_state(sa, n_commands),
+            health=ig.Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3))))
+        self.nets, self.steps = stacked_networks(nets), ig.step_grid(grid)
+        self.opts = ig.RunOptions(pst=pst, inertia=sim.inertia, limit=limit, stop=stop)
+        self.limit = limit
+        #: the model's parameters with the run's largest step as the limiters' reach
+        self.params = m.params._replace(reach=float(np.max(grid.h)))
+        self.k, self.status, self.wall, self.stored = 0, ig.OK, 0.0, False
+        self.evaluate: int | None = None
+
+    @property
+    def x(self) -> np.ndarray:
+        """The flat state at the last stored grid index (n_state,)."""
+        return self.carry.x
+
+    @property
+    def V_nc(self) -> np.ndarray:
+        """The kept-bus voltages (n_nc,) complex pu."""
+        return self.carry.kept.V
+
+    def advance(self, k1: int) -> None:
+        """Integrate up to grid index k1 and store its outputs (nothing after a stop);
+        advance(0) at the start stores the initial point."""
+        if self.status != ig.OK or k1 < self.k or (k1 == self.k and self.stored):
+            return
+        self.stored = True
+        if self.evaluate is None:      # the model's evaluation: compiled or loaded here
+            self.evaluate = evaluate_address(self.params)
+        await_background(ig.integrate)
+        wall = time.perf_counter()
+        self.status, k_end = ig.integrate(*self.arguments(k1))
+        self.wall += time.perf_counter() - wall
+        self.k = k_end
+
+    def arguments(self, k1: int) -> tuple:
+        """The arguments of `integrate` from the last stored grid index to k1 (an address
+        of 0 before the first `advance`)."""
+        return (self.carry, self.k, k1, self.steps, self.nets, self.params, self.sa,
+                self.opts, self.rec, self.evaluate or 0)
+
+    def command(self, i: int, t_apply: float, modes) -> None:
+        """Schedule command i: device set-points (units of each rating) from t_apply (s)."""
+        ds = self.carry.devices
+        ds.cmd_t[i], ds.cmd_mode[i] = t_apply, modes
+
+    def partial(self, k: int, history_s: float) -> SimulationResult:
+        """The trajectory of the last `history_s` seconds up to grid index k (views, no
+        verdict): a callback at every frame then costs the same late in a long run as
+        early (the whole trajectory would make a run's cost grow with its length squared)."""
+        r, c, n = self.rec, self.sim.case, k + 1
+        lo = max(int(np.searchsorted(self.grid.t[:n], self.grid.t[k] - history_s)) - 1, 0)
+        return SimulationResult(
+            t=self.grid.t[lo:n], machines=c.machines.number.astype(int),
+            buses=c.buses.number.astype(int), speed=r.speed[lo:n], angle=r.angle[lo:n],
+            pelect=r.pelect[lo:n], pmech=r.pmech[lo:n], efd=r.efd[lo:n],
+            vmag=np.abs(r.V[lo:n]), vang=np.angle(r.V[lo:n]), inertia=self.sim.inertia,
+            devices=np.arange(1, self.sa.pmax.size + 1), pesd=self.rec.P[lo:n])
+
+    def finish(self, storage) -> SimulationResult:
+        """The result; raises SimulationError (with the partial result) after a divergence."""
+        sim, g, k_end = self.sim, self.grid, self.k
+        res = sim._result(g.t, self.rec, k_end + 1, self.wall, self.limit)
+        if storage is not None:
+            log = self.rec.log
+            _attach_storage(res, storage, self.rec.P[:k_end + 1], self.rec.stats,
+                            sim.case.base_mva, log[~np.isnan(log[:, 0])], sim.case.freq_hz)
+        t_fail = g.t[min(k_end + 1, g.t.size - 1)]
+        if self.status == ig.UNSTABLE_STEP:
+            q, x = int(self.carry.health.bad[0]), self.carry.x
+            raise NumericalInstabilityError(
+                f"case '{sim.case.name}': numerical instability in the step ending at t = "
+                f"{t_fail:.4f} s: state {self.m.state_name(q)} = {x[q]:.6g} "
+                f"({ig.symptom(x[q], q, self.m.mp.n)}); the step h = "
+                f"{g.h[g.interval[k_end]]:.6g} s is too large for this model: use a smaller "
+                f"step (trajectory kept up to {g.t[k_end]:.4f} s)", result=res)
+        if self.status < 0:
+            raise SimulationError(f"case '{sim.case.name}': the network/load equations did "
+                                  f"not converge (voltage collapse) in the step ending at "
+                                  f"t = {t_fail:.4f} s (trajectory kept up to "
+                                  f"{g.t[k_end]:.4f} s)", result=res)
+        return res
+
+
+#: Two switchings of a device closer than this (s) count as chattering.
+CHATTER_S = 0.02
+
+
+def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva, log, f0) -> None:
+    """Device powers and per-device figures: switchings, chattering (switchings within
+    CHATTER_S of the previous one), energy absorbed and delivered (MJ), highest and lowest
+    stored energy relative to the start (MJ, exact at located switchings: `_advance`),
+    peak power actually used (MW); the switching log (time s, device number, new mode,
+    relative speed Hz) in res.meta["switchings"]."""
+    res.devices = np.arange(1, len(fleet.devices) + 1)
+    res.pesd = P
+    res.meta["switchings"] = [(float(t), int(d) + 1, int(m), float(r * f0)) for t, d, m, r in log]
+    res.meta["storage"] = [
+        {"device": i + 1, "bus": d.bus, "machine": d.machine, "pmax_mw": d.pmax_mw,
+         "switchings": int(stats[i, 0]),
+         "chattering": int(np.sum(np.diff(log[log[:, 1] == i, 0]) < CHATTER_S)),
+         "energy_absorbed_mj": float(stats[i, 1] * base_mva),
+         "energy_delivered_mj": float(stats[i, 2] * base_mva),
+         "soc_high_mj": float(stats[i, 3] * base_mva),
+         "soc_low_mj": float(stats[i, 4] * base_mva),
+         "peak_power_mw": float(np.abs(P[:, i]).max() * base_mva) if P.size else 0.0}
+        for i, d in enumerate(fleet.devices)]
+
+
+def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """Machines that lost synchronism: split the rotor angles at their largest gap into two
+    coherent groups and return the indices of the group with the smaller inertia (the
+    leading group on a tie), sorted."""
+    order = np.argsort(delta)
+    cut = int(np.argmax(np.diff(delta[order]))) + 1
+    lagging, leading = order[:cut], order[cut:]
+    m_lag, m_lead = inertia[lagging].sum(), inertia[leading].sum()
+    group = leading if m_lead <= m_lag * (1 + 1e-9) else lagging
+    return np.sort(group)

@@ -1,0 +1,135 @@
+"""The integration grid and the step policy: where the steps of a run fall and how long
+they may be.
+
+Event times are grid points, so the run restarts exactly at every event.  The model
+conventions (`stabctl.dynamics.model.CONVENTIONS`, docs/conventions.md) set the grid:
+
+- ``"ieee"`` (default): each interval between events gets ceil(length/h) equal steps (never
+  longer than h).
+- ``"pstess"``: PSTess's own, fix(length/h) steps per interval (steps in [h, 2h)).
+
+The default step comes from the case (`default_step`); a step is refused when the explicit
+predictor-corrector would be unstable with it (`check_step`) or a run would take more than
+MAX_STEPS steps (`check_step_count`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from stabctl.case import Case
+from stabctl.dynamics.model import check_conventions
+from stabctl.errors import InputError
+
+
+@dataclass(frozen=True)
+class TimeGrid:
+    """Integration grid: t (N+1,), interval id of each point (a point at an event belongs to
+    the interval that starts there; a time repeats after a zero-length interval), step h
+    of each interval (0 for a zero-length one), and the interval start times."""
+
+    t: np.ndarray
+    interval: np.ndarray
+    h: np.ndarray
+    starts: np.ndarray
+
+
+def time_grid(starts, t_end: float, h: float, pstess: bool = False) -> TimeGrid:
+    """The grid: intervals between consecutive start times (the first 0, non-decreasing,
+    all below t_end), each divided into equal steps, at least one (so a zero-length
+    interval gets one step of h = 0 and its start time appears twice, as in PSTess).
+    pstess: fix(length/h) steps (PSTess, steps in [h, 2h)); else ceil(length/h) (steps at
+    most h; a length within 1e-9 of a multiple of h takes that multiple).
+
+    Raises InputError for a non-positive or non-finite step or end time.
+    """
+    if not (0 < h < np.inf and 0 < t_end < np.inf):
+        raise InputError(f"need a positive step and end time, got h={h}, t_end={t_end}")
+    pts = [float(x) for x in starts] + [float(t_end)]
+    ts, ids, hs = [], [], []
+    for s, (a, b) in enumerate(zip(pts[:-1], pts[1:])):
+        n = max(1, int(np.trunc((b - a) / h) if pstess else np.ceil((b - a) / h - 1e-9)))
+        hs.append((b - a) / n)
+        ts.append(a + hs[-1] * np.arange(n))
+        ids.append(np.full(n, s))
+    t = np.concatenate(ts + [[pts[-1]]])
+    interval = np.concatenate(ids + [[len(pts) - 2]])
+    return TimeGrid(t=t, interval=interval, h=np.array(hs), starts=np.array(pts[:-1]))
+
+
+#: ieee default step: at most this fraction of the fastest time constant (`default_step`).
+STEP_PER_TIME_CONSTANT = 0.5
+
+
+def default_step(case: Case, conventions: str = "ieee",
+                 fastest: tuple[float, str] | None = None) -> float:
+    """Default integration step (s).
+
+    pstess: the data file's own step (sw_con row 1, col 7), else half a cycle of the case
+    frequency (1/120 s at 60 Hz), as PSTess.  ieee: from the model, not from a PSTess run
+    setting: half a cycle, capped at STEP_PER_TIME_CONSTANT times the case's fastest time
+    constant, the largest step whose CCTs agree with a converged (step-halved) run within
+    the 1 ms CCT tolerance on the paper's faults (docs/conventions.md, convergence table;
+    docs/simulator.md, default step).  Kundur 5 ms either way (T_R = 0.01 s); miniWECC
+    5 ms instead of its data file's 1/480 s (fastest 0.01 s: a governor's T_5), whose CCTs
+    are the same to the millisecond (docs/simulator.md).  fastest: the case's
+    `fastest_time_constant`, if already known.
+    """
+    sw = case.sw_con
+    half_cycle = 0.5 / case.freq_hz
+    if check_conventions(conventions) == "pstess":
+        return float(sw[0, 6]) if sw is not None and sw[0, 6] > 0 else half_cycle
+    T, _ = fastest_time_constant(case) if fastest is None else fastest
+    return min(half_cycle, STEP_PER_TIME_CONSTANT * T)
+
+
+def fastest_time_constant(case: Case) -> tuple[float, str]:
+    """Smallest time constant among the states of the case's models (s) and where it is
+    (table, field, row).  Raises CaseError for models stabctl does not have."""
+    from stabctl.models import exciters
+    from stabctl.models import governors
+    from stabctl.models import machines
+    from stabctl.models import pss
+    cands = []
+    mp, ep = machines.machine_params(case), exciters.exciter_params(case)
+    pp, gp = pss.pss_params(case), governors.governor_params(case)
+    for name, arr, sel in (
+            ("mac_con T\"do", mp.Tdopp, mp.kind == 2), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2),
+            ("mac_con T'do", mp.Tdop, mp.kind >= 1), ("mac_con T'qo", mp.Tqop, mp.kind >= 1),
+            *pp.time_constants(), *ep.time_constants(), *gp.time_constants()):
+        if np.any(sel):
+            k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))
+            cands.append((float(abs(arr[k])), f"{name} row {k + 1}"))
+    return min(cands) if cands else (np.inf, "")
+
+
+def check_step(fastest: tuple[float, str], h: float) -> None:
+    """Raise InputError when h is not a positive finite step or exceeds twice the fastest
+    time constant (`fastest_time_constant`): the explicit predictor-corrector is unstable
+    there (its stability interval is h/T < 2)."""
+    T, where = fastest
+    if not 0 < h < np.inf:
+        raise InputError(f"step must be a positive number of seconds, got {h}")
+    if h >= 2 * T:
+        raise InputError(f"step {h} s is too large: the fastest time constant is {T} s "
+                         f"({where}); the predictor-corrector needs h < {2 * T} s")
+
+
+#: most integration steps one run may take: a smaller step (or a longer run) is refused
+#: at once instead of running silently for minutes and filling the memory with the
+#: trajectory (miniWECC: 200000 steps are about 10 s and 0.7 GB)
+MAX_STEPS = 200_000
+
+
+def check_step_count(t_end: float, h: float) -> None:
+    """Raise InputError when a run to t_end (s) with step h (s) needs more than MAX_STEPS
+    steps."""
+    if not 0 < h < float("inf"):
+        raise InputError(f"step must be a finite number > 0 s, got {h}")
+    n = t_end / h
+    if not n <= MAX_STEPS:
+        raise InputError(f"step {h:g} s: a run to {t_end:g} s needs {n:.3g} steps, more than "
+                         f"the limit {MAX_STEPS} (stabctl.dynamics.grid.MAX_STEPS); use a larger "
+                         "step (--step) or a shorter run (--tf)")

@@ -1,0 +1,480 @@
+"""The compiled predictor-corrector loop (`integrate`) and the data it reads and fills.
+
+Integrator (PSTess 1.1 `s_simu.m`, docs/pst_models.md 7): explicit Heun (modified Euler),
+each state advanced by x_j = x_k + h/2 (f(x_k) + f(x_k + h f(x_k))) with the network solved
+at both stages, on the grid of `stabctl.dynamics.grid` (every event time a grid point).
+Event semantics (`RunOptions.pst`):
+
+- "exact": each step uses the network of the interval it lies in;
+- "pst": PSTess's own, so that trajectories match PSTess bit for bit: the corrector of the
+  step ending at an event already uses the post-event network, and the first step of each
+  interval after the first is evaluated once more before it is taken (its limiter clamps
+  persist).
+
+Numerical health is checked after every step (`_healthy`): a non-finite state, a speed
+outside [1 - SPEED_BAND, 1 + SPEED_BAND] pu or Heun's local error estimate above EST_TOL for
+more than EST_STEPS steps in a row (the signature of an explicit method beyond its
+stability region) stops the run (UNSTABLE_STEP), so that a loss of synchronism (an angle
+more than `RunOptions.limit` rad from the centre of inertia, eq. 40) is only ever judged on
+a numerically healthy run.  The storage devices are advanced by `stabctl.dynamics.switching`.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+
+from stabctl._jit.arrays import assign, max_abs
+from stabctl._jit.decorators import kernel, njit
+from stabctl.dynamics import switching as sw
+from stabctl.dynamics.coi import coi_value
+from stabctl.dynamics.model import (BUS_VOLTAGES, NO_BUS_VOLTAGES, KeptBuses, KernelNetwork,
+                                    KernelOutputs, call_evaluate, kernel_outputs)
+from stabctl.storage import control as law
+
+if TYPE_CHECKING:
+    from stabctl.dynamics.grid import TimeGrid
+
+
+class Recording(NamedTuple):
+    """Preallocated buffers filled by `integrate` (`recording`): speed, angle, pelect,
+    pmech, efd (n_t, n_mac) and V (n_t, n_bus) complex at every grid index (the predictor
+    stage's outputs); the device powers P (n_t, n_dev) pu; per device stats (n_dev, 5) =
+    (switchings, energy absorbed, energy delivered, highest and lowest stored energy
+    relative to the start, all in pu*s; `stabctl.dynamics.switching.advance`); the
+    switching log (rows: time s, device, new mode, relative speed pu; NaN rows unused)."""
+
+    speed: np.ndarray
+    angle: np.ndarray
+    pelect: np.ndarray
+    pmech: np.ndarray
+    efd: np.ndarray
+    V: np.ndarray
+    P: np.ndarray
+    stats: np.ndarray
+    log: np.ndarray
+
+
+#: rows of the switching log of a run (switchings beyond it are counted, not logged)
+LOG_ROWS = 4096
+
+
+def recording(n_t: int, nm: int, nb: int, nd: int) -> Recording:
+    """Zeroed buffers for a run.
+
+    Parameters
+    ----------
+    n_t : int
+        Grid points.
+    nm, nb, nd : int
+        Machines, buses, storage devices.
+
+    Returns
+    -------
+    Recording
+    """
+    return Recording(speed=np.zeros((n_t, nm)), angle=np.zeros((n_t, nm)),
+                     pelect=np.zeros((n_t, nm)), pmech=np.zeros((n_t, nm)),
+                     efd=np.zeros((n_t, nm)), V=np.zeros((n_t, nb), np.complex128),
+                     P=np.zeros((n_t, nd)), stats=np.zeros((nd, 5)),
+                     log=np.full((LOG_ROWS, 4), np.nan))
+
+
+OK, SEPARATED, NO_LOAD_FLOW, UNSTABLE_STEP = 0, 1, -1, -3
+
+#: Numerical health (`_healthy`): a non-finite state, a speed more than SPEED_BAND pu from
+#: synchronous, or Heun's local error estimate (`_local_error`) above EST_TOL for more than
+#: EST_STEPS steps in a row marks a run that left the integrator's stability region.  On
+#: the paper's faults healthy runs stay above 0.1 for at most 6 steps (a field voltage
+#: reaching its ceiling inside a step); Kundur at h = 0.019 s (h/T_R = 1.9) sits above it
+#: from 1.5 s on at a spurious fixed point of the method (Efd at its ceiling, 0.3-9).
+SPEED_BAND, EST_TOL, EST_STEPS = 0.5, 0.1, 50
+
+
+def symptom(value: float, q: int, nm: int) -> str:
+    """Why `_healthy` stopped a run at state q (value its value, nm machines): a phrase
+    for the NumericalInstabilityError."""
+    if not np.isfinite(value):
+        return "not finite"
+    if nm <= q < 2 * nm and abs(value - 1.0) > SPEED_BAND:
+        return f"speed more than {SPEED_BAND} pu from synchronous"
+    return (f"the largest local error estimate, above {EST_TOL} for {EST_STEPS} steps in a "
+            "row")
+
+
+class Health(NamedTuple):
+    """Numerical-health trackers of a run (`_healthy`): the local error estimate of the
+    step ending at each grid index (n_t,), the state it is largest in (1,), the number of
+    steps in a row above EST_TOL (1,), the offending state index (1,)."""
+
+    est: np.ndarray
+    worst: np.ndarray
+    n_big: np.ndarray
+    bad: np.ndarray
+
+
+class StepGrid(NamedTuple):
+    """The grid as `integrate` reads it (`TimeGrid`): t (n_t,) s, interval (n_t,) stage
+    index of each point, h (n_stage,) step of each interval (s), first (n_t,) whether the
+    step from a point is the first of an interval after the first."""
+
+    t: np.ndarray
+    interval: np.ndarray
+    h: np.ndarray
+    first: np.ndarray
+
+
+def step_grid(grid: TimeGrid) -> StepGrid:
+    """The kernel view of a `TimeGrid`.
+
+    Parameters
+    ----------
+    grid : TimeGrid
+
+    Returns
+    -------
+    StepGrid
+    """
+    return StepGrid(grid.t, grid.interval, grid.h, np.r_[False, np.diff(grid.interval) > 0])
+
+
+class RunOptions(NamedTuple):
+    """Settings of a run: pst event semantics (module docstring); inertia (n_mac,) the COI
+    weights H * MVA; limit (rad) and stop: end the run when an angle leaves the COI by more
+    than limit."""
+
+    pst: bool
+    inertia: np.ndarray
+    limit: float
+    stop: bool
+
+
+class Carry(NamedTuple):
+    """What `integrate` updates in place, so that a run can be continued: the flat state x
+    (n_state,), the kept buses (`KeptBuses`: voltages, held loads, device injections),
+    held_stage[0] the network stage the held loads belong to (they are cleared when it
+    changes), the devices (`stabctl.dynamics.switching.DeviceState`) and the numerical
+    health (`Health`)."""
+
+    x: np.ndarray
+    kept: KeptBuses
+    held_stage: np.ndarray
+    devices: sw.DeviceState
+    health: Health
+
+
+class _Kernel(NamedTuple):
+    """What one network evaluation inside `integrate` needs (`_evaluate`)."""
+
+    p: object
+    nets: KernelNetwork
+    kept: KeptBuses
+    held_stage: np.ndarray
+    out: KernelOutputs
+    #: machine-code address of the model's evaluation (`stabctl.dynamics.model.call_evaluate`)
+    evaluate: int
+
+
+class _Workspace(NamedTuple):
+    """Scratch arrays of `integrate`: derivatives at the step start (dx_k) and at the
+    predictor (dx_j), what the devices see at the sub-step start (a) and end (b), and which
+    devices switched in the current step."""
+
+    dx_k: np.ndarray
+    dx_j: np.ndarray
+    a: sw.Seen
+    b: sw.Seen
+    switched: np.ndarray
+
+
+@kernel
+def _workspace(x, nd):
+    return _Workspace(np.zeros_like(x), np.zeros_like(x),  # slots no kernel writes stay 0
+                      sw.Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)),
+                      sw.Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)), np.zeros(nd, np.bool_))
+
+
+# -- health and separation -----------------------------------------------------------------
+
+@kernel
+def _local_error(x, f_k, f_j, hh, where):
+    """Heun's local error estimate (the corrector minus the Euler predictor, hh/2 |f_j -
+    f_k|), largest over the states relative to 1 + |x|; its state index in where[0]."""
+    e = 0.0
+    for q in range(x.size):
+        eq = 0.5 * hh * abs(f_j[q] - f_k[q]) / (1.0 + abs(x[q]))
+        if eq > e:
+            e, where[0] = eq, q
+    return e
+
+
+@kernel
+def _healthy(x, est, nm, health):
+    """Numerical health after a step with local error estimate est (module docstring);
+    returns False with the offending state index in health.bad[0]."""
+    for q in range(x.size):
+        if not np.isfinite(x[q]):
+            health.bad[0] = q
+            return False
+    for i in range(nm):
+        if abs(x[nm + i] - 1.0) > SPEED_BAND:
+            health.bad[0] = nm + i
+            return False
+    health.n_big[0] = health.n_big[0] + 1 if est > EST_TOL else 0
+    if health.n_big[0] > EST_STEPS:
+        health.bad[0] = health.worst[0]
+        return False
+    return True
+
+
+@kernel
+def _separated(x, nm, opts):
+    """Whether a rotor angle is more than opts.limit from the COI angle (eq. 40)."""
+    return max_abs(x[:nm] - coi_value(x[:nm], opts.inertia)) > opts.limit
+
+
+# -- recording -------------------------------------------------------------------------------
+
+@kernel
+def _record(rec, k, x, out, P):
+    """Store grid index k: angles and speeds of x, the evaluation outputs, device powers."""
+    nm = out.pelect.size
+    for i in range(nm):
+        rec.angle[k, i] = x[i]
+        rec.speed[k, i] = x[nm + i]
+    assign(rec.pelect[k], out.pelect)
+    assign(rec.pmech[k], out.pmech)
+    assign(rec.efd[k], out.efd)
+    assign(rec.V[k], out.V_bus)
+    if P.size > 0:
+        assign(rec.P[k], P)
+
+
+# -- network solution ----------------------------------------------------------------------
+
+@kernel
+def _stage(nets, s):
+    """The matrices of network stage s from the stacked ones."""
+    return KernelNetwork(nets.Y11[s], nets.Y12[s], nets.Y21[s], nets.Y22[s], nets.Z22[s],
+                         nets.R[s])
+
+
+# The stages that evaluate the model are inlined into `integrate` at numba IR level
+# (inline="always").  They call the model by address (`call_evaluate`), so none links it;
+# compiled as functions of their own they still took longer: `integrate` alone compiled in
+# 19.4 s instead of 17.4 s on a cold cache.  The compiled arithmetic, and so every result,
+# is the same.
+@kernel(inline="always")
+def _evaluate(kn, x, stage, want, dx):
+    """`evaluate_kernel` with the network of `stage`; the held loads are released when
+    the stage changes.  Returns its iteration count (< 0: no convergence)."""
+    if stage != kn.held_stage[0]:
+        kn.kept.held[:] = False
+        kn.held_stage[0] = stage
+    return call_evaluate(kn.evaluate, x, kn.p, _stage(kn.nets, stage), kn.kept, want, dx,
+                         kn.out)
+
+
+# -- the controller at a grid point and at a split point -----------------------------------
+
+@kernel(inline="always")
+def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
+    """The controller at grid index k (events make voltages jump here): commands due,
+    Table 3 modes, targets and powers; the network is solved again if a power changed."""
+    sw.observe(x, w.dx_k, kn.p.n_mac, opts.inertia, sa, kn.kept.V, w.a)
+    if sa.kind == law.EXTERNAL:
+        sw.apply_commands(ds, grid.t[k], rec, w.a.r)
+    for d in range(sa.pmax.size):
+        want = law.desired_mode(sa, d, ds.mode[d], w.a.r[d], w.a.v[d])
+        if sa.kind == law.BANG_BANG and want != ds.mode[d]:
+            ds.mode[d] = want
+            w.switched[d] = True
+            sw.log_switching(rec, d, grid.t[k], want, w.a.r[d])
+    sw.targets(sa, ds.mode, w.a.r, w.a.v, w.a.acc, ds.target)
+    if sw.powers_now(sa, ds):
+        sw.inject(sa, ds.P, kn.kept.S_extra)
+        _evaluate(kn, x, grid.interval[k], BUS_VOLTAGES, w.dx_k)
+
+
+@kernel(inline="always")
+def _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d):
+    """The controller at a split point of step k (a switching or a command, rem seconds
+    before t_k+1): commands, switchings, targets, powers, then the derivatives there.
+    Returns (network solved, derivatives)."""
+    t_now = grid.t[k + 1] - rem
+    sw.observe(x_a, w.dx_j, kn.p.n_mac, opts.inertia, sa, kn.kept.V, w.a)
+    if sa.kind == law.EXTERNAL:
+        sw.apply_commands(ds, t_now, rec, w.a.r)
+    if first_d >= 0:
+        sw.switch_located(sa, ds, w, rec, first_d, t_now)
+    sw.targets(sa, ds.mode, w.a.r, w.a.v, w.a.acc, ds.target)
+    sw.powers_now(sa, ds)
+    sw.inject(sa, ds.P, kn.kept.S_extra)
+    dx_a = np.empty_like(x_a)
+    return _evaluate(kn, x_a, grid.interval[k], NO_BUS_VOLTAGES, dx_a) >= 0, dx_a
+
+
+# -- the step ------------------------------------------------------------------------------
+
+@kernel(inline="always")
+def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
+    """Heun's predictor-corrector over hh from x_a (derivatives dx_a), the devices' powers
+    advanced on a copy of their energy: (network solved, corrected state); dx_j is written
+    with the derivatives at the predictor (network of `stage`)."""
+    Pb = sw.advance(sa, ds.P, ds.target, ds.e.copy(), hh, np.zeros((sa.pmax.size, 5)))
+    sw.inject(sa, Pb, kn.kept.S_extra)
+    xp = x_a + hh * dx_a
+    if _evaluate(kn, xp, stage, want, dx_j) < 0:
+        return False, x_a
+    return True, x_a + 0.5 * hh * (dx_a + dx_j)
+
+
+@kernel(inline="always")
+def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
+    """The step from grid index k, split at located switchings and scheduled commands
+    (each device switches at most once per step, commands are finite: it ends).  Returns
+    (status, index, state after the step; x itself when the network failed)."""
+    s = grid.interval[k]
+    j = grid.interval[k + 1] if opts.pst else s
+    last = k == grid.interval.size - 2
+    x_a, dx_a, rem = x, w.dx_k, grid.h[s]
+    x_b = x
+    while True:
+        hh = sw.substep_length(grid, sa, ds, k, rem)
+        ok, x_b = _heun(kn, sa, ds, x_a, dx_a, hh, j if hh == rem else s, last and hh == rem,
+                        w.dx_j)
+        if not ok:
+            return NO_LOAD_FLOW, k, x
+        if hh == rem:
+            health.est[k + 1] = _local_error(x_b, dx_a, w.dx_j, hh, health.worst)
+        theta, first_d = 2.0, -1
+        if sa.kind == law.BANG_BANG and hh == rem:
+            theta, first_d = sw.locate_switching(kn, grid, sa, ds, opts, w, x_b, k)
+        if hh == rem and first_d < 0:
+            break
+        if first_d >= 0:           # re-integrate up to the first switching instant
+            hh = theta * rem
+        Pm = sw.advance(sa, ds.P, ds.target, ds.e, hh, rec.stats)
+        if first_d >= 0:
+            sw.inject(sa, Pm, kn.kept.S_extra)
+            if _evaluate(kn, x_a + hh * dx_a, s, NO_BUS_VOLTAGES, w.dx_j) < 0:
+                return NO_LOAD_FLOW, k, x
+            x_a = x_a + 0.5 * hh * (dx_a + w.dx_j)
+        else:                      # up to the scheduled command
+            x_a = x_b
+        rem -= hh
+        assign(ds.P, Pm)
+        ok, dx_a = _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d)
+        if not ok:
+            return NO_LOAD_FLOW, k, x
+        x_b = x_a
+        if rem <= 1e-15:
+            break
+    if sa.pmax.size > 0 and rem > 1e-15:
+        assign(ds.P, sw.advance(sa, ds.P, ds.target, ds.e, rem, rec.stats))
+    return OK, k, x_b
+
+
+@kernel(inline="always")
+def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
+    """One step from grid index k: the network at t_k (PSTess evaluates an interval's first
+    step twice; the first pass's clamps stay), the controller there, the record of t_k,
+    then the sub-steps.  Returns (status, index, state)."""
+    s = grid.interval[k]
+    sw.inject(sa, ds.P, kn.kept.S_extra)
+    if grid.first[k] and opts.pst:
+        V_keep = kn.kept.V.copy()
+        _evaluate(kn, x, s, NO_BUS_VOLTAGES, w.dx_k)
+        assign(kn.kept.V, V_keep)
+    if _evaluate(kn, x, s, BUS_VOLTAGES, w.dx_k) < 0:
+        return NO_LOAD_FLOW, max(k - 1, 0), x
+    w.switched[:] = False
+    if sa.pmax.size > 0:
+        _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k)
+    _record(rec, k, x, kn.out, ds.P)
+    return _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k)
+
+
+@kernel(inline="always")
+def _after_step(kn, sa, ds, opts, rec, health, x, k):
+    """Numerical health and loss of synchronism after the step from k: (status, index)."""
+    if not _healthy(x, health.est[k + 1], kn.p.n_mac, health):
+        return UNSTABLE_STEP, k
+    if opts.stop and _separated(x, kn.p.n_mac, opts):
+        _record(rec, k + 1, x, kn.out, ds.P)
+        return SEPARATED, k + 1
+    return OK, k
+
+
+@kernel(inline="always")
+def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
+    """Store the outputs at k1 where a run pauses, from copies (the next call evaluates it
+    for real)."""
+    V_keep, held_keep, stage_keep = kn.kept.V.copy(), kn.kept.held.copy(), kn.held_stage[0]
+    sw.inject(sa, ds.P, kn.kept.S_extra)
+    _evaluate(kn, x.copy(), grid.interval[k1], BUS_VOLTAGES, w.dx_k)
+    assign(kn.kept.V, V_keep)
+    assign(kn.kept.held, held_keep)
+    kn.held_stage[0] = stage_keep
+    _record(rec, k1, x, kn.out, ds.P)
+
+
+@njit
+def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
+    """PST's predictor-corrector from grid index k0 to k1 (module docstring).
+
+    Parameters
+    ----------
+    c : Carry
+        State, kept buses, devices and health; updated in place, so that a run can be
+        continued.
+    k0, k1 : int
+        First and last grid index.
+    grid : StepGrid
+        The grid (`step_grid`).
+    nets : KernelNetwork
+        Network matrices stacked by interval (`stabctl.dynamics.model.stacked_networks`).
+    p : stabctl.dynamics.model.KernelParams
+        Model parameters.
+    sa : stabctl.storage.devices.StorageArrays
+        The storage devices.  Bang-bang devices: a mode change within a step has its
+        instant located (`stabctl.storage.control.crossing`) and the step is
+        re-integrated in two parts.  Externally commanded devices: each command of the
+        schedule (c.devices.cmd_t sorted) takes effect at its exact time, splitting the
+        step.
+    opts : RunOptions
+        Event semantics, COI weights, separation limit and stop.
+    rec : Recording
+        Filled at every index with the predictor-stage outputs, the states, the device
+        powers, their switching and energy statistics and the switching log.
+    evaluate : int
+        Machine-code address of `stabctl.dynamics.model.evaluate_kernel` for these
+        arguments (`stabctl.dynamics.model.evaluate_address`).
+
+    Returns
+    -------
+    status : int
+        OK, SEPARATED (stopped at loss of synchronism), UNSTABLE_STEP (`_healthy` failed
+        after the step from the index), NO_LOAD_FLOW.
+    k : int
+        The last stored grid index.
+    """
+    n = grid.interval.size
+    kn = _Kernel(p, nets, c.kept, c.held_stage, kernel_outputs(p.n_mac, nets.R.shape[1]),
+                 evaluate)
+    w = _workspace(c.x, sa.pmax.size)
+    x = c.x.copy()
+    for k in range(k0, min(k1, n - 1)):
+        status, k_end, x = _step(kn, grid, sa, c.devices, opts, w, rec, c.health, x, k)
+        if status == OK:
+            status, k_end = _after_step(kn, sa, c.devices, opts, rec, c.health, x, k)
+        if status != OK:
+            assign(c.x, x)
+            return status, k_end
+    assign(c.x, x)
+    if k1 >= n - 1:
+        _record(rec, n - 1, x, kn.out, c.devices.P)
+        return OK, n - 1
+    _record_paused(kn, grid, sa, c.devices, rec, w, x, k1)
+    return OK, k1

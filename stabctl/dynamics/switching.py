@@ -1,0 +1,197 @@
+"""The storage devices inside the compiled integrator: their state, what they see, their
+set-points and powers, energy accounting, scheduled commands and the location of bang-bang
+switchings within a step.
+
+Bang-bang devices (paper Table 3): a mode change within a step has its instant located
+(`locate_switching`, `stabctl.storage.control.crossing`) and the step is re-integrated in
+two parts (`stabctl.dynamics.integrator`); each device switches at most once per step.
+Externally commanded devices: each command of the schedule takes effect at its exact time
+(`apply_commands`, `substep_length`).  Every switching is counted and logged
+(`log_switching`) in the run's `stabctl.dynamics.integrator.Recording`.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from stabctl._jit.decorators import kernel
+from stabctl.storage import control as law
+from stabctl.storage import devices as st
+
+
+class DeviceState(NamedTuple):
+    """Controller and device state carried across `stabctl.dynamics.integrator.integrate`
+    calls (n_dev entries): mode (-1, 0, +1; an external set-point in units of the rating),
+    power P (pu), power target, energy content e (pu*s); the command schedule of externally
+    commanded devices: cmd_t (n_cmd,) times (s, inf until scheduled), cmd_mode (n_cmd, n_dev)
+    set-points, and its next entry cmd_next[0]."""
+
+    mode: np.ndarray
+    P: np.ndarray
+    target: np.ndarray
+    e: np.ndarray
+    cmd_next: np.ndarray
+    cmd_t: np.ndarray
+    cmd_mode: np.ndarray
+
+
+def device_state(sa, n_commands: int = 0) -> DeviceState:
+    """Initial device state: idle, no power, the initial energy sa.e0.
+
+    Parameters
+    ----------
+    sa : stabctl.storage.devices.StorageArrays
+        The packed fleet (n_dev devices).
+    n_commands : int
+        Room in the command schedule.
+
+    Returns
+    -------
+    DeviceState
+    """
+    nd = sa.pmax.size
+    return DeviceState(np.zeros(nd), np.zeros(nd), np.zeros(nd), sa.e0.copy(),
+                       np.zeros(1, np.int64), np.full(n_commands, np.inf),
+                       np.zeros((n_commands, nd)))
+
+
+class Seen(NamedTuple):
+    """What the devices see at one point (n_dev each): speed relative to the COI r (pu),
+    bus voltage v (pu), relative acceleration acc (pu/s)."""
+
+    r: np.ndarray
+    v: np.ndarray
+    acc: np.ndarray
+
+
+@kernel
+def log_switching(rec, d, time_, mode, r):
+    """Count a switching of device d and log it (time s, device, new mode, rel. speed)."""
+    row = int(rec.stats[:, 0].sum())
+    rec.stats[d, 0] += 1
+    if row < rec.log.shape[0]:
+        rec.log[row, 0], rec.log[row, 1], rec.log[row, 2], rec.log[row, 3] = time_, d, mode, r
+
+
+@kernel
+def inject(sa, P, S):
+    """Complex power drawn at the kept buses by the devices (absorbing is +)."""
+    S[:] = 0.0
+    for d in range(P.size):
+        S[sa.pos[d]] += P[d]
+
+
+# -- device control and energy accounting --------------------------------------------------
+
+@kernel
+def targets(sa, mode, r, v, accel, out):
+    """Device power set-points: bang-bang modes times ratings, or the linear law."""
+    for d in range(out.size):
+        if sa.kind == law.BANG_BANG:
+            out[d] = mode[d] * sa.pmax[d]
+        elif sa.kind == law.EXTERNAL:
+            out[d] = mode[d] * sa.pmax[d] if v[d] >= sa.vgate else 0.0
+        elif v[d] < sa.vgate:
+            out[d] = 0.0
+        else:
+            out[d] = min(max(sa.Kv * r[d] + sa.Ka * accel[d], -sa.pmax[d]), sa.pmax[d])
+
+
+@kernel
+def powers_now(sa, ds):
+    """Device powers at once on their targets (ideal devices; lags and ramps keep them);
+    returns whether any changed."""
+    changed = False
+    for d in range(ds.P.size):
+        Pn = st.device_power(sa, d, ds.target[d], ds.P[d], ds.e[d], 0.0)
+        changed = changed or Pn != ds.P[d]
+        ds.P[d] = Pn
+    return changed
+
+
+@kernel
+def advance(sa, P, target, e, hh, stats):
+    """Device powers after hh seconds; energy (SOC, absorbed, delivered) by trapezoid, and
+    the extremes of the SOC relative to its start.  Sub-steps end at every located
+    switching, so for ideal devices (power constant within a sub-step, the SOC linear)
+    these extremes are exact, not sampled at grid points."""
+    Pn = np.empty_like(P)
+    for d in range(P.size):
+        Pn[d] = st.device_power(sa, d, target[d], P[d], e[d], hh)
+        e[d] += 0.5 * hh * (P[d] + Pn[d])
+        stats[d, 1] += 0.5 * hh * (max(P[d], 0.0) + max(Pn[d], 0.0))
+        stats[d, 2] += 0.5 * hh * (max(-P[d], 0.0) + max(-Pn[d], 0.0))
+        soc = e[d] - sa.e0[d]
+        stats[d, 3] = max(stats[d, 3], soc)
+        stats[d, 4] = min(stats[d, 4], soc)
+    return Pn
+
+
+@kernel
+def observe(x, dx, nm, inertia, sa, V_nc, seen):
+    """Relative speeds, bus voltages and relative accelerations seen by the devices."""
+    law.relative_speeds(x, nm, inertia, sa, seen.r)
+    law.relative_speeds(dx, nm, inertia, sa, seen.acc)
+    for d in range(seen.r.size):
+        seen.v[d] = abs(V_nc[sa.pos[d]])
+
+
+# -- commands ------------------------------------------------------------------------------
+
+@kernel
+def apply_commands(ds, t_now, rec, r):
+    """Apply every scheduled command due by t_now (externally commanded devices); a
+    change of the set-point's sign (idle, absorb, inject) is logged as a switching."""
+    while ds.cmd_next[0] < ds.cmd_t.size and ds.cmd_t[ds.cmd_next[0]] <= t_now + 1e-12:
+        c = ds.cmd_next[0]
+        for d in range(ds.mode.size):
+            if np.sign(ds.cmd_mode[c, d]) != np.sign(ds.mode[d]):
+                log_switching(rec, d, ds.cmd_t[c], np.sign(ds.cmd_mode[c, d]), r[d])
+            ds.mode[d] = ds.cmd_mode[c, d]
+        ds.cmd_next[0] += 1
+
+
+@kernel
+def substep_length(grid, sa, ds, k, rem):
+    """Length of the next sub-step of step k with rem seconds left: the rest, or up to the
+    next scheduled command if one falls inside."""
+    if (sa.kind == law.EXTERNAL and ds.cmd_next[0] < ds.cmd_t.size
+            and ds.cmd_t[ds.cmd_next[0]] < grid.t[k + 1] - 1e-12):
+        return max(ds.cmd_t[ds.cmd_next[0]] - (grid.t[k + 1] - rem), 0.0)
+    return rem
+
+
+@kernel(inline="always")
+def locate_switching(kn, grid, sa, ds, opts, w, x_b, k):
+    """First bang-bang switching inside the step from grid index k (state x_b and w.dx_j at
+    its end): (fraction of the step, device), (2.0, -1) if none.  A device switches at most
+    once per step; a voltage-gate jump at an event is taken at the grid point."""
+    observe(x_b, w.dx_j, kn.p.n_mac, opts.inertia, sa, kn.kept.V, w.b)
+    at_event = grid.interval[k + 1] != grid.interval[k]
+    theta, first_d = 2.0, -1
+    for d in range(sa.pmax.size):
+        if w.switched[d]:    # one switching per device and step: no chattering loop
+            continue
+        want = law.desired_mode(sa, d, ds.mode[d], w.b.r[d], w.b.v[d])
+        gate_jump = (w.a.v[d] >= sa.vgate) != (w.b.v[d] >= sa.vgate)
+        if want != ds.mode[d] and not (at_event and gate_jump):  # events: at t_k+1
+            th, _ = law.crossing(sa, ds.mode[d], want, w.a.r[d], w.b.r[d], w.a.v[d], w.b.v[d])
+            if th < theta:
+                theta, first_d = th, d
+    return theta, first_d
+
+
+@kernel
+def switch_located(sa, ds, w, rec, first_d, t_now):
+    """At the located instant t_now: switch device first_d, and any other whose crossing
+    falls there too (within 1e-9 of the step)."""
+    for d in range(sa.pmax.size):
+        want = law.desired_mode(sa, d, ds.mode[d], w.b.r[d], w.b.v[d])
+        if want != ds.mode[d] and not w.switched[d]:
+            th, new = law.crossing(sa, ds.mode[d], want, w.a.r[d], w.b.r[d], w.a.v[d], w.b.v[d])
+            if d == first_d or th <= 1e-9:
+                ds.mode[d] = new
+                w.switched[d] = True
+                log_switching(rec, d, t_now, new, w.a.r[d])
