@@ -11,11 +11,11 @@ import time
 import pytest
 from click.testing import CliRunner
 
-from stabctl.studies.cases import DEFAULT_FAULTS
-from stabctl.stability.cct import LineFault, cached_simulator, cct_job, cct_jobs
 from stabctl.cli import main
 from stabctl.errors import InputError
 from stabctl.parallel import Job, pooled, read_records, run_sweep
+from stabctl.stability.cct import LineFault, cached_simulator, cct_job, cct_jobs
+from stabctl.studies.cases import DEFAULT_FAULTS
 
 # -- job functions (module level: spawned workers import them by name; one inputs dict) --
 
@@ -320,8 +320,8 @@ def test_sweep_jobs_with_another_controller_are_keyed_apart():
     # the paper's controller: exactly cct_jobs' jobs (earlier records resume); another:
     # the ratings' jobs carry it in their inputs and keys
     from stabctl.stability.cct import cct_jobs
-    from stabctl.studies.cases import default_faults
     from stabctl.storage.control import BangBangCOI
+    from stabctl.studies.cases import default_faults
     from stabctl.studies.sweeps import controlled_cct_job, controlled_cct_jobs
 
     faults = default_faults("kundur")[:1]

@@ -52,9 +52,18 @@ def _wait_for(cond, timeout: float) -> bool:
     return cond()
 
 
+def _default_sigint():
+    """In the child before exec: SIGINT back to its default.  A process started with SIGINT
+    ignored (pytest run by nohup, as a background job of a non-interactive shell, by some
+    CI runners) passes SIG_IGN on to its children, and Python then installs no
+    KeyboardInterrupt handler: the Ctrl-C under test would be ignored."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(args, tmp_path):
     return subprocess.Popen(STABCTL + [str(a) for a in args], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_default_sigint)
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and prctl: Linux")
@@ -101,14 +110,16 @@ def test_sigint_of_a_screening_exits_130_with_the_resume_command(tmp_path):
 
 
 @pytest.mark.parametrize("command,target,kept", [
-    (["paper", "--out-dir", "rep", "--only", "analytic"], "stabctl.studies.paper.write_paper_report",
+    (["paper", "--out-dir", "rep", "--only", "analytic"],
+     "stabctl.studies.paper.write_paper_report",
      "finished sweep records in rep are kept with --resume; resume with: stabctl "),
     (["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "10"],
      "stabctl.placement.plan.plan", "nothing is kept; the work starts again"),
     (["estimate", "cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"],
      "stabctl.estimation.closed_loop.cct_study", "nothing is kept; the work starts again"),
     (["sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "o.jsonl"],
-     "stabctl.parallel.run_sweep", "finished jobs are in o.jsonl (0 recorded); they are skipped; resume with:"),
+     "stabctl.parallel.run_sweep",
+     "finished jobs are in o.jsonl (0 recorded); they are skipped; resume with:"),
     (["screen", "kundur", "--out", "s.jsonl"], "stabctl.stability.screening.screen",
      "finished searches are in s.jsonl (0 recorded); they are skipped; resume with:"),
 ])
