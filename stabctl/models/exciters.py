@@ -340,7 +340,7 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
 _RUNNING = np.bool_(False)
 
 
-@kernel
+@kernel(inline="always")
 def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
     """Field voltage exciter i hands its machine (PST flag 1), pu on the machine base:
     `field_voltage_at` with the machine quantities it needs.
@@ -368,7 +368,7 @@ def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
     return field_voltage_at(P, x, i, et, pss_out, VB, ifd, ieee)
 
 
-@kernel
+@kernel(inline="always")
 def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """Field voltage of exciter i given its machine's terminal voltage VTR_alg (pu), the
     ST3 source voltage VB (1 for the other types) and the field current ifd (EXST1; 0 for
@@ -421,7 +421,7 @@ def recorded_efd(P, x, i, efd_alg):
 
 # -- smpexc (and SCRX): T_R, lead-lag T_C/T_B, K_A/(1 + s T_A) limited [Vrmin, Vrmax]
 
-@kernel
+@kernel(inline="always")
 def _smp_field_voltage(P, x, i, VTR_alg, pss_out, ieee):
     """smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
     ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error, without
@@ -435,7 +435,7 @@ def _smp_field_voltage(P, x, i, VTR_alg, pss_out, ieee):
     return P[i, E.KA] * VA * mult
 
 
-@kernel
+@kernel(inline="always")
 def _smp_derivatives(P, x, i, err, dx, ieee):
     """smpexc: PSTess clamps the Efd state to [Vrmin, Vrmax] after its derivative is
     computed and keeps the derivative (a windup clamp; PST's misspelt dEFD,
@@ -456,7 +456,7 @@ def _smp_derivatives(P, x, i, err, dx, ieee):
 # -- exc_st3: V_I limited, K_J, lead-lag, non-windup K_A/(1 + s T_A) with the inner loop
 # -- feedback min(V_Gmax, K_G Efd); output min(V_R V_B, Efdmax)
 
-@kernel
+@kernel(inline="always")
 def _st3_source(P, i, MP, xm, cur, m, vt, ed, eq, cd, cq, et):
     """exc_st3's source voltage V_B (`st3_source_voltage`, PST exc_st3 flag 1) from the
     stator quantities ed, eq, cd, cq of machine m (`machines.stator_without_speed`), its
@@ -472,14 +472,14 @@ def _st3_source(P, i, MP, xm, cur, m, vt, ed, eq, cd, cq, et):
                               _RUNNING)
 
 
-@kernel
+@kernel(inline="always")
 def _st3_field_voltage(P, x, i, VB, ieee):
     """exc_st3: min(V_R V_B, Efdmax) (ieee: V_R clipped to [Vrmin, Vrmax])."""
     VR = clip(x[2, i], P[i, E.VRMIN], P[i, E.VRMAX]) if ieee else x[2, i]
     return min(VR * VB, P[i, E.EFDMAX])
 
 
-@kernel
+@kernel(inline="always")
 def _st3_derivatives(P, x, i, err, efd, dx, ieee):
     """exc_st3: V_R clamped and its derivative zeroed when it pushes outward
     (`blocks.nonwindup`)."""
@@ -493,14 +493,14 @@ def _st3_derivatives(P, x, i, err, efd, dx, ieee):
 # -- EXST1: rate feedback s K_F/(1 + s T_F) on Efd, V_I limited, lead-lag, K_A/(1 + s T_A);
 # -- output limited to [V_t Vrmin, V_t Vrmax - K_C I_fd]
 
-@kernel
+@kernel(inline="always")
 def _st1_field_voltage(P, x, i, VTR_alg, ifd):
     """EXST1: V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd] (ifd the machine's field
     current)."""
     return clip(x[2, i], VTR_alg * P[i, E.VRMIN], VTR_alg * P[i, E.VRMAX] - P[i, E.KC] * ifd)
 
 
-@kernel
+@kernel(inline="always")
 def _st1_derivatives(P, x, i, err, efd, dx):
     """EXST1 (PSS/E; docs/pst_models.md 2.4): the rate feedback (state R_f, only with
     K_F != 0) subtracted before the V_I limits."""
@@ -525,7 +525,7 @@ def dc_feedback(KE, Asat, Bsat, quadratic, Efd):
     return (KE + SE) * Efd
 
 
-@kernel
+@kernel(inline="always")
 def _dc_derivatives(P, x, i, eterm, err, dx, ieee, reach):
     """exc_dc12 flag 2 and IEEET2: the rate feedback K_F/T_F (Efd - R_f) = s K_F/(1 + s
     T_F) Efd (IEEET2: then the lag 1/(1 + s T_F2), state V_F), subtracted from the error;

@@ -217,7 +217,7 @@ def derivatives(P, x, k, omega, dx):
         _ieesgo_lags(P, x, k, omega, dx)
 
 
-@kernel
+@kernel(inline="always")
 def _fractions(P, k, y):
     """The IEEEG1/IEESGO shaft power: the lag outputs y (4,) times their fractions."""
     return P[k, G.KA] * y[0] + P[k, G.KB] * y[1] + P[k, G.KC] * y[2] + P[k, G.KD] * y[3]
@@ -226,20 +226,20 @@ def _fractions(P, k, y):
 # -- tg (PST tg.m) and TGOV1: power order, servo (tg: input limited; TGOV1: non-windup
 # -- valve), lead-lag T_3/T_c; tg: then the lead-lag T_4/T_5; TGOV1: minus D_t (omega - 1)
 
-@kernel
+@kernel(inline="always")
 def _tg_pmech(P, x, k):
     """tg: (1 + s T_4)/(1 + s T_5) of the output of (1 + s T_3)/(1 + s T_c)."""
     y2 = leadlag(x[0, k], x[1, k], P[k, G.T3], P[k, G.TC])[0]
     return leadlag(y2, x[2, k], P[k, G.T4], P[k, G.T5])[0]
 
 
-@kernel
+@kernel(inline="always")
 def _tgov1_pmech(P, x, k, omega):
     """TGOV1: the lead-lag (1 + s T_2)/(1 + s T_3) output minus D_t (omega - 1)."""
     return leadlag(x[0, k], x[1, k], P[k, G.T3], P[k, G.TC])[0] - P[k, G.DT] * (omega - 1.0)
 
 
-@kernel
+@kernel(inline="always")
 def _tg_derivatives(P, x, k, omega, dx):
     """tg and TGOV1: the order P_ref + (w_f - omega)/R through the servo 1/(1 + s T_s)
     (tg: order clipped to [Tmin, Tmax]; TGOV1: non-windup valve), then the lead-lags."""
@@ -256,7 +256,7 @@ def _tg_derivatives(P, x, k, omega, dx):
 
 # -- IEEEG1: lead-lag on K (omega - 1), rate- and position-limited gate, lags T4..T7
 
-@kernel
+@kernel(inline="always")
 def _ieeeg1_lags(P, x, k, dx=None):
     """Outputs (4,) of the IEEEG1 lags T4..T7 in series on the gate (a lag below 1e-3 s
     passes its input) and, given dx, their derivatives."""
@@ -270,7 +270,7 @@ def _ieeeg1_lags(P, x, k, dx=None):
     return y
 
 
-@kernel
+@kernel(inline="always")
 def _ieeeg1_derivatives(P, x, k, omega, dx):
     """IEEEG1: K (1 + s T_2)/(1 + s T_1) on the speed deviation, the gate's rate
     (P_ref - that - gate)/T_3 limited to [Uc, Uo], position [PMIN, PMAX] non-windup."""
@@ -288,14 +288,14 @@ def _head(q, g):
     return (q / g) ** 2 if g > 0 else 0.0
 
 
-@kernel
+@kernel(inline="always")
 def _hygov_pmech(P, x, k, omega):
     """HYGOV: A_t h (q - q_NL) - D_turb (omega - 1) g."""
     g, q = x[2, k], x[3, k]
     return P[k, G.T5] * _head(q, g) * (q - P[k, G.QNL]) - P[k, G.DT] * (omega - 1.0) * g
 
 
-@kernel
+@kernel(inline="always")
 def _hygov_derivatives(P, x, k, omega, dx):
     """HYGOV: filter, rate- and position-limited gate integrator, gate servo, water column
     (module docstring; ANDES ``hygov.py``)."""
@@ -312,7 +312,7 @@ def _hygov_derivatives(P, x, k, omega, dx):
 # -- IEESGO: K_1 (omega - 1) through 1/(1 + s T_1), (1 + s T_2)/(1 + s T_3); the order
 # -- limited to [PMIN, PMAX] through the lags T_4, T_5, T_6
 
-@kernel
+@kernel(inline="always")
 def _ieesgo_lags(P, x, k, omega, dx=None):
     """IEESGO: outputs (4,) of the lags T4, T5, T6 (the fourth 0; a time constant below
     1e-3 s passes its input) and, given dx, the derivatives of its five states."""

@@ -217,7 +217,7 @@ def output_and_derivatives(P, x, k, omega, pe, dx):
     return _pst(P, x, k, pe if kind == PST_POWER else omega, dx)
 
 
-@kernel
+@kernel(inline="always")
 def _pst(P, x, k, u, dx):
     """PST pss (pss.m): washout s T_w/(1 + s T_w) on u (speed or power), then
     K (1 + s T_1)/(1 + s T_2) (K T_w given, column 3), then (1 + s T_3)/(1 + s T_4)
@@ -238,7 +238,7 @@ def _signal(code, omega, pe):
     return 0.0
 
 
-@kernel
+@kernel(inline="always")
 def _psse(P, x, k, omega, pe, dx):
     """PSS/E stabiliser: input lags K_i/(1 + s Tr_i) summed, filter N/D, washout
     K_w s/(1 + s T_w), three lead-lags, output limits (docs 3.1)."""
@@ -263,7 +263,7 @@ def _psse(P, x, k, omega, pe, dx):
     return clip(y, P[k, S.MIN], P[k, S.MAX])
 
 
-@kernel
+@kernel(inline="always")
 def _stab2a(P, x, k, pe, dx):
     """STAB2A: -(K_Tw s/(1 + s T_w))^3 on pe (K_Tw = K_2 T_2, T_w = T_2), then
     K_3/(1 + s T_3) + K_4 (columns K1, Tr1, K2), then (K_5/(1 + s T_5))^2 (columns K5 = T5,
