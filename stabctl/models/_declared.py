@@ -90,7 +90,7 @@ def pack(obj, layout, **values) -> np.ndarray:
     obj : object
         The parameter dataclass; ``obj.n`` rows.
     layout : sequence of (str, str)
-        (constant suffix, attribute) per column; an attribute may be dotted (``KP.real``)
+        (column name, attribute) per column; an attribute may be dotted (``KP.real``)
         or name one of ``values``.
     **values : array_like
         Columns not held by ``obj`` (set points such as ``Vref``).

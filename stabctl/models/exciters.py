@@ -12,6 +12,11 @@ below 1e-3 s means the block is absent (no state).  States, named per type in
 STATE_NAMES: smpexc (V_TR, V_As, Efd); exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As,
 V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f); IEEET2 (exc_dc12's and V_F, the second
 feedback lag).  Units: pu on the machine base; times in s.
+
+The kernels read the packed parameters by name (`E`, from :data:`PACKED`), are built of
+the control blocks of `stabctl.models.blocks`, and are one function per type behind the
+family's dispatch on kind (`field_voltage`, `derivatives`, `recorded_efd`); the family
+computes the machine quantities a type needs (ST3 source voltage, EXST1 field current).
 """
 
 from __future__ import annotations
