@@ -373,7 +373,7 @@ def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
     return field_voltage_at(P, x, i, et, pss_out, VB, ifd, ieee)
 
 
-@kernel
+@kernel(inline="always")
 def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """Field voltage of exciter i given its machine's terminal voltage VTR_alg (pu), the
     ST3 source voltage VB (1 for the other types) and the field current ifd (EXST1; 0 for
