@@ -39,7 +39,11 @@ class CompiledOnly(CPUDispatcher):
         trampoline = self.__dict__.get("_from_python")
         if trampoline is None:
             target = self
-            trampoline = self._from_python = numba.njit(lambda *a: target(*a))
+            if self.targetoptions.get("inline", "never") == "never":
+                trampoline = numba.njit(lambda *a: target(*a))
+            else:        # numba inlines no kernel into a call with *args: compile its source
+                trampoline = numba.njit(self.py_func)
+            self._from_python = trampoline
         return trampoline(*args)
 
 

@@ -213,11 +213,7 @@ class DynamicModel:
         S0 = op.S_gen[mp.bus_idx]
         S0 = S0.real * mp.pfrac + 1j * S0.imag * mp.qfrac
         em = ep.mac
-        theta0 = np.angle(op.V[mp.bus_idx])
-        VB0 = np.array([exc.st3_source_voltage(ep.KP[i], ep.KI[i], ep.XL[i], ep.KC[i],
-                                               eterm0[m], theta0[m], S0.real[m], S0.imag[m],
-                                               mp.mac_pot[m], self.vex0[m], True)
-                        for i, m in enumerate(em)])
+        VB0 = exc.initial_source_voltage(ep, mp, op.V[mp.bus_idx], S0, self.vex0)
         xe, self.Vref, self.ep = exc.initialise(ep, self.vex0[em], eterm0[em], VB0)
         ep = self.ep
         L.view(x, "exc")[:] = xe
@@ -320,7 +316,7 @@ class KernelParams(NamedTuple):
     I0: np.ndarray
     Y_low: np.ndarray
     ieee: bool
-    #: limiter reach (s): the run's step in a simulation, 0 elsewhere (`exc._nonwindup`)
+    #: limiter reach (s): the run's step in a simulation, 0 elsewhere (`stabctl.models.blocks.nonwindup`)
     reach: float
     n_mac: int
     n_exc: int
@@ -423,8 +419,6 @@ def kernel_outputs(nm, nb):
 #: Python True/False passed from compiled code is typed as a literal, and numba would
 #: compile `evaluate_kernel` (and its callers) once per value
 BUS_VOLTAGES, NO_BUS_VOLTAGES = np.bool_(True), np.bool_(False)
-#: ``init=False`` of `stabctl.models.exciters.st3_source_voltage`, non-literal likewise
-_RUNNING = np.bool_(False)
 
 
 @njit(cache=True)
@@ -480,43 +474,31 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
             V_bus[p.mac_bus[m]] = R[p.mac_bus[m]] @ z
     pss_out = np.empty(nps)
     for k in range(nps):
-        m = int(p.SP[k, pss_.S_MAC])
-        pe = (psi[m] * np.conj(cur[m])).real * p.MP[m, mac.K_POT]
+        m = int(p.SP[k, pss_.S.MAC])
+        pe = (psi[m] * np.conj(cur[m])).real * p.MP[m, mac.K.POT]
         pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, xm[1, m], pe, dxp)
     vex = p.vex0.copy()
     efd_alg = np.empty(ne)
     pss_exc = np.zeros(ne)
     for i in range(ne):
-        m = int(p.EP[i, exc.E_MAC])
+        m = int(p.EP[i, exc.E.MAC])
         if p.pss_of_exc[i] >= 0:
             pss_exc[i] = pss_out[p.pss_of_exc[i]]
-        ed, eq, cd, cq = mac.stator_without_speed(p.MP, xm, cur, m)
-        et = np.hypot(ed, eq)
-        VB = 1.0
-        kind = p.EP[i, exc.E_KIND]
-        own = kind == exc.ST1 or (kind == exc.ST3 and p.EP[i, exc.E_IFDM] > 0)
-        ifd = mac.field_current(p.MP, xm, cur, m) if own else 0.0
-        if kind == exc.ST3:
-            KP = p.EP[i, exc.E_KPR] + 1j * p.EP[i, exc.E_KPI]
-            fld = ifd if own else mac.st3_field_current(p.MP, xm, cur, m)
-            VB = exc.st3_source_voltage(KP, p.EP[i, exc.E_KI], p.EP[i, exc.E_XL],
-                                        p.EP[i, exc.E_KC], et, np.angle(V_bus[p.mac_bus[m]]),
-                                        eq * cq + ed * cd, eq * cd - ed * cq, p.MP[m, mac.K_POT],
-                                        fld, _RUNNING)
-        efd_alg[i] = exc.field_voltage(p.EP, xe, i, et, pss_exc[i], VB, ifd, p.ieee)
+        efd_alg[i] = exc.field_voltage(p.EP, xe, i, p.MP, xm, cur, V_bus[p.mac_bus[m]],
+                                       pss_exc[i], p.ieee)
         vex[m] = efd_alg[i]
     assign(pmech, p.pmech0)
     for k in range(ng):
-        m = int(p.GP[k, gov.G_MAC])
+        m = int(p.GP[k, gov.G.MAC])
         pmech[m] = gov.pmech(p.GP, xg, k, xm[1, m])
     mac.derivatives(p.MP, p.basrad, xm, cur, vex, pmech, dxm, pelect, qelect, eterm)
     assign(efd, p.vex0)
     for i in range(ne):
-        m = int(p.EP[i, exc.E_MAC])
+        m = int(p.EP[i, exc.E.MAC])
         exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], dxe, p.ieee, p.reach)
         efd[m] = exc.recorded_efd(p.EP, xe, i, efd_alg[i])
     for k in range(ng):
-        gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G_MAC])], dxg)
+        gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G.MAC])], dxg)
     return it
 
 

@@ -3,12 +3,17 @@ declarations of :mod:`stabctl.case.params`.
 
 Each model family (exciters, PSS, governors, machines) lists, once, which declared
 table fields its kernels take as given (``TABLE_FIELDS``) and the layout of its packed
-parameter matrix (``PACKED``: constant suffix and attribute per column).  From these,
-:func:`params_class` gives the parameter dataclass its fields, :func:`columns`
-the kernels' column constants (``E_KA``, ``S_TW``, ...) and :func:`pack` the matrix.
+parameter matrix (``PACKED``: column name and attribute per column).  From these,
+:func:`params_class` gives the parameter dataclass its fields, :func:`layout` the
+kernels' named column indices (``E.KA``, ``S.TW``, ...; each name spelled once, in
+``PACKED``), :func:`check_packed` that every column's attribute exists, and :func:`pack`
+the matrix.
 """
 
 from __future__ import annotations
+
+import dataclasses
+from collections import namedtuple
 
 import numpy as np
 
@@ -33,18 +38,48 @@ def params_class(leading: tuple[str, ...], declared: tuple[str, ...]):
     return lambda cls: array_dataclass(cls, (*leading, *declared))
 
 
-def columns(layout, *suffixes: str) -> tuple[int, ...]:
-    """Column of each named constant suffix in a packed layout of (suffix, attribute)
-    pairs: the kernels' column constants (numba reads module globals as compile-time
-    constants).
+def layout(name: str, packed):
+    """The named column indices of a packed layout: a namedtuple instance whose field
+    ``N`` is the column of the pair (``N``, attribute) in `packed`, e.g. ``E.KA``.  A
+    module-global instance is a compile-time constant to numba (its fields fold into
+    the kernels like literal integers, and the kernels cache).
+
+    Parameters
+    ----------
+    name : str
+        The namedtuple's type name (e.g. ``"ExciterColumns"``).
+    packed : sequence of (str, str)
+        (column name, attribute) per column.
+
+    Returns
+    -------
+    namedtuple
+        Fields: the column names in order, values 0 .. len(packed) - 1.
 
     Raises
     ------
-    KeyError
-        A suffix the layout does not hold.
+    ValueError
+        A column name given twice or not an identifier (namedtuple's own check).
     """
-    index = {suffix: k for k, (suffix, _) in enumerate(layout)}
-    return tuple(index[s] for s in suffixes)
+    names = [column for column, _ in packed]
+    return namedtuple(name, names)(*range(len(names)))
+
+
+def check_packed(cls, packed, values=()) -> None:
+    """Check that every column of a packed layout reads an attribute `cls` has: a field
+    of the dataclass, a property or attribute of the class (the first part of a dotted
+    name such as ``KP.real``), or one of `values` (set points `pack` takes separately).
+
+    Raises
+    ------
+    AttributeError
+        Names the first column whose attribute `cls` does not have.
+    """
+    have = {f.name for f in dataclasses.fields(cls)} | set(dir(cls)) | set(values)
+    for column, attr in packed:
+        if attr.split(".")[0] not in have:
+            raise AttributeError(f"{cls.__name__}: packed column {column} reads "
+                                 f"'{attr}', which it does not have")
 
 
 def pack(obj, layout, **values) -> np.ndarray:
@@ -55,7 +90,7 @@ def pack(obj, layout, **values) -> np.ndarray:
     obj : object
         The parameter dataclass; ``obj.n`` rows.
     layout : sequence of (str, str)
-        (constant suffix, attribute) per column; an attribute may be dotted (``KP.real``)
+        (column name, attribute) per column; an attribute may be dotted (``KP.real``)
         or name one of ``values``.
     **values : array_like
         Columns not held by ``obj`` (set points such as ``Vref``).

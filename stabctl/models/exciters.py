@@ -12,6 +12,11 @@ below 1e-3 s means the block is absent (no state).  States, named per type in
 STATE_NAMES: smpexc (V_TR, V_As, Efd); exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As,
 V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f); IEEET2 (exc_dc12's and V_F, the second
 feedback lag).  Units: pu on the machine base; times in s.
+
+The kernels read the packed parameters by name (`E`, from :data:`PACKED`), are built of
+the control blocks of `stabctl.models.blocks`, and are one function per type behind the
+family's dispatch on kind (`field_voltage`, `derivatives`, `recorded_efd`); the family
+computes the machine quantities a type needs (ST3 source voltage, EXST1 field current).
 """
 
 from __future__ import annotations
@@ -24,10 +29,12 @@ from stabctl._jit.decorators import kernel, njit
 from stabctl.case import Case, beyond
 from stabctl.case.params import EXCITER
 from stabctl.errors import CaseError
-from stabctl.models._declared import columns, pack, params_class
+from stabctl.models import machines as mac
+from stabctl.models._declared import check_packed, layout, pack, params_class
+from stabctl.models.blocks import (GAIN_OVER_T, LBND, clip, lag, leadlag_input_state,
+                                   nonwindup_lag, washout)
 from stabctl.models.saturation import quadratic_fit
 
-LBND = 1e-3
 SMP, DC1, DC2, ST3, ST1, T2 = 0, 1, 2, 3, 4, 5
 STATE_NAMES = {SMP: ("VTR", "VAs", "Efd"), ST3: ("VTR", "VAs", "VR"),
                DC1: ("VTR", "VAs", "VR", "Efd", "Rf"), DC2: ("VTR", "VAs", "VR", "Efd", "Rf"),
@@ -36,24 +43,19 @@ STATE_NAMES = {SMP: ("VTR", "VAs", "Efd"), ST3: ("VTR", "VAs", "VR"),
 #: exc_con fields (stabctl.case.params.EXCITER) the kernels take as the table gives them:
 #: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P))
 TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] if n != "thetaP")
-#: the packed parameter matrix of the compiled kernels, (constant suffix, ExciterParams
+#: the packed parameter matrix of the compiled kernels, (column name, ExciterParams
 #: attribute) per column: exc_con columns 1-20 in declared order (the machine's row for
 #: the machine number, K_P exp(j theta_P) as its real and imaginary parts), then the
-#: derived parameters and V_ref; the constants E_<suffix> are generated from it
+#: derived parameters (IEEET2's T_F2 under its own name) and V_ref
 PACKED = (("KIND", "kind"), ("MAC", "mac"),
           *((n.upper(), n) for n in TABLE_FIELDS[:TABLE_FIELDS.index("KP")]),
           ("KPR", "KP.real"), ("KPI", "KP.imag"),
           *((n.upper(), n) for n in TABLE_FIELDS[TABLE_FIELDS.index("KP") + 1:]),
           ("TCTB", "tc_tb"), ("KE", "KE"), ("TE", "TE"), ("ASAT", "Asat"), ("BSAT", "Bsat"),
-          ("KF", "KF"), ("TF", "TF"), ("VREF", "Vref"), ("SATQ", "sat_quadratic"),
-          ("IFDM", "ifd_machine"))
-(E_KIND, E_MAC, E_TR, E_KA, E_TA, E_TB, E_TC, E_VRMAX, E_VRMIN, E_VIMAX, E_VIMIN, E_KJ,
- E_KPR, E_KPI, E_KI, E_XL, E_KC, E_EFDMAX, E_KG, E_VGMAX, E_TCTB, E_KE, E_TE, E_ASAT,
- E_BSAT, E_KF, E_TF, E_VREF, E_SATQ, E_IFDM) = \
-    columns(PACKED, "KIND", "MAC", "TR", "KA", "TA", "TB", "TC", "VRMAX", "VRMIN", "VIMAX",
-            "VIMIN", "KJ", "KPR", "KPI", "KI", "XL", "KC", "EFDMAX", "KG", "VGMAX", "TCTB",
-            "KE", "TE", "ASAT", "BSAT", "KF", "TF", "VREF", "SATQ", "IFDM")
-E_NCOL = len(PACKED)
+          ("KF", "KF"), ("TF", "TF"), ("TF2", "TF2"), ("VREF", "Vref"),
+          ("SATQ", "sat_quadratic"), ("IFDM", "ifd_machine"))
+#: the kernels' column of each PACKED name: P[i, E.KA]
+E = layout("ExciterColumns", PACKED)
 DC_KINDS = (DC1, DC2, T2)
 
 
@@ -84,7 +86,7 @@ class ExciterParams:
         return self.kind.size
 
     def packed(self, Vref: np.ndarray) -> np.ndarray:
-        """Parameter matrix (n_exc, E_NCOL) for the compiled kernels, with Vref, columns
+        """Parameter matrix (n_exc, len(PACKED)) for the compiled kernels, with Vref, columns
         as :data:`PACKED`."""
         return pack(self, PACKED, Vref=Vref)
 
@@ -108,7 +110,13 @@ class ExciterParams:
     @property
     def has_VF(self):
         """IEEET2 with a second rate-feedback lag (T_F2 >= 1e-3 s, exc_con column 18)."""
-        return (self.kind == T2) & (self.Efdmax >= LBND)
+        return self.TF2 >= LBND
+
+    @property
+    def TF2(self):
+        """IEEET2's second rate-feedback time constant T_F2 (s; exc_con column 18, read
+        as Efdmax by the other types), 0 for the other types."""
+        return np.where(self.kind == T2, self.Efdmax, 0.0)
 
     @property
     def tc_tb(self):
@@ -139,7 +147,10 @@ class ExciterParams:
         return (("exc_con T_R", self.TR, self.has_TR), ("exc_con T_A", self.TA, self.has_TA),
                 ("exc_con T_B", self.TB, self.has_TB), ("exc_con T_E", self.TE, self.is_dc),
                 ("exc_con T_F", self.TF, self.has_Rf),
-                ("exc_con T_F2", self.Efdmax, self.has_VF))
+                ("exc_con T_F2", self.TF2, self.has_VF))
+
+
+check_packed(ExciterParams, PACKED, ("Vref",))
 
 
 def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
@@ -244,13 +255,25 @@ def st3_source_voltage(KP, KI, XL, KC, eterm, theta, pelect, qelect, mac_pot, fl
     return VE * _fex(IN, init)
 
 
+def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):
+    """The ST3 source voltage V_B (`st3_source_voltage`, PST exc_st3 flag 0) of every
+    exciter at the initial point, (n_exc,): V_mac the complex terminal voltages, S_mac the
+    machines' complex generation (system base), vex their field voltages, all (n_mac,);
+    mp the MachineParams."""
+    eterm, theta = np.abs(V_mac), np.angle(V_mac)
+    return np.array([st3_source_voltage(p.KP[i], p.KI[i], p.XL[i], p.KC[i], eterm[m],
+                                        theta[m], S_mac.real[m], S_mac.imag[m],
+                                        mp.mac_pot[m], vex[m], True)
+                     for i, m in enumerate(p.mac)])
+
+
 def initialise(p: ExciterParams, vex, eterm, VB=None):
     """States (n_slots, n_exc), Vref (n_exc,) and the parameters with PSS/E's computed KE
     (DC exciters with KE = 0 get KE = -SE(Efd0), so that V_R starts at 0) from the
     machines' field voltage vex and terminal voltage eterm; VB is the ST3 source voltage
-    (needed for type 3).  Raises CaseError when the initial point violates a limit PST
-    checks (ST3: Efdmax or the V_I range; DC: the V_R limits) by more than
-    `case.START_LIMIT_TOL`."""
+    (`initial_source_voltage`; needed for type 3).  Raises CaseError when the initial
+    point violates a limit PST checks (ST3: Efdmax or the V_I range; DC: the V_R limits)
+    by more than `case.START_LIMIT_TOL`."""
     x = np.zeros((6, p.n))
     x[0] = eterm
     smp, st3, dc = p.kind == SMP, p.kind == ST3, p.is_dc
@@ -313,115 +336,189 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
     return replace(p, KE=KE), VR
 
 
-@kernel
-def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
-    """Field voltage exciter i hands its machine (PST flag 1); VTR_alg: terminal voltage,
-    VB: ST3 source voltage, ifd: machine field current (EXST1); ieee: the IEEE 421.5
-    convention (limited states are read clipped to their limits).
+# -- compiled runtime kernels: P is ExciterParams.packed(), x the exciter block of the
+# -- state vector (n_slots, n_exc), i the exciter; one function per type, dispatched on
+# -- kind by `field_voltage`, `derivatives` and `recorded_efd`
 
-    smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
-    ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error, without
-    limits; exc_dc12: the Efd state; exc_st3: min(V_R V_B, Efdmax) (ieee: V_R clipped);
-    EXST1: V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd]; smpexc bus fed (SCRX,
-    exc_con column 19 = 1): its output times VTR_alg.
+#: ``init=False`` of `st3_source_voltage` as a numpy boolean: a Python False passed from
+#: compiled code is typed as a literal, a second compile of it
+_RUNNING = np.bool_(False)
+
+
+@kernel(inline="always")
+def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
+    """Field voltage exciter i hands its machine (PST flag 1), pu on the machine base:
+    `field_voltage_at` with the machine quantities it needs.
+
+    Parameters
+    ----------
+    P, x, i : the exciters' packed parameters, states (n_slots, n_exc), the exciter.
+    MP, xm, cur : the machines' packed parameters (machines.PACKED), states (6, n_mac)
+        and network currents (n_mac,) complex, system base: the terminal voltage V_t
+        (PST exc_st3's speed-free stator equations, `machines.stator_without_speed`), the
+        ST3 source voltage and the field current (EXST1) come from them.
+    vt : complex
+        The machine's terminal bus voltage (its angle sets the ST3 source phasor).
+    pss_out : float
+        The output of the machine's PSS (0 without).
+    ieee : bool
+        The IEEE 421.5 convention (limited states are read clipped to their limits).
     """
-    kind = P[i, E_KIND]
+    m = int(P[i, E.MAC])
+    ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, m)
+    et = np.hypot(ed, eq)
+    kind = P[i, E.KIND]
+    VB = _st3_source(P, i, MP, xm, cur, m, vt, ed, eq, cd, cq, et) if kind == ST3 else 1.0
+    ifd = mac.field_current(MP, xm, cur, m) if kind == ST1 else 0.0
+    return field_voltage_at(P, x, i, et, pss_out, VB, ifd, ieee)
+
+
+@kernel(inline="always")
+def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
+    """Field voltage of exciter i given its machine's terminal voltage VTR_alg (pu), the
+    ST3 source voltage VB (1 for the other types) and the field current ifd (EXST1; 0 for
+    the others): per type `_smp_field_voltage`, `_st3_field_voltage`,
+    `_st1_field_voltage`, the DC exciters' Efd state."""
+    kind = P[i, E.KIND]
     if kind == ST3:
-        VR = min(max(x[2, i], P[i, E_VRMIN]), P[i, E_VRMAX]) if ieee else x[2, i]
-        return min(VR * VB, P[i, E_EFDMAX])
+        return _st3_field_voltage(P, x, i, VB, ieee)
     if kind == ST1:
-        hi = VTR_alg * P[i, E_VRMAX] - P[i, E_KC] * ifd
-        return min(max(x[2, i], VTR_alg * P[i, E_VRMIN]), hi)
+        return _st1_field_voltage(P, x, i, VTR_alg, ifd)
     if kind == DC1 or kind == DC2 or kind == T2:
         return x[3, i]
-    mult = VTR_alg if P[i, E_KG] == 1 else 1.0
-    if P[i, E_TA] >= LBND:
-        return (min(max(x[2, i], P[i, E_VRMIN]), P[i, E_VRMAX]) if ieee else x[2, i]) * mult
-    VTR = x[0, i] if P[i, E_TR] >= LBND else VTR_alg
-    err = P[i, E_VREF] - VTR + pss_out
-    VA = P[i, E_TCTB] * err + (1 - P[i, E_TCTB]) * x[1, i] if P[i, E_TB] >= LBND else err
-    return P[i, E_KA] * VA * mult
-
-
-@kernel
-def _nonwindup(x, dx, r, i, d, lo, hi, ieee, reach):
-    """Non-windup limited lag: zero an outward derivative beyond a limit (PST exc_st3,
-    exc_dc12; ieee: at or beyond it, IEEE Std 421.5-2016 annex E.5, so that a state held
-    at its limit stays there), then clamp the state.
-
-    reach (s, >= 0; ieee only): a state that its derivative drives into a limit within
-    `reach` is held on it (set to the limit, derivative zero).  For a limit that moves
-    with the terminal voltage (DC2) the run's step is passed: the held state is otherwise
-    left a hair inside the limit after each step, the derivative there is the full
-    (K_A V_A - V_R)/T_A, and the predictor-corrector alternates between it and zero (a
-    false NumericalInstabilityError from its local error estimate).  With reach = 0 it is
-    the plain annex E.5 limiter; as the step shrinks both converge to it."""
-    if ieee:
-        if d > 0 and x[r, i] + reach * d >= hi:
-            x[r, i], d = hi, 0.0
-        elif d < 0 and x[r, i] + reach * d <= lo:
-            x[r, i], d = lo, 0.0
-    elif (x[r, i] > hi and d > 0) or (x[r, i] < lo and d < 0):
-        d = 0.0
-    dx[r, i] = d
-    x[r, i] = min(max(x[r, i], lo), hi)
+    return _smp_field_voltage(P, x, i, VTR_alg, pss_out, ieee)
 
 
 @kernel
 def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee, reach):
     """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
-    reach (s): DC2's V_t-scaled V_R limits hold a state within that reach (`_nonwindup`;
-    the run's step, 0 in the linearisation).
 
-    smpexc: PSTess clamps the Efd state to [Vrmin, Vrmax] after its derivative is computed
-    and keeps the derivative (PST's misspelt dEFD, docs/pst_models.md 2.1); ieee: a
-    non-windup limit as IEEE Std 421.5-2016 (SEXS/ST1A lag), the derivative zeroed while
-    at the limit and driven outward.  exc_st3 and exc_dc12: V_R is clamped and its
-    derivative zeroed when it pushes outward (`_nonwindup`).
+    Every type: the voltage transducer lag T_R on eterm (pu) and the error V_ref - V_TR +
+    pss_out; efd is the field voltage `field_voltage` gave; reach (s): DC2's V_t-scaled
+    V_R limits hold a state within that reach (`blocks.nonwindup`; the run's step, 0 in
+    the linearisation).
     """
     dx[:, i] = 0.0
-    has_TR, has_TB = P[i, E_TR] >= LBND, P[i, E_TB] >= LBND
-    VTR = x[0, i] if has_TR else eterm
-    dx[0, i] = (eterm - x[0, i]) / P[i, E_TR] if has_TR else 0.0
-    kind = P[i, E_KIND]
-    smp, dc, st1 = kind == SMP, kind == DC1 or kind == DC2 or kind == T2, kind == ST1
-    VI = P[i, E_VREF] - VTR + pss_out
-    if dc:
-        VF = P[i, E_KF] / P[i, E_TF] * (x[3, i] - x[4, i])
-        if kind == T2 and P[i, E_EFDMAX] >= LBND:     # IEEET2: second lag T_F2
-            dx[5, i] = (VF - x[5, i]) / P[i, E_EFDMAX]
-            VF = x[5, i]
-        VI -= VF
-    elif st1 and P[i, E_KF] != 0:
-        VI = min(max(VI - P[i, E_KF] / P[i, E_TF] * (efd - x[3, i]), P[i, E_VIMIN]),
-                 P[i, E_VIMAX])
-        dx[3, i] = (efd - x[3, i]) / P[i, E_TF]
-    elif not smp:
-        VI = min(max(VI, P[i, E_VIMIN]), P[i, E_VIMAX])
-    u = P[i, E_KJ] * VI if kind == ST3 else VI
-    dx[1, i] = (u - x[1, i]) / P[i, E_TB] if has_TB else 0.0
-    VA = P[i, E_TCTB] * u + (1 - P[i, E_TCTB]) * x[1, i] if has_TB else u
-    lo, hi = P[i, E_VRMIN], P[i, E_VRMAX]
-    if smp:
-        if P[i, E_TA] >= LBND and ieee:
-            _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo, hi, ieee,
-                       0.0)
-        elif P[i, E_TA] >= LBND:
-            dx[2, i] = (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA]
-            x[2, i] = min(max(x[2, i], lo), hi)
-        else:
-            dx[2, i] = 0.0
-    elif st1:
-        dx[2, i] = (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA]
-    elif dc:
-        mult = eterm if kind == DC2 else 1.0
-        _nonwindup(x, dx, 2, i, (P[i, E_KA] * VA - x[2, i]) / P[i, E_TA], lo * mult, hi * mult,
-                   ieee, reach if kind == DC2 else 0.0)
-        _dc_exciter(P, x, i, dx)
+    VTR, dx[0, i] = lag(eterm, x[0, i], P[i, E.TR])
+    err = P[i, E.VREF] - VTR + pss_out
+    kind = P[i, E.KIND]
+    if kind == SMP:
+        _smp_derivatives(P, x, i, err, dx, ieee)
+    elif kind == ST3:
+        _st3_derivatives(P, x, i, err, efd, dx, ieee)
+    elif kind == ST1:
+        _st1_derivatives(P, x, i, err, efd, dx)
     else:
-        d = (P[i, E_KA] * (VA - min(P[i, E_VGMAX], P[i, E_KG] * efd)) - x[2, i]) / P[i, E_TA]
-        _nonwindup(x, dx, 2, i, d, lo, hi, ieee, 0.0)
+        _dc_derivatives(P, x, i, eterm, err, dx, ieee, reach)
 
+
+@kernel
+def recorded_efd(P, x, i, efd_alg):
+    """Efd as PST records it: the (clamped) smpexc state, the DC Efd state, or the ST3
+    (and bus-fed smpexc) algebraic value efd_alg (`field_voltage`)."""
+    kind = P[i, E.KIND]
+    if kind == DC1 or kind == DC2 or kind == T2:
+        return x[3, i]
+    if kind == SMP and P[i, E.TA] >= LBND and P[i, E.KG] != 1:
+        return x[2, i]
+    return efd_alg
+
+
+# -- smpexc (and SCRX): T_R, lead-lag T_C/T_B, K_A/(1 + s T_A) limited [Vrmin, Vrmax]
+
+@kernel(inline="always")
+def _smp_field_voltage(P, x, i, VTR_alg, pss_out, ieee):
+    """smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
+    ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error, without
+    limits; bus fed (SCRX, exc_con column 19 = 1): times the terminal voltage VTR_alg."""
+    mult = VTR_alg if P[i, E.KG] == 1 else 1.0
+    if P[i, E.TA] >= LBND:
+        return (clip(x[2, i], P[i, E.VRMIN], P[i, E.VRMAX]) if ieee else x[2, i]) * mult
+    VTR = lag(VTR_alg, x[0, i], P[i, E.TR])[0]
+    err = P[i, E.VREF] - VTR + pss_out
+    VA = leadlag_input_state(err, x[1, i], P[i, E.TCTB], P[i, E.TB])[0]
+    return P[i, E.KA] * VA * mult
+
+
+@kernel(inline="always")
+def _smp_derivatives(P, x, i, err, dx, ieee):
+    """smpexc: PSTess clamps the Efd state to [Vrmin, Vrmax] after its derivative is
+    computed and keeps the derivative (a windup clamp; PST's misspelt dEFD,
+    docs/pst_models.md 2.1); ieee: a non-windup limit as IEEE Std 421.5-2016 (SEXS/ST1A
+    lag).  No T_A: no state (the output is algebraic)."""
+    VA, dx[1, i] = leadlag_input_state(err, x[1, i], P[i, E.TCTB], P[i, E.TB])
+    if P[i, E.TA] < LBND:
+        return
+    lo, hi = P[i, E.VRMIN], P[i, E.VRMAX]
+    if ieee:
+        x[2, i], dx[2, i] = nonwindup_lag(P[i, E.KA] * VA, x[2, i], P[i, E.TA], lo, hi,
+                                          ieee, 0.0)
+    else:
+        dx[2, i] = lag(P[i, E.KA] * VA, x[2, i], P[i, E.TA])[1]
+        x[2, i] = clip(x[2, i], lo, hi)
+
+
+# -- exc_st3: V_I limited, K_J, lead-lag, non-windup K_A/(1 + s T_A) with the inner loop
+# -- feedback min(V_Gmax, K_G Efd); output min(V_R V_B, Efdmax)
+
+@kernel(inline="always")
+def _st3_source(P, i, MP, xm, cur, m, vt, ed, eq, cd, cq, et):
+    """exc_st3's source voltage V_B (`st3_source_voltage`, PST exc_st3 flag 1) from the
+    stator quantities ed, eq, cd, cq of machine m (`machines.stator_without_speed`), its
+    terminal voltage et and bus voltage vt, and the field current: exc_st3's own
+    estimate (`machines.st3_field_current`) or, with ifd_machine, the machine's."""
+    if P[i, E.IFDM] > 0:
+        fld = mac.field_current(MP, xm, cur, m)
+    else:
+        fld = mac.st3_field_current(MP, xm, cur, m)
+    KP = P[i, E.KPR] + 1j * P[i, E.KPI]
+    return st3_source_voltage(KP, P[i, E.KI], P[i, E.XL], P[i, E.KC], et, np.angle(vt),
+                              eq * cq + ed * cd, eq * cd - ed * cq, MP[m, mac.K.POT], fld,
+                              _RUNNING)
+
+
+@kernel(inline="always")
+def _st3_field_voltage(P, x, i, VB, ieee):
+    """exc_st3: min(V_R V_B, Efdmax) (ieee: V_R clipped to [Vrmin, Vrmax])."""
+    VR = clip(x[2, i], P[i, E.VRMIN], P[i, E.VRMAX]) if ieee else x[2, i]
+    return min(VR * VB, P[i, E.EFDMAX])
+
+
+@kernel(inline="always")
+def _st3_derivatives(P, x, i, err, efd, dx, ieee):
+    """exc_st3: V_R clamped and its derivative zeroed when it pushes outward
+    (`blocks.nonwindup`)."""
+    u = P[i, E.KJ] * clip(err, P[i, E.VIMIN], P[i, E.VIMAX])
+    VA, dx[1, i] = leadlag_input_state(u, x[1, i], P[i, E.TCTB], P[i, E.TB])
+    x[2, i], dx[2, i] = nonwindup_lag(
+        P[i, E.KA] * (VA - min(P[i, E.VGMAX], P[i, E.KG] * efd)), x[2, i], P[i, E.TA],
+        P[i, E.VRMIN], P[i, E.VRMAX], ieee, 0.0)
+
+
+# -- EXST1: rate feedback s K_F/(1 + s T_F) on Efd, V_I limited, lead-lag, K_A/(1 + s T_A);
+# -- output limited to [V_t Vrmin, V_t Vrmax - K_C I_fd]
+
+@kernel(inline="always")
+def _st1_field_voltage(P, x, i, VTR_alg, ifd):
+    """EXST1: V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd] (ifd the machine's field
+    current)."""
+    return clip(x[2, i], VTR_alg * P[i, E.VRMIN], VTR_alg * P[i, E.VRMAX] - P[i, E.KC] * ifd)
+
+
+@kernel(inline="always")
+def _st1_derivatives(P, x, i, err, efd, dx):
+    """EXST1 (PSS/E; docs/pst_models.md 2.4): the rate feedback (state R_f, only with
+    K_F != 0) subtracted before the V_I limits."""
+    if P[i, E.KF] != 0:
+        VF, dx[3, i] = washout(efd, x[3, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
+        err = err - VF
+    VA, dx[1, i] = leadlag_input_state(clip(err, P[i, E.VIMIN], P[i, E.VIMAX]), x[1, i],
+                                       P[i, E.TCTB], P[i, E.TB])
+    dx[2, i] = lag(P[i, E.KA] * VA, x[2, i], P[i, E.TA])[1]
+
+
+# -- exc_dc12 (DC1, DC2) and IEEET2: rate feedback, lead-lag, non-windup K_A/(1 + s T_A)
+# -- (DC2: limits times V_t), the exciter field T_E
 
 @njit
 def dc_feedback(KE, Asat, Bsat, quadratic, Efd):
@@ -433,24 +530,20 @@ def dc_feedback(KE, Asat, Bsat, quadratic, Efd):
     return (KE + SE) * Efd
 
 
-@kernel
-def _dc_exciter(P, x, i, dx):
-    """DC exciter field and rate feedback (PST exc_dc12 flag 2):
-    T_E dEfd/dt = V_R - V_FE(Efd) (`dc_feedback`);
-    T_F dR_f/dt = Efd - R_f (the feedback K_F/T_F (Efd - R_f) = s K_F/(1 + s T_F) Efd)."""
-    Efd = x[3, i]
-    dx[3, i] = (x[2, i] - dc_feedback(P[i, E_KE], P[i, E_ASAT], P[i, E_BSAT], P[i, E_SATQ],
-                                      Efd)) / P[i, E_TE]
-    dx[4, i] = (Efd - x[4, i]) / P[i, E_TF]
-
-
-@kernel
-def recorded_efd(P, x, i, efd_alg):
-    """Efd as PST records it: the (clamped) smpexc state, the DC Efd state, or the ST3
-    (and bus-fed smpexc) algebraic value."""
-    kind = P[i, E_KIND]
-    if kind == DC1 or kind == DC2 or kind == T2:
-        return x[3, i]
-    if kind == SMP and P[i, E_TA] >= LBND and P[i, E_KG] != 1:
-        return x[2, i]
-    return efd_alg
+@kernel(inline="always")
+def _dc_derivatives(P, x, i, eterm, err, dx, ieee, reach):
+    """exc_dc12 flag 2 and IEEET2: the rate feedback K_F/T_F (Efd - R_f) = s K_F/(1 + s
+    T_F) Efd (IEEET2: then the lag 1/(1 + s T_F2), state V_F), subtracted from the error;
+    V_R non-windup (DC2: limits times eterm, held within `reach`);
+    T_E dEfd/dt = V_R - V_FE(Efd) (`dc_feedback`)."""
+    kind = P[i, E.KIND]
+    VF, dx[4, i] = washout(x[3, i], x[4, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
+    if kind == T2:
+        VF, dx[5, i] = lag(VF, x[5, i], P[i, E.TF2])
+    VA, dx[1, i] = leadlag_input_state(err - VF, x[1, i], P[i, E.TCTB], P[i, E.TB])
+    mult = eterm if kind == DC2 else 1.0
+    x[2, i], dx[2, i] = nonwindup_lag(P[i, E.KA] * VA, x[2, i], P[i, E.TA],
+                                      P[i, E.VRMIN] * mult, P[i, E.VRMAX] * mult, ieee,
+                                      reach if kind == DC2 else 0.0)
+    dx[3, i] = (x[2, i] - dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ],
+                                      x[3, i])) / P[i, E.TE]

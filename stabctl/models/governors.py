@@ -31,9 +31,9 @@ from stabctl._jit.decorators import kernel
 from stabctl.case import Case, beyond
 from stabctl.case.params import GOVERNOR
 from stabctl.errors import CaseError
-from stabctl.models._declared import columns, pack, params_class
+from stabctl.models._declared import check_packed, layout, pack, params_class
+from stabctl.models.blocks import LBND, clip, lag, leadlag, nonwindup, nonwindup_lag
 
-LBND = 1e-3
 TG, TGOV1, IEEEG1, HYGOV, IEESGO = 1, 2, 3, 4, 5
 N_STATES = 6
 STATE_NAMES = {TG: ("servo", "transient", "turbine"),
@@ -46,17 +46,13 @@ HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel")
 #: tg_con fields (stabctl.case.params.GOVERNOR) the kernels take as given: columns 3-16
 #: (the IEEEG1 fractions K1..K8 enter summed per shaft stage, K)
 TABLE_FIELDS = GOVERNOR.names[2:16]
-#: packed parameter matrix of the kernels, (constant suffix, GovernorParams attribute) per
-#: column: tg_con columns 1-16 in declared order, K's four columns, P_ref; constants G_<suffix>
+#: packed parameter matrix of the kernels, (column name, GovernorParams attribute) per
+#: column: tg_con columns 1-16 in declared order, K's four columns, P_ref, HYGOV's fields
 PACKED = (("KIND", "kind"), ("MAC", "mac"), *((n.upper(), n) for n in TABLE_FIELDS),
           *((f"K{s}", f"K_{i}") for i, s in enumerate("ABCD")), ("PREF", "Pref"),
           *((n.upper(), n) for n in HYGOV_FIELDS))
-(G_KIND, G_MAC, G_WF, G_INVR, G_TMAX, G_TS, G_TC, G_T3, G_T4, G_T5, G_TMIN, G_DT, G_T6,
- G_T7, G_UO, G_UC, G_KA, G_KB, G_KC, G_KD, G_PREF, G_RP, G_RT, G_QNL, G_KG, G_VELM_REL) = \
-    columns(PACKED, "KIND", "MAC", "WF", "INVR", "TMAX", "TS", "TC", "T3", "T4", "T5",
-            "TMIN", "DT", "T6", "T7", "UO", "UC", "KA", "KB", "KC", "KD", "PREF", "RP", "RT",
-            "QNL", "KG", "VELM_REL")
-G_NCOL = len(PACKED)
+#: the kernels' column of each PACKED name: P[k, G.TS]
+G = layout("GovernorColumns", PACKED)
 
 
 @params_class(("kind", "mac"), TABLE_FIELDS)
@@ -79,7 +75,7 @@ class GovernorParams:
         return self.mac.size
 
     def packed(self, Pref: np.ndarray) -> np.ndarray:
-        """Parameter matrix (n_tg, G_NCOL) for the compiled kernels, with P_ref, columns
+        """Parameter matrix (n_tg, len(PACKED)) for the compiled kernels, with P_ref, columns
         as :data:`PACKED`."""
         return pack(self, PACKED, Pref=Pref, **{f"K_{i}": self.K[:, i] for i in range(4)})
 
@@ -117,20 +113,27 @@ class GovernorParams:
                 ("tg_con T_6", self.T6, lag["T6"]), ("tg_con T_7", self.T7, lag["T7"] & g1))
 
 
+check_packed(GovernorParams, PACKED, ("Pref", *(f"K_{i}" for i in range(4))))
+
+
 def governor_params(case: Case) -> GovernorParams:
     """Governor parameters.
 
-    Raises CaseError (tg_con row, field) for a zero time constant or gain the model
-    divides by (tg: Ts, Tc, T5; TGOV1: T1 = Ts, T3 = Tc; IEEEG1: T3 = Ts; HYGOV: T_g = Ts,
-    T_f = Tc, T_w = T4, r = K2) or an IEEEG1 without power fractions."""
+    Raises CaseError (tg_con row, field) for a time constant the model needs below 1e-3 s
+    (tg: Ts, Tc, T5; TGOV1: T1 = Ts, T3 = Tc; IEEEG1: T3 = Ts; HYGOV: T_g = Ts, T_f = Tc,
+    T_w = T4: a lag below it would be absent, `blocks.LBND`), a zero HYGOV r = K2, or an
+    IEEEG1 without power fractions."""
     g = case.governors
     need = {TG: ("Ts", "Tc", "T5"), TGOV1: ("Ts", "Tc"), IEEEG1: ("Ts",),
-            HYGOV: ("Ts", "Tc", "T4", "K2"), IEESGO: ()}
+            HYGOV: ("Ts", "Tc", "T4"), IEESGO: ()}
     for r in range(len(g)):
         for name in need[int(g.type[r])]:
-            if getattr(g, name)[r] == 0:
-                raise CaseError(f"tg_con row {r + 1}, field '{name}': must be non-zero for "
+            if getattr(g, name)[r] < LBND:
+                raise CaseError(f"tg_con row {r + 1}, field '{name}': must be >= {LBND} s for "
                                 f"governor type {int(g.type[r])}")
+        if g.type[r] == HYGOV and g.K2[r] == 0:
+            raise CaseError(f"tg_con row {r + 1}, field 'K2': must be non-zero for governor "
+                            f"type {HYGOV}")
     K = np.column_stack([g.K1 + g.K2, g.K3 + g.K4, g.K5 + g.K6, g.K7 + g.K8]).reshape(len(g), 4)
     bad = np.nonzero((g.type == IEEEG1) & (K.sum(axis=1) <= 0))[0]
     if bad.size:
@@ -173,128 +176,155 @@ def initialise(p: GovernorParams, pmech0):
     return x, np.where(hy, p.Rp * gate, gate)
 
 
-@kernel
-def _ieeeg1_lags(P, x, k):
-    """Outputs of the IEEEG1 lags T4..T7 (a lag below 1e-3 s passes its input)."""
-    y = np.empty(4)
-    u = x[1, k]
-    for r in range(4):
-        T = P[k, (G_T4, G_T5, G_T6, G_T7)[r]]
-        y[r] = x[2 + r, k] if T >= LBND else u
-        u = y[r]
-    return y
+# -- compiled runtime kernels: P is GovernorParams.packed(), x the governor block of the
+# -- state vector (n_slots, n_tg), k the governor; one function per type, dispatched on
+# -- kind by `pmech` and `derivatives`
+
+#: the governors' non-windup rule (`blocks.nonwindup`): at or beyond a limit, always, as
+#: a numpy boolean (a Python True from compiled code is typed as a literal, a second
+#: compile of the block)
+_AT_LIMIT = np.bool_(True)
 
 
 @kernel
 def pmech(P, x, k, omega):
     """Mechanical power of governor k (machine base) at machine speed omega (pu), flag 1."""
-    kind = P[k, G_KIND]
-    if kind == IEEEG1 or kind == IEESGO:
-        y = _ieeeg1_lags(P, x, k) if kind == IEEEG1 else _ieesgo_lags(P, x, k, omega)
-        return (P[k, G_KA] * y[0] + P[k, G_KB] * y[1] + P[k, G_KC] * y[2]
-                + P[k, G_KD] * y[3])
-    if kind == HYGOV:
-        g, q = x[2, k], x[3, k]
-        h = (q / g) ** 2 if g > 0 else 0.0
-        return P[k, G_T5] * h * (q - P[k, G_QNL]) - P[k, G_DT] * (omega - 1.0) * g
-    y2 = x[1, k] + P[k, G_T3] / P[k, G_TC] * x[0, k]
+    kind = P[k, G.KIND]
+    if kind == TG:
+        return _tg_pmech(P, x, k)
     if kind == TGOV1:
-        return y2 - P[k, G_DT] * (omega - 1.0)
-    return x[2, k] + P[k, G_T4] / P[k, G_T5] * y2
-
-
-@kernel
-def _nonwindup(x, dx, r, k, d, lo, hi):
-    """Non-windup limited integrator/lag: clamp the state, zero an outward derivative."""
-    if (x[r, k] >= hi and d > 0) or (x[r, k] <= lo and d < 0):
-        d = 0.0
-    dx[r, k] = d
-    x[r, k] = min(max(x[r, k], lo), hi)
+        return _tgov1_pmech(P, x, k, omega)
+    if kind == IEEEG1:
+        return _fractions(P, k, _ieeeg1_lags(P, x, k))
+    if kind == HYGOV:
+        return _hygov_pmech(P, x, k, omega)
+    return _fractions(P, k, _ieesgo_lags(P, x, k, omega))
 
 
 @kernel
 def derivatives(P, x, k, omega, dx):
     """Derivatives of governor k into dx[:, k] for its machine speed omega (pu), flag 2;
-    clamps the limited TGOV1 valve and IEEEG1 gate states in x."""
-    kind = P[k, G_KIND]
+    clamps the limited TGOV1 valve, IEEEG1 and HYGOV gate states in x."""
+    kind = P[k, G.KIND]
     dx[:, k] = 0.0
-    if kind == IEEEG1:
+    if kind == TG or kind == TGOV1:
+        _tg_derivatives(P, x, k, omega, dx)
+    elif kind == IEEEG1:
         _ieeeg1_derivatives(P, x, k, omega, dx)
-        return
-    if kind == HYGOV:
+    elif kind == HYGOV:
         _hygov_derivatives(P, x, k, omega, dx)
-        return
-    if kind == IEESGO:
-        _ieesgo_lags(P, x, k, omega, dx)
-        return
-    order = P[k, G_PREF] + (P[k, G_WF] - omega) * P[k, G_INVR]
-    lo, hi = P[k, G_TMIN], P[k, G_TMAX]
-    r3 = P[k, G_T3] / P[k, G_TC]
-    if kind == TGOV1:
-        _nonwindup(x, dx, np.int64(0), k, (order - x[0, k]) / P[k, G_TS], lo, hi)
     else:
-        dx[0, k] = (min(max(order, lo), hi) - x[0, k]) / P[k, G_TS]
-    dx[1, k] = ((1 - r3) * x[0, k] - x[1, k]) / P[k, G_TC]
-    if kind == TG:
-        y2 = x[1, k] + r3 * x[0, k]
-        dx[2, k] = ((1 - P[k, G_T4] / P[k, G_T5]) * y2 - x[2, k]) / P[k, G_T5]
+        _ieesgo_lags(P, x, k, omega, dx)
 
 
-@kernel
-def _ieeeg1_derivatives(P, x, k, omega, dx):
-    """IEEEG1: lead-lag on K (omega - 1), rate- and position-limited gate, lags T4..T7."""
-    u = P[k, G_INVR] * (omega - 1.0)
-    if P[k, G_TC] >= LBND:
-        r = P[k, G_T3] / P[k, G_TC]
-        dx[0, k] = ((1 - r) * u - x[0, k]) / P[k, G_TC]
-        u = x[0, k] + r * u
-    rate = min(max((P[k, G_PREF] - u - x[1, k]) / P[k, G_TS], P[k, G_UC]), P[k, G_UO])
-    _nonwindup(x, dx, np.int64(1), k, rate, P[k, G_TMIN], P[k, G_TMAX])
-    y = _ieeeg1_lags(P, x, k)
-    inp = x[1, k]
+@kernel(inline="always")
+def _fractions(P, k, y):
+    """The IEEEG1/IEESGO shaft power: the lag outputs y (4,) times their fractions."""
+    return P[k, G.KA] * y[0] + P[k, G.KB] * y[1] + P[k, G.KC] * y[2] + P[k, G.KD] * y[3]
+
+
+# -- tg (PST tg.m) and TGOV1: power order, servo (tg: input limited; TGOV1: non-windup
+# -- valve), lead-lag T_3/T_c; tg: then the lead-lag T_4/T_5; TGOV1: minus D_t (omega - 1)
+
+@kernel(inline="always")
+def _tg_pmech(P, x, k):
+    """tg: (1 + s T_4)/(1 + s T_5) of the output of (1 + s T_3)/(1 + s T_c)."""
+    y2 = leadlag(x[0, k], x[1, k], P[k, G.T3], P[k, G.TC])[0]
+    return leadlag(y2, x[2, k], P[k, G.T4], P[k, G.T5])[0]
+
+
+@kernel(inline="always")
+def _tgov1_pmech(P, x, k, omega):
+    """TGOV1: the lead-lag (1 + s T_2)/(1 + s T_3) output minus D_t (omega - 1)."""
+    return leadlag(x[0, k], x[1, k], P[k, G.T3], P[k, G.TC])[0] - P[k, G.DT] * (omega - 1.0)
+
+
+@kernel(inline="always")
+def _tg_derivatives(P, x, k, omega, dx):
+    """tg and TGOV1: the order P_ref + (w_f - omega)/R through the servo 1/(1 + s T_s)
+    (tg: order clipped to [Tmin, Tmax]; TGOV1: non-windup valve), then the lead-lags."""
+    order = P[k, G.PREF] + (P[k, G.WF] - omega) * P[k, G.INVR]
+    lo, hi = P[k, G.TMIN], P[k, G.TMAX]
+    if P[k, G.KIND] == TGOV1:
+        x[0, k], dx[0, k] = nonwindup_lag(order, x[0, k], P[k, G.TS], lo, hi, _AT_LIMIT, 0.0)
+    else:
+        dx[0, k] = lag(clip(order, lo, hi), x[0, k], P[k, G.TS])[1]
+    y2, dx[1, k] = leadlag(x[0, k], x[1, k], P[k, G.T3], P[k, G.TC])
+    if P[k, G.KIND] == TG:
+        dx[2, k] = leadlag(y2, x[2, k], P[k, G.T4], P[k, G.T5])[1]
+
+
+# -- IEEEG1: lead-lag on K (omega - 1), rate- and position-limited gate, lags T4..T7
+
+@kernel(inline="always")
+def _ieeeg1_lags(P, x, k, dx=None):
+    """Outputs (4,) of the IEEEG1 lags T4..T7 in series on the gate (a lag below 1e-3 s
+    passes its input) and, given dx, their derivatives."""
+    y = np.empty(4)
+    u = x[1, k]
     for r in range(4):
-        T = P[k, (G_T4, G_T5, G_T6, G_T7)[r]]
-        dx[2 + r, k] = (inp - x[2 + r, k]) / T if T >= LBND else 0.0
-        inp = y[r]
+        u, d = lag(u, x[2 + r, k], P[k, (G.T4, G.T5, G.T6, G.T7)[r]])
+        if dx is not None:
+            dx[2 + r, k] = d
+        y[r] = u
+    return y
 
+
+@kernel(inline="always")
+def _ieeeg1_derivatives(P, x, k, omega, dx):
+    """IEEEG1: K (1 + s T_2)/(1 + s T_1) on the speed deviation, the gate's rate
+    (P_ref - that - gate)/T_3 limited to [Uc, Uo], position [PMIN, PMAX] non-windup."""
+    u, dx[0, k] = leadlag(P[k, G.INVR] * (omega - 1.0), x[0, k], P[k, G.T3], P[k, G.TC])
+    rate = clip((P[k, G.PREF] - u - x[1, k]) / P[k, G.TS], P[k, G.UC], P[k, G.UO])
+    x[1, k], dx[1, k] = nonwindup(x[1, k], rate, P[k, G.TMIN], P[k, G.TMAX], _AT_LIMIT, 0.0)
+    _ieeeg1_lags(P, x, k, dx)
+
+
+# -- HYGOV (machine base): filter, gate integrator, gate servo, water column
 
 @kernel
+def _head(q, g):
+    """HYGOV's head at the turbine, (q/g)^2 (0 with the gate closed)."""
+    return (q / g) ** 2 if g > 0 else 0.0
+
+
+@kernel(inline="always")
+def _hygov_pmech(P, x, k, omega):
+    """HYGOV: A_t h (q - q_NL) - D_turb (omega - 1) g."""
+    g, q = x[2, k], x[3, k]
+    return P[k, G.T5] * _head(q, g) * (q - P[k, G.QNL]) - P[k, G.DT] * (omega - 1.0) * g
+
+
+@kernel(inline="always")
 def _hygov_derivatives(P, x, k, omega, dx):
     """HYGOV: filter, rate- and position-limited gate integrator, gate servo, water column
     (module docstring; ANDES ``hygov.py``)."""
     e = x[0, k]
-    c = x[1, k] + e / P[k, G_RT]
-    dx[0, k] = (P[k, G_PREF] - (omega - 1.0) - P[k, G_RP] * c - e) / P[k, G_TC]
-    shift = P[k, G_VELM_REL] * e / P[k, G_RT]
-    rate = min(max(P[k, G_KG] * e, P[k, G_UC] - shift), P[k, G_UO] - shift)
-    _nonwindup(x, dx, np.int64(1), k, rate, P[k, G_TMIN], P[k, G_TMAX])
-    dx[2, k] = (c - x[2, k]) / P[k, G_TS]
-    g = x[2, k]
-    h = (x[3, k] / g) ** 2 if g > 0 else 0.0
-    dx[3, k] = (1.0 - h) / P[k, G_T4]
+    c = x[1, k] + e / P[k, G.RT]
+    dx[0, k] = lag(P[k, G.PREF] - (omega - 1.0) - P[k, G.RP] * c, e, P[k, G.TC])[1]
+    shift = P[k, G.VELM_REL] * e / P[k, G.RT]
+    rate = clip(P[k, G.KG] * e, P[k, G.UC] - shift, P[k, G.UO] - shift)
+    x[1, k], dx[1, k] = nonwindup(x[1, k], rate, P[k, G.TMIN], P[k, G.TMAX], _AT_LIMIT, 0.0)
+    dx[2, k] = lag(c, x[2, k], P[k, G.TS])[1]
+    dx[3, k] = (1.0 - _head(x[3, k], x[2, k])) / P[k, G.T4]
 
 
-@kernel
+# -- IEESGO: K_1 (omega - 1) through 1/(1 + s T_1), (1 + s T_2)/(1 + s T_3); the order
+# -- limited to [PMIN, PMAX] through the lags T_4, T_5, T_6
+
+@kernel(inline="always")
 def _ieesgo_lags(P, x, k, omega, dx=None):
-    """IEESGO: outputs of the lags T4, T5, T6 (module docstring; a time constant below
+    """IEESGO: outputs (4,) of the lags T4, T5, T6 (the fourth 0; a time constant below
     1e-3 s passes its input) and, given dx, the derivatives of its five states."""
-    u = P[k, G_INVR] * (omega - 1.0)
-    if P[k, G_TC] >= LBND:
-        if dx is not None:
-            dx[0, k] = (u - x[0, k]) / P[k, G_TC]
-        u = x[0, k]
-    if P[k, G_TS] >= LBND:
-        r = P[k, G_T3] / P[k, G_TS]
-        if dx is not None:
-            dx[1, k] = ((1 - r) * u - x[1, k]) / P[k, G_TS]
-        u = x[1, k] + r * u
-    u = min(max(P[k, G_PREF] - u, P[k, G_TMIN]), P[k, G_TMAX])
+    u, d0 = lag(P[k, G.INVR] * (omega - 1.0), x[0, k], P[k, G.TC])
+    u, d1 = leadlag(u, x[1, k], P[k, G.T3], P[k, G.TS])
+    if dx is not None:
+        dx[0, k], dx[1, k] = d0, d1
+    u = clip(P[k, G.PREF] - u, P[k, G.TMIN], P[k, G.TMAX])
     y = np.zeros(4)
     for r in range(3):
-        T = P[k, (G_T4, G_T5, G_T6)[r]]
-        if T >= LBND:
-            if dx is not None:
-                dx[2 + r, k] = (u - x[2 + r, k]) / T
-            u = x[2 + r, k]
+        u, d = lag(u, x[2 + r, k], P[k, (G.T4, G.T5, G.T6)[r]])
+        if dx is not None:
+            dx[2 + r, k] = d
         y[r] = u
     return y

@@ -19,7 +19,7 @@ from stabctl._jit.decorators import kernel
 
 from stabctl.case import Case
 from stabctl.case.params import MACHINE
-from stabctl.models._declared import columns, pack, params_class
+from stabctl.models._declared import check_packed, layout, pack, params_class
 from stabctl.models.saturation import quadratic_fit
 
 SUB, TRA, EM = 2, 1, 0
@@ -28,23 +28,17 @@ STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
 #: mac_con fields (stabctl.case.params.MACHINE) of MachineParams: columns 4-17 (xl .. D0,
 #: after PST's substitutions) and the generation fractions pfrac, qfrac (22, 23)
 TABLE_FIELDS = (*MACHINE.names[MACHINE.col("xl") - 1:MACHINE.col("D0")], "pfrac", "qfrac")
-#: packed parameter matrix of the kernels, (constant suffix, MachineParams attribute) per
+#: packed parameter matrix of the kernels, (column name, MachineParams attribute) per
 #: column: kind, mac_pot, mac_con columns 4-17 in declared order, PST's derived constants
 #: (mac_pot columns 6-15), saturation, initial E'q, speed effects, the air-gap saturation
-#: A, B and gamma_qd of PSS/E's GENROU; constants K_<suffix>
+#: A, B and gamma_qd of PSS/E's GENROU
 PACKED = (("KIND", "kind"), ("POT", "mac_pot"),
           *((n.upper(), n) for n in TABLE_FIELDS[:-2]),
           *((f"P{k}", f"p{k}") for k in range(6, 16)),
           ("SA", "sat_a"), ("SB", "sat_b"), ("SC", "sat_c"), ("EQP0", "eqp0"),
           ("SPEED", "speed_effects"), ("GA", "gap_a"), ("GB", "gap_b"), ("GQD", "gqd"))
-(K_KIND, K_POT, K_XL, K_RA, K_XD, K_XDP, K_XDPP, K_TDOP, K_TDOPP, K_XQ, K_XQP, K_XQPP,
- K_TQOP, K_TQOPP, K_H, K_D0, K_P6, K_P7, K_P8, K_P9, K_P10, K_P11, K_P12, K_P13, K_P14,
- K_P15, K_SA, K_SB, K_SC, K_EQP0, K_SPEED, K_GA, K_GB, K_GQD) = \
-    columns(PACKED, "KIND", "POT", "XL", "RA", "XD", "XDP", "XDPP", "TDOP", "TDOPP", "XQ",
-            "XQP", "XQPP", "TQOP", "TQOPP", "H", "D0", "P6", "P7", "P8", "P9", "P10",
-            "P11", "P12", "P13", "P14", "P15", "SA", "SB", "SC", "EQP0", "SPEED", "GA",
-            "GB", "GQD")
-K_NCOL = len(PACKED)
+#: the kernels' column of each PACKED name: P[i, K.XDP]
+K = layout("MachineColumns", PACKED)
 
 
 @params_class(("kind", "bus_idx", "mac_pot"), TABLE_FIELDS)
@@ -70,7 +64,7 @@ class MachineParams:
         return self.kind.size
 
     def packed(self, eqp0: np.ndarray) -> np.ndarray:
-        """Parameter matrix (n_mac, K_NCOL) for the compiled kernels; eqp0 = initial E'q."""
+        """Parameter matrix (n_mac, len(PACKED)) for the compiled kernels; eqp0 = initial E'q."""
         with np.errstate(divide="ignore", invalid="ignore"):   # mac_em: 0/0 constants unused
             return self._packed(eqp0)
 
@@ -186,6 +180,9 @@ def machine_params(case: Case) -> MachineParams:
             "mac_con row {row}: GENROU saturation points (1.0, S(1.0)), (1.2, S(1.2))")))
 
 
+check_packed(MachineParams, PACKED, ("eqp0", "gap_a", "gap_b", "sat_a", "sat_b", "sat_c"))
+
+
 def saturation_coefficients(S10: np.ndarray, S12: np.ndarray) -> np.ndarray:
     """Quadratic E_sat(e) = a e^2 + b e + c through (0.8, 0.8), (1, 1 + S10),
     (1.2, 1.2 (1 + S12)) (PST `mac_sub`/`mac_tra` flag 0); shape (n, 3)."""
@@ -260,8 +257,8 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
 @kernel
 def _fluxes(P, x, i):
     """psi"_d, psi"_q of machine i (subtransient model)."""
-    return (P[i, K_P9] * x[2, i] + P[i, K_P10] * x[3, i],
-            P[i, K_P14] * x[4, i] + P[i, K_P15] * x[5, i])
+    return (P[i, K.P9] * x[2, i] + P[i, K.P10] * x[3, i],
+            P[i, K.P14] * x[4, i] + P[i, K.P15] * x[5, i])
 
 
 @kernel
@@ -275,7 +272,7 @@ def _dq(delta, X):
 def _stator_speed(P, x, i):
     """Speed in the subtransient stator voltage and torque: omega with speed effects (PST
     mac_sub), 1 without (ANDES GENROU)."""
-    return x[1, i] if P[i, K_SPEED] > 0 else 1.0
+    return x[1, i] if P[i, K.SPEED] > 0 else 1.0
 
 
 @kernel
@@ -287,7 +284,7 @@ def internal_voltage(P, x, psi):
     """
     for i in range(P.shape[0]):
         e = np.exp(1j * x[0, i])
-        if P[i, K_KIND] == SUB:
+        if P[i, K.KIND] == SUB:
             psidpp, psiqpp = _fluxes(P, x, i)
             psi[i] = _stator_speed(P, x, i) * e * (psidpp + 1j * psiqpp)
         else:
@@ -298,10 +295,10 @@ def internal_voltage(P, x, psi):
 def _gap_saturation(P, i, psidpp, psiqpp):
     """S_e(|psi"|) = B (|psi"| - A)^2 / |psi"| of machine i, PSS/E's GENROU saturation of
     the air-gap flux (ANDES ``genrou.py`` ``Se``; 0 for |psi"| <= A and without it)."""
-    if P[i, K_GB] == 0.0:
+    if P[i, K.GB] == 0.0:
         return 0.0
     psi = np.hypot(psidpp, psiqpp)
-    return P[i, K_GB] * (psi - P[i, K_GA]) ** 2 / psi if psi > P[i, K_GA] else 0.0
+    return P[i, K.GB] * (psi - P[i, K.GA]) ** 2 / psi if psi > P[i, K.GA] else 0.0
 
 
 @kernel
@@ -311,22 +308,22 @@ def _field_current(P, x, i, cdg):
     (no saturation, docs 1.6) + S_e psi"_d with PSS/E's GENROU saturation (ANDES
     ``genrou.py`` ``XadIfd``); transient E_Isat(E'q) + (x_d - x'_d) i_d (docs 1.8, with
     PST's test on the initial E'q); classical: E' (constant)."""
-    kind = P[i, K_KIND]
+    kind = P[i, K.KIND]
     e = x[2, i]
     if kind == SUB:
         psidpp, psiqpp = _fluxes(P, x, i)
-        return (e + P[i, K_P7] * (cdg + P[i, K_P6] * (e - x[3, i] - P[i, K_P8] * cdg))
+        return (e + P[i, K.P7] * (cdg + P[i, K.P6] * (e - x[3, i] - P[i, K.P8] * cdg))
                 + _gap_saturation(P, i, psidpp, psiqpp) * psidpp)
     if kind == TRA:
-        esat = e if P[i, K_EQP0] < 0.8 else P[i, K_SA] * e * e + P[i, K_SB] * e + P[i, K_SC]
-        return esat + (P[i, K_XD] - P[i, K_XDP]) * cdg
+        esat = e if P[i, K.EQP0] < 0.8 else P[i, K.SA] * e * e + P[i, K.SB] * e + P[i, K.SC]
+        return esat + (P[i, K.XD] - P[i, K.XDP]) * cdg
     return e
 
 
 @kernel
 def field_current(P, x, cur, i):
     """Field current of machine i (machine base) at network current cur[i] (system base)."""
-    return _field_current(P, x, i, _dq(x[0, i], cur[i])[0] * P[i, K_POT])
+    return _field_current(P, x, i, _dq(x[0, i], cur[i])[0] * P[i, K.POT])
 
 
 @kernel
@@ -340,44 +337,44 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
         w = x[1, i]
         ws = _stator_speed(P, x, i)
         curd, curq = _dq(x[0, i], cur[i])
-        pot = P[i, K_POT]
+        pot = P[i, K.POT]
         cdg, cqg = curd * pot, curq * pot
-        kind = P[i, K_KIND]
+        kind = P[i, K.KIND]
         dx[0, i] = basrad * (w - 1.0)
         dx[3, i] = 0.0
         dx[5, i] = 0.0
         fld = _field_current(P, x, i, cdg)
         if kind == SUB:
             psidpp, psiqpp = _fluxes(P, x, i)
-            Eqpe = x[2, i] - x[3, i] - P[i, K_P8] * cdg
-            Edpe = x[4, i] - x[5, i] - P[i, K_P13] * cqg
-            ed = -P[i, K_RA] * cdg - (ws * psiqpp - P[i, K_XQPP] * cqg)
-            eq = -P[i, K_RA] * cqg + (ws * psidpp - P[i, K_XDPP] * cdg)
-            dx[2, i] = (vex[i] - fld) / P[i, K_TDOP]
-            dx[3, i] = Eqpe / P[i, K_TDOPP]
+            Eqpe = x[2, i] - x[3, i] - P[i, K.P8] * cdg
+            Edpe = x[4, i] - x[5, i] - P[i, K.P13] * cqg
+            ed = -P[i, K.RA] * cdg - (ws * psiqpp - P[i, K.XQPP] * cqg)
+            eq = -P[i, K.RA] * cqg + (ws * psidpp - P[i, K.XDPP] * cdg)
+            dx[2, i] = (vex[i] - fld) / P[i, K.TDOP]
+            dx[3, i] = Eqpe / P[i, K.TDOPP]
             # PSS/E's GENROU saturation: - gamma_qd S_e psi"_q (ANDES genrou.py XaqI1q, whose
             # e'_d, psi"_q are -E'd, -psi"_q here)
-            dx[4, i] = (-x[4, i] + P[i, K_P12] * (-cqg - P[i, K_P11] * Edpe)
-                        - P[i, K_GQD] * _gap_saturation(P, i, psidpp, psiqpp) * psiqpp
-                        ) / P[i, K_TQOP]
-            dx[5, i] = Edpe / P[i, K_TQOPP]
+            dx[4, i] = (-x[4, i] + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe)
+                        - P[i, K.GQD] * _gap_saturation(P, i, psidpp, psiqpp) * psiqpp
+                        ) / P[i, K.TQOP]
+            dx[5, i] = Edpe / P[i, K.TQOPP]
             torque = pmech[i] / ws - (psidpp * cqg - psiqpp * cdg)
         elif kind == TRA:
-            ed = x[4, i] - P[i, K_RA] * cdg + P[i, K_XDP] * cqg
-            eq = x[2, i] - P[i, K_RA] * cqg - P[i, K_XDP] * cdg
-            dx[2, i] = (vex[i] - fld) / P[i, K_TDOP]
-            dx[4, i] = (-x[4, i] + (P[i, K_XQ] - P[i, K_XQP]) * cqg) / P[i, K_TQOP]
-            torque = pmech[i] - ((eq * curq + ed * curd) * pot + P[i, K_RA] * (cdg ** 2 + cqg ** 2))
+            ed = x[4, i] - P[i, K.RA] * cdg + P[i, K.XDP] * cqg
+            eq = x[2, i] - P[i, K.RA] * cqg - P[i, K.XDP] * cdg
+            dx[2, i] = (vex[i] - fld) / P[i, K.TDOP]
+            dx[4, i] = (-x[4, i] + (P[i, K.XQ] - P[i, K.XQP]) * cqg) / P[i, K.TQOP]
+            torque = pmech[i] - ((eq * curq + ed * curd) * pot + P[i, K.RA] * (cdg ** 2 + cqg ** 2))
         else:
-            ed = x[4, i] + P[i, K_XDP] * cqg
-            eq = x[2, i] - P[i, K_XDP] * cdg
+            ed = x[4, i] + P[i, K.XDP] * cqg
+            eq = x[2, i] - P[i, K.XDP] * cdg
             dx[2, i] = 0.0
             dx[4, i] = 0.0
             torque = pmech[i] - (eq * curq + ed * curd) * pot
         pelect[i] = eq * curq + ed * curd
         qelect[i] = eq * curd - ed * curq
         eterm[i] = np.hypot(ed, eq)
-        dx[1, i] = (torque - P[i, K_D0] * (w - 1.0)) / (2.0 * P[i, K_H])
+        dx[1, i] = (torque - P[i, K.D0] * (w - 1.0)) / (2.0 * P[i, K.H])
 
 
 @kernel
@@ -385,10 +382,10 @@ def stator_without_speed(P, x, cur, i):
     """(ed, eq, curd, curq) of machine i from the subtransient stator equations without the
     speed factor (PST `exc_st3` flag 1 recomputes them this way); currents system base."""
     curd, curq = _dq(x[0, i], cur[i])
-    pot = P[i, K_POT]
+    pot = P[i, K.POT]
     psidpp, psiqpp = _fluxes(P, x, i)
-    ed = -P[i, K_RA] * curd * pot - (psiqpp - P[i, K_XQPP] * curq * pot)
-    eq = -P[i, K_RA] * curq * pot + (psidpp - P[i, K_XDPP] * curd * pot)
+    ed = -P[i, K.RA] * curd * pot - (psiqpp - P[i, K.XQPP] * curq * pot)
+    eq = -P[i, K.RA] * curq * pot + (psidpp - P[i, K.XDPP] * curd * pot)
     return ed, eq, curd, curq
 
 
@@ -396,6 +393,6 @@ def stator_without_speed(P, x, cur, i):
 def st3_field_current(P, x, cur, i):
     """PST exc_st3's own field-current estimate E_Isat + p6 (E'q - psi_kd) + p7 i_d."""
     e = x[2, i]
-    esat = max(e, P[i, K_SA] * e * e + P[i, K_SB] * e + P[i, K_SC])
+    esat = max(e, P[i, K.SA] * e * e + P[i, K.SB] * e + P[i, K.SC])
     curd = _dq(x[0, i], cur[i])[0]
-    return esat + P[i, K_P6] * (e - x[3, i]) + P[i, K_P7] * curd * P[i, K_POT]
+    return esat + P[i, K.P6] * (e - x[3, i]) + P[i, K.P7] * curd * P[i, K.POT]

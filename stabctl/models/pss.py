@@ -25,9 +25,10 @@ from stabctl._jit.decorators import kernel
 from stabctl.case import Case
 from stabctl.case.params import PSS
 from stabctl.errors import CaseError
-from stabctl.models._declared import columns, pack, params_class
+from stabctl.models._declared import check_packed, layout, pack, params_class
+from stabctl.models.blocks import (GAIN_AFTER, GAIN_BEFORE, LBND, clip, lag, leadlag,
+                                   washout)
 
-LBND = 1e-3
 PST_SPEED, PST_POWER, PSSE, STAB2A = 1, 2, 3, 4
 SPEED, POWER = 1, 3                           # PSS/E input codes (ICS, MODE)
 STATE_NAMES = {PST_SPEED: ("washout", "leadlag1", "leadlag2"),
@@ -38,20 +39,14 @@ STATE_NAMES = {PST_SPEED: ("washout", "leadlag1", "leadlag2"),
 #: pss_con fields (stabctl.case.params.PSS) the kernels take: columns 3-18 (type 3's
 #: filter A1..A6 enters as its canonical form nf, fe, fa, fc)
 TABLE_FIELDS = PSS.names[2:18]
-#: packed parameter matrix of the kernels, (constant suffix, PssParams attribute) per
-#: column: pss_con columns 1-18 in declared order, then the filter; constants S_<suffix>
+#: packed parameter matrix of the kernels, (column name, PssParams attribute) per
+#: column: pss_con columns 1-18 in declared order, then the filter (a_0..a_3, c_0..c_3)
 _SUFFIX = {"ymax": "MAX", "ymin": "MIN", "input1": "IN1", "input2": "IN2"}
 PACKED = (("KIND", "kind"), ("MAC", "mac"),
           *((_SUFFIX.get(n, n.upper()), n) for n in TABLE_FIELDS), ("NF", "nf"), ("FE", "fe"),
           *((f"FA{i}", f"fa_{i}") for i in range(4)), *((f"FC{i}", f"fc_{i}") for i in range(4)))
-(S_KIND, S_MAC, S_KTW, S_TW, S_T1, S_T2, S_T3, S_T4, S_MAX, S_MIN, S_T5, S_T6, S_IN1, S_K1,
- S_TR1, S_IN2, S_K2, S_TR2, S_NF, S_FE, S_FA0, S_FA1, S_FA2, S_FA3, S_FC0, S_FC1, S_FC2,
- S_FC3) = \
-    columns(PACKED, "KIND", "MAC", "KTW", "TW", "T1", "T2", "T3", "T4", "MAX", "MIN", "T5",
-            "T6", "IN1", "K1", "TR1", "IN2", "K2", "TR2", "NF", "FE", "FA0", "FA1", "FA2",
-            "FA3", "FC0", "FC1", "FC2", "FC3")
-S_NCOL = len(PACKED)
-S_FA, S_FC = S_FA0, S_FC0                     # filter a_0..a_3, then c_0..c_3
+#: the kernels' column of each PACKED name: P[k, S.TW]
+S = layout("PssColumns", PACKED)
 W_PSSE, LL_PSSE = 6, 7                        # type 3 washout and first lead-lag slots
 
 
@@ -77,7 +72,7 @@ class PssParams:
         return self.kind == PST_POWER
 
     def packed(self) -> np.ndarray:
-        """Parameter matrix (n_pss, S_NCOL) for the compiled kernels, columns as
+        """Parameter matrix (n_pss, len(PACKED)) for the compiled kernels, columns as
         :data:`PACKED`."""
         return pack(self, PACKED, **{f"fa_{i}": self.fa[:, i] for i in range(4)},
                     **{f"fc_{i}": self.fc[:, i] for i in range(4)})
@@ -119,11 +114,15 @@ class PssParams:
                 ("pss_con Tr2", self.Tr2, e & (self.input2 != 0) & (self.Tr2 >= LBND)))
 
 
+check_packed(PssParams, PACKED, (*(f"fa_{i}" for i in range(4)), *(f"fc_{i}" for i in range(4))))
+
+
 def pss_params(case: Case) -> PssParams:
     """PSS parameters of a case.
 
-    Raises CaseError (pss_con row) for a type-3 or 4 washout below 1e-3 s, a type-3
-    lead-lag with a lead but no lag, an input
+    Raises CaseError (pss_con row) for a PST pss (types 1, 2) whose first lead-lag has
+    no lag (T_2 below 1e-3 s; PST has no such case), a type-3 or 4 washout below 1e-3 s,
+    a type-3 lead-lag with a lead but no lag, an input
     code other than 1 (speed) or 3 (power), or an improper filter (A6 without a
     second-order denominator)."""
     s = case.pss
@@ -138,6 +137,9 @@ def pss_params(case: Case) -> PssParams:
 
 
 def _check_psse(s) -> None:
+    for r in np.nonzero((s.type <= PST_POWER) & (s.T2 < LBND))[0]:
+        raise CaseError(f"pss_con row {r + 1}, field 'T2': the first lead-lag needs "
+                        f"T2 >= {LBND} s")
     for r in np.nonzero((s.type >= PSSE) & (s.Tw < LBND))[0]:
         raise CaseError(f"pss_con row {r + 1}, field 'Tw': washout needs Tw >= {LBND} s")
     for r in np.nonzero(s.type == PSSE)[0]:
@@ -199,43 +201,36 @@ def initialise(p: PssParams, u1, u2):
     return x[:p.n_slots()]
 
 
-@kernel
-def _leadlag(P, x, dx, r, k, u, lead, lag):
-    """PST-form lead-lag (1 + s T_lead)/(1 + s T_lag) with state slot r; output."""
-    if P[k, lag] < LBND:
-        dx[r, k] = 0.0
-        return u
-    ratio = P[k, lead] / P[k, lag]
-    dx[r, k] = ((1 - ratio) * u - x[r, k]) / P[k, lag]
-    return ratio * u + x[r, k]
+# -- compiled runtime kernels: P is PssParams.packed(), x the PSS block of the state
+# -- vector (n_slots, n_pss), k the PSS; one function per type, dispatched on kind
 
 
 @kernel
 def output_and_derivatives(P, x, k, omega, pe, dx):
-    """Output of PSS k at machine speed omega (pu) and electrical power pe (machine base),
-    PST flag 1/2; its derivatives into dx[:, k]."""
-    if P[k, S_KIND] == PSSE:
+    """Output of PSS k (pu, to its exciter's summing junction) at machine speed omega (pu)
+    and electrical power pe (machine base), PST flag 1/2; its derivatives into dx[:, k]."""
+    kind = P[k, S.KIND]
+    if kind == PSSE:
         return _psse(P, x, k, omega, pe, dx)
-    if P[k, S_KIND] == STAB2A:
+    if kind == STAB2A:
         return _stab2a(P, x, k, pe, dx)
-    u = pe if P[k, S_KIND] == PST_POWER else omega
-    var1 = (u - x[0, k]) / P[k, S_TW]
-    r12 = P[k, S_T1] / P[k, S_T2]
-    var2 = r12 * P[k, S_KTW] * var1 + x[1, k]
-    dx[0, k] = var1
-    dx[1, k] = ((1 - r12) * P[k, S_KTW] * var1 - x[1, k]) / P[k, S_T2]
-    if P[k, S_T4] >= LBND:
-        r34 = P[k, S_T3] / P[k, S_T4]
-        var3 = r34 * var2 + x[2, k]
-        dx[2, k] = ((1 - r34) * var2 - x[2, k]) / P[k, S_T4]
-    else:
-        var3 = var2
-        dx[2, k] = 0.0
-    return min(max(var3, P[k, S_MIN]), P[k, S_MAX])
+    return _pst(P, x, k, pe if kind == PST_POWER else omega, dx)
+
+
+@kernel(inline="always")
+def _pst(P, x, k, u, dx):
+    """PST pss (pss.m): washout s T_w/(1 + s T_w) on u (speed or power), then
+    K (1 + s T_1)/(1 + s T_2) (K T_w given, column 3), then (1 + s T_3)/(1 + s T_4)
+    (absent for T_4 < 1e-3 s), output limits [ymin, ymax]."""
+    y, dx[0, k] = washout(u, x[0, k], P[k, S.TW], 1.0, GAIN_AFTER)
+    y, dx[1, k] = leadlag(y, x[1, k], P[k, S.T1], P[k, S.T2], P[k, S.KTW])
+    y, dx[2, k] = leadlag(y, x[2, k], P[k, S.T3], P[k, S.T4])
+    return clip(y, P[k, S.MIN], P[k, S.MAX])
 
 
 @kernel
 def _signal(code, omega, pe):
+    """A PSS/E stabiliser input: speed deviation (pu) or electrical power (code 3), else 0."""
     if code == SPEED:
         return omega - 1.0
     if code == POWER:
@@ -243,49 +238,32 @@ def _signal(code, omega, pe):
     return 0.0
 
 
-@kernel
+@kernel(inline="always")
 def _psse(P, x, k, omega, pe, dx):
     """PSS/E stabiliser: input lags K_i/(1 + s Tr_i) summed, filter N/D, washout
     K_w s/(1 + s T_w), three lead-lags, output limits (docs 3.1)."""
     dx[:, k] = 0.0
     v = 0.0
-    for r, code, K, T in ((0, S_IN1, S_K1, S_TR1), (1, S_IN2, S_K2, S_TR2)):
-        u = P[k, K] * _signal(P[k, code], omega, pe)
-        if P[k, T] >= LBND:
-            dx[r, k] = (u - x[r, k]) / P[k, T]
-            u = x[r, k]
+    for r, code, K, T in ((0, S.IN1, S.K1, S.TR1), (1, S.IN2, S.K2, S.TR2)):
+        u, dx[r, k] = lag(P[k, K] * _signal(P[k, code], omega, pe), x[r, k], P[k, T])
         v += u
-    nf = int(P[k, S_NF])
-    w = P[k, S_FE] * v
+    nf = int(P[k, S.NF])
+    w = P[k, S.FE] * v
     if nf > 0:
         acc = v
         for i in range(nf):
-            w += P[k, S_FC + i] * x[2 + i, k]
-            acc -= P[k, S_FA + i] * x[2 + i, k]
+            w += P[k, S.FC0 + i] * x[2 + i, k]
+            acc -= P[k, S.FA0 + i] * x[2 + i, k]
             if i < nf - 1:
                 dx[2 + i, k] = x[3 + i, k]
         dx[1 + nf, k] = acc
-    y = P[k, S_KTW] * (w - x[W_PSSE, k]) / P[k, S_TW]
-    dx[W_PSSE, k] = (w - x[W_PSSE, k]) / P[k, S_TW]
-    # column and slot numbers as int64, not literals: one compiled _leadlag, not three
-    i64 = np.int64
-    y = _leadlag(P, x, dx, i64(LL_PSSE), k, y, i64(S_T1), i64(S_T2))
-    y = _leadlag(P, x, dx, i64(LL_PSSE + 1), k, y, i64(S_T3), i64(S_T4))
-    y = _leadlag(P, x, dx, i64(LL_PSSE + 2), k, y, i64(S_T5), i64(S_T6))
-    return min(max(y, P[k, S_MIN]), P[k, S_MAX])
+    y, dx[W_PSSE, k] = washout(w, x[W_PSSE, k], P[k, S.TW], P[k, S.KTW], GAIN_BEFORE)
+    for j, lead, lag_ in ((0, S.T1, S.T2), (1, S.T3, S.T4), (2, S.T5, S.T6)):
+        y, dx[LL_PSSE + j, k] = leadlag(y, x[LL_PSSE + j, k], P[k, lead], P[k, lag_])
+    return clip(y, P[k, S.MIN], P[k, S.MAX])
 
 
-@kernel
-def _lag(P, x, dx, r, k, u, T):
-    """Lag 1/(1 + s T) of u with state slot r (T below 1e-3 s: u itself); output."""
-    if P[k, T] < LBND:
-        dx[r, k] = 0.0
-        return u
-    dx[r, k] = (u - x[r, k]) / P[k, T]
-    return x[r, k]
-
-
-@kernel
+@kernel(inline="always")
 def _stab2a(P, x, k, pe, dx):
     """STAB2A: -(K_Tw s/(1 + s T_w))^3 on pe (K_Tw = K_2 T_2, T_w = T_2), then
     K_3/(1 + s T_3) + K_4 (columns K1, Tr1, K2), then (K_5/(1 + s T_5))^2 (columns K5 = T5,
@@ -293,11 +271,10 @@ def _stab2a(P, x, k, pe, dx):
     dx[:, k] = 0.0
     y = pe
     for r in range(3):
-        dx[r, k] = (y - x[r, k]) / P[k, S_TW]
-        y = P[k, S_KTW] * dx[r, k]
+        y, dx[r, k] = washout(y, x[r, k], P[k, S.TW], P[k, S.KTW], GAIN_AFTER)
     y = -y
-    i64 = np.int64          # slot and column numbers as int64: one compiled _lag, not three
-    y = _lag(P, x, dx, i64(3), k, P[k, S_K1] * y, i64(S_TR1)) + P[k, S_K2] * y
-    y = _lag(P, x, dx, i64(4), k, P[k, S_T5] * y, i64(S_T6))
-    y = _lag(P, x, dx, i64(5), k, P[k, S_T5] * y, i64(S_T6))
-    return min(max(y, P[k, S_MIN]), P[k, S_MAX])
+    y3, dx[3, k] = lag(P[k, S.K1] * y, x[3, k], P[k, S.TR1])
+    y = y3 + P[k, S.K2] * y
+    for r in (4, 5):
+        y, dx[r, k] = lag(P[k, S.T5] * y, x[r, k], P[k, S.T6])
+    return clip(y, P[k, S.MIN], P[k, S.MAX])

@@ -258,8 +258,8 @@ def _columns(model: DynamicModel, act: np.ndarray, pos: np.ndarray):
     kind = np.concatenate([np.full(act.size, STATE), np.full(pos.size, ESD),
                            np.full(n_e, VREF), np.full(n_g, PREF)]).astype(np.int64)
     index = np.concatenate([act, pos, np.arange(n_e), np.arange(n_g)]).astype(np.int64)
-    values = np.concatenate([model.x0[act], np.zeros(pos.size), p.EP[:, exc.E_VREF],
-                             p.GP[:, gov.G_PREF]])
+    values = np.concatenate([model.x0[act], np.zeros(pos.size), p.EP[:, exc.E.VREF],
+                             p.GP[:, gov.G.PREF]])
     return kind, index, values
 
 
@@ -352,9 +352,9 @@ def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0, evaluate
         elif kind[c] == ESD:
             nominal = 0.0
         elif kind[c] == VREF:
-            nominal = p.EP[j, exc.E_VREF]
+            nominal = p.EP[j, exc.E.VREF]
         else:
-            nominal = p.GP[j, gov.G_PREF]
+            nominal = p.GP[j, gov.G.PREF]
         hi, lo = nominal + step[c], nominal - step[c]
         fp = np.zeros_like(x0)
         for side in range(2):
@@ -366,16 +366,16 @@ def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0, evaluate
             elif kind[c] == ESD:
                 S[j] = v
             elif kind[c] == VREF:
-                p.EP[j, exc.E_VREF] = v
+                p.EP[j, exc.E.VREF] = v
             else:
-                p.GP[j, gov.G_PREF] = v
+                p.GP[j, gov.G.PREF] = v
             it = call_evaluate(evaluate, x, p, net,
                                KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_), S),
                                BUS_VOLTAGES, dx, out)
             if kind[c] == VREF:
-                p.EP[j, exc.E_VREF] = nominal
+                p.EP[j, exc.E.VREF] = nominal
             elif kind[c] == PREF:
-                p.GP[j, gov.G_PREF] = nominal
+                p.GP[j, gov.G.PREF] = nominal
             if it < 0:
                 return c
             if side == 0:

@@ -304,17 +304,17 @@ def test_packed_kernel_columns_come_from_the_declaration():
         exciters=ExciterTable.from_matrix([[3, 1] + list(np.arange(3.0, 21.0)) + [0, 0, 0, 0]]))
     ep = exc_m.exciter_params(case)
     P = ep.packed(np.zeros(1))
-    assert P.shape == (1, exc_m.E_NCOL) == (1, len(exc_m.PACKED))
+    assert P.shape == (1, len(exc_m.E)) == (1, len(exc_m.PACKED))
     for name in exc_m.TABLE_FIELDS:                # given columns as the table holds them
         if name not in ("KP", "KA"):
-            assert P[0, getattr(exc_m, "E_" + name.upper())] == getattr(case.exciters, name)[0]
-            assert decl.EXCITER.param(name).col - 1 == getattr(exc_m, "E_" + name.upper())
+            assert P[0, getattr(exc_m.E, name.upper())] == getattr(case.exciters, name)[0]
+            assert decl.EXCITER.param(name).col - 1 == getattr(exc_m.E, name.upper())
     gp = gov_m.governor_params(load_case("kundur"))
     G = gp.packed(np.zeros(gp.n))
     for name in gov_m.TABLE_FIELDS:
-        np.testing.assert_array_equal(G[:, getattr(gov_m, "G_" + name.upper())],
+        np.testing.assert_array_equal(G[:, getattr(gov_m.G, name.upper())],
                                       getattr(load_case("kundur").governors, name))
-        assert decl.GOVERNOR.col(name) - 1 == getattr(gov_m, "G_" + name.upper())
+        assert decl.GOVERNOR.col(name) - 1 == getattr(gov_m.G, name.upper())
     assert set(pss_m.TABLE_FIELDS) <= set(decl.PSS.names)
     assert set(mac_m.TABLE_FIELDS) <= set(decl.MACHINE.names)
 

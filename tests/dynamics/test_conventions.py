@@ -27,13 +27,13 @@ def smpexc_at_ceiling(model, error_pu):
     P = model.params.EP.copy()
     x = np.zeros((model.layout.exc_rows, P.shape[0]))
     x[0] = 1.0                                    # V_TR
-    P[:, exc.E_VREF] = 1.0 + error_pu
-    x[2] = P[:, exc.E_VRMAX]                      # Efd at its ceiling
+    P[:, exc.E.VREF] = 1.0 + error_pu
+    x[2] = P[:, exc.E.VRMAX]                      # Efd at its ceiling
     dx = np.zeros_like(x)
     ieee = model.params.ieee
-    vex = exc.field_voltage(P, x, 0, 1.0, 0.0, 1.0, 0.0, ieee)
+    vex = exc.field_voltage_at(P, x, 0, 1.0, 0.0, 1.0, 0.0, ieee)
     exc.derivatives(P, x, 0, 1.0, 0.0, vex, dx, ieee, 0.0)
-    return dx[2, 0], x[2, 0], P[0, exc.E_VRMAX]
+    return dx[2, 0], x[2, 0], P[0, exc.E.VRMAX]
 
 
 def test_ieee_limiter_holds_the_state_at_the_ceiling(models):
@@ -58,7 +58,7 @@ def test_machine_sees_the_clipped_field_voltage_under_ieee(models):
         m = models[conv]
         x = np.zeros((m.layout.exc_rows, m.params.EP.shape[0]))
         x[2] = 7.0
-        assert exc.field_voltage(m.params.EP, x, 0, 1.0, 0.0, 1.0, 0.0, m.params.ieee) == want
+        assert exc.field_voltage_at(m.params.EP, x, 0, 1.0, 0.0, 1.0, 0.0, m.params.ieee) == want
 
 
 def test_grids_of_the_two_conventions():

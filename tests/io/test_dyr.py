@@ -368,14 +368,14 @@ def test_exst1_steady_state_and_output_limit():
     x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
     assert (x[2, 0], x[3, 0]) == (Efd, Efd) and Vref[0] == pytest.approx(Vt + Efd / 50, rel=1e-15)
     P = p.packed(Vref)
-    assert exc.field_voltage(P, x, 0, Vt, 0.0, 1.0, Efd, True) == Efd
+    assert exc.field_voltage_at(P, x, 0, Vt, 0.0, 1.0, Efd, True) == Efd
     dx = np.full_like(x, np.nan)
     exc.derivatives(P, x, 0, Vt, 0.0, Efd, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
     x[2, 0] = 10.0
-    assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(0.9 * 4.0 - 0.1 * 2.0)
+    assert exc.field_voltage_at(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(0.9 * 4.0 - 0.1 * 2.0)
     x[2, 0] = -10.0
-    assert exc.field_voltage(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(0.9 * -3.0)
+    assert exc.field_voltage_at(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(0.9 * -3.0)
 
 
 def test_exst1_initial_point_outside_limits_is_refused():

@@ -1,0 +1,148 @@
+"""Control blocks of the exciter, PSS and governor models, each written once.
+
+Every block is a scalar kernel: it takes the block's input u, its state x (where it has
+one) and its parameters, and returns its output and the state's derivative dx/dt; the
+model writes the derivative into its slot.  Units are those of the caller (pu signals,
+time constants in s).  A time constant below :data:`LBND` (1e-3 s) means the block is
+absent: its input passes and the derivative is 0 (PST's ``*_idx`` convention, PST manual
+3.11-3.30; docs/pst_models.md 2-4).  Where the models' sources spell one block with
+different floating-point operations, the block keeps each spelling as a variant (a gain
+argument or a `form`), so that every model computes exactly what it did.
+
+Sources: PSTess 1.1 `smpexc.m`, `exc_dc12.m`, `exc_st3.m`, `pss.m`, `tg.m`; IEEE Std
+421.5-2016 annex E (E.2 lag, E.3 lead-lag, E.4 washout, E.5 non-windup limits, E.7
+windup limits); PSS/E Model Library (the PSS/E models' blocks).
+"""
+
+from __future__ import annotations
+
+from stabctl._jit.decorators import kernel
+
+#: a time constant below this (s) means the block is absent
+LBND = 1e-3
+
+#: washout gain placement: K ((u - x)/T), (K (u - x))/T, (K/T) (u - x)
+GAIN_AFTER, GAIN_BEFORE, GAIN_OVER_T = 0, 1, 2
+
+
+@kernel
+def clip(v, lo, hi):
+    """Windup limit (IEEE 421.5 E.7), also a rate limit or saturation of a signal:
+    min(max(v, lo), hi) (hi wins if lo > hi)."""
+    return min(max(v, lo), hi)
+
+
+@kernel
+def lag(u, x, T):
+    """First-order lag 1/(1 + s T) (IEEE 421.5 E.2): output x, dx/dt = (u - x)/T;
+    T < LBND: output u, derivative 0 (no state).
+
+    Returns
+    -------
+    (float, float)
+        Output, state derivative.
+    """
+    if T < LBND:
+        return u, 0.0
+    return x, (u - x) / T
+
+
+@kernel
+def leadlag(u, x, T_lead, T_lag, K=1.0):
+    """Lead-lag K (1 + s T_lead)/(1 + s T_lag) in PST's realisation (pss.m, tg.m): with
+    r = T_lead/T_lag the output is r K u + x and dx/dt = ((1 - r) K u - x)/T_lag, so
+    that the state is the output minus its direct part; at rest x = (1 - r) K u.  The
+    gain multiplies r (and 1 - r) before u, as PST's pss first lead-lag does; K = 1 is
+    the plain lead-lag (bit for bit).  T_lag < LBND: output K u, derivative 0.
+
+    Returns
+    -------
+    (float, float)
+        Output, state derivative.
+    """
+    if T_lag < LBND:
+        return K * u, 0.0
+    r = T_lead / T_lag
+    return r * K * u + x, ((1 - r) * K * u - x) / T_lag
+
+
+@kernel
+def leadlag_input_state(u, x, ratio, T_lag):
+    """Lead-lag (1 + s T_lead)/(1 + s T_lag) in the exciters' realisation (PST
+    smpexc.m, exc_dc12.m, exc_st3.m): the state is the lagged input, dx/dt = (u - x)/T_lag,
+    and the output ratio u + (1 - ratio) x with ratio = T_lead/T_lag given (exc_pot
+    column 5); at rest x = u (IEEE 421.5 E.3).  T_lag < LBND: output u, derivative 0.
+
+    Returns
+    -------
+    (float, float)
+        Output, state derivative.
+    """
+    if T_lag < LBND:
+        return u, 0.0
+    return ratio * u + (1 - ratio) * x, (u - x) / T_lag
+
+
+@kernel
+def washout(u, x, T, K, form):
+    """Washout K s T/(1 + s T) (IEEE 421.5 E.4; K s/(1 + s T) with K the caller's
+    gain): the state lags the input, dx/dt = (u - x)/T, and the output is the gain times
+    dx/dt, computed as `form` says: GAIN_AFTER K ((u - x)/T) (PST pss, STAB2A; K = 1
+    gives dx/dt itself), GAIN_BEFORE (K (u - x))/T (PSS/E IEEEST), GAIN_OVER_T (K/T)
+    (u - x) (the exciters' rate feedback s K_F/(1 + s T_F)).  T must be >= LBND.
+
+    Returns
+    -------
+    (float, float)
+        Output, state derivative.
+    """
+    d = (u - x) / T
+    if form == GAIN_BEFORE:
+        return K * (u - x) / T, d
+    if form == GAIN_OVER_T:
+        return K / T * (u - x), d
+    return K * d, d
+
+
+@kernel
+def nonwindup(x, d, lo, hi, ieee, reach):
+    """Non-windup limit of a state x whose derivative is d (IEEE 421.5-2016 E.5 for a
+    lag or an integrator): an outward derivative is zeroed, then the state is clamped to
+    [lo, hi].
+
+    ieee: the annex's rule, at or beyond a limit (a state held at its limit stays
+    there), with `reach` (s, >= 0): a state that d drives into a limit within `reach`
+    is held on it (set to the limit, derivative 0).  For a limit that moves with the
+    terminal voltage (DC2) the simulator passes its step: the held state is otherwise
+    left a hair inside the limit after each step, the derivative there is the full
+    one, and the predictor-corrector alternates between it and zero (a false
+    NumericalInstabilityError from its local error estimate).  reach = 0 is the plain
+    annex E.5 limiter; as the step shrinks both converge to it.  Not ieee: PSTess's rule
+    (exc_st3, exc_dc12), only beyond a limit.
+
+    Returns
+    -------
+    (float, float)
+        The clamped state, its derivative.
+    """
+    if ieee:
+        if d > 0 and x + reach * d >= hi:
+            x, d = hi, 0.0
+        elif d < 0 and x + reach * d <= lo:
+            x, d = lo, 0.0
+    elif (x > hi and d > 0) or (x < lo and d < 0):
+        d = 0.0
+    return clip(x, lo, hi), d
+
+
+@kernel
+def nonwindup_lag(u, x, T, lo, hi, ieee, reach):
+    """Non-windup limited lag 1/(1 + s T), limits [lo, hi] (IEEE 421.5 E.5):
+    `nonwindup` of x with dx/dt = (u - x)/T (no bypass: T must be >= LBND).
+
+    Returns
+    -------
+    (float, float)
+        The clamped state (the output), its derivative.
+    """
+    return nonwindup(x, (u - x) / T, lo, hi, ieee, reach)

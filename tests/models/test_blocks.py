@@ -1,0 +1,113 @@
+"""The control blocks (stabctl.models.blocks) against their closed forms: the step
+responses of a lag, a lead-lag and a washout, and the non-windup limiter's rules (IEEE
+Std 421.5-2016 annex E.5 and PSTess's)."""
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from stabctl.models import blocks as b
+
+
+def step_response(block, x0, t, *args):
+    """Output of a one-state block at time t (s) after its input steps from 0 to 1 at
+    t = 0 with the state x0 at rest."""
+    sol = solve_ivp(lambda _, x: [block(1.0, x[0], *args)[1]], (0, t), [x0],
+                    rtol=1e-12, atol=1e-14)
+    return block(1.0, sol.y[0, -1], *args)[0]
+
+
+def test_lag_step_response_is_one_minus_exp():
+    """1/(1 + s T): y(T) = 1 - e^-1 (IEEE 421.5 E.2)."""
+    T = 0.3
+    assert step_response(b.lag, 0.0, T, T) == pytest.approx(1 - np.exp(-1), rel=1e-6)
+
+
+def test_a_lag_below_the_threshold_is_absent():
+    assert b.lag(0.7, 5.0, 0.999e-3) == (0.7, 0.0)
+    assert b.leadlag(0.7, 5.0, 1.0, 0.5e-3, 2.0) == (1.4, 0.0)
+    assert b.leadlag_input_state(0.7, 5.0, 3.0, 0.0) == (0.7, 0.0)
+
+
+@pytest.mark.parametrize("block, x_rest, ratio", [(b.leadlag, 0.0, 4.0),
+                                                   (b.leadlag_input_state, 0.0, 4.0)])
+def test_leadlag_jumps_by_tlead_over_tlag_then_settles(block, x_rest, ratio):
+    """(1 + s T_lead)/(1 + s T_lag) after a unit step: y(0+) = T_lead/T_lag, y(t) = 1 -
+    (1 - T_lead/T_lag) e^(-t/T_lag) (IEEE 421.5 E.3), in both realisations."""
+    T_lead, T_lag = 2.0, 0.5
+    args = (T_lead, T_lag) if block is b.leadlag else (T_lead / T_lag, T_lag)
+    assert block(1.0, x_rest, *args)[0] == ratio
+    t = 0.7
+    assert step_response(block, x_rest, t, *args) == pytest.approx(
+        1 - (1 - ratio) * np.exp(-t / T_lag), rel=1e-8)
+
+
+def test_leadlag_gain_multiplies_the_response_and_one_is_exact():
+    """K (1 + s T_lead)/(1 + s T_lag): K times the plain response; K = 1 bit for bit."""
+    u, x = 0.123456789, -0.0987654321
+    y, d = b.leadlag(u, x, 0.3, 0.7)
+    assert b.leadlag(u, x, 0.3, 0.7, 1.0) == (y, d)
+    yK, dK = b.leadlag(u, x, 0.3, 0.7, 2.5)
+    assert yK == pytest.approx(0.3 / 0.7 * 2.5 * u + x, rel=1e-15)
+    assert dK == pytest.approx(((1 - 0.3 / 0.7) * 2.5 * u - x) / 0.7, rel=1e-14)
+
+
+@pytest.mark.parametrize("form", [b.GAIN_AFTER, b.GAIN_BEFORE, b.GAIN_OVER_T])
+def test_washout_step_response_is_exp(form):
+    """K s/(1 + s T) (K the output gain on the state derivative): after a unit step
+    y(t) = (K/T) e^(-t/T) (IEEE 421.5 E.4), each gain spelling to rounding."""
+    K, T, t = 3.0, 0.4, 0.25
+    assert step_response(b.washout, 0.0, t, T, K, form) == pytest.approx(
+        K / T * np.exp(-t / T), rel=1e-8)
+    assert b.washout(2.0, 2.0, T, K, form) == (0.0, 0.0)      # at rest: no output
+
+
+def test_clip_is_a_windup_limit():
+    assert [b.clip(v, -1.0, 2.0) for v in (-3.0, 0.5, 9.0)] == [-1.0, 0.5, 2.0]
+
+
+@pytest.mark.parametrize("ieee", [True, False])
+def test_nonwindup_state_stays_at_its_limit_while_driven_outward(ieee):
+    """IEEE 421.5 E.5: beyond its limit and driven outward, the state is clamped to it
+    with a zero derivative (both rules); driven inward it keeps its derivative."""
+    assert b.nonwindup(2.5, 4.0, -1.0, 2.0, ieee, 0.0) == (2.0, 0.0)
+    assert b.nonwindup(-1.5, -4.0, -1.0, 2.0, ieee, 0.0) == (-1.0, 0.0)
+    assert b.nonwindup(2.0, -4.0, -1.0, 2.0, ieee, 0.0) == (2.0, -4.0)
+    assert b.nonwindup(-1.0, 4.0, -1.0, 2.0, ieee, 0.0) == (-1.0, 4.0)
+    assert b.nonwindup(0.5, 4.0, -1.0, 2.0, ieee, 0.0) == (0.5, 4.0)
+
+
+def test_nonwindup_at_the_limit_ieee_holds_pstess_does_not():
+    """At (not beyond) the limit and driven outward: IEEE 421.5 E.5 holds the state
+    (derivative 0); PSTess (exc_st3, exc_dc12) only acts beyond it."""
+    assert b.nonwindup(2.0, 4.0, -1.0, 2.0, True, 0.0) == (2.0, 0.0)
+    assert b.nonwindup(2.0, 4.0, -1.0, 2.0, False, 0.0) == (2.0, 4.0)
+
+
+def test_nonwindup_reach_holds_a_state_it_would_reach_within_it():
+    """ieee with reach r: a state within r d of the limit is set on it, derivative 0."""
+    assert b.nonwindup(1.99, 4.0, -1.0, 2.0, True, 0.01) == (2.0, 0.0)
+    assert b.nonwindup(1.9, 4.0, -1.0, 2.0, True, 0.01) == (1.9, 4.0)
+
+
+def test_nonwindup_lag_against_windup_lag():
+    """A lag limited at hi = 1 driven by u = 3 for 1 s, then u = 0: the non-windup state
+    leaves the limit at once, y(t) = e^(-t/T) after the reversal; the windup lag's
+    unlimited state (3 - 3 e^(-1/T) at the reversal, clipped only at the output) decays
+    from there, its output held at the limit for T ln(x_rev) s (IEEE 421.5 E.5 against E.7)."""
+    T, lo, hi = 0.5, -9.0, 1.0
+
+    def run(u, x0, t, nonwindup):
+        def f(_, x):
+            return [b.nonwindup_lag(u, x[0], T, lo, hi, True, 0.0)[1] if nonwindup
+                    else b.lag(u, x[0], T)[1]]
+        return solve_ivp(f, (0, t), [x0], rtol=1e-12, atol=1e-14).y[0, -1]
+
+    x_nw = run(3.0, 0.0, 1.0, True)
+    x_w = run(3.0, 0.0, 1.0, False)
+    assert x_nw == pytest.approx(hi, rel=1e-6)
+    assert x_w == pytest.approx(3 - 3 * np.exp(-1 / T), rel=1e-9)
+    t = 0.2
+    assert run(0.0, x_nw, t, True) == pytest.approx(np.exp(-t / T), rel=1e-6)
+    x_w_t = run(0.0, x_w, t, False)
+    assert x_w_t == pytest.approx(x_w * np.exp(-t / T), rel=1e-8) and b.clip(x_w_t, lo, hi) == hi

@@ -1,0 +1,171 @@
+"""Exciter models, one by one (stabctl.models.exciters): the initial point is an
+equilibrium, the non-windup regulator limit (IEEE Std 421.5-2016 annex E.5), step
+responses against their closed forms, the named packed layout."""
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from stabctl.case import ExciterTable
+from stabctl.io import load_case
+from stabctl.models import exciters as exc
+from stabctl.models._declared import check_packed, layout
+
+#: exc_con rows (PST manual 3.11 Table 2, 3.13 Table 3; stabctl columns 21-25)
+SMP = [0, 1, 0.0, 200, 0.05, 10.0, 1.0, 5.0, -5.0]
+SCRX = SMP + [0] * 9 + [1, 0]                          # bus fed: exc_con column 19
+DC1 = [1, 1, 0.02, 20, 0.02, 1, 1, 5.2, -4.16, 1.0, 0.83, 0, 0, 0, 0, 0.0754, 1.246, 0, 0, 0]
+DC2 = [2] + DC1[1:]
+IEEET2 = [5, 1, 0.02, 20, 0.02, 0, 0, 5.2, -4.16, 1.0, 0.83, 0, 0, 0, 0, 0.0754, 1.246, 0.5,
+          0, 0]
+ST3 = [3, 1, 0.0, 7.04, 1.0, 6.67, 1.0, 1.0, 0.0, 0.2, -0.2, 200, 4.37, 20, 4.83, 0.09, 1.1,
+       8.63, 1.0, 6.53]
+ST1 = [4, 1, 0.02, 50, 0.02, 0.02, 0.1, 4.0, -3.0, 0.2, -0.2, 0, 0, 0, 0, 0, 0.1, 0, 0, 0,
+       0.01, 1.0]
+ROWS = {"smpexc": SMP, "SCRX": SCRX, "DC1": DC1, "DC2": DC2, "IEEET2": IEEET2, "ST3": ST3,
+        "EXST1": ST1}
+EFD0, VT0, VB0 = 1.9, 1.02, 4.0                 # initial field and terminal voltage, ST3 V_B
+
+
+def params(row):
+    case = load_case("kundur")
+    return exc.exciter_params(case.replace(exciters=ExciterTable.from_matrix([row])))
+
+
+def started(row):
+    """(P, x) of an exciter started at EFD0, VT0 (ST3: source voltage VB0)."""
+    x, Vref, p = exc.initialise(params(row), np.array([EFD0]), np.array([VT0]),
+                                np.array([VB0]))
+    return p.packed(Vref), x
+
+
+def derivatives(P, x, eterm=VT0, efd=EFD0, ieee=True):
+    dx = np.full_like(x, np.nan)
+    exc.derivatives(P, x, 0, eterm, 0.0, efd, dx, ieee, 0.0)
+    return dx
+
+
+@pytest.mark.parametrize("ieee", [True, False])
+@pytest.mark.parametrize("name", sorted(ROWS))
+def test_initial_point_is_an_equilibrium(name, ieee):
+    """At the initial point the exciter hands its machine the initial field voltage
+    (ST3: V_R V_B; EXST1: I_fd0 = Efd0) and every derivative is 0 (PST flag 0)."""
+    P, x = started(ROWS[name])
+    assert exc.field_voltage_at(P, x, 0, VT0, 0.0, VB0, EFD0, ieee) == pytest.approx(
+        EFD0, rel=1e-15)
+    assert np.abs(derivatives(P, x, ieee=ieee)).max() < 1e-12
+
+
+def simulate(P, x0, t, eterm=VT0):
+    """States after t s with the terminal voltage held at eterm, the field voltage fed
+    back as the exciter hands it over (V_B = 1)."""
+    def f(_, y):
+        x = y.reshape(x0.shape).copy()
+        efd = exc.field_voltage_at(P, x, 0, eterm, 0.0, 1.0, 0.0, True)
+        return derivatives(P, x, eterm, efd).ravel()
+    return solve_ivp(f, (0, t), x0.ravel(), rtol=1e-12, atol=1e-14).y[:, -1].reshape(x0.shape)
+
+
+def test_smpexc_step_response_is_a_lag():
+    """smpexc without T_R and lead-lag: Efd = Efd0 + K_A dV (1 - e^(-t/T_A)); at t = T_A
+    the fraction 1 - e^-1 (PST smpexc, IEEE 421.5 E.2)."""
+    row = SMP[:5] + [0.0, 0.0] + SMP[7:]
+    P, x = started(row)
+    dV = 1e-4
+    P[0, exc.E.VREF] += dV
+    x = simulate(P, x, 0.05)
+    assert (x[2, 0] - EFD0) / (200 * dV) == pytest.approx(1 - np.exp(-1), rel=1e-6)
+
+
+def test_smpexc_without_ta_jumps_by_the_lead_lag_ratio():
+    """smpexc without T_A: Efd = K_A (1 + s T_C)/(1 + s T_B) of the error, which jumps by
+    K_A dV T_C/T_B at a V_ref step."""
+    row = SMP[:4] + [0.0] + SMP[5:]
+    P, x = started(row)
+    dV = 1e-3
+    P[0, exc.E.VREF] += dV
+    jump = exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, 0.0, True) - EFD0
+    assert jump == pytest.approx(200 * dV * 1.0 / 10.0, rel=1e-9)
+
+
+def test_scrx_bus_fed_output_scales_with_the_terminal_voltage():
+    """SCRX with CSWITCH = 0: the output is the regulator state times V_t."""
+    P, x = started(SCRX)
+    assert exc.field_voltage_at(P, x, 0, 0.5, 0.0, 1.0, 0.0, True) == pytest.approx(
+        EFD0 / VT0 * 0.5, rel=1e-15)
+
+
+def test_dc1_step_response_is_two_lags():
+    """DC1 without saturation, lead-lag or rate feedback (K_E = 1): Efd/dV = K_A/((1 +
+    s T_A)(K_E + s T_E)), step response K_A dV [1 - (T_A e^(-t/T_A) - T_E e^(-t/T_E))/(T_A
+    - T_E)] (PST exc_dc12)."""
+    row = DC1[:2] + [0.0, 20, 0.02, 0.0, 0.0] + DC1[7:15] + [0.0] + DC1[16:]
+    P, x = started(row)
+    dV, TA, TE, t = 1e-4, 0.02, 0.83, 0.5
+    P[0, exc.E.VREF] += dV
+    x = simulate(P, x, t)
+    exact = 20 * dV * (1 - (TA * np.exp(-t / TA) - TE * np.exp(-t / TE)) / (TA - TE))
+    assert x[3, 0] - EFD0 == pytest.approx(exact, rel=1e-6)
+
+
+def test_ieeet2_rate_feedback_has_its_second_lag():
+    """IEEET2: the rate feedback s K_F/((1 + s T_F1)(1 + s T_F2)): its state V_F lags
+    K_F/T_F1 (Efd - R_f) by T_F2 (exc_con column 18, the layout's TF2; 0 for the other
+    types), and with T_F2 below 1e-3 s it is DC1's feedback."""
+    P, x = started(IEEET2)
+    assert P[0, exc.E.TF2] == 0.5 and started(DC1)[0][0, exc.E.TF2] == 0.0
+    x[3, 0] += 0.1                                   # Efd above R_f by 0.1
+    dx = derivatives(P, x)
+    assert dx[5, 0] == pytest.approx((0.0754 / 1.246 * 0.1 - x[5, 0]) / 0.5, rel=1e-14)
+    P[0, exc.E.TF2] = 0.0
+    P1, x1 = started(IEEET2[:17] + [0.0] + IEEET2[18:])
+    x1[3, 0] += 0.1
+    np.testing.assert_array_equal(derivatives(P, x)[:5], derivatives(P1, x1)[:5])
+
+
+@pytest.mark.parametrize("name, slot", [("DC1", 2), ("ST3", 2), ("smpexc", 2)])
+def test_regulator_is_non_windup(name, slot):
+    """IEEE 421.5 E.5: V_R beyond Vrmax and driven outward is put back on the limit with
+    a zero derivative; driven inward it leaves at once; PSTess (exc_dc12, exc_st3) acts
+    only beyond the limit, so at the limit the outward derivative stays."""
+    P, x0 = started(ROWS[name])
+    hi = P[0, exc.E.VRMAX]
+    up = P.copy()
+    up[0, exc.E.VREF] += 1.0
+    x = x0.copy()
+    x[slot, 0] = hi + 0.5
+    dx = derivatives(up, x)
+    assert x[slot, 0] == hi and dx[slot, 0] == 0.0
+    down = P.copy()
+    down[0, exc.E.VREF] -= 1.0
+    x[slot, 0] = hi
+    assert derivatives(down, x)[slot, 0] < 0 and x[slot, 0] == hi
+    if name != "smpexc":
+        assert derivatives(up, x, ieee=False)[slot, 0] > 0
+
+
+def test_st3_regulator_input_is_limited():
+    """exc_st3: the error is limited to [VImin, VImax] before K_J: the lead-lag state
+    moves at (K_J VImax - x)/T_B for a large error."""
+    P, x = started(ST3)
+    P[0, exc.E.VREF] += 1.0
+    assert derivatives(P, x)[1, 0] == pytest.approx((200 * 0.2 - x[1, 0]) / 6.67, rel=1e-14)
+
+
+def test_exst1_rate_feedback_is_a_washout_on_efd():
+    """EXST1: the feedback s K_F/(1 + s T_F) Efd = K_F/T_F (Efd - R_f) subtracted from the
+    error before the V_I limits; its state lags Efd by T_F."""
+    P, x = started(ST1)
+    dx = derivatives(P, x, efd=EFD0 + 0.5)
+    assert dx[3, 0] == pytest.approx(0.5 / 1.0, rel=1e-14)
+    err = P[0, exc.E.VREF] - x[0, 0] - 0.01 / 1.0 * 0.5
+    assert dx[1, 0] == pytest.approx((err - x[1, 0]) / 0.02, rel=1e-12)
+
+
+def test_layout_names_every_packed_column_once():
+    assert exc.E._fields == tuple(name for name, _ in exc.PACKED)
+    assert list(exc.E) == list(range(len(exc.PACKED)))
+    with pytest.raises(ValueError):
+        layout("Twice", (("KA", "KA"), ("KA", "TA")))
+    with pytest.raises(AttributeError, match="KX reads 'KX'"):
+        check_packed(exc.ExciterParams, (*exc.PACKED, ("KX", "KX")), ("Vref",))

@@ -1,0 +1,147 @@
+"""Governor models, one by one (stabctl.models.governors): the initial point is an
+equilibrium at the initial mechanical power, the non-windup gate and valve limits (IEEE
+Std 421.5-2016 annex E.5 rule), step responses against their closed forms, the named
+packed layout."""
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from stabctl.case import GovernorTable
+from stabctl.errors import CaseError
+from stabctl.io import load_case
+from stabctl.models import governors as gov
+
+#: tg_con rows (PST manual tg; stabctl types 2-5, docs/pst_models.md 4.1-4.3)
+TG = [1, 1, 1, 20, 1.2, 0.4, 0.5, 2.0, 1.0, 3.0, 0.0]
+TGOV1 = [2, 1, 1, 20, 1.2, 0.49, 7.0, 2.1, 0, 0, 0.1, 2.0]
+IEEEG1 = [3, 1, 1, 20, 0.95, 0.2, 0.1, 0, 0.1, 0, 0, 0, 0, 8.72, 0.5, -1, 0, 0, 0, 0, 0.3, 0,
+          0.6, 0.1]
+#: HYGOV: GMAX 1, T_g 0.5, T_f 0.05, T_w 1.2, A_t 1.1, GMIN 0, D_turb 0.5, VELM 0.2,
+#: R 0.04, r 0.5, q_NL 0.08, K_g = 1/(r T_r) = 0.4, velm_rel 0
+HYGOV = [4, 1, 1, 0, 1.0, 0.5, 0.05, 0, 1.2, 1.1, 0.0, 0.5, 0, 0, 0.2, -0.2, 0.04, 0.5, 0.08,
+         0.4, 0.0]
+#: IEESGO: K_1 = 20, T_1 0.1, T_2/T_3 = 0.5/2, T_4 0.3, T_5 4, T_6 0.6, fractions (0.3, 0.3, 0.4)
+IEESGO = [5, 1, 1, 20, 1.2, 2.0, 0.1, 0.5, 0.3, 4.0, 0.0, 0, 0.6, 0, 0, 0, 0.3, 0, 0.3, 0,
+          0.4, 0, 0, 0]
+ROWS = {"tg": TG, "TGOV1": TGOV1, "IEEEG1": IEEEG1, "HYGOV": HYGOV, "IEESGO": IEESGO}
+PM0 = 0.7                                     # initial mechanical power (machine base)
+
+
+def params(row):
+    case = load_case("kundur")
+    return gov.governor_params(case.replace(governors=GovernorTable.from_matrix([row])))
+
+
+def started(row, pm0=PM0):
+    x, Pref = gov.initialise(params(row), np.array([pm0]))
+    return params(row).packed(Pref), x
+
+
+def derivatives(P, x, omega=1.0):
+    dx = np.full_like(x, np.nan)
+    gov.derivatives(P, x, 0, omega, dx)
+    return dx
+
+
+def pmech_after(P, x0, t, omega=1.0):
+    """Mechanical power after t s at constant speed omega."""
+    def f(_, y):
+        return derivatives(P, y.reshape(x0.shape).copy(), omega).ravel()
+    sol = solve_ivp(f, (0, t), x0.ravel(), rtol=1e-12, atol=1e-14)
+    return gov.pmech(P, sol.y[:, -1].reshape(x0.shape), 0, omega)
+
+
+@pytest.mark.parametrize("name", sorted(ROWS))
+def test_initial_point_is_an_equilibrium(name):
+    """At rated speed the initial states give the initial mechanical power and every
+    derivative is 0 (PST tg flag 0; PSS/E's initialisation of the others)."""
+    P, x = started(ROWS[name])
+    assert gov.pmech(P, x, 0, 1.0) == pytest.approx(PM0, rel=1e-14)
+    assert np.abs(derivatives(P, x)).max() < 1e-13
+
+
+def test_tg_step_response_is_its_servo_lag():
+    """tg with T_3 = T_c and T_4 = T_5 (both lead-lags cancel): P_ref step dP gives
+    pmech = pm0 + dP (1 - e^(-t/T_s)); at t = T_s the fraction 1 - e^-1."""
+    row = TG[:7] + [0.5, 3.0, 3.0, 0.0]
+    P, x = started(row)
+    dP = 1e-4
+    P[0, gov.G.PREF] += dP
+    assert (pmech_after(P, x, 0.4) - PM0) / dP == pytest.approx(1 - np.exp(-1), rel=1e-6)
+
+
+def test_tg_lead_lags_jump_by_their_ratios():
+    """tg: the servo state stepped by d moves pmech by d T_3/T_c T_4/T_5 at once."""
+    P, x = started(TG)
+    x[0, 0] += 1e-3
+    assert gov.pmech(P, x, 0, 1.0) - PM0 == pytest.approx(1e-3 * 2.0 / 0.5 * 1.0 / 3.0,
+                                                          rel=1e-9)
+
+
+def test_tgov1_valve_stays_at_its_limit_while_driven_outward():
+    """TGOV1's valve (non-windup, [VMIN, VMAX]): beyond VMAX and driven outward it is put
+    back on VMAX with a zero derivative; driven inward it leaves."""
+    P, x = started(TGOV1)
+    up = P.copy()
+    up[0, gov.G.PREF] += 1.0
+    x[0, 0] = 1.3
+    assert derivatives(up, x)[0, 0] == 0.0 and x[0, 0] == 1.2
+    assert derivatives(P, x)[0, 0] == pytest.approx((PM0 - 1.2) / 0.49, rel=1e-14)
+
+
+def test_ieeeg1_gate_is_non_windup_at_pmax():
+    """IEEEG1's gate at PMAX driven open stays there (derivative 0); closing leaves."""
+    P, x = started(IEEEG1)
+    up = P.copy()
+    up[0, gov.G.PREF] += 1.0
+    x[1, 0] = 0.95
+    assert derivatives(up, x)[1, 0] == 0.0 and x[1, 0] == 0.95
+    assert derivatives(P, x)[1, 0] == -1.0              # (0.7 - 0.95)/T3 limited to Uc
+
+
+def test_hygov_gate_integrator_is_non_windup_and_rate_limited():
+    """HYGOV: the gate integrator's rate K_g e is limited to [-VELM, VELM]; the
+    integrator (position limits [GMIN, GMAX]) beyond GMAX and driven open is put back
+    on GMAX with a zero derivative."""
+    P, x = started(HYGOV)
+    up = P.copy()
+    up[0, gov.G.PREF] += 1.0
+    x[0, 0] = 1.0                                      # a large filtered error e
+    assert derivatives(up, x)[1, 0] == 0.2             # 0.4 e limited to VELM
+    x[1, 0] = 1.3                                      # beyond GMAX, opening
+    dx = derivatives(up, x)
+    assert dx[1, 0] == 0.0 and x[1, 0] == 1.0
+
+
+def test_hygov_water_column_starts_at_rated_head():
+    """HYGOV: at the initial point the flow is q0 = pm0/A_t + q_NL at head (q/g)^2 = 1;
+    pm drops by D_turb g dw at a speed step."""
+    P, x = started(HYGOV)
+    q0 = PM0 / 1.1 + 0.08
+    assert x[3, 0] == pytest.approx(q0, rel=1e-15) and x[2, 0] == pytest.approx(q0, rel=1e-15)
+    assert gov.pmech(P, x, 0, 1.01) == pytest.approx(PM0 - 0.5 * 0.01 * q0, rel=1e-12)
+
+
+def test_ieesgo_step_response_is_its_t4_lag():
+    """IEESGO with T_1, T_3, T_5, T_6 absent: P_ref step dP through the T_4 lag, pmech =
+    pm0 + (sum of fractions) dP (1 - e^(-t/T_4)); at t = T_4 the fraction 1 - e^-1."""
+    row = list(IEESGO)
+    row[5] = row[6] = row[9] = row[12] = 0.0              # T3 (Ts), T1 (Tc), T5, T6
+    row[7] = 0.0                                           # T2 (no lead either)
+    P, x = started(row)
+    dP = 1e-4
+    P[0, gov.G.PREF] += dP
+    assert (pmech_after(P, x, 0.3) - PM0) / dP == pytest.approx(1 - np.exp(-1), rel=1e-6)
+
+
+def test_lag_time_constants_below_the_threshold_are_refused():
+    """tg's lags always exist in PST: a T_s below 1e-3 s (which would make the lag
+    absent) is refused, naming the field."""
+    with pytest.raises(CaseError, match="tg_con row 1, field 'Ts': must be >= 0.001 s"):
+        params(TG[:5] + [5e-4] + TG[6:])
+
+
+def test_layout_names_every_packed_column_once():
+    assert gov.G._fields == tuple(name for name, _ in gov.PACKED)
+    assert params(HYGOV).packed(np.zeros(1)).shape == (1, len(gov.G))

@@ -1,0 +1,118 @@
+"""PSS models, one by one (stabctl.models.pss): rest at the initial point, the output's
+jump at an input step against the transfer function's high-frequency gain, the output
+limits, the named packed layout."""
+
+import numpy as np
+import pytest
+
+from stabctl.case import PssTable
+from stabctl.errors import CaseError
+from stabctl.io import load_case
+from stabctl.models import pss as pss_
+
+#: pss_con rows (PST manual 3.30 Table 13; stabctl types 3, 4)
+PST_SPEED = [1, 1, 200.0, 10.0, 0.05, 0.02, 3.0, 5.4, 0.2, -0.05]
+PST_POWER = [2] + PST_SPEED[1:]
+#: PSS/E IEEEST on speed: K_w = 2, T_w = 5, lead-lags (0.2/0.05, 0.3/0.1, 0.4/0.2), K1 = 10,
+#: input lag Tr1 = 0.02, filter 1/(1 + 0.1 s)
+PSSE = [3, 1, 2.0, 5.0, 0.2, 0.05, 0.3, 0.1, 0.5, -0.5, 0.4, 0.2, 1, 10.0, 0.02, 0, 0, 0,
+        0.1, 0, 0, 0, 0, 0]
+#: STAB2A: K2 T2 = 1.5 (K2 = 0.5, T2 = 3), K3 = 0.8, T3 = 0.5, K4 = 0.3, K5 = 1.2, T5 = 0.4
+STAB2A = [4, 1, 1.5, 3.0, 0, 0, 0, 0, 0.5, -0.5, 1.2, 0.4, 0, 0.8, 0.5, 0, 0.3, 0]
+ROWS = {"PST speed": PST_SPEED, "PST power": PST_POWER, "PSS/E": PSSE, "STAB2A": STAB2A}
+OMEGA0, PE0 = 1.0, 0.7                              # initial speed (pu), power (machine base)
+
+
+def params(row):
+    case = load_case("kundur")
+    return pss_.pss_params(case.replace(pss=PssTable.from_matrix([row])))
+
+
+def started(row, omega=OMEGA0, pe=PE0):
+    """(P, x) of a PSS at rest at speed omega and power pe."""
+    p = params(row)
+    u1, u2 = pss_.pss_inputs(p, np.array([omega]), np.array([pe]), np.ones(1))
+    return p.packed(), pss_.initialise(p, u1, u2)
+
+
+def output(P, x, omega=OMEGA0, pe=PE0):
+    dx = np.full_like(x, np.nan)
+    return pss_.output_and_derivatives(P, x, 0, omega, pe, dx), dx
+
+
+@pytest.mark.parametrize("name", sorted(ROWS))
+def test_initial_point_is_at_rest(name):
+    """At the initial point the output is 0 and every derivative 0 (washouts at their
+    input; the PSS/E filter of DC gain 1 at its input)."""
+    P, x = started(ROWS[name])
+    y, dx = output(P, x)
+    assert y == pytest.approx(0.0, abs=1e-15)
+    assert np.abs(dx[:len(pss_.STATE_NAMES[ROWS[name][0]])]).max() < 1e-13
+
+
+def test_pst_speed_pss_jumps_by_its_high_frequency_gain():
+    """PST pss: K s T_w/(1 + s T_w) (1 + s T_1)/(1 + s T_2) (1 + s T_3)/(1 + s T_4) on the
+    speed; a step dw gives y(0+) = K dw T_1 T_3/(T_2 T_4) (K = column 3 / T_w)."""
+    P, x = started(PST_SPEED)
+    dw = 1e-5
+    y, _ = output(P, x, omega=OMEGA0 + dw)
+    assert y == pytest.approx(200.0 / 10.0 * dw * 0.05 * 3.0 / (0.02 * 5.4), rel=1e-9)
+
+
+def test_pst_power_pss_takes_the_power_and_is_limited():
+    """PST pss type 2 on the electrical power; its output clipped to [ymin, ymax]."""
+    P, x = started(PST_POWER)
+    dp = 1e-6
+    assert output(P, x, pe=PE0 + dp)[0] == pytest.approx(
+        20.0 * dp * 0.05 * 3.0 / (0.02 * 5.4), rel=1e-7)
+    assert output(P, x, pe=PE0 + 1.0)[0] == 0.2
+    assert output(P, x, pe=PE0 - 1.0)[0] == -0.05
+
+
+def test_psse_stabiliser_jump_and_filter():
+    """IEEEST: K1/(1 + s Tr1), filter, K_w s/(1 + s T_w), three lead-lags: the lagged
+    input and the filter make the output continuous at a speed step, and with both
+    absent it jumps by K1 dw K_w/T_w T1 T3 T5/(T2 T4 T6)."""
+    P, x = started(PSSE)
+    dw = 1e-5
+    assert output(P, x, omega=OMEGA0 + dw)[0] == pytest.approx(0.0, abs=1e-15)
+    row = PSSE[:14] + [0.0] + PSSE[15:18] + [0.0] * 6
+    P, x = started(row)
+    assert output(P, x, omega=OMEGA0 + dw)[0] == pytest.approx(
+        10.0 * dw * 2.0 / 5.0 * 0.2 * 0.3 * 0.4 / (0.05 * 0.1 * 0.2), rel=1e-9)
+
+
+def test_psse_filter_is_its_transfer_function():
+    """The filter 1/(1 + A1 s), A1 = 0.1 s, in controllable form (state z, output w = c_0
+    z): w moves at (v - w)/A1 for its input v = K1 dw (the lag Tr1 at its new value)."""
+    P, x = started(PSSE)
+    dw = 1e-3
+    v = 10.0 * dw
+    x[0, 0], x[2, 0] = v, 0.3 * v / P[0, pss_.S.FC0]
+    _, dx = output(P, x, omega=OMEGA0 + dw)
+    w = P[0, pss_.S.FC0] * x[2, 0]
+    assert P[0, pss_.S.FC0] * dx[2, 0] == pytest.approx((v - w) / 0.1, rel=1e-12)
+
+
+def test_stab2a_jump_through_three_washouts():
+    """STAB2A: -(K_2 T_2 s/(1 + s T_2))^3 on the power, K_3/(1 + s T_3) + K_4, then
+    (K_5/(1 + s T_5))^2; with T_3 and T_5 absent a power step dp gives
+    y(0+) = -K_5^2 (K_3 + K_4) (K_2)^3 dp."""
+    row = list(STAB2A)
+    row[11] = row[14] = 0.0                          # T_5 (column 12), T_3 (column 15)
+    P, x = started(row)
+    dp = 1e-6
+    assert output(P, x, pe=PE0 + dp)[0] == pytest.approx(
+        -1.2 ** 2 * (0.8 + 0.3) * 0.5 ** 3 * dp, rel=1e-8)
+
+
+def test_pst_pss_first_lead_lag_needs_its_lag():
+    """PST's pss always has its first lead-lag: T_2 below 1e-3 s (which would make the
+    block absent) is refused."""
+    with pytest.raises(CaseError, match="pss_con row 1, field 'T2': the first lead-lag"):
+        params(PST_SPEED[:5] + [5e-4] + PST_SPEED[6:])
+
+
+def test_layout_names_every_packed_column_once():
+    assert pss_.S._fields == tuple(name for name, _ in pss_.PACKED)
+    assert params(PSSE).packed().shape == (1, len(pss_.S))
