@@ -16,13 +16,15 @@ windup limits); PSS/E Model Library (the PSS/E models' blocks).
 
 from __future__ import annotations
 
+import numpy as np
+
 from stabctl._jit.decorators import kernel
 
 #: a time constant below this (s) means the block is absent
 LBND = 1e-3
 
 #: washout gain placement: K ((u - x)/T), (K (u - x))/T, (K/T) (u - x)
-GAIN_AFTER, GAIN_BEFORE, GAIN_OVER_T = 0, 1, 2
+GAIN_AFTER, GAIN_BEFORE, GAIN_OVER_T = np.int64(0), np.int64(1), np.int64(2)
 
 
 @kernel
