@@ -3,7 +3,8 @@ the mean over runs of the largest |f_i - f_COI| (mHz) of every estimate, and the
 actions per run, at several integration steps
 (`stabctl.studies.estimation_report.ambient_figures`, the report's runs).
 
-Run: python analysis/ambient_step.py kundur 0.005 0.0041666666666666667 0.0020833333333333333 0.0010416666666666667
+Run: python analysis/ambient_step.py kundur 0.005 0.0041666666666666667 0.0020833333333333333
+0.0010416666666666667
      python analysis/ambient_step.py miniwecc 0.005 0.0025 [--runs N] [--seconds S]
 """
 
@@ -21,17 +22,21 @@ def main(argv=None):
     ap.add_argument("--seconds", type=float, default=AMBIENT_S)
     a = ap.parse_args(argv)
     case = load_case(a.case)
-    print(f"{a.case}, {a.runs} runs of {a.seconds:g} s: mean (max) over runs of the largest "
-          "|f_i - f_COI| (mHz); false actions per run")
+    print(
+        f"{a.case}, {a.runs} runs of {a.seconds:g} s: mean (max) over runs of the largest "
+        "|f_i - f_COI| (mHz); false actions per run"
+    )
     print("| step (ms) | true | raw | kf | ekf | actions raw / kf / ekf |")
     print("|---|---|---|---|---|---|")
     for h in a.steps:
         fig = ambient_figures(case, h=h, runs=a.runs, t_end=a.seconds)
-        cell = lambda e: (f"{fig[e]['max_rel_mhz']['mean']:.2f} "  # noqa: E731
-                          f"({fig[e]['max_rel_mhz']['max']:.2f})")
+        cell = lambda e: f"{fig[e]['max_rel_mhz']['mean']:.2f} ({fig[e]['max_rel_mhz']['max']:.2f})"
         acts = " / ".join(f"{fig[e]['actions']['mean']:.2f}" for e in ("raw", "kf", "ekf"))
-        print(f"| {h * 1e3:.3f} | {cell('true')} | {cell('raw')} | {cell('kf')} | "
-              f"{cell('ekf')} | {acts} |", flush=True)
+        print(
+            f"| {h * 1e3:.3f} | {cell('true')} | {cell('raw')} | {cell('kf')} | "
+            f"{cell('ekf')} | {acts} |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -13,8 +13,10 @@ from stabctl.io import load_case
 from stabctl.network.powerflow import solve_powerflow
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data" / "pstess"
-REFS = {"kundur": "kundur_d2asbegp_default_loadflow_bus.csv",
-        "miniwecc": "miniwecc_base_default_loadflow_bus.csv"}
+REFS = {
+    "kundur": "kundur_d2asbegp_default_loadflow_bus.csv",
+    "miniwecc": "miniwecc_base_default_loadflow_bus.csv",
+}
 
 for name, ref_file in REFS.items():
     ref = np.loadtxt(DATA / ref_file, delimiter=",")
@@ -24,6 +26,8 @@ for name, ref_file in REFS.items():
     da = np.max(np.abs(got[:, 2] - ref[:, 2]))
     dpq = np.max(np.abs(got[:, 3:7] - ref[:, 3:7]))
     rest = np.max(np.abs(got[:, 7:] - ref[:, 7:]))
-    print(f"{name:9s} buses {len(ref):4d}  iterations {res.iterations}  "
-          f"max|dV| {dv:.2e} pu  max|dtheta| {da:.2e} deg  max|dPQ| {dpq:.2e} pu  "
-          f"cols 8-15 max diff {rest:.1e}")
+    print(
+        f"{name:9s} buses {len(ref):4d}  iterations {res.iterations}  "
+        f"max|dV| {dv:.2e} pu  max|dtheta| {da:.2e} deg  max|dPQ| {dpq:.2e} pu  "
+        f"cols 8-15 max diff {rest:.1e}"
+    )

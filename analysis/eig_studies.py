@@ -15,5 +15,5 @@ from stabctl.studies.eig_validation import write_validation
 REF = Path(__file__).resolve().parent.parent / "tests" / "data" / "pstess"
 
 if __name__ == "__main__":
-    logging.basicConfig(level=logging.INFO, format="%(message)s")   # the files written
+    logging.basicConfig(level=logging.INFO, format="%(message)s")  # the files written
     write_validation("reports", REF)

@@ -11,13 +11,13 @@ clearing, the relative speed the controller acted on against the truth (mHz).
 
 import numpy as np
 
-from stabctl.studies.cases import CASE1
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import fault_with_clearing
 from stabctl.estimation import closed_loop as cl
 from stabctl.estimation.filters import FrequencyKF
 from stabctl.estimation.models import relative_speeds
 from stabctl.io import load_case
-from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.driver import Simulator
+from stabctl.studies.cases import CASE1
 
 
 class ExtrapolatingKF(FrequencyKF):
@@ -43,17 +43,24 @@ def main():
     sim = Simulator(case)
     events = [fault_with_clearing(case, CASE1.bus, CASE1.far_bus, CASE1.fault.t_fault, 20)]
     t_clear = max(events[0].times())
-    for label, est, ext in (("ideal", "ideal", False), ("kf, ROCOF extrapolated", "kf", True),
-                            ("kf, held (baseline)", "kf", False)):
+    for label, est, ext in (
+        ("ideal", "ideal", False),
+        ("kf, ROCOF extrapolated", "kf", True),
+        ("kf, held (baseline)", "kf", False),
+    ):
         r = run(sim, events, est, ext)
         d, res = r.diagnostics, r.result
-        print(f"{label}: stable {res.stable}, {len(res.meta['switchings'])} switchings, "
-              f"run end {res.t[-1]:.2f} s")
+        print(
+            f"{label}: stable {res.stable}, {len(res.meta['switchings'])} switchings, "
+            f"run end {res.t[-1]:.2f} s"
+        )
         true = res.speed_at(np.minimum(d.t + d.latency, res.t[-1]))
         rel = relative_speeds(true, true, res.inertia, d.coi)[0] * d.f0
         for k in np.flatnonzero((d.t > t_clear) & (d.t < t_clear + 0.2)):
-            print(f"  t {d.t[k]:.3f} s  acted on {np.round(d.rel[k] * 1e3).astype(int)}  "
-                  f"true {np.round(rel[k] * 1e3).astype(int)}  modes {d.modes[k]}")
+            print(
+                f"  t {d.t[k]:.3f} s  acted on {np.round(d.rel[k] * 1e3).astype(int)}  "
+                f"true {np.round(rel[k] * 1e3).astype(int)}  modes {d.modes[k]}"
+            )
 
 
 if __name__ == "__main__":

@@ -25,16 +25,28 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--records", default="loop_cct_step.jsonl")
     a = ap.parse_args(argv)
-    print(f"{a.case}, fault {a.bus}-{a.far_bus}, {a.esd_pct:g} % ESDs, {a.estimator}, "
-          f"{a.runs} seeds: CCT (cycles)")
+    print(
+        f"{a.case}, fault {a.bus}-{a.far_bus}, {a.esd_pct:g} % ESDs, {a.estimator}, "
+        f"{a.runs} seeds: CCT (cycles)"
+    )
     print("| step (ms) | mean | std | min | max | values |")
     print("|---|---|---|---|---|---|")
     for h in a.steps:
-        r = cl.cct_study(a.case, LineFault(a.bus, a.far_bus), [a.esd_pct], a.runs, a.records,
-                         estimators=(a.estimator,), model=ModelOptions(h=h),
-                         runner=RunnerOptions(a.workers, progress=False))[a.esd_pct][a.estimator]
-        print(f"| {h * 1e3:.4g} | {r['mean']:.3f} | {r['std']:.3f} | {r['min']:.2f} | "
-              f"{r['max']:.2f} | {' '.join(f'{v:g}' for v in r['values'])} |", flush=True)
+        r = cl.cct_study(
+            a.case,
+            LineFault(a.bus, a.far_bus),
+            [a.esd_pct],
+            a.runs,
+            a.records,
+            estimators=(a.estimator,),
+            model=ModelOptions(h=h),
+            runner=RunnerOptions(a.workers, progress=False),
+        )[a.esd_pct][a.estimator]
+        print(
+            f"| {h * 1e3:.4g} | {r['mean']:.3f} | {r['std']:.3f} | {r['min']:.2f} | "
+            f"{r['max']:.2f} | {' '.join(f'{v:g}' for v in r['values'])} |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -18,10 +18,11 @@ def main(argv=None):
     ap.add_argument("--out", default="reports")
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(message)s")   # progress on stderr
+    logging.basicConfig(level=logging.INFO, format="%(message)s")  # progress on stderr
     for name in args.cases:
-        path = placement_study(name, args.out, args.workers,
-                               generated_by="python analysis/placement_study.py")
+        path = placement_study(
+            name, args.out, args.workers, generated_by="python analysis/placement_study.py"
+        )
         print(f"wrote {path}")
 
 

@@ -15,10 +15,10 @@ Run: python benchmarks/bench_cct.py
 import os
 import time
 
+from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
 from stabctl.stability.cct import SearchOptions, critical_clearing_time
 from stabctl.studies.cases import CASE1, CASE2
-from stabctl.dynamics.driver import Simulator
 
 SEARCHES = (  # case, fault, target s (None: no target), label
     ("miniwecc", CASE2.fault, 3.0, "Case 2: bus 83, line 83-33"),
@@ -29,24 +29,37 @@ SEARCHES = (  # case, fault, target s (None: no target), label
 def main():
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
-    print(f"{'case':9} {'fault':28} {'conv':7} {'h ms':>6} {'err bar':>7} {'build s':>8} "
-          f"{'CCT s':>7} {'cycles':>7} {'err ms':>6} {'sims':>5} {'wall s':>7} {'target s':>9}")
+    print(
+        f"{'case':9} {'fault':28} {'conv':7} {'h ms':>6} {'err bar':>7} {'build s':>8} "
+        f"{'CCT s':>7} {'cycles':>7} {'err ms':>6} {'sims':>5} {'wall s':>7} {'target s':>9}"
+    )
     for name, fault, target, label in SEARCHES:
         for conv in ("pstess", "ieee"):
             t = time.perf_counter()
             sim = Simulator(load_case(name), conventions=conv)
             build = time.perf_counter() - t
-            sim.run(fault.events(0.05), t_end=fault.t_fault + 1.0)   # warm-up (compilation)
+            sim.run(fault.events(0.05), t_end=fault.t_fault + 1.0)  # warm-up (compilation)
             for check in (False, True):
-                res = min((critical_clearing_time(sim, fault, SearchOptions(error_check=check))
-                           for _ in range(3)), key=lambda r: r.wall_time_s)
-                verdict = "" if target is None or conv == "pstess" else \
-                    f"{target:9.1f} {'ok' if res.wall_time_s <= target else 'MISSED'}"
+                res = min(
+                    (
+                        critical_clearing_time(sim, fault, SearchOptions(error_check=check))
+                        for _ in range(3)
+                    ),
+                    key=lambda r: r.wall_time_s,
+                )
+                verdict = (
+                    ""
+                    if target is None or conv == "pstess"
+                    else f"{target:9.1f} {'ok' if res.wall_time_s <= target else 'MISSED'}"
+                )
                 err = "-" if res.numerical_error_s is None else f"{1000 * res.numerical_error_s:g}"
-                print(f"{name:9} {label:28} {conv:7} {1000 * res.step_s:6.3g} "
-                      f"{'yes' if check else 'no':>7} {build:8.2f} {res.cct_s:7.3f} "
-                      f"{res.cct_cycles:7.2f} {err:>6} {res.n_simulations:5d} "
-                      f"{res.wall_time_s:7.2f} {verdict}", flush=True)
+                print(
+                    f"{name:9} {label:28} {conv:7} {1000 * res.step_s:6.3g} "
+                    f"{'yes' if check else 'no':>7} {build:8.2f} {res.cct_s:7.3f} "
+                    f"{res.cct_cycles:7.2f} {err:>6} {res.n_simulations:5d} "
+                    f"{res.wall_time_s:7.2f} {verdict}",
+                    flush=True,
+                )
 
 
 if __name__ == "__main__":

@@ -14,14 +14,14 @@ Run: python benchmarks/bench_estimator.py
 import os
 import time
 
-from stabctl.studies.cases import CASE2
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.estimation import pmu
 from stabctl.estimation.filters import FrequencyKF, SwingEKF
 from stabctl.estimation.models import machine_models, relative_speeds
 from stabctl.estimation.reference import SwingEKFReference
-from stabctl.estimation import pmu
 from stabctl.io import load_case
-from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.driver import Simulator
+from stabctl.studies.cases import CASE2
 
 RATE = 60.0
 TARGET_US = 1e6 / RATE / 100
@@ -42,7 +42,14 @@ def main():
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     case = load_case("miniwecc")
-    res = Simulator(case).run([fault_with_clearing(case, CASE2.bus, CASE2.far_bus, CASE2.fault.t_fault, CASE2.cycles["estimation"])], t_end=10.0)
+    res = Simulator(case).run(
+        [
+            fault_with_clearing(
+                case, CASE2.bus, CASE2.far_bus, CASE2.fault.t_fault, CASE2.cycles["estimation"]
+            )
+        ],
+        t_end=10.0,
+    )
     pmus = pmu.machine_pmus(case)
     settings = pmu.PMUSettings(rate=RATE, drop_prob=0.05)
     frames = list(pmu.measure(pmu.phasor_truth(case, res, pmus), settings, seed=1))
@@ -51,11 +58,16 @@ def main():
     rows = [
         ("SwingEKF + relative speeds", lambda: SwingEKF(models, settings), relative),
         ("FrequencyKF + relative speeds", lambda: FrequencyKF(models.pmu, settings), relative),
-        ("SwingEKFReference (filterpy)", lambda: SwingEKFReference(models, settings),
-         lambda out: None),
+        (
+            "SwingEKFReference (filterpy)",
+            lambda: SwingEKFReference(models, settings),
+            lambda out: None,
+        ),
     ]
-    print(f"miniWECC, {models.n} machines, {len(frames)} frames at {RATE:g} frames/s; "
-          f"target < {TARGET_US:.0f} us per frame (100x real time)")
+    print(
+        f"miniWECC, {models.n} machines, {len(frames)} frames at {RATE:g} frames/s; "
+        f"target < {TARGET_US:.0f} us per frame (100x real time)"
+    )
     print(f"{'estimator':32} {'us/frame':>9} {'x real time':>12}")
     for label, make, consume in rows:
         us = per_frame_us(make, frames, consume)

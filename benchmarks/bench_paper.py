@@ -33,8 +33,11 @@ def _clear_cache() -> int:
     working directory when it holds a source tree, else the installed one), as after a
     fresh installation; the number of files deleted."""
     code = "from stabctl._jit.cache import clear_cache; print(clear_cache())"
-    return int(subprocess.run([sys.executable, "-c", code], check=True, text=True,
-                              stdout=subprocess.PIPE).stdout)
+    return int(
+        subprocess.run(
+            [sys.executable, "-c", code], check=True, text=True, stdout=subprocess.PIPE
+        ).stdout
+    )
 
 
 def run(parts, out: Path) -> tuple[float, dict]:
@@ -53,10 +56,18 @@ def run(parts, out: Path) -> tuple[float, dict]:
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", nargs="+", choices=PARTS, default=list(PARTS))
-    ap.add_argument("--cold", action="store_true",
-                    help="delete stabctl's compiled-kernel cache first (as a fresh install)")
-    ap.add_argument("--keep", type=Path, default=None, metavar="DIR",
-                    help="write the reports to DIR (must be empty or absent) and keep them")
+    ap.add_argument(
+        "--cold",
+        action="store_true",
+        help="delete stabctl's compiled-kernel cache first (as a fresh install)",
+    )
+    ap.add_argument(
+        "--keep",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="write the reports to DIR (must be empty or absent) and keep them",
+    )
     args = ap.parse_args()
     if args.keep is not None and args.keep.exists() and any(args.keep.iterdir()):
         sys.exit(f"--keep {args.keep}: not empty (the run must not reuse earlier records)")
@@ -69,15 +80,18 @@ def main():
         if tmp:
             shutil.rmtree(tmp, ignore_errors=True)
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    print(f"stabctl paper --only {' '.join(args.only)}: {wall:.1f} s wall on {cores} cores "
-          f"(kernel cache {'cleared: ' + str(cleared) + ' files' if args.cold else 'as found'};"
-          f" one run, fresh output directory)")
+    print(
+        f"stabctl paper --only {' '.join(args.only)}: {wall:.1f} s wall on {cores} cores "
+        f"(kernel cache {'cleared: ' + str(cleared) + ' files' if args.cold else 'as found'};"
+        f" one run, fresh output directory)"
+    )
     print(run_summary(log))
     inside = sum(s["seconds"] for s in log["sections"])
     print(f"{wall - inside:.1f} s start-up, imports and file moves outside the sections")
     for name, r in log["records"].items():
-        print(f"records {name}: job time summed {r['job_wall_s']} s, longest "
-              f"{r['longest_job_s']} s")
+        print(
+            f"records {name}: job time summed {r['job_wall_s']} s, longest {r['longest_job_s']} s"
+        )
     gaps = [b[0] - a[0] for a, b in zip(log["progress"], log["progress"][1:])]
     if gaps:
         print(f"longest stretch between two progress lines: {max(gaps):.0f} s")

@@ -2,8 +2,8 @@
 
 1. The convex program alone, 34 sites (miniWECC): 10 CCT cuts (gradients drawn at random,
    seed 0, like SIME's: a few sites per contingency), the 33 real damping rows of the
-   linearised miniWECC (`stabctl.smallsignal.damping`, zeta_min 0.05), elastic rows and a trust region,
-   as inside the loop; median of 20 solves: Clarabel's own time and the wall time with
+   linearised miniWECC (`stabctl.smallsignal.damping`, zeta_min 0.05), elastic rows and a trust
+   region, as inside the loop; median of 20 solves: Clarabel's own time and the wall time with
    cvxpy's canonicalisation.  Target: well under 1 s.
 2. The verified placement (`stabctl.placement.loop.place`) of each case's DEFAULT
    contingencies (`stabctl sweep-cct`), targets = CCT of the uniform 5 % fleet, 2 workers:
@@ -19,23 +19,25 @@ import time
 import numpy as np
 
 from stabctl.io import load_case
-from stabctl.studies.cases import DEFAULT_FAULTS
-from stabctl.stability.cct import cached_simulator
-from stabctl.smallsignal.damping import DampingModel, relay_df
-from stabctl.smallsignal.linearise import linearise
-from stabctl.placement.program import CCTCut, candidate_sites, solve_allocation
 from stabctl.parallel import RunnerOptions
 from stabctl.placement.evaluation import Contingency, VerifyOptions
 from stabctl.placement.loop import Study, WarmStart, baseline, evaluations, place
+from stabctl.placement.program import CCTCut, candidate_sites, solve_allocation
+from stabctl.smallsignal.damping import DampingModel, relay_df
+from stabctl.smallsignal.linearise import linearise
+from stabctl.stability.cct import cached_simulator
+from stabctl.studies.cases import DEFAULT_FAULTS
 
 
 def convex_solve_time(n_rep: int = 20) -> None:
     case = load_case("miniwecc")
     sites = candidate_sites(case)
-    sys_ = linearise(cached_simulator("miniwecc"),
-                     esd_buses=list(dict.fromkeys(s.bus for s in sites)))
-    rows = DampingModel(sys_, sites, relay_df(0.1, 0.2, case.freq_hz).real,
-                        case.base_mva).rows(np.zeros(len(sites)), 0.05)
+    sys_ = linearise(
+        cached_simulator("miniwecc"), esd_buses=list(dict.fromkeys(s.bus for s in sites))
+    )
+    rows = DampingModel(sys_, sites, relay_df(0.1, 0.2, case.freq_hz).real, case.base_mva).rows(
+        np.zeros(len(sites)), 0.05
+    )
     rng = np.random.default_rng(0)
     cuts = []
     for c in range(10):
@@ -44,14 +46,23 @@ def convex_solve_time(n_rep: int = 20) -> None:
         cuts.append(CCTCut(f"c{c}", 0.15, 0.1, g, np.zeros(len(sites))))
     times, walls = [], []
     for _ in range(n_rep):
-        a = solve_allocation(sites, cuts, damping=rows, cct_penalty=1e5, penalty=1e5,
-                             trust=(np.zeros(len(sites)), 500.0), safety_s=0.002)
+        a = solve_allocation(
+            sites,
+            cuts,
+            damping=rows,
+            cct_penalty=1e5,
+            penalty=1e5,
+            trust=(np.zeros(len(sites)), 500.0),
+            safety_s=0.002,
+        )
         times.append(a.solve_time_s)
         walls.append(a.wall_time_s)
-    print(f"convex program, {len(sites)} sites, {len(cuts)} CCT rows, {len(rows.b)} damping "
-          f"rows: Clarabel {1000 * np.median(times):.2f} ms, with cvxpy "
-          f"{1000 * np.median(walls):.1f} ms (median of {n_rep}); target < 1000 ms: "
-          f"{'ok' if np.median(walls) < 1.0 else 'MISSED'}")
+    print(
+        f"convex program, {len(sites)} sites, {len(cuts)} CCT rows, {len(rows.b)} damping "
+        f"rows: Clarabel {1000 * np.median(times):.2f} ms, with cvxpy "
+        f"{1000 * np.median(walls):.1f} ms (median of {n_rep}); target < 1000 ms: "
+        f"{'ok' if np.median(walls) < 1.0 else 'MISSED'}"
+    )
 
 
 def verified_placement(case_name: str, workers: int = 2) -> None:
@@ -68,10 +79,12 @@ def verified_placement(case_name: str, workers: int = 2) -> None:
     t_targets = time.perf_counter() - t
     res = place(case_name, cons, study, warm=WarmStart(base=base))
     sims = sum(r["n_simulations"] for r in res.iterations)
-    print(f"{case_name}: targets (no storage + uniform 5 %) {t_targets:.1f} s; verified "
-          f"placement {res.wall_time_s:.1f} s, {len(res.iterations)} allocations, {sims} "
-          f"simulations, {res.allocation.total_mw:.1f} MW vs {0.05 * mva.sum():.0f} MW "
-          f"uniform, {'verified' if res.verified else 'NOT verified'}")
+    print(
+        f"{case_name}: targets (no storage + uniform 5 %) {t_targets:.1f} s; verified "
+        f"placement {res.wall_time_s:.1f} s, {len(res.iterations)} allocations, {sims} "
+        f"simulations, {res.allocation.total_mw:.1f} MW vs {0.05 * mva.sum():.0f} MW "
+        f"uniform, {'verified' if res.verified else 'NOT verified'}"
+    )
 
 
 def main():
@@ -80,6 +93,7 @@ def main():
         verified_placement(name)
     if "--study" in sys.argv:
         from stabctl.studies.placement import placement_study
+
         for name in ("kundur", "miniwecc"):
             t = time.perf_counter()
             path = placement_study(name, "reports", progress=lambda msg: None)

@@ -60,12 +60,11 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-
 from _timing import best_of
 
 T_FAULT, T_CLEAR, T_END, X_FAULT, TOL_CCT = 1.0, 1.1, 20.0, 1e-4, 1e-3
 REPEAT, ANDES_REPEAT = 3, 3
-SPARSE_ABOVE = 1500              # states: dense eig below, sparse shift-invert above
+SPARSE_ABOVE = 1500  # states: dense eig below, sparse shift-invert above
 SHIFTS_HZ = (0.2, 0.6, 1.0, 1.4, 1.8)
 GB_BUSES = 2224
 WORKERS_EXTRAPOLATED = (8, 32, 128)
@@ -104,22 +103,30 @@ def load_system(label: str, work: str):
 
     if label in ("kundur", "miniwecc"):
         andes_files = None
-        if label == "kundur":   # ANDES's own Kundur (its data, not stabctl's built-in)
+        if label == "kundur":  # ANDES's own Kundur (its data, not stabctl's built-in)
             andes_files = (_cases_dir() / "kundur" / "kundur_full.xlsx", None, ("Toggle",))
         return load_case(label), True, None, andes_files
     if label in ("ieee39", "gb"):
-        path = _cases_dir() / {"ieee39": "ieee39/ieee39_full.xlsx",
-                               "gb": "GBnetwork/GBnetwork.xlsx"}[label]
+        path = (
+            _cases_dir()
+            / {"ieee39": "ieee39/ieee39_full.xlsx", "gb": "GBnetwork/GBnetwork.xlsx"}[label]
+        )
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore")        # "left out Toggle"
+            warnings.simplefilter("ignore")  # "left out Toggle"
             case = import_andes(path, on_unsupported="skip")
         return case, False, FAULT_BUS.get(label), (path, None, ("Toggle",))
-    raw, dyr = {"npcc": lambda: _psse("npcc", "npcc.raw", "npcc_full.dyr", work),
-                "wecc179": lambda: _psse("wecc", "wecc.raw", "wecc_full.dyr", work,
-                                         unsaturated=True),
-                "n44": lambda: _psse("nordic44", "N44_BC.raw", "N44_BC.dyr", work,
-                                     drop=("STAB2A", "IEEET2", "TOGGLE"),
-                                     unsaturated=True)}[label]()
+    raw, dyr = {
+        "npcc": lambda: _psse("npcc", "npcc.raw", "npcc_full.dyr", work),
+        "wecc179": lambda: _psse("wecc", "wecc.raw", "wecc_full.dyr", work, unsaturated=True),
+        "n44": lambda: _psse(
+            "nordic44",
+            "N44_BC.raw",
+            "N44_BC.dyr",
+            work,
+            drop=("STAB2A", "IEEET2", "TOGGLE"),
+            unsaturated=True,
+        ),
+    }[label]()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         case = load_psse(raw, dyr, conventions="andes", on_unsupported="skip")
@@ -136,18 +143,20 @@ def fault_bus(case) -> int:
 
 # -- stabctl (in its own subprocess) -----------------------------------------------------
 
+
 def em_modes_sparse(A: np.ndarray, n_em: int):
     """Eigenvalues near j 2 pi f for f in SHIFTS_HZ by shift-invert Arnoldi on sparse A,
     about n_em / len(SHIFTS_HZ) + 4 per shift, merged (the 0.1-2 Hz band)."""
     import scipy.sparse as sp
     from scipy.sparse.linalg import eigs
 
-    As = sp.csc_matrix(A, dtype=complex)      # complex shift: complex arithmetic
+    As = sp.csc_matrix(A, dtype=complex)  # complex shift: complex arithmetic
     k = max(6, math.ceil(1.5 * n_em / len(SHIFTS_HZ)) + 4)
     found = []
     for f in SHIFTS_HZ:
-        found.append(eigs(As, k=min(k, A.shape[0] - 2), sigma=2j * np.pi * f,
-                          return_eigenvectors=False))
+        found.append(
+            eigs(As, k=min(k, A.shape[0] - 2), sigma=2j * np.pi * f, return_eigenvectors=False)
+        )
     lam = np.concatenate(found)
     lam = lam[(lam.imag >= 2 * np.pi * 0.1) & (lam.imag <= 2 * np.pi * 2.0)]
     return np.unique(np.round(lam, 6))
@@ -157,32 +166,41 @@ def ours(label: str, repeat: int) -> dict:
     import resource
     import tracemalloc
 
-    from stabctl.dynamics.events import Fault
     from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import Fault
     from stabctl.errors import NumericalInstabilityError
     from stabctl.smallsignal.linearise import linearise
     from stabctl.smallsignal.modal import modal_analysis
-    from stabctl.stability.cct import SearchOptions, LineFault, critical_clearing_time
+    from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
 
     with tempfile.TemporaryDirectory() as work:
         case, q_limits, bus, _ = load_system(label, work)
     bus = fault_bus(case) if bus is None else bus
-    Simulator(case, q_limits=q_limits)             # loads the compiled kernels
+    Simulator(case, q_limits=q_limits)  # loads the compiled kernels
     t = time.perf_counter()
     sim = Simulator(case, q_limits=q_limits)
     setup = time.perf_counter() - t
     events = [Fault(bus, T_FAULT, T_CLEAR, x=X_FAULT)]
-    sim.run(events, 1.5)                                                  # compile
+    sim.run(events, 1.5)  # compile
     wall, res = best_of(lambda: sim.run(events, T_END), repeat, warm_up=False)
     n_steps = len(res.t) - 1
     tracemalloc.start()
     Simulator(case, q_limits=q_limits).run(events, T_END)
     traced = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    out = {"label": label, "buses": int(case.n_bus), "machines": len(case.machines),
-           "h": sim.default_h, "setup_s": setup, "run_s": wall, "stable": bool(res.stable),
-           "traced_mb": traced / 2 ** 20, "fault_bus": bus, "us_per_step": 1e6 * wall / n_steps}
-    linearise(sim, esd_buses=())                   # compile
+    out = {
+        "label": label,
+        "buses": int(case.n_bus),
+        "machines": len(case.machines),
+        "h": sim.default_h,
+        "setup_s": setup,
+        "run_s": wall,
+        "stable": bool(res.stable),
+        "traced_mb": traced / 2**20,
+        "fault_bus": bus,
+        "us_per_step": 1e6 * wall / n_steps,
+    }
+    linearise(sim, esd_buses=())  # compile
     t = time.perf_counter()
     sys_ = linearise(sim, esd_buses=())
     lin = time.perf_counter() - t
@@ -199,18 +217,32 @@ def ours(label: str, repeat: int) -> dict:
         lam = em_modes_sparse(np.asarray(sys_.A), out.get("n_em", n // 4))
         out["sparse_s"] = time.perf_counter() - t
         out["n_sparse"] = int(lam.size)
-        if "n_em" in out:        # how many of the dense EM modes the shifts found
-            out["sparse_found"] = int(sum(np.min(np.abs(lam - e)) < 1e-4 * abs(e)
-                                          for e in em if 0.1 <= e.imag / 2 / np.pi <= 2.0))
+        if "n_em" in out:  # how many of the dense EM modes the shifts found
+            out["sparse_found"] = int(
+                sum(
+                    np.min(np.abs(lam - e)) < 1e-4 * abs(e)
+                    for e in em
+                    if 0.1 <= e.imag / 2 / np.pi <= 2.0
+                )
+            )
             out["dense_em_in_band"] = int(sum(0.1 <= e.imag / 2 / np.pi <= 2.0 for e in em))
     out["lin_s"] = lin
     out["eig_method"] = "dense" if n <= SPARSE_ABOVE else "sparse shift-invert"
-    for h in sim.default_h / np.array([1, 2, 4]):   # a finer step if a probe blows up
+    for h in sim.default_h / np.array([1, 2, 4]):  # a finer step if a probe blows up
         try:
             t = time.perf_counter()
-            cct = critical_clearing_time(sim, LineFault(bus, None, T_FAULT), SearchOptions(tol=TOL_CCT, error_check=False), h=h)
-            out.update(cct_s=time.perf_counter() - t, cct_ms=1e3 * cct.cct_s,
-                       cct_runs=cct.n_simulations, cct_h=h)
+            cct = critical_clearing_time(
+                sim,
+                LineFault(bus, None, T_FAULT),
+                SearchOptions(tol=TOL_CCT, error_check=False),
+                h=h,
+            )
+            out.update(
+                cct_s=time.perf_counter() - t,
+                cct_ms=1e3 * cct.cct_s,
+                cct_runs=cct.n_simulations,
+                cct_h=h,
+            )
             out.pop("cct_error", None)
             break
         except NumericalInstabilityError as exc:
@@ -225,6 +257,7 @@ def ours(label: str, repeat: int) -> dict:
 
 # -- ANDES (in its own subprocess) -------------------------------------------------------
 
+
 def andes(label: str, repeat: int) -> dict:
     from stabctl.io.andes import AndesFault, andes_modes, andes_system
 
@@ -237,20 +270,27 @@ def andes(label: str, repeat: int) -> dict:
         out = {"label": label}
 
         def tds(numba, t_end=T_END):
-            ss = andes_system(path, dyr, AndesFault(bus, T_FAULT, T_CLEAR, x=X_FAULT),
-                              config_option=[f"Runtime.numba={int(numba)}"], off=off)
+            ss = andes_system(
+                path,
+                dyr,
+                AndesFault(bus, T_FAULT, T_CLEAR, x=X_FAULT),
+                config_option=[f"Runtime.numba={int(numba)}"],
+                off=off,
+            )
             ss.TDS.config.update(tf=t_end, criteria=0, no_tqdm=1)
             t = time.perf_counter()
             if not ss.PFlow.run():
-                raise RuntimeError("ANDES power flow did not converge (PFlow.run() False, "
-                                   f"{ss.PFlow.config.max_iter} iterations at most)")
+                raise RuntimeError(
+                    "ANDES power flow did not converge (PFlow.run() False, "
+                    f"{ss.PFlow.config.max_iter} iterations at most)"
+                )
             if not ss.TDS.run():
                 raise RuntimeError("ANDES TDS failed")
             return time.perf_counter() - t
 
         numba = True
         try:
-            tds(True, 1.5)                                      # numba compile (cached)
+            tds(True, 1.5)  # numba compile (cached)
         except RuntimeError as exc:
             out["andes_error"] = str(exc)
             return out
@@ -274,6 +314,7 @@ def andes(label: str, repeat: int) -> dict:
 
 # -- GB screening on Dask ----------------------------------------------------------------
 
+
 def screen_gb(n_jobs: int, workers: int = 2) -> dict:
     from stabctl.io.pst import write_case_json
     from stabctl.parallel import run_sweep
@@ -284,33 +325,45 @@ def screen_gb(n_jobs: int, workers: int = 2) -> dict:
         path = write_case_json(case, Path(work) / "gb.json")
         buses = [int(b) for b in case.buses.number[:: max(1, case.n_bus // n_jobs)][:n_jobs]]
         t = time.perf_counter()
-        jobs = cct_jobs(str(path), [LineFault(b, None, T_FAULT) for b in buses],
-                        tol=TOL_CCT, q_limits=q_limits, error_check=False)
+        jobs = cct_jobs(
+            str(path),
+            [LineFault(b, None, T_FAULT) for b in buses],
+            tol=TOL_CCT,
+            q_limits=q_limits,
+            error_check=False,
+        )
         prepare = time.perf_counter() - t
         t = time.perf_counter()
-        rep = run_sweep(jobs, Path(work) / "gb.jsonl", workers=workers, scheduler="local",
-                        progress=False)
+        rep = run_sweep(
+            jobs, Path(work) / "gb.jsonl", workers=workers, scheduler="local", progress=False
+        )
         wall = time.perf_counter() - t
         t = time.perf_counter()
         from stabctl.dynamics.driver import Simulator
+
         Simulator(case, q_limits=q_limits)
         setup = time.perf_counter() - t
     recs = list(rep.records.values())
     ok = [r for r in recs if r["status"] == "ok"]
-    return {"jobs": len(recs), "ok": len(ok), "wall_s": wall, "prepare_s": prepare,
-            "setup_s": setup, "per_job_s": [r["result"]["wall_time_s"] for r in ok],
-            "job_wall_s": [r["wall_time_s"] for r in recs if r["wall_time_s"] is not None],
-            "runs": [r["result"]["n_simulations"] for r in ok],
-            "cct_ms": [1e3 * r["result"]["cct_s"] for r in ok],
-            "failed": [f"{r['key']}: {r.get('error', '')[:150]}" for r in recs
-                       if r["status"] != "ok"]}
+    return {
+        "jobs": len(recs),
+        "ok": len(ok),
+        "wall_s": wall,
+        "prepare_s": prepare,
+        "setup_s": setup,
+        "per_job_s": [r["result"]["wall_time_s"] for r in ok],
+        "job_wall_s": [r["wall_time_s"] for r in recs if r["wall_time_s"] is not None],
+        "runs": [r["result"]["n_simulations"] for r in ok],
+        "cct_ms": [1e3 * r["result"]["cct_s"] for r in ok],
+        "failed": [f"{r['key']}: {r.get('error', '')[:150]}" for r in recs if r["status"] != "ok"],
+    }
 
 
 # -- the table ---------------------------------------------------------------------------
 
+
 def _sub(part: str, label: str, repeat: int) -> dict:
-    cmd = [sys.executable, __file__, "--part", part, "--systems", label,
-           "--repeat", str(repeat)]
+    cmd = [sys.executable, __file__, "--part", part, "--systems", label, "--repeat", str(repeat)]
     one_core = {v: "1" for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
     p = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, **one_core})
     lines = [ln for ln in p.stdout.splitlines() if ln.startswith("{")]
@@ -324,72 +377,95 @@ def _f(x, fmt="{:.2f}", missing="-"):
 
 
 def table(rows, andes_rows, repeat, andes_repeat):
-    print(f"\nstabctl: 20 s run, bus fault j{X_FAULT:g} pu {T_FAULT:g}-{T_CLEAR:g} s, the "
-          f"case's default step, best of {repeat}, compile excluded; ANDES 2.0 at its "
-          f"defaults (trapezoid 1/30 s, tol 1e-4), best of {andes_repeat}")
-    head = (f"{'system':<9}{'buses':>6}{'mach':>5}{'states':>7}{'step':>7}{'setup s':>8}"
-            f"{'s/sim s':>8}{'us/step':>8}{'RSS MB':>7}{'trace MB':>9}{'lin s':>7}{'EM s':>7}{'EM':>4}"
-            f"{'CCT s':>7}{'CCT ms':>7}{'runs':>5}{'ANDES s/sim s':>14}{'ANDES EIG s':>12}")
+    print(
+        f"\nstabctl: 20 s run, bus fault j{X_FAULT:g} pu {T_FAULT:g}-{T_CLEAR:g} s, the "
+        f"case's default step, best of {repeat}, compile excluded; ANDES 2.0 at its "
+        f"defaults (trapezoid 1/30 s, tol 1e-4), best of {andes_repeat}"
+    )
+    head = (
+        f"{'system':<9}{'buses':>6}{'mach':>5}{'states':>7}{'step':>7}{'setup s':>8}"
+        f"{'s/sim s':>8}{'us/step':>8}{'RSS MB':>7}{'trace MB':>9}{'lin s':>7}{'EM s':>7}{'EM':>4}"
+        f"{'CCT s':>7}{'CCT ms':>7}{'runs':>5}{'ANDES s/sim s':>14}{'ANDES EIG s':>12}"
+    )
     print(head)
     for r, a in zip(rows, andes_rows):
         em_s = r.get("dense_s") if r.get("eig_method") == "dense" else r.get("sparse_s")
         andes_tds = a.get("andes_tds_s")
-        print(f"{r['label']:<9}{r.get('buses', 0):6d}{r.get('machines', 0):5d}"
-              f"{r.get('states', 0):7d}{_f(r.get('h'), '{:.4f}'):>7}"
-              f"{_f(r.get('setup_s')):>8}{_f(r.get('run_s') and r['run_s'] / T_END, '{:.3f}'):>8}"
-              f"{_f(r.get('us_per_step'), '{:.0f}'):>8}{_f(r.get('rss_mb'), '{:.0f}'):>7}{_f(r.get('traced_mb'), '{:.1f}'):>9}"
-              f"{_f(r.get('lin_s')):>7}{_f(em_s):>7}{r.get('n_em', r.get('n_sparse', 0)):4d}"
-              f"{_f(r.get('cct_s')):>7}{_f(r.get('cct_ms'), '{:.0f}'):>7}"
-              f"{r.get('cct_runs', 0):5d}"
-              f"{_f(andes_tds and andes_tds / T_END, '{:.3f}'):>14}"
-              f"{_f(a.get('andes_eig_s')):>12}")
+        print(
+            f"{r['label']:<9}{r.get('buses', 0):6d}{r.get('machines', 0):5d}"
+            f"{r.get('states', 0):7d}{_f(r.get('h'), '{:.4f}'):>7}"
+            f"{_f(r.get('setup_s')):>8}{_f(r.get('run_s') and r['run_s'] / T_END, '{:.3f}'):>8}"
+            f"{_f(r.get('us_per_step'), '{:.0f}'):>8}{_f(r.get('rss_mb'), '{:.0f}'):>7}"
+            f"{_f(r.get('traced_mb'), '{:.1f}'):>9}"
+            f"{_f(r.get('lin_s')):>7}{_f(em_s):>7}{r.get('n_em', r.get('n_sparse', 0)):4d}"
+            f"{_f(r.get('cct_s')):>7}{_f(r.get('cct_ms'), '{:.0f}'):>7}"
+            f"{r.get('cct_runs', 0):5d}"
+            f"{_f(andes_tds and andes_tds / T_END, '{:.3f}'):>14}"
+            f"{_f(a.get('andes_eig_s')):>12}"
+        )
     for r, a in zip(rows, andes_rows):
         notes = [f"{k}: {v}" for k, v in {**r, **a}.items() if k.endswith(("error", "note"))]
         if r.get("cct_h") and r["cct_h"] != r["h"]:
             notes.append(f"CCT at step {r['cct_h']:.5f} s")
         if "numba" in a:
-            notes.append(f"ANDES numba {'on' if a['numba'] else 'off (did not compile)'}, "
-                         f"{a.get('andes_states', '?')} states")
+            notes.append(
+                f"ANDES numba {'on' if a['numba'] else 'off (did not compile)'}, "
+                f"{a.get('andes_states', '?')} states"
+            )
         if r.get("sparse_s") is not None:
-            notes.append(f"EM modes: dense {_f(r.get('dense_s'))} s, sparse shift-invert at "
-                         f"{len(SHIFTS_HZ)} shifts {_f(r['sparse_s'])} s "
-                         f"({r.get('sparse_found', '?')} of {r.get('dense_em_in_band', '?')} "
-                         f"dense EM modes in 0.1-2 Hz found)")
+            notes.append(
+                f"EM modes: dense {_f(r.get('dense_s'))} s, sparse shift-invert at "
+                f"{len(SHIFTS_HZ)} shifts {_f(r['sparse_s'])} s "
+                f"({r.get('sparse_found', '?')} of {r.get('dense_em_in_band', '?')} "
+                f"dense EM modes in 0.1-2 Hz found)"
+            )
         if "run_s" in r:
-            notes.append(f"20 s run {r['run_s']:.2f} s, fault bus {r['fault_bus']}, "
-                         f"{'stable' if r['stable'] else 'unstable'}")
+            notes.append(
+                f"20 s run {r['run_s']:.2f} s, fault bus {r['fault_bus']}, "
+                f"{'stable' if r['stable'] else 'unstable'}"
+            )
         print(f"  {r['label']}: " + "; ".join(notes))
     ok = [r for r in rows if "run_s" in r and r.get("states")]
     if len(ok) >= 2:
-        for what, key in (("20 s run", "run_s"), ("20 s run per step", "us_per_step"), ("set-up", "setup_s"),
-                          ("CCT", "cct_s"), ("linearise", "lin_s")):
+        for what, key in (
+            ("20 s run", "run_s"),
+            ("20 s run per step", "us_per_step"),
+            ("set-up", "setup_s"),
+            ("CCT", "cct_s"),
+            ("linearise", "lin_s"),
+        ):
             pts = [(np.log(r["states"]), np.log(r[key])) for r in ok if r.get(key)]
             if len(pts) >= 2:
                 x, y = np.array(pts).T
-                print(f"log-log slope of {what} wall against states: "
-                      f"{np.polyfit(x, y, 1)[0]:.2f}")
+                print(f"log-log slope of {what} wall against states: {np.polyfit(x, y, 1)[0]:.2f}")
 
 
 def screening_table(s: dict) -> None:
     t = np.array(s["per_job_s"])
-    print(f"\nGB bus-fault screening on a local Dask cluster of 2 workers: {s['jobs']} jobs "
-          f"(1 ms CCT, no half-step check), {s['ok']} ok, wall {s['wall_s']:.1f} s "
-          f"(cluster start + worker set-up included); job preparation in the parent "
-          f"{s['prepare_s']:.1f} s")
+    print(
+        f"\nGB bus-fault screening on a local Dask cluster of 2 workers: {s['jobs']} jobs "
+        f"(1 ms CCT, no half-step check), {s['ok']} ok, wall {s['wall_s']:.1f} s "
+        f"(cluster start + worker set-up included); job preparation in the parent "
+        f"{s['prepare_s']:.1f} s"
+    )
     if t.size:
-        print(f"per-job wall (CCT search): mean {t.mean():.1f} s, min {t.min():.1f}, max "
-              f"{t.max():.1f} ({np.mean(s['runs']):.1f} runs per search; CCTs "
-              f"{', '.join(f'{c:.0f}' for c in s['cct_ms'])} ms); whole jobs (a worker's "
-              f"first includes its case load and set-up) "
-              f"{', '.join(f'{x:.1f}' for x in s['job_wall_s'])} s; simulator set-up "
-              f"{s['setup_s']:.1f} s")
+        print(
+            f"per-job wall (CCT search): mean {t.mean():.1f} s, min {t.min():.1f}, max "
+            f"{t.max():.1f} ({np.mean(s['runs']):.1f} runs per search; CCTs "
+            f"{', '.join(f'{c:.0f}' for c in s['cct_ms'])} ms); whole jobs (a worker's "
+            f"first includes its case load and set-up) "
+            f"{', '.join(f'{x:.1f}' for x in s['job_wall_s'])} s; simulator set-up "
+            f"{s['setup_s']:.1f} s"
+        )
         t_job = float(np.mean(s["job_wall_s"]))
         ideal = math.ceil(s["jobs"] / 2) * t_job
-        print(f"extrapolated whole screening ({GB_BUSES} buses), T(W) = ceil({GB_BUSES}/W) * "
-              f"t_job, t_job = {t_job:.1f} s the mean whole-job wall (failed jobs and each "
-              f"worker's one set-up included); measured here {s['wall_s']:.1f} s against "
-              f"T(2) = {ideal:.1f} s for {s['jobs']} jobs (the rest: cluster start, uneven "
-              f"finish)")
+        print(
+            f"extrapolated whole screening ({GB_BUSES} buses), T(W) = ceil({GB_BUSES}/W) * "
+            f"t_job, t_job = {t_job:.1f} s the mean whole-job wall (failed jobs and each "
+            f"worker's one set-up included); measured here {s['wall_s']:.1f} s against "
+            f"T(2) = {ideal:.1f} s for {s['jobs']} jobs (the rest: cluster start, uneven "
+            f"finish)"
+        )
         for w in (1, 2, *WORKERS_EXTRAPOLATED):
             print(f"  W = {w:4d}: {math.ceil(GB_BUSES / w) * t_job / 60:8.1f} min")
     for f in s["failed"]:
@@ -402,11 +478,16 @@ def main():
     ap.add_argument("--repeat", type=int, default=REPEAT)
     ap.add_argument("--andes-repeat", type=int, default=ANDES_REPEAT)
     ap.add_argument("--no-andes", action="store_true")
-    ap.add_argument("--screen", type=int, default=0, metavar="N",
-                    help="GB bus faults to screen on a local Dask cluster (0: none)")
+    ap.add_argument(
+        "--screen",
+        type=int,
+        default=0,
+        metavar="N",
+        help="GB bus faults to screen on a local Dask cluster (0: none)",
+    )
     ap.add_argument("--part", choices=("ours", "andes"), help=argparse.SUPPRESS)
     args = ap.parse_args()
-    if args.part:                      # the subprocess of one system
+    if args.part:  # the subprocess of one system
         fn = ours if args.part == "ours" else andes
         print(json.dumps(fn(args.systems[0], args.repeat)))
         return

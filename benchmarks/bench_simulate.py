@@ -5,12 +5,12 @@ time, and the targets on one core: Kundur 20 s <= 0.05 s, miniWECC 20 s <= 0.3 s
 Run: python benchmarks/bench_simulate.py
 """
 
-
 from _timing import best_of
-from stabctl.io import load_case
-from stabctl.dynamics.events import fault_with_clearing
+
 from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.grid import default_step
+from stabctl.io import load_case
 from stabctl.studies.cases import CASE1, CASE2
 
 CASES = ((CASE1, 0.05), (CASE2, 0.3))  # paper case, target s (20 s run, one core)

@@ -18,8 +18,10 @@ def main():
             res = table4(key, Path(tmp), progress=False)
             wall = time.perf_counter() - t
             sims = sum(r["n_simulations"] for r in res.values())
-            print(f"{name:9} {fault.describe():40} {len(RATINGS_PCT) + 1} CCT searches, "
-                  f"{sims} simulations, {wall:.1f} s wall")
+            print(
+                f"{name:9} {fault.describe():40} {len(RATINGS_PCT) + 1} CCT searches, "
+                f"{sims} simulations, {wall:.1f} s wall"
+            )
 
 
 if __name__ == "__main__":

@@ -22,7 +22,12 @@ if __name__ == "__main__":
     ap.add_argument("--case", action="append", choices=list(CASES), help="default: both")
     a = ap.parse_args()
     cct_runs = SeedRule() if a.cct_runs is None else a.cct_runs
-    for p in write_estimation_report("reports", a.runs, cct_runs, a.workers,
-                                     tuple(a.case or CASES),
-                                     generated_by="python sims/estimation_study.py"):
+    for p in write_estimation_report(
+        "reports",
+        a.runs,
+        cct_runs,
+        a.workers,
+        tuple(a.case or CASES),
+        generated_by="python sims/estimation_study.py",
+    ):
         print(f"wrote {p}")

@@ -1,11 +1,11 @@
 """Run many independent jobs in parallel, recording each as it finishes (resumable).
 
 A `Job` is a key, a top-level (picklable) function and its JSON-able inputs (a dict the
-function takes as its one argument); the function returns a JSON-able dict.  `run_sweep` runs the jobs in local processes
-(`concurrent.futures.ProcessPoolExecutor`, one worker per available core, started with
-"spawn" so that no thread or lock of the parent is inherited) or, given a scheduler
-address, on a Dask distributed cluster (optional: `pip install "stabctl[dask]"`; stabctl
-must be installed on the workers).
+function takes as its one argument); the function returns a JSON-able dict.  `run_sweep` runs the
+jobs in local processes (`concurrent.futures.ProcessPoolExecutor`, one worker per available
+core, started with "spawn" so that no thread or lock of the parent is inherited) or, given a
+scheduler address, on a Dask distributed cluster (optional: `pip install "stabctl[dask]"`;
+stabctl must be installed on the workers).
 
 Output: a JSON-lines file, one line per finished job, appended and flushed as each job
 completes, so an interrupted sweep (Ctrl-C, a killed job) keeps every finished job:
@@ -26,20 +26,19 @@ import ctypes
 import json
 import multiprocessing
 import os
-import signal
 import re
+import signal
 import socket
 import sys
 import tempfile
 import time
 import traceback
 import warnings
+from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterator, Mapping
-
 
 from stabctl.errors import InputError, StabctlError
 from stabctl.progress import bar as progress_bar
@@ -121,15 +120,21 @@ def run_job(func: Callable[..., dict], key: str, inputs: Mapping) -> dict:
         rec = {"status": "ok", "result": func(dict(inputs))}
     except Exception as exc:  # noqa: BLE001 - every failure is recorded with its reason
         rec = _failure_fields(exc)
-    return {"key": key, "inputs": dict(inputs), **rec,
-            "wall_time_s": time.perf_counter() - wall,
-            "worker": f"{socket.gethostname()}:{os.getpid()}"}
+    return {
+        "key": key,
+        "inputs": dict(inputs),
+        **rec,
+        "wall_time_s": time.perf_counter() - wall,
+        "worker": f"{socket.gethostname()}:{os.getpid()}",
+    }
 
 
 def _failure_fields(exc: BaseException) -> dict:
     msg = " ".join(str(exc).split())
-    fields = {"status": "failed", "error": f"{type(exc).__name__}: {msg}" if msg
-              else type(exc).__name__}
+    fields = {
+        "status": "failed",
+        "error": f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__,
+    }
     if not isinstance(exc, StabctlError):
         fields["traceback"] = "".join(traceback.format_exception(exc))
     return fields
@@ -139,8 +144,13 @@ def _lost(job: Job, exc: BaseException) -> dict:
     """Record of a job whose worker failed outside the job (died, was lost)."""
     fields = _failure_fields(exc)
     fields["error"] = f"worker failed: {fields['error']}"
-    return {"key": job.key, "inputs": dict(job.inputs), **fields, "wall_time_s": None,
-            "worker": None}
+    return {
+        "key": job.key,
+        "inputs": dict(job.inputs),
+        **fields,
+        "wall_time_s": None,
+        "worker": None,
+    }
 
 
 def read_records(path: str | Path) -> dict[str, dict]:
@@ -158,7 +168,7 @@ def read_records(path: str | Path) -> dict[str, dict]:
                 rec = json.loads(line)
                 records[rec["key"]] = rec
             except (ValueError, KeyError, TypeError):
-                warnings.warn(f"{path} line {n}: not a sweep record, ignored")
+                warnings.warn(f"{path} line {n}: not a sweep record, ignored", stacklevel=2)
     return records
 
 
@@ -177,8 +187,11 @@ def set_aside_damaged(path: str | Path) -> list[int]:
                 continue
             try:
                 rec = json.loads(line)
-                ok = isinstance(rec, dict) and isinstance(rec.get("key"), str) \
+                ok = (
+                    isinstance(rec, dict)
+                    and isinstance(rec.get("key"), str)
                     and rec.get("status") in ("ok", "failed")
+                )
             except ValueError:
                 ok = False
             (good if ok else bad).append((n, line if line.endswith("\n") else line + "\n"))
@@ -189,13 +202,17 @@ def set_aside_damaged(path: str | Path) -> list[int]:
         f.writelines(line for _, line in bad)
     atomic_write(path, lambda f: f.writelines(line for _, line in good))
     numbers = [n for n, _ in bad]
-    warnings.warn(f"{path}: line(s) {', '.join(map(str, numbers))} not a whole sweep record "
-                  f"(cut by a kill?): moved to {aside}; their jobs run again")
+    warnings.warn(
+        f"{path}: line(s) {', '.join(map(str, numbers))} not a whole sweep record "
+        f"(cut by a kill?): moved to {aside}; their jobs run again",
+        stacklevel=2,
+    )
     return numbers
 
 
-def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w",
-                 permissions: int | None = None) -> Path:
+def atomic_write(
+    path: str | Path, write: Callable, *, mode: str | None = "w", permissions: int | None = None
+) -> Path:
     """Write a file atomically: into a temporary file beside it (hidden, same suffix, so
     that writers choosing the format by extension still do), renamed over `path` only when
     complete; the temporary file is removed if writing fails.  The one atomic write of
@@ -264,8 +281,12 @@ _PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
 def process_pool(workers: int) -> ProcessPoolExecutor:
     """A spawned process pool whose workers die with this process (`die_with_parent`)."""
-    return ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=die_with_parent, initargs=(os.getpid(),))
+    return ProcessPoolExecutor(
+        workers,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=die_with_parent,
+        initargs=(os.getpid(),),
+    )
 
 
 def stop_pool(pool: ProcessPoolExecutor) -> None:
@@ -294,7 +315,7 @@ def pooled(workers: int) -> Iterator[ProcessPoolExecutor]:
     ------
     ProcessPoolExecutor
     """
-    pool = process_pool(workers)      # workers die with this process (SIGKILL included)
+    pool = process_pool(workers)  # workers die with this process (SIGKILL included)
     try:
         yield pool
     except BaseException:
@@ -333,10 +354,11 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
     if scheduler:
         client = _dask_client(scheduler, workers)
         try:
-            yield lambda func, jobs: client.gather([client.submit(func, j, pure=False)
-                                                    for j in jobs])
+            yield lambda func, jobs: client.gather(
+                [client.submit(func, j, pure=False) for j in jobs]
+            )
         finally:
-            cluster = client.cluster            # ours (scheduler="local") or None
+            cluster = client.cluster  # ours (scheduler="local") or None
             client.close()
             if cluster is not None:
                 cluster.close()
@@ -348,9 +370,16 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
         yield lambda func, jobs: [f.result() for f in [pool.submit(func, j) for j in jobs]]
 
 
-def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
-              scheduler: str | None = None, progress: bool | Callable = True,
-              retry_failed: bool = False, pool=None) -> SweepReport:
+def run_sweep(
+    jobs,
+    out: str | Path,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool | Callable = True,
+    retry_failed: bool = False,
+    pool=None,
+) -> SweepReport:
     """Run `jobs` (Job) not yet recorded in `out`, appending one JSON line per job.
 
     Args:
@@ -375,35 +404,47 @@ def run_sweep(jobs, out: str | Path, *, workers: int | None = None,
     set_aside_damaged(out)
     done = read_records(out)
     _check_jobs(jobs, done, out)
-    todo = [j for j in jobs if j.key not in done
-            or (retry_failed and done[j.key].get("status") == "failed")]
+    todo = [
+        j
+        for j in jobs
+        if j.key not in done or (retry_failed and done[j.key].get("status") == "failed")
+    ]
     wall = time.perf_counter()
     failed = written = 0
     if todo:
         results = _dask(todo, scheduler, workers) if scheduler else _local(todo, workers, pool)
         out.parent.mkdir(parents=True, exist_ok=True)
-        with closing(results), _appender(out) as f, \
-                progress_bar(len(todo), out.name, show=progress is True) as bar:
+        with (
+            closing(results),
+            _appender(out) as f,
+            progress_bar(len(todo), out.name, show=progress is True) as bar,
+        ):
             for rec in results:
                 line = _line(rec)
                 f.write(line)
                 f.flush()
-                rec = done[rec["key"]] = json.loads(line)      # as it reads back
+                rec = done[rec["key"]] = json.loads(line)  # as it reads back
                 failed += rec["status"] == "failed"
                 bar.update()
                 bar.set_postfix(failed=failed)
                 written += 1
                 if callable(progress):
                     progress(written, len(todo))
-    return SweepReport(out=out, records={j.key: done[j.key] for j in jobs}, ran=len(todo),
-                       skipped=len(jobs) - len(todo), failed=failed,
-                       wall_time_s=time.perf_counter() - wall)
+    return SweepReport(
+        out=out,
+        records={j.key: done[j.key] for j in jobs},
+        ran=len(todo),
+        skipped=len(jobs) - len(todo),
+        failed=failed,
+        wall_time_s=time.perf_counter() - wall,
+    )
 
 
 #: Record fields that change from run to run (timings, process ids, tracebacks with the
 #: install's paths): left out of the reproducible copy written by `write_reproducible`.
-RUN_DEPENDENT = frozenset({"wall_time_s", "worker", "traceback", "solve_time_s",
-                           "solve_times_s", "solve_wall_s"})
+RUN_DEPENDENT = frozenset(
+    {"wall_time_s", "worker", "traceback", "solve_time_s", "solve_times_s", "solve_wall_s"}
+)
 
 
 def strip_run_dependent(obj):
@@ -417,8 +458,9 @@ def strip_run_dependent(obj):
 
 def natural_key(key: str) -> tuple:
     """Sort key of a job key with its numbers compared as numbers (seed2 before seed10)."""
-    return tuple((0, int(t), "") if t.isdigit() else (1, 0, t)
-                 for t in re.split(r"(\d+)", key) if t)
+    return tuple(
+        (0, int(t), "") if t.isdigit() else (1, 0, t) for t in re.split(r"(\d+)", key) if t
+    )
 
 
 def write_reproducible(src: str | Path, dst: str | Path) -> dict:
@@ -429,17 +471,27 @@ def write_reproducible(src: str | Path, dst: str | Path) -> dict:
     out, for a run log: {"jobs", "failed", "job_wall_s" (sum), "longest_job_s",
     "longest_job"}."""
     records = read_records(src)
-    atomic_write(dst, lambda f: f.writelines(
-        json.dumps(strip_run_dependent(records[key]), default=_jsonable) + "\n"
-        for key in sorted(records, key=natural_key)), permissions=0o644)
-    walls = {k: r.get("wall_time_s") for k, r in records.items()
-             if isinstance(r.get("wall_time_s"), (int, float))}
+    atomic_write(
+        dst,
+        lambda f: f.writelines(
+            json.dumps(strip_run_dependent(records[key]), default=_jsonable) + "\n"
+            for key in sorted(records, key=natural_key)
+        ),
+        permissions=0o644,
+    )
+    walls = {
+        k: r.get("wall_time_s")
+        for k, r in records.items()
+        if isinstance(r.get("wall_time_s"), (int, float))
+    }
     longest = max(walls, key=walls.get, default=None)
-    return {"jobs": len(records),
-            "failed": sum(r.get("status") == "failed" for r in records.values()),
-            "job_wall_s": round(sum(walls.values()), 3),
-            "longest_job_s": None if longest is None else round(walls[longest], 3),
-            "longest_job": longest}
+    return {
+        "jobs": len(records),
+        "failed": sum(r.get("status") == "failed" for r in records.values()),
+        "job_wall_s": round(sum(walls.values()), 3),
+        "longest_job_s": None if longest is None else round(walls[longest], 3),
+        "longest_job": longest,
+    }
 
 
 def _check_jobs(jobs, done: dict, out: Path) -> None:
@@ -449,15 +501,20 @@ def _check_jobs(jobs, done: dict, out: Path) -> None:
             raise InputError(f"duplicate job key {j.key!r}")
         seen.add(j.key)
         if j.key in done and done[j.key].get("inputs") != _normalised(j.inputs):
-            raise InputError(f"{out} already holds job {j.key!r} with other inputs ("
-                             f"{_differences(done[j.key].get('inputs') or {}, j.inputs)}); "
-                             "use another output file")
+            raise InputError(
+                f"{out} already holds job {j.key!r} with other inputs ("
+                f"{_differences(done[j.key].get('inputs') or {}, j.inputs)}); "
+                "use another output file"
+            )
 
 
 def _differences(old: dict, new: Mapping) -> str:
     new = _normalised(new)
-    return ", ".join(f"{k}: {old.get(k)!r} there, {new.get(k)!r} now"
-                     for k in sorted(set(old) | set(new)) if old.get(k) != new.get(k))
+    return ", ".join(
+        f"{k}: {old.get(k)!r} there, {new.get(k)!r} now"
+        for k in sorted(set(old) | set(new))
+        if old.get(k) != new.get(k)
+    )
 
 
 def _normalised(inputs: Mapping) -> dict:
@@ -489,8 +546,11 @@ class _appender:
         self.path = path
 
     def __enter__(self):
-        cut = self.path.exists() and self.path.stat().st_size > 0 and \
-            self.path.read_bytes()[-1:] != b"\n"
+        cut = (
+            self.path.exists()
+            and self.path.stat().st_size > 0
+            and self.path.read_bytes()[-1:] != b"\n"
+        )
         self.f = self.path.open("a")
         if cut:
             self.f.write("\n")
@@ -531,12 +591,17 @@ def _dask_client(scheduler: str, workers: int):
     try:
         from distributed import Client, LocalCluster
     except ImportError:
-        raise InputError(f"--scheduler {scheduler} needs Dask distributed, which is not "
-                         "installed: pip install 'stabctl[dask]'") from None
+        raise InputError(
+            f"--scheduler {scheduler} needs Dask distributed, which is not "
+            "installed: pip install 'stabctl[dask]'"
+        ) from None
     try:
         if scheduler == "local":
-            return Client(LocalCluster(n_workers=workers, threads_per_worker=1,
-                                       processes=True, dashboard_address=None))
+            return Client(
+                LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+                )
+            )
         return Client(scheduler)
     except (OSError, TimeoutError, ValueError) as exc:
         raise InputError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
@@ -552,15 +617,19 @@ def _dask_records(client, jobs: list) -> Iterator[dict]:
     from distributed import as_completed
 
     try:
-        futures = {client.submit(run_job, j.func, j.key, dict(j.inputs), pure=False,
-                                 retries=DASK_RETRIES): j for j in jobs}
+        futures = {
+            client.submit(
+                run_job, j.func, j.key, dict(j.inputs), pure=False, retries=DASK_RETRIES
+            ): j
+            for j in jobs
+        }
         for fut in as_completed(futures):
             try:
                 yield fut.result()
             except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker, cancelled
                 yield _lost(futures[fut], exc)
     finally:
-        cluster = client.cluster            # ours (scheduler="local") or None
+        cluster = client.cluster  # ours (scheduler="local") or None
         client.close()
         if cluster is not None:
             cluster.close()

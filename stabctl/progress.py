@@ -38,8 +38,12 @@ class Heartbeat:
         Longest silence, s; default HEARTBEAT_S.
     """
 
-    def __init__(self, say: Callable[[str], None] | None,
-                 line: Callable[[str], str] = "... {}".format, every: float = HEARTBEAT_S):
+    def __init__(
+        self,
+        say: Callable[[str], None] | None,
+        line: Callable[[str], str] = "... {}".format,
+        every: float = HEARTBEAT_S,
+    ):
         self._say, self._line, self._every = say, line, every
         self.status, self._last = "", time.monotonic()
         self._lock = threading.Lock()

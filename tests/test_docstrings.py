@@ -21,17 +21,22 @@ import pytest
 import stabctl
 import stabctl.errors
 
-SECTION = re.compile(r"^[ \t]*(Parameters|Other Parameters|Returns|Yields|Receives|Raises|"
-                     r"Warns|Warnings|Attributes|Methods|Notes|See Also|References|"
-                     r"Examples)[ \t]*\n[ \t]*-{3,}[ \t]*$", re.M)
+SECTION = re.compile(
+    r"^[ \t]*(Parameters|Other Parameters|Returns|Yields|Receives|Raises|"
+    r"Warns|Warnings|Attributes|Methods|Notes|See Also|References|"
+    r"Examples)[ \t]*\n[ \t]*-{3,}[ \t]*$",
+    re.M,
+)
 
 
 def sections(doc: str) -> dict[str, str]:
     """numpydoc section name -> its body."""
     doc = inspect.cleandoc(doc)
     marks = list(SECTION.finditer(doc))
-    return {m[1]: doc[m.end():(marks[i + 1].start() if i + 1 < len(marks) else len(doc))]
-            for i, m in enumerate(marks)}
+    return {
+        m[1]: doc[m.end() : (marks[i + 1].start() if i + 1 < len(marks) else len(doc))]
+        for i, m in enumerate(marks)
+    }
 
 
 def documented_names(body: str) -> set[str]:
@@ -80,9 +85,12 @@ def own_nodes(func):
 
 def returns_value(func) -> bool:
     """``func`` has a ``return <value>`` (other than ``return None``) of its own."""
-    return any(isinstance(n, ast.Return) and n.value is not None
-               and not (isinstance(n.value, ast.Constant) and n.value.value is None)
-               for n in own_nodes(func))
+    return any(
+        isinstance(n, ast.Return)
+        and n.value is not None
+        and not (isinstance(n.value, ast.Constant) and n.value.value is None)
+        for n in own_nodes(func)
+    )
 
 
 def raises_directly(func) -> bool:
@@ -127,21 +135,32 @@ def test_public_api_has_numpydoc_docstring(label, obj, owner):
             params = params[1:]
         body = secs.get("Parameters", "") + secs.get("Other Parameters", "")
     sig = inspect.signature(obj.__init__ if inspect.isclass(obj) else obj)
-    params = [p for p in params
-              if sig.parameters.get(p) is None
-              or sig.parameters[p].kind not in (inspect.Parameter.VAR_POSITIONAL,
-                                                inspect.Parameter.VAR_KEYWORD)]
+    params = [
+        p
+        for p in params
+        if sig.parameters.get(p) is None
+        or sig.parameters[p].kind
+        not in (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)
+    ]
     missing = set(params) - documented_names(body)
     assert not missing, f"{label}: parameters not documented: {sorted(missing)}"
     if not inspect.isclass(obj):
         ret = sig.return_annotation
         if ret is inspect.Signature.empty and returns_value(obj):
             ret = "a value"
-        if ret not in (inspect.Signature.empty, None, "None") and "Returns" not in secs \
-                and "Yields" not in secs:
+        if (
+            ret not in (inspect.Signature.empty, None, "None")
+            and "Returns" not in secs
+            and "Yields" not in secs
+        ):
             pytest.fail(f"{label}: returns {ret} but has no Returns section")
-    code = obj.__post_init__ if dataclasses.is_dataclass(obj) and \
-        hasattr(obj, "__post_init__") else obj.__init__ if inspect.isclass(obj) else obj
+    code = (
+        obj.__post_init__
+        if dataclasses.is_dataclass(obj) and hasattr(obj, "__post_init__")
+        else obj.__init__
+        if inspect.isclass(obj)
+        else obj
+    )
     if "Raises" not in secs and inspect.isfunction(code) and raises_directly(code):
         pytest.fail(f"{label}: raises but has no Raises section")
     for exc in exception_names(secs.get("Raises", "")):

@@ -33,7 +33,7 @@ def test_a_source_change_clears_the_kernels_under_numba_cache_dir(tmp_path, monk
     assert not (kernels / "f-1.py311.nbi").exists()
     assert stamp.read_text() == jc.source_digest()
     (kernels / "f-1.py311.nbi").write_text("fresh")
-    jc.ensure_fresh_cache()                      # same sources: kept
+    jc.ensure_fresh_cache()  # same sources: kept
     assert (kernels / "f-1.py311.nbi").exists()
 
 
@@ -44,11 +44,24 @@ def test_the_cache_key_hashes_the_kernel_sources_only(tmp_path):
     pkg = tmp_path / "stabctl"
     shutil.copytree(jc._PKG, pkg, ignore=shutil.ignore_patterns("__pycache__"))
     names = {str(f.relative_to(pkg)) for f in jc.kernel_sources(pkg)}
-    assert {"_jit/arrays.py", "_jit/decorators.py", "dynamics/integrator.py",
-            "dynamics/switching.py", "dynamics/model.py", "storage/control.py",
-            "network/solution.py", "models/machines.py", "errors.py"} <= names
-    assert not names & {"cli/simulate.py", "dynamics/driver.py", "dynamics/grid.py",
-                        "_jit/cache.py", "_jit/notify.py"}
+    assert {
+        "_jit/arrays.py",
+        "_jit/decorators.py",
+        "dynamics/integrator.py",
+        "dynamics/switching.py",
+        "dynamics/model.py",
+        "storage/control.py",
+        "network/solution.py",
+        "models/machines.py",
+        "errors.py",
+    } <= names
+    assert not names & {
+        "cli/simulate.py",
+        "dynamics/driver.py",
+        "dynamics/grid.py",
+        "_jit/cache.py",
+        "_jit/notify.py",
+    }
     assert not any(n.startswith(("cli/", "placement/", "plotting/")) for n in names)
 
     def edited(path, old, new):
@@ -57,12 +70,18 @@ def test_the_cache_key_hashes_the_kernel_sources_only(tmp_path):
         return jc.source_digest(pkg)
 
     key = jc.source_digest(pkg)
-    assert edited("cli/simulate.py", "Nonlinear", "Non-linear") == key      # a help string
+    assert edited("cli/simulate.py", "Nonlinear", "Non-linear") == key  # a help string
     assert edited("dynamics/driver.py", "class Simulator", "class Simulator ") == key
-    assert edited("errors.py", '"""', '""" ') != key                      # imported by kernels
+    assert edited("errors.py", '"""', '""" ') != key  # imported by kernels
     key = jc.source_digest(pkg)
-    assert edited("dynamics/integrator.py", "SPEED_BAND, EST_TOL, EST_STEPS = 0.5",
-                  "SPEED_BAND, EST_TOL, EST_STEPS = 0.4") != key
+    assert (
+        edited(
+            "dynamics/integrator.py",
+            "SPEED_BAND, EST_TOL, EST_STEPS = 0.5",
+            "SPEED_BAND, EST_TOL, EST_STEPS = 0.4",
+        )
+        != key
+    )
     key = jc.source_digest(pkg)
     assert edited("cli/simulate.py", "\n\n\n", "\n\n\n@kernel\ndef f():\n    pass\n\n\n") != key
     assert "cli/simulate.py" in {str(f.relative_to(pkg)) for f in jc.kernel_sources(pkg)}
@@ -103,12 +122,12 @@ def test_the_probe_types_are_those_of_runs_with_storage_and_commands():
     import numpy as np
     from numba import typeof
 
-    from stabctl.dynamics.model import StageConfig
     from stabctl.dynamics.driver import Simulator, _Run
     from stabctl.dynamics.grid import time_grid
+    from stabctl.dynamics.model import StageConfig
     from stabctl.io import load_case
-    from stabctl.storage import devices
     from stabctl.stability.cct import storage_fleet
+    from stabctl.storage import devices
 
     sim = Simulator(load_case("kundur"), background_compile=False)
     fleet = storage_fleet(sim.case, 5.0)
@@ -116,8 +135,17 @@ def test_the_probe_types_are_those_of_runs_with_storage_and_commands():
     sa = devices.pack(fleet, sim.case, m.nc_idx)
     for n_commands in (0, 3):
         nets = [m.network(StageConfig()), m.network(StageConfig(faults=((2, 1e7j),)))]
-        run = _Run(sim, m, sa, time_grid([0.0, 1.0], 2.0, sim.default_h), nets, True, np.pi,
-                   True, n_commands=n_commands)
+        run = _Run(
+            sim,
+            m,
+            sa,
+            time_grid([0.0, 1.0], 2.0, sim.default_h),
+            nets,
+            True,
+            np.pi,
+            True,
+            n_commands=n_commands,
+        )
         assert [typeof(a) for a in run.arguments(5)] == sim.run_argument_types()
 
 
@@ -148,18 +176,20 @@ def test_a_cold_first_run_compiles_the_integrator_in_a_child_and_loads_it(tmp_pa
 
     import numpy as np
 
-    from stabctl.dynamics.events import Fault
     from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import Fault
     from stabctl.io import load_case
 
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
-    out = subprocess.run([sys.executable, "-c", _COLD_RUN], env=env, capture_output=True,
-                         text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", _COLD_RUN], env=env, capture_output=True, text=True, check=True
+    )
     got = json.loads(out.stdout.strip().splitlines()[-1])
     assert got["started"] == ["stabctl.dynamics.integrator.integrate"]
     assert (got["hits"], got["misses"]) == (1, 0)
     here = Simulator(load_case("kundur")).run(
-        [Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0)
+        [Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0
+    )
     np.testing.assert_allclose(got["speed"], here.speed[-1], rtol=0, atol=1e-13)
 
 
@@ -178,7 +208,7 @@ def test_assign_writes_views_as_numpys_slice_assignment_does():
     _store(x, P, 1, xk, Pk)
     assert np.array_equal(x, want_x) and np.array_equal(P, want_P)
     F, A = np.zeros((5, 5)), rng.normal(size=(2, 2))
-    assign(F[3:, 3:], A)          # a block that is not contiguous
+    assign(F[3:, 3:], A)  # a block that is not contiguous
     want = np.zeros((5, 5))
     want[3:, 3:] = A
     assert np.array_equal(F, want)
@@ -215,10 +245,16 @@ def test_no_kernel_compiles_numbas_slice_assignment_message():
         "from stabctl.smallsignal.linearise import compile_differences\n"
         "compile_differences(sim.model)\n"
         "compile_filters(machine_models(case, machine_pmus(case)))\n"
-        "print(len(seen), seen[:3])\n")
+        "print(len(seen), seen[:3])\n"
+    )
     with tempfile.TemporaryDirectory() as cache:
-        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                             env={**os.environ, "NUMBA_CACHE_DIR": cache}, check=True).stdout
+        out = subprocess.run(
+            [sys.executable, "-c", code],
+            capture_output=True,
+            text=True,
+            env={**os.environ, "NUMBA_CACHE_DIR": cache},
+            check=True,
+        ).stdout
     assert out.startswith("0 "), out
 
 
@@ -228,7 +264,7 @@ def test_a_kernel_called_by_address_returns_raises_and_checks_its_types():
     import numba
     import numpy as np
     import pytest
-    from numba import types, typeof
+    from numba import typeof, types
 
     from stabctl._jit.address import address_of, by_address
 

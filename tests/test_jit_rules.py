@@ -37,9 +37,14 @@ def _decorated(fn: ast.FunctionDef) -> bool:
 def _kernel_bodies():
     """(module, function AST) of every kernel (numba dispatchers; not the typing code of
     an ``intrinsic``)."""
-    return [(mod, node) for mod, tree in DECLARING for node in tree.body
-            if isinstance(node, ast.FunctionDef) and _decorated(node)
-            and isinstance(getattr(mod, node.name), Dispatcher)]
+    return [
+        (mod, node)
+        for mod, tree in DECLARING
+        for node in tree.body
+        if isinstance(node, ast.FunctionDef)
+        and _decorated(node)
+        and isinstance(getattr(mod, node.name), Dispatcher)
+    ]
 
 
 def _resolve(mod, expr):
@@ -58,9 +63,15 @@ def _where(mod, node) -> str:
 
 def test_the_scan_finds_the_kernels_of_every_layer():
     names = {mod.__name__ for mod, _ in DECLARING}
-    assert {"stabctl._jit.arrays", "stabctl.dynamics.integrator", "stabctl.dynamics.model",
-            "stabctl.dynamics.switching", "stabctl.models.machines",
-            "stabctl.network.solution", "stabctl.smallsignal.linearise"} <= names
+    assert {
+        "stabctl._jit.arrays",
+        "stabctl.dynamics.integrator",
+        "stabctl.dynamics.model",
+        "stabctl.dynamics.switching",
+        "stabctl.models.machines",
+        "stabctl.network.solution",
+        "stabctl.smallsignal.linearise",
+    } <= names
     assert len(_kernel_bodies()) > 50
 
 
@@ -77,10 +88,17 @@ def _bare_numba(tree) -> list[int]:
 
 def test_every_kernel_is_declared_by_the_jit_decorators():
     # rule 1: cached (numba's FunctionCache), and never a bare numba.njit / numba.jit
-    bad = [_where(mod, fn) for mod, fn in _kernel_bodies()
-           if type(getattr(mod, fn.name)._cache).__name__ != "FunctionCache"]
-    bad += [f"{f.relative_to(PKG)}:{line}" for f in PKG.rglob("*.py") if f.parent.name != "_jit"
-            for line in _bare_numba(ast.parse(f.read_text("utf-8")))]
+    bad = [
+        _where(mod, fn)
+        for mod, fn in _kernel_bodies()
+        if type(getattr(mod, fn.name)._cache).__name__ != "FunctionCache"
+    ]
+    bad += [
+        f"{f.relative_to(PKG)}:{line}"
+        for f in PKG.rglob("*.py")
+        if f.parent.name != "_jit"
+        for line in _bare_numba(ast.parse(f.read_text("utf-8")))
+    ]
     assert not bad, bad
 
 
@@ -96,8 +114,12 @@ def _python_functions(tree):
 
 
 def _python_calls_of_kernels(mod, tree) -> list[str]:
-    return [_where(mod, call) for fn in _python_functions(tree) for call in ast.walk(fn)
-            if isinstance(call, ast.Call) and isinstance(_resolve(mod, call.func), CompiledOnly)]
+    return [
+        _where(mod, call)
+        for fn in _python_functions(tree)
+        for call in ast.walk(fn)
+        if isinstance(call, ast.Call) and isinstance(_resolve(mod, call.func), CompiledOnly)
+    ]
 
 
 def test_package_code_never_calls_a_compiled_only_kernel_from_python():
@@ -119,15 +141,18 @@ def test_the_python_and_decorator_scans_find_offenders():
 
     mod = types.ModuleType("stabctl.offending_for_the_test")
     mod.max_abs = max_abs
-    tree = ast.parse("import numba\n@numba.njit\ndef g(a):\n    return a\n"
-                     "class A:\n    def f(self, a):\n        return max_abs(a)\n")
+    tree = ast.parse(
+        "import numba\n@numba.njit\ndef g(a):\n    return a\n"
+        "class A:\n    def f(self, a):\n        return max_abs(a)\n"
+    )
     assert _bare_numba(tree) == [2]
     assert _python_calls_of_kernels(mod, tree) == ["stabctl.offending_for_the_test:7"]
 
 
 def _is_scalar(expr) -> bool:
-    return (isinstance(expr, ast.Constant) or isinstance(expr, ast.UnaryOp)
-            and isinstance(expr.operand, ast.Constant))
+    return isinstance(expr, ast.Constant) or (
+        isinstance(expr, ast.UnaryOp) and isinstance(expr.operand, ast.Constant)
+    )
 
 
 def test_no_kernel_assigns_an_array_into_a_slice():
@@ -141,8 +166,11 @@ def test_no_kernel_assigns_an_array_into_a_slice():
             for t in targets:
                 index = t.slice if isinstance(t, ast.Subscript) else None
                 parts = index.elts if isinstance(index, ast.Tuple) else [index]
-                if any(isinstance(p, ast.Slice) or isinstance(p, ast.Constant)
-                       and p.value is Ellipsis for p in parts):
+                if any(
+                    isinstance(p, ast.Slice)
+                    or (isinstance(p, ast.Constant) and p.value is Ellipsis)
+                    for p in parts
+                ):
                     bad.append(f"{_where(mod, node)}: {ast.unparse(node)}")
     assert not bad, bad
 
@@ -162,9 +190,13 @@ def test_kernels_pass_numpy_scalars_not_python_literals_to_kernels():
                 value = arg.value if isinstance(arg, ast.Constant) else _resolve(mod, arg)
                 kind = repr(value) if type(value) in (bool, int) else "a variable"
                 seen.setdefault((callee.py_func.__qualname__, pos), {}).setdefault(
-                    kind, _where(mod, call))
-    bad = {(name, pos): kinds for (name, pos), kinds in seen.items()
-           if len(kinds) > 1 and set(kinds) != {"a variable"}}
+                    kind, _where(mod, call)
+                )
+    bad = {
+        (name, pos): kinds
+        for (name, pos), kinds in seen.items()
+        if len(kinds) > 1 and set(kinds) != {"a variable"}
+    }
     assert not set(bad) - KNOWN_LITERALS, bad
 
 
@@ -173,34 +205,53 @@ KNOWN_LITERALS: set = set()
 
 
 def _numpy_calls(fn, names):
-    return [c for c in ast.walk(fn) if isinstance(c, ast.Call)
-            and ast.unparse(c.func) in {f"{np_}.{n}" for np_ in ("np", "numpy") for n in names}]
+    return [
+        c
+        for c in ast.walk(fn)
+        if isinstance(c, ast.Call)
+        and ast.unparse(c.func) in {f"{np_}.{n}" for np_ in ("np", "numpy") for n in names}
+    ]
 
 
 def test_no_kernel_uses_numpys_linear_algebra():
     # rule 5: LAPACK by symbol (network.solution's dgesv), not np.linalg
-    bad = [f"{_where(mod, node)}: {ast.unparse(node)}" for mod, fn in _kernel_bodies()
-           for node in ast.walk(fn) if isinstance(node, ast.Attribute) and node.attr == "linalg"]
+    bad = [
+        f"{_where(mod, node)}: {ast.unparse(node)}"
+        for mod, fn in _kernel_bodies()
+        for node in ast.walk(fn)
+        if isinstance(node, ast.Attribute) and node.attr == "linalg"
+    ]
     assert not bad, bad
 
 
 def test_no_kernel_takes_the_largest_magnitude_with_numpys_reduction():
     # rule 6: np.max(np.abs(a)) is `max_abs`
-    bad = [f"{_where(mod, c)}: {ast.unparse(c)}" for mod, fn in _kernel_bodies()
-           for c in _numpy_calls(fn, ("max", "amax", "nanmax"))
-           if c.args and isinstance(c.args[0], ast.Call)
-           and ast.unparse(c.args[0].func) in ("np.abs", "numpy.abs", "abs")]
+    bad = [
+        f"{_where(mod, c)}: {ast.unparse(c)}"
+        for mod, fn in _kernel_bodies()
+        for c in _numpy_calls(fn, ("max", "amax", "nanmax"))
+        if c.args
+        and isinstance(c.args[0], ast.Call)
+        and ast.unparse(c.args[0].func) in ("np.abs", "numpy.abs", "abs")
+    ]
     assert not bad, bad
 
 
-@pytest.mark.parametrize("rule, source", [
-    (test_no_kernel_assigns_an_array_into_a_slice, "def f(a, b):\n    a[1:] = b\n"),
-    (test_kernels_pass_numpy_scalars_not_python_literals_to_kernels,
-     "def f(a):\n    g(a, True)\n    return g(a, False)\n"),
-    (test_no_kernel_uses_numpys_linear_algebra, "def f(a):\n    return np.linalg.inv(a)\n"),
-    (test_no_kernel_takes_the_largest_magnitude_with_numpys_reduction,
-     "def f(a):\n    return np.max(np.abs(a))\n"),
-])
+@pytest.mark.parametrize(
+    "rule, source",
+    [
+        (test_no_kernel_assigns_an_array_into_a_slice, "def f(a, b):\n    a[1:] = b\n"),
+        (
+            test_kernels_pass_numpy_scalars_not_python_literals_to_kernels,
+            "def f(a):\n    g(a, True)\n    return g(a, False)\n",
+        ),
+        (test_no_kernel_uses_numpys_linear_algebra, "def f(a):\n    return np.linalg.inv(a)\n"),
+        (
+            test_no_kernel_takes_the_largest_magnitude_with_numpys_reduction,
+            "def f(a):\n    return np.max(np.abs(a))\n",
+        ),
+    ],
+)
 def test_each_rule_fails_on_an_offending_kernel(rule, source, monkeypatch):
     # the scans above do find what they forbid: a kernel breaking the rule fails them
     import types

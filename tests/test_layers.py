@@ -20,8 +20,13 @@ def test_import_linter_contract_is_kept():
     if not Path(exe).exists():
         pytest.skip("import-linter not installed (the test extra installs it)")
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    res = subprocess.run([exe, "--config", str(ROOT / "pyproject.toml")], cwd=ROOT, env=env,
-                         capture_output=True, text=True)
+    res = subprocess.run(
+        [exe, "--config", str(ROOT / "pyproject.toml")],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+    )
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-2000:]
     assert "1 kept, 0 broken" in res.stdout
 
@@ -29,11 +34,14 @@ def test_import_linter_contract_is_kept():
 def test_import_stabctl_leaves_environment_and_files_alone(tmp_path):
     """``import stabctl`` sets no environment variable, imports no numerics and compiles
     nothing (the public names load on first use)."""
-    code = ("import os, sys, json; before = dict(os.environ); import stabctl; "
-            "print(json.dumps([dict(os.environ) == before, 'numpy' in sys.modules, "
-            "'numba' in sys.modules, sorted(stabctl.__all__)]))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True, cwd=tmp_path).stdout
+    code = (
+        "import os, sys, json; before = dict(os.environ); import stabctl; "
+        "print(json.dumps([dict(os.environ) == before, 'numpy' in sys.modules, "
+        "'numba' in sys.modules, sorted(stabctl.__all__)]))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path
+    ).stdout
     same_env, numpy_loaded, numba_loaded, names = json.loads(out)
     assert same_env and not numpy_loaded and not numba_loaded
     assert {"Simulator", "load_case", "critical_clearing_time", "linearise"} <= set(names)
@@ -60,11 +68,11 @@ def test_compile_notice_once_and_only_when_a_stabctl_kernel_compiles():
     kernel.__module__ = "stabctl.kernel_for_the_test"
     calls = []
     on_first_compile(lambda: calls.append(1))
-    assert numba.njit(other)(1) == 0 and calls == []                 # not stabctl
+    assert numba.njit(other)(1) == 0 and calls == []  # not stabctl
     assert numba.njit(kernel)(1) == 2 and calls == [1]
-    assert numba.njit(kernel)(2.0) == 3.0 and calls == [1]           # once only
+    assert numba.njit(kernel)(2.0) == 3.0 and calls == [1]  # once only
     stop = on_first_compile(lambda: calls.append(2))
-    stop()                                                           # the command ended
+    stop()  # the command ended
     assert numba.njit(kernel)(3j) == 1 + 3j and calls == [1]
 
 
@@ -84,9 +92,10 @@ def test_a_long_compile_is_announced_again_while_it_lasts():
     heard = []
     stop = on_first_compile(lambda: None, still=heard.append, every_s=0.05)
     from numba.core import event
+
     real_start = event.start_event
 
-    def stretched(kind, data=None):                  # make each compile take 0.3 s
+    def stretched(kind, data=None):  # make each compile take 0.3 s
         real_start(kind, data)
         if kind == "numba:compile":
             time.sleep(0.3)
@@ -100,9 +109,9 @@ def test_a_long_compile_is_announced_again_while_it_lasts():
     n = len(heard)
     time.sleep(0.6)
     assert n >= 2 and heard == sorted(heard) and heard[0] >= 0.05
-    assert len(heard) == n                           # quiet once compiling is over
+    assert len(heard) == n  # quiet once compiling is over
     heard.clear()
-    event.start_event = stretched                    # a later compile counts from its start
+    event.start_event = stretched  # a later compile counts from its start
     try:
         numba.njit(slow)(2.0)
     finally:

@@ -55,7 +55,7 @@ def ctrl_c_parent(inputs):
 
 def crash(inputs):
     x = inputs["x"]
-    os._exit(x)                     # the worker process dies (as on a segfault or OOM kill)
+    os._exit(x)  # the worker process dies (as on a segfault or OOM kill)
 
 
 def simulator_identity(inputs):
@@ -90,7 +90,7 @@ def test_kundur_cct_sweep_in_processes_then_resume(tmp_path):
     res1 = case1["result"]
     assert res1["cct_cycles"] >= 9 and res1["cct_cycles"] < res1["t_unstable_cycles"] <= 10
     assert res1["numerical_error_s"] == 0.0 and res1["conventions"] == "ieee"
-    assert len({r["worker"] for r in recs}) == 2                   # ran in two processes
+    assert len({r["worker"] for r in recs}) == 2  # ran in two processes
     before = out.read_bytes()
     again = run_sweep(jobs, out, workers=2, progress=False)
     assert (again.ran, again.skipped) == (0, 2) and out.read_bytes() == before
@@ -99,8 +99,9 @@ def test_kundur_cct_sweep_in_processes_then_resume(tmp_path):
 
 def test_failures_are_recorded_with_their_reason(tmp_path):
     out = tmp_path / "mixed.jsonl"
-    too_low = Job("cct-above-limit", cct_job, {"case": "kundur", "bus": 3, "far_bus": 101,
-                                               "t_max": 0.1})
+    too_low = Job(
+        "cct-above-limit", cct_job, {"case": "kundur", "bus": 3, "far_bus": 101, "t_max": 0.1}
+    )
     jobs = jobs_of(square, 2) + jobs_of(boom, 3) + jobs_of(refuse, 4) + [too_low]
     rep = run_sweep(jobs, out, workers=2, progress=False)
     assert (rep.ran, rep.failed) == (4, 3)
@@ -110,7 +111,7 @@ def test_failures_are_recorded_with_their_reason(tmp_path):
     assert bad["status"] == "failed" and bad["error"] == "ValueError: bad x = 3"
     assert "in boom" in bad["traceback"] and bad["inputs"] == {"x": 3}
     assert recs["refuse/4"]["error"] == "InputError: no result for 4"
-    assert "traceback" not in recs["refuse/4"]                      # stabctl errors: reason only
+    assert "traceback" not in recs["refuse/4"]  # stabctl errors: reason only
     assert "above the search limit t_max = 0.1 s" in recs["cct-above-limit"]["error"]
     # failed jobs are finished: skipped on resume unless retried
     assert run_sweep(jobs, out, workers=1, progress=False).ran == 0
@@ -167,8 +168,9 @@ def test_ctrl_c_on_a_process_pool_keeps_finished_lines(tmp_path):
     assert time.perf_counter() - t0 < 10
     keys = [r["key"] for r in lines(out)]
     assert {"square/1", "square/2"} <= set(keys) and not any(k.startswith("sleepy") for k in keys)
-    rest = run_sweep(jobs_of(square, 1, 2) + jobs_of(sleepy, 0.01, 0.02), out, workers=1,
-                     progress=False)
+    rest = run_sweep(
+        jobs_of(square, 1, 2) + jobs_of(sleepy, 0.01, 0.02), out, workers=1, progress=False
+    )
     assert (rest.ran, rest.skipped) == (2, 2)
 
 
@@ -176,9 +178,12 @@ def test_line_cut_by_a_kill_is_moved_aside_and_its_job_rerun(tmp_path):
     out = tmp_path / "cut.jsonl"
     run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
     with out.open("a") as f:
-        f.write('{"key": "square/2", "inp')                          # killed mid-write
-    with pytest.warns(UserWarning, match=r"line\(s\) 2 not a whole sweep record .*moved to "
-                                         r".*cut\.jsonl\.damaged; their jobs run again"):
+        f.write('{"key": "square/2", "inp')  # killed mid-write
+    with pytest.warns(
+        UserWarning,
+        match=r"line\(s\) 2 not a whole sweep record .*moved to "
+        r".*cut\.jsonl\.damaged; their jobs run again",
+    ):
         rep = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
     assert (rep.ran, rep.skipped) == (1, 1)
     text = out.read_text().splitlines()
@@ -195,8 +200,11 @@ def test_damaged_line_in_the_middle_is_moved_aside_too(tmp_path):
     with pytest.warns(UserWarning, match=r"line\(s\) 2 not a whole sweep record"):
         rep = run_sweep(jobs_of(square, 1, 2, 3), out, workers=1, progress=False)
     assert (rep.ran, rep.skipped) == (1, 2)
-    assert sorted(json.loads(t)["key"] for t in out.read_text().splitlines()) == \
-        ["square/1", "square/2", "square/3"]
+    assert sorted(json.loads(t)["key"] for t in out.read_text().splitlines()) == [
+        "square/1",
+        "square/2",
+        "square/3",
+    ]
 
 
 # ---------------------------------------------------------------------------- errors
@@ -218,8 +226,12 @@ def test_duplicate_keys_changed_inputs_and_bad_workers_write_nothing(tmp_path):
 def test_scheduler_without_dask_is_a_clear_error(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)
     with pytest.raises(InputError, match=r"needs Dask distributed.*stabctl\[dask\]"):
-        run_sweep(jobs_of(square, 1), tmp_path / "d.jsonl", scheduler="tcp://127.0.0.1:8786",
-                  progress=False)
+        run_sweep(
+            jobs_of(square, 1),
+            tmp_path / "d.jsonl",
+            scheduler="tcp://127.0.0.1:8786",
+            progress=False,
+        )
     assert not (tmp_path / "d.jsonl").exists()
 
 
@@ -227,8 +239,12 @@ def test_scheduler_without_dask_is_a_clear_error(tmp_path, monkeypatch):
 def test_dask_cluster(tmp_path):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=1, processes=False, dashboard_address=None) as c:
-        rep = run_sweep(jobs_of(square, 1, 2) + jobs_of(boom, 3), tmp_path / "d.jsonl",
-                        scheduler=c.scheduler_address, progress=False)
+        rep = run_sweep(
+            jobs_of(square, 1, 2) + jobs_of(boom, 3),
+            tmp_path / "d.jsonl",
+            scheduler=c.scheduler_address,
+            progress=False,
+        )
     assert (rep.ran, rep.failed) == (3, 1)
     assert rep.records["square/2"]["result"] == {"y": 4}
     assert rep.records["boom/3"]["error"] == "ValueError: bad x = 3"
@@ -238,13 +254,13 @@ def test_dask_cluster(tmp_path):
 def test_local_dask_cluster_records_a_dead_worker_as_failed_and_resumes(tmp_path):
     pytest.importorskip("distributed")
     out = tmp_path / "d.jsonl"
-    rep = run_sweep(jobs_of(square, 1, 2) + jobs_of(crash, 3), out, scheduler="local",
-                    workers=2, progress=False)
+    rep = run_sweep(
+        jobs_of(square, 1, 2) + jobs_of(crash, 3), out, scheduler="local", workers=2, progress=False
+    )
     assert (rep.ran, rep.failed) == (3, 1)
     assert rep.records["square/2"]["result"] == {"y": 4}
     assert "crash/3" in read_records(out) and "Killed" in rep.records["crash/3"]["error"]
-    again = run_sweep(jobs_of(square, 1, 2, 4), out, scheduler="local", workers=1,
-                      progress=False)
+    again = run_sweep(jobs_of(square, 1, 2, 4), out, scheduler="local", workers=1, progress=False)
     assert (again.ran, again.skipped) == (1, 2)
 
 
@@ -264,13 +280,26 @@ def assert_bad_input(res, tmp_path, needle):
 
 def test_cli_sweep_cct_default_faults_json_then_resume(tmp_path):
     out = tmp_path / "k.jsonl"
-    res = run("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", out, "--workers", 1,
-              "--tol-ms", 5, "--json")
+    res = run(
+        "sweep-cct",
+        "kundur",
+        "--faults",
+        "DEFAULT",
+        "--out",
+        out,
+        "--workers",
+        1,
+        "--tol-ms",
+        5,
+        "--json",
+    )
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
     assert (d["ran"], d["skipped"], d["failed"]) == (2, 0, 0)
-    assert [r["key"] for r in d["records"]] == ["kundur/3-101/t1/esd-none",
-                                                "kundur/13-101/t1/esd-none"]
+    assert [r["key"] for r in d["records"]] == [
+        "kundur/3-101/t1/esd-none",
+        "kundur/13-101/t1/esd-none",
+    ]
     assert len(lines(out)) == 2
     res = run("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", out, "--tol-ms", 5)
     assert res.exit_code == 0, res.output
@@ -281,19 +310,33 @@ def test_cli_sweep_cct_default_faults_json_then_resume(tmp_path):
 def test_cli_sweep_cct_faults_csv(tmp_path):
     faults = tmp_path / "faults.csv"
     faults.write_text("bus,far_bus,t_fault\n3,101,0.5\n")
-    res = run("sweep-cct", "kundur", "--faults", faults, "--out", tmp_path / "o.jsonl",
-              "--workers", 1, "--tol-ms", 5, "--json")
+    res = run(
+        "sweep-cct",
+        "kundur",
+        "--faults",
+        faults,
+        "--out",
+        tmp_path / "o.jsonl",
+        "--workers",
+        1,
+        "--tol-ms",
+        5,
+        "--json",
+    )
     assert res.exit_code == 0, res.output
     rec = json.loads(res.stdout)["records"][0]
     assert rec["key"] == "kundur/3-101/t0.5/esd-none" and rec["status"] == "ok"
 
 
-@pytest.mark.parametrize("args, needle", [
-    (("--faults", "missing.csv"), "fault list missing.csv"),
-    (("--faults", "DEFAULT", "--esd-pct", "abc"), "--esd-pct 'abc'"),
-    (("--faults", "DEFAULT", "--workers", 0), "--workers 0: must be in [1, 1024]"),
-    (("--faults", "DEFAULT", "--tol-ms", -1), "--tol-ms"),
-])
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (("--faults", "missing.csv"), "fault list missing.csv"),
+        (("--faults", "DEFAULT", "--esd-pct", "abc"), "--esd-pct 'abc'"),
+        (("--faults", "DEFAULT", "--workers", 0), "--workers 0: must be in [1, 1024]"),
+        (("--faults", "DEFAULT", "--tol-ms", -1), "--tol-ms"),
+    ],
+)
 def test_cli_sweep_cct_bad_input(tmp_path, args, needle):
     res = run("sweep-cct", "kundur", "--out", tmp_path / "o.jsonl", *args)
     assert_bad_input(res, tmp_path, needle)
@@ -312,8 +355,10 @@ def test_ratings_parse_none_and_lists():
 
     assert _ratings(()) == [None]
     assert _ratings(("none,5", "10", "5")) == [None, 5.0, 10.0]
-    assert [j.key for j in cct_jobs("kundur", [LineFault(3, 101)], [None, 5.0])] == \
-        ["kundur/3-101/t1/esd-none", "kundur/3-101/t1/esd5"]
+    assert [j.key for j in cct_jobs("kundur", [LineFault(3, 101)], [None, 5.0])] == [
+        "kundur/3-101/t1/esd-none",
+        "kundur/3-101/t1/esd5",
+    ]
 
 
 def test_sweep_jobs_with_another_controller_are_keyed_apart():

@@ -14,14 +14,14 @@ def test_heartbeat_repeats_its_status_only_after_a_silence():
     said = []
     with Heartbeat(said.append, line="still {}".format, every=0.2) as beat:
         beat("start")
-        time.sleep(0.8)                     # no status yet: nothing repeated
+        time.sleep(0.8)  # no status yet: nothing repeated
         beat.note("busy")
         deadline = time.monotonic() + 5
         while "still busy" not in said and time.monotonic() < deadline:
             time.sleep(0.05)
     assert said[0] == "start" and "still busy" in said
     n = len(said)
-    time.sleep(0.8)                         # left: the thread has stopped
+    time.sleep(0.8)  # left: the thread has stopped
     assert len(said) == n
 
 

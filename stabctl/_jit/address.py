@@ -42,8 +42,9 @@ def address_of(dispatcher, argtypes) -> int:
     cres = dispatcher.overloads[argtypes]
     address = cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
     if not address or cres.signature.return_type != types.intp:
-        raise RuntimeError(f"{dispatcher.py_func.__qualname__}: no compiled function "
-                           f"returning intp for {argtypes}")
+        raise RuntimeError(
+            f"{dispatcher.py_func.__qualname__}: no compiled function returning intp for {argtypes}"
+        )
     return address
 
 
@@ -68,12 +69,12 @@ def by_address(name: str, names: tuple[str, ...], fixed):
         A call whose argument types differ from `fixed` raises TypingError at compile
         time: the callee would read its arguments wrongly.
     """
+
     def typer(typingctx, address, *args):
         if not isinstance(address, types.Integer):
             raise TypingError(f"{name}: the address must be an integer, got {address}")
         if len(args) != len(names):
-            raise TypingError(f"{name}: {len(names)} arguments after the address, got "
-                              f"{len(args)}")
+            raise TypingError(f"{name}: {len(names)} arguments after the address, got {len(args)}")
         for arg, got, want in zip(names, args, fixed()):
             if want is not None and got != want:
                 raise TypingError(f"{name}: {arg} must be {want}, got {got}")
@@ -81,8 +82,7 @@ def by_address(name: str, names: tuple[str, ...], fixed):
         def codegen(context, builder, signature, llargs):
             fnty = context.call_conv.get_function_type(types.intp, args)
             fn = builder.inttoptr(llargs[0], fnty.as_pointer())
-            status, res = context.call_conv.call_function(builder, fn, types.intp, args,
-                                                          llargs[1:])
+            status, res = context.call_conv.call_function(builder, fn, types.intp, args, llargs[1:])
             with builder.if_then(status.is_error, likely=False):
                 context.call_conv.return_status_propagate(builder, status)
             return res
@@ -93,6 +93,9 @@ def by_address(name: str, names: tuple[str, ...], fixed):
     # numba folds the call's arguments by this signature when lowering it: named ones, as
     # a starred parameter would be lowered as one tuple argument
     typer.__signature__ = inspect.Signature(
-        [inspect.Parameter(n, inspect.Parameter.POSITIONAL_OR_KEYWORD)
-         for n in ("typingctx", "address", *names)])
+        [
+            inspect.Parameter(n, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+            for n in ("typingctx", "address", *names)
+        ]
+    )
     return intrinsic(typer)

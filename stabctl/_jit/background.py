@@ -70,15 +70,28 @@ def compile_in_background(dispatcher, argtypes, opt: int | None = None) -> bool:
         Whether a child process was started.
     """
     name = _name(dispatcher)
-    if (name in _BACKGROUND or dispatcher.signatures or cached(dispatcher)
-            or not _writable(Path(dispatcher.stats.cache_path))):
+    if (
+        name in _BACKGROUND
+        or dispatcher.signatures
+        or cached(dispatcher)
+        or not _writable(Path(dispatcher.stats.cache_path))
+    ):
         return False
-    err = tempfile.TemporaryFile()
+    err = tempfile.TemporaryFile()  # noqa: SIM115 - the child's stderr, read after it exits
     env = dict(os.environ, **({} if opt is None else {"NUMBA_OPT": str(opt)}))
-    proc = subprocess.Popen([sys.executable, "-m", __name__, dispatcher.py_func.__module__,
-                             dispatcher.py_func.__qualname__],
-                            stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=err,
-                            env=env)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            __name__,
+            dispatcher.py_func.__module__,
+            dispatcher.py_func.__qualname__,
+        ],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        stderr=err,
+        env=env,
+    )
     proc.stdin.write(pickle.dumps(tuple(argtypes)))
     proc.stdin.close()
     _BACKGROUND[name] = (proc, err)
@@ -107,9 +120,12 @@ def await_background(dispatcher) -> None:
     if proc.returncode != 0:
         err.seek(0)
         lines = err.read().decode(errors="replace").strip().splitlines() or ["no message"]
-        warnings.warn(f"compiling {_name(dispatcher)} in a child process failed "
-                      f"(exit {proc.returncode}: {lines[-1]}); compiling it here",
-                      RuntimeWarning, stacklevel=2)
+        warnings.warn(
+            f"compiling {_name(dispatcher)} in a child process failed "
+            f"(exit {proc.returncode}: {lines[-1]}); compiling it here",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     err.close()
 
 
@@ -119,7 +135,6 @@ def _stop(proc: subprocess.Popen) -> None:
         proc.wait()
 
 
-if __name__ == "__main__":       # the child of `compile_in_background`
+if __name__ == "__main__":  # the child of `compile_in_background`
     _module, _qualname = sys.argv[1:3]
-    getattr(importlib.import_module(_module), _qualname).compile(
-        pickle.load(sys.stdin.buffer))
+    getattr(importlib.import_module(_module), _qualname).compile(pickle.load(sys.stdin.buffer))

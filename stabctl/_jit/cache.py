@@ -27,8 +27,18 @@ import numba
 _PKG = Path(__file__).resolve().parents[1]
 
 #: decorators that make numba compile the function below them (`kernel_sources`)
-KERNEL_DECORATORS = ("kernel", "njit", "jit", "intrinsic", "overload", "overload_method",
-                     "register_jitable", "cfunc", "vectorize", "guvectorize")
+KERNEL_DECORATORS = (
+    "kernel",
+    "njit",
+    "jit",
+    "intrinsic",
+    "overload",
+    "overload_method",
+    "register_jitable",
+    "cfunc",
+    "vectorize",
+    "guvectorize",
+)
 _DECORATOR = re.compile(rf"@(?:[\w.]+\.)?(?:{'|'.join(KERNEL_DECORATORS)})\b")
 
 
@@ -52,9 +62,9 @@ def _import_statements(text: str):
             line += " " + next(lines, ")")
         line = re.sub(r"#.*", "", line).replace("(", " ").replace(")", " ")
         if line.startswith("import "):
-            yield "", line[len("import "):]
+            yield "", line[len("import ") :]
         else:
-            module, _, listed = line[len("from "):].partition(" import ")
+            module, _, listed = line[len("from ") :].partition(" import ")
             yield module.strip(), listed
 
 
@@ -76,7 +86,7 @@ def _imported_modules(modules: dict[str, Path], name: str, text: str) -> set[Pat
             continue
         dots = len(base) - len(base.lstrip("."))
         if dots:
-            base = ".".join([*package[:len(package) - dots + 1], *filter(None, [base[dots:]])])
+            base = ".".join([*package[: len(package) - dots + 1], *filter(None, [base[dots:]])])
         imported += [f"{base}.{n}" if f"{base}.{n}" in modules else base for n in _names(listed)]
     return {modules[n] for n in imported if n in modules}
 
@@ -87,7 +97,7 @@ def _declares_kernels(text: str) -> bool:
     line of every file took 20 ms)."""
     for hit in _DECORATOR.finditer(text):
         line_start = text.rfind("\n", 0, hit.start()) + 1
-        if not text[line_start:hit.start()].strip():
+        if not text[line_start : hit.start()].strip():
             return True
     return False
 
@@ -155,8 +165,10 @@ def cache_dirs() -> list[Path]:
     root = numba.config.CACHE_DIR
     if not root:
         return [d / "__pycache__" for d in sources]
-    return [Path(root) / f"{d.name}_{hashlib.sha1(os.path.abspath(d).encode()).hexdigest()}"
-            for d in sources]
+    return [
+        Path(root) / f"{d.name}_{hashlib.sha1(os.path.abspath(d).encode()).hexdigest()}"
+        for d in sources
+    ]
 
 
 def clear_cache() -> int:

@@ -34,14 +34,16 @@ class CompiledOnly(CPUDispatcher):
 
     def __call__(self, *args, **kwargs):
         if kwargs:
-            raise TypeError(f"{self.py_func.__qualname__}: keyword arguments from Python "
-                            "are not supported (a kernel for compiled callers)")
+            raise TypeError(
+                f"{self.py_func.__qualname__}: keyword arguments from Python "
+                "are not supported (a kernel for compiled callers)"
+            )
         trampoline = self.__dict__.get("_from_python")
         if trampoline is None:
             target = self
             if self.targetoptions.get("inline", "never") == "never":
                 trampoline = numba.njit(lambda *a: target(*a))
-            else:        # numba inlines no kernel into a call with *args: compile its source
+            else:  # numba inlines no kernel into a call with *args: compile its source
                 trampoline = numba.njit(self.py_func)
             self._from_python = trampoline
         return trampoline(*args)
@@ -66,9 +68,11 @@ def kernel(func=None, **options):
     CompiledOnly
         The dispatcher (a call from Python compiles a trampoline first).
     """
+
     def declare(f):
-        dispatcher = numba.njit(f, cache=True, no_cpython_wrapper=True,
-                                no_cfunc_wrapper=True, **options)
+        dispatcher = numba.njit(
+            f, cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True, **options
+        )
         dispatcher.__class__ = CompiledOnly
         return dispatcher
 

@@ -38,13 +38,12 @@ def on_first_compile(notify, still=None, every_s: float = 10.0):
         depth, noticed, t_begin, last = 0, False, 0.0, 0.0
 
         def on_start(self, ev):
-            if self.depth == 0:              # a compile begins (numba's overloads nest)
+            if self.depth == 0:  # a compile begins (numba's overloads nest)
                 self.t_begin = now = time.perf_counter()
-                if now - self.last > every_s:   # else it follows the last one: keep the
-                    self.last = now             # beat, never more than every_s apart
+                if now - self.last > every_s:  # else it follows the last one: keep the
+                    self.last = now  # beat, never more than every_s apart
             self.depth += 1
-            if not self.noticed and ev.data["dispatcher"].py_func.__module__.startswith(
-                    "stabctl."):
+            if not self.noticed and ev.data["dispatcher"].py_func.__module__.startswith("stabctl."):
                 self.noticed = True
                 notify()
                 if still is not None:

@@ -23,6 +23,22 @@ from stabctl.case.system import (
     beyond,
 )
 
-__all__ = ["CASE_DIR", "PQ", "PV", "START_LIMIT_TOL", "SWING", "TABLES", "BranchTable",
-           "BusTable", "Case", "ExciterTable", "GovernorTable", "InjectionTable", "LoadTable",
-           "MachineTable", "PssTable", "Table", "beyond"]
+__all__ = [
+    "CASE_DIR",
+    "PQ",
+    "PV",
+    "START_LIMIT_TOL",
+    "SWING",
+    "TABLES",
+    "BranchTable",
+    "BusTable",
+    "Case",
+    "ExciterTable",
+    "GovernorTable",
+    "InjectionTable",
+    "LoadTable",
+    "MachineTable",
+    "PssTable",
+    "Table",
+    "beyond",
+]

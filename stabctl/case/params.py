@@ -24,9 +24,10 @@ Sources: PST manual (Power System Toolbox 3.0, Rogers & Chow) section 3.22 Table
 
 from __future__ import annotations
 
+import inspect
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Mapping
 
 __all__ = ["Param", "DyrModel", "Family", "MACHINE", "EXCITER", "PSS", "GOVERNOR", "FAMILIES"]
 
@@ -147,8 +148,10 @@ class Family:
     def __post_init__(self):
         for k, p in enumerate(self.params):
             if p.col != k + 1:
-                raise ValueError(f"{self.table}: parameter {p.name} declared as column {p.col}, "
-                                 f"is column {k + 1}")
+                raise ValueError(
+                    f"{self.table}: parameter {p.name} declared as column {p.col}, "
+                    f"is column {k + 1}"
+                )
         names = [p.name for p in self.params] + [p.alt for p in self.params if p.alt]
         if len(set(names)) != len(names):
             raise ValueError(f"{self.table}: a parameter name or alternative name repeats")
@@ -251,7 +254,10 @@ def choices_message(p: Param) -> str:
 _REACT, _TC = dict(unit="pu", lo=0.0), dict(unit="s", lo=0.0)
 
 MACHINE = Family(
-    table="mac_con", min_columns=16, key="number", key_label="machine",
+    table="mac_con",
+    min_columns=16,
+    key="number",
+    key_label="machine",
     params=(
         Param("number", "code", 1, integer=True, doc="machine number"),
         Param("bus", "code", 2, integer=True, doc="bus number"),
@@ -260,15 +266,17 @@ MACHINE = Family(
         Param("ra", col=5, doc="armature resistance", **_REACT),
         Param("xd", col=6, doc="d-axis synchronous reactance (0: classical model)", **_REACT),
         Param("xdp", col=7, doc="d-axis transient reactance x'd", **_REACT),
-        Param("xdpp", col=8, doc='d-axis subtransient reactance x"d (0: transient model)',
-              **_REACT),
+        Param(
+            "xdpp", col=8, doc='d-axis subtransient reactance x"d (0: transient model)', **_REACT
+        ),
         Param("Tdop", col=9, doc="d-axis open-circuit transient time constant T'do", **_TC),
         Param("Tdopp", col=10, doc='d-axis open-circuit subtransient time constant T"do', **_TC),
         Param("xq", col=11, doc="q-axis synchronous reactance", **_REACT),
         Param("xqp", col=12, doc="q-axis transient reactance x'q", **_REACT),
         Param("xqpp", col=13, doc='q-axis subtransient reactance x"q', **_REACT),
-        Param("Tqop", col=14, doc="q-axis open-circuit transient time constant T'qo (0 kept)",
-              **_TC),
+        Param(
+            "Tqop", col=14, doc="q-axis open-circuit transient time constant T'qo (0 kept)", **_TC
+        ),
         Param("Tqopp", col=15, doc='q-axis open-circuit subtransient time constant T"qo', **_TC),
         Param("H", "s", 16, doc="inertia constant (MW s / MVA on machine base)"),
         Param("D0", "pu", 17, doc="local damping coefficient d_o"),
@@ -278,27 +286,95 @@ MACHINE = Family(
         Param("S12", "", 21, doc="saturation factor S(1.2)"),
         Param("pfrac", "", 22, default=1.0, doc="fraction of the bus generation P"),
         Param("qfrac", "", 23, default=1.0, doc="fraction of the bus generation Q"),
-        Param("speed_effects", "code", 24, default=1.0, choices=(0.0, 1.0),
-              doc="subtransient: 1 stator voltage and torque with speed (PST mac_sub), "
-                  "0 without (ANDES GENROU/GENSAL)"),
-        Param("psse_sat", "code", 25, default=0.0, choices=(0.0, 1.0),
-              doc="subtransient: 0 no saturation (PST mac_sub as modelled here), 1 PSS/E's "
-                  "GENROU saturation of the air-gap flux |psi\"| through S(1.0), S(1.2) "
-                  "(ANDES GENROU/GENSAL)"),
+        Param(
+            "speed_effects",
+            "code",
+            24,
+            default=1.0,
+            choices=(0.0, 1.0),
+            doc="subtransient: 1 stator voltage and torque with speed (PST mac_sub), "
+            "0 without (ANDES GENROU/GENSAL)",
+        ),
+        Param(
+            "psse_sat",
+            "code",
+            25,
+            default=0.0,
+            choices=(0.0, 1.0),
+            doc="subtransient: 0 no saturation (PST mac_sub as modelled here), 1 PSS/E's "
+            'GENROU saturation of the air-gap flux |psi"| through S(1.0), S(1.2) '
+            "(ANDES GENROU/GENSAL)",
+        ),
     ),
     dyr=(
         # GENROU -> mac_sub with x"q = x"d (set by the importer)
-        DyrModel("GENROU", ("T'do", "T''do", "T'qo", "T''qo", "H", "D", "Xd", "Xq", "X'd",
-                            "X'q", "X''d", "Xl", "S(1.0)", "S(1.2)"),
-                 {"Tdop": "T'do", "Tdopp": "T''do", "Tqop": "T'qo", "Tqopp": "T''qo", "H": "H",
-                  "D0": "D", "xd": "Xd", "xq": "Xq", "xdp": "X'd", "xqp": "X'q",
-                  "xdpp": "X''d", "xl": "Xl", "S10": "S(1.0)", "S12": "S(1.2)"}),
+        DyrModel(
+            "GENROU",
+            (
+                "T'do",
+                "T''do",
+                "T'qo",
+                "T''qo",
+                "H",
+                "D",
+                "Xd",
+                "Xq",
+                "X'd",
+                "X'q",
+                "X''d",
+                "Xl",
+                "S(1.0)",
+                "S(1.2)",
+            ),
+            {
+                "Tdop": "T'do",
+                "Tdopp": "T''do",
+                "Tqop": "T'qo",
+                "Tqopp": "T''qo",
+                "H": "H",
+                "D0": "D",
+                "xd": "Xd",
+                "xq": "Xq",
+                "xdp": "X'd",
+                "xqp": "X'q",
+                "xdpp": "X''d",
+                "xl": "Xl",
+                "S10": "S(1.0)",
+                "S12": "S(1.2)",
+            },
+        ),
         # GENSAL -> mac_sub without the q-axis transient circuit (x'q = x_q, T'qo = 0)
-        DyrModel("GENSAL", ("T'do", "T''do", "T''qo", "H", "D", "Xd", "Xq", "X'd", "X''d",
-                            "Xl", "S(1.0)", "S(1.2)"),
-                 {"Tdop": "T'do", "Tdopp": "T''do", "Tqopp": "T''qo", "H": "H", "D0": "D",
-                  "xd": "Xd", "xq": "Xq", "xdp": "X'd", "xdpp": "X''d", "xl": "Xl",
-                  "S10": "S(1.0)", "S12": "S(1.2)"}),
+        DyrModel(
+            "GENSAL",
+            (
+                "T'do",
+                "T''do",
+                "T''qo",
+                "H",
+                "D",
+                "Xd",
+                "Xq",
+                "X'd",
+                "X''d",
+                "Xl",
+                "S(1.0)",
+                "S(1.2)",
+            ),
+            {
+                "Tdop": "T'do",
+                "Tdopp": "T''do",
+                "Tqopp": "T''qo",
+                "H": "H",
+                "D0": "D",
+                "xd": "Xd",
+                "xq": "Xq",
+                "xdp": "X'd",
+                "xdpp": "X''d",
+                "xl": "Xl",
+                "S10": "S(1.0)",
+                "S12": "S(1.2)",
+            },
+        ),
         # GENCLS -> mac_em behind x'd = ZSORCE X (set by the importer)
         DyrModel("GENCLS", ("H", "D"), {"H": "H", "D0": "D"}),
     ),
@@ -310,11 +386,21 @@ MACHINE = Family(
 # --------------------------------------------------------------------------------------
 
 EXCITER = Family(
-    table="exc_con", min_columns=9, key="machine", key_label="machine",
+    table="exc_con",
+    min_columns=9,
+    key="machine",
+    key_label="machine",
     params=(
-        Param("type", "code", 1, integer=True, choices=(0, 1, 2, 3, 4, 5), label="exciter type",
-              doc="0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1, "
-                  "5 IEEET2 (DC1 with a two-lag rate feedback)"),
+        Param(
+            "type",
+            "code",
+            1,
+            integer=True,
+            choices=(0, 1, 2, 3, 4, 5),
+            label="exciter type",
+            doc="0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1, "
+            "5 IEEET2 (DC1 with a two-lag rate feedback)",
+        ),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("TR", "s", 3, lo=0.0, doc="input filter time constant"),
         Param("KA", "", 4, doc="voltage regulator gain"),
@@ -323,72 +409,234 @@ EXCITER = Family(
         Param("TC", "s", 7, doc="transient gain reduction time constant"),
         Param("Vrmax", "pu", 8, doc="maximum regulator output"),
         Param("Vrmin", "pu", 9, doc="minimum regulator output"),
-        Param("VImax", "pu", 10, alt="KE",
-              doc="ST3, EXST1: max internal signal | DC1/2: KE exciter constant"),
-        Param("VImin", "pu", 11, alt="TE",
-              doc="ST3, EXST1: min internal signal | DC1/2: TE exciter time constant, s"),
+        Param(
+            "VImax",
+            "pu",
+            10,
+            alt="KE",
+            doc="ST3, EXST1: max internal signal | DC1/2: KE exciter constant",
+        ),
+        Param(
+            "VImin",
+            "pu",
+            11,
+            alt="TE",
+            doc="ST3, EXST1: min internal signal | DC1/2: TE exciter time constant, s",
+        ),
         Param("KJ", "", 12, alt="E1", doc="ST3: first stage regulator gain | DC1/2: E1, pu"),
         Param("KP", "", 13, alt="SE1", doc="ST3: potential circuit gain | DC1/2: SE(E1)"),
-        Param("thetaP", "deg", 14, alt="E2",
-              doc="ST3: potential circuit angle | DC1/2: E2, pu"),
+        Param("thetaP", "deg", 14, alt="E2", doc="ST3: potential circuit angle | DC1/2: E2, pu"),
         Param("KI", "", 15, alt="SE2", doc="ST3: current circuit gain | DC1/2: SE(E2)"),
-        Param("XL", "pu", 16, alt="KF_dc",
-              doc="ST3: potential source reactance | DC1/2: KF stabilizer gain"),
-        Param("KC", "", 17, alt="TF_dc",
-              doc="ST3, EXST1: rectifier loading factor | DC1/2: TF stabilizer time "
-                  "constant, s"),
-        Param("Efdmax", "pu", 18, alt="TF2",
-              doc="ST3: maximum field voltage | IEEET2: second rate feedback time constant "
-                  "TF2, s"),
-        Param("KG", "", 19, alt="bus_fed",
-              doc="ST3: inner loop feedback constant | smpexc: 1 the output times the "
-                  "terminal voltage (bus-fed SCRX), 0 not"),
+        Param(
+            "XL",
+            "pu",
+            16,
+            alt="KF_dc",
+            doc="ST3: potential source reactance | DC1/2: KF stabilizer gain",
+        ),
+        Param(
+            "KC",
+            "",
+            17,
+            alt="TF_dc",
+            doc="ST3, EXST1: rectifier loading factor | DC1/2: TF stabilizer time constant, s",
+        ),
+        Param(
+            "Efdmax",
+            "pu",
+            18,
+            alt="TF2",
+            doc="ST3: maximum field voltage | IEEET2: second rate feedback time constant TF2, s",
+        ),
+        Param(
+            "KG",
+            "",
+            19,
+            alt="bus_fed",
+            doc="ST3: inner loop feedback constant | smpexc: 1 the output times the "
+            "terminal voltage (bus-fed SCRX), 0 not",
+        ),
         Param("VGmax", "pu", 20, doc="ST3: maximum inner loop feedback"),
         Param("KF", "", 21, doc="EXST1: rate feedback gain"),
         Param("TF", "s", 22, doc="EXST1: rate feedback time constant"),
-        Param("dc_sat", "code", 23, choices=(0, 1),
-              doc="DC1/2 saturation through (E1, SE1), (E2, SE2): 0 PST's exponential, "
-                  "1 PSS/E's quadratic"),
-        Param("ke_given", "code", 24, choices=(0, 1),
-              doc="DC1/2: 0 K_E = 0 computed so that V_R starts at 0 (PST), 1 as given "
-                  "(ANDES)"),
-        Param("ifd_machine", "code", 25, choices=(0, 1),
-              doc="ST3: field current of I_N = K_C I_fd / V_E, 0 PST exc_st3's own estimate "
-                  "E_Isat(E'q) + p6 (E'q - psi_kd) + p7 i_d, 1 the machine's (IEEE 421.5 "
-                  "I_FD; ANDES esst3a.py XadIfd)"),
+        Param(
+            "dc_sat",
+            "code",
+            23,
+            choices=(0, 1),
+            doc="DC1/2 saturation through (E1, SE1), (E2, SE2): 0 PST's exponential, "
+            "1 PSS/E's quadratic",
+        ),
+        Param(
+            "ke_given",
+            "code",
+            24,
+            choices=(0, 1),
+            doc="DC1/2: 0 K_E = 0 computed so that V_R starts at 0 (PST), 1 as given (ANDES)",
+        ),
+        Param(
+            "ifd_machine",
+            "code",
+            25,
+            choices=(0, 1),
+            doc="ST3: field current of I_N = K_C I_fd / V_E, 0 PST exc_st3's own estimate "
+            "E_Isat(E'q) + p6 (E'q - psi_kd) + p7 i_d, 1 the machine's (IEEE 421.5 "
+            "I_FD; ANDES esst3a.py XadIfd)",
+        ),
     ),
     dyr=(
         # SEXS -> smpexc: T_C = (TA/TB) TB is computed
-        DyrModel("SEXS", ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX"),
-                 {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"}, kind=0),
-        *(DyrModel(name, ("TR", "KA", "TA", "TB", "TC", "VRMAX", "VRMIN", "KE", "TE", "KF",
-                          "TF1", "Switch", "E1", "SE(E1)", "E2", "SE(E2)"),
-                   {"TR": "TR", "KA": "KA", "TA": "TA", "TB": "TB", "TC": "TC",
-                    "Vrmax": "VRMAX", "Vrmin": "VRMIN", "KE": "KE", "TE": "TE", "KF_dc": "KF",
-                    "TF_dc": "TF1"}, kind=kind)
-          for name, kind in (("IEEEX1", 1), ("EXDC2", 2), ("ESDC2A", 2))),
+        DyrModel(
+            "SEXS",
+            ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX"),
+            {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"},
+            kind=0,
+        ),
+        *(
+            DyrModel(
+                name,
+                (
+                    "TR",
+                    "KA",
+                    "TA",
+                    "TB",
+                    "TC",
+                    "VRMAX",
+                    "VRMIN",
+                    "KE",
+                    "TE",
+                    "KF",
+                    "TF1",
+                    "Switch",
+                    "E1",
+                    "SE(E1)",
+                    "E2",
+                    "SE(E2)",
+                ),
+                {
+                    "TR": "TR",
+                    "KA": "KA",
+                    "TA": "TA",
+                    "TB": "TB",
+                    "TC": "TC",
+                    "Vrmax": "VRMAX",
+                    "Vrmin": "VRMIN",
+                    "KE": "KE",
+                    "TE": "TE",
+                    "KF_dc": "KF",
+                    "TF_dc": "TF1",
+                },
+                kind=kind,
+            )
+            for name, kind in (("IEEEX1", 1), ("EXDC2", 2), ("ESDC2A", 2))
+        ),
         # IEEET2 -> DC1 (type 5) with the rate feedback s KF/((1 + s TF1)(1 + s TF2))
-        DyrModel("IEEET2", ("TR", "KA", "TA", "VRMAX", "VRMIN", "KE", "TE", "KF", "TF1", "TF2",
-                            "E1", "SE(E1)", "E2", "SE(E2)"),
-                 {"TR": "TR", "KA": "KA", "TA": "TA", "Vrmax": "VRMAX", "Vrmin": "VRMIN",
-                  "KE": "KE", "TE": "TE", "KF_dc": "KF", "TF_dc": "TF1", "TF2": "TF2"}, kind=5),
+        DyrModel(
+            "IEEET2",
+            (
+                "TR",
+                "KA",
+                "TA",
+                "VRMAX",
+                "VRMIN",
+                "KE",
+                "TE",
+                "KF",
+                "TF1",
+                "TF2",
+                "E1",
+                "SE(E1)",
+                "E2",
+                "SE(E2)",
+            ),
+            {
+                "TR": "TR",
+                "KA": "KA",
+                "TA": "TA",
+                "Vrmax": "VRMAX",
+                "Vrmin": "VRMIN",
+                "KE": "KE",
+                "TE": "TE",
+                "KF_dc": "KF",
+                "TF_dc": "TF1",
+                "TF2": "TF2",
+            },
+            kind=5,
+        ),
         # SCRX -> smpexc: T_C = (TA/TB) TB computed; CSWITCH 0 (bus fed): bus_fed = 1
-        DyrModel("SCRX", ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX", "CSWITCH", "rc/rfd"),
-                 {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"}, kind=0),
-        DyrModel("EXST1", ("TR", "VIMAX", "VIMIN", "TC", "TB", "KA", "TA", "VRMAX", "VRMIN",
-                           "KC", "KF", "TF"),
-                 {"TR": "TR", "KA": "KA", "TA": "TA", "TB": "TB", "TC": "TC", "Vrmax": "VRMAX",
-                  "Vrmin": "VRMIN", "VImax": "VIMAX", "VImin": "VIMIN", "KC": "KC", "KF": "KF",
-                  "TF": "TF"}, kind=4),
+        DyrModel(
+            "SCRX",
+            ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX", "CSWITCH", "rc/rfd"),
+            {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"},
+            kind=0,
+        ),
+        DyrModel(
+            "EXST1",
+            ("TR", "VIMAX", "VIMIN", "TC", "TB", "KA", "TA", "VRMAX", "VRMIN", "KC", "KF", "TF"),
+            {
+                "TR": "TR",
+                "KA": "KA",
+                "TA": "TA",
+                "TB": "TB",
+                "TC": "TC",
+                "Vrmax": "VRMAX",
+                "Vrmin": "VRMIN",
+                "VImax": "VIMAX",
+                "VImin": "VIMIN",
+                "KC": "KC",
+                "KF": "KF",
+                "TF": "TF",
+            },
+            kind=4,
+        ),
         # ESST3A -> exc_st3 (TA = 0): its KA is PST's K_J, its inner loop KM/(1 + s TM)
         # limited [VMMIN, VMMAX] PST's K_A/(1 + s T_A); Efdmax = VBMAX VMMAX is computed
-        DyrModel("ESST3A", ("TR", "VIMAX", "VIMIN", "KM", "TC", "TB", "KA", "TA", "VRMAX",
-                            "VRMIN", "KG", "KP", "KI", "VBMAX", "KC", "XL", "VGMAX", "THETAP",
-                            "TM", "VMMAX", "VMMIN"),
-                 {"TR": "TR", "KA": "KM", "TA": "TM", "TB": "TB", "TC": "TC", "Vrmax": "VMMAX",
-                  "Vrmin": "VMMIN", "VImax": "VIMAX", "VImin": "VIMIN", "KJ": "KA", "KP": "KP",
-                  "thetaP": "THETAP", "KI": "KI", "XL": "XL", "KC": "KC", "KG": "KG",
-                  "VGmax": "VGMAX"}, kind=3),
+        DyrModel(
+            "ESST3A",
+            (
+                "TR",
+                "VIMAX",
+                "VIMIN",
+                "KM",
+                "TC",
+                "TB",
+                "KA",
+                "TA",
+                "VRMAX",
+                "VRMIN",
+                "KG",
+                "KP",
+                "KI",
+                "VBMAX",
+                "KC",
+                "XL",
+                "VGMAX",
+                "THETAP",
+                "TM",
+                "VMMAX",
+                "VMMIN",
+            ),
+            {
+                "TR": "TR",
+                "KA": "KM",
+                "TA": "TM",
+                "TB": "TB",
+                "TC": "TC",
+                "Vrmax": "VMMAX",
+                "Vrmin": "VMMIN",
+                "VImax": "VIMAX",
+                "VImin": "VIMIN",
+                "KJ": "KA",
+                "KP": "KP",
+                "thetaP": "THETAP",
+                "KI": "KI",
+                "XL": "XL",
+                "KC": "KC",
+                "KG": "KG",
+                "VGmax": "VGMAX",
+            },
+            kind=3,
+        ),
     ),
 )
 
@@ -398,14 +646,25 @@ EXCITER = Family(
 # --------------------------------------------------------------------------------------
 
 PSS = Family(
-    table="pss_con", min_columns=10, key="machine", key_label="machine",
+    table="pss_con",
+    min_columns=10,
+    key="machine",
+    key_label="machine",
     params=(
-        Param("type", "code", 1, integer=True, choices=(1, 2, 3, 4), label="pss type",
-              doc="1 PST pss, speed input; 2 PST pss, electrical power input; 3 PSS/E; "
-                  "4 PSS/E STAB2A"),
+        Param(
+            "type",
+            "code",
+            1,
+            integer=True,
+            choices=(1, 2, 3, 4),
+            label="pss type",
+            doc="1 PST pss, speed input; 2 PST pss, electrical power input; 3 PSS/E; "
+            "4 PSS/E STAB2A",
+        ),
         Param("machine", "code", 2, integer=True, doc="machine number"),
-        Param("KTw", "", 3, doc="gain times washout time constant (K*Tw); type 3: washout "
-                                "gain K_w"),
+        Param(
+            "KTw", "", 3, doc="gain times washout time constant (K*Tw); type 3: washout gain K_w"
+        ),
         Param("Tw", "s", 4, lo=0.0, doc="washout time constant"),
         Param("T1", "s", 5, doc="first lead time constant"),
         Param("T2", "s", 6, lo=0.0, doc="first lag time constant"),
@@ -413,40 +672,125 @@ PSS = Family(
         Param("T4", "s", 8, lo=0.0, doc="second lag time constant"),
         Param("ymax", "pu", 9, doc="maximum output"),
         Param("ymin", "pu", 10, doc="minimum output"),
-        Param("T5", "s", 11, alt="K5", doc="type 3: third lead time constant | type 4: "
-                                            "output lag gain K5"),
+        Param(
+            "T5",
+            "s",
+            11,
+            alt="K5",
+            doc="type 3: third lead time constant | type 4: output lag gain K5",
+        ),
         Param("T6", "s", 12, lo=0.0, doc="type 3: third lag time constant"),
-        Param("input1", "code", 13, integer=True,
-              doc="type 3: first input, PSS/E code (1 speed deviation, 3 electrical power)"),
+        Param(
+            "input1",
+            "code",
+            13,
+            integer=True,
+            doc="type 3: first input, PSS/E code (1 speed deviation, 3 electrical power)",
+        ),
         Param("K1", "", 14, doc="type 3: first input gain"),
         Param("Tr1", "s", 15, lo=0.0, doc="type 3: first input transducer time constant"),
-        Param("input2", "code", 16, integer=True,
-              doc="type 3: second input, PSS/E code (0 none)"),
+        Param("input2", "code", 16, integer=True, doc="type 3: second input, PSS/E code (0 none)"),
         Param("K2", "", 17, doc="type 3: second input gain"),
         Param("Tr2", "s", 18, lo=0.0, doc="type 3: second input transducer time constant"),
-        *(Param(f"A{k}", "s" if k % 2 else "s^2", 18 + k,
+        *(
+            Param(
+                f"A{k}",
+                "s" if k % 2 else "s^2",
+                18 + k,
                 doc=f"type 3: filter (1 + A5 s + A6 s^2)/((1 + A1 s + A2 s^2)(1 + A3 s + "
-                    f"A4 s^2)), A{k}")
-          for k in range(1, 7)),
+                f"A4 s^2)), A{k}",
+            )
+            for k in range(1, 7)
+        ),
     ),
     dyr=(
         # IEEEST -> PST pss (types 1, 2) when exactly equivalent, else type 3; the mapper
         # chooses the type and computes K_Tw = KS T5
-        DyrModel("IEEEST", ("ICS", "IB", "A1", "A2", "A3", "A4", "A5", "A6", "T1", "T2", "T3",
-                            "T4", "T5", "T6", "KS", "LSMAX", "LSMIN", "VCU", "VCL"),
-                 {"Tw": "T6", "ymax": "LSMAX", "ymin": "LSMIN"}),
-        DyrModel("ST2CUT", ("MODE", "BUSR", "MODE2", "BUSR2", "K1", "K2", "T1", "T2", "T3",
-                            "T4", "T5", "T6", "T7", "T8", "T9", "T10", "LSMAX", "LSMIN", "VCU",
-                            "VCL"),
-                 {"input1": "MODE", "K1": "K1", "Tr1": "T1", "input2": "MODE2", "K2": "K2",
-                  "Tr2": "T2", "KTw": "T3", "Tw": "T4", "T1": "T5", "T2": "T6", "T3": "T7",
-                  "T4": "T8", "T5": "T9", "T6": "T10", "ymax": "LSMAX", "ymin": "LSMIN"},
-                 kind=3),
+        DyrModel(
+            "IEEEST",
+            (
+                "ICS",
+                "IB",
+                "A1",
+                "A2",
+                "A3",
+                "A4",
+                "A5",
+                "A6",
+                "T1",
+                "T2",
+                "T3",
+                "T4",
+                "T5",
+                "T6",
+                "KS",
+                "LSMAX",
+                "LSMIN",
+                "VCU",
+                "VCL",
+            ),
+            {"Tw": "T6", "ymax": "LSMAX", "ymin": "LSMIN"},
+        ),
+        DyrModel(
+            "ST2CUT",
+            (
+                "MODE",
+                "BUSR",
+                "MODE2",
+                "BUSR2",
+                "K1",
+                "K2",
+                "T1",
+                "T2",
+                "T3",
+                "T4",
+                "T5",
+                "T6",
+                "T7",
+                "T8",
+                "T9",
+                "T10",
+                "LSMAX",
+                "LSMIN",
+                "VCU",
+                "VCL",
+            ),
+            {
+                "input1": "MODE",
+                "K1": "K1",
+                "Tr1": "T1",
+                "input2": "MODE2",
+                "K2": "K2",
+                "Tr2": "T2",
+                "KTw": "T3",
+                "Tw": "T4",
+                "T1": "T5",
+                "T2": "T6",
+                "T3": "T7",
+                "T4": "T8",
+                "T5": "T9",
+                "T6": "T10",
+                "ymax": "LSMAX",
+                "ymin": "LSMIN",
+            },
+            kind=3,
+        ),
         # STAB2A -> type 4: three washouts K2 T2 s/(1 + s T2) (KTw = K2 T2 computed), K3/(1 +
         # s T3) + K4, two lags K5/(1 + s T5), output limits +-HLIM
-        DyrModel("STAB2A", ("K2", "T2", "K3", "T3", "K4", "K5", "T5", "HLIM"),
-                 {"Tw": "T2", "K1": "K3", "Tr1": "T3", "K2": "K4", "K5": "K5", "T6": "T5",
-                  "ymax": "HLIM"}, kind=4),
+        DyrModel(
+            "STAB2A",
+            ("K2", "T2", "K3", "T3", "K4", "K5", "T5", "HLIM"),
+            {
+                "Tw": "T2",
+                "K1": "K3",
+                "Tr1": "T3",
+                "K2": "K4",
+                "K5": "K5",
+                "T6": "T5",
+                "ymax": "HLIM",
+            },
+            kind=4,
+        ),
     ),
 )
 
@@ -456,71 +800,168 @@ PSS = Family(
 # --------------------------------------------------------------------------------------
 
 #: tg_con columns 17-21 (IEEEG1's K1..K5) as HYGOV reads them: (alternative name, doc)
-_HYGOV_ALT = {1: ("Rp", " | HYGOV: permanent droop R, pu"),
-              2: ("rt", " | HYGOV: temporary droop r, pu"),
-              3: ("qNL", " | HYGOV: no-load flow qNL, pu"),
-              4: ("Kg", " | HYGOV: gate integrator gain, 1/s (PSS/E: 1/(r Tr))"),
-              5: ("velm_rel", " | HYGOV: 1 gate rate limits [-VELM, VELM] - e/r (ANDES), "
-                              "0 [-VELM, VELM]")}
+_HYGOV_ALT = {
+    1: ("Rp", " | HYGOV: permanent droop R, pu"),
+    2: ("rt", " | HYGOV: temporary droop r, pu"),
+    3: ("qNL", " | HYGOV: no-load flow qNL, pu"),
+    4: ("Kg", " | HYGOV: gate integrator gain, 1/s (PSS/E: 1/(r Tr))"),
+    5: ("velm_rel", " | HYGOV: 1 gate rate limits [-VELM, VELM] - e/r (ANDES), 0 [-VELM, VELM]"),
+}
 
 GOVERNOR = Family(
-    table="tg_con", min_columns=10, key="machine", key_label="machine",
+    table="tg_con",
+    min_columns=10,
+    key="machine",
+    key_label="machine",
     params=(
-        Param("type", "code", 1, integer=True, choices=(1, 2, 3, 4, 5), label="governor type",
-              doc="1 PST tg, 2 TGOV1, 3 IEEEG1, 4 HYGOV, 5 IEESGO"),
+        Param(
+            "type",
+            "code",
+            1,
+            integer=True,
+            choices=(1, 2, 3, 4, 5),
+            label="governor type",
+            doc="1 PST tg, 2 TGOV1, 3 IEEEG1, 4 HYGOV, 5 IEESGO",
+        ),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("wf", "pu", 3, doc="speed set point"),
         Param("invR", "pu", 4, doc="steady-state gain 1/R (IEEEG1: K), on machine base"),
         Param("Tmax", "pu", 5, doc="maximum power order (TGOV1: VMAX, IEEEG1: PMAX)"),
-        Param("Ts", "s", 6, lo=0.0, doc="servo time constant (TGOV1: T1; IEEEG1: T3, gate "
-                                        "servo)"),
+        Param("Ts", "s", 6, lo=0.0, doc="servo time constant (TGOV1: T1; IEEEG1: T3, gate servo)"),
         Param("Tc", "s", 7, lo=0.0, doc="governor lag time constant (TGOV1: T3; IEEEG1: T1)"),
         Param("T3", "s", 8, doc="transient gain (lead) time constant (TGOV1, IEEEG1: T2)"),
-        Param("T4", "s", 9, alt="Tw", doc="HP section time constant (IEEEG1: T4, steam "
-                                          "chest); < 0 hydro | HYGOV: water time constant Tw"),
-        Param("T5", "s", 10, lo=0.0, alt="At",
-              doc="reheater time constant (IEEEG1: T5) | HYGOV: turbine gain At"),
-        Param("Tmin", "pu", 11, doc="minimum power order (tg: 0 as PST; TGOV1: VMIN; "
-                                    "IEEEG1: PMIN)"),
+        Param(
+            "T4",
+            "s",
+            9,
+            alt="Tw",
+            doc="HP section time constant (IEEEG1: T4, steam "
+            "chest); < 0 hydro | HYGOV: water time constant Tw",
+        ),
+        Param(
+            "T5",
+            "s",
+            10,
+            lo=0.0,
+            alt="At",
+            doc="reheater time constant (IEEEG1: T5) | HYGOV: turbine gain At",
+        ),
+        Param(
+            "Tmin", "pu", 11, doc="minimum power order (tg: 0 as PST; TGOV1: VMIN; IEEEG1: PMIN)"
+        ),
         Param("Dt", "pu", 12, doc="turbine damping (TGOV1), pu power / pu speed"),
         Param("T6", "s", 13, lo=0.0, doc="IEEEG1 third turbine time constant"),
         Param("T7", "s", 14, lo=0.0, doc="IEEEG1 fourth turbine time constant"),
         Param("Uo", "pu/s", 15, doc="IEEEG1 maximum valve opening rate"),
         Param("Uc", "pu/s", 16, doc="IEEEG1 maximum valve closing rate (< 0)"),
-        *(Param(f"K{k}", "", 16 + k, alt=_HYGOV_ALT.get(k, ("", ""))[0],
+        *(
+            Param(
+                f"K{k}",
+                "",
+                16 + k,
+                alt=_HYGOV_ALT.get(k, ("", ""))[0],
                 doc=f"IEEEG1 fraction of power after T{3 + (k + 1) // 2} "
-                    f"({'HP' if k % 2 else 'LP'} shaft)" + _HYGOV_ALT.get(k, ("", ""))[1])
-          for k in range(1, 9)),
+                f"({'HP' if k % 2 else 'LP'} shaft)" + _HYGOV_ALT.get(k, ("", ""))[1],
+            )
+            for k in range(1, 9)
+        ),
     ),
     dyr=(
         # TGOV1: invR = 1/R is computed
-        DyrModel("TGOV1", ("R", "T1", "VMAX", "VMIN", "T2", "T3", "Dt"),
-                 {"Tmax": "VMAX", "Tmin": "VMIN", "Ts": "T1", "Tc": "T3", "T3": "T2",
-                  "Dt": "Dt"}, kind=2),
-        DyrModel("IEEEG1", ("JBUS", "M", "K", "T1", "T2", "T3", "Uo", "Uc", "PMAX", "PMIN",
-                            "T4", "K1", "K2", "T5", "K3", "K4", "T6", "K5", "K6", "T7", "K7",
-                            "K8"),
-                 {"invR": "K", "Tc": "T1", "T3": "T2", "Ts": "T3", "Uo": "Uo", "Uc": "Uc",
-                  "Tmax": "PMAX", "Tmin": "PMIN", "T4": "T4", "T5": "T5", "T6": "T6",
-                  "T7": "T7", **{f"K{k}": f"K{k}" for k in range(1, 9)}}, kind=3),
+        DyrModel(
+            "TGOV1",
+            ("R", "T1", "VMAX", "VMIN", "T2", "T3", "Dt"),
+            {"Tmax": "VMAX", "Tmin": "VMIN", "Ts": "T1", "Tc": "T3", "T3": "T2", "Dt": "Dt"},
+            kind=2,
+        ),
+        DyrModel(
+            "IEEEG1",
+            (
+                "JBUS",
+                "M",
+                "K",
+                "T1",
+                "T2",
+                "T3",
+                "Uo",
+                "Uc",
+                "PMAX",
+                "PMIN",
+                "T4",
+                "K1",
+                "K2",
+                "T5",
+                "K3",
+                "K4",
+                "T6",
+                "K5",
+                "K6",
+                "T7",
+                "K7",
+                "K8",
+            ),
+            {
+                "invR": "K",
+                "Tc": "T1",
+                "T3": "T2",
+                "Ts": "T3",
+                "Uo": "Uo",
+                "Uc": "Uc",
+                "Tmax": "PMAX",
+                "Tmin": "PMIN",
+                "T4": "T4",
+                "T5": "T5",
+                "T6": "T6",
+                "T7": "T7",
+                **{f"K{k}": f"K{k}" for k in range(1, 9)},
+            },
+            kind=3,
+        ),
         # HYGOV -> type 4: Kg = 1/(r Tr) and Uc = -VELM computed
-        DyrModel("HYGOV", ("R", "r", "Tr", "Tf", "Tg", "VELM", "GMAX", "GMIN", "TW", "At",
-                           "Dturb", "qNL"),
-                 {"Rp": "R", "rt": "r", "T3": "Tr", "Tc": "Tf", "Ts": "Tg", "Uo": "VELM",
-                  "Tmax": "GMAX", "Tmin": "GMIN", "Tw": "TW", "At": "At", "Dt": "Dturb",
-                  "qNL": "qNL"}, kind=4),
+        DyrModel(
+            "HYGOV",
+            ("R", "r", "Tr", "Tf", "Tg", "VELM", "GMAX", "GMIN", "TW", "At", "Dturb", "qNL"),
+            {
+                "Rp": "R",
+                "rt": "r",
+                "T3": "Tr",
+                "Tc": "Tf",
+                "Ts": "Tg",
+                "Uo": "VELM",
+                "Tmax": "GMAX",
+                "Tmin": "GMIN",
+                "Tw": "TW",
+                "At": "At",
+                "Dt": "Dturb",
+                "qNL": "qNL",
+            },
+            kind=4,
+        ),
         # IEESGO -> type 5: K1 (speed gain), lag T1, lead-lag T2/T3, limits, lags T4-T6;
         # the power fractions after T4, T5, T6 (1 - K2, (1 - K3) K2, K2 K3) computed
-        DyrModel("IEESGO", ("T1", "T2", "T3", "T4", "T5", "T6", "K1", "K2", "K3", "PMAX",
-                            "PMIN"),
-                 {"Tc": "T1", "T3": "T2", "Ts": "T3", "T4": "T4", "T5": "T5", "T6": "T6",
-                  "invR": "K1", "Tmax": "PMAX", "Tmin": "PMIN"}, kind=5),
+        DyrModel(
+            "IEESGO",
+            ("T1", "T2", "T3", "T4", "T5", "T6", "K1", "K2", "K3", "PMAX", "PMIN"),
+            {
+                "Tc": "T1",
+                "T3": "T2",
+                "Ts": "T3",
+                "T4": "T4",
+                "T5": "T5",
+                "T6": "T6",
+                "invR": "K1",
+                "Tmax": "PMAX",
+                "Tmin": "PMIN",
+            },
+            kind=5,
+        ),
     ),
 )
 
 #: table field of Case -> family, for the four dynamic-data tables
 FAMILIES: Mapping[str, Family] = MappingProxyType(
-    {"machines": MACHINE, "exciters": EXCITER, "pss": PSS, "governors": GOVERNOR})
+    {"machines": MACHINE, "exciters": EXCITER, "pss": PSS, "governors": GOVERNOR}
+)
 
 
 def array_dataclass(cls, names):
@@ -540,6 +981,6 @@ def array_dataclass(cls, names):
     type
         The dataclass.
     """
-    own = dict(cls.__dict__.get("__annotations__", {}))
+    own = dict(inspect.get_annotations(cls))
     cls.__annotations__ = {**{n: "np.ndarray" for n in names}, **own}
     return dataclass(frozen=True, eq=False)(cls)

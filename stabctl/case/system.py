@@ -31,15 +31,23 @@ table, the row (1-based, with its bus or machine number) and the field.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import ClassVar, Mapping
+from typing import ClassVar
 
 import numpy as np
 
-from stabctl.case.params import (EXCITER, GOVERNOR, MACHINE, PSS, Family, array_dataclass,
-                                 choices_message)
+from stabctl.case.params import (
+    EXCITER,
+    GOVERNOR,
+    MACHINE,
+    PSS,
+    Family,
+    array_dataclass,
+    choices_message,
+)
 from stabctl.errors import CaseError, UnknownBusError
 
 __all__ = [
@@ -120,9 +128,7 @@ class Table:
             if n is None:
                 n = arr.size
             elif arr.size != n:
-                raise CaseError(
-                    f"{self.TABLE}: field '{name}' has {arr.size} rows, expected {n}"
-                )
+                raise CaseError(f"{self.TABLE}: field '{name}' has {arr.size} rows, expected {n}")
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
         for name in self.columns():
@@ -145,7 +151,7 @@ class Table:
         return tuple(f.name for f in dataclasses.fields(cls))
 
     @classmethod
-    def from_matrix(cls, matrix) -> "Table":
+    def from_matrix(cls, matrix) -> Table:
         """Build the table from a PST matrix (rows x columns, PST column order).
 
         Omitted trailing columns (down to ``MIN_COLUMNS``) take ``DEFAULTS``; an empty
@@ -164,8 +170,7 @@ class Table:
                 else f"{cls.MIN_COLUMNS} to {len(cols)}"
             )
             raise CaseError(
-                f"{cls.TABLE}: wrong column count {ncol}, expected {want} "
-                f"({', '.join(cols)})"
+                f"{cls.TABLE}: wrong column count {ncol}, expected {want} ({', '.join(cols)})"
             )
         data = {c: mat[:, k] for k, c in enumerate(cols[:ncol])}
         for c in cols[ncol:]:
@@ -173,7 +178,7 @@ class Table:
         return cls(**data)
 
     @classmethod
-    def empty(cls) -> "Table":
+    def empty(cls) -> Table:
         """A table with no rows."""
         return cls.from_matrix(np.zeros((0, len(cls.columns()))))
 
@@ -195,16 +200,16 @@ class Table:
             raise CaseError(f"{self.TABLE}: no column {k} (has 1..{len(cols)})")
         return getattr(self, cols[k - 1])
 
-    def replace(self, **changes) -> "Table":
+    def replace(self, **changes) -> Table:
         """A copy with some columns replaced (validated again)."""
         return dataclasses.replace(self, **changes)
 
-    def select(self, rows) -> "Table":
+    def select(self, rows) -> Table:
         """A copy holding only ``rows`` (index array or boolean mask)."""
         rows = np.asarray(rows)
         return type(self)(**{c: getattr(self, c)[rows] for c in self.columns()})
 
-    def equals(self, other: "Table") -> bool:
+    def equals(self, other: Table) -> bool:
         """True if ``other`` is the same kind of table with identical values."""
         return type(self) is type(other) and all(
             np.array_equal(getattr(self, c), getattr(other, c)) for c in self.columns()
@@ -234,7 +239,7 @@ class Table:
 
     def _unique(self, fld: str, what: str):
         vals = getattr(self, fld)
-        _, first, counts = np.unique(vals, return_index=True, return_counts=True)
+        _, _first, counts = np.unique(vals, return_index=True, return_counts=True)
         if np.any(counts > 1):
             seen: dict[float, int] = {}
             for i, v in enumerate(vals):
@@ -275,6 +280,7 @@ def _declared(family: Family):
     callable
         The decorator.
     """
+
     def wrap(cls):
         cls.TABLE, cls.MIN_COLUMNS, cls.FAMILY = family.table, family.min_columns, family
         cls.DEFAULTS, cls.INTEGER = family.defaults, family.integer
@@ -282,6 +288,7 @@ def _declared(family: Family):
         if cls.__doc__:
             cls.__doc__ = cls.__doc__.replace("{columns}", family.rst_table())
         return array_dataclass(cls, [p.name for p in family.params])
+
     return wrap
 
 
@@ -299,8 +306,7 @@ def _as_matrix(matrix, table: str) -> np.ndarray:
         for i, r in enumerate(rows):
             if len(r) != len(rows[0]):
                 raise CaseError(
-                    f"{table} row {i + 1}: wrong column count {len(r)}, "
-                    f"row 1 has {len(rows[0])}"
+                    f"{table} row {i + 1}: wrong column count {len(r)}, row 1 has {len(rows[0])}"
                 )
     try:
         return np.array(rows, dtype=float)
@@ -358,7 +364,11 @@ class BusTable(Table):
     TABLE: ClassVar[str] = "bus"
     MIN_COLUMNS: ClassVar[int] = 10
     DEFAULTS: ClassVar[Mapping[str, float]] = {
-        "qmax": 9999.0, "qmin": -9999.0, "kv": 1.0, "vmax": 1.5, "vmin": 0.5
+        "qmax": 9999.0,
+        "qmin": -9999.0,
+        "kv": 1.0,
+        "vmax": 1.5,
+        "vmin": 0.5,
     }
     KEY: ClassVar[str] = "number"
     KEY_LABEL: ClassVar[str] = "bus"
@@ -394,9 +404,8 @@ class BranchTable(Table):
 
     Parallel circuits are separate rows. Omitted columns: tap 1, the rest 0 (the miniWECC
     ``line`` matrix has 5 columns, PST's 10).  Line-end shunts (columns 11-14, stabctl's)
-    are switched with the branch, in addition to the charging ``b``. Validation: from/to are integers, r >= 0, the series
-    impedance is not zero, from != to.
-    """
+    are switched with the branch, in addition to the charging ``b``. Validation: from/to are
+    integers, r >= 0, the series impedance is not zero, from != to."""
 
     from_bus: np.ndarray
     to_bus: np.ndarray
@@ -427,61 +436,72 @@ class BranchTable(Table):
     def _check(self):
         self._nonnegative("r")
         self._require((self.r != 0) | (self.x != 0), "x", "series impedance r+jx must not be 0")
-        self._require(self.from_bus != self.to_bus, "to_bus", "branch must join two different buses")
+        self._require(
+            self.from_bus != self.to_bus, "to_bus", "branch must join two different buses"
+        )
 
 
 @_declared(MACHINE)
 class MachineTable(Table):
     """Synchronous machine data: PST ``mac_con`` (PST manual section 3.22 Table 10), plus
-    stabctl's column 24 ``speed_effects`` for subtransient machines: 1 (PST ``mac_sub``)
-    the stator voltage is proportional to rotor speed and the torque is Pm/omega; 0 speed
-    1 in both (ANDES's GENROU/GENSAL, which have no speed effects; docs/pst_models.md
-    1.5-1.6), and column 25 ``psse_sat``: 1 PSS/E's GENROU saturation of the air-gap flux
-    through S(1.0), S(1.2) as ANDES solves it, 0 none (PST ``mac_sub``; docs 1.6a).
-    Columns (declared in :data:`stabctl.case.params.MACHINE`; reactances on the
-    machine base):
+        stabctl's column 24 ``speed_effects`` for subtransient machines: 1 (PST ``mac_sub``)
+        the stator voltage is proportional to rotor speed and the torque is Pm/omega; 0 speed
+        1 in both (ANDES's GENROU/GENSAL, which have no speed effects; docs/pst_models.md
+        1.5-1.6), and column 25 ``psse_sat``: 1 PSS/E's GENROU saturation of the air-gap flux
+        through S(1.0), S(1.2) as ANDES solves it, 0 none (PST ``mac_sub``; docs 1.6a).
+        Columns (declared in :data:`stabctl.case.params.MACHINE`; reactances on the
+        machine base):
 
-{columns}
+    {columns}
 
-    Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``).
-    Validation: unique positive integer machine numbers, mva > 0, H > 0, reactances and
-    ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), speed_effects and psse_sat 0 or 1.
+        Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``).
+        Validation: unique positive integer machine numbers, mva > 0, H > 0, reactances and
+        ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), speed_effects and psse_sat 0 or 1.
     """
 
     def _check(self):
         self._require(self.number > 0, "number", "machine number must be a positive integer")
         self._unique("number", "machine number")
         self._require(self.mva > 0, "mva", "machine base must be > 0")
-        self._require(self.H > 0, "H", "inertia constant must be > 0 s (H = 0, an "
-                      "infinite bus, is not modelled)")
+        self._require(
+            self.H > 0,
+            "H",
+            "inertia constant must be > 0 s (H = 0, an infinite bus, is not modelled)",
+        )
         # the open-circuit time constants a machine's model divides by (x_d = 0: classical,
         # none; x"d = 0: transient, T'do; else subtransient, T'do and T"do); T'qo, T"qo of 0
         # mean "no such circuit" (PST)
-        self._require((self.xd == 0) | (self.Tdop > 0), "Tdop",
-                      "T'do must be > 0 s for a transient or subtransient machine (x_d > 0)")
-        self._require((self.xd == 0) | (self.xdpp == 0) | (self.Tdopp > 0), "Tdopp",
-                      "T\"do must be > 0 s for a subtransient machine (x\"d > 0)")
+        self._require(
+            (self.xd == 0) | (self.Tdop > 0),
+            "Tdop",
+            "T'do must be > 0 s for a transient or subtransient machine (x_d > 0)",
+        )
+        self._require(
+            (self.xd == 0) | (self.xdpp == 0) | (self.Tdopp > 0),
+            "Tdopp",
+            'T"do must be > 0 s for a subtransient machine (x"d > 0)',
+        )
 
 
 @_declared(EXCITER)
 class ExciterTable(Table):
     """Exciter data: PST ``exc_con``, 20 columns, named as for ST3 (PST manual 3.13 Table 3),
-    plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4) and
-    23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3), 25 for
-    the ST3's field current in I_N (2.2).
-    Columns (declared in :data:`stabctl.case.params.EXCITER`):
+        plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4) and
+        23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3), 25 for
+        the ST3's field current in I_N (2.2).
+        Columns (declared in :data:`stabctl.case.params.EXCITER`):
 
-{columns}
+    {columns}
 
-    Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2; their
-    names there are the declaration's ``alt`` names KE, TE, E1, SE1, E2, SE2, KF_dc,
-    TF_dc); use ``col(k)`` for those.  IEEET2 (type 5) reads them as types 1, 2 do, and
-    column 18 as its second rate feedback time constant TF2; a simple exciter (type 0)
-    reads column 19 as ``bus_fed`` (PSS/E SCRX, output times V_t).  EXST1 (type 4) uses
-    columns 3-11 and KC (17) as named, with Vrmax, Vrmin its output limits (times V_t) and
-    KF, TF (21, 22).  Omitted trailing columns are 0 (a simple exciter needs 9).
-    Validation: type in {0, ..., 5}, one exciter per machine, TR, TA, TB >= 0, dc_sat and ke_given 0 or 1 (machine
-    existence is checked by :class:`Case`).
+        Columns 10-17 mean the DC quantities for types 1 and 2 (PST manual 3.11 Table 2; their
+        names there are the declaration's ``alt`` names KE, TE, E1, SE1, E2, SE2, KF_dc,
+        TF_dc); use ``col(k)`` for those.  IEEET2 (type 5) reads them as types 1, 2 do, and
+        column 18 as its second rate feedback time constant TF2; a simple exciter (type 0)
+        reads column 19 as ``bus_fed`` (PSS/E SCRX, output times V_t).  EXST1 (type 4) uses
+        columns 3-11 and KC (17) as named, with Vrmax, Vrmin its output limits (times V_t) and
+        KF, TF (21, 22).  Omitted trailing columns are 0 (a simple exciter needs 9). Validation:
+        type in {0, ..., 5}, one exciter per machine, TR, TA, TB >= 0, dc_sat and ke_given 0 or
+        1 (machine existence is checked by :class:`Case`).
     """
 
     def _check(self):
@@ -491,36 +511,39 @@ class ExciterTable(Table):
 @_declared(PSS)
 class PssTable(Table):
     """Power system stabilizer data: PST ``pss_con``, 10 columns (PST manual 3.30 Table 13),
-    extended by stabctl with type 3, the PSS/E stabilisers IEEEST and ST2CUT, and type 4,
-    PSS/E's STAB2A (docs/pst_models.md 3.1-3.2).  Columns (declared in
-    :data:`stabctl.case.params.PSS`):
+        extended by stabctl with type 3, the PSS/E stabilisers IEEEST and ST2CUT, and type 4,
+        PSS/E's STAB2A (docs/pst_models.md 3.1-3.2).  Columns (declared in
+        :data:`stabctl.case.params.PSS`):
 
-{columns}
+    {columns}
 
-    Omitted columns are 0.  Validation: type in {1, 2, 3, 4}, one PSS per machine, washout
-    and lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0, Tw > 0, T2 > 0 for types 1 and 2.
+        Omitted columns are 0.  Validation: type in {1, 2, 3, 4}, one PSS per machine, washout
+        and lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0, Tw > 0, T2 > 0 for types 1 and 2.
     """
 
     def _check(self):
         self._unique("machine", "pss on machine")
         self._require(self.Tw > 0, "Tw", "washout time constant must be > 0 s")
-        self._require((self.type >= 3) | (self.T2 > 0), "T2",
-                      "first lag time constant must be > 0 s for PST's pss (types 1, 2)")
+        self._require(
+            (self.type >= 3) | (self.T2 > 0),
+            "T2",
+            "first lag time constant must be > 0 s for PST's pss (types 1, 2)",
+        )
 
 
 @_declared(GOVERNOR)
 class GovernorTable(Table):
     """Turbine-governor data: PST ``tg_con`` (PST manual 3.45, ``tg``), extended by stabctl
-    with the PSS/E ``TGOV1``, ``IEEEG1``, ``HYGOV`` and ``IEESGO`` models (PSS/E Model
-    Library; equations in docs/pst_models.md section 4).  Columns (declared in
-    :data:`stabctl.case.params.GOVERNOR`; powers on the machine base):
+        with the PSS/E ``TGOV1``, ``IEEEG1``, ``HYGOV`` and ``IEESGO`` models (PSS/E Model
+        Library; equations in docs/pst_models.md section 4).  Columns (declared in
+        :data:`stabctl.case.params.GOVERNOR`; powers on the machine base):
 
-{columns}
+    {columns}
 
-    PST files give 10 columns; the omitted ones are 0 (Tmin = 0 is PST tg's lower clip).
-    Validation: type in {1, ..., 5}, one governor per machine, lag time constants Ts, Tc,
-    T5, T6, T7 >= 0 (the lead constants T3, T4 may be negative: miniWECC's hydro units use
-    T4 = -1).
+        PST files give 10 columns; the omitted ones are 0 (Tmin = 0 is PST tg's lower clip).
+        Validation: type in {1, ..., 5}, one governor per machine, lag time constants Ts, Tc,
+        T5, T6, T7 >= 0 (the lead constants T3, T4 may be negative: miniWECC's hydro units use
+        T4 = -1).
     """
 
     def _check(self):
@@ -702,7 +725,9 @@ class Case:
             self, "_bus_map", MappingProxyType({int(b): i for i, b in enumerate(self.buses.number)})
         )
         object.__setattr__(
-            self, "_mac_map", MappingProxyType({int(m): i for i, m in enumerate(self.machines.number)})
+            self,
+            "_mac_map",
+            MappingProxyType({int(m): i for i, m in enumerate(self.machines.number)}),
         )
         object.__setattr__(self, "sw_con", _check_sw_con(self.sw_con))
         object.__setattr__(self, "extra", _freeze_extra(self.extra))
@@ -723,7 +748,11 @@ class Case:
         for tab in (self.exciters, self.pss, self.governors):
             bad = np.flatnonzero(~np.isin(tab.machine, macs))
             if bad.size:
-                tab._fail(bad[0], "machine", f"machine {_fmt(tab.machine[bad[0]])} does not exist in mac_con")
+                tab._fail(
+                    bad[0],
+                    "machine",
+                    f"machine {_fmt(tab.machine[bad[0]])} does not exist in mac_con",
+                )
 
     @staticmethod
     def _check_buses(tab: Table, fld: str, known: np.ndarray):
@@ -825,7 +854,7 @@ class Case:
         """0-based rows of the swing bus(es), int array."""
         return np.flatnonzero(self.buses.kind == SWING)
 
-    def replace(self, **changes) -> "Case":
+    def replace(self, **changes) -> Case:
         """A copy with some fields replaced (validated again).
 
         Parameters
@@ -848,7 +877,7 @@ class Case:
         """
         return dataclasses.replace(self, **changes)
 
-    def equals(self, other: "Case") -> bool:
+    def equals(self, other: Case) -> bool:
         """Compare two cases value by value.
 
         Parameters
@@ -866,11 +895,14 @@ class Case:
         if not isinstance(other, Case):
             return False
         same_scalars = (self.name, self.base_mva, self.freq_hz) == (
-            other.name, other.base_mva, other.freq_hz
+            other.name,
+            other.base_mva,
+            other.freq_hz,
         )
         same_tables = all(getattr(self, t).equals(getattr(other, t)) for t in TABLES)
         same_sw = (self.sw_con is None and other.sw_con is None) or (
-            self.sw_con is not None and other.sw_con is not None
+            self.sw_con is not None
+            and other.sw_con is not None
             and np.array_equal(self.sw_con, other.sw_con)
         )
         same_extra = self.extra.keys() == other.extra.keys() and all(
@@ -920,8 +952,9 @@ def beyond(value, lo, hi, tol: float = START_LIMIT_TOL):
     """Boolean array: ``value`` outside ``[lo, hi]`` by more than ``tol`` (pu; relative to
     the limit's size above 1) -- the start-up limit checks of the dynamic models."""
     value, lo, hi = (np.asarray(a, float) for a in (value, lo, hi))
-    return ((value > hi + tol * np.maximum(1.0, np.abs(hi)))
-            | (value < lo - tol * np.maximum(1.0, np.abs(lo))))
+    return (value > hi + tol * np.maximum(1.0, np.abs(hi))) | (
+        value < lo - tol * np.maximum(1.0, np.abs(lo))
+    )
 
 
 #: directory of the built-in cases (stabctl JSON, converted from PSTess; MIT LICENSE, NOTICE)

@@ -22,7 +22,6 @@ import sys
 
 import click
 
-
 #: commands that run the compiled simulator (the others never compile anything)
 _SIMULATING = {"paper", "simulate", "cct", "sweep-cct", "screen", "eig", "place", "estimate"}
 
@@ -42,11 +41,17 @@ def main(ctx):
         from stabctl._jit.notify import on_first_compile
 
         # said when compiling starts (never for cached kernels; bad input fails before)
-        ctx.call_on_close(on_first_compile(
-            lambda: click.echo("stabctl: compiling the simulator's kernels (once after "
-                               "installation or a source change, 15-30 s; later runs load "
-                               "them in about a second)", err=True),
-            still=lambda s: click.echo(f"stabctl: still compiling ({s:.0f} s)", err=True)))
+        ctx.call_on_close(
+            on_first_compile(
+                lambda: click.echo(
+                    "stabctl: compiling the simulator's kernels (once after "
+                    "installation or a source change, 15-30 s; later runs load "
+                    "them in about a second)",
+                    err=True,
+                ),
+                still=lambda s: click.echo(f"stabctl: still compiling ({s:.0f} s)", err=True),
+            )
+        )
 
 
 class _Echo(logging.Handler):
@@ -55,7 +60,7 @@ class _Echo(logging.Handler):
     def emit(self, record: logging.LogRecord) -> None:
         try:
             click.echo(self.format(record), err=True)
-        except Exception:
+        except Exception:  # noqa: BLE001 - a logging handler reports its own failures
             self.handleError(record)
 
 
@@ -74,9 +79,21 @@ def _register() -> None:
     from stabctl.cli import compile as compile_
     from stabctl.cli import eig, estimate, io, omib, paper, place, simulate, stability
 
-    for cmd in (omib.omib, paper.paper, io.cases, simulate.simulate, stability.cct,
-                stability.sweep_cct, stability.screen, eig.eig, estimate.estimate,
-                place.place, io.import_psse, io.import_andes, compile_.compile_kernels):
+    for cmd in (
+        omib.omib,
+        paper.paper,
+        io.cases,
+        simulate.simulate,
+        stability.cct,
+        stability.sweep_cct,
+        stability.screen,
+        eig.eig,
+        estimate.estimate,
+        place.place,
+        io.import_psse,
+        io.import_andes,
+        compile_.compile_kernels,
+    ):
         main.add_command(cmd)
 
 

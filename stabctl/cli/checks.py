@@ -44,15 +44,18 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         where = p.parent
     where = where if str(where) else Path(".")
     if not where.is_dir():
-        raise InputError(f"{option} {path}: directory {where} does not exist (create it "
-                         "first; it is not created for you)")
+        raise InputError(
+            f"{option} {path}: directory {where} does not exist (create it "
+            "first; it is not created for you)"
+        )
     try:
         fd, tmp = tempfile.mkstemp(dir=where, prefix=".stabctl-write-test.")
         os.close(fd)
         os.unlink(tmp)
     except OSError as exc:
-        raise InputError(f"{option} {path}: cannot write in {where} "
-                         f"({exc.strerror or exc})") from None
+        raise InputError(
+            f"{option} {path}: cannot write in {where} ({exc.strerror or exc})"
+        ) from None
     if not directory and p.exists() and not os.access(p, os.W_OK):
         raise InputError(f"{option} {path}: the file is not writable")
 
@@ -90,8 +93,6 @@ def check_suffix(path, allowed, option) -> Path | None:
         raise InputError(f"{option} {path} is a directory")
     check_writable(p, option)
     return p
-
-
 
 
 def search_settings(tol_ms, t_max, tf):

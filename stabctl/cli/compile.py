@@ -21,9 +21,13 @@ def _filter_kernels() -> list:
     found = []
     for name in declaring_modules():
         if name.startswith("stabctl.estimation."):
-            found += [d for d in vars(importlib.import_module(name)).values()
-                      if isinstance(d, Dispatcher) and not isinstance(d, CompiledOnly)
-                      and d.py_func.__module__ == name]
+            found += [
+                d
+                for d in vars(importlib.import_module(name)).values()
+                if isinstance(d, Dispatcher)
+                and not isinstance(d, CompiledOnly)
+                and d.py_func.__module__ == name
+            ]
     return found
 
 
@@ -33,8 +37,12 @@ def _kernels() -> dict[str, list]:
     from stabctl.dynamics.model import evaluate_kernel
     from stabctl.smallsignal.linearise import _differences
 
-    return {"model evaluation": [evaluate_kernel], "filters": _filter_kernels(),
-            "linearisation": [_differences], "integrator": [integrate]}
+    return {
+        "model evaluation": [evaluate_kernel],
+        "filters": _filter_kernels(),
+        "linearisation": [_differences],
+        "integrator": [integrate],
+    }
 
 
 def _warm_steps(case):
@@ -57,10 +65,12 @@ def _warm_steps(case):
         await_background(integrate)
         integrate.compile(tuple(sim.run_argument_types()))
 
-    return [("model evaluation", lambda: evaluate_address(sim.model.params)),
-            ("filters", lambda: compile_filters(machine_models(case, machine_pmus(case)))),
-            ("linearisation", lambda: compile_differences(sim.model)),
-            ("integrator", integrator)]
+    return [
+        ("model evaluation", lambda: evaluate_address(sim.model.params)),
+        ("filters", lambda: compile_filters(machine_models(case, machine_pmus(case)))),
+        ("linearisation", lambda: compile_differences(sim.model)),
+        ("integrator", integrator),
+    ]
 
 
 def _misses(dispatchers) -> int:
@@ -83,12 +93,19 @@ def _warm(names) -> None:
             action()
             compiled = cold[part] or _misses(kernels[part]) > misses
             n_compiled += compiled
-            beside = "  (in a child process, beside the above)" if (
-                compiled and part == "integrator") else ""
-            click.echo(f"{name:<10} {part:<17} {'compiled' if compiled else 'loaded':<9}"
-                       f"{time.perf_counter() - t0:6.1f} s{beside}")
-    click.echo(f"kernel cache warm ({_location()}): {n_compiled} compiled, "
-               f"{time.perf_counter() - t_all:.1f} s in all")
+            beside = (
+                "  (in a child process, beside the above)"
+                if (compiled and part == "integrator")
+                else ""
+            )
+            click.echo(
+                f"{name:<10} {part:<17} {'compiled' if compiled else 'loaded':<9}"
+                f"{time.perf_counter() - t0:6.1f} s{beside}"
+            )
+    click.echo(
+        f"kernel cache warm ({_location()}): {n_compiled} compiled, "
+        f"{time.perf_counter() - t_all:.1f} s in all"
+    )
 
 
 def _location() -> str:
@@ -105,17 +122,19 @@ def _check() -> bool:
     for part, dispatchers in _kernels().items():
         missing = [d.py_func.__qualname__ for d in dispatchers if not cached(d)]
         warm = warm and not missing
-        click.echo(f"{part:<17} " + (f"not cached: {', '.join(missing)}" if missing else
-                                      "cached"))
+        click.echo(f"{part:<17} " + (f"not cached: {', '.join(missing)}" if missing else "cached"))
     click.echo(f"kernel cache {'warm' if warm else 'cold'} ({_location()})")
     return warm
 
 
 @click.command("compile")
 @click.argument("case_names", metavar="[CASE]...", nargs=-1)
-@click.option("--check", is_flag=True,
-              help="Only report whether the kernels are in the on-disk cache (exit status 1 "
-                   "if any is not); compile nothing.")
+@click.option(
+    "--check",
+    is_flag=True,
+    help="Only report whether the kernels are in the on-disk cache (exit status 1 "
+    "if any is not); compile nothing.",
+)
 @reports_errors
 def compile_kernels(case_names, check):
     """Compile the kernels of the simulator, the linearisation and the estimation

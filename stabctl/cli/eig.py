@@ -6,23 +6,38 @@ from pathlib import Path
 
 import click
 
-from stabctl.errors import InputError
-from stabctl.cli.format import print_json, print_modes
 from stabctl.cli.checks import check_writable
-from stabctl.cli.options import (conventions_option, json_option, out_dir_option, q_limits_option,
-                                 reports_errors)
+from stabctl.cli.format import print_json, print_modes
+from stabctl.cli.options import (
+    conventions_option,
+    json_option,
+    out_dir_option,
+    q_limits_option,
+    reports_errors,
+)
+from stabctl.errors import InputError
 
 
 @click.command()
 @click.argument("case_name", metavar="CASE")
-@click.option("--no-pss", is_flag=True,
-              help="Analyse the case with its PSS removed (pss_con empty).")
-@click.option("--areas", "n_areas", type=int, default=None, metavar="N",
-              help="Number of coherent areas for the local/inter-area classification "
-                   "(default: from a gap in the electromechanical frequencies, docs/modal.md).")
-@click.option("--report", is_flag=True,
-              help="Write OUT_DIR/eig_<case>[_nopss].md with the eigenvalue plot, mode-shape "
-                   "compass plots and participation bar charts (PNG).")
+@click.option(
+    "--no-pss", is_flag=True, help="Analyse the case with its PSS removed (pss_con empty)."
+)
+@click.option(
+    "--areas",
+    "n_areas",
+    type=int,
+    default=None,
+    metavar="N",
+    help="Number of coherent areas for the local/inter-area classification "
+    "(default: from a gap in the electromechanical frequencies, docs/modal.md).",
+)
+@click.option(
+    "--report",
+    is_flag=True,
+    help="Write OUT_DIR/eig_<case>[_nopss].md with the eigenvalue plot, mode-shape "
+    "compass plots and participation bar charts (PNG).",
+)
 @out_dir_option("The report directory (with --report).")
 @conventions_option
 @q_limits_option
@@ -55,8 +70,13 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, as_j
         raise InputError(f"--out-dir {out_dir} is not a directory")
     if report:
         check_writable(out_dir, "--out-dir", directory=True)
-    st = eig_study(load_case(case_name), no_pss=no_pss, n_areas=n_areas, conventions=conventions,
-                   q_limits=q_limits)
+    st = eig_study(
+        load_case(case_name),
+        no_pss=no_pss,
+        n_areas=n_areas,
+        conventions=conventions,
+        q_limits=q_limits,
+    )
     written = [str(write_report(st, out_dir))] if report else []
     if as_json:
         print_json({**study_json(st), "files": written})

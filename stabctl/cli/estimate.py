@@ -11,13 +11,21 @@ import json
 import click
 
 from stabctl.cli.checks import model_settings
+from stabctl.cli.format import closed_loop_lines, estimator_cct_lines, print_estimate, print_json
+from stabctl.cli.options import (
+    TF_AFTER_FAULT_S,
+    _apply,
+    clear_cycles_option,
+    controller,
+    fault_options,
+    json_option,
+    model_options,
+    reports_errors,
+    storage_options,
+    tf_option,
+)
 from stabctl.errors import InputError
 from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are the CLI's
-from stabctl.cli.format import (closed_loop_lines, estimator_cct_lines, print_estimate,
-                                print_json)
-from stabctl.cli.options import (TF_AFTER_FAULT_S, _apply, clear_cycles_option, controller,
-                                 fault_options, json_option, model_options, reports_errors,
-                                 storage_options, tf_option)
 
 #: the old mode flags of `estimate CASE`, by the subcommand they select (first wins)
 _LEGACY_FLAGS = (("--cct", "cct"), ("--closed-loop", "closed-loop"))
@@ -51,54 +59,136 @@ def estimate():
 
 
 def _rate_latency(func):
-    return _apply(func, (
-        click.option("--rate", type=float, default=_PMU.rate, show_default=True, metavar="FPS",
-                     help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120."),
-        click.option("--latency-ms", type=float, default=1000 * _PMU.latency_s, show_default=True,
-                     metavar="MS", help="Delay from a frame's time stamp to its arrival (ms).")))
+    return _apply(
+        func,
+        (
+            click.option(
+                "--rate",
+                type=float,
+                default=_PMU.rate,
+                show_default=True,
+                metavar="FPS",
+                help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120.",
+            ),
+            click.option(
+                "--latency-ms",
+                type=float,
+                default=1000 * _PMU.latency_s,
+                show_default=True,
+                metavar="MS",
+                help="Delay from a frame's time stamp to its arrival (ms).",
+            ),
+        ),
+    )
 
 
 def _pmu_noise(func):
-    return _apply(func, (
-        click.option("--drop", type=float, default=_PMU.drop_prob, show_default=True, metavar="P",
-                     help="Probability that a frame is lost."),
-        click.option("--tve-pct", type=float, default=100 * _PMU.tve, show_default=True,
-                     help="Total vector error limit (%), C37.118.1 Table 3."),
-        click.option("--fe-hz", type=float, default=_PMU.fe_hz, show_default=True,
-                     help="Frequency error limit (Hz), C37.118.1 Table 4."),
-        click.option("--rfe-hz-s", type=float, default=_PMU.rfe_hz_s, show_default=True,
-                     help="ROCOF error limit (Hz/s), C37.118.1 Table 4."),
-        click.option("--k-sigma", type=float, default=_PMU.k_sigma, show_default=True,
-                     help="The limits are this many standard deviations of the errors."),
-        _WINDOW))
+    return _apply(
+        func,
+        (
+            click.option(
+                "--drop",
+                type=float,
+                default=_PMU.drop_prob,
+                show_default=True,
+                metavar="P",
+                help="Probability that a frame is lost.",
+            ),
+            click.option(
+                "--tve-pct",
+                type=float,
+                default=100 * _PMU.tve,
+                show_default=True,
+                help="Total vector error limit (%), C37.118.1 Table 3.",
+            ),
+            click.option(
+                "--fe-hz",
+                type=float,
+                default=_PMU.fe_hz,
+                show_default=True,
+                help="Frequency error limit (Hz), C37.118.1 Table 4.",
+            ),
+            click.option(
+                "--rfe-hz-s",
+                type=float,
+                default=_PMU.rfe_hz_s,
+                show_default=True,
+                help="ROCOF error limit (Hz/s), C37.118.1 Table 4.",
+            ),
+            click.option(
+                "--k-sigma",
+                type=float,
+                default=_PMU.k_sigma,
+                show_default=True,
+                help="The limits are this many standard deviations of the errors.",
+            ),
+            _WINDOW,
+        ),
+    )
 
 
-_WINDOW = click.option("--window-cycles", type=float, default=_PMU.window_cycles, show_default=True,
-                       metavar="C", help="Frequency and ROCOF estimation window (cycles): "
-                       "the phase advance over it; 2 = P class (C37.118.1-2011 Annex C).")
+_WINDOW = click.option(
+    "--window-cycles",
+    type=float,
+    default=_PMU.window_cycles,
+    show_default=True,
+    metavar="C",
+    help="Frequency and ROCOF estimation window (cycles): "
+    "the phase advance over it; 2 = P class (C37.118.1-2011 Annex C).",
+)
 
 
 def _runs_seed(func):
-    return _apply(func, (
-        click.option("--runs", type=int, default=20, show_default=True, metavar="N",
-                     help="Monte-Carlo runs (PMU noise seeds S, S+1, ..., S+N-1)."),
-        click.option("--seed", type=int, default=0, show_default=True, metavar="S",
-                     help="Seed of the first run.")))
+    return _apply(
+        func,
+        (
+            click.option(
+                "--runs",
+                type=int,
+                default=20,
+                show_default=True,
+                metavar="N",
+                help="Monte-Carlo runs (PMU noise seeds S, S+1, ..., S+N-1).",
+            ),
+            click.option(
+                "--seed",
+                type=int,
+                default=0,
+                show_default=True,
+                metavar="S",
+                help="Seed of the first run.",
+            ),
+        ),
+    )
 
 
-def _settings(rate, latency_ms, drop=_PMU.drop_prob, tve_pct=100 * _PMU.tve,
-              fe_hz=_PMU.fe_hz, rfe_hz_s=_PMU.rfe_hz_s, k_sigma=_PMU.k_sigma,
-              window_cycles=_PMU.window_cycles):
+def _settings(
+    rate,
+    latency_ms,
+    drop=_PMU.drop_prob,
+    tve_pct=100 * _PMU.tve,
+    fe_hz=_PMU.fe_hz,
+    rfe_hz_s=_PMU.rfe_hz_s,
+    k_sigma=_PMU.k_sigma,
+    window_cycles=_PMU.window_cycles,
+):
     """The PMUSettings of the command line's values (its units: %, ms)."""
-    return _PMU(rate=rate, tve=tve_pct / 100, fe_hz=fe_hz, rfe_hz_s=rfe_hz_s,
-                k_sigma=k_sigma, latency_s=latency_ms / 1000, drop_prob=drop,
-                window_cycles=window_cycles)
+    return _PMU(
+        rate=rate,
+        tve=tve_pct / 100,
+        fe_hz=fe_hz,
+        rfe_hz_s=rfe_hz_s,
+        k_sigma=k_sigma,
+        latency_s=latency_ms / 1000,
+        drop_prob=drop,
+        window_cycles=window_cycles,
+    )
 
 
 def _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
     """The case, the fault event and the end of the run (default: fault + 5 s)."""
-    from stabctl.io import load_case
     from stabctl.dynamics.events import fault_with_clearing
+    from stabctl.io import load_case
 
     tf = t_fault + TF_AFTER_FAULT_S if tf is None else tf
     if not tf > 0:
@@ -110,39 +200,110 @@ def _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
 def _fault_run(func):
     """The options of a PMU run through a fault (rmse, closed-loop): case, fault, clearing,
     end time, PMU rate and latency, PMU noise."""
-    for option in reversed((click.argument("case_name", metavar="CASE"),
-                            fault_options(required=True),
-                            clear_cycles_option("Clearing after N cycles, both ends"),
-                            tf_option(), _rate_latency, _pmu_noise)):
+    for option in reversed(
+        (
+            click.argument("case_name", metavar="CASE"),
+            fault_options(required=True),
+            clear_cycles_option("Clearing after N cycles, both ends"),
+            tf_option(),
+            _rate_latency,
+            _pmu_noise,
+        )
+    ):
         func = option(func)
     return func
 
 
 @estimate.command()
 @_fault_run
-@click.option("--pmu-at", type=click.Choice(["terminal", "hv"]), default="terminal",
-              show_default=True, help="PMU of each generator at its terminal or HV bus.")
-@storage_options(" In the fault run, controlled on the true speeds with the paper's "
-                 "settings; the controller options set the rule of the false actions.")
+@click.option(
+    "--pmu-at",
+    type=click.Choice(["terminal", "hv"]),
+    default="terminal",
+    show_default=True,
+    help="PMU of each generator at its terminal or HV bus.",
+)
+@storage_options(
+    " In the fault run, controlled on the true speeds with the paper's "
+    "settings; the controller options set the rule of the false actions."
+)
 @_runs_seed
-@click.option("--settle-ms", type=float, default=100.0, show_default=True, metavar="MS",
-              help="Errors are taken from this long after the clearing to the end (ms).")
-@click.option("--ambient-s", type=float, default=60.0, show_default=True, metavar="S",
-              help="Length of the runs without fault for the false ESD actions (s; 0: skip).")
-@click.option("--ambient-pct", type=float, default=1.0, show_default=True, metavar="P",
-              help="Ambient load fluctuation in the runs without fault: standard deviation "
-                   "of every load's P (%; 0: PMU noise only).")
-@click.option("--ambient-tau-s", type=float, default=2.0, show_default=True, metavar="T",
-              help="Correlation time of the ambient load fluctuation (s).")
-@click.option("--ambient-runs", type=int, default=5, show_default=True, metavar="N",
-              help="Runs without fault (load and PMU noise seeds S..S+N-1).")
+@click.option(
+    "--settle-ms",
+    type=float,
+    default=100.0,
+    show_default=True,
+    metavar="MS",
+    help="Errors are taken from this long after the clearing to the end (ms).",
+)
+@click.option(
+    "--ambient-s",
+    type=float,
+    default=60.0,
+    show_default=True,
+    metavar="S",
+    help="Length of the runs without fault for the false ESD actions (s; 0: skip).",
+)
+@click.option(
+    "--ambient-pct",
+    type=float,
+    default=1.0,
+    show_default=True,
+    metavar="P",
+    help="Ambient load fluctuation in the runs without fault: standard deviation "
+    "of every load's P (%; 0: PMU noise only).",
+)
+@click.option(
+    "--ambient-tau-s",
+    type=float,
+    default=2.0,
+    show_default=True,
+    metavar="T",
+    help="Correlation time of the ambient load fluctuation (s).",
+)
+@click.option(
+    "--ambient-runs",
+    type=int,
+    default=5,
+    show_default=True,
+    metavar="N",
+    help="Runs without fault (load and PMU noise seeds S..S+N-1).",
+)
 @model_options
 @json_option("the figures")
 @reports_errors
-def rmse(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms, drop,
-         tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles, pmu_at, esd_pct, deadband_hz,
-         v_gate, coi, hysteresis_hz, runs, seed, settle_ms, ambient_s, ambient_pct, ambient_tau_s,
-         ambient_runs, conventions, step, as_json):
+def rmse(
+    case_name,
+    fault,
+    far_bus,
+    t_fault,
+    clear_cycles,
+    tf,
+    rate,
+    latency_ms,
+    drop,
+    tve_pct,
+    fe_hz,
+    rfe_hz_s,
+    k_sigma,
+    window_cycles,
+    pmu_at,
+    esd_pct,
+    deadband_hz,
+    v_gate,
+    coi,
+    hysteresis_hz,
+    runs,
+    seed,
+    settle_ms,
+    ambient_s,
+    ambient_pct,
+    ambient_tau_s,
+    ambient_runs,
+    conventions,
+    step,
+    as_json,
+):
     """Errors of the speed estimators against the truth, and false ESD actions.
 
     The fault run is simulated once (with --esd-pct, storage acts on the true speeds);
@@ -172,22 +333,52 @@ def rmse(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms,
     if min(settle_ms, ambient_s, seed) < 0 or ambient_runs < 1:
         raise InputError("--settle-ms, --ambient-s and --seed must be >= 0, --ambient-runs >= 1")
     ambient = am.AmbientLoad(ambient_pct, ambient_tau_s, seed)
-    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma,
-                         window_cycles)
+    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
     case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
-    mc = ErrorRuns(runs=runs, seed=seed, pmu_at=pmu_at, coi=coi,
-                   control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
-                   ambient=ambient, ambient_s=ambient_s, ambient_runs=ambient_runs)
-    d = estimator_errors(case, ev, mc, settings=settings, esd_pct=esd_pct,
-                         settle_s=settle_ms / 1000, t_end=tf,
-                         model=model_settings(conventions, step))
-    out = {"case": case.name, "fault": {"bus": fault, "far_bus": far_bus, "t_fault_s": t_fault,
-                                        "clear_cycles": clear_cycles},
-           "esd_pct": esd_pct, "pmu": {**settings.__dict__, "at": pmu_at}, "runs": runs,
-           "seed": seed, "window_s": d["window_s"], "stable": d["stable"],
-           "estimators": d["estimators"], "false_actions": d["false_actions"],
-           "ambient": {"t_s": ambient_s, "deadband_hz": deadband_hz, "pct": ambient_pct,
-                       "tau_s": ambient_tau_s, "runs": ambient_runs}}
+    mc = ErrorRuns(
+        runs=runs,
+        seed=seed,
+        pmu_at=pmu_at,
+        coi=coi,
+        control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
+        ambient=ambient,
+        ambient_s=ambient_s,
+        ambient_runs=ambient_runs,
+    )
+    d = estimator_errors(
+        case,
+        ev,
+        mc,
+        settings=settings,
+        esd_pct=esd_pct,
+        settle_s=settle_ms / 1000,
+        t_end=tf,
+        model=model_settings(conventions, step),
+    )
+    out = {
+        "case": case.name,
+        "fault": {
+            "bus": fault,
+            "far_bus": far_bus,
+            "t_fault_s": t_fault,
+            "clear_cycles": clear_cycles,
+        },
+        "esd_pct": esd_pct,
+        "pmu": {**settings.__dict__, "at": pmu_at},
+        "runs": runs,
+        "seed": seed,
+        "window_s": d["window_s"],
+        "stable": d["stable"],
+        "estimators": d["estimators"],
+        "false_actions": d["false_actions"],
+        "ambient": {
+            "t_s": ambient_s,
+            "deadband_hz": deadband_hz,
+            "pct": ambient_pct,
+            "tau_s": ambient_tau_s,
+            "runs": ambient_runs,
+        },
+    }
     if as_json:
         print_json(out)
         return
@@ -203,14 +394,37 @@ def _check_positive(**values) -> None:
 @estimate.command("closed-loop")
 @_fault_run
 @storage_options(" Required: the ESDs the estimators command.")
-@click.option("--seed", type=int, default=0, show_default=True, metavar="S",
-              help="Seed of the PMU noise.")
+@click.option(
+    "--seed", type=int, default=0, show_default=True, metavar="S", help="Seed of the PMU noise."
+)
 @model_options
 @json_option("the verdicts")
 @reports_errors
-def closed_loop(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, latency_ms, drop,
-                tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles, esd_pct, deadband_hz,
-                v_gate, coi, hysteresis_hz, seed, conventions, step, as_json):
+def closed_loop(
+    case_name,
+    fault,
+    far_bus,
+    t_fault,
+    clear_cycles,
+    tf,
+    rate,
+    latency_ms,
+    drop,
+    tve_pct,
+    fe_hz,
+    rfe_hz_s,
+    k_sigma,
+    window_cycles,
+    esd_pct,
+    deadband_hz,
+    v_gate,
+    coi,
+    hysteresis_hz,
+    seed,
+    conventions,
+    step,
+    as_json,
+):
     """The fault simulated with the ESDs commanded by each estimator in the loop.
 
     For each estimator (ideal, raw, kf, ekf; PMU noise seed --seed) the verdict, the
@@ -221,13 +435,19 @@ def closed_loop(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, late
     _check_positive(tf=tf, deadband_hz=deadband_hz)
     if esd_pct is None:
         raise InputError("estimate closed-loop needs --esd-pct")
-    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma,
-                         window_cycles)
+    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
     case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
-    rows = closed_loop_verdicts(case, ev, t_end=tf, settings=settings, esd_pct=esd_pct,
-                                seed=seed,
-                                control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
-                                deadband_hz=deadband_hz, model=model_settings(conventions, step))
+    rows = closed_loop_verdicts(
+        case,
+        ev,
+        t_end=tf,
+        settings=settings,
+        esd_pct=esd_pct,
+        seed=seed,
+        control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
+        deadband_hz=deadband_hz,
+        model=model_settings(conventions, step),
+    )
     out = {"closed_loop": rows, "lines": closed_loop_lines(rows, fault, far_bus, esd_pct, seed)}
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
 
@@ -236,16 +456,34 @@ def closed_loop(case_name, fault, far_bus, t_fault, clear_cycles, tf, rate, late
 @click.argument("case_name", metavar="CASE")
 @fault_options(required=True, t_fault=False)
 @_rate_latency
-@click.option("--esd-pct", type=float, required=True, default=None, metavar="P",
-              help="ESD of P % of each generator's MVA at its HV bus (% of machine MVA), "
-                   "the paper's bang-bang COI control (Table 3).")
+@click.option(
+    "--esd-pct",
+    type=float,
+    required=True,
+    default=None,
+    metavar="P",
+    help="ESD of P % of each generator's MVA at its HV bus (% of machine MVA), "
+    "the paper's bang-bang COI control (Table 3).",
+)
 @_WINDOW
 @_runs_seed
 @model_options
 @json_option("the CCTs")
 @reports_errors
-def cct(case_name, fault, far_bus, rate, latency_ms, esd_pct, window_cycles, runs, seed,
-        conventions, step, as_json):
+def cct(
+    case_name,
+    fault,
+    far_bus,
+    rate,
+    latency_ms,
+    esd_pct,
+    window_cycles,
+    runs,
+    seed,
+    conventions,
+    step,
+    as_json,
+):
     """CCT of the fault line with each estimator in the loop, over --runs noise seeds.
 
     The CCT searches run in parallel; printed per estimator: mean and spread (cycles).
@@ -255,8 +493,18 @@ def cct(case_name, fault, far_bus, rate, latency_ms, esd_pct, window_cycles, run
     _check_positive(runs=runs)
     settings = _settings(rate, latency_ms, window_cycles=window_cycles)
     case, _, _ = _fault_event(case_name, fault, far_bus, 1.0, 6.0, None)  # checks the line
-    table = estimator_ccts(case.name, fault, far_bus, esd_pct=esd_pct, runs=runs, seed=seed,
-                           settings=settings, model=model_settings(conventions, step))
-    out = {"cct_cycles": table,
-           "lines": estimator_cct_lines(table, fault, far_bus, esd_pct, settings, runs, seed)}
+    table = estimator_ccts(
+        case.name,
+        fault,
+        far_bus,
+        esd_pct=esd_pct,
+        runs=runs,
+        seed=seed,
+        settings=settings,
+        model=model_settings(conventions, step),
+    )
+    out = {
+        "cct_cycles": table,
+        "lines": estimator_cct_lines(table, fault, far_bus, esd_pct, settings, runs, seed),
+    }
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))

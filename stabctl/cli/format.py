@@ -84,8 +84,10 @@ def describe_event(ev) -> str:
             return s + ", never cleared"
         if ev.far_bus is None:
             return s + f", cleared at {ev.clear_near:g} s without loss of a line"
-        return (s + f" on line {ev.bus}-{ev.far_bus} (circuit {ev.circuit}), cleared at "
-                f"{ev.clear_near:g} s near / {ev.far_clear:g} s far end, line tripped")
+        return (
+            s + f" on line {ev.bus}-{ev.far_bus} (circuit {ev.circuit}), cleared at "
+            f"{ev.clear_near:g} s near / {ev.far_clear:g} s far end, line tripped"
+        )
     if isinstance(ev, LineTrip):
         return f"line {ev.from_bus}-{ev.to_bus} (circuit {ev.circuit}) tripped at {ev.t:g} s"
     if isinstance(ev, GeneratorTrip):
@@ -93,7 +95,6 @@ def describe_event(ev) -> str:
     if isinstance(ev, LoadStep):
         return f"load step {ev.P:g}{ev.Q:+g}j pu at bus {ev.bus} at {ev.t:g} s"
     return repr(ev)
-
 
 
 def save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0) -> None:
@@ -110,8 +111,11 @@ def save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0
     from stabctl.parallel import atomic_write
     from stabctl.plotting.figures import simulation_overview
 
-    atomic_write(path, lambda tmp: simulation_overview(result, tmp, title=title,
-                                                       base_mva=base_mva), mode=None)
+    atomic_write(
+        path,
+        lambda tmp: simulation_overview(result, tmp, title=title, base_mva=base_mva),
+        mode=None,
+    )
 
 
 def describe_esd(esd: dict, short: bool = False) -> str:
@@ -129,10 +133,12 @@ def describe_esd(esd: dict, short: bool = False) -> str:
     """
     where = "" if short else " at the generator HV buses"
     control = "bang-bang COI control" if short else esd["control"]
-    return (f"storage: {esd['devices']} ESDs of {esd['pct_of_machine_mva']:g} % of machine MVA"
-            f"{where}, {control}, deadband {esd['deadband_hz']:g} Hz, "
-            f"{'gate' if short else 'voltage gate'} {esd['v_gate_pu']:g} pu, {esd['coi']} COI"
-            + (f", hysteresis {esd['hysteresis_hz']:g} Hz" if esd["hysteresis_hz"] else ""))
+    return (
+        f"storage: {esd['devices']} ESDs of {esd['pct_of_machine_mva']:g} % of machine MVA"
+        f"{where}, {control}, deadband {esd['deadband_hz']:g} Hz, "
+        f"{'gate' if short else 'voltage gate'} {esd['v_gate_pu']:g} pu, {esd['coi']} COI"
+        + (f", hysteresis {esd['hysteresis_hz']:g} Hz" if esd["hysteresis_hz"] else "")
+    )
 
 
 def print_storage(esd: dict, result) -> None:
@@ -147,18 +153,23 @@ def print_storage(esd: dict, result) -> None:
     info = result.meta.get("storage", [])
     active = [d for d in info if d["switchings"] > 0]
     click.echo(f"  {describe_esd(esd)}")
-    click.echo(f"  {sum(d['switchings'] for d in info)} switchings, {len(active)} of "
-               f"{len(info)} devices acted; absorbed "
-               f"{sum(d['energy_absorbed_mj'] for d in info):.1f} MJ, delivered "
-               f"{sum(d['energy_delivered_mj'] for d in info):.1f} MJ")
+    click.echo(
+        f"  {sum(d['switchings'] for d in info)} switchings, {len(active)} of "
+        f"{len(info)} devices acted; absorbed "
+        f"{sum(d['energy_absorbed_mj'] for d in info):.1f} MJ, delivered "
+        f"{sum(d['energy_delivered_mj'] for d in info):.1f} MJ"
+    )
     if active:
-        click.echo(f"  {'device':>6} {'bus':>6} {'machine':>7} {'MW':>7} {'switchings':>10} "
-                   f"{'absorbed MJ':>11} {'delivered MJ':>12} {'peak MW':>8}")
+        click.echo(
+            f"  {'device':>6} {'bus':>6} {'machine':>7} {'MW':>7} {'switchings':>10} "
+            f"{'absorbed MJ':>11} {'delivered MJ':>12} {'peak MW':>8}"
+        )
     for d in active:
-        click.echo(f"  {d['device']:6d} {d['bus']:6d} {'G' + str(d['machine']):>7} "
-                   f"{d['pmax_mw']:7.1f} {d['switchings']:10d} {d['energy_absorbed_mj']:11.1f} "
-                   f"{d['energy_delivered_mj']:12.1f} {d['peak_power_mw']:8.1f}")
-
+        click.echo(
+            f"  {d['device']:6d} {d['bus']:6d} {'G' + str(d['machine']):>7} "
+            f"{d['pmax_mw']:7.1f} {d['switchings']:10d} {d['energy_absorbed_mj']:11.1f} "
+            f"{d['energy_delivered_mj']:12.1f} {d['peak_power_mw']:8.1f}"
+        )
 
 
 def print_cct(case_name, rating, d) -> None:
@@ -174,22 +185,29 @@ def print_cct(case_name, rating, d) -> None:
     """
     f = d["fault"]
     circ = f" (circuit {f['circuit']})" if f["circuit"] != 1 else ""
-    click.echo(f"case {case_name}: fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']}"
-               f"{circ} at {f['t_fault']:g} s, cleared at both ends, line tripped"
-               + "".join(f", {a}-{b} also opened" for a, b in f["trips"])
-               + ("; no storage" if rating is None else f"; storage {rating:g} % of machine MVA"))
-    click.echo(f"CCT {d['cct_s']:.3f} s = {d['cct_cycles']:.2f} cycles (stable at "
-               f"{d['t_stable_s']:.3f} s, unstable at {d['t_unstable_s']:.3f} s = "
-               f"{d['t_unstable_cycles']:.2f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
-               f"step {d['step_s']:g} s, {d['conventions']} conventions)")
+    click.echo(
+        f"case {case_name}: fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']}"
+        f"{circ} at {f['t_fault']:g} s, cleared at both ends, line tripped"
+        + "".join(f", {a}-{b} also opened" for a, b in f["trips"])
+        + ("; no storage" if rating is None else f"; storage {rating:g} % of machine MVA")
+    )
+    click.echo(
+        f"CCT {d['cct_s']:.3f} s = {d['cct_cycles']:.2f} cycles (stable at "
+        f"{d['t_stable_s']:.3f} s, unstable at {d['t_unstable_s']:.3f} s = "
+        f"{d['t_unstable_cycles']:.2f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
+        f"step {d['step_s']:g} s, {d['conventions']} conventions)"
+    )
     if d["numerical_error_s"] is not None:
-        click.echo(f"numerical error {1000 * d['numerical_error_s']:g} ms (CCT at half the "
-                   f"step {d['cct_half_step_s']:.3f} s)")
+        click.echo(
+            f"numerical error {1000 * d['numerical_error_s']:g} ms (CCT at half the "
+            f"step {d['cct_half_step_s']:.3f} s)"
+        )
     if d["separated_machines"]:
-        click.echo(f"machine(s) {', '.join(map(str, d['separated_machines']))} lose "
-                   f"synchronism when cleared at {d['t_unstable_s']:.3f} s")
+        click.echo(
+            f"machine(s) {', '.join(map(str, d['separated_machines']))} lose "
+            f"synchronism when cleared at {d['t_unstable_s']:.3f} s"
+        )
     click.echo(f"{d['n_simulations']} simulations, wall {d['wall_time_s']:.2f} s")
-
 
 
 def sweep_line(key, rec) -> str:
@@ -208,12 +226,13 @@ def sweep_line(key, rec) -> str:
     """
     if rec["status"] != "ok":
         return f"{key:<34} failed: {rec['error']}"
-    r, wall = rec["result"], rec.get("wall_time_s")    # none in a reproducible copy
+    r, wall = rec["result"], rec.get("wall_time_s")  # none in a reproducible copy
     err = r.get("numerical_error_s")
     err = "-" if err is None else f"{1000 * err:g}"
-    return (f"{key:<34} {r['cct_s']:7.3f} {r['cct_cycles']:8.2f} {err:>6} "
-            f"{r['n_simulations']:5d} " + ("      -" if wall is None else f"{wall:7.2f}"))
-
+    return (
+        f"{key:<34} {r['cct_s']:7.3f} {r['cct_cycles']:8.2f} {err:>6} "
+        f"{r['n_simulations']:5d} " + ("      -" if wall is None else f"{wall:7.2f}")
+    )
 
 
 def print_sweep(rep, n_jobs: int) -> None:
@@ -225,13 +244,14 @@ def print_sweep(rep, n_jobs: int) -> None:
     n_jobs : int
         Jobs in the sweep.
     """
-    click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'err ms':>6} {'sims':>5} "
-               f"{'wall s':>7}")
+    click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'err ms':>6} {'sims':>5} {'wall s':>7}")
     for key, rec in rep.records.items():
         click.echo(sweep_line(key, rec))
     n_bad = sum(r["status"] != "ok" for r in rep.records.values())
-    click.echo(f"{n_jobs} job(s): {rep.ran} run now, {rep.skipped} already in {rep.out}; "
-               f"{n_bad} failed; wall {rep.wall_time_s:.1f} s")
+    click.echo(
+        f"{n_jobs} job(s): {rep.ran} run now, {rep.skipped} already in {rep.out}; "
+        f"{n_bad} failed; wall {rep.wall_time_s:.1f} s"
+    )
 
 
 def print_screening(rows) -> None:
@@ -247,8 +267,9 @@ def print_screening(rows) -> None:
         where = f"bus {r['bus']}" + (f" line to {r['far_bus']}" if r["far_bus"] else "")
         if r["status"] == "ok":
             err = "-" if r["numerical_error_s"] is None else f"{1000 * r['numerical_error_s']:g}"
-            click.echo(f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  "
-                       f"{r['separated']}")
+            click.echo(
+                f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  {r['separated']}"
+            )
         else:
             click.echo(f"{where:<22} {'-':>7} {'-':>7}  {r['error'][:70]}")
 
@@ -266,17 +287,23 @@ def print_modes(st, no_pss: bool) -> None:
     import numpy as np
 
     ma = st.ma
-    click.echo(f"case {st.case.name}{' without PSS' if no_pss else ''}: {st.sys.nstates} "
-               f"states; linearised in {st.t_linearise:.2f} s, analysed in {st.t_analyse:.2f} s")
-    click.echo(f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
-               "(excluded from damping statistics)")
+    click.echo(
+        f"case {st.case.name}{' without PSS' if no_pss else ''}: {st.sys.nstates} "
+        f"states; linearised in {st.t_linearise:.2f} s, analysed in {st.t_analyse:.2f} s"
+    )
+    click.echo(
+        f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
+        "(excluded from damping statistics)"
+    )
     click.echo(f"{'mode':>5} {'f Hz':>7} {'damping':>8}  {'kind':<10} machines")
     em = ma.electromechanical
     for i in em[np.argsort(ma.freq_hz[em])]:
         g1, g2 = ma.groups(i)
         against = " ".join(f"G{k}" for k in g2[:6]) or "-"
-        click.echo(f"{i:5d} {ma.freq_hz[i]:7.3f} {ma.damping[i]:8.4f}  {ma.kind[i]:<10} "
-                   f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}")
+        click.echo(
+            f"{i:5d} {ma.freq_hz[i]:7.3f} {ma.damping[i]:8.4f}  {ma.kind[i]:<10} "
+            f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}"
+        )
 
 
 def print_estimate(d) -> None:
@@ -288,32 +315,51 @@ def print_estimate(d) -> None:
         The report (`estimate rmse --json`).
     """
     f, p = d["fault"], d["pmu"]
-    click.echo(f"case {d['case']}: fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']} "
-               f"at {f['t_fault_s']:g} s, cleared after {f['clear_cycles']:g} cycles"
-               + ("" if d["esd_pct"] is None else f"; storage {d['esd_pct']:g} % (true speeds)")
-               + ("" if d["stable"] else "; the run loses synchronism"))
-    click.echo(f"PMUs at the {p['at']} buses: {p['rate']:g} frames/s, TVE {100 * p['tve']:g} %, "
-               f"FE {p['fe_hz']:g} Hz, RFE {p['rfe_hz_s']:g} Hz/s ({p['k_sigma']:g} sigma), "
-               f"frequency window {p['window_cycles']:g} cycles, latency {1000 * p['latency_s']:g} ms, lost {p['drop_prob']:g}; "
-               f"{d['runs']} runs, seeds {d['seed']}..{d['seed'] + d['runs'] - 1}")
+    click.echo(
+        f"case {d['case']}: fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']} "
+        f"at {f['t_fault_s']:g} s, cleared after {f['clear_cycles']:g} cycles"
+        + ("" if d["esd_pct"] is None else f"; storage {d['esd_pct']:g} % (true speeds)")
+        + ("" if d["stable"] else "; the run loses synchronism")
+    )
+    click.echo(
+        f"PMUs at the {p['at']} buses: {p['rate']:g} frames/s, TVE {100 * p['tve']:g} %, "
+        f"FE {p['fe_hz']:g} Hz, RFE {p['rfe_hz_s']:g} Hz/s ({p['k_sigma']:g} sigma), "
+        f"frequency window {p['window_cycles']:g} cycles, latency {1000 * p['latency_s']:g} ms, "
+        f"lost {p['drop_prob']:g}; "
+        f"{d['runs']} runs, seeds {d['seed']}..{d['seed'] + d['runs'] - 1}"
+    )
     w = d["window_s"]
     click.echo(f"errors in mHz from {w[0]:.3f} s to {w[1]:g} s, mean +- std over the runs:")
-    cols = (("speed", "speed_rmse_mhz"), ("COI", "coi_rmse_mhz"), ("relative", "rel_rmse_mhz"),
-            ("rel. max", "rel_max_mhz"), ("at arrival", "rel_arrival_rmse_mhz"),
-            ("forecast", "rel_forecast_rmse_mhz"), ("NIS in 95%", "nis_inside"))
+    cols = (
+        ("speed", "speed_rmse_mhz"),
+        ("COI", "coi_rmse_mhz"),
+        ("relative", "rel_rmse_mhz"),
+        ("rel. max", "rel_max_mhz"),
+        ("at arrival", "rel_arrival_rmse_mhz"),
+        ("forecast", "rel_forecast_rmse_mhz"),
+        ("NIS in 95%", "nis_inside"),
+    )
     click.echo(f"{'estimator':9}" + "".join(f"{c:>17}" for c, _ in cols))
     for name, fig in d["estimators"].items():
-        cells = [f"{'-':>17}" if fig[k]["mean"] is None else
-                 f"{fig[k]['mean']:>10.3f} +-{fig[k]['std']:<5.3f}" for _, k in cols]
+        cells = [
+            f"{'-':>17}"
+            if fig[k]["mean"] is None
+            else f"{fig[k]['mean']:>10.3f} +-{fig[k]['std']:<5.3f}"
+            for _, k in cols
+        ]
         click.echo(f"{name:9}" + "".join(cells))
     if d["false_actions"] is not None:
         a = d["ambient"]
-        click.echo(f"no fault, {a['runs']} runs of {a['t_s']:g} s, ambient load {a['pct']:g} % "
-                   f"(tau {a['tau_s']:g} s), deadband {1000 * a['deadband_hz']:g} mHz: false ESD "
-                   "actions per run (largest |f_i - f_COI|, largest std of f_i - f_COI; mHz)")
+        click.echo(
+            f"no fault, {a['runs']} runs of {a['t_s']:g} s, ambient load {a['pct']:g} % "
+            f"(tau {a['tau_s']:g} s), deadband {1000 * a['deadband_hz']:g} mHz: false ESD "
+            "actions per run (largest |f_i - f_COI|, largest std of f_i - f_COI; mHz)"
+        )
         for name, fig in d["false_actions"].items():
-            click.echo(f"  {name:5} {fig['actions']['mean']:8.2f}  "
-                       f"({fig['max_rel_mhz']['mean']:.2f}, {fig['std_rel_mhz']['mean']:.2f})")
+            click.echo(
+                f"  {name:5} {fig['actions']['mean']:8.2f}  "
+                f"({fig['max_rel_mhz']['mean']:.2f}, {fig['std_rel_mhz']['mean']:.2f})"
+            )
 
 
 def print_placement(case_name, d) -> None:
@@ -325,22 +371,27 @@ def print_placement(case_name, d) -> None:
     d : dict
         The result (`place --json`).
     """
-    click.echo(f"case {case_name}: {d['total_mw']:.1f} MW of storage at {d['n_sites']} "
-               f"site(s); {'VERIFIED' if d['verified'] else 'NOT verified'} by simulation "
-               f"({d['message']})")
+    click.echo(
+        f"case {case_name}: {d['total_mw']:.1f} MW of storage at {d['n_sites']} "
+        f"site(s); {'VERIFIED' if d['verified'] else 'NOT verified'} by simulation "
+        f"({d['message']})"
+    )
     click.echo(f"{'bus':>6} {'machine':>8} {'MW':>9}")
     for r in d["allocation"]:
         click.echo(f"{r['bus']:>6} {r['machine']:>8} {r['mw']:9.1f}")
     click.echo(f"{'contingency':<16} {'no ESD s':>9} {'target s':>9} {'with s':>8}  met")
     for c in d["contingencies"]:
-        click.echo(f"{c['name']:<16} {c['cct_no_storage_s']:9.3f} {c['target_cct_s']:9.3f} "
-                   f"{c['cct_s']:8.3f}  {'yes' if c['met'] else 'NO'}")
+        click.echo(
+            f"{c['name']:<16} {c['cct_no_storage_s']:9.3f} {c['target_cct_s']:9.3f} "
+            f"{c['cct_s']:8.3f}  {'yes' if c['met'] else 'NO'}"
+        )
     for m in d.get("damping", []):
         click.echo(f"mode {m['freq_hz']:.3f} Hz: damping {m['damping']:.4f}")
     solve = max(d["solve_times_s"], default=0.0)
-    click.echo(f"{len(d['iterations'])} allocation(s) simulated, wall {d['wall_time_s']:.1f} s, "
-               f"longest convex solve {1000 * solve:.1f} ms")
-
+    click.echo(
+        f"{len(d['iterations'])} allocation(s) simulated, wall {d['wall_time_s']:.1f} s, "
+        f"longest convex solve {1000 * solve:.1f} ms"
+    )
 
 
 def print_plan(case_name, d) -> None:
@@ -353,41 +404,53 @@ def print_plan(case_name, d) -> None:
         The result (`place --json`, `stabctl.placement.plan.PlanResult.to_dict`).
     """
     c = d["cost"]
-    click.echo(f"case {case_name} ({d['requirement']}; load levels "
-               f"{', '.join(f'{x:g}' for x in d['load_levels'])}): {d['total_mw']:.1f} MW, "
-               f"{d['total_mwh']:.2f} MWh at {d['n_sites']} site(s), cost {c['total']:.1f} "
-               f"(MW {c['mw']:.1f}, MWh {c['mwh']:.1f}, sites {c['site']:.1f}); "
-               f"{'VERIFIED' if d['verified'] else 'NOT verified'} ({d['message']})")
-    click.echo(f"{'bus':>6} {'machine':>8} {'MW':>9} {'MWh':>8} {'absorbed MJ':>12} "
-               f"{'delivered MJ':>13}")
+    click.echo(
+        f"case {case_name} ({d['requirement']}; load levels "
+        f"{', '.join(f'{x:g}' for x in d['load_levels'])}): {d['total_mw']:.1f} MW, "
+        f"{d['total_mwh']:.2f} MWh at {d['n_sites']} site(s), cost {c['total']:.1f} "
+        f"(MW {c['mw']:.1f}, MWh {c['mwh']:.1f}, sites {c['site']:.1f}); "
+        f"{'VERIFIED' if d['verified'] else 'NOT verified'} ({d['message']})"
+    )
+    click.echo(
+        f"{'bus':>6} {'machine':>8} {'MW':>9} {'MWh':>8} {'absorbed MJ':>12} {'delivered MJ':>13}"
+    )
     for r in d["allocation"]:
-        click.echo(f"{r['bus']:>6} {r['machine']:>8} {r['mw']:9.1f} {r['mwh']:8.2f} "
-                   f"{r.get('absorbed_mj', 0.0):12.1f} {r.get('delivered_mj', 0.0):13.1f}")
-    click.echo(f"{d['n_met']} of {d['n_contingencies']} contingencies stable at their "
-               f"required clearing time; solved for: {', '.join(d['active']) or 'none'}")
+        click.echo(
+            f"{r['bus']:>6} {r['machine']:>8} {r['mw']:9.1f} {r['mwh']:8.2f} "
+            f"{r.get('absorbed_mj', 0.0):12.1f} {r.get('delivered_mj', 0.0):13.1f}"
+        )
+    click.echo(
+        f"{d['n_met']} of {d['n_contingencies']} contingencies stable at their "
+        f"required clearing time; solved for: {', '.join(d['active']) or 'none'}"
+    )
     click.echo(f"{'contingency':<18} {'required s':>10} {'no ESD s':>9} {'with s':>8}  met")
     for r in d["contingencies"]:
         if r["cct_s"] is None and r["met"]:
             continue
         f = lambda x: "-" if x is None else f"{x:.3f}"  # noqa: E731
-        click.echo(f"{r['name']:<18} {r['required_s']:10.3f} {f(r['cct_no_storage_s']):>9} "
-                   f"{f(r['cct_s']):>8}  {'yes' if r['met'] else 'NO'}")
+        click.echo(
+            f"{r['name']:<18} {r['required_s']:10.3f} {f(r['cct_no_storage_s']):>9} "
+            f"{f(r['cct_s']):>8}  {'yes' if r['met'] else 'NO'}"
+        )
     if d.get("out_of_scope"):
         click.echo("out of scope (unstable when cleared at once): " + ", ".join(d["out_of_scope"]))
     for proof in d.get("infeasible") or []:
         click.echo("set aside as " + proof)
     u = d.get("uniform")
     if u and u.get("pct") is not None:
-        click.echo(f"least uniform fleet: {u['pct']:g} % of every MVA = {u['total_mw']:.0f} MW,"
-                   f" {u['mwh']:.2f} MWh, cost {u['cost']['total']:.1f}")
+        click.echo(
+            f"least uniform fleet: {u['pct']:g} % of every MVA = {u['total_mw']:.0f} MW,"
+            f" {u['mwh']:.2f} MWh, cost {u['cost']['total']:.1f}"
+        )
     for a in d.get("alone") or []:
         mw = "infeasible" if a["total_mw"] is None else f"{a['total_mw']:.1f} MW"
         click.echo(f"fault {a['fault']} alone: {mw}")
     click.echo(f"{d['n_simulations']} runs simulated, wall {d['wall_time_s']:.1f} s")
 
 
-def estimator_cct_lines(table: dict, bus: int, far_bus: int, esd_pct: float, settings,
-                        runs: int, seed: int) -> list:
+def estimator_cct_lines(
+    table: dict, bus: int, far_bus: int, esd_pct: float, settings, runs: int, seed: int
+) -> list:
     """The text lines of `estimate cct`.
 
     Parameters
@@ -404,12 +467,21 @@ def estimator_cct_lines(table: dict, bus: int, far_bus: int, esd_pct: float, set
     list of str
     """
     rate, lat = settings.rate, settings.latency_s
-    lines = [f"CCT of line {bus}-{far_bus}, ESD {esd_pct:g} %, {rate:g} frames/s, latency "
-             f"{1000 * lat:g} ms, frequency window {settings.window_cycles:g} cycles, {runs} "
-             f"seeds from {seed} (cycles):"]
-    lines += [f"  {e:5} " + ("failed" if s["mean"] is None else
-                             f"{s['mean']:7.2f} +- {s['std']:.2f} ({s['min']:.2f}..{s['max']:.2f})")
-              + f"  runs {s['runs']}, failed {s['failed']}" for e, s in table.items()]
+    lines = [
+        f"CCT of line {bus}-{far_bus}, ESD {esd_pct:g} %, {rate:g} frames/s, latency "
+        f"{1000 * lat:g} ms, frequency window {settings.window_cycles:g} cycles, {runs} "
+        f"seeds from {seed} (cycles):"
+    ]
+    lines += [
+        f"  {e:5} "
+        + (
+            "failed"
+            if s["mean"] is None
+            else f"{s['mean']:7.2f} +- {s['std']:.2f} ({s['min']:.2f}..{s['max']:.2f})"
+        )
+        + f"  runs {s['runs']}, failed {s['failed']}"
+        for e, s in table.items()
+    ]
     return lines
 
 
@@ -428,8 +500,9 @@ def closed_loop_lines(rows: dict, bus: int, far_bus: int, esd_pct: float, seed: 
     -------
     list of str
     """
-    head = (f"closed loop, fault at bus {bus} line {bus}-{far_bus}, ESD {esd_pct:g} %, "
-            f"seed {seed}:")
-    return [head] + [f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} switchings "
-                     f"{r['switchings']:5d}  false actions {r['false_actions']}"
-                     for e, r in rows.items()]
+    head = f"closed loop, fault at bus {bus} line {bus}-{far_bus}, ESD {esd_pct:g} %, seed {seed}:"
+    return [head] + [
+        f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} switchings "
+        f"{r['switchings']:5d}  false actions {r['false_actions']}"
+        for e, r in rows.items()
+    ]

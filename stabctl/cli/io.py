@@ -7,8 +7,8 @@ from pathlib import Path
 
 import click
 
-from stabctl.cli.format import describe_sw_con, print_json
 from stabctl.cli.checks import check_suffix
+from stabctl.cli.format import describe_sw_con, print_json
 from stabctl.cli.options import AliasedOption, json_option, reports_errors
 
 
@@ -16,12 +16,20 @@ def _case_info(name: str) -> dict:
     from stabctl.io import load_case
 
     case = load_case(name)
-    return {"name": name, "description": case.description,
-            "buses": case.n_bus, "branches": len(case.branches),
-            "machines": len(case.machines), "exciters": len(case.exciters),
-            "pss": len(case.pss), "governors": len(case.governors),
-            "nonconforming_loads": len(case.loads), "base_mva": case.base_mva,
-            "freq_hz": case.freq_hz, "sw_con": describe_sw_con(case)}
+    return {
+        "name": name,
+        "description": case.description,
+        "buses": case.n_bus,
+        "branches": len(case.branches),
+        "machines": len(case.machines),
+        "exciters": len(case.exciters),
+        "pss": len(case.pss),
+        "governors": len(case.governors),
+        "nonconforming_loads": len(case.loads),
+        "base_mva": case.base_mva,
+        "freq_hz": case.freq_hz,
+        "sw_con": describe_sw_con(case),
+    }
 
 
 @click.command()
@@ -42,9 +50,11 @@ def cases(as_json):
         print_json(rows)
         return
     for r in rows:
-        click.echo(f"{r['name']}: {r['buses']} buses, {r['branches']} branches, "
-                   f"{r['machines']} machines, {r['governors']} governors, "
-                   f"{r['base_mva']:g} MVA base, {r['freq_hz']:g} Hz")
+        click.echo(
+            f"{r['name']}: {r['buses']} buses, {r['branches']} branches, "
+            f"{r['machines']} machines, {r['governors']} governors, "
+            f"{r['base_mva']:g} MVA base, {r['freq_hz']:g} Hz"
+        )
         click.echo(f"    {r['description']}")
         if r["sw_con"]:
             click.echo(f"    data file disturbance: {r['sw_con']}")
@@ -52,40 +62,69 @@ def cases(as_json):
 
 def _dyr_and_out(func):
     """The optional DYR argument and the --out option of the import commands."""
-    func = click.option("--out", "-o", "out_path", required=True, metavar="CASE.json",
-                        type=click.Path(dir_okay=False),
-                        help="Output file: the stabctl case to write.")(func)
-    return click.argument("dyr_path", metavar="[DYR]", required=False,
-                          type=click.Path(dir_okay=False))(func)
+    func = click.option(
+        "--out",
+        "-o",
+        "out_path",
+        required=True,
+        metavar="CASE.json",
+        type=click.Path(dir_okay=False),
+        help="Output file: the stabctl case to write.",
+    )(func)
+    return click.argument(
+        "dyr_path", metavar="[DYR]", required=False, type=click.Path(dir_okay=False)
+    )(func)
 
 
 def _imported(case, out) -> tuple[dict, str]:
     """The summary of an imported case written to ``out``: (JSON fields, text)."""
-    summary = {"case": str(out), "name": case.name, "buses": case.n_bus,
-               "branches": len(case.branches), "machines": len(case.machines),
-               "exciters": len(case.exciters), "pss": len(case.pss),
-               "governors": len(case.governors)}
-    return summary, (f"wrote {out}: {case.n_bus} buses, {len(case.branches)} branches, "
-                     f"{len(case.machines)} machines, {len(case.exciters)} exciters, "
-                     f"{len(case.pss)} PSS, {len(case.governors)} governors")
+    summary = {
+        "case": str(out),
+        "name": case.name,
+        "buses": case.n_bus,
+        "branches": len(case.branches),
+        "machines": len(case.machines),
+        "exciters": len(case.exciters),
+        "pss": len(case.pss),
+        "governors": len(case.governors),
+    }
+    return summary, (
+        f"wrote {out}: {case.n_bus} buses, {len(case.branches)} branches, "
+        f"{len(case.machines)} machines, {len(case.exciters)} exciters, "
+        f"{len(case.pss)} PSS, {len(case.governors)} governors"
+    )
 
 
 @click.command("import-psse")
 @click.argument("raw_path", metavar="RAW", type=click.Path(dir_okay=False))
 @_dyr_and_out
-@click.option("--skip-unsupported", is_flag=True,
-              help="Leave out records stabctl cannot represent (listed as warnings) "
-                   "instead of refusing the files.")
-@click.option("--loads", type=click.Choice(["impedance", "raw"]), default="impedance",
-              show_default=True,
-              help="Load model in dynamic runs: all constant impedance, or the RAW "
-                   "composition (constant power, current, admittance; PST's network "
-                   "solution may fail with constant power under deep voltage dips).")
-@click.option("--dyr-conventions", "--conventions", "conventions", cls=AliasedOption,
-              type=click.Choice(["pst", "andes"]), default="pst", show_default=True,
-              help="How to read the DYR models: PST's (machines with speed effects, "
-                   "EXDC2 limits times the terminal voltage) or ANDES 2.0's (neither), "
-                   "to compare with ANDES like for like.")
+@click.option(
+    "--skip-unsupported",
+    is_flag=True,
+    help="Leave out records stabctl cannot represent (listed as warnings) "
+    "instead of refusing the files.",
+)
+@click.option(
+    "--loads",
+    type=click.Choice(["impedance", "raw"]),
+    default="impedance",
+    show_default=True,
+    help="Load model in dynamic runs: all constant impedance, or the RAW "
+    "composition (constant power, current, admittance; PST's network "
+    "solution may fail with constant power under deep voltage dips).",
+)
+@click.option(
+    "--dyr-conventions",
+    "--conventions",
+    "conventions",
+    cls=AliasedOption,
+    type=click.Choice(["pst", "andes"]),
+    default="pst",
+    show_default=True,
+    help="How to read the DYR models: PST's (machines with speed effects, "
+    "EXDC2 limits times the terminal voltage) or ANDES 2.0's (neither), "
+    "to compare with ANDES like for like.",
+)
 @json_option("the summary")
 @reports_errors
 def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventions, as_json):
@@ -103,8 +142,9 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventio
     from stabctl.io.psse import import_psse as run_import
 
     out = check_suffix(out_path, (".json",), "--out")
-    case, left_out = run_import(raw_path, dyr_path,
-                                "skip" if skip_unsupported else "error", loads, conventions)
+    case, left_out = run_import(
+        raw_path, dyr_path, "skip" if skip_unsupported else "error", loads, conventions
+    )
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
     summary.update(nonconforming_loads=len(case.loads), left_out=list(left_out))
@@ -117,13 +157,23 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventio
 @click.command("import-andes")
 @click.argument("case_path", metavar="CASE", type=click.Path(dir_okay=False))
 @_dyr_and_out
-@click.option("--skip-unsupported", is_flag=True,
-              help="Leave out the ANDES models stabctl lacks (listed as warnings) instead "
-                   "of refusing the case.")
-@click.option("--dyr-conventions", "--conventions", "conventions", cls=AliasedOption,
-              type=click.Choice(["pst", "andes"]), default="andes", show_default=True,
-              help="How to read the PSS/E models: as ANDES 2.0 solves them (the same "
-                   "equations as ANDES: machines without speed effects, ...) or as PST's.")
+@click.option(
+    "--skip-unsupported",
+    is_flag=True,
+    help="Leave out the ANDES models stabctl lacks (listed as warnings) instead "
+    "of refusing the case.",
+)
+@click.option(
+    "--dyr-conventions",
+    "--conventions",
+    "conventions",
+    cls=AliasedOption,
+    type=click.Choice(["pst", "andes"]),
+    default="andes",
+    show_default=True,
+    help="How to read the PSS/E models: as ANDES 2.0 solves them (the same "
+    "equations as ANDES: machines without speed effects, ...) or as PST's.",
+)
 @json_option("the summary")
 @reports_errors
 def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, as_json):
@@ -145,23 +195,32 @@ def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, a
     from stabctl.io.andes_case import read_andes_case
 
     out = check_suffix(out_path, (".json",), "--out")
-    imported = read_andes_case(case_path, conventions,
-                               "skip" if skip_unsupported else "error", dyr_path)
+    imported = read_andes_case(
+        case_path, conventions, "skip" if skip_unsupported else "error", dyr_path
+    )
     case = imported.case
     dv, da = _powerflow_gap(imported)
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
-    summary.update(left_out=list(imported.left_out), ignored=list(imported.ignored),
-                   powerflow_vmag_diff_pu=dv, powerflow_angle_diff_rad=da)
+    summary.update(
+        left_out=list(imported.left_out),
+        ignored=list(imported.ignored),
+        powerflow_vmag_diff_pu=dv,
+        powerflow_angle_diff_rad=da,
+    )
     if as_json:
         print_json(summary)
         return
-    click.echo(f"{text}; {len(imported.left_out)} left out"
-               + (f"; ignored (no effect on the dynamics): {', '.join(imported.ignored)}"
-                  if imported.ignored else ""))
+    click.echo(
+        f"{text}; {len(imported.left_out)} left out"
+        + (
+            f"; ignored (no effect on the dynamics): {', '.join(imported.ignored)}"
+            if imported.ignored
+            else ""
+        )
+    )
     if dv is not None:
-        click.echo(f"power flow against ANDES's: max |dV| {dv:.1e} pu, max |d angle| "
-                   f"{da:.1e} rad")
+        click.echo(f"power flow against ANDES's: max |dV| {dv:.1e} pu, max |d angle| {da:.1e} rad")
 
 
 #: largest power-flow difference to ANDES's (pu, rad) accepted without a warning
@@ -180,20 +239,23 @@ def _powerflow_gap(imported) -> tuple[float | None, float | None]:
     from stabctl.network.powerflow import solve_powerflow
 
     if imported.pf_bus is None:
-        warnings.warn("ANDES's power flow of the case did not converge: not compared")
+        warnings.warn("ANDES's power flow of the case did not converge: not compared", stacklevel=2)
         return None, None
     case = imported.case
     try:
         pf = solve_powerflow(case, q_limits=False, tol=1e-10)
     except PowerFlowError as exc:
-        warnings.warn(f"stabctl's power flow of the case did not converge: {exc}")
+        warnings.warn(f"stabctl's power flow of the case did not converge: {exc}", stacklevel=2)
         return None, None
     rows = case.bus_indices(imported.pf_bus)
     dv = float(np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)))
     da = float(np.max(np.abs(pf.vang[rows] - imported.pf_vang)))
     if max(dv, da) > _PF_AGREEMENT:
-        warnings.warn(f"the power flow differs from ANDES's by up to {dv:.1e} pu, {da:.1e} "
-                      "rad: check the network data")
+        warnings.warn(
+            f"the power flow differs from ANDES's by up to {dv:.1e} pu, {da:.1e} "
+            "rad: check the network data",
+            stacklevel=2,
+        )
     return dv, da
 
 

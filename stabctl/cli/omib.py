@@ -4,21 +4,35 @@ from __future__ import annotations
 
 import click
 
-from stabctl.errors import InputError
 from stabctl.cli.format import print_json
 from stabctl.cli.options import _RANGES, interval, json_option, reports_errors
+from stabctl.errors import InputError
 
 
 @click.command()
-@click.option("--fault-cycles", "-c", type=float, multiple=True,
-              help="Fault durations in cycles: `--fault-cycles 6 12 15` (default 6 12 15).")
+@click.option(
+    "--fault-cycles",
+    "-c",
+    type=float,
+    multiple=True,
+    help="Fault durations in cycles: `--fault-cycles 6 12 15` (default 6 12 15).",
+)
 @click.argument("more_cycles", nargs=-1, type=float)
 @click.option("--H", "H", type=float, default=3.0, show_default=True, help="Inertia constant (s).")
 @click.option("--pm", type=float, default=0.5, show_default=True, help="Mechanical power (pu).")
-@click.option("--delta0", type=float, default=0.4950, show_default=True,
-              help="Pre-fault angle (rad); sets Pmax = Pm/sin(delta0).")
-@click.option("--pmax", type=float, default=None,
-              help="Pre/post-fault Pmax (pu) instead of deriving it from delta0.")
+@click.option(
+    "--delta0",
+    type=float,
+    default=0.4950,
+    show_default=True,
+    help="Pre-fault angle (rad); sets Pmax = Pm/sin(delta0).",
+)
+@click.option(
+    "--pmax",
+    type=float,
+    default=None,
+    help="Pre/post-fault Pmax (pu) instead of deriving it from delta0.",
+)
 @click.option("--f0", type=float, default=60.0, show_default=True, help="Frequency (Hz).")
 @json_option("the clearing table and the EAC summary")
 @reports_errors
@@ -34,9 +48,11 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
         system = OMIB.from_operating_point(H=H, Pm=pm, delta0=delta0, f0=f0)
         lo, hi = _RANGES["--pmax"][:2]
         if not lo < system.Pmax_pre <= hi:
-            raise InputError(f"--delta0 {delta0:g} with --pm {pm:g}: Pmax = Pm/sin(delta0) = "
-                             f"{system.Pmax_pre:g} pu, outside the --pmax range "
-                             f"{interval(_RANGES['--pmax'])}")
+            raise InputError(
+                f"--delta0 {delta0:g} with --pm {pm:g}: Pmax = Pm/sin(delta0) = "
+                f"{system.Pmax_pre:g} pu, outside the --pmax range "
+                f"{interval(_RANGES['--pmax'])}"
+            )
     else:
         system = OMIB(H=H, Pm=pm, Pmax_pre=pmax, Pmax_fault=0.0, Pmax_post=pmax, f0=f0)
     cycles = tuple(fault_cycles) + tuple(more_cycles) or (6.0, 12.0, 15.0)
@@ -46,9 +62,12 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
         return
     click.echo(f"{'cycles':>7} {'delta_cl rad':>13} {'omega_cl rad/s':>15}  verdict")
     for r in out["cases"]:
-        click.echo(f"{r['cycles']:7.2f} {r['delta_cl_rad']:13.4f} {r['omega_cl_rad_s']:15.4f}  "
-                   f"{'stable' if r['stable'] else 'unstable'}")
+        click.echo(
+            f"{r['cycles']:7.2f} {r['delta_cl_rad']:13.4f} {r['omega_cl_rad_s']:15.4f}  "
+            f"{'stable' if r['stable'] else 'unstable'}"
+        )
     e = out["eac"]
-    click.echo(f"EAC: critical clearing angle {e['delta_cr_rad']:.4f} rad, CCT {e['t_cr_s']:.4f} s "
-               f"({e['t_cr_cycles']:.2f} cycles); bisection {e['t_cr_bisection_s']:.4f} s")
-
+    click.echo(
+        f"EAC: critical clearing angle {e['delta_cr_rad']:.4f} rad, CCT {e['t_cr_s']:.4f} s "
+        f"({e['t_cr_cycles']:.2f} cycles); bisection {e['t_cr_bisection_s']:.4f} s"
+    )

@@ -27,8 +27,8 @@ import warnings
 
 import click
 
-from stabctl.errors import InputError, StabctlError
 from stabctl.cli.format import one_line
+from stabctl.errors import InputError, StabctlError
 
 #: seconds a run continues after the fault start when --tf is not given
 TF_AFTER_FAULT_S = 5.0
@@ -62,6 +62,7 @@ def reports_errors(func):
         ``warning:`` lines on stderr on success (on error only the ``error:`` line); Ctrl-C
         prints what was kept (exit status 130).
     """
+
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         with warnings.catch_warnings(record=True) as caught:
@@ -78,6 +79,7 @@ def reports_errors(func):
         for w in caught:
             click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
         return out
+
     return wrapper
 
 
@@ -149,9 +151,9 @@ def interval(spec) -> str:
     str
     """
     lo, hi, lo_in, hi_in, unit = spec
-    return (f"{'[' if lo_in else '('}{lo:g}, {hi:g}{']' if hi_in else ')'}"
-            + (f" {unit}" if unit else ""))
-
+    return f"{'[' if lo_in else '('}{lo:g}, {hi:g}{']' if hi_in else ')'}" + (
+        f" {unit}" if unit else ""
+    )
 
 
 def check_number(label: str, value) -> None:
@@ -189,8 +191,9 @@ def _check_numbers(kwargs) -> None:
     for param in ctx.command.params:
         if param.name not in kwargs:
             continue
-        label = next((o for o in param.opts if o.startswith("--")), None) or \
-            param.human_readable_name
+        label = (
+            next((o for o in param.opts if o.startswith("--")), None) or param.human_readable_name
+        )
         for value in _numbers(kwargs[param.name]):
             check_number(label, value)
 
@@ -222,6 +225,7 @@ def _interrupted(kwargs) -> str:
     out = kwargs.get("out_path") or kwargs.get("out_dir") or ""
     if name in ("sweep-cct", "screen") and out:
         from stabctl.parallel import read_records
+
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             out = f"{out} ({len(read_records(out))} recorded)"
@@ -230,6 +234,7 @@ def _interrupted(kwargs) -> str:
 
 
 # -- option decorators -------------------------------------------------------------------
+
 
 def _apply(func, options):
     for opt in reversed(options):
@@ -244,95 +249,175 @@ def json_option(what: str = "the result"):
 
 def out_file_option(default=None, metavar="FILE", help="Output file."):
     """``--out FILE``: an output file (never a directory), into ``out_path``."""
-    return click.option("--out", "out_path", type=click.Path(dir_okay=False),
-                        default=default, show_default=default is not None, metavar=metavar,
-                        help=f"Output file: {help[0].lower()}{help[1:]}")
+    return click.option(
+        "--out",
+        "out_path",
+        type=click.Path(dir_okay=False),
+        default=default,
+        show_default=default is not None,
+        metavar=metavar,
+        help=f"Output file: {help[0].lower()}{help[1:]}",
+    )
 
 
 def out_dir_option(help="Report directory."):
     """``--out-dir DIR`` (hidden alias ``--out``): an output directory, into ``out_dir``."""
     # a path, checked by the command (check_writable): a file there is one `error:` line
-    return click.option("--out-dir", "--out", "out_dir", cls=AliasedOption, default="reports",
-                        show_default=True, metavar="DIR", type=click.Path(),
-                        help=f"Output directory: {help[0].lower()}{help[1:]}")
+    return click.option(
+        "--out-dir",
+        "--out",
+        "out_dir",
+        cls=AliasedOption,
+        default="reports",
+        show_default=True,
+        metavar="DIR",
+        type=click.Path(),
+        help=f"Output directory: {help[0].lower()}{help[1:]}",
+    )
 
 
 def plot_option(what: str):
     """``--plot FILE.png``: a figure file (.png, .pdf or .svg) of ``what``, into
     ``plot_path``."""
-    return click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-                        metavar="FILE.png", help=f"Figure file (.png, .pdf or .svg): {what}.")
+    return click.option(
+        "--plot",
+        "plot_path",
+        type=click.Path(dir_okay=False),
+        default=None,
+        metavar="FILE.png",
+        help=f"Figure file (.png, .pdf or .svg): {what}.",
+    )
 
 
 def conventions_option(func):
     """``--conventions ieee|pstess``, the model conventions."""
-    return click.option("--conventions", type=click.Choice(["ieee", "pstess"]),
-                        default="ieee", show_default=True,
-                        help="Model conventions: ieee (IEEE 421.5 limiters, results converge "
-                             "with the step) or pstess (PSTess 1.1 bit for bit, quirks "
-                             "included); docs/conventions.md.")(func)
+    return click.option(
+        "--conventions",
+        type=click.Choice(["ieee", "pstess"]),
+        default="ieee",
+        show_default=True,
+        help="Model conventions: ieee (IEEE 421.5 limiters, results converge "
+        "with the step) or pstess (PSTess 1.1 bit for bit, quirks "
+        "included); docs/conventions.md.",
+    )(func)
 
 
 def model_options(func):
     """``--conventions`` and ``--step``, the same on every command that simulates."""
-    func = click.option("--step", type=float, default=None, metavar="H",
-                        help="Integration step (s); default: ieee half a cycle capped at "
-                             "half the case's fastest time constant (Kundur and miniWECC "
-                             "5 ms); pstess the data file's step (Kundur 10 ms, miniWECC "
-                             "1/480 s).")(func)
+    func = click.option(
+        "--step",
+        type=float,
+        default=None,
+        metavar="H",
+        help="Integration step (s); default: ieee half a cycle capped at "
+        "half the case's fastest time constant (Kundur and miniWECC "
+        "5 ms); pstess the data file's step (Kundur 10 ms, miniWECC "
+        "1/480 s).",
+    )(func)
     return conventions_option(func)
 
 
 def q_limits_option(func):
     """``--q-limits/--no-q-limits`` on every command that starts a run or linearises."""
-    return click.option("--q-limits/--no-q-limits", "q_limits", default=True,
-                        show_default=True,
-                        help="Power flow: PV buses switch to PQ at their reactive limits "
-                             "(PST's chq_lim) or keep their voltage without limits (ANDES's "
-                             "default, for comparisons with ANDES).")(func)
+    return click.option(
+        "--q-limits/--no-q-limits",
+        "q_limits",
+        default=True,
+        show_default=True,
+        help="Power flow: PV buses switch to PQ at their reactive limits "
+        "(PST's chq_lim) or keep their voltage without limits (ANDES's "
+        "default, for comparisons with ANDES).",
+    )(func)
 
 
 def tf_option(extra: str = ""):
     """``--tf S``: end of each run (s), default the fault start + 5 s (into ``tf``)."""
-    return click.option("--tf", type=float, default=None, metavar="S",
-                        help=f"End of each run (s); default: the fault start + "
-                             f"{TF_AFTER_FAULT_S:g} s{extra}.")
+    return click.option(
+        "--tf",
+        type=float,
+        default=None,
+        metavar="S",
+        help=f"End of each run (s); default: the fault start + {TF_AFTER_FAULT_S:g} s{extra}.",
+    )
 
 
 def fault_options(required: bool, t_fault: bool = True):
     """``--fault BUS --far-bus BUS`` and (``t_fault``) ``--t-fault S``: a bolted fault."""
-    return lambda func: _apply(func, (
-        click.option("--fault", type=int, required=required, default=None, metavar="BUS",
-                     help="Three-phase (bolted) fault at bus BUS (bus number as in the data)."),
-        click.option("--far-bus", type=int, required=required, default=None, metavar="BUS",
-                     help="Far end of the faulted line BUS-FAR_BUS, tripped at clearing."
-                          + ("" if required else " Without it the fault is cleared "
-                                                 "without loss of a line.")),
-        *([click.option("--t-fault", type=float, default=1.0, show_default=True,
-                        metavar="S", help="Fault start time (s).")] if t_fault else [])))
+    return lambda func: _apply(
+        func,
+        (
+            click.option(
+                "--fault",
+                type=int,
+                required=required,
+                default=None,
+                metavar="BUS",
+                help="Three-phase (bolted) fault at bus BUS (bus number as in the data).",
+            ),
+            click.option(
+                "--far-bus",
+                type=int,
+                required=required,
+                default=None,
+                metavar="BUS",
+                help="Far end of the faulted line BUS-FAR_BUS, tripped at clearing."
+                + ("" if required else " Without it the fault is cleared without loss of a line."),
+            ),
+            *(
+                [
+                    click.option(
+                        "--t-fault",
+                        type=float,
+                        default=1.0,
+                        show_default=True,
+                        metavar="S",
+                        help="Fault start time (s).",
+                    )
+                ]
+                if t_fault
+                else []
+            ),
+        ),
+    )
 
 
 def circuit_option(func):
     """``--circuit K``: which of parallel circuits BUS-FAR_BUS is faulted."""
-    return click.option("--circuit", type=int, default=1, show_default=True, metavar="K",
-                        help="Which of parallel circuits BUS-FAR_BUS (in data order) is "
-                             "faulted.")(func)
+    return click.option(
+        "--circuit",
+        type=int,
+        default=1,
+        show_default=True,
+        metavar="K",
+        help="Which of parallel circuits BUS-FAR_BUS (in data order) is faulted.",
+    )(func)
 
 
 def clear_cycles_option(help="Clearing after N cycles of the case frequency."):
     """``--clear-cycles N`` (cycles)."""
-    return click.option("--clear-cycles", type=float, default=6.0, show_default=True,
-                        metavar="N", help=f"{help} (cycles).")
+    return click.option(
+        "--clear-cycles",
+        type=float,
+        default=6.0,
+        show_default=True,
+        metavar="N",
+        help=f"{help} (cycles).",
+    )
 
 
 def faults_option(func):
     """``--faults FILE.csv|DEFAULT`` (hidden, deprecated alias ``--contingencies``)."""
     return click.option(
-        "--faults", "--contingencies", "faults_src", cls=AliasedOption, required=True,
+        "--faults",
+        "--contingencies",
+        "faults_src",
+        cls=AliasedOption,
+        required=True,
         metavar="FILE.csv|DEFAULT",
         help="CSV with a header bus,far_bus[,t_fault,circuit], one line fault per row "
-             "(cleared at both ends, line tripped); DEFAULT: the built-in list (kundur: "
-             "3-101, 13-101; miniwecc: 83-33, 40-44; faults at 1 s).")(func)
+        "(cleared at both ends, line tripped); DEFAULT: the built-in list (kundur: "
+        "3-101, 13-101; miniwecc: 83-33, 40-44; faults at 1 s).",
+    )(func)
 
 
 def read_fault_list(case_name: str, src: str):
@@ -357,11 +442,27 @@ def read_fault_list(case_name: str, src: str):
 
 def tol_options(t_max: float = 1.0, t_max_help: str = "a CCT above it is an error"):
     """``--tol-ms MS`` and ``--t-max S`` of the CCT searches."""
-    return lambda func: _apply(func, (
-        click.option("--tol-ms", type=float, default=1.0, show_default=True, metavar="MS",
-                     help="Width of the final bracket of each CCT search (ms)."),
-        click.option("--t-max", type=float, default=t_max, show_default=True, metavar="S",
-                     help=f"Longest clearing time tried (s); {t_max_help}.")))
+    return lambda func: _apply(
+        func,
+        (
+            click.option(
+                "--tol-ms",
+                type=float,
+                default=1.0,
+                show_default=True,
+                metavar="MS",
+                help="Width of the final bracket of each CCT search (ms).",
+            ),
+            click.option(
+                "--t-max",
+                type=float,
+                default=t_max,
+                show_default=True,
+                metavar="S",
+                help=f"Longest clearing time tried (s); {t_max_help}.",
+            ),
+        ),
+    )
 
 
 def storage_options(rating_help: str = "", multiple: bool = False, with_rating: bool = True):
@@ -369,23 +470,58 @@ def storage_options(rating_help: str = "", multiple: bool = False, with_rating: 
     ``--deadband-hz``, ``--v-gate``, ``--coi``, ``--hysteresis-hz``: the paper's bang-bang
     COI control (Table 3). ``with_rating`` False: the controller options only (`place`
     sizes the storage itself)."""
-    esd = click.option("--esd-pct", multiple=True, metavar="P",
-                       help="Storage ratings (% of machine MVA): repeat or comma-separate; "
-                            "'none' = no storage (the default)." + rating_help) if multiple \
-        else click.option("--esd-pct", type=float, default=None, metavar="P",
-                          help="ESD of P % of each generator's MVA at its HV bus (% of "
-                               "machine MVA), the paper's bang-bang COI control (Table 3)."
-                               + rating_help)
-    return lambda func: _apply(func, (
-        *([esd] if with_rating else []),
-        click.option("--deadband-hz", type=float, default=0.1, show_default=True,
-                     help="ESD controller deadband on f_i - f_COI (Hz)."),
-        click.option("--v-gate", type=float, default=0.8, show_default=True,
-                     help="ESDs act only while their bus voltage is at least this (pu)."),
-        click.option("--coi", type=click.Choice(["system", "rest"]), default="system",
-                     show_default=True, help="COI of the whole system or of the rest of it."),
-        click.option("--hysteresis-hz", type=float, default=0.0, show_default=True,
-                     help="A running ESD stops only inside deadband - hysteresis (Hz).")))
+    esd = (
+        click.option(
+            "--esd-pct",
+            multiple=True,
+            metavar="P",
+            help="Storage ratings (% of machine MVA): repeat or comma-separate; "
+            "'none' = no storage (the default)." + rating_help,
+        )
+        if multiple
+        else click.option(
+            "--esd-pct",
+            type=float,
+            default=None,
+            metavar="P",
+            help="ESD of P % of each generator's MVA at its HV bus (% of "
+            "machine MVA), the paper's bang-bang COI control (Table 3)." + rating_help,
+        )
+    )
+    return lambda func: _apply(
+        func,
+        (
+            *([esd] if with_rating else []),
+            click.option(
+                "--deadband-hz",
+                type=float,
+                default=0.1,
+                show_default=True,
+                help="ESD controller deadband on f_i - f_COI (Hz).",
+            ),
+            click.option(
+                "--v-gate",
+                type=float,
+                default=0.8,
+                show_default=True,
+                help="ESDs act only while their bus voltage is at least this (pu).",
+            ),
+            click.option(
+                "--coi",
+                type=click.Choice(["system", "rest"]),
+                default="system",
+                show_default=True,
+                help="COI of the whole system or of the rest of it.",
+            ),
+            click.option(
+                "--hysteresis-hz",
+                type=float,
+                default=0.0,
+                show_default=True,
+                help="A running ESD stops only inside deadband - hysteresis (Hz).",
+            ),
+        ),
+    )
 
 
 def controller(deadband_hz, v_gate, coi, hysteresis_hz):
@@ -403,11 +539,24 @@ def controller(deadband_hz, v_gate, coi, hysteresis_hz):
 def parallel_options(func):
     """``--workers N`` and ``--scheduler ADDRESS``, the runner of
     :func:`stabctl.parallel.run_sweep`."""
-    return _apply(func, (
-        click.option("--workers", type=int, default=None, metavar="N",
-                     help="Local worker processes (default: the available cores, at most "
-                          "one per job); with --scheduler local, the Dask workers."),
-        click.option("--scheduler", default=None, metavar="ADDRESS",
-                     help="Dask distributed scheduler (tcp://host:8786) to run on instead, "
-                          "or 'local' for a local Dask cluster of --workers processes "
-                          "(needs pip install 'stabctl[dask]').")))
+    return _apply(
+        func,
+        (
+            click.option(
+                "--workers",
+                type=int,
+                default=None,
+                metavar="N",
+                help="Local worker processes (default: the available cores, at most "
+                "one per job); with --scheduler local, the Dask workers.",
+            ),
+            click.option(
+                "--scheduler",
+                default=None,
+                metavar="ADDRESS",
+                help="Dask distributed scheduler (tcp://host:8786) to run on instead, "
+                "or 'local' for a local Dask cluster of --workers processes "
+                "(needs pip install 'stabctl[dask]').",
+            ),
+        ),
+    )

@@ -12,21 +12,26 @@ from stabctl.cli.options import out_dir_option, reports_errors
 
 @click.command()
 @out_dir_option("The report directory (paper.md, figures, records).")
-@click.option("--resume", is_flag=True,
-              help="Continue the sweeps (Table 4 and estimator CCT sweeps, placement "
-                   "screening) from the records of an interrupted run in OUT_DIR/.paper-work, "
-                   "or else from the records in OUT_DIR; by default they are recomputed.")
-@click.option("--only", multiple=True,
-              type=click.Choice(["analytic", "cases", "convergence", "table4", "estimation",
-                                 "placement"]),
-              help="Build only these parts (repeatable; times on 2 cores): analytic = "
-                   "Sections 2-4 (seconds); cases = Cases 1 and 2 (under a minute, with the "
-                   "first compilation); table4 = CCT sweeps (15 s); estimation = "
-                   "estimator Monte Carlo and in-the-loop CCTs (under 2 minutes); placement = "
-                   "the planner's ESD sizing and placement studies (about 4.5 minutes); "
-                   "convergence = CCT against the step under both conventions (half a "
-                   "minute).  All: about 8 minutes. "
-                   "Default: all; with --only, paper.md holds only those parts.")
+@click.option(
+    "--resume",
+    is_flag=True,
+    help="Continue the sweeps (Table 4 and estimator CCT sweeps, placement "
+    "screening) from the records of an interrupted run in OUT_DIR/.paper-work, "
+    "or else from the records in OUT_DIR; by default they are recomputed.",
+)
+@click.option(
+    "--only",
+    multiple=True,
+    type=click.Choice(["analytic", "cases", "convergence", "table4", "estimation", "placement"]),
+    help="Build only these parts (repeatable; times on 2 cores): analytic = "
+    "Sections 2-4 (seconds); cases = Cases 1 and 2 (under a minute, with the "
+    "first compilation); table4 = CCT sweeps (15 s); estimation = "
+    "estimator Monte Carlo and in-the-loop CCTs (under 2 minutes); placement = "
+    "the planner's ESD sizing and placement studies (about 4.5 minutes); "
+    "convergence = CCT against the step under both conventions (half a "
+    "minute).  All: about 8 minutes. "
+    "Default: all; with --only, paper.md holds only those parts.",
+)
 @reports_errors
 def paper(out_dir, resume, only):
     """Reproduce the paper's tables and figures into OUT_DIR/paper.md (+ PNG figures).
@@ -45,4 +50,3 @@ def paper(out_dir, resume, only):
     path = write_paper_report(out_dir, resume=resume, only=only)
     click.echo(run_summary(json.loads((path.parent / RUN_LOG).read_text())))
     click.echo(f"wrote {path}")
-

@@ -8,83 +8,199 @@ import sys
 
 import click
 
-from stabctl.errors import InputError
-from stabctl.cli.format import print_json, print_plan
 from stabctl.cli.checks import check_writable, model_settings, search_settings
-from stabctl.cli.options import (AliasedOption, controller, faults_option, json_option,
-                                 model_options, out_file_option, parallel_options,
-                                 read_fault_list, reports_errors, storage_options,
-                                 tol_options)
+from stabctl.cli.format import print_json, print_plan
+from stabctl.cli.options import (
+    AliasedOption,
+    controller,
+    faults_option,
+    json_option,
+    model_options,
+    out_file_option,
+    parallel_options,
+    read_fault_list,
+    reports_errors,
+    storage_options,
+    tol_options,
+)
+from stabctl.errors import InputError
 
 
 @click.command()
 @click.argument("case_name", metavar="CASE")
 @faults_option
-@click.option("--required-clearing-cycles", type=float, default=None, metavar="N",
-              help="Every contingency stable when cleared after N cycles (cycles).")
-@click.option("--target-cct-gain", type=float, default=None, metavar="PCT",
-              help="Required CCT of every contingency: its CCT without storage raised by "
-                   "PCT (%).")
-@click.option("--target-cct-s", type=float, default=None, metavar="S",
-              help="Required CCT of every contingency (s).  Any mix of the three: the "
-                   "strictest wins; a --faults CSV may override them per fault (columns "
-                   "required_clearing_cycles, target_cct_gain, target_cct_s).")
-@click.option("--load-levels", default="1", show_default=True, metavar="LIST",
-              help="Load levels, comma-separated fractions of the base load (e.g. "
-                   "0.9,1.0,1.1): loads and dispatch scaled, power flow re-solved; every "
-                   "contingency is verified at each.")
-@click.option("--cost-mw", type=float, default=1.0, show_default=True, metavar="C",
-              help="Cost per MW of rating.")
-@click.option("--cost-mwh", type=float, default=0.0, show_default=True, metavar="C",
-              help="Cost per MWh of usable energy (sized from the verifying runs).")
-@click.option("--cost-site", "--site-cost", "cost_site", cls=AliasedOption, type=float,
-              default=0.0, show_default=True, metavar="C", help="Cost per site used.")
-@click.option("--site-costs", type=click.Path(dir_okay=False), default=None, metavar="FILE",
-              help="Per-site costs: CSV with a machine column and any of cost_mw, "
-                   "cost_mwh, cost_site.")
-@click.option("--zeta-min", type=float, default=None, metavar="Z",
-              help="Least damping ratio of every electromechanical mode (bang-bang ESDs "
-                   "as their describing-function gain at --amplitude-hz).")
-@click.option("--max-sites", type=int, default=None, metavar="N",
-              help="At most N sites (greedy elimination).")
-@click.option("--max-site-pct", type=float, default=50.0, show_default=True, metavar="P",
-              help="Largest rating per site (% of its generator's MVA).")
-@click.option("--amplitude-hz", type=float, default=0.2, show_default=True,
-              help="Relative-speed amplitude at which the damping is required (Hz).")
-@click.option("--uniform-reference", is_flag=True,
-              help="Also the least uniform fleet (same % at every generator, bisection) "
-                   "meeting the same requirements.")
-@click.option("--alone", is_flag=True,
-              help="Also each binding fault's own least allocation.")
-@click.option("--screening", type=click.Path(dir_okay=False, exists=True), default=None,
-              metavar="FILE.jsonl",
-              help="Records of a screening without storage (`stabctl screen --out`): its "
-                   "CCT brackets are reused (faults known stable at the requirement are "
-                   "not simulated again, CCT searches start there, the most binding are "
-                   "ranked by them).")
-@click.option("--set-aside-infeasible", is_flag=True,
-              help="A contingency that storage at the candidate sites cannot make meet its "
-                   "requirement (proven by simulation with every site at its bound) is "
-                   "listed and the others are planned for (default: error, exit 2).")
+@click.option(
+    "--required-clearing-cycles",
+    type=float,
+    default=None,
+    metavar="N",
+    help="Every contingency stable when cleared after N cycles (cycles).",
+)
+@click.option(
+    "--target-cct-gain",
+    type=float,
+    default=None,
+    metavar="PCT",
+    help="Required CCT of every contingency: its CCT without storage raised by PCT (%).",
+)
+@click.option(
+    "--target-cct-s",
+    type=float,
+    default=None,
+    metavar="S",
+    help="Required CCT of every contingency (s).  Any mix of the three: the "
+    "strictest wins; a --faults CSV may override them per fault (columns "
+    "required_clearing_cycles, target_cct_gain, target_cct_s).",
+)
+@click.option(
+    "--load-levels",
+    default="1",
+    show_default=True,
+    metavar="LIST",
+    help="Load levels, comma-separated fractions of the base load (e.g. "
+    "0.9,1.0,1.1): loads and dispatch scaled, power flow re-solved; every "
+    "contingency is verified at each.",
+)
+@click.option(
+    "--cost-mw",
+    type=float,
+    default=1.0,
+    show_default=True,
+    metavar="C",
+    help="Cost per MW of rating.",
+)
+@click.option(
+    "--cost-mwh",
+    type=float,
+    default=0.0,
+    show_default=True,
+    metavar="C",
+    help="Cost per MWh of usable energy (sized from the verifying runs).",
+)
+@click.option(
+    "--cost-site",
+    "--site-cost",
+    "cost_site",
+    cls=AliasedOption,
+    type=float,
+    default=0.0,
+    show_default=True,
+    metavar="C",
+    help="Cost per site used.",
+)
+@click.option(
+    "--site-costs",
+    type=click.Path(dir_okay=False),
+    default=None,
+    metavar="FILE",
+    help="Per-site costs: CSV with a machine column and any of cost_mw, cost_mwh, cost_site.",
+)
+@click.option(
+    "--zeta-min",
+    type=float,
+    default=None,
+    metavar="Z",
+    help="Least damping ratio of every electromechanical mode (bang-bang ESDs "
+    "as their describing-function gain at --amplitude-hz).",
+)
+@click.option(
+    "--max-sites", type=int, default=None, metavar="N", help="At most N sites (greedy elimination)."
+)
+@click.option(
+    "--max-site-pct",
+    type=float,
+    default=50.0,
+    show_default=True,
+    metavar="P",
+    help="Largest rating per site (% of its generator's MVA).",
+)
+@click.option(
+    "--amplitude-hz",
+    type=float,
+    default=0.2,
+    show_default=True,
+    help="Relative-speed amplitude at which the damping is required (Hz).",
+)
+@click.option(
+    "--uniform-reference",
+    is_flag=True,
+    help="Also the least uniform fleet (same % at every generator, bisection) "
+    "meeting the same requirements.",
+)
+@click.option("--alone", is_flag=True, help="Also each binding fault's own least allocation.")
+@click.option(
+    "--screening",
+    type=click.Path(dir_okay=False, exists=True),
+    default=None,
+    metavar="FILE.jsonl",
+    help="Records of a screening without storage (`stabctl screen --out`): its "
+    "CCT brackets are reused (faults known stable at the requirement are "
+    "not simulated again, CCT searches start there, the most binding are "
+    "ranked by them).",
+)
+@click.option(
+    "--set-aside-infeasible",
+    is_flag=True,
+    help="A contingency that storage at the candidate sites cannot make meet its "
+    "requirement (proven by simulation with every site at its bound) is "
+    "listed and the others are planned for (default: error, exit 2).",
+)
 @storage_options(with_rating=False)
 @tol_options()
-@click.option("--max-iter", type=int, default=10, show_default=True,
-              help="Allocations simulated at most per round of constraint generation.")
-@click.option("--max-rounds", type=int, default=6, show_default=True,
-              help="Rounds of constraint generation at most (solve, check every "
-                   "contingency, add those that fail).")
+@click.option(
+    "--max-iter",
+    type=int,
+    default=10,
+    show_default=True,
+    help="Allocations simulated at most per round of constraint generation.",
+)
+@click.option(
+    "--max-rounds",
+    type=int,
+    default=6,
+    show_default=True,
+    help="Rounds of constraint generation at most (solve, check every "
+    "contingency, add those that fail).",
+)
 @parallel_options
 @model_options
 @out_file_option(metavar="FILE.json", help="The result as JSON (written when done).")
 @json_option()
 @reports_errors
-def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, target_cct_s,
-          load_levels, cost_mw, cost_mwh, cost_site, site_costs, zeta_min, max_sites,
-          max_site_pct, amplitude_hz, uniform_reference, alone, screening,
-          set_aside_infeasible,
-          deadband_hz, v_gate, coi,
-          hysteresis_hz, tol_ms, t_max, max_iter, max_rounds, workers, scheduler,
-          conventions, step, out_path, as_json):
+def place(
+    case_name,
+    faults_src,
+    required_clearing_cycles,
+    target_cct_gain,
+    target_cct_s,
+    load_levels,
+    cost_mw,
+    cost_mwh,
+    cost_site,
+    site_costs,
+    zeta_min,
+    max_sites,
+    max_site_pct,
+    amplitude_hz,
+    uniform_reference,
+    alone,
+    screening,
+    set_aside_infeasible,
+    deadband_hz,
+    v_gate,
+    coi,
+    hysteresis_hz,
+    tol_ms,
+    t_max,
+    max_iter,
+    max_rounds,
+    workers,
+    scheduler,
+    conventions,
+    step,
+    out_path,
+    as_json,
+):
     """Least-cost energy storage (sites, MW and MWh) such that every contingency meets its
     requirement at every load level, verified by nonlinear simulation.
 
@@ -110,8 +226,13 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     from stabctl.placement.loop import PlaceOptions, Study
     from stabctl.placement.plan import PlanOptions, plan
     from stabctl.placement.program import candidate_sites
-    from stabctl.placement.requirements import (CostModel, Requirement, read_requirements,
-                                                read_site_costs, screening_brackets)
+    from stabctl.placement.requirements import (
+        CostModel,
+        Requirement,
+        read_requirements,
+        read_site_costs,
+        screening_brackets,
+    )
 
     search = search_settings(tol_ms, t_max, None)
     if workers is not None and workers < 1:
@@ -123,16 +244,21 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     if max_rounds < 1:
         raise InputError(f"--max-rounds must be >= 1, got {max_rounds}")
     if all(v is None for v in (required_clearing_cycles, target_cct_gain, target_cct_s)):
-        raise InputError("give a requirement: --required-clearing-cycles, "
-                         "--target-cct-gain or --target-cct-s")
-    for opt, v in (("--required-clearing-cycles", required_clearing_cycles),
-                   ("--target-cct-gain", target_cct_gain), ("--target-cct-s", target_cct_s)):
+        raise InputError(
+            "give a requirement: --required-clearing-cycles, --target-cct-gain or --target-cct-s"
+        )
+    for opt, v in (
+        ("--required-clearing-cycles", required_clearing_cycles),
+        ("--target-cct-gain", target_cct_gain),
+        ("--target-cct-s", target_cct_s),
+    ):
         if v is not None and not v > 0:
             raise InputError(f"{opt} must be > 0, got {v:g}")
     req = Requirement(required_clearing_cycles, target_cct_gain, target_cct_s)
     levels = _load_levels(load_levels)
-    cost = CostModel(cost_mw, cost_mwh, cost_site,
-                     read_site_costs(site_costs) if site_costs else {})
+    cost = CostModel(
+        cost_mw, cost_mwh, cost_site, read_site_costs(site_costs) if site_costs else {}
+    )
     brackets = screening_brackets(screening) if screening else None
     if out_path:
         check_writable(out_path, "--out")
@@ -142,16 +268,29 @@ def place(case_name, faults_src, required_clearing_cycles, target_cct_gain, targ
     sites = candidate_sites(case, max_site_pct)
     n = min(workers or default_workers(), len(faults) * len(levels))
     # without --json the progress lines go to the log, which the CLI shows on stderr
-    options = PlanOptions(load_levels=levels, overrides=overrides, cost=cost,
-                          brackets=brackets, max_rounds=max_rounds, uniform=uniform_reference,
-                          alone=alone, drop_infeasible=set_aside_infeasible,
-                          place=PlaceOptions(zeta_min=zeta_min, amplitude_hz=amplitude_hz,
-                                             max_sites=max_sites, max_iter=max_iter))
-    study = Study(sites=sites, controller=controller(deadband_hz, v_gate, coi, hysteresis_hz),
-                  search=search, model=model_settings(conventions, step),
-                  runner=RunnerOptions(n, scheduler))
-    result = plan(case_name, faults, req, options, study,
-                  progress=(lambda msg: None) if as_json else None)
+    options = PlanOptions(
+        load_levels=levels,
+        overrides=overrides,
+        cost=cost,
+        brackets=brackets,
+        max_rounds=max_rounds,
+        uniform=uniform_reference,
+        alone=alone,
+        drop_infeasible=set_aside_infeasible,
+        place=PlaceOptions(
+            zeta_min=zeta_min, amplitude_hz=amplitude_hz, max_sites=max_sites, max_iter=max_iter
+        ),
+    )
+    study = Study(
+        sites=sites,
+        controller=controller(deadband_hz, v_gate, coi, hysteresis_hz),
+        search=search,
+        model=model_settings(conventions, step),
+        runner=RunnerOptions(n, scheduler),
+    )
+    result = plan(
+        case_name, faults, req, options, study, progress=(lambda msg: None) if as_json else None
+    )
     out = {"case": case.name, **result.to_dict()}
     if out_path:
         atomic_write(out_path, lambda f: json.dump(out, f, indent=1, default=float))
@@ -168,9 +307,11 @@ def _load_levels(text: str) -> tuple:
     try:
         levels = tuple(float(x) for x in str(text).split(",") if x.strip())
     except ValueError:
-        raise InputError(f"--load-levels: not a comma-separated list of numbers: "
-                         f"{text!r}") from None
+        raise InputError(
+            f"--load-levels: not a comma-separated list of numbers: {text!r}"
+        ) from None
     if not levels or any(not x > 0 for x in levels):
-        raise InputError(f"--load-levels: need numbers > 0 (fractions of the base load), "
-                         f"got {text!r}")
+        raise InputError(
+            f"--load-levels: need numbers > 0 (fractions of the base load), got {text!r}"
+        )
     return levels

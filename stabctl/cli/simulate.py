@@ -4,18 +4,44 @@ from __future__ import annotations
 
 import click
 
-from stabctl.errors import InputError
-from stabctl.cli.format import (describe_esd, describe_event, print_json, print_storage,
-                                save_plot_atomically)
 from stabctl.cli.checks import OUT_SUFFIXES, PLOT_SUFFIXES, check_suffix
-from stabctl.cli.options import (TF_AFTER_FAULT_S, circuit_option, clear_cycles_option, controller,
-                                 fault_options, json_option, model_options, out_file_option,
-                                 plot_option, q_limits_option, reports_errors, storage_options,
-                                 tf_option)
+from stabctl.cli.format import (
+    describe_esd,
+    describe_event,
+    print_json,
+    print_storage,
+    save_plot_atomically,
+)
+from stabctl.cli.options import (
+    TF_AFTER_FAULT_S,
+    circuit_option,
+    clear_cycles_option,
+    controller,
+    fault_options,
+    json_option,
+    model_options,
+    out_file_option,
+    plot_option,
+    q_limits_option,
+    reports_errors,
+    storage_options,
+    tf_option,
+)
+from stabctl.errors import InputError
 
 
-def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit,
-                  trips, t_trips, pstess_default):
+def _build_events(
+    case,
+    fault,
+    far_bus,
+    t_fault,
+    clear_cycles,
+    far_clear_cycles,
+    circuit,
+    trips,
+    t_trips,
+    pstess_default,
+):
     from stabctl.dynamics.events import LineTrip, fault_with_clearing, from_sw_con
 
     events = list(from_sw_con(case)) if pstess_default else []
@@ -31,15 +57,20 @@ def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
             raise InputError(f"--far-clear-cycles must be >= 0, got {far_clear_cycles:g}")
         if t_fault < 0:
             raise InputError(f"--t-fault must be >= 0 s, got {t_fault:g}")
-        events.append(fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles,
-                                          far_clear_cycles, circuit=circuit))
+        events.append(
+            fault_with_clearing(
+                case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit=circuit
+            )
+        )
     if trips:
         times = list(t_trips) or [1.0]
         if len(times) == 1:
             times = times * len(trips)
         if len(times) != len(trips):
-            raise InputError(f"{len(trips)} --trip but {len(t_trips)} --t-trip: give one "
-                             "--t-trip for all or one per --trip")
+            raise InputError(
+                f"{len(trips)} --trip but {len(t_trips)} --t-trip: give one "
+                "--t-trip for all or one per --trip"
+            )
         for (a, b), t in zip(trips, times):
             if t < 0:
                 raise InputError(f"--t-trip must be >= 0 s, got {t:g}")
@@ -54,33 +85,76 @@ def _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
 @fault_options(required=False)
 @circuit_option
 @clear_cycles_option("Near-end clearing after N cycles of the case frequency")
-@click.option("--far-clear-cycles", type=float, default=None, metavar="M",
-              help="Far-end clearing after M cycles from fault start (cycles; default: N).")
-@click.option("--trip", type=(int, int), multiple=True, metavar="FROM TO",
-              help="Trip one circuit of line FROM-TO without fault (repeatable).")
-@click.option("--t-trip", type=float, multiple=True, metavar="S",
-              help="Trip time (s): once for all trips or once per --trip (default 1.0).")
-@click.option("--pstess-default", is_flag=True,
-              help="Run the case file's own PST sw_con disturbance (with any of the above "
-                   "added); --tf then defaults to its end time.")
+@click.option(
+    "--far-clear-cycles",
+    type=float,
+    default=None,
+    metavar="M",
+    help="Far-end clearing after M cycles from fault start (cycles; default: N).",
+)
+@click.option(
+    "--trip",
+    type=(int, int),
+    multiple=True,
+    metavar="FROM TO",
+    help="Trip one circuit of line FROM-TO without fault (repeatable).",
+)
+@click.option(
+    "--t-trip",
+    type=float,
+    multiple=True,
+    metavar="S",
+    help="Trip time (s): once for all trips or once per --trip (default 1.0).",
+)
+@click.option(
+    "--pstess-default",
+    is_flag=True,
+    help="Run the case file's own PST sw_con disturbance (with any of the above "
+    "added); --tf then defaults to its end time.",
+)
 @tf_option("; no disturbance: 5 s; with --pstess-default: the end of the data file's run")
 @model_options
 @q_limits_option
-@click.option("--separation-limit", type=float, default=3.141592653589793,
-              show_default="pi", metavar="RAD",
-              help="Loss of synchronism: a rotor angle more than RAD from the centre of "
-                   "inertia (rad).")
-@click.option("--stop-at-separation", is_flag=True,
-              help="Stop the run at loss of synchronism.")
+@click.option(
+    "--separation-limit",
+    type=float,
+    default=3.141592653589793,
+    show_default="pi",
+    metavar="RAD",
+    help="Loss of synchronism: a rotor angle more than RAD from the centre of inertia (rad).",
+)
+@click.option("--stop-at-separation", is_flag=True, help="Stop the run at loss of synchronism.")
 @out_file_option(metavar="FILE.csv|FILE.npz", help="The trajectories (CSV or numpy .npz).")
 @plot_option("speeds, angles from the COI and bus voltages")
 @storage_options()
 @json_option("the run summary")
 @reports_errors
-def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clear_cycles, trip,
-             t_trip, pstess_default, tf, conventions, step, q_limits, separation_limit,
-             stop_at_separation, out_path, plot_path, esd_pct, deadband_hz, v_gate, coi,
-             hysteresis_hz, as_json):
+def simulate(
+    case_name,
+    fault,
+    far_bus,
+    circuit,
+    t_fault,
+    clear_cycles,
+    far_clear_cycles,
+    trip,
+    t_trip,
+    pstess_default,
+    tf,
+    conventions,
+    step,
+    q_limits,
+    separation_limit,
+    stop_at_separation,
+    out_path,
+    plot_path,
+    esd_pct,
+    deadband_hz,
+    v_gate,
+    coi,
+    hysteresis_hz,
+    as_json,
+):
     """Nonlinear multi-machine time-domain simulation (PSTess models and integrator).
 
     CASE is a built-in name (see `stabctl cases`) or a case file (.json, PST .m). The run
@@ -117,18 +191,28 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     converging) and a run that diverges exit with status 2 and one `error:` line; no file
     is written then (a diverged run reports where it stopped).
     """
-    from stabctl.io import load_case
     from stabctl.dynamics.driver import Simulator
-    from stabctl.dynamics.grid import check_step_count
     from stabctl.dynamics.events import validate as validate_events
+    from stabctl.dynamics.grid import check_step_count
+    from stabctl.io import load_case
 
     out_p = check_suffix(out_path, OUT_SUFFIXES, "--out")
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
     if not separation_limit > 0:
         raise InputError(f"--separation-limit must be > 0 rad, got {separation_limit:g}")
     case = load_case(case_name)
-    events = _build_events(case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles,
-                           circuit, trip, t_trip, pstess_default)
+    events = _build_events(
+        case,
+        fault,
+        far_bus,
+        t_fault,
+        clear_cycles,
+        far_clear_cycles,
+        circuit,
+        trip,
+        t_trip,
+        pstess_default,
+    )
     if tf is None and pstess_default and case.sw_con is not None:
         tf = float(case.sw_con[-1, 0])
     elif tf is None:
@@ -137,23 +221,40 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
         raise InputError(f"--tf must be > 0 s, got {tf:g}")
     late = [e for e in events if min(e.times()) >= tf]
     if late:
-        raise InputError(f"{describe_event(late[0])}: starts at or after the end of the run "
-                         f"(--tf {tf:g} s)")
+        raise InputError(
+            f"{describe_event(late[0])}: starts at or after the end of the run (--tf {tf:g} s)"
+        )
     if step is not None:
-        check_step_count(tf, step)          # refused before any work (building the model)
+        check_step_count(tf, step)  # refused before any work (building the model)
     fleet = None
     if esd_pct is not None:
         from stabctl.storage.devices import uniform_fleet
+
         fleet = uniform_fleet(case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz))
-    validate_events(case, events, tf)       # an unknown bus or line before compiling
+    validate_events(case, events, tf)  # an unknown bus or line before compiling
     sim = Simulator(case, conventions=conventions, q_limits=q_limits)
     h = sim.default_h if step is None else step
-    result = sim.run(events, t_end=tf, h=h, separation_limit=separation_limit,
-                     stop_at_separation=stop_at_separation, storage=fleet)
-    esd = None if esd_pct is None else {
-        "pct_of_machine_mva": esd_pct, "devices": len(fleet.devices),
-        "control": "bang-bang COI (paper Table 3)", "deadband_hz": deadband_hz,
-        "v_gate_pu": v_gate, "coi": coi, "hysteresis_hz": hysteresis_hz}
+    result = sim.run(
+        events,
+        t_end=tf,
+        h=h,
+        separation_limit=separation_limit,
+        stop_at_separation=stop_at_separation,
+        storage=fleet,
+    )
+    esd = (
+        None
+        if esd_pct is None
+        else {
+            "pct_of_machine_mva": esd_pct,
+            "devices": len(fleet.devices),
+            "control": "bang-bang COI (paper Table 3)",
+            "deadband_hz": deadband_hz,
+            "v_gate_pu": v_gate,
+            "coi": coi,
+            "hysteresis_hz": hysteresis_hz,
+        }
+    )
     written = []
     if plot_p is not None:
         title = f"{case.name}: " + ("; ".join(describe_event(e) for e in events) or "flat run")
@@ -171,14 +272,24 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
     if esd is not None:
         summary["switchings"] = result.switching_records()
     if as_json:
-        print_json({**summary, "step_s": h, "conventions": conventions, "q_limits": q_limits,
-                     "esd": esd,
-                     "events": [describe_event(e) for e in events], "files": written})
+        print_json(
+            {
+                **summary,
+                "step_s": h,
+                "conventions": conventions,
+                "q_limits": q_limits,
+                "esd": esd,
+                "events": [describe_event(e) for e in events],
+                "files": written,
+            }
+        )
         return
-    click.echo(f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
-               f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {h:g} s, "
-               f"{conventions} conventions), "
-               f"wall {summary.get('wall_time_s', float('nan')):.2f} s")
+    click.echo(
+        f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
+        f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {h:g} s, "
+        f"{conventions} conventions), "
+        f"wall {summary.get('wall_time_s', float('nan')):.2f} s"
+    )
     for e in events or ["flat run (no disturbance)"]:
         click.echo(f"  {e if isinstance(e, str) else describe_event(e)}")
     if esd is not None:
@@ -187,7 +298,9 @@ def simulate(case_name, fault, far_bus, circuit, t_fault, clear_cycles, far_clea
         click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
     else:
         machines = ", ".join(str(m) for m in result.separated)
-        click.echo(f"loss of synchronism at t = {result.t_separation:.4f} s: machine(s) "
-                   f"{machines} separate" + (" (run stopped)" if stop_at_separation else ""))
+        click.echo(
+            f"loss of synchronism at t = {result.t_separation:.4f} s: machine(s) "
+            f"{machines} separate" + (" (run stopped)" if stop_at_separation else "")
+        )
     for w in written:
         click.echo(f"wrote {w}")

@@ -4,24 +4,48 @@ from __future__ import annotations
 
 import click
 
-from stabctl.errors import InputError
+from stabctl.cli.checks import (
+    PLOT_SUFFIXES,
+    check_suffix,
+    check_writable,
+    model_settings,
+    search_settings,
+)
 from stabctl.cli.format import print_cct, print_json, print_screening, print_sweep
-from stabctl.cli.checks import (PLOT_SUFFIXES, check_suffix, check_writable, model_settings,
-                                search_settings)
-from stabctl.cli.options import (check_number, circuit_option, controller, fault_options,
-                                 faults_option, json_option, model_options, out_file_option,
-                                 parallel_options, plot_option, q_limits_option, read_fault_list,
-                                 reports_errors, storage_options, tf_option, tol_options)
+from stabctl.cli.options import (
+    check_number,
+    circuit_option,
+    controller,
+    fault_options,
+    faults_option,
+    json_option,
+    model_options,
+    out_file_option,
+    parallel_options,
+    plot_option,
+    q_limits_option,
+    read_fault_list,
+    reports_errors,
+    storage_options,
+    tf_option,
+    tol_options,
+)
+from stabctl.errors import InputError
 
 
 @click.command()
 @click.argument("case_name", metavar="CASE")
 @fault_options(required=True)
 @circuit_option
-@click.option("--trip", type=(int, int), multiple=True, metavar="FROM TO",
-              help="Also open circuit 1 of line FROM-TO at the clearing instant "
-                   "(repeatable); both circuits of a double line: --circuit 2 --trip "
-                   "BUS FAR_BUS.")
+@click.option(
+    "--trip",
+    type=(int, int),
+    multiple=True,
+    metavar="FROM TO",
+    help="Also open circuit 1 of line FROM-TO at the clearing instant "
+    "(repeatable); both circuits of a double line: --circuit 2 --trip "
+    "BUS FAR_BUS.",
+)
 @storage_options()
 @tol_options()
 @tf_option()
@@ -29,8 +53,26 @@ from stabctl.cli.options import (check_number, circuit_option, controller, fault
 @q_limits_option
 @json_option()
 @reports_errors
-def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, deadband_hz, v_gate, coi,
-        hysteresis_hz, tol_ms, t_max, tf, conventions, step, q_limits, as_json):
+def cct(
+    case_name,
+    fault,
+    far_bus,
+    circuit,
+    t_fault,
+    trip,
+    esd_pct,
+    deadband_hz,
+    v_gate,
+    coi,
+    hysteresis_hz,
+    tol_ms,
+    t_max,
+    tf,
+    conventions,
+    step,
+    q_limits,
+    as_json,
+):
     """Critical clearing time of a line fault by bisection on the clearing time.
 
     The fault at BUS on line BUS-FAR_BUS starts at --t-fault and is cleared at both ends
@@ -52,26 +94,27 @@ def cct(case_name, fault, far_bus, circuit, t_fault, trip, esd_pct, deadband_hz,
     Bad input (unknown bus or line, unstable at zero clearing, CCT above --t-max, storage
     not available) exits with status 2 and one `error:` line.
     """
+    from stabctl.dynamics.events import validate as validate_events
     from stabctl.io import load_case
     from stabctl.stability.cct import LineFault, critical_clearing_time
     from stabctl.storage.devices import uniform_fleet
-    from stabctl.dynamics.events import validate as validate_events
 
     search = search_settings(tol_ms, t_max, tf)
     model = model_settings(conventions, None, q_limits)
     case = load_case(case_name)
-    storage = None if esd_pct is None else uniform_fleet(
-        case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz))
+    storage = (
+        None
+        if esd_pct is None
+        else uniform_fleet(case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz))
+    )
     line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
-    validate_events(case, line_fault.events(0.0), t_fault + 1.0)   # before compiling
-    res = critical_clearing_time(model.simulator(case), line_fault, search, storage=storage,
-                                 h=step)
+    validate_events(case, line_fault.events(0.0), t_fault + 1.0)  # before compiling
+    res = critical_clearing_time(model.simulator(case), line_fault, search, storage=storage, h=step)
     out = {"case": case.name, "esd_pct": esd_pct, **res.to_dict(), "q_limits": q_limits}
     if as_json:
         print_json(out)
     else:
         print_cct(case.name, esd_pct, out)
-
 
 
 def _ratings(values) -> list:
@@ -109,8 +152,11 @@ def _ratings(values) -> list:
 @click.argument("case_name", metavar="CASE")
 @faults_option
 @storage_options(multiple=True, rating_help=" Every fault runs at every rating.")
-@out_file_option("results.jsonl", "FILE.jsonl", "JSON lines, one per finished job; "
-                 "rerunning with it skips the jobs already there.")
+@out_file_option(
+    "results.jsonl",
+    "FILE.jsonl",
+    "JSON lines, one per finished job; rerunning with it skips the jobs already there.",
+)
 @parallel_options
 @click.option("--retry-failed", is_flag=True, help="Rerun the jobs recorded as failed.")
 @tol_options()
@@ -119,9 +165,26 @@ def _ratings(values) -> list:
 @q_limits_option
 @json_option("every record")
 @reports_errors
-def sweep_cct(case_name, faults_src, esd_pct, deadband_hz, v_gate, coi, hysteresis_hz,
-              out_path, workers, scheduler, retry_failed, tol_ms, t_max, tf, conventions,
-              step, q_limits, as_json):
+def sweep_cct(
+    case_name,
+    faults_src,
+    esd_pct,
+    deadband_hz,
+    v_gate,
+    coi,
+    hysteresis_hz,
+    out_path,
+    workers,
+    scheduler,
+    retry_failed,
+    tol_ms,
+    t_max,
+    tf,
+    conventions,
+    step,
+    q_limits,
+    as_json,
+):
     """CCT of every (fault, storage rating) pair, in parallel, resumable.
 
     Each job is one `stabctl cct` search; its line in --out holds its key
@@ -136,9 +199,9 @@ def sweep_cct(case_name, faults_src, esd_pct, deadband_hz, v_gate, coi, hysteres
       stabctl sweep-cct miniwecc --faults faults.csv --scheduler tcp://10.0.0.5:8786
     """
     from stabctl.io import load_case
+    from stabctl.parallel import run_sweep
     from stabctl.stability.cct import storage_fleet
     from stabctl.studies.sweeps import controlled_cct_jobs
-    from stabctl.parallel import run_sweep
 
     search = search_settings(tol_ms, t_max, tf)
     model = model_settings(conventions, step, q_limits)
@@ -152,33 +215,59 @@ def sweep_cct(case_name, faults_src, esd_pct, deadband_hz, v_gate, coi, hysteres
         storage_fleet(case, p)
     faults = read_fault_list(case_name, faults_src)
     jobs = controlled_cct_jobs(case_name, faults, ratings, ctrl, search=search, model=model)
-    rep = run_sweep(jobs, out_path, workers=workers, scheduler=scheduler,
-                    retry_failed=retry_failed)      # Ctrl-C: reports_errors, exit 130
+    rep = run_sweep(
+        jobs, out_path, workers=workers, scheduler=scheduler, retry_failed=retry_failed
+    )  # Ctrl-C: reports_errors, exit 130
     if as_json:
-        print_json({"out": str(rep.out), "ran": rep.ran, "skipped": rep.skipped,
-                     "failed": rep.failed, "wall_time_s": rep.wall_time_s,
-                     "records": list(rep.records.values())})
+        print_json(
+            {
+                "out": str(rep.out),
+                "ran": rep.ran,
+                "skipped": rep.skipped,
+                "failed": rep.failed,
+                "wall_time_s": rep.wall_time_s,
+                "records": list(rep.records.values()),
+            }
+        )
         return
     print_sweep(rep, len(jobs))
 
 
 @click.command()
 @click.argument("case_name", metavar="CASE")
-@click.option("--buses", default=None, metavar="B1,B2,...",
-              help="Buses to fault (default: every bus).")
-@click.option("--lines", is_flag=True,
-              help="Also fault the from-end of every branch with the branch tripped (N-1).")
+@click.option(
+    "--buses", default=None, metavar="B1,B2,...", help="Buses to fault (default: every bus)."
+)
+@click.option(
+    "--lines",
+    is_flag=True,
+    help="Also fault the from-end of every branch with the branch tripped (N-1).",
+)
 @tol_options(0.5, "a CCT above it is recorded as failed")
-@out_file_option("screening.jsonl", "FILE.jsonl", "JSON lines, one per finished search "
-                 "(rerunning resumes).")
+@out_file_option(
+    "screening.jsonl", "FILE.jsonl", "JSON lines, one per finished search (rerunning resumes)."
+)
 @plot_option("network map with buses coloured by CCT")
 @parallel_options
 @model_options
 @q_limits_option
 @json_option("every row")
 @reports_errors
-def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers, scheduler,
-           conventions, step, q_limits, as_json):
+def screen(
+    case_name,
+    buses,
+    lines,
+    tol_ms,
+    t_max,
+    out_path,
+    plot_path,
+    workers,
+    scheduler,
+    conventions,
+    step,
+    q_limits,
+    as_json,
+):
     """Contingency screening: CCT of a three-phase fault at every bus (and with --lines of
     every branch fault with the branch tripped), in parallel and resumable.
 
@@ -195,13 +284,19 @@ def screen(case_name, buses, lines, tol_ms, t_max, out_path, plot_path, workers,
     bus_list = None if buses is None else _bus_list(buses)
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
     check_writable(out_path, "--out")
-    rows = run_screen(case_name, out_path, buses=bus_list, lines=lines,
-                      search=search_settings(tol_ms, t_max, None),
-                      model=model_settings(conventions, step, q_limits),
-                      runner=RunnerOptions(workers, scheduler))
+    rows = run_screen(
+        case_name,
+        out_path,
+        buses=bus_list,
+        lines=lines,
+        search=search_settings(tol_ms, t_max, None),
+        model=model_settings(conventions, step, q_limits),
+        runner=RunnerOptions(workers, scheduler),
+    )
     rows.sort(key=lambda r: r.get("cct_s", float("inf")))
     if plot_p is not None:
         from stabctl.plotting import figures as plotting
+
         plotting.screening_map(case, rows, plot_p)
     if as_json:
         print_json(rows)

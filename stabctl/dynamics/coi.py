@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from stabctl.storage.control import coi_value  # noqa: F401  the compiled variant
+from stabctl.storage.control import coi_value
 
 __all__ = ["coi_weights", "coi_angle", "coi_speed", "coi_of_rest", "coi_value"]
 

@@ -176,9 +176,15 @@ def validate(case: Case, events, t_end: float) -> None:
         if isinstance(ev, Fault):
             case.bus_index(ev.bus)
             if ev.clear_near is not None and ev.clear_near < ev.t:
-                raise InputError(f"fault at bus {ev.bus}: cleared at {ev.clear_near} s "
-                                 f"before it starts at {ev.t} s")
-            if ev.far_clear is not None and ev.clear_near is not None and ev.far_clear < ev.clear_near:
+                raise InputError(
+                    f"fault at bus {ev.bus}: cleared at {ev.clear_near} s "
+                    f"before it starts at {ev.t} s"
+                )
+            if (
+                ev.far_clear is not None
+                and ev.clear_near is not None
+                and ev.far_clear < ev.clear_near
+            ):
                 raise InputError(f"fault at bus {ev.bus}: far end clears before near end")
             if ev.far_bus is not None:
                 circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
@@ -191,8 +197,10 @@ def validate(case: Case, events, t_end: float) -> None:
         else:
             raise InputError(f"unknown event {ev!r}")
         if any(t < 0 for t in ev.times()):
-            raise InputError(f"event {ev} has a negative time (events after t_end = {t_end} s "
-                             "simply do not happen)")
+            raise InputError(
+                f"event {ev} has a negative time (events after t_end = {t_end} s "
+                "simply do not happen)"
+            )
 
 
 def stage_boundaries(events, t_end: float) -> list[tuple[float, int, int]]:
@@ -204,8 +212,11 @@ def stage_boundaries(events, t_end: float) -> list[tuple[float, int, int]]:
     out = []
     for i, ev in enumerate(events):
         if isinstance(ev, Fault):
-            times = [ev.t] if ev.clear_near is None else \
-                [ev.t, ev.clear_near] + ([ev.far_clear] if ev.far_bus is not None else [])
+            times = (
+                [ev.t]
+                if ev.clear_near is None
+                else [ev.t, ev.clear_near] + ([ev.far_clear] if ev.far_bus is not None else [])
+            )
         else:
             times = ev.times()
         out += [(float(t), i, k + 1) for k, t in enumerate(times) if t < t_end]
@@ -232,9 +243,13 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
         elif isinstance(ev, LoadStep):
             b = case.bus_index(ev.bus)
             loads.append((b, complex(ev.P, -ev.Q) / abs(V0[b]) ** 2))
-    return StageConfig(faults=tuple(faults), opened=tuple(sorted(set(opened))),
-                       fault_feeds=tuple(feeds), tripped_machines=tuple(sorted(set(tripped))),
-                       load_steps=tuple(loads))
+    return StageConfig(
+        faults=tuple(faults),
+        opened=tuple(sorted(set(opened))),
+        fault_feeds=tuple(feeds),
+        tripped_machines=tuple(sorted(set(tripped))),
+        load_steps=tuple(loads),
+    )
 
 
 def stages(case: Case, events, t_end: float, V0: np.ndarray):
@@ -245,7 +260,7 @@ def stages(case: Case, events, t_end: float, V0: np.ndarray):
     starts, configs, last = [0.0], [configuration(case, events, phases, V0)], None
     for t, i, k in stage_boundaries(events, t_end):
         phases[i] = k
-        merge = t == starts[-1] and (len(starts) == 1 or last != i)   # t = 0, or another event
+        merge = t == starts[-1] and (len(starts) == 1 or last != i)  # t = 0, or another event
         if merge:
             configs[-1] = configuration(case, events, phases, V0)
         else:
@@ -255,9 +270,15 @@ def stages(case: Case, events, t_end: float, V0: np.ndarray):
     return starts, configs
 
 
-def fault_with_clearing(case: Case, bus: int, far_bus: int | None, t_fault: float,
-                        clear_cycles: float, far_clear_cycles: float | None = None,
-                        circuit: int = 1) -> Fault:
+def fault_with_clearing(
+    case: Case,
+    bus: int,
+    far_bus: int | None,
+    t_fault: float,
+    clear_cycles: float,
+    far_clear_cycles: float | None = None,
+    circuit: int = 1,
+) -> Fault:
     """A fault cleared after a number of cycles at the near end and at the far end (the
     CLI's ``--clear-cycles`` / ``--far-clear-cycles``).
 
@@ -292,11 +313,19 @@ def fault_with_clearing(case: Case, bus: int, far_bus: int | None, t_fault: floa
         `clear_cycles` negative, or `far_clear_cycles` below `clear_cycles`.
     """
     if clear_cycles < 0 or (far_clear_cycles is not None and far_clear_cycles < clear_cycles):
-        raise InputError("clearing cycles must be >= 0 and the far end no earlier than the near end")
+        raise InputError(
+            "clearing cycles must be >= 0 and the far end no earlier than the near end"
+        )
     cyc = 1.0 / case.freq_hz
     far = clear_cycles if far_clear_cycles is None else far_clear_cycles
-    return Fault(bus=bus, t=t_fault, clear_near=t_fault + clear_cycles * cyc,
-                 clear_far=t_fault + far * cyc, far_bus=far_bus, circuit=circuit)
+    return Fault(
+        bus=bus,
+        t=t_fault,
+        clear_near=t_fault + clear_cycles * cyc,
+        clear_far=t_fault + far * cyc,
+        far_bus=far_bus,
+        circuit=circuit,
+    )
 
 
 def from_sw_con(case: Case) -> list:
@@ -307,8 +336,15 @@ def from_sw_con(case: Case) -> list:
     ftype = int(sw[1, 5])
     if ftype == 0:
         far = int(sw[1, 2]) if sw[1, 2] else None
-        return [Fault(bus=int(sw[1, 1]), t=float(sw[1, 0]), clear_near=float(sw[2, 0]),
-                      clear_far=float(sw[3, 0]), far_bus=far)]
+        return [
+            Fault(
+                bus=int(sw[1, 1]),
+                t=float(sw[1, 0]),
+                clear_near=float(sw[2, 0]),
+                clear_far=float(sw[3, 0]),
+                far_bus=far,
+            )
+        ]
     if ftype == 4:
         return [LineTrip(int(sw[1, 1]), int(sw[1, 2]), float(sw[1, 0]))]
     if ftype == 6:

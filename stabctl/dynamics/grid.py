@@ -63,8 +63,9 @@ def time_grid(starts, t_end: float, h: float, pstess: bool = False) -> TimeGrid:
 STEP_PER_TIME_CONSTANT = 0.5
 
 
-def default_step(case: Case, conventions: str = "ieee",
-                 fastest: tuple[float, str] | None = None) -> float:
+def default_step(
+    case: Case, conventions: str = "ieee", fastest: tuple[float, str] | None = None
+) -> float:
     """Default integration step (s).
 
     pstess: the data file's own step (sw_con row 1, col 7), else half a cycle of the case
@@ -88,17 +89,20 @@ def default_step(case: Case, conventions: str = "ieee",
 def fastest_time_constant(case: Case) -> tuple[float, str]:
     """Smallest time constant among the states of the case's models (s) and where it is
     (table, field, row).  Raises CaseError for models stabctl does not have."""
-    from stabctl.models import exciters
-    from stabctl.models import governors
-    from stabctl.models import machines
-    from stabctl.models import pss
+    from stabctl.models import exciters, governors, machines, pss
+
     cands = []
     mp, ep = machines.machine_params(case), exciters.exciter_params(case)
     pp, gp = pss.pss_params(case), governors.governor_params(case)
     for name, arr, sel in (
-            ("mac_con T\"do", mp.Tdopp, mp.kind == 2), ("mac_con T\"qo", mp.Tqopp, mp.kind == 2),
-            ("mac_con T'do", mp.Tdop, mp.kind >= 1), ("mac_con T'qo", mp.Tqop, mp.kind >= 1),
-            *pp.time_constants(), *ep.time_constants(), *gp.time_constants()):
+        ('mac_con T"do', mp.Tdopp, mp.kind == 2),
+        ('mac_con T"qo', mp.Tqopp, mp.kind == 2),
+        ("mac_con T'do", mp.Tdop, mp.kind >= 1),
+        ("mac_con T'qo", mp.Tqop, mp.kind >= 1),
+        *pp.time_constants(),
+        *ep.time_constants(),
+        *gp.time_constants(),
+    ):
         if np.any(sel):
             k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))
             cands.append((float(abs(arr[k])), f"{name} row {k + 1}"))
@@ -113,8 +117,10 @@ def check_step(fastest: tuple[float, str], h: float) -> None:
     if not 0 < h < np.inf:
         raise InputError(f"step must be a positive number of seconds, got {h}")
     if h >= 2 * T:
-        raise InputError(f"step {h} s is too large: the fastest time constant is {T} s "
-                         f"({where}); the predictor-corrector needs h < {2 * T} s")
+        raise InputError(
+            f"step {h} s is too large: the fastest time constant is {T} s "
+            f"({where}); the predictor-corrector needs h < {2 * T} s"
+        )
 
 
 #: most integration steps one run may take: a smaller step (or a longer run) is refused
@@ -130,6 +136,8 @@ def check_step_count(t_end: float, h: float) -> None:
         raise InputError(f"step must be a finite number > 0 s, got {h}")
     n = t_end / h
     if not n <= MAX_STEPS:
-        raise InputError(f"step {h:g} s: a run to {t_end:g} s needs {n:.3g} steps, more than "
-                         f"the limit {MAX_STEPS} (stabctl.dynamics.grid.MAX_STEPS); use a larger "
-                         "step (--step) or a shorter run (--tf)")
+        raise InputError(
+            f"step {h:g} s: a run to {t_end:g} s needs {n:.3g} steps, more than "
+            f"the limit {MAX_STEPS} (stabctl.dynamics.grid.MAX_STEPS); use a larger "
+            "step (--step) or a shorter run (--tf)"
+        )

@@ -19,17 +19,16 @@ from numba import types
 from stabctl._jit.address import address_of, by_address
 from stabctl._jit.arrays import assign
 from stabctl._jit.decorators import njit
-
+from stabctl.case import BranchTable, BusTable, Case
+from stabctl.errors import CaseError, InputError, SimulationError
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
 from stabctl.models import pss as pss_
-from stabctl.case import BranchTable, BusTable, Case
-from stabctl.errors import CaseError, InputError, SimulationError
 from stabctl.network.solution import NonConformingLoads, ReducedNetwork, reduce_network, solve_nc
 
-FAULT_B = 1e7      # PST's bolted-fault shunt susceptance (1/1e-7)
-OPEN_X = 1e7       # PST opens a branch by giving it this reactance (charging stays)
+FAULT_B = 1e7  # PST's bolted-fault shunt susceptance (1/1e-7)
+OPEN_X = 1e7  # PST opens a branch by giving it this reactance (charging stays)
 
 
 @dataclass(frozen=True)
@@ -42,7 +41,7 @@ class OperatingPoint:
     S_load: np.ndarray
 
     @classmethod
-    def from_bus_matrix(cls, bus: np.ndarray) -> "OperatingPoint":
+    def from_bus_matrix(cls, bus: np.ndarray) -> OperatingPoint:
         """From a solved PST bus matrix (columns: number, |V|, angle deg, Pg, Qg, Pl, Ql...)."""
         bus = np.asarray(bus, float)
         V = bus[:, 1] * np.exp(1j * np.deg2rad(bus[:, 2]))
@@ -85,9 +84,12 @@ class Layout:
 
     def __post_init__(self):
         start = 0
-        for name, rows, n in (("mac", 6, self.n_mac), ("exc", self.exc_rows, self.n_exc),
-                              ("pss", self.pss_rows, self.n_pss),
-                              ("tg", self.tg_rows, self.n_tg)):
+        for name, rows, n in (
+            ("mac", 6, self.n_mac),
+            ("exc", self.exc_rows, self.n_exc),
+            ("pss", self.pss_rows, self.n_pss),
+            ("tg", self.tg_rows, self.n_tg),
+        ):
             self.blocks[name] = (slice(start, start + rows * n), (rows, n))
             start += rows * n
         self.size = start
@@ -105,8 +107,9 @@ CONVENTIONS = ("ieee", "pstess")
 def check_conventions(conventions: str) -> str:
     """Return `conventions` if it is one of CONVENTIONS, else raise InputError."""
     if conventions not in CONVENTIONS:
-        raise InputError(f"conventions must be one of {', '.join(CONVENTIONS)}, "
-                         f"got {conventions!r}")
+        raise InputError(
+            f"conventions must be one of {', '.join(CONVENTIONS)}, got {conventions!r}"
+        )
     return conventions
 
 
@@ -123,16 +126,24 @@ class DynamicModel:
             without generation; InputError: unknown conventions.
     """
 
-    def __init__(self, case: Case, op: OperatingPoint, injection_buses=(),
-                 conventions: str = "ieee"):
+    def __init__(
+        self, case: Case, op: OperatingPoint, injection_buses=(), conventions: str = "ieee"
+    ):
         self.case, self.op = case, op
         self.conventions = check_conventions(conventions)
         self.mp = mac.machine_params(case)
         self.ep = exc.exciter_params(case)
         self.pp = pss_.pss_params(case)
         self.gp = gov.governor_params(case)
-        self.layout = Layout(self.mp.n, self.ep.n, self.pp.n, self.gp.n,
-                             self.ep.n_slots(), self.pp.n_slots(), self.gp.n_slots())
+        self.layout = Layout(
+            self.mp.n,
+            self.ep.n,
+            self.pp.n,
+            self.gp.n,
+            self.ep.n_slots(),
+            self.pp.n_slots(),
+            self.gp.n_slots(),
+        )
         self._setup_loads(injection_buses)
         self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
         self._initialise()
@@ -147,18 +158,17 @@ class DynamicModel:
             frac[case.bus_indices(lc[:, 0])] = lc[:, 1:5]
         has_mac = np.zeros(case.n_bus, bool)
         has_mac[self.mp.bus_idx] = True
-        S_L = op.S_load - np.where(has_mac, 0.0, op.S_gen)   # generation without machine
+        S_L = op.S_load - np.where(has_mac, 0.0, op.S_gen)  # generation without machine
         fP, fQ, fIP, fIQ = frac.T
         S_Z = (1 - fP - fIP) * S_L.real + 1j * (1 - fQ - fIQ) * S_L.imag
-        self.y_load = np.conj(S_Z) / V0 ** 2
+        self.y_load = np.conj(S_Z) / V0**2
         extra = case.bus_indices(list(injection_buses)) if len(injection_buses) else []
         nc = np.asarray(case.bus_indices(lc[:, 0]) if lc.size else [], int)
         self.nc_idx = np.unique(np.concatenate([nc, np.asarray(extra, int)])).astype(int)
         i = self.nc_idx
         S_P = fP[i] * S_L[i].real + 1j * fQ[i] * S_L[i].imag
         S_I = fIP[i] * S_L[i].real + 1j * fIQ[i] * S_L[i].imag
-        self.nc = NonConformingLoads(S_P=S_P, I0=S_I / V0[i],
-                                     Y_low=np.conj(S_P + S_I) / V0[i] ** 2)
+        self.nc = NonConformingLoads(S_P=S_P, I0=S_I / V0[i], Y_low=np.conj(S_P + S_I) / V0[i] ** 2)
 
     # -- network stages ---------------------------------------------------------------
     def network(self, config: StageConfig = StageConfig()) -> ReducedNetwork:
@@ -195,12 +205,15 @@ class DynamicModel:
             bus = np.vstack([bus, new_bus])
             line = np.vstack([line, new_line])
             y_shunt = np.concatenate([y_shunt, np.zeros(len(new_bus))])
-        stage = case.replace(buses=BusTable.from_matrix(bus), branches=BranchTable.from_matrix(line))
+        stage = case.replace(
+            buses=BusTable.from_matrix(bus), branches=BranchTable.from_matrix(line)
+        )
         online = np.ones(self.mp.n, bool)
         online[list(config.tripped_machines)] = False
         _check_islands(stage, self.mp.bus_idx[online], case.n_bus)
-        return reduce_network(stage, y_shunt, self.mp.y_internal, self.mp.bus_idx, online,
-                              self.nc_idx, case.n_bus)
+        return reduce_network(
+            stage, y_shunt, self.mp.y_internal, self.mp.bus_idx, online, self.nc_idx, case.n_bus
+        )
 
     # -- initialisation ---------------------------------------------------------------
     def _initialise(self):
@@ -217,8 +230,9 @@ class DynamicModel:
         xe, self.Vref, self.ep = exc.initialise(ep, self.vex0[em], eterm0[em], VB0)
         ep = self.ep
         L.view(x, "exc")[:] = xe
-        L.view(x, "pss")[:] = pss_.initialise(self.pp, *pss_.pss_inputs(self.pp, xm[1], S0.real,
-                                                                       mp.mac_pot))
+        L.view(x, "pss")[:] = pss_.initialise(
+            self.pp, *pss_.pss_inputs(self.pp, xm[1], S0.real, mp.mac_pot)
+        )
         xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac])
         L.view(x, "tg")[:] = xg
         self.x0 = x
@@ -230,13 +244,28 @@ class DynamicModel:
                 raise CaseError(f"pss_con row {k + 1}: machine has no exciter for the PSS output")
             self.pss_of_exc[hit] = k
         self.params = KernelParams(
-            MP=mp.packed(self.eqp0), basrad=mp.basrad, EP=ep.packed(self.Vref),
-            SP=self.pp.packed(), GP=self.gp.packed(self.Pref), pss_of_exc=self.pss_of_exc,
-            exc_rows=L.exc_rows, pss_rows=L.pss_rows, tg_rows=L.tg_rows,
-            mac_bus=mp.bus_idx.astype(np.int64), vex0=self.vex0, pmech0=self.pmech0,
-            S_P=self.nc.S_P.astype(complex), I0=self.nc.I0.astype(complex),
-            Y_low=self.nc.Y_low.astype(complex), ieee=self.conventions == "ieee", reach=0.0,
-            n_mac=L.n_mac, n_exc=L.n_exc, n_pss=L.n_pss, n_tg=L.n_tg)
+            MP=mp.packed(self.eqp0),
+            basrad=mp.basrad,
+            EP=ep.packed(self.Vref),
+            SP=self.pp.packed(),
+            GP=self.gp.packed(self.Pref),
+            pss_of_exc=self.pss_of_exc,
+            exc_rows=L.exc_rows,
+            pss_rows=L.pss_rows,
+            tg_rows=L.tg_rows,
+            mac_bus=mp.bus_idx.astype(np.int64),
+            vex0=self.vex0,
+            pmech0=self.pmech0,
+            S_P=self.nc.S_P.astype(complex),
+            I0=self.nc.I0.astype(complex),
+            Y_low=self.nc.Y_low.astype(complex),
+            ieee=self.conventions == "ieee",
+            reach=0.0,
+            n_mac=L.n_mac,
+            n_exc=L.n_exc,
+            n_pss=L.n_pss,
+            n_tg=L.n_tg,
+        )
 
     @functools.cached_property
     def initial_residual(self) -> tuple[float, str]:
@@ -254,13 +283,19 @@ class DynamicModel:
 
     def state_name(self, k: int) -> str:
         """Name of flat state index k, e.g. 'mac.omega.G3' or 'exc.VTR.G1'."""
-        owners = {"mac": np.arange(self.mp.n), "exc": self.ep.mac, "pss": self.pp.mac,
-                  "tg": self.gp.mac}
-        names = {"mac": lambda i: mac.STATE_NAMES,
-                 "pss": lambda i: pss_.STATE_NAMES[int(self.pp.kind[i])],
-                 "exc": lambda i: exc.STATE_NAMES[int(self.ep.kind[i])],
-                 "tg": lambda i: gov.STATE_NAMES[int(self.gp.kind[i])]}
-        for block, (sl, (rows, n)) in self.layout.blocks.items():
+        owners = {
+            "mac": np.arange(self.mp.n),
+            "exc": self.ep.mac,
+            "pss": self.pp.mac,
+            "tg": self.gp.mac,
+        }
+        names = {
+            "mac": lambda i: mac.STATE_NAMES,
+            "pss": lambda i: pss_.STATE_NAMES[int(self.pp.kind[i])],
+            "exc": lambda i: exc.STATE_NAMES[int(self.ep.kind[i])],
+            "tg": lambda i: gov.STATE_NAMES[int(self.gp.kind[i])],
+        }
+        for block, (sl, (_rows, n)) in self.layout.blocks.items():
             if sl.start <= k < sl.stop:
                 r, i = divmod(k - sl.start, n)
                 number = int(self.case.machines.number[owners[block][i]])
@@ -285,13 +320,22 @@ class DynamicModel:
         """
         ko = kernel_outputs(self.mp.n, self.case.n_bus)
         S = np.zeros(self.nc_idx.size, complex) if S_extra is None else np.asarray(S_extra, complex)
-        kept = KeptBuses(V=np.array(V_nc_guess, complex), held=np.zeros(S.size, np.bool_),
-                         S_extra=S)
+        kept = KeptBuses(
+            V=np.array(V_nc_guess, complex), held=np.zeros(S.size, np.bool_), S_extra=S
+        )
         dx = np.zeros_like(x)  # slots no kernel writes (e.g. a short PSS in long slots) stay 0
         if evaluate_kernel(x, self.params, kernel_network(net), kept, want_vbus, dx, ko) < 0:
             raise SimulationError("non-conforming load iteration did not converge")
-        return dx, Outputs(pelect=ko.pelect, qelect=ko.qelect, eterm=ko.eterm, V_bus=ko.V_bus,
-                           V_nc=kept.V, efd=ko.efd, pmech=ko.pmech, cur=ko.cur)
+        return dx, Outputs(
+            pelect=ko.pelect,
+            qelect=ko.qelect,
+            eterm=ko.eterm,
+            V_bus=ko.V_bus,
+            V_nc=kept.V,
+            efd=ko.efd,
+            pmech=ko.pmech,
+            cur=ko.cur,
+        )
 
 
 class KernelParams(NamedTuple):
@@ -316,7 +360,8 @@ class KernelParams(NamedTuple):
     I0: np.ndarray
     Y_low: np.ndarray
     ieee: bool
-    #: limiter reach (s): the run's step in a simulation, 0 elsewhere (`stabctl.models.blocks.nonwindup`)
+    #: limiter reach (s): the run's step in a simulation, 0 elsewhere
+    #: (`stabctl.models.blocks.nonwindup`)
     reach: float
     n_mac: int
     n_exc: int
@@ -367,8 +412,12 @@ def stacked_networks(nets) -> KernelNetwork:
     KernelNetwork
         Each field of shape (n_stage, ...) of the single-stage shape.
     """
-    return KernelNetwork(*(np.ascontiguousarray(np.stack([getattr(n, f) for n in nets]))
-                           for f in KernelNetwork._fields))
+    return KernelNetwork(
+        *(
+            np.ascontiguousarray(np.stack([getattr(n, f) for n in nets]))
+            for f in KernelNetwork._fields
+        )
+    )
 
 
 class KeptBuses(NamedTuple):
@@ -411,8 +460,15 @@ def kernel_outputs(nm, nb):
     -------
     KernelOutputs
     """
-    return KernelOutputs(np.empty(nm, np.complex128), np.empty(nm), np.empty(nm),
-                         np.empty(nm), np.empty(nm), np.empty(nm), np.zeros(nb, np.complex128))
+    return KernelOutputs(
+        np.empty(nm, np.complex128),
+        np.empty(nm),
+        np.empty(nm),
+        np.empty(nm),
+        np.empty(nm),
+        np.empty(nm),
+        np.zeros(nb, np.complex128),
+    )
 
 
 #: the ``want_vbus`` flags of `evaluate_kernel` for compiled callers, as numpy booleans: a
@@ -455,11 +511,11 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     cur, pelect, qelect, eterm, efd, pmech, V_bus = out
     o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
     xm, dxm = x[:o].reshape(6, nm), dx[:o].reshape(6, nm)
-    xe, dxe = x[o:o + re * ne].reshape(re, ne), dx[o:o + re * ne].reshape(re, ne)
+    xe, dxe = x[o : o + re * ne].reshape(re, ne), dx[o : o + re * ne].reshape(re, ne)
     o += re * ne
-    xp, dxp = x[o:o + rp * nps].reshape(rp, nps), dx[o:o + rp * nps].reshape(rp, nps)
+    xp, dxp = x[o : o + rp * nps].reshape(rp, nps), dx[o : o + rp * nps].reshape(rp, nps)
     o += rp * nps
-    xg, dxg = x[o:o + rg * ng].reshape(rg, ng), dx[o:o + rg * ng].reshape(rg, ng)
+    xg, dxg = x[o : o + rg * ng].reshape(rg, ng), dx[o : o + rg * ng].reshape(rg, ng)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
     it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, held)
@@ -484,8 +540,9 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         m = int(p.EP[i, exc.E.MAC])
         if p.pss_of_exc[i] >= 0:
             pss_exc[i] = pss_out[p.pss_of_exc[i]]
-        efd_alg[i] = exc.field_voltage(p.EP, xe, i, p.MP, xm, cur, V_bus[p.mac_bus[m]],
-                                       pss_exc[i], p.ieee)
+        efd_alg[i] = exc.field_voltage(
+            p.EP, xe, i, p.MP, xm, cur, V_bus[p.mac_bus[m]], pss_exc[i], p.ieee
+        )
         vex[m] = efd_alg[i]
     assign(pmech, p.pmech0)
     for k in range(ng):
@@ -510,8 +567,14 @@ def _evaluate_arg_types() -> tuple:
 
     z, c = np.zeros(1), np.zeros(1, np.complex128)
     net = KernelNetwork(*[np.zeros((1, 1), np.complex128)] * len(KernelNetwork._fields))
-    return (typeof(z), typeof(net), typeof(KeptBuses(c, np.zeros(1, np.bool_), c)),
-            types.boolean, typeof(z), typeof(KernelOutputs(c, z, z, z, z, z, c)))
+    return (
+        typeof(z),
+        typeof(net),
+        typeof(KeptBuses(c, np.zeros(1, np.bool_), c)),
+        types.boolean,
+        typeof(z),
+        typeof(KernelOutputs(c, z, z, z, z, z, c)),
+    )
 
 
 def evaluate_address(p) -> int:
@@ -548,8 +611,9 @@ def _call_evaluate_types() -> tuple:
 #: second time.  Every argument but p must have the type `evaluate_address` compiled for
 #: (`_evaluate_arg_types`: C-contiguous arrays, a boolean want_vbus; TypingError
 #: otherwise), or the call would read its arguments wrongly.
-call_evaluate = by_address("call_evaluate", ("x", "p", "net", "kept", "want_vbus", "dx", "out"),
-                           _call_evaluate_types)
+call_evaluate = by_address(
+    "call_evaluate", ("x", "p", "net", "kept", "want_vbus", "dx", "out"), _call_evaluate_types
+)
 
 
 def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:
@@ -559,8 +623,10 @@ def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:
     from scipy.sparse.csgraph import connected_components
 
     if len(stage.machines) == 0:
-        raise InputError(f"case '{stage.name}' has no machines (mac_con is empty): a dynamic "
-                         "run or linearisation needs at least one")
+        raise InputError(
+            f"case '{stage.name}' has no machines (mac_con is empty): a dynamic "
+            "run or linearisation needs at least one"
+        )
     br = stage.branches
     closed = br.x < OPEN_X / 10
     f, t = stage.bus_indices(br.from_bus[closed]), stage.bus_indices(br.to_bus[closed])
@@ -570,8 +636,10 @@ def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:
     live = np.isin(label, label[source_buses])
     dead = np.nonzero(~live[:n_orig])[0]
     if dead.size:
-        raise InputError("the disturbance islands bus(es) "
-                         f"{[int(b) for b in stage.buses.number[dead]]} from every generator")
+        raise InputError(
+            "the disturbance islands bus(es) "
+            f"{[int(b) for b in stage.buses.number[dead]]} from every generator"
+        )
 
 
 @dataclass

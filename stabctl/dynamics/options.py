@@ -9,8 +9,8 @@ off), so records written before stay valid for resuming.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Mapping
 
 from stabctl.dynamics.model import check_conventions
 from stabctl.errors import InputError
@@ -50,22 +50,31 @@ class ModelOptions:
         (``kwargs``: its other arguments, e.g. ``injection_buses``)."""
         from stabctl.dynamics.driver import Simulator
 
-        return Simulator(case, conventions=self.conventions, step=self.h,
-                         q_limits=self.q_limits, **kwargs)
+        return Simulator(
+            case, conventions=self.conventions, step=self.h, q_limits=self.q_limits, **kwargs
+        )
 
     def key_suffix(self) -> str:
         """Sweep-key tail: '/pstess', '/h<step>', '/no-q-limits' for non-default fields."""
-        return (("" if self.conventions == "ieee" else f"/{self.conventions}")
-                + ("" if self.h is None else f"/h{self.h:g}")
-                + ("" if self.q_limits else "/no-q-limits"))
+        return (
+            ("" if self.conventions == "ieee" else f"/{self.conventions}")
+            + ("" if self.h is None else f"/h{self.h:g}")
+            + ("" if self.q_limits else "/no-q-limits")
+        )
 
     def to_inputs(self) -> dict:
         """Fields of a job's recorded inputs: conventions, h, and q_limits when off."""
-        return {"conventions": self.conventions, "h": self.h,
-                **({} if self.q_limits else {"q_limits": False})}
+        return {
+            "conventions": self.conventions,
+            "h": self.h,
+            **({} if self.q_limits else {"q_limits": False}),
+        }
 
     @classmethod
     def from_inputs(cls, inputs: Mapping) -> ModelOptions:
         """The settings recorded in a job's inputs (`to_inputs`; absent fields default)."""
-        return cls(conventions=inputs.get("conventions", "ieee"), h=inputs.get("h"),
-                   q_limits=bool(inputs.get("q_limits", True)))
+        return cls(
+            conventions=inputs.get("conventions", "ieee"),
+            h=inputs.get("h"),
+            q_limits=bool(inputs.get("q_limits", True)),
+        )

@@ -18,8 +18,13 @@ from stabctl.dynamics.coi import coi_angle, coi_speed
 from stabctl.parallel import atomic_write
 
 SERIES = ("speed", "angle", "pelect", "pmech", "efd")
-SERIES_UNITS = {"speed": "speed_pu", "angle": "angle_rad", "pelect": "pelect_pu",
-                "pmech": "pmech_pu", "efd": "efd_pu"}
+SERIES_UNITS = {
+    "speed": "speed_pu",
+    "angle": "angle_rad",
+    "pelect": "pelect_pu",
+    "pmech": "pmech_pu",
+    "efd": "efd_pu",
+}
 
 
 @dataclass
@@ -127,8 +132,10 @@ class SimulationResult:
             after it.
         """
         keep = np.r_[np.diff(self.t) > 0, True]
-        return np.stack([np.interp(t, self.t[keep], self.speed[keep, k])
-                         for k in range(self.speed.shape[1])], axis=1)
+        return np.stack(
+            [np.interp(t, self.t[keep], self.speed[keep, k]) for k in range(self.speed.shape[1])],
+            axis=1,
+        )
 
     def machine(self, number: int) -> int:
         """Column index of a machine in the per-machine arrays.
@@ -187,10 +194,15 @@ class SimulationResult:
             rad), ``t_end_s`` (last recorded time, s), ``n_steps`` (recorded times - 1),
             then every entry of `meta`.
         """
-        return {"stable": self.stable, "t_separation_s": self.t_separation,
-                "separated_machines": [int(m) for m in self.separated],
-                "max_angle_spread_rad": self.max_angle_spread,
-                "t_end_s": float(self.t[-1]), "n_steps": int(self.t.size - 1), **self.meta}
+        return {
+            "stable": self.stable,
+            "t_separation_s": self.t_separation,
+            "separated_machines": [int(m) for m in self.separated],
+            "max_angle_spread_rad": self.max_angle_spread,
+            "t_end_s": float(self.t[-1]),
+            "n_steps": int(self.t.size - 1),
+            **self.meta,
+        }
 
     def switching_records(self) -> list[dict]:
         """The storage switching log as records with named fields.
@@ -212,9 +224,17 @@ class SimulationResult:
         for t, dev, mode, rel in self.meta.get("switchings", []):
             d, m = info.get(int(dev), {}), float(mode)
             code = int(m) if m.is_integer() else m
-            out.append({"t_s": float(t), "device": int(dev), "bus": d.get("bus"),
-                        "machine": d.get("machine"), "mode": names.get(code, f"{m:g}"),
-                        "mode_code": code, "rel_speed_hz": float(rel)})
+            out.append(
+                {
+                    "t_s": float(t),
+                    "device": int(dev),
+                    "bus": d.get("bus"),
+                    "machine": d.get("machine"),
+                    "mode": names.get(code, f"{m:g}"),
+                    "mode_code": code,
+                    "rel_speed_hz": float(rel),
+                }
+            )
         return out
 
     # -- export -------------------------------------------------------------------------
@@ -258,8 +278,12 @@ class SimulationResult:
             `path`.
         """
         names, data = self.columns()
-        return atomic_write(path, lambda f: np.savetxt(f, data, delimiter=",", header=",".join(names),
-                                                       comments="", fmt="%.10g"))
+        return atomic_write(
+            path,
+            lambda f: np.savetxt(
+                f, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g"
+            ),
+        )
 
     def to_npz(self, path: str | os.PathLike) -> Path:
         """Write every array and the verdict to a compressed .npz, atomically (temporary
@@ -281,7 +305,7 @@ class SimulationResult:
         return atomic_write(path, lambda f: np.savez_compressed(f, **arrays), mode="wb")
 
     @classmethod
-    def from_npz(cls, path: str | os.PathLike) -> "SimulationResult":
+    def from_npz(cls, path: str | os.PathLike) -> SimulationResult:
         """Read a result written by `to_npz`.
 
         Parameters
@@ -298,5 +322,6 @@ class SimulationResult:
             d = {k: z[k] for k in z.files}
         stable, tsep = d.pop("verdict")
         sep = list(d.pop("separated"))
-        return cls(**d, stable=bool(stable), t_separation=None if np.isnan(tsep) else tsep,
-                   separated=sep)
+        return cls(
+            **d, stable=bool(stable), t_separation=None if np.isnan(tsep) else tsep, separated=sep
+        )

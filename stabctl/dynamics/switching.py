@@ -52,9 +52,15 @@ def device_state(sa, n_commands: int = 0) -> DeviceState:
     DeviceState
     """
     nd = sa.pmax.size
-    return DeviceState(np.zeros(nd), np.zeros(nd), np.zeros(nd), sa.e0.copy(),
-                       np.zeros(1, np.int64), np.full(n_commands, np.inf),
-                       np.zeros((n_commands, nd)))
+    return DeviceState(
+        np.zeros(nd),
+        np.zeros(nd),
+        np.zeros(nd),
+        sa.e0.copy(),
+        np.zeros(1, np.int64),
+        np.full(n_commands, np.inf),
+        np.zeros((n_commands, nd)),
+    )
 
 
 class Seen(NamedTuple):
@@ -84,6 +90,7 @@ def inject(sa, P, S):
 
 
 # -- device control and energy accounting --------------------------------------------------
+
 
 @kernel
 def targets(sa, mode, r, v, accel, out):
@@ -140,6 +147,7 @@ def observe(x, dx, nm, inertia, sa, V_nc, seen):
 
 # -- commands ------------------------------------------------------------------------------
 
+
 @kernel
 def apply_commands(ds, t_now, rec, r):
     """Apply every scheduled command due by t_now (externally commanded devices); a
@@ -157,8 +165,11 @@ def apply_commands(ds, t_now, rec, r):
 def substep_length(grid, sa, ds, k, rem):
     """Length of the next sub-step of step k with rem seconds left: the rest, or up to the
     next scheduled command if one falls inside."""
-    if (sa.kind == law.EXTERNAL and ds.cmd_next[0] < ds.cmd_t.size
-            and ds.cmd_t[ds.cmd_next[0]] < grid.t[k + 1] - 1e-12):
+    if (
+        sa.kind == law.EXTERNAL
+        and ds.cmd_next[0] < ds.cmd_t.size
+        and ds.cmd_t[ds.cmd_next[0]] < grid.t[k + 1] - 1e-12
+    ):
         return max(ds.cmd_t[ds.cmd_next[0]] - (grid.t[k + 1] - rem), 0.0)
     return rem
 
@@ -172,7 +183,7 @@ def locate_switching(kn, grid, sa, ds, opts, w, x_b, k):
     at_event = grid.interval[k + 1] != grid.interval[k]
     theta, first_d = 2.0, -1
     for d in range(sa.pmax.size):
-        if w.switched[d]:    # one switching per device and step: no chattering loop
+        if w.switched[d]:  # one switching per device and step: no chattering loop
             continue
         want = law.desired_mode(sa, d, ds.mode[d], w.b.r[d], w.b.v[d])
         gate_jump = (w.a.v[d] >= sa.vgate) != (w.b.v[d] >= sa.vgate)

@@ -36,10 +36,10 @@ import numpy as np
 from scipy.signal import lfilter
 
 from stabctl.case import Case
-from stabctl.errors import InputError
 from stabctl.dynamics.results import SimulationResult
-from stabctl.storage.devices import StorageDevice, StorageFleet
+from stabctl.errors import InputError
 from stabctl.storage.control import ExternalCommands
+from stabctl.storage.devices import StorageDevice, StorageFleet
 
 
 @dataclass(frozen=True)
@@ -57,14 +57,18 @@ class AmbientLoad:
 
     def __post_init__(self):
         if self.pct < 0 or not self.tau_s > 0:
-            raise InputError(f"ambient load needs pct >= 0 and tau > 0, got {self.pct}, "
-                             f"{self.tau_s}")
+            raise InputError(
+                f"ambient load needs pct >= 0 and tau > 0, got {self.pct}, {self.tau_s}"
+            )
 
     def devices(self, case: Case) -> tuple[StorageDevice, ...]:
         """One commanded device per bus load with P > 0, rated at that P (MW)."""
         p = case.buses.pload * case.base_mva
-        return tuple(StorageDevice(bus=int(b), machine=None, pmax_mw=float(mw))
-                     for b, mw in zip(case.buses.number, p) if mw > 0)
+        return tuple(
+            StorageDevice(bus=int(b), machine=None, pmax_mw=float(mw))
+            for b, mw in zip(case.buses.number, p)
+            if mw > 0
+        )
 
     def deviations(self, n: int, dt: float, n_loads: int) -> np.ndarray:
         """x (n, n_loads) at t_k = k dt, k = 0 .. n-1, relative to each load's P."""
@@ -87,8 +91,9 @@ def ou_samples(n: int, dt: float, tau: float, sd: float, m: int, seed: int) -> n
     return lfilter([sd * np.sqrt(1 - a * a)], [1.0, -a], e, axis=0)
 
 
-def simulate(sim, t_end: float, ambient: AmbientLoad, rate: float = 60.0, events=(),
-             h: float | None = None) -> SimulationResult:
+def simulate(
+    sim, t_end: float, ambient: AmbientLoad, rate: float = 60.0, events=(), h: float | None = None
+) -> SimulationResult:
     """A run of `sim` (a `Simulator`) to t_end (s) with the loads fluctuating, the deviation
     updated `rate` times per second; `events` as `Simulator.run`.  The result's `pesd`
     holds the load deviations (pu, system base), one column per load of
@@ -96,5 +101,6 @@ def simulate(sim, t_end: float, ambient: AmbientLoad, rate: float = 60.0, events
     frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
     devs, set_points = ambient.schedule(sim.case, frames.size, rate)
     fleet = StorageFleet(devs, ExternalCommands(v_gate_pu=0.0))
-    return sim.run_commanded(events, t_end, fleet, frames, lambda t, _: set_points(t), h=h,
-                             history_s=0.0)              # the set points read no trajectory
+    return sim.run_commanded(
+        events, t_end, fleet, frames, lambda t, _: set_points(t), h=h, history_s=0.0
+    )  # the set points read no trajectory

@@ -59,11 +59,11 @@ from typing import NamedTuple
 import numpy as np
 
 from stabctl.case import Case
-from stabctl.errors import InputError
-from stabctl.network.ybus import branch_admittances
 from stabctl.dynamics.results import SimulationResult
-from stabctl.storage.devices import hv_bus
+from stabctl.errors import InputError
 from stabctl.estimation.settings import PMUSettings
+from stabctl.network.ybus import branch_admittances
+from stabctl.storage.devices import hv_bus
 
 KCL_TOLERANCE_PU = 1e-6
 
@@ -88,8 +88,13 @@ class PMU:
 
     @property
     def label(self) -> str:
-        what = f"G{self.machine}" if self.machine is not None else \
-            f"D{self.device}" if self.device is not None else "V"
+        what = (
+            f"G{self.machine}"
+            if self.machine is not None
+            else f"D{self.device}"
+            if self.device is not None
+            else "V"
+        )
         return f"B{self.bus}:{what}"
 
 
@@ -111,19 +116,28 @@ class PhasorTruth:
     f0: float
     window: float | None = None
 
-    def at(self, t: np.ndarray) -> "PhasorTruth":
+    def at(self, t: np.ndarray) -> PhasorTruth:
         """The same quantities at times t (k,) within the grid (window None in the result):
         phasors linearly interpolated (magnitudes and unwrapped angles separately);
         frequency and ROCOF interpolated, or with a window the PMU's estimates at t
         (`centred_estimates`)."""
         t = np.asarray(t, float)
         if self.window is None:
-            freq, rocof = interp_columns(t, self.t, self.freq), interp_columns(t, self.t, self.rocof)
+            freq, rocof = (
+                interp_columns(t, self.t, self.freq),
+                interp_columns(t, self.t, self.rocof),
+            )
         else:
             freq, rocof = centred_estimates(self.t, np.angle(self.v), t, self.window, self.f0)
-        return PhasorTruth(t=t, pmus=self.pmus, v=_interp_phasor(t, self.t, self.v),
-                           i=_interp_phasor(t, self.t, self.i), freq=freq, rocof=rocof,
-                           f0=self.f0)
+        return PhasorTruth(
+            t=t,
+            pmus=self.pmus,
+            v=_interp_phasor(t, self.t, self.v),
+            i=_interp_phasor(t, self.t, self.i),
+            freq=freq,
+            rocof=rocof,
+            f0=self.f0,
+        )
 
 
 class Frame(NamedTuple):
@@ -177,8 +191,9 @@ class FrameStream:
 
     def frame(self, k: int) -> Frame:
         """Frame k (all PMUs at time stamp t[k])."""
-        return Frame(float(self.t[k]), self.valid[k], self.v[k], self.i[k], self.freq[k],
-                     self.rocof[k])
+        return Frame(
+            float(self.t[k]), self.valid[k], self.v[k], self.i[k], self.freq[k], self.rocof[k]
+        )
 
     def __iter__(self):
         return (self.frame(k) for k in range(self.t.size))
@@ -187,17 +202,20 @@ class FrameStream:
 # -- true quantities from a simulation --------------------------------------------------
 def machine_pmus(case: Case, at: str = "terminal") -> tuple:
     """One PMU per generator measuring its current: at its terminal bus (at="terminal") or
-    its high-voltage bus (at="hv", `stabctl.storage.devices.hv_bus`). Raises InputError otherwise."""
+    its high-voltage bus (at="hv", `stabctl.storage.devices.hv_bus`). Raises InputError
+    otherwise."""
     if at not in ("terminal", "hv"):
         raise InputError(f"PMU placement must be 'terminal' or 'hv', got {at!r}")
     nums = [int(n) for n in case.machines.number]
-    buses = [int(b) for b in case.machines.bus] if at == "terminal" else \
-        [hv_bus(case, n) for n in nums]
+    buses = (
+        [int(b) for b in case.machines.bus] if at == "terminal" else [hv_bus(case, n) for n in nums]
+    )
     return tuple(PMU(bus=b, machine=n) for b, n in zip(buses, nums))
 
 
-def window_estimates(t: np.ndarray, ang: np.ndarray, f_at, rocof_at, window: float,
-                     f0: float) -> tuple[np.ndarray, np.ndarray]:
+def window_estimates(
+    t: np.ndarray, ang: np.ndarray, f_at, rocof_at, window: float, f0: float
+) -> tuple[np.ndarray, np.ndarray]:
     """A PMU's frequency (Hz) and ROCOF (Hz/s) over its estimation window, from bus angles.
 
     The phase advance over the window (IEEE C37.118.1-2011 clause 4.3, frequency as the
@@ -221,17 +239,21 @@ def window_estimates(t: np.ndarray, ang: np.ndarray, f_at, rocof_at, window: flo
         raise InputError("PMU frequency needs a strictly increasing time grid")
     if not 0 < window < np.inf:
         raise InputError(f"PMU estimation window must be > 0 s, got {window}")
-    f_at, rocof_at = np.atleast_1d(np.asarray(f_at, float)), np.atleast_1d(np.asarray(rocof_at, float))
+    f_at, rocof_at = (
+        np.atleast_1d(np.asarray(f_at, float)),
+        np.atleast_1d(np.asarray(rocof_at, float)),
+    )
     k, half = f_at.size, window / 2
     x = np.concatenate((f_at - half, f_at + half, rocof_at - window, rocof_at, rocof_at + window))
     th = interp_columns(x, t, np.unwrap(ang, axis=0))
-    f = f0 + (th[k:2 * k] - th[:k]) / (2 * np.pi * window)
-    r = th[2 * k:].reshape(3, rocof_at.size, -1)
-    return f, (r[2] - 2 * r[1] + r[0]) / (2 * np.pi * window ** 2)
+    f = f0 + (th[k : 2 * k] - th[:k]) / (2 * np.pi * window)
+    r = th[2 * k :].reshape(3, rocof_at.size, -1)
+    return f, (r[2] - 2 * r[1] + r[0]) / (2 * np.pi * window**2)
 
 
-def centred_estimates(t: np.ndarray, ang: np.ndarray, at, window: float,
-                      f0: float) -> tuple[np.ndarray, np.ndarray]:
+def centred_estimates(
+    t: np.ndarray, ang: np.ndarray, at, window: float, f0: float
+) -> tuple[np.ndarray, np.ndarray]:
     """`window_estimates` time-tagged at the window centres `at` (k,) s (C37.118.1-2011
     Annex C), the windows moved inside the grid [t0, t_end] near its ends (one-sided
     there; a grid shorter than two windows holds its end values).  Returns f, rocof
@@ -241,18 +263,21 @@ def centred_estimates(t: np.ndarray, ang: np.ndarray, at, window: float,
     return window_estimates(t, ang, inside(window / 2), inside(window), window, f0)
 
 
-def angle_truth(t: np.ndarray, pmus, v: np.ndarray, i: np.ndarray, f0: float,
-                window: float) -> PhasorTruth:
+def angle_truth(
+    t: np.ndarray, pmus, v: np.ndarray, i: np.ndarray, f0: float, window: float
+) -> PhasorTruth:
     """The `PhasorTruth` of phasors v, i (n_t, n_pmu) on grid t (n_t,) s, its frequency and
     ROCOF the PMU's over `window` s from the angle of v (`centred_estimates`).  Raises as
     `window_estimates`."""
     freq, rocof = centred_estimates(t, np.angle(v), t, window, f0)
-    return PhasorTruth(t=t, pmus=tuple(pmus), v=v, i=i, freq=freq, rocof=rocof, f0=f0,
-                       window=window)
+    return PhasorTruth(
+        t=t, pmus=tuple(pmus), v=v, i=i, freq=freq, rocof=rocof, f0=f0, window=window
+    )
 
 
-def phasor_truth(case: Case, result: SimulationResult, pmus,
-                 window_cycles: float = PMUSettings.window_cycles) -> PhasorTruth:
+def phasor_truth(
+    case: Case, result: SimulationResult, pmus, window_cycles: float = PMUSettings.window_cycles
+) -> PhasorTruth:
     """True PMU quantities of `pmus` on the result's step grid (see the module docstring),
     frequency and ROCOF over a window of window_cycles cycles (`angle_truth`; measure it
     with `PMUSettings` of the same window).
@@ -285,7 +310,7 @@ def _current(case: Case, result: SimulationResult, pmu: PMU, V: np.ndarray, keep
     k = case.machine_index(pmu.machine)
     term = case.bus_index(int(case.machines.bus[k]))
     ba = branch_admittances(case)
-    if b == term:   # Kirchhoff at the terminal bus: everything leaving it into the network
+    if b == term:  # Kirchhoff at the terminal bus: everything leaving it into the network
         cur = V[:, term] * (case.buses.gshunt[term] + 1j * case.buses.bshunt[term])
         for j in np.flatnonzero(ba.f == term):
             cur = cur + ba.yff[j] * V[:, term] + ba.yft[j] * V[:, ba.t[j]]
@@ -295,18 +320,25 @@ def _current(case: Case, result: SimulationResult, pmu: PMU, V: np.ndarray, keep
         # records its pelect and bus voltages from different evaluations
         p_err = np.abs((V[:, term] * np.conj(cur)).real - result.pelect[keep, k])[:-1].max()
         if p_err > KCL_TOLERANCE_PU:
-            raise InputError(f"PMU at bus {pmu.bus}: the current of machine {pmu.machine} "
-                             f"is not the sum of its terminal branch currents (P differs "
-                             f"from pelect by {p_err:.2e} pu: load, fault or trip at the bus)")
+            raise InputError(
+                f"PMU at bus {pmu.bus}: the current of machine {pmu.machine} "
+                f"is not the sum of its terminal branch currents (P differs "
+                f"from pelect by {p_err:.2e} pu: load, fault or trip at the bus)"
+            )
         return cur
     rows = np.flatnonzero(((ba.f == term) & (ba.t == b)) | ((ba.f == b) & (ba.t == term)))
     if rows.size == 0:
-        raise InputError(f"PMU at bus {pmu.bus}: no branch joins it to the terminal bus "
-                         f"{int(case.machines.bus[k])} of machine {pmu.machine}")
+        raise InputError(
+            f"PMU at bus {pmu.bus}: no branch joins it to the terminal bus "
+            f"{int(case.machines.bus[k])} of machine {pmu.machine}"
+        )
     cur = np.zeros(n, complex)
-    for j in rows:   # current into bus b = minus the current injected into the branch at b
-        cur -= (ba.ytf[j] * V[:, term] + ba.ytt[j] * V[:, b]) if ba.t[j] == b else \
-            (ba.yff[j] * V[:, b] + ba.yft[j] * V[:, term])
+    for j in rows:  # current into bus b = minus the current injected into the branch at b
+        cur -= (
+            (ba.ytf[j] * V[:, term] + ba.ytt[j] * V[:, b])
+            if ba.t[j] == b
+            else (ba.yff[j] * V[:, b] + ba.yft[j] * V[:, term])
+        )
     return cur
 
 
@@ -316,8 +348,9 @@ def _device_current(result: SimulationResult, pmu: PMU, v: np.ndarray, keep) -> 
     if pmu.device not in info:
         raise InputError(f"PMU at bus {pmu.bus}: storage device {pmu.device} is not in the result")
     if info[pmu.device]["bus"] != pmu.bus:
-        raise InputError(f"PMU at bus {pmu.bus}: storage device {pmu.device} is at bus "
-                         f"{info[pmu.device]['bus']}")
+        raise InputError(
+            f"PMU at bus {pmu.bus}: storage device {pmu.device} is at bus {info[pmu.device]['bus']}"
+        )
     col = int(np.flatnonzero(result.devices == pmu.device)[0])
     return -result.pesd[keep, col] / np.conj(v)
 
@@ -329,8 +362,9 @@ def frame_times(t_end: float, rate: float) -> np.ndarray:
     return np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
 
 
-def measure(truth: PhasorTruth, settings: PMUSettings = PMUSettings(),
-            seed: int = 0) -> FrameStream:
+def measure(
+    truth: PhasorTruth, settings: PMUSettings = PMUSettings(), seed: int = 0
+) -> FrameStream:
     """The frame stream of the PMUs of `truth`: true values at the reporting instants
     within the truth's time span, plus noise, latency and dropped frames (module docstring).
 
@@ -340,25 +374,38 @@ def measure(truth: PhasorTruth, settings: PMUSettings = PMUSettings(),
     """
     if seed < 0:
         raise InputError(f"seed must be >= 0, got {seed}")
-    if truth.window is not None and not np.isclose(truth.window, settings.window_s(truth.f0),
-                                                   rtol=1e-12, atol=0.0):
-        raise InputError(f"the truth's frequency window is {truth.window * truth.f0:g} cycles, "
-                         f"the PMU settings' {settings.window_cycles:g}")
+    if truth.window is not None and not np.isclose(
+        truth.window, settings.window_s(truth.f0), rtol=1e-12, atol=0.0
+    ):
+        raise InputError(
+            f"the truth's frequency window is {truth.window * truth.f0:g} cycles, "
+            f"the PMU settings' {settings.window_cycles:g}"
+        )
     t = truth.t[0] + frame_times(truth.t[-1] - truth.t[0], settings.rate)
     if t.size < 2:
         raise InputError("the run is shorter than one PMU frame interval")
     true = truth.at(t)
     n_f, n_p = true.v.shape
-    noise = [_pmu_noise(np.random.default_rng(s), n_f, settings)
-             for s in np.random.SeedSequence(seed).spawn(n_p)]
+    noise = [
+        _pmu_noise(np.random.default_rng(s), n_f, settings)
+        for s in np.random.SeedSequence(seed).spawn(n_p)
+    ]
     ev, ei, ef, er, drop = (np.stack(a, axis=1) for a in zip(*noise))
     valid = ~drop
     nan = np.where(valid, 1.0, np.nan)
     return FrameStream(
-        pmus=truth.pmus, settings=settings, seed=seed, t=t,
-        arrival=np.where(valid, t[:, None] + settings.latency_s, np.inf), valid=valid,
-        v=true.v * (1 + ev) * nan, i=true.i * (1 + ei) * nan,
-        freq=(true.freq + ef) * nan, rocof=(true.rocof + er) * nan, true=true)
+        pmus=truth.pmus,
+        settings=settings,
+        seed=seed,
+        t=t,
+        arrival=np.where(valid, t[:, None] + settings.latency_s, np.inf),
+        valid=valid,
+        v=true.v * (1 + ev) * nan,
+        i=true.i * (1 + ei) * nan,
+        freq=(true.freq + ef) * nan,
+        rocof=(true.rocof + er) * nan,
+        true=true,
+    )
 
 
 def _pmu_noise(rng: np.random.Generator, n: int, s: PMUSettings):

@@ -11,9 +11,20 @@ import numpy as np
 from filterpy.common import Q_continuous_white_noise
 from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
 
-from stabctl.estimation.filters import (T_ANGLE, T_F0, T_SIG2, FrequencyKF, SwingEKF,
-                                        swing_begin, swing_h, swing_inputs, swing_measure,
-                                        swing_Q, swing_transition, wrap_angle)
+from stabctl.estimation.filters import (
+    T_ANGLE,
+    T_F0,
+    T_SIG2,
+    FrequencyKF,
+    SwingEKF,
+    swing_begin,
+    swing_h,
+    swing_inputs,
+    swing_measure,
+    swing_Q,
+    swing_transition,
+    wrap_angle,
+)
 
 
 class FrequencyKFReference(FrequencyKF):
@@ -32,8 +43,10 @@ class FrequencyKFReference(FrequencyKF):
                     kf.x, kf.P, self.ready[k] = z[k].copy(), self.R.copy(), True
                     self.x[k], self.P[k] = kf.x, kf.P
                 continue
-            kf.F, kf.Q = np.array([[1.0, dt], [0.0, 1.0]]), \
-                Q_continuous_white_noise(2, dt, self.tun.rocof_walk)
+            kf.F, kf.Q = (
+                np.array([[1.0, dt], [0.0, 1.0]]),
+                Q_continuous_white_noise(2, dt, self.tun.rocof_walk),
+            )
             kf.predict()
             if ok[k]:
                 kf.update(z[k], R=self.R, H=np.eye(2))
@@ -67,8 +80,9 @@ class SwingEKFReference(SwingEKF):
                 continue
             meas = swing_measure(v[k], i[k], pr, self.tv[T_SIG2]) if ok[k] else (np.nan,) * 6
             if not self.ready[k]:
-                ekf.x, ekf.P = swing_begin(k, v[k], i[k], f[k], *meas[2:], pr, self.tv,
-                                           self.hold, self.cur_hold, self.g)
+                ekf.x, ekf.P = swing_begin(
+                    k, v[k], i[k], f[k], *meas[2:], pr, self.tv, self.hold, self.cur_hold, self.g
+                )
                 self.ready[k] = True
             else:
                 self._predict(ekf, k, ok[k], meas, i[k], dt, *(d[k] for d in disc))
@@ -78,16 +92,33 @@ class SwingEKFReference(SwingEKF):
 
     def _predict(self, ekf, k, ok, meas, cur, dt, Adq, bdq, Adg, bdg):
         pr, tv = self.par[k], self.tv
-        u = swing_inputs(k, ok, meas[2], meas[3], cur, meas[4], self.hold, self.cur_hold,
-                         self.g, ekf.x[1], pr, Adg, bdg, tv)
+        u = swing_inputs(
+            k,
+            ok,
+            meas[2],
+            meas[3],
+            cur,
+            meas[4],
+            self.hold,
+            self.cur_hold,
+            self.g,
+            ekf.x[1],
+            pr,
+            Adg,
+            bdg,
+            tv,
+        )
         xn, F, gs = swing_transition(ekf.x, u[0], u[1], u[3], u[4], dt, pr, Adq, bdq, tv[T_F0])
         ekf.F, ekf.Q = F, swing_Q(gs, u[2], u[5], bdq, dt, tv)
         ekf.predict(u=xn)
 
     def _update(self, ekf, k, theta, emag, r):
         pr, tv = self.par[k], self.tv
-        ekf.update(np.array([theta]), HJacobian=lambda x: swing_h(x, emag, pr)[1][None, :],
-                   Hx=lambda x: np.array([swing_h(x, emag, pr)[0]]),
-                   R=np.array([[r + tv[T_ANGLE] ** 2]]),
-                   residual=lambda a, b: np.array([wrap_angle(a[0] - b[0])]))
+        ekf.update(
+            np.array([theta]),
+            HJacobian=lambda x: swing_h(x, emag, pr)[1][None, :],
+            Hx=lambda x: np.array([swing_h(x, emag, pr)[0]]),
+            R=np.array([[r + tv[T_ANGLE] ** 2]]),
+            residual=lambda a, b: np.array([wrap_angle(a[0] - b[0])]),
+        )
         self.nis[k] = ekf.y @ ekf.SI @ ekf.y

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from stabctl.errors import InputError
 
-RATES = (10.0, 12.0, 15.0, 20.0, 30.0, 60.0, 120.0)   # frames/s at 60 Hz (C37.118.1 5.3)
+RATES = (10.0, 12.0, 15.0, 20.0, 30.0, 60.0, 120.0)  # frames/s at 60 Hz (C37.118.1 5.3)
 
 
 @dataclass(frozen=True)
@@ -44,12 +44,15 @@ class PMUSettings:
 
     def __post_init__(self):
         if self.rate not in RATES:
-            raise InputError(f"PMU rate must be one of {', '.join(f'{r:g}' for r in RATES)} "
-                             f"frames/s, got {self.rate:g}")
+            raise InputError(
+                f"PMU rate must be one of {', '.join(f'{r:g}' for r in RATES)} "
+                f"frames/s, got {self.rate:g}"
+            )
         limits = (self.tve, self.fe_hz, self.rfe_hz_s, self.latency_s)
         if not (all(0 <= v < float("inf") for v in limits) and 0 < self.k_sigma < float("inf")):
-            raise InputError("PMU accuracy limits and latency must be finite and >= 0, "
-                             "k_sigma finite and > 0")
+            raise InputError(
+                "PMU accuracy limits and latency must be finite and >= 0, k_sigma finite and > 0"
+            )
         if not 0 <= self.drop_prob < 1:
             raise InputError(f"dropped-frame probability must be in [0, 1), got {self.drop_prob}")
         if not 0 < self.window_cycles < float("inf"):

@@ -56,9 +56,7 @@ def load_case(name_or_path: str | Path) -> Case:
     if "/" not in text and "\\" not in text and not text.endswith((".json", ".m")):
         if builtin.is_file():
             return pstio.read_case_json(builtin)
-        raise CaseError(
-            f"unknown case '{text}': built-ins are {', '.join(list_cases()) or 'none'}"
-        )
+        raise CaseError(f"unknown case '{text}': built-ins are {', '.join(list_cases()) or 'none'}")
     path = Path(name_or_path)
     if not path.is_file():
         raise CaseError(f"case file not found: {path}")

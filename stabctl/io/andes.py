@@ -7,7 +7,8 @@ tools solve the same problem:
 * power flow: ANDES's Newton-Raphson with tolerance 1e-12 and its defaults (PV buses
   keep their voltage without Q limits, ``PV.config.pv2pq = 0``);
 * dynamics: loads constant impedance (ANDES's default ``PQ.config.p2z = q2z = 1``; import
-  the case with ``loads="impedance"``), implicit trapezoidal integration with a fixed step, Newton tolerance 1e-8;
+  the case with ``loads="impedance"``), implicit trapezoidal integration with a fixed step, Newton
+  tolerance 1e-8;
 * fault: ANDES's ``Fault`` model, a shunt ``rf + j xf`` at the bus from ``tf`` to ``tc``
   (no line lost);
 * network: ANDES 2.0's PSS/E reader leaves a non-transformer branch on a 100 MVA base
@@ -36,8 +37,17 @@ import numpy as np
 
 from stabctl.errors import InputError
 
-__all__ = ["AndesFault", "strip_dyr", "andes_system", "andes_powerflow", "andes_speeds",
-           "andes_machine_buses", "andes_modes", "andes_separated", "andes_stable"]
+__all__ = [
+    "AndesFault",
+    "strip_dyr",
+    "andes_system",
+    "andes_powerflow",
+    "andes_speeds",
+    "andes_machine_buses",
+    "andes_modes",
+    "andes_separated",
+    "andes_stable",
+]
 
 
 @dataclass(frozen=True)
@@ -61,8 +71,9 @@ def _andes():
     return andes
 
 
-def strip_dyr(src: str | Path, dst: str | Path, models, unsaturated: bool = False
-              ) -> tuple[str, ...]:
+def strip_dyr(
+    src: str | Path, dst: str | Path, models, unsaturated: bool = False
+) -> tuple[str, ...]:
     """Copy the DYR file ``src`` to ``dst`` without the records of ``models`` (names in
     upper case, e.g. ``{"EXST1", "TOGGLE"}``); returns the removed model names in file
     order. ``unsaturated``: GENROU and GENSAL records get S(1.0) = S(1.2) = 0 (their last
@@ -97,8 +108,13 @@ def _unsaturated(text: str) -> str:
     return f"{head}{quote} {' '.join(fields[:-2] + ['0.0', '0.0'])} {slash}{comment}"
 
 
-def andes_system(raw: str | Path, dyr: str | Path | None = None,
-                 fault: AndesFault | None = None, config_option=(), off=()):
+def andes_system(
+    raw: str | Path,
+    dyr: str | Path | None = None,
+    fault: AndesFault | None = None,
+    config_option=(),
+    off=(),
+):
     """An ANDES ``System`` of the RAW (+ DYR) files, or of any case file ANDES reads
     (xlsx, json, MATPOWER: ``dyr`` None), with ``fault`` added, set up; config_option:
     ANDES config overrides such as "Runtime.numba=1"; off: ANDES models whose devices are
@@ -115,8 +131,16 @@ def andes_system(raw: str | Path, dyr: str | Path | None = None,
     if Path(raw).suffix.lower() == ".raw":
         _raw_network(ss, raw)
     if fault is not None:
-        ss.add("Fault", {"bus": fault.bus, "tf": fault.t_fault, "tc": fault.t_clear,
-                         "rf": fault.r, "xf": fault.x})
+        ss.add(
+            "Fault",
+            {
+                "bus": fault.bus,
+                "tf": fault.t_fault,
+                "tc": fault.t_clear,
+                "rf": fault.r,
+                "xf": fault.x,
+            },
+        )
     ss.setup()
     ss.PFlow.config.tol = 1e-12
     return ss
@@ -141,8 +165,7 @@ def _raw_network(ss, raw) -> None:
     vn = dict(zip(ss.Bus.idx.v, ss.Bus.Vn.v))
     for r in rows[np.any(rows[:, 10:14] != 0, axis=1)] if rows.shape[1] > 10 else ():
         for bus, g, b in ((int(r[0]), r[10], r[11]), (int(r[1]), r[12], r[13])):
-            ss.add("Shunt", {"bus": bus, "g": float(g), "b": float(b), "Sn": mva,
-                             "Vn": vn[bus]})
+            ss.add("Shunt", {"bus": bus, "g": float(g), "b": float(b), "Sn": mva, "Vn": vn[bus]})
 
 
 def andes_powerflow(ss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -198,8 +221,9 @@ def andes_separated(ss) -> bool:
     return bool(np.max(np.abs(delta - coi[:, None])) > np.pi)
 
 
-def andes_stable(raw: str | Path, dyr: str | Path, fault: AndesFault, t_end: float,
-                 step: float) -> bool:
+def andes_stable(
+    raw: str | Path, dyr: str | Path, fault: AndesFault, t_end: float, step: float
+) -> bool:
     """ANDES's verdict on ``fault``: a run to ``t_end`` (s, fixed ``step``) without its own
     stop criterion, stable unless a rotor angle leaves the COI by more than pi rad or the
     run breaks down (machines slipping poles)."""

@@ -55,21 +55,42 @@ from stabctl.io.andes import _andes
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
 from stabctl.io.pst import case_from_matrices
 
-__all__ = ["AndesImport", "import_andes", "read_andes_case", "MAPPED_MODELS",
-           "IGNORED_MODELS"]
+__all__ = ["AndesImport", "import_andes", "read_andes_case", "MAPPED_MODELS", "IGNORED_MODELS"]
 
 #: ANDES model -> the PSS/E model its parameters are read as
-MAPPED_MODELS = {**{m: m for m in ("GENROU", "GENCLS", "SEXS", "IEEEX1", "EXDC2", "ESDC2A",
-                                   "EXST1", "ESST3A", "IEEEST", "ST2CUT", "TGOV1", "IEEEG1",
-                                   "HYGOV", "IEESGO")}, "TGOV1N": "TGOV1"}
+MAPPED_MODELS = {
+    **{
+        m: m
+        for m in (
+            "GENROU",
+            "GENCLS",
+            "SEXS",
+            "IEEEX1",
+            "EXDC2",
+            "ESDC2A",
+            "EXST1",
+            "ESST3A",
+            "IEEEST",
+            "ST2CUT",
+            "TGOV1",
+            "IEEEG1",
+            "HYGOV",
+            "IEESGO",
+        )
+    },
+    "TGOV1N": "TGOV1",
+}
 #: ANDES models with no effect on the network or the machines
 IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc")
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
 _NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt")
 _MACHINES = ("GENROU", "GENCLS")
 #: ANDES parameters outside PSS/E's data that must keep the value stabctl's models have
-_FIXED = {"GENROU": {"kp": 0.0, "kw": 0.0}, "GENCLS": {"kp": 0.0, "kw": 0.0},
-          **{g: {"wref0": 1.0} for g in ("TGOV1", "TGOV1N", "IEEEG1", "HYGOV", "IEESGO")}}
+_FIXED = {
+    "GENROU": {"kp": 0.0, "kw": 0.0},
+    "GENCLS": {"kp": 0.0, "kw": 0.0},
+    **{g: {"wref0": 1.0} for g in ("TGOV1", "TGOV1N", "IEEEG1", "HYGOV", "IEESGO")},
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,8 +119,12 @@ class AndesImport:
     pf_vang: np.ndarray | None
 
 
-def import_andes(path: str | Path, conventions: str = "andes",
-                 on_unsupported: str = "error", dyr: str | Path | None = None) -> Case:
+def import_andes(
+    path: str | Path,
+    conventions: str = "andes",
+    on_unsupported: str = "error",
+    dyr: str | Path | None = None,
+) -> Case:
     """Read a case through ANDES's own parser into a :class:`~stabctl.case.Case`.
 
     Parameters
@@ -139,9 +164,12 @@ def import_andes(path: str | Path, conventions: str = "andes",
     return read_andes_case(path, conventions, on_unsupported, dyr).case
 
 
-def read_andes_case(path: str | Path, conventions: str = "andes",
-                    on_unsupported: str = "error", dyr: str | Path | None = None
-                    ) -> AndesImport:
+def read_andes_case(
+    path: str | Path,
+    conventions: str = "andes",
+    on_unsupported: str = "error",
+    dyr: str | Path | None = None,
+) -> AndesImport:
     """:func:`import_andes` with what was left out, what was ignored and ANDES's power
     flow (:class:`AndesImport`). Same arguments and errors."""
     if conventions not in CONVENTIONS:
@@ -151,34 +179,48 @@ def read_andes_case(path: str | Path, conventions: str = "andes",
     path = Path(path)
     ss = _load(path, dyr)
     counts = {name: m.n for name, m in ss.models.items() if m.n}
-    lacking = [f"{name} ({n})" for name, n in counts.items()
-               if name not in _NETWORK and name not in MAPPED_MODELS
-               and name not in IGNORED_MODELS]
+    lacking = [
+        f"{name} ({n})"
+        for name, n in counts.items()
+        if name not in _NETWORK and name not in MAPPED_MODELS and name not in IGNORED_MODELS
+    ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
     gens, records, refused = _dynamic_records(ss, path.name, numbers)
     if records:
         tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
         refused += [f"{r.label()}" for r in tables.unsupported]
-        mats.update({k: getattr(tables, k) for k in ("mac_con", "exc_con", "pss_con",
-                                                       "tg_con")
-                     if getattr(tables, k) is not None})
+        mats.update(
+            {
+                k: getattr(tables, k)
+                for k in ("mac_con", "exc_con", "pss_con", "tg_con")
+                if getattr(tables, k) is not None
+            }
+        )
     left_out = tuple(lacking + refused)
     if left_out:
         listing = "; ".join(
-            ([f"ANDES models stabctl lacks (devices): {', '.join(lacking)}"] if lacking
-             else []) + ([f"devices refused: {'; '.join(refused)}"] if refused else []))
+            ([f"ANDES models stabctl lacks (devices): {', '.join(lacking)}"] if lacking else [])
+            + ([f"devices refused: {'; '.join(refused)}"] if refused else [])
+        )
         if on_unsupported == "error":
-            raise InputError(f"{path.name}: {listing} (use on_unsupported='skip' / "
-                             "--skip-unsupported to leave them out)")
+            raise InputError(
+                f"{path.name}: {listing} (use on_unsupported='skip' / "
+                "--skip-unsupported to leave them out)"
+            )
         bare = [r for r in refused if r.endswith(_NO_MACHINE)]
         if bare:
-            raise CaseError(f"{path.name}: a static generator cannot be left out without "
-                            f"changing the power flow: {'; '.join(bare)}")
+            raise CaseError(
+                f"{path.name}: a static generator cannot be left out without "
+                f"changing the power flow: {'; '.join(bare)}"
+            )
         warnings.warn(f"{path.name}: left out {listing}", UserWarning, stacklevel=3)
-    case = case_from_matrices(mats, path.stem, description=f"ANDES case {path.name}",
-                              source=f"ANDES case {path.name}, imported by "
-                                     "stabctl.io.andes_case.import_andes")
+    case = case_from_matrices(
+        mats,
+        path.stem,
+        description=f"ANDES case {path.name}",
+        source=f"ANDES case {path.name}, imported by stabctl.io.andes_case.import_andes",
+    )
     return AndesImport(case, left_out, ignored, *_powerflow(ss, numbers))
 
 
@@ -191,15 +233,16 @@ def _load(path: Path, dyr):
             raise InputError(f"case file not found: {file}")
     kw = {} if dyr is None else {"addfile": str(dyr)}
     try:
-        with warnings.catch_warnings():   # ANDES's own deprecation notices
+        with warnings.catch_warnings():  # ANDES's own deprecation notices
             warnings.simplefilter("ignore")
-            ss = andes.load(str(path), setup=True, no_output=True, default_config=True,
-                            **kw)
-    except Exception as exc:  # ANDES raises many kinds for a file it cannot parse
+            ss = andes.load(str(path), setup=True, no_output=True, default_config=True, **kw)
+    except Exception as exc:  # noqa: BLE001 - ANDES raises many kinds for a file it cannot parse
         raise InputError(f"{path.name}: ANDES cannot read the case: {exc}") from None
     if ss is None or not ss.is_setup:
-        raise InputError(f"{path.name}: ANDES cannot read the case (its parser or set-up "
-                         "failed; run `andes run` on it for ANDES's own message)")
+        raise InputError(
+            f"{path.name}: ANDES cannot read the case (its parser or set-up "
+            "failed; run `andes run` on it for ANDES's own message)"
+        )
     return ss
 
 
@@ -209,8 +252,10 @@ def _network(ss, file: str) -> tuple[dict, dict]:
     for k, idx in enumerate(ss.Bus.idx.v):
         number = _integer(idx)
         if number is None or number <= 0:
-            raise CaseError(f"{file}: Bus row {k + 1} idx {idx!r} is not a positive integer "
-                            "(stabctl numbers buses)")
+            raise CaseError(
+                f"{file}: Bus row {k + 1} idx {idx!r} is not a positive integer "
+                "(stabctl numbers buses)"
+            )
         if not ss.Bus.u.v[k]:
             raise CaseError(f"{file}: Bus {number} is out of service (u = 0): not supported")
         numbers[idx] = number
@@ -238,14 +283,36 @@ def _network(ss, file: str) -> tuple[dict, dict]:
     for k in _in_service(ln):
         tap = ln.tap.v[k] or 1.0
         gh, bh = ln.g1.v[k] + ln.g.v[k] / 2, ln.b1.v[k] + ln.b.v[k] / 2
-        lines.append([numbers[ln.bus1.v[k]], numbers[ln.bus2.v[k]], ln.r.v[k], ln.x.v[k],
-                      2 * bh, tap, -np.rad2deg(ln.phi.v[k]), 0, 0, 0, gh / tap ** 2, 0, gh,
-                      0])
+        lines.append(
+            [
+                numbers[ln.bus1.v[k]],
+                numbers[ln.bus2.v[k]],
+                ln.r.v[k],
+                ln.x.v[k],
+                2 * bh,
+                tap,
+                -np.rad2deg(ln.phi.v[k]),
+                0,
+                0,
+                0,
+                gh / tap**2,
+                0,
+                gh,
+                0,
+            ]
+        )
     line = np.array(lines, float).reshape(-1, 14)
     if not np.any(line[:, 10:14]):
         line = line[:, :10]
-    return ({"bus": bus, "line": line, "basmva": float(ss.config.mva),
-             "sys_freq": float(ss.config.freq)}, numbers)
+    return (
+        {
+            "bus": bus,
+            "line": line,
+            "basmva": float(ss.config.mva),
+            "sys_freq": float(ss.config.freq),
+        },
+        numbers,
+    )
 
 
 def _in_service(model) -> list[int]:
@@ -273,8 +340,11 @@ def _dynamic_records(ss, file: str, numbers: dict):
             machines.append((position.get(m.gen.v[k], len(static)), name, k))
     machines.sort()
     with_machine = {ss.models[name].gen.v[k] for _, name, k in machines}
-    bare = [f"{sg.class_name} {sg.idx.v[k]} (bus {numbers[sg.bus.v[k]]})" for sg, k in static
-            if sg.u.v[k] and sg.idx.v[k] not in with_machine]
+    bare = [
+        f"{sg.class_name} {sg.idx.v[k]} (bus {numbers[sg.bus.v[k]]})"
+        for sg, k in static
+        if sg.u.v[k] and sg.idx.v[k] not in with_machine
+    ]
     if machines:
         refused += [f"{b}: {_NO_MACHINE}" for b in bare]
     gens, by_syn = [], {}
@@ -283,20 +353,31 @@ def _dynamic_records(ss, file: str, numbers: dict):
         sg = ss.PV if m.gen.v[k] in ss.PV.idx.v else ss.Slack
         j = list(sg.idx.v).index(m.gen.v[k])
         gid = str(m.idx.v[k])
-        gens.append({"number": number, "bus": numbers[m.bus.v[k]], "id": gid,
-                     "mbase": float(m.Sn.v[k]), "ra": float(m.ra.vin[k]),
-                     "xsource": float(m.xd1.vin[k]),
-                     "pg": float(m.gammap.v[k] * sg.p0.v[j]),
-                     "qg": float(m.gammaq.v[k] * sg.q0.v[j]),
-                     "sbase": float(ss.config.mva)})
+        gens.append(
+            {
+                "number": number,
+                "bus": numbers[m.bus.v[k]],
+                "id": gid,
+                "mbase": float(m.Sn.v[k]),
+                "ra": float(m.ra.vin[k]),
+                "xsource": float(m.xd1.vin[k]),
+                "pg": float(m.gammap.v[k] * sg.p0.v[j]),
+                "qg": float(m.gammaq.v[k] * sg.q0.v[j]),
+                "sbase": float(ss.config.mva),
+            }
+        )
         by_syn[m.idx.v[k]] = gens[-1]
         if m.fn.v[k] != ss.config.freq:
-            refused.append(f"{name} {m.idx.v[k]}: fn = {m.fn.v[k]:g} Hz differs from the "
-                           f"system frequency {ss.config.freq:g} Hz (one frequency in "
-                           "stabctl)")
+            refused.append(
+                f"{name} {m.idx.v[k]}: fn = {m.fn.v[k]:g} Hz differs from the "
+                f"system frequency {ss.config.freq:g} Hz (one frequency in "
+                "stabctl)"
+            )
         if name == "GENROU" and m.xq2.vin[k] != m.xd2.vin[k]:
-            refused.append(f"GENROU {m.idx.v[k]}: xq2 = {m.xq2.vin[k]:g} differs from xd2 = "
-                           f"{m.xd2.vin[k]:g} (PSS/E's GENROU, and ANDES's, need them equal)")
+            refused.append(
+                f"GENROU {m.idx.v[k]}: xq2 = {m.xq2.vin[k]:g} differs from xd2 = "
+                f"{m.xd2.vin[k]:g} (PSS/E's GENROU, and ANDES's, need them equal)"
+            )
     avr_syn = {}
     for name, psse in MAPPED_MODELS.items():
         m = ss.models.get(name)
@@ -311,16 +392,18 @@ def _dynamic_records(ss, file: str, numbers: dict):
         if m is None or not m.n:
             continue
         for k in _in_service(m):
-            syn = m.idx.v[k] if psse in _MACHINES else (
-                m.syn.v[k] if "syn" in m.params else avr_syn.get(m.avr.v[k]))
+            syn = (
+                m.idx.v[k]
+                if psse in _MACHINES
+                else (m.syn.v[k] if "syn" in m.params else avr_syn.get(m.avr.v[k]))
+            )
             gen = by_syn.get(syn)
             why = _fixed_differs(m, name, k)
             if gen is None or why:
                 refused.append(f"{name} {m.idx.v[k]}: " + (why or "its machine is not mapped"))
                 continue
             params = _psse_params(ss, m, dyr[psse], DYR_MODELS[psse].fields, k)
-            records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(),
-                                     params))
+            records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused
 
 
@@ -353,8 +436,10 @@ def _psse_params(ss, m, spec: dict, fields, k: int) -> tuple[float, ...]:
     is its bus number (0 without one)."""
     inputs = spec["inputs"][2:]
     if len(inputs) != len(fields):
-        raise InputError(f"ANDES's psse-dyr.yaml gives {len(inputs)} {m.class_name} "
-                         f"parameters, the PSS/E Model Library {len(fields)}")
+        raise InputError(
+            f"ANDES's psse-dyr.yaml gives {len(inputs)} {m.class_name} "
+            f"parameters, the PSS/E Model Library {len(fields)}"
+        )
     source = {}
     for param, expr in spec["outputs"].items():
         if isinstance(expr, str) and ";" in expr:
@@ -388,5 +473,8 @@ def _powerflow(ss, numbers: dict):
         warnings.simplefilter("ignore")
         if not ss.PFlow.run():
             return None, None, None
-    return (np.array([numbers[i] for i in ss.Bus.idx.v]), np.array(ss.Bus.v.v, float),
-            np.array(ss.Bus.a.v, float))
+    return (
+        np.array([numbers[i] for i in ss.Bus.idx.v]),
+        np.array(ss.Bus.v.v, float),
+        np.array(ss.Bus.a.v, float),
+    )

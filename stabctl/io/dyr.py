@@ -31,8 +31,12 @@ from stabctl.errors import CaseError
 
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
 #: table kind -> the declaration of its columns and DYR models (stabctl.case.params)
-FAMILY: dict[str, Family] = {"machine": MACHINE, "exciter": EXCITER, "pss": PSS,
-                             "governor": GOVERNOR}
+FAMILY: dict[str, Family] = {
+    "machine": MACHINE,
+    "exciter": EXCITER,
+    "pss": PSS,
+    "governor": GOVERNOR,
+}
 #: DYR model -> its declaration (parameter names and order, fields copied to the table)
 DYR_MODELS: dict[str, DyrModel] = {m.name: m for f in FAMILY.values() for m in f.dyr}
 #: numbers after the id per model (PSS/E Model Library: ICONs, then CONs)
@@ -79,6 +83,7 @@ class _Unsupported(Exception):
 
 # -- parsing ----------------------------------------------------------------------------------
 
+
 def read_dyr(path) -> list[DyrRecord]:
     """Records of a PSS/E DYR file, in file order.
 
@@ -104,7 +109,7 @@ def read_dyr(path) -> list[DyrRecord]:
                 if tokens:
                     records.append(_record(path.name, start, tokens))
                 tokens = []
-                break                      # the rest of the line after '/' is a comment
+                break  # the rest of the line after '/' is a comment
             if not tokens:
                 start = n
             tokens.append(tok)
@@ -115,8 +120,10 @@ def read_dyr(path) -> list[DyrRecord]:
 
 def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
     if len(tokens) < 3 or not tokens[1].startswith("'"):
-        raise CaseError(f"{file}:{line}: malformed record {' '.join(tokens)[:60]!r}: expected "
-                        "IBUS 'MODEL' ID parameters /")
+        raise CaseError(
+            f"{file}:{line}: malformed record {' '.join(tokens)[:60]!r}: expected "
+            "IBUS 'MODEL' ID parameters /"
+        )
     model = tokens[1].strip("'").strip().upper()
     bus = _integer(tokens[0])
     if bus is None:
@@ -129,13 +136,15 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
             value = float(tok.replace("D", "E").replace("d", "e"))
         except ValueError:
             if model in N_PARAMS:
-                raise CaseError(f"{file}:{line}: {model} parameter {k} {tok!r} is not a "
-                                "number") from None
-            value = float("nan")          # e.g. USRMDL's quoted names: reported unsupported
+                raise CaseError(
+                    f"{file}:{line}: {model} parameter {k} {tok!r} is not a number"
+                ) from None
+            value = float("nan")  # e.g. USRMDL's quoted names: reported unsupported
         else:
             if model in N_PARAMS and not math.isfinite(value):
-                raise CaseError(f"{file}:{line}: {model} parameter {k} {tok!r} is not a "
-                                "finite number")
+                raise CaseError(
+                    f"{file}:{line}: {model} parameter {k} {tok!r} is not a finite number"
+                )
         params.append(value)
     return DyrRecord(file, line, bus, model, _machine_id(tokens[2]), tuple(params))
 
@@ -155,8 +164,10 @@ def _integer(tok: str) -> int | None:
 
 # -- mapping ------------------------------------------------------------------------------------
 
-def dyr_tables(records, generators, on_unsupported: str = "error",
-               conventions: str = "pst") -> DyrTables:
+
+def dyr_tables(
+    records, generators, on_unsupported: str = "error", conventions: str = "pst"
+) -> DyrTables:
     """PST matrices for the generators of a RAW file from their DYR records.
 
     Args:
@@ -193,14 +204,20 @@ def dyr_tables(records, generators, on_unsupported: str = "error",
         raise CaseError(f"conventions must be one of {CONVENTIONS}, got {conventions!r}")
     rows, skipped = _map_records(records, generators, conventions)
     if skipped and on_unsupported == "error":
-        raise CaseError("unsupported DYR records (use on_unsupported='skip' to leave them "
-                        "out):\n" + "\n".join(f"  {r.label()}: {why}" for r, why in skipped))
+        raise CaseError(
+            "unsupported DYR records (use on_unsupported='skip' to leave them "
+            "out):\n" + "\n".join(f"  {r.label()}: {why}" for r, why in skipped)
+        )
     _check_machines(generators, rows["machine"])
     _set_fractions(generators, rows["machine"])
     tables = {k: _matrix(rows[k], width) for k, width in _WIDTH.items()}
-    return DyrTables(mac_con=tables["machine"], exc_con=tables["exciter"],
-                     pss_con=tables["pss"], tg_con=tables["governor"],
-                     unsupported=tuple(r for r, _ in skipped))
+    return DyrTables(
+        mac_con=tables["machine"],
+        exc_con=tables["exciter"],
+        pss_con=tables["pss"],
+        tg_con=tables["governor"],
+        unsupported=tuple(r for r, _ in skipped),
+    )
 
 
 def _map_records(records, generators, conventions):
@@ -229,8 +246,10 @@ def _map_records(records, generators, conventions):
             row[MACHINE.col("psse_sat") - 1] = 1.0
         number = int(gen["number"])
         if number in rows[kind]:
-            raise CaseError(f"{rec.label()}: second {kind} model for this generator (first at "
-                            f"{rows[kind][number][0].where()})")
+            raise CaseError(
+                f"{rec.label()}: second {kind} model for this generator (first at "
+                f"{rows[kind][number][0].where()})"
+            )
         rows[kind][number] = (rec, row)
     for number in [k for k in rows["pss"] if k not in rows["exciter"]]:
         skipped.append((rows["pss"].pop(number)[0], "its machine has no (supported) exciter"))
@@ -240,16 +259,18 @@ def _map_records(records, generators, conventions):
 def _check_count(rec: DyrRecord) -> None:
     want = N_PARAMS[rec.model]
     if len(rec.params) != want:
-        raise CaseError(f"{rec.label()}: needs {want} parameters after the id, got "
-                        f"{len(rec.params)}")
+        raise CaseError(
+            f"{rec.label()}: needs {want} parameters after the id, got {len(rec.params)}"
+        )
 
 
 def _check_machines(generators, machines) -> None:
     missing = [g for g in generators if int(g["number"]) not in machines]
     if missing:
-        raise CaseError("generator(s) without a machine model record in the DYR data: "
-                        + ", ".join(f"machine {g['number']} (bus {g['bus']}, id {g['id']})"
-                                    for g in missing))
+        raise CaseError(
+            "generator(s) without a machine model record in the DYR data: "
+            + ", ".join(f"machine {g['number']} (bus {g['bus']}, id {g['id']})" for g in missing)
+        )
 
 
 def _set_fractions(generators, machines) -> None:
@@ -261,8 +282,10 @@ def _set_fractions(generators, machines) -> None:
         if len(gs) == 1:
             continue
         if any("pg" not in g or "qg" not in g for g in gs):
-            raise CaseError(f"bus {bus} has {len(gs)} generators: give 'pg' and 'qg' of each to "
-                            "split the bus generation (mac_con pfrac, qfrac)")
+            raise CaseError(
+                f"bus {bus} has {len(gs)} generators: give 'pg' and 'qg' of each to "
+                "split the bus generation (mac_con pfrac, qfrac)"
+            )
         for key, col in (("pg", MACHINE.col("pfrac") - 1), ("qg", MACHINE.col("qfrac") - 1)):
             total = sum(float(g[key]) for g in gs)
             for g in gs:
@@ -278,18 +301,28 @@ def _matrix(rows: dict, width: int) -> np.ndarray | None:
 
 # -- machines (PST mac_con, MachineTable) -----------------------------------------------------
 
+
 def _mac_row(rec, gen, **cols) -> list:
     """mac_con row of a machine record: the declared copies (stabctl.case.params.MACHINE),
     the RAW data (number, bus, mbase, ra) and ``cols``."""
-    cols.update(number=gen["number"], bus=gen["bus"], mva=gen["mbase"], ra=gen["ra"],
-                col19=gen["number"], pfrac=1.0, qfrac=1.0, speed_effects=1.0)
+    cols.update(
+        number=gen["number"],
+        bus=gen["bus"],
+        mva=gen["mbase"],
+        ra=gen["ra"],
+        col19=gen["number"],
+        pfrac=1.0,
+        qfrac=1.0,
+        speed_effects=1.0,
+    )
     return MACHINE.dyr_row(DYR_MODELS[rec.model], rec.params, **cols)
 
 
 def _positive_h(rec, H) -> None:
     if H <= 0:
-        raise CaseError(f"{rec.label()}: H = {H} (PSS/E infinite bus) is not supported; "
-                        "H must be > 0")
+        raise CaseError(
+            f"{rec.label()}: H = {H} (PSS/E infinite bus) is not supported; H must be > 0"
+        )
 
 
 def _genrou(rec, gen):
@@ -316,12 +349,14 @@ def _gencls(rec, gen):
 
 # -- exciters (PST exc_con, ExciterTable) ------------------------------------------------------
 
+
 def _exc_row(rec, gen, model=None, **cols) -> list:
     """exc_con row of an exciter record: type and copies as declared for ``model`` (default
     the record's; stabctl.case.params.EXCITER), the machine number and ``cols`` (table
     names or the DC exciters' ``alt`` names)."""
-    return EXCITER.dyr_row(model or DYR_MODELS[rec.model], rec.params,
-                           machine=gen["number"], **cols)
+    return EXCITER.dyr_row(
+        model or DYR_MODELS[rec.model], rec.params, machine=gen["number"], **cols
+    )
 
 
 def _sexs(rec, gen):
@@ -366,13 +401,21 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False):
             raise _Unsupported(f"Switch = {v['Switch']} is not modelled (only 0)")
         points = (v["E1"], v["SE(E1)"], v["E2"], v["SE(E2)"])
         if andes:
-            return _exc_row(rec, gen, decl, **cols, **dict(zip(("E1", "SE1", "E2", "SE2"),
-                                                               points)), dc_sat=1, ke_given=1)
+            return _exc_row(
+                rec,
+                gen,
+                decl,
+                **cols,
+                **dict(zip(("E1", "SE1", "E2", "SE2"), points)),
+                dc_sat=1,
+                ke_given=1,
+            )
         try:
             A, B = exp_saturation(*points)
         except CaseError as exc:
             raise CaseError(f"{rec.label()}: {exc}") from None
         return _exc_row(rec, gen, decl, **cols, SE1=A, E2=0.0, SE2=B)
+
     return mapper
 
 
@@ -383,8 +426,9 @@ def _scrx(rec, gen):
     effect while the field current stays positive) only."""
     v = DYR_MODELS["SCRX"].values(rec.params)
     if v["rc/rfd"] != 0:
-        raise _Unsupported(f"rc/rfd = {v['rc/rfd']:g}: the field discharge resistor is not "
-                           "modelled (only 0)")
+        raise _Unsupported(
+            f"rc/rfd = {v['rc/rfd']:g}: the field discharge resistor is not modelled (only 0)"
+        )
     return _exc_row(rec, gen, TC=v["TA/TB"] * v["TB"], bus_fed=float(v["CSWITCH"] == 0))
 
 
@@ -396,8 +440,12 @@ def _scrx_andes(rec, gen):
     """SCRX as ANDES 2.0 reads it: its ``psse-dyr.yaml`` makes an SCRX record a SEXS
     passing only the machine, so every parameter takes SEXS's default
     (:data:`ANDES_SEXS_DEFAULTS`), never bus fed."""
-    return EXCITER.dyr_row(DYR_MODELS["SEXS"], ANDES_SEXS_DEFAULTS, machine=gen["number"],
-                           TC=ANDES_SEXS_DEFAULTS[0] * ANDES_SEXS_DEFAULTS[1])
+    return EXCITER.dyr_row(
+        DYR_MODELS["SEXS"],
+        ANDES_SEXS_DEFAULTS,
+        machine=gen["number"],
+        TC=ANDES_SEXS_DEFAULTS[0] * ANDES_SEXS_DEFAULTS[1],
+    )
 
 
 def _exst1(rec, gen):
@@ -414,12 +462,15 @@ def _esst3a(rec, gen):
     12.2)."""
     v = DYR_MODELS["ESST3A"].values(rec.params)
     if v["TA"] >= 1e-3:
-        raise _Unsupported(f"TA = {v['TA']:g} s: the regulator lag before the inner loop has "
-                           "no PST exc_st3 counterpart (only TA = 0)")
+        raise _Unsupported(
+            f"TA = {v['TA']:g} s: the regulator lag before the inner loop has "
+            "no PST exc_st3 counterpart (only TA = 0)"
+        )
     return _exc_row(rec, gen, Efdmax=v["VBMAX"] * v["VMMAX"])
 
 
 # -- PSS (PST pss_con, PssTable) ----------------------------------------------------------------
+
 
 def _pss_row(rec, gen, **cols) -> list:
     """pss_con row of a PSS record: the declared copies (stabctl.case.params.PSS), the
@@ -431,14 +482,17 @@ def _local_inputs(*pairs) -> None:
     """PSS/E input codes and remote buses: only local speed (1) or electrical power (3)."""
     for code, bus in pairs:
         if code not in (0.0, 1.0, 3.0) or bus != 0:
-            raise _Unsupported(f"input code {code:g} at bus {bus:g} (only local speed 1 or "
-                               "electrical power 3)")
+            raise _Unsupported(
+                f"input code {code:g} at bus {bus:g} (only local speed 1 or electrical power 3)"
+            )
 
 
 def _washout(gain_T, T):
     if gain_T == 0 or T < 1e-3:
-        raise _Unsupported("washout numerator time constant 0 (a lag instead) or washout "
-                           "time constant below 1e-3 s")
+        raise _Unsupported(
+            "washout numerator time constant 0 (a lag instead) or washout "
+            "time constant below 1e-3 s"
+        )
 
 
 def _ieeest(rec, gen):
@@ -457,11 +511,21 @@ def _ieeest(rec, gen):
     stages = [(a, b) for a, b in lead_lags if a or b]
     if not any(A) and stages and all(b >= 1e-3 for _, b in stages):
         (a1, b1), (a2, b2) = (stages + [(0.0, 0.0)])[:2]
-        return _pss_row(rec, gen, type={1.0: 1, 3.0: 2}[ics], KTw=KTw, T1=a1, T2=b1, T3=a2,
-                        T4=b2)
+        return _pss_row(rec, gen, type={1.0: 1, 3.0: 2}[ics], KTw=KTw, T1=a1, T2=b1, T3=a2, T4=b2)
     (a1, b1), (a2, b2) = lead_lags
-    return _pss_row(rec, gen, type=3, input1=ics, K1=1.0, KTw=KTw, T1=a1, T2=b1, T3=a2, T4=b2,
-                    **{f"A{k}": a for k, a in enumerate(A, 1)})
+    return _pss_row(
+        rec,
+        gen,
+        type=3,
+        input1=ics,
+        K1=1.0,
+        KTw=KTw,
+        T1=a1,
+        T2=b1,
+        T3=a2,
+        T4=b2,
+        **{f"A{k}": a for k, a in enumerate(A, 1)},
+    )
 
 
 def _st2cut(rec, gen):
@@ -485,11 +549,13 @@ def _stab2a(rec, gen):
 
 # -- governors (PST tg_con, GovernorTable) ----------------------------------------------------
 
+
 def _tg_row(rec, gen, **cols) -> list:
     """tg_con row of a governor record: type and copies as declared
     (stabctl.case.params.GOVERNOR), the machine number, speed set point 1 and ``cols``."""
-    return GOVERNOR.dyr_row(DYR_MODELS[rec.model], rec.params, machine=gen["number"], wf=1.0,
-                            **cols)
+    return GOVERNOR.dyr_row(
+        DYR_MODELS[rec.model], rec.params, machine=gen["number"], wf=1.0, **cols
+    )
 
 
 def _tgov1(rec, gen):
@@ -541,9 +607,16 @@ def _ieesgo(rec, gen, andes=False):
 
 _MAPPERS = {
     "machine": {"GENROU": _genrou, "GENSAL": _gensal, "GENCLS": _gencls},
-    "exciter": {"SEXS": _sexs, "IEEEX1": _dc("IEEEX1"), "EXDC2": _dc("EXDC2"),
-                "ESDC2A": _dc("ESDC2A", zero_vrmax_unlimited=True), "EXST1": _exst1,
-                "ESST3A": _esst3a, "IEEET2": _dc("IEEET2"), "SCRX": _scrx},
+    "exciter": {
+        "SEXS": _sexs,
+        "IEEEX1": _dc("IEEEX1"),
+        "EXDC2": _dc("EXDC2"),
+        "ESDC2A": _dc("ESDC2A", zero_vrmax_unlimited=True),
+        "EXST1": _exst1,
+        "ESST3A": _esst3a,
+        "IEEET2": _dc("IEEET2"),
+        "SCRX": _scrx,
+    },
     "pss": {"IEEEST": _ieeest, "ST2CUT": _st2cut, "STAB2A": _stab2a},
     "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1, "HYGOV": _hygov, "IEESGO": _ieesgo},
 }
@@ -605,11 +678,17 @@ def _gensal_andes(rec, gen):
 #: `_map_records`); GENSAL is its GENROU, SCRX its SEXS; HYGOV
 #: and IEESGO as ANDES solves them (``_hygov``, ``_ieesgo``); IEEET2, which ANDES lacks,
 #: with the quadratic saturation of its other DC exciters
-_ANDES_MAPPERS = {"IEEEX1": _dc("IEEEX1", andes=True), "EXDC2": _dc("IEEEX1", andes=True),
-                  "ESDC2A": _esdc2a_andes, "ESST3A": _esst3a_andes, "IEEEG1": _ieeeg1_andes,
-                  "GENSAL": _gensal_andes,
-                  "SCRX": _scrx_andes, "IEEET2": _dc("IEEET2", andes=True),
-                  "HYGOV": lambda rec, gen: _hygov(rec, gen, andes=True),
-                  "IEESGO": lambda rec, gen: _ieesgo(rec, gen, andes=True)}
+_ANDES_MAPPERS = {
+    "IEEEX1": _dc("IEEEX1", andes=True),
+    "EXDC2": _dc("IEEEX1", andes=True),
+    "ESDC2A": _esdc2a_andes,
+    "ESST3A": _esst3a_andes,
+    "IEEEG1": _ieeeg1_andes,
+    "GENSAL": _gensal_andes,
+    "SCRX": _scrx_andes,
+    "IEEET2": _dc("IEEET2", andes=True),
+    "HYGOV": lambda rec, gen: _hygov(rec, gen, andes=True),
+    "IEESGO": lambda rec, gen: _ieesgo(rec, gen, andes=True),
+}
 CONVENTIONS = ("pst", "andes")
 _WIDTH = {kind: len(family.params) for kind, family in FAMILY.items()}

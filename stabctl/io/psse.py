@@ -27,9 +27,13 @@ __all__ = ["load_psse", "import_psse"]
 _MODES = ("error", "skip")
 
 
-def load_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
-              on_unsupported: str = "error", loads: str = "impedance",
-              conventions: str = "pst") -> Case:
+def load_psse(
+    raw_path: str | Path,
+    dyr_path: str | Path | None = None,
+    on_unsupported: str = "error",
+    loads: str = "impedance",
+    conventions: str = "pst",
+) -> Case:
     """Build a :class:`~stabctl.case.Case` from a PSS/E RAW (v32-34) and a DYR file.
 
     Args:
@@ -60,9 +64,13 @@ def load_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
     return import_psse(raw_path, dyr_path, on_unsupported, loads, conventions)[0]
 
 
-def import_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
-                on_unsupported: str = "error", loads: str = "impedance",
-                conventions: str = "pst") -> tuple[Case, tuple[str, ...]]:
+def import_psse(
+    raw_path: str | Path,
+    dyr_path: str | Path | None = None,
+    on_unsupported: str = "error",
+    loads: str = "impedance",
+    conventions: str = "pst",
+) -> tuple[Case, tuple[str, ...]]:
     """:func:`load_psse` that also returns the records left out, each as
     ``"file:line record"`` (empty unless ``on_unsupported="skip"``). Same arguments and
     errors."""
@@ -76,8 +84,9 @@ def import_psse(raw_path: str | Path, dyr_path: str | Path | None = None,
         mats.update(dyn)
         unsupported += dyr_unsupported
     _report(unsupported, on_unsupported, _files(raw_path, dyr_path))
-    case = case_from_matrices(mats, raw.name, source=_source(raw_path, dyr_path),
-                              description=raw.title)
+    case = case_from_matrices(
+        mats, raw.name, source=_source(raw_path, dyr_path), description=raw.title
+    )
     return case, tuple(unsupported)
 
 
@@ -86,8 +95,7 @@ def _dynamic_tables(raw: RawData, dyr_path, conventions) -> tuple[dict, list[str
     from stabctl.io.dyr import dyr_tables, read_dyr
 
     gens = [{**g.as_dyr(), "sbase": raw.base_mva} for g in raw.generators]
-    tables = dyr_tables(read_dyr(dyr_path), gens,
-                        on_unsupported="skip", conventions=conventions)
+    tables = dyr_tables(read_dyr(dyr_path), gens, on_unsupported="skip", conventions=conventions)
     mats = {}
     for key in ("mac_con", "exc_con", "pss_con", "tg_con"):
         if getattr(tables, key) is not None:
@@ -105,11 +113,16 @@ def _report(unsupported: list[str], mode: str, where: str) -> None:
         return
     listing = "; ".join(unsupported)
     if mode == "error":
-        raise CaseError(f"{where}: {len(unsupported)} unsupported record(s) (use "
-                        f"on_unsupported='skip' / --skip-unsupported to leave them out): "
-                        f"{listing}")
-    warnings.warn(f"{where}: left out {len(unsupported)} unsupported record(s): {listing}",
-                  UserWarning, stacklevel=4)
+        raise CaseError(
+            f"{where}: {len(unsupported)} unsupported record(s) (use "
+            f"on_unsupported='skip' / --skip-unsupported to leave them out): "
+            f"{listing}"
+        )
+    warnings.warn(
+        f"{where}: left out {len(unsupported)} unsupported record(s): {listing}",
+        UserWarning,
+        stacklevel=4,
+    )
 
 
 def _files(raw_path, dyr_path) -> str:

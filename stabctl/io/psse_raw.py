@@ -65,18 +65,52 @@ from stabctl.errors import CaseError
 __all__ = ["RawSource", "Generator", "RawData", "read_raw", "split_fields"]
 
 _SECTIONS = {
-    32: ("bus", "load", "fixed shunt", "generator", "branch", "transformer", "area",
-         "two-terminal dc line", "vsc dc line", "impedance correction table",
-         "multi-terminal dc line", "multi-section line", "zone", "inter-area transfer",
-         "owner", "facts device", "switched shunt", "gne device"),
+    32: (
+        "bus",
+        "load",
+        "fixed shunt",
+        "generator",
+        "branch",
+        "transformer",
+        "area",
+        "two-terminal dc line",
+        "vsc dc line",
+        "impedance correction table",
+        "multi-terminal dc line",
+        "multi-section line",
+        "zone",
+        "inter-area transfer",
+        "owner",
+        "facts device",
+        "switched shunt",
+        "gne device",
+    ),
 }
 _SECTIONS[33] = _SECTIONS[32] + ("induction machine",)
-_SECTIONS[34] = ("system-wide data", "bus", "load", "fixed shunt", "generator", "branch",
-                 "system switching device", "transformer") + _SECTIONS[32][6:] + (
-                     "induction machine", "substation")
+_SECTIONS[34] = (
+    (
+        "system-wide data",
+        "bus",
+        "load",
+        "fixed shunt",
+        "generator",
+        "branch",
+        "system switching device",
+        "transformer",
+    )
+    + _SECTIONS[32][6:]
+    + ("induction machine", "substation")
+)
 
-_SKIPPED = {"system-wide data", "area", "zone", "inter-area transfer", "owner",
-            "substation", "impedance correction table"}
+_SKIPPED = {
+    "system-wide data",
+    "area",
+    "zone",
+    "inter-area transfer",
+    "owner",
+    "substation",
+    "impedance correction table",
+}
 _IDE_ISOLATED = 4
 #: largest magnitude of a RAW number (bus numbers, MW, kV, pu alike are far below)
 _LARGEST = 1e12
@@ -117,8 +151,16 @@ class Generator:
     def as_dyr(self) -> dict:
         """The dict ``stabctl.io.dyr.dyr_tables`` takes for this generator (pg and qg split
         a bus's generation among its machines)."""
-        return {"number": self.number, "bus": self.bus, "id": self.id, "mbase": self.mbase,
-                "ra": self.ra, "xsource": self.xsource, "pg": self.pg, "qg": self.qg}
+        return {
+            "number": self.number,
+            "bus": self.bus,
+            "id": self.id,
+            "mbase": self.mbase,
+            "ra": self.ra,
+            "xsource": self.xsource,
+            "pg": self.pg,
+            "qg": self.qg,
+        }
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,8 +192,13 @@ class RawData:
     def matrices(self) -> dict:
         """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``)
         for :func:`stabctl.io.pst.case_from_matrices`."""
-        return {"bus": self.bus, "line": self.line, "load_con": self.load_con,
-                "basmva": self.base_mva, "sys_freq": self.freq_hz}
+        return {
+            "bus": self.bus,
+            "line": self.line,
+            "load_con": self.load_con,
+            "basmva": self.base_mva,
+            "sys_freq": self.freq_hz,
+        }
 
 
 # --------------------------------------------------------------------------------------
@@ -278,9 +325,11 @@ def _check_fields(rec: _Rec, version: int) -> None:
         if not lo <= len(vals) <= hi:
             want = f"{lo}" if lo == hi else f"{lo} to {hi}"
             where = f" (line {row + 1} of the record)" if len(limits) > 1 else ""
-            raise CaseError(f"{rec.file}:{rec.line + row} {rec.section} record{where}: "
-                            f"{len(vals)} field(s), the v{version} layout has {want}: a "
-                            "cut or merged line, or a missing '0 /' section terminator")
+            raise CaseError(
+                f"{rec.file}:{rec.line + row} {rec.section} record{where}: "
+                f"{len(vals)} field(s), the v{version} layout has {want}: a "
+                "cut or merged line, or a missing '0 /' section terminator"
+            )
 
 
 def _records(lines: list[str], path: Path, version: int):
@@ -312,13 +361,17 @@ def _records(lines: list[str], path: Path, version: int):
         if head.upper() == "Q":
             missing = sections[k:]
             if missing and not set(missing) <= _OPTIONAL_TAIL:
-                raise CaseError(f"{path.name}:{lineno}: 'Q' (end of data) inside the "
-                                f"{sections[k]} data: {len(missing)} section(s) not ended by "
-                                "their '0 /' record (a terminator is missing)")
+                raise CaseError(
+                    f"{path.name}:{lineno}: 'Q' (end of data) inside the "
+                    f"{sections[k]} data: {len(missing)} section(s) not ended by "
+                    "their '0 /' record (a terminator is missing)"
+                )
             return
         if k >= len(sections):
-            raise CaseError(f"{path.name}:{lineno}: data after the last section "
-                            f"({sections[-1]}) and no 'Q' record")
+            raise CaseError(
+                f"{path.name}:{lineno}: data after the last section "
+                f"({sections[-1]}) and no 'Q' record"
+            )
         if head == "0":
             k += 1
             continue
@@ -331,9 +384,11 @@ def _records(lines: list[str], path: Path, version: int):
     if pending is not None:
         pending.fail(f"file ends inside the record ({len(pending.lines)} of {need} lines)")
     if k < len(sections):
-        raise CaseError(f"{path.name}:{last}: the file ends in the {sections[k]} data, "
-                        "without its '0 /' terminator and the 'Q' record: the file is cut "
-                        "short (nothing imported)")
+        raise CaseError(
+            f"{path.name}:{last}: the file ends in the {sections[k]} data, "
+            "without its '0 /' terminator and the 'Q' record: the file is cut "
+            "short (nothing imported)"
+        )
 
 
 # --------------------------------------------------------------------------------------
@@ -348,15 +403,15 @@ class _Builder:
     version: int
     base: float
     loads: str
-    buses: dict = field(default_factory=dict)      # number -> bus row (list of 15)
-    load_src: dict = field(default_factory=dict)   # bus -> its first load record
+    buses: dict = field(default_factory=dict)  # number -> bus row (list of 15)
+    load_src: dict = field(default_factory=dict)  # bus -> its first load record
     isolated: set = field(default_factory=set)
     load_parts: dict = field(default_factory=dict)  # bus -> [Pp, Qp, Pi, Qi]
     branches: list = field(default_factory=list)
     gens: list = field(default_factory=list)
     gen_vs: dict = field(default_factory=dict)
     unsupported: list = field(default_factory=list)
-    seen: dict = field(default_factory=dict)       # (section, ids) -> first line
+    seen: dict = field(default_factory=dict)  # (section, ids) -> first line
 
     def once(self, rec: _Rec, key: tuple, what: str):
         """CaseError when a record with the same identity came before (a duplicated
@@ -394,8 +449,23 @@ def _bus(b: _Builder, rec: _Rec):
     if vm <= 0:
         rec.fail(f"bus {num}: VM {vm:g} must be > 0")
     kind = {1: PQ, 2: PV, 3: SWING}[ide]
-    b.buses[num] = [num, vm, rec.num(0, 8, 0.0), 0, 0, 0, 0, 0, 0, kind, 0, 0,
-                    rec.num(0, 2, 0.0), 0, 0]
+    b.buses[num] = [
+        num,
+        vm,
+        rec.num(0, 8, 0.0),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        kind,
+        0,
+        0,
+        rec.num(0, 2, 0.0),
+        0,
+        0,
+    ]
 
 
 def _load(b: _Builder, rec: _Rec):
@@ -417,8 +487,11 @@ def _load(b: _Builder, rec: _Rec):
 
 def _fixed_shunt(b: _Builder, rec: _Rec):
     """Fixed shunt: I, ID, STATUS, GL, BL (POM Fixed Shunt Data)."""
-    b.once(rec, (rec.int(0, 0), rec.text(0, 1)),
-           f"fixed shunt at bus {rec.int(0, 0)} '{rec.text(0, 1)}'")
+    b.once(
+        rec,
+        (rec.int(0, 0), rec.text(0, 1)),
+        f"fixed shunt at bus {rec.int(0, 0)} '{rec.text(0, 1)}'",
+    )
     row = b.bus_row(rec, rec.int(0, 0), "fixed shunt")
     if row is not None and rec.int(0, 2, 1) != 0:
         row[7] += rec.num(0, 3, 0.0) / b.base
@@ -458,10 +531,19 @@ def _add_generator(b: _Builder, rec: _Rec, row: list, vs: float, o: int, gid: st
     mbase = rec.num(0, 8 + o, b.base)
     if mbase <= 0:
         rec.fail(f"generator at bus {row[0]} '{gid}': MBASE {mbase:g} must be > 0")
-    b.gens.append(Generator(
-        number=len(b.gens) + 1, bus=int(row[0]), id=gid, mbase=mbase,
-        ra=rec.num(0, 9 + o, 0.0), xsource=rec.num(0, 10 + o, 1.0), pg=pg, qg=qg,
-        source=rec.source(f"generator at bus {row[0]} '{gid}'")))
+    b.gens.append(
+        Generator(
+            number=len(b.gens) + 1,
+            bus=int(row[0]),
+            id=gid,
+            mbase=mbase,
+            ra=rec.num(0, 9 + o, 0.0),
+            xsource=rec.num(0, 10 + o, 1.0),
+            pg=pg,
+            qg=qg,
+            source=rec.source(f"generator at bus {row[0]} '{gid}'"),
+        )
+    )
 
 
 def _ends(b: _Builder, rec: _Rec, i: int, j: int, what: str):
@@ -487,7 +569,7 @@ def _branch(b: _Builder, rec: _Rec):
     gi, bi, gj, bj = (rec.num(0, k + n, 0.0) for n in range(4))
     if r < 0 or (r == 0 and x == 0):
         rec.fail(f"{what}: R = {r:g} must be >= 0 and R + jX not 0")
-    if gi == 0 and gj == 0 and bi == bj:      # a symmetric susceptance: part of the charging
+    if gi == 0 and gj == 0 and bi == bj:  # a symmetric susceptance: part of the charging
         b.branches.append([i, j, r, x, bc + bi + bj, 0, 0, 0, 0, 0])
     else:
         b.branches.append([i, j, r, x, bc, 0, 0, 0, 0, 0, gi, bi, gj, bj])
@@ -507,11 +589,12 @@ def _transformer(b: _Builder, rec: _Rec):
         return
     tab = rec.int(2, 23 if b.version >= 34 else 13, 0)
     if rec.num(0, 7, 0.0) != 0 or rec.num(0, 8, 0.0) != 0 or tab != 0:
-        return b.skip(rec, f"{what}: magnetizing admittance (MAG1, MAG2) or impedance "
-                           "correction table (TAB1)")
+        return b.skip(
+            rec, f"{what}: magnetizing admittance (MAG1, MAG2) or impedance correction table (TAB1)"
+        )
     t1, t2 = _windings(rec, ends, what)
     r, x = _impedance(b, rec, ends[0], what)
-    r2, x2 = r * t2 ** 2, x * t2 ** 2
+    r2, x2 = r * t2**2, x * t2**2
     if r2 < 0 or (r2 == 0 and x2 == 0):
         rec.fail(f"{what}: R1-2 must be >= 0 and R1-2 + jX1-2 not 0")
     ang = rec.num(2, 2, 0.0)
@@ -564,9 +647,15 @@ def _switched_shunt(b: _Builder, rec: _Rec):
         row[8] += rec.num(0, 10 if b.version >= 34 else 9) / b.base
 
 
-_HANDLERS = {"bus": _bus, "load": _load, "fixed shunt": _fixed_shunt,
-             "generator": _generator, "branch": _branch, "transformer": _transformer,
-             "switched shunt": _switched_shunt}
+_HANDLERS = {
+    "bus": _bus,
+    "load": _load,
+    "fixed shunt": _fixed_shunt,
+    "generator": _generator,
+    "branch": _branch,
+    "transformer": _transformer,
+    "switched shunt": _switched_shunt,
+}
 
 
 def _load_con(b: _Builder) -> np.ndarray:
@@ -579,8 +668,11 @@ def _load_con(b: _Builder) -> np.ndarray:
             continue
         fp, fq = _fraction(pp, pi), _fraction(qp, qi)
         if fp is None or fq is None:
-            b.skip(b.load_src[num], f"loads at bus {num}: constant-power and constant-"
-                                    "current parts of opposite sign (no load_con fractions)")
+            b.skip(
+                b.load_src[num],
+                f"loads at bus {num}: constant-power and constant-"
+                "current parts of opposite sign (no load_con fractions)",
+            )
         else:
             rows.append([num, fp, fq, 1.0 - fp, 1.0 - fq])
     return np.array(rows, dtype=float).reshape(-1, 5)
@@ -640,7 +732,7 @@ def _dispatch(b: _Builder, rec: _Rec):
     if handler is not None:
         try:
             handler(b, rec)
-        except (OverflowError, ZeroDivisionError) as exc:   # values no case can hold
+        except (OverflowError, ZeroDivisionError) as exc:  # values no case can hold
             rec.fail(f"the values give no finite per-unit data ({exc})")
     elif rec.section not in _SKIPPED:
         b.skip(rec, f"{rec.section} record")
@@ -655,10 +747,19 @@ def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawDat
     if not np.any(bus[:, 9] == SWING):
         raise CaseError(f"{path.name}: no swing bus (IDE 3) in the bus data")
     width = max([10, *(len(row) for row in b.branches)])
-    line = np.array([row + [0.0] * (width - len(row)) for row in b.branches],
-                    dtype=float).reshape(-1, width)
+    line = np.array([row + [0.0] * (width - len(row)) for row in b.branches], dtype=float).reshape(
+        -1, width
+    )
     title = " / ".join(t.strip() for t in lines[1:3] if t.strip())
-    return RawData(name=path.stem, title=title, version=version, base_mva=b.base,
-                   freq_hz=freq, bus=bus, line=line, load_con=load_con,
-                   generators=tuple(b.gens),
-                   unsupported=tuple(sorted(b.unsupported, key=lambda s: s.line)))
+    return RawData(
+        name=path.stem,
+        title=title,
+        version=version,
+        base_mva=b.base,
+        freq_hz=freq,
+        bus=bus,
+        line=line,
+        load_con=load_con,
+        generators=tuple(b.gens),
+        unsupported=tuple(sorted(b.unsupported, key=lambda s: s.line)),
+    )

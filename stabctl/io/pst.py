@@ -23,8 +23,9 @@ from __future__ import annotations
 import json
 import re
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -90,17 +91,30 @@ def case_from_matrices(
     for key in ("bus", "line"):
         if key not in mats or _is_empty(mats[key]):
             raise CaseError(f"{name}: the data defines no '{key}' matrix")
-    tables = {field: TABLES[field].from_matrix(mats[key])
-              for key, field in PST_TABLES.items() if key in mats}
+    tables = {
+        field: TABLES[field].from_matrix(mats[key])
+        for key, field in PST_TABLES.items()
+        if key in mats
+    }
     bases = {field: _scalar(mats[key], key) for key, field in _SCALARS.items() if key in mats}
     for key, field in _SCALARS.items():
         if field not in bases:  # PST data files leave the bases to the calling script
             default = _DEFAULTS[field]
-            warnings.warn(f"{name}: the data defines no '{key}': {field} = {default:g} "
-                          f"{_UNITS[field]} (PST's default)", UserWarning, stacklevel=2)
-    extra = {k: v for k, v in mats.items()
-             if k not in PST_TABLES and k not in _SCALARS and k != "sw_con"
-             and _is_numeric(v) and not _is_empty(v)}
+            warnings.warn(
+                f"{name}: the data defines no '{key}': {field} = {default:g} "
+                f"{_UNITS[field]} (PST's default)",
+                UserWarning,
+                stacklevel=2,
+            )
+    extra = {
+        k: v
+        for k, v in mats.items()
+        if k not in PST_TABLES
+        and k not in _SCALARS
+        and k != "sw_con"
+        and _is_numeric(v)
+        and not _is_empty(v)
+    }
     return Case(
         name=name,
         base_mva=bases.get("base_mva", _DEFAULT_BASE_MVA),
@@ -149,8 +163,9 @@ def read_pstess_json(path: str | Path, name: str | None = None, description: str
     data = _load_json(path)
     if not isinstance(data, dict) or "bus" not in data:
         raise CaseError(f"{path}: not a PSTess matrix JSON (no 'bus' key)")
-    return case_from_matrices(data, name or path.stem, source=f"PSTess data {path.name}",
-                              description=description)
+    return case_from_matrices(
+        data, name or path.stem, source=f"PSTess data {path.name}", description=description
+    )
 
 
 def read_pst_m(path: str | Path, name: str | None = None, description: str = "") -> Case:
@@ -165,8 +180,9 @@ def read_pst_m(path: str | Path, name: str | None = None, description: str = "")
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
     mats = parse_m(text, str(path))
-    return case_from_matrices(mats, name or path.stem, source=f"PST data file {path.name}",
-                              description=description)
+    return case_from_matrices(
+        mats, name or path.stem, source=f"PST data file {path.name}", description=description
+    )
 
 
 def read_any(path: str | Path) -> Case:
@@ -276,7 +292,7 @@ def parse_m(text: str, where: str = "<m-file>") -> dict[str, np.ndarray]:
         if not m:
             raise CaseError(f"{where} line {start}: not a literal assignment: {_short(clean)}")
         name = m.group(1)
-        body = stmt[stmt.index("=") + 1:]
+        body = stmt[stmt.index("=") + 1 :]
         out[name] = _parse_value(body, start, where, name)
     return out
 
@@ -300,7 +316,7 @@ def _parse_value(body: str, start: int, where: str, name: str) -> np.ndarray:
 
 
 def _parse_matrix(body: str, start: int, where: str, name: str) -> np.ndarray:
-    inner = body[body.index("[") + 1: body.rindex("]")]
+    inner = body[body.index("[") + 1 : body.rindex("]")]
     rows: list[list[float]] = []
     row_lines: list[int] = []
     row: list[float] = []
@@ -330,7 +346,8 @@ def _parse_matrix(body: str, start: int, where: str, name: str) -> np.ndarray:
     for r, ln in zip(rows, row_lines):
         if len(r) != len(rows[0]):
             raise CaseError(
-                f"{where} line {ln}: '{name}': row has {len(r)} columns, first row has {len(rows[0])}"
+                f"{where} line {ln}: '{name}': row has {len(r)} columns, "
+                f"first row has {len(rows[0])}"
             )
     return np.array(rows, dtype=float)
 
@@ -379,16 +396,21 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
         )
     raw_tables = data.get("tables")
     if not isinstance(raw_tables, Mapping):
-        raise CaseError(f"{where}: no 'tables' object (the case's tables by name: "
-                        f"{', '.join(TABLES)}; at least buses and branches)")
+        raise CaseError(
+            f"{where}: no 'tables' object (the case's tables by name: "
+            f"{', '.join(TABLES)}; at least buses and branches)"
+        )
     unknown = set(raw_tables) - set(TABLES)
     if unknown:
         raise CaseError(f"{where}: unknown table(s) {sorted(unknown)}; known: {list(TABLES)}")
     for required in ("buses", "branches"):
         if required not in raw_tables:
             raise CaseError(f"{where}: tables: no '{required}' table")
-    tables = {field: _table_from_json(TABLES[field], raw_tables[field], where)
-              for field in TABLES if field in raw_tables}
+    tables = {
+        field: _table_from_json(TABLES[field], raw_tables[field], where)
+        for field in TABLES
+        if field in raw_tables
+    }
     extra = data.get("extra") or {}
     if not isinstance(extra, Mapping):
         raise CaseError(f"{where}: 'extra' must be an object of matrices by name")
@@ -421,8 +443,7 @@ def _field_number(data: Mapping, key: str, where: str) -> float:
 
 def _table_from_json(cls, raw: Mapping, where: str):
     if not isinstance(raw, Mapping):
-        raise CaseError(f"{where}: table '{cls.TABLE}' must be an object with 'columns' "
-                        "and 'rows'")
+        raise CaseError(f"{where}: table '{cls.TABLE}' must be an object with 'columns' and 'rows'")
     cols = raw.get("columns")
     rows = raw.get("rows", [])
     if not isinstance(cols, list) or not all(isinstance(c, str) for c in cols):
@@ -434,7 +455,9 @@ def _table_from_json(cls, raw: Mapping, where: str):
     known = cls.columns()
     bad = [c for c in cols if c not in known]
     if bad:
-        raise CaseError(f"{where}: table '{cls.TABLE}' has unknown column(s) {bad}; known: {list(known)}")
+        raise CaseError(
+            f"{where}: table '{cls.TABLE}' has unknown column(s) {bad}; known: {list(known)}"
+        )
     from stabctl.case.system import _as_matrix
 
     mat = _as_matrix(rows, cls.TABLE)
@@ -442,11 +465,14 @@ def _table_from_json(cls, raw: Mapping, where: str):
         return cls.empty()
     if mat.shape[1] != len(cols):
         raise CaseError(
-            f"{where}: table '{cls.TABLE}' rows have {mat.shape[1]} values, {len(cols)} columns named"
+            f"{where}: table '{cls.TABLE}' rows have {mat.shape[1]} values, "
+            f"{len(cols)} columns named"
         )
     n = mat.shape[0]
-    data = {c: mat[:, cols.index(c)] if c in cols else np.full(n, float(cls.DEFAULTS.get(c, 0.0)))
-            for c in known}
+    data = {
+        c: mat[:, cols.index(c)] if c in cols else np.full(n, float(cls.DEFAULTS.get(c, 0.0)))
+        for c in known
+    }
     return cls(**data)
 
 
@@ -473,8 +499,19 @@ def write_case_json(case: Case, path: str | Path, licence: str = "") -> Path:
     Python's shortest round-trip repr, so reading gives back identical values.
     """
     d = case_to_dict(case, licence)
-    head = {k: d[k] for k in ("format", "version", "name", "description", "source", "licence",
-                               "base_mva", "freq_hz")}
+    head = {
+        k: d[k]
+        for k in (
+            "format",
+            "version",
+            "name",
+            "description",
+            "source",
+            "licence",
+            "base_mva",
+            "freq_hz",
+        )
+    }
     parts = ["{"]
     for k, v in head.items():
         parts.append(f"  {json.dumps(k)}: {json.dumps(v)},")

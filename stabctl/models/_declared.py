@@ -78,8 +78,9 @@ def check_packed(cls, packed, values=()) -> None:
     have = {f.name for f in dataclasses.fields(cls)} | set(dir(cls)) | set(values)
     for column, attr in packed:
         if attr.split(".")[0] not in have:
-            raise AttributeError(f"{cls.__name__}: packed column {column} reads "
-                                 f"'{attr}', which it does not have")
+            raise AttributeError(
+                f"{cls.__name__}: packed column {column} reads '{attr}', which it does not have"
+            )
 
 
 def pack(obj, layout, **values) -> np.ndarray:
@@ -100,6 +101,7 @@ def pack(obj, layout, **values) -> np.ndarray:
     numpy.ndarray
         float64, shape (obj.n, len(layout)).
     """
+
     def value(attr):
         if attr in values:
             return values[attr]
@@ -107,5 +109,6 @@ def pack(obj, layout, **values) -> np.ndarray:
         for part in attr.split("."):
             v = getattr(v, part)
         return v
+
     cols = [np.asarray(value(attr), float) for _, attr in layout]
     return np.column_stack(cols).reshape(obj.n, len(layout))

@@ -3,8 +3,8 @@
 
 Sources: PSTess 1.1 `tg_indx.m`, `tg.m` (docs/pst_models.md section 4); PSS/E Model
 Library `TGOV1`, `IEEEG1` (IEEE Committee Report 1973 steam turbine model), as
-implemented in ANDES (`andes/models/governor/tgov1.py`, `ieeeg1.py`, `hygov.py`, `ieesgo.py`); equations in
-docs/pst_models.md section 4.1-4.3.
+implemented in ANDES (`andes/models/governor/tgov1.py`, `ieeeg1.py`, `hygov.py`, `ieesgo.py`);
+equations in docs/pst_models.md section 4.1-4.3.
 
 tg: demand = clip(P_ref + (w_f - omega)/R, Tmin, T_max) -> 1/(1 + s T_s)
 -> (1 + s T_3)/(1 + s T_c) -> (1 + s T_4)/(1 + s T_5) -> pmech (machine base).  T_4 may
@@ -26,8 +26,8 @@ type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jit.decorators import kernel
 
+from stabctl._jit.decorators import kernel
 from stabctl.case import Case, beyond
 from stabctl.case.params import GOVERNOR
 from stabctl.errors import CaseError
@@ -36,11 +36,13 @@ from stabctl.models.blocks import LBND, clip, lag, leadlag, nonwindup, nonwindup
 
 TG, TGOV1, IEEEG1, HYGOV, IEESGO = 1, 2, 3, 4, 5
 N_STATES = 6
-STATE_NAMES = {TG: ("servo", "transient", "turbine"),
-               TGOV1: ("valve", "leadlag"),
-               IEEEG1: ("leadlag", "gate", "T4lag", "T5lag", "T6lag", "T7lag"),
-               HYGOV: ("filter", "gate_integrator", "gate", "flow"),
-               IEESGO: ("lag", "leadlag", "T4lag", "T5lag", "T6lag")}
+STATE_NAMES = {
+    TG: ("servo", "transient", "turbine"),
+    TGOV1: ("valve", "leadlag"),
+    IEEEG1: ("leadlag", "gate", "T4lag", "T5lag", "T6lag", "T7lag"),
+    HYGOV: ("filter", "gate_integrator", "gate", "flow"),
+    IEESGO: ("lag", "leadlag", "T4lag", "T5lag", "T6lag"),
+}
 #: HYGOV's fields in tg_con columns 17-21 (alternative names of K1..K5)
 HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel")
 #: tg_con fields (stabctl.case.params.GOVERNOR) the kernels take as given: columns 3-16
@@ -48,9 +50,14 @@ HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel")
 TABLE_FIELDS = GOVERNOR.names[2:16]
 #: packed parameter matrix of the kernels, (column name, GovernorParams attribute) per
 #: column: tg_con columns 1-16 in declared order, K's four columns, P_ref, HYGOV's fields
-PACKED = (("KIND", "kind"), ("MAC", "mac"), *((n.upper(), n) for n in TABLE_FIELDS),
-          *((f"K{s}", f"K_{i}") for i, s in enumerate("ABCD")), ("PREF", "Pref"),
-          *((n.upper(), n) for n in HYGOV_FIELDS))
+PACKED = (
+    ("KIND", "kind"),
+    ("MAC", "mac"),
+    *((n.upper(), n) for n in TABLE_FIELDS),
+    *((f"K{s}", f"K_{i}") for i, s in enumerate("ABCD")),
+    ("PREF", "Pref"),
+    *((n.upper(), n) for n in HYGOV_FIELDS),
+)
 #: the kernels' column of each PACKED name: P[k, G.TS]
 G = layout("GovernorColumns", PACKED)
 
@@ -99,18 +106,24 @@ class GovernorParams:
         act[1] |= sg & (self.Ts >= LBND)
         for r, T in zip(range(2, 5), (self.T4, self.T5, self.T6)):
             act[r] |= sg & (T >= LBND)
-        return act[:self.n_slots()]
+        return act[: self.n_slots()]
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
         tg, t1, g1 = self.kind == TG, self.kind == TGOV1, self.kind == IEEEG1
         hy, sg = self.kind == HYGOV, self.kind == IEESGO
-        lag = {name: (g1 | sg) & (getattr(self, name) >= LBND)
-               for name in ("Tc", "Ts", "T4", "T5", "T6", "T7")}
-        return (("tg_con T_s", self.Ts, tg | t1 | g1 | hy | lag["Ts"]),
-                ("tg_con T_c", self.Tc, tg | t1 | hy | lag["Tc"]),
-                ("tg_con T_5", self.T5, tg | lag["T5"]), ("tg_con T_4", self.T4, hy | lag["T4"]),
-                ("tg_con T_6", self.T6, lag["T6"]), ("tg_con T_7", self.T7, lag["T7"] & g1))
+        lag = {
+            name: (g1 | sg) & (getattr(self, name) >= LBND)
+            for name in ("Tc", "Ts", "T4", "T5", "T6", "T7")
+        }
+        return (
+            ("tg_con T_s", self.Ts, tg | t1 | g1 | hy | lag["Ts"]),
+            ("tg_con T_c", self.Tc, tg | t1 | hy | lag["Tc"]),
+            ("tg_con T_5", self.T5, tg | lag["T5"]),
+            ("tg_con T_4", self.T4, hy | lag["T4"]),
+            ("tg_con T_6", self.T6, lag["T6"]),
+            ("tg_con T_7", self.T7, lag["T7"] & g1),
+        )
 
 
 check_packed(GovernorParams, PACKED, ("Pref", *(f"K_{i}" for i in range(4))))
@@ -124,26 +137,38 @@ def governor_params(case: Case) -> GovernorParams:
     T_w = T4: a lag below it would be absent, `blocks.LBND`), a zero HYGOV r = K2, or an
     IEEEG1 without power fractions."""
     g = case.governors
-    need = {TG: ("Ts", "Tc", "T5"), TGOV1: ("Ts", "Tc"), IEEEG1: ("Ts",),
-            HYGOV: ("Ts", "Tc", "T4"), IEESGO: ()}
+    need = {
+        TG: ("Ts", "Tc", "T5"),
+        TGOV1: ("Ts", "Tc"),
+        IEEEG1: ("Ts",),
+        HYGOV: ("Ts", "Tc", "T4"),
+        IEESGO: (),
+    }
     for r in range(len(g)):
         for name in need[int(g.type[r])]:
             if getattr(g, name)[r] < LBND:
-                raise CaseError(f"tg_con row {r + 1}, field '{name}': must be >= {LBND} s for "
-                                f"governor type {int(g.type[r])}")
+                raise CaseError(
+                    f"tg_con row {r + 1}, field '{name}': must be >= {LBND} s for "
+                    f"governor type {int(g.type[r])}"
+                )
         if g.type[r] == HYGOV and g.K2[r] == 0:
-            raise CaseError(f"tg_con row {r + 1}, field 'K2': must be non-zero for governor "
-                            f"type {HYGOV}")
+            raise CaseError(
+                f"tg_con row {r + 1}, field 'K2': must be non-zero for governor type {HYGOV}"
+            )
     K = np.column_stack([g.K1 + g.K2, g.K3 + g.K4, g.K5 + g.K6, g.K7 + g.K8]).reshape(len(g), 4)
     bad = np.nonzero((g.type == IEEEG1) & (K.sum(axis=1) <= 0))[0]
     if bad.size:
-        raise CaseError(f"tg_con row {bad[0] + 1}, fields 'K1'..'K8': IEEEG1 power fractions "
-                        "must sum to > 0")
+        raise CaseError(
+            f"tg_con row {bad[0] + 1}, fields 'K1'..'K8': IEEEG1 power fractions must sum to > 0"
+        )
     hy = g.type == HYGOV
     return GovernorParams(
-        kind=g.type.astype(int), mac=np.array([case.machine_index(m) for m in g.machine], int),
-        **{n: getattr(g, n).copy() for n in TABLE_FIELDS}, K=np.where(hy[:, None], 0.0, K),
-        **{n: np.where(hy, g.col(17 + i), 0.0) for i, n in enumerate(HYGOV_FIELDS)})
+        kind=g.type.astype(int),
+        mac=np.array([case.machine_index(m) for m in g.machine], int),
+        **{n: getattr(g, n).copy() for n in TABLE_FIELDS},
+        K=np.where(hy[:, None], 0.0, K),
+        **{n: np.where(hy, g.col(17 + i), 0.0) for i, n in enumerate(HYGOV_FIELDS)},
+    )
 
 
 def initialise(p: GovernorParams, pmech0):
@@ -162,8 +187,10 @@ def initialise(p: GovernorParams, pmech0):
     gate = np.where(hy, pmech0 / np.where(hy, p.T5, 1.0) + p.qNL, gate)
     bad = np.nonzero(beyond(gate, p.Tmin, p.Tmax))[0]
     if bad.size:
-        raise CaseError(f"tg_con row {bad[0] + 1}: initial power order {gate[bad[0]]:.4f} pu "
-                        "outside [Tmin, Tmax]")
+        raise CaseError(
+            f"tg_con row {bad[0] + 1}: initial power order {gate[bad[0]]:.4f} pu "
+            "outside [Tmin, Tmax]"
+        )
     tg, t1, g1 = p.kind == TG, p.kind == TGOV1, p.kind == IEEEG1
     x[0] = np.where(g1, 0.0, pmech0)
     x[1] = np.where(tg | t1, (1 - p.T3 / tc) * pmech0, gate)
@@ -171,7 +198,7 @@ def initialise(p: GovernorParams, pmech0):
     x[3:] = np.where(g1, gate, 0.0)
     x[:5] = np.where(sg, np.array([0.0, 0.0, 1.0, 1.0, 1.0])[:, None] * gate, x[:5])
     x[:4] = np.where(hy, np.array([0.0, 1.0, 1.0, 1.0])[:, None] * gate, x[:4])
-    x = x[:p.n_slots()]
+    x = x[: p.n_slots()]
     x[2:] *= p.has_state()[2:] | tg
     return x, np.where(hy, p.Rp * gate, gate)
 
@@ -226,6 +253,7 @@ def _fractions(P, k, y):
 # -- tg (PST tg.m) and TGOV1: power order, servo (tg: input limited; TGOV1: non-windup
 # -- valve), lead-lag T_3/T_c; tg: then the lead-lag T_4/T_5; TGOV1: minus D_t (omega - 1)
 
+
 @kernel(inline="always")
 def _tg_pmech(P, x, k):
     """tg: (1 + s T_4)/(1 + s T_5) of the output of (1 + s T_3)/(1 + s T_c)."""
@@ -256,6 +284,7 @@ def _tg_derivatives(P, x, k, omega, dx):
 
 # -- IEEEG1: lead-lag on K (omega - 1), rate- and position-limited gate, lags T4..T7
 
+
 @kernel(inline="always")
 def _ieeeg1_lags(P, x, k, dx=None):
     """Outputs (4,) of the IEEEG1 lags T4..T7 in series on the gate (a lag below 1e-3 s
@@ -281,6 +310,7 @@ def _ieeeg1_derivatives(P, x, k, omega, dx):
 
 
 # -- HYGOV (machine base): filter, gate integrator, gate servo, water column
+
 
 @kernel
 def _head(q, g):
@@ -311,6 +341,7 @@ def _hygov_derivatives(P, x, k, omega, dx):
 
 # -- IEESGO: K_1 (omega - 1) through 1/(1 + s T_1), (1 + s T_2)/(1 + s T_3); the order
 # -- limited to [PMIN, PMAX] through the lags T_4, T_5, T_6
+
 
 @kernel(inline="always")
 def _ieesgo_lags(P, x, k, omega, dx=None):

@@ -15,8 +15,8 @@ psi_kq; `mac_tra` uses the first four, `mac_em` the first two (the others stay c
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jit.decorators import kernel
 
+from stabctl._jit.decorators import kernel
 from stabctl.case import Case
 from stabctl.case.params import MACHINE
 from stabctl.models._declared import check_packed, layout, pack, params_class
@@ -27,16 +27,25 @@ STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
 
 #: mac_con fields (stabctl.case.params.MACHINE) of MachineParams: columns 4-17 (xl .. D0,
 #: after PST's substitutions) and the generation fractions pfrac, qfrac (22, 23)
-TABLE_FIELDS = (*MACHINE.names[MACHINE.col("xl") - 1:MACHINE.col("D0")], "pfrac", "qfrac")
+TABLE_FIELDS = (*MACHINE.names[MACHINE.col("xl") - 1 : MACHINE.col("D0")], "pfrac", "qfrac")
 #: packed parameter matrix of the kernels, (column name, MachineParams attribute) per
 #: column: kind, mac_pot, mac_con columns 4-17 in declared order, PST's derived constants
 #: (mac_pot columns 6-15), saturation, initial E'q, speed effects, the air-gap saturation
 #: A, B and gamma_qd of PSS/E's GENROU
-PACKED = (("KIND", "kind"), ("POT", "mac_pot"),
-          *((n.upper(), n) for n in TABLE_FIELDS[:-2]),
-          *((f"P{k}", f"p{k}") for k in range(6, 16)),
-          ("SA", "sat_a"), ("SB", "sat_b"), ("SC", "sat_c"), ("EQP0", "eqp0"),
-          ("SPEED", "speed_effects"), ("GA", "gap_a"), ("GB", "gap_b"), ("GQD", "gqd"))
+PACKED = (
+    ("KIND", "kind"),
+    ("POT", "mac_pot"),
+    *((n.upper(), n) for n in TABLE_FIELDS[:-2]),
+    *((f"P{k}", f"p{k}") for k in range(6, 16)),
+    ("SA", "sat_a"),
+    ("SB", "sat_b"),
+    ("SC", "sat_c"),
+    ("EQP0", "eqp0"),
+    ("SPEED", "speed_effects"),
+    ("GA", "gap_a"),
+    ("GB", "gap_b"),
+    ("GQD", "gqd"),
+)
 #: the kernels' column of each PACKED name: P[i, K.XDP]
 K = layout("MachineColumns", PACKED)
 
@@ -65,13 +74,21 @@ class MachineParams:
 
     def packed(self, eqp0: np.ndarray) -> np.ndarray:
         """Parameter matrix (n_mac, len(PACKED)) for the compiled kernels; eqp0 = initial E'q."""
-        with np.errstate(divide="ignore", invalid="ignore"):   # mac_em: 0/0 constants unused
+        with np.errstate(divide="ignore", invalid="ignore"):  # mac_em: 0/0 constants unused
             return self._packed(eqp0)
 
     def _packed(self, eqp0):
         sat = {f"sat_{c}": self.sat[:, k] for k, c in enumerate("abc")}
-        return np.nan_to_num(pack(self, PACKED, eqp0=eqp0, gap_a=self.air_gap_sat[:, 0],
-                                  gap_b=self.air_gap_sat[:, 1], **sat))
+        return np.nan_to_num(
+            pack(
+                self,
+                PACKED,
+                eqp0=eqp0,
+                gap_a=self.air_gap_sat[:, 0],
+                gap_b=self.air_gap_sat[:, 1],
+                **sat,
+            )
+        )
 
     @property
     def x_network(self) -> np.ndarray:
@@ -169,15 +186,39 @@ def machine_params(case: Case) -> MachineParams:
     Tqop = np.where(m.Tqop == 0, 999.0, m.Tqop)
     Tqopp = np.where(m.Tqopp == 0, 999.0, m.Tqopp)
     return MachineParams(
-        kind=kind, bus_idx=case.bus_indices(m.bus), mac_pot=case.base_mva / m.mva,
-        ra=m.ra.copy(), xl=m.xl.copy(), xd=m.xd.copy(), xdp=m.xdp.copy(), xdpp=m.xdpp.copy(),
-        xq=m.xq.copy(), xqp=xqp, xqpp=xqpp, Tdop=m.Tdop.copy(), Tdopp=m.Tdopp.copy(),
-        Tqop=Tqop, Tqopp=Tqopp, H=m.H.copy(), D0=m.D0.copy(), pfrac=m.pfrac.copy(),
-        qfrac=m.qfrac.copy(), sat=saturation_coefficients(m.S10, m.S12),
-        basrad=2 * np.pi * case.freq_hz, speed_effects=sub & (m.speed_effects == 1),
-        air_gap_sat=np.column_stack(quadratic_fit(
-            1.0, m.S10, 1.2, m.S12, sub & (m.psse_sat == 1),
-            "mac_con row {row}: GENROU saturation points (1.0, S(1.0)), (1.2, S(1.2))")))
+        kind=kind,
+        bus_idx=case.bus_indices(m.bus),
+        mac_pot=case.base_mva / m.mva,
+        ra=m.ra.copy(),
+        xl=m.xl.copy(),
+        xd=m.xd.copy(),
+        xdp=m.xdp.copy(),
+        xdpp=m.xdpp.copy(),
+        xq=m.xq.copy(),
+        xqp=xqp,
+        xqpp=xqpp,
+        Tdop=m.Tdop.copy(),
+        Tdopp=m.Tdopp.copy(),
+        Tqop=Tqop,
+        Tqopp=Tqopp,
+        H=m.H.copy(),
+        D0=m.D0.copy(),
+        pfrac=m.pfrac.copy(),
+        qfrac=m.qfrac.copy(),
+        sat=saturation_coefficients(m.S10, m.S12),
+        basrad=2 * np.pi * case.freq_hz,
+        speed_effects=sub & (m.speed_effects == 1),
+        air_gap_sat=np.column_stack(
+            quadratic_fit(
+                1.0,
+                m.S10,
+                1.2,
+                m.S12,
+                sub & (m.psse_sat == 1),
+                "mac_con row {row}: GENROU saturation points (1.0, S(1.0)), (1.2, S(1.2))",
+            )
+        ),
+    )
 
 
 check_packed(MachineParams, PACKED, ("eqp0", "gap_a", "gap_b", "sat_a", "sat_b", "sat_c"))
@@ -210,7 +251,7 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     """
     v = V[p.bus_idx]
     S = S_gen[p.bus_idx].real * p.pfrac + 1j * S_gen[p.bus_idx].imag * p.qfrac
-    I = np.conj(S / v) * p.mac_pot                       # terminal current, machine base
+    I = np.conj(S / v) * p.mac_pot  # terminal current, machine base
     x = np.zeros((6, p.n))
     x[1] = 1.0
     sub = p.kind == SUB
@@ -240,7 +281,7 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     E = np.where(p.kind == EM, E_em, E_tr)
     edp_t, eqp_t = to_dq(x[0], E)
     a, b, c = p.sat.T
-    esat = np.where(eqp_t < 0.8, eqp_t, a * eqp_t ** 2 + b * eqp_t + c)
+    esat = np.where(eqp_t < 0.8, eqp_t, a * eqp_t**2 + b * eqp_t + c)
     vex_tra = np.where(p.kind == EM, eqp_t, esat + (p.xd - p.xdp) * curdg)
     x[2] = np.where(sub, eqp_sub, eqp_t)
     x[3] = np.where(sub, psikd, 0.0)
@@ -257,8 +298,10 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
 @kernel
 def _fluxes(P, x, i):
     """psi"_d, psi"_q of machine i (subtransient model)."""
-    return (P[i, K.P9] * x[2, i] + P[i, K.P10] * x[3, i],
-            P[i, K.P14] * x[4, i] + P[i, K.P15] * x[5, i])
+    return (
+        P[i, K.P9] * x[2, i] + P[i, K.P10] * x[3, i],
+        P[i, K.P14] * x[4, i] + P[i, K.P15] * x[5, i],
+    )
 
 
 @kernel
@@ -312,8 +355,11 @@ def _field_current(P, x, i, cdg):
     e = x[2, i]
     if kind == SUB:
         psidpp, psiqpp = _fluxes(P, x, i)
-        return (e + P[i, K.P7] * (cdg + P[i, K.P6] * (e - x[3, i] - P[i, K.P8] * cdg))
-                + _gap_saturation(P, i, psidpp, psiqpp) * psidpp)
+        return (
+            e
+            + P[i, K.P7] * (cdg + P[i, K.P6] * (e - x[3, i] - P[i, K.P8] * cdg))
+            + _gap_saturation(P, i, psidpp, psiqpp) * psidpp
+        )
     if kind == TRA:
         esat = e if P[i, K.EQP0] < 0.8 else P[i, K.SA] * e * e + P[i, K.SB] * e + P[i, K.SC]
         return esat + (P[i, K.XD] - P[i, K.XDP]) * cdg
@@ -354,9 +400,11 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
             dx[3, i] = Eqpe / P[i, K.TDOPP]
             # PSS/E's GENROU saturation: - gamma_qd S_e psi"_q (ANDES genrou.py XaqI1q, whose
             # e'_d, psi"_q are -E'd, -psi"_q here)
-            dx[4, i] = (-x[4, i] + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe)
-                        - P[i, K.GQD] * _gap_saturation(P, i, psidpp, psiqpp) * psiqpp
-                        ) / P[i, K.TQOP]
+            dx[4, i] = (
+                -x[4, i]
+                + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe)
+                - P[i, K.GQD] * _gap_saturation(P, i, psidpp, psiqpp) * psiqpp
+            ) / P[i, K.TQOP]
             dx[5, i] = Edpe / P[i, K.TQOPP]
             torque = pmech[i] / ws - (psidpp * cqg - psiqpp * cdg)
         elif kind == TRA:
@@ -364,7 +412,7 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
             eq = x[2, i] - P[i, K.RA] * cqg - P[i, K.XDP] * cdg
             dx[2, i] = (vex[i] - fld) / P[i, K.TDOP]
             dx[4, i] = (-x[4, i] + (P[i, K.XQ] - P[i, K.XQP]) * cqg) / P[i, K.TQOP]
-            torque = pmech[i] - ((eq * curq + ed * curd) * pot + P[i, K.RA] * (cdg ** 2 + cqg ** 2))
+            torque = pmech[i] - ((eq * curq + ed * curd) * pot + P[i, K.RA] * (cdg**2 + cqg**2))
         else:
             ed = x[4, i] + P[i, K.XDP] * cqg
             eq = x[2, i] - P[i, K.XDP] * cdg

@@ -20,34 +20,51 @@ the same machine.
 from __future__ import annotations
 
 import numpy as np
-from stabctl._jit.decorators import kernel
 
+from stabctl._jit.decorators import kernel
 from stabctl.case import Case
 from stabctl.case.params import PSS
 from stabctl.errors import CaseError
 from stabctl.models._declared import check_packed, layout, pack, params_class
-from stabctl.models.blocks import (GAIN_AFTER, GAIN_BEFORE, LBND, clip, lag, leadlag,
-                                   washout)
+from stabctl.models.blocks import GAIN_AFTER, GAIN_BEFORE, LBND, clip, lag, leadlag, washout
 
 PST_SPEED, PST_POWER, PSSE, STAB2A = 1, 2, 3, 4
-SPEED, POWER = 1, 3                           # PSS/E input codes (ICS, MODE)
-STATE_NAMES = {PST_SPEED: ("washout", "leadlag1", "leadlag2"),
-               PST_POWER: ("washout", "leadlag1", "leadlag2"),
-               PSSE: ("lag1", "lag2", "filter1", "filter2", "filter3", "filter4", "washout",
-                      "leadlag1", "leadlag2", "leadlag3"),
-               STAB2A: ("washout1", "washout2", "washout3", "lag3", "lag5a", "lag5b")}
+SPEED, POWER = 1, 3  # PSS/E input codes (ICS, MODE)
+STATE_NAMES = {
+    PST_SPEED: ("washout", "leadlag1", "leadlag2"),
+    PST_POWER: ("washout", "leadlag1", "leadlag2"),
+    PSSE: (
+        "lag1",
+        "lag2",
+        "filter1",
+        "filter2",
+        "filter3",
+        "filter4",
+        "washout",
+        "leadlag1",
+        "leadlag2",
+        "leadlag3",
+    ),
+    STAB2A: ("washout1", "washout2", "washout3", "lag3", "lag5a", "lag5b"),
+}
 #: pss_con fields (stabctl.case.params.PSS) the kernels take: columns 3-18 (type 3's
 #: filter A1..A6 enters as its canonical form nf, fe, fa, fc)
 TABLE_FIELDS = PSS.names[2:18]
 #: packed parameter matrix of the kernels, (column name, PssParams attribute) per
 #: column: pss_con columns 1-18 in declared order, then the filter (a_0..a_3, c_0..c_3)
 _SUFFIX = {"ymax": "MAX", "ymin": "MIN", "input1": "IN1", "input2": "IN2"}
-PACKED = (("KIND", "kind"), ("MAC", "mac"),
-          *((_SUFFIX.get(n, n.upper()), n) for n in TABLE_FIELDS), ("NF", "nf"), ("FE", "fe"),
-          *((f"FA{i}", f"fa_{i}") for i in range(4)), *((f"FC{i}", f"fc_{i}") for i in range(4)))
+PACKED = (
+    ("KIND", "kind"),
+    ("MAC", "mac"),
+    *((_SUFFIX.get(n, n.upper()), n) for n in TABLE_FIELDS),
+    ("NF", "nf"),
+    ("FE", "fe"),
+    *((f"FA{i}", f"fa_{i}") for i in range(4)),
+    *((f"FC{i}", f"fc_{i}") for i in range(4)),
+)
 #: the kernels' column of each PACKED name: P[k, S.TW]
 S = layout("PssColumns", PACKED)
-W_PSSE, LL_PSSE = 6, 7                        # type 3 washout and first lead-lag slots
+W_PSSE, LL_PSSE = 6, 7  # type 3 washout and first lead-lag slots
 
 
 @params_class(("kind", "mac"), TABLE_FIELDS)
@@ -74,8 +91,12 @@ class PssParams:
     def packed(self) -> np.ndarray:
         """Parameter matrix (n_pss, len(PACKED)) for the compiled kernels, columns as
         :data:`PACKED`."""
-        return pack(self, PACKED, **{f"fa_{i}": self.fa[:, i] for i in range(4)},
-                    **{f"fc_{i}": self.fc[:, i] for i in range(4)})
+        return pack(
+            self,
+            PACKED,
+            **{f"fa_{i}": self.fa[:, i] for i in range(4)},
+            **{f"fc_{i}": self.fc[:, i] for i in range(4)},
+        )
 
     @property
     def has_T4(self):
@@ -101,17 +122,19 @@ class PssParams:
         act[:3] |= s2
         act[3] |= s2 & (self.Tr1 >= LBND)
         act[4:6] |= s2 & (self.T6 >= LBND)
-        return act[:self.n_slots()]
+        return act[: self.n_slots()]
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
         e = self.kind >= PSSE
-        return (("pss_con T_w", self.Tw, np.ones(self.n, bool)),
-                ("pss_con T_2", self.T2, (self.kind <= PST_POWER) | (e & (self.T2 >= LBND))),
-                ("pss_con T_4", self.T4, self.T4 >= LBND),
-                ("pss_con T_6", self.T6, e & (self.T6 >= LBND)),
-                ("pss_con Tr1", self.Tr1, e & (self.Tr1 >= LBND)),
-                ("pss_con Tr2", self.Tr2, e & (self.input2 != 0) & (self.Tr2 >= LBND)))
+        return (
+            ("pss_con T_w", self.Tw, np.ones(self.n, bool)),
+            ("pss_con T_2", self.T2, (self.kind <= PST_POWER) | (e & (self.T2 >= LBND))),
+            ("pss_con T_4", self.T4, self.T4 >= LBND),
+            ("pss_con T_6", self.T6, e & (self.T6 >= LBND)),
+            ("pss_con Tr1", self.Tr1, e & (self.Tr1 >= LBND)),
+            ("pss_con Tr2", self.Tr2, e & (self.input2 != 0) & (self.Tr2 >= LBND)),
+        )
 
 
 check_packed(PssParams, PACKED, (*(f"fa_{i}" for i in range(4)), *(f"fc_{i}" for i in range(4))))
@@ -131,26 +154,35 @@ def pss_params(case: Case) -> PssParams:
     nf, fa, fc, fe = _filters(s)
     given = {n: getattr(s, n).copy() for n in TABLE_FIELDS}
     given.update(input1=np.where(e, s.input1, 0), input2=np.where(e, s.input2, 0))
-    return PssParams(kind=s.type.astype(int),
-                     mac=np.array([case.machine_index(m) for m in s.machine], int),
-                     **given, nf=nf, fa=fa, fc=fc, fe=fe)
+    return PssParams(
+        kind=s.type.astype(int),
+        mac=np.array([case.machine_index(m) for m in s.machine], int),
+        **given,
+        nf=nf,
+        fa=fa,
+        fc=fc,
+        fe=fe,
+    )
 
 
 def _check_psse(s) -> None:
     for r in np.nonzero((s.type <= PST_POWER) & (s.T2 < LBND))[0]:
-        raise CaseError(f"pss_con row {r + 1}, field 'T2': the first lead-lag needs "
-                        f"T2 >= {LBND} s")
+        raise CaseError(f"pss_con row {r + 1}, field 'T2': the first lead-lag needs T2 >= {LBND} s")
     for r in np.nonzero((s.type >= PSSE) & (s.Tw < LBND))[0]:
         raise CaseError(f"pss_con row {r + 1}, field 'Tw': washout needs Tw >= {LBND} s")
     for r in np.nonzero(s.type == PSSE)[0]:
         if s.input1[r] not in (SPEED, POWER) or s.input2[r] not in (0, SPEED, POWER):
-            raise CaseError(f"pss_con row {r + 1}, fields 'input1', 'input2': PSS/E input codes "
-                            "1 (speed) or 3 (electrical power) only (input2 may be 0)")
+            raise CaseError(
+                f"pss_con row {r + 1}, fields 'input1', 'input2': PSS/E input codes "
+                "1 (speed) or 3 (electrical power) only (input2 may be 0)"
+            )
         if s.Tw[r] < LBND:
             raise CaseError(f"pss_con row {r + 1}, field 'Tw': washout needs Tw >= {LBND} s")
-        for lead, lag in (("T1", "T2"), ("T3", "T4"), ("T5", "T6")):
-            if getattr(s, lag)[r] < LBND and getattr(s, lead)[r] != 0:
-                raise CaseError(f"pss_con row {r + 1}, field '{lag}': lead {lead} without lag")
+        for lead_name, lag_name in (("T1", "T2"), ("T3", "T4"), ("T5", "T6")):
+            if getattr(s, lag_name)[r] < LBND and getattr(s, lead_name)[r] != 0:
+                raise CaseError(
+                    f"pss_con row {r + 1}, field '{lag_name}': lead {lead_name} without lag"
+                )
 
 
 def _filters(s):
@@ -163,12 +195,14 @@ def _filters(s):
         den = np.polymul([s.A4[r], s.A3[r], 1.0], [s.A2[r], s.A1[r], 1.0])[::-1]  # ascending
         num = np.array([1.0, s.A5[r], s.A6[r]])
         order = int(np.max(np.nonzero(den)[0]))
-        if np.any(num[order + 1:] != 0):
-            raise CaseError(f"pss_con row {r + 1}, fields 'A5', 'A6': filter numerator of "
-                            f"higher order than its denominator ({order})")
+        if np.any(num[order + 1 :] != 0):
+            raise CaseError(
+                f"pss_con row {r + 1}, fields 'A5', 'A6': filter numerator of "
+                f"higher order than its denominator ({order})"
+            )
         if order == 0:
             continue
-        a, b = den[:order] / den[order], np.append(num, np.zeros(3))[:order + 1] / den[order]
+        a, b = den[:order] / den[order], np.append(num, np.zeros(3))[: order + 1] / den[order]
         nf[r], fe[r] = order, b[order]
         fa[r, :order] = a
         fc[r, :order] = b[:order] - b[order] * a
@@ -198,7 +232,7 @@ def initialise(p: PssParams, u1, u2):
     x[1] = np.where(e, y2, 0.0)
     x[2] = np.where(e & (p.nf >= 1), v / np.where(p.nf >= 1, p.fa[:, 0], 1.0), 0.0)
     x[W_PSSE] = np.where(e, v, 0.0)
-    return x[:p.n_slots()]
+    return x[: p.n_slots()]
 
 
 # -- compiled runtime kernels: P is PssParams.packed(), x the PSS block of the state

@@ -26,6 +26,8 @@ def quadratic_fit(E1, SE1, E2, SE2, rows, what: str):
         B = SE2 * E2 * (a - 1) ** 2 / (E1 - E2) ** 2
     bad = np.nonzero(~off & ~np.isfinite(A + B))[0]
     if bad.size:
-        raise CaseError(what.format(row=bad[0] + 1) + " give no quadratic fit (need E1 != E2, "
-                        "SE1 E1 != SE2 E2, same sign)")
+        raise CaseError(
+            what.format(row=bad[0] + 1) + " give no quadratic fit (need E1 != E2, "
+            "SE1 E1 != SE2 E2, same sign)"
+        )
     return np.where(off, 0.0, A), np.where(off, 0.0, B)

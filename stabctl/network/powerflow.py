@@ -99,10 +99,25 @@ class PowerFlowResult:
         b = self.case.buses
         qmax, qmin, vmax, vmin = _limits(self.case)
         kv = np.where(b.kv == 0, 1.0, b.kv)
-        return np.column_stack([
-            b.number, self.vmag, self.vang_deg, self.pgen, self.qgen, self.pload,
-            self.qload, b.gshunt, b.bshunt, self.kind, qmax, qmin, kv, vmax, vmin,
-        ])
+        return np.column_stack(
+            [
+                b.number,
+                self.vmag,
+                self.vang_deg,
+                self.pgen,
+                self.qgen,
+                self.pload,
+                self.qload,
+                b.gshunt,
+                b.bshunt,
+                self.kind,
+                qmax,
+                qmin,
+                kv,
+                vmax,
+                vmin,
+            ]
+        )
 
     def solved_case(self) -> Case:
         """The case with its bus table replaced by :meth:`bus_matrix` and the final taps
@@ -219,7 +234,7 @@ def _newton(case, ybus, st: _State, tol, max_iter, q_limits):
         if not np.all(np.isfinite(dx)):
             _fail(case, it, dp, dq, "non-finite Newton step")
         st.vang[ang_idx] += dx[: ang_idx.size]
-        st.vmag[mag_idx] += dx[ang_idx.size:]
+        st.vmag[mag_idx] += dx[ang_idx.size :]
         np.clip(st.vmag, vmin, vmax, out=st.vmag)
         dp, dq, s = _mismatch(ybus, st)
         if q_limits and _apply_q_limits(st, s, qmax, qmin):
@@ -248,16 +263,20 @@ def _check_islands(case: Case, drop=()) -> None:
     keep[[d for d in drop if 0 <= d < keep.size]] = False
     f = case.bus_indices(case.branches.from_bus[keep])
     t = case.bus_indices(case.branches.to_bus[keep])
-    _, label = connected_components(sp.coo_matrix((np.ones(f.size), (f, t)), shape=(n, n)),
-                                    directed=False)
+    _, label = connected_components(
+        sp.coo_matrix((np.ones(f.size), (f, t)), shape=(n, n)), directed=False
+    )
     dead = np.flatnonzero(~np.isin(label, label[case.buses.kind == SWING]))
     if dead.size:
         nums = [int(b) for b in case.buses.number[dead]]
-        listing = ", ".join(map(str, nums[:10])) + (f" and {len(nums) - 10} more"
-                                                    if len(nums) > 10 else "")
+        listing = ", ".join(map(str, nums[:10])) + (
+            f" and {len(nums) - 10} more" if len(nums) > 10 else ""
+        )
         cause = "the dropped branch(es)" if drop else "the case data (no branch joins them)"
-        raise PowerFlowError(f"power flow of case '{case.name}': bus(es) {listing} have no "
-                             f"path to a swing bus: an island left by {cause}")
+        raise PowerFlowError(
+            f"power flow of case '{case.name}': bus(es) {listing} have no "
+            f"path to a swing bus: an island left by {cause}"
+        )
 
 
 def _move_taps(case: Case, vmag, taps) -> bool:
@@ -279,12 +298,18 @@ def _move_taps(case: Case, vmag, taps) -> bool:
         i, step, tmin, tmax = to_idx[k], br.tapstep[k], br.tapmin[k], br.tapmax[k]
         if high[i]:
             err = (vmag[i] - vmax[i]) / vmax[i]
-            tap = taps[k] + step if err < step else (
-                np.ceil((taps[k] + err - tmin) / step) * step + tmin)
+            tap = (
+                taps[k] + step
+                if err < step
+                else (np.ceil((taps[k] + err - tmin) / step) * step + tmin)
+            )
         else:
             err = (vmin[i] - vmag[i]) / vmin[i]
-            tap = taps[k] - step if err < step else (
-                np.fix((taps[k] - err - tmin) / step) * step + tmin)
+            tap = (
+                taps[k] - step
+                if err < step
+                else (np.fix((taps[k] - err - tmin) / step) * step + tmin)
+            )
         taps[k] = min(tmax, max(tap, tmin))
     return bool(np.any(taps != old))
 
@@ -298,10 +323,19 @@ def _initial_state(case: Case) -> tuple[_State, np.ndarray, np.ndarray]:
         idx = case.bus_indices(case.injections.bus)
         np.add.at(inj_p, idx, case.injections.p)
         np.add.at(inj_q, idx, case.injections.q)
-    return _State(
-        vmag=b.vmag.copy(), vang=np.deg2rad(b.vang_deg), pg=b.pgen + inj_p, qg=b.qgen + inj_q,
-        pl=b.pload.copy(), ql=b.qload.copy(), kind=b.kind.astype(int),
-    ), inj_p, inj_q
+    return (
+        _State(
+            vmag=b.vmag.copy(),
+            vang=np.deg2rad(b.vang_deg),
+            pg=b.pgen + inj_p,
+            qg=b.qgen + inj_q,
+            pl=b.pload.copy(),
+            ql=b.qload.copy(),
+            kind=b.kind.astype(int),
+        ),
+        inj_p,
+        inj_q,
+    )
 
 
 def _report(case: Case, st: _State, s, inj_p, inj_q):
@@ -379,7 +413,7 @@ def solve_powerflow(
     _check_islands(case, drop)
     taps = case.branches.tap.copy()
     taps[taps == 0] = 1.0
-    for tap_it in range(1, _TAP_ITER_MAX + 1):
+    for tap_it in range(1, _TAP_ITER_MAX + 1):  # noqa: B007 - the count is reported after
         ybus = build_ybus(case, drop=drop, taps=taps)
         st, inj_p, inj_q = _initial_state(case)
         iters, mism, s, converged, dp, dq = _newton(case, ybus, st, tol, max_iter, q_limits)
@@ -388,14 +422,28 @@ def solve_powerflow(
     else:
         warnings.warn(
             f"power flow of case '{case.name}': voltages still at limits after "
-            f"{_TAP_ITER_MAX} tap iterations", RuntimeWarning, stacklevel=2)
+            f"{_TAP_ITER_MAX} tap iterations",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     if not converged:
         _fail(case, iters, dp, dq, "did not converge")
     pg, qg, pl, ql, limited = _report(case, st, s, inj_p, inj_q)
     return PowerFlowResult(
-        case=case, vmag=st.vmag, vang=st.vang, pgen=pg, qgen=qg, pload=pl, qload=ql,
-        kind=st.kind, q_limited=limited, iterations=iters, max_mismatch=mism, taps=taps,
-        tap_iterations=tap_it, dropped=drop,
+        case=case,
+        vmag=st.vmag,
+        vang=st.vang,
+        pgen=pg,
+        qgen=qg,
+        pload=pl,
+        qload=ql,
+        kind=st.kind,
+        q_limited=limited,
+        iterations=iters,
+        max_mismatch=mism,
+        taps=taps,
+        tap_iterations=tap_it,
+        dropped=drop,
     )
 
 
@@ -445,14 +493,19 @@ def scale_load(case: Case, factor: float, *, q_limits: bool = True) -> Case:
     if factor == 1.0:
         return case
     b = case.buses
-    scaled = case.replace(name=f"{case.name}@{factor:g}",
-                          buses=b.replace(pload=b.pload * factor, qload=b.qload * factor,
-                                          pgen=_dispatch(case, factor)))
+    scaled = case.replace(
+        name=f"{case.name}@{factor:g}",
+        buses=b.replace(
+            pload=b.pload * factor, qload=b.qload * factor, pgen=_dispatch(case, factor)
+        ),
+    )
     try:
         solve_powerflow(scaled, q_limits=q_limits)
     except PowerFlowError as exc:
-        raise PowerFlowError(f"load level {factor:g} ({100 * factor:g} % of the base load "
-                             f"of case '{case.name}'): {exc}") from None
+        raise PowerFlowError(
+            f"load level {factor:g} ({100 * factor:g} % of the base load "
+            f"of case '{case.name}'): {exc}"
+        ) from None
     return scaled
 
 

@@ -21,9 +21,9 @@ import numpy as np
 import scipy.linalg as la
 from numba import types
 from numba.extending import get_cython_function_address
+
 from stabctl._jit.arrays import assign, max_abs
 from stabctl._jit.decorators import kernel
-
 from stabctl.case import Case
 from stabctl.errors import SimulationError
 from stabctl.network.ybus import build_ybus
@@ -41,11 +41,11 @@ NEWTON_TOL, NEWTON_MAX_ITER = 1e-10, 50
 # name: numba links the symbol in each process that loads a kernel calling it, so they stay
 # cacheable (a ctypes pointer would not).  np.linalg.solve in a kernel compiled numba's
 # copy-in and shape-message code as well: about 3 s of a cold first call.
-llvm.add_symbol("stabctl_dgesv",
-                get_cython_function_address("scipy.linalg.cython_lapack", "dgesv"))
+llvm.add_symbol("stabctl_dgesv", get_cython_function_address("scipy.linalg.cython_lapack", "dgesv"))
 _INT, _F8 = types.CPointer(types.intc), types.CPointer(types.float64)
-_dgesv = types.ExternalFunction("stabctl_dgesv",
-                                types.void(_INT, _INT, _F8, _INT, _INT, _F8, _INT, _INT))
+_dgesv = types.ExternalFunction(
+    "stabctl_dgesv", types.void(_INT, _INT, _F8, _INT, _INT, _F8, _INT, _INT)
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,8 +65,15 @@ class ReducedNetwork:
     Z22: np.ndarray
 
 
-def reduce_network(case: Case, y_shunt: np.ndarray, y_mac: np.ndarray, mac_bus: np.ndarray,
-                   mac_online: np.ndarray, nc_idx: np.ndarray, n_bus_orig: int) -> ReducedNetwork:
+def reduce_network(
+    case: Case,
+    y_shunt: np.ndarray,
+    y_mac: np.ndarray,
+    mac_bus: np.ndarray,
+    mac_online: np.ndarray,
+    nc_idx: np.ndarray,
+    n_bus_orig: int,
+) -> ReducedNetwork:
     """Kron-reduce the network of `case` (a stage variant, possibly with extra fault buses).
 
     Args:
@@ -100,7 +107,7 @@ def reduce_network(case: Case, y_shunt: np.ndarray, y_mac: np.ndarray, mac_bus: 
     Yek, Yee = full[np.ix_(elim, keep)], full[np.ix_(elim, elim)]
     try:
         lu = la.lu_factor(Yee, check_finite=True)
-        rec = -la.lu_solve(lu, Yek)            # eliminated voltages from kept ones
+        rec = -la.lu_solve(lu, Yek)  # eliminated voltages from kept ones
     except (la.LinAlgError, ValueError) as exc:
         raise SimulationError(f"singular network in stage of case '{case.name}': {exc}") from exc
     if not np.all(np.isfinite(rec)):
@@ -112,9 +119,14 @@ def reduce_network(case: Case, y_shunt: np.ndarray, y_mac: np.ndarray, mac_bus: 
     R[bus_elim] = rec[elim >= n_mac]
     c = np.ascontiguousarray
     Y22 = c(Yred[n_mac:, n_mac:])
-    return ReducedNetwork(Y11=c(Yred[:n_mac, :n_mac]), Y12=c(Yred[:n_mac, n_mac:]),
-                          Y21=c(Yred[n_mac:, :n_mac]), Y22=Y22, R=c(R[:n_bus_orig]),
-                          Z22=c(np.linalg.inv(Y22)) if Y22.size else Y22.copy())
+    return ReducedNetwork(
+        Y11=c(Yred[:n_mac, :n_mac]),
+        Y12=c(Yred[:n_mac, n_mac:]),
+        Y21=c(Yred[n_mac:, :n_mac]),
+        Y22=Y22,
+        R=c(R[:n_bus_orig]),
+        Z22=c(np.linalg.inv(Y22)) if Y22.size else Y22.copy(),
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -206,7 +218,7 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held):
     it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, held, vmin)
     if it >= 0:
         return it
-    low = vmin < V_SWITCH + 0.05         # every bus that came near the switch
+    low = vmin < V_SWITCH + 0.05  # every bus that came near the switch
     assign(V, V_start)
     it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, low, vmin)
     if it >= 0:
@@ -243,10 +255,18 @@ def _lapack_solve(A, b):
     n = A.shape[0]
     a = np.asfortranarray(A)
     x = b.copy()
-    dims = np.array([n, 1, 0], np.intc)    # n (also the leading dimensions), nrhs, info
+    dims = np.array([n, 1, 0], np.intc)  # n (also the leading dimensions), nrhs, info
     ipiv = np.empty(n, np.intc)
-    _dgesv(dims.ctypes, dims[1:].ctypes, a.ctypes, dims.ctypes, ipiv.ctypes, x.ctypes,
-           dims.ctypes, dims[2:].ctypes)
+    _dgesv(
+        dims.ctypes,
+        dims[1:].ctypes,
+        a.ctypes,
+        dims.ctypes,
+        ipiv.ctypes,
+        x.ctypes,
+        dims.ctypes,
+        dims[2:].ctypes,
+    )
     return x, dims[2]
 
 
@@ -273,7 +293,7 @@ def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, low, vmin):
             Vc = np.conj(V[r])
             if m > V_SWITCH and not low[r]:
                 A = np.conj(I0[r]) / (2 * m)
-                B = -np.conj(S_P[r] + S_extra[r]) / Vc ** 2 - np.conj(I0[r]) * m / (2 * Vc ** 2)
+                B = -np.conj(S_P[r] + S_extra[r]) / Vc**2 - np.conj(I0[r]) * m / (2 * Vc**2)
             else:
                 A = np.conj(Y_low[r])
                 B = 0.0 + 0.0j

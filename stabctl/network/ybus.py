@@ -25,8 +25,8 @@ load and fault admittances with :func:`add_shunts`; a line trip is ``drop=[row]`
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Iterable, Mapping
 
 import numpy as np
 import scipy.sparse as sp
@@ -107,7 +107,12 @@ def branch_admittances(
     half_b = 0.5j * br.b[rows]
     t = complex_taps(case, taps)[rows]
     yff, ytt = (y + half_b) / (t * np.conj(t)).real, y + half_b
-    ends = (br.g_from[rows] != 0) | (br.b_from[rows] != 0) | (br.g_to[rows] != 0) | (br.b_to[rows] != 0)
+    ends = (
+        (br.g_from[rows] != 0)
+        | (br.b_from[rows] != 0)
+        | (br.g_to[rows] != 0)
+        | (br.b_to[rows] != 0)
+    )
     if ends.any():
         yff = yff + (br.g_from[rows] + 1j * br.b_from[rows])
         ytt = ytt + (br.g_to[rows] + 1j * br.b_to[rows])
@@ -244,7 +249,7 @@ class Network:
     in_service: np.ndarray
 
     @classmethod
-    def from_case(cls, case: Case, drop: Iterable[int] = ()) -> "Network":
+    def from_case(cls, case: Case, drop: Iterable[int] = ()) -> Network:
         """Build the network of ``case`` without branch rows ``drop`` (0-based)."""
         drop = list(drop)
         return cls(case, build_ybus(case, drop=drop), kept_rows(case, drop))
@@ -254,7 +259,7 @@ class Network:
         """Bus number -> 0-based row/column of ``ybus``."""
         return self.case.bus_map
 
-    def without(self, rows: Iterable[int]) -> "Network":
+    def without(self, rows: Iterable[int]) -> Network:
         """The network with branch ``rows`` (0-based) also out of service, by subtracting
         their stamps (no rebuild). Raises :class:`CaseError` if a row is already out."""
         rows = np.unique(np.asarray(list(rows), dtype=int))

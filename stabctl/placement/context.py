@@ -13,8 +13,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.placement.evaluation import (VerifyOptions, _fault_dict, check, controller_dict,
-                                          devices_of)
+from stabctl.placement.evaluation import (
+    VerifyOptions,
+    _fault_dict,
+    check,
+    controller_dict,
+    devices_of,
+)
 from stabctl.placement.loop import PlaceOptions, Study, evaluations
 from stabctl.placement.requirements import CostModel
 
@@ -62,28 +67,43 @@ class PlanContext:
             devs = [d + [float(energy_mj[j])] for d, j in zip(devs, used)]
         ctrl = controller_dict(self.controller)
         sites = [[s.bus, s.machine] for s in self.sites]
-        jobs = [{"case": self.case, "fault": _fault_dict(c.fault), "devices": devs,
-                 "sites": sites, "controller": ctrl, "t_clear": c.target_cct_s,
-                 "load": c.load, **self.model.to_inputs(), **({} if h is None else {"h": h})}
-                for c in contingencies]
+        jobs = [
+            {
+                "case": self.case,
+                "fault": _fault_dict(c.fault),
+                "devices": devs,
+                "sites": sites,
+                "controller": ctrl,
+                "t_clear": c.target_cct_s,
+                "load": c.load,
+                **self.model.to_inputs(),
+                **({} if h is None else {"h": h}),
+            }
+            for c in contingencies
+        ]
         return dict(zip((c.name for c in contingencies), self.run_map(check, jobs)))
 
     def priced(self, mwh_per_mw) -> tuple:
         """Sites whose cost per MW includes their energy at mwh_per_mw (MWh/MW)."""
-        return tuple(replace(s, cost=max(self.cost.of(s.machine)[0]
-                                         + self.cost.of(s.machine)[1] * e, 1e-9))
-                     for s, e in zip(self.sites, mwh_per_mw))
+        return tuple(
+            replace(s, cost=max(self.cost.of(s.machine)[0] + self.cost.of(s.machine)[1] * e, 1e-9))
+            for s, e in zip(self.sites, mwh_per_mw)
+        )
 
     def counting(self, run_map, beat):
         """run_map that adds the simulations its jobs report to n_runs (and tells the
         heartbeat `beat`)."""
+
         def counted(func, jobs):
-            beat.note(f"{len(jobs)} {func.__name__} job(s) running, {self.n_runs} runs "
-                      "simulated before them")
+            beat.note(
+                f"{len(jobs)} {func.__name__} job(s) running, {self.n_runs} runs "
+                "simulated before them"
+            )
             out = run_map(func, jobs)
-            with self.lock:         # `faults_alone` runs batches from several threads
+            with self.lock:  # `faults_alone` runs batches from several threads
                 self.n_runs += sum(o.get("n_simulations") or 0 for o in out)
             return out
+
         return counted
 
     @property
@@ -99,9 +119,14 @@ class PlanContext:
         todo = [c for c in cons if c.name not in self.base]
         if not todo:
             return
-        br = {c.name: tuple(brackets[c.fault_name]) for c in todo
-              if brackets and c.load == 1.0 and c.fault_name in brackets
-              and None not in brackets[c.fault_name]}
+        br = {
+            c.name: tuple(brackets[c.fault_name])
+            for c in todo
+            if brackets
+            and c.load == 1.0
+            and c.fault_name in brackets
+            and None not in brackets[c.fault_name]
+        }
         self.base.update(evaluations(self.case, todo, None, study, VerifyOptions(brackets=br)))
 
     def step_s(self) -> float:

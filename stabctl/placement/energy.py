@@ -69,16 +69,17 @@ def size_energy(pl: PlanContext, cons, mw, checks) -> tuple:
     again = energy_setters({c.name: c for c in cons}, mw, energy)
     rerun = pl.check(again, mw, energy_mj=3600 * mwh)
     ok = all(r["stable_at_check"] for r in rerun.values())
-    pl.say(f"energy: {mwh.sum():.2f} MWh at {len(used)} site(s); {len(again)} run(s) "
-           f"again with that energy: {'stable' if ok else 'UNSTABLE'}")
+    pl.say(
+        f"energy: {mwh.sum():.2f} MWh at {len(used)} site(s); {len(again)} run(s) "
+        f"again with that energy: {'stable' if ok else 'UNSTABLE'}"
+    )
     return mwh, energy, ok
 
 
 def energy_setters(by_name: dict, mw, energy) -> list:
     """The contingencies whose check runs set a site's energy (`size_energy`), each once,
     in name order."""
-    return [by_name[n] for n in sorted({energy[j]["set_by"] for j, p in enumerate(mw)
-                                        if p > 0})]
+    return [by_name[n] for n in sorted({energy[j]["set_by"] for j, p in enumerate(mw) if p > 0})]
 
 
 def energy_half_step(checks: dict, mw, mwh, energy) -> dict:
@@ -90,15 +91,25 @@ def energy_half_step(checks: dict, mw, mwh, energy) -> dict:
     percentage also when no site needed any energy at the full step)."""
     used = [j for j, p in enumerate(mw) if p > 0]
     if not used:
-        return {"max_energy_diff_mwh": None, "max_energy_diff_pct": None,
-                "energy_covered_half": None}
+        return {
+            "max_energy_diff_mwh": None,
+            "max_energy_diff_pct": None,
+            "energy_covered_half": None,
+        }
     half = {j: energy_need(checks[energy[j]["set_by"]], k) for k, j in enumerate(used)}
     diff = {j: abs(half[j] - energy[j]["excursion_mwh"]) for j in used}
-    return {"max_energy_diff_mwh": max(diff.values()),
-            "max_energy_diff_pct": max((100 * diff[j] / energy[j]["excursion_mwh"]
-                                        for j in used if energy[j]["excursion_mwh"] > 0),
-                                       default=None),
-            "energy_covered_half": all(half[j] <= mwh[j] for j in used)}
+    return {
+        "max_energy_diff_mwh": max(diff.values()),
+        "max_energy_diff_pct": max(
+            (
+                100 * diff[j] / energy[j]["excursion_mwh"]
+                for j in used
+                if energy[j]["excursion_mwh"] > 0
+            ),
+            default=None,
+        ),
+        "energy_covered_half": all(half[j] <= mwh[j] for j in used),
+    }
 
 
 def energy_note(e: dict) -> str:
@@ -106,8 +117,9 @@ def energy_note(e: dict) -> str:
     if e["max_energy_diff_mwh"] is None:
         return ""
     pct = e["max_energy_diff_pct"]
-    return (f"; energies within {e['max_energy_diff_mwh']:.3f} MWh"
-            + ("" if pct is None else f" ({pct:.1f} %)") + " at half the step, "
-            + ("covered by the sizing" if e["energy_covered_half"] else "NOT covered"))
-
-
+    return (
+        f"; energies within {e['max_energy_diff_mwh']:.3f} MWh"
+        + ("" if pct is None else f" ({pct:.1f} %)")
+        + " at half the step, "
+        + ("covered by the sizing" if e["energy_covered_half"] else "NOT covered")
+    )

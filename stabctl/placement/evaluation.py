@@ -20,16 +20,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.stability.cct import LineFault, SearchOptions, cached_simulator, critical_clearing_time
 from stabctl.errors import InputError, SimulationError
 from stabctl.placement.program import CCTCut
-from stabctl.stability.sime import (clearing_energy_rate, critical_machines, device_modes, omib_equivalent,
-                   storage_integrals, unstable_margin, unstable_point)
-from stabctl.storage.devices import StorageDevice, StorageFleet
+from stabctl.stability.cct import LineFault, SearchOptions, cached_simulator, critical_clearing_time
+from stabctl.stability.sime import (
+    clearing_energy_rate,
+    critical_machines,
+    device_modes,
+    omib_equivalent,
+    storage_integrals,
+    unstable_margin,
+    unstable_point,
+)
 from stabctl.storage.control import BangBangCOI
+from stabctl.storage.devices import StorageDevice, StorageFleet
 
-EPS_S = 0.005       # clearing-time step of d eta / d t_clear (s)
-SCAN_S = 0.005      # clearing-time grid of the first-unstable scan (s)
+EPS_S = 0.005  # clearing-time step of d eta / d t_clear (s)
+SCAN_S = 0.005  # clearing-time grid of the first-unstable scan (s)
 
 
 @dataclass(frozen=True)
@@ -47,8 +54,11 @@ class Contingency:
         """The fault's short name (e.g. ``83-33``), without the load level."""
         f = self.fault
         where = f"{f.bus}" if f.far_bus is None else f"{f.bus}-{f.far_bus}"
-        return where + (f"#{f.circuit}" if f.circuit != 1 else "") + \
-            "".join(f"+{a}-{b}" for a, b in f.trips)
+        return (
+            where
+            + (f"#{f.circuit}" if f.circuit != 1 else "")
+            + "".join(f"+{a}-{b}" for a, b in f.trips)
+        )
 
     @property
     def name(self) -> str:
@@ -57,6 +67,7 @@ class Contingency:
 
 
 # -- one contingency at one allocation (runs in a worker) ------------------------------
+
 
 def evaluate(job: dict) -> dict:
     """CCT of one contingency with ESDs and the gradient of that CCT in the rating of
@@ -98,36 +109,75 @@ def evaluate(job: dict) -> dict:
     SimulationError
         The network fails while the fault is on.
     """
-    sim = _Memo(cached_simulator(job["case"], ModelOptions.from_inputs(job),
-                                 load=job.get("load", 1.0)))
+    sim = _Memo(
+        cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0))
+    )
     f, sites, tol, t_max = _fault_of(job["fault"]), job["sites"], job["tol"], job["t_max"]
     ctrl = BangBangCOI(**job["controller"])
-    fleet = StorageFleet(tuple(StorageDevice(int(b), int(k), float(p))
-                               for b, k, p in job["devices"]), ctrl) if job["devices"] else None
+    fleet = (
+        StorageFleet(
+            tuple(StorageDevice(int(b), int(k), float(p)) for b, k, p in job["devices"]), ctrl
+        )
+        if job["devices"]
+        else None
+    )
     check_s = job.get("check_s")
     checked = {} if check_s is None else _check_run(sim, f, fleet, float(check_s), sites, ctrl)
     try:
         if job.get("scan_from") is None:
             res = _bisection(sim, f, fleet, tol, t_max, job.get("bracket"))
         else:
-            res, _ = scanned_cct(sim, f, fleet, tol=tol, t_max=t_max, start=job["scan_from"],
-                                 stop=job.get("scan_to"), step=job.get("scan_s", SCAN_S))
+            res, _ = scanned_cct(
+                sim,
+                f,
+                fleet,
+                tol=tol,
+                t_max=t_max,
+                start=job["scan_from"],
+                stop=job.get("scan_to"),
+                step=job.get("scan_s", SCAN_S),
+            )
     except InputError as exc:
         if "above the search limit" not in str(exc):
             raise
-        return {"cct_s": t_max, "t_unstable_s": None, "n_simulations": sim.n_runs,
-                "separated": [], "critical": [], "margin": None, "dmargin_dtc": None,
-                "above_t_max": True, "gradient_s_per_mw": [0.0] * len(sites), **checked}
+        return {
+            "cct_s": t_max,
+            "t_unstable_s": None,
+            "n_simulations": sim.n_runs,
+            "separated": [],
+            "critical": [],
+            "margin": None,
+            "dmargin_dtc": None,
+            "above_t_max": True,
+            "gradient_s_per_mw": [0.0] * len(sites),
+            **checked,
+        }
     if not job.get("gradient", True):
-        return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable, "n_simulations": sim.n_runs,
-                "separated": list(res.separated), "above_t_max": False, "critical": [],
-                "margin": None, "dmargin_dtc": None, "gradient_s_per_mw": [0.0] * len(sites),
-                **checked}
-    grad = cct_gradient(sim, f, res.t_unstable, fleet, sites, np.asarray(job["beta"]), ctrl,
-                        job.get("eps_s", EPS_S))
+        return {
+            "cct_s": res.cct_s,
+            "t_unstable_s": res.t_unstable,
+            "n_simulations": sim.n_runs,
+            "separated": list(res.separated),
+            "above_t_max": False,
+            "critical": [],
+            "margin": None,
+            "dmargin_dtc": None,
+            "gradient_s_per_mw": [0.0] * len(sites),
+            **checked,
+        }
+    grad = cct_gradient(
+        sim, f, res.t_unstable, fleet, sites, np.asarray(job["beta"]), ctrl, job.get("eps_s", EPS_S)
+    )
     grad.pop("n_runs")
-    return {"cct_s": res.cct_s, "t_unstable_s": res.t_unstable, "n_simulations": sim.n_runs,
-            "separated": list(res.separated), "above_t_max": False, **grad, **checked}
+    return {
+        "cct_s": res.cct_s,
+        "t_unstable_s": res.t_unstable,
+        "n_simulations": sim.n_runs,
+        "separated": list(res.separated),
+        "above_t_max": False,
+        **grad,
+        **checked,
+    }
 
 
 def check(job: dict) -> dict:
@@ -158,15 +208,27 @@ def check(job: dict) -> dict:
     SimulationError
         The network fails while the fault is on.
     """
-    sim = _Memo(cached_simulator(job["case"], ModelOptions.from_inputs(job),
-                                 load=job.get("load", 1.0)))
+    sim = _Memo(
+        cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0))
+    )
     ctrl = BangBangCOI(**job["controller"])
-    fleet = StorageFleet(tuple(
-        StorageDevice(int(d[0]), int(d[1]), float(d[2]),
-                      **({"energy_mj": float(d[3])} if len(d) > 3 else {}))
-        for d in job["devices"]), ctrl) if job["devices"] else None
-    out = _check_run(sim, _fault_of(job["fault"]), fleet, float(job["t_clear"]), job["sites"],
-                     ctrl)
+    fleet = (
+        StorageFleet(
+            tuple(
+                StorageDevice(
+                    int(d[0]),
+                    int(d[1]),
+                    float(d[2]),
+                    **({"energy_mj": float(d[3])} if len(d) > 3 else {}),
+                )
+                for d in job["devices"]
+            ),
+            ctrl,
+        )
+        if job["devices"]
+        else None
+    )
+    out = _check_run(sim, _fault_of(job["fault"]), fleet, float(job["t_clear"]), job["sites"], ctrl)
     return {**out, "n_simulations": sim.n_runs}
 
 
@@ -175,23 +237,35 @@ def _check_run(sim, f: LineFault, fleet, t_clear: float, sites, ctrl) -> dict:
     from stabctl.storage.devices import energy_excursion
 
     r = _run(sim, f, t_clear, fleet)
-    energy = [[d["energy_absorbed_mj"], d["energy_delivered_mj"], d["soc_high_mj"],
-               d["soc_low_mj"]] for d in (r.meta.get("storage", []) if fleet else [])]
+    energy = [
+        [d["energy_absorbed_mj"], d["energy_delivered_mj"], d["soc_high_mj"], d["soc_low_mj"]]
+        for d in (r.meta.get("storage", []) if fleet else [])
+    ]
     per_mw = []
     if sites:
-        modes = device_modes(r, [s[0] for s in sites], [s[1] for s in sites], ctrl,
-                             sim.case.freq_hz)
+        modes = device_modes(
+            r, [s[0] for s in sites], [s[1] for s in sites], ctrl, sim.case.freq_hz
+        )
         for j in range(modes.shape[1]):
             e = energy_excursion(r.t, modes[:, j].astype(float))
             per_mw.append(max(e["soc_high_mj"], -e["soc_low_mj"]))
-    return {"stable_at_check": bool(r.stable), "check_s": t_clear, "energy_mj": energy,
-            "site_excursion_s": per_mw}
+    return {
+        "stable_at_check": bool(r.stable),
+        "check_s": t_clear,
+        "energy_mj": energy,
+        "site_excursion_s": per_mw,
+    }
 
 
 def _fault_of(fault: dict) -> LineFault:
     far = None if fault["far_bus"] is None else int(fault["far_bus"])
-    return LineFault(int(fault["bus"]), far, float(fault["t_fault"]),
-                     int(fault["circuit"]), tuple((int(a), int(b)) for a, b in fault["trips"]))
+    return LineFault(
+        int(fault["bus"]),
+        far,
+        float(fault["t_fault"]),
+        int(fault["circuit"]),
+        tuple((int(a), int(b)) for a, b in fault["trips"]),
+    )
 
 
 def _bisection(sim, fault: LineFault, fleet, tol: float, t_max: float, bracket):
@@ -201,11 +275,18 @@ def _bisection(sim, fault: LineFault, fleet, tol: float, t_max: float, bracket):
         lo, hi = (float(t) for t in bracket)
         if 0 < lo < hi <= t_max:
             try:
-                return critical_clearing_time(sim, fault, SearchOptions(tol=tol, t_lo=lo, t_hi=hi, t_max=t_max, error_check=False), storage=fleet)
+                return critical_clearing_time(
+                    sim,
+                    fault,
+                    SearchOptions(tol=tol, t_lo=lo, t_hi=hi, t_max=t_max, error_check=False),
+                    storage=fleet,
+                )
             except InputError as exc:
                 if "unstable already at the lower bound" not in str(exc):
                     raise
-    return critical_clearing_time(sim, fault, SearchOptions(tol=tol, t_max=t_max, error_check=False), storage=fleet)
+    return critical_clearing_time(
+        sim, fault, SearchOptions(tol=tol, t_max=t_max, error_check=False), storage=fleet
+    )
 
 
 class _Memo:
@@ -220,23 +301,51 @@ class _Memo:
     def __getattr__(self, name):
         return getattr(self._sim, name)
 
-    def run(self, events=(), t_end: float = 5.0, h: float | None = None, semantics=None,
-            separation_limit: float = np.pi, stop_at_separation: bool = False,
-            storage=None):
+    def run(
+        self,
+        events=(),
+        t_end: float = 5.0,
+        h: float | None = None,
+        semantics=None,
+        separation_limit: float = np.pi,
+        stop_at_separation: bool = False,
+        storage=None,
+    ):
         h = self._sim.default_h if h is None else h
-        key = (repr(list(events)), round(t_end, 12), h, semantics, separation_limit,
-               stop_at_separation, id(storage))
+        key = (
+            repr(list(events)),
+            round(t_end, 12),
+            h,
+            semantics,
+            separation_limit,
+            stop_at_separation,
+            id(storage),
+        )
         if key not in self._done:
             self.n_runs += 1
-            self._done[key] = self._sim.run(events, t_end, h=h, semantics=semantics,
-                                            separation_limit=separation_limit,
-                                            stop_at_separation=stop_at_separation,
-                                            storage=storage)
+            self._done[key] = self._sim.run(
+                events,
+                t_end,
+                h=h,
+                semantics=semantics,
+                separation_limit=separation_limit,
+                stop_at_separation=stop_at_separation,
+                storage=storage,
+            )
         return self._done[key]
 
 
-def scanned_cct(sim, fault: LineFault, fleet, *, tol: float, t_max: float, start: float,
-                stop: float | None, step: float):
+def scanned_cct(
+    sim,
+    fault: LineFault,
+    fleet,
+    *,
+    tol: float,
+    t_max: float,
+    start: float,
+    stop: float | None,
+    step: float,
+):
     """CCT as the FIRST unstable clearing time: runs cleared at start, start + step, ...
     (up to stop, default t_max) until one is unstable, then `critical_clearing_time`
     bisects between it and the last stable one (from 0 if `start` itself is unstable);
@@ -252,18 +361,39 @@ def scanned_cct(sim, fault: LineFault, fleet, *, tol: float, t_max: float, start
     while t <= limit + 1e-12:
         runs += 1
         if not _run(sim, fault, t, fleet).stable:
-            res = critical_clearing_time(sim, fault, SearchOptions(tol=tol, t_lo=prev or 0.0, t_hi=t, error_check=False, t_max=t), storage=fleet)
+            res = critical_clearing_time(
+                sim,
+                fault,
+                SearchOptions(tol=tol, t_lo=prev or 0.0, t_hi=t, error_check=False, t_max=t),
+                storage=fleet,
+            )
             return res, runs
         prev, t = t, round(t + step, 12)
     if prev is None or prev >= t_max:
-        raise InputError(f"{fault.describe()}: the CCT is above the search limit t_max = "
-                         f"{t_max:g} s")
-    res = critical_clearing_time(sim, fault, SearchOptions(tol=tol, t_lo=prev, error_check=False, t_hi=min(prev + 4 * step, t_max), t_max=t_max), storage=fleet)
+        raise InputError(
+            f"{fault.describe()}: the CCT is above the search limit t_max = {t_max:g} s"
+        )
+    res = critical_clearing_time(
+        sim,
+        fault,
+        SearchOptions(
+            tol=tol, t_lo=prev, error_check=False, t_hi=min(prev + 4 * step, t_max), t_max=t_max
+        ),
+        storage=fleet,
+    )
     return res, runs
 
 
-def cct_gradient(sim, fault: LineFault, t_clear: float, fleet, sites, beta: np.ndarray,
-                 controller: BangBangCOI, eps_s: float = EPS_S) -> dict:
+def cct_gradient(
+    sim,
+    fault: LineFault,
+    t_clear: float,
+    fleet,
+    sites,
+    beta: np.ndarray,
+    controller: BangBangCOI,
+    eps_s: float = EPS_S,
+) -> dict:
     """Gradient of the CCT in the site ratings (s/MW) from the run cleared at t_clear (just
     beyond the CCT) and a later unstable one (t_clear + eps_s, the step doubled up to 3
     times while that run is stable or the margin does not fall).  When no later run gives
@@ -284,7 +414,7 @@ def cct_gradient(sim, fault: LineFault, t_clear: float, fleet, sites, beta: np.n
     deta_dp = eq.group_weights(beta) * storage_integrals(eq, modes, ku) / case.base_mva
     slope, how, runs = 0.0, "difference", 1
     for k in range(4):
-        eps = eps_s * 2 ** k
+        eps = eps_s * 2**k
         runs += 1
         r2 = _run(sim, fault, t_clear + eps, fleet)
         if not r2.stable:
@@ -294,10 +424,17 @@ def cct_gradient(sim, fault: LineFault, t_clear: float, fleet, sites, beta: np.n
     if not slope < 0:
         slope, how = -clearing_energy_rate(eq, fault.t_fault + t_clear), "clearing energy"
     if not slope < 0:
-        raise InputError(f"{fault.describe()}: no SIME margin slope in the clearing time "
-                         f"near {t_clear:g} s")
-    return {"gradient_s_per_mw": (-deta_dp / slope).tolist(), "margin": eta1,
-            "dmargin_dtc": slope, "slope_from": how, "critical": crit, "n_runs": runs}
+        raise InputError(
+            f"{fault.describe()}: no SIME margin slope in the clearing time near {t_clear:g} s"
+        )
+    return {
+        "gradient_s_per_mw": (-deta_dp / slope).tolist(),
+        "margin": eta1,
+        "dmargin_dtc": slope,
+        "slope_from": how,
+        "critical": crit,
+        "n_runs": runs,
+    }
 
 
 def _margin(result, crit, t_clear_abs: float, case):
@@ -311,8 +448,9 @@ def _run(sim, fault: LineFault, t_clear: float, fleet):
     """A run to fault + 5 s stopped at separation; after a divergence (voltage collapse
     or a machine lost) its partial trajectory."""
     try:
-        return sim.run(fault.events(t_clear), fault.t_fault + 5.0, storage=fleet,
-                       stop_at_separation=True)
+        return sim.run(
+            fault.events(t_clear), fault.t_fault + 5.0, storage=fleet, stop_at_separation=True
+        )
     except SimulationError as exc:
         if exc.result is None or len(exc.result.t) < 3:
             raise
@@ -321,6 +459,7 @@ def _run(sim, fault: LineFault, t_clear: float, fleet):
 
 
 # -- parallel evaluation ---------------------------------------------------------------
+
 
 def devices_of(sites, mw) -> list:
     """[bus, machine, MW] of every site with a rating > 0."""
@@ -420,21 +559,36 @@ def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions
     """
     devices = devices_of(ev.sites, mw)
     t_max, base, scan = ev.search.t_max, opts.base, opts.scan
-    common = {"case": ev.case, "devices": devices, "sites": [[s.bus, s.machine] for s in ev.sites],
-              "beta": np.asarray(ev.beta).tolist(), "controller": controller_dict(ev.controller),
-              "tol": ev.search.tol, "t_max": t_max, "scan_s": ev.scan_s,
-              **ev.model.to_inputs()}
+    common = {
+        "case": ev.case,
+        "devices": devices,
+        "sites": [[s.bus, s.machine] for s in ev.sites],
+        "beta": np.asarray(ev.beta).tolist(),
+        "controller": controller_dict(ev.controller),
+        "tol": ev.search.tol,
+        "t_max": t_max,
+        "scan_s": ev.scan_s,
+        **ev.model.to_inputs(),
+    }
     scanning = devices and base is not None and scan != "none"
     brackets = opts.brackets or {}
-    jobs = [{**common, "fault": _fault_dict(c.fault), "load": c.load, "gradient": opts.gradient,
-             **({"check_s": c.target_cct_s} if opts.check else {}),
-             "scan_from": min(base[c.name]["cct_s"], c.target_cct_s) if scanning else None,
-             "scan_to": c.target_cct_s if scan == "target" else None,
-             **({"bracket": list(brackets[c.name])}
-                if c.name in brackets and not scanning else {})}
-            for c in contingencies]
-    spans = [(j["scan_to"] or t_max) - j["scan_from"] if j["scan_from"] is not None else 0.0
-             for j in jobs]
+    jobs = [
+        {
+            **common,
+            "fault": _fault_dict(c.fault),
+            "load": c.load,
+            "gradient": opts.gradient,
+            **({"check_s": c.target_cct_s} if opts.check else {}),
+            "scan_from": min(base[c.name]["cct_s"], c.target_cct_s) if scanning else None,
+            "scan_to": c.target_cct_s if scan == "target" else None,
+            **({"bracket": list(brackets[c.name])} if c.name in brackets and not scanning else {}),
+        }
+        for c in contingencies
+    ]
+    spans = [
+        (j["scan_to"] or t_max) - j["scan_from"] if j["scan_from"] is not None else 0.0
+        for j in jobs
+    ]
     order = sorted(range(len(jobs)), key=lambda i: -spans[i])
     done = dict(zip(order, ev.run_map(evaluate, [jobs[i] for i in order])))
     return {c.name: done[i] for i, c in enumerate(contingencies)}
@@ -442,18 +596,33 @@ def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions
 
 def controller_dict(controller: BangBangCOI) -> dict:
     """The fields of a bang-bang law as a JSON-able dict (a worker job's `controller`)."""
-    return {"deadband_hz": controller.deadband_hz, "v_gate_pu": controller.v_gate_pu,
-            "coi": controller.coi, "hysteresis_hz": controller.hysteresis_hz}
+    return {
+        "deadband_hz": controller.deadband_hz,
+        "v_gate_pu": controller.v_gate_pu,
+        "coi": controller.coi,
+        "hysteresis_hz": controller.hysteresis_hz,
+    }
 
 
 def _fault_dict(f: LineFault) -> dict:
-    return {"bus": f.bus, "far_bus": f.far_bus, "t_fault": f.t_fault, "circuit": f.circuit,
-            "trips": [list(t) for t in f.trips]}
+    return {
+        "bus": f.bus,
+        "far_bus": f.far_bus,
+        "t_fault": f.t_fault,
+        "circuit": f.circuit,
+        "trips": [list(t) for t in f.trips],
+    }
 
 
 def cuts_from(contingencies, evaluations: dict, mw) -> list[CCTCut]:
     """One CCTCut per contingency from its evaluation at ratings mw."""
-    return [CCTCut(contingency=c.name, target_s=c.target_cct_s,
-                   cct_s=evaluations[c.name]["cct_s"],
-                   gradient=np.asarray(evaluations[c.name]["gradient_s_per_mw"], float),
-                   at_mw=np.asarray(mw, float)) for c in contingencies]
+    return [
+        CCTCut(
+            contingency=c.name,
+            target_s=c.target_cct_s,
+            cct_s=evaluations[c.name]["cct_s"],
+            gradient=np.asarray(evaluations[c.name]["gradient_s_per_mw"], float),
+            at_mw=np.asarray(mw, float),
+        )
+        for c in contingencies
+    ]

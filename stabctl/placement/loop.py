@@ -44,19 +44,22 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.stability.cct import cached_simulator
 from stabctl.errors import InputError
-from stabctl.placement.program import (Allocation, InfeasibleError, candidate_sites, solve_allocation,
-                        sparse_allocation)
 from stabctl.parallel import RunnerOptions, worker_pool
-from stabctl.placement.evaluation import (Contingency, Evaluator, VerifyOptions, cuts_from,
-                                          verify)
-from stabctl.stability.cct import SearchOptions
+from stabctl.placement.evaluation import Contingency, Evaluator, VerifyOptions, cuts_from, verify
+from stabctl.placement.program import (
+    Allocation,
+    InfeasibleError,
+    candidate_sites,
+    solve_allocation,
+    sparse_allocation,
+)
+from stabctl.stability.cct import SearchOptions, cached_simulator
 from stabctl.storage.control import BangBangCOI
 
 logger = logging.getLogger(__name__)
 
-MIN_MW = 1.0        # ratings below this are not installed (MW)
+MIN_MW = 1.0  # ratings below this are not installed (MW)
 #: The paper's Table 3 law (`stabctl.storage.devices.BangBangCOI` defaults: 100 mHz deadband, 0.8 pu
 #: voltage gate, system COI, no hysteresis).
 DEFAULT_CONTROLLER = BangBangCOI()
@@ -96,22 +99,34 @@ class PlacementResult:
     def to_dict(self) -> dict:
         """JSON-ready summary (MW, s)."""
         a = self.allocation
-        out = {"verified": self.verified, "message": self.message,
-               "allocation": a.rows(), "total_mw": a.total_mw, "n_sites": a.n_sites,
-               "contingencies": [self.row(c) for c in self.contingencies],
-               "iterations": self.iterations, "wall_time_s": self.wall_time_s,
-               "solve_times_s": self.solve_times_s}
+        out = {
+            "verified": self.verified,
+            "message": self.message,
+            "allocation": a.rows(),
+            "total_mw": a.total_mw,
+            "n_sites": a.n_sites,
+            "contingencies": [self.row(c) for c in self.contingencies],
+            "iterations": self.iterations,
+            "wall_time_s": self.wall_time_s,
+            "solve_times_s": self.solve_times_s,
+        }
         if self.damping is not None:
-            out["damping"] = [{"freq_hz": float(f), "damping": float(z)}
-                              for f, z in zip(*self.damping)]
+            out["damping"] = [
+                {"freq_hz": float(f), "damping": float(z)} for f, z in zip(*self.damping)
+            ]
         return out
 
     def row(self, c: Contingency) -> dict:
         """One contingency: target, CCT without and with the allocation (s), met."""
         cct = self.evaluations[c.name]["cct_s"]
-        return {"name": c.name, "fault": c.fault.describe(), "target_cct_s": c.target_cct_s,
-                "cct_no_storage_s": self.base[c.name]["cct_s"], "cct_s": cct,
-                "met": cct >= c.target_cct_s - 1e-9}
+        return {
+            "name": c.name,
+            "fault": c.fault.describe(),
+            "target_cct_s": c.target_cct_s,
+            "cct_no_storage_s": self.base[c.name]["cct_s"],
+            "cct_s": cct,
+            "met": cct >= c.target_cct_s - 1e-9,
+        }
 
 
 @dataclass(frozen=True)
@@ -241,8 +256,9 @@ class _Setup:
 
     def sites_cost(self, mw) -> float:
         """Cost of the sites used by ratings mw (per-site costs)."""
-        return float(np.broadcast_to(self.solve_kw["site_cost"], (len(self.sites),))
-                     @ (np.asarray(mw) > 0))
+        return float(
+            np.broadcast_to(self.solve_kw["site_cost"], (len(self.sites),)) @ (np.asarray(mw) > 0)
+        )
 
 
 @dataclass
@@ -256,9 +272,14 @@ class _Point:
     feasible: bool
 
 
-def place(case: str, contingencies, study: Study = Study(),
-          options: PlaceOptions = PlaceOptions(), warm: WarmStart = WarmStart(),
-          progress=None) -> PlacementResult:
+def place(
+    case: str,
+    contingencies,
+    study: Study = Study(),
+    options: PlaceOptions = PlaceOptions(),
+    warm: WarmStart = WarmStart(),
+    progress=None,
+) -> PlacementResult:
     """Least-cost ESD allocation meeting every contingency's target CCT (and damping),
     verified by simulation (module docstring).
 
@@ -302,20 +323,34 @@ def place(case: str, contingencies, study: Study = Study(),
         beta, damping = _linear_models(sim, sites, study.law, o.zeta_min, o.amplitude_hz)
     say = progress or logger.info
     with _pool(study) as rm:
-        setup = _Setup(Evaluator(rm, case, sites, beta, study.law, study.search, study.model),
-                       contingencies, damping, o.zeta_min,
-                       {"safety_s": 2 * tol if o.safety_s is None else o.safety_s,
-                        "max_sites": o.max_sites, "site_cost": o.site_cost})
+        setup = _Setup(
+            Evaluator(rm, case, sites, beta, study.law, study.search, study.model),
+            contingencies,
+            damping,
+            o.zeta_min,
+            {
+                "safety_s": 2 * tol if o.safety_s is None else o.safety_s,
+                "max_sites": o.max_sites,
+                "site_cost": o.site_cost,
+            },
+        )
         base = setup.base = warm.base or setup.verify(np.zeros(len(sites)))
         say("no storage: " + _cct_line(contingencies, base))
-        result = _iterate(setup, base, _start(setup, warm.start, base, say, warm.evaluations),
-                          o.max_iter, o.rtol, say)
+        result = _iterate(
+            setup,
+            base,
+            _start(setup, warm.start, base, say, warm.evaluations),
+            o.max_iter,
+            o.rtol,
+            say,
+        )
     result.wall_time_s = time.perf_counter() - wall
     return result
 
 
-def evaluations(case: str, contingencies, mw=None, study: Study = Study(),
-                opts: VerifyOptions = VerifyOptions()) -> dict:
+def evaluations(
+    case: str, contingencies, mw=None, study: Study = Study(), opts: VerifyOptions = VerifyOptions()
+) -> dict:
     """Simulated CCT (and its gradient) of every contingency at ratings mw.
 
     Parameters
@@ -353,12 +388,14 @@ def evaluations(case: str, contingencies, mw=None, study: Study = Study(),
         return verify(ev, contingencies, mw, opts)
 
 
-def baseline(case: str, faults, study: Study = Study(),
-             opts: VerifyOptions = VerifyOptions()) -> dict:
+def baseline(
+    case: str, faults, study: Study = Study(), opts: VerifyOptions = VerifyOptions()
+) -> dict:
     """`evaluations` of every fault (`LineFault`) without storage: CCT by bisection and
     its gradient, by contingency name (study, opts as `evaluations`)."""
-    return evaluations(case, [Contingency(f, study.search.t_max) for f in faults], None,
-                       study, opts)
+    return evaluations(
+        case, [Contingency(f, study.search.t_max) for f in faults], None, study, opts
+    )
 
 
 def with_gain(faults, base: dict, gain_pct: float, tol: float = 1e-3) -> tuple:
@@ -399,16 +436,20 @@ def _linear_models(sim, sites, controller, zeta_min, amplitude_hz):
 
     case = sim.case
     sys = linearise(sim, esd_buses=list(dict.fromkeys(s.bus for s in sites)))
-    beta = distribution_factors(sys, [s.bus for s in sites], case.machines.number,
-                                sim.inertia, case.base_mva)
+    beta = distribution_factors(
+        sys, [s.bus for s in sites], case.machines.number, sim.inertia, case.base_mva
+    )
     if zeta_min is None:
         return beta, None
-    gain = relay_df(controller.deadband_hz, amplitude_hz, case.freq_hz,
-                    controller.hysteresis_hz).real
+    gain = relay_df(
+        controller.deadband_hz, amplitude_hz, case.freq_hz, controller.hysteresis_hz
+    ).real
     if not gain > 0:
-        raise InputError(f"oscillation amplitude {amplitude_hz:g} Hz is inside the ESD "
-                         f"deadband ({controller.deadband_hz:g} Hz): the devices are idle "
-                         "there and add no damping")
+        raise InputError(
+            f"oscillation amplitude {amplitude_hz:g} Hz is inside the ESD "
+            f"deadband ({controller.deadband_hz:g} Hz): the devices are idle "
+            "there and add no damping"
+        )
     return beta, DampingModel(sys, sites, gain, case.base_mva)
 
 
@@ -429,8 +470,10 @@ def _check_settings(contingencies, max_iter, tol, workers, zeta_min) -> None:
 
 # -- the trust-region loop ---------------------------------------------------------------
 
-def _start(setup: _Setup, start, base: dict, say,
-           known: dict | None = None) -> tuple[np.ndarray, dict]:
+
+def _start(
+    setup: _Setup, start, base: dict, say, known: dict | None = None
+) -> tuple[np.ndarray, dict]:
     """The first allocation and its evaluations (no storage unless `start` is given;
     `known`: its evaluations already simulated, by contingency name)."""
     n = len(setup.sites)
@@ -442,14 +485,15 @@ def _start(setup: _Setup, start, base: dict, say,
     mw = _rounded(start, setup.sites)
     known = known if known is not None and np.array_equal(mw, start) else {}
     missing = [c for c in setup.contingencies if c.name not in known]
-    ev = {**{c.name: known[c.name] for c in setup.contingencies if c.name in known},
-          **(setup.verify(mw, missing) if missing else {})}
+    ev = {
+        **{c.name: known[c.name] for c in setup.contingencies if c.name in known},
+        **(setup.verify(mw, missing) if missing else {}),
+    }
     say(f"start {mw.sum():.1f} MW: " + _cct_line(setup.contingencies, ev))
     return mw, ev
 
 
-def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float,
-             say) -> PlacementResult:
+def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float, say) -> PlacementResult:
     mw0, ev0 = start
     cuts = cuts_from(setup.contingencies, ev0, mw0)
     prices = _prices(setup, cuts_from(setup.contingencies, base, np.zeros_like(mw0)))
@@ -464,24 +508,32 @@ def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float,
         trial = _rounded(alloc.mw, setup.sites)
         predicted = cur.merit - _model_merit(setup, cuts, rows, trial, prices)
         if predicted <= rtol * max(setup.cost @ cur.mw, 1e-9) or np.array_equal(trial, cur.mw):
-            message = (f"converged: the program predicts < {rtol:.0%} further saving"
-                       if cur.feasible else "stuck: the linearised program predicts no "
-                       "progress from the current allocation")
+            message = (
+                f"converged: the program predicts < {rtol:.0%} further saving"
+                if cur.feasible
+                else "stuck: the linearised program predicts no "
+                "progress from the current allocation"
+            )
             break
         new = _point(setup, trial, setup.verify(trial), prices)
         rho = (cur.merit - new.merit) / predicted
         iterations.append(_record(it, setup, new, alloc, rho, radius))
-        say(f"iteration {it}: {trial.sum():.1f} MW at {np.count_nonzero(trial)} site(s), "
+        say(
+            f"iteration {it}: {trial.sum():.1f} MW at {np.count_nonzero(trial)} site(s), "
             f"{'meets every target' if new.feasible else 'misses'}, rho {rho:.2f}; "
-            + _cct_line(setup.contingencies, new.ev))
+            + _cct_line(setup.contingencies, new.ev)
+        )
         if new.feasible and (best is None or setup.cost @ new.mw < setup.cost @ best.mw):
             best = new
         tried.append(new)
         step = float(np.max(np.abs(trial - cur.mw)))
         if rho >= ACCEPT:
             cur, seen = new, [cur]
-            radius = min(2 * radius, setup.upper.max()) if rho >= GOOD and \
-                step >= 0.9 * radius else radius
+            radius = (
+                min(2 * radius, setup.upper.max())
+                if rho >= GOOD and step >= 0.9 * radius
+                else radius
+            )
         else:
             seen.append(new)
             radius = step / 2
@@ -493,10 +545,16 @@ def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float,
         message = f"no allocation met every target in {len(iterations)} simulated allocation(s)"
     end = best or cur
     return PlacementResult(
-        allocation=_as_allocation(setup.sites, end.mw, solve_times), verified=best is not None,
-        evaluations=end.ev, base=base, iterations=iterations,
-        contingencies=setup.contingencies, damping=end.zeta, message=message,
-        solve_times_s=solve_times)
+        allocation=_as_allocation(setup.sites, end.mw, solve_times),
+        verified=best is not None,
+        evaluations=end.ev,
+        base=base,
+        iterations=iterations,
+        contingencies=setup.contingencies,
+        damping=end.zeta,
+        message=message,
+        solve_times_s=solve_times,
+    )
 
 
 def _restore(setup: _Setup, tried, best, prices, iterations, say):
@@ -508,17 +566,21 @@ def _restore(setup: _Setup, tried, best, prices, iterations, say):
     allocation simulates first the contingencies the near miss missed, and the others
     only when those meet their targets (a miss there settles it).  Each one simulated is
     recorded in `iterations`."""
+
     def cost(p):
         return float(setup.cost @ p)
 
-    near = [p for p in tried if not p.feasible
-            and _misses_by(setup, p) <= RESTORE_MISS * setup.tol
-            and (best is None or cost(p.mw) < cost(best.mw))]
+    near = [
+        p
+        for p in tried
+        if not p.feasible
+        and _misses_by(setup, p) <= RESTORE_MISS * setup.tol
+        and (best is None or cost(p.mw) < cost(best.mw))
+    ]
     if not near:
         return None
     p0 = min(near, key=lambda p: cost(p.mw))
-    missed = [c for c in setup.contingencies
-              if p0.ev[c.name]["cct_s"] < c.target_cct_s - 1e-9]
+    missed = [c for c in setup.contingencies if p0.ev[c.name]["cct_s"] < c.target_cct_s - 1e-9]
     for k in RESTORE_SCALE:
         mw = _rounded(np.minimum(k * p0.mw, setup.upper), setup.sites)
         if best is not None and cost(mw) >= cost(best.mw):
@@ -526,19 +588,36 @@ def _restore(setup: _Setup, tried, best, prices, iterations, say):
         ev = setup.verify(mw, missed) if missed else {}
         short = [c for c in missed if ev[c.name]["cct_s"] < c.target_cct_s - 1e-9]
         if short:
-            iterations.append(_record(len(iterations) + 1, setup,
-                                      _Point(mw, ev, None, float("nan"), False),
-                                      _as_allocation(setup.sites, mw, []), float("nan"), 0.0,
-                                      which=missed))
+            iterations.append(
+                _record(
+                    len(iterations) + 1,
+                    setup,
+                    _Point(mw, ev, None, float("nan"), False),
+                    _as_allocation(setup.sites, mw, []),
+                    float("nan"),
+                    0.0,
+                    which=missed,
+                )
+            )
             say(f"restoration x{k:g}: {mw.sum():.1f} MW, misses; " + _cct_line(missed, ev))
             continue
         rest = [c for c in setup.contingencies if c.name not in ev]
         new = _point(setup, mw, {**ev, **(setup.verify(mw, rest) if rest else {})}, prices)
-        iterations.append(_record(len(iterations) + 1, setup, new,
-                                  _as_allocation(setup.sites, mw, []), float("nan"), 0.0))
-        say(f"restoration x{k:g}: {mw.sum():.1f} MW, "
+        iterations.append(
+            _record(
+                len(iterations) + 1,
+                setup,
+                new,
+                _as_allocation(setup.sites, mw, []),
+                float("nan"),
+                0.0,
+            )
+        )
+        say(
+            f"restoration x{k:g}: {mw.sum():.1f} MW, "
             f"{'meets every target' if new.feasible else 'misses'}; "
-            + _cct_line(setup.contingencies, new.ev))
+            + _cct_line(setup.contingencies, new.ev)
+        )
         if new.feasible:
             return new
     return None
@@ -554,8 +633,10 @@ def _misses_by(setup: _Setup, p: _Point) -> float:
 def _secant_cuts(setup: _Setup, cur: _Point, seen) -> list:
     """Cuts at the current allocation, corrected through the allocations simulated since
     it was accepted and the one it was accepted from (`CCTCut.through`)."""
-    return [c.through([(p.mw, p.ev[c.contingency]["cct_s"]) for p in seen])
-            for c in cuts_from(setup.contingencies, cur.ev, cur.mw)]
+    return [
+        c.through([(p.mw, p.ev[c.contingency]["cct_s"]) for p in seen])
+        for c in cuts_from(setup.contingencies, cur.ev, cur.mw)
+    ]
 
 
 def _prices(setup: _Setup, cuts) -> tuple[float, float]:
@@ -563,8 +644,11 @@ def _prices(setup: _Setup, cuts) -> tuple[float, float]:
     contingency's cheapest marginal cost of CCT at P = 0; mu_d (cost per unit damping
     shortfall) ten times the cost of every site at its bound."""
     cost = setup.cost
-    rates = [np.min(cost[c.gradient > 0] / c.gradient[c.gradient > 0])
-             for c in cuts if np.any(c.gradient > 0)]
+    rates = [
+        np.min(cost[c.gradient > 0] / c.gradient[c.gradient > 0])
+        for c in cuts
+        if np.any(c.gradient > 0)
+    ]
     full = float(cost @ setup.upper)
     mu_t = 10 * max(rates) if rates else full / setup.tol
     return mu_t, 10 * full
@@ -575,10 +659,16 @@ def _point(setup: _Setup, mw, ev: dict, prices) -> _Point:
     zeta = None if setup.damping is None else setup.damping.em_damping(mw)
     short_t = sum(max(0.0, c.target_cct_s - ev[c.name]["cct_s"]) for c in setup.contingencies)
     short_d = 0.0 if zeta is None else damping_shortfall(zeta[1], setup.zeta_min)
-    merit = float(setup.cost @ mw + setup.sites_cost(mw)
-                  + prices[0] * short_t + prices[1] * short_d)
-    return _Point(mw=np.asarray(mw, float), ev=ev, zeta=zeta, merit=merit,
-                  feasible=short_t <= 1e-9 and short_d <= 1e-4)
+    merit = float(
+        setup.cost @ mw + setup.sites_cost(mw) + prices[0] * short_t + prices[1] * short_d
+    )
+    return _Point(
+        mw=np.asarray(mw, float),
+        ev=ev,
+        zeta=zeta,
+        merit=merit,
+        feasible=short_t <= 1e-9 and short_d <= 1e-4,
+    )
 
 
 def damping_shortfall(zeta, zeta_min: float) -> float:
@@ -588,25 +678,24 @@ def damping_shortfall(zeta, zeta_min: float) -> float:
     z = np.asarray(zeta, float)
     if not z.size:
         return 0.0
-    kappa = zeta_min / np.sqrt(1 - zeta_min ** 2)
-    return float(max(0.0, np.max(kappa * np.sqrt(1 - z ** 2) - z)))
+    kappa = zeta_min / np.sqrt(1 - zeta_min**2)
+    return float(max(0.0, np.max(kappa * np.sqrt(1 - z**2) - z)))
 
 
 def _model_merit(setup: _Setup, cuts, rows, mw, prices) -> float:
     """The merit as the program sees it at ratings mw (linearised CCTs and damping)."""
     short_t = sum(max(0.0, c.target_s - c.predicted(mw)) for c in cuts)
-    short_d = 0.0 if rows is None or not len(rows.b) else \
-        float(max(0.0, np.max(rows.A @ mw - rows.b)))
-    return float(setup.cost @ mw + setup.sites_cost(mw)
-                 + prices[0] * short_t + prices[1] * short_d)
+    short_d = (
+        0.0 if rows is None or not len(rows.b) else float(max(0.0, np.max(rows.A @ mw - rows.b)))
+    )
+    return float(setup.cost @ mw + setup.sites_cost(mw) + prices[0] * short_t + prices[1] * short_d)
 
 
 def _trial(setup: _Setup, cuts, centre, radius, prices, solve_times, max_steps: int = 8):
     """The program's step from `centre` within `radius`; with damping rows, re-linearised
     at the step and solved again (same centre and radius) while the recomputed damping
     shortfall decreases: (allocation, damping rows used or None)."""
-    kw = dict(setup.solve_kw, cct_penalty=prices[0], penalty=prices[1],
-              trust=(centre, radius))
+    kw = dict(setup.solve_kw, cct_penalty=prices[0], penalty=prices[1], trust=(centre, radius))
     dm = setup.damping
     rows = None if dm is None else dm.rows(centre, setup.zeta_min)
     alloc = sparse_allocation(setup.sites, cuts, damping=rows, **kw)
@@ -644,13 +733,18 @@ def _prove_infeasible(setup: _Setup, cuts, checked: set) -> None:
     ev = setup.verify(ub, which)
     failing = [c for c in which if ev[c.name]["cct_s"] < c.target_cct_s - 1e-9]
     if failing:
-        raise InfeasibleError("infeasible: " + "; ".join(
-            f"contingency {c.name} ({c.fault.describe()}"
-            f"{'' if c.load == 1.0 else f', load {100 * c.load:g} % of the base'}) "
-            "reaches a CCT of only "
-            f"{ev[c.name]['cct_s']:.3f} s against its target {c.target_cct_s:.3f} s even with "
-            f"every candidate site at its bound ({ub.sum():.0f} MW), simulated"
-            for c in failing), [c.name for c in failing])
+        raise InfeasibleError(
+            "infeasible: "
+            + "; ".join(
+                f"contingency {c.name} ({c.fault.describe()}"
+                f"{'' if c.load == 1.0 else f', load {100 * c.load:g} % of the base'}) "
+                "reaches a CCT of only "
+                f"{ev[c.name]['cct_s']:.3f} s against its target {c.target_cct_s:.3f} s even with "
+                f"every candidate site at its bound ({ub.sum():.0f} MW), simulated"
+                for c in failing
+            ),
+            [c.name for c in failing],
+        )
 
 
 def _rounded(mw, sites) -> np.ndarray:
@@ -661,28 +755,39 @@ def _rounded(mw, sites) -> np.ndarray:
     return np.where(mw >= MIN_MW, up, 0.0)
 
 
-def _record(it, setup: _Setup, p: _Point, alloc: Allocation, rho, radius,
-            which=None) -> dict:
+def _record(it, setup: _Setup, p: _Point, alloc: Allocation, rho, radius, which=None) -> dict:
     """One simulated allocation for `PlacementResult.iterations`; which: the contingencies
     simulated there (default all)."""
     which = setup.contingencies if which is None else which
-    return {"iteration": it, "total_mw": float(p.mw.sum()),
-            "n_sites": int(np.count_nonzero(p.mw)), "mw_by_site": [float(x) for x in p.mw],
-            "meets_targets": p.feasible, "rho": float(rho), "radius_mw": float(radius),
-            "cct_s": {c.name: p.ev[c.name]["cct_s"] for c in which},
-            "n_simulations": sum(p.ev[c.name]["n_simulations"] or 0 for c in which),
-            "predicted_cct_s": alloc.predicted_cct_s,
-            "min_damping": None if p.zeta is None else float(np.min(p.zeta[1])),
-            "solve_time_s": alloc.solve_time_s, "solve_wall_s": alloc.wall_time_s}
+    return {
+        "iteration": it,
+        "total_mw": float(p.mw.sum()),
+        "n_sites": int(np.count_nonzero(p.mw)),
+        "mw_by_site": [float(x) for x in p.mw],
+        "meets_targets": p.feasible,
+        "rho": float(rho),
+        "radius_mw": float(radius),
+        "cct_s": {c.name: p.ev[c.name]["cct_s"] for c in which},
+        "n_simulations": sum(p.ev[c.name]["n_simulations"] or 0 for c in which),
+        "predicted_cct_s": alloc.predicted_cct_s,
+        "min_damping": None if p.zeta is None else float(np.min(p.zeta[1])),
+        "solve_time_s": alloc.solve_time_s,
+        "solve_wall_s": alloc.wall_time_s,
+    }
 
 
 def _as_allocation(sites, mw, solve_times) -> Allocation:
     cost = np.array([s.cost for s in sites])
-    return Allocation(sites=tuple(sites), mw=np.asarray(mw, float), objective=float(cost @ mw),
-                      solve_time_s=float(solve_times[-1]) if solve_times else 0.0,
-                      wall_time_s=0.0)
+    return Allocation(
+        sites=tuple(sites),
+        mw=np.asarray(mw, float),
+        objective=float(cost @ mw),
+        solve_time_s=float(solve_times[-1]) if solve_times else 0.0,
+        wall_time_s=0.0,
+    )
 
 
 def _cct_line(contingencies, ev) -> str:
-    return ", ".join(f"{c.name} {ev[c.name]['cct_s']:.3f}/{c.target_cct_s:.3f} s"
-                     for c in contingencies)
+    return ", ".join(
+        f"{c.name} {ev[c.name]['cct_s']:.3f}/{c.target_cct_s:.3f} s" for c in contingencies
+    )

@@ -31,8 +31,7 @@ from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import InputError
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import mwh_per_mw, size_energy
-from stabctl.placement.loop import (PlaceOptions, Study, WarmStart, _as_allocation, _pool,
-                                    place)
+from stabctl.placement.loop import PlaceOptions, Study, WarmStart, _as_allocation, _pool, place
 from stabctl.placement.program import InfeasibleError, candidate_sites
 from stabctl.placement.references import faults_alone, half_step, least_uniform, margins
 from stabctl.placement.requirements import CostModel, Requirement, contingencies_of, describe
@@ -95,17 +94,30 @@ class PlanResult:
     def to_dict(self) -> dict:
         """JSON-ready summary (MW, MWh, s, cost units)."""
         met = [c for c in self.contingencies if c["met"]]
-        return {"verified": self.verified, "message": self.message,
-                "requirement": self.requirement, "load_levels": list(self.load_levels),
-                "allocation": self.allocation(), "total_mw": self.total_mw,
-                "total_mwh": float(self.mwh.sum()), "n_sites": int(np.count_nonzero(self.mw)),
-                "cost": self.cost, "n_contingencies": len(self.contingencies),
-                "n_met": len(met), "active": self.active,
-                "out_of_scope": self.out_of_scope, "infeasible": self.infeasible,
-                "set_aside": self.set_aside,
-                "contingencies": self.contingencies, "rounds": self.rounds,
-                "n_simulations": self.n_simulations, "wall_time_s": self.wall_time_s,
-                "uniform": self.uniform, "alone": self.alone, "half_step": self.half_step}
+        return {
+            "verified": self.verified,
+            "message": self.message,
+            "requirement": self.requirement,
+            "load_levels": list(self.load_levels),
+            "allocation": self.allocation(),
+            "total_mw": self.total_mw,
+            "total_mwh": float(self.mwh.sum()),
+            "n_sites": int(np.count_nonzero(self.mw)),
+            "cost": self.cost,
+            "n_contingencies": len(self.contingencies),
+            "n_met": len(met),
+            "active": self.active,
+            "out_of_scope": self.out_of_scope,
+            "infeasible": self.infeasible,
+            "set_aside": self.set_aside,
+            "contingencies": self.contingencies,
+            "rounds": self.rounds,
+            "n_simulations": self.n_simulations,
+            "wall_time_s": self.wall_time_s,
+            "uniform": self.uniform,
+            "alone": self.alone,
+            "half_step": self.half_step,
+        }
 
 
 @dataclass(frozen=True)
@@ -172,8 +184,14 @@ class PlanOptions:
     half_step_n: int = 0
 
 
-def plan(case: str, faults, requirement: Requirement, options: PlanOptions = PlanOptions(),
-         study: Study = Study(), progress=None) -> PlanResult:
+def plan(
+    case: str,
+    faults,
+    requirement: Requirement,
+    options: PlanOptions = PlanOptions(),
+    study: Study = Study(),
+    progress=None,
+) -> PlanResult:
     """Least-cost ESD sites, MW and MWh meeting `requirement` on every fault at every load
     level, verified by simulation (module docstring).
 
@@ -219,21 +237,39 @@ def plan(case: str, faults, requirement: Requirement, options: PlanOptions = Pla
     freq_hz, sites = _case_at_levels(case, study.model, levels, study.sites)
     say = Heartbeat(progress or logger.info)
     with _pool(study) as pool_map, say:
-        pl = PlanContext(case, sites, o.cost or CostModel(), study.law, study.model, None,
-                         study.search.tol, study.search.t_max, say, place=o.place,
-                         drop_infeasible=o.drop_infeasible, brackets=o.brackets)
+        pl = PlanContext(
+            case,
+            sites,
+            o.cost or CostModel(),
+            study.law,
+            study.model,
+            None,
+            study.search.tol,
+            study.search.t_max,
+            say,
+            place=o.place,
+            drop_infeasible=o.drop_infeasible,
+            brackets=o.brackets,
+        )
         pl.run_map = pl.counting(pool_map, say)
         kw = replace(study, sites=sites, run_map=pl.run_map, controller=pl.controller)
         cons = _contingencies(pl, faults, requirement, o.overrides, freq_hz, levels, kw)
-        cons, failing, checks, out = _without_storage(pl, cons, len(faults), len(levels),
-                                                      o.scope_stable_at_once)
+        cons, failing, checks, out = _without_storage(
+            pl, cons, len(faults), len(levels), o.scope_stable_at_once
+        )
         result = _generate(pl, cons, failing, checks, o.n_active, o.max_rounds, kw)
         result.out_of_scope, result.load_levels = sorted(out), levels
         result.requirement = describe(requirement, o.overrides)
         result.infeasible, result.set_aside = list(pl.infeasible), list(pl.set_aside)
         kept = {r["name"] for r in result.contingencies}
-        _references(pl, tuple(c for c in cons if c.name in kept),
-                    [c for c in failing if c.name in kept], result, kw, o)
+        _references(
+            pl,
+            tuple(c for c in cons if c.name in kept),
+            [c for c in failing if c.name in kept],
+            result,
+            kw,
+            o,
+        )
     result.n_simulations = pl.n_runs
     result.wall_time_s = time.perf_counter() - wall
     return result
@@ -260,8 +296,9 @@ def _case_at_levels(case: str, model: ModelOptions, levels, sites) -> tuple:
     return sim.case.freq_hz, tuple(sites or candidate_sites(sim.case))
 
 
-def _contingencies(pl: PlanContext, faults, requirement: Requirement, overrides, freq_hz,
-                   levels, kw) -> tuple:
+def _contingencies(
+    pl: PlanContext, faults, requirement: Requirement, overrides, freq_hz, levels, kw
+) -> tuple:
     """Every fault at every load level with its required clearing time
     (`contingencies_of`); where a requirement is a CCT gain, the CCTs without storage of
     every contingency are simulated first (into pl.base)."""
@@ -272,35 +309,45 @@ def _contingencies(pl: PlanContext, faults, requirement: Requirement, overrides,
     return contingencies_of(faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base)
 
 
-def _without_storage(pl: PlanContext, cons, n_faults: int, n_levels: int,
-                     scope_stable_at_once: bool) -> tuple:
+def _without_storage(
+    pl: PlanContext, cons, n_faults: int, n_levels: int, scope_stable_at_once: bool
+) -> tuple:
     """Each contingency cleared at its required time without storage (one run each, but
     those the screening knows stable): (the contingencies in scope, those failing, name ->
     check, names out of scope: unstable even when cleared at once, when
     scope_stable_at_once)."""
     known = _stable_by_screening(cons, pl.brackets)
-    pl.say(f"{len(cons)} contingencies ({n_faults} faults x {n_levels} load "
-           f"level(s)): each cleared at its required time without storage ({len(known)} "
-           "known stable there from the screening)")
+    pl.say(
+        f"{len(cons)} contingencies ({n_faults} faults x {n_levels} load "
+        f"level(s)): each cleared at its required time without storage ({len(known)} "
+        "known stable there from the screening)"
+    )
     checks = pl.check([c for c in cons if c.name not in known], np.zeros(len(pl.sites)))
     failing = [c for c in cons if c.name in checks and not checks[c.name]["stable_at_check"]]
     out = _out_of_scope(pl, failing) if scope_stable_at_once else set()
     if out:
-        pl.say("out of scope (unstable even when cleared at once, the line trip alone): "
-               + ", ".join(sorted(out)))
+        pl.say(
+            "out of scope (unstable even when cleared at once, the line trip alone): "
+            + ", ".join(sorted(out))
+        )
     cons = tuple(c for c in cons if c.name not in out)
     failing = [c for c in failing if c.name not in out]
-    pl.say(f"{len(failing)} of {len(cons)} unstable without storage: "
-           + ", ".join(c.name for c in failing[:12]) + (" ..." if len(failing) > 12 else ""))
+    pl.say(
+        f"{len(failing)} of {len(cons)} unstable without storage: "
+        + ", ".join(c.name for c in failing[:12])
+        + (" ..." if len(failing) > 12 else "")
+    )
     return cons, failing, {**{n: _STABLE for n in known}, **checks}, out
 
 
-def _references(pl: PlanContext, cons, failing, result: PlanResult, kw: Study,
-                o: PlanOptions) -> None:
+def _references(
+    pl: PlanContext, cons, failing, result: PlanResult, kw: Study, o: PlanOptions
+) -> None:
     """What `plan` adds to a result when asked: the clearing margins (then the half-step
     check, which ranks by them), the least uniform fleet and each binding fault alone.
     They are independent, so they run at the same time (one thread each, sharing the
     worker pool: fewer idle workers at the end of each one's batches)."""
+
     def margins_and_half_step():
         if o.margins_tol is not None:
             margins(pl, cons, result, o.margins_tol, o.margins_cap_s, kw)
@@ -310,8 +357,11 @@ def _references(pl: PlanContext, cons, failing, result: PlanResult, kw: Study,
     with ThreadPoolExecutor(max_workers=3) as threads:
         m = threads.submit(margins_and_half_step)
         u = threads.submit(least_uniform, pl, cons, failing, kw) if o.uniform else None
-        a = (threads.submit(faults_alone, pl, cons, result, o.place.max_iter, kw)
-             if o.alone else None)
+        a = (
+            threads.submit(faults_alone, pl, cons, result, o.place.max_iter, kw)
+            if o.alone
+            else None
+        )
         m.result()
         result.uniform = None if u is None else u.result()
         result.alone = [] if a is None else a.result()
@@ -325,9 +375,15 @@ def _stable_by_screening(cons, brackets) -> set:
     """Names of base-load contingencies the screening found stable when cleared at their
     required time or later without storage (its stable end is at least the requirement).
     """
-    return {c.name for c in cons if brackets and c.load == 1.0 and c.fault_name in brackets
-            and brackets[c.fault_name][0] is not None
-            and brackets[c.fault_name][0] >= c.target_cct_s - 1e-9}
+    return {
+        c.name
+        for c in cons
+        if brackets
+        and c.load == 1.0
+        and c.fault_name in brackets
+        and brackets[c.fault_name][0] is not None
+        and brackets[c.fault_name][0] >= c.target_cct_s - 1e-9
+    }
 
 
 def _out_of_scope(pl: PlanContext, failing) -> set:
@@ -335,8 +391,7 @@ def _out_of_scope(pl: PlanContext, failing) -> set:
     at once (one run each, the line trip alone)."""
     if not failing:
         return set()
-    at_once = pl.check([replace(c, target_cct_s=0.0) for c in failing],
-                       np.zeros(len(pl.sites)))
+    at_once = pl.check([replace(c, target_cct_s=0.0) for c in failing], np.zeros(len(pl.sites)))
     return {n for n, ck in at_once.items() if not ck["stable_at_check"]}
 
 
@@ -345,9 +400,13 @@ def _most_binding(failing, brackets, base: dict, n: int) -> list:
     the requirement: simulated (base) or else the screening's (base load; none: last),
     the heavier load level first among equals.  With a screening no run is needed: the
     CCTs without storage of the rest are simulated only if they are added."""
+
     def severity(c):
-        cct = base[c.name]["cct_s"] if c.name in base else \
-            (brackets or {}).get(c.fault_name, (None,))[0]
+        cct = (
+            base[c.name]["cct_s"]
+            if c.name in base
+            else (brackets or {}).get(c.fault_name, (None,))[0]
+        )
         return (np.inf if cct is None else cct / c.target_cct_s, -c.load, c.name)
 
     return sorted(failing, key=severity)[:n]
@@ -369,14 +428,15 @@ class _Rounds:
     message: str = ""
 
 
-def _generate(pl: PlanContext, cons, failing, checks, n_active, max_rounds,
-              kw: Study) -> PlanResult:
+def _generate(
+    pl: PlanContext, cons, failing, checks, n_active, max_rounds, kw: Study
+) -> PlanResult:
     """The rounds of constraint generation (module docstring), then the energies."""
     st = _Rounds(cons, checks, np.zeros(len(pl.sites)))
     if not failing:
         st.verified, st.message = True, "every contingency is stable without storage"
     else:
-        if not pl.brackets:         # no screening to rank by: simulate every failing one
+        if not pl.brackets:  # no screening to rank by: simulate every failing one
             pl.add_base(failing, None, kw)
         st.active = _most_binding(failing, pl.brackets, pl.base, n_active)
         pl.add_base(st.active, pl.brackets, kw)
@@ -387,11 +447,21 @@ def _generate(pl: PlanContext, cons, failing, checks, n_active, max_rounds,
     mwh, energy, ok = size_energy(pl, st.cons, st.mw, st.checks)
     if st.verified and not ok:
         st.verified, st.message = False, st.message + "; the sized energies fail a check run"
-    return PlanResult(case=pl.case, requirement="", load_levels=(), sites=pl.sites, mw=st.mw,
-                      mwh=mwh, cost=pl.cost.split(pl.sites, st.mw, mwh), verified=st.verified,
-                      contingencies=_rows(st.cons, st.checks, st.evs, pl.base),
-                      rounds=st.rounds, active=[c.name for c in st.active],
-                      message=st.message, energy=energy)
+    return PlanResult(
+        case=pl.case,
+        requirement="",
+        load_levels=(),
+        sites=pl.sites,
+        mw=st.mw,
+        mwh=mwh,
+        cost=pl.cost.split(pl.sites, st.mw, mwh),
+        verified=st.verified,
+        contingencies=_rows(st.cons, st.checks, st.evs, pl.base),
+        rounds=st.rounds,
+        active=[c.name for c in st.active],
+        message=st.message,
+        energy=energy,
+    )
 
 
 def _round(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw: Study) -> bool:
@@ -401,14 +471,24 @@ def _round(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw: Study) -> 
     constraint generation ends (st.verified and st.message say how)."""
     pl.energy_rate = mwh_per_mw(len(pl.sites), st.checks)
     sites = pl.priced(pl.energy_rate)
-    pl.say(f"round {rnd}: solving for {len(st.active)} contingencies ("
-           + ", ".join(c.name for c in st.active) + ")")
+    pl.say(
+        f"round {rnd}: solving for {len(st.active)} contingencies ("
+        + ", ".join(c.name for c in st.active)
+        + ")"
+    )
     try:
-        res = place(pl.case, st.active, replace(kw, sites=sites),
-                    replace(pl.place, site_cost=pl.site_costs),
-                    WarmStart(base={c.name: pl.base[c.name] for c in st.active},
-                              start=None if not st.mw.any() else st.mw, evaluations=st.evs),
-                    progress=lambda m: pl.say(f"round {rnd}: {m}"))
+        res = place(
+            pl.case,
+            st.active,
+            replace(kw, sites=sites),
+            replace(pl.place, site_cost=pl.site_costs),
+            WarmStart(
+                base={c.name: pl.base[c.name] for c in st.active},
+                start=None if not st.mw.any() else st.mw,
+                evaluations=st.evs,
+            ),
+            progress=lambda m: pl.say(f"round {rnd}: {m}"),
+        )
     except InfeasibleError as exc:
         if not pl.drop_infeasible or not exc.contingencies:
             raise
@@ -423,8 +503,16 @@ def _set_aside(pl: PlanContext, st: _Rounds, rnd: int, exc: InfeasibleError) -> 
     gone = set(exc.contingencies)
     pl.infeasible.append(str(exc))
     pl.set_aside.extend(sorted(gone))
-    st.rounds.append({"round": rnd, "active": [c.name for c in st.active], "total_mw": None,
-                      "set_aside": sorted(gone), "failing": [], "iterations": 0})
+    st.rounds.append(
+        {
+            "round": rnd,
+            "active": [c.name for c in st.active],
+            "total_mw": None,
+            "set_aside": sorted(gone),
+            "failing": [],
+            "iterations": 0,
+        }
+    )
     pl.say(f"round {rnd}: set aside as infeasible: {', '.join(sorted(gone))}")
     st.cons = tuple(c for c in st.cons if c.name not in gone)
     st.active = [c for c in st.active if c.name not in gone]
@@ -452,13 +540,25 @@ def _add_failing(pl: PlanContext, st: _Rounds, rnd: int, res, kw) -> bool:
     st.mw, st.evs = res.allocation.mw, dict(res.evaluations)
     st.checks = pl.check(st.cons, st.mw)
     fails = [c for c in st.cons if not st.checks[c.name]["stable_at_check"]]
-    st.rounds.append({"round": rnd, "active": [c.name for c in st.active],
-                      "total_mw": float(st.mw.sum()), "loop_verified": res.verified,
-                      "loop_message": res.message, "failing": [c.name for c in fails],
-                      "iterations": len(res.iterations)})
-    pl.say(f"round {rnd}: {st.mw.sum():.1f} MW, checked {len(st.cons)} contingencies: "
-           + (f"{len(fails)} fail (" + ", ".join(c.name for c in fails[:8]) + ")"
-              if fails else "all stable"))
+    st.rounds.append(
+        {
+            "round": rnd,
+            "active": [c.name for c in st.active],
+            "total_mw": float(st.mw.sum()),
+            "loop_verified": res.verified,
+            "loop_message": res.message,
+            "failing": [c.name for c in fails],
+            "iterations": len(res.iterations),
+        }
+    )
+    pl.say(
+        f"round {rnd}: {st.mw.sum():.1f} MW, checked {len(st.cons)} contingencies: "
+        + (
+            f"{len(fails)} fail (" + ", ".join(c.name for c in fails[:8]) + ")"
+            if fails
+            else "all stable"
+        )
+    )
     if not res.verified:
         st.message = f"round {rnd}: the loop did not verify an allocation ({res.message})"
         return True
@@ -467,8 +567,10 @@ def _add_failing(pl: PlanContext, st: _Rounds, rnd: int, res, kw) -> bool:
         return True
     new = [c for c in fails if c.name not in {a.name for a in st.active}]
     if not new:
-        st.message = (f"round {rnd}: contingencies of the active set fail their check run: "
-                      f"{', '.join(c.name for c in fails)}")
+        st.message = (
+            f"round {rnd}: contingencies of the active set fail their check run: "
+            f"{', '.join(c.name for c in fails)}"
+        )
         return True
     pl.add_base(new, pl.brackets, kw)
     st.active = st.active + new
@@ -481,13 +583,19 @@ def _rows(cons, checks, evs, base) -> list:
     out = []
     for c in cons:
         cct = evs.get(c.name, {}).get("cct_s")
-        out.append({"name": c.name, "fault": c.fault.describe(), "fault_name": c.fault_name,
-                    "load": c.load, "required_s": c.target_cct_s,
-                    "met": bool(checks[c.name]["stable_at_check"])
-                    and (cct is None or cct >= c.target_cct_s - 1e-9),
-                    "cct_no_storage_s": base.get(c.name, {}).get("cct_s"),
-                    "cct_s": cct, "margin_s": None if cct is None else cct - c.target_cct_s,
-                    "margin_at_least": False})
+        out.append(
+            {
+                "name": c.name,
+                "fault": c.fault.describe(),
+                "fault_name": c.fault_name,
+                "load": c.load,
+                "required_s": c.target_cct_s,
+                "met": bool(checks[c.name]["stable_at_check"])
+                and (cct is None or cct >= c.target_cct_s - 1e-9),
+                "cct_no_storage_s": base.get(c.name, {}).get("cct_s"),
+                "cct_s": cct,
+                "margin_s": None if cct is None else cct - c.target_cct_s,
+                "margin_at_least": False,
+            }
+        )
     return out
-
-

@@ -59,8 +59,10 @@ class Site:
 
     def __post_init__(self):
         if not (self.max_mw > 0 and self.cost > 0):
-            raise InputError(f"site at bus {self.bus}: max_mw and cost must be > 0, got "
-                             f"{self.max_mw:g} MW and {self.cost:g}")
+            raise InputError(
+                f"site at bus {self.bus}: max_mw and cost must be > 0, got "
+                f"{self.max_mw:g} MW and {self.cost:g}"
+            )
 
 
 def candidate_sites(case, max_pct: float = 50.0, machines=None, cost=None) -> tuple[Site, ...]:
@@ -76,9 +78,15 @@ def candidate_sites(case, max_pct: float = 50.0, machines=None, cost=None) -> tu
         raise InputError(f"largest site rating must be > 0 % of machine MVA, got {max_pct:g}")
     nums = [int(k) for k in (case.machines.number if machines is None else machines)]
     cost = cost or {}
-    return tuple(Site(bus=hv_bus(case, k), machine=k,
-                      max_mw=max_pct / 100 * float(case.machines.mva[case.machine_index(k)]),
-                      cost=float(cost.get(k, 1.0))) for k in nums)
+    return tuple(
+        Site(
+            bus=hv_bus(case, k),
+            machine=k,
+            max_mw=max_pct / 100 * float(case.machines.mva[case.machine_index(k)]),
+            cost=float(cost.get(k, 1.0)),
+        )
+        for k in nums
+    )
 
 
 @dataclass(frozen=True)
@@ -96,7 +104,7 @@ class CCTCut:
         """Linearised CCT (s) at ratings P (MW)."""
         return float(self.cct_s + self.gradient @ (np.asarray(P, float) - self.at_mw))
 
-    def through(self, points) -> "CCTCut":
+    def through(self, points) -> CCTCut:
         """The cut corrected to pass through measured (ratings MW (n_sites,), CCT s)
         `points`: the gradient g is first scaled by the least-squares factor
         a = (S^T g) . d / |S^T g|^2 (SIME's error is mostly the one scalar
@@ -142,13 +150,24 @@ class Allocation:
 
     def rows(self) -> list[dict]:
         """Installed sites only: bus, machine, MW."""
-        return [{"bus": s.bus, "machine": s.machine, "mw": float(p)}
-                for s, p in zip(self.sites, self.mw) if p > 0]
+        return [
+            {"bus": s.bus, "machine": s.machine, "mw": float(p)}
+            for s, p in zip(self.sites, self.mw)
+            if p > 0
+        ]
 
 
-def solve_allocation(sites, cuts, *, safety_s: float = 0.0, damping: DampingRows | None = None,
-                     penalty: float | None = None, cct_penalty: float | None = None,
-                     upper=None, trust: tuple | None = None) -> Allocation:
+def solve_allocation(
+    sites,
+    cuts,
+    *,
+    safety_s: float = 0.0,
+    damping: DampingRows | None = None,
+    penalty: float | None = None,
+    cct_penalty: float | None = None,
+    upper=None,
+    trust: tuple | None = None,
+) -> Allocation:
     """Solve the linear program of the module docstring once (cvxpy, Clarabel).
 
     Args:
@@ -169,8 +188,9 @@ def solve_allocation(sites, cuts, *, safety_s: float = 0.0, damping: DampingRows
     P = cp.Variable(n, nonneg=True)
     u = cp.Variable(len(cuts), nonneg=True) if cct_penalty is not None and cuts else None
     lin = [c.cct_s + c.gradient @ (P - c.at_mw) for c in cuts]
-    cons = [P <= ub] + [lin[i] + (0 if u is None else u[i]) >= c.target_s + safety_s
-                        for i, c in enumerate(cuts)]
+    cons = [P <= ub] + [
+        lin[i] + (0 if u is None else u[i]) >= c.target_s + safety_s for i, c in enumerate(cuts)
+    ]
     obj = cost @ P + (0 if u is None else cct_penalty * cp.sum(u))
     slack = None
     if damping is not None and len(damping.b):
@@ -186,12 +206,16 @@ def solve_allocation(sites, cuts, *, safety_s: float = 0.0, damping: DampingRows
     if prob.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
         raise _infeasible(cuts, ub, safety_s, prob.status)
     mw = np.where(P.value > 1e-6, P.value, 0.0)
-    return Allocation(sites=tuple(sites), mw=mw, objective=float(prob.value),
-                      solve_time_s=float(prob.solver_stats.solve_time or 0.0),
-                      wall_time_s=wall,
-                      slack=0.0 if slack is None else float(np.sum(slack.value)),
-                      cct_slack=0.0 if u is None else float(np.sum(u.value)),
-                      predicted_cct_s={c.contingency: c.predicted(mw) for c in cuts})
+    return Allocation(
+        sites=tuple(sites),
+        mw=mw,
+        objective=float(prob.value),
+        solve_time_s=float(prob.solver_stats.solve_time or 0.0),
+        wall_time_s=wall,
+        slack=0.0 if slack is None else float(np.sum(slack.value)),
+        cct_slack=0.0 if u is None else float(np.sum(u.value)),
+        predicted_cct_s={c.contingency: c.predicted(mw) for c in cuts},
+    )
 
 
 def diagnose(cuts, upper, safety_s: float = 0.0) -> list[str]:
@@ -210,18 +234,24 @@ def _infeasible(cuts, ub, safety_s, status) -> InfeasibleError:
     bad = diagnose(cuts, ub, safety_s)
     if bad:
         worst = {c.contingency: c for c in cuts}[bad[0]]
-        best = worst.cct_s - worst.gradient @ worst.at_mw + \
-            np.maximum(worst.gradient * ub, 0.0).sum()
+        best = (
+            worst.cct_s - worst.gradient @ worst.at_mw + np.maximum(worst.gradient * ub, 0.0).sum()
+        )
         return InfeasibleError(
             f"contingency {', '.join(bad)}: even with every site at its upper bound "
             f"({ub.sum():.0f} MW) the linearised CCT of {bad[0]} reaches only {best:.3f} s "
-            f"against the target {worst.target_s:.3f} s", bad)
-    return InfeasibleError(f"the targets of {len(cuts)} contingencies cannot be met together "
-                           f"within the site bounds and limits (solver status {status})")
+            f"against the target {worst.target_s:.3f} s",
+            bad,
+        )
+    return InfeasibleError(
+        f"the targets of {len(cuts)} contingencies cannot be met together "
+        f"within the site bounds and limits (solver status {status})"
+    )
 
 
-def sparse_allocation(sites, cuts, *, max_sites: int | None = None,
-                      site_cost=0.0, upper=None, **kw) -> Allocation:
+def sparse_allocation(
+    sites, cuts, *, max_sites: int | None = None, site_cost=0.0, upper=None, **kw
+) -> Allocation:
     """Fewer sites by greedy backward elimination: while more than max_sites sites are
     used, or while leaving one out lowers objective + the cost of the sites used
     (site_cost: one number for every site, or one per site, shape (n_sites,)), the used site
@@ -249,8 +279,10 @@ def sparse_allocation(sites, cuts, *, max_sites: int | None = None,
         best = _drop_one_site(sites, cuts, alloc, ub, kw)
         if over and best is None:
             used = ", ".join(f"bus {sites[j].bus}" for j in np.nonzero(alloc.mw > 0)[0])
-            raise InfeasibleError(f"with at most {max_sites} site(s): none of the "
-                                  f"{alloc.n_sites} sites used ({used}) can be left out")
+            raise InfeasibleError(
+                f"with at most {max_sites} site(s): none of the "
+                f"{alloc.n_sites} sites used ({used}) can be left out"
+            )
         if not over and (best is None or total(best[0]) >= total(alloc)):
             break
         alloc, ub = best

@@ -37,8 +37,10 @@ def margins(pl: PlanContext, cons, result, tol: float, cap_s: float, kw) -> None
     todo = [c for c in cons if rows[c.name]["cct_s"] is None and rows[c.name]["met"]]
     if not todo:
         return
-    pl.say(f"clearing margins of {len(todo)} contingencies (up to {1000 * cap_s:g} ms, "
-           f"{1000 * tol:g} ms)")
+    pl.say(
+        f"clearing margins of {len(todo)} contingencies (up to {1000 * cap_s:g} ms, "
+        f"{1000 * tol:g} ms)"
+    )
     top = {c.name: round(min(c.target_cct_s + cap_s, pl.t_max), 12) for c in todo}
     far = pl.check([replace(c, target_cct_s=top[c.name]) for c in todo], result.mw)
     near = [c for c in todo if not far[c.name]["stable_at_check"]]
@@ -47,12 +49,19 @@ def margins(pl: PlanContext, cons, result, tol: float, cap_s: float, kw) -> None
             rows[c.name].update(margin_s=top[c.name] - c.target_cct_s, margin_at_least=True)
     if not near:
         return
-    ev = evaluations(pl.case, near, result.mw, replace(kw, search=replace(kw.search, tol=tol)),
-                     VerifyOptions(brackets={c.name: (c.target_cct_s, top[c.name])
-                                             for c in near}, gradient=False))
+    ev = evaluations(
+        pl.case,
+        near,
+        result.mw,
+        replace(kw, search=replace(kw.search, tol=tol)),
+        VerifyOptions(
+            brackets={c.name: (c.target_cct_s, top[c.name]) for c in near}, gradient=False
+        ),
+    )
     for c in near:
-        rows[c.name].update(cct_s=ev[c.name]["cct_s"], cct_tol_s=tol,
-                            margin_s=ev[c.name]["cct_s"] - c.target_cct_s)
+        rows[c.name].update(
+            cct_s=ev[c.name]["cct_s"], cct_tol_s=tol, margin_s=ev[c.name]["cct_s"] - c.target_cct_s
+        )
 
 
 def half_step(pl: PlanContext, cons, result, n: int, kw) -> dict:
@@ -71,28 +80,48 @@ def half_step(pl: PlanContext, cons, result, n: int, kw) -> dict:
     resolution, s), and the energy's half-step figures (`energy_half_step`)}."""
     h = pl.step_s()
     by_name = {c.name: c for c in cons}
-    rows = sorted((r for r in result.contingencies if r["cct_s"] is not None),
-                  key=lambda r: r["margin_s"])[:n]
+    rows = sorted(
+        (r for r in result.contingencies if r["cct_s"] is not None), key=lambda r: r["margin_s"]
+    )[:n]
     tight = [by_name[r["name"]] for r in rows]
     res_of = {r["name"]: r.get("cct_tol_s", pl.tol) for r in rows}
     # one batch: the tightest contingencies and those that set an energy (often the same)
     setters = energy_setters(by_name, result.mw, result.energy)
-    checks = pl.check(list({c.name: c for c in tight + setters}.values()), result.mw,
-                      h=h / 2)
-    ev = evaluations(pl.case, tight, result.mw, replace(kw, model=replace(kw.model, h=h / 2)),
-                     VerifyOptions(brackets={r["name"]: (r["cct_s"] - 2 * res_of[r["name"]],
-                                                         r["cct_s"] + 2 * res_of[r["name"]])
-                                             for r in rows}, gradient=False))
-    out = [{"name": r["name"], "required_s": r["required_s"], "cct_s": r["cct_s"],
-            "cct_tol_s": res_of[r["name"]], "cct_half_s": ev[r["name"]]["cct_s"],
-            "stable_half": bool(checks[r["name"]]["stable_at_check"])} for r in rows]
-    diff = max((max(0.0, abs(o["cct_half_s"] - o["cct_s"]) - o["cct_tol_s"]) for o in out),
-               default=0.0)
+    checks = pl.check(list({c.name: c for c in tight + setters}.values()), result.mw, h=h / 2)
+    ev = evaluations(
+        pl.case,
+        tight,
+        result.mw,
+        replace(kw, model=replace(kw.model, h=h / 2)),
+        VerifyOptions(
+            brackets={
+                r["name"]: (r["cct_s"] - 2 * res_of[r["name"]], r["cct_s"] + 2 * res_of[r["name"]])
+                for r in rows
+            },
+            gradient=False,
+        ),
+    )
+    out = [
+        {
+            "name": r["name"],
+            "required_s": r["required_s"],
+            "cct_s": r["cct_s"],
+            "cct_tol_s": res_of[r["name"]],
+            "cct_half_s": ev[r["name"]]["cct_s"],
+            "stable_half": bool(checks[r["name"]]["stable_at_check"]),
+        }
+        for r in rows
+    ]
+    diff = max(
+        (max(0.0, abs(o["cct_half_s"] - o["cct_s"]) - o["cct_tol_s"]) for o in out), default=0.0
+    )
     ok = all(o["stable_half"] for o in out)
     energy = energy_half_step(checks, result.mw, result.mwh, result.energy)
-    pl.say(f"half step ({1000 * h / 2:.3g} ms): {len(out)} tightest contingencies "
-           f"{'all stable' if ok else 'NOT all stable'} at their required time; CCTs within "
-           f"{1000 * diff:.0f} ms beyond their resolution" + energy_note(energy))
+    pl.say(
+        f"half step ({1000 * h / 2:.3g} ms): {len(out)} tightest contingencies "
+        f"{'all stable' if ok else 'NOT all stable'} at their required time; CCTs within "
+        f"{1000 * diff:.0f} ms beyond their resolution" + energy_note(energy)
+    )
     return {"h_s": h, "rows": out, "all_stable": ok, "max_cct_diff_s": diff, **energy}
 
 
@@ -111,14 +140,21 @@ def least_uniform(pl: PlanContext, cons, failing, kw) -> dict:
     fleet, pct_max = _uniform_fleet(pl)
     if not failing:
         zero = np.zeros(len(pl.sites))
-        return {"pct": 0.0, "total_mw": 0.0, "mwh": 0.0,
-                "cost": pl.cost.split(pl.sites, zero, zero), "verified": True}
+        return {
+            "pct": 0.0,
+            "total_mw": 0.0,
+            "mwh": 0.0,
+            "cost": pl.cost.split(pl.sites, zero, zero),
+            "verified": True,
+        }
     pct = _least_pct(pl, failing, fleet, pct_max)
     if pct is None:
         pl.say(f"uniform: not met even at {pct_max:g} % of every MVA")
         return {"pct": None, "total_mw": None, "verified": False}
-    pl.say(f"uniform: {pct:g} % meets the contingencies unstable without storage; "
-           "checking every contingency")
+    pl.say(
+        f"uniform: {pct:g} % meets the contingencies unstable without storage; "
+        "checking every contingency"
+    )
     pct, ok, checks = _verified_pct(pl, cons, failing, pct, fleet, pct_max, kw)
     return _uniform_result(pl, cons, pct, fleet(pct), ok, checks)
 
@@ -129,8 +165,10 @@ def _uniform_fleet(pl: PlanContext) -> tuple:
     pct_max the largest % every site bound allows."""
     mva = _mva(pl)
     upper = np.array([s.max_mw for s in pl.sites])
-    return (lambda p: _rounded(np.minimum(p / 100 * mva, upper), pl.sites),
-            float(np.min(100 * upper / mva)))
+    return (
+        lambda p: _rounded(np.minimum(p / 100 * mva, upper), pl.sites),
+        float(np.min(100 * upper / mva)),
+    )
 
 
 def _stable(pl: PlanContext, which, mw) -> tuple:
@@ -155,8 +193,7 @@ def _least_pct(pl: PlanContext, failing, fleet, pct_max: float) -> float | None:
     return float(np.ceil(hi / UNIFORM_RES_PCT - 1e-6) * UNIFORM_RES_PCT)
 
 
-def _verified_pct(pl: PlanContext, cons, failing, pct: float, fleet, pct_max: float,
-                  kw) -> tuple:
+def _verified_pct(pl: PlanContext, cons, failing, pct: float, fleet, pct_max: float, kw) -> tuple:
     """From pct up by UNIFORM_RES_PCT (at most to pct_max) until every contingency is
     stable at its required time and those of `failing` meet it by their CCT: (the %,
     verified, the checks of every contingency at it)."""
@@ -177,11 +214,20 @@ def _uniform_result(pl: PlanContext, cons, pct: float, mw, ok: bool, checks) -> 
     mwh, energy, e_ok = size_energy(pl, cons, mw, checks)
     setters = energy_setters({c.name: c for c in cons}, mw, energy)
     half = energy_half_step(pl.check(setters, mw, h=pl.step_s() / 2), mw, mwh, energy)
-    pl.say(f"uniform: {pct:g} % = {mw.sum():.0f} MW, "
-           f"{'verified' if ok and e_ok else 'NOT verified'}" + energy_note(half))
-    return {"pct": pct, "total_mw": float(mw.sum()), "mw_by_site": mw.tolist(),
-            "mwh": float(mwh.sum()), "cost": pl.cost.split(pl.sites, mw, mwh),
-            "verified": bool(ok and e_ok), "energy": energy, **half}
+    pl.say(
+        f"uniform: {pct:g} % = {mw.sum():.0f} MW, "
+        f"{'verified' if ok and e_ok else 'NOT verified'}" + energy_note(half)
+    )
+    return {
+        "pct": pct,
+        "total_mw": float(mw.sum()),
+        "mw_by_site": mw.tolist(),
+        "mwh": float(mwh.sum()),
+        "cost": pl.cost.split(pl.sites, mw, mwh),
+        "verified": bool(ok and e_ok),
+        "energy": energy,
+        **half,
+    }
 
 
 def _mva(pl: PlanContext) -> np.ndarray:
@@ -189,8 +235,7 @@ def _mva(pl: PlanContext) -> np.ndarray:
     from stabctl.stability.cct import cached_simulator
 
     case = cached_simulator(pl.case, pl.model).case
-    return np.array([float(case.machines.mva[case.machine_index(s.machine)])
-                     for s in pl.sites])
+    return np.array([float(case.machines.mva[case.machine_index(s.machine)]) for s in pl.sites])
 
 
 def faults_alone(pl: PlanContext, cons, result, max_iter: int, kw) -> list:
@@ -208,15 +253,23 @@ def faults_alone(pl: PlanContext, cons, result, max_iter: int, kw) -> list:
         mine = [by_name[n] for n in result.active if by_name[n].fault_name == fname]
         base = {c.name: pl.base[c.name] for c in mine}
         try:
-            res = place(pl.case, mine, replace(kw, sites=sites),
-                        PlaceOptions(max_iter=max_iter, site_cost=pl.site_costs),
-                        WarmStart(base=base))
+            res = place(
+                pl.case,
+                mine,
+                replace(kw, sites=sites),
+                PlaceOptions(max_iter=max_iter, site_cost=pl.site_costs),
+                WarmStart(base=base),
+            )
         except InfeasibleError as exc:
             return {"fault": fname, "total_mw": None, "verified": False, "message": str(exc)}
         pl.say(f"alone: {fname}: {res.allocation.total_mw:.1f} MW")
-        return {"fault": fname, "contingencies": [c.name for c in mine],
-                "total_mw": res.allocation.total_mw, "allocation": res.allocation.rows(),
-                "verified": res.verified}
+        return {
+            "fault": fname,
+            "contingencies": [c.name for c in mine],
+            "total_mw": res.allocation.total_mw,
+            "allocation": res.allocation.rows(),
+            "verified": res.verified,
+        }
 
     with ThreadPoolExecutor(max_workers=len(faults)) as threads:
         return list(threads.map(one, faults))

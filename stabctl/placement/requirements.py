@@ -52,11 +52,15 @@ class Requirement:
     def __post_init__(self):
         given = [v for v in (self.cycles, self.gain_pct, self.cct_s) if v is not None]
         if not given:
-            raise InputError("no requirement given: need a required clearing time "
-                             "(cycles), a CCT gain (%) or a target CCT (s)")
+            raise InputError(
+                "no requirement given: need a required clearing time "
+                "(cycles), a CCT gain (%) or a target CCT (s)"
+            )
         if not all(np.isfinite(v) and v > 0 for v in given):
-            raise InputError(f"requirements must be > 0, got cycles={self.cycles}, "
-                             f"gain={self.gain_pct} %, cct={self.cct_s} s")
+            raise InputError(
+                f"requirements must be > 0, got cycles={self.cycles}, "
+                f"gain={self.gain_pct} %, cct={self.cct_s} s"
+            )
 
     @property
     def needs_base(self) -> bool:
@@ -93,9 +97,11 @@ class Requirement:
 
     def describe(self) -> str:
         """E.g. ``"5 cycles"``, ``"CCT +10 %"``."""
-        parts = ([f"{self.cycles:g} cycles"] if self.cycles is not None else []) + \
-            ([f"CCT +{self.gain_pct:g} %"] if self.gain_pct is not None else []) + \
-            ([f"CCT {1000 * self.cct_s:g} ms"] if self.cct_s is not None else [])
+        parts = (
+            ([f"{self.cycles:g} cycles"] if self.cycles is not None else [])
+            + ([f"CCT +{self.gain_pct:g} %"] if self.gain_pct is not None else [])
+            + ([f"CCT {1000 * self.cct_s:g} ms"] if self.cct_s is not None else [])
+        )
         return ", ".join(parts)
 
 
@@ -121,9 +127,14 @@ def read_requirements(path) -> dict:
     rows = csv_rows(path, "fault list", ("bus", "far_bus"))
     out = {}
     for line, (fault, row) in enumerate(zip(faults, rows), start=2):
-        vals = {k: (row.get(c) or "").strip() for k, c in
-                (("cycles", "required_clearing_cycles"), ("gain_pct", "target_cct_gain"),
-                 ("cct_s", "target_cct_s"))}
+        vals = {
+            k: (row.get(c) or "").strip()
+            for k, c in (
+                ("cycles", "required_clearing_cycles"),
+                ("gain_pct", "target_cct_gain"),
+                ("cct_s", "target_cct_s"),
+            )
+        }
         if not any(vals.values()):
             continue
         try:
@@ -157,8 +168,10 @@ class CostModel:
     overrides: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        for k, o in [(None, {"per_mw": self.per_mw, "per_mwh": self.per_mwh,
-                             "per_site": self.per_site}), *self.overrides.items()]:
+        for k, o in [
+            (None, {"per_mw": self.per_mw, "per_mwh": self.per_mwh, "per_site": self.per_site}),
+            *self.overrides.items(),
+        ]:
             if any(not (np.isfinite(v) and v >= 0) for v in o.values()):
                 where = "" if k is None else f" (site of G{k})"
                 raise InputError(f"costs must be numbers >= 0{where}, got {o}")
@@ -168,15 +181,21 @@ class CostModel:
     def of(self, machine: int) -> tuple[float, float, float]:
         """(per MW, per MWh, per site) at the site of `machine`."""
         o = self.overrides.get(int(machine), {})
-        return (o.get("per_mw", self.per_mw), o.get("per_mwh", self.per_mwh),
-                o.get("per_site", self.per_site))
+        return (
+            o.get("per_mw", self.per_mw),
+            o.get("per_mwh", self.per_mwh),
+            o.get("per_site", self.per_site),
+        )
 
     def split(self, sites, mw, mwh) -> dict:
         """{"mw", "mwh", "site", "total"} cost of ratings mw and energies mwh per site."""
         c = np.array([self.of(s.machine) for s in sites]).reshape(len(sites), 3)
         mw, mwh = np.asarray(mw, float), np.asarray(mwh, float)
-        out = {"mw": float(c[:, 0] @ mw), "mwh": float(c[:, 1] @ mwh),
-               "site": float(c[:, 2] @ (mw > 0))}
+        out = {
+            "mw": float(c[:, 0] @ mw),
+            "mwh": float(c[:, 1] @ mwh),
+            "site": float(c[:, 2] @ (mw > 0)),
+        }
         out["total"] = out["mw"] + out["mwh"] + out["site"]
         return out
 
@@ -191,9 +210,15 @@ def read_site_costs(path) -> dict:
     out = {}
     for line, row in enumerate(rows, start=2):
         try:
-            out[int(row["machine"])] = {k: float(row[c]) for k, c in
-                                        (("per_mw", "cost_mw"), ("per_mwh", "cost_mwh"),
-                                         ("per_site", "cost_site")) if (row.get(c) or "").strip()}
+            out[int(row["machine"])] = {
+                k: float(row[c])
+                for k, c in (
+                    ("per_mw", "cost_mw"),
+                    ("per_mwh", "cost_mwh"),
+                    ("per_site", "cost_site"),
+                )
+                if (row.get(c) or "").strip()
+            }
         except (TypeError, ValueError) as exc:
             raise InputError(f"site costs {path} line {line}: {exc}") from None
     return out
@@ -218,20 +243,32 @@ def screening_brackets(path) -> dict:
         r, inputs = rec.get("result") or {}, rec.get("inputs") or {}
         still = "still stable" in (rec.get("error") or "") and "t_max" in inputs
         if inputs.get("esd_pct") is not None or not (
-                (rec.get("status") == "ok" and "t_stable_s" in r) or still):
+            (rec.get("status") == "ok" and "t_stable_s" in r) or still
+        ):
             continue
         f = r.get("fault") or inputs
-        fault = LineFault(int(f["bus"]), None if f["far_bus"] is None else int(f["far_bus"]),
-                          float(f["t_fault"]), int(f["circuit"]),
-                          tuple((int(a), int(b)) for a, b in f["trips"]))
-        out[Contingency(fault, 1.0).fault_name] = \
+        fault = LineFault(
+            int(f["bus"]),
+            None if f["far_bus"] is None else int(f["far_bus"]),
+            float(f["t_fault"]),
+            int(f["circuit"]),
+            tuple((int(a), int(b)) for a, b in f["trips"]),
+        )
+        out[Contingency(fault, 1.0).fault_name] = (
             (float(inputs["t_max"]), None) if still else (r["t_stable_s"], r["t_unstable_s"])
+        )
     return out
 
 
-def contingencies_of(faults, requirement: Requirement, freq_hz: float, tol: float,
-                     load_levels=(1.0,), overrides: dict | None = None,
-                     base: dict | None = None) -> tuple:
+def contingencies_of(
+    faults,
+    requirement: Requirement,
+    freq_hz: float,
+    tol: float,
+    load_levels=(1.0,),
+    overrides: dict | None = None,
+    base: dict | None = None,
+) -> tuple:
     """One `Contingency` per fault and load level with its required clearing time (s):
     the fault's override (by fault name) or `requirement`; base (name -> evaluation
     without storage) for gain requirements.  Raises InputError (a gain without base)."""
@@ -252,4 +289,3 @@ def describe(requirement: Requirement, overrides) -> str:
     have their own (overrides, fault name -> Requirement, `read_requirements`)."""
     extra = f" ({len(overrides)} fault(s) with their own)" if overrides else ""
     return requirement.describe() + extra
-

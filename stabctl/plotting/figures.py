@@ -11,9 +11,9 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import control as ct  # noqa: E402
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import control as ct
+import matplotlib.pyplot as plt
+import numpy as np
 
 
 def save_figure(fig, path) -> None:
@@ -36,20 +36,35 @@ def omib_phase_plane(system, runs: dict, path: Path) -> None:
     phase_plane_plot), the stability boundary through delta_u, and one run per fault."""
     fig, ax = plt.subplots(figsize=(7, 5))
     f = system.rhs("post")
-    ct.phase_plane_plot(lambda t, x: np.array(f(t, x)), [-1.0, 4.0, -12.0, 12.0], 1.0,
-                        ax=ax, plot_separatrices=False, plot_equilpoints=False,
-                        plot_streamplot={"color": "0.8"})
+    ct.phase_plane_plot(
+        lambda t, x: np.array(f(t, x)),
+        [-1.0, 4.0, -12.0, 12.0],
+        1.0,
+        ax=ax,
+        plot_separatrices=False,
+        plot_equilpoints=False,
+        plot_streamplot={"color": "0.8"},
+    )
     d = np.linspace(-1.0, system.delta_u, 600)
     w = system.separatrix(d)
     ax.plot(d, w, "k--", lw=1.5, label="stability boundary")
     ax.plot(d, -w, "k--", lw=1.5)
     for cyc, run in runs.items():
-        ax.plot(run.delta, run.omega, lw=1.8,
-                label=f"{cyc} cycles ({'stable' if run.stable else 'unstable'})")
+        ax.plot(
+            run.delta,
+            run.omega,
+            lw=1.8,
+            label=f"{cyc} cycles ({'stable' if run.stable else 'unstable'})",
+        )
         ax.plot(run.delta_cl, run.omega_cl, "o", color=ax.lines[-1].get_color())
     ax.plot([system.delta_s, system.delta_u], [0, 0], "kx")
-    ax.set(xlim=(-1, 4), ylim=(-12, 12), xlabel="delta (rad)", ylabel="d(delta)/dt (rad/s)",
-           title="OMIB phase plane (paper Figs. 4-5)")
+    ax.set(
+        xlim=(-1, 4),
+        ylim=(-12, 12),
+        xlabel="delta (rad)",
+        ylabel="d(delta)/dt (rad/s)",
+        title="OMIB phase plane (paper Figs. 4-5)",
+    )
     ax.legend(loc="lower left", fontsize=8)
     save_figure(fig, path)
 
@@ -66,8 +81,11 @@ def omib_equal_area(system, run, path: Path) -> None:
     d2 = np.linspace(run.delta_cl, system.delta_u, 100)
     ax.fill_between(d2, system.Pm, system.pe(d2, "post"), alpha=0.4, label="A2 available")
     ax.axvline(system.critical_clearing_angle(), color="r", ls=":", label="critical clearing angle")
-    ax.set(xlabel="delta (rad)", ylabel="power (pu)",
-           title=f"Equal-area criterion, clearing at {run.t_clear * 60:.0f} cycles")
+    ax.set(
+        xlabel="delta (rad)",
+        ylabel="power (pu)",
+        title=f"Equal-area criterion, clearing at {run.t_clear * 60:.0f} cycles",
+    )
     ax.legend(fontsize=8)
     save_figure(fig, path)
 
@@ -76,21 +94,24 @@ def feedback_phase_plane(system, runs: dict, path: Path) -> None:
     """Phase-plane comparison of the feedback laws (paper Fig. 7) and speed versus time."""
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
     d = np.linspace(-1.0, system.delta_u, 400)
-    ax1.plot(d, system.separatrix(d), "k--", lw=1,
-             label="stability boundary without control")
+    ax1.plot(d, system.separatrix(d), "k--", lw=1, label="stability boundary without control")
     ax1.plot(d, -system.separatrix(d), "k--", lw=1)
     for name, run in runs.items():
         ax1.plot(run.delta, run.omega, lw=1.3, label=name)
         ax2.plot(run.t, run.omega, lw=1.1, label=name)
-    ax1.set(xlim=(-1, 3.5), ylim=(-12, 12), xlabel="delta (rad)", ylabel="d(delta)/dt (rad/s)",
-            title="15-cycle fault: feedback laws (paper Fig. 7)")
+    ax1.set(
+        xlim=(-1, 3.5),
+        ylim=(-12, 12),
+        xlabel="delta (rad)",
+        ylabel="d(delta)/dt (rad/s)",
+        title="15-cycle fault: feedback laws (paper Fig. 7)",
+    )
     ax2.set(xlim=(0, 6), ylim=(-12, 12), xlabel="t (s)", ylabel="d(delta)/dt (rad/s)")
     ax1.legend(fontsize=7, loc="lower left")
     save_figure(fig, path)
 
 
-def min_time_figures(system, x_release, sols: dict, states_path: Path,
-                     costates_path: Path) -> None:
+def min_time_figures(system, x_release, sols: dict, states_path: Path, costates_path: Path) -> None:
     """States with the minimum-time pulse versus no storage (Fig. 10) and co-states (Fig. 11)."""
     from stabctl.smib.optimal import time_to_zero_speed
 
@@ -103,8 +124,11 @@ def min_time_figures(system, x_release, sols: dict, states_path: Path,
     for pc, s in sols.items():
         ax1.plot(s.t, s.x2, label=f"P_Cmax = {pc} pu (T = {s.T:.4f} s)")
         ax2.plot(s.x1, s.x2, label=f"P_Cmax = {pc} pu")
-    ax1.set(xlabel="time after release (s)", ylabel="x2 = d(delta)/dt (rad/s)",
-            title="Minimum-time control: speed (paper Fig. 10)")
+    ax1.set(
+        xlabel="time after release (s)",
+        ylabel="x2 = d(delta)/dt (rad/s)",
+        title="Minimum-time control: speed (paper Fig. 10)",
+    )
     ax2.set(xlabel="x1 = delta (rad)", ylabel="x2 (rad/s)", title="phase plane")
     ax1.legend(fontsize=8)
     save_figure(fig, states_path)
@@ -114,14 +138,18 @@ def min_time_figures(system, x_release, sols: dict, states_path: Path,
         ax2.plot(s.t, s.l2, label=f"P_Cmax = {pc} pu")
     ax1.set(xlabel="time after release (s)", ylabel="lambda1", title="co-state lambda1 (Fig. 11)")
     ax2.axhline(0, color="k", lw=0.8)
-    ax2.set(xlabel="time after release (s)", ylabel="lambda2",
-            title="co-state lambda2 > 0: P_C = P_Cmax throughout")
+    ax2.set(
+        xlabel="time after release (s)",
+        ylabel="lambda2",
+        title="co-state lambda2 > 0: P_C = P_Cmax throughout",
+    )
     ax1.legend(fontsize=8)
     save_figure(fig, costates_path)
 
 
-def simulation_overview(result, path, title: str | None = None, max_labels: int = 10,
-                        base_mva: float = 100.0) -> None:
+def simulation_overview(
+    result, path, title: str | None = None, max_labels: int = 10, base_mva: float = 100.0
+) -> None:
     """Panels versus time for a `stabctl.dynamics.results.SimulationResult`: machine speeds (pu),
     rotor angles relative to the centre of inertia (rad, the result's own COI with H*MVA
     weights), bus voltage magnitudes (pu) and, when the run had storage, the device powers
@@ -132,14 +160,17 @@ def simulation_overview(result, path, title: str | None = None, max_labels: int 
     few."""
     t = result.t
     storage = result.pesd is not None and result.devices.size > 0
-    fig, axes = plt.subplots(4 if storage else 3, 1, figsize=(9, 11.5 if storage else 9),
-                             sharex=True)
+    fig, axes = plt.subplots(
+        4 if storage else 3, 1, figsize=(9, 11.5 if storage else 9), sharex=True
+    )
     rel = result.angle - result.coi_angle[:, None]
     lost = set(int(m) for m in result.separated)
     mstyles = _machine_styles(result.machines, lost, max_labels)
-    series = ((axes[0], result.speed, "G", result.machines, "speed (pu)"),
-              (axes[1], rel, "G", result.machines, "angle - COI angle (rad)"),
-              (axes[2], result.vmag, "B", result.buses, "bus voltage (pu)"))
+    series = (
+        (axes[0], result.speed, "G", result.machines, "speed (pu)"),
+        (axes[1], rel, "G", result.machines, "angle - COI angle (rad)"),
+        (axes[2], result.vmag, "B", result.buses, "bus voltage (pu)"),
+    )
     for ax, data, prefix, numbers, ylabel in series:
         many = data.shape[1] > max_labels
         for j, n in enumerate(numbers):
@@ -147,23 +178,33 @@ def simulation_overview(result, path, title: str | None = None, max_labels: int 
                 st = mstyles[j]
                 ax.plot(t, data[:, j], **st)
                 if many and st["label"]:
-                    ax.annotate(st["label"], (t[-1], data[-1, j]), fontsize=8,
-                                color=st["color"], xytext=(2, 0), textcoords="offset points",
-                                va="center")
+                    ax.annotate(
+                        st["label"],
+                        (t[-1], data[-1, j]),
+                        fontsize=8,
+                        color=st["color"],
+                        xytext=(2, 0),
+                        textcoords="offset points",
+                        va="center",
+                    )
             else:
-                ax.plot(t, data[:, j], lw=0.8 if many else 1.2,
-                        label=None if many else f"B{int(n)}")
+                ax.plot(
+                    t, data[:, j], lw=0.8 if many else 1.2, label=None if many else f"B{int(n)}"
+                )
         if prefix == "G" and many:
-            ax.plot([], [], color="0.5", lw=0.7,
-                    label=f"other {len(numbers) - len(lost)} machines (thin)")
+            ax.plot(
+                [],
+                [],
+                color="0.5",
+                lw=0.7,
+                label=f"other {len(numbers) - len(lost)} machines (thin)",
+            )
         if result.t_separation is not None:
-            ax.axvline(result.t_separation, color="r", ls=":", lw=1.2,
-                       label="loss of synchronism")
+            ax.axvline(result.t_separation, color="r", ls=":", lw=1.2, label="loss of synchronism")
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
         if prefix == "G" or not many:
-            ax.legend(fontsize=7, ncol=min(5, data.shape[1] + 1) if not many else 1,
-                      loc="best")
+            ax.legend(fontsize=7, ncol=min(5, data.shape[1] + 1) if not many else 1, loc="best")
     if storage:
         ax = axes[3]
         info = result.meta.get("storage", [])
@@ -173,21 +214,34 @@ def simulation_overview(result, path, title: str | None = None, max_labels: int 
             d = info[i] if i < len(info) else {}
             named = i in active[:max_labels]
             mach = d.get("machine")
-            ax.plot(t, result.pesd[:, i] * base_mva, lw=1.0,
-                    color=colour.get(int(mach)) if mach is not None and not many else None,
-                    label=(f"ESD {int(result.devices[i])} at bus {d.get('bus')} (G{mach})"
-                           if named and d else None))
+            ax.plot(
+                t,
+                result.pesd[:, i] * base_mva,
+                lw=1.0,
+                color=colour.get(int(mach)) if mach is not None and not many else None,
+                label=(
+                    f"ESD {int(result.devices[i])} at bus {d.get('bus')} (G{mach})"
+                    if named and d
+                    else None
+                ),
+            )
         ax.set_ylabel("ESD power (MW, + absorbs)")
         ax.grid(True, alpha=0.3)
         idle = result.devices.size - len(active)
-        ax.set_title(f"{result.devices.size} storage devices, {len(active)} switched"
-                     + (f", {idle} stayed idle" if idle else ""), fontsize=9)
+        ax.set_title(
+            f"{result.devices.size} storage devices, {len(active)} switched"
+            + (f", {idle} stayed idle" if idle else ""),
+            fontsize=9,
+        )
         if active:
             ax.legend(fontsize=7, ncol=2, loc="best")
     axes[-1].set_xlabel("t (s)")
-    verdict = ("stable" if result.stable else
-               f"loss of synchronism at {result.t_separation:.3f} s, machine(s) "
-               + ", ".join(str(int(m)) for m in result.separated))
+    verdict = (
+        "stable"
+        if result.stable
+        else f"loss of synchronism at {result.t_separation:.3f} s, machine(s) "
+        + ", ".join(str(int(m)) for m in result.separated)
+    )
     head = title or str(result.meta.get("case", "simulation"))
     axes[0].set_title(f"{head}\n{verdict}", fontsize=9)
     save_figure(fig, Path(path))
@@ -199,19 +253,42 @@ def _machine_styles(numbers, highlight=(), max_labels: int = 10) -> list[dict]:
     the `highlight`ed ones (thick, black/red/..., labelled)."""
     numbers = [int(n) for n in numbers]
     if len(numbers) <= max_labels:
-        return [{"color": plt.get_cmap("tab10")(j % 10), "lw": 1.2, "ls": "-",
-                 "label": f"G{n}", "zorder": 2} for j, n in enumerate(numbers)]
+        return [
+            {
+                "color": plt.get_cmap("tab10")(j % 10),
+                "lw": 1.2,
+                "ls": "-",
+                "label": f"G{n}",
+                "zorder": 2,
+            }
+            for j, n in enumerate(numbers)
+        ]
     cmap, styles = plt.get_cmap("tab20"), ("-", "--", ":")
     loud = ("k", "tab:red", "tab:blue", "tab:green", "tab:purple")
     shown = [n for n in numbers if n in set(int(h) for h in highlight)]
     out = []
     for j, n in enumerate(numbers):
         if n in shown:
-            out.append({"color": loud[shown.index(n) % len(loud)], "lw": 2.2, "ls": "-",
-                        "label": f"G{n}", "zorder": 3})
+            out.append(
+                {
+                    "color": loud[shown.index(n) % len(loud)],
+                    "lw": 2.2,
+                    "ls": "-",
+                    "label": f"G{n}",
+                    "zorder": 3,
+                }
+            )
         else:
-            out.append({"color": cmap(j % 20), "lw": 0.7, "ls": styles[(j // 20) % 3],
-                        "label": None, "zorder": 2, "alpha": 0.8})
+            out.append(
+                {
+                    "color": cmap(j % 20),
+                    "lw": 0.7,
+                    "ls": styles[(j // 20) % 3],
+                    "label": None,
+                    "zorder": 2,
+                    "alpha": 0.8,
+                }
+            )
     return out
 
 
@@ -221,10 +298,16 @@ def _speed_panel(ax, res, styles, label: str) -> None:
     for j, st in enumerate(styles):
         ax.plot(res.t, res.speed[:, j], **st)
         if st["label"] and len(styles) > 10:
-            ax.annotate(st["label"], (res.t[-1], res.speed[-1, j]), fontsize=8,
-                        color=st["color"], xytext=(2, 0), textcoords="offset points",
-                        va="center")
-    if len(styles) > 10:      # room for the names at the end of the traces
+            ax.annotate(
+                st["label"],
+                (res.t[-1], res.speed[-1, j]),
+                fontsize=8,
+                color=st["color"],
+                xytext=(2, 0),
+                textcoords="offset points",
+                va="center",
+            )
+    if len(styles) > 10:  # room for the names at the end of the traces
         ax.set_xlim(res.t[0], res.t[-1] + 0.1 * (res.t[-1] - res.t[0]))
     quiet = sum(1 for st in styles if not st["label"])
     if quiet:
@@ -252,23 +335,37 @@ def storage_case_figure(without, with_, path: Path, title: str, highlight=()) ->
     for i in active[:12]:
         d = with_.meta["storage"][i]
         named = not many or int(d["machine"]) in marked
-        axes[2].plot(with_.t, with_.pesd[:, i] * 100, lw=1,
-                     color=colour.get(int(d["machine"])) if named else None,
-                     label=f"ESD at bus {d['bus']} (G{d['machine']})")
-    axes[2].set(xlabel="t (s)", ylabel="ESD power (MW, + absorbs)",
-                title="device powers" + (f" ({min(len(active), 12)} of {len(active)} that "
-                                         "switched)" if len(active) > 12 else ""))
+        axes[2].plot(
+            with_.t,
+            with_.pesd[:, i] * 100,
+            lw=1,
+            color=colour.get(int(d["machine"])) if named else None,
+            label=f"ESD at bus {d['bus']} (G{d['machine']})",
+        )
+    axes[2].set(
+        xlabel="t (s)",
+        ylabel="ESD power (MW, + absorbs)",
+        title="device powers"
+        + (f" ({min(len(active), 12)} of {len(active)} that switched)" if len(active) > 12 else ""),
+    )
     if active:
         axes[2].legend(fontsize=7)
     for ax in axes[:2]:
-        ax.set_ylim(min(a.speed.min() for a in (without, with_)) - 0.002,
-                    max(a.speed.max() for a in (without, with_)) + 0.002)
+        ax.set_ylim(
+            min(a.speed.min() for a in (without, with_)) - 0.002,
+            max(a.speed.max() for a in (without, with_)) + 0.002,
+        )
     fig.suptitle(title)
     save_figure(fig, path)
 
 
-def cct_versus_rating(results: dict, ratings, path: Path, paper_row: dict | None = None,
-                      paper_label: str = "paper Table 4") -> None:
+def cct_versus_rating(
+    results: dict,
+    ratings,
+    path: Path,
+    paper_row: dict | None = None,
+    paper_label: str = "paper Table 4",
+) -> None:
     """CCT increase (%) versus ESD rating (% of machine MVA) per case (Table 4), with the
     paper's printed row (rating % -> increase %) as its own series when given."""
     fig, ax = plt.subplots(figsize=(6.5, 4.2))
@@ -279,16 +376,23 @@ def cct_versus_rating(results: dict, ratings, path: Path, paper_row: dict | None
     if paper_row:
         x = sorted(paper_row)
         ax.plot(x, [paper_row[p] for p in x], "ks--", mfc="none", ms=7, label=paper_label)
-    ax.set(xlabel="ESD rating (% of machine MVA)", ylabel="CCT increase (%)",
-           title="Table 4: CCT gain versus storage rating")
+    ax.set(
+        xlabel="ESD rating (% of machine MVA)",
+        ylabel="CCT increase (%)",
+        title="Table 4: CCT gain versus storage rating",
+    )
     ax.legend(fontsize=8)
     save_figure(fig, path)
 
 
-# -- modal analysis (stabctl.smallsignal.modal) --------------------------------------------------------
+# -- modal analysis (stabctl.smallsignal.modal) ------------------------------------------
 
-_KIND_STYLE = {"inter-area": ("tab:red", "s"), "local": ("tab:blue", "o"),
-               "other": ("0.6", "."), "angle reference": ("k", "x")}
+_KIND_STYLE = {
+    "inter-area": ("tab:red", "s"),
+    "local": ("tab:blue", "o"),
+    "other": ("0.6", "."),
+    "angle reference": ("k", "x"),
+}
 
 
 def eigenvalue_plot(ma, path, title: str, dampings=(0.03, 0.05, 0.1, 0.2)) -> None:
@@ -306,19 +410,26 @@ def eigenvalue_plot(ma, path, title: str, dampings=(0.03, 0.05, 0.1, 0.2)) -> No
     fmax = 2.6
     sig_min = min(-0.5, 1.2 * float(np.min(lam[ma.electromechanical].real, initial=-1.0)))
     for zeta in dampings:
-        wn = np.linspace(0, 2 * np.pi * fmax / np.sqrt(1 - zeta ** 2), 50)
-        ax2.plot(-zeta * wn, wn * np.sqrt(1 - zeta ** 2) / (2 * np.pi), "k:", lw=0.8)
-        f_end = min(fmax, -sig_min * np.sqrt(1 - zeta ** 2) / (2 * np.pi * zeta))
-        ax2.annotate(f"{zeta:.0%}", (-zeta * 2 * np.pi * f_end / np.sqrt(1 - zeta ** 2), f_end),
-                     fontsize=7, ha="right")
+        wn = np.linspace(0, 2 * np.pi * fmax / np.sqrt(1 - zeta**2), 50)
+        ax2.plot(-zeta * wn, wn * np.sqrt(1 - zeta**2) / (2 * np.pi), "k:", lw=0.8)
+        f_end = min(fmax, -sig_min * np.sqrt(1 - zeta**2) / (2 * np.pi * zeta))
+        ax2.annotate(
+            f"{zeta:.0%}",
+            (-zeta * 2 * np.pi * f_end / np.sqrt(1 - zeta**2), f_end),
+            fontsize=7,
+            ha="right",
+        )
     for ax in (ax1, ax2):
         ax.axvline(0, color="k", lw=0.8)
         ax.grid(True, alpha=0.3)
         ax.set(xlabel="real part (1/s)", ylabel="frequency (Hz)")
     ax1.set_xscale("symlog", linthresh=1.0)
     ax1.set_title("all modes (one per conjugate pair)")
-    ax2.set(xlim=(sig_min, 0.25 * abs(sig_min)), ylim=(0, fmax),
-            title="electromechanical region, dotted: constant damping ratio")
+    ax2.set(
+        xlim=(sig_min, 0.25 * abs(sig_min)),
+        ylim=(0, fmax),
+        title="electromechanical region, dotted: constant damping ratio",
+    )
     ax2.legend(fontsize=8, loc="upper left")
     fig.suptitle(title)
     save_figure(fig, Path(path))
@@ -345,8 +456,12 @@ def mode_shape_compass(ma, modes, path, max_labels: int = 6) -> None:
         ax = fig.add_subplot(rows, cols, n + 1, projection="polar")
         s = ma.speed_shape[:, i]
         for k in np.argsort(np.abs(s)):
-            ax.annotate("", xy=(np.angle(s[k]), abs(s[k])), xytext=(0, 0),
-                        arrowprops=dict(arrowstyle="->", color=colors(ma.areas[k] % 10), lw=1.2))
+            ax.annotate(
+                "",
+                xy=(np.angle(s[k]), abs(s[k])),
+                xytext=(0, 0),
+                arrowprops=dict(arrowstyle="->", color=colors(ma.areas[k] % 10), lw=1.2),
+            )
         for k in np.argsort(-np.abs(s))[:max_labels]:
             ax.text(np.angle(s[k]), abs(s[k]) * 1.08, f"G{int(ma.machines[k])}", fontsize=7)
         ax.set_ylim(0, 1.15)
@@ -366,19 +481,20 @@ def participation_bars(ma, modes, path, n_bars: int = 12) -> None:
         p = ma.machine_participation(i)
         k = np.argsort(-p)[:n_bars]
         ax.bar(range(k.size), p[k], color=[colors(ma.areas[j] % 10) for j in k])
-        ax.set_xticks(range(k.size), [f"G{int(ma.machines[j])}" for j in k], fontsize=7,
-                      rotation=90)
+        ax.set_xticks(
+            range(k.size), [f"G{int(ma.machines[j])}" for j in k], fontsize=7, rotation=90
+        )
         ax.set(ylabel="participation", title=_mode_title(ma, i))
         ax.title.set_fontsize(9)
-    for ax in axes.flat[len(modes):]:
+    for ax in axes.flat[len(modes) :]:
         ax.set_visible(False)
     fig.suptitle("participation factors per machine (each mode sums to 1; colour = area)")
     save_figure(fig, Path(path))
 
 
 def screening_map(case, rows, path: Path) -> None:
-    """Network drawn with `stabctl.plotting.layout.spectral_layout`, each bus coloured by the CCT of a
-    fault there (grey: failed search); bus numbers on the most critical ones."""
+    """Network drawn with `stabctl.plotting.layout.spectral_layout`, each bus coloured by the CCT
+    of a fault there (grey: failed search); bus numbers on the most critical ones."""
     from stabctl.plotting.layout import spectral_layout
 
     xy = spectral_layout(case)
@@ -390,12 +506,21 @@ def screening_map(case, rows, path: Path) -> None:
     idx = case.bus_indices(list(bus_rows))
     cct = np.array([r.get("cct_s", np.nan) for r in bus_rows.values()])
     ok = np.isfinite(cct)
-    sc = ax.scatter(xy[idx[ok], 0], xy[idx[ok], 1], c=cct[ok] * case.freq_hz, cmap="RdYlGn",
-                    s=40, zorder=2, edgecolors="k", linewidths=0.3)
+    sc = ax.scatter(
+        xy[idx[ok], 0],
+        xy[idx[ok], 1],
+        c=cct[ok] * case.freq_hz,
+        cmap="RdYlGn",
+        s=40,
+        zorder=2,
+        edgecolors="k",
+        linewidths=0.3,
+    )
     ax.scatter(xy[idx[~ok], 0], xy[idx[~ok], 1], c="0.5", s=40, zorder=2, marker="x")
     for k in np.argsort(np.where(ok, cct, np.inf))[:10]:
         ax.annotate(str(int(case.buses.number[idx[k]])), xy[idx[k]], fontsize=7)
     fig.colorbar(sc, ax=ax, label="CCT of a bus fault (cycles)")
-    ax.set(title=f"{case.name}: critical clearing time of a fault at each bus", xticks=[],
-           yticks=[])
+    ax.set(
+        title=f"{case.name}: critical clearing time of a fault at each bus", xticks=[], yticks=[]
+    )
     save_figure(fig, path)

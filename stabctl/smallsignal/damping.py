@@ -12,11 +12,12 @@ Design, 1968, ch. 2):
 so the ESD acts on a mode of that amplitude as the linear feedback P_j = K_j omega_rel_j,
 K_j = n(A) P_j, LINEAR in the rating.  n(A) is computed by `control.describing_function`
 (python-control) on the relay itself (`relay_df`); with hysteresis h it gains a small
-lag, of relative size ~h / A, which is left out (the in-phase part is used).  Closing these loops on the linearised model
-(`stabctl.smallsignal.linearise`: inputs P_esd_B<bus>, outputs omega_rel_G<k>) gives
-A_cl(P) = A + B_s diag(n P / S_base) C_s, whose eigenvalues are recomputed exactly
-(`stabctl.smallsignal.modal`); their first-order change is the residue of each site's own loop
-(`stabctl.smallsignal.modal.mode_sensitivity`), d lambda_m / d K_j = R_m,jj.  The damping ratio
+lag, of relative size ~h / A, which is left out (the in-phase part is used).  Closing these loops
+on the linearised model (`stabctl.smallsignal.linearise`: inputs P_esd_B<bus>, outputs
+omega_rel_G<k>) gives A_cl(P) = A + B_s diag(n P / S_base) C_s, whose eigenvalues are recomputed
+exactly (`stabctl.smallsignal.modal`); their first-order change is the residue of each site's
+own loop (`stabctl.smallsignal.modal.mode_sensitivity`), d lambda_m / d K_j = R_m,jj.  The
+damping ratio
 -Re(lambda)/|lambda| >= zeta_min is the half plane Re(lambda) + kappa Im(lambda) <= 0,
 kappa = zeta_min / sqrt(1 - zeta_min^2), linear in lambda and hence, to first order, in P.
 Below the deadband (A <= d) the ESDs are idle and add no damping at all.
@@ -30,7 +31,7 @@ import control as ct
 import numpy as np
 
 from stabctl.errors import InputError
-from stabctl.smallsignal.modal import mode_sensitivity, modal_analysis
+from stabctl.smallsignal.modal import modal_analysis, mode_sensitivity
 
 
 @dataclass(frozen=True)
@@ -43,7 +44,6 @@ class DampingRows:
     labels: tuple = ()
 
 
-
 class BangBangRelay(ct.DescribingFunctionNonlinearity):
     """The Table 3 law on a relative speed x (pu) with unit output: +1 above the deadband,
     -1 below minus it, 0 inside; with hysteresis a running relay stops only inside
@@ -54,8 +54,9 @@ class BangBangRelay(ct.DescribingFunctionNonlinearity):
         self.db, self.hyst, self.mode = deadband, hysteresis, 0
 
     def __call__(self, x):
-        keep = (self.mode == 1 and x > self.db - self.hyst) or \
-            (self.mode == -1 and x < self.hyst - self.db)
+        keep = (self.mode == 1 and x > self.db - self.hyst) or (
+            self.mode == -1 and x < self.hyst - self.db
+        )
         if not keep:
             self.mode = 1 if x > self.db else -1 if x < -self.db else 0
         return float(self.mode)
@@ -64,8 +65,9 @@ class BangBangRelay(ct.DescribingFunctionNonlinearity):
         return self.hyst == 0
 
 
-def relay_df(deadband_hz: float, amplitude_hz: float, freq_hz: float,
-             hysteresis_hz: float = 0.0) -> complex:
+def relay_df(
+    deadband_hz: float, amplitude_hz: float, freq_hz: float, hysteresis_hz: float = 0.0
+) -> complex:
     """Describing function n(A) of the unit bang-bang relay (`BangBangRelay`) at a
     relative-speed amplitude `amplitude_hz` (Hz), in pu power per pu speed per pu rating,
     by `control.describing_function` (first harmonic over one period, 4000 points).  Real
@@ -75,8 +77,7 @@ def relay_df(deadband_hz: float, amplitude_hz: float, freq_hz: float,
     if not amplitude_hz > 0:
         raise InputError(f"oscillation amplitude must be > 0 Hz, got {amplitude_hz:g}")
     relay = BangBangRelay(deadband_hz / freq_hz, hysteresis_hz / freq_hz)
-    return complex(ct.describing_function(relay, [amplitude_hz / freq_hz],
-                                          num_points=4000)[0])
+    return complex(ct.describing_function(relay, [amplitude_hz / freq_hz], num_points=4000)[0])
 
 
 class DampingModel:
@@ -105,8 +106,15 @@ class DampingModel:
         """The model with the sites' loops closed at ratings mw (MW): A + B_s K C_s."""
         K = self.scale * np.asarray(mw, float)
         s = self.sys
-        return ct.ss(np.asarray(s.A) + self.B_s @ (K[:, None] * self.C_s), s.B, s.C, s.D,
-                     states=s.state_labels, inputs=s.input_labels, outputs=s.output_labels)
+        return ct.ss(
+            np.asarray(s.A) + self.B_s @ (K[:, None] * self.C_s),
+            s.B,
+            s.C,
+            s.D,
+            states=s.state_labels,
+            inputs=s.input_labels,
+            outputs=s.output_labels,
+        )
 
     def modes(self, mw):
         """`stabctl.smallsignal.modal.ModalAnalysis` of the closed loop at ratings mw (MW)."""
@@ -126,16 +134,27 @@ class DampingModel:
         """
         if not 0 <= zeta_min < 1:
             raise InputError(f"zeta_min must be in [0, 1), got {zeta_min:g}")
-        kappa = zeta_min / np.sqrt(1 - zeta_min ** 2)
+        kappa = zeta_min / np.sqrt(1 - zeta_min**2)
         mw = np.asarray(mw, float)
         sys_cl = self.closed_loop(mw)
         ma = modal_analysis(sys_cl)
         em = ma.electromechanical
         ms = mode_sensitivity(sys_cl, ma)
-        R = ms.residues[em]                                      # (n_em, n_out, n_in)
-        r = np.stack([R[:, ms.outputs.index(self.sys.output_labels[o]),
-                        ms.inputs.index(self.sys.input_labels[i])]
-                      for i, o in zip(self.col, self.row)], axis=1) * self.scale
+        R = ms.residues[em]  # (n_em, n_out, n_in)
+        r = (
+            np.stack(
+                [
+                    R[
+                        :,
+                        ms.outputs.index(self.sys.output_labels[o]),
+                        ms.inputs.index(self.sys.input_labels[i]),
+                    ]
+                    for i, o in zip(self.col, self.row)
+                ],
+                axis=1,
+            )
+            * self.scale
+        )
         lam = ma.eigenvalues[em]
         a = (r.real + kappa * r.imag) / np.abs(lam)[:, None]
         b = (-(lam.real + kappa * lam.imag)) / np.abs(lam) + a @ mw

@@ -1,6 +1,6 @@
-"""Modal analysis of a linearised model (`stabctl.smallsignal.linearise`): eigenvalues, eigenvectors,
-participation factors, mode shapes, electromechanical modes and their local / inter-area
-classification, residues, controllability and observability.
+"""Modal analysis of a linearised model (`stabctl.smallsignal.linearise`): eigenvalues,
+eigenvectors, participation factors, mode shapes, electromechanical modes and their local /
+inter-area classification, residues, controllability and observability.
 
 Conventions (docs/modal.md):
 - right eigenvectors phi_i (columns of `right`) have unit 2-norm; left eigenvectors psi_i
@@ -25,10 +25,10 @@ import scipy.linalg as la
 
 from stabctl.errors import InputError
 
-F_MIN_HZ, F_MAX_HZ = 0.1, 2.5     # electromechanical band
-INTER_AREA_ETA = 0.5              # area-momentum fraction above which a mode is inter-area
-GAP_RATIO = 1.3                   # consecutive EM frequencies this far apart: time-scale gap
-SIGNIFICANT = 0.2                 # |speed shape| (of the largest) to count in a coherent group
+F_MIN_HZ, F_MAX_HZ = 0.1, 2.5  # electromechanical band
+INTER_AREA_ETA = 0.5  # area-momentum fraction above which a mode is inter-area
+GAP_RATIO = 1.3  # consecutive EM frequencies this far apart: time-scale gap
+SIGNIFICANT = 0.2  # |speed shape| (of the largest) to count in a coherent group
 STATE_GROUPS = ("rotor angle/speed", "rotor flux", "exciter", "pss", "governor")
 
 
@@ -103,24 +103,39 @@ class ModalAnalysis:
         for key, idx in (("all", rest), ("electromechanical", self.electromechanical)):
             if idx.size:
                 j = int(idx[np.argmin(self.damping[idx])])
-                out[key] = {"mode": j, "damping": float(self.damping[j]),
-                            "freq_hz": float(self.freq_hz[j])}
+                out[key] = {
+                    "mode": j,
+                    "damping": float(self.damping[j]),
+                    "freq_hz": float(self.freq_hz[j]),
+                }
         return out
 
     def mode_record(self, i: int) -> dict:
         """Everything about mode i, JSON-ready."""
         lam = self.eigenvalues[i]
-        rec = {"mode": i, "real": float(lam.real), "imag": float(lam.imag),
-               "freq_hz": float(self.freq_hz[i]), "damping": float(self.damping[i]),
-               "kind": str(self.kind[i]),
-               "dominant_states": [{"state": s, "participation": p}
-                                   for s, p in self.dominant_states(i)]}
+        rec = {
+            "mode": i,
+            "real": float(lam.real),
+            "imag": float(lam.imag),
+            "freq_hz": float(self.freq_hz[i]),
+            "damping": float(self.damping[i]),
+            "kind": str(self.kind[i]),
+            "dominant_states": [
+                {"state": s, "participation": p} for s, p in self.dominant_states(i)
+            ],
+        }
         if i in self.electromechanical:
             g1, g2 = self.groups(i)
-            rec.update(dominant_machines=self.dominant_machines(i), group=g1, against=g2,
-                       area_momentum_fraction=float(self.eta[i]),
-                       speed_shape={f"G{int(k)}": [float(abs(z)), float(np.degrees(np.angle(z)))]
-                                    for k, z in zip(self.machines, self.speed_shape[:, i])})
+            rec.update(
+                dominant_machines=self.dominant_machines(i),
+                group=g1,
+                against=g2,
+                area_momentum_fraction=float(self.eta[i]),
+                speed_shape={
+                    f"G{int(k)}": [float(abs(z)), float(np.degrees(np.angle(z)))]
+                    for k, z in zip(self.machines, self.speed_shape[:, i])
+                },
+            )
         return rec
 
 
@@ -132,8 +147,9 @@ def state_group(name: str) -> str:
     return {"exc": STATE_GROUPS[2], "pss": STATE_GROUPS[3], "tg": STATE_GROUPS[4]}[block]
 
 
-def modal_analysis(sys, inertia=None, n_areas: int | None = None,
-                   areas: dict | None = None) -> ModalAnalysis:
+def modal_analysis(
+    sys, inertia=None, n_areas: int | None = None, areas: dict | None = None
+) -> ModalAnalysis:
     """Modes of a linearised model (a control.StateSpace from `stabctl.smallsignal.linearise`).
 
     Parameters
@@ -182,7 +198,7 @@ def modal_analysis(sys, inertia=None, n_areas: int | None = None,
     e[angle] = 1.0
     ref = int(np.argmax(np.abs(e @ right)))
     f, mag = np.abs(lam.imag) / (2 * np.pi), np.abs(lam)
-    zeta = np.divide(-lam.real, mag, out=np.ones_like(mag), where=mag > 0)   # lambda = 0: 1
+    zeta = np.divide(-lam.real, mag, out=np.ones_like(mag), where=mag > 0)  # lambda = 0: 1
     em = electromechanical_modes(f, P, states)
     if areas is None:
         areas = coherent_areas(shape, f, em, n_areas)
@@ -193,18 +209,30 @@ def modal_analysis(sys, inertia=None, n_areas: int | None = None,
     kind = np.full(lam.size, "other", dtype=object)
     kind[em] = np.where(eta[em] > INTER_AREA_ETA, "inter-area", "local")
     kind[ref] = "angle reference"
-    return ModalAnalysis(eigenvalues=lam, freq_hz=f, damping=zeta, right=right, left=left,
-                         participation=P, states=states, machines=machines,
-                         inertia=np.asarray(inertia, float), speed_shape=shape,
-                         reference_mode=ref, electromechanical=em, areas=areas,
-                         kind=kind.astype(str), eta=eta)
+    return ModalAnalysis(
+        eigenvalues=lam,
+        freq_hz=f,
+        damping=zeta,
+        right=right,
+        left=left,
+        participation=P,
+        states=states,
+        machines=machines,
+        inertia=np.asarray(inertia, float),
+        speed_shape=shape,
+        reference_mode=ref,
+        electromechanical=em,
+        areas=areas,
+        kind=kind.astype(str),
+        eta=eta,
+    )
 
 
 def electromechanical_modes(freq_hz: np.ndarray, P: np.ndarray, states) -> np.ndarray:
     """Indices of the modes with F_MIN_HZ <= f <= F_MAX_HZ whose participation summed over
     the rotor angle/speed states is the largest of the STATE_GROUPS."""
     groups = np.array([state_group(n) for n in states])
-    shares = np.stack([P[groups == g].sum(axis=0) for g in STATE_GROUPS])   # (groups, modes)
+    shares = np.stack([P[groups == g].sum(axis=0) for g in STATE_GROUPS])  # (groups, modes)
     band = (freq_hz >= F_MIN_HZ) & (freq_hz <= F_MAX_HZ)
     return np.nonzero(band & (shares[0] >= shares.max(axis=0)))[0]
 
@@ -241,8 +269,9 @@ def _normalised(shape: np.ndarray) -> np.ndarray:
     return shape / np.where(top == 0, 1.0, top)
 
 
-def coherent_areas(shape: np.ndarray, freq_hz: np.ndarray, em: np.ndarray,
-                   n_areas: int | None = None) -> np.ndarray:
+def coherent_areas(
+    shape: np.ndarray, freq_hz: np.ndarray, em: np.ndarray, n_areas: int | None = None
+) -> np.ndarray:
     """Coherent areas of the machines by slow coherency (Chow et al., grouping by
     pivoting): the rigid-body direction and the speed shapes of the r - 1 slowest
     electromechanical modes span V (g, r); the r machines chosen by QR with column pivoting
@@ -263,11 +292,13 @@ def coherent_areas(shape: np.ndarray, freq_hz: np.ndarray, em: np.ndarray,
     if n_areas is None:
         n_areas = 1 + _slow_mode_count(freq_hz[em])
     if not 1 <= n_areas <= min(em.size + 1, g):
-        raise InputError(f"the number of areas must be between 1 and {min(em.size + 1, g)} "
-                         f"(electromechanical modes + 1, at most the machines), got {n_areas}")
+        raise InputError(
+            f"the number of areas must be between 1 and {min(em.size + 1, g)} "
+            f"(electromechanical modes + 1, at most the machines), got {n_areas}"
+        )
     if n_areas == 1:
         return np.zeros(g, int)
-    V = np.column_stack([np.ones(g), *(shape[:, i].real for i in em[:n_areas - 1])])
+    V = np.column_stack([np.ones(g), *(shape[:, i].real for i in em[: n_areas - 1])])
     _, _, piv = la.qr(V.T, pivoting=True)
     L = V @ np.linalg.inv(V[piv[:n_areas]])
     return _by_first_machine(np.argmax(L, axis=1))
@@ -296,7 +327,7 @@ def _slow_mode_count(f_sorted: np.ndarray) -> int:
     if f_sorted.size < 2:
         return f_sorted.size
     ratios = f_sorted[1:] / f_sorted[:-1]
-    lower = ratios[:max(1, f_sorted.size // 2)]
+    lower = ratios[: max(1, f_sorted.size // 2)]
     wide = np.nonzero(lower >= GAP_RATIO)[0]
     return int(wide[-1] if wide.size else np.argmax(lower)) + 1
 
@@ -327,8 +358,9 @@ class ModeSensitivity:
     outputs: list
 
 
-def mode_sensitivity(sys, ma: ModalAnalysis, inputs: str = "P_esd_",
-                     outputs: str = "omega_rel_") -> ModeSensitivity:
+def mode_sensitivity(
+    sys, ma: ModalAnalysis, inputs: str = "P_esd_", outputs: str = "omega_rel_"
+) -> ModeSensitivity:
     """Residues, controllability and observability of each mode from the inputs whose
     names start with `inputs` to the outputs starting with `outputs` (default: every ESD
     power input to every relative speed).  G(s) = D + sum over all eigenvalues of
@@ -340,16 +372,21 @@ def mode_sensitivity(sys, ma: ModalAnalysis, inputs: str = "P_esd_",
     outs = [k for k, n in enumerate(sys.output_labels) if n.startswith(outputs)]
     if not ins or not outs:
         raise InputError(f"no input starting with {inputs!r} or output with {outputs!r}")
-    cphi = np.asarray(sys.C)[outs] @ ma.right            # (n_out, m)
-    psib = ma.left @ np.asarray(sys.B)[:, ins]           # (m, n_in)
+    cphi = np.asarray(sys.C)[outs] @ ma.right  # (n_out, m)
+    psib = ma.left @ np.asarray(sys.B)[:, ins]  # (m, n_in)
     R = cphi.T[:, :, None] * psib[:, None, :]
-    return ModeSensitivity(residues=R, controllability=np.abs(psib), observability=np.abs(cphi.T),
-                           inputs=[sys.input_labels[j] for j in ins],
-                           outputs=[sys.output_labels[k] for k in outs])
+    return ModeSensitivity(
+        residues=R,
+        controllability=np.abs(psib),
+        observability=np.abs(cphi.T),
+        inputs=[sys.input_labels[j] for j in ins],
+        outputs=[sys.output_labels[k] for k in outs],
+    )
 
 
-def match_modes(ours: np.ndarray, reference: np.ndarray, f_min: float = F_MIN_HZ,
-                f_max: float = F_MAX_HZ) -> list[dict]:
+def match_modes(
+    ours: np.ndarray, reference: np.ndarray, f_min: float = F_MIN_HZ, f_max: float = F_MAX_HZ
+) -> list[dict]:
     """Pair every reference eigenvalue with Im > 0 and frequency in [f_min, f_max] Hz with
     the nearest of ours (complex arrays, any order, conjugates allowed); each pair as
     {"reference", "ours" (complex), "freq_ref_hz", "freq_err_pct", "damping_ref",
@@ -363,7 +400,14 @@ def match_modes(ours: np.ndarray, reference: np.ndarray, f_min: float = F_MIN_HZ
         o = ours[np.argmin(np.abs(ours - r))]
         f_o = abs(o.imag) / (2 * np.pi)
         z_r = -r.real / abs(r)
-        out.append({"reference": r, "ours": o, "freq_ref_hz": f_r,
-                    "freq_err_pct": 100 * (f_o - f_r) / f_r,
-                    "damping_ref": z_r, "damping_err": -o.real / abs(o) - z_r})
+        out.append(
+            {
+                "reference": r,
+                "ours": o,
+                "freq_ref_hz": f_r,
+                "freq_err_pct": 100 * (f_o - f_r) / f_r,
+                "damping_ref": z_r,
+                "damping_err": -o.real / abs(o) - z_r,
+            }
+        )
     return out

@@ -63,11 +63,19 @@ class TwoMachineCOI:
 
     def equivalent(self) -> OMIB:
         """The OMIB in the relative angle delta1 - delta2 (paper eqs. 21-24)."""
-        return OMIB(H=self.H, Pm=self.Pm, Pmax_pre=self.Pmax_pre, Pmax_fault=self.Pmax_fault,
-                    Pmax_post=self.Pmax_post, f0=self.f0, k_C=self.k_C)
+        return OMIB(
+            H=self.H,
+            Pm=self.Pm,
+            Pmax_pre=self.Pmax_pre,
+            Pmax_fault=self.Pmax_fault,
+            Pmax_post=self.Pmax_post,
+            f0=self.f0,
+            k_C=self.k_C,
+        )
 
-    def simulate_machines(self, t_clear: float, t_end: float, P_C: float = 0.0,
-                          t_on: float | None = None) -> dict[str, np.ndarray]:
+    def simulate_machines(
+        self, t_clear: float, t_end: float, P_C: float = 0.0, t_on: float | None = None
+    ) -> dict[str, np.ndarray]:
         """Integrate both machines separately (delta1, omega1, delta2, omega2).
 
         The fault is applied at t = 0 and cleared at t_clear; a constant storage power P_C
@@ -82,8 +90,13 @@ class TwoMachineCOI:
 
             def f(t, x):
                 p_line = pmax * np.sin(x[0] - x[2])
-                return [x[1], ws / (2 * self.H1) * (self.Pm - p_line - pc),
-                        x[3], ws / (2 * self.H_rest) * (-self.Pm + p_line)]
+                return [
+                    x[1],
+                    ws / (2 * self.H1) * (self.Pm - p_line - pc),
+                    x[3],
+                    ws / (2 * self.H_rest) * (-self.Pm + p_line),
+                ]
+
             return f
 
         t_on = t_clear if t_on is None else t_on
@@ -93,8 +106,14 @@ class TwoMachineCOI:
         for a, b, stage in segments:
             if b <= a:
                 continue
-            sol = solve_ivp(rhs(stage, P_C if a >= t_on else 0.0), (a, b), x, rtol=1e-10,
-                            atol=1e-12, max_step=1e-3)
+            sol = solve_ivp(
+                rhs(stage, P_C if a >= t_on else 0.0),
+                (a, b),
+                x,
+                rtol=1e-10,
+                atol=1e-12,
+                max_step=1e-3,
+            )
             ts.append(sol.t)
             xs.append(sol.y)
             x = sol.y[:, -1]
@@ -106,6 +125,7 @@ class TwoMachineCOI:
 #: delta0 = pi/6 (Pm = 0.5 pu, Pmax = 1 pu), H = 6/7 s, a 6-cycle bolted fault
 #: (x1(tr) = 1.0734 rad, x2(tr) = 10.9956 rad/s = 3.5*pi).  We split H as H1 = 1 s and
 #: H_rest = 6 s; the split only matters for the storage share k_C = 6/7.
-PAPER_TWO_MACHINE = TwoMachineCOI(H1=1.0, H_rest=6.0, Pm=0.5, Pmax_pre=1.0, Pmax_fault=0.0,
-                                  Pmax_post=1.0)
+PAPER_TWO_MACHINE = TwoMachineCOI(
+    H1=1.0, H_rest=6.0, Pm=0.5, Pmax_pre=1.0, Pmax_fault=0.0, Pmax_post=1.0
+)
 PAPER_TWO_MACHINE_T_RELEASE = 0.1  # s, 6 cycles at 60 Hz

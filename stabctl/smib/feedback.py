@@ -52,7 +52,8 @@ class FeedbackLaw:
         if (self.sign_law and abs(self.Ka) >= M) or (not self.sign_law and M + self.Ka <= 0):
             raise InputError(
                 f"law {self.name!r}: acceleration gain Ka = {self.Ka} makes the algebraic loop "
-                f"singular for M = {M:.5g} (need M + Ka > 0, or |Ka| < M for the sign law)")
+                f"singular for M = {M:.5g} (need M + Ka > 0, or |Ka| < M for the sign law)"
+            )
 
     def __call__(self, f: float, omega: float, M: float) -> tuple[float, float]:
         """Resolve the loop: returns (acceleration rad/s^2, P_eC pu) for accelerating power f."""

@@ -15,8 +15,8 @@ omega, Hz for f0.  M is in pu*s^2/rad.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -76,12 +76,21 @@ class OMIB:
             pmax = getattr(self, f"Pmax_{stage}")
             if self.Pm >= pmax:
                 raise InputError(
-                    f"no equilibrium: Pm = {self.Pm} pu is not below Pmax_{stage} = {pmax} pu")
+                    f"no equilibrium: Pm = {self.Pm} pu is not below Pmax_{stage} = {pmax} pu"
+                )
 
     @classmethod
-    def from_operating_point(cls, H: float, Pm: float, delta0: float, V0: float = 1.0,
-                             V1: float = 1.0, fault_ratio: float = 0.0,
-                             post_ratio: float = 1.0, f0: float = 60.0) -> "OMIB":
+    def from_operating_point(
+        cls,
+        H: float,
+        Pm: float,
+        delta0: float,
+        V0: float = 1.0,
+        V1: float = 1.0,
+        fault_ratio: float = 0.0,
+        post_ratio: float = 1.0,
+        f0: float = 60.0,
+    ) -> OMIB:
         """Build the OMIB from the pre-fault operating point (paper Section 2).
 
         Pmax_pre = Pm / sin(delta0) (so that Pe = Pm at delta0, i.e. X = V0*V1/Pmax_pre);
@@ -121,8 +130,14 @@ class OMIB:
         if not (V0 > 0 and V1 > 0):
             raise InputError("voltages V0 and V1 must be positive")
         pmax = Pm / np.sin(delta0)
-        return cls(H=H, Pm=Pm, Pmax_pre=pmax, Pmax_fault=fault_ratio * pmax,
-                   Pmax_post=post_ratio * pmax, f0=f0)
+        return cls(
+            H=H,
+            Pm=Pm,
+            Pmax_pre=pmax,
+            Pmax_fault=fault_ratio * pmax,
+            Pmax_post=post_ratio * pmax,
+            f0=f0,
+        )
 
     # -- constants of the model -------------------------------------------------------
     @property
@@ -236,8 +251,11 @@ class OMIB:
             V, pu*s (pu power times rad), of the broadcast shape.
         """
         ds = self.delta_s
-        return (0.5 * self.M * np.asarray(omega) ** 2 - self.Pm * (np.asarray(delta) - ds)
-                - self.Pmax_post * (np.cos(delta) - np.cos(ds)))
+        return (
+            0.5 * self.M * np.asarray(omega) ** 2
+            - self.Pm * (np.asarray(delta) - ds)
+            - self.Pmax_post * (np.cos(delta) - np.cos(ds))
+        )
 
     @property
     def critical_energy(self) -> float:
@@ -262,8 +280,11 @@ class OMIB:
             where the level set has no real speed.
         """
         ds = self.delta_s
-        kinetic = self.critical_energy + self.Pm * (np.asarray(delta) - ds) + \
-            self.Pmax_post * (np.cos(delta) - np.cos(ds))
+        kinetic = (
+            self.critical_energy
+            + self.Pm * (np.asarray(delta) - ds)
+            + self.Pmax_post * (np.cos(delta) - np.cos(ds))
+        )
         with np.errstate(invalid="ignore"):
             return np.sqrt(2 * kinetic / self.M)
 
@@ -324,8 +345,7 @@ class OMIB:
         den = self.Pmax_post - self.Pmax_fault
         if den <= 0:
             raise InputError("Pmax_fault >= Pmax_post: the equal-area criterion gives no angle")
-        c = (self.Pm * (du - d0) + self.Pmax_post * np.cos(du)
-             - self.Pmax_fault * np.cos(d0)) / den
+        c = (self.Pm * (du - d0) + self.Pmax_post * np.cos(du) - self.Pmax_fault * np.cos(d0)) / den
         if not -1 <= c <= 1:
             raise InputError(f"no critical clearing angle: cos(delta_cr) = {c:.4f}")
         return float(np.arccos(c))
@@ -351,14 +371,17 @@ class OMIB:
         """
         dcr = self.critical_clearing_angle()
         if self.Pm == 0:
-            raise InputError("Pm = 0: the fault does not accelerate the machine, there is no "
-                             "critical clearing time")
+            raise InputError(
+                "Pm = 0: the fault does not accelerate the machine, there is no "
+                "critical clearing time"
+            )
         if self.Pmax_fault == 0 and self.D == 0:
             return float(np.sqrt(2 * self.M * (dcr - self.delta0) / self.Pm))
         event = lambda t, x: x[0] - dcr  # noqa: E731
         event.terminal, event.direction = True, 1
-        sol = solve_ivp(self.rhs("fault"), (0, 10.0), [self.delta0, 0.0], events=event,
-                        rtol=1e-11, atol=1e-12)
+        sol = solve_ivp(
+            self.rhs("fault"), (0, 10.0), [self.delta0, 0.0], events=event, rtol=1e-11, atol=1e-12
+        )
         if not sol.t_events[0].size:
             raise InputError("the fault-on trajectory never reaches the critical angle")
         return float(sol.t_events[0][0])
@@ -385,7 +408,7 @@ def clearing_state_closed_form(system: OMIB, t_clear: float) -> tuple[float, flo
     if system.Pmax_fault != 0:
         raise InputError("closed-form clearing state needs Pmax_fault = 0")
     a = system.Pm / system.M
-    return system.delta0 + 0.5 * a * t_clear ** 2, a * t_clear
+    return system.delta0 + 0.5 * a * t_clear**2, a * t_clear
 
 
 #: A post-fault control law: (f, omega, M) -> (acceleration rad/s^2, P_C pu), where f is the
@@ -427,8 +450,14 @@ def _unstable_event(system: OMIB):
     return event
 
 
-def simulate(system: OMIB, t_clear: float, t_end: float = 3.0, law: ControlLaw | None = None,
-             max_step: float = 1e-3, rtol: float = 1e-9) -> OMIBRun:
+def simulate(
+    system: OMIB,
+    t_clear: float,
+    t_end: float = 3.0,
+    law: ControlLaw | None = None,
+    max_step: float = 1e-3,
+    rtol: float = 1e-9,
+) -> OMIBRun:
     """Simulate a fault at t = 0 cleared at t_clear (s), then the post-fault network.
 
     The control law (if any) acts only after clearing, as in the paper's Section 3.  The
@@ -442,15 +471,23 @@ def simulate(system: OMIB, t_clear: float, t_end: float = 3.0, law: ControlLaw |
         raise InputError(f"need 0 <= t_clear < t_end, got t_clear={t_clear}, t_end={t_end}")
     x0 = [system.delta0, 0.0]
     if t_clear > 0:
-        on = solve_ivp(system.rhs("fault"), (0, t_clear), x0, max_step=max_step, rtol=rtol,
-                       atol=1e-10)
+        on = solve_ivp(
+            system.rhs("fault"), (0, t_clear), x0, max_step=max_step, rtol=rtol, atol=1e-10
+        )
         t1, x1 = on.t, on.y
     else:
         t1, x1 = np.array([0.0]), np.array(x0, float).reshape(2, 1)
     xcl = x1[:, -1]
     post = _post_rhs(system, law)
-    off = solve_ivp(post, (t_clear, t_end), xcl, max_step=max_step, rtol=rtol, atol=1e-10,
-                    events=_unstable_event(system))
+    off = solve_ivp(
+        post,
+        (t_clear, t_end),
+        xcl,
+        max_step=max_step,
+        rtol=rtol,
+        atol=1e-10,
+        events=_unstable_event(system),
+    )
     t = np.concatenate([t1, off.t[1:]])
     y = np.concatenate([x1, off.y[:, 1:]], axis=1)
     P_C = np.zeros_like(t)
@@ -459,9 +496,17 @@ def simulate(system: OMIB, t_clear: float, t_end: float = 3.0, law: ControlLaw |
         f = system.accelerating_power(y[0, k:], y[1, k:], "post")
         P_C[k:] = [law(fi, wi, system.M)[1] for fi, wi in zip(f, y[1, k:])]
     lost = off.t_events[0].size > 0 or xcl[0] >= system.delta_u
-    return OMIBRun(t=t, delta=y[0], omega=y[1], P_C=P_C, stable=not lost,
-                   t_unstable=_first_event(off, t_clear) if lost else None, t_clear=t_clear,
-                   delta_cl=float(xcl[0]), omega_cl=float(xcl[1]))
+    return OMIBRun(
+        t=t,
+        delta=y[0],
+        omega=y[1],
+        P_C=P_C,
+        stable=not lost,
+        t_unstable=_first_event(off, t_clear) if lost else None,
+        t_clear=t_clear,
+        delta_cl=float(xcl[0]),
+        omega_cl=float(xcl[1]),
+    )
 
 
 def _first_event(sol, t_clear: float) -> float:
@@ -481,8 +526,9 @@ def _post_rhs(system: OMIB, law: ControlLaw | None):
     return f
 
 
-def critical_clearing_time_bisection(system: OMIB, tol: float = 1e-4, t_max: float = 1.0,
-                                     t_end: float = 5.0) -> tuple[float, int]:
+def critical_clearing_time_bisection(
+    system: OMIB, tol: float = 1e-4, t_max: float = 1.0, t_end: float = 5.0
+) -> tuple[float, int]:
     """CCT by bisection on time-domain simulations: (CCT in s, number of runs).
 
     Stability criterion: the run does not pass delta_u within t_end (see `simulate`).
@@ -491,6 +537,7 @@ def critical_clearing_time_bisection(system: OMIB, tol: float = 1e-4, t_max: flo
     Raises:
         InputError: the bracket [0, t_max] does not contain the CCT.
     """
+
     def stable(tc):
         return simulate(system, tc, t_end=t_end, max_step=5e-3).stable
 
@@ -515,9 +562,15 @@ def clearing_table(system: OMIB, fault_cycles, t_end: float = 3.0) -> list[dict]
         if cyc < 0:
             raise InputError(f"fault duration must be >= 0 cycles, got {cyc}")
         run = simulate(system, cycles_to_seconds(cyc, system.f0), t_end=t_end)
-        rows.append({"cycles": float(cyc), "t_clear_s": run.t_clear,
-                     "delta_cl_rad": run.delta_cl, "omega_cl_rad_s": run.omega_cl,
-                     "stable": run.stable})
+        rows.append(
+            {
+                "cycles": float(cyc),
+                "t_clear_s": run.t_clear,
+                "delta_cl_rad": run.delta_cl,
+                "omega_cl_rad_s": run.omega_cl,
+                "stable": run.stable,
+            }
+        )
     return rows
 
 
@@ -525,6 +578,11 @@ def eac_summary(system: OMIB) -> dict:
     """Equal-area critical clearing angle and time, closed form and by bisection."""
     t_cr = system.critical_clearing_time()
     t_bis, runs = critical_clearing_time_bisection(system)
-    return {"delta_cr_rad": system.critical_clearing_angle(), "t_cr_s": t_cr,
-            "t_cr_cycles": t_cr * system.f0, "t_cr_bisection_s": t_bis,
-            "bisection_runs": runs, "delta_u_rad": system.delta_u}
+    return {
+        "delta_cr_rad": system.critical_clearing_angle(),
+        "t_cr_s": t_cr,
+        "t_cr_cycles": t_cr * system.f0,
+        "t_cr_bisection_s": t_bis,
+        "bisection_runs": runs,
+        "delta_u_rad": system.delta_u,
+    }

@@ -64,12 +64,20 @@ def time_to_zero_speed(system: OMIB, x_start, P_C: float, t_max: float = 5.0):
     Returns (T in s, solve_ivp solution); T = inf when the speed does not reach zero
     within t_max (loss of synchronism).
     """
+
     def stop(t, x):
         return x[1]
 
     stop.terminal, stop.direction = True, -1
-    sol = solve_ivp(system.rhs("post", P_C), (0, t_max), list(x_start), events=stop,
-                    rtol=1e-11, atol=1e-12, dense_output=True)
+    sol = solve_ivp(
+        system.rhs("post", P_C),
+        (0, t_max),
+        list(x_start),
+        events=stop,
+        rtol=1e-11,
+        atol=1e-12,
+        dense_output=True,
+    )
     return (float(sol.t_events[0][0]) if sol.t_events[0].size else float("inf")), sol
 
 
@@ -97,8 +105,9 @@ def solve_min_time(system: OMIB, x_start, P_Cmax: float, n_nodes: int = 200) -> 
 
     def ode(tau, y, p):
         x1, x2, l1, l2 = y
-        return p[0] * np.vstack([x2, (Pm - Pmax * np.sin(x1) - u) / M,
-                                 l2 * Pmax * np.cos(x1) / M, -l1])
+        return p[0] * np.vstack(
+            [x2, (Pm - Pmax * np.sin(x1) - u) / M, l2 * Pmax * np.cos(x1) / M, -l1]
+        )
 
     def hamiltonian(y):
         return 1 + y[2] * y[1] + y[3] * (Pm - Pmax * np.sin(y[0]) - u) / M
@@ -116,7 +125,17 @@ def solve_min_time(system: OMIB, x_start, P_Cmax: float, n_nodes: int = 200) -> 
     T = float(res.p[0])
     tau_f = np.linspace(0, 1, 400)
     y = res.sol(tau_f)
-    return MinTimeSolution(T=T, t=tau_f * T, x1=y[0], x2=y[1], l1=y[2], l2=y[3],
-                           hamiltonian=hamiltonian(y), P_C=np.where(y[3] > 0, P_Cmax, 0.0),
-                           lambda2_positive=bool(np.all(y[3] > 0)), T_pulse=T_pulse,
-                           T_uncontrolled=T_unc, bvp_residual=float(np.max(res.rms_residuals)))
+    return MinTimeSolution(
+        T=T,
+        t=tau_f * T,
+        x1=y[0],
+        x2=y[1],
+        l1=y[2],
+        l2=y[3],
+        hamiltonian=hamiltonian(y),
+        P_C=np.where(y[3] > 0, P_Cmax, 0.0),
+        lambda2_positive=bool(np.all(y[3] > 0)),
+        T_pulse=T_pulse,
+        T_uncontrolled=T_unc,
+        bvp_residual=float(np.max(res.rms_residuals)),
+    )

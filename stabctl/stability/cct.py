@@ -36,18 +36,18 @@ import csv
 import functools
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
-from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
-from stabctl.dynamics.events import Fault, LineTrip
-from stabctl.network.ybus import circuit_row
-from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import Fault, LineTrip
 from stabctl.dynamics.options import ModelOptions
+from stabctl.dynamics.results import SimulationResult
+from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
+from stabctl.network.ybus import circuit_row
 
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
 #: to the limit), the limit, tolerance, and the run length after the fault.
@@ -104,8 +104,14 @@ class LineFault:
             clearing instant.
         """
         tc = self.t_fault + t_clear
-        fault = Fault(bus=self.bus, t=self.t_fault, clear_near=tc, clear_far=tc,
-                      far_bus=self.far_bus, circuit=self.circuit)
+        fault = Fault(
+            bus=self.bus,
+            t=self.t_fault,
+            clear_near=tc,
+            clear_far=tc,
+            far_bus=self.far_bus,
+            circuit=self.circuit,
+        )
         return [fault] + [LineTrip(a, b, tc) for a, b in self.trips]
 
     def describe(self) -> str:
@@ -182,17 +188,26 @@ class CCTResult:
 
     def to_dict(self) -> dict:
         """JSON-ready summary (times in s, cycles of the case frequency)."""
-        return {"fault": asdict(self.fault), "cct_s": self.cct_s, "cct_cycles": self.cct_cycles,
-                "numerical_error_s": self.numerical_error_s,
-                "cct_half_step_s": self.cct_half_step_s, "conventions": self.conventions,
-                "t_stable_s": self.t_stable, "t_unstable_s": self.t_unstable,
-                "t_unstable_cycles": self.t_unstable * self.freq_hz,
-                "search_bracket_s": list(self.search_bracket), "tol_s": self.tol_s,
-                "step_s": self.step_s, "n_simulations": self.n_simulations,
-                "wall_time_s": self.wall_time_s, "criterion": self.criterion,
-                "separated_machines": list(self.separated),
-                "probes": [[t, ok] for t, ok in self.probes],
-                "half_step_probes": [[t, ok] for t, ok in self.half_step_probes]}
+        return {
+            "fault": asdict(self.fault),
+            "cct_s": self.cct_s,
+            "cct_cycles": self.cct_cycles,
+            "numerical_error_s": self.numerical_error_s,
+            "cct_half_step_s": self.cct_half_step_s,
+            "conventions": self.conventions,
+            "t_stable_s": self.t_stable,
+            "t_unstable_s": self.t_unstable,
+            "t_unstable_cycles": self.t_unstable * self.freq_hz,
+            "search_bracket_s": list(self.search_bracket),
+            "tol_s": self.tol_s,
+            "step_s": self.step_s,
+            "n_simulations": self.n_simulations,
+            "wall_time_s": self.wall_time_s,
+            "criterion": self.criterion,
+            "separated_machines": list(self.separated),
+            "probes": [[t, ok] for t, ok in self.probes],
+            "half_step_probes": [[t, ok] for t, ok in self.half_step_probes],
+        }
 
 
 @dataclass(frozen=True)
@@ -245,21 +260,36 @@ class SearchOptions:
         default = SearchOptions()
         for name in ("t_lo", "t_hi", "separation_limit", "criterion", "stop_at_separation"):
             if getattr(self, name) != getattr(default, name):
-                raise InputError(f"a CCT sweep records tol, t_max, t_end and error_check "
-                                 f"only; {name} must keep its default")
-        return {"tol": self.tol, "t_max": self.t_max, "t_end": self.t_end,
-                **({} if self.error_check else {"error_check": False})}
+                raise InputError(
+                    f"a CCT sweep records tol, t_max, t_end and error_check "
+                    f"only; {name} must keep its default"
+                )
+        return {
+            "tol": self.tol,
+            "t_max": self.t_max,
+            "t_end": self.t_end,
+            **({} if self.error_check else {"error_check": False}),
+        }
 
     @classmethod
     def from_inputs(cls, inputs) -> SearchOptions:
         """The settings recorded in a job's inputs (`to_inputs`; absent fields default)."""
-        return cls(tol=inputs.get("tol", TOL), t_max=inputs.get("t_max", T_MAX),
-                   t_end=inputs.get("t_end"), error_check=inputs.get("error_check", True))
+        return cls(
+            tol=inputs.get("tol", TOL),
+            t_max=inputs.get("t_max", T_MAX),
+            t_end=inputs.get("t_end"),
+            error_check=inputs.get("error_check", True),
+        )
 
 
-def critical_clearing_time(sim: Simulator, fault: LineFault,
-                           search: SearchOptions | None = None, *, h: float | None = None,
-                           storage=None) -> CCTResult:
+def critical_clearing_time(
+    sim: Simulator,
+    fault: LineFault,
+    search: SearchOptions | None = None,
+    *,
+    h: float | None = None,
+    storage=None,
+) -> CCTResult:
     """CCT of `fault` on `sim`'s case by bisection on the clearing time (see module doc).
 
     Parameters
@@ -317,8 +347,7 @@ def critical_clearing_time(sim: Simulator, fault: LineFault,
 
     def stable_at(k: int, step: float = h) -> bool:
         t_clear = _lattice(k, tol)
-        res, diverged = _run(sim, fault, t_clear, t_end, step, o.separation_limit, stop,
-                             extra)
+        res, diverged = _run(sim, fault, t_clear, t_end, step, o.separation_limit, stop, extra)
         ok = not diverged and bool(crit(res))
         probes[step].append((t_clear, ok))
         if not ok and step == h:
@@ -333,13 +362,23 @@ def critical_clearing_time(sim: Simulator, fault: LineFault,
     half = None
     if o.error_check:
         half = _lattice(_half_step_cct(lambda k: stable_at(k, h / 2), k_lo, k_hi, k_max), tol)
-    return CCTResult(fault=fault, t_stable=_lattice(k_lo, tol), t_unstable=_lattice(k_hi, tol),
-                     search_bracket=start, tol_s=tol, step_s=h, freq_hz=sim.case.freq_hz,
-                     n_simulations=len(probes[h]) + len(probes[h / 2]),
-                     wall_time_s=time.perf_counter() - wall,
-                     criterion=getattr(crit, "__name__", repr(crit)), probes=tuple(probes[h]),
-                     separated=separated.get(k_hi, ()), cct_half_step_s=half,
-                     half_step_probes=tuple(probes[h / 2]), conventions=sim.conventions)
+    return CCTResult(
+        fault=fault,
+        t_stable=_lattice(k_lo, tol),
+        t_unstable=_lattice(k_hi, tol),
+        search_bracket=start,
+        tol_s=tol,
+        step_s=h,
+        freq_hz=sim.case.freq_hz,
+        n_simulations=len(probes[h]) + len(probes[h / 2]),
+        wall_time_s=time.perf_counter() - wall,
+        criterion=getattr(crit, "__name__", repr(crit)),
+        probes=tuple(probes[h]),
+        separated=separated.get(k_hi, ()),
+        cct_half_step_s=half,
+        half_step_probes=tuple(probes[h / 2]),
+        conventions=sim.conventions,
+    )
 
 
 def _bisect(stable_at, k_lo: int, k_hi: int) -> tuple[int, int]:
@@ -379,13 +418,16 @@ def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
     if not tol > 0:
         raise InputError(f"CCT tolerance must be > 0 s, got {tol:g}")
     if not 0 <= t_lo < t_hi <= t_max:
-        raise InputError(f"CCT search bounds need 0 <= t_lo < t_hi <= t_max, got "
-                         f"{t_lo:g}, {t_hi:g}, {t_max:g} s")
+        raise InputError(
+            f"CCT search bounds need 0 <= t_lo < t_hi <= t_max, got {t_lo:g}, {t_hi:g}, {t_max:g} s"
+        )
     if fault.t_fault < 0:
         raise InputError(f"fault time must be >= 0 s, got {fault.t_fault:g}")
     if not t_end > fault.t_fault + t_max:
-        raise InputError(f"run end {t_end:g} s must come after the latest clearing "
-                         f"(fault at {fault.t_fault:g} s + t_max {t_max:g} s)")
+        raise InputError(
+            f"run end {t_end:g} s must come after the latest clearing "
+            f"(fault at {fault.t_fault:g} s + t_max {t_max:g} s)"
+        )
 
 
 def _check_trips(case, fault: LineFault) -> None:
@@ -395,8 +437,10 @@ def _check_trips(case, fault: LineFault) -> None:
     faulted = circuit_row(case, fault.bus, fault.far_bus, fault.circuit)
     for a, b in fault.trips:
         if circuit_row(case, a, b) == faulted:
-            raise InputError(f"{fault.describe()}: trip {a}-{b} is the faulted circuit itself; "
-                             f"to open both circuits fault circuit 2 and trip circuit 1")
+            raise InputError(
+                f"{fault.describe()}: trip {a}-{b} is the faulted circuit itself; "
+                f"to open both circuits fault circuit 2 and trip circuit 1"
+            )
 
 
 def _lattice(k: int, tol: float) -> float:
@@ -410,8 +454,9 @@ def _lattice_bounds(tol, t_lo, t_hi, t_max) -> tuple[int, int, int]:
     k_max = math.floor(t_max / tol + 1e-9)
     k_hi = min(max(math.ceil(t_hi / tol - 1e-9), k_lo + 1), k_max)
     if k_hi <= k_lo:
-        raise InputError(f"CCT search range {t_lo:g}-{t_max:g} s is narrower than the "
-                         f"tolerance {tol:g} s")
+        raise InputError(
+            f"CCT search range {t_lo:g}-{t_max:g} s is narrower than the tolerance {tol:g} s"
+        )
     return k_lo, k_hi, k_max
 
 
@@ -419,16 +464,22 @@ def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple
     """Check stable at k_lo, then double k_hi (up to k_max) until it is unstable."""
     if not stable_at(k_lo):
         if k_lo == 0:
-            raise InputError(f"{fault.describe()}: unstable even when cleared instantly "
-                             "(the line trip alone loses synchronism), no CCT")
-        raise InputError(f"{fault.describe()}: unstable already at the lower bound "
-                         f"{_lattice(k_lo, tol):g} s; lower it")
+            raise InputError(
+                f"{fault.describe()}: unstable even when cleared instantly "
+                "(the line trip alone loses synchronism), no CCT"
+            )
+        raise InputError(
+            f"{fault.describe()}: unstable already at the lower bound "
+            f"{_lattice(k_lo, tol):g} s; lower it"
+        )
     while stable_at(k_hi):
         if k_hi == k_max:
             t = _lattice(k_max, tol)
-            raise InputError(f"{fault.describe()}: the CCT is above the search limit "
-                             f"t_max = {t:g} s "
-                             f"({t * freq:.4g} cycles): still stable when cleared there")
+            raise InputError(
+                f"{fault.describe()}: the CCT is above the search limit "
+                f"t_max = {t:g} s "
+                f"({t * freq:.4g} cycles): still stable when cleared there"
+            )
         k_lo, k_hi = k_hi, min(2 * k_hi, k_max)
     return k_lo, k_hi
 
@@ -439,22 +490,31 @@ def _run(sim, fault: LineFault, t_clear, t_end, h, limit, stop, extra):
     partial result and True (unstable); a failure while the fault is on is raised, naming
     the fault and the clearing time (the model's limit, not a verdict)."""
     try:
-        return sim.run(fault.events(t_clear), t_end, h=h, separation_limit=limit,
-                       stop_at_separation=stop, **extra), False
+        return sim.run(
+            fault.events(t_clear),
+            t_end,
+            h=h,
+            separation_limit=limit,
+            stop_at_separation=stop,
+            **extra,
+        ), False
     except NumericalInstabilityError as exc:
-        raise NumericalInstabilityError(f"{fault.describe()}, cleared after {t_clear:g} s: "
-                                        f"{exc}", result=exc.result) from exc
+        raise NumericalInstabilityError(
+            f"{fault.describe()}, cleared after {t_clear:g} s: {exc}", result=exc.result
+        ) from exc
     except SimulationError as exc:
         res = exc.result
         t = getattr(res, "t", None)
         cleared = t is not None and len(t) > 0 and t[-1] >= fault.t_fault + t_clear
         if res is not None and (not res.stable or cleared):
             return res, True
-        raise SimulationError(f"{fault.describe()}, cleared after {t_clear:g} s: {exc}",
-                              result=exc.result) from exc
+        raise SimulationError(
+            f"{fault.describe()}, cleared after {t_clear:g} s: {exc}", result=exc.result
+        ) from exc
 
 
 # -- CCT sweeps (jobs for stabctl.parallel) -------------------------------------------------
+
 
 def storage_fleet(case, esd_pct: float | None):
     """:func:`stabctl.storage.uniform_fleet` of ``esd_pct`` % at every generator's HV bus,
@@ -466,9 +526,10 @@ def storage_fleet(case, esd_pct: float | None):
     return storage.uniform_fleet(case, esd_pct)
 
 
-@functools.lru_cache(maxsize=None)
-def cached_simulator(case_name: str, model: ModelOptions = ModelOptions(),
-                     load: float = 1.0) -> Simulator:
+@functools.cache
+def cached_simulator(
+    case_name: str, model: ModelOptions = ModelOptions(), load: float = 1.0
+) -> Simulator:
     """One Simulator per case, model settings and load level per process (the power flow
     is solved once per worker).
 
@@ -527,15 +588,24 @@ def fault_of_inputs(inputs) -> LineFault:
     """The fault recorded in a sweep job's inputs (bus, far_bus, t_fault, circuit, trips;
     `fault_inputs`)."""
     far = inputs["far_bus"]
-    return LineFault(int(inputs["bus"]), None if far is None else int(far),
-                     float(inputs.get("t_fault", 1.0)), int(inputs.get("circuit", 1)),
-                     tuple((int(a), int(b)) for a, b in inputs.get("trips", ())))
+    return LineFault(
+        int(inputs["bus"]),
+        None if far is None else int(far),
+        float(inputs.get("t_fault", 1.0)),
+        int(inputs.get("circuit", 1)),
+        tuple((int(a), int(b)) for a, b in inputs.get("trips", ())),
+    )
 
 
 def fault_inputs(fault: LineFault) -> dict:
     """A fault as a sweep job records it (`fault_of_inputs` reads it back)."""
-    return {"bus": fault.bus, "far_bus": fault.far_bus, "t_fault": fault.t_fault,
-            "circuit": fault.circuit, "trips": [list(t) for t in fault.trips]}
+    return {
+        "bus": fault.bus,
+        "far_bus": fault.far_bus,
+        "t_fault": fault.t_fault,
+        "circuit": fault.circuit,
+        "trips": [list(t) for t in fault.trips],
+    }
 
 
 def cct_job(inputs: dict) -> dict:
@@ -561,27 +631,42 @@ def cct_job(inputs: dict) -> dict:
         As `critical_clearing_time` and `storage_fleet`.
     """
     sim = cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs))
-    res = critical_clearing_time(sim, fault_of_inputs(inputs), SearchOptions.from_inputs(inputs),
-                                 storage=storage_fleet(sim.case, inputs.get("esd_pct")))
+    res = critical_clearing_time(
+        sim,
+        fault_of_inputs(inputs),
+        SearchOptions.from_inputs(inputs),
+        storage=storage_fleet(sim.case, inputs.get("esd_pct")),
+    )
     return res.to_dict()
 
 
-def cct_key(case: str, fault: LineFault, esd_pct: float | None,
-            model: ModelOptions = ModelOptions()) -> str:
+def cct_key(
+    case: str, fault: LineFault, esd_pct: float | None, model: ModelOptions = ModelOptions()
+) -> str:
     """Sweep key, e.g. 'kundur/3-101/t1/esd-none' or 'kundur/3-101#2+13-101/t1/esd20';
     '/pstess', '/h<step>' and '/no-q-limits' are appended for the pstess conventions, a
     given step and a power flow without PV Q limits (`ModelOptions.key_suffix`)."""
-    line = f"bus{fault.bus}" if fault.far_bus is None else \
-        f"{fault.bus}-{fault.far_bus}" + (f"#{fault.circuit}" if fault.circuit != 1 else "")
+    line = (
+        f"bus{fault.bus}"
+        if fault.far_bus is None
+        else f"{fault.bus}-{fault.far_bus}" + (f"#{fault.circuit}" if fault.circuit != 1 else "")
+    )
     line += "".join(f"+{a}-{b}" for a, b in fault.trips)
     rating = "none" if esd_pct is None else f"{esd_pct:g}"
-    return (f"{case}/{line}/t{fault.t_fault:g}/esd{'-' if esd_pct is None else ''}{rating}"
-            f"{model.key_suffix()}")
+    return (
+        f"{case}/{line}/t{fault.t_fault:g}/esd{'-' if esd_pct is None else ''}{rating}"
+        f"{model.key_suffix()}"
+    )
 
 
-def cct_jobs(case_name: str, faults, ratings=(None,), *,
-             search: SearchOptions = SearchOptions(),
-             model: ModelOptions = ModelOptions()) -> list:
+def cct_jobs(
+    case_name: str,
+    faults,
+    ratings=(None,),
+    *,
+    search: SearchOptions = SearchOptions(),
+    model: ModelOptions = ModelOptions(),
+) -> list:
     """One `stabctl.parallel.Job` per (fault, storage rating %, None = no storage) pair.
 
     Each job's inputs record the case, the fault, the rating, the search settings
@@ -592,21 +677,27 @@ def cct_jobs(case_name: str, faults, ratings=(None,), *,
     so that bad input fails before any job runs, then compiles the simulator's kernels in
     this process if they are not cached (`compile_here`).
     """
-    from stabctl.io import load_case
     from stabctl.dynamics.events import validate
+    from stabctl.io import load_case
     from stabctl.parallel import Job
 
     case = load_case(case_name)
     faults = list(faults)
     for f in faults:
         validate(case, f.events(0.0), 0.0)
-    recorded = search.to_inputs()            # the records' field order, kept since v0.1:
+    recorded = search.to_inputs()  # the records' field order, kept since v0.1:
     checked = {"error_check": recorded.pop("error_check")} if "error_check" in recorded else {}
     settings = {**recorded, **model.to_inputs(), **checked}
     compile_here(case_name, model)
-    return [Job(key=cct_key(case_name, f, p, model), func=cct_job,
-                inputs={"case": case_name, **fault_inputs(f), "esd_pct": p, **settings})
-            for f in faults for p in ratings]
+    return [
+        Job(
+            key=cct_key(case_name, f, p, model),
+            func=cct_job,
+            inputs={"case": case_name, **fault_inputs(f), "esd_pct": p, **settings},
+        )
+        for f in faults
+        for p in ratings
+    ]
 
 
 def read_faults(path: str | Path) -> list[LineFault]:
@@ -644,16 +735,21 @@ def csv_rows(path: str | Path, what: str, columns, more: str = "") -> list[dict]
     except OSError as exc:
         raise InputError(f"{what} {path}: {exc.strerror or exc}") from None
     if not rows or not set(columns) <= set(rows[0]):
-        raise InputError(f"{what} {path}: needs a header with columns {','.join(columns)}"
-                         f"{more} and at least one row")
+        raise InputError(
+            f"{what} {path}: needs a header with columns {','.join(columns)}"
+            f"{more} and at least one row"
+        )
     return rows
 
 
 def _fault_row(path, line: int, row: dict) -> LineFault:
     try:
         far = (row["far_bus"] or "").strip()
-        return LineFault(bus=int(row["bus"]), far_bus=int(far) if far else None,
-                         t_fault=float(row.get("t_fault") or 1.0),
-                         circuit=int(row.get("circuit") or 1))
+        return LineFault(
+            bus=int(row["bus"]),
+            far_bus=int(far) if far else None,
+            t_fault=float(row.get("t_fault") or 1.0),
+            circuit=int(row.get("circuit") or 1),
+        )
     except (TypeError, ValueError) as exc:
         raise InputError(f"fault list {path} line {line}: {exc}") from None

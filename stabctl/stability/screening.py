@@ -18,8 +18,9 @@ from stabctl.parallel import RunnerOptions, run_sweep
 from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs
 
 
-def screening_faults(case: Case, buses=None, lines: bool = False,
-                     t_fault: float = 1.0) -> list[LineFault]:
+def screening_faults(
+    case: Case, buses=None, lines: bool = False, t_fault: float = 1.0
+) -> list[LineFault]:
     """Bus faults at `buses` (default all) and, with `lines`, a fault at the from-end of
     every branch (first circuit of parallel ones once each) with the branch tripped."""
     buses = case.buses.number if buses is None else buses
@@ -34,9 +35,16 @@ def screening_faults(case: Case, buses=None, lines: bool = False,
     return faults
 
 
-def screen(case_name: str, out: str | Path, *, buses=None, lines: bool = False,
-           search: SearchOptions = SearchOptions(), model: ModelOptions = ModelOptions(),
-           runner: RunnerOptions = RunnerOptions()) -> list[dict]:
+def screen(
+    case_name: str,
+    out: str | Path,
+    *,
+    buses=None,
+    lines: bool = False,
+    search: SearchOptions = SearchOptions(),
+    model: ModelOptions = ModelOptions(),
+    runner: RunnerOptions = RunnerOptions(),
+) -> list[dict]:
     """Run the screening.
 
     Parameters
@@ -66,18 +74,30 @@ def screen(case_name: str, out: str | Path, *, buses=None, lines: bool = False,
     """
     case = load_case(case_name)
     faults = screening_faults(case, buses, lines)
-    report = run_sweep(cct_jobs(case_name, faults, search=search, model=model), out,
-                       workers=runner.workers, scheduler=runner.scheduler,
-                       progress=runner.progress)
+    report = run_sweep(
+        cct_jobs(case_name, faults, search=search, model=model),
+        out,
+        workers=runner.workers,
+        scheduler=runner.scheduler,
+        progress=runner.progress,
+    )
     rows = []
     for fault, rec in zip(faults, report.records.values()):
-        row = {"key": rec["key"], "bus": fault.bus, "far_bus": fault.far_bus,
-               "status": rec["status"]}
+        row = {
+            "key": rec["key"],
+            "bus": fault.bus,
+            "far_bus": fault.far_bus,
+            "status": rec["status"],
+        }
         if rec["status"] == "ok":
             r = rec["result"]
-            row.update(cct_s=r["cct_s"], cct_cycles=r["cct_cycles"],
-                       numerical_error_s=r.get("numerical_error_s"),
-                       separated=r["separated_machines"], n_simulations=r["n_simulations"])
+            row.update(
+                cct_s=r["cct_s"],
+                cct_cycles=r["cct_cycles"],
+                numerical_error_s=r.get("numerical_error_s"),
+                separated=r["separated_machines"],
+                n_simulations=r["n_simulations"],
+            )
         else:
             row["error"] = rec.get("error", "")
         rows.append(row)

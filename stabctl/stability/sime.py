@@ -36,8 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from stabctl.dynamics.coi import coi_angle, coi_of_rest, coi_speed
-from stabctl.errors import InputError
 from stabctl.dynamics.results import SimulationResult
+from stabctl.errors import InputError
 
 
 @dataclass(frozen=True)
@@ -74,25 +74,34 @@ def critical_machines(result: SimulationResult) -> list[int]:
     return [int(k) for k in result.machines[separated_group(result.angle[-1], result.inertia)]]
 
 
-def omib_equivalent(result: SimulationResult, critical, base_mva: float,
-                    freq_hz: float) -> OmibEquivalent:
+def omib_equivalent(
+    result: SimulationResult, critical, base_mva: float, freq_hz: float
+) -> OmibEquivalent:
     """The OMIB of `result` for the critical machines `critical` (numbers).
 
     Raises InputError when the critical group is empty or holds every machine.
     """
     C = np.isin(result.machines, list(critical))
     if not C.any() or C.all():
-        raise InputError(f"critical group {list(critical)} must be a proper, non-empty "
-                         "subset of the machines")
+        raise InputError(
+            f"critical group {list(critical)} must be a proper, non-empty subset of the machines"
+        )
     ws = 2 * np.pi * freq_hz
     Mk = 2 * np.asarray(result.inertia, float) / (base_mva * ws)
     MC, MN = Mk[C].sum(), Mk[~C].sum()
     delta = coi_angle(result.angle[:, C], Mk[C]) - coi_angle(result.angle[:, ~C], Mk[~C])
     omega = ws * (coi_speed(result.speed[:, C], Mk[C]) - coi_speed(result.speed[:, ~C], Mk[~C]))
     sigma = 1 if delta[-1] >= delta[0] else -1
-    return OmibEquivalent(t=result.t, delta=sigma * delta, omega=sigma * omega,
-                          M=MC * MN / (MC + MN), critical=tuple(int(k) for k in critical),
-                          sigma=sigma, in_critical=C, M_machine=Mk)
+    return OmibEquivalent(
+        t=result.t,
+        delta=sigma * delta,
+        omega=sigma * omega,
+        M=MC * MN / (MC + MN),
+        critical=tuple(int(k) for k in critical),
+        sigma=sigma,
+        in_critical=C,
+        M_machine=Mk,
+    )
 
 
 def unstable_point(eq: OmibEquivalent, t_clear: float) -> int:
@@ -142,13 +151,14 @@ def storage_integrals(eq: OmibEquivalent, modes: np.ndarray, k_u: int) -> np.nda
     group runs ahead and injecting while it falls behind removes energy on each swing."""
     if k_u <= 0:
         return np.zeros(modes.shape[1])
-    w = eq.sigma * eq.omega[:k_u + 1]
-    area = 0.5 * (w[1:] + w[:-1]) * np.diff(eq.t[:k_u + 1])
+    w = eq.sigma * eq.omega[: k_u + 1]
+    area = 0.5 * (w[1:] + w[:-1]) * np.diff(eq.t[: k_u + 1])
     return area @ modes[:k_u]
 
 
-def device_modes(result: SimulationResult, buses, machines, controller,
-                 freq_hz: float) -> np.ndarray:
+def device_modes(
+    result: SimulationResult, buses, machines, controller, freq_hz: float
+) -> np.ndarray:
     """The paper's Table 3 mode (+1 absorb, -1 inject, 0 idle) that a bang-bang ESD at each
     of `buses`, driven by the matching machine of `machines`, would take along `result`
     (whether or not it is installed), on the run's grid: (n_t, n_dev).
@@ -165,8 +175,7 @@ def device_modes(result: SimulationResult, buses, machines, controller,
         coi = result.coi_speed[:, None]
     rel = (w[:, idx] - coi) * freq_hz
     v = result.vmag[:, [result.bus(int(b)) for b in buses]]
-    return _table3(rel, v >= controller.v_gate_pu, controller.deadband_hz,
-                   controller.hysteresis_hz)
+    return _table3(rel, v >= controller.v_gate_pu, controller.deadband_hz, controller.hysteresis_hz)
 
 
 def _table3(rel_hz: np.ndarray, gate: np.ndarray, db: float, hyst: float) -> np.ndarray:
@@ -186,10 +195,11 @@ def _table3(rel_hz: np.ndarray, gate: np.ndarray, db: float, hyst: float) -> np.
 
 def distribution_factors(sys, buses, machines, inertia, base_mva: float) -> np.ndarray:
     """beta (n_mac, n_dev): share of each machine's electrical power in 1 pu drawn at each
-    bus of `buses`, at the operating point, from a linearised model (`stabctl.smallsignal.linearise`,
-    ESD inputs at those buses): beta_kj = -(2 H_k S_k / S_base) B[omega_k, P_esd_j]
-    (B in pu speed/s per pu; inertia = H_k S_k in MJ, machines: numbers, in that order).
-    Columns sum to ~1 (less the change of losses and voltage-dependent loads).
+    bus of `buses`, at the operating point, from a linearised model
+    (`stabctl.smallsignal.linearise`, ESD inputs at those buses): beta_kj = -(2 H_k S_k /
+    S_base) B[omega_k, P_esd_j] (B in pu speed/s per pu; inertia = H_k S_k in MJ, machines:
+    numbers, in that order). Columns sum to ~1 (less the change of losses and voltage-dependent
+    loads).
 
     Raises InputError when a bus has no ESD input in the model.
     """

@@ -3,5 +3,13 @@
 from stabctl.storage.control import BangBangCOI, ControlLaw, ExternalCommands, LinearFeedback
 from stabctl.storage.devices import StorageDevice, StorageFleet, hv_bus, uniform_fleet
 
-__all__ = ["BangBangCOI", "ControlLaw", "ExternalCommands", "LinearFeedback", "StorageDevice",
-           "StorageFleet", "hv_bus", "uniform_fleet"]
+__all__ = [
+    "BangBangCOI",
+    "ControlLaw",
+    "ExternalCommands",
+    "LinearFeedback",
+    "StorageDevice",
+    "StorageFleet",
+    "hv_bus",
+    "uniform_fleet",
+]

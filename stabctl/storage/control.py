@@ -116,12 +116,14 @@ class BangBangCOI:
     def __post_init__(self):
         if self.coi not in ("system", "rest"):
             raise InputError(f"coi must be 'system' or 'rest', got {self.coi!r}")
-        if not (0 <= self.deadband_hz < float("inf")
-                and 0 <= self.hysteresis_hz <= self.deadband_hz):
+        if not (
+            0 <= self.deadband_hz < float("inf") and 0 <= self.hysteresis_hz <= self.deadband_hz
+        ):
             raise InputError("need deadband >= 0 and 0 <= hysteresis <= deadband (finite, Hz)")
         if not 0 <= self.v_gate_pu <= MAX_V_GATE_PU:
-            raise InputError(f"voltage gate must be in [0, {MAX_V_GATE_PU:g}] pu, got "
-                             f"{self.v_gate_pu}")
+            raise InputError(
+                f"voltage gate must be in [0, {MAX_V_GATE_PU:g}] pu, got {self.v_gate_pu}"
+            )
 
     def packed(self, f0: float) -> LawConstants:
         """The law's constants for the kernels.
@@ -138,8 +140,15 @@ class BangBangCOI:
             `hysteresis_hz / f0`), the voltage gate (pu), the COI choice (``rest`` True
             for ``coi="rest"``), gains 0.
         """
-        return LawConstants(self.kind, self.deadband_hz / f0, self.hysteresis_hz / f0,
-                            self.v_gate_pu, self.coi == "rest", 0.0, 0.0)
+        return LawConstants(
+            self.kind,
+            self.deadband_hz / f0,
+            self.hysteresis_hz / f0,
+            self.v_gate_pu,
+            self.coi == "rest",
+            0.0,
+            0.0,
+        )
 
 
 @dataclass(frozen=True)
@@ -167,8 +176,9 @@ class LinearFeedback:
     def packed(self, f0: float) -> LawConstants:
         """Gains per pu speed (times 2 pi f0), the gate, the COI."""
         ws = 2 * np.pi * f0
-        return LawConstants(self.kind, 0.0, 0.0, self.v_gate_pu, self.coi == "rest",
-                            self.Kv * ws, self.Ka * ws)
+        return LawConstants(
+            self.kind, 0.0, 0.0, self.v_gate_pu, self.coi == "rest", self.Kv * ws, self.Ka * ws
+        )
 
 
 @dataclass(frozen=True)
@@ -194,6 +204,7 @@ class ExternalCommands:
 
 # -- compiled kernels (used by stabctl.dynamics.integrator.integrate) ----------------------
 
+
 @kernel
 def coi_value(values, inertia):
     """Centre-of-inertia value (paper eq. 40) of per-machine values (n_mac,) with weights
@@ -208,7 +219,7 @@ def relative_speeds(x, nm, inertia, sa, out):
     the rest of the system (sa.rest); 0 for a device without a machine.  x: flat state
     (speeds in x[nm:2 nm]); out (n_dev,) is written."""
     M = inertia.sum()
-    coi = coi_value(x[nm:2 * nm], inertia)
+    coi = coi_value(x[nm : 2 * nm], inertia)
     for d in range(sa.mac.size):
         i = sa.mac[d]
         w = x[nm + i]

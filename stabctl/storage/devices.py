@@ -20,7 +20,6 @@ from stabctl.case import Case
 from stabctl.errors import CaseError, InputError
 from stabctl.storage.control import NO_LAW, NO_STORAGE, BangBangCOI, ControlLaw
 
-
 #: largest storage rating of `uniform_fleet`, % of the machine's MVA (a device larger than
 #: its generator is outside the paper's use and its control law)
 MAX_ESD_PCT = 100.0
@@ -69,10 +68,14 @@ class StorageDevice:
 
     def __post_init__(self):
         if not self.pmax_mw > 0:
-            raise InputError(f"storage at bus {self.bus}: rating must be > 0 MW, got {self.pmax_mw}")
+            raise InputError(
+                f"storage at bus {self.bus}: rating must be > 0 MW, got {self.pmax_mw}"
+            )
         if self.lag_s < 0 or self.ramp_mw_s <= 0 or self.energy_mj <= 0 or not 0 <= self.soc0 <= 1:
-            raise InputError(f"storage at bus {self.bus}: lag >= 0, ramp > 0, energy > 0 and "
-                             "0 <= soc0 <= 1 are required")
+            raise InputError(
+                f"storage at bus {self.bus}: lag >= 0, ramp > 0, energy > 0 and "
+                "0 <= soc0 <= 1 are required"
+            )
 
 
 @dataclass(frozen=True)
@@ -143,8 +146,9 @@ def uniform_fleet(case: Case, pct: float, controller=None, at: str = "hv") -> St
         `pct` not in (0, MAX_ESD_PCT].
     """
     if not 0 < pct <= MAX_ESD_PCT:
-        raise InputError(f"storage rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, "
-                         f"got {pct}")
+        raise InputError(
+            f"storage rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, got {pct}"
+        )
     devs = []
     for num, bus, mva in zip(case.machines.number, case.machines.bus, case.machines.mva):
         b = hv_bus(case, int(num)) if at == "hv" else int(bus)
@@ -192,29 +196,33 @@ def energy_excursion(t, p_mw) -> dict:
     pos = 0.5 * (np.maximum(p[1:], 0) + np.maximum(p[:-1], 0))
     neg = 0.5 * (np.maximum(-p[1:], 0) + np.maximum(-p[:-1], 0))
     high, low = float(e.max()), float(e.min())
-    return {"absorbed_mj": float(pos @ dt), "delivered_mj": float(neg @ dt),
-            "soc_high_mj": high, "soc_low_mj": low,
-            "need_mwh": 2 * max(high, -low) / 3600.0}
+    return {
+        "absorbed_mj": float(pos @ dt),
+        "delivered_mj": float(neg @ dt),
+        "soc_high_mj": high,
+        "soc_low_mj": low,
+        "need_mwh": 2 * max(high, -low) / 3600.0,
+    }
 
 
 class StorageArrays(NamedTuple):
     """Fleet packed for the compiled loop (n_dev entries each; system-base pu, s)."""
 
-    pos: np.ndarray       # index of the device bus among the kept buses
-    bus: np.ndarray       # bus index (for its voltage)
-    mac: np.ndarray       # machine index (-1: none)
+    pos: np.ndarray  # index of the device bus among the kept buses
+    bus: np.ndarray  # bus index (for its voltage)
+    mac: np.ndarray  # machine index (-1: none)
     pmax: np.ndarray
     lag: np.ndarray
-    ramp: np.ndarray      # pu/s
-    emax: np.ndarray      # pu*s
-    e0: np.ndarray        # pu*s
-    kind: int             # law kind (stabctl.storage.control: NO_STORAGE, BANG_BANG, ...)
-    db: float             # deadband, pu speed
-    hyst: float           # hysteresis, pu speed
+    ramp: np.ndarray  # pu/s
+    emax: np.ndarray  # pu*s
+    e0: np.ndarray  # pu*s
+    kind: int  # law kind (stabctl.storage.control: NO_STORAGE, BANG_BANG, ...)
+    db: float  # deadband, pu speed
+    hyst: float  # hysteresis, pu speed
     vgate: float
     rest: bool
-    Kv: float             # pu per pu speed
-    Ka: float             # pu per pu speed per s
+    Kv: float  # pu per pu speed
+    Ka: float  # pu per pu speed per s
 
 
 def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageArrays:
@@ -226,24 +234,39 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageA
     base, f0 = case.base_mva, case.freq_hz
     devs = () if fleet is None else fleet.devices
     bus = np.array([case.bus_index(d.bus) for d in devs], np.int64)
-    pos = np.array([int(np.nonzero(nc_idx == b)[0][0]) if np.any(nc_idx == b) else -1
-                    for b in bus], np.int64)
+    pos = np.array(
+        [int(np.nonzero(nc_idx == b)[0][0]) if np.any(nc_idx == b) else -1 for b in bus], np.int64
+    )
     if np.any(pos < 0):
-        raise CaseError(f"storage bus {devs[int(np.argmin(pos))].bus} is not kept in the "
-                        "reduced network: pass the fleet to the Simulator")
+        raise CaseError(
+            f"storage bus {devs[int(np.argmin(pos))].bus} is not kept in the "
+            "reduced network: pass the fleet to the Simulator"
+        )
     f = lambda attr: np.array([getattr(d, attr) for d in devs], float)  # noqa: E731
     law = NO_LAW if fleet is None else fleet.controller.packed(f0)
     return StorageArrays(
-        pos=pos, bus=bus, mac=np.array([-1 if d.machine is None else case.machine_index(d.machine)
-                                        for d in devs], np.int64),
-        pmax=f("pmax_mw") / base, lag=f("lag_s"), ramp=f("ramp_mw_s") / base,
+        pos=pos,
+        bus=bus,
+        mac=np.array(
+            [-1 if d.machine is None else case.machine_index(d.machine) for d in devs], np.int64
+        ),
+        pmax=f("pmax_mw") / base,
+        lag=f("lag_s"),
+        ramp=f("ramp_mw_s") / base,
         emax=f("energy_mj") / base,
         e0=np.where(np.isfinite(f("energy_mj")), f("soc0") * f("energy_mj"), 0.0) / base,
-        kind=law.kind if devs else NO_STORAGE, db=law.db, hyst=law.hyst, vgate=law.vgate,
-        rest=law.rest, Kv=law.Kv, Ka=law.Ka)
+        kind=law.kind if devs else NO_STORAGE,
+        db=law.db,
+        hyst=law.hyst,
+        vgate=law.vgate,
+        rest=law.rest,
+        Kv=law.Kv,
+        Ka=law.Ka,
+    )
 
 
 # -- compiled device kernel (used by stabctl.dynamics.integrator.integrate) -------------------
+
 
 @kernel
 def device_power(sa, d, target, P, e, h):

@@ -13,8 +13,8 @@ fault out again.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
 
 from stabctl.errors import InputError
 from stabctl.stability.cct import LineFault
@@ -59,10 +59,20 @@ class PaperCase:
         return self.fault.far_bus
 
 
-CASE1 = PaperCase("Case 1", "kundur", LineFault(3, 101, 1.0), t_end=8.0,
-                  cycles={"figure": 11, "paper": 21, "estimation": 7.0})
-CASE2 = PaperCase("Case 2", "miniwecc", LineFault(83, 33, 1.0), t_end=10.0,
-                  cycles={"figure": 6, "paper": 6, "estimation": 4.0})
+CASE1 = PaperCase(
+    "Case 1",
+    "kundur",
+    LineFault(3, 101, 1.0),
+    t_end=8.0,
+    cycles={"figure": 11, "paper": 21, "estimation": 7.0},
+)
+CASE2 = PaperCase(
+    "Case 2",
+    "miniwecc",
+    LineFault(83, 33, 1.0),
+    t_end=10.0,
+    cycles={"figure": 6, "paper": 6, "estimation": 4.0},
+)
 
 #: the paper's cases by built-in case name
 PAPER_CASES: Mapping[str, PaperCase] = {c.case: c for c in (CASE1, CASE2)}
@@ -95,5 +105,7 @@ def default_faults(case_name: str) -> tuple[LineFault, ...]:
     try:
         return DEFAULT_FAULTS[case_name]
     except KeyError:
-        raise InputError(f"no DEFAULT fault list for case '{case_name}' (there is one for "
-                         f"{', '.join(DEFAULT_FAULTS)}); give --faults FILE.csv") from None
+        raise InputError(
+            f"no DEFAULT fault list for case '{case_name}' (there is one for "
+            f"{', '.join(DEFAULT_FAULTS)}); give --faults FILE.csv"
+        ) from None

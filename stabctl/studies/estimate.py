@@ -50,8 +50,9 @@ class ErrorRuns:
     ambient_runs: int
 
 
-def estimator_errors(case, event, mc: ErrorRuns, *, settings, esd_pct, settle_s: float,
-                     t_end: float, model=None) -> dict:
+def estimator_errors(
+    case, event, mc: ErrorRuns, *, settings, esd_pct, settle_s: float, t_end: float, model=None
+) -> dict:
     """Errors of every estimator against the simulated truth, and false ESD actions.
 
     Parameters
@@ -96,21 +97,38 @@ def estimator_errors(case, event, mc: ErrorRuns, *, settings, esd_pct, settle_s:
         raise InputError(f"--tf {t_end:g} s ends before the errors start ({window[0]:g} s)")
     fleet = None if esd_pct is None else uniform_fleet(case, esd_pct)
     sim = (model or ModelOptions()).simulator(
-        case, injection_buses=() if fleet is None else fleet.buses)
+        case, injection_buses=() if fleet is None else fleet.buses
+    )
     compile_filters(machine_models(case, machine_pmus(case, mc.pmu_at)))
     res = sim.run([event], t_end=t_end, storage=fleet)
     figures = study.monte_carlo(case, res, settings, mc.runs, mc.seed, window, mc.pmu_at, mc.coi)
     actions = None
     if mc.ambient_s > 0:
-        flat = [am.simulate(sim, mc.ambient_s, replace(mc.ambient, seed=mc.seed + r),
-                            settings.rate) for r in range(mc.ambient_runs)]
+        flat = [
+            am.simulate(sim, mc.ambient_s, replace(mc.ambient, seed=mc.seed + r), settings.rate)
+            for r in range(mc.ambient_runs)
+        ]
         actions = study.false_actions(case, flat, settings, mc.seed, mc.control, mc.pmu_at)
-    return {"window_s": list(window), "stable": res.stable, "estimators": figures,
-            "false_actions": actions}
+    return {
+        "window_s": list(window),
+        "stable": res.stable,
+        "estimators": figures,
+        "false_actions": actions,
+    }
 
 
-def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float, seed: int,
-                         control, deadband_hz: float, model=None) -> dict:
+def closed_loop_verdicts(
+    case,
+    event,
+    *,
+    t_end: float,
+    settings,
+    esd_pct: float,
+    seed: int,
+    control,
+    deadband_hz: float,
+    model=None,
+) -> dict:
     """The fault simulated with the ESDs commanded by each estimator in the loop.
 
     Parameters
@@ -145,16 +163,28 @@ def closed_loop_verdicts(case, event, *, t_end: float, settings, esd_pct: float,
     sim, rows = (model or ModelOptions()).simulator(case), {}
     compile_filters(machine_models(case, machine_pmus(case)))
     for e in cl.ESTIMATORS:
-        run = cl.run_closed_loop(sim, [event], t_end, cl.LoopOptions(esd_pct, e, settings, seed,
-                                                                     control))
-        rows[e] = {"stable": run.result.stable,
-                   "switchings": len(run.result.meta.get("switchings", [])),
-                   "false_actions": cl.false_actions(run, deadband_hz)}
+        run = cl.run_closed_loop(
+            sim, [event], t_end, cl.LoopOptions(esd_pct, e, settings, seed, control)
+        )
+        rows[e] = {
+            "stable": run.result.stable,
+            "switchings": len(run.result.meta.get("switchings", [])),
+            "false_actions": cl.false_actions(run, deadband_hz),
+        }
     return rows
 
 
-def estimator_ccts(case_name: str, bus: int, far_bus: int, *, esd_pct: float, runs: int,
-                   seed: int, settings, model=None) -> dict:
+def estimator_ccts(
+    case_name: str,
+    bus: int,
+    far_bus: int,
+    *,
+    esd_pct: float,
+    runs: int,
+    seed: int,
+    settings,
+    model=None,
+) -> dict:
     """CCT of a line fault with each estimator in the loop, over ``runs`` noise seeds.
 
     Parameters
@@ -182,8 +212,17 @@ def estimator_ccts(case_name: str, bus: int, far_bus: int, *, esd_pct: float, ru
     from stabctl.estimation.settings import PMUSettings
     from stabctl.stability.cct import LineFault
 
-    pmu = PMUSettings(rate=settings.rate, latency_s=settings.latency_s,
-                      window_cycles=settings.window_cycles)
+    pmu = PMUSettings(
+        rate=settings.rate, latency_s=settings.latency_s, window_cycles=settings.window_cycles
+    )
     with tempfile.TemporaryDirectory() as tmp:
-        return cl.cct_study(case_name, LineFault(bus, far_bus), [esd_pct], runs,
-                            Path(tmp) / "cct.jsonl", seed=seed, pmu=pmu, model=model)[esd_pct]
+        return cl.cct_study(
+            case_name,
+            LineFault(bus, far_bus),
+            [esd_pct],
+            runs,
+            Path(tmp) / "cct.jsonl",
+            seed=seed,
+            pmu=pmu,
+            model=model,
+        )[esd_pct]

@@ -26,22 +26,34 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from stabctl._jit.decorators import njit
 
-from stabctl.estimation.filters import FrequencyKF, SwingEKF, nis_bounds
-from stabctl.estimation.models import (FrequencyTuning, MachineModels, SwingTuning, machine_models,
-                                       relative_speeds)
-from stabctl.storage import control as law
-from stabctl.storage import devices as st
+from stabctl._jit.decorators import njit
 from stabctl.case import Case
+from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import InputError
+from stabctl.estimation.filters import FrequencyKF, SwingEKF, nis_bounds
+from stabctl.estimation.models import (
+    FrequencyTuning,
+    MachineModels,
+    SwingTuning,
+    machine_models,
+    relative_speeds,
+)
 from stabctl.estimation.pmu import FrameStream, machine_pmus, measure, phasor_truth
 from stabctl.estimation.settings import PMUSettings
-from stabctl.dynamics.results import SimulationResult
+from stabctl.storage import control as law
+from stabctl.storage import devices as st
 
 ESTIMATORS = ("raw", "kf", "ekf")
-METRICS = ("speed_rmse_mhz", "coi_rmse_mhz", "rel_rmse_mhz", "rel_max_mhz",
-           "rel_arrival_rmse_mhz", "rel_forecast_rmse_mhz", "nis_inside")
+METRICS = (
+    "speed_rmse_mhz",
+    "coi_rmse_mhz",
+    "rel_rmse_mhz",
+    "rel_max_mhz",
+    "rel_arrival_rmse_mhz",
+    "rel_forecast_rmse_mhz",
+    "nis_inside",
+)
 
 
 @dataclass(frozen=True)
@@ -58,12 +70,17 @@ class Track:
     dof: int
 
 
-def run_estimators(stream: FrameStream, models: MachineModels,
-                   kf_tuning: FrequencyTuning = FrequencyTuning(),
-                   ekf_tuning: SwingTuning = SwingTuning()) -> dict[str, Track]:
+def run_estimators(
+    stream: FrameStream,
+    models: MachineModels,
+    kf_tuning: FrequencyTuning = FrequencyTuning(),
+    ekf_tuning: SwingTuning = SwingTuning(),
+) -> dict[str, Track]:
     """Tracks of the raw PMU frequency and of both filters fed every frame in order."""
-    filters = {"kf": FrequencyKF(models.pmu, stream.settings, kf_tuning, models.f0),
-               "ekf": SwingEKF(models, stream.settings, ekf_tuning)}
+    filters = {
+        "kf": FrequencyKF(models.pmu, stream.settings, kf_tuning, models.f0),
+        "ekf": SwingEKF(models, stream.settings, ekf_tuning),
+    }
     out = {"raw": _raw_track(stream, models)}
     lat = stream.settings.latency_s
     for name, f in filters.items():
@@ -84,8 +101,13 @@ def _raw_track(stream: FrameStream, models: MachineModels) -> Track:
     return Track(speed, var, speed, var, np.full_like(speed, np.nan), dof=0)
 
 
-def errors(track: Track, result: SimulationResult, stream: FrameStream,
-           window: tuple[float, float], coi: str = "system") -> dict:
+def errors(
+    track: Track,
+    result: SimulationResult,
+    stream: FrameStream,
+    window: tuple[float, float],
+    coi: str = "system",
+) -> dict:
     """Error figures of one track (module docstring), mHz; nis_inside NaN for a track
     without NIS.  window: (start, end) s of the time stamps evaluated."""
     f0 = stream.true.f0
@@ -96,14 +118,16 @@ def errors(track: Track, result: SimulationResult, stream: FrameStream,
     true = result.speed_at(stream.t[sel])
     late = result.speed_at(stream.t[sel] + stream.settings.latency_s)
     rel = lambda s: relative_speeds(s, s, M, coi)[0]  # noqa: E731
-    rms = lambda e: float(np.sqrt(np.nanmean(e ** 2)) * f0 * 1e3)  # noqa: E731
+    rms = lambda e: float(np.sqrt(np.nanmean(e**2)) * f0 * 1e3)  # noqa: E731
     e_rel = rel(track.speed[sel]) - rel(true)
-    out = {"speed_rmse_mhz": rms(track.speed[sel] - true),
-           "coi_rmse_mhz": rms((track.speed[sel] - true) @ M / M.sum()),
-           "rel_rmse_mhz": rms(e_rel),
-           "rel_max_mhz": float(np.nanmax(np.abs(e_rel)) * f0 * 1e3),
-           "rel_arrival_rmse_mhz": rms(rel(track.speed[sel]) - rel(late)),
-           "rel_forecast_rmse_mhz": rms(rel(track.ahead[sel]) - rel(late))}
+    out = {
+        "speed_rmse_mhz": rms(track.speed[sel] - true),
+        "coi_rmse_mhz": rms((track.speed[sel] - true) @ M / M.sum()),
+        "rel_rmse_mhz": rms(e_rel),
+        "rel_max_mhz": float(np.nanmax(np.abs(e_rel)) * f0 * 1e3),
+        "rel_arrival_rmse_mhz": rms(rel(track.speed[sel]) - rel(late)),
+        "rel_forecast_rmse_mhz": rms(rel(track.ahead[sel]) - rel(late)),
+    }
     nis = track.nis[sel]
     nis = nis[np.isfinite(nis)]
     if track.dof and nis.size:
@@ -114,9 +138,16 @@ def errors(track: Track, result: SimulationResult, stream: FrameStream,
     return out
 
 
-def monte_carlo(case: Case, result: SimulationResult, settings: PMUSettings, runs: int,
-                seed: int, window: tuple[float, float], at: str = "terminal",
-                coi: str = "system") -> dict:
+def monte_carlo(
+    case: Case,
+    result: SimulationResult,
+    settings: PMUSettings,
+    runs: int,
+    seed: int,
+    window: tuple[float, float],
+    at: str = "terminal",
+    coi: str = "system",
+) -> dict:
     """Errors of every estimator over `runs` PMU streams (seeds seed .. seed + runs - 1).
 
     Returns {estimator: {metric: {"mean", "std", "min", "max", "runs": [...]}}}.
@@ -132,21 +163,32 @@ def monte_carlo(case: Case, result: SimulationResult, settings: PMUSettings, run
         stream = measure(truth, settings, seed + r)
         for name, track in run_estimators(stream, models).items():
             per_run[name].append(errors(track, result, stream, window, coi))
-    return {name: {m: _summary([e[m] for e in rows]) for m in METRICS}
-            for name, rows in per_run.items()}
+    return {
+        name: {m: _summary([e[m] for e in rows]) for m in METRICS} for name, rows in per_run.items()
+    }
 
 
 def _summary(values) -> dict:
     v = np.asarray(values, float)
     if np.all(np.isnan(v)):
         return {"mean": None, "std": None, "min": None, "max": None, "runs": [None] * v.size}
-    return {"mean": float(np.nanmean(v)), "std": float(np.nanstd(v)), "min": float(np.nanmin(v)),
-            "max": float(np.nanmax(v)), "runs": [float(x) for x in v]}
+    return {
+        "mean": float(np.nanmean(v)),
+        "std": float(np.nanstd(v)),
+        "min": float(np.nanmin(v)),
+        "max": float(np.nanmax(v)),
+        "runs": [float(x) for x in v],
+    }
 
 
-def false_actions(case: Case, results, settings: PMUSettings, seed: int,
-                  controller: law.BangBangCOI = law.BangBangCOI(),
-                  at: str = "terminal") -> dict:
+def false_actions(
+    case: Case,
+    results,
+    settings: PMUSettings,
+    seed: int,
+    controller: law.BangBangCOI = law.BangBangCOI(),
+    at: str = "terminal",
+) -> dict:
     """ESD actions of every estimator on runs without fault (module docstring).
 
     results: the runs without fault (e.g. with ambient load fluctuation,
@@ -161,11 +203,14 @@ def false_actions(case: Case, results, settings: PMUSettings, seed: int,
     pmus = machine_pmus(case, at)
     models = machine_models(case, pmus)
     sa = st.pack(st.uniform_fleet(case, 1.0, controller), case, np.arange(case.n_bus))
-    figs = {name: {"actions": [], "max_rel_mhz": [], "std_rel_mhz": []}
-            for name in ("true", *ESTIMATORS)}
+    figs = {
+        name: {"actions": [], "max_rel_mhz": [], "std_rel_mhz": []}
+        for name in ("true", *ESTIMATORS)
+    }
     for r, result in enumerate(results):
-        stream = measure(phasor_truth(case, result, pmus, settings.window_cycles), settings,
-                         seed + r)
+        stream = measure(
+            phasor_truth(case, result, pmus, settings.window_cycles), settings, seed + r
+        )
         tracks = {k: v.speed for k, v in run_estimators(stream, models).items()}
         tracks["true"] = result.speed_at(stream.t)
         for name, speed in tracks.items():

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import fault_with_clearing
 from stabctl.io import load_case
 from stabctl.plotting.figures import simulation_overview
 from stabctl.studies.cases import CASE1, CASE2, PaperCase
@@ -31,9 +31,11 @@ def _verdict(case, res) -> str:
     if res.stable:
         return f"  verdict: stable (largest angle from the COI {res.max_angle_spread:.3f} rad)"
     buses = [int(case.machines.bus[case.machine_index(m)]) for m in res.separated]
-    return (f"  verdict: loss of synchronism at t = {res.t_separation:.4f} s; machine(s) "
-            f"{', '.join(map(str, res.separated))} (bus {', '.join(map(str, buses))}) "
-            "separate from the rest")
+    return (
+        f"  verdict: loss of synchronism at t = {res.t_separation:.4f} s; machine(s) "
+        f"{', '.join(map(str, res.separated))} (bus {', '.join(map(str, buses))}) "
+        "separate from the rest"
+    )
 
 
 def _cct_scan(pc: PaperCase, cycles: int, t_end: float) -> list[str]:
@@ -42,16 +44,24 @@ def _cct_scan(pc: PaperCase, cycles: int, t_end: float) -> list[str]:
     last_stable = first_unstable = None
     for cyc in range(6, cycles + 1):
         case, _, r = _run(pc, cyc, t_end, stop_at_separation=True)
-        lines.append(f"    {cyc:3d}: " + ("stable" if r.stable else
-                     f"machines {r.separated} separate at {r.t_separation:.3f} s"))
+        lines.append(
+            f"    {cyc:3d}: "
+            + (
+                "stable"
+                if r.stable
+                else f"machines {r.separated} separate at {r.t_separation:.3f} s"
+            )
+        )
         if r.stable:
             last_stable = cyc
         elif first_unstable is None:
             first_unstable = cyc
     if last_stable is not None and first_unstable is not None:
-        lines.append(f"  critical clearing time between {last_stable} and {first_unstable} "
-                     f"cycles ({last_stable / case.freq_hz:.3f}-"
-                     f"{first_unstable / case.freq_hz:.3f} s)")
+        lines.append(
+            f"  critical clearing time between {last_stable} and {first_unstable} "
+            f"cycles ({last_stable / case.freq_hz:.3f}-"
+            f"{first_unstable / case.freq_hz:.3f} s)"
+        )
     return lines
 
 
@@ -63,10 +73,12 @@ def _excursions(res) -> list[str]:
     dev = np.abs(res.angle - coi[:, None]).max(axis=0)
     order = np.argsort(dev)[::-1][:4]
     j13 = res.machine(13)
-    return ["  largest excursions from the COI of the remaining machines: "
-            + ", ".join(f"machine {int(res.machines[j])} {dev[j]:.2f} rad" for j in order),
-            f"  machine 13: at most {dev[j13]:.2f} rad from that COI -> "
-            + ("stays in synchronism" if dev[j13] < np.pi else "separates too")]
+    return [
+        "  largest excursions from the COI of the remaining machines: "
+        + ", ".join(f"machine {int(res.machines[j])} {dev[j]:.2f} rad" for j in order),
+        f"  machine 13: at most {dev[j13]:.2f} rad from that COI -> "
+        + ("stays in synchronism" if dev[j13] < np.pi else "separates too"),
+    ]
 
 
 def no_storage_report(pc: PaperCase, out_dir: Path, t_end: float = 5.0) -> list[str]:
@@ -91,14 +103,20 @@ def no_storage_report(pc: PaperCase, out_dir: Path, t_end: float = 5.0) -> list[
     cycles = pc.cycles["paper"]
     case, _, res = _run(pc, cycles, t_end)
     key = pc.label.lower().replace(" ", "")
-    lines = [f"{pc.label} (no storage): {case.name}, {cycles}-cycle fault at bus {pc.bus} on "
-             f"line {pc.bus}-{pc.far_bus} at {pc.fault.t_fault} s, line tripped; {t_end:g} s",
-             _verdict(case, res)]
+    lines = [
+        f"{pc.label} (no storage): {case.name}, {cycles}-cycle fault at bus {pc.bus} on "
+        f"line {pc.bus}-{pc.far_bus} at {pc.fault.t_fault} s, line tripped; {t_end:g} s",
+        _verdict(case, res),
+    ]
     lines += _cct_scan(pc, cycles, t_end) if pc is CASE1 else _excursions(res)
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / f"{key}_no_storage.png"
-    simulation_overview(res, path, title=f"{pc.label}, no storage: {case.name}, {cycles}-cycle "
-                        f"fault at bus {pc.bus}, line {pc.bus}-{pc.far_bus} tripped")
+    simulation_overview(
+        res,
+        path,
+        title=f"{pc.label}, no storage: {case.name}, {cycles}-cycle "
+        f"fault at bus {pc.bus}, line {pc.bus}-{pc.far_bus} tripped",
+    )
     return lines + [f"  wrote {path}"]
 
 

@@ -14,20 +14,20 @@ import platform
 import shutil
 import tempfile
 import time
-from datetime import datetime, timezone
+from collections.abc import Callable
+from datetime import UTC, datetime
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
-from stabctl.studies import paper_storage
+from stabctl.errors import InputError
+from stabctl.parallel import read_records, write_reproducible
 from stabctl.plotting import figures as plotting
 from stabctl.smib.coi import PAPER_TWO_MACHINE, PAPER_TWO_MACHINE_T_RELEASE
-from stabctl.errors import InputError
 from stabctl.smib.feedback import PAPER_LAWS, settling_time
 from stabctl.smib.omib import PAPER_OMIB, clearing_table, eac_summary, simulate
 from stabctl.smib.optimal import solve_min_time
-from stabctl.parallel import read_records, write_reproducible
+from stabctl.studies import paper_storage
 
 logger = logging.getLogger(__name__)
 
@@ -49,12 +49,17 @@ def section_omib(fig_dir: Path) -> str:
     sys_ = PAPER_OMIB
     rows = clearing_table(sys_, PAPER_TABLE1)
     eac = eac_summary(sys_)
-    lines = ["## 1. One-machine infinite bus (paper Section 2, Table 1)", "",
-             f"H = {sys_.H} s, f0 = {sys_.f0} Hz, Pm = {sys_.Pm} pu, delta0 = {sys_.delta0:.4f} rad, "
-             f"Pmax = {sys_.Pmax_pre:.4f} pu (X = {sys_.X:.4f} pu), bolted fault at the generator "
-             "bus, post-fault network = pre-fault.", "",
-             "| cycles | delta_cl (rad) | paper | error | d(delta)/dt (rad/s) | paper | error "
-             "| verdict | paper |", "|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "## 1. One-machine infinite bus (paper Section 2, Table 1)",
+        "",
+        f"H = {sys_.H} s, f0 = {sys_.f0} Hz, Pm = {sys_.Pm} pu, delta0 = {sys_.delta0:.4f} rad, "
+        f"Pmax = {sys_.Pmax_pre:.4f} pu (X = {sys_.X:.4f} pu), bolted fault at the generator "
+        "bus, post-fault network = pre-fault.",
+        "",
+        "| cycles | delta_cl (rad) | paper | error | d(delta)/dt (rad/s) | paper | error "
+        "| verdict | paper |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     runs = {}
     for r in rows:
         cyc = int(r["cycles"])
@@ -63,26 +68,38 @@ def section_omib(fig_dir: Path) -> str:
         lines.append(
             f"| {cyc} | {r['delta_cl_rad']:.4f} | {d_ref} | {_rel(r['delta_cl_rad'], d_ref)} | "
             f"{r['omega_cl_rad_s']:.4f} | {w_ref} | {_rel(r['omega_cl_rad_s'], w_ref)} | "
-            f"{'stable' if r['stable'] else 'unstable'} | {'stable' if st_ref else 'unstable'} |")
+            f"{'stable' if r['stable'] else 'unstable'} | {'stable' if st_ref else 'unstable'} |"
+        )
     drift = _energy_drift(sys_, runs)
-    lines += ["", "Equal-area criterion (eq. 11) and energy function (eq. 10):", "",
-              f"- critical clearing angle {eac['delta_cr_rad']:.4f} rad; CCT closed form "
-              f"{eac['t_cr_s']:.5f} s ({eac['t_cr_cycles']:.2f} cycles), time-domain bisection "
-              f"{eac['t_cr_bisection_s']:.5f} s ({eac['bisection_runs']} runs): difference "
-              f"{1e3 * abs(eac['t_cr_s'] - eac['t_cr_bisection_s']):.3f} ms.",
-              "- accelerating area A1 versus kinetic energy at clearing M*omega_cl^2/2 "
-              "(pu*s), and the decelerating area still available:", "",
-              "| cycles | A1 | kinetic energy | available A2 | max energy drift after clearing |",
-              "|---|---|---|---|---|"]
+    lines += [
+        "",
+        "Equal-area criterion (eq. 11) and energy function (eq. 10):",
+        "",
+        f"- critical clearing angle {eac['delta_cr_rad']:.4f} rad; CCT closed form "
+        f"{eac['t_cr_s']:.5f} s ({eac['t_cr_cycles']:.2f} cycles), time-domain bisection "
+        f"{eac['t_cr_bisection_s']:.5f} s ({eac['bisection_runs']} runs): difference "
+        f"{1e3 * abs(eac['t_cr_s'] - eac['t_cr_bisection_s']):.3f} ms.",
+        "- accelerating area A1 versus kinetic energy at clearing M*omega_cl^2/2 "
+        "(pu*s), and the decelerating area still available:",
+        "",
+        "| cycles | A1 | kinetic energy | available A2 | max energy drift after clearing |",
+        "|---|---|---|---|---|",
+    ]
     for cyc, run in runs.items():
         a1 = sys_.accelerating_area(run.delta_cl)
-        ke = 0.5 * sys_.M * run.omega_cl ** 2
-        lines.append(f"| {cyc} | {a1:.6f} | {ke:.6f} | {sys_.decelerating_area(run.delta_cl):.6f} "
-                     f"| {drift[cyc]:.1e} |")
+        ke = 0.5 * sys_.M * run.omega_cl**2
+        lines.append(
+            f"| {cyc} | {a1:.6f} | {ke:.6f} | {sys_.decelerating_area(run.delta_cl):.6f} "
+            f"| {drift[cyc]:.1e} |"
+        )
     plotting.omib_phase_plane(sys_, runs, fig_dir / "fig04_omib_phase_plane.png")
     plotting.omib_equal_area(sys_, runs[12], fig_dir / "fig05_omib_equal_area.png")
-    lines += ["", "![phase plane](fig04_omib_phase_plane.png)",
-              "![equal area](fig05_omib_equal_area.png)", ""]
+    lines += [
+        "",
+        "![phase plane](fig04_omib_phase_plane.png)",
+        "![equal area](fig05_omib_equal_area.png)",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -104,26 +121,38 @@ def section_feedback(fig_dir: Path) -> str:
     for law in PAPER_LAWS:
         law.check(sys_.M)
         runs[law.name] = simulate(sys_, t_cl, t_end=t_end, law=law)
-    lines = ["## 2. Feedback laws (paper Section 3, 15-cycle fault, control after clearing)", "",
-             "Eq. (14) is garbled in the source text; we read it as "
-             "P_eC = Ka |d2delta/dt2| sgn(d delta/dt), consistent with the paper's description. "
-             "Laws using the acceleration form an algebraic loop with the swing equation, "
-             "resolved exactly (see `stabctl.smib.feedback`).", "",
-             "| law | stable | max angle (rad) | max speed dev. after clearing (rad/s) | "
-             f"settling time, 5 % band (s, within {t_end} s) | peak |P_C| (pu) |",
-             "|---|---|---|---|---|---|"]
+    lines = [
+        "## 2. Feedback laws (paper Section 3, 15-cycle fault, control after clearing)",
+        "",
+        "Eq. (14) is garbled in the source text; we read it as "
+        "P_eC = Ka |d2delta/dt2| sgn(d delta/dt), consistent with the paper's description. "
+        "Laws using the acceleration form an algebraic loop with the swing equation, "
+        "resolved exactly (see `stabctl.smib.feedback`).",
+        "",
+        "| law | stable | max angle (rad) | max speed dev. after clearing (rad/s) | "
+        f"settling time, 5 % band (s, within {t_end} s) | peak |P_C| (pu) |",
+        "|---|---|---|---|---|---|",
+    ]
     for name, run in runs.items():
         k = run.t >= run.t_clear
         ts = settling_time(run.t, run.omega, run.t_clear) if run.stable else float("inf")
-        lines.append(f"| {name} | {'yes' if run.stable else 'no'} | {run.delta.max():.4f} | "
-                     f"{np.abs(run.omega[k]).max():.4f} | "
-                     f"{'never' if np.isinf(ts) else f'{ts:.2f}'} | {np.abs(run.P_C).max():.3f} |")
+        lines.append(
+            f"| {name} | {'yes' if run.stable else 'no'} | {run.delta.max():.4f} | "
+            f"{np.abs(run.omega[k]).max():.4f} | "
+            f"{'never' if np.isinf(ts) else f'{ts:.2f}'} | {np.abs(run.P_C).max():.3f} |"
+        )
     plotting.feedback_phase_plane(sys_, runs, fig_dir / "fig07_feedback_phase_plane.png")
-    lines += ["", "Settling time \"never\": the speed does not stay inside the band within "
-              f"{t_end:g} s (an unstable run leaves it for good). "
-              "The acceleration-only law changes the effective inertia but adds no damping, "
-              "so it never settles; the sign law always absorbs energy from the swing "
-              "(P_C * omega >= 0).", "", "![feedback](fig07_feedback_phase_plane.png)", ""]
+    lines += [
+        "",
+        'Settling time "never": the speed does not stay inside the band within '
+        f"{t_end:g} s (an unstable run leaves it for good). "
+        "The acceleration-only law changes the effective inertia but adds no damping, "
+        "so it never settles; the sign law always absorbs energy from the swing "
+        "(P_C * omega >= 0).",
+        "",
+        "![feedback](fig07_feedback_phase_plane.png)",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -133,33 +162,52 @@ def section_two_machine_and_min_time(fig_dir: Path) -> str:
     eq = tm.equivalent()
     rel = simulate(eq, PAPER_TWO_MACHINE_T_RELEASE, t_end=PAPER_TWO_MACHINE_T_RELEASE + 0.01)
     x_r = (rel.delta_cl, rel.omega_cl)
-    lines = ["## 3. Two-machine COI equivalent and minimum-time control (paper Section 4)", "",
-             f"H1 = {tm.H1} s against the rest H_rest = {tm.H_rest} s (H = {tm.H:.4f} s), "
-             f"Pm = {tm.Pm} pu, Pmax = {tm.Pmax_pre} pu, delta0 = {eq.delta0:.4f} rad, "
-             f"{PAPER_TWO_MACHINE_T_RELEASE * 60:.0f}-cycle bolted fault. Table 2 fixes only "
-             "H, delta0 and the fault duration; the split of H only sets the storage share "
-             f"k_C = {tm.k_C:.4f}.", "",
-             "| state at release | ours | paper | error |", "|---|---|---|---|",
-             f"| x1(tr) (rad) | {x_r[0]:.4f} | {PAPER_TABLE2['x1_rad']} | "
-             f"{_rel(x_r[0], PAPER_TABLE2['x1_rad'])} |",
-             f"| x2(tr) (rad/s) | {x_r[1]:.4f} | {PAPER_TABLE2['x2_rad_s']} | "
-             f"{_rel(x_r[1], PAPER_TABLE2['x2_rad_s'])} |", "",
-             "Minimum-time problem (eqs. 27-39), solved as a free-final-time two-point BVP "
-             "(scipy solve_bvp): lambda2 > 0 on the whole interval, so the optimal input is the "
-             "full absorbing pulse P_C = P_Cmax.", "",
-             "| P_Cmax (pu) | T from BVP (s) | T of simulated full pulse (s) | T without storage (s) "
-             "| min lambda2 | max abs(H) | lambda2 > 0 |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        "## 3. Two-machine COI equivalent and minimum-time control (paper Section 4)",
+        "",
+        f"H1 = {tm.H1} s against the rest H_rest = {tm.H_rest} s (H = {tm.H:.4f} s), "
+        f"Pm = {tm.Pm} pu, Pmax = {tm.Pmax_pre} pu, delta0 = {eq.delta0:.4f} rad, "
+        f"{PAPER_TWO_MACHINE_T_RELEASE * 60:.0f}-cycle bolted fault. Table 2 fixes only "
+        "H, delta0 and the fault duration; the split of H only sets the storage share "
+        f"k_C = {tm.k_C:.4f}.",
+        "",
+        "| state at release | ours | paper | error |",
+        "|---|---|---|---|",
+        f"| x1(tr) (rad) | {x_r[0]:.4f} | {PAPER_TABLE2['x1_rad']} | "
+        f"{_rel(x_r[0], PAPER_TABLE2['x1_rad'])} |",
+        f"| x2(tr) (rad/s) | {x_r[1]:.4f} | {PAPER_TABLE2['x2_rad_s']} | "
+        f"{_rel(x_r[1], PAPER_TABLE2['x2_rad_s'])} |",
+        "",
+        "Minimum-time problem (eqs. 27-39), solved as a free-final-time two-point BVP "
+        "(scipy solve_bvp): lambda2 > 0 on the whole interval, so the optimal input is the "
+        "full absorbing pulse P_C = P_Cmax.",
+        "",
+        "| P_Cmax (pu) | T from BVP (s) | T of simulated full pulse (s) | T without storage (s) "
+        "| min lambda2 | max abs(H) | lambda2 > 0 |",
+        "|---|---|---|---|---|---|---|",
+    ]
     sols = {}
     for pc in MIN_TIME_RATINGS_PU:
         s = solve_min_time(eq, x_r, pc)
         sols[pc] = s
-        lines.append(f"| {pc} | {s.T:.5f} | {s.T_pulse:.5f} | {s.T_uncontrolled:.5f} | "
-                     f"{s.l2.min():.3e} | {np.abs(s.hamiltonian).max():.1e} | "
-                     f"{'yes' if s.lambda2_positive else 'no'} |")
-    plotting.min_time_figures(eq, x_r, sols, fig_dir / "fig10_min_time_states.png",
-                              fig_dir / "fig11_min_time_costates.png")
-    lines += ["", "![states](fig10_min_time_states.png)", "![costates](fig11_min_time_costates.png)",
-              ""]
+        lines.append(
+            f"| {pc} | {s.T:.5f} | {s.T_pulse:.5f} | {s.T_uncontrolled:.5f} | "
+            f"{s.l2.min():.3e} | {np.abs(s.hamiltonian).max():.1e} | "
+            f"{'yes' if s.lambda2_positive else 'no'} |"
+        )
+    plotting.min_time_figures(
+        eq,
+        x_r,
+        sols,
+        fig_dir / "fig10_min_time_states.png",
+        fig_dir / "fig11_min_time_costates.png",
+    )
+    lines += [
+        "",
+        "![states](fig10_min_time_states.png)",
+        "![costates](fig11_min_time_costates.png)",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -167,29 +215,42 @@ def section_estimation(fig_dir: Path, records_dir: Path, progress=None) -> str:
     """PMU estimation and estimator-in-the-loop control: separate reports."""
     from stabctl.studies.estimation_report import write_estimation_report
 
-    paths = write_estimation_report(fig_dir, runs=20, records_dir=records_dir,
-                                    progress=progress)
+    paths = write_estimation_report(fig_dir, runs=20, records_dir=records_dir, progress=progress)
     links = ", ".join(f"[{p.stem}]({p.name})" for p in paths)
-    return "\n".join(["## 7. Estimated speeds in the control loop", "",
-                      "PMU model (IEEE C37.118.1 limits), Kalman filters, RMSE versus truth, "
-                      "false actions in ambient noise and CCT with ideal measurements, raw "
-                      f"PMU frequency and each estimator in the loop: {links}.", ""])
+    return "\n".join(
+        [
+            "## 7. Estimated speeds in the control loop",
+            "",
+            "PMU model (IEEE C37.118.1 limits), Kalman filters, RMSE versus truth, "
+            "false actions in ambient noise and CCT with ideal measurements, raw "
+            f"PMU frequency and each estimator in the loop: {links}.",
+            "",
+        ]
+    )
 
 
 def section_placement(fig_dir: Path, records_dir: Path, progress=None) -> str:
     """ESD sizing and placement: separate reports per case."""
     from stabctl.studies.placement import placement_study
 
-    paths = [placement_study(case, fig_dir, records_dir=records_dir, progress=progress)
-             for case in ("kundur", "miniwecc")]
+    paths = [
+        placement_study(case, fig_dir, records_dir=records_dir, progress=progress)
+        for case in ("kundur", "miniwecc")
+    ]
     links = ", ".join(f"[{p.stem}]({p.name})" for p in paths)
-    return "\n".join(["## 8. Where to put how much storage", "",
-                      "Least-cost ESD sites, MW and MWh (convex programs, cvxpy + Clarabel, "
-                      "constraint generation) such that every screened fault is stable when "
-                      "cleared after 5 cycles at 90, 100 and 110 % load, verified by "
-                      "simulation, against the least uniform fleet meeting the same "
-                      "requirement, with the Pareto curve of cost against the required "
-                      f"clearing time: {links}.", ""])
+    return "\n".join(
+        [
+            "## 8. Where to put how much storage",
+            "",
+            "Least-cost ESD sites, MW and MWh (convex programs, cvxpy + Clarabel, "
+            "constraint generation) such that every screened fault is stable when "
+            "cleared after 5 cycles at 90, 100 and 110 % load, verified by "
+            "simulation, against the least uniform fleet meeting the same "
+            "requirement, with the Pareto curve of cost against the required "
+            f"clearing time: {links}.",
+            "",
+        ]
+    )
 
 
 def section_convergence(fig_dir: Path, progress=None) -> str:
@@ -198,14 +259,18 @@ def section_convergence(fig_dir: Path, progress=None) -> str:
     progress(str), if given, hears each CCT search (case, conventions, step)."""
     from stabctl.studies.convergence import PAPER_FAULTS, cct_versus_step, markdown_table
 
-    lines = ["## 9. Step convergence: IEEE 421.5 limiters against PSTess's", "",
-             "CCT of the Case-1 and Case-2 faults (bisection to 1 ms) at steps from 10 ms to "
-             "0.5 ms. ieee (the default): every limiter non-windup as IEEE Std 421.5-2016, "
-             "the step never longer than h, each step on the network of its interval. "
-             "pstess: PSTess 1.1 bit for bit, including the smpexc limiter that keeps the "
-             "field voltage's derivative at the ceiling (docs/conventions.md lists every "
-             "difference with its PSTess source line). Each CCT search also reruns its final "
-             "bracket at half the step: `numerical_error_s` in `stabctl cct --json`.", ""]
+    lines = [
+        "## 9. Step convergence: IEEE 421.5 limiters against PSTess's",
+        "",
+        "CCT of the Case-1 and Case-2 faults (bisection to 1 ms) at steps from 10 ms to "
+        "0.5 ms. ieee (the default): every limiter non-windup as IEEE Std 421.5-2016, "
+        "the step never longer than h, each step on the network of its interval. "
+        "pstess: PSTess 1.1 bit for bit, including the smpexc limiter that keeps the "
+        "field voltage's derivative at the ceiling (docs/conventions.md lists every "
+        "difference with its PSTess source line). Each CCT search also reruns its final "
+        "bracket at half the step: `numerical_error_s` in `stabctl cct --json`.",
+        "",
+    ]
     for name, fault in PAPER_FAULTS.items():
         table = cct_versus_step(name, fault, progress=progress)
         freq = 60.0
@@ -213,18 +278,25 @@ def section_convergence(fig_dir: Path, progress=None) -> str:
         pst = [c for _, c, _ in table["pstess"]["rows"]]
         lines += [f"### {name}: {fault.describe()}", ""]
         lines += markdown_table(name, table, freq)
-        lines += ["", f"- ieee: {1000 * min(ieee):.0f}-{1000 * max(ieee):.0f} ms over the "
-                  f"steps ({1000 * (max(ieee) - min(ieee)):.0f} ms spread, the tolerance is "
-                  f"1 ms); pstess: {1000 * min(pst):.0f}-{1000 * max(pst):.0f} ms "
-                  f"({1000 * (max(pst) - min(pst)):.0f} ms spread).", ""]
-    lines += ["Under ieee the CCT moves by at most one 1 ms lattice cell between halvings "
-              "(resolved to 0.1 ms on Kundur: 156.8, 157.7, 157.9, 157.9, 158.0, 158.0 ms at "
-              "10, 5, 2.5, 1.25, 0.625, 0.3125 ms: differences shrinking about fourfold per "
-              "halving, second order). Kundur's default ieee step is half its fastest time "
-              "constant (T_R = 10 ms), so the default CCT is within the tolerance of the "
-              "converged one; so is miniWECC's (a governor's T_5 = 10 ms: 5 ms, 2.4 times its "
-              "data-file step 1/480 s, the pstess default; ST3 exciters, whose PSTess limiter "
-              "already zeroes the derivative, so both conventions converge).", ""]
+        lines += [
+            "",
+            f"- ieee: {1000 * min(ieee):.0f}-{1000 * max(ieee):.0f} ms over the "
+            f"steps ({1000 * (max(ieee) - min(ieee)):.0f} ms spread, the tolerance is "
+            f"1 ms); pstess: {1000 * min(pst):.0f}-{1000 * max(pst):.0f} ms "
+            f"({1000 * (max(pst) - min(pst)):.0f} ms spread).",
+            "",
+        ]
+    lines += [
+        "Under ieee the CCT moves by at most one 1 ms lattice cell between halvings "
+        "(resolved to 0.1 ms on Kundur: 156.8, 157.7, 157.9, 157.9, 158.0, 158.0 ms at "
+        "10, 5, 2.5, 1.25, 0.625, 0.3125 ms: differences shrinking about fourfold per "
+        "halving, second order). Kundur's default ieee step is half its fastest time "
+        "constant (T_R = 10 ms), so the default CCT is within the tolerance of the "
+        "converged one; so is miniWECC's (a governor's T_5 = 10 ms: 5 ms, 2.4 times its "
+        "data-file step 1/480 s, the pstess default; ST3 exciters, whose PSTess limiter "
+        "already zeroes the derivative, so both conventions converge).",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -242,9 +314,11 @@ TALKING = {section_convergence}
 #: Parts whose sweeps keep resumable records (JSON lines): key -> (section(fig_dir,
 #: records_dir, progress), record files).  The records are made in WORK_DIR and copied
 #: into the report directory, reproducibly (`sweep.write_reproducible`), at the end.
-RESUMABLE = {"table4": (paper_storage.section_table4, "table4_*.jsonl"),
-             "estimation": (section_estimation, "estimation_cct_*.jsonl"),
-             "placement": (section_placement, "placement_*_screening.jsonl")}
+RESUMABLE = {
+    "table4": (paper_storage.section_table4, "table4_*.jsonl"),
+    "estimation": (section_estimation, "estimation_cct_*.jsonl"),
+    "placement": (section_placement, "placement_*_screening.jsonl"),
+}
 #: Sub-directory of the report directory holding the records of the run in progress
 #: (with timings, for --resume); removed when the run completes.
 WORK_DIR = ".paper-work"
@@ -253,8 +327,12 @@ WORK_DIR = ".paper-work"
 RUN_LOG = "run_log.json"
 
 
-def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], None] | None = None,
-                       resume: bool = False, only=None) -> Path:
+def write_paper_report(
+    out_dir: str | os.PathLike,
+    progress: Callable[[str], None] | None = None,
+    resume: bool = False,
+    only=None,
+) -> Path:
     """Build the report parts (`PARTS`; all, or the keys in `only`) into out_dir/paper.md
     with their PNG figures and sub-reports; returns the path.
 
@@ -291,11 +369,20 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
             for f in out.glob(pattern):
                 shutil.copyfile(f, work / f.name)
     t_start = time.perf_counter()
-    log = {"command": "stabctl paper", "parts": keys, "resume": bool(resume),
-           "started": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-           "stabctl": _version(), "python": platform.python_version(),
-           "cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-           else os.cpu_count(), "sections": [], "records": {}, "progress": []}
+    log = {
+        "command": "stabctl paper",
+        "parts": keys,
+        "resume": bool(resume),
+        "started": datetime.now(UTC).isoformat(timespec="seconds"),
+        "stabctl": _version(),
+        "python": platform.python_version(),
+        "cores": len(os.sched_getaffinity(0))
+        if hasattr(os, "sched_getaffinity")
+        else os.cpu_count(),
+        "sections": [],
+        "records": {},
+        "progress": [],
+    }
 
     def say(msg: str) -> None:
         log["progress"].append([round(time.perf_counter() - t_start, 1), msg])
@@ -303,28 +390,47 @@ def write_paper_report(out_dir: str | os.PathLike, progress: Callable[[str], Non
 
     with tempfile.TemporaryDirectory(dir=out, prefix=".paper-") as tmp:
         tmp = Path(tmp)
-        parts = ["# stabctl: reproduction of the paper's results", "",
-                 "Generated by `stabctl paper`. Errors are relative to the paper's printed values.",
-                 ""]
+        parts = [
+            "# stabctl: reproduction of the paper's results",
+            "",
+            "Generated by `stabctl paper`. Errors are relative to the paper's printed values.",
+            "",
+        ]
         for key in keys:
             for section in PARTS[key]:
-                parts.append(_timed(log, key, section, say, lambda s: s(
-                    tmp, **({"progress": say} if s in TALKING else {}))))
+                parts.append(
+                    _timed(
+                        log,
+                        key,
+                        section,
+                        say,
+                        lambda s: s(tmp, **({"progress": say} if s in TALKING else {})),
+                    )
+                )
             if key in RESUMABLE:
-                parts.append(_timed(log, key, RESUMABLE[key][0], say,
-                                    lambda s: s(tmp, work, progress=say),
-                                    " (resumable records)"))
+                parts.append(
+                    _timed(
+                        log,
+                        key,
+                        RESUMABLE[key][0],
+                        say,
+                        lambda s: s(tmp, work, progress=say),
+                        " (resumable records)",
+                    )
+                )
         (tmp / "paper.md").write_text("\n".join(parts))
         for f in tmp.iterdir():
             os.replace(f, out / f.name)
     for key in keys:
         for f in sorted(work.glob(RESUMABLE[key][1])) if key in RESUMABLE else ():
-            log["records"][f.name] = {**write_reproducible(f, out / f.name),
-                                      "simulations": _simulations(out / f.name)}
+            log["records"][f.name] = {
+                **write_reproducible(f, out / f.name),
+                "simulations": _simulations(out / f.name),
+            }
             f.unlink()
     try:
         work.rmdir()
-    except OSError:              # something else left there: keep it
+    except OSError:  # something else left there: keep it
         pass
     log["total_s"] = round(time.perf_counter() - t_start, 1)
     (out / RUN_LOG).write_text(json.dumps(log, indent=1) + "\n")
@@ -346,8 +452,10 @@ def run_summary(log: dict) -> str:
     section, jobs and simulations per sweep record file, the total."""
     lines = [f"{'seconds':>8}  section"]
     lines += [f"{s['seconds']:8.1f}  {s['section']}" for s in log["sections"]]
-    lines += [f"{'':8}  {name}: {r['jobs']} jobs ({r['failed']} failed), "
-              f"{r['simulations']} simulations" for name, r in log["records"].items()]
+    lines += [
+        f"{'':8}  {name}: {r['jobs']} jobs ({r['failed']} failed), {r['simulations']} simulations"
+        for name, r in log["records"].items()
+    ]
     lines.append(f"{log['total_s']:8.1f}  in all, on {log['cores']} cores")
     return "\n".join(lines)
 
@@ -358,14 +466,16 @@ def _timed(log: dict, key: str, section, say, call, note: str = "") -> str:
     say(f"paper: {title}{note}")
     t0 = time.perf_counter()
     text = call(section)
-    log["sections"].append({"part": key, "section": title,
-                            "seconds": round(time.perf_counter() - t0, 1)})
+    log["sections"].append(
+        {"part": key, "section": title, "seconds": round(time.perf_counter() - t0, 1)}
+    )
     return text
 
 
 def _version() -> str:
     try:
         from importlib.metadata import version
+
         return version("stabctl")
     except Exception:  # noqa: BLE001 - not installed (source tree)
         return "unknown"

@@ -18,8 +18,8 @@ reports/placement_<case>.md, its JSON and three figures.
 from __future__ import annotations
 
 import json
-import threading
 import logging
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
@@ -28,30 +28,28 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from stabctl.io import load_case  # noqa: E402
-from stabctl.plotting.figures import save_figure as _save  # noqa: E402
-from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs  # noqa: E402
-from stabctl.studies.cases import DEFAULT_FAULTS  # noqa: E402
-from stabctl.placement.program import candidate_sites  # noqa: E402
-from stabctl.placement.evaluation import Contingency, VerifyOptions  # noqa: E402
-from stabctl.placement.loop import (PlaceOptions, Study, WarmStart, _rounded,  # noqa: E402
-                                    evaluations, place)
-from stabctl.placement.plan import PlanOptions, plan  # noqa: E402
-from stabctl.placement.requirements import (CostModel, Requirement,  # noqa: E402
-                                            screening_brackets)
-from stabctl.storage.devices import hv_bus  # noqa: E402
-from stabctl.parallel import run_sweep, strip_run_dependent, worker_pool  # noqa: E402
-from stabctl.progress import Heartbeat  # noqa: E402
+from stabctl.io import load_case
+from stabctl.parallel import run_sweep, strip_run_dependent, worker_pool
+from stabctl.placement.evaluation import Contingency, VerifyOptions
+from stabctl.placement.loop import PlaceOptions, Study, WarmStart, _rounded, evaluations, place
+from stabctl.placement.plan import PlanOptions, plan
+from stabctl.placement.program import candidate_sites
+from stabctl.placement.requirements import CostModel, Requirement, screening_brackets
+from stabctl.plotting.figures import save_figure as _save
+from stabctl.progress import Heartbeat
+from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs
+from stabctl.storage.devices import hv_bus
+from stabctl.studies.cases import DEFAULT_FAULTS
 
 logger = logging.getLogger(__name__)
 
-UNIFORM_PCT = 5.0                         # the paper's fleet (continuity section)
-N_FAULTS = 10                             # a case with more than 2 N_FAULTS lines: HV only
-REQUIRED_CYCLES = 5.0                     # normal clearing plus a margin (TPL-001 spirit)
-LOAD_LEVELS = (0.9, 1.0, 1.1)             # fractions of the base load
+UNIFORM_PCT = 5.0  # the paper's fleet (continuity section)
+N_FAULTS = 10  # a case with more than 2 N_FAULTS lines: HV only
+REQUIRED_CYCLES = 5.0  # normal clearing plus a margin (TPL-001 spirit)
+LOAD_LEVELS = (0.9, 1.0, 1.1)  # fractions of the base load
 PARETO_CYCLES = {"miniwecc": (4.0, 6.0), "kundur": (10.0, 12.0)}
 #: Illustrative prices (M$): power conversion per MW, energy per MWh, per site
 COSTS = CostModel(per_mw=0.3, per_mwh=0.4, per_site=2.0)
@@ -59,13 +57,14 @@ COSTS = CostModel(per_mw=0.3, per_mwh=0.4, per_site=2.0)
 #: asks about (the largest required time plus MARGIN_CAP_S); a fault still stable there is
 #: known stable at each of them without a run.
 SCREEN_TOL, SCREEN_T_MAX, TOL = 0.005, 0.2, 1e-3
-MARGIN_TOL, MARGIN_CAP_S = 0.005, 0.1     # clearing margins: resolution, largest shown (s)
-T_MAX_PLACE = 1.0                         # CCT search limit of the placement runs (s)
-MAX_ITER, MAX_ITER_SIDE = 6, 4            # simulated allocations: per round; the others
-HALF_STEP_N = 10                          # tightest contingencies simulated at h/2
+MARGIN_TOL, MARGIN_CAP_S = 0.005, 0.1  # clearing margins: resolution, largest shown (s)
+T_MAX_PLACE = 1.0  # CCT search limit of the placement runs (s)
+MAX_ITER, MAX_ITER_SIDE = 6, 4  # simulated allocations: per round; the others
+HALF_STEP_N = 10  # tightest contingencies simulated at h/2
 
 
 # -- contingencies -----------------------------------------------------------------------
+
 
 def candidate_faults(case) -> list[LineFault]:
     """A fault at each end of every line (same kV at both ends, first circuit), the line
@@ -74,9 +73,13 @@ def candidate_faults(case) -> list[LineFault]:
     without a trip (a small case has too few lines whose loss it survives)."""
     hv = {hv_bus(case, int(k)) for k in case.machines.number}
     kv = lambda b: case.buses.kv[case.bus_index(b)]  # noqa: E731
-    lines = list(dict.fromkeys((int(f), int(t)) for f, t in zip(case.branches.from_bus,
-                                                                  case.branches.to_bus)
-                               if kv(f) == kv(t)))
+    lines = list(
+        dict.fromkeys(
+            (int(f), int(t))
+            for f, t in zip(case.branches.from_bus, case.branches.to_bus)
+            if kv(f) == kv(t)
+        )
+    )
     if len(lines) > 2 * N_FAULTS:
         lines = [(f, t) for f, t in lines if f in hv or t in hv]
     faults = [LineFault(a, b) for f, t in lines for a, b in ((f, t), (t, f))]
@@ -91,23 +94,30 @@ def screen(case_name: str, out_dir: Path, workers: int, progress=None) -> list[d
     {"fault", "error"}].  progress: callable(done, total) after each fault."""
     faults = candidate_faults(load_case(case_name))
     search = SearchOptions(tol=SCREEN_TOL, t_max=SCREEN_T_MAX, error_check=False)
-    rep = run_sweep(cct_jobs(case_name, faults, search=search),
-                    out_dir / f"placement_{case_name}_screening.jsonl", workers=workers,
-                    progress=progress or False)
+    rep = run_sweep(
+        cct_jobs(case_name, faults, search=search),
+        out_dir / f"placement_{case_name}_screening.jsonl",
+        workers=workers,
+        progress=progress or False,
+    )
     rows = []
     for f, rec in zip(faults, rep.records.values()):
         ok = rec["status"] == "ok"
-        rows.append({"fault": f, "cct_s": rec["result"]["cct_s"] if ok else None,
-                     "t_unstable_s": rec["result"]["t_unstable_s"] if ok else None,
-                     "error": None if ok else rec.get("error", "")})
+        rows.append(
+            {
+                "fault": f,
+                "cct_s": rec["result"]["cct_s"] if ok else None,
+                "t_unstable_s": rec["result"]["t_unstable_s"] if ok else None,
+                "error": None if ok else rec.get("error", ""),
+            }
+        )
     return rows
 
 
 def in_scope(rows) -> list[dict]:
     """The screened faults the planner must meet: those stable when cleared at once (a
     CCT, or still stable at the screening's limit)."""
-    return [r for r in rows if r["cct_s"] is not None or
-            "still stable" in (r["error"] or "")]
+    return [r for r in rows if r["cct_s"] is not None or "still stable" in (r["error"] or "")]
 
 
 def paper_continuity(case_name: str, sites, mva, kw: Study, say) -> dict:
@@ -120,13 +130,24 @@ def paper_continuity(case_name: str, sites, mva, kw: Study, say) -> dict:
     uni = evaluations(case_name, plain, fleet, kw, VerifyOptions(base=base, scan="full"))
     name = plain[0].name
     target = (Contingency(fault, uni[name]["cct_s"]),)
-    res = place(case_name, target, kw, PlaceOptions(max_iter=MAX_ITER_SIDE),
-                WarmStart(base=base, start=fleet, evaluations=uni),
-                progress=lambda m: say(f"{case_name} paper's fault: {m}"))
-    return {"name": name, "cct_none_s": base[name]["cct_s"], "target_s": uni[name]["cct_s"],
-            "uniform_mw": float(fleet.sum()), "total_mw": res.allocation.total_mw,
-            "verified": res.verified, "allocation": res.allocation.rows(),
-            "cct_s": res.evaluations[name]["cct_s"]}
+    res = place(
+        case_name,
+        target,
+        kw,
+        PlaceOptions(max_iter=MAX_ITER_SIDE),
+        WarmStart(base=base, start=fleet, evaluations=uni),
+        progress=lambda m: say(f"{case_name} paper's fault: {m}"),
+    )
+    return {
+        "name": name,
+        "cct_none_s": base[name]["cct_s"],
+        "target_s": uni[name]["cct_s"],
+        "uniform_mw": float(fleet.sum()),
+        "total_mw": res.allocation.total_mw,
+        "verified": res.verified,
+        "allocation": res.allocation.rows(),
+        "cct_s": res.evaluations[name]["cct_s"],
+    }
 
 
 def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = True) -> dict:
@@ -145,31 +166,54 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
     with Heartbeat(say, done.line) as beat:
         say = beat
         beat.note("screening")
-        rows = screen(case_name, records_dir, workers,
-                      lambda k, n: beat.note(f"screening {k}/{n} faults"))
+        rows = screen(
+            case_name, records_dir, workers, lambda k, n: beat.note(f"screening {k}/{n} faults")
+        )
         scope = in_scope(rows)
         faults = [r["fault"] for r in scope]
         brackets = screening_brackets(records_dir / f"placement_{case_name}_screening.jsonl")
-        say(f"{case_name}: screened {len(rows)} faults in {time.perf_counter() - wall:.0f} s;"
-            f" {len(faults)} stable when cleared at once")
+        say(
+            f"{case_name}: screened {len(rows)} faults in {time.perf_counter() - wall:.0f} s;"
+            f" {len(faults)} stable when cleared at once"
+        )
         with worker_pool(workers) as pool_map:
             run_map = done.counting(pool_map)
-            kw = Study(sites=sites, search=SearchOptions(tol=TOL, t_max=T_MAX_PLACE),
-                       run_map=run_map)
-            common = PlanOptions(brackets=brackets, cost=COSTS, drop_infeasible=True,
-                                 place=PlaceOptions(max_iter=MAX_ITER))
+            kw = Study(
+                sites=sites, search=SearchOptions(tol=TOL, t_max=T_MAX_PLACE), run_map=run_map
+            )
+            common = PlanOptions(
+                brackets=brackets,
+                cost=COSTS,
+                drop_infeasible=True,
+                place=PlaceOptions(max_iter=MAX_ITER),
+            )
             beat.note(f"plan for {REQUIRED_CYCLES:g} cycles")
-            main = plan(case_name, faults, Requirement(cycles=REQUIRED_CYCLES),
-                        replace(common, load_levels=LOAD_LEVELS, alone=True,
-                                margins_tol=MARGIN_TOL, half_step_n=HALF_STEP_N,
-                                margins_cap_s=MARGIN_CAP_S, uniform=True), kw,
-                        progress=lambda m: say(f"{case_name} {REQUIRED_CYCLES:g} cycles: {m}"))
+            main = plan(
+                case_name,
+                faults,
+                Requirement(cycles=REQUIRED_CYCLES),
+                replace(
+                    common,
+                    load_levels=LOAD_LEVELS,
+                    alone=True,
+                    margins_tol=MARGIN_TOL,
+                    half_step_n=HALF_STEP_N,
+                    margins_cap_s=MARGIN_CAP_S,
+                    uniform=True,
+                ),
+                kw,
+                progress=lambda m: say(f"{case_name} {REQUIRED_CYCLES:g} cycles: {m}"),
+            )
 
             def point(cyc):
-                r = plan(case_name, faults, Requirement(cycles=cyc),
-                         replace(common, load_levels=(1.0,) if fast else LOAD_LEVELS,
-                                 uniform=not fast), kw,
-                         progress=lambda m: say(f"{case_name} {cyc:g} cycles: {m}"))
+                r = plan(
+                    case_name,
+                    faults,
+                    Requirement(cycles=cyc),
+                    replace(common, load_levels=(1.0,) if fast else LOAD_LEVELS, uniform=not fast),
+                    kw,
+                    progress=lambda m: say(f"{case_name} {cyc:g} cycles: {m}"),
+                )
                 return _pareto_point(cyc, r)
 
             # the Pareto points and the paper's fault at the same time (one thread each,
@@ -180,30 +224,50 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
                 pareto = list(threads.map(point, PARETO_CYCLES[case_name]))
                 paper = paper_job.result()
     pareto.append(_pareto_point(REQUIRED_CYCLES, main, LOAD_LEVELS))
-    return {"case": case_name, "wall_time_s": time.perf_counter() - wall,
-            "required_cycles": REQUIRED_CYCLES, "load_levels": list(LOAD_LEVELS),
-            "costs": {"per_mw": COSTS.per_mw, "per_mwh": COSTS.per_mwh,
-                      "per_site": COSTS.per_site},
-            "pareto_load_levels": [1.0] if fast else list(LOAD_LEVELS),
-            "screening": [{"fault": r["fault"].describe(),
-                           "name": Contingency(r["fault"], 1).name, "cct_s": r["cct_s"],
-                           "error": r["error"]} for r in rows],
-            "n_faults": len(faults),
-            "sites": [{"bus": s.bus, "machine": s.machine, "max_mw": s.max_mw, "mva": m}
-                      for s, m in zip(sites, mva)],
-            "plan": main.to_dict(), "mw_by_site": main.mw.tolist(),
-            "pareto": sorted(pareto, key=lambda p: p["cycles"]), "paper_alone": paper}
+    return {
+        "case": case_name,
+        "wall_time_s": time.perf_counter() - wall,
+        "required_cycles": REQUIRED_CYCLES,
+        "load_levels": list(LOAD_LEVELS),
+        "costs": {"per_mw": COSTS.per_mw, "per_mwh": COSTS.per_mwh, "per_site": COSTS.per_site},
+        "pareto_load_levels": [1.0] if fast else list(LOAD_LEVELS),
+        "screening": [
+            {
+                "fault": r["fault"].describe(),
+                "name": Contingency(r["fault"], 1).name,
+                "cct_s": r["cct_s"],
+                "error": r["error"],
+            }
+            for r in rows
+        ],
+        "n_faults": len(faults),
+        "sites": [
+            {"bus": s.bus, "machine": s.machine, "max_mw": s.max_mw, "mva": m}
+            for s, m in zip(sites, mva)
+        ],
+        "plan": main.to_dict(),
+        "mw_by_site": main.mw.tolist(),
+        "pareto": sorted(pareto, key=lambda p: p["cycles"]),
+        "paper_alone": paper,
+    }
 
 
 def _pareto_point(cycles: float, r, levels=(1.0,)) -> dict:
     u = r.uniform or {}
-    return {"cycles": cycles, "load_levels": list(levels), "total_mw": r.total_mw,
-            "total_mwh": float(r.mwh.sum()), "cost": r.cost["total"], "verified": r.verified,
-            "n_sites": int(np.count_nonzero(r.mw)),
-            "uniform_pct": u.get("pct"), "uniform_mw": u.get("total_mw"),
-            "uniform_cost": (u.get("cost") or {}).get("total"),
-            "uniform_verified": u.get("verified"),
-            "set_aside": list(r.set_aside)}
+    return {
+        "cycles": cycles,
+        "load_levels": list(levels),
+        "total_mw": r.total_mw,
+        "total_mwh": float(r.mwh.sum()),
+        "cost": r.cost["total"],
+        "verified": r.verified,
+        "n_sites": int(np.count_nonzero(r.mw)),
+        "uniform_pct": u.get("pct"),
+        "uniform_mw": u.get("total_mw"),
+        "uniform_cost": (u.get("cost") or {}).get("total"),
+        "uniform_verified": u.get("verified"),
+        "set_aside": list(r.set_aside),
+    }
 
 
 class _Evaluations:
@@ -215,11 +279,13 @@ class _Evaluations:
 
     def counting(self, run_map):
         """run_map that counts its jobs."""
+
         def counted(func, jobs):
             out = run_map(func, jobs)
             with self._lock:
                 self.n += len(jobs)
             return out
+
         return counted
 
     def line(self, status: str) -> str:
@@ -244,6 +310,7 @@ def critical_only_mw(case, sites, uniform_mw, inertia, critical) -> float:
 
 # -- figures and report ------------------------------------------------------------------
 
+
 def figure_allocation(d: dict, path: Path) -> None:
     """Bars per site: optimised rating and the least uniform fleet's (MW)."""
     labels = [f"{s['bus']}\nG{s['machine']}" for s in d["sites"]]
@@ -252,8 +319,13 @@ def figure_allocation(d: dict, path: Path) -> None:
     uni = np.array(u.get("mw_by_site") or np.zeros(len(opt)))
     x = np.arange(len(labels))
     fig, ax = plt.subplots(figsize=(max(6, 0.35 * len(x) + 2), 4))
-    ax.bar(x - 0.2, uni, 0.4, color="0.7",
-           label=f"least uniform, {u.get('pct') or 0:g} % ({uni.sum():.0f} MW)")
+    ax.bar(
+        x - 0.2,
+        uni,
+        0.4,
+        color="0.7",
+        label=f"least uniform, {u.get('pct') or 0:g} % ({uni.sum():.0f} MW)",
+    )
     ax.bar(x + 0.2, opt, 0.4, label=f"optimised ({opt.sum():.0f} MW)", color="C3")
     ax.set_xticks(x, labels, fontsize=7)
     ax.set_xlabel("site (HV bus, generator)")
@@ -268,8 +340,11 @@ def figure_margins(d: dict, path: Path) -> None:
     time, ms) of every contingency, per load level, sorted."""
     fig, ax = plt.subplots(figsize=(7, 4))
     for k, load in enumerate(d["load_levels"]):
-        m = sorted(1000 * r["margin_s"] for r in d["plan"]["contingencies"]
-                   if r["load"] == load and r["margin_s"] is not None)
+        m = sorted(
+            1000 * r["margin_s"]
+            for r in d["plan"]["contingencies"]
+            if r["load"] == load and r["margin_s"] is not None
+        )
         ax.plot(np.arange(len(m)), m, ".-", ms=3, color=f"C{k}", label=f"load {load:g}")
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xlabel("contingency (sorted by margin)")
@@ -283,11 +358,17 @@ def figure_pareto(d: dict, path: Path) -> None:
     """Cost against the required clearing time: optimised and least uniform."""
     p = d["pareto"]
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot([q["cycles"] for q in p], [q["cost"] for q in p], "o-", color="C3",
-            label="optimised placement")
+    ax.plot(
+        [q["cycles"] for q in p],
+        [q["cost"] for q in p],
+        "o-",
+        color="C3",
+        label="optimised placement",
+    )
     uni = [(q["cycles"], q["uniform_cost"]) for q in p if q["uniform_cost"] is not None]
-    ax.plot([c for c, _ in uni], [v for _, v in uni], "s--", color="C0",
-            label="least uniform fleet")
+    ax.plot(
+        [c for c, _ in uni], [v for _, v in uni], "s--", color="C0", label="least uniform fleet"
+    )
     ax.set_xlabel("required clearing time (cycles)")
     ax.set_ylabel("cost (M$, illustrative prices)")
     ax.set_title(f"{d['case']}: cost against required clearing time")
@@ -305,7 +386,8 @@ def report(d: dict, out_dir: Path, generated_by: str = "stabctl paper") -> Path:
     figure_margins(d, out_dir / figs["margins"])
     figure_pareto(d, out_dir / figs["pareto"])
     (out_dir / f"placement_{case}.json").write_text(
-        json.dumps(strip_run_dependent(d), indent=1, default=float))
+        json.dumps(strip_run_dependent(d), indent=1, default=float)
+    )
     path = out_dir / f"placement_{case}.md"
     path.write_text("\n".join(_markdown(d, figs, generated_by)) + "\n")
     return path
@@ -326,82 +408,140 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
     c = p["cost"]
     ratio = (100 * p["total_mw"] / u["total_mw"]) if u.get("total_mw") else None
     loads = ", ".join(f"{x:g}" for x in d["load_levels"])
-    lines = [f"# ESD sizing and placement: {case}", "",
-             f"Generated by `{generated_by}` (method in docs/placement.md, section 7).  "
-             "Every verdict below is simulated (PSTess models) with the paper's bang-bang "
-             "law (100 mHz deadband, 0.8 pu gate, system COI).", "",
-             f"**Requirement**: every screened fault stable when cleared after {cyc:g} "
-             f"cycles ({1000 * cyc / 60:.1f} ms), at load levels {loads} (loads and "
-             "dispatch scaled, power flow re-solved).  "
-             f"**Result**: {p['total_mw']:.1f} MW and {p['total_mwh']:.2f} MWh at "
-             f"{p['n_sites']} site(s), cost {c['total']:.1f} M$; "
-             + (f"{ratio:.1f} % of the MW of the least uniform fleet meeting the same "
-                f"requirement ({u['pct']:g} % of every MVA = {u['total_mw']:.0f} MW, cost "
-                f"{u['cost']['total']:.1f} M$)" if ratio is not None else
-                "no uniform fleet needed") + "; "
-             + ("verified on" if p["verified"] else "NOT verified on")
-             + f" {p['n_met']} of {p['n_contingencies']} contingencies ({p['message']}).",
-             "", f"Costs (illustrative): {d['costs']['per_mw']:g} M$/MW, "
-             f"{d['costs']['per_mwh']:g} M$/MWh, {d['costs']['per_site']:g} M$ per site.", "",
-             "## Contingencies", "", _screening_text(d), "",
-             "## Allocation", "",
-             "| HV bus | generator | MW | % of its MVA | MWh | absorbed MJ | delivered MJ "
-             "| energy set by |", "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        f"# ESD sizing and placement: {case}",
+        "",
+        f"Generated by `{generated_by}` (method in docs/placement.md, section 7).  "
+        "Every verdict below is simulated (PSTess models) with the paper's bang-bang "
+        "law (100 mHz deadband, 0.8 pu gate, system COI).",
+        "",
+        f"**Requirement**: every screened fault stable when cleared after {cyc:g} "
+        f"cycles ({1000 * cyc / 60:.1f} ms), at load levels {loads} (loads and "
+        "dispatch scaled, power flow re-solved).  "
+        f"**Result**: {p['total_mw']:.1f} MW and {p['total_mwh']:.2f} MWh at "
+        f"{p['n_sites']} site(s), cost {c['total']:.1f} M$; "
+        + (
+            f"{ratio:.1f} % of the MW of the least uniform fleet meeting the same "
+            f"requirement ({u['pct']:g} % of every MVA = {u['total_mw']:.0f} MW, cost "
+            f"{u['cost']['total']:.1f} M$)"
+            if ratio is not None
+            else "no uniform fleet needed"
+        )
+        + "; "
+        + ("verified on" if p["verified"] else "NOT verified on")
+        + f" {p['n_met']} of {p['n_contingencies']} contingencies ({p['message']}).",
+        "",
+        f"Costs (illustrative): {d['costs']['per_mw']:g} M$/MW, "
+        f"{d['costs']['per_mwh']:g} M$/MWh, {d['costs']['per_site']:g} M$ per site.",
+        "",
+        "## Contingencies",
+        "",
+        _screening_text(d),
+        "",
+        "## Allocation",
+        "",
+        "| HV bus | generator | MW | % of its MVA | MWh | absorbed MJ | delivered MJ "
+        "| energy set by |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for a in p["allocation"]:
-        lines.append(f"| {a['bus']} | G{a['machine']} | {a['mw']:.1f} | "
-                     f"{100 * a['mw'] / mva[a['machine']]:.1f} | {a['mwh']:.2f} | "
-                     f"{a.get('absorbed_mj', 0):.0f} | {a.get('delivered_mj', 0):.0f} | "
-                     f"{a.get('set_by', '-')} |")
-    lines += ["", "| | MW | MWh | sites | cost MW | cost MWh | cost sites | total (M$) |",
-              "|---|---|---|---|---|---|---|---|",
-              f"| optimised | {p['total_mw']:.1f} | {p['total_mwh']:.2f} | {p['n_sites']} | "
-              f"{c['mw']:.1f} | {c['mwh']:.2f} | {c['site']:.1f} | {c['total']:.1f} |"]
+        lines.append(
+            f"| {a['bus']} | G{a['machine']} | {a['mw']:.1f} | "
+            f"{100 * a['mw'] / mva[a['machine']]:.1f} | {a['mwh']:.2f} | "
+            f"{a.get('absorbed_mj', 0):.0f} | {a.get('delivered_mj', 0):.0f} | "
+            f"{a.get('set_by', '-')} |"
+        )
+    lines += [
+        "",
+        "| | MW | MWh | sites | cost MW | cost MWh | cost sites | total (M$) |",
+        "|---|---|---|---|---|---|---|---|",
+        f"| optimised | {p['total_mw']:.1f} | {p['total_mwh']:.2f} | {p['n_sites']} | "
+        f"{c['mw']:.1f} | {c['mwh']:.2f} | {c['site']:.1f} | {c['total']:.1f} |",
+    ]
     if u.get("total_mw") is not None:
         uc = u["cost"]
-        lines.append(f"| least uniform ({u['pct']:g} %) | {u['total_mw']:.1f} | "
-                     f"{u['mwh']:.2f} | {len(d['sites'])} | {uc['mw']:.1f} | "
-                     f"{uc['mwh']:.2f} | {uc['site']:.1f} | {uc['total']:.1f} |")
-    lines += ["", "The energy of each device is twice the largest state-of-charge excursion "
-              f"along the runs cleared at {cyc:g} cycles (a device started half full), plus 5 "
-              "%; the runs that set it were simulated again with that finite energy."
-              + ("" if u.get("max_energy_diff_mwh") is None else
-                 " For the least uniform fleet those runs" + _energy_sentence(u)
-                 + " (the optimised allocation's: see the half-step check)."), "",
-              f"![allocation]({figs['allocation']})", "",
-              "## What drives it: each binding fault alone", "",
-              "| fault | load levels solved | least MW alone | sites | verified |",
-              "|---|---|---|---|---|"]
+        lines.append(
+            f"| least uniform ({u['pct']:g} %) | {u['total_mw']:.1f} | "
+            f"{u['mwh']:.2f} | {len(d['sites'])} | {uc['mw']:.1f} | "
+            f"{uc['mwh']:.2f} | {uc['site']:.1f} | {uc['total']:.1f} |"
+        )
+    lines += [
+        "",
+        "The energy of each device is twice the largest state-of-charge excursion "
+        f"along the runs cleared at {cyc:g} cycles (a device started half full), plus 5 "
+        "%; the runs that set it were simulated again with that finite energy."
+        + (
+            ""
+            if u.get("max_energy_diff_mwh") is None
+            else " For the least uniform fleet those runs"
+            + _energy_sentence(u)
+            + " (the optimised allocation's: see the half-step check)."
+        ),
+        "",
+        f"![allocation]({figs['allocation']})",
+        "",
+        "## What drives it: each binding fault alone",
+        "",
+        "| fault | load levels solved | least MW alone | sites | verified |",
+        "|---|---|---|---|---|",
+    ]
     for a in p["alone"]:
         mw = "infeasible" if a["total_mw"] is None else f"{a['total_mw']:.1f}"
         where = ", ".join(f"G{x['machine']} {x['mw']:.0f}" for x in a.get("allocation", []))
-        lines.append(f"| {a['fault']} | {', '.join(a.get('contingencies', []))} | {mw} | "
-                     f"{where} | {'yes' if a['verified'] else 'no'} |")
-    lines += ["", "## Constraint generation", "",
-              "| round | solved for | MW | failing the check after it |", "|---|---|---|---|"]
+        lines.append(
+            f"| {a['fault']} | {', '.join(a.get('contingencies', []))} | {mw} | "
+            f"{where} | {'yes' if a['verified'] else 'no'} |"
+        )
+    lines += [
+        "",
+        "## Constraint generation",
+        "",
+        "| round | solved for | MW | failing the check after it |",
+        "|---|---|---|---|",
+    ]
     for r in p["rounds"]:
         if r["total_mw"] is None:
-            lines.append(f"| {r['round']} | {', '.join(r['active'])} | - | set aside as "
-                         f"infeasible: {', '.join(r.get('set_aside', []))} |")
+            lines.append(
+                f"| {r['round']} | {', '.join(r['active'])} | - | set aside as "
+                f"infeasible: {', '.join(r.get('set_aside', []))} |"
+            )
             continue
-        lines.append(f"| {r['round']} | {', '.join(r['active'])} | {r['total_mw']:.1f} | "
-                     f"{', '.join(r['failing']) or 'none'} |")
-    lines += ["", "## Clearing margin of every contingency at every load level", "",
-              "CCT with the allocation (ms; 1 ms for the contingencies solved for, "
-              f"{1000 * MARGIN_TOL:g} ms for the others, shown up to "
-              f"{1000 * MARGIN_CAP_S:g} ms: '>' = still stable there) minus the required "
-              f"{cyc:g}-cycle clearing time; every contingency was also simulated cleared at "
-              "the required time.", "",
-              "| fault | CCT without storage, base load (ms) | "
-              + " | ".join(f"margin at {x:g} (ms)" for x in d["load_levels"]) + " |",
-              "|---|---|" + "---|" * len(d["load_levels"])]
+        lines.append(
+            f"| {r['round']} | {', '.join(r['active'])} | {r['total_mw']:.1f} | "
+            f"{', '.join(r['failing']) or 'none'} |"
+        )
+    lines += [
+        "",
+        "## Clearing margin of every contingency at every load level",
+        "",
+        "CCT with the allocation (ms; 1 ms for the contingencies solved for, "
+        f"{1000 * MARGIN_TOL:g} ms for the others, shown up to "
+        f"{1000 * MARGIN_CAP_S:g} ms: '>' = still stable there) minus the required "
+        f"{cyc:g}-cycle clearing time; every contingency was also simulated cleared at "
+        "the required time.",
+        "",
+        "| fault | CCT without storage, base load (ms) | "
+        + " | ".join(f"margin at {x:g} (ms)" for x in d["load_levels"])
+        + " |",
+        "|---|---|" + "---|" * len(d["load_levels"]),
+    ]
     by = {}
     for r in p["contingencies"]:
         by.setdefault(r["fault_name"], {})[r["load"]] = r
-    screen_cct = {r["name"]: _ms(r["cct_s"]) if r["cct_s"] is not None else
-                  f">{1000 * SCREEN_T_MAX:g}" if "still stable" in (r["error"] or "") else "-"
-                  for r in d["screening"]}
-    order = sorted(by, key=lambda f: min((x["margin_s"] if x["margin_s"] is not None
-                                          else 9.0) for x in by[f].values()))
+    screen_cct = {
+        r["name"]: _ms(r["cct_s"])
+        if r["cct_s"] is not None
+        else f">{1000 * SCREEN_T_MAX:g}"
+        if "still stable" in (r["error"] or "")
+        else "-"
+        for r in d["screening"]
+    }
+    order = sorted(
+        by,
+        key=lambda f: min(
+            (x["margin_s"] if x["margin_s"] is not None else 9.0) for x in by[f].values()
+        ),
+    )
     for f in order:
         cells = []
         for x in d["load_levels"]:
@@ -411,38 +551,57 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
             elif r["margin_s"] is None:
                 cells.append("stable" if r["met"] else "FAILS")
             else:
-                cells.append((">" if r.get("margin_at_least") else "")
-                             + f"{1000 * r['margin_s']:+.0f}" + ("" if r["met"] else " FAILS"))
+                cells.append(
+                    (">" if r.get("margin_at_least") else "")
+                    + f"{1000 * r['margin_s']:+.0f}"
+                    + ("" if r["met"] else " FAILS")
+                )
         lines.append(f"| {f} | {screen_cct.get(f, '-')} | " + " | ".join(cells) + " |")
     lines += ["", f"![margins]({figs['margins']})", ""] + _half_step_lines(p.get("half_step"))
     lines += [
-              "## Cost against the required clearing time", "",
-              ("The other points at the base load only and without their uniform "
-               "reference (the fast variant that `stabctl paper` runs)."
-               if d.get("pareto_load_levels") == [1.0] else
-               "Every point at every load level."), "",
-              "| required (cycles) | load levels | optimised MW | MWh | sites | cost | "
-              "least uniform % | uniform MW | uniform cost | verified | set aside as "
-              "infeasible |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+        "## Cost against the required clearing time",
+        "",
+        (
+            "The other points at the base load only and without their uniform "
+            "reference (the fast variant that `stabctl paper` runs)."
+            if d.get("pareto_load_levels") == [1.0]
+            else "Every point at every load level."
+        ),
+        "",
+        "| required (cycles) | load levels | optimised MW | MWh | sites | cost | "
+        "least uniform % | uniform MW | uniform cost | verified | set aside as "
+        "infeasible |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for q in d["pareto"]:
-        lines.append(f"| {q['cycles']:g} | {', '.join(f'{x:g}' for x in q['load_levels'])} | "
-                     f"{q['total_mw']:.1f} | {q['total_mwh']:.2f} | {q['n_sites']} | "
-                     f"{q['cost']:.1f} | {_num(q['uniform_pct'], 'g')} | "
-                     f"{_num(q['uniform_mw'], '.0f')} | "
-                     f"{_num(q['uniform_cost'], '.1f')} | "
-                     f"{'yes' if q['verified'] else 'no'} | "
-                     f"{', '.join(q.get('set_aside') or []) or 'none'} |")
+        lines.append(
+            f"| {q['cycles']:g} | {', '.join(f'{x:g}' for x in q['load_levels'])} | "
+            f"{q['total_mw']:.1f} | {q['total_mwh']:.2f} | {q['n_sites']} | "
+            f"{q['cost']:.1f} | {_num(q['uniform_pct'], 'g')} | "
+            f"{_num(q['uniform_mw'], '.0f')} | "
+            f"{_num(q['uniform_cost'], '.1f')} | "
+            f"{'yes' if q['verified'] else 'no'} | "
+            f"{', '.join(q.get('set_aside') or []) or 'none'} |"
+        )
     pa = d["paper_alone"]
-    lines += ["", f"![Pareto]({figs['pareto']})", "",
-              "## Continuity: the paper's fault with the uniform 5 % target", "",
-              f"The paper's fault {pa['name']} alone, target the first unstable clearing "
-              f"time of 5 % storage at every generator ({pa['uniform_mw']:.0f} MW): "
-              f"{1000 * pa['target_s']:.0f} ms (without storage {1000 * pa['cct_none_s']:.0f}"
-              f" ms).  Least allocation from that fleet: {pa['total_mw']:.1f} MW = "
-              f"{100 * pa['total_mw'] / pa['uniform_mw']:.1f} % of it, verified CCT "
-              f"{1000 * pa['cct_s']:.0f} ms ({'verified' if pa['verified'] else 'NOT verified'}"
-              "; " + ", ".join(f"{a['mw']:.0f} MW at bus {a['bus']} (G{a['machine']})"
-                               for a in pa["allocation"]) + ")."]
+    lines += [
+        "",
+        f"![Pareto]({figs['pareto']})",
+        "",
+        "## Continuity: the paper's fault with the uniform 5 % target",
+        "",
+        f"The paper's fault {pa['name']} alone, target the first unstable clearing "
+        f"time of 5 % storage at every generator ({pa['uniform_mw']:.0f} MW): "
+        f"{1000 * pa['target_s']:.0f} ms (without storage {1000 * pa['cct_none_s']:.0f}"
+        f" ms).  Least allocation from that fleet: {pa['total_mw']:.1f} MW = "
+        f"{100 * pa['total_mw'] / pa['uniform_mw']:.1f} % of it, verified CCT "
+        f"{1000 * pa['cct_s']:.0f} ms ({'verified' if pa['verified'] else 'NOT verified'}"
+        "; "
+        + ", ".join(
+            f"{a['mw']:.0f} MW at bus {a['bus']} (G{a['machine']})" for a in pa["allocation"]
+        )
+        + ").",
+    ]
     return lines
 
 
@@ -450,41 +609,57 @@ def timing_line(d: dict) -> str:
     """The study's run-dependent figures (for a run log, not the report): wall times of
     the main plan and the study, and the runs simulated."""
     p = d["plan"]
-    return (f"{d['case']}: placement plan wall time {p['wall_time_s']:.0f} s, "
-            f"{p['n_simulations']} runs (study {d['wall_time_s']:.0f} s)")
+    return (
+        f"{d['case']}: placement plan wall time {p['wall_time_s']:.0f} s, "
+        f"{p['n_simulations']} runs (study {d['wall_time_s']:.0f} s)"
+    )
 
 
 def _energy_sentence(e: dict) -> str:
     """The energy's half-step figures (`stabctl.placement.energy.energy_half_step`) as the end of a
     sentence about the runs that set each site's energy."""
     pct = e["max_energy_diff_pct"]
-    return (", simulated again at half the step, change a site's energy need (twice its "
-            f"largest state-of-charge excursion) by at most {e['max_energy_diff_mwh']:.3f} MWh"
-            + ("" if pct is None else f" ({pct:.1f} % of it)") + "; the sized energies, "
-            "margin and rounding included, "
-            + ("cover" if e["energy_covered_half"] else "do **not** cover")
-            + " the half-step needs")
+    return (
+        ", simulated again at half the step, change a site's energy need (twice its "
+        f"largest state-of-charge excursion) by at most {e['max_energy_diff_mwh']:.3f} MWh"
+        + ("" if pct is None else f" ({pct:.1f} % of it)")
+        + "; the sized energies, "
+        "margin and rounding included, "
+        + ("cover" if e["energy_covered_half"] else "do **not** cover")
+        + " the half-step needs"
+    )
 
 
 def _half_step_lines(hs) -> list[str]:
-    """The half-step check of the tightest contingencies (`stabctl.placement.references.half_step`)."""
+    """The half-step check of the tightest contingencies
+    (`stabctl.placement.references.half_step`)."""
     if not hs:
         return []
     h = 1000 * hs["h_s"]
-    out = ["## Half-step check", "",
-           f"The {len(hs['rows'])} contingencies of least margin simulated again with the "
-           f"allocation at half the step ({h / 2:.3g} ms instead of {h:.3g} ms): "
-           + ("all stable" if hs["all_stable"] else "**not all stable**")
-           + " when cleared at the required time; their CCTs differ from the full step's by "
-           f"at most {1000 * hs['max_cct_diff_s']:.0f} ms beyond the resolution of each."
-           + ("" if hs["max_energy_diff_mwh"] is None else
-              " The runs that set each site's energy" + _energy_sentence(hs) + "."), "",
-           "| contingency | required (ms) | CCT, step h (ms) | CCT, step h/2 (ms) | "
-           "stable at the required time, h/2 |", "|---|---|---|---|---|"]
+    out = [
+        "## Half-step check",
+        "",
+        f"The {len(hs['rows'])} contingencies of least margin simulated again with the "
+        f"allocation at half the step ({h / 2:.3g} ms instead of {h:.3g} ms): "
+        + ("all stable" if hs["all_stable"] else "**not all stable**")
+        + " when cleared at the required time; their CCTs differ from the full step's by "
+        f"at most {1000 * hs['max_cct_diff_s']:.0f} ms beyond the resolution of each."
+        + (
+            ""
+            if hs["max_energy_diff_mwh"] is None
+            else " The runs that set each site's energy" + _energy_sentence(hs) + "."
+        ),
+        "",
+        "| contingency | required (ms) | CCT, step h (ms) | CCT, step h/2 (ms) | "
+        "stable at the required time, h/2 |",
+        "|---|---|---|---|---|",
+    ]
     for r in hs["rows"]:
-        out.append(f"| {r['name']} | {1000 * r['required_s']:.0f} | "
-                   f"{1000 * r['cct_s']:.0f} (to {1000 * r['cct_tol_s']:g}) | "
-                   f"{1000 * r['cct_half_s']:.0f} | {'yes' if r['stable_half'] else 'NO'} |")
+        out.append(
+            f"| {r['name']} | {1000 * r['required_s']:.0f} | "
+            f"{1000 * r['cct_s']:.0f} (to {1000 * r['cct_tol_s']:g}) | "
+            f"{1000 * r['cct_half_s']:.0f} | {'yes' if r['stable_half'] else 'NO'} |"
+        )
     return out + [""]
 
 
@@ -495,27 +670,41 @@ def _screening_text(d: dict) -> str:
     scope = " at a generator HV bus" if n_line > 4 * N_FAULTS else ""
     buses = f" and {n_bus} bus faults cleared without a trip" if n_bus else ""
     p = d["plan"]
-    return (f"Screened {n_line} line faults (each end of every line{scope}, line tripped)"
-            f"{buses}; coarse CCT without storage, {1000 * SCREEN_TOL:g} ms, up to "
-            f"{SCREEN_T_MAX:g} s: {len(ok)} with a CCT.  Every fault stable when cleared at "
-            f"once ({d['n_faults']}) is a contingency at each of the "
-            f"{len(d['load_levels'])} load levels: {p['n_contingencies']} in all.  "
-            + (f"Out of scope, unstable without storage even when cleared at once (the "
-               f"line trip alone) at that load level, which no clearing time can help "
-               f"(N-1 insecure there): {', '.join(p['out_of_scope'])}.  "
-               if p["out_of_scope"] else "")
-            + ("Set aside as infeasible with storage at the candidate sites (every site at "
-               "its bound, simulated): " + "; ".join(p["infeasible"]) + ".  "
-               if p.get("infeasible") else "") +
-            "Constraint generation: simulated once without storage cleared at the required "
-            "time, the most binding failing contingencies (up to 12) are solved for; "
-            "every contingency is then simulated with the allocation cleared at the "
-            "required time, and those that fail are added.")
+    return (
+        f"Screened {n_line} line faults (each end of every line{scope}, line tripped)"
+        f"{buses}; coarse CCT without storage, {1000 * SCREEN_TOL:g} ms, up to "
+        f"{SCREEN_T_MAX:g} s: {len(ok)} with a CCT.  Every fault stable when cleared at "
+        f"once ({d['n_faults']}) is a contingency at each of the "
+        f"{len(d['load_levels'])} load levels: {p['n_contingencies']} in all.  "
+        + (
+            f"Out of scope, unstable without storage even when cleared at once (the "
+            f"line trip alone) at that load level, which no clearing time can help "
+            f"(N-1 insecure there): {', '.join(p['out_of_scope'])}.  "
+            if p["out_of_scope"]
+            else ""
+        )
+        + (
+            "Set aside as infeasible with storage at the candidate sites (every site at "
+            "its bound, simulated): " + "; ".join(p["infeasible"]) + ".  "
+            if p.get("infeasible")
+            else ""
+        )
+        + "Constraint generation: simulated once without storage cleared at the required "
+        "time, the most binding failing contingencies (up to 12) are solved for; "
+        "every contingency is then simulated with the allocation cleared at the "
+        "required time, and those that fail are added."
+    )
 
 
-def placement_study(case_name: str, out_dir="reports", workers: int = 2, progress=None,
-                    records_dir=None, generated_by: str = "stabctl paper",
-                    fast: bool = True) -> Path:
+def placement_study(
+    case_name: str,
+    out_dir="reports",
+    workers: int = 2,
+    progress=None,
+    records_dir=None,
+    generated_by: str = "stabctl paper",
+    fast: bool = True,
+) -> Path:
     """Run the study for one case (kundur or miniwecc: the paper's fault must be in
     `stabctl.studies.cases.DEFAULT_FAULTS`) and write its report into out_dir; returns the
     markdown path.  workers: processes; progress: callable(str) (default: this module's
@@ -532,4 +721,3 @@ def placement_study(case_name: str, out_dir="reports", workers: int = 2, progres
     d = study(case_name, records, workers, say, fast)
     say(timing_line(d))
     return report(d, out, generated_by)
-

@@ -13,10 +13,15 @@ resume).
 from __future__ import annotations
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.stability.cct import (SearchOptions, cached_simulator, cct_jobs,
-                                   critical_clearing_time, fault_of_inputs)
-from stabctl.storage.devices import uniform_fleet
+from stabctl.stability.cct import (
+    SearchOptions,
+    cached_simulator,
+    cct_jobs,
+    critical_clearing_time,
+    fault_of_inputs,
+)
 from stabctl.storage.control import BangBangCOI
+from stabctl.storage.devices import uniform_fleet
 
 
 def controlled_cct_job(inputs: dict) -> dict:
@@ -37,15 +42,25 @@ def controlled_cct_job(inputs: dict) -> dict:
     """
     sim = cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs))
     esd_pct = inputs.get("esd_pct")
-    fleet = None if esd_pct is None else uniform_fleet(sim.case, esd_pct,
-                                                       BangBangCOI(**inputs["controller"]))
-    return critical_clearing_time(sim, fault_of_inputs(inputs), SearchOptions.from_inputs(inputs),
-                                  storage=fleet).to_dict()
+    fleet = (
+        None
+        if esd_pct is None
+        else uniform_fleet(sim.case, esd_pct, BangBangCOI(**inputs["controller"]))
+    )
+    return critical_clearing_time(
+        sim, fault_of_inputs(inputs), SearchOptions.from_inputs(inputs), storage=fleet
+    ).to_dict()
 
 
-def controlled_cct_jobs(case_name: str, faults, ratings, controller: BangBangCOI, *,
-                        search: SearchOptions = SearchOptions(),
-                        model: ModelOptions = ModelOptions()) -> list:
+def controlled_cct_jobs(
+    case_name: str,
+    faults,
+    ratings,
+    controller: BangBangCOI,
+    *,
+    search: SearchOptions = SearchOptions(),
+    model: ModelOptions = ModelOptions(),
+) -> list:
     """The jobs of a CCT sweep whose ESDs run ``controller``.
 
     Parameters
@@ -70,11 +85,19 @@ def controlled_cct_jobs(case_name: str, faults, ratings, controller: BangBangCOI
     jobs = cct_jobs(case_name, faults, ratings, search=search, model=model)
     if controller == BangBangCOI():
         return jobs
-    ctrl = {"deadband_hz": controller.deadband_hz, "v_gate_pu": controller.v_gate_pu,
-            "coi": controller.coi, "hysteresis_hz": controller.hysteresis_hz}
-    tag = (f"/ctrl-db{controller.deadband_hz:g}-vg{controller.v_gate_pu:g}-{controller.coi}"
-           f"-hy{controller.hysteresis_hz:g}")
-    return [j if j.inputs["esd_pct"] is None else
-            Job(key=j.key + tag, func=controlled_cct_job,
-                inputs={**j.inputs, "controller": ctrl})
-            for j in jobs]
+    ctrl = {
+        "deadband_hz": controller.deadband_hz,
+        "v_gate_pu": controller.v_gate_pu,
+        "coi": controller.coi,
+        "hysteresis_hz": controller.hysteresis_hz,
+    }
+    tag = (
+        f"/ctrl-db{controller.deadband_hz:g}-vg{controller.v_gate_pu:g}-{controller.coi}"
+        f"-hy{controller.hysteresis_hz:g}"
+    )
+    return [
+        j
+        if j.inputs["esd_pct"] is None
+        else Job(key=j.key + tag, func=controlled_cct_job, inputs={**j.inputs, "controller": ctrl})
+        for j in jobs
+    ]

@@ -11,13 +11,13 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from stabctl.io import pst as pstio
-from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.cli.options import _RANGES, check_number
-from stabctl.errors import CaseError, InputError, StabctlError
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.grid import MAX_STEPS
+from stabctl.errors import CaseError, InputError, StabctlError
+from stabctl.io import load_case
+from stabctl.io import pst as pstio
 
 PSSE = Path(__file__).parents[1] / "data" / "psse"
 
@@ -38,8 +38,10 @@ def assert_error(res, *needles):
 @pytest.fixture
 def no_simulation(monkeypatch):
     """Fail the test if a simulator is built: the error must come before any work."""
+
     def refuse(*a, **k):
         raise AssertionError("work started before the input was checked")
+
     monkeypatch.setattr(Simulator, "__init__", refuse)
 
 
@@ -48,33 +50,52 @@ def no_simulation(monkeypatch):
 FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
 
 
-@pytest.mark.parametrize("args,needle", [
-    (FAULT + ("--clear-cycles", "nan", "--tf", 2), "--clear-cycles nan: must be a finite number"),
-    (FAULT + ("--far-clear-cycles", "nan"), "--far-clear-cycles nan"),
-    (FAULT + ("--t-fault", "nan"), "--t-fault nan"),
-    (FAULT + ("--t-fault", "inf"), "--t-fault inf"),
-    (FAULT + ("--tf", "-inf"), "--tf -inf"),
-    (FAULT + ("--esd-pct", "1e6"), "--esd-pct 1e+06: must be in (0, 100] % of machine MVA"),
-    (FAULT + ("--esd-pct", 5, "--v-gate", "nan"), "--v-gate nan: must be a finite number in [0, 2] pu"),
-    (FAULT + ("--deadband-hz", "inf"), "--deadband-hz inf"),
-    (FAULT + ("--step", "nan"), "--step nan"),
-    (("cct", "kundur", "--fault", 3, "--far-bus", 101, "--tol-ms", "nan"), "--tol-ms nan"),
-    (("cct", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", "1e6"), "--esd-pct 1e+06"),
-    (("estimate", "kundur", "--fault", 3, "--far-bus", 101, "--runs", 1, "--tve-pct", "nan"),
-     "--tve-pct nan: must be a finite number in [0, 100] %"),
-    (("estimate", "kundur", "--fault", 3, "--far-bus", 101, "--drop", 1), "--drop 1: must be in [0, 1)"),
-    (("omib", "--H", "nan"), "--H nan"),
-    (("omib", "6", "inf"), "MORE_CYCLES inf"),
-    # found by the slow fuzzing: each ran the CCT bisection for minutes
-    (("omib", "--delta0", "1e-7"), "Pmax = Pm/sin(delta0) = 5e+06 pu, outside the --pmax range"),
-    (("omib", "--H", "0.001", "--f0", "1000"), "--H 0.001: must be in [0.5, 50] s"),
-    (("omib", "--pm", "0", "--pmax", "1e-7"), "--pm 0: must be in (0, 10] pu"),
-    (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "5,nan"), "--esd-pct nan"),
-    (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "1e6"), "--esd-pct 1e+06"),
-    (("screen", "kundur", "--buses", "3,x"), "--buses 'x': not a bus number"),
-    (("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "nan"),
-     "--target-cct-gain nan"),
-])
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (
+            FAULT + ("--clear-cycles", "nan", "--tf", 2),
+            "--clear-cycles nan: must be a finite number",
+        ),
+        (FAULT + ("--far-clear-cycles", "nan"), "--far-clear-cycles nan"),
+        (FAULT + ("--t-fault", "nan"), "--t-fault nan"),
+        (FAULT + ("--t-fault", "inf"), "--t-fault inf"),
+        (FAULT + ("--tf", "-inf"), "--tf -inf"),
+        (FAULT + ("--esd-pct", "1e6"), "--esd-pct 1e+06: must be in (0, 100] % of machine MVA"),
+        (
+            FAULT + ("--esd-pct", 5, "--v-gate", "nan"),
+            "--v-gate nan: must be a finite number in [0, 2] pu",
+        ),
+        (FAULT + ("--deadband-hz", "inf"), "--deadband-hz inf"),
+        (FAULT + ("--step", "nan"), "--step nan"),
+        (("cct", "kundur", "--fault", 3, "--far-bus", 101, "--tol-ms", "nan"), "--tol-ms nan"),
+        (("cct", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", "1e6"), "--esd-pct 1e+06"),
+        (
+            ("estimate", "kundur", "--fault", 3, "--far-bus", 101, "--runs", 1, "--tve-pct", "nan"),
+            "--tve-pct nan: must be a finite number in [0, 100] %",
+        ),
+        (
+            ("estimate", "kundur", "--fault", 3, "--far-bus", 101, "--drop", 1),
+            "--drop 1: must be in [0, 1)",
+        ),
+        (("omib", "--H", "nan"), "--H nan"),
+        (("omib", "6", "inf"), "MORE_CYCLES inf"),
+        # found by the slow fuzzing: each ran the CCT bisection for minutes
+        (
+            ("omib", "--delta0", "1e-7"),
+            "Pmax = Pm/sin(delta0) = 5e+06 pu, outside the --pmax range",
+        ),
+        (("omib", "--H", "0.001", "--f0", "1000"), "--H 0.001: must be in [0.5, 50] s"),
+        (("omib", "--pm", "0", "--pmax", "1e-7"), "--pm 0: must be in (0, 10] pu"),
+        (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "5,nan"), "--esd-pct nan"),
+        (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "1e6"), "--esd-pct 1e+06"),
+        (("screen", "kundur", "--buses", "3,x"), "--buses 'x': not a bus number"),
+        (
+            ("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "nan"),
+            "--target-cct-gain nan",
+        ),
+    ],
+)
 def test_bad_number_is_refused_before_any_work(no_simulation, tmp_path, monkeypatch, args, needle):
     monkeypatch.chdir(tmp_path)
     assert_error(run(*args), needle)
@@ -82,7 +103,7 @@ def test_bad_number_is_refused_before_any_work(no_simulation, tmp_path, monkeypa
 
 
 def test_every_range_accepts_inside_and_refuses_outside_and_non_finite():
-    for label, (lo, hi, lo_in, hi_in, unit) in _RANGES.items():
+    for label, (lo, hi, lo_in, hi_in, _unit) in _RANGES.items():
         check_number(label, (lo + hi) / 2)
         for v in (lo, hi):
             if (v == lo and lo_in) or (v == hi and hi_in):
@@ -100,13 +121,18 @@ def test_every_range_accepts_inside_and_refuses_outside_and_non_finite():
 
 def test_too_small_step_is_refused_not_run_for_minutes():
     res = run("simulate", "kundur", "--step", "1e-7")
-    assert_error(res, "step 1e-07 s: a run to 5 s needs 5e+07 steps",
-                 f"more than the limit {MAX_STEPS}", "--step")
+    assert_error(
+        res,
+        "step 1e-07 s: a run to 5 s needs 5e+07 steps",
+        f"more than the limit {MAX_STEPS}",
+        "--step",
+    )
     with pytest.raises(InputError, match="needs"):
         Simulator(load_case("kundur")).run([], t_end=1.0, h=1e-6)
 
 
 # -- finding 3 and 7: case data -----------------------------------------------------------
+
 
 def _kundur_dict():
     return pstio.case_to_dict(load_case("kundur"))
@@ -118,13 +144,16 @@ def _set(d, table, field, value, row=0):
     return d
 
 
-@pytest.mark.parametrize("table,field,where", [
-    ("machines", "H", "mac_con row 1 (machine 1), field 'H': inertia constant must be > 0"),
-    ("machines", "Tdop", "mac_con row 1 (machine 1), field 'Tdop': T'do must be > 0"),
-    ("machines", "Tdopp", "mac_con row 1 (machine 1), field 'Tdopp': T\"do must be > 0"),
-    ("pss", "Tw", "pss_con row 1 (machine 1), field 'Tw': washout time constant must be > 0"),
-    ("pss", "T2", "pss_con row 1 (machine 1), field 'T2': first lag time constant must be > 0"),
-])
+@pytest.mark.parametrize(
+    "table,field,where",
+    [
+        ("machines", "H", "mac_con row 1 (machine 1), field 'H': inertia constant must be > 0"),
+        ("machines", "Tdop", "mac_con row 1 (machine 1), field 'Tdop': T'do must be > 0"),
+        ("machines", "Tdopp", "mac_con row 1 (machine 1), field 'Tdopp': T\"do must be > 0"),
+        ("pss", "Tw", "pss_con row 1 (machine 1), field 'Tw': washout time constant must be > 0"),
+        ("pss", "T2", "pss_con row 1 (machine 1), field 'T2': first lag time constant must be > 0"),
+    ],
+)
 def test_zero_time_constant_is_a_case_error_not_a_zero_division(tmp_path, table, field, where):
     d = _set(_kundur_dict(), table, field, 0.0)
     with pytest.raises(CaseError) as err:
@@ -147,8 +176,11 @@ def test_case_without_machines_says_so(tmp_path):
 
 def test_case_file_without_tables_or_bases_names_what_is_missing(tmp_path):
     d = _kundur_dict()
-    for key, needle in (("tables", "no 'tables' object"), ("base_mva", "no 'base_mva' (system "
-                        "base, MVA"), ("freq_hz", "no 'freq_hz' (nominal frequency, Hz")):
+    for key, needle in (
+        ("tables", "no 'tables' object"),
+        ("base_mva", "no 'base_mva' (system base, MVA"),
+        ("freq_hz", "no 'freq_hz' (nominal frequency, Hz"),
+    ):
         bad = copy.deepcopy(d)
         del bad[key]
         path = tmp_path / f"no_{key}.json"
@@ -166,10 +198,14 @@ def test_case_file_without_tables_or_bases_names_what_is_missing(tmp_path):
 
 def test_pst_file_without_bases_names_the_defaults(tmp_path):
     path = tmp_path / "tiny.m"
-    path.write_text("bus = [1 1 0 0 0 0 0 0 0 1; 2 1 0 0 0 0.5 0.1 0 0 3];\n"
-                    "line = [1 2 0 0.1 0 1 0 0 0 0];\n")
-    with pytest.warns(UserWarning, match=r"tiny: the data defines no 'basmva': base_mva = 100 "
-                                         r"MVA \(PST's default\)"):
+    path.write_text(
+        "bus = [1 1 0 0 0 0 0 0 0 1; 2 1 0 0 0 0.5 0.1 0 0 3];\nline = [1 2 0 0.1 0 1 0 0 0 0];\n"
+    )
+    with pytest.warns(
+        UserWarning,
+        match=r"tiny: the data defines no 'basmva': base_mva = 100 "
+        r"MVA \(PST's default\)",
+    ):
         case = load_case(path)
     assert (case.base_mva, case.freq_hz) == (100.0, 60.0)
 
@@ -177,8 +213,7 @@ def test_pst_file_without_bases_names_the_defaults(tmp_path):
 def test_island_is_named_not_blamed_on_another_bus(tmp_path):
     d = _kundur_dict()
     # bus 4 (a load bus) loses its only branch, 3-4
-    d["tables"]["branches"]["rows"] = [r for r in d["tables"]["branches"]["rows"]
-                                       if 4 not in r[:2]]
+    d["tables"]["branches"]["rows"] = [r for r in d["tables"]["branches"]["rows"] if 4 not in r[:2]]
     path = tmp_path / "island4.json"
     path.write_text(json.dumps(d))
     assert_error(run("simulate", path, "--tf", 1), "bus(es) 4 have no path to a swing bus")
@@ -193,24 +228,44 @@ def test_island_is_named_not_blamed_on_another_bus(tmp_path):
 
 # -- finding 4 and 8: output paths --------------------------------------------------------
 
-@pytest.mark.parametrize("args,needle", [
-    (("simulate", "kundur", "--out", "/proc/x.csv"), "--out /proc/x.csv: cannot write in /proc"),
-    (("simulate", "kundur", "--plot", "/proc/x.png"), "--plot /proc/x.png: cannot write in /proc"),
-    (("simulate", "kundur", "--out", "missing/x.csv"), "--out missing/x.csv: directory missing "
-                                                       "does not exist"),
-    (("import-psse", PSSE / "five_bus_v33.raw", "-o", "/proc/x.json"), "--out /proc/x.json"),
-    (("import-psse", PSSE / "five_bus_v33.raw", "-o", "missing/x.json"), "directory missing"),
-    (("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "/proc/x.jsonl"), "--out /proc/x.jsonl"),
-    (("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "missing/x.jsonl"), "directory missing"),
-    (("screen", "kundur", "--out", "/proc/s.jsonl"), "--out /proc/s.jsonl"),
-    (("screen", "kundur", "--plot", "missing/m.png"), "--plot missing/m.png"),
-    (("eig", "kundur", "--report", "--out-dir", "/proc/rep"), "--out-dir /proc/rep"),
-    (("paper", "--out-dir", "missing/reports"), "--out-dir missing/reports: directory missing"),
-])
-def test_unwritable_output_is_refused_before_any_work(no_simulation, tmp_path, monkeypatch, args,
-                                                       needle):
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (
+            ("simulate", "kundur", "--out", "/proc/x.csv"),
+            "--out /proc/x.csv: cannot write in /proc",
+        ),
+        (
+            ("simulate", "kundur", "--plot", "/proc/x.png"),
+            "--plot /proc/x.png: cannot write in /proc",
+        ),
+        (
+            ("simulate", "kundur", "--out", "missing/x.csv"),
+            "--out missing/x.csv: directory missing does not exist",
+        ),
+        (("import-psse", PSSE / "five_bus_v33.raw", "-o", "/proc/x.json"), "--out /proc/x.json"),
+        (("import-psse", PSSE / "five_bus_v33.raw", "-o", "missing/x.json"), "directory missing"),
+        (
+            ("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "/proc/x.jsonl"),
+            "--out /proc/x.jsonl",
+        ),
+        (
+            ("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "missing/x.jsonl"),
+            "directory missing",
+        ),
+        (("screen", "kundur", "--out", "/proc/s.jsonl"), "--out /proc/s.jsonl"),
+        (("screen", "kundur", "--plot", "missing/m.png"), "--plot missing/m.png"),
+        (("eig", "kundur", "--report", "--out-dir", "/proc/rep"), "--out-dir /proc/rep"),
+        (("paper", "--out-dir", "missing/reports"), "--out-dir missing/reports: directory missing"),
+    ],
+)
+def test_unwritable_output_is_refused_before_any_work(
+    no_simulation, tmp_path, monkeypatch, args, needle
+):
     monkeypatch.chdir(tmp_path)
     import stabctl.parallel
+
     monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
     assert_error(run(*args), needle)
     assert list(tmp_path.iterdir()) == []
@@ -221,6 +276,7 @@ def test_read_only_existing_output_is_refused(tmp_path):
     out.write_text("old")
     out.chmod(0o444)
     import os
+
     if os.access(out, os.W_OK):  # root ignores the mode
         pytest.skip("running as root: file modes do not stop writes")
     assert_error(run("simulate", "kundur", "--out", out), "not writable")
@@ -230,25 +286,29 @@ def test_errors_are_stabctl_errors():
     assert issubclass(CaseError, StabctlError) and issubclass(InputError, StabctlError)
 
 
-def test_import_andes_without_andes_says_how_to_install_and_writes_nothing(
-        monkeypatch, tmp_path):
-    monkeypatch.setitem(__import__("sys").modules, "andes", None)   # import andes fails
+def test_import_andes_without_andes_says_how_to_install_and_writes_nothing(monkeypatch, tmp_path):
+    monkeypatch.setitem(__import__("sys").modules, "andes", None)  # import andes fails
     out = tmp_path / "case.json"
     res = run("import-andes", PSSE / "five_bus_v33.raw", "-o", out)
     assert_error(res, "ANDES is not installed", "pip install 'stabctl[andes]'")
     assert not out.exists()
 
 
-@pytest.mark.parametrize("args", [
-    ("simulate", "kundur", "--fault", 7, "--far-bus", 8),
-    ("simulate", "kundur", "--fault", 3, "--far-bus", 13),
-    ("cct", "kundur", "--fault", 3, "--far-bus", 7),
-])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("simulate", "kundur", "--fault", 7, "--far-bus", 8),
+        ("simulate", "kundur", "--fault", 3, "--far-bus", 13),
+        ("cct", "kundur", "--fault", 3, "--far-bus", 7),
+    ],
+)
 def test_unknown_bus_or_line_is_refused_before_the_model_is_built(args, monkeypatch):
     """An unknown bus or line is named before the simulator is built (which compiles the
     kernels on a first call: 20 s of a cold `stabctl simulate` went by before the error)."""
+
     def built(*a, **k):
         raise AssertionError("Simulator built before the events were checked")
+
     monkeypatch.setattr("stabctl.dynamics.driver.Simulator.__init__", built)
     res = run(*args)
     assert res.exit_code == 2 and re.search(r"bus \d+|line", res.stderr), res.stderr

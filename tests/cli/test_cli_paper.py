@@ -17,8 +17,11 @@ def test_omib_json_reports_table1_and_eac():
 
 def test_bad_arguments_exit_nonzero_with_message():
     runner = CliRunner()
-    for args in (["omib", "--H", "-3"], ["omib", "--pm", "1.5", "--pmax", "1.0"],
-                 ["omib", "--delta0", "2.0"]):
+    for args in (
+        ["omib", "--H", "-3"],
+        ["omib", "--pm", "1.5", "--pmax", "1.0"],
+        ["omib", "--delta0", "2.0"],
+    ):
         res = runner.invoke(main, args)
         assert res.exit_code == 2
         assert "error:" in res.output

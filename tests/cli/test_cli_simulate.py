@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from stabctl.io import pst as pstio
-from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.dynamics.results import SimulationResult
+from stabctl.io import load_case
+from stabctl.io import pst as pstio
 
 DATA = Path(__file__).parents[1] / "data" / "pstess"
 
@@ -56,10 +56,25 @@ def test_cases_text():
 def test_help_texts_state_units():
     res = run("simulate", "--help")
     assert res.exit_code == 0
-    for s in ("--fault BUS", "--far-bus", "--clear-cycles N", "--far-clear-cycles M",
-              "--trip FROM TO", "--t-trip", "--tf S", "--step H", "--pstess-default",
-              "--stop-at-separation", "--out", "--plot", "--json", "(s)", "pu", "rad",
-              "cycles"):
+    for s in (
+        "--fault BUS",
+        "--far-bus",
+        "--clear-cycles N",
+        "--far-clear-cycles M",
+        "--trip FROM TO",
+        "--t-trip",
+        "--tf S",
+        "--step H",
+        "--pstess-default",
+        "--stop-at-separation",
+        "--out",
+        "--plot",
+        "--json",
+        "(s)",
+        "pu",
+        "rad",
+        "cycles",
+    ):
         assert s in res.stdout, s
     assert run("cases", "--help").exit_code == 0
 
@@ -69,8 +84,18 @@ def test_help_texts_state_units():
 
 def test_pstess_default_through_cli_matches_pstess(tmp_path):
     out, png = tmp_path / "kundur.csv", tmp_path / "kundur.png"
-    res = run("simulate", "kundur", "--pstess-default", "--out", out, "--plot", png, "--json",
-              "--conventions", "pstess")
+    res = run(
+        "simulate",
+        "kundur",
+        "--pstess-default",
+        "--out",
+        out,
+        "--plot",
+        png,
+        "--json",
+        "--conventions",
+        "pstess",
+    )
     assert res.exit_code == 0, res.output
     summary = json.loads(res.stdout)
     assert summary["conventions"] == "pstess" and summary["step_s"] == 0.01
@@ -92,13 +117,27 @@ def test_pstess_default_through_cli_matches_pstess(tmp_path):
 
 def test_case1_fault_json_and_stop_at_separation(tmp_path):
     out = tmp_path / "case1.npz"
-    res = run("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--t-fault", 1,
-              "--clear-cycles", 21, "--stop-at-separation", "--json", "--out", out)
+    res = run(
+        "simulate",
+        "kundur",
+        "--fault",
+        3,
+        "--far-bus",
+        101,
+        "--t-fault",
+        1,
+        "--clear-cycles",
+        21,
+        "--stop-at-separation",
+        "--json",
+        "--out",
+        out,
+    )
     assert res.exit_code == 0, res.output
     s = json.loads(res.stdout)
     assert s["stable"] is False and s["separated_machines"] == [1, 2]
     assert s["t_separation_s"] > 1.35 and s["t_separation_s"] < 3.0
-    assert s["t_end_s"] == pytest.approx(s["t_separation_s"])        # stopped there
+    assert s["t_end_s"] == pytest.approx(s["t_separation_s"])  # stopped there
     assert s["max_angle_spread_rad"] > np.pi
     assert "3-101" in s["events"][0] and "1.35 s" in s["events"][0]
     back = SimulationResult.from_npz(out)
@@ -107,8 +146,21 @@ def test_case1_fault_json_and_stop_at_separation(tmp_path):
 
 @pytest.mark.parametrize("conventions, t_sep", [("ieee", "1.96"), ("pstess", "2.07")])
 def test_text_output_reports_verdict(conventions, t_sep):
-    res = run("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 21,
-              "--far-clear-cycles", 21, "--stop-at-separation", "--conventions", conventions)
+    res = run(
+        "simulate",
+        "kundur",
+        "--fault",
+        3,
+        "--far-bus",
+        101,
+        "--clear-cycles",
+        21,
+        "--far-clear-cycles",
+        21,
+        "--stop-at-separation",
+        "--conventions",
+        conventions,
+    )
     assert res.exit_code == 0, res.output
     assert f"loss of synchronism at t = {t_sep}" in res.stdout and "1, 2" in res.stdout
     assert f"{conventions} conventions" in res.stdout
@@ -119,32 +171,66 @@ def test_flat_run_and_line_trips(tmp_path):
     assert res.exit_code == 0, res.output
     s = json.loads(res.stdout)
     assert s["stable"] and s["events"] == [] and s["t_end_s"] == 2.0
-    res = run("simulate", "kundur", "--trip", 3, 101, "--trip", 13, 101, "--t-trip", 0.5,
-              "--t-trip", 1.0, "--tf", 3, "--step", 0.005, "--json")
+    res = run(
+        "simulate",
+        "kundur",
+        "--trip",
+        3,
+        101,
+        "--trip",
+        13,
+        101,
+        "--t-trip",
+        0.5,
+        "--t-trip",
+        1.0,
+        "--tf",
+        3,
+        "--step",
+        0.005,
+        "--json",
+    )
     assert res.exit_code == 0, res.output
     s = json.loads(res.stdout)
     assert s["stable"] and s["step_s"] == 0.005 and s["n_steps"] == 600
-    assert s["events"] == ["line 3-101 (circuit 1) tripped at 0.5 s",
-                           "line 13-101 (circuit 1) tripped at 1 s"]
+    assert s["events"] == [
+        "line 3-101 (circuit 1) tripped at 0.5 s",
+        "line 13-101 (circuit 1) tripped at 1 s",
+    ]
 
 
 # -------------------------------------------------------------------------- bad input
 
 
-@pytest.mark.parametrize("args, needles", [
-    (["kundur", "--fault", 999], ["bus 999"]),
-    (["kundur", "--fault", 3, "--far-bus", 14], ["no branch between bus 3 and bus 14"]),
-    (["kundur", "--trip", 1, 2], ["no branch between bus 1 and bus 2"]),
-    (["kundur", "--fault", 3, "--far-bus", 101, "--circuit", 3], ["circuit 3"]),
-    (["kundur", "--fault", 3, "--clear-cycles", -1], ["--clear-cycles"]),
-    (["kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 6, "--far-clear-cycles", 3],
-     ["far end"]),
-    (["kundur", "--far-bus", 101], ["without --fault"]),
-    (["kundur", "--fault", 3, "--t-fault", 6, "--tf", 5], ["after the end of the run"]),
-    (["kundur", "--trip", 3, 101, "--t-trip", -1], ["--t-trip"]),
-    (["kundur", "--step", 0], ["--step"]),
-    (["nonesuch"], ["unknown case 'nonesuch'"]),
-])
+@pytest.mark.parametrize(
+    "args, needles",
+    [
+        (["kundur", "--fault", 999], ["bus 999"]),
+        (["kundur", "--fault", 3, "--far-bus", 14], ["no branch between bus 3 and bus 14"]),
+        (["kundur", "--trip", 1, 2], ["no branch between bus 1 and bus 2"]),
+        (["kundur", "--fault", 3, "--far-bus", 101, "--circuit", 3], ["circuit 3"]),
+        (["kundur", "--fault", 3, "--clear-cycles", -1], ["--clear-cycles"]),
+        (
+            [
+                "kundur",
+                "--fault",
+                3,
+                "--far-bus",
+                101,
+                "--clear-cycles",
+                6,
+                "--far-clear-cycles",
+                3,
+            ],
+            ["far end"],
+        ),
+        (["kundur", "--far-bus", 101], ["without --fault"]),
+        (["kundur", "--fault", 3, "--t-fault", 6, "--tf", 5], ["after the end of the run"]),
+        (["kundur", "--trip", 3, 101, "--t-trip", -1], ["--t-trip"]),
+        (["kundur", "--step", 0], ["--step"]),
+        (["nonesuch"], ["unknown case 'nonesuch'"]),
+    ],
+)
 def test_bad_input_exits_2_and_writes_nothing(tmp_path, args, needles):
     out_dir = tmp_path / "out"
     out_dir.mkdir()
@@ -173,10 +259,20 @@ def test_diverging_run_exits_2_reports_stop_time(tmp_path):
     case = load_case("kundur")
     H = case.machines.H.copy()
     H[0] = 1e-5
-    path = pstio.write_case_json(case.replace(machines=case.machines.replace(H=H)),
-                                 tmp_path / "tiny_h.json")
+    path = pstio.write_case_json(
+        case.replace(machines=case.machines.replace(H=H)), tmp_path / "tiny_h.json"
+    )
     out_dir = tmp_path / "out"
     out_dir.mkdir()
-    res = run("simulate", path, "--tf", 3, "--out", out_dir / "r.csv", "--plot",
-              out_dir / "r.png", "--json")
+    res = run(
+        "simulate",
+        path,
+        "--tf",
+        3,
+        "--out",
+        out_dir / "r.csv",
+        "--plot",
+        out_dir / "r.png",
+        "--json",
+    )
     assert_bad_input(res, out_dir, "numerical instability", "t = ")

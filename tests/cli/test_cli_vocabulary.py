@@ -20,10 +20,10 @@ UNIT = re.compile(r"\((s|ms|Hz|Hz/s|pu|rad|MW|cycles|frames/s|%[^);]*)[;)]")
 #: (command, option) -> why its signature may differ from the other commands'
 DIFFERENCES = {
     ("screen", "--t-max"): "bus faults cleared without loss of a line: CCTs above 0.5 s "
-                           "are recorded as failed, not searched",
+    "are recorded as failed, not searched",
     ("sweep-cct", "--esd-pct"): "a list of ratings (repeatable, comma-separated, 'none')",
     ("import-andes", "--dyr-conventions"): "an ANDES case is read as ANDES solves it unless "
-                                           "told otherwise",
+    "told otherwise",
 }
 #: options whose default is each command's own (an output file name)
 OWN_DEFAULT = {"--out"}
@@ -51,8 +51,13 @@ def _signature(name, p) -> dict:
     elif isinstance(t, click.Tuple):
         kind += repr([type(x).__name__ for x in t.types])
     m = UNIT.search(p.help or "")
-    sig = {"type": kind, "multiple": p.multiple, "flag": p.is_flag,
-           "default": p.default, "unit": m and m.group(1)}
+    sig = {
+        "type": kind,
+        "multiple": p.multiple,
+        "flag": p.is_flag,
+        "default": p.default,
+        "unit": m and m.group(1),
+    }
     if name in OWN_DEFAULT:
         del sig["default"]
     return sig
@@ -62,9 +67,22 @@ COMMANDS = dict(_commands())
 
 
 def test_every_command_is_introspected():
-    assert {"simulate", "cct", "sweep-cct", "screen", "place", "eig", "paper", "omib",
-            "cases", "import-psse", "import-andes", "estimate rmse", "estimate closed-loop",
-            "estimate cct"} <= set(COMMANDS)
+    assert {
+        "simulate",
+        "cct",
+        "sweep-cct",
+        "screen",
+        "place",
+        "eig",
+        "paper",
+        "omib",
+        "cases",
+        "import-psse",
+        "import-andes",
+        "estimate rmse",
+        "estimate closed-loop",
+        "estimate cct",
+    } <= set(COMMANDS)
 
 
 def test_an_option_name_has_one_type_default_and_unit():
@@ -76,8 +94,11 @@ def test_an_option_name_has_one_type_default_and_unit():
     clashes = []
     for oname, by_cmd in seen.items():
         first_cmd, first = next(iter(by_cmd.items()))
-        clashes += [f"{oname}: {cname} {sig} != {first_cmd} {first}"
-                    for cname, sig in by_cmd.items() if sig != first]
+        clashes += [
+            f"{oname}: {cname} {sig} != {first_cmd} {first}"
+            for cname, sig in by_cmd.items()
+            if sig != first
+        ]
     assert not clashes, "\n".join(clashes)
 
 
@@ -86,9 +107,18 @@ def test_numeric_options_state_their_unit_the_same_way_everywhere():
     # the ones the vocabulary is about have one at all
     for cname, cmd in COMMANDS.items():
         for oname, p in _options(cmd).items():
-            if oname in ("--tf", "--t-fault", "--step", "--t-max", "--tol-ms",
-                         "--deadband-hz", "--hysteresis-hz", "--v-gate", "--esd-pct",
-                         "--clear-cycles"):
+            if oname in (
+                "--tf",
+                "--t-fault",
+                "--step",
+                "--t-max",
+                "--tol-ms",
+                "--deadband-hz",
+                "--hysteresis-hz",
+                "--v-gate",
+                "--esd-pct",
+                "--clear-cycles",
+            ):
                 assert UNIT.search(p.help or ""), (cname, oname, p.help)
 
 
@@ -116,9 +146,16 @@ def test_out_is_a_file_out_dir_a_directory():
             assert opts["--out-dir"].help.startswith("Output directory"), cname
 
 
-@pytest.mark.parametrize("command,alias", [
-    ("place", "--contingencies"), ("eig", "--out"), ("paper", "--out"),
-    ("import-psse", "--conventions"), ("import-andes", "--conventions")])
+@pytest.mark.parametrize(
+    "command,alias",
+    [
+        ("place", "--contingencies"),
+        ("eig", "--out"),
+        ("paper", "--out"),
+        ("import-psse", "--conventions"),
+        ("import-andes", "--conventions"),
+    ],
+)
 def test_deprecated_aliases_are_hidden_but_accepted(command, alias):
     res = CliRunner().invoke(main, [command, "--help"])
     assert res.exit_code == 0 and f"{alias} " not in res.output.replace("--out-dir", "")
@@ -126,8 +163,10 @@ def test_deprecated_aliases_are_hidden_but_accepted(command, alias):
 
 
 def test_old_estimate_form_goes_to_the_subcommands():
-    for args, doc in ((["kundur", "--fault", "3"], "Errors of the speed estimators"),
-                      (["kundur", "--closed-loop", "--fault", "3"], "commanded by each"),
-                      (["kundur", "--fault", "3", "--cct"], "CCT of the fault line")):
+    for args, doc in (
+        (["kundur", "--fault", "3"], "Errors of the speed estimators"),
+        (["kundur", "--closed-loop", "--fault", "3"], "commanded by each"),
+        (["kundur", "--fault", "3", "--cct"], "CCT of the fault line"),
+    ):
         res = CliRunner().invoke(main, ["estimate", *args, "--help"])
         assert res.exit_code == 0 and doc in res.output, res.output

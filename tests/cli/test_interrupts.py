@@ -61,24 +61,43 @@ def _default_sigint():
 
 
 def _start(args, tmp_path):
-    return subprocess.Popen(STABCTL + [str(a) for a in args], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=_default_sigint)
+    return subprocess.Popen(
+        STABCTL + [str(a) for a in args],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=_default_sigint,
+    )
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and prctl: Linux")
 def test_sigkill_of_a_sweep_leaves_no_worker_running(tmp_path):
-    proc = _start(["sweep-cct", "miniwecc", "--faults", "DEFAULT", "--esd-pct", "none,5,10",
-                   "--workers", "2", "--out", "k.jsonl"], tmp_path)
+    proc = _start(
+        [
+            "sweep-cct",
+            "miniwecc",
+            "--faults",
+            "DEFAULT",
+            "--esd-pct",
+            "none,5,10",
+            "--workers",
+            "2",
+            "--out",
+            "k.jsonl",
+        ],
+        tmp_path,
+    )
     try:
         # two workers (and the resource tracker) started
         assert _wait_for(lambda: len(_children(proc.pid)) >= 3, 60), _children(proc.pid)
-        time.sleep(1.0)                      # the workers are inside their jobs
+        time.sleep(1.0)  # the workers are inside their jobs
         kids = _children(proc.pid)
         proc.send_signal(signal.SIGKILL)
         proc.wait(10)
-        assert _wait_for(lambda: not any(_alive(k) for k in kids), 10), \
-            [k for k in kids if _alive(k)]
+        assert _wait_for(lambda: not any(_alive(k) for k in kids), 10), [
+            k for k in kids if _alive(k)
+        ]
     finally:
         if proc.poll() is None:
             proc.kill()
@@ -105,34 +124,56 @@ def test_sigint_of_a_screening_exits_130_with_the_resume_command(tmp_path):
     assert _wait_for(lambda: not any(_alive(k) for k in kids), 10)
     # every line left is a whole record
     import json
-    assert all(json.loads(line)["status"] in ("ok", "failed")
-               for line in out.read_text().splitlines())
+
+    assert all(
+        json.loads(line)["status"] in ("ok", "failed") for line in out.read_text().splitlines()
+    )
 
 
-@pytest.mark.parametrize("command,target,kept", [
-    (["paper", "--out-dir", "rep", "--only", "analytic"],
-     "stabctl.studies.paper.write_paper_report",
-     "finished sweep records in rep are kept with --resume; resume with: stabctl "),
-    (["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "10"],
-     "stabctl.placement.plan.plan", "nothing is kept; the work starts again"),
-    (["estimate", "cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"],
-     "stabctl.estimation.closed_loop.cct_study", "nothing is kept; the work starts again"),
-    (["sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "o.jsonl"],
-     "stabctl.parallel.run_sweep",
-     "finished jobs are in o.jsonl (0 recorded); they are skipped; resume with:"),
-    (["screen", "kundur", "--out", "s.jsonl"], "stabctl.stability.screening.screen",
-     "finished searches are in s.jsonl (0 recorded); they are skipped; resume with:"),
-])
-def test_every_long_command_ends_the_same_way_on_ctrl_c(tmp_path, monkeypatch, command, target,
-                                                        kept):
+@pytest.mark.parametrize(
+    "command,target,kept",
+    [
+        (
+            ["paper", "--out-dir", "rep", "--only", "analytic"],
+            "stabctl.studies.paper.write_paper_report",
+            "finished sweep records in rep are kept with --resume; resume with: stabctl ",
+        ),
+        (
+            ["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "10"],
+            "stabctl.placement.plan.plan",
+            "nothing is kept; the work starts again",
+        ),
+        (
+            ["estimate", "cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"],
+            "stabctl.estimation.closed_loop.cct_study",
+            "nothing is kept; the work starts again",
+        ),
+        (
+            ["sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "o.jsonl"],
+            "stabctl.parallel.run_sweep",
+            "finished jobs are in o.jsonl (0 recorded); they are skipped; resume with:",
+        ),
+        (
+            ["screen", "kundur", "--out", "s.jsonl"],
+            "stabctl.stability.screening.screen",
+            "finished searches are in s.jsonl (0 recorded); they are skipped; resume with:",
+        ),
+    ],
+)
+def test_every_long_command_ends_the_same_way_on_ctrl_c(
+    tmp_path, monkeypatch, command, target, kept
+):
     monkeypatch.chdir(tmp_path)
     module, name = target.rsplit(".", 1)
 
     def interrupted(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(sys.modules[module] if module in sys.modules
-                        else __import__(module, fromlist=[name]), name, interrupted)
+    monkeypatch.setattr(
+        sys.modules[module] if module in sys.modules else __import__(module, fromlist=[name]),
+        name,
+        interrupted,
+    )
     monkeypatch.setattr(sys, "argv", ["stabctl", *command])
     res = CliRunner().invoke(main, command)
     assert res.exit_code == 130, (res.output, res.exception)

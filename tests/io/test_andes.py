@@ -29,17 +29,24 @@ import pytest
 pytestmark = pytest.mark.andes
 andes = pytest.importorskip("andes")
 
-from stabctl.io.andes import (AndesFault, andes_machine_buses,  # noqa: E402
-                              andes_modes, andes_separated, andes_speeds, andes_stable,
-                              andes_system, strip_dyr)
-from stabctl.io.andes_case import import_andes, read_andes_case  # noqa: E402
-from stabctl.errors import CaseError, InputError  # noqa: E402
-from stabctl.stability.cct import SearchOptions, LineFault, critical_clearing_time  # noqa: E402
+from stabctl.dynamics.driver import Simulator  # noqa: E402
 from stabctl.dynamics.events import Fault, LineTrip  # noqa: E402
+from stabctl.errors import CaseError, InputError  # noqa: E402
+from stabctl.io.andes import (  # noqa: E402
+    AndesFault,
+    andes_machine_buses,
+    andes_modes,
+    andes_separated,
+    andes_speeds,
+    andes_stable,
+    andes_system,
+    strip_dyr,
+)
+from stabctl.io.andes_case import import_andes, read_andes_case  # noqa: E402
+from stabctl.io.psse import load_psse  # noqa: E402
 from stabctl.smallsignal.linearise import linearise  # noqa: E402
 from stabctl.smallsignal.modal import modal_analysis  # noqa: E402
-from stabctl.io.psse import load_psse  # noqa: E402
-from stabctl.dynamics.driver import Simulator  # noqa: E402
+from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time  # noqa: E402
 
 CASES = Path(andes.__file__).parent / "cases"
 WECC_CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
@@ -101,26 +108,26 @@ def test_kundur_fault_speeds_match_andes(kundur):
     # 6-cycle fault at bus 7 (0.0001j pu), no line lost; governors and exciters on.
     # ANDES's reading of the models: the same equations, the same trajectories
     t, w, wa = fault_speeds(kundur, 7, 6, 5.0, conventions="andes")
-    assert np.max(np.abs(w - wa)) < 3e-4                          # measured 1.94e-4
-    assert np.max(np.abs(wa - 1)) > 7e-3                          # a real swing
+    assert np.max(np.abs(w - wa)) < 3e-4  # measured 1.94e-4
+    assert np.max(np.abs(wa - 1)) > 7e-3  # a real swing
     # PST's models (speed effects, EXDC2 limits times the terminal voltage): the common
     # speed drifts apart after 2 s, the swings between machines agree
     t, w, wa = fault_speeds(kundur, 7, 6, 5.0)
-    assert np.max(np.abs(w[t <= 2.0] - wa[t <= 2.0])) < 3e-4     # measured 2.1e-4
-    assert np.max(np.abs(w - wa)) < 1.5e-3                        # measured 1.13e-3
+    assert np.max(np.abs(w[t <= 2.0] - wa[t <= 2.0])) < 3e-4  # measured 2.1e-4
+    assert np.max(np.abs(w - wa)) < 1.5e-3  # measured 1.13e-3
     rel, rel_a = w - w.mean(1, keepdims=True), wa - wa.mean(1, keepdims=True)
-    assert np.max(np.abs(rel - rel_a)) < 4e-4                     # measured 2.5e-4
+    assert np.max(np.abs(rel - rel_a)) < 4e-4  # measured 2.5e-4
 
 
 def test_wecc_fault_speeds_match_andes(wecc):
     # 6-cycle fault at bus 1 (Coronado 500 kV): 29 GENROU, exciters, PSS, IEEEG1
     # ESST3A's V_E from system-base currents as ANDES (2.31e-4 pu with machine-base ones)
     t, w, wa = fault_speeds(wecc, 1, 6, 5.0, conventions="andes")
-    assert np.max(np.abs(w - wa)) < 5e-5                          # measured 2.6e-5
+    assert np.max(np.abs(w - wa)) < 5e-5  # measured 2.6e-5
     assert np.max(np.abs(wa - 1)) > 5e-3
-    t, w, wa = fault_speeds(wecc, 1, 6, 5.0)   # PST's models, IEEEG1 rate limits
-    assert np.max(np.abs(w[t <= 2.0] - wa[t <= 2.0])) < 4e-4     # measured 2.8e-4
-    assert np.max(np.abs(w - wa)) < 1.5e-3                        # measured 1.03e-3
+    t, w, wa = fault_speeds(wecc, 1, 6, 5.0)  # PST's models, IEEEG1 rate limits
+    assert np.max(np.abs(w[t <= 2.0] - wa[t <= 2.0])) < 4e-4  # measured 2.8e-4
+    assert np.max(np.abs(w - wa)) < 1.5e-3  # measured 1.03e-3
 
 
 def test_kundur_dc2_exciters_converge_in_the_step(kundur):
@@ -157,9 +164,9 @@ def test_kundur_line_trip_speeds_match_andes():
         res = Simulator(case).run([LineTrip(a, b, 2.0)], 10.0, h=STEP)
         w = speeds_on(t, res, case, ss)
         gaps[conventions] = np.max(np.abs(w - wa))
-    assert np.max(np.abs(wa - 1)) > 5e-3                          # a real swing
-    assert gaps["andes"] < 2e-4                                   # measured 1.06e-4
-    assert gaps["pst"] < 7e-4                                     # measured 4.6e-4
+    assert np.max(np.abs(wa - 1)) > 5e-3  # a real swing
+    assert gaps["andes"] < 2e-4  # measured 1.06e-4
+    assert gaps["pst"] < 7e-4  # measured 4.6e-4
 
 
 def test_kundur_cct_matches_andes_verdicts(kundur):
@@ -168,8 +175,10 @@ def test_kundur_cct_matches_andes_verdicts(kundur):
     bisection: 494 ms, benchmarks/bench_andes.py)."""
     raw, dyr = kundur
     sim = Simulator(load_psse(raw, dyr, conventions="andes"))
-    cct = critical_clearing_time(sim, LineFault(7, None, 1.0), SearchOptions(tol=1e-3), h=STEP).cct_s
-    assert abs(cct - 0.491) < 2e-3                                 # measured 491 ms
+    cct = critical_clearing_time(
+        sim, LineFault(7, None, 1.0), SearchOptions(tol=1e-3), h=STEP
+    ).cct_s
+    assert abs(cct - 0.491) < 2e-3  # measured 491 ms
     for t_clear, stable in ((cct - 0.008, True), (cct + 0.008, False)):
         fault = AndesFault(7, 1.0, 1.0 + t_clear)
         assert andes_stable(raw, dyr, fault, 6.0, STEP) is stable
@@ -191,35 +200,38 @@ def relative_gaps(ours, theirs):
 def test_kundur_electromechanical_modes_match_andes(kundur):
     ours, theirs = em_modes(kundur, conventions="andes")
     assert len(ours) == 3  # one inter-area, two local modes
-    assert np.max(relative_gaps(ours, theirs)) < 2e-3             # measured 0.07 %
-    ours, theirs = em_modes(kundur)   # PST's machines: speed effects damp a little more
+    assert np.max(relative_gaps(ours, theirs)) < 2e-3  # measured 0.07 %
+    ours, theirs = em_modes(kundur)  # PST's machines: speed effects damp a little more
     np.testing.assert_allclose(ours.imag, theirs.imag, rtol=3e-3)  # measured 1.7e-3
-    assert np.max(relative_gaps(ours, theirs)) < 0.015             # measured 1.2 %
+    assert np.max(relative_gaps(ours, theirs)) < 0.015  # measured 1.2 %
 
 
 def test_wecc_machines_and_governors_modes_equal_andes(wecc_no_controls):
     # GENROU + IEEEG1 read as ANDES does: the same linear model to round-off
     ours, theirs = em_modes(wecc_no_controls, conventions="andes")
     assert len(ours) >= 28
-    assert np.max(relative_gaps(ours, theirs)) < 1e-3             # measured 2e-5
-    ours, theirs = em_modes(wecc_no_controls)   # speed effects: the slow modes move most
+    assert np.max(relative_gaps(ours, theirs)) < 1e-3  # measured 2e-5
+    ours, theirs = em_modes(wecc_no_controls)  # speed effects: the slow modes move most
     f = ours.imag / (2 * np.pi)
-    assert np.max(relative_gaps(ours, theirs)[f > 0.6]) < 0.016   # measured 1.47 %
+    assert np.max(relative_gaps(ours, theirs)[f > 0.6]) < 0.016  # measured 1.47 %
 
 
 def test_wecc_esdc2a_modes_equal_andes(tmp_path):
     """Machines and governors plus the ESDC2A of bus 111 read as ANDES solves it (quadratic
     saturation, K_E = 0 kept, T_R bypassed): the same linear model."""
     text = (CASES / "wecc" / "wecc_full.dyr").read_text()
-    records = [r for r in re.findall(r"[^/]*?/", text, flags=re.S)
-               if re.search(r"'(GENROU|IEEEG1)'", r) or re.match(r"\s*111\s+'ESDC2A'", r)]
+    records = [
+        r
+        for r in re.findall(r"[^/]*?/", text, flags=re.S)
+        if re.search(r"'(GENROU|IEEEG1)'", r) or re.match(r"\s*111\s+'ESDC2A'", r)
+    ]
     src = tmp_path / "g20.dyr"
     src.write_text("\n".join(r.strip("\n") for r in records) + "\n")
     dyr = tmp_path / "g20_unsat.dyr"
     strip_dyr(src, dyr, (), unsaturated=True)
     ours, theirs = em_modes((CASES / "wecc" / "wecc.raw", dyr), conventions="andes")
     assert len(ours) >= 28
-    assert np.max(relative_gaps(ours, theirs)) < 1e-3             # measured 1e-5
+    assert np.max(relative_gaps(ours, theirs)) < 1e-3  # measured 1e-5
 
 
 def test_wecc_whole_case_modes_match_andes(wecc):
@@ -227,9 +239,9 @@ def test_wecc_whole_case_modes_match_andes(wecc):
     ours, theirs = em_modes(wecc, conventions="andes")
     gaps = relative_gaps(ours, theirs)
     assert len(ours) >= 28
-    assert np.median(gaps) < 0.005                                # measured 0.06 %
-    assert np.sum(gaps > 0.02) <= 2                               # 26 of 28 within 2 %
-    assert np.max(gaps) < 0.035      # measured 3.1 %, 0.77 Hz, bus 111 (power-input IEEEST)
+    assert np.median(gaps) < 0.005  # measured 0.06 %
+    assert np.sum(gaps > 0.02) <= 2  # 26 of 28 within 2 %
+    assert np.max(gaps) < 0.035  # measured 3.1 %, 0.77 Hz, bus 111 (power-input IEEEST)
 
 
 @pytest.fixture(scope="module")
@@ -263,18 +275,18 @@ def test_ieee14_fault_speeds_and_modes_match_andes(ieee14):
     # difference (ANDES's 1e-8 pu line R) only
     rows = paired_rows(case.machines.bus, andes_machine_buses(ss))
     vex0 = sim.model_for(()).vex0[rows]
-    assert np.max(np.abs(vex0 - ss.GENROU.vf0.v)) < 5e-7          # measured 9e-8
+    assert np.max(np.abs(vex0 - ss.GENROU.vf0.v)) < 5e-7  # measured 9e-8
     # ESST3A's I_N from the machine's field current, as at initialisation (ANDES): a flat
     # start (with PST exc_st3's estimate, 0.022 on a V_R derivative)
-    assert sim.model_for(()).initial_residual[0] < 1e-9           # measured 4e-14
-    assert np.max(np.abs(wa - 1)) > 4e-3                          # a real swing
-    assert np.max(np.abs(w - wa)) < 1e-5                          # measured 4.5e-6
+    assert sim.model_for(()).initial_residual[0] < 1e-9  # measured 4e-14
+    assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing
+    assert np.max(np.abs(w - wa)) < 1e-5  # measured 4.5e-6
     ma = modal_analysis(linearise(sim))
     ours = ma.eigenvalues[ma.electromechanical]
     theirs = andes_modes(andes_system(raw, dyr))
     near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
     assert len(ours) == 4
-    assert np.max(relative_gaps(ours, near)) < 0.005              # measured 0.31 %
+    assert np.max(relative_gaps(ours, near)) < 0.005  # measured 0.31 %
 
 
 @pytest.fixture(scope="module")
@@ -283,8 +295,9 @@ def n44(tmp_path_factory):
     HYGOV/IEESGO governors) without the STAB2A and IEEET2 records ANDES cannot read (65)
     and with the machines' saturation zeroed in both tools."""
     dyr = tmp_path_factory.mktemp("n44") / "n44.dyr"
-    removed = strip_dyr(CASES / "nordic44" / "N44_BC.dyr", dyr, {"STAB2A", "IEEET2"},
-                        unsaturated=True)
+    removed = strip_dyr(
+        CASES / "nordic44" / "N44_BC.dyr", dyr, {"STAB2A", "IEEET2"}, unsaturated=True
+    )
     assert len(removed) == 65
     return CASES / "nordic44" / "N44_BC.raw", dyr
 
@@ -296,11 +309,11 @@ def test_n44_fault_speeds_verdict_and_modes_match_andes(n44):
     j1e-3 pu, 5 ms step in both."""
     raw, dyr = n44
     res, ss, wa, w, ours, near = fault_and_modes(raw, dyr, 5101, 1.0 + 6 / 60)
-    assert np.max(np.abs(wa - 1)) > 3e-3                          # a real swing
-    assert np.max(np.abs(w - wa)) < 5e-5                          # measured 9.6e-6
+    assert np.max(np.abs(wa - 1)) > 3e-3  # a real swing
+    assert np.max(np.abs(w - wa)) < 5e-5  # measured 9.6e-6
     assert res.stable and not andes_separated(ss)
     assert len(ours) >= 70
-    assert np.max(relative_gaps(ours, near)) < 1e-5               # measured 6e-8
+    assert np.max(relative_gaps(ours, near)) < 1e-5  # measured 6e-8
     # ANDES's reading of N44 (no stabilisers, default SEXS for SCRX) has an unstable
     # 0.39 Hz mode; both tools find it
     assert np.sum(ours.real > 0) == np.sum(near.real > 0) == 1
@@ -339,11 +352,11 @@ def test_npcc_fault_speeds_verdict_and_modes_match_andes(npcc):
     paired in order (paired with one stabctl unit each, the speeds were 6.2e-3 pu apart)."""
     raw, dyr = npcc
     res, ss, wa, w, ours, near = fault_and_modes(raw, dyr, 6, 1.1)
-    assert np.max(np.abs(wa - 1)) > 5e-3                          # a real swing (9.4e-3)
-    assert np.max(np.abs(w - wa)) < 5e-5                          # measured 2.95e-5
+    assert np.max(np.abs(wa - 1)) > 5e-3  # a real swing (9.4e-3)
+    assert np.max(np.abs(w - wa)) < 5e-5  # measured 2.95e-5
     assert res.stable and not andes_separated(ss)
-    assert len(ours) >= 40                                        # 42 of 48 machines
-    assert np.max(relative_gaps(ours, near)) < 1e-5               # measured 1.7e-7
+    assert len(ours) >= 40  # 42 of 48 machines
+    assert np.max(relative_gaps(ours, near)) < 1e-5  # measured 1.7e-7
 
 
 def test_n44_whole_case_imports_simulates_and_linearises():
@@ -352,8 +365,12 @@ def test_n44_whole_case_imports_simulates_and_linearises():
     the stabilisers' and governors' states."""
     raw, dyr = CASES / "nordic44" / "N44_BC.raw", CASES / "nordic44" / "N44_BC.dyr"
     case = load_psse(raw, dyr)
-    assert (len(case.machines), len(case.exciters), len(case.pss), len(case.governors)) == \
-        (80, 80, 53, 80)
+    assert (len(case.machines), len(case.exciters), len(case.pss), len(case.governors)) == (
+        80,
+        80,
+        53,
+        80,
+    )
     assert np.count_nonzero(case.branches.b_from) == 4
     sim = Simulator(case)
     res = sim.run([Fault(5101, 1.0, 1.1, x=1e-3)], 3.0, h=STEP)
@@ -387,21 +404,22 @@ def test_ieee39_fault_speeds_verdict_and_modes_match_andes():
     """IEEE 39 as ANDES has it (ieee39_full.xlsx: 10 GENROU, IEEEX1, IEEEST, TGOV1N; its
     dynamics exist only in ANDES's format), imported through ANDES's parser; 6-cycle fault
     at bus 16 through j1e-3 pu."""
-    sim, res, ss, t, w, wa = andes_case_run("ieee39/ieee39_full.xlsx", 16)
-    assert np.max(np.abs(wa - 1)) > 5e-3                          # a real swing
-    assert np.max(np.abs(w - wa)) < 1e-4                          # measured 6.7e-5
+    sim, res, ss, _t, w, wa = andes_case_run("ieee39/ieee39_full.xlsx", 16)
+    assert np.max(np.abs(wa - 1)) > 5e-3  # a real swing
+    assert np.max(np.abs(w - wa)) < 1e-4  # measured 6.7e-5
     assert res.stable and not andes_separated(ss)
     ma = modal_analysis(linearise(sim))
     ours = ma.eigenvalues[ma.electromechanical]
-    theirs = andes_modes(andes_system(andes.get_case("ieee39/ieee39_full.xlsx"),
-                                      off=("Toggle",)))
+    theirs = andes_modes(andes_system(andes.get_case("ieee39/ieee39_full.xlsx"), off=("Toggle",)))
     near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
-    assert len(ours) == 9                                         # ten machines
-    assert np.max(relative_gaps(ours, near)) < 0.01               # measured 0.5 %
+    assert len(ours) == 9  # ten machines
+    assert np.max(relative_gaps(ours, near)) < 0.01  # measured 0.5 %
 
 
-@pytest.mark.parametrize("name", ["ieee39/ieee39_full.xlsx", "kundur/kundur_full.xlsx",
-                                  "npcc/npcc.xlsx", "ieee14/ieee14.json"])
+@pytest.mark.parametrize(
+    "name",
+    ["ieee39/ieee39_full.xlsx", "kundur/kundur_full.xlsx", "npcc/npcc.xlsx", "ieee14/ieee14.json"],
+)
 def test_imported_andes_case_power_flow_equals_andes(name):
     """The network as ANDES solves it: stabctl's power flow of the imported case (Q limits
     off) against ANDES's, the difference being ANDES's 1e-8 pu added to every branch's R
@@ -413,8 +431,8 @@ def test_imported_andes_case_power_flow_equals_andes(name):
         imported = read_andes_case(andes.get_case(name), on_unsupported="skip")
     pf = solve_powerflow(imported.case, q_limits=False, tol=1e-12)
     rows = imported.case.bus_indices(imported.pf_bus)
-    assert np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)) < 1e-6   # measured 2.5e-7
-    assert np.max(np.abs(pf.vang[rows] - imported.pf_vang)) < 2e-6   # measured 8.2e-7
+    assert np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)) < 1e-6  # measured 2.5e-7
+    assert np.max(np.abs(pf.vang[rows] - imported.pf_vang)) < 2e-6  # measured 8.2e-7
 
 
 def test_import_andes_maps_psse_models_as_the_dyr_reader():
@@ -426,6 +444,7 @@ def test_import_andes_maps_psse_models_as_the_dyr_reader():
         ours = load_psse(raw, dyr, on_unsupported="skip", conventions="andes")
     with pytest.warns(UserWarning, match=r"lacks .*Toggle \(1\)"):
         theirs = import_andes(raw, dyr=dyr, on_unsupported="skip")
+
     def by_bus(case, table):
         """The table's matrix, rows ordered by machine bus, machine numbers (which follow
         each reader's generator order: mac_con columns 1 and 19, the others' column 2)
@@ -436,8 +455,9 @@ def test_import_andes_maps_psse_models_as_the_dyr_reader():
         return np.delete(m, [0, 18] if table == "machines" else [1], axis=1)
 
     for table in ("machines", "exciters", "governors"):
-        np.testing.assert_allclose(by_bus(theirs, table), by_bus(ours, table), rtol=1e-12,
-                                   atol=1e-12, err_msg=table)
+        np.testing.assert_allclose(
+            by_bus(theirs, table), by_bus(ours, table), rtol=1e-12, atol=1e-12, err_msg=table
+        )
 
 
 def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
@@ -460,17 +480,32 @@ def test_import_andes_cli_writes_ieee39_and_refuses_renewables(tmp_path):
     from stabctl.io import load_case
 
     out = tmp_path / "ieee39.json"
-    res = CliRunner().invoke(main, ["import-andes", andes.get_case("ieee39/ieee39_full.xlsx"),
-                                    "-o", str(out), "--skip-unsupported", "--json"])
+    res = CliRunner().invoke(
+        main,
+        [
+            "import-andes",
+            andes.get_case("ieee39/ieee39_full.xlsx"),
+            "-o",
+            str(out),
+            "--skip-unsupported",
+            "--json",
+        ],
+    )
     assert res.exit_code == 0, res.output
     summary = json.loads(res.stdout)
     assert summary["left_out"] == ["Toggle (1)"]
     assert summary["powerflow_vmag_diff_pu"] < 1e-6
     case = load_case(out)
-    assert (case.n_bus, len(case.machines), len(case.exciters), len(case.pss),
-            len(case.governors)) == (39, 10, 10, 10, 10)
+    assert (
+        case.n_bus,
+        len(case.machines),
+        len(case.exciters),
+        len(case.pss),
+        len(case.governors),
+    ) == (39, 10, 10, 10, 10)
     bad = tmp_path / "solar.json"
-    res = CliRunner().invoke(main, ["import-andes", andes.get_case("ieee14/ieee14_solar.xlsx"),
-                                    "-o", str(bad)])
+    res = CliRunner().invoke(
+        main, ["import-andes", andes.get_case("ieee14/ieee14_solar.xlsx"), "-o", str(bad)]
+    )
     assert res.exit_code == 2 and not bad.exists()
     assert "REGCA1 (1)" in res.stderr and "--skip-unsupported" in res.stderr

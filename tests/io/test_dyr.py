@@ -8,16 +8,16 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable
+from stabctl.dynamics.driver import Simulator
+from stabctl.errors import CaseError
+from stabctl.io import load_case
+from stabctl.io.dyr import dyr_tables, exp_saturation, read_dyr
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
 from stabctl.models import pss as pss_
-from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable
-from stabctl.io import load_case
-from stabctl.io.dyr import dyr_tables, exp_saturation, read_dyr
-from stabctl.errors import CaseError
 from stabctl.smallsignal.linearise import linearise
-from stabctl.dynamics.driver import Simulator
 
 pytestmark = pytest.mark.andes  # every test reads ANDES's case files
 andes = pytest.importorskip("andes")
@@ -33,16 +33,23 @@ def kundur_generators(mbase=900.0):
 
 def wecc_generators(records):
     keys = sorted({(r.bus, r.id) for r in records if r.model == "GENROU"})
-    return [dict(number=i + 1, bus=b, id=d, mbase=100.0, ra=0.0, xsource=0.2)
-            for i, (b, d) in enumerate(keys)]
+    return [
+        dict(number=i + 1, bus=b, id=d, mbase=100.0, ra=0.0, xsource=0.2)
+        for i, (b, d) in enumerate(keys)
+    ]
 
 
 def andes_initialised(folder):
     """ANDES's own case <folder>.raw + <folder>_full.dyr, power flow solved, dynamics
     initialised."""
     cases = CASES / folder
-    ss = andes.load(str(cases / f"{folder}.raw"), addfile=str(cases / f"{folder}_full.dyr"),
-                    setup=True, no_output=True, default_config=True)
+    ss = andes.load(
+        str(cases / f"{folder}.raw"),
+        addfile=str(cases / f"{folder}_full.dyr"),
+        setup=True,
+        no_output=True,
+        default_config=True,
+    )
     ss.PFlow.run()
     ss.TDS.init()
     return ss
@@ -61,24 +68,77 @@ def kundur_tables():
 
 # -- parsing and mapping against the files ------------------------------------------------------
 
+
 def test_kundur_records_as_in_the_file():
     recs = read_dyr(KUNDUR_DYR)
     assert [r.model for r in recs[:3]] == ["GENROU", "EXDC2", "TGOV1"]
     assert (recs[0].line, recs[1].line, recs[2].line) == (1, 4, 8)
-    assert recs[0].params == (8.0, 0.03, 0.4, 0.05, 6.5, 0.0, 1.8, 1.7, 0.3, 0.55, 0.25, 0.06,
-                              0.0, 0.0)
-    assert recs[-1].model == "TOGGLE" and recs[-1].line == 37   # ANDES's own event record
+    assert recs[0].params == (
+        8.0,
+        0.03,
+        0.4,
+        0.05,
+        6.5,
+        0.0,
+        1.8,
+        1.7,
+        0.3,
+        0.55,
+        0.25,
+        0.06,
+        0.0,
+        0.0,
+    )
+    assert recs[-1].model == "TOGGLE" and recs[-1].line == 37  # ANDES's own event record
 
 
 def test_kundur_genrou_to_mac_sub(kundur_tables):
     m = kundur_tables.mac_con
-    row = dict(zip(("number", "bus", "mva", "xl", "ra", "xd", "xdp", "xdpp", "Tdop", "Tdopp",
-                    "xq", "xqp", "xqpp", "Tqop", "Tqopp", "H", "D0"), m[2]))
-    assert row == dict(number=3, bus=3, mva=900, xl=0.06, ra=0, xd=1.8, xdp=0.3, xdpp=0.25,
-                       Tdop=8.0, Tdopp=0.03, xq=1.7, xqp=0.55, xqpp=0.25, Tqop=0.4,
-                       Tqopp=0.05, H=6.175, D0=0)
+    row = dict(
+        zip(
+            (
+                "number",
+                "bus",
+                "mva",
+                "xl",
+                "ra",
+                "xd",
+                "xdp",
+                "xdpp",
+                "Tdop",
+                "Tdopp",
+                "xq",
+                "xqp",
+                "xqpp",
+                "Tqop",
+                "Tqopp",
+                "H",
+                "D0",
+            ),
+            m[2],
+        )
+    )
+    assert row == dict(
+        number=3,
+        bus=3,
+        mva=900,
+        xl=0.06,
+        ra=0,
+        xd=1.8,
+        xdp=0.3,
+        xdpp=0.25,
+        Tdop=8.0,
+        Tdopp=0.03,
+        xq=1.7,
+        xqp=0.55,
+        xqpp=0.25,
+        Tqop=0.4,
+        Tqopp=0.05,
+        H=6.175,
+        D0=0,
+    )
     assert m.shape == (4, 25) and np.all(m[:, 21:24] == 1.0)  # pfrac, qfrac, speed effects
-    assert np.all(m[:, 24] == 0)                              # PST's mac_sub: no saturation
+    assert np.all(m[:, 24] == 0)  # PST's mac_sub: no saturation
 
 
 def test_kundur_exdc2_to_dc2_and_tgov1(kundur_tables):
@@ -100,17 +160,21 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
     assert (g.type[0], g.invR[0], g.Tc[0], g.T3[0], g.Ts[0]) == (3, 20, 0.1, 0, 0.2)
     assert (g.Uo[0], g.Uc[0], g.Tmax[0], g.Tmin[0], g.T4[0], g.T7[0]) == (1, -1, 0.95, 0, 0.1, 8.72)
     assert (g.K5[0], g.K7[0]) == (0.3, 0.7)
-    p = gov.governor_params(load_case("kundur").replace(governors=g.select(np.arange(4))
-                                                       .replace(machine=np.array([1, 2, 3, 4]))))
+    p = gov.governor_params(
+        load_case("kundur").replace(
+            governors=g.select(np.arange(4)).replace(machine=np.array([1, 2, 3, 4]))
+        )
+    )
     np.testing.assert_allclose(p.K[0], [0, 0, 0.3, 0.7])
 
 
 def test_andes_conventions_change_only_what_andes_reads_differently():
     pst = dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip")
-    andes_ = dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip",
-                        conventions="andes")
+    andes_ = dyr_tables(
+        read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip", conventions="andes"
+    )
     speed = MachineTable.columns().index("speed_effects")
-    sat = MachineTable.columns().index("psse_sat")              # GENROU's air-gap saturation
+    sat = MachineTable.columns().index("psse_sat")  # GENROU's air-gap saturation
     assert np.all(pst.mac_con[:, speed] == 1) and np.all(andes_.mac_con[:, speed] == 0)
     assert np.all(pst.mac_con[:, sat] == 0) and np.all(andes_.mac_con[:, sat] == 1)
     assert np.all(pst.exc_con[:, 0] == 2) and np.all(andes_.exc_con[:, 0] == 1)  # EXDC2
@@ -130,9 +194,9 @@ def test_andes_conventions_change_only_what_andes_reads_differently():
     t_andes = dyr_tables(recs, gens, conventions="andes")
     g_andes = GovernorTable.from_matrix(t_andes.tg_con)
     e = ExciterTable.from_matrix(t_andes.exc_con)
-    dc2 = e.type == exc.DC2                                           # WECC's 8 ESDC2A
+    dc2 = e.type == exc.DC2  # WECC's 8 ESDC2A
     assert dc2.sum() == 8 and np.all(e.TR[dc2] == 0) and np.all(e.dc_sat[dc2] == 1)
-    st3 = e.type == exc.ST3                       # WECC's 4 ESST3A: I_N from the machine's I_fd
+    st3 = e.type == exc.ST3  # WECC's 4 ESST3A: I_N from the machine's I_fd
     assert st3.sum() == 4 and np.all(e.ifd_machine[st3] == 1) and np.all(e.ifd_machine[~st3] == 0)
     assert np.all(ExciterTable.from_matrix(dyr_tables(recs, gens).exc_con).ifd_machine == 0)
     assert (g_pst.Uo[0], g_pst.Uc[0]) == (1.0, -1.0)
@@ -144,24 +208,32 @@ def test_andes_conventions_change_only_what_andes_reads_differently():
 def test_unsupported_records_are_listed_with_file_and_line(tmp_path):
     with pytest.raises(CaseError) as e:
         dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators())
-    assert str(e.value).endswith("kundur_full.dyr:37 TOGGLE (bus 0, id LINE_8): model TOGGLE "
-                                 "is not mapped")
-    text = ("1 'GENCLS' 1 3.0 0.0 /\n1 'ESAC1A' 1 0 0 /\n"
-            "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n")
+    assert str(e.value).endswith(
+        "kundur_full.dyr:37 TOGGLE (bus 0, id LINE_8): model TOGGLE is not mapped"
+    )
+    text = (
+        "1 'GENCLS' 1 3.0 0.0 /\n1 'ESAC1A' 1 0 0 /\n"
+        "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
+    )
     with pytest.raises(CaseError) as e:
         dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
     assert str(e.value).splitlines()[1:] == [
         "  t.dyr:2 ESAC1A (bus 1, id 1): model ESAC1A is not mapped",
-        "  t.dyr:3 IEEEST (bus 1, id 1): its machine has no (supported) exciter"]
+        "  t.dyr:3 IEEEST (bus 1, id 1): its machine has no (supported) exciter",
+    ]
 
 
 def test_wecc_imports_completely():
     recs = read_dyr(WECC_DYR)
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
-        (29, 25), (29, 25), (29, 24), (29, 24)) and t.unsupported == ()
+        (29, 25),
+        (29, 25),
+        (29, 24),
+        (29, 24),
+    ) and t.unsupported == ()
     kinds = dict(zip(*np.unique(t.exc_con[:, 0], return_counts=True)))
-    assert kinds == {2: 8, 3: 4, 4: 17}                       # ESDC2A, ESST3A, EXST1
+    assert kinds == {2: 8, 3: 4, 4: 17}  # ESDC2A, ESST3A, EXST1
 
 
 def test_wecc_esdc2a_to_dc2():
@@ -171,7 +243,7 @@ def test_wecc_esdc2a_to_dc2():
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
     t = dyr_tables(recs, gens)
-    n10 = [g["number"] for g in gens if g["bus"] == 10][0]
+    n10 = next(g["number"] for g in gens if g["bus"] == 10)
     e = t.exc_con[t.exc_con[:, 1] == n10][0]
     np.testing.assert_array_equal(e[:11], [2, n10, 0.02, 50, 0.05, 0.02, 0, 999, -3, 0, 0.512])
     assert (e[15], e[16]) == (0.07, 1.3)
@@ -188,11 +260,34 @@ def test_wecc_esst3a_to_exc_st3():
     t = dyr_tables(recs, gens, on_unsupported="skip")
     r = [g["bus"] for g in gens].index(3)
     row = t.exc_con[list(t.exc_con[:, 1]).index(gens[r]["number"])]
-    np.testing.assert_array_equal(row[:20], [3, gens[r]["number"], 0.02, 8, 0.4, 5, 1, 99, 0, 0.3,
-                                            -0.2, 20, 3.67, 3.33, 0.435, 0.0098, 0.01,
-                                            6.48 * 99, 1, 4.86])
-    np.testing.assert_array_equal(t.pss_con[0], [2, gens[r]["number"], -2 * 1.0, 4.2, 0, 0.75, 0,
-                                                 0, 0.1, -0.1] + [0] * 14)
+    np.testing.assert_array_equal(
+        row[:20],
+        [
+            3,
+            gens[r]["number"],
+            0.02,
+            8,
+            0.4,
+            5,
+            1,
+            99,
+            0,
+            0.3,
+            -0.2,
+            20,
+            3.67,
+            3.33,
+            0.435,
+            0.0098,
+            0.01,
+            6.48 * 99,
+            1,
+            4.86,
+        ],
+    )
+    np.testing.assert_array_equal(
+        t.pss_con[0], [2, gens[r]["number"], -2 * 1.0, 4.2, 0, 0.75, 0, 0, 0.1, -0.1] + [0] * 14
+    )
 
 
 def test_wecc_exst1_mapping():
@@ -210,14 +305,17 @@ def test_wecc_exst1_mapping():
 
 
 def test_ieeest_maps_to_pst_pss_when_equivalent(tmp_path):
-    text = ("1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
-            "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n")
+    text = (
+        "1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
+        "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
+    )
     t = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
     # speed input (PST type 1), K*Tw = KS T5 = 20 * 1.5, Tw = T6, lead-lags (0.2/0.02), (0/0.5)
-    np.testing.assert_array_equal(t.pss_con[0], [1, 1, 30, 10, 0.2, 0.02, 0, 0.5, 0.1, -0.1]
-                                  + [0] * 14)
+    np.testing.assert_array_equal(
+        t.pss_con[0], [1, 1, 30, 10, 0.2, 0.02, 0, 0.5, 0.1, -0.1] + [0] * 14
+    )
     np.testing.assert_array_equal(t.exc_con[0][:9], [0, 1, 0, 100, 0.05, 10, 1.0, 5, -5])
-    assert t.mac_con[0][6] == 0.25 and t.mac_con[0][5] == 0     # classical: x'd = ZSORCE X
+    assert t.mac_con[0][6] == 0.25 and t.mac_con[0][5] == 0  # classical: x'd = ZSORCE X
 
 
 def test_gensal_has_no_q_axis_transient_circuit(tmp_path):
@@ -228,28 +326,41 @@ def test_gensal_has_no_q_axis_transient_circuit(tmp_path):
 
 # -- errors --------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("text, message", [
-    ("1 'GENCLS' 1 3.0 0.0\n", r"t.dyr:1: record not terminated by '/'"),
-    ("\n1 'GENCLS' 1 3.0 x0 /\n", r"t.dyr:2: GENCLS parameter 2 'x0' is not a number"),
-    ("1 GENCLS 1 3.0 0.0 /\n", r"t.dyr:1: malformed record"),
-    ("B1 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1: GENCLS bus field 'B1' is not an integer"),
-])
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("1 'GENCLS' 1 3.0 0.0\n", r"t.dyr:1: record not terminated by '/'"),
+        ("\n1 'GENCLS' 1 3.0 x0 /\n", r"t.dyr:2: GENCLS parameter 2 'x0' is not a number"),
+        ("1 GENCLS 1 3.0 0.0 /\n", r"t.dyr:1: malformed record"),
+        ("B1 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1: GENCLS bus field 'B1' is not an integer"),
+    ],
+)
 def test_malformed_records_name_file_and_line(tmp_path, text, message):
     with pytest.raises(CaseError, match=message):
         read_dyr(write(tmp_path, text))
 
 
-@pytest.mark.parametrize("text, message", [
-    ("1 'GENCLS' 1 3.0 /\n",
-     r"t.dyr:1 GENCLS \(bus 1, id 1\): needs 2 parameters after the id, got 1"),
-    ("1 'GENCLS' 1 3.0 0 /\n7 'GENCLS' 1 3.0 0 /\n",
-     r"unsupported DYR .*\n  t.dyr:2 GENCLS \(bus 7, id 1\): no such generator in the RAW"),
-    ("1 'GENCLS' 1 3.0 0 /\n1 'GENCLS' 1 3.0 0 /\n",
-     r"t.dyr:2 GENCLS .*second machine model .*t.dyr:1"),
-    ("1 'GENCLS' 1 0.0 0 /\n", r"H = 0.0 \(PSS/E infinite bus\)"),
-    ("1 'GENCLS' 1 3.0 0 /\n1 'TGOV1' 1 0 0.5 1 0 1 2 0 /\n", r"t.dyr:2 TGOV1 .*droop R = 0.0"),
-    ("1 'TGOV1' 1 0.05 0.5 1 0 1 2 0 /\n", r"machine 1 \(bus 1, id 1\)"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (
+            "1 'GENCLS' 1 3.0 /\n",
+            r"t.dyr:1 GENCLS \(bus 1, id 1\): needs 2 parameters after the id, got 1",
+        ),
+        (
+            "1 'GENCLS' 1 3.0 0 /\n7 'GENCLS' 1 3.0 0 /\n",
+            r"unsupported DYR .*\n  t.dyr:2 GENCLS \(bus 7, id 1\): no such generator in the RAW",
+        ),
+        (
+            "1 'GENCLS' 1 3.0 0 /\n1 'GENCLS' 1 3.0 0 /\n",
+            r"t.dyr:2 GENCLS .*second machine model .*t.dyr:1",
+        ),
+        ("1 'GENCLS' 1 0.0 0 /\n", r"H = 0.0 \(PSS/E infinite bus\)"),
+        ("1 'GENCLS' 1 3.0 0 /\n1 'TGOV1' 1 0 0.5 1 0 1 2 0 /\n", r"t.dyr:2 TGOV1 .*droop R = 0.0"),
+        ("1 'TGOV1' 1 0.05 0.5 1 0 1 2 0 /\n", r"machine 1 \(bus 1, id 1\)"),
+    ],
+)
 def test_mapping_errors_name_the_record(tmp_path, text, message):
     with pytest.raises(CaseError, match=message):
         dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
@@ -270,6 +381,7 @@ def test_generator_without_machine_model_is_named(tmp_path):
 
 # -- model equations ------------------------------------------------------------------------------
 
+
 def test_exponential_saturation_passes_both_points():
     A, B = exp_saturation(3.1, 0.33, 2.3, 0.1)
     np.testing.assert_allclose([A * np.exp(B * 3.1), A * np.exp(B * 2.3)], [0.33, 0.1], rtol=1e-14)
@@ -277,8 +389,9 @@ def test_exponential_saturation_passes_both_points():
 
 
 def dc_params(kind=exc.DC1, KE=1.0, A=0.0, B=0.0):
-    e = ExciterTable.from_matrix([[kind, 1, 0.02, 20, 0.02, 1, 1, 5.2, -4.16, KE, 0.83, 0, A, 0,
-                                   B, 0.0754, 1.246, 0, 0, 0]])
+    e = ExciterTable.from_matrix(
+        [[kind, 1, 0.02, 20, 0.02, 1, 1, 5.2, -4.16, KE, 0.83, 0, A, 0, B, 0.0754, 1.246, 0, 0, 0]]
+    )
     return exc.exciter_params(load_case("kundur").replace(exciters=e))
 
 
@@ -304,19 +417,44 @@ def test_quadratic_saturation_passes_both_points_and_keeps_ke():
     (E2, SE2) (WECC bus 111's ESDC2A data); with ke_given, K_E = 0 stays 0 and
     V_R0 = B (Efd0 - A)^2; all derivatives zero at the initial point."""
     E1, SE1, E2, SE2 = 2.625, 0.54, 20.0, 1.0
-    row = [exc.DC2, 1, 0.02, 40.5, 0.06, 0.02, 0, 999, -2, 0, 0.5, E1, SE1, E2, SE2, 0.05, 1.0,
-           0, 0, 0, 0, 0, 1, 1]
+    row = [
+        exc.DC2,
+        1,
+        0.02,
+        40.5,
+        0.06,
+        0.02,
+        0,
+        999,
+        -2,
+        0,
+        0.5,
+        E1,
+        SE1,
+        E2,
+        SE2,
+        0.05,
+        1.0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        1,
+    ]
     p = exc.exciter_params(load_case("kundur").replace(exciters=ExciterTable.from_matrix([row])))
     A, B = p.Asat[0], p.Bsat[0]
-    np.testing.assert_allclose([B * (E1 - A) ** 2, B * (E2 - A) ** 2], [SE1 * E1, SE2 * E2],
-                               rtol=1e-13)
+    np.testing.assert_allclose(
+        [B * (E1 - A) ** 2, B * (E2 - A) ** 2], [SE1 * E1, SE2 * E2], rtol=1e-13
+    )
     Efd, Vt = 1.9, 1.03
     x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
     assert p.KE[0] == 0.0 and x[2, 0] == pytest.approx(B * (Efd - A) ** 2, rel=1e-14)
     dx = np.zeros_like(x)
     exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
-    row[23] = 0                                      # K_E = 0 computed: V_R0 = 0
+    row[23] = 0  # K_E = 0 computed: V_R0 = 0
     p = exc.exciter_params(load_case("kundur").replace(exciters=ExciterTable.from_matrix([row])))
     x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
     assert p.KE[0] == pytest.approx(-B * (Efd - A) ** 2 / Efd) and abs(x[2, 0]) < 1e-15
@@ -355,8 +493,34 @@ def test_dc2_state_held_on_a_limit_that_rose_within_reach():
 
 
 def st1_params(KC=0.1, KF=0.01):
-    e = ExciterTable.from_matrix([[4, 1, 0.02, 50, 0.02, 0.02, 0.1, 4.0, -3.0, 0.2, -0.2, 0, 0,
-                                   0, 0, 0, KC, 0, 0, 0, KF, 1.0]])
+    e = ExciterTable.from_matrix(
+        [
+            [
+                4,
+                1,
+                0.02,
+                50,
+                0.02,
+                0.02,
+                0.1,
+                4.0,
+                -3.0,
+                0.2,
+                -0.2,
+                0,
+                0,
+                0,
+                0,
+                0,
+                KC,
+                0,
+                0,
+                0,
+                KF,
+                1.0,
+            ]
+        ]
+    )
     return exc.exciter_params(load_case("kundur").replace(exciters=e))
 
 
@@ -373,13 +537,15 @@ def test_exst1_steady_state_and_output_limit():
     exc.derivatives(P, x, 0, Vt, 0.0, Efd, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
     x[2, 0] = 10.0
-    assert exc.field_voltage_at(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(0.9 * 4.0 - 0.1 * 2.0)
+    assert exc.field_voltage_at(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(
+        0.9 * 4.0 - 0.1 * 2.0
+    )
     x[2, 0] = -10.0
     assert exc.field_voltage_at(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(0.9 * -3.0)
 
 
 def test_exst1_initial_point_outside_limits_is_refused():
-    with pytest.raises(CaseError, match="exc_con row 1: EXST1 initial field voltage 3.9"):
+    with pytest.raises(CaseError, match=r"exc_con row 1: EXST1 initial field voltage 3\.9"):
         exc.initialise(st1_params(), np.array([3.9]), np.array([1.0]))
 
 
@@ -410,7 +576,7 @@ def test_start_up_limit_checks_allow_round_off_only():
     for pm in (p.Tmin[0] - 1e-3, p.Tmax[0] + 1e-3):
         with pytest.raises(CaseError, match=r"tg_con row 1: .* outside \[Tmin, Tmax\]"):
             gov.initialise(p, np.array([pm]))
-    e = dc_params(KE=1.0)                      # DC1: V_R0 = K_E Efd0 against Vrmax = 5.2
+    e = dc_params(KE=1.0)  # DC1: V_R0 = K_E Efd0 against Vrmax = 5.2
     exc.initialise(e, np.array([5.2 * (1 + 1e-15)]), np.array([1.0]))
     with pytest.raises(CaseError, match="exc_con row 1: initial DC regulator output"):
         exc.initialise(e, np.array([5.21]), np.array([1.0]))
@@ -432,8 +598,9 @@ def test_tgov1_step_response_matches_closed_form():
     t = 3.0
     sol = solve_ivp(f, (0, t), x0.ravel(), rtol=1e-11, atol=1e-13)
     pm = gov.pmech(P, sol.y[:, -1].reshape(x0.shape), 0, 1.0) - 0.5
-    exact = dP * (1 - (T1 - T2) / (T1 - T3) * np.exp(-t / T1)
-                  - (T3 - T2) / (T3 - T1) * np.exp(-t / T3))
+    exact = dP * (
+        1 - (T1 - T2) / (T1 - T3) * np.exp(-t / T1) - (T3 - T2) / (T3 - T1) * np.exp(-t / T3)
+    )
     assert pm == pytest.approx(exact, rel=1e-8)
 
 
@@ -447,8 +614,36 @@ def test_tgov1_valve_is_non_windup():
 
 
 def ieeeg1_params():
-    g = GovernorTable.from_matrix([[3, 1, 1, 20, 0.95, 0.2, 0.1, 0, 0.1, 0, 0, 0, 0, 8.72,
-                                    0.5, -1, 0, 0, 0, 0, 0.3, 0, 0.6, 0.1]])
+    g = GovernorTable.from_matrix(
+        [
+            [
+                3,
+                1,
+                1,
+                20,
+                0.95,
+                0.2,
+                0.1,
+                0,
+                0.1,
+                0,
+                0,
+                0,
+                0,
+                8.72,
+                0.5,
+                -1,
+                0,
+                0,
+                0,
+                0,
+                0.3,
+                0,
+                0.6,
+                0.1,
+            ]
+        ]
+    )
     return gov.governor_params(load_case("kundur").replace(governors=g))
 
 
@@ -456,27 +651,31 @@ def test_ieeeg1_steady_state_and_gate_rate_limit():
     """Pm = (K1+..+K8) gate in steady state; a large Pref step moves the gate at Uo."""
     p = ieeeg1_params()
     x, gate = gov.initialise(p, np.array([0.7]))
-    assert gate[0] == pytest.approx(0.7, rel=1e-15)        # K sum = 0.3 + 0.6 + 0.1 = 1
+    assert gate[0] == pytest.approx(0.7, rel=1e-15)  # K sum = 0.3 + 0.6 + 0.1 = 1
     P = p.packed(gate)
     assert gov.pmech(P, x, 0, 1.0) == pytest.approx(0.7, rel=1e-15)
     dx = np.zeros_like(x)
     gov.derivatives(P, x, 0, 1.0, dx)
     assert np.abs(dx).max() < 1e-15
     gov.derivatives(p.packed(gate + 0.2), x, 0, 1.0, dx)
-    assert dx[1, 0] == 0.5                                   # (0.2 / T3 = 1) limited to Uo
-    gov.derivatives(P, x, 0, 1.01, dx)            # speed up 1 %: the T1 lag starts at K dw/T1
+    assert dx[1, 0] == 0.5  # (0.2 / T3 = 1) limited to Uo
+    gov.derivatives(P, x, 0, 1.01, dx)  # speed up 1 %: the T1 lag starts at K dw/T1
     assert dx[1, 0] == 0.0 and dx[0, 0] == pytest.approx(20 * 0.01 / 0.1, rel=1e-12)
-    x[0, 0] = 0.4                                 # lag output K dw = 0.4: (0 - 0.4)/T3 -> Uc
+    x[0, 0] = 0.4  # lag output K dw = 0.4: (0 - 0.4)/T3 -> Uc
     gov.derivatives(P, x, 0, 1.02, dx)
     assert dx[1, 0] == -1.0 and dx[0, 0] == pytest.approx(0.0, abs=1e-12)
 
 
 # -- the models in the simulator and the linearisation -------------------------------------------
 
+
 def replaced_kundur(exc_con, tg_con):
     case = load_case("kundur")
-    return case.replace(exciters=ExciterTable.from_matrix(exc_con),
-                        governors=GovernorTable.from_matrix(tg_con), pss=case.pss.empty())
+    return case.replace(
+        exciters=ExciterTable.from_matrix(exc_con),
+        governors=GovernorTable.from_matrix(tg_con),
+        pss=case.pss.empty(),
+    )
 
 
 @pytest.fixture(scope="module")
@@ -496,11 +695,41 @@ def test_flat_run_with_exdc2_and_tgov1_has_no_drift(dyr_kundur):
 
 def test_flat_run_with_ieeex1_and_ieeeg1_has_no_drift(kundur_tables):
     exc_con = kundur_tables.exc_con.copy()
-    exc_con[:, 0] = 1                                    # IEEEX1: solid-fed DC1
+    exc_con[:, 0] = 1  # IEEEX1: solid-fed DC1
     exc_con[:, 12], exc_con[:, 14] = exp_saturation(3.1, 0.33, 2.3, 0.1)
-    rows = np.tile(GovernorTable.from_matrix([[3, 1, 1, 20, 0.95, 0.2, 0.1, 0, 0.1, 0, 0, 0,
-                                               0, 8.72, 0.5, -1, 0, 0, 0, 0, 0.3, 0, 0.6,
-                                               0.1]]).matrix(), (4, 1))
+    rows = np.tile(
+        GovernorTable.from_matrix(
+            [
+                [
+                    3,
+                    1,
+                    1,
+                    20,
+                    0.95,
+                    0.2,
+                    0.1,
+                    0,
+                    0.1,
+                    0,
+                    0,
+                    0,
+                    0,
+                    8.72,
+                    0.5,
+                    -1,
+                    0,
+                    0,
+                    0,
+                    0,
+                    0.3,
+                    0,
+                    0.6,
+                    0.1,
+                ]
+            ]
+        ).matrix(),
+        (4, 1),
+    )
     rows[:, 1] = [1, 2, 3, 4]
     sim = Simulator(replaced_kundur(exc_con, rows))
     residual, where = sim.model_for([]).initial_residual
@@ -517,16 +746,44 @@ def test_flat_run_with_ieeex1_and_ieeeg1_has_no_drift(kundur_tables):
 def test_flat_run_with_exst1_has_no_drift(kundur_tables):
     """WECC's EXST1 data (T_C = 0: no transient gain; with T_C/T_B = 5 and no PSS, Kundur's
     inter-area mode is unstable and round-off grows), K_C = 0.1 so the I_fd limit acts."""
-    e = np.tile(ExciterTable.from_matrix(
-        [[4, 1, 0.02, 50, 0.02, 0.02, 0.0, 4.0, -3.0, 0.2, -0.2, 0, 0, 0, 0, 0, 0.1, 0, 0, 0,
-          0.01, 1.0]]).matrix(), (4, 1))
+    e = np.tile(
+        ExciterTable.from_matrix(
+            [
+                [
+                    4,
+                    1,
+                    0.02,
+                    50,
+                    0.02,
+                    0.02,
+                    0.0,
+                    4.0,
+                    -3.0,
+                    0.2,
+                    -0.2,
+                    0,
+                    0,
+                    0,
+                    0,
+                    0,
+                    0.1,
+                    0,
+                    0,
+                    0,
+                    0.01,
+                    1.0,
+                ]
+            ]
+        ).matrix(),
+        (4, 1),
+    )
     e[:, 1] = [1, 2, 3, 4]
     sim = Simulator(replaced_kundur(e, kundur_tables.tg_con))
     residual, where = sim.model_for([]).initial_residual
     assert residual < 1e-9, where
     r = sim.run([], 10.0)
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
-    sys = linearise(sim)                            # 6 + EXST1 4 (V_TR, V_As, V_R, R_f) + 2
+    sys = linearise(sim)  # 6 + EXST1 4 (V_TR, V_As, V_R, R_f) + 2
     assert sys.nstates == 4 * (6 + 4 + 2) and "exc_Rf_G3" in sys.state_labels
 
 
@@ -537,12 +794,12 @@ def test_flat_run_with_esst3a_and_ieeest_has_no_drift():
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
     t = dyr_tables(recs, gens, on_unsupported="skip")
-    n3 = [g["number"] for g in gens if g["bus"] == 3][0]
+    n3 = next(g["number"] for g in gens if g["bus"] == 3)
     e = np.tile(t.exc_con[t.exc_con[:, 1] == n3], (4, 1))
     p = np.tile(t.pss_con[t.pss_con[:, 1] == n3], (4, 1))
     e[:, 1] = p[:, 1] = [1, 2, 3, 4]
     case = load_case("kundur")
-    e[:, 16] = 0.0                                   # K_C
+    e[:, 16] = 0.0  # K_C
     case = case.replace(exciters=ExciterTable.from_matrix(e), pss=PssTable.from_matrix(p))
     sim = Simulator(case)
     residual, where = sim.model_for([]).initial_residual
@@ -581,22 +838,28 @@ def test_kundur_network_with_dyr_machines_runs_flat(tmp_path):
     (GENSAL, GENCLS, GENROU; SEXS, EXDC2 with saturation; TGOV1 with Dt; machine 4 without
     governor): equilibrium at t = 0, no drift, GENSAL's E'd identically 0 (docs 12.1)."""
     case = load_case("kundur")
-    gens = [dict(number=int(k), bus=int(b), id="1", mbase=900.0, ra=0.0, xsource=0.3)
-            for k, b in zip(case.machines.number, case.machines.bus)]
+    gens = [
+        dict(number=int(k), bus=int(b), id="1", mbase=900.0, ra=0.0, xsource=0.3)
+        for k, b in zip(case.machines.number, case.machines.bus)
+    ]
     t = dyr_tables(read_dyr(write(tmp_path, KUNDUR_PST_DYR)), gens)
-    case = case.replace(machines=MachineTable.from_matrix(t.mac_con),
-                        exciters=ExciterTable.from_matrix(t.exc_con), pss=PssTable.empty(),
-                        governors=GovernorTable.from_matrix(t.tg_con))
+    case = case.replace(
+        machines=MachineTable.from_matrix(t.mac_con),
+        exciters=ExciterTable.from_matrix(t.exc_con),
+        pss=PssTable.empty(),
+        governors=GovernorTable.from_matrix(t.tg_con),
+    )
     sim = Simulator(case)
     m = sim.model_for([])
     assert m.initial_residual[0] < 1e-9, m.initial_residual[1]
-    assert list(m.mp.kind) == [2, 0, 2, 2]                   # mac_sub, mac_em, mac_sub x2
-    assert abs(m.layout.view(m.x0, "mac")[4, 0]) < 1e-12      # GENSAL: E'd = 0
+    assert list(m.mp.kind) == [2, 0, 2, 2]  # mac_sub, mac_em, mac_sub x2
+    assert abs(m.layout.view(m.x0, "mac")[4, 0]) < 1e-12  # GENSAL: E'd = 0
     r = sim.run([], 10.0)
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
 
 
 # -- PSS/E stabilisers (pss type 3) ------------------------------------------------------------
+
 
 def test_wecc_st2cut_mapping():
     """Line 21 (bus 5): MODE 1 BUSR 0 MODE2 0 BUSR2 0 K1 5.5 K2 0 T1 .03 T2 0 T3 10 T4 10
@@ -604,15 +867,39 @@ def test_wecc_st2cut_mapping():
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
     t = dyr_tables(recs, gens, on_unsupported="skip")
-    n5 = [g["number"] for g in gens if g["bus"] == 5][0]
+    n5 = next(g["number"] for g in gens if g["bus"] == 5)
     s = PssTable.from_matrix(t.pss_con[t.pss_con[:, 1] == n5])
     assert (s.type[0], s.input1[0], s.K1[0], s.Tr1[0], s.input2[0]) == (3, 1, 5.5, 0.03, 0)
     assert (s.KTw[0], s.Tw[0], s.T1[0], s.T2[0], s.T3[0], s.T4[0]) == (10, 10, 0.4, 0.04, 0, 0)
     assert (s.ymax[0], s.ymin[0]) == (0.05, -0.05)
 
 
-PSSE_ROW = [3, 1, 2.0, 3.0, 0.3, 0.05, 0.2, 0.04, 0.2, -0.2, 0.1, 0.02, 1, 20.0, 0.03, 3, 0.5,
-            0.1, 0.05, 0.002, 0.02, 0.0001, 0.01, 0.0005]
+PSSE_ROW = [
+    3,
+    1,
+    2.0,
+    3.0,
+    0.3,
+    0.05,
+    0.2,
+    0.04,
+    0.2,
+    -0.2,
+    0.1,
+    0.02,
+    1,
+    20.0,
+    0.03,
+    3,
+    0.5,
+    0.1,
+    0.05,
+    0.002,
+    0.02,
+    0.0001,
+    0.01,
+    0.0005,
+]
 
 
 def psse_params(row=PSSE_ROW):
@@ -649,18 +936,29 @@ def test_psse_stabiliser_transfer_function_matches_closed_form():
     Kw, Tw, T1, T2, T3, T4 = PSSE_ROW[2:8]
     T5, T6, K1, Tr1 = PSSE_ROW[10], PSSE_ROW[11], PSSE_ROW[13], PSSE_ROW[14]
     A1, A2, A3, A4, A5, A6 = PSSE_ROW[18:]
-    exact = (K1 / (1 + s * Tr1) * (1 + A5 * s + A6 * s**2)
-             / ((1 + A1 * s + A2 * s**2) * (1 + A3 * s + A4 * s**2)) * Kw * s / (1 + s * Tw)
-             * (1 + s * T1) / (1 + s * T2) * (1 + s * T3) / (1 + s * T4)
-             * (1 + s * T5) / (1 + s * T6))
+    exact = (
+        K1
+        / (1 + s * Tr1)
+        * (1 + A5 * s + A6 * s**2)
+        / ((1 + A1 * s + A2 * s**2) * (1 + A3 * s + A4 * s**2))
+        * Kw
+        * s
+        / (1 + s * Tw)
+        * (1 + s * T1)
+        / (1 + s * T2)
+        * (1 + s * T3)
+        / (1 + s * T4)
+        * (1 + s * T5)
+        / (1 + s * T6)
+    )
     assert H == pytest.approx(exact, rel=1e-7)
-    assert n == 2 + 4 + 1 + 3                                  # lags, 4th-order filter, ...
+    assert n == 2 + 4 + 1 + 3  # lags, 4th-order filter, ...
 
 
 def test_psse_stabiliser_output_is_zero_and_steady_at_the_initial_point():
     p = psse_params()
     u1, u2 = pss_.pss_inputs(p, np.array([1.0]), np.array([0.7]), np.ones(1))
-    assert (u1[0], u2[0]) == (0.0, 0.7)                       # speed deviation, power
+    assert (u1[0], u2[0]) == (0.0, 0.7)  # speed deviation, power
     x = pss_.initialise(p, u1, u2)
     dx = np.full_like(x, np.nan)
     y = pss_.output_and_derivatives(p.packed(), x, 0, 1.0, 0.7, dx)
@@ -673,7 +971,7 @@ def test_flat_run_and_linearisation_with_psse_stabilisers(dyr_kundur):
     drift; the linearised model has its 10 states per PSS and no unstable mode."""
     rows = np.tile(PSSE_ROW, (4, 1))
     rows[:, 1] = [1, 2, 3, 4]
-    rows[:, 13] = 2.0                                           # K1: a moderate speed gain
+    rows[:, 13] = 2.0  # K1: a moderate speed gain
     case = dyr_kundur.replace(pss=PssTable.from_matrix(rows))
     sim = Simulator(case)
     residual, where = sim.model_for([]).initial_residual
@@ -686,16 +984,18 @@ def test_flat_run_and_linearisation_with_psse_stabilisers(dyr_kundur):
 
 
 def test_ieeest_with_filter_maps_to_psse_type_and_other_inputs_are_unsupported(tmp_path):
-    text = ("1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
-            "1 'IEEEST' 1 3 0 0.1 0.01 0 0 0.05 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
-            "2 'GENCLS' 1 3.0 0.0 /\n2 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
-            "2 'IEEEST' 1 2 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n")
+    text = (
+        "1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
+        "1 'IEEEST' 1 3 0 0.1 0.01 0 0 0.05 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
+        "2 'GENCLS' 1 3.0 0.0 /\n2 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
+        "2 'IEEEST' 1 2 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
+    )
     t = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:2], on_unsupported="skip")
     s = PssTable.from_matrix(t.pss_con)
     assert (s.type[0], s.input1[0], s.K1[0], s.KTw[0], s.Tw[0]) == (3, 3, 1.0, 20 * 1.5, 10)
     assert (s.A1[0], s.A2[0], s.A5[0]) == (0.1, 0.01, 0.05)
     assert (s.T1[0], s.T2[0], s.T4[0]) == (0.2, 0.02, 0.5)
-    assert [r.line for r in t.unsupported] == [6]             # ICS 2: bus frequency
+    assert [r.line for r in t.unsupported] == [6]  # ICS 2: bus frequency
 
 
 def test_initial_point_matches_andes_kundur_full():
@@ -707,10 +1007,12 @@ def test_initial_point_matches_andes_kundur_full():
     g = ss.GENROU
     rows = [ss.Bus.idx.v.index(b) for b in g.bus.v]
     t = dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip")
-    case = load_case("kundur")        # its bus list holds ANDES's generator buses 1-4
-    case = case.replace(machines=MachineTable.from_matrix(t.mac_con),
-                        exciters=ExciterTable.from_matrix(t.exc_con),
-                        governors=GovernorTable.from_matrix(t.tg_con))
+    case = load_case("kundur")  # its bus list holds ANDES's generator buses 1-4
+    case = case.replace(
+        machines=MachineTable.from_matrix(t.mac_con),
+        exciters=ExciterTable.from_matrix(t.exc_con),
+        governors=GovernorTable.from_matrix(t.tg_con),
+    )
     mp = mac.machine_params(case)
     V, S = np.ones(case.n_bus, complex), np.zeros(case.n_bus, complex)
     V[mp.bus_idx] = ss.Bus.v.v[rows] * np.exp(1j * ss.Bus.a.v[rows])
@@ -721,7 +1023,7 @@ def test_initial_point_matches_andes_kundur_full():
     _, Vref, _ = exc.initialise(exc.exciter_params(case), vex, np.abs(V[mp.bus_idx]))
     np.testing.assert_allclose(Vref, ss.EXDC2.vref0.v, atol=1e-12)
     _, Pref = gov.initialise(gov.governor_params(case), pm)
-    np.testing.assert_allclose(Pref * 900 / 100, ss.TGOV1.pref0.v, rtol=1e-12)   # system base
+    np.testing.assert_allclose(Pref * 900 / 100, ss.TGOV1.pref0.v, rtol=1e-12)  # system base
 
 
 def test_ieeex1_initialisation_matches_andes_npcc():
@@ -732,11 +1034,14 @@ def test_ieeex1_initialisation_matches_andes_npcc():
     ss = andes_initialised("npcc")
     g, x1 = ss.GENROU, ss.IEEEX1
     assert x1.n == 24
-    recs = [r for r in read_dyr(CASES / "npcc" / "npcc_full.dyr")
-            if r.model in ("GENROU", "IEEEX1")]
+    recs = [
+        r for r in read_dyr(CASES / "npcc" / "npcc_full.dyr") if r.model in ("GENROU", "IEEEX1")
+    ]
     keys = [(r.bus, r.id) for r in recs if r.model == "GENROU"]
-    gens = [dict(number=i + 1, bus=b, id=d, mbase=100.0, ra=0.0, xsource=0.2, pg=1.0,
-                 qg=1.0) for i, (b, d) in enumerate(keys)]
+    gens = [
+        dict(number=i + 1, bus=b, id=d, mbase=100.0, ra=0.0, xsource=0.2, pg=1.0, qg=1.0)
+        for i, (b, d) in enumerate(keys)
+    ]
     # ANDES holds the records in file order: its k-th IEEEX1 is the file's k-th
     number = [keys.index((r.bus, r.id)) + 1 for r in recs if r.model == "IEEEX1"]
     k = [g.idx.v.index(s) for s in x1.syn.v]
@@ -746,11 +1051,20 @@ def test_ieeex1_initialisation_matches_andes_npcc():
         t = dyr_tables(recs, gens, conventions=conventions)
         rows = np.array([t.exc_con[t.exc_con[:, 1] == n][0] for n in number])
         rows[:, 1] = 1
-        assert np.all(rows[:, 0] == 1)    # DC1 both ways (ANDES's limiter keeps VRMAX)
-        kundur = load_case("kundur")           # one exciter at a time on its machine 1
-        vref[conventions] = np.array([exc.initialise(exc.exciter_params(kundur.replace(
-            exciters=ExciterTable.from_matrix(row[None]))), g.vf0.v[[i]], vt[[j]])[1][0]
-            for j, (i, row) in enumerate(zip(k, rows))])
+        assert np.all(rows[:, 0] == 1)  # DC1 both ways (ANDES's limiter keeps VRMAX)
+        kundur = load_case("kundur")  # one exciter at a time on its machine 1
+        vref[conventions] = np.array(
+            [
+                exc.initialise(
+                    exc.exciter_params(
+                        kundur.replace(exciters=ExciterTable.from_matrix(row[None]))
+                    ),
+                    g.vf0.v[[i]],
+                    vt[[j]],
+                )[1][0]
+                for j, (i, row) in enumerate(zip(k, rows))
+            ]
+        )
     np.testing.assert_allclose(vref["andes"], x1.vref0.v, atol=1e-12)
     assert np.max(np.abs(vref["pst"] - x1.vref0.v)) > 1e-3
 
@@ -761,13 +1075,13 @@ def test_flat_run_with_wecc_esdc2a_has_no_drift(kundur_tables):
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
     t = dyr_tables(recs, gens)
-    n10 = [g["number"] for g in gens if g["bus"] == 10][0]
+    n10 = next(g["number"] for g in gens if g["bus"] == 10)
     e = np.tile(t.exc_con[t.exc_con[:, 1] == n10], (4, 1))
     e[:, 1] = [1, 2, 3, 4]
     sim = Simulator(replaced_kundur(e, kundur_tables.tg_con))
     m = sim.model_for([])
     assert m.initial_residual[0] < 1e-9, m.initial_residual[1]
-    np.testing.assert_allclose(m.layout.view(m.x0, "exc")[2], 0.0, atol=1e-15)   # V_R0
+    np.testing.assert_allclose(m.layout.view(m.x0, "exc")[2], 0.0, atol=1e-15)  # V_R0
     r = sim.run([], 10.0)
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
 
@@ -778,10 +1092,12 @@ def test_exst1_and_ieeeg1_initialisation_match_andes_wecc():
     ANDES's vref0 and IEEEG1 its pref0 (machine base here, system base in ANDES)."""
     ss = andes_initialised("wecc")
     g = ss.GENROU
-    gens = [dict(number=i + 1, bus=int(b), id="1", mbase=float(sn), ra=0.0, xsource=0.2)
-            for i, (b, sn) in enumerate(zip(g.bus.v, g.Sn.v))]
+    gens = [
+        dict(number=i + 1, bus=int(b), id="1", mbase=float(sn), ra=0.0, xsource=0.2)
+        for i, (b, sn) in enumerate(zip(g.bus.v, g.Sn.v))
+    ]
     t = dyr_tables(read_dyr(WECC_DYR), gens)
-    st1 = [g.idx.v.index(s) for s in ss.EXST1.syn.v][:4]        # four EXST1 machines
+    st1 = [g.idx.v.index(s) for s in ss.EXST1.syn.v][:4]  # four EXST1 machines
     rows = np.array([t.exc_con[t.exc_con[:, 1] == k + 1][0] for k in st1])
     rows[:, 1] = [1, 2, 3, 4]
     case = load_case("kundur").replace(exciters=ExciterTable.from_matrix(rows))
@@ -801,6 +1117,17 @@ def test_exst1_and_ieeeg1_initialisation_match_andes_wecc():
     for i, k in enumerate(g.idx.v.index(s) for s in e.syn.v):
         b = ss.Bus.idx.v.index(g.bus.v[k])
         KP = e.KP.v[i] * np.exp(1j * np.deg2rad(e.THETAP.v[i]))
-        VE = exc.st3_source_voltage(KP, e.KI.v[i], e.XL.v[i], 0.0, ss.Bus.v.v[b], ss.Bus.a.v[b],
-                                    g.Pe.v[k], g.Qe.v[k], 1.0, 0.0, True)
+        VE = exc.st3_source_voltage(
+            KP,
+            e.KI.v[i],
+            e.XL.v[i],
+            0.0,
+            ss.Bus.v.v[b],
+            ss.Bus.a.v[b],
+            g.Pe.v[k],
+            g.Qe.v[k],
+            1.0,
+            0.0,
+            True,
+        )
         assert VE == pytest.approx(e.VE.v[i], rel=1e-12)

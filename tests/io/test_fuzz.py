@@ -31,13 +31,13 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 
-from stabctl.io import pst as pstio
 from stabctl.case import Case
-from stabctl.io import load_case
 from stabctl.cli import main
-from stabctl.errors import StabctlError
-from stabctl.io.psse import load_psse
 from stabctl.dynamics.driver import Simulator
+from stabctl.errors import StabctlError
+from stabctl.io import load_case
+from stabctl.io import pst as pstio
+from stabctl.io.psse import load_psse
 
 HERE = Path(__file__).parents[1]
 PSSE = HERE / "data" / "psse"
@@ -47,26 +47,49 @@ SEEDS = {
     "case_json": [(Path(pstio.__file__).parents[1] / "case" / "data" / "kundur.json").read_text()],
     "pst_m": [(HERE / "data" / "pstess" / "d2asbegp.m").read_text()],
 }
-TIME_BOX_S = 60          # no example may take longer (a hang fails the test)
+TIME_BOX_S = 60  # no example may take longer (a hang fails the test)
 
 _HEALTH = [HealthCheck.too_slow, HealthCheck.data_too_large]
 QUICK = settings(max_examples=40, deadline=None, suppress_health_check=_HEALTH)
 SLOW = settings(max_examples=1000, deadline=None, suppress_health_check=_HEALTH)
 
 _NUMBER = re.compile(r"(?<![\w.])[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?(?![\w.])")
-_SPECIAL = ["nan", "NaN", "inf", "-inf", "Infinity", "-Infinity", "0", "0.0", "-1", "-0.5",
-            "1e308", "-1e308", "1e-300", "99999", "", "x", "1.5", "2", "1e6"]
+_SPECIAL = [
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "Infinity",
+    "-Infinity",
+    "0",
+    "0.0",
+    "-1",
+    "-0.5",
+    "1e308",
+    "-1e308",
+    "1e-300",
+    "99999",
+    "",
+    "x",
+    "1.5",
+    "2",
+    "1e6",
+]
 
 
 # -- mutations ----------------------------------------------------------------------------
 
+
 @st.composite
 def numbers(draw) -> str:
     """A replacement for a number: special values, random floats and integers."""
-    return draw(st.one_of(
-        st.sampled_from(_SPECIAL),
-        st.floats(allow_nan=True, allow_infinity=True).map(repr),
-        st.integers(-10**6, 10**6).map(str)))
+    return draw(
+        st.one_of(
+            st.sampled_from(_SPECIAL),
+            st.floats(allow_nan=True, allow_infinity=True).map(repr),
+            st.integers(-(10**6), 10**6).map(str),
+        )
+    )
 
 
 @st.composite
@@ -77,12 +100,15 @@ def mutated(draw, seeds: list[str]) -> str:
     for _ in range(draw(st.integers(1, 4))):
         if not lines:
             break
-        kind = draw(st.sampled_from(["truncate", "delete", "duplicate", "swap", "number",
-                                     "number", "number"]))
+        kind = draw(
+            st.sampled_from(
+                ["truncate", "delete", "duplicate", "swap", "number", "number", "number"]
+            )
+        )
         i = draw(st.integers(0, len(lines) - 1))
         if kind == "truncate":
             text = "".join(lines)
-            lines = text[:draw(st.integers(0, len(text)))].splitlines(keepends=True)
+            lines = text[: draw(st.integers(0, len(text)))].splitlines(keepends=True)
         elif kind == "delete":
             del lines[i]
         elif kind == "duplicate":
@@ -94,11 +120,12 @@ def mutated(draw, seeds: list[str]) -> str:
             found = list(_NUMBER.finditer(lines[i]))
             if found:
                 m = draw(st.sampled_from(found))
-                lines[i] = lines[i][:m.start()] + draw(numbers()) + lines[i][m.end():]
+                lines[i] = lines[i][: m.start()] + draw(numbers()) + lines[i][m.end() :]
     return "".join(lines)
 
 
 # -- outcome ------------------------------------------------------------------------------
+
 
 class _Hang(Exception):
     """Raised by the time box (not a StabctlError: fails the property)."""
@@ -108,6 +135,7 @@ class _Hang(Exception):
 def time_box(seconds: int):
     def expired(signum, frame):
         raise _Hang(f"example ran longer than {seconds} s")
+
     old = signal.signal(signal.SIGALRM, expired)
     signal.alarm(seconds)
     try:
@@ -143,6 +171,7 @@ def _file(tmp: str, name: str, text: str) -> Path:
 
 # -- properties ---------------------------------------------------------------------------
 
+
 def raw_property(text):
     with tempfile.TemporaryDirectory() as tmp:
         raw = _file(tmp, "fuzz.raw", text)
@@ -173,19 +202,25 @@ def _valid(case):
     return case
 
 
-for _name, _prop in (("raw", raw_property), ("dyr", dyr_property),
-                     ("case_json", case_json_property), ("pst_m", pst_m_property)):
+for _name, _prop in (
+    ("raw", raw_property),
+    ("dyr", dyr_property),
+    ("case_json", case_json_property),
+    ("pst_m", pst_m_property),
+):
     _strategy = mutated(SEEDS[_name])
     globals()[f"test_fuzz_{_name}_reader"] = QUICK(given(_strategy)(_prop))
-    globals()[f"test_fuzz_{_name}_reader_slow"] = pytest.mark.slow(
-        SLOW(given(_strategy)(_prop)))
+    globals()[f"test_fuzz_{_name}_reader_slow"] = pytest.mark.slow(SLOW(given(_strategy)(_prop)))
 
 
 # -- a mutated case runs or is refused ----------------------------------------------------
 
 _KUNDUR = pstio.case_to_dict(load_case("kundur"))
-_FIELDS = [(t, c) for t in ("machines", "exciters", "pss", "governors", "buses", "branches")
-           for c in _KUNDUR["tables"][t]["columns"]]
+_FIELDS = [
+    (t, c)
+    for t in ("machines", "exciters", "pss", "governors", "buses", "branches")
+    for c in _KUNDUR["tables"][t]["columns"]
+]
 
 
 @st.composite
@@ -196,8 +231,12 @@ def mutated_kundur(draw) -> dict:
         table, col = draw(st.sampled_from(_FIELDS))
         t = d["tables"][table]
         row = draw(st.integers(0, len(t["rows"]) - 1))
-        value = draw(st.one_of(st.sampled_from([0.0, -1.0, 1e-9, 1e9, 0.5, 2.0]),
-                               st.floats(-1e3, 1e3, allow_nan=False)))
+        value = draw(
+            st.one_of(
+                st.sampled_from([0.0, -1.0, 1e-9, 1e9, 0.5, 2.0]),
+                st.floats(-1e3, 1e3, allow_nan=False),
+            )
+        )
         t["rows"][row][t["columns"].index(col)] = value
         note(f"{table} row {row + 1} {col} = {value!r}")
     return d
@@ -207,26 +246,41 @@ def case_run_property(d):
     def run():
         case = pstio.case_from_dict(d)
         Simulator(case).run([], t_end=0.1)
+
     outcome("case_run", run)
 
 
 test_fuzz_case_fields_run_or_refused = settings(QUICK, max_examples=15)(
-    given(mutated_kundur())(case_run_property))
+    given(mutated_kundur())(case_run_property)
+)
 test_fuzz_case_fields_run_or_refused_slow = pytest.mark.slow(
-    settings(SLOW, max_examples=300)(given(mutated_kundur())(case_run_property)))
+    settings(SLOW, max_examples=300)(given(mutated_kundur())(case_run_property))
+)
 
 
 # -- CLI numeric options ------------------------------------------------------------------
 
+
 def _cli_value():
-    return st.one_of(st.sampled_from(["nan", "inf", "-inf", "0", "-1", "1e6", "1e-7", "0.5",
-                                      "1", "5", "100"]),
-                     st.floats(-1e4, 1e4, allow_nan=False).map(repr))
+    return st.one_of(
+        st.sampled_from(["nan", "inf", "-inf", "0", "-1", "1e6", "1e-7", "0.5", "1", "5", "100"]),
+        st.floats(-1e4, 1e4, allow_nan=False).map(repr),
+    )
 
 
 _OMIB = ["--H", "--pm", "--delta0", "--pmax", "--f0", "--fault-cycles"]
-_SIMULATE = ["--t-fault", "--clear-cycles", "--far-clear-cycles", "--tf", "--step",
-             "--separation-limit", "--esd-pct", "--deadband-hz", "--v-gate", "--hysteresis-hz"]
+_SIMULATE = [
+    "--t-fault",
+    "--clear-cycles",
+    "--far-clear-cycles",
+    "--tf",
+    "--step",
+    "--separation-limit",
+    "--esd-pct",
+    "--deadband-hz",
+    "--v-gate",
+    "--hysteresis-hz",
+]
 
 
 def cli_property(command, options):
@@ -240,8 +294,13 @@ def cli_property(command, options):
             lines = res.stderr.strip().splitlines()
             assert len(lines) == 1 and lines[0].startswith("error: "), (args, res.stderr)
             raise StabctlError(lines[0])
-        assert res.exit_code == 0 and res.exception is None, (args, res.exit_code,
-                                                              res.exception, res.output)
+        assert res.exit_code == 0 and res.exception is None, (
+            args,
+            res.exit_code,
+            res.exception,
+            res.output,
+        )
+
     outcome(f"cli {command[0]}", invoke)
 
 

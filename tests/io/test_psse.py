@@ -11,14 +11,14 @@ import pytest
 from click.testing import CliRunner
 
 from stabctl.case import PQ, PV, SWING
-from stabctl.io import load_case
 from stabctl.cli import main
+from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import CaseError
-from stabctl.network.ybus import branch_admittances
-from stabctl.network.powerflow import solve_powerflow
+from stabctl.io import load_case
 from stabctl.io.psse import import_psse, load_psse
 from stabctl.io.psse_raw import read_raw, split_fields
-from stabctl.dynamics.results import SimulationResult
+from stabctl.network.powerflow import solve_powerflow
+from stabctl.network.ybus import branch_admittances
 
 DATA = Path(__file__).parents[1] / "data" / "psse"
 V33 = DATA / "five_bus_v33.raw"
@@ -34,8 +34,7 @@ def run(*args):
 
 def test_fields_split_on_commas_and_blanks_with_quoted_names_and_comments():
     # POM: items separated by commas or blanks, names in single quotes, '/' ends the data
-    assert split_fields("  1,'AB, C/ ',  2.0 3,,4 / 5, 6") == ["1", "AB, C/ ", "2.0", "3", "",
-                                                             "4"]
+    assert split_fields("  1,'AB, C/ ',  2.0 3,,4 / 5, 6") == ["1", "AB, C/ ", "2.0", "3", "", "4"]
 
 
 @pytest.mark.parametrize("path", [V33, V34])
@@ -46,16 +45,22 @@ def test_five_bus_buses_loads_and_shunts(path):
     assert sorted(bus) == [1, 2, 3, 4]  # bus 5 is IDE 4 (isolated): left out with its load
     # bus 2: load 1 in service (load 2 is not), I part at VM = 0.98, Y part and the fixed
     # shunt GL + jBL = 5 + j20 MW/Mvar as bus shunt; YQ = -4 Mvar is inductive
-    np.testing.assert_allclose(bus[2][[5, 6, 7, 8]],
-                               [(100 + 20 * 0.98) / 100, (30 + 5 * 0.98) / 100,
-                                (10 + 5) / 100, (-4 + 20) / 100], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(
+        bus[2][[5, 6, 7, 8]],
+        [(100 + 20 * 0.98) / 100, (30 + 5 * 0.98) / 100, (10 + 5) / 100, (-4 + 20) / 100],
+        rtol=0,
+        atol=1e-15,
+    )
     assert bus[2][9] == PQ and bus[4][9] == PQ and bus[1][9] == SWING and bus[3][9] == PV
     # switched shunt at bus 4: fixed at BINIT = 30 Mvar
     assert bus[4][8] == pytest.approx(0.30, abs=1e-15)
     # load_con: constant-power and constant-current shares of the bus load
-    np.testing.assert_allclose(raw.load_con,
-                               [[2, 100 / 119.6, 30 / 34.9, 19.6 / 119.6, 4.9 / 34.9],
-                                [4, 1, 1, 0, 0]], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(
+        raw.load_con,
+        [[2, 100 / 119.6, 30 / 34.9, 19.6 / 119.6, 4.9 / 34.9], [4, 1, 1, 0, 0]],
+        rtol=0,
+        atol=1e-15,
+    )
 
 
 @pytest.mark.parametrize("path", [V33, V34])
@@ -64,15 +69,41 @@ def test_five_bus_generators(path):
     bus3 = raw.bus[raw.bus[:, 0] == 3][0]
     # generators '1' and '2' in service (PG 150 + 50 MW, QG 20 + 10 Mvar, QT 100 + 60,
     # QB -50 - 20 Mvar); '3' has STAT 0; the bus is PV at VS = 1.01
-    np.testing.assert_allclose(bus3[[1, 3, 4, 10, 11]], [1.01, 2.0, 0.3, 1.6, -0.7],
-                               rtol=0, atol=1e-15)
+    np.testing.assert_allclose(
+        bus3[[1, 3, 4, 10, 11]], [1.01, 2.0, 0.3, 1.6, -0.7], rtol=0, atol=1e-15
+    )
     assert [g.as_dyr() for g in raw.generators] == [
-        {"number": 1, "bus": 1, "id": "1", "mbase": 500.0, "ra": 0.0, "xsource": 0.25,
-         "pg": 0.0, "qg": 0.0},
-        {"number": 2, "bus": 3, "id": "1", "mbase": 200.0, "ra": 0.0, "xsource": 0.2,
-         "pg": 150.0, "qg": 20.0},
-        {"number": 3, "bus": 3, "id": "2", "mbase": 100.0, "ra": 0.0, "xsource": 0.3,
-         "pg": 50.0, "qg": 10.0}]
+        {
+            "number": 1,
+            "bus": 1,
+            "id": "1",
+            "mbase": 500.0,
+            "ra": 0.0,
+            "xsource": 0.25,
+            "pg": 0.0,
+            "qg": 0.0,
+        },
+        {
+            "number": 2,
+            "bus": 3,
+            "id": "1",
+            "mbase": 200.0,
+            "ra": 0.0,
+            "xsource": 0.2,
+            "pg": 150.0,
+            "qg": 20.0,
+        },
+        {
+            "number": 3,
+            "bus": 3,
+            "id": "2",
+            "mbase": 100.0,
+            "ra": 0.0,
+            "xsource": 0.3,
+            "pg": 50.0,
+            "qg": 10.0,
+        },
+    ]
     assert raw.generators[2].source.line == (19 if path == V33 else 22)
 
 
@@ -80,17 +111,18 @@ def test_five_bus_generators(path):
 def test_five_bus_branches_and_transformer_bases(path):
     line = read_raw(path).line
     # lines: circuit 2 is out of service; circuit 3 has BI = BJ = 0.05 added to B = 0.1
-    np.testing.assert_allclose(line[:2, :7], [[1, 2, 0.01, 0.1, 0.2, 0, 0],
-                                              [1, 2, 0.02, 0.2, 0.2, 0, 0]])
+    np.testing.assert_allclose(
+        line[:2, :7], [[1, 2, 0.01, 0.1, 0.2, 0, 0], [1, 2, 0.02, 0.2, 0.2, 0, 0]]
+    )
     # T1: CW 2 (kV): t1 = 240/230, t2 = 21/20; CZ 2: Z = (0.005 + j0.08) * 100/500 on the
     # system base, referred through t2: Z * t2^2, tap t1/t2
     t1, t2 = 240 / 230, 21 / 20
-    np.testing.assert_allclose(line[2, :7], [2, 3, 0.001 * t2**2, 0.016 * t2**2, 0,
-                                             t1 / t2, 0], rtol=1e-14)
+    np.testing.assert_allclose(
+        line[2, :7], [2, 3, 0.001 * t2**2, 0.016 * t2**2, 0, t1 / t2, 0], rtol=1e-14
+    )
     # T2: CW 3 (pu of NOMV1 = 120 kV on a 115 kV bus): t1 = 1.02 * 120/115; ANG1 = 30 deg
     # is PST's phase -30 (stabctl.network.ybus)
-    np.testing.assert_allclose(line[3, :7], [4, 2, 0, 0.05, 0, 1.02 * 120 / 115, -30],
-                               rtol=1e-14)
+    np.testing.assert_allclose(line[3, :7], [4, 2, 0, 0.05, 0, 1.02 * 120 / 115, -30], rtol=1e-14)
 
 
 def test_two_winding_circuit_of_two_off_nominal_windings():
@@ -99,9 +131,11 @@ def test_two_winding_circuit_of_two_off_nominal_windings():
     case = load_psse(V33)
     ba = branch_admittances(case, rows=[2])
     z, t1, t2 = (0.005 + 0.08j) * 100 / 500, 240 / 230, 21 / 20
-    np.testing.assert_allclose([ba.yff[0], ba.yft[0], ba.ytf[0], ba.ytt[0]],
-                               [1 / (z * t1**2), -1 / (z * t1 * t2), -1 / (z * t1 * t2),
-                                1 / (z * t2**2)], rtol=1e-13)
+    np.testing.assert_allclose(
+        [ba.yff[0], ba.yft[0], ba.ytf[0], ba.ytt[0]],
+        [1 / (z * t1**2), -1 / (z * t1 * t2), -1 / (z * t1 * t2), 1 / (z * t2**2)],
+        rtol=1e-13,
+    )
 
 
 def test_impedance_loads_leave_load_con_empty():
@@ -134,10 +168,13 @@ def _edit(tmp_path, old, new, src=V33):
 
 
 def test_malformed_number_names_file_line_and_record(tmp_path):
-    path = _edit(tmp_path, "1.00000E-2, 1.00000E-1,   0.20000,  100.00,  100.00,  100.00,"
-                           "  0.00000,  0.00000,  0.00000,  0.00000,1,1",
-                 "1.00000E-2, 1.0O000E-1,   0.20000,  100.00,  100.00,  100.00,"
-                 "  0.00000,  0.00000,  0.00000,  0.00000,1,1")
+    path = _edit(
+        tmp_path,
+        "1.00000E-2, 1.00000E-1,   0.20000,  100.00,  100.00,  100.00,"
+        "  0.00000,  0.00000,  0.00000,  0.00000,1,1",
+        "1.00000E-2, 1.0O000E-1,   0.20000,  100.00,  100.00,  100.00,"
+        "  0.00000,  0.00000,  0.00000,  0.00000,1,1",
+    )
     with pytest.raises(CaseError, match=r"edited\.raw:22 branch record: field 5 '1\.0O000E-1'"):
         read_raw(path)
 
@@ -150,15 +187,18 @@ def test_unknown_bus_names_file_line_and_record(tmp_path):
 
 def _with_unsupported(tmp_path):
     """The v33 case with a three-winding transformer and a FACTS device added."""
-    three = ("    2,     3,     4,'2 ',1,1,1, 0.0, 0.0,2,'T3          ',1,   1,1.0000\n"
-             " 0.0, 0.1, 100.0, 0.0, 0.1, 100.0, 0.0, 0.1, 100.0, 1.0, 0.0\n"
-             "1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0\n"
-             "1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0\n"
-             "1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0\n"
-             "0 / END OF TRANSFORMER DATA")
+    three = (
+        "    2,     3,     4,'2 ',1,1,1, 0.0, 0.0,2,'T3          ',1,   1,1.0000\n"
+        " 0.0, 0.1, 100.0, 0.0, 0.1, 100.0, 0.0, 0.1, 100.0, 1.0, 0.0\n"
+        "1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0\n"
+        "1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0\n"
+        "1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0\n"
+        "0 / END OF TRANSFORMER DATA"
+    )
     path = _edit(tmp_path, "0 / END OF TRANSFORMER DATA", three)
-    text = path.read_text().replace("0 / END OF FACTS DEVICE DATA",
-                                    "'SVC1', 4, 0, 1\n0 / END OF FACTS DEVICE DATA", 1)
+    text = path.read_text().replace(
+        "0 / END OF FACTS DEVICE DATA", "'SVC1', 4, 0, 1\n0 / END OF FACTS DEVICE DATA", 1
+    )
     path.write_text(text)
     return path
 
@@ -177,17 +217,22 @@ def test_unsupported_records_skipped_with_a_warning(tmp_path):
     path = _with_unsupported(tmp_path)
     with pytest.warns(UserWarning, match="left out 2 unsupported record"):
         case, left_out = import_psse(path, on_unsupported="skip")
-    assert left_out == ("edited.raw:34 three-winding transformer 2-3-4 '2'",
-                        "edited.raw:51 facts device record")
+    assert left_out == (
+        "edited.raw:34 three-winding transformer 2-3-4 '2'",
+        "edited.raw:51 facts device record",
+    )
     assert len(case.branches) == 4  # the case without them
 
 
 @pytest.mark.andes
 def test_unsupported_dyr_records_are_listed_with_the_raw_ones():
-    andes, raw = _andes_case("kundur/kundur.raw")
+    _andes, raw = _andes_case("kundur/kundur.raw")
     dyr = raw.with_name("kundur_full.dyr")  # ends with ANDES's own Toggle record (line 37)
-    with pytest.raises(CaseError, match=r"kundur\.raw \+ kundur_full\.dyr: 1 unsupported "
-                                        r"record\(s\).*kundur_full\.dyr:37 TOGGLE 'LINE_8'"):
+    with pytest.raises(
+        CaseError,
+        match=r"kundur\.raw \+ kundur_full\.dyr: 1 unsupported "
+        r"record\(s\).*kundur_full\.dyr:37 TOGGLE 'LINE_8'",
+    ):
         load_psse(raw, dyr)
     with pytest.warns(UserWarning, match="kundur_full.dyr:37 TOGGLE"):
         case = load_psse(raw, dyr, on_unsupported="skip")
@@ -205,8 +250,11 @@ def test_load_of_mixed_sign_has_no_load_con_fractions(tmp_path):
 
 def test_remote_regulation_is_unsupported(tmp_path):
     path = _edit(tmp_path, "1.01000,     3,   100.000", "1.01000,     4,   100.000")
-    with pytest.raises(CaseError, match=r"edited\.raw:19 generator at bus 3 '2': remote "
-                                        r"voltage regulation of bus 4"):
+    with pytest.raises(
+        CaseError,
+        match=r"edited\.raw:19 generator at bus 3 '2': remote "
+        r"voltage regulation of bus 4",
+    ):
         load_psse(path)
 
 
@@ -287,8 +335,9 @@ def test_power_flow_matches_andes(name):
 def test_phase_shifter_sign_matches_andes(tmp_path):
     andes, raw = _andes_case("kundur/kundur.raw")
     # transformer 1-5 with ANG1 = 10 deg (winding 1 leads, PSS/E POM)
-    text = raw.read_text().replace("1.00000,   0.000,   0.000,     0.00", "1.00000,   0.000,"
-                                   "  10.000,     0.00", 1)
+    text = raw.read_text().replace(
+        "1.00000,   0.000,   0.000,     0.00", "1.00000,   0.000,  10.000,     0.00", 1
+    )
     path = tmp_path / "kundur_ps.raw"
     path.write_text(text)
     ss = _andes_pflow(andes, path)
@@ -308,8 +357,8 @@ def test_q_limits_switch_matches_andes_ieee14(tmp_path):
     flow; with them (PST's chq_lim, the default) PV buses switch to PQ and the voltages
     move.  The case starts at all: its bus-6 unit has Pm0 = 0.3 = TGOV1's Tmin, reached
     up to round-off (the start-up check's tolerance)."""
-    from stabctl.io.andes import strip_dyr
     from stabctl.dynamics.driver import Simulator
+    from stabctl.io.andes import strip_dyr
 
     andes, folder = _andes_case("ieee14")
     raw, dyr = folder / "ieee14.raw", tmp_path / "ieee14.dyr"
@@ -320,13 +369,14 @@ def test_q_limits_switch_matches_andes_ieee14(tmp_path):
     v_andes = np.array(ss.Bus.v.v) * np.exp(1j * np.array(ss.Bus.a.v))
     free, limited = Simulator(case, q_limits=False), Simulator(case)
     assert (free.q_limits, limited.q_limits) == (False, True)
-    assert np.max(np.abs(free.op.V[idx] - v_andes)) < 2e-5        # ANDES's R, X + 1e-8
+    assert np.max(np.abs(free.op.V[idx] - v_andes)) < 2e-5  # ANDES's R, X + 1e-8
     assert np.max(np.abs(limited.op.V[idx] - v_andes)) > 0.01
     assert np.sum(solve_powerflow(case).q_limited) == 4
     assert not solve_powerflow(case, q_limits=False).q_limited.any()
     out = tmp_path / "ieee14.json"
-    r = CliRunner().invoke(main, ["import-psse", str(raw), str(dyr), "-o", str(out),
-                                  "--conventions", "andes"])
+    r = CliRunner().invoke(
+        main, ["import-psse", str(raw), str(dyr), "-o", str(out), "--conventions", "andes"]
+    )
     assert r.exit_code == 0, r.output
     for flag, expected in (("--no-q-limits", False), ("--q-limits", True)):
         r = CliRunner().invoke(main, ["simulate", str(out), "--tf", "0.1", "--json", flag])

@@ -5,8 +5,8 @@ from pathlib import Path
 
 import pytest
 
-from stabctl.io.dyr import read_dyr
 from stabctl.errors import CaseError
+from stabctl.io.dyr import read_dyr
 from stabctl.io.psse import load_psse
 from stabctl.io.psse_raw import read_raw
 
@@ -30,21 +30,24 @@ def test_every_cut_before_the_last_section_is_refused_with_file_line(tmp_path, s
         path = _write(tmp_path, text[:n])
         with pytest.raises(CaseError, match=r"cut\.raw:\d+"):
             read_raw(path)
-    whole = read_raw(_write(tmp_path, text[:text.rindex("Q")]))
+    whole = read_raw(_write(tmp_path, text[: text.rindex("Q")]))
     assert whole.line.shape == full.line.shape
 
 
 def test_cut_in_the_bus_data_names_file_line_not_a_missing_matrix(tmp_path):
     text = V33.read_text()
-    cut = text[:text.index("    3,'GEN")]
-    with pytest.raises(CaseError, match=r"cut\.raw:5: the file ends in the bus data, without "
-                                        r"its '0 /' terminator and the 'Q' record"):
+    cut = text[: text.index("    3,'GEN")]
+    with pytest.raises(
+        CaseError,
+        match=r"cut\.raw:5: the file ends in the bus data, without "
+        r"its '0 /' terminator and the 'Q' record",
+    ):
         load_psse(_write(tmp_path, cut), DYR)
 
 
 def test_cut_after_the_generators_is_a_raw_error_not_unsupported_dyr_records(tmp_path):
     text = V33.read_text()
-    cut = text[:text.index("0 / END OF GENERATOR DATA")]
+    cut = text[: text.index("0 / END OF GENERATOR DATA")]
     with pytest.raises(CaseError) as err:
         load_psse(_write(tmp_path, cut), DYR)
     assert "cut.raw:20: the file ends in the generator data" in str(err.value)
@@ -55,7 +58,7 @@ def test_half_read_last_line_is_refused_not_read_with_a_wrong_value(tmp_path):
     # the issue's case: a branch line cut inside X (0.22001 read as 2.2001 and B = 0)
     text = V33.read_text()
     line = "    1,      2,'2 ', 1.00000E-2, 1.0"
-    cut = text[:text.index(line) + len(line)]
+    cut = text[: text.index(line) + len(line)]
     with pytest.raises(CaseError, match=r"cut\.raw:23 branch record: 5 field\(s\)"):
         read_raw(_write(tmp_path, cut))
 
@@ -65,26 +68,32 @@ def test_q_before_a_section_terminator_is_refused(tmp_path):
     with pytest.raises(CaseError, match=r"cut\.raw:\d+"):
         read_raw(_write(tmp_path, text))
     early_q = V33.read_text().split("0 / END OF BRANCH DATA")[0] + "0 / END OF BRANCH DATA\nQ\n"
-    with pytest.raises(CaseError, match=r"cut\.raw:\d+: 'Q' \(end of data\) inside the "
-                                        r"transformer data: 14 section\(s\) not ended"):
+    with pytest.raises(
+        CaseError,
+        match=r"cut\.raw:\d+: 'Q' \(end of data\) inside the "
+        r"transformer data: 14 section\(s\) not ended",
+    ):
         read_raw(_write(tmp_path, early_q))
 
 
 def test_q_may_leave_out_the_sections_older_writers_omit(tmp_path):
     text = V33.read_text()
-    short = text[:text.index("0 / END OF GNE DATA")] + "Q\n"
+    short = text[: text.index("0 / END OF GNE DATA")] + "Q\n"
     assert read_raw(_write(tmp_path, short)).line.shape == read_raw(V33).line.shape
 
 
-@pytest.mark.parametrize("marker,what", [
-    ("    1,      2,'1 ', 1.00000E-2", r"branch 1-2 '1' appears twice \(first at line 22\)"),
-    ("    3,'1 ',   150.000", r"generator at bus 3 '1' appears twice \(first at line 18\)"),
-    ("    4,'1 ',1,   1,   1,    40.000", r"load at bus 4 '1' appears twice"),
-])
+@pytest.mark.parametrize(
+    "marker,what",
+    [
+        ("    1,      2,'1 ', 1.00000E-2", r"branch 1-2 '1' appears twice \(first at line 22\)"),
+        ("    3,'1 ',   150.000", r"generator at bus 3 '1' appears twice \(first at line 18\)"),
+        ("    4,'1 ',1,   1,   1,    40.000", r"load at bus 4 '1' appears twice"),
+    ],
+)
 def test_duplicated_record_is_refused(tmp_path, marker, what):
     text = V33.read_text()
     start = text.index(marker)
-    line = text[start:text.index("\n", start) + 1]
+    line = text[start : text.index("\n", start) + 1]
     path = _write(tmp_path, text.replace(line, line + line, 1))
     with pytest.raises(CaseError, match=what):
         read_raw(path)
@@ -92,8 +101,9 @@ def test_duplicated_record_is_refused(tmp_path, marker, what):
 
 @pytest.mark.parametrize("token", ["nan", "inf", "-Infinity"])
 def test_non_finite_raw_field_is_refused(tmp_path, token):
-    text = V33.read_text().replace("1.00000E-2, 1.00000E-1,   0.20000", f"1.00000E-2, {token}, "
-                                   "  0.20000", 1)
+    text = V33.read_text().replace(
+        "1.00000E-2, 1.00000E-1,   0.20000", f"1.00000E-2, {token},   0.20000", 1
+    )
     with pytest.raises(CaseError, match=r"cut\.raw:22 branch record: field 5 .* not a finite"):
         read_raw(_write(tmp_path, text))
 
@@ -109,14 +119,20 @@ def test_record_of_another_section_read_as_this_one_is_refused(tmp_path):
 def test_non_finite_dyr_parameter_is_refused(tmp_path, token):
     text = DYR.read_text().replace("8.0  0.03  0.4", f"8.0  {token}  0.4", 1)
     path = _write(tmp_path, text, "bad.dyr")
-    with pytest.raises(CaseError, match=rf"bad\.dyr:1: GENROU parameter 2 '{token}' is not a "
-                                        "finite number"):
+    with pytest.raises(
+        CaseError,
+        match=rf"bad\.dyr:1: GENROU parameter 2 '{token}' is not a "
+        "finite number",
+    ):
         read_dyr(path)
 
 
 def test_dyr_cut_inside_a_record_is_refused(tmp_path):
     text = DYR.read_text()
-    path = _write(tmp_path, text[:text.index("1.8  1.7  0.3  0.55  0.25  0.06  0.0  0.0 /  "
-                                             "machine 3")], "cut.dyr")
+    path = _write(
+        tmp_path,
+        text[: text.index("1.8  1.7  0.3  0.55  0.25  0.06  0.0  0.0 /  machine 3")],
+        "cut.dyr",
+    )
     with pytest.raises(CaseError, match=r"cut\.dyr:3: record not terminated by '/'"):
         load_psse(V33, path)

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stabctl.io import pst as pstio
-from stabctl.io import load_case
 from stabctl.errors import CaseError
+from stabctl.io import load_case
+from stabctl.io import pst as pstio
 
 DATA = Path(__file__).parents[1] / "data" / "pstess"
 
@@ -25,9 +25,9 @@ def test_m_file_parses_to_octaves_matrices():
     octave = json.loads((DATA / "d2asbegp.json").read_text())
     for key, value in octave.items():
         np.testing.assert_array_equal(mats[key], np.array(value, float), err_msg=key)
-    assert mats["ind_con"].size == 0 and mats["mld_con"].size == 0   # `= [];`
-    assert mats["mac_con"].shape == (4, 21)     # rows continued with `...`
-    assert mats["sw_con"].shape == (5, 7)       # commented-out rows skipped
+    assert mats["ind_con"].size == 0 and mats["mld_con"].size == 0  # `= [];`
+    assert mats["mac_con"].shape == (4, 21)  # rows continued with `...`
+    assert mats["sw_con"].shape == (5, 7)  # commented-out rows skipped
 
 
 def test_m_and_json_give_the_same_case_and_keep_sw_con():
@@ -36,7 +36,7 @@ def test_m_and_json_give_the_same_case_and_keep_sw_con():
     assert a.name == b.name == "d2asbegp"
     assert a.equals(b)
     np.testing.assert_array_equal(a.sw_con[3], [0.2, 0, 0, 0, 0, 0, 0.01])
-    assert set(a.extra) == {"lmod_con", "rlmod_con"}   # empty ind_con/mld_con dropped
+    assert set(a.extra) == {"lmod_con", "rlmod_con"}  # empty ind_con/mld_con dropped
 
 
 def test_builtin_kundur_equals_fresh_import():
@@ -113,8 +113,16 @@ def test_own_format_round_trip(tmp_path, name):
     raw = json.loads(path.read_text())
     assert (raw["format"], raw["version"], raw["licence"]) == ("stabctl-case", 1, "MIT, test")
     assert raw["tables"]["machines"]["columns"][:8] == [
-        "number", "bus", "mva", "xl", "ra", "xd", "xdp", "xdpp"]
-    assert load_case(path).equals(case)            # load_case by path, dispatch on content
+        "number",
+        "bus",
+        "mva",
+        "xl",
+        "ra",
+        "xd",
+        "xdp",
+        "xdpp",
+    ]
+    assert load_case(path).equals(case)  # load_case by path, dispatch on content
 
 
 def test_own_format_is_one_row_per_line(tmp_path):

@@ -8,11 +8,11 @@ with the solution found from scratch."""
 import numpy as np
 import pytest
 
-from stabctl.io import load_case
+from stabctl.dynamics.driver import Simulator, _Run
 from stabctl.dynamics.events import Fault
+from stabctl.io import load_case
 from stabctl.models.machines import internal_voltage
 from stabctl.network.solution import V_RELEASE, V_SWITCH, _load_mismatch, solve_nc
-from stabctl.dynamics.driver import Simulator, _Run
 
 
 @pytest.fixture(scope="module")
@@ -26,17 +26,19 @@ def fault_network():
     run.advance(k)
     n = m.mp.n
     psi = np.empty(n, complex)
-    internal_voltage(m.params.MP, run.x[:6 * n].reshape(6, n), psi)
+    internal_voltage(m.params.MP, run.x[: 6 * n].reshape(6, n), psi)
     return m, nets[grid.interval[k]], nets[0], psi, run.V_nc.copy()
 
 
 def solve(m, net, psi, V, held):
     p = m.params
-    it = solve_nc(net.Y21, net.Y22, net.Z22, psi, p.S_P, p.I0, p.Y_low, V,
-                  np.zeros(V.size, complex), held)
+    it = solve_nc(
+        net.Y21, net.Y22, net.Z22, psi, p.S_P, p.I0, p.Y_low, V, np.zeros(V.size, complex), held
+    )
     F = np.empty(V.size, complex)
-    resid = _load_mismatch(net.Y21 @ psi, net.Y22, V, p.S_P, p.I0, p.Y_low,
-                           np.zeros(V.size, complex), F, held)
+    resid = _load_mismatch(
+        net.Y21 @ psi, net.Y22, V, p.S_P, p.I0, p.Y_low, np.zeros(V.size, complex), F, held
+    )
     return it, resid
 
 
@@ -45,7 +47,7 @@ def test_fault_holds_loads_near_the_switch_and_reuses_the_hold(fault_network):
     V, held = V_fault.copy(), np.zeros(V_fault.size, np.bool_)
     it, resid = solve(m, fault, psi, V, held)
     assert it >= 0 and resid < 1e-10
-    assert 0 < held.sum() < held.size                    # some loads, not all
+    assert 0 < held.sum() < held.size  # some loads, not all
     assert np.all(np.abs(V[held]) < V_RELEASE)
     # the next evaluation starts from the hold and lands on the same solution
     V2, held2 = V.copy(), held.copy()
@@ -78,6 +80,6 @@ def test_lapack_solve_matches_numpy_and_reports_a_singular_matrix():
     A_before = A.copy()
     x, info = _lapack_solve(A, b)
     assert info == 0 and np.allclose(A @ x, b, atol=1e-12)
-    assert np.array_equal(A, A_before)                      # the input is left alone
+    assert np.array_equal(A, A_before)  # the input is left alone
     _, info = _lapack_solve(np.array([[1.0, 2.0], [2.0, 4.0]]), np.ones(2))
-    assert info == 2                                        # U[1, 1] = 0 (dgesv's INFO)
+    assert info == 2  # U[1, 1] = 0 (dgesv's INFO)

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from stabctl.network import ybus as network
 from stabctl.case import PQ, PV
-from stabctl.io import load_case
 from stabctl.errors import CaseError, PowerFlowError, UnknownBusError
+from stabctl.io import load_case
+from stabctl.network import ybus as network
 from stabctl.network.powerflow import solve_powerflow
 
 DATA = Path(__file__).parents[1] / "data" / "pstess"
@@ -38,11 +38,11 @@ def test_powerflow_matches_pstess(name):
     ref = reference(name)
     got = res.bus_matrix()
     assert got.shape == ref.shape == (load_case(name).n_bus, 15)
-    np.testing.assert_array_equal(got[:, 0], ref[:, 0])                  # bus order
-    assert np.max(np.abs(got[:, 1] - ref[:, 1])) < 1e-4                  # |V|, pu
-    assert np.max(np.abs(got[:, 2] - ref[:, 2])) < 1e-2                  # angle, deg
-    np.testing.assert_allclose(got[:, 3:7], ref[:, 3:7], atol=1e-4)      # Pg Qg Pl Ql
-    np.testing.assert_array_equal(got[:, 7:], ref[:, 7:])                # G B type limits kV
+    np.testing.assert_array_equal(got[:, 0], ref[:, 0])  # bus order
+    assert np.max(np.abs(got[:, 1] - ref[:, 1])) < 1e-4  # |V|, pu
+    assert np.max(np.abs(got[:, 2] - ref[:, 2])) < 1e-2  # angle, deg
+    np.testing.assert_allclose(got[:, 3:7], ref[:, 3:7], atol=1e-4)  # Pg Qg Pl Ql
+    np.testing.assert_array_equal(got[:, 7:], ref[:, 7:])  # G B type limits kV
     np.testing.assert_allclose(res.vang, np.deg2rad(ref[:, 2]), atol=1e-2 * np.pi / 180)
     assert res.max_mismatch <= 1e-8 and res.iterations <= 10
 
@@ -50,8 +50,8 @@ def test_powerflow_matches_pstess(name):
 def test_kundur_pstess_generation_and_swing():
     res = solve_powerflow(load_case("kundur"))
     k = res.case.bus_index
-    assert res.pgen[k(1)] == pytest.approx(7.26106622, abs=1e-6)   # swing P from reference
-    assert res.vang_deg[k(1)] == 18.5                               # swing angle fixed
+    assert res.pgen[k(1)] == pytest.approx(7.26106622, abs=1e-6)  # swing P from reference
+    assert res.vang_deg[k(1)] == 18.5  # swing angle fixed
     assert res.qgen[k(12)] == pytest.approx(1.763058068, abs=1e-6)
     assert np.all(res.vmag[res.case.buses.kind == PV] == 1.01)
 
@@ -60,7 +60,7 @@ def test_solved_case_is_the_bus_solution():
     res = solve_powerflow(load_case("kundur"))
     solved = res.solved_case()
     np.testing.assert_array_equal(solved.buses.matrix(), res.bus_matrix())
-    again = solve_powerflow(solved)           # starting at the solution: no iteration
+    again = solve_powerflow(solved)  # starting at the solution: no iteration
     assert again.iterations == 0
 
 
@@ -84,7 +84,7 @@ def test_power_balance_equals_losses():
 
 def test_q_limit_switches_pv_to_pq_at_the_limit():
     case = load_case("kundur")
-    i = case.bus_index(2)                        # Qg = 1.942 in the reference
+    i = case.bus_index(2)  # Qg = 1.942 in the reference
     qmax = np.where(case.buses.number == 2, 1.8, case.buses.qmax)
     case = case.replace(buses=case.buses.replace(qmax=qmax))
     res = solve_powerflow(case)
@@ -92,14 +92,14 @@ def test_q_limit_switches_pv_to_pq_at_the_limit():
     assert res.qgen[i] == pytest.approx(1.8, abs=1e-9)
     assert res.tap_iterations == 1
     assert res.qload[i] == pytest.approx(0.0, abs=1e-8)
-    assert res.vmag[i] < 1.01                    # voltage no longer held
+    assert res.vmag[i] < 1.01  # voltage no longer held
     assert res.bus_matrix()[i, 9] == 3
     assert not solve_powerflow(case, q_limits=False).q_limited.any()
 
 
 def test_tap_changer_moves_one_step_like_lftap():
     case = load_case("kundur")
-    j = case.bus_index(4)                        # V = 0.998 in the reference
+    j = case.bus_index(4)  # V = 0.998 in the reference
     vmin = case.buses.vmin.copy()
     vmin[j] = 0.999
     case = case.replace(buses=case.buses.replace(vmin=vmin))
@@ -109,12 +109,15 @@ def test_tap_changer_moves_one_step_like_lftap():
     assert res.tap_iterations == 2 and res.vmag[j] > 0.999
     # without the tap changer the clipped voltage cannot reach the solution (PST: no
     # convergence) -> the error names the bus
-    with pytest.raises(PowerFlowError, match=r"did not converge after 50 iteration\(s\).*at bus (3|4) "):
+    with pytest.raises(
+        PowerFlowError, match=r"did not converge after 50 iteration\(s\).*at bus (3|4) "
+    ):
         solve_powerflow(case, tap_changing=False)
 
 
 def test_injection_acts_as_negative_load():
     from stabctl.case import InjectionTable
+
     case = load_case("kundur")
     inj = InjectionTable.from_matrix([[4, 1.0, 0.2]])
     with_inj = solve_powerflow(case.replace(injections=inj))
@@ -131,7 +134,9 @@ def test_injection_acts_as_negative_load():
 
 def test_nonconvergence_names_iterations_and_bus():
     case = load_case("kundur")
-    heavy = case.replace(buses=case.buses.replace(pload=case.buses.pload * 5, qload=case.buses.qload * 5))
+    heavy = case.replace(
+        buses=case.buses.replace(pload=case.buses.pload * 5, qload=case.buses.qload * 5)
+    )
     with pytest.raises(PowerFlowError) as e:
         solve_powerflow(heavy, max_iter=15, tap_changing=False)
     msg = str(e.value)
@@ -142,9 +147,12 @@ def test_nonconvergence_names_iterations_and_bus():
 
 def test_islanded_bus_raises_powerflowerror():
     case = load_case("kundur")
-    row = network.circuit_row(case, 3, 4)            # the only branch to load bus 4
-    with pytest.raises(PowerFlowError, match=r"bus\(es\) 4 have no path to a swing bus: an "
-                                             r"island left by the dropped branch"):
+    row = network.circuit_row(case, 3, 4)  # the only branch to load bus 4
+    with pytest.raises(
+        PowerFlowError,
+        match=r"bus\(es\) 4 have no path to a swing bus: an "
+        r"island left by the dropped branch",
+    ):
         solve_powerflow(case, drop=[row])
 
 
@@ -180,8 +188,12 @@ def test_ybus_equals_pst_incidence_formula(name):
 def test_ybus_with_phase_shift_and_tap_follows_pst():
     case = load_case("kundur")
     br = case.branches
-    case = case.replace(branches=br.replace(phase_deg=np.where(np.arange(len(br)) == 6, 5.0, 0.0),
-                                            tap=np.where(np.arange(len(br)) == 6, 1.05, br.tap)))
+    case = case.replace(
+        branches=br.replace(
+            phase_deg=np.where(np.arange(len(br)) == 6, 5.0, 0.0),
+            tap=np.where(np.arange(len(br)) == 6, 1.05, br.tap),
+        )
+    )
     np.testing.assert_allclose(network.build_ybus(case).toarray(), pst_y_sparse(case), atol=1e-9)
 
 
@@ -190,8 +202,9 @@ def test_ybus_row_sums_are_shunts_without_charging_and_taps():
     br = case.branches
     flat = case.replace(branches=br.replace(b=np.zeros(len(br)), tap=np.ones(len(br))))
     y = network.build_ybus(flat)
-    np.testing.assert_allclose(y @ np.ones(case.n_bus), case.buses.gshunt + 1j * case.buses.bshunt,
-                               atol=1e-9)
+    np.testing.assert_allclose(
+        y @ np.ones(case.n_bus), case.buses.gshunt + 1j * case.buses.bshunt, atol=1e-9
+    )
     # with charging: row sum = shunt + half the charging of each incident branch
     y = network.build_ybus(case.replace(branches=br.replace(tap=np.ones(len(br)))))
     half = np.zeros(case.n_bus)
@@ -207,7 +220,7 @@ def test_ybus_symmetric_without_phase_shifters():
 
 def test_ybus_two_bus_closed_form():
     case = load_case("kundur")
-    row = 2                                              # 3-4 transformer, x = 0.005, tap 0.975
+    row = 2  # 3-4 transformer, x = 0.005, tap 0.975
     ba = network.branch_admittances(case, [row])
     y, t = 1 / 0.005j, 0.975
     assert ba.yff[0] == pytest.approx(y / t**2) and ba.ytt[0] == pytest.approx(y)
@@ -217,7 +230,7 @@ def test_ybus_two_bus_closed_form():
 def test_tripping_one_of_two_parallel_circuits_halves_the_coupling():
     case = load_case("kundur")
     rows = network.find_branches(case, 101, 3)
-    assert rows.tolist() == [4, 5]                        # both 3-101 circuits
+    assert rows.tolist() == [4, 5]  # both 3-101 circuits
     i, j = case.bus_index(3), case.bus_index(101)
     full = network.build_ybus(case)
     tripped = network.build_ybus(case, drop=[network.circuit_row(case, 3, 101, 1)])

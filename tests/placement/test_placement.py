@@ -1,8 +1,8 @@
 """ESD placement: SIME against the equal-area criterion, the convex program against the
 OMIB closed form, cuts and sparsity on small programs with known answers, the describing
 function and damping rows, infeasibility naming the contingency, and the verification loop
-really simulating (counted Simulator.run calls, CCTs equal independent `stabctl.stability.cct` runs).
-Simulation-based tests use Kundur only."""
+really simulating (counted Simulator.run calls, CCTs equal independent `stabctl.stability.cct`
+runs). Simulation-based tests use Kundur only."""
 
 import json
 
@@ -10,28 +10,41 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from stabctl.io import load_case
-from stabctl.stability.cct import SearchOptions, LineFault, critical_clearing_time
 from stabctl.cli import main
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import InputError
+from stabctl.io import load_case
+from stabctl.placement.evaluation import Contingency, VerifyOptions
+from stabctl.placement.loop import PlaceOptions, Study, WarmStart, place
+from stabctl.placement.program import (
+    CCTCut,
+    InfeasibleError,
+    Site,
+    candidate_sites,
+    diagnose,
+    solve_allocation,
+    sparse_allocation,
+)
 from stabctl.smallsignal.damping import DampingModel, relay_df
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smib.omib import PAPER_OMIB, clearing_state_closed_form, simulate
-from stabctl.placement.program import (CCTCut, InfeasibleError, Site, candidate_sites, diagnose,
-                               solve_allocation, sparse_allocation)
-from stabctl.placement.evaluation import Contingency, VerifyOptions
-from stabctl.placement.loop import PlaceOptions, Study, WarmStart, place
-from stabctl.dynamics.results import SimulationResult
-from stabctl.stability.sime import omib_equivalent, storage_integrals, unstable_margin, unstable_point
-from stabctl.dynamics.driver import Simulator
-from stabctl.storage.devices import StorageDevice, StorageFleet
+from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
+from stabctl.stability.sime import (
+    omib_equivalent,
+    storage_integrals,
+    unstable_margin,
+    unstable_point,
+)
 from stabctl.storage.control import BangBangCOI
+from stabctl.storage.devices import StorageDevice, StorageFleet
 
 BASE_MVA, F0 = 100.0, 60.0
-CASE1 = LineFault(3, 101)                       # Kundur, paper Case 1 (CCT 0.269 s)
+CASE1 = LineFault(3, 101)  # Kundur, paper Case 1 (CCT 0.269 s)
 
 
 # -- SIME and the convex program against the OMIB equal-area criterion -------------------
+
 
 def omib_as_result(run) -> SimulationResult:
     """An OMIB run as a two-machine result: machine 1 the generator (H on the system base),
@@ -40,10 +53,19 @@ def omib_as_result(run) -> SimulationResult:
     z = np.zeros((n, 2))
     angle, speed = z.copy(), z.copy()
     angle[:, 0], speed[:, 0] = run.delta, run.omega / (2 * np.pi * F0)
-    return SimulationResult(t=run.t, machines=np.array([1, 2]), buses=np.array([1]),
-                            speed=speed, angle=angle, pelect=z, pmech=z, efd=z,
-                            vmag=np.ones((n, 1)), vang=np.zeros((n, 1)),
-                            inertia=np.array([PAPER_OMIB.H * BASE_MVA, 1e9]))
+    return SimulationResult(
+        t=run.t,
+        machines=np.array([1, 2]),
+        buses=np.array([1]),
+        speed=speed,
+        angle=angle,
+        pelect=z,
+        pmech=z,
+        efd=z,
+        vmag=np.ones((n, 1)),
+        vang=np.zeros((n, 1)),
+        inertia=np.array([PAPER_OMIB.H * BASE_MVA, 1e9]),
+    )
 
 
 def sime_of_omib(t_clear):
@@ -54,15 +76,14 @@ def sime_of_omib(t_clear):
     ku = unstable_point(eq, t_clear)
     modes = (run.t >= t_clear).astype(int)[:, None]
     g = eq.group_weights(np.array([[1.0], [0.0]]))
-    return unstable_margin(eq, ku), float(g[0] * storage_integrals(eq, modes, ku)[0]), \
-        run.delta_cl
+    return unstable_margin(eq, ku), float(g[0] * storage_integrals(eq, modes, ku)[0]), run.delta_cl
 
 
 def test_sime_margin_of_the_omib_is_the_equal_area_excess_and_its_sensitivity_the_angle():
-    t_clear = 15 / 60                                    # unstable (Table 1)
+    t_clear = 15 / 60  # unstable (Table 1)
     eta, deta_dp, d_cl = sime_of_omib(t_clear)
     eac = PAPER_OMIB.decelerating_area(d_cl) - PAPER_OMIB.accelerating_area(d_cl)
-    assert eta == pytest.approx(eac, rel=1e-4)           # energy conservation
+    assert eta == pytest.approx(eac, rel=1e-4)  # energy conservation
     assert deta_dp == pytest.approx(PAPER_OMIB.delta_u - d_cl, rel=1e-4)
 
 
@@ -72,12 +93,18 @@ def test_convex_rating_equals_the_equal_area_closed_form():
     P_C (delta_u - delta_cl): P_C = (A1 - A2) / (delta_u - delta_tgt)."""
     t_tgt, eps = 15 / 60, 2e-3
     d_tgt, _ = clearing_state_closed_form(PAPER_OMIB, t_tgt)
-    closed = (PAPER_OMIB.accelerating_area(d_tgt) - PAPER_OMIB.decelerating_area(d_tgt)) / \
-        (PAPER_OMIB.delta_u - d_tgt)
+    closed = (PAPER_OMIB.accelerating_area(d_tgt) - PAPER_OMIB.decelerating_area(d_tgt)) / (
+        PAPER_OMIB.delta_u - d_tgt
+    )
     eta, deta_dp, _ = sime_of_omib(t_tgt)
     slope = (sime_of_omib(t_tgt + eps)[0] - eta) / eps
-    cut = CCTCut("omib", target_s=t_tgt, cct_s=t_tgt + eta / -slope,
-                 gradient=np.array([deta_dp / -slope / BASE_MVA]), at_mw=np.zeros(1))
+    cut = CCTCut(
+        "omib",
+        target_s=t_tgt,
+        cct_s=t_tgt + eta / -slope,
+        gradient=np.array([deta_dp / -slope / BASE_MVA]),
+        at_mw=np.zeros(1),
+    )
     alloc = solve_allocation([Site(bus=1, machine=1, max_mw=100.0)], [cut])
     assert alloc.mw[0] / BASE_MVA == pytest.approx(closed, rel=1e-4)
     assert alloc.predicted_cct_s["omib"] == pytest.approx(t_tgt)
@@ -101,19 +128,20 @@ def test_program_takes_the_cheapest_ccts_per_mw_and_respects_costs_and_safety():
     alloc = solve_allocation(SITES, [cut("a", [1, 2, 0])])
     np.testing.assert_allclose(alloc.mw, [0, 50, 0], atol=1e-5)
     dear = (Site(1, 1, 100.0), Site(2, 2, 100.0, cost=3.0), Site(3, 3, 100.0))
-    np.testing.assert_allclose(solve_allocation(dear, [cut("a", [1, 2, 0])]).mw, [100, 0, 0],
-                               atol=1e-5)
+    np.testing.assert_allclose(
+        solve_allocation(dear, [cut("a", [1, 2, 0])]).mw, [100, 0, 0], atol=1e-5
+    )
     safe = solve_allocation(SITES, [cut("a", [1, 2, 0])], safety_s=0.002)
     assert safe.mw[1] == pytest.approx(51.0, abs=1e-5)
 
 
 def test_infeasible_bounds_name_the_contingency():
-    cuts = [cut("easy", [0, 0, 2]), cut("hard", [0.1, 0.1, 0])]    # hard needs 1000 MW
+    cuts = [cut("easy", [0, 0, 2]), cut("hard", [0.1, 0.1, 0])]  # hard needs 1000 MW
     assert diagnose(cuts, [s.max_mw for s in SITES]) == ["hard"]
     with pytest.raises(InfeasibleError, match="hard") as exc:
         solve_allocation(SITES, cuts)
     assert exc.value.contingencies == ("hard",)
-    elastic = solve_allocation(SITES, cuts, cct_penalty=1e3)        # elastic rows solve
+    elastic = solve_allocation(SITES, cuts, cct_penalty=1e3)  # elastic rows solve
     assert elastic.cct_slack > 0
 
 
@@ -133,7 +161,7 @@ def test_max_sites_and_site_cost_keep_the_shared_site():
 
 def test_secant_correction_scales_the_gradient_and_fits_every_point():
     c = CCTCut("a", 0.3, 0.2, np.array([1e-3, 2e-3, 0.0]), np.zeros(3))
-    once = c.through([(np.array([0, 10, 0]), 0.21)])               # measured half the slope
+    once = c.through([(np.array([0, 10, 0]), 0.21)])  # measured half the slope
     np.testing.assert_allclose(once.gradient, [0.5e-3, 1e-3, 0], atol=1e-12)
     pts = [(np.array([0, 10, 0]), 0.21), (np.array([10, 0, 5]), 0.23)]
     both = c.through(pts)
@@ -143,11 +171,12 @@ def test_secant_correction_scales_the_gradient_and_fits_every_point():
 
 # -- describing function and damping rows ------------------------------------------------
 
+
 def test_describing_function_of_the_bang_bang_relay():
     d, A = 0.1 / F0, 0.25 / F0
     closed = 4 / (np.pi * A) * np.sqrt(1 - (d / A) ** 2)
-    assert relay_df(0.1, 0.25, F0).real == pytest.approx(closed, rel=1e-3)   # 4000 points
-    assert relay_df(0.1, 0.05, F0) == 0                            # idle inside the band
+    assert relay_df(0.1, 0.25, F0).real == pytest.approx(closed, rel=1e-3)  # 4000 points
+    assert relay_df(0.1, 0.05, F0) == 0  # idle inside the band
     lagged = relay_df(0.1, 0.25, F0, hysteresis_hz=0.01)
     assert lagged.imag < 0 and abs(lagged.imag) < 0.1 * lagged.real
 
@@ -163,8 +192,8 @@ def kundur_damping():
 def test_damping_rows_predict_the_recomputed_eigenvalues_to_first_order(kundur_damping):
     dm, zmin = kundur_damping, 0.3
     rows = dm.rows(np.zeros(4), zmin)
-    P = np.array([2.0, 0, 1.0, 0])                                 # MW, small
-    kappa = zmin / np.sqrt(1 - zmin ** 2)
+    P = np.array([2.0, 0, 1.0, 0])  # MW, small
+    kappa = zmin / np.sqrt(1 - zmin**2)
     ma = dm.modes(P)
     lam = ma.eigenvalues[ma.electromechanical]
     actual = (lam.real + kappa * lam.imag) / np.abs(lam)
@@ -173,6 +202,7 @@ def test_damping_rows_predict_the_recomputed_eigenvalues_to_first_order(kundur_d
 
 
 # -- the verification loop on Kundur -------------------------------------------------------
+
 
 @pytest.fixture(scope="module")
 def counted_place():
@@ -194,17 +224,18 @@ def counted_place():
 
 def test_verification_runs_the_simulator_for_every_reported_simulation(counted_place):
     res, calls = counted_place
-    reported = res.base["3-101"]["n_simulations"] + \
-        sum(r["n_simulations"] for r in res.iterations)
+    reported = res.base["3-101"]["n_simulations"] + sum(r["n_simulations"] for r in res.iterations)
     assert len(calls) == reported > 20
-    assert sum(c is not None for c in calls) >= len(res.iterations) * 5   # with storage
+    assert sum(c is not None for c in calls) >= len(res.iterations) * 5  # with storage
 
 
 def test_verified_cct_equals_an_independent_cct_search(counted_place):
     res, _ = counted_place
     assert res.verified and res.allocation.total_mw > 0
-    fleet = StorageFleet(tuple(StorageDevice(r["bus"], r["machine"], r["mw"])
-                               for r in res.allocation.rows()), BangBangCOI())
+    fleet = StorageFleet(
+        tuple(StorageDevice(r["bus"], r["machine"], r["mw"]) for r in res.allocation.rows()),
+        BangBangCOI(),
+    )
     sim = Simulator(load_case("kundur"))
     independent = critical_clearing_time(sim, CASE1, storage=fleet)
     assert res.evaluations["3-101"]["cct_s"] == pytest.approx(independent.cct_s)
@@ -231,11 +262,14 @@ def test_a_feasible_uniform_start_is_only_ever_improved_and_verified():
     may only return a verified allocation costing at most that fleet."""
     case = load_case("kundur")
     sites = candidate_sites(case)
-    uniform = 0.05 * np.array([case.machines.mva[case.machine_index(s.machine)]
-                               for s in sites])
+    uniform = 0.05 * np.array([case.machines.mva[case.machine_index(s.machine)] for s in sites])
     # the uniform 5 % fleet clears the Case-1 fault up to 0.202 s (ieee conventions)
-    res = place("kundur", [Contingency(CASE1, 0.195)], options=PlaceOptions(max_iter=4),
-                warm=WarmStart(start=uniform))
+    res = place(
+        "kundur",
+        [Contingency(CASE1, 0.195)],
+        options=PlaceOptions(max_iter=4),
+        warm=WarmStart(start=uniform),
+    )
     assert res.verified
     assert res.allocation.total_mw <= uniform.sum() + 0.4
     assert res.evaluations["3-101"]["cct_s"] >= 0.195
@@ -244,7 +278,7 @@ def test_a_feasible_uniform_start_is_only_ever_improved_and_verified():
 
 
 def test_infeasible_bounds_are_proven_by_simulation_and_name_the_contingency():
-    sites = candidate_sites(load_case("kundur"), max_pct=0.5)       # 4.5 MW per site
+    sites = candidate_sites(load_case("kundur"), max_pct=0.5)  # 4.5 MW per site
     with pytest.raises(InfeasibleError, match="contingency 3-101") as exc:
         place("kundur", [Contingency(CASE1, 0.300)], Study(sites=sites))
     assert exc.value.contingencies == ("3-101",)
@@ -253,8 +287,9 @@ def test_infeasible_bounds_are_proven_by_simulation_and_name_the_contingency():
 
 def test_damping_target_is_confirmed_by_recomputed_eigenvalues():
     """A CCT target already met without storage: only zeta_min asks for storage."""
-    res = place("kundur", [Contingency(CASE1, 0.150)],
-                options=PlaceOptions(zeta_min=0.15, max_iter=4))
+    res = place(
+        "kundur", [Contingency(CASE1, 0.150)], options=PlaceOptions(zeta_min=0.15, max_iter=4)
+    )
     assert res.verified
     assert res.allocation.total_mw > 0
     assert res.damping[1].min() >= 0.15 - 1e-4
@@ -262,24 +297,41 @@ def test_damping_target_is_confirmed_by_recomputed_eigenvalues():
 
 # -- command line --------------------------------------------------------------------------
 
+
 def test_cli_place_json_meets_the_gain_and_bad_input_exits_2():
-    r = CliRunner().invoke(main, ["place", "kundur", "--faults", "DEFAULT",
-                                  "--target-cct-gain", "3", "--workers", "1", "--json"])
+    r = CliRunner().invoke(
+        main,
+        [
+            "place",
+            "kundur",
+            "--faults",
+            "DEFAULT",
+            "--target-cct-gain",
+            "3",
+            "--workers",
+            "1",
+            "--json",
+        ],
+    )
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)
     assert d["verified"] and d["total_mw"] > 0 and d["n_sites"] == len(d["allocation"])
     for c in d["contingencies"]:
         assert c["met"]
-        if c["cct_s"] is not None:           # solved for: its CCT was simulated
+        if c["cct_s"] is not None:  # solved for: its CCT was simulated
             assert c["cct_s"] >= c["required_s"] >= 1.03 * c["cct_no_storage_s"] - 1e-9
-    for args in (["--target-cct-gain", "0"], ["--target-cct-gain", "5", "--max-sites", "0"],
-                 ["--target-cct-gain", "5", "--zeta-min", "1"]):
+    for args in (
+        ["--target-cct-gain", "0"],
+        ["--target-cct-gain", "5", "--max-sites", "0"],
+        ["--target-cct-gain", "5", "--zeta-min", "1"],
+    ):
         bad = CliRunner().invoke(main, ["place", "kundur", "--contingencies", "DEFAULT", *args])
         assert bad.exit_code == 2
         assert bad.output.startswith("error:") and bad.output.count("\n") == 1
 
 
 # -- warm starts and shared runs (the placement study's speed) ------------------------------
+
 
 def test_bisection_warm_started_from_a_coarse_bracket_equals_the_cold_one():
     """The CCT without storage started from a 5 ms bracket (as the screening gives) equals
@@ -291,7 +343,9 @@ def test_bisection_warm_started_from_a_coarse_bracket_equals_the_cold_one():
     faults = [CASE1, LineFault(13, 101), LineFault(1, None), LineFault(110, None)]
     brackets = {}
     for f in faults:
-        coarse = critical_clearing_time(sim, f, SearchOptions(tol=0.005, t_max=0.5, error_check=False))
+        coarse = critical_clearing_time(
+            sim, f, SearchOptions(tol=0.005, t_max=0.5, error_check=False)
+        )
         brackets[Contingency(f, 1).name] = coarse.bracket
     cold = baseline("kundur", faults)
     warm = baseline("kundur", faults, opts=VerifyOptions(brackets=brackets))
@@ -311,8 +365,7 @@ def test_a_start_already_evaluated_is_not_simulated_again():
 
     case = load_case("kundur")
     sites = candidate_sites(case)
-    uniform = 0.05 * np.array([case.machines.mva[case.machine_index(s.machine)]
-                               for s in sites])
+    uniform = 0.05 * np.array([case.machines.mva[case.machine_index(s.machine)] for s in sites])
     cons = [Contingency(CASE1, 0.195)]
     base = evaluations("kundur", cons)
     known = evaluations("kundur", cons, uniform, opts=VerifyOptions(base=base, scan="full"))
@@ -325,13 +378,19 @@ def test_a_start_already_evaluated_is_not_simulated_again():
 
     Simulator.run = run
     try:
-        res = place("kundur", cons, options=PlaceOptions(max_iter=2),
-                    warm=WarmStart(base=base, start=uniform, evaluations=known))
+        res = place(
+            "kundur",
+            cons,
+            options=PlaceOptions(max_iter=2),
+            warm=WarmStart(base=base, start=uniform, evaluations=known),
+        )
     finally:
         Simulator.run = original
-    again = place("kundur", cons, options=PlaceOptions(max_iter=2),
-                  warm=WarmStart(base=base, start=uniform))
+    again = place(
+        "kundur", cons, options=PlaceOptions(max_iter=2), warm=WarmStart(base=base, start=uniform)
+    )
     assert len(calls) == sum(r["n_simulations"] for r in res.iterations)
     assert res.allocation.total_mw == pytest.approx(again.allocation.total_mw)
-    assert res.evaluations["3-101"]["cct_s"] == pytest.approx(again.evaluations["3-101"]["cct_s"],
-                                                            abs=1e-9)
+    assert res.evaluations["3-101"]["cct_s"] == pytest.approx(
+        again.evaluations["3-101"]["cct_s"], abs=1e-9
+    )

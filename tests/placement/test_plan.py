@@ -19,8 +19,8 @@ from stabctl.network.powerflow import scale_load, solve_powerflow
 from stabctl.placement.energy import ENERGY_MARGIN
 from stabctl.placement.loop import Study
 from stabctl.placement.plan import PlanOptions, plan
-from stabctl.placement.requirements import CostModel, Requirement
 from stabctl.placement.program import InfeasibleError, candidate_sites
+from stabctl.placement.requirements import CostModel, Requirement
 from stabctl.smib.omib import PAPER_OMIB, simulate
 from stabctl.stability.cct import LineFault
 from stabctl.storage.control import BangBangCOI
@@ -31,6 +31,7 @@ BASE_MVA = 100.0
 
 # -- MWh sizing: the OMIB's first swing in closed form ------------------------------------
 
+
 def first_swing_duration(system, delta_cl, omega_cl, P_C):
     """Time from clearing to the end of the first swing (omega = 0) with the device
     absorbing P_C throughout: energy conservation M omega^2 / 2 = M omega_cl^2 / 2 +
@@ -39,33 +40,38 @@ def first_swing_duration(system, delta_cl, omega_cl, P_C):
     M = system.M
 
     def w2(d):
-        work = (system.Pm - P_C) * (d - delta_cl) + system.Pmax_post * (np.cos(d) -
-                                                                        np.cos(delta_cl))
-        return omega_cl ** 2 + 2 * work / M
+        work = (system.Pm - P_C) * (d - delta_cl) + system.Pmax_post * (
+            np.cos(d) - np.cos(delta_cl)
+        )
+        return omega_cl**2 + 2 * work / M
 
     lo, hi = delta_cl, np.pi - np.arcsin((system.Pm - P_C) / system.Pmax_post)
-    for _ in range(200):                        # delta_max: first zero of omega^2
+    for _ in range(200):  # delta_max: first zero of omega^2
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if w2(mid) > 0 else (lo, mid)
     d_max = lo
-    t, _ = quad(lambda u: 2 * u / np.sqrt(max(w2(d_max - u * u), 1e-300)), 0,
-                np.sqrt(d_max - delta_cl), limit=200)
+    t, _ = quad(
+        lambda u: 2 * u / np.sqrt(max(w2(d_max - u * u), 1e-300)),
+        0,
+        np.sqrt(d_max - delta_cl),
+        limit=200,
+    )
     return t
 
 
 def test_energy_of_a_bang_bang_device_over_the_first_swing_is_its_rating_times_its_duration():
-    P_C, t_clear = 0.2, 0.2                                   # pu, s (CCT 0.243 s)
+    P_C, t_clear = 0.2, 0.2  # pu, s (CCT 0.243 s)
     law = lambda f, w, M: ((f - P_C * np.sign(w)) / M, P_C * np.sign(w))  # noqa: E731
     run = simulate(PAPER_OMIB, t_clear, t_end=t_clear + 0.6, law=law, max_step=2e-5)
     assert run.stable
     t1 = first_swing_duration(PAPER_OMIB, run.delta_cl, run.omega_cl, P_C)
     # the run up to the end of the first swing (omega back to 0)
     end = np.nonzero((run.t > t_clear) & (run.omega <= 0))[0][0]
-    e = energy_excursion(run.t[:end + 1], run.P_C[:end + 1] * BASE_MVA)
+    e = energy_excursion(run.t[: end + 1], run.P_C[: end + 1] * BASE_MVA)
     closed_mj = P_C * BASE_MVA * t1
     assert e["absorbed_mj"] == pytest.approx(closed_mj, rel=2e-3)
     assert e["soc_high_mj"] == pytest.approx(closed_mj, rel=2e-3)
-    assert e["delivered_mj"] <= P_C * BASE_MVA * 2e-5       # the last half step only
+    assert e["delivered_mj"] <= P_C * BASE_MVA * 2e-5  # the last half step only
     # started half full, the device needs twice its largest excursion
     assert e["need_mwh"] == pytest.approx(2 * closed_mj / 3600, rel=2e-3)
     # over the whole run (back swing injecting) the state of charge is the running
@@ -73,7 +79,8 @@ def test_energy_of_a_bang_bang_device_over_the_first_swing_is_its_rating_times_i
     whole = energy_excursion(run.t, run.P_C * BASE_MVA)
     assert whole["soc_high_mj"] == pytest.approx(closed_mj, rel=2e-3)
     assert whole["absorbed_mj"] - whole["delivered_mj"] == pytest.approx(
-        np.trapezoid(run.P_C, run.t) * BASE_MVA, rel=1e-9, abs=1e-9)
+        np.trapezoid(run.P_C, run.t) * BASE_MVA, rel=1e-9, abs=1e-9
+    )
 
 
 def test_a_device_sized_by_its_excursion_follows_the_unlimited_trajectory(kundur):
@@ -83,16 +90,20 @@ def test_a_device_sized_by_its_excursion_follows_the_unlimited_trajectory(kundur
     free = StorageFleet((StorageDevice(110, 3, 100.0),), BangBangCOI())
     r = kundur.run(fault.events(0.15), 4.0, storage=free)
     need = energy_excursion(r.t, r.pesd[:, 0] * BASE_MVA)["need_mwh"]
-    sized = StorageFleet((StorageDevice(110, 3, 100.0, energy_mj=1.05 * need * 3600),),
-                         BangBangCOI())
-    small = StorageFleet((StorageDevice(110, 3, 100.0, energy_mj=0.5 * need * 3600),),
-                         BangBangCOI())
-    np.testing.assert_allclose(kundur.run(fault.events(0.15), 4.0, storage=sized).pesd,
-                               r.pesd, atol=1e-12)
+    sized = StorageFleet(
+        (StorageDevice(110, 3, 100.0, energy_mj=1.05 * need * 3600),), BangBangCOI()
+    )
+    small = StorageFleet(
+        (StorageDevice(110, 3, 100.0, energy_mj=0.5 * need * 3600),), BangBangCOI()
+    )
+    np.testing.assert_allclose(
+        kundur.run(fault.events(0.15), 4.0, storage=sized).pesd, r.pesd, atol=1e-12
+    )
     assert not np.allclose(kundur.run(fault.events(0.15), 4.0, storage=small).pesd, r.pesd)
 
 
 # -- load levels ------------------------------------------------------------------------------
+
 
 def test_scaled_load_keeps_the_power_balance_and_names_a_load_level_without_power_flow():
     case = load_case("kundur")
@@ -101,10 +112,10 @@ def test_scaled_load_keeps_the_power_balance_and_names_a_load_level_without_powe
     np.testing.assert_allclose(u.pload, 1.05 * b.pload)
     np.testing.assert_allclose(u.qload, 1.05 * b.qload)
     pv = b.kind == 2
-    np.testing.assert_allclose(u.pgen[pv], 1.05 * b.pgen[pv])    # no governor at its limit
+    np.testing.assert_allclose(u.pgen[pv], 1.05 * b.pgen[pv])  # no governor at its limit
     pf = solve_powerflow(up)
     # conservation: generation - load = series losses + shunt conductance losses
-    losses = float(pf.branch_flows()["loss"].real.sum()) + float(u.gshunt @ pf.vmag ** 2)
+    losses = float(pf.branch_flows()["loss"].real.sum()) + float(u.gshunt @ pf.vmag**2)
     assert pf.pgen.sum() - pf.pload.sum() == pytest.approx(losses, rel=1e-6, abs=1e-7)
     assert losses > 0
     assert scale_load(case, 1.0) is case
@@ -116,8 +127,9 @@ def test_scaled_load_keeps_the_power_balance_and_names_a_load_level_without_powe
 
 # -- requirements and costs -------------------------------------------------------------------
 
+
 def test_the_strictest_requirement_wins_and_is_rounded_up_to_the_tolerance():
-    assert Requirement(cycles=5).target_s(60.0, 1e-3) == pytest.approx(0.084)   # 83.3 ms
+    assert Requirement(cycles=5).target_s(60.0, 1e-3) == pytest.approx(0.084)  # 83.3 ms
     both = Requirement(cycles=5, gain_pct=10, cct_s=0.09)
     assert both.target_s(60.0, 1e-3, base_cct_s=0.1) == pytest.approx(0.110)
     assert both.target_s(60.0, 1e-3, base_cct_s=0.05) == pytest.approx(0.090)
@@ -132,23 +144,31 @@ def test_the_strictest_requirement_wins_and_is_rounded_up_to_the_tolerance():
 def test_cost_split_is_per_mw_per_mwh_and_per_used_site():
     sites = candidate_sites(load_case("kundur"))
     cost = CostModel(per_mw=2.0, per_mwh=300.0, per_site=50.0, overrides={3: {"per_mw": 5.0}})
-    mw = np.array([10.0, 0.0, 20.0, 0.0])                        # sites of G1..G4
+    mw = np.array([10.0, 0.0, 20.0, 0.0])  # sites of G1..G4
     mwh = np.array([0.1, 0.0, 0.2, 0.0])
     got = cost.split(sites, mw, mwh)
-    assert got == pytest.approx({"mw": 10 * 2 + 20 * 5, "mwh": 300 * 0.3, "site": 100.0,
-                                 "total": 120 + 90 + 100})
+    assert got == pytest.approx(
+        {"mw": 10 * 2 + 20 * 5, "mwh": 300 * 0.3, "site": 100.0, "total": 120 + 90 + 100}
+    )
     with pytest.raises(InputError):
         CostModel(per_mw=0.0, per_mwh=0.0)
 
 
 # -- constraint generation and infeasibility (Kundur) ------------------------------------------
 
+
 def independently_stable(case_name, fault, t_clear, rows, load=1.0):
     sim = Simulator(scale_load(load_case(case_name), load))
-    fleet = StorageFleet(tuple(StorageDevice(r["bus"], r["machine"], r["mw"]) for r in rows),
-                         BangBangCOI()) if rows else None
-    return sim.run(fault.events(t_clear), fault.t_fault + 5.0, storage=fleet,
-                   stop_at_separation=True).stable
+    fleet = (
+        StorageFleet(
+            tuple(StorageDevice(r["bus"], r["machine"], r["mw"]) for r in rows), BangBangCOI()
+        )
+        if rows
+        else None
+    )
+    return sim.run(
+        fault.events(t_clear), fault.t_fault + 5.0, storage=fleet, stop_at_separation=True
+    ).stable
 
 
 def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verified():
@@ -156,9 +176,13 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
     most binding): the other fails the check at that allocation, is added, and the end
     allocation holds both, as an independent simulation at each required time confirms."""
     faults = [LineFault(3, 101), LineFault(20, None)]
-    over = {"20": Requirement(cycles=15)}                        # 250 ms for the bus-20 fault
-    res = plan("kundur", faults, Requirement(cycles=12),
-               PlanOptions(overrides=over, n_active=1, half_step_n=2, uniform=True))
+    over = {"20": Requirement(cycles=15)}  # 250 ms for the bus-20 fault
+    res = plan(
+        "kundur",
+        faults,
+        Requirement(cycles=12),
+        PlanOptions(overrides=over, n_active=1, half_step_n=2, uniform=True),
+    )
     assert len(res.rounds) >= 2
     first = res.rounds[0]
     assert first["active"] == ["3-101"] and "20" in first["failing"]
@@ -173,8 +197,10 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
     # no more than the resolution (the ieee default step's convergence claim: CCTs within
     # the 1 ms tolerance of a step-halved run, docs/conventions.md)
     hs = res.half_step
-    assert [r["name"] for r in hs["rows"]] == sorted(["3-101", "20"], key=lambda n: next(
-        c["margin_s"] for c in res.contingencies if c["name"] == n))
+    assert [r["name"] for r in hs["rows"]] == sorted(
+        ["3-101", "20"],
+        key=lambda n: next(c["margin_s"] for c in res.contingencies if c["name"] == n),
+    )
     assert hs["all_stable"] and hs["max_cct_diff_s"] <= 1e-9
     assert hs["h_s"] == Simulator(load_case("kundur")).default_h
     # the sized energies converge too: the half-step change of each site's energy need is
@@ -199,34 +225,59 @@ def testenergy_half_step_figures_by_hand():
     of each site's own need, a site with no need left out of the %, and the cover test
     against the sized MWh (margin and rounding included)."""
     from stabctl.placement.energy import energy_half_step
+
     mw = np.array([10.0, 0.0, 5.0, 2.0])
-    energy = [{"set_by": "a", "excursion_mwh": 0.02}, {},
-              {"set_by": "b", "excursion_mwh": 0.01}, {"set_by": "b", "excursion_mwh": 0.0}]
+    energy = [
+        {"set_by": "a", "excursion_mwh": 0.02},
+        {},
+        {"set_by": "b", "excursion_mwh": 0.01},
+        {"set_by": "b", "excursion_mwh": 0.0},
+    ]
     # the k-th site with storage reads row k of its setter's run (sites 0, 2, 3)
-    half = {"a": {"energy_mj": [[0, 0, 36.0, -9.0], [], []]},      # need 0.02 -> 0.02
-            "b": {"energy_mj": [[], [0, 0, 0.0, -27.0],             # 0.01 -> 0.015 (+50 %)
-                                [0, 0, 1.8, 0.0]]}}                 # 0 -> 0.001 (no %)
+    half = {
+        "a": {"energy_mj": [[0, 0, 36.0, -9.0], [], []]},  # need 0.02 -> 0.02
+        "b": {
+            "energy_mj": [
+                [],
+                [0, 0, 0.0, -27.0],  # 0.01 -> 0.015 (+50 %)
+                [0, 0, 1.8, 0.0],
+            ]
+        },
+    }  # 0 -> 0.001 (no %)
     e = energy_half_step(half, mw, np.array([0.03, 0.0, 0.02, 0.01]), energy)
     assert e["max_energy_diff_mwh"] == pytest.approx(0.005)
     assert e["max_energy_diff_pct"] == pytest.approx(50.0)
     assert e["energy_covered_half"]
-    assert not energy_half_step(half, mw, np.array([0.03, 0.0, 0.012, 0.01]),
-                                 energy)["energy_covered_half"]
+    assert not energy_half_step(half, mw, np.array([0.03, 0.0, 0.012, 0.01]), energy)[
+        "energy_covered_half"
+    ]
     assert energy_half_step({}, np.zeros(4), np.zeros(4), [{}] * 4) == {
-        "max_energy_diff_mwh": None, "max_energy_diff_pct": None,
-        "energy_covered_half": None}
+        "max_energy_diff_mwh": None,
+        "max_energy_diff_pct": None,
+        "energy_covered_half": None,
+    }
 
 
 def test_infeasible_requirement_names_the_contingency_and_its_load_level():
-    sites = candidate_sites(load_case("kundur"), max_pct=0.5)       # 4.5 MW per site
+    sites = candidate_sites(load_case("kundur"), max_pct=0.5)  # 4.5 MW per site
     with pytest.raises(InfeasibleError, match=r"3-101@110%.*load 110 %") as exc:
-        plan("kundur", [LineFault(3, 101)], Requirement(cycles=12),
-             PlanOptions(load_levels=(1.1,)), Study(sites=sites))
+        plan(
+            "kundur",
+            [LineFault(3, 101)],
+            Requirement(cycles=12),
+            PlanOptions(load_levels=(1.1,)),
+            Study(sites=sites),
+        )
     assert exc.value.contingencies == ("3-101@110%",)
     # set aside instead: named, and the rest planned for (9 cycles = 150 ms: the base load
     # needs no storage, CCT 157 ms; at 110 % the CCT without storage is 100 ms)
-    res = plan("kundur", [LineFault(3, 101)], Requirement(cycles=9),
-               PlanOptions(load_levels=(1.0, 1.1), drop_infeasible=True), Study(sites=sites))
+    res = plan(
+        "kundur",
+        [LineFault(3, 101)],
+        Requirement(cycles=9),
+        PlanOptions(load_levels=(1.0, 1.1), drop_infeasible=True),
+        Study(sites=sites),
+    )
     assert res.set_aside == ["3-101@110%"] and "load 110 %" in res.infeasible[0]
     assert [c["name"] for c in res.contingencies] == ["3-101"] and res.verified
 
@@ -234,21 +285,38 @@ def test_infeasible_requirement_names_the_contingency_and_its_load_level():
 def test_cli_place_with_a_clearing_time_requirement_and_bad_input(tmp_path):
     faults = tmp_path / "f.csv"
     faults.write_text("bus,far_bus,required_clearing_cycles\n3,101,11\n")
-    r = CliRunner().invoke(main, ["place", "kundur", "--faults", str(faults),
-                                  "--required-clearing-cycles", "10", "--cost-mwh", "100",
-                                  "--workers", "1", "--json"])
+    r = CliRunner().invoke(
+        main,
+        [
+            "place",
+            "kundur",
+            "--faults",
+            str(faults),
+            "--required-clearing-cycles",
+            "10",
+            "--cost-mwh",
+            "100",
+            "--workers",
+            "1",
+            "--json",
+        ],
+    )
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)
     assert d["verified"] and d["total_mw"] > 0 and d["total_mwh"] > 0
-    assert d["contingencies"][0]["required_s"] == pytest.approx(0.184)     # 11 cycles
+    assert d["contingencies"][0]["required_s"] == pytest.approx(0.184)  # 11 cycles
     assert d["cost"]["total"] == pytest.approx(d["cost"]["mw"] + d["cost"]["mwh"])
     assert d["cost"]["mwh"] == pytest.approx(100 * d["total_mwh"])
     out = tmp_path / "never.json"
-    for args in (["--required-clearing-cycles", "0"], ["--load-levels", "1,-1",
-                                                       "--required-clearing-cycles", "5"],
-                 ["--cost-mw", "-1", "--required-clearing-cycles", "5"], []):
-        bad = CliRunner().invoke(main, ["place", "kundur", "--faults", "DEFAULT", *args,
-                                        "--out", str(out)])
+    for args in (
+        ["--required-clearing-cycles", "0"],
+        ["--load-levels", "1,-1", "--required-clearing-cycles", "5"],
+        ["--cost-mw", "-1", "--required-clearing-cycles", "5"],
+        [],
+    ):
+        bad = CliRunner().invoke(
+            main, ["place", "kundur", "--faults", "DEFAULT", *args, "--out", str(out)]
+        )
         assert bad.exit_code == 2, bad.output
         assert bad.output.startswith("error:") and bad.output.count("\n") == 1
         assert not out.exists()
@@ -258,18 +326,32 @@ def test_screening_brackets_and_requirement_overrides_are_read_from_their_files(
     from stabctl.placement.requirements import read_requirements, screening_brackets
 
     rec = tmp_path / "s.jsonl"
-    ok = {"key": "k1", "status": "ok", "inputs": {"esd_pct": None},
-          "result": {"fault": {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1,
-                               "trips": []}, "t_stable_s": 0.155, "t_unstable_s": 0.16}}
-    bus = {**ok, "key": "k2", "result": {**ok["result"], "fault": {
-        "bus": 1, "far_bus": None, "t_fault": 1.0, "circuit": 1, "trips": []}}}
-    stored = {**ok, "key": "k3", "inputs": {"esd_pct": 5.0}}            # with storage
+    ok = {
+        "key": "k1",
+        "status": "ok",
+        "inputs": {"esd_pct": None},
+        "result": {
+            "fault": {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1, "trips": []},
+            "t_stable_s": 0.155,
+            "t_unstable_s": 0.16,
+        },
+    }
+    bus = {
+        **ok,
+        "key": "k2",
+        "result": {
+            **ok["result"],
+            "fault": {"bus": 1, "far_bus": None, "t_fault": 1.0, "circuit": 1, "trips": []},
+        },
+    }
+    stored = {**ok, "key": "k3", "inputs": {"esd_pct": 5.0}}  # with storage
     failed = {"key": "k4", "status": "failed", "inputs": {"esd_pct": None}, "error": "x"}
     rec.write_text("\n".join(json.dumps(r) for r in (ok, bus, stored, failed)) + "\n")
     assert screening_brackets(rec) == {"3-101": (0.155, 0.16), "1": (0.155, 0.16)}
     csv = tmp_path / "f.csv"
-    csv.write_text("bus,far_bus,required_clearing_cycles,target_cct_s\n3,101,6,\n1,,,0.3\n"
-                   "13,101,,\n")
+    csv.write_text(
+        "bus,far_bus,required_clearing_cycles,target_cct_s\n3,101,6,\n1,,,0.3\n13,101,,\n"
+    )
     req = read_requirements(csv)
     assert set(req) == {"3-101", "1"}
     assert req["3-101"].target_s(60.0, 1e-3) == pytest.approx(0.1)

@@ -34,8 +34,11 @@ def test_algebraic_loop_solution_satisfies_the_swing_equation(law, f, omega):
     M = PAPER_OMIB.M
     a, p = law(f, omega, M)
     assert M * a == pytest.approx(f - p, rel=1e-12)
-    expected = (law.Kv * omega + law.Ka * abs(a) * np.sign(omega) if law.sign_law
-                else law.Kv * omega + law.Ka * a)
+    expected = (
+        law.Kv * omega + law.Ka * abs(a) * np.sign(omega)
+        if law.sign_law
+        else law.Kv * omega + law.Ka * a
+    )
     assert p == pytest.approx(expected, rel=1e-12)
 
 

@@ -4,8 +4,14 @@ import numpy as np
 import pytest
 
 from stabctl.errors import InputError
-from stabctl.smib.omib import (OMIB, PAPER_OMIB, clearing_state_closed_form, clearing_table,
-                          critical_clearing_time_bisection, simulate)
+from stabctl.smib.omib import (
+    OMIB,
+    PAPER_OMIB,
+    clearing_state_closed_form,
+    clearing_table,
+    critical_clearing_time_bisection,
+    simulate,
+)
 
 # paper Table 1: cycles -> (delta_cl rad, d(delta)/dt rad/s, stable)
 TABLE1 = {6: (0.6519, 3.1374, True), 12: (1.1228, 6.2747, True), 15: (1.4753, 7.8421, False)}
@@ -38,8 +44,7 @@ def test_eac_closed_form_cct_agrees_with_time_domain_bisection_within_1ms():
 
 
 def test_eac_with_nonzero_fault_on_transfer_agrees_with_bisection():
-    sys_ = OMIB.from_operating_point(H=3.0, Pm=0.5, delta0=0.4950, fault_ratio=0.3,
-                                     post_ratio=0.8)
+    sys_ = OMIB.from_operating_point(H=3.0, Pm=0.5, delta0=0.4950, fault_ratio=0.3, post_ratio=0.8)
     t_bis, _ = critical_clearing_time_bisection(sys_, tol=1e-4)
     assert abs(sys_.critical_clearing_time() - t_bis) < 1e-3
 
@@ -47,7 +52,7 @@ def test_eac_with_nonzero_fault_on_transfer_agrees_with_bisection():
 @pytest.mark.parametrize("cycles", [6, 12])
 def test_accelerating_area_equals_kinetic_energy_and_energy_is_conserved(cycles):
     run = simulate(PAPER_OMIB, cycles / 60, t_end=3.0)
-    ke = 0.5 * PAPER_OMIB.M * run.omega_cl ** 2
+    ke = 0.5 * PAPER_OMIB.M * run.omega_cl**2
     assert PAPER_OMIB.accelerating_area(run.delta_cl) == pytest.approx(ke, rel=1e-8)
     post = run.t >= run.t_clear
     v = PAPER_OMIB.energy(run.delta[post], run.omega[post])
@@ -62,9 +67,14 @@ def test_separatrix_passes_through_the_unstable_equilibrium():
     assert run.omega_cl > PAPER_OMIB.separatrix(run.delta_cl)
 
 
-@pytest.mark.parametrize("kwargs", [dict(H=-1.0, Pm=0.5, Pmax_pre=1, Pmax_fault=0, Pmax_post=1),
-                                    dict(H=3.0, Pm=1.2, Pmax_pre=1, Pmax_fault=0, Pmax_post=1),
-                                    dict(H=3.0, Pm=0.5, Pmax_pre=1, Pmax_fault=0, Pmax_post=0.4)])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(H=-1.0, Pm=0.5, Pmax_pre=1, Pmax_fault=0, Pmax_post=1),
+        dict(H=3.0, Pm=1.2, Pmax_pre=1, Pmax_fault=0, Pmax_post=1),
+        dict(H=3.0, Pm=0.5, Pmax_pre=1, Pmax_fault=0, Pmax_post=0.4),
+    ],
+)
 def test_bad_parameters_are_rejected(kwargs):
     with pytest.raises(InputError):
         OMIB(**kwargs)

@@ -4,43 +4,68 @@ import json
 
 from click.testing import CliRunner
 
+from stabctl.cli import main
+from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
 from stabctl.parallel import RunnerOptions
-from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
-from stabctl.cli import main
 from stabctl.plotting.layout import spectral_layout
+from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
 from stabctl.stability.screening import screen, screening_faults
-from stabctl.dynamics.driver import Simulator
 
 
 def test_screening_faults_cover_every_bus_and_every_circuit():
     case = load_case("kundur")
     faults = screening_faults(case, lines=True)
-    assert [f.bus for f in faults[:case.n_bus]] == list(case.buses.number)
-    assert all(f.far_bus is None for f in faults[:case.n_bus])
-    lines = faults[case.n_bus:]
+    assert [f.bus for f in faults[: case.n_bus]] == list(case.buses.number)
+    assert all(f.far_bus is None for f in faults[: case.n_bus])
+    lines = faults[case.n_bus :]
     assert len(lines) == len(case.branches)
     assert sorted(f.circuit for f in lines if (f.bus, f.far_bus) == (3, 101)) == [1, 2]
 
 
 def test_screening_rows_match_single_searches_and_resume(tmp_path):
     out = tmp_path / "s.jsonl"
-    rows = screen("kundur", out, buses=[3, 12], search=SearchOptions(t_max=0.5),
-                  runner=RunnerOptions(workers=1, progress=False))
+    rows = screen(
+        "kundur",
+        out,
+        buses=[3, 12],
+        search=SearchOptions(t_max=0.5),
+        runner=RunnerOptions(workers=1, progress=False),
+    )
     sim = Simulator(load_case("kundur"))
     for row in rows:
         ref = critical_clearing_time(sim, LineFault(row["bus"], None), SearchOptions(t_max=0.5))
         assert row["status"] == "ok" and row["cct_s"] == ref.cct_s
     n = len(out.read_text().splitlines())
-    screen("kundur", out, buses=[3, 12], search=SearchOptions(t_max=0.5),
-           runner=RunnerOptions(workers=1, progress=False))
-    assert len(out.read_text().splitlines()) == n          # resumed: nothing rerun
+    screen(
+        "kundur",
+        out,
+        buses=[3, 12],
+        search=SearchOptions(t_max=0.5),
+        runner=RunnerOptions(workers=1, progress=False),
+    )
+    assert len(out.read_text().splitlines()) == n  # resumed: nothing rerun
 
 
 def test_cli_screen_writes_map_and_reports_failures(tmp_path):
-    res = CliRunner().invoke(main, ["screen", "kundur", "--buses", "3,101", "--t-max", "0.4",
-                                    "--workers", "1", "--out", str(tmp_path / "s.jsonl"),
-                                    "--plot", str(tmp_path / "m.png"), "--json"])
+    res = CliRunner().invoke(
+        main,
+        [
+            "screen",
+            "kundur",
+            "--buses",
+            "3,101",
+            "--t-max",
+            "0.4",
+            "--workers",
+            "1",
+            "--out",
+            str(tmp_path / "s.jsonl"),
+            "--plot",
+            str(tmp_path / "m.png"),
+            "--json",
+        ],
+    )
     assert res.exit_code == 0, res.output
     rows = json.loads(res.stdout)
     by_bus = {r["bus"]: r for r in rows}

@@ -3,13 +3,19 @@
 import numpy as np
 import pytest
 
-from stabctl.io import load_case
-from stabctl.errors import InputError
-from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.driver import Simulator
-from stabctl.storage.devices import (StorageDevice, StorageFleet, energy_excursion, hv_bus,
-                                     pack, uniform_fleet)
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.errors import InputError
+from stabctl.io import load_case
 from stabctl.storage.control import BangBangCOI, LinearFeedback, desired_mode, desired_modes
+from stabctl.storage.devices import (
+    StorageDevice,
+    StorageFleet,
+    energy_excursion,
+    hv_bus,
+    pack,
+    uniform_fleet,
+)
 
 DB_PU = 0.1 / 60  # 100 mHz deadband in pu speed
 
@@ -27,16 +33,19 @@ def arrays(case, controller=BangBangCOI()):
     return pack(fleet, case, np.array(sorted(case.bus_indices(fleet.buses))))
 
 
-@pytest.mark.parametrize("mode,r,v,expected", [
-    (0, 2 * DB_PU, 1.0, 1),      # faster than the COI beyond the band: absorb
-    (0, -2 * DB_PU, 1.0, -1),    # slower: inject
-    (0, 0.5 * DB_PU, 1.0, 0),    # inside the deadband: idle
-    (0, -0.5 * DB_PU, 1.0, 0),
-    (1, 0.5 * DB_PU, 1.0, 0),    # back inside the band: stop (no hysteresis)
-    (0, 2 * DB_PU, 0.79, 0),     # bus voltage below the 0.8 pu gate: idle
-    (1, 2 * DB_PU, 0.79, 0),
-    (-1, -2 * DB_PU, 0.8, -1),   # at the gate: acts
-])
+@pytest.mark.parametrize(
+    "mode,r,v,expected",
+    [
+        (0, 2 * DB_PU, 1.0, 1),  # faster than the COI beyond the band: absorb
+        (0, -2 * DB_PU, 1.0, -1),  # slower: inject
+        (0, 0.5 * DB_PU, 1.0, 0),  # inside the deadband: idle
+        (0, -0.5 * DB_PU, 1.0, 0),
+        (1, 0.5 * DB_PU, 1.0, 0),  # back inside the band: stop (no hysteresis)
+        (0, 2 * DB_PU, 0.79, 0),  # bus voltage below the 0.8 pu gate: idle
+        (1, 2 * DB_PU, 0.79, 0),
+        (-1, -2 * DB_PU, 0.8, -1),  # at the gate: acts
+    ],
+)
 def test_table3_decisions(kundur, mode, r, v, expected):
     case, _ = kundur
     assert desired_mode(arrays(case), 0, mode, r, v) == expected
@@ -46,18 +55,18 @@ def test_table3_decisions_of_every_device_at_once(kundur):
     # one device per machine (G1..G4): each reads its own machine's relative speed
     case, _ = kundur
     sa = arrays(case)
-    rel = np.array([2, -2, 0.5, 0.5]) * DB_PU                 # per machine
+    rel = np.array([2, -2, 0.5, 0.5]) * DB_PU  # per machine
     mac = np.asarray(sa.mac)
-    modes = desired_modes(sa, np.where(mac == 3, 1, 0), rel)    # G4's device running
+    modes = desired_modes(sa, np.where(mac == 3, 1, 0), rel)  # G4's device running
     assert list(modes) == [[1, -1, 0, 0][m] for m in mac]
 
 
 def test_hysteresis_keeps_a_running_device_on_inside_the_band(kundur):
     case, _ = kundur
     sa = arrays(case, BangBangCOI(hysteresis_hz=0.05))
-    assert desired_mode(sa, 0, 1, 0.7 * DB_PU, 1.0) == 1      # above db - hyst: stays on
-    assert desired_mode(sa, 0, 1, 0.4 * DB_PU, 1.0) == 0      # below: off
-    assert desired_mode(sa, 0, 0, 0.7 * DB_PU, 1.0) == 0      # an idle one does not start
+    assert desired_mode(sa, 0, 1, 0.7 * DB_PU, 1.0) == 1  # above db - hyst: stays on
+    assert desired_mode(sa, 0, 1, 0.4 * DB_PU, 1.0) == 0  # below: off
+    assert desired_mode(sa, 0, 0, 0.7 * DB_PU, 1.0) == 0  # an idle one does not start
 
 
 def test_devices_sit_at_the_generator_hv_buses(kundur):
@@ -65,7 +74,7 @@ def test_devices_sit_at_the_generator_hv_buses(kundur):
     # Kundur (PST numbering): generators 1, 2, 11, 12 step up to 10, 20, 110, 120
     assert [hv_bus(case, m) for m in (1, 2, 3, 4)] == [10, 20, 110, 120]
     fleet = uniform_fleet(case, 5)
-    assert [d.pmax_mw for d in fleet.devices] == [45.0] * 4   # 5 % of 900 MVA
+    assert [d.pmax_mw for d in fleet.devices] == [45.0] * 4  # 5 % of 900 MVA
     with pytest.raises(InputError):
         uniform_fleet(case, 0)
 
@@ -85,21 +94,24 @@ def test_case1_unstable_without_and_stable_with_control(kundur):
 
 def test_area1_absorbs_area2_injects_after_clearing(kundur):
     case, sim = kundur
-    r = sim.run([fault_with_clearing(case, 3, 101, 1.0, 17)], t_end=3.0,
-                storage=uniform_fleet(case, 5))
+    r = sim.run(
+        [fault_with_clearing(case, 3, 101, 1.0, 17)], t_end=3.0, storage=uniform_fleet(case, 5)
+    )
     k = np.searchsorted(r.t, 1.35)
-    assert list(np.sign(r.pesd[k])) == [1, 1, -1, -1]     # paper Figs. 14-15: C1, C2 absorb
+    assert list(np.sign(r.pesd[k])) == [1, 1, -1, -1]  # paper Figs. 14-15: C1, C2 absorb
 
 
 def test_switching_instants_are_located_not_rounded(kundur):
     """At every speed-boundary switching the relative speed equals +-100 mHz to 1e-4 Hz,
     far tighter than rounding to the 10 ms step would give (~5 mHz)."""
     case, sim = kundur
-    r = sim.run([fault_with_clearing(case, 3, 101, 1.0, 17)], t_end=6.0,
-                storage=uniform_fleet(case, 5))
+    r = sim.run(
+        [fault_with_clearing(case, 3, 101, 1.0, 17)], t_end=6.0, storage=uniform_fleet(case, 5)
+    )
     h = 0.01
-    speed_switches = [(t, rel) for t, _, _, rel in r.meta["switchings"]
-                      if abs(abs(rel) - 0.1) < 0.01]
+    speed_switches = [
+        (t, rel) for t, _, _, rel in r.meta["switchings"] if abs(abs(rel) - 0.1) < 0.01
+    ]
     assert len(speed_switches) >= 8
     assert all(abs(abs(rel) - 0.1) < 1e-4 for _, rel in speed_switches)
     off_grid = [t for t, _ in speed_switches if abs(t / h - round(t / h)) > 1e-6]
@@ -108,10 +120,11 @@ def test_switching_instants_are_located_not_rounded(kundur):
 
 def test_no_chattering_and_energy_accounting(kundur):
     case, sim = kundur
-    r = sim.run([fault_with_clearing(case, 3, 101, 1.0, 17)], t_end=6.0,
-                storage=uniform_fleet(case, 5))
+    r = sim.run(
+        [fault_with_clearing(case, 3, 101, 1.0, 17)], t_end=6.0, storage=uniform_fleet(case, 5)
+    )
     for dev in r.meta["storage"]:
-        assert dev["switchings"] <= 20                       # a few per swing, no chattering
+        assert dev["switchings"] <= 20  # a few per swing, no chattering
         assert dev["peak_power_mw"] == pytest.approx(45.0)
         p = r.pesd[:, dev["device"] - 1] * case.base_mva
         absorbed = np.trapezoid(np.clip(p, 0, None), r.t)
@@ -125,9 +138,10 @@ def test_state_of_charge_extremes_are_integrated_between_switchings(kundur):
     The trapezoid of its power sampled on the 10 ms grid (`energy_excursion`) misses that
     by a fraction of a MJ: a step that contains a switching is averaged across it."""
     case, sim = kundur
-    r = sim.run([fault_with_clearing(case, 3, 101, 1.0, 21)], t_end=6.0,
-                storage=uniform_fleet(case, 5))
-    assert not r.stable                      # 5 % does not hold 21 cycles (docs/storage.md)
+    r = sim.run(
+        [fault_with_clearing(case, 3, 101, 1.0, 21)], t_end=6.0, storage=uniform_fleet(case, 5)
+    )
+    assert not r.stable  # 5 % does not hold 21 cycles (docs/storage.md)
     for i, dev in enumerate(r.meta["storage"]):
         one_sided = {dev["energy_absorbed_mj"], dev["energy_delivered_mj"]}
         assert 0.0 in one_sided and max(one_sided) > 100.0
@@ -140,8 +154,9 @@ def test_state_of_charge_extremes_are_integrated_between_switchings(kundur):
 
 def test_voltage_gate_idles_devices_near_the_fault(kundur):
     case, sim = kundur
-    r = sim.run([fault_with_clearing(case, 3, 101, 1.0, 17)], t_end=2.0,
-                storage=uniform_fleet(case, 5))
+    r = sim.run(
+        [fault_with_clearing(case, 3, 101, 1.0, 17)], t_end=2.0, storage=uniform_fleet(case, 5)
+    )
     on = (r.t > 1.0) & (r.t < 1.28)
     v10 = r.vmag[on, r.bus(10)]
     assert np.all(v10 < 0.8) and np.all(r.pesd[on, 0] == 0)
@@ -154,7 +169,7 @@ def test_energy_limit_stops_absorption_when_full(kundur):
     r = sim.run([fault_with_clearing(case, 3, 101, 1.0, 17)], t_end=3.0, storage=fleet)
     absorbed = r.meta["storage"][0]["energy_absorbed_mj"]
     delivered = r.meta["storage"][0]["energy_delivered_mj"]
-    assert absorbed - delivered <= 5.0 + 0.5                 # room for 5 MJ at 50 % SOC
+    assert absorbed - delivered <= 5.0 + 0.5  # room for 5 MJ at 50 % SOC
 
 
 def test_linear_speed_law_is_proportional_and_clipped(kundur):
@@ -162,12 +177,14 @@ def test_linear_speed_law_is_proportional_and_clipped(kundur):
     fleet = StorageFleet(uniform_fleet(case, 5).devices, LinearFeedback(Kv=0.5))
     r = sim.run([fault_with_clearing(case, 3, 101, 1.0, 17)], t_end=3.0, storage=fleet)
     k = np.searchsorted(r.t, 1.5)
-    rel = (r.speed[k] - r.coi_speed[k]) * 2 * np.pi * 60       # rad/s
+    rel = (r.speed[k] - r.coi_speed[k]) * 2 * np.pi * 60  # rad/s
     expected = np.clip(0.5 * rel, -0.45, 0.45)
     # the law is held over each step: compare with the speeds one step earlier as well
     rel_prev = (r.speed[k - 1] - r.coi_speed[k - 1]) * 2 * np.pi * 60
-    assert np.all(np.minimum(abs(r.pesd[k] - expected),
-                             abs(r.pesd[k] - np.clip(0.5 * rel_prev, -0.45, 0.45))) < 0.02)
+    assert np.all(
+        np.minimum(abs(r.pesd[k] - expected), abs(r.pesd[k] - np.clip(0.5 * rel_prev, -0.45, 0.45)))
+        < 0.02
+    )
 
 
 def test_cli_simulate_with_storage(tmp_path):
@@ -176,9 +193,21 @@ def test_cli_simulate_with_storage(tmp_path):
     from click.testing import CliRunner
 
     from stabctl.cli import main
+
     # ieee conventions: CCT 9.42 cycles without storage, 12.12 with 5 % (reports/paper.md)
-    args = ["simulate", "kundur", "--fault", "3", "--far-bus", "101", "--clear-cycles", "11",
-            "--tf", "5", "--json"]
+    args = [
+        "simulate",
+        "kundur",
+        "--fault",
+        "3",
+        "--far-bus",
+        "101",
+        "--clear-cycles",
+        "11",
+        "--tf",
+        "5",
+        "--json",
+    ]
     plain = json.loads(CliRunner().invoke(main, args).stdout)
     res = CliRunner().invoke(main, args + ["--esd-pct", "5", "--out", str(tmp_path / "r.csv")])
     out = json.loads(res.stdout)
@@ -191,8 +220,10 @@ def test_cli_simulate_with_storage(tmp_path):
     assert out["esd"]["deadband_hz"] == 0.1 and out["esd"]["v_gate_pu"] == 0.8
     sw = out["switchings"]
     assert len(sw) == sum(d["switchings"] for d in out["storage"]) > 0
-    assert all(set(r) == {"t_s", "device", "bus", "machine", "mode", "mode_code",
-                          "rel_speed_hz"} for r in sw)
+    assert all(
+        set(r) == {"t_s", "device", "bus", "machine", "mode", "mode_code", "rel_speed_hz"}
+        for r in sw
+    )
     by_dev = {d["device"]: d for d in out["storage"]}
     for r in sw:
         assert r["t_s"] >= 1.0 and r["t_s"] <= 5.0 and r["bus"] == by_dev[r["device"]]["bus"]
@@ -205,8 +236,9 @@ def test_cli_simulate_with_storage(tmp_path):
             assert r["rel_speed_hz"] < -0.1 + 1e-4
     assert "switchings" not in plain and plain["esd"] is None
     # the text output and the plot say that storage acted
-    text = CliRunner().invoke(main, args[:-1] + ["--esd-pct", "5", "--plot",
-                                                 str(tmp_path / "r.png")])
+    text = CliRunner().invoke(
+        main, args[:-1] + ["--esd-pct", "5", "--plot", str(tmp_path / "r.png")]
+    )
     assert text.exit_code == 0, text.output
     assert "storage: 4 ESDs of 5 % of machine MVA" in text.stdout
     assert f"{len(sw)} switchings, 4 of 4 devices acted" in text.stdout
@@ -232,14 +264,15 @@ def test_commanded_devices_follow_the_schedule_at_exact_times(kundur):
 
     frames = np.arange(0, 6, 1 / 60)
     ev = [fault_with_clearing(case, 3, 101, 1.0, 17)]
-    res = sim.run_commanded(ev, 6.0, StorageFleet(fleet.devices, ExternalCommands()), frames,
-                            decide, latency=0.05)
+    res = sim.run_commanded(
+        ev, 6.0, StorageFleet(fleet.devices, ExternalCommands()), frames, decide, latency=0.05
+    )
     assert res.stable and sim.run(ev, t_end=6.0).stable is False
     times = np.array([t for t, *_ in res.meta["switchings"]])
     assert times.size >= 8
     assert np.allclose(np.min(np.abs(times[:, None] - (frames + 0.05)[None, :]), axis=1), 0)
     with pytest.raises(InputError):
-        sim.run_commanded(ev, 6.0, fleet, frames, decide)        # not ExternalCommands
+        sim.run_commanded(ev, 6.0, fleet, frames, decide)  # not ExternalCommands
 
 
 def test_boundary_chattering_is_bounded_measured_and_removed_by_hysteresis(kundur):
@@ -250,8 +283,10 @@ def test_boundary_chattering_is_bounded_measured_and_removed_by_hysteresis(kundu
     fault = [fault_with_clearing(case, 3, 101, 1.0, 21)]
     plain = sim.run(fault, t_end=10.0, storage=uniform_fleet(case, 20))
     assert plain.stable and np.all(np.diff(plain.t) >= 0)
-    assert np.ptp(plain.speed[-200:], axis=0).max() > 0           # dynamics not frozen
+    assert np.ptp(plain.speed[-200:], axis=0).max() > 0  # dynamics not frozen
     chatter = [d["chattering"] for d in plain.meta["storage"]]
     assert sum(chatter) > 0 and max(d["switchings"] for d in plain.meta["storage"]) < 1000
-    hyst = sim.run(fault, t_end=10.0, storage=uniform_fleet(case, 20, BangBangCOI(hysteresis_hz=0.02)))
+    hyst = sim.run(
+        fault, t_end=10.0, storage=uniform_fleet(case, 20, BangBangCOI(hysteresis_hz=0.02))
+    )
     assert hyst.stable and all(d["chattering"] == 0 for d in hyst.meta["storage"])

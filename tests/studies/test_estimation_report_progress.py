@@ -17,5 +17,6 @@ def test_case_figures_reports_every_stage_and_ambient_run(tmp_path, monkeypatch)
     assert said[0] == "estimation kundur: RMSE, 3 PMU noise runs"
     assert [m for m in said if "ambient" in m] == [
         f"estimation kundur: ambient load run {r}/{er.AMBIENT_RUNS} (60 s)"
-        for r in range(1, er.AMBIENT_RUNS + 1)]
+        for r in range(1, er.AMBIENT_RUNS + 1)
+    ]
     assert said[-1] == "estimation kundur: CCT with the estimators in the loop, 2 noise seeds"

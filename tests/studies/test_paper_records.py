@@ -7,13 +7,13 @@ from pathlib import Path
 
 import pytest
 
-from stabctl.studies import paper
 from stabctl.parallel import Job, natural_key, run_sweep, strip_run_dependent, write_reproducible
+from stabctl.studies import paper
 
 
 def square(inputs: dict) -> dict:
     x = inputs["x"]
-    return {"y": x * x, "wall_time_s": 0.001 * x}          # a run-dependent field inside
+    return {"y": x * x, "wall_time_s": 0.001 * x}  # a run-dependent field inside
 
 
 class Boom(RuntimeError):
@@ -22,13 +22,19 @@ class Boom(RuntimeError):
 
 def _fake_section(fail_after_sweep: list):
     """A resumable section: a sweep of 12 jobs into records_dir, then its markdown."""
+
     def section_fake(fig_dir: Path, records_dir: Path, progress=None) -> str:
         """Fake part: squares."""
-        rep = run_sweep([Job(f"sq/seed{x}", square, {"x": x}) for x in (10, 2, 1, 11, 0, 3)],
-                        records_dir / "fake_squares.jsonl", workers=1, progress=False)
+        rep = run_sweep(
+            [Job(f"sq/seed{x}", square, {"x": x}) for x in (10, 2, 1, 11, 0, 3)],
+            records_dir / "fake_squares.jsonl",
+            workers=1,
+            progress=False,
+        )
         if fail_after_sweep:
             raise Boom("interrupted")
         return "## squares\n\n" + ", ".join(str(r["result"]["y"]) for r in rep.records.values())
+
     return section_fake
 
 
@@ -44,23 +50,23 @@ def test_old_records_kept_until_the_run_completes(tmp_path, fake_parts):
     old = tmp_path / "fake_squares.jsonl"
     old.write_text('{"key": "old", "inputs": {}, "status": "ok", "result": {}}\n')
     (tmp_path / "paper.md").write_text("old report\n")
-    fake_parts.append(True)                                   # the section fails
+    fake_parts.append(True)  # the section fails
     with pytest.raises(Boom):
         paper.write_paper_report(tmp_path, progress=lambda m: None, only=["fake"])
-    assert old.read_text().startswith('{"key": "old"')        # not deleted, not replaced
+    assert old.read_text().startswith('{"key": "old"')  # not deleted, not replaced
     assert (tmp_path / "paper.md").read_text() == "old report\n"
     work = tmp_path / paper.WORK_DIR / "fake_squares.jsonl"
-    assert len(work.read_text().splitlines()) == 6             # finished jobs kept, timed
+    assert len(work.read_text().splitlines()) == 6  # finished jobs kept, timed
     assert all("wall_time_s" in json.loads(x) for x in work.read_text().splitlines())
-    assert not list(tmp_path.glob(".paper-[!w]*"))            # no temporary report dirs
+    assert not list(tmp_path.glob(".paper-[!w]*"))  # no temporary report dirs
 
-    fake_parts.clear()                                        # --resume: nothing rerun
+    fake_parts.clear()  # --resume: nothing rerun
     calls = []
     paper.write_paper_report(tmp_path, progress=calls.append, only=["fake"], resume=True)
     lines = [json.loads(x) for x in old.read_text().splitlines()]
     assert [r["key"] for r in lines] == [f"sq/seed{x}" for x in (0, 1, 2, 3, 10, 11)]
     assert all(set(r) == {"key", "inputs", "status", "result"} for r in lines)
-    assert lines[4]["result"] == {"y": 100}                   # nested timing left out
+    assert lines[4]["result"] == {"y": 100}  # nested timing left out
     assert "squares" in (tmp_path / "paper.md").read_text()
     assert not (tmp_path / paper.WORK_DIR).exists()
     log = json.loads((tmp_path / paper.RUN_LOG).read_text())
@@ -90,30 +96,54 @@ def test_resume_starts_from_the_records_in_out(tmp_path, fake_parts):
     assert (tmp_path / "fake_squares.jsonl").read_bytes() == first
     # reused records carry no timing: the run log says so with a zero sum
     log = json.loads((tmp_path / paper.RUN_LOG).read_text())
-    assert log["records"]["fake_squares.jsonl"] == {"jobs": 6, "failed": 0, "job_wall_s": 0,
-                                                    "longest_job_s": None,
-                                                    "longest_job": None, "simulations": 0}
+    assert log["records"]["fake_squares.jsonl"] == {
+        "jobs": 6,
+        "failed": 0,
+        "job_wall_s": 0,
+        "longest_job_s": None,
+        "longest_job": None,
+        "simulations": 0,
+    }
 
 
 def test_strip_and_natural_order():
-    rec = {"key": "k", "wall_time_s": 1.0, "worker": "h:1", "result": {
-        "cct_s": 0.3, "wall_time_s": 2.0, "runs": [{"solve_time_s": 1, "x": 1}]}}
+    rec = {
+        "key": "k",
+        "wall_time_s": 1.0,
+        "worker": "h:1",
+        "result": {"cct_s": 0.3, "wall_time_s": 2.0, "runs": [{"solve_time_s": 1, "x": 1}]},
+    }
     assert strip_run_dependent(rec) == {"key": "k", "result": {"cct_s": 0.3, "runs": [{"x": 1}]}}
     keys = ["k/esd10", "k/esd5", "k/esd-none", "k/seed10", "k/seed9", "k/0.05s/seed1"]
-    assert sorted(keys, key=natural_key) == ["k/0.05s/seed1", "k/esd5", "k/esd10",
-                                             "k/esd-none", "k/seed9", "k/seed10"]
+    assert sorted(keys, key=natural_key) == [
+        "k/0.05s/seed1",
+        "k/esd5",
+        "k/esd10",
+        "k/esd-none",
+        "k/seed9",
+        "k/seed10",
+    ]
 
 
 def test_write_reproducible_keeps_last_line_per_key(tmp_path):
     src, dst = tmp_path / "src.jsonl", tmp_path / "dst.jsonl"
-    src.write_text('{"key": "b", "status": "failed", "wall_time_s": 1.5, "traceback": "x"}\n'
-                   '{"key": "a", "status": "ok", "result": {"v": 1}, "wall_time_s": 0.5}\n'
-                   '{"key": "b", "status": "ok", "result": {"v": 2}, "wall_time_s": 2.5}\n')
+    src.write_text(
+        '{"key": "b", "status": "failed", "wall_time_s": 1.5, "traceback": "x"}\n'
+        '{"key": "a", "status": "ok", "result": {"v": 1}, "wall_time_s": 0.5}\n'
+        '{"key": "b", "status": "ok", "result": {"v": 2}, "wall_time_s": 2.5}\n'
+    )
     info = write_reproducible(src, dst)
-    assert dst.read_text() == ('{"key": "a", "status": "ok", "result": {"v": 1}}\n'
-                               '{"key": "b", "status": "ok", "result": {"v": 2}}\n')
-    assert info == {"jobs": 2, "failed": 0, "job_wall_s": 3.0, "longest_job_s": 2.5,
-                    "longest_job": "b"}
+    assert dst.read_text() == (
+        '{"key": "a", "status": "ok", "result": {"v": 1}}\n'
+        '{"key": "b", "status": "ok", "result": {"v": 2}}\n'
+    )
+    assert info == {
+        "jobs": 2,
+        "failed": 0,
+        "job_wall_s": 3.0,
+        "longest_job_s": 2.5,
+        "longest_job": "b",
+    }
     assert not list(tmp_path.glob(".dst*"))
 
 
@@ -134,9 +164,11 @@ def test_placement_report_holds_no_timings(tmp_path):
     root = Path(__file__).resolve().parents[2]
     d = json.loads((root / "reports" / "placement_kundur.json").read_text())
     if "plan" not in d:
-        pytest.skip("reports/placement_kundur.json predates the planner study: "
-                    "regenerate it with `stabctl paper --only placement`")
-    d["wall_time_s"], d["plan"]["wall_time_s"] = 12.0, 3.0   # as a fresh study has
+        pytest.skip(
+            "reports/placement_kundur.json predates the planner study: "
+            "regenerate it with `stabctl paper --only placement`"
+        )
+    d["wall_time_s"], d["plan"]["wall_time_s"] = 12.0, 3.0  # as a fresh study has
     d["plan"]["n_simulations"] = 40
     md = report(d, tmp_path).read_text()
     assert "Generated by `stabctl paper`" in md and "issue" not in md
