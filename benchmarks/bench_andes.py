@@ -287,7 +287,7 @@ def study_eig(files, repeat):
     for label, raw, dyr, _ in files:
         case = load_psse(raw, dyr, conventions=CONVENTIONS)
         modal_analysis(linearise(case))
-        ours, ma = best_of(lambda: modal_analysis(linearise(case)), repeat, warm_up=False)
+        ours, ma = best_of(lambda case=case: modal_analysis(linearise(case)), repeat, warm_up=False)
         fine = modal_analysis(linearise(case, rel_step=1e-6))
         em = ma.eigenvalues[ma.electromechanical]
         em_fine = fine.eigenvalues[fine.electromechanical]

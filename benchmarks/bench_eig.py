@@ -9,6 +9,8 @@ warm-up (compilation excluded), one core.  Target: miniWECC linearise + analyse
 Run: python benchmarks/bench_eig.py
 """
 
+from functools import partial
+
 from _timing import best_of
 
 from stabctl.dynamics.driver import Simulator
@@ -24,10 +26,10 @@ def main():
     )
     for name, target in (("kundur", float("nan")), ("miniwecc", 0.5)):
         case = load_case(name)
-        t_model, sim = best_of(lambda: Simulator(case), 5)
-        t_lin, sys = best_of(lambda: linearise(sim), 5)
-        t_ma, ma = best_of(lambda: modal_analysis(sys), 5)
-        t_res, _ = best_of(lambda: mode_sensitivity(sys, ma), 5)
+        t_model, sim = best_of(partial(Simulator, case), 5)
+        t_lin, sys = best_of(partial(linearise, sim), 5)
+        t_ma, ma = best_of(partial(modal_analysis, sys), 5)
+        t_res, _ = best_of(partial(mode_sensitivity, sys, ma), 5)
         total = t_lin + t_ma + t_res
         print(
             f"{name:10} {sys.nstates:6d} {sys.ninputs:6d} {t_model:8.3f} {t_lin:11.3f} "

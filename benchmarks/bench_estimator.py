@@ -42,14 +42,10 @@ def main():
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     case = load_case("miniwecc")
-    res = Simulator(case).run(
-        [
-            fault_with_clearing(
-                case, CASE2.bus, CASE2.far_bus, CASE2.fault.t_fault, CASE2.cycles["estimation"]
-            )
-        ],
-        t_end=10.0,
+    fault = fault_with_clearing(
+        case, CASE2.bus, CASE2.far_bus, CASE2.fault.t_fault, CASE2.cycles["estimation"]
     )
+    res = Simulator(case).run([fault], t_end=10.0)
     pmus = pmu.machine_pmus(case)
     settings = pmu.PMUSettings(rate=RATE, drop_prob=0.05)
     frames = list(pmu.measure(pmu.phasor_truth(case, res, pmus), settings, seed=1))

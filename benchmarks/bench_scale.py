@@ -384,7 +384,8 @@ def table(rows, andes_rows, repeat, andes_repeat):
     )
     head = (
         f"{'system':<9}{'buses':>6}{'mach':>5}{'states':>7}{'step':>7}{'setup s':>8}"
-        f"{'s/sim s':>8}{'us/step':>8}{'RSS MB':>7}{'trace MB':>9}{'lin s':>7}{'EM s':>7}{'EM':>4}"
+        f"{'s/sim s':>8}{'us/step':>8}{'RSS MB':>7}{'trace MB':>9}{'lin s':>7}{'EM s':>7}"
+        f"{'EM':>4}"
         f"{'CCT s':>7}{'CCT ms':>7}{'runs':>5}{'ANDES s/sim s':>14}{'ANDES EIG s':>12}"
     )
     print(head)

@@ -5,6 +5,8 @@ time, and the targets on one core: Kundur 20 s <= 0.05 s, miniWECC 20 s <= 0.3 s
 Run: python benchmarks/bench_simulate.py
 """
 
+from functools import partial
+
 from _timing import best_of
 
 from stabctl.dynamics.driver import Simulator
@@ -26,7 +28,7 @@ def main():
         fault = [fault_with_clearing(case, pc.bus, pc.far_bus, pc.fault.t_fault, cyc)]
         for h in (default_step(case), 1 / 240):
             for what, ev in ((label, fault), ("no disturbance", [])):
-                wall, _ = best_of(lambda: sim.run(ev, t_end=20.0, h=h))
+                wall, _ = best_of(partial(sim.run, ev, t_end=20.0, h=h))
                 print(f"{name:10} {what:44} {h:9.5f} {wall:8.3f} {20.0 / wall:12.0f} {target:9.2f}")
 
 

@@ -34,7 +34,7 @@ import tempfile
 import time
 import traceback
 import warnings
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Generator, Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import closing, contextmanager
 from dataclasses import dataclass, field
@@ -180,7 +180,8 @@ def set_aside_damaged(path: str | Path) -> list[int]:
     path = Path(path)
     if not path.exists():
         return []
-    good, bad = [], []
+    good: list = []
+    bad: list = []
     with path.open(errors="replace") as f:
         for n, line in enumerate(f, start=1):
             if not line.strip():
@@ -479,12 +480,12 @@ def write_reproducible(src: str | Path, dst: str | Path) -> dict:
         ),
         permissions=0o644,
     )
-    walls = {
-        k: r.get("wall_time_s")
+    walls: dict[str, float] = {
+        k: r["wall_time_s"]
         for k, r in records.items()
         if isinstance(r.get("wall_time_s"), (int, float))
     }
-    longest = max(walls, key=walls.get, default=None)
+    longest = max(walls, key=walls.__getitem__, default=None)
     return {
         "jobs": len(records),
         "failed": sum(r.get("status") == "failed" for r in records.values()),
@@ -560,7 +561,7 @@ class _appender:
         self.f.close()
 
 
-def _local(jobs: list, workers: int | None, pool=None) -> Iterator[dict]:
+def _local(jobs: list, workers: int | None, pool=None) -> Generator[dict, None, None]:
     """Records in completion order from a process pool: `pool` if given, else one of
     `workers` processes for these jobs (in this process if workers == 1)."""
     if pool is not None:
@@ -575,7 +576,7 @@ def _local(jobs: list, workers: int | None, pool=None) -> Iterator[dict]:
         yield from _completed(pool, jobs)
 
 
-def _completed(pool, jobs: list) -> Iterator[dict]:
+def _completed(pool, jobs: list) -> Generator[dict, None, None]:
     futures = {pool.submit(run_job, j.func, j.key, j.inputs): j for j in jobs}
     for fut in as_completed(futures):
         try:
@@ -607,13 +608,13 @@ def _dask_client(scheduler: str, workers: int):
         raise InputError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
 
 
-def _dask(jobs: list, scheduler: str, workers: int | None) -> Iterator[dict]:
+def _dask(jobs: list, scheduler: str, workers: int | None) -> Generator[dict, None, None]:
     """Records in completion order from a Dask distributed cluster (`_dask_client`)."""
     n = min(workers or default_workers(), len(jobs))
     return _dask_records(_dask_client(scheduler, n), jobs)
 
 
-def _dask_records(client, jobs: list) -> Iterator[dict]:
+def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
     from distributed import as_completed
 
     try:

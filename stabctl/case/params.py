@@ -28,12 +28,13 @@ import inspect
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Any
 
 __all__ = ["Param", "DyrModel", "Family", "MACHINE", "EXCITER", "PSS", "GOVERNOR", "FAMILIES"]
 
 
 @dataclass(frozen=True)
-class Param:
+class Param:  # fields of a dataclass: numpydoc ignore=PR02
     """One column of a PST dynamic-data matrix, declared once.
 
     Parameters
@@ -80,7 +81,7 @@ class Param:
 
 
 @dataclass(frozen=True)
-class DyrModel:
+class DyrModel:  # fields of a dataclass: numpydoc ignore=PR02
     """How one PSS/E dynamic model's DYR record fills a table row.
 
     Parameters
@@ -116,7 +117,7 @@ class DyrModel:
 
 
 @dataclass(frozen=True)
-class Family:
+class Family:  # fields of a dataclass: numpydoc ignore=PR02
     """The declaration of one PST dynamic-data matrix and the DYR models that fill it.
 
     Parameters
@@ -251,7 +252,8 @@ def choices_message(p: Param) -> str:
 # mac_con: synchronous machines (PST manual 3.22 Table 10)
 # --------------------------------------------------------------------------------------
 
-_REACT, _TC = dict(unit="pu", lo=0.0), dict(unit="s", lo=0.0)
+_REACT: dict[str, Any] = dict(unit="pu", lo=0.0)
+_TC: dict[str, Any] = dict(unit="s", lo=0.0)
 
 MACHINE = Family(
     table="mac_con",

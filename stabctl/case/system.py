@@ -35,7 +35,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar, Self
 
 import numpy as np
 
@@ -117,6 +117,11 @@ class Table:
     INTEGER: ClassVar[tuple[str, ...]] = ()
     FAMILY: ClassVar[Family | None] = None
 
+    if TYPE_CHECKING:
+        # for mypy only: the declared tables (machines, exciters, PSS, governors) get
+        # their column fields from their Family when the class is made (`_declared`)
+        def __getattr__(self, name: str) -> np.ndarray: ...
+
     def __post_init__(self):
         n = None
         for name in self.columns():
@@ -151,7 +156,7 @@ class Table:
         return tuple(f.name for f in dataclasses.fields(cls))
 
     @classmethod
-    def from_matrix(cls, matrix) -> Table:
+    def from_matrix(cls, matrix) -> Self:
         """Build the table from a PST matrix (rows x columns, PST column order).
 
         Omitted trailing columns (down to ``MIN_COLUMNS``) take ``DEFAULTS``; an empty
@@ -178,7 +183,7 @@ class Table:
         return cls(**data)
 
     @classmethod
-    def empty(cls) -> Table:
+    def empty(cls) -> Self:
         """A table with no rows."""
         return cls.from_matrix(np.zeros((0, len(cls.columns()))))
 

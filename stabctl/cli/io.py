@@ -4,6 +4,7 @@ files."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
 import click
 
@@ -141,7 +142,7 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventio
     """
     from stabctl.io.psse import import_psse as run_import
 
-    out = check_suffix(out_path, (".json",), "--out")
+    out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
     case, left_out = run_import(
         raw_path, dyr_path, "skip" if skip_unsupported else "error", loads, conventions
     )
@@ -194,7 +195,7 @@ def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, a
     """
     from stabctl.io.andes_case import read_andes_case
 
-    out = check_suffix(out_path, (".json",), "--out")
+    out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
     imported = read_andes_case(
         case_path, conventions, "skip" if skip_unsupported else "error", dyr_path
     )

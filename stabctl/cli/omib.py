@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import click
 
 from stabctl.cli.format import print_json
@@ -56,7 +58,7 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
     else:
         system = OMIB(H=H, Pm=pm, Pmax_pre=pmax, Pmax_fault=0.0, Pmax_post=pmax, f0=f0)
     cycles = tuple(fault_cycles) + tuple(more_cycles) or (6.0, 12.0, 15.0)
-    out = {"cases": clearing_table(system, cycles), "eac": eac_summary(system)}
+    out: dict[str, Any] = {"cases": clearing_table(system, cycles), "eac": eac_summary(system)}
     if as_json:
         print_json(out)
         return

@@ -229,7 +229,7 @@ def _interrupted(kwargs) -> str:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             out = f"{out} ({len(read_records(out))} recorded)"
-    kept = _KEPT.get(name, "nothing is kept; the work starts again").format(out=out)
+    kept = _KEPT.get(name or "", "nothing is kept; the work starts again").format(out=out)
     return f"interrupted: {kept}; resume with: {shlex.join(argv)}"
 
 

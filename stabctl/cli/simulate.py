@@ -247,7 +247,7 @@ def simulate(
         if esd_pct is None
         else {
             "pct_of_machine_mva": esd_pct,
-            "devices": len(fleet.devices),
+            "devices": len(fleet.devices),  # type: ignore[union-attr]
             "control": "bang-bang COI (paper Table 3)",
             "deadband_hz": deadband_hz,
             "v_gate_pu": v_gate,

@@ -24,7 +24,9 @@ before the time stamp, where the offline model centres them on it.  The first fr
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -39,6 +41,9 @@ from stabctl.estimation.pmu import (Frame, PhasorTruth, interp_columns, machine_
                                    window_estimates)
 from stabctl.estimation.settings import PMUSettings
 from stabctl.dynamics.results import SimulationResult
+
+if TYPE_CHECKING:
+    from stabctl.dynamics.driver import Simulator
 
 ESTIMATORS = ("ideal", "raw", "kf", "ekf")
 #: trajectory handed to the controller at each frame (PMU estimation windows): the two
@@ -283,7 +288,8 @@ def run_closed_loop(sim, events, t_end: float, loop: LoopOptions, *, h: float | 
     ctrl = LoopController(sim.case, fleet.devices, loop.estimator, settings, loop.seed, t_end,
                           loop.control, loop.at)
     frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
-    devices, decide = fleet.devices, ctrl
+    devices = fleet.devices
+    decide: Callable = ctrl
     if ambient is not None:
         loads, set_points = ambient.schedule(sim.case, frames.size, rate)
         devices = devices + loads
@@ -320,7 +326,7 @@ class LoopRunner:
     """What `cct.critical_clearing_time` needs of a simulator (`.case`, `.run`), with the
     ESDs commanded through `run_closed_loop` as `loop` says."""
 
-    sim: object
+    sim: Simulator
     loop: LoopOptions
 
     @property

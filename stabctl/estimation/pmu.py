@@ -123,10 +123,8 @@ class PhasorTruth:
         (`centred_estimates`)."""
         t = np.asarray(t, float)
         if self.window is None:
-            freq, rocof = (
-                interp_columns(t, self.t, self.freq),
-                interp_columns(t, self.t, self.rocof),
-            )
+            freq = interp_columns(t, self.t, self.freq)
+            rocof = interp_columns(t, self.t, self.rocof)
         else:
             freq, rocof = centred_estimates(self.t, np.angle(self.v), t, self.window, self.f0)
         return PhasorTruth(
@@ -239,10 +237,8 @@ def window_estimates(
         raise InputError("PMU frequency needs a strictly increasing time grid")
     if not 0 < window < np.inf:
         raise InputError(f"PMU estimation window must be > 0 s, got {window}")
-    f_at, rocof_at = (
-        np.atleast_1d(np.asarray(f_at, float)),
-        np.atleast_1d(np.asarray(rocof_at, float)),
-    )
+    f_at = np.atleast_1d(np.asarray(f_at, float))
+    rocof_at = np.atleast_1d(np.asarray(rocof_at, float))
     k, half = f_at.size, window / 2
     x = np.concatenate((f_at - half, f_at + half, rocof_at - window, rocof_at, rocof_at + window))
     th = interp_columns(x, t, np.unwrap(ang, axis=0))
@@ -352,7 +348,7 @@ def _device_current(result: SimulationResult, pmu: PMU, v: np.ndarray, keep) -> 
             f"PMU at bus {pmu.bus}: storage device {pmu.device} is at bus {info[pmu.device]['bus']}"
         )
     col = int(np.flatnonzero(result.devices == pmu.device)[0])
-    return -result.pesd[keep, col] / np.conj(v)
+    return -result.pesd[keep, col] / np.conj(v)  # type: ignore[index]  # storage: has pesd
 
 
 # -- measurement ------------------------------------------------------------------------

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -121,7 +122,7 @@ def andes_system(
     switched off (``u = 0``) before set-up, e.g. ``("Toggle",)`` for a case's own
     disturbance.  Only a RAW file gets :func:`_raw_network`'s corrections."""
     andes = _andes()
-    kw = {} if dyr is None else {"addfile": str(dyr)}
+    kw: dict[str, Any] = {} if dyr is None else {"addfile": str(dyr)}
     if config_option:
         kw["config_option"] = list(config_option)
     ss = andes.load(str(raw), setup=False, no_output=True, default_config=True, **kw)

@@ -46,6 +46,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -440,7 +441,7 @@ def _psse_params(ss, m, spec: dict, fields, k: int) -> tuple[float, ...]:
             f"ANDES's psse-dyr.yaml gives {len(inputs)} {m.class_name} "
             f"parameters, the PSS/E Model Library {len(fields)}"
         )
-    source = {}
+    source: dict[str, Any] = {}
     for param, expr in spec["outputs"].items():
         if isinstance(expr, str) and ";" in expr:
             source.setdefault(expr.split(";")[0].split(".")[-1].strip(), param)

@@ -102,7 +102,9 @@ def read_dyr(path) -> list[DyrRecord]:
         text = path.read_text(errors="replace")
     except OSError as exc:
         raise CaseError(f"{path}: cannot read DYR file: {exc.strerror or exc}") from None
-    records, tokens, start = [], [], 0
+    records: list = []
+    tokens: list = []
+    start = 0
     for n, line in enumerate(text.splitlines(), 1):
         for tok in _TOKEN.findall(line):
             if tok == "/":
@@ -212,7 +214,7 @@ def dyr_tables(
     _set_fractions(generators, rows["machine"])
     tables = {k: _matrix(rows[k], width) for k, width in _WIDTH.items()}
     return DyrTables(
-        mac_con=tables["machine"],
+        mac_con=tables["machine"],  # type: ignore[arg-type]  # None: no machine
         exc_con=tables["exciter"],
         pss_con=tables["pss"],
         tg_con=tables["governor"],

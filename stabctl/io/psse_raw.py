@@ -52,10 +52,13 @@ Bus numbers stay as in the RAW file. Branch rows: lines in file order, then tran
 
 from __future__ import annotations
 
+import builtins
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NoReturn
 
 import numpy as np
 
@@ -64,7 +67,7 @@ from stabctl.errors import CaseError
 
 __all__ = ["RawSource", "Generator", "RawData", "read_raw", "split_fields"]
 
-_SECTIONS = {
+_SECTIONS: dict[int, tuple[str, ...]] = {
     32: (
         "bus",
         "load",
@@ -252,14 +255,16 @@ class _Rec:
             self.fail(f"field {k + 1} '{vals[k]}' is out of range (|value| <= {_LARGEST:g})")
         return v
 
-    def int(self, row: int, k: int, default: int | None = None) -> int:
+    def int(
+        self, row: builtins.int, k: builtins.int, default: builtins.int | None = None
+    ) -> builtins.int:
         """Field ``k`` of line ``row`` as an integer (see :meth:`num`)."""
         v = self.num(row, k, default)
         if not float(v).is_integer():
             self.fail(f"field {k + 1} '{self.lines[row][k]}' is not an integer")
         return int(v)
 
-    def text(self, row: int, k: int, default: str = "1") -> str:
+    def text(self, row: builtins.int, k: builtins.int, default: str = "1") -> str:
         """Field ``k`` of line ``row`` as a stripped string (an ID)."""
         vals = self.lines[row]
         return vals[k].strip() if k < len(vals) and vals[k].strip() else default
@@ -267,7 +272,7 @@ class _Rec:
     def source(self, what: str) -> RawSource:
         return RawSource(self.file, self.line, what)
 
-    def fail(self, what: str):
+    def fail(self, what: str) -> NoReturn:
         raise CaseError(f"{self.file}:{self.line} {self.section} record: {what}")
 
 
@@ -316,7 +321,7 @@ def _check_fields(rec: _Rec, version: int) -> None:
     section's layout (a cut or merged line, or a record of another section)."""
     group = 1 if version >= 34 else 0
     if rec.section in _FIELDS:
-        limits = [_FIELDS[rec.section][group]]
+        limits: Sequence[tuple[int, int]] = [_FIELDS[rec.section][group]]
     elif rec.section == "transformer" and len(rec.lines) == 4:
         limits = _XFMR_FIELDS[group]
     else:

@@ -91,7 +91,7 @@ def case_from_matrices(
     for key in ("bus", "line"):
         if key not in mats or _is_empty(mats[key]):
             raise CaseError(f"{name}: the data defines no '{key}' matrix")
-    tables = {
+    tables: dict[str, Any] = {
         field: TABLES[field].from_matrix(mats[key])
         for key, field in PST_TABLES.items()
         if key in mats

@@ -14,13 +14,24 @@ from __future__ import annotations
 
 import dataclasses
 from collections import namedtuple
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from stabctl.case.params import array_dataclass
 
 
-def params_class(leading: tuple[str, ...], declared: tuple[str, ...]):
+class Declared:
+    """Base of the model parameter classes (`params_class`): their declared fields are
+    made at run time, so for a type checker every attribute is an array."""
+
+    if TYPE_CHECKING:
+
+        def __getattr__(self, name: str) -> np.ndarray: ...
+
+
+def params_class(leading: tuple[str, ...], declared: tuple[str, ...]) -> Callable[[type], Any]:
     """Class decorator: a frozen dataclass whose fields are ``leading`` (model-side
     fields such as ``kind``, ``mac``), then ``declared`` (table fields under their
     declared names), then the class's own annotated fields.
@@ -33,7 +44,8 @@ def params_class(leading: tuple[str, ...], declared: tuple[str, ...]):
     Returns
     -------
     callable
-        The decorator.
+        The decorator (its class is typed ``Any`` for mypy: the fields are made at run
+        time from the declarations).
     """
     return lambda cls: array_dataclass(cls, (*leading, *declared))
 

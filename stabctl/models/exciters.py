@@ -30,7 +30,7 @@ from stabctl.case import Case, beyond
 from stabctl.case.params import EXCITER
 from stabctl.errors import CaseError
 from stabctl.models import machines as mac
-from stabctl.models._declared import check_packed, layout, pack, params_class
+from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
 from stabctl.models.blocks import (GAIN_OVER_T, LBND, clip, lag, leadlag_input_state,
                                    nonwindup_lag, washout)
 from stabctl.models.saturation import quadratic_fit
@@ -60,7 +60,7 @@ DC_KINDS = (DC1, DC2, T2)
 
 
 @params_class(("kind", "mac"), TABLE_FIELDS)
-class ExciterParams:
+class ExciterParams(Declared):
     """Exciter data of a case, arrays of shape (n_exc,): ``kind`` the exc_con type,
     ``mac`` the machine's row (index), then the exc_con fields :data:`TABLE_FIELDS` under
     their declared names (stabctl.case.params.EXCITER; KP the complex K_P exp(j

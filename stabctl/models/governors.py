@@ -31,7 +31,7 @@ from stabctl._jit.decorators import kernel
 from stabctl.case import Case, beyond
 from stabctl.case.params import GOVERNOR
 from stabctl.errors import CaseError
-from stabctl.models._declared import check_packed, layout, pack, params_class
+from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
 from stabctl.models.blocks import LBND, clip, lag, leadlag, nonwindup, nonwindup_lag
 
 TG, TGOV1, IEEEG1, HYGOV, IEESGO = 1, 2, 3, 4, 5
@@ -63,7 +63,7 @@ G = layout("GovernorColumns", PACKED)
 
 
 @params_class(("kind", "mac"), TABLE_FIELDS)
-class GovernorParams:
+class GovernorParams(Declared):
     """Governor data, arrays of shape (n_tg,): ``kind`` the tg_con type, ``mac`` the
     machine's row (index), the tg_con fields :data:`TABLE_FIELDS` under their declared
     names (stabctl.case.params.GOVERNOR); K (n_tg, 4): IEEEG1 (and IEESGO) K1+K2, K3+K4,

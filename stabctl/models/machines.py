@@ -19,7 +19,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.case import Case
 from stabctl.case.params import MACHINE
-from stabctl.models._declared import check_packed, layout, pack, params_class
+from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
 from stabctl.models.saturation import quadratic_fit
 
 SUB, TRA, EM = 2, 1, 0
@@ -51,7 +51,7 @@ K = layout("MachineColumns", PACKED)
 
 
 @params_class(("kind", "bus_idx", "mac_pot"), TABLE_FIELDS)
-class MachineParams:
+class MachineParams(Declared):
     """Machine data after PST's substitutions, arrays of shape (n_mac,).
 
     `kind` is SUB/TRA/EM as PST's `mac_indx` chooses it: x_d = 0 -> classical; x"_d = 0 ->

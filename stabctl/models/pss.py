@@ -25,7 +25,7 @@ from stabctl._jit.decorators import kernel
 from stabctl.case import Case
 from stabctl.case.params import PSS
 from stabctl.errors import CaseError
-from stabctl.models._declared import check_packed, layout, pack, params_class
+from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
 from stabctl.models.blocks import GAIN_AFTER, GAIN_BEFORE, LBND, clip, lag, leadlag, washout
 
 PST_SPEED, PST_POWER, PSSE, STAB2A = 1, 2, 3, 4
@@ -68,7 +68,7 @@ W_PSSE, LL_PSSE = 6, 7  # type 3 washout and first lead-lag slots
 
 
 @params_class(("kind", "mac"), TABLE_FIELDS)
-class PssParams:
+class PssParams(Declared):
     """PSS data, arrays of shape (n_pss,): ``kind`` the pss_con type, ``mac`` the machine's
     row (index), the pss_con fields :data:`TABLE_FIELDS` under their declared names
     (stabctl.case.params.PSS; input1, input2 0 for types 1, 2).  Type 3: the filter in

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -22,6 +23,7 @@ from stabctl.placement.evaluation import (
 )
 from stabctl.placement.loop import PlaceOptions, Study, evaluations
 from stabctl.placement.requirements import CostModel
+from stabctl.storage.control import BangBangCOI
 
 
 @dataclass
@@ -41,12 +43,12 @@ class PlanContext:
     case: str
     sites: tuple
     cost: CostModel
-    controller: object
+    controller: BangBangCOI
     model: ModelOptions
-    run_map: object
+    run_map: Any
     tol: float
     t_max: float
-    say: object
+    say: Any
     n_runs: int = 0
     base: dict = field(default_factory=dict)
     energy_rate: np.ndarray | None = None
@@ -55,7 +57,7 @@ class PlanContext:
     infeasible: list = field(default_factory=list)
     set_aside: list = field(default_factory=list)
     place: PlaceOptions = PlaceOptions()
-    lock: object = field(default_factory=threading.Lock)
+    lock: Any = field(default_factory=threading.Lock)
 
     def check(self, contingencies, mw, energy_mj=None, h: float | None = None) -> dict:
         """`stabctl.placement.evaluation.check` of every contingency at ratings mw (one

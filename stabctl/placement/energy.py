@@ -48,7 +48,8 @@ def size_energy(pl: PlanContext, cons, mw, checks) -> tuple:
     Returns (mwh (n_sites,), per-site energy figures, all those runs stable)."""
     used = [j for j, p in enumerate(mw) if p > 0]
     n = len(pl.sites)
-    mwh, energy = np.zeros(n), [{} for _ in range(n)]
+    mwh = np.zeros(n)
+    energy: list[dict] = [{} for _ in range(n)]
     if not used:
         return mwh, energy, True
     setter = {}

@@ -16,6 +16,7 @@ are JSON-able jobs run in parallel worker processes (`stabctl.parallel.worker_po
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -528,7 +529,7 @@ class Evaluator:
         Clearing-time grid of the first-unstable scan (s).
     """
 
-    run_map: object
+    run_map: Any
     case: str
     sites: tuple
     beta: np.ndarray
@@ -571,6 +572,7 @@ def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions
         **ev.model.to_inputs(),
     }
     scanning = devices and base is not None and scan != "none"
+    base = base or {}
     brackets = opts.brackets or {}
     jobs = [
         {

@@ -40,6 +40,7 @@ import threading
 import time
 from contextlib import nullcontext
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -157,7 +158,7 @@ class Study:
     search: SearchOptions = SearchOptions()
     model: ModelOptions = ModelOptions()
     runner: RunnerOptions = RunnerOptions(workers=1)
-    run_map: object = None
+    run_map: Any = None
 
     @property
     def law(self) -> BangBangCOI:
@@ -192,7 +193,7 @@ class PlaceOptions:
     zeta_min: float | None = None
     amplitude_hz: float = 0.2
     max_sites: int | None = None
-    site_cost: object = 0.0
+    site_cost: Any = 0.0
     safety_s: float | None = None
     max_iter: int = 10
     rtol: float = 0.02
@@ -218,7 +219,7 @@ class WarmStart:
     """
 
     base: dict | None = None
-    start: object = None
+    start: Any = None
     evaluations: dict | None = None
 
 
@@ -229,7 +230,7 @@ class _Setup:
 
     ev: Evaluator
     contingencies: tuple
-    damping: object
+    damping: Any
     zeta_min: float | None
     solve_kw: dict
     base: dict | None = None
@@ -499,7 +500,9 @@ def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float, say) 
     prices = _prices(setup, cuts_from(setup.contingencies, base, np.zeros_like(mw0)))
     cur = _point(setup, mw0, ev0, prices)
     best = cur if cur.feasible else None
-    radius, checked, iterations, solve_times = float(setup.upper.max()), set(), [], []
+    radius, iterations = float(setup.upper.max()), []
+    checked: set[str] = set()
+    solve_times: list[float] = []
     seen, tried = [], []
     message = f"stopped after {max_iter} simulated allocation(s) (cap)"
     for it in range(1, max_iter + 1):
@@ -671,12 +674,13 @@ def _point(setup: _Setup, mw, ev: dict, prices) -> _Point:
     )
 
 
-def damping_shortfall(zeta, zeta_min: float) -> float:
+def damping_shortfall(zeta, zeta_min: float | None) -> float:
     """max over modes of kappa sqrt(1 - zeta^2) - zeta (>= 0), kappa = zeta_min /
     sqrt(1 - zeta_min^2): the normalised distance of the worst eigenvalue beyond the
-    zeta_min line (the measure of `damping.DampingModel.rows`; ~ zeta_min - zeta)."""
+    zeta_min line (the measure of `damping.DampingModel.rows`; ~ zeta_min - zeta); 0
+    without a damping requirement (zeta_min None)."""
     z = np.asarray(zeta, float)
-    if not z.size:
+    if not z.size or zeta_min is None:
         return 0.0
     kappa = zeta_min / np.sqrt(1 - zeta_min**2)
     return float(max(0.0, np.max(kappa * np.sqrt(1 - z**2) - z)))

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import cast
 
 import cvxpy as cp
 import numpy as np
@@ -205,15 +206,16 @@ def solve_allocation(
     wall = time.perf_counter() - wall
     if prob.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
         raise _infeasible(cuts, ub, safety_s, prob.status)
-    mw = np.where(P.value > 1e-6, P.value, 0.0)
+    value = cast(np.ndarray, P.value)  # solved: not None
+    mw = np.where(value > 1e-6, value, 0.0)
     return Allocation(
         sites=tuple(sites),
         mw=mw,
         objective=float(prob.value),
         solve_time_s=float(prob.solver_stats.solve_time or 0.0),
         wall_time_s=wall,
-        slack=0.0 if slack is None else float(np.sum(slack.value)),
-        cct_slack=0.0 if u is None else float(np.sum(u.value)),
+        slack=0.0 if slack is None else float(np.sum(cast(np.ndarray, slack.value))),
+        cct_slack=0.0 if u is None else float(np.sum(cast(np.ndarray, u.value))),
         predicted_cct_s={c.contingency: c.predicted(mw) for c in cuts},
     )
 

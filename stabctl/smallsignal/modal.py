@@ -201,11 +201,11 @@ def modal_analysis(
     zeta = np.divide(-lam.real, mag, out=np.ones_like(mag), where=mag > 0)  # lambda = 0: 1
     em = electromechanical_modes(f, P, states)
     if areas is None:
-        areas = coherent_areas(shape, f, em, n_areas)
+        area_of = coherent_areas(shape, f, em, n_areas)
     else:
-        areas = _given_areas(areas, machines)
+        area_of = _given_areas(areas, machines)
     eta = np.full(lam.size, np.nan)
-    eta[em] = area_momentum_fraction(shape[:, em], inertia, areas)
+    eta[em] = area_momentum_fraction(shape[:, em], inertia, area_of)
     kind = np.full(lam.size, "other", dtype=object)
     kind[em] = np.where(eta[em] > INTER_AREA_ETA, "inter-area", "local")
     kind[ref] = "angle reference"
@@ -222,7 +222,7 @@ def modal_analysis(
         speed_shape=shape,
         reference_mode=ref,
         electromechanical=em,
-        areas=areas,
+        areas=area_of,
         kind=kind.astype(str),
         eta=eta,
     )

@@ -378,7 +378,7 @@ class OMIB:
         if self.Pmax_fault == 0 and self.D == 0:
             return float(np.sqrt(2 * self.M * (dcr - self.delta0) / self.Pm))
         event = lambda t, x: x[0] - dcr  # noqa: E731
-        event.terminal, event.direction = True, 1
+        event.terminal, event.direction = True, 1  # type: ignore[attr-defined]  # scipy's
         sol = solve_ivp(
             self.rhs("fault"), (0, 10.0), [self.delta0, 0.0], events=event, rtol=1e-11, atol=1e-12
         )
@@ -446,7 +446,7 @@ def _unstable_event(system: OMIB):
     def event(t, x):
         return x[0] - du
 
-    event.terminal, event.direction = True, 1
+    event.terminal, event.direction = True, 1  # type: ignore[attr-defined]  # scipy's
     return event
 
 

@@ -68,7 +68,7 @@ def time_to_zero_speed(system: OMIB, x_start, P_C: float, t_max: float = 5.0):
     def stop(t, x):
         return x[1]
 
-    stop.terminal, stop.direction = True, -1
+    stop.terminal, stop.direction = True, -1  # type: ignore[attr-defined]  # scipy's
     sol = solve_ivp(
         system.rhs("post", P_C),
         (0, t_max),

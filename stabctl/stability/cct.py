@@ -39,6 +39,7 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
@@ -52,6 +53,25 @@ from stabctl.network.ybus import circuit_row
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
 #: to the limit), the limit, tolerance, and the run length after the fault.
 T_LO, T_HI, T_MAX, TOL, T_AFTER_FAULT = 0.0, 0.1, 1.0, 1e-3, 5.0
+
+
+class Runner(Protocol):
+    """What `critical_clearing_time` needs of a simulator: a `Simulator`, or anything
+    that runs the case's events the same way (e.g. the estimator-in-the-loop runner,
+    `stabctl.estimation.closed_loop.LoopRunner`)."""
+
+    @property
+    def case(self): ...
+
+    @property
+    def conventions(self) -> str: ...
+
+    @property
+    def default_h(self) -> float: ...
+
+    def run(
+        self, events, t_end, *, h=None, separation_limit=np.pi, stop_at_separation=True
+    ) -> SimulationResult: ...
 
 
 @dataclass(frozen=True)
@@ -283,7 +303,7 @@ class SearchOptions:
 
 
 def critical_clearing_time(
-    sim: Simulator,
+    sim: Runner,
     fault: LineFault,
     search: SearchOptions | None = None,
     *,
@@ -294,8 +314,9 @@ def critical_clearing_time(
 
     Parameters
     ----------
-    sim : Simulator
-        The simulator of the case (its power flow is solved once).
+    sim : Runner
+        The simulator of the case (its power flow is solved once), a `Simulator` or a
+        runner like it.
     fault : LineFault
         The fault; its clearing time is the unknown.
     search : SearchOptions or None, optional
@@ -343,7 +364,8 @@ def critical_clearing_time(
     crit = no_separation if o.criterion is None else o.criterion
     stop = o.criterion is None if o.stop_at_separation is None else o.stop_at_separation
     extra = {} if storage is None else {"storage": storage}
-    probes, separated = {h: [], h / 2: []}, {}
+    probes: dict[float, list] = {h: [], h / 2: []}
+    separated: dict = {}
 
     def stable_at(k: int, step: float = h) -> bool:
         t_clear = _lattice(k, tol)

@@ -26,7 +26,7 @@ def screening_faults(
     buses = case.buses.number if buses is None else buses
     faults = [LineFault(int(b), None, t_fault) for b in buses]
     if lines:
-        seen = set()
+        seen: set[tuple[int, int, int]] = set()
         for f, t in zip(case.branches.from_bus, case.branches.to_bus):
             key = (int(f), int(t))
             circuit = sum(1 for k in seen if k[:2] == key) + 1

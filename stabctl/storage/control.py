@@ -87,7 +87,7 @@ class ControlLaw(Protocol):
 
 
 @dataclass(frozen=True)
-class BangBangCOI:
+class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
     """The paper's controller (Table 3); see the module docstring.
 
     Parameters
@@ -152,7 +152,7 @@ class BangBangCOI:
 
 
 @dataclass(frozen=True)
-class LinearFeedback:
+class LinearFeedback:  # fields of a dataclass: numpydoc ignore=PR02
     """Section 3 laws for many machines: P = Kv * dw + Ka * d(dw)/dt, clipped to +-Pmax.
 
     Parameters
@@ -182,7 +182,7 @@ class LinearFeedback:
 
 
 @dataclass(frozen=True)
-class ExternalCommands:
+class ExternalCommands:  # fields of a dataclass: numpydoc ignore=PR02
     """Devices commanded from outside the simulation (estimator in the loop): their
     set-points in units of the rating (Table 3 modes -1 inject, 0 idle, +1 absorb; other
     values for a scaled power such as an ambient load deviation) come from

@@ -12,6 +12,7 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -34,7 +35,7 @@ class EigStudy:
 
     case: Case
     no_pss: bool
-    sys: object
+    sys: Any  # control.StateSpace (untyped)
     ma: ModalAnalysis
     sens: ModeSensitivity
     t_linearise: float

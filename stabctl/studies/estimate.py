@@ -14,8 +14,13 @@ from __future__ import annotations
 import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from stabctl.errors import InputError
+
+if TYPE_CHECKING:
+    from stabctl.estimation.ambient import AmbientLoad
+    from stabctl.storage.control import BangBangCOI
 
 
 @dataclass(frozen=True)
@@ -44,8 +49,8 @@ class ErrorRuns:
     seed: int
     pmu_at: str
     coi: str
-    control: object
-    ambient: object
+    control: BangBangCOI
+    ambient: AmbientLoad
     ambient_s: float
     ambient_runs: int
 

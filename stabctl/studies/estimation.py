@@ -88,7 +88,7 @@ def run_estimators(
         for fr in stream:
             s, v = f.step(fr)
             rows.append((s, v, *f.forecast(lat), f.nis.copy()))
-        out[name] = Track(*(np.array(a) for a in zip(*rows)), dof=f.dof)
+        out[name] = Track(*(np.array(a) for a in zip(*rows)), dof=f.dof)  # type: ignore[misc, arg-type]
     return out
 
 
@@ -158,7 +158,7 @@ def monte_carlo(
     pmus = machine_pmus(case, at)
     models = machine_models(case, pmus)
     truth = phasor_truth(case, result, pmus, settings.window_cycles)
-    per_run = {name: [] for name in ESTIMATORS}
+    per_run: dict[str, list] = {name: [] for name in ESTIMATORS}
     for r in range(runs):
         stream = measure(truth, settings, seed + r)
         for name, track in run_estimators(stream, models).items():
@@ -203,7 +203,7 @@ def false_actions(
     pmus = machine_pmus(case, at)
     models = machine_models(case, pmus)
     sa = st.pack(st.uniform_fleet(case, 1.0, controller), case, np.arange(case.n_bus))
-    figs = {
+    figs: dict[str, dict[str, list]] = {
         name: {"actions": [], "max_rel_mhz": [], "std_rel_mhz": []}
         for name in ("true", *ESTIMATORS)
     }

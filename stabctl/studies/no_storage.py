@@ -108,7 +108,7 @@ def no_storage_report(pc: PaperCase, out_dir: Path, t_end: float = 5.0) -> list[
         f"line {pc.bus}-{pc.far_bus} at {pc.fault.t_fault} s, line tripped; {t_end:g} s",
         _verdict(case, res),
     ]
-    lines += _cct_scan(pc, cycles, t_end) if pc is CASE1 else _excursions(res)
+    lines += _cct_scan(pc, int(cycles), t_end) if pc is CASE1 else _excursions(res)
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / f"{key}_no_storage.png"
     simulation_overview(

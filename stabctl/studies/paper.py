@@ -17,6 +17,7 @@ import time
 from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -369,7 +370,7 @@ def write_paper_report(
             for f in out.glob(pattern):
                 shutil.copyfile(f, work / f.name)
     t_start = time.perf_counter()
-    log = {
+    log: dict[str, Any] = {
         "command": "stabctl paper",
         "parts": keys,
         "resume": bool(resume),
@@ -388,8 +389,8 @@ def write_paper_report(
         log["progress"].append([round(time.perf_counter() - t_start, 1), msg])
         (progress or logger.info)(msg)
 
-    with tempfile.TemporaryDirectory(dir=out, prefix=".paper-") as tmp:
-        tmp = Path(tmp)
+    with tempfile.TemporaryDirectory(dir=out, prefix=".paper-") as tmp_name:
+        tmp = Path(tmp_name)
         parts = [
             "# stabctl: reproduction of the paper's results",
             "",

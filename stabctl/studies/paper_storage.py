@@ -50,7 +50,7 @@ def _run_pair(pc: PaperCase, cycles, pct, conventions="ieee", halve=False):
 def _halved(pair, *args, **kw) -> str:
     """'same' when both verdicts of `pair` (without, with) hold at half the step, else
     what changes: the step-convergence check of a verdict."""
-    half = _run_pair(*args, halve=True, **kw)[:2]
+    half = _run_pair(*args, halve=True, **kw)[:2]  # type: ignore[misc]
     diff = [
         f"{what} {'stable' if h.stable else 'unstable'}"
         for what, p, h in zip(("without", "with"), pair, half)
@@ -202,7 +202,8 @@ def section_table4(fig_dir: Path, out_dir: Path, progress=None) -> str:
     lines = [
         "## 6. Table 4: CCT versus ESD rating",
         "",
-        "Bisection on the clearing time to 1 ms (`stabctl.stability.cct`, ieee conventions, each "
+        "Bisection on the clearing time to 1 ms (`stabctl.stability.cct`, ieee conventions, "
+        "each "
         "CCT's numerical error from rerunning its bracket at half the step in the `err` "
         "column), stability = no rotor angle leaves the COI by more than pi within 5 s "
         "of the fault. The paper's Table 4 (miniWECC): ESD power 0 / 5 / 15 / 20 / 25 / "
@@ -329,8 +330,8 @@ def _table4_hypotheses(res: dict) -> list[str]:
     larger = all(whole[p] > PAPER_TABLE4[p] for p in common)
     gains = [res[p]["cct_s"] for p in RATINGS_PCT]
     rising = all(b > a for a, b in itertools.pairwise(gains))
-    ng = [no_gate[p] for p in sorted(no_gate)]
-    gate_caps = not all(b > a for a, b in itertools.pairwise(ng))
+    no_gate_ccts = [no_gate[p] for p in sorted(no_gate)]
+    gate_caps = not all(b > a for a, b in itertools.pairwise(no_gate_ccts))
     lines += [
         "",
         f"- Whole cycles: our base CCT is {res[None]['cct_cycles']:.2f} cycles "

@@ -525,7 +525,7 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
         + " |",
         "|---|---|" + "---|" * len(d["load_levels"]),
     ]
-    by = {}
+    by: dict = {}
     for r in p["contingencies"]:
         by.setdefault(r["fault_name"], {})[r["load"]] = r
     screen_cct = {
@@ -715,8 +715,8 @@ def placement_study(
     (InfeasibleError, InputError, SimulationError)."""
     out = Path(out_dir)
     records = Path(records_dir or out)
-    for d in (out, records):
-        d.mkdir(parents=True, exist_ok=True)
+    for folder in (out, records):
+        folder.mkdir(parents=True, exist_ok=True)
     say = progress or logger.info
     d = study(case_name, records, workers, say, fast)
     say(timing_line(d))

@@ -155,9 +155,8 @@ def test_raw_values_are_kept_not_model_defaults():
 def test_omitted_bus_columns_take_pst_loadflow_defaults():
     b = BusTable.from_matrix([r[:10] for r in BUS])
     assert b.qmax.tolist() == [9999] * 3 and b.qmin.tolist() == [-9999] * 3
-    assert (
-        b.kv.tolist() == [1] * 3 and b.vmax.tolist() == [1.5] * 3 and b.vmin.tolist() == [0.5] * 3
-    )
+    assert b.kv.tolist() == [1] * 3 and b.vmax.tolist() == [1.5] * 3
+    assert b.vmin.tolist() == [0.5] * 3
 
 
 def test_five_column_lines_get_tap_one():
