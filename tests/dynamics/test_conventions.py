@@ -6,7 +6,10 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from stabctl.models import exciters as exc
+from stabctl.io import load_case
 from stabctl.cli import main
+from stabctl.errors import InputError, NumericalInstabilityError
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.grid import time_grid

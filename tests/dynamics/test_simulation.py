@@ -22,6 +22,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from stabctl.io import load_case
+from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
 from stabctl.dynamics.events import Fault, LineTrip, fault_with_clearing, from_sw_con
 from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.driver import Simulator

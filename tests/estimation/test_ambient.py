@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from stabctl.errors import InputError
 from stabctl.estimation import ambient as am
 from stabctl.io import load_case
 from stabctl.errors import InputError
@@ -73,7 +72,7 @@ def test_load_fluctuation_drives_the_simulated_speeds(kundur):
 
 
 def test_zero_amplitude_gives_the_deterministic_run(kundur):
-    _case, sim = kundur
+    case, sim = kundur
     still = am.simulate(sim, 5.0, am.AmbientLoad(pct=0.0))
     flat = sim.run([], t_end=5.0)
     assert np.all(still.pesd == 0.0)

@@ -3,6 +3,9 @@
 import numpy as np
 import pytest
 
+from stabctl.errors import InputError
+from stabctl.estimation import closed_loop as cl
+from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.driver import Simulator
 from stabctl.estimation.ambient import AmbientLoad
@@ -11,7 +14,6 @@ from stabctl.parallel import RunnerOptions
 from stabctl.stability.cct import LineFault
 from stabctl.storage.devices import StorageFleet, uniform_fleet
 from stabctl.storage.control import ExternalCommands
-from stabctl.storage.devices import StorageFleet, uniform_fleet
 
 
 @pytest.fixture(scope="module")

@@ -18,12 +18,11 @@ from stabctl.studies import estimation as study
 from stabctl.estimation import pmu
 from stabctl.io import load_case
 from stabctl.cli import main
+from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.driver import Simulator
 from stabctl.storage.devices import pack, uniform_fleet
 from stabctl.storage.control import BangBangCOI
-from stabctl.storage.devices import pack, uniform_fleet
-from stabctl.studies import estimation as study
 
 F0, WB = 60.0, 2 * np.pi * 60.0
 H, X, EMAG, VMAG, PM = 5.0, 0.3, 1.1, 1.0, 0.8
@@ -191,7 +190,7 @@ def kundur():
 
 
 def test_kundur_relative_speed_well_inside_the_deadband(kundur):
-    _case, res, _pmus, models, truth = kundur
+    case, res, pmus, models, truth = kundur
     st = pmu.PMUSettings(drop_prob=0.02)
     stream = pmu.measure(truth, st, seed=3)
     tracks = study.run_estimators(stream, models)
@@ -204,7 +203,7 @@ def test_kundur_relative_speed_well_inside_the_deadband(kundur):
 
 
 def test_compiled_filters_equal_the_filterpy_reference(kundur):
-    _case, _res, _pmus, models, truth = kundur
+    case, res, pmus, models, truth = kundur
     st = pmu.PMUSettings(drop_prob=0.1)
     stream = pmu.measure(truth, st, seed=1)
     for fast, ref in ((FrequencyKF(models.pmu, st), FrequencyKFReference(models.pmu, st)),
@@ -215,7 +214,7 @@ def test_compiled_filters_equal_the_filterpy_reference(kundur):
 
 
 def test_same_seed_same_estimates(kundur):
-    _case, _res, _pmus, models, truth = kundur
+    case, res, pmus, models, truth = kundur
     runs = [study.run_estimators(pmu.measure(truth, seed=9), models)["ekf"].speed for _ in range(2)]
     np.testing.assert_array_equal(*runs)
 

@@ -5,6 +5,9 @@ currents)."""
 import numpy as np
 import pytest
 
+from stabctl.estimation import pmu
+from stabctl.io import load_case
+from stabctl.errors import InputError
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.driver import Simulator
 from stabctl.storage.devices import uniform_fleet

@@ -7,6 +7,8 @@ mechanical torques balance."""
 import numpy as np
 import pytest
 
+from stabctl.errors import CaseError
+from stabctl.io import load_case
 from stabctl.dynamics.model import StageConfig
 from stabctl.dynamics.driver import Simulator
 

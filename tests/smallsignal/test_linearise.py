@@ -1,5 +1,5 @@
-"""Linearisation of the simulator's own model (stabctl.smallsignal.linearise) against PSTess
-svm_mgen, the nonlinear simulator (ESD power pulse) and its own perturbation error.
+"""Linearisation of the simulator's own model (stabctl.smallsignal.linearise) against PSTess svm_mgen,
+the nonlinear simulator (ESD power pulse) and its own perturbation error.
 
 References (tests/data/pstess/, copied from shared/reference/pstess; PSTess 1.1 svm_mgen
 under GNU Octave, MIT licence, see LICENSE and NOTICE there): kundur_d2asbegp_eigenvalues.csv
@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from stabctl.case import PssTable
+from stabctl.io import load_case
 from stabctl.errors import InputError, SimulationError, UnknownBusError
 from stabctl.smallsignal.linearise import (STATE, active_states, compare_pulse, jacobian_columns,
                                linearise, linearise_model, perturbation_error)

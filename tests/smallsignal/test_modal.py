@@ -9,12 +9,12 @@ import pytest
 from click.testing import CliRunner
 
 from stabctl.case import PssTable
+from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.errors import InputError
-from stabctl.io import load_case
+from stabctl.studies.eigenvalues import _areas as study_areas
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import _by_first_machine, modal_analysis, mode_sensitivity
-from stabctl.studies.eigenvalues import _areas as study_areas
 
 
 @pytest.fixture(scope="module")
