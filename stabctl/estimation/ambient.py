@@ -37,6 +37,7 @@ from scipy.signal import lfilter
 
 from stabctl.case import Case
 from stabctl.errors import InputError
+from stabctl.dynamics.driver import CommandFrames
 from stabctl.dynamics.results import SimulationResult
 from stabctl.storage.devices import StorageDevice, StorageFleet
 from stabctl.storage.control import ExternalCommands
@@ -96,5 +97,6 @@ def simulate(sim, t_end: float, ambient: AmbientLoad, rate: float = 60.0, events
     frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
     devs, set_points = ambient.schedule(sim.case, frames.size, rate)
     fleet = StorageFleet(devs, ExternalCommands(v_gate_pu=0.0))
-    return sim.run_commanded(events, t_end, fleet, frames, lambda t, _: set_points(t), h=h,
+    schedule = CommandFrames(frames, lambda t, _: set_points(t),
                              history_s=0.0)              # the set points read no trajectory
+    return sim.run_commanded(events, t_end, fleet, schedule, h=h)

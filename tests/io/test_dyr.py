@@ -801,6 +801,7 @@ def test_exst1_and_ieeeg1_initialisation_match_andes_wecc():
     for i, k in enumerate(g.idx.v.index(s) for s in e.syn.v):
         b = ss.Bus.idx.v.index(g.bus.v[k])
         KP = e.KP.v[i] * np.exp(1j * np.deg2rad(e.THETAP.v[i]))
-        VE = exc.st3_source_voltage(KP, e.KI.v[i], e.XL.v[i], 0.0, ss.Bus.v.v[b], ss.Bus.a.v[b],
-                                    g.Pe.v[k], g.Qe.v[k], 1.0, 0.0, True)
+        VE = exc.st3_source_voltage(KP, e.KI.v[i], e.XL.v[i], 0.0,
+                                    exc.ST3Machine(ss.Bus.v.v[b], ss.Bus.a.v[b], g.Pe.v[k],
+                                                   g.Qe.v[k], 1.0, 0.0), True)
         assert VE == pytest.approx(e.VE.v[i], rel=1e-12)
