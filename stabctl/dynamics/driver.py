@@ -12,6 +12,8 @@ raises SimulationError; both carry the trajectory up to that point.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -50,6 +52,35 @@ def single_threaded_blas() -> None:
         from threadpoolctl import threadpool_limits
         threadpool_limits(limits=1, user_api="blas")
         _BLAS_LIMITED = True
+
+
+@dataclass(frozen=True)
+class CommandFrames:
+    """The measurement frames of a commanded run (`Simulator.run_commanded`): when they
+    arrive, what is decided at each and when the decision takes effect.
+
+    Attributes
+    ----------
+    times : array_like of float, shape (n_frames,)
+        Measurement-frame arrival times, s, strictly increasing; those after the run's
+        end are ignored.
+    decide : callable
+        ``decide(t_f, partial) -> set-points``: `t_f` a float (s), `partial` a
+        SimulationResult of the last `history_s` seconds up to the first grid point at or
+        after t_f (no verdict); returns array_like, shape (n_dev,), each device's set-point
+        in units of its rating (Table 3 modes -1 inject, 0 idle, +1 absorb; any real value
+        for a scaled power, e.g. an ambient load deviation).
+    latency : float, optional
+        Delay from a frame's arrival to its set-points taking effect, s (>= 0); default 0.
+    history_s : float, optional
+        Length of the trajectory handed to `decide`, s; default 1 s (a PMU window is a
+        few cycles).
+    """
+
+    times: object
+    decide: Callable
+    latency: float = 0.0
+    history_s: float = 1.0
 
 
 class Simulator:
@@ -262,20 +293,18 @@ class Simulator:
             return "pst" if self.conventions == "pstess" else "exact"
         return semantics
 
-    def run_commanded(self, events, t_end: float, storage, frame_times, decide,
-                      latency: float = 0.0, h: float | None = None,
-                      semantics: str | None = None,
+    def run_commanded(self, events, t_end: float, storage, frames: CommandFrames,
+                      h: float | None = None, semantics: str | None = None,
                       separation_limit: float = np.pi,
-                      stop_at_separation: bool = False,
-                      history_s: float = 1.0) -> SimulationResult:
+                      stop_at_separation: bool = False) -> SimulationResult:
         """Simulate with storage devices commanded from measurements (estimator in the loop).
 
-        At each frame time t_f (s, increasing) the run is advanced to the first grid point
-        at or after t_f and ``decide(t_f, partial)`` is called with the recent trajectory
-        (a SimulationResult of the last `history_s` seconds up to that grid point, so a
-        measurement at t_f can be interpolated; no verdict); it returns the device
-        set-points, which take effect at exactly t_f + `latency` (the step is split there)
-        and hold until the next ones.
+        At each frame time t_f (s, increasing; ``frames.times``) the run is advanced to the
+        first grid point at or after t_f and ``frames.decide(t_f, partial)`` is called with
+        the recent trajectory (a SimulationResult of the last ``frames.history_s`` seconds
+        up to that grid point, so a measurement at t_f can be interpolated; no verdict); it
+        returns the device set-points, which take effect at exactly t_f +
+        ``frames.latency`` (the step is split there) and hold until the next ones.
         With `stop_at_separation` the run ends at the first step after which a rotor angle
         is more than `separation_limit` rad from the COI, as `run` (no further frame is
         decided).
@@ -289,17 +318,9 @@ class Simulator:
         storage : StorageFleet
             The devices; its controller must be
             `stabctl.storage.control.ExternalCommands`.
-        frame_times : array_like of float, shape (n_frames,)
-            Measurement-frame arrival times, s, strictly increasing; those after `t_end`
-            are ignored.
-        decide : callable
-            ``decide(t_f, partial) -> set-points``: `t_f` a float (s), `partial` a
-            SimulationResult; returns array_like, shape (n_dev,), each device's set-point
-            in units of its rating (Table 3 modes -1 inject, 0 idle, +1 absorb; any real
-            value for a scaled power, e.g. an ambient load deviation).
-        latency : float, optional
-            Delay from a frame's arrival to its set-points taking effect, s (>= 0);
-            default 0.
+        frames : CommandFrames
+            The frame arrival times (s; those after `t_end` are ignored), the `decide`
+            callback, the latency (s) and the history length handed to `decide` (s).
         h : float or None, optional
             Integration step, s, as `run`.
         semantics : {"pst", "exact"} or None, optional
@@ -308,9 +329,6 @@ class Simulator:
             Loss-of-synchronism limit, rad, as `run`; default pi.
         stop_at_separation : bool, optional
             End the run at separation, as `run`; default False.
-        history_s : float, optional
-            Length of the trajectory handed to `decide`, s; default 1 s (a PMU window
-            is a few cycles).
 
         Returns
         -------
@@ -327,7 +345,7 @@ class Simulator:
         """
         if storage is None or storage.controller.kind != law.EXTERNAL:
             raise InputError("run_commanded needs a fleet whose controller is ExternalCommands")
-        frame_times = np.asarray(frame_times, float)
+        frame_times, latency = np.asarray(frames.times, float), frames.latency
         if np.any(np.diff(frame_times) <= 0) or latency < 0:
             raise InputError("frame times must increase and the latency must be >= 0")
         semantics = self._semantics(semantics)
@@ -340,7 +358,8 @@ class Simulator:
             if run.status != ig.OK:
                 break
             run.command(i, t_f + latency,
-                        np.asarray(decide(float(t_f), run.partial(k, history_s)), float))
+                        np.asarray(frames.decide(float(t_f), run.partial(k, frames.history_s)),
+                                   float))
         run.advance(grid.t.size - 1)
         return run.finish(storage)
 

@@ -188,6 +188,15 @@ class _Workspace(NamedTuple):
     switched: np.ndarray
 
 
+class _SplitPoint(NamedTuple):
+    """Where the step from grid index k is split (`_resume`): rem (s) before t_k+1, at the
+    located switching of device first_d, or at a scheduled command (first_d -1)."""
+
+    k: int
+    rem: float
+    first_d: int
+
+
 @kernel
 def _workspace(x, nd):
     return _Workspace(np.zeros_like(x), np.zeros_like(x),  # slots no kernel writes stay 0
@@ -298,10 +307,12 @@ def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
 
 
 @kernel(inline="always")
-def _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d):
-    """The controller at a split point of step k (a switching or a command, rem seconds
-    before t_k+1): commands, switchings, targets, powers, then the derivatives there.
-    Returns (network solved, derivatives)."""
+def _resume(kn, grid, sa, ds, opts, w, rec, x_a, at):
+    """The controller at a split point `at` of the step from grid index at.k (a switching
+    or a command, at.rem seconds before t_k+1; `_SplitPoint`) with the state x_a there:
+    commands, switchings, targets, powers, then the derivatives there.  Returns (network
+    solved, derivatives)."""
+    k, rem, first_d = at
     t_now = grid.t[k + 1] - rem
     sw.observe(x_a, w.dx_j, kn.p.n_mac, opts.inertia, sa, kn.kept.V, w.a)
     if sa.kind == law.EXTERNAL:
@@ -365,7 +376,7 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
             x_a = x_b
         rem -= hh
         assign(ds.P, Pm)
-        ok, dx_a = _resume(kn, grid, sa, ds, opts, w, rec, x_a, k, rem, first_d)
+        ok, dx_a = _resume(kn, grid, sa, ds, opts, w, rec, x_a, _SplitPoint(k, rem, first_d))
         if not ok:
             return NO_LOAD_FLOW, k, x
         x_b = x_a

@@ -36,6 +36,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from stabctl.case import Case
+from stabctl.dynamics.driver import CommandFrames
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import InputError
 from stabctl.storage.control import ExternalCommands
@@ -101,6 +102,7 @@ def simulate(
     frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
     devs, set_points = ambient.schedule(sim.case, frames.size, rate)
     fleet = StorageFleet(devs, ExternalCommands(v_gate_pu=0.0))
-    return sim.run_commanded(
-        events, t_end, fleet, frames, lambda t, _: set_points(t), h=h, history_s=0.0
+    schedule = CommandFrames(
+        frames, lambda t, _: set_points(t), history_s=0.0
     )  # the set points read no trajectory
+    return sim.run_commanded(events, t_end, fleet, schedule, h=h)

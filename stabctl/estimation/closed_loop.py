@@ -32,6 +32,7 @@ import numpy as np
 
 from stabctl.estimation.filters import FrequencyKF, SwingEKF
 from stabctl.estimation.models import MachineModels, machine_models, relative_speeds
+from stabctl.dynamics.driver import CommandFrames
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
 from stabctl.estimation.ambient import AmbientLoad
@@ -68,7 +69,7 @@ class Diagnostics:
 
 
 class LoopController:
-    """The `decide(t_f, partial)` callback of `Simulator.run_commanded`.
+    """The `decide(t_f, partial)` callback of `Simulator.run_commanded` (`CommandFrames`).
 
     case: the case; devices: the fleet's `StorageDevice`s; estimator: one of
     `ESTIMATORS`; settings: the PMUs (rate, noise, latency = the loop's latency); seed:
@@ -295,10 +296,11 @@ def run_closed_loop(sim, events, t_end: float, loop: LoopOptions, *, h: float | 
         devices = devices + loads
         decide = lambda t, p: np.r_[ctrl(t, p), set_points(t)]  # noqa: E731
     gate = law.ExternalCommands(v_gate_pu=loop.control.v_gate_pu)
-    res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), frames, decide,
-                            latency=settings.latency_s, h=h, separation_limit=separation_limit,
-                            stop_at_separation=stop_at_separation,
-                            history_s=HISTORY_WINDOWS * settings.window_s(sim.case.freq_hz))
+    schedule = CommandFrames(frames, decide, latency=settings.latency_s,
+                             history_s=HISTORY_WINDOWS * settings.window_s(sim.case.freq_hz))
+    res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), schedule, h=h,
+                            separation_limit=separation_limit,
+                            stop_at_separation=stop_at_separation)
     return ClosedLoopRun(res, ctrl.diagnostics())
 
 

@@ -22,6 +22,7 @@ computes the machine quantities a type needs (ST3 source voltage, EXST1 field cu
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 from stabctl._jit.decorators import kernel, njit
@@ -245,10 +246,28 @@ def _fex(IN, init):
     return 0.0
 
 
+class ST3Machine(NamedTuple):
+    """The quantities of an ST3 exciter's machine its source voltage is computed from
+    (`st3_source_voltage`), floats: eterm the terminal voltage magnitude (pu), theta its
+    angle (rad), pelect, qelect the electrical power (pu on the system base), mac_pot the
+    system base / machine base ratio, fldcur the field current (pu on the machine
+    base)."""
+
+    eterm: float
+    theta: float
+    pelect: float
+    qelect: float
+    mac_pot: float
+    fldcur: float
+
+
 @njit
-def st3_source_voltage(KP, KI, XL, KC, eterm, theta, pelect, qelect, mac_pot, fldcur, init):
+def st3_source_voltage(KP, KI, XL, KC, machine, init):
     """V_B = V_E F_EX of the ST3 potential/compound source (PST exc_st3 flag 0/1); KP is
-    the complex K_P exp(j theta_P); pelect, qelect on the system base."""
+    the complex K_P exp(j theta_P), KI, XL, KC the exciter's other source parameters (pu),
+    machine the `ST3Machine` quantities (pelect, qelect on the system base), init PST's
+    flag 0 (its F_EX quirk, `_fex`)."""
+    eterm, theta, pelect, qelect, mac_pot, fldcur = machine
     i_t = (pelect - 1j * qelect) / (eterm * np.exp(-1j * theta)) * mac_pot
     VE = np.abs(KP * eterm * np.exp(1j * theta) + 1j * (KI + KP * XL) * i_t)
     IN = KC * fldcur / VE if VE > 0 else 0.0
@@ -261,9 +280,10 @@ def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):
     machines' complex generation (system base), vex their field voltages, all (n_mac,);
     mp the MachineParams."""
     eterm, theta = np.abs(V_mac), np.angle(V_mac)
-    return np.array([st3_source_voltage(p.KP[i], p.KI[i], p.XL[i], p.KC[i], eterm[m],
-                                        theta[m], S_mac.real[m], S_mac.imag[m],
-                                        mp.mac_pot[m], vex[m], True)
+    return np.array([st3_source_voltage(p.KP[i], p.KI[i], p.XL[i], p.KC[i],
+                                        ST3Machine(eterm[m], theta[m], S_mac.real[m],
+                                                   S_mac.imag[m], mp.mac_pot[m], vex[m]),
+                                        True)
                      for i, m in enumerate(p.mac)])
 
 
@@ -345,6 +365,21 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
 _RUNNING = np.bool_(False)
 
 
+class StatorQuantities(NamedTuple):
+    """A machine's terminal quantities as PST exc_st3 flag 1 recomputes them
+    (`machines.stator_without_speed`, floats but vt): ed, eq the d, q terminal voltages
+    (pu), cd, cq the d, q currents (pu on the system base), et = hypot(ed, eq) the
+    terminal voltage magnitude (pu), vt the terminal bus voltage (complex pu; its angle
+    sets the ST3 source phasor)."""
+
+    ed: float
+    eq: float
+    cd: float
+    cq: float
+    et: float
+    vt: complex
+
+
 @kernel(inline="always")
 def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
     """Field voltage exciter i hands its machine (PST flag 1), pu on the machine base:
@@ -368,7 +403,8 @@ def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
     ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, m)
     et = np.hypot(ed, eq)
     kind = P[i, E.KIND]
-    VB = _st3_source(P, i, MP, xm, cur, m, vt, ed, eq, cd, cq, et) if kind == ST3 else 1.0
+    VB = (_st3_source(P, i, MP, xm, cur, m, StatorQuantities(ed, eq, cd, cq, et, vt))
+          if kind == ST3 else 1.0)
     ifd = mac.field_current(MP, xm, cur, m) if kind == ST1 else 0.0
     return field_voltage_at(P, x, i, et, pss_out, VB, ifd, ieee)
 
@@ -462,18 +498,21 @@ def _smp_derivatives(P, x, i, err, dx, ieee):
 # -- feedback min(V_Gmax, K_G Efd); output min(V_R V_B, Efdmax)
 
 @kernel(inline="always")
-def _st3_source(P, i, MP, xm, cur, m, vt, ed, eq, cd, cq, et):
-    """exc_st3's source voltage V_B (`st3_source_voltage`, PST exc_st3 flag 1) from the
-    stator quantities ed, eq, cd, cq of machine m (`machines.stator_without_speed`), its
-    terminal voltage et and bus voltage vt, and the field current: exc_st3's own
-    estimate (`machines.st3_field_current`) or, with ifd_machine, the machine's."""
+def _st3_source(P, i, MP, xm, cur, m, stator):
+    """exc_st3's source voltage V_B (`st3_source_voltage`, PST exc_st3 flag 1) of exciter
+    i from its machine m's terminal quantities `stator` (`StatorQuantities`: ed, eq, cd,
+    cq of `machines.stator_without_speed`, the terminal voltage et and bus voltage vt) and
+    the field current: exc_st3's own estimate (`machines.st3_field_current`) or, with
+    ifd_machine, the machine's; MP, xm, cur as `field_voltage`."""
+    ed, eq, cd, cq, et, vt = stator
     if P[i, E.IFDM] > 0:
         fld = mac.field_current(MP, xm, cur, m)
     else:
         fld = mac.st3_field_current(MP, xm, cur, m)
     KP = P[i, E.KPR] + 1j * P[i, E.KPI]
-    return st3_source_voltage(KP, P[i, E.KI], P[i, E.XL], P[i, E.KC], et, np.angle(vt),
-                              eq * cq + ed * cd, eq * cd - ed * cq, MP[m, mac.K.POT], fld,
+    return st3_source_voltage(KP, P[i, E.KI], P[i, E.XL], P[i, E.KC],
+                              ST3Machine(et, np.angle(vt), eq * cq + ed * cd,
+                                         eq * cd - ed * cq, MP[m, mac.K.POT], fld),
                               _RUNNING)
 
 

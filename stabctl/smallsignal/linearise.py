@@ -30,6 +30,8 @@ named by `DynamicModel.state_name`; unused slots (docs/modal.md, "State counts")
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import control as ct
 import numpy as np
 from numba import typeof
@@ -51,6 +53,29 @@ from stabctl.errors import InputError, SimulationError
 REL_STEP = 1e-4          # PSTess svm_mgen's relative perturbation
 KINK_RATIO = 1e-2        # one-sided slopes differing more than this: a limit was crossed
 STATE, ESD, VREF, PREF = 0, 1, 2, 3
+
+
+class Perturbations(NamedTuple):
+    """The difference columns of `_differences`, each array of shape (n_col,): kind what
+    is perturbed (STATE, ESD, VREF, PREF; int64), index which one (STATE: flat state
+    index; ESD: kept-bus position; VREF: exciter row; PREF: governor row; int64), step
+    the perturbation h (in the unit of the perturbed quantity)."""
+
+    kind: np.ndarray
+    index: np.ndarray
+    step: np.ndarray
+
+
+class Differences(NamedTuple):
+    """What `_differences` fills: J (n_col, n_x) d(dx/dt)/d(column), dV (n_col, n_bus)
+    complex d(V_bus)/d(column), curv (n_col,) the kink measure max|f+ - 2 f0 + f-| /
+    max|f+ - f-| of each column, V0 (n_bus,) complex the bus voltages at the operating
+    point."""
+
+    J: np.ndarray
+    dV: np.ndarray
+    curv: np.ndarray
+    V0: np.ndarray
 
 
 def active_states(model: DynamicModel) -> np.ndarray:
@@ -280,10 +305,10 @@ def jacobian_columns(model: DynamicModel, kind, index, step):
     args = _difference_arguments(model, kind, index, step)
     # cold: _differences compiles in a child process while this one compiles the model
     compile_in_background(_differences, [typeof(a) for a in args])
-    args[-1] = evaluate_address(args[5])
+    args[-1] = evaluate_address(args[3])
     await_background(_differences)
     bad = _differences(*args)
-    J, dV, curv, V0 = args[7:11]
+    J, dV, curv, V0 = args[5]
     if bad >= 0:
         raise SimulationError(f"the network did not solve with {_what(model, kind, index, bad)} "
                               "perturbed")
@@ -296,15 +321,17 @@ def jacobian_columns(model: DynamicModel, kind, index, step):
 
 
 def _difference_arguments(model: DynamicModel, kind, index, step) -> list:
-    """The arguments of `_differences` for `jacobian_columns` (its outputs J, dV, curv, V0
-    zeroed at positions 7-10; the model's address 0 at the end, to be filled in)."""
+    """The arguments of `_differences` for `jacobian_columns` (its `Differences` zeroed
+    at position 5; the model's address 0 at the end, to be filled in)."""
     net = model.network(StageConfig())
     p = model.params._replace(EP=model.params.EP.copy(), GP=model.params.GP.copy())
     n_col, n_bus = len(kind), model.case.n_bus
-    return [np.asarray(kind, np.int64), np.asarray(index, np.int64), np.asarray(step, float),
-            model.x0, model.V_nc0, p, kernel_network(net), np.zeros((n_col, model.layout.size)),
-            np.zeros((n_col, n_bus), np.complex128), np.zeros(n_col),
-            np.zeros(n_bus, np.complex128), 0]
+    cols = Perturbations(np.asarray(kind, np.int64), np.asarray(index, np.int64),
+                         np.asarray(step, float))
+    res = Differences(np.zeros((n_col, model.layout.size)),
+                      np.zeros((n_col, n_bus), np.complex128), np.zeros(n_col),
+                      np.zeros(n_bus, np.complex128))
+    return [cols, model.x0, model.V_nc0, p, kernel_network(net), res, 0]
 
 
 def compile_differences(model: DynamicModel) -> None:
@@ -330,12 +357,17 @@ def _what(model, kind, index, c) -> str:
 
 
 @njit(cache=True)
-def _differences(kind, index, step, x0, V_nc0, p, net, J, dV, curv, V0, evaluate):
-    """Fill J, dV with central differences (see jacobian_columns) and curv with
-    max|f+ - 2 f0 + f-| / max|f+ - f-| per column; V0 with the unperturbed bus voltages.
-    evaluate: the address of the model's evaluation (`call_evaluate`; the model is not
-    compiled again into this kernel).  Returns -1, or the column whose network did not
-    solve (-2: the unperturbed one)."""
+def _differences(cols, x0, V_nc0, p, net, res, evaluate):
+    """Fill res.J, res.dV with central differences (see jacobian_columns) of the columns
+    `cols` (`Perturbations`) and res.curv with max|f+ - 2 f0 + f-| / max|f+ - f-| per
+    column; res.V0 with the unperturbed bus voltages (`Differences`).  x0 (n_x,) the
+    state and V_nc0 (n_kept,) complex the kept-bus voltages at the operating point, p the
+    kernel parameters (EP and GP perturbed in place, restored), net the pre-disturbance
+    `KernelNetwork`; evaluate: the address of the model's evaluation (`call_evaluate`;
+    the model is not compiled again into this kernel).  Returns -1, or the column whose
+    network did not solve (-2: the unperturbed one)."""
+    kind, index, step = cols
+    J, dV, curv, V0 = res
     dx = np.zeros_like(x0)   # slots no kernel writes (unused by a model type) must stay 0:
     f0 = np.zeros_like(x0)   # the kink test below looks at every slot
     out = kernel_outputs(p.n_mac, net.R.shape[0])

@@ -7,7 +7,7 @@ from stabctl.errors import InputError
 from stabctl.estimation import closed_loop as cl
 from stabctl.io import load_case
 from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.driver import CommandFrames, Simulator
 from stabctl.estimation.ambient import AmbientLoad
 from stabctl.estimation.settings import PMUSettings
 from stabctl.parallel import RunnerOptions
@@ -55,7 +55,7 @@ def test_stop_at_separation_ends_the_commanded_run_where_run_does(kundur):
     case, sim, ev = kundur
     fleet = StorageFleet(uniform_fleet(case, 5).devices, ExternalCommands())
     frames = np.arange(361) / 60
-    idle = sim.run_commanded(ev, 6.0, fleet, frames, lambda t, p: np.zeros(4),
+    idle = sim.run_commanded(ev, 6.0, fleet, CommandFrames(frames, lambda t, p: np.zeros(4)),
                              stop_at_separation=True)
     plain = sim.run(ev, t_end=6.0, stop_at_separation=True)
     assert not idle.stable and not plain.stable

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.driver import CommandFrames, Simulator
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.errors import InputError
 from stabctl.io import load_case
@@ -265,14 +265,17 @@ def test_commanded_devices_follow_the_schedule_at_exact_times(kundur):
     frames = np.arange(0, 6, 1 / 60)
     ev = [fault_with_clearing(case, 3, 101, 1.0, 17)]
     res = sim.run_commanded(
-        ev, 6.0, StorageFleet(fleet.devices, ExternalCommands()), frames, decide, latency=0.05
+        ev,
+        6.0,
+        StorageFleet(fleet.devices, ExternalCommands()),
+        CommandFrames(frames, decide, latency=0.05),
     )
     assert res.stable and sim.run(ev, t_end=6.0).stable is False
     times = np.array([t for t, *_ in res.meta["switchings"]])
     assert times.size >= 8
     assert np.allclose(np.min(np.abs(times[:, None] - (frames + 0.05)[None, :]), axis=1), 0)
     with pytest.raises(InputError):
-        sim.run_commanded(ev, 6.0, fleet, frames, decide)  # not ExternalCommands
+        sim.run_commanded(ev, 6.0, fleet, CommandFrames(frames, decide))  # not ExternalCommands
 
 
 def test_boundary_chattering_is_bounded_measured_and_removed_by_hysteresis(kundur):
