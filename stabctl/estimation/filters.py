@@ -48,6 +48,8 @@ from __future__ import annotations
 
 import cmath
 import math
+from collections import namedtuple
+from typing import NamedTuple
 
 import numpy as np
 from scipy.stats import chi2
@@ -58,6 +60,7 @@ from stabctl.errors import InputError
 from stabctl.estimation.models import FrequencyTuning, MachineModels, SwingTuning
 from stabctl.estimation.pmu import Frame
 from stabctl.estimation.settings import PMUSettings
+from stabctl.models._declared import layout
 from stabctl.models.machines import EM, SUB, TRA
 from stabctl.models.machines import _dq as rotor_dq  # the one compiled dq transform
 
@@ -69,37 +72,93 @@ def nis_bounds(dof: int, coverage: float = 0.95) -> tuple[float, float]:
 
 
 # -- packed parameters for the compiled kernels ----------------------------------------------
-(C_H, C_D, C_POT, C_RA, C_ZRE, C_ZIM, C_PERSPEED, C_QC1, C_QC2, C_QSIGN, C_QSPEED, C_KIND,
- C_XL, C_XQ, C_XQP, C_XDP, C_GACT, C_WF, C_INVR, C_TMAX, C_GC, C_GU, C_NCOL) = \
-    tuple(range(20)) + (20, 23, 26)
-(T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP, T_SIG2, T_SIGF, T_F0, T_NCOL) = range(10)
-# held values per machine: P_ag at the previous frame (measured or held) and its variance,
-# its last measured change between frames, the variance of I_q, P_m at the start
-(H_PAG, H_PAGVAR, H_DPAG, H_IQVAR, H_PM0, H_NCOL) = range(6)
+NG = 3      # states of a PST tg turbine-governor (`Governors`): the width of its blocks
+
+#: The row of one machine in the packed parameters: (name, width, value from the
+#: `MachineModels` m, shape (n,) or (n, width)) per block of columns, in order.
+_MACHINE_ROW = (
+    ("H", 1, lambda m: m.H), ("D", 1, lambda m: m.D), ("POT", 1, lambda m: m.pot),
+    ("RA", 1, lambda m: m.ra), ("ZRE", 1, lambda m: m.z_emf.real),
+    ("ZIM", 1, lambda m: m.z_emf.imag), ("PERSPEED", 1, lambda m: m.per_speed),
+    ("QC1", 1, lambda m: m.qaxis.c[:, 0]), ("QC2", 1, lambda m: m.qaxis.c[:, 1]),
+    ("QSIGN", 1, lambda m: m.qaxis.sign), ("QSPEED", 1, lambda m: m.qaxis.speed),
+    ("KIND", 1, lambda m: m.qaxis.kind), ("XL", 1, lambda m: m.qaxis.xl),
+    ("XQ", 1, lambda m: m.qaxis.xq), ("XQP", 1, lambda m: m.qaxis.xqp),
+    ("XDP", 1, lambda m: m.qaxis.xdp), ("GACT", 1, lambda m: m.governor.active),
+    ("WF", 1, lambda m: m.governor.wf), ("INVR", 1, lambda m: m.governor.invR),
+    ("TMAX", 1, lambda m: m.governor.Tmax),
+    ("GC", NG, lambda m: m.governor.c),           # P_m = c.g
+    ("GU", NG, lambda m: m.governor.g_unit),      # g in equilibrium at P_m = 1
+)
+#: First column of each block of `_MACHINE_ROW` (``pr[C.POT]``, ``pr[C.GC:C.GC + NG]``);
+#: module-global, so a compile-time constant to numba (as `stabctl.models._declared.layout`).
+C = namedtuple("MachineColumns", [name for name, _, _ in _MACHINE_ROW])(
+    *(sum(width for _, width, _ in _MACHINE_ROW[:j]) for j in range(len(_MACHINE_ROW))))
+
+#: The tuning vector: (name, attribute of the `SwingTuning` or one of the values
+#: `_tuning_vector` computes) per entry, ``tv[T.F0]``.
+_TUNING = (("ANGLE", "angle_model_rad"), ("ACCEL", "accel_psd"), ("PMWALK", "pm_walk"),
+           ("PM0", "pm0_sd"), ("FLUX0", "flux0_sd"), ("JUMP", "jump_pu"),
+           ("SIG2", "sigma_phasor2"), ("SIGF", "sigma_freq"), ("F0", "f0"))
+T = layout("SwingTuningColumns", _TUNING)
+
+#: Held values per machine, ``hold[k, H.PAG]``: (name, meaning) per column.
+H = layout("HeldColumns", (
+    ("PAG", "P_ag at the previous frame, measured or held (pu machine base)"),
+    ("PAGVAR", "its variance"),
+    ("DPAG", "its last measured change between frames"),
+    ("IQVAR", "the variance of I_q"),
+    ("PM0", "P_m at the start")))
+
+
+class Held(NamedTuple):
+    """What the swing filter holds per machine between frames (changed in place by the
+    kernels): hold (n, len(H)) the values named by `H`; cur (n,) the last valid current
+    phasor (complex pu, system base); g (n, NG) the governor states."""
+
+    hold: np.ndarray
+    cur: np.ndarray
+    g: np.ndarray
+
+
+class MachineFrame(NamedTuple):
+    """One frame as the swing filter's machines see it, arrays (n,): v, i the voltage and
+    current phasors of each machine's PMU (complex pu, system base), freq its frequency
+    (Hz), valid whether all three were received and finite."""
+
+    v: np.ndarray
+    i: np.ndarray
+    freq: np.ndarray
+    valid: np.ndarray
+
+
+class Discrete(NamedTuple):
+    """The machines' linear systems discretised over one frame interval
+    (`LinearSystems.discrete`): q-axis circuits Adq (n, 2, 2), bdq (n, 2); governors
+    Adg (n, NG, NG), bdg (n, NG)."""
+
+    Adq: np.ndarray
+    bdq: np.ndarray
+    Adg: np.ndarray
+    bdg: np.ndarray
 
 
 def _packed(m: MachineModels) -> np.ndarray:
-    """Parameter matrix (n, C_NCOL) of the swing filter's compiled kernels."""
-    P = np.zeros((m.n, C_NCOL))
-    q, g = m.qaxis, m.governor
-    for col, val in ((C_H, m.H), (C_D, m.D), (C_POT, m.pot), (C_RA, m.ra), (C_ZRE, m.z_emf.real),
-                     (C_ZIM, m.z_emf.imag), (C_PERSPEED, m.per_speed), (C_QC1, q.c[:, 0]),
-                     (C_QC2, q.c[:, 1]), (C_QSIGN, q.sign), (C_QSPEED, q.speed),
-                     (C_KIND, q.kind), (C_XL, q.xl), (C_XQ, q.xq), (C_XQP, q.xqp),
-                     (C_XDP, q.xdp), (C_GACT, g.active), (C_WF, g.wf), (C_INVR, g.invR),
-                     (C_TMAX, g.Tmax)):
-        P[:, col] = val
-    P[:, C_GC:C_GC + 3], P[:, C_GU:C_GU + 3] = g.c, g.g_unit
+    """Parameter matrix of the swing filter's compiled kernels, one `_MACHINE_ROW` per
+    machine: (n, number of columns), columns named by `C`."""
+    P = np.zeros((m.n, sum(width for _, width, _ in _MACHINE_ROW)))
+    for (_, width, value), start in zip(_MACHINE_ROW, C):
+        P[:, start:start + width] = np.reshape(value(m), (m.n, width))
     return P
 
 
 def _tuning_vector(tun: SwingTuning, s: PMUSettings, f0: float) -> np.ndarray:
-    """Tuning and PMU noise of the swing filter's compiled kernels, (T_NCOL,)."""
-    v = np.zeros(T_NCOL)
-    v[[T_ANGLE, T_ACCEL, T_PMWALK, T_PM0, T_FLUX0, T_JUMP]] = (
-        tun.angle_model_rad, tun.accel_psd, tun.pm_walk, tun.pm0_sd, tun.flux0_sd, tun.jump_pu)
-    v[T_SIG2], v[T_SIGF], v[T_F0] = s.sigma_phasor ** 2, s.sigma_freq, f0
-    return v
+    """Tuning and PMU noise of the swing filter's compiled kernels, (len(T),), entries
+    named by `T`: `_TUNING`'s attributes of `tun`, the PMU phasor noise variance
+    sigma_phasor^2, the frequency noise sigma_freq (Hz) and f0 (Hz)."""
+    values = {"sigma_phasor2": s.sigma_phasor ** 2, "sigma_freq": s.sigma_freq, "f0": f0}
+    return np.array([values[attr] if attr in values else getattr(tun, attr)
+                     for _, attr in _TUNING], float)
 
 
 # -- swing filter equations, one machine (shared by the compiled and the filterpy paths) ---
@@ -117,13 +176,13 @@ def swing_measure(v, i, pr, sig2):
     To first order in the relative phasor errors (std s, sig2 = s^2, per component): angle
     of E: s^2 (|V|^2 + |Z I|^2) / |E|^2; P = Re(V conj I): 2 s^2 |S|^2; I_q: s^2 |I|^2
     (machine base, pot^2 |I|^2)."""
-    pot = pr[C_POT]
-    zi = complex(pr[C_ZRE], pr[C_ZIM]) * i
+    pot = pr[C.POT]
+    zi = complex(pr[C.ZRE], pr[C.ZIM]) * i
     e = v + zi
     S = v * np.conj(i)
     ia2 = (abs(i) * pot) ** 2
     emag = abs(e)
-    return (math.atan2(e.imag, e.real), emag, pot * S.real + pr[C_RA] * ia2,
+    return (math.atan2(e.imag, e.real), emag, pot * S.real + pr[C.RA] * ia2,
             2 * sig2 * (pot * abs(S)) ** 2, sig2 * ia2,
             sig2 * (abs(v) ** 2 + abs(zi) ** 2) / emag ** 2)
 
@@ -132,67 +191,72 @@ def swing_measure(v, i, pr, sig2):
 def swing_start(v, i, freq, r, pr, tv):
     """Initial state (5,) and covariance (5, 5) of one machine: steady state as PST's
     initialisation (docs/pst_models.md 1.7), speed from the bus frequency."""
-    i_m = i * pr[C_POT]
-    kind = int(pr[C_KIND])
+    i_m = i * pr[C.POT]
+    kind = int(pr[C.KIND])
     if kind == EM:
-        delta = cmath.phase(v + 1j * pr[C_XDP] * i_m)
+        delta = cmath.phase(v + 1j * pr[C.XDP] * i_m)
     else:
-        delta = cmath.phase(v + complex(pr[C_RA], pr[C_XQ]) * i_m)
+        delta = cmath.phase(v + complex(pr[C.RA], pr[C.XQ]) * i_m)
     curd, curq = rotor_dq(delta, i_m)
-    edra = -rotor_dq(delta, v)[0] - pr[C_RA] * curd
+    edra = -rotor_dq(delta, v)[0] - pr[C.RA] * curd
     x = np.zeros(5)
-    x[0], x[1] = delta, freq / tv[T_F0] - 1.0
+    x[0], x[1] = delta, freq / tv[T.F0] - 1.0
     if kind == SUB:
-        x[3], x[4] = edra + pr[C_XQP] * curq, edra + pr[C_XL] * curq
+        x[3], x[4] = edra + pr[C.XQP] * curq, edra + pr[C.XL] * curq
     elif kind == TRA:
-        x[3] = rotor_dq(delta, v + complex(pr[C_RA], pr[C_XDP]) * i_m)[0]
+        x[3] = rotor_dq(delta, v + complex(pr[C.RA], pr[C.XDP]) * i_m)[0]
     P = np.zeros((5, 5))
-    P[0, 0] = r + tv[T_ANGLE] ** 2
-    P[1, 1] = (tv[T_SIGF] / tv[T_F0]) ** 2
-    P[2, 2] = tv[T_PM0] ** 2
-    P[3, 3] = P[4, 4] = tv[T_FLUX0] ** 2
+    P[0, 0] = r + tv[T.ANGLE] ** 2
+    P[1, 1] = (tv[T.SIGF] / tv[T.F0]) ** 2
+    P[2, 2] = tv[T.PM0] ** 2
+    P[3, 3] = P[4, 4] = tv[T.FLUX0] ** 2
     return x, P
 
 
 @kernel
-def swing_begin(k, v, i, freq, pag, pag_var, iq_var, r, pr, tv, hold, cur_hold, g):
-    """Start machine k at its first valid frame: initial state and covariance
-    (`swing_start`); held values (in place) with P_m = P_ag and the governor in equilibrium."""
-    hold[k, H_PAG], hold[k, H_PAGVAR], hold[k, H_DPAG], hold[k, H_IQVAR], hold[k, H_PM0] = \
+def swing_begin(k, frame, pag, pag_var, iq_var, r, pr, tv, held):
+    """Start machine k at its first valid frame (`MachineFrame`; its measured P_ag, the
+    variances and r as `swing_measure` gives them): initial state and covariance
+    (`swing_start`); its `Held` values (in place) with P_m = P_ag and the governor in
+    equilibrium."""
+    hold, cur_hold, g = held
+    hold[k, H.PAG], hold[k, H.PAGVAR], hold[k, H.DPAG], hold[k, H.IQVAR], hold[k, H.PM0] = \
         pag, pag_var, 0.0, iq_var, pag
-    cur_hold[k] = i
-    assign(g[k], pr[C_GU:C_GU + 3] * pag)
-    return swing_start(v, i, freq, r, pr, tv)
+    cur_hold[k] = frame.i[k]
+    assign(g[k], pr[C.GU:C.GU + NG] * pag)
+    return swing_start(frame.v[k], frame.i[k], frame.freq[k], r, pr, tv)
 
 
 @kernel
-def swing_inputs(k, valid, pag, pag_var, cur, iq_var, hold, cur_hold, g, w, pr, Adg, bdg, tv):
-    """Inputs of machine k over one interval: (mean P_m, mean P_ag, variance of the mean
-    P_ag, current at both ends, variance of I_q).
+def swing_inputs(k, frame, pag, pag_var, iq_var, held, w, pr, disc, tv):
+    """Inputs of machine k over one interval ending at `frame` (`MachineFrame`; P_ag and
+    the variances as `swing_measure` gives them when the frame is valid): (mean P_m, mean
+    P_ag, variance of the mean P_ag, current at both ends, variance of I_q).
 
-    Advances its governor (demand from the estimated speed 1 + w, P_ref such that the start
-    was an equilibrium at nominal speed) and its held values (in place: hold (n, H_NCOL),
-    cur_hold (n,), g (n, 3)).  For a dropped frame the last P_ag and current are held and
-    the variance of P_ag grows by the square of its last change between frames dP; a
-    change of a measured P_ag above jump_pu adds dP^2 / 12 (event at an unknown instant)."""
-    pm0 = hold[k, H_PM0]
+    Advances its governor (`Discrete` disc; demand from the estimated speed 1 + w, P_ref
+    such that the start was an equilibrium at nominal speed) and its `Held` values (in
+    place).  For a dropped frame the last P_ag and current are held and the variance of
+    P_ag grows by the square of its last change between frames dP; a change of a measured
+    P_ag above jump_pu adds dP^2 / 12 (event at an unknown instant)."""
+    hold, cur_hold, g = held
+    pm0 = hold[k, H.PM0]
     pm_before, pm_after = pm0, pm0
-    if pr[C_GACT] > 0:
-        pm_before = _dot(g[k], pr[C_GC:C_GC + 3])
-        u = pm0 - (pr[C_WF] - 1.0) * pr[C_INVR] + (pr[C_WF] - 1.0 - w) * pr[C_INVR]
-        assign(g[k], _mv(Adg, g[k]) + bdg * min(max(u, 0.0), pr[C_TMAX]))
-        pm_after = _dot(g[k], pr[C_GC:C_GC + 3])
-    p0, v0, cur0, iq0 = hold[k, H_PAG], hold[k, H_PAGVAR], cur_hold[k], hold[k, H_IQVAR]
-    if valid:
+    if pr[C.GACT] > 0:
+        pm_before = _dot(g[k], pr[C.GC:C.GC + NG])
+        u = pm0 - (pr[C.WF] - 1.0) * pr[C.INVR] + (pr[C.WF] - 1.0 - w) * pr[C.INVR]
+        assign(g[k], _mv(disc.Adg[k], g[k]) + disc.bdg[k] * min(max(u, 0.0), pr[C.TMAX]))
+        pm_after = _dot(g[k], pr[C.GC:C.GC + NG])
+    p0, v0, cur0, iq0 = hold[k, H.PAG], hold[k, H.PAGVAR], cur_hold[k], hold[k, H.IQVAR]
+    if frame.valid[k]:
         dp = pag - p0
-        var = 0.25 * (v0 + pag_var) + (dp * dp / 12 if abs(dp) > tv[T_JUMP] else 0.0)
-        hold[k, H_DPAG], hold[k, H_IQVAR], cur_hold[k] = dp, iq_var, cur
+        var = 0.25 * (v0 + pag_var) + (dp * dp / 12 if abs(dp) > tv[T.JUMP] else 0.0)
+        hold[k, H.DPAG], hold[k, H.IQVAR], cur_hold[k] = dp, iq_var, frame.i[k]
     else:
-        pag, pag_var = p0, v0 + hold[k, H_DPAG] ** 2
+        pag, pag_var = p0, v0 + hold[k, H.DPAG] ** 2
         var = 0.25 * (v0 + pag_var)
-    hold[k, H_PAG], hold[k, H_PAGVAR] = pag, pag_var
+    hold[k, H.PAG], hold[k, H.PAGVAR] = pag, pag_var
     return (0.5 * (pm_before + pm_after), 0.5 * (p0 + pag), var, cur0, cur_hold[k],
-            0.5 * (iq0 + hold[k, H_IQVAR]))
+            0.5 * (iq0 + hold[k, H.IQVAR]))
 
 
 @kernel
@@ -201,15 +265,15 @@ def swing_transition(x, pm, pag, cur0, cur1, dt, pr, Adq, bdq, f0):
     of one machine over dt (module docstring)."""
     d, w, p = x[0], x[1], x[2]
     wb = 2 * math.pi * f0
-    omega = 1.0 + w if pr[C_PERSPEED] > 0 else 1.0
-    c = 1.0 / (2 * pr[C_H] * omega)
-    acc = c * (pm + p - pag) - pr[C_D] * w / (2 * pr[C_H])
-    da_dw = -pr[C_D] / (2 * pr[C_H])
-    if pr[C_PERSPEED] > 0:
+    omega = 1.0 + w if pr[C.PERSPEED] > 0 else 1.0
+    c = 1.0 / (2 * pr[C.H] * omega)
+    acc = c * (pm + p - pag) - pr[C.D] * w / (2 * pr[C.H])
+    da_dw = -pr[C.D] / (2 * pr[C.H])
+    if pr[C.PERSPEED] > 0:
         da_dw -= c * (pm + p - pag) / omega
     d1 = d + wb * dt * (w + 0.5 * dt * acc)
-    r0 = cmath.exp(-1j * d) * cur0 * pr[C_POT]
-    r1 = cmath.exp(-1j * d1) * cur1 * pr[C_POT]
+    r0 = cmath.exp(-1j * d) * cur0 * pr[C.POT]
+    r1 = cmath.exp(-1j * d1) * cur1 * pr[C.POT]
     iq = 0.5 * (r0.real + r1.real)
     xn = np.empty(5)
     xn[0], xn[1], xn[2] = d1, w + dt * acc, p
@@ -233,7 +297,7 @@ def swing_transition(x, pm, pag, cur0, cur1, dt, pr, Adq, bdq, f0):
 def swing_Q(g, pag_var, iq_var, bdq, dt, tv):
     """Process noise (5, 5) of one machine: measured-power noise through g, I_q noise
     through b_d, white unmodelled acceleration on (delta, w), random walk of dPm."""
-    wb = 2 * math.pi * tv[T_F0]
+    wb = 2 * math.pi * tv[T.F0]
     Q = np.zeros((5, 5))
     for a in range(5):
         for b in range(5):
@@ -241,28 +305,29 @@ def swing_Q(g, pag_var, iq_var, bdq, dt, tv):
     for a in range(2):
         for b in range(2):
             Q[3 + a, 3 + b] += bdq[a] * bdq[b] * iq_var
-    q = tv[T_ACCEL]
+    q = tv[T.ACCEL]
     Q[0, 0] += q * wb * wb * dt ** 3 / 3
     Q[0, 1] += q * wb * dt * dt / 2
     Q[1, 0] += q * wb * dt * dt / 2
     Q[1, 1] += q * dt
-    Q[2, 2] += tv[T_PMWALK] * dt
+    Q[2, 2] += tv[T.PMWALK] * dt
     return Q
 
 
 @kernel
 def swing_h(x, emag, pr):
-    """Predicted internal-voltage angle of one machine and its Jacobian H (5,)."""
-    omega = 1.0 + x[1] if pr[C_QSPEED] > 0 else 1.0
-    psi = pr[C_QC1] * x[3] + pr[C_QC2] * x[4]
+    """Predicted internal-voltage angle of one machine and its Jacobian Hj (5,) (named so
+    as not to hide the layout `H` of the held values)."""
+    omega = 1.0 + x[1] if pr[C.QSPEED] > 0 else 1.0
+    psi = pr[C.QC1] * x[3] + pr[C.QC2] * x[4]
     s = min(max(omega * psi / emag, -0.99), 0.99)
-    k = pr[C_QSIGN] / (emag * math.sqrt(1 - s * s))
-    H = np.zeros(5)
-    H[0] = 1.0
-    if pr[C_QSPEED] > 0:
-        H[1] = k * psi
-    H[3], H[4] = k * omega * pr[C_QC1], k * omega * pr[C_QC2]
-    return x[0] + pr[C_QSIGN] * math.asin(s), H
+    k = pr[C.QSIGN] / (emag * math.sqrt(1 - s * s))
+    Hj = np.zeros(5)
+    Hj[0] = 1.0
+    if pr[C.QSPEED] > 0:
+        Hj[1] = k * psi
+    Hj[3], Hj[4] = k * omega * pr[C.QC1], k * omega * pr[C.QC2]
+    return x[0] + pr[C.QSIGN] * math.asin(s), Hj
 
 
 # -- compiled filters, all machines ---------------------------------------------------------
@@ -353,32 +418,34 @@ def _store(x, P, k, xk, Pk):
 
 
 @njit(cache=True)
-def _swing_batch(x, P, nis, ready, hold, cur_hold, g, v, i, freq, valid, dt, par, Adq, bdq,
-                 Adg, bdg, tv):
+def _swing_batch(x, P, nis, ready, held, frame, dt, par, disc, tv):
     """One frame of the swing filter for every machine (in place): predict the machines
-    already started over dt, update those with a valid frame, start the others."""
+    already started over dt (`Discrete` disc), update those with a valid frame
+    (`MachineFrame`), start the others; x (n, 5), P (n, 5, 5), nis (n,), ready (n,),
+    `Held` held, par the `_packed` rows (n, columns named by `C`), tv (len(T),)."""
     for k in range(x.shape[0]):
         nis[k] = np.nan
         pr = par[k]
-        if not (ready[k] or valid[k]):
+        valid = frame.valid[k]
+        if not (ready[k] or valid):
             continue
         theta = emag = pag = pag_var = iq_var = r = np.nan
-        if valid[k]:
-            theta, emag, pag, pag_var, iq_var, r = swing_measure(v[k], i[k], pr, tv[T_SIG2])
+        if valid:
+            theta, emag, pag, pag_var, iq_var, r = swing_measure(frame.v[k], frame.i[k], pr,
+                                                                 tv[T.SIG2])
         if not ready[k]:
-            _store(x, P, k, *swing_begin(k, v[k], i[k], freq[k], pag, pag_var, iq_var, r, pr,
-                                         tv, hold, cur_hold, g))
+            _store(x, P, k, *swing_begin(k, frame, pag, pag_var, iq_var, r, pr, tv, held))
             ready[k] = True
             continue
-        pm, pbar, pvar, c0, c1, iqv = swing_inputs(k, valid[k], pag, pag_var, i[k], iq_var,
-                                                   hold, cur_hold, g, x[k, 1], pr, Adg[k],
-                                                   bdg[k], tv)
-        xn, F, gs = swing_transition(x[k], pm, pbar, c0, c1, dt, pr, Adq[k], bdq[k], tv[T_F0])
-        Pp = _sandwich(F, P[k]) + swing_Q(gs, pvar, iqv, bdq[k], dt, tv)
-        if valid[k]:
-            h, H = swing_h(xn, emag, pr)
-            xu, Pu, nis[k] = _scalar_update(xn, Pp, wrap_angle(theta - h), H,
-                                            r + tv[T_ANGLE] ** 2)
+        pm, pbar, pvar, c0, c1, iqv = swing_inputs(k, frame, pag, pag_var, iq_var, held,
+                                                   x[k, 1], pr, disc, tv)
+        xn, F, gs = swing_transition(x[k], pm, pbar, c0, c1, dt, pr, disc.Adq[k],
+                                     disc.bdq[k], tv[T.F0])
+        Pp = _sandwich(F, P[k]) + swing_Q(gs, pvar, iqv, disc.bdq[k], dt, tv)
+        if valid:
+            h, Hj = swing_h(xn, emag, pr)
+            xu, Pu, nis[k] = _scalar_update(xn, Pp, wrap_angle(theta - h), Hj,
+                                            r + tv[T.ANGLE] ** 2)
             _store(x, P, k, xu, Pu)
         else:
             _store(x, P, k, xn, Pp)
@@ -502,23 +569,22 @@ class SwingEKF(_MachineFilters):
         self.m = models
         super().__init__(models.n, 5)
         self.par, self.tv = _packed(models), _tuning_vector(tuning, settings, models.f0)
-        self.hold = np.full((models.n, H_NCOL), np.nan)      # H_* columns
-        self.cur_hold = np.full(models.n, np.nan + 0j)
-        self.g = np.zeros((models.n, 3))                      # governor states
+        self.held = Held(np.full((models.n, len(H)), np.nan), np.full(models.n, np.nan + 0j),
+                         np.zeros((models.n, NG)))
 
-    def _frame(self, frame: Frame):
+    def _frame(self, frame: Frame) -> MachineFrame:
         """This filter's machines' voltage, current, frequency and valid mask."""
         p = self.m.pmu
         v, i, f = frame.v[p], frame.i[p], frame.freq[p]
-        return v, i, f, frame.valid[p] & np.isfinite(v) & np.isfinite(i) & np.isfinite(f)
+        return MachineFrame(v, i, f,
+                            frame.valid[p] & np.isfinite(v) & np.isfinite(i) & np.isfinite(f))
 
-    def _discrete(self, dt):
-        return (*self.m.qaxis.sys.discrete(dt), *self.m.governor.sys.discrete(dt))
+    def _discrete(self, dt) -> Discrete:
+        return Discrete(*self.m.qaxis.sys.discrete(dt), *self.m.governor.sys.discrete(dt))
 
     def _advance(self, frame, dt):
-        v, i, f, ok = self._frame(frame)
-        _swing_batch(self.x, self.P, self.nis, self.ready, self.hold, self.cur_hold, self.g,
-                     v, i, f, ok, dt, self.par, *self._discrete(dt), self.tv)
+        _swing_batch(self.x, self.P, self.nis, self.ready, self.held, self._frame(frame), dt,
+                     self.par, self._discrete(dt), self.tv)
 
     def _output(self):
         return 1.0 + self.x[:, 1], self.P[:, 1, 1]
@@ -528,10 +594,11 @@ class SwingEKF(_MachineFilters):
         variance (from those of dPm and P_ag) and its covariance with the speed."""
         m, w = self.m, self.x[:, 1]
         gov = m.governor
-        pm = np.where(gov.active, gov.output(self.g), self.hold[:, H_PM0])
+        hold = self.held.hold
+        pm = np.where(gov.active, gov.output(self.held.g), hold[:, H.PM0])
         c = 1.0 / (2 * m.H * np.where(m.per_speed, 1.0 + w, 1.0))
-        acc = c * (pm + self.x[:, 2] - self.hold[:, H_PAG]) - m.D * w / (2 * m.H)
-        return acc, c ** 2 * (self.P[:, 2, 2] + self.hold[:, H_PAGVAR]), c * self.P[:, 1, 2]
+        acc = c * (pm + self.x[:, 2] - hold[:, H.PAG]) - m.D * w / (2 * m.H)
+        return acc, c ** 2 * (self.P[:, 2, 2] + hold[:, H.PAGVAR]), c * self.P[:, 1, 2]
 
 
 def compile_filters(models: MachineModels) -> None:

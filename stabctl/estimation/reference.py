@@ -12,11 +12,9 @@ from filterpy.common import Q_continuous_white_noise
 from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
 
 from stabctl.estimation.filters import (
-    T_ANGLE,
-    T_F0,
-    T_SIG2,
     FrequencyKF,
     SwingEKF,
+    T,
     swing_begin,
     swing_h,
     swing_inputs,
@@ -71,44 +69,29 @@ class SwingEKFReference(SwingEKF):
         self.ekfs = [_SwingEKF1(dim_x=5, dim_z=1) for _ in range(self.m.n)]
 
     def _advance(self, frame, dt):
-        v, i, f, ok = self._frame(frame)
+        fr = self._frame(frame)
+        v, i, ok = fr.v, fr.i, fr.valid
         disc = self._discrete(dt)
         self.nis[:] = np.nan
         for k, ekf in enumerate(self.ekfs):
             pr = self.par[k]
             if not (self.ready[k] or ok[k]):
                 continue
-            meas = swing_measure(v[k], i[k], pr, self.tv[T_SIG2]) if ok[k] else (np.nan,) * 6
+            meas = swing_measure(v[k], i[k], pr, self.tv[T.SIG2]) if ok[k] else (np.nan,) * 6
             if not self.ready[k]:
-                ekf.x, ekf.P = swing_begin(
-                    k, v[k], i[k], f[k], *meas[2:], pr, self.tv, self.hold, self.cur_hold, self.g
-                )
+                ekf.x, ekf.P = swing_begin(k, fr, *meas[2:], pr, self.tv, self.held)
                 self.ready[k] = True
             else:
-                self._predict(ekf, k, ok[k], meas, i[k], dt, *(d[k] for d in disc))
+                self._predict(ekf, k, fr, meas, dt, disc)
                 if ok[k]:
                     self._update(ekf, k, meas[0], meas[1], meas[5])
             self.x[k], self.P[k] = ekf.x, ekf.P
 
-    def _predict(self, ekf, k, ok, meas, cur, dt, Adq, bdq, Adg, bdg):
+    def _predict(self, ekf, k, fr, meas, dt, disc):
         pr, tv = self.par[k], self.tv
-        u = swing_inputs(
-            k,
-            ok,
-            meas[2],
-            meas[3],
-            cur,
-            meas[4],
-            self.hold,
-            self.cur_hold,
-            self.g,
-            ekf.x[1],
-            pr,
-            Adg,
-            bdg,
-            tv,
-        )
-        xn, F, gs = swing_transition(ekf.x, u[0], u[1], u[3], u[4], dt, pr, Adq, bdq, tv[T_F0])
+        u = swing_inputs(k, fr, meas[2], meas[3], meas[4], self.held, ekf.x[1], pr, disc, tv)
+        Adq, bdq = disc.Adq[k], disc.bdq[k]
+        xn, F, gs = swing_transition(ekf.x, u[0], u[1], u[3], u[4], dt, pr, Adq, bdq, tv[T.F0])
         ekf.F, ekf.Q = F, swing_Q(gs, u[2], u[5], bdq, dt, tv)
         ekf.predict(u=xn)
 
@@ -118,7 +101,7 @@ class SwingEKFReference(SwingEKF):
             np.array([theta]),
             HJacobian=lambda x: swing_h(x, emag, pr)[1][None, :],
             Hx=lambda x: np.array([swing_h(x, emag, pr)[0]]),
-            R=np.array([[r + tv[T_ANGLE] ** 2]]),
+            R=np.array([[r + tv[T.ANGLE] ** 2]]),
             residual=lambda a, b: np.array([wrap_angle(a[0] - b[0])]),
         )
         self.nis[k] = ekf.y @ ekf.SI @ ekf.y
