@@ -23,17 +23,28 @@ from stabctl.case import Case
 from stabctl.dynamics import events as ev_
 from stabctl.dynamics import integrator as ig
 from stabctl.dynamics.coi import coi_angle
-from stabctl.dynamics.grid import (check_step, check_step_count, default_step,
-                                   fastest_time_constant, time_grid)
-from stabctl.dynamics.model import (DynamicModel, KeptBuses, OperatingPoint, StageConfig,
-                                    check_conventions, evaluate_address, evaluate_kernel,
-                                    stacked_networks)
+from stabctl.dynamics.grid import (
+    check_step,
+    check_step_count,
+    default_step,
+    fastest_time_constant,
+    time_grid,
+)
+from stabctl.dynamics.model import (
+    DynamicModel,
+    KeptBuses,
+    OperatingPoint,
+    StageConfig,
+    check_conventions,
+    evaluate_address,
+    evaluate_kernel,
+    stacked_networks,
+)
 from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
-
 
 _BLAS_LIMITED = False
 
@@ -50,6 +61,7 @@ def single_threaded_blas() -> None:
     if not _BLAS_LIMITED:
         import scipy.linalg.cython_lapack  # noqa: F401  the LAPACK numba calls: load it first
         from threadpoolctl import threadpool_limits
+
         threadpool_limits(limits=1, user_api="blas")
         _BLAS_LIMITED = True
 
@@ -139,15 +151,24 @@ class Simulator:
         The power flow (when `op` is None) did not converge.
     """
 
-    def __init__(self, case: Case, op: OperatingPoint | None = None, injection_buses=(),
-                 conventions: str = "ieee", step: float | None = None,
-                 q_limits: bool = True, background_compile: bool = True):
+    def __init__(
+        self,
+        case: Case,
+        op: OperatingPoint | None = None,
+        injection_buses=(),
+        conventions: str = "ieee",
+        step: float | None = None,
+        q_limits: bool = True,
+        background_compile: bool = True,
+    ):
         self.conventions = check_conventions(conventions)
         self.q_limits = bool(q_limits)
         if op is None:
             from stabctl.network.powerflow import solve_powerflow
+
             op = OperatingPoint.from_bus_matrix(
-                solve_powerflow(case, q_limits=self.q_limits).bus_matrix())
+                solve_powerflow(case, q_limits=self.q_limits).bus_matrix()
+            )
         single_threaded_blas()
         self.case, self.op = case, op
         self.fastest = fastest_time_constant(case)
@@ -187,9 +208,16 @@ class Simulator:
         from numba import typeof
 
         m = self.model
-        probe = _Run(self, m, st.pack(None, self.case, m.nc_idx),
-                     time_grid([0.0], self.default_h, self.default_h),
-                     [m.network(StageConfig())], False, np.pi, False)
+        probe = _Run(
+            self,
+            m,
+            st.pack(None, self.case, m.nc_idx),
+            time_grid([0.0], self.default_h, self.default_h),
+            [m.network(StageConfig())],
+            False,
+            np.pi,
+            False,
+        )
         return [typeof(a) for a in probe.arguments(1)]
 
     def model_for(self, buses=()) -> DynamicModel:
@@ -211,9 +239,16 @@ class Simulator:
             self._models[key] = DynamicModel(self.case, self.op, sorted(key), self.conventions)
         return self._models[key]
 
-    def run(self, events=(), t_end: float = 5.0, h: float | None = None,
-            semantics: str | None = None, separation_limit: float = np.pi,
-            stop_at_separation: bool = False, storage=None) -> SimulationResult:
+    def run(
+        self,
+        events=(),
+        t_end: float = 5.0,
+        h: float | None = None,
+        semantics: str | None = None,
+        separation_limit: float = np.pi,
+        stop_at_separation: bool = False,
+        storage=None,
+    ) -> SimulationResult:
         """Simulate disturbances from the power-flow point, t = 0 to `t_end`.
 
         Parameters
@@ -267,8 +302,9 @@ class Simulator:
         """
         semantics = self._semantics(semantics)
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
-        run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
-                   stop_at_separation)
+        run = _Run(
+            self, m, sa, grid, nets, semantics == "pst", separation_limit, stop_at_separation
+        )
         run.advance(grid.t.size - 1)
         return run.finish(storage)
 
@@ -293,10 +329,17 @@ class Simulator:
             return "pst" if self.conventions == "pstess" else "exact"
         return semantics
 
-    def run_commanded(self, events, t_end: float, storage, frames: CommandFrames,
-                      h: float | None = None, semantics: str | None = None,
-                      separation_limit: float = np.pi,
-                      stop_at_separation: bool = False) -> SimulationResult:
+    def run_commanded(
+        self,
+        events,
+        t_end: float,
+        storage,
+        frames: CommandFrames,
+        h: float | None = None,
+        semantics: str | None = None,
+        separation_limit: float = np.pi,
+        stop_at_separation: bool = False,
+    ) -> SimulationResult:
         """Simulate with storage devices commanded from measurements (estimator in the loop).
 
         At each frame time t_f (s, increasing; ``frames.times``) the run is advanced to the
@@ -350,20 +393,31 @@ class Simulator:
             raise InputError("frame times must increase and the latency must be >= 0")
         semantics = self._semantics(semantics)
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
-        run = _Run(self, m, sa, grid, nets, semantics == "pst", separation_limit,
-                   stop_at_separation, n_commands=frame_times.size)
+        run = _Run(
+            self,
+            m,
+            sa,
+            grid,
+            nets,
+            semantics == "pst",
+            separation_limit,
+            stop_at_separation,
+            n_commands=frame_times.size,
+        )
         for i, t_f in enumerate(frame_times[frame_times <= t_end]):
             k = int(np.searchsorted(grid.t, t_f - 1e-12))
             run.advance(k)
             if run.status != ig.OK:
                 break
-            run.command(i, t_f + latency,
-                        np.asarray(frames.decide(float(t_f), run.partial(k, frames.history_s)),
-                                   float))
+            run.command(
+                i,
+                t_f + latency,
+                np.asarray(frames.decide(float(t_f), run.partial(k, frames.history_s)), float),
+            )
         run.advance(grid.t.size - 1)
         return run.finish(storage)
 
-    def _result(self, t, rec: "ig.Recording", n, wall, limit) -> SimulationResult:
+    def _result(self, t, rec: ig.Recording, n, wall, limit) -> SimulationResult:
         c = self.case
         angle = rec.angle[:n]
         dev = np.abs(angle - coi_angle(angle, self.inertia)[:, None])
@@ -375,14 +429,28 @@ class Simulator:
             group = separated_group(angle[k], self.inertia)
             separated = [int(x) for x in c.machines.number[group]]
         return SimulationResult(
-            t=t[:n].copy(), machines=c.machines.number.astype(int),
+            t=t[:n].copy(),
+            machines=c.machines.number.astype(int),
             buses=c.buses.number.astype(int),
-            speed=rec.speed[:n], angle=angle, pelect=rec.pelect[:n], pmech=rec.pmech[:n],
-            efd=rec.efd[:n], vmag=np.abs(rec.V[:n]), vang=np.angle(rec.V[:n]),
-            inertia=self.inertia, stable=t_sep is None, t_separation=t_sep, separated=separated,
-            meta={"case": c.name, "conventions": self.conventions, "wall_time_s": wall,
-                  "max_initial_derivative": self.model.initial_residual[0],
-                  "max_initial_derivative_state": self.model.initial_residual[1]})
+            speed=rec.speed[:n],
+            angle=angle,
+            pelect=rec.pelect[:n],
+            pmech=rec.pmech[:n],
+            efd=rec.efd[:n],
+            vmag=np.abs(rec.V[:n]),
+            vang=np.angle(rec.V[:n]),
+            inertia=self.inertia,
+            stable=t_sep is None,
+            t_separation=t_sep,
+            separated=separated,
+            meta={
+                "case": c.name,
+                "conventions": self.conventions,
+                "wall_time_s": wall,
+                "max_initial_derivative": self.model.initial_residual[0],
+                "max_initial_derivative_state": self.model.initial_residual[1],
+            },
+        )
 
 
 def simulator_cached() -> bool:
@@ -396,16 +464,21 @@ def simulator_cached() -> bool:
 class _Run:
     """One simulation in progress: the compiled loop advanced piecewise (see `integrate`)."""
 
-    def __init__(self, sim: "Simulator", m, sa, grid, nets, pst, limit, stop, n_commands=0):
+    def __init__(self, sim: Simulator, m, sa, grid, nets, pst, limit, stop, n_commands=0):
         self.sim, self.m, self.sa, self.grid = sim, m, sa, grid
         n_nc = m.V_nc0.size
         self.rec = ig.recording(grid.t.size, m.mp.n, sim.case.n_bus, sa.pmax.size)
         self.carry = ig.Carry(
             x=m.x0.copy(),
-            kept=KeptBuses(V=m.V_nc0.copy(), held=np.zeros(n_nc, np.bool_),  # loads held low
-                           S_extra=np.zeros(n_nc, np.complex128)),
-            held_stage=np.full(1, -1), devices=device_state(sa, n_commands),
-            health=ig.Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3))))
+            kept=KeptBuses(
+                V=m.V_nc0.copy(),
+                held=np.zeros(n_nc, np.bool_),  # loads held low
+                S_extra=np.zeros(n_nc, np.complex128),
+            ),
+            held_stage=np.full(1, -1),
+            devices=device_state(sa, n_commands),
+            health=ig.Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3))),
+        )
         self.nets, self.steps = stacked_networks(nets), ig.step_grid(grid)
         self.opts = ig.RunOptions(pst=pst, inertia=sim.inertia, limit=limit, stop=stop)
         self.limit = limit
@@ -430,7 +503,7 @@ class _Run:
         if self.status != ig.OK or k1 < self.k or (k1 == self.k and self.stored):
             return
         self.stored = True
-        if self.evaluate is None:      # the model's evaluation: compiled or loaded here
+        if self.evaluate is None:  # the model's evaluation: compiled or loaded here
             self.evaluate = evaluate_address(self.params)
         await_background(ig.integrate)
         wall = time.perf_counter()
@@ -441,8 +514,18 @@ class _Run:
     def arguments(self, k1: int) -> tuple:
         """The arguments of `integrate` from the last stored grid index to k1 (an address
         of 0 before the first `advance`)."""
-        return (self.carry, self.k, k1, self.steps, self.nets, self.params, self.sa,
-                self.opts, self.rec, self.evaluate or 0)
+        return (
+            self.carry,
+            self.k,
+            k1,
+            self.steps,
+            self.nets,
+            self.params,
+            self.sa,
+            self.opts,
+            self.rec,
+            self.evaluate or 0,
+        )
 
     def command(self, i: int, t_apply: float, modes) -> None:
         """Schedule command i: device set-points (units of each rating) from t_apply (s)."""
@@ -456,11 +539,20 @@ class _Run:
         r, c, n = self.rec, self.sim.case, k + 1
         lo = max(int(np.searchsorted(self.grid.t[:n], self.grid.t[k] - history_s)) - 1, 0)
         return SimulationResult(
-            t=self.grid.t[lo:n], machines=c.machines.number.astype(int),
-            buses=c.buses.number.astype(int), speed=r.speed[lo:n], angle=r.angle[lo:n],
-            pelect=r.pelect[lo:n], pmech=r.pmech[lo:n], efd=r.efd[lo:n],
-            vmag=np.abs(r.V[lo:n]), vang=np.angle(r.V[lo:n]), inertia=self.sim.inertia,
-            devices=np.arange(1, self.sa.pmax.size + 1), pesd=self.rec.P[lo:n])
+            t=self.grid.t[lo:n],
+            machines=c.machines.number.astype(int),
+            buses=c.buses.number.astype(int),
+            speed=r.speed[lo:n],
+            angle=r.angle[lo:n],
+            pelect=r.pelect[lo:n],
+            pmech=r.pmech[lo:n],
+            efd=r.efd[lo:n],
+            vmag=np.abs(r.V[lo:n]),
+            vang=np.angle(r.V[lo:n]),
+            inertia=self.sim.inertia,
+            devices=np.arange(1, self.sa.pmax.size + 1),
+            pesd=self.rec.P[lo:n],
+        )
 
     def finish(self, storage) -> SimulationResult:
         """The result; raises SimulationError (with the partial result) after a divergence."""
@@ -468,8 +560,15 @@ class _Run:
         res = sim._result(g.t, self.rec, k_end + 1, self.wall, self.limit)
         if storage is not None:
             log = self.rec.log
-            _attach_storage(res, storage, self.rec.P[:k_end + 1], self.rec.stats,
-                            sim.case.base_mva, log[~np.isnan(log[:, 0])], sim.case.freq_hz)
+            _attach_storage(
+                res,
+                storage,
+                self.rec.P[: k_end + 1],
+                self.rec.stats,
+                sim.case.base_mva,
+                log[~np.isnan(log[:, 0])],
+                sim.case.freq_hz,
+            )
         t_fail = g.t[min(k_end + 1, g.t.size - 1)]
         if self.status == ig.UNSTABLE_STEP:
             q, x = int(self.carry.health.bad[0]), self.carry.x
@@ -478,12 +577,17 @@ class _Run:
                 f"{t_fail:.4f} s: state {self.m.state_name(q)} = {x[q]:.6g} "
                 f"({ig.symptom(x[q], q, self.m.mp.n)}); the step h = "
                 f"{g.h[g.interval[k_end]]:.6g} s is too large for this model: use a smaller "
-                f"step (trajectory kept up to {g.t[k_end]:.4f} s)", result=res)
+                f"step (trajectory kept up to {g.t[k_end]:.4f} s)",
+                result=res,
+            )
         if self.status < 0:
-            raise SimulationError(f"case '{sim.case.name}': the network/load equations did "
-                                  f"not converge (voltage collapse) in the step ending at "
-                                  f"t = {t_fail:.4f} s (trajectory kept up to "
-                                  f"{g.t[k_end]:.4f} s)", result=res)
+            raise SimulationError(
+                f"case '{sim.case.name}': the network/load equations did "
+                f"not converge (voltage collapse) in the step ending at "
+                f"t = {t_fail:.4f} s (trajectory kept up to "
+                f"{g.t[k_end]:.4f} s)",
+                result=res,
+            )
         return res
 
 
@@ -501,15 +605,21 @@ def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva, log, f0) -
     res.pesd = P
     res.meta["switchings"] = [(float(t), int(d) + 1, int(m), float(r * f0)) for t, d, m, r in log]
     res.meta["storage"] = [
-        {"device": i + 1, "bus": d.bus, "machine": d.machine, "pmax_mw": d.pmax_mw,
-         "switchings": int(stats[i, 0]),
-         "chattering": int(np.sum(np.diff(log[log[:, 1] == i, 0]) < CHATTER_S)),
-         "energy_absorbed_mj": float(stats[i, 1] * base_mva),
-         "energy_delivered_mj": float(stats[i, 2] * base_mva),
-         "soc_high_mj": float(stats[i, 3] * base_mva),
-         "soc_low_mj": float(stats[i, 4] * base_mva),
-         "peak_power_mw": float(np.abs(P[:, i]).max() * base_mva) if P.size else 0.0}
-        for i, d in enumerate(fleet.devices)]
+        {
+            "device": i + 1,
+            "bus": d.bus,
+            "machine": d.machine,
+            "pmax_mw": d.pmax_mw,
+            "switchings": int(stats[i, 0]),
+            "chattering": int(np.sum(np.diff(log[log[:, 1] == i, 0]) < CHATTER_S)),
+            "energy_absorbed_mj": float(stats[i, 1] * base_mva),
+            "energy_delivered_mj": float(stats[i, 2] * base_mva),
+            "soc_high_mj": float(stats[i, 3] * base_mva),
+            "soc_low_mj": float(stats[i, 4] * base_mva),
+            "peak_power_mw": float(np.abs(P[:, i]).max() * base_mva) if P.size else 0.0,
+        }
+        for i, d in enumerate(fleet.devices)
+    ]
 
 
 def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:

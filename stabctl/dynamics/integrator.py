@@ -29,8 +29,15 @@ from stabctl._jit.arrays import assign, max_abs
 from stabctl._jit.decorators import kernel, njit
 from stabctl.dynamics import switching as sw
 from stabctl.dynamics.coi import coi_value
-from stabctl.dynamics.model import (BUS_VOLTAGES, NO_BUS_VOLTAGES, KeptBuses, KernelNetwork,
-                                    KernelOutputs, call_evaluate, kernel_outputs)
+from stabctl.dynamics.model import (
+    BUS_VOLTAGES,
+    NO_BUS_VOLTAGES,
+    KeptBuses,
+    KernelNetwork,
+    KernelOutputs,
+    call_evaluate,
+    kernel_outputs,
+)
 from stabctl.storage import control as law
 
 if TYPE_CHECKING:
@@ -74,11 +81,17 @@ def recording(n_t: int, nm: int, nb: int, nd: int) -> Recording:
     -------
     Recording
     """
-    return Recording(speed=np.zeros((n_t, nm)), angle=np.zeros((n_t, nm)),
-                     pelect=np.zeros((n_t, nm)), pmech=np.zeros((n_t, nm)),
-                     efd=np.zeros((n_t, nm)), V=np.zeros((n_t, nb), np.complex128),
-                     P=np.zeros((n_t, nd)), stats=np.zeros((nd, 5)),
-                     log=np.full((LOG_ROWS, 4), np.nan))
+    return Recording(
+        speed=np.zeros((n_t, nm)),
+        angle=np.zeros((n_t, nm)),
+        pelect=np.zeros((n_t, nm)),
+        pmech=np.zeros((n_t, nm)),
+        efd=np.zeros((n_t, nm)),
+        V=np.zeros((n_t, nb), np.complex128),
+        P=np.zeros((n_t, nd)),
+        stats=np.zeros((nd, 5)),
+        log=np.full((LOG_ROWS, 4), np.nan),
+    )
 
 
 OK, SEPARATED, NO_LOAD_FLOW, UNSTABLE_STEP = 0, 1, -1, -3
@@ -99,8 +112,7 @@ def symptom(value: float, q: int, nm: int) -> str:
         return "not finite"
     if nm <= q < 2 * nm and abs(value - 1.0) > SPEED_BAND:
         return f"speed more than {SPEED_BAND} pu from synchronous"
-    return (f"the largest local error estimate, above {EST_TOL} for {EST_STEPS} steps in a "
-            "row")
+    return f"the largest local error estimate, above {EST_TOL} for {EST_STEPS} steps in a row"
 
 
 class Health(NamedTuple):
@@ -199,12 +211,17 @@ class _SplitPoint(NamedTuple):
 
 @kernel
 def _workspace(x, nd):
-    return _Workspace(np.zeros_like(x), np.zeros_like(x),  # slots no kernel writes stay 0
-                      sw.Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)),
-                      sw.Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)), np.zeros(nd, np.bool_))
+    return _Workspace(
+        np.zeros_like(x),
+        np.zeros_like(x),  # slots no kernel writes stay 0
+        sw.Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)),
+        sw.Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)),
+        np.zeros(nd, np.bool_),
+    )
 
 
 # -- health and separation -----------------------------------------------------------------
+
 
 @kernel
 def _local_error(x, f_k, f_j, hh, where):
@@ -245,6 +262,7 @@ def _separated(x, nm, opts):
 
 # -- recording -------------------------------------------------------------------------------
 
+
 @kernel
 def _record(rec, k, x, out, P):
     """Store grid index k: angles and speeds of x, the evaluation outputs, device powers."""
@@ -262,11 +280,11 @@ def _record(rec, k, x, out, P):
 
 # -- network solution ----------------------------------------------------------------------
 
+
 @kernel
 def _stage(nets, s):
     """The matrices of network stage s from the stacked ones."""
-    return KernelNetwork(nets.Y11[s], nets.Y12[s], nets.Y21[s], nets.Y22[s], nets.Z22[s],
-                         nets.R[s])
+    return KernelNetwork(nets.Y11[s], nets.Y12[s], nets.Y21[s], nets.Y22[s], nets.Z22[s], nets.R[s])
 
 
 # The stages that evaluate the model are inlined into `integrate` at numba IR level
@@ -281,11 +299,11 @@ def _evaluate(kn, x, stage, want, dx):
     if stage != kn.held_stage[0]:
         kn.kept.held[:] = False
         kn.held_stage[0] = stage
-    return call_evaluate(kn.evaluate, x, kn.p, _stage(kn.nets, stage), kn.kept, want, dx,
-                         kn.out)
+    return call_evaluate(kn.evaluate, x, kn.p, _stage(kn.nets, stage), kn.kept, want, dx, kn.out)
 
 
 # -- the controller at a grid point and at a split point -----------------------------------
+
 
 @kernel(inline="always")
 def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
@@ -328,6 +346,7 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, at):
 
 # -- the step ------------------------------------------------------------------------------
 
+
 @kernel(inline="always")
 def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
     """Heun's predictor-corrector over hh from x_a (derivatives dx_a), the devices' powers
@@ -353,8 +372,9 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
     x_b = x
     while True:
         hh = sw.substep_length(grid, sa, ds, k, rem)
-        ok, x_b = _heun(kn, sa, ds, x_a, dx_a, hh, j if hh == rem else s, last and hh == rem,
-                        w.dx_j)
+        ok, x_b = _heun(
+            kn, sa, ds, x_a, dx_a, hh, j if hh == rem else s, last and hh == rem, w.dx_j
+        )
         if not ok:
             return NO_LOAD_FLOW, k, x
         if hh == rem:
@@ -364,7 +384,7 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
             theta, first_d = sw.locate_switching(kn, grid, sa, ds, opts, w, x_b, k)
         if hh == rem and first_d < 0:
             break
-        if first_d >= 0:           # re-integrate up to the first switching instant
+        if first_d >= 0:  # re-integrate up to the first switching instant
             hh = theta * rem
         Pm = sw.advance(sa, ds.P, ds.target, ds.e, hh, rec.stats)
         if first_d >= 0:
@@ -372,7 +392,7 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
             if _evaluate(kn, x_a + hh * dx_a, s, NO_BUS_VOLTAGES, w.dx_j) < 0:
                 return NO_LOAD_FLOW, k, x
             x_a = x_a + 0.5 * hh * (dx_a + w.dx_j)
-        else:                      # up to the scheduled command
+        else:  # up to the scheduled command
             x_a = x_b
         rem -= hh
         assign(ds.P, Pm)
@@ -472,8 +492,7 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
         The last stored grid index.
     """
     n = grid.interval.size
-    kn = _Kernel(p, nets, c.kept, c.held_stage, kernel_outputs(p.n_mac, nets.R.shape[1]),
-                 evaluate)
+    kn = _Kernel(p, nets, c.kept, c.held_stage, kernel_outputs(p.n_mac, nets.R.shape[1]), evaluate)
     w = _workspace(c.x, sa.pmax.size)
     x = c.x.copy()
     for k in range(k0, min(k1, n - 1)):

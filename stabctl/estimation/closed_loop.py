@@ -30,18 +30,24 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from stabctl.dynamics.driver import CommandFrames
+from stabctl.dynamics.results import SimulationResult
+from stabctl.errors import InputError
+from stabctl.estimation.ambient import AmbientLoad
 from stabctl.estimation.filters import FrequencyKF, SwingEKF
 from stabctl.estimation.models import MachineModels, machine_models, relative_speeds
-from stabctl.dynamics.driver import CommandFrames
+from stabctl.estimation.pmu import (
+    Frame,
+    PhasorTruth,
+    interp_columns,
+    machine_pmus,
+    measure,
+    window_estimates,
+)
+from stabctl.estimation.settings import PMUSettings
+from stabctl.network.ybus import branch_admittances
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
-from stabctl.estimation.ambient import AmbientLoad
-from stabctl.errors import InputError
-from stabctl.network.ybus import branch_admittances
-from stabctl.estimation.pmu import (Frame, PhasorTruth, interp_columns, machine_pmus, measure,
-                                   window_estimates)
-from stabctl.estimation.settings import PMUSettings
-from stabctl.dynamics.results import SimulationResult
 
 if TYPE_CHECKING:
     from stabctl.dynamics.driver import Simulator
@@ -79,9 +85,17 @@ class LoopController:
     buses.
     """
 
-    def __init__(self, case, devices, estimator: str, settings: PMUSettings, seed: int,
-                 t_end: float, control: law.BangBangCOI = law.BangBangCOI(),
-                 at: str = "terminal"):
+    def __init__(
+        self,
+        case,
+        devices,
+        estimator: str,
+        settings: PMUSettings,
+        seed: int,
+        t_end: float,
+        control: law.BangBangCOI = law.BangBangCOI(),
+        at: str = "terminal",
+    ):
         if estimator not in ESTIMATORS:
             raise InputError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {estimator!r}")
         self.case, self.estimator, self.settings = case, estimator, settings
@@ -95,8 +109,11 @@ class LoopController:
         self.need_cols = np.searchsorted(self.need, self.cols)
         self.C_need = self.C[:, self.need]
         self.noise = _unit_noise(self.pmus, settings, seed, t_end, case.freq_hz)
-        self.sa = st.pack(st.StorageFleet(tuple(devices), replace(control, v_gate_pu=0.0)),
-                          case, np.arange(case.n_bus))
+        self.sa = st.pack(
+            st.StorageFleet(tuple(devices), replace(control, v_gate_pu=0.0)),
+            case,
+            np.arange(case.n_bus),
+        )
         self.filter = _make_filter(estimator, self.models, settings)
         self.mode = np.zeros(len(devices), np.int64)
         self.held = np.full(self.models.n, np.nan)
@@ -115,7 +132,7 @@ class LoopController:
         """Speed estimates (n_mac,) pu for the instant the modes take effect."""
         if self.estimator == "ideal":
             return partial.speed_at(np.array([t_f]))[0]
-        if partial.t.size < 2:          # the run start is not recorded yet: no frame
+        if partial.t.size < 2:  # the run start is not recorded yet: no frame
             return np.ones(self.models.n)
         frame = self._frame(t_f, partial)
         if self.estimator == "raw":
@@ -129,19 +146,41 @@ class LoopController:
         """The measured frame at t_f: true values from the trajectory's tail, plus noise."""
         k = int(round(t_f * self.settings.rate))
         f0 = self.case.freq_hz
-        v, i, f, rocof = _tail_truth(partial, self.cols, self.C, t_f,
-                                     self.settings.window_s(f0), f0,
-                                     need=(self.need, self.need_cols, self.C_need))
+        v, i, f, rocof = _tail_truth(
+            partial,
+            self.cols,
+            self.C,
+            t_f,
+            self.settings.window_s(f0),
+            f0,
+            need=(self.need, self.need_cols, self.C_need),
+        )
         n = self.noise
         nan = np.where(n.valid[k], 1.0, np.nan)
-        return Frame(t_f, n.valid[k], v * (1 + n.v[k]) * nan, i * (1 + n.i[k]) * nan,
-                     (f + n.freq[k]) * nan, (rocof + n.rocof[k]) * nan)
+        return Frame(
+            t_f,
+            n.valid[k],
+            v * (1 + n.v[k]) * nan,
+            i * (1 + n.i[k]) * nan,
+            (f + n.freq[k]) * nan,
+            (rocof + n.rocof[k]) * nan,
+        )
 
     def diagnostics(self) -> Diagnostics:
-        t, rel, modes = (np.array(a) for a in zip(*self.rows)) if self.rows else \
-            (np.zeros(0), np.zeros((0, self.models.n)), np.zeros((0, self.mode.size), int))
-        return Diagnostics(t=t, rel=rel, modes=modes, mac=np.asarray(self.sa.mac),
-                           latency=self.settings.latency_s, f0=self.case.freq_hz, coi=self.coi)
+        t, rel, modes = (
+            (np.array(a) for a in zip(*self.rows))
+            if self.rows
+            else (np.zeros(0), np.zeros((0, self.models.n)), np.zeros((0, self.mode.size), int))
+        )
+        return Diagnostics(
+            t=t,
+            rel=rel,
+            modes=modes,
+            mac=np.asarray(self.sa.mac),
+            latency=self.settings.latency_s,
+            f0=self.case.freq_hz,
+            coi=self.coi,
+        )
 
 
 def _make_filter(estimator: str, models: MachineModels, settings: PMUSettings):
@@ -159,11 +198,23 @@ def _unit_noise(pmus, settings: PMUSettings, seed: int, t_end: float, f0: float)
     the losses, exactly as `measure` draws them for a run of that length."""
     n = len(pmus)
     one = np.ones((2, n), complex)
-    truth = PhasorTruth(t=np.array([0.0, t_end]), pmus=tuple(pmus), v=one, i=one,
-                        freq=np.zeros((2, n)), rocof=np.zeros((2, n)), f0=f0)
+    truth = PhasorTruth(
+        t=np.array([0.0, t_end]),
+        pmus=tuple(pmus),
+        v=one,
+        i=one,
+        freq=np.zeros((2, n)),
+        rocof=np.zeros((2, n)),
+        f0=f0,
+    )
     s = measure(truth, settings, seed)
-    return replace(s, v=np.nan_to_num(s.v - 1), i=np.nan_to_num(s.i - 1),
-                   freq=np.nan_to_num(s.freq), rocof=np.nan_to_num(s.rocof))
+    return replace(
+        s,
+        v=np.nan_to_num(s.v - 1),
+        i=np.nan_to_num(s.i - 1),
+        freq=np.nan_to_num(s.freq),
+        rocof=np.nan_to_num(s.rocof),
+    )
 
 
 def current_map(case, pmus) -> np.ndarray:
@@ -187,8 +238,9 @@ def current_map(case, pmus) -> np.ndarray:
     return C
 
 
-def _tail_truth(partial: SimulationResult, cols, C, t_f: float, window: float, f0: float,
-                need=None):
+def _tail_truth(
+    partial: SimulationResult, cols, C, t_f: float, window: float, f0: float, need=None
+):
     """Noise-free PMU values at t_f from the end of the run so far (up to the first grid
     point at or after t_f): bus voltages interpolated by magnitude and unwrapped angle, the
     currents C @ V; frequency over the last `window` s before t_f and ROCOF over the last
@@ -201,11 +253,12 @@ def _tail_truth(partial: SimulationResult, cols, C, t_f: float, window: float, f
     t = partial.t[lo:]
     keep = np.r_[np.diff(t) > 0, True]
     ang = np.unwrap(partial.vang[lo:, bus][keep], axis=0)
-    nb = ang.shape[1]               # one interpolation for |V| and angle
+    nb = ang.shape[1]  # one interpolation for |V| and angle
     at = interp_columns(np.array([t_f]), t[keep], np.hstack((partial.vmag[lo:, bus][keep], ang)))
     now = at[0, :nb] * np.exp(1j * at[0, nb:])
-    f, rocof = window_estimates(t[keep], ang[:, cols_in], [t_f - window / 2], [t_f - window],
-                                window, f0)
+    f, rocof = window_estimates(
+        t[keep], ang[:, cols_in], [t_f - window / 2], [t_f - window], window, f0
+    )
     return now[cols_in], C_in @ now, f[0], rocof[0]
 
 
@@ -247,9 +300,17 @@ class LoopOptions:
     at: str = "terminal"
 
 
-def run_closed_loop(sim, events, t_end: float, loop: LoopOptions, *, h: float | None = None,
-                    separation_limit: float = np.pi, stop_at_separation: bool = True,
-                    ambient: AmbientLoad | None = None) -> ClosedLoopRun:
+def run_closed_loop(
+    sim,
+    events,
+    t_end: float,
+    loop: LoopOptions,
+    *,
+    h: float | None = None,
+    separation_limit: float = np.pi,
+    stop_at_separation: bool = True,
+    ambient: AmbientLoad | None = None,
+) -> ClosedLoopRun:
     """Simulate `events` to t_end (s) with the ESDs commanded by Table 3 on the relative
     speeds the loop's estimator gives.
 
@@ -286,8 +347,9 @@ def run_closed_loop(sim, events, t_end: float, loop: LoopOptions, *, h: float | 
     """
     settings, rate = loop.pmu, loop.pmu.rate
     fleet = st.uniform_fleet(sim.case, loop.fleet_pct)
-    ctrl = LoopController(sim.case, fleet.devices, loop.estimator, settings, loop.seed, t_end,
-                          loop.control, loop.at)
+    ctrl = LoopController(
+        sim.case, fleet.devices, loop.estimator, settings, loop.seed, t_end, loop.control, loop.at
+    )
     frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
     devices = fleet.devices
     decide: Callable = ctrl
@@ -296,11 +358,21 @@ def run_closed_loop(sim, events, t_end: float, loop: LoopOptions, *, h: float | 
         devices = devices + loads
         decide = lambda t, p: np.r_[ctrl(t, p), set_points(t)]  # noqa: E731
     gate = law.ExternalCommands(v_gate_pu=loop.control.v_gate_pu)
-    schedule = CommandFrames(frames, decide, latency=settings.latency_s,
-                             history_s=HISTORY_WINDOWS * settings.window_s(sim.case.freq_hz))
-    res = sim.run_commanded(events, t_end, st.StorageFleet(devices, gate), schedule, h=h,
-                            separation_limit=separation_limit,
-                            stop_at_separation=stop_at_separation)
+    schedule = CommandFrames(
+        frames,
+        decide,
+        latency=settings.latency_s,
+        history_s=HISTORY_WINDOWS * settings.window_s(sim.case.freq_hz),
+    )
+    res = sim.run_commanded(
+        events,
+        t_end,
+        st.StorageFleet(devices, gate),
+        schedule,
+        h=h,
+        separation_limit=separation_limit,
+        stop_at_separation=stop_at_separation,
+    )
     return ClosedLoopRun(res, ctrl.diagnostics())
 
 
@@ -322,6 +394,7 @@ def false_actions(run: ClosedLoopRun, deadband_hz: float = 0.1) -> int:
 
 
 # -- CCT with the estimator in the loop ---------------------------------------------------
+
 
 @dataclass(frozen=True)
 class LoopRunner:
@@ -345,9 +418,15 @@ class LoopRunner:
 
     def run(self, events, t_end, h=None, separation_limit=np.pi, stop_at_separation=True):
         """The closed-loop SimulationResult (run_closed_loop's arguments)."""
-        return run_closed_loop(self.sim, events, t_end, self.loop, h=h,
-                               separation_limit=separation_limit,
-                               stop_at_separation=stop_at_separation).result
+        return run_closed_loop(
+            self.sim,
+            events,
+            t_end,
+            self.loop,
+            h=h,
+            separation_limit=separation_limit,
+            stop_at_separation=stop_at_separation,
+        ).result
 
 
 #: Clearing-time resolution of the CCT searches with the estimator in the loop (s): 1/4
@@ -385,22 +464,29 @@ def cct_job(inputs: dict) -> dict:
     searched from scratch.
     """
     from stabctl.dynamics.options import ModelOptions
-    from stabctl.stability.cct import (LineFault, SearchOptions, cached_simulator,
-                                       critical_clearing_time)
+    from stabctl.stability.cct import (
+        LineFault,
+        SearchOptions,
+        cached_simulator,
+        critical_clearing_time,
+    )
 
-    pmu = PMUSettings(rate=inputs.get("rate", 60.0), latency_s=inputs.get("latency", 0.05),
-                      window_cycles=inputs.get("window_cycles", PMUSettings.window_cycles))
+    pmu = PMUSettings(
+        rate=inputs.get("rate", 60.0),
+        latency_s=inputs.get("latency", 0.05),
+        window_cycles=inputs.get("window_cycles", PMUSettings.window_cycles),
+    )
     loop = LoopOptions(inputs["esd_pct"], inputs["estimator"], pmu, inputs["seed"])
     runner = LoopRunner(cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs)), loop)
-    fault = LineFault(int(inputs["bus"]), int(inputs["far_bus"]),
-                      float(inputs.get("t_fault", 1.0)))
-    r = critical_clearing_time(runner, fault, SearchOptions(tol=inputs.get("tol", CCT_TOL_S),
-                                                            error_check=False))
+    fault = LineFault(int(inputs["bus"]), int(inputs["far_bus"]), float(inputs.get("t_fault", 1.0)))
+    r = critical_clearing_time(
+        runner, fault, SearchOptions(tol=inputs.get("tol", CCT_TOL_S), error_check=False)
+    )
     return {"cct_s": r.cct_s, "cct_cycles": r.cct_cycles, "n_simulations": r.n_simulations}
 
 
 @dataclass(frozen=True)
-class SeedRule:
+class SeedRule:  # fields of a dataclass: numpydoc ignore=PR02
     """How many PMU noise seeds a row (rating, estimator) of `cct_study` gets: batches of
     `batch` seeds until the confidence interval of the row's mean CCT is within
     +-half_width_cycles, at most max_runs seeds.
@@ -436,8 +522,9 @@ class SeedRule:
 
     def __post_init__(self):
         if self.batch < 1 or self.max_runs < self.batch:
-            raise InputError(f"need 1 <= batch <= max_runs seeds, got {self.batch}, "
-                             f"{self.max_runs}")
+            raise InputError(
+                f"need 1 <= batch <= max_runs seeds, got {self.batch}, {self.max_runs}"
+            )
         if not 0.0 < self.confidence < 1.0:
             raise InputError(f"confidence must be in (0, 1), got {self.confidence}")
 
@@ -455,9 +542,19 @@ class SeedRule:
         return float(max(spread, (1.0 - (1.0 - self.confidence) ** (1.0 / n)) * tol_cycles))
 
 
-def cct_study(case: str, fault, ratings, runs, out, *, estimators=ESTIMATORS,
-              seed: int = 0, pmu: PMUSettings = PMUSettings(), model=None,
-              runner=None) -> dict:
+def cct_study(
+    case: str,
+    fault,
+    ratings,
+    runs,
+    out,
+    *,
+    estimators=ESTIMATORS,
+    seed: int = 0,
+    pmu: PMUSettings = PMUSettings(),
+    model=None,
+    runner=None,
+) -> dict:
     """CCTs per rating and estimator over noise seeds, each by the cold bisection of
     `cct_job`, in parallel with `stabctl.parallel.run_sweep` (records appended to `out`,
     finished jobs reused).
@@ -511,23 +608,41 @@ def cct_study(case: str, fault, ratings, runs, out, *, estimators=ESTIMATORS,
     model = ModelOptions() if model is None else model
     runner = RunnerOptions() if runner is None else runner
     if replace(pmu, rate=60.0, latency_s=0.05, window_cycles=2.0) != PMUSettings():
-        raise InputError("the estimator CCT sweep records the PMU rate, latency and window "
-                         "only; keep the other PMU settings at their defaults")
+        raise InputError(
+            "the estimator CCT sweep records the PMU rate, latency and window "
+            "only; keep the other PMU settings at their defaults"
+        )
     rule = runs if isinstance(runs, SeedRule) else None
     if rule is None and runs < 1:
         raise InputError(f"need at least one run, got {runs}")
     tol_cycles = CCT_TOL_S * load_case(case).freq_hz
     rate, latency, bus, far_bus = pmu.rate, pmu.latency_s, fault.bus, fault.far_bus
-    window = ({} if pmu.window_cycles == PMUSettings.window_cycles
-              else {"window_cycles": float(pmu.window_cycles)})
+    window = (
+        {}
+        if pmu.window_cycles == PMUSettings.window_cycles
+        else {"window_cycles": float(pmu.window_cycles)}
+    )
     tail = model.key_suffix() + "".join(f"/w{w:g}c" for w in window.values())
     at = {} if fault.t_fault == 1.0 else {"t_fault": fault.t_fault}
 
     def job(p: float, e: str, s: int) -> Job:
-        return Job(f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s/seed{s}{tail}",
-                   cct_job, dict(case=case, bus=bus, far_bus=far_bus, esd_pct=p, estimator=e,
-                                 seed=s, rate=rate, latency=latency, **model.to_inputs(),
-                                 **window, **at))
+        return Job(
+            f"{case}/{bus}-{far_bus}/{p:g}%/{e}/{rate:g}fps/{latency:g}s/seed{s}{tail}",
+            cct_job,
+            dict(
+                case=case,
+                bus=bus,
+                far_bus=far_bus,
+                esd_pct=p,
+                estimator=e,
+                seed=s,
+                rate=rate,
+                latency=latency,
+                **model.to_inputs(),
+                **window,
+                **at,
+            ),
+        )
 
     compile_here(case, model)
     first = runs if rule is None else rule.batch
@@ -536,29 +651,62 @@ def cct_study(case: str, fault, ratings, runs, out, *, estimators=ESTIMATORS,
     with pooled(n_workers) if n_workers > 1 else nullcontext() as pool:  # one for all rounds
         while True:
             jobs = {pe: [job(*pe, s) for s in range(seed, seed + n)] for pe, n in count.items()}
-            rep = run_sweep([j for row in jobs.values() for j in row], out,
-                            workers=runner.workers, progress=runner.progress, pool=pool)
-            values = {pe: [rep.records[j.key]["result"]["cct_cycles"]
-                           if rep.records[j.key]["status"] == "ok" else np.nan for j in row]
-                      for pe, row in jobs.items()}
-            more = {} if rule is None else {
-                pe: min(n + rule.batch, rule.max_runs) for pe, n in count.items()
-                if pe[1] != "ideal" and n < rule.max_runs
-                and rule.half_width(values[pe], tol_cycles) > rule.half_width_cycles}
+            rep = run_sweep(
+                [j for row in jobs.values() for j in row],
+                out,
+                workers=runner.workers,
+                progress=runner.progress,
+                pool=pool,
+            )
+            values = {
+                pe: [
+                    rep.records[j.key]["result"]["cct_cycles"]
+                    if rep.records[j.key]["status"] == "ok"
+                    else np.nan
+                    for j in row
+                ]
+                for pe, row in jobs.items()
+            }
+            more = (
+                {}
+                if rule is None
+                else {
+                    pe: min(n + rule.batch, rule.max_runs)
+                    for pe, n in count.items()
+                    if pe[1] != "ideal"
+                    and n < rule.max_runs
+                    and rule.half_width(values[pe], tol_cycles) > rule.half_width_cycles
+                }
+            )
             if not more:
                 break
             count.update(more)
-    return {p: {e: {**_spread(values[p, e]),
-                    "half_width": None if rule is None or e == "ideal"
-                    else rule.half_width(values[p, e], tol_cycles)}
-                for e in estimators} for p in ratings}
+    return {
+        p: {
+            e: {
+                **_spread(values[p, e]),
+                "half_width": None
+                if rule is None or e == "ideal"
+                else rule.half_width(values[p, e], tol_cycles),
+            }
+            for e in estimators
+        }
+        for p in ratings
+    }
 
 
 def _spread(values) -> dict:
     """Mean, standard deviation, range of finite values (failed runs: NaN, counted)."""
     v = np.asarray(values, float)
     ok = v[np.isfinite(v)]
-    stats = (float(ok.mean()), float(ok.std()), float(ok.min()), float(ok.max())) if ok.size \
+    stats = (
+        (float(ok.mean()), float(ok.std()), float(ok.min()), float(ok.max()))
+        if ok.size
         else (None,) * 4
-    return {**dict(zip(("mean", "std", "min", "max"), stats)), "runs": int(v.size),
-            "failed": int(v.size - ok.size), "values": [float(x) for x in v]}
+    )
+    return {
+        **dict(zip(("mean", "std", "min", "max"), stats)),
+        "runs": int(v.size),
+        "failed": int(v.size - ok.size),
+        "values": [float(x) for x in v],
+    }

@@ -72,43 +72,66 @@ def nis_bounds(dof: int, coverage: float = 0.95) -> tuple[float, float]:
 
 
 # -- packed parameters for the compiled kernels ----------------------------------------------
-NG = 3      # states of a PST tg turbine-governor (`Governors`): the width of its blocks
+NG = 3  # states of a PST tg turbine-governor (`Governors`): the width of its blocks
 
 #: The row of one machine in the packed parameters: (name, width, value from the
 #: `MachineModels` m, shape (n,) or (n, width)) per block of columns, in order.
 _MACHINE_ROW = (
-    ("H", 1, lambda m: m.H), ("D", 1, lambda m: m.D), ("POT", 1, lambda m: m.pot),
-    ("RA", 1, lambda m: m.ra), ("ZRE", 1, lambda m: m.z_emf.real),
-    ("ZIM", 1, lambda m: m.z_emf.imag), ("PERSPEED", 1, lambda m: m.per_speed),
-    ("QC1", 1, lambda m: m.qaxis.c[:, 0]), ("QC2", 1, lambda m: m.qaxis.c[:, 1]),
-    ("QSIGN", 1, lambda m: m.qaxis.sign), ("QSPEED", 1, lambda m: m.qaxis.speed),
-    ("KIND", 1, lambda m: m.qaxis.kind), ("XL", 1, lambda m: m.qaxis.xl),
-    ("XQ", 1, lambda m: m.qaxis.xq), ("XQP", 1, lambda m: m.qaxis.xqp),
-    ("XDP", 1, lambda m: m.qaxis.xdp), ("GACT", 1, lambda m: m.governor.active),
-    ("WF", 1, lambda m: m.governor.wf), ("INVR", 1, lambda m: m.governor.invR),
+    ("H", 1, lambda m: m.H),
+    ("D", 1, lambda m: m.D),
+    ("POT", 1, lambda m: m.pot),
+    ("RA", 1, lambda m: m.ra),
+    ("ZRE", 1, lambda m: m.z_emf.real),
+    ("ZIM", 1, lambda m: m.z_emf.imag),
+    ("PERSPEED", 1, lambda m: m.per_speed),
+    ("QC1", 1, lambda m: m.qaxis.c[:, 0]),
+    ("QC2", 1, lambda m: m.qaxis.c[:, 1]),
+    ("QSIGN", 1, lambda m: m.qaxis.sign),
+    ("QSPEED", 1, lambda m: m.qaxis.speed),
+    ("KIND", 1, lambda m: m.qaxis.kind),
+    ("XL", 1, lambda m: m.qaxis.xl),
+    ("XQ", 1, lambda m: m.qaxis.xq),
+    ("XQP", 1, lambda m: m.qaxis.xqp),
+    ("XDP", 1, lambda m: m.qaxis.xdp),
+    ("GACT", 1, lambda m: m.governor.active),
+    ("WF", 1, lambda m: m.governor.wf),
+    ("INVR", 1, lambda m: m.governor.invR),
     ("TMAX", 1, lambda m: m.governor.Tmax),
-    ("GC", NG, lambda m: m.governor.c),           # P_m = c.g
-    ("GU", NG, lambda m: m.governor.g_unit),      # g in equilibrium at P_m = 1
+    ("GC", NG, lambda m: m.governor.c),  # P_m = c.g
+    ("GU", NG, lambda m: m.governor.g_unit),  # g in equilibrium at P_m = 1
 )
 #: First column of each block of `_MACHINE_ROW` (``pr[C.POT]``, ``pr[C.GC:C.GC + NG]``);
 #: module-global, so a compile-time constant to numba (as `stabctl.models._declared.layout`).
 C = namedtuple("MachineColumns", [name for name, _, _ in _MACHINE_ROW])(
-    *(sum(width for _, width, _ in _MACHINE_ROW[:j]) for j in range(len(_MACHINE_ROW))))
+    *(sum(width for _, width, _ in _MACHINE_ROW[:j]) for j in range(len(_MACHINE_ROW)))
+)
 
 #: The tuning vector: (name, attribute of the `SwingTuning` or one of the values
 #: `_tuning_vector` computes) per entry, ``tv[T.F0]``.
-_TUNING = (("ANGLE", "angle_model_rad"), ("ACCEL", "accel_psd"), ("PMWALK", "pm_walk"),
-           ("PM0", "pm0_sd"), ("FLUX0", "flux0_sd"), ("JUMP", "jump_pu"),
-           ("SIG2", "sigma_phasor2"), ("SIGF", "sigma_freq"), ("F0", "f0"))
+_TUNING = (
+    ("ANGLE", "angle_model_rad"),
+    ("ACCEL", "accel_psd"),
+    ("PMWALK", "pm_walk"),
+    ("PM0", "pm0_sd"),
+    ("FLUX0", "flux0_sd"),
+    ("JUMP", "jump_pu"),
+    ("SIG2", "sigma_phasor2"),
+    ("SIGF", "sigma_freq"),
+    ("F0", "f0"),
+)
 T = layout("SwingTuningColumns", _TUNING)
 
 #: Held values per machine, ``hold[k, H.PAG]``: (name, meaning) per column.
-H = layout("HeldColumns", (
-    ("PAG", "P_ag at the previous frame, measured or held (pu machine base)"),
-    ("PAGVAR", "its variance"),
-    ("DPAG", "its last measured change between frames"),
-    ("IQVAR", "the variance of I_q"),
-    ("PM0", "P_m at the start")))
+H = layout(
+    "HeldColumns",
+    (
+        ("PAG", "P_ag at the previous frame, measured or held (pu machine base)"),
+        ("PAGVAR", "its variance"),
+        ("DPAG", "its last measured change between frames"),
+        ("IQVAR", "the variance of I_q"),
+        ("PM0", "P_m at the start"),
+    ),
+)
 
 
 class Held(NamedTuple):
@@ -148,7 +171,7 @@ def _packed(m: MachineModels) -> np.ndarray:
     machine: (n, number of columns), columns named by `C`."""
     P = np.zeros((m.n, sum(width for _, width, _ in _MACHINE_ROW)))
     for (_, width, value), start in zip(_MACHINE_ROW, C):
-        P[:, start:start + width] = np.reshape(value(m), (m.n, width))
+        P[:, start : start + width] = np.reshape(value(m), (m.n, width))
     return P
 
 
@@ -156,9 +179,10 @@ def _tuning_vector(tun: SwingTuning, s: PMUSettings, f0: float) -> np.ndarray:
     """Tuning and PMU noise of the swing filter's compiled kernels, (len(T),), entries
     named by `T`: `_TUNING`'s attributes of `tun`, the PMU phasor noise variance
     sigma_phasor^2, the frequency noise sigma_freq (Hz) and f0 (Hz)."""
-    values = {"sigma_phasor2": s.sigma_phasor ** 2, "sigma_freq": s.sigma_freq, "f0": f0}
-    return np.array([values[attr] if attr in values else getattr(tun, attr)
-                     for _, attr in _TUNING], float)
+    values = {"sigma_phasor2": s.sigma_phasor**2, "sigma_freq": s.sigma_freq, "f0": f0}
+    return np.array(
+        [values[attr] if attr in values else getattr(tun, attr) for _, attr in _TUNING], float
+    )
 
 
 # -- swing filter equations, one machine (shared by the compiled and the filterpy paths) ---
@@ -182,9 +206,14 @@ def swing_measure(v, i, pr, sig2):
     S = v * np.conj(i)
     ia2 = (abs(i) * pot) ** 2
     emag = abs(e)
-    return (math.atan2(e.imag, e.real), emag, pot * S.real + pr[C.RA] * ia2,
-            2 * sig2 * (pot * abs(S)) ** 2, sig2 * ia2,
-            sig2 * (abs(v) ** 2 + abs(zi) ** 2) / emag ** 2)
+    return (
+        math.atan2(e.imag, e.real),
+        emag,
+        pot * S.real + pr[C.RA] * ia2,
+        2 * sig2 * (pot * abs(S)) ** 2,
+        sig2 * ia2,
+        sig2 * (abs(v) ** 2 + abs(zi) ** 2) / emag**2,
+    )
 
 
 @kernel
@@ -220,10 +249,15 @@ def swing_begin(k, frame, pag, pag_var, iq_var, r, pr, tv, held):
     (`swing_start`); its `Held` values (in place) with P_m = P_ag and the governor in
     equilibrium."""
     hold, cur_hold, g = held
-    hold[k, H.PAG], hold[k, H.PAGVAR], hold[k, H.DPAG], hold[k, H.IQVAR], hold[k, H.PM0] = \
-        pag, pag_var, 0.0, iq_var, pag
+    hold[k, H.PAG], hold[k, H.PAGVAR], hold[k, H.DPAG], hold[k, H.IQVAR], hold[k, H.PM0] = (
+        pag,
+        pag_var,
+        0.0,
+        iq_var,
+        pag,
+    )
     cur_hold[k] = frame.i[k]
-    assign(g[k], pr[C.GU:C.GU + NG] * pag)
+    assign(g[k], pr[C.GU : C.GU + NG] * pag)
     return swing_start(frame.v[k], frame.i[k], frame.freq[k], r, pr, tv)
 
 
@@ -242,10 +276,10 @@ def swing_inputs(k, frame, pag, pag_var, iq_var, held, w, pr, disc, tv):
     pm0 = hold[k, H.PM0]
     pm_before, pm_after = pm0, pm0
     if pr[C.GACT] > 0:
-        pm_before = _dot(g[k], pr[C.GC:C.GC + NG])
+        pm_before = _dot(g[k], pr[C.GC : C.GC + NG])
         u = pm0 - (pr[C.WF] - 1.0) * pr[C.INVR] + (pr[C.WF] - 1.0 - w) * pr[C.INVR]
         assign(g[k], _mv(disc.Adg[k], g[k]) + disc.bdg[k] * min(max(u, 0.0), pr[C.TMAX]))
-        pm_after = _dot(g[k], pr[C.GC:C.GC + NG])
+        pm_after = _dot(g[k], pr[C.GC : C.GC + NG])
     p0, v0, cur0, iq0 = hold[k, H.PAG], hold[k, H.PAGVAR], cur_hold[k], hold[k, H.IQVAR]
     if frame.valid[k]:
         dp = pag - p0
@@ -255,8 +289,14 @@ def swing_inputs(k, frame, pag, pag_var, iq_var, held, w, pr, disc, tv):
         pag, pag_var = p0, v0 + hold[k, H.DPAG] ** 2
         var = 0.25 * (v0 + pag_var)
     hold[k, H.PAG], hold[k, H.PAGVAR] = pag, pag_var
-    return (0.5 * (pm_before + pm_after), 0.5 * (p0 + pag), var, cur0, cur_hold[k],
-            0.5 * (iq0 + hold[k, H.IQVAR]))
+    return (
+        0.5 * (pm_before + pm_after),
+        0.5 * (p0 + pag),
+        var,
+        cur0,
+        cur_hold[k],
+        0.5 * (iq0 + hold[k, H.IQVAR]),
+    )
 
 
 @kernel
@@ -285,7 +325,7 @@ def swing_transition(x, pm, pag, cur0, cur1, dt, pr, Adq, bdq, f0):
     F[1, 1] = 1 + dt * da_dw
     F[1, 2] = dt * c
     assign(F[3:, 3:], Adq)
-    for j in range(3):                       # I_q(delta') depends on (delta, w, dPm)
+    for j in range(3):  # I_q(delta') depends on (delta, w, dPm)
         dIq = 0.5 * r1.imag * F[0, j] + (0.5 * r0.imag if j == 0 else 0.0)
         F[3, j], F[4, j] = bdq[0] * dIq, bdq[1] * dIq
     g = np.zeros(5)
@@ -306,7 +346,7 @@ def swing_Q(g, pag_var, iq_var, bdq, dt, tv):
         for b in range(2):
             Q[3 + a, 3 + b] += bdq[a] * bdq[b] * iq_var
     q = tv[T.ACCEL]
-    Q[0, 0] += q * wb * wb * dt ** 3 / 3
+    Q[0, 0] += q * wb * wb * dt**3 / 3
     Q[0, 1] += q * wb * dt * dt / 2
     Q[1, 0] += q * wb * dt * dt / 2
     Q[1, 1] += q * dt
@@ -364,8 +404,12 @@ def _inv2(S):
     """Inverse of a 2 x 2 matrix."""
     det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
     out = np.empty((2, 2))
-    out[0, 0], out[0, 1], out[1, 0], out[1, 1] = S[1, 1] / det, -S[0, 1] / det, \
-        -S[1, 0] / det, S[0, 0] / det
+    out[0, 0], out[0, 1], out[1, 0], out[1, 1] = (
+        S[1, 1] / det,
+        -S[0, 1] / det,
+        -S[1, 0] / det,
+        S[0, 0] / det,
+    )
     return out
 
 
@@ -431,21 +475,23 @@ def _swing_batch(x, P, nis, ready, held, frame, dt, par, disc, tv):
             continue
         theta = emag = pag = pag_var = iq_var = r = np.nan
         if valid:
-            theta, emag, pag, pag_var, iq_var, r = swing_measure(frame.v[k], frame.i[k], pr,
-                                                                 tv[T.SIG2])
+            theta, emag, pag, pag_var, iq_var, r = swing_measure(
+                frame.v[k], frame.i[k], pr, tv[T.SIG2]
+            )
         if not ready[k]:
             _store(x, P, k, *swing_begin(k, frame, pag, pag_var, iq_var, r, pr, tv, held))
             ready[k] = True
             continue
-        pm, pbar, pvar, c0, c1, iqv = swing_inputs(k, frame, pag, pag_var, iq_var, held,
-                                                   x[k, 1], pr, disc, tv)
-        xn, F, gs = swing_transition(x[k], pm, pbar, c0, c1, dt, pr, disc.Adq[k],
-                                     disc.bdq[k], tv[T.F0])
+        pm, pbar, pvar, c0, c1, iqv = swing_inputs(
+            k, frame, pag, pag_var, iq_var, held, x[k, 1], pr, disc, tv
+        )
+        xn, F, gs = swing_transition(
+            x[k], pm, pbar, c0, c1, dt, pr, disc.Adq[k], disc.bdq[k], tv[T.F0]
+        )
         Pp = _sandwich(F, P[k]) + swing_Q(gs, pvar, iqv, disc.bdq[k], dt, tv)
         if valid:
             h, Hj = swing_h(xn, emag, pr)
-            xu, Pu, nis[k] = _scalar_update(xn, Pp, wrap_angle(theta - h), Hj,
-                                            r + tv[T.ANGLE] ** 2)
+            xu, Pu, nis[k] = _scalar_update(xn, Pp, wrap_angle(theta - h), Hj, r + tv[T.ANGLE] ** 2)
             _store(x, P, k, xu, Pu)
         else:
             _store(x, P, k, xn, Pp)
@@ -457,7 +503,7 @@ def _freq_batch(x, P, nis, ready, z, valid, dt, q, R):
     [f - f0, ROCOF], R (2, 2)."""
     F, Q = np.zeros((2, 2)), np.empty((2, 2))
     F[0, 0], F[0, 1], F[1, 1] = 1.0, dt, 1.0
-    Q[0, 0], Q[0, 1], Q[1, 0], Q[1, 1] = q * dt ** 3 / 3, q * dt ** 2 / 2, q * dt ** 2 / 2, q * dt
+    Q[0, 0], Q[0, 1], Q[1, 0], Q[1, 1] = q * dt**3 / 3, q * dt**2 / 2, q * dt**2 / 2, q * dt
     for k in range(x.shape[0]):
         nis[k] = np.nan
         if not ready[k]:
@@ -502,8 +548,10 @@ class _MachineFilters:
         previous one.
         """
         if self.t is not None and not frame.t > self.t:
-            raise InputError(f"frame at t = {frame.t} s is not after the previous one "
-                             f"({self.t} s): frames must come in time-stamp order")
+            raise InputError(
+                f"frame at t = {frame.t} s is not after the previous one "
+                f"({self.t} s): frames must come in time-stamp order"
+            )
         self._advance(frame, 0.0 if self.t is None else frame.t - self.t)
         self.t = frame.t
         return self._output()
@@ -514,7 +562,7 @@ class _MachineFilters:
         acts, latency included): the last rate of change of speed held."""
         speed, var = self._output()
         rate, rate_var, cov = self._rate()
-        return speed + horizon * rate, var + 2 * horizon * cov + horizon ** 2 * rate_var
+        return speed + horizon * rate, var + 2 * horizon * cov + horizon**2 * rate_var
 
 
 class FrequencyKF(_MachineFilters):
@@ -527,11 +575,16 @@ class FrequencyKF(_MachineFilters):
     name = "kf"
     dof = 2
 
-    def __init__(self, pmu, settings: PMUSettings, tuning: FrequencyTuning = FrequencyTuning(),
-                 f0: float = 60.0):
+    def __init__(
+        self,
+        pmu,
+        settings: PMUSettings,
+        tuning: FrequencyTuning = FrequencyTuning(),
+        f0: float = 60.0,
+    ):
         self.pmu, self.tun, self.f0 = np.asarray(pmu), tuning, f0
         super().__init__(self.pmu.size, 2)
-        self.R = np.diag([settings.sigma_freq ** 2, settings.sigma_rocof ** 2])
+        self.R = np.diag([settings.sigma_freq**2, settings.sigma_rocof**2])
 
     def _measure(self, frame: Frame):
         """z (n, 2) = [f - f0 (Hz), ROCOF (Hz/s)] and the valid mask (n,)."""
@@ -540,11 +593,10 @@ class FrequencyKF(_MachineFilters):
 
     def _advance(self, frame, dt):
         z, ok = self._measure(frame)
-        _freq_batch(self.x, self.P, self.nis, self.ready, z, ok, dt, self.tun.rocof_walk,
-                    self.R)
+        _freq_batch(self.x, self.P, self.nis, self.ready, z, ok, dt, self.tun.rocof_walk, self.R)
 
     def _output(self):
-        return 1.0 + self.x[:, 0] / self.f0, self.P[:, 0, 0] / self.f0 ** 2
+        return 1.0 + self.x[:, 0] / self.f0, self.P[:, 0, 0] / self.f0**2
 
     def forecast(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
         """The filtered frequency as the speed `horizon` s ahead, held, not extrapolated
@@ -553,7 +605,7 @@ class FrequencyKF(_MachineFilters):
         latency fed the steps back into the commands (docs/estimation.md 2.1).  Variance:
         the filter's plus horizon^2 times that of the ROCOF (the unextrapolated change)."""
         speed, var = self._output()
-        return speed, var + horizon ** 2 * self.P[:, 1, 1] / self.f0 ** 2
+        return speed, var + horizon**2 * self.P[:, 1, 1] / self.f0**2
 
 
 class SwingEKF(_MachineFilters):
@@ -564,27 +616,42 @@ class SwingEKF(_MachineFilters):
 
     name = "ekf"
 
-    def __init__(self, models: MachineModels, settings: PMUSettings,
-                 tuning: SwingTuning = SwingTuning()):
+    def __init__(
+        self, models: MachineModels, settings: PMUSettings, tuning: SwingTuning = SwingTuning()
+    ):
         self.m = models
         super().__init__(models.n, 5)
         self.par, self.tv = _packed(models), _tuning_vector(tuning, settings, models.f0)
-        self.held = Held(np.full((models.n, len(H)), np.nan), np.full(models.n, np.nan + 0j),
-                         np.zeros((models.n, NG)))
+        self.held = Held(
+            np.full((models.n, len(H)), np.nan),
+            np.full(models.n, np.nan + 0j),
+            np.zeros((models.n, NG)),
+        )
 
     def _frame(self, frame: Frame) -> MachineFrame:
         """This filter's machines' voltage, current, frequency and valid mask."""
         p = self.m.pmu
         v, i, f = frame.v[p], frame.i[p], frame.freq[p]
-        return MachineFrame(v, i, f,
-                            frame.valid[p] & np.isfinite(v) & np.isfinite(i) & np.isfinite(f))
+        return MachineFrame(
+            v, i, f, frame.valid[p] & np.isfinite(v) & np.isfinite(i) & np.isfinite(f)
+        )
 
     def _discrete(self, dt) -> Discrete:
         return Discrete(*self.m.qaxis.sys.discrete(dt), *self.m.governor.sys.discrete(dt))
 
     def _advance(self, frame, dt):
-        _swing_batch(self.x, self.P, self.nis, self.ready, self.held, self._frame(frame), dt,
-                     self.par, self._discrete(dt), self.tv)
+        _swing_batch(
+            self.x,
+            self.P,
+            self.nis,
+            self.ready,
+            self.held,
+            self._frame(frame),
+            dt,
+            self.par,
+            self._discrete(dt),
+            self.tv,
+        )
 
     def _output(self):
         return 1.0 + self.x[:, 1], self.P[:, 1, 1]
@@ -598,7 +665,7 @@ class SwingEKF(_MachineFilters):
         pm = np.where(gov.active, gov.output(self.held.g), hold[:, H.PM0])
         c = 1.0 / (2 * m.H * np.where(m.per_speed, 1.0 + w, 1.0))
         acc = c * (pm + self.x[:, 2] - hold[:, H.PAG]) - m.D * w / (2 * m.H)
-        return acc, c ** 2 * (self.P[:, 2, 2] + hold[:, H.PAGVAR]), c * self.P[:, 1, 2]
+        return acc, c**2 * (self.P[:, 2, 2] + hold[:, H.PAGVAR]), c * self.P[:, 1, 2]
 
 
 def compile_filters(models: MachineModels) -> None:
@@ -615,10 +682,14 @@ def compile_filters(models: MachineModels) -> None:
         As `machine_models` gives them.
     """
     n_pmu = int(models.pmu.max()) + 1
-    lost = Frame(0.0, np.zeros(n_pmu, bool), np.full(n_pmu, np.nan + 0j),
-                 np.full(n_pmu, np.nan + 0j), np.full(n_pmu, np.nan), np.full(n_pmu, np.nan))
+    lost = Frame(
+        0.0,
+        np.zeros(n_pmu, bool),
+        np.full(n_pmu, np.nan + 0j),
+        np.full(n_pmu, np.nan + 0j),
+        np.full(n_pmu, np.nan),
+        np.full(n_pmu, np.nan),
+    )
     settings = PMUSettings()
     for f in (FrequencyKF(models.pmu, settings, f0=models.f0), SwingEKF(models, settings)):
         f.step(lost)
-
-

@@ -90,13 +90,15 @@ class Governors:
     active: np.ndarray
 
     @classmethod
-    def from_case(cls, case: Case) -> "Governors":
+    def from_case(cls, case: Case) -> Governors:
         """The case's tg_con governors (none: every machine inactive); raises CaseError
         for a governor other than PST tg (type 1), which this linear model does not hold."""
         other = np.nonzero(case.governors.type != 1)[0]
         if other.size:
-            raise CaseError(f"tg_con row {other[0] + 1}: the estimator's governor model is PST "
-                            f"tg (type 1) only, got type {int(case.governors.type[other[0]])}")
+            raise CaseError(
+                f"tg_con row {other[0] + 1}: the estimator's governor model is PST "
+                f"tg (type 1) only, got type {int(case.governors.type[other[0]])}"
+            )
         n = len(case.machines)
         A, b, c, gu = np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
         wf, invR, Tmax, active = np.ones(n), np.zeros(n), np.full(n, np.inf), np.zeros(n, bool)
@@ -104,8 +106,11 @@ class Governors:
         for r in range(len(g)):
             k = case.machine_index(g.machine[r])
             Ts, Tc, T3, T4, T5 = g.Ts[r], g.Tc[r], g.T3[r], g.T4[r], g.T5[r]
-            A[k] = [[-1 / Ts, 0, 0], [(1 - T3 / Tc) / Tc, -1 / Tc, 0],
-                    [(1 - T4 / T5) * T3 / Tc / T5, (1 - T4 / T5) / T5, -1 / T5]]
+            A[k] = [
+                [-1 / Ts, 0, 0],
+                [(1 - T3 / Tc) / Tc, -1 / Tc, 0],
+                [(1 - T4 / T5) * T3 / Tc / T5, (1 - T4 / T5) / T5, -1 / T5],
+            ]
             b[k, 0] = 1 / Ts
             c[k] = [T4 / T5 * T3 / Tc, T4 / T5, 1.0]
             gu[k] = [1.0, 1 - T3 / Tc, 1 - T4 / T5]
@@ -137,7 +142,7 @@ class QAxis:
     xdp: np.ndarray
 
     @classmethod
-    def from_case(cls, case: Case) -> "QAxis":
+    def from_case(cls, case: Case) -> QAxis:
         """From the case's machine data with PST's substitutions (`machine_params`)."""
         mp = machine_params(case)
         n, sub, tra = mp.n, mp.kind == SUB, mp.kind == TRA
@@ -146,15 +151,29 @@ class QAxis:
             p14, p15 = np.nan_to_num(mp.p14), np.nan_to_num(mp.p15)
         A, b, c = np.zeros((n, 2, 2)), np.zeros((n, 2)), np.zeros((n, 2))
         Tq, Tqq = mp.Tqop, mp.Tqopp
-        A[sub] = np.stack([np.stack([-(1 + p12 * p11) / Tq, p12 * p11 / Tq], -1),
-                           np.stack([1 / Tqq, -1 / Tqq], -1)], 1)[sub]
+        A[sub] = np.stack(
+            [
+                np.stack([-(1 + p12 * p11) / Tq, p12 * p11 / Tq], -1),
+                np.stack([1 / Tqq, -1 / Tqq], -1),
+            ],
+            1,
+        )[sub]
         b[sub] = np.stack([(p12 * p11 * p13 - p12) / Tq, -p13 / Tqq], -1)[sub]
         c[sub] = np.stack([p14, p15], -1)[sub]
         A[tra, 0, 0] = -1 / Tq[tra]
         b[tra, 0] = ((mp.xq - mp.xqp) / Tq)[tra]
         c[tra, 0] = 1.0
-        return cls(LinearSystems(A, b), c, np.where(tra, -1.0, 1.0), mp.speed_effects, mp.kind,
-                   mp.xl, mp.xq, mp.xqp, mp.xdp)
+        return cls(
+            LinearSystems(A, b),
+            c,
+            np.where(tra, -1.0, 1.0),
+            mp.speed_effects,
+            mp.kind,
+            mp.xl,
+            mp.xq,
+            mp.xqp,
+            mp.xdp,
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -198,14 +217,23 @@ def machine_models(case: Case, pmus) -> MachineModels:
     if missing:
         raise InputError(f"no PMU measures the current of machine(s) {missing}")
     idx = np.array([which[int(n)] for n in case.machines.number])
-    z = mp.z_internal.copy()              # the simulator's internal impedance, system base
+    z = mp.z_internal.copy()  # the simulator's internal impedance, system base
     for k, j in enumerate(idx):
         z[k] += _series_impedance(case, int(case.machines.bus[k]), pmus[j].bus)
     return MachineModels(
-        numbers=case.machines.number.astype(int), pmu=idx, H=mp.H.copy(), D=mp.D0.copy(),
-        pot=mp.mac_pot, ra=mp.ra_network, z_emf=z,
-        per_speed=mp.speed_effects, inertia=mp.H * case.machines.mva, f0=case.freq_hz,
-        governor=Governors.from_case(case), qaxis=QAxis.from_case(case))
+        numbers=case.machines.number.astype(int),
+        pmu=idx,
+        H=mp.H.copy(),
+        D=mp.D0.copy(),
+        pot=mp.mac_pot,
+        ra=mp.ra_network,
+        z_emf=z,
+        per_speed=mp.speed_effects,
+        inertia=mp.H * case.machines.mva,
+        f0=case.freq_hz,
+        governor=Governors.from_case(case),
+        qaxis=QAxis.from_case(case),
+    )
 
 
 def _series_impedance(case: Case, term: int, bus: int) -> complex:
@@ -214,8 +242,9 @@ def _series_impedance(case: Case, term: int, bus: int) -> complex:
     if term == bus:
         return 0j
     br = case.branches
-    sel = ((br.from_bus == term) & (br.to_bus == bus)) | \
-        ((br.from_bus == bus) & (br.to_bus == term))
+    sel = ((br.from_bus == term) & (br.to_bus == bus)) | (
+        (br.from_bus == bus) & (br.to_bus == term)
+    )
     return complex(1.0 / np.sum(1.0 / (br.r[sel] + 1j * br.x[sel])))
 
 
@@ -225,11 +254,12 @@ def coi_speed(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray):
     machine estimates taken as independent (one filter per machine, independent PMU
     noise).  speed, var: (..., n) pu, pu^2, machines on the last axis; returns (...)."""
     w = coi_weights(inertia)
-    return speed @ w, var @ w ** 2
+    return speed @ w, var @ w**2
 
 
-def relative_speeds(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray,
-                    coi: str = "system") -> tuple[np.ndarray, np.ndarray]:
+def relative_speeds(
+    speed: np.ndarray, var: np.ndarray, inertia: np.ndarray, coi: str = "system"
+) -> tuple[np.ndarray, np.ndarray]:
     """omega_i - omega_COI of every machine (pu) and its variance (pu^2), the COI of all
     machines (coi="system") or of the others (coi="rest"), as `stabctl.storage.devices.BangBangCOI`.
     speed, var: (..., n), machines on the last axis.
@@ -244,7 +274,5 @@ def relative_speeds(speed: np.ndarray, var: np.ndarray, inertia: np.ndarray,
         return speed - c[..., None], (1 - 2 * w) * var + cv[..., None]
     if coi == "rest":
         rest = (c[..., None] - w * speed) / (1 - w)
-        return speed - rest, var + (cv[..., None] - w ** 2 * var) / (1 - w) ** 2
+        return speed - rest, var + (cv[..., None] - w**2 * var) / (1 - w) ** 2
     raise InputError(f"coi must be 'system' or 'rest', got {coi!r}")
-
-

@@ -25,21 +25,33 @@ from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
-from stabctl._jit.decorators import kernel, njit
 
+from stabctl._jit.decorators import kernel, njit
 from stabctl.case import Case, beyond
 from stabctl.case.params import EXCITER
 from stabctl.errors import CaseError
 from stabctl.models import machines as mac
 from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
-from stabctl.models.blocks import (GAIN_OVER_T, LBND, clip, lag, leadlag_input_state,
-                                   nonwindup_lag, washout)
+from stabctl.models.blocks import (
+    GAIN_OVER_T,
+    LBND,
+    clip,
+    lag,
+    leadlag_input_state,
+    nonwindup_lag,
+    washout,
+)
 from stabctl.models.saturation import quadratic_fit
 
 SMP, DC1, DC2, ST3, ST1, T2 = 0, 1, 2, 3, 4, 5
-STATE_NAMES = {SMP: ("VTR", "VAs", "Efd"), ST3: ("VTR", "VAs", "VR"),
-               DC1: ("VTR", "VAs", "VR", "Efd", "Rf"), DC2: ("VTR", "VAs", "VR", "Efd", "Rf"),
-               ST1: ("VTR", "VAs", "VR", "Rf"), T2: ("VTR", "VAs", "VR", "Efd", "Rf", "VF")}
+STATE_NAMES = {
+    SMP: ("VTR", "VAs", "Efd"),
+    ST3: ("VTR", "VAs", "VR"),
+    DC1: ("VTR", "VAs", "VR", "Efd", "Rf"),
+    DC2: ("VTR", "VAs", "VR", "Efd", "Rf"),
+    ST1: ("VTR", "VAs", "VR", "Rf"),
+    T2: ("VTR", "VAs", "VR", "Efd", "Rf", "VF"),
+}
 
 #: exc_con fields (stabctl.case.params.EXCITER) the kernels take as the table gives them:
 #: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P))
@@ -48,13 +60,25 @@ TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] if n != "thetaP")
 #: attribute) per column: exc_con columns 1-20 in declared order (the machine's row for
 #: the machine number, K_P exp(j theta_P) as its real and imaginary parts), then the
 #: derived parameters (IEEET2's T_F2 under its own name) and V_ref
-PACKED = (("KIND", "kind"), ("MAC", "mac"),
-          *((n.upper(), n) for n in TABLE_FIELDS[:TABLE_FIELDS.index("KP")]),
-          ("KPR", "KP.real"), ("KPI", "KP.imag"),
-          *((n.upper(), n) for n in TABLE_FIELDS[TABLE_FIELDS.index("KP") + 1:]),
-          ("TCTB", "tc_tb"), ("KE", "KE"), ("TE", "TE"), ("ASAT", "Asat"), ("BSAT", "Bsat"),
-          ("KF", "KF"), ("TF", "TF"), ("TF2", "TF2"), ("VREF", "Vref"),
-          ("SATQ", "sat_quadratic"), ("IFDM", "ifd_machine"))
+PACKED = (
+    ("KIND", "kind"),
+    ("MAC", "mac"),
+    *((n.upper(), n) for n in TABLE_FIELDS[: TABLE_FIELDS.index("KP")]),
+    ("KPR", "KP.real"),
+    ("KPI", "KP.imag"),
+    *((n.upper(), n) for n in TABLE_FIELDS[TABLE_FIELDS.index("KP") + 1 :]),
+    ("TCTB", "tc_tb"),
+    ("KE", "KE"),
+    ("TE", "TE"),
+    ("ASAT", "Asat"),
+    ("BSAT", "Bsat"),
+    ("KF", "KF"),
+    ("TF", "TF"),
+    ("TF2", "TF2"),
+    ("VREF", "Vref"),
+    ("SATQ", "sat_quadratic"),
+    ("IFDM", "ifd_machine"),
+)
 #: the kernels' column of each PACKED name: P[i, E.KA]
 E = layout("ExciterColumns", PACKED)
 DC_KINDS = (DC1, DC2, T2)
@@ -136,7 +160,7 @@ class ExciterParams(Declared):
         act[3] = self.has_Rf
         act[4] = self.is_dc
         act[5] = self.has_VF
-        return act[:self.n_slots()]
+        return act[: self.n_slots()]
 
     @property
     def has_Rf(self):
@@ -145,10 +169,14 @@ class ExciterParams(Declared):
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
-        return (("exc_con T_R", self.TR, self.has_TR), ("exc_con T_A", self.TA, self.has_TA),
-                ("exc_con T_B", self.TB, self.has_TB), ("exc_con T_E", self.TE, self.is_dc),
-                ("exc_con T_F", self.TF, self.has_Rf),
-                ("exc_con T_F2", self.TF2, self.has_VF))
+        return (
+            ("exc_con T_R", self.TR, self.has_TR),
+            ("exc_con T_A", self.TA, self.has_TA),
+            ("exc_con T_B", self.TB, self.has_TB),
+            ("exc_con T_E", self.TE, self.is_dc),
+            ("exc_con T_F", self.TF, self.has_Rf),
+            ("exc_con T_F2", self.TF2, self.has_VF),
+        )
 
 
 check_packed(ExciterParams, PACKED, ("Vref",))
@@ -165,8 +193,11 @@ def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
     A, B = _exponential_fit(e)
     quad = e.dc_sat == 1
     if quad.any():
-        Aq, Bq = quadratic_fit(*_dc_points(e), quad, "exc_con row {row}: DC exciter "
-                               "saturation points (E1, SE1, E2, SE2)")
+        Aq, Bq = quadratic_fit(
+            *_dc_points(e),
+            quad,
+            "exc_con row {row}: DC exciter saturation points (E1, SE1, E2, SE2)",
+        )
         A, B = np.where(quad, Aq, A), np.where(quad, Bq, B)
     return A, B
 
@@ -191,15 +222,17 @@ def _exponential_fit(e):
     bad = np.nonzero(np.isin(e.type, DC_KINDS) & (e.dc_sat == 0))[0]
     bad = bad[~np.isfinite(A[bad] + B[bad])]
     if bad.size:
-        raise CaseError(f"exc_con row {bad[0] + 1}: DC exciter saturation points (E1, SE1, E2, "
-                        "SE2) give no exponential fit (need E1 != E2, SE1 E1 > 0, SE2 E2 > 0)")
+        raise CaseError(
+            f"exc_con row {bad[0] + 1}: DC exciter saturation points (E1, SE1, E2, "
+            "SE2) give no exponential fit (need E1 != E2, SE1 E1 > 0, SE2 E2 > 0)"
+        )
     return A, B
 
 
 def _check_dc(e) -> None:
     """DC exciter and EXST1 options stabctl does not model: raise CaseError naming row and
     field (T_A, T_E, T_F must exist; Vrmax = 0 is PST's 'compute it')."""
-    dc = (("TA", "TA"), ("TE", "TE"), ("TF", "TF_dc"))      # (name in messages, declared)
+    dc = (("TA", "TA"), ("TE", "TE"), ("TF", "TF_dc"))  # (name in messages, declared)
     need = {DC1: dc, DC2: dc, T2: dc, ST1: (("TA", "TA"),)}
     for r in np.nonzero(np.isin(e.type, (*DC_KINDS, ST1)))[0]:
         kind = int(e.type[r])
@@ -207,11 +240,15 @@ def _check_dc(e) -> None:
         for name, declared in need[kind] + extra:
             k = EXCITER.col(declared)
             if e.col(k)[r] < LBND:
-                raise CaseError(f"exc_con row {r + 1}, field '{name}' (column {k}): exciter "
-                                f"type {kind} needs {name} >= {LBND} s")
+                raise CaseError(
+                    f"exc_con row {r + 1}, field '{name}' (column {k}): exciter "
+                    f"type {kind} needs {name} >= {LBND} s"
+                )
         if kind != ST1 and e.Vrmax[r] == 0:
-            raise CaseError(f"exc_con row {r + 1}, field 'Vrmax': 0 (PST computes it from E2) "
-                            "is not supported; give the limit")
+            raise CaseError(
+                f"exc_con row {r + 1}, field 'Vrmax': 0 (PST computes it from E2) "
+                "is not supported; give the limit"
+            )
 
 
 def exciter_params(case: Case) -> ExciterParams:
@@ -224,13 +261,19 @@ def exciter_params(case: Case) -> ExciterParams:
     given = {n: getattr(e, n).copy() for n in TABLE_FIELDS}
     given.update(KA=KA, KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)))
     return ExciterParams(
-        kind=e.type.astype(int), mac=np.array([case.machine_index(m) for m in e.machine], int),
-        **given, KE=np.where(dc, _dc(e, "KE"), 0.0), TE=np.where(dc, _dc(e, "TE"), 0.0),
-        Asat=np.where(dc, A, 0.0), Bsat=np.where(dc, B, 0.0),
+        kind=e.type.astype(int),
+        mac=np.array([case.machine_index(m) for m in e.machine], int),
+        **given,
+        KE=np.where(dc, _dc(e, "KE"), 0.0),
+        TE=np.where(dc, _dc(e, "TE"), 0.0),
+        Asat=np.where(dc, A, 0.0),
+        Bsat=np.where(dc, B, 0.0),
         KF=np.where(dc, _dc(e, "KF_dc"), np.where(e.type == ST1, e.KF, 0.0)),
         TF=np.where(dc, _dc(e, "TF_dc"), np.where(e.type == ST1, e.TF, 0.0)),
-        sat_quadratic=dc & (e.dc_sat == 1), ke_given=dc & (e.ke_given == 1),
-        ifd_machine=(e.type == ST3) & (e.ifd_machine == 1))
+        sat_quadratic=dc & (e.dc_sat == 1),
+        ke_given=dc & (e.ke_given == 1),
+        ifd_machine=(e.type == ST3) & (e.ifd_machine == 1),
+    )
 
 
 @kernel
@@ -240,7 +283,7 @@ def _fex(IN, init):
     if IN < 0.433:
         return 1.0 - 0.5771 * IN
     if 0.433 < IN < 0.75:
-        return np.sqrt(max(0.75 - (IN ** 0.2 if init else IN * IN), 0.0))
+        return np.sqrt(max(0.75 - (IN**0.2 if init else IN * IN), 0.0))
     if IN > 0.75:
         return max(0.0, (1.708 if init else 1.732) * (1.0 - IN))
     return 0.0
@@ -280,11 +323,19 @@ def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):
     machines' complex generation (system base), vex their field voltages, all (n_mac,);
     mp the MachineParams."""
     eterm, theta = np.abs(V_mac), np.angle(V_mac)
-    return np.array([st3_source_voltage(p.KP[i], p.KI[i], p.XL[i], p.KC[i],
-                                        ST3Machine(eterm[m], theta[m], S_mac.real[m],
-                                                   S_mac.imag[m], mp.mac_pot[m], vex[m]),
-                                        True)
-                     for i, m in enumerate(p.mac)])
+    return np.array(
+        [
+            st3_source_voltage(
+                p.KP[i],
+                p.KI[i],
+                p.XL[i],
+                p.KC[i],
+                ST3Machine(eterm[m], theta[m], S_mac.real[m], S_mac.imag[m], mp.mac_pot[m], vex[m]),
+                True,
+            )
+            for i, m in enumerate(p.mac)
+        ]
+    )
 
 
 def initialise(p: ExciterParams, vex, eterm, VB=None):
@@ -298,7 +349,7 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     x[0] = eterm
     smp, st3, dc = p.kind == SMP, p.kind == ST3, p.is_dc
     bus_fed = smp & (p.KG == 1)
-    vex_smp = vex / np.where(bus_fed, eterm, 1.0)      # SCRX bus fed: Efd = V_t x Efd state
+    vex_smp = vex / np.where(bus_fed, eterm, 1.0)  # SCRX bus fed: Efd = V_t x Efd state
     VA_smp = vex_smp / p.KA
     VB = np.ones(p.n) if VB is None else np.where(st3, VB, 1.0)
     VR = vex / VB
@@ -307,8 +358,10 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     bad = st3 & (beyond(vex, -np.inf, p.Efdmax) | beyond(VI, p.VImin, p.VImax))
     if bad.any():
         i = int(np.nonzero(bad)[0][0])
-        raise CaseError(f"exc_con row {i + 1}: initial field voltage {vex[i]:.3f} pu outside "
-                        "the ST3 limits (Efdmax or VI range)")
+        raise CaseError(
+            f"exc_con row {i + 1}: initial field voltage {vex[i]:.3f} pu outside "
+            "the ST3 limits (Efdmax or VI range)"
+        )
     p, VR_dc = _dc_initial_regulator(p, vex, eterm)
     st1 = p.kind == ST1
     _check_st1_initial(p, vex, eterm)
@@ -319,7 +372,7 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     x[3] = np.where(p.has_Rf, vex, 0.0)
     x[4] = np.where(dc, vex, 0.0)
     Vref = eterm + np.where(st3, VI, VA)
-    return x[:p.n_slots()], Vref, p
+    return x[: p.n_slots()], Vref, p
 
 
 def _check_st1_initial(p: ExciterParams, Efd, eterm):
@@ -327,12 +380,19 @@ def _check_st1_initial(p: ExciterParams, Efd, eterm):
     Efd0) and the regulator input Efd0/K_A inside [VImin, VImax]; raises CaseError."""
     st1 = p.kind == ST1
     VI = Efd / p.KA
-    bad = np.nonzero(st1 & (beyond(Efd, eterm * p.Vrmin, eterm * p.Vrmax - p.KC * Efd)
-                            | beyond(VI, p.VImin, p.VImax)))[0]
+    bad = np.nonzero(
+        st1
+        & (
+            beyond(Efd, eterm * p.Vrmin, eterm * p.Vrmax - p.KC * Efd)
+            | beyond(VI, p.VImin, p.VImax)
+        )
+    )[0]
     if bad.size:
         i = bad[0]
-        raise CaseError(f"exc_con row {i + 1}: EXST1 initial field voltage {Efd[i]:.4f} pu "
-                        "outside its output limits or regulator input outside [VImin, VImax]")
+        raise CaseError(
+            f"exc_con row {i + 1}: EXST1 initial field voltage {Efd[i]:.4f} pu "
+            "outside its output limits or regulator input outside [VImin, VImax]"
+        )
 
 
 def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
@@ -343,16 +403,18 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
     KE, VR = p.KE.copy(), np.zeros(p.n)
     for r in np.nonzero(dc)[0]:
         sat = (p.Asat[r], p.Bsat[r], float(p.sat_quadratic[r]), Efd[r])
-        if KE[r] == 0 and not p.ke_given[r] and Efd[r] != 0:   # V_R starts at 0
+        if KE[r] == 0 and not p.ke_given[r] and Efd[r] != 0:  # V_R starts at 0
             KE[r] = -dc_feedback(0.0, *sat) / Efd[r]
         VR[r] = dc_feedback(KE[r], *sat)
     mult = np.where(p.kind == DC2, eterm, 1.0)
     bad = np.nonzero(dc & beyond(VR, p.Vrmin * mult, p.Vrmax * mult))[0]
     if bad.size:
         i = bad[0]
-        raise CaseError(f"exc_con row {i + 1}: initial DC regulator output V_R = {VR[i]:.4f} pu "
-                        f"outside [Vrmin, Vrmax] = [{p.Vrmin[i] * mult[i]:.4f}, "
-                        f"{p.Vrmax[i] * mult[i]:.4f}]")
+        raise CaseError(
+            f"exc_con row {i + 1}: initial DC regulator output V_R = {VR[i]:.4f} pu "
+            f"outside [Vrmin, Vrmax] = [{p.Vrmin[i] * mult[i]:.4f}, "
+            f"{p.Vrmax[i] * mult[i]:.4f}]"
+        )
     return replace(p, KE=KE), VR
 
 
@@ -387,8 +449,10 @@ def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
 
     Parameters
     ----------
-    P, x, i : the exciters' packed parameters, states (n_slots, n_exc), the exciter.
-    MP, xm, cur : the machines' packed parameters (machines.PACKED), states (6, n_mac)
+    P, x, i : ndarray, ndarray, int
+        The exciters' packed parameters, states (n_slots, n_exc), the exciter.
+    MP, xm, cur : ndarray
+        The machines' packed parameters (machines.PACKED), states (6, n_mac)
         and network currents (n_mac,) complex, system base: the terminal voltage V_t
         (PST exc_st3's speed-free stator equations, `machines.stator_without_speed`), the
         ST3 source voltage and the field current (EXST1) come from them.
@@ -403,8 +467,11 @@ def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
     ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, m)
     et = np.hypot(ed, eq)
     kind = P[i, E.KIND]
-    VB = (_st3_source(P, i, MP, xm, cur, m, StatorQuantities(ed, eq, cd, cq, et, vt))
-          if kind == ST3 else 1.0)
+    VB = (
+        _st3_source(P, i, MP, xm, cur, m, StatorQuantities(ed, eq, cd, cq, et, vt))
+        if kind == ST3
+        else 1.0
+    )
     ifd = mac.field_current(MP, xm, cur, m) if kind == ST1 else 0.0
     return field_voltage_at(P, x, i, et, pss_out, VB, ifd, ieee)
 
@@ -462,6 +529,7 @@ def recorded_efd(P, x, i, efd_alg):
 
 # -- smpexc (and SCRX): T_R, lead-lag T_C/T_B, K_A/(1 + s T_A) limited [Vrmin, Vrmax]
 
+
 @kernel(inline="always")
 def _smp_field_voltage(P, x, i, VTR_alg, pss_out, ieee):
     """smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
@@ -487,8 +555,7 @@ def _smp_derivatives(P, x, i, err, dx, ieee):
         return
     lo, hi = P[i, E.VRMIN], P[i, E.VRMAX]
     if ieee:
-        x[2, i], dx[2, i] = nonwindup_lag(P[i, E.KA] * VA, x[2, i], P[i, E.TA], lo, hi,
-                                          ieee, 0.0)
+        x[2, i], dx[2, i] = nonwindup_lag(P[i, E.KA] * VA, x[2, i], P[i, E.TA], lo, hi, ieee, 0.0)
     else:
         dx[2, i] = lag(P[i, E.KA] * VA, x[2, i], P[i, E.TA])[1]
         x[2, i] = clip(x[2, i], lo, hi)
@@ -496,6 +563,7 @@ def _smp_derivatives(P, x, i, err, dx, ieee):
 
 # -- exc_st3: V_I limited, K_J, lead-lag, non-windup K_A/(1 + s T_A) with the inner loop
 # -- feedback min(V_Gmax, K_G Efd); output min(V_R V_B, Efdmax)
+
 
 @kernel(inline="always")
 def _st3_source(P, i, MP, xm, cur, m, stator):
@@ -510,10 +578,14 @@ def _st3_source(P, i, MP, xm, cur, m, stator):
     else:
         fld = mac.st3_field_current(MP, xm, cur, m)
     KP = P[i, E.KPR] + 1j * P[i, E.KPI]
-    return st3_source_voltage(KP, P[i, E.KI], P[i, E.XL], P[i, E.KC],
-                              ST3Machine(et, np.angle(vt), eq * cq + ed * cd,
-                                         eq * cd - ed * cq, MP[m, mac.K.POT], fld),
-                              _RUNNING)
+    return st3_source_voltage(
+        KP,
+        P[i, E.KI],
+        P[i, E.XL],
+        P[i, E.KC],
+        ST3Machine(et, np.angle(vt), eq * cq + ed * cd, eq * cd - ed * cq, MP[m, mac.K.POT], fld),
+        _RUNNING,
+    )
 
 
 @kernel(inline="always")
@@ -530,12 +602,19 @@ def _st3_derivatives(P, x, i, err, efd, dx, ieee):
     u = P[i, E.KJ] * clip(err, P[i, E.VIMIN], P[i, E.VIMAX])
     VA, dx[1, i] = leadlag_input_state(u, x[1, i], P[i, E.TCTB], P[i, E.TB])
     x[2, i], dx[2, i] = nonwindup_lag(
-        P[i, E.KA] * (VA - min(P[i, E.VGMAX], P[i, E.KG] * efd)), x[2, i], P[i, E.TA],
-        P[i, E.VRMIN], P[i, E.VRMAX], ieee, 0.0)
+        P[i, E.KA] * (VA - min(P[i, E.VGMAX], P[i, E.KG] * efd)),
+        x[2, i],
+        P[i, E.TA],
+        P[i, E.VRMIN],
+        P[i, E.VRMAX],
+        ieee,
+        0.0,
+    )
 
 
 # -- EXST1: rate feedback s K_F/(1 + s T_F) on Efd, V_I limited, lead-lag, K_A/(1 + s T_A);
 # -- output limited to [V_t Vrmin, V_t Vrmax - K_C I_fd]
+
 
 @kernel(inline="always")
 def _st1_field_voltage(P, x, i, VTR_alg, ifd):
@@ -551,13 +630,15 @@ def _st1_derivatives(P, x, i, err, efd, dx):
     if P[i, E.KF] != 0:
         VF, dx[3, i] = washout(efd, x[3, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
         err = err - VF
-    VA, dx[1, i] = leadlag_input_state(clip(err, P[i, E.VIMIN], P[i, E.VIMAX]), x[1, i],
-                                       P[i, E.TCTB], P[i, E.TB])
+    VA, dx[1, i] = leadlag_input_state(
+        clip(err, P[i, E.VIMIN], P[i, E.VIMAX]), x[1, i], P[i, E.TCTB], P[i, E.TB]
+    )
     dx[2, i] = lag(P[i, E.KA] * VA, x[2, i], P[i, E.TA])[1]
 
 
 # -- exc_dc12 (DC1, DC2) and IEEET2: rate feedback, lead-lag, non-windup K_A/(1 + s T_A)
 # -- (DC2: limits times V_t), the exciter field T_E
+
 
 @njit
 def dc_feedback(KE, Asat, Bsat, quadratic, Efd):
@@ -581,8 +662,15 @@ def _dc_derivatives(P, x, i, eterm, err, dx, ieee, reach):
         VF, dx[5, i] = lag(VF, x[5, i], P[i, E.TF2])
     VA, dx[1, i] = leadlag_input_state(err - VF, x[1, i], P[i, E.TCTB], P[i, E.TB])
     mult = eterm if kind == DC2 else 1.0
-    x[2, i], dx[2, i] = nonwindup_lag(P[i, E.KA] * VA, x[2, i], P[i, E.TA],
-                                      P[i, E.VRMIN] * mult, P[i, E.VRMAX] * mult, ieee,
-                                      reach if kind == DC2 else 0.0)
-    dx[3, i] = (x[2, i] - dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ],
-                                      x[3, i])) / P[i, E.TE]
+    x[2, i], dx[2, i] = nonwindup_lag(
+        P[i, E.KA] * VA,
+        x[2, i],
+        P[i, E.TA],
+        P[i, E.VRMIN] * mult,
+        P[i, E.VRMAX] * mult,
+        ieee,
+        reach if kind == DC2 else 0.0,
+    )
+    dx[3, i] = (
+        x[2, i] - dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ], x[3, i])
+    ) / P[i, E.TE]

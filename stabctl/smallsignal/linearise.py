@@ -39,30 +39,37 @@ from numba import typeof
 from stabctl._jit.arrays import assign, max_abs
 from stabctl._jit.background import await_background, compile_in_background
 from stabctl._jit.decorators import njit
-
+from stabctl.case import Case
+from stabctl.dynamics.coi import coi_weights
+from stabctl.dynamics.model import (
+    BUS_VOLTAGES,
+    DynamicModel,
+    KeptBuses,
+    KernelOutputs,
+    StageConfig,
+    call_evaluate,
+    evaluate_address,
+    kernel_network,
+    kernel_outputs,
+)
+from stabctl.errors import InputError, SimulationError
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
-from stabctl.case import Case
-from stabctl.dynamics.coi import coi_weights
-from stabctl.dynamics.model import (BUS_VOLTAGES, DynamicModel, KeptBuses, KernelOutputs,
-                                    StageConfig, call_evaluate, evaluate_address,
-                                    kernel_network, kernel_outputs)
-from stabctl.errors import InputError, SimulationError
 
-REL_STEP = 1e-4          # PSTess svm_mgen's relative perturbation
-KINK_RATIO = 1e-2        # one-sided slopes differing more than this: a limit was crossed
+REL_STEP = 1e-4  # PSTess svm_mgen's relative perturbation
+KINK_RATIO = 1e-2  # one-sided slopes differing more than this: a limit was crossed
 STATE, ESD, VREF, PREF = 0, 1, 2, 3
 
 
 class Perturbations(NamedTuple):
     """The difference columns of `_differences`, each array of shape (n_col,): kind what
-    is perturbed (STATE, ESD, VREF, PREF; int64), index which one (STATE: flat state
+    is perturbed (STATE, ESD, VREF, PREF; int64), which which one (STATE: flat state
     index; ESD: kept-bus position; VREF: exciter row; PREF: governor row; int64), step
     the perturbation h (in the unit of the perturbed quantity)."""
 
     kind: np.ndarray
-    index: np.ndarray
+    which: np.ndarray
     step: np.ndarray
 
 
@@ -105,8 +112,14 @@ def default_esd_buses(case: Case) -> list[int]:
     return list(dict.fromkeys(hv_bus(case, int(k)) for k in case.machines.number))
 
 
-def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP,
-              conventions: str = "ieee", q_limits: bool = True):
+def linearise(
+    target,
+    esd_buses=None,
+    extra_buses=(),
+    rel_step: float = REL_STEP,
+    conventions: str = "ieee",
+    q_limits: bool = True,
+):
     """Linearised model of a case at its power-flow point, as a `control.StateSpace`.
 
     Central differences of the simulator's own equations (PSTess ``svm_mgen``,
@@ -158,8 +171,11 @@ def linearise(target, esd_buses=None, extra_buses=(), rel_step: float = REL_STEP
     """
     from stabctl.dynamics.driver import Simulator
 
-    sim = target if isinstance(target, Simulator) else Simulator(
-        target, conventions=conventions, q_limits=q_limits, background_compile=False)
+    sim = (
+        target
+        if isinstance(target, Simulator)
+        else Simulator(target, conventions=conventions, q_limits=q_limits, background_compile=False)
+    )
     case = sim.case
     buses = list(default_esd_buses(case) if esd_buses is None else esd_buses)
     buses = list(dict.fromkeys(int(b) for b in [*buses, *extra_buses]))
@@ -182,9 +198,16 @@ def linearise_model(model: DynamicModel, esd_buses=(), rel_step: float = REL_STE
     n = act.size
     A, B = J[:n, act].T, J[n:, act].T
     C, D = output_matrices(model, act, A, B, dV[:n].T, dV[n:].T, V0)
-    return ct.ss(A, B, C, D, states=[signal_name(model.state_name(int(k))) for k in act],
-                 inputs=_input_names(case, esd_buses, model), outputs=output_names(case),
-                 name=f"{case.name} linearised")
+    return ct.ss(
+        A,
+        B,
+        C,
+        D,
+        states=[signal_name(model.state_name(int(k))) for k in act],
+        inputs=_input_names(case, esd_buses, model),
+        outputs=output_names(case),
+        name=f"{case.name} linearised",
+    )
 
 
 def perturbation_error(target, rel_step: float = REL_STEP, factor: float = 10.0, **kw) -> dict:
@@ -219,8 +242,17 @@ def perturbation_error(target, rel_step: float = REL_STEP, factor: float = 10.0,
     return out
 
 
-def compare_pulse(sim, sys, bus: int, P: float = 0.05, t_on: float = 0.5, width: float = 0.125,
-                  t_end: float = 6.0, h: float = 1 / 1024, edge: float = 0.02) -> dict:
+def compare_pulse(
+    sim,
+    sys,
+    bus: int,
+    P: float = 0.05,
+    t_on: float = 0.5,
+    width: float = 0.125,
+    t_end: float = 6.0,
+    h: float = 1 / 1024,
+    edge: float = 0.02,
+) -> dict:
     """Responses of the linear model `sys` and of the nonlinear simulator `sim` to a power
     pulse drawn at `bus`: P pu (system base) from t_on for `width` s.
 
@@ -242,8 +274,12 @@ def compare_pulse(sim, sys, bus: int, P: float = 0.05, t_on: float = 0.5, width:
         raise InputError(f"{name} is not an input of the linear model")
     if any(abs(v / h - round(v / h)) > 1e-9 for v in (t_on, width, t_end)):
         raise InputError("t_on, width and t_end must be multiples of the step h")
-    res = sim.run([LoadStep(int(bus), t_on, P), LoadStep(int(bus), t_on + width, -P)],
-                  t_end=t_end, h=h, semantics="exact")
+    res = sim.run(
+        [LoadStep(int(bus), t_on, P), LoadStep(int(bus), t_on + width, -P)],
+        t_end=t_end,
+        h=h,
+        semantics="exact",
+    )
     j = sys.input_labels.index(name)
     col = ct.ss(sys.A, sys.B[:, [j]], sys.C, sys.D[:, [j]])
     k = np.arange(res.t.size)
@@ -255,23 +291,28 @@ def compare_pulse(sim, sys, bus: int, P: float = 0.05, t_on: float = 0.5, width:
     B = [f"B{int(b)}" for b in res.buses]
     f_nl = np.gradient(np.unwrap(res.vang, axis=0), res.t, axis=0) / (2 * np.pi)
     away = (np.abs(res.t - t_on) > edge) & (np.abs(res.t - t_on - width) > edge)
-    pairs = {"omega": (pick("omega", G), res.speed - 1.0),
-             "omega_rel": (pick("omega_rel", G), res.speed - res.coi_speed[:, None]),
-             "vmag": (pick("vmag", B), res.vmag - res.vmag[0]),
-             "f_bus": (pick("f_bus", B)[away], f_nl[away])}
-    return {key: (float(np.abs(lin - nl).max()), float(np.abs(nl).max()))
-            for key, (lin, nl) in pairs.items()}
+    pairs = {
+        "omega": (pick("omega", G), res.speed - 1.0),
+        "omega_rel": (pick("omega_rel", G), res.speed - res.coi_speed[:, None]),
+        "vmag": (pick("vmag", B), res.vmag - res.vmag[0]),
+        "f_bus": (pick("f_bus", B)[away], f_nl[away]),
+    }
+    return {
+        key: (float(np.abs(lin - nl).max()), float(np.abs(nl).max()))
+        for key, (lin, nl) in pairs.items()
+    }
 
 
 def _kept_positions(model: DynamicModel, buses) -> np.ndarray:
     """Positions of the ESD buses among the model's kept buses; InputError if not kept."""
     idx = model.case.bus_indices(list(buses)) if len(buses) else np.zeros(0, int)
     pos = np.array([np.searchsorted(model.nc_idx, i) for i in idx], np.int64)
-    bad = [b for b, p, i in zip(buses, pos, idx)
-           if p >= model.nc_idx.size or model.nc_idx[p] != i]
+    bad = [b for b, p, i in zip(buses, pos, idx) if p >= model.nc_idx.size or model.nc_idx[p] != i]
     if bad:
-        raise InputError(f"ESD bus(es) {bad} are not kept in the reduced network: build the "
-                         "model with them as injection buses (Simulator.model_for)")
+        raise InputError(
+            f"ESD bus(es) {bad} are not kept in the reduced network: build the "
+            "model with them as injection buses (Simulator.model_for)"
+        )
     return pos
 
 
@@ -280,11 +321,13 @@ def _columns(model: DynamicModel, act: np.ndarray, pos: np.ndarray):
     first, then ESD powers, Vref of every exciter, Pref of every governor."""
     p = model.params
     n_e, n_g = p.EP.shape[0], p.GP.shape[0]
-    kind = np.concatenate([np.full(act.size, STATE), np.full(pos.size, ESD),
-                           np.full(n_e, VREF), np.full(n_g, PREF)]).astype(np.int64)
+    kind = np.concatenate(
+        [np.full(act.size, STATE), np.full(pos.size, ESD), np.full(n_e, VREF), np.full(n_g, PREF)]
+    ).astype(np.int64)
     index = np.concatenate([act, pos, np.arange(n_e), np.arange(n_g)]).astype(np.int64)
-    values = np.concatenate([model.x0[act], np.zeros(pos.size), p.EP[:, exc.E.VREF],
-                             p.GP[:, gov.G.PREF]])
+    values = np.concatenate(
+        [model.x0[act], np.zeros(pos.size), p.EP[:, exc.E.VREF], p.GP[:, gov.G.PREF]]
+    )
     return kind, index, values
 
 
@@ -310,13 +353,16 @@ def jacobian_columns(model: DynamicModel, kind, index, step):
     bad = _differences(*args)
     J, dV, curv, V0 = args[5]
     if bad >= 0:
-        raise SimulationError(f"the network did not solve with {_what(model, kind, index, bad)} "
-                              "perturbed")
+        raise SimulationError(
+            f"the network did not solve with {_what(model, kind, index, bad)} perturbed"
+        )
     k = int(np.argmax(curv))
     if curv[k] > KINK_RATIO:
-        raise SimulationError(f"perturbing {_what(model, kind, index, k)} by +-{step[k]:.3g} "
-                              f"crosses a limiter (one-sided slopes differ by {curv[k]:.1%}); "
-                              "use a smaller rel_step")
+        raise SimulationError(
+            f"perturbing {_what(model, kind, index, k)} by +-{step[k]:.3g} "
+            f"crosses a limiter (one-sided slopes differ by {curv[k]:.1%}); "
+            "use a smaller rel_step"
+        )
     return J, dV, V0
 
 
@@ -326,11 +372,15 @@ def _difference_arguments(model: DynamicModel, kind, index, step) -> list:
     net = model.network(StageConfig())
     p = model.params._replace(EP=model.params.EP.copy(), GP=model.params.GP.copy())
     n_col, n_bus = len(kind), model.case.n_bus
-    cols = Perturbations(np.asarray(kind, np.int64), np.asarray(index, np.int64),
-                         np.asarray(step, float))
-    res = Differences(np.zeros((n_col, model.layout.size)),
-                      np.zeros((n_col, n_bus), np.complex128), np.zeros(n_col),
-                      np.zeros(n_bus, np.complex128))
+    cols = Perturbations(
+        np.asarray(kind, np.int64), np.asarray(index, np.int64), np.asarray(step, float)
+    )
+    res = Differences(
+        np.zeros((n_col, model.layout.size)),
+        np.zeros((n_col, n_bus), np.complex128),
+        np.zeros(n_col),
+        np.zeros(n_bus, np.complex128),
+    )
     return [cols, model.x0, model.V_nc0, p, kernel_network(net), res, 0]
 
 
@@ -349,8 +399,11 @@ def compile_differences(model: DynamicModel) -> None:
 
 
 def _what(model, kind, index, c) -> str:
-    names = {ESD: "ESD power at kept bus", VREF: "Vref of exciter row",
-             PREF: "Pref of governor row"}
+    names = {
+        ESD: "ESD power at kept bus",
+        VREF: "Vref of exciter row",
+        PREF: "Pref of governor row",
+    }
     if kind[c] == STATE:
         return f"state {model.state_name(int(index[c]))}"
     return f"{names[int(kind[c])]} {int(index[c]) + 1}"
@@ -368,14 +421,24 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
     network did not solve (-2: the unperturbed one)."""
     kind, index, step = cols
     J, dV, curv, V0 = res
-    dx = np.zeros_like(x0)   # slots no kernel writes (unused by a model type) must stay 0:
-    f0 = np.zeros_like(x0)   # the kink test below looks at every slot
+    dx = np.zeros_like(x0)  # slots no kernel writes (unused by a model type) must stay 0:
+    f0 = np.zeros_like(x0)  # the kink test below looks at every slot
     out = kernel_outputs(p.n_mac, net.R.shape[0])
     S = np.zeros(V_nc0.size, np.complex128)
     at_op = KernelOutputs(out.cur, out.pelect, out.qelect, out.eterm, out.efd, out.pmech, V0)
-    if call_evaluate(evaluate, x0.copy(), p, net,
-                     KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_), S), BUS_VOLTAGES,
-                     f0, at_op) < 0:
+    if (
+        call_evaluate(
+            evaluate,
+            x0.copy(),
+            p,
+            net,
+            KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_), S),
+            BUS_VOLTAGES,
+            f0,
+            at_op,
+        )
+        < 0
+    ):
         return -2
     for c in range(kind.size):
         j = index[c]
@@ -401,9 +464,16 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
                 p.EP[j, exc.E.VREF] = v
             else:
                 p.GP[j, gov.G.PREF] = v
-            it = call_evaluate(evaluate, x, p, net,
-                               KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_), S),
-                               BUS_VOLTAGES, dx, out)
+            it = call_evaluate(
+                evaluate,
+                x,
+                p,
+                net,
+                KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_), S),
+                BUS_VOLTAGES,
+                dx,
+                out,
+            )
             if kind[c] == VREF:
                 p.EP[j, exc.E.VREF] = nominal
             elif kind[c] == PREF:
@@ -428,13 +498,13 @@ def output_matrices(model: DynamicModel, act, A, B, dVx, dVu, V0):
     """
     nm = model.mp.n
     pos = {int(k): i for i, k in enumerate(act)}
-    S = np.zeros((nm, act.size))                       # omega_k = S x
+    S = np.zeros((nm, act.size))  # omega_k = S x
     S[np.arange(nm), [pos[nm + k] for k in range(nm)]] = 1.0
     w = model.mp.H * model.case.machines.mva
     coi = coi_weights(w) @ S
     Vm = np.abs(V0)[:, None]
-    dmag = lambda dV: (np.conj(V0)[:, None] * dV).real / Vm         # noqa: E731
-    dang = lambda dV: (np.conj(V0)[:, None] * dV).imag / Vm ** 2    # noqa: E731
+    dmag = lambda dV: (np.conj(V0)[:, None] * dV).real / Vm  # noqa: E731
+    dang = lambda dV: (np.conj(V0)[:, None] * dV).imag / Vm**2  # noqa: E731
     Tx = dang(dVx)
     two_pi = 2 * np.pi
     C = np.vstack([S, coi, S - coi, dmag(dVx), Tx @ A / two_pi])
@@ -451,12 +521,19 @@ def output_names(case: Case) -> list[str]:
     """Output names in order: omega_G<k>, omega_coi, omega_rel_G<k>, vmag_B<n>, f_bus_B<n>."""
     g = [f"G{int(k)}" for k in case.machines.number]
     b = [f"B{int(n)}" for n in case.buses.number]
-    return ([f"omega_{x}" for x in g] + ["omega_coi"] + [f"omega_rel_{x}" for x in g]
-            + [f"vmag_{x}" for x in b] + [f"f_bus_{x}" for x in b])
+    return (
+        [f"omega_{x}" for x in g]
+        + ["omega_coi"]
+        + [f"omega_rel_{x}" for x in g]
+        + [f"vmag_{x}" for x in b]
+        + [f"f_bus_{x}" for x in b]
+    )
 
 
 def _input_names(case: Case, esd_buses, model: DynamicModel) -> list[str]:
     num = case.machines.number
-    return ([f"P_esd_B{int(b)}" for b in esd_buses]
-            + [f"Vref_G{int(num[m])}" for m in model.ep.mac]
-            + [f"Pref_G{int(num[m])}" for m in model.gp.mac])
+    return (
+        [f"P_esd_B{int(b)}" for b in esd_buses]
+        + [f"Vref_G{int(num[m])}" for m in model.ep.mac]
+        + [f"Pref_G{int(num[m])}" for m in model.gp.mac]
+    )

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from stabctl.models import exciters as exc
-from stabctl.io import load_case
 from stabctl.cli import main
-from stabctl.errors import InputError, NumericalInstabilityError
-from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.grid import time_grid
+from stabctl.errors import InputError, NumericalInstabilityError
+from stabctl.io import load_case
+from stabctl.models import exciters as exc
 
 
 @pytest.fixture(scope="module")
@@ -26,9 +26,9 @@ def smpexc_at_ceiling(model, error_pu):
     error_pu (Vref - V_TR, no PSS): derivatives and the state after flag 2."""
     P = model.params.EP.copy()
     x = np.zeros((model.layout.exc_rows, P.shape[0]))
-    x[0] = 1.0                                    # V_TR
+    x[0] = 1.0  # V_TR
     P[:, exc.E.VREF] = 1.0 + error_pu
-    x[2] = P[:, exc.E.VRMAX]                      # Efd at its ceiling
+    x[2] = P[:, exc.E.VRMAX]  # Efd at its ceiling
     dx = np.zeros_like(x)
     ieee = model.params.ieee
     vex = exc.field_voltage_at(P, x, 0, 1.0, 0.0, 1.0, 0.0, ieee)
@@ -47,7 +47,7 @@ def test_ieee_limiter_holds_the_state_at_the_ceiling(models):
 
 
 def test_ieee_limiter_leaves_the_ceiling_when_the_input_reverses(models):
-    d, x, _ = smpexc_at_ceiling(models["ieee"], -0.01)       # K_A V_A = -2 pu < 5 pu
+    d, _x, _ = smpexc_at_ceiling(models["ieee"], -0.01)  # K_A V_A = -2 pu < 5 pu
     assert d == pytest.approx((200 * -0.01 - 5.0) / 0.05) and d < 0
 
 
@@ -68,7 +68,7 @@ def test_grids_of_the_two_conventions():
     assert pst.h[1] == pytest.approx(0.0125)
     ieee = time_grid([0.0, 0.1, 0.15], 0.2, 0.01)
     assert np.all(ieee.h <= 0.01 + 1e-15) and ieee.h[1] == pytest.approx(0.01)
-    odd = time_grid([0.0, 1.0], 1.0 + 1 / 60 * 7, 0.005)        # 7 cycles at 5 ms
+    odd = time_grid([0.0, 1.0], 1.0 + 1 / 60 * 7, 0.005)  # 7 cycles at 5 ms
     assert odd.h[1] <= 0.005 and np.diff(odd.t).max() <= 0.005 + 1e-15
 
 
@@ -84,15 +84,18 @@ def test_too_large_a_step_is_an_error_not_a_verdict(conventions):
     at its ceiling; both are numerical failures naming the time and the state."""
     sim = Simulator(load_case("kundur"), conventions=conventions)
     for h in (0.0199, 0.019):
-        with pytest.raises(NumericalInstabilityError,
-                           match=r"numerical instability in the step ending at t = .* s: "
-                                 r"state (exc|mac)\..*use a smaller step") as info:
+        with pytest.raises(
+            NumericalInstabilityError,
+            match=r"numerical instability in the step ending at t = .* s: "
+            r"state (exc|mac)\..*use a smaller step",
+        ) as info:
             sim.run([fault_with_clearing(sim.case, 3, 101, 1.0, 5)], t_end=9.0, h=h)
         assert info.value.result.t[-1] < 9.0
 
 
-@pytest.mark.parametrize("conventions, h", [("ieee", 0.005), ("ieee", 0.01),
-                                             ("pstess", 0.01), ("pstess", 0.005)])
+@pytest.mark.parametrize(
+    "conventions, h", [("ieee", 0.005), ("ieee", 0.01), ("pstess", 0.01), ("pstess", 0.005)]
+)
 def test_health_check_is_silent_on_healthy_runs(conventions, h):
     """Stable (5 cycles) and unstable (21 cycles) Case-1 runs at usual steps, 9 s."""
     sim = Simulator(load_case("kundur"), conventions=conventions)
@@ -102,8 +105,23 @@ def test_health_check_is_silent_on_healthy_runs(conventions, h):
 
 
 def test_cli_reports_numerical_instability_with_exit_2():
-    res = CliRunner().invoke(main, ["simulate", "kundur", "--fault", "3", "--far-bus", "101",
-                                    "--clear-cycles", "5", "--step", "0.0199", "--tf", "9"])
+    res = CliRunner().invoke(
+        main,
+        [
+            "simulate",
+            "kundur",
+            "--fault",
+            "3",
+            "--far-bus",
+            "101",
+            "--clear-cycles",
+            "5",
+            "--step",
+            "0.0199",
+            "--tf",
+            "9",
+        ],
+    )
     assert res.exit_code == 2, res.output
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ")

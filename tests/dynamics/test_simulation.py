@@ -22,25 +22,25 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stabctl.io import load_case
-from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
-from stabctl.dynamics.events import Fault, LineTrip, fault_with_clearing, from_sw_con
-from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import Fault, LineTrip, fault_with_clearing, from_sw_con
 from stabctl.dynamics.grid import default_step
+from stabctl.dynamics.results import SimulationResult
+from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
+from stabctl.io import load_case
 
 DATA = Path(__file__).parents[1] / "data" / "pstess"
 
-SPEED_TOL, ANGLE_TOL, VMAG_TOL = 2e-4, 0.02, 0.01   # acceptance tolerances
-REGRESSION = 1e-6                                     # we reach ~1e-9; guard against drift
-PSTESS_EXACT_SPEED = 1e-8    # the pstess conventions reproduce PSTess (reached: 5e-10, 7e-10)
+SPEED_TOL, ANGLE_TOL, VMAG_TOL = 2e-4, 0.02, 0.01  # acceptance tolerances
+REGRESSION = 1e-6  # we reach ~1e-9; guard against drift
+PSTESS_EXACT_SPEED = 1e-8  # the pstess conventions reproduce PSTess (reached: 5e-10, 7e-10)
 
 
 def reference(stem: str, quantity: str):
     """PSTess trajectory: (t, numbers, values (n_t, n)); numbers are machine numbers for
     gen<k>_bus<n> columns and bus numbers for bus<n> columns."""
     csv, gz = DATA / f"{stem}_{quantity}.csv", DATA / f"{stem}_{quantity}.csv.gz"
-    with (gzip.open(gz, "rt") if gz.exists() else open(csv)) as f:
+    with gzip.open(gz, "rt") if gz.exists() else open(csv) as f:
         header = f.readline().strip().split(",")
         data = np.loadtxt(f, delimiter=",", ndmin=2)
     assert header[0] == "t"
@@ -53,7 +53,7 @@ def compare_with_pstess(res: SimulationResult, stem: str, ref_machine: int, faul
     voltage outside the fault window and everywhere (pu). Checks the time grid first."""
     t, macs, speed = reference(stem, "speed_pu")
     assert res.t.shape == t.shape, "time grid differs from PSTess's"
-    np.testing.assert_allclose(res.t, t, atol=1e-8)    # CSV print precision
+    np.testing.assert_allclose(res.t, t, atol=1e-8)  # CSV print precision
     cols = [res.machine(m) for m in macs]
     err = {"speed_pu": np.abs(res.speed[:, cols] - speed).max()}
     _, macs_a, angle = reference(stem, "angle_rad")
@@ -77,7 +77,7 @@ def check_agreement(err, record_property, label):
     assert err["speed_pu"] < PSTESS_EXACT_SPEED
     assert err["rel_angle_rad"] < ANGLE_TOL
     assert err["vmag_pu_outside_fault"] < VMAG_TOL
-    for k, v in err.items():            # regression: the achieved agreement is ~1e-9
+    for k, v in err.items():  # regression: the achieved agreement is ~1e-9
         assert v < REGRESSION, f"{label} {k} = {v:.3g} vs PSTess: was ~1e-9"
 
 
@@ -96,36 +96,40 @@ def test_kundur_shipped_fault_matches_pstess(kundur_pstess, record_property):
     kundur = kundur_pstess
     case = kundur.case
     sw = np.loadtxt(DATA / "kundur_d2asbegp_default_sw_con.csv", delimiter=",")
-    np.testing.assert_array_equal(case.sw_con, sw)    # the shipped case is the reference's
+    np.testing.assert_array_equal(case.sw_con, sw)  # the shipped case is the reference's
     events = from_sw_con(case)
     assert events == [Fault(bus=3, t=0.1, clear_near=0.15, clear_far=0.2, far_bus=101)]
     assert default_step(case, "pstess") == 0.01 == kundur.default_h
     res = kundur.run(events, t_end=5.0)
     assert res.meta["conventions"] == "pstess"
     assert res.stable
-    err = compare_with_pstess(res, "kundur_d2asbegp_default", ref_machine=3,
-                              fault_window=(0.1, 0.2))
+    err = compare_with_pstess(
+        res, "kundur_d2asbegp_default", ref_machine=3, fault_window=(0.1, 0.2)
+    )
     check_agreement(err, record_property, "kundur_default")
 
 
 def test_miniwecc_fault_40_44_matches_pstess(wecc_pstess, record_property):
     wecc = wecc_pstess
     sw = np.loadtxt(DATA / "miniwecc_base_f40_44_sw_con.csv", delimiter=",")
-    assert sw[1, 1:3].tolist() == [40, 44] and sw[1, 5] == 0       # three-phase fault
+    assert sw[1, 1:3].tolist() == [40, 44] and sw[1, 5] == 0  # three-phase fault
     fault = Fault(bus=40, t=sw[1, 0], clear_near=sw[2, 0], clear_far=sw[3, 0], far_bus=44)
     res = wecc.run([fault], t_end=sw[-1, 0], h=sw[0, 6])
     assert res.stable
-    err = compare_with_pstess(res, "miniwecc_base_f40_44", ref_machine=1,
-                              fault_window=(sw[1, 0], sw[3, 0]))
+    err = compare_with_pstess(
+        res, "miniwecc_base_f40_44", ref_machine=1, fault_window=(sw[1, 0], sw[3, 0])
+    )
     check_agreement(err, record_property, "miniwecc_f40_44")
 
 
 def test_miniwecc_flat_run_does_not_drift(wecc, record_property):
     res = wecc.run([], t_end=30.0)
-    assert res.t[-1] == 30.0 and res.t.size == 6001 and res.stable      # h = 5 ms
-    drift = {"speed_pu": np.abs(res.speed - 1.0).max(),
-             "angle_rad": np.abs(res.angle - res.angle[0]).max(),
-             "vmag_pu": np.abs(res.vmag - res.vmag[0]).max()}
+    assert res.t[-1] == 30.0 and res.t.size == 6001 and res.stable  # h = 5 ms
+    drift = {
+        "speed_pu": np.abs(res.speed - 1.0).max(),
+        "angle_rad": np.abs(res.angle - res.angle[0]).max(),
+        "vmag_pu": np.abs(res.vmag - res.vmag[0]).max(),
+    }
     for k, v in drift.items():
         record_property(f"miniwecc_flat_30s_drift_{k}", f"{v:.3g}")
     print("\nminiWECC flat 30 s drift: " + ", ".join(f"{k} {v:.2e}" for k, v in drift.items()))
@@ -142,12 +146,12 @@ def test_case1_kundur_area1_loses_synchronism(case1, record_property):
     record_property("case1_separated", res.separated)
     print(f"\nCase 1: separation at {res.t_separation:.3f} s, machines {res.separated}")
     assert not res.stable
-    assert res.separated == [1, 2]                  # area 1
-    assert res.t_separation > 1.35 and res.t_separation < 3.0   # after clearing (2.07 s)
+    assert res.separated == [1, 2]  # area 1
+    assert res.t_separation > 1.35 and res.t_separation < 3.0  # after clearing (2.07 s)
     d = {m: res.angle[:, res.machine(m)] for m in (1, 2, 3, 4)}
-    assert np.abs(d[3] - d[4]).max() < 1.0           # area 2 stays together
-    assert np.abs(d[1] - d[2]).max() < 1.0           # area 1 swings out as one group
-    assert np.abs(d[1] - d[3])[-1] > 2 * np.pi       # ... and slips poles against area 2
+    assert np.abs(d[3] - d[4]).max() < 1.0  # area 2 stays together
+    assert np.abs(d[1] - d[2]).max() < 1.0  # area 1 swings out as one group
+    assert np.abs(d[1] - d[3])[-1] > 2 * np.pi  # ... and slips poles against area 2
 
 
 @pytest.mark.parametrize("conventions, cycles", [("ieee", 9), ("pstess", 12)])
@@ -164,8 +168,7 @@ def test_case2_miniwecc_colstrip_loses_synchronism(wecc, record_property):
     """Paper Case 2 without storage: 6-cycle fault at bus 83, line 83-33 tripped.
     PSTess shows machine 14 (Colstrip, bus 32) separating alone; the paper names 13 and 14."""
     case = wecc.case
-    res = wecc.run([fault_with_clearing(case, 83, 33, 1.0, 6)], t_end=5.0,
-                   stop_at_separation=True)
+    res = wecc.run([fault_with_clearing(case, 83, 33, 1.0, 6)], t_end=5.0, stop_at_separation=True)
     record_property("case2_t_separation_s", res.t_separation)
     record_property("case2_separated", res.separated)
     print(f"\nCase 2: separation at {res.t_separation:.4f} s, machines {res.separated}")
@@ -185,8 +188,9 @@ def test_case2_miniwecc_colstrip_loses_synchronism(wecc, record_property):
 
 def test_separation_reported_and_stop_early(kundur, case1):
     full = case1
-    stopped = kundur.run([fault_with_clearing(kundur.case, 3, 101, 1.0, 21)], t_end=5.0,
-                         stop_at_separation=True)
+    stopped = kundur.run(
+        [fault_with_clearing(kundur.case, 3, 101, 1.0, 21)], t_end=5.0, stop_at_separation=True
+    )
     assert stopped.t_separation == full.t_separation
     assert stopped.separated == full.separated
     assert stopped.t[-1] == pytest.approx(full.t_separation) and full.t[-1] == 5.0
@@ -205,8 +209,12 @@ def test_separation_reported_and_stop_early(kundur, case1):
 
 def test_separation_limit_is_a_parameter(kundur, case1):
     # a looser limit reports the same group later
-    res = kundur.run([fault_with_clearing(kundur.case, 3, 101, 1.0, 21)], t_end=5.0,
-                     separation_limit=2 * np.pi, stop_at_separation=True)
+    res = kundur.run(
+        [fault_with_clearing(kundur.case, 3, 101, 1.0, 21)],
+        t_end=5.0,
+        separation_limit=2 * np.pi,
+        stop_at_separation=True,
+    )
     assert res.separated == [1, 2] and res.t_separation > case1.t_separation
 
 
@@ -220,11 +228,14 @@ def test_unknown_fault_bus(kundur):
         kundur.run([fault_with_clearing(kundur.case, 3, 777, 0.1, 6)], t_end=1.0)
 
 
-@pytest.mark.parametrize("event, what", [
-    (Fault(bus=3, t=0.1, clear_near=0.2, far_bus=14), "between bus 3 and bus 14"),
-    (LineTrip(1, 2, 0.1), "between bus 1 and bus 2"),
-    (Fault(bus=3, t=0.1, clear_near=0.2, far_bus=101, circuit=3), "circuit 3"),
-])
+@pytest.mark.parametrize(
+    "event, what",
+    [
+        (Fault(bus=3, t=0.1, clear_near=0.2, far_bus=14), "between bus 3 and bus 14"),
+        (LineTrip(1, 2, 0.1), "between bus 1 and bus 2"),
+        (Fault(bus=3, t=0.1, clear_near=0.2, far_bus=101, circuit=3), "circuit 3"),
+    ],
+)
 def test_line_that_does_not_exist(kundur, event, what):
     with pytest.raises(CaseError, match=what):
         kundur.run([event], t_end=1.0)
@@ -264,7 +275,7 @@ def test_diverging_run_raises_with_partial_trajectory():
     for name in ("speed", "angle", "pelect", "vmag"):
         arr = getattr(part, name)
         assert arr.shape[0] == part.t.size and np.all(np.isfinite(arr)), name
-    assert abs(part.speed[-1, 0] - 1) > 10 * abs(part.speed[1, 0] - 1)   # it was blowing up
+    assert abs(part.speed[-1, 0] - 1) > 10 * abs(part.speed[1, 0] - 1)  # it was blowing up
 
 
 # --------------------------------------------------------------------------- export
@@ -272,10 +283,16 @@ def test_diverging_run_raises_with_partial_trajectory():
 
 def expected_columns(res):
     m, b = res.machines, res.buses
-    return (["t"] + [f"speed_pu.G{k}" for k in m] + [f"angle_rad.G{k}" for k in m]
-            + [f"pelect_pu.G{k}" for k in m] + [f"pmech_pu.G{k}" for k in m]
-            + [f"efd_pu.G{k}" for k in m] + [f"vmag_pu.B{n}" for n in b]
-            + [f"vang_rad.B{n}" for n in b])
+    return (
+        ["t"]
+        + [f"speed_pu.G{k}" for k in m]
+        + [f"angle_rad.G{k}" for k in m]
+        + [f"pelect_pu.G{k}" for k in m]
+        + [f"pmech_pu.G{k}" for k in m]
+        + [f"efd_pu.G{k}" for k in m]
+        + [f"vmag_pu.B{n}" for n in b]
+        + [f"vang_rad.B{n}" for n in b]
+    )
 
 
 def test_csv_export_columns_and_values(case1, tmp_path):
@@ -287,18 +304,31 @@ def test_csv_export_columns_and_values(case1, tmp_path):
     data = np.loadtxt(path, delimiter=",", skiprows=1)
     assert data.shape == (case1.t.size, len(header))
     np.testing.assert_allclose(data[:, 0], case1.t, rtol=1e-9)
-    np.testing.assert_allclose(data[:, header.index("speed_pu.G3")],
-                               case1.speed[:, case1.machine(3)], rtol=1e-9)
-    np.testing.assert_allclose(data[:, header.index("vmag_pu.B14")],
-                               case1.vmag[:, case1.bus(14)], rtol=1e-9)
-    assert [p.name for p in tmp_path.iterdir()] == ["run.csv"]    # no temporary leftovers
+    np.testing.assert_allclose(
+        data[:, header.index("speed_pu.G3")], case1.speed[:, case1.machine(3)], rtol=1e-9
+    )
+    np.testing.assert_allclose(
+        data[:, header.index("vmag_pu.B14")], case1.vmag[:, case1.bus(14)], rtol=1e-9
+    )
+    assert [p.name for p in tmp_path.iterdir()] == ["run.csv"]  # no temporary leftovers
 
 
 def test_npz_round_trip(case1, tmp_path):
     path = case1.to_npz(tmp_path / "run.npz")
     back = SimulationResult.from_npz(path)
-    for name in ("t", "machines", "buses", "speed", "angle", "pelect", "pmech", "efd", "vmag",
-                 "vang", "inertia"):
+    for name in (
+        "t",
+        "machines",
+        "buses",
+        "speed",
+        "angle",
+        "pelect",
+        "pmech",
+        "efd",
+        "vmag",
+        "vang",
+        "inertia",
+    ):
         np.testing.assert_array_equal(getattr(back, name), getattr(case1, name), err_msg=name)
     assert back.stable is False and back.separated == [1, 2]
     assert back.t_separation == pytest.approx(case1.t_separation)
@@ -314,7 +344,7 @@ def test_simultaneous_near_and_far_clearing_keeps_psts_zero_length_stage(kundur_
     res = kundur_pstess.run([fault_with_clearing(case, 3, 101, 1.0, 12)], t_end=2.0)
     dup = np.nonzero(np.diff(res.t) == 0)[0]
     assert dup.size == 1 and res.t[dup[0]] == pytest.approx(1.2)
-    v101 = res.vmag[dup[0]:dup[0] + 2, res.bus(101)]
-    assert v101[0] < 0.7 and v101[1] > 0.9          # fed fault, then line out
-    assert res.vmag[dup[0], res.bus(3)] > 0.9        # near end already open
-    np.testing.assert_array_equal(res.speed[dup[0]], res.speed[dup[0] + 1])   # h = 0 step
+    v101 = res.vmag[dup[0] : dup[0] + 2, res.bus(101)]
+    assert v101[0] < 0.7 and v101[1] > 0.9  # fed fault, then line out
+    assert res.vmag[dup[0], res.bus(3)] > 0.9  # near end already open
+    np.testing.assert_array_equal(res.speed[dup[0]], res.speed[dup[0] + 1])  # h = 0 step

@@ -3,17 +3,17 @@
 import numpy as np
 import pytest
 
+from stabctl.dynamics.driver import CommandFrames, Simulator
+from stabctl.dynamics.events import fault_with_clearing
 from stabctl.errors import InputError
 from stabctl.estimation import closed_loop as cl
-from stabctl.io import load_case
-from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.driver import CommandFrames, Simulator
 from stabctl.estimation.ambient import AmbientLoad
 from stabctl.estimation.settings import PMUSettings
+from stabctl.io import load_case
 from stabctl.parallel import RunnerOptions
 from stabctl.stability.cct import LineFault
-from stabctl.storage.devices import StorageFleet, uniform_fleet
 from stabctl.storage.control import ExternalCommands
+from stabctl.storage.devices import StorageFleet, uniform_fleet
 
 
 @pytest.fixture(scope="module")
@@ -24,25 +24,31 @@ def kundur():
 
 
 def test_ekf_in_the_loop_keeps_the_17_cycle_fault_stable_like_the_ideal_controller(kundur):
-    case, sim, ev = kundur
-    ekf = cl.run_closed_loop(sim, ev, 6.0, cl.LoopOptions(5, "ekf", PMUSettings(rate=60, latency_s=0.05), 3))
-    ideal = cl.run_closed_loop(sim, ev, 6.0, cl.LoopOptions(5, "ideal", PMUSettings(rate=60, latency_s=0.05)))
+    _case, sim, ev = kundur
+    ekf = cl.run_closed_loop(
+        sim, ev, 6.0, cl.LoopOptions(5, "ekf", PMUSettings(rate=60, latency_s=0.05), 3)
+    )
+    ideal = cl.run_closed_loop(
+        sim, ev, 6.0, cl.LoopOptions(5, "ideal", PMUSettings(rate=60, latency_s=0.05))
+    )
     assert ekf.result.stable and ideal.result.stable
-    assert not sim.run(ev, t_end=6.0).stable                      # without storage
+    assert not sim.run(ev, t_end=6.0).stable  # without storage
     assert len(ekf.result.meta["switchings"]) >= 8
     assert ekf.diagnostics.modes.shape == (361, 4)
 
 
 def test_ideal_closed_loop_reproduces_the_internal_controller_verdict(kundur):
     case, sim, ev = kundur
-    loop = cl.run_closed_loop(sim, ev, 6.0, cl.LoopOptions(5, "ideal", PMUSettings(rate=120, latency_s=0.0)))
+    loop = cl.run_closed_loop(
+        sim, ev, 6.0, cl.LoopOptions(5, "ideal", PMUSettings(rate=120, latency_s=0.0))
+    )
     inner = sim.run(ev, t_end=6.0, storage=uniform_fleet(case, 5))
     assert loop.result.stable == inner.stable is True
     assert np.abs(loop.result.speed[-1] - inner.speed[-1]).max() < 2e-3
 
 
 def test_same_seed_same_switchings_other_seed_other_noise(kundur):
-    case, sim, ev = kundur
+    _case, sim, ev = kundur
     runs = [cl.run_closed_loop(sim, ev, 3.0, cl.LoopOptions(5, "kf", seed=s)) for s in (7, 7, 8)]
     assert runs[0].result.meta["switchings"] == runs[1].result.meta["switchings"]
     assert np.array_equal(runs[0].diagnostics.rel, runs[1].diagnostics.rel)
@@ -55,14 +61,15 @@ def test_stop_at_separation_ends_the_commanded_run_where_run_does(kundur):
     case, sim, ev = kundur
     fleet = StorageFleet(uniform_fleet(case, 5).devices, ExternalCommands())
     frames = np.arange(361) / 60
-    idle = sim.run_commanded(ev, 6.0, fleet, CommandFrames(frames, lambda t, p: np.zeros(4)),
-                             stop_at_separation=True)
+    idle = sim.run_commanded(
+        ev, 6.0, fleet, CommandFrames(frames, lambda t, p: np.zeros(4)), stop_at_separation=True
+    )
     plain = sim.run(ev, t_end=6.0, stop_at_separation=True)
     assert not idle.stable and not plain.stable
     assert idle.t[-1] == idle.t_separation < 6.0
-    assert abs(idle.t_separation - plain.t_separation) <= 0.01          # one step
+    assert abs(idle.t_separation - plain.t_separation) <= 0.01  # one step
     assert idle.separated == plain.separated
-    assert len(idle.meta["storage"]) == 4                                 # kept when stopped
+    assert len(idle.meta["storage"]) == 4  # kept when stopped
 
 
 def test_kf_in_the_loop_keeps_the_20_cycle_fault_at_20_percent_stable(kundur):
@@ -82,9 +89,9 @@ def test_no_false_action_in_the_loop_under_ambient_load_noise(kundur):
         res = run.result
         assert [s["switchings"] for s in res.meta["storage"][:4]] == [0, 0, 0, 0]
         assert cl.false_actions(run) == 0
-        assert np.abs(run.diagnostics.rel).max() < 0.1                    # Hz, the deadband
+        assert np.abs(run.diagnostics.rel).max() < 0.1  # Hz, the deadband
     rel = (res.speed - res.coi_speed[:, None]) * case.freq_hz
-    assert np.abs(rel).max() > 1e-3                    # the loads do move the machines (Hz)
+    assert np.abs(rel).max() > 1e-3  # the loads do move the machines (Hz)
 
 
 def test_seed_rule_half_width_is_student_t_with_the_lattice_floor():
@@ -94,7 +101,7 @@ def test_seed_rule_half_width_is_student_t_with_the_lattice_floor():
     assert rule.half_width([8.5, 8.75, 8.5, 8.75, 8.75], 0.25) == pytest.approx(0.170, abs=1e-3)
     # five equal CCTs: no sample spread, the binomial floor (1 - 0.05^(1/5)) / 4 = 0.1127
     assert rule.half_width([12.0] * 5, 0.25) == pytest.approx(0.1127, abs=1e-4)
-    assert rule.half_width([12.0, np.nan], 0.25) == np.inf          # one finite value
+    assert rule.half_width([12.0, np.nan], 0.25) == np.inf  # one finite value
     with pytest.raises(InputError, match="batch <= max_runs"):
         cl.SeedRule(batch=5, max_runs=4)
     with pytest.raises(InputError, match="confidence"):
@@ -106,19 +113,24 @@ def test_cct_study_adds_seed_batches_until_the_interval_is_narrow(tmp_path):
     # cycles (reports/estimation_kundur.md, 20 seeds).  With batches of 2 the lattice floor
     # is 0.194 cycle at 2 seeds, 0.132 at 4 and 0.099 at 6 (< 0.125): three rounds
     rule = cl.SeedRule(batch=2, max_runs=8)
-    table = cl.cct_study("kundur", LineFault(3, 101), [5.0], rule, tmp_path / "cct.jsonl",
-                         estimators=("ideal", "raw"),
-                         runner=RunnerOptions(progress=False))[5.0]
+    table = cl.cct_study(
+        "kundur",
+        LineFault(3, 101),
+        [5.0],
+        rule,
+        tmp_path / "cct.jsonl",
+        estimators=("ideal", "raw"),
+        runner=RunnerOptions(progress=False),
+    )[5.0]
     assert table["ideal"]["runs"] == 1 and table["ideal"]["half_width"] is None
     assert table["raw"]["runs"] == 6
     assert table["raw"]["values"] == [12.0] * 6
     assert table["raw"]["half_width"] == pytest.approx((1 - 0.05 ** (1 / 6)) / 4)
 
 
-
-
 def test_cct_study_passes_the_pmu_window_to_every_run_and_names_it_when_not_default(
-        tmp_path, monkeypatch):
+    tmp_path, monkeypatch
+):
     # the default window keeps the records' keys and inputs as they were (committed records
     # stay valid); another window is part of both, and reaches the PMUs of every loop run
     from types import SimpleNamespace
@@ -129,22 +141,42 @@ def test_cct_study_passes_the_pmu_window_to_every_run_and_names_it_when_not_defa
 
     def fake_sweep(jobs, out, **kw):
         seen["jobs"] = jobs
-        return SimpleNamespace(records={j.key: {"status": "ok",
-                                                "result": {"cct_cycles": 12.0}} for j in jobs})
+        return SimpleNamespace(
+            records={j.key: {"status": "ok", "result": {"cct_cycles": 12.0}} for j in jobs}
+        )
 
     monkeypatch.setattr(par, "run_sweep", fake_sweep)
     for window, tail in ((2.0, "seed0"), (4.0, "seed0/w4c")):
-        cl.cct_study("kundur", LineFault(3, 101), [5.0], 1, tmp_path / "cct.jsonl",
-                     estimators=("raw",), pmu=PMUSettings(window_cycles=window),
-                     runner=RunnerOptions(workers=1, progress=False))
-        job, = seen["jobs"]
+        cl.cct_study(
+            "kundur",
+            LineFault(3, 101),
+            [5.0],
+            1,
+            tmp_path / "cct.jsonl",
+            estimators=("raw",),
+            pmu=PMUSettings(window_cycles=window),
+            runner=RunnerOptions(workers=1, progress=False),
+        )
+        (job,) = seen["jobs"]
         assert job.key.endswith(tail)
         assert job.inputs.get("window_cycles", 2.0) == window
         assert ("window_cycles" in job.inputs) == (window != 2.0)
     got = {}
-    monkeypatch.setattr(cl, "run_closed_loop",
-                        lambda sim, ev, t, loop, **k: got.setdefault("w", loop.pmu.window_cycles))
-    with pytest.raises(AttributeError):          # the fake returns a float, not a run
-        cl.cct_job({"case": "kundur", "bus": 3, "far_bus": 101, "esd_pct": 5.0,
-                    "estimator": "raw", "seed": 0, "window_cycles": 4.0})
+    monkeypatch.setattr(
+        cl,
+        "run_closed_loop",
+        lambda sim, ev, t, loop, **k: got.setdefault("w", loop.pmu.window_cycles),
+    )
+    with pytest.raises(AttributeError):  # the fake returns a float, not a run
+        cl.cct_job(
+            {
+                "case": "kundur",
+                "bus": 3,
+                "far_bus": 101,
+                "esd_pct": 5.0,
+                "estimator": "raw",
+                "seed": 0,
+                "window_cycles": 4.0,
+            }
+        )
     assert got["w"] == 4.0

@@ -9,20 +9,28 @@ import pytest
 import scipy.linalg
 from click.testing import CliRunner
 
-from stabctl.estimation.filters import FrequencyKF, SwingEKF, nis_bounds
-from stabctl.estimation.models import (FrequencyTuning, Governors, LinearSystems, MachineModels,
-                                       QAxis, SwingTuning, coi_speed, machine_models,
-                                       relative_speeds)
-from stabctl.estimation.reference import FrequencyKFReference, SwingEKFReference
-from stabctl.studies import estimation as study
-from stabctl.estimation import pmu
-from stabctl.io import load_case
 from stabctl.cli import main
-from stabctl.errors import InputError
-from stabctl.dynamics.events import fault_with_clearing
 from stabctl.dynamics.driver import Simulator
-from stabctl.storage.devices import pack, uniform_fleet
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.errors import InputError
+from stabctl.estimation import pmu
+from stabctl.estimation.filters import FrequencyKF, SwingEKF, nis_bounds
+from stabctl.estimation.models import (
+    FrequencyTuning,
+    Governors,
+    LinearSystems,
+    MachineModels,
+    QAxis,
+    SwingTuning,
+    coi_speed,
+    machine_models,
+    relative_speeds,
+)
+from stabctl.estimation.reference import FrequencyKFReference, SwingEKFReference
+from stabctl.io import load_case
 from stabctl.storage.control import BangBangCOI
+from stabctl.storage.devices import pack, uniform_fleet
+from stabctl.studies import estimation as study
 
 F0, WB = 60.0, 2 * np.pi * 60.0
 H, X, EMAG, VMAG, PM = 5.0, 0.3, 1.1, 1.0, 0.8
@@ -37,12 +45,13 @@ def linear_swing(t_end=10.0, f_m=1.0, zeta=0.05, dP=0.5, t_on=1.0, t_off=1.1, am
     Returns t, speed (pu), P_ag and the PhasorTruth of its PMU.
     """
     wn = 2 * np.pi * f_m
-    K, De = wn ** 2 * 2 * H / WB, 4 * H * zeta * wn / WB
+    K, De = wn**2 * 2 * H / WB, 4 * H * zeta * wn / WB
     A = np.array([[0.0, WB], [-K / (2 * H), -De / (2 * H)]])
     dt = 1e-3
     t = np.round(np.arange(0, t_end + dt / 2, dt), 9)
-    E = scipy.linalg.expm(np.block([[A * dt, np.array([[0.0], [dt / (2 * H)]])],
-                                    [np.zeros((1, 3))]]))
+    E = scipy.linalg.expm(
+        np.block([[A * dt, np.array([[0.0], [dt / (2 * H)]])], [np.zeros((1, 3))]])
+    )
     x, xs = np.zeros(2), []
     for tk in t:
         xs.append(x)
@@ -54,22 +63,54 @@ def linear_swing(t_end=10.0, f_m=1.0, zeta=0.05, dP=0.5, t_on=1.0, t_off=1.1, am
     theta = delta - np.arcsin(pag * X / (EMAG * VMAG))
     e, v = EMAG * np.exp(1j * delta), VMAG * np.exp(1j * theta)
     cur = (e - v) / (1j * X)
-    truth = pmu.angle_truth(t, (pmu.PMU(bus=1, machine=1),), v[:, None], cur[:, None], F0,
-                            pmu.PMUSettings().window_s(F0))
+    truth = pmu.angle_truth(
+        t,
+        (pmu.PMU(bus=1, machine=1),),
+        v[:, None],
+        cur[:, None],
+        F0,
+        pmu.PMUSettings().window_s(F0),
+    )
     return t, 1 + w, pag, truth
 
 
 def classical_models():
     """MachineModels of the synthetic machine: classical, no governor, system base."""
     z1 = np.zeros(1)
-    gov = Governors(LinearSystems(np.zeros((1, 3, 3)), np.zeros((1, 3))), np.zeros((1, 3)),
-                       np.zeros((1, 3)), np.ones(1), z1, np.full(1, np.inf), np.zeros(1, bool))
-    qax = QAxis(LinearSystems(np.zeros((1, 2, 2)), np.zeros((1, 2))), np.zeros((1, 2)),
-                   np.ones(1), np.zeros(1, bool), np.zeros(1, int), z1, z1, z1, np.full(1, X))
-    return MachineModels(numbers=np.array([1]), pmu=np.array([0]), H=np.full(1, H), D=z1,
-                            pot=np.ones(1), ra=z1, z_emf=np.full(1, 1j * X),
-                            per_speed=np.zeros(1, bool), inertia=np.full(1, H * 100.0), f0=F0,
-                            governor=gov, qaxis=qax)
+    gov = Governors(
+        LinearSystems(np.zeros((1, 3, 3)), np.zeros((1, 3))),
+        np.zeros((1, 3)),
+        np.zeros((1, 3)),
+        np.ones(1),
+        z1,
+        np.full(1, np.inf),
+        np.zeros(1, bool),
+    )
+    qax = QAxis(
+        LinearSystems(np.zeros((1, 2, 2)), np.zeros((1, 2))),
+        np.zeros((1, 2)),
+        np.ones(1),
+        np.zeros(1, bool),
+        np.zeros(1, int),
+        z1,
+        z1,
+        z1,
+        np.full(1, X),
+    )
+    return MachineModels(
+        numbers=np.array([1]),
+        pmu=np.array([0]),
+        H=np.full(1, H),
+        D=z1,
+        pot=np.ones(1),
+        ra=z1,
+        z_emf=np.full(1, 1j * X),
+        per_speed=np.zeros(1, bool),
+        inertia=np.full(1, H * 100.0),
+        f0=F0,
+        governor=gov,
+        qaxis=qax,
+    )
 
 
 def feed(f, stream):
@@ -93,32 +134,39 @@ def test_ekf_on_a_linear_swing_is_unbiased_accurate_and_consistent(swing):
         stream = pmu.measure(truth, st, seed)
         speed, var, nis = feed(SwingEKF(models, st, tun), stream)
         sel = stream.t > 1.2
-        err = (speed[sel, 0] - true_speed(stream.t[sel])) * F0 * 1e3          # mHz
+        err = (speed[sel, 0] - true_speed(stream.t[sel])) * F0 * 1e3  # mHz
         bias.append(err.mean())
-        rmse.append(np.sqrt(np.mean(err ** 2)))
+        rmse.append(np.sqrt(np.mean(err**2)))
         lo, hi = nis_bounds(1)
         inside.append(np.mean((nis[sel] > lo) & (nis[sel] < hi)))
         # the filter's own variance matches its error
-        assert np.mean(err ** 2 / (var[sel, 0] * (F0 * 1e3) ** 2)) == pytest.approx(1, abs=0.35)
-    assert abs(np.mean(bias)) < 0.1 and np.mean(rmse) < 2.0     # mHz; the swing is 300 mHz
+        assert np.mean(err**2 / (var[sel, 0] * (F0 * 1e3) ** 2)) == pytest.approx(1, abs=0.35)
+    assert abs(np.mean(bias)) < 0.1 and np.mean(rmse) < 2.0  # mHz; the swing is 300 mHz
     assert np.mean(inside) == pytest.approx(0.95, abs=0.02)
 
 
 def test_baseline_kf_smooths_the_pmu_frequency_consistently():
     t = np.linspace(0, 60, 60001)
-    f = 60 + 0.05 * np.sin(2 * np.pi * 0.2 * t)                 # 0.2 Hz, 50 mHz
+    f = 60 + 0.05 * np.sin(2 * np.pi * 0.2 * t)  # 0.2 Hz, 50 mHz
     rocof = 0.05 * 2 * np.pi * 0.2 * np.cos(2 * np.pi * 0.2 * t)
     ones = np.ones((t.size, 1))
-    truth = pmu.PhasorTruth(t=t, pmus=(pmu.PMU(bus=1),), v=ones + 0j, i=ones * np.nan,
-                            freq=f[:, None], rocof=rocof[:, None], f0=F0)
+    truth = pmu.PhasorTruth(
+        t=t,
+        pmus=(pmu.PMU(bus=1),),
+        v=ones + 0j,
+        i=ones * np.nan,
+        freq=f[:, None],
+        rocof=rocof[:, None],
+        f0=F0,
+    )
     st = pmu.PMUSettings()
     stream = pmu.measure(truth, st, seed=2)
-    speed, var, nis = feed(FrequencyKF([0], st, FrequencyTuning(rocof_walk=0.001)), stream)
+    speed, _var, nis = feed(FrequencyKF([0], st, FrequencyTuning(rocof_walk=0.001)), stream)
     sel = stream.t > 2
     e_kf = (speed[sel, 0] * F0 - stream.true.freq[sel, 0]) * 1e3
     e_raw = (stream.freq[sel, 0] - stream.true.freq[sel, 0]) * 1e3
     assert abs(e_kf.mean()) < 0.05
-    assert np.sqrt(np.mean(e_kf ** 2)) < 0.3 * np.sqrt(np.mean(e_raw ** 2))
+    assert np.sqrt(np.mean(e_kf**2)) < 0.3 * np.sqrt(np.mean(e_raw**2))
     lo, hi = nis_bounds(2)
     assert np.mean((nis[sel] > lo) & (nis[sel] < hi)) == pytest.approx(0.95, abs=0.02)
 
@@ -128,16 +176,16 @@ def test_dropped_frames_are_predicted_over(swing):
     st = pmu.PMUSettings(drop_prob=0.1)
     stream = pmu.measure(truth, st, seed=5)
     f = SwingEKF(classical_models(), st)
-    speed, var, nis = feed(f, stream)
+    speed, _var, nis = feed(f, stream)
     start = np.argmax(stream.valid[:, 0])
     assert np.all(np.isfinite(speed[start:]))
-    assert np.all(np.isnan(nis[~stream.valid[:, 0]]))           # no update without a frame
+    assert np.all(np.isnan(nis[~stream.valid[:, 0]]))  # no update without a frame
     sel = stream.t > 1.2
     err = (speed[sel, 0] - true_speed(stream.t[sel])) * F0 * 1e3
-    assert np.sqrt(np.mean(err ** 2)) < 4.0
+    assert np.sqrt(np.mean(err**2)) < 4.0
     lo, hi = nis_bounds(1)
     n = nis[sel, 0][np.isfinite(nis[sel, 0])]
-    assert 0.93 < np.mean((n > lo) & (n < hi)) < 0.99          # still consistent
+    assert 0.93 < np.mean((n > lo) & (n < hi)) < 0.99  # still consistent
 
 
 def test_frames_must_come_in_time_order(swing):
@@ -171,7 +219,7 @@ def test_coi_and_relative_speeds_with_variances():
     draws = speed + rng.normal(size=(200000, 3)) * np.sqrt(var)
     for coi in ("system", "rest"):
         r, rv = relative_speeds(speed, var, M, coi)
-        rd = relative_speeds(draws, draws, M, coi)[0]           # (..., n) stacks work
+        rd = relative_speeds(draws, draws, M, coi)[0]  # (..., n) stacks work
         np.testing.assert_allclose(rd.mean(axis=0), r, atol=2e-6)
         np.testing.assert_allclose(rd.var(axis=0), rv, rtol=0.02)
     rest0 = speed[0] - (2 * 0.999 + 5 * 1.0) / 7
@@ -190,12 +238,12 @@ def kundur():
 
 
 def test_kundur_relative_speed_well_inside_the_deadband(kundur):
-    case, res, pmus, models, truth = kundur
+    _case, res, _pmus, models, truth = kundur
     st = pmu.PMUSettings(drop_prob=0.02)
     stream = pmu.measure(truth, st, seed=3)
     tracks = study.run_estimators(stream, models)
     fig = {k: study.errors(v, res, stream, (1.3, 8.0)) for k, v in tracks.items()}
-    assert fig["ekf"]["rel_rmse_mhz"] < 3.0                      # deadband: 100 mHz
+    assert fig["ekf"]["rel_rmse_mhz"] < 3.0  # deadband: 100 mHz
     assert fig["ekf"]["coi_rmse_mhz"] < 3.0
     assert fig["ekf"]["rel_rmse_mhz"] < fig["kf"]["rel_rmse_mhz"] / 3
     assert fig["ekf"]["rel_forecast_rmse_mhz"] < fig["ekf"]["rel_arrival_rmse_mhz"] / 2
@@ -203,18 +251,20 @@ def test_kundur_relative_speed_well_inside_the_deadband(kundur):
 
 
 def test_compiled_filters_equal_the_filterpy_reference(kundur):
-    case, res, pmus, models, truth = kundur
+    _case, _res, _pmus, models, truth = kundur
     st = pmu.PMUSettings(drop_prob=0.1)
     stream = pmu.measure(truth, st, seed=1)
-    for fast, ref in ((FrequencyKF(models.pmu, st), FrequencyKFReference(models.pmu, st)),
-                      (SwingEKF(models, st), SwingEKFReference(models, st))):
+    for fast, ref in (
+        (FrequencyKF(models.pmu, st), FrequencyKFReference(models.pmu, st)),
+        (SwingEKF(models, st), SwingEKFReference(models, st)),
+    ):
         a, b = feed(fast, stream), feed(ref, stream)
         for x, y in zip(a, b):
             np.testing.assert_allclose(x, y, rtol=1e-9, atol=1e-14)
 
 
 def test_same_seed_same_estimates(kundur):
-    case, res, pmus, models, truth = kundur
+    _case, _res, _pmus, models, truth = kundur
     runs = [study.run_estimators(pmu.measure(truth, seed=9), models)["ekf"].speed for _ in range(2)]
     np.testing.assert_array_equal(*runs)
 
@@ -224,28 +274,48 @@ def test_false_actions_follow_table_3():
     sa = pack(uniform_fleet(case, 1.0, BangBangCOI()), case, np.arange(case.n_bus))
     db = 0.1 / 60
     rel = np.zeros((6, 4))
-    rel[:, 0] = [0, 2 * db, 2 * db, 0, -2 * db, 0.5 * db]       # two actions
-    rel[:, 3] = [0, 0.9 * db, -0.9 * db, 0, 0, 0]               # inside the band: none
+    rel[:, 0] = [0, 2 * db, 2 * db, 0, -2 * db, 0.5 * db]  # two actions
+    rel[:, 3] = [0, 0.9 * db, -0.9 * db, 0, 0, 0]  # inside the band: none
     assert study._count_actions(sa, rel) == 2
 
 
 def test_estimate_command_json_and_bad_input():
-    res = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
-                                    "--tf", "4", "--runs", "2", "--ambient-s", "3", "--json"])
+    res = CliRunner().invoke(
+        main,
+        [
+            "estimate",
+            "kundur",
+            "--fault",
+            "3",
+            "--far-bus",
+            "101",
+            "--tf",
+            "4",
+            "--runs",
+            "2",
+            "--ambient-s",
+            "3",
+            "--json",
+        ],
+    )
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
     assert set(d["estimators"]) == {"raw", "kf", "ekf"} and d["runs"] == 2
     assert d["estimators"]["ekf"]["rel_rmse_mhz"]["mean"] < 3.0
     assert len(d["estimators"]["ekf"]["rel_rmse_mhz"]["runs"]) == 2
     assert d["false_actions"]["true"]["actions"]["mean"] == 0
-    assert d["false_actions"]["true"]["std_rel_mhz"]["mean"] > 0      # the loads move it
+    assert d["false_actions"]["true"]["std_rel_mhz"]["mean"] > 0  # the loads move it
     assert d["ambient"]["pct"] == 1.0 and d["ambient"]["runs"] == 5
     assert d["window_s"] == pytest.approx([1.2, 4.0])
-    neg = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
-                                    "--ambient-pct", "-1"])
-    assert neg.exit_code == 2 and neg.stderr.startswith("error: --ambient-pct -1: must be in [0, 100] %")
-    bad = CliRunner().invoke(main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101",
-                                    "--rate", "50"])
+    neg = CliRunner().invoke(
+        main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101", "--ambient-pct", "-1"]
+    )
+    assert neg.exit_code == 2 and neg.stderr.startswith(
+        "error: --ambient-pct -1: must be in [0, 100] %"
+    )
+    bad = CliRunner().invoke(
+        main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101", "--rate", "50"]
+    )
     assert bad.exit_code == 2 and bad.stderr.startswith("error: PMU rate must be one of")
 
 
@@ -256,16 +326,24 @@ def test_baseline_kf_forecast_does_not_amplify_a_bus_angle_step():
     # extrapolated ROCOF would add 50 ms * A / w = 1.5 A) and return once both windows
     # have passed.
     st, w, dth, t_step = pmu.PMUSettings(), 2 / F0, 0.05, 1.0 + 1 / 240
-    pulse = dth / (2 * np.pi * w)                                          # Hz, 239 mHz
-    phase = lambda t: dth * (t >= t_step)                                  # noqa: E731
-    freq = lambda t: F0 + (phase(t) - phase(t - w)) / (2 * np.pi * w)      # noqa: E731
+    pulse = dth / (2 * np.pi * w)  # Hz, 239 mHz
+    phase = lambda t: dth * (t >= t_step)  # noqa: E731
+    freq = lambda t: F0 + (phase(t) - phase(t - w)) / (2 * np.pi * w)  # noqa: E731
     rng = np.random.default_rng(0)
     kf, out = FrequencyKF([0], st, f0=F0), []
     for t in np.arange(1, 150) / F0:
         z = freq(t) + rng.normal() * st.sigma_freq
         r = (freq(t) - freq(t - w)) / w + rng.normal() * st.sigma_rocof
-        kf.step(pmu.Frame(t, np.array([True]), np.ones(1, complex), np.ones(1, complex),
-                          np.array([z]), np.array([r])))
+        kf.step(
+            pmu.Frame(
+                t,
+                np.array([True]),
+                np.ones(1, complex),
+                np.ones(1, complex),
+                np.array([z]),
+                np.array([r]),
+            )
+        )
         out.append((t, (kf.forecast(st.latency_s)[0][0] - 1) * F0))
     t, dev = np.array(out).T
     assert np.abs(dev).max() <= 1.1 * pulse

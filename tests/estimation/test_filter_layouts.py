@@ -23,13 +23,17 @@ def test_each_named_column_holds_its_declared_value():
     np.testing.assert_array_equal(P[:, C.ZIM], m.z_emf.imag)
     np.testing.assert_array_equal(P[:, C.QC2], m.qaxis.c[:, 1])
     np.testing.assert_array_equal(P[:, C.GACT], m.governor.active)
-    np.testing.assert_array_equal(P[:, C.GC:C.GC + NG], m.governor.c)
-    np.testing.assert_array_equal(P[:, C.GU:C.GU + NG], m.governor.g_unit)
+    np.testing.assert_array_equal(P[:, C.GC : C.GC + NG], m.governor.c)
+    np.testing.assert_array_equal(P[:, C.GU : C.GU + NG], m.governor.g_unit)
     tun, s = SwingTuning(jump_pu=0.25), PMUSettings()
     tv = _tuning_vector(tun, s, 50.0)
     assert tv.shape == (len(T),)
-    assert (tv[T.JUMP], tv[T.SIG2], tv[T.SIGF], tv[T.F0]) == \
-        (0.25, s.sigma_phasor ** 2, s.sigma_freq, 50.0)
+    assert (tv[T.JUMP], tv[T.SIG2], tv[T.SIGF], tv[T.F0]) == (
+        0.25,
+        s.sigma_phasor**2,
+        s.sigma_freq,
+        50.0,
+    )
     assert SwingEKF(m, s).held.hold.shape == (m.n, len(H))
 
 

@@ -5,11 +5,11 @@ currents)."""
 import numpy as np
 import pytest
 
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.errors import InputError
 from stabctl.estimation import pmu
 from stabctl.io import load_case
-from stabctl.errors import InputError
-from stabctl.dynamics.events import fault_with_clearing
-from stabctl.dynamics.driver import Simulator
 from stabctl.storage.devices import uniform_fleet
 
 
@@ -17,9 +17,15 @@ def constant_truth(n_pmu=2, t_end=100.0, f=60.0):
     """Steady phasors on a 1 kHz grid: V = 1.02 at 0.3 rad, I = 0.8 at -0.2 rad."""
     t = np.linspace(0.0, t_end, int(t_end * 1000) + 1)
     ones = np.ones((t.size, n_pmu))
-    return pmu.PhasorTruth(t=t, pmus=tuple(pmu.PMU(bus=b + 1, machine=b + 1) for b in range(n_pmu)),
-                           v=1.02 * np.exp(0.3j) * ones, i=0.8 * np.exp(-0.2j) * ones,
-                           freq=f * ones, rocof=0 * ones, f0=60.0)
+    return pmu.PhasorTruth(
+        t=t,
+        pmus=tuple(pmu.PMU(bus=b + 1, machine=b + 1) for b in range(n_pmu)),
+        v=1.02 * np.exp(0.3j) * ones,
+        i=0.8 * np.exp(-0.2j) * ones,
+        freq=f * ones,
+        rocof=0 * ones,
+        f0=60.0,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -29,17 +35,17 @@ def steady_stream():
 
 def test_phasor_noise_matches_the_tve_limit_as_a_3_sigma_bound(steady_stream):
     s = steady_stream
-    e = s.v / s.true.v - 1                                     # relative phasor error
-    sigma = 0.01 / (3 * np.sqrt(2))                            # 0.236 %
+    e = s.v / s.true.v - 1  # relative phasor error
+    sigma = 0.01 / (3 * np.sqrt(2))  # 0.236 %
     assert np.std(np.abs(s.v) / np.abs(s.true.v) - 1) == pytest.approx(sigma, rel=0.03)
-    assert np.std(np.angle(s.v / s.true.v)) == pytest.approx(sigma, rel=0.03)   # rad
+    assert np.std(np.angle(s.v / s.true.v)) == pytest.approx(sigma, rel=0.03)  # rad
     assert abs(np.mean(e.real)) < 4 * sigma / np.sqrt(e.size)
     tve = np.abs(e)
-    assert np.sqrt(np.mean(tve ** 2)) == pytest.approx(0.01 / 3, rel=0.03)      # RMS = limit/k
-    assert np.mean(tve <= 0.01) > 0.999                        # P(TVE > 1 %) = exp(-9)
+    assert np.sqrt(np.mean(tve**2)) == pytest.approx(0.01 / 3, rel=0.03)  # RMS = limit/k
+    assert np.mean(tve <= 0.01) > 0.999  # P(TVE > 1 %) = exp(-9)
     ei = s.i / s.true.i - 1
     assert np.std(ei.imag) == pytest.approx(sigma, rel=0.03)
-    assert abs(np.corrcoef(e.real.ravel(), ei.real.ravel())[0, 1]) < 0.03   # independent
+    assert abs(np.corrcoef(e.real.ravel(), ei.real.ravel())[0, 1]) < 0.03  # independent
 
 
 def test_frequency_and_rocof_noise(steady_stream):
@@ -64,7 +70,7 @@ def test_same_seed_same_stream_and_independent_pmus():
     for name in ("v", "i", "freq", "rocof", "valid"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
     assert not np.allclose(a.freq, c.freq)
-    more = pmu.measure(constant_truth(4, 5.0), seed=11)         # a PMU added at the end
+    more = pmu.measure(constant_truth(4, 5.0), seed=11)  # a PMU added at the end
     np.testing.assert_array_equal(more.freq[:, :3], a.freq)
     assert abs(np.corrcoef(a.freq[:, 0], a.freq[:, 1])[0, 1]) < 0.15
 
@@ -94,9 +100,17 @@ def test_reporting_rates(rate):
     assert 60 / rate * s.t[int(rate)] == pytest.approx(60.0 / rate)
 
 
-@pytest.mark.parametrize("bad", [dict(rate=50.0), dict(tve=-0.01), dict(drop_prob=1.0),
-                                 dict(latency_s=-1.0), dict(k_sigma=0.0),
-                                 dict(window_cycles=-1.0)])
+@pytest.mark.parametrize(
+    "bad",
+    [
+        dict(rate=50.0),
+        dict(tve=-0.01),
+        dict(drop_prob=1.0),
+        dict(latency_s=-1.0),
+        dict(k_sigma=0.0),
+        dict(window_cycles=-1.0),
+    ],
+)
 def test_bad_settings(bad):
     with pytest.raises(InputError):
         pmu.PMUSettings(**bad)
@@ -107,12 +121,12 @@ def test_window_frequency_of_an_angle_parabola_is_exact():
     # difference of a parabola is its derivative at the window centre, exactly.
     t = np.linspace(0, 2, 2001)
     a = 0.1
-    ang = 2 * np.pi * 0.5 * t + a * t ** 2
+    ang = 2 * np.pi * 0.5 * t + a * t**2
     st = pmu.PMUSettings()
     w = st.window_s(60.0)
     c = np.array([0.5, 1.0, 1.5])
     f, r = pmu.window_estimates(t, np.angle(np.exp(1j * ang))[:, None], c, c, w, 60.0)
-    np.testing.assert_allclose(f[:, 0], 60.5 + a * c / np.pi, atol=1e-6)   # linear interp.
+    np.testing.assert_allclose(f[:, 0], 60.5 + a * c / np.pi, atol=1e-6)  # linear interp.
     np.testing.assert_allclose(r[:, 0], a / np.pi, atol=1e-4)
     with pytest.raises(InputError):
         pmu.window_estimates(t[::-1], ang[:, None], c, c, w, 60.0)
@@ -137,20 +151,20 @@ def test_an_angle_jump_adds_jump_over_2_pi_window_whatever_the_step(cycles):
         ang = 2 * np.pi * (f_ramp - 60.0) * t + np.where(t >= t_j, d, 0.0)
         f, r = pmu.centred_estimates(t, ang[:, None], frames, w, 60.0)
         err = f[:, 0] - f_ramp
-        away = np.abs(frames - t_j) >= w / 2 + h      # window clear of the smeared jump
+        away = np.abs(frames - t_j) >= w / 2 + h  # window clear of the smeared jump
         np.testing.assert_allclose(err[away], 0.0, atol=1e-9)
         assert np.all((err > -1e-9) & (err <= bound + 1e-9))
-        assert err.max() == pytest.approx(bound, rel=1e-9)         # the frame at the jump
-        assert np.abs(r[:, 0]).max() <= bound / w + 1e-6            # ROCOF: one window more
+        assert err.max() == pytest.approx(bound, rel=1e-9)  # the frame at the jump
+        assert np.abs(r[:, 0]).max() <= bound / w + 1e-6  # ROCOF: one window more
 
 
 def test_truth_frequency_is_evaluated_at_the_frames_and_checks_the_window():
     t = np.linspace(0, 2, 2001)
-    v = np.exp(1j * 2 * np.pi * 0.2 * t)[:, None]                    # 60.2 Hz
+    v = np.exp(1j * 2 * np.pi * 0.2 * t)[:, None]  # 60.2 Hz
     w = pmu.PMUSettings().window_s(60.0)
     truth = pmu.angle_truth(t, (pmu.PMU(bus=1),), v, v * np.nan, 60.0, w)
     s = pmu.measure(truth, pmu.PMUSettings(fe_hz=0.0, rfe_hz_s=0.0), seed=0)
-    np.testing.assert_allclose(s.true.freq, 60.2, atol=1e-9)         # ends included
+    np.testing.assert_allclose(s.true.freq, 60.2, atol=1e-9)  # ends included
     np.testing.assert_allclose(s.true.rocof, 0.0, atol=1e-6)
     with pytest.raises(InputError, match="window"):
         pmu.measure(truth, pmu.PMUSettings(window_cycles=4.0), seed=0)
@@ -161,7 +175,8 @@ def kundur_esd():
     case = load_case("kundur")
     fleet = uniform_fleet(case, 5)
     res = Simulator(case, injection_buses=fleet.buses).run(
-        [fault_with_clearing(case, 3, 101, 1.0, 6)], t_end=3.0, storage=fleet)
+        [fault_with_clearing(case, 3, 101, 1.0, 6)], t_end=3.0, storage=fleet
+    )
     return case, res
 
 
@@ -171,9 +186,9 @@ def test_generator_currents_carry_the_simulated_power(kundur_esd, at):
     pmus = pmu.machine_pmus(case, at)
     assert [p.bus for p in pmus] == ([1, 2, 11, 12] if at == "terminal" else [10, 20, 110, 120])
     truth = pmu.phasor_truth(case, res, pmus)
-    keep = np.r_[np.diff(res.t) > 0, True]                   # the repeated clearing instant
+    keep = np.r_[np.diff(res.t) > 0, True]  # the repeated clearing instant
     P = (truth.v * np.conj(truth.i)).real
-    np.testing.assert_allclose(P, res.pelect[keep], atol=1e-9)   # lossless step-up branches
+    np.testing.assert_allclose(P, res.pelect[keep], atol=1e-9)  # lossless step-up branches
     np.testing.assert_allclose(truth.freq[0], 60.0, atol=1e-9)
 
 
@@ -182,19 +197,23 @@ def test_device_current_and_labels(kundur_esd):
     pmus = (pmu.PMU(bus=10, device=1), pmu.PMU(bus=20))
     truth = pmu.phasor_truth(case, res, pmus)
     keep = np.r_[np.diff(res.t) > 0, True]
-    np.testing.assert_allclose((truth.v[:, 0] * np.conj(truth.i[:, 0])).real,
-                               -res.pesd[keep, 0], atol=1e-12)    # absorbing is + for ESDs
+    np.testing.assert_allclose(
+        (truth.v[:, 0] * np.conj(truth.i[:, 0])).real, -res.pesd[keep, 0], atol=1e-12
+    )  # absorbing is + for ESDs
     assert np.all(np.isnan(truth.i[:, 1]))
     s = pmu.measure(truth, seed=0)
     assert s.labels == ["B10:D1", "B20:V"]
     assert np.all(np.isnan(s.power[:, 1]))
 
 
-@pytest.mark.parametrize("p, match", [
-    (pmu.PMU(bus=20, device=1), "device 1 is at bus 10"),
-    (pmu.PMU(bus=10, device=9), "device 9 is not in the result"),
-    (pmu.PMU(bus=3, machine=1), "no branch joins it"),
-])
+@pytest.mark.parametrize(
+    "p, match",
+    [
+        (pmu.PMU(bus=20, device=1), "device 1 is at bus 10"),
+        (pmu.PMU(bus=10, device=9), "device 9 is not in the result"),
+        (pmu.PMU(bus=3, machine=1), "no branch joins it"),
+    ],
+)
 def test_bad_pmus(kundur_esd, p, match):
     case, res = kundur_esd
     with pytest.raises(InputError, match=match):

@@ -7,9 +7,9 @@ equilibrium, and its field voltage and rotor angle are ANDES's closed forms (``v
 import numpy as np
 import pytest
 
+from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
 from stabctl.io import load_case
-from stabctl.dynamics.driver import Simulator
 
 S10, S12 = 0.09, 0.38
 
@@ -18,9 +18,14 @@ def saturated(psse_sat: float = 1.0, s10: float = S10, s12: float = S12):
     case = load_case("kundur")
     n = len(case.machines)
     full = np.full
-    return case.replace(machines=case.machines.replace(
-        S10=full(n, s10), S12=full(n, s12), speed_effects=full(n, 0.0),
-        psse_sat=full(n, psse_sat)))
+    return case.replace(
+        machines=case.machines.replace(
+            S10=full(n, s10),
+            S12=full(n, s12),
+            speed_effects=full(n, 0.0),
+            psse_sat=full(n, psse_sat),
+        )
+    )
 
 
 def andes_closed_forms(case, model):
@@ -40,7 +45,7 @@ def andes_closed_forms(case, model):
     th = np.angle(psi20) - np.angle(I)
     delta0 = np.arctan(_b * np.cos(th) / (_b * np.sin(th) - _a)) + np.angle(psi20)
     Tdq = np.cos(delta0) - 1j * np.sin(delta0)
-    psi2d0, Id0 = (psi20 * Tdq).real, np.conj(I * Tdq).imag   # lines 113-125
+    psi2d0, Id0 = (psi20 * Tdq).real, np.conj(I * Tdq).imag  # lines 113-125
     return delta0, (Se0 + 1) * psi2d0 + (m.xd - m.xdpp) * Id0, Se0
 
 
@@ -48,7 +53,7 @@ def test_saturated_initial_point_is_an_equilibrium_at_andes_field_voltage_and_an
     case = saturated()
     model = Simulator(case).model_for(())
     delta0, vf0, Se0 = andes_closed_forms(case, model)
-    assert np.all(Se0 > 0.01)                      # saturated operating points
+    assert np.all(Se0 > 0.01)  # saturated operating points
     n = len(case.machines)
     np.testing.assert_allclose(model.x0[:n], delta0, atol=1e-12)
     np.testing.assert_allclose(model.vex0, vf0, rtol=1e-12)

@@ -11,9 +11,9 @@ r_a; PSS/E imports usually do (ZSORCE R).
 import numpy as np
 import pytest
 
+from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
 from stabctl.models.machines import EM, SUB, TRA, machine_params
-from stabctl.dynamics.driver import Simulator
 
 RA = 0.003
 KINDS = {"mac_sub": SUB, "mac_tra": TRA, "mac_em": EM}
@@ -74,6 +74,6 @@ def test_ra_enters_the_network_on_the_system_base():
     model = Simulator(case).model_for()
     S = model.op.S_gen[mp.bus_idx]
     I = np.abs(S / model.op.V[mp.bus_idx]) * mp.mac_pot
-    np.testing.assert_allclose(model.pmech0, S.real * mp.mac_pot + RA * I ** 2, rtol=1e-12)
+    np.testing.assert_allclose(model.pmech0, S.real * mp.mac_pot + RA * I**2, rtol=1e-12)
     em = machine_params(kundur_with_ra("mac_em"))
     np.testing.assert_allclose(1.0 / em.y_internal, 1j * em.xdp * em.mac_pot)

@@ -12,8 +12,7 @@ from stabctl.models import blocks as b
 def step_response(block, x0, t, *args):
     """Output of a one-state block at time t (s) after its input steps from 0 to 1 at
     t = 0 with the state x0 at rest."""
-    sol = solve_ivp(lambda _, x: [block(1.0, x[0], *args)[1]], (0, t), [x0],
-                    rtol=1e-12, atol=1e-14)
+    sol = solve_ivp(lambda _, x: [block(1.0, x[0], *args)[1]], (0, t), [x0], rtol=1e-12, atol=1e-14)
     return block(1.0, sol.y[0, -1], *args)[0]
 
 
@@ -29,8 +28,9 @@ def test_a_lag_below_the_threshold_is_absent():
     assert b.leadlag_input_state(0.7, 5.0, 3.0, 0.0) == (0.7, 0.0)
 
 
-@pytest.mark.parametrize("block, x_rest, ratio", [(b.leadlag, 0.0, 4.0),
-                                                   (b.leadlag_input_state, 0.0, 4.0)])
+@pytest.mark.parametrize(
+    "block, x_rest, ratio", [(b.leadlag, 0.0, 4.0), (b.leadlag_input_state, 0.0, 4.0)]
+)
 def test_leadlag_jumps_by_tlead_over_tlag_then_settles(block, x_rest, ratio):
     """(1 + s T_lead)/(1 + s T_lag) after a unit step: y(0+) = T_lead/T_lag, y(t) = 1 -
     (1 - T_lead/T_lag) e^(-t/T_lag) (IEEE 421.5 E.3), in both realisations."""
@@ -39,7 +39,8 @@ def test_leadlag_jumps_by_tlead_over_tlag_then_settles(block, x_rest, ratio):
     assert block(1.0, x_rest, *args)[0] == ratio
     t = 0.7
     assert step_response(block, x_rest, t, *args) == pytest.approx(
-        1 - (1 - ratio) * np.exp(-t / T_lag), rel=1e-8)
+        1 - (1 - ratio) * np.exp(-t / T_lag), rel=1e-8
+    )
 
 
 def test_leadlag_gain_multiplies_the_response_and_one_is_exact():
@@ -58,8 +59,9 @@ def test_washout_step_response_is_exp(form):
     y(t) = (K/T) e^(-t/T) (IEEE 421.5 E.4), each gain spelling to rounding."""
     K, T, t = 3.0, 0.4, 0.25
     assert step_response(b.washout, 0.0, t, T, K, form) == pytest.approx(
-        K / T * np.exp(-t / T), rel=1e-8)
-    assert b.washout(2.0, 2.0, T, K, form) == (0.0, 0.0)      # at rest: no output
+        K / T * np.exp(-t / T), rel=1e-8
+    )
+    assert b.washout(2.0, 2.0, T, K, form) == (0.0, 0.0)  # at rest: no output
 
 
 def test_clip_is_a_windup_limit():
@@ -99,8 +101,12 @@ def test_nonwindup_lag_against_windup_lag():
 
     def run(u, x0, t, nonwindup):
         def f(_, x):
-            return [b.nonwindup_lag(u, x[0], T, lo, hi, True, 0.0)[1] if nonwindup
-                    else b.lag(u, x[0], T)[1]]
+            return [
+                b.nonwindup_lag(u, x[0], T, lo, hi, True, 0.0)[1]
+                if nonwindup
+                else b.lag(u, x[0], T)[1]
+            ]
+
         return solve_ivp(f, (0, t), [x0], rtol=1e-12, atol=1e-14).y[0, -1]
 
     x_nw = run(3.0, 0.0, 1.0, True)

@@ -13,18 +13,66 @@ from stabctl.models._declared import check_packed, layout
 
 #: exc_con rows (PST manual 3.11 Table 2, 3.13 Table 3; stabctl columns 21-25)
 SMP = [0, 1, 0.0, 200, 0.05, 10.0, 1.0, 5.0, -5.0]
-SCRX = SMP + [0] * 9 + [1, 0]                          # bus fed: exc_con column 19
+SCRX = SMP + [0] * 9 + [1, 0]  # bus fed: exc_con column 19
 DC1 = [1, 1, 0.02, 20, 0.02, 1, 1, 5.2, -4.16, 1.0, 0.83, 0, 0, 0, 0, 0.0754, 1.246, 0, 0, 0]
 DC2 = [2] + DC1[1:]
-IEEET2 = [5, 1, 0.02, 20, 0.02, 0, 0, 5.2, -4.16, 1.0, 0.83, 0, 0, 0, 0, 0.0754, 1.246, 0.5,
-          0, 0]
-ST3 = [3, 1, 0.0, 7.04, 1.0, 6.67, 1.0, 1.0, 0.0, 0.2, -0.2, 200, 4.37, 20, 4.83, 0.09, 1.1,
-       8.63, 1.0, 6.53]
-ST1 = [4, 1, 0.02, 50, 0.02, 0.02, 0.1, 4.0, -3.0, 0.2, -0.2, 0, 0, 0, 0, 0, 0.1, 0, 0, 0,
-       0.01, 1.0]
-ROWS = {"smpexc": SMP, "SCRX": SCRX, "DC1": DC1, "DC2": DC2, "IEEET2": IEEET2, "ST3": ST3,
-        "EXST1": ST1}
-EFD0, VT0, VB0 = 1.9, 1.02, 4.0                 # initial field and terminal voltage, ST3 V_B
+IEEET2 = [5, 1, 0.02, 20, 0.02, 0, 0, 5.2, -4.16, 1.0, 0.83, 0, 0, 0, 0, 0.0754, 1.246, 0.5, 0, 0]
+ST3 = [
+    3,
+    1,
+    0.0,
+    7.04,
+    1.0,
+    6.67,
+    1.0,
+    1.0,
+    0.0,
+    0.2,
+    -0.2,
+    200,
+    4.37,
+    20,
+    4.83,
+    0.09,
+    1.1,
+    8.63,
+    1.0,
+    6.53,
+]
+ST1 = [
+    4,
+    1,
+    0.02,
+    50,
+    0.02,
+    0.02,
+    0.1,
+    4.0,
+    -3.0,
+    0.2,
+    -0.2,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0.1,
+    0,
+    0,
+    0,
+    0.01,
+    1.0,
+]
+ROWS = {
+    "smpexc": SMP,
+    "SCRX": SCRX,
+    "DC1": DC1,
+    "DC2": DC2,
+    "IEEET2": IEEET2,
+    "ST3": ST3,
+    "EXST1": ST1,
+}
+EFD0, VT0, VB0 = 1.9, 1.02, 4.0  # initial field and terminal voltage, ST3 V_B
 
 
 def params(row):
@@ -34,8 +82,7 @@ def params(row):
 
 def started(row):
     """(P, x) of an exciter started at EFD0, VT0 (ST3: source voltage VB0)."""
-    x, Vref, p = exc.initialise(params(row), np.array([EFD0]), np.array([VT0]),
-                                np.array([VB0]))
+    x, Vref, p = exc.initialise(params(row), np.array([EFD0]), np.array([VT0]), np.array([VB0]))
     return p.packed(Vref), x
 
 
@@ -52,17 +99,20 @@ def test_initial_point_is_an_equilibrium(name, ieee):
     (ST3: V_R V_B; EXST1: I_fd0 = Efd0) and every derivative is 0 (PST flag 0)."""
     P, x = started(ROWS[name])
     assert exc.field_voltage_at(P, x, 0, VT0, 0.0, VB0, EFD0, ieee) == pytest.approx(
-        EFD0, rel=1e-15)
+        EFD0, rel=1e-15
+    )
     assert np.abs(derivatives(P, x, ieee=ieee)).max() < 1e-12
 
 
 def simulate(P, x0, t, eterm=VT0):
     """States after t s with the terminal voltage held at eterm, the field voltage fed
     back as the exciter hands it over (V_B = 1)."""
+
     def f(_, y):
         x = y.reshape(x0.shape).copy()
         efd = exc.field_voltage_at(P, x, 0, eterm, 0.0, 1.0, 0.0, True)
         return derivatives(P, x, eterm, efd).ravel()
+
     return solve_ivp(f, (0, t), x0.ravel(), rtol=1e-12, atol=1e-14).y[:, -1].reshape(x0.shape)
 
 
@@ -92,7 +142,8 @@ def test_scrx_bus_fed_output_scales_with_the_terminal_voltage():
     """SCRX with CSWITCH = 0: the output is the regulator state times V_t."""
     P, x = started(SCRX)
     assert exc.field_voltage_at(P, x, 0, 0.5, 0.0, 1.0, 0.0, True) == pytest.approx(
-        EFD0 / VT0 * 0.5, rel=1e-15)
+        EFD0 / VT0 * 0.5, rel=1e-15
+    )
 
 
 def test_dc1_step_response_is_two_lags():
@@ -114,7 +165,7 @@ def test_ieeet2_rate_feedback_has_its_second_lag():
     types), and with T_F2 below 1e-3 s it is DC1's feedback."""
     P, x = started(IEEET2)
     assert P[0, exc.E.TF2] == 0.5 and started(DC1)[0][0, exc.E.TF2] == 0.0
-    x[3, 0] += 0.1                                   # Efd above R_f by 0.1
+    x[3, 0] += 0.1  # Efd above R_f by 0.1
     dx = derivatives(P, x)
     assert dx[5, 0] == pytest.approx((0.0754 / 1.246 * 0.1 - x[5, 0]) / 0.5, rel=1e-14)
     P[0, exc.E.TF2] = 0.0

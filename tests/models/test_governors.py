@@ -15,17 +15,86 @@ from stabctl.models import governors as gov
 #: tg_con rows (PST manual tg; stabctl types 2-5, docs/pst_models.md 4.1-4.3)
 TG = [1, 1, 1, 20, 1.2, 0.4, 0.5, 2.0, 1.0, 3.0, 0.0]
 TGOV1 = [2, 1, 1, 20, 1.2, 0.49, 7.0, 2.1, 0, 0, 0.1, 2.0]
-IEEEG1 = [3, 1, 1, 20, 0.95, 0.2, 0.1, 0, 0.1, 0, 0, 0, 0, 8.72, 0.5, -1, 0, 0, 0, 0, 0.3, 0,
-          0.6, 0.1]
+IEEEG1 = [
+    3,
+    1,
+    1,
+    20,
+    0.95,
+    0.2,
+    0.1,
+    0,
+    0.1,
+    0,
+    0,
+    0,
+    0,
+    8.72,
+    0.5,
+    -1,
+    0,
+    0,
+    0,
+    0,
+    0.3,
+    0,
+    0.6,
+    0.1,
+]
 #: HYGOV: GMAX 1, T_g 0.5, T_f 0.05, T_w 1.2, A_t 1.1, GMIN 0, D_turb 0.5, VELM 0.2,
 #: R 0.04, r 0.5, q_NL 0.08, K_g = 1/(r T_r) = 0.4, velm_rel 0
-HYGOV = [4, 1, 1, 0, 1.0, 0.5, 0.05, 0, 1.2, 1.1, 0.0, 0.5, 0, 0, 0.2, -0.2, 0.04, 0.5, 0.08,
-         0.4, 0.0]
+HYGOV = [
+    4,
+    1,
+    1,
+    0,
+    1.0,
+    0.5,
+    0.05,
+    0,
+    1.2,
+    1.1,
+    0.0,
+    0.5,
+    0,
+    0,
+    0.2,
+    -0.2,
+    0.04,
+    0.5,
+    0.08,
+    0.4,
+    0.0,
+]
 #: IEESGO: K_1 = 20, T_1 0.1, T_2/T_3 = 0.5/2, T_4 0.3, T_5 4, T_6 0.6, fractions (0.3, 0.3, 0.4)
-IEESGO = [5, 1, 1, 20, 1.2, 2.0, 0.1, 0.5, 0.3, 4.0, 0.0, 0, 0.6, 0, 0, 0, 0.3, 0, 0.3, 0,
-          0.4, 0, 0, 0]
+IEESGO = [
+    5,
+    1,
+    1,
+    20,
+    1.2,
+    2.0,
+    0.1,
+    0.5,
+    0.3,
+    4.0,
+    0.0,
+    0,
+    0.6,
+    0,
+    0,
+    0,
+    0.3,
+    0,
+    0.3,
+    0,
+    0.4,
+    0,
+    0,
+    0,
+]
 ROWS = {"tg": TG, "TGOV1": TGOV1, "IEEEG1": IEEEG1, "HYGOV": HYGOV, "IEESGO": IEESGO}
-PM0 = 0.7                                     # initial mechanical power (machine base)
+PM0 = 0.7  # initial mechanical power (machine base)
 
 
 def params(row):
@@ -46,8 +115,10 @@ def derivatives(P, x, omega=1.0):
 
 def pmech_after(P, x0, t, omega=1.0):
     """Mechanical power after t s at constant speed omega."""
+
     def f(_, y):
         return derivatives(P, y.reshape(x0.shape).copy(), omega).ravel()
+
     sol = solve_ivp(f, (0, t), x0.ravel(), rtol=1e-12, atol=1e-14)
     return gov.pmech(P, sol.y[:, -1].reshape(x0.shape), 0, omega)
 
@@ -75,8 +146,7 @@ def test_tg_lead_lags_jump_by_their_ratios():
     """tg: the servo state stepped by d moves pmech by d T_3/T_c T_4/T_5 at once."""
     P, x = started(TG)
     x[0, 0] += 1e-3
-    assert gov.pmech(P, x, 0, 1.0) - PM0 == pytest.approx(1e-3 * 2.0 / 0.5 * 1.0 / 3.0,
-                                                          rel=1e-9)
+    assert gov.pmech(P, x, 0, 1.0) - PM0 == pytest.approx(1e-3 * 2.0 / 0.5 * 1.0 / 3.0, rel=1e-9)
 
 
 def test_tgov1_valve_stays_at_its_limit_while_driven_outward():
@@ -97,7 +167,7 @@ def test_ieeeg1_gate_is_non_windup_at_pmax():
     up[0, gov.G.PREF] += 1.0
     x[1, 0] = 0.95
     assert derivatives(up, x)[1, 0] == 0.0 and x[1, 0] == 0.95
-    assert derivatives(P, x)[1, 0] == -1.0              # (0.7 - 0.95)/T3 limited to Uc
+    assert derivatives(P, x)[1, 0] == -1.0  # (0.7 - 0.95)/T3 limited to Uc
 
 
 def test_hygov_gate_integrator_is_non_windup_and_rate_limited():
@@ -107,9 +177,9 @@ def test_hygov_gate_integrator_is_non_windup_and_rate_limited():
     P, x = started(HYGOV)
     up = P.copy()
     up[0, gov.G.PREF] += 1.0
-    x[0, 0] = 1.0                                      # a large filtered error e
-    assert derivatives(up, x)[1, 0] == 0.2             # 0.4 e limited to VELM
-    x[1, 0] = 1.3                                      # beyond GMAX, opening
+    x[0, 0] = 1.0  # a large filtered error e
+    assert derivatives(up, x)[1, 0] == 0.2  # 0.4 e limited to VELM
+    x[1, 0] = 1.3  # beyond GMAX, opening
     dx = derivatives(up, x)
     assert dx[1, 0] == 0.0 and x[1, 0] == 1.0
 
@@ -127,8 +197,8 @@ def test_ieesgo_step_response_is_its_t4_lag():
     """IEESGO with T_1, T_3, T_5, T_6 absent: P_ref step dP through the T_4 lag, pmech =
     pm0 + (sum of fractions) dP (1 - e^(-t/T_4)); at t = T_4 the fraction 1 - e^-1."""
     row = list(IEESGO)
-    row[5] = row[6] = row[9] = row[12] = 0.0              # T3 (Ts), T1 (Tc), T5, T6
-    row[7] = 0.0                                           # T2 (no lead either)
+    row[5] = row[6] = row[9] = row[12] = 0.0  # T3 (Ts), T1 (Tc), T5, T6
+    row[7] = 0.0  # T2 (no lead either)
     P, x = started(row)
     dP = 1e-4
     P[0, gov.G.PREF] += dP
@@ -138,7 +208,7 @@ def test_ieesgo_step_response_is_its_t4_lag():
 def test_lag_time_constants_below_the_threshold_are_refused():
     """tg's lags always exist in PST: a T_s below 1e-3 s (which would make the lag
     absent) is refused, naming the field."""
-    with pytest.raises(CaseError, match="tg_con row 1, field 'Ts': must be >= 0.001 s"):
+    with pytest.raises(CaseError, match=r"tg_con row 1, field 'Ts': must be >= 0\.001 s"):
         params(TG[:5] + [5e-4] + TG[6:])
 
 

@@ -15,12 +15,36 @@ PST_SPEED = [1, 1, 200.0, 10.0, 0.05, 0.02, 3.0, 5.4, 0.2, -0.05]
 PST_POWER = [2] + PST_SPEED[1:]
 #: PSS/E IEEEST on speed: K_w = 2, T_w = 5, lead-lags (0.2/0.05, 0.3/0.1, 0.4/0.2), K1 = 10,
 #: input lag Tr1 = 0.02, filter 1/(1 + 0.1 s)
-PSSE = [3, 1, 2.0, 5.0, 0.2, 0.05, 0.3, 0.1, 0.5, -0.5, 0.4, 0.2, 1, 10.0, 0.02, 0, 0, 0,
-        0.1, 0, 0, 0, 0, 0]
+PSSE = [
+    3,
+    1,
+    2.0,
+    5.0,
+    0.2,
+    0.05,
+    0.3,
+    0.1,
+    0.5,
+    -0.5,
+    0.4,
+    0.2,
+    1,
+    10.0,
+    0.02,
+    0,
+    0,
+    0,
+    0.1,
+    0,
+    0,
+    0,
+    0,
+    0,
+]
 #: STAB2A: K2 T2 = 1.5 (K2 = 0.5, T2 = 3), K3 = 0.8, T3 = 0.5, K4 = 0.3, K5 = 1.2, T5 = 0.4
 STAB2A = [4, 1, 1.5, 3.0, 0, 0, 0, 0, 0.5, -0.5, 1.2, 0.4, 0, 0.8, 0.5, 0, 0.3, 0]
 ROWS = {"PST speed": PST_SPEED, "PST power": PST_POWER, "PSS/E": PSSE, "STAB2A": STAB2A}
-OMEGA0, PE0 = 1.0, 0.7                              # initial speed (pu), power (machine base)
+OMEGA0, PE0 = 1.0, 0.7  # initial speed (pu), power (machine base)
 
 
 def params(row):
@@ -47,7 +71,7 @@ def test_initial_point_is_at_rest(name):
     P, x = started(ROWS[name])
     y, dx = output(P, x)
     assert y == pytest.approx(0.0, abs=1e-15)
-    assert np.abs(dx[:len(pss_.STATE_NAMES[ROWS[name][0]])]).max() < 1e-13
+    assert np.abs(dx[: len(pss_.STATE_NAMES[ROWS[name][0]])]).max() < 1e-13
 
 
 def test_pst_speed_pss_jumps_by_its_high_frequency_gain():
@@ -64,7 +88,8 @@ def test_pst_power_pss_takes_the_power_and_is_limited():
     P, x = started(PST_POWER)
     dp = 1e-6
     assert output(P, x, pe=PE0 + dp)[0] == pytest.approx(
-        20.0 * dp * 0.05 * 3.0 / (0.02 * 5.4), rel=1e-7)
+        20.0 * dp * 0.05 * 3.0 / (0.02 * 5.4), rel=1e-7
+    )
     assert output(P, x, pe=PE0 + 1.0)[0] == 0.2
     assert output(P, x, pe=PE0 - 1.0)[0] == -0.05
 
@@ -79,7 +104,8 @@ def test_psse_stabiliser_jump_and_filter():
     row = PSSE[:14] + [0.0] + PSSE[15:18] + [0.0] * 6
     P, x = started(row)
     assert output(P, x, omega=OMEGA0 + dw)[0] == pytest.approx(
-        10.0 * dw * 2.0 / 5.0 * 0.2 * 0.3 * 0.4 / (0.05 * 0.1 * 0.2), rel=1e-9)
+        10.0 * dw * 2.0 / 5.0 * 0.2 * 0.3 * 0.4 / (0.05 * 0.1 * 0.2), rel=1e-9
+    )
 
 
 def test_psse_filter_is_its_transfer_function():
@@ -99,11 +125,12 @@ def test_stab2a_jump_through_three_washouts():
     (K_5/(1 + s T_5))^2; with T_3 and T_5 absent a power step dp gives
     y(0+) = -K_5^2 (K_3 + K_4) (K_2)^3 dp."""
     row = list(STAB2A)
-    row[11] = row[14] = 0.0                          # T_5 (column 12), T_3 (column 15)
+    row[11] = row[14] = 0.0  # T_5 (column 12), T_3 (column 15)
     P, x = started(row)
     dp = 1e-6
     assert output(P, x, pe=PE0 + dp)[0] == pytest.approx(
-        -1.2 ** 2 * (0.8 + 0.3) * 0.5 ** 3 * dp, rel=1e-8)
+        -(1.2**2) * (0.8 + 0.3) * 0.5**3 * dp, rel=1e-8
+    )
 
 
 def test_pst_pss_first_lead_lag_needs_its_lag():

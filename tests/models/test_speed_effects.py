@@ -7,10 +7,10 @@ mechanical torques balance."""
 import numpy as np
 import pytest
 
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.model import StageConfig
 from stabctl.errors import CaseError
 from stabctl.io import load_case
-from stabctl.dynamics.model import StageConfig
-from stabctl.dynamics.driver import Simulator
 
 DW = 0.01  # speed offset of machine 1, pu
 
@@ -25,9 +25,9 @@ def accelerations(speed_effects: float):
     net = m.network(StageConfig())
     x = m.x0.copy()
     _, out0 = m.evaluate(x.copy(), net, m.V_nc0)
-    x[n] += DW                                  # omega of machine 1 (states: delta, omega, ...)
+    x[n] += DW  # omega of machine 1 (states: delta, omega, ...)
     dx, out = m.evaluate(x, net, m.V_nc0)
-    return dx[n:2 * n], out.pelect, out0.pelect, m
+    return dx[n : 2 * n], out.pelect, out0.pelect, m
 
 
 def test_without_speed_effects_a_speed_offset_alone_leaves_the_torques_balanced():

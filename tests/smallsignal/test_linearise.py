@@ -1,5 +1,5 @@
-"""Linearisation of the simulator's own model (stabctl.smallsignal.linearise) against PSTess svm_mgen,
-the nonlinear simulator (ESD power pulse) and its own perturbation error.
+"""Linearisation of the simulator's own model (stabctl.smallsignal.linearise) against PSTess
+svm_mgen, the nonlinear simulator (ESD power pulse) and its own perturbation error.
 
 References (tests/data/pstess/, copied from shared/reference/pstess; PSTess 1.1 svm_mgen
 under GNU Octave, MIT licence, see LICENSE and NOTICE there): kundur_d2asbegp_eigenvalues.csv
@@ -14,16 +14,23 @@ import numpy as np
 import pytest
 
 from stabctl.case import PssTable
-from stabctl.io import load_case
-from stabctl.errors import InputError, SimulationError, UnknownBusError
-from stabctl.smallsignal.linearise import (STATE, active_states, compare_pulse, jacobian_columns,
-                               linearise, linearise_model, perturbation_error)
-from stabctl.smallsignal.modal import match_modes
 from stabctl.dynamics.driver import Simulator
+from stabctl.errors import InputError, SimulationError, UnknownBusError
+from stabctl.io import load_case
+from stabctl.smallsignal.linearise import (
+    STATE,
+    active_states,
+    compare_pulse,
+    jacobian_columns,
+    linearise,
+    linearise_model,
+    perturbation_error,
+)
+from stabctl.smallsignal.modal import match_modes
 
 DATA = Path(__file__).parents[1] / "data" / "pstess"
-FREQ_TOL_PCT, DAMPING_TOL = 1.0, 0.01       # the issue's acceptance tolerances
-REGRESSION_FREQ_PCT, REGRESSION_DAMPING = 0.05, 1e-3   # we reach 3e-2 % / 2e-4: guard
+FREQ_TOL_PCT, DAMPING_TOL = 1.0, 0.01  # the issue's acceptance tolerances
+REGRESSION_FREQ_PCT, REGRESSION_DAMPING = 0.05, 1e-3  # we reach 3e-2 % / 2e-4: guard
 
 
 @pytest.fixture(scope="module")
@@ -41,14 +48,19 @@ def pstess_eigenvalues(name):
     return ref[:, 1] + 1j * ref[:, 2]
 
 
-@pytest.mark.parametrize("sim_name, ref_name, n_states, n_pst", [
-    ("kundur", "kundur_d2asbegp_eigenvalues.csv", 56, 60),
-    ("kundur_nopss", "kundur_d2asbegp_nopss_eigenvalues.csv", 44, 48)])
-def test_electromechanical_band_matches_pstess(sim_name, ref_name, n_states, n_pst, request,
-                                               record_property):
+@pytest.mark.parametrize(
+    "sim_name, ref_name, n_states, n_pst",
+    [
+        ("kundur", "kundur_d2asbegp_eigenvalues.csv", 56, 60),
+        ("kundur_nopss", "kundur_d2asbegp_nopss_eigenvalues.csv", 44, 48),
+    ],
+)
+def test_electromechanical_band_matches_pstess(
+    sim_name, ref_name, n_states, n_pst, request, record_property
+):
     sys = linearise(request.getfixturevalue(sim_name))
     ref = pstess_eigenvalues(ref_name)
-    assert sys.nstates == n_states and ref.size == n_pst == n_states + 4   # + lmod/rlmod
+    assert sys.nstates == n_states and ref.size == n_pst == n_states + 4  # + lmod/rlmod
     lam = np.linalg.eigvals(sys.A)
     pairs = match_modes(lam, ref)
     assert len(pairs) >= 6
@@ -56,8 +68,10 @@ def test_electromechanical_band_matches_pstess(sim_name, ref_name, n_states, n_p
     z_err = max(abs(p["damping_err"]) for p in pairs)
     record_property("worst_freq_err_pct", f_err)
     record_property("worst_damping_err", z_err)
-    print(f"{sim_name}: {len(pairs)} modes 0.1-2.5 Hz, worst frequency {f_err:.2e} %, "
-          f"damping {z_err:.2e}")
+    print(
+        f"{sim_name}: {len(pairs)} modes 0.1-2.5 Hz, worst frequency {f_err:.2e} %, "
+        f"damping {z_err:.2e}"
+    )
     assert f_err < FREQ_TOL_PCT and z_err < DAMPING_TOL
     assert f_err < REGRESSION_FREQ_PCT and z_err < REGRESSION_DAMPING
     # every PSTess eigenvalue but the four lmod/rlmod lags at -20 has a partner of ours
@@ -83,14 +97,19 @@ def test_state_counts_and_inactive_slots(kundur):
     J, _, _ = jacobian_columns(m, np.full(idx.size, STATE), idx, 1e-4 * np.maximum(abs(m.x0), 1))
     assert np.all(J[:, ~act] == 0) and np.all(J[~act] == 0)
     wecc = linearise(load_case("miniwecc"))
-    assert wecc.nstates == 565 - 2 * 64          # PSTess count less 64 lmod + 64 rlmod
-    assert not any(n.startswith("exc_VTR") for n in wecc.state_labels)   # T_R = 0
+    assert wecc.nstates == 565 - 2 * 64  # PSTess count less 64 lmod + 64 rlmod
+    assert not any(n.startswith("exc_VTR") for n in wecc.state_labels)  # T_R = 0
 
 
 def test_signal_names_and_output_structure(sys_k, kundur):
-    assert sys_k.input_labels == ["P_esd_B10", "P_esd_B20", "P_esd_B110", "P_esd_B120",
-                                  *[f"Vref_G{g}" for g in range(1, 5)],
-                                  *[f"Pref_G{g}" for g in range(1, 5)]]
+    assert sys_k.input_labels == [
+        "P_esd_B10",
+        "P_esd_B20",
+        "P_esd_B110",
+        "P_esd_B120",
+        *[f"Vref_G{g}" for g in range(1, 5)],
+        *[f"Pref_G{g}" for g in range(1, 5)],
+    ]
     assert sys_k.state_labels[:2] == ["mac_delta_G1", "mac_delta_G2"]
     lab = sys_k.output_labels
     assert lab[:5] == ["omega_G1", "omega_G2", "omega_G3", "omega_G4", "omega_coi"]
@@ -102,9 +121,9 @@ def test_signal_names_and_output_structure(sys_k, kundur):
     speeds = [sys_k.state_labels.index(f"mac_omega_G{g}") for g in range(1, 5)]
     np.testing.assert_allclose(C[4, speeds], w, rtol=1e-15)
     np.testing.assert_allclose(C[5:9], C[:4] - C[4], atol=1e-15)
-    assert np.all(D[:9] == 0)                           # speeds have no feedthrough
+    assert np.all(D[:9] == 0)  # speeds have no feedthrough
     v10 = lab.index("vmag_B10")
-    assert D[v10, 0] < 0                                # drawing power lowers the voltage
+    assert D[v10, 0] < 0  # drawing power lowers the voltage
 
 
 def test_reference_inputs_enter_as_the_equations_say(sys_k):

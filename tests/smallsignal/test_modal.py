@@ -9,12 +9,12 @@ import pytest
 from click.testing import CliRunner
 
 from stabctl.case import PssTable
-from stabctl.io import load_case
 from stabctl.cli import main
 from stabctl.errors import InputError
-from stabctl.studies.eigenvalues import _areas as study_areas
+from stabctl.io import load_case
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import _by_first_machine, modal_analysis, mode_sensitivity
+from stabctl.studies.eigenvalues import _areas as study_areas
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +43,7 @@ def test_eigenvectors_and_participation_normalisation(sys_k, ma_k):
     np.testing.assert_allclose(np.linalg.norm(V, axis=0), 1.0)
     P = ma_k.participation
     assert P.shape == (n, lam.size) and np.all(P >= 0)
-    np.testing.assert_allclose(P.sum(axis=0), 1.0, rtol=1e-12)      # per mode (not per state)
+    np.testing.assert_allclose(P.sum(axis=0), 1.0, rtol=1e-12)  # per mode (not per state)
     assert np.abs(P.sum(axis=1) - 1).max() > 0.1
     f, z = ma_k.freq_hz, ma_k.damping
     np.testing.assert_allclose(f, lam.imag / (2 * np.pi))
@@ -55,16 +55,20 @@ def test_angle_reference_mode_identified_and_excluded(sys_k, ma_k):
     assert abs(ma_k.eigenvalues[i]) < 1e-5 and ma_k.kind[i] == "angle reference"
     phi = np.real_if_close(ma_k.right[:, i] / ma_k.right[0, i])
     angles = [k for k, s in enumerate(sys_k.state_labels) if s.startswith("mac_delta")]
-    np.testing.assert_allclose(phi[angles], 1.0, atol=1e-6)          # common rotation
+    np.testing.assert_allclose(phi[angles], 1.0, atol=1e-6)  # common rotation
     assert np.abs(np.delete(phi, angles)).max() < 1e-6
     stats = ma_k.damping_statistics()
     assert stats["all"]["mode"] != i
     assert stats["electromechanical"]["freq_hz"] == pytest.approx(0.612, abs=1e-3)
 
 
-@pytest.mark.parametrize("nopss, expected", [
-    (False, [(0.612, "inter-area"), (1.292, "local"), (1.340, "local")]),
-    (True, [(0.634, "inter-area"), (1.149, "local"), (1.157, "local")])])
+@pytest.mark.parametrize(
+    "nopss, expected",
+    [
+        (False, [(0.612, "inter-area"), (1.292, "local"), (1.340, "local")]),
+        (True, [(0.634, "inter-area"), (1.149, "local"), (1.157, "local")]),
+    ],
+)
 def test_kundur_local_and_interarea_modes(nopss, expected, sys_k, sys_k_nopss):
     ma = modal_analysis(sys_k_nopss if nopss else sys_k)
     em = ma.electromechanical[np.argsort(ma.freq_hz[ma.electromechanical])]
@@ -76,7 +80,7 @@ def test_kundur_local_and_interarea_modes(nopss, expected, sys_k, sys_k_nopss):
     assert {frozenset(g) for g in ma.groups(ia)} == {frozenset({1, 2}), frozenset({3, 4})}
     assert ma.eta[ia] > 0.9 and all(ma.eta[i] < 0.2 for i in em[1:])
     if nopss:
-        assert ma.damping[ia] < 0                    # the unstable inter-area mode
+        assert ma.damping[ia] < 0  # the unstable inter-area mode
         assert ma.damping_statistics()["electromechanical"]["mode"] == ia
     for i in em:
         s = ma.speed_shape[:, i]
@@ -90,7 +94,7 @@ def test_kundur_local_and_interarea_modes(nopss, expected, sys_k, sys_k_nopss):
 def test_areas_numbered_by_their_first_machine():
     assert list(_by_first_machine(np.array([1, 1, 0, 0]))) == [0, 0, 1, 1]
     assert list(_by_first_machine(np.array([2, 0, 2, 1, 0]))) == [0, 1, 0, 2, 1]
-    assert list(_by_first_machine(np.array([3, 3, 5]))) == [0, 0, 1]      # empty labels
+    assert list(_by_first_machine(np.array([3, 3, 5]))) == [0, 0, 1]  # empty labels
 
 
 def test_residues_reproduce_the_transfer_function(sys_k, ma_k):
@@ -98,16 +102,20 @@ def test_residues_reproduce_the_transfer_function(sys_k, ma_k):
     assert sens.inputs == ["P_esd_B10", "P_esd_B20", "P_esd_B110", "P_esd_B120"]
     assert sens.outputs == [f"omega_rel_G{g}" for g in range(1, 5)]
     R = sens.residues
-    np.testing.assert_allclose(np.abs(R), sens.observability[:, :, None]
-                               * sens.controllability[:, None, :], rtol=1e-12)
+    np.testing.assert_allclose(
+        np.abs(R), sens.observability[:, :, None] * sens.controllability[:, None, :], rtol=1e-12
+    )
     C, B = np.asarray(sys_k.C)[5:9], np.asarray(sys_k.B)[:, :4]
     i = ma_k.electromechanical[0]
     np.testing.assert_allclose(R[i], np.outer(C @ ma_k.right[:, i], ma_k.left[i] @ B), rtol=1e-12)
     for s0 in (2j * np.pi * 0.6, 0.5 + 3j):
         G = sys_k(s0)[5:9, :4]
         lam = ma_k.eigenvalues
-        part = sum(R[k] / (s0 - lam[k]) + (np.conj(R[k]) / (s0 - np.conj(lam[k]))
-                                           if lam[k].imag > 0 else 0) for k in range(lam.size))
+        part = sum(
+            R[k] / (s0 - lam[k])
+            + (np.conj(R[k]) / (s0 - np.conj(lam[k])) if lam[k].imag > 0 else 0)
+            for k in range(lam.size)
+        )
         np.testing.assert_allclose(part, G, rtol=1e-7, atol=1e-12 * np.abs(G).max())
 
 
@@ -156,18 +164,26 @@ def test_eig_report_files(tmp_path):
     assert res.exit_code == 0, res.output
     assert "inter-area" in res.stdout and "local" in res.stdout
     names = sorted(p.name for p in tmp_path.iterdir())
-    assert names == ["eig_kundur.md", "eig_kundur_eigs.png", "eig_kundur_pf.png",
-                     "eig_kundur_shapes.png"]
+    assert names == [
+        "eig_kundur.md",
+        "eig_kundur_eigs.png",
+        "eig_kundur_pf.png",
+        "eig_kundur_shapes.png",
+    ]
     md = (tmp_path / "eig_kundur.md").read_text()
     assert "| inter-area |" in md and md.count("| local |") == 2
     for png in names[1:]:
         assert f"({png})" in md
 
 
-@pytest.mark.parametrize("args, needle", [
-    (("eig", "nosuch"), "unknown case"),
-    (("eig", "kundur", "--areas", "0"), "--areas 0: must be in [1, 1000]"),
-    (("eig", "kundur", "--report", "--out", "FILE"), "not a directory")])
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (("eig", "nosuch"), "unknown case"),
+        (("eig", "kundur", "--areas", "0"), "--areas 0: must be in [1, 1000]"),
+        (("eig", "kundur", "--report", "--out", "FILE"), "not a directory"),
+    ],
+)
 def test_eig_bad_input(args, needle, tmp_path):
     f = tmp_path / "FILE"
     f.write_text("")
