@@ -16,13 +16,13 @@ import numpy as np
 from stabctl.dynamics.options import ModelOptions
 from stabctl.placement.evaluation import (
     VerifyOptions,
-    _fault_dict,
     check,
     controller_dict,
     devices_of,
 )
 from stabctl.placement.loop import PlaceOptions, Study, evaluations
 from stabctl.placement.requirements import CostModel
+from stabctl.stability.cct import fault_inputs
 from stabctl.storage.control import BangBangCOI
 
 
@@ -72,7 +72,7 @@ class PlanContext:
         jobs = [
             {
                 "case": self.case,
-                "fault": _fault_dict(c.fault),
+                "fault": fault_inputs(c.fault),
                 "devices": devs,
                 "sites": sites,
                 "controller": ctrl,

@@ -23,7 +23,14 @@ import numpy as np
 from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import InputError, SimulationError
 from stabctl.placement.program import CCTCut
-from stabctl.stability.cct import LineFault, SearchOptions, cached_simulator, critical_clearing_time
+from stabctl.stability.cct import (
+    LineFault,
+    SearchOptions,
+    cached_simulator,
+    critical_clearing_time,
+    fault_inputs,
+    fault_of_inputs,
+)
 from stabctl.stability.sime import (
     clearing_energy_rate,
     critical_machines,
@@ -77,7 +84,7 @@ def evaluate(job: dict) -> dict:
     Parameters
     ----------
     job : dict
-        case (str); fault (`_fault_dict`); devices ([bus, machine, MW] each); sites
+        case (str); fault (`fault_inputs`); devices ([bus, machine, MW] each); sites
         ([bus, machine] each); beta (distribution factors, n_mac x n_sites,
         `sime.distribution_factors`); controller (BangBangCOI fields); tol, t_max (s, the
         search); conventions, h (model conventions and step, None: the default); load
@@ -113,7 +120,7 @@ def evaluate(job: dict) -> dict:
     sim = _Memo(
         cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0))
     )
-    f, sites, tol, t_max = _fault_of(job["fault"]), job["sites"], job["tol"], job["t_max"]
+    f, sites, tol, t_max = fault_of_inputs(job["fault"]), job["sites"], job["tol"], job["t_max"]
     ctrl = BangBangCOI(**job["controller"])
     fleet = (
         StorageFleet(
@@ -189,7 +196,7 @@ def check(job: dict) -> dict:
     Parameters
     ----------
     job : dict
-        case, fault (`_fault_dict`), devices ([bus, machine, MW] each, or [bus, machine,
+        case, fault (`fault_inputs`), devices ([bus, machine, MW] each, or [bus, machine,
         MW, usable energy MJ] for a device of finite energy started half full), sites
         ([bus, machine] each), controller (BangBangCOI fields), t_clear (s after the
         fault start), conventions, h (None: the default), load (load level, default 1).
@@ -229,7 +236,9 @@ def check(job: dict) -> dict:
         if job["devices"]
         else None
     )
-    out = _check_run(sim, _fault_of(job["fault"]), fleet, float(job["t_clear"]), job["sites"], ctrl)
+    out = _check_run(
+        sim, fault_of_inputs(job["fault"]), fleet, float(job["t_clear"]), job["sites"], ctrl
+    )
     return {**out, "n_simulations": sim.n_runs}
 
 
@@ -256,17 +265,6 @@ def _check_run(sim, f: LineFault, fleet, t_clear: float, sites, ctrl) -> dict:
         "energy_mj": energy,
         "site_excursion_s": per_mw,
     }
-
-
-def _fault_of(fault: dict) -> LineFault:
-    far = None if fault["far_bus"] is None else int(fault["far_bus"])
-    return LineFault(
-        int(fault["bus"]),
-        far,
-        float(fault["t_fault"]),
-        int(fault["circuit"]),
-        tuple((int(a), int(b)) for a, b in fault["trips"]),
-    )
 
 
 def _bisection(sim, fault: LineFault, fleet, tol: float, t_max: float, bracket):
@@ -577,7 +575,7 @@ def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions
     jobs = [
         {
             **common,
-            "fault": _fault_dict(c.fault),
+            "fault": fault_inputs(c.fault),
             "load": c.load,
             "gradient": opts.gradient,
             **({"check_s": c.target_cct_s} if opts.check else {}),
@@ -603,16 +601,6 @@ def controller_dict(controller: BangBangCOI) -> dict:
         "v_gate_pu": controller.v_gate_pu,
         "coi": controller.coi,
         "hysteresis_hz": controller.hysteresis_hz,
-    }
-
-
-def _fault_dict(f: LineFault) -> dict:
-    return {
-        "bus": f.bus,
-        "far_bus": f.far_bus,
-        "t_fault": f.t_fault,
-        "circuit": f.circuit,
-        "trips": [list(t) for t in f.trips],
     }
 
 
