@@ -98,12 +98,23 @@ class DyrModel:  # fields of a dataclass: numpydoc ignore=PR02
     kind : int or None
         Value of the table's ``type`` column (None: the mapper chooses it, or the table
         has none).
+    andes : tuple of str
+        The ANDES 2.0 models whose parameters are this record's (ANDES's
+        ``andes/io/psse-dyr.yaml`` maps each onto one ANDES parameter), read back as this
+        record by :mod:`stabctl.io.andes_case`; empty when ANDES has no such model.
+
+    Notes
+    -----
+    A record whose row is its copies and the machine number (no unit change, product or
+    fit) needs no mapper of its own: :mod:`stabctl.io.dyr` maps it with its family's
+    default, so adding such a model is this declaration and its model's kernel.
     """
 
     name: str
     fields: tuple[str, ...]
     copy: Mapping[str, str] = field(default_factory=dict)
     kind: int | None = None
+    andes: tuple[str, ...] = ()
 
     def __post_init__(self):
         unknown = set(self.copy.values()) - set(self.fields)
@@ -344,6 +355,7 @@ MACHINE = Family(
                 "S10": "S(1.0)",
                 "S12": "S(1.2)",
             },
+            andes=("GENROU",),
         ),
         # GENSAL -> mac_sub without the q-axis transient circuit (x'q = x_q, T'qo = 0)
         DyrModel(
@@ -378,7 +390,12 @@ MACHINE = Family(
             },
         ),
         # GENCLS -> mac_em behind x'd = ZSORCE X (set by the importer)
-        DyrModel("GENCLS", ("H", "D"), {"H": "H", "D0": "D"}),
+        DyrModel(
+            "GENCLS",
+            ("H", "D"),
+            {"H": "H", "D0": "D"},
+            andes=("GENCLS",),
+        ),
     ),
 )
 
@@ -493,6 +510,7 @@ EXCITER = Family(
             ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX"),
             {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"},
             kind=0,
+            andes=("SEXS",),
         ),
         *(
             DyrModel(
@@ -529,6 +547,7 @@ EXCITER = Family(
                     "TF_dc": "TF1",
                 },
                 kind=kind,
+                andes=(name,),
             )
             for name, kind in (("IEEEX1", 1), ("EXDC2", 2), ("ESDC2A", 2))
         ),
@@ -590,6 +609,7 @@ EXCITER = Family(
                 "TF": "TF",
             },
             kind=4,
+            andes=("EXST1",),
         ),
         # ESST3A -> exc_st3 (TA = 0): its KA is PST's K_J, its inner loop KM/(1 + s TM)
         # limited [VMMIN, VMMAX] PST's K_A/(1 + s T_A); Efdmax = VBMAX VMMAX is computed
@@ -638,6 +658,7 @@ EXCITER = Family(
                 "VGmax": "VGMAX",
             },
             kind=3,
+            andes=("ESST3A",),
         ),
     ),
 )
@@ -732,6 +753,7 @@ PSS = Family(
                 "VCL",
             ),
             {"Tw": "T6", "ymax": "LSMAX", "ymin": "LSMIN"},
+            andes=("IEEEST",),
         ),
         DyrModel(
             "ST2CUT",
@@ -776,6 +798,7 @@ PSS = Family(
                 "ymin": "LSMIN",
             },
             kind=3,
+            andes=("ST2CUT",),
         ),
         # STAB2A -> type 4: three washouts K2 T2 s/(1 + s T2) (KTw = K2 T2 computed), K3/(1 +
         # s T3) + K4, two lags K5/(1 + s T5), output limits +-HLIM
@@ -875,6 +898,7 @@ GOVERNOR = Family(
             ("R", "T1", "VMAX", "VMIN", "T2", "T3", "Dt"),
             {"Tmax": "VMAX", "Tmin": "VMIN", "Ts": "T1", "Tc": "T3", "T3": "T2", "Dt": "Dt"},
             kind=2,
+            andes=("TGOV1", "TGOV1N"),
         ),
         DyrModel(
             "IEEEG1",
@@ -918,6 +942,7 @@ GOVERNOR = Family(
                 **{f"K{k}": f"K{k}" for k in range(1, 9)},
             },
             kind=3,
+            andes=("IEEEG1",),
         ),
         # HYGOV -> type 4: Kg = 1/(r Tr) and Uc = -VELM computed
         DyrModel(
@@ -938,6 +963,7 @@ GOVERNOR = Family(
                 "qNL": "qNL",
             },
             kind=4,
+            andes=("HYGOV",),
         ),
         # IEESGO -> type 5: K1 (speed gain), lag T1, lead-lag T2/T3, limits, lags T4-T6;
         # the power fractions after T4, T5, T6 (1 - K2, (1 - K3) K2, K2 K3) computed
@@ -956,6 +982,7 @@ GOVERNOR = Family(
                 "Tmin": "PMIN",
             },
             kind=5,
+            andes=("IEESGO",),
         ),
     ),
 )

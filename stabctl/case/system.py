@@ -505,8 +505,8 @@ class ExciterTable(Table):
         reads column 19 as ``bus_fed`` (PSS/E SCRX, output times V_t).  EXST1 (type 4) uses
         columns 3-11 and KC (17) as named, with Vrmax, Vrmin its output limits (times V_t) and
         KF, TF (21, 22).  Omitted trailing columns are 0 (a simple exciter needs 9). Validation:
-        type in {0, ..., 5}, one exciter per machine, TR, TA, TB >= 0, dc_sat and ke_given 0 or
-        1 (machine existence is checked by :class:`Case`).
+        each column's declared range and codes (``type`` among the declared exciter types), one
+        exciter per machine (machine existence is checked by :class:`Case`).
     """
 
     def _check(self):

@@ -58,29 +58,9 @@ from stabctl.io.pst import case_from_matrices
 
 __all__ = ["AndesImport", "import_andes", "read_andes_case", "MAPPED_MODELS", "IGNORED_MODELS"]
 
-#: ANDES model -> the PSS/E model its parameters are read as
-MAPPED_MODELS = {
-    **{
-        m: m
-        for m in (
-            "GENROU",
-            "GENCLS",
-            "SEXS",
-            "IEEEX1",
-            "EXDC2",
-            "ESDC2A",
-            "EXST1",
-            "ESST3A",
-            "IEEEST",
-            "ST2CUT",
-            "TGOV1",
-            "IEEEG1",
-            "HYGOV",
-            "IEESGO",
-        )
-    },
-    "TGOV1N": "TGOV1",
-}
+#: ANDES model -> the PSS/E model its parameters are read as (declared with the record,
+#: ``DyrModel.andes`` in stabctl.case.params)
+MAPPED_MODELS = {name: m.name for m in DYR_MODELS.values() for name in m.andes}
 #: ANDES models with no effect on the network or the machines
 IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc")
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"

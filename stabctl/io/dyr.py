@@ -227,7 +227,7 @@ def _map_records(records, generators, conventions):
     with their reasons, in file order; raises CaseError for malformed records."""
     andes = conventions == "andes"
     gens = {(int(g["bus"]), _machine_id(g["id"])): g for g in generators}
-    rows: dict[str, dict[int, tuple[DyrRecord, list]]] = {k: {} for k in _MAPPERS}
+    rows: dict[str, dict[int, tuple[DyrRecord, list]]] = {k: {} for k in FAMILY}
     skipped = []
     for rec in records:
         kind = _KIND.get(rec.model)
@@ -239,7 +239,7 @@ def _map_records(records, generators, conventions):
             if gen is None:
                 raise _Unsupported("no such generator in the RAW data (or out of service)")
             mapper = _ANDES_MAPPERS.get(rec.model) if andes else None
-            row = (mapper or _MAPPERS[kind][rec.model])(rec, gen)
+            row = (mapper or _MAPPERS.get(rec.model) or _DEFAULT_ROW[kind])(rec, gen)
         except _Unsupported as why:
             skipped.append((rec, str(why)))
             continue
@@ -450,12 +450,6 @@ def _scrx_andes(rec, gen):
     )
 
 
-def _exst1(rec, gen):
-    """EXST1: TR VIMAX VIMIN TC TB KA TA VRMAX VRMIN KC KF TF -> stabctl type 4 (columns
-    as declared: VImax, VImin 10-11, KC 17, KF, TF 21-22)."""
-    return _exc_row(rec, gen)
-
-
 def _esst3a(rec, gen):
     """ESST3A: TR VIMAX VIMIN KM TC TB KA TA VRMAX VRMIN KG KP KI VBMAX KC XL VGMAX THETAP TM
     VMMAX VMMIN -> PST exc_st3 (type 3) when TA = 0: ST3A's gain KA is PST's K_J, its inner
@@ -607,22 +601,32 @@ def _ieesgo(rec, gen, andes=False):
     return _tg_row(rec, gen, **cols)
 
 
+#: DYR model -> its mapper, for the records whose row is not only the declared copies
+#: (unit changes, products, fits, options refused); the others take their family's
+#: default, `_DEFAULT_ROW`
 _MAPPERS = {
-    "machine": {"GENROU": _genrou, "GENSAL": _gensal, "GENCLS": _gencls},
-    "exciter": {
-        "SEXS": _sexs,
-        "IEEEX1": _dc("IEEEX1"),
-        "EXDC2": _dc("EXDC2"),
-        "ESDC2A": _dc("ESDC2A", zero_vrmax_unlimited=True),
-        "EXST1": _exst1,
-        "ESST3A": _esst3a,
-        "IEEET2": _dc("IEEET2"),
-        "SCRX": _scrx,
-    },
-    "pss": {"IEEEST": _ieeest, "ST2CUT": _st2cut, "STAB2A": _stab2a},
-    "governor": {"TGOV1": _tgov1, "IEEEG1": _ieeeg1, "HYGOV": _hygov, "IEESGO": _ieesgo},
+    "GENROU": _genrou,
+    "GENSAL": _gensal,
+    "GENCLS": _gencls,
+    "SEXS": _sexs,
+    "IEEEX1": _dc("IEEEX1"),
+    "EXDC2": _dc("EXDC2"),
+    "ESDC2A": _dc("ESDC2A", zero_vrmax_unlimited=True),
+    "ESST3A": _esst3a,
+    "IEEET2": _dc("IEEET2"),
+    "SCRX": _scrx,
+    "IEEEST": _ieeest,
+    "ST2CUT": _st2cut,
+    "STAB2A": _stab2a,
+    "TGOV1": _tgov1,
+    "IEEEG1": _ieeeg1,
+    "HYGOV": _hygov,
+    "IEESGO": _ieesgo,
 }
-_KIND = {model: kind for kind, models in _MAPPERS.items() for model in models}
+#: table kind -> the row of a record that is its declared copies and the machine number
+_DEFAULT_ROW = {"machine": _mac_row, "exciter": _exc_row, "pss": _pss_row, "governor": _tg_row}
+#: DYR model -> its table kind
+_KIND = {m.name: kind for kind, family in FAMILY.items() for m in family.dyr}
 
 
 def _ieeeg1_andes(rec, gen):
