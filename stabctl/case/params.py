@@ -551,6 +551,39 @@ EXCITER = Family(
             )
             for name, kind in (("IEEEX1", 1), ("EXDC2", 2), ("ESDC2A", 2))
         ),
+        # IEEET1 (IEEE 1968 type 1) -> DC1 (type 1) without the lead-lag (TB = TC = 0)
+        DyrModel(
+            "IEEET1",
+            (
+                "TR",
+                "KA",
+                "TA",
+                "VRMAX",
+                "VRMIN",
+                "KE",
+                "TE",
+                "KF",
+                "TF",
+                "Switch",
+                "E1",
+                "SE(E1)",
+                "E2",
+                "SE(E2)",
+            ),
+            {
+                "TR": "TR",
+                "KA": "KA",
+                "TA": "TA",
+                "Vrmax": "VRMAX",
+                "Vrmin": "VRMIN",
+                "KE": "KE",
+                "TE": "TE",
+                "KF_dc": "KF",
+                "TF_dc": "TF",
+            },
+            kind=1,
+            andes=("IEEET1",),
+        ),
         # IEEET2 -> DC1 (type 5) with the rate feedback s KF/((1 + s TF1)(1 + s TF2))
         DyrModel(
             "IEEET2",

@@ -416,6 +416,19 @@ def test_ieee39_fault_speeds_verdict_and_modes_match_andes():
     assert np.max(relative_gaps(ours, near)) < 0.01  # measured 0.5 %
 
 
+def test_ieee14_ieeet1_starts_flat_and_fault_speeds_match_andes():
+    """IEEE 14 with IEEET1 exciters (ANDES's ieee14_ieeet1.xlsx; read as DC1 without the
+    lead-lag, docs/pst_models.md 12.2): a 10 s flat run stays at 1 pu, and after a 6-cycle
+    fault at bus 9 the speeds are those of ANDES's ``ieeet1.py``."""
+    sim, res, ss, _t, w, wa = andes_case_run("ieee14/ieee14_ieeet1.xlsx", 9)
+    assert np.sum(sim.case.exciters.type == 1) == ss.IEEET1.n > 0
+    flat = sim.run([], 10.0, h=STEP)
+    assert np.max(np.abs(flat.speed - 1)) < 1e-10  # measured 0
+    assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing (4.9e-3)
+    assert np.max(np.abs(w - wa)) < 2e-5  # measured 4.5e-6
+    assert res.stable and not andes_separated(ss)
+
+
 @pytest.mark.parametrize(
     "name",
     ["ieee39/ieee39_full.xlsx", "kundur/kundur_full.xlsx", "npcc/npcc.xlsx", "ieee14/ieee14.json"],
