@@ -535,13 +535,15 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, xm[1, m], pe, dxp)
     vex = p.vex0.copy()
     efd_alg = np.empty(ne)
+    ifd = np.empty(ne)
     pss_exc = np.zeros(ne)
     for i in range(ne):
         m = int(p.EP[i, exc.E.MAC])
         if p.pss_of_exc[i] >= 0:
             pss_exc[i] = pss_out[p.pss_of_exc[i]]
+        ifd[i] = exc.field_current(p.EP, i, p.MP, xm, cur)
         efd_alg[i] = exc.field_voltage(
-            p.EP, xe, i, p.MP, xm, cur, V_bus[p.mac_bus[m]], pss_exc[i], p.ieee
+            p.EP, xe, i, p.MP, xm, cur, V_bus[p.mac_bus[m]], pss_exc[i], ifd[i], p.ieee
         )
         vex[m] = efd_alg[i]
     assign(pmech, p.pmech0)
@@ -552,7 +554,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     assign(efd, p.vex0)
     for i in range(ne):
         m = int(p.EP[i, exc.E.MAC])
-        exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], dxe, p.ieee, p.reach)
+        exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], ifd[i], dxe, p.ieee, p.reach)
         efd[m] = exc.recorded_efd(p.EP, xe, i, efd_alg[i])
     for k in range(ng):
         gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G.MAC])], dxg)

@@ -24,8 +24,8 @@ Dynamic models: each ANDES model whose parameters are PSS/E's (ANDES's
 ``andes/io/psse-dyr.yaml`` maps every PSS/E parameter of the model onto one ANDES parameter)
 is turned back into its PSS/E record through that file and mapped by the DYR mappers of
 :mod:`stabctl.io.dyr` (each parameter declared once, :mod:`stabctl.case.params`):
-GENROU, GENCLS, SEXS, IEEEX1, IEEET1, EXDC2, ESDC2A, EXST1, ESST3A, IEEEST, ST2CUT, TGOV1 (and
-TGOV1N, its variant with the reference after the droop: the same dynamics at a constant
+GENROU, GENCLS, SEXS, IEEEX1, IEEET1, EXDC2, ESDC2A, EXST1, ESST1A, ESST3A, IEEEST, ST2CUT,
+TGOV1 (and TGOV1N, its variant with the reference after the droop: the same dynamics at a constant
 reference), IEEEG1, HYGOV, IEESGO.  Values are ANDES's inputs (``vin``: machine data on
 the machine base ``Sn``, as PSS/E).  Machine ``k`` of the case is the ``k``-th synchronous
 generator in the order of ANDES's static generators (``PV`` rows, then ``Slack``).
@@ -411,7 +411,9 @@ def _psse_yaml() -> dict:
 
 def _psse_params(ss, m, spec: dict, fields, k: int) -> tuple[float, ...]:
     """The PSS/E record's numbers (``fields`` order) of ANDES device ``k`` of model ``m``,
-    inverting the model's ``outputs`` of ``psse-dyr.yaml``: a parameter copied from a PSS/E
+    inverting the model's ``outputs`` of ``psse-dyr.yaml`` (its ``inputs`` matched to
+    ``fields`` by name where the names agree, else by position: ANDES lists ESST1A's
+    in its own order, TB before TC): a parameter copied from a PSS/E
     input gives it back; H is M/2 (``M: "H; lambda x: 2 * x"``); remote buses None -> 0;
     EXDC2's and IEEEX1's Switch, which ANDES lacks, is 0; IEEEG1's second machine (JBUS)
     is its bus number (0 without one)."""
@@ -440,6 +442,8 @@ def _psse_params(ss, m, spec: dict, fields, k: int) -> tuple[float, ...]:
             values.append(0.0 if syn2 is None else float(ss.SynGen.get("bus", syn2)))
         else:  # Switch, ID2: not in ANDES's model
             values.append(0.0)
+    if sorted(inputs) == sorted(fields):  # same names: the Model Library's order
+        return tuple(values[inputs.index(name)] for name in fields)
     return tuple(values)
 
 

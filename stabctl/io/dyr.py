@@ -450,6 +450,18 @@ def _scrx_andes(rec, gen):
     )
 
 
+def _esst1a(rec, gen, andes=False):
+    """ESST1A: UEL VOS TR VIMAX VIMIN TC TB TC1 TB1 KA TA VAMAX VAMIN VRMAX VRMIN KC KF TF
+    KLR ILR -> stabctl type 6 (columns as declared).  UEL, the under-excitation limiter's
+    input location, is free: no limiter model feeds it.  VOS = 2 (the stabiliser after
+    V_A) is not modelled (only 1, at the voltage error); andes: ANDES 2.0's ``esst1a.py``
+    adds the stabiliser at the voltage error whatever VOS, and so does stabctl."""
+    vos = DYR_MODELS["ESST1A"].values(rec.params)["VOS"]
+    if vos != 1 and not andes:
+        raise _Unsupported(f"VOS = {vos:g}: the stabiliser after V_A is not modelled (only 1)")
+    return _exc_row(rec, gen)
+
+
 def _esst3a(rec, gen):
     """ESST3A: TR VIMAX VIMIN KM TC TB KA TA VRMAX VRMIN KG KP KI VBMAX KC XL VGMAX THETAP TM
     VMMAX VMMIN -> PST exc_st3 (type 3) when TA = 0: ST3A's gain KA is PST's K_J, its inner
@@ -612,6 +624,7 @@ _MAPPERS = {
     "IEEEX1": _dc("IEEEX1"),
     "EXDC2": _dc("EXDC2"),
     "ESDC2A": _dc("ESDC2A", zero_vrmax_unlimited=True),
+    "ESST1A": _esst1a,
     "ESST3A": _esst3a,
     "IEEET1": _dc("IEEET1", zero_vrmax_unlimited=True),
     "IEEET2": _dc("IEEET2"),
@@ -689,6 +702,7 @@ _ANDES_MAPPERS = {
     "IEEEX1": _dc("IEEEX1", andes=True),
     "EXDC2": _dc("IEEEX1", andes=True),
     "ESDC2A": _esdc2a_andes,
+    "ESST1A": lambda rec, gen: _esst1a(rec, gen, andes=True),
     "ESST3A": _esst3a_andes,
     "IEEEG1": _ieeeg1_andes,
     "GENSAL": _gensal_andes,

@@ -1,22 +1,25 @@
 """Exciter models: PST `smpexc` (type 0, simple static), `exc_dc12` (types 1 and 2, IEEE
 DC1 / DC2 dc commutator exciters), `exc_st3` (type 3, IEEE ST3), stabctl's PSS/E
 `EXST1` (type 4, IEEE ST1 simplified) and `IEEET2` (type 5: DC1 whose rate feedback has a
-second lag, s K_F/((1 + s T_F1)(1 + s T_F2))); smpexc also serves PSS/E's SCRX (bus fed:
-the output times the terminal voltage, exc_con column 19 ``bus_fed``).
+second lag, s K_F/((1 + s T_F1)(1 + s T_F2))) and `ESST1A` (type 6, IEEE ST1A with its
+field current limiter); smpexc also serves PSS/E's SCRX (bus fed: the output times the
+terminal voltage, exc_con column 19 ``bus_fed``).
 
 Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
 Table 2, 3.13 Table 3); PSS/E Model Library EXST1 (IEEE Std 421.5 ST1A simplified),
-IEEET2 (IEEE Committee Report 1968 type 2) and SCRX (bus-fed or solid-fed static exciter);
+IEEET2 (IEEE Committee Report 1968 type 2), ESST1A (IEEE Std 421.5-2016 ST1A; ANDES 2.0
+``esst1a.py``) and SCRX (bus-fed or solid-fed static exciter);
 equations, limits and PST's quirks in docs/pst_models.md section 2.  A time constant
 below 1e-3 s means the block is absent (no state).  States, named per type in
 STATE_NAMES: smpexc (V_TR, V_As, Efd); exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As,
 V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f); IEEET2 (exc_dc12's and V_F, the second
-feedback lag).  Units: pu on the machine base; times in s.
+feedback lag); ESST1A (V_TR, V_As, V_A, R_f, V_As1).  Units: pu on the machine base; times in s.
 
 The kernels read the packed parameters by name (`E`, from :data:`PACKED`), are built of
 the control blocks of `stabctl.models.blocks`, and are one function per type behind the
 family's dispatch on kind (`field_voltage`, `derivatives`, `recorded_efd`); the family
-computes the machine quantities a type needs (ST3 source voltage, EXST1 field current).
+computes the machine quantities a type needs (ST3 source voltage; the field current of
+the types in :data:`READS_IFD`, `field_current`).
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ from stabctl.models.blocks import (
 )
 from stabctl.models.saturation import quadratic_fit
 
-SMP, DC1, DC2, ST3, ST1, T2 = 0, 1, 2, 3, 4, 5
+SMP, DC1, DC2, ST3, ST1, T2, ST1A = 0, 1, 2, 3, 4, 5, 6
 STATE_NAMES = {
     SMP: ("VTR", "VAs", "Efd"),
     ST3: ("VTR", "VAs", "VR"),
@@ -51,11 +54,15 @@ STATE_NAMES = {
     DC2: ("VTR", "VAs", "VR", "Efd", "Rf"),
     ST1: ("VTR", "VAs", "VR", "Rf"),
     T2: ("VTR", "VAs", "VR", "Efd", "Rf", "VF"),
+    ST1A: ("VTR", "VAs", "VA", "Rf", "VAs1"),
 }
+#: the types whose equations read the machine's field current (`field_current`)
+READS_IFD = (ST1, ST1A)
 
 #: exc_con fields (stabctl.case.params.EXCITER) the kernels take as the table gives them:
-#: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P))
-TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] if n != "thetaP")
+#: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P)) and
+#: 26-31 (ESST1A)
+TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] + EXCITER.names[25:31] if n != "thetaP")
 #: the packed parameter matrix of the compiled kernels, (column name, ExciterParams
 #: attribute) per column: exc_con columns 1-20 in declared order (the machine's row for
 #: the machine number, K_P exp(j theta_P) as its real and imaginary parts), then the
@@ -68,6 +75,7 @@ PACKED = (
     ("KPI", "KP.imag"),
     *((n.upper(), n) for n in TABLE_FIELDS[TABLE_FIELDS.index("KP") + 1 :]),
     ("TCTB", "tc_tb"),
+    ("TC1TB1", "tc1_tb1"),
     ("KE", "KE"),
     ("TE", "TE"),
     ("ASAT", "Asat"),
@@ -148,6 +156,16 @@ class ExciterParams(Declared):
         """T_C/T_B where the lead-lag exists, 1 otherwise (PST exc_pot column 5)."""
         return np.where(self.has_TB, self.TC / np.where(self.has_TB, self.TB, 1.0), 1.0)
 
+    @property
+    def has_TB1(self):
+        """ESST1A's second lead-lag exists (T_B1 >= 1e-3 s)."""
+        return (self.kind == ST1A) & (self.TB1 >= LBND)
+
+    @property
+    def tc1_tb1(self):
+        """ESST1A's T_C1/T_B1 where its second lead-lag exists, 1 otherwise."""
+        return np.where(self.has_TB1, self.TC1 / np.where(self.has_TB1, self.TB1, 1.0), 1.0)
+
     def n_slots(self) -> int:
         """State slots per exciter: the most any exciter of the case uses (3 if none)."""
         return max([3, *(len(STATE_NAMES[int(k)]) for k in self.kind)])
@@ -158,14 +176,14 @@ class ExciterParams(Declared):
         act[0], act[1] = self.has_TR, self.has_TB
         act[2] = (self.kind == ST3) | self.has_TA
         act[3] = self.has_Rf
-        act[4] = self.is_dc
+        act[4] = self.is_dc | self.has_TB1
         act[5] = self.has_VF
         return act[: self.n_slots()]
 
     @property
     def has_Rf(self):
-        """The rate-feedback state exists: DC exciters, EXST1 with K_F != 0."""
-        return self.is_dc | ((self.kind == ST1) & (self.KF != 0))
+        """The rate-feedback state exists: DC exciters, EXST1 and ESST1A with K_F != 0."""
+        return self.is_dc | (np.isin(self.kind, (ST1, ST1A)) & (self.KF != 0))
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
@@ -173,6 +191,7 @@ class ExciterParams(Declared):
             ("exc_con T_R", self.TR, self.has_TR),
             ("exc_con T_A", self.TA, self.has_TA),
             ("exc_con T_B", self.TB, self.has_TB),
+            ("exc_con T_B1", self.TB1, self.has_TB1),
             ("exc_con T_E", self.TE, self.is_dc),
             ("exc_con T_F", self.TF, self.has_Rf),
             ("exc_con T_F2", self.TF2, self.has_VF),
@@ -230,13 +249,13 @@ def _exponential_fit(e):
 
 
 def _check_dc(e) -> None:
-    """DC exciter and EXST1 options stabctl does not model: raise CaseError naming row and
-    field (T_A, T_E, T_F must exist; Vrmax = 0 is PST's 'compute it')."""
+    """DC exciter, EXST1 and ESST1A options stabctl does not model: raise CaseError naming
+    row and field (T_A, T_E, T_F must exist; Vrmax = 0 is PST's 'compute it')."""
     dc = (("TA", "TA"), ("TE", "TE"), ("TF", "TF_dc"))  # (name in messages, declared)
-    need = {DC1: dc, DC2: dc, T2: dc, ST1: (("TA", "TA"),)}
-    for r in np.nonzero(np.isin(e.type, (*DC_KINDS, ST1)))[0]:
+    need = {DC1: dc, DC2: dc, T2: dc, ST1: (("TA", "TA"),), ST1A: (("TA", "TA"),)}
+    for r in np.nonzero(np.isin(e.type, (*DC_KINDS, *READS_IFD)))[0]:
         kind = int(e.type[r])
-        extra = (("TF", "TF"),) if kind == ST1 and e.KF[r] != 0 else ()
+        extra = (("TF", "TF"),) if kind in READS_IFD and e.KF[r] != 0 else ()
         for name, declared in need[kind] + extra:
             k = EXCITER.col(declared)
             if e.col(k)[r] < LBND:
@@ -244,7 +263,7 @@ def _check_dc(e) -> None:
                     f"exc_con row {r + 1}, field '{name}' (column {k}): exciter "
                     f"type {kind} needs {name} >= {LBND} s"
                 )
-        if kind != ST1 and e.Vrmax[r] == 0:
+        if kind not in READS_IFD and e.Vrmax[r] == 0:
             raise CaseError(
                 f"exc_con row {r + 1}, field 'Vrmax': 0 (PST computes it from E2) "
                 "is not supported; give the limit"
@@ -268,8 +287,8 @@ def exciter_params(case: Case) -> ExciterParams:
         TE=np.where(dc, _dc(e, "TE"), 0.0),
         Asat=np.where(dc, A, 0.0),
         Bsat=np.where(dc, B, 0.0),
-        KF=np.where(dc, _dc(e, "KF_dc"), np.where(e.type == ST1, e.KF, 0.0)),
-        TF=np.where(dc, _dc(e, "TF_dc"), np.where(e.type == ST1, e.TF, 0.0)),
+        KF=np.where(dc, _dc(e, "KF_dc"), np.where(np.isin(e.type, READS_IFD), e.KF, 0.0)),
+        TF=np.where(dc, _dc(e, "TF_dc"), np.where(np.isin(e.type, READS_IFD), e.TF, 0.0)),
         sat_quadratic=dc & (e.dc_sat == 1),
         ke_given=dc & (e.ke_given == 1),
         ifd_machine=(e.type == ST3) & (e.ifd_machine == 1),
@@ -363,35 +382,49 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
             "the ST3 limits (Efdmax or VI range)"
         )
     p, VR_dc = _dc_initial_regulator(p, vex, eterm)
-    st1 = p.kind == ST1
-    _check_st1_initial(p, vex, eterm)
-    VA = np.where(smp, VA_smp, np.where(dc, VR_dc, vex) / p.KA)
+    st1, st1a = p.kind == ST1, p.kind == ST1A
+    VR_st1a = st1a_regulator_output(p, vex)
+    _check_st1_initial(p, vex, eterm, np.where(st1a, VR_st1a, vex))
+    VA = np.where(smp, VA_smp, np.where(dc, VR_dc, np.where(st1a, VR_st1a, vex)) / p.KA)
     VA = np.where(st3, VA_st3, VA)
     x[1] = VA
     x[2] = np.where(smp, vex_smp, np.where(st1, vex, np.where(dc, VR_dc, VR)))
+    x[2] = np.where(st1a, VR_st1a, x[2])
     x[3] = np.where(p.has_Rf, vex, 0.0)
-    x[4] = np.where(dc, vex, 0.0)
+    x[4] = np.where(dc, vex, np.where(st1a, VA, 0.0))
     Vref = eterm + np.where(st3, VI, VA)
     return x[: p.n_slots()], Vref, p
 
 
-def _check_st1_initial(p: ExciterParams, Efd, eterm):
-    """EXST1 at the initial point: Efd0 inside [V_t Vrmin, V_t Vrmax - K_C I_fd0] (I_fd0 =
-    Efd0) and the regulator input Efd0/K_A inside [VImin, VImax]; raises CaseError."""
-    st1 = p.kind == ST1
-    VI = Efd / p.KA
+def st1a_regulator_output(p: ExciterParams, Efd):
+    """ESST1A's regulator output V_A at rest, (n_exc,): Efd0 plus the field current
+    limiter's K_LR max(0, I_fd0 - I_LR) with I_fd0 = Efd0 (the field current at rest; ANDES
+    ``esst1a.py`` ``VA0``); Efd0 for the other types."""
+    return np.where(p.kind == ST1A, Efd + p.KLR * np.maximum(Efd - p.ILR, 0.0), Efd)
+
+
+def _check_st1_initial(p: ExciterParams, Efd, eterm, VA):
+    """EXST1 and ESST1A at the initial point: Efd0 inside [V_t Vrmin, V_t Vrmax - K_C
+    I_fd0] (I_fd0 = Efd0), the regulator input VA/K_A inside [VImin, VImax] (VA: Efd0, or
+    ESST1A's `st1a_regulator_output`), ESST1A's VA inside [VAmin, VAmax]; raises
+    CaseError."""
+    st1 = np.isin(p.kind, READS_IFD)
+    VI = VA / p.KA
     bad = np.nonzero(
         st1
         & (
             beyond(Efd, eterm * p.Vrmin, eterm * p.Vrmax - p.KC * Efd)
             | beyond(VI, p.VImin, p.VImax)
+            | ((p.kind == ST1A) & beyond(VA, p.VAmin, p.VAmax))
         )
     )[0]
     if bad.size:
         i = bad[0]
+        name = "ESST1A" if p.kind[i] == ST1A else "EXST1"
         raise CaseError(
-            f"exc_con row {i + 1}: EXST1 initial field voltage {Efd[i]:.4f} pu "
+            f"exc_con row {i + 1}: {name} initial field voltage {Efd[i]:.4f} pu "
             "outside its output limits or regulator input outside [VImin, VImax]"
+            + (" or V_A outside [VAmin, VAmax]" if p.kind[i] == ST1A else "")
         )
 
 
@@ -425,6 +458,9 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
 #: ``init=False`` of `st3_source_voltage` as a numpy boolean: a Python False passed from
 #: compiled code is typed as a literal, a second compile of it
 _RUNNING = np.bool_(False)
+#: ``ieee=True`` of the blocks for the models PSTess lacks (ESST1A), a numpy boolean for
+#: the same reason
+_IEEE_RULE = np.bool_(True)
 
 
 class StatorQuantities(NamedTuple):
@@ -443,7 +479,18 @@ class StatorQuantities(NamedTuple):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
+def field_current(P, i, MP, xm, cur):
+    """The field current (pu on the machine base) of exciter i's machine where its type's
+    equations read it (:data:`READS_IFD`: EXST1, ESST1A), 0 for the other types; MP, xm,
+    cur as `field_voltage`."""
+    kind = P[i, E.KIND]
+    if kind == ST1 or kind == ST1A:
+        return mac.field_current(MP, xm, cur, int(P[i, E.MAC]))
+    return 0.0
+
+
+@kernel(inline="always")
+def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ifd, ieee):
     """Field voltage exciter i hands its machine (PST flag 1), pu on the machine base:
     `field_voltage_at` with the machine quantities it needs.
 
@@ -454,12 +501,14 @@ def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
     MP, xm, cur : ndarray
         The machines' packed parameters (machines.PACKED), states (6, n_mac)
         and network currents (n_mac,) complex, system base: the terminal voltage V_t
-        (PST exc_st3's speed-free stator equations, `machines.stator_without_speed`), the
-        ST3 source voltage and the field current (EXST1) come from them.
+        (PST exc_st3's speed-free stator equations, `machines.stator_without_speed`) and
+        the ST3 source voltage come from them.
     vt : complex
         The machine's terminal bus voltage (its angle sets the ST3 source phasor).
     pss_out : float
         The output of the machine's PSS (0 without).
+    ifd : float
+        The machine's field current, `field_current`.
     ieee : bool
         The IEEE 421.5 convention (limited states are read clipped to their limits).
     """
@@ -472,32 +521,34 @@ def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ieee):
         if kind == ST3
         else 1.0
     )
-    ifd = mac.field_current(MP, xm, cur, m) if kind == ST1 else 0.0
     return field_voltage_at(P, x, i, et, pss_out, VB, ifd, ieee)
 
 
 @kernel(inline="always")
 def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """Field voltage of exciter i given its machine's terminal voltage VTR_alg (pu), the
-    ST3 source voltage VB (1 for the other types) and the field current ifd (EXST1; 0 for
-    the others): per type `_smp_field_voltage`, `_st3_field_voltage`,
-    `_st1_field_voltage`, the DC exciters' Efd state."""
+    ST3 source voltage VB (1 for the other types) and the field current ifd (EXST1,
+    ESST1A; 0 for the others): per type `_smp_field_voltage`, `_st3_field_voltage`,
+    `_st1_field_voltage`, `_st1a_field_voltage`, the DC exciters' Efd state."""
     kind = P[i, E.KIND]
     if kind == ST3:
         return _st3_field_voltage(P, x, i, VB, ieee)
     if kind == ST1:
         return _st1_field_voltage(P, x, i, VTR_alg, ifd)
+    if kind == ST1A:
+        return _st1a_field_voltage(P, x, i, VTR_alg, ifd)
     if kind == DC1 or kind == DC2 or kind == T2:
         return x[3, i]
     return _smp_field_voltage(P, x, i, VTR_alg, pss_out, ieee)
 
 
 @kernel
-def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee, reach):
+def derivatives(P, x, i, eterm, pss_out, efd, ifd, dx, ieee, reach):
     """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
 
     Every type: the voltage transducer lag T_R on eterm (pu) and the error V_ref - V_TR +
-    pss_out; efd is the field voltage `field_voltage` gave; reach (s): DC2's V_t-scaled
+    pss_out; efd is the field voltage `field_voltage` gave, ifd the field current
+    `field_current` gave; reach (s): DC2's V_t-scaled
     V_R limits hold a state within that reach (`blocks.nonwindup`; the run's step, 0 in
     the linearisation).
     """
@@ -511,6 +562,8 @@ def derivatives(P, x, i, eterm, pss_out, efd, dx, ieee, reach):
         _st3_derivatives(P, x, i, err, efd, dx, ieee)
     elif kind == ST1:
         _st1_derivatives(P, x, i, err, efd, dx)
+    elif kind == ST1A:
+        _st1a_derivatives(P, x, i, err, ifd, dx)
     else:
         _dc_derivatives(P, x, i, eterm, err, dx, ieee, reach)
 
@@ -634,6 +687,50 @@ def _st1_derivatives(P, x, i, err, efd, dx):
         clip(err, P[i, E.VIMIN], P[i, E.VIMAX]), x[1, i], P[i, E.TCTB], P[i, E.TB]
     )
     dx[2, i] = lag(P[i, E.KA] * VA, x[2, i], P[i, E.TA])[1]
+
+
+# -- ESST1A (IEEE 421.5-2016 ST1A as PSS/E and ANDES esst1a.py read it, no UEL/OEL):
+# -- V_I limited, two lead-lags, non-windup K_A/(1 + s T_A) limited [VAmin, VAmax] minus
+# -- the field current limiter K_LR max(0, I_fd - I_LR); output limited to [V_t Vrmin,
+# -- V_t Vrmax - K_C I_fd]; rate feedback s K_F/(1 + s T_F) of the output before that limit.
+# -- PSTess has no ST1A, so there is no quirk to keep: both conventions use IEEE 421.5's
+# -- non-windup rule (E.5) and read V_A within its limits
+
+
+@kernel(inline="always")
+def _st1a_regulator(P, x, i, ifd):
+    """ESST1A: V_A clipped to [VAmin, VAmax] minus K_LR max(0, I_fd - I_LR)."""
+    VA = clip(x[2, i], P[i, E.VAMIN], P[i, E.VAMAX])
+    return VA - P[i, E.KLR] * max(ifd - P[i, E.ILR], 0.0)
+
+
+@kernel(inline="always")
+def _st1a_field_voltage(P, x, i, VTR_alg, ifd):
+    """ESST1A: `_st1a_regulator` clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd]."""
+    return clip(
+        _st1a_regulator(P, x, i, ifd),
+        VTR_alg * P[i, E.VRMIN],
+        VTR_alg * P[i, E.VRMAX] - P[i, E.KC] * ifd,
+    )
+
+
+@kernel(inline="always")
+def _st1a_derivatives(P, x, i, err, ifd, dx):
+    """ESST1A (docs/pst_models.md 2.6): the rate feedback of `_st1a_regulator` (state R_f,
+    only with K_F != 0) subtracted before the V_I limits, the lead-lags T_C/T_B (state
+    V_As) and T_C1/T_B1 (state V_As1), V_A non-windup."""
+    if P[i, E.KF] != 0:
+        VF, dx[3, i] = washout(
+            _st1a_regulator(P, x, i, ifd), x[3, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T
+        )
+        err = err - VF
+    u, dx[1, i] = leadlag_input_state(
+        clip(err, P[i, E.VIMIN], P[i, E.VIMAX]), x[1, i], P[i, E.TCTB], P[i, E.TB]
+    )
+    u, dx[4, i] = leadlag_input_state(u, x[4, i], P[i, E.TC1TB1], P[i, E.TB1])
+    x[2, i], dx[2, i] = nonwindup_lag(
+        P[i, E.KA] * u, x[2, i], P[i, E.TA], P[i, E.VAMIN], P[i, E.VAMAX], _IEEE_RULE, 0.0
+    )
 
 
 # -- exc_dc12 (DC1, DC2) and IEEET2: rate feedback, lead-lag, non-windup K_A/(1 + s T_A)

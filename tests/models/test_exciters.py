@@ -63,6 +63,11 @@ ST1 = [
     0.01,
     1.0,
 ]
+#: ESST1A (type 6): TR KA TA TB TC Vrmax Vrmin VImax VImin (columns 3-11), KC (17), KF TF
+#: (21-22), TC1 TB1 VAmax VAmin KLR ILR (26-31); with EFD0 = 1.9 the field current limiter
+#: is on at the start (I_fd0 = Efd0 > ILR): V_A0 = 1.9 + 2 (1.9 - 1.5) = 2.7
+ST1A = [6, 1, 0.02, 200, 0.04, 10.0, 1.0, 7.3, -7.3, 0.8, -0.1, 0, 0, 0, 0, 0, 0.1, 0, 0, 0]
+ST1A += [0.05, 1.0, 0, 0, 0, 0.5, 2.0, 6.0, -5.0, 2.0, 1.5]
 ROWS = {
     "smpexc": SMP,
     "SCRX": SCRX,
@@ -71,6 +76,7 @@ ROWS = {
     "IEEET2": IEEET2,
     "ST3": ST3,
     "EXST1": ST1,
+    "ESST1A": ST1A,
 }
 EFD0, VT0, VB0 = 1.9, 1.02, 4.0  # initial field and terminal voltage, ST3 V_B
 
@@ -88,7 +94,7 @@ def started(row):
 
 def derivatives(P, x, eterm=VT0, efd=EFD0, ieee=True):
     dx = np.full_like(x, np.nan)
-    exc.derivatives(P, x, 0, eterm, 0.0, efd, dx, ieee, 0.0)
+    exc.derivatives(P, x, 0, eterm, 0.0, efd, efd, dx, ieee, 0.0)
     return dx
 
 
@@ -211,6 +217,66 @@ def test_exst1_rate_feedback_is_a_washout_on_efd():
     assert dx[3, 0] == pytest.approx(0.5 / 1.0, rel=1e-14)
     err = P[0, exc.E.VREF] - x[0, 0] - 0.01 / 1.0 * 0.5
     assert dx[1, 0] == pytest.approx((err - x[1, 0]) / 0.02, rel=1e-12)
+
+
+def test_esst1a_starts_with_its_field_current_limiter_on():
+    """ESST1A at rest: V_A0 = Efd0 + K_LR (I_fd0 - I_LR) (ANDES esst1a.py VA0), both
+    lead-lag states and V_ref - V_t at V_A0/K_A, the rate-feedback state at Efd0."""
+    P, x = started(ST1A)
+    assert x[2, 0] == pytest.approx(2.7, rel=1e-15)
+    assert x[1, 0] == x[4, 0] == pytest.approx(2.7 / 200, rel=1e-15)
+    assert x[3, 0] == EFD0 and P[0, exc.E.VREF] == pytest.approx(VT0 + 2.7 / 200, rel=1e-15)
+
+
+def test_esst1a_field_current_limiter_and_output_limit():
+    """ESST1A's output V_A - K_LR max(0, I_fd - I_LR), clipped to [V_t Vrmin, V_t Vrmax -
+    K_C I_fd]: a field current 0.1 higher lowers Efd at once by K_LR 0.1; below I_LR the
+    limiter is off; at V_t = 0.2 the upper limit 0.2 7.3 - 0.1 I_fd binds."""
+    P, x = started(ST1A)
+
+    def efd(vt, ifd):
+        return exc.field_voltage_at(P, x, 0, vt, 0.0, 1.0, ifd, True)
+
+    assert efd(VT0, EFD0 + 0.1) == pytest.approx(EFD0 - 2 * 0.1, rel=1e-14)
+    assert efd(VT0, 1.0) == pytest.approx(2.7, rel=1e-15)
+    assert efd(0.2, EFD0) == pytest.approx(0.2 * 7.3 - 0.1 * EFD0, rel=1e-14)
+
+
+def test_esst1a_error_step_passes_both_lead_lags():
+    """A stabiliser step dV at rest: the regulator's input jumps by dV (T_C/T_B)
+    (T_C1/T_B1), so dV_A/dt = K_A dV (T_C/T_B)(T_C1/T_B1)/T_A (the lead-lags' IEEE 421.5
+    E.3 realisation, the lag E.2)."""
+    P, x = started(ST1A)
+    dV, dx = 1e-3, np.zeros_like(x)
+    exc.derivatives(P, x, 0, VT0, dV, EFD0, EFD0, dx, True, 0.0)
+    assert dx[2, 0] == pytest.approx(200 * dV * (1 / 10) * (0.5 / 2) / 0.04, rel=1e-12)
+    assert dx[4, 0] == pytest.approx(dV * (1 / 10) / 2.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("ieee", [True, False])
+def test_esst1a_va_is_non_windup(ieee):
+    """ESST1A's V_A at VAmax driven outward (a stabiliser step of 50 pu: the error at
+    VImax, K_A times the lead-lags' output 6.6 > VAmax) stays there with a zero derivative
+    (IEEE 421.5 E.5), both conventions; driven inward it leaves at once."""
+    P, x = started(ST1A)
+    x[2, 0] = 6.0
+    dx = np.zeros_like(x)
+    exc.derivatives(P, x, 0, VT0, 50.0, EFD0, EFD0, dx, ieee, 0.0)
+    assert x[2, 0] == 6.0 and dx[2, 0] == 0.0
+    exc.derivatives(P, x, 0, VT0, 0.0, EFD0, EFD0, dx, ieee, 0.0)
+    assert dx[2, 0] < 0
+
+
+def test_esst1a_rate_feedback_is_a_washout_of_the_regulator_output():
+    """ESST1A's feedback s K_F/(1 + s T_F) acts on V_A - K_LR max(0, I_fd - I_LR) before
+    the output limit (ANDES esst1a.py WF of LVG_y): V_A 0.5 above rest moves R_f at
+    0.5/T_F and lowers the lead-lag's input by K_F/T_F 0.5."""
+    P, x = started(ST1A)
+    x[2, 0] += 0.5
+    dx = derivatives(P, x)
+    assert dx[3, 0] == pytest.approx(0.5 / 1.0, rel=1e-14)
+    err = P[0, exc.E.VREF] - x[0, 0] - 0.05 / 1.0 * 0.5
+    assert dx[1, 0] == pytest.approx((err - x[1, 0]) / 10.0, rel=1e-12)
 
 
 def test_layout_names_every_packed_column_once():
