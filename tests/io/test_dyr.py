@@ -228,7 +228,7 @@ def test_wecc_imports_completely():
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
         (29, 25),
-        (29, 25),
+        (29, 31),  # every declared exc_con column (stabctl.case.params.EXCITER)
         (29, 24),
         (29, 24),
     ) and t.unsupported == ()
@@ -408,7 +408,7 @@ def test_dc_exciter_steady_state_vr_equals_ke_plus_se_times_efd(KE):
     assert x[2, 0] == pytest.approx((KE_eff + SE) * Efd, abs=1e-15)
     assert Vref[0] == pytest.approx(Vt + x[2, 0] / 20, rel=1e-15)
     dx = np.zeros_like(x)
-    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx, True, 0.0)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, Efd, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
 
 
@@ -452,7 +452,7 @@ def test_quadratic_saturation_passes_both_points_and_keeps_ke():
     x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
     assert p.KE[0] == 0.0 and x[2, 0] == pytest.approx(B * (Efd - A) ** 2, rel=1e-14)
     dx = np.zeros_like(x)
-    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, dx, True, 0.0)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, Efd, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
     row[23] = 0  # K_E = 0 computed: V_R0 = 0
     p = exc.exciter_params(load_case("kundur").replace(exciters=ExciterTable.from_matrix([row])))
@@ -467,7 +467,7 @@ def test_dc2_limit_scales_with_terminal_voltage():
         x, Vref, p = exc.initialise(p, np.array([1.0]), np.array([1.0]))
         x[2, 0] = 10.0
         dx = np.zeros_like(x)
-        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, dx, True, 0.0)
+        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, 1.0, dx, True, 0.0)
         assert x[2, 0] == pytest.approx(bound, rel=1e-15) and dx[2, 0] == 0.0
 
 
@@ -485,7 +485,7 @@ def test_dc2_state_held_on_a_limit_that_rose_within_reach():
         x = x0.copy()
         x[2, 0] = 5.2 * 0.5
         dx = np.zeros_like(x)
-        exc.derivatives(P, x, 0, 0.51, 0.0, 1.0, dx, True, reach)
+        exc.derivatives(P, x, 0, 0.51, 0.0, 1.0, 1.0, dx, True, reach)
         if held:
             assert x[2, 0] == pytest.approx(5.2 * 0.51, rel=1e-15) and dx[2, 0] == 0.0
         else:
@@ -534,7 +534,7 @@ def test_exst1_steady_state_and_output_limit():
     P = p.packed(Vref)
     assert exc.field_voltage_at(P, x, 0, Vt, 0.0, 1.0, Efd, True) == Efd
     dx = np.full_like(x, np.nan)
-    exc.derivatives(P, x, 0, Vt, 0.0, Efd, dx, True, 0.0)
+    exc.derivatives(P, x, 0, Vt, 0.0, Efd, Efd, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
     x[2, 0] = 10.0
     assert exc.field_voltage_at(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(
