@@ -23,10 +23,10 @@ Network (ANDES's values after set-up, pu on the system base):
 Dynamic models: each ANDES model whose parameters are PSS/E's (ANDES's
 ``andes/io/psse-dyr.yaml`` maps every PSS/E parameter of the model onto one ANDES parameter)
 is turned back into its PSS/E record through that file and mapped by the DYR mappers of
-:mod:`stabctl.io.dyr` (each parameter declared once, :mod:`stabctl.case.params`):
-GENROU, GENCLS, SEXS, IEEEX1, IEEET1, EXDC2, ESDC2A, EXST1, ESST1A, ESST3A, IEEEST, ST2CUT,
-TGOV1 (and TGOV1N, its variant with the reference after the droop: the same dynamics at a constant
-reference), IEEEG1, HYGOV, IEESGO.  Values are ANDES's inputs (``vin``: machine data on
+:mod:`stabctl.io.dyr` (each parameter declared once, :mod:`stabctl.case.params`, with
+the ANDES models read as it, ``DyrModel.andes``; :data:`MAPPED_MODELS` lists them).
+ANDES's TGOV1N, TGOV1 with the reference after the droop, is read as TGOV1: the same
+dynamics at a constant reference.  Values are ANDES's inputs (``vin``: machine data on
 the machine base ``Sn``, as PSS/E).  Machine ``k`` of the case is the ``k``-th synchronous
 generator in the order of ANDES's static generators (``PV`` rows, then ``Slack``).
 

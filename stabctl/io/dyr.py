@@ -653,13 +653,17 @@ def _ieeeg1_andes(rec, gen):
     return row
 
 
-def _esdc2a_andes(rec, gen):
-    """ESDC2A as ANDES 2.0 solves it: quadratic saturation, K_E as given, and its voltage
-    error taken from the bus voltage itself, not the transducer lag (``vi = vref - v -
-    WF_y``), i.e. T_R = 0."""
-    row = _dc("ESDC2A", zero_vrmax_unlimited=True, andes=True)(rec, gen)
-    row[EXCITER.col("TR") - 1] = 0.0
-    return row
+def _without_tr(mapper):
+    """An exciter's ``mapper`` with T_R = 0: ANDES 2.0's ESDC2A and EXAC1 take their
+    voltage error from the bus voltage itself, not the transducer lag (``esdc2a.py``,
+    ``exac1.py``: ``vi = vref - v - WF_y``)."""
+
+    def without_tr(rec, gen):
+        row = mapper(rec, gen)
+        row[EXCITER.col("TR") - 1] = 0.0
+        return row
+
+    return without_tr
 
 
 def _esst3a_andes(rec, gen):
@@ -691,7 +695,8 @@ def _gensal_andes(rec, gen):
 #: them after EXDC2's ``LagAntiWindup`` LA has built its ``AntiWindup`` limiter
 #: ``LA.lim`` on VRMAX, VRMIN; the limiter keeps those (on NPCC ``LA.lim.upper.v`` =
 #: VRMAX, e.g. 6.5 for bus 25, where VRTMAX = 6.89), so the scaled limits are never
-#: applied (read as DC2, NPCC differed from ANDES by 6.2e-3 pu in speed); its ESDC2A bypasses T_R;
+#: applied (read as DC2, NPCC differed from ANDES by 6.2e-3 pu in speed); its ESDC2A and
+#: EXAC1 bypass T_R;
 #: its IEEEG1 rate limits are on the system base, its ESST3A forms V_E from system-base
 #: stator currents and I_N from the machine's field current; its GENROU (and GENSAL)
 #: saturates the air-gap flux (``genrou.py``, the machine rows' column 25, set in
@@ -701,7 +706,9 @@ def _gensal_andes(rec, gen):
 _ANDES_MAPPERS = {
     "IEEEX1": _dc("IEEEX1", andes=True),
     "EXDC2": _dc("IEEEX1", andes=True),
-    "ESDC2A": _esdc2a_andes,
+    #: ESDC2A: also the quadratic saturation and K_E as given
+    "ESDC2A": _without_tr(_dc("ESDC2A", zero_vrmax_unlimited=True, andes=True)),
+    "EXAC1": _without_tr(_exc_row),
     "ESST1A": lambda rec, gen: _esst1a(rec, gen, andes=True),
     "ESST3A": _esst3a_andes,
     "IEEEG1": _ieeeg1_andes,

@@ -11,7 +11,8 @@ argument or a `form`), so that every model computes exactly what it did.
 
 Sources: PSTess 1.1 `smpexc.m`, `exc_dc12.m`, `exc_st3.m`, `pss.m`, `tg.m`; IEEE Std
 421.5-2016 annex E (E.2 lag, E.3 lead-lag, E.4 washout, E.5 non-windup limits, E.7
-windup limits); PSS/E Model Library (the PSS/E models' blocks).
+windup limits) and annex D (rectifier regulation); PSS/E Model Library (the PSS/E
+models' blocks).
 """
 
 from __future__ import annotations
@@ -148,3 +149,21 @@ def nonwindup_lag(u, x, T, lo, hi, ieee, reach):
         The clamped state (the output), its derivative.
     """
     return nonwindup(x, (u - x) / T, lo, hi, ieee, reach)
+
+
+@kernel
+def rectifier_loading(IN):
+    """Rectifier regulation F_EX(I_N) of an AC exciter's output (IEEE Std 421.5-2016
+    annex D, rectifier regulation): 1 for I_N <= 0, 1 - 0.577 I_N up to 0.433, sqrt(0.75
+    - I_N^2) up to 0.75, 1.732 (1 - I_N) up to 1, 0 beyond (ANDES ``exac1.py`` ``FEX``).
+    PST's exc_st3 spells it with 0.5771 and an initialisation quirk, kept as its own
+    variant (`stabctl.models.exciters._fex`) so that PSTess's results stay bit for bit."""
+    if IN <= 0.0:
+        return 1.0
+    if IN <= 0.433:
+        return 1.0 - 0.577 * IN
+    if IN <= 0.75:
+        return np.sqrt(0.75 - IN * IN)
+    if IN <= 1.0:
+        return 1.732 * (1.0 - IN)
+    return 0.0

@@ -1,19 +1,21 @@
 """Exciter models: PST `smpexc` (type 0, simple static), `exc_dc12` (types 1 and 2, IEEE
 DC1 / DC2 dc commutator exciters), `exc_st3` (type 3, IEEE ST3), stabctl's PSS/E
-`EXST1` (type 4, IEEE ST1 simplified) and `IEEET2` (type 5: DC1 whose rate feedback has a
-second lag, s K_F/((1 + s T_F1)(1 + s T_F2))) and `ESST1A` (type 6, IEEE ST1A with its
-field current limiter); smpexc also serves PSS/E's SCRX (bus fed: the output times the
-terminal voltage, exc_con column 19 ``bus_fed``).
+`EXST1` (type 4, IEEE ST1 simplified), `IEEET2` (type 5: DC1 whose rate feedback has a
+second lag, s K_F/((1 + s T_F1)(1 + s T_F2))), `ESST1A` (type 6, IEEE ST1A with its
+field current limiter) and `EXAC1` (type 7, IEEE AC1 with its rectifier regulation);
+smpexc also serves PSS/E's SCRX (bus fed: the output times the terminal voltage, exc_con
+column 19 ``bus_fed``).
 
 Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
 Table 2, 3.13 Table 3); PSS/E Model Library EXST1 (IEEE Std 421.5 ST1A simplified),
 IEEET2 (IEEE Committee Report 1968 type 2), ESST1A (IEEE Std 421.5-2016 ST1A; ANDES 2.0
-``esst1a.py``) and SCRX (bus-fed or solid-fed static exciter);
-equations, limits and PST's quirks in docs/pst_models.md section 2.  A time constant
-below 1e-3 s means the block is absent (no state).  States, named per type in
-STATE_NAMES: smpexc (V_TR, V_As, Efd); exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As,
-V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f); IEEET2 (exc_dc12's and V_F, the second
-feedback lag); ESST1A (V_TR, V_As, V_A, R_f, V_As1).  Units: pu on the machine base; times in s.
+``esst1a.py``), EXAC1 (IEEE 1981 AC1; ANDES 2.0 ``exac1.py``) and SCRX (bus-fed or
+solid-fed static exciter); equations, limits and PST's quirks in docs/pst_models.md
+section 2.  A time constant below 1e-3 s means the block is absent (no state).  States,
+named per type in STATE_NAMES: smpexc (V_TR, V_As, Efd); exc_st3 (V_TR, V_As, V_R);
+exc_dc12 (V_TR, V_As, V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f); IEEET2 (exc_dc12's
+and V_F, the second feedback lag); ESST1A (V_TR, V_As, V_A, R_f, V_As1); EXAC1 (V_TR,
+V_As, V_R, V_E, R_f).  Units: pu on the machine base; times in s.
 
 The kernels read the packed parameters by name (`E`, from :data:`PACKED`), are built of
 the control blocks of `stabctl.models.blocks`, and are one function per type behind the
@@ -28,6 +30,7 @@ from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
+from scipy.optimize import brentq
 
 from stabctl._jit.decorators import kernel, njit
 from stabctl.case import Case, beyond
@@ -42,11 +45,12 @@ from stabctl.models.blocks import (
     lag,
     leadlag_input_state,
     nonwindup_lag,
+    rectifier_loading,
     washout,
 )
 from stabctl.models.saturation import quadratic_fit
 
-SMP, DC1, DC2, ST3, ST1, T2, ST1A = 0, 1, 2, 3, 4, 5, 6
+SMP, DC1, DC2, ST3, ST1, T2, ST1A, AC1, AC4 = 0, 1, 2, 3, 4, 5, 6, 7, 8
 STATE_NAMES = {
     SMP: ("VTR", "VAs", "Efd"),
     ST3: ("VTR", "VAs", "VR"),
@@ -55,14 +59,16 @@ STATE_NAMES = {
     ST1: ("VTR", "VAs", "VR", "Rf"),
     T2: ("VTR", "VAs", "VR", "Efd", "Rf", "VF"),
     ST1A: ("VTR", "VAs", "VA", "Rf", "VAs1"),
+    AC1: ("VTR", "VAs", "VR", "VE", "Rf"),
+    AC4: ("VTR", "VAs", "VR"),
 }
 #: the types whose equations read the machine's field current (`field_current`)
-READS_IFD = (ST1, ST1A)
+READS_IFD = (ST1, ST1A, AC1, AC4)
 
 #: exc_con fields (stabctl.case.params.EXCITER) the kernels take as the table gives them:
 #: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P)) and
-#: 26-31 (ESST1A)
-TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] + EXCITER.names[25:31] if n != "thetaP")
+#: 26-32 (ESST1A, EXAC1)
+TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] + EXCITER.names[25:32] if n != "thetaP")
 #: the packed parameter matrix of the compiled kernels, (column name, ExciterParams
 #: attribute) per column: exc_con columns 1-20 in declared order (the machine's row for
 #: the machine number, K_P exp(j theta_P) as its real and imaginary parts), then the
@@ -157,6 +163,11 @@ class ExciterParams(Declared):
         return np.where(self.has_TB, self.TC / np.where(self.has_TB, self.TB, 1.0), 1.0)
 
     @property
+    def is_ac(self):
+        """AC exciters (EXAC1): the exciter voltage V_E and the rectifier regulation."""
+        return self.kind == AC1
+
+    @property
     def has_TB1(self):
         """ESST1A's second lead-lag exists (T_B1 >= 1e-3 s)."""
         return (self.kind == ST1A) & (self.TB1 >= LBND)
@@ -175,15 +186,16 @@ class ExciterParams(Declared):
         act = np.zeros((6, self.n), bool)
         act[0], act[1] = self.has_TR, self.has_TB
         act[2] = (self.kind == ST3) | self.has_TA
-        act[3] = self.has_Rf
-        act[4] = self.is_dc | self.has_TB1
+        act[3] = self.has_Rf | self.is_ac
+        act[4] = self.is_dc | self.has_TB1 | (self.is_ac & self.has_Rf)
         act[5] = self.has_VF
         return act[: self.n_slots()]
 
     @property
     def has_Rf(self):
-        """The rate-feedback state exists: DC exciters, EXST1 and ESST1A with K_F != 0."""
-        return self.is_dc | (np.isin(self.kind, (ST1, ST1A)) & (self.KF != 0))
+        """The rate-feedback state exists: DC exciters, EXST1, ESST1A and EXAC1 with
+        K_F != 0."""
+        return self.is_dc | (np.isin(self.kind, READS_IFD) & (self.KF != 0))
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
@@ -192,7 +204,7 @@ class ExciterParams(Declared):
             ("exc_con T_A", self.TA, self.has_TA),
             ("exc_con T_B", self.TB, self.has_TB),
             ("exc_con T_B1", self.TB1, self.has_TB1),
-            ("exc_con T_E", self.TE, self.is_dc),
+            ("exc_con T_E", self.TE, self.is_dc | self.is_ac),
             ("exc_con T_F", self.TF, self.has_Rf),
             ("exc_con T_F2", self.TF2, self.has_VF),
         )
@@ -207,10 +219,11 @@ def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
     dc_sat 0, PST exc_dc12's SE(E) = Asat exp(Bsat |E|): E2 (column 14) = 0 means columns
     13, 15 are Asat, Bsat themselves; otherwise PST's fit through (E1, SE1), (E2, SE2) --
     **QUIRK**: Bsat = ln(SE2 E2 / (SE1 E1)) / (E2 - E1), Asat = SE1 exp(-Bsat E1), so
-    SE(E1) = SE1 but SE(E2) = SE2 E2 / E1 (docs 2.3).  dc_sat 1, the quadratic
-    SE(E) E = Bsat (E - Asat)^2 through both points (PSS/E; ANDES `ExcQuadSat`)."""
+    SE(E1) = SE1 but SE(E2) = SE2 E2 / E1 (docs 2.3).  dc_sat 1, and EXAC1 always, the
+    quadratic SE(E) E = Bsat (E - Asat)^2 through both points (PSS/E; ANDES
+    `ExcQuadSat`)."""
     A, B = _exponential_fit(e)
-    quad = e.dc_sat == 1
+    quad = (e.dc_sat == 1) | (e.type == AC1)
     if quad.any():
         Aq, Bq = quadratic_fit(
             *_dc_points(e),
@@ -252,7 +265,15 @@ def _check_dc(e) -> None:
     """DC exciter, EXST1 and ESST1A options stabctl does not model: raise CaseError naming
     row and field (T_A, T_E, T_F must exist; Vrmax = 0 is PST's 'compute it')."""
     dc = (("TA", "TA"), ("TE", "TE"), ("TF", "TF_dc"))  # (name in messages, declared)
-    need = {DC1: dc, DC2: dc, T2: dc, ST1: (("TA", "TA"),), ST1A: (("TA", "TA"),)}
+    need = {
+        DC1: dc,
+        DC2: dc,
+        T2: dc,
+        ST1: (("TA", "TA"),),
+        ST1A: (("TA", "TA"),),
+        AC1: (("TA", "TA"), ("TE", "TE")),
+        AC4: (("TA", "TA"),),
+    }
     for r in np.nonzero(np.isin(e.type, (*DC_KINDS, *READS_IFD)))[0]:
         kind = int(e.type[r])
         extra = (("TF", "TF"),) if kind in READS_IFD and e.KF[r] != 0 else ()
@@ -276,6 +297,7 @@ def exciter_params(case: Case) -> ExciterParams:
     _check_dc(e)
     A, B = _dc_saturation(e)
     dc = np.isin(e.type, DC_KINDS)
+    ac = e.type == AC1
     KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
     given = {n: getattr(e, n).copy() for n in TABLE_FIELDS}
     given.update(KA=KA, KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)))
@@ -283,13 +305,13 @@ def exciter_params(case: Case) -> ExciterParams:
         kind=e.type.astype(int),
         mac=np.array([case.machine_index(m) for m in e.machine], int),
         **given,
-        KE=np.where(dc, _dc(e, "KE"), 0.0),
-        TE=np.where(dc, _dc(e, "TE"), 0.0),
-        Asat=np.where(dc, A, 0.0),
-        Bsat=np.where(dc, B, 0.0),
+        KE=np.where(dc | ac, _dc(e, "KE"), 0.0),
+        TE=np.where(dc | ac, _dc(e, "TE"), 0.0),
+        Asat=np.where(dc | ac, A, 0.0),
+        Bsat=np.where(dc | ac, B, 0.0),
         KF=np.where(dc, _dc(e, "KF_dc"), np.where(np.isin(e.type, READS_IFD), e.KF, 0.0)),
         TF=np.where(dc, _dc(e, "TF_dc"), np.where(np.isin(e.type, READS_IFD), e.TF, 0.0)),
-        sat_quadratic=dc & (e.dc_sat == 1),
+        sat_quadratic=(dc & (e.dc_sat == 1)) | ac,
         ke_given=dc & (e.ke_given == 1),
         ifd_machine=(e.type == ST3) & (e.ifd_machine == 1),
     )
@@ -392,6 +414,14 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     x[2] = np.where(st1a, VR_st1a, x[2])
     x[3] = np.where(p.has_Rf, vex, 0.0)
     x[4] = np.where(dc, vex, np.where(st1a, VA, 0.0))
+    if p.is_ac.any():
+        VE, VFE = ac_initial_exciter(p, vex)
+        ac = p.is_ac
+        x[1] = np.where(ac, VFE / p.KA, x[1])
+        x[2] = np.where(ac, VFE, x[2])
+        x[3] = np.where(ac, VE, x[3])
+        x[4] = np.where(ac, VFE, x[4])
+        VA = np.where(ac, VFE / p.KA, VA)
     Vref = eterm + np.where(st3, VI, VA)
     return x[: p.n_slots()], Vref, p
 
@@ -403,24 +433,52 @@ def st1a_regulator_output(p: ExciterParams, Efd):
     return np.where(p.kind == ST1A, Efd + p.KLR * np.maximum(Efd - p.ILR, 0.0), Efd)
 
 
+def ac_initial_exciter(p: ExciterParams, Efd):
+    """EXAC1 at rest, arrays (n_exc,) (0 for the other types): the exciter voltage V_E0
+    solving V_E F_EX(K_C I_fd0/V_E) = Efd0 (`blocks.rectifier_loading`, increasing in V_E;
+    I_fd0 = Efd0) and V_FE0 = K_E V_E0 + S_E(V_E0) V_E0 + K_D I_fd0 (= V_R0); raises
+    CaseError if V_R0 is outside [Vrmin, Vrmax] or V_R0/K_A has no V_E0."""
+    VE, VFE = np.zeros(p.n), np.zeros(p.n)
+    for i in np.nonzero(p.is_ac)[0]:
+        efd0 = ifd0 = float(Efd[i])
+        if efd0 <= 0:
+            raise CaseError(
+                f"exc_con row {i + 1}: EXAC1 initial field voltage {efd0:.4f} pu must be > 0"
+            )
+        KC = float(p.KC[i])
+
+        def residual(v, KC=KC, ifd0=ifd0, efd0=efd0):
+            return v * rectifier_loading(KC * ifd0 / v) - efd0
+
+        VE[i] = brentq(residual, efd0, efd0 + KC * ifd0 + 1.0, xtol=1e-15, rtol=1e-15)
+        VFE[i] = dc_feedback(p.KE[i], p.Asat[i], p.Bsat[i], 1.0, VE[i]) + p.KD[i] * ifd0
+        if beyond(VFE[i], p.Vrmin[i], p.Vrmax[i]):
+            raise CaseError(
+                f"exc_con row {i + 1}: EXAC1 initial regulator output V_R = {VFE[i]:.4f} pu "
+                f"outside [Vrmin, Vrmax] = [{p.Vrmin[i]:.4f}, {p.Vrmax[i]:.4f}]"
+            )
+    return VE, VFE
+
+
 def _check_st1_initial(p: ExciterParams, Efd, eterm, VA):
-    """EXST1 and ESST1A at the initial point: Efd0 inside [V_t Vrmin, V_t Vrmax - K_C
-    I_fd0] (I_fd0 = Efd0), the regulator input VA/K_A inside [VImin, VImax] (VA: Efd0, or
-    ESST1A's `st1a_regulator_output`), ESST1A's VA inside [VAmin, VAmax]; raises
-    CaseError."""
-    st1 = np.isin(p.kind, READS_IFD)
-    VI = VA / p.KA
+    """EXST1, ESST1A and EXAC4 at the initial point: Efd0 inside its output limits, [V_t
+    Vrmin, V_t Vrmax - K_C I_fd0] (EXAC4: [Vrmin - K_C I_fd0, Vrmax - K_C I_fd0]) with
+    I_fd0 = Efd0, the regulator input VA/K_A inside [VImin, VImax] (VA: Efd0, or ESST1A's
+    `st1a_regulator_output`), ESST1A's VA inside [VAmin, VAmax]; raises CaseError."""
+    ac4 = p.kind == AC4
+    lo = np.where(ac4, p.Vrmin - p.KC * Efd, eterm * p.Vrmin)
+    hi = np.where(ac4, p.Vrmax, eterm * p.Vrmax) - p.KC * Efd
     bad = np.nonzero(
-        st1
+        np.isin(p.kind, (ST1, ST1A, AC4))
         & (
-            beyond(Efd, eterm * p.Vrmin, eterm * p.Vrmax - p.KC * Efd)
-            | beyond(VI, p.VImin, p.VImax)
+            beyond(Efd, lo, hi)
+            | beyond(VA / p.KA, p.VImin, p.VImax)
             | ((p.kind == ST1A) & beyond(VA, p.VAmin, p.VAmax))
         )
     )[0]
     if bad.size:
         i = bad[0]
-        name = "ESST1A" if p.kind[i] == ST1A else "EXST1"
+        name = {ST1: "EXST1", ST1A: "ESST1A", AC4: "EXAC4"}[int(p.kind[i])]
         raise CaseError(
             f"exc_con row {i + 1}: {name} initial field voltage {Efd[i]:.4f} pu "
             "outside its output limits or regulator input outside [VImin, VImax]"
@@ -484,7 +542,7 @@ def field_current(P, i, MP, xm, cur):
     equations read it (:data:`READS_IFD`: EXST1, ESST1A), 0 for the other types; MP, xm,
     cur as `field_voltage`."""
     kind = P[i, E.KIND]
-    if kind == ST1 or kind == ST1A:
+    if kind == ST1 or kind == ST1A or kind == AC1 or kind == AC4:
         return mac.field_current(MP, xm, cur, int(P[i, E.MAC]))
     return 0.0
 
@@ -537,6 +595,10 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
         return _st1_field_voltage(P, x, i, VTR_alg, ifd)
     if kind == ST1A:
         return _st1a_field_voltage(P, x, i, VTR_alg, ifd)
+    if kind == AC1:
+        return _ac1_field_voltage(P, x, i, ifd)
+    if kind == AC4:
+        return clip(x[2, i], P[i, E.VRMIN] - P[i, E.KC] * ifd, P[i, E.VRMAX] - P[i, E.KC] * ifd)
     if kind == DC1 or kind == DC2 or kind == T2:
         return x[3, i]
     return _smp_field_voltage(P, x, i, VTR_alg, pss_out, ieee)
@@ -564,6 +626,10 @@ def derivatives(P, x, i, eterm, pss_out, efd, ifd, dx, ieee, reach):
         _st1_derivatives(P, x, i, err, efd, dx)
     elif kind == ST1A:
         _st1a_derivatives(P, x, i, err, ifd, dx)
+    elif kind == AC1:
+        _ac1_derivatives(P, x, i, err, ifd, dx)
+    elif kind == AC4:
+        _ac4_derivatives(P, x, i, err, dx)
     else:
         _dc_derivatives(P, x, i, eterm, err, dx, ieee, reach)
 
@@ -731,6 +797,54 @@ def _st1a_derivatives(P, x, i, err, ifd, dx):
     x[2, i], dx[2, i] = nonwindup_lag(
         P[i, E.KA] * u, x[2, i], P[i, E.TA], P[i, E.VAMIN], P[i, E.VAMAX], _IEEE_RULE, 0.0
     )
+
+
+# -- EXAC1 (IEEE 1981 AC1 as PSS/E EXAC1 and ANDES 2.0 exac1.py): lead-lag, non-windup
+# -- K_A/(1 + s T_A) -> V_R; T_E dV_E/dt = V_R - V_FE, V_FE = K_E V_E + S_E(V_E) V_E + K_D
+# -- I_fd (PSS/E's quadratic saturation); Efd = V_E F_EX(K_C I_fd/V_E); rate feedback
+# -- s K_F/(1 + s T_F) of V_FE.  PSTess has no AC1: IEEE 421.5's non-windup rule in both
+# -- conventions
+
+
+@kernel(inline="always")
+def _ac1_field_voltage(P, x, i, ifd):
+    """EXAC1: V_E F_EX(I_N), I_N = K_C I_fd / V_E (`blocks.rectifier_loading`)."""
+    VE = x[3, i]
+    return VE * rectifier_loading(P[i, E.KC] * ifd / VE) if VE > 0 else 0.0
+
+
+@kernel(inline="always")
+def _ac1_derivatives(P, x, i, err, ifd, dx):
+    """EXAC1 (docs/pst_models.md 2.7): the rate feedback of V_FE (state R_f, with K_F !=
+    0) subtracted from the error, the lead-lag T_C/T_B, V_R non-windup on [Vrmin, Vrmax],
+    the exciter T_E dV_E/dt = V_R - V_FE."""
+    VFE = (
+        dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ], x[3, i])
+        + P[i, E.KD] * ifd
+    )
+    if P[i, E.KF] != 0:
+        VF, dx[4, i] = washout(VFE, x[4, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
+        err = err - VF
+    u, dx[1, i] = leadlag_input_state(err, x[1, i], P[i, E.TCTB], P[i, E.TB])
+    x[2, i], dx[2, i] = nonwindup_lag(
+        P[i, E.KA] * u, x[2, i], P[i, E.TA], P[i, E.VRMIN], P[i, E.VRMAX], _IEEE_RULE, 0.0
+    )
+    dx[3, i] = (x[2, i] - VFE) / P[i, E.TE]
+
+
+# -- EXAC4 (IEEE 1981 AC4 as PSS/E EXAC4 and ANDES 2.0 exac4.py): V_I limited, lead-lag,
+# -- K_A/(1 + s T_A) (no limit on the lag); output limited to [Vrmin - K_C I_fd, Vrmax -
+# -- K_C I_fd] (in `field_voltage_at`)
+
+
+@kernel(inline="always")
+def _ac4_derivatives(P, x, i, err, dx):
+    """EXAC4 (docs/pst_models.md 2.8): the error limited to [VImin, VImax], the lead-lag
+    T_C/T_B, the lag K_A/(1 + s T_A)."""
+    u, dx[1, i] = leadlag_input_state(
+        clip(err, P[i, E.VIMIN], P[i, E.VIMAX]), x[1, i], P[i, E.TCTB], P[i, E.TB]
+    )
+    dx[2, i] = lag(P[i, E.KA] * u, x[2, i], P[i, E.TA])[1]
 
 
 # -- exc_dc12 (DC1, DC2) and IEEET2: rate feedback, lead-lag, non-windup K_A/(1 + s T_A)

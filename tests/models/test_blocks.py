@@ -117,3 +117,16 @@ def test_nonwindup_lag_against_windup_lag():
     assert run(0.0, x_nw, t, True) == pytest.approx(np.exp(-t / T), rel=1e-6)
     x_w_t = run(0.0, x_w, t, False)
     assert x_w_t == pytest.approx(x_w * np.exp(-t / T), rel=1e-8) and b.clip(x_w_t, lo, hi) == hi
+
+
+def test_rectifier_loading_segments_and_continuity():
+    """F_EX(I_N) of IEEE 421.5 annex D: its four segments, continuous to the rounding of
+    the standard's coefficients at 0.433, 0.75 and 1."""
+    f = b.rectifier_loading
+    assert f(-0.1) == f(0.0) == 1.0
+    assert f(0.2) == pytest.approx(1 - 0.577 * 0.2, rel=1e-15)
+    assert f(0.6) == pytest.approx(np.sqrt(0.75 - 0.36), rel=1e-15)
+    assert f(0.9) == pytest.approx(1.732 * 0.1, rel=1e-14)
+    assert f(1.2) == 0.0
+    for edge in (0.433, 0.75, 1.0):
+        assert abs(f(edge - 1e-12) - f(edge + 1e-12)) < 3e-4

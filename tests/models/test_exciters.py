@@ -68,6 +68,10 @@ ST1 = [
 #: is on at the start (I_fd0 = Efd0 > ILR): V_A0 = 1.9 + 2 (1.9 - 1.5) = 2.7
 ST1A = [6, 1, 0.02, 200, 0.04, 10.0, 1.0, 7.3, -7.3, 0.8, -0.1, 0, 0, 0, 0, 0, 0.1, 0, 0, 0]
 ST1A += [0.05, 1.0, 0, 0, 0, 0.5, 2.0, 6.0, -5.0, 2.0, 1.5]
+#: EXAC1 (type 7): TR KA TA TB TC Vrmax Vrmin (3-9), KE TE E1 SE1 E2 SE2 (10-15, the DC
+#: names), KC (17), KF TF (21-22), KD (32); I_N0 = 0.2 1.9 / V_E0 < 0.433
+AC1 = [7, 1, 0.0, 400, 0.02, 0.0, 0.0, 8.0, -8.0, 1.0, 0.8, 2.0, 0.05, 3.0, 0.2, 0, 0.2, 0, 0, 0]
+AC1 += [0.03, 1.0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.38]
 ROWS = {
     "smpexc": SMP,
     "SCRX": SCRX,
@@ -77,6 +81,7 @@ ROWS = {
     "ST3": ST3,
     "EXST1": ST1,
     "ESST1A": ST1A,
+    "EXAC1": AC1,
 }
 EFD0, VT0, VB0 = 1.9, 1.02, 4.0  # initial field and terminal voltage, ST3 V_B
 
@@ -277,6 +282,45 @@ def test_esst1a_rate_feedback_is_a_washout_of_the_regulator_output():
     assert dx[3, 0] == pytest.approx(0.5 / 1.0, rel=1e-14)
     err = P[0, exc.E.VREF] - x[0, 0] - 0.05 / 1.0 * 0.5
     assert dx[1, 0] == pytest.approx((err - x[1, 0]) / 10.0, rel=1e-12)
+
+
+def test_exac1_initial_point_in_closed_form():
+    """EXAC1 at rest with I_N0 <= 0.433: V_E0 = Efd0 + 0.577 K_C I_fd0 (I_fd0 = Efd0), V_R0
+    = V_FE0 = K_E V_E0 + B (V_E0 - A)^2 + K_D I_fd0 with the quadratic through (2, 0.05),
+    (3, 0.2): S_E(E) E = B (E - A)^2 (PSS/E), the rate-feedback state at V_FE0."""
+    P, x = started(AC1)
+    VE0 = EFD0 + 0.577 * 0.2 * EFD0
+    A = (3 - 2 * np.sqrt(6)) / (1 - np.sqrt(6))  # (3 - A) = sqrt(0.6/0.1) (2 - A)
+    B = 0.1 / (2 - A) ** 2
+    VFE0 = VE0 + B * (VE0 - A) ** 2 + 0.38 * EFD0
+    assert x[3, 0] == pytest.approx(VE0, rel=1e-14)
+    assert x[2, 0] == x[4, 0] == pytest.approx(VFE0, rel=1e-14)
+    assert P[0, exc.E.VREF] == pytest.approx(VT0 + VFE0 / 400, rel=1e-15)
+
+
+def test_exac1_output_follows_the_rectifier_regulation():
+    """EXAC1's Efd = V_E F_EX(K_C I_fd/V_E) (IEEE 421.5 annex D): a field current of 5 pu
+    gives I_N = 1/V_E0 in the sqrt(0.75 - I_N^2) segment; 20 pu, beyond 1: no output."""
+    P, x = started(AC1)
+    VE0 = x[3, 0]
+    IN = 0.2 * 5 / VE0
+    assert 0.433 < IN < 0.75
+    got = exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, 5.0, True)
+    assert got == pytest.approx(VE0 * np.sqrt(0.75 - IN**2), rel=1e-14)
+    assert exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, 20.0, True) == 0.0
+
+
+def test_exac1_exciter_integrates_vr_minus_vfe_and_vr_is_non_windup():
+    """EXAC1: T_E dV_E/dt = V_R - V_FE (a field current 0.1 higher raises V_FE by K_D
+    0.1); V_R at Vrmax driven outward stays there with a zero derivative (IEEE 421.5
+    E.5)."""
+    P, x = started(AC1)
+    dx = np.zeros_like(x)
+    exc.derivatives(P, x, 0, VT0, 0.0, EFD0, EFD0 + 0.1, dx, True, 0.0)
+    assert dx[3, 0] == pytest.approx(-0.38 * 0.1 / 0.8, rel=1e-12)
+    x[2, 0] = 8.0
+    exc.derivatives(P, x, 0, VT0, 1.0, EFD0, EFD0, dx, True, 0.0)
+    assert x[2, 0] == 8.0 and dx[2, 0] == 0.0
 
 
 def test_layout_names_every_packed_column_once():
