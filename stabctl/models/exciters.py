@@ -2,20 +2,21 @@
 DC1 / DC2 dc commutator exciters), `exc_st3` (type 3, IEEE ST3), stabctl's PSS/E
 `EXST1` (type 4, IEEE ST1 simplified), `IEEET2` (type 5: DC1 whose rate feedback has a
 second lag, s K_F/((1 + s T_F1)(1 + s T_F2))), `ESST1A` (type 6, IEEE ST1A with its
-field current limiter) and `EXAC1` (type 7, IEEE AC1 with its rectifier regulation);
-smpexc also serves PSS/E's SCRX (bus fed: the output times the terminal voltage, exc_con
-column 19 ``bus_fed``).
+field current limiter), `EXAC1` (type 7, IEEE AC1 with its rectifier regulation) and
+`EXAC4` (type 8, IEEE AC4); smpexc also serves PSS/E's SCRX (bus fed: the output times
+the terminal voltage, exc_con column 19 ``bus_fed``).
 
 Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
 Table 2, 3.13 Table 3); PSS/E Model Library EXST1 (IEEE Std 421.5 ST1A simplified),
 IEEET2 (IEEE Committee Report 1968 type 2), ESST1A (IEEE Std 421.5-2016 ST1A; ANDES 2.0
-``esst1a.py``), EXAC1 (IEEE 1981 AC1; ANDES 2.0 ``exac1.py``) and SCRX (bus-fed or
-solid-fed static exciter); equations, limits and PST's quirks in docs/pst_models.md
-section 2.  A time constant below 1e-3 s means the block is absent (no state).  States,
-named per type in STATE_NAMES: smpexc (V_TR, V_As, Efd); exc_st3 (V_TR, V_As, V_R);
-exc_dc12 (V_TR, V_As, V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R, R_f); IEEET2 (exc_dc12's
-and V_F, the second feedback lag); ESST1A (V_TR, V_As, V_A, R_f, V_As1); EXAC1 (V_TR,
-V_As, V_R, V_E, R_f).  Units: pu on the machine base; times in s.
+``esst1a.py``), EXAC1 and EXAC4 (IEEE 1981 AC1, AC4; ANDES 2.0 ``exac1.py``,
+``exac4.py``) and SCRX (bus-fed or solid-fed static exciter); equations, limits and PST's
+quirks in docs/pst_models.md section 2.  A time constant below 1e-3 s means the block is
+absent (no state).  States, named per type in STATE_NAMES: smpexc (V_TR, V_As, Efd);
+exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As, V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R,
+R_f); IEEET2 (exc_dc12's and V_F, the second feedback lag); ESST1A (V_TR, V_As, V_A, R_f,
+V_As1); EXAC1 (V_TR, V_As, V_R, V_E, R_f); EXAC4 (V_TR, V_As, V_R).  Units: pu on the
+machine base; times in s.
 
 The kernels read the packed parameters by name (`E`, from :data:`PACKED`), are built of
 the control blocks of `stabctl.models.blocks`, and are one function per type behind the

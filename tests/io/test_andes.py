@@ -469,6 +469,23 @@ def test_ieee14_exac1_starts_flat_and_its_field_voltage_and_speeds_match_andes()
     assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 2e-3
 
 
+def test_ieee14_exac4_starts_flat_and_its_field_voltage_and_speeds_match_andes():
+    """IEEE 14 with an EXAC4 (ANDES's ieee14_exac4.xlsx; docs/pst_models.md 2.8): a 10 s
+    flat run stays at 1 pu; after a 6-cycle fault at bus 9 its field voltage rides both
+    output limits (8 pu, then 0) as ANDES's ``exac4.py`` and the speeds agree."""
+    sim, res, ss, _t, w, wa = andes_case_run("ieee14/ieee14_exac4.xlsx", 9)
+    assert np.sum(sim.case.exciters.type == 8) == ss.EXAC4.n == 1
+    flat = sim.run([], 10.0, h=STEP)
+    assert np.max(np.abs(flat.speed - 1)) < 1e-10  # measured 0
+    assert np.max(np.abs(w - wa)) < 2e-5  # measured 4.5e-6
+    k = list(sim.case.machines.bus).index(ss.SynGen.get("bus", ss.EXAC4.syn.v[0]))
+    ta = ss.dae.ts.t
+    theirs = ss.dae.ts.y[:, ss.EXAC4.vout.a[0]]
+    ours = np.interp(ta, res.t, res.efd[:, k])
+    assert np.max(theirs) == pytest.approx(8.0) and np.min(theirs) < 1e-9  # both limits
+    assert np.max(np.abs(ours - theirs)[ta > 1.3]) < 5e-3
+
+
 @pytest.mark.parametrize(
     "name",
     ["ieee39/ieee39_full.xlsx", "kundur/kundur_full.xlsx", "npcc/npcc.xlsx", "ieee14/ieee14.json"],

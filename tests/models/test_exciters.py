@@ -72,6 +72,8 @@ ST1A += [0.05, 1.0, 0, 0, 0, 0.5, 2.0, 6.0, -5.0, 2.0, 1.5]
 #: names), KC (17), KF TF (21-22), KD (32); I_N0 = 0.2 1.9 / V_E0 < 0.433
 AC1 = [7, 1, 0.0, 400, 0.02, 0.0, 0.0, 8.0, -8.0, 1.0, 0.8, 2.0, 0.05, 3.0, 0.2, 0, 0.2, 0, 0, 0]
 AC1 += [0.03, 1.0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.38]
+#: EXAC4 (type 8): TR KA TA TB TC Vrmax Vrmin VImax VImin (3-11), KC (17)
+AC4 = [8, 1, 0.02, 200, 0.04, 10.0, 1.0, 5.0, -4.0, 0.1, -0.1, 0, 0, 0, 0, 0, 0.1]
 ROWS = {
     "smpexc": SMP,
     "SCRX": SCRX,
@@ -82,6 +84,7 @@ ROWS = {
     "EXST1": ST1,
     "ESST1A": ST1A,
     "EXAC1": AC1,
+    "EXAC4": AC4,
 }
 EFD0, VT0, VB0 = 1.9, 1.02, 4.0  # initial field and terminal voltage, ST3 V_B
 
@@ -321,6 +324,19 @@ def test_exac1_exciter_integrates_vr_minus_vfe_and_vr_is_non_windup():
     x[2, 0] = 8.0
     exc.derivatives(P, x, 0, VT0, 1.0, EFD0, EFD0, dx, True, 0.0)
     assert x[2, 0] == 8.0 and dx[2, 0] == 0.0
+
+
+def test_exac4_output_limits_fall_with_the_field_current():
+    """EXAC4's output is its regulator state clipped to [Vrmin - K_C I_fd, Vrmax - K_C
+    I_fd] (PSS/E EXAC4), not scaled by V_t: the state at 6 with I_fd = 2 gives 5 - 0.2;
+    a large error moves the windup lag at (K_A T_C/T_B VImax - V_R)/T_A."""
+    P, x = started(AC4)
+    x[2, 0] = 6.0
+    assert exc.field_voltage_at(P, x, 0, 0.3, 0.0, 1.0, 2.0, True) == pytest.approx(4.8)
+    dx = np.zeros_like(x)
+    exc.derivatives(P, x, 0, VT0, 1.0, EFD0, EFD0, dx, True, 0.0)
+    u = x[1, 0] + 0.1 * (0.1 - x[1, 0])  # lead-lag output, ratio T_C/T_B
+    assert dx[2, 0] == pytest.approx((200 * u - 6.0) / 0.04, rel=1e-12)
 
 
 def test_layout_names_every_packed_column_once():
