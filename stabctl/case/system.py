@@ -40,6 +40,8 @@ from typing import TYPE_CHECKING, ClassVar, Self
 import numpy as np
 
 from stabctl.case.params import (
+    CONVERTER,
+    ESD1,
     EXCITER,
     GOVERNOR,
     MACHINE,
@@ -60,6 +62,7 @@ __all__ = [
     "GovernorTable",
     "LoadTable",
     "InjectionTable",
+    "ConverterTable",
     "Case",
     "SWING",
     "PV",
@@ -630,6 +633,46 @@ class InjectionTable(Table):
     INTEGER: ClassVar[tuple[str, ...]] = ("bus",)
 
 
+@_declared(CONVERTER)
+class ConverterTable(Table):
+    """Converter-interfaced devices (inverter-based resources): stabctl's ``ibr_con``,
+        one row per device, as ANDES 2.0's distributed models PVD1 (WECC distributed PV)
+        and ESD1 (PVD1 with a state of charge) have them (docs/ibr.md): a current source
+        at its bus, whose initial P and Q are the fractions ``pfrac``, ``qfrac`` of the
+        bus generation of the power flow.  Columns (declared in
+        :data:`stabctl.case.params.CONVERTER`; powers, currents and reactances on the
+        device base ``mva``, as ANDES's inputs):
+
+    {columns}
+
+        Omitted columns take ANDES's defaults (as declared).  Validation: unique positive
+        integer numbers, type 1 or 2, mva > 0, Twm > 0, tip, tiq, Tfm >= 0, ft0 < ft1 <=
+        ft2 < ft3 and vt0 < vt1 <= vt2 < vt3 (the trip curves divide by the differences),
+        dqdv < 0, ESD1: Tf > 0, En > 0, 0 < EtaC, EtaD and SOCmin <= SOCinit <= SOCmax.
+    """
+
+    def _check(self):
+        self._require(self.number > 0, "number", "converter number must be a positive integer")
+        self._unique("number", "converter number")
+        self._require(self.mva > 0, "mva", "device base must be > 0")
+        self._require(self.Twm > 0, "Twm", "washout time constant must be > 0 s")
+        self._require(self.dqdv < 0, "dqdv", "Q-V droop must be < 0")
+        for a, b in (("vt0", "vt1"), ("vt2", "vt3"), ("ft0", "ft1"), ("ft2", "ft3")):
+            self._require(getattr(self, b) > getattr(self, a), b, f"must be > {a}")
+        self._require(self.vt2 >= self.vt1, "vt2", "must be >= vt1")
+        self._require(self.ft2 >= self.ft1, "ft2", "must be >= ft1")
+        esd = self.type == ESD1
+        self._require(~esd | (self.Tf > 0), "Tf", "ESD1 integrator time constant must be > 0 s")
+        self._require(~esd | (self.En > 0), "En", "ESD1 rated energy must be > 0 MWh")
+        self._require(~esd | (self.EtaC > 0), "EtaC", "ESD1 efficiency must be > 0")
+        self._require(~esd | (self.EtaD > 0), "EtaD", "ESD1 efficiency must be > 0")
+        self._require(
+            ~esd | ((self.SOCinit >= self.SOCmin) & (self.SOCinit <= self.SOCmax)),
+            "SOCinit",
+            "ESD1 initial state of charge must be in [SOCmin, SOCmax]",
+        )
+
+
 #: table field of Case -> table class, in file order
 TABLES: Mapping[str, type[Table]] = MappingProxyType(
     {
@@ -641,6 +684,7 @@ TABLES: Mapping[str, type[Table]] = MappingProxyType(
         "governors": GovernorTable,
         "loads": LoadTable,
         "injections": InjectionTable,
+        "converters": ConverterTable,
     }
 )
 
@@ -678,6 +722,9 @@ class Case:
     injections : InjectionTable
         Fixed constant-power injections not in the bus table (storage or HVDC set
         points), one row each, pu on the system base; empty by default.
+    converters : ConverterTable
+        Converter-interfaced devices (ANDES PVD1, ESD1), one row each, pu on the device
+        base (see the class for columns and units); empty by default.
     sw_con : numpy.ndarray or None
         The data file's own switching (disturbance) matrix, shape (rows, 7), PST format
         (PST manual 2.5), read-only; None if the file has none.
@@ -693,7 +740,7 @@ class Case:
     ------
     CaseError
         On construction: bus numbers referenced but not in ``buses`` (branches, machines,
-        loads, injections), controllers on machines not in ``machines``, no swing bus, a
+        loads, injections, converters), controllers on machines not in ``machines``, no swing bus, a
         malformed ``sw_con``, a table of the wrong class, or a non-positive base or
         frequency.
     """
@@ -709,6 +756,7 @@ class Case:
     governors: GovernorTable = field(default_factory=GovernorTable.empty)
     loads: LoadTable = field(default_factory=LoadTable.empty)
     injections: InjectionTable = field(default_factory=InjectionTable.empty)
+    converters: ConverterTable = field(default_factory=ConverterTable.empty)
     sw_con: np.ndarray | None = None
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
     source: str = ""
@@ -749,6 +797,7 @@ class Case:
         self._check_buses(self.machines, "bus", known)
         self._check_buses(self.loads, "bus", known)
         self._check_buses(self.injections, "bus", known)
+        self._check_buses(self.converters, "bus", known)
         macs = self.machines.number
         for tab in (self.exciters, self.pss, self.governors):
             bad = np.flatnonzero(~np.isin(tab.machine, macs))

@@ -89,11 +89,15 @@ def _imported(case, out) -> tuple[dict, str]:
         "pss": len(case.pss),
         "governors": len(case.governors),
     }
-    return summary, (
+    text = (
         f"wrote {out}: {case.n_bus} buses, {len(case.branches)} branches, "
         f"{len(case.machines)} machines, {len(case.exciters)} exciters, "
         f"{len(case.pss)} PSS, {len(case.governors)} governors"
     )
+    if len(case.converters):  # a case without converters is summarised as before
+        summary["converters"] = len(case.converters)
+        text += f", {len(case.converters)} converters"
+    return summary, text
 
 
 @click.command("import-psse")

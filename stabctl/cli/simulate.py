@@ -178,7 +178,9 @@ def simulate(
     settings (`esd`), per device switchings, energy absorbed and delivered (MJ) and peak
     power used (MW) (`storage`), and every switching as {t_s, device, bus, machine, mode
     (absorb, idle, inject), mode_code (+1, 0, -1), rel_speed_hz (machine minus COI speed
-    seen by the controller)} (`switchings`).
+    seen by the controller)} (`switchings`).  A case with converters (ANDES PVD1, ESD1;
+    docs/ibr.md) adds pibr_pu.C<c> and qibr_pu.C<c>, the P and Q each injects (system
+    base).
 
     \b
     Examples:

@@ -440,6 +440,9 @@ class Simulator:
             vmag=np.abs(rec.V[:n]),
             vang=np.angle(rec.V[:n]),
             inertia=self.inertia,
+            converters=c.converters.number.astype(int),
+            ibr_p=rec.S_ibr[:n].real.copy() if len(c.converters) else None,
+            ibr_q=rec.S_ibr[:n].imag.copy() if len(c.converters) else None,
             stable=t_sep is None,
             t_separation=t_sep,
             separated=separated,
@@ -467,7 +470,7 @@ class _Run:
     def __init__(self, sim: Simulator, m, sa, grid, nets, pst, limit, stop, n_commands=0):
         self.sim, self.m, self.sa, self.grid = sim, m, sa, grid
         n_nc = m.V_nc0.size
-        self.rec = ig.recording(grid.t.size, m.mp.n, sim.case.n_bus, sa.pmax.size)
+        self.rec = ig.recording(grid.t.size, m.mp.n, sim.case.n_bus, sa.pmax.size, m.cp.n)
         self.carry = ig.Carry(
             x=m.x0.copy(),
             kept=KeptBuses(

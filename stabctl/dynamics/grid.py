@@ -89,11 +89,12 @@ def default_step(
 def fastest_time_constant(case: Case) -> tuple[float, str]:
     """Smallest time constant among the states of the case's models (s) and where it is
     (table, field, row).  Raises CaseError for models stabctl does not have."""
-    from stabctl.models import exciters, governors, machines, pss
+    from stabctl.models import converters, exciters, governors, machines, pss
 
     cands = []
     mp, ep = machines.machine_params(case), exciters.exciter_params(case)
     pp, gp = pss.pss_params(case), governors.governor_params(case)
+    cp = converters.converter_params(case)
     for name, arr, sel in (
         ('mac_con T"do', mp.Tdopp, mp.kind == 2),
         ('mac_con T"qo', mp.Tqopp, mp.kind == 2),
@@ -102,6 +103,7 @@ def fastest_time_constant(case: Case) -> tuple[float, str]:
         *pp.time_constants(),
         *ep.time_constants(),
         *gp.time_constants(),
+        *cp.time_constants(),
     ):
         if np.any(sel):
             k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))

@@ -50,7 +50,8 @@ class Recording(NamedTuple):
     stage's outputs); the device powers P (n_t, n_dev) pu; per device stats (n_dev, 5) =
     (switchings, energy absorbed, energy delivered, highest and lowest stored energy
     relative to the start, all in pu*s; `stabctl.dynamics.switching.advance`); the
-    switching log (rows: time s, device, new mode, relative speed pu; NaN rows unused)."""
+    switching log (rows: time s, device, new mode, relative speed pu; NaN rows unused);
+    the converters' injected P + j Q, S_ibr (n_t, n_ibr) complex pu (system base)."""
 
     speed: np.ndarray
     angle: np.ndarray
@@ -61,13 +62,14 @@ class Recording(NamedTuple):
     P: np.ndarray
     stats: np.ndarray
     log: np.ndarray
+    S_ibr: np.ndarray
 
 
 #: rows of the switching log of a run (switchings beyond it are counted, not logged)
 LOG_ROWS = 4096
 
 
-def recording(n_t: int, nm: int, nb: int, nd: int) -> Recording:
+def recording(n_t: int, nm: int, nb: int, nd: int, ni: int = 0) -> Recording:
     """Zeroed buffers for a run.
 
     Parameters
@@ -76,6 +78,8 @@ def recording(n_t: int, nm: int, nb: int, nd: int) -> Recording:
         Grid points.
     nm, nb, nd : int
         Machines, buses, storage devices.
+    ni : int, optional
+        Converters; default 0.
 
     Returns
     -------
@@ -91,6 +95,7 @@ def recording(n_t: int, nm: int, nb: int, nd: int) -> Recording:
         P=np.zeros((n_t, nd)),
         stats=np.zeros((nd, 5)),
         log=np.full((LOG_ROWS, 4), np.nan),
+        S_ibr=np.zeros((n_t, ni), np.complex128),
     )
 
 
@@ -276,6 +281,8 @@ def _record(rec, k, x, out, P):
     assign(rec.V[k], out.V_bus)
     if P.size > 0:
         assign(rec.P[k], P)
+    if out.S_ibr.size > 0:
+        assign(rec.S_ibr[k], out.S_ibr)
 
 
 # -- network solution ----------------------------------------------------------------------
@@ -492,7 +499,9 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
         The last stored grid index.
     """
     n = grid.interval.size
-    kn = _Kernel(p, nets, c.kept, c.held_stage, kernel_outputs(p.n_mac, nets.R.shape[1]), evaluate)
+    kn = _Kernel(
+        p, nets, c.kept, c.held_stage, kernel_outputs(p.n_mac, nets.R.shape[1], p.n_ibr), evaluate
+    )
     w = _workspace(c.x, sa.pmax.size)
     x = c.x.copy()
     for k in range(k0, min(k1, n - 1)):

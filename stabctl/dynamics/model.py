@@ -21,6 +21,7 @@ from stabctl._jit.arrays import assign
 from stabctl._jit.decorators import njit
 from stabctl.case import BranchTable, BusTable, Case
 from stabctl.errors import CaseError, InputError, SimulationError
+from stabctl.models import converters as conv
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
@@ -70,8 +71,9 @@ class StageConfig:
 @dataclass
 class Layout:
     """Slices of the flat state vector: machines (6, n_mac), exciters (exc_rows, n_exc),
-    pss (pss_rows, n_pss), governors (tg_rows, n_tg), each stored state-major; the rows
-    are the most slots any exciter / PSS / governor type of the case uses."""
+    pss (pss_rows, n_pss), governors (tg_rows, n_tg), converters (conv.N_STATES, n_ibr),
+    each stored state-major; the rows are the most slots any exciter / PSS / governor type
+    of the case uses."""
 
     n_mac: int
     n_exc: int
@@ -80,6 +82,7 @@ class Layout:
     exc_rows: int = 3
     pss_rows: int = 3
     tg_rows: int = 3
+    n_ibr: int = 0
     blocks: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -89,6 +92,7 @@ class Layout:
             ("exc", self.exc_rows, self.n_exc),
             ("pss", self.pss_rows, self.n_pss),
             ("tg", self.tg_rows, self.n_tg),
+            ("ibr", conv.N_STATES, self.n_ibr),
         ):
             self.blocks[name] = (slice(start, start + rows * n), (rows, n))
             start += rows * n
@@ -135,6 +139,7 @@ class DynamicModel:
         self.ep = exc.exciter_params(case)
         self.pp = pss_.pss_params(case)
         self.gp = gov.governor_params(case)
+        self.cp = conv.converter_params(case, op.V, op.S_gen)
         self.layout = Layout(
             self.mp.n,
             self.ep.n,
@@ -143,6 +148,7 @@ class DynamicModel:
             self.ep.n_slots(),
             self.pp.n_slots(),
             self.gp.n_slots(),
+            self.cp.n,
         )
         self._setup_loads(injection_buses)
         self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
@@ -158,13 +164,22 @@ class DynamicModel:
             frac[case.bus_indices(lc[:, 0])] = lc[:, 1:5]
         has_mac = np.zeros(case.n_bus, bool)
         has_mac[self.mp.bus_idx] = True
-        S_L = op.S_load - np.where(has_mac, 0.0, op.S_gen)  # generation without machine
+        S_free = op.S_gen
+        cp = self.cp
+        if cp.n:  # the converters' shares of the generation at buses without machine
+            S_conv = np.zeros(case.n_bus, complex)
+            np.add.at(S_conv, cp.bus_idx, cp.P0 + 1j * cp.Q0)
+            S_free = op.S_gen - S_conv
+        S_L = op.S_load - np.where(has_mac, 0.0, S_free)  # generation without machine
         fP, fQ, fIP, fIQ = frac.T
         S_Z = (1 - fP - fIP) * S_L.real + 1j * (1 - fQ - fIQ) * S_L.imag
         self.y_load = np.conj(S_Z) / V0**2
         extra = case.bus_indices(list(injection_buses)) if len(injection_buses) else []
         nc = np.asarray(case.bus_indices(lc[:, 0]) if lc.size else [], int)
-        self.nc_idx = np.unique(np.concatenate([nc, np.asarray(extra, int)])).astype(int)
+        self.nc_idx = np.unique(
+            np.concatenate([nc, np.asarray(extra, int), cp.bus_idx.astype(int)])
+        ).astype(int)
+        cp.pos[:] = np.searchsorted(self.nc_idx, cp.bus_idx)
         i = self.nc_idx
         S_P = fP[i] * S_L[i].real + 1j * fQ[i] * S_L[i].imag
         S_I = fIP[i] * S_L[i].real + 1j * fIQ[i] * S_L[i].imag
@@ -235,6 +250,7 @@ class DynamicModel:
         )
         xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac])
         L.view(x, "tg")[:] = xg
+        L.view(x, "ibr")[:] = conv.initialise(self.cp, op.V)
         self.x0 = x
         self.V_nc0 = op.V[self.nc_idx].astype(complex)
         self.pss_of_exc = np.full(ep.n, -1)
@@ -249,6 +265,7 @@ class DynamicModel:
             EP=ep.packed(self.Vref),
             SP=self.pp.packed(),
             GP=self.gp.packed(self.Pref),
+            IP=self.cp.packed(),
             pss_of_exc=self.pss_of_exc,
             exc_rows=L.exc_rows,
             pss_rows=L.pss_rows,
@@ -265,6 +282,7 @@ class DynamicModel:
             n_exc=L.n_exc,
             n_pss=L.n_pss,
             n_tg=L.n_tg,
+            n_ibr=L.n_ibr,
         )
 
     @functools.cached_property
@@ -288,19 +306,24 @@ class DynamicModel:
             "exc": self.ep.mac,
             "pss": self.pp.mac,
             "tg": self.gp.mac,
+            "ibr": np.arange(self.cp.n),
         }
         names = {
             "mac": lambda i: mac.STATE_NAMES,
             "pss": lambda i: pss_.STATE_NAMES[int(self.pp.kind[i])],
             "exc": lambda i: exc.STATE_NAMES[int(self.ep.kind[i])],
             "tg": lambda i: gov.STATE_NAMES[int(self.gp.kind[i])],
+            "ibr": lambda i: conv.STATE_NAMES,
         }
         for block, (sl, (_rows, n)) in self.layout.blocks.items():
             if sl.start <= k < sl.stop:
                 r, i = divmod(k - sl.start, n)
-                number = int(self.case.machines.number[owners[block][i]])
                 own = names[block](i)
-                return f"{block}.{own[r] if r < len(own) else f'unused{r}'}.G{number}"
+                state = own[r] if r < len(own) else f"unused{r}"
+                if block == "ibr":
+                    return f"ibr.{state}.C{int(self.case.converters.number[i])}"
+                number = int(self.case.machines.number[owners[block][i]])
+                return f"{block}.{state}.G{number}"
         raise IndexError(f"state index {k} out of range")
 
     # -- one evaluation -----------------------------------------------------------------
@@ -318,7 +341,7 @@ class DynamicModel:
         Raises:
             SimulationError: the non-conforming load iteration did not converge.
         """
-        ko = kernel_outputs(self.mp.n, self.case.n_bus)
+        ko = kernel_outputs(self.mp.n, self.case.n_bus, self.cp.n)
         S = np.zeros(self.nc_idx.size, complex) if S_extra is None else np.asarray(S_extra, complex)
         kept = KeptBuses(
             V=np.array(V_nc_guess, complex), held=np.zeros(S.size, np.bool_), S_extra=S
@@ -335,20 +358,22 @@ class DynamicModel:
             efd=ko.efd,
             pmech=ko.pmech,
             cur=ko.cur,
+            S_ibr=ko.S_ibr,
         )
 
 
 class KernelParams(NamedTuple):
     """Packed parameters of every model for the compiled kernels (see each model's
-    `packed`), the non-conforming load data of the kept buses (S_P, I0, Y_low, (n_nc,)
-    complex pu) and the numbers of machines, exciters, PSSs and governors (the state
-    layout, `Layout`)."""
+    `packed`; IP the converters'), the non-conforming load data of the kept buses (S_P,
+    I0, Y_low, (n_nc,) complex pu) and the numbers of machines, exciters, PSSs, governors
+    and converters (the state layout, `Layout`)."""
 
     MP: np.ndarray
     basrad: float
     EP: np.ndarray
     SP: np.ndarray
     GP: np.ndarray
+    IP: np.ndarray
     pss_of_exc: np.ndarray
     exc_rows: int
     pss_rows: int
@@ -367,6 +392,7 @@ class KernelParams(NamedTuple):
     n_exc: int
     n_pss: int
     n_tg: int
+    n_ibr: int
 
 
 class KernelNetwork(NamedTuple):
@@ -434,7 +460,8 @@ class KeptBuses(NamedTuple):
 class KernelOutputs(NamedTuple):
     """Algebraic outputs written by `evaluate_kernel`: per machine cur (complex, system
     base), pelect, qelect (system base), eterm, efd, pmech (machine base), all (n_mac,);
-    V_bus (n_bus,) complex pu."""
+    V_bus (n_bus,) complex pu; per converter S_ibr (n_ibr,) the injected P + j Q (pu,
+    system base)."""
 
     cur: np.ndarray
     pelect: np.ndarray
@@ -443,11 +470,13 @@ class KernelOutputs(NamedTuple):
     efd: np.ndarray
     pmech: np.ndarray
     V_bus: np.ndarray
+    S_ibr: np.ndarray
 
 
 @njit(cache=True)
-def kernel_outputs(nm, nb):
-    """Output buffers for `evaluate_kernel`: (n_mac,) each, V_bus (nb,) zeros.
+def kernel_outputs(nm, nb, ni):
+    """Output buffers for `evaluate_kernel`: (n_mac,) each, V_bus (nb,) and S_ibr (ni,)
+    zeros.
 
     Parameters
     ----------
@@ -455,6 +484,8 @@ def kernel_outputs(nm, nb):
         Number of machines.
     nb : int
         Number of buses.
+    ni : int
+        Number of converters.
 
     Returns
     -------
@@ -468,6 +499,7 @@ def kernel_outputs(nm, nb):
         np.empty(nm),
         np.empty(nm),
         np.zeros(nb, np.complex128),
+        np.zeros(ni, np.complex128),
     )
 
 
@@ -505,10 +537,10 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     int
         The load-iteration count, -1 without convergence.
     """
-    nm, ne, nps, ng = p.n_mac, p.n_exc, p.n_pss, p.n_tg
+    nm, ne, nps, ng, ni = p.n_mac, p.n_exc, p.n_pss, p.n_tg, p.n_ibr
     Y11, Y12, Y21, Y22, Z22, R = net
     V_nc, held, S_extra = kept
-    cur, pelect, qelect, eterm, efd, pmech, V_bus = out
+    cur, pelect, qelect, eterm, efd, pmech, V_bus, S_ibr = out
     o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
     xm, dxm = x[:o].reshape(6, nm), dx[:o].reshape(6, nm)
     xe, dxe = x[o : o + re * ne].reshape(re, ne), dx[o : o + re * ne].reshape(re, ne)
@@ -516,9 +548,15 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     xp, dxp = x[o : o + rp * nps].reshape(rp, nps), dx[o : o + rp * nps].reshape(rp, nps)
     o += rp * nps
     xg, dxg = x[o : o + rg * ng].reshape(rg, ng), dx[o : o + rg * ng].reshape(rg, ng)
+    o += rg * ng
+    ri = conv.N_STATES
+    xi, dxi = x[o : o + ri * ni].reshape(ri, ni), dx[o : o + ri * ni].reshape(ri, ni)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
-    it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, held)
+    I_dev = np.zeros(V_nc.size, np.complex128)
+    for k in range(ni):
+        I_dev[int(p.IP[k, conv.C.POS])] += conv.drawn_current(p.IP, xi, k)
+    it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, I_dev, held)
     if it < 0:
         return -1
     assign(cur, Y11 @ psi + Y12 @ V_nc)
@@ -558,6 +596,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         efd[m] = exc.recorded_efd(p.EP, xe, i, efd_alg[i])
     for k in range(ng):
         gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G.MAC])], dxg)
+    for k in range(ni):
+        S_ibr[k] = conv.derivatives(p.IP, xi, k, V_nc[int(p.IP[k, conv.C.POS])], dxi)
     return it
 
 
@@ -575,7 +615,7 @@ def _evaluate_arg_types() -> tuple:
         typeof(KeptBuses(c, np.zeros(1, np.bool_), c)),
         types.boolean,
         typeof(z),
-        typeof(KernelOutputs(c, z, z, z, z, z, c)),
+        typeof(KernelOutputs(c, z, z, z, z, z, c, c)),
     )
 
 
@@ -647,7 +687,8 @@ def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:
 @dataclass
 class Outputs:
     """Algebraic outputs of one evaluation: per machine pelect, qelect (system base), eterm,
-    efd, pmech (machine base), cur (complex, system base); V_bus (n_bus,), V_nc."""
+    efd, pmech (machine base), cur (complex, system base); V_bus (n_bus,), V_nc; per
+    converter S_ibr (n_ibr,) the injected P + j Q (pu, system base)."""
 
     pelect: np.ndarray
     qelect: np.ndarray
@@ -657,3 +698,4 @@ class Outputs:
     efd: np.ndarray
     pmech: np.ndarray
     cur: np.ndarray
+    S_ibr: np.ndarray

@@ -3,7 +3,8 @@
 Columns of the CSV: `t` (s), then per machine k (number as in the
 data) `speed_pu.G<k>`, `angle_rad.G<k>` (absolute, synchronous frame, as PSTess),
 `pelect_pu.G<k>` (system base), `pmech_pu.G<k>` (machine base), `efd_pu.G<k>`, per bus n
-`vmag_pu.B<n>`, `vang_rad.B<n>`, and per storage device d `pesd_pu.D<d>` (+ absorbs).
+`vmag_pu.B<n>`, `vang_rad.B<n>`, per storage device d `pesd_pu.D<d>` (+ absorbs), and per
+converter c `pibr_pu.C<c>`, `qibr_pu.C<c>` (injected P, Q on the system base).
 """
 
 from __future__ import annotations
@@ -68,6 +69,12 @@ class SimulationResult:
     pesd : ndarray, shape (n_t, n_dev), or None, optional
         Storage device powers, pu on the system base (+ absorbs); None (default) without
         storage.
+    converters : ndarray of int, shape (n_ibr,), optional
+        Converter numbers as in the data (``ibr_con``), the column order of `ibr_p` and
+        `ibr_q`; empty (default) without converters.
+    ibr_p, ibr_q : ndarray, shape (n_t, n_ibr), or None, optional
+        Active and reactive power the converters inject, pu on the system base; None
+        (default) when not recorded.
     stable : bool, optional
         False when some rotor angle left the COI by more than the separation limit
         (`Simulator.run`, default pi rad); default True.
@@ -96,6 +103,9 @@ class SimulationResult:
     inertia: np.ndarray
     devices: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     pesd: np.ndarray | None = None
+    converters: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    ibr_p: np.ndarray | None = None
+    ibr_q: np.ndarray | None = None
     stable: bool = True
     t_separation: float | None = None
     separated: list = field(default_factory=list)
@@ -244,10 +254,12 @@ class SimulationResult:
         Returns
         -------
         names : list of str
-            Column names, n_columns = 1 + 5 n_mac + 2 n_bus (+ n_dev with storage): ``t``,
-            then ``speed_pu.G<k>``, ``angle_rad.G<k>``, ``pelect_pu.G<k>``,
-            ``pmech_pu.G<k>``, ``efd_pu.G<k>`` per machine k, ``vmag_pu.B<n>`` and
-            ``vang_rad.B<n>`` per bus n, ``pesd_pu.D<d>`` per device d.
+            Column names, n_columns = 1 + 5 n_mac + 2 n_bus (+ n_dev with storage, + 2
+            n_ibr with converters): ``t``, then ``speed_pu.G<k>``, ``angle_rad.G<k>``,
+            ``pelect_pu.G<k>``, ``pmech_pu.G<k>``, ``efd_pu.G<k>`` per machine k,
+            ``vmag_pu.B<n>`` and ``vang_rad.B<n>`` per bus n, ``pesd_pu.D<d>`` per device
+            d, ``pibr_pu.C<c>`` then ``qibr_pu.C<c>`` per converter c (injected, system
+            base).
         data : ndarray, shape (n_t, n_columns)
             The values, units as in the names (s, pu, rad).
         """
@@ -261,6 +273,10 @@ class SimulationResult:
         if self.pesd is not None and self.devices.size:
             names += [f"pesd_pu.D{int(d)}" for d in self.devices]
             blocks.append(self.pesd)
+        if self.ibr_p is not None and self.ibr_q is not None and self.converters.size:
+            names += [f"pibr_pu.C{int(c)}" for c in self.converters]
+            names += [f"qibr_pu.C{int(c)}" for c in self.converters]
+            blocks += [self.ibr_p, self.ibr_q]
         return names, np.hstack(blocks)
 
     def to_csv(self, path: str | os.PathLike) -> Path:
@@ -300,6 +316,8 @@ class SimulationResult:
             `path`.
         """
         arrays = {k: v for k, v in self.__dict__.items() if isinstance(v, np.ndarray)}
+        if not self.converters.size:  # files of cases without converters as before
+            arrays.pop("converters", None)
         arrays["verdict"] = np.array([self.stable, self.t_separation or np.nan], float)
         arrays["separated"] = np.asarray(self.separated, int)
         return atomic_write(path, lambda f: np.savez_compressed(f, **arrays), mode="wb")

@@ -194,6 +194,19 @@ def andes_speeds(ss, t_end: float, step: float) -> tuple[np.ndarray, np.ndarray]
     return t, np.asarray(ss.dae.ts.x)[:, ss.GENROU.omega.a[order]]
 
 
+def andes_converter_powers(ss, model: str) -> tuple[np.ndarray, np.ndarray]:
+    """The active and reactive powers the in-service devices of an ANDES converter model
+    (``"PVD1"``, ``"ESD1"``) injected in the run of :func:`andes_speeds`, ANDES's
+    ``Pe = Ipout_y v``, ``Qe = Iqout_y v`` (``andes/models/distributed/pvd1.py``, class
+    docstring): (P, Q), each shape (n_t, n_dev), pu on the system base, devices in ANDES's
+    order (the order :func:`stabctl.io.andes_case.import_andes` numbers them)."""
+    m = ss.models[model]
+    on = [k for k in range(m.n) if m.u.v[k]]
+    x, y = np.asarray(ss.dae.ts.x), np.asarray(ss.dae.ts.y)
+    v = y[:, m.v.a[on]]
+    return x[:, m.Ipout_y.a[on]] * v, x[:, m.Iqout_y.a[on]] * v
+
+
 def andes_machine_buses(ss) -> np.ndarray:
     """Bus numbers of :func:`andes_speeds`'s columns (GENROU in static-generator order),
     shape (n_gen,), to pair them with stabctl's machines."""

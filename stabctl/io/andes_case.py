@@ -30,7 +30,17 @@ dynamics at a constant reference.  Values are ANDES's inputs (``vin``: machine d
 the machine base ``Sn``, as PSS/E).  Machine ``k`` of the case is the ``k``-th synchronous
 generator in the order of ANDES's static generators (``PV`` rows, then ``Slack``).
 
-Models with no effect on the network and machines are ignored: ``Area``, and the
+Converter-interfaced devices (:mod:`stabctl.models.converters`, docs/ibr.md): ``PVD1`` and
+``ESD1`` become rows of the converter table (``ibr_con``, :data:`stabctl.case.params.CONVERTER`)
+with their inputs (``vin``, device base ``Sn``), ``gammap``/``gammaq`` as the fractions of
+their static generator's power, and the time constants of the ``BusFreq`` device each reads
+(ANDES creates one with its defaults when ``busf`` is empty).  Refused, naming the device: a
+remote bus ``igreg``, a nominal frequency other than the system's, a static generator
+sharing its bus with another, or converters taking other than all of their static
+generator's P and Q (ANDES drops the rest of a replaced generator's power).
+
+Models with no effect on the network and machines are ignored: ``Summary`` (the case's
+notes), ``Area``, and the
 measurements ``BusFreq``, ``BusROCOF``, ``ACEc`` (read by no model stabctl maps).  Every
 other model is refused by name (:class:`~stabctl.errors.InputError` listing each with its
 device count), disturbances (``Toggle``, ``Fault``, ``Alter``) included, or left out with
@@ -51,18 +61,28 @@ from typing import Any
 import numpy as np
 
 from stabctl.case import PQ, PV, SWING, Case
+from stabctl.case.params import CONVERTER, ESD1, PVD1
 from stabctl.errors import CaseError, InputError
 from stabctl.io.andes import _andes
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
 from stabctl.io.pst import case_from_matrices
 
-__all__ = ["AndesImport", "import_andes", "read_andes_case", "MAPPED_MODELS", "IGNORED_MODELS"]
+__all__ = [
+    "AndesImport",
+    "import_andes",
+    "read_andes_case",
+    "MAPPED_MODELS",
+    "IGNORED_MODELS",
+    "CONVERTER_MODELS",
+]
 
 #: ANDES model -> the PSS/E model its parameters are read as (declared with the record,
 #: ``DyrModel.andes`` in stabctl.case.params)
 MAPPED_MODELS = {name: m.name for m in DYR_MODELS.values() for name in m.andes}
 #: ANDES models with no effect on the network or the machines
-IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc")
+IGNORED_MODELS = ("Summary", "Area", "BusFreq", "BusROCOF", "ACEc")
+#: ANDES converter models -> the converter type of stabctl.case.params.CONVERTER
+CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1}
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
 _NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt")
 _MACHINES = ("GENROU", "GENCLS")
@@ -163,11 +183,18 @@ def read_andes_case(
     lacking = [
         f"{name} ({n})"
         for name, n in counts.items()
-        if name not in _NETWORK and name not in MAPPED_MODELS and name not in IGNORED_MODELS
+        if name not in _NETWORK
+        and name not in MAPPED_MODELS
+        and name not in IGNORED_MODELS
+        and name not in CONVERTER_MODELS
     ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
-    gens, records, refused = _dynamic_records(ss, path.name, numbers)
+    ibr_con, ibr_refused, with_converter = _converters(ss, numbers)
+    gens, records, refused = _dynamic_records(ss, path.name, numbers, with_converter)
+    refused += ibr_refused
+    if ibr_con:
+        mats["ibr_con"] = np.array(ibr_con, float)
     if records:
         tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
         refused += [f"{r.label()}" for r in tables.unsupported]
@@ -308,9 +335,70 @@ def _integer(value) -> int | None:
     return int(v) if np.isfinite(v) and v.is_integer() else None
 
 
-def _dynamic_records(ss, file: str, numbers: dict):
+def _converters(ss, numbers: dict):
+    """The converter table's rows (``ibr_con``, :data:`stabctl.case.params.CONVERTER`
+    order) of ANDES's PVD1 and ESD1 devices in service, the devices refused (with why),
+    and the static generators the mapped converters replace."""
+    rows, refused, replaced = [], [], set()
+    share: dict = {}
+    sg_bus: dict = {}
+    for m in (ss.PV, ss.Slack):
+        for k in _in_service(m):
+            sg_bus.setdefault(m.bus.v[k], []).append(m.idx.v[k])
+    number = 0
+    for name, kind in CONVERTER_MODELS.items():
+        m = ss.models.get(name)
+        if m is None:
+            continue
+        for k in _in_service(m):
+            where = f"{name} {m.idx.v[k]}"
+            gen = m.gen.v[k]
+            sg = ss.PV if gen in ss.PV.idx.v else ss.Slack
+            bus = sg.bus.v[list(sg.idx.v).index(gen)]
+            busf = m.busfreq.v[k]
+            bf = list(ss.BusFreq.idx.v).index(busf)
+            why = ""
+            if m.igreg.v[k] is not None:
+                why = f"remote bus igreg = {m.igreg.v[k]} (stabctl: the device's own bus)"
+            elif m.bus.v[k] != bus:
+                why = f"bus {m.bus.v[k]} differs from its static generator's ({bus})"
+            elif len(sg_bus.get(bus, ())) > 1:
+                why = f"its static generator {gen} shares bus {numbers[bus]} with another"
+            elif ss.config.freq not in (m.fn.v[k], ss.BusFreq.fn.v[bf]):
+                why = f"fn differs from the system frequency {ss.config.freq:g} Hz"
+            elif ss.BusFreq.Tw.v[bf] <= 0:
+                why = f"its BusFreq {busf} has Tw = 0"
+            if why:
+                refused.append(f"{where}: {why}")
+                continue
+            number += 1
+            v = {p.name: p.default for p in CONVERTER.params}
+            v.update(number=number, bus=numbers[bus], type=kind, mva=m.Sn.v[k])
+            v.update(pfrac=m.gammap.v[k], qfrac=m.gammaq.v[k], plim=m.config.plim)
+            v.update(Tfm=ss.BusFreq.Tf.v[bf], Twm=ss.BusFreq.Tw.v[bf])
+            for p in CONVERTER.params[6:]:
+                if p.name in m.params:
+                    v[p.name] = float(m.params[p.name].vin[k])
+            rows.append([float(v[p.name]) for p in CONVERTER.params])
+            got = share.setdefault(gen, [0.0, 0.0, []])
+            got[0] += m.gammap.v[k]
+            got[1] += m.gammaq.v[k]
+            got[2].append(where)
+            replaced.add(gen)
+    for gen, (gp, gq, devs) in share.items():
+        if abs(gp - 1) > 1e-9 or abs(gq - 1) > 1e-9:
+            refused.append(
+                f"{', '.join(devs)}: take gammap = {gp:g}, gammaq = {gq:g} of static "
+                f"generator {gen} (ANDES drops the rest of a replaced generator's power; "
+                "stabctl needs all of it, 1)"
+            )
+    return rows, refused, replaced
+
+
+def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
     """The generators (dicts for :func:`stabctl.io.dyr.dyr_tables`), the PSS/E records of
-    the mapped ANDES devices, and the devices refused here (with why)."""
+    the mapped ANDES devices, and the devices refused here (with why); static generators
+    in ``with_converter`` are replaced by converters, not machines."""
     dyr = _psse_yaml()
     static = [(m, k) for m in (ss.PV, ss.Slack) for k in range(m.n)]
     position = {m.idx.v[k]: n for n, (m, k) in enumerate(static)}
@@ -324,7 +412,7 @@ def _dynamic_records(ss, file: str, numbers: dict):
     bare = [
         f"{sg.class_name} {sg.idx.v[k]} (bus {numbers[sg.bus.v[k]]})"
         for sg, k in static
-        if sg.u.v[k] and sg.idx.v[k] not in with_machine
+        if sg.u.v[k] and sg.idx.v[k] not in with_machine and sg.idx.v[k] not in with_converter
     ]
     if machines:
         refused += [f"{b}: {_NO_MACHINE}" for b in bare]

@@ -61,6 +61,7 @@ PST_TABLES: Mapping[str, str] = {
     "pss_con": "pss",
     "tg_con": "governors",
     "load_con": "loads",
+    "ibr_con": "converters",  # stabctl's converter table (ANDES PVD1, ESD1), no PST matrix
 }
 
 _SCALARS = {"basmva": "base_mva", "sys_freq": "freq_hz"}
@@ -363,11 +364,17 @@ def _to_float(tok: str) -> float:
 _LICENCE_DEFAULT = ""
 
 
+#: tables written only when they have rows (a case without converters is written as before
+#: the converter table existed)
+_OPTIONAL_TABLES = ("converters",)
+
+
 def case_to_dict(case: Case, licence: str = "") -> dict:
     """The own-format dict of a case (see :func:`write_case_json` for the layout)."""
     tables = {
         field: {"columns": list(cls.columns()), "rows": getattr(case, field).matrix().tolist()}
         for field, cls in TABLES.items()
+        if field not in _OPTIONAL_TABLES or len(getattr(case, field))
     }
     return {
         "format": FORMAT,

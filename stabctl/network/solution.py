@@ -143,7 +143,7 @@ class NonConformingLoads:
 
 
 @kernel
-def _load_currents(V, S_P, I0, Y_low, S_extra, low, out):
+def _load_currents(V, S_P, I0, Y_low, S_extra, I_dev, low, out):
     """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out)."""
     for i in range(V.size):
         m = abs(V[i])
@@ -151,13 +151,15 @@ def _load_currents(V, S_P, I0, Y_low, S_extra, low, out):
             out[i] = np.conj(S_P[i] + S_extra[i] + I0[i] * m) / np.conj(V[i])
         else:
             out[i] = np.conj(Y_low[i]) * V[i]
+        if I_dev[i] != 0.0:  # converters: current sources at every voltage
+            out[i] += np.conj(I_dev[i] * m) / np.conj(V[i])
 
 
 @kernel
-def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low):
+def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, F, low):
     """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|.  Buses with low[i]
     are held at their low-voltage impedance model."""
-    _load_currents(V, S_P, I0, Y_low, S_extra, low, F)
+    _load_currents(V, S_P, I0, Y_low, S_extra, I_dev, low, F)
     F += b + Y22 @ V
     return max_abs(F)
 
@@ -172,12 +174,15 @@ def _held_below(V, held, limit):
 
 
 @kernel
-def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held):
+def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, I_dev, held):
     """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
 
     I_load = conj((S_P + S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's
     low-voltage switch; S_extra, e.g. storage power, is dropped below 0.5 pu with the
-    rest).  V (n_nc,) is the starting point and is updated in place.  First the chord
+    rest), plus conj(I_dev |V|/V) at every voltage: the converters' currents
+    (`stabctl.models.converters`), I_dev (n_nc,) complex power per pu voltage drawn, a
+    current of fixed magnitude and angle relative to the bus voltage.
+    V (n_nc,) is the starting point and is updated in place.  First the chord
     iteration V <- V - Z22 F(V) (the loads are small beside the network admittance, so it
     contracts fast and costs one matrix-vector product per step); if that has not converged
     in 30 steps, Newton's method in rectangular coordinates (as PST).  If Newton fails too,
@@ -202,32 +207,32 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, held):
     V_start = V.copy()
     vmin = np.abs(V_start)
     if held.any():
-        it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, held, vmin)
+        it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, I_dev, F, held, vmin)
         if it < 0:
             assign(V, V_start)
-            it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, held, vmin)
+            it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, held, vmin)
         if it >= 0 and _held_below(V, held, V_RELEASE):
             return it
         held[:] = False
         assign(V, V_start)
         assign(vmin, np.abs(V_start))
-    it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, held, vmin)
+    it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, I_dev, F, held, vmin)
     if it >= 0:
         return it
     assign(V, V_start)
-    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, held, vmin)
+    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, held, vmin)
     if it >= 0:
         return it
     low = vmin < V_SWITCH + 0.05  # every bus that came near the switch
     assign(V, V_start)
-    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, low, vmin)
+    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, low, vmin)
     if it >= 0:
         assign(held, low)
     return it
 
 
 @kernel
-def _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, low, vmin):
+def _chord(b, Z22, V, S_P, I0, Y_low, S_extra, I_dev, F, low, vmin):
     """Up to 30 chord steps V <- V - Z22 F(V); the step count, or -1 if not converged.
 
     With F(V) = b + Y22 V + I_load(V) the step is V <- -Z22 (b + I_load(V)): one
@@ -238,7 +243,7 @@ def _chord(b, Z22, V, S_P, I0, Y_low, S_extra, F, low, vmin):
     """
     w = -(Z22 @ b)
     for it in range(30):
-        _load_currents(V, S_P, I0, Y_low, S_extra, low, F)
+        _load_currents(V, S_P, I0, Y_low, S_extra, I_dev, low, F)
         V_new = w - Z22 @ F
         step = max_abs(V_new - V)
         assign(V, V_new)
@@ -271,7 +276,7 @@ def _lapack_solve(A, b):
 
 
 @kernel
-def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, low, vmin):
+def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, low, vmin):
     """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load);
     vmin keeps the smallest magnitude each bus reached.  Converged when the mismatch is
     below NEWTON_TOL (pu), within NEWTON_MAX_ITER iterations (else -1)."""
@@ -280,7 +285,7 @@ def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, low, vmin):
     rhs = np.empty(2 * n)
     F = np.empty(n, np.complex128)
     for it in range(NEWTON_MAX_ITER):
-        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, F, low) < NEWTON_TOL:
+        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, F, low) < NEWTON_TOL:
             return it
         # Wirtinger derivatives: d(load current) = A dV + B conj(dV), A, B diagonal
         for r in range(n):
@@ -297,6 +302,9 @@ def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, low, vmin):
             else:
                 A = np.conj(Y_low[r])
                 B = 0.0 + 0.0j
+            if I_dev[r] != 0.0:  # the converters' current, as the I0 term at every voltage
+                A += np.conj(I_dev[r]) / (2 * m)
+                B -= np.conj(I_dev[r]) * m / (2 * Vc**2)
             J[r, r] += (A + B).real
             J[r, n + r] -= (A - B).imag
             J[n + r, r] += (A + B).imag

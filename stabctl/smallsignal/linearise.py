@@ -102,6 +102,7 @@ def active_states(model: DynamicModel) -> np.ndarray:
     L.view(act, "exc")[:] = ep.has_state()
     L.view(act, "pss")[:] = pp.has_state()
     L.view(act, "tg")[:] = model.gp.has_state()
+    L.view(act, "ibr")[:] = model.cp.has_state()
     return act
 
 
@@ -423,9 +424,11 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
     J, dV, curv, V0 = res
     dx = np.zeros_like(x0)  # slots no kernel writes (unused by a model type) must stay 0:
     f0 = np.zeros_like(x0)  # the kink test below looks at every slot
-    out = kernel_outputs(p.n_mac, net.R.shape[0])
+    out = kernel_outputs(p.n_mac, net.R.shape[0], p.n_ibr)
     S = np.zeros(V_nc0.size, np.complex128)
-    at_op = KernelOutputs(out.cur, out.pelect, out.qelect, out.eterm, out.efd, out.pmech, V0)
+    at_op = KernelOutputs(
+        out.cur, out.pelect, out.qelect, out.eterm, out.efd, out.pmech, V0, out.S_ibr
+    )
     if (
         call_evaluate(
             evaluate,

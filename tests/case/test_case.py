@@ -14,6 +14,7 @@ from stabctl.case import (
     BranchTable,
     BusTable,
     Case,
+    ConverterTable,
     ExciterTable,
     GovernorTable,
     LoadTable,
@@ -346,6 +347,7 @@ DECLARED_TABLES = {
     "exciters": ExciterTable,
     "pss": PssTable,
     "governors": GovernorTable,
+    "converters": ConverterTable,
 }
 
 

@@ -30,10 +30,11 @@ pytestmark = pytest.mark.andes
 andes = pytest.importorskip("andes")
 
 from stabctl.dynamics.driver import Simulator  # noqa: E402
-from stabctl.dynamics.events import Fault, LineTrip  # noqa: E402
+from stabctl.dynamics.events import Fault, LineTrip, LoadStep  # noqa: E402
 from stabctl.errors import CaseError, InputError  # noqa: E402
 from stabctl.io.andes import (  # noqa: E402
     AndesFault,
+    andes_converter_powers,
     andes_machine_buses,
     andes_modes,
     andes_separated,
@@ -579,3 +580,187 @@ def test_import_andes_cli_writes_ieee39_and_refuses_renewables(tmp_path):
     )
     assert res.exit_code == 2 and not bad.exists()
     assert "REGCA1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
+
+
+# -- converter-interfaced devices (ANDES PVD1, ESD1; docs/ibr.md) --------------------------------
+
+#: ANDES's IEEE 14 cases with converters: ten devices on the bus-4 static generator (five
+#: with P priority, five with Q priority), each a tenth of its power
+CONVERTER_CASES = {"PVD1": "ieee14/ieee14_pvd1.xlsx", "ESD1": "ieee14/ieee14_esd1.xlsx"}
+
+
+def converter_case(model, **changes):
+    """The imported case (ANDES's Toggle left out), converter columns changed as given."""
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(andes.get_case(CONVERTER_CASES[model]), on_unsupported="skip")
+    n = len(case.converters)
+    cols = {k: np.full(n, float(v)) for k, v in changes.items()}
+    return case.replace(converters=case.converters.replace(**cols)) if cols else case
+
+
+def converter_gaps(model, case, events, andes_edit, t_end=5.0):
+    """Both tools' runs of the same case and disturbance, 5 ms step, PV Q limits off:
+    the largest speed gap and converter P and Q gaps (pu), on ANDES's time grid without
+    the points ANDES adds 1e-4 s around each event (a jump's instant, recorded before it
+    by ANDES, after it by stabctl), and stabctl's result.  ``andes_edit(ss)`` adds the
+    disturbance to ANDES's system (and changes its converters) before set-up."""
+    ss = andes.load(
+        str(andes.get_case(CONVERTER_CASES[model])),
+        setup=False,
+        no_output=True,
+        default_config=True,
+    )
+    ss.Toggle.u.v = [0] * ss.Toggle.n
+    andes_edit(ss)
+    ss.setup()
+    ss.PFlow.config.tol = 1e-12
+    t, wa = andes_speeds(ss, t_end, STEP)
+    Pa, Qa = andes_converter_powers(ss, model)
+    res = Simulator(case, q_limits=False).run(events, t_end, h=STEP)
+    w = speeds_on(t, res, case, ss)
+    P = np.column_stack([np.interp(t, res.t, p) for p in res.ibr_p.T])
+    Q = np.column_stack([np.interp(t, res.t, q) for q in res.ibr_q.T])
+    jumps = np.zeros(t.size, bool)
+    for e in events:
+        for te in (e.t, getattr(e, "clear_near", None), getattr(e, "clear_far", None)):
+            if te is not None:
+                jumps |= np.abs(t - te) <= 2e-4
+    return (
+        np.max(np.abs(w - wa)),
+        np.max(np.abs(P - Pa)[~jumps]),
+        np.max(np.abs(Q - Qa)[~jumps]),
+        np.max(np.abs(wa - 1)),
+        res,
+    )
+
+
+def _fault(bus, t_clear):
+    def edit(ss):
+        ss.add("Fault", {"bus": bus, "tf": 1.0, "tc": t_clear, "rf": 0.0, "xf": 1e-3})
+
+    return edit
+
+
+@pytest.mark.parametrize("model", ["PVD1", "ESD1"])
+def test_ieee14_converters_fault_speeds_and_powers_match_andes(model):
+    """Issue 29's like-for-like check: ANDES's IEEE 14 with ten PVD1 (ESD1) devices replacing
+    the bus-4 generator, imported through ANDES's parser; 6-cycle fault at bus 9 through
+    j1e-3 pu, 5 ms step in both.  The converters' currents fall to zero in the fault (the
+    under-voltage trip curve, then the measured frequency's spike) and recover through
+    their lags after it."""
+    case = converter_case(model)
+    t_clear = 1.0 + 6 / 60
+    dw, dP, dQ, swing, res = converter_gaps(
+        model, case, [Fault(9, 1.0, t_clear, x=1e-3)], _fault(9, t_clear)
+    )
+    print(f"\n{model} fault vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert swing > 4e-3  # a real swing
+    assert np.ptp(res.ibr_p) > 4e-3  # the converters drop out and recover (0.005 pu each)
+    assert dw < 2e-5  # measured 4.4e-6 (target 1e-4)
+    assert dP < 3e-4  # measured 7.4e-5 (target 1e-3)
+    assert dQ < 3e-4  # measured 5.0e-5 (target 1e-3)
+
+
+@pytest.mark.parametrize("model", ["PVD1", "ESD1"])
+def test_ieee14_converters_load_shed_step_matches_andes(model):
+    """A step: the bus-14 load (0.2 + j0.07 pu in these cases) shed at 1 s (ANDES: its PQ
+    device toggled off; stabctl: the same constant impedance removed).  The angle step
+    makes the measured frequency spike past the trip curve; the devices drop out and
+    recover."""
+    case = converter_case(model)
+    b = case.bus_index(14)
+    shed_load = LoadStep(14, 1.0, -case.buses.pload[b], -case.buses.qload[b])
+    assert (shed_load.P, shed_load.Q) == (-0.2, -0.07)
+
+    def shed(ss):
+        k = list(ss.PQ.bus.v).index(14)
+        ss.add("Toggle", {"model": "PQ", "dev": ss.PQ.idx.v[k], "t": 1.0})
+
+    dw, dP, dQ, swing, res = converter_gaps(model, case, [shed_load], shed)
+    print(f"\n{model} load shed vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert swing > 2e-3 and np.ptp(res.ibr_p) > 4e-3
+    assert dw < 2e-6  # measured 3.1e-7
+    assert dP < 1.5e-4  # measured 3.5e-5
+    assert dQ < 1e-5  # measured 1.1e-7
+
+
+def test_ieee14_pvd1_current_limits_match_andes():
+    """The current limits in a fault, both priorities: ialim 0.7 pu on the device base
+    (0.007 pu system base, above the 0.006 pu the devices start with), the trip curves
+    (recflag 0) and the frequency droop (ddn 0) off, so that the commands reach the limits.
+    P priority (devices 1-5): Ip = Ipul clipped at ialim, Iq within sqrt(ialim^2 - Ip^2);
+    Q priority (6-10): Iq at -ialim (ANDES's Q droop absorbs below 0.8 pu, docs/ibr.md),
+    Ip within sqrt(ialim^2 - Iq^2)."""
+    case = converter_case("PVD1", ialim=0.7, recflag=0, ddn=0)
+
+    def edit(ss):
+        ss.PVD1.ialim.v = [0.7] * ss.PVD1.n
+        ss.PVD1.recflag.v = [0.0] * ss.PVD1.n
+        ss.PVD1.ddn.v = [0.0] * ss.PVD1.n
+        _fault(9, 1.1)(ss)
+
+    dw, dP, dQ, _, res = converter_gaps("PVD1", case, [Fault(9, 1.0, 1.1, x=1e-3)], edit)
+    print(f"\nPVD1 current limits vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert dw < 2e-5  # measured 4.5e-6
+    assert dP < 2e-4  # measured 4.2e-5
+    assert dQ < 2e-4  # measured 4.2e-5
+    v = res.vmag[:, case.bus_index(4)][:, None]
+    Ip, Iq = res.ibr_p / v, res.ibr_q / v
+    assert np.max(np.hypot(Ip, Iq)) <= 0.007 * (1 + 1e-9)  # never beyond the limit
+    late = (res.t > 1.08) & (res.t < 1.1)  # four lag time constants into the fault
+    assert np.all(Ip[late, :5] > 0.0069)  # P priority: at the limit (0.0081 asked)
+    assert np.all(Iq[late, 5:] < -0.0069)  # Q priority: at the limit
+    assert np.all(np.abs(Ip[late, 5:]) < 0.001)  # what room the Q priority leaves
+
+
+@pytest.mark.parametrize("model", ["PVD1", "ESD1"])
+def test_ieee14_converters_flat_run_stays_at_the_power_flow_point(model):
+    """10 s without disturbance: every state within 1e-8 of its initial value (measured
+    1e-13), the converters' P, Q those of the power flow; ESD1's state of charge
+    discharges at its power-flow output, dSOC/dt = -P0 Sb/(3600 En Tf) (ANDES's
+    integrator, check_init=False): -1.39e-6 /s here."""
+    from stabctl.dynamics.driver import _Run
+
+    case = converter_case(model)
+    sim = Simulator(case, q_limits=False)
+    m, sa, grid, nets = sim._prepare([], 10.0, STEP, None, "exact")
+    run = _Run(sim, m, sa, grid, nets, False, np.pi, False)
+    run.advance(grid.t.size - 1)
+    res = run.finish(None)
+    drift = np.abs(run.x - m.x0)
+    soc = np.array(["SOC" in m.state_name(k) for k in range(drift.size)])  # 0 for PVD1
+    print(f"\n{model} flat 10 s: largest drift {np.max(drift[~soc]):.2e} (SOC excluded)")
+    assert np.max(drift[~soc]) < 1e-8
+    assert np.max(np.abs(res.ibr_p - 0.005)) < 1e-12
+    assert np.max(np.abs(res.ibr_q - res.ibr_q[0])) < 1e-12
+    if model == "ESD1":
+        rate = -m.cp.P0 * case.base_mva / 3600 / case.converters.En / case.converters.Tf
+        # the closed form to the round-off of 2000 steps (measured 3.9e-14)
+        np.testing.assert_allclose(run.x[soc] - m.x0[soc], rate * 10.0, rtol=0, atol=1e-12)
+        assert abs(rate[0] * 10) > 1e-5
+
+
+def test_import_andes_cli_writes_converters_to_the_json_case(tmp_path):
+    """`stabctl import-andes` of ANDES's ieee14_esd1.xlsx: the ten ESD1 rows go into the
+    JSON case (table ``converters``, device-base values as ANDES's inputs) and back."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+    from stabctl.io import load_case
+
+    out = tmp_path / "esd1.json"
+    res = CliRunner().invoke(
+        main,
+        ["import-andes", andes.get_case(CONVERTER_CASES["ESD1"]), "-o", str(out)]
+        + ["--skip-unsupported", "--json"],
+    )
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    assert summary["converters"] == 10 and summary["machines"] == 5
+    assert summary["left_out"] == ["Toggle (2)"]
+    case = load_case(out)
+    assert case.equals(converter_case("ESD1"))
+    conv = case.converters
+    assert set(conv.type) == {2} and set(conv.bus) == {4} and set(conv.pqflag) == {0, 1}
+    assert (conv.ialim[0], conv.ddn[0], conv.xc[0], conv.mva[0]) == (1.1, 5.0, 0.01, 1.0)
+    assert (conv.Tfm[0], conv.Twm[0], conv.En[0]) == (0.02, 0.02, 100.0)

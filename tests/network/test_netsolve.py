@@ -33,11 +33,30 @@ def fault_network():
 def solve(m, net, psi, V, held):
     p = m.params
     it = solve_nc(
-        net.Y21, net.Y22, net.Z22, psi, p.S_P, p.I0, p.Y_low, V, np.zeros(V.size, complex), held
+        net.Y21,
+        net.Y22,
+        net.Z22,
+        psi,
+        p.S_P,
+        p.I0,
+        p.Y_low,
+        V,
+        np.zeros(V.size, complex),
+        np.zeros(V.size, complex),
+        held,
     )
     F = np.empty(V.size, complex)
     resid = _load_mismatch(
-        net.Y21 @ psi, net.Y22, V, p.S_P, p.I0, p.Y_low, np.zeros(V.size, complex), F, held
+        net.Y21 @ psi,
+        net.Y22,
+        V,
+        p.S_P,
+        p.I0,
+        p.Y_low,
+        np.zeros(V.size, complex),
+        np.zeros(V.size, complex),
+        F,
+        held,
     )
     return it, resid
 

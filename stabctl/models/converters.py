@@ -1,0 +1,366 @@
+"""Converter-interfaced devices (inverter-based resources): ANDES 2.0's distributed models
+PVD1 (type 1, WECC distributed PV) and ESD1 (type 2, PVD1 with a state of charge), with the
+ANDES bus-frequency measurement (BusFreq) each reads.
+
+Sources: ANDES 2.0 ``andes/models/distributed/pvd1.py`` (PVD1Model, lines 235-517),
+``esd1.py`` (ESD1Model, lines 54-87), ``andes/models/measurement/busfreq.py`` (lines
+48-84), blocks ``andes/core/block.py`` (Lag, Washout, GainLimiter, DeadBand1, Integrator)
+and flags ``andes/core/discrete.py`` (Limiter: ``zu = u >= upper``, ``zl = u <= lower``;
+DeadBand and LessThan strict).  Equations, parameters and the ANDES agreement in
+docs/ibr.md.
+
+Per device (system base; the table's device-base values converted by `converter_params`):
+
+* frequency: L = (a - a0) through 1/(1 + s Tfm), washout y = (L - x_w)/(2 pi fn Twm),
+  f = 1 + y (pu), fHz = fn f; the angle a continuous (unwrapped), as ANDES's;
+* power order: Psum = pref0 + ddn dbd(fn - fHz) (droop only beyond fdbd, over-frequency),
+  limited to [pmn, pmx] (plim), Ipul = Psum/vp (vp = max(|V|, 0.01); below pmn: 0);
+* reactive order: Qsum = qref0 + Qdrp(Vcomp), Vcomp = |V + j xc (Ip + j Iq)|, Iqul =
+  Qsum/vp;
+* current limits: P priority (pqflag 1) Ipmax = ialim, Iqmax = sqrt(ialim^2 - Ipcmd^2);
+  Q priority (0) Iqmax = ialim, Ipmax = sqrt(ialim^2 - Iqcmd^2); ESD1 Ipmax 0 at SOCmin,
+  Ipmin = -ialim-type bound, 0 at SOCmax; commands R clip(., lower, upper) with R the
+  product of the voltage and frequency trip curves (recflag);
+* output lags Ip, Iq (tip, tiq): the current injected at the bus is (Ip - j Iq) V/|V|,
+  so P = Ip |V|, Q = Iq |V|;
+* ESD1: dSOC/dt = Sb/(3600 En Tf) (-EtaC P if P < 0 else -P/EtaD).
+
+States per device (`STATE_NAMES`): Ip, Iq, the measurement lag and washout, the SOC
+(ESD1; 0 for PVD1).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from stabctl._jit.decorators import kernel, njit
+from stabctl.case import Case
+from stabctl.case.params import CONVERTER, ESD1, PVD1
+from stabctl.errors import CaseError
+from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
+from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, washout
+
+__all__ = [
+    "PVD1",
+    "ESD1",
+    "N_STATES",
+    "STATE_NAMES",
+    "ConverterParams",
+    "converter_params",
+    "initialise",
+    "drawn_current",
+    "derivatives",
+    "commands",
+    "derivatives_at",
+]
+
+N_STATES = 5
+STATE_NAMES = ("Ip", "Iq", "f_lag", "f_washout", "SOC")
+#: the ibr_con fields the kernels take as given (pu quantities after the base change)
+TABLE_FIELDS = tuple(n for n in CONVERTER.names if n not in ("number", "bus", "mva"))
+#: fields on the device base: powers and currents (times Sn/Sb), the reactance (Sb/Sn)
+POWER_FIELDS = ("qmx", "qmn", "pmx", "dqdv", "ddn", "ialim")
+#: packed parameter matrix of the kernels, (column name, ConverterParams attribute)
+PACKED = (
+    ("POS", "pos"),
+    *((n.upper(), n) for n in TABLE_FIELDS),
+    ("PMN", "pmn"),
+    ("P0", "P0"),
+    ("Q0", "Q0"),
+    ("COS_A0", "cos_a0"),
+    ("SIN_A0", "sin_a0"),
+    ("VQU", "Vqu"),
+    ("VQL", "Vql"),
+    ("KSOC", "Ksoc"),
+    ("FN", "fn"),
+)
+#: the kernels' column of each PACKED name: P[k, C.IALIM]
+C = layout("ConverterColumns", PACKED)
+
+
+@params_class(("pos", "bus_idx"), TABLE_FIELDS)
+class ConverterParams(Declared):
+    """Converter data on the system base, arrays of shape (n_ibr,): ``pos`` the device
+    bus's position among the kept buses (set by the dynamic model), ``bus_idx`` its bus
+    row, the ibr_con fields :data:`TABLE_FIELDS` (powers, currents, ``dqdv``, ``ddn``
+    times Sn/Sb, ``xc`` times Sb/Sn), and the initial point: P0, Q0 (pref0, qref0, pu),
+    cos_a0, sin_a0 (initial bus angle), Vqu, Vql (Q-droop bounds, ANDES's ConstServices),
+    pmn (lower power order: 0 PVD1, -pmx ESD1), Ksoc = Sb/(3600 En Tf) (1/s per pu),
+    fn (Hz)."""
+
+    pmn: np.ndarray
+    P0: np.ndarray
+    Q0: np.ndarray
+    cos_a0: np.ndarray
+    sin_a0: np.ndarray
+    Vqu: np.ndarray
+    Vql: np.ndarray
+    Ksoc: np.ndarray
+    fn: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.bus_idx.size
+
+    def packed(self) -> np.ndarray:
+        """Parameter matrix (n_ibr, len(PACKED)) for the compiled kernels."""
+        return pack(self, PACKED)
+
+    def time_constants(self):
+        """(label, values, mask) of every time constant that sets a state's speed."""
+        esd = self.type == ESD1
+        return (
+            ("ibr_con tip", self.tip, np.ones(self.n, bool)),
+            ("ibr_con tiq", self.tiq, np.ones(self.n, bool)),
+            ("ibr_con Tfm", self.Tfm, self.Tfm >= LBND),
+            ("ibr_con Twm", self.Twm, np.ones(self.n, bool)),
+            ("ibr_con Tf", self.Tf, esd),
+        )
+
+    def has_state(self) -> np.ndarray:
+        """Boolean (N_STATES, n_ibr): the slots that are states of each device."""
+        act = np.ones((N_STATES, self.n), bool)
+        act[2] = self.Tfm >= LBND
+        act[4] = self.type == ESD1
+        return act
+
+
+check_packed(ConverterParams, PACKED)
+
+
+def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
+    """Converter parameters on the system base, with the initial point of the power flow.
+
+    Parameters
+    ----------
+    case : Case
+        The case (its ``converters`` table).
+    V0 : ndarray of complex, shape (n_bus,), optional
+        Power-flow bus voltages, pu; None: the bus table's (flat) values.
+    S_gen : ndarray of complex, shape (n_bus,), optional
+        Power-flow bus generation, pu; None: the bus table's.
+
+    Returns
+    -------
+    ConverterParams
+        With ``pos`` -1 (set by the dynamic model).
+
+    Raises
+    ------
+    CaseError
+        A lag time constant tip, tiq below 1e-3 s (the current would be an algebraic
+        function of the voltage inside the network solution), naming the row and field.
+    """
+    t = case.converters
+    n = len(t)
+    for name in ("tip", "tiq"):
+        bad = np.flatnonzero(getattr(t, name) < LBND)
+        if bad.size:
+            t._fail(bad[0], name, f"must be >= {LBND:g} s (a lag of the output current)")
+    b = case.buses
+    if V0 is None:
+        V0 = b.vmag * np.exp(1j * np.deg2rad(b.vang_deg))
+    if S_gen is None:
+        S_gen = b.pgen + 1j * b.qgen
+    idx = case.bus_indices(t.bus) if n else np.zeros(0, int)
+    scale = t.mva / case.base_mva
+    vals = {name: getattr(t, name).copy() for name in TABLE_FIELDS}
+    for name in POWER_FIELDS:
+        vals[name] = vals[name] * scale
+    vals["xc"] = vals["xc"] / scale
+    P0 = t.pfrac * S_gen[idx].real
+    Q0 = t.qfrac * S_gen[idx].imag
+    a0 = np.angle(V0[idx])
+    with np.errstate(divide="ignore"):
+        Ksoc = np.where(t.type == ESD1, case.base_mva / 3600.0 / t.En / t.Tf, 0.0)
+    return ConverterParams(
+        pos=np.full(n, -1, np.int64),
+        bus_idx=np.asarray(idx, np.int64),
+        **vals,
+        pmn=np.where(t.type == ESD1, -vals["pmx"], 0.0),
+        P0=P0,
+        Q0=Q0,
+        cos_a0=np.cos(a0),
+        sin_a0=np.sin(a0),
+        Vqu=vals["v1"] - (Q0 - vals["qmn"]) / vals["dqdv"],
+        Vql=vals["v0"] + (vals["qmx"] - Q0) / vals["dqdv"],
+        Ksoc=Ksoc,
+        fn=np.full(n, case.freq_hz),
+    )
+
+
+# -- compiled kernels ----------------------------------------------------------------------
+
+
+@kernel
+def _band(u, lower, upper):
+    """ANDES Limiter flags (equal=True): (zl, zi, zu) as floats, zl = u <= lower,
+    zu = u >= upper."""
+    zu = 1.0 if u >= upper else 0.0
+    zl = 1.0 if u <= lower else 0.0
+    zi = 1.0 - max(zu, zl)
+    return zl, zi, zu
+
+
+@kernel
+def _algebraic(P, x, k, V):
+    """ANDES's algebraic chain of device k at bus voltage V with the states x: the current
+    commands (Ipcmd, Iqcmd) and the SOC derivative's input, and the frequency block's
+    derivatives (dL, dW)."""
+    v = abs(V)
+    # bus frequency (BusFreq): lag of a - a0, washout with K = 1/(2 pi fn).  The angle
+    # is ANDES's continuous one: a - a0 taken within pi of the filter's state (the lag's,
+    # else the washout's, which follow it within T x its rate), not wrapped to (-pi, pi]
+    ref = x[2, k] if P[k, C.TFM] >= LBND else x[3, k]
+    a0 = np.arctan2(P[k, C.SIN_A0], P[k, C.COS_A0]) + ref
+    a = ref + np.angle(V * np.exp(-1j * a0))
+    L, dL = lag(a, x[2, k], P[k, C.TFM])
+    fn = P[k, C.FN]
+    w, dW = washout(L, x[3, k], P[k, C.TWM], 1.0 / (2.0 * np.pi * fn), GAIN_BEFORE)
+    fHz = fn * (1.0 + w)
+    # trip curves (ANDES Limiter flags), R the product of the four
+    zl, zi, zu = _band(fHz, P[k, C.FT0], P[k, C.FT1])
+    Ffl = zi * (1.0 / (P[k, C.FT1] - P[k, C.FT0])) * (fHz - P[k, C.FT0]) + zu
+    zl, zi, zu = _band(fHz, P[k, C.FT2], P[k, C.FT3])
+    Ffh = zl + zi * (1.0 + (1.0 / (P[k, C.FT3] - P[k, C.FT2])) * (P[k, C.FT2] - fHz))
+    zl, zi, zu = _band(v, P[k, C.VT0], P[k, C.VT1])
+    Fvl = zi * (1.0 / (P[k, C.VT1] - P[k, C.VT0])) * (v - P[k, C.VT0]) + zu
+    zl, zi, zu = _band(v, P[k, C.VT2], P[k, C.VT3])
+    Fvh = zl + zi * (1.0 + (1.0 / (P[k, C.VT3] - P[k, C.VT2])) * (P[k, C.VT2] - v))
+    rec = P[k, C.RECFLAG]
+    R = Fvl * Fvh * Ffl * Ffh * rec + (1.0 - rec)
+    vp = 0.01 if v <= 0.01 else v
+    # active power order: deadband droop (DeadBand1, strict flags), limiter PHL
+    Fdev = fn - fHz
+    db = 0.0
+    if Fdev > 999.0:
+        db = Fdev - 999.0
+    elif Fdev < P[k, C.FDBD]:
+        db = Fdev - P[k, C.FDBD]
+    Psum = P[k, C.P0] + P[k, C.DDN] * db
+    if P[k, C.PLIM] != 0.0:
+        zl, zi, zu = _band(Psum, P[k, C.PMN], P[k, C.PMX])
+        Ipul = (Psum * zi + P[k, C.PMX] * zu) / vp
+    else:
+        Ipul = Psum / vp
+    # reactive power order: Q-V droop on the compensated voltage
+    Vcomp = abs(V + 1j * P[k, C.XC] * (x[0, k] + 1j * x[1, k]))
+    qmx, qmn, dqdv = P[k, C.QMX], P[k, C.QMN], P[k, C.DQDV]
+    l1, i1, _u1 = _band(Vcomp, P[k, C.VQL], P[k, C.V0])
+    _l2, i2, u2 = _band(Vcomp, P[k, C.V1], P[k, C.VQU])
+    Qdrp = (
+        l1 * qmx
+        + u2 * qmn
+        + i1 * (qmx + dqdv * (P[k, C.VQU] - Vcomp))
+        + i2 * (dqdv * (P[k, C.V1] - Vcomp))
+    )
+    Iqul = (P[k, C.Q0] + Qdrp) / vp
+    # current limits (priority pqflag), ESD1's state-of-charge bounds
+    ialim = P[k, C.IALIM]
+    esd = P[k, C.TYPE] == ESD1
+    up_ok, lo_ok = 1.0, 1.0
+    if esd:
+        up_ok = 0.0 if x[4, k] <= P[k, C.SOCMIN] else 1.0
+        lo_ok = 0.0 if x[4, k] >= P[k, C.SOCMAX] else 1.0
+    if P[k, C.PQFLAG] == 1.0:
+        Ipmax = up_ok * ialim
+        Ipmin = -lo_ok * ialim if esd else 0.0
+        Ipcmd = R * clip(Ipul, Ipmin, Ipmax)
+        Iqmax = np.sqrt(max(ialim**2 - Ipcmd**2, 0.0))
+        Iqcmd = R * clip(Iqul, -Iqmax, Iqmax)
+    else:
+        Iqcmd = R * clip(Iqul, -ialim, ialim)
+        room = np.sqrt(max(ialim**2 - Iqcmd**2, 0.0))
+        Ipmin = -lo_ok * room if esd else 0.0
+        Ipcmd = R * clip(Ipul, Ipmin, up_ok * room)
+    return Ipcmd, Iqcmd, dL, dW
+
+
+@kernel
+def drawn_current(P, x, k):
+    """The current device k draws at its bus as complex power per pu voltage (the
+    network solution's device-current term, `stabctl.network.solution.solve_nc`): -(Ip +
+    j Iq), so that the injected current is (Ip - j Iq) V/|V|."""
+    return -(x[0, k] + 1j * x[1, k])
+
+
+@kernel
+def derivatives(P, x, k, V, dx):
+    """Write the derivatives of device k (slots 0-4 of column k of dx) at bus voltage V
+    (complex pu) and return its injected complex power P + j Q (pu, system base)."""
+    Ipcmd, Iqcmd, dL, dW = _algebraic(P, x, k, V)
+    v = abs(V)
+    _, dx[0, k] = lag(Ipcmd, x[0, k], P[k, C.TIP])
+    _, dx[1, k] = lag(Iqcmd, x[1, k], P[k, C.TIQ])
+    dx[2, k] = dL
+    dx[3, k] = dW
+    dx[4, k] = 0.0
+    if P[k, C.TYPE] == ESD1:
+        pe = v * x[0, k]
+        u = -pe * P[k, C.ETAC] if x[0, k] < 0.0 else -pe / P[k, C.ETAD]
+        dx[4, k] = P[k, C.KSOC] * u
+    return v * x[0, k] + 1j * v * x[1, k]
+
+
+@njit(cache=True)
+def commands(P, x, V):
+    """The current commands (Ipcmd, Iqcmd) of every device, each (n_ibr,), at bus
+    voltages V (n_ibr,) complex with the states x (N_STATES, n_ibr); P the packed
+    parameters (the initialisation check of `initialise`)."""
+    n = V.size
+    Ip, Iq = np.empty(n), np.empty(n)
+    for k in range(n):
+        Ip[k], Iq[k], _, _ = _algebraic(P, x, k, V[k])
+    return Ip, Iq
+
+
+@njit(cache=True)
+def derivatives_at(P, x, V, dx):
+    """`derivatives` of every device at bus voltages V (n_ibr,) complex: dx (N_STATES,
+    n_ibr) written, the injected P + j Q (n_ibr,) complex returned (for tests and
+    tools; the simulator calls `derivatives` inside its evaluation)."""
+    S = np.empty(V.size, np.complex128)
+    for k in range(V.size):
+        S[k] = derivatives(P, x, k, V[k], dx)
+    return S
+
+
+def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
+    """Initial states (N_STATES, n_ibr) at the power-flow voltages, checked against the
+    power-flow point.
+
+    Parameters
+    ----------
+    cp : ConverterParams
+        The devices (with their P0, Q0).
+    V0 : ndarray of complex, shape (n_bus,)
+        Power-flow bus voltages, pu.
+
+    Returns
+    -------
+    ndarray, shape (N_STATES, n_ibr)
+        Ip = P0/|V|, Iq = Q0/|V|, the measurement states 0, SOC = SOCinit (ESD1).
+
+    Raises
+    ------
+    CaseError
+        A device whose commands at the initial point are not its power-flow P0, Q0 (a
+        current limit, a trip curve, the Q droop or the power-order limit active at the
+        start), naming it.
+    """
+    x = np.zeros((N_STATES, cp.n))
+    V = V0[cp.bus_idx]
+    v = np.abs(V)
+    x[0], x[1] = cp.P0 / v, cp.Q0 / v
+    x[4] = np.where(cp.type == ESD1, cp.SOCinit, 0.0)
+    Ip, Iq = commands(cp.packed(), x, V.astype(np.complex128)) if cp.n else ((), ())
+    for k, (Ipcmd, Iqcmd) in enumerate(zip(Ip, Iq)):
+        if abs(Ipcmd - x[0, k]) > 1e-9 or abs(Iqcmd - x[1, k]) > 1e-9:
+            raise CaseError(
+                f"ibr_con row {k + 1}: the converter cannot start at its power-flow point "
+                f"P0 = {cp.P0[k]:.6g}, Q0 = {cp.Q0[k]:.6g} pu at |V| = {v[k]:.6g} pu: its "
+                f"commands there are Ip = {Ipcmd:.6g}, Iq = {Iqcmd:.6g} pu instead of "
+                f"{x[0, k]:.6g}, {x[1, k]:.6g} (a current limit ialim, a trip curve, the "
+                "Q droop or the power-order limit is active at the start)"
+            )
+    return x

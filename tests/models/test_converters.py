@@ -1,0 +1,149 @@
+"""The converter model (ANDES 2.0 PVD1 / ESD1, stabctl.models.converters) in closed form:
+the commands of ANDES's equations at chosen voltages and states, the current limits of
+both priorities, the trip curves, ESD1's state-of-charge bounds, the initialisation check,
+and the converter table's validation and JSON round trip.  The runs against ANDES are in
+tests/io/test_andes.py."""
+
+import numpy as np
+import pytest
+
+from stabctl.case import BranchTable, BusTable, Case, ConverterTable
+from stabctl.errors import CaseError
+from stabctl.io.pst import case_from_dict, case_to_dict
+from stabctl.models import converters as conv
+
+# a 2-bus system: swing bus 1, bus 2 generating 0.5 + j0.1 pu (100 MVA base)
+BUS = [[1, 1.0, 0, 0, 0, 0, 0, 0, 0, 1], [2, 1.0, 0, 0.5, 0.1, 0, 0, 0, 0, 2]]
+LINE = [[1, 2, 0.0, 0.1, 0.0, 1.0, 0.0]]
+#: one converter row: number, bus, type, mva 100, pfrac, qfrac 1, xc 0, pqflag
+ROW = [1, 2, 1, 100.0, 1.0, 1.0, 0.0, 1]
+
+
+def make_case(*rows, **cols):
+    conv_t = ConverterTable.from_matrix([list(r) for r in rows] or [ROW])
+    if cols:
+        conv_t = conv_t.replace(**{k: np.full(len(conv_t), float(v)) for k, v in cols.items()})
+    return Case(
+        "two_bus",
+        100.0,
+        60.0,
+        BusTable.from_matrix(BUS),
+        BranchTable.from_matrix(LINE),
+        converters=conv_t,
+    )
+
+
+def commands(case, V, x=None):
+    """(Ipcmd, Iqcmd) of every converter at bus voltage V (complex), states x (default:
+    the initial ones at V = 1 pu)."""
+    V0 = np.ones(case.n_bus, complex)
+    cp = conv.converter_params(case, V0, case.buses.pgen + 1j * case.buses.qgen)
+    if x is None:
+        x = conv.initialise(cp, V0)
+    return conv.commands(cp.packed(), x, np.full(cp.n, V, complex))
+
+
+def test_at_the_power_flow_point_the_commands_are_its_currents():
+    case = make_case()
+    Ip, Iq = commands(case, 1.0)
+    assert (Ip[0], Iq[0]) == (0.5, 0.1)  # P0/|V|, Q0/|V| exactly
+    Ip, Iq = commands(case, 0.95)  # inside the trip curves and the droop band
+    np.testing.assert_allclose([Ip[0], Iq[0]], [0.5 / 0.95, 0.1 / 0.95], rtol=1e-15)
+
+
+def test_under_voltage_trip_curve_scales_both_currents():
+    # vt0 = 0.88, vt1 = 0.9: at 0.89 pu the curve is 0.5 (recflag 1), with recflag 0 it is 1
+    Ip, Iq = commands(make_case(), 0.89)
+    np.testing.assert_allclose(Ip[0], 0.5 * 0.5 / 0.89, rtol=1e-12)
+    Ip, _ = commands(make_case(recflag=0), 0.89)
+    np.testing.assert_allclose(Ip[0], 0.5 / 0.89, rtol=1e-12)
+    Ip, Iq = commands(make_case(), 0.87)  # below vt0: tripped
+    assert (Ip[0], Iq[0]) == (0.0, 0.0)
+
+
+def test_current_limit_p_priority():
+    # ialim 0.6 pu: at 0.75 pu asked Ip = 0.667 (recflag 0), clipped to 0.6; Iq within
+    # sqrt(0.6^2 - 0.6^2) = 0
+    case = make_case(recflag=0, ialim=0.6, pqflag=1)
+    Ip, Iq = commands(case, 0.75)
+    assert Ip[0] == 0.6 and Iq[0] == 0.0
+    Ip, Iq = commands(case, 0.95)  # 0.526 asked, room sqrt(0.36 - Ip^2) = 0.289 for Iq
+    np.testing.assert_allclose(Ip[0], 0.5 / 0.95, rtol=1e-15)
+    assert Iq[0] == pytest.approx(0.1 / 0.95)
+
+
+def test_current_limit_q_priority():
+    # Q priority, ialim 0.3: Iq = 0.1/0.95 (within 0.3), Ip within sqrt(0.09 - Iq^2)
+    case = make_case(recflag=0, ialim=0.3, pqflag=0)
+    x = np.zeros((conv.N_STATES, 1))
+    Ip, Iq = commands(case, 0.95, x)
+    assert Iq[0] == pytest.approx(0.1 / 0.95, rel=1e-15)
+    assert Ip[0] == pytest.approx(np.sqrt(0.3**2 - Iq[0] ** 2), rel=1e-15)
+
+
+def test_start_beyond_a_current_limit_is_refused():
+    with pytest.raises(CaseError, match=r"ibr_con row 1: the converter cannot start"):
+        commands(make_case(ialim=0.4), 1.0)
+
+
+def test_esd1_state_of_charge_bounds_the_active_current():
+    # ESD1: at SOCmin no discharge (Ipmax 0), at SOCmax no charge (Ipmin 0); between, the
+    # power order may be negative down to -pmx
+    row = list(ROW)
+    row[2] = 2
+    case = make_case(row)
+    x = np.zeros((conv.N_STATES, 1))
+    x[4] = 0.0  # SOCmin = 0
+    Ip, _ = commands(case, 1.0, x)
+    assert Ip[0] == 0.0
+    x[4] = 0.5
+    Ip, _ = commands(case, 1.0, x)
+    assert Ip[0] == 0.5
+    # charging: a negative power set point is kept at SOC 0.5, cut at SOCmax = 1
+    bus = [list(BUS[0]), [2, 1.0, 0, -0.2, 0.0, 0, 0, 0, 0, 2]]
+    charging = case.replace(buses=BusTable.from_matrix(bus))
+    x[4] = 0.5
+    Ip, _ = commands(charging, 1.0, x)
+    assert Ip[0] == pytest.approx(-0.2)
+    x[4] = 1.0
+    Ip, _ = commands(charging, 1.0, x)
+    assert Ip[0] == 0.0
+
+
+def test_soc_derivative_is_the_discharge_over_the_energy():
+    # dSOC/dt = -P Sb/(3600 En Tf) discharging (EtaD 1), ANDES's Integrator u, K, T
+    row = list(ROW)
+    row[2] = 2
+    case = make_case(row, En=50.0, Tf=2.0)
+    cp = conv.converter_params(case, np.ones(2, complex), case.buses.pgen + 1j * case.buses.qgen)
+    x = conv.initialise(cp, np.ones(2, complex))
+    dx = np.zeros_like(x)
+    S = conv.derivatives_at(cp.packed(), x, np.ones(1, complex), dx)
+    assert S[0] == pytest.approx(0.5 + 0.1j)
+    assert dx[4, 0] == pytest.approx(-0.5 * 100 / 3600 / 50 / 2, rel=1e-15)
+    assert np.all(np.abs(dx[:4]) < 1e-15)  # the rest at equilibrium
+
+
+@pytest.mark.parametrize(
+    "field, value, message",
+    [
+        ("type", 3, r"converter type must be 1 or 2"),
+        ("dqdv", 0.5, r"Q-V droop must be < 0"),
+        ("ft1", 59.0, r"field 'ft1': must be > ft0"),
+        ("Twm", 0.0, r"washout time constant must be > 0"),
+        ("SOCinit", 2.0, r"field 'SOCinit': ESD1 initial state of charge"),
+    ],
+)
+def test_converter_table_refuses_bad_values_naming_the_field(field, value, message):
+    row = list(ROW)
+    row[2] = 2  # ESD1, for the SOC check
+    with pytest.raises(CaseError, match=rf"ibr_con row 1 \(converter 1\).*{message}"):
+        make_case(row, **{field: value})
+
+
+def test_converter_table_round_trips_through_json_and_is_absent_without_converters():
+    case = make_case()
+    back = case_from_dict(case_to_dict(case))
+    assert back.equals(case) and len(back.converters) == 1
+    plain = case.replace(converters=ConverterTable.empty())
+    assert "converters" not in case_to_dict(plain)["tables"]
