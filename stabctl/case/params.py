@@ -1010,9 +1010,9 @@ GOVERNOR = Family(
             "code",
             1,
             integer=True,
-            choices=(1, 2, 3, 4, 5),
+            choices=(1, 2, 3, 4, 5, 6),
             label="governor type",
-            doc="1 PST tg, 2 TGOV1, 3 IEEEG1, 4 HYGOV, 5 IEESGO",
+            doc="1 PST tg, 2 TGOV1, 3 IEEEG1, 4 HYGOV, 5 IEESGO, 6 GAST",
         ),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("wf", "pu", 3, doc="speed set point"),
@@ -1056,6 +1056,8 @@ GOVERNOR = Family(
             )
             for k in range(1, 9)
         ),
+        Param("AT", "pu", 25, doc="GAST ambient temperature load limit"),
+        Param("KT", "", 26, doc="GAST temperature limiter gain"),
     ),
     dyr=(
         # TGOV1: invR = 1/R is computed
@@ -1149,6 +1151,24 @@ GOVERNOR = Family(
             },
             kind=5,
             andes=("IEESGO",),
+        ),
+        # GAST -> type 6: invR = 1/R is computed; T1 the valve (Ts), T2 the power lag (Tc), T3
+        # the load-limit feedback lag
+        DyrModel(
+            "GAST",
+            ("R", "T1", "T2", "T3", "AT", "KT", "VMAX", "VMIN", "Dturb"),
+            {
+                "Ts": "T1",
+                "Tc": "T2",
+                "T3": "T3",
+                "AT": "AT",
+                "KT": "KT",
+                "Tmax": "VMAX",
+                "Tmin": "VMIN",
+                "Dt": "Dturb",
+            },
+            kind=6,
+            andes=("GAST",),
         ),
     ),
 )

@@ -90,7 +90,7 @@ _MACHINES = ("GENROU", "GENCLS")
 _FIXED = {
     "GENROU": {"kp": 0.0, "kw": 0.0},
     "GENCLS": {"kp": 0.0, "kw": 0.0},
-    **{g: {"wref0": 1.0} for g in ("TGOV1", "TGOV1N", "IEEEG1", "HYGOV", "IEESGO")},
+    **{g: {"wref0": 1.0} for g in ("TGOV1", "TGOV1N", "IEEEG1", "HYGOV", "IEESGO", "GAST")},
 }
 
 

@@ -566,10 +566,11 @@ def _tg_row(rec, gen, **cols) -> list:
     )
 
 
-def _tgov1(rec, gen):
-    """TGOV1: R T1 VMAX VMIN T2 T3 Dt -> tg_con type 2 (1/R, valve T1 with non-windup
-    [VMIN, VMAX], lead-lag T2/T3, damping Dt)."""
-    R = DYR_MODELS["TGOV1"].values(rec.params)["R"]
+def _droop(rec, gen):
+    """TGOV1 (R T1 VMAX VMIN T2 T3 Dt -> tg_con type 2: valve T1 with non-windup [VMIN,
+    VMAX], lead-lag T2/T3, damping Dt) and GAST (R T1 T2 T3 AT KT VMAX VMIN Dturb -> type
+    6): the declared copies and 1/R."""
+    R = DYR_MODELS[rec.model].values(rec.params)["R"]
     if R <= 0:
         raise CaseError(f"{rec.label()}: droop R = {R} must be > 0")
     return _tg_row(rec, gen, invR=1 / R)
@@ -632,7 +633,8 @@ _MAPPERS = {
     "IEEEST": _ieeest,
     "ST2CUT": _st2cut,
     "STAB2A": _stab2a,
-    "TGOV1": _tgov1,
+    "TGOV1": _droop,
+    "GAST": _droop,
     "IEEEG1": _ieeeg1,
     "HYGOV": _hygov,
     "IEESGO": _ieesgo,

@@ -1,10 +1,10 @@
 """Turbine-governors: PST `tg` (type 1) and the PSS/E models TGOV1 (type 2), IEEEG1
-(type 3), HYGOV (type 4) and IEESGO (type 5).
+(type 3), HYGOV (type 4), IEESGO (type 5) and GAST (type 6).
 
 Sources: PSTess 1.1 `tg_indx.m`, `tg.m` (docs/pst_models.md section 4); PSS/E Model
 Library `TGOV1`, `IEEEG1` (IEEE Committee Report 1973 steam turbine model), as
-implemented in ANDES (`andes/models/governor/tgov1.py`, `ieeeg1.py`, `hygov.py`, `ieesgo.py`);
-equations in docs/pst_models.md section 4.1-4.3.
+implemented in ANDES (`andes/models/governor/tgov1.py`, `ieeeg1.py`, `hygov.py`,
+`ieesgo.py`, `gast.py`); equations in docs/pst_models.md section 4.1-4.4.
 
 tg: demand = clip(P_ref + (w_f - omega)/R, Tmin, T_max) -> 1/(1 + s T_s)
 -> (1 + s T_3)/(1 + s T_c) -> (1 + s T_4)/(1 + s T_5) -> pmech (machine base).  T_4 may
@@ -18,7 +18,9 @@ e/r with the gate integrator dx_g/dt = K_g e (PSS/E: K_g = 1/(r T_r)) rate-limit
 column T_w dq/dt = 1 - (q/g)^2, pmech = A_t (q/g)^2 (q - q_NL) - D_turb (omega - 1) g.
 IEESGO: K_1 (omega - 1) through 1/(1 + s T_1) and (1 + s T_2)/(1 + s T_3), P_ref minus it
 limited to [PMIN, PMAX], lags T_4, T_5, T_6, pmech = (1 - K_2) y_4 + (1 - K_3) K_2 y_5 +
-K_2 K_3 y_6 (the IEEEG1 fraction columns K1, K3, K5).
+K_2 K_3 y_6 (the IEEEG1 fraction columns K1, K3, K5).  GAST: min(P_ref + (w_f - omega)/R,
+AT + KT (AT - y_3)) -> 1/(1 + s T1) non-windup [VMIN, VMAX] -> 1/(1 + s T2) = y_2 ->
+minus D_turb (omega - 1); y_3 = y_2/(1 + s T3).
 States: up to N_STATES slots per governor (the most any type present uses), named per
 type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 """
@@ -34,7 +36,7 @@ from stabctl.errors import CaseError
 from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
 from stabctl.models.blocks import LBND, clip, lag, leadlag, nonwindup, nonwindup_lag
 
-TG, TGOV1, IEEEG1, HYGOV, IEESGO = 1, 2, 3, 4, 5
+TG, TGOV1, IEEEG1, HYGOV, IEESGO, GAST = 1, 2, 3, 4, 5, 6
 N_STATES = 6
 STATE_NAMES = {
     TG: ("servo", "transient", "turbine"),
@@ -42,12 +44,13 @@ STATE_NAMES = {
     IEEEG1: ("leadlag", "gate", "T4lag", "T5lag", "T6lag", "T7lag"),
     HYGOV: ("filter", "gate_integrator", "gate", "flow"),
     IEESGO: ("lag", "leadlag", "T4lag", "T5lag", "T6lag"),
+    GAST: ("valve", "T2lag", "T3lag"),
 }
 #: HYGOV's fields in tg_con columns 17-21 (alternative names of K1..K5)
 HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel")
 #: tg_con fields (stabctl.case.params.GOVERNOR) the kernels take as given: columns 3-16
-#: (the IEEEG1 fractions K1..K8 enter summed per shaft stage, K)
-TABLE_FIELDS = GOVERNOR.names[2:16]
+#: and GAST's 25-26 (the IEEEG1 fractions K1..K8 enter summed per shaft stage, K)
+TABLE_FIELDS = GOVERNOR.names[2:16] + GOVERNOR.names[24:26]
 #: packed parameter matrix of the kernels, (column name, GovernorParams attribute) per
 #: column: tg_con columns 1-16 in declared order, K's four columns, P_ref, HYGOV's fields
 PACKED = (
@@ -106,6 +109,10 @@ class GovernorParams(Declared):
         act[1] |= sg & (self.Ts >= LBND)
         for r, T in zip(range(2, 5), (self.T4, self.T5, self.T6)):
             act[r] |= sg & (T >= LBND)
+        ga = self.kind == GAST
+        act[0] |= ga
+        act[1] |= ga & (self.Tc >= LBND)
+        act[2] |= ga & (self.T3 >= LBND)
         return act[: self.n_slots()]
 
     def time_constants(self):
@@ -116,9 +123,11 @@ class GovernorParams(Declared):
             name: (g1 | sg) & (getattr(self, name) >= LBND)
             for name in ("Tc", "Ts", "T4", "T5", "T6", "T7")
         }
+        ga = self.kind == GAST
         return (
-            ("tg_con T_s", self.Ts, tg | t1 | g1 | hy | lag["Ts"]),
-            ("tg_con T_c", self.Tc, tg | t1 | hy | lag["Tc"]),
+            ("tg_con T_s", self.Ts, tg | t1 | g1 | hy | ga | lag["Ts"]),
+            ("tg_con T_c", self.Tc, tg | t1 | hy | lag["Tc"] | (ga & (self.Tc >= LBND))),
+            ("tg_con T_3", self.T3, ga & (self.T3 >= LBND)),
             ("tg_con T_5", self.T5, tg | lag["T5"]),
             ("tg_con T_4", self.T4, hy | lag["T4"]),
             ("tg_con T_6", self.T6, lag["T6"]),
@@ -143,6 +152,7 @@ def governor_params(case: Case) -> GovernorParams:
         IEEEG1: ("Ts",),
         HYGOV: ("Ts", "Tc", "T4"),
         IEESGO: (),
+        GAST: ("Ts",),
     }
     for r in range(len(g)):
         for name in need[int(g.type[r])]:
@@ -191,6 +201,12 @@ def initialise(p: GovernorParams, pmech0):
             f"tg_con row {bad[0] + 1}: initial power order {gate[bad[0]]:.4f} pu "
             "outside [Tmin, Tmax]"
         )
+    bad = np.nonzero((p.kind == GAST) & (p.AT + p.KT * (p.AT - pmech0) < pmech0))[0]
+    if bad.size:
+        raise CaseError(
+            f"tg_con row {bad[0] + 1}: GAST's load limit AT + KT (AT - Pm0) is below its "
+            f"initial power {pmech0[bad[0]]:.4f} pu"
+        )
     tg, t1, g1 = p.kind == TG, p.kind == TGOV1, p.kind == IEEEG1
     x[0] = np.where(g1, 0.0, pmech0)
     x[1] = np.where(tg | t1, (1 - p.T3 / tc) * pmech0, gate)
@@ -225,6 +241,8 @@ def pmech(P, x, k, omega):
         return _fractions(P, k, _ieeeg1_lags(P, x, k))
     if kind == HYGOV:
         return _hygov_pmech(P, x, k, omega)
+    if kind == GAST:
+        return lag(x[0, k], x[1, k], P[k, G.TC])[0] - P[k, G.DT] * (omega - 1.0)
     return _fractions(P, k, _ieesgo_lags(P, x, k, omega))
 
 
@@ -240,6 +258,8 @@ def derivatives(P, x, k, omega, dx):
         _ieeeg1_derivatives(P, x, k, omega, dx)
     elif kind == HYGOV:
         _hygov_derivatives(P, x, k, omega, dx)
+    elif kind == GAST:
+        _gast_derivatives(P, x, k, omega, dx)
     else:
         _ieesgo_lags(P, x, k, omega, dx)
 
@@ -280,6 +300,25 @@ def _tg_derivatives(P, x, k, omega, dx):
     y2, dx[1, k] = leadlag(x[0, k], x[1, k], P[k, G.T3], P[k, G.TC])
     if P[k, G.KIND] == TG:
         dx[2, k] = leadlag(y2, x[2, k], P[k, G.T4], P[k, G.T5])[1]
+
+
+# -- GAST (PSS/E GAST, ANDES 2.0 gast.py): the droop order and the load limit AT + KT (AT
+# -- - y3) through a low-value gate, the non-windup valve 1/(1 + s T1) on [VMIN, VMAX], the
+# -- lag 1/(1 + s T2) to the power (minus D_t (omega - 1)), the lag T3 of the load limit
+
+
+@kernel(inline="always")
+def _gast_derivatives(P, x, k, omega, dx):
+    """GAST (docs/pst_models.md 4.4): min(P_ref + (w_f - omega)/R, AT + KT (AT - y_3))
+    through the valve (Ts = T1), y_2 its lag T2 (Tc), y_3 the lag T3 of y_2 (a lag below
+    1e-3 s passes its input)."""
+    y2, dx[1, k] = lag(x[0, k], x[1, k], P[k, G.TC])
+    y3, dx[2, k] = lag(y2, x[2, k], P[k, G.T3])
+    order = P[k, G.PREF] + (P[k, G.WF] - omega) * P[k, G.INVR]
+    limit = P[k, G.AT] + P[k, G.KT] * (P[k, G.AT] - y3)
+    x[0, k], dx[0, k] = nonwindup_lag(
+        min(order, limit), x[0, k], P[k, G.TS], P[k, G.TMIN], P[k, G.TMAX], _AT_LIMIT, 0.0
+    )
 
 
 # -- IEEEG1: lead-lag on K (omega - 1), rate- and position-limited gate, lags T4..T7

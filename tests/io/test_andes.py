@@ -384,7 +384,7 @@ def test_n44_whole_case_imports_simulates_and_linearises():
     assert sum("tg_flow" in n for n in names) == 50
 
 
-def andes_case_run(name, bus, t_end=5.0, conventions="andes"):
+def andes_case_run(name, bus, t_end=5.0, conventions="andes", off=("Toggle",)):
     """An ANDES case file imported by :func:`import_andes` (its own disturbance, Toggle,
     left out) and ANDES's run of the same file (Toggle switched off): a 6-cycle fault at
     ``bus`` through j1e-3 pu, 5 ms step in both, PV Q limits off in both (ANDES's
@@ -396,7 +396,7 @@ def andes_case_run(name, bus, t_end=5.0, conventions="andes"):
     t_clear = 1.0 + 6 / 60
     sim = Simulator(case, q_limits=False)
     res = sim.run([Fault(bus, 1.0, t_clear, x=1e-3)], t_end, h=STEP)
-    ss = andes_system(path, fault=AndesFault(bus, 1.0, t_clear, x=1e-3), off=("Toggle",))
+    ss = andes_system(path, fault=AndesFault(bus, 1.0, t_clear, x=1e-3), off=off)
     t, wa = andes_speeds(ss, t_end, STEP)
     return sim, res, ss, t, speeds_on(t, res, case, ss), wa
 
@@ -485,6 +485,25 @@ def test_ieee14_exac4_starts_flat_and_its_field_voltage_and_speeds_match_andes()
     ours = np.interp(ta, res.t, res.efd[:, k])
     assert np.max(theirs) == pytest.approx(8.0) and np.min(theirs) < 1e-9  # both limits
     assert np.max(np.abs(ours - theirs)[ta > 1.3]) < 5e-3
+
+
+def test_ieee14_gast_starts_flat_and_its_power_and_speeds_match_andes():
+    """IEEE 14 with a GAST (ANDES's ieee14_gast.xlsx; docs/pst_models.md 4.6), its AC8B
+    exciter, which stabctl lacks, off in ANDES's run too: flat 10 s; after a 6-cycle
+    fault at bus 9 the gas turbine's mechanical power follows ANDES's ``gast.py``."""
+    sim, res, ss, _t, w, wa = andes_case_run(
+        "ieee14/ieee14_gast.xlsx", 9, t_end=10.0, off=("Toggle", "AC8B")
+    )
+    assert np.sum(sim.case.governors.type == 6) == ss.GAST.n == 1
+    flat = sim.run([], 10.0, h=STEP)
+    assert np.max(np.abs(flat.speed - 1)) < 1e-10 and np.ptp(flat.pmech, axis=0).max() < 1e-12
+    assert np.max(np.abs(w - wa)) < 2e-5  # measured 4.5e-6
+    k = list(sim.case.machines.bus).index(ss.SynGen.get("bus", ss.GAST.syn.v[0]))
+    ta = ss.dae.ts.t
+    theirs = ss.dae.ts.y[:, ss.GAST.pout.a[0]]
+    ours = np.interp(ta, res.t, res.pmech[:, k])
+    assert np.ptp(theirs) > 0.05  # the turbine responds (0.307-0.359 pu)
+    assert np.max(np.abs(ours - theirs)) < 1e-4  # measured 1.8e-5
 
 
 @pytest.mark.parametrize(

@@ -93,7 +93,17 @@ IEESGO = [
     0,
     0,
 ]
-ROWS = {"tg": TG, "TGOV1": TGOV1, "IEEEG1": IEEEG1, "HYGOV": HYGOV, "IEESGO": IEESGO}
+#: GAST: 1/R = 20, T1 (Ts) 0.4, T2 (Tc) 0.1, T3 3, VMAX 1.0, VMIN -0.05, D_turb 0, AT 0.8,
+#: KT 2 (tg_con columns 4-8, 11, 12, 25, 26): the load limit 0.8 + 2 (0.8 - 0.7) = 1.0
+GAST = [6, 1, 1, 20, 1.0, 0.4, 0.1, 3.0, 0, 0, -0.05, 0.0] + [0] * 12 + [0.8, 2.0]
+ROWS = {
+    "tg": TG,
+    "TGOV1": TGOV1,
+    "IEEEG1": IEEEG1,
+    "HYGOV": HYGOV,
+    "IEESGO": IEESGO,
+    "GAST": GAST,
+}
 PM0 = 0.7  # initial mechanical power (machine base)
 
 
@@ -215,3 +225,38 @@ def test_lag_time_constants_below_the_threshold_are_refused():
 def test_layout_names_every_packed_column_once():
     assert gov.G._fields == tuple(name for name, _ in gov.PACKED)
     assert params(HYGOV).packed(np.zeros(1)).shape == (1, len(gov.G))
+
+
+def test_gast_load_limit_takes_over_the_droop_order():
+    """GAST: the valve follows min(droop order, AT + KT (AT - y_3)) (PSS/E GAST's low-value
+    gate; ANDES gast.py): at 5 % under-speed the droop asks 0.7 + 20 0.05 = 1.7, the load
+    limit 1.0 wins, and the valve moves at (1.0 - 0.7)/T1; with y_3 lowered to 0.5 the
+    limit rises to 1.4; at rest the power lag T2 and limit lag T3 hold."""
+    P, x = started(GAST)
+    dx = derivatives(P, x, omega=0.95)
+    assert dx[0, 0] == pytest.approx((1.0 - 0.7) / 0.4, rel=1e-14)
+    assert dx[1, 0] == dx[2, 0] == 0.0
+    x[2, 0] = 0.5
+    assert derivatives(P, x, omega=0.95)[0, 0] == pytest.approx((1.4 - 0.7) / 0.4, rel=1e-14)
+
+
+def test_gast_valve_is_non_windup_and_power_is_its_lag():
+    """GAST's valve at VMAX driven outward stays there with a zero derivative (IEEE 421.5
+    E.5 rule); after a P_ref step dP the power is the two lags 1/((1 + s T1)(1 + s T2))
+    (the load limit far away): pm0 + dP [1 - (T1 e^(-t/T1) - T2 e^(-t/T2))/(T1 - T2)]."""
+    P, x = started(GAST)
+    x[0, 0] = 1.0
+    dx = derivatives(P, x, omega=0.9)
+    assert x[0, 0] == 1.0 and dx[0, 0] == 0.0
+    P, x = started(GAST)
+    P[0, gov.G.AT] = 5.0  # the load limit out of the way
+    dP, T1, T2, t = 1e-4, 0.4, 0.1, 0.3
+    P[0, gov.G.PREF] += dP
+    exact = PM0 + dP * (1 - (T1 * np.exp(-t / T1) - T2 * np.exp(-t / T2)) / (T1 - T2))
+    assert pmech_after(P, x, t) == pytest.approx(exact, rel=1e-9)
+
+
+def test_gast_initial_power_above_its_load_limit_is_refused():
+    """GAST starting where AT + KT (AT - Pm0) < Pm0 would not be at rest: refused."""
+    with pytest.raises(CaseError, match="GAST's load limit"):
+        started(GAST[:24] + [0.6, 2.0])
