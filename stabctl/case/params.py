@@ -414,6 +414,18 @@ MACHINE = Family(
 # exc_con: exciters (PST manual 3.38 Table 15, 3.11 Table 2, 3.13 Table 3; docs 2.3-2.4)
 # --------------------------------------------------------------------------------------
 
+#: the copies the IEEE 1968 DC records IEEET1 and IEEET2 share (PSS/E Model Library)
+_IEEET_COPY = {
+    "TR": "TR",
+    "KA": "KA",
+    "TA": "TA",
+    "Vrmax": "VRMAX",
+    "Vrmin": "VRMIN",
+    "KE": "KE",
+    "TE": "TE",
+    "KF_dc": "KF",
+}
+
 EXCITER = Family(
     table="exc_con",
     min_columns=9,
@@ -591,17 +603,7 @@ EXCITER = Family(
                 "E2",
                 "SE(E2)",
             ),
-            {
-                "TR": "TR",
-                "KA": "KA",
-                "TA": "TA",
-                "Vrmax": "VRMAX",
-                "Vrmin": "VRMIN",
-                "KE": "KE",
-                "TE": "TE",
-                "KF_dc": "KF",
-                "TF_dc": "TF",
-            },
+            {**_IEEET_COPY, "TF_dc": "TF"},
             kind=1,
             andes=("IEEET1",),
         ),
@@ -624,18 +626,7 @@ EXCITER = Family(
                 "E2",
                 "SE(E2)",
             ),
-            {
-                "TR": "TR",
-                "KA": "KA",
-                "TA": "TA",
-                "Vrmax": "VRMAX",
-                "Vrmin": "VRMIN",
-                "KE": "KE",
-                "TE": "TE",
-                "KF_dc": "KF",
-                "TF_dc": "TF1",
-                "TF2": "TF2",
-            },
+            {**_IEEET_COPY, "TF_dc": "TF1", "TF2": "TF2"},
             kind=5,
         ),
         # SCRX -> smpexc: T_C = (TA/TB) TB computed; CSWITCH 0 (bus fed): bus_fed = 1

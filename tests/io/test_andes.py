@@ -430,78 +430,65 @@ def test_ieee14_ieeet1_starts_flat_and_fault_speeds_match_andes():
     assert res.stable and not andes_separated(ss)
 
 
-def test_ieee14_esst1a_starts_flat_and_its_field_voltage_and_speeds_match_andes():
-    """IEEE 14 with an ESST1A (ANDES's ieee14_esst1a.xlsx, K_LR = 1, I_LR = 1: its field
-    current limiter is on from the start; docs/pst_models.md 2.6): a 10 s flat run stays
-    at 1 pu; after a 6-cycle fault at bus 9 its field voltage follows ANDES's
-    ``esst1a.py`` (swinging 0.9-5.8 pu) and the speeds agree."""
-    sim, res, ss, _t, w, wa = andes_case_run("ieee14/ieee14_esst1a.xlsx", 9)
-    assert np.sum(sim.case.exciters.type == 6) == ss.ESST1A.n == 1
+def device_output_run(name, model, off=("Toggle",), t_end=5.0):
+    """:func:`andes_case_run` of an IEEE 14 case with one device of ANDES model ``model``
+    (an exciter or a governor; a 6-cycle fault at bus 9), after the checks every such
+    case passes: a 10 s flat run moves no speed and no mechanical power, and the fault
+    speeds agree within 2e-5 pu (measured 4.5e-6 in each).  Returns ANDES's time grid,
+    stabctl's output of the device on it and ANDES's (exciter: the field voltage ``vout``;
+    governor: the mechanical power ``pout``)."""
+    sim, res, ss, _t, w, wa = andes_case_run(name, 9, t_end=t_end, off=off)
+    dev = getattr(ss, model)
+    assert dev.n == 1
     flat = sim.run([], 10.0, h=STEP)
-    assert np.max(np.abs(flat.speed - 1)) < 1e-10  # measured 0
-    assert np.max(np.abs(w - wa)) < 2e-5  # measured 4.5e-6
-    k = list(sim.case.machines.bus).index(ss.SynGen.get("bus", ss.ESST1A.syn.v[0]))
+    assert np.max(np.abs(flat.speed - 1)) < 1e-10 and np.ptp(flat.pmech, axis=0).max() < 1e-12
+    assert np.max(np.abs(w - wa)) < 2e-5
+    k = list(sim.case.machines.bus).index(ss.SynGen.get("bus", dev.syn.v[0]))
     ta = ss.dae.ts.t
-    theirs = ss.dae.ts.y[:, ss.ESST1A.vout.a[0]]
-    ours = np.interp(ta, res.t, res.efd[:, k])
-    assert np.ptp(theirs) > 4.5  # the field voltage swings
-    away = (np.abs(ta - 1.0) > 0.011) & (np.abs(ta - 1.1) > 0.011)  # not at the switchings
+    series, var = ("efd", dev.vout) if "vout" in dev.__dict__ else ("pmech", dev.pout)
+    return ta, np.interp(ta, res.t, getattr(res, series)[:, k]), ss.dae.ts.y[:, var.a[0]]
+
+
+#: ANDES's grid points at the fault and its clearing (1 s, 1.1 s), where it records the
+#: value before a jump and stabctl the value after
+AWAY = 0.011
+
+
+def test_ieee14_esst1a_field_voltage_and_speeds_match_andes():
+    """ANDES's ieee14_esst1a.xlsx (K_LR = 1, I_LR = 1: the field current limiter on from
+    the start; docs/pst_models.md 2.6): the field voltage follows ``esst1a.py``."""
+    ta, ours, theirs = device_output_run("ieee14/ieee14_esst1a.xlsx", "ESST1A")
+    assert np.ptp(theirs) > 4.5  # the field voltage swings (0.9-5.8 pu)
+    away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
     assert np.max(np.abs(ours - theirs)[away]) < 0.15  # measured 0.086, 15 ms after clearing
-    late = ta > 1.5
-    assert np.max(np.abs(ours - theirs)[late]) < 2e-3  # measured 5e-4
+    assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 2e-3  # measured 5e-4
 
 
-def test_ieee14_exac1_starts_flat_and_its_field_voltage_and_speeds_match_andes():
-    """IEEE 14 with an EXAC1 (ANDES's ieee14_exac1.xlsx; docs/pst_models.md 2.7): a 10 s
-    flat run stays at 1 pu; after a 6-cycle fault at bus 9 its field voltage follows
-    ANDES's ``exac1.py`` (swinging 1.36-2.60 pu) and the speeds agree."""
-    sim, res, ss, _t, w, wa = andes_case_run("ieee14/ieee14_exac1.xlsx", 9)
-    assert np.sum(sim.case.exciters.type == 7) == ss.EXAC1.n == 1
-    flat = sim.run([], 10.0, h=STEP)
-    assert np.max(np.abs(flat.speed - 1)) < 1e-10  # measured 0
-    assert np.max(np.abs(w - wa)) < 2e-5  # measured 4.5e-6
-    k = list(sim.case.machines.bus).index(ss.SynGen.get("bus", ss.EXAC1.syn.v[0]))
-    ta = ss.dae.ts.t
-    theirs = ss.dae.ts.y[:, ss.EXAC1.vout.a[0]]
-    ours = np.interp(ta, res.t, res.efd[:, k])
-    assert np.ptp(theirs) > 1.0  # the field voltage swings
-    away = (np.abs(ta - 1.0) > 0.011) & (np.abs(ta - 1.1) > 0.011)  # not at the switchings
+def test_ieee14_exac1_field_voltage_and_speeds_match_andes():
+    """ANDES's ieee14_exac1.xlsx (docs/pst_models.md 2.7): the field voltage follows
+    ``exac1.py``."""
+    ta, ours, theirs = device_output_run("ieee14/ieee14_exac1.xlsx", "EXAC1")
+    assert np.ptp(theirs) > 1.0  # the field voltage swings (1.36-2.60 pu)
+    away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
     assert np.max(np.abs(ours - theirs)[away]) < 0.04  # measured 0.019, 12 ms after clearing
     assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 2e-3
 
 
-def test_ieee14_exac4_starts_flat_and_its_field_voltage_and_speeds_match_andes():
-    """IEEE 14 with an EXAC4 (ANDES's ieee14_exac4.xlsx; docs/pst_models.md 2.8): a 10 s
-    flat run stays at 1 pu; after a 6-cycle fault at bus 9 its field voltage rides both
-    output limits (8 pu, then 0) as ANDES's ``exac4.py`` and the speeds agree."""
-    sim, res, ss, _t, w, wa = andes_case_run("ieee14/ieee14_exac4.xlsx", 9)
-    assert np.sum(sim.case.exciters.type == 8) == ss.EXAC4.n == 1
-    flat = sim.run([], 10.0, h=STEP)
-    assert np.max(np.abs(flat.speed - 1)) < 1e-10  # measured 0
-    assert np.max(np.abs(w - wa)) < 2e-5  # measured 4.5e-6
-    k = list(sim.case.machines.bus).index(ss.SynGen.get("bus", ss.EXAC4.syn.v[0]))
-    ta = ss.dae.ts.t
-    theirs = ss.dae.ts.y[:, ss.EXAC4.vout.a[0]]
-    ours = np.interp(ta, res.t, res.efd[:, k])
+def test_ieee14_exac4_field_voltage_and_speeds_match_andes():
+    """ANDES's ieee14_exac4.xlsx (docs/pst_models.md 2.8): the field voltage rides both
+    output limits (8 pu, then 0) as ``exac4.py``'s."""
+    ta, ours, theirs = device_output_run("ieee14/ieee14_exac4.xlsx", "EXAC4")
     assert np.max(theirs) == pytest.approx(8.0) and np.min(theirs) < 1e-9  # both limits
     assert np.max(np.abs(ours - theirs)[ta > 1.3]) < 5e-3
 
 
-def test_ieee14_gast_starts_flat_and_its_power_and_speeds_match_andes():
-    """IEEE 14 with a GAST (ANDES's ieee14_gast.xlsx; docs/pst_models.md 4.6), its AC8B
-    exciter, which stabctl lacks, off in ANDES's run too: flat 10 s; after a 6-cycle
-    fault at bus 9 the gas turbine's mechanical power follows ANDES's ``gast.py``."""
-    sim, res, ss, _t, w, wa = andes_case_run(
-        "ieee14/ieee14_gast.xlsx", 9, t_end=10.0, off=("Toggle", "AC8B")
+def test_ieee14_gast_power_and_speeds_match_andes():
+    """ANDES's ieee14_gast.xlsx (docs/pst_models.md 4.4), its AC8B exciter, which stabctl
+    lacks, off in ANDES's run too: over 10 s the gas turbine's mechanical power follows
+    ``gast.py``."""
+    _ta, ours, theirs = device_output_run(
+        "ieee14/ieee14_gast.xlsx", "GAST", off=("Toggle", "AC8B"), t_end=10.0
     )
-    assert np.sum(sim.case.governors.type == 6) == ss.GAST.n == 1
-    flat = sim.run([], 10.0, h=STEP)
-    assert np.max(np.abs(flat.speed - 1)) < 1e-10 and np.ptp(flat.pmech, axis=0).max() < 1e-12
-    assert np.max(np.abs(w - wa)) < 2e-5  # measured 4.5e-6
-    k = list(sim.case.machines.bus).index(ss.SynGen.get("bus", ss.GAST.syn.v[0]))
-    ta = ss.dae.ts.t
-    theirs = ss.dae.ts.y[:, ss.GAST.pout.a[0]]
-    ours = np.interp(ta, res.t, res.pmech[:, k])
     assert np.ptp(theirs) > 0.05  # the turbine responds (0.307-0.359 pu)
     assert np.max(np.abs(ours - theirs)) < 1e-4  # measured 1.8e-5
 
