@@ -124,6 +124,10 @@ class Simulator:
         compile it in a child process while this one compiles the model's evaluation
         (True, the default: a cold first run then costs about the longer of the two, not
         their sum, on two cores); False for a simulator that never runs (linearisation).
+    off_equilibrium : {"refuse", "warn"}, optional
+        An initial point whose largest |derivative| exceeds 1e-8 (a model's
+        initialisation disagreeing with its dynamics) is refused (the default) or warned
+        about (`DynamicModel.check_equilibrium`, which names the state).
 
     Attributes
     ----------
@@ -145,7 +149,8 @@ class Simulator:
         the case's fastest time constant (the predictor-corrector's stability interval).
     CaseError
         Models stabctl does not have, limits violated at the initial point (as
-        `stabctl.dynamics.model.DynamicModel`); UnknownBusError (a CaseError) for an
+        `stabctl.dynamics.model.DynamicModel`), an initial point that is not an
+        equilibrium (``off_equilibrium="refuse"``); UnknownBusError (a CaseError) for an
         injection bus not in the case.
     PowerFlowError
         The power flow (when `op` is None) did not converge.
@@ -160,6 +165,7 @@ class Simulator:
         step: float | None = None,
         q_limits: bool = True,
         background_compile: bool = True,
+        off_equilibrium: str = "refuse",
     ):
         self.conventions = check_conventions(conventions)
         self.q_limits = bool(q_limits)
@@ -179,6 +185,7 @@ class Simulator:
         self.inertia = self.model.mp.H * case.machines.mva
         if background_compile:
             self._compile_runs_elsewhere()
+        self.model.check_equilibrium(off_equilibrium)
 
     def _compile_runs_elsewhere(self) -> None:
         """When `stabctl.dynamics.integrator.integrate` is neither compiled in this process
