@@ -68,13 +68,15 @@ class DyrTables:
     """PST matrices built from DYR records, rows in machine order, columns as the case
     tables (MachineTable, ExciterTable, PssTable, GovernorTable): mac_con (n_gen, 24),
     exc_con (n, 24), pss_con (n, 24), tg_con (n, 24) (None when no record of that kind);
-    unsupported: the records skipped (`on_unsupported="skip"`), in file order."""
+    unsupported: the records skipped (`on_unsupported="skip"`), in file order; why: the
+    reason each was skipped (same order), e.g. "model TOGGLE is not mapped"."""
 
     mac_con: np.ndarray
     exc_con: np.ndarray | None
     pss_con: np.ndarray | None
     tg_con: np.ndarray | None
     unsupported: tuple[DyrRecord, ...]
+    why: tuple[str, ...] = ()
 
 
 class _Unsupported(Exception):
@@ -219,6 +221,7 @@ def dyr_tables(
         pss_con=tables["pss"],
         tg_con=tables["governor"],
         unsupported=tuple(r for r, _ in skipped),
+        why=tuple(why for _, why in skipped),
     )
 
 

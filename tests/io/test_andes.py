@@ -36,6 +36,7 @@ from stabctl.io.andes import (  # noqa: E402
     AndesFault,
     andes_machine_buses,
     andes_modes,
+    andes_powerflow,
     andes_separated,
     andes_speeds,
     andes_stable,
@@ -44,6 +45,7 @@ from stabctl.io.andes import (  # noqa: E402
 )
 from stabctl.io.andes_case import import_andes, read_andes_case  # noqa: E402
 from stabctl.io.psse import load_psse  # noqa: E402
+from stabctl.models.pss import pss_inputs  # noqa: E402
 from stabctl.smallsignal.linearise import linearise  # noqa: E402
 from stabctl.smallsignal.modal import modal_analysis  # noqa: E402
 from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time  # noqa: E402
@@ -93,12 +95,14 @@ def wecc_no_controls(tmp_path_factory):
     return CASES / "wecc" / "wecc.raw", dyr
 
 
-def fault_speeds(files, bus, cycles, t_end, conventions="pst"):
+def fault_speeds(files, bus, cycles, t_end, conventions="pst", off_equilibrium="refuse"):
     """Speeds (pu) of both tools on ANDES's time grid: (t, stabctl, ANDES)."""
     raw, dyr = files
     t_clear = 1.0 + cycles / 60.0
     case = load_psse(raw, dyr, conventions=conventions)
-    res = Simulator(case).run([Fault(bus, 1.0, t_clear, x=1e-4)], t_end, h=STEP)
+    res = Simulator(case, off_equilibrium=off_equilibrium).run(
+        [Fault(bus, 1.0, t_clear, x=1e-4)], t_end, h=STEP
+    )
     ss = andes_system(raw, dyr, AndesFault(bus, 1.0, t_clear))
     t, w_andes = andes_speeds(ss, t_end, STEP)
     return t, speeds_on(t, res, case, ss), w_andes
@@ -125,7 +129,10 @@ def test_wecc_fault_speeds_match_andes(wecc):
     t, w, wa = fault_speeds(wecc, 1, 6, 5.0, conventions="andes")
     assert np.max(np.abs(w - wa)) < 5e-5  # measured 2.6e-5
     assert np.max(np.abs(wa - 1)) > 5e-3
-    t, w, wa = fault_speeds(wecc, 1, 6, 5.0)  # PST's models, IEEEG1 rate limits
+    # PST's models, IEEEG1 rate limits; PST's exc_st3 (ESST3A) feeds K_C a field current
+    # other than its initialisation's: off equilibrium at the start, as in PST
+    with pytest.warns(UserWarning, match=r"not an equilibrium: \|dexc\.VR\.G6/dt\| = 0\.0097"):
+        t, w, wa = fault_speeds(wecc, 1, 6, 5.0, off_equilibrium="warn")
     assert np.max(np.abs(w[t <= 2.0] - wa[t <= 2.0])) < 4e-4  # measured 2.8e-4
     assert np.max(np.abs(w - wa)) < 1.5e-3  # measured 1.03e-3
 
@@ -403,10 +410,28 @@ def andes_case_run(name, bus, t_end=5.0, conventions="andes"):
 def test_ieee39_fault_speeds_verdict_and_modes_match_andes():
     """IEEE 39 as ANDES has it (ieee39_full.xlsx: 10 GENROU, IEEEX1, IEEEST, TGOV1N; its
     dynamics exist only in ANDES's format), imported through ANDES's parser; 6-cycle fault
-    at bus 16 through j1e-3 pu."""
+    at bus 16 through j1e-3 pu.  Its IEEEST take the electrical power (MODE 3) of
+    machines with r_a (up to 0.0615, G6): ANDES's input is the air-gap power (``tm0`` at
+    initialisation, ``te`` after); with the terminal power at initialisation stabctl
+    started off equilibrium (0.015 on pss.leadlag1.G6), drifted 6.3e-5 pu in a 10 s flat
+    run (ANDES: 0) and the fault's speeds were 6.7e-5 pu apart."""
     sim, res, ss, _t, w, wa = andes_case_run("ieee39/ieee39_full.xlsx", 16)
+    assert sim.model.initial_residual[0] < 1e-8  # measured 4.9e-13
+    ss0 = andes_system(andes.get_case("ieee39/ieee39_full.xlsx"), off=("Toggle",))
+    andes_powerflow(ss0)
+    ss0.TDS.init()
+    m = sim.model
+    u1, _ = pss_inputs(m.pp, np.ones(m.mp.n), m.pmech0)
+    ours = dict(zip(sim.case.machines.bus[m.pp.mac], u1))
+    bus = dict(zip(ss0.GENROU.idx.v, ss0.GENROU.bus.v))
+    theirs = {bus[s]: v for s, v in zip(ss0.IEEEST.syn.v, ss0.IEEEST.sig.v)}
+    assert set(ss0.IEEEST.MODE.v) == {3} and len(theirs) == 10
+    # the power flows' difference (ANDES's 1e-8 pu branch R) only; r_a |I|^2 is 2.4e-2
+    # at G6 (bus 35)
+    assert max(abs(ours[b] - theirs[b]) for b in theirs) < 2e-6  # measured 4.7e-7
+    assert np.abs(sim.run([], 10.0, h=STEP).speed - 1).max() < 1e-9  # ANDES: 0
     assert np.max(np.abs(wa - 1)) > 5e-3  # a real swing
-    assert np.max(np.abs(w - wa)) < 1e-4  # measured 6.7e-5
+    assert np.max(np.abs(w - wa)) < 3e-5  # measured 1.4e-5
     assert res.stable and not andes_separated(ss)
     ma = modal_analysis(linearise(sim))
     ours = ma.eigenvalues[ma.electromechanical]
@@ -509,3 +534,50 @@ def test_import_andes_cli_writes_ieee39_and_refuses_renewables(tmp_path):
     )
     assert res.exit_code == 2 and not bad.exists()
     assert "REGCA1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
+
+
+def test_import_andes_gives_the_reason_of_a_refused_device(tmp_path):
+    """IEEE 14's PSS/E files with bus 3's IEEEST given a VCU cut-off (1.1 pu, which ANDES
+    reads and stabctl does not model): the device is named with the DYR reader's reason."""
+    src = CASES / "ieee14" / "ieee14.dyr"
+    text = src.read_text()
+    old = "-2.0000      0.10000     -0.10000       0.0000       0.0000      /"
+    assert text.count(old) == 1  # bus 3's IEEEST: LSMAX LSMIN VCU VCL
+    dyr = tmp_path / "ieee14.dyr"
+    dyr.write_text(text.replace(old, old.replace("0.0000       0.0000      /", "1.1 0.0 /")))
+    with pytest.warns(UserWarning, match=r"IEEEST \(bus 3, id GENROU_3\): no input \(ICS 0\)"):
+        imported = read_andes_case(CASES / "ieee14" / "ieee14.raw", dyr=dyr, on_unsupported="skip")
+    assert [r for r in imported.left_out if "IEEEST" in r] == [
+        "ieee14.raw:1 IEEEST (bus 3, id GENROU_3): no input (ICS 0) or VCU/VCL cut-off"
+    ]
+
+
+def test_import_andes_n44_keeps_its_machines_and_says_what_changed():
+    """N44's PSS/E files through ANDES's parser: its DYR reader leaves the 80 machines'
+    fn at 60 Hz in the 50 Hz system; with on_unsupported="skip" they are kept at the
+    system frequency and reported so, not as left out (which the warning said)."""
+    raw, dyr = CASES / "nordic44" / "N44_BC.raw", CASES / "nordic44" / "N44_BC.dyr"
+    with pytest.raises(InputError, match=r"to keep with a change: GENROU \(80: "):
+        read_andes_case(raw, dyr=dyr)
+    with pytest.warns(UserWarning) as record:
+        imported = read_andes_case(raw, dyr=dyr, on_unsupported="skip")
+    text = " ".join(str(w.message) for w in record)
+    assert "left out" not in text
+    assert imported.changed == (
+        "GENROU (80: GENROU_51, GENROU_52, GENROU_53, GENROU_1, GENROU_2, ...): fn = 60 Hz "
+        "read as the system frequency 50 Hz (one frequency in stabctl)",
+    )
+    assert imported.left_out == () and len(imported.case.machines) == 80
+
+
+def test_import_andes_ignores_the_summary_notes():
+    """ANDES's SMIB case carries three ``Summary`` rows (notes, no equations:
+    ``andes/models/info.py``) and its own Fault: only the Fault is refused."""
+    with pytest.raises(InputError) as err:
+        import_andes(andes.get_case("smib/SMIB.xlsx"))
+    assert "Fault (1)" in str(err.value) and "Summary" not in str(err.value)
+    with pytest.warns(UserWarning, match=r"lacks .*Fault \(1\)"):
+        imported = read_andes_case(andes.get_case("smib/SMIB.xlsx"), on_unsupported="skip")
+    assert imported.ignored == ("Area (1)", "Summary (3)")
+    assert imported.left_out == ("Fault (1)",)
+    assert len(imported.case.machines) == 2  # the machine and the infinite bus (1e9 MVA)
