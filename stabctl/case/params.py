@@ -485,6 +485,14 @@ EXCITER = Family(
             "E_Isat(E'q) + p6 (E'q - psi_kd) + p7 i_d, 1 the machine's (IEEE 421.5 "
             "I_FD; ANDES esst3a.py XadIfd)",
         ),
+        Param(
+            "VBmax",
+            "pu",
+            26,
+            lo=0.0,
+            doc="ST3: upper limit of the source voltage V_B = V_E F_EX (PSS/E ESST3A "
+            "VBMAX); 0 none (PST exc_st3)",
+        ),
     ),
     dyr=(
         # SEXS -> smpexc: T_C = (TA/TB) TB is computed
@@ -592,7 +600,8 @@ EXCITER = Family(
             kind=4,
         ),
         # ESST3A -> exc_st3 (TA = 0): its KA is PST's K_J, its inner loop KM/(1 + s TM)
-        # limited [VMMIN, VMMAX] PST's K_A/(1 + s T_A); Efdmax = VBMAX VMMAX is computed
+        # limited [VMMIN, VMMAX] PST's K_A/(1 + s T_A); VBMAX limits V_B (column 26);
+        # Efdmax = VBMAX VMMAX is computed
         DyrModel(
             "ESST3A",
             (
@@ -636,6 +645,7 @@ EXCITER = Family(
                 "KC": "KC",
                 "KG": "KG",
                 "VGmax": "VGMAX",
+                "VBmax": "VBMAX",
             },
             kind=3,
         ),

@@ -463,8 +463,8 @@ def _esst3a(rec, gen):
     """ESST3A: TR VIMAX VIMIN KM TC TB KA TA VRMAX VRMIN KG KP KI VBMAX KC XL VGMAX THETAP TM
     VMMAX VMMIN -> PST exc_st3 (type 3) when TA = 0: ST3A's gain KA is PST's K_J, its inner
     loop KM/(1 + s TM) limited [VMMIN, VMMAX] is PST's K_A/(1 + s T_A) limited [Vrmin,
-    Vrmax]; VRMAX/VRMIN and VBMAX have no PST counterpart (Efdmax = VBMAX VMMAX; docs
-    12.2)."""
+    Vrmax]; VRMAX/VRMIN have no PST counterpart; VBMAX limits V_B (exc_con column 26,
+    stabctl's, not PST's) and Efdmax = VBMAX VMMAX (docs 12.2)."""
     v = DYR_MODELS["ESST3A"].values(rec.params)
     if v["TA"] >= 1e-3:
         raise _Unsupported(

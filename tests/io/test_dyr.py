@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable
-from stabctl.case.params import MACHINE, PSS
+from stabctl.case.params import EXCITER, MACHINE, PSS
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
 from stabctl.io import load_case
@@ -229,7 +229,7 @@ def test_wecc_imports_completely():
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
         (29, 25),
-        (29, 25),
+        (29, 26),
         (29, 24),
         (29, 24),
     ) and t.unsupported == ()
@@ -255,7 +255,8 @@ def test_wecc_esdc2a_to_dc2():
 def test_wecc_esst3a_to_exc_st3():
     """Line 8 (bus 3): TR .02 VIMAX .3 VIMIN -.2 KM 8 TC 1 TB 5 KA 20 TA 0 VRMAX 99 VRMIN -99
     KG 1 KP 3.67 KI .435 VBMAX 6.48 KC .01 XL .0098 VGMAX 4.86 THETAP 3.33 TM .4 VMMAX 99
-    VMMIN 0 -> exc_st3 with K_J = KA, K_A = KM, T_A = TM, V_R limits = VM limits."""
+    VMMIN 0 -> exc_st3 with K_J = KA, K_A = KM, T_A = TM, V_R limits = VM limits, V_B
+    limited to VBMAX (column 26)."""
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
     t = dyr_tables(recs, gens, on_unsupported="skip")
@@ -286,6 +287,7 @@ def test_wecc_esst3a_to_exc_st3():
             4.86,
         ],
     )
+    assert row[EXCITER.col("VBmax") - 1] == 6.48
     np.testing.assert_array_equal(
         t.pss_con[0], [2, gens[r]["number"], -2 * 1.0, 4.2, 0, 0.75, 0, 0, 0.1, -0.1] + [0] * 14
     )
