@@ -172,9 +172,9 @@ class Simulator:
         if op is None:
             from stabctl.network.powerflow import solve_powerflow
 
-            op = OperatingPoint.from_bus_matrix(
-                solve_powerflow(case, q_limits=self.q_limits).bus_matrix()
-            )
+            pf = solve_powerflow(case, q_limits=self.q_limits)
+            op = OperatingPoint.from_bus_matrix(pf.bus_matrix())
+            case = _with_solved_taps(case, pf.taps)
         single_threaded_blas()
         self.case, self.op = case, op
         self.fastest = fastest_time_constant(case)
@@ -458,6 +458,32 @@ class Simulator:
                 "max_initial_derivative_state": self.model.initial_residual[1],
             },
         )
+
+
+def _with_solved_taps(case: Case, taps: np.ndarray) -> Case:
+    """The case with the on-load taps its power flow moved (PST's drivers run the dynamics
+    on ``bus_sol`` and the line matrix with ``lftap``'s final taps); the case itself when
+    none moved.  Without them a case whose taps move (Kundur at 110 % load: 0.975 ->
+    0.96875, 0.9688 -> 0.9563) started off equilibrium, its network not the power
+    flow's (0.566 on exc.VTR.G4).
+
+    Parameters
+    ----------
+    case : Case
+        The case whose power flow was solved.
+    taps : numpy.ndarray
+        The power flow's final tap ratios, shape (n_branches,)
+        (`stabctl.network.powerflow.PowerFlowResult.taps`).
+
+    Returns
+    -------
+    Case
+        ``case``, or a copy with ``branches.tap`` replaced.
+    """
+    given = np.where(case.branches.tap == 0, 1.0, case.branches.tap)
+    if np.array_equal(given, taps):
+        return case
+    return case.replace(branches=case.branches.replace(tap=np.asarray(taps, float)))
 
 
 def simulator_cached() -> bool:
