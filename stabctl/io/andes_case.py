@@ -235,7 +235,8 @@ def read_andes_case(
         description=f"ANDES case {path.name}",
         source=f"ANDES case {path.name}, imported by stabctl.io.andes_case.import_andes",
     )
-    return AndesImport(case, left_out, ignored, *_powerflow(ss, numbers), changed=tuple(changed))
+    pf_bus, pf_vmag, pf_vang = _powerflow(ss, numbers)
+    return AndesImport(case, left_out, ignored, pf_bus, pf_vmag, pf_vang, tuple(changed))
 
 
 def _load(path: Path, dyr):
