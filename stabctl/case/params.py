@@ -535,6 +535,14 @@ EXCITER = Family(
         Param("KLR", "", 30, doc="ESST1A: field current limiter gain"),
         Param("ILR", "pu", 31, doc="ESST1A: field current limiter pick-up (machine base)"),
         Param("KD", "", 32, doc="EXAC1: demagnetising factor of the field current"),
+        Param(
+            "VBmax",
+            "pu",
+            33,
+            lo=0.0,
+            doc="ST3: upper limit of the source voltage V_B = V_E F_EX (PSS/E ESST3A "
+            "VBMAX); 0 none (PST exc_st3)",
+        ),
     ),
     dyr=(
         # SEXS -> smpexc: T_C = (TA/TB) TB is computed
@@ -769,7 +777,8 @@ EXCITER = Family(
             andes=("ESST1A",),
         ),
         # ESST3A -> exc_st3 (TA = 0): its KA is PST's K_J, its inner loop KM/(1 + s TM)
-        # limited [VMMIN, VMMAX] PST's K_A/(1 + s T_A); Efdmax = VBMAX VMMAX is computed
+        # limited [VMMIN, VMMAX] PST's K_A/(1 + s T_A); VBMAX limits V_B (column 33);
+        # Efdmax = VBMAX VMMAX is computed
         DyrModel(
             "ESST3A",
             (
@@ -813,6 +822,7 @@ EXCITER = Family(
                 "KC": "KC",
                 "KG": "KG",
                 "VGmax": "VGMAX",
+                "VBmax": "VBMAX",
             },
             kind=3,
             andes=("ESST3A",),

@@ -77,6 +77,27 @@ def _dyr_and_out(func):
     )(func)
 
 
+def _static_option(func):
+    """--static: accept a case without machines (a power-flow-only case)."""
+    return click.option(
+        "--static",
+        is_flag=True,
+        help="Write a power-flow-only case when the files have no dynamic data (no "
+        "machine model); without it such an import is refused (nothing written).",
+    )(func)
+
+
+def _check_dynamic(case, source: str, static: bool) -> None:
+    """Refuse a case without machines unless --static asked for one."""
+    from stabctl.errors import InputError
+
+    if len(case.machines) == 0 and not static:
+        raise InputError(
+            f"{source}: no dynamic data: the case would have no machines (give the DYR "
+            "file, or --static for a power-flow-only case)"
+        )
+
+
 def _imported(case, out) -> tuple[dict, str]:
     """The summary of an imported case written to ``out``: (JSON fields, text)."""
     summary = {
@@ -130,14 +151,18 @@ def _imported(case, out) -> tuple[dict, str]:
     "EXDC2 limits times the terminal voltage) or ANDES 2.0's (neither), "
     "to compare with ANDES like for like.",
 )
+@_static_option
 @json_option("the summary")
 @reports_errors
-def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventions, as_json):
+def import_psse(
+    raw_path, dyr_path, out_path, skip_unsupported, loads, conventions, static, as_json
+):
     """Convert a PSS/E RAW file (v32-34) and optionally a DYR file to a stabctl case.
 
     The case (stabctl's JSON format) is usable as CASE by simulate, cct, eig and screen.
-    Unsupported records are named as FILE:LINE RECORD; without --skip-unsupported they
-    stop the import (exit status 2, nothing written).
+    Unsupported records are named as FILE:LINE RECORD with the reason; without
+    --skip-unsupported they stop the import (exit status 2, nothing written). A RAW file
+    without DYR (no machines) is refused unless --static asks for a power-flow-only case.
 
     \b
     Example:
@@ -150,6 +175,7 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventio
     case, left_out = run_import(
         raw_path, dyr_path, "skip" if skip_unsupported else "error", loads, conventions
     )
+    _check_dynamic(case, Path(raw_path).name, static)
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
     summary.update(nonconforming_loads=len(case.loads), left_out=list(left_out))
@@ -179,9 +205,10 @@ def import_psse(raw_path, dyr_path, out_path, skip_unsupported, loads, conventio
     help="How to read the PSS/E models: as ANDES 2.0 solves them (the same "
     "equations as ANDES: machines without speed effects, ...) or as PST's.",
 )
+@_static_option
 @json_option("the summary")
 @reports_errors
-def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, as_json):
+def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, static, as_json):
     """Convert any case ANDES 2.0 loads (xlsx, json, PSS/E RAW [+ DYR], MATPOWER) to a
     stabctl case.
 
@@ -189,7 +216,8 @@ def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, a
     "stabctl[andes]") and written in stabctl's JSON format, usable as CASE by simulate,
     cct, eig and screen (with --no-q-limits to solve ANDES's power flow). ANDES models
     stabctl lacks are named with their device counts; without --skip-unsupported they
-    stop the import (exit status 2, nothing written). The power flow of the case is
+    stop the import (exit status 2, nothing written), as does a case without machine
+    models unless --static asks for a power-flow-only case. The power flow of the case is
     compared with ANDES's (PV Q limits off in both) and the largest differences reported.
 
     \b
@@ -204,11 +232,13 @@ def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, a
         case_path, conventions, "skip" if skip_unsupported else "error", dyr_path
     )
     case = imported.case
+    _check_dynamic(case, Path(case_path).name, static)
     dv, da = _powerflow_gap(imported)
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
     summary.update(
         left_out=list(imported.left_out),
+        changed=list(imported.changed),
         ignored=list(imported.ignored),
         powerflow_vmag_diff_pu=dv,
         powerflow_angle_diff_rad=da,
@@ -218,6 +248,7 @@ def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, a
         return
     click.echo(
         f"{text}; {len(imported.left_out)} left out"
+        + (f"; kept with a change: {'; '.join(imported.changed)}" if imported.changed else "")
         + (
             f"; ignored (no effect on the dynamics): {', '.join(imported.ignored)}"
             if imported.ignored

@@ -124,6 +124,10 @@ class Simulator:
         compile it in a child process while this one compiles the model's evaluation
         (True, the default: a cold first run then costs about the longer of the two, not
         their sum, on two cores); False for a simulator that never runs (linearisation).
+    off_equilibrium : {"refuse", "warn"}, optional
+        An initial point whose largest |derivative| exceeds 1e-8 (a model's
+        initialisation disagreeing with its dynamics) is refused (the default) or warned
+        about (`DynamicModel.check_equilibrium`, which names the state).
 
     Attributes
     ----------
@@ -145,7 +149,8 @@ class Simulator:
         the case's fastest time constant (the predictor-corrector's stability interval).
     CaseError
         Models stabctl does not have, limits violated at the initial point (as
-        `stabctl.dynamics.model.DynamicModel`); UnknownBusError (a CaseError) for an
+        `stabctl.dynamics.model.DynamicModel`), an initial point that is not an
+        equilibrium (``off_equilibrium="refuse"``); UnknownBusError (a CaseError) for an
         injection bus not in the case.
     PowerFlowError
         The power flow (when `op` is None) did not converge.
@@ -160,15 +165,16 @@ class Simulator:
         step: float | None = None,
         q_limits: bool = True,
         background_compile: bool = True,
+        off_equilibrium: str = "refuse",
     ):
         self.conventions = check_conventions(conventions)
         self.q_limits = bool(q_limits)
         if op is None:
             from stabctl.network.powerflow import solve_powerflow
 
-            op = OperatingPoint.from_bus_matrix(
-                solve_powerflow(case, q_limits=self.q_limits).bus_matrix()
-            )
+            pf = solve_powerflow(case, q_limits=self.q_limits)
+            op = OperatingPoint.from_bus_matrix(pf.bus_matrix())
+            case = _with_solved_taps(case, pf.taps)
         single_threaded_blas()
         self.case, self.op = case, op
         self.fastest = fastest_time_constant(case)
@@ -179,6 +185,7 @@ class Simulator:
         self.inertia = self.model.mp.H * case.machines.mva
         if background_compile:
             self._compile_runs_elsewhere()
+        self.model.check_equilibrium(off_equilibrium)
 
     def _compile_runs_elsewhere(self) -> None:
         """When `stabctl.dynamics.integrator.integrate` is neither compiled in this process
@@ -454,6 +461,32 @@ class Simulator:
                 "max_initial_derivative_state": self.model.initial_residual[1],
             },
         )
+
+
+def _with_solved_taps(case: Case, taps: np.ndarray) -> Case:
+    """The case with the on-load taps its power flow moved (PST's drivers run the dynamics
+    on ``bus_sol`` and the line matrix with ``lftap``'s final taps); the case itself when
+    none moved.  Without them a case whose taps move (Kundur at 110 % load: 0.975 ->
+    0.96875, 0.9688 -> 0.9563) started off equilibrium, its network not the power
+    flow's (0.566 on exc.VTR.G4).
+
+    Parameters
+    ----------
+    case : Case
+        The case whose power flow was solved.
+    taps : numpy.ndarray
+        The power flow's final tap ratios, shape (n_branches,)
+        (`stabctl.network.powerflow.PowerFlowResult.taps`).
+
+    Returns
+    -------
+    Case
+        ``case``, or a copy with ``branches.tap`` replaced.
+    """
+    given = np.where(case.branches.tap == 0, 1.0, case.branches.tap)
+    if np.array_equal(given, taps):
+        return case
+    return case.replace(branches=case.branches.replace(tap=np.asarray(taps, float)))
 
 
 def simulator_cached() -> bool:

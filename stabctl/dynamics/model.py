@@ -10,6 +10,7 @@ docs/pst_models.md sections 1-7.
 from __future__ import annotations
 
 import functools
+import warnings
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -30,6 +31,8 @@ from stabctl.network.solution import NonConformingLoads, ReducedNetwork, reduce_
 
 FAULT_B = 1e7  # PST's bolted-fault shunt susceptance (1/1e-7)
 OPEN_X = 1e7  # PST opens a branch by giving it this reactance (charging stays)
+#: largest |derivative| at t = 0 of an equilibrium (DynamicModel.check_equilibrium)
+EQUILIBRIUM_TOL = 1e-8
 
 
 @dataclass(frozen=True)
@@ -246,7 +249,7 @@ class DynamicModel:
         ep = self.ep
         L.view(x, "exc")[:] = xe
         L.view(x, "pss")[:] = pss_.initialise(
-            self.pp, *pss_.pss_inputs(self.pp, xm[1], S0.real, mp.mac_pot)
+            self.pp, *pss_.pss_inputs(self.pp, xm[1], self.pmech0)
         )
         xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac])
         L.view(x, "tg")[:] = xg
@@ -298,6 +301,54 @@ class DynamicModel:
         dx, _ = self.evaluate(self.x0.copy(), self.network(StageConfig()), self.V_nc0)
         k = int(np.argmax(np.abs(dx)))
         return float(abs(dx[k])), self.state_name(k)
+
+    def check_equilibrium(self, off_equilibrium: str = "refuse") -> None:
+        """Refuse (or warn about) an initial point that is not an equilibrium: a largest
+        |derivative| at t = 0 (`initial_residual`) above :data:`EQUILIBRIUM_TOL`.
+
+        Every model's initialisation solves its own equations at the power flow, so a
+        residual there means two definitions of one quantity disagree (IEEE 39's power-input
+        IEEEST fed the terminal power at initialisation and the air-gap power after: 0.015
+        on ``pss.leadlag1.G6``, a 6e-5 pu speed drift in a 10 s flat run); the built-in
+        cases start within 2e-12 (Kundur 2.7e-13 on ``exc.Efd.G3``, miniWECC 1.9e-12 on
+        ``exc.VR.G18``), the PSS/E and ANDES cases read as ANDES solves them within 3e-11.
+        A model reproduced as PST has it may start off equilibrium as PST does (PST's
+        ``exc_st3`` estimates the field current fed to K_C differently from its
+        initialisation: WECC-179 read with ``conventions="pst"``, 0.040 on ``exc.VR.G1``).
+
+        Parameters
+        ----------
+        off_equilibrium : {"refuse", "warn"}, optional
+            Raise (the default) or warn (:class:`UserWarning`) and go on.
+
+        Raises
+        ------
+        CaseError
+            ``off_equilibrium="refuse"`` and the residual is above the tolerance: the
+            value and the state (e.g. ``pss.leadlag1.G6``).
+        InputError
+            ``off_equilibrium`` is neither "refuse" nor "warn".
+        """
+        if off_equilibrium not in ("refuse", "warn"):
+            raise InputError(f"off_equilibrium must be 'refuse' or 'warn', got {off_equilibrium!r}")
+        residual, state = self.initial_residual
+        if residual <= EQUILIBRIUM_TOL:
+            return
+        text = (
+            f"case '{self.case.name}': the initial point is not an equilibrium: "
+            f"|d{state}/dt| = {residual:.3g} at t = 0 (tolerance {EQUILIBRIUM_TOL:g}); "
+            "a model's initialisation disagrees with its dynamics"
+        )
+        if off_equilibrium == "warn":
+            warnings.warn(text, UserWarning, stacklevel=3)
+            return
+        hint = (
+            "; PSS/E data read with conventions 'pst': PST's exc_st3 (ESST3A) starts off "
+            "equilibrium with K_C != 0, read them with conventions 'andes'"
+            if state.startswith("exc.")
+            else ""
+        )
+        raise CaseError(f"{text}{hint} (Simulator(off_equilibrium='warn') runs it anyway)")
 
     def state_name(self, k: int) -> str:
         """Name of flat state index k, e.g. 'mac.omega.G3' or 'exc.VTR.G1'."""

@@ -40,7 +40,7 @@ sharing its bus with another, or converters taking other than all of their stati
 generator's P and Q (ANDES drops the rest of a replaced generator's power).
 
 Models with no effect on the network and machines are ignored: ``Summary`` (the case's
-notes), ``Area``, and the
+notes, ``andes/models/info.py``), ``Area``, and the
 measurements ``BusFreq``, ``BusROCOF``, ``ACEc`` (read by no model stabctl maps).  Every
 other model is refused by name (:class:`~stabctl.errors.InputError` listing each with its
 device count), disturbances (``Toggle``, ``Fault``, ``Alter``) included, or left out with
@@ -79,7 +79,8 @@ __all__ = [
 #: ANDES model -> the PSS/E model its parameters are read as (declared with the record,
 #: ``DyrModel.andes`` in stabctl.case.params)
 MAPPED_MODELS = {name: m.name for m in DYR_MODELS.values() for name in m.andes}
-#: ANDES models with no effect on the network or the machines
+#: ANDES models with no effect on the network or the machines (``Summary``: notes only,
+#: ``andes/models/info.py``, "not used in DAE calculations")
 IGNORED_MODELS = ("Summary", "Area", "BusFreq", "BusROCOF", "ACEc")
 #: ANDES converter models -> the converter type of stabctl.case.params.CONVERTER
 CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1}
@@ -104,12 +105,18 @@ class AndesImport:
         The stabctl case.
     left_out : tuple of str
         What was left out (``on_unsupported="skip"``): ``"MODEL (count)"`` per ANDES model,
-        then each DYR-level refusal as ``file:row MODEL (bus, id): why``.
+        then each refused device with why (``MODEL idx: why``, a DYR-level refusal as
+        ``file:row MODEL (bus B, id I): why``).
     ignored : tuple of str
         ANDES models ignored as without effect, ``"MODEL (count)"``.
     pf_bus, pf_vmag, pf_vang : numpy.ndarray
         ANDES's own power flow: bus numbers, |V| (pu), angle (rad), each shape (n_bus,),
         in the case's bus order (None when ANDES's power flow did not converge).
+    changed : tuple of str
+        Devices kept with a change (``on_unsupported="skip"``), ``"MODEL (n: idx, ...):
+        what"`` per model and change: a machine's rated frequency ``fn`` read as the
+        system's (N44 read from PSS/E files: ANDES's DYR reader leaves ``fn`` at 60 Hz in a
+        50 Hz system), GENROU's ``xq2`` read as ``xd2``.
     """
 
     case: Case
@@ -118,6 +125,7 @@ class AndesImport:
     pf_bus: np.ndarray | None
     pf_vmag: np.ndarray | None
     pf_vang: np.ndarray | None
+    changed: tuple[str, ...] = ()
 
 
 def import_andes(
@@ -191,13 +199,13 @@ def read_andes_case(
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
     ibr_con, ibr_refused, with_converter = _converters(ss, numbers)
-    gens, records, refused = _dynamic_records(ss, path.name, numbers, with_converter)
+    gens, records, refused, changed = _dynamic_records(ss, path.name, numbers, with_converter)
     refused += ibr_refused
     if ibr_con:
         mats["ibr_con"] = np.array(ibr_con, float)
     if records:
         tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
-        refused += [f"{r.label()}" for r in tables.unsupported]
+        refused += [f"{r.label()}: {why}" for r, why in zip(tables.unsupported, tables.why)]
         mats.update(
             {
                 k: getattr(tables, k)
@@ -206,15 +214,18 @@ def read_andes_case(
             }
         )
     left_out = tuple(lacking + refused)
-    if left_out:
+    if left_out or changed:
         listing = "; ".join(
             ([f"ANDES models stabctl lacks (devices): {', '.join(lacking)}"] if lacking else [])
             + ([f"devices refused: {'; '.join(refused)}"] if refused else [])
         )
+        kept = f"kept with a change: {'; '.join(changed)}" if changed else ""
         if on_unsupported == "error":
             raise InputError(
-                f"{path.name}: {listing} (use on_unsupported='skip' / "
-                "--skip-unsupported to leave them out)"
+                f"{path.name}: "
+                + "; ".join(t for t in (listing, kept.replace("kept with", "to keep with")) if t)
+                + " (use on_unsupported='skip' / --skip-unsupported to leave them out"
+                + (" or keep them changed)" if changed else ")")
             )
         bare = [r for r in refused if r.endswith(_NO_MACHINE)]
         if bare:
@@ -222,14 +233,16 @@ def read_andes_case(
                 f"{path.name}: a static generator cannot be left out without "
                 f"changing the power flow: {'; '.join(bare)}"
             )
-        warnings.warn(f"{path.name}: left out {listing}", UserWarning, stacklevel=3)
+        text = "; ".join(t for t in ((f"left out {listing}" if listing else ""), kept) if t)
+        warnings.warn(f"{path.name}: {text}", UserWarning, stacklevel=3)
     case = case_from_matrices(
         mats,
         path.stem,
         description=f"ANDES case {path.name}",
         source=f"ANDES case {path.name}, imported by stabctl.io.andes_case.import_andes",
     )
-    return AndesImport(case, left_out, ignored, *_powerflow(ss, numbers))
+    pf_bus, pf_vmag, pf_vang = _powerflow(ss, numbers)
+    return AndesImport(case, left_out, ignored, pf_bus, pf_vmag, pf_vang, tuple(changed))
 
 
 def _load(path: Path, dyr):
@@ -402,7 +415,7 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
     dyr = _psse_yaml()
     static = [(m, k) for m in (ss.PV, ss.Slack) for k in range(m.n)]
     position = {m.idx.v[k]: n for n, (m, k) in enumerate(static)}
-    machines, refused = [], []
+    machines, refused, changed = [], [], []
     for name in _MACHINES:
         m = ss.models[name]
         for k in _in_service(m):
@@ -437,15 +450,22 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
         )
         by_syn[m.idx.v[k]] = gens[-1]
         if m.fn.v[k] != ss.config.freq:
-            refused.append(
-                f"{name} {m.idx.v[k]}: fn = {m.fn.v[k]:g} Hz differs from the "
-                f"system frequency {ss.config.freq:g} Hz (one frequency in "
-                "stabctl)"
+            changed.append(
+                (
+                    name,
+                    str(m.idx.v[k]),
+                    f"fn = {m.fn.v[k]:g} Hz read as the system frequency "
+                    f"{ss.config.freq:g} Hz (one frequency in stabctl)",
+                )
             )
         if name == "GENROU" and m.xq2.vin[k] != m.xd2.vin[k]:
-            refused.append(
-                f"GENROU {m.idx.v[k]}: xq2 = {m.xq2.vin[k]:g} differs from xd2 = "
-                f"{m.xd2.vin[k]:g} (PSS/E's GENROU, and ANDES's, need them equal)"
+            changed.append(
+                (
+                    name,
+                    str(m.idx.v[k]),
+                    f"xq2 = {m.xq2.vin[k]:g} read as xd2 = {m.xd2.vin[k]:g} (PSS/E's "
+                    "GENROU has one subtransient reactance)",
+                )
             )
     avr_syn = {}
     for name, psse in MAPPED_MODELS.items():
@@ -473,7 +493,19 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 continue
             params = _psse_params(ss, m, dyr[psse], DYR_MODELS[psse].fields, k)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
-    return gens, records, refused
+    return gens, records, refused, _grouped(changed)
+
+
+def _grouped(changed) -> list[str]:
+    """``"MODEL (n: idx, ...): why"`` per model and reason of the devices kept with a
+    change, in first-seen order (five idx named)."""
+    groups: dict[tuple[str, str], list[str]] = {}
+    for name, idx, why in changed:
+        groups.setdefault((name, why), []).append(idx)
+    return [
+        f"{name} ({len(ids)}: {', '.join(ids[:5])}{', ...' if len(ids) > 5 else ''}): {why}"
+        for (name, why), ids in groups.items()
+    ]
 
 
 def _fixed_differs(m, name: str, k: int) -> str:

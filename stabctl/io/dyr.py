@@ -68,13 +68,15 @@ class DyrTables:
     """PST matrices built from DYR records, rows in machine order, columns as the case
     tables (MachineTable, ExciterTable, PssTable, GovernorTable): mac_con (n_gen, 24),
     exc_con (n, 24), pss_con (n, 24), tg_con (n, 24) (None when no record of that kind);
-    unsupported: the records skipped (`on_unsupported="skip"`), in file order."""
+    unsupported: the records skipped (`on_unsupported="skip"`), in file order; why: the
+    reason each was skipped (same order), e.g. "model TOGGLE is not mapped"."""
 
     mac_con: np.ndarray
     exc_con: np.ndarray | None
     pss_con: np.ndarray | None
     tg_con: np.ndarray | None
     unsupported: tuple[DyrRecord, ...]
+    why: tuple[str, ...] = ()
 
 
 class _Unsupported(Exception):
@@ -219,6 +221,7 @@ def dyr_tables(
         pss_con=tables["pss"],
         tg_con=tables["governor"],
         unsupported=tuple(r for r, _ in skipped),
+        why=tuple(why for _, why in skipped),
     )
 
 
@@ -466,8 +469,8 @@ def _esst3a(rec, gen):
     """ESST3A: TR VIMAX VIMIN KM TC TB KA TA VRMAX VRMIN KG KP KI VBMAX KC XL VGMAX THETAP TM
     VMMAX VMMIN -> PST exc_st3 (type 3) when TA = 0: ST3A's gain KA is PST's K_J, its inner
     loop KM/(1 + s TM) limited [VMMIN, VMMAX] is PST's K_A/(1 + s T_A) limited [Vrmin,
-    Vrmax]; VRMAX/VRMIN and VBMAX have no PST counterpart (Efdmax = VBMAX VMMAX; docs
-    12.2)."""
+    Vrmax]; VRMAX/VRMIN have no PST counterpart; VBMAX limits V_B (exc_con column 33,
+    stabctl's, not PST's) and Efdmax = VBMAX VMMAX (docs 12.2)."""
     v = DYR_MODELS["ESST3A"].values(rec.params)
     if v["TA"] >= 1e-3:
         raise _Unsupported(

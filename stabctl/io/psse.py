@@ -100,12 +100,13 @@ def _dynamic_tables(raw: RawData, dyr_path, conventions) -> tuple[dict, list[str
     for key in ("mac_con", "exc_con", "pss_con", "tg_con"):
         if getattr(tables, key) is not None:
             mats[key] = getattr(tables, key)
-    return mats, [_dyr_text(r) for r in tables.unsupported]
+    return mats, [_dyr_text(r, why) for r, why in zip(tables.unsupported, tables.why)]
 
 
-def _dyr_text(rec) -> str:
+def _dyr_text(rec, why: str) -> str:
+    """``file:line MODEL at bus B 'ID': why`` of a record left out."""
     at = f" at bus {rec.bus}" if rec.bus else ""
-    return f"{rec.file}:{rec.line} {rec.model}{at} '{rec.id}'"
+    return f"{rec.file}:{rec.line} {rec.model}{at} '{rec.id}': {why}"
 
 
 def _report(unsupported: list[str], mode: str, where: str) -> None:

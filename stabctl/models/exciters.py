@@ -93,6 +93,7 @@ PACKED = (
     ("VREF", "Vref"),
     ("SATQ", "sat_quadratic"),
     ("IFDM", "ifd_machine"),
+    ("VBCAP", "VB_cap"),
 )
 #: the kernels' column of each PACKED name: P[i, E.KA]
 E = layout("ExciterColumns", PACKED)
@@ -109,7 +110,8 @@ class ExciterParams(Declared):
     with sat_quadratic SE(E) E = Bsat (E - Asat)^2 above Asat (0 for the other types);
     ke_given: KE used as given (else 0 means computed at initialisation); KF, TF: rate
     feedback of the DC exciters and EXST1; ifd_machine: ST3 whose I_N takes the machine's
-    field current, not PST exc_st3's estimate (exc_con column 25)."""
+    field current, not PST exc_st3's estimate (exc_con column 25); VB_cap: the ST3 source
+    voltage's upper limit (exc_con column 33, VBmax; inf where 0 or not ST3)."""
 
     KE: np.ndarray
     TE: np.ndarray
@@ -120,6 +122,7 @@ class ExciterParams(Declared):
     sat_quadratic: np.ndarray
     ke_given: np.ndarray
     ifd_machine: np.ndarray
+    VB_cap: np.ndarray
 
     @property
     def n(self) -> int:
@@ -315,6 +318,7 @@ def exciter_params(case: Case) -> ExciterParams:
         sat_quadratic=(dc & (e.dc_sat == 1)) | ac,
         ke_given=dc & (e.ke_given == 1),
         ifd_machine=(e.type == ST3) & (e.ifd_machine == 1),
+        VB_cap=np.where((e.type == ST3) & (e.VBmax > 0), e.VBmax, np.inf),
     )
 
 
@@ -361,19 +365,24 @@ def st3_source_voltage(KP, KI, XL, KC, machine, init):
 
 def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):
     """The ST3 source voltage V_B (`st3_source_voltage`, PST exc_st3 flag 0) of every
-    exciter at the initial point, (n_exc,): V_mac the complex terminal voltages, S_mac the
-    machines' complex generation (system base), vex their field voltages, all (n_mac,);
-    mp the MachineParams."""
+    exciter at the initial point, at most its VBmax (`ExciterParams.VB_cap`), (n_exc,):
+    V_mac the complex terminal voltages, S_mac the machines' complex generation (system
+    base), vex their field voltages, all (n_mac,); mp the MachineParams."""
     eterm, theta = np.abs(V_mac), np.angle(V_mac)
     return np.array(
         [
-            st3_source_voltage(
-                p.KP[i],
-                p.KI[i],
-                p.XL[i],
-                p.KC[i],
-                ST3Machine(eterm[m], theta[m], S_mac.real[m], S_mac.imag[m], mp.mac_pot[m], vex[m]),
-                True,
+            min(
+                st3_source_voltage(
+                    p.KP[i],
+                    p.KI[i],
+                    p.XL[i],
+                    p.KC[i],
+                    ST3Machine(
+                        eterm[m], theta[m], S_mac.real[m], S_mac.imag[m], mp.mac_pot[m], vex[m]
+                    ),
+                    True,
+                ),
+                p.VB_cap[i],
             )
             for i, m in enumerate(p.mac)
         ]
@@ -691,14 +700,16 @@ def _st3_source(P, i, MP, xm, cur, m, stator):
     i from its machine m's terminal quantities `stator` (`StatorQuantities`: ed, eq, cd,
     cq of `machines.stator_without_speed`, the terminal voltage et and bus voltage vt) and
     the field current: exc_st3's own estimate (`machines.st3_field_current`) or, with
-    ifd_machine, the machine's; MP, xm, cur as `field_voltage`."""
+    ifd_machine, the machine's; MP, xm, cur as `field_voltage`.  At most VBmax (PSS/E
+    ESST3A's ``VB`` limiter, ANDES ``esst3a.py`` ``VB = GainLimiter(upper=VBMAX)``; inf
+    without)."""
     ed, eq, cd, cq, et, vt = stator
     if P[i, E.IFDM] > 0:
         fld = mac.field_current(MP, xm, cur, m)
     else:
         fld = mac.st3_field_current(MP, xm, cur, m)
     KP = P[i, E.KPR] + 1j * P[i, E.KPI]
-    return st3_source_voltage(
+    VB = st3_source_voltage(
         KP,
         P[i, E.KI],
         P[i, E.XL],
@@ -706,6 +717,7 @@ def _st3_source(P, i, MP, xm, cur, m, stator):
         ST3Machine(et, np.angle(vt), eq * cq + ed * cd, eq * cd - ed * cq, MP[m, mac.K.POT], fld),
         _RUNNING,
     )
+    return min(VB, P[i, E.VBCAP])
 
 
 @kernel(inline="always")

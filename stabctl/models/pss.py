@@ -209,10 +209,31 @@ def _filters(s):
     return nf, fa, fc, fe
 
 
-def pss_inputs(p: PssParams, omega, pelect, mac_pot):
-    """Signals 1 and 2 of each PSS (n_pss,): PST types: speed (pu) or electrical power on
-    the machine base, then 0; type 3: its PSS/E inputs (speed deviation or power)."""
-    w, pe = omega[p.mac], pelect[p.mac] * mac_pot[p.mac]
+def pss_inputs(p: PssParams, omega, pe_machine):
+    """Signals 1 and 2 of each PSS at the initial point, shape (n_pss,) each.
+
+    Parameters
+    ----------
+    p : PssParams
+        The stabilisers.
+    omega : numpy.ndarray
+        Machine speeds (pu), shape (n_mac,).
+    pe_machine : numpy.ndarray
+        Electrical power of each machine on its own base (pu), shape (n_mac,): the air-gap
+        power ``Re(psi conj(I))`` of the internal voltage the network sees, the signal
+        :func:`output_and_derivatives` is given in a run (at the initial point the
+        mechanical power, terminal power plus ``r_a |I|^2``).  ANDES's IEEEST takes the
+        same (``sig``: ``tm0`` at initialisation, ``te`` after, ``andes/models/pss/
+        ieeest.py``); with the terminal power here a machine with ``r_a`` started off
+        equilibrium (IEEE 39 G6: 0.015 on ``pss.leadlag1``).
+
+    Returns
+    -------
+    u1, u2 : numpy.ndarray
+        PST types: speed (pu) or the power, then 0; type 3: its PSS/E inputs (speed
+        deviation or power); type 4: the power, then 0.
+    """
+    w, pe = omega[p.mac], pe_machine[p.mac]
     u1 = np.where(p.kind == PST_SPEED, w, pe)
     u1 = np.where(p.kind == PSSE, np.where(p.input1 == SPEED, w - 1.0, pe), u1)
     u2 = np.where(p.input2 == SPEED, w - 1.0, np.where(p.input2 == POWER, pe, 0.0))

@@ -348,3 +348,19 @@ def test_simultaneous_near_and_far_clearing_keeps_psts_zero_length_stage(kundur_
     assert v101[0] < 0.7 and v101[1] > 0.9  # fed fault, then line out
     assert res.vmag[dup[0], res.bus(3)] > 0.9  # near end already open
     np.testing.assert_array_equal(res.speed[dup[0]], res.speed[dup[0] + 1])  # h = 0 step
+
+
+def test_load_level_with_moved_taps_starts_at_equilibrium():
+    """Kundur at 110 % load: the power flow moves its two on-load taps (PST lftap); the
+    dynamic network takes those taps, as PST's drivers run the dynamics on the power
+    flow's line matrix, so the start is an equilibrium (with the case's own taps it was
+    0.566 off on exc.VTR.G4 and refused by the initial-point check)."""
+    from stabctl.network.powerflow import scale_load, solve_powerflow
+
+    case = scale_load(load_case("kundur"), 1.1)
+    pf = solve_powerflow(case)
+    moved = pf.taps != np.where(case.branches.tap == 0, 1.0, case.branches.tap)
+    assert np.count_nonzero(moved) == 2
+    sim = Simulator(case)
+    np.testing.assert_array_equal(sim.case.branches.tap, pf.taps)
+    assert sim.model.initial_residual[0] < 1e-9  # measured 4.4e-13

@@ -9,6 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable
+from stabctl.case.params import EXCITER, MACHINE, PSS
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
 from stabctl.io import load_case
@@ -228,7 +229,7 @@ def test_wecc_imports_completely():
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
         (29, 25),
-        (29, 31),  # every declared exc_con column (stabctl.case.params.EXCITER)
+        (29, 33),  # every declared exc_con column (stabctl.case.params.EXCITER)
         (29, 24),
         (29, 24),
     ) and t.unsupported == ()
@@ -254,7 +255,8 @@ def test_wecc_esdc2a_to_dc2():
 def test_wecc_esst3a_to_exc_st3():
     """Line 8 (bus 3): TR .02 VIMAX .3 VIMIN -.2 KM 8 TC 1 TB 5 KA 20 TA 0 VRMAX 99 VRMIN -99
     KG 1 KP 3.67 KI .435 VBMAX 6.48 KC .01 XL .0098 VGMAX 4.86 THETAP 3.33 TM .4 VMMAX 99
-    VMMIN 0 -> exc_st3 with K_J = KA, K_A = KM, T_A = TM, V_R limits = VM limits."""
+    VMMIN 0 -> exc_st3 with K_J = KA, K_A = KM, T_A = TM, V_R limits = VM limits, V_B
+    limited to VBMAX (column 26)."""
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
     t = dyr_tables(recs, gens, on_unsupported="skip")
@@ -285,6 +287,7 @@ def test_wecc_esst3a_to_exc_st3():
             4.86,
         ],
     )
+    assert row[EXCITER.col("VBmax") - 1] == 6.48
     np.testing.assert_array_equal(
         t.pss_con[0], [2, gens[r]["number"], -2 * 1.0, 4.2, 0, 0.75, 0, 0, 0.1, -0.1] + [0] * 14
     )
@@ -913,7 +916,7 @@ def test_psse_stabiliser_transfer_function_matches_closed_form():
     output limits, here opened)."""
     p = psse_params(PSSE_ROW[:8] + [1e9, -1e9] + PSSE_ROW[10:])
     P = p.packed()
-    x0 = pss_.initialise(p, *pss_.pss_inputs(p, np.array([1.0]), np.array([0.0]), np.ones(1)))
+    x0 = pss_.initialise(p, *pss_.pss_inputs(p, np.array([1.0]), np.array([0.0])))
     act = np.nonzero(p.has_state()[:, 0])[0]
 
     def f(x, w):
@@ -957,7 +960,7 @@ def test_psse_stabiliser_transfer_function_matches_closed_form():
 
 def test_psse_stabiliser_output_is_zero_and_steady_at_the_initial_point():
     p = psse_params()
-    u1, u2 = pss_.pss_inputs(p, np.array([1.0]), np.array([0.7]), np.ones(1))
+    u1, u2 = pss_.pss_inputs(p, np.array([1.0]), np.array([0.7]))
     assert (u1[0], u2[0]) == (0.0, 0.7)  # speed deviation, power
     x = pss_.initialise(p, u1, u2)
     dx = np.full_like(x, np.nan)
@@ -1126,3 +1129,53 @@ def test_exst1_and_ieeeg1_initialisation_match_andes_wecc():
             True,
         )
         assert VE == pytest.approx(e.VE.v[i], rel=1e-12)
+
+
+def test_power_input_stabiliser_starts_at_rest_with_armature_resistance(dyr_kundur):
+    """Kundur (EXDC2, TGOV1) with r_a = 0.003 and a PSS/E stabiliser on every machine
+    whose second input is the electrical power (ICS 3): in a run that input is the air-gap
+    power Re(psi" conj(I)), as ANDES's IEEEST (``te``; ``tm0`` at initialisation), so the
+    initial washout state is K_2 (P_t + r_a |I|^2) (machine base; closed form from the
+    power flow) and the start is an equilibrium.  With the terminal power P_t there it
+    started off (9.9e-3 on pss.lag2.G1; IEEE 39 G6: 0.015 on pss.leadlag1) and was refused."""
+    rows = np.tile(PSSE_ROW, (4, 1))
+    rows[:, 1] = [1, 2, 3, 4]
+    m = dyr_kundur.machines.matrix()
+    m[:, MACHINE.col("ra") - 1] = 0.003
+    case = dyr_kundur.replace(machines=MachineTable.from_matrix(m), pss=PssTable.from_matrix(rows))
+    sim = Simulator(case)
+    model = sim.model
+    mp, op = model.mp, model.op
+    S = op.S_gen[mp.bus_idx]
+    current = np.abs(S / op.V[mp.bus_idx]) * mp.mac_pot  # machine base
+    air_gap = S.real * mp.mac_pot + 0.003 * current**2
+    K2 = PSSE_ROW[PSS.col("K2") - 1]
+    washout = model.layout.view(model.x0, "pss")[pss_.W_PSSE]
+    np.testing.assert_allclose(washout, K2 * air_gap, rtol=1e-12)
+    assert np.min(0.003 * current**2) > 1e-3  # the terminal power would differ
+    residual, where = model.initial_residual
+    assert residual < 1e-9, where
+    r = sim.run([], 10.0)
+    assert np.abs(r.speed - 1).max() < 1e-9
+
+
+def test_start_off_equilibrium_is_refused_naming_the_state():
+    """WECC's ESST3A read as PST's exc_st3 with K_C = 0.2 on Kundur's machines: PST's
+    exc_st3 feeds K_C a field current estimated differently from the one of its
+    initialisation, so the start is off equilibrium (as in PST): refused, with the state
+    and the value; ``off_equilibrium="warn"`` runs it with a warning."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens, on_unsupported="skip")
+    n3 = next(g["number"] for g in gens if g["bus"] == 3)
+    e = np.tile(t.exc_con[t.exc_con[:, 1] == n3], (4, 1))
+    e[:, 1] = [1, 2, 3, 4]
+    assert np.all(e[:, 16] > 0)  # K_C
+    case = load_case("kundur").replace(exciters=ExciterTable.from_matrix(e), pss=PssTable.empty())
+    with pytest.raises(CaseError, match=r"not an equilibrium: \|dexc\.VR\.G\d/dt\| = .*exc_st3"):
+        Simulator(case)
+    with pytest.warns(UserWarning, match=r"\|dexc\.VR\.G\d/dt\|"):
+        sim = Simulator(case, off_equilibrium="warn")
+    assert sim.model.initial_residual[0] > 1e-3
+    assert Simulator(load_case("kundur")).model.initial_residual[0] < 1e-12  # 2.7e-13
+    assert Simulator(load_case("miniwecc")).model.initial_residual[0] < 1e-11  # 1.9e-12

@@ -234,7 +234,7 @@ def test_unsupported_dyr_records_are_listed_with_the_raw_ones():
         r"record\(s\).*kundur_full\.dyr:37 TOGGLE 'LINE_8'",
     ):
         load_psse(raw, dyr)
-    with pytest.warns(UserWarning, match="kundur_full.dyr:37 TOGGLE"):
+    with pytest.warns(UserWarning, match="kundur_full.dyr:37 TOGGLE 'LINE_8': model TOGGLE is not"):
         case = load_psse(raw, dyr, on_unsupported="skip")
     assert (len(case.machines), len(case.exciters), len(case.governors)) == (4, 4, 4)
 
@@ -263,11 +263,24 @@ def test_remote_regulation_is_unsupported(tmp_path):
 
 def test_import_psse_writes_a_case_that_reads_back(tmp_path):
     out = tmp_path / "five.json"
-    res = run("import-psse", V34, "-o", out, "--json", "--loads", "raw")
+    res = run("import-psse", V34, "-o", out, "--json", "--loads", "raw", "--static")
     assert res.exit_code == 0, res.output
     summary = json.loads(res.stdout)
     assert (summary["buses"], summary["branches"], summary["nonconforming_loads"]) == (4, 4, 2)
     assert load_case(out).equals(load_psse(V34, loads="raw"))
+
+
+def test_import_psse_without_dyr_is_refused_unless_static(tmp_path):
+    """A RAW file alone has no machine: the import is refused (nothing written) unless
+    --static asks for a power-flow-only case."""
+    out = tmp_path / "five.json"
+    res = run("import-psse", V34, "-o", out)
+    assert res.exit_code == 2 and not out.exists()
+    assert "five_bus_v34.raw: no dynamic data: the case would have no machines" in res.stderr
+    assert "--static" in res.stderr
+    res = run("import-psse", V34, "-o", out, "--static", "--json")
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["machines"] == 0 and out.exists()
 
 
 def test_imported_case_runs_flat_from_its_power_flow(tmp_path):
@@ -291,7 +304,7 @@ def test_import_psse_bad_input_exits_2_and_writes_nothing(tmp_path):
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: edited.raw: 2 unsupported")
     assert list(out_dir.iterdir()) == []
-    res = run("import-psse", src, "-o", out_dir / "x.json", "--skip-unsupported")
+    res = run("import-psse", src, "-o", out_dir / "x.json", "--skip-unsupported", "--static")
     assert res.exit_code == 0, res.output
     assert "warning: edited.raw: left out 2 unsupported record(s)" in res.stderr
     assert [p.name for p in out_dir.iterdir()] == ["x.json"]

@@ -55,7 +55,7 @@ def params(row):
 def started(row, omega=OMEGA0, pe=PE0):
     """(P, x) of a PSS at rest at speed omega and power pe."""
     p = params(row)
-    u1, u2 = pss_.pss_inputs(p, np.array([omega]), np.array([pe]), np.ones(1))
+    u1, u2 = pss_.pss_inputs(p, np.array([omega]), np.array([pe]))
     return p.packed(), pss_.initialise(p, u1, u2)
 
 
