@@ -387,11 +387,11 @@ def test_declared_bound_violated_names_the_field(fam, table, row):
             table.from_matrix([bad])
     for p in [p for p in fam.params if p.choices]:
         bad = row + [0.0] * (len(fam.params) - len(row))
-        bad[p.col - 1] = 7
+        bad[p.col - 1] = 99
         with pytest.raises(
             CaseError,
             match=rf"field '{p.name}': {p.label or p.name} must be "
-            r".* or .*, got 7",
+            r".* or .*, got 99",
         ):
             table.from_matrix([bad])
 
@@ -414,7 +414,8 @@ def test_packed_kernel_columns_come_from_the_declaration():
         np.testing.assert_array_equal(
             G[:, getattr(gov_m.G, name.upper())], getattr(load_case("kundur").governors, name)
         )
-        assert decl.GOVERNOR.col(name) - 1 == getattr(gov_m.G, name.upper())
+        if decl.GOVERNOR.col(name) <= 16:  # PST's and the PSS/E columns keep their place
+            assert decl.GOVERNOR.col(name) - 1 == getattr(gov_m.G, name.upper())
     assert set(pss_m.TABLE_FIELDS) <= set(decl.PSS.names)
     assert set(mac_m.TABLE_FIELDS) <= set(decl.MACHINE.names)
 
