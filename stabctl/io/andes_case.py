@@ -81,7 +81,7 @@ __all__ = [
 MAPPED_MODELS = {name: m.name for m in DYR_MODELS.values() for name in m.andes}
 #: ANDES models with no effect on the network or the machines (``Summary``: notes only,
 #: ``andes/models/info.py``, "not used in DAE calculations")
-IGNORED_MODELS = ("Summary", "Area", "BusFreq", "BusROCOF", "ACEc")
+IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc", "Summary")
 #: ANDES converter models -> the converter type of stabctl.case.params.CONVERTER
 CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1}
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"

@@ -56,6 +56,9 @@ __all__ = [
 
 N_STATES = 5
 STATE_NAMES = ("Ip", "Iq", "f_lag", "f_washout", "SOC")
+#: the slots that integrate energy (ESD1's state of charge): at rest only at zero output,
+#: so the initial-point check leaves them out
+ENERGY_SLOTS = [STATE_NAMES.index("SOC")]
 #: the ibr_con fields the kernels take as given (pu quantities after the base change)
 TABLE_FIELDS = tuple(n for n in CONVERTER.names if n not in ("number", "bus", "mva"))
 #: fields on the device base: powers and currents (times Sn/Sb), the reactance (Sb/Sn)

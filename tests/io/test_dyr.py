@@ -229,9 +229,9 @@ def test_wecc_imports_completely():
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
         (29, 25),
-        (29, 33),  # every declared exc_con column (stabctl.case.params.EXCITER)
+        (29, 33),  # every declared column (stabctl.case.params)
         (29, 24),
-        (29, 24),
+        (29, 26),
     ) and t.unsupported == ()
     kinds = dict(zip(*np.unique(t.exc_con[:, 0], return_counts=True)))
     assert kinds == {2: 8, 3: 4, 4: 17}  # ESDC2A, ESST3A, EXST1
