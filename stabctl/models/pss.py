@@ -229,9 +229,11 @@ def pss_inputs(p: PssParams, omega, pe_machine):
 
     Returns
     -------
-    u1, u2 : numpy.ndarray
-        PST types: speed (pu) or the power, then 0; type 3: its PSS/E inputs (speed
-        deviation or power); type 4: the power, then 0.
+    u1 : numpy.ndarray
+        PST types: speed (pu) or the power; type 3: its first PSS/E input (speed
+        deviation or power); type 4: the power.
+    u2 : numpy.ndarray
+        Type 3: its second PSS/E input; the other types: 0.
     """
     w, pe = omega[p.mac], pe_machine[p.mac]
     u1 = np.where(p.kind == PST_SPEED, w, pe)
