@@ -528,9 +528,12 @@ def _converter_fixed_point(p, xi, net, psi, V_nc, S_extra, I_dev, held, it):
         for k in range(p.n_ibr):
             pos = int(p.IP[k, conv.C.POS])
             new[pos] += conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]))
-        if np.max(np.abs(new - I_dev)) <= CURRENT_TOL:
+        moved = 0.0
+        for i in range(V_nc.size):
+            moved = max(moved, abs(new[i] - I_dev[i]))
+        if moved <= CURRENT_TOL:
             return it
-        I_dev[:] = new
+        assign(I_dev, new)
         more = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, I_dev, held)
         if more < 0:
             return -1
