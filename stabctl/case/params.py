@@ -1175,11 +1175,12 @@ GOVERNOR = Family(
 )
 
 # --------------------------------------------------------------------------------------
-# ibr_con: converter-interfaced devices (stabctl's table; ANDES 2.0 PVD1, ESD1)
+# ibr_con: converter-interfaced devices (stabctl's table; ANDES 2.0 PVD1, ESD1, REGCA1)
 # --------------------------------------------------------------------------------------
 
-#: ANDES's converter types: PVD1 (WECC distributed PV), ESD1 (PVD1 with a state of charge)
-PVD1, ESD1 = 1, 2
+#: ANDES's converter types: PVD1 (WECC distributed PV), ESD1 (PVD1 with a state of charge),
+#: REGCA1 (WECC second-generation renewable generator/converter, REGC_A)
+PVD1, ESD1, REGCA1 = 1, 2, 3
 
 _DEV_PU: dict[str, Any] = dict(unit="pu")  # on the device base mva (ANDES ``power=True``)
 
@@ -1196,9 +1197,10 @@ CONVERTER = Family(
             "code",
             3,
             integer=True,
-            choices=(PVD1, ESD1),
+            choices=(PVD1, ESD1, REGCA1),
             label="converter type",
-            doc="1 PVD1 (ANDES distributed PV), 2 ESD1 (PVD1 with a state of charge)",
+            doc="1 PVD1 (ANDES distributed PV), 2 ESD1 (PVD1 with a state of charge), "
+            "3 REGCA1 (WECC renewable generator/converter, constant current commands)",
         ),
         Param("mva", "MVA", 4, default=100.0, lo=0.0, doc="device base Sn"),
         Param("pfrac", "", 5, default=1.0, doc="fraction of the bus generation P (ANDES gammap)"),
@@ -1287,6 +1289,40 @@ CONVERTER = Family(
         Param("En", "MWh", 36, default=100.0, doc="ESD1: rated energy"),
         Param("EtaC", "", 37, default=1.0, doc="ESD1: charging efficiency"),
         Param("EtaD", "", 38, default=1.0, doc="ESD1: discharging efficiency"),
+        Param("Tg", "s", 39, default=0.1, lo=0.0, doc="REGCA1: converter time constant"),
+        Param(
+            "Rrpwr",
+            "pu",
+            40,
+            default=10.0,
+            lo=0.0,
+            doc="REGCA1: LVPL rate limit of Tg dIp/dt (system base, as ANDES: not converted)",
+        ),
+        Param("Brkpt", "pu", 41, default=1.0, doc="REGCA1: LVPL breakpoint voltage"),
+        Param("Zerox", "pu", 42, default=0.5, doc="REGCA1: LVPL zero-crossing voltage"),
+        Param(
+            "Lvplsw",
+            "code",
+            43,
+            default=1.0,
+            choices=(0.0, 1.0),
+            doc="REGCA1: low-voltage power logic 1 on, 0 off",
+        ),
+        Param("Lvpl1", "pu", 44, default=1.0, doc="REGCA1: LVPL current limit at Brkpt"),
+        Param("Volim", "pu", 45, default=1.2, doc="REGCA1: voltage of high-voltage Iq management"),
+        Param("Lvpnt1", "pu", 46, default=0.8, doc="REGCA1: upper voltage of the Ip gain LVG"),
+        Param("Lvpnt0", "pu", 47, default=0.4, doc="REGCA1: lower voltage of the Ip gain LVG"),
+        Param(
+            "Iolim",
+            col=48,
+            default=-1.5,
+            doc="REGCA1: lower limit of the output Iq (high-voltage management)",
+            **_DEV_PU,
+        ),
+        Param("Tfltr", "s", 49, default=0.1, lo=0.0, doc="REGCA1: LVPL voltage filter"),
+        Param("Khv", "", 50, default=0.7, lo=0.0, doc="REGCA1: over-voltage Iq gain"),
+        Param("Iqrmax", col=51, default=1.0, doc="REGCA1: upper rate of Tg dIq/dt", **_DEV_PU),
+        Param("Iqrmin", col=52, default=-1.0, doc="REGCA1: lower rate of Tg dIq/dt", **_DEV_PU),
     ),
 )
 

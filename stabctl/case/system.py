@@ -46,6 +46,7 @@ from stabctl.case.params import (
     GOVERNOR,
     MACHINE,
     PSS,
+    REGCA1,
     Family,
     array_dataclass,
     choices_message,
@@ -637,7 +638,8 @@ class InjectionTable(Table):
 class ConverterTable(Table):
     """Converter-interfaced devices (inverter-based resources): stabctl's ``ibr_con``,
         one row per device, as ANDES 2.0's distributed models PVD1 (WECC distributed PV)
-        and ESD1 (PVD1 with a state of charge) have them (docs/ibr.md): a current source
+        and ESD1 (PVD1 with a state of charge), and the renewable generator/converter
+        REGCA1 (WECC REGC_A) have them (docs/ibr.md): a current source
         at its bus, whose initial P and Q are the fractions ``pfrac``, ``qfrac`` of the
         bus generation of the power flow.  Columns (declared in
         :data:`stabctl.case.params.CONVERTER`; powers, currents and reactances on the
@@ -646,9 +648,11 @@ class ConverterTable(Table):
     {columns}
 
         Omitted columns take ANDES's defaults (as declared).  Validation: unique positive
-        integer numbers, type 1 or 2, mva > 0, Twm > 0, tip, tiq, Tfm >= 0, ft0 < ft1 <=
+        integer numbers, type 1, 2 or 3, mva > 0, Twm > 0, tip, tiq, Tfm >= 0, ft0 < ft1 <=
         ft2 < ft3 and vt0 < vt1 <= vt2 < vt3 (the trip curves divide by the differences),
-        dqdv < 0, ESD1: Tf > 0, En > 0, 0 < EtaC, EtaD and SOCmin <= SOCinit <= SOCmax.
+        dqdv < 0, ESD1: Tf > 0, En > 0, 0 < EtaC, EtaD and SOCmin <= SOCinit <= SOCmax;
+        REGCA1: Lvpnt0 < Lvpnt1 and (Lvplsw 1) Zerox < Brkpt (the piecewise gains divide by
+        the differences).
     """
 
     def _check(self):
@@ -670,6 +674,13 @@ class ConverterTable(Table):
             ~esd | ((self.SOCinit >= self.SOCmin) & (self.SOCinit <= self.SOCmax)),
             "SOCinit",
             "ESD1 initial state of charge must be in [SOCmin, SOCmax]",
+        )
+        reg = self.type == REGCA1
+        self._require(~reg | (self.Lvpnt1 > self.Lvpnt0), "Lvpnt1", "REGCA1: must be > Lvpnt0")
+        self._require(
+            ~reg | (self.Lvplsw == 0) | (self.Brkpt > self.Zerox),
+            "Brkpt",
+            "REGCA1: must be > Zerox",
         )
 
 

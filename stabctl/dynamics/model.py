@@ -19,7 +19,7 @@ from numba import types
 
 from stabctl._jit.address import address_of, by_address
 from stabctl._jit.arrays import assign
-from stabctl._jit.decorators import njit
+from stabctl._jit.decorators import kernel, njit
 from stabctl.case import BranchTable, BusTable, Case
 from stabctl.errors import CaseError, InputError, SimulationError
 from stabctl.models import converters as conv
@@ -368,7 +368,7 @@ class DynamicModel:
             "pss": lambda i: pss_.STATE_NAMES[int(self.pp.kind[i])],
             "exc": lambda i: exc.STATE_NAMES[int(self.ep.kind[i])],
             "tg": lambda i: gov.STATE_NAMES[int(self.gp.kind[i])],
-            "ibr": lambda i: conv.STATE_NAMES,
+            "ibr": lambda i: conv.STATE_NAMES[int(self.cp.type[i])],
         }
         for block, (sl, (_rows, n)) in self.layout.blocks.items():
             if sl.start <= k < sl.stop:
@@ -564,6 +564,38 @@ def kernel_outputs(nm, nb, ni):
 BUS_VOLTAGES, NO_BUS_VOLTAGES = np.bool_(True), np.bool_(False)
 
 
+#: the converters' voltage-dependent currents (REGCA1): the network solution is repeated
+#: until no drawn current changes by more than this (pu), at most CURRENT_ITERATIONS times
+CURRENT_TOL = 1e-11
+CURRENT_ITERATIONS = 50
+
+
+@kernel
+def _converter_fixed_point(p, xi, net, psi, V_nc, S_extra, I_dev, held, it):
+    """Fixed-point iteration of the network solution and the converters' drawn currents
+    when one depends on its bus voltage (REGCA1's LVG and HVG, `conv.drawn_current`):
+    I_dev recomputed at the solved voltages and the network solved again until no current
+    moves by more than CURRENT_TOL.  Returns the total load-iteration count, -1 without
+    convergence (either loop)."""
+    _Y11, _Y12, Y21, Y22, Z22, _R = net
+    for _ in range(CURRENT_ITERATIONS):
+        new = np.zeros(V_nc.size, np.complex128)
+        for k in range(p.n_ibr):
+            pos = int(p.IP[k, conv.C.POS])
+            new[pos] += conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]))
+        moved = 0.0
+        for i in range(V_nc.size):
+            moved = max(moved, abs(new[i] - I_dev[i]))
+        if moved <= CURRENT_TOL:
+            return it
+        assign(I_dev, new)
+        more = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, I_dev, held)
+        if more < 0:
+            return -1
+        it += more
+    return -1
+
+
 @njit(cache=True)
 def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     """One evaluation in PSTess's order (docs/pst_models.md 7.2): machine flag 1, network,
@@ -609,11 +641,19 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
     I_dev = np.zeros(V_nc.size, np.complex128)
+    v_dep = False
     for k in range(ni):
-        I_dev[int(p.IP[k, conv.C.POS])] += conv.drawn_current(p.IP, xi, k)
+        pos = int(p.IP[k, conv.C.POS])
+        conv.clamp_states(p.IP, xi, k)
+        I_dev[pos] += conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]))
+        v_dep = v_dep or conv.voltage_dependent(p.IP, k)
     it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, I_dev, held)
     if it < 0:
         return -1
+    if v_dep:  # currents that depend on the voltage (REGCA1): repeat until they agree
+        it = _converter_fixed_point(p, xi, net, psi, V_nc, S_extra, I_dev, held, it)
+        if it < 0:
+            return -1
     assign(cur, Y11 @ psi + Y12 @ V_nc)
     z = np.concatenate((psi, V_nc))
     if want_vbus:

@@ -30,11 +30,13 @@ dynamics at a constant reference.  Values are ANDES's inputs (``vin``: machine d
 the machine base ``Sn``, as PSS/E).  Machine ``k`` of the case is the ``k``-th synchronous
 generator in the order of ANDES's static generators (``PV`` rows, then ``Slack``).
 
-Converter-interfaced devices (:mod:`stabctl.models.converters`, docs/ibr.md): ``PVD1`` and
-``ESD1`` become rows of the converter table (``ibr_con``, :data:`stabctl.case.params.CONVERTER`)
+Converter-interfaced devices (:mod:`stabctl.models.converters`, docs/ibr.md): ``PVD1``,
+``ESD1`` and ``REGCA1`` (without an electrical control REECA1: constant current commands)
+become rows of the converter table (``ibr_con``, :data:`stabctl.case.params.CONVERTER`)
 with their inputs (``vin``, device base ``Sn``), ``gammap``/``gammaq`` as the fractions of
-their static generator's power, and the time constants of the ``BusFreq`` device each reads
-(ANDES creates one with its defaults when ``busf`` is empty).  Refused, naming the device: a
+their static generator's power, and (PVD1, ESD1) the time constants of the ``BusFreq``
+device each reads (ANDES creates one with its defaults when ``busf`` is empty).  Refused,
+naming the device: a REGCA1 driven by an electrical control (REECA1, REECA1E, REECB1), a
 remote bus ``igreg``, a nominal frequency other than the system's, a static generator
 sharing its bus with another, or converters taking other than all of their static
 generator's P and Q (ANDES drops the rest of a replaced generator's power).
@@ -61,7 +63,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.case import PQ, PV, SWING, Case
-from stabctl.case.params import CONVERTER, ESD1, PVD1
+from stabctl.case.params import CONVERTER, ESD1, PVD1, REGCA1
 from stabctl.errors import CaseError, InputError
 from stabctl.io.andes import _andes
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
@@ -83,7 +85,7 @@ MAPPED_MODELS = {name: m.name for m in DYR_MODELS.values() for name in m.andes}
 #: ``andes/models/info.py``, "not used in DAE calculations")
 IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc", "Summary")
 #: ANDES converter models -> the converter type of stabctl.case.params.CONVERTER
-CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1}
+CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1}
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
 _NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt")
 _MACHINES = ("GENROU", "GENCLS")
@@ -350,7 +352,8 @@ def _integer(value) -> int | None:
 
 def _converters(ss, numbers: dict):
     """The converter table's rows (``ibr_con``, :data:`stabctl.case.params.CONVERTER`
-    order) of ANDES's PVD1 and ESD1 devices in service, the devices refused (with why),
+    order) of ANDES's PVD1, ESD1 and REGCA1 devices in service (a REGCA1 only without an
+    electrical control: :data:`RENEWABLE_CONTROLS`), the devices refused (with why),
     and the static generators the mapped converters replace."""
     rows, refused, replaced = [], [], set()
     share: dict = {}
@@ -368,27 +371,41 @@ def _converters(ss, numbers: dict):
             gen = m.gen.v[k]
             sg = ss.PV if gen in ss.PV.idx.v else ss.Slack
             bus = sg.bus.v[list(sg.idx.v).index(gen)]
-            busf = m.busfreq.v[k]
-            bf = list(ss.BusFreq.idx.v).index(busf)
             why = ""
-            if m.igreg.v[k] is not None:
-                why = f"remote bus igreg = {m.igreg.v[k]} (stabctl: the device's own bus)"
-            elif m.bus.v[k] != bus:
-                why = f"bus {m.bus.v[k]} differs from its static generator's ({bus})"
-            elif len(sg_bus.get(bus, ())) > 1:
-                why = f"its static generator {gen} shares bus {numbers[bus]} with another"
-            elif ss.config.freq not in (m.fn.v[k], ss.BusFreq.fn.v[bf]):
-                why = f"fn differs from the system frequency {ss.config.freq:g} Hz"
-            elif ss.BusFreq.Tw.v[bf] <= 0:
-                why = f"its BusFreq {busf} has Tw = 0"
+            if kind == REGCA1:
+                busf, bf = None, 0
+                drivers = _electrical_controls(ss, m.idx.v[k])
+                if m.bus.v[k] != bus:
+                    why = f"bus {m.bus.v[k]} differs from its static generator's ({bus})"
+                elif len(sg_bus.get(bus, ())) > 1:
+                    why = f"its static generator {gen} shares bus {numbers[bus]} with another"
+                elif drivers:
+                    why = (
+                        f"its current commands come from {', '.join(drivers)}, which stabctl "
+                        "lacks (it models REGCA1 with constant commands)"
+                    )
+            else:
+                busf = m.busfreq.v[k]
+                bf = list(ss.BusFreq.idx.v).index(busf)
+                if m.igreg.v[k] is not None:
+                    why = f"remote bus igreg = {m.igreg.v[k]} (stabctl: the device's own bus)"
+                elif m.bus.v[k] != bus:
+                    why = f"bus {m.bus.v[k]} differs from its static generator's ({bus})"
+                elif len(sg_bus.get(bus, ())) > 1:
+                    why = f"its static generator {gen} shares bus {numbers[bus]} with another"
+                elif ss.config.freq not in (m.fn.v[k], ss.BusFreq.fn.v[bf]):
+                    why = f"fn differs from the system frequency {ss.config.freq:g} Hz"
+                elif ss.BusFreq.Tw.v[bf] <= 0:
+                    why = f"its BusFreq {busf} has Tw = 0"
             if why:
                 refused.append(f"{where}: {why}")
                 continue
             number += 1
             v = {p.name: p.default for p in CONVERTER.params}
             v.update(number=number, bus=numbers[bus], type=kind, mva=m.Sn.v[k])
-            v.update(pfrac=m.gammap.v[k], qfrac=m.gammaq.v[k], plim=m.config.plim)
-            v.update(Tfm=ss.BusFreq.Tf.v[bf], Twm=ss.BusFreq.Tw.v[bf])
+            v.update(pfrac=m.gammap.v[k], qfrac=m.gammaq.v[k])
+            if kind != REGCA1:
+                v.update(plim=m.config.plim, Tfm=ss.BusFreq.Tf.v[bf], Twm=ss.BusFreq.Tw.v[bf])
             for p in CONVERTER.params[6:]:
                 if p.name in m.params:
                     v[p.name] = float(m.params[p.name].vin[k])
@@ -406,6 +423,21 @@ def _converters(ss, numbers: dict):
                 "stabctl needs all of it, 1)"
             )
     return rows, refused, replaced
+
+
+#: ANDES's electrical controls of a renewable generator (group RenExciter, parameter reg)
+RENEWABLE_CONTROLS = ("REECA1", "REECA1E", "REECB1")
+
+
+def _electrical_controls(ss, regc) -> list[str]:
+    """The in-service ANDES electrical controls (RENEWABLE_CONTROLS) of renewable generator
+    ``regc`` (its idx), as "model idx" labels."""
+    found = []
+    for name in RENEWABLE_CONTROLS:
+        m = ss.models.get(name)
+        if m is not None and m.n:
+            found += [f"{name} {m.idx.v[j]}" for j in _in_service(m) if m.reg.v[j] == regc]
+    return found
 
 
 def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):

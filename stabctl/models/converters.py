@@ -35,7 +35,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
 from stabctl.case import Case
-from stabctl.case.params import CONVERTER, ESD1, PVD1
+from stabctl.case.params import CONVERTER, ESD1, PVD1, REGCA1
 from stabctl.errors import CaseError
 from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
 from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, washout
@@ -43,6 +43,7 @@ from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, washout
 __all__ = [
     "PVD1",
     "ESD1",
+    "REGCA1",
     "N_STATES",
     "STATE_NAMES",
     "ConverterParams",
@@ -55,14 +56,19 @@ __all__ = [
 ]
 
 N_STATES = 5
-STATE_NAMES = ("Ip", "Iq", "f_lag", "f_washout", "SOC")
+#: state names per converter type (slots beyond a type's names are unused, 0)
+STATE_NAMES = {
+    PVD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
+    ESD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
+    REGCA1: ("Ip", "Iq", "V_filter"),
+}
 #: the slots that integrate energy (ESD1's state of charge): at rest only at zero output,
-#: so the initial-point check leaves them out
-ENERGY_SLOTS = [STATE_NAMES.index("SOC")]
+#: so the initial-point check leaves them out (unused, 0, in the other types)
+ENERGY_SLOTS = [STATE_NAMES[ESD1].index("SOC")]
 #: the ibr_con fields the kernels take as given (pu quantities after the base change)
 TABLE_FIELDS = tuple(n for n in CONVERTER.names if n not in ("number", "bus", "mva"))
 #: fields on the device base: powers and currents (times Sn/Sb), the reactance (Sb/Sn)
-POWER_FIELDS = ("qmx", "qmn", "pmx", "dqdv", "ddn", "ialim")
+POWER_FIELDS = ("qmx", "qmn", "pmx", "dqdv", "ddn", "ialim", "Iolim", "Iqrmax", "Iqrmin")
 #: packed parameter matrix of the kernels, (column name, ConverterParams attribute)
 PACKED = (
     ("POS", "pos"),
@@ -76,6 +82,10 @@ PACKED = (
     ("VQL", "Vql"),
     ("KSOC", "Ksoc"),
     ("FN", "fn"),
+    ("IPCMD0", "Ipcmd0"),
+    ("IQCMD0", "Iqcmd0"),
+    ("KLVG", "kLVG"),
+    ("KLVPL", "kLVPL"),
 )
 #: the kernels' column of each PACKED name: P[k, C.IALIM]
 C = layout("ConverterColumns", PACKED)
@@ -89,7 +99,9 @@ class ConverterParams(Declared):
     times Sn/Sb, ``xc`` times Sb/Sn), and the initial point: P0, Q0 (pref0, qref0, pu),
     cos_a0, sin_a0 (initial bus angle), Vqu, Vql (Q-droop bounds, ANDES's ConstServices),
     pmn (lower power order: 0 PVD1, -pmx ESD1), Ksoc = Sb/(3600 En Tf) (1/s per pu),
-    fn (Hz)."""
+    fn (Hz); REGCA1: the constant current commands Ipcmd0 = P0/(|V0| LVG(|V0|)), Iqcmd0 =
+    -Q0/|V0| (ANDES's Ipcmd0_LVG, Iqcmd0), the gains kLVG = 1/(Lvpnt1 - Lvpnt0), kLVPL =
+    Lvplsw Lvpl1/(Brkpt - Zerox) (0 for the other types)."""
 
     pmn: np.ndarray
     P0: np.ndarray
@@ -100,6 +112,10 @@ class ConverterParams(Declared):
     Vql: np.ndarray
     Ksoc: np.ndarray
     fn: np.ndarray
+    Ipcmd0: np.ndarray
+    Iqcmd0: np.ndarray
+    kLVG: np.ndarray
+    kLVPL: np.ndarray
 
     @property
     def n(self) -> int:
@@ -112,18 +128,24 @@ class ConverterParams(Declared):
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
         esd = self.type == ESD1
+        pvd = self.type != REGCA1
+        reg = ~pvd
         return (
-            ("ibr_con tip", self.tip, np.ones(self.n, bool)),
-            ("ibr_con tiq", self.tiq, np.ones(self.n, bool)),
-            ("ibr_con Tfm", self.Tfm, self.Tfm >= LBND),
-            ("ibr_con Twm", self.Twm, np.ones(self.n, bool)),
+            ("ibr_con tip", self.tip, pvd),
+            ("ibr_con tiq", self.tiq, pvd),
+            ("ibr_con Tfm", self.Tfm, pvd & (self.Tfm >= LBND)),
+            ("ibr_con Twm", self.Twm, pvd),
             ("ibr_con Tf", self.Tf, esd),
+            ("ibr_con Tg", self.Tg, reg),
+            ("ibr_con Tfltr", self.Tfltr, reg),
         )
 
     def has_state(self) -> np.ndarray:
         """Boolean (N_STATES, n_ibr): the slots that are states of each device."""
         act = np.ones((N_STATES, self.n), bool)
-        act[2] = self.Tfm >= LBND
+        reg = self.type == REGCA1
+        act[2] = reg | (self.Tfm >= LBND)
+        act[3] = ~reg
         act[4] = self.type == ESD1
         return act
 
@@ -151,15 +173,17 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     Raises
     ------
     CaseError
-        A lag time constant tip, tiq below 1e-3 s (the current would be an algebraic
-        function of the voltage inside the network solution), naming the row and field.
+        A lag time constant tip, tiq (PVD1, ESD1) or Tg, Tfltr (REGCA1) below 1e-3 s
+        (the current would be an algebraic function of the voltage inside the network
+        solution), naming the row and field.
     """
     t = case.converters
     n = len(t)
-    for name in ("tip", "tiq"):
-        bad = np.flatnonzero(getattr(t, name) < LBND)
+    reg = t.type == REGCA1
+    for name, sel in (("tip", ~reg), ("tiq", ~reg), ("Tg", reg), ("Tfltr", reg)):
+        bad = np.flatnonzero(sel & (getattr(t, name) < LBND))
         if bad.size:
-            t._fail(bad[0], name, f"must be >= {LBND:g} s (a lag of the output current)")
+            t._fail(bad[0], name, f"must be >= {LBND:g} s (a lag of the converter)")
     b = case.buses
     if V0 is None:
         V0 = b.vmag * np.exp(1j * np.deg2rad(b.vang_deg))
@@ -174,6 +198,14 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     P0 = t.pfrac * S_gen[idx].real
     Q0 = t.qfrac * S_gen[idx].imag
     a0 = np.angle(V0[idx])
+    v0 = np.abs(V0[idx])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kLVG = np.where(reg, 1.0 / (t.Lvpnt1 - t.Lvpnt0), 0.0)
+        kLVPL = np.where(reg, t.Lvplsw * t.Lvpl1 / (t.Brkpt - t.Zerox), 0.0)
+        # LVG at the initial voltage, as `_lvg`
+        LVG0 = np.where(v0 <= t.Lvpnt0, 0.0, np.where(v0 <= t.Lvpnt1, (v0 - t.Lvpnt0) * kLVG, 1.0))
+        # ANDES's Ipcmd at an initial LVG of 0 is 1 (regca1.py 202); refused by initialise
+        Ipcmd0 = np.where(LVG0 > 0, P0 / v0 / np.where(LVG0 > 0, LVG0, 1.0), 1.0)
     with np.errstate(divide="ignore"):
         Ksoc = np.where(t.type == ESD1, case.base_mva / 3600.0 / t.En / t.Tf, 0.0)
     return ConverterParams(
@@ -189,10 +221,95 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         Vql=vals["v0"] + (vals["qmx"] - Q0) / vals["dqdv"],
         Ksoc=Ksoc,
         fn=np.full(n, case.freq_hz),
+        Ipcmd0=np.where(reg, Ipcmd0, 0.0),
+        Iqcmd0=np.where(reg, -Q0 / v0, 0.0),
+        kLVG=kLVG,
+        kLVPL=kLVPL,
     )
 
 
 # -- compiled kernels ----------------------------------------------------------------------
+
+
+@kernel
+def _lvg(v, Lvpnt0, Lvpnt1, kLVG):
+    """REGCA1's low-voltage active-current gain LVG (ANDES Piecewise, regca1.py 192-196):
+    0 at v <= Lvpnt0, (v - Lvpnt0) kLVG up to Lvpnt1, 1 above."""
+    if v <= Lvpnt0:
+        return 0.0
+    if v <= Lvpnt1:
+        return (v - Lvpnt0) * kLVG
+    return 1.0
+
+
+@kernel
+def _regca1_currents(P, x, k, v):
+    """REGCA1's output currents (Ipout, Iqout) of device k at voltage magnitude v (ANDES
+    regca1.py 258-278): Ipout = Ip LVG(v); Iqout = Iq - HVG, HVG = Khv (v - Volim) at or
+    above 0 (GainLimiter, lower 0), Iqout held at Iolim at or below it."""
+    Ipout = x[0, k] * _lvg(v, P[k, C.LVPNT0], P[k, C.LVPNT1], P[k, C.KLVG])
+    HVG = P[k, C.KHV] * (v - P[k, C.VOLIM])
+    if HVG <= 0.0:
+        HVG = 0.0
+    Iqout = x[1, k] - HVG
+    if Iqout <= P[k, C.IOLIM]:
+        Iqout = P[k, C.IOLIM]
+    return Ipout, Iqout
+
+
+@kernel
+def _regca1_ip_limits(P, x, k):
+    """REGCA1's Ip lag S0 (ANDES regca1.py 238-256) at the states x: the LVPL upper limit
+    (Piecewise, 242-249) of the filtered voltage S2 (x[2]) and the equation value e =
+    Ipcmd - Ip after the rate limit Rrpwr (ANDES compares the right-hand side Tg dIp/dt,
+    not dIp/dt: andes/core/discrete.py RateLimiter.check_eq)."""
+    S2 = x[2, k]
+    sw = P[k, C.LVPLSW]
+    if S2 <= P[k, C.ZEROX]:
+        LVPL = 9999.0 * (1.0 - sw)
+    elif S2 <= P[k, C.BRKPT]:
+        LVPL = (S2 - P[k, C.ZEROX]) * P[k, C.KLVPL] + 9999.0 * (1.0 - sw)
+    else:
+        LVPL = 9999.0
+    e = P[k, C.IPCMD0] - x[0, k]
+    if e > P[k, C.RRPWR]:
+        e = P[k, C.RRPWR]
+    return LVPL, e
+
+
+@kernel
+def clamp_states(P, x, k):
+    """Clamp device k's limited states in place before the network solution, as ANDES's
+    AntiWindup does within its iteration (andes/core/discrete.py AntiWindup.check_eq):
+    REGCA1's Ip at its LVPL limit when at or above it with a non-negative e (the state is
+    reset to the limit).  Other types: nothing."""
+    if P[k, C.TYPE] == REGCA1:
+        LVPL, e = _regca1_ip_limits(P, x, k)
+        if x[0, k] >= LVPL and e >= 0.0:
+            x[0, k] = LVPL
+
+
+@kernel
+def _regca1_derivatives(P, x, k, v, dx):
+    """REGCA1's state derivatives of device k at voltage magnitude v (ANDES regca1.py
+    219-256), slots 0-2 of column k of dx (the Ip state clamped first, `clamp_states`)."""
+    _, dx[2, k] = lag(v, x[2, k], P[k, C.TFLTR])
+    # S0: Ip lag with the rate limit, then the anti-windup upper limit LVPL
+    clamp_states(P, x, k)
+    LVPL, e = _regca1_ip_limits(P, x, k)
+    if x[0, k] >= LVPL and e >= 0.0:
+        e = 0.0
+    Tg = P[k, C.TG]
+    dx[0, k] = e / Tg
+    # S1: Iq lag (gain -1 on Iqcmd), rate limits enabled by the sign of Q0
+    e = -P[k, C.IQCMD0] - x[1, k]
+    if P[k, C.Q0] < 0.0 and e < P[k, C.IQRMIN]:
+        e = P[k, C.IQRMIN]
+    if P[k, C.Q0] > 0.0 and e > P[k, C.IQRMAX]:
+        e = P[k, C.IQRMAX]
+    dx[1, k] = e / Tg
+    dx[3, k] = 0.0
+    dx[4, k] = 0.0
 
 
 @kernel
@@ -280,19 +397,35 @@ def _algebraic(P, x, k, V):
 
 
 @kernel
-def drawn_current(P, x, k):
+def drawn_current(P, x, k, v):
     """The current device k draws at its bus as complex power per pu voltage (the
-    network solution's device-current term, `stabctl.network.solution.solve_nc`): -(Ip +
-    j Iq), so that the injected current is (Ip - j Iq) V/|V|."""
+    network solution's device-current term, `stabctl.network.solution.solve_nc`) at bus
+    voltage magnitude v: -(Ip + j Iq), so that the injected current is (Ip - j Iq) V/|V|;
+    REGCA1 the same with its output currents Ipout, Iqout, which depend on v."""
+    if P[k, C.TYPE] == REGCA1:
+        Ipout, Iqout = _regca1_currents(P, x, k, v)
+        return -(Ipout + 1j * Iqout)
     return -(x[0, k] + 1j * x[1, k])
+
+
+@kernel
+def voltage_dependent(P, k):
+    """True if device k's drawn current depends on its bus voltage (REGCA1): the network
+    solution is then repeated until the currents agree with the voltages."""
+    return P[k, C.TYPE] == REGCA1
 
 
 @kernel
 def derivatives(P, x, k, V, dx):
     """Write the derivatives of device k (slots 0-4 of column k of dx) at bus voltage V
-    (complex pu) and return its injected complex power P + j Q (pu, system base)."""
-    Ipcmd, Iqcmd, dL, dW = _algebraic(P, x, k, V)
+    (complex pu) and return its injected complex power P + j Q (pu, system base); a
+    REGCA1's Ip state is clamped in place at its LVPL limit (`clamp_states`)."""
     v = abs(V)
+    if P[k, C.TYPE] == REGCA1:
+        Ipout, Iqout = _regca1_currents(P, x, k, v)
+        _regca1_derivatives(P, x, k, v, dx)
+        return v * Ipout + 1j * v * Iqout
+    Ipcmd, Iqcmd, dL, dW = _algebraic(P, x, k, V)
     _, dx[0, k] = lag(Ipcmd, x[0, k], P[k, C.TIP])
     _, dx[1, k] = lag(Iqcmd, x[1, k], P[k, C.TIQ])
     dx[2, k] = dL
@@ -342,22 +475,47 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     Returns
     -------
     ndarray, shape (N_STATES, n_ibr)
-        Ip = P0/|V|, Iq = Q0/|V|, the measurement states 0, SOC = SOCinit (ESD1).
+        PVD1, ESD1: Ip = P0/|V|, Iq = Q0/|V|, the measurement states 0, SOC = SOCinit
+        (ESD1).  REGCA1 (ANDES regca1.py 184-211): Ip = Ipcmd0, Iq = -Iqcmd0 = Q0/|V|,
+        the voltage filter |V|.
 
     Raises
     ------
     CaseError
         A device whose commands at the initial point are not its power-flow P0, Q0 (a
         current limit, a trip curve, the Q droop or the power-order limit active at the
-        start), naming it.
+        start); a REGCA1 that does not start at rest at P0, Q0 (LVG 0 at its voltage, Ip
+        at the LVPL limit, the high-voltage management or Iolim active), naming it.
     """
     x = np.zeros((N_STATES, cp.n))
     V = V0[cp.bus_idx]
     v = np.abs(V)
-    x[0], x[1] = cp.P0 / v, cp.Q0 / v
+    reg = cp.type == REGCA1
+    x[0], x[1] = np.where(reg, cp.Ipcmd0, cp.P0 / v), cp.Q0 / v
+    x[2] = np.where(reg, v, 0.0)
     x[4] = np.where(cp.type == ESD1, cp.SOCinit, 0.0)
-    Ip, Iq = commands(cp.packed(), x, V.astype(np.complex128)) if cp.n else ((), ())
+    P = cp.packed()
+    Vc = V.astype(np.complex128)
+    if np.any(reg):
+        dx = np.zeros_like(x)
+        x_in = x.copy()
+        S = derivatives_at(P, x_in, Vc, dx)
+        for k in np.flatnonzero(reg):
+            gap = abs(S[k] - (cp.P0[k] + 1j * cp.Q0[k]))
+            moving = np.max(np.abs(dx[:3, k]))
+            if gap > 1e-9 or moving > 1e-9 or np.any(x_in[:, k] != x[:, k]):
+                raise CaseError(
+                    f"ibr_con row {k + 1}: the REGCA1 cannot start at its power-flow point "
+                    f"P0 = {cp.P0[k]:.6g}, Q0 = {cp.Q0[k]:.6g} pu at |V| = {v[k]:.6g} pu: "
+                    f"it injects {S[k].real:.6g} + j{S[k].imag:.6g} pu there, its states "
+                    f"moving at up to {moving:.3g} pu/s (the low-voltage gain LVG 0, Ip at "
+                    "the LVPL limit, the high-voltage management Volim or the limit Iolim "
+                    "is active at the start)"
+                )
+    Ip, Iq = commands(P, x, Vc) if cp.n else ((), ())
     for k, (Ipcmd, Iqcmd) in enumerate(zip(Ip, Iq)):
+        if reg[k]:
+            continue
         if abs(Ipcmd - x[0, k]) > 1e-9 or abs(Iqcmd - x[1, k]) > 1e-9:
             raise CaseError(
                 f"ibr_con row {k + 1}: the converter cannot start at its power-flow point "

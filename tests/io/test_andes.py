@@ -582,12 +582,13 @@ def test_import_andes_maps_psse_models_as_the_dyr_reader():
 
 def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
     """A case with renewables (REGCA1, REECA1, REPCA1) and ANDES's own disturbances: one
-    error naming every model and its device count; with on_unsupported="skip" the
-    renewable's static generator cannot be left out."""
+    error naming every model stabctl lacks and its device count, and the REGCA1 refused
+    because a REECA1 drives it; with on_unsupported="skip" the renewable's static
+    generator cannot be left out."""
     path = andes.get_case("ieee14/ieee14_solar.xlsx")
     with pytest.raises(InputError) as err:
         import_andes(path)
-    for name in ("REGCA1 (1)", "REECA1 (1)", "REPCA1 (1)", "Toggle (2)"):
+    for name in ("REECA1 (1)", "REPCA1 (1)", "Toggle (2)", "REGCA1 1: its current commands"):
         assert name in str(err.value)
     with pytest.raises(CaseError, match=r"PV 5 \(bus 8\): no synchronous machine"):
         import_andes(path, on_unsupported="skip")
@@ -628,7 +629,8 @@ def test_import_andes_cli_writes_ieee39_and_refuses_renewables(tmp_path):
         main, ["import-andes", andes.get_case("ieee14/ieee14_solar.xlsx"), "-o", str(bad)]
     )
     assert res.exit_code == 2 and not bad.exists()
-    assert "REGCA1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
+    assert "REECA1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
+    assert "REGCA1 1: its current commands come from REECA1 1" in res.stderr
 
 
 # -- converter-interfaced devices (ANDES PVD1, ESD1; docs/ibr.md) --------------------------------
@@ -894,3 +896,157 @@ def test_ieee14_slow_mode_gap_is_the_valve_at_its_limit(ieee14, tmp_path):
     assert slow["at limit"][1] == pytest.approx(slow["moved"][1], abs=1e-9)  # ANDES: free
     assert slow["at limit"][2] > 0.03  # measured 5.9 %
     assert slow["moved"][2] < 1e-4  # measured 0.00 %
+
+
+# -- REGCA1 (ANDES renewable/regca1.py; docs/ibr.md) ------------------------------------------
+
+
+def solar_case_file(tmp_path, drop):
+    """ANDES's ieee14_solar.xlsx (REGCA1 + REECA1 + REPCA1 on the bus-8 generator) without
+    the sheets ``drop``, written to ``tmp_path``."""
+    import pandas as pd
+
+    sheets = pd.read_excel(andes.get_case("ieee14/ieee14_solar.xlsx"), sheet_name=None)
+    path = tmp_path / ("ieee14_solar_without_" + "_".join(sorted(drop)).lower() + ".xlsx")
+    with pd.ExcelWriter(path) as out:
+        for name, sheet in sheets.items():
+            if name not in drop:
+                sheet.to_excel(out, sheet_name=name, index=False)
+    return path
+
+
+@pytest.fixture(scope="module")
+def regca1_alone(tmp_path_factory):
+    """ieee14_solar with the REGCA1 alone (REECA1, REPCA1 removed): constant current
+    commands, and the imported case."""
+    path = solar_case_file(tmp_path_factory.mktemp("regca1"), ("REECA1", "REPCA1"))
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    return path, case
+
+
+def algebraic_gaps(t, ours, theirs, events, step=STEP):
+    """Largest |ours - theirs| of an algebraic output on ANDES's grid t, leaving out the
+    points in (te - step, te + 2e-4] of each event time te: ANDES records the instant
+    before a jump and adds points 1e-4 s around it, stabctl records after it, so that an
+    interpolation of stabctl's values there mixes both sides."""
+    out = np.zeros(t.size, bool)
+    for te in events:
+        out |= (t > te - step) & (t <= te + 2e-4)
+    return np.max(np.abs(ours - theirs)[~out])
+
+
+def test_ieee14_regca1_fault_speeds_and_powers_match_andes(regca1_alone):
+    """ANDES's IEEE 14 with the bus-8 generator a REGCA1 (ieee14_solar without REECA1 and
+    REPCA1), 6-cycle fault at bus 9 through j1e-3 pu, 5 ms step in both.  In the fault
+    the bus-8 voltage (0.17 pu) takes the low-voltage gain LVG to 0 and the filtered
+    voltage below Zerox, so that the LVPL limit resets Ip to 0; after clearing Ip
+    recovers along Tg and LVPL."""
+    path, case = regca1_alone
+    t_clear = 1.0 + 6 / 60
+    res = Simulator(case, q_limits=False).run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
+    ss = andes_system(path, fault=AndesFault(9, 1.0, t_clear, x=1e-3), off=("Toggle",))
+    t, wa = andes_speeds(ss, 5.0, STEP)
+    Pa, Qa = andes_converter_powers(ss, "REGCA1")
+    dw = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
+    dP = algebraic_gaps(t, np.interp(t, res.t, res.ibr_p[:, 0]), Pa[:, 0], (1.0, t_clear))
+    dQ = algebraic_gaps(t, np.interp(t, res.t, res.ibr_q[:, 0]), Qa[:, 0], (1.0, t_clear))
+    print(f"\nREGCA1 fault vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing
+    assert np.min(res.ibr_p) == 0.0 and np.max(res.ibr_p) > 0.35  # drops out, recovers
+    assert dw < 2e-5  # measured 4.8e-6 (target 1e-4)
+    assert dP < 5e-4  # measured 2.1e-4 (target 1e-3), 5 ms after clearing
+    assert dQ < 1e-4  # measured 2.3e-5 (target 1e-3)
+
+
+def test_ieee14_regca1_rate_and_high_voltage_limits_match_andes(regca1_alone):
+    """The same fault with Rrpwr 0.05 and Volim 1.05 pu (the case's 999 and 1.2 never act):
+    after clearing Ip rises at the rate limit, Tg dIp/dt = Rrpwr (ANDES bounds the lag
+    equation's right-hand side: 0.5 pu/s here, not 0.05), and the post-fault voltage
+    (up to 1.068 pu) engages the high-voltage management, Iqout = Iq - Khv (v - Volim)."""
+    path, case = regca1_alone
+    changes = {"Rrpwr": 0.05, "Volim": 1.05}
+    reg = case.converters.replace(**{k: np.full(1, v) for k, v in changes.items()})
+    case = case.replace(converters=reg)
+    res = Simulator(case, q_limits=False).run([Fault(9, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
+    ss = andes.load(str(path), setup=False, no_output=True, default_config=True)
+    ss.Toggle.u.v = [0] * ss.Toggle.n
+    for name, value in changes.items():
+        getattr(ss.REGCA1, name).v = [value]
+    _fault(9, 1.1)(ss)
+    ss.setup()
+    ss.PFlow.config.tol = 1e-12
+    t, wa = andes_speeds(ss, 5.0, STEP)
+    Pa, Qa = andes_converter_powers(ss, "REGCA1")
+    dw = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
+    dP = algebraic_gaps(t, np.interp(t, res.t, res.ibr_p[:, 0]), Pa[:, 0], (1.0, 1.1))
+    dQ = algebraic_gaps(t, np.interp(t, res.t, res.ibr_q[:, 0]), Qa[:, 0], (1.0, 1.1))
+    print(f"\nREGCA1 rate and HV limits vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert dw < 2e-5  # measured 5.1e-6
+    assert dP < 2e-4  # measured 3.4e-5
+    assert dQ < 2e-4  # measured 5.5e-5
+    # stabctl's own run in closed form: where LVG is 1 (v > Lvpnt1 = 1.0) and Ipcmd0 - Ip
+    # exceeds Rrpwr (the rate limit binds), Ip = P/v rises at Rrpwr/Tg = 0.5 pu/s; above
+    # Volim, Q/v = Q0/v0 - Khv (v - Volim)
+    v = res.vmag[:, case.bus_index(8)]
+    Ip = res.ibr_p[:, 0] / v
+    cp = Simulator(case, q_limits=False).model.cp
+    ramp = (res.t > 1.1) & (v > 1.0) & (Ip < cp.Ipcmd0[0] - 0.06)
+    ramp = ramp[1:] & ramp[:-1]
+    assert ramp.sum() > 20
+    np.testing.assert_allclose(np.diff(Ip)[ramp] / STEP, 0.05 / 0.1, rtol=1e-9)
+    high = (res.t > 1.1) & (v > 1.05)
+    assert high.sum() > 20
+    np.testing.assert_allclose(
+        res.ibr_q[high, 0] / v[high], cp.Q0[0] / 1.03 - 0.7 * (v[high] - 1.05), rtol=1e-12
+    )
+
+
+def test_ieee14_regca1_flat_run_stays_at_the_power_flow_point(regca1_alone):
+    """10 s without disturbance: every state within 1e-8 of its initial value, the
+    REGCA1's P, Q those of the power flow (0.35 pu; Q ANDES's PV solution)."""
+    from stabctl.dynamics.driver import _Run
+
+    _, case = regca1_alone
+    sim = Simulator(case, q_limits=False)
+    m, sa, grid, nets = sim._prepare([], 10.0, STEP, None, "exact")
+    run = _Run(sim, m, sa, grid, nets, False, np.pi, False)
+    run.advance(grid.t.size - 1)
+    res = run.finish(None)
+    drift = np.max(np.abs(run.x - m.x0))
+    print(f"\nREGCA1 flat 10 s: largest drift {drift:.2e}")
+    assert drift < 1e-8
+    assert np.max(np.abs(res.ibr_p - 0.35)) < 1e-12
+    assert np.max(np.abs(res.ibr_q - m.cp.Q0)) < 1e-12
+
+
+def test_ieee14_regca1_modes_match_andes(regca1_alone):
+    """The state matrix at the power flow (REGCA1 states included, `has_state`): the
+    REGCA1's own modes, -1/Tg twice and -1/Tfltr (-10 1/s each), in both tools, and the
+    three electromechanical modes (above 5 rad/s) within 0.5 % of ANDES's (measured
+    0.22 %, as for ieee14 without converters).  rel_step 1e-6: the default perturbation
+    of a governor's Pref crosses its limit in this case."""
+    from stabctl.smallsignal.linearise import linearise_model
+
+    path, case = regca1_alone
+    A = linearise_model(Simulator(case, q_limits=False).model, rel_step=1e-6).A
+    ours = np.linalg.eigvals(A)
+    theirs = andes_modes(andes_system(path, off=("Toggle",)))
+    for modes in (ours, theirs):
+        assert np.sum(np.abs(modes + 10.0) < 1e-6) == 3
+    em = ours[(ours.imag > 5.0) & (ours.imag < 2 * np.pi * 3)]
+    near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in em])
+    gap = np.max(relative_gaps(em, near))
+    print(f"\nREGCA1 case electromechanical modes vs ANDES: {gap:.2%}")
+    assert len(em) == 3
+    assert gap < 0.005  # measured 0.22 %
+
+
+def test_import_andes_refuses_a_regca1_driven_by_reeca1(tmp_path):
+    """A REGCA1 whose commands come from a REECA1 (ieee14_solar without REPCA1) is refused
+    by name, not run with constant commands; its generator cannot be left out."""
+    path = solar_case_file(tmp_path, ("REPCA1",))
+    with pytest.raises(InputError, match=r"REECA1 \(1\).*REGCA1 1: its current commands come"):
+        import_andes(path)
+    with pytest.raises(CaseError, match=r"cannot be left out"):
+        import_andes(path, on_unsupported="skip")

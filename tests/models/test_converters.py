@@ -1,8 +1,9 @@
-"""The converter model (ANDES 2.0 PVD1 / ESD1, stabctl.models.converters) in closed form:
-the commands of ANDES's equations at chosen voltages and states, the current limits of
-both priorities, the trip curves, ESD1's state-of-charge bounds, the initialisation check,
-and the converter table's validation and JSON round trip.  The runs against ANDES are in
-tests/io/test_andes.py."""
+"""The converter model (ANDES 2.0 PVD1 / ESD1 / REGCA1, stabctl.models.converters) in
+closed form: the commands of ANDES's equations at chosen voltages and states, the current
+limits of both priorities, the trip curves, ESD1's state-of-charge bounds, REGCA1's
+low-voltage gain, high-voltage management, LVPL anti-windup limit and rate limits, the
+initialisation checks, and the converter table's validation and JSON round trip.  The
+runs against ANDES are in tests/io/test_andes.py."""
 
 import numpy as np
 import pytest
@@ -127,7 +128,7 @@ def test_soc_derivative_is_the_discharge_over_the_energy():
 @pytest.mark.parametrize(
     "field, value, message",
     [
-        ("type", 3, r"converter type must be 1 or 2"),
+        ("type", 4, r"converter type must be 1, 2 or 3"),
         ("dqdv", 0.5, r"Q-V droop must be < 0"),
         ("ft1", 59.0, r"field 'ft1': must be > ft0"),
         ("Twm", 0.0, r"washout time constant must be > 0"),
@@ -147,3 +148,91 @@ def test_converter_table_round_trips_through_json_and_is_absent_without_converte
     assert back.equals(case) and len(back.converters) == 1
     plain = case.replace(converters=ConverterTable.empty())
     assert "converters" not in case_to_dict(plain)["tables"]
+
+
+# -- REGCA1 (ANDES renewable/regca1.py) ------------------------------------------------------
+
+#: a REGCA1 on bus 2 (0.5 + j0.1 pu at 1 pu), ANDES's defaults otherwise (Tg 0.1 s)
+REG_ROW = [1, 2, 3, 100.0, 1.0, 1.0, 0.0, 0]
+
+
+def regca1(x_changes=(), V=1.0, **cols):
+    """(derivatives dx, injected S, states x after the evaluation, packed parameters) of
+    the bus-2 REGCA1 at bus voltage V, its initial states (at 1 pu) changed as given."""
+    case = make_case(REG_ROW, **cols)
+    V0 = np.ones(2, complex)
+    cp = conv.converter_params(case, V0, case.buses.pgen + 1j * case.buses.qgen)
+    x = conv.initialise(cp, V0)
+    for row, value in x_changes:
+        x[row, 0] = value
+    dx = np.zeros_like(x)
+    S = conv.derivatives_at(cp.packed(), x, np.full(1, V, complex), dx)
+    return dx, S[0], x, cp
+
+
+def test_regca1_starts_at_rest_at_the_power_flow_point():
+    # Ip = Ipcmd0 = P0/v, Iq = -Iqcmd0 = Q0/v, the voltage filter at v (regca1.py 184-211)
+    dx, S, x, cp = regca1()
+    assert (x[0, 0], x[1, 0], x[2, 0]) == (0.5, 0.1, 1.0)
+    assert S == 0.5 + 0.1j and np.all(dx == 0.0)
+    assert (cp.Ipcmd0[0], cp.Iqcmd0[0]) == (0.5, -0.1)
+
+
+def test_regca1_low_voltage_gain_and_high_voltage_reactive_management():
+    # LVG: (v - Lvpnt0)/(Lvpnt1 - Lvpnt0) between 0.4 and 0.8 pu (ANDES defaults), 0
+    # below; Pe = Ip LVG v.  HVG = Khv (v - Volim) above Volim = 1.2: Qe = (Iq - HVG) v
+    _, S, _, _ = regca1(V=0.6)
+    assert S.real == pytest.approx(0.5 * 0.5 * 0.6, rel=1e-14)
+    assert S.imag == pytest.approx(0.1 * 0.6, rel=1e-14)
+    _, S, _, _ = regca1(V=0.35)
+    assert S.real == 0.0
+    _, S, _, _ = regca1(V=1.3)
+    assert S.imag == pytest.approx((0.1 - 0.7 * 0.1) * 1.3, rel=1e-12)
+    # Iolim: the output Iq held at its lower limit (-1.5 pu default; here 0.05, above
+    # Iq - HVG = 0.03)
+    _, S, _, _ = regca1(V=1.3, Iolim=0.05)
+    assert S.imag == pytest.approx(0.05 * 1.3, rel=1e-14)
+
+
+def test_regca1_lvpl_limit_resets_the_active_current_state():
+    # filtered voltage 0.65 pu: LVPL = (0.65 - Zerox) Lvpl1/(Brkpt - Zerox) = 0.3 (Zerox
+    # 0.5, Brkpt 1.0, Lvpl1 1).  Ip = 0.5 >= 0.3 with e = Ipcmd - Ip >= 0: the state is set
+    # to 0.3 and held (ANDES AntiWindup); Ip = 0.6 above Ipcmd (e < 0) decays freely
+    dx, _, x, _ = regca1([(2, 0.65)], V=0.65)
+    assert x[0, 0] == pytest.approx(0.3, rel=1e-14) and dx[0, 0] == 0.0
+    assert dx[2, 0] == 0.0  # the filter at the bus voltage
+    dx, _, x, _ = regca1([(0, 0.6), (2, 0.65)], V=0.65)
+    assert x[0, 0] == 0.6 and dx[0, 0] == pytest.approx(-0.1 / 0.1, rel=1e-14)
+    # below Zerox the limit is 0; with Lvplsw 0 there is none
+    dx, _, x, _ = regca1([(2, 0.45)], V=0.45)
+    assert x[0, 0] == 0.0 and dx[0, 0] == 0.0
+    dx, _, x, _ = regca1([(0, 0.2), (2, 0.45)], V=0.45, Lvplsw=0)
+    assert x[0, 0] == 0.2 and dx[0, 0] == pytest.approx(0.3 / 0.1, rel=1e-14)
+
+
+def test_regca1_rate_limits_apply_to_the_lag_equations_right_hand_side():
+    # ANDES's RateLimiter bounds Tg dy/dt (the equation's value): Rrpwr 0.05 on Ip rising
+    # from 0.2 towards 0.5 gives dIp/dt = 0.05/Tg; Iqrmax 0.02 on Iq rising from 0 (Q0 > 0
+    # enables only the upper rate) gives 0.02/Tg, a falling Iq is not limited
+    dx, _, _, _ = regca1([(0, 0.2), (1, 0.0)], Rrpwr=0.05, Iqrmax=0.02)
+    assert dx[0, 0] == pytest.approx(0.05 / 0.1, rel=1e-14)
+    assert dx[1, 0] == pytest.approx(0.02 / 0.1, rel=1e-14)
+    dx, _, _, _ = regca1([(1, 0.5)], Iqrmin=-0.02)
+    assert dx[1, 0] == pytest.approx(-0.4 / 0.1, rel=1e-14)
+
+
+def test_regca1_start_with_a_limit_active_is_refused():
+    # Volim 0.9 at 1 pu: the high-voltage management would move Q at t = 0
+    with pytest.raises(CaseError, match=r"ibr_con row 1: the REGCA1 cannot start"):
+        regca1(Volim=0.9)
+    with pytest.raises(CaseError, match=r"ibr_con row 1: the REGCA1 cannot start"):
+        regca1(Brkpt=1.2, Zerox=0.9, Lvpl1=0.2)  # LVPL 0.067 below Ip = 0.5
+
+
+@pytest.mark.parametrize(
+    "field, value, message",
+    [("Lvpnt1", 0.3, r"REGCA1: must be > Lvpnt0"), ("Brkpt", 0.4, r"REGCA1: must be > Zerox")],
+)
+def test_regca1_piecewise_points_are_checked(field, value, message):
+    with pytest.raises(CaseError, match=rf"ibr_con row 1 \(converter 1\).*{message}"):
+        make_case(REG_ROW, **{field: value})
