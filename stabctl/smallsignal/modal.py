@@ -29,7 +29,7 @@ F_MIN_HZ, F_MAX_HZ = 0.1, 2.5  # electromechanical band
 INTER_AREA_ETA = 0.5  # area-momentum fraction above which a mode is inter-area
 GAP_RATIO = 1.3  # consecutive EM frequencies this far apart: time-scale gap
 SIGNIFICANT = 0.2  # |speed shape| (of the largest) to count in a coherent group
-STATE_GROUPS = ("rotor angle/speed", "rotor flux", "exciter", "pss", "governor")
+STATE_GROUPS = ("rotor angle/speed", "rotor flux", "exciter", "pss", "governor", "converter")
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,11 +140,13 @@ class ModalAnalysis:
 
 
 def state_group(name: str) -> str:
-    """STATE_GROUPS entry of a state name such as 'mac_omega_G3' or 'exc_VTR_G1'."""
+    """STATE_GROUPS entry of a state name such as 'mac_omega_G3', 'exc_VTR_G1' or
+    'ibr_Ip_C1' (a converter-interfaced device, `stabctl.models.converters`)."""
     block, var = name.split("_", 2)[:2]
     if block == "mac":
         return STATE_GROUPS[0] if var in ("delta", "omega") else STATE_GROUPS[1]
-    return {"exc": STATE_GROUPS[2], "pss": STATE_GROUPS[3], "tg": STATE_GROUPS[4]}[block]
+    groups = {"exc": 2, "pss": 3, "tg": 4, "ibr": 5}
+    return STATE_GROUPS[groups[block]]
 
 
 def modal_analysis(

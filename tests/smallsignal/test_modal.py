@@ -13,7 +13,13 @@ from stabctl.cli import main
 from stabctl.errors import InputError
 from stabctl.io import load_case
 from stabctl.smallsignal.linearise import linearise
-from stabctl.smallsignal.modal import _by_first_machine, modal_analysis, mode_sensitivity
+from stabctl.smallsignal.modal import (
+    STATE_GROUPS,
+    _by_first_machine,
+    modal_analysis,
+    mode_sensitivity,
+    state_group,
+)
 from stabctl.studies.eigenvalues import _areas as study_areas
 
 
@@ -192,3 +198,11 @@ def test_eig_bad_input(args, needle, tmp_path):
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0]
     assert res.stdout == "" and [p.name for p in tmp_path.iterdir()] == ["FILE"]
+
+
+def test_every_state_block_of_the_model_has_a_group():
+    """Participation sums per group cover every state block `linearise` names: machines
+    (angle/speed, flux), exciters, stabilisers, governors and converter-interfaced devices
+    ('ibr_Ip_C1'; before, a converter case's modal analysis raised KeyError)."""
+    names = ["mac_delta_G1", "mac_psikd_G1", "exc_VTR_G1", "pss_washout_G1", "tg_valve_G1"]
+    assert [state_group(n) for n in [*names, "ibr_Ip_C1"]] == list(STATE_GROUPS)
