@@ -1,13 +1,13 @@
 """The case model: one power system's static and dynamic data (:class:`Case`) and its
 tables, plus the built-in cases shipped in ``stabctl/case/data`` (read them with
-:func:`stabctl.io.load_case`).  The lowest layer of stabctl: it imports nothing above it.
+:func:`stabctl.io.load_case`).  It sits above the model declarations (:mod:`stabctl.models`), whose
+parameter declarations its dynamic-data tables are built from.
 """
 
 from stabctl.case.system import (
     CASE_DIR,
     PQ,
     PV,
-    START_LIMIT_TOL,
     SWING,
     TABLES,
     BranchTable,
@@ -21,14 +21,12 @@ from stabctl.case.system import (
     MachineTable,
     PssTable,
     Table,
-    beyond,
 )
 
 __all__ = [
     "CASE_DIR",
     "PQ",
     "PV",
-    "START_LIMIT_TOL",
     "SWING",
     "TABLES",
     "BranchTable",
@@ -42,5 +40,4 @@ __all__ = [
     "MachineTable",
     "PssTable",
     "Table",
-    "beyond",
 ]

@@ -39,19 +39,13 @@ from typing import TYPE_CHECKING, ClassVar, Self
 
 import numpy as np
 
-from stabctl.case.params import (
-    CONVERTER,
-    ESD1,
-    EXCITER,
-    GOVERNOR,
-    MACHINE,
-    PSS,
-    REGCA1,
-    Family,
-    array_dataclass,
-    choices_message,
-)
 from stabctl.errors import CaseError, UnknownBusError
+from stabctl.models.converters import CONVERTER, ESD1, REGCA1
+from stabctl.models.declaration import Family, array_dataclass, choices_message
+from stabctl.models.exciters import EXCITER
+from stabctl.models.governors import GOVERNOR
+from stabctl.models.machines import MACHINE
+from stabctl.models.pss import PSS
 
 __all__ = [
     "Table",
@@ -105,7 +99,7 @@ class Table:
     * ``INTEGER`` -- fields that must hold integers (numbers, types).
 
     The dynamic-data tables (machines, exciters, PSS, governors) get all of these, and
-    their fields, from a :class:`~stabctl.case.params.Family` declaration (``FAMILY``,
+    their fields, from a :class:`~stabctl.models.declaration.Family` declaration (``FAMILY``,
     see :func:`_declared`), which also gives each column's bounds and allowed values.
 
     Raises :class:`CaseError` on construction if arrays differ in length, are not 1-D,
@@ -278,8 +272,8 @@ def _declared(family: Family):
     Parameters
     ----------
     family : Family
-        The declaration (:mod:`stabctl.case.params`): one ``np.ndarray`` field per
-        :class:`~stabctl.case.params.Param` in column order; ``TABLE``, ``MIN_COLUMNS``,
+        The declaration (:mod:`stabctl.models.declaration`): one ``np.ndarray`` field per
+        :class:`~stabctl.models.declaration.Param` in column order; ``TABLE``, ``MIN_COLUMNS``,
         ``DEFAULTS``, ``KEY``, ``KEY_LABEL``, ``INTEGER`` and ``FAMILY`` set from it; the
         ``{columns}`` mark of the class docstring replaced by the declaration's column
         table.
@@ -458,7 +452,7 @@ class MachineTable(Table):
         1 in both (ANDES's GENROU/GENSAL, which have no speed effects; docs/pst_models.md
         1.5-1.6), and column 25 ``psse_sat``: 1 PSS/E's GENROU saturation of the air-gap flux
         through S(1.0), S(1.2) as ANDES solves it, 0 none (PST ``mac_sub``; docs 1.6a).
-        Columns (declared in :data:`stabctl.case.params.MACHINE`; reactances on the
+        Columns (declared in :data:`stabctl.models.machines.MACHINE`; reactances on the
         machine base):
 
     {columns}
@@ -498,7 +492,7 @@ class ExciterTable(Table):
         plus stabctl's columns 21, 22 for the PSS/E EXST1 (type 4, docs/pst_models.md 2.4) and
         23, 24 for the DC exciters' saturation and K_E as ANDES reads PSS/E data (2.3), 25 for
         the ST3's field current in I_N (2.2).
-        Columns (declared in :data:`stabctl.case.params.EXCITER`):
+        Columns (declared in :data:`stabctl.models.exciters.EXCITER`):
 
     {columns}
 
@@ -522,7 +516,7 @@ class PssTable(Table):
     """Power system stabilizer data: PST ``pss_con``, 10 columns (PST manual 3.30 Table 13),
         extended by stabctl with type 3, the PSS/E stabilisers IEEEST and ST2CUT, and type 4,
         PSS/E's STAB2A (docs/pst_models.md 3.1-3.2).  Columns (declared in
-        :data:`stabctl.case.params.PSS`):
+        :data:`stabctl.models.pss.PSS`):
 
     {columns}
 
@@ -545,7 +539,7 @@ class GovernorTable(Table):
     """Turbine-governor data: PST ``tg_con`` (PST manual 3.45, ``tg``), extended by stabctl
         with the PSS/E ``TGOV1``, ``IEEEG1``, ``HYGOV`` and ``IEESGO`` models (PSS/E Model
         Library; equations in docs/pst_models.md section 4).  Columns (declared in
-        :data:`stabctl.case.params.GOVERNOR`; powers on the machine base):
+        :data:`stabctl.models.governors.GOVERNOR`; powers on the machine base):
 
     {columns}
 
@@ -642,7 +636,7 @@ class ConverterTable(Table):
         REGCA1 (WECC REGC_A) have them (docs/ibr.md): a current source
         at its bus, whose initial P and Q are the fractions ``pfrac``, ``qfrac`` of the
         bus generation of the power flow.  Columns (declared in
-        :data:`stabctl.case.params.CONVERTER`; powers, currents and reactances on the
+        :data:`stabctl.models.converters.CONVERTER`; powers, currents and reactances on the
         device base ``mva``, as ANDES's inputs):
 
     {columns}
@@ -1005,22 +999,6 @@ def _freeze_extra(extra: Mapping | None) -> Mapping[str, np.ndarray]:
 # --------------------------------------------------------------------------------------
 # built-in cases
 # --------------------------------------------------------------------------------------
-
-#: tolerance of every start-up limit check (pu): an initial value this close to a limit,
-#: outside it by round-off of the power flow (solved to 1e-8 by default, 1e-12 when
-#: compared with ANDES), is at the limit, not beyond it (IEEE 14's bus-6 unit: Pm0 = 0.3
-#: exactly at TGOV1's lower limit lands at 0.3 - 3e-17)
-START_LIMIT_TOL = 1e-6
-
-
-def beyond(value, lo, hi, tol: float = START_LIMIT_TOL):
-    """Boolean array: ``value`` outside ``[lo, hi]`` by more than ``tol`` (pu; relative to
-    the limit's size above 1) -- the start-up limit checks of the dynamic models."""
-    value, lo, hi = (np.asarray(a, float) for a in (value, lo, hi))
-    return (value > hi + tol * np.maximum(1.0, np.abs(hi))) | (
-        value < lo - tol * np.maximum(1.0, np.abs(lo))
-    )
-
 
 #: directory of the built-in cases (stabctl JSON, converted from PSTess; MIT LICENSE, NOTICE)
 CASE_DIR = Path(__file__).with_name("data")

@@ -23,7 +23,7 @@ Network (ANDES's values after set-up, pu on the system base):
 Dynamic models: each ANDES model whose parameters are PSS/E's (ANDES's
 ``andes/io/psse-dyr.yaml`` maps every PSS/E parameter of the model onto one ANDES parameter)
 is turned back into its PSS/E record through that file and mapped by the DYR mappers of
-:mod:`stabctl.io.dyr` (each parameter declared once, :mod:`stabctl.case.params`, with
+:mod:`stabctl.io.dyr` (each parameter declared once, :mod:`stabctl.models.declaration`, with
 the ANDES models read as it, ``DyrModel.andes``; :data:`MAPPED_MODELS` lists them).
 ANDES's TGOV1N, TGOV1 with the reference after the droop, is read as TGOV1: the same
 dynamics at a constant reference.  Values are ANDES's inputs (``vin``: machine data on
@@ -32,7 +32,7 @@ generator in the order of ANDES's static generators (``PV`` rows, then ``Slack``
 
 Converter-interfaced devices (:mod:`stabctl.models.converters`, docs/ibr.md): ``PVD1``,
 ``ESD1`` and ``REGCA1`` (without an electrical control REECA1: constant current commands)
-become rows of the converter table (``ibr_con``, :data:`stabctl.case.params.CONVERTER`)
+become rows of the converter table (``ibr_con``, :data:`stabctl.models.converters.CONVERTER`)
 with their inputs (``vin``, device base ``Sn``), ``gammap``/``gammaq`` as the fractions of
 their static generator's power, and (PVD1, ESD1) the time constants of the ``BusFreq``
 device each reads (ANDES creates one with its defaults when ``busf`` is empty).  Refused,
@@ -63,11 +63,11 @@ from typing import Any
 import numpy as np
 
 from stabctl.case import PQ, PV, SWING, Case
-from stabctl.case.params import CONVERTER, ESD1, PVD1, REGCA1
 from stabctl.errors import CaseError, InputError
 from stabctl.io.andes import _andes
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
 from stabctl.io.pst import case_from_matrices
+from stabctl.models.converters import CONVERTER, ESD1, PVD1, REGCA1
 
 __all__ = [
     "AndesImport",
@@ -79,12 +79,12 @@ __all__ = [
 ]
 
 #: ANDES model -> the PSS/E model its parameters are read as (declared with the record,
-#: ``DyrModel.andes`` in stabctl.case.params)
+#: ``DyrModel.andes`` in the model modules)
 MAPPED_MODELS = {name: m.name for m in DYR_MODELS.values() for name in m.andes}
 #: ANDES models with no effect on the network or the machines (``Summary``: notes only,
 #: ``andes/models/info.py``, "not used in DAE calculations")
 IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc", "Summary")
-#: ANDES converter models -> the converter type of stabctl.case.params.CONVERTER
+#: ANDES converter models -> the converter type of stabctl.models.converters.CONVERTER
 CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1}
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
 _NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt")
@@ -351,7 +351,7 @@ def _integer(value) -> int | None:
 
 
 def _converters(ss, numbers: dict):
-    """The converter table's rows (``ibr_con``, :data:`stabctl.case.params.CONVERTER`
+    """The converter table's rows (``ibr_con``, :data:`stabctl.models.converters.CONVERTER`
     order) of ANDES's PVD1, ESD1 and REGCA1 devices in service (a REGCA1 only without an
     electrical control: :data:`RENEWABLE_CONTROLS`), the devices refused (with why),
     and the static generators the mapped converters replace."""

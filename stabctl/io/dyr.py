@@ -9,8 +9,9 @@ CON(J) ... CON(J+n) /`` over one or more lines, fields separated by blanks or co
 ICONs of IEEEG1 (JBUS, M), IEEEST (ICS, IB) and ST2CUT (MODE, BUSR, MODE2, BUSR2) come
 first among the numbers.  Parameter
 order per model (PSS/E Model Library, as ANDES `andes/io/psse-dyr.yaml`) and the table
-field each parameter is copied to are declared once, with the table columns, in
-`stabctl.case.params` (`DyrModel`); the mappers here only compute what is not a copy
+field each parameter is copied to are declared once, with the table columns, in the
+model modules (`stabctl.models.declaration.DyrModel`); the mappers here only compute
+what is not a copy
 (unit changes, products, saturation fits, the PSS type).  Mapping and the known
 modelling differences: docs/pst_models.md section 12.
 
@@ -26,11 +27,15 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.case.params import EXCITER, GOVERNOR, MACHINE, PSS, DyrModel, Family
 from stabctl.errors import CaseError
+from stabctl.models.declaration import DyrModel, Family
+from stabctl.models.exciters import EXCITER
+from stabctl.models.governors import GOVERNOR
+from stabctl.models.machines import MACHINE
+from stabctl.models.pss import PSS
 
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
-#: table kind -> the declaration of its columns and DYR models (stabctl.case.params)
+#: table kind -> the declaration of its columns and DYR models (stabctl.models)
 FAMILY: dict[str, Family] = {
     "machine": MACHINE,
     "exciter": EXCITER,
@@ -308,7 +313,7 @@ def _matrix(rows: dict, width: int) -> np.ndarray | None:
 
 
 def _mac_row(rec, gen, **cols) -> list:
-    """mac_con row of a machine record: the declared copies (stabctl.case.params.MACHINE),
+    """mac_con row of a machine record: the declared copies (stabctl.models.machines.MACHINE),
     the RAW data (number, bus, mbase, ra) and ``cols``."""
     cols.update(
         number=gen["number"],
@@ -357,7 +362,7 @@ def _gencls(rec, gen):
 
 def _exc_row(rec, gen, model=None, **cols) -> list:
     """exc_con row of an exciter record: type and copies as declared for ``model`` (default
-    the record's; stabctl.case.params.EXCITER), the machine number and ``cols`` (table
+    the record's; stabctl.models.exciters.EXCITER), the machine number and ``cols`` (table
     names or the DC exciters' ``alt`` names)."""
     return EXCITER.dyr_row(
         model or DYR_MODELS[rec.model], rec.params, machine=gen["number"], **cols
@@ -484,7 +489,7 @@ def _esst3a(rec, gen):
 
 
 def _pss_row(rec, gen, **cols) -> list:
-    """pss_con row of a PSS record: the declared copies (stabctl.case.params.PSS), the
+    """pss_con row of a PSS record: the declared copies (stabctl.models.pss.PSS), the
     machine number and ``cols``."""
     return PSS.dyr_row(DYR_MODELS[rec.model], rec.params, machine=gen["number"], **cols)
 
@@ -563,7 +568,7 @@ def _stab2a(rec, gen):
 
 def _tg_row(rec, gen, **cols) -> list:
     """tg_con row of a governor record: type and copies as declared
-    (stabctl.case.params.GOVERNOR), the machine number, speed set point 1 and ``cols``."""
+    (stabctl.models.governors.GOVERNOR), the machine number, speed set point 1 and ``cols``."""
     return GOVERNOR.dyr_row(
         DYR_MODELS[rec.model], rec.params, machine=gen["number"], wf=1.0, **cols
     )

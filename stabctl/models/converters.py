@@ -31,14 +31,178 @@ States per device (`STATE_NAMES`): Ip, Iq, the measurement lag and washout, the 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
-from stabctl.case import Case
-from stabctl.case.params import CONVERTER, ESD1, PVD1, REGCA1
 from stabctl.errors import CaseError
-from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
 from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, washout
+from stabctl.models.declaration import (
+    Declared,
+    Family,
+    Param,
+    check_packed,
+    layout,
+    pack,
+    params_class,
+)
+
+if TYPE_CHECKING:
+    from stabctl.case import Case
+
+
+# --------------------------------------------------------------------------------------
+# ibr_con: converter-interfaced devices (stabctl's table; ANDES 2.0 PVD1, ESD1, REGCA1)
+# --------------------------------------------------------------------------------------
+
+#: ANDES's converter types: PVD1 (WECC distributed PV), ESD1 (PVD1 with a state of charge),
+#: REGCA1 (WECC second-generation renewable generator/converter, REGC_A)
+PVD1, ESD1, REGCA1 = 1, 2, 3
+
+_DEV_PU: dict[str, Any] = dict(unit="pu")  # on the device base mva (ANDES ``power=True``)
+
+CONVERTER = Family(
+    table="ibr_con",
+    min_columns=8,
+    key="number",
+    key_label="converter",
+    params=(
+        Param("number", "code", 1, integer=True, doc="converter number"),
+        Param("bus", "code", 2, integer=True, doc="bus number"),
+        Param(
+            "type",
+            "code",
+            3,
+            integer=True,
+            choices=(PVD1, ESD1, REGCA1),
+            label="converter type",
+            doc="1 PVD1 (ANDES distributed PV), 2 ESD1 (PVD1 with a state of charge), "
+            "3 REGCA1 (WECC renewable generator/converter, constant current commands)",
+        ),
+        Param("mva", "MVA", 4, default=100.0, lo=0.0, doc="device base Sn"),
+        Param("pfrac", "", 5, default=1.0, doc="fraction of the bus generation P (ANDES gammap)"),
+        Param("qfrac", "", 6, default=1.0, doc="fraction of the bus generation Q (ANDES gammaq)"),
+        Param(
+            "xc",
+            col=7,
+            lo=0.0,
+            doc="coupling reactance of the Q-droop's compensated voltage (device base)",
+            **_DEV_PU,
+        ),
+        Param(
+            "pqflag",
+            "code",
+            8,
+            choices=(0.0, 1.0),
+            doc="current-limit priority: 0 reactive (Q), 1 active (P)",
+        ),
+        Param("qmx", col=9, default=0.33, doc="maximum reactive power command", **_DEV_PU),
+        Param("qmn", col=10, default=-0.33, doc="minimum reactive power command", **_DEV_PU),
+        Param(
+            "pmx",
+            col=11,
+            default=9999.0,
+            doc="maximum active power command (ESD1: -pmx the minimum)",
+            **_DEV_PU,
+        ),
+        Param("v0", "pu", 12, default=0.8, doc="lower voltage of the Q-droop deadband"),
+        Param("v1", "pu", 13, default=1.1, doc="upper voltage of the Q-droop deadband"),
+        Param("dqdv", col=14, default=-1.0, doc="Q-V droop (< 0), pu Q per pu V", **_DEV_PU),
+        Param("fdbd", "Hz", 15, default=-0.017, hi=0.0, doc="frequency deadband (<= 0)"),
+        Param(
+            "ddn",
+            "pu/Hz",
+            16,
+            lo=0.0,
+            doc="P droop gain beyond the deadband, pu (device base) per Hz",
+        ),
+        Param("ialim", col=17, default=1.3, lo=0.0, doc="apparent current limit", **_DEV_PU),
+        *(
+            Param(f"vt{k}", "pu", 18 + k, default=d, lo=0.0, doc=f"voltage trip curve point {k}")
+            for k, d in enumerate((0.88, 0.90, 1.1, 1.2))
+        ),
+        *(
+            Param(f"ft{k}", "Hz", 22 + k, default=d, lo=0.0, doc=f"frequency trip curve point {k}")
+            for k, d in enumerate((59.5, 59.7, 60.3, 60.5))
+        ),
+        Param("tip", "s", 26, default=0.02, lo=0.0, doc="active current lag time constant"),
+        Param("tiq", "s", 27, default=0.02, lo=0.0, doc="reactive current lag time constant"),
+        Param(
+            "recflag",
+            "code",
+            28,
+            default=1.0,
+            choices=(0.0, 1.0),
+            doc="1 the currents times the voltage and frequency trip curves, 0 without",
+        ),
+        Param(
+            "plim",
+            "code",
+            29,
+            default=1.0,
+            choices=(0.0, 1.0),
+            doc="1 the power order limited to [0, pmx] (ESD1 [-pmx, pmx]), 0 not (ANDES plim)",
+        ),
+        Param(
+            "Tfm",
+            "s",
+            30,
+            default=0.02,
+            lo=0.0,
+            doc="frequency measurement: angle filter time constant (ANDES BusFreq Tf)",
+        ),
+        Param(
+            "Twm",
+            "s",
+            31,
+            default=0.1,
+            lo=0.0,
+            doc="frequency measurement: washout time constant (ANDES BusFreq Tw, > 0)",
+        ),
+        Param("Tf", "s", 32, default=1.0, doc="ESD1: state-of-charge integrator time constant"),
+        Param("SOCmin", "", 33, doc="ESD1: minimum state of charge"),
+        Param("SOCmax", "", 34, default=1.0, doc="ESD1: maximum state of charge"),
+        Param("SOCinit", "", 35, default=0.5, doc="ESD1: initial state of charge"),
+        Param("En", "MWh", 36, default=100.0, doc="ESD1: rated energy"),
+        Param("EtaC", "", 37, default=1.0, doc="ESD1: charging efficiency"),
+        Param("EtaD", "", 38, default=1.0, doc="ESD1: discharging efficiency"),
+        Param("Tg", "s", 39, default=0.1, lo=0.0, doc="REGCA1: converter time constant"),
+        Param(
+            "Rrpwr",
+            "pu",
+            40,
+            default=10.0,
+            lo=0.0,
+            doc="REGCA1: LVPL rate limit of Tg dIp/dt (system base, as ANDES: not converted)",
+        ),
+        Param("Brkpt", "pu", 41, default=1.0, doc="REGCA1: LVPL breakpoint voltage"),
+        Param("Zerox", "pu", 42, default=0.5, doc="REGCA1: LVPL zero-crossing voltage"),
+        Param(
+            "Lvplsw",
+            "code",
+            43,
+            default=1.0,
+            choices=(0.0, 1.0),
+            doc="REGCA1: low-voltage power logic 1 on, 0 off",
+        ),
+        Param("Lvpl1", "pu", 44, default=1.0, doc="REGCA1: LVPL current limit at Brkpt"),
+        Param("Volim", "pu", 45, default=1.2, doc="REGCA1: voltage of high-voltage Iq management"),
+        Param("Lvpnt1", "pu", 46, default=0.8, doc="REGCA1: upper voltage of the Ip gain LVG"),
+        Param("Lvpnt0", "pu", 47, default=0.4, doc="REGCA1: lower voltage of the Ip gain LVG"),
+        Param(
+            "Iolim",
+            col=48,
+            default=-1.5,
+            doc="REGCA1: lower limit of the output Iq (high-voltage management)",
+            **_DEV_PU,
+        ),
+        Param("Tfltr", "s", 49, default=0.1, lo=0.0, doc="REGCA1: LVPL voltage filter"),
+        Param("Khv", "", 50, default=0.7, lo=0.0, doc="REGCA1: over-voltage Iq gain"),
+        Param("Iqrmax", col=51, default=1.0, doc="REGCA1: upper rate of Tg dIq/dt", **_DEV_PU),
+        Param("Iqrmin", col=52, default=-1.0, doc="REGCA1: lower rate of Tg dIq/dt", **_DEV_PU),
+    ),
+)
 
 __all__ = [
     "PVD1",

@@ -28,17 +28,14 @@ the types in :data:`READS_IFD`, `field_current`).
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from scipy.optimize import brentq
 
 from stabctl._jit.decorators import kernel, njit
-from stabctl.case import Case, beyond
-from stabctl.case.params import EXCITER
 from stabctl.errors import CaseError
 from stabctl.models import machines as mac
-from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
 from stabctl.models.blocks import (
     GAIN_OVER_T,
     LBND,
@@ -49,7 +46,427 @@ from stabctl.models.blocks import (
     rectifier_loading,
     washout,
 )
+from stabctl.models.declaration import (
+    Declared,
+    DyrModel,
+    Family,
+    Param,
+    beyond,
+    check_packed,
+    layout,
+    pack,
+    params_class,
+)
 from stabctl.models.saturation import quadratic_fit
+
+if TYPE_CHECKING:
+    from stabctl.case import Case
+
+
+# --------------------------------------------------------------------------------------
+# exc_con: exciters (PST manual 3.38 Table 15, 3.11 Table 2, 3.13 Table 3; docs 2.3-2.4)
+# --------------------------------------------------------------------------------------
+
+
+def _upper(*names: str, **renamed: str) -> dict[str, str]:
+    """DYR copies of table fields whose PSS/E name is theirs in upper case (``"Vrmax"`` <-
+    ``"VRMAX"``), and of ``renamed`` fields (table field=DYR name)."""
+    return {**{n: n.upper() for n in names}, **renamed}
+
+
+#: the copies the IEEE 1968 DC records IEEET1 and IEEET2 share (PSS/E Model Library)
+_IEEET_COPY = {
+    "TR": "TR",
+    "KA": "KA",
+    "TA": "TA",
+    "Vrmax": "VRMAX",
+    "Vrmin": "VRMIN",
+    "KE": "KE",
+    "TE": "TE",
+    "KF_dc": "KF",
+}
+
+EXCITER = Family(
+    table="exc_con",
+    min_columns=9,
+    key="machine",
+    key_label="machine",
+    params=(
+        Param(
+            "type",
+            "code",
+            1,
+            integer=True,
+            choices=(0, 1, 2, 3, 4, 5, 6, 7, 8),
+            label="exciter type",
+            doc="0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1, "
+            "5 IEEET2 (DC1 with a two-lag rate feedback), 6 ESST1A (IEEE 421.5 ST1A), "
+            "7 EXAC1 (IEEE AC1), 8 EXAC4 (IEEE AC4)",
+        ),
+        Param("machine", "code", 2, integer=True, doc="machine number"),
+        Param("TR", "s", 3, lo=0.0, doc="input filter time constant"),
+        Param("KA", "", 4, doc="voltage regulator gain"),
+        Param("TA", "s", 5, lo=0.0, doc="voltage regulator time constant"),
+        Param("TB", "s", 6, lo=0.0, doc="transient gain reduction time constant"),
+        Param("TC", "s", 7, doc="transient gain reduction time constant"),
+        Param("Vrmax", "pu", 8, doc="maximum regulator output"),
+        Param("Vrmin", "pu", 9, doc="minimum regulator output"),
+        Param(
+            "VImax",
+            "pu",
+            10,
+            alt="KE",
+            doc="ST3, EXST1: max internal signal | DC1/2, EXAC1: KE exciter constant",
+        ),
+        Param(
+            "VImin",
+            "pu",
+            11,
+            alt="TE",
+            doc="ST3, EXST1: min internal signal | DC1/2, EXAC1: TE exciter time constant, s",
+        ),
+        Param("KJ", "", 12, alt="E1", doc="ST3: first stage regulator gain | DC1/2, EXAC1: E1, pu"),
+        Param("KP", "", 13, alt="SE1", doc="ST3: potential circuit gain | DC1/2, EXAC1: SE(E1)"),
+        Param(
+            "thetaP", "deg", 14, alt="E2", doc="ST3: potential circuit angle | DC1/2, EXAC1: E2, pu"
+        ),
+        Param("KI", "", 15, alt="SE2", doc="ST3: current circuit gain | DC1/2, EXAC1: SE(E2)"),
+        Param(
+            "XL",
+            "pu",
+            16,
+            alt="KF_dc",
+            doc="ST3: potential source reactance | DC1/2: KF stabilizer gain",
+        ),
+        Param(
+            "KC",
+            "",
+            17,
+            alt="TF_dc",
+            doc="ST3, EXST1, ESST1A, EXAC1, EXAC4: rectifier loading factor | DC1/2: TF "
+            "stabilizer time constant, s",
+        ),
+        Param(
+            "Efdmax",
+            "pu",
+            18,
+            alt="TF2",
+            doc="ST3: maximum field voltage | IEEET2: second rate feedback time constant TF2, s",
+        ),
+        Param(
+            "KG",
+            "",
+            19,
+            alt="bus_fed",
+            doc="ST3: inner loop feedback constant | smpexc: 1 the output times the "
+            "terminal voltage (bus-fed SCRX), 0 not",
+        ),
+        Param("VGmax", "pu", 20, doc="ST3: maximum inner loop feedback"),
+        Param("KF", "", 21, doc="EXST1, ESST1A, EXAC1: rate feedback gain"),
+        Param("TF", "s", 22, doc="EXST1, ESST1A, EXAC1: rate feedback time constant"),
+        Param(
+            "dc_sat",
+            "code",
+            23,
+            choices=(0, 1),
+            doc="DC1/2 saturation through (E1, SE1), (E2, SE2): 0 PST's exponential, "
+            "1 PSS/E's quadratic",
+        ),
+        Param(
+            "ke_given",
+            "code",
+            24,
+            choices=(0, 1),
+            doc="DC1/2: 0 K_E = 0 computed so that V_R starts at 0 (PST), 1 as given (ANDES)",
+        ),
+        Param(
+            "ifd_machine",
+            "code",
+            25,
+            choices=(0, 1),
+            doc="ST3: field current of I_N = K_C I_fd / V_E, 0 PST exc_st3's own estimate "
+            "E_Isat(E'q) + p6 (E'q - psi_kd) + p7 i_d, 1 the machine's (IEEE 421.5 "
+            "I_FD; ANDES esst3a.py XadIfd)",
+        ),
+        Param("TC1", "s", 26, doc="ESST1A: second lead time constant"),
+        Param("TB1", "s", 27, lo=0.0, doc="ESST1A: second lag time constant"),
+        Param("VAmax", "pu", 28, doc="ESST1A: maximum regulator output V_A"),
+        Param("VAmin", "pu", 29, doc="ESST1A: minimum regulator output V_A"),
+        Param("KLR", "", 30, doc="ESST1A: field current limiter gain"),
+        Param("ILR", "pu", 31, doc="ESST1A: field current limiter pick-up (machine base)"),
+        Param("KD", "", 32, doc="EXAC1: demagnetising factor of the field current"),
+        Param(
+            "VBmax",
+            "pu",
+            33,
+            lo=0.0,
+            doc="ST3: upper limit of the source voltage V_B = V_E F_EX (PSS/E ESST3A "
+            "VBMAX); 0 none (PST exc_st3)",
+        ),
+    ),
+    dyr=(
+        # SEXS -> smpexc: T_C = (TA/TB) TB is computed
+        DyrModel(
+            "SEXS",
+            ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX"),
+            {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"},
+            kind=0,
+            andes=("SEXS",),
+        ),
+        *(
+            DyrModel(
+                name,
+                (
+                    "TR",
+                    "KA",
+                    "TA",
+                    "TB",
+                    "TC",
+                    "VRMAX",
+                    "VRMIN",
+                    "KE",
+                    "TE",
+                    "KF",
+                    "TF1",
+                    "Switch",
+                    "E1",
+                    "SE(E1)",
+                    "E2",
+                    "SE(E2)",
+                ),
+                {
+                    "TR": "TR",
+                    "KA": "KA",
+                    "TA": "TA",
+                    "TB": "TB",
+                    "TC": "TC",
+                    "Vrmax": "VRMAX",
+                    "Vrmin": "VRMIN",
+                    "KE": "KE",
+                    "TE": "TE",
+                    "KF_dc": "KF",
+                    "TF_dc": "TF1",
+                },
+                kind=kind,
+                andes=(name,),
+            )
+            for name, kind in (("IEEEX1", 1), ("EXDC2", 2), ("ESDC2A", 2))
+        ),
+        # IEEET1 (IEEE 1968 type 1) -> DC1 (type 1) without the lead-lag (TB = TC = 0)
+        DyrModel(
+            "IEEET1",
+            (
+                "TR",
+                "KA",
+                "TA",
+                "VRMAX",
+                "VRMIN",
+                "KE",
+                "TE",
+                "KF",
+                "TF",
+                "Switch",
+                "E1",
+                "SE(E1)",
+                "E2",
+                "SE(E2)",
+            ),
+            {**_IEEET_COPY, "TF_dc": "TF"},
+            kind=1,
+            andes=("IEEET1",),
+        ),
+        # IEEET2 -> DC1 (type 5) with the rate feedback s KF/((1 + s TF1)(1 + s TF2))
+        DyrModel(
+            "IEEET2",
+            (
+                "TR",
+                "KA",
+                "TA",
+                "VRMAX",
+                "VRMIN",
+                "KE",
+                "TE",
+                "KF",
+                "TF1",
+                "TF2",
+                "E1",
+                "SE(E1)",
+                "E2",
+                "SE(E2)",
+            ),
+            {**_IEEET_COPY, "TF_dc": "TF1", "TF2": "TF2"},
+            kind=5,
+        ),
+        # SCRX -> smpexc: T_C = (TA/TB) TB computed; CSWITCH 0 (bus fed): bus_fed = 1
+        DyrModel(
+            "SCRX",
+            ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX", "CSWITCH", "rc/rfd"),
+            {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"},
+            kind=0,
+        ),
+        DyrModel(
+            "EXST1",
+            ("TR", "VIMAX", "VIMIN", "TC", "TB", "KA", "TA", "VRMAX", "VRMIN", "KC", "KF", "TF"),
+            _upper(
+                "TR", "KA", "TA", "TB", "TC", "Vrmax", "Vrmin", "VImax", "VImin", "KC", "KF", "TF"
+            ),
+            kind=4,
+            andes=("EXST1",),
+        ),
+        # EXAC1 -> type 7 (IEEE 1981 AC1); saturation: PSS/E's quadratic through the points
+        DyrModel(
+            "EXAC1",
+            (
+                "TR",
+                "TB",
+                "TC",
+                "KA",
+                "TA",
+                "VRMAX",
+                "VRMIN",
+                "TE",
+                "KF",
+                "TF",
+                "KC",
+                "KD",
+                "KE",
+                "E1",
+                "SE(E1)",
+                "E2",
+                "SE(E2)",
+            ),
+            _upper(
+                "TR",
+                "TB",
+                "TC",
+                "KA",
+                "TA",
+                "Vrmax",
+                "Vrmin",
+                "TE",
+                "KF",
+                "TF",
+                "KC",
+                "KD",
+                "KE",
+                "E1",
+                "E2",
+                SE1="SE(E1)",
+                SE2="SE(E2)",
+            ),
+            kind=7,
+            andes=("EXAC1",),
+        ),
+        # EXAC4 -> type 8 (IEEE 1981 AC4)
+        DyrModel(
+            "EXAC4",
+            ("TR", "VIMAX", "VIMIN", "TC", "TB", "KA", "TA", "VRMAX", "VRMIN", "KC"),
+            _upper("TR", "VImax", "VImin", "TC", "TB", "KA", "TA", "Vrmax", "Vrmin", "KC"),
+            kind=8,
+            andes=("EXAC4",),
+        ),
+        # ESST1A -> type 6; UEL (no under-excitation limiter is modelled: no signal) and
+        # VOS (1: the stabiliser at the voltage error) are checked by the mapper
+        DyrModel(
+            "ESST1A",
+            (
+                "UEL",
+                "VOS",
+                "TR",
+                "VIMAX",
+                "VIMIN",
+                "TC",
+                "TB",
+                "TC1",
+                "TB1",
+                "KA",
+                "TA",
+                "VAMAX",
+                "VAMIN",
+                "VRMAX",
+                "VRMIN",
+                "KC",
+                "KF",
+                "TF",
+                "KLR",
+                "ILR",
+            ),
+            _upper(
+                "TR",
+                "VImax",
+                "VImin",
+                "TC",
+                "TB",
+                "TC1",
+                "TB1",
+                "KA",
+                "TA",
+                "VAmax",
+                "VAmin",
+                "Vrmax",
+                "Vrmin",
+                "KC",
+                "KF",
+                "TF",
+                "KLR",
+                "ILR",
+            ),
+            kind=6,
+            andes=("ESST1A",),
+        ),
+        # ESST3A -> exc_st3 (TA = 0): its KA is PST's K_J, its inner loop KM/(1 + s TM)
+        # limited [VMMIN, VMMAX] PST's K_A/(1 + s T_A); VBMAX limits V_B (column 33);
+        # Efdmax = VBMAX VMMAX is computed
+        DyrModel(
+            "ESST3A",
+            (
+                "TR",
+                "VIMAX",
+                "VIMIN",
+                "KM",
+                "TC",
+                "TB",
+                "KA",
+                "TA",
+                "VRMAX",
+                "VRMIN",
+                "KG",
+                "KP",
+                "KI",
+                "VBMAX",
+                "KC",
+                "XL",
+                "VGMAX",
+                "THETAP",
+                "TM",
+                "VMMAX",
+                "VMMIN",
+            ),
+            {
+                "TR": "TR",
+                "KA": "KM",
+                "TA": "TM",
+                "TB": "TB",
+                "TC": "TC",
+                "Vrmax": "VMMAX",
+                "Vrmin": "VMMIN",
+                "VImax": "VIMAX",
+                "VImin": "VIMIN",
+                "KJ": "KA",
+                "KP": "KP",
+                "thetaP": "THETAP",
+                "KI": "KI",
+                "XL": "XL",
+                "KC": "KC",
+                "KG": "KG",
+                "VGmax": "VGMAX",
+                "VBmax": "VBMAX",
+            },
+            kind=3,
+            andes=("ESST3A",),
+        ),
+    ),
+)
 
 SMP, DC1, DC2, ST3, ST1, T2, ST1A, AC1, AC4 = 0, 1, 2, 3, 4, 5, 6, 7, 8
 STATE_NAMES = {
@@ -66,7 +483,7 @@ STATE_NAMES = {
 #: the types whose equations read the machine's field current (`field_current`)
 READS_IFD = (ST1, ST1A, AC1, AC4)
 
-#: exc_con fields (stabctl.case.params.EXCITER) the kernels take as the table gives them:
+#: exc_con fields (stabctl.models.exciters.EXCITER) the kernels take as the table gives them:
 #: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P)) and
 #: 26-32 (ESST1A, EXAC1)
 TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] + EXCITER.names[25:32] if n != "thetaP")
@@ -104,7 +521,7 @@ DC_KINDS = (DC1, DC2, T2)
 class ExciterParams(Declared):
     """Exciter data of a case, arrays of shape (n_exc,): ``kind`` the exc_con type,
     ``mac`` the machine's row (index), then the exc_con fields :data:`TABLE_FIELDS` under
-    their declared names (stabctl.case.params.EXCITER; KP the complex K_P exp(j
+    their declared names (stabctl.models.exciters.EXCITER; KP the complex K_P exp(j
     theta_P), KA = 0 read as 1 for the regulated types), then the derived fields below.
     DC exciters (types 1, 2): KE, TE and the saturation SE(E) = Asat exp(Bsat |E|), or
     with sat_quadratic SE(E) E = Bsat (E - Asat)^2 above Asat (0 for the other types);
@@ -395,7 +812,7 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     machines' field voltage vex and terminal voltage eterm; VB is the ST3 source voltage
     (`initial_source_voltage`; needed for type 3).  Raises CaseError when the initial
     point violates a limit PST checks (ST3: Efdmax or the V_I range; DC: the V_R limits)
-    by more than `case.START_LIMIT_TOL`."""
+    by more than `START_LIMIT_TOL` (stabctl.models.declaration)."""
     x = np.zeros((6, p.n))
     x[0] = eterm
     smp, st3, dc = p.kind == SMP, p.kind == ST3, p.is_dc

@@ -27,14 +27,215 @@ type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.case import Case, beyond
-from stabctl.case.params import GOVERNOR
 from stabctl.errors import CaseError
-from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
 from stabctl.models.blocks import LBND, clip, lag, leadlag, nonwindup, nonwindup_lag
+from stabctl.models.declaration import (
+    Declared,
+    DyrModel,
+    Family,
+    Param,
+    beyond,
+    check_packed,
+    layout,
+    pack,
+    params_class,
+)
+
+if TYPE_CHECKING:
+    from stabctl.case import Case
+
+
+# --------------------------------------------------------------------------------------
+# tg_con: turbine-governors (PST manual 3.45; PSS/E TGOV1, IEEEG1; docs section 4)
+# --------------------------------------------------------------------------------------
+
+#: tg_con columns 17-21 (IEEEG1's K1..K5) as HYGOV reads them: (alternative name, doc)
+_HYGOV_ALT = {
+    1: ("Rp", " | HYGOV: permanent droop R, pu"),
+    2: ("rt", " | HYGOV: temporary droop r, pu"),
+    3: ("qNL", " | HYGOV: no-load flow qNL, pu"),
+    4: ("Kg", " | HYGOV: gate integrator gain, 1/s (PSS/E: 1/(r Tr))"),
+    5: ("velm_rel", " | HYGOV: 1 gate rate limits [-VELM, VELM] - e/r (ANDES), 0 [-VELM, VELM]"),
+}
+
+GOVERNOR = Family(
+    table="tg_con",
+    min_columns=10,
+    key="machine",
+    key_label="machine",
+    params=(
+        Param(
+            "type",
+            "code",
+            1,
+            integer=True,
+            choices=(1, 2, 3, 4, 5, 6),
+            label="governor type",
+            doc="1 PST tg, 2 TGOV1, 3 IEEEG1, 4 HYGOV, 5 IEESGO, 6 GAST",
+        ),
+        Param("machine", "code", 2, integer=True, doc="machine number"),
+        Param("wf", "pu", 3, doc="speed set point"),
+        Param("invR", "pu", 4, doc="steady-state gain 1/R (IEEEG1: K), on machine base"),
+        Param("Tmax", "pu", 5, doc="maximum power order (TGOV1: VMAX, IEEEG1: PMAX)"),
+        Param("Ts", "s", 6, lo=0.0, doc="servo time constant (TGOV1: T1; IEEEG1: T3, gate servo)"),
+        Param("Tc", "s", 7, lo=0.0, doc="governor lag time constant (TGOV1: T3; IEEEG1: T1)"),
+        Param("T3", "s", 8, doc="transient gain (lead) time constant (TGOV1, IEEEG1: T2)"),
+        Param(
+            "T4",
+            "s",
+            9,
+            alt="Tw",
+            doc="HP section time constant (IEEEG1: T4, steam "
+            "chest); < 0 hydro | HYGOV: water time constant Tw",
+        ),
+        Param(
+            "T5",
+            "s",
+            10,
+            lo=0.0,
+            alt="At",
+            doc="reheater time constant (IEEEG1: T5) | HYGOV: turbine gain At",
+        ),
+        Param(
+            "Tmin", "pu", 11, doc="minimum power order (tg: 0 as PST; TGOV1: VMIN; IEEEG1: PMIN)"
+        ),
+        Param("Dt", "pu", 12, doc="turbine damping (TGOV1), pu power / pu speed"),
+        Param("T6", "s", 13, lo=0.0, doc="IEEEG1 third turbine time constant"),
+        Param("T7", "s", 14, lo=0.0, doc="IEEEG1 fourth turbine time constant"),
+        Param("Uo", "pu/s", 15, doc="IEEEG1 maximum valve opening rate"),
+        Param("Uc", "pu/s", 16, doc="IEEEG1 maximum valve closing rate (< 0)"),
+        *(
+            Param(
+                f"K{k}",
+                "",
+                16 + k,
+                alt=_HYGOV_ALT.get(k, ("", ""))[0],
+                doc=f"IEEEG1 fraction of power after T{3 + (k + 1) // 2} "
+                f"({'HP' if k % 2 else 'LP'} shaft)" + _HYGOV_ALT.get(k, ("", ""))[1],
+            )
+            for k in range(1, 9)
+        ),
+        Param("AT", "pu", 25, doc="GAST ambient temperature load limit"),
+        Param("KT", "", 26, doc="GAST temperature limiter gain"),
+    ),
+    dyr=(
+        # TGOV1: invR = 1/R is computed
+        DyrModel(
+            "TGOV1",
+            ("R", "T1", "VMAX", "VMIN", "T2", "T3", "Dt"),
+            {"Tmax": "VMAX", "Tmin": "VMIN", "Ts": "T1", "Tc": "T3", "T3": "T2", "Dt": "Dt"},
+            kind=2,
+            andes=("TGOV1", "TGOV1N"),
+        ),
+        DyrModel(
+            "IEEEG1",
+            (
+                "JBUS",
+                "M",
+                "K",
+                "T1",
+                "T2",
+                "T3",
+                "Uo",
+                "Uc",
+                "PMAX",
+                "PMIN",
+                "T4",
+                "K1",
+                "K2",
+                "T5",
+                "K3",
+                "K4",
+                "T6",
+                "K5",
+                "K6",
+                "T7",
+                "K7",
+                "K8",
+            ),
+            {
+                "invR": "K",
+                "Tc": "T1",
+                "T3": "T2",
+                "Ts": "T3",
+                "Uo": "Uo",
+                "Uc": "Uc",
+                "Tmax": "PMAX",
+                "Tmin": "PMIN",
+                "T4": "T4",
+                "T5": "T5",
+                "T6": "T6",
+                "T7": "T7",
+                **{f"K{k}": f"K{k}" for k in range(1, 9)},
+            },
+            kind=3,
+            andes=("IEEEG1",),
+        ),
+        # HYGOV -> type 4: Kg = 1/(r Tr) and Uc = -VELM computed
+        DyrModel(
+            "HYGOV",
+            ("R", "r", "Tr", "Tf", "Tg", "VELM", "GMAX", "GMIN", "TW", "At", "Dturb", "qNL"),
+            {
+                "Rp": "R",
+                "rt": "r",
+                "T3": "Tr",
+                "Tc": "Tf",
+                "Ts": "Tg",
+                "Uo": "VELM",
+                "Tmax": "GMAX",
+                "Tmin": "GMIN",
+                "Tw": "TW",
+                "At": "At",
+                "Dt": "Dturb",
+                "qNL": "qNL",
+            },
+            kind=4,
+            andes=("HYGOV",),
+        ),
+        # IEESGO -> type 5: K1 (speed gain), lag T1, lead-lag T2/T3, limits, lags T4-T6;
+        # the power fractions after T4, T5, T6 (1 - K2, (1 - K3) K2, K2 K3) computed
+        DyrModel(
+            "IEESGO",
+            ("T1", "T2", "T3", "T4", "T5", "T6", "K1", "K2", "K3", "PMAX", "PMIN"),
+            {
+                "Tc": "T1",
+                "T3": "T2",
+                "Ts": "T3",
+                "T4": "T4",
+                "T5": "T5",
+                "T6": "T6",
+                "invR": "K1",
+                "Tmax": "PMAX",
+                "Tmin": "PMIN",
+            },
+            kind=5,
+            andes=("IEESGO",),
+        ),
+        # GAST -> type 6: invR = 1/R is computed; T1 the valve (Ts), T2 the power lag (Tc), T3
+        # the load-limit feedback lag
+        DyrModel(
+            "GAST",
+            ("R", "T1", "T2", "T3", "AT", "KT", "VMAX", "VMIN", "Dturb"),
+            {
+                "Ts": "T1",
+                "Tc": "T2",
+                "T3": "T3",
+                "AT": "AT",
+                "KT": "KT",
+                "Tmax": "VMAX",
+                "Tmin": "VMIN",
+                "Dt": "Dturb",
+            },
+            kind=6,
+            andes=("GAST",),
+        ),
+    ),
+)
 
 TG, TGOV1, IEEEG1, HYGOV, IEESGO, GAST = 1, 2, 3, 4, 5, 6
 N_STATES = 6
@@ -48,7 +249,7 @@ STATE_NAMES = {
 }
 #: HYGOV's fields in tg_con columns 17-21 (alternative names of K1..K5)
 HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel")
-#: tg_con fields (stabctl.case.params.GOVERNOR) the kernels take as given: columns 3-16
+#: tg_con fields (stabctl.models.governors.GOVERNOR) the kernels take as given: columns 3-16
 #: and GAST's 25-26 (the IEEEG1 fractions K1..K8 enter summed per shaft stage, K)
 TABLE_FIELDS = GOVERNOR.names[2:16] + GOVERNOR.names[24:26]
 #: packed parameter matrix of the kernels, (column name, GovernorParams attribute) per
@@ -69,7 +270,7 @@ G = layout("GovernorColumns", PACKED)
 class GovernorParams(Declared):
     """Governor data, arrays of shape (n_tg,): ``kind`` the tg_con type, ``mac`` the
     machine's row (index), the tg_con fields :data:`TABLE_FIELDS` under their declared
-    names (stabctl.case.params.GOVERNOR); K (n_tg, 4): IEEEG1 (and IEESGO) K1+K2, K3+K4,
+    names (stabctl.models.governors.GOVERNOR); K (n_tg, 4): IEEEG1 (and IEESGO) K1+K2, K3+K4,
     K5+K6, K7+K8; Rp, rt, qNL, Kg, velm_rel: HYGOV's columns 17-21 (0 for other types;
     T4 is its T_w, T5 its A_t)."""
 
@@ -189,7 +390,8 @@ def initialise(p: GovernorParams, pmech0):
     integrator at q_0 = pmech0/A_t + q_NL, head 1).
 
     Raises CaseError when the initial power order is outside [Tmin, Tmax] (PST's check
-    for tg, the non-windup limits for TGOV1 and IEEEG1), beyond `case.START_LIMIT_TOL`."""
+    for tg, the non-windup limits for TGOV1 and IEEEG1), beyond `START_LIMIT_TOL`
+    (stabctl.models.declaration)."""
     x = np.zeros((N_STATES, p.n))
     tc = np.where(p.Tc >= LBND, p.Tc, 1.0)
     hy, sg = p.kind == HYGOV, p.kind == IEESGO

@@ -14,18 +14,171 @@ psi_kq; `mac_tra` uses the first four, `mac_em` the first two (the others stay c
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.case import Case
-from stabctl.case.params import MACHINE
-from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
+from stabctl.models.declaration import (
+    Declared,
+    DyrModel,
+    Family,
+    Param,
+    check_packed,
+    layout,
+    pack,
+    params_class,
+)
 from stabctl.models.saturation import quadratic_fit
+
+if TYPE_CHECKING:
+    from stabctl.case import Case
+
+
+# --------------------------------------------------------------------------------------
+# mac_con: synchronous machines (PST manual 3.22 Table 10)
+# --------------------------------------------------------------------------------------
+
+_REACT: dict[str, Any] = dict(unit="pu", lo=0.0)
+_TC: dict[str, Any] = dict(unit="s", lo=0.0)
+
+MACHINE = Family(
+    table="mac_con",
+    min_columns=16,
+    key="number",
+    key_label="machine",
+    params=(
+        Param("number", "code", 1, integer=True, doc="machine number"),
+        Param("bus", "code", 2, integer=True, doc="bus number"),
+        Param("mva", "MVA", 3, doc="machine base"),
+        Param("xl", col=4, doc="leakage reactance", **_REACT),
+        Param("ra", col=5, doc="armature resistance", **_REACT),
+        Param("xd", col=6, doc="d-axis synchronous reactance (0: classical model)", **_REACT),
+        Param("xdp", col=7, doc="d-axis transient reactance x'd", **_REACT),
+        Param(
+            "xdpp", col=8, doc='d-axis subtransient reactance x"d (0: transient model)', **_REACT
+        ),
+        Param("Tdop", col=9, doc="d-axis open-circuit transient time constant T'do", **_TC),
+        Param("Tdopp", col=10, doc='d-axis open-circuit subtransient time constant T"do', **_TC),
+        Param("xq", col=11, doc="q-axis synchronous reactance", **_REACT),
+        Param("xqp", col=12, doc="q-axis transient reactance x'q", **_REACT),
+        Param("xqpp", col=13, doc='q-axis subtransient reactance x"q', **_REACT),
+        Param(
+            "Tqop", col=14, doc="q-axis open-circuit transient time constant T'qo (0 kept)", **_TC
+        ),
+        Param("Tqopp", col=15, doc='q-axis open-circuit subtransient time constant T"qo', **_TC),
+        Param("H", "s", 16, doc="inertia constant (MW s / MVA on machine base)"),
+        Param("D0", "pu", 17, doc="local damping coefficient d_o"),
+        Param("D1", "pu", 18, doc="system damping coefficient d_1"),
+        Param("col19", "", 19, doc='"bus number" in the manual; unused by PSTess, kept as given'),
+        Param("S10", "", 20, doc="saturation factor S(1.0)"),
+        Param("S12", "", 21, doc="saturation factor S(1.2)"),
+        Param("pfrac", "", 22, default=1.0, doc="fraction of the bus generation P"),
+        Param("qfrac", "", 23, default=1.0, doc="fraction of the bus generation Q"),
+        Param(
+            "speed_effects",
+            "code",
+            24,
+            default=1.0,
+            choices=(0.0, 1.0),
+            doc="subtransient: 1 stator voltage and torque with speed (PST mac_sub), "
+            "0 without (ANDES GENROU/GENSAL)",
+        ),
+        Param(
+            "psse_sat",
+            "code",
+            25,
+            default=0.0,
+            choices=(0.0, 1.0),
+            doc="subtransient: 0 no saturation (PST mac_sub as modelled here), 1 PSS/E's "
+            'GENROU saturation of the air-gap flux |psi"| through S(1.0), S(1.2) '
+            "(ANDES GENROU/GENSAL)",
+        ),
+    ),
+    dyr=(
+        # GENROU -> mac_sub with x"q = x"d (set by the importer)
+        DyrModel(
+            "GENROU",
+            (
+                "T'do",
+                "T''do",
+                "T'qo",
+                "T''qo",
+                "H",
+                "D",
+                "Xd",
+                "Xq",
+                "X'd",
+                "X'q",
+                "X''d",
+                "Xl",
+                "S(1.0)",
+                "S(1.2)",
+            ),
+            {
+                "Tdop": "T'do",
+                "Tdopp": "T''do",
+                "Tqop": "T'qo",
+                "Tqopp": "T''qo",
+                "H": "H",
+                "D0": "D",
+                "xd": "Xd",
+                "xq": "Xq",
+                "xdp": "X'd",
+                "xqp": "X'q",
+                "xdpp": "X''d",
+                "xl": "Xl",
+                "S10": "S(1.0)",
+                "S12": "S(1.2)",
+            },
+            andes=("GENROU",),
+        ),
+        # GENSAL -> mac_sub without the q-axis transient circuit (x'q = x_q, T'qo = 0)
+        DyrModel(
+            "GENSAL",
+            (
+                "T'do",
+                "T''do",
+                "T''qo",
+                "H",
+                "D",
+                "Xd",
+                "Xq",
+                "X'd",
+                "X''d",
+                "Xl",
+                "S(1.0)",
+                "S(1.2)",
+            ),
+            {
+                "Tdop": "T'do",
+                "Tdopp": "T''do",
+                "Tqopp": "T''qo",
+                "H": "H",
+                "D0": "D",
+                "xd": "Xd",
+                "xq": "Xq",
+                "xdp": "X'd",
+                "xdpp": "X''d",
+                "xl": "Xl",
+                "S10": "S(1.0)",
+                "S12": "S(1.2)",
+            },
+        ),
+        # GENCLS -> mac_em behind x'd = ZSORCE X (set by the importer)
+        DyrModel(
+            "GENCLS",
+            ("H", "D"),
+            {"H": "H", "D0": "D"},
+            andes=("GENCLS",),
+        ),
+    ),
+)
 
 SUB, TRA, EM = 2, 1, 0
 STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
 
-#: mac_con fields (stabctl.case.params.MACHINE) of MachineParams: columns 4-17 (xl .. D0,
+#: mac_con fields (stabctl.models.machines.MACHINE) of MachineParams: columns 4-17 (xl .. D0,
 #: after PST's substitutions) and the generation fractions pfrac, qfrac (22, 23)
 TABLE_FIELDS = (*MACHINE.names[MACHINE.col("xl") - 1 : MACHINE.col("D0")], "pfrac", "qfrac")
 #: packed parameter matrix of the kernels, (column name, MachineParams attribute) per
@@ -59,7 +212,7 @@ class MachineParams(Declared):
     subtransient x"_q := x"_d, T'qo = 0 -> 999, T"qo = 0 -> 999 with x'_q := x"_q;
     transient x'_q := x'_d, T'qo = 0 -> 999.  Fields: ``kind``, ``bus_idx`` (the bus's
     row), ``mac_pot`` (system base / machine base), the mac_con fields
-    :data:`TABLE_FIELDS` under their declared names (stabctl.case.params.MACHINE), then
+    :data:`TABLE_FIELDS` under their declared names (stabctl.models.machines.MACHINE), then
     the derived ones below.
     """
 

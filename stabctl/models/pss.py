@@ -19,14 +19,182 @@ the same machine.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.case import Case
-from stabctl.case.params import PSS
 from stabctl.errors import CaseError
-from stabctl.models._declared import Declared, check_packed, layout, pack, params_class
 from stabctl.models.blocks import GAIN_AFTER, GAIN_BEFORE, LBND, clip, lag, leadlag, washout
+from stabctl.models.declaration import (
+    Declared,
+    DyrModel,
+    Family,
+    Param,
+    check_packed,
+    layout,
+    pack,
+    params_class,
+)
+
+if TYPE_CHECKING:
+    from stabctl.case import Case
+
+
+# --------------------------------------------------------------------------------------
+# pss_con: power system stabilisers (PST manual 3.30 Table 13; docs 3.1)
+# --------------------------------------------------------------------------------------
+
+PSS = Family(
+    table="pss_con",
+    min_columns=10,
+    key="machine",
+    key_label="machine",
+    params=(
+        Param(
+            "type",
+            "code",
+            1,
+            integer=True,
+            choices=(1, 2, 3, 4),
+            label="pss type",
+            doc="1 PST pss, speed input; 2 PST pss, electrical power input; 3 PSS/E; "
+            "4 PSS/E STAB2A",
+        ),
+        Param("machine", "code", 2, integer=True, doc="machine number"),
+        Param(
+            "KTw", "", 3, doc="gain times washout time constant (K*Tw); type 3: washout gain K_w"
+        ),
+        Param("Tw", "s", 4, lo=0.0, doc="washout time constant"),
+        Param("T1", "s", 5, doc="first lead time constant"),
+        Param("T2", "s", 6, lo=0.0, doc="first lag time constant"),
+        Param("T3", "s", 7, doc="second lead time constant"),
+        Param("T4", "s", 8, lo=0.0, doc="second lag time constant"),
+        Param("ymax", "pu", 9, doc="maximum output"),
+        Param("ymin", "pu", 10, doc="minimum output"),
+        Param(
+            "T5",
+            "s",
+            11,
+            alt="K5",
+            doc="type 3: third lead time constant | type 4: output lag gain K5",
+        ),
+        Param("T6", "s", 12, lo=0.0, doc="type 3: third lag time constant"),
+        Param(
+            "input1",
+            "code",
+            13,
+            integer=True,
+            doc="type 3: first input, PSS/E code (1 speed deviation, 3 electrical power)",
+        ),
+        Param("K1", "", 14, doc="type 3: first input gain"),
+        Param("Tr1", "s", 15, lo=0.0, doc="type 3: first input transducer time constant"),
+        Param("input2", "code", 16, integer=True, doc="type 3: second input, PSS/E code (0 none)"),
+        Param("K2", "", 17, doc="type 3: second input gain"),
+        Param("Tr2", "s", 18, lo=0.0, doc="type 3: second input transducer time constant"),
+        *(
+            Param(
+                f"A{k}",
+                "s" if k % 2 else "s^2",
+                18 + k,
+                doc=f"type 3: filter (1 + A5 s + A6 s^2)/((1 + A1 s + A2 s^2)(1 + A3 s + "
+                f"A4 s^2)), A{k}",
+            )
+            for k in range(1, 7)
+        ),
+    ),
+    dyr=(
+        # IEEEST -> PST pss (types 1, 2) when exactly equivalent, else type 3; the mapper
+        # chooses the type and computes K_Tw = KS T5
+        DyrModel(
+            "IEEEST",
+            (
+                "ICS",
+                "IB",
+                "A1",
+                "A2",
+                "A3",
+                "A4",
+                "A5",
+                "A6",
+                "T1",
+                "T2",
+                "T3",
+                "T4",
+                "T5",
+                "T6",
+                "KS",
+                "LSMAX",
+                "LSMIN",
+                "VCU",
+                "VCL",
+            ),
+            {"Tw": "T6", "ymax": "LSMAX", "ymin": "LSMIN"},
+            andes=("IEEEST",),
+        ),
+        DyrModel(
+            "ST2CUT",
+            (
+                "MODE",
+                "BUSR",
+                "MODE2",
+                "BUSR2",
+                "K1",
+                "K2",
+                "T1",
+                "T2",
+                "T3",
+                "T4",
+                "T5",
+                "T6",
+                "T7",
+                "T8",
+                "T9",
+                "T10",
+                "LSMAX",
+                "LSMIN",
+                "VCU",
+                "VCL",
+            ),
+            {
+                "input1": "MODE",
+                "K1": "K1",
+                "Tr1": "T1",
+                "input2": "MODE2",
+                "K2": "K2",
+                "Tr2": "T2",
+                "KTw": "T3",
+                "Tw": "T4",
+                "T1": "T5",
+                "T2": "T6",
+                "T3": "T7",
+                "T4": "T8",
+                "T5": "T9",
+                "T6": "T10",
+                "ymax": "LSMAX",
+                "ymin": "LSMIN",
+            },
+            kind=3,
+            andes=("ST2CUT",),
+        ),
+        # STAB2A -> type 4: three washouts K2 T2 s/(1 + s T2) (KTw = K2 T2 computed), K3/(1 +
+        # s T3) + K4, two lags K5/(1 + s T5), output limits +-HLIM
+        DyrModel(
+            "STAB2A",
+            ("K2", "T2", "K3", "T3", "K4", "K5", "T5", "HLIM"),
+            {
+                "Tw": "T2",
+                "K1": "K3",
+                "Tr1": "T3",
+                "K2": "K4",
+                "K5": "K5",
+                "T6": "T5",
+                "ymax": "HLIM",
+            },
+            kind=4,
+        ),
+    ),
+)
 
 PST_SPEED, PST_POWER, PSSE, STAB2A = 1, 2, 3, 4
 SPEED, POWER = 1, 3  # PSS/E input codes (ICS, MODE)
@@ -47,7 +215,7 @@ STATE_NAMES = {
     ),
     STAB2A: ("washout1", "washout2", "washout3", "lag3", "lag5a", "lag5b"),
 }
-#: pss_con fields (stabctl.case.params.PSS) the kernels take: columns 3-18 (type 3's
+#: pss_con fields (stabctl.models.pss.PSS) the kernels take: columns 3-18 (type 3's
 #: filter A1..A6 enters as its canonical form nf, fe, fa, fc)
 TABLE_FIELDS = PSS.names[2:18]
 #: packed parameter matrix of the kernels, (column name, PssParams attribute) per
@@ -71,7 +239,7 @@ W_PSSE, LL_PSSE = 6, 7  # type 3 washout and first lead-lag slots
 class PssParams(Declared):
     """PSS data, arrays of shape (n_pss,): ``kind`` the pss_con type, ``mac`` the machine's
     row (index), the pss_con fields :data:`TABLE_FIELDS` under their declared names
-    (stabctl.case.params.PSS; input1, input2 0 for types 1, 2).  Type 3: the filter in
+    (stabctl.models.pss.PSS; input1, input2 0 for types 1, 2).  Type 3: the filter in
     controllable canonical form of order nf (<= 4): fa (n, 4) the monic denominator
     coefficients a_0..a_3, fc (n, 4) output coefficients, fe the feedthrough."""
 

@@ -333,7 +333,7 @@ def test_case_layer_never_reads_shared():
         assert not re.search(r"(\.\./|/work/)shared", text), py
 
 
-# -- one declaration per parameter (stabctl.case.params) ----------------------------------------
+# -- one declaration per parameter (stabctl.models.declaration) -----------------------------
 
 from stabctl.case import params as decl  # noqa: E402
 from stabctl.io import dyr as dyr_io  # noqa: E402
@@ -368,10 +368,10 @@ def test_tables_are_their_declaration(kind):
 @pytest.mark.parametrize(
     "fam, table, row",
     [
-        (decl.EXCITER, ExciterTable, EXC[0]),
-        (decl.PSS, PssTable, None),
-        (decl.GOVERNOR, GovernorTable, TG[0]),
-        (decl.MACHINE, MachineTable, MAC[0]),
+        (exc_m.EXCITER, ExciterTable, EXC[0]),
+        (pss_m.PSS, PssTable, None),
+        (gov_m.GOVERNOR, GovernorTable, TG[0]),
+        (mac_m.MACHINE, MachineTable, MAC[0]),
     ],
 )
 def test_declared_bound_violated_names_the_field(fam, table, row):
@@ -406,18 +406,18 @@ def test_packed_kernel_columns_come_from_the_declaration():
     for name in exc_m.TABLE_FIELDS:  # given columns as the table holds them
         if name not in ("KP", "KA"):
             assert P[0, getattr(exc_m.E, name.upper())] == getattr(case.exciters, name)[0]
-            if decl.EXCITER.param(name).col <= 20:  # PST's columns keep their place
-                assert decl.EXCITER.param(name).col - 1 == getattr(exc_m.E, name.upper())
+            if exc_m.EXCITER.param(name).col <= 20:  # PST's columns keep their place
+                assert exc_m.EXCITER.param(name).col - 1 == getattr(exc_m.E, name.upper())
     gp = gov_m.governor_params(load_case("kundur"))
     G = gp.packed(np.zeros(gp.n))
     for name in gov_m.TABLE_FIELDS:
         np.testing.assert_array_equal(
             G[:, getattr(gov_m.G, name.upper())], getattr(load_case("kundur").governors, name)
         )
-        if decl.GOVERNOR.col(name) <= 16:  # PST's and the PSS/E columns keep their place
-            assert decl.GOVERNOR.col(name) - 1 == getattr(gov_m.G, name.upper())
-    assert set(pss_m.TABLE_FIELDS) <= set(decl.PSS.names)
-    assert set(mac_m.TABLE_FIELDS) <= set(decl.MACHINE.names)
+        if gov_m.GOVERNOR.col(name) <= 16:  # PST's and the PSS/E columns keep their place
+            assert gov_m.GOVERNOR.col(name) - 1 == getattr(gov_m.G, name.upper())
+    assert set(pss_m.TABLE_FIELDS) <= set(pss_m.PSS.names)
+    assert set(mac_m.TABLE_FIELDS) <= set(mac_m.MACHINE.names)
 
 
 def test_dyr_field_maps_come_from_the_declaration():

@@ -9,7 +9,6 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable
-from stabctl.case.params import EXCITER, MACHINE, PSS
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
 from stabctl.io import load_case
@@ -18,6 +17,9 @@ from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
 from stabctl.models import pss as pss_
+from stabctl.models.exciters import EXCITER
+from stabctl.models.machines import MACHINE
+from stabctl.models.pss import PSS
 from stabctl.smallsignal.linearise import linearise
 
 pytestmark = pytest.mark.andes  # every test reads ANDES's case files
@@ -229,7 +231,7 @@ def test_wecc_imports_completely():
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
         (29, 25),
-        (29, 33),  # every declared column (stabctl.case.params)
+        (29, 33),  # every declared column (stabctl.models)
         (29, 24),
         (29, 26),
     ) and t.unsupported == ()

@@ -9,7 +9,7 @@ from scipy.integrate import solve_ivp
 from stabctl.case import ExciterTable
 from stabctl.io import load_case
 from stabctl.models import exciters as exc
-from stabctl.models._declared import check_packed, layout
+from stabctl.models.declaration import check_packed, layout
 
 #: exc_con rows (PST manual 3.11 Table 2, 3.13 Table 3; stabctl columns 21-25)
 SMP = [0, 1, 0.0, 200, 0.05, 10.0, 1.0, 5.0, -5.0]
