@@ -2,21 +2,23 @@
 DC1 / DC2 dc commutator exciters), `exc_st3` (type 3, IEEE ST3), stabctl's PSS/E
 `EXST1` (type 4, IEEE ST1 simplified), `IEEET2` (type 5: DC1 whose rate feedback has a
 second lag, s K_F/((1 + s T_F1)(1 + s T_F2))), `ESST1A` (type 6, IEEE ST1A with its
-field current limiter), `EXAC1` (type 7, IEEE AC1 with its rectifier regulation) and
-`EXAC4` (type 8, IEEE AC4); smpexc also serves PSS/E's SCRX (bus fed: the output times
-the terminal voltage, exc_con column 19 ``bus_fed``).
+field current limiter), `EXAC1` (type 7, IEEE AC1 with its rectifier regulation),
+`EXAC4` (type 8, IEEE AC4) and `ESAC1A` (type 9, IEEE 421.5 AC1A: EXAC1 whose regulator
+V_A and output V_R have limits of their own); smpexc also serves PSS/E's SCRX (bus fed:
+the output times the terminal voltage, exc_con column 19 ``bus_fed``).
 
 Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
 Table 2, 3.13 Table 3); PSS/E Model Library EXST1 (IEEE Std 421.5 ST1A simplified),
 IEEET2 (IEEE Committee Report 1968 type 2), ESST1A (IEEE Std 421.5-2016 ST1A; ANDES 2.0
 ``esst1a.py``), EXAC1 and EXAC4 (IEEE 1981 AC1, AC4; ANDES 2.0 ``exac1.py``,
-``exac4.py``) and SCRX (bus-fed or solid-fed static exciter); equations, limits and PST's
-quirks in docs/pst_models.md section 2.  A time constant below 1e-3 s means the block is
+``exac4.py``), ESAC1A (IEEE Std 421.5-2005 AC1A; ANDES 2.0 ``esac1a.py``) and SCRX
+(bus-fed or solid-fed static exciter); equations, limits and PST's quirks in
+docs/pst_models.md section 2.  A time constant below 1e-3 s means the block is
 absent (no state).  States, named per type in STATE_NAMES: smpexc (V_TR, V_As, Efd);
 exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As, V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R,
 R_f); IEEET2 (exc_dc12's and V_F, the second feedback lag); ESST1A (V_TR, V_As, V_A, R_f,
-V_As1); EXAC1 (V_TR, V_As, V_R, V_E, R_f); EXAC4 (V_TR, V_As, V_R).  Units: pu on the
-machine base; times in s.
+V_As1); EXAC1 (V_TR, V_As, V_R, V_E, R_f); ESAC1A (V_TR, V_As, V_A, V_E, R_f); EXAC4
+(V_TR, V_As, V_R).  Units: pu on the machine base; times in s.
 
 The kernels read the packed parameters by name (`E`, from :data:`PACKED`), are built of
 the control blocks of `stabctl.models.blocks`, and are one function per type behind the
@@ -42,6 +44,7 @@ from stabctl.models.blocks import (
     clip,
     lag,
     leadlag_input_state,
+    nonwindup,
     nonwindup_lag,
     rectifier_loading,
     washout,
@@ -97,11 +100,11 @@ EXCITER = Family(
             "code",
             1,
             integer=True,
-            choices=(0, 1, 2, 3, 4, 5, 6, 7, 8),
+            choices=(0, 1, 2, 3, 4, 5, 6, 7, 8, 9),
             label="exciter type",
             doc="0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1, "
             "5 IEEET2 (DC1 with a two-lag rate feedback), 6 ESST1A (IEEE 421.5 ST1A), "
-            "7 EXAC1 (IEEE AC1), 8 EXAC4 (IEEE AC4)",
+            "7 EXAC1 (IEEE AC1), 8 EXAC4 (IEEE AC4), 9 ESAC1A (IEEE 421.5 AC1A)",
         ),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("TR", "s", 3, lo=0.0, doc="input filter time constant"),
@@ -116,21 +119,36 @@ EXCITER = Family(
             "pu",
             10,
             alt="KE",
-            doc="ST3, EXST1: max internal signal | DC1/2, EXAC1: KE exciter constant",
+            doc="ST3, EXST1: max internal signal | DC1/2, EXAC1/ESAC1A: KE exciter constant",
         ),
         Param(
             "VImin",
             "pu",
             11,
             alt="TE",
-            doc="ST3, EXST1: min internal signal | DC1/2, EXAC1: TE exciter time constant, s",
+            doc="ST3, EXST1: min internal signal | DC1/2, EXAC1/ESAC1A: TE exciter time "
+            "constant, s",
         ),
-        Param("KJ", "", 12, alt="E1", doc="ST3: first stage regulator gain | DC1/2, EXAC1: E1, pu"),
-        Param("KP", "", 13, alt="SE1", doc="ST3: potential circuit gain | DC1/2, EXAC1: SE(E1)"),
         Param(
-            "thetaP", "deg", 14, alt="E2", doc="ST3: potential circuit angle | DC1/2, EXAC1: E2, pu"
+            "KJ",
+            "",
+            12,
+            alt="E1",
+            doc="ST3: first stage regulator gain | DC1/2, EXAC1/ESAC1A: E1, pu",
         ),
-        Param("KI", "", 15, alt="SE2", doc="ST3: current circuit gain | DC1/2, EXAC1: SE(E2)"),
+        Param(
+            "KP", "", 13, alt="SE1", doc="ST3: potential circuit gain | DC1/2, EXAC1/ESAC1A: SE(E1)"
+        ),
+        Param(
+            "thetaP",
+            "deg",
+            14,
+            alt="E2",
+            doc="ST3: potential circuit angle | DC1/2, EXAC1/ESAC1A: E2, pu",
+        ),
+        Param(
+            "KI", "", 15, alt="SE2", doc="ST3: current circuit gain | DC1/2, EXAC1/ESAC1A: SE(E2)"
+        ),
         Param(
             "XL",
             "pu",
@@ -143,7 +161,7 @@ EXCITER = Family(
             "",
             17,
             alt="TF_dc",
-            doc="ST3, EXST1, ESST1A, EXAC1, EXAC4: rectifier loading factor | DC1/2: TF "
+            doc="ST3, EXST1, ESST1A, EXAC1, EXAC4, ESAC1A: rectifier loading factor | DC1/2: TF "
             "stabilizer time constant, s",
         ),
         Param(
@@ -162,8 +180,8 @@ EXCITER = Family(
             "terminal voltage (bus-fed SCRX), 0 not",
         ),
         Param("VGmax", "pu", 20, doc="ST3: maximum inner loop feedback"),
-        Param("KF", "", 21, doc="EXST1, ESST1A, EXAC1: rate feedback gain"),
-        Param("TF", "s", 22, doc="EXST1, ESST1A, EXAC1: rate feedback time constant"),
+        Param("KF", "", 21, doc="EXST1, ESST1A, EXAC1, ESAC1A: rate feedback gain"),
+        Param("TF", "s", 22, doc="EXST1, ESST1A, EXAC1, ESAC1A: rate feedback time constant"),
         Param(
             "dc_sat",
             "code",
@@ -190,11 +208,11 @@ EXCITER = Family(
         ),
         Param("TC1", "s", 26, doc="ESST1A: second lead time constant"),
         Param("TB1", "s", 27, lo=0.0, doc="ESST1A: second lag time constant"),
-        Param("VAmax", "pu", 28, doc="ESST1A: maximum regulator output V_A"),
-        Param("VAmin", "pu", 29, doc="ESST1A: minimum regulator output V_A"),
+        Param("VAmax", "pu", 28, doc="ESST1A, ESAC1A: maximum regulator output V_A"),
+        Param("VAmin", "pu", 29, doc="ESST1A, ESAC1A: minimum regulator output V_A"),
         Param("KLR", "", 30, doc="ESST1A: field current limiter gain"),
         Param("ILR", "pu", 31, doc="ESST1A: field current limiter pick-up (machine base)"),
-        Param("KD", "", 32, doc="EXAC1: demagnetising factor of the field current"),
+        Param("KD", "", 32, doc="EXAC1, ESAC1A: demagnetising factor of the field current"),
         Param(
             "VBmax",
             "pu",
@@ -365,6 +383,56 @@ EXCITER = Family(
             kind=8,
             andes=("EXAC4",),
         ),
+        # ESAC1A -> type 9 (IEEE 421.5 AC1A): EXAC1 with V_A limited to [VAMIN, VAMAX] and
+        # V_R to [VRMIN, VRMAX]; the saturation points named as ANDES's psse-dyr.yaml
+        # names them (its inputs, in its own order, are matched by name)
+        DyrModel(
+            "ESAC1A",
+            (
+                "TR",
+                "TB",
+                "TC",
+                "KA",
+                "TA",
+                "VAMAX",
+                "VAMIN",
+                "TE",
+                "KF",
+                "TF",
+                "KC",
+                "KD",
+                "KE",
+                "E1",
+                "SE1",
+                "E2",
+                "SE2",
+                "VRMAX",
+                "VRMIN",
+            ),
+            _upper(
+                "TR",
+                "TB",
+                "TC",
+                "KA",
+                "TA",
+                "VAmax",
+                "VAmin",
+                "TE",
+                "KF",
+                "TF",
+                "KC",
+                "KD",
+                "KE",
+                "E1",
+                "SE1",
+                "E2",
+                "SE2",
+                "Vrmax",
+                "Vrmin",
+            ),
+            kind=9,
+            andes=("ESAC1A",),
+        ),
         # ESST1A -> type 6; UEL (no under-excitation limiter is modelled: no signal) and
         # VOS (1: the stabiliser at the voltage error) are checked by the mapper
         DyrModel(
@@ -468,7 +536,7 @@ EXCITER = Family(
     ),
 )
 
-SMP, DC1, DC2, ST3, ST1, T2, ST1A, AC1, AC4 = 0, 1, 2, 3, 4, 5, 6, 7, 8
+SMP, DC1, DC2, ST3, ST1, T2, ST1A, AC1, AC4, AC1A = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
 STATE_NAMES = {
     SMP: ("VTR", "VAs", "Efd"),
     ST3: ("VTR", "VAs", "VR"),
@@ -479,13 +547,17 @@ STATE_NAMES = {
     ST1A: ("VTR", "VAs", "VA", "Rf", "VAs1"),
     AC1: ("VTR", "VAs", "VR", "VE", "Rf"),
     AC4: ("VTR", "VAs", "VR"),
+    AC1A: ("VTR", "VAs", "VA", "VE", "Rf"),
 }
 #: the types whose equations read the machine's field current (`field_current`)
-READS_IFD = (ST1, ST1A, AC1, AC4)
+READS_IFD = (ST1, ST1A, AC1, AC4, AC1A)
+#: the AC exciters with an exciter voltage V_E and PSS/E's quadratic saturation: EXAC1,
+#: ESAC1A
+AC_KINDS = (AC1, AC1A)
 
 #: exc_con fields (stabctl.models.exciters.EXCITER) the kernels take as the table gives them:
 #: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P)) and
-#: 26-32 (ESST1A, EXAC1)
+#: 26-32 (ESST1A, EXAC1, ESAC1A)
 TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] + EXCITER.names[25:32] if n != "thetaP")
 #: the packed parameter matrix of the compiled kernels, (column name, ExciterParams
 #: attribute) per column: exc_con columns 1-20 in declared order (the machine's row for
@@ -585,8 +657,9 @@ class ExciterParams(Declared):
 
     @property
     def is_ac(self):
-        """AC exciters (EXAC1): the exciter voltage V_E and the rectifier regulation."""
-        return self.kind == AC1
+        """AC exciters (EXAC1, ESAC1A): the exciter voltage V_E and the rectifier
+        regulation."""
+        return np.isin(self.kind, AC_KINDS)
 
     @property
     def has_TB1(self):
@@ -614,7 +687,7 @@ class ExciterParams(Declared):
 
     @property
     def has_Rf(self):
-        """The rate-feedback state exists: DC exciters, EXST1, ESST1A and EXAC1 with
+        """The rate-feedback state exists: DC exciters, EXST1, ESST1A, EXAC1 and ESAC1A with
         K_F != 0."""
         return self.is_dc | (np.isin(self.kind, READS_IFD) & (self.KF != 0))
 
@@ -640,11 +713,11 @@ def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
     dc_sat 0, PST exc_dc12's SE(E) = Asat exp(Bsat |E|): E2 (column 14) = 0 means columns
     13, 15 are Asat, Bsat themselves; otherwise PST's fit through (E1, SE1), (E2, SE2) --
     **QUIRK**: Bsat = ln(SE2 E2 / (SE1 E1)) / (E2 - E1), Asat = SE1 exp(-Bsat E1), so
-    SE(E1) = SE1 but SE(E2) = SE2 E2 / E1 (docs 2.3).  dc_sat 1, and EXAC1 always, the
+    SE(E1) = SE1 but SE(E2) = SE2 E2 / E1 (docs 2.3).  dc_sat 1, and EXAC1/ESAC1A always, the
     quadratic SE(E) E = Bsat (E - Asat)^2 through both points (PSS/E; ANDES
     `ExcQuadSat`)."""
     A, B = _exponential_fit(e)
-    quad = (e.dc_sat == 1) | (e.type == AC1)
+    quad = (e.dc_sat == 1) | np.isin(e.type, AC_KINDS)
     if quad.any():
         Aq, Bq = quadratic_fit(
             *_dc_points(e),
@@ -694,6 +767,7 @@ def _check_dc(e) -> None:
         ST1A: (("TA", "TA"),),
         AC1: (("TA", "TA"), ("TE", "TE")),
         AC4: (("TA", "TA"),),
+        AC1A: (("TA", "TA"), ("TE", "TE")),
     }
     for r in np.nonzero(np.isin(e.type, (*DC_KINDS, *READS_IFD)))[0]:
         kind = int(e.type[r])
@@ -718,7 +792,7 @@ def exciter_params(case: Case) -> ExciterParams:
     _check_dc(e)
     A, B = _dc_saturation(e)
     dc = np.isin(e.type, DC_KINDS)
-    ac = e.type == AC1
+    ac = np.isin(e.type, AC_KINDS)
     KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
     given = {n: getattr(e, n).copy() for n in TABLE_FIELDS}
     given.update(KA=KA, KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)))
@@ -861,16 +935,18 @@ def st1a_regulator_output(p: ExciterParams, Efd):
 
 
 def ac_initial_exciter(p: ExciterParams, Efd):
-    """EXAC1 at rest, arrays (n_exc,) (0 for the other types): the exciter voltage V_E0
-    solving V_E F_EX(K_C I_fd0/V_E) = Efd0 (`blocks.rectifier_loading`, increasing in V_E;
-    I_fd0 = Efd0) and V_FE0 = K_E V_E0 + S_E(V_E0) V_E0 + K_D I_fd0 (= V_R0); raises
-    CaseError if V_R0 is outside [Vrmin, Vrmax] or V_R0/K_A has no V_E0."""
+    """EXAC1 and ESAC1A at rest, arrays (n_exc,) (0 for the other types): the exciter
+    voltage V_E0 solving V_E F_EX(K_C I_fd0/V_E) = Efd0 (`blocks.rectifier_loading`,
+    increasing in V_E; I_fd0 = Efd0) and V_FE0 = K_E V_E0 + S_E(V_E0) V_E0 + K_D I_fd0 (=
+    V_R0, and ESAC1A's V_A0); raises CaseError if V_R0 is outside [Vrmin, Vrmax] (ESAC1A:
+    or V_A0 outside [VAmin, VAmax]) or V_R0/K_A has no V_E0."""
     VE, VFE = np.zeros(p.n), np.zeros(p.n)
     for i in np.nonzero(p.is_ac)[0]:
+        name = "EXAC1" if p.kind[i] == AC1 else "ESAC1A"
         efd0 = ifd0 = float(Efd[i])
         if efd0 <= 0:
             raise CaseError(
-                f"exc_con row {i + 1}: EXAC1 initial field voltage {efd0:.4f} pu must be > 0"
+                f"exc_con row {i + 1}: {name} initial field voltage {efd0:.4f} pu must be > 0"
             )
         KC = float(p.KC[i])
 
@@ -879,11 +955,15 @@ def ac_initial_exciter(p: ExciterParams, Efd):
 
         VE[i] = brentq(residual, efd0, efd0 + KC * ifd0 + 1.0, xtol=1e-15, rtol=1e-15)
         VFE[i] = dc_feedback(p.KE[i], p.Asat[i], p.Bsat[i], 1.0, VE[i]) + p.KD[i] * ifd0
-        if beyond(VFE[i], p.Vrmin[i], p.Vrmax[i]):
-            raise CaseError(
-                f"exc_con row {i + 1}: EXAC1 initial regulator output V_R = {VFE[i]:.4f} pu "
-                f"outside [Vrmin, Vrmax] = [{p.Vrmin[i]:.4f}, {p.Vrmax[i]:.4f}]"
-            )
+        limits = [("V_R", "Vrmin, Vrmax", p.Vrmin[i], p.Vrmax[i])]
+        if p.kind[i] == AC1A:
+            limits.append(("V_A", "VAmin, VAmax", p.VAmin[i], p.VAmax[i]))
+        for what, names, lo, hi in limits:
+            if beyond(VFE[i], lo, hi):
+                raise CaseError(
+                    f"exc_con row {i + 1}: {name} initial regulator output {what} = "
+                    f"{VFE[i]:.4f} pu outside [{names}] = [{lo:.4f}, {hi:.4f}]"
+                )
     return VE, VFE
 
 
@@ -969,7 +1049,7 @@ def field_current(P, i, MP, xm, cur):
     equations read it (:data:`READS_IFD`: EXST1, ESST1A), 0 for the other types; MP, xm,
     cur as `field_voltage`."""
     kind = P[i, E.KIND]
-    if kind == ST1 or kind == ST1A or kind == AC1 or kind == AC4:
+    if kind == ST1 or kind == ST1A or kind == AC1 or kind == AC4 or kind == AC1A:
         return mac.field_current(MP, xm, cur, int(P[i, E.MAC]))
     return 0.0
 
@@ -1022,7 +1102,7 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
         return _st1_field_voltage(P, x, i, VTR_alg, ifd)
     if kind == ST1A:
         return _st1a_field_voltage(P, x, i, VTR_alg, ifd)
-    if kind == AC1:
+    if kind == AC1 or kind == AC1A:
         return _ac1_field_voltage(P, x, i, ifd)
     if kind == AC4:
         return clip(x[2, i], P[i, E.VRMIN] - P[i, E.KC] * ifd, P[i, E.VRMAX] - P[i, E.KC] * ifd)
@@ -1053,7 +1133,7 @@ def derivatives(P, x, i, eterm, pss_out, efd, ifd, dx, ieee, reach):
         _st1_derivatives(P, x, i, err, efd, dx)
     elif kind == ST1A:
         _st1a_derivatives(P, x, i, err, ifd, dx)
-    elif kind == AC1:
+    elif kind == AC1 or kind == AC1A:
         _ac1_derivatives(P, x, i, err, ifd, dx)
     elif kind == AC4:
         _ac4_derivatives(P, x, i, err, dx)
@@ -1232,8 +1312,11 @@ def _st1a_derivatives(P, x, i, err, ifd, dx):
 # -- EXAC1 (IEEE 1981 AC1 as PSS/E EXAC1 and ANDES 2.0 exac1.py): lead-lag, non-windup
 # -- K_A/(1 + s T_A) -> V_R; T_E dV_E/dt = V_R - V_FE, V_FE = K_E V_E + S_E(V_E) V_E + K_D
 # -- I_fd (PSS/E's quadratic saturation); Efd = V_E F_EX(K_C I_fd/V_E); rate feedback
-# -- s K_F/(1 + s T_F) of V_FE.  PSTess has no AC1: IEEE 421.5's non-windup rule in both
-# -- conventions
+# -- s K_F/(1 + s T_F) of V_FE.  ESAC1A (IEEE 421.5-2005 AC1A, no UEL/OEL): the lag's
+# -- non-windup limits are [VAmin, VAmax], V_R = V_A clipped to [Vrmin, Vrmax] and the
+# -- exciter's V_E held at or above 0 (ANDES 2.0 esac1a.py leaves out this clip, the V_E
+# -- limit and the rate feedback: docs/pst_models.md 2.7).  PSTess has no AC1: IEEE
+# -- 421.5's non-windup rule in both conventions
 
 
 @kernel(inline="always")
@@ -1245,9 +1328,11 @@ def _ac1_field_voltage(P, x, i, ifd):
 
 @kernel(inline="always")
 def _ac1_derivatives(P, x, i, err, ifd, dx):
-    """EXAC1 (docs/pst_models.md 2.7): the rate feedback of V_FE (state R_f, with K_F !=
-    0) subtracted from the error, the lead-lag T_C/T_B, V_R non-windup on [Vrmin, Vrmax],
-    the exciter T_E dV_E/dt = V_R - V_FE."""
+    """EXAC1 and ESAC1A (docs/pst_models.md 2.7): the rate feedback of V_FE (state R_f,
+    with K_F != 0) subtracted from the error, the lead-lag T_C/T_B, the regulator lag
+    non-windup (EXAC1: V_R on [Vrmin, Vrmax]; ESAC1A: V_A on [VAmin, VAmax], then V_R = V_A
+    clipped to [Vrmin, Vrmax]), the exciter T_E dV_E/dt = V_R - V_FE (ESAC1A: V_E >= 0,
+    non-windup: IEEE 421.5-2005 6.1, as OpenIPSL's and Dynawo's AC1A)."""
     VFE = (
         dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ], x[3, i])
         + P[i, E.KD] * ifd
@@ -1256,10 +1341,15 @@ def _ac1_derivatives(P, x, i, err, ifd, dx):
         VF, dx[4, i] = washout(VFE, x[4, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
         err = err - VF
     u, dx[1, i] = leadlag_input_state(err, x[1, i], P[i, E.TCTB], P[i, E.TB])
-    x[2, i], dx[2, i] = nonwindup_lag(
-        P[i, E.KA] * u, x[2, i], P[i, E.TA], P[i, E.VRMIN], P[i, E.VRMAX], _IEEE_RULE, 0.0
-    )
-    dx[3, i] = (x[2, i] - VFE) / P[i, E.TE]
+    if P[i, E.KIND] == AC1A:
+        lo, hi = P[i, E.VAMIN], P[i, E.VAMAX]
+    else:
+        lo, hi = P[i, E.VRMIN], P[i, E.VRMAX]
+    x[2, i], dx[2, i] = nonwindup_lag(P[i, E.KA] * u, x[2, i], P[i, E.TA], lo, hi, _IEEE_RULE, 0.0)
+    VR = clip(x[2, i], P[i, E.VRMIN], P[i, E.VRMAX])
+    dx[3, i] = (VR - VFE) / P[i, E.TE]
+    if P[i, E.KIND] == AC1A:  # the diodes: V_E >= 0, non-windup
+        x[3, i], dx[3, i] = nonwindup(x[3, i], dx[3, i], 0.0, np.inf, _IEEE_RULE, 0.0)
 
 
 # -- EXAC4 (IEEE 1981 AC4 as PSS/E EXAC4 and ANDES 2.0 exac4.py): V_I limited, lead-lag,

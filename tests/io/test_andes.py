@@ -18,6 +18,7 @@ are tight), and as PST's models (the default), where those three differences rem
 the bounds say how much they matter. The bounds are the measured differences with a
 margin."""
 
+import dataclasses
 import json
 import re
 import warnings
@@ -1050,3 +1051,46 @@ def test_import_andes_refuses_a_regca1_driven_by_reeca1(tmp_path):
         import_andes(path)
     with pytest.raises(CaseError, match=r"cannot be left out"):
         import_andes(path, on_unsupported="skip")
+
+
+def test_ieee14_esac1a_field_voltage_matches_andes_where_andes_models_it():
+    """ANDES's ieee14_esac1a.xlsx (docs/pst_models.md 2.7): ANDES 2.0's ``esac1a.py``
+    leaves out the rate feedback (its ``vi`` omits ``WF_y``), the V_R limits and V_E >= 0.
+    With K_F = 0 and the V_R limits opened in stabctl, a 3-cycle fault at bus 9 gives
+    ANDES's field voltage (4.4 pu peak) until ANDES's goes below 0 (to -0.021 pu, through
+    the diodes stabctl's V_E limit models), and 0 there."""
+    path = andes.get_case("ieee14/ieee14_esac1a.xlsx")
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, conventions="andes", on_unsupported="skip")
+    e = case.exciters
+    ac1a = e.type == 9
+    assert ac1a.sum() == 1 and e.KF[ac1a] == 0.1 and e.Vrmax[ac1a] == 7.3  # ANDES's defaults
+    opened = case.replace(
+        exciters=dataclasses.replace(
+            e,
+            KF=np.where(ac1a, 0.0, e.KF),
+            Vrmax=np.where(ac1a, 999.0, e.Vrmax),
+            Vrmin=np.where(ac1a, -999.0, e.Vrmin),
+        )
+    )
+    t_clear = 1.0 + 3 / 60
+    ss = andes_system(path, fault=AndesFault(9, 1.0, t_clear, x=1e-3), off=("Toggle",))
+    ta, _ = andes_speeds(ss, 5.0, STEP)
+    theirs = ss.dae.ts.y[:, ss.ESAC1A.vout.a[0]]
+    k = list(case.machines.bus).index(ss.SynGen.get("bus", ss.ESAC1A.syn.v[0]))
+    sim = Simulator(opened, q_limits=False)
+    assert sim.model.initial_residual[0] < 1e-8
+    res = sim.run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
+    ours = np.interp(ta, res.t, res.efd[:, k])
+    away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - t_clear) > AWAY)
+    assert np.max(theirs) > 4.0 and np.min(theirs) < -0.01  # both regimes reached
+    before = away & (ta < ta[np.argmax(theirs < 0)])  # until ANDES's goes negative
+    gap = np.abs(ours - theirs)
+    assert np.max(gap[before]) < 0.015  # measured 6.9e-3, 15 ms after clearing
+    assert np.max(gap[before & (ta > 1.5)]) < 5e-3  # measured 3.3e-3
+    assert np.max(gap[ta > 4.0]) < 5e-3  # measured 2.4e-3, after the dip
+    assert np.max(ours[theirs < 0]) < 0.03 and np.min(ours) >= 0.0  # measured 0.019
+    full = Simulator(case, q_limits=False)  # the model as imported: K_F 0.1, V_R limits
+    assert np.max(np.abs(full.run([], 10.0, h=STEP).speed - 1)) < 1e-10
+    res = full.run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
+    assert res.stable and 1.0 < np.min(res.efd[:, k]) < np.max(res.efd[:, k]) < 3.0

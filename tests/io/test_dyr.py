@@ -215,13 +215,13 @@ def test_unsupported_records_are_listed_with_file_and_line(tmp_path):
         "kundur_full.dyr:37 TOGGLE (bus 0, id LINE_8): model TOGGLE is not mapped"
     )
     text = (
-        "1 'GENCLS' 1 3.0 0.0 /\n1 'ESAC1A' 1 0 0 /\n"
+        "1 'GENCLS' 1 3.0 0.0 /\n1 'ESST4B' 1 0 0 /\n"
         "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
     )
     with pytest.raises(CaseError) as e:
         dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
     assert str(e.value).splitlines()[1:] == [
-        "  t.dyr:2 ESAC1A (bus 1, id 1): model ESAC1A is not mapped",
+        "  t.dyr:2 ESST4B (bus 1, id 1): model ESST4B is not mapped",
         "  t.dyr:3 IEEEST (bus 1, id 1): its machine has no (supported) exciter",
     ]
 
@@ -1181,3 +1181,17 @@ def test_start_off_equilibrium_is_refused_naming_the_state():
     assert sim.model.initial_residual[0] > 1e-3
     assert Simulator(load_case("kundur")).model.initial_residual[0] < 1e-12  # 2.7e-13
     assert Simulator(load_case("miniwecc")).model.initial_residual[0] < 1e-11  # 1.9e-12
+
+
+def test_esac1a_record_lands_in_its_columns(tmp_path):
+    """ESAC1A in the PSS/E Model Library's order (TR TB TC KA TA VAMAX VAMIN TE KF TF KC
+    KD KE E1 SE(E1) E2 SE(E2) VRMAX VRMIN) becomes an exc_con row of type 9 with each
+    value in its declared column (stabctl.models.exciters.EXCITER)."""
+    values = [0.02, 0.5, 0.8, 400, 0.02, 14.5, -14.5, 0.8, 0.03, 1.0, 0.2, 0.38, 1.0]
+    values += [4.18, 0.1, 3.14, 0.03, 6.03, -5.43]
+    text = "1 'GENCLS' 1 3.0 0.0 /\n1 'ESAC1A' 1 " + " ".join(map(str, values)) + " /\n"
+    tab = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
+    e = ExciterTable.from_matrix(tab.exc_con)
+    got = [e.TR, e.TB, e.TC, e.KA, e.TA, e.VAmax, e.VAmin, e.VImin, e.KF, e.TF, e.KC, e.KD]
+    got += [e.VImax, e.KJ, e.KP, e.thetaP, e.KI, e.Vrmax, e.Vrmin]  # KE, E1, SE1, E2, SE2
+    assert e.type[0] == 9 and [g[0] for g in got] == values

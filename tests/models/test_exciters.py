@@ -72,6 +72,9 @@ ST1A += [0.05, 1.0, 0, 0, 0, 0.5, 2.0, 6.0, -5.0, 2.0, 1.5]
 #: names), KC (17), KF TF (21-22), KD (32); I_N0 = 0.2 1.9 / V_E0 < 0.433
 AC1 = [7, 1, 0.0, 400, 0.02, 0.0, 0.0, 8.0, -8.0, 1.0, 0.8, 2.0, 0.05, 3.0, 0.2, 0, 0.2, 0, 0, 0]
 AC1 += [0.03, 1.0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.38]
+#: ESAC1A (type 9): EXAC1's row with V_R limited to [-5.4, 6] and V_A to [-14.5, 14.5]
+#: (VAmax, VAmin: columns 28-29)
+AC1A = [9, *AC1[1:7], 6.0, -5.4, *AC1[9:27], 14.5, -14.5, *AC1[29:]]
 #: EXAC4 (type 8): TR KA TA TB TC Vrmax Vrmin VImax VImin (3-11), KC (17)
 AC4 = [8, 1, 0.02, 200, 0.04, 10.0, 1.0, 5.0, -4.0, 0.1, -0.1, 0, 0, 0, 0, 0, 0.1]
 ROWS = {
@@ -85,6 +88,7 @@ ROWS = {
     "ESST1A": ST1A,
     "EXAC1": AC1,
     "EXAC4": AC4,
+    "ESAC1A": AC1A,
 }
 EFD0, VT0, VB0 = 1.9, 1.02, 4.0  # initial field and terminal voltage, ST3 V_B
 
@@ -324,6 +328,43 @@ def test_exac1_exciter_integrates_vr_minus_vfe_and_vr_is_non_windup():
     x[2, 0] = 8.0
     exc.derivatives(P, x, 0, VT0, 1.0, EFD0, EFD0, dx, True, 0.0)
     assert x[2, 0] == 8.0 and dx[2, 0] == 0.0
+
+
+def test_esac1a_with_the_same_limits_is_exac1():
+    """ESAC1A whose V_A limits are EXAC1's V_R limits (so the V_R clip never acts) has
+    EXAC1's initial point and derivatives (IEEE 421.5-2005 AC1A without UEL/OEL)."""
+    same = [9, *AC1[1:27], AC1[7], AC1[8], *AC1[29:]]
+    (P7, x7), (P9, x9) = started(AC1), started(same)
+    np.testing.assert_array_equal(x7, x9)
+    x7[2, 0] = x9[2, 0] = 7.0  # V_R away from rest
+    np.testing.assert_array_equal(derivatives(P7, x7), derivatives(P9, x9))
+
+
+def test_esac1a_va_is_non_windup_and_vr_clips_it():
+    """ESAC1A: V_A inside [VAmin, VAmax] but above Vrmax drives the exciter with V_R =
+    Vrmax (T_E dV_E/dt = 6 - V_FE0); V_A beyond VAmax driven outward is put back on
+    it with a zero derivative (IEEE 421.5 E.5)."""
+    P, x = started(AC1A)
+    VFE0 = x[4, 0]  # the rate-feedback state rests at V_FE0
+    x[2, 0] = 10.0
+    dx = derivatives(P, x)
+    assert x[2, 0] == 10.0 and dx[3, 0] == pytest.approx((6.0 - VFE0) / 0.8, rel=1e-12)
+    up = P.copy()
+    up[0, exc.E.VREF] += 1.0
+    x[2, 0] = 15.0
+    dx = derivatives(up, x)
+    assert x[2, 0] == 14.5 and dx[2, 0] == 0.0
+
+
+def test_esac1a_exciter_voltage_does_not_go_negative():
+    """ESAC1A's V_E is held at 0 when V_R - V_FE drives it down (the rectifier's diodes;
+    IEEE 421.5-2005 6.1); EXAC1's at the same point falls through 0."""
+    for row, held in ((AC1A, True), (AC1, False)):
+        P, x = started(row)
+        x[3, 0], x[2, 0] = 0.0, -5.0
+        dx = derivatives(P, x)
+        assert x[3, 0] == 0.0 and (dx[3, 0] == 0.0) == held
+        assert held or dx[3, 0] < 0
 
 
 def test_exac4_output_limits_fall_with_the_field_current():
