@@ -22,6 +22,8 @@ from stabctl.models.machines import MACHINE
 from stabctl.models.pss import PSS
 from stabctl.smallsignal.linearise import linearise
 
+from model_rows import EXST1, IEEEG1
+
 pytestmark = pytest.mark.andes  # every test reads ANDES's case files
 andes = pytest.importorskip("andes")
 CASES = Path(andes.__file__).parent / "cases"
@@ -619,36 +621,7 @@ def test_tgov1_valve_is_non_windup():
 
 
 def ieeeg1_params():
-    g = GovernorTable.from_matrix(
-        [
-            [
-                3,
-                1,
-                1,
-                20,
-                0.95,
-                0.2,
-                0.1,
-                0,
-                0.1,
-                0,
-                0,
-                0,
-                0,
-                8.72,
-                0.5,
-                -1,
-                0,
-                0,
-                0,
-                0,
-                0.3,
-                0,
-                0.6,
-                0.1,
-            ]
-        ]
-    )
+    g = GovernorTable.from_matrix([IEEEG1])
     return gov.governor_params(load_case("kundur").replace(governors=g))
 
 
@@ -703,36 +676,7 @@ def test_flat_run_with_ieeex1_and_ieeeg1_has_no_drift(kundur_tables):
     exc_con[:, 0] = 1  # IEEEX1: solid-fed DC1
     exc_con[:, 12], exc_con[:, 14] = exp_saturation(3.1, 0.33, 2.3, 0.1)
     rows = np.tile(
-        GovernorTable.from_matrix(
-            [
-                [
-                    3,
-                    1,
-                    1,
-                    20,
-                    0.95,
-                    0.2,
-                    0.1,
-                    0,
-                    0.1,
-                    0,
-                    0,
-                    0,
-                    0,
-                    8.72,
-                    0.5,
-                    -1,
-                    0,
-                    0,
-                    0,
-                    0,
-                    0.3,
-                    0,
-                    0.6,
-                    0.1,
-                ]
-            ]
-        ).matrix(),
+        GovernorTable.from_matrix([IEEEG1]).matrix(),
         (4, 1),
     )
     rows[:, 1] = [1, 2, 3, 4]
@@ -751,37 +695,7 @@ def test_flat_run_with_ieeex1_and_ieeeg1_has_no_drift(kundur_tables):
 def test_flat_run_with_exst1_has_no_drift(kundur_tables):
     """WECC's EXST1 data (T_C = 0: no transient gain; with T_C/T_B = 5 and no PSS, Kundur's
     inter-area mode is unstable and round-off grows), K_C = 0.1 so the I_fd limit acts."""
-    e = np.tile(
-        ExciterTable.from_matrix(
-            [
-                [
-                    4,
-                    1,
-                    0.02,
-                    50,
-                    0.02,
-                    0.02,
-                    0.0,
-                    4.0,
-                    -3.0,
-                    0.2,
-                    -0.2,
-                    0,
-                    0,
-                    0,
-                    0,
-                    0,
-                    0.1,
-                    0,
-                    0,
-                    0,
-                    0.01,
-                    1.0,
-                ]
-            ]
-        ).matrix(),
-        (4, 1),
-    )
+    e = np.tile(ExciterTable.from_matrix([[*EXST1[:6], 0.0, *EXST1[7:]]]).matrix(), (4, 1))
     e[:, 1] = [1, 2, 3, 4]
     sim = Simulator(replaced_kundur(e, kundur_tables.tg_con))
     residual, where = sim.model_for([]).initial_residual

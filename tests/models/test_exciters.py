@@ -11,6 +11,8 @@ from stabctl.io import load_case
 from stabctl.models import exciters as exc
 from stabctl.models.declaration import check_packed, layout
 
+from model_rows import EXST1 as ST1
+
 #: exc_con rows (PST manual 3.11 Table 2, 3.13 Table 3; stabctl columns 21-25)
 SMP = [0, 1, 0.0, 200, 0.05, 10.0, 1.0, 5.0, -5.0]
 SCRX = SMP + [0] * 9 + [1, 0]  # bus fed: exc_con column 19
@@ -38,30 +40,6 @@ ST3 = [
     8.63,
     1.0,
     6.53,
-]
-ST1 = [
-    4,
-    1,
-    0.02,
-    50,
-    0.02,
-    0.02,
-    0.1,
-    4.0,
-    -3.0,
-    0.2,
-    -0.2,
-    0,
-    0,
-    0,
-    0,
-    0,
-    0.1,
-    0,
-    0,
-    0,
-    0.01,
-    1.0,
 ]
 #: ESST1A (type 6): TR KA TA TB TC Vrmax Vrmin VImax VImin (columns 3-11), KC (17), KF TF
 #: (21-22), TC1 TB1 VAmax VAmin KLR ILR (26-31); with EFD0 = 1.9 the field current limiter

@@ -12,35 +12,11 @@ from stabctl.errors import CaseError
 from stabctl.io import load_case
 from stabctl.models import governors as gov
 
+from model_rows import IEEEG1
+
 #: tg_con rows (PST manual tg; stabctl types 2-5, docs/pst_models.md 4.1-4.3)
 TG = [1, 1, 1, 20, 1.2, 0.4, 0.5, 2.0, 1.0, 3.0, 0.0]
 TGOV1 = [2, 1, 1, 20, 1.2, 0.49, 7.0, 2.1, 0, 0, 0.1, 2.0]
-IEEEG1 = [
-    3,
-    1,
-    1,
-    20,
-    0.95,
-    0.2,
-    0.1,
-    0,
-    0.1,
-    0,
-    0,
-    0,
-    0,
-    8.72,
-    0.5,
-    -1,
-    0,
-    0,
-    0,
-    0,
-    0.3,
-    0,
-    0.6,
-    0.1,
-]
 #: HYGOV: GMAX 1, T_g 0.5, T_f 0.05, T_w 1.2, A_t 1.1, GMIN 0, D_turb 0.5, VELM 0.2,
 #: R 0.04, r 0.5, q_NL 0.08, K_g = 1/(r T_r) = 0.4, velm_rel 0
 HYGOV = [
