@@ -60,7 +60,7 @@ from stabctl.errors import InputError
 from stabctl.estimation.models import FrequencyTuning, MachineModels, SwingTuning
 from stabctl.estimation.pmu import Frame
 from stabctl.estimation.settings import PMUSettings
-from stabctl.models._declared import layout
+from stabctl.models.declaration import layout
 from stabctl.models.machines import EM, SUB, TRA
 from stabctl.models.machines import _dq as rotor_dq  # the one compiled dq transform
 
@@ -101,7 +101,7 @@ _MACHINE_ROW = (
     ("GU", NG, lambda m: m.governor.g_unit),  # g in equilibrium at P_m = 1
 )
 #: First column of each block of `_MACHINE_ROW` (``pr[C.POT]``, ``pr[C.GC:C.GC + NG]``);
-#: module-global, so a compile-time constant to numba (as `stabctl.models._declared.layout`).
+#: module-global, so a compile-time constant to numba (as `stabctl.models.declaration.layout`).
 C = namedtuple("MachineColumns", [name for name, _, _ in _MACHINE_ROW])(
     *(sum(width for _, width, _ in _MACHINE_ROW[:j]) for j in range(len(_MACHINE_ROW)))
 )
