@@ -1,7 +1,7 @@
-"""Which of ANDES 2.0's own case files with dynamics stabctl imports (issue 29's coverage
-table): every ``.xlsx`` and ``.json`` under ``andes/cases`` holding a dynamic device
-(a model of ANDES's machine, exciter, governor, stabiliser, renewable, distributed or
-motor groups) is read with :func:`stabctl.io.andes_case.read_andes_case`
+"""Which of ANDES 2.0's own case files with dynamics stabctl imports (the coverage table
+of docs/andes_coverage.md): every ``.xlsx`` and ``.json`` under ``andes/cases`` holding a
+dynamic device (a model of ANDES's machine, exciter, governor, stabiliser, renewable,
+distributed or motor groups) is read with :func:`stabctl.io.andes_case.read_andes_case`
 (``on_unsupported="skip"``).  A file imports when nothing but ANDES's own disturbance
 records (Toggle, Fault, Alter), which a stabctl run takes as events instead, is left out.
 
