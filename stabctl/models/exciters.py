@@ -4,21 +4,24 @@ DC1 / DC2 dc commutator exciters), `exc_st3` (type 3, IEEE ST3), stabctl's PSS/E
 second lag, s K_F/((1 + s T_F1)(1 + s T_F2))), `ESST1A` (type 6, IEEE ST1A with its
 field current limiter), `EXAC1` (type 7, IEEE AC1 with its rectifier regulation),
 `EXAC4` (type 8, IEEE AC4) and `ESAC1A` (type 9, IEEE 421.5 AC1A: EXAC1 whose regulator
-V_A and output V_R have limits of their own); smpexc also serves PSS/E's SCRX (bus fed:
+V_A and output V_R have limits of their own), `AC8B` (type 10, IEEE 421.5 AC8B: the AC
+exciter behind a PID); smpexc also serves PSS/E's SCRX (bus fed:
 the output times the terminal voltage, exc_con column 19 ``bus_fed``).
 
 Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
 Table 2, 3.13 Table 3); PSS/E Model Library EXST1 (IEEE Std 421.5 ST1A simplified),
 IEEET2 (IEEE Committee Report 1968 type 2), ESST1A (IEEE Std 421.5-2016 ST1A; ANDES 2.0
 ``esst1a.py``), EXAC1 and EXAC4 (IEEE 1981 AC1, AC4; ANDES 2.0 ``exac1.py``,
-``exac4.py``), ESAC1A (IEEE Std 421.5-2005 AC1A; ANDES 2.0 ``esac1a.py``) and SCRX
+``exac4.py``), ESAC1A (IEEE Std 421.5-2005 AC1A; ANDES 2.0 ``esac1a.py``), AC8B (ANDES
+2.0 ``ac8b.py``) and SCRX
 (bus-fed or solid-fed static exciter); equations, limits and PST's quirks in
 docs/pst_models.md section 2.  A time constant below 1e-3 s means the block is
 absent (no state).  States, named per type in STATE_NAMES: smpexc (V_TR, V_As, Efd);
 exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As, V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R,
 R_f); IEEET2 (exc_dc12's and V_F, the second feedback lag); ESST1A (V_TR, V_As, V_A, R_f,
 V_As1); EXAC1 (V_TR, V_As, V_R, V_E, R_f); ESAC1A (V_TR, V_As, V_A, V_E, R_f); EXAC4
-(V_TR, V_As, V_R).  Units: pu on the machine base; times in s.
+(V_TR, V_As, V_R); AC8B (V_TR, PID integral, V_R, V_E, PID derivative).  Units: pu on
+the machine base; times in s.
 
 The kernels read the packed parameters by name (`E`, from :data:`PACKED`), are built of
 the control blocks of `stabctl.models.blocks`, and are one function per type behind the
@@ -39,6 +42,7 @@ from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import CaseError
 from stabctl.models import machines as mac
 from stabctl.models.blocks import (
+    GAIN_BEFORE,
     GAIN_OVER_T,
     LBND,
     clip,
@@ -100,11 +104,12 @@ EXCITER = Family(
             "code",
             1,
             integer=True,
-            choices=(0, 1, 2, 3, 4, 5, 6, 7, 8, 9),
+            choices=(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10),
             label="exciter type",
             doc="0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1, "
             "5 IEEET2 (DC1 with a two-lag rate feedback), 6 ESST1A (IEEE 421.5 ST1A), "
-            "7 EXAC1 (IEEE AC1), 8 EXAC4 (IEEE AC4), 9 ESAC1A (IEEE 421.5 AC1A)",
+            "7 EXAC1 (IEEE AC1), 8 EXAC4 (IEEE AC4), 9 ESAC1A (IEEE 421.5 AC1A), 10 AC8B "
+            "(IEEE 421.5 AC8B, PID regulator)",
         ),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("TR", "s", 3, lo=0.0, doc="input filter time constant"),
@@ -221,6 +226,12 @@ EXCITER = Family(
             doc="ST3: upper limit of the source voltage V_B = V_E F_EX (PSS/E ESST3A "
             "VBMAX); 0 none (PST exc_st3)",
         ),
+        Param("Kpid_P", "", 34, doc="AC8B: PID proportional gain"),
+        Param("Kpid_I", "1/s", 35, doc="AC8B: PID integral gain"),
+        Param("Kpid_D", "s", 36, doc="AC8B: PID derivative gain"),
+        Param("Td", "s", 37, lo=0.0, doc="AC8B: PID derivative time constant"),
+        Param("VPmax", "pu", 38, doc="AC8B: PID output upper limit"),
+        Param("VPmin", "pu", 39, doc="AC8B: PID output lower limit"),
     ),
     dyr=(
         # SEXS -> smpexc: T_C = (TA/TB) TB is computed
@@ -433,6 +444,58 @@ EXCITER = Family(
             kind=9,
             andes=("ESAC1A",),
         ),
+        # AC8B -> type 10 (IEEE 421.5 AC8B as PowerWorld's AC8B record and ANDES 2.0
+        # ac8b.py): ANDES's parameter names and order; VFEMAX and VEMIN, which ANDES's
+        # model leaves out, are not read
+        DyrModel(
+            "AC8B",
+            (
+                "TR",
+                "kP",
+                "kI",
+                "kD",
+                "Td",
+                "VPMAX",
+                "VPMIN",
+                "VRMAX",
+                "VRMIN",
+                "VFEMAX",
+                "VEMIN",
+                "TA",
+                "KA",
+                "TE",
+                "KC",
+                "KD",
+                "KE",
+                "E1",
+                "SE1",
+                "E2",
+                "SE2",
+            ),
+            _upper(
+                "TR",
+                "VPmax",
+                "VPmin",
+                "Vrmax",
+                "Vrmin",
+                "TA",
+                "KA",
+                "TE",
+                "KC",
+                "KD",
+                "KE",
+                "E1",
+                "SE1",
+                "E2",
+                "SE2",
+                Kpid_P="kP",
+                Kpid_I="kI",
+                Kpid_D="kD",
+                Td="Td",
+            ),
+            kind=10,
+            andes=("AC8B",),
+        ),
         # ESST1A -> type 6; UEL (no under-excitation limiter is modelled: no signal) and
         # VOS (1: the stabiliser at the voltage error) are checked by the mapper
         DyrModel(
@@ -536,7 +599,7 @@ EXCITER = Family(
     ),
 )
 
-SMP, DC1, DC2, ST3, ST1, T2, ST1A, AC1, AC4, AC1A = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
+SMP, DC1, DC2, ST3, ST1, T2, ST1A, AC1, AC4, AC1A, AC8B = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10
 STATE_NAMES = {
     SMP: ("VTR", "VAs", "Efd"),
     ST3: ("VTR", "VAs", "VR"),
@@ -548,17 +611,22 @@ STATE_NAMES = {
     AC1: ("VTR", "VAs", "VR", "VE", "Rf"),
     AC4: ("VTR", "VAs", "VR"),
     AC1A: ("VTR", "VAs", "VA", "VE", "Rf"),
+    AC8B: ("VTR", "PIDi", "VR", "VE", "PIDd"),
 }
 #: the types whose equations read the machine's field current (`field_current`)
-READS_IFD = (ST1, ST1A, AC1, AC4, AC1A)
+READS_IFD = (ST1, ST1A, AC1, AC4, AC1A, AC8B)
 #: the AC exciters with an exciter voltage V_E and PSS/E's quadratic saturation: EXAC1,
-#: ESAC1A
-AC_KINDS = (AC1, AC1A)
+#: ESAC1A, AC8B
+AC_KINDS = (AC1, AC1A, AC8B)
+#: AC8B's PID tracking anti-windup gain (ANDES 2.0 ac8b.py config ``ks``)
+PID_TRACKING = 2.0
 
 #: exc_con fields (stabctl.models.exciters.EXCITER) the kernels take as the table gives them:
 #: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P)) and
-#: 26-32 (ESST1A, EXAC1, ESAC1A)
-TABLE_FIELDS = tuple(n for n in EXCITER.names[2:20] + EXCITER.names[25:32] if n != "thetaP")
+#: 26-32 (ESST1A, EXAC1, ESAC1A) and 34-39 (AC8B's PID)
+TABLE_FIELDS = tuple(
+    n for n in EXCITER.names[2:20] + EXCITER.names[25:32] + EXCITER.names[33:39] if n != "thetaP"
+)
 #: the packed parameter matrix of the compiled kernels, (column name, ExciterParams
 #: attribute) per column: exc_con columns 1-20 in declared order (the machine's row for
 #: the machine number, K_P exp(j theta_P) as its real and imaginary parts), then the
@@ -631,6 +699,11 @@ class ExciterParams(Declared):
         return self.TB >= LBND
 
     @property
+    def has_pid_d(self):
+        """AC8B with the PID's derivative branch (K_D != 0, T_D >= 1e-3 s)."""
+        return (self.kind == AC8B) & (self.Kpid_D != 0) & (self.Td >= LBND)
+
+    @property
     def has_TA(self):
         return self.TA >= LBND
 
@@ -678,10 +751,10 @@ class ExciterParams(Declared):
     def has_state(self) -> np.ndarray:
         """Boolean (n_slots, n_exc): the slots that are states (docs/modal.md)."""
         act = np.zeros((6, self.n), bool)
-        act[0], act[1] = self.has_TR, self.has_TB
+        act[0], act[1] = self.has_TR, self.has_TB | (self.kind == AC8B)
         act[2] = (self.kind == ST3) | self.has_TA
         act[3] = self.has_Rf | self.is_ac
-        act[4] = self.is_dc | self.has_TB1 | (self.is_ac & self.has_Rf)
+        act[4] = self.is_dc | self.has_TB1 | (self.is_ac & self.has_Rf) | self.has_pid_d
         act[5] = self.has_VF
         return act[: self.n_slots()]
 
@@ -701,6 +774,7 @@ class ExciterParams(Declared):
             ("exc_con T_E", self.TE, self.is_dc | self.is_ac),
             ("exc_con T_F", self.TF, self.has_Rf),
             ("exc_con T_F2", self.TF2, self.has_VF),
+            ("exc_con T_D", self.Td, self.has_pid_d),
         )
 
 
@@ -768,6 +842,7 @@ def _check_dc(e) -> None:
         AC1: (("TA", "TA"), ("TE", "TE")),
         AC4: (("TA", "TA"),),
         AC1A: (("TA", "TA"), ("TE", "TE")),
+        AC8B: (("TA", "TA"), ("TE", "TE")),
     }
     for r in np.nonzero(np.isin(e.type, (*DC_KINDS, *READS_IFD)))[0]:
         kind = int(e.type[r])
@@ -921,8 +996,8 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
         x[1] = np.where(ac, VFE / p.KA, x[1])
         x[2] = np.where(ac, VFE, x[2])
         x[3] = np.where(ac, VE, x[3])
-        x[4] = np.where(ac, VFE, x[4])
-        VA = np.where(ac, VFE / p.KA, VA)
+        x[4] = np.where(ac & (p.kind != AC8B), VFE, x[4])  # AC8B: its PID's washout, 0
+        VA = np.where(ac & (p.kind != AC8B), VFE / p.KA, np.where(ac, 0.0, VA))  # PID: 0
     Vref = eterm + np.where(st3, VI, VA)
     return x[: p.n_slots()], Vref, p
 
@@ -939,10 +1014,11 @@ def ac_initial_exciter(p: ExciterParams, Efd):
     voltage V_E0 solving V_E F_EX(K_C I_fd0/V_E) = Efd0 (`blocks.rectifier_loading`,
     increasing in V_E; I_fd0 = Efd0) and V_FE0 = K_E V_E0 + S_E(V_E0) V_E0 + K_D I_fd0 (=
     V_R0, and ESAC1A's V_A0); raises CaseError if V_R0 is outside [Vrmin, Vrmax] (ESAC1A:
-    or V_A0 outside [VAmin, VAmax]) or V_R0/K_A has no V_E0."""
+    or V_A0 outside [VAmin, VAmax]; AC8B: or V_R0/K_A outside [VPmin, VPmax]) or V_R0/K_A
+    has no V_E0."""
     VE, VFE = np.zeros(p.n), np.zeros(p.n)
     for i in np.nonzero(p.is_ac)[0]:
-        name = "EXAC1" if p.kind[i] == AC1 else "ESAC1A"
+        name = {AC1: "EXAC1", AC1A: "ESAC1A", AC8B: "AC8B"}[int(p.kind[i])]
         efd0 = ifd0 = float(Efd[i])
         if efd0 <= 0:
             raise CaseError(
@@ -958,6 +1034,8 @@ def ac_initial_exciter(p: ExciterParams, Efd):
         limits = [("V_R", "Vrmin, Vrmax", p.Vrmin[i], p.Vrmax[i])]
         if p.kind[i] == AC1A:
             limits.append(("V_A", "VAmin, VAmax", p.VAmin[i], p.VAmax[i]))
+        if p.kind[i] == AC8B:  # the PID's output at rest, V_R0/K_A
+            limits.append(("V_R/K_A", "VPmin, VPmax", p.VPmin[i] * p.KA[i], p.VPmax[i] * p.KA[i]))
         for what, names, lo, hi in limits:
             if beyond(VFE[i], lo, hi):
                 raise CaseError(
@@ -1049,7 +1127,7 @@ def field_current(P, i, MP, xm, cur):
     equations read it (:data:`READS_IFD`: EXST1, ESST1A), 0 for the other types; MP, xm,
     cur as `field_voltage`."""
     kind = P[i, E.KIND]
-    if kind == ST1 or kind == ST1A or kind == AC1 or kind == AC4 or kind == AC1A:
+    if kind in READS_IFD:
         return mac.field_current(MP, xm, cur, int(P[i, E.MAC]))
     return 0.0
 
@@ -1102,7 +1180,7 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
         return _st1_field_voltage(P, x, i, VTR_alg, ifd)
     if kind == ST1A:
         return _st1a_field_voltage(P, x, i, VTR_alg, ifd)
-    if kind == AC1 or kind == AC1A:
+    if kind == AC1 or kind == AC1A or kind == AC8B:
         return _ac1_field_voltage(P, x, i, ifd)
     if kind == AC4:
         return clip(x[2, i], P[i, E.VRMIN] - P[i, E.KC] * ifd, P[i, E.VRMAX] - P[i, E.KC] * ifd)
@@ -1135,6 +1213,8 @@ def derivatives(P, x, i, eterm, pss_out, efd, ifd, dx, ieee, reach):
         _st1a_derivatives(P, x, i, err, ifd, dx)
     elif kind == AC1 or kind == AC1A:
         _ac1_derivatives(P, x, i, err, ifd, dx)
+    elif kind == AC8B:
+        _ac8b_derivatives(P, x, i, err, ifd, dx)
     elif kind == AC4:
         _ac4_derivatives(P, x, i, err, dx)
     else:
@@ -1333,10 +1413,7 @@ def _ac1_derivatives(P, x, i, err, ifd, dx):
     non-windup (EXAC1: V_R on [Vrmin, Vrmax]; ESAC1A: V_A on [VAmin, VAmax], then V_R = V_A
     clipped to [Vrmin, Vrmax]), the exciter T_E dV_E/dt = V_R - V_FE (ESAC1A: V_E >= 0,
     non-windup: IEEE 421.5-2005 6.1, as OpenIPSL's and Dynawo's AC1A)."""
-    VFE = (
-        dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ], x[3, i])
-        + P[i, E.KD] * ifd
-    )
+    VFE = _ac_exciter_feedback(P, x, i, ifd)
     if P[i, E.KF] != 0:
         VF, dx[4, i] = washout(VFE, x[4, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
         err = err - VF
@@ -1346,10 +1423,49 @@ def _ac1_derivatives(P, x, i, err, ifd, dx):
     else:
         lo, hi = P[i, E.VRMIN], P[i, E.VRMAX]
     x[2, i], dx[2, i] = nonwindup_lag(P[i, E.KA] * u, x[2, i], P[i, E.TA], lo, hi, _IEEE_RULE, 0.0)
-    VR = clip(x[2, i], P[i, E.VRMIN], P[i, E.VRMAX])
+    _ac_exciter(P, x, i, clip(x[2, i], P[i, E.VRMIN], P[i, E.VRMAX]), VFE, dx)
+
+
+@kernel(inline="always")
+def _ac_exciter_feedback(P, x, i, ifd):
+    """V_FE = K_E V_E + S_E(V_E) V_E + K_D I_fd of the AC exciters (PSS/E's quadratic
+    saturation, `dc_feedback`)."""
+    return (
+        dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ], x[3, i])
+        + P[i, E.KD] * ifd
+    )
+
+
+@kernel(inline="always")
+def _ac_exciter(P, x, i, VR, VFE, dx):
+    """The AC exciters' T_E dV_E/dt = V_R - V_FE; ESAC1A and AC8B hold V_E >= 0,
+    non-windup (the rectifier's diodes)."""
     dx[3, i] = (VR - VFE) / P[i, E.TE]
-    if P[i, E.KIND] == AC1A:  # the diodes: V_E >= 0, non-windup
+    if P[i, E.KIND] != AC1:
         x[3, i], dx[3, i] = nonwindup(x[3, i], dx[3, i], 0.0, np.inf, _IEEE_RULE, 0.0)
+
+
+# -- AC8B (IEEE 421.5-2005 AC8B as ANDES 2.0 ac8b.py, PowerWorld's AC8B record): a PID
+# -- with tracking anti-windup, ys = K_P u + x_i + K_D (u - x_d)/T_D, y = ys clipped to
+# -- [VPmin, VPmax], dx_i/dt = K_I (u - k_s (ys - y)) (k_s = 2, ANDES's PIDTrackAW),
+# -- T_D dx_d/dt = u - x_d; K_A/(1 + s T_A) non-windup on [Vrmin, Vrmax] -> V_R; the
+# -- exciter as EXAC1's (V_E >= 0).  VFEMAX and VEMIN are not modelled (ANDES neither)
+
+
+@kernel(inline="always")
+def _ac8b_derivatives(P, x, i, err, ifd, dx):
+    """AC8B (docs/pst_models.md 2.7): the PID on the voltage error (states PIDi, PIDd),
+    the regulator lag V_R, the exciter V_E."""
+    ys = P[i, E.KPID_P] * err + x[1, i]
+    if P[i, E.KPID_D] != 0 and P[i, E.TD] >= LBND:
+        yd, dx[4, i] = washout(err, x[4, i], P[i, E.TD], P[i, E.KPID_D], GAIN_BEFORE)
+        ys = ys + yd
+    y = clip(ys, P[i, E.VPMIN], P[i, E.VPMAX])
+    dx[1, i] = P[i, E.KPID_I] * (err - PID_TRACKING * (ys - y))
+    x[2, i], dx[2, i] = nonwindup_lag(
+        P[i, E.KA] * y, x[2, i], P[i, E.TA], P[i, E.VRMIN], P[i, E.VRMAX], _IEEE_RULE, 0.0
+    )
+    _ac_exciter(P, x, i, x[2, i], _ac_exciter_feedback(P, x, i, ifd), dx)
 
 
 # -- EXAC4 (IEEE 1981 AC4 as PSS/E EXAC4 and ANDES 2.0 exac4.py): V_I limited, lead-lag,

@@ -53,6 +53,11 @@ AC1 += [0.03, 1.0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.38]
 #: ESAC1A (type 9): EXAC1's row with V_R limited to [-5.4, 6] and V_A to [-14.5, 14.5]
 #: (VAmax, VAmin: columns 28-29)
 AC1A = [9, *AC1[1:7], 6.0, -5.4, *AC1[9:27], 14.5, -14.5, *AC1[29:]]
+#: AC8B (type 10): EXAC1's exciter (K_E T_E, saturation, K_C, K_D) with K_A 40, T_A 0.04,
+#: V_R on [1, 7.3], no lead-lag or rate feedback, and the PID (columns 34-39): K_P 3,
+#: K_I 1, K_D 1, T_D 0.2, output on [-0.5, 0.5]
+AC8B = [10, 1, 0.0, 40, 0.04, 0, 0, 7.3, 1.0, *AC1[9:20], 0, 0, *AC1[22:31], 0.38, 0]
+AC8B += [3.0, 1.0, 1.0, 0.2, 0.5, -0.5]
 #: EXAC4 (type 8): TR KA TA TB TC Vrmax Vrmin VImax VImin (3-11), KC (17)
 AC4 = [8, 1, 0.02, 200, 0.04, 10.0, 1.0, 5.0, -4.0, 0.1, -0.1, 0, 0, 0, 0, 0, 0.1]
 ROWS = {
@@ -67,6 +72,7 @@ ROWS = {
     "EXAC1": AC1,
     "EXAC4": AC4,
     "ESAC1A": AC1A,
+    "AC8B": AC8B,
 }
 EFD0, VT0, VB0 = 1.9, 1.02, 4.0  # initial field and terminal voltage, ST3 V_B
 
@@ -343,6 +349,29 @@ def test_esac1a_exciter_voltage_does_not_go_negative():
         dx = derivatives(P, x)
         assert x[3, 0] == 0.0 and (dx[3, 0] == 0.0) == held
         assert held or dx[3, 0] < 0
+
+
+def test_ac8b_starts_with_the_reference_at_the_terminal_voltage():
+    """AC8B at rest (ANDES 2.0 ac8b.py): the PID's integral holds V_R0/K_A = V_FE0/K_A,
+    its derivative washout 0, and V_ref = V_t (the PID integrates any error)."""
+    P, x = started(AC8B)
+    assert P[0, exc.E.VREF] == VT0
+    assert x[1, 0] == pytest.approx(x[2, 0] / 40, rel=1e-15) and x[4, 0] == 0.0
+
+
+def test_ac8b_pid_tracks_its_output_limit():
+    """AC8B's PID (ANDES PIDTrackAW): ys = K_P u + x_i + K_D (u - x_d)/T_D, y = ys clipped
+    to [VPmin, VPmax], dx_i/dt = K_I (u - 2 (ys - y)), T_D dx_d/dt = u - x_d; the
+    regulator lag follows K_A y."""
+    P, x = started(AC8B)
+    u = 0.1  # a voltage error: ys = 3 0.1 + x_i + 1 0.1/0.2 = 0.8 + x_i > 0.5
+    up = P.copy()
+    up[0, exc.E.VREF] += u
+    dx = derivatives(up, x)
+    ys = 3 * u + x[1, 0] + 1 * u / 0.2
+    assert dx[1, 0] == pytest.approx(1 * (u - 2 * (ys - 0.5)), rel=1e-12)
+    assert dx[4, 0] == pytest.approx(u / 0.2, rel=1e-12)
+    assert dx[2, 0] == pytest.approx((40 * 0.5 - x[2, 0]) / 0.04, rel=1e-12)
 
 
 def test_exac4_output_limits_fall_with_the_field_current():
