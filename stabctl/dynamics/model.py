@@ -27,7 +27,13 @@ from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
 from stabctl.models import pss as pss_
-from stabctl.network.solution import NonConformingLoads, ReducedNetwork, reduce_network, solve_nc
+from stabctl.network.solution import (
+    KeptLoads,
+    NonConformingLoads,
+    ReducedNetwork,
+    reduce_network,
+    solve_nc,
+)
 
 FAULT_B = 1e7  # PST's bolted-fault shunt susceptance (1/1e-7)
 OPEN_X = 1e7  # PST opens a branch by giving it this reactance (charging stays)
@@ -571,25 +577,33 @@ CURRENT_ITERATIONS = 50
 
 
 @kernel
-def _converter_fixed_point(p, xi, net, psi, V_nc, S_extra, I_dev, held, it):
+def _drawn_currents(p, xi, V_nc):
+    """The converters' currents drawn at the kept buses at voltages V_nc, summed per bus
+    (`conv.drawn_current`; power per pu voltage, `KeptLoads.I_dev`), (n_nc,) complex."""
+    I_dev = np.zeros(V_nc.size, np.complex128)
+    for k in range(p.n_ibr):
+        pos = int(p.IP[k, conv.C.POS])
+        I_dev[pos] += conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]))
+    return I_dev
+
+
+@kernel
+def _converter_fixed_point(p, xi, net, psi, V_nc, loads, held, it):
     """Fixed-point iteration of the network solution and the converters' drawn currents
     when one depends on its bus voltage (REGCA1's LVG and HVG, `conv.drawn_current`):
-    I_dev recomputed at the solved voltages and the network solved again until no current
-    moves by more than CURRENT_TOL.  Returns the total load-iteration count, -1 without
-    convergence (either loop)."""
+    loads.I_dev recomputed at the solved voltages (in place) and the network solved again
+    until no current moves by more than CURRENT_TOL.  Returns the total load-iteration
+    count, -1 without convergence (either loop)."""
     _Y11, _Y12, Y21, Y22, Z22, _R = net
     for _ in range(CURRENT_ITERATIONS):
-        new = np.zeros(V_nc.size, np.complex128)
-        for k in range(p.n_ibr):
-            pos = int(p.IP[k, conv.C.POS])
-            new[pos] += conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]))
+        new = _drawn_currents(p, xi, V_nc)
         moved = 0.0
         for i in range(V_nc.size):
-            moved = max(moved, abs(new[i] - I_dev[i]))
+            moved = max(moved, abs(new[i] - loads.I_dev[i]))
         if moved <= CURRENT_TOL:
             return it
-        assign(I_dev, new)
-        more = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, I_dev, held)
+        assign(loads.I_dev, new)
+        more = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
         if more < 0:
             return -1
         it += more
@@ -640,18 +654,16 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     xi, dxi = x[o : o + ri * ni].reshape(ri, ni), dx[o : o + ri * ni].reshape(ri, ni)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
-    I_dev = np.zeros(V_nc.size, np.complex128)
     v_dep = False
     for k in range(ni):
-        pos = int(p.IP[k, conv.C.POS])
         conv.clamp_states(p.IP, xi, k)
-        I_dev[pos] += conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]))
         v_dep = v_dep or conv.voltage_dependent(p.IP, k)
-    it = solve_nc(Y21, Y22, Z22, psi, p.S_P, p.I0, p.Y_low, V_nc, S_extra, I_dev, held)
+    loads = KeptLoads(p.S_P, p.I0, p.Y_low, S_extra, _drawn_currents(p, xi, V_nc))
+    it = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
     if it < 0:
         return -1
     if v_dep:  # currents that depend on the voltage (REGCA1): repeat until they agree
-        it = _converter_fixed_point(p, xi, net, psi, V_nc, S_extra, I_dev, held, it)
+        it = _converter_fixed_point(p, xi, net, psi, V_nc, loads, held, it)
         if it < 0:
             return -1
     assign(cur, Y11 @ psi + Y12 @ V_nc)

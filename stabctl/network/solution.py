@@ -15,6 +15,7 @@ with I_nc the current injected at the kept buses by their loads and devices.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import llvmlite.binding as llvm
 import numpy as np
@@ -142,9 +143,24 @@ class NonConformingLoads:
     Y_low: np.ndarray
 
 
+class KeptLoads(NamedTuple):
+    """What the kept buses draw in one network solution (`solve_nc`), arrays (n_nc,)
+    complex: the non-conforming loads S_P, I0, Y_low (`NonConformingLoads`), the extra
+    constant power S_extra (e.g. storage, dropped below 0.5 pu with the loads) and the
+    converters' currents I_dev (power per pu voltage, drawn at every voltage)."""
+
+    S_P: np.ndarray
+    I0: np.ndarray
+    Y_low: np.ndarray
+    S_extra: np.ndarray
+    I_dev: np.ndarray
+
+
 @kernel
-def _load_currents(V, S_P, I0, Y_low, S_extra, I_dev, low, out):
-    """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out)."""
+def _load_currents(V, loads, low, out):
+    """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out); loads a
+    `KeptLoads`."""
+    S_P, I0, Y_low, S_extra, I_dev = loads
     for i in range(V.size):
         m = abs(V[i])
         if m > V_SWITCH and not low[i]:
@@ -156,10 +172,10 @@ def _load_currents(V, S_P, I0, Y_low, S_extra, I_dev, low, out):
 
 
 @kernel
-def _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, F, low):
+def _load_mismatch(b, Y22, V, loads, F, low):
     """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|.  Buses with low[i]
     are held at their low-voltage impedance model."""
-    _load_currents(V, S_P, I0, Y_low, S_extra, I_dev, low, F)
+    _load_currents(V, loads, low, F)
     F += b + Y22 @ V
     return max_abs(F)
 
@@ -174,14 +190,15 @@ def _held_below(V, held, limit):
 
 
 @kernel
-def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, I_dev, held):
+def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
     """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
 
-    I_load = conj((S_P + S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's
-    low-voltage switch; S_extra, e.g. storage power, is dropped below 0.5 pu with the
-    rest), plus conj(I_dev |V|/V) at every voltage: the converters' currents
-    (`stabctl.models.converters`), I_dev (n_nc,) complex power per pu voltage drawn, a
-    current of fixed magnitude and angle relative to the bus voltage.
+    With loads the `KeptLoads` (S_P, I0, Y_low, S_extra, I_dev): I_load = conj((S_P +
+    S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's low-voltage switch;
+    S_extra, e.g. storage power, is dropped below 0.5 pu with the rest), plus conj(I_dev
+    |V|/V) at every voltage: the converters' currents (`stabctl.models.converters`), I_dev
+    complex power per pu voltage drawn, a current of fixed magnitude and angle relative to
+    the bus voltage.
     V (n_nc,) is the starting point and is updated in place.  First the chord
     iteration V <- V - Z22 F(V) (the loads are small beside the network admittance, so it
     contracts fast and costs one matrix-vector product per step); if that has not converged
@@ -207,32 +224,32 @@ def solve_nc(Y21, Y22, Z22, psi, S_P, I0, Y_low, V, S_extra, I_dev, held):
     V_start = V.copy()
     vmin = np.abs(V_start)
     if held.any():
-        it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, I_dev, F, held, vmin)
+        it = _chord(b, Z22, V, loads, F, held, vmin)
         if it < 0:
             assign(V, V_start)
-            it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, held, vmin)
+            it = _newton_nc(b, Y22, V, loads, held, vmin)
         if it >= 0 and _held_below(V, held, V_RELEASE):
             return it
         held[:] = False
         assign(V, V_start)
         assign(vmin, np.abs(V_start))
-    it = _chord(b, Z22, V, S_P, I0, Y_low, S_extra, I_dev, F, held, vmin)
+    it = _chord(b, Z22, V, loads, F, held, vmin)
     if it >= 0:
         return it
     assign(V, V_start)
-    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, held, vmin)
+    it = _newton_nc(b, Y22, V, loads, held, vmin)
     if it >= 0:
         return it
     low = vmin < V_SWITCH + 0.05  # every bus that came near the switch
     assign(V, V_start)
-    it = _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, low, vmin)
+    it = _newton_nc(b, Y22, V, loads, low, vmin)
     if it >= 0:
         assign(held, low)
     return it
 
 
 @kernel
-def _chord(b, Z22, V, S_P, I0, Y_low, S_extra, I_dev, F, low, vmin):
+def _chord(b, Z22, V, loads, F, low, vmin):
     """Up to 30 chord steps V <- V - Z22 F(V); the step count, or -1 if not converged.
 
     With F(V) = b + Y22 V + I_load(V) the step is V <- -Z22 (b + I_load(V)): one
@@ -243,7 +260,7 @@ def _chord(b, Z22, V, S_P, I0, Y_low, S_extra, I_dev, F, low, vmin):
     """
     w = -(Z22 @ b)
     for it in range(30):
-        _load_currents(V, S_P, I0, Y_low, S_extra, I_dev, low, F)
+        _load_currents(V, loads, low, F)
         V_new = w - Z22 @ F
         step = max_abs(V_new - V)
         assign(V, V_new)
@@ -276,16 +293,17 @@ def _lapack_solve(A, b):
 
 
 @kernel
-def _newton_nc(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, low, vmin):
+def _newton_nc(b, Y22, V, loads, low, vmin):
     """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load);
     vmin keeps the smallest magnitude each bus reached.  Converged when the mismatch is
     below NEWTON_TOL (pu), within NEWTON_MAX_ITER iterations (else -1)."""
+    S_P, I0, Y_low, S_extra, I_dev = loads
     n = V.size
     J = np.empty((2 * n, 2 * n))
     rhs = np.empty(2 * n)
     F = np.empty(n, np.complex128)
     for it in range(NEWTON_MAX_ITER):
-        if _load_mismatch(b, Y22, V, S_P, I0, Y_low, S_extra, I_dev, F, low) < NEWTON_TOL:
+        if _load_mismatch(b, Y22, V, loads, F, low) < NEWTON_TOL:
             return it
         # Wirtinger derivatives: d(load current) = A dV + B conj(dV), A, B diagonal
         for r in range(n):

@@ -12,7 +12,13 @@ from stabctl.dynamics.driver import Simulator, _Run
 from stabctl.dynamics.events import Fault
 from stabctl.io import load_case
 from stabctl.models.machines import internal_voltage
-from stabctl.network.solution import V_RELEASE, V_SWITCH, _load_mismatch, solve_nc
+from stabctl.network.solution import (
+    V_RELEASE,
+    V_SWITCH,
+    KeptLoads,
+    _load_mismatch,
+    solve_nc,
+)
 
 
 @pytest.fixture(scope="module")
@@ -32,32 +38,11 @@ def fault_network():
 
 def solve(m, net, psi, V, held):
     p = m.params
-    it = solve_nc(
-        net.Y21,
-        net.Y22,
-        net.Z22,
-        psi,
-        p.S_P,
-        p.I0,
-        p.Y_low,
-        V,
-        np.zeros(V.size, complex),
-        np.zeros(V.size, complex),
-        held,
-    )
+    none = np.zeros(V.size, complex)  # no extra power, no converters
+    loads = KeptLoads(p.S_P, p.I0, p.Y_low, none, none)
+    it = solve_nc(net.Y21, net.Y22, net.Z22, psi, V, loads, held)
     F = np.empty(V.size, complex)
-    resid = _load_mismatch(
-        net.Y21 @ psi,
-        net.Y22,
-        V,
-        p.S_P,
-        p.I0,
-        p.Y_low,
-        np.zeros(V.size, complex),
-        np.zeros(V.size, complex),
-        F,
-        held,
-    )
+    resid = _load_mismatch(net.Y21 @ psi, net.Y22, V, loads, F, held)
     return it, resid
 
 
