@@ -371,32 +371,10 @@ def _converters(ss, numbers: dict):
             gen = m.gen.v[k]
             sg = ss.PV if gen in ss.PV.idx.v else ss.Slack
             bus = sg.bus.v[list(sg.idx.v).index(gen)]
-            why = ""
-            if kind == REGCA1:
-                busf, bf = None, 0
-                drivers = _electrical_controls(ss, m.idx.v[k])
-                if m.bus.v[k] != bus:
-                    why = f"bus {m.bus.v[k]} differs from its static generator's ({bus})"
-                elif len(sg_bus.get(bus, ())) > 1:
-                    why = f"its static generator {gen} shares bus {numbers[bus]} with another"
-                elif drivers:
-                    why = (
-                        f"its current commands come from {', '.join(drivers)}, which stabctl "
-                        "lacks (it models REGCA1 with constant commands)"
-                    )
-            else:
-                busf = m.busfreq.v[k]
-                bf = list(ss.BusFreq.idx.v).index(busf)
-                if m.igreg.v[k] is not None:
-                    why = f"remote bus igreg = {m.igreg.v[k]} (stabctl: the device's own bus)"
-                elif m.bus.v[k] != bus:
-                    why = f"bus {m.bus.v[k]} differs from its static generator's ({bus})"
-                elif len(sg_bus.get(bus, ())) > 1:
-                    why = f"its static generator {gen} shares bus {numbers[bus]} with another"
-                elif ss.config.freq not in (m.fn.v[k], ss.BusFreq.fn.v[bf]):
-                    why = f"fn differs from the system frequency {ss.config.freq:g} Hz"
-                elif ss.BusFreq.Tw.v[bf] <= 0:
-                    why = f"its BusFreq {busf} has Tw = 0"
+            bf = 0 if kind == REGCA1 else list(ss.BusFreq.idx.v).index(m.busfreq.v[k])
+            why = _converter_refusal(ss, m, k, bus, len(sg_bus.get(bus, ())) > 1, bf)
+            if why == "shared":
+                why = f"its static generator {gen} shares bus {numbers[bus]} with another"
             if why:
                 refused.append(f"{where}: {why}")
                 continue
@@ -423,6 +401,35 @@ def _converters(ss, numbers: dict):
                 "stabctl needs all of it, 1)"
             )
     return rows, refused, replaced
+
+
+def _converter_refusal(ss, m, k, bus, shared: bool, bf: int) -> str:
+    """Why ANDES converter device ``k`` of model ``m`` cannot be mapped (empty if it can):
+    its bus not its static generator's ``bus``, that generator sharing its bus
+    (``shared``: the reason is then "shared", worded by the caller, which numbers the
+    buses), a REGCA1 driven by an electrical control, a PVD1/ESD1
+    regulating a remote bus, with a nominal frequency other than the system's or whose
+    BusFreq (row ``bf``) has no washout."""
+    regca1 = m.class_name == "REGCA1"
+    if not regca1 and m.igreg.v[k] is not None:
+        return f"remote bus igreg = {m.igreg.v[k]} (stabctl: the device's own bus)"
+    if m.bus.v[k] != bus:
+        return f"bus {m.bus.v[k]} differs from its static generator's ({bus})"
+    if shared:
+        return "shared"
+    if regca1:
+        drivers = _electrical_controls(ss, m.idx.v[k])
+        return (
+            f"its current commands come from {', '.join(drivers)}, which stabctl lacks (it "
+            "models REGCA1 with constant commands)"
+            if drivers
+            else ""
+        )
+    if ss.config.freq not in (m.fn.v[k], ss.BusFreq.fn.v[bf]):
+        return f"fn differs from the system frequency {ss.config.freq:g} Hz"
+    if ss.BusFreq.Tw.v[bf] <= 0:
+        return f"its BusFreq {m.busfreq.v[k]} has Tw = 0"
+    return ""
 
 
 #: ANDES's electrical controls of a renewable generator (group RenExciter, parameter reg)
