@@ -93,6 +93,12 @@ _IEEET_COPY = {
     "KF_dc": "KF",
 }
 
+#: ESAC1A's record, every parameter a copy, in the PSS/E Model Library's order
+_ESAC1A_COPY = _upper(
+    "TR", "TB", "TC", "KA", "TA", "VAmax", "VAmin", "TE", "KF", "TF", "KC", "KD", "KE", "E1",
+    "SE1", "E2", "SE2", "Vrmax", "Vrmin",
+)  # fmt: skip
+
 EXCITER = Family(
     table="exc_con",
     min_columns=9,
@@ -399,48 +405,8 @@ EXCITER = Family(
         # names them (its inputs, in its own order, are matched by name)
         DyrModel(
             "ESAC1A",
-            (
-                "TR",
-                "TB",
-                "TC",
-                "KA",
-                "TA",
-                "VAMAX",
-                "VAMIN",
-                "TE",
-                "KF",
-                "TF",
-                "KC",
-                "KD",
-                "KE",
-                "E1",
-                "SE1",
-                "E2",
-                "SE2",
-                "VRMAX",
-                "VRMIN",
-            ),
-            _upper(
-                "TR",
-                "TB",
-                "TC",
-                "KA",
-                "TA",
-                "VAmax",
-                "VAmin",
-                "TE",
-                "KF",
-                "TF",
-                "KC",
-                "KD",
-                "KE",
-                "E1",
-                "SE1",
-                "E2",
-                "SE2",
-                "Vrmax",
-                "Vrmin",
-            ),
+            tuple(_ESAC1A_COPY.values()),
+            _ESAC1A_COPY,
             kind=9,
             andes=("ESAC1A",),
         ),
