@@ -36,7 +36,6 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-from scipy.optimize import brentq
 
 from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import CaseError
@@ -982,6 +981,8 @@ def ac_initial_exciter(p: ExciterParams, Efd):
     V_R0, and ESAC1A's V_A0); raises CaseError if V_R0 is outside [Vrmin, Vrmax] (ESAC1A:
     or V_A0 outside [VAmin, VAmax]; AC8B: or V_R0/K_A outside [VPmin, VPmax]) or V_R0/K_A
     has no V_E0."""
+    from scipy.optimize import brentq  # here: the case layer imports this module (0.5 s)
+
     VE, VFE = np.zeros(p.n), np.zeros(p.n)
     for i in np.nonzero(p.is_ac)[0]:
         name = {AC1: "EXAC1", AC1A: "ESAC1A", AC8B: "AC8B"}[int(p.kind[i])]
