@@ -67,7 +67,7 @@ from stabctl.errors import CaseError, InputError
 from stabctl.io.andes import _andes
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
 from stabctl.io.pst import case_from_matrices
-from stabctl.models.converters import CONVERTER, ESD1, PVD1, REGCA1
+from stabctl.models.converters import CONVERTER, ESD1, PVD1, REECA1, REECA1_FIELDS, REGCA1
 
 __all__ = [
     "AndesImport",
@@ -86,6 +86,8 @@ MAPPED_MODELS = {name: m.name for m in DYR_MODELS.values() for name in m.andes}
 IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc", "Summary")
 #: ANDES converter models -> the converter type of stabctl.models.converters.CONVERTER
 CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1}
+#: ANDES controls read into their converter's row (a REGCA1's REECA1, ibr_con ``reec``)
+CONVERTER_CONTROLS = ("REECA1",)
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
 _NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt")
 _MACHINES = ("GENROU", "GENCLS")
@@ -197,6 +199,7 @@ def read_andes_case(
         and name not in MAPPED_MODELS
         and name not in IGNORED_MODELS
         and name not in CONVERTER_MODELS
+        and name not in CONVERTER_CONTROLS
     ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
@@ -387,6 +390,8 @@ def _converters(ss, numbers: dict):
             for p in CONVERTER.params[6:]:
                 if p.name in m.params:
                     v[p.name] = float(m.params[p.name].vin[k])
+            if kind == REGCA1:
+                v.update(_reeca1_values(ss, m.idx.v[k]))
             rows.append([float(v[p.name]) for p in CONVERTER.params])
             got = share.setdefault(gen, [0.0, 0.0, []])
             got[0] += m.gammap.v[k]
@@ -418,13 +423,7 @@ def _converter_refusal(ss, m, k, bus, shared: bool, bf: int) -> str:
     if shared:
         return "shared"
     if regca1:
-        drivers = _electrical_controls(ss, m.idx.v[k])
-        return (
-            f"its current commands come from {', '.join(drivers)}, which stabctl lacks (it "
-            "models REGCA1 with constant commands)"
-            if drivers
-            else ""
-        )
+        return _electrical_control_refusal(ss, m.idx.v[k])
     if ss.config.freq not in (m.fn.v[k], ss.BusFreq.fn.v[bf]):
         return f"fn differs from the system frequency {ss.config.freq:g} Hz"
     if ss.BusFreq.Tw.v[bf] <= 0:
@@ -434,16 +433,49 @@ def _converter_refusal(ss, m, k, bus, shared: bool, bf: int) -> str:
 
 #: ANDES's electrical controls of a renewable generator (group RenExciter, parameter reg)
 RENEWABLE_CONTROLS = ("REECA1", "REECA1E", "REECB1")
+#: ibr_con fields named otherwise in ANDES's REECA1 (its PQFLAG, Tiq; config kqs, kvs,
+#: tpfilt)
+_REECA1_NAMES = {"pqflag": "PQFLAG", "tiq": "Tiq"}
+_REECA1_CONFIG = {"Kqs": "kqs", "Kvs": "kvs", "Tpfilt": "tpfilt"}
 
 
-def _electrical_controls(ss, regc) -> list[str]:
+def _electrical_control_refusal(ss, regc) -> str:
+    """Why renewable generator ``regc``'s electrical control cannot be mapped (empty if
+    it has none or one REECA1 on its own bus)."""
+    drivers = _electrical_controls(ss, regc)
+    if len(drivers) > 1 or any(name != "REECA1" for name, _ in drivers):
+        labels = ", ".join(f"{name} {ss.models[name].idx.v[j]}" for name, j in drivers)
+        return f"its current commands come from {labels}; stabctl models one REECA1 (or none)"
+    busr = [ss.REECA1.busr.v[j] for _, j in drivers]
+    if busr and busr[0] is not None:
+        return f"its REECA1 regulates remote bus busr = {busr[0]} (stabctl: its own)"
+    return ""
+
+
+def _reeca1_values(ss, regc) -> dict[str, float]:
+    """The ibr_con fields of renewable generator ``regc``'s REECA1 (none without one): its
+    parameters as given (``vin``, before ANDES's base change) and its config."""
+    drivers = _electrical_controls(ss, regc)
+    if not drivers:
+        return {}
+    m, j = ss.REECA1, drivers[0][1]
+    v: dict[str, float] = {"reec": float(REECA1)}
+    for field in REECA1_FIELDS:
+        if field in _REECA1_CONFIG:
+            v[field] = float(getattr(m.config, _REECA1_CONFIG[field]))
+        else:
+            v[field] = float(m.params[_REECA1_NAMES.get(field, field)].vin[j])
+    return v
+
+
+def _electrical_controls(ss, regc) -> list[tuple[str, int]]:
     """The in-service ANDES electrical controls (RENEWABLE_CONTROLS) of renewable generator
-    ``regc`` (its idx), as "model idx" labels."""
+    ``regc`` (its idx), as (model name, row)."""
     found = []
     for name in RENEWABLE_CONTROLS:
         m = ss.models.get(name)
         if m is not None and m.n:
-            found += [f"{name} {m.idx.v[j]}" for j in _in_service(m) if m.reg.v[j] == regc]
+            found += [(name, j) for j in _in_service(m) if m.reg.v[j] == regc]
     return found
 
 

@@ -62,6 +62,76 @@ PVD1, ESD1, REGCA1 = 1, 2, 3
 
 _DEV_PU: dict[str, Any] = dict(unit="pu")  # on the device base mva (ANDES ``power=True``)
 
+#: REGCA1's electrical control (ibr_con ``reec``): none, REECA1 (WECC REEC_A)
+NO_REEC, REECA1 = 0, 1
+
+
+def _reeca1_params(col: int) -> tuple[Param, ...]:
+    """REECA1's columns from ``col`` on (ANDES 2.0 ``renewable/reeca1.py`` REECA1Data and
+    its config kqs, kvs, tpfilt; PQFLAG is the table's ``pqflag``).  Powers and currents
+    on the device base where ANDES converts them (``power``/``current`` True); the gains
+    Kqv, Kqp, Kqi, Kvp, Kvi and the currents Iqh1, Iql1, Iqfrz on the system base, as
+    ANDES reads them."""
+    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
+    rows: list[tuple[str, dict[str, Any]]] = [
+        ("PFFLAG", dict(flag, doc="REECA1: 1 power-factor control, 0 Q control")),
+        ("VFLAG", dict(flag, doc="REECA1: 1 Q control (PI), 0 voltage control")),
+        ("QFLAG", dict(flag, doc="REECA1: 1 voltage/Q control (PI), 0 constant PF or Q")),
+        ("PFLAG", dict(flag, doc="REECA1: 1 P order times the speed (1 here), 0 not")),
+        ("Vdip", dict(unit="pu", default=0.8, doc="REECA1: voltage below which it freezes")),
+        ("Vup", dict(unit="pu", default=1.2, doc="REECA1: voltage above which it freezes")),
+        ("Trv", dict(unit="s", default=0.02, lo=0.0, doc="REECA1: voltage filter")),
+        ("dbd1", dict(unit="pu", default=-0.02, hi=0.0, doc="REECA1: lower voltage deadband")),
+        ("dbd2", dict(unit="pu", default=0.02, lo=0.0, doc="REECA1: upper voltage deadband")),
+        ("Kqv", dict(unit="pu", default=1.0, lo=0.0, doc="REECA1: Iqinj per pu voltage error")),
+        ("Iqh1", dict(unit="pu", default=999.0, doc="REECA1: upper limit of Iqinj")),
+        ("Iql1", dict(unit="pu", default=-999.0, doc="REECA1: lower limit of Iqinj")),
+        ("Vref0", dict(unit="pu", default=1.0, doc="REECA1: Iqinj reference (0: initial V)")),
+        ("Iqfrz", dict(unit="pu", doc="REECA1: Iqinj held for Thld > 0 after a dip")),
+        ("Thld", dict(unit="s", doc="REECA1: Iqinj hold after a dip (> 0 Iqfrz, < 0 Kqv)")),
+        ("Thld2", dict(unit="s", lo=0.0, doc="REECA1: Ipmax held after a dip")),
+        ("Tp", dict(unit="s", default=0.02, lo=0.0, doc="REECA1: Pe filter")),
+        ("QMax", dict(_DEV_PU, default=999.0, doc="REECA1: upper Q reference limit")),
+        ("QMin", dict(_DEV_PU, default=-999.0, doc="REECA1: lower Q reference limit")),
+        ("VMAX", dict(unit="pu", default=999.0, doc="REECA1: upper voltage control limit")),
+        ("VMIN", dict(unit="pu", default=-999.0, doc="REECA1: lower voltage control limit")),
+        ("Kqp", dict(unit="pu", default=1.0, doc="REECA1: Q PI proportional gain")),
+        ("Kqi", dict(unit="1/s", default=0.1, doc="REECA1: Q PI integral gain")),
+        ("Kvp", dict(unit="pu", default=1.0, doc="REECA1: V PI proportional gain")),
+        ("Kvi", dict(unit="1/s", default=0.1, doc="REECA1: V PI integral gain")),
+        ("Vref1", dict(unit="pu", default=1.0, doc="REECA1: voltage reference (VFLAG 0)")),
+        ("dPmax", dict(_DEV_PU, default=999.0, doc="REECA1: upper P reference rate (x tpfilt)")),
+        ("dPmin", dict(_DEV_PU, default=-999.0, doc="REECA1: lower P reference rate")),
+        ("PMAX", dict(_DEV_PU, default=999.0, doc="REECA1: upper P order limit")),
+        ("PMIN", dict(_DEV_PU, doc="REECA1: lower P order limit")),
+        ("Imax", dict(_DEV_PU, default=999.0, doc="REECA1: apparent current limit")),
+        ("Tpord", dict(unit="s", default=0.02, lo=0.0, doc="REECA1: P order lag")),
+        *_vdl_params("VDL1, Iq limit", "Vq", "Iq", (2.0, 4.0, 8.0, 10.0)),
+        *_vdl_params("VDL2, Ip limit", "Vp", "Ip", (2.0, 4.0, 8.0, 12.0)),
+        ("Kqs", dict(unit="", default=2.0, lo=0.0, doc="REECA1: Q PI tracking gain (kqs)")),
+        ("Kvs", dict(unit="", default=2.0, lo=0.0, doc="REECA1: V PI tracking gain (kvs)")),
+        ("Tpfilt", dict(unit="s", default=0.02, lo=0.0, doc="REECA1: P reference filter")),
+    ]
+    return tuple(Param(name, col=col + j, **kw) for j, (name, kw) in enumerate(rows))
+
+
+def _vdl_params(curve: str, v_name: str, i_name: str, currents) -> list[tuple[str, dict[str, Any]]]:
+    """REECA1's voltage-dependent current limit ``curve``: four voltages (pu) and four
+    currents (device base), ANDES's defaults."""
+    volts = [
+        (f"{v_name}{j}", dict(unit="pu", default=v, doc=f"REECA1: {curve} point {j}, voltage"))
+        for j, v in enumerate((0.2, 0.4, 0.8, 1.0), 1)
+    ]
+    return volts + [
+        (f"{i_name}{j}", dict(_DEV_PU, default=i, doc=f"REECA1: {curve} point {j}, current"))
+        for j, i in enumerate(currents, 1)
+    ]
+
+
+_REECA1_PARAMS = _reeca1_params(54)
+#: the ibr_con fields a REECA1 sets (its own columns, its PQFLAG and its Iq filter Tiq)
+REECA1_FIELDS = ("pqflag", "tiq", *(p.name for p in _REECA1_PARAMS))
+
 CONVERTER = Family(
     table="ibr_con",
     min_columns=8,
@@ -201,6 +271,14 @@ CONVERTER = Family(
         Param("Khv", "", 50, default=0.7, lo=0.0, doc="REGCA1: over-voltage Iq gain"),
         Param("Iqrmax", col=51, default=1.0, doc="REGCA1: upper rate of Tg dIq/dt", **_DEV_PU),
         Param("Iqrmin", col=52, default=-1.0, doc="REGCA1: lower rate of Tg dIq/dt", **_DEV_PU),
+        Param(
+            "reec",
+            "code",
+            53,
+            choices=(NO_REEC, REECA1),
+            doc="REGCA1's electrical control: 0 none (constant current commands), 1 REECA1",
+        ),
+        *_REECA1_PARAMS,
     ),
 )
 
@@ -219,20 +297,39 @@ __all__ = [
     "derivatives_at",
 ]
 
-N_STATES = 5
-#: state names per converter type (slots beyond a type's names are unused, 0)
+#: REECA1's slots (a REGCA1 with ``reec`` 1): its states, then its memory (`MEMORY_SLOTS`)
+REECA1_SLOTS = (
+    *("Vt_filter", "Pe_filter", "PIQ", "Iq_filter", "Pref_filter", "Pord", "PIV"),
+    *("Iqinj_timer", "Ipmax_timer", "Ipmax_held", "PIQ_held", "PIV_held", "Ipcmd_last"),
+)
+# numpy scalars: a kernel's argument is then typed once (not as a literal per value)
+_VT, _PE, _PIQ, _S4, _PFILT, _PORD, _PIV = (np.int64(j) for j in range(5, 12))
+_T_IQ, _T_IP, _IPMAX_H, _PIQ_H, _PIV_H, _IPCMD = (np.int64(j) for j in range(12, 18))
+N_STATES = 5 + len(REECA1_SLOTS)
+#: state names per converter type (slots beyond a type's names, or that a device does not
+#: use, `has_state`, are unused, 0)
 STATE_NAMES = {
     PVD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
     ESD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
-    REGCA1: ("Ip", "Iq", "V_filter"),
+    REGCA1: ("Ip", "Iq", "V_filter", "", "", *REECA1_SLOTS),
 }
+#: slots that are not states but the memory of REECA1's discrete logic, written in place by
+#: the kernel (ANDES's ExtendedEvent timers, its VarHold of Ipmax, the frozen PI outputs):
+#: at rest they do not move; the linearisation leaves them out (`has_state`)
+MEMORY_SLOTS = list(range(int(_T_IQ), int(_IPCMD) + 1))
 #: the slots that integrate energy (ESD1's state of charge): at rest only at zero output,
 #: so the initial-point check leaves them out (unused, 0, in the other types)
 ENERGY_SLOTS = [STATE_NAMES[ESD1].index("SOC")]
 #: the ibr_con fields the kernels take as given (pu quantities after the base change)
 TABLE_FIELDS = tuple(n for n in CONVERTER.names if n not in ("number", "bus", "mva"))
+#: REECA1's lag time constants (each must be >= LBND; its Iq filter is ``tiq``)
+REECA1_LAGS = ("Trv", "Tp", "tiq", "Tpfilt", "Tpord")
 #: fields on the device base: powers and currents (times Sn/Sb), the reactance (Sb/Sn)
-POWER_FIELDS = ("qmx", "qmn", "pmx", "dqdv", "ddn", "ialim", "Iolim", "Iqrmax", "Iqrmin")
+POWER_FIELDS = (
+    *("qmx", "qmn", "pmx", "dqdv", "ddn", "ialim", "Iolim", "Iqrmax", "Iqrmin"),
+    *("QMax", "QMin", "dPmax", "dPmin", "PMAX", "PMIN", "Imax"),
+    *(f"{a}{j}" for a in ("Iq", "Ip") for j in range(1, 5)),
+)
 #: packed parameter matrix of the kernels, (column name, ConverterParams attribute)
 PACKED = (
     ("POS", "pos"),
@@ -250,6 +347,13 @@ PACKED = (
     ("IQCMD0", "Iqcmd0"),
     ("KLVG", "kLVG"),
     ("KLVPL", "kLVPL"),
+    ("VREF0R", "Vref0r"),
+    ("QREF", "Qref"),
+    ("TANPF", "tanpf"),
+    ("IPOFF", "Ipoff"),
+    ("IMAXR", "Imaxr"),
+    ("ZVDL1", "zVDL1"),
+    ("ZVDL2", "zVDL2"),
 )
 #: the kernels' column of each PACKED name: P[k, C.IALIM]
 C = layout("ConverterColumns", PACKED)
@@ -265,7 +369,12 @@ class ConverterParams(Declared):
     pmn (lower power order: 0 PVD1, -pmx ESD1), Ksoc = Sb/(3600 En Tf) (1/s per pu),
     fn (Hz); REGCA1: the constant current commands Ipcmd0 = P0/(|V0| LVG(|V0|)), Iqcmd0 =
     -Q0/|V0| (ANDES's Ipcmd0_LVG, Iqcmd0), the gains kLVG = 1/(Lvpnt1 - Lvpnt0), kLVPL =
-    Lvplsw Lvpl1/(Brkpt - Zerox) (0 for the other types)."""
+    Lvplsw Lvpl1/(Brkpt - Zerox) (0 for the other types); REECA1 (``reec``, ANDES
+    reeca1.py): Vref0r (Vref0, the initial |V| where 0), Qref = -qref0 (its Q reference:
+    Q0, or Vref1 - |V0| with QFLAG), tanpf = Q0/P0 (the power-factor reference, 0 where
+    P0 = 0: Qcpf held at Q0), Ipoff = Ipcmd0 - P0/|V0| (the REGCA1's Ipcmd less the
+    REECA1's, ANDES's two initial commands summed), Imaxr (Imax, 1e8 where <= 0), zVDL1,
+    zVDL2 (1 where the VDL curve's points rise: the curve applies)."""
 
     pmn: np.ndarray
     P0: np.ndarray
@@ -280,6 +389,13 @@ class ConverterParams(Declared):
     Iqcmd0: np.ndarray
     kLVG: np.ndarray
     kLVPL: np.ndarray
+    Vref0r: np.ndarray
+    Qref: np.ndarray
+    tanpf: np.ndarray
+    Ipoff: np.ndarray
+    Imaxr: np.ndarray
+    zVDL1: np.ndarray
+    zVDL2: np.ndarray
 
     @property
     def n(self) -> int:
@@ -294,14 +410,16 @@ class ConverterParams(Declared):
         esd = self.type == ESD1
         pvd = self.type != REGCA1
         reg = ~pvd
+        ree = self.reec == REECA1
         return (
             ("ibr_con tip", self.tip, pvd),
-            ("ibr_con tiq", self.tiq, pvd),
+            ("ibr_con tiq", self.tiq, pvd | ree),
             ("ibr_con Tfm", self.Tfm, pvd & (self.Tfm >= LBND)),
             ("ibr_con Twm", self.Twm, pvd),
             ("ibr_con Tf", self.Tf, esd),
             ("ibr_con Tg", self.Tg, reg),
             ("ibr_con Tfltr", self.Tfltr, reg),
+            *((f"ibr_con {n}", getattr(self, n), ree) for n in REECA1_LAGS),
         )
 
     def has_state(self) -> np.ndarray:
@@ -311,6 +429,8 @@ class ConverterParams(Declared):
         act[2] = reg | (self.Tfm >= LBND)
         act[3] = ~reg
         act[4] = self.type == ESD1
+        act[5:] = self.reec == REECA1
+        act[MEMORY_SLOTS] = False
         return act
 
 
@@ -337,14 +457,20 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     Raises
     ------
     CaseError
-        A lag time constant tip, tiq (PVD1, ESD1) or Tg, Tfltr (REGCA1) below 1e-3 s
-        (the current would be an algebraic function of the voltage inside the network
-        solution), naming the row and field.
+        A lag time constant tip, tiq (PVD1, ESD1), Tg, Tfltr (REGCA1) or REECA1's
+        (:data:`REECA1_LAGS`) below 1e-3 s (the current would be an algebraic function of
+        the voltage inside the network solution); an electrical control ``reec`` on a
+        device other than a REGCA1; naming the row and field.
     """
     t = case.converters
     n = len(t)
     reg = t.type == REGCA1
-    for name, sel in (("tip", ~reg), ("tiq", ~reg), ("Tg", reg), ("Tfltr", reg)):
+    ree = t.reec == REECA1
+    bad = np.flatnonzero(ree & ~reg)
+    if bad.size:
+        t._fail(bad[0], "reec", "an electrical control drives a REGCA1 (type 3) only")
+    lags = [("tip", ~reg), ("tiq", ~reg), ("Tg", reg), ("Tfltr", reg)]
+    for name, sel in lags + [(name, ree) for name in REECA1_LAGS]:
         bad = np.flatnonzero(sel & (getattr(t, name) < LBND))
         if bad.size:
             t._fail(bad[0], name, f"must be >= {LBND:g} s (a lag of the converter)")
@@ -389,7 +515,34 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         Iqcmd0=np.where(reg, -Q0 / v0, 0.0),
         kLVG=kLVG,
         kLVPL=kLVPL,
+        **_reeca1_services(vals, ree, P0, Q0, v0, np.where(reg, Ipcmd0, 0.0)),
     )
+
+
+def _reeca1_services(vals: dict, ree, P0, Q0, v0, Ipcmd0) -> dict[str, np.ndarray]:
+    """REECA1's initial services (ANDES reeca1.py ConstServices; `ConverterParams`) from
+    the system-base fields ``vals``, for the rows ``ree`` (0 elsewhere)."""
+
+    def rising(a: str, b: str):
+        pts = [vals[f"{c}{j}"] for c in (a, b) for j in (1, 2, 3)]
+        nxt = [vals[f"{c}{j}"] for c in (a, b) for j in (2, 3, 4)]
+        return np.all(np.array(pts) <= np.array(nxt), axis=0)
+
+    # qref0 (reeca1.py 412): QFLAG (v - Vref1), else Iqcmd0 vp (vp = v above 0.01 pu)
+    vp0 = np.where(v0 <= 0.01, 0.01, v0)
+    qref0 = np.where(vals["QFLAG"] == 1, v0 - vals["Vref1"], -Q0 / v0 * vp0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tanpf = np.where(P0 != 0, Q0 / np.where(P0 != 0, P0, 1.0), 0.0)
+    on = {
+        "Vref0r": np.where(vals["Vref0"] == 0, v0, vals["Vref0"]),
+        "Qref": -qref0,
+        "tanpf": tanpf,
+        "Ipoff": Ipcmd0 - P0 / v0,
+        "Imaxr": np.where(vals["Imax"] <= 0, 1e8, vals["Imax"]),
+        "zVDL1": rising("Vq", "Iq").astype(float),
+        "zVDL2": rising("Vp", "Ip").astype(float),
+    }
+    return {name: np.where(ree, value, 0.0) for name, value in on.items()}
 
 
 # -- compiled kernels ----------------------------------------------------------------------
@@ -422,6 +575,16 @@ def _regca1_currents(P, x, k, v):
 
 
 @kernel
+def _ipcmd(P, x, k):
+    """REGCA1 k's active current command: Ipcmd0, or with a REECA1 its last command
+    (slot ``Ipcmd_last``, ANDES's algebraic Ipcmd of the previous iterate, which its
+    anti-windup check reads before the network solution)."""
+    if P[k, C.REEC] == REECA1:
+        return x[_IPCMD, k]
+    return P[k, C.IPCMD0]
+
+
+@kernel
 def _regca1_ip_limits(P, x, k):
     """REGCA1's Ip lag S0 (ANDES regca1.py 238-256) at the states x: the LVPL upper limit
     (Piecewise, 242-249) of the filtered voltage S2 (x[2]) and the equation value e =
@@ -435,7 +598,7 @@ def _regca1_ip_limits(P, x, k):
         LVPL = (S2 - P[k, C.ZEROX]) * P[k, C.KLVPL] + 9999.0 * (1.0 - sw)
     else:
         LVPL = 9999.0
-    e = P[k, C.IPCMD0] - x[0, k]
+    e = _ipcmd(P, x, k) - x[0, k]
     if e > P[k, C.RRPWR]:
         e = P[k, C.RRPWR]
     return LVPL, e
@@ -454,9 +617,10 @@ def clamp_states(P, x, k):
 
 
 @kernel
-def _regca1_derivatives(P, x, k, v, dx):
+def _regca1_derivatives(P, x, k, v, Iq_target, dx):
     """REGCA1's state derivatives of device k at voltage magnitude v (ANDES regca1.py
-    219-256), slots 0-2 of column k of dx (the Ip state clamped first, `clamp_states`)."""
+    219-256) toward its commands (`_ipcmd`, Iq_target = -Iqcmd), slots 0-4 of column k
+    of dx (the Ip state clamped first, `clamp_states`)."""
     _, dx[2, k] = lag(v, x[2, k], P[k, C.TFLTR])
     # S0: Ip lag with the rate limit, then the anti-windup upper limit LVPL
     clamp_states(P, x, k)
@@ -466,7 +630,7 @@ def _regca1_derivatives(P, x, k, v, dx):
     Tg = P[k, C.TG]
     dx[0, k] = e / Tg
     # S1: Iq lag (gain -1 on Iqcmd), rate limits enabled by the sign of Q0
-    e = -P[k, C.IQCMD0] - x[1, k]
+    e = Iq_target - x[1, k]
     if P[k, C.Q0] < 0.0 and e < P[k, C.IQRMIN]:
         e = P[k, C.IQRMIN]
     if P[k, C.Q0] > 0.0 and e > P[k, C.IQRMAX]:
@@ -474,6 +638,172 @@ def _regca1_derivatives(P, x, k, v, dx):
     dx[1, k] = e / Tg
     dx[3, k] = 0.0
     dx[4, k] = 0.0
+
+
+@kernel
+def _timer(x, dx, slot, k, on, t_ext):
+    """An event flag extended by t_ext s after its input ``on`` falls (ANDES
+    ExtendedEvent, andes/core/service.py): while on, the timer slot is set to t_ext in
+    place; after, it runs down at 1/s to 0.  Returns 1.0 while the timer runs (the
+    extension, on or after the event), else 0.0."""
+    dx[slot, k] = 0.0
+    if on:
+        x[slot, k] = t_ext
+    elif x[slot, k] > 0.0:
+        dx[slot, k] = -1.0
+    else:
+        x[slot, k] = 0.0
+    return 1.0 if x[slot, k] > 0.0 else 0.0
+
+
+@kernel
+def _frozen_pi(P, x, k, u, gains, lo, hi, frz, dx):
+    """ANDES's PITrackAWFreeze of device k: ys = kp u + xi, y = clip(ys, lo, hi), dxi/dt
+    = ki (u - ks (ys - y)); frozen (frz 1) the output held and the integrator stopped.
+    ``gains`` the columns (kp, ki, ks, state slot, held slot); returns y."""
+    kp, ki, ks = P[k, gains[0]], P[k, gains[1]], P[k, gains[2]]
+    slot, held = gains[3], gains[4]
+    if frz:
+        dx[slot, k] = 0.0
+        return x[held, k]
+    ys = kp * u + x[slot, k]
+    y = clip(ys, lo, hi)
+    dx[slot, k] = ki * (u - ks * (ys - y))
+    x[held, k] = y
+    return y
+
+
+@kernel
+def _vdl(P, k, c, u):
+    """REECA1's voltage-dependent current limit (ANDES Piecewise VDL1/VDL2) of device k at
+    filtered voltage u: the four voltages in columns c..c+3, the currents c+4..c+7."""
+    if u <= P[k, c]:
+        return P[k, c + 4]
+    for j in range(1, 4):
+        if u <= P[k, c + j]:
+            v0, v1, i0, i1 = P[k, c + j - 1], P[k, c + j], P[k, c + j + 3], P[k, c + j + 4]
+            return (u - v0) * ((i1 - i0) / (v1 - v0)) + i0
+    return P[k, c + 7]
+
+
+#: REECA1's VDL curves as (flag column, first point column), numpy scalars
+_VDL1 = (np.int64(C.ZVDL1), np.int64(C.VQ1))
+_VDL2 = (np.int64(C.ZVDL2), np.int64(C.VP1))
+
+
+@kernel
+def _vdl_limit(P, k, curve, u):
+    """REECA1's VDL limit of device k at filtered voltage u: min(VDL(u), Imaxr) (`_vdl`,
+    columns c) if the curve's points rise (flag column z), else 1e8 (ANDES Iqmax1,
+    Ipmax1); curve = (z, c), `_VDL1` or `_VDL2`."""
+    z, c = curve
+    if P[k, z] == 0.0:
+        return 1e8
+    return min(_vdl(P, k, c, u), P[k, C.IMAXR])
+
+
+@kernel
+def _room(P, k, other):
+    """The current room sqrt(max(Imax^2 - other^2, 0)) the other command leaves."""
+    return np.sqrt(max(P[k, C.IMAX] ** 2 - other**2, 0.0))
+
+
+@kernel
+def _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx):
+    """REECA1's reactive current command IqHL of device k: the V PI (`_frozen_pi`, input
+    u, limits +-Iqmax) with QFLAG, else the filtered Q command s4, plus Iqinj, limited to
+    +-Iqmax."""
+    piv = _frozen_pi(P, x, k, u, (C.KVP, C.KVI, C.KVS, _PIV, _PIV_H), -Iqmax, Iqmax, frz, dx)
+    Qsel = piv if P[k, C.QFLAG] == 1.0 else s4
+    return clip(Qsel + Iqinj, -Iqmax, Iqmax)
+
+
+@kernel
+def _ip_command(P, x, k, Ip_order, Ipmax, hold):
+    """REECA1's active current command IpHL = clip(Ip_order, 0, Ipmax) of device k, Ipmax
+    held at its value before ``hold`` (1.0 for Thld2 s after a dip; ANDES VarHold
+    Ipmaxh), tracked in place otherwise."""
+    if hold:
+        Ipmax = x[_IPMAX_H, k]
+    else:
+        x[_IPMAX_H, k] = Ipmax
+    return clip(Ip_order, 0.0, Ipmax)
+
+
+@kernel
+def _p_order(P, x, k, frz, dx):
+    """REECA1's power order Pord of device k: the reference P0 through the rate-limited
+    filter Tpfilt (ANDES LagRate, rates dPmin, dPmax on its right-hand side), then the
+    lag Tpord frozen in a dip with the anti-windup limits [PMIN, PMAX] (LagAWFreeze; the
+    state reset to a limit in place)."""
+    e = clip(P[k, C.P0] - x[_PFILT, k], P[k, C.DPMIN], P[k, C.DPMAX])
+    dx[_PFILT, k] = e / P[k, C.TPFILT]
+    e = 0.0 if frz else x[_PFILT, k] - x[_PORD, k]
+    if x[_PORD, k] >= P[k, C.PMAX] and e >= 0.0:
+        x[_PORD, k], e = P[k, C.PMAX], 0.0
+    elif x[_PORD, k] <= P[k, C.PMIN] and e <= 0.0:
+        x[_PORD, k], e = P[k, C.PMIN], 0.0
+    dx[_PORD, k] = e / P[k, C.TPORD]
+    return x[_PORD, k]
+
+
+@kernel
+def _iq_injection(P, k, vt, frz, extended):
+    """REECA1's Iqinj of device k at filtered voltage vt: Kqv times the deadbanded error
+    Vref0r - vt (DeadBand1, strict) in a dip; for |Thld| s after it (``extended``) the
+    same (Thld < 0) or Iqfrz (Thld > 0); limited to [Iql1, Iqh1] (ANDES leaves the limits
+    out)."""
+    err = P[k, C.VREF0R] - vt
+    db = 0.0
+    if err > P[k, C.DBD2]:
+        db = err - P[k, C.DBD2]
+    elif err < P[k, C.DBD1]:
+        db = err - P[k, C.DBD1]
+    Iqv = db * P[k, C.KQV]
+    Iqinj = 0.0
+    if frz or (extended and P[k, C.THLD] < 0.0):
+        Iqinj = Iqv
+    elif extended and P[k, C.THLD] > 0.0:
+        Iqinj = P[k, C.IQFRZ]
+    return clip(Iqinj, P[k, C.IQL1], P[k, C.IQH1])
+
+
+@kernel
+def _reeca1(P, x, k, v, S, dx):
+    """REECA1 (ANDES 2.0 reeca1.py; docs/ibr.md 6) driving REGCA1 k at voltage magnitude v
+    with its injected power S = Pe + j Qe: the derivatives of its slots written, its
+    memory (`MEMORY_SLOTS`) updated in place; returns the commands (IpHL, IqHL), pu.
+    Frozen (Volt_dip) while v < Vdip or v > Vup (strict)."""
+    frz = v < P[k, C.VDIP] or v > P[k, C.VUP]
+    extended = _timer(x, dx, _T_IQ, k, frz, abs(P[k, C.THLD]))
+    hold = _timer(x, dx, _T_IP, k, frz, P[k, C.THLD2])
+    if frz:  # the Ipmax hold runs after the dip only (ExtendedEvent extend_only)
+        hold = 0.0
+    vt, dx[_VT, k] = lag(v, x[_VT, k], P[k, C.TRV])
+    _, dx[_PE, k] = lag(S.real, x[_PE, k], P[k, C.TP])
+    vp = 0.01 if v <= 0.01 else v
+    # reactive power reference: Q, or the power factor of the filtered Pe (Q0 at P0 = 0)
+    PFsel = P[k, C.QREF]
+    if P[k, C.PFFLAG] == 1.0:
+        PFsel = x[_PE, k] * P[k, C.TANPF] if P[k, C.P0] != 0.0 else P[k, C.Q0]
+    Qerr = clip(PFsel, P[k, C.QMIN], P[k, C.QMAX]) - S.imag
+    vflag = P[k, C.VFLAG]
+    lo, hi = P[k, C.VMIN], P[k, C.VMAX]
+    piq = _frozen_pi(P, x, k, vflag * Qerr, (C.KQP, C.KQI, C.KQS, _PIQ, _PIQ_H), lo, hi, frz, dx)
+    Vsel = clip(P[k, C.VREF1] + PFsel if vflag == 0.0 else piq, lo, hi)
+    u = P[k, C.QFLAG] * (Vsel - vt * (1.0 - vflag))
+    s4 = x[_S4, k]
+    dx[_S4, k] = 0.0 if frz else (PFsel / vp - s4) / P[k, C.TIQ]
+    Iqinj = _iq_injection(P, k, vt, frz, extended)
+    Ip_order = _p_order(P, x, k, frz, dx) / vp
+    if P[k, C.PQFLAG] == 0.0:  # Q priority
+        Iqmax = _vdl_limit(P, k, _VDL1, vt)
+        IqHL = _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx)
+        IpHL = _ip_command(P, x, k, Ip_order, _room(P, k, IqHL), hold)
+    else:
+        IpHL = _ip_command(P, x, k, Ip_order, _vdl_limit(P, k, _VDL2, vt), hold)
+        IqHL = _iq_command(P, x, k, u, s4, Iqinj, _room(P, k, IpHL), frz, dx)
+    return IpHL, IqHL
 
 
 @kernel
@@ -587,7 +917,11 @@ def derivatives(P, x, k, V, dx):
     v = abs(V)
     if P[k, C.TYPE] == REGCA1:
         Ipout, Iqout = _regca1_currents(P, x, k, v)
-        _regca1_derivatives(P, x, k, v, dx)
+        Iq_target = -P[k, C.IQCMD0]
+        if P[k, C.REEC] == REECA1:
+            Ipcmd, Iq_target = _reeca1(P, x, k, v, v * Ipout + 1j * v * Iqout, dx)
+            x[_IPCMD, k] = Ipcmd + P[k, C.IPOFF]
+        _regca1_derivatives(P, x, k, v, Iq_target, dx)
         return v * Ipout + 1j * v * Iqout
     Ipcmd, Iqcmd, dL, dW = _algebraic(P, x, k, V)
     _, dx[0, k] = lag(Ipcmd, x[0, k], P[k, C.TIP])
@@ -641,7 +975,8 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     ndarray, shape (N_STATES, n_ibr)
         PVD1, ESD1: Ip = P0/|V|, Iq = Q0/|V|, the measurement states 0, SOC = SOCinit
         (ESD1).  REGCA1 (ANDES regca1.py 184-211): Ip = Ipcmd0, Iq = -Iqcmd0 = Q0/|V|,
-        the voltage filter |V|.
+        the voltage filter |V|; with a REECA1, its states (`_reeca1_initial`) and memory
+        (the held outputs: their values at the start).
 
     Raises
     ------
@@ -649,7 +984,9 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
         A device whose commands at the initial point are not its power-flow P0, Q0 (a
         current limit, a trip curve, the Q droop or the power-order limit active at the
         start); a REGCA1 that does not start at rest at P0, Q0 (LVG 0 at its voltage, Ip
-        at the LVPL limit, the high-voltage management or Iolim active), naming it.
+        at the LVPL limit, the high-voltage management or Iolim active; its REECA1's
+        references not at rest: a current limit, a frozen start, a PI input not 0),
+        naming it and the fastest-moving state.
     """
     x = np.zeros((N_STATES, cp.n))
     V = V0[cp.bus_idx]
@@ -660,22 +997,10 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     x[4] = np.where(cp.type == ESD1, cp.SOCinit, 0.0)
     P = cp.packed()
     Vc = V.astype(np.complex128)
+    if np.any(cp.reec == REECA1):
+        _reeca1_initial(cp, x, v)
     if np.any(reg):
-        dx = np.zeros_like(x)
-        x_in = x.copy()
-        S = derivatives_at(P, x_in, Vc, dx)
-        for k in np.flatnonzero(reg):
-            gap = abs(S[k] - (cp.P0[k] + 1j * cp.Q0[k]))
-            moving = np.max(np.abs(dx[:3, k]))
-            if gap > 1e-9 or moving > 1e-9 or np.any(x_in[:, k] != x[:, k]):
-                raise CaseError(
-                    f"ibr_con row {k + 1}: the REGCA1 cannot start at its power-flow point "
-                    f"P0 = {cp.P0[k]:.6g}, Q0 = {cp.Q0[k]:.6g} pu at |V| = {v[k]:.6g} pu: "
-                    f"it injects {S[k].real:.6g} + j{S[k].imag:.6g} pu there, its states "
-                    f"moving at up to {moving:.3g} pu/s (the low-voltage gain LVG 0, Ip at "
-                    "the LVPL limit, the high-voltage management Volim or the limit Iolim "
-                    "is active at the start)"
-                )
+        _check_regca1(cp, P, x, Vc)
     Ip, Iq = commands(P, x, Vc) if cp.n else ((), ())
     for k, (Ipcmd, Iqcmd) in enumerate(zip(Ip, Iq)):
         if reg[k]:
@@ -689,3 +1014,52 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
                 "Q droop or the power-order limit is active at the start)"
             )
     return x
+
+
+def _reeca1_initial(cp: ConverterParams, x: np.ndarray, v: np.ndarray) -> None:
+    """REECA1's initial states in x (N_STATES, n_ibr), in place, at the voltage
+    magnitudes v (ANDES reeca1.py v_str): the filters at |V0|, P0, P0, P0; the Q filter
+    at PFsel/vp (Qref, or Q0 with PFFLAG); the V PI's integrator at QFLAG Q0/|V0| (its
+    x0 -QFLAG Iqcmd0), the Q PI's at 0; the last Ipcmd the REGCA1's Ipcmd0."""
+    ree = cp.reec == REECA1
+    vp = np.where(v <= 0.01, 0.01, v)
+    pfsel = np.where(cp.PFFLAG == 1, cp.Q0, cp.Qref)
+    init = {
+        _VT: v,
+        _PE: cp.P0,
+        _S4: pfsel / vp,
+        _PFILT: cp.P0,
+        _PORD: cp.P0,
+        _PIV: cp.QFLAG * cp.Q0 / v,
+        _IPCMD: cp.Ipcmd0,
+    }
+    for slot, value in init.items():
+        x[slot] = np.where(ree, value, 0.0)
+
+
+def _check_regca1(cp: ConverterParams, P: np.ndarray, x: np.ndarray, Vc: np.ndarray) -> None:
+    """Refuse a REGCA1 (with its REECA1) that does not start at rest at its power-flow
+    point: x (N_STATES, n_ibr) the initial states, its REECA1's memory filled in place by
+    a first evaluation; P the packed parameters, Vc the devices' bus voltages."""
+    x0 = x.copy()
+    dx = np.zeros_like(x)
+    derivatives_at(P, x, Vc, dx)  # the held outputs take their initial values
+    x_in = x.copy()
+    S = derivatives_at(P, x_in, Vc, dx)
+    act = cp.has_state()
+    states = ~np.isin(np.arange(N_STATES), MEMORY_SLOTS)
+    for k in np.flatnonzero(cp.type == REGCA1):
+        speed = np.where(act[:, k], np.abs(dx[:, k]), 0.0)
+        worst = int(np.argmax(speed))
+        gap = abs(S[k] - (cp.P0[k] + 1j * cp.Q0[k]))
+        clamped = np.any(x_in[:, k] != x[:, k]) or np.any((x[:, k] != x0[:, k])[states])
+        if gap > 1e-9 or speed[worst] > 1e-9 or clamped:
+            raise CaseError(
+                f"ibr_con row {k + 1}: the REGCA1 cannot start at its power-flow point "
+                f"P0 = {cp.P0[k]:.6g}, Q0 = {cp.Q0[k]:.6g} pu at |V| = {abs(Vc[k]):.6g} pu: "
+                f"it injects {S[k].real:.6g} + j{S[k].imag:.6g} pu there, its states "
+                f"moving at up to {speed[worst]:.3g} pu/s ({STATE_NAMES[REGCA1][worst]}; "
+                "the low-voltage gain LVG 0, Ip at the LVPL limit, the high-voltage "
+                "management Volim or the limit Iolim is active at the start, or its "
+                "REECA1's current limits, voltage dip freeze or PI references)"
+            )

@@ -586,14 +586,17 @@ def test_import_andes_maps_psse_models_as_the_dyr_reader():
 
 def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
     """A case with renewables (REGCA1, REECA1, REPCA1) and ANDES's own disturbances: one
-    error naming every model stabctl lacks and its device count, and the REGCA1 refused
-    because a REECA1 drives it; with on_unsupported="skip" the renewable's static
-    generator cannot be left out."""
-    path = andes.get_case("ieee14/ieee14_solar.xlsx")
+    error naming every model stabctl lacks (the plant control REPCA1, Toggle) and its
+    device count, the REECA1 read; a REGCA1 driven by a REECB1 is refused by name, and
+    with on_unsupported="skip" its static generator cannot be left out."""
     with pytest.raises(InputError) as err:
-        import_andes(path)
-    for name in ("REECA1 (1)", "REPCA1 (1)", "Toggle (2)", "REGCA1 1: its current commands"):
+        import_andes(andes.get_case("ieee14/ieee14_solar.xlsx"))
+    for name in ("REPCA1 (1)", "Toggle (2)"):
         assert name in str(err.value)
+    assert "REECA1" not in str(err.value)
+    path = andes.get_case("ieee14/ieee14_reecb1.json")
+    with pytest.raises(InputError, match=r"REGCA1 1: its current commands come from REECB1 1"):
+        import_andes(path)
     with pytest.raises(CaseError, match=r"PV 5 \(bus 8\): no synchronous machine"):
         import_andes(path, on_unsupported="skip")
 
@@ -633,8 +636,7 @@ def test_import_andes_cli_writes_ieee39_and_refuses_renewables(tmp_path):
         main, ["import-andes", andes.get_case("ieee14/ieee14_solar.xlsx"), "-o", str(bad)]
     )
     assert res.exit_code == 2 and not bad.exists()
-    assert "REECA1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
-    assert "REGCA1 1: its current commands come from REECA1 1" in res.stderr
+    assert "REPCA1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
 
 
 # -- converter-interfaced devices (ANDES PVD1, ESD1; docs/ibr.md) --------------------------------
@@ -1046,14 +1048,118 @@ def test_ieee14_regca1_modes_match_andes(regca1_alone):
     assert gap < 0.005  # measured 0.22 %
 
 
-def test_import_andes_refuses_a_regca1_driven_by_reeca1(tmp_path):
-    """A REGCA1 whose commands come from a REECA1 (ieee14_solar without REPCA1) is refused
-    by name, not run with constant commands; its generator cannot be left out."""
+# -- REECA1 driving the REGCA1 (ANDES renewable/reeca1.py; docs/ibr.md 6) -------------------
+
+
+@pytest.fixture(scope="module")
+def reeca1_case(tmp_path_factory):
+    """ieee14_solar without its plant control REPCA1 (REECA1's references constant) and
+    the imported case."""
+    path = solar_case_file(tmp_path_factory.mktemp("reeca1"), ("REPCA1",))
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    return path, case
+
+
+def reeca1_gaps(path, case, bus, cycles, h, t_end):
+    """(speed, P, Q) gaps to ANDES of a bus fault through j1e-3 pu, both tools at step h."""
+    t_clear = 1.0 + cycles / 60
+    res = Simulator(case, q_limits=False).run([Fault(bus, 1.0, t_clear, x=1e-3)], t_end, h=h)
+    ss = andes_system(path, fault=AndesFault(bus, 1.0, t_clear, x=1e-3), off=("Toggle",))
+    t, wa = andes_speeds(ss, t_end, h)
+    Pa, Qa = andes_converter_powers(ss, "REGCA1")
+    dw = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
+    gaps = [
+        algebraic_gaps(t, np.interp(t, res.t, ours[:, 0]), theirs[:, 0], (1.0, t_clear), h)
+        for ours, theirs in ((res.ibr_p, Pa), (res.ibr_q, Qa))
+    ]
+    return dw, *gaps
+
+
+def test_import_andes_reads_the_reeca1_into_its_regca1s_row(reeca1_case):
+    """The REECA1's parameters land in the REGCA1's ibr_con row as given (device base),
+    its config (kqs, kvs, tpfilt) too; ANDES's solar case: Kqv 20, Thld -2 s, Thld2 1 s,
+    Vref0 1.03, Imax 10."""
+    _, case = reeca1_case
+    t = case.converters
+    assert (t.reec[0], t.Kqv[0], t.Thld[0], t.Thld2[0], t.Vref0[0]) == (1, 20, -2, 1, 1.03)
+    assert (t.Imax[0], t.Kqs[0], t.Kvs[0], t.Tpfilt[0], t.pqflag[0]) == (10, 2, 2, 0.02, 0)
+
+
+def test_ieee14_reeca1_fault_speeds_and_powers_match_andes(reeca1_case):
+    """3-cycle fault at bus 9 (ANDES 2.0 stops at clearing for 6 cycles here, with or
+    without the REPCA1): the bus-8 voltage dips to 0.5 pu, the REECA1 freezes and injects
+    Kqv (Vref0 - V) = up to 9.5 pu of reactive current command, held |Thld| = 2 s after
+    the dip, with Ipmax held Thld2 = 1 s.  Kqv = 20 through Tg = Trv = 0.02 s is a fast
+    loop: at 5 ms each tool is a step error away from the other's (P 8.9e-3, Q 8.5e-2,
+    speeds 1.8e-5; ANDES 5 ms against ANDES 1.25 ms differs by 0.09 pu in Q), at 1.25 ms
+    in both they agree within P 1.1e-3, Q 9.1e-3, speeds 3.0e-6 (0.5 ms: 6.9e-4, 5.8e-3,
+    2.6e-6), so the equations are the same and the gap is the step."""
+    path, case = reeca1_case
+    dw, dP, dQ = reeca1_gaps(path, case, 9, 3, STEP, 5.0)
+    print(f"\nREECA1 fault vs ANDES at 5 ms: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert dw < 5e-5  # measured 1.75e-5 (target 1e-4)
+    assert dP < 2e-2 and dQ < 0.15  # measured 8.9e-3, 8.5e-2: the step (docstring)
+    dw, dP, dQ = reeca1_gaps(path, case, 9, 3, STEP / 4, 2.0)
+    print(f"REECA1 fault vs ANDES at 1.25 ms: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert dw < 1e-5  # measured 3.0e-6
+    assert dP < 2e-3 and dQ < 2e-2  # measured 1.1e-3, 9.1e-3
+
+
+def test_ieee14_reeca1_flat_run_stays_at_the_power_flow_point(reeca1_case):
+    """10 s without disturbance: every state (REECA1's and its memory) within 1e-8."""
+    from stabctl.dynamics.driver import _Run
+
+    _, case = reeca1_case
+    sim = Simulator(case, q_limits=False)
+    m, sa, grid, nets = sim._prepare([], 10.0, STEP, None, "exact")
+    run = _Run(sim, m, sa, grid, nets, False, np.pi, False)
+    run.advance(grid.t.size - 1)
+    drift = np.max(np.abs(run.x - m.x0))
+    print(f"\nREECA1 flat 10 s: largest drift {drift:.2e}")
+    assert drift < 1e-8
+
+
+def test_ieee14_reeca1_holds_active_current_thld2_after_the_dip(reeca1_case):
+    """Imax 1.2 pu (ANDES 2.0 cannot initialise this: its Iqmax start equation misses
+    Imax, residual -8.8): in the dip the reactive command takes the whole current (Q
+    priority), Ipmax = sqrt(Imax^2 - Iqcmd^2) = 0, and Ipmax stays held at that value
+    Thld2 = 1 s after the dip ends (PSS/E REEC_A; WECC's delayed active power
+    recovery): P stays near 0 for 1 s, then recovers.  Halving the step moves the
+    recovery instant by less than a step."""
+    _, case = reeca1_case
+    case = case.replace(converters=case.converters.replace(Imax=np.full(1, 1.2)))
+    ends = []
+    for h in (STEP, STEP / 2):
+        res = Simulator(case, q_limits=False).run([Fault(14, 1.0, 1.1, x=1e-3)], 4.0, h=h)
+        v = res.vmag[:, case.bus_index(8)]
+        dip = (v < 0.8) | (v > 1.1)
+        end = res.t[np.flatnonzero(dip)[-1] + 1]
+        Iq = res.ibr_q[:, 0] / v
+        assert np.max(Iq) < 1.2  # the command at its limit, the lagging current below
+        held = (res.t > end + 0.6) & (res.t < end + 1.0 - 2 * h)
+        assert np.max(res.ibr_p[held, 0]) < 1e-3  # Ip decays along Tg (0.1 s) toward 0
+        rising = res.t[np.flatnonzero((res.t > end + 0.6) & (res.ibr_p[:, 0] > 0.01))[0]]
+        ends.append(rising - end)
+        assert res.ibr_p[-1, 0] == pytest.approx(0.35, abs=1e-3)
+    print(f"\nREECA1 Ipmax hold: P recovers {ends[0]:.4f} s after the dip ({ends[1]:.4f} at h/2)")
+    assert 1.0 < ends[0] < 1.1 and abs(ends[0] - ends[1]) < STEP
+
+
+def test_import_andes_refuses_a_regca1_with_two_electrical_controls(tmp_path):
+    """Two REECA1 on one REGCA1 are refused by name (stabctl models one or none)."""
+    import pandas as pd
+
     path = solar_case_file(tmp_path, ("REPCA1",))
-    with pytest.raises(InputError, match=r"REECA1 \(1\).*REGCA1 1: its current commands come"):
+    sheets = pd.read_excel(path, sheet_name=None)
+    two = pd.concat([sheets["REECA1"]] * 2, ignore_index=True)
+    two.loc[1, ["uid", "idx", "name"]] = [1, 2, "REECA1_2"]
+    sheets["REECA1"] = two
+    with pd.ExcelWriter(path) as out:
+        for name, sheet in sheets.items():
+            sheet.to_excel(out, sheet_name=name, index=False)
+    with pytest.raises(InputError, match=r"REGCA1 1: its current commands come from REECA1 1"):
         import_andes(path)
-    with pytest.raises(CaseError, match=r"cannot be left out"):
-        import_andes(path, on_unsupported="skip")
 
 
 def test_ieee14_esac1a_field_voltage_matches_andes_where_andes_models_it():

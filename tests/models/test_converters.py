@@ -236,3 +236,85 @@ def test_regca1_start_with_a_limit_active_is_refused():
 def test_regca1_piecewise_points_are_checked(field, value, message):
     with pytest.raises(CaseError, match=rf"ibr_con row 1 \(converter 1\).*{message}"):
         make_case(REG_ROW, **{field: value})
+
+
+# -- REECA1 (ANDES renewable/reeca1.py, docs/ibr.md 6) --------------------------------------
+
+S = {name: 5 + j for j, name in enumerate(conv.REECA1_SLOTS)}  # REECA1's slots
+
+
+def reeca1(x_changes=(), V=1.0, **cols):
+    """`regca1` with a REECA1 (``reec`` 1, Vref0 1 pu: no voltage error at the start)."""
+    return regca1(x_changes, V, reec=1, **{"Vref0": 1.0, **cols})
+
+
+def test_reeca1_starts_at_rest_with_its_memory_at_the_initial_values():
+    # the filters at |V0|, P0, P0, P0, the Q filter at Q0/|V0|; the held Ipmax the room
+    # sqrt(Imax^2 - Iqcmd^2) its Q priority leaves, the last Ipcmd the REGCA1's
+    dx, S_, x, cp = reeca1()
+    assert np.all(dx == 0.0) and S_ == 0.5 + 0.1j
+    assert x[S["Vt_filter"], 0] == 1.0 and x[S["Iq_filter"], 0] == pytest.approx(0.1)
+    assert x[S["Pord"], 0] == x[S["Pref_filter"], 0] == 0.5
+    assert x[S["Ipmax_held"], 0] == pytest.approx(np.sqrt(999.0**2 - 0.1**2), rel=1e-15)
+    assert x[S["Ipcmd_last"], 0] == 0.5
+    assert not cp.has_state()[conv.MEMORY_SLOTS].any()
+
+
+def test_reeca1_voltage_dip_freezes_and_injects_reactive_current():
+    # at 0.5 pu (below Vdip 0.8) with the filtered voltage at 0.5: Iqinj = Kqv (Vref0 -
+    # 0.5 - dbd2) = 0.48, Iqcmd = Q filter + Iqinj = 0.58, the REGCA1's Iq lag moves
+    # toward it; the frozen lags and PIs stand still; the Iqinj timer is set to |Thld|
+    dx, _, x, _ = reeca1([(S["Vt_filter"], 0.5), (S["Pref_filter"], 0.6)], V=0.5, Thld=-2.0)
+    assert dx[1, 0] == pytest.approx((0.58 - 0.1) / 0.1, rel=1e-13)
+    for name in ("Iq_filter", "Pord", "PIQ", "PIV"):
+        assert dx[S[name], 0] == 0.0
+    assert dx[S["Pref_filter"], 0] == pytest.approx((0.5 - 0.6) / 0.02, rel=1e-13)
+    assert x[S["Iqinj_timer"], 0] == 2.0 and x[S["Ipmax_timer"], 0] == 0.0
+
+
+def test_reeca1_voltage_dependent_limit_and_q_priority_room_for_ip():
+    # VDL1 at the filtered 0.5 pu: (0.5 - 0.4)(8 - 4)/(0.8 - 0.4) + 4 = 5 pu; Iqinj 20 x
+    # 0.48 = 9.6 is cut to 5; Imax 5.05 leaves Ipmax = sqrt(5.05^2 - 5^2) to the order
+    # Pord/v = 1.0: the Ipcmd is that room (the REGCA1's Iq rate limit Iqrmax opened)
+    changes = [(S["Vt_filter"], 0.5)]
+    dx, _, x, _ = reeca1(changes, V=0.5, Kqv=20.0, Imax=5.05, Iqrmax=99.0)
+    assert dx[1, 0] == pytest.approx((5.0 - 0.1) / 0.1, rel=1e-13)
+    assert x[S["Ipcmd_last"], 0] == pytest.approx(np.sqrt(5.05**2 - 25.0), rel=1e-13)
+    # P priority: VDL2 (0.5 - 0.4)(8 - 4)/0.4 + 4 = 5 above the order: Ipcmd 1.0, Iq's
+    # room sqrt(5.05^2 - 1)
+    dx, _, x, _ = reeca1(changes, V=0.5, Kqv=20.0, Imax=5.05, Iqrmax=99.0, pqflag=1)
+    assert x[S["Ipcmd_last"], 0] == pytest.approx(1.0, rel=1e-13)
+    assert dx[1, 0] == pytest.approx((np.sqrt(5.05**2 - 1.0) - 0.1) / 0.1, rel=1e-13)
+
+
+def test_reeca1_holds_ipmax_after_the_dip_and_runs_its_timers_down():
+    # after the dip (1 pu) with the Thld2 timer running: Ipmax is the held 0.2, not the
+    # room; both timers run down at 1/s; without a running timer the held value tracks
+    dx, _, x, _ = reeca1([(S["Ipmax_timer"], 0.5), (S["Ipmax_held"], 0.2)])
+    assert x[S["Ipcmd_last"], 0] == 0.2 and x[S["Ipmax_held"], 0] == 0.2
+    assert dx[S["Ipmax_timer"], 0] == -1.0
+    dx, _, x, _ = reeca1([(S["Ipmax_held"], 0.2)])
+    assert x[S["Ipcmd_last"], 0] == 0.5 and x[S["Ipmax_held"], 0] > 998.0
+    # Thld > 0: Iqfrz injected while the Iqinj timer runs after the dip
+    dx, _, _, _ = reeca1([(S["Iqinj_timer"], 0.3)], Thld=0.5, Iqfrz=0.25)
+    assert dx[1, 0] == pytest.approx(0.25 / 0.1, rel=1e-13)
+    assert dx[S["Iqinj_timer"], 0] == -1.0
+
+
+def test_reeca1_power_order_anti_windup_resets_the_state_to_its_limit():
+    # Pord 0.65 above PMAX 0.6 with the reference above it (e >= 0): set to 0.6, held;
+    # above the limit with e < 0 it decays freely
+    dx, _, x, _ = reeca1([(S["Pref_filter"], 0.8), (S["Pord"], 0.65)], PMAX=0.6)
+    assert x[S["Pord"], 0] == 0.6 and dx[S["Pord"], 0] == 0.0
+    dx, _, x, _ = reeca1([(S["Pord"], 0.65)], PMAX=0.6)
+    assert x[S["Pord"], 0] == 0.65
+    assert dx[S["Pord"], 0] == pytest.approx((0.5 - 0.65) / 0.02, rel=1e-13)
+
+
+def test_reeca1_start_off_equilibrium_is_refused_naming_the_state():
+    # VFLAG 1 with QFLAG 1: the Q PI's input Qref - Qe = (Vref1 - v) - Q0 is not 0, so the
+    # V PI's output, the REGCA1's Iq command, moves (ANDES starts it off equilibrium too)
+    with pytest.raises(CaseError, match=r"REGCA1 cannot start.*\(Iq;"):
+        reeca1(QFLAG=1, VFLAG=1)
+    with pytest.raises(CaseError, match=r"field 'reec'.*drives a REGCA1"):
+        conv.converter_params(make_case(reec=1))
