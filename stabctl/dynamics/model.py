@@ -185,10 +185,11 @@ class DynamicModel:
         self.y_load = np.conj(S_Z) / V0**2
         extra = case.bus_indices(list(injection_buses)) if len(injection_buses) else []
         nc = np.asarray(case.bus_indices(lc[:, 0]) if lc.size else [], int)
-        self.nc_idx = np.unique(
-            np.concatenate([nc, np.asarray(extra, int), cp.bus_idx.astype(int)])
-        ).astype(int)
-        cp.pos[:] = np.searchsorted(self.nc_idx, cp.bus_idx)
+        # the converters' buses and their plant controls' line ends (REPCA1)
+        ends = np.concatenate([cp.bus_idx, cp.bus1_idx, cp.bus2_idx]).astype(int)
+        self.nc_idx = np.unique(np.concatenate([nc, np.asarray(extra, int), ends])).astype(int)
+        for pos, rows in ((cp.pos, cp.bus_idx), (cp.pos1, cp.bus1_idx), (cp.pos2, cp.bus2_idx)):
+            pos[:] = np.searchsorted(self.nc_idx, rows)
         i = self.nc_idx
         S_P = fP[i] * S_L[i].real + 1j * fQ[i] * S_L[i].imag
         S_I = fIP[i] * S_L[i].real + 1j * fIQ[i] * S_L[i].imag
@@ -704,7 +705,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     for k in range(ng):
         gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G.MAC])], dxg)
     for k in range(ni):
-        S_ibr[k] = conv.derivatives(p.IP, xi, k, V_nc[int(p.IP[k, conv.C.POS])], dxi)
+        S_ibr[k] = conv.derivatives(p.IP, xi, k, V_nc[int(p.IP[k, conv.C.POS])], V_nc, dxi)
     return it
 
 

@@ -67,7 +67,16 @@ from stabctl.errors import CaseError, InputError
 from stabctl.io.andes import _andes
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
 from stabctl.io.pst import case_from_matrices
-from stabctl.models.converters import CONVERTER, ESD1, PVD1, REECA1, REECA1_FIELDS, REGCA1
+from stabctl.models.converters import (
+    CONVERTER,
+    ESD1,
+    PVD1,
+    REECA1,
+    REECA1_FIELDS,
+    REGCA1,
+    REPCA1,
+    REPCA1_FIELDS,
+)
 
 __all__ = [
     "AndesImport",
@@ -87,7 +96,7 @@ IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc", "Summary")
 #: ANDES converter models -> the converter type of stabctl.models.converters.CONVERTER
 CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1}
 #: ANDES controls read into their converter's row (a REGCA1's REECA1, ibr_con ``reec``)
-CONVERTER_CONTROLS = ("REECA1",)
+CONVERTER_CONTROLS = ("REECA1", "REPCA1")
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
 _NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt")
 _MACHINES = ("GENROU", "GENCLS")
@@ -391,7 +400,7 @@ def _converters(ss, numbers: dict):
                 if p.name in m.params:
                     v[p.name] = float(m.params[p.name].vin[k])
             if kind == REGCA1:
-                v.update(_reeca1_values(ss, m.idx.v[k]))
+                v.update(_reeca1_values(ss, m.idx.v[k], numbers))
             rows.append([float(v[p.name]) for p in CONVERTER.params])
             got = share.setdefault(gen, [0.0, 0.0, []])
             got[0] += m.gammap.v[k]
@@ -449,12 +458,56 @@ def _electrical_control_refusal(ss, regc) -> str:
     busr = [ss.REECA1.busr.v[j] for _, j in drivers]
     if busr and busr[0] is not None:
         return f"its REECA1 regulates remote bus busr = {busr[0]} (stabctl: its own)"
+    plants = _plant_controls(ss, ss.REECA1.idx.v[drivers[0][1]]) if drivers else []
+    if len(plants) > 1:
+        return f"its REECA1 takes references from {len(plants)} REPCA1 (stabctl: one)"
+    for j in plants:
+        m = ss.REPCA1
+        if m.Fflag.v[j] != 0:
+            return f"its REPCA1 {m.idx.v[j]} has Fflag 1 (stabctl models its reactive path)"
+        if m.busr.v[j] is not None:
+            return f"its REPCA1 {m.idx.v[j]} regulates remote bus busr = {m.busr.v[j]}"
     return ""
 
 
-def _reeca1_values(ss, regc) -> dict[str, float]:
+def _plant_controls(ss, reec) -> list[int]:
+    """The rows of the in-service REPCA1 whose electrical control is ``reec`` (its idx)."""
+    m = ss.models.get("REPCA1")
+    return [j for j in _in_service(m) if m.ree.v[j] == reec] if m is not None else []
+
+
+def _repca1_values(ss, j: int, numbers: dict) -> dict[str, float]:
+    """The ibr_con fields of REPCA1 row j: its parameters (the compensation Rc, Xc the
+    monitored line's where not given, ANDES NumSelect), config kqs and freeze, and its
+    line's end buses (numbered as stabctl's) and impedance (0 buses: no line)."""
+    m = ss.REPCA1
+    v: dict[str, float] = {"repc": float(REPCA1)}
+    config = {"pc_Kqs": m.config.kqs, "pc_freeze": m.config.freeze}
+    line = m.line.v[j]
+    ends = {"pc_bus1": 0.0, "pc_bus2": 0.0, "pc_r": 1.0, "pc_x": 1.0}
+    if line is not None:
+        k = list(ss.Line.idx.v).index(line)
+        b1, b2 = ss.Line.bus1.v[k], ss.Line.bus2.v[k]
+        ends = {"pc_bus1": numbers[b1], "pc_bus2": numbers[b2]}
+        ends.update(pc_r=ss.Line.r.v[k], pc_x=ss.Line.x.v[k])
+    for field in REPCA1_FIELDS:
+        name = field[3:]
+        if field in config:
+            v[field] = float(config[field])
+        elif field in ends:
+            v[field] = float(ends[field])
+        else:
+            v[field] = float(m.params[name].v[j])
+    for field, given in (("pc_Rc", m.Rc.v[j]), ("pc_Xc", m.Xc.v[j])):
+        if given is None or not np.isfinite(given):
+            v[field] = v["pc_r" if field == "pc_Rc" else "pc_x"]
+    return v
+
+
+def _reeca1_values(ss, regc, numbers: dict) -> dict[str, float]:
     """The ibr_con fields of renewable generator ``regc``'s REECA1 (none without one): its
-    parameters as given (``vin``, before ANDES's base change) and its config."""
+    parameters as given (``vin``, before ANDES's base change) and its config, and its
+    REPCA1's (`_repca1_values`)."""
     drivers = _electrical_controls(ss, regc)
     if not drivers:
         return {}
@@ -465,6 +518,8 @@ def _reeca1_values(ss, regc) -> dict[str, float]:
             v[field] = float(getattr(m.config, _REECA1_CONFIG[field]))
         else:
             v[field] = float(m.params[_REECA1_NAMES.get(field, field)].vin[j])
+    for plant in _plant_controls(ss, m.idx.v[j]):
+        v.update(_repca1_values(ss, plant, numbers))
     return v
 
 

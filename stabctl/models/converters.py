@@ -37,7 +37,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import CaseError
-from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, washout
+from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, leadlag_input_state, washout
 from stabctl.models.declaration import (
     Declared,
     Family,
@@ -129,6 +129,53 @@ def _vdl_params(curve: str, v_name: str, i_name: str, currents) -> list[tuple[st
 
 
 _REECA1_PARAMS = _reeca1_params(54)
+
+#: REECA1's plant control (ibr_con ``repc``): none, REPCA1 (WECC REPC_A)
+NO_REPC, REPCA1 = 0, 1
+
+
+def _repca1_params(col: int) -> tuple[Param, ...]:
+    """REPCA1's columns from ``col`` on, prefixed ``pc_`` (ANDES 2.0
+    ``renewable/repca1.py`` REPCA1Data; config kqs, freeze): its reactive power path.
+    The monitored line's end buses and impedance (system base) and the compensation
+    impedance (Rc, Xc or, where not given, the line's: ANDES NumSelect) are written by
+    the import.  Its frequency path (Fflag 1) is not modelled (refused)."""
+    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
+    rows: list[tuple[str, dict[str, Any]]] = [
+        ("VCFlag", dict(flag, default=1.0, doc="1 compensated voltage, 0 V + Kc Qline")),
+        ("RefFlag", dict(flag, default=1.0, doc="1 voltage control, 0 line Q control")),
+        ("Fflag", dict(flag, choices=(0.0,), doc="frequency path (0: not modelled)")),
+        ("bus1", dict(unit="code", integer=True, doc="monitored line's from bus (0: none)")),
+        ("bus2", dict(unit="code", integer=True, doc="monitored line's to bus (0: none)")),
+        ("r", dict(unit="pu", default=1.0, doc="monitored line resistance")),
+        ("x", dict(unit="pu", default=1.0, doc="monitored line reactance")),
+        ("Rc", dict(unit="pu", doc="line drop compensation resistance")),
+        ("Xc", dict(unit="pu", doc="line drop compensation reactance")),
+        ("Kc", dict(unit="pu", doc="reactive droop gain (VCFlag 0)")),
+        ("Tfltr", dict(unit="s", default=0.02, lo=0.0, doc="voltage and Q filters")),
+        ("Kp", dict(unit="pu", default=1.0, doc="PI proportional gain")),
+        ("Ki", dict(unit="1/s", default=0.1, doc="PI integral gain")),
+        ("Kqs", dict(unit="", default=2.0, lo=0.0, doc="PI tracking gain (kqs)")),
+        ("Tft", dict(unit="s", default=1.0, lo=0.0, doc="lead time constant")),
+        ("Tfv", dict(unit="s", default=1.0, lo=0.0, doc="lag time constant")),
+        ("Vfrz", dict(unit="pu", default=0.8, doc="voltage below which the error is held")),
+        ("freeze", dict(flag, default=1.0, doc="1 the hold below Vfrz on, 0 off")),
+        ("emax", dict(unit="pu", default=999.0, doc="upper error limit")),
+        ("emin", dict(unit="pu", default=-999.0, doc="lower error limit")),
+        ("dbd1", dict(unit="pu", default=-0.1, hi=0.0, doc="lower error deadband")),
+        ("dbd2", dict(unit="pu", default=0.1, lo=0.0, doc="upper error deadband")),
+        ("Qmax", dict(_DEV_PU, default=999.0, doc="upper Q command")),
+        ("Qmin", dict(_DEV_PU, default=-999.0, doc="lower Q command")),
+    ]
+    return tuple(
+        Param(f"pc_{name}", col=col + j, **{**kw, "doc": "REPCA1: " + kw["doc"]})
+        for j, (name, kw) in enumerate(rows)
+    )
+
+
+_REPCA1_PARAMS = _repca1_params(106)
+#: the ibr_con fields a REPCA1 sets (``pc_`` and ANDES's name)
+REPCA1_FIELDS = tuple(p.name for p in _REPCA1_PARAMS)
 #: the ibr_con fields a REECA1 sets (its own columns, its PQFLAG and its Iq filter Tiq)
 REECA1_FIELDS = ("pqflag", "tiq", *(p.name for p in _REECA1_PARAMS))
 
@@ -279,6 +326,14 @@ CONVERTER = Family(
             doc="REGCA1's electrical control: 0 none (constant current commands), 1 REECA1",
         ),
         *_REECA1_PARAMS,
+        Param(
+            "repc",
+            "code",
+            105,
+            choices=(NO_REPC, REPCA1),
+            doc="REECA1's plant control: 0 none (constant references), 1 REPCA1",
+        ),
+        *_REPCA1_PARAMS,
     ),
 )
 
@@ -295,6 +350,7 @@ __all__ = [
     "derivatives",
     "commands",
     "derivatives_at",
+    "at_power_flow",
 ]
 
 #: REECA1's slots (a REGCA1 with ``reec`` 1): its states, then its memory (`MEMORY_SLOTS`)
@@ -302,21 +358,24 @@ REECA1_SLOTS = (
     *("Vt_filter", "Pe_filter", "PIQ", "Iq_filter", "Pref_filter", "Pord", "PIV"),
     *("Iqinj_timer", "Ipmax_timer", "Ipmax_held", "PIQ_held", "PIV_held", "Ipcmd_last"),
 )
+#: REPCA1's slots (``repc`` 1): its states, then its memory (the held error)
+REPCA1_SLOTS = ("Vc_filter", "Qline_filter", "PI_plant", "LeadLag_plant", "e_held")
 # numpy scalars: a kernel's argument is then typed once (not as a literal per value)
 _VT, _PE, _PIQ, _S4, _PFILT, _PORD, _PIV = (np.int64(j) for j in range(5, 12))
 _T_IQ, _T_IP, _IPMAX_H, _PIQ_H, _PIV_H, _IPCMD = (np.int64(j) for j in range(12, 18))
-N_STATES = 5 + len(REECA1_SLOTS)
+_PC_V, _PC_Q, _PC_PI, _PC_LL, _PC_E_H = (np.int64(j) for j in range(18, 23))
+N_STATES = 5 + len(REECA1_SLOTS) + len(REPCA1_SLOTS)
 #: state names per converter type (slots beyond a type's names, or that a device does not
 #: use, `has_state`, are unused, 0)
 STATE_NAMES = {
     PVD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
     ESD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
-    REGCA1: ("Ip", "Iq", "V_filter", "", "", *REECA1_SLOTS),
+    REGCA1: ("Ip", "Iq", "V_filter", "", "", *REECA1_SLOTS, *REPCA1_SLOTS),
 }
 #: slots that are not states but the memory of REECA1's discrete logic, written in place by
 #: the kernel (ANDES's ExtendedEvent timers, its VarHold of Ipmax, the frozen PI outputs):
 #: at rest they do not move; the linearisation leaves them out (`has_state`)
-MEMORY_SLOTS = list(range(int(_T_IQ), int(_IPCMD) + 1))
+MEMORY_SLOTS = [*range(int(_T_IQ), int(_IPCMD) + 1), int(_PC_E_H)]
 #: the slots that integrate energy (ESD1's state of charge): at rest only at zero output,
 #: so the initial-point check leaves them out (unused, 0, in the other types)
 ENERGY_SLOTS = [STATE_NAMES[ESD1].index("SOC")]
@@ -324,10 +383,12 @@ ENERGY_SLOTS = [STATE_NAMES[ESD1].index("SOC")]
 TABLE_FIELDS = tuple(n for n in CONVERTER.names if n not in ("number", "bus", "mva"))
 #: REECA1's lag time constants (each must be >= LBND; its Iq filter is ``tiq``)
 REECA1_LAGS = ("Trv", "Tp", "tiq", "Tpfilt", "Tpord")
+#: REPCA1's (its lead time constant pc_Tft may be 0)
+REPCA1_LAGS = ("pc_Tfltr", "pc_Tfv")
 #: fields on the device base: powers and currents (times Sn/Sb), the reactance (Sb/Sn)
 POWER_FIELDS = (
     *("qmx", "qmn", "pmx", "dqdv", "ddn", "ialim", "Iolim", "Iqrmax", "Iqrmin"),
-    *("QMax", "QMin", "dPmax", "dPmin", "PMAX", "PMIN", "Imax"),
+    *("QMax", "QMin", "dPmax", "dPmin", "PMAX", "PMIN", "Imax", "pc_Qmax", "pc_Qmin"),
     *(f"{a}{j}" for a in ("Iq", "Ip") for j in range(1, 5)),
 )
 #: packed parameter matrix of the kernels, (column name, ConverterParams attribute)
@@ -354,6 +415,11 @@ PACKED = (
     ("IMAXR", "Imaxr"),
     ("ZVDL1", "zVDL1"),
     ("ZVDL2", "zVDL2"),
+    ("POS1", "pos1"),
+    ("POS2", "pos2"),
+    ("ISIGN", "isign"),
+    ("PC_VREF0", "pc_Vref0"),
+    ("PC_QLINE0", "pc_Qline0"),
 )
 #: the kernels' column of each PACKED name: P[k, C.IALIM]
 C = layout("ConverterColumns", PACKED)
@@ -374,7 +440,12 @@ class ConverterParams(Declared):
     Q0, or Vref1 - |V0| with QFLAG), tanpf = Q0/P0 (the power-factor reference, 0 where
     P0 = 0: Qcpf held at Q0), Ipoff = Ipcmd0 - P0/|V0| (the REGCA1's Ipcmd less the
     REECA1's, ANDES's two initial commands summed), Imaxr (Imax, 1e8 where <= 0), zVDL1,
-    zVDL2 (1 where the VDL curve's points rise: the curve applies)."""
+    zVDL2 (1 where the VDL curve's points rise: the curve applies); REPCA1 (``repc``,
+    ANDES repca1.py): the monitored line's end buses (rows bus1_idx, bus2_idx; the
+    device's own bus without a line) and their positions pos1, pos2 among the kept buses
+    (set by the dynamic model), isign (1 if the device's bus is bus1, else -1: the line
+    current counted from it), and the initial compensated voltage pc_Vref0 (its voltage
+    reference, ANDES Vref0) and line Q pc_Qline0 (0 elsewhere)."""
 
     pmn: np.ndarray
     P0: np.ndarray
@@ -396,6 +467,13 @@ class ConverterParams(Declared):
     Imaxr: np.ndarray
     zVDL1: np.ndarray
     zVDL2: np.ndarray
+    pos1: np.ndarray
+    pos2: np.ndarray
+    bus1_idx: np.ndarray
+    bus2_idx: np.ndarray
+    isign: np.ndarray
+    pc_Vref0: np.ndarray
+    pc_Qline0: np.ndarray
 
     @property
     def n(self) -> int:
@@ -420,6 +498,7 @@ class ConverterParams(Declared):
             ("ibr_con Tg", self.Tg, reg),
             ("ibr_con Tfltr", self.Tfltr, reg),
             *((f"ibr_con {n}", getattr(self, n), ree) for n in REECA1_LAGS),
+            *((f"ibr_con {n}", getattr(self, n), self.repc == REPCA1) for n in REPCA1_LAGS),
         )
 
     def has_state(self) -> np.ndarray:
@@ -429,7 +508,8 @@ class ConverterParams(Declared):
         act[2] = reg | (self.Tfm >= LBND)
         act[3] = ~reg
         act[4] = self.type == ESD1
-        act[5:] = self.reec == REECA1
+        act[5:_PC_V] = self.reec == REECA1
+        act[_PC_V:] = self.repc == REPCA1
         act[MEMORY_SLOTS] = False
         return act
 
@@ -470,7 +550,12 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     if bad.size:
         t._fail(bad[0], "reec", "an electrical control drives a REGCA1 (type 3) only")
     lags = [("tip", ~reg), ("tiq", ~reg), ("Tg", reg), ("Tfltr", reg)]
-    for name, sel in lags + [(name, ree) for name in REECA1_LAGS]:
+    pc = t.repc == REPCA1
+    bad = np.flatnonzero(pc & ~ree)
+    if bad.size:
+        t._fail(bad[0], "repc", "a plant control drives a REECA1 (reec 1) only")
+    lags += [(name, ree) for name in REECA1_LAGS] + [(name, pc) for name in REPCA1_LAGS]
+    for name, sel in lags:
         bad = np.flatnonzero(sel & (getattr(t, name) < LBND))
         if bad.size:
             t._fail(bad[0], name, f"must be >= {LBND:g} s (a lag of the converter)")
@@ -498,7 +583,7 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         Ipcmd0 = np.where(LVG0 > 0, P0 / v0 / np.where(LVG0 > 0, LVG0, 1.0), 1.0)
     with np.errstate(divide="ignore"):
         Ksoc = np.where(t.type == ESD1, case.base_mva / 3600.0 / t.En / t.Tf, 0.0)
-    return ConverterParams(
+    cp = ConverterParams(
         pos=np.full(n, -1, np.int64),
         bus_idx=np.asarray(idx, np.int64),
         **vals,
@@ -516,7 +601,42 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         kLVG=kLVG,
         kLVPL=kLVPL,
         **_reeca1_services(vals, ree, P0, Q0, v0, np.where(reg, Ipcmd0, 0.0)),
+        **_repca1_services(case, idx),
     )
+    _repca1_references(cp, V0)
+    return cp
+
+
+def _repca1_services(case: Case, idx: np.ndarray) -> dict[str, np.ndarray]:
+    """REPCA1's line services (`ConverterParams`) of the devices on bus rows idx; without
+    a line (bus1 = bus2 = 0) both ends the device's bus (no line current, ANDES's no-line
+    patch)."""
+    t = case.converters
+    pc = t.repc == REPCA1
+    line = pc & (t.pc_bus1 > 0)
+    b1 = np.where(line, case.bus_indices(np.where(line, t.pc_bus1, t.bus)), idx)
+    b2 = np.where(line, case.bus_indices(np.where(line, t.pc_bus2, t.bus)), idx)
+    bad = np.flatnonzero(line & (b1 != idx) & (b2 != idx))
+    if bad.size:
+        t._fail(bad[0], "pc_bus1", "the monitored line must end at the device's bus")
+    return {
+        "pos1": np.full(len(t), -1, np.int64),
+        "pos2": np.full(len(t), -1, np.int64),
+        "bus1_idx": np.asarray(b1, np.int64),
+        "bus2_idx": np.asarray(b2, np.int64),
+        "isign": np.where(b1 == idx, 1.0, -1.0),
+        "pc_Vref0": np.zeros(len(t)),  # `_repca1_references`
+        "pc_Qline0": np.zeros(len(t)),
+    }
+
+
+def _repca1_references(cp: ConverterParams, V0: np.ndarray) -> None:
+    """REPCA1's initial references in place: pc_Vref0 the selected voltage VCsel and
+    pc_Qline0 the line Q at the power-flow voltages V0 (n_bus,) (`line_measures`)."""
+    P = cp.packed()
+    for k in np.flatnonzero(cp.repc == REPCA1):
+        Vsel, Qline = line_measures(P, k, V0[cp.bus_idx[k]], V0[cp.bus1_idx[k]], V0[cp.bus2_idx[k]])
+        cp.pc_Vref0[k], cp.pc_Qline0[k] = Vsel, Qline
 
 
 def _reeca1_services(vals: dict, ree, P0, Q0, v0, Ipcmd0) -> dict[str, np.ndarray]:
@@ -769,9 +889,10 @@ def _iq_injection(P, k, vt, frz, extended):
 
 
 @kernel
-def _reeca1(P, x, k, v, S, dx):
+def _reeca1(P, x, k, v, S, Qext, dx):
     """REECA1 (ANDES 2.0 reeca1.py; docs/ibr.md 6) driving REGCA1 k at voltage magnitude v
-    with its injected power S = Pe + j Qe: the derivatives of its slots written, its
+    with its injected power S = Pe + j Qe and its plant control's Q reference increment
+    Qext (0 without one): the derivatives of its slots written, its
     memory (`MEMORY_SLOTS`) updated in place; returns the commands (IpHL, IqHL), pu.
     Frozen (Volt_dip) while v < Vdip or v > Vup (strict)."""
     frz = v < P[k, C.VDIP] or v > P[k, C.VUP]
@@ -783,7 +904,7 @@ def _reeca1(P, x, k, v, S, dx):
     _, dx[_PE, k] = lag(S.real, x[_PE, k], P[k, C.TP])
     vp = 0.01 if v <= 0.01 else v
     # reactive power reference: Q, or the power factor of the filtered Pe (Q0 at P0 = 0)
-    PFsel = P[k, C.QREF]
+    PFsel = P[k, C.QREF] + Qext
     if P[k, C.PFFLAG] == 1.0:
         PFsel = x[_PE, k] * P[k, C.TANPF] if P[k, C.P0] != 0.0 else P[k, C.Q0]
     Qerr = clip(PFsel, P[k, C.QMIN], P[k, C.QMAX]) - S.imag
@@ -804,6 +925,51 @@ def _reeca1(P, x, k, v, S, dx):
         IpHL = _ip_command(P, x, k, Ip_order, _vdl_limit(P, k, _VDL2, vt), hold)
         IqHL = _iq_command(P, x, k, u, s4, Iqinj, _room(P, k, IpHL), frz, dx)
     return IpHL, IqHL
+
+
+@njit(cache=True)
+def line_measures(P, k, V, V1, V2):
+    """REPCA1 k's measured signals at its bus voltage V and its line's end voltages V1,
+    V2 (complex pu; ANDES repca1.py Iline, Vcomp, Qline): the line current from the
+    device's bus Iline = isign (V1 - V2)/(r + j x); returns (VCsel, Qline) with Qline =
+    Im(isign V1 conj((V1 - V2)/(r + j x))) and VCsel = |V - (Rc + j Xc) Iline| (VCFlag 1)
+    or Kc Qline + |V| (VCFlag 0)."""
+    Z = P[k, C.PC_R] + 1j * P[k, C.PC_X]
+    s = P[k, C.ISIGN]
+    Iline = s * (V1 - V2) / Z
+    Qline = (s * V1 * np.conj((V1 - V2) / Z)).imag
+    if P[k, C.PC_VCFLAG] == 1.0:
+        return abs(V - (P[k, C.PC_RC] + 1j * P[k, C.PC_XC]) * Iline), Qline
+    return Qline * P[k, C.PC_KC] + abs(V), Qline
+
+
+@kernel
+def _repca1(P, x, k, V, V_nc, dx):
+    """REPCA1 (ANDES 2.0 repca1.py, reactive path; docs/ibr.md 7) of device k at its bus
+    voltage V with the kept-bus voltages V_nc (its line's ends at columns POS1, POS2): the
+    derivatives of its slots written, the held error updated in place; returns Qext, the
+    increment of its REECA1's Q reference (pu)."""
+    VCsel, Qline = line_measures(P, k, V, V_nc[int(P[k, C.POS1])], V_nc[int(P[k, C.POS2])])
+    T = P[k, C.PC_TFLTR]
+    s0, dx[_PC_V, k] = lag(VCsel, x[_PC_V, k], T)
+    s1, dx[_PC_Q, k] = lag(Qline, x[_PC_Q, k], T)
+    ref = P[k, C.PC_VREF0] - s0 if P[k, C.PC_REFFLAG] == 1.0 else P[k, C.PC_QLINE0] - s1
+    db = 0.0
+    if ref > P[k, C.PC_DBD2]:
+        db = ref - P[k, C.PC_DBD2]
+    elif ref < P[k, C.PC_DBD1]:
+        db = ref - P[k, C.PC_DBD1]
+    enf = clip(db, P[k, C.PC_EMIN], P[k, C.PC_EMAX])
+    if abs(V) < P[k, C.PC_VFRZ] and P[k, C.PC_FREEZE] == 1.0:  # held (ANDES VarHold)
+        enf = x[_PC_E_H, k]
+    x[_PC_E_H, k] = enf
+    ys = P[k, C.PC_KP] * enf + x[_PC_PI, k]
+    y = clip(ys, P[k, C.PC_QMIN], P[k, C.PC_QMAX])
+    dx[_PC_PI, k] = P[k, C.PC_KI] * (enf - P[k, C.PC_KQS] * (ys - y))
+    dx[_PC_E_H, k] = 0.0
+    Tfv = P[k, C.PC_TFV]
+    Qext, dx[_PC_LL, k] = leadlag_input_state(y, x[_PC_LL, k], P[k, C.PC_TFT] / Tfv, Tfv)
+    return Qext
 
 
 @kernel
@@ -910,16 +1076,18 @@ def voltage_dependent(P, k):
 
 
 @kernel
-def derivatives(P, x, k, V, dx):
-    """Write the derivatives of device k (slots 0-4 of column k of dx) at bus voltage V
-    (complex pu) and return its injected complex power P + j Q (pu, system base); a
-    REGCA1's Ip state is clamped in place at its LVPL limit (`clamp_states`)."""
+def derivatives(P, x, k, V, V_nc, dx):
+    """Write the derivatives of device k (column k of dx) at bus voltage V (complex pu;
+    V_nc the kept-bus voltages, where a REPCA1's line ends are) and return its injected
+    complex power P + j Q (pu, system base); a REGCA1's Ip state is clamped in place at
+    its LVPL limit (`clamp_states`), its controls' memory updated in place."""
     v = abs(V)
     if P[k, C.TYPE] == REGCA1:
         Ipout, Iqout = _regca1_currents(P, x, k, v)
         Iq_target = -P[k, C.IQCMD0]
         if P[k, C.REEC] == REECA1:
-            Ipcmd, Iq_target = _reeca1(P, x, k, v, v * Ipout + 1j * v * Iqout, dx)
+            Qext = _repca1(P, x, k, V, V_nc, dx) if P[k, C.REPC] == REPCA1 else 0.0
+            Ipcmd, Iq_target = _reeca1(P, x, k, v, v * Ipout + 1j * v * Iqout, Qext, dx)
             x[_IPCMD, k] = Ipcmd + P[k, C.IPOFF]
         _regca1_derivatives(P, x, k, v, Iq_target, dx)
         return v * Ipout + 1j * v * Iqout
@@ -949,13 +1117,14 @@ def commands(P, x, V):
 
 
 @njit(cache=True)
-def derivatives_at(P, x, V, dx):
+def derivatives_at(P, x, V, V_nc, dx):
     """`derivatives` of every device at bus voltages V (n_ibr,) complex: dx (N_STATES,
     n_ibr) written, the injected P + j Q (n_ibr,) complex returned (for tests and
-    tools; the simulator calls `derivatives` inside its evaluation)."""
+    tools; the simulator calls `derivatives` inside its evaluation).  A REPCA1's line
+    ends are read from V_nc at its positions pos1, pos2 (`at_power_flow`)."""
     S = np.empty(V.size, np.complex128)
     for k in range(V.size):
-        S[k] = derivatives(P, x, k, V[k], dx)
+        S[k] = derivatives(P, x, k, V[k], V_nc, dx)
     return S
 
 
@@ -995,12 +1164,14 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     x[0], x[1] = np.where(reg, cp.Ipcmd0, cp.P0 / v), cp.Q0 / v
     x[2] = np.where(reg, v, 0.0)
     x[4] = np.where(cp.type == ESD1, cp.SOCinit, 0.0)
-    P = cp.packed()
-    Vc = V.astype(np.complex128)
+    P, Vc, V_nc = at_power_flow(cp, V0)
     if np.any(cp.reec == REECA1):
         _reeca1_initial(cp, x, v)
+    pc = cp.repc == REPCA1
+    x[_PC_V] = np.where(pc, cp.pc_Vref0, 0.0)  # the filters at VCsel, Qline; PI, lead-lag 0
+    x[_PC_Q] = np.where(pc, cp.pc_Qline0, 0.0)
     if np.any(reg):
-        _check_regca1(cp, P, x, Vc)
+        _check_regca1(cp, P, x, Vc, V_nc)
     Ip, Iq = commands(P, x, Vc) if cp.n else ((), ())
     for k, (Ipcmd, Iqcmd) in enumerate(zip(Ip, Iq)):
         if reg[k]:
@@ -1037,15 +1208,28 @@ def _reeca1_initial(cp: ConverterParams, x: np.ndarray, v: np.ndarray) -> None:
         x[slot] = np.where(ree, value, 0.0)
 
 
-def _check_regca1(cp: ConverterParams, P: np.ndarray, x: np.ndarray, Vc: np.ndarray) -> None:
-    """Refuse a REGCA1 (with its REECA1) that does not start at rest at its power-flow
-    point: x (N_STATES, n_ibr) the initial states, its REECA1's memory filled in place by
-    a first evaluation; P the packed parameters, Vc the devices' bus voltages."""
+def at_power_flow(cp: ConverterParams, V0: np.ndarray):
+    """The packed parameters and voltages for `derivatives_at` at the power-flow bus
+    voltages V0 (n_bus,): (P with each REPCA1's line ends at positions n_ibr + k and
+    2 n_ibr + k, the devices' bus voltages (n_ibr,), those and the line ends' (3 n_ibr,)),
+    complex pu."""
+    n = cp.n
+    P = cp.packed()
+    P[:, C.POS1] = n + np.arange(n)
+    P[:, C.POS2] = 2 * n + np.arange(n)
+    V_nc = V0[np.concatenate([cp.bus_idx, cp.bus1_idx, cp.bus2_idx])].astype(np.complex128)
+    return P, V_nc[:n].copy(), V_nc
+
+
+def _check_regca1(cp: ConverterParams, P, x: np.ndarray, Vc, V_nc) -> None:
+    """Refuse a REGCA1 (with its controls) that does not start at rest at its power-flow
+    point: x (N_STATES, n_ibr) the initial states, its controls' memory filled in place by
+    a first evaluation; P, Vc, V_nc as `at_power_flow` gives them."""
     x0 = x.copy()
     dx = np.zeros_like(x)
-    derivatives_at(P, x, Vc, dx)  # the held outputs take their initial values
+    derivatives_at(P, x, Vc, V_nc, dx)  # the held outputs take their initial values
     x_in = x.copy()
-    S = derivatives_at(P, x_in, Vc, dx)
+    S = derivatives_at(P, x_in, Vc, V_nc, dx)
     act = cp.has_state()
     states = ~np.isin(np.arange(N_STATES), MEMORY_SLOTS)
     for k in np.flatnonzero(cp.type == REGCA1):

@@ -1146,6 +1146,69 @@ def test_ieee14_reeca1_holds_active_current_thld2_after_the_dip(reeca1_case):
     assert 1.0 < ends[0] < 1.1 and abs(ends[0] - ends[1]) < STEP
 
 
+# -- REPCA1, the plant control (ANDES renewable/repca1.py; docs/ibr.md 7) ---------------------
+
+
+@pytest.fixture(scope="module")
+def solar_case():
+    """ANDES's ieee14_solar as it is (REGCA1 + REECA1 + REPCA1), imported (its Toggle
+    records left to the run)."""
+    path = andes.get_case("ieee14/ieee14_solar.xlsx")
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    return path, case
+
+
+def test_import_andes_reads_the_repca1_with_its_monitored_line(solar_case):
+    """The REPCA1 lands in its REGCA1's row: Line_20 (buses 8-7, the REGCA1 on 8) is the
+    monitored line, its impedance the compensation (Rc, Xc not given: ANDES NumSelect),
+    so that the compensated voltage V8 - Z (V8 - V7)/Z is the far end's: the voltage
+    reference is |V7| of the power flow."""
+    _, case = solar_case
+    t = case.converters
+    assert (t.repc[0], t.pc_bus1[0], t.pc_bus2[0], t.bus[0]) == (1, 8, 7, 8)
+    assert (t.pc_Rc[0], t.pc_Xc[0]) == (t.pc_r[0], t.pc_x[0]) and t.pc_x[0] > 0.1
+    m = Simulator(case, q_limits=False).model
+    assert m.cp.isign[0] == 1.0
+    assert m.cp.pc_Vref0[0] == pytest.approx(abs(m.op.V[case.bus_index(7)]), rel=1e-12)
+
+
+def test_ieee14_solar_with_its_plant_control_matches_andes(solar_case, reeca1_case):
+    """The whole ieee14_solar, 3-cycle fault at bus 9, 5 ms in both: the plant control's
+    slow PI (Ki 0.1) moves the reactive power after the fault (Q 5 s after 0.0745 pu
+    where without REPCA1 it returns to 0.0740), and stabctl follows ANDES there within
+    1e-5 pu; the fast part is the REECA1's (its step gaps: see the REECA1 test)."""
+    path, case = solar_case
+    t_clear = 1.0 + 3 / 60
+    res = Simulator(case, q_limits=False).run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
+    ss = andes_system(path, fault=AndesFault(9, 1.0, t_clear, x=1e-3), off=("Toggle",))
+    t, wa = andes_speeds(ss, 5.0, STEP)
+    _, Qa = andes_converter_powers(ss, "REGCA1")
+    dw = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
+    late = t > 2.0
+    dQ_late = np.max(np.abs(np.interp(t, res.t, res.ibr_q[:, 0])[late] - Qa[late, 0]))
+    print(f"\nieee14_solar vs ANDES: speed {dw:.2e}, Q after 2 s {dQ_late:.2e} pu")
+    assert dw < 5e-5  # measured 1.8e-5 (target 1e-4)
+    assert dQ_late < 1e-5  # measured 4.5e-6
+    _, alone = reeca1_case
+    res0 = Simulator(alone, q_limits=False).run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
+    assert res.ibr_q[-1, 0] - res0.ibr_q[-1, 0] > 4e-4  # the plant control acts
+
+
+def test_ieee14_solar_flat_run_stays_at_the_power_flow_point(solar_case):
+    """10 s without disturbance, the plant control included: every state within 1e-8."""
+    from stabctl.dynamics.driver import _Run
+
+    _, case = solar_case
+    sim = Simulator(case, q_limits=False)
+    m, sa, grid, nets = sim._prepare([], 10.0, STEP, None, "exact")
+    run = _Run(sim, m, sa, grid, nets, False, np.pi, False)
+    run.advance(grid.t.size - 1)
+    drift = np.max(np.abs(run.x - m.x0))
+    print(f"\nieee14_solar flat 10 s: largest drift {drift:.2e}")
+    assert drift < 1e-8
+
+
 def test_import_andes_refuses_a_regca1_with_two_electrical_controls(tmp_path):
     """Two REECA1 on one REGCA1 are refused by name (stabctl models one or none)."""
     import pandas as pd

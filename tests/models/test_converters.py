@@ -119,7 +119,8 @@ def test_soc_derivative_is_the_discharge_over_the_energy():
     cp = conv.converter_params(case, np.ones(2, complex), case.buses.pgen + 1j * case.buses.qgen)
     x = conv.initialise(cp, np.ones(2, complex))
     dx = np.zeros_like(x)
-    S = conv.derivatives_at(cp.packed(), x, np.ones(1, complex), dx)
+    P, V, V_nc = conv.at_power_flow(cp, np.ones(2, complex))
+    S = conv.derivatives_at(P, x, V, V_nc, dx)
     assert S[0] == pytest.approx(0.5 + 0.1j)
     assert dx[4, 0] == pytest.approx(-0.5 * 100 / 3600 / 50 / 2, rel=1e-15)
     assert np.all(np.abs(dx[:4]) < 1e-15)  # the rest at equilibrium
@@ -166,7 +167,9 @@ def regca1(x_changes=(), V=1.0, **cols):
     for row, value in x_changes:
         x[row, 0] = value
     dx = np.zeros_like(x)
-    S = conv.derivatives_at(cp.packed(), x, np.full(1, V, complex), dx)
+    P, _, _ = conv.at_power_flow(cp, V0)
+    Vk = np.full(3, V, complex)  # the device's bus and its (absent) line's ends
+    S = conv.derivatives_at(P, x, Vk[:1], Vk, dx)
     return dx, S[0], x, cp
 
 
@@ -318,3 +321,36 @@ def test_reeca1_start_off_equilibrium_is_refused_naming_the_state():
         reeca1(QFLAG=1, VFLAG=1)
     with pytest.raises(CaseError, match=r"field 'reec'.*drives a REGCA1"):
         conv.converter_params(make_case(reec=1))
+
+
+# -- REPCA1 (ANDES renewable/repca1.py, docs/ibr.md 7), reactive path ---------------------------
+
+SP = {name: 5 + len(conv.REECA1_SLOTS) + j for j, name in enumerate(conv.REPCA1_SLOTS)}
+
+
+def test_repca1_voltage_error_through_deadband_pi_and_lead_lag_raises_q_reference():
+    # no monitored line: the compensated voltage is |V| (1 pu at the start, the reference).
+    # The filter at 0.9: error 0.1 beyond the deadband 0.02 -> 0.08; the PI (Kp 1) gives
+    # 0.08 and integrates Ki 0.08; the lead-lag (Tft = Tfv) passes it: Qext = 0.08 moves
+    # the REECA1's Q filter at (Q0 + Qext - s4)/Tiq
+    cols = dict(repc=1, pc_dbd1=-0.02, pc_dbd2=0.02)
+    dx, _, x, cp = reeca1(**cols)
+    assert np.all(dx == 0.0) and cp.pc_Vref0[0] == 1.0
+    dx, _, x, _ = reeca1([(SP["Vc_filter"], 0.9)], **cols)
+    assert dx[SP["PI_plant"], 0] == pytest.approx(0.1 * 0.08, rel=1e-12)
+    assert dx[S["Iq_filter"], 0] == pytest.approx(0.08 / 0.02, rel=1e-12)
+    assert x[SP["e_held"], 0] == pytest.approx(0.08, rel=1e-12)
+    # below Vfrz (0.8) the error is held at its last value (here 0.05): the PI keeps
+    # integrating it (ANDES VarHold); with freeze 0 the live error (0.78 - 0.02 = 0.76)
+    changes = [(SP["Vc_filter"], 0.22), (SP["e_held"], 0.05)]
+    dx, _, x, _ = reeca1(changes, V=0.7, **cols)
+    assert dx[SP["PI_plant"], 0] == pytest.approx(0.1 * 0.05, rel=1e-12)
+    dx, _, _, _ = reeca1(changes, V=0.7, pc_freeze=0, **cols)
+    assert dx[SP["PI_plant"], 0] == pytest.approx(0.1 * 0.76, rel=1e-12)
+
+
+def test_repca1_needs_a_reeca1_and_the_monitored_line_at_its_bus():
+    with pytest.raises(CaseError, match=r"field 'repc'.*drives a REECA1"):
+        regca1(repc=1)
+    with pytest.raises(CaseError, match=r"field 'pc_bus1'.*end at the device's bus"):
+        reeca1(repc=1, pc_bus1=1, pc_bus2=1)
