@@ -942,6 +942,25 @@ def algebraic_gaps(t, ours, theirs, events, step=STEP):
     return np.max(np.abs(ours - theirs)[~out])
 
 
+def regca1_fault_run(path, case, bus, cycles, h, t_end):
+    """A bus fault through j1e-3 pu from 1 s, both tools at step h, on ANDES's grid t: the
+    largest speed gap dw, the REGCA1's P, Q (stabctl's interpolated) and Pa, Qa."""
+    t_clear = 1.0 + cycles / 60
+    res = Simulator(case, q_limits=False).run([Fault(bus, 1.0, t_clear, x=1e-3)], t_end, h=h)
+    ss = andes_system(path, fault=AndesFault(bus, 1.0, t_clear, x=1e-3), off=("Toggle",))
+    t, wa = andes_speeds(ss, t_end, h)
+    Pa, Qa = andes_converter_powers(ss, "REGCA1")
+    return {
+        "t": t,
+        "dw": np.max(np.abs(speeds_on(t, res, case, ss) - wa)),
+        "P": np.interp(t, res.t, res.ibr_p[:, 0]),
+        "Q": np.interp(t, res.t, res.ibr_q[:, 0]),
+        "Pa": Pa[:, 0],
+        "Qa": Qa[:, 0],
+        "res": res,
+    }
+
+
 def test_ieee14_regca1_fault_speeds_and_powers_match_andes(regca1_alone):
     """ANDES's IEEE 14 with the bus-8 generator a REGCA1 (ieee14_solar without REECA1 and
     REPCA1), 6-cycle fault at bus 9 through j1e-3 pu, 5 ms step in both.  In the fault
@@ -949,16 +968,10 @@ def test_ieee14_regca1_fault_speeds_and_powers_match_andes(regca1_alone):
     voltage below Zerox, so that the LVPL limit resets Ip to 0; after clearing Ip
     recovers along Tg and LVPL."""
     path, case = regca1_alone
-    t_clear = 1.0 + 6 / 60
-    res = Simulator(case, q_limits=False).run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
-    ss = andes_system(path, fault=AndesFault(9, 1.0, t_clear, x=1e-3), off=("Toggle",))
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    Pa, Qa = andes_converter_powers(ss, "REGCA1")
-    dw = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
-    dP = algebraic_gaps(t, np.interp(t, res.t, res.ibr_p[:, 0]), Pa[:, 0], (1.0, t_clear))
-    dQ = algebraic_gaps(t, np.interp(t, res.t, res.ibr_q[:, 0]), Qa[:, 0], (1.0, t_clear))
+    dw, dP, dQ, run = fault_gaps(path, case, 9, 6, STEP, 5.0)
+    res = run["res"]
     print(f"\nREGCA1 fault vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
-    assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing
+    assert np.max(np.abs(res.speed - 1)) > 4e-3  # a real swing
     assert np.min(res.ibr_p) == 0.0 and np.max(res.ibr_p) > 0.35  # drops out, recovers
     assert dw < 2e-5  # measured 4.8e-6 (target 1e-4)
     assert dP < 5e-4  # measured 2.1e-4 (target 1e-3), 5 ms after clearing
@@ -1077,19 +1090,16 @@ def reeca1_case(tmp_path_factory):
     return path, case
 
 
-def reeca1_gaps(path, case, bus, cycles, h, t_end):
-    """(speed, P, Q) gaps to ANDES of a bus fault through j1e-3 pu, both tools at step h."""
-    t_clear = 1.0 + cycles / 60
-    res = Simulator(case, q_limits=False).run([Fault(bus, 1.0, t_clear, x=1e-3)], t_end, h=h)
-    ss = andes_system(path, fault=AndesFault(bus, 1.0, t_clear, x=1e-3), off=("Toggle",))
-    t, wa = andes_speeds(ss, t_end, h)
-    Pa, Qa = andes_converter_powers(ss, "REGCA1")
-    dw = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
+def fault_gaps(path, case, bus, cycles, h, t_end):
+    """(speed, P, Q) gaps to ANDES of a bus fault through j1e-3 pu, both tools at step h
+    (`regca1_fault_run`, returned last)."""
+    run = regca1_fault_run(path, case, bus, cycles, h, t_end)
+    t, t_clear = run["t"], 1.0 + cycles / 60
     gaps = [
-        algebraic_gaps(t, np.interp(t, res.t, ours[:, 0]), theirs[:, 0], (1.0, t_clear), h)
-        for ours, theirs in ((res.ibr_p, Pa), (res.ibr_q, Qa))
+        algebraic_gaps(t, run[ours], run[theirs], (1.0, t_clear), h)
+        for ours, theirs in (("P", "Pa"), ("Q", "Qa"))
     ]
-    return dw, *gaps
+    return run["dw"], *gaps, run
 
 
 def test_import_andes_reads_the_reeca1_into_its_regca1s_row(reeca1_case):
@@ -1112,11 +1122,11 @@ def test_ieee14_reeca1_fault_speeds_and_powers_match_andes(reeca1_case):
     in both they agree within P 1.1e-3, Q 9.1e-3, speeds 3.0e-6 (0.5 ms: 6.9e-4, 5.8e-3,
     2.6e-6), so the equations are the same and the gap is the step."""
     path, case = reeca1_case
-    dw, dP, dQ = reeca1_gaps(path, case, 9, 3, STEP, 5.0)
+    dw, dP, dQ, _ = fault_gaps(path, case, 9, 3, STEP, 5.0)
     print(f"\nREECA1 fault vs ANDES at 5 ms: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert dw < 5e-5  # measured 1.75e-5 (target 1e-4)
     assert dP < 2e-2 and dQ < 0.15  # measured 8.9e-3, 8.5e-2: the step (docstring)
-    dw, dP, dQ = reeca1_gaps(path, case, 9, 3, STEP / 4, 2.0)
+    dw, dP, dQ, _ = fault_gaps(path, case, 9, 3, STEP / 4, 2.0)
     print(f"REECA1 fault vs ANDES at 1.25 ms: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert dw < 1e-5  # measured 3.0e-6
     assert dP < 2e-3 and dQ < 2e-2  # measured 1.1e-3, 9.1e-3
@@ -1181,19 +1191,14 @@ def test_ieee14_solar_with_its_plant_control_matches_andes(solar_case, reeca1_ca
     where without REPCA1 it returns to 0.0740), and stabctl follows ANDES there within
     1e-5 pu; the fast part is the REECA1's (its step gaps: see the REECA1 test)."""
     path, case = solar_case
-    t_clear = 1.0 + 3 / 60
-    res = Simulator(case, q_limits=False).run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
-    ss = andes_system(path, fault=AndesFault(9, 1.0, t_clear, x=1e-3), off=("Toggle",))
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    _, Qa = andes_converter_powers(ss, "REGCA1")
-    dw = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
-    late = t > 2.0
-    dQ_late = np.max(np.abs(np.interp(t, res.t, res.ibr_q[:, 0])[late] - Qa[late, 0]))
+    run = regca1_fault_run(path, case, 9, 3, STEP, 5.0)
+    res, dw, late = run["res"], run["dw"], run["t"] > 2.0
+    dQ_late = np.max(np.abs(run["Q"][late] - run["Qa"][late]))
     print(f"\nieee14_solar vs ANDES: speed {dw:.2e}, Q after 2 s {dQ_late:.2e} pu")
     assert dw < 5e-5  # measured 1.8e-5 (target 1e-4)
     assert dQ_late < 1e-5  # measured 4.5e-6
     _, alone = reeca1_case
-    res0 = Simulator(alone, q_limits=False).run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
+    res0 = Simulator(alone, q_limits=False).run([Fault(9, 1.0, 1.05, x=1e-3)], 5.0, h=STEP)
     assert res.ibr_q[-1, 0] - res0.ibr_q[-1, 0] > 4e-4  # the plant control acts
 
 
