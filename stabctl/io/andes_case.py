@@ -463,8 +463,6 @@ def _electrical_control_refusal(ss, regc) -> str:
         return f"its REECA1 takes references from {len(plants)} REPCA1 (stabctl: one)"
     for j in plants:
         m = ss.REPCA1
-        if m.Fflag.v[j] != 0:
-            return f"its REPCA1 {m.idx.v[j]} has Fflag 1 (stabctl models its reactive path)"
         if m.busr.v[j] is not None:
             return f"its REPCA1 {m.idx.v[j]} regulates remote bus busr = {m.busr.v[j]}"
     return ""
@@ -477,12 +475,16 @@ def _plant_controls(ss, reec) -> list[int]:
 
 
 def _repca1_values(ss, j: int, numbers: dict) -> dict[str, float]:
-    """The ibr_con fields of REPCA1 row j: its parameters (the compensation Rc, Xc the
-    monitored line's where not given, ANDES NumSelect), config kqs and freeze, and its
-    line's end buses (numbered as stabctl's) and impedance (0 buses: no line)."""
+    """The ibr_con fields of REPCA1 row j: its parameters as given (``vin``; the
+    compensation Rc, Xc the monitored line's where not given, ANDES NumSelect), config
+    kqs, ksg and freeze, its line's end buses (numbered as stabctl's) and impedance (0
+    buses: no line) and its frequency measurement's time constants (its BusFreq's, or
+    the one ANDES adds at its bus)."""
     m = ss.REPCA1
+    f = list(ss.BusFreq.idx.v).index(m.busfreq.v[j])  # its own or the one ANDES added
     v: dict[str, float] = {"repc": float(REPCA1)}
-    config = {"pc_Kqs": m.config.kqs, "pc_freeze": m.config.freeze}
+    v.update(Tfm=ss.BusFreq.Tf.v[f], Twm=ss.BusFreq.Tw.v[f])
+    config = {"pc_Kqs": m.config.kqs, "pc_Ksg": m.config.ksg, "pc_freeze": m.config.freeze}
     line = m.line.v[j]
     ends = {"pc_bus1": 0.0, "pc_bus2": 0.0, "pc_r": 1.0, "pc_x": 1.0}
     if line is not None:
@@ -497,7 +499,7 @@ def _repca1_values(ss, j: int, numbers: dict) -> dict[str, float]:
         elif field in ends:
             v[field] = float(ends[field])
         else:
-            v[field] = float(m.params[name].v[j])
+            v[field] = float(m.params[name].vin[j])
     for field, given in (("pc_Rc", m.Rc.v[j]), ("pc_Xc", m.Xc.v[j])):
         if given is None or not np.isfinite(given):
             v[field] = v["pc_r" if field == "pc_Rc" else "pc_x"]

@@ -139,12 +139,13 @@ def _repca1_params(col: int) -> tuple[Param, ...]:
     ``renewable/repca1.py`` REPCA1Data; config kqs, freeze): its reactive power path.
     The monitored line's end buses and impedance (system base) and the compensation
     impedance (Rc, Xc or, where not given, the line's: ANDES NumSelect) are written by
-    the import.  Its frequency path (Fflag 1) is not modelled (refused)."""
+    the import; its frequency measurement is the table's Tfm, Twm (ANDES BusFreq)."""
     flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
     rows: list[tuple[str, dict[str, Any]]] = [
         ("VCFlag", dict(flag, default=1.0, doc="1 compensated voltage, 0 V + Kc Qline")),
         ("RefFlag", dict(flag, default=1.0, doc="1 voltage control, 0 line Q control")),
-        ("Fflag", dict(flag, choices=(0.0,), doc="frequency path (0: not modelled)")),
+        ("Fflag", dict(flag, doc="1 the frequency path's Pext on, 0 off")),
+        ("PLflag", dict(flag, default=1.0, doc="1 the line P error in the P path, 0 not")),
         ("bus1", dict(unit="code", integer=True, doc="monitored line's from bus (0: none)")),
         ("bus2", dict(unit="code", integer=True, doc="monitored line's to bus (0: none)")),
         ("r", dict(unit="pu", default=1.0, doc="monitored line resistance")),
@@ -164,8 +165,21 @@ def _repca1_params(col: int) -> tuple[Param, ...]:
         ("emin", dict(unit="pu", default=-999.0, doc="lower error limit")),
         ("dbd1", dict(unit="pu", default=-0.1, hi=0.0, doc="lower error deadband")),
         ("dbd2", dict(unit="pu", default=0.1, lo=0.0, doc="upper error deadband")),
-        ("Qmax", dict(_DEV_PU, default=999.0, doc="upper Q command")),
-        ("Qmin", dict(_DEV_PU, default=-999.0, doc="lower Q command")),
+        ("Qmax", dict(unit="pu", default=999.0, doc="upper Q command (system base)")),
+        ("Qmin", dict(unit="pu", default=-999.0, doc="lower Q command (system base)")),
+        ("Kpg", dict(unit="pu", default=1.0, doc="P PI proportional gain")),
+        ("Kig", dict(unit="1/s", default=0.1, doc="P PI integral gain")),
+        ("Ksg", dict(unit="", default=2.0, lo=0.0, doc="P PI tracking gain (ksg)")),
+        ("Tp", dict(unit="s", default=0.02, lo=0.0, doc="line P filter")),
+        ("fdbd1", dict(unit="pu", default=-0.0002833, hi=0.0, doc="lower frequency deadband")),
+        ("fdbd2", dict(unit="pu", default=0.0002833, lo=0.0, doc="upper frequency deadband")),
+        ("femax", dict(unit="pu", default=0.05, doc="upper P error limit")),
+        ("femin", dict(unit="pu", default=-0.05, doc="lower P error limit")),
+        ("Pmax", dict(_DEV_PU, default=999.0, doc="upper P PI output")),
+        ("Pmin", dict(_DEV_PU, default=-999.0, doc="lower P PI output")),
+        ("Tg", dict(unit="s", default=0.02, lo=0.0, doc="Pext lag")),
+        ("Ddn", dict(unit="pu", default=10.0, doc="droop gain, frequency above 1 pu")),
+        ("Dup", dict(unit="pu", default=10.0, doc="droop gain, frequency below 1 pu")),
     ]
     return tuple(
         Param(f"pc_{name}", col=col + j, **{**kw, "doc": "REPCA1: " + kw["doc"]})
@@ -359,11 +373,16 @@ REECA1_SLOTS = (
     *("Iqinj_timer", "Ipmax_timer", "Ipmax_held", "PIQ_held", "PIV_held", "Ipcmd_last"),
 )
 #: REPCA1's slots (``repc`` 1): its states, then its memory (the held error)
-REPCA1_SLOTS = ("Vc_filter", "Qline_filter", "PI_plant", "LeadLag_plant", "e_held")
+REPCA1_SLOTS = (
+    *("Vc_filter", "Qline_filter", "PI_plant", "LeadLag_plant"),
+    *("f_lag_plant", "f_washout_plant", "Pline_filter", "PI_P_plant", "Pext_lag", "e_held"),
+)
 # numpy scalars: a kernel's argument is then typed once (not as a literal per value)
+_F_LAG, _F_WASHOUT = np.int64(2), np.int64(3)  # PVD1's, ESD1's frequency measurement
 _VT, _PE, _PIQ, _S4, _PFILT, _PORD, _PIV = (np.int64(j) for j in range(5, 12))
 _T_IQ, _T_IP, _IPMAX_H, _PIQ_H, _PIV_H, _IPCMD = (np.int64(j) for j in range(12, 18))
-_PC_V, _PC_Q, _PC_PI, _PC_LL, _PC_E_H = (np.int64(j) for j in range(18, 23))
+_PC_V, _PC_Q, _PC_PI, _PC_LL = (np.int64(j) for j in range(18, 22))
+_PC_FL, _PC_FW, _PC_P, _PC_PIP, _PC_PEXT, _PC_E_H = (np.int64(j) for j in range(22, 28))
 N_STATES = 5 + len(REECA1_SLOTS) + len(REPCA1_SLOTS)
 #: state names per converter type (slots beyond a type's names, or that a device does not
 #: use, `has_state`, are unused, 0)
@@ -384,11 +403,11 @@ TABLE_FIELDS = tuple(n for n in CONVERTER.names if n not in ("number", "bus", "m
 #: REECA1's lag time constants (each must be >= LBND; its Iq filter is ``tiq``)
 REECA1_LAGS = ("Trv", "Tp", "tiq", "Tpfilt", "Tpord")
 #: REPCA1's (its lead time constant pc_Tft may be 0)
-REPCA1_LAGS = ("pc_Tfltr", "pc_Tfv")
+REPCA1_LAGS = ("pc_Tfltr", "pc_Tfv", "pc_Tp", "pc_Tg", "Twm")
 #: fields on the device base: powers and currents (times Sn/Sb), the reactance (Sb/Sn)
 POWER_FIELDS = (
     *("qmx", "qmn", "pmx", "dqdv", "ddn", "ialim", "Iolim", "Iqrmax", "Iqrmin"),
-    *("QMax", "QMin", "dPmax", "dPmin", "PMAX", "PMIN", "Imax", "pc_Qmax", "pc_Qmin"),
+    *("QMax", "QMin", "dPmax", "dPmin", "PMAX", "PMIN", "Imax", "pc_Pmax", "pc_Pmin"),
     *(f"{a}{j}" for a in ("Iq", "Ip") for j in range(1, 5)),
 )
 #: packed parameter matrix of the kernels, (column name, ConverterParams attribute)
@@ -420,6 +439,7 @@ PACKED = (
     ("ISIGN", "isign"),
     ("PC_VREF0", "pc_Vref0"),
     ("PC_QLINE0", "pc_Qline0"),
+    ("PC_PLINE0", "pc_Pline0"),
 )
 #: the kernels' column of each PACKED name: P[k, C.IALIM]
 C = layout("ConverterColumns", PACKED)
@@ -445,7 +465,7 @@ class ConverterParams(Declared):
     device's own bus without a line) and their positions pos1, pos2 among the kept buses
     (set by the dynamic model), isign (1 if the device's bus is bus1, else -1: the line
     current counted from it), and the initial compensated voltage pc_Vref0 (its voltage
-    reference, ANDES Vref0) and line Q pc_Qline0 (0 elsewhere)."""
+    reference, ANDES Vref0), line Q pc_Qline0 and P pc_Pline0 (0 elsewhere)."""
 
     pmn: np.ndarray
     P0: np.ndarray
@@ -474,6 +494,7 @@ class ConverterParams(Declared):
     isign: np.ndarray
     pc_Vref0: np.ndarray
     pc_Qline0: np.ndarray
+    pc_Pline0: np.ndarray
 
     @property
     def n(self) -> int:
@@ -492,7 +513,7 @@ class ConverterParams(Declared):
         return (
             ("ibr_con tip", self.tip, pvd),
             ("ibr_con tiq", self.tiq, pvd | ree),
-            ("ibr_con Tfm", self.Tfm, pvd & (self.Tfm >= LBND)),
+            ("ibr_con Tfm", self.Tfm, (pvd | (self.repc == REPCA1)) & (self.Tfm >= LBND)),
             ("ibr_con Twm", self.Twm, pvd),
             ("ibr_con Tf", self.Tf, esd),
             ("ibr_con Tg", self.Tg, reg),
@@ -510,6 +531,7 @@ class ConverterParams(Declared):
         act[4] = self.type == ESD1
         act[5:_PC_V] = self.reec == REECA1
         act[_PC_V:] = self.repc == REPCA1
+        act[_PC_FL] &= self.Tfm >= LBND
         act[MEMORY_SLOTS] = False
         return act
 
@@ -627,16 +649,19 @@ def _repca1_services(case: Case, idx: np.ndarray) -> dict[str, np.ndarray]:
         "isign": np.where(b1 == idx, 1.0, -1.0),
         "pc_Vref0": np.zeros(len(t)),  # `_repca1_references`
         "pc_Qline0": np.zeros(len(t)),
+        "pc_Pline0": np.zeros(len(t)),
     }
 
 
 def _repca1_references(cp: ConverterParams, V0: np.ndarray) -> None:
-    """REPCA1's initial references in place: pc_Vref0 the selected voltage VCsel and
-    pc_Qline0 the line Q at the power-flow voltages V0 (n_bus,) (`line_measures`)."""
+    """REPCA1's initial references in place: pc_Vref0 the selected voltage VCsel,
+    pc_Qline0 and pc_Pline0 the line's Q and P at the power-flow voltages V0 (n_bus,)
+    (`line_measures`)."""
     P = cp.packed()
     for k in np.flatnonzero(cp.repc == REPCA1):
-        Vsel, Qline = line_measures(P, k, V0[cp.bus_idx[k]], V0[cp.bus1_idx[k]], V0[cp.bus2_idx[k]])
-        cp.pc_Vref0[k], cp.pc_Qline0[k] = Vsel, Qline
+        ends = (V0[cp.bus_idx[k]], V0[cp.bus1_idx[k]], V0[cp.bus2_idx[k]])
+        cp.pc_Vref0[k], Sline = line_measures(P, k, *ends)
+        cp.pc_Qline0[k], cp.pc_Pline0[k] = Sline.imag, Sline.real
 
 
 def _reeca1_services(vals: dict, ree, P0, Q0, v0, Ipcmd0) -> dict[str, np.ndarray]:
@@ -851,12 +876,12 @@ def _ip_command(P, x, k, Ip_order, Ipmax, hold):
 
 
 @kernel
-def _p_order(P, x, k, frz, dx):
-    """REECA1's power order Pord of device k: the reference P0 through the rate-limited
+def _p_order(P, x, k, Pext, frz, dx):
+    """REECA1's power order Pord of device k: the reference P0 + Pext through the rate-limited
     filter Tpfilt (ANDES LagRate, rates dPmin, dPmax on its right-hand side), then the
     lag Tpord frozen in a dip with the anti-windup limits [PMIN, PMAX] (LagAWFreeze; the
     state reset to a limit in place)."""
-    e = clip(P[k, C.P0] - x[_PFILT, k], P[k, C.DPMIN], P[k, C.DPMAX])
+    e = clip(P[k, C.P0] + Pext - x[_PFILT, k], P[k, C.DPMIN], P[k, C.DPMAX])
     dx[_PFILT, k] = e / P[k, C.TPFILT]
     e = 0.0 if frz else x[_PFILT, k] - x[_PORD, k]
     if x[_PORD, k] >= P[k, C.PMAX] and e >= 0.0:
@@ -889,10 +914,10 @@ def _iq_injection(P, k, vt, frz, extended):
 
 
 @kernel
-def _reeca1(P, x, k, v, S, Qext, dx):
+def _reeca1(P, x, k, v, S, ext, dx):
     """REECA1 (ANDES 2.0 reeca1.py; docs/ibr.md 6) driving REGCA1 k at voltage magnitude v
-    with its injected power S = Pe + j Qe and its plant control's Q reference increment
-    Qext (0 without one): the derivatives of its slots written, its
+    with its injected power S = Pe + j Qe and its plant control's reference increments
+    ext = Pext + j Qext (0 without one): the derivatives of its slots written, its
     memory (`MEMORY_SLOTS`) updated in place; returns the commands (IpHL, IqHL), pu.
     Frozen (Volt_dip) while v < Vdip or v > Vup (strict)."""
     frz = v < P[k, C.VDIP] or v > P[k, C.VUP]
@@ -904,7 +929,7 @@ def _reeca1(P, x, k, v, S, Qext, dx):
     _, dx[_PE, k] = lag(S.real, x[_PE, k], P[k, C.TP])
     vp = 0.01 if v <= 0.01 else v
     # reactive power reference: Q, or the power factor of the filtered Pe (Q0 at P0 = 0)
-    PFsel = P[k, C.QREF] + Qext
+    PFsel = P[k, C.QREF] + ext.imag
     if P[k, C.PFFLAG] == 1.0:
         PFsel = x[_PE, k] * P[k, C.TANPF] if P[k, C.P0] != 0.0 else P[k, C.Q0]
     Qerr = clip(PFsel, P[k, C.QMIN], P[k, C.QMAX]) - S.imag
@@ -916,7 +941,7 @@ def _reeca1(P, x, k, v, S, Qext, dx):
     s4 = x[_S4, k]
     dx[_S4, k] = 0.0 if frz else (PFsel / vp - s4) / P[k, C.TIQ]
     Iqinj = _iq_injection(P, k, vt, frz, extended)
-    Ip_order = _p_order(P, x, k, frz, dx) / vp
+    Ip_order = _p_order(P, x, k, ext.real, frz, dx) / vp
     if P[k, C.PQFLAG] == 0.0:  # Q priority
         Iqmax = _vdl_limit(P, k, _VDL1, vt)
         IqHL = _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx)
@@ -930,29 +955,29 @@ def _reeca1(P, x, k, v, S, Qext, dx):
 @njit(cache=True)
 def line_measures(P, k, V, V1, V2):
     """REPCA1 k's measured signals at its bus voltage V and its line's end voltages V1,
-    V2 (complex pu; ANDES repca1.py Iline, Vcomp, Qline): the line current from the
-    device's bus Iline = isign (V1 - V2)/(r + j x); returns (VCsel, Qline) with Qline =
-    Im(isign V1 conj((V1 - V2)/(r + j x))) and VCsel = |V - (Rc + j Xc) Iline| (VCFlag 1)
-    or Kc Qline + |V| (VCFlag 0)."""
+    V2 (complex pu; ANDES repca1.py Iline, Vcomp, Pline, Qline): the line current from
+    the device's bus Iline = isign (V1 - V2)/(r + j x); returns (VCsel, Sline) with Sline
+    = Pline + j Qline = isign V1 conj((V1 - V2)/(r + j x)) and VCsel = |V - (Rc + j Xc)
+    Iline| (VCFlag 1) or Kc Qline + |V| (VCFlag 0)."""
     Z = P[k, C.PC_R] + 1j * P[k, C.PC_X]
     s = P[k, C.ISIGN]
     Iline = s * (V1 - V2) / Z
-    Qline = (s * V1 * np.conj((V1 - V2) / Z)).imag
+    Sline = s * V1 * np.conj((V1 - V2) / Z)
     if P[k, C.PC_VCFLAG] == 1.0:
-        return abs(V - (P[k, C.PC_RC] + 1j * P[k, C.PC_XC]) * Iline), Qline
-    return Qline * P[k, C.PC_KC] + abs(V), Qline
+        return abs(V - (P[k, C.PC_RC] + 1j * P[k, C.PC_XC]) * Iline), Sline
+    return Sline.imag * P[k, C.PC_KC] + abs(V), Sline
 
 
 @kernel
 def _repca1(P, x, k, V, V_nc, dx):
     """REPCA1 (ANDES 2.0 repca1.py, reactive path; docs/ibr.md 7) of device k at its bus
     voltage V with the kept-bus voltages V_nc (its line's ends at columns POS1, POS2): the
-    derivatives of its slots written, the held error updated in place; returns Qext, the
-    increment of its REECA1's Q reference (pu)."""
-    VCsel, Qline = line_measures(P, k, V, V_nc[int(P[k, C.POS1])], V_nc[int(P[k, C.POS2])])
+    derivatives of its slots written, the held error updated in place; returns ext =
+    Pext + j Qext, the increments of its REECA1's P and Q references (pu; `_repca1_p`)."""
+    VCsel, Sline = line_measures(P, k, V, V_nc[int(P[k, C.POS1])], V_nc[int(P[k, C.POS2])])
     T = P[k, C.PC_TFLTR]
     s0, dx[_PC_V, k] = lag(VCsel, x[_PC_V, k], T)
-    s1, dx[_PC_Q, k] = lag(Qline, x[_PC_Q, k], T)
+    s1, dx[_PC_Q, k] = lag(Sline.imag, x[_PC_Q, k], T)
     ref = P[k, C.PC_VREF0] - s0 if P[k, C.PC_REFFLAG] == 1.0 else P[k, C.PC_QLINE0] - s1
     db = 0.0
     if ref > P[k, C.PC_DBD2]:
@@ -969,7 +994,48 @@ def _repca1(P, x, k, V, V_nc, dx):
     dx[_PC_E_H, k] = 0.0
     Tfv = P[k, C.PC_TFV]
     Qext, dx[_PC_LL, k] = leadlag_input_state(y, x[_PC_LL, k], P[k, C.PC_TFT] / Tfv, Tfv)
-    return Qext
+    return _repca1_p(P, x, k, V, Sline.real, dx) + 1j * Qext
+
+
+@kernel
+def _repca1_p(P, x, k, V, Pline, dx):
+    """REPCA1's frequency path of device k (ANDES repca1.py s4-s6): the frequency error
+    1 - f (pu; `_bus_frequency` at its bus) through the deadband [fdbd1, fdbd2] times Ddn
+    (negative) or Dup, plus with PLflag Pline0 - lag(Pline, Tp); limited to [femin,
+    femax], the tracking PI (Kpg, Kig, ksg) in [Pmin, Pmax] and the lag Tg; returns
+    Pext (the increment of its REECA1's P reference), 0 with Fflag 0."""
+    f, dx[_PC_FL, k], dx[_PC_FW, k] = _bus_frequency(P, x, k, V, _PC_FL, _PC_FW)
+    err = 1.0 - f
+    db = 0.0
+    if err > P[k, C.PC_FDBD2]:
+        db = err - P[k, C.PC_FDBD2]
+    elif err < P[k, C.PC_FDBD1]:
+        db = err - P[k, C.PC_FDBD1]
+    droop = db * (P[k, C.PC_DDN] if db < 0.0 else P[k, C.PC_DUP])
+    s4, dx[_PC_P, k] = lag(Pline, x[_PC_P, k], P[k, C.PC_TP])
+    e = clip(
+        droop + P[k, C.PC_PLFLAG] * (P[k, C.PC_PLINE0] - s4), P[k, C.PC_FEMIN], P[k, C.PC_FEMAX]
+    )
+    ys = P[k, C.PC_KPG] * e + x[_PC_PIP, k]
+    y = clip(ys, P[k, C.PC_PMIN], P[k, C.PC_PMAX])
+    dx[_PC_PIP, k] = P[k, C.PC_KIG] * (e - P[k, C.PC_KSG] * (ys - y))
+    Pext, dx[_PC_PEXT, k] = lag(y, x[_PC_PEXT, k], P[k, C.PC_TG])
+    return P[k, C.PC_FFLAG] * Pext
+
+
+@kernel
+def _bus_frequency(P, x, k, V, sl, sw):
+    """ANDES's bus frequency measurement (BusFreq, andes/models/measurement/busfreq.py) of
+    device k at bus voltage V, its states in slots sl (lag Tfm of a - a0) and sw
+    (washout Twm, gain 1/(2 pi fn)): returns (f pu, d lag/dt, d washout/dt).  The angle
+    is ANDES's continuous one: a - a0 taken within pi of the filter's state (the lag's,
+    else the washout's, which follow it within T x its rate), not wrapped to (-pi, pi]."""
+    ref = x[sl, k] if P[k, C.TFM] >= LBND else x[sw, k]
+    a0 = np.arctan2(P[k, C.SIN_A0], P[k, C.COS_A0]) + ref
+    a = ref + np.angle(V * np.exp(-1j * a0))
+    L, dL = lag(a, x[sl, k], P[k, C.TFM])
+    w, dW = washout(L, x[sw, k], P[k, C.TWM], 1.0 / (2.0 * np.pi * P[k, C.FN]), GAIN_BEFORE)
+    return 1.0 + w, dL, dW
 
 
 @kernel
@@ -988,16 +1054,9 @@ def _algebraic(P, x, k, V):
     commands (Ipcmd, Iqcmd) and the SOC derivative's input, and the frequency block's
     derivatives (dL, dW)."""
     v = abs(V)
-    # bus frequency (BusFreq): lag of a - a0, washout with K = 1/(2 pi fn).  The angle
-    # is ANDES's continuous one: a - a0 taken within pi of the filter's state (the lag's,
-    # else the washout's, which follow it within T x its rate), not wrapped to (-pi, pi]
-    ref = x[2, k] if P[k, C.TFM] >= LBND else x[3, k]
-    a0 = np.arctan2(P[k, C.SIN_A0], P[k, C.COS_A0]) + ref
-    a = ref + np.angle(V * np.exp(-1j * a0))
-    L, dL = lag(a, x[2, k], P[k, C.TFM])
+    f, dL, dW = _bus_frequency(P, x, k, V, _F_LAG, _F_WASHOUT)
     fn = P[k, C.FN]
-    w, dW = washout(L, x[3, k], P[k, C.TWM], 1.0 / (2.0 * np.pi * fn), GAIN_BEFORE)
-    fHz = fn * (1.0 + w)
+    fHz = fn * f
     # trip curves (ANDES Limiter flags), R the product of the four
     zl, zi, zu = _band(fHz, P[k, C.FT0], P[k, C.FT1])
     Ffl = zi * (1.0 / (P[k, C.FT1] - P[k, C.FT0])) * (fHz - P[k, C.FT0]) + zu
@@ -1086,8 +1145,8 @@ def derivatives(P, x, k, V, V_nc, dx):
         Ipout, Iqout = _regca1_currents(P, x, k, v)
         Iq_target = -P[k, C.IQCMD0]
         if P[k, C.REEC] == REECA1:
-            Qext = _repca1(P, x, k, V, V_nc, dx) if P[k, C.REPC] == REPCA1 else 0.0
-            Ipcmd, Iq_target = _reeca1(P, x, k, v, v * Ipout + 1j * v * Iqout, Qext, dx)
+            ext = _repca1(P, x, k, V, V_nc, dx) if P[k, C.REPC] == REPCA1 else 0.0j
+            Ipcmd, Iq_target = _reeca1(P, x, k, v, v * Ipout + 1j * v * Iqout, ext, dx)
             x[_IPCMD, k] = Ipcmd + P[k, C.IPOFF]
         _regca1_derivatives(P, x, k, v, Iq_target, dx)
         return v * Ipout + 1j * v * Iqout
@@ -1170,6 +1229,7 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     pc = cp.repc == REPCA1
     x[_PC_V] = np.where(pc, cp.pc_Vref0, 0.0)  # the filters at VCsel, Qline; PI, lead-lag 0
     x[_PC_Q] = np.where(pc, cp.pc_Qline0, 0.0)
+    x[_PC_P] = np.where(pc, cp.pc_Pline0, 0.0)  # the frequency path at rest at 0
     if np.any(reg):
         _check_regca1(cp, P, x, Vc, V_nc)
     Ip, Iq = commands(P, x, Vc) if cp.n else ((), ())

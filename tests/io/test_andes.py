@@ -585,15 +585,16 @@ def test_import_andes_maps_psse_models_as_the_dyr_reader():
 
 
 def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
-    """A case with renewables (REGCA1, REECA1, REPCA1) and ANDES's own disturbances: one
-    error naming every model stabctl lacks (the plant control REPCA1, Toggle) and its
-    device count, the REECA1 read; a REGCA1 driven by a REECB1 is refused by name, and
-    with on_unsupported="skip" its static generator cannot be left out."""
+    """A wind case (REGCA1 driven by the WT* family) and ANDES's own disturbances: one error
+    naming every model stabctl lacks with its device count, the REGCA1/REECA1/REPCA1 read;
+    a REGCA1 driven by a REECB1 is refused by name, and with on_unsupported="skip" its
+    static generator cannot be left out."""
     with pytest.raises(InputError) as err:
-        import_andes(andes.get_case("ieee14/ieee14_solar.xlsx"))
-    for name in ("REPCA1 (1)", "Toggle (2)"):
+        import_andes(andes.get_case("ieee14/ieee14_wt3.xlsx"))
+    for name in ("WTDTA1 (1)", "WTTQA1 (1)", "Toggle (2)"):
         assert name in str(err.value)
-    assert "REECA1" not in str(err.value)
+    for name in ("REGCA1", "REECA1", "REPCA1"):
+        assert name not in str(err.value)
     path = andes.get_case("ieee14/ieee14_reecb1.json")
     with pytest.raises(InputError, match=r"REGCA1 1: its current commands come from REECB1 1"):
         import_andes(path)
@@ -631,12 +632,12 @@ def test_import_andes_cli_writes_ieee39_and_refuses_renewables(tmp_path):
         len(case.pss),
         len(case.governors),
     ) == (39, 10, 10, 10, 10)
-    bad = tmp_path / "solar.json"
+    bad = tmp_path / "wind.json"
     res = CliRunner().invoke(
-        main, ["import-andes", andes.get_case("ieee14/ieee14_solar.xlsx"), "-o", str(bad)]
+        main, ["import-andes", andes.get_case("ieee14/ieee14_wt3.xlsx"), "-o", str(bad)]
     )
     assert res.exit_code == 2 and not bad.exists()
-    assert "REPCA1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
+    assert "WTDTA1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
 
 
 # -- converter-interfaced devices (ANDES PVD1, ESD1; docs/ibr.md) --------------------------------
@@ -907,15 +908,18 @@ def test_ieee14_slow_mode_gap_is_the_valve_at_its_limit(ieee14, tmp_path):
 # -- REGCA1 (ANDES renewable/regca1.py; docs/ibr.md) ------------------------------------------
 
 
-def solar_case_file(tmp_path, drop):
+def solar_case_file(tmp_path, drop, **edits):
     """ANDES's ieee14_solar.xlsx (REGCA1 + REECA1 + REPCA1 on the bus-8 generator) without
-    the sheets ``drop``, written to ``tmp_path``."""
+    the sheets ``drop`` and with the values ``edits`` ({sheet: {column: value}}), written
+    to ``tmp_path``."""
     import pandas as pd
 
     sheets = pd.read_excel(andes.get_case("ieee14/ieee14_solar.xlsx"), sheet_name=None)
     path = tmp_path / ("ieee14_solar_without_" + "_".join(sorted(drop)).lower() + ".xlsx")
     with pd.ExcelWriter(path) as out:
         for name, sheet in sheets.items():
+            for column, value in edits.get(name, {}).items():
+                sheet[column] = value
             if name not in drop:
                 sheet.to_excel(out, sheet_name=name, index=False)
     return path
@@ -1200,6 +1204,32 @@ def test_ieee14_solar_with_its_plant_control_matches_andes(solar_case, reeca1_ca
     _, alone = reeca1_case
     res0 = Simulator(alone, q_limits=False).run([Fault(9, 1.0, 1.05, x=1e-3)], 5.0, h=STEP)
     assert res.ibr_q[-1, 0] - res0.ibr_q[-1, 0] > 4e-4  # the plant control acts
+
+
+def test_ieee14_solar_plant_frequency_path_matches_andes(tmp_path, solar_case):
+    """The REPCA1's frequency path switched on (Fflag 1, PLflag 1; deadband +-2e-4 pu,
+    Ddn = Dup = 20; the case's +-0.01 pu is never left): after the 3-cycle fault at bus 9
+    the bus frequency's dip and the line P's error move Pext (P 0.357 pu 0.2 s after
+    the fault where without it 0.380).  The gap to ANDES is the step's (the REECA1's fast
+    loop feeds it): P from 1.2 s 2.0e-3 at 5 ms, 1.3e-4 at 1.25 ms in both; from 1.5 s
+    8.5e-5 and 7.3e-6; after 2 s 3.0e-5 at 5 ms."""
+    edits = dict(Fflag=1.0, PLflag=1.0, fdbd1=-2e-4, fdbd2=2e-4, Ddn=20.0, Dup=20.0)
+    path = solar_case_file(tmp_path, (), REPCA1=edits)
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    assert (case.converters.pc_Fflag[0], case.converters.pc_Ddn[0]) == (1.0, 20.0)
+    gaps = {}
+    for h, t_end in ((STEP, 3.0), (STEP / 4, 2.0)):
+        run = regca1_fault_run(path, case, 9, 3, h, t_end)
+        gap = np.abs(run["P"] - run["Pa"])
+        gaps[h] = [np.max(gap[run["t"] >= a]) for a in (1.2, 1.5, 2.0)]
+        assert run["dw"] < 5e-5  # measured 1.9e-5 at 5 ms
+    print(f"\nREPCA1 frequency path vs ANDES, P from 1.2, 1.5, 2 s: {gaps}")
+    assert gaps[STEP][1] < 2e-4 and gaps[STEP][2] < 5e-5  # measured 8.5e-5, 3.0e-5
+    assert gaps[STEP / 4][0] < 3e-4 and gaps[STEP / 4][1] < 2e-5  # measured 1.3e-4, 7.3e-6
+    base = regca1_fault_run(solar_case[0], solar_case[1], 9, 3, STEP, 1.3)
+    at = np.argmin(np.abs(base["t"] - 1.2))
+    assert base["P"][at] - run["P"][np.argmin(np.abs(run["t"] - 1.2))] > 0.02  # it acts
 
 
 def test_import_andes_refuses_a_regca1_with_two_electrical_controls(tmp_path):
