@@ -118,6 +118,10 @@ def save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0
     )
 
 
+#: what `describe_esd` and `print_cct` call the devices of each storage model
+_ESD_NAMES = {"ideal": "ESDs", "wecc": "WECC batteries"}
+
+
 def describe_esd(esd: dict, short: bool = False) -> str:
     """One line on the storage of `simulate --esd-pct` (short: for a plot title).
 
@@ -134,8 +138,9 @@ def describe_esd(esd: dict, short: bool = False) -> str:
     where = "" if short else " at the generator HV buses"
     control = "bang-bang COI control" if short else esd["control"]
     return (
-        f"storage: {esd['devices']} ESDs of {esd['pct_of_machine_mva']:g} % of machine MVA"
-        f"{where}, {control}, deadband {esd['deadband_hz']:g} Hz, "
+        f"storage: {esd['devices']} {_ESD_NAMES[esd.get('model', 'ideal')]} of "
+        f"{esd['pct_of_machine_mva']:g} % of machine MVA{where}, {control}, "
+        f"deadband {esd['deadband_hz']:g} Hz, "
         f"{'gate' if short else 'voltage gate'} {esd['v_gate_pu']:g} pu, {esd['coi']} COI"
         + (f", hysteresis {esd['hysteresis_hz']:g} Hz" if esd["hysteresis_hz"] else "")
     )
@@ -189,7 +194,12 @@ def print_cct(case_name, rating, d) -> None:
         f"case {case_name}: fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']}"
         f"{circ} at {f['t_fault']:g} s, cleared at both ends, line tripped"
         + "".join(f", {a}-{b} also opened" for a, b in f["trips"])
-        + ("; no storage" if rating is None else f"; storage {rating:g} % of machine MVA")
+        + (
+            "; no storage"
+            if rating is None
+            else f"; storage {rating:g} % of machine MVA"
+            + (", WECC batteries" if d.get("esd_model") == "wecc" else "")
+        )
     )
     click.echo(
         f"CCT {d['cct_s']:.3f} s = {d['cct_cycles']:.2f} cycles (stable at "

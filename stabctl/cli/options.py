@@ -465,6 +465,21 @@ def tol_options(t_max: float = 1.0, t_max_help: str = "a CCT above it is an erro
     )
 
 
+def esd_model_option(func):
+    """``--esd-model ideal|wecc``: the storage devices' model (`stabctl.storage.devices`
+    `StorageFleet.model`): ideal power sources, or WECC batteries (REGCA1 + REECA1 in the
+    storage current range + REPCA1) taking the law's power as their plant's reference."""
+    return click.option(
+        "--esd-model",
+        type=click.Choice(["ideal", "wecc"]),
+        default="ideal",
+        show_default=True,
+        help="Storage devices: ideal power sources, or WECC batteries (converter current "
+        "limit, lags, voltage-dip logic, plant control; docs/storage.md) whose plant "
+        "takes the controller's power as its reference.",
+    )(func)
+
+
 def storage_options(rating_help: str = "", multiple: bool = False, with_rating: bool = True):
     """The storage option set: ``--esd-pct`` (one rating, or with ``multiple`` a list),
     ``--deadband-hz``, ``--v-gate``, ``--coi``, ``--hysteresis-hz``: the paper's bang-bang

@@ -22,10 +22,13 @@ from stabctl.cli.options import out_dir_option, reports_errors
 @click.option(
     "--only",
     multiple=True,
-    type=click.Choice(["analytic", "cases", "convergence", "table4", "estimation", "placement"]),
+    type=click.Choice(
+        ["analytic", "cases", "convergence", "table4", "wecc", "estimation", "placement"]
+    ),
     help="Build only these parts (repeatable; times on 2 cores): analytic = "
     "Sections 2-4 (seconds); cases = Cases 1 and 2 (under a minute, with the "
-    "first compilation); table4 = CCT sweeps (15 s); estimation = "
+    "first compilation); table4 = CCT sweeps (15 s); wecc = Case 2 and Table 4 with "
+    "WECC batteries beside ideal ESDs; estimation = "
     "estimator Monte Carlo and in-the-loop CCTs (under 2 minutes); placement = "
     "the planner's ESD sizing and placement studies (about 4.5 minutes); "
     "convergence = CCT against the step under both conventions (half a "

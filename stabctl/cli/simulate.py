@@ -17,6 +17,7 @@ from stabctl.cli.options import (
     circuit_option,
     clear_cycles_option,
     controller,
+    esd_model_option,
     fault_options,
     json_option,
     model_options,
@@ -127,6 +128,7 @@ def _build_events(
 @out_file_option(metavar="FILE.csv|FILE.npz", help="The trajectories (CSV or numpy .npz).")
 @plot_option("speeds, angles from the COI and bus voltages")
 @storage_options()
+@esd_model_option
 @json_option("the run summary")
 @reports_errors
 def simulate(
@@ -153,6 +155,7 @@ def simulate(
     v_gate,
     coi,
     hysteresis_hz,
+    esd_model,
     as_json,
 ):
     """Nonlinear multi-machine time-domain simulation (PSTess models and integrator).
@@ -232,7 +235,9 @@ def simulate(
     if esd_pct is not None:
         from stabctl.storage.devices import uniform_fleet
 
-        fleet = uniform_fleet(case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz))
+        fleet = uniform_fleet(
+            case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz), model=esd_model
+        )
     validate_events(case, events, tf)  # an unknown bus or line before compiling
     sim = Simulator(case, conventions=conventions, q_limits=q_limits)
     h = sim.default_h if step is None else step
@@ -249,6 +254,7 @@ def simulate(
         if esd_pct is None
         else {
             "pct_of_machine_mva": esd_pct,
+            "model": esd_model,
             "devices": len(fleet.devices),  # type: ignore[union-attr]
             "control": "bang-bang COI (paper Table 3)",
             "deadband_hz": deadband_hz,

@@ -16,6 +16,7 @@ from stabctl.cli.options import (
     check_number,
     circuit_option,
     controller,
+    esd_model_option,
     fault_options,
     faults_option,
     json_option,
@@ -47,6 +48,7 @@ from stabctl.errors import InputError
     "BUS FAR_BUS.",
 )
 @storage_options()
+@esd_model_option
 @tol_options()
 @tf_option()
 @model_options
@@ -65,6 +67,7 @@ def cct(
     v_gate,
     coi,
     hysteresis_hz,
+    esd_model,
     tol_ms,
     t_max,
     tf,
@@ -105,12 +108,20 @@ def cct(
     storage = (
         None
         if esd_pct is None
-        else uniform_fleet(case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz))
+        else uniform_fleet(
+            case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz), model=esd_model
+        )
     )
     line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
     validate_events(case, line_fault.events(0.0), t_fault + 1.0)  # before compiling
     res = critical_clearing_time(model.simulator(case), line_fault, search, storage=storage, h=step)
-    out = {"case": case.name, "esd_pct": esd_pct, **res.to_dict(), "q_limits": q_limits}
+    out = {
+        "case": case.name,
+        "esd_pct": esd_pct,
+        "esd_model": esd_model,
+        **res.to_dict(),
+        "q_limits": q_limits,
+    }
     if as_json:
         print_json(out)
     else:
@@ -152,6 +163,7 @@ def _ratings(values) -> list:
 @click.argument("case_name", metavar="CASE")
 @faults_option
 @storage_options(multiple=True, rating_help=" Every fault runs at every rating.")
+@esd_model_option
 @out_file_option(
     "results.jsonl",
     "FILE.jsonl",
@@ -173,6 +185,7 @@ def sweep_cct(
     v_gate,
     coi,
     hysteresis_hz,
+    esd_model,
     out_path,
     workers,
     scheduler,
@@ -214,7 +227,9 @@ def sweep_cct(
     for p in ratings:
         storage_fleet(case, p)
     faults = read_fault_list(case_name, faults_src)
-    jobs = controlled_cct_jobs(case_name, faults, ratings, ctrl, search=search, model=model)
+    jobs = controlled_cct_jobs(
+        case_name, faults, ratings, ctrl, search=search, model=model, esd_model=esd_model
+    )
     rep = run_sweep(
         jobs, out_path, workers=workers, scheduler=scheduler, retry_failed=retry_failed
     )  # Ctrl-C: reports_errors, exit 130

@@ -43,6 +43,7 @@ from stabctl.dynamics.model import (
 from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
+from stabctl.models import converters as conv
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
 
@@ -181,6 +182,10 @@ class Simulator:
         self.default_h = default_step(case, conventions, self.fastest) if step is None else step
         check_step(self.fastest, self.default_h)
         self._models: dict[frozenset, DynamicModel] = {}
+        #: the simulators of this case with WECC batteries (`_for_storage`), and in one of
+        #: them the batteries' converter rows
+        self._battery_sims: dict[tuple, Simulator] = {}
+        self.battery_rows: np.ndarray | None = None
         self.model = self.model_for(injection_buses)
         self.inertia = self.model.mp.H * case.machines.mva
         if background_compile:
@@ -307,6 +312,11 @@ class Simulator:
             A singular network or non-convergent loads (voltage collapse).  Both carry
             the partial result as ``.result``.
         """
+        sim = self._for_storage(storage)
+        if sim is not self:
+            return sim.run(
+                events, t_end, h, semantics, separation_limit, stop_at_separation, storage
+            )
         semantics = self._semantics(semantics)
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
         run = _Run(
@@ -314,6 +324,29 @@ class Simulator:
         )
         run.advance(grid.t.size - 1)
         return run.finish(storage)
+
+    def _for_storage(self, storage) -> Simulator:
+        """This simulator, or for a fleet of WECC batteries (`StorageFleet.model` "wecc")
+        the simulator of the case with them (`stabctl.storage.devices.battery_case`, same
+        operating point: the batteries start idle), built once per fleet layout."""
+        if storage is None or storage.model != "wecc" or self.battery_rows is not None:
+            return self
+        key = (
+            tuple((d.bus, d.pmax_mw) for d in storage.devices),
+            tuple(sorted(storage.battery.items())),
+        )
+        if key not in self._battery_sims:
+            case, rows = st.battery_case(self.case, storage)
+            sim = Simulator(
+                case,
+                self.op,
+                conventions=self.conventions,
+                step=self.default_h,
+                background_compile=False,
+            )
+            sim.battery_rows = rows
+            self._battery_sims[key] = sim
+        return self._battery_sims[key]
 
     def _prepare(self, events, t_end, h, storage, semantics):
         """Validate, choose the model (storage buses kept), pack the devices, build the
@@ -324,7 +357,11 @@ class Simulator:
         ev_.validate(self.case, events, t_end)
         h = self.default_h if h is None else h
         m = self.model_for(storage.buses if storage is not None else ())
-        sa = st.pack(storage, self.case, m.nc_idx)
+        xslot = None
+        if self.battery_rows is not None:
+            start = m.layout.blocks["ibr"][0].start
+            xslot = start + int(conv.PLANT_PREF_SLOT) * m.cp.n + self.battery_rows
+        sa = st.pack(storage, self.case, m.nc_idx, xslot)
         check_step(self.fastest, h)
         check_step_count(t_end, h)
         starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
@@ -395,6 +432,11 @@ class Simulator:
         """
         if storage is None or storage.controller.kind != law.EXTERNAL:
             raise InputError("run_commanded needs a fleet whose controller is ExternalCommands")
+        sim = self._for_storage(storage)
+        if sim is not self:
+            return sim.run_commanded(
+                events, t_end, storage, frames, h, semantics, separation_limit, stop_at_separation
+            )
         frame_times, latency = np.asarray(frames.times, float), frames.latency
         if np.any(np.diff(frame_times) <= 0) or latency < 0:
             raise InputError("frame times must increase and the latency must be >= 0")
@@ -604,6 +646,7 @@ class _Run:
                 sim.case.base_mva,
                 log[~np.isnan(log[:, 0])],
                 sim.case.freq_hz,
+                sim.battery_rows,
             )
         t_fail = g.t[min(k_end + 1, g.t.size - 1)]
         if self.status == ig.UNSTABLE_STEP:
@@ -631,13 +674,30 @@ class _Run:
 CHATTER_S = 0.02
 
 
-def _attach_storage(res: SimulationResult, fleet, P, stats, base_mva, log, f0) -> None:
+def _attach_storage(
+    res: SimulationResult, fleet, P, stats, base_mva, log, f0, battery_rows=None
+) -> None:
     """Device powers and per-device figures: switchings, chattering (switchings within
     CHATTER_S of the previous one), energy absorbed and delivered (MJ), highest and lowest
     stored energy relative to the start (MJ, exact at located switchings: `_advance`),
     peak power actually used (MW); the switching log (time s, device number, new mode,
-    relative speed Hz) in res.meta["switchings"]."""
+    relative speed Hz) in res.meta["switchings"].  WECC batteries (their converter rows
+    `battery_rows`): the power is the converter's (its P injection, sign changed), the
+    energy figures its integral on the time grid (`energy_excursion`), the law's
+    power in res.meta["pesd_command"]."""
     res.devices = np.arange(1, len(fleet.devices) + 1)
+    if battery_rows is not None:
+        res.meta["pesd_command"] = P
+        P = -res.ibr_p[:, battery_rows]
+        stats = stats.copy()
+        for i in range(P.shape[1]):
+            ex = st.energy_excursion(res.t, P[:, i])
+            stats[i, 1:] = [
+                ex["absorbed_mj"],
+                ex["delivered_mj"],
+                ex["soc_high_mj"],
+                ex["soc_low_mj"],
+            ]
     res.pesd = P
     res.meta["switchings"] = [(float(t), int(d) + 1, int(m), float(r * f0)) for t, d, m, r in log]
     res.meta["storage"] = [

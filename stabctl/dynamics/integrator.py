@@ -327,7 +327,7 @@ def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
             sw.log_switching(rec, d, grid.t[k], want, w.a.r[d])
     sw.targets(sa, ds.mode, w.a.r, w.a.v, w.a.acc, ds.target)
     if sw.powers_now(sa, ds):
-        sw.inject(sa, ds.P, kn.kept.S_extra)
+        sw.inject(sa, ds.P, kn.kept.S_extra, x)
         _evaluate(kn, x, grid.interval[k], BUS_VOLTAGES, w.dx_k)
 
 
@@ -346,7 +346,7 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, at):
         sw.switch_located(sa, ds, w, rec, first_d, t_now)
     sw.targets(sa, ds.mode, w.a.r, w.a.v, w.a.acc, ds.target)
     sw.powers_now(sa, ds)
-    sw.inject(sa, ds.P, kn.kept.S_extra)
+    sw.inject(sa, ds.P, kn.kept.S_extra, x_a)
     dx_a = np.empty_like(x_a)
     return _evaluate(kn, x_a, grid.interval[k], NO_BUS_VOLTAGES, dx_a) >= 0, dx_a
 
@@ -360,8 +360,8 @@ def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
     advanced on a copy of their energy: (network solved, corrected state); dx_j is written
     with the derivatives at the predictor (network of `stage`)."""
     Pb = sw.advance(sa, ds.P, ds.target, ds.e.copy(), hh, np.zeros((sa.pmax.size, 5)))
-    sw.inject(sa, Pb, kn.kept.S_extra)
     xp = x_a + hh * dx_a
+    sw.inject(sa, Pb, kn.kept.S_extra, xp)
     if _evaluate(kn, xp, stage, want, dx_j) < 0:
         return False, x_a
     return True, x_a + 0.5 * hh * (dx_a + dx_j)
@@ -395,8 +395,9 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
             hh = theta * rem
         Pm = sw.advance(sa, ds.P, ds.target, ds.e, hh, rec.stats)
         if first_d >= 0:
-            sw.inject(sa, Pm, kn.kept.S_extra)
-            if _evaluate(kn, x_a + hh * dx_a, s, NO_BUS_VOLTAGES, w.dx_j) < 0:
+            xm = x_a + hh * dx_a
+            sw.inject(sa, Pm, kn.kept.S_extra, xm)
+            if _evaluate(kn, xm, s, NO_BUS_VOLTAGES, w.dx_j) < 0:
                 return NO_LOAD_FLOW, k, x
             x_a = x_a + 0.5 * hh * (dx_a + w.dx_j)
         else:  # up to the scheduled command
@@ -420,7 +421,7 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     step twice; the first pass's clamps stay), the controller there, the record of t_k,
     then the sub-steps.  Returns (status, index, state)."""
     s = grid.interval[k]
-    sw.inject(sa, ds.P, kn.kept.S_extra)
+    sw.inject(sa, ds.P, kn.kept.S_extra, x)
     if grid.first[k] and opts.pst:
         V_keep = kn.kept.V.copy()
         _evaluate(kn, x, s, NO_BUS_VOLTAGES, w.dx_k)
@@ -450,8 +451,9 @@ def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
     """Store the outputs at k1 where a run pauses, from copies (the next call evaluates it
     for real)."""
     V_keep, held_keep, stage_keep = kn.kept.V.copy(), kn.kept.held.copy(), kn.held_stage[0]
-    sw.inject(sa, ds.P, kn.kept.S_extra)
-    _evaluate(kn, x.copy(), grid.interval[k1], BUS_VOLTAGES, w.dx_k)
+    xc = x.copy()
+    sw.inject(sa, ds.P, kn.kept.S_extra, xc)
+    _evaluate(kn, xc, grid.interval[k1], BUS_VOLTAGES, w.dx_k)
     assign(kn.kept.V, V_keep)
     assign(kn.kept.held, held_keep)
     kn.held_stage[0] = stage_keep

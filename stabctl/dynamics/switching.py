@@ -82,11 +82,16 @@ def log_switching(rec, d, time_, mode, r):
 
 
 @kernel
-def inject(sa, P, S):
-    """Complex power drawn at the kept buses by the devices (absorbing is +)."""
+def inject(sa, P, S, x):
+    """The devices' powers P (absorbing is +) into the state x to be evaluated: an ideal
+    device's drawn at its kept bus (S, complex power per kept bus), a WECC battery's as
+    its plant's P reference (-P written to its converter's slot, `sa.xslot`)."""
     S[:] = 0.0
     for d in range(P.size):
-        S[sa.pos[d]] += P[d]
+        if sa.xslot[d] >= 0:
+            x[sa.xslot[d]] = -P[d]
+        else:
+            S[sa.pos[d]] += P[d]
 
 
 # -- device control and energy accounting --------------------------------------------------

@@ -348,6 +348,14 @@ CONVERTER = Family(
             doc="REECA1's plant control: 0 none (constant references), 1 REPCA1",
         ),
         *_REPCA1_PARAMS,
+        Param(
+            "storage",
+            "code",
+            144,
+            choices=(0.0, 1.0),
+            doc="REECA1's active current range: 0 [0, Ipmax] (a generator, ANDES), "
+            "1 [-Ipmax, Ipmax] (a battery, WECC REEC_C)",
+        ),
     ),
 )
 
@@ -372,10 +380,13 @@ REECA1_SLOTS = (
     *("Vt_filter", "Pe_filter", "PIQ", "Iq_filter", "Pref_filter", "Pord", "PIV"),
     *("Iqinj_timer", "Ipmax_timer", "Ipmax_held", "PIQ_held", "PIV_held", "Ipcmd_last"),
 )
-#: REPCA1's slots (``repc`` 1): its states, then its memory (the held error)
+#: REPCA1's slots (``repc`` 1): its states, then its memory (the held error, and the plant
+#: P reference's increment a storage controller commands, written by the simulator:
+#: `stabctl.storage.devices`, ANDES's Plant_pref - Pline0)
 REPCA1_SLOTS = (
     *("Vc_filter", "Qline_filter", "PI_plant", "LeadLag_plant"),
     *("f_lag_plant", "f_washout_plant", "Pline_filter", "PI_P_plant", "Pext_lag", "e_held"),
+    "Plant_pref_command",
 )
 # numpy scalars: a kernel's argument is then typed once (not as a literal per value)
 _F_LAG, _F_WASHOUT = np.int64(2), np.int64(3)  # PVD1's, ESD1's frequency measurement
@@ -383,6 +394,8 @@ _VT, _PE, _PIQ, _S4, _PFILT, _PORD, _PIV = (np.int64(j) for j in range(5, 12))
 _T_IQ, _T_IP, _IPMAX_H, _PIQ_H, _PIV_H, _IPCMD = (np.int64(j) for j in range(12, 18))
 _PC_V, _PC_Q, _PC_PI, _PC_LL = (np.int64(j) for j in range(18, 22))
 _PC_FL, _PC_FW, _PC_P, _PC_PIP, _PC_PEXT, _PC_E_H = (np.int64(j) for j in range(22, 28))
+#: the plant P reference's commanded increment (pu, system base, injection +)
+PLANT_PREF_SLOT = np.int64(28)
 N_STATES = 5 + len(REECA1_SLOTS) + len(REPCA1_SLOTS)
 #: state names per converter type (slots beyond a type's names, or that a device does not
 #: use, `has_state`, are unused, 0)
@@ -394,7 +407,7 @@ STATE_NAMES = {
 #: slots that are not states but the memory of REECA1's discrete logic, written in place by
 #: the kernel (ANDES's ExtendedEvent timers, its VarHold of Ipmax, the frozen PI outputs):
 #: at rest they do not move; the linearisation leaves them out (`has_state`)
-MEMORY_SLOTS = [*range(int(_T_IQ), int(_IPCMD) + 1), int(_PC_E_H)]
+MEMORY_SLOTS = [*range(int(_T_IQ), int(_IPCMD) + 1), int(_PC_E_H), int(PLANT_PREF_SLOT)]
 #: the slots that integrate energy (ESD1's state of charge): at rest only at zero output,
 #: so the initial-point check leaves them out (unused, 0, in the other types)
 ENERGY_SLOTS = [STATE_NAMES[ESD1].index("SOC")]
@@ -865,14 +878,15 @@ def _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx):
 
 @kernel
 def _ip_command(P, x, k, Ip_order, Ipmax, hold):
-    """REECA1's active current command IpHL = clip(Ip_order, 0, Ipmax) of device k, Ipmax
-    held at its value before ``hold`` (1.0 for Thld2 s after a dip; ANDES VarHold
-    Ipmaxh), tracked in place otherwise."""
+    """REECA1's active current command IpHL = clip(Ip_order, 0, Ipmax) of device k (a
+    battery, ``storage`` 1: clip(Ip_order, -Ipmax, Ipmax), WECC REEC_C), Ipmax held at
+    its value before ``hold`` (1.0 for Thld2 s after a dip; ANDES VarHold Ipmaxh),
+    tracked in place otherwise."""
     if hold:
         Ipmax = x[_IPMAX_H, k]
     else:
         x[_IPMAX_H, k] = Ipmax
-    return clip(Ip_order, 0.0, Ipmax)
+    return clip(Ip_order, -P[k, C.STORAGE] * Ipmax, Ipmax)
 
 
 @kernel
@@ -1001,7 +1015,9 @@ def _repca1(P, x, k, V, V_nc, dx):
 def _repca1_p(P, x, k, V, Pline, dx):
     """REPCA1's frequency path of device k (ANDES repca1.py s4-s6): the frequency error
     1 - f (pu; `_bus_frequency` at its bus) through the deadband [fdbd1, fdbd2] times Ddn
-    (negative) or Dup, plus with PLflag Pline0 - lag(Pline, Tp); limited to [femin,
+    (negative) or Dup, plus with PLflag Plant_pref - lag(Pline, Tp), Plant_pref = Pline0
+    plus the commanded increment in slot `PLANT_PREF_SLOT` (0 unless a storage controller
+    writes it); limited to [femin,
     femax], the tracking PI (Kpg, Kig, ksg) in [Pmin, Pmax] and the lag Tg; returns
     Pext (the increment of its REECA1's P reference), 0 with Fflag 0."""
     f, dx[_PC_FL, k], dx[_PC_FW, k] = _bus_frequency(P, x, k, V, _PC_FL, _PC_FW)
@@ -1014,8 +1030,11 @@ def _repca1_p(P, x, k, V, Pline, dx):
     droop = db * (P[k, C.PC_DDN] if db < 0.0 else P[k, C.PC_DUP])
     s4, dx[_PC_P, k] = lag(Pline, x[_PC_P, k], P[k, C.PC_TP])
     e = clip(
-        droop + P[k, C.PC_PLFLAG] * (P[k, C.PC_PLINE0] - s4), P[k, C.PC_FEMIN], P[k, C.PC_FEMAX]
+        droop + P[k, C.PC_PLFLAG] * (P[k, C.PC_PLINE0] + x[PLANT_PREF_SLOT, k] - s4),
+        P[k, C.PC_FEMIN],
+        P[k, C.PC_FEMAX],
     )
+    dx[PLANT_PREF_SLOT, k] = 0.0
     ys = P[k, C.PC_KPG] * e + x[_PC_PIP, k]
     y = clip(ys, P[k, C.PC_PMIN], P[k, C.PC_PMAX])
     dx[_PC_PIP, k] = P[k, C.PC_KIG] * (e - P[k, C.PC_KSG] * (ys - y))

@@ -4,6 +4,11 @@ Section 5).
 An ESD at a bus is a real-power sink/source P in [-Pmax, +Pmax] (pu on the system base,
 + absorbs, as the paper), drawn at its bus in the network solution.  Ideal (instant) by
 default; optionally a first-order lag, a ramp limit and an energy (state-of-charge) range.
+A fleet of model ``"wecc"`` makes each device a WECC battery instead (`battery_case`: a
+REGCA1 converter with its REECA1 electrical control in the storage current range and a
+REPCA1 plant control, `stabctl.models.converters`, docs/storage.md): the law's power is
+then the plant's P reference, and the converter's current limit, lags and voltage logic
+decide what reaches the grid.
 The control laws a fleet shares are in `stabctl.storage.control` (re-exported by
 `stabctl.storage`).
 """
@@ -18,11 +23,51 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.case import Case
 from stabctl.errors import CaseError, InputError
+from stabctl.models import converters as conv
 from stabctl.storage.control import NO_LAW, NO_STORAGE, BangBangCOI, ControlLaw
 
 #: largest storage rating of `uniform_fleet`, % of the machine's MVA (a device larger than
 #: its generator is outside the paper's use and its control law)
 MAX_ESD_PCT = 100.0
+
+#: storage device models: "ideal" (the law's power drawn at the bus, `StorageDevice`'s lag,
+#: ramp and energy applied) or "wecc" (a WECC battery taking the law's power as its plant
+#: reference, `battery_case`)
+ESD_MODELS = ("ideal", "wecc")
+
+#: a WECC battery's converter row (ibr_con fields, `stabctl.models.converters.CONVERTER`)
+#: where it differs from the table's defaults (ANDES 2.0's): a REGCA1 (converter lag Tg
+#: 0.02 s) with a REECA1 in the storage current range (Ip in [-Ipmax, Ipmax], P order in
+#: [-1, 1] of its rating, active-current priority, apparent current limit Imax 1 pu of
+#: its rating) and a REPCA1 plant control without a monitored line whose P path passes
+#: its reference straight on (Fflag 1, PLflag 1, proportional gain 1, no integral, no
+#: frequency droop, error limits open, output [-1, 1]); its voltage control (Q path) and
+#: the REECA1's dip logic (frozen below Vdip 0.8 pu, reactive current Kqv per pu voltage
+#: error) are ANDES's defaults.  Idle at the operating point (pfrac = qfrac = 0: P0 = Q0
+#: = 0).  Device base: the device's rating, MVA = MW.
+WECC_BATTERY: dict[str, float] = {
+    "type": float(conv.REGCA1),
+    "pfrac": 0.0,
+    "qfrac": 0.0,
+    "pqflag": 1.0,
+    "Tg": 0.02,
+    "reec": float(conv.REECA1),
+    "storage": 1.0,
+    "PMAX": 1.0,
+    "PMIN": -1.0,
+    "Imax": 1.0,
+    "repc": float(conv.REPCA1),
+    "pc_Fflag": 1.0,
+    "pc_PLflag": 1.0,
+    "pc_Kpg": 1.0,
+    "pc_Kig": 0.0,
+    "pc_Ddn": 0.0,
+    "pc_Dup": 0.0,
+    "pc_femax": 999.0,
+    "pc_femin": -999.0,
+    "pc_Pmax": 1.0,
+    "pc_Pmin": -1.0,
+}
 
 
 @dataclass(frozen=True)
@@ -90,10 +135,37 @@ class StorageFleet:
         The law driving every device (`stabctl.storage.control`: `BangBangCOI`, the
         paper's, by default; `LinearFeedback`; `ExternalCommands` for
         `Simulator.run_commanded`).
+    model : {"ideal", "wecc"}, optional
+        ``"ideal"`` (default): each device draws the law's power at its bus (with its
+        lag, ramp and energy); ``"wecc"``: each device is a WECC battery whose plant
+        takes the law's power as its P reference (`battery_case`; the devices' lag and
+        ramp are then the converter's, their energy range still bounds the reference).
+    battery : dict, optional
+        ibr_con fields of the WECC batteries replacing `WECC_BATTERY`'s or the table's
+        defaults (e.g. ``{"Imax": 1.2}``); only with model "wecc".
+
+    Raises
+    ------
+    InputError
+        An unknown model, a battery field that is not an ibr_con field, or battery fields
+        with model "ideal".
     """
 
     devices: tuple = ()
     controller: ControlLaw = field(default_factory=BangBangCOI)
+    model: str = "ideal"
+    battery: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.model not in ESD_MODELS:
+            raise InputError(
+                f"storage model must be one of {', '.join(ESD_MODELS)}, got {self.model!r}"
+            )
+        unknown = sorted(set(self.battery) - set(conv.CONVERTER.names))
+        if unknown:
+            raise InputError(f"WECC battery: {', '.join(unknown)} not ibr_con fields")
+        if self.battery and self.model != "wecc":
+            raise InputError("battery fields are for storage model 'wecc' only")
 
     @property
     def buses(self) -> list[int]:
@@ -118,7 +190,45 @@ def hv_bus(case: Case, machine: int) -> int:
     return best if kv.max() > case.buses.kv[case.bus_index(term)] else term
 
 
-def uniform_fleet(case: Case, pct: float, controller=None, at: str = "hv") -> StorageFleet:
+def battery_case(case: Case, fleet: StorageFleet) -> tuple[Case, np.ndarray]:
+    """The case with each device of a "wecc" fleet as a WECC battery: a converter row per
+    device at its bus, rated its MW (MVA), the fields of `WECC_BATTERY` and the fleet's
+    ``battery`` overrides, numbered after the case's converters.
+
+    Parameters
+    ----------
+    case : Case
+        The case the fleet runs on.
+    fleet : StorageFleet
+        Its devices (model "wecc").
+
+    Returns
+    -------
+    tuple of (Case, ndarray of int, shape (n_dev,))
+        The case with the batteries' rows appended, and each device's row in its
+        converter table.
+
+    Raises
+    ------
+    CaseError
+        A battery field out of its range (`stabctl.models.converters.CONVERTER`), naming
+        the row and field.
+    """
+    t = case.converters
+    n0 = len(t)
+    first = int(t.number.max()) + 1 if n0 else 1
+    fields = {**WECC_BATTERY, **fleet.battery}
+    rows = []
+    for j, d in enumerate(fleet.devices):
+        row = {"number": first + j, "bus": d.bus, "mva": d.pmax_mw, **fields}
+        rows.append([row.get(c, type(t).DEFAULTS.get(c, 0.0)) for c in t.columns()])
+    table = type(t).from_matrix(np.vstack([t.matrix(), np.array(rows, float)]))
+    return case.replace(converters=table), np.arange(n0, n0 + len(rows))
+
+
+def uniform_fleet(
+    case: Case, pct: float, controller=None, at: str = "hv", model: str = "ideal"
+) -> StorageFleet:
     """One ideal ESD per generator, rated pct % of the generator's MVA, at its HV
     bus or its terminal bus.
 
@@ -133,6 +243,8 @@ def uniform_fleet(case: Case, pct: float, controller=None, at: str = "hv") -> St
     at : str, optional
         ``"hv"`` (default): the generator's high-voltage bus (`hv_bus`: the neighbour of
         its terminal bus with the highest rated kV); any other value: the terminal bus.
+    model : {"ideal", "wecc"}, optional
+        The devices' model (`StorageFleet.model`); default "ideal".
 
     Returns
     -------
@@ -143,7 +255,7 @@ def uniform_fleet(case: Case, pct: float, controller=None, at: str = "hv") -> St
     Raises
     ------
     InputError
-        `pct` not in (0, MAX_ESD_PCT].
+        `pct` not in (0, MAX_ESD_PCT], or an unknown model.
     """
     if not 0 < pct <= MAX_ESD_PCT:
         raise InputError(
@@ -153,7 +265,7 @@ def uniform_fleet(case: Case, pct: float, controller=None, at: str = "hv") -> St
     for num, bus, mva in zip(case.machines.number, case.machines.bus, case.machines.mva):
         b = hv_bus(case, int(num)) if at == "hv" else int(bus)
         devs.append(StorageDevice(bus=b, machine=int(num), pmax_mw=pct / 100.0 * mva))
-    return StorageFleet(tuple(devs), controller or BangBangCOI())
+    return StorageFleet(tuple(devs), controller or BangBangCOI(), model=model)
 
 
 def energy_excursion(t, p_mw) -> dict:
@@ -209,6 +321,7 @@ class StorageArrays(NamedTuple):
     """Fleet packed for the compiled loop (n_dev entries each; system-base pu, s)."""
 
     pos: np.ndarray  # index of the device bus among the kept buses
+    xslot: np.ndarray  # a WECC battery's plant-reference slot in the flat state (-1: ideal)
     bus: np.ndarray  # bus index (for its voltage)
     mac: np.ndarray  # machine index (-1: none)
     pmax: np.ndarray
@@ -225,8 +338,10 @@ class StorageArrays(NamedTuple):
     Ka: float  # pu per pu speed per s
 
 
-def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageArrays:
-    """Pack a fleet for the kernels; nc_idx are the kept buses of the dynamic model.
+def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray, xslot=None) -> StorageArrays:
+    """Pack a fleet for the kernels; nc_idx are the kept buses of the dynamic model, xslot
+    (n_dev,) the flat state index of each WECC battery's plant P reference
+    (`stabctl.models.converters.PLANT_PREF_SLOT` of its converter; None: ideal devices).
 
     Raises CaseError when a device bus is not kept (build the Simulator with the fleet's
     buses as injection buses) or names an unknown machine.
@@ -246,6 +361,7 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray) -> StorageA
     law = NO_LAW if fleet is None else fleet.controller.packed(f0)
     return StorageArrays(
         pos=pos,
+        xslot=np.full(len(devs), -1, np.int64) if xslot is None else np.asarray(xslot, np.int64),
         bus=bus,
         mac=np.array(
             [-1 if d.machine is None else case.machine_index(d.machine) for d in devs], np.int64

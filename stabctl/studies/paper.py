@@ -306,6 +306,7 @@ PARTS: dict[str, tuple[Callable[[Path], str], ...]] = {
     "analytic": (section_omib, section_feedback, section_two_machine_and_min_time),
     "cases": (paper_storage.section_case1, paper_storage.section_case2),
     "table4": (),
+    "wecc": (),
     "estimation": (),
     "placement": (),
     "convergence": (section_convergence,),
@@ -317,6 +318,7 @@ TALKING = {section_convergence}
 #: into the report directory, reproducibly (`sweep.write_reproducible`), at the end.
 RESUMABLE = {
     "table4": (paper_storage.section_table4, "table4_*.jsonl"),
+    "wecc": (paper_storage.section_wecc, "wecc_*.jsonl"),
     "estimation": (section_estimation, "estimation_cct_*.jsonl"),
     "placement": (section_placement, "placement_*_screening.jsonl"),
 }

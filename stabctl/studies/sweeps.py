@@ -7,7 +7,8 @@ controller: each job then builds its fleet with that controller, and its key say
 (``/ctrl-db<deadband>-vg<gate>-<coi>-hy<hysteresis>``), so that records of different
 controllers never mix in one output file. With the paper's controller the jobs are
 exactly :func:`~stabctl.stability.cct.cct_jobs`' (same keys and inputs: earlier records
-resume).
+resume).  With WECC batteries (``esd_model="wecc"``, `stabctl.storage.devices`) the key
+ends in ``/wecc``.
 """
 
 from __future__ import annotations
@@ -33,7 +34,8 @@ def controlled_cct_job(inputs: dict) -> dict:
     inputs : dict
         :func:`~stabctl.stability.cct.cct_job`'s inputs and ``controller``: the
         :class:`~stabctl.storage.devices.BangBangCOI` fields (deadband_hz, v_gate_pu,
-        coi, hysteresis_hz); esd_pct None: no storage (the controller unused).
+        coi, hysteresis_hz), optionally ``esd_model`` ("ideal", the default, or "wecc");
+        esd_pct None: no storage (the controller unused).
 
     Returns
     -------
@@ -45,7 +47,12 @@ def controlled_cct_job(inputs: dict) -> dict:
     fleet = (
         None
         if esd_pct is None
-        else uniform_fleet(sim.case, esd_pct, BangBangCOI(**inputs["controller"]))
+        else uniform_fleet(
+            sim.case,
+            esd_pct,
+            BangBangCOI(**inputs["controller"]),
+            model=inputs.get("esd_model", "ideal"),
+        )
     )
     return critical_clearing_time(
         sim, fault_of_inputs(inputs), SearchOptions.from_inputs(inputs), storage=fleet
@@ -60,6 +67,7 @@ def controlled_cct_jobs(
     *,
     search: SearchOptions = SearchOptions(),
     model: ModelOptions = ModelOptions(),
+    esd_model: str = "ideal",
 ) -> list:
     """The jobs of a CCT sweep whose ESDs run ``controller``.
 
@@ -72,18 +80,21 @@ def controlled_cct_jobs(
     controller : BangBangCOI
     search, model : SearchOptions, ModelOptions, optional
         As :func:`stabctl.stability.cct.cct_jobs`.
+    esd_model : {"ideal", "wecc"}, optional
+        The devices' model (`stabctl.storage.devices.StorageFleet.model`); default
+        "ideal".
 
     Returns
     -------
     list of stabctl.parallel.Job
-        :func:`~stabctl.stability.cct.cct_jobs`' jobs for the paper's controller (or no
-        storage); else run by :func:`controlled_cct_job`, the controller in their inputs
-        and keys.
+        :func:`~stabctl.stability.cct.cct_jobs`' jobs for the paper's controller and ideal
+        devices (or no storage); else run by :func:`controlled_cct_job`, the controller
+        and the model in their inputs and keys.
     """
     from stabctl.parallel import Job
 
     jobs = cct_jobs(case_name, faults, ratings, search=search, model=model)
-    if controller == BangBangCOI():
+    if controller == BangBangCOI() and esd_model == "ideal":
         return jobs
     ctrl = {
         "deadband_hz": controller.deadband_hz,
@@ -92,12 +103,15 @@ def controlled_cct_jobs(
         "hysteresis_hz": controller.hysteresis_hz,
     }
     tag = (
-        f"/ctrl-db{controller.deadband_hz:g}-vg{controller.v_gate_pu:g}-{controller.coi}"
+        ""
+        if controller == BangBangCOI()
+        else f"/ctrl-db{controller.deadband_hz:g}-vg{controller.v_gate_pu:g}-{controller.coi}"
         f"-hy{controller.hysteresis_hz:g}"
-    )
+    ) + ("/wecc" if esd_model == "wecc" else "")
+    extra = {"controller": ctrl, **({"esd_model": esd_model} if esd_model != "ideal" else {})}
     return [
         j
         if j.inputs["esd_pct"] is None
-        else Job(key=j.key + tag, func=controlled_cct_job, inputs={**j.inputs, "controller": ctrl})
+        else Job(key=j.key + tag, func=controlled_cct_job, inputs={**j.inputs, **extra})
         for j in jobs
     ]

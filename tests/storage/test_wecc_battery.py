@@ -1,0 +1,136 @@
+"""Storage as a WECC battery (`StorageFleet(model="wecc")`, docs/storage.md): a REGCA1 with
+a REECA1 in the storage current range and a REPCA1 plant taking the controller's power as
+its reference.  Checked against closed forms: rest at the operating point, the step
+response of the plant's chain of four first-order lags, the converter's current limit
+P <= v Imax, and the REECA1 freeze below Vdip."""
+
+import math
+
+import numpy as np
+import pytest
+
+from stabctl.dynamics.driver import CommandFrames, Simulator
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.errors import InputError
+from stabctl.io import load_case
+from stabctl.storage.control import ExternalCommands
+from stabctl.storage.devices import WECC_BATTERY, StorageFleet, battery_case, uniform_fleet
+
+#: the lags between the plant reference and the injected power: REPCA1's Pext lag Tg,
+#: REECA1's reference filter Tpfilt and P order lag Tpord, REGCA1's converter lag Tg (s)
+LAGS = 0.02
+
+
+@pytest.fixture(scope="module")
+def kundur():
+    case = load_case("kundur")
+    return case, Simulator(case)
+
+
+def commanded(sim, fleet, modes_at, t_end=3.0, events=()):
+    """A run whose devices take `modes_at(t)` (units of their rating) at every 1/60 s."""
+    ext = StorageFleet(fleet.devices, ExternalCommands(), model="wecc", battery=fleet.battery)
+    frames = CommandFrames(np.arange(0.0, t_end, 1 / 60), lambda t, part: modes_at(t))
+    return sim.run_commanded(list(events), t_end, ext, frames)
+
+
+def test_battery_rows_take_the_fields_and_refuse_unknown_ones(kundur):
+    case, _sim = kundur
+    fleet = uniform_fleet(case, 5, model="wecc")
+    bcase, rows = battery_case(case, fleet)
+    t = bcase.converters
+    assert list(rows) == [0, 1, 2, 3] and list(t.bus) == [10, 20, 110, 120]
+    assert np.all(t.mva == 45.0) and np.all(t.storage == 1) and np.all(t.Imax == 1.0)
+    assert np.all(t.pfrac == 0) and np.all(t.repc == WECC_BATTERY["repc"])
+    with pytest.raises(InputError, match="Imx not ibr_con fields"):
+        StorageFleet(fleet.devices, model="wecc", battery={"Imx": 1.2})
+    with pytest.raises(InputError, match="storage model must be one of"):
+        uniform_fleet(case, 5, model="pv")
+
+
+def test_idle_batteries_rest_at_the_operating_point(kundur):
+    """Flat 10 s with the paper's controller: no device moves, no machine either."""
+    case, sim = kundur
+    res = sim.run([], t_end=10.0, storage=uniform_fleet(case, 5, model="wecc"))
+    assert np.max(np.abs(res.pesd)) < 1e-12
+    assert np.max(np.abs(res.speed - 1.0)) < 1e-10
+    assert res.meta["switchings"] == []
+
+
+def test_power_follows_the_reference_through_four_lags(kundur):
+    """A step of the plant reference (+1 rating: absorb) at 1 s: the injected power is the
+    step response of four first-order lags of 0.02 s, 1 - exp(-t/T) sum_{k<4} (t/T)^k/k!,
+    times the rating; it settles at the reference where the bus voltage allows it, at the
+    current limit v Imax (Imax 1 rating) where the absorption pulls v below 1 pu."""
+    case, sim = kundur
+    fleet = uniform_fleet(case, 5, model="wecc")
+    res = commanded(sim, fleet, lambda t: np.where(t >= 1.0, 1.0, 0.0) * np.ones(4))
+    rating = 45.0 / case.base_mva
+    for tau in (0.02, 0.05, 0.1):
+        i = int(np.argmin(np.abs(res.t - (1.0 + tau))))
+        x = (res.t[i] - 1.0) / LAGS
+        closed = 1.0 - math.exp(-x) * sum(x**k / math.factorial(k) for k in range(4))
+        assert res.pesd[i] / rating == pytest.approx(closed * np.ones(4), abs=0.01)
+    v = res.vmag[-1, case.bus_indices([10, 20, 110, 120])]
+    assert np.all(v < 1.0)
+    np.testing.assert_allclose(res.pesd[-1] / rating, np.minimum(1.0, v), rtol=1e-4)
+
+
+def test_current_limit_caps_the_power_at_v_imax(kundur):
+    """Imax 0.8 of the rating: a full-rating reference gives P = v Imax (active-current
+    priority, no reactive current at rest), below the reference."""
+    case, sim = kundur
+    fleet = StorageFleet(
+        uniform_fleet(case, 5).devices, model="wecc", battery={"Imax": 0.8, "PMAX": 1.0}
+    )
+    res = commanded(sim, fleet, lambda t: -np.ones(4))
+    rating = 45.0 / case.base_mva
+    v = res.vmag[-1, case.bus_indices([10, 20, 110, 120])]
+    np.testing.assert_allclose(-res.pesd[-1] / rating, 0.8 * v, rtol=1e-4)
+    assert np.all(-res.pesd / rating <= 0.8 * 1.2)
+
+
+def test_case1_battery_and_ideal_device_switch_alike_and_the_battery_lags(kundur):
+    """Kundur Case 1 (11 cycles, 5 %): the batteries keep the system stable as the ideal
+    devices do, switch as often (the same law on nearly the same speeds), and their power
+    never exceeds the rating by more than the voltage rise allows (P = v Ip, Ip <= 1/v at
+    the order)."""
+    case, sim = kundur
+    ev = [fault_with_clearing(case, 3, 101, 1.0, 11)]
+    ideal = sim.run(ev, t_end=6.0, storage=uniform_fleet(case, 5))
+    wecc = sim.run(ev, t_end=6.0, storage=uniform_fleet(case, 5, model="wecc"))
+    assert ideal.stable and wecc.stable
+    rating = 45.0 / case.base_mva
+    assert np.max(np.abs(wecc.pesd)) / rating < 1.02  # measured 1.005
+    assert [d["switchings"] for d in wecc.meta["storage"]] == [4, 4, 4, 4]
+    # the power lags its command: differences as large as the command at switchings
+    assert np.max(np.abs(wecc.pesd - wecc.meta["pesd_command"])) / rating > 1.0
+
+
+def test_cct_cli_and_sweep_jobs_take_the_wecc_model(kundur):
+    """`stabctl cct --esd-model wecc` gives the library's CCT with WECC batteries; sweep
+    jobs of that model are keyed apart from the ideal devices' (records never mix)."""
+    import json
+
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+    from stabctl.stability.cct import LineFault, critical_clearing_time
+    from stabctl.storage.control import BangBangCOI
+    from stabctl.studies.sweeps import controlled_cct_jobs
+
+    case, sim = kundur
+    args = ["cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5", "--json"]
+    res = CliRunner().invoke(main, [*args, "--esd-model", "wecc"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    lib = critical_clearing_time(
+        sim, LineFault(3, 101, 1.0), storage=uniform_fleet(case, 5, model="wecc")
+    )
+    assert out["esd_model"] == "wecc" and out["cct_s"] == pytest.approx(lib.cct_s)
+    jobs = controlled_cct_jobs("kundur", [LineFault(3, 101, 1.0)], [None, 5], BangBangCOI())
+    wecc = controlled_cct_jobs(
+        "kundur", [LineFault(3, 101, 1.0)], [None, 5], BangBangCOI(), esd_model="wecc"
+    )
+    assert wecc[0].key == jobs[0].key and wecc[1].key == jobs[1].key + "/wecc"
+    assert wecc[1].inputs["esd_model"] == "wecc"
