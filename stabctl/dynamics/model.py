@@ -657,7 +657,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     mac.internal_voltage(p.MP, xm, psi)
     v_dep = False
     for k in range(ni):
-        conv.clamp_states(p.IP, xi, k)
+        conv.clamp_states(p.IP, xi, k, p.reach)
         v_dep = v_dep or conv.voltage_dependent(p.IP, k)
     loads = KeptLoads(p.S_P, p.I0, p.Y_low, S_extra, _drawn_currents(p, xi, V_nc))
     it = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
@@ -705,7 +705,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     for k in range(ng):
         gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G.MAC])], dxg)
     for k in range(ni):
-        S_ibr[k] = conv.derivatives(p.IP, xi, k, V_nc[int(p.IP[k, conv.C.POS])], V_nc, dxi)
+        V_k = V_nc[int(p.IP[k, conv.C.POS])]
+        S_ibr[k] = conv.derivatives(p.IP, xi, k, V_k, V_nc, p.reach, dxi)
     return it
 
 

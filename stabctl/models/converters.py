@@ -763,27 +763,39 @@ def _regca1_ip_limits(P, x, k):
 
 
 @kernel
-def clamp_states(P, x, k):
+def _at_lvpl(P, x, k, reach):
+    """Whether REGCA1 k's Ip is held on its LVPL limit: at or above it with a
+    non-negative e, or driven into it within `reach` s (`blocks.nonwindup`'s rule for a
+    moving limit: the LVPL rises with the filtered voltage after a dip, and a state left
+    a hair below it at each step would alternate between the full derivative and 0).
+    Returns (held, LVPL, e)."""
+    LVPL, e = _regca1_ip_limits(P, x, k)
+    held = e >= 0.0 and x[0, k] + reach * e / P[k, C.TG] >= LVPL
+    return held, LVPL, e
+
+
+@kernel
+def clamp_states(P, x, k, reach):
     """Clamp device k's limited states in place before the network solution, as ANDES's
     AntiWindup does within its iteration (andes/core/discrete.py AntiWindup.check_eq):
-    REGCA1's Ip at its LVPL limit when at or above it with a non-negative e (the state is
-    reset to the limit).  Other types: nothing."""
+    REGCA1's Ip at its LVPL limit when held there (`_at_lvpl`; reach 0: at or above it
+    with a non-negative e).  Other types: nothing."""
     if P[k, C.TYPE] == REGCA1:
-        LVPL, e = _regca1_ip_limits(P, x, k)
-        if x[0, k] >= LVPL and e >= 0.0:
+        held, LVPL, _ = _at_lvpl(P, x, k, reach)
+        if held:
             x[0, k] = LVPL
 
 
 @kernel
-def _regca1_derivatives(P, x, k, v, Iq_target, dx):
+def _regca1_derivatives(P, x, k, v, Iq_target, reach, dx):
     """REGCA1's state derivatives of device k at voltage magnitude v (ANDES regca1.py
     219-256) toward its commands (`_ipcmd`, Iq_target = -Iqcmd), slots 0-4 of column k
-    of dx (the Ip state clamped first, `clamp_states`)."""
+    of dx (the Ip state clamped first, `clamp_states` with `reach`)."""
     _, dx[2, k] = lag(v, x[2, k], P[k, C.TFLTR])
     # S0: Ip lag with the rate limit, then the anti-windup upper limit LVPL
-    clamp_states(P, x, k)
-    LVPL, e = _regca1_ip_limits(P, x, k)
-    if x[0, k] >= LVPL and e >= 0.0:
+    clamp_states(P, x, k, reach)
+    held, _, e = _at_lvpl(P, x, k, reach)
+    if held:
         e = 0.0
     Tg = P[k, C.TG]
     dx[0, k] = e / Tg
@@ -1154,11 +1166,12 @@ def voltage_dependent(P, k):
 
 
 @kernel
-def derivatives(P, x, k, V, V_nc, dx):
+def derivatives(P, x, k, V, V_nc, reach, dx):
     """Write the derivatives of device k (column k of dx) at bus voltage V (complex pu;
     V_nc the kept-bus voltages, where a REPCA1's line ends are) and return its injected
     complex power P + j Q (pu, system base); a REGCA1's Ip state is clamped in place at
-    its LVPL limit (`clamp_states`), its controls' memory updated in place."""
+    its LVPL limit (`clamp_states`; reach s: the simulator's step, 0 the limit alone),
+    its controls' memory updated in place."""
     v = abs(V)
     if P[k, C.TYPE] == REGCA1:
         Ipout, Iqout = _regca1_currents(P, x, k, v)
@@ -1167,7 +1180,7 @@ def derivatives(P, x, k, V, V_nc, dx):
             ext = _repca1(P, x, k, V, V_nc, dx) if P[k, C.REPC] == REPCA1 else 0.0j
             Ipcmd, Iq_target = _reeca1(P, x, k, v, v * Ipout + 1j * v * Iqout, ext, dx)
             x[_IPCMD, k] = Ipcmd + P[k, C.IPOFF]
-        _regca1_derivatives(P, x, k, v, Iq_target, dx)
+        _regca1_derivatives(P, x, k, v, Iq_target, reach, dx)
         return v * Ipout + 1j * v * Iqout
     Ipcmd, Iqcmd, dL, dW = _algebraic(P, x, k, V)
     _, dx[0, k] = lag(Ipcmd, x[0, k], P[k, C.TIP])
@@ -1202,7 +1215,7 @@ def derivatives_at(P, x, V, V_nc, dx):
     ends are read from V_nc at its positions pos1, pos2 (`at_power_flow`)."""
     S = np.empty(V.size, np.complex128)
     for k in range(V.size):
-        S[k] = derivatives(P, x, k, V[k], V_nc, dx)
+        S[k] = derivatives(P, x, k, V[k], V_nc, 0.0, dx)
     return S
 
 
