@@ -184,14 +184,20 @@ def table4(case_key: str, out_dir: Path, progress: bool = True) -> dict:
     records are kept in out_dir/table4_<case>.jsonl.  Returns {rating: CCT result dict}."""
     name, fault = CASES[case_key]
     ratings = (None,) + RATINGS_PCT
-    report = run_sweep(
-        cct_jobs(name, [fault], ratings), out_dir / f"table4_{name}.jsonl", progress=progress
-    )
+    jobs = cct_jobs(name, [fault], ratings)
+    return _sweep_results(jobs, ratings, out_dir / f"table4_{name}.jsonl", "Table 4", progress)
+
+
+def _sweep_results(jobs, keys, path: Path, what: str, progress: bool) -> dict:
+    """Run the resumable sweep of `jobs` with its records in `path` and return {key: CCT
+    result dict}, keys in job order; RuntimeError naming `what` and the job if one
+    failed."""
+    report = run_sweep(jobs, path, progress=progress)
     out = {}
-    for job, pct in zip(report.records.values(), ratings):
+    for job, key in zip(report.records.values(), keys):
         if job["status"] != "ok":
-            raise RuntimeError(f"Table 4 job {job['key']} failed: {job.get('error')}")
-        out[pct] = job["result"]
+            raise RuntimeError(f"{what} job {job['key']} failed: {job.get('error')}")
+        out[key] = job["result"]
     return out
 
 
@@ -284,13 +290,7 @@ def wecc_table(case_key: str, out_dir: Path, progress: bool = True) -> dict:
         *controlled_cct_jobs(name, [fault], RATINGS_PCT, BangBangCOI(), esd_model="wecc"),
     ]
     keys = [("ideal", pct) for pct in ratings] + [("wecc", pct) for pct in RATINGS_PCT]
-    report = run_sweep(jobs, out_dir / f"wecc_{name}.jsonl", progress=progress)
-    out = {}
-    for job, key in zip(report.records.values(), keys):
-        if job["status"] != "ok":
-            raise RuntimeError(f"WECC battery job {job['key']} failed: {job.get('error')}")
-        out[key] = job["result"]
-    return out
+    return _sweep_results(jobs, keys, out_dir / f"wecc_{name}.jsonl", "WECC battery", progress)
 
 
 def section_wecc(fig_dir: Path, out_dir: Path, progress=None) -> str:
