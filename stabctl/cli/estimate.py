@@ -17,6 +17,7 @@ from stabctl.cli.options import (
     _apply,
     clear_cycles_option,
     controller,
+    esd_model_option,
     fault_options,
     json_option,
     model_options,
@@ -394,6 +395,7 @@ def _check_positive(**values) -> None:
 @estimate.command("closed-loop")
 @_fault_run
 @storage_options(" Required: the ESDs the estimators command.")
+@esd_model_option
 @click.option(
     "--seed", type=int, default=0, show_default=True, metavar="S", help="Seed of the PMU noise."
 )
@@ -420,6 +422,7 @@ def closed_loop(
     v_gate,
     coi,
     hysteresis_hz,
+    esd_model,
     seed,
     conventions,
     step,
@@ -447,8 +450,12 @@ def closed_loop(
         control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
         deadband_hz=deadband_hz,
         model=model_settings(conventions, step),
+        esd_model=esd_model,
     )
-    out = {"closed_loop": rows, "lines": closed_loop_lines(rows, fault, far_bus, esd_pct, seed)}
+    out = {
+        "closed_loop": rows,
+        "lines": closed_loop_lines(rows, fault, far_bus, esd_pct, seed, esd_model),
+    }
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
 
 

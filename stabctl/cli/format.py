@@ -495,7 +495,9 @@ def estimator_cct_lines(
     return lines
 
 
-def closed_loop_lines(rows: dict, bus: int, far_bus: int, esd_pct: float, seed: int) -> list:
+def closed_loop_lines(
+    rows: dict, bus: int, far_bus: int, esd_pct: float, seed: int, esd_model: str = "ideal"
+) -> list:
     """The text lines of `estimate closed-loop`.
 
     Parameters
@@ -505,12 +507,17 @@ def closed_loop_lines(rows: dict, bus: int, far_bus: int, esd_pct: float, seed: 
     bus, far_bus : int
     esd_pct : float
     seed : int
+    esd_model : str, optional
+        The ESDs' model ("ideal" or "wecc").
 
     Returns
     -------
     list of str
     """
-    head = f"closed loop, fault at bus {bus} line {bus}-{far_bus}, ESD {esd_pct:g} %, seed {seed}:"
+    head = (
+        f"closed loop, fault at bus {bus} line {bus}-{far_bus}, "
+        f"{_ESD_NAMES[esd_model]} {esd_pct:g} %, seed {seed}:"
+    )
     return [head] + [
         f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} switchings "
         f"{r['switchings']:5d}  false actions {r['false_actions']}"

@@ -290,6 +290,9 @@ class LoopOptions:
         The Table 3 law (deadband, voltage gate, COI).
     at : str
         Where the PMUs measure: ``"terminal"`` or ``"hv"``.
+    esd_model : str
+        The ESDs' model, ``"ideal"`` or ``"wecc"`` (WECC batteries taking the commands as
+        their plant reference, `stabctl.storage.devices.StorageFleet`).
     """
 
     fleet_pct: float
@@ -298,6 +301,7 @@ class LoopOptions:
     seed: int = 0
     control: law.BangBangCOI = law.BangBangCOI()
     at: str = "terminal"
+    esd_model: str = "ideal"
 
 
 def run_closed_loop(
@@ -341,12 +345,12 @@ def run_closed_loop(
     Raises
     ------
     InputError
-        A bad estimator or rating.
+        A bad estimator or rating; an ambient load with WECC batteries.
     SimulationError
         As `Simulator.run_commanded`.
     """
     settings, rate = loop.pmu, loop.pmu.rate
-    fleet = st.uniform_fleet(sim.case, loop.fleet_pct)
+    fleet = st.uniform_fleet(sim.case, loop.fleet_pct, model=loop.esd_model)
     ctrl = LoopController(
         sim.case, fleet.devices, loop.estimator, settings, loop.seed, t_end, loop.control, loop.at
     )
@@ -354,6 +358,8 @@ def run_closed_loop(
     devices = fleet.devices
     decide: Callable = ctrl
     if ambient is not None:
+        if fleet.model != "ideal":
+            raise InputError("an ambient load fluctuation runs with ideal ESDs only")
         loads, set_points = ambient.schedule(sim.case, frames.size, rate)
         devices = devices + loads
         decide = lambda t, p: np.r_[ctrl(t, p), set_points(t)]  # noqa: E731
@@ -367,7 +373,7 @@ def run_closed_loop(
     res = sim.run_commanded(
         events,
         t_end,
-        st.StorageFleet(devices, gate),
+        st.StorageFleet(devices, gate, model=fleet.model),
         schedule,
         h=h,
         separation_limit=separation_limit,

@@ -133,6 +133,7 @@ def closed_loop_verdicts(
     control,
     deadband_hz: float,
     model=None,
+    esd_model: str = "ideal",
 ) -> dict:
     """The fault simulated with the ESDs commanded by each estimator in the loop.
 
@@ -152,6 +153,8 @@ def closed_loop_verdicts(
         Deadband of the false-action count (Hz).
     model : stabctl.dynamics.options.ModelOptions or None
         Conventions, step and Q limits (None: the defaults).
+    esd_model : {"ideal", "wecc"}, optional
+        The ESDs' model (`stabctl.storage.devices.StorageFleet.model`).
 
     Returns
     -------
@@ -169,7 +172,10 @@ def closed_loop_verdicts(
     compile_filters(machine_models(case, machine_pmus(case)))
     for e in cl.ESTIMATORS:
         run = cl.run_closed_loop(
-            sim, [event], t_end, cl.LoopOptions(esd_pct, e, settings, seed, control)
+            sim,
+            [event],
+            t_end,
+            cl.LoopOptions(esd_pct, e, settings, seed, control, esd_model=esd_model),
         )
         rows[e] = {
             "stable": run.result.stable,

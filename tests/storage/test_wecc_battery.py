@@ -134,3 +134,23 @@ def test_cct_cli_and_sweep_jobs_take_the_wecc_model(kundur):
     )
     assert wecc[0].key == jobs[0].key and wecc[1].key == jobs[1].key + "/wecc"
     assert wecc[1].inputs["esd_model"] == "wecc"
+
+
+def test_estimators_in_the_loop_command_wecc_batteries(kundur):
+    """The closed loop (PMU frames, estimator, Table 3) commands the batteries' plant
+    reference: with exact measurements (estimator "ideal") Case 1 at 11 cycles stays
+    stable, the power drawn is the converters' and the law's is kept; an ambient load
+    fluctuation, whose loads are not batteries, is refused."""
+    from stabctl.estimation import closed_loop as cl
+    from stabctl.estimation.ambient import AmbientLoad
+
+    case, sim = kundur
+    ev = [fault_with_clearing(case, 3, 101, 1.0, 11)]
+    loop = cl.LoopOptions(5.0, "ideal", esd_model="wecc")
+    run = cl.run_closed_loop(sim, ev, 6.0, loop)
+    assert run.result.stable and len(run.result.meta["switchings"]) > 0
+    cmd = run.result.meta["pesd_command"]
+    assert np.max(np.abs(cmd)) == pytest.approx(0.45)
+    assert np.max(np.abs(run.result.pesd - cmd)) > 0.1  # the converters lag the law
+    with pytest.raises(InputError, match="ambient load fluctuation runs with ideal ESDs"):
+        cl.run_closed_loop(sim, ev, 6.0, loop, ambient=AmbientLoad())
