@@ -186,6 +186,7 @@ class Simulator:
         #: them the batteries' converter rows
         self._battery_sims: dict[tuple, Simulator] = {}
         self.battery_rows: np.ndarray | None = None
+        self.off_equilibrium = off_equilibrium
         self.model = self.model_for(injection_buses)
         self.inertia = self.model.mp.H * case.machines.mva
         if background_compile:
@@ -343,6 +344,7 @@ class Simulator:
                 conventions=self.conventions,
                 step=self.default_h,
                 background_compile=False,
+                off_equilibrium=self.off_equilibrium,
             )
             sim.battery_rows = rows
             self._battery_sims[key] = sim
