@@ -682,14 +682,16 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     vex = p.vex0.copy()
     efd_alg = np.empty(ne)
     ifd = np.empty(ne)
+    vb = np.empty(ne)
     pss_exc = np.zeros(ne)
     for i in range(ne):
         m = int(p.EP[i, exc.E.MAC])
         if p.pss_of_exc[i] >= 0:
             pss_exc[i] = pss_out[p.pss_of_exc[i]]
         ifd[i] = exc.field_current(p.EP, i, p.MP, xm, cur)
+        vb[i] = exc.source_voltage(p.EP, i, p.MP, xm, cur, V_bus[p.mac_bus[m]], ifd[i])
         efd_alg[i] = exc.field_voltage(
-            p.EP, xe, i, p.MP, xm, cur, V_bus[p.mac_bus[m]], pss_exc[i], ifd[i], p.ieee
+            p.EP, xe, i, p.MP, xm, cur, pss_exc[i], ifd[i], vb[i], p.ieee
         )
         vex[m] = efd_alg[i]
     assign(pmech, p.pmech0)
@@ -700,7 +702,9 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     assign(efd, p.vex0)
     for i in range(ne):
         m = int(p.EP[i, exc.E.MAC])
-        exc.derivatives(p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], ifd[i], dxe, p.ieee, p.reach)
+        exc.derivatives(
+            p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], ifd[i], vb[i], dxe, p.ieee, p.reach
+        )
         efd[m] = exc.recorded_efd(p.EP, xe, i, efd_alg[i])
     for k in range(ng):
         gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G.MAC])], dxg)

@@ -131,6 +131,7 @@ def andes_system(
         model.u.v = [0] * model.n
     if Path(raw).suffix.lower() == ".raw":
         _raw_network(ss, raw)
+    _repair_esdc1a(ss)
     if fault is not None:
         ss.add(
             "Fault",
@@ -145,6 +146,20 @@ def andes_system(
     ss.setup()
     ss.PFlow.config.tol = 1e-12
     return ss
+
+
+def _repair_esdc1a(ss) -> None:
+    """Before set-up: ANDES 2.0's ESDC1A regulator limiter on its own limits.  ``esdc1a.py``
+    replaces ESDC2A's V_t-scaled limits ``VRU``, ``VRL`` by ``VRMAX``, ``VRMIN`` but its
+    anti-windup lag ``LA`` (built by ESDC2A) keeps the removed services, which are never
+    evaluated: the limit stays the float 0.0 and every ESDC1A case fails at
+    initialisation (``TypeError`` in ``do_adjust_upper``; ieee14_esdc1a.xlsx).  Pointing
+    ``LA`` and its limiter at the new services gives the model its documented limits."""
+    m = ss.models.get("ESDC1A")
+    if m is None or not m.n:
+        return
+    for block in (m.LA, m.LA.lim):
+        block.upper, block.lower = m.VRU, m.VRL
 
 
 def _raw_network(ss, raw) -> None:

@@ -42,8 +42,10 @@ sharing its bus with another, or converters taking other than all of their stati
 generator's P and Q (ANDES drops the rest of a replaced generator's power).
 
 Models with no effect on the network and machines are ignored: ``Summary`` (the case's
-notes, ``andes/models/info.py``), ``Area``, and the
-measurements ``BusFreq``, ``BusROCOF``, ``ACEc`` (read by no model stabctl maps).  Every
+notes, ``andes/models/info.py``), ``Area``, ``COI`` (the centre-of-inertia calculation,
+``coi.py``: generators name it, no equation reads it), and the
+measurements ``BusFreq``, ``BusROCOF``, ``ACEc``, ``PMU``, ``PLL1``, ``PLL2`` (read by no
+model stabctl maps; a PLL only by REGCP1 and REGF2, which are refused).  Every
 other model is refused by name (:class:`~stabctl.errors.InputError` listing each with its
 device count), disturbances (``Toggle``, ``Fault``, ``Alter``) included, or left out with
 ``on_unsupported="skip"``.
@@ -91,8 +93,9 @@ __all__ = [
 #: ``DyrModel.andes`` in the model modules)
 MAPPED_MODELS = {name: m.name for m in DYR_MODELS.values() for name in m.andes}
 #: ANDES models with no effect on the network or the machines (``Summary``: notes only,
-#: ``andes/models/info.py``, "not used in DAE calculations")
-IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc", "Summary")
+#: ``andes/models/info.py``, "not used in DAE calculations"; ``COI``: an output no
+#: equation reads; the measurements, read by no model mapped here)
+IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc", "Summary", "COI", "PMU", "PLL1", "PLL2")
 #: ANDES converter models -> the converter type of stabctl.models.converters.CONVERTER
 CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1}
 #: ANDES controls read into their converter's row (a REGCA1's REECA1, ibr_con ``reec``)
@@ -105,6 +108,7 @@ _FIXED = {
     "GENROU": {"kp": 0.0, "kw": 0.0},
     "GENCLS": {"kp": 0.0, "kw": 0.0},
     **{g: {"wref0": 1.0} for g in ("TGOV1", "TGOV1N", "IEEEG1", "HYGOV", "IEESGO", "GAST")},
+    "ESST4B": {"VGMAX": 20.0},  # not in PSS/E's record: ANDES's default, as read
 }
 
 

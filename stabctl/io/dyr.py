@@ -397,7 +397,7 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False):
     decl = DYR_MODELS[model]
 
     def mapper(rec, gen):
-        """IEEEX1 (DC1, type 1) / EXDC2, ESDC2A (DC2, type 2): TR KA TA TB TC VRMAX VRMIN KE
+        """IEEEX1, ESDC1A (DC1, type 1) / EXDC2, ESDC2A (DC2, type 2): TR KA TA TB TC VRMAX VRMIN KE
         TE KF TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; IEEET2 (type 5): TR KA TA VRMAX
         VRMIN KE TE KF TF1 TF2 E1 SE(E1) E2 SE(E2), DC1 without the lead-lag and with the
         rate feedback's second lag TF2 (exc_con column 18); saturation as Asat, Bsat (E2
@@ -483,6 +483,36 @@ def _esst3a(rec, gen):
             "no PST exc_st3 counterpart (only TA = 0)"
         )
     return _exc_row(rec, gen, Efdmax=v["VBMAX"] * v["VMMAX"])
+
+
+def _ieeet3(rec, gen):
+    """IEEET3: TR KA TA VRMAX VRMIN TE KF TF KP KI VBMAX KE -> type 11; VRMAX = 0 read as
+    no upper limit (ANDES ``ieeet3.py`` ``VRMAXc``)."""
+    v = DYR_MODELS["IEEET3"].values(rec.params)
+    return _exc_row(rec, gen, **({"Vrmax": VRMAX_UNLIMITED} if v["VRMAX"] == 0 else {}))
+
+
+def _esst4b(rec, gen, vgmax=VRMAX_UNLIMITED):
+    """ESST4B: TR KPR KIR VRMAX VRMIN TA KPM KIM VMMAX VMMIN KG KP KI VBMAX KC XL THETAP ->
+    type 12; the inner-loop feedback K_G Efd unlimited (PSS/E's record has no VGMAX):
+    VGmax = ``vgmax``."""
+    return _exc_row(rec, gen, VGmax=vgmax)
+
+
+def _source_on_system_base(mapper, names=("KI", "XL")):
+    """An exciter's ``mapper`` as ANDES 2.0 solves its potential/compound source (ESST3A,
+    ESST4B, IEEET3): ``V_E = |K_P e^(j theta_P) V_t + j (K_I + K_P X_L) I_t|`` with the
+    stator current on the system base, i.e. K_I and X_L times MBASE/SBASE with the
+    machine-base current."""
+
+    def on_system_base(rec, gen):
+        row = mapper(rec, gen)
+        scale = gen["mbase"] / gen.get("sbase", 100.0)
+        for name in names:
+            row[EXCITER.col(name) - 1] *= scale
+        return row
+
+    return on_system_base
 
 
 # -- PSS (PST pss_con, PssTable) ----------------------------------------------------------------
@@ -633,8 +663,11 @@ _MAPPERS = {
     "IEEEX1": _dc("IEEEX1"),
     "EXDC2": _dc("EXDC2"),
     "ESDC2A": _dc("ESDC2A", zero_vrmax_unlimited=True),
+    "ESDC1A": _dc("ESDC1A", zero_vrmax_unlimited=True),
     "ESST1A": _esst1a,
     "ESST3A": _esst3a,
+    "IEEET3": _ieeet3,
+    "ESST4B": _esst4b,
     "IEEET1": _dc("IEEET1", zero_vrmax_unlimited=True),
     "IEEET2": _dc("IEEET2"),
     "SCRX": _scrx,
@@ -677,15 +710,11 @@ def _without_tr(mapper):
 
 
 def _esst3a_andes(rec, gen):
-    """ESST3A as ANDES 2.0 solves it: its source voltage ``V_E = |K_P e^(j theta_P) V_t +
-    j (K_I + K_P X_L) I_t|`` (``esst3a.py``) takes the stator current on the system base,
-    i.e. K_I and X_L times MBASE/SBASE with the machine-base current; its rectifier
+    """ESST3A as ANDES 2.0 solves it: its source voltage from the stator current on the
+    system base (`_source_on_system_base`, ``esst3a.py``); its rectifier
     loading ``I_N = K_C XadIfd / V_E`` (``esst3a.py`` lines 190-191) the machine's field
     current, as at initialisation, not PST exc_st3's estimate (exc_con column 25 = 1)."""
-    row = _esst3a(rec, gen)
-    scale = gen["mbase"] / gen.get("sbase", 100.0)
-    for name in ("KI", "XL"):
-        row[EXCITER.col(name) - 1] *= scale
+    row = _source_on_system_base(_esst3a)(rec, gen)
     row[EXCITER.col("ifd_machine") - 1] = 1.0
     return row
 
@@ -718,9 +747,14 @@ _ANDES_MAPPERS = {
     "EXDC2": _dc("IEEEX1", andes=True),
     #: ESDC2A: also the quadratic saturation and K_E as given
     "ESDC2A": _without_tr(_dc("ESDC2A", zero_vrmax_unlimited=True, andes=True)),
+    #: ESDC1A: ESDC2A with V_R limits not scaled by V_t (``esdc1a.py``), i.e. DC1
+    "ESDC1A": _without_tr(_dc("ESDC1A", zero_vrmax_unlimited=True, andes=True)),
     "EXAC1": _without_tr(_exc_row),
     "ESST1A": lambda rec, gen: _esst1a(rec, gen, andes=True),
     "ESST3A": _esst3a_andes,
+    "IEEET3": _source_on_system_base(_ieeet3),
+    #: ESST4B: ANDES's VGMAX, 20 (its default; stabctl.io.andes_case refuses others)
+    "ESST4B": _source_on_system_base(lambda rec, gen: _esst4b(rec, gen, vgmax=20.0)),
     "IEEEG1": _ieeeg1_andes,
     "GENSAL": _gensal_andes,
     "SCRX": _scrx_andes,

@@ -5,7 +5,9 @@ second lag, s K_F/((1 + s T_F1)(1 + s T_F2))), `ESST1A` (type 6, IEEE ST1A with 
 field current limiter), `EXAC1` (type 7, IEEE AC1 with its rectifier regulation),
 `EXAC4` (type 8, IEEE AC4) and `ESAC1A` (type 9, IEEE 421.5 AC1A: EXAC1 whose regulator
 V_A and output V_R have limits of their own), `AC8B` (type 10, IEEE 421.5 AC8B: the AC
-exciter behind a PID); smpexc also serves PSS/E's SCRX (bus fed:
+exciter behind a PID), `IEEET3` (type 11, IEEE 1968 type 3: the compound source added to
+the regulator), `ESST4B` (type 12, IEEE 421.5 ST4B: two PI regulators and the
+potential/compound source); smpexc also serves PSS/E's SCRX (bus fed:
 the output times the terminal voltage, exc_con column 19 ``bus_fed``).
 
 Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
@@ -13,21 +15,24 @@ Table 2, 3.13 Table 3); PSS/E Model Library EXST1 (IEEE Std 421.5 ST1A simplifie
 IEEET2 (IEEE Committee Report 1968 type 2), ESST1A (IEEE Std 421.5-2016 ST1A; ANDES 2.0
 ``esst1a.py``), EXAC1 and EXAC4 (IEEE 1981 AC1, AC4; ANDES 2.0 ``exac1.py``,
 ``exac4.py``), ESAC1A (IEEE Std 421.5-2005 AC1A; ANDES 2.0 ``esac1a.py``), AC8B (ANDES
-2.0 ``ac8b.py``) and SCRX
+2.0 ``ac8b.py``), IEEET3 (ANDES 2.0 ``ieeet3.py``), ESST4B (IEEE Std 421.5-2005 ST4B;
+ANDES 2.0 ``esst4b.py``) and SCRX
 (bus-fed or solid-fed static exciter); equations, limits and PST's quirks in
 docs/pst_models.md section 2.  A time constant below 1e-3 s means the block is
 absent (no state).  States, named per type in STATE_NAMES: smpexc (V_TR, V_As, Efd);
 exc_st3 (V_TR, V_As, V_R); exc_dc12 (V_TR, V_As, V_R, Efd, R_f); EXST1 (V_TR, V_As, V_R,
 R_f); IEEET2 (exc_dc12's and V_F, the second feedback lag); ESST1A (V_TR, V_As, V_A, R_f,
 V_As1); EXAC1 (V_TR, V_As, V_R, V_E, R_f); ESAC1A (V_TR, V_As, V_A, V_E, R_f); EXAC4
-(V_TR, V_As, V_R); AC8B (V_TR, PID integral, V_R, V_E, PID derivative).  Units: pu on
+(V_TR, V_As, V_R); AC8B (V_TR, PID integral, V_R, V_E, PID derivative); IEEET3 (V_TR,
+V_As unused, V_R, Efd, R_f); ESST4B (V_TR, PI integral, V_M, inner PI integral).  Units: pu on
 the machine base; times in s.
 
 The kernels read the packed parameters by name (`E`, from :data:`PACKED`), are built of
 the control blocks of `stabctl.models.blocks`, and are one function per type behind the
 family's dispatch on kind (`field_voltage`, `derivatives`, `recorded_efd`); the family
-computes the machine quantities a type needs (ST3 source voltage; the field current of
-the types in :data:`READS_IFD`, `field_current`).
+computes the machine quantities a type needs (the source voltage of the types in
+:data:`SOURCE_KINDS`, `source_voltage`; the field current of the types in
+:data:`READS_IFD`, `field_current`).
 """
 
 from __future__ import annotations
@@ -109,12 +114,13 @@ EXCITER = Family(
             "code",
             1,
             integer=True,
-            choices=(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10),
+            choices=(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12),
             label="exciter type",
             doc="0 simple (smpexc), 1 DC1, 2 DC2 (exc_dc12), 3 ST3 (exc_st3), 4 EXST1, "
             "5 IEEET2 (DC1 with a two-lag rate feedback), 6 ESST1A (IEEE 421.5 ST1A), "
             "7 EXAC1 (IEEE AC1), 8 EXAC4 (IEEE AC4), 9 ESAC1A (IEEE 421.5 AC1A), 10 AC8B "
-            "(IEEE 421.5 AC8B, PID regulator)",
+            "(IEEE 421.5 AC8B, PID regulator), 11 IEEET3 (IEEE 1968 type 3, compound "
+            "source), 12 ESST4B (IEEE 421.5 ST4B, PI regulators)",
         ),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("TR", "s", 3, lo=0.0, doc="input filter time constant"),
@@ -129,14 +135,15 @@ EXCITER = Family(
             "pu",
             10,
             alt="KE",
-            doc="ST3, EXST1: max internal signal | DC1/2, EXAC1/ESAC1A: KE exciter constant",
+            doc="ST3, EXST1: max internal signal | DC1/2, EXAC1/ESAC1A, IEEET3: KE exciter "
+            "constant",
         ),
         Param(
             "VImin",
             "pu",
             11,
             alt="TE",
-            doc="ST3, EXST1: min internal signal | DC1/2, EXAC1/ESAC1A: TE exciter time "
+            doc="ST3, EXST1: min internal signal | DC1/2, EXAC1/ESAC1A, IEEET3: TE exciter time "
             "constant, s",
         ),
         Param(
@@ -147,32 +154,40 @@ EXCITER = Family(
             doc="ST3: first stage regulator gain | DC1/2, EXAC1/ESAC1A: E1, pu",
         ),
         Param(
-            "KP", "", 13, alt="SE1", doc="ST3: potential circuit gain | DC1/2, EXAC1/ESAC1A: SE(E1)"
+            "KP",
+            "",
+            13,
+            alt="SE1",
+            doc="ST3, IEEET3, ESST4B: potential circuit gain | DC1/2, EXAC1/ESAC1A: SE(E1)",
         ),
         Param(
             "thetaP",
             "deg",
             14,
             alt="E2",
-            doc="ST3: potential circuit angle | DC1/2, EXAC1/ESAC1A: E2, pu",
+            doc="ST3, ESST4B: potential circuit angle | DC1/2, EXAC1/ESAC1A: E2, pu",
         ),
         Param(
-            "KI", "", 15, alt="SE2", doc="ST3: current circuit gain | DC1/2, EXAC1/ESAC1A: SE(E2)"
+            "KI",
+            "",
+            15,
+            alt="SE2",
+            doc="ST3, IEEET3, ESST4B: current circuit gain | DC1/2, EXAC1/ESAC1A: SE(E2)",
         ),
         Param(
             "XL",
             "pu",
             16,
             alt="KF_dc",
-            doc="ST3: potential source reactance | DC1/2: KF stabilizer gain",
+            doc="ST3, ESST4B: potential source reactance | DC1/2: KF stabilizer gain",
         ),
         Param(
             "KC",
             "",
             17,
             alt="TF_dc",
-            doc="ST3, EXST1, ESST1A, EXAC1, EXAC4, ESAC1A: rectifier loading factor | DC1/2: TF "
-            "stabilizer time constant, s",
+            doc="ST3, EXST1, ESST1A, EXAC1, EXAC4, ESAC1A, ESST4B: rectifier loading factor "
+            "| DC1/2: TF stabilizer time constant, s",
         ),
         Param(
             "Efdmax",
@@ -186,12 +201,14 @@ EXCITER = Family(
             "",
             19,
             alt="bus_fed",
-            doc="ST3: inner loop feedback constant | smpexc: 1 the output times the "
+            doc="ST3, ESST4B: inner loop feedback constant | smpexc: 1 the output times the "
             "terminal voltage (bus-fed SCRX), 0 not",
         ),
-        Param("VGmax", "pu", 20, doc="ST3: maximum inner loop feedback"),
-        Param("KF", "", 21, doc="EXST1, ESST1A, EXAC1, ESAC1A: rate feedback gain"),
-        Param("TF", "s", 22, doc="EXST1, ESST1A, EXAC1, ESAC1A: rate feedback time constant"),
+        Param("VGmax", "pu", 20, doc="ST3, ESST4B: maximum inner loop feedback"),
+        Param("KF", "", 21, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback gain"),
+        Param(
+            "TF", "s", 22, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback time constant"
+        ),
         Param(
             "dc_sat",
             "code",
@@ -228,15 +245,19 @@ EXCITER = Family(
             "pu",
             33,
             lo=0.0,
-            doc="ST3: upper limit of the source voltage V_B = V_E F_EX (PSS/E ESST3A "
-            "VBMAX); 0 none (PST exc_st3)",
+            doc="ST3, ESST4B: upper limit of the source voltage V_B = V_E F_EX (PSS/E "
+            "ESST3A, ESST4B VBMAX); IEEET3: of V_B + V_R; 0 none (PST exc_st3)",
         ),
-        Param("Kpid_P", "", 34, doc="AC8B: PID proportional gain"),
-        Param("Kpid_I", "1/s", 35, doc="AC8B: PID integral gain"),
+        Param("Kpid_P", "", 34, doc="AC8B: PID proportional gain | ESST4B: K_PR"),
+        Param("Kpid_I", "1/s", 35, doc="AC8B: PID integral gain | ESST4B: K_IR"),
         Param("Kpid_D", "s", 36, doc="AC8B: PID derivative gain"),
         Param("Td", "s", 37, lo=0.0, doc="AC8B: PID derivative time constant"),
         Param("VPmax", "pu", 38, doc="AC8B: PID output upper limit"),
         Param("VPmin", "pu", 39, doc="AC8B: PID output lower limit"),
+        Param("KPM", "", 40, doc="ESST4B: inner-loop PI proportional gain"),
+        Param("KIM", "1/s", 41, doc="ESST4B: inner-loop PI integral gain"),
+        Param("VMmax", "pu", 42, doc="ESST4B: inner-loop PI output upper limit"),
+        Param("VMmin", "pu", 43, doc="ESST4B: inner-loop PI output lower limit"),
     ),
     dyr=(
         # SEXS -> smpexc: T_C = (TA/TB) TB is computed
@@ -284,7 +305,7 @@ EXCITER = Family(
                 kind=kind,
                 andes=(name,),
             )
-            for name, kind in (("IEEEX1", 1), ("EXDC2", 2), ("ESDC2A", 2))
+            for name, kind in (("IEEEX1", 1), ("EXDC2", 2), ("ESDC2A", 2), ("ESDC1A", 1))
         ),
         # IEEET1 (IEEE 1968 type 1) -> DC1 (type 1) without the lead-lag (TB = TC = 0)
         DyrModel(
@@ -461,6 +482,73 @@ EXCITER = Family(
             kind=10,
             andes=("AC8B",),
         ),
+        # IEEET3 -> type 11 (IEEE 1968 type 3), PSS/E's CON order (ANDES's psse-dyr.yaml
+        # lists VBMAX and KE elsewhere; its inputs are matched by name)
+        DyrModel(
+            "IEEET3",
+            ("TR", "KA", "TA", "VRMAX", "VRMIN", "TE", "KF", "TF", "KP", "KI", "VBMAX", "KE"),
+            _upper(
+                "TR",
+                "KA",
+                "TA",
+                "Vrmax",
+                "Vrmin",
+                "KF",
+                "TF",
+                "KP",
+                "KI",
+                "VBmax",
+                TE="TE",
+                KE="KE",
+            ),
+            kind=11,
+            andes=("IEEET3",),
+        ),
+        # ESST4B -> type 12 (IEEE 421.5 ST4B); VGmax, which PSS/E's record lacks, is set
+        # by its mapper
+        DyrModel(
+            "ESST4B",
+            (
+                "TR",
+                "KPR",
+                "KIR",
+                "VRMAX",
+                "VRMIN",
+                "TA",
+                "KPM",
+                "KIM",
+                "VMMAX",
+                "VMMIN",
+                "KG",
+                "KP",
+                "KI",
+                "VBMAX",
+                "KC",
+                "XL",
+                "THETAP",
+            ),
+            _upper(
+                "TR",
+                "Vrmax",
+                "Vrmin",
+                "TA",
+                "KPM",
+                "KIM",
+                "VMmax",
+                "VMmin",
+                "KG",
+                "KP",
+                "KI",
+                "VBmax",
+                "KC",
+                "XL",
+                "thetaP",
+                Kpid_P="KPR",
+                Kpid_I="KIR",
+            ),
+            kind=12,
+            andes=("ESST4B",),
+        ),
         # ESST1A -> type 6; UEL (no under-excitation limiter is modelled: no signal) and
         # VOS (1: the stabiliser at the voltage error) are checked by the mapper
         DyrModel(
@@ -564,7 +652,7 @@ EXCITER = Family(
     ),
 )
 
-SMP, DC1, DC2, ST3, ST1, T2, ST1A, AC1, AC4, AC1A, AC8B = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10
+SMP, DC1, DC2, ST3, ST1, T2, ST1A, AC1, AC4, AC1A, AC8B, T3, ST4B = range(13)
 STATE_NAMES = {
     SMP: ("VTR", "VAs", "Efd"),
     ST3: ("VTR", "VAs", "VR"),
@@ -577,20 +665,29 @@ STATE_NAMES = {
     AC4: ("VTR", "VAs", "VR"),
     AC1A: ("VTR", "VAs", "VA", "VE", "Rf"),
     AC8B: ("VTR", "PIDi", "VR", "VE", "PIDd"),
+    T3: ("VTR", "VAs", "VR", "Efd", "Rf"),
+    ST4B: ("VTR", "PIi", "VM", "PIMi"),
 }
 #: the types whose equations read the machine's field current (`field_current`)
-READS_IFD = (ST1, ST1A, AC1, AC4, AC1A, AC8B)
+READS_IFD = (ST1, ST1A, AC1, AC4, AC1A, AC8B, T3, ST4B)
+#: the types with a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (the DC
+#: exciters read theirs from columns 16-17): EXST1, ESST1A, EXAC1, ESAC1A, IEEET3
+RATE_FEEDBACK = (ST1, ST1A, AC1, AC1A, T3)
+#: the types fed by a potential (and compound) source V_B computed from the machine's
+#: terminal voltage and current (`source_voltage`): ST3, IEEET3, ESST4B
+SOURCE_KINDS = (ST3, T3, ST4B)
 #: the AC exciters with an exciter voltage V_E and PSS/E's quadratic saturation: EXAC1,
 #: ESAC1A, AC8B
 AC_KINDS = (AC1, AC1A, AC8B)
-#: AC8B's PID tracking anti-windup gain (ANDES 2.0 ac8b.py config ``ks``)
+#: the tracking anti-windup gain of AC8B's PID and ESST4B's two PI regulators (ANDES 2.0
+#: ac8b.py config ``ks``, esst4b.py ``ksr``, ``ksm``)
 PID_TRACKING = 2.0
 
 #: exc_con fields (stabctl.models.exciters.EXCITER) the kernels take as the table gives them:
 #: columns 3-20 (ST3 naming; KP, thetaP are taken as the complex K_P exp(j theta_P)) and
-#: 26-32 (ESST1A, EXAC1, ESAC1A) and 34-39 (AC8B's PID)
+#: 26-32 (ESST1A, EXAC1, ESAC1A), 34-39 (AC8B's PID) and 40-43 (ESST4B's inner loop)
 TABLE_FIELDS = tuple(
-    n for n in EXCITER.names[2:20] + EXCITER.names[25:32] + EXCITER.names[33:39] if n != "thetaP"
+    n for n in EXCITER.names[2:20] + EXCITER.names[25:32] + EXCITER.names[33:] if n != "thetaP"
 )
 #: the packed parameter matrix of the compiled kernels, (column name, ExciterParams
 #: attribute) per column: exc_con columns 1-20 in declared order (the machine's row for
@@ -717,17 +814,19 @@ class ExciterParams(Declared):
         """Boolean (n_slots, n_exc): the slots that are states (docs/modal.md)."""
         act = np.zeros((6, self.n), bool)
         act[0], act[1] = self.has_TR, self.has_TB | (self.kind == AC8B)
+        act[1] |= (self.kind == ST4B) & (self.Kpid_I != 0)  # the regulator PI's integral
         act[2] = (self.kind == ST3) | self.has_TA
-        act[3] = self.has_Rf | self.is_ac
-        act[4] = self.is_dc | self.has_TB1 | (self.is_ac & self.has_Rf) | self.has_pid_d
+        t3, st4b = self.kind == T3, self.kind == ST4B
+        act[3] = self.has_Rf | self.is_ac | t3 | (st4b & (self.KIM != 0))
+        act[4] = self.is_dc | self.has_TB1 | ((self.is_ac | t3) & self.has_Rf) | self.has_pid_d
         act[5] = self.has_VF
         return act[: self.n_slots()]
 
     @property
     def has_Rf(self):
-        """The rate-feedback state exists: DC exciters, EXST1, ESST1A, EXAC1 and ESAC1A with
+        """The rate-feedback state exists: DC exciters, and :data:`RATE_FEEDBACK` types with
         K_F != 0."""
-        return self.is_dc | (np.isin(self.kind, READS_IFD) & (self.KF != 0))
+        return self.is_dc | (np.isin(self.kind, RATE_FEEDBACK) & (self.KF != 0))
 
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
@@ -736,7 +835,7 @@ class ExciterParams(Declared):
             ("exc_con T_A", self.TA, self.has_TA),
             ("exc_con T_B", self.TB, self.has_TB),
             ("exc_con T_B1", self.TB1, self.has_TB1),
-            ("exc_con T_E", self.TE, self.is_dc | self.is_ac),
+            ("exc_con T_E", self.TE, self.is_dc | self.is_ac | (self.kind == T3)),
             ("exc_con T_F", self.TF, self.has_Rf),
             ("exc_con T_F2", self.TF2, self.has_VF),
             ("exc_con T_D", self.Td, self.has_pid_d),
@@ -808,10 +907,12 @@ def _check_dc(e) -> None:
         AC4: (("TA", "TA"),),
         AC1A: (("TA", "TA"), ("TE", "TE")),
         AC8B: (("TA", "TA"), ("TE", "TE")),
+        T3: (("TA", "TA"), ("TE", "TE")),
+        ST4B: (("TA", "TA"),),
     }
     for r in np.nonzero(np.isin(e.type, (*DC_KINDS, *READS_IFD)))[0]:
         kind = int(e.type[r])
-        extra = (("TF", "TF"),) if kind in READS_IFD and e.KF[r] != 0 else ()
+        extra = (("TF", "TF"),) if kind in RATE_FEEDBACK and e.KF[r] != 0 else ()
         for name, declared in need[kind] + extra:
             k = EXCITER.col(declared)
             if e.col(k)[r] < LBND:
@@ -833,6 +934,7 @@ def exciter_params(case: Case) -> ExciterParams:
     A, B = _dc_saturation(e)
     dc = np.isin(e.type, DC_KINDS)
     ac = np.isin(e.type, AC_KINDS)
+    t3 = e.type == T3
     KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
     given = {n: getattr(e, n).copy() for n in TABLE_FIELDS}
     given.update(KA=KA, KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)))
@@ -840,16 +942,16 @@ def exciter_params(case: Case) -> ExciterParams:
         kind=e.type.astype(int),
         mac=np.array([case.machine_index(m) for m in e.machine], int),
         **given,
-        KE=np.where(dc | ac, _dc(e, "KE"), 0.0),
-        TE=np.where(dc | ac, _dc(e, "TE"), 0.0),
+        KE=np.where(dc | ac | t3, _dc(e, "KE"), 0.0),
+        TE=np.where(dc | ac | t3, _dc(e, "TE"), 0.0),
         Asat=np.where(dc | ac, A, 0.0),
         Bsat=np.where(dc | ac, B, 0.0),
-        KF=np.where(dc, _dc(e, "KF_dc"), np.where(np.isin(e.type, READS_IFD), e.KF, 0.0)),
-        TF=np.where(dc, _dc(e, "TF_dc"), np.where(np.isin(e.type, READS_IFD), e.TF, 0.0)),
+        KF=np.where(dc, _dc(e, "KF_dc"), np.where(np.isin(e.type, RATE_FEEDBACK), e.KF, 0.0)),
+        TF=np.where(dc, _dc(e, "TF_dc"), np.where(np.isin(e.type, RATE_FEEDBACK), e.TF, 0.0)),
         sat_quadratic=(dc & (e.dc_sat == 1)) | ac,
         ke_given=dc & (e.ke_given == 1),
         ifd_machine=(e.type == ST3) & (e.ifd_machine == 1),
-        VB_cap=np.where((e.type == ST3) & (e.VBmax > 0), e.VBmax, np.inf),
+        VB_cap=np.where(np.isin(e.type, SOURCE_KINDS) & (e.VBmax > 0), e.VBmax, np.inf),
     )
 
 
@@ -882,42 +984,62 @@ class ST3Machine(NamedTuple):
 
 
 @njit
+def potential_source(KP, KI, XL, machine):
+    """The potential/compound source's V_E = |K_P V_t + j (K_I + K_P X_L) I_t| (IEEE Std
+    421.5-2016 ST3A, ST4B; IEEE 1968 type 3 with X_L = 0 and K_P real), pu: KP the complex
+    K_P exp(j theta_P), KI, XL (pu), machine the `ST3Machine` quantities (pelect, qelect
+    on the system base; I_t on the machine base)."""
+    eterm, theta, pelect, qelect, mac_pot, _ = machine
+    i_t = (pelect - 1j * qelect) / (eterm * np.exp(-1j * theta)) * mac_pot
+    return np.abs(KP * eterm * np.exp(1j * theta) + 1j * (KI + KP * XL) * i_t)
+
+
+@njit
 def st3_source_voltage(KP, KI, XL, KC, machine, init):
     """V_B = V_E F_EX of the ST3 potential/compound source (PST exc_st3 flag 0/1); KP is
     the complex K_P exp(j theta_P), KI, XL, KC the exciter's other source parameters (pu),
     machine the `ST3Machine` quantities (pelect, qelect on the system base), init PST's
     flag 0 (its F_EX quirk, `_fex`)."""
-    eterm, theta, pelect, qelect, mac_pot, fldcur = machine
-    i_t = (pelect - 1j * qelect) / (eterm * np.exp(-1j * theta)) * mac_pot
-    VE = np.abs(KP * eterm * np.exp(1j * theta) + 1j * (KI + KP * XL) * i_t)
-    IN = KC * fldcur / VE if VE > 0 else 0.0
+    VE = potential_source(KP, KI, XL, machine)
+    IN = KC * machine.fldcur / VE if VE > 0 else 0.0
     return VE * _fex(IN, init)
 
 
+@njit
+def source_voltage_of(kind, KP, KI, XL, KC, cap, machine, init):
+    """The source term V_B of an exciter of type ``kind`` (:data:`SOURCE_KINDS`) from its
+    machine's quantities (`ST3Machine`; fldcur the field current, pu on the machine base):
+    ST3 `st3_source_voltage`, at most cap (VBmax); IEEET3 sqrt(V_E^2 - (0.78 I_fd)^2), 0
+    where that is negative (IEEE 1968 type 3, ANDES 2.0 ``ieeet3.py``; its cap applies to
+    V_B + V_R); ESST4B V_E F_EX(K_C I_fd / V_E) (`blocks.rectifier_loading`, IEEE Std
+    421.5-2016 annex D), at most cap.  V_E: `potential_source`."""
+    if kind == ST3:
+        return min(st3_source_voltage(KP, KI, XL, KC, machine, init), cap)
+    VE = potential_source(KP, KI, XL, machine)
+    if kind == T3:
+        SQE = VE * VE - (0.78 * machine.fldcur) ** 2
+        return np.sqrt(SQE) if SQE > 0 else 0.0
+    IN = KC * machine.fldcur / VE if VE > 0 else 0.0
+    return min(VE * rectifier_loading(IN), cap)
+
+
 def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):
-    """The ST3 source voltage V_B (`st3_source_voltage`, PST exc_st3 flag 0) of every
-    exciter at the initial point, at most its VBmax (`ExciterParams.VB_cap`), (n_exc,):
+    """The source term V_B (`source_voltage_of`; PST exc_st3 flag 0 for the ST3) of every
+    exciter of :data:`SOURCE_KINDS` at the initial point (1 for the other types), (n_exc,):
     V_mac the complex terminal voltages, S_mac the machines' complex generation (system
-    base), vex their field voltages, all (n_mac,); mp the MachineParams."""
+    base), vex their field voltages (= field currents at rest), all (n_mac,); mp the
+    MachineParams."""
     eterm, theta = np.abs(V_mac), np.angle(V_mac)
-    return np.array(
-        [
-            min(
-                st3_source_voltage(
-                    p.KP[i],
-                    p.KI[i],
-                    p.XL[i],
-                    p.KC[i],
-                    ST3Machine(
-                        eterm[m], theta[m], S_mac.real[m], S_mac.imag[m], mp.mac_pot[m], vex[m]
-                    ),
-                    True,
-                ),
-                p.VB_cap[i],
-            )
-            for i, m in enumerate(p.mac)
-        ]
-    )
+    VB = np.ones(p.n)
+    for i in np.nonzero(np.isin(p.kind, SOURCE_KINDS))[0]:
+        m = p.mac[i]
+        machine = ST3Machine(
+            eterm[m], theta[m], S_mac.real[m], S_mac.imag[m], mp.mac_pot[m], vex[m]
+        )
+        VB[i] = source_voltage_of(
+            p.kind[i], p.KP[i], p.KI[i], p.XL[i], p.KC[i], p.VB_cap[i], machine, True
+        )
+    return VB
 
 
 def initialise(p: ExciterParams, vex, eterm, VB=None):
@@ -933,8 +1055,8 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     bus_fed = smp & (p.KG == 1)
     vex_smp = vex / np.where(bus_fed, eterm, 1.0)  # SCRX bus fed: Efd = V_t x Efd state
     VA_smp = vex_smp / p.KA
-    VB = np.ones(p.n) if VB is None else np.where(st3, VB, 1.0)
-    VR = vex / VB
+    VB = np.ones(p.n) if VB is None else VB
+    VR = vex / np.where(st3, VB, 1.0)
     VA_st3 = VR / p.KA + np.minimum(p.VGmax, p.KG * vex)
     VI = VA_st3 / np.where(p.KJ == 0, 1.0, p.KJ)
     bad = st3 & (beyond(vex, -np.inf, p.Efdmax) | beyond(VI, p.VImin, p.VImax))
@@ -963,8 +1085,55 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
         x[3] = np.where(ac, VE, x[3])
         x[4] = np.where(ac & (p.kind != AC8B), VFE, x[4])  # AC8B: its PID's washout, 0
         VA = np.where(ac & (p.kind != AC8B), VFE / p.KA, np.where(ac, 0.0, VA))  # PID: 0
+    t3, st4b = p.kind == T3, p.kind == ST4B
+    if t3.any():
+        VR_t3 = _t3_initial_regulator(p, vex, VB)
+        x[2] = np.where(t3, VR_t3, x[2])
+        x[3] = np.where(t3, vex, x[3])
+        x[4] = np.where(t3, vex, x[4])  # the rate feedback's washout at rest
+        VA = np.where(t3, VR_t3 / p.KA, VA)
+    if st4b.any():
+        VG, VM = _st4b_initial_regulators(p, vex, VB)
+        x[1] = np.where(st4b, VG, x[1])  # the regulator PI's integral: its output at rest
+        x[2] = np.where(st4b, VG, x[2])
+        x[3] = np.where(st4b, VM, x[3])
+        VA = np.where(st4b, 0.0, VA)  # a PI at rest: no error
     Vref = eterm + np.where(st3, VI, VA)
     return x[: p.n_slots()], Vref, p
+
+
+def _t3_initial_regulator(p: ExciterParams, Efd, VB):
+    """IEEET3 at rest: V_R0 = K_E Efd0 - V_B0 (ANDES 2.0 ``ieeet3.py`` ``VR0``), (n_exc,);
+    raises CaseError if V_R0 is outside [Vrmin, Vrmax] or V_B0 + V_R0 outside [0, VBmax]."""
+    VR = p.KE * Efd - VB
+    bad = (p.kind == T3) & (beyond(VR, p.Vrmin, p.Vrmax) | beyond(VB + VR, np.zeros(p.n), p.VB_cap))
+    for i in np.nonzero(bad)[0]:
+        raise CaseError(
+            f"exc_con row {i + 1}: IEEET3 initial regulator output V_R = {VR[i]:.4f} pu "
+            f"outside [Vrmin, Vrmax] = [{p.Vrmin[i]:.4f}, {p.Vrmax[i]:.4f}] or V_B + V_R = "
+            f"{VB[i] + VR[i]:.4f} pu outside [0, VBmax]"
+        )
+    return VR
+
+
+def _st4b_initial_regulators(p: ExciterParams, Efd, VB):
+    """ESST4B at rest (ANDES 2.0 ``esst4b.py``): the regulator PI's output V_G0 = min(K_G
+    Efd0, VGmax) (the inner loop's input is 0) and the inner PI's V_M0 = Efd0 / V_B0,
+    arrays (n_exc,); raises CaseError if V_B0 <= 0, V_G0 is outside [Vrmin, Vrmax] or
+    V_M0 outside [VMmin, VMmax]."""
+    VG = np.minimum(p.KG * Efd, p.VGmax)
+    VM = Efd / np.where(VB > 0, VB, 1.0)
+    bad = (p.kind == ST4B) & (
+        (VB <= 0) | beyond(VG, p.Vrmin, p.Vrmax) | beyond(VM, p.VMmin, p.VMmax)
+    )
+    for i in np.nonzero(bad)[0]:
+        raise CaseError(
+            f"exc_con row {i + 1}: ESST4B at rest: source V_B = {VB[i]:.4f} pu (must be "
+            f"> 0), regulator output V_G = {VG[i]:.4f} pu (in [Vrmin, Vrmax] = "
+            f"[{p.Vrmin[i]:.4f}, {p.Vrmax[i]:.4f}]), inner-loop output V_M = {VM[i]:.4f} pu "
+            f"(in [VMmin, VMmax] = [{p.VMmin[i]:.4f}, {p.VMmax[i]:.4f}])"
+        )
+    return VG, VM
 
 
 def st1a_regulator_output(p: ExciterParams, Efd):
@@ -1091,8 +1260,8 @@ class StatorQuantities(NamedTuple):
 @kernel(inline="always")
 def field_current(P, i, MP, xm, cur):
     """The field current (pu on the machine base) of exciter i's machine where its type's
-    equations read it (:data:`READS_IFD`: EXST1, ESST1A), 0 for the other types; MP, xm,
-    cur as `field_voltage`."""
+    equations read it (:data:`READS_IFD`), 0 for the other types; MP, xm, cur as
+    `field_voltage`."""
     kind = P[i, E.KIND]
     if kind in READS_IFD:
         return mac.field_current(MP, xm, cur, int(P[i, E.MAC]))
@@ -1100,9 +1269,43 @@ def field_current(P, i, MP, xm, cur):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ifd, ieee):
+def source_voltage(P, i, MP, xm, cur, vt, ifd):
+    """The source term V_B of exciter i (`source_voltage_of`; :data:`SOURCE_KINDS`), 1 for
+    the other types: from its machine's terminal quantities as PST exc_st3 flag 1
+    recomputes them (`machines.stator_without_speed`), vt the machine's terminal bus
+    voltage (complex; its angle sets the source phasor), ifd the field current
+    (`field_current`; the ST3 reads its own, `_st3_field_current`); at most VBmax (PSS/E
+    ESST3A's and ESST4B's ``VB`` limiter; inf without); MP, xm, cur as `field_voltage`."""
+    kind = P[i, E.KIND]
+    if kind != ST3 and kind != T3 and kind != ST4B:
+        return 1.0
+    m = int(P[i, E.MAC])
+    ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, m)
+    stator = StatorQuantities(ed, eq, cd, cq, np.hypot(ed, eq), vt)
+    fld = _st3_field_current(P, i, MP, xm, cur, m) if kind == ST3 else ifd
+    return source_voltage_of(
+        kind,
+        P[i, E.KPR] + 1j * P[i, E.KPI],
+        P[i, E.KI],
+        P[i, E.XL],
+        P[i, E.KC],
+        P[i, E.VBCAP],
+        _source_machine(MP, m, stator, fld),
+        _RUNNING,
+    )
+
+
+@kernel(inline="always")
+def _source_machine(MP, m, stator, fld):
+    """`ST3Machine` of machine m from its `StatorQuantities` and field current fld."""
+    ed, eq, cd, cq, et, vt = stator
+    return ST3Machine(et, np.angle(vt), eq * cq + ed * cd, eq * cd - ed * cq, MP[m, mac.K.POT], fld)
+
+
+@kernel(inline="always")
+def field_voltage(P, x, i, MP, xm, cur, pss_out, ifd, VB, ieee):
     """Field voltage exciter i hands its machine (PST flag 1), pu on the machine base:
-    `field_voltage_at` with the machine quantities it needs.
+    `field_voltage_at` with its machine's terminal voltage.
 
     Parameters
     ----------
@@ -1111,35 +1314,28 @@ def field_voltage(P, x, i, MP, xm, cur, vt, pss_out, ifd, ieee):
     MP, xm, cur : ndarray
         The machines' packed parameters (machines.PACKED), states (6, n_mac)
         and network currents (n_mac,) complex, system base: the terminal voltage V_t
-        (PST exc_st3's speed-free stator equations, `machines.stator_without_speed`) and
-        the ST3 source voltage come from them.
-    vt : complex
-        The machine's terminal bus voltage (its angle sets the ST3 source phasor).
+        comes from them (PST exc_st3's speed-free stator equations,
+        `machines.stator_without_speed`).
     pss_out : float
         The output of the machine's PSS (0 without).
     ifd : float
         The machine's field current, `field_current`.
+    VB : float
+        The source term, `source_voltage`.
     ieee : bool
         The IEEE 421.5 convention (limited states are read clipped to their limits).
     """
-    m = int(P[i, E.MAC])
-    ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, m)
-    et = np.hypot(ed, eq)
-    kind = P[i, E.KIND]
-    VB = (
-        _st3_source(P, i, MP, xm, cur, m, StatorQuantities(ed, eq, cd, cq, et, vt))
-        if kind == ST3
-        else 1.0
-    )
-    return field_voltage_at(P, x, i, et, pss_out, VB, ifd, ieee)
+    ed, eq, _, _ = mac.stator_without_speed(MP, xm, cur, int(P[i, E.MAC]))
+    return field_voltage_at(P, x, i, np.hypot(ed, eq), pss_out, VB, ifd, ieee)
 
 
 @kernel(inline="always")
 def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """Field voltage of exciter i given its machine's terminal voltage VTR_alg (pu), the
-    ST3 source voltage VB (1 for the other types) and the field current ifd (EXST1,
-    ESST1A; 0 for the others): per type `_smp_field_voltage`, `_st3_field_voltage`,
-    `_st1_field_voltage`, `_st1a_field_voltage`, the DC exciters' Efd state."""
+    source term VB (`source_voltage`) and the field current ifd (`field_current`): per
+    type `_smp_field_voltage`, `_st3_field_voltage`, `_st1_field_voltage`,
+    `_st1a_field_voltage`, `_st4b_field_voltage`, the DC exciters' and IEEET3's Efd
+    state."""
     kind = P[i, E.KIND]
     if kind == ST3:
         return _st3_field_voltage(P, x, i, VB, ieee)
@@ -1151,18 +1347,20 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
         return _ac1_field_voltage(P, x, i, ifd)
     if kind == AC4:
         return clip(x[2, i], P[i, E.VRMIN] - P[i, E.KC] * ifd, P[i, E.VRMAX] - P[i, E.KC] * ifd)
-    if kind == DC1 or kind == DC2 or kind == T2:
+    if kind == ST4B:
+        return _st4b_field_voltage(P, x, i, VB)
+    if kind == DC1 or kind == DC2 or kind == T2 or kind == T3:
         return x[3, i]
     return _smp_field_voltage(P, x, i, VTR_alg, pss_out, ieee)
 
 
 @kernel
-def derivatives(P, x, i, eterm, pss_out, efd, ifd, dx, ieee, reach):
+def derivatives(P, x, i, eterm, pss_out, efd, ifd, VB, dx, ieee, reach):
     """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
 
     Every type: the voltage transducer lag T_R on eterm (pu) and the error V_ref - V_TR +
     pss_out; efd is the field voltage `field_voltage` gave, ifd the field current
-    `field_current` gave; reach (s): DC2's V_t-scaled
+    `field_current` gave, VB the source term `source_voltage` gave; reach (s): DC2's V_t-scaled
     V_R limits hold a state within that reach (`blocks.nonwindup`; the run's step, 0 in
     the linearisation).
     """
@@ -1184,6 +1382,10 @@ def derivatives(P, x, i, eterm, pss_out, efd, ifd, dx, ieee, reach):
         _ac8b_derivatives(P, x, i, err, ifd, dx)
     elif kind == AC4:
         _ac4_derivatives(P, x, i, err, dx)
+    elif kind == T3:
+        _t3_derivatives(P, x, i, err, VB, dx)
+    elif kind == ST4B:
+        _st4b_derivatives(P, x, i, err, efd, dx)
     else:
         _dc_derivatives(P, x, i, eterm, err, dx, ieee, reach)
 
@@ -1193,7 +1395,7 @@ def recorded_efd(P, x, i, efd_alg):
     """Efd as PST records it: the (clamped) smpexc state, the DC Efd state, or the ST3
     (and bus-fed smpexc) algebraic value efd_alg (`field_voltage`)."""
     kind = P[i, E.KIND]
-    if kind == DC1 or kind == DC2 or kind == T2:
+    if kind == DC1 or kind == DC2 or kind == T2 or kind == T3:
         return x[3, i]
     if kind == SMP and P[i, E.TA] >= LBND and P[i, E.KG] != 1:
         return x[2, i]
@@ -1239,29 +1441,13 @@ def _smp_derivatives(P, x, i, err, dx, ieee):
 
 
 @kernel(inline="always")
-def _st3_source(P, i, MP, xm, cur, m, stator):
-    """exc_st3's source voltage V_B (`st3_source_voltage`, PST exc_st3 flag 1) of exciter
-    i from its machine m's terminal quantities `stator` (`StatorQuantities`: ed, eq, cd,
-    cq of `machines.stator_without_speed`, the terminal voltage et and bus voltage vt) and
-    the field current: exc_st3's own estimate (`machines.st3_field_current`) or, with
-    ifd_machine, the machine's; MP, xm, cur as `field_voltage`.  At most VBmax (PSS/E
-    ESST3A's ``VB`` limiter, ANDES ``esst3a.py`` ``VB = GainLimiter(upper=VBMAX)``; inf
-    without)."""
-    ed, eq, cd, cq, et, vt = stator
+def _st3_field_current(P, i, MP, xm, cur, m):
+    """The field current of exciter i's source (ST3, machine m): exc_st3's own estimate
+    (`machines.st3_field_current`) or, with ifd_machine, the machine's (ANDES
+    ``esst3a.py``); MP, xm, cur as `field_voltage`."""
     if P[i, E.IFDM] > 0:
-        fld = mac.field_current(MP, xm, cur, m)
-    else:
-        fld = mac.st3_field_current(MP, xm, cur, m)
-    KP = P[i, E.KPR] + 1j * P[i, E.KPI]
-    VB = st3_source_voltage(
-        KP,
-        P[i, E.KI],
-        P[i, E.XL],
-        P[i, E.KC],
-        ST3Machine(et, np.angle(vt), eq * cq + ed * cd, eq * cd - ed * cq, MP[m, mac.K.POT], fld),
-        _RUNNING,
-    )
-    return min(VB, P[i, E.VBCAP])
+        return mac.field_current(MP, xm, cur, m)
+    return mac.st3_field_current(MP, xm, cur, m)
 
 
 @kernel(inline="always")
@@ -1488,3 +1674,62 @@ def _dc_derivatives(P, x, i, eterm, err, dx, ieee, reach):
     dx[3, i] = (
         x[2, i] - dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ], x[3, i])
     ) / P[i, E.TE]
+
+
+# -- IEEET3 (IEEE 1968 type 3 as PSS/E IEEET3 and ANDES 2.0 ieeet3.py): non-windup
+# -- K_A/(1 + s T_A) on the error less the rate feedback s K_F/(1 + s T_F) of Efd -> V_R;
+# -- the compound source V_B = sqrt(V_E^2 - (0.78 I_fd)^2) added, V_B + V_R limited to
+# -- [0, VBmax]; the exciter T_E dEfd/dt = V_B + V_R - K_E Efd.  PSTess has no type 3:
+# -- IEEE 421.5's non-windup rule in both conventions
+
+
+@kernel(inline="always")
+def _t3_derivatives(P, x, i, err, VB, dx):
+    """IEEET3 (docs/pst_models.md 2.9): the rate feedback (state R_f, with K_F != 0), the
+    regulator V_R non-windup on [Vrmin, Vrmax], the exciter Efd fed by V_B + V_R clipped
+    to [0, VBmax] (VB the source term, `source_voltage`)."""
+    if P[i, E.KF] != 0:
+        VF, dx[4, i] = washout(x[3, i], x[4, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
+        err = err - VF
+    x[2, i], dx[2, i] = nonwindup_lag(
+        P[i, E.KA] * err, x[2, i], P[i, E.TA], P[i, E.VRMIN], P[i, E.VRMAX], _IEEE_RULE, 0.0
+    )
+    dx[3, i] = (clip(VB + x[2, i], 0.0, P[i, E.VBCAP]) - P[i, E.KE] * x[3, i]) / P[i, E.TE]
+
+
+# -- ESST4B (IEEE 421.5-2005 ST4B as PSS/E ESST4B and ANDES 2.0 esst4b.py, no OEL/UEL):
+# -- the regulator PI K_PR + K_IR/s with tracking anti-windup on [Vrmin, Vrmax] (state
+# -- PIi), the lag 1/(1 + s T_A) (state V_M), the inner-loop PI K_PM + K_IM/s on V_M -
+# -- min(K_G Efd, VGmax), tracking anti-windup on [VMmin, VMmax] (state PIMi); Efd = V_B
+# -- times the inner PI's output, V_B = min(V_E F_EX, VBmax).  The feedback K_G Efd closes
+# -- an algebraic loop, solved exactly (`_st4b_field_voltage`)
+
+
+@kernel(inline="always")
+def _st4b_field_voltage(P, x, i, VB):
+    """ESST4B: Efd = V_B clip(K_PM (V_M - min(K_G Efd, VGmax)) + PIMi, VMmin, VMmax),
+    solved for Efd (ANDES solves it with its algebraic equations): the right side does
+    not rise with Efd (K_PM K_G >= 0, V_B >= 0), so there is one solution, on the
+    feedback's limit if its candidate there reaches it, else V_B clip(y, VMmin, VMmax)
+    with y = (K_PM V_M + PIMi)/(1 + V_B K_PM K_G) the unclipped loop's output."""
+    KPM, KG, VGmax = P[i, E.KPM], P[i, E.KG], P[i, E.VGMAX]
+    lo, hi = P[i, E.VMMIN], P[i, E.VMMAX]
+    on_limit = VB * clip(KPM * (x[2, i] - VGmax) + x[3, i], lo, hi)
+    if KG * on_limit >= VGmax:
+        return on_limit
+    return VB * clip((KPM * x[2, i] + x[3, i]) / (1.0 + VB * KPM * KG), lo, hi)
+
+
+@kernel(inline="always")
+def _st4b_derivatives(P, x, i, err, efd, dx):
+    """ESST4B (docs/pst_models.md 2.10): both PI regulators with ANDES's tracking
+    anti-windup, dx_i/dt = K_I (u - k_s (ys - y)) (k_s = :data:`PID_TRACKING`), and the
+    lag T_A; efd the field voltage (`_st4b_field_voltage`)."""
+    ys = P[i, E.KPID_P] * err + x[1, i]
+    y = clip(ys, P[i, E.VRMIN], P[i, E.VRMAX])
+    dx[1, i] = P[i, E.KPID_I] * (err - PID_TRACKING * (ys - y))
+    dx[2, i] = lag(y, x[2, i], P[i, E.TA])[1]
+    u = x[2, i] - min(P[i, E.KG] * efd, P[i, E.VGMAX])
+    ys = P[i, E.KPM] * u + x[3, i]
+    y = clip(ys, P[i, E.VMMIN], P[i, E.VMMAX])
+    dx[3, i] = P[i, E.KIM] * (u - PID_TRACKING * (ys - y))

@@ -142,8 +142,8 @@ def test_miniwecc_flat_run_does_not_drift(wecc, record_property):
 
 def test_case1_kundur_area1_loses_synchronism(case1, record_property):
     res = case1
-    record_property("case1_t_separation_s", res.t_separation)
-    record_property("case1_separated", res.separated)
+    record_property("case1_t_separation_s", float(res.t_separation))
+    record_property("case1_separated", [int(m) for m in res.separated])
     print(f"\nCase 1: separation at {res.t_separation:.3f} s, machines {res.separated}")
     assert not res.stable
     assert res.separated == [1, 2]  # area 1
@@ -169,8 +169,8 @@ def test_case2_miniwecc_colstrip_loses_synchronism(wecc, record_property):
     PSTess shows machine 14 (Colstrip, bus 32) separating alone; the paper names 13 and 14."""
     case = wecc.case
     res = wecc.run([fault_with_clearing(case, 83, 33, 1.0, 6)], t_end=5.0, stop_at_separation=True)
-    record_property("case2_t_separation_s", res.t_separation)
-    record_property("case2_separated", res.separated)
+    record_property("case2_t_separation_s", float(res.t_separation))
+    record_property("case2_separated", [int(m) for m in res.separated])
     print(f"\nCase 2: separation at {res.t_separation:.4f} s, machines {res.separated}")
     assert not res.stable
     assert res.separated == [14]

@@ -529,6 +529,37 @@ def test_ieee14_exac4_field_voltage_and_speeds_match_andes():
     assert np.max(np.abs(ours - theirs)[ta > 1.3]) < 5e-3
 
 
+def test_ieee14_esdc1a_field_voltage_and_speeds_match_andes():
+    """ANDES's ieee14_esdc1a.xlsx, ESDC1A read as DC1 (PSS/E ESDC1A: ESDC2A's record with
+    V_R limits not scaled by V_t); ANDES's run with its limiter repaired
+    (`stabctl.io.andes._repair_esdc1a`: as shipped, ANDES 2.0 cannot initialise it)."""
+    ta, ours, theirs = device_output_run("ieee14/ieee14_esdc1a.xlsx", "ESDC1A")
+    assert np.ptp(theirs) > 0.9  # the field voltage swings (1.97-3.0 pu)
+    away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
+    assert np.max(np.abs(ours - theirs)[away]) < 0.02  # measured 8.1e-3, 11 ms after clearing
+    assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 2e-3  # measured 6.4e-4
+
+
+def test_ieee14_ieeet3_field_voltage_and_speeds_match_andes():
+    """ANDES's ieee14_ieeet3.xlsx (docs/pst_models.md 2.9): the compound source
+    sqrt(V_E^2 - (0.78 I_fd)^2) plus V_R drives the exciter as ``ieeet3.py``'s."""
+    ta, ours, theirs = device_output_run("ieee14/ieee14_ieeet3.xlsx", "IEEET3")
+    assert np.ptp(theirs) > 0.15  # the field voltage swings (its source follows I_t)
+    away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
+    assert np.max(np.abs(ours - theirs)[away]) < 1e-3  # measured 3.0e-4
+    assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 2e-4  # measured 3.7e-5
+
+
+def test_ieee14_esst4b_field_voltage_and_speeds_match_andes():
+    """ANDES's ieee14_esst4b.xlsx (docs/pst_models.md 2.10): the two PI regulators and
+    the inner loop's algebraic feedback K_G Efd as ``esst4b.py``'s."""
+    ta, ours, theirs = device_output_run("ieee14/ieee14_esst4b.xlsx", "ESST4B")
+    assert np.ptp(theirs) > 0.35  # the field voltage swings
+    away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
+    assert np.max(np.abs(ours - theirs)[away]) < 4e-3  # measured 1.1e-3
+    assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 5e-5  # measured 5.9e-6
+
+
 def test_ieee14_gast_power_and_speeds_match_andes():
     """ANDES's ieee14_gast.xlsx (docs/pst_models.md 4.4), its AC8B exciter off in both
     runs (after this 6-cycle fault AC8B's speeds differ by 7.9e-5 pu, docs 2.7): over
@@ -869,6 +900,27 @@ def test_import_andes_ignores_the_summary_notes():
     assert imported.ignored == ("Area (1)", "Summary (3)")
     assert imported.left_out == ("Fault (1)",)
     assert len(imported.case.machines) == 2  # the machine and the infinite bus (1e9 MVA)
+
+
+@pytest.mark.parametrize(
+    "name, ignored, disturbance",
+    [
+        ("kundur/kundur_coi.xlsx", "COI (2)", "Toggle (1)"),
+        ("kundur/kundur_pmu.xlsx", "PMU (10)", "Toggle (1)"),
+        ("ieee14/ieee14_pll1.xlsx", "PLL1 (10)", "Fault (1)"),
+    ],
+)
+def test_import_andes_ignores_calculations_no_equation_reads(name, ignored, disturbance):
+    """ANDES's COI (``coi.py``: machines name it, no equation reads its output), PMU and
+    PLL1 (measurements read only by models stabctl refuses: REGCP1, REGF2) are ignored
+    and named; only the case's own disturbance is refused, and the case starts at rest."""
+    with pytest.raises(InputError) as err:
+        import_andes(andes.get_case(name))
+    assert disturbance in str(err.value) and ignored.split()[0] not in str(err.value)
+    with pytest.warns(UserWarning, match="lacks"):
+        imported = read_andes_case(andes.get_case(name), on_unsupported="skip")
+    assert ignored in imported.ignored and imported.left_out == (disturbance,)
+    assert Simulator(imported.case, q_limits=False).model.initial_residual[0] < 1e-8
 
 
 def test_ieee14_slow_mode_gap_is_the_valve_at_its_limit(ieee14, tmp_path):

@@ -12,7 +12,7 @@ from stabctl.case import ExciterTable, GovernorTable, MachineTable, PssTable
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
 from stabctl.io import load_case
-from stabctl.io.dyr import dyr_tables, exp_saturation, read_dyr
+from stabctl.io.dyr import VRMAX_UNLIMITED, dyr_tables, exp_saturation, read_dyr
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
@@ -217,13 +217,13 @@ def test_unsupported_records_are_listed_with_file_and_line(tmp_path):
         "kundur_full.dyr:37 TOGGLE (bus 0, id LINE_8): model TOGGLE is not mapped"
     )
     text = (
-        "1 'GENCLS' 1 3.0 0.0 /\n1 'ESST4B' 1 0 0 /\n"
+        "1 'GENCLS' 1 3.0 0.0 /\n1 'ESST5B' 1 0 0 /\n"
         "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
     )
     with pytest.raises(CaseError) as e:
         dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
     assert str(e.value).splitlines()[1:] == [
-        "  t.dyr:2 ESST4B (bus 1, id 1): model ESST4B is not mapped",
+        "  t.dyr:2 ESST5B (bus 1, id 1): model ESST5B is not mapped",
         "  t.dyr:3 IEEEST (bus 1, id 1): its machine has no (supported) exciter",
     ]
 
@@ -415,7 +415,7 @@ def test_dc_exciter_steady_state_vr_equals_ke_plus_se_times_efd(KE):
     assert x[2, 0] == pytest.approx((KE_eff + SE) * Efd, abs=1e-15)
     assert Vref[0] == pytest.approx(Vt + x[2, 0] / 20, rel=1e-15)
     dx = np.zeros_like(x)
-    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, Efd, dx, True, 0.0)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, Efd, 1.0, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
 
 
@@ -459,7 +459,7 @@ def test_quadratic_saturation_passes_both_points_and_keeps_ke():
     x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
     assert p.KE[0] == 0.0 and x[2, 0] == pytest.approx(B * (Efd - A) ** 2, rel=1e-14)
     dx = np.zeros_like(x)
-    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, Efd, dx, True, 0.0)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, Efd, 1.0, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
     row[23] = 0  # K_E = 0 computed: V_R0 = 0
     p = exc.exciter_params(load_case("kundur").replace(exciters=ExciterTable.from_matrix([row])))
@@ -474,7 +474,7 @@ def test_dc2_limit_scales_with_terminal_voltage():
         x, Vref, p = exc.initialise(p, np.array([1.0]), np.array([1.0]))
         x[2, 0] = 10.0
         dx = np.zeros_like(x)
-        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, 1.0, dx, True, 0.0)
+        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, 1.0, 1.0, dx, True, 0.0)
         assert x[2, 0] == pytest.approx(bound, rel=1e-15) and dx[2, 0] == 0.0
 
 
@@ -492,7 +492,7 @@ def test_dc2_state_held_on_a_limit_that_rose_within_reach():
         x = x0.copy()
         x[2, 0] = 5.2 * 0.5
         dx = np.zeros_like(x)
-        exc.derivatives(P, x, 0, 0.51, 0.0, 1.0, 1.0, dx, True, reach)
+        exc.derivatives(P, x, 0, 0.51, 0.0, 1.0, 1.0, 1.0, dx, True, reach)
         if held:
             assert x[2, 0] == pytest.approx(5.2 * 0.51, rel=1e-15) and dx[2, 0] == 0.0
         else:
@@ -541,7 +541,7 @@ def test_exst1_steady_state_and_output_limit():
     P = p.packed(Vref)
     assert exc.field_voltage_at(P, x, 0, Vt, 0.0, 1.0, Efd, True) == Efd
     dx = np.full_like(x, np.nan)
-    exc.derivatives(P, x, 0, Vt, 0.0, Efd, Efd, dx, True, 0.0)
+    exc.derivatives(P, x, 0, Vt, 0.0, Efd, Efd, 1.0, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
     x[2, 0] = 10.0
     assert exc.field_voltage_at(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(
@@ -1109,3 +1109,26 @@ def test_esac1a_record_lands_in_its_columns(tmp_path):
     got = [e.TR, e.TB, e.TC, e.KA, e.TA, e.VAmax, e.VAmin, e.VImin, e.KF, e.TF, e.KC, e.KD]
     got += [e.VImax, e.KJ, e.KP, e.thetaP, e.KI, e.Vrmax, e.Vrmin]  # KE, E1, SE1, E2, SE2
     assert e.type[0] == 9 and [g[0] for g in got] == values
+
+
+def test_ieeet3_and_esst4b_records_land_in_their_columns(tmp_path):
+    """IEEET3 in the PSS/E Model Library's order (TR KA TA VRMAX VRMIN TE KF TF KP KI VBMAX
+    KE) and ESST4B (TR KPR KIR VRMAX VRMIN TA KPM KIM VMMAX VMMIN KG KP KI VBMAX KC XL
+    THETAP) become exc_con rows of types 11 and 12 with each value in its declared column;
+    ESST4B's inner-loop feedback is unlimited (PSS/E has no VGMAX), IEEET3's VRMAX = 0 is
+    no limit."""
+    t3 = [0.02, 5.0, 0.04, 0.0, -7.3, 1.0, 0.1, 1.0, 4.0, 0.1, 18.0, 1.0]
+    st4b = [0.01, 1.0, 0.5, 8.0, -1.0, 0.1, 1.5, 0.2, 8.0, -2.0, 1.0, 4.0, 0.1, 18.0, 0.1]
+    st4b += [0.01, 5.0]
+    text = "1 'GENCLS' 1 3.0 0.0 /\n2 'GENCLS' 1 3.0 0.0 /\n"
+    text += "1 'IEEET3' 1 " + " ".join(map(str, t3)) + " /\n"
+    text += "2 'ESST4B' 1 " + " ".join(map(str, st4b)) + " /\n"
+    tab = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:2])
+    e = ExciterTable.from_matrix(tab.exc_con)
+    got = [e.TR, e.KA, e.TA, e.Vrmax, e.Vrmin, e.VImin, e.KF, e.TF, e.KP, e.KI, e.VBmax]
+    got += [e.VImax]  # KE, TE: the DC names of columns 10-11
+    assert e.type[0] == 11 and [g[0] for g in got] == [*t3[:3], VRMAX_UNLIMITED, *t3[4:]]
+    got = [e.TR, e.Kpid_P, e.Kpid_I, e.Vrmax, e.Vrmin, e.TA, e.KPM, e.KIM, e.VMmax, e.VMmin]
+    got += [e.KG, e.KP, e.KI, e.VBmax, e.KC, e.XL, e.thetaP]
+    assert e.type[1] == 12 and [g[1] for g in got] == st4b
+    assert e.VGmax[1] == VRMAX_UNLIMITED

@@ -60,6 +60,14 @@ AC8B = [10, 1, 0.0, 40, 0.04, 0, 0, 7.3, 1.0, *AC1[9:20], 0, 0, *AC1[22:31], 0.3
 AC8B += [3.0, 1.0, 1.0, 0.2, 0.5, -0.5]
 #: EXAC4 (type 8): TR KA TA TB TC Vrmax Vrmin VImax VImin (3-11), KC (17)
 AC4 = [8, 1, 0.02, 200, 0.04, 10.0, 1.0, 5.0, -4.0, 0.1, -0.1, 0, 0, 0, 0, 0, 0.1]
+#: IEEET3 (type 11): TR KA TA (3-5), Vrmax Vrmin (8-9), KE TE (10-11, the DC names), KP
+#: KI (13, 15), KF TF (21-22), VBmax (33); ANDES 2.0's ieee14_ieeet3.xlsx values
+T3 = [11, 1, 0.02, 5.0, 0.04, 0, 0, 7.3, -7.3, 1.0, 1.0, 0, 4.0, 0, 0.1, 0, 0, 0, 0, 0]
+T3 += [0.1, 1.0, *[0] * 10, 18.0]
+#: ESST4B (type 12): TR TA (3, 5), Vrmax Vrmin (8-9), KP thetaP KI XL KC (13-17), KG
+#: VGmax (19-20), VBmax (33), K_PR K_IR (34-35), K_PM K_IM VMmax VMmin (40-43)
+ST4B = [12, 1, 0.01, 0, 0.1, 0, 0, 8.0, 0.0, 0, 0, 0, 4.0, 0, 0.1, 0.01, 0.1, 0, 1.0, 20.0]
+ST4B += [*[0] * 12, 18.0, 1.0, 0.5, 0, 0, 0, 0, 1.0, 0.5, 8.0, 0.0]
 ROWS = {
     "smpexc": SMP,
     "SCRX": SCRX,
@@ -73,6 +81,8 @@ ROWS = {
     "EXAC4": AC4,
     "ESAC1A": AC1A,
     "AC8B": AC8B,
+    "IEEET3": T3,
+    "ESST4B": ST4B,
 }
 EFD0, VT0, VB0 = 1.9, 1.02, 4.0  # initial field and terminal voltage, ST3 V_B
 
@@ -90,7 +100,7 @@ def started(row):
 
 def derivatives(P, x, eterm=VT0, efd=EFD0, ieee=True):
     dx = np.full_like(x, np.nan)
-    exc.derivatives(P, x, 0, eterm, 0.0, efd, efd, dx, ieee, 0.0)
+    exc.derivatives(P, x, 0, eterm, 0.0, efd, efd, VB0, dx, ieee, 0.0)
     return dx
 
 
@@ -244,7 +254,7 @@ def test_esst1a_error_step_passes_both_lead_lags():
     E.3 realisation, the lag E.2)."""
     P, x = started(ST1A)
     dV, dx = 1e-3, np.zeros_like(x)
-    exc.derivatives(P, x, 0, VT0, dV, EFD0, EFD0, dx, True, 0.0)
+    exc.derivatives(P, x, 0, VT0, dV, EFD0, EFD0, 1.0, dx, True, 0.0)
     assert dx[2, 0] == pytest.approx(200 * dV * (1 / 10) * (0.5 / 2) / 0.04, rel=1e-12)
     assert dx[4, 0] == pytest.approx(dV * (1 / 10) / 2.0, rel=1e-12)
 
@@ -257,9 +267,9 @@ def test_esst1a_va_is_non_windup(ieee):
     P, x = started(ST1A)
     x[2, 0] = 6.0
     dx = np.zeros_like(x)
-    exc.derivatives(P, x, 0, VT0, 50.0, EFD0, EFD0, dx, ieee, 0.0)
+    exc.derivatives(P, x, 0, VT0, 50.0, EFD0, EFD0, 1.0, dx, ieee, 0.0)
     assert x[2, 0] == 6.0 and dx[2, 0] == 0.0
-    exc.derivatives(P, x, 0, VT0, 0.0, EFD0, EFD0, dx, ieee, 0.0)
+    exc.derivatives(P, x, 0, VT0, 0.0, EFD0, EFD0, 1.0, dx, ieee, 0.0)
     assert dx[2, 0] < 0
 
 
@@ -307,10 +317,10 @@ def test_exac1_exciter_integrates_vr_minus_vfe_and_vr_is_non_windup():
     E.5)."""
     P, x = started(AC1)
     dx = np.zeros_like(x)
-    exc.derivatives(P, x, 0, VT0, 0.0, EFD0, EFD0 + 0.1, dx, True, 0.0)
+    exc.derivatives(P, x, 0, VT0, 0.0, EFD0, EFD0 + 0.1, 1.0, dx, True, 0.0)
     assert dx[3, 0] == pytest.approx(-0.38 * 0.1 / 0.8, rel=1e-12)
     x[2, 0] = 8.0
-    exc.derivatives(P, x, 0, VT0, 1.0, EFD0, EFD0, dx, True, 0.0)
+    exc.derivatives(P, x, 0, VT0, 1.0, EFD0, EFD0, 1.0, dx, True, 0.0)
     assert x[2, 0] == 8.0 and dx[2, 0] == 0.0
 
 
@@ -382,9 +392,64 @@ def test_exac4_output_limits_fall_with_the_field_current():
     x[2, 0] = 6.0
     assert exc.field_voltage_at(P, x, 0, 0.3, 0.0, 1.0, 2.0, True) == pytest.approx(4.8)
     dx = np.zeros_like(x)
-    exc.derivatives(P, x, 0, VT0, 1.0, EFD0, EFD0, dx, True, 0.0)
+    exc.derivatives(P, x, 0, VT0, 1.0, EFD0, EFD0, 1.0, dx, True, 0.0)
     u = x[1, 0] + 0.1 * (0.1 - x[1, 0])  # lead-lag output, ratio T_C/T_B
     assert dx[2, 0] == pytest.approx((200 * u - 6.0) / 0.04, rel=1e-12)
+
+
+def test_ieeet3_source_and_regulator_sum_is_limited_to_0_and_vbmax():
+    """IEEET3 (docs/pst_models.md 2.9): T_E dEfd/dt = clip(V_B + V_R, 0, VBmax) - K_E Efd;
+    at rest V_R0 = K_E Efd0 - V_B0 (ANDES ``ieeet3.py``)."""
+    P, x = started([*T3[:32], 10.0])  # VBmax 10
+    assert x[2, 0] == pytest.approx(1.0 * EFD0 - VB0)
+    for VR, fed in ((7.0, 10.0), (-7.0, 0.0), (-1.0, VB0 - 1.0)):
+        x[2, 0] = VR
+        assert derivatives(P, x)[3, 0] == pytest.approx((fed - EFD0) / 1.0, rel=1e-12)
+
+
+def test_ieeet3_rate_feedback_and_source_term():
+    """The rate feedback K_F/T_F (Efd - R_f) is taken from the regulator's input, and the
+    source term is sqrt(V_E^2 - (0.78 I_fd)^2), 0 where negative (ANDES ``ieeet3.py``)."""
+    P, x = started(T3)
+    x[4, 0] = EFD0 - 0.5  # R_f behind Efd: feedback 0.1/1.0 * 0.5
+    dx = derivatives(P, x)
+    assert dx[2, 0] == pytest.approx((5.0 * (x[2, 0] / 5.0 - 0.05) - x[2, 0]) / 0.04, rel=1e-9)
+    machine = exc.ST3Machine(1.0, 0.0, 0.8, 0.1, 1.0, 2.0)
+    VE = exc.potential_source(4.0 + 0j, 0.1, 0.0, machine)
+    assert VE == pytest.approx(abs(4.0 + 1j * 0.1 * (0.8 - 0.1j)))
+    assert exc.source_voltage_of(exc.T3, 4.0 + 0j, 0.1, 0.0, 0.0, np.inf, machine, False) == (
+        pytest.approx(np.sqrt(VE**2 - 1.56**2))
+    )
+    dead = exc.ST3Machine(1.0, 0.0, 0.8, 0.1, 1.0, VE / 0.78 + 0.1)
+    assert exc.source_voltage_of(exc.T3, 4.0 + 0j, 0.1, 0.0, 0.0, np.inf, dead, False) == 0.0
+
+
+@pytest.mark.parametrize("VGmax", [20.0, 1.0])
+@pytest.mark.parametrize("VM", [0.3, 2.0, 8.5, -0.2])
+def test_esst4b_field_voltage_solves_its_inner_loop(VM, VGmax):
+    """ESST4B's Efd = V_B clip(K_PM (V_M - min(K_G Efd, VGmax)) + PIMi, VMmin, VMmax)
+    holds exactly for the returned Efd, with the feedback free or on VGmax and the inner
+    PI free or on either limit (the algebraic loop ANDES solves with its equations)."""
+    row = ST4B.copy()
+    row[19] = VGmax
+    P, x = started(row)
+    x[2, 0], x[3, 0] = VM, 0.3
+    efd = exc.field_voltage_at(P, x, 0, VT0, 0.0, VB0, EFD0, True)
+    inner = np.clip(1.0 * (VM - min(1.0 * efd, VGmax)) + 0.3, 0.0, 8.0)
+    assert efd == pytest.approx(VB0 * inner, rel=1e-13, abs=1e-13)
+
+
+def test_esst4b_regulators_track_their_limits():
+    """Both PI regulators integrate K_I (u - 2 (ys - y)) (ANDES ``PITrackAW``, k_s = 2): a
+    large error drives the regulator's ys above Vrmax = 8."""
+    P, x = started(ST4B)
+    dx = np.zeros_like(x)
+    x[0, 0] = VT0 - 10.0  # the transducer's output 10 pu below V_ref
+    exc.derivatives(P, x, 0, VT0 - 10.0, 0.0, EFD0, EFD0, VB0, dx, True, 0.0)
+    ys = 1.0 * 10.0 + x[1, 0]
+    assert dx[1, 0] == pytest.approx(0.5 * (10.0 - 2 * (ys - 8.0)), rel=1e-12)
+    assert dx[2, 0] == pytest.approx((8.0 - x[2, 0]) / 0.1, rel=1e-12)
+    assert dx[3, 0] == 0.0  # the inner loop still balanced: V_M = K_G Efd
 
 
 def test_layout_names_every_packed_column_once():

@@ -66,8 +66,8 @@ def test_electromechanical_band_matches_pstess(
     assert len(pairs) >= 6
     f_err = max(abs(p["freq_err_pct"]) for p in pairs)
     z_err = max(abs(p["damping_err"]) for p in pairs)
-    record_property("worst_freq_err_pct", f_err)
-    record_property("worst_damping_err", z_err)
+    record_property("worst_freq_err_pct", float(f_err))
+    record_property("worst_damping_err", float(z_err))
     print(
         f"{sim_name}: {len(pairs)} modes 0.1-2.5 Hz, worst frequency {f_err:.2e} %, "
         f"damping {z_err:.2e}"
