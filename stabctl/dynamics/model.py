@@ -678,7 +678,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     for k in range(nps):
         m = int(p.SP[k, pss_.S.MAC])
         pe = (psi[m] * np.conj(cur[m])).real * p.MP[m, mac.K.POT]
-        pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, xm[1, m], pe, dxp)
+        vt = np.abs(V_bus[p.mac_bus[m]])
+        pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, xm[1, m], pe, vt, dxp)
     vex = p.vex0.copy()
     efd_alg = np.empty(ne)
     ifd = np.empty(ne)

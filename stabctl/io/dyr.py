@@ -545,13 +545,13 @@ def _ieeest(rec, gen):
     """IEEEST: ICS IB A1..A6 T1..T6 KS LSMAX LSMIN VCU VCL -> PST pss (type 1 speed, 2
     power) when exactly equivalent (A1..A6 = 0, a lead-lag with lag >= 1e-3 s): washout
     KS sT5/(1 + sT6) = K_Tw s/(1 + s T_w), K_Tw = KS T5, T_w = T6; else stabctl's PSS/E
-    stabiliser (type 3).  VCU/VCL cut-off unsupported (docs 12.3)."""
+    stabiliser (type 3); VCU/VCL: the output cut-off (pss_con columns 25-26)."""
     v = DYR_MODELS["IEEEST"].values(rec.params)
     ics, A = v["ICS"], [v[f"A{k}"] for k in range(1, 7)]
     _local_inputs((ics, v["IB"]))
     _washout(v["T5"], v["T6"])
-    if ics == 0 or v["VCU"] or v["VCL"]:
-        raise _Unsupported("no input (ICS 0) or VCU/VCL cut-off")
+    if ics == 0:
+        raise _Unsupported("no input (ICS 0)")
     KTw = v["KS"] * v["T5"]
     lead_lags = [(v[a], v[b]) for a, b in (("T1", "T2"), ("T3", "T4"))]
     stages = [(a, b) for a, b in lead_lags if a or b]
@@ -577,12 +577,12 @@ def _ieeest(rec, gen):
 def _st2cut(rec, gen):
     """ST2CUT: MODE BUSR MODE2 BUSR2 K1 K2 T1..T10 LSMAX LSMIN VCU VCL -> stabctl's PSS/E
     stabiliser (type 3): K1/(1 + sT1) + K2/(1 + sT2) inputs, washout sT3/(1 + sT4), lead-lags
-    T5/T6, T7/T8, T9/T10.  VCU/VCL cut-off unsupported."""
+    T5/T6, T7/T8, T9/T10; VCU/VCL: the output cut-off (pss_con columns 25-26)."""
     v = DYR_MODELS["ST2CUT"].values(rec.params)
     _local_inputs((v["MODE"], v["BUSR"]), (v["MODE2"], v["BUSR2"]))
     _washout(v["T3"], v["T4"])
-    if v["MODE"] == 0 or v["VCU"] or v["VCL"]:
-        raise _Unsupported("no first input (MODE 0) or VCU/VCL cut-off")
+    if v["MODE"] == 0:
+        raise _Unsupported("no first input (MODE 0)")
     return _pss_row(rec, gen)
 
 

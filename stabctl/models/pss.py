@@ -14,7 +14,8 @@ gain for type 3.  PST pss states: washout, lead-lag 1, lead-lag 2 (only when
 T_4 >= 1e-3).  Type 3 states: input lags 1, 2, filter 1-4, washout, lead-lags 1-3 (each
 only where its block exists).  Type 4 states: washouts 1-3, the T_3 lag, the two T_5 lags
 (a lag below 1e-3 s passes its input).  Output in pu, added to the exciter summing junction of
-the same machine.
+the same machine; 0 while the terminal voltage is outside [VCL, VCU] (pss_con columns 25-26,
+PSS/E's output cut-off; 0 none).
 """
 
 from __future__ import annotations
@@ -102,6 +103,20 @@ PSS = Family(
             )
             for k in range(1, 7)
         ),
+        Param(
+            "VCU",
+            "pu",
+            25,
+            doc="output cut-off: the output is 0 while the terminal voltage is above VCU "
+            "(PSS/E IEEEST, ST2CUT VCU; 0 none)",
+        ),
+        Param(
+            "VCL",
+            "pu",
+            26,
+            doc="output cut-off: the output is 0 while the terminal voltage is below VCL "
+            "(PSS/E IEEEST, ST2CUT VCL; 0 none)",
+        ),
     ),
     dyr=(
         # IEEEST -> PST pss (types 1, 2) when exactly equivalent, else type 3; the mapper
@@ -129,7 +144,7 @@ PSS = Family(
                 "VCU",
                 "VCL",
             ),
-            {"Tw": "T6", "ymax": "LSMAX", "ymin": "LSMIN"},
+            {"Tw": "T6", "ymax": "LSMAX", "ymin": "LSMIN", "VCU": "VCU", "VCL": "VCL"},
             andes=("IEEEST",),
         ),
         DyrModel(
@@ -173,6 +188,8 @@ PSS = Family(
                 "T6": "T10",
                 "ymax": "LSMAX",
                 "ymin": "LSMIN",
+                "VCU": "VCU",
+                "VCL": "VCL",
             },
             kind=3,
             andes=("ST2CUT",),
@@ -229,6 +246,8 @@ PACKED = (
     ("FE", "fe"),
     *((f"FA{i}", f"fa_{i}") for i in range(4)),
     *((f"FC{i}", f"fc_{i}") for i in range(4)),
+    ("VCUT_HI", "v_cut_high"),
+    ("VCUT_LO", "v_cut_low"),
 )
 #: the kernels' column of each PACKED name: P[k, S.TW]
 S = layout("PssColumns", PACKED)
@@ -241,12 +260,16 @@ class PssParams(Declared):
     row (index), the pss_con fields :data:`TABLE_FIELDS` under their declared names
     (stabctl.models.pss.PSS; input1, input2 0 for types 1, 2).  Type 3: the filter in
     controllable canonical form of order nf (<= 4): fa (n, 4) the monic denominator
-    coefficients a_0..a_3, fc (n, 4) output coefficients, fe the feedthrough."""
+    coefficients a_0..a_3, fc (n, 4) output coefficients, fe the feedthrough.  Every
+    type: v_cut_high, v_cut_low the output cut-off's terminal voltages (pu; VCU, VCL with
+    0 read as none: +inf, -inf)."""
 
     nf: np.ndarray
     fa: np.ndarray
     fc: np.ndarray
     fe: np.ndarray
+    v_cut_high: np.ndarray
+    v_cut_low: np.ndarray
 
     @property
     def n(self) -> int:
@@ -330,6 +353,8 @@ def pss_params(case: Case) -> PssParams:
         fa=fa,
         fc=fc,
         fe=fe,
+        v_cut_high=np.where(s.VCU == 0, np.inf, s.VCU),
+        v_cut_low=np.where(s.VCL == 0, -np.inf, s.VCL),
     )
 
 
@@ -431,15 +456,19 @@ def initialise(p: PssParams, u1, u2):
 
 
 @kernel
-def output_and_derivatives(P, x, k, omega, pe, dx):
-    """Output of PSS k (pu, to its exciter's summing junction) at machine speed omega (pu)
-    and electrical power pe (machine base), PST flag 1/2; its derivatives into dx[:, k]."""
+def output_and_derivatives(P, x, k, omega, pe, vt, dx):
+    """Output of PSS k (pu, to its exciter's summing junction) at machine speed omega (pu),
+    electrical power pe (machine base) and terminal voltage magnitude vt (pu), PST flag
+    1/2; its derivatives into dx[:, k].  The output is 0 while vt is outside [VCL, VCU]
+    (PSS/E IEEEST, ST2CUT; ANDES 2.0 ``ieeest.py`` ``OLIM``); the states move on."""
     kind = P[k, S.KIND]
     if kind == PSSE:
-        return _psse(P, x, k, omega, pe, dx)
-    if kind == STAB2A:
-        return _stab2a(P, x, k, pe, dx)
-    return _pst(P, x, k, pe if kind == PST_POWER else omega, dx)
+        y = _psse(P, x, k, omega, pe, dx)
+    elif kind == STAB2A:
+        y = _stab2a(P, x, k, pe, dx)
+    else:
+        y = _pst(P, x, k, pe if kind == PST_POWER else omega, dx)
+    return y if P[k, S.VCUT_LO] <= vt <= P[k, S.VCUT_HI] else 0.0
 
 
 @kernel(inline="always")

@@ -856,19 +856,37 @@ def test_import_andes_cli_writes_converters_to_the_json_case(tmp_path):
 
 
 def test_import_andes_gives_the_reason_of_a_refused_device(tmp_path):
-    """IEEE 14's PSS/E files with bus 3's IEEEST given a VCU cut-off (1.1 pu, which ANDES
-    reads and stabctl does not model): the device is named with the DYR reader's reason."""
+    """IEEE 14's PSS/E files with bus 3's IEEEST given no input (ICS 0, which ANDES reads
+    and stabctl does not model): the device is named with the DYR reader's reason."""
     src = CASES / "ieee14" / "ieee14.dyr"
     text = src.read_text()
-    old = "-2.0000      0.10000     -0.10000       0.0000       0.0000      /"
-    assert text.count(old) == 1  # bus 3's IEEEST: LSMAX LSMIN VCU VCL
+    old = "3 'IEEEST' 1          3            0"
+    assert text.count(old) == 1  # bus 3's IEEEST: ICS 3 (power), IB 0
     dyr = tmp_path / "ieee14.dyr"
-    dyr.write_text(text.replace(old, old.replace("0.0000       0.0000      /", "1.1 0.0 /")))
+    dyr.write_text(text.replace(old, "3 'IEEEST' 1          0            0"))
     with pytest.warns(UserWarning, match=r"IEEEST \(bus 3, id GENROU_3\): no input \(ICS 0\)"):
         imported = read_andes_case(CASES / "ieee14" / "ieee14.raw", dyr=dyr, on_unsupported="skip")
     assert [r for r in imported.left_out if "IEEEST" in r] == [
-        "ieee14.raw:1 IEEEST (bus 3, id GENROU_3): no input (ICS 0) or VCU/VCL cut-off"
+        "ieee14.raw:1 IEEEST (bus 3, id GENROU_3): no input (ICS 0)"
     ]
+
+
+def test_kundur_ieeest_output_cut_off_matches_andes():
+    """ANDES's kundur_ieeest.xlsx: an IEEEST with a filter (A1..A6 = 1) and the output
+    cut-off VCU 1.2, VCL 0.8 pu (pss_con columns 25-26, the kernel's rule in
+    tests/models/test_pss.py); a 6-cycle fault at bus 7 takes bus 1 below 0.8 pu in both
+    tools over the same grid points, where ANDES's output is 0; speeds within 3e-4 pu
+    (measured 2.1e-4; this PSS's gain is small: without the cut-off 2.9e-11 pu apart)."""
+    sim, res, ss, t, w, wa = andes_case_run("kundur/kundur_ieeest.xlsx", 7)
+    assert sim.model.initial_residual[0] < 1e-8
+    assert (sim.case.pss.VCU[0], sim.case.pss.VCL[0]) == (1.2, 0.8)
+    assert np.max(np.abs(w - wa)) < 3e-4 and np.max(np.abs(wa - 1)) > 7e-3
+    m = ss.IEEEST
+    v_a = ss.dae.ts.y[:, ss.Bus.v.a[list(ss.Bus.idx.v).index(m.bus.v[0])]]
+    v = np.interp(t, res.t, res.vmag[:, list(res.buses).index(1)])
+    low = (t > 1.0 + AWAY) & (t < 1.1 - AWAY)
+    assert np.all(v_a[low] < 0.8) and np.all(v[low] < 0.8)
+    assert np.all(ss.dae.ts.y[low, m.vsout.a[0]] == 0.0)
 
 
 def test_import_andes_n44_keeps_its_machines_and_says_what_changed():

@@ -233,8 +233,8 @@ def test_wecc_imports_completely():
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
         (29, 25),
-        (29, len(EXCITER.names)),  # every declared column (39, stabctl.models.exciters)
-        (29, 24),
+        (29, len(EXCITER.names)),  # every declared column (43, stabctl.models.exciters)
+        (29, len(PSS.names)),  # every declared column (26, stabctl.models.pss)
         (29, 26),
     ) and t.unsupported == ()
     kinds = dict(zip(*np.unique(t.exc_con[:, 0], return_counts=True)))
@@ -293,7 +293,7 @@ def test_wecc_esst3a_to_exc_st3():
     )
     assert row[EXCITER.col("VBmax") - 1] == 6.48
     np.testing.assert_array_equal(
-        t.pss_con[0], [2, gens[r]["number"], -2 * 1.0, 4.2, 0, 0.75, 0, 0, 0.1, -0.1] + [0] * 14
+        t.pss_con[0], [2, gens[r]["number"], -2 * 1.0, 4.2, 0, 0.75, 0, 0, 0.1, -0.1] + [0] * 16
     )
 
 
@@ -319,7 +319,7 @@ def test_ieeest_maps_to_pst_pss_when_equivalent(tmp_path):
     t = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
     # speed input (PST type 1), K*Tw = KS T5 = 20 * 1.5, Tw = T6, lead-lags (0.2/0.02), (0/0.5)
     np.testing.assert_array_equal(
-        t.pss_con[0], [1, 1, 30, 10, 0.2, 0.02, 0, 0.5, 0.1, -0.1] + [0] * 14
+        t.pss_con[0], [1, 1, 30, 10, 0.2, 0.02, 0, 0.5, 0.1, -0.1] + [0] * 16
     )
     np.testing.assert_array_equal(t.exc_con[0][:9], [0, 1, 0, 100, 0.05, 10, 1.0, 5, -5])
     assert t.mac_con[0][6] == 0.25 and t.mac_con[0][5] == 0  # classical: x'd = ZSORCE X
@@ -838,7 +838,7 @@ def test_psse_stabiliser_transfer_function_matches_closed_form():
     def f(x, w):
         full, dx = x0.copy(), np.zeros_like(x0)
         full[act, 0] = x
-        y = pss_.output_and_derivatives(P, full, 0, w, 0.0, dx)
+        y = pss_.output_and_derivatives(P, full, 0, w, 0.0, 1.0, dx)
         return dx[act, 0], y
 
     n, h = act.size, 1e-4
@@ -880,7 +880,7 @@ def test_psse_stabiliser_output_is_zero_and_steady_at_the_initial_point():
     assert (u1[0], u2[0]) == (0.0, 0.7)  # speed deviation, power
     x = pss_.initialise(p, u1, u2)
     dx = np.full_like(x, np.nan)
-    y = pss_.output_and_derivatives(p.packed(), x, 0, 1.0, 0.7, dx)
+    y = pss_.output_and_derivatives(p.packed(), x, 0, 1.0, 0.7, 1.0, dx)
     assert y == pytest.approx(0, abs=1e-15)
     assert np.abs(dx).max() < 1e-14
 

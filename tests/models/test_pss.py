@@ -61,7 +61,7 @@ def started(row, omega=OMEGA0, pe=PE0):
 
 def output(P, x, omega=OMEGA0, pe=PE0):
     dx = np.full_like(x, np.nan)
-    return pss_.output_and_derivatives(P, x, 0, omega, pe, dx), dx
+    return pss_.output_and_derivatives(P, x, 0, omega, pe, 1.0, dx), dx
 
 
 @pytest.mark.parametrize("name", sorted(ROWS))
@@ -143,3 +143,23 @@ def test_pst_pss_first_lead_lag_needs_its_lag():
 def test_layout_names_every_packed_column_once():
     assert pss_.S._fields == tuple(name for name, _ in pss_.PACKED)
     assert params(PSSE).packed().shape == (1, len(pss_.S))
+
+
+@pytest.mark.parametrize("name", sorted(ROWS))
+def test_output_is_cut_off_outside_vcl_vcu_while_the_states_move_on(name):
+    """With VCU = 1.2, VCL = 0.8 (pss_con columns 25-26; PSS/E IEEEST, ANDES ``OLIM``) the
+    output is 0 at a terminal voltage of 0.7 or 1.3 pu and unchanged at 1.0 pu; the
+    derivatives are the same at all three (the blocks run on); VCU = VCL = 0: no cut-off."""
+    row = ROWS[name] + [0] * (24 - len(ROWS[name]))
+    P, x = started([*row, 1.2, 0.8])
+    P0, _ = started(row)
+    x = x + 0.01  # away from rest: every type's output moves
+    ys, dxs = [], []
+    for vt in (1.0, 0.7, 1.3):
+        dx = np.zeros_like(x)
+        ys.append(pss_.output_and_derivatives(P, x, 0, OMEGA0 + 0.01, PE0 + 0.1, vt, dx))
+        dxs.append(dx)
+    dx = np.zeros_like(x)
+    free = pss_.output_and_derivatives(P0, x, 0, OMEGA0 + 0.01, PE0 + 0.1, 0.1, dx)
+    assert ys[0] == free != 0 and ys[1] == ys[2] == 0.0
+    assert np.array_equal(dxs[0], dxs[1]) and np.array_equal(dxs[0], dxs[2])
