@@ -472,16 +472,12 @@ def _esst1a(rec, gen, andes=False):
 
 def _esst3a(rec, gen):
     """ESST3A: TR VIMAX VIMIN KM TC TB KA TA VRMAX VRMIN KG KP KI VBMAX KC XL VGMAX THETAP TM
-    VMMAX VMMIN -> PST exc_st3 (type 3) when TA = 0: ST3A's gain KA is PST's K_J, its inner
-    loop KM/(1 + s TM) limited [VMMIN, VMMAX] is PST's K_A/(1 + s T_A) limited [Vrmin,
-    Vrmax]; VRMAX/VRMIN have no PST counterpart; VBMAX limits V_B (exc_con column 33,
-    stabctl's, not PST's) and Efdmax = VBMAX VMMAX (docs 12.2)."""
+    VMMAX VMMIN -> PST exc_st3 (type 3): ST3A's gain KA is PST's K_J, its inner loop KM/(1 +
+    s TM) limited [VMMIN, VMMAX] is PST's K_A/(1 + s T_A) limited [Vrmin, Vrmax]; its
+    regulator lag 1/(1 + s TA) non-windup on [VRMIN, VRMAX] is stabctl's (exc_con columns
+    44, 28-29; TA = 0: none, and VRMAX/VRMIN unused, PST's exc_st3); VBMAX limits V_B
+    (exc_con column 33, stabctl's, not PST's) and Efdmax = VBMAX VMMAX (docs 12.2)."""
     v = DYR_MODELS["ESST3A"].values(rec.params)
-    if v["TA"] >= 1e-3:
-        raise _Unsupported(
-            f"TA = {v['TA']:g} s: the regulator lag before the inner loop has "
-            "no PST exc_st3 counterpart (only TA = 0)"
-        )
     return _exc_row(rec, gen, Efdmax=v["VBMAX"] * v["VMMAX"])
 
 

@@ -235,8 +235,20 @@ EXCITER = Family(
         ),
         Param("TC1", "s", 26, doc="ESST1A: second lead time constant"),
         Param("TB1", "s", 27, lo=0.0, doc="ESST1A: second lag time constant"),
-        Param("VAmax", "pu", 28, doc="ESST1A, ESAC1A: maximum regulator output V_A"),
-        Param("VAmin", "pu", 29, doc="ESST1A, ESAC1A: minimum regulator output V_A"),
+        Param(
+            "VAmax",
+            "pu",
+            28,
+            doc="ESST1A, ESAC1A: maximum regulator output V_A | ST3: ESST3A's VRMAX on "
+            "its regulator lag (with TA_st3a)",
+        ),
+        Param(
+            "VAmin",
+            "pu",
+            29,
+            doc="ESST1A, ESAC1A: minimum regulator output V_A | ST3: ESST3A's VRMIN on "
+            "its regulator lag (with TA_st3a)",
+        ),
         Param("KLR", "", 30, doc="ESST1A: field current limiter gain"),
         Param("ILR", "pu", 31, doc="ESST1A: field current limiter pick-up (machine base)"),
         Param("KD", "", 32, doc="EXAC1, ESAC1A: demagnetising factor of the field current"),
@@ -258,6 +270,14 @@ EXCITER = Family(
         Param("KIM", "1/s", 41, doc="ESST4B: inner-loop PI integral gain"),
         Param("VMmax", "pu", 42, doc="ESST4B: inner-loop PI output upper limit"),
         Param("VMmin", "pu", 43, doc="ESST4B: inner-loop PI output lower limit"),
+        Param(
+            "TA_st3a",
+            "s",
+            44,
+            lo=0.0,
+            doc="ST3: ESST3A's regulator lag 1/(1 + s T_A) before the inner loop, non-windup "
+            "on [VAmin, VAmax] (below 1e-3 s: none, as PST exc_st3)",
+        ),
     ),
     dyr=(
         # SEXS -> smpexc: T_C = (TA/TB) TB is computed
@@ -598,9 +618,10 @@ EXCITER = Family(
             kind=6,
             andes=("ESST1A",),
         ),
-        # ESST3A -> exc_st3 (TA = 0): its KA is PST's K_J, its inner loop KM/(1 + s TM)
-        # limited [VMMIN, VMMAX] PST's K_A/(1 + s T_A); VBMAX limits V_B (column 33);
-        # Efdmax = VBMAX VMMAX is computed
+        # ESST3A -> exc_st3: its KA is PST's K_J, its inner loop KM/(1 + s TM) limited
+        # [VMMIN, VMMAX] PST's K_A/(1 + s T_A); VBMAX limits V_B (column 33); its
+        # regulator lag 1/(1 + s TA) on [VRMIN, VRMAX] columns 44, 28-29 (none for TA
+        # = 0); Efdmax = VBMAX VMMAX is computed
         DyrModel(
             "ESST3A",
             (
@@ -645,6 +666,9 @@ EXCITER = Family(
                 "KG": "KG",
                 "VGmax": "VGMAX",
                 "VBmax": "VBMAX",
+                "TA_st3a": "TA",
+                "VAmax": "VRMAX",
+                "VAmin": "VRMIN",
             },
             kind=3,
             andes=("ESST3A",),
@@ -655,7 +679,7 @@ EXCITER = Family(
 SMP, DC1, DC2, ST3, ST1, T2, ST1A, AC1, AC4, AC1A, AC8B, T3, ST4B = range(13)
 STATE_NAMES = {
     SMP: ("VTR", "VAs", "Efd"),
-    ST3: ("VTR", "VAs", "VR"),
+    ST3: ("VTR", "VAs", "VR", "VA"),
     DC1: ("VTR", "VAs", "VR", "Efd", "Rf"),
     DC2: ("VTR", "VAs", "VR", "Efd", "Rf"),
     ST1: ("VTR", "VAs", "VR", "Rf"),
@@ -807,8 +831,17 @@ class ExciterParams(Declared):
         return np.where(self.has_TB1, self.TC1 / np.where(self.has_TB1, self.TB1, 1.0), 1.0)
 
     def n_slots(self) -> int:
-        """State slots per exciter: the most any exciter of the case uses (3 if none)."""
-        return max([3, *(len(STATE_NAMES[int(k)]) for k in self.kind)])
+        """State slots per exciter: the most any exciter of the case uses (3 if none; an ST3
+        uses its fourth, ESST3A's regulator lag, only with T_A)."""
+        used = [len(STATE_NAMES[int(k)]) for k in self.kind]
+        return max(
+            [3, *(u - (k == ST3 and not a) for u, k, a in zip(used, self.kind, self.has_TA3A))]
+        )
+
+    @property
+    def has_TA3A(self):
+        """ST3 with ESST3A's regulator lag (T_A >= 1e-3 s, exc_con column 44)."""
+        return (self.kind == ST3) & (self.TA_st3a >= LBND)
 
     def has_state(self) -> np.ndarray:
         """Boolean (n_slots, n_exc): the slots that are states (docs/modal.md)."""
@@ -817,7 +850,7 @@ class ExciterParams(Declared):
         act[1] |= (self.kind == ST4B) & (self.Kpid_I != 0)  # the regulator PI's integral
         act[2] = (self.kind == ST3) | self.has_TA
         t3, st4b = self.kind == T3, self.kind == ST4B
-        act[3] = self.has_Rf | self.is_ac | t3 | (st4b & (self.KIM != 0))
+        act[3] = self.has_Rf | self.is_ac | t3 | (st4b & (self.KIM != 0)) | self.has_TA3A
         act[4] = self.is_dc | self.has_TB1 | ((self.is_ac | t3) & self.has_Rf) | self.has_pid_d
         act[5] = self.has_VF
         return act[: self.n_slots()]
@@ -835,6 +868,7 @@ class ExciterParams(Declared):
             ("exc_con T_A", self.TA, self.has_TA),
             ("exc_con T_B", self.TB, self.has_TB),
             ("exc_con T_B1", self.TB1, self.has_TB1),
+            ("exc_con TA_st3a", self.TA_st3a, self.has_TA3A),
             ("exc_con T_E", self.TE, self.is_dc | self.is_ac | (self.kind == T3)),
             ("exc_con T_F", self.TF, self.has_Rf),
             ("exc_con T_F2", self.TF2, self.has_VF),
@@ -1060,11 +1094,12 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     VA_st3 = VR / p.KA + np.minimum(p.VGmax, p.KG * vex)
     VI = VA_st3 / np.where(p.KJ == 0, 1.0, p.KJ)
     bad = st3 & (beyond(vex, -np.inf, p.Efdmax) | beyond(VI, p.VImin, p.VImax))
+    bad |= p.has_TA3A & beyond(VA_st3, p.VAmin, p.VAmax)
     if bad.any():
         i = int(np.nonzero(bad)[0][0])
         raise CaseError(
             f"exc_con row {i + 1}: initial field voltage {vex[i]:.3f} pu outside "
-            "the ST3 limits (Efdmax or VI range)"
+            "the ST3 limits (Efdmax, the VI range or ESST3A's [VRMIN, VRMAX])"
         )
     p, VR_dc = _dc_initial_regulator(p, vex, eterm)
     st1, st1a = p.kind == ST1, p.kind == ST1A
@@ -1075,7 +1110,7 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     x[1] = VA
     x[2] = np.where(smp, vex_smp, np.where(st1, vex, np.where(dc, VR_dc, VR)))
     x[2] = np.where(st1a, VR_st1a, x[2])
-    x[3] = np.where(p.has_Rf, vex, 0.0)
+    x[3] = np.where(p.has_Rf, vex, np.where(p.has_TA3A, VA_st3, 0.0))
     x[4] = np.where(dc, vex, np.where(st1a, VA, 0.0))
     if p.is_ac.any():
         VE, VFE = ac_initial_exciter(p, vex)
@@ -1460,9 +1495,15 @@ def _st3_field_voltage(P, x, i, VB, ieee):
 @kernel(inline="always")
 def _st3_derivatives(P, x, i, err, efd, dx, ieee):
     """exc_st3: V_R clamped and its derivative zeroed when it pushes outward
-    (`blocks.nonwindup`)."""
+    (`blocks.nonwindup`); with TA_st3a ESST3A's regulator lag (state V_A, non-windup on
+    [VAmin, VAmax], IEEE 421.5's rule) between the lead-lag and the inner loop."""
     u = P[i, E.KJ] * clip(err, P[i, E.VIMIN], P[i, E.VIMAX])
     VA, dx[1, i] = leadlag_input_state(u, x[1, i], P[i, E.TCTB], P[i, E.TB])
+    if P[i, E.TA_ST3A] >= LBND:  # ESST3A's regulator lag (no PST counterpart)
+        x[3, i], dx[3, i] = nonwindup_lag(
+            VA, x[3, i], P[i, E.TA_ST3A], P[i, E.VAMIN], P[i, E.VAMAX], _IEEE_RULE, 0.0
+        )
+        VA = x[3, i]
     x[2, i], dx[2, i] = nonwindup_lag(
         P[i, E.KA] * (VA - min(P[i, E.VGMAX], P[i, E.KG] * efd)),
         x[2, i],
