@@ -329,11 +329,12 @@ class Simulator:
     def _for_storage(self, storage) -> Simulator:
         """This simulator, or for a fleet of WECC batteries (`StorageFleet.model` "wecc")
         the simulator of the case with them (`stabctl.storage.devices.battery_case`, same
-        operating point: the batteries start idle), built once per fleet layout."""
+        operating point: the batteries start idle), built once per fleet layout (bus,
+        rating, energy and initial charge of each device, the battery fields)."""
         if storage is None or storage.model != "wecc" or self.battery_rows is not None:
             return self
         key = (
-            tuple((d.bus, d.pmax_mw) for d in storage.devices),
+            tuple((d.bus, d.pmax_mw, d.energy_mj, d.soc0) for d in storage.devices),
             tuple(sorted(storage.battery.items())),
         )
         if key not in self._battery_sims:

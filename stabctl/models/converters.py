@@ -291,13 +291,26 @@ CONVERTER = Family(
             lo=0.0,
             doc="frequency measurement: washout time constant (ANDES BusFreq Tw, > 0)",
         ),
-        Param("Tf", "s", 32, default=1.0, doc="ESD1: state-of-charge integrator time constant"),
-        Param("SOCmin", "", 33, doc="ESD1: minimum state of charge"),
-        Param("SOCmax", "", 34, default=1.0, doc="ESD1: maximum state of charge"),
-        Param("SOCinit", "", 35, default=0.5, doc="ESD1: initial state of charge"),
-        Param("En", "MWh", 36, default=100.0, doc="ESD1: rated energy"),
-        Param("EtaC", "", 37, default=1.0, doc="ESD1: charging efficiency"),
-        Param("EtaD", "", 38, default=1.0, doc="ESD1: discharging efficiency"),
+        Param(
+            "Tf",
+            "s",
+            32,
+            default=1.0,
+            doc="ESD1, REGCA1 battery: state-of-charge integrator time constant",
+        ),
+        Param("SOCmin", "", 33, doc="ESD1, REGCA1 battery: minimum state of charge"),
+        Param("SOCmax", "", 34, default=1.0, doc="ESD1, REGCA1 battery: maximum state of charge"),
+        Param("SOCinit", "", 35, default=0.5, doc="ESD1, REGCA1 battery: initial state of charge"),
+        Param(
+            "En",
+            "MWh",
+            36,
+            default=100.0,
+            doc="ESD1, REGCA1 battery (``storage`` 1): rated energy (battery: 0 none, no state of "
+            "charge)",
+        ),
+        Param("EtaC", "", 37, default=1.0, doc="ESD1, REGCA1 battery: charging efficiency"),
+        Param("EtaD", "", 38, default=1.0, doc="ESD1, REGCA1 battery: discharging efficiency"),
         Param("Tg", "s", 39, default=0.1, lo=0.0, doc="REGCA1: converter time constant"),
         Param(
             "Rrpwr",
@@ -402,13 +415,14 @@ N_STATES = 5 + len(REECA1_SLOTS) + len(REPCA1_SLOTS)
 STATE_NAMES = {
     PVD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
     ESD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
-    REGCA1: ("Ip", "Iq", "V_filter", "", "", *REECA1_SLOTS, *REPCA1_SLOTS),
+    REGCA1: ("Ip", "Iq", "V_filter", "", "SOC", *REECA1_SLOTS, *REPCA1_SLOTS),
 }
 #: slots that are not states but the memory of REECA1's discrete logic, written in place by
 #: the kernel (ANDES's ExtendedEvent timers, its VarHold of Ipmax, the frozen PI outputs):
 #: at rest they do not move; the linearisation leaves them out (`has_state`)
 MEMORY_SLOTS = [*range(int(_T_IQ), int(_IPCMD) + 1), int(_PC_E_H), int(PLANT_PREF_SLOT)]
-#: the slots that integrate energy (ESD1's state of charge): at rest only at zero output,
+#: the slots that integrate energy (ESD1's and a battery's state of charge): at rest only
+#: at zero output,
 #: so the initial-point check leaves them out (unused, 0, in the other types)
 ENERGY_SLOTS = [STATE_NAMES[ESD1].index("SOC")]
 #: the ibr_con fields the kernels take as given (pu quantities after the base change)
@@ -535,13 +549,19 @@ class ConverterParams(Declared):
             *((f"ibr_con {n}", getattr(self, n), self.repc == REPCA1) for n in REPCA1_LAGS),
         )
 
+    @property
+    def is_battery(self):
+        """REGCA1 batteries with a state of charge (``storage`` 1, finite En; WECC
+        REEC_C)."""
+        return (self.type == REGCA1) & (self.storage == 1) & (self.Ksoc > 0)
+
     def has_state(self) -> np.ndarray:
         """Boolean (N_STATES, n_ibr): the slots that are states of each device."""
         act = np.ones((N_STATES, self.n), bool)
         reg = self.type == REGCA1
         act[2] = reg | (self.Tfm >= LBND)
         act[3] = ~reg
-        act[4] = self.type == ESD1
+        act[4] = (self.type == ESD1) | self.is_battery
         act[5:_PC_V] = self.reec == REECA1
         act[_PC_V:] = self.repc == REPCA1
         act[_PC_FL] &= self.Tfm >= LBND
@@ -617,7 +637,8 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         # ANDES's Ipcmd at an initial LVG of 0 is 1 (regca1.py 202); refused by initialise
         Ipcmd0 = np.where(LVG0 > 0, P0 / v0 / np.where(LVG0 > 0, LVG0, 1.0), 1.0)
     with np.errstate(divide="ignore"):
-        Ksoc = np.where(t.type == ESD1, case.base_mva / 3600.0 / t.En / t.Tf, 0.0)
+        soc = (t.type == ESD1) | ((t.type == REGCA1) & (t.storage == 1) & (t.En > 0))
+        Ksoc = np.where(soc, case.base_mva / 3600.0 / t.En / t.Tf, 0.0)
     cp = ConverterParams(
         pos=np.full(n, -1, np.int64),
         bus_idx=np.asarray(idx, np.int64),
@@ -891,14 +912,21 @@ def _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx):
 @kernel
 def _ip_command(P, x, k, Ip_order, Ipmax, hold):
     """REECA1's active current command IpHL = clip(Ip_order, 0, Ipmax) of device k (a
-    battery, ``storage`` 1: clip(Ip_order, -Ipmax, Ipmax), WECC REEC_C), Ipmax held at
-    its value before ``hold`` (1.0 for Thld2 s after a dip; ANDES VarHold Ipmaxh),
-    tracked in place otherwise."""
+    battery, ``storage`` 1: clip(Ip_order, -Ipmax, Ipmax), WECC REEC_C, whose state of
+    charge, with a finite En, stops discharging at SOCmin and charging at SOCmax), Ipmax
+    held at its value before ``hold`` (1.0 for Thld2 s after a dip; ANDES VarHold
+    Ipmaxh), tracked in place otherwise."""
     if hold:
         Ipmax = x[_IPMAX_H, k]
     else:
         x[_IPMAX_H, k] = Ipmax
-    return clip(Ip_order, -P[k, C.STORAGE] * Ipmax, Ipmax)
+    lo, hi = -P[k, C.STORAGE] * Ipmax, Ipmax
+    if P[k, C.KSOC] > 0.0:
+        if x[4, k] <= P[k, C.SOCMIN]:
+            hi = 0.0
+        if x[4, k] >= P[k, C.SOCMAX]:
+            lo = 0.0
+    return clip(Ip_order, lo, hi)
 
 
 @kernel
@@ -1181,18 +1209,25 @@ def derivatives(P, x, k, V, V_nc, reach, dx):
             Ipcmd, Iq_target = _reeca1(P, x, k, v, v * Ipout + 1j * v * Iqout, ext, dx)
             x[_IPCMD, k] = Ipcmd + P[k, C.IPOFF]
         _regca1_derivatives(P, x, k, v, Iq_target, reach, dx)
+        dx[4, k] = _soc_rate(P, k, v * Ipout)
         return v * Ipout + 1j * v * Iqout
     Ipcmd, Iqcmd, dL, dW = _algebraic(P, x, k, V)
     _, dx[0, k] = lag(Ipcmd, x[0, k], P[k, C.TIP])
     _, dx[1, k] = lag(Iqcmd, x[1, k], P[k, C.TIQ])
     dx[2, k] = dL
     dx[3, k] = dW
-    dx[4, k] = 0.0
-    if P[k, C.TYPE] == ESD1:
-        pe = v * x[0, k]
-        u = -pe * P[k, C.ETAC] if x[0, k] < 0.0 else -pe / P[k, C.ETAD]
-        dx[4, k] = P[k, C.KSOC] * u
+    dx[4, k] = _soc_rate(P, k, v * x[0, k])
     return v * x[0, k] + 1j * v * x[1, k]
+
+
+@kernel
+def _soc_rate(P, k, pe):
+    """dSOC/dt of device k injecting pe (pu, system base): Ksoc (-EtaC pe) charging, Ksoc
+    (-pe/EtaD) discharging (ANDES 2.0 esd1.py; WECC REEC_C's SOC integrator with its
+    efficiencies); 0 without a state of charge (Ksoc 0)."""
+    if P[k, C.KSOC] == 0.0:
+        return 0.0
+    return P[k, C.KSOC] * (-pe * P[k, C.ETAC] if pe < 0.0 else -pe / P[k, C.ETAD])
 
 
 @njit(cache=True)
@@ -1254,7 +1289,7 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     reg = cp.type == REGCA1
     x[0], x[1] = np.where(reg, cp.Ipcmd0, cp.P0 / v), cp.Q0 / v
     x[2] = np.where(reg, v, 0.0)
-    x[4] = np.where(cp.type == ESD1, cp.SOCinit, 0.0)
+    x[4] = np.where((cp.type == ESD1) | cp.is_battery, cp.SOCinit, 0.0)
     P, Vc, V_nc = at_power_flow(cp, V0)
     if np.any(cp.reec == REECA1):
         _reeca1_initial(cp, x, v)

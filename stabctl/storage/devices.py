@@ -15,6 +15,7 @@ The control laws a fleet shares are in `stabctl.storage.control` (re-exported by
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -139,7 +140,7 @@ class StorageFleet:
         ``"ideal"`` (default): each device draws the law's power at its bus (with its
         lag, ramp and energy); ``"wecc"``: each device is a WECC battery whose plant
         takes the law's power as its P reference (`battery_case`; the devices' lag and
-        ramp are then the converter's, their energy range still bounds the reference).
+        ramp are then the converter's, and their energy its state of charge, WECC REEC_C).
     battery : dict, optional
         ibr_con fields of the WECC batteries replacing `WECC_BATTERY`'s or the table's
         defaults (e.g. ``{"Imax": 1.2}``); only with model "wecc".
@@ -192,8 +193,10 @@ def hv_bus(case: Case, machine: int) -> int:
 
 def battery_case(case: Case, fleet: StorageFleet) -> tuple[Case, np.ndarray]:
     """The case with each device of a "wecc" fleet as a WECC battery: a converter row per
-    device at its bus, rated its MW (MVA), the fields of `WECC_BATTERY` and the fleet's
-    ``battery`` overrides, numbered after the case's converters.
+    device at its bus, rated its MW (MVA), its energy and initial state of charge as the
+    battery's (En, SOCinit: WECC REEC_C's state of charge, which stops discharging empty
+    and charging full), the fields of `WECC_BATTERY` and the fleet's ``battery``
+    overrides, numbered after the case's converters.
 
     Parameters
     ----------
@@ -220,7 +223,14 @@ def battery_case(case: Case, fleet: StorageFleet) -> tuple[Case, np.ndarray]:
     fields = {**WECC_BATTERY, **fleet.battery}
     rows = []
     for j, d in enumerate(fleet.devices):
-        row = {"number": first + j, "bus": d.bus, "mva": d.pmax_mw, **fields}
+        row = {
+            "number": first + j,
+            "bus": d.bus,
+            "mva": d.pmax_mw,
+            "En": d.energy_mj / 3600.0 if math.isfinite(d.energy_mj) else 0.0,  # MWh; 0: none
+            "SOCinit": d.soc0,
+            **fields,
+        }
         rows.append([row.get(c, type(t).DEFAULTS.get(c, 0.0)) for c in t.columns()])
     table = type(t).from_matrix(np.vstack([t.matrix(), np.array(rows, float)]))
     return case.replace(converters=table), np.arange(n0, n0 + len(rows))
@@ -369,8 +379,10 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray, xslot=None)
         pmax=f("pmax_mw") / base,
         lag=f("lag_s"),
         ramp=f("ramp_mw_s") / base,
-        emax=f("energy_mj") / base,
-        e0=np.where(np.isfinite(f("energy_mj")), f("soc0") * f("energy_mj"), 0.0) / base,
+        # WECC batteries keep their state of charge in the converter (`battery_case`)
+        emax=f("energy_mj") / base if xslot is None else np.full(len(devs), np.inf),
+        e0=np.where(np.isfinite(f("energy_mj")) & (xslot is None), f("soc0") * f("energy_mj"), 0)
+        / base,
         kind=law.kind if devs else NO_STORAGE,
         db=law.db,
         hyst=law.hyst,

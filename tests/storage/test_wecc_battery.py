@@ -154,3 +154,24 @@ def test_estimators_in_the_loop_command_wecc_batteries(kundur):
     assert np.max(np.abs(run.result.pesd - cmd)) > 0.1  # the converters lag the law
     with pytest.raises(InputError, match="ambient load fluctuation runs with ideal ESDs"):
         cl.run_closed_loop(sim, ev, 6.0, loop, ambient=AmbientLoad())
+
+
+@pytest.mark.parametrize("command", [-1.0, 1.0])
+def test_state_of_charge_stops_a_battery_empty_or_full(kundur, command):
+    """WECC REEC_C's state of charge (the device's energy as the battery's En, SOCinit):
+    90 MJ batteries at half charge, commanded their full rating out (-1) or in (+1) from
+    1 s, deliver or take 45 MJ (half their energy, within the 20 ms lags' tail, 3 %) and
+    then nothing: the current command's range closes at SOCmin or SOCmax."""
+    from dataclasses import replace
+
+    case, sim = kundur
+    fleet = uniform_fleet(case, 5, model="wecc")
+    fleet = replace(fleet, devices=tuple(replace(d, energy_mj=90.0) for d in fleet.devices))
+    res = commanded(sim, fleet, lambda t: np.where(t >= 1.0, command, 0.0) * np.ones(4), 4.0)
+    rating = 45.0 / case.base_mva
+    energy = np.trapezoid(res.pesd, res.t, axis=0) * case.base_mva  # MJ absorbed (+)
+    np.testing.assert_allclose(energy * command, 45.0, rtol=0.03)  # measured 45.8-46.0
+    assert np.max(np.abs(res.pesd[res.t > 3.5])) < 1e-3 * rating
+    step = lambda t: np.where(t >= 1.0, command, 0.0) * np.ones(4)  # noqa: E731
+    unlimited = commanded(sim, uniform_fleet(case, 5, model="wecc"), step, 4.0)
+    assert np.all(np.abs(unlimited.pesd[-1]) > 0.9 * rating)  # without En: at its rating
