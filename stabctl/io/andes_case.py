@@ -44,8 +44,10 @@ generator's P and Q (ANDES drops the rest of a replaced generator's power).
 Models with no effect on the network and machines are ignored: ``Summary`` (the case's
 notes, ``andes/models/info.py``), ``Area``, ``COI`` (the centre-of-inertia calculation,
 ``coi.py``: generators name it, no equation reads it), and the
-measurements ``BusFreq``, ``BusROCOF``, ``ACEc``, ``PMU``, ``PLL1``, ``PLL2`` (read by no
-model stabctl maps; a PLL only by REGCP1 and REGF2, which are refused).  Every
+measurements ``BusFreq``, ``BusROCOF``, ``ACEc``, ``PMU``, ``PLL1``, ``PLL2``, ``FreqDiv``
+(read by no model stabctl maps; a PLL only by REGCP1 and REGF2, which are refused; ANDES
+resolves a converter's or plant control's frequency measurement to a BusFreq at its bus,
+even where ``busf`` names a FreqDiv).  Every
 other model is refused by name (:class:`~stabctl.errors.InputError` listing each with its
 device count), disturbances (``Toggle``, ``Fault``, ``Alter``) included, or left out with
 ``on_unsupported="skip"``.
@@ -95,7 +97,18 @@ MAPPED_MODELS = {name: m.name for m in DYR_MODELS.values() for name in m.andes}
 #: ANDES models with no effect on the network or the machines (``Summary``: notes only,
 #: ``andes/models/info.py``, "not used in DAE calculations"; ``COI``: an output no
 #: equation reads; the measurements, read by no model mapped here)
-IGNORED_MODELS = ("Area", "BusFreq", "BusROCOF", "ACEc", "Summary", "COI", "PMU", "PLL1", "PLL2")
+IGNORED_MODELS = (
+    "Area",
+    "BusFreq",
+    "BusROCOF",
+    "ACEc",
+    "Summary",
+    "COI",
+    "PMU",
+    "PLL1",
+    "PLL2",
+    "FreqDiv",
+)
 #: ANDES converter models -> the converter type of stabctl.models.converters.CONVERTER
 CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1}
 #: ANDES controls read into their converter's row (a REGCA1's REECA1, ibr_con ``reec``)

@@ -952,6 +952,7 @@ def test_import_andes_ignores_the_summary_notes():
         ("kundur/kundur_coi.xlsx", "COI (2)", "Toggle (1)"),
         ("kundur/kundur_pmu.xlsx", "PMU (10)", "Toggle (1)"),
         ("ieee14/ieee14_pll1.xlsx", "PLL1 (10)", "Fault (1)"),
+        ("ieee14/ieee14_freqdiv.xlsx", "FreqDiv (14)", "Toggle (2)"),
     ],
 )
 def test_import_andes_ignores_calculations_no_equation_reads(name, ignored, disturbance):
