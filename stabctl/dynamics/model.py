@@ -258,7 +258,8 @@ class DynamicModel:
         L.view(x, "pss")[:] = pss_.initialise(
             self.pp, *pss_.pss_inputs(self.pp, xm[1], self.pmech0)
         )
-        xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac])
+        lp = np.where(self.gp.mac2 >= 0, self.pmech0[np.maximum(self.gp.mac2, 0)], 0.0)
+        xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac], lp)
         L.view(x, "tg")[:] = xg
         L.view(x, "ibr")[:] = conv.initialise(self.cp, op.V)
         self.x0 = x
@@ -699,6 +700,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     for k in range(ng):
         m = int(p.GP[k, gov.G.MAC])
         pmech[m] = gov.pmech(p.GP, xg, k, xm[1, m])
+        if p.GP[k, gov.G.MAC2] >= 0:  # a cross-compound unit's LP shaft
+            pmech[int(p.GP[k, gov.G.MAC2])] = gov.pmech_lp(p.GP, xg, k)
     mac.derivatives(p.MP, p.basrad, xm, cur, vex, pmech, dxm, pelect, qelect, eterm)
     assign(efd, p.vex0)
     for i in range(ne):

@@ -247,7 +247,10 @@ def _map_records(records, generators, conventions):
             if gen is None:
                 raise _Unsupported("no such generator in the RAW data (or out of service)")
             mapper = _ANDES_MAPPERS.get(rec.model) if andes else None
-            row = (mapper or _MAPPERS.get(rec.model) or _DEFAULT_ROW[kind])(rec, gen)
+            if rec.model == "IEEEG1":  # its LP shaft may be another generator's
+                row = (_ieeeg1_andes if andes else _ieeeg1)(rec, gen, _lp_generator(rec, gens))
+            else:
+                row = (mapper or _MAPPERS.get(rec.model) or _DEFAULT_ROW[kind])(rec, gen)
         except _Unsupported as why:
             skipped.append((rec, str(why)))
             continue
@@ -610,13 +613,43 @@ def _droop(rec, gen):
     return _tg_row(rec, gen, invR=1 / R)
 
 
-def _ieeeg1(rec, gen):
+def _ieeeg1(rec, gen, lp=None):
     """IEEEG1: JBUS M K T1 T2 T3 Uo Uc PMAX PMIN T4 K1 K2 T5 K3 K4 T6 K5 K6 T7 K7 K8 ->
-    tg_con type 3 (HP and LP powers summed on the one shaft; JBUS must be 0)."""
-    jbus = DYR_MODELS["IEEEG1"].values(rec.params)["JBUS"]
-    if jbus != 0:
-        raise _Unsupported(f"cross-compound unit (JBUS = {jbus:g}): LP shaft on another machine")
-    return _tg_row(rec, gen)
+    tg_con type 3: HP and LP powers summed on the one shaft (JBUS 0), or a cross-compound
+    unit with its LP shaft on generator ``lp`` (`_lp_generator`; tg_con column 27): its
+    parameters on the turbine's base, the two machines' MBASE summed (as ANDES 2.0's
+    ``ieeeg1.py`` with Tn 0), so K, PMAX, PMIN times (MBASE + MBASE_LP)/MBASE on the HP
+    machine's base."""
+    if lp is None:
+        return _tg_row(rec, gen)
+    scale = (gen["mbase"] + lp["mbase"]) / gen["mbase"]
+    v = DYR_MODELS["IEEEG1"].values(rec.params)
+    return _tg_row(
+        rec,
+        gen,
+        machine2=lp["number"],
+        invR=v["K"] * scale,
+        Tmax=v["PMAX"] * scale,
+        Tmin=v["PMIN"] * scale,
+    )
+
+
+def _lp_generator(rec, gens):
+    """The generator of an IEEEG1's LP shaft (JBUS, M; None for JBUS 0): the one at JBUS
+    with id M, or with M 0 the only one at JBUS (ANDES's records give no M); raises
+    `_Unsupported` when there is none or M 0 leaves it ambiguous."""
+    v = DYR_MODELS["IEEEG1"].values(rec.params)
+    jbus, m = int(v["JBUS"]), v["M"]
+    if jbus == 0:
+        return None
+    at = [g for (bus, _), g in gens.items() if bus == jbus]
+    if m != 0:
+        at = [g for g in at if _machine_id(g["id"]) == _machine_id(f"{m:g}")]
+    if len(at) != 1:
+        raise _Unsupported(
+            f"cross-compound LP shaft at bus {jbus}, id {m:g}: {len(at)} generators match"
+        )
+    return at[0]
 
 
 def _hygov(rec, gen, andes=False):
@@ -672,7 +705,6 @@ _MAPPERS = {
     "STAB2A": _stab2a,
     "TGOV1": _droop,
     "GAST": _droop,
-    "IEEEG1": _ieeeg1,
     "HYGOV": _hygov,
     "IEESGO": _ieesgo,
 }
@@ -682,10 +714,10 @@ _DEFAULT_ROW = {"machine": _mac_row, "exciter": _exc_row, "pss": _pss_row, "gove
 _KIND = {m.name: kind for kind, family in FAMILY.items() for m in family.dyr}
 
 
-def _ieeeg1_andes(rec, gen):
+def _ieeeg1_andes(rec, gen, lp=None):
     """IEEEG1 as ANDES 2.0 reads it: Uo, Uc (pu/s) on the system base, not converted to
     the machine base as its K, PMAX, PMIN are (``NumParam(power=True)``)."""
-    row = _ieeeg1(rec, gen)
+    row = _ieeeg1(rec, gen, lp)
     scale = gen.get("sbase", 100.0) / gen["mbase"]
     for name in ("Uo", "Uc"):
         row[GOVERNOR.col(name) - 1] *= scale
@@ -751,7 +783,6 @@ _ANDES_MAPPERS = {
     "IEEET3": _source_on_system_base(_ieeet3),
     #: ESST4B: ANDES's VGMAX, 20 (its default; stabctl.io.andes_case refuses others)
     "ESST4B": _source_on_system_base(lambda rec, gen: _esst4b(rec, gen, vgmax=20.0)),
-    "IEEEG1": _ieeeg1_andes,
     "GENSAL": _gensal_andes,
     "SCRX": _scrx_andes,
     "IEEET1": _dc("IEEET1", zero_vrmax_unlimited=True, andes=True),

@@ -122,6 +122,14 @@ GOVERNOR = Family(
         ),
         Param("AT", "pu", 25, doc="GAST ambient temperature load limit"),
         Param("KT", "", 26, doc="GAST temperature limiter gain"),
+        Param(
+            "machine2",
+            "code",
+            27,
+            integer=True,
+            doc="IEEEG1: machine number of the LP shaft of a cross-compound unit (PSS/E JBUS, "
+            "M): K2, K4, K6, K8 drive it; 0 one shaft (every fraction on `machine`)",
+        ),
     ),
     dyr=(
         # TGOV1: invR = 1/R is computed
@@ -259,6 +267,9 @@ PACKED = (
     ("MAC", "mac"),
     *((n.upper(), n) for n in TABLE_FIELDS),
     *((f"K{s}", f"K_{i}") for i, s in enumerate("ABCD")),
+    ("MAC2", "mac2"),
+    *((f"KL{s}", f"K_lp_{i}") for i, s in enumerate("ABCD")),
+    ("LP_BASE", "lp_base"),
     ("PREF", "Pref"),
     *((n.upper(), n) for n in HYGOV_FIELDS),
 )
@@ -271,10 +282,16 @@ class GovernorParams(Declared):
     """Governor data, arrays of shape (n_tg,): ``kind`` the tg_con type, ``mac`` the
     machine's row (index), the tg_con fields :data:`TABLE_FIELDS` under their declared
     names (stabctl.models.governors.GOVERNOR); K (n_tg, 4): IEEEG1 (and IEESGO) K1+K2, K3+K4,
-    K5+K6, K7+K8; Rp, rt, qNL, Kg, velm_rel: HYGOV's columns 17-21 (0 for other types;
-    T4 is its T_w, T5 its A_t)."""
+    K5+K6, K7+K8, or a cross-compound IEEEG1's HP fractions K1, K3, K5, K7, whose LP
+    fractions K2, K4, K6, K8 are K_lp (n_tg, 4; 0 otherwise) driving machine row mac2 (-1
+    none) with its power times lp_base (the HP machine's MVA over the LP machine's); Rp,
+    rt, qNL, Kg, velm_rel: HYGOV's columns 17-21 (0 for other types; T4 is its T_w, T5
+    its A_t)."""
 
     K: np.ndarray
+    mac2: np.ndarray
+    K_lp: np.ndarray
+    lp_base: np.ndarray
     Rp: np.ndarray
     rt: np.ndarray
     qNL: np.ndarray
@@ -288,7 +305,13 @@ class GovernorParams(Declared):
     def packed(self, Pref: np.ndarray) -> np.ndarray:
         """Parameter matrix (n_tg, len(PACKED)) for the compiled kernels, with P_ref, columns
         as :data:`PACKED`."""
-        return pack(self, PACKED, Pref=Pref, **{f"K_{i}": self.K[:, i] for i in range(4)})
+        return pack(
+            self,
+            PACKED,
+            Pref=Pref,
+            **{f"K_{i}": self.K[:, i] for i in range(4)},
+            **{f"K_lp_{i}": self.K_lp[:, i] for i in range(4)},
+        )
 
     def n_slots(self) -> int:
         """State slots per governor: the most any governor of the case uses (3 if none)."""
@@ -336,7 +359,11 @@ class GovernorParams(Declared):
         )
 
 
-check_packed(GovernorParams, PACKED, ("Pref", *(f"K_{i}" for i in range(4))))
+check_packed(
+    GovernorParams,
+    PACKED,
+    ("Pref", *(f"K_{i}" for i in range(4)), *(f"K_lp_{i}" for i in range(4))),
+)
 
 
 def governor_params(case: Case) -> GovernorParams:
@@ -368,6 +395,12 @@ def governor_params(case: Case) -> GovernorParams:
             )
     K = np.column_stack([g.K1 + g.K2, g.K3 + g.K4, g.K5 + g.K6, g.K7 + g.K8]).reshape(len(g), 4)
     bad = np.nonzero((g.type == IEEEG1) & (K.sum(axis=1) <= 0))[0]
+    cross = (g.type == IEEEG1) & (g.machine2 != 0)
+    K_hp = np.column_stack([g.K1, g.K3, g.K5, g.K7]).reshape(len(g), 4)
+    K_lp = np.column_stack([g.K2, g.K4, g.K6, g.K8]).reshape(len(g), 4)
+    mac2 = _lp_machines(case, g, cross)
+    mac = np.array([case.machine_index(m) for m in g.machine], int)
+    mva = case.machines.mva
     if bad.size:
         raise CaseError(
             f"tg_con row {bad[0] + 1}, fields 'K1'..'K8': IEEEG1 power fractions must sum to > 0"
@@ -375,27 +408,62 @@ def governor_params(case: Case) -> GovernorParams:
     hy = g.type == HYGOV
     return GovernorParams(
         kind=g.type.astype(int),
-        mac=np.array([case.machine_index(m) for m in g.machine], int),
+        mac=mac,
         **{n: getattr(g, n).copy() for n in TABLE_FIELDS},
-        K=np.where(hy[:, None], 0.0, K),
+        K=np.where(hy[:, None], 0.0, np.where(cross[:, None], K_hp, K)),
+        mac2=mac2,
+        K_lp=np.where(cross[:, None], K_lp, 0.0),
+        lp_base=np.where(cross, mva[mac] / mva[np.maximum(mac2, 0)], 0.0),
         **{n: np.where(hy, g.col(17 + i), 0.0) for i, n in enumerate(HYGOV_FIELDS)},
     )
 
 
-def initialise(p: GovernorParams, pmech0):
+def _lp_machines(case: Case, g, cross) -> np.ndarray:
+    """The LP machines' rows of the cross-compound IEEEG1 (-1 for the others); raises
+    CaseError for an unknown machine, the unit's own machine, or one with a governor of
+    its own."""
+    mac2 = np.full(len(g), -1, int)
+    own = set(int(m) for m in g.machine)
+    for r in np.nonzero(cross)[0]:
+        number = int(g.machine2[r])
+        if number == int(g.machine[r]) or number in own:
+            raise CaseError(
+                f"tg_con row {r + 1}, field 'machine2': machine {number} is the unit's own "
+                "or has a governor of its own"
+            )
+        mac2[r] = case.machine_index(number)
+    return mac2
+
+
+def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     """States (n_slots, n_tg) and P_ref (n_tg,) from the initial mechanical power pmech0
     (machine base) at rated speed: every lag at its input, lead-lag states at
     (1 - T_lead/T_lag) times their input.  P_ref is the power order (tg, TGOV1), the
-    gate position (IEEEG1, IEESGO: pmech0 / sum K) or R q_0 (HYGOV: flow, gate and gate
-    integrator at q_0 = pmech0/A_t + q_NL, head 1).
+    gate position (IEEEG1, IEESGO: pmech0 / sum K; a cross-compound IEEEG1: its two
+    machines' power, pmech0_lp the LP machine's on its base, over the sum of all eight
+    fractions) or R q_0 (HYGOV: flow, gate and gate integrator at q_0 = pmech0/A_t +
+    q_NL, head 1).
 
     Raises CaseError when the initial power order is outside [Tmin, Tmax] (PST's check
-    for tg, the non-windup limits for TGOV1 and IEEEG1), beyond `START_LIMIT_TOL`
-    (stabctl.models.declaration)."""
+    for tg, the non-windup limits for TGOV1 and IEEEG1), or a cross-compound unit's
+    machines do not share its power as its HP and LP fractions do (ANDES 2.0 ieeeg1.py's
+    ``_Pc`` check), beyond `START_LIMIT_TOL` (stabctl.models.declaration)."""
     x = np.zeros((N_STATES, p.n))
     tc = np.where(p.Tc >= LBND, p.Tc, 1.0)
     hy, sg = p.kind == HYGOV, p.kind == IEESGO
-    gate = pmech0 / np.where((p.kind == IEEEG1) | sg, p.K.sum(axis=1), 1.0)
+    cross = p.mac2 >= 0
+    lp = np.zeros(p.n) if pmech0_lp is None else np.asarray(pmech0_lp, float)
+    total = np.where(cross, pmech0 + lp / np.where(cross, p.lp_base, 1.0), pmech0)
+    K_all = p.K.sum(axis=1) + p.K_lp.sum(axis=1)
+    gate = total / np.where((p.kind == IEEEG1) | sg, K_all, 1.0)
+    bad = np.nonzero(cross & beyond(pmech0, p.K.sum(axis=1) * gate, p.K.sum(axis=1) * gate))[0]
+    if bad.size:
+        r = bad[0]
+        raise CaseError(
+            f"tg_con row {r + 1}: the cross-compound unit's HP machine starts at "
+            f"{pmech0[r]:.4f} pu, its fractions K1, K3, K5, K7 give "
+            f"{p.K[r].sum() * gate[r]:.4f} pu of the two machines' power"
+        )
     gate = np.where(hy, pmech0 / np.where(hy, p.T5, 1.0) + p.qNL, gate)
     bad = np.nonzero(beyond(gate, p.Tmin, p.Tmax))[0]
     if bad.size:
@@ -446,6 +514,17 @@ def pmech(P, x, k, omega):
     if kind == GAST:
         return lag(x[0, k], x[1, k], P[k, G.TC])[0] - P[k, G.DT] * (omega - 1.0)
     return _fractions(P, k, _ieesgo_lags(P, x, k, omega))
+
+
+@kernel
+def pmech_lp(P, x, k):
+    """Mechanical power (its machine's base) a cross-compound IEEEG1 k hands its LP
+    machine (column MAC2): the lags' outputs times K2, K4, K6, K8, in the HP machine's
+    base times LP_BASE."""
+    y = _ieeeg1_lags(P, x, k)
+    return P[k, G.LP_BASE] * (
+        P[k, G.KLA] * y[0] + P[k, G.KLB] * y[1] + P[k, G.KLC] * y[2] + P[k, G.KLD] * y[3]
+    )
 
 
 @kernel

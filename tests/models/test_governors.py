@@ -236,3 +236,27 @@ def test_gast_initial_power_above_its_load_limit_is_refused():
     """GAST starting where AT + KT (AT - Pm0) < Pm0 would not be at rest: refused."""
     with pytest.raises(CaseError, match="GAST's load limit"):
         started(GAST[:24] + [0.6, 2.0])
+
+
+def test_cross_compound_ieeeg1_shares_its_power_between_two_machines():
+    """An IEEEG1 on Kundur's machine 1 with its LP shaft on machine 2 (tg_con column 27):
+    the HP machine gets K1, K3, K5, K7 of the lags' outputs, the LP machine K2, K4, K6, K8
+    of them in its own base (times MVA_1/MVA_2); at rest both get their initial power,
+    gate = (P_HP + P_LP MVA_2/MVA_1)/sum K; a split unlike the fractions' is refused."""
+    case = load_case("kundur")
+    row = [*IEEEG1, *[0] * (27 - len(IEEEG1))]
+    row[16:24] = [0.2, 0.3, 0.2, 0.1, 0.1, 0.05, 0.0, 0.05]  # HP 0.5, LP 0.5
+    row[4], row[26] = 2.0, 2  # PMAX on the turbine's base; the LP shaft on machine 2
+    p = gov.governor_params(case.replace(governors=GovernorTable.from_matrix([row])))
+    assert p.mac2[0] == case.machine_index(2) and p.lp_base[0] == pytest.approx(1.0)
+    x, Pref = gov.initialise(p, np.array([0.6]), np.array([0.6]))
+    P = p.packed(Pref)
+    assert Pref[0] == pytest.approx(1.2)  # (0.6 + 0.6)/sum K = 1.2/1.0
+    assert gov.pmech(P, x, 0, 1.0) == pytest.approx(0.6)
+    assert gov.pmech_lp(P, x, 0) == pytest.approx(0.6)
+    assert np.abs(derivatives(P, x)).max() < 1e-12
+    with pytest.raises(CaseError, match=r"cross-compound unit's HP machine starts at 0\.7000"):
+        gov.initialise(p, np.array([0.7]), np.array([0.6]))
+    row[26] = 1
+    with pytest.raises(CaseError, match="'machine2': machine 1 is the unit's own"):
+        gov.governor_params(case.replace(governors=GovernorTable.from_matrix([row])))
