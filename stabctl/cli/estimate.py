@@ -474,6 +474,7 @@ def closed_loop(
 )
 @_WINDOW
 @_runs_seed
+@esd_model_option
 @model_options
 @json_option("the CCTs")
 @reports_errors
@@ -487,6 +488,7 @@ def cct(
     window_cycles,
     runs,
     seed,
+    esd_model,
     conventions,
     step,
     as_json,
@@ -509,9 +511,13 @@ def cct(
         seed=seed,
         settings=settings,
         model=model_settings(conventions, step),
+        esd_model=esd_model,
     )
     out = {
         "cct_cycles": table,
-        "lines": estimator_cct_lines(table, fault, far_bus, esd_pct, settings, runs, seed),
+        "esd_model": esd_model,
+        "lines": estimator_cct_lines(
+            table, fault, far_bus, esd_pct, settings, runs, seed, esd_model
+        ),
     }
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))

@@ -459,7 +459,14 @@ def print_plan(case_name, d) -> None:
 
 
 def estimator_cct_lines(
-    table: dict, bus: int, far_bus: int, esd_pct: float, settings, runs: int, seed: int
+    table: dict,
+    bus: int,
+    far_bus: int,
+    esd_pct: float,
+    settings,
+    runs: int,
+    seed: int,
+    esd_model: str = "ideal",
 ) -> list:
     """The text lines of `estimate cct`.
 
@@ -471,6 +478,8 @@ def estimator_cct_lines(
     esd_pct : float
     settings : stabctl.estimation.settings.PMUSettings
     runs, seed : int
+    esd_model : {"ideal", "wecc"}, optional
+        The storage devices' model (named in the first line).
 
     Returns
     -------
@@ -478,7 +487,8 @@ def estimator_cct_lines(
     """
     rate, lat = settings.rate, settings.latency_s
     lines = [
-        f"CCT of line {bus}-{far_bus}, ESD {esd_pct:g} %, {rate:g} frames/s, latency "
+        f"CCT of line {bus}-{far_bus}, {_ESD_NAMES[esd_model]} {esd_pct:g} %, {rate:g} "
+        f"frames/s, latency "
         f"{1000 * lat:g} ms, frequency window {settings.window_cycles:g} cycles, {runs} "
         f"seeds from {seed} (cycles):"
     ]

@@ -482,7 +482,13 @@ def cct_job(inputs: dict) -> dict:
         latency_s=inputs.get("latency", 0.05),
         window_cycles=inputs.get("window_cycles", PMUSettings.window_cycles),
     )
-    loop = LoopOptions(inputs["esd_pct"], inputs["estimator"], pmu, inputs["seed"])
+    loop = LoopOptions(
+        inputs["esd_pct"],
+        inputs["estimator"],
+        pmu,
+        inputs["seed"],
+        esd_model=inputs.get("esd_model", "ideal"),
+    )
     runner = LoopRunner(cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs)), loop)
     fault = LineFault(int(inputs["bus"]), int(inputs["far_bus"]), float(inputs.get("t_fault", 1.0)))
     r = critical_clearing_time(
@@ -560,6 +566,7 @@ def cct_study(
     pmu: PMUSettings = PMUSettings(),
     model=None,
     runner=None,
+    esd_model: str = "ideal",
 ) -> dict:
     """CCTs per rating and estimator over noise seeds, each by the cold bisection of
     `cct_job`, in parallel with `stabctl.parallel.run_sweep` (records appended to `out`,
@@ -591,6 +598,9 @@ def cct_study(
         Conventions, step and Q limits of every run (None: the defaults).
     runner : RunnerOptions or None
         Workers and progress (None: the defaults; no Dask scheduler here).
+    esd_model : {"ideal", "wecc"}
+        The storage devices' model (`LoopOptions.esd_model`); "wecc" jobs carry it in
+        their inputs and a "/wecc" key suffix.
 
     Returns
     -------
@@ -628,7 +638,12 @@ def cct_study(
         if pmu.window_cycles == PMUSettings.window_cycles
         else {"window_cycles": float(pmu.window_cycles)}
     )
-    tail = model.key_suffix() + "".join(f"/w{w:g}c" for w in window.values())
+    devices = {} if esd_model == "ideal" else {"esd_model": esd_model}  # ideal: keys as before
+    tail = (
+        model.key_suffix()
+        + "".join(f"/w{w:g}c" for w in window.values())
+        + "".join(f"/{m}" for m in devices.values())
+    )
     at = {} if fault.t_fault == 1.0 else {"t_fault": fault.t_fault}
 
     def job(p: float, e: str, s: int) -> Job:
@@ -646,6 +661,7 @@ def cct_study(
                 latency=latency,
                 **model.to_inputs(),
                 **window,
+                **devices,
                 **at,
             ),
         )

@@ -195,6 +195,7 @@ def estimator_ccts(
     seed: int,
     settings,
     model=None,
+    esd_model: str = "ideal",
 ) -> dict:
     """CCT of a line fault with each estimator in the loop, over ``runs`` noise seeds.
 
@@ -211,6 +212,8 @@ def estimator_ccts(
         Its rate, latency and frequency window are used.
     model : stabctl.dynamics.options.ModelOptions or None
         Conventions, step and Q limits (None: the defaults).
+    esd_model : {"ideal", "wecc"}
+        The storage devices' model (`stabctl.storage.devices.StorageFleet.model`).
 
     Returns
     -------
@@ -236,4 +239,5 @@ def estimator_ccts(
             seed=seed,
             pmu=pmu,
             model=model,
+            esd_model=esd_model,
         )[esd_pct]

@@ -1,5 +1,7 @@
 """ESD control with the speed estimator in the loop (stabctl.estimation.closed_loop)."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -180,3 +182,23 @@ def test_cct_study_passes_the_pmu_window_to_every_run_and_names_it_when_not_defa
             }
         )
     assert got["w"] == 4.0
+
+
+def test_cct_study_with_wecc_batteries_names_them_and_commands_them(tmp_path):
+    """esd_model "wecc": every job carries it and a "/wecc" key suffix (the ideal default's
+    keys and inputs unchanged), and the loop commands batteries: with exact measurements
+    Kundur line 3-101 at 5 % has its CCT at 11.75 cycles, a quarter cycle below the
+    ideal devices' 12 (the direct law's CCTs: 0.197 s and 0.202 s, docs/storage.md)."""
+    table = cl.cct_study(
+        "kundur",
+        LineFault(3, 101),
+        [5.0],
+        1,
+        tmp_path / "cct.jsonl",
+        estimators=("ideal",),
+        runner=RunnerOptions(workers=1, progress=False),
+        esd_model="wecc",
+    )[5.0]
+    assert table["ideal"]["values"] == [pytest.approx(11.75)]
+    keys = [json.loads(line)["key"] for line in (tmp_path / "cct.jsonl").read_text().splitlines()]
+    assert keys == ["kundur/3-101/5%/ideal/60fps/0.05s/seed0/wecc"]
