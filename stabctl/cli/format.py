@@ -416,7 +416,8 @@ def print_plan(case_name, d) -> None:
     c = d["cost"]
     click.echo(
         f"case {case_name} ({d['requirement']}; load levels "
-        f"{', '.join(f'{x:g}' for x in d['load_levels'])}): {d['total_mw']:.1f} MW, "
+        f"{', '.join(f'{x:g}' for x in d['load_levels'])}; "
+        f"{_ESD_NAMES[d.get('esd_model', 'ideal')]}): {d['total_mw']:.1f} MW, "
         f"{d['total_mwh']:.2f} MWh at {d['n_sites']} site(s), cost {c['total']:.1f} "
         f"(MW {c['mw']:.1f}, MWh {c['mwh']:.1f}, sites {c['site']:.1f}); "
         f"{'VERIFIED' if d['verified'] else 'NOT verified'} ({d['message']})"

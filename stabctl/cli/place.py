@@ -13,6 +13,7 @@ from stabctl.cli.format import print_json, print_plan
 from stabctl.cli.options import (
     AliasedOption,
     controller,
+    esd_model_option,
     faults_option,
     json_option,
     model_options,
@@ -146,6 +147,7 @@ from stabctl.errors import InputError
     "listed and the others are planned for (default: error, exit 2).",
 )
 @storage_options(with_rating=False)
+@esd_model_option
 @tol_options()
 @click.option(
     "--max-iter",
@@ -190,6 +192,7 @@ def place(
     v_gate,
     coi,
     hysteresis_hz,
+    esd_model,
     tol_ms,
     t_max,
     max_iter,
@@ -287,11 +290,12 @@ def place(
         search=search,
         model=model_settings(conventions, step),
         runner=RunnerOptions(n, scheduler),
+        esd_model=esd_model,
     )
     result = plan(
         case_name, faults, req, options, study, progress=(lambda msg: None) if as_json else None
     )
-    out = {"case": case.name, **result.to_dict()}
+    out = {"case": case.name, "esd_model": esd_model, **result.to_dict()}
     if out_path:
         atomic_write(out_path, lambda f: json.dump(out, f, indent=1, default=float))
     if as_json:

@@ -638,7 +638,7 @@ def cct_study(
         if pmu.window_cycles == PMUSettings.window_cycles
         else {"window_cycles": float(pmu.window_cycles)}
     )
-    devices = {} if esd_model == "ideal" else {"esd_model": esd_model}  # ideal: keys as before
+    devices = st.model_inputs(esd_model)  # ideal: keys and inputs as before
     tail = (
         model.key_suffix()
         + "".join(f"/w{w:g}c" for w in window.values())

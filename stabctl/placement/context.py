@@ -24,6 +24,7 @@ from stabctl.placement.loop import PlaceOptions, Study, evaluations
 from stabctl.placement.requirements import CostModel
 from stabctl.stability.cct import fault_inputs
 from stabctl.storage.control import BangBangCOI
+from stabctl.storage.devices import model_inputs
 
 
 @dataclass
@@ -37,7 +38,8 @@ class PlanContext:
     evaluation without storage (`add_base`); energy_rate: usable energy per MW at each site (MWh/MW,
     `stabctl.placement.energy.mwh_per_mw`); drop_infeasible, brackets: as `plan`;
     infeasible, set_aside: what was set aside; place: the `PlaceOptions` of every
-    round's `place` (damping, sparsity, iterations).
+    round's `place` (damping, sparsity, iterations); esd_model: the devices' model
+    (`Study.esd_model`).
     """
 
     case: str
@@ -57,6 +59,7 @@ class PlanContext:
     infeasible: list = field(default_factory=list)
     set_aside: list = field(default_factory=list)
     place: PlaceOptions = PlaceOptions()
+    esd_model: str = "ideal"
     lock: Any = field(default_factory=threading.Lock)
 
     def check(self, contingencies, mw, energy_mj=None, h: float | None = None) -> dict:
@@ -79,6 +82,7 @@ class PlanContext:
                 "t_clear": c.target_cct_s,
                 "load": c.load,
                 **self.model.to_inputs(),
+                **model_inputs(self.esd_model),
                 **({} if h is None else {"h": h}),
             }
             for c in contingencies

@@ -41,7 +41,7 @@ from stabctl.stability.sime import (
     unstable_point,
 )
 from stabctl.storage.control import BangBangCOI
-from stabctl.storage.devices import StorageDevice, StorageFleet
+from stabctl.storage.devices import StorageDevice, StorageFleet, model_inputs
 
 EPS_S = 0.005  # clearing-time step of d eta / d t_clear (s)
 SCAN_S = 0.005  # clearing-time grid of the first-unstable scan (s)
@@ -122,13 +122,7 @@ def evaluate(job: dict) -> dict:
     )
     f, sites, tol, t_max = fault_of_inputs(job["fault"]), job["sites"], job["tol"], job["t_max"]
     ctrl = BangBangCOI(**job["controller"])
-    fleet = (
-        StorageFleet(
-            tuple(StorageDevice(int(b), int(k), float(p)) for b, k, p in job["devices"]), ctrl
-        )
-        if job["devices"]
-        else None
-    )
+    fleet = _fleet(job, ctrl)
     check_s = job.get("check_s")
     checked = {} if check_s is None else _check_run(sim, f, fleet, float(check_s), sites, ctrl)
     try:
@@ -220,26 +214,25 @@ def check(job: dict) -> dict:
         cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0))
     )
     ctrl = BangBangCOI(**job["controller"])
-    fleet = (
-        StorageFleet(
-            tuple(
-                StorageDevice(
-                    int(d[0]),
-                    int(d[1]),
-                    float(d[2]),
-                    **({"energy_mj": float(d[3])} if len(d) > 3 else {}),
-                )
-                for d in job["devices"]
-            ),
-            ctrl,
-        )
-        if job["devices"]
-        else None
-    )
+    fleet = _fleet(job, ctrl)
     out = _check_run(
         sim, fault_of_inputs(job["fault"]), fleet, float(job["t_clear"]), job["sites"], ctrl
     )
     return {**out, "n_simulations": sim.n_runs}
+
+
+def _fleet(job: dict, ctrl) -> StorageFleet | None:
+    """The storage of a job: its ``devices`` rows (bus, machine, MW[, usable MJ]) driven
+    by ctrl, of its ``esd_model`` (default "ideal"); None without devices."""
+    if not job["devices"]:
+        return None
+    devices = tuple(
+        StorageDevice(
+            int(d[0]), int(d[1]), float(d[2]), **({"energy_mj": float(d[3])} if len(d) > 3 else {})
+        )
+        for d in job["devices"]
+    )
+    return StorageFleet(devices, ctrl, model=job.get("esd_model", "ideal"))
 
 
 def _check_run(sim, f: LineFault, fleet, t_clear: float, sites, ctrl) -> dict:
@@ -525,6 +518,8 @@ class Evaluator:
         Conventions and step of the runs (each contingency at its own load level).
     scan_s : float
         Clearing-time grid of the first-unstable scan (s).
+    esd_model : {"ideal", "wecc"}
+        The devices' model (`Study.esd_model`).
     """
 
     run_map: Any
@@ -535,6 +530,7 @@ class Evaluator:
     search: SearchOptions = SearchOptions()
     model: ModelOptions = ModelOptions()
     scan_s: float = SCAN_S
+    esd_model: str = "ideal"
 
 
 def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions()) -> dict:
@@ -568,6 +564,7 @@ def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions
         "t_max": t_max,
         "scan_s": ev.scan_s,
         **ev.model.to_inputs(),
+        **model_inputs(ev.esd_model),
     }
     scanning = devices and base is not None and scan != "none"
     base = base or {}

@@ -151,6 +151,9 @@ class Study:
     run_map : callable or None
         A `stabctl.parallel.worker_pool` map kept open by the caller (so that workers and
         their caches serve many calls); None: a pool per call, as `runner` says.
+    esd_model : {"ideal", "wecc"}
+        The devices' model (`stabctl.storage.devices.StorageFleet.model`): ideal power
+        sources or WECC batteries taking the law's power as their plant reference.
     """
 
     sites: tuple | None = None
@@ -159,6 +162,7 @@ class Study:
     model: ModelOptions = ModelOptions()
     runner: RunnerOptions = RunnerOptions(workers=1)
     run_map: Any = None
+    esd_model: str = "ideal"
 
     @property
     def law(self) -> BangBangCOI:
@@ -325,7 +329,16 @@ def place(
     say = progress or logger.info
     with _pool(study) as rm:
         setup = _Setup(
-            Evaluator(rm, case, sites, beta, study.law, study.search, study.model),
+            Evaluator(
+                rm,
+                case,
+                sites,
+                beta,
+                study.law,
+                study.search,
+                study.model,
+                esd_model=study.esd_model,
+            ),
             contingencies,
             damping,
             o.zeta_min,
@@ -385,7 +398,9 @@ def evaluations(
         beta, _ = _linear_models(sim, sites, study.law, None, 0.0)
     mw = np.zeros(len(sites)) if mw is None else np.asarray(mw, float)
     with _pool(study) as rm:
-        ev = Evaluator(rm, case, sites, beta, study.law, study.search, study.model)
+        ev = Evaluator(
+            rm, case, sites, beta, study.law, study.search, study.model, esd_model=study.esd_model
+        )
         return verify(ev, contingencies, mw, opts)
 
 

@@ -250,6 +250,7 @@ def plan(
             place=o.place,
             drop_infeasible=o.drop_infeasible,
             brackets=o.brackets,
+            esd_model=study.esd_model,
         )
         pl.run_map = pl.counting(pool_map, say)
         kw = replace(study, sites=sites, run_map=pl.run_map, controller=pl.controller)

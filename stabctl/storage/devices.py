@@ -36,6 +36,23 @@ MAX_ESD_PCT = 100.0
 #: reference, `battery_case`)
 ESD_MODELS = ("ideal", "wecc")
 
+
+def model_inputs(esd_model: str) -> dict:
+    """A parallel job's inputs naming the devices' model (`StorageFleet.model`): none for
+    "ideal", so that the default's jobs, keys and records stay as they were, and
+    ``{"esd_model": model}`` otherwise (the workers build their fleet of that model).
+
+    Parameters
+    ----------
+    esd_model : {"ideal", "wecc"}
+
+    Returns
+    -------
+    dict
+    """
+    return {} if esd_model == "ideal" else {"esd_model": esd_model}
+
+
 #: a WECC battery's converter row (ibr_con fields, `stabctl.models.converters.CONVERTER`)
 #: where it differs from the table's defaults (ANDES 2.0's): a REGCA1 (converter lag Tg
 #: 0.02 s) with a REECA1 in the storage current range (Ip in [-Ipmax, Ipmax], P order in

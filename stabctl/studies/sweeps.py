@@ -22,7 +22,7 @@ from stabctl.stability.cct import (
     fault_of_inputs,
 )
 from stabctl.storage.control import BangBangCOI
-from stabctl.storage.devices import uniform_fleet
+from stabctl.storage.devices import model_inputs, uniform_fleet
 
 
 def controlled_cct_job(inputs: dict) -> dict:
@@ -108,7 +108,7 @@ def controlled_cct_jobs(
         else f"/ctrl-db{controller.deadband_hz:g}-vg{controller.v_gate_pu:g}-{controller.coi}"
         f"-hy{controller.hysteresis_hz:g}"
     ) + ("/wecc" if esd_model == "wecc" else "")
-    extra = {"controller": ctrl, **({"esd_model": esd_model} if esd_model != "ideal" else {})}
+    extra = {"controller": ctrl, **model_inputs(esd_model)}
     return [
         j
         if j.inputs["esd_pct"] is None
