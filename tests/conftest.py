@@ -10,14 +10,32 @@ Markers (registered in pyproject.toml):
 * ``dask``  -- sweeps on a Dask cluster (needs ``distributed``; skipped without).
 
 A quick run: ``python -m pytest -m "not andes and not dask"``.
+
+On several processes (pytest-xdist ``-n``) the controller first fills the compiled-kernel
+cache (``stabctl compile``, `pytest_configure`), so that no test meets a cold cache while
+the others load every core: a first compile then takes minutes, and a command's output
+carries its compile notice.
 """
 
 from __future__ import annotations
+
+import subprocess
+import sys
 
 import pytest
 
 from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
+
+
+def pytest_configure(config):
+    """Under pytest-xdist, in the controller before the workers start: ``stabctl compile``
+    (every built-in case's argument types into the shared on-disk cache; a warm cache
+    only loads, about a second)."""
+    if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
+        subprocess.run(
+            [sys.executable, "-m", "stabctl.cli", "compile"], capture_output=True, timeout=1200
+        )
 
 
 @pytest.fixture(scope="session")
