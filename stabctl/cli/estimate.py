@@ -228,6 +228,7 @@ def _fault_run(func):
     " In the fault run, controlled on the true speeds with the paper's "
     "settings; the controller options set the rule of the false actions."
 )
+@esd_model_option
 @_runs_seed
 @click.option(
     "--settle-ms",
@@ -294,6 +295,7 @@ def rmse(
     v_gate,
     coi,
     hysteresis_hz,
+    esd_model,
     runs,
     seed,
     settle_ms,
@@ -307,11 +309,11 @@ def rmse(
 ):
     """Errors of the speed estimators against the truth, and false ESD actions.
 
-    The fault run is simulated once (with --esd-pct, storage acts on the true speeds);
-    then, per Monte-Carlo run, every generator's PMU stream is drawn (IEEE C37.118.1
-    noise limits read as k-sigma bounds, latency, lost frames) and fed frame by frame to
-    the raw PMU frequency, the baseline Kalman filter on frequency/ROCOF (kf) and the
-    swing-equation EKF (ekf).
+    The fault run is simulated once (with --esd-pct, storage acts on the true speeds; with
+    --esd-model wecc the devices are WECC batteries); then, per Monte-Carlo run, every
+    generator's PMU stream is drawn (IEEE C37.118.1 noise limits read as k-sigma bounds,
+    latency, lost frames) and fed frame by frame to the raw PMU frequency, the baseline
+    Kalman filter on frequency/ROCOF (kf) and the swing-equation EKF (ekf).
 
     \b
     Printed per estimator, mean +- standard deviation over the runs (mHz): RMSE of the
@@ -355,6 +357,7 @@ def rmse(
         settle_s=settle_ms / 1000,
         t_end=tf,
         model=model_settings(conventions, step),
+        esd_model=esd_model,
     )
     out = {
         "case": case.name,
@@ -365,6 +368,7 @@ def rmse(
             "clear_cycles": clear_cycles,
         },
         "esd_pct": esd_pct,
+        "esd_model": esd_model,
         "pmu": {**settings.__dict__, "at": pmu_at},
         "runs": runs,
         "seed": seed,
@@ -454,6 +458,7 @@ def closed_loop(
     )
     out = {
         "closed_loop": rows,
+        "esd_model": esd_model,
         "lines": closed_loop_lines(rows, fault, far_bus, esd_pct, seed, esd_model),
     }
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))

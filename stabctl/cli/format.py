@@ -328,7 +328,13 @@ def print_estimate(d) -> None:
     click.echo(
         f"case {d['case']}: fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']} "
         f"at {f['t_fault_s']:g} s, cleared after {f['clear_cycles']:g} cycles"
-        + ("" if d["esd_pct"] is None else f"; storage {d['esd_pct']:g} % (true speeds)")
+        + (
+            ""
+            if d["esd_pct"] is None
+            else f"; storage {d['esd_pct']:g} %"
+            + (", WECC batteries" if d.get("esd_model") == "wecc" else "")
+            + " (true speeds)"
+        )
         + ("" if d["stable"] else "; the run loses synchronism")
     )
     click.echo(

@@ -313,7 +313,7 @@ def place(
         A contingency misses its target even with every site at its bound (simulated),
         or the damping rows cannot be met.
     InputError
-        Bad settings or contingencies.
+        Bad settings (`check_damping_model`) or contingencies.
     SimulationError
         As the CCT search.
     """
@@ -321,6 +321,7 @@ def place(
     contingencies = tuple(contingencies)
     o, tol = options, study.search.tol
     _check_settings(contingencies, o.max_iter, tol, study.runner.workers or 1, o.zeta_min)
+    check_damping_model(o.zeta_min, study.esd_model)
     sim = cached_simulator(case, study.model)
     _check_faults(sim.case, contingencies)
     sites = tuple(study.sites or candidate_sites(sim.case))
@@ -467,6 +468,32 @@ def _linear_models(sim, sites, controller, zeta_min, amplitude_hz):
             "there and add no damping"
         )
     return beta, DampingModel(sys, sites, gain, case.base_mva)
+
+
+def check_damping_model(zeta_min: float | None, esd_model: str) -> None:
+    """Refuse a damping requirement for devices other than ideal: the damping rows and
+    the eigenvalues that confirm them (`stabctl.smallsignal.damping.DampingModel`) take
+    each device as an ideal power input at its bus, without a WECC battery's converter
+    lags and current limit, so they would not be the batteries' damping.
+
+    Parameters
+    ----------
+    zeta_min : float or None
+        The damping requirement (`PlaceOptions.zeta_min`; None: none).
+    esd_model : {"ideal", "wecc"}
+        The devices' model (`Study.esd_model`).
+
+    Raises
+    ------
+    InputError
+        zeta_min given with esd_model other than "ideal".
+    """
+    if zeta_min is not None and esd_model != "ideal":
+        raise InputError(
+            f"--zeta-min with --esd-model {esd_model}: the damping rows and their "
+            "eigenvalue check take every device as an ideal power input (no converter "
+            "lags or current limit), not a WECC battery; drop --zeta-min or use ideal devices"
+        )
 
 
 def _check_settings(contingencies, max_iter, tol, workers, zeta_min) -> None:

@@ -31,7 +31,15 @@ from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import InputError
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import mwh_per_mw, size_energy
-from stabctl.placement.loop import PlaceOptions, Study, WarmStart, _as_allocation, _pool, place
+from stabctl.placement.loop import (
+    PlaceOptions,
+    Study,
+    WarmStart,
+    _as_allocation,
+    _pool,
+    check_damping_model,
+    place,
+)
 from stabctl.placement.program import InfeasibleError, candidate_sites
 from stabctl.placement.references import faults_alone, half_step, least_uniform, margins
 from stabctl.placement.requirements import CostModel, Requirement, contingencies_of, describe
@@ -222,7 +230,8 @@ def plan(
         A contingency misses its requirement even with every site at its bound (named
         with its load level).
     InputError
-        No faults, bad settings, a fault unstable already when cleared at once.
+        No faults, bad settings (`check_damping_model`), a fault unstable already when
+        cleared at once.
     PowerFlowError, CaseError
         A load level without a power flow or a valid initial state (named).
     """
@@ -233,6 +242,7 @@ def plan(
         raise InputError("no contingency given")
     if o.n_active < 1 or o.max_rounds < 1 or o.place.max_iter < 1:
         raise InputError("need n_active, max_rounds and max_iter >= 1")
+    check_damping_model(o.place.zeta_min, study.esd_model)
     levels = _load_levels(o.load_levels)
     freq_hz, sites = _case_at_levels(case, study.model, levels, study.sites)
     say = Heartbeat(progress or logger.info)

@@ -56,7 +56,16 @@ class ErrorRuns:
 
 
 def estimator_errors(
-    case, event, mc: ErrorRuns, *, settings, esd_pct, settle_s: float, t_end: float, model=None
+    case,
+    event,
+    mc: ErrorRuns,
+    *,
+    settings,
+    esd_pct,
+    settle_s: float,
+    t_end: float,
+    model=None,
+    esd_model: str = "ideal",
 ) -> dict:
     """Errors of every estimator against the simulated truth, and false ESD actions.
 
@@ -76,6 +85,9 @@ def estimator_errors(
         the fault run.
     model : stabctl.dynamics.options.ModelOptions or None
         Conventions, step and Q limits (None: the defaults).
+    esd_model : {"ideal", "wecc"}, optional
+        The model of the fault run's storage (`stabctl.storage.devices.StorageFleet.model`);
+        the runs without fault have none (their false actions are counted, not simulated).
 
     Returns
     -------
@@ -100,7 +112,7 @@ def estimator_errors(
     window = (max(event.times()) + settle_s, t_end)
     if not window[0] < t_end:
         raise InputError(f"--tf {t_end:g} s ends before the errors start ({window[0]:g} s)")
-    fleet = None if esd_pct is None else uniform_fleet(case, esd_pct)
+    fleet = None if esd_pct is None else uniform_fleet(case, esd_pct, model=esd_model)
     sim = (model or ModelOptions()).simulator(
         case, injection_buses=() if fleet is None else fleet.buses
     )

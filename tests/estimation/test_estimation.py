@@ -348,3 +348,46 @@ def test_baseline_kf_forecast_does_not_amplify_a_bus_angle_step():
     t, dev = np.array(out).T
     assert np.abs(dev).max() <= 1.1 * pulse
     assert np.abs(dev[t > t_step + 2 * w + 3 / F0]).max() < 6 * st.sigma_freq
+
+
+def test_estimate_rmse_simulates_the_fault_run_with_wecc_batteries():
+    """`estimate rmse --esd-model wecc`: the fault run's storage is WECC batteries.  Kundur
+    line 3-101 cleared after 12 cycles with 5 % devices is stable with ideal devices and
+    loses synchronism (at 3.3 s) with batteries, whose lags cost a quarter cycle of CCT.
+    --esd-model takes ideal or wecc only (exit 2), here and in `estimate cct`."""
+    args = ["estimate", "rmse", "kundur", "--fault", "3", "--far-bus", "101"]
+    args += ["--clear-cycles", "12", "--esd-pct", "5", "--runs", "1", "--ambient-s", "0"]
+    args += ["--tf", "3.5"]
+    out = {}
+    for model in ("ideal", "wecc"):
+        res = CliRunner().invoke(main, [*args, "--esd-model", model, "--json"])
+        assert res.exit_code == 0, res.output
+        out[model] = json.loads(res.stdout)
+    assert out["ideal"]["stable"] and not out["wecc"]["stable"]
+    assert out["wecc"]["esd_model"] == "wecc" and out["ideal"]["esd_model"] == "ideal"
+    text = CliRunner().invoke(main, [*args, "--esd-model", "wecc"])
+    assert "storage 5 %, WECC batteries (true speeds); the run loses synchronism" in text.stdout
+    for sub in (["rmse"], ["cct", "--esd-pct", "5"]):
+        bad = CliRunner().invoke(
+            main,
+            ["estimate", *sub, "kundur", "--fault", "3", "--far-bus", "101", "--esd-model", "foo"],
+        )
+        assert bad.exit_code == 2 and "'foo' is not one of 'ideal', 'wecc'" in bad.output
+
+
+def test_estimate_cct_commands_wecc_batteries():
+    """`estimate cct --esd-model wecc`: every estimator's loop commands batteries, whose
+    CCT with exact measurements is 11.75 cycles against the ideal devices' 12.00
+    (test_closed_loop), and the report names them."""
+    res = CliRunner().invoke(
+        main,
+        ["estimate", "cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"]
+        + ["--runs", "1", "--esd-model", "wecc", "--json"],
+    )
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert d["esd_model"] == "wecc" and d["lines"][0].startswith(
+        "CCT of line 3-101, WECC batteries"
+    )
+    assert d["cct_cycles"]["ideal"]["values"] == [pytest.approx(11.75)]
+    assert all(max(r["values"]) < 12.0 for r in d["cct_cycles"].values())
