@@ -31,15 +31,20 @@ the machine base ``Sn``, as PSS/E).  Machine ``k`` of the case is the ``k``-th s
 generator in the order of ANDES's static generators (``PV`` rows, then ``Slack``).
 
 Converter-interfaced devices (:mod:`stabctl.models.converters`, docs/ibr.md): ``PVD1``,
-``ESD1`` and ``REGCA1`` (without an electrical control REECA1: constant current commands)
-become rows of the converter table (``ibr_con``, :data:`stabctl.models.converters.CONVERTER`)
-with their inputs (``vin``, device base ``Sn``), ``gammap``/``gammaq`` as the fractions of
-their static generator's power, and (PVD1, ESD1) the time constants of the ``BusFreq``
-device each reads (ANDES creates one with its defaults when ``busf`` is empty).  Refused,
-naming the device: a REGCA1 driven by an electrical control (REECA1, REECA1E, REECB1), a
-remote bus ``igreg``, a nominal frequency other than the system's, a static generator
-sharing its bus with another, or converters taking other than all of their static
-generator's P and Q (ANDES drops the rest of a replaced generator's power).
+``ESD1`` and ``REGCA1`` become rows of the converter table (``ibr_con``,
+:data:`stabctl.models.converters.CONVERTER`) with their inputs (``vin``, device base
+``Sn``), ``gammap``/``gammaq`` as the fractions of their static generator's power, and
+(PVD1, ESD1) the time constants of the ``BusFreq`` device each reads (ANDES creates one
+with its defaults when ``busf`` is empty).  A REGCA1's controls are read into its row: its
+electrical control ``REECA1``, that control's plant control ``REPCA1`` and wind turbine
+(drive train ``WTDTA1`` or ``WTDS``, then ``WTARA1``, ``WTPTA1``, ``WTTQA1``, each naming
+the one before).  Refused, naming the device: a REGCA1 driven by another electrical
+control (REECA1E, REECB1) or by two, a remote bus ``igreg`` or ``busr``, a nominal
+frequency other than the system's, a wind chain with a missing link or a second drive
+train, a static generator sharing its bus with another, or converters (with a machine on
+the same static generator, which then takes ``gammap``/``gammaq`` of it) taking other
+than all of their static generator's P and Q (ANDES drops the rest of a replaced
+generator's power).
 
 Models with no effect on the network and machines are ignored: ``Summary`` (the case's
 notes, ``andes/models/info.py``), ``Area``, ``COI`` (the centre-of-inertia calculation,
@@ -80,6 +85,9 @@ from stabctl.models.converters import (
     REGCA1,
     REPCA1,
     REPCA1_FIELDS,
+    WIND_FIELDS,
+    WTDS,
+    WTDTA1,
 )
 
 __all__ = [
@@ -112,7 +120,16 @@ IGNORED_MODELS = (
 #: ANDES converter models -> the converter type of stabctl.models.converters.CONVERTER
 CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1}
 #: ANDES controls read into their converter's row (a REGCA1's REECA1, ibr_con ``reec``)
-CONVERTER_CONTROLS = ("REECA1", "REPCA1")
+CONVERTER_CONTROLS = ("REECA1", "REPCA1", "WTDTA1", "WTDS", "WTARA1", "WTPTA1", "WTTQA1")
+#: ANDES's wind drive trains (group RenGovernor) -> ibr_con ``wind``
+DRIVE_TRAINS = {"WTDTA1": WTDTA1, "WTDS": WTDS}
+#: the wind models after the drive train: (ANDES model, its parent's parameter, ibr_con
+#: flag, column prefix); each names the one before it (WTTQA1 -> WTPTA1 -> WTARA1)
+WIND_CHAIN = (
+    ("WTARA1", "rego", "aero", "wa_"),
+    ("WTPTA1", "rea", "pitch", "wp_"),
+    ("WTTQA1", "rep", "torque", "wq_"),
+)
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
 _NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt")
 _MACHINES = ("GENROU", "GENCLS")
@@ -424,6 +441,13 @@ def _converters(ss, numbers: dict):
             got[1] += m.gammaq.v[k]
             got[2].append(where)
             replaced.add(gen)
+    for name in _MACHINES:
+        m = ss.models[name]
+        for k in _in_service(m):
+            if m.gen.v[k] in share:
+                share[m.gen.v[k]][0] += m.gammap.v[k]
+                share[m.gen.v[k]][1] += m.gammaq.v[k]
+                share[m.gen.v[k]][2].append(f"{name} {m.idx.v[k]}")
     for gen, (gp, gq, devs) in share.items():
         if abs(gp - 1) > 1e-9 or abs(gq - 1) > 1e-9:
             refused.append(
@@ -482,6 +506,22 @@ def _electrical_control_refusal(ss, regc) -> str:
         m = ss.REPCA1
         if m.busr.v[j] is not None:
             return f"its REPCA1 {m.idx.v[j]} regulates remote bus busr = {m.busr.v[j]}"
+    return _wind_refusal(ss, ss.REECA1.idx.v[drivers[0][1]]) if drivers else ""
+
+
+def _wind_refusal(ss, reec) -> str:
+    """Why the wind turbine of REECA1 ``reec`` cannot be mapped (empty if it has at most
+    one model at each link of the chain drive train -> WTARA1 -> WTPTA1 -> WTTQA1)."""
+    trains = [(n, j) for n in DRIVE_TRAINS for j in _children(ss, n, "ree", reec)]
+    found = [f"{n} {ss.models[n].idx.v[j]}" for n, j in trains]
+    if len(trains) > 1:
+        return f"its REECA1 has {len(trains)} drive trains ({', '.join(found)}; stabctl: one)"
+    parent = ss.models[trains[0][0]].idx.v[trains[0][1]] if trains else None
+    for chained, link, _, _ in WIND_CHAIN:
+        rows = _children(ss, chained, link, parent) if parent is not None else []
+        if len(rows) > 1:
+            return f"its wind turbine has {len(rows)} {chained} on {parent} (stabctl: one)"
+        parent = ss.models[chained].idx.v[rows[0]] if rows else None
     return ""
 
 
@@ -539,6 +579,46 @@ def _reeca1_values(ss, regc, numbers: dict) -> dict[str, float]:
             v[field] = float(m.params[_REECA1_NAMES.get(field, field)].vin[j])
     for plant in _plant_controls(ss, m.idx.v[j]):
         v.update(_repca1_values(ss, plant, numbers))
+    v.update(_wind_values(ss, m.idx.v[j]))
+    return v
+
+
+def _children(ss, name: str, parent_field: str, parent) -> list[int]:
+    """The in-service rows of ANDES model ``name`` whose ``parent_field`` is ``parent``."""
+    m = ss.models.get(name)
+    if m is None or not m.n:
+        return []
+    return [j for j in _in_service(m) if m.params[parent_field].v[j] == parent]
+
+
+def _wind_values(ss, reec) -> dict[str, float]:
+    """The ibr_con fields of the wind turbine of REECA1 ``reec`` (its idx; none without
+    one): its drive train (WTDTA1 or WTDS, ``wt_``: WTDS's D read as ``wt_DAMP``) and the
+    models chained after it (`WIND_CHAIN`), parameters as given (``vin``, device base;
+    WTTQA1's Tn 0 where not given)."""
+    trains = [(n, j) for n in DRIVE_TRAINS for j in _children(ss, n, "ree", reec)]
+    if not trains:
+        return {}
+    name, j = trains[0]
+    m = ss.models[name]
+    v: dict[str, float] = {"wind": float(DRIVE_TRAINS[name])}
+    alias = {"wt_DAMP": "D"} if name == "WTDS" else {}
+    for field in WIND_FIELDS[1:]:
+        src = alias.get(field, field[3:])
+        if field.startswith("wt_") and src in m.params:
+            v[field] = float(m.params[src].vin[j])
+    parent = m.idx.v[j]
+    for chained, link, flag, prefix in WIND_CHAIN:
+        rows = _children(ss, chained, link, parent)
+        if not rows:
+            break
+        c = ss.models[chained]
+        v[flag] = 1.0
+        for field in WIND_FIELDS:
+            if field.startswith(prefix):
+                value = float(c.params[field[3:]].vin[rows[0]])
+                v[field] = 0.0 if field == "wq_Tn" and not np.isfinite(value) else value
+        parent = c.idx.v[rows[0]]
     return v
 
 
@@ -593,6 +673,8 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 "sbase": float(ss.config.mva),
             }
         )
+        if m.gen.v[k] in with_converter:  # converters take the rest of its generator
+            gens[-1].update(pfrac=float(m.gammap.v[k]), qfrac=float(m.gammaq.v[k]))
         by_syn[m.idx.v[k]] = gens[-1]
         if m.fn.v[k] != ss.config.freq:
             changed.append(

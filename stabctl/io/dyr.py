@@ -184,8 +184,9 @@ def dyr_tables(
         generators: sequence of dicts in RAW order, keys "number" (1-based machine number,
             the row of mac_con), "bus", "id", "mbase" (MVA), "ra", "xsource" (ZSORCE on
             mbase, pu); optional "pg", "qg" (MW, Mvar) to split a bus's generation among
-            several machines (mac_con columns 22, 23), "sbase" (system base, MVA, default
-            100; used by conventions="andes").
+            several machines (mac_con columns 22, 23), "pfrac", "qfrac" (a lone machine's
+            share of its bus's generation when converters take the rest; default 1),
+            "sbase" (system base, MVA, default 100; used by conventions="andes").
         on_unsupported: "error" (raise, listing every unsupported record) or "skip" (leave
             those records out and return them in `unsupported`).
         conventions: "pst" (PST's models as they are) or "andes" (ANDES 2.0's reading of
@@ -324,8 +325,8 @@ def _mac_row(rec, gen, **cols) -> list:
         mva=gen["mbase"],
         ra=gen["ra"],
         col19=gen["number"],
-        pfrac=1.0,
-        qfrac=1.0,
+        pfrac=gen.get("pfrac", 1.0),
+        qfrac=gen.get("qfrac", 1.0),
         speed_effects=1.0,
     )
     return MACHINE.dyr_row(DYR_MODELS[rec.model], rec.params, **cols)
@@ -724,6 +725,18 @@ def _ieeeg1_andes(rec, gen, lp=None):
     return row
 
 
+def _times_speed(mapper):
+    """An exciter's ``mapper`` whose field voltage is its output times the rotor speed:
+    ANDES 2.0's EXDC2 (``exdc2.py``: ``vout = omega vp``; exc_con column 45 = 1)."""
+
+    def times_speed(rec, gen):
+        row = mapper(rec, gen)
+        row[EXCITER.col("efd_speed") - 1] = 1.0
+        return row
+
+    return times_speed
+
+
 def _without_tr(mapper):
     """An exciter's ``mapper`` with T_R = 0: ANDES 2.0's ESDC2A and EXAC1 take their
     voltage error from the bus voltage itself, not the transducer lag (``esdc2a.py``,
@@ -757,7 +770,8 @@ def _gensal_andes(rec, gen):
 
 #: conventions="andes": ANDES 2.0's DC exciters (IEEEX1, EXDC2, ESDC2A) use the quadratic
 #: saturation and keep K_E = 0; its EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
-#: terminal voltage as PSS/E's and IEEE DC2, and so does its IEEEX1 (PST's DC1): ANDES
+#: terminal voltage as PSS/E's and IEEE DC2 (and times the rotor speed,
+#: `_times_speed`), and so does its IEEEX1 (PST's DC1): ANDES
 #: 2.0's ``ieeex1.py`` defines VRTMAX = VRMAX v and sets ``LA.upper``, ``LA.lower`` to
 #: them after EXDC2's ``LagAntiWindup`` LA has built its ``AntiWindup`` limiter
 #: ``LA.lim`` on VRMAX, VRMIN; the limiter keeps those (on NPCC ``LA.lim.upper.v`` =
@@ -772,7 +786,7 @@ def _gensal_andes(rec, gen):
 #: with the quadratic saturation of its other DC exciters
 _ANDES_MAPPERS = {
     "IEEEX1": _dc("IEEEX1", andes=True),
-    "EXDC2": _dc("IEEEX1", andes=True),
+    "EXDC2": _times_speed(_dc("IEEEX1", andes=True)),
     #: ESDC2A: also the quadratic saturation and K_E as given
     "ESDC2A": _without_tr(_dc("ESDC2A", zero_vrmax_unlimited=True, andes=True)),
     #: ESDC1A: ESDC2A with V_R limits not scaled by V_t (``esdc1a.py``), i.e. DC1

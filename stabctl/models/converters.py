@@ -188,6 +188,68 @@ def _repca1_params(col: int) -> tuple[Param, ...]:
 
 
 _REPCA1_PARAMS = _repca1_params(106)
+
+#: the wind turbine's drive train (ibr_con ``wind``, a REECA1's RenGovernor): none, WTDTA1
+#: (two masses), WTDS (one mass)
+NO_WIND, WTDTA1, WTDS = 0, 1, 2
+
+
+def _wind_params(col: int) -> tuple[Param, ...]:
+    """The wind turbine's columns from ``col`` on (ANDES 2.0 ``renewable/wtdta1.py``,
+    ``wtds.py``, ``wtara1.py``, ``wtpta1.py``, ``wttqa1.py``): the drive train ``wt_``,
+    the aerodynamics ``wa_``, the pitch control ``wp_`` and the torque control ``wq_``,
+    each with its on/off code.  Inertias, damping, torque limits and the torque
+    control's power points on the device base (``wq_Tn`` where given), as ANDES converts
+    them; angles in degrees, as ANDES's pitch and aerodynamics read them."""
+    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
+    rows: list[tuple[str, dict[str, Any]]] = [
+        (
+            "wt_H",
+            dict(_DEV_PU, unit="MWs/MVA", default=3.0, lo=0.0, doc="WTDTA1/WTDS: total inertia"),
+        ),
+        ("wt_DAMP", dict(_DEV_PU, doc="WTDTA1: generator damping (WTDS: D, on its speed)")),
+        ("wt_Htfrac", dict(unit="", default=0.5, doc="WTDTA1: turbine inertia fraction")),
+        ("wt_Freq1", dict(unit="pu", default=1.0, doc="WTDTA1: first shaft torsional frequency")),
+        ("wt_Dshaft", dict(_DEV_PU, default=1.0, doc="WTDTA1: shaft damping")),
+        ("wt_w0", dict(unit="pu", default=1.0, doc="WTDTA1/WTDS: speed without a torque control")),
+        ("aero", dict(flag, doc="WTARA1 aerodynamics: 1 on (Pm falls with the pitch), 0 off")),
+        ("wa_Ka", dict(unit="pu/deg", default=1.0, lo=0.0, doc="WTARA1: aerodynamic gain")),
+        ("wa_theta0", dict(unit="deg", doc="WTARA1: initial pitch angle")),
+        ("pitch", dict(flag, doc="WTPTA1 pitch control: 1 on, 0 off (needs aero)")),
+        ("wp_Kiw", dict(unit="1/s", default=0.1, doc="WTPTA1: speed PI integral gain")),
+        ("wp_Kpw", dict(unit="pu", doc="WTPTA1: speed PI proportional gain")),
+        ("wp_Kic", dict(unit="1/s", default=0.1, doc="WTPTA1: power PI integral gain")),
+        ("wp_Kpc", dict(unit="pu", doc="WTPTA1: power PI proportional gain")),
+        ("wp_Kcc", dict(unit="pu", doc="WTPTA1: power error gain in the speed PI")),
+        ("wp_Tp", dict(unit="s", default=0.3, lo=0.0, doc="WTPTA1: blade response lag")),
+        ("wp_thmax", dict(unit="deg", default=30.0, doc="WTPTA1: maximum pitch angle")),
+        ("wp_thmin", dict(unit="deg", doc="WTPTA1: minimum pitch angle")),
+        ("wp_dthmax", dict(unit="deg", default=5.0, doc="WTPTA1: upper rate of Tp dtheta/dt")),
+        ("wp_dthmin", dict(unit="deg", default=-5.0, doc="WTPTA1: lower rate of Tp dtheta/dt")),
+        ("torque", dict(flag, doc="WTTQA1 torque control: 1 on, 0 off (needs pitch)")),
+        ("wq_Kip", dict(unit="1/s", default=0.1, doc="WTTQA1: PI integral gain")),
+        ("wq_Kpp", dict(unit="pu", doc="WTTQA1: PI proportional gain")),
+        ("wq_Tp", dict(unit="s", default=0.05, lo=0.0, doc="WTTQA1: Pe filter")),
+        ("wq_Twref", dict(unit="s", default=30.0, lo=0.0, doc="WTTQA1: speed reference lag")),
+        ("wq_Temax", dict(_DEV_PU, default=1.2, doc="WTTQA1: maximum electric torque")),
+        ("wq_Temin", dict(_DEV_PU, doc="WTTQA1: minimum electric torque")),
+        ("wq_Tflag", dict(flag, doc="WTTQA1: 1 power error, 0 speed error")),
+        *(
+            pair
+            for j, (p, sp) in enumerate(((0.2, 0.58), (0.4, 0.72), (0.6, 0.86), (0.8, 1.0)), 1)
+            for pair in (
+                (f"wq_p{j}", dict(_DEV_PU, default=p, doc=f"WTTQA1: power point {j}")),
+                (f"wq_sp{j}", dict(unit="pu", default=sp, doc=f"WTTQA1: speed at point {j}")),
+            )
+        ),
+        ("wq_Tn", dict(unit="MVA", lo=0.0, doc="WTTQA1: turbine rating (0: the device's mva)")),
+    ]
+    return tuple(Param(name, col=col + j, **kw) for j, (name, kw) in enumerate(rows))
+
+
+_WIND_PARAMS = _wind_params(146)
+#: the ibr_con fields a wind turbine sets (``wind`` and its models' columns)
+WIND_FIELDS = ("wind", *(p.name for p in _WIND_PARAMS))
 #: the ibr_con fields a REPCA1 sets (``pc_`` and ANDES's name)
 REPCA1_FIELDS = tuple(p.name for p in _REPCA1_PARAMS)
 #: the ibr_con fields a REECA1 sets (its own columns, its PQFLAG and its Iq filter Tiq)
@@ -369,6 +431,16 @@ CONVERTER = Family(
             doc="REECA1's active current range: 0 [0, Ipmax] (a generator, ANDES), "
             "1 [-Ipmax, Ipmax] (a battery, WECC REEC_C)",
         ),
+        Param(
+            "wind",
+            "code",
+            145,
+            choices=(NO_WIND, WTDTA1, WTDS),
+            doc="REECA1's wind turbine (ANDES RenGovernor): 0 none, 1 WTDTA1 (two-mass drive "
+            "train), 2 WTDS (one mass); with WTARA1, WTPTA1, WTTQA1 (``aero``, ``pitch``, "
+            "``torque``)",
+        ),
+        *_WIND_PARAMS,
     ),
 )
 
@@ -376,6 +448,9 @@ __all__ = [
     "PVD1",
     "ESD1",
     "REGCA1",
+    "NO_WIND",
+    "WTDTA1",
+    "WTDS",
     "N_STATES",
     "STATE_NAMES",
     "ConverterParams",
@@ -401,6 +476,13 @@ REPCA1_SLOTS = (
     *("f_lag_plant", "f_washout_plant", "Pline_filter", "PI_P_plant", "Pext_lag", "e_held"),
     "Plant_pref_command",
 )
+#: the wind turbine's slots (``wind`` 1 or 2): the drive train's turbine and generator
+#: speeds and shaft torque (WTDS: its one speed in ``wt``), WTTQA1's Pe filter, speed
+#: reference and PI, WTPTA1's two PIs and pitch angle (deg)
+WIND_SLOTS = (
+    *("wt", "wg", "Tshaft", "Pe_filter_tq", "wref_tq", "PI_tq"),
+    *("PIc_pitch", "PIw_pitch", "theta_pitch"),
+)
 # numpy scalars: a kernel's argument is then typed once (not as a literal per value)
 _F_LAG, _F_WASHOUT = np.int64(2), np.int64(3)  # PVD1's, ESD1's frequency measurement
 _VT, _PE, _PIQ, _S4, _PFILT, _PORD, _PIV = (np.int64(j) for j in range(5, 12))
@@ -409,13 +491,15 @@ _PC_V, _PC_Q, _PC_PI, _PC_LL = (np.int64(j) for j in range(18, 22))
 _PC_FL, _PC_FW, _PC_P, _PC_PIP, _PC_PEXT, _PC_E_H = (np.int64(j) for j in range(22, 28))
 #: the plant P reference's commanded increment (pu, system base, injection +)
 PLANT_PREF_SLOT = np.int64(28)
-N_STATES = 5 + len(REECA1_SLOTS) + len(REPCA1_SLOTS)
+_WT, _WG, _TSH, _TQ_PE, _TQ_WREF, _TQ_PI = (np.int64(j) for j in range(29, 35))
+_PT_C, _PT_W, _PT_TH = (np.int64(j) for j in range(35, 38))
+N_STATES = 5 + len(REECA1_SLOTS) + len(REPCA1_SLOTS) + len(WIND_SLOTS)
 #: state names per converter type (slots beyond a type's names, or that a device does not
 #: use, `has_state`, are unused, 0)
 STATE_NAMES = {
     PVD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
     ESD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
-    REGCA1: ("Ip", "Iq", "V_filter", "", "SOC", *REECA1_SLOTS, *REPCA1_SLOTS),
+    REGCA1: ("Ip", "Iq", "V_filter", "", "SOC", *REECA1_SLOTS, *REPCA1_SLOTS, *WIND_SLOTS),
 }
 #: slots that are not states but the memory of REECA1's discrete logic, written in place by
 #: the kernel (ANDES's ExtendedEvent timers, its VarHold of Ipmax, the frozen PI outputs):
@@ -436,7 +520,12 @@ POWER_FIELDS = (
     *("qmx", "qmn", "pmx", "dqdv", "ddn", "ialim", "Iolim", "Iqrmax", "Iqrmin"),
     *("QMax", "QMin", "dPmax", "dPmin", "PMAX", "PMIN", "Imax", "pc_Pmax", "pc_Pmin"),
     *(f"{a}{j}" for a in ("Iq", "Ip") for j in range(1, 5)),
+    *("wt_H", "wt_DAMP", "wt_Dshaft"),
 )
+#: the torque control's fields on its turbine's base (``wq_Tn``, else the device's)
+TORQUE_POWER_FIELDS = ("wq_Temax", "wq_Temin", *(f"wq_p{j}" for j in range(1, 5)))
+#: the wind models' lag time constants (each >= LBND where the model is on)
+WIND_LAGS = (("torque", ("wq_Tp", "wq_Twref")), ("pitch", ("wp_Tp",)))
 #: packed parameter matrix of the kernels, (column name, ConverterParams attribute)
 PACKED = (
     ("POS", "pos"),
@@ -547,6 +636,11 @@ class ConverterParams(Declared):
             ("ibr_con Tfltr", self.Tfltr, reg),
             *((f"ibr_con {n}", getattr(self, n), ree) for n in REECA1_LAGS),
             *((f"ibr_con {n}", getattr(self, n), self.repc == REPCA1) for n in REPCA1_LAGS),
+            *(
+                (f"ibr_con {n}", getattr(self, n), getattr(self, flag) == 1)
+                for flag, names in WIND_LAGS
+                for n in names
+            ),
         )
 
     @property
@@ -565,6 +659,12 @@ class ConverterParams(Declared):
         act[5:_PC_V] = self.reec == REECA1
         act[_PC_V:] = self.repc == REPCA1
         act[_PC_FL] &= self.Tfm >= LBND
+        act[_WT:] = False
+        wind = self.wind != NO_WIND
+        act[_WT] = wind
+        act[_WG] = act[_TSH] = self.wind == WTDTA1
+        act[_TQ_PE : _TQ_PI + 1] = self.torque == 1
+        act[_PT_C : _PT_TH + 1] = self.pitch == 1
         act[MEMORY_SLOTS] = False
         return act
 
@@ -610,6 +710,8 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     if bad.size:
         t._fail(bad[0], "repc", "a plant control drives a REECA1 (reec 1) only")
     lags += [(name, ree) for name in REECA1_LAGS] + [(name, pc) for name in REPCA1_LAGS]
+    _check_wind(t, ree)
+    lags += [(n, getattr(t, flag) == 1) for flag, names in WIND_LAGS for n in names]
     for name, sel in lags:
         bad = np.flatnonzero(sel & (getattr(t, name) < LBND))
         if bad.size:
@@ -625,6 +727,8 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     for name in POWER_FIELDS:
         vals[name] = vals[name] * scale
     vals["xc"] = vals["xc"] / scale
+    for name in TORQUE_POWER_FIELDS:
+        vals[name] = vals[name] * np.where(t.wq_Tn > 0, t.wq_Tn, t.mva) / case.base_mva
     P0 = t.pfrac * S_gen[idx].real
     Q0 = t.qfrac * S_gen[idx].imag
     a0 = np.angle(V0[idx])
@@ -660,7 +764,44 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         **_repca1_services(case, idx),
     )
     _repca1_references(cp, V0)
+    _torque_limits(cp)
     return cp
+
+
+def _check_wind(t, ree) -> None:
+    """Refuse a wind turbine that its models cannot run: one without a REECA1 (``ree``
+    the rows with one), a pitch control without the aerodynamics, a torque control
+    without the pitch control (ANDES chains them: WTTQA1 -> WTPTA1 -> WTARA1 -> the drive
+    train), a WTDTA1 whose inertia split Htfrac is not inside (0, 1) (WTDS is the one-mass
+    train), an inertia H not above 0."""
+    wind = t.wind != NO_WIND
+    rules = (
+        ("wind", wind & ~ree, "a wind turbine drives a REECA1 (reec 1) only"),
+        ("aero", (t.aero == 1) & ~wind, "the aerodynamics need a drive train (wind 1 or 2)"),
+        ("pitch", (t.pitch == 1) & (t.aero != 1), "a pitch control needs the aerodynamics"),
+        ("torque", (t.torque == 1) & (t.pitch != 1), "a torque control needs the pitch control"),
+        ("wt_H", wind & (t.wt_H <= 0), "must be > 0 (the drive train's inertia)"),
+        (
+            "wt_Htfrac",
+            (t.wind == WTDTA1) & ((t.wt_Htfrac <= 0) | (t.wt_Htfrac >= 1)),
+            "must lie inside (0, 1) for a two-mass WTDTA1 (WTDS: one mass)",
+        ),
+    )
+    for field, bad, why in rules:
+        rows = np.flatnonzero(bad)
+        if rows.size:
+            t._fail(rows[0], field, why)
+
+
+def _torque_limits(cp: ConverterParams) -> None:
+    """WTTQA1's upper torque limit raised, in place, to its PI's initial output P0/fPe(P0)
+    where that lies above it, as ANDES does when a limiter starts beyond its upper limit
+    (andes/core/discrete.py Limiter ``allow_adjust``, ``adjust_upper``; kundur_wtds.xlsx:
+    7 pu through a 100 MVA turbine against Temax 1.2)."""
+    P = cp.packed()
+    for k in np.flatnonzero(cp.torque == 1):
+        torque0 = cp.P0[k] / _speed_curve.py_func(P, k, cp.P0[k])
+        cp.wq_Temax[k] = max(cp.wq_Temax[k], torque0)
 
 
 def _repca1_services(case: Case, idx: np.ndarray) -> dict[str, np.ndarray]:
@@ -930,14 +1071,15 @@ def _ip_command(P, x, k, Ip_order, Ipmax, hold):
 
 
 @kernel
-def _p_order(P, x, k, Pext, frz, dx):
-    """REECA1's power order Pord of device k: the reference P0 + Pext through the rate-limited
-    filter Tpfilt (ANDES LagRate, rates dPmin, dPmax on its right-hand side), then the
-    lag Tpord frozen in a dip with the anti-windup limits [PMIN, PMAX] (LagAWFreeze; the
-    state reset to a limit in place)."""
-    e = clip(P[k, C.P0] + Pext - x[_PFILT, k], P[k, C.DPMIN], P[k, C.DPMAX])
+def _p_order(P, x, k, Pref, wg, frz, dx):
+    """REECA1's power order Pord of device k: the reference Pref through the rate-limited
+    filter Tpfilt (ANDES LagRate, rates dPmin, dPmax on its right-hand side), times the
+    speed wg with PFLAG (Psel), then the lag Tpord frozen in a dip with the anti-windup
+    limits [PMIN, PMAX] (LagAWFreeze; the state reset to a limit in place)."""
+    e = clip(Pref - x[_PFILT, k], P[k, C.DPMIN], P[k, C.DPMAX])
     dx[_PFILT, k] = e / P[k, C.TPFILT]
-    e = 0.0 if frz else x[_PFILT, k] - x[_PORD, k]
+    Psel = wg * x[_PFILT, k] if P[k, C.PFLAG] == 1.0 else x[_PFILT, k]
+    e = 0.0 if frz else Psel - x[_PORD, k]
     if x[_PORD, k] >= P[k, C.PMAX] and e >= 0.0:
         x[_PORD, k], e = P[k, C.PMAX], 0.0
     elif x[_PORD, k] <= P[k, C.PMIN] and e <= 0.0:
@@ -968,12 +1110,15 @@ def _iq_injection(P, k, vt, frz, extended):
 
 
 @kernel
-def _reeca1(P, x, k, v, S, ext, dx):
+def _reeca1(P, x, k, v, S, ref, wg, dx):
     """REECA1 (ANDES 2.0 reeca1.py; docs/ibr.md 6) driving REGCA1 k at voltage magnitude v
-    with its injected power S = Pe + j Qe and its plant control's reference increments
-    ext = Pext + j Qext (0 without one): the derivatives of its slots written, its
-    memory (`MEMORY_SLOTS`) updated in place; returns the commands (IpHL, IqHL), pu.
-    Frozen (Volt_dip) while v < Vdip or v > Vup (strict)."""
+    with its injected power S = Pe + j Qe, its references ref = Pref + j Qext (Pref: P0,
+    or its wind turbine's, plus its plant control's Pext; Qext the plant control's Q
+    increment, 0 without one) and its speed wg (1 without a wind turbine): the
+    derivatives of its slots written, its memory (`MEMORY_SLOTS`) updated in place;
+    returns the commands (IpHL, IqHL), pu.  Frozen (Volt_dip) while v < Vdip or v > Vup
+    (strict)."""
+    ext = ref - P[k, C.P0]
     frz = v < P[k, C.VDIP] or v > P[k, C.VUP]
     extended = _timer(x, dx, _T_IQ, k, frz, abs(P[k, C.THLD]))
     hold = _timer(x, dx, _T_IP, k, frz, P[k, C.THLD2])
@@ -995,7 +1140,7 @@ def _reeca1(P, x, k, v, S, ext, dx):
     s4 = x[_S4, k]
     dx[_S4, k] = 0.0 if frz else (PFsel / vp - s4) / P[k, C.TIQ]
     Iqinj = _iq_injection(P, k, vt, frz, extended)
-    Ip_order = _p_order(P, x, k, ext.real, frz, dx) / vp
+    Ip_order = _p_order(P, x, k, ref.real, wg, frz, dx) / vp
     if P[k, C.PQFLAG] == 0.0:  # Q priority
         Iqmax = _vdl_limit(P, k, _VDL1, vt)
         IqHL = _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx)
@@ -1175,6 +1320,127 @@ def _algebraic(P, x, k, V):
 
 
 @kernel
+def _wind_rest(P, k, dx):
+    """Zero the derivatives of device k's wind slots (those its wind models do not write:
+    all without a turbine)."""
+    for j in range(len(WIND_SLOTS)):
+        dx[_WT + j, k] = 0.0
+
+
+@kernel
+def _speeds(P, x, k):
+    """The turbine and generator speeds (wt, wg) of device k's drive train, pu: WTDTA1's
+    two masses, WTDS's one (both its speed)."""
+    if P[k, C.WIND] == WTDS:
+        return x[_WT, k], x[_WT, k]
+    return x[_WT, k], x[_WG, k]
+
+
+@kernel
+def _speed_curve(P, k, u):
+    """WTTQA1's speed reference fPe of device k at filtered power u (ANDES Piecewise of
+    the points (p_j, sp_j), j = 1..4, flat beyond them)."""
+    if u <= P[k, C.WQ_P1]:
+        return P[k, C.WQ_SP1]
+    if u <= P[k, C.WQ_P2]:
+        kp = (P[k, C.WQ_SP2] - P[k, C.WQ_SP1]) / (P[k, C.WQ_P2] - P[k, C.WQ_P1])
+        return P[k, C.WQ_SP1] + (u - P[k, C.WQ_P1]) * kp
+    if u <= P[k, C.WQ_P3]:
+        kp = (P[k, C.WQ_SP3] - P[k, C.WQ_SP2]) / (P[k, C.WQ_P3] - P[k, C.WQ_P2])
+        return P[k, C.WQ_SP2] + (u - P[k, C.WQ_P2]) * kp
+    if u <= P[k, C.WQ_P4]:
+        kp = (P[k, C.WQ_SP4] - P[k, C.WQ_SP3]) / (P[k, C.WQ_P4] - P[k, C.WQ_P3])
+        return P[k, C.WQ_SP3] + (u - P[k, C.WQ_P3]) * kp
+    return P[k, C.WQ_SP4]
+
+
+@kernel
+def _windup_pi(x, k, slot, u, kp, ki, lo, hi, dx):
+    """ANDES's PIAWHardLimit of device k: integrator xi (slot) with dxi/dt = ki u held in
+    [lo, hi] (AntiWindup: at or beyond a limit with an outward rate, reset to it in
+    place and stopped), output clip(kp u + xi, lo, hi)."""
+    d = ki * u
+    if x[slot, k] >= hi and d >= 0.0:
+        x[slot, k], d = hi, 0.0
+    elif x[slot, k] <= lo and d <= 0.0:
+        x[slot, k], d = lo, 0.0
+    dx[slot, k] = d
+    return clip(kp * u + x[slot, k], lo, hi)
+
+
+@kernel
+def _wind_reference(P, x, k, Pe, dx):
+    """The REECA1's speed and P reference from device k's wind turbine at its output Pe
+    (pu): WTTQA1 (ANDES wttqa1.py) Pe through the lag Tp to the speed curve fPe, fPe
+    through the lag Twref to wref, the PI (Kpp, Kip; windup and output limits [Temin,
+    Temax]) of (Pe - P0)/wg (Tflag 1) or wref - wg (0), Pref = PI wg; the REECA1's speed
+    1 + wg - fPe (ANDES's sum of the drive train's wg - 1 and the torque control's 1 -
+    fPe).  Without a torque control: Pref = P0/wg, the speed wg.  Returns (speed, Pref,
+    the drive train's speed reference wr0: fPe, or w0 without WTTQA1)."""
+    _, wg = _speeds(P, x, k)
+    if P[k, C.TORQUE] == 0.0:
+        return wg, P[k, C.P0] / wg, P[k, C.WT_W0]
+    Pef, dx[_TQ_PE, k] = lag(Pe, x[_TQ_PE, k], P[k, C.WQ_TP])
+    fPe = _speed_curve(P, k, Pef)
+    wref, dx[_TQ_WREF, k] = lag(fPe, x[_TQ_WREF, k], P[k, C.WQ_TWREF])
+    Tsel = (Pe - P[k, C.P0]) / wg if P[k, C.WQ_TFLAG] == 1.0 else wref - wg
+    lo, hi = P[k, C.WQ_TEMIN], P[k, C.WQ_TEMAX]
+    y = _windup_pi(x, k, _TQ_PI, Tsel, P[k, C.WQ_KPP], P[k, C.WQ_KIP], lo, hi, dx)
+    return 1.0 + wg - fPe, y * wg, fPe
+
+
+@kernel
+def _pitch_angle(P, x, k, wt, Pord, Pref, dx):
+    """WTPTA1's pitch angle of device k (ANDES wtpta1.py, deg): the PI (Kpc, Kic) of
+    Pord - Pref plus the PI (Kpw, Kiw) of Kcc (Pord - Pref) + wt - w0 (its speed
+    reference: the drive train's w0, as ANDES initialises it), each limited to [thmin,
+    thmax], through the lag Tp with the rate limits [dthmin, dthmax] on Tp dtheta/dt and
+    the anti-windup limits [thmin, thmax] (LagAntiWindupRate)."""
+    lo, hi = P[k, C.WP_THMIN], P[k, C.WP_THMAX]
+    e = Pord - Pref
+    yc = _windup_pi(x, k, _PT_C, e, P[k, C.WP_KPC], P[k, C.WP_KIC], lo, hi, dx)
+    u = P[k, C.WP_KCC] * e + wt - P[k, C.WT_W0]
+    yw = _windup_pi(x, k, _PT_W, u, P[k, C.WP_KPW], P[k, C.WP_KIW], lo, hi, dx)
+    r = clip(yw + yc - x[_PT_TH, k], P[k, C.WP_DTHMIN], P[k, C.WP_DTHMAX])
+    if x[_PT_TH, k] >= hi and r >= 0.0:
+        x[_PT_TH, k], r = hi, 0.0
+    elif x[_PT_TH, k] <= lo and r <= 0.0:
+        x[_PT_TH, k], r = lo, 0.0
+    dx[_PT_TH, k] = r / P[k, C.WP_TP]
+    return x[_PT_TH, k]
+
+
+@kernel
+def _wind_mechanics(P, x, k, Pe, wg_ree, wr0, Pref, dx):
+    """Device k's turbine (ANDES wtdta1.py, wtds.py, wtara1.py) at its output Pe, the
+    REECA1's speed wg_ree and P reference Pref, the speed reference wr0: the aerodynamic
+    power Pm = P0 - Ka theta (theta - theta0) (WTARA1; theta = rad(theta0) - theta0 plus
+    the pitch angle, ANDES's mix of radians and degrees kept), P0 without; WTDTA1 2 Ht
+    dwt/dt = Pm/wt - Tshaft - pd, 2 Hg dwg/dt = -Pe/wg + Tshaft - DAMP (wg - w0) + pd,
+    dTshaft/dt = Kshaft (wt - wg), pd = Dshaft (wt - wg), Ht = Htfrac H, Hg = H - Ht,
+    Kshaft = 2 Ht Hg Freq1^2/H; WTDS 2 H dw/dt = (Pm - Pe)/wg_ree - DAMP (w - wr0)."""
+    wt, wg = _speeds(P, x, k)
+    theta0 = P[k, C.WA_THETA0]
+    theta = np.deg2rad(theta0)
+    if P[k, C.PITCH] == 1.0:
+        theta += _pitch_angle(P, x, k, wt, x[_PORD, k], Pref, dx) - theta0
+    Pm = P[k, C.P0]
+    if P[k, C.AERO] == 1.0:
+        Pm += -(theta - theta0) * theta * P[k, C.WA_KA]
+    H = P[k, C.WT_H]
+    if P[k, C.WIND] == WTDS:
+        d = (Pm - Pe) / wg_ree - P[k, C.WT_DAMP] * (wt - wr0)
+        dx[_WT, k] = d / (2.0 * H)
+        return
+    Ht2 = 2.0 * (P[k, C.WT_HTFRAC] * H)
+    Hg2 = 2.0 * H * (1.0 - P[k, C.WT_HTFRAC])
+    pd = P[k, C.WT_DSHAFT] * (wt - wg)
+    dx[_WT, k] = (Pm / wt - x[_TSH, k] - pd) / Ht2
+    dx[_WG, k] = (-Pe / wg + x[_TSH, k] - P[k, C.WT_DAMP] * (wg - P[k, C.WT_W0]) + pd) / Hg2
+    dx[_TSH, k] = Ht2 * Hg2 * 0.5 * P[k, C.WT_FREQ1] ** 2 / H * (wt - wg)
+
+
+@kernel
 def drawn_current(P, x, k, v):
     """The current device k draws at its bus as complex power per pu voltage (the
     network solution's device-current term, `stabctl.network.solution.solve_nc`) at bus
@@ -1204,10 +1470,17 @@ def derivatives(P, x, k, V, V_nc, reach, dx):
     if P[k, C.TYPE] == REGCA1:
         Ipout, Iqout = _regca1_currents(P, x, k, v)
         Iq_target = -P[k, C.IQCMD0]
+        _wind_rest(P, k, dx)
         if P[k, C.REEC] == REECA1:
             ext = _repca1(P, x, k, V, V_nc, dx) if P[k, C.REPC] == REPCA1 else 0.0j
-            Ipcmd, Iq_target = _reeca1(P, x, k, v, v * Ipout + 1j * v * Iqout, ext, dx)
+            wg, Pref, wr0 = 1.0, P[k, C.P0], 1.0
+            if P[k, C.WIND] != NO_WIND:
+                wg, Pref, wr0 = _wind_reference(P, x, k, v * Ipout, dx)
+            ref = Pref + ext
+            Ipcmd, Iq_target = _reeca1(P, x, k, v, v * Ipout + 1j * v * Iqout, ref, wg, dx)
             x[_IPCMD, k] = Ipcmd + P[k, C.IPOFF]
+            if P[k, C.WIND] != NO_WIND:
+                _wind_mechanics(P, x, k, v * Ipout, wg, wr0, ref.real, dx)
         _regca1_derivatives(P, x, k, v, Iq_target, reach, dx)
         dx[4, k] = _soc_rate(P, k, v * Ipout)
         return v * Ipout + 1j * v * Iqout
@@ -1293,6 +1566,8 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     P, Vc, V_nc = at_power_flow(cp, V0)
     if np.any(cp.reec == REECA1):
         _reeca1_initial(cp, x, v)
+    if np.any(cp.wind != NO_WIND):
+        _wind_initial(cp, x)
     pc = cp.repc == REPCA1
     x[_PC_V] = np.where(pc, cp.pc_Vref0, 0.0)  # the filters at VCsel, Qline; PI, lead-lag 0
     x[_PC_Q] = np.where(pc, cp.pc_Qline0, 0.0)
@@ -1333,6 +1608,28 @@ def _reeca1_initial(cp: ConverterParams, x: np.ndarray, v: np.ndarray) -> None:
     }
     for slot, value in init.items():
         x[slot] = np.where(ree, value, 0.0)
+
+
+def _wind_initial(cp: ConverterParams, x: np.ndarray) -> None:
+    """The wind turbines' initial states in x (N_STATES, n_ibr), in place (ANDES's
+    initialisation, the torque control's values set last): both speeds at fPe(P0) with
+    a torque control (WTTQA1), else at w0; the shaft torque P0 over that speed (WTDTA1);
+    WTTQA1's Pe filter at P0, its speed reference at fPe(P0), its PI's integrator at
+    P0/fPe(P0); WTPTA1's integrators at 0 and its pitch angle at the PIs' outputs (the
+    speed PI's clip(Kpw (w - w0), thmin, thmax))."""
+    P = cp.packed()
+    for k in np.flatnonzero(cp.wind != NO_WIND):
+        w = _speed_curve.py_func(P, k, cp.P0[k]) if cp.torque[k] == 1 else cp.wt_w0[k]
+        x[_WT, k] = w
+        if cp.wind[k] == WTDTA1:
+            x[_WG, k] = w
+            x[_TSH, k] = cp.P0[k] / w
+        if cp.torque[k] == 1:
+            x[_TQ_PE, k], x[_TQ_WREF, k], x[_TQ_PI, k] = cp.P0[k], w, cp.P0[k] / w
+        if cp.pitch[k] == 1:
+            lo, hi = cp.wp_thmin[k], cp.wp_thmax[k]
+            yw = np.clip(cp.wp_Kpw[k] * (w - cp.wt_w0[k]), lo, hi)
+            x[_PT_TH, k] = yw + np.clip(0.0, lo, hi)
 
 
 def at_power_flow(cp: ConverterParams, V0: np.ndarray):

@@ -278,6 +278,14 @@ EXCITER = Family(
             doc="ST3: ESST3A's regulator lag 1/(1 + s T_A) before the inner loop, non-windup "
             "on [VAmin, VAmax] (below 1e-3 s: none, as PST exc_st3)",
         ),
+        Param(
+            "efd_speed",
+            "code",
+            45,
+            choices=(0, 1),
+            doc="1: the field voltage is the exciter's output times the rotor speed (pu), "
+            "ANDES 2.0's EXDC2 (exdc2.py vout = omega vp); 0 (default): the output",
+        ),
     ),
     dyr=(
         # SEXS -> smpexc: T_C = (TA/TB) TB is computed
@@ -1340,7 +1348,8 @@ def _source_machine(MP, m, stator, fld):
 @kernel(inline="always")
 def field_voltage(P, x, i, MP, xm, cur, pss_out, ifd, VB, ieee):
     """Field voltage exciter i hands its machine (PST flag 1), pu on the machine base:
-    `field_voltage_at` with its machine's terminal voltage.
+    `field_voltage_at` with its machine's terminal voltage (times its speed with
+    exc_con column 45, ``efd_speed``, = 1).
 
     Parameters
     ----------
@@ -1360,8 +1369,10 @@ def field_voltage(P, x, i, MP, xm, cur, pss_out, ifd, VB, ieee):
     ieee : bool
         The IEEE 421.5 convention (limited states are read clipped to their limits).
     """
-    ed, eq, _, _ = mac.stator_without_speed(MP, xm, cur, int(P[i, E.MAC]))
-    return field_voltage_at(P, x, i, np.hypot(ed, eq), pss_out, VB, ifd, ieee)
+    m = int(P[i, E.MAC])
+    ed, eq, _, _ = mac.stator_without_speed(MP, xm, cur, m)
+    efd = field_voltage_at(P, x, i, np.hypot(ed, eq), pss_out, VB, ifd, ieee)
+    return efd * xm[1, m] if P[i, E.EFD_SPEED] == 1 else efd
 
 
 @kernel(inline="always")
@@ -1428,8 +1439,11 @@ def derivatives(P, x, i, eterm, pss_out, efd, ifd, VB, dx, ieee, reach):
 @kernel
 def recorded_efd(P, x, i, efd_alg):
     """Efd as PST records it: the (clamped) smpexc state, the DC Efd state, or the ST3
-    (and bus-fed smpexc) algebraic value efd_alg (`field_voltage`)."""
+    (and bus-fed smpexc) algebraic value efd_alg (`field_voltage`); efd_alg, the
+    machine's, with ``efd_speed``."""
     kind = P[i, E.KIND]
+    if P[i, E.EFD_SPEED] == 1:
+        return efd_alg
     if kind == DC1 or kind == DC2 or kind == T2 or kind == T3:
         return x[3, i]
     if kind == SMP and P[i, E.TA] >= LBND and P[i, E.KG] != 1:

@@ -354,3 +354,89 @@ def test_repca1_needs_a_reeca1_and_the_monitored_line_at_its_bus():
         regca1(repc=1)
     with pytest.raises(CaseError, match=r"field 'pc_bus1'.*end at the device's bus"):
         reeca1(repc=1, pc_bus1=1, pc_bus2=1)
+
+
+# -- wind turbine (ANDES renewable/wtdta1.py, wtds.py, wtara1.py, wtpta1.py, wttqa1.py) ----
+
+SW = {
+    name: 5 + len(conv.REECA1_SLOTS) + len(conv.REPCA1_SLOTS) + j
+    for j, name in enumerate(conv.WIND_SLOTS)
+}
+#: a REECA1 with the whole WT3 chain: two-mass drive train, aerodynamics, pitch and torque
+WT3 = dict(wind=conv.WTDTA1, aero=1, pitch=1, torque=1)
+
+
+def wind(x_changes=(), V=1.0, **cols):
+    """`reeca1` with a wind turbine (default: the WT3 chain)."""
+    return reeca1(x_changes, V, **{**WT3, **cols})
+
+
+def test_wind_turbine_starts_at_rest_on_its_speed_curve():
+    # torque control: both speeds at fPe(P0) = 0.72 + (0.5 - 0.4) 0.14/0.2 = 0.79 (the
+    # default points), the shaft torque and the PI's integrator P0/0.79, the speed
+    # reference 0.79, the pitch at 0 (its PIs at 0, thmin 0); without torque control the
+    # speeds sit at w0 and Tshaft = P0
+    dx, S_, x, _ = wind()
+    assert np.max(np.abs(dx)) < 1e-14 and S_ == 0.5 + 0.1j
+    w = 0.72 + 0.1 * 0.14 / 0.2
+    for slot in ("wt", "wg", "wref_tq"):
+        assert x[SW[slot], 0] == pytest.approx(w, rel=1e-14)
+    assert x[SW["Tshaft"], 0] == pytest.approx(0.5 / w, rel=1e-14)
+    assert x[SW["PI_tq"], 0] == pytest.approx(0.5 / w, rel=1e-14)
+    assert x[SW["theta_pitch"], 0] == 0.0
+    dx, _, x, _ = wind(torque=0)
+    assert np.all(dx == 0.0)
+    assert (x[SW["wt"], 0], x[SW["wg"], 0], x[SW["Tshaft"], 0]) == (1.0, 1.0, 0.5)
+
+
+def test_two_mass_drive_train_twists_the_shaft():
+    # wt 0.01 above wg = 1 (no torque control): Kshaft = 2 Ht 2 Hg Freq1^2 / (2 H) = 1.5
+    # with H = 3, Htfrac 0.5; pd = Dshaft (wt - wg) = 0.01; 2 Ht dwt/dt = Pm/wt - Tshaft - pd,
+    # 2 Hg dwg/dt = -Pe/wg + Tshaft + pd (DAMP 0)
+    dx, S_, _, _ = wind([(SW["wt"], 1.01)], torque=0, pitch=0, aero=0)
+    assert dx[SW["Tshaft"], 0] == pytest.approx(1.5 * 0.01, rel=1e-12)
+    assert dx[SW["wt"], 0] == pytest.approx((0.5 / 1.01 - 0.5 - 0.01) / 3.0, rel=1e-12)
+    assert dx[SW["wg"], 0] == pytest.approx((-S_.real + 0.5 + 0.01) / 3.0, rel=1e-12)
+    # WTDS, one mass: 2 H dw/dt = (Pm - Pe)/w_ree - D (w - w0), D = 2
+    dx, S_, _, _ = wind([(SW["wt"], 1.01)], wind=conv.WTDS, torque=0, pitch=0, aero=0, wt_DAMP=2)
+    assert dx[SW["wt"], 0] == pytest.approx(((0.5 - S_.real) / 1.01 - 0.02) / 6.0, rel=1e-12)
+
+
+def test_pitch_control_rate_and_anti_windup_limits_and_the_aerodynamic_power():
+    # the speed PI's integrator at 30 deg: the lag's Tp dtheta/dt = 30 - 0 is rate limited
+    # to dthmax = 5 deg; at 2 deg the aerodynamic power falls by Ka theta^2 (ANDES's
+    # degrees): 2 Ht dwt/dt = (P0 - 4)/wt - Tshaft - pd
+    dx, _, _, _ = wind([(SW["PIw_pitch"], 30.0)], torque=0)
+    assert dx[SW["theta_pitch"], 0] == pytest.approx(5.0 / 0.3, rel=1e-14)
+    dx, _, _, _ = wind([(SW["PIw_pitch"], 2.0), (SW["theta_pitch"], 2.0)], torque=0)
+    assert dx[SW["theta_pitch"], 0] == 0.0
+    assert dx[SW["wt"], 0] == pytest.approx((0.5 - 4.0 - 0.5) / 3.0, rel=1e-12)
+    # at thmin (0) with the PIs driving it lower the angle stays, the speed PI's
+    # integrator too (below w0: u < 0)
+    dx, _, x, _ = wind([(SW["wt"], 0.99), (SW["wg"], 0.99)], torque=0)
+    assert dx[SW["theta_pitch"], 0] == 0.0 and dx[SW["PIw_pitch"], 0] == 0.0
+    assert x[SW["theta_pitch"], 0] == 0.0
+
+
+def test_torque_control_pi_sets_the_power_reference():
+    # wg 0.01 below the speed reference (Tflag 0): the PI (Kip 0.1) integrates 0.1 * 0.01;
+    # Pref = PI wg moves the REECA1's power order: Tpord dPord/dt = Pref - Pord
+    w = 0.79
+    dx, _, _, _ = wind([(SW["wg"], w - 0.01), (SW["wt"], w - 0.01)])
+    assert dx[SW["PI_tq"], 0] == pytest.approx(0.1 * 0.01, rel=1e-9)
+    Pref = 0.5 / w * (w - 0.01)
+    assert dx[S["Pref_filter"], 0] == pytest.approx((Pref - 0.5) / 0.02, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    "cols, message",
+    [
+        (dict(wind=conv.WTDTA1, reec=0), r"field 'wind'.*drives a REECA1"),
+        (dict(torque=1, pitch=0), r"field 'torque'.*needs the pitch control"),
+        (dict(pitch=1, aero=0, torque=0), r"field 'pitch'.*needs the aerodynamics"),
+        (dict(wt_Htfrac=1.0), r"field 'wt_Htfrac'.*inside \(0, 1\)"),
+    ],
+)
+def test_wind_turbine_chains_and_inertia_split_are_checked(cols, message):
+    with pytest.raises(CaseError, match=message):
+        regca1(**{**WT3, "reec": 1, "Vref0": 1.0, **cols})
