@@ -4,7 +4,8 @@ Faults follow PST's switching sequence (`y_switch.m`, PST manual section 2.5): a
 three-phase fault at a bus, cleared at the near end (the faulted circuit opens there and the
 far end keeps feeding the fault through it) and later at the far end (the circuit is out);
 a fault without a far bus is cleared without loss of a line.  A line is opened as PST does:
-its reactance becomes 1e7 pu and its charging stays connected.  Any number of events per run.
+its reactance becomes 1e7 pu; its charging stays connected under the pstess conventions and
+goes with it under ieee (docs/conventions.md 9).  Any number of events per run.
 """
 
 from __future__ import annotations
@@ -40,7 +41,8 @@ class Fault:
 
     At `clear_near` the faulted circuit opens at the near end (`bus`), the far end still
     feeding the fault through it; at `clear_far` it opens at the far end too and the fault is
-    gone, the circuit staying out (a line opened as PST: reactance 1e7 pu, charging kept):
+    gone, the circuit staying out (a line opened as PST: reactance 1e7 pu; its charging
+    kept under pstess, removed under ieee):
     PST's fault type 0.  With equal near and far times the zero-length interval between
     the two openings is kept, as PSTess does.  The times are checked against the case when the
     run starts (`Simulator.run`): InputError for a clearing before the fault or a far end
@@ -106,7 +108,8 @@ class Fault:
 @dataclass(frozen=True)
 class LineTrip(_AtOneTime):
     """Open one circuit of the line `from_bus`-`to_bus` at `t`, without fault (PST's
-    ``sw_con`` type 4; the line opened as PST: reactance 1e7 pu, charging kept).
+    ``sw_con`` type 4; the line opened as PST: reactance 1e7 pu, its charging kept under
+    the pstess conventions, removed under ieee).
 
     Attributes
     ----------

@@ -36,7 +36,7 @@ from stabctl.network.solution import (
 )
 
 FAULT_B = 1e7  # PST's bolted-fault shunt susceptance (1/1e-7)
-OPEN_X = 1e7  # PST opens a branch by giving it this reactance (charging stays)
+OPEN_X = 1e7  # PST opens a branch by giving it this reactance (charging stays in PST)
 #: largest |derivative| at t = 0 of an equilibrium (DynamicModel.check_equilibrium)
 EQUILIBRIUM_TOL = 1e-8
 
@@ -63,10 +63,11 @@ class StageConfig:
     """Network configuration of one interval (hashable; built by `stabctl.dynamics.events`).
 
     faults: (bus index, shunt admittance) pairs replacing the bus shunt (PST sw_con fault);
-    opened: branch rows opened by PST's x = 1e7 (line charging stays connected);
+    opened: branch rows opened by PST's x = 1e7 (line charging stays connected under the
+        pstess conventions, as PST; removed under ieee: both breakers open de-energise it);
     fault_feeds: (branch row, far-end bus number, still_faulted) for a line cleared at the
-        near end: a copy of the line feeds a fault node from the far end until the far end
-        clears too (PST y_switch);
+        near end: a copy of the line (with its charging) feeds a fault node from the far
+        end until the far end clears too (PST y_switch; then, under ieee, without it);
     tripped_machines: machine indices disconnected; load_steps: (bus index, admittance).
     """
 
@@ -211,18 +212,21 @@ class DynamicModel:
             bus[b, 7], bus[b, 8] = y.real, y.imag
         for b, y in config.load_steps:
             y_shunt[b] += y
+        # PSTess keeps an opened line's charging; a breaker de-energises it (ieee)
+        b_open = 1.0 if self.conventions == "pstess" else 0.0
         for row in config.opened:
-            line[row, 3] = OPEN_X
+            line[row, 3], line[row, 4] = OPEN_X, line[row, 4] * b_open
         new_bus, new_line = [], []
         next_number = bus[:, 0].max() + 10
         for row, far, faulted in config.fault_feeds:
-            line[row, 3] = OPEN_X
+            nl = line[row].copy()
+            line[row, 3], line[row, 4] = OPEN_X, line[row, 4] * b_open
             nb = np.zeros(bus.shape[1])
             nb[[0, 1, 9]] = next_number, 1.0, 3
             nb[8] = -FAULT_B if faulted else 0.0
-            nl = line[row].copy()
             nl[0], nl[1] = next_number, far
             nl[3] = case.branches.x[row] if faulted else OPEN_X
+            nl[4] *= 1.0 if faulted else b_open
             new_bus.append(nb)
             new_line.append(nl)
             next_number += 10

@@ -128,9 +128,9 @@ def section_case1(fig_dir: Path) -> str:
     lines += [
         "",
         "The paper's 21-cycle fault is far beyond this model's critical clearing "
-        "time. With IEEE 421.5 limiters the no-storage CCT is 9.4 cycles (157 ms at the "
-        "5 ms default step, 158 ms converged; section 9) and 5 % ESDs raise it to 12.1 "
-        "cycles; even 30 % ESDs clear only 20.6 cycles. PSTess 1.1's own model gives 16.1 "
+        "time. With IEEE 421.5 limiters the no-storage CCT is 9.2 cycles (154 ms at the "
+        "5 ms default step and converged; section 9) and 5 % ESDs raise it to 11.9 "
+        "cycles; even 30 % ESDs clear only 20.5 cycles. PSTess 1.1's own model gives 16.1 "
         "and 18.2 cycles at its 10 ms step, but that is its smpexc limiter: the field "
         "voltage's derivative is never zeroed at the ceiling and the machine sees Efd_max "
         "+ h dEfd/dt, several pu above the 5 pu ceiling with K_A = 200, so the field "

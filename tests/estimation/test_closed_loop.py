@@ -111,8 +111,8 @@ def test_seed_rule_half_width_is_student_t_with_the_lattice_floor():
 
 
 def test_cct_study_adds_seed_batches_until_the_interval_is_narrow(tmp_path):
-    # Kundur line 3-101, 5 % ESDs, raw PMU frequency in the loop: every seed's CCT is 12
-    # cycles (reports/estimation_kundur.md, 20 seeds).  With batches of 2 the lattice floor
+    # Kundur line 3-101, 5 % ESDs, raw PMU frequency in the loop: every seed's CCT is 11.75
+    # cycles (reports/estimation_kundur.md, 5 seeds).  With batches of 2 the lattice floor
     # is 0.194 cycle at 2 seeds, 0.132 at 4 and 0.099 at 6 (< 0.125): three rounds
     rule = cl.SeedRule(batch=2, max_runs=8)
     table = cl.cct_study(
@@ -126,7 +126,7 @@ def test_cct_study_adds_seed_batches_until_the_interval_is_narrow(tmp_path):
     )[5.0]
     assert table["ideal"]["runs"] == 1 and table["ideal"]["half_width"] is None
     assert table["raw"]["runs"] == 6
-    assert table["raw"]["values"] == [12.0] * 6
+    assert table["raw"]["values"] == [pytest.approx(11.75)] * 6
     assert table["raw"]["half_width"] == pytest.approx((1 - 0.05 ** (1 / 6)) / 4)
 
 
@@ -187,8 +187,8 @@ def test_cct_study_passes_the_pmu_window_to_every_run_and_names_it_when_not_defa
 def test_cct_study_with_wecc_batteries_names_them_and_commands_them(tmp_path):
     """esd_model "wecc": every job carries it and a "/wecc" key suffix (the ideal default's
     keys and inputs unchanged), and the loop commands batteries: with exact measurements
-    Kundur line 3-101 at 5 % has its CCT at 11.75 cycles, a quarter cycle below the
-    ideal devices' 12 (the direct law's CCTs: 0.197 s and 0.202 s, docs/storage.md)."""
+    Kundur line 3-101 at 5 % has its CCT at 11.5 cycles, half a cycle below the ideal
+    devices' 12 (docs/storage.md)."""
     table = cl.cct_study(
         "kundur",
         LineFault(3, 101),
@@ -199,6 +199,6 @@ def test_cct_study_with_wecc_batteries_names_them_and_commands_them(tmp_path):
         runner=RunnerOptions(workers=1, progress=False),
         esd_model="wecc",
     )[5.0]
-    assert table["ideal"]["values"] == [pytest.approx(11.75)]
+    assert table["ideal"]["values"] == [pytest.approx(11.5)]
     keys = [json.loads(line)["key"] for line in (tmp_path / "cct.jsonl").read_text().splitlines()]
     assert keys == ["kundur/3-101/5%/ideal/60fps/0.05s/seed0/wecc"]

@@ -1469,6 +1469,50 @@ def test_kundur_wind_turbine_controls_shape_the_response_and_match_andes_in_the_
     assert np.max(np.abs(P_off - run["Pa"])[run["t"] > 1.5]) > 0.05
 
 
+def test_ieee14_wt3n_own_line_trip_matches_andes(wind_cases):
+    """ieee14_wt3n's own disturbance, line 1-2 opened at 1 s (its Toggle): five turbines
+    and a zero-power GENCLS (M 0.01 s) as the angle reference, which runs away in both
+    tools (1.48 pu 0.1 s after the trip); stabctl's reference speed follows ANDES's
+    within 6e-4 pu of its 0.48 pu excursion and the turbines' P within 1e-4 pu (with the
+    opened line's charging kept, as PSTess, the excursion was half as fast)."""
+    path = andes.get_case("ieee14/ieee14_wt3n.xlsx")
+    case = wind_cases["ieee14/ieee14_wt3n.xlsx"]
+    ss = andes_system(path, off=("Fault",))
+    line = list(ss.Line.idx.v).index(ss.Toggle.dev.v[0])
+    a, b = int(ss.Line.bus1.v[line]), int(ss.Line.bus2.v[line])
+    andes_speeds(ss, 1.1, STEP)
+    t = np.asarray(ss.dae.ts.t)
+    wa = np.asarray(ss.dae.ts.x)[:, ss.GENCLS.omega.a[0]]
+    Pa, _ = andes_converter_powers(ss, "REGCA1")
+    res = Simulator(case, q_limits=False).run([LineTrip(a, b, 1.0)], 1.1, h=STEP)
+    dw = np.max(np.abs(np.interp(t, res.t, res.speed[:, 0]) - wa))
+    P = np.column_stack([np.interp(t, res.t, res.ibr_p[:, k]) for k in range(5)])
+    dP = algebraic_gaps(t, P, Pa, (1.0,))
+    print(f"\nieee14_wt3n line trip vs ANDES: reference speed {dw:.2e}, P {dP:.2e} pu")
+    assert np.max(wa) > 1.4  # the reference runs away
+    assert dw < 1e-3 and dP < 1e-4  # measured 5.8e-4, 2.9e-5
+
+
+def test_ieee14_line_trip_drops_the_line_charging_as_andes():
+    """ieee14_linetrip's line 1-2 (b 0.053 pu) opened at 1 s: 1 ms later bus 1 is at
+    ANDES's voltage under the ieee conventions (the breakers de-energise the line);
+    pstess keeps PST's charging (y_switch.m), 5e-3 pu higher."""
+    path = andes.get_case("ieee14/ieee14_linetrip.xlsx")
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    ss = andes_system(path)
+    andes_speeds(ss, 1.01, 1e-3)
+    t = np.asarray(ss.dae.ts.t)
+    v1 = np.asarray(ss.dae.ts.y)[:, ss.Bus.v.a[0]][np.argmin(np.abs(t - 1.001))]
+    ours = {}
+    for conventions in ("ieee", "pstess"):
+        sim = Simulator(case, q_limits=False, conventions=conventions)
+        res = sim.run([LineTrip(1, 2, 1.0)], 1.01, h=1e-3)
+        ours[conventions] = res.vmag[np.argmin(np.abs(res.t - 1.001)), 0]
+    assert abs(ours["ieee"] - v1) < 1e-4  # measured 2e-5 (1.01608 against 1.01606)
+    assert ours["pstess"] - v1 > 4e-3  # measured 4.9e-3
+
+
 def test_ieee14_esac1a_field_voltage_matches_andes_where_andes_models_it():
     """ANDES's ieee14_esac1a.xlsx (docs/pst_models.md 2.7): ANDES 2.0's ``esac1a.py``
     leaves out the rate feedback (its ``vi`` omits ``WF_y``), the V_R limits and V_E >= 0.

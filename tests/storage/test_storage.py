@@ -194,7 +194,7 @@ def test_cli_simulate_with_storage(tmp_path):
 
     from stabctl.cli import main
 
-    # ieee conventions: CCT 9.42 cycles without storage, 12.12 with 5 % (reports/paper.md)
+    # ieee conventions: CCT 9.24 cycles without storage, 11.94 with 5 % (reports/paper.md)
     args = [
         "simulate",
         "kundur",
