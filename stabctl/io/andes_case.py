@@ -512,17 +512,27 @@ def _electrical_control_refusal(ss, regc) -> str:
 def _wind_refusal(ss, reec) -> str:
     """Why the wind turbine of REECA1 ``reec`` cannot be mapped (empty if it has at most
     one model at each link of the chain drive train -> WTARA1 -> WTPTA1 -> WTTQA1)."""
-    trains = [(n, j) for n in DRIVE_TRAINS for j in _children(ss, n, "ree", reec)]
-    found = [f"{n} {ss.models[n].idx.v[j]}" for n, j in trains]
-    if len(trains) > 1:
-        return f"its REECA1 has {len(trains)} drive trains ({', '.join(found)}; stabctl: one)"
-    parent = ss.models[trains[0][0]].idx.v[trains[0][1]] if trains else None
-    for chained, link, _, _ in WIND_CHAIN:
-        rows = _children(ss, chained, link, parent) if parent is not None else []
-        if len(rows) > 1:
-            return f"its wind turbine has {len(rows)} {chained} on {parent} (stabctl: one)"
-        parent = ss.models[chained].idx.v[rows[0]] if rows else None
+    links = _wind_links(ss, reec)
+    for n, link in enumerate(links):
+        if len(link) > 1:
+            found = ", ".join(f"{name} {ss.models[name].idx.v[j]}" for name, j in link)
+            if n == 0:
+                return f"its REECA1 has {len(link)} drive trains ({found}; stabctl: one)"
+            return f"its wind turbine has {len(link)} {link[0][0]} ({found}; stabctl: one)"
     return ""
+
+
+def _wind_links(ss, reec) -> list[list[tuple[str, int]]]:
+    """The wind turbine of REECA1 ``reec`` (its idx) as ANDES chains it, one list of
+    (model, in-service row) per link: the drive trains naming ``reec`` (WTDTA1, WTDS),
+    then each model of `WIND_CHAIN` naming the first device of the link before; empty
+    links end it (none without a drive train)."""
+    links = [[(n, j) for n in DRIVE_TRAINS for j in _children(ss, n, "ree", reec)]]
+    for chained, field, _, _ in WIND_CHAIN:
+        name, j = links[-1][0] if links[-1] else (None, None)
+        rows = [] if name is None else _children(ss, chained, field, ss.models[name].idx.v[j])
+        links.append([(chained, r) for r in rows])
+    return [link for link in links if link]
 
 
 def _plant_controls(ss, reec) -> list[int]:
@@ -596,10 +606,10 @@ def _wind_values(ss, reec) -> dict[str, float]:
     one): its drive train (WTDTA1 or WTDS, ``wt_``: WTDS's D read as ``wt_DAMP``) and the
     models chained after it (`WIND_CHAIN`), parameters as given (``vin``, device base;
     WTTQA1's Tn 0 where not given)."""
-    trains = [(n, j) for n in DRIVE_TRAINS for j in _children(ss, n, "ree", reec)]
-    if not trains:
+    links = _wind_links(ss, reec)
+    if not links:
         return {}
-    name, j = trains[0]
+    name, j = links[0][0]
     m = ss.models[name]
     v: dict[str, float] = {"wind": float(DRIVE_TRAINS[name])}
     alias = {"wt_DAMP": "D"} if name == "WTDS" else {}
@@ -607,18 +617,13 @@ def _wind_values(ss, reec) -> dict[str, float]:
         src = alias.get(field, field[3:])
         if field.startswith("wt_") and src in m.params:
             v[field] = float(m.params[src].vin[j])
-    parent = m.idx.v[j]
-    for chained, link, flag, prefix in WIND_CHAIN:
-        rows = _children(ss, chained, link, parent)
-        if not rows:
-            break
-        c = ss.models[chained]
+    for link, (_, _, flag, prefix) in zip(links[1:], WIND_CHAIN):
+        name, j = link[0]
         v[flag] = 1.0
         for field in WIND_FIELDS:
             if field.startswith(prefix):
-                value = float(c.params[field[3:]].vin[rows[0]])
+                value = float(ss.models[name].params[field[3:]].vin[j])
                 v[field] = 0.0 if field == "wq_Tn" and not np.isfinite(value) else value
-        parent = c.idx.v[rows[0]]
     return v
 
 
