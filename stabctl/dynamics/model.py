@@ -62,7 +62,10 @@ class OperatingPoint:
 class StageConfig:
     """Network configuration of one interval (hashable; built by `stabctl.dynamics.events`).
 
-    faults: (bus index, shunt admittance) pairs replacing the bus shunt (PST sw_con fault);
+    faults: (bus index, shunt admittance) pairs: PST's sw_con fault replaces the bus shunt
+        (pstess; and a bolted fault under both conventions, where the shunt is immaterial);
+        under ieee a fault through an impedance adds to it (a fault does not disconnect the
+        bus's capacitor banks: as ANDES's Fault and PSS/E);
     opened: branch rows opened by PST's x = 1e7 (line charging stays connected under the
         pstess conventions, as PST; removed under ieee: both breakers open de-energise it);
     fault_feeds: (branch row, far-end bus number, still_faulted) for a line cleared at the
@@ -209,7 +212,8 @@ class DynamicModel:
         line = case.branches.matrix().copy()
         y_shunt = self.y_load.copy()
         for b, y in config.faults:
-            bus[b, 7], bus[b, 8] = y.real, y.imag
+            kept = 0.0 if self.conventions == "pstess" or y == -1j * FAULT_B else 1.0
+            bus[b, 7], bus[b, 8] = kept * bus[b, 7] + y.real, kept * bus[b, 8] + y.imag
         for b, y in config.load_steps:
             y_shunt[b] += y
         # PSTess keeps an opened line's charging; a breaker de-energises it (ieee)
@@ -583,32 +587,38 @@ CURRENT_ITERATIONS = 50
 
 
 @kernel
-def _drawn_currents(p, xi, V_nc):
-    """The converters' currents drawn at the kept buses at voltages V_nc, summed per bus
-    (`conv.drawn_current`; power per pu voltage, `KeptLoads.I_dev`), (n_nc,) complex."""
-    I_dev = np.zeros(V_nc.size, np.complex128)
+def _drawn_currents(p, xi, V_nc, I_dev, I_fix, tol):
+    """The converters' currents drawn at the kept buses at voltages V_nc, summed per bus:
+    I_dev (power per pu voltage) and I_fix (fixed in the network frame), each (n_nc,)
+    complex (`conv.drawn_current`, `KeptLoads`), written in place if one moved by more
+    than tol; returns the largest move."""
+    moved = 0.0
+    rel = np.zeros(V_nc.size, np.complex128)
+    fix = np.zeros(V_nc.size, np.complex128)
     for k in range(p.n_ibr):
         pos = int(p.IP[k, conv.C.POS])
-        I_dev[pos] += conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]))
-    return I_dev
+        a, b = conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]))
+        rel[pos] += a
+        fix[pos] += b
+    for i in range(V_nc.size):
+        moved = max(moved, abs(rel[i] - I_dev[i]), abs(fix[i] - I_fix[i]))
+    if moved > tol:
+        assign(I_dev, rel)
+        assign(I_fix, fix)
+    return moved
 
 
 @kernel
 def _converter_fixed_point(p, xi, net, psi, V_nc, loads, held, it):
     """Fixed-point iteration of the network solution and the converters' drawn currents
     when one depends on its bus voltage (REGCA1's LVG and HVG, `conv.drawn_current`):
-    loads.I_dev recomputed at the solved voltages (in place) and the network solved again
-    until no current moves by more than CURRENT_TOL.  Returns the total load-iteration
-    count, -1 without convergence (either loop)."""
+    loads.I_dev, loads.I_fix recomputed at the solved voltages (in place) and the network
+    solved again until no current moves by more than CURRENT_TOL.  Returns the total
+    load-iteration count, -1 without convergence (either loop)."""
     _Y11, _Y12, Y21, Y22, Z22, _R = net
     for _ in range(CURRENT_ITERATIONS):
-        new = _drawn_currents(p, xi, V_nc)
-        moved = 0.0
-        for i in range(V_nc.size):
-            moved = max(moved, abs(new[i] - loads.I_dev[i]))
-        if moved <= CURRENT_TOL:
+        if _drawn_currents(p, xi, V_nc, loads.I_dev, loads.I_fix, CURRENT_TOL) <= CURRENT_TOL:
             return it
-        assign(loads.I_dev, new)
         more = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
         if more < 0:
             return -1
@@ -664,7 +674,10 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     for k in range(ni):
         conv.clamp_states(p.IP, xi, k, p.reach)
         v_dep = v_dep or conv.voltage_dependent(p.IP, k)
-    loads = KeptLoads(p.S_P, p.I0, p.Y_low, S_extra, _drawn_currents(p, xi, V_nc))
+    I_dev = np.zeros(V_nc.size, np.complex128)
+    I_fix = np.zeros(V_nc.size, np.complex128)
+    _drawn_currents(p, xi, V_nc, I_dev, I_fix, -1.0)
+    loads = KeptLoads(p.S_P, p.I0, p.Y_low, S_extra, I_dev, I_fix)
     it = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
     if it < 0:
         return -1

@@ -211,15 +211,16 @@ def andes_speeds(ss, t_end: float, step: float) -> tuple[np.ndarray, np.ndarray]
 
 def andes_converter_powers(ss, model: str) -> tuple[np.ndarray, np.ndarray]:
     """The active and reactive powers the in-service devices of an ANDES converter model
-    (``"PVD1"``, ``"ESD1"``, ``"REGCA1"``) injected in the run of :func:`andes_speeds`,
-    ANDES's ``Pe = Ipout_y v``, ``Qe = Iqout_y v`` (``andes/models/distributed/pvd1.py``,
-    class docstring; REGCA1: its algebraic ``Pe``, ``Qe``, ``renewable/regca1.py``
-    280-283): (P, Q), each shape (n_t, n_dev), pu on the system base, devices in ANDES's
+    (``"PVD1"``, ``"ESD1"``, ``"REGCA1"``, ``"REGCP1"``) injected in the run of
+    :func:`andes_speeds`, ANDES's ``Pe = Ipout_y v``, ``Qe = Iqout_y v``
+    (``andes/models/distributed/pvd1.py``, class docstring; REGCA1, REGCP1: their algebraic
+    ``Pe``, ``Qe``, ``renewable/regca1.py`` 280-283, ``regcp1.py``): (P, Q), each shape
+    (n_t, n_dev), pu on the system base, devices in ANDES's
     order (the order :func:`stabctl.io.andes_case.import_andes` numbers them)."""
     m = ss.models[model]
     on = [k for k in range(m.n) if m.u.v[k]]
     x, y = np.asarray(ss.dae.ts.x), np.asarray(ss.dae.ts.y)
-    if model == "REGCA1":
+    if model in ("REGCA1", "REGCP1"):
         return y[:, m.Pe.a[on]], y[:, m.Qe.a[on]]
     v = y[:, m.v.a[on]]
     return x[:, m.Ipout_y.a[on]] * v, x[:, m.Iqout_y.a[on]] * v

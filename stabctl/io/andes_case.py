@@ -31,28 +31,29 @@ the machine base ``Sn``, as PSS/E).  Machine ``k`` of the case is the ``k``-th s
 generator in the order of ANDES's static generators (``PV`` rows, then ``Slack``).
 
 Converter-interfaced devices (:mod:`stabctl.models.converters`, docs/ibr.md): ``PVD1``,
-``ESD1`` and ``REGCA1`` become rows of the converter table (``ibr_con``,
-:data:`stabctl.models.converters.CONVERTER`) with their inputs (``vin``, device base
-``Sn``), ``gammap``/``gammaq`` as the fractions of their static generator's power, and
-(PVD1, ESD1) the time constants of the ``BusFreq`` device each reads (ANDES creates one
-with its defaults when ``busf`` is empty).  A REGCA1's controls are read into its row: its
-electrical control ``REECA1``, that control's plant control ``REPCA1`` and wind turbine
-(drive train ``WTDTA1`` or ``WTDS``, then ``WTARA1``, ``WTPTA1``, ``WTTQA1``, each naming
-the one before).  Refused, naming the device: a REGCA1 driven by another electrical
-control (REECA1E, REECB1) or by two, a remote bus ``igreg`` or ``busr``, a nominal
-frequency other than the system's, a wind chain with a missing link or a second drive
-train, a static generator sharing its bus with another, or converters (with a machine on
-the same static generator, which then takes ``gammap``/``gammaq`` of it) taking other
-than all of their static generator's P and Q (ANDES drops the rest of a replaced
-generator's power).
+``ESD1``, ``REGCA1`` and ``REGCP1`` (a REGCA1 whose angle may come from a PLL) become rows
+of the converter table (``ibr_con``, :data:`stabctl.models.converters.CONVERTER`) with
+their inputs (``vin``, device base ``Sn``), ``gammap``/``gammaq`` as the fractions of
+their static generator's power, and (PVD1, ESD1) the time constants of the ``BusFreq``
+device each reads (ANDES creates one with its defaults when ``busf`` is empty).  A
+REGCA1's controls are read into its row: its electrical control ``REECA1`` or ``REECB1``,
+that control's plant control ``REPCA1`` and wind turbine (drive train ``WTDTA1`` or
+``WTDS``, then ``WTARA1``, ``WTPTA1``, ``WTTQA1``, each naming the one before; a REECA1's
+only), a REGCP1's ``PLL1``.  Refused, naming the device: a REGCA1 driven by another
+electrical control (REECA1E) or by two, a REGCP1 whose PLL is a PLL2, measures another
+bus or runs at another frequency, a remote bus ``igreg`` or ``busr``, a nominal frequency
+other than the system's, a wind chain with a missing link or a second drive train, a
+static generator sharing its bus with another, or converters (with a machine on the same
+static generator, which then takes ``gammap``/``gammaq`` of it) taking other than all of
+their static generator's P and Q (ANDES drops the rest of a replaced generator's power).
 
 Models with no effect on the network and machines are ignored: ``Summary`` (the case's
 notes, ``andes/models/info.py``), ``Area``, ``COI`` (the centre-of-inertia calculation,
 ``coi.py``: generators name it, no equation reads it), and the
 measurements ``BusFreq``, ``BusROCOF``, ``ACEc``, ``PMU``, ``PLL1``, ``PLL2``, ``FreqDiv``
-(read by no model stabctl maps; a PLL only by REGCP1 and REGF2, which are refused; ANDES
-resolves a converter's or plant control's frequency measurement to a BusFreq at its bus,
-even where ``busf`` names a FreqDiv).  Every
+(read by no model stabctl maps, but a REGCP1's PLL1, read into its row; ANDES resolves a
+converter's or plant control's frequency measurement to a BusFreq at its bus, even where
+``busf`` names a FreqDiv).  Every
 other model is refused by name (:class:`~stabctl.errors.InputError` listing each with its
 device count), disturbances (``Toggle``, ``Fault``, ``Alter``) included, or left out with
 ``on_unsupported="skip"``.
@@ -79,9 +80,11 @@ from stabctl.io.pst import case_from_matrices
 from stabctl.models.converters import (
     CONVERTER,
     ESD1,
+    PLL1,
     PVD1,
     REECA1,
     REECA1_FIELDS,
+    REECB1,
     REGCA1,
     REPCA1,
     REPCA1_FIELDS,
@@ -118,9 +121,10 @@ IGNORED_MODELS = (
     "FreqDiv",
 )
 #: ANDES converter models -> the converter type of stabctl.models.converters.CONVERTER
-CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1}
-#: ANDES controls read into their converter's row (a REGCA1's REECA1, ibr_con ``reec``)
-CONVERTER_CONTROLS = ("REECA1", "REPCA1", "WTDTA1", "WTDS", "WTARA1", "WTPTA1", "WTTQA1")
+CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1, "REGCP1": REGCA1}
+#: ANDES controls read into their converter's row (a REGCA1's REECA1 or REECB1, ibr_con
+#: ``reec``)
+CONVERTER_CONTROLS = ("REECA1", "REECB1", "REPCA1", "WTDTA1", "WTDS", "WTARA1", "WTPTA1", "WTTQA1")
 #: ANDES's wind drive trains (group RenGovernor) -> ibr_con ``wind``
 DRIVE_TRAINS = {"WTDTA1": WTDTA1, "WTDS": WTDS}
 #: the wind models after the drive train: (ANDES model, its parent's parameter, ibr_con
@@ -316,18 +320,29 @@ def _load(path: Path, dyr):
 
 
 def _network(ss, file: str) -> tuple[dict, dict]:
-    """PST ``bus`` and ``line`` matrices and the bases; bus idx -> bus number."""
+    """PST ``bus`` and ``line`` matrices and the bases; bus idx -> bus number (ANDES's
+    idx; a bus idx 0, which ANDES allows and PSS/E and stabctl do not, takes the first
+    number above the largest, with a warning naming both)."""
     numbers = {}
     for k, idx in enumerate(ss.Bus.idx.v):
         number = _integer(idx)
-        if number is None or number <= 0:
+        if number is None or number < 0:
             raise CaseError(
-                f"{file}: Bus row {k + 1} idx {idx!r} is not a positive integer "
+                f"{file}: Bus row {k + 1} idx {idx!r} is not a non-negative integer "
                 "(stabctl numbers buses)"
             )
         if not ss.Bus.u.v[k]:
             raise CaseError(f"{file}: Bus {number} is out of service (u = 0): not supported")
         numbers[idx] = number
+    zero = [idx for idx, number in numbers.items() if number == 0]
+    if zero:
+        numbers[zero[0]] = max(numbers.values()) + 1
+        warnings.warn(
+            f"{file}: Bus idx {zero[0]!r} is numbered {numbers[zero[0]]} (stabctl numbers "
+            "buses from 1)",
+            UserWarning,
+            stacklevel=4,
+        )
     b = ss.Bus
     bus = np.zeros((b.n, 15))
     bus[:, 0] = [numbers[i] for i in b.idx.v]
@@ -431,10 +446,11 @@ def _converters(ss, numbers: dict):
             if kind != REGCA1:
                 v.update(plim=m.config.plim, Tfm=ss.BusFreq.Tf.v[bf], Twm=ss.BusFreq.Tw.v[bf])
             for p in CONVERTER.params[6:]:
-                if p.name in m.params:
+                if p.name in m.params and p.name != "pll":  # REGCP1's pll: the PLL's idx
                     v[p.name] = float(m.params[p.name].vin[k])
             if kind == REGCA1:
                 v.update(_reeca1_values(ss, m.idx.v[k], numbers))
+                v.update(_pll_values(ss, m, k))
             rows.append([float(v[p.name]) for p in CONVERTER.params])
             got = share.setdefault(gen, [0.0, 0.0, []])
             got[0] += m.gammap.v[k]
@@ -465,13 +481,17 @@ def _converter_refusal(ss, m, k, bus, shared: bool, bf: int) -> str:
     buses), a REGCA1 driven by an electrical control, a PVD1/ESD1
     regulating a remote bus, with a nominal frequency other than the system's or whose
     BusFreq (row ``bf``) has no washout."""
-    regca1 = m.class_name == "REGCA1"
+    regca1 = m.class_name in ("REGCA1", "REGCP1")
     if not regca1 and m.igreg.v[k] is not None:
         return f"remote bus igreg = {m.igreg.v[k]} (stabctl: the device's own bus)"
     if m.bus.v[k] != bus:
         return f"bus {m.bus.v[k]} differs from its static generator's ({bus})"
     if shared:
         return "shared"
+    if m.class_name == "REGCP1" and m.pll.v[k] is not None:
+        why = _pll_refusal(ss, m.pll.v[k], bus)
+        if why:
+            return f"its angle comes from PLL {m.pll.v[k]}: {why}"
     if regca1:
         return _electrical_control_refusal(ss, m.idx.v[k])
     if ss.config.freq not in (m.fn.v[k], ss.BusFreq.fn.v[bf]):
@@ -481,32 +501,70 @@ def _converter_refusal(ss, m, k, bus, shared: bool, bf: int) -> str:
     return ""
 
 
+def _pll_refusal(ss, pll, bus) -> str:
+    """Why PLL ``pll`` (its idx) cannot give a REGCP1 on ``bus`` its angle (empty if it
+    can: an in-service PLL1 on that bus at the system frequency)."""
+    m = ss.models["PLL1"]
+    if pll not in m.idx.v:
+        return "stabctl models PLL1 (ANDES PLL2's SRF loop is not)"
+    j = list(m.idx.v).index(pll)
+    if not m.u.v[j]:
+        return "it is out of service"
+    if m.bus.v[j] != bus:
+        return f"it measures bus {m.bus.v[j]}, not the converter's"
+    if m.fn.v[j] != ss.config.freq:
+        return f"its fn {m.fn.v[j]:g} Hz differs from the system frequency"
+    return ""
+
+
+def _pll_values(ss, m, k) -> dict[str, float]:
+    """The ibr_con fields of REGCP1 row k's PLL1 (none without one; `_pll_refusal` has
+    passed): ``pll`` 1 and its gains and lags as given."""
+    if m.class_name != "REGCP1" or m.pll.v[k] is None:
+        return {}
+    pll = ss.PLL1
+    j = list(pll.idx.v).index(m.pll.v[k])
+    v = {"pll": float(PLL1)}
+    v.update({f"pll_{n}": float(pll.params[n].vin[j]) for n in ("Kp", "Ki", "Tf", "Tp")})
+    return v
+
+
 #: ANDES's electrical controls of a renewable generator (group RenExciter, parameter reg)
 RENEWABLE_CONTROLS = ("REECA1", "REECA1E", "REECB1")
-#: ibr_con fields named otherwise in ANDES's REECA1 (its PQFLAG, Tiq; config kqs, kvs,
-#: tpfilt)
+#: the electrical controls stabctl models -> ibr_con ``reec``
+MAPPED_CONTROLS = {"REECA1": REECA1, "REECB1": REECB1}
+#: ibr_con fields named otherwise in ANDES's REECA1, REECB1 (their PQFLAG, Tiq; config kqs,
+#: kvs, tpfilt)
 _REECA1_NAMES = {"pqflag": "PQFLAG", "tiq": "Tiq"}
 _REECA1_CONFIG = {"Kqs": "kqs", "Kvs": "kvs", "Tpfilt": "tpfilt"}
 
 
 def _electrical_control_refusal(ss, regc) -> str:
     """Why renewable generator ``regc``'s electrical control cannot be mapped (empty if
-    it has none or one REECA1 on its own bus)."""
+    it has none or one REECA1 or REECB1 on its own bus)."""
     drivers = _electrical_controls(ss, regc)
-    if len(drivers) > 1 or any(name != "REECA1" for name, _ in drivers):
+    if len(drivers) > 1 or any(name not in MAPPED_CONTROLS for name, _ in drivers):
         labels = ", ".join(f"{name} {ss.models[name].idx.v[j]}" for name, j in drivers)
-        return f"its current commands come from {labels}; stabctl models one REECA1 (or none)"
-    busr = [ss.REECA1.busr.v[j] for _, j in drivers]
-    if busr and busr[0] is not None:
-        return f"its REECA1 regulates remote bus busr = {busr[0]} (stabctl: its own)"
-    plants = _plant_controls(ss, ss.REECA1.idx.v[drivers[0][1]]) if drivers else []
+        return (
+            f"its current commands come from {labels}; stabctl models one REECA1 or "
+            "REECB1 (or none)"
+        )
+    if not drivers:
+        return ""
+    name, j = drivers[0]
+    ree = ss.models[name]
+    if ree.busr.v[j] is not None:
+        return f"its {name} regulates remote bus busr = {ree.busr.v[j]} (stabctl: its own)"
+    plants = _plant_controls(ss, ree.idx.v[j])
     if len(plants) > 1:
-        return f"its REECA1 takes references from {len(plants)} REPCA1 (stabctl: one)"
-    for j in plants:
+        return f"its {name} takes references from {len(plants)} REPCA1 (stabctl: one)"
+    for p in plants:
         m = ss.REPCA1
-        if m.busr.v[j] is not None:
-            return f"its REPCA1 {m.idx.v[j]} regulates remote bus busr = {m.busr.v[j]}"
-    return _wind_refusal(ss, ss.REECA1.idx.v[drivers[0][1]]) if drivers else ""
+        if m.busr.v[p] is not None:
+            return f"its REPCA1 {m.idx.v[p]} regulates remote bus busr = {m.busr.v[p]}"
+    if name == "REECB1" and _wind_links(ss, ree.idx.v[j]):
+        return f"its REECB1 {ree.idx.v[j]} drives a wind turbine (stabctl: a REECA1's only)"
+    return _wind_refusal(ss, ree.idx.v[j])
 
 
 def _wind_refusal(ss, reec) -> str:
@@ -574,19 +632,22 @@ def _repca1_values(ss, j: int, numbers: dict) -> dict[str, float]:
 
 
 def _reeca1_values(ss, regc, numbers: dict) -> dict[str, float]:
-    """The ibr_con fields of renewable generator ``regc``'s REECA1 (none without one): its
-    parameters as given (``vin``, before ANDES's base change) and its config, and its
+    """The ibr_con fields of renewable generator ``regc``'s REECA1 or REECB1 (none without
+    one): its parameters as given (``vin``, before ANDES's base change) and its config
+    (a REECB1's fields REECA1 alone has keep their defaults: no hold, no PFLAG), and its
     REPCA1's (`_repca1_values`)."""
     drivers = _electrical_controls(ss, regc)
     if not drivers:
         return {}
-    m, j = ss.REECA1, drivers[0][1]
-    v: dict[str, float] = {"reec": float(REECA1)}
+    name, j = drivers[0]
+    m = ss.models[name]
+    v: dict[str, float] = {"reec": float(MAPPED_CONTROLS[name])}
     for field in REECA1_FIELDS:
+        src = _REECA1_NAMES.get(field, field)
         if field in _REECA1_CONFIG:
             v[field] = float(getattr(m.config, _REECA1_CONFIG[field]))
-        else:
-            v[field] = float(m.params[_REECA1_NAMES.get(field, field)].vin[j])
+        elif src in m.params:
+            v[field] = float(m.params[src].vin[j])
     for plant in _plant_controls(ss, m.idx.v[j]):
         v.update(_repca1_values(ss, plant, numbers))
     v.update(_wind_values(ss, m.idx.v[j]))

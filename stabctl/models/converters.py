@@ -62,8 +62,10 @@ PVD1, ESD1, REGCA1 = 1, 2, 3
 
 _DEV_PU: dict[str, Any] = dict(unit="pu")  # on the device base mva (ANDES ``power=True``)
 
-#: REGCA1's electrical control (ibr_con ``reec``): none, REECA1 (WECC REEC_A)
-NO_REEC, REECA1 = 0, 1
+#: REGCA1's electrical control (ibr_con ``reec``): none, REECA1 (WECC REEC_A), REECB1 (WECC
+#: REEC_B: REECA1's columns without its VDL curves, Iqinj hold, PFLAG and Vref1; ANDES 2.0
+#: ``renewable/reecb1.py``)
+NO_REEC, REECA1, REECB1 = 0, 1, 2
 
 
 def _reeca1_params(col: int) -> tuple[Param, ...]:
@@ -248,6 +250,17 @@ def _wind_params(col: int) -> tuple[Param, ...]:
 
 
 _WIND_PARAMS = _wind_params(146)
+
+#: the angle a REGCA1 reads (ibr_con ``pll``): its bus's (0; REGCA1, ANDES's REGCP1 without a
+#: PLL), or a PLL1's (1; REGCP1 with a PLL1, ANDES 2.0 ``renewable/regcp1.py``)
+NO_PLL, PLL1 = 0, 1
+
+_PLL_PARAMS = (
+    Param("pll_Kp", "pu", 184, default=0.1, doc="PLL1: PI proportional gain (rad/rad)"),
+    Param("pll_Ki", "1/s", 185, default=0.1, doc="PLL1: PI integral gain"),
+    Param("pll_Tf", "s", 186, default=0.05, lo=0.0, doc="PLL1: input angle filter"),
+    Param("pll_Tp", "s", 187, default=0.05, lo=0.0, doc="PLL1: output angle lag"),
+)
 #: the ibr_con fields a wind turbine sets (``wind`` and its models' columns)
 WIND_FIELDS = ("wind", *(p.name for p in _WIND_PARAMS))
 #: the ibr_con fields a REPCA1 sets (``pc_`` and ANDES's name)
@@ -411,8 +424,9 @@ CONVERTER = Family(
             "reec",
             "code",
             53,
-            choices=(NO_REEC, REECA1),
-            doc="REGCA1's electrical control: 0 none (constant current commands), 1 REECA1",
+            choices=(NO_REEC, REECA1, REECB1),
+            doc="REGCA1's electrical control: 0 none (constant current commands), 1 REECA1, "
+            "2 REECB1",
         ),
         *_REECA1_PARAMS,
         Param(
@@ -441,6 +455,15 @@ CONVERTER = Family(
             "``torque``)",
         ),
         *_WIND_PARAMS,
+        Param(
+            "pll",
+            "code",
+            183,
+            choices=(NO_PLL, PLL1),
+            doc="REGCA1's angle: 0 its bus's, 1 a PLL1's (ANDES REGCP1 with a PLL1: its "
+            "currents and the electrical control's voltage in the PLL's frame)",
+        ),
+        *_PLL_PARAMS,
     ),
 )
 
@@ -483,6 +506,9 @@ WIND_SLOTS = (
     *("wt", "wg", "Tshaft", "Pe_filter_tq", "wref_tq", "PI_tq"),
     *("PIc_pitch", "PIw_pitch", "theta_pitch"),
 )
+#: the PLL1's slots (``pll`` 1; ANDES measurement/pll.py): the filtered bus angle, the PI's
+#: integrator, the estimated angle and the measured angle (rad)
+PLL_SLOTS = ("af_pll", "PI_pll", "ae_pll", "am_pll")
 # numpy scalars: a kernel's argument is then typed once (not as a literal per value)
 _F_LAG, _F_WASHOUT = np.int64(2), np.int64(3)  # PVD1's, ESD1's frequency measurement
 _VT, _PE, _PIQ, _S4, _PFILT, _PORD, _PIV = (np.int64(j) for j in range(5, 12))
@@ -493,13 +519,17 @@ _PC_FL, _PC_FW, _PC_P, _PC_PIP, _PC_PEXT, _PC_E_H = (np.int64(j) for j in range(
 PLANT_PREF_SLOT = np.int64(28)
 _WT, _WG, _TSH, _TQ_PE, _TQ_WREF, _TQ_PI = (np.int64(j) for j in range(29, 35))
 _PT_C, _PT_W, _PT_TH = (np.int64(j) for j in range(35, 38))
-N_STATES = 5 + len(REECA1_SLOTS) + len(REPCA1_SLOTS) + len(WIND_SLOTS)
+_PLL_AF, _PLL_PI, _PLL_AE, _PLL_AM = (np.int64(j) for j in range(38, 42))
+N_STATES = 5 + len(REECA1_SLOTS) + len(REPCA1_SLOTS) + len(WIND_SLOTS) + len(PLL_SLOTS)
 #: state names per converter type (slots beyond a type's names, or that a device does not
 #: use, `has_state`, are unused, 0)
 STATE_NAMES = {
     PVD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
     ESD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
-    REGCA1: ("Ip", "Iq", "V_filter", "", "SOC", *REECA1_SLOTS, *REPCA1_SLOTS, *WIND_SLOTS),
+    REGCA1: (
+        *("Ip", "Iq", "V_filter", "", "SOC"),
+        *(*REECA1_SLOTS, *REPCA1_SLOTS, *WIND_SLOTS, *PLL_SLOTS),
+    ),
 }
 #: slots that are not states but the memory of REECA1's discrete logic, written in place by
 #: the kernel (ANDES's ExtendedEvent timers, its VarHold of Ipmax, the frozen PI outputs):
@@ -524,8 +554,13 @@ POWER_FIELDS = (
 )
 #: the torque control's fields on its turbine's base (``wq_Tn``, else the device's)
 TORQUE_POWER_FIELDS = ("wq_Temax", "wq_Temin", *(f"wq_p{j}" for j in range(1, 5)))
-#: the wind models' lag time constants (each >= LBND where the model is on)
-WIND_LAGS = (("torque", ("wq_Tp", "wq_Twref")), ("pitch", ("wp_Tp",)))
+#: the lag time constants of the models switched on by a code (wind models, PLL): (code,
+#: its lags), each >= LBND where the model is on
+SWITCHED_LAGS = (
+    ("torque", ("wq_Tp", "wq_Twref")),
+    ("pitch", ("wp_Tp",)),
+    ("pll", ("pll_Tf", "pll_Tp")),
+)
 #: packed parameter matrix of the kernels, (column name, ConverterParams attribute)
 PACKED = (
     ("POS", "pos"),
@@ -571,12 +606,13 @@ class ConverterParams(Declared):
     pmn (lower power order: 0 PVD1, -pmx ESD1), Ksoc = Sb/(3600 En Tf) (1/s per pu),
     fn (Hz); REGCA1: the constant current commands Ipcmd0 = P0/(|V0| LVG(|V0|)), Iqcmd0 =
     -Q0/|V0| (ANDES's Ipcmd0_LVG, Iqcmd0), the gains kLVG = 1/(Lvpnt1 - Lvpnt0), kLVPL =
-    Lvplsw Lvpl1/(Brkpt - Zerox) (0 for the other types); REECA1 (``reec``, ANDES
-    reeca1.py): Vref0r (Vref0, the initial |V| where 0), Qref = -qref0 (its Q reference:
-    Q0, or Vref1 - |V0| with QFLAG), tanpf = Q0/P0 (the power-factor reference, 0 where
-    P0 = 0: Qcpf held at Q0), Ipoff = Ipcmd0 - P0/|V0| (the REGCA1's Ipcmd less the
-    REECA1's, ANDES's two initial commands summed), Imaxr (Imax, 1e8 where <= 0), zVDL1,
-    zVDL2 (1 where the VDL curve's points rise: the curve applies); REPCA1 (``repc``,
+    Lvplsw Lvpl1/(Brkpt - Zerox) (0 for the other types); REECA1 or REECB1 (``reec``,
+    ANDES reeca1.py, reecb1.py): Vref0r (Vref0, the initial |V| where 0), Qref = -qref0
+    (its Q reference: Q0, or with a REECA1's QFLAG Vref1 - |V0|), tanpf = Q0/P0 (the
+    power-factor reference, 0 where P0 = 0: Qcpf held at Q0), Ipoff = Ipcmd0 - P0/|V0|
+    (the REGCA1's Ipcmd less the REECA1's, ANDES's two initial commands summed), Imaxr
+    (Imax, 1e8 where <= 0), zVDL1, zVDL2 (1 where the VDL curve's points rise: the curve
+    applies); REPCA1 (``repc``,
     ANDES repca1.py): the monitored line's end buses (rows bus1_idx, bus2_idx; the
     device's own bus without a line) and their positions pos1, pos2 among the kept buses
     (set by the dynamic model), isign (1 if the device's bus is bus1, else -1: the line
@@ -625,7 +661,7 @@ class ConverterParams(Declared):
         esd = self.type == ESD1
         pvd = self.type != REGCA1
         reg = ~pvd
-        ree = self.reec == REECA1
+        ree = self.reec != NO_REEC
         return (
             ("ibr_con tip", self.tip, pvd),
             ("ibr_con tiq", self.tiq, pvd | ree),
@@ -638,7 +674,7 @@ class ConverterParams(Declared):
             *((f"ibr_con {n}", getattr(self, n), self.repc == REPCA1) for n in REPCA1_LAGS),
             *(
                 (f"ibr_con {n}", getattr(self, n), getattr(self, flag) == 1)
-                for flag, names in WIND_LAGS
+                for flag, names in SWITCHED_LAGS
                 for n in names
             ),
         )
@@ -656,7 +692,7 @@ class ConverterParams(Declared):
         act[2] = reg | (self.Tfm >= LBND)
         act[3] = ~reg
         act[4] = (self.type == ESD1) | self.is_battery
-        act[5:_PC_V] = self.reec == REECA1
+        act[5:_PC_V] = self.reec != NO_REEC
         act[_PC_V:] = self.repc == REPCA1
         act[_PC_FL] &= self.Tfm >= LBND
         act[_WT:] = False
@@ -665,6 +701,7 @@ class ConverterParams(Declared):
         act[_WG] = act[_TSH] = self.wind == WTDTA1
         act[_TQ_PE : _TQ_PI + 1] = self.torque == 1
         act[_PT_C : _PT_TH + 1] = self.pitch == 1
+        act[_PLL_AF : _PLL_AM + 1] = self.pll == PLL1
         act[MEMORY_SLOTS] = False
         return act
 
@@ -700,18 +737,21 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     t = case.converters
     n = len(t)
     reg = t.type == REGCA1
-    ree = t.reec == REECA1
+    ree = t.reec != NO_REEC
     bad = np.flatnonzero(ree & ~reg)
     if bad.size:
         t._fail(bad[0], "reec", "an electrical control drives a REGCA1 (type 3) only")
+    bad = np.flatnonzero((t.pll != NO_PLL) & ~reg)
+    if bad.size:
+        t._fail(bad[0], "pll", "a PLL gives the angle of a REGCA1 (type 3) only")
     lags = [("tip", ~reg), ("tiq", ~reg), ("Tg", reg), ("Tfltr", reg)]
     pc = t.repc == REPCA1
     bad = np.flatnonzero(pc & ~ree)
     if bad.size:
-        t._fail(bad[0], "repc", "a plant control drives a REECA1 (reec 1) only")
+        t._fail(bad[0], "repc", "a plant control drives an electrical control (reec 1, 2) only")
     lags += [(name, ree) for name in REECA1_LAGS] + [(name, pc) for name in REPCA1_LAGS]
-    _check_wind(t, ree)
-    lags += [(n, getattr(t, flag) == 1) for flag, names in WIND_LAGS for n in names]
+    _check_wind(t, t.reec == REECA1)
+    lags += [(n, getattr(t, flag) == 1) for flag, names in SWITCHED_LAGS for n in names]
     for name, sel in lags:
         bad = np.flatnonzero(sel & (getattr(t, name) < LBND))
         if bad.size:
@@ -760,7 +800,7 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         Iqcmd0=np.where(reg, -Q0 / v0, 0.0),
         kLVG=kLVG,
         kLVPL=kLVPL,
-        **_reeca1_services(vals, ree, P0, Q0, v0, np.where(reg, Ipcmd0, 0.0)),
+        **_reeca1_services(vals, t.reec, P0, Q0, v0, np.where(reg, Ipcmd0, 0.0)),
         **_repca1_services(case, idx),
     )
     _repca1_references(cp, V0)
@@ -839,18 +879,21 @@ def _repca1_references(cp: ConverterParams, V0: np.ndarray) -> None:
         cp.pc_Qline0[k], cp.pc_Pline0[k] = Sline.imag, Sline.real
 
 
-def _reeca1_services(vals: dict, ree, P0, Q0, v0, Ipcmd0) -> dict[str, np.ndarray]:
-    """REECA1's initial services (ANDES reeca1.py ConstServices; `ConverterParams`) from
-    the system-base fields ``vals``, for the rows ``ree`` (0 elsewhere)."""
+def _reeca1_services(vals: dict, reec, P0, Q0, v0, Ipcmd0) -> dict[str, np.ndarray]:
+    """REECA1's and REECB1's initial services (ANDES reeca1.py, reecb1.py ConstServices;
+    `ConverterParams`) from the system-base fields ``vals``, for the rows with an
+    electrical control ``reec`` (0 elsewhere)."""
 
     def rising(a: str, b: str):
         pts = [vals[f"{c}{j}"] for c in (a, b) for j in (1, 2, 3)]
         nxt = [vals[f"{c}{j}"] for c in (a, b) for j in (2, 3, 4)]
         return np.all(np.array(pts) <= np.array(nxt), axis=0)
 
-    # qref0 (reeca1.py 412): QFLAG (v - Vref1), else Iqcmd0 vp (vp = v above 0.01 pu)
+    # qref0 (reeca1.py 412): QFLAG (v - Vref1), else Iqcmd0 vp (vp = v above 0.01 pu);
+    # REECB1's -Q0 (reecb1.py 304)
     vp0 = np.where(v0 <= 0.01, 0.01, v0)
     qref0 = np.where(vals["QFLAG"] == 1, v0 - vals["Vref1"], -Q0 / v0 * vp0)
+    qref0 = np.where(reec == REECB1, -Q0, qref0)
     with np.errstate(divide="ignore", invalid="ignore"):
         tanpf = np.where(P0 != 0, Q0 / np.where(P0 != 0, P0, 1.0), 0.0)
     on = {
@@ -862,7 +905,7 @@ def _reeca1_services(vals: dict, ree, P0, Q0, v0, Ipcmd0) -> dict[str, np.ndarra
         "zVDL1": rising("Vq", "Iq").astype(float),
         "zVDL2": rising("Vp", "Ip").astype(float),
     }
-    return {name: np.where(ree, value, 0.0) for name, value in on.items()}
+    return {name: np.where(reec != NO_REEC, value, 0.0) for name, value in on.items()}
 
 
 # -- compiled kernels ----------------------------------------------------------------------
@@ -899,7 +942,7 @@ def _ipcmd(P, x, k):
     """REGCA1 k's active current command: Ipcmd0, or with a REECA1 its last command
     (slot ``Ipcmd_last``, ANDES's algebraic Ipcmd of the previous iterate, which its
     anti-windup check reads before the network solution)."""
-    if P[k, C.REEC] == REECA1:
+    if P[k, C.REEC] != NO_REEC:
         return x[_IPCMD, k]
     return P[k, C.IPCMD0]
 
@@ -1027,8 +1070,11 @@ _VDL2 = (np.int64(C.ZVDL2), np.int64(C.VP1))
 def _vdl_limit(P, k, curve, u):
     """REECA1's VDL limit of device k at filtered voltage u: min(VDL(u), Imaxr) (`_vdl`,
     columns c) if the curve's points rise (flag column z), else 1e8 (ANDES Iqmax1,
-    Ipmax1); curve = (z, c), `_VDL1` or `_VDL2`."""
+    Ipmax1); curve = (z, c), `_VDL1` or `_VDL2`.  A REECB1 has no curves: Imaxr (ANDES
+    reecb1.py Ipmax, Iqmax)."""
     z, c = curve
+    if P[k, C.REEC] == REECB1:
+        return P[k, C.IMAXR]
     if P[k, z] == 0.0:
         return 1e8
     return min(_vdl(P, k, c, u), P[k, C.IMAXR])
@@ -1036,8 +1082,10 @@ def _vdl_limit(P, k, curve, u):
 
 @kernel
 def _room(P, k, other):
-    """The current room sqrt(max(Imax^2 - other^2, 0)) the other command leaves."""
-    return np.sqrt(max(P[k, C.IMAX] ** 2 - other**2, 0.0))
+    """The current room sqrt(max(Imax^2 - other^2, 0)) the other command leaves (a
+    REECB1's Imaxr: ANDES reecb1.py Ipmax2sq, Iqmax2sq)."""
+    Imax = P[k, C.IMAXR] if P[k, C.REEC] == REECB1 else P[k, C.IMAX]
+    return np.sqrt(max(Imax**2 - other**2, 0.0))
 
 
 @kernel
@@ -1093,7 +1141,7 @@ def _iq_injection(P, k, vt, frz, extended):
     """REECA1's Iqinj of device k at filtered voltage vt: Kqv times the deadbanded error
     Vref0r - vt (DeadBand1, strict) in a dip; for |Thld| s after it (``extended``) the
     same (Thld < 0) or Iqfrz (Thld > 0); limited to [Iql1, Iqh1] (ANDES leaves the limits
-    out)."""
+    out).  A REECB1's at all times (its GainLimiter, no hold)."""
     err = P[k, C.VREF0R] - vt
     db = 0.0
     if err > P[k, C.DBD2]:
@@ -1102,7 +1150,7 @@ def _iq_injection(P, k, vt, frz, extended):
         db = err - P[k, C.DBD1]
     Iqv = db * P[k, C.KQV]
     Iqinj = 0.0
-    if frz or (extended and P[k, C.THLD] < 0.0):
+    if frz or (extended and P[k, C.THLD] < 0.0) or P[k, C.REEC] == REECB1:
         Iqinj = Iqv
     elif extended and P[k, C.THLD] > 0.0:
         Iqinj = P[k, C.IQFRZ]
@@ -1117,7 +1165,9 @@ def _reeca1(P, x, k, v, S, ref, wg, dx):
     increment, 0 without one) and its speed wg (1 without a wind turbine): the
     derivatives of its slots written, its memory (`MEMORY_SLOTS`) updated in place;
     returns the commands (IpHL, IqHL), pu.  Frozen (Volt_dip) while v < Vdip or v > Vup
-    (strict)."""
+    (strict).  A REECB1 (ANDES reecb1.py) the same but: the V PI's input the selected
+    Vsel (the Q PI's output with VFLAG, else 0), no VDL curves, Iqinj at all times, no
+    holds (its Thld, Thld2 0) and no PFLAG (0)."""
     ext = ref - P[k, C.P0]
     frz = v < P[k, C.VDIP] or v > P[k, C.VUP]
     extended = _timer(x, dx, _T_IQ, k, frz, abs(P[k, C.THLD]))
@@ -1135,8 +1185,11 @@ def _reeca1(P, x, k, v, S, ref, wg, dx):
     vflag = P[k, C.VFLAG]
     lo, hi = P[k, C.VMIN], P[k, C.VMAX]
     piq = _frozen_pi(P, x, k, vflag * Qerr, (C.KQP, C.KQI, C.KQS, _PIQ, _PIQ_H), lo, hi, frz, dx)
-    Vsel = clip(P[k, C.VREF1] + PFsel if vflag == 0.0 else piq, lo, hi)
-    u = P[k, C.QFLAG] * (Vsel - vt * (1.0 - vflag))
+    if P[k, C.REEC] == REECB1:
+        u = P[k, C.QFLAG] * clip(vflag * piq, lo, hi)
+    else:
+        Vsel = clip(P[k, C.VREF1] + PFsel if vflag == 0.0 else piq, lo, hi)
+        u = P[k, C.QFLAG] * (Vsel - vt * (1.0 - vflag))
     s4 = x[_S4, k]
     dx[_S4, k] = 0.0 if frz else (PFsel / vp - s4) / P[k, C.TIQ]
     Iqinj = _iq_injection(P, k, vt, frz, extended)
@@ -1441,15 +1494,32 @@ def _wind_mechanics(P, x, k, Pe, wg_ree, wr0, Pref, dx):
 
 
 @kernel
+def _frame(P, x, k, V):
+    """exp(j (a - am)) of device k at its bus voltage V: the rotation from the PLL1's
+    frame (measured angle am) to the bus's (angle a); 1 without a PLL (ANDES regcp1.py:
+    Vd = |V| cos(a - am), Vq = -|V| sin(a - am))."""
+    if P[k, C.PLL] == NO_PLL:
+        return 1.0 + 0.0j
+    v = abs(V)
+    if v == 0.0:
+        return 1.0 + 0.0j
+    return V / v * np.exp(-1j * x[_PLL_AM, k])
+
+
+@kernel
 def drawn_current(P, x, k, v):
-    """The current device k draws at its bus as complex power per pu voltage (the
-    network solution's device-current term, `stabctl.network.solution.solve_nc`) at bus
-    voltage magnitude v: -(Ip + j Iq), so that the injected current is (Ip - j Iq) V/|V|;
-    REGCA1 the same with its output currents Ipout, Iqout, which depend on v."""
+    """The current device k draws at its bus as (I_rel, I_fix) at bus voltage magnitude
+    v, for the network solution (`stabctl.network.solution.KeptLoads`): I_rel = -(Ip + j
+    Iq) as complex power per pu voltage, so that the injected current is (Ip - j Iq)
+    V/|V|; REGCA1 the same with its output currents Ipout, Iqout, which depend on v;
+    with a PLL1 the current is set in the PLL's frame, not the bus's: I_fix = -(Ipout - j
+    Iqout) exp(j am) drawn whatever V (ANDES regcp1.py), I_rel 0."""
     if P[k, C.TYPE] == REGCA1:
         Ipout, Iqout = _regca1_currents(P, x, k, v)
-        return -(Ipout + 1j * Iqout)
-    return -(x[0, k] + 1j * x[1, k])
+        if P[k, C.PLL] == PLL1:
+            return 0.0j, -(Ipout - 1j * Iqout) * np.exp(1j * x[_PLL_AM, k])
+        return -(Ipout + 1j * Iqout), 0.0j
+    return -(x[0, k] + 1j * x[1, k]), 0.0j
 
 
 @kernel
@@ -1469,21 +1539,25 @@ def derivatives(P, x, k, V, V_nc, reach, dx):
     v = abs(V)
     if P[k, C.TYPE] == REGCA1:
         Ipout, Iqout = _regca1_currents(P, x, k, v)
+        rot = _frame(P, x, k, V)
+        S = v * rot * (Ipout + 1j * Iqout)  # Pe + j Qe (ANDES regcp1.py)
+        _pll(P, x, k, V, dx)
         Iq_target = -P[k, C.IQCMD0]
         _wind_rest(P, k, dx)
-        if P[k, C.REEC] == REECA1:
+        if P[k, C.REEC] != NO_REEC:
             ext = _repca1(P, x, k, V, V_nc, dx) if P[k, C.REPC] == REPCA1 else 0.0j
             wg, Pref, wr0 = 1.0, P[k, C.P0], 1.0
             if P[k, C.WIND] != NO_WIND:
-                wg, Pref, wr0 = _wind_reference(P, x, k, v * Ipout, dx)
+                wg, Pref, wr0 = _wind_reference(P, x, k, S.real, dx)
             ref = Pref + ext
-            Ipcmd, Iq_target = _reeca1(P, x, k, v, v * Ipout + 1j * v * Iqout, ref, wg, dx)
+            # the electrical control reads Vd, the voltage in the PLL's frame (|V| without)
+            Ipcmd, Iq_target = _reeca1(P, x, k, v * rot.real, S, ref, wg, dx)
             x[_IPCMD, k] = Ipcmd + P[k, C.IPOFF]
             if P[k, C.WIND] != NO_WIND:
-                _wind_mechanics(P, x, k, v * Ipout, wg, wr0, ref.real, dx)
+                _wind_mechanics(P, x, k, S.real, wg, wr0, ref.real, dx)
         _regca1_derivatives(P, x, k, v, Iq_target, reach, dx)
-        dx[4, k] = _soc_rate(P, k, v * Ipout)
-        return v * Ipout + 1j * v * Iqout
+        dx[4, k] = _soc_rate(P, k, S.real)
+        return S
     Ipcmd, Iqcmd, dL, dW = _algebraic(P, x, k, V)
     _, dx[0, k] = lag(Ipcmd, x[0, k], P[k, C.TIP])
     _, dx[1, k] = lag(Iqcmd, x[1, k], P[k, C.TIQ])
@@ -1491,6 +1565,25 @@ def derivatives(P, x, k, V, V_nc, reach, dx):
     dx[3, k] = dW
     dx[4, k] = _soc_rate(P, k, v * x[0, k])
     return v * x[0, k] + 1j * v * x[1, k]
+
+
+@kernel
+def _pll(P, x, k, V, dx):
+    """PLL1's derivatives of device k at its bus voltage V (ANDES 2.0 measurement/pll.py
+    PLL1): the bus angle a through the lag Tf (af), the PI on af - am (Kp, Ki), the
+    estimated angle ae' = 2 pi fn PI_y and the measured angle am the lag Tp of ae; a
+    taken within pi of am (ANDES's bus angle is not wrapped); nothing without a PLL."""
+    for j in range(len(PLL_SLOTS)):
+        dx[_PLL_AF + j, k] = 0.0
+    if P[k, C.PLL] == NO_PLL:
+        return
+    am = x[_PLL_AM, k]
+    a = am + np.angle(V * np.exp(-1j * am)) if V != 0.0 else x[_PLL_AF, k]
+    dx[_PLL_AF, k] = (a - x[_PLL_AF, k]) / P[k, C.PLL_TF]
+    e = x[_PLL_AF, k] - am
+    dx[_PLL_PI, k] = P[k, C.PLL_KI] * e
+    dx[_PLL_AE, k] = 2.0 * np.pi * P[k, C.FN] * (P[k, C.PLL_KP] * e + x[_PLL_PI, k])
+    dx[_PLL_AM, k] = (x[_PLL_AE, k] - am) / P[k, C.PLL_TP]
 
 
 @kernel
@@ -1564,7 +1657,7 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     x[2] = np.where(reg, v, 0.0)
     x[4] = np.where((cp.type == ESD1) | cp.is_battery, cp.SOCinit, 0.0)
     P, Vc, V_nc = at_power_flow(cp, V0)
-    if np.any(cp.reec == REECA1):
+    if np.any(cp.reec != NO_REEC):
         _reeca1_initial(cp, x, v)
     if np.any(cp.wind != NO_WIND):
         _wind_initial(cp, x)
@@ -1572,6 +1665,8 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     x[_PC_V] = np.where(pc, cp.pc_Vref0, 0.0)  # the filters at VCsel, Qline; PI, lead-lag 0
     x[_PC_Q] = np.where(pc, cp.pc_Qline0, 0.0)
     x[_PC_P] = np.where(pc, cp.pc_Pline0, 0.0)  # the frequency path at rest at 0
+    for slot in (_PLL_AF, _PLL_AE, _PLL_AM):  # the PLL's angles at the bus's, its PI at 0
+        x[slot] = np.where(cp.pll == PLL1, np.angle(V), 0.0)
     if np.any(reg):
         _check_regca1(cp, P, x, Vc, V_nc)
     Ip, Iq = commands(P, x, Vc) if cp.n else ((), ())
@@ -1594,7 +1689,7 @@ def _reeca1_initial(cp: ConverterParams, x: np.ndarray, v: np.ndarray) -> None:
     magnitudes v (ANDES reeca1.py v_str): the filters at |V0|, P0, P0, P0; the Q filter
     at PFsel/vp (Qref, or Q0 with PFFLAG); the V PI's integrator at QFLAG Q0/|V0| (its
     x0 -QFLAG Iqcmd0), the Q PI's at 0; the last Ipcmd the REGCA1's Ipcmd0."""
-    ree = cp.reec == REECA1
+    ree = cp.reec != NO_REEC
     vp = np.where(v <= 0.01, 0.01, v)
     pfsel = np.where(cp.PFFLAG == 1, cp.Q0, cp.Qref)
     init = {

@@ -146,21 +146,23 @@ class NonConformingLoads:
 class KeptLoads(NamedTuple):
     """What the kept buses draw in one network solution (`solve_nc`), arrays (n_nc,)
     complex: the non-conforming loads S_P, I0, Y_low (`NonConformingLoads`), the extra
-    constant power S_extra (e.g. storage, dropped below 0.5 pu with the loads) and the
-    converters' currents I_dev (power per pu voltage, drawn at every voltage)."""
+    constant power S_extra (e.g. storage, dropped below 0.5 pu with the loads), the
+    converters' currents I_dev (power per pu voltage, drawn at every voltage) and I_fix
+    (a current fixed in the network frame: a converter whose angle comes from a PLL)."""
 
     S_P: np.ndarray
     I0: np.ndarray
     Y_low: np.ndarray
     S_extra: np.ndarray
     I_dev: np.ndarray
+    I_fix: np.ndarray
 
 
 @kernel
 def _load_currents(V, loads, low, out):
     """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out); loads a
     `KeptLoads`."""
-    S_P, I0, Y_low, S_extra, I_dev = loads
+    S_P, I0, Y_low, S_extra, I_dev, I_fix = loads
     for i in range(V.size):
         m = abs(V[i])
         if m > V_SWITCH and not low[i]:
@@ -169,6 +171,7 @@ def _load_currents(V, loads, low, out):
             out[i] = np.conj(Y_low[i]) * V[i]
         if I_dev[i] != 0.0:  # converters: current sources at every voltage
             out[i] += np.conj(I_dev[i] * m) / np.conj(V[i])
+        out[i] += I_fix[i]
 
 
 @kernel
@@ -193,12 +196,12 @@ def _held_below(V, held, limit):
 def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
     """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
 
-    With loads the `KeptLoads` (S_P, I0, Y_low, S_extra, I_dev): I_load = conj((S_P +
+    With loads the `KeptLoads` (S_P, I0, Y_low, S_extra, I_dev, I_fix): I_load = conj((S_P +
     S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's low-voltage switch;
     S_extra, e.g. storage power, is dropped below 0.5 pu with the rest), plus conj(I_dev
     |V|/V) at every voltage: the converters' currents (`stabctl.models.converters`), I_dev
     complex power per pu voltage drawn, a current of fixed magnitude and angle relative to
-    the bus voltage.
+    the bus voltage, and I_fix, a current drawn fixed in the network frame.
     V (n_nc,) is the starting point and is updated in place.  First the chord
     iteration V <- V - Z22 F(V) (the loads are small beside the network admittance, so it
     contracts fast and costs one matrix-vector product per step); if that has not converged
@@ -297,7 +300,7 @@ def _newton_nc(b, Y22, V, loads, low, vmin):
     """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load);
     vmin keeps the smallest magnitude each bus reached.  Converged when the mismatch is
     below NEWTON_TOL (pu), within NEWTON_MAX_ITER iterations (else -1)."""
-    S_P, I0, Y_low, S_extra, I_dev = loads
+    S_P, I0, Y_low, S_extra, I_dev, _I_fix = loads  # I_fix: no derivative
     n = V.size
     J = np.empty((2 * n, 2 * n))
     rhs = np.empty(2 * n)

@@ -578,12 +578,18 @@ def test_ieee14_gast_power_and_speeds_match_andes():
 
 @pytest.mark.parametrize(
     "name",
-    ["ieee39/ieee39_full.xlsx", "kundur/kundur_full.xlsx", "npcc/npcc.xlsx", "ieee14/ieee14.json"],
+    [
+        "ieee39/ieee39_full.xlsx",
+        "kundur/kundur_full.xlsx",
+        "npcc/npcc.xlsx",
+        "ieee14/ieee14.json",
+        "5bus/pjm5bus.json",
+    ],
 )
 def test_imported_andes_case_power_flow_equals_andes(name):
     """The network as ANDES solves it: stabctl's power flow of the imported case (Q limits
     off) against ANDES's, the difference being ANDES's 1e-8 pu added to every branch's R
-    and X."""
+    and X (pjm5bus: its bus idx 0 renumbered, next test)."""
     from stabctl.network.powerflow import solve_powerflow
 
     with warnings.catch_warnings():
@@ -593,6 +599,20 @@ def test_imported_andes_case_power_flow_equals_andes(name):
     rows = imported.case.bus_indices(imported.pf_bus)
     assert np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)) < 1e-6  # measured 2.5e-7
     assert np.max(np.abs(pf.vang[rows] - imported.pf_vang)) < 2e-6  # measured 8.2e-7
+
+
+def test_import_andes_numbers_a_bus_idx_0_above_the_others():
+    """pjm5bus's buses are idx 0-4 (ANDES allows 0; PSS/E and stabctl number from 1): bus 0
+    becomes bus 5, with a warning naming both, its machine and lines with it."""
+    path = andes.get_case("5bus/pjm5bus.json")
+    with pytest.warns(UserWarning, match=r"Bus idx 0 is numbered 5 \(stabctl numbers buses"):
+        case = import_andes(path, on_unsupported="skip")
+    assert sorted(case.buses.number) == [1, 2, 3, 4, 5]
+    ss = andes_system(path)
+    assert 5 in case.machines.bus and 0 in ss.GENCLS.bus.v
+    ends = {tuple(sorted(e)) for e in zip(case.branches.from_bus, case.branches.to_bus)}
+    theirs = {tuple(sorted((b1 or 5, b2 or 5))) for b1, b2 in zip(ss.Line.bus1.v, ss.Line.bus2.v)}
+    assert ends == theirs
 
 
 def test_import_andes_maps_psse_models_as_the_dyr_reader():
@@ -623,15 +643,19 @@ def test_import_andes_maps_psse_models_as_the_dyr_reader():
 def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
     """A case with a distributed-generation protection (DGPRCT1 on ten PVD1) and ANDES's
     own disturbances: one error naming every model stabctl lacks with its device count,
-    the PVD1 read; a REGCA1 driven by a REECB1 is refused by name, and with
-    on_unsupported="skip" its static generator cannot be left out."""
+    the PVD1 read; a REGCP1 whose angle comes from a PLL2 (SRF loop, not modelled) is
+    refused by name, and with on_unsupported="skip" its static generator cannot be left
+    out."""
     with pytest.raises(InputError) as err:
         import_andes(andes.get_case("ieee14/ieee14_dgprct1.xlsx"))
     for name in ("DGPRCT1 (1)", "Toggle (2)"):
         assert name in str(err.value)
     assert "PVD1" not in str(err.value)
-    path = andes.get_case("ieee14/ieee14_reecb1.json")
-    with pytest.raises(InputError, match=r"REGCA1 1: its current commands come from REECB1 1"):
+    data = json.loads(Path(andes.get_case("ieee14/ieee14_regcp1_nopll.json")).read_text())
+    data["REGCP1"][0]["pll"] = "PLL2_1"
+    path = tmp_path / "ieee14_regcp1_pll2.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(InputError, match=r"REGCP1 1: its angle comes from PLL PLL2_1: stabctl"):
         import_andes(path)
     with pytest.raises(CaseError, match=r"PV 5 \(bus 8\): no synchronous machine"):
         import_andes(path, on_unsupported="skip")
@@ -1073,14 +1097,15 @@ def algebraic_gaps(t, ours, theirs, events, step=STEP):
     return np.max(np.abs(ours - theirs)[~out])
 
 
-def regca1_fault_run(path, case, bus, cycles, h, t_end):
-    """A bus fault through j1e-3 pu from 1 s, both tools at step h, on ANDES's grid t: the
-    largest speed gap dw, the REGCA1's P, Q (stabctl's interpolated) and Pa, Qa."""
+def regca1_fault_run(path, case, bus, cycles, h, t_end, x=1e-3, model="REGCA1"):
+    """A bus fault through j x pu from 1 s, both tools at step h, on ANDES's grid t (the
+    case's own Toggle and Fault off): the largest speed gap dw, the converter's P, Q
+    (stabctl's interpolated) and Pa, Qa (ANDES ``model``'s)."""
     t_clear = 1.0 + cycles / 60
-    res = Simulator(case, q_limits=False).run([Fault(bus, 1.0, t_clear, x=1e-3)], t_end, h=h)
-    ss = andes_system(path, fault=AndesFault(bus, 1.0, t_clear, x=1e-3), off=("Toggle",))
+    res = Simulator(case, q_limits=False).run([Fault(bus, 1.0, t_clear, x=x)], t_end, h=h)
+    ss = andes_system(path, fault=AndesFault(bus, 1.0, t_clear, x=x), off=("Toggle", "Fault"))
     t, wa = andes_speeds(ss, t_end, h)
-    Pa, Qa = andes_converter_powers(ss, "REGCA1")
+    Pa, Qa = andes_converter_powers(ss, model)
     return {
         "t": t,
         "dw": np.max(np.abs(speeds_on(t, res, case, ss) - wa)),
@@ -1221,10 +1246,10 @@ def reeca1_case(tmp_path_factory):
     return path, case
 
 
-def fault_gaps(path, case, bus, cycles, h, t_end):
-    """(speed, P, Q) gaps to ANDES of a bus fault through j1e-3 pu, both tools at step h
-    (`regca1_fault_run`, returned last)."""
-    run = regca1_fault_run(path, case, bus, cycles, h, t_end)
+def fault_gaps(path, case, bus, cycles, h, t_end, **kw):
+    """(speed, P, Q) gaps to ANDES of a bus fault through j1e-3 pu (or ``x``), both tools at
+    step h (`regca1_fault_run`, returned last)."""
+    run = regca1_fault_run(path, case, bus, cycles, h, t_end, **kw)
     t, t_clear = run["t"], 1.0 + cycles / 60
     gaps = [
         algebraic_gaps(t, run[ours], run[theirs], (1.0, t_clear), h)
@@ -1373,6 +1398,141 @@ def test_import_andes_refuses_a_regca1_with_two_electrical_controls(tmp_path):
             sheet.to_excel(out, sheet_name=name, index=False)
     with pytest.raises(InputError, match=r"REGCA1 1: its current commands come from REECA1 1"):
         import_andes(path)
+
+
+# -- REECB1 and REGCP1 (ANDES renewable/reecb1.py, regcp1.py; docs/ibr.md 6) ----------------
+
+
+@pytest.fixture(scope="module")
+def reecb1_case():
+    """ANDES's ieee14_reecb1.json (REGCA1 + REECB1 + REPCA1 on the bus-8 generator),
+    imported (its Toggle and Fault records left to the run)."""
+    path = andes.get_case("ieee14/ieee14_reecb1.json")
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    return path, case
+
+
+def test_import_andes_reads_the_reecb1_into_its_regca1s_row(reecb1_case):
+    """The REECB1 lands in the REGCA1's row as ``reec`` 2 with its parameters as given
+    (VFLAG = QFLAG = 1: both PIs in the loop; Kqv 0, Vup 1.1, Imax 10); the fields only
+    REECA1 has keep their defaults (no hold, no PFLAG); its REPCA1 is read too."""
+    _, case = reecb1_case
+    t = case.converters
+    read = (t.reec[0], t.VFLAG[0], t.QFLAG[0], t.Kqv[0], t.Vup[0], t.Imax[0])
+    assert read == (2, 1, 1, 0, 1.1, 10)
+    assert (t.Thld[0], t.Thld2[0], t.PFLAG[0], t.repc[0]) == (0, 0, 0, 1)
+
+
+def test_ieee14_reecb1_flat_run_stays_at_the_power_flow_point(reecb1_case):
+    _, case = reecb1_case
+    drift, _ = flat_run(case)
+    assert drift < 1e-8  # measured 7.3e-14
+
+
+def test_ieee14_reecb1_fault_speeds_and_powers_match_andes(reecb1_case):
+    """6-cycle fault at bus 9 through j2 pu, 5 s, 5 ms in both: the bus-8 voltage stays
+    above Vdip (0.94 pu), so that the REECB1's Q and V PIs, its REPCA1's voltage control
+    and the converter act all along: speeds, P and Q within the targets (1e-4, 1e-3 pu).
+    Through j1e-3 pu the REECB1 freezes; ANDES holds its PIs at the value of the first
+    Newton iterate after the fault (``PITrackAWFreeze``: its frozen equation is 0 = 0,
+    and ``Volt_dip`` is evaluated before that iterate), 0.115 against 0.072 pu of Iq
+    command at any step, stabctl at the value before the fault: speeds still within the
+    target, P and Q 1.2e-2 and 3.8e-2 pu apart, the same at 1.25 ms."""
+    path, case = reecb1_case
+    dw, dP, dQ, run = fault_gaps(path, case, 9, 6, STEP, 5.0, x=2.0)
+    print(f"\nREECB1, fault through j2 vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert np.ptp(run["Pa"]) > 0.05 and np.ptp(run["Qa"]) > 0.03  # it acts
+    assert dw < 1e-5 and dP < 5e-4 and dQ < 1e-3  # measured 8.2e-7, 6.0e-5, 1.8e-4
+    dw, dP, dQ, _ = fault_gaps(path, case, 9, 6, STEP, 5.0)
+    print(f"REECB1, fault through j1e-3 vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert dw < 1e-4  # measured 5.9e-5
+    assert dP < 2e-2 and dQ < 5e-2  # measured 1.2e-2, 3.8e-2: ANDES's freeze (docstring)
+
+
+def test_ieee14_regcp1_without_pll_is_a_regca1_and_matches_andes():
+    """ieee14_regcp1_nopll.json: a REGCP1 with no PLL uses the bus angle (ANDES
+    regcp1.py: pll None), which is the REGCA1; imported as one (with its REECA1 and
+    REPCA1), it starts flat and follows ANDES through a 6-cycle fault at bus 9 through
+    j0.3 pu (bus 8 at 0.62 pu)."""
+    path = andes.get_case("ieee14/ieee14_regcp1_nopll.json")
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    assert (case.converters.type[0], case.converters.reec[0]) == (3, 1)
+    drift, _ = flat_run(case)
+    assert drift < 1e-8  # measured 7.3e-14
+    dw, dP, dQ, _ = fault_gaps(path, case, 9, 6, STEP, 5.0, x=0.3, model="REGCP1")
+    print(f"\nREGCP1 without PLL vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert dw < 1e-5 and dP < 1e-3 and dQ < 1e-3  # measured 2.7e-6, 4.4e-4, 8.6e-4
+
+
+@pytest.fixture(scope="module")
+def regcp1_case():
+    """ANDES's ieee14_regcp1.xlsx: the bus-8 generator a REGCP1 whose angle comes from a
+    PLL1, with REECA1 and REPCA1."""
+    path = andes.get_case("ieee14/ieee14_regcp1.xlsx")
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    return path, case
+
+
+def test_import_andes_reads_the_regcp1s_pll1(regcp1_case):
+    """The PLL1 lands in the REGCA1's row: pll 1 with its gains and lags as given."""
+    _, case = regcp1_case
+    t = case.converters
+    assert (t.type[0], t.reec[0], t.repc[0], t.pll[0]) == (3, 1, 1, 1)
+    assert (t.pll_Kp[0], t.pll_Ki[0], t.pll_Tf[0], t.pll_Tp[0]) == (1.0, 0.2, 0.05, 0.05)
+
+
+def test_ieee14_regcp1_with_its_pll_matches_andes(regcp1_case):
+    """Flat 10 s within 1e-8.  A 6-cycle fault at bus 9 through j2 pu (bus 8 at 0.94 pu),
+    5 ms in both: speeds, P and Q within the targets.  Through j1e-3 pu (bus 8 at 0.18
+    pu, the REECA1's Kqv = 20 loop injecting up to 4.9 pu of Q), at 1.25 ms in both:
+    speeds 2.4e-6, P 2.0e-3, Q 1.4e-2 (at 5 ms 1.2e-5, 1.4e-2, 0.10: the step, as for the
+    REECA1 alone).  With the PLL left out (the bus angle) the same fault is 0.37 pu of P
+    from ANDES: the converter's currents in the PLL's frame are what ANDES solves."""
+    path, case = regcp1_case
+    drift, _ = flat_run(case)
+    assert drift < 1e-8  # measured 7.3e-14
+    dw, dP, dQ, _ = fault_gaps(path, case, 9, 6, STEP, 5.0, x=2.0, model="REGCP1")
+    print(f"\nREGCP1 + PLL1, fault through j2: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
+    assert dw < 1e-5 and dP < 1e-3 and dQ < 1e-3  # measured 8.6e-7, 1.1e-4, 5.3e-4
+    gaps = fault_gaps(path, case, 9, 6, STEP / 4, 3.0, model="REGCP1")[:3]
+    print(
+        "REGCP1 + PLL1, fault through j1e-3 at 1.25 ms: speed {:.2e}, P {:.2e}, Q {:.2e}".format(
+            *gaps
+        )
+    )
+    assert gaps[0] < 1e-5 and gaps[1] < 4e-3 and gaps[2] < 3e-2  # 2.4e-6, 2.0e-3, 1.4e-2
+    off = case.replace(converters=case.converters.replace(pll=np.zeros(1)))
+    assert fault_gaps(path, off, 9, 6, STEP / 4, 3.0, model="REGCP1")[1] > 0.1  # 0.37
+
+
+def test_fault_through_an_impedance_keeps_the_bus_shunt_as_andes():
+    """IEEE 14's bus 9 has a 0.19 pu capacitor.  A fault there through j2 pu: under the ieee
+    conventions it adds to the capacitor (ANDES's Fault, PSS/E), so that the bus-9
+    voltage 5 ms into the fault is ANDES's and the speeds follow ANDES within 1e-6 pu;
+    under pstess it replaces the bus shunt as PST's sw_con fault does, 0.028 pu lower
+    (the speeds 2.2e-4 pu from ANDES: a third of the swing).  A bolted fault replaces it
+    under both (the shunt is immaterial at 0 V)."""
+    path = andes.get_case("ieee14/ieee14.json")
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    ss = andes_system(path, fault=AndesFault(9, 1.0, 1.1, x=2.0), off=("Toggle",))
+    t, wa = andes_speeds(ss, 1.5, STEP)
+    i = np.argmin(np.abs(t - 1.005))
+    v9 = np.asarray(ss.dae.ts.y)[i, ss.Bus.v.a[list(ss.Bus.idx.v).index(9)]]
+    row = list(case.buses.number).index(9)
+    ours = {}
+    for conventions in ("ieee", "pstess"):
+        sim = Simulator(case, q_limits=False, conventions=conventions, off_equilibrium="warn")
+        res = sim.run([Fault(9, 1.0, 1.1, x=2.0)], 1.5, h=STEP)
+        dw = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
+        ours[conventions] = (np.interp(t[i], res.t, res.vmag[:, row]), dw)
+    v_ieee, v_pst = ours["ieee"][0], ours["pstess"][0]
+    print(f"\nbus-9 V at 1.005 s: ANDES {v9:.6f}, ieee {v_ieee:.6f}, pstess {v_pst:.6f}")
+    assert abs(ours["ieee"][0] - v9) < 1e-4 and ours["ieee"][1] < 1e-5  # 1.3e-5, 6.6e-7
+    assert v9 - ours["pstess"][0] > 0.02  # measured 0.028
 
 
 # -- wind turbines (ANDES WT3: REGCA1 + REECA1 + REPCA1 driven by WTDTA1 or WTDS, WTARA1,

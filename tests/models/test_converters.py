@@ -350,10 +350,80 @@ def test_repca1_voltage_error_through_deadband_pi_and_lead_lag_raises_q_referenc
 
 
 def test_repca1_needs_a_reeca1_and_the_monitored_line_at_its_bus():
-    with pytest.raises(CaseError, match=r"field 'repc'.*drives a REECA1"):
+    with pytest.raises(CaseError, match=r"field 'repc'.*drives an electrical control"):
         regca1(repc=1)
     with pytest.raises(CaseError, match=r"field 'pc_bus1'.*end at the device's bus"):
         reeca1(repc=1, pc_bus1=1, pc_bus2=1)
+
+
+# -- REECB1 (ANDES renewable/reecb1.py, docs/ibr.md 6) ---------------------------------------
+
+
+def reecb1(x_changes=(), V=1.0, **cols):
+    """`regca1` with a REECB1 (``reec`` 2, Vref0 1 pu)."""
+    return regca1(x_changes, V, reec=2, **{"Vref0": 1.0, **cols})
+
+
+def test_reecb1_starts_at_rest_and_injects_reactive_current_outside_a_dip():
+    # at rest as the REECA1; at 0.9 pu (above Vdip 0.8: no freeze) with the filtered
+    # voltage there, Iqinj = Kqv (Vref0 - 0.9 - dbd2) = 2 x 0.08 acts (REECA1: in a dip
+    # only) and the Q filter keeps moving
+    dx, S_, _, _ = reecb1()
+    assert np.all(dx == 0.0) and S_ == 0.5 + 0.1j
+    dx, _, _, _ = reecb1([(S["Vt_filter"], 0.9)], V=0.9, Kqv=2.0)
+    assert dx[1, 0] == pytest.approx((0.1 + 0.16 - 0.1) / 0.1, rel=1e-13)
+    dx, _, _, _ = reeca1([(S["Vt_filter"], 0.9)], V=0.9, Kqv=2.0)
+    assert dx[1, 0] == 0.0
+
+
+def test_reecb1_current_limit_is_imax_without_vdl_curves():
+    # Q priority, Iqinj 20 x 0.48 = 9.6 in the dip: REECA1 cuts it at VDL1(0.5) = 5, the
+    # REECB1 at Imax = 7 (no curves); Ip gets the room sqrt(Imax^2 - Iqcmd^2) = 0
+    changes = [(S["Vt_filter"], 0.5)]
+    dx, _, x, _ = reecb1(changes, V=0.5, Kqv=20.0, Imax=7.0, Iqrmax=99.0)
+    assert dx[1, 0] == pytest.approx((7.0 - 0.1) / 0.1, rel=1e-13)
+    assert x[S["Ipcmd_last"], 0] == pytest.approx(0.0, abs=1e-15)
+
+
+def test_reecb1_v_pi_reads_the_q_pis_output_not_the_voltage():
+    # VFLAG = QFLAG = 1: the V PI's input is Vsel = the Q PI's output (REECA1: Vsel - Vt
+    # with VFLAG 0); the Q PI's integrator at 0.1 (Kqp 0, no Q error) gives Vsel 0.1,
+    # which the V PI integrates: Kvi x 0.1
+    dx, _, _, _ = reecb1([(S["PIQ"], 0.1)], VFLAG=1, QFLAG=1, Kqp=0.0, Kvi=0.3)
+    assert dx[S["PIV"], 0] == pytest.approx(0.3 * 0.1, rel=1e-13)
+
+
+# -- PLL1 (ANDES measurement/pll.py, renewable/regcp1.py; docs/ibr.md 9) -----------------
+
+#: the PLL1's slots
+PL = {
+    n: 5 + len(conv.REECA1_SLOTS) + len(conv.REPCA1_SLOTS) + len(conv.WIND_SLOTS) + j
+    for j, n in enumerate(conv.PLL_SLOTS)
+}
+
+
+def test_pll1_starts_at_the_bus_angle_and_rotates_the_currents_into_its_frame():
+    # at rest at the power-flow angle (0 here); with the measured angle am 0.1 rad behind
+    # the bus's, Pe + j Qe = |V| exp(j (a - am)) (Ip + j Iq) (regcp1.py: Vd, Vq), and the
+    # current drawn from the network, fixed in its frame, is -(Ip - j Iq) exp(j am)
+    dx, S_, x, _ = regca1(pll=1)
+    assert np.all(dx == 0.0) and S_ == 0.5 + 0.1j
+    V = np.exp(0.1j)
+    dx, S_, x, cp = regca1([(PL["am_pll"], 0.0)], V=V, pll=1)
+    assert S_ == pytest.approx(np.exp(0.1j) * (0.5 + 0.1j), rel=1e-14)
+    P = cp.packed()
+    rel, fix = conv.drawn_current(P, x, 0, 1.0)
+    assert rel == 0.0 and fix == pytest.approx(-(0.5 - 0.1j), rel=1e-15)
+    # the loop: af moves toward a at 1/Tf, the PI on af - am, ae' = 2 pi fn PI_y
+    dx, _, _, _ = regca1([(PL["af_pll"], 0.1)], V=V, pll=1, pll_Kp=1.0, pll_Ki=0.2)
+    assert dx[PL["af_pll"], 0] == pytest.approx(0.0, abs=1e-14)
+    assert dx[PL["PI_pll"], 0] == pytest.approx(0.2 * 0.1, rel=1e-13)
+    assert dx[PL["ae_pll"], 0] == pytest.approx(2 * np.pi * 60 * 0.1, rel=1e-13)
+
+
+def test_pll1_on_a_device_other_than_a_regca1_is_refused():
+    with pytest.raises(CaseError, match=r"field 'pll'.*REGCA1 \(type 3\) only"):
+        conv.converter_params(make_case([1, 2, 1, 100.0, 1.0, 1.0, 0.0, 0], pll=1))
 
 
 # -- wind turbine (ANDES renewable/wtdta1.py, wtds.py, wtara1.py, wtpta1.py, wttqa1.py) ----

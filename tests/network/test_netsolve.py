@@ -39,7 +39,7 @@ def fault_network():
 def solve(m, net, psi, V, held):
     p = m.params
     none = np.zeros(V.size, complex)  # no extra power, no converters
-    loads = KeptLoads(p.S_P, p.I0, p.Y_low, none, none)
+    loads = KeptLoads(p.S_P, p.I0, p.Y_low, none, none, none)
     it = solve_nc(net.Y21, net.Y22, net.Z22, psi, V, loads, held)
     F = np.empty(V.size, complex)
     resid = _load_mismatch(net.Y21 @ psi, net.Y22, V, loads, F, held)
