@@ -17,6 +17,28 @@ class CaseError(StabctlError, ValueError):
     """Malformed case data: names the table, the row and the field."""
 
 
+class InitialLimitError(CaseError):
+    """Controls whose initial point (from the power flow) lies outside their own limits.
+
+    Attributes: table (``"exc_con"`` or ``"tg_con"``), rows (0-based rows of that table,
+    every offending one), messages (one per row, naming the limit and the value).
+    """
+
+    def __init__(self, table: str, rows, messages):
+        self.table, self.rows, self.messages = table, tuple(rows), tuple(messages)
+        more = len(self.rows) - 1
+        also = f" (and {more} more {table} row(s): {self.messages[1]}; ...)" if more else ""
+        super().__init__(self.messages[0] + also)
+
+
+def refuse_initial(table: str, bad, message) -> None:
+    """Raise :class:`InitialLimitError` for the True entries of ``bad`` (boolean array over
+    the table's rows), ``message(i)`` describing row i (0-based); nothing if none."""
+    rows = [int(i) for i, b in enumerate(bad) if b]
+    if rows:
+        raise InitialLimitError(table, rows, [message(i) for i in rows])
+
+
 class UnknownBusError(CaseError, KeyError):
     """A bus number that is not in the case."""
 

@@ -408,7 +408,8 @@ class BranchTable(Table):
     Parallel circuits are separate rows. Omitted columns: tap 1, the rest 0 (the miniWECC
     ``line`` matrix has 5 columns, PST's 10).  Line-end shunts (columns 11-14, stabctl's)
     are switched with the branch, in addition to the charging ``b``. Validation: from/to are
-    integers, r >= 0, the series impedance is not zero, from != to."""
+    integers, the series impedance is not zero (r < 0 allowed: network equivalents carry
+    it), from != to."""
 
     from_bus: np.ndarray
     to_bus: np.ndarray
@@ -437,7 +438,7 @@ class BranchTable(Table):
         raise CaseError(f"line row {row + 1}{ident}, field '{fld}': {what}")
 
     def _check(self):
-        self._nonnegative("r")
+        # r < 0 is allowed: network equivalents carry it (ANDES's EI_33, PSS/E's equivalencing)
         self._require((self.r != 0) | (self.x != 0), "x", "series impedance r+jx must not be 0")
         self._require(
             self.from_bus != self.to_bus, "to_bus", "branch must join two different buses"

@@ -151,11 +151,35 @@ def _imported(case, out) -> tuple[dict, str]:
     "EXDC2 limits times the terminal voltage) or ANDES 2.0's (neither), "
     "to compare with ANDES like for like.",
 )
+@click.option(
+    "--net-unmodelled",
+    is_flag=True,
+    help="Net the generators the DYR file gives no machine model (PSS/E's netting: "
+    "each a negative constant-power load PG + jQG at its bus, listed as a warning) "
+    "instead of refusing the files.",
+)
+@click.option(
+    "--leave-out-infeasible",
+    is_flag=True,
+    help="Leave out the exciters (with their PSS) and governors whose initial point, at "
+    "the power flow simulate solves (Q limits on), lies outside their own limits "
+    "(PSS/E: 'initial conditions suspect'), each named, instead of writing a case that "
+    "simulate refuses.",
+)
 @_static_option
 @json_option("the summary")
 @reports_errors
 def import_psse(
-    raw_path, dyr_path, out_path, skip_unsupported, loads, conventions, static, as_json
+    raw_path,
+    dyr_path,
+    out_path,
+    skip_unsupported,
+    loads,
+    conventions,
+    net_unmodelled,
+    leave_out_infeasible,
+    static,
+    as_json,
 ):
     """Convert a PSS/E RAW file (v32-34) and optionally a DYR file to a stabctl case.
 
@@ -163,6 +187,11 @@ def import_psse(
     Unsupported records are named as FILE:LINE RECORD with the reason; without
     --skip-unsupported they stop the import (exit status 2, nothing written). A RAW file
     without DYR (no machines) is refused unless --static asks for a power-flow-only case.
+    Generators without a machine model in the DYR file are refused by name, or netted as
+    negative loads with --net-unmodelled (synthetic grids such as ACTIVSg2000 give their
+    wind and solar plants no dynamic data). Exciters and governors that cannot start
+    within their own limits make simulate refuse the case; --leave-out-infeasible leaves
+    them out, each named.
 
     \b
     Example:
@@ -172,17 +201,37 @@ def import_psse(
     from stabctl.io.psse import import_psse as run_import
 
     out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
-    case, left_out = run_import(
-        raw_path, dyr_path, "skip" if skip_unsupported else "error", loads, conventions
+    case, left_out, netted = run_import(
+        raw_path,
+        dyr_path,
+        "skip" if skip_unsupported else "error",
+        loads,
+        conventions,
+        "net" if net_unmodelled else "error",
     )
     _check_dynamic(case, Path(raw_path).name, static)
+    infeasible: tuple[str, ...] = ()
+    if leave_out_infeasible and len(case.machines):
+        from stabctl.dynamics.infeasible import leave_out_infeasible as leave_out
+
+        case, infeasible = leave_out(case)
+        for line in infeasible:
+            click.echo(f"warning: left out the {line}", err=True)
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
-    summary.update(nonconforming_loads=len(case.loads), left_out=list(left_out))
+    summary.update(
+        nonconforming_loads=len(case.loads),
+        left_out=list(left_out),
+        netted=list(netted),
+        infeasible=list(infeasible),
+    )
     if as_json:
         print_json(summary)
         return
-    click.echo(f"{text}; {len(left_out)} record(s) left out")
+    click.echo(
+        f"{text}; {len(left_out)} record(s) left out, {len(netted)} generator(s) netted, "
+        f"{len(infeasible)} control(s) outside their limits left out"
+    )
 
 
 @click.command("import-andes")

@@ -331,8 +331,6 @@ def _network(ss, file: str) -> tuple[dict, dict]:
                 f"{file}: Bus row {k + 1} idx {idx!r} is not a non-negative integer "
                 "(stabctl numbers buses)"
             )
-        if not ss.Bus.u.v[k]:
-            raise CaseError(f"{file}: Bus {number} is out of service (u = 0): not supported")
         numbers[idx] = number
     zero = [idx for idx, number in numbers.items() if number == 0]
     if zero:
@@ -344,12 +342,15 @@ def _network(ss, file: str) -> tuple[dict, dict]:
             stacklevel=4,
         )
     b = ss.Bus
-    bus = np.zeros((b.n, 15))
-    bus[:, 0] = [numbers[i] for i in b.idx.v]
-    bus[:, 1], bus[:, 2] = b.v0.v, np.rad2deg(b.a0.v)
+    on = _in_service(b)
+    _warn_out_of_service(ss, file, [b.idx.v[k] for k in range(b.n) if k not in on], numbers)
+    bus = np.zeros((len(on), 15))
+    bus[:, 0] = [numbers[b.idx.v[k]] for k in on]
+    bus[:, 1], bus[:, 2] = np.asarray(b.v0.v)[on], np.rad2deg(np.asarray(b.a0.v)[on])
     bus[:, 9] = PQ
-    bus[:, 12], bus[:, 13], bus[:, 14] = b.Vn.v, b.vmax.v, b.vmin.v
-    row = {idx: k for k, idx in enumerate(b.idx.v)}
+    bus[:, 12] = np.asarray(b.Vn.v)[on]
+    bus[:, 13], bus[:, 14] = np.asarray(b.vmax.v)[on], np.asarray(b.vmin.v)[on]
+    row = {b.idx.v[k]: r for r, k in enumerate(on)}
     for m, cols in ((ss.PQ, ((5, "p0"), (6, "q0"))), (ss.Shunt, ((7, "g"), (8, "b")))):
         for k in _in_service(m):
             for col, name in cols:
@@ -400,7 +401,30 @@ def _network(ss, file: str) -> tuple[dict, dict]:
 
 
 def _in_service(model) -> list[int]:
-    return [k for k in range(model.n) if model.u.v[k]]
+    """Rows of the devices in service: ANDES's effective status ``ue`` (0 also for a
+    device at a bus out of service), ``u`` for a model without one."""
+    status = model.ue if hasattr(model, "ue") else model.u
+    return [k for k in range(model.n) if status.v[k]]
+
+
+def _warn_out_of_service(ss, file: str, buses: list, numbers: dict) -> None:
+    """One warning naming the buses out of service (u = 0) and how many devices ANDES
+    takes out with them (its ``ue``): stabctl leaves them out of the case as ANDES does."""
+    if not buses:
+        return
+    gone = sum(
+        1
+        for m in ss.models.values()
+        if m.n and m.class_name != "Bus" and hasattr(m, "ue")
+        for k in range(m.n)
+        if m.u.v[k] and not m.ue.v[k]
+    )
+    warnings.warn(
+        f"{file}: bus(es) {', '.join(str(numbers[i]) for i in buses)} out of service (u = 0) "
+        f"left out with the {gone} device(s) connected to them (ANDES's effective status)",
+        UserWarning,
+        stacklevel=4,
+    )
 
 
 def _integer(value) -> int | None:
@@ -713,10 +737,13 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
             machines.append((position.get(m.gen.v[k], len(static)), name, k))
     machines.sort()
     with_machine = {ss.models[name].gen.v[k] for _, name, k in machines}
+    on = {(sg.class_name, k) for sg in (ss.PV, ss.Slack) for k in _in_service(sg)}
     bare = [
         f"{sg.class_name} {sg.idx.v[k]} (bus {numbers[sg.bus.v[k]]})"
         for sg, k in static
-        if sg.u.v[k] and sg.idx.v[k] not in with_machine and sg.idx.v[k] not in with_converter
+        if (sg.class_name, k) in on
+        and sg.idx.v[k] not in with_machine
+        and sg.idx.v[k] not in with_converter
     ]
     if machines:
         refused += [f"{b}: {_NO_MACHINE}" for b in bare]
@@ -784,7 +811,11 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
             if gen is None or why:
                 refused.append(f"{name} {m.idx.v[k]}: " + (why or "its machine is not mapped"))
                 continue
-            params = _psse_params(ss, m, dyr[psse], DYR_MODELS[psse].fields, k)
+            fields = DYR_MODELS[psse].fields
+            if psse in dyr:
+                params = _psse_params(ss, m, dyr[psse], fields, k)
+            else:  # ANDES's own model (TG2): its parameters by name, as given
+                params = tuple(float(m.params[f].vin[k]) for f in fields)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused, _grouped(changed)
 
@@ -865,14 +896,16 @@ def _number(v) -> float:
 
 
 def _powerflow(ss, numbers: dict):
-    """ANDES's power flow (tolerance 1e-12) in the case's bus order; Nones if it fails."""
+    """ANDES's power flow (tolerance 1e-12) in the case's bus order (the buses in
+    service); Nones if it fails."""
     ss.PFlow.config.tol = 1e-12
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         if not ss.PFlow.run():
             return None, None, None
+    on = _in_service(ss.Bus)
     return (
-        np.array([numbers[i] for i in ss.Bus.idx.v]),
-        np.array(ss.Bus.v.v, float),
-        np.array(ss.Bus.a.v, float),
+        np.array([numbers[ss.Bus.idx.v[k]] for k in on]),
+        np.array(ss.Bus.v.v, float)[on],
+        np.array(ss.Bus.a.v, float)[on],
     )

@@ -155,12 +155,64 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
                     f"{file}:{line}: {model} parameter {k} {tok!r} is not a finite number"
                 )
         params.append(value)
-    return DyrRecord(file, line, bus, model, _machine_id(tokens[2]), tuple(params))
+    return DyrRecord(file, line, bus, model, machine_id(tokens[2]), tuple(params))
 
 
-def _machine_id(tok) -> str:
+def machine_id(tok) -> str:
     """Machine id as compared between RAW and DYR: quotes and blanks stripped, upper case."""
     return str(tok).strip().strip("'").strip().upper()
+
+
+#: PSS/E generator models (a machine or a converter: what makes a RAW generator dynamic),
+#: mapped or not (PSS/E Model Library, "Generator Models" and "Renewable Generator Models")
+_SOURCE_MODELS = frozenset(
+    [
+        "GENCLS",
+        "GENROU",
+        "GENSAL",
+        "GENROE",
+        "GENSAE",
+        "GENTPJ1",
+        "GENTPF",
+        "GENQEC",
+        "GENDCO",
+        "CGEN1",
+        "CIMTR1",
+        "CIMTR2",
+        "CIMTR3",
+        "CIMTR4",
+        "CSVGN1",
+        "CSVGN3",
+        "CSVGN4",
+        "CSVGN5",
+        "CSVGN6",
+        "CSTCNT",
+        "CSTATT",
+        "FRECHG",
+        "REGCA1",
+        "REGCAU1",
+        "REGCB1",
+        "REGCC1",
+        "REGFM_A1",
+        "REGFM_B1",
+        "WT1G1",
+        "WT2G1",
+        "WT3G1",
+        "WT3G2",
+        "WT4G1",
+        "WT4G2",
+        "PVGU1",
+        "DERA1",
+        "DERAU1",
+        "PVD1",
+    ]
+)
+
+
+def has_machine_model(rec: DyrRecord) -> bool:
+    """Whether ``rec`` gives its generator a dynamic source model (a machine or a
+    converter, mapped by stabctl or not): a generator without one is what PSS/E nets."""
+    return rec.model in _SOURCE_MODELS or _KIND.get(rec.model) == "machine"
 
 
 def _integer(tok: str) -> int | None:
@@ -235,7 +287,7 @@ def _map_records(records, generators, conventions):
     """Rows per kind {kind: {machine number: (record, row)}} and the unsupported records
     with their reasons, in file order; raises CaseError for malformed records."""
     andes = conventions == "andes"
-    gens = {(int(g["bus"]), _machine_id(g["id"])): g for g in generators}
+    gens = {(int(g["bus"]), machine_id(g["id"])): g for g in generators}
     rows: dict[str, dict[int, tuple[DyrRecord, list]]] = {k: {} for k in FAMILY}
     skipped = []
     for rec in records:
@@ -284,6 +336,8 @@ def _check_machines(generators, machines) -> None:
         raise CaseError(
             "generator(s) without a machine model record in the DYR data: "
             + ", ".join(f"machine {g['number']} (bus {g['bus']}, id {g['id']})" for g in missing)
+            + " (stabctl.io.psse.import_psse with unmodelled='net', import-psse "
+            "--net-unmodelled, nets them as negative loads)"
         )
 
 
@@ -598,20 +652,21 @@ def _stab2a(rec, gen):
 
 def _tg_row(rec, gen, **cols) -> list:
     """tg_con row of a governor record: type and copies as declared
-    (stabctl.models.governors.GOVERNOR), the machine number, speed set point 1 and ``cols``."""
+    (stabctl.models.governors.GOVERNOR), the machine number, speed set point 1 (or
+    ``cols``'s wf) and ``cols``."""
     return GOVERNOR.dyr_row(
-        DYR_MODELS[rec.model], rec.params, machine=gen["number"], wf=1.0, **cols
+        DYR_MODELS[rec.model], rec.params, machine=gen["number"], **{"wf": 1.0, **cols}
     )
 
 
 def _droop(rec, gen):
     """TGOV1 (R T1 VMAX VMIN T2 T3 Dt -> tg_con type 2: valve T1 with non-windup [VMIN,
-    VMAX], lead-lag T2/T3, damping Dt) and GAST (R T1 T2 T3 AT KT VMAX VMIN Dturb -> type
-    6): the declared copies and 1/R."""
-    R = DYR_MODELS[rec.model].values(rec.params)["R"]
-    if R <= 0:
-        raise CaseError(f"{rec.label()}: droop R = {R} must be > 0")
-    return _tg_row(rec, gen, invR=1 / R)
+    VMAX], lead-lag T2/T3, damping Dt), GAST (R T1 T2 T3 AT KT VMAX VMIN Dturb -> type
+    6) and ANDES's TG2 (R wref0 pmax pmin T1 T2 -> type 7): the declared copies and 1/R."""
+    v = DYR_MODELS[rec.model].values(rec.params)
+    if v["R"] <= 0:
+        raise CaseError(f"{rec.label()}: droop R = {v['R']} must be > 0")
+    return _tg_row(rec, gen, invR=1 / v["R"], **({"wf": v["wref0"]} if "wref0" in v else {}))
 
 
 def _ieeeg1(rec, gen, lp=None):
@@ -645,7 +700,7 @@ def _lp_generator(rec, gens):
         return None
     at = [g for (bus, _), g in gens.items() if bus == jbus]
     if m != 0:
-        at = [g for g in at if _machine_id(g["id"]) == _machine_id(f"{m:g}")]
+        at = [g for g in at if machine_id(g["id"]) == machine_id(f"{m:g}")]
     if len(at) != 1:
         raise _Unsupported(
             f"cross-compound LP shaft at bus {jbus}, id {m:g}: {len(at)} generators match"
@@ -706,6 +761,7 @@ _MAPPERS = {
     "STAB2A": _stab2a,
     "TGOV1": _droop,
     "GAST": _droop,
+    "TG2": _droop,
     "HYGOV": _hygov,
     "IEESGO": _ieesgo,
 }

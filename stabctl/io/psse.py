@@ -7,7 +7,13 @@ is the k-th in-service generator of the RAW file); where several machines share 
 each takes the share PG_k / sum(PG) of the bus generation and QG_k / sum(QG) of its Q
 (``mac_con`` columns 22, 23).
 
-Records that stabctl cannot represent are collected from both files and either refused
+Generators without a machine model in the DYR file are refused (``unmodelled="error"``)
+or netted (``"net"``, PSS/E's netting: a negative constant-power load at their bus,
+:func:`stabctl.io.psse_raw.read_raw`), listed in one warning; wind and solar plants of
+synthetic grids (ACTIVSg) often come without dynamic data.
+
+Dynamic records of generators out of service in the RAW file are ignored, as PSS/E
+ignores them. Records that stabctl cannot represent are collected from both files and either refused
 together (``on_unsupported="error"``: one :class:`~stabctl.errors.CaseError` listing every
 one as ``file:line record``) or left out with one warning listing them (``"skip"``).
 """
@@ -16,15 +22,26 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
+from typing import NamedTuple
 
 from stabctl.case import Case
 from stabctl.errors import CaseError
 from stabctl.io.psse_raw import RawData, read_raw
 from stabctl.io.pst import case_from_matrices
 
-__all__ = ["load_psse", "import_psse"]
+__all__ = ["load_psse", "import_psse", "PsseImport"]
 
 _MODES = ("error", "skip")
+_UNMODELLED = ("error", "net")
+
+
+class PsseImport(NamedTuple):
+    """What :func:`import_psse` gives: the case, the records left out and the generators
+    netted, each as ``"file:line record"`` text."""
+
+    case: Case
+    left_out: tuple[str, ...]
+    netted: tuple[str, ...]
 
 
 def load_psse(
@@ -33,6 +50,7 @@ def load_psse(
     on_unsupported: str = "error",
     loads: str = "impedance",
     conventions: str = "pst",
+    unmodelled: str = "error",
 ) -> Case:
     """Build a :class:`~stabctl.case.Case` from a PSS/E RAW (v32-34) and a DYR file.
 
@@ -48,6 +66,9 @@ def load_psse(
             speed effects, EXDC2 limits scaled by the terminal voltage); ``"andes"``
             follows ANDES 2.0's reading for like-for-like comparisons (no speed effects
             in GENROU/GENSAL, EXDC2 limits constant; :func:`stabctl.io.dyr.dyr_tables`).
+        unmodelled: ``"error"`` refuses generators without a machine model record in the
+            DYR file, ``"net"`` nets them (negative constant-power loads PG + jQG at their
+            buses, listed in a :class:`UserWarning`).
 
     Returns:
         the case, named after the RAW file, described by the RAW title lines; units as
@@ -55,13 +76,14 @@ def load_psse(
 
     Raises:
         CaseError: a malformed record (``file:line record: what``), unsupported records
-            with ``on_unsupported="error"`` (every one listed), a bad mode, or data the
-            case model refuses.
+            with ``on_unsupported="error"`` (every one listed), a generator without machine
+            model with ``unmodelled="error"`` (every one listed), a swing bus left without
+            generator by netting, a bad mode, or data the case model refuses.
 
     Source: PSS/E POM "Power Flow Raw Data File Contents" and "Dynamics Data" (PSS/E
     Model Library for the DYR records); PST manual section 3.22 for ``mac_con``.
     """
-    return import_psse(raw_path, dyr_path, on_unsupported, loads, conventions)[0]
+    return import_psse(raw_path, dyr_path, on_unsupported, loads, conventions, unmodelled)[0]
 
 
 def import_psse(
@@ -70,32 +92,57 @@ def import_psse(
     on_unsupported: str = "error",
     loads: str = "impedance",
     conventions: str = "pst",
-) -> tuple[Case, tuple[str, ...]]:
-    """:func:`load_psse` that also returns the records left out, each as
-    ``"file:line record"`` (empty unless ``on_unsupported="skip"``). Same arguments and
-    errors."""
+    unmodelled: str = "error",
+) -> PsseImport:
+    """:func:`load_psse` that also returns the records left out (empty unless
+    ``on_unsupported="skip"``) and the generators netted (empty unless
+    ``unmodelled="net"``). Same arguments and errors."""
+    from stabctl.io.dyr import read_dyr
+
     if on_unsupported not in _MODES:
         raise CaseError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
-    raw = read_raw(raw_path, loads=loads)
+    if unmodelled not in _UNMODELLED:
+        raise CaseError(f"unmodelled must be 'error' or 'net', got {unmodelled!r}")
+    records = None if dyr_path is None else read_dyr(dyr_path)
+    net = None if records is None or unmodelled == "error" else _without_machine(records)
+    raw = read_raw(raw_path, loads=loads, net=net)
     mats = raw.matrices()
     unsupported = [str(s) for s in raw.unsupported]
-    if dyr_path is not None:
-        dyn, dyr_unsupported = _dynamic_tables(raw, dyr_path, conventions)
+    if records is not None:
+        records = [r for r in records if (r.bus, r.id) not in raw.out_of_service]
+        dyn, dyr_unsupported = _dynamic_tables(raw, records, conventions)
         mats.update(dyn)
         unsupported += dyr_unsupported
-    _report(unsupported, on_unsupported, _files(raw_path, dyr_path))
+    where = _files(raw_path, dyr_path)
+    _report(unsupported, on_unsupported, where)
+    netted = tuple(str(s) for s in raw.netted)
+    if netted:
+        warnings.warn(
+            f"{where}: netted {len(netted)} generator(s) without a machine model as "
+            f"negative loads: {'; '.join(netted)}",
+            UserWarning,
+            stacklevel=3,
+        )
     case = case_from_matrices(
         mats, raw.name, source=_source(raw_path, dyr_path), description=raw.title
     )
-    return case, tuple(unsupported)
+    return PsseImport(case, tuple(unsupported), netted)
 
 
-def _dynamic_tables(raw: RawData, dyr_path, conventions) -> tuple[dict, list[str]]:
-    """PST dynamic matrices from the DYR file and its unsupported records (as text)."""
-    from stabctl.io.dyr import dyr_tables, read_dyr
+def _without_machine(records):
+    """``net`` for :func:`read_raw`: True for a (bus, ID) no DYR machine record names."""
+    from stabctl.io.dyr import has_machine_model, machine_id
+
+    modelled = {(r.bus, r.id) for r in records if has_machine_model(r)}
+    return lambda bus, gid: (bus, machine_id(gid)) not in modelled
+
+
+def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]]:
+    """PST dynamic matrices from the DYR records and the unsupported ones (as text)."""
+    from stabctl.io.dyr import dyr_tables
 
     gens = [{**g.as_dyr(), "sbase": raw.base_mva} for g in raw.generators]
-    tables = dyr_tables(read_dyr(dyr_path), gens, on_unsupported="skip", conventions=conventions)
+    tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
     mats = {}
     for key in ("mac_con", "exc_con", "pss_con", "tg_con"):
         if getattr(tables, key) is not None:

@@ -25,8 +25,12 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
 * fixed shunts (in service): GL + jBL (MW/Mvar at 1 pu) into the bus shunt;
 * generators (in service): PG, QG, QT, QB, VS, IREG, MBASE, ZSORCE = ZR + jZX (pu on
   MBASE). Several generators at one bus add up; the bus is PV (IDE 2) or swing (IDE 3) at
-  VS, with Q limits the sums of QT and QB (a sum of exactly 0 reads as "no limit", PST's
-  convention). An IDE 2 bus without generator in service is a load bus;
+  VS, with Q limits the sums of QT and QB (a sum of exactly 0 is a limit at 0 in PSS/E
+  but "no limit" in PST's bus table: it is written as +-1e-9 pu, :data:`ZERO_Q_LIMIT`).
+  An IDE 2 bus without generator in service is a load bus. Generators the caller nets
+  (``net``: those without a machine model in the DYR data, PSS/E's netting) are a
+  negative constant-power load PG + jQG at their bus instead (its composition in the
+  dynamic run as the bus's loads, above), and leave the bus's Q limits;
 * non-transformer branches (in service): R, X, B; line shunts GI + jBI, GJ + jBJ at their
   ends (``line`` columns 11-14, switched with the branch; the ``line`` matrix has these
   columns only when a branch has them);
@@ -35,8 +39,11 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   WINDV1, WINDV2, ANG1. The circuit bus I - ideal t1:1 - Z - ideal 1:t2 - bus J is PST's
   branch with tap t1/t2 on the I side and impedance Z*t2^2 (MATPOWER's convention when
   t2 = 1); the phase is PST's, the opposite sign of ANG1 (:mod:`stabctl.network.ybus`). Taps
-  stay at WINDV (automatic adjustment COD is not modelled, as ANDES); magnetizing
-  admittance MAG1/MAG2, impedance correction tables (TAB1) are unsupported;
+  stay at WINDV (automatic adjustment COD is not modelled, as ANDES); the magnetizing
+  admittance MAG1 + jMAG2 (CM 1: pu on SBASE) is a shunt at the winding-1 bus, switched
+  with the transformer (``line`` columns 11-12; MATPOWER's ``psse_convert_xfmr`` puts it
+  at that bus too); CM 2 (no-load loss and current) and impedance correction tables
+  (TAB1) are unsupported;
 * switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt.
 
 Skipped without a word: area, zone, owner, inter-area transfer, substation and system
@@ -55,7 +62,7 @@ from __future__ import annotations
 import builtins
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NoReturn
@@ -177,8 +184,12 @@ class RawData:
         line: PST ``line`` matrix, shape (n_branch, 10), or (n_branch, 14) when a branch
             has line-end shunts (:class:`stabctl.case.BranchTable` columns 11-14).
         load_con: PST ``load_con`` rows, shape (n, 5) (empty unless ``loads="raw"``).
-        generators: in-service generators in RAW order.
+        generators: in-service generators in RAW order (the netted ones left out).
         unsupported: records that could not be represented, in file order.
+        netted: the in-service generators netted as negative loads (``read_raw``'s
+            ``net``), in file order.
+        out_of_service: (bus, ID upper case) of the generators out of service (STAT 0)
+            at in-service buses: PSS/E ignores their dynamic records.
     """
 
     name: str
@@ -191,6 +202,8 @@ class RawData:
     load_con: np.ndarray
     generators: tuple[Generator, ...]
     unsupported: tuple[RawSource, ...]
+    netted: tuple[RawSource, ...] = ()
+    out_of_service: frozenset[tuple[int, str]] = frozenset()
 
     def matrices(self) -> dict:
         """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``)
@@ -416,6 +429,9 @@ class _Builder:
     gens: list = field(default_factory=list)
     gen_vs: dict = field(default_factory=dict)
     unsupported: list = field(default_factory=list)
+    net: Callable[[int, str], bool] | None = None  # (bus, id) -> netted as a load?
+    netted: list = field(default_factory=list)  # (bus, RawSource) of netted generators
+    out_of_service: list = field(default_factory=list)  # (bus, ID) of generators
     seen: dict = field(default_factory=dict)  # (section, ids) -> first line
 
     def once(self, rec: _Rec, key: tuple, what: str):
@@ -510,9 +526,13 @@ def _generator(b: _Builder, rec: _Rec):
     b.once(rec, (num, gid), f"generator at bus {num} '{gid}'")
     row = b.bus_row(rec, num, "generator")
     o = 1 if b.version >= 34 else 0  # v34 inserts NREG after IREG
+    if row is not None and rec.int(0, 14 + o, 1) == 0:
+        b.out_of_service.append((num, gid.upper()))
     if row is None or rec.int(0, 14 + o, 1) == 0:
         return
     what = f"generator at bus {num} '{gid}'"
+    if b.net is not None and b.net(num, gid):
+        return _net_generator(b, rec, num, what)
     ireg = rec.int(0, 7, 0)
     if ireg not in (0, num):
         return b.skip(rec, f"{what}: remote voltage regulation of bus {ireg}")
@@ -524,6 +544,15 @@ def _generator(b: _Builder, rec: _Rec):
     if b.gen_vs.setdefault(num, vs) != vs:
         return b.skip(rec, f"{what}: VS {vs:g} differs from bus {num}'s first generator")
     _add_generator(b, rec, row, vs, o, gid)
+
+
+def _net_generator(b: _Builder, rec: _Rec, num: int, what: str):
+    """A generator as a negative constant-power load PG + jQG at its bus."""
+    b.load_src.setdefault(num, rec)
+    parts = b.load_parts.setdefault(num, [0.0, 0.0, 0.0, 0.0])
+    parts[0] -= rec.num(0, 2, 0.0) / b.base
+    parts[1] -= rec.num(0, 3, 0.0) / b.base
+    b.netted.append((num, rec.source(what)))
 
 
 def _add_generator(b: _Builder, rec: _Rec, row: list, vs: float, o: int, gid: str):
@@ -572,8 +601,8 @@ def _branch(b: _Builder, rec: _Rec):
         return
     r, x, bc = rec.num(0, 3), rec.num(0, 4), rec.num(0, 5, 0.0)
     gi, bi, gj, bj = (rec.num(0, k + n, 0.0) for n in range(4))
-    if r < 0 or (r == 0 and x == 0):
-        rec.fail(f"{what}: R = {r:g} must be >= 0 and R + jX not 0")
+    if r == 0 and x == 0:  # R < 0 allowed: equivalents carry it
+        rec.fail(f"{what}: R + jX must not be 0")
     if gi == 0 and gj == 0 and bi == bj:  # a symmetric susceptance: part of the charging
         b.branches.append([i, j, r, x, bc + bi + bj, 0, 0, 0, 0, 0])
     else:
@@ -592,18 +621,19 @@ def _transformer(b: _Builder, rec: _Rec):
     ends = _ends(b, rec, i, j, "transformer")
     if ends is None or rec.int(0, 11, 1) == 0:
         return
-    tab = rec.int(2, 23 if b.version >= 34 else 13, 0)
-    if rec.num(0, 7, 0.0) != 0 or rec.num(0, 8, 0.0) != 0 or tab != 0:
-        return b.skip(
-            rec, f"{what}: magnetizing admittance (MAG1, MAG2) or impedance correction table (TAB1)"
-        )
+    if rec.int(2, 23 if b.version >= 34 else 13, 0) != 0:
+        return b.skip(rec, f"{what}: impedance correction table (TAB1)")
+    g_mag, b_mag = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
+    if (g_mag or b_mag) and rec.int(0, 6, 1) != 1:
+        return b.skip(rec, f"{what}: magnetizing admittance as no-load loss and current (CM 2)")
     t1, t2 = _windings(rec, ends, what)
     r, x = _impedance(b, rec, ends[0], what)
     r2, x2 = r * t2**2, x * t2**2
-    if r2 < 0 or (r2 == 0 and x2 == 0):
-        rec.fail(f"{what}: R1-2 must be >= 0 and R1-2 + jX1-2 not 0")
+    if r2 == 0 and x2 == 0:
+        rec.fail(f"{what}: R1-2 + jX1-2 must not be 0")
     ang = rec.num(2, 2, 0.0)
-    b.branches.append([i, j, r2, x2, 0, t1 / t2, -ang if ang else 0.0, 0, 0, 0])
+    row = [i, j, r2, x2, 0, t1 / t2, -ang if ang else 0.0, 0, 0, 0]
+    b.branches.append(row + ([g_mag, b_mag, 0.0, 0.0] if g_mag or b_mag else []))
 
 
 def _windings(rec: _Rec, ends, what: str) -> tuple[float, float]:
@@ -691,6 +721,19 @@ def _fraction(power: float, current: float) -> float | None:
     return 1.0 if total == 0 else power / total
 
 
+#: a generator bus's Q limit of exactly 0 (PSS/E: Q held at 0) as written in the bus
+#: table, where PST reads 0 as "no limit", pu
+ZERO_Q_LIMIT = 1e-9
+
+
+def _zero_q_limits(b: _Builder):
+    """PSS/E's Q limits of exactly 0 at generator buses as +-:data:`ZERO_Q_LIMIT`."""
+    for num in {g.bus for g in b.gens}:
+        row = b.buses[num]
+        row[10] = row[10] or ZERO_Q_LIMIT
+        row[11] = row[11] or -ZERO_Q_LIMIT
+
+
 def _demote_idle_pv(b: _Builder):
     """IDE 2 buses without an in-service generator are load buses (PSS/E)."""
     with_gen = {g.bus for g in b.gens}
@@ -699,13 +742,29 @@ def _demote_idle_pv(b: _Builder):
             row[9] = PQ
 
 
-def read_raw(path: str | Path, loads: str = "impedance") -> RawData:
+def _check_netted_swing(b: _Builder):
+    """CaseError for a swing bus left without a generator by netting."""
+    with_gen = {g.bus for g in b.gens}
+    for bus, src in b.netted:
+        if b.buses[bus][9] == SWING and bus not in with_gen:
+            raise CaseError(
+                f"{src}: swing bus {bus} has no generator left once netted (give its "
+                "generator a machine model in the DYR data)"
+            )
+
+
+def read_raw(
+    path: str | Path, loads: str = "impedance", net: Callable[[int, str], bool] | None = None
+) -> RawData:
     """Read a PSS/E RAW file (version 32, 33 or 34) into PST matrices.
 
     Args:
         path: the ``.raw`` file.
         loads: ``"impedance"`` makes every load constant impedance in the dynamic run;
             ``"raw"`` keeps each load's PSS/E composition there (``load_con``).
+        net: called with each in-service generator's bus number and ID (stripped); a
+            generator it returns True for is netted: a negative constant-power load
+            PG + jQG at its bus (PSS/E's ``GNET``), not a generator (see module doc).
 
     Returns:
         :class:`RawData` (bus, line, load_con matrices in pu on SBASE, the generators,
@@ -714,7 +773,8 @@ def read_raw(path: str | Path, loads: str = "impedance") -> RawData:
     Raises:
         CaseError: unreadable file, unsupported version, a malformed record (a field that
             is not a number, a bus number not in the bus data, a zero impedance, ...),
-            naming ``file:line`` and the record; no swing bus.
+            naming ``file:line`` and the record; no swing bus; a swing bus whose every
+            generator is netted.
 
     Source: PSS/E POM v32-v34 "Power Flow Raw Data File Contents" (see module doc).
     """
@@ -726,7 +786,7 @@ def read_raw(path: str | Path, loads: str = "impedance") -> RawData:
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
     base, version, freq = _header(lines, path)
-    b = _Builder(version, base, loads)
+    b = _Builder(version, base, loads, net=net)
     for rec in _records(lines, path, version):
         _dispatch(b, rec)
     return _finish(b, path, lines, version, freq)
@@ -747,6 +807,8 @@ def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawDat
     if not b.buses:
         raise CaseError(f"{path.name}: no bus data")
     _demote_idle_pv(b)
+    _zero_q_limits(b)
+    _check_netted_swing(b)
     load_con = _load_con(b)
     bus = np.array(list(b.buses.values()), dtype=float)
     if not np.any(bus[:, 9] == SWING):
@@ -767,4 +829,6 @@ def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawDat
         load_con=load_con,
         generators=tuple(b.gens),
         unsupported=tuple(sorted(b.unsupported, key=lambda s: s.line)),
+        netted=tuple(src for _, src in b.netted),
+        out_of_service=frozenset(b.out_of_service),
     )

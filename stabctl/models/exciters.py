@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, refuse_initial
 from stabctl.models import machines as mac
 from stabctl.models.blocks import (
     GAIN_BEFORE,
@@ -950,7 +950,7 @@ def _check_dc(e) -> None:
         AC1A: (("TA", "TA"), ("TE", "TE")),
         AC8B: (("TA", "TA"), ("TE", "TE")),
         T3: (("TA", "TA"), ("TE", "TE")),
-        ST4B: (("TA", "TA"),),
+        ST4B: (),  # T_A = 0: no lag (PSS/E), `_st4b_field_voltage`
     }
     for r in np.nonzero(np.isin(e.type, (*DC_KINDS, *READS_IFD)))[0]:
         kind = int(e.type[r])
@@ -1103,12 +1103,14 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
     VI = VA_st3 / np.where(p.KJ == 0, 1.0, p.KJ)
     bad = st3 & (beyond(vex, -np.inf, p.Efdmax) | beyond(VI, p.VImin, p.VImax))
     bad |= p.has_TA3A & beyond(VA_st3, p.VAmin, p.VAmax)
-    if bad.any():
-        i = int(np.nonzero(bad)[0][0])
-        raise CaseError(
+    refuse_initial(
+        "exc_con",
+        bad,
+        lambda i: (
             f"exc_con row {i + 1}: initial field voltage {vex[i]:.3f} pu outside "
             "the ST3 limits (Efdmax, the VI range or ESST3A's [VRMIN, VRMAX])"
-        )
+        ),
+    )
     p, VR_dc = _dc_initial_regulator(p, vex, eterm)
     st1, st1a = p.kind == ST1, p.kind == ST1A
     VR_st1a = st1a_regulator_output(p, vex)
@@ -1150,12 +1152,15 @@ def _t3_initial_regulator(p: ExciterParams, Efd, VB):
     raises CaseError if V_R0 is outside [Vrmin, Vrmax] or V_B0 + V_R0 outside [0, VBmax]."""
     VR = p.KE * Efd - VB
     bad = (p.kind == T3) & (beyond(VR, p.Vrmin, p.Vrmax) | beyond(VB + VR, np.zeros(p.n), p.VB_cap))
-    for i in np.nonzero(bad)[0]:
-        raise CaseError(
-            f"exc_con row {i + 1}: IEEET3 initial regulator output V_R = {VR[i]:.4f} pu "
-            f"outside [Vrmin, Vrmax] = [{p.Vrmin[i]:.4f}, {p.Vrmax[i]:.4f}] or V_B + V_R = "
+    refuse_initial(
+        "exc_con",
+        bad,
+        lambda i: (
+            f"exc_con row {i + 1}: IEEET3 initial regulator output V_R = {VR[i]:.4f} "
+            f"pu outside [Vrmin, Vrmax] = [{p.Vrmin[i]:.4f}, {p.Vrmax[i]:.4f}] or V_B + V_R = "
             f"{VB[i] + VR[i]:.4f} pu outside [0, VBmax]"
-        )
+        ),
+    )
     return VR
 
 
@@ -1169,13 +1174,16 @@ def _st4b_initial_regulators(p: ExciterParams, Efd, VB):
     bad = (p.kind == ST4B) & (
         (VB <= 0) | beyond(VG, p.Vrmin, p.Vrmax) | beyond(VM, p.VMmin, p.VMmax)
     )
-    for i in np.nonzero(bad)[0]:
-        raise CaseError(
-            f"exc_con row {i + 1}: ESST4B at rest: source V_B = {VB[i]:.4f} pu (must be "
-            f"> 0), regulator output V_G = {VG[i]:.4f} pu (in [Vrmin, Vrmax] = "
+    refuse_initial(
+        "exc_con",
+        bad,
+        lambda i: (
+            f"exc_con row {i + 1}: ESST4B at rest: source V_B = {VB[i]:.4f} pu (must "
+            f"be > 0), regulator output V_G = {VG[i]:.4f} pu (in [Vrmin, Vrmax] = "
             f"[{p.Vrmin[i]:.4f}, {p.Vrmax[i]:.4f}]), inner-loop output V_M = {VM[i]:.4f} pu "
             f"(in [VMmin, VMmax] = [{p.VMmin[i]:.4f}, {p.VMmax[i]:.4f}])"
-        )
+        ),
+    )
     return VG, VM
 
 
@@ -1196,6 +1204,7 @@ def ac_initial_exciter(p: ExciterParams, Efd):
     from scipy.optimize import brentq  # here: the case layer imports this module (0.5 s)
 
     VE, VFE = np.zeros(p.n), np.zeros(p.n)
+    bad: dict[int, str] = {}  # row -> its limit violation
     for i in np.nonzero(p.is_ac)[0]:
         name = {AC1: "EXAC1", AC1A: "ESAC1A", AC8B: "AC8B"}[int(p.kind[i])]
         efd0 = ifd0 = float(Efd[i])
@@ -1217,10 +1226,11 @@ def ac_initial_exciter(p: ExciterParams, Efd):
             limits.append(("V_R/K_A", "VPmin, VPmax", p.VPmin[i] * p.KA[i], p.VPmax[i] * p.KA[i]))
         for what, names, lo, hi in limits:
             if beyond(VFE[i], lo, hi):
-                raise CaseError(
+                bad[i] = (
                     f"exc_con row {i + 1}: {name} initial regulator output {what} = "
                     f"{VFE[i]:.4f} pu outside [{names}] = [{lo:.4f}, {hi:.4f}]"
                 )
+    refuse_initial("exc_con", [i in bad for i in range(p.n)], bad.get)
     return VE, VFE
 
 
@@ -1232,22 +1242,21 @@ def _check_st1_initial(p: ExciterParams, Efd, eterm, VA):
     ac4 = p.kind == AC4
     lo = np.where(ac4, p.Vrmin - p.KC * Efd, eterm * p.Vrmin)
     hi = np.where(ac4, p.Vrmax, eterm * p.Vrmax) - p.KC * Efd
-    bad = np.nonzero(
-        np.isin(p.kind, (ST1, ST1A, AC4))
-        & (
-            beyond(Efd, lo, hi)
-            | beyond(VA / p.KA, p.VImin, p.VImax)
-            | ((p.kind == ST1A) & beyond(VA, p.VAmin, p.VAmax))
-        )
-    )[0]
-    if bad.size:
-        i = bad[0]
-        name = {ST1: "EXST1", ST1A: "ESST1A", AC4: "EXAC4"}[int(p.kind[i])]
-        raise CaseError(
-            f"exc_con row {i + 1}: {name} initial field voltage {Efd[i]:.4f} pu "
-            "outside its output limits or regulator input outside [VImin, VImax]"
-            + (" or V_A outside [VAmin, VAmax]" if p.kind[i] == ST1A else "")
-        )
+    bad = np.isin(p.kind, (ST1, ST1A, AC4)) & (
+        beyond(Efd, lo, hi)
+        | beyond(VA / p.KA, p.VImin, p.VImax)
+        | ((p.kind == ST1A) & beyond(VA, p.VAmin, p.VAmax))
+    )
+    names = {ST1: "EXST1", ST1A: "ESST1A", AC4: "EXAC4"}
+    refuse_initial(
+        "exc_con",
+        bad,
+        lambda i: (
+            f"exc_con row {i + 1}: {names[int(p.kind[i])]} initial field voltage "
+            f"{Efd[i]:.4f} pu outside its output limits or regulator input outside [VImin, "
+            "VImax]" + (" or V_A outside [VAmin, VAmax]" if p.kind[i] == ST1A else "")
+        ),
+    )
 
 
 def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
@@ -1262,14 +1271,15 @@ def _dc_initial_regulator(p: ExciterParams, Efd, eterm):
             KE[r] = -dc_feedback(0.0, *sat) / Efd[r]
         VR[r] = dc_feedback(KE[r], *sat)
     mult = np.where(p.kind == DC2, eterm, 1.0)
-    bad = np.nonzero(dc & beyond(VR, p.Vrmin * mult, p.Vrmax * mult))[0]
-    if bad.size:
-        i = bad[0]
-        raise CaseError(
+    refuse_initial(
+        "exc_con",
+        dc & beyond(VR, p.Vrmin * mult, p.Vrmax * mult),
+        lambda i: (
             f"exc_con row {i + 1}: initial DC regulator output V_R = {VR[i]:.4f} pu "
             f"outside [Vrmin, Vrmax] = [{p.Vrmin[i] * mult[i]:.4f}, "
             f"{p.Vrmax[i] * mult[i]:.4f}]"
-        )
+        ),
+    )
     return replace(p, KE=KE), VR
 
 
@@ -1394,7 +1404,7 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     if kind == AC4:
         return clip(x[2, i], P[i, E.VRMIN] - P[i, E.KC] * ifd, P[i, E.VRMAX] - P[i, E.KC] * ifd)
     if kind == ST4B:
-        return _st4b_field_voltage(P, x, i, VB)
+        return _st4b_field_voltage(P, x, i, VTR_alg, pss_out, VB)
     if kind == DC1 or kind == DC2 or kind == T2 or kind == T3:
         return x[3, i]
     return _smp_field_voltage(P, x, i, VTR_alg, pss_out, ieee)
@@ -1761,18 +1771,30 @@ def _t3_derivatives(P, x, i, err, VB, dx):
 
 
 @kernel(inline="always")
-def _st4b_field_voltage(P, x, i, VB):
+def _st4b_regulator(P, x, i, err):
+    """ESST4B's regulator PI K_PR err + PIi: (unclipped, clipped to [Vrmin, Vrmax])."""
+    ys = P[i, E.KPID_P] * err + x[1, i]
+    return ys, clip(ys, P[i, E.VRMIN], P[i, E.VRMAX])
+
+
+@kernel(inline="always")
+def _st4b_field_voltage(P, x, i, VTR_alg, pss_out, VB):
     """ESST4B: Efd = V_B clip(K_PM (V_M - min(K_G Efd, VGmax)) + PIMi, VMmin, VMmax),
     solved for Efd (ANDES solves it with its algebraic equations): the right side does
     not rise with Efd (K_PM K_G >= 0, V_B >= 0), so there is one solution, on the
     feedback's limit if its candidate there reaches it, else V_B clip(y, VMmin, VMmax)
-    with y = (K_PM V_M + PIMi)/(1 + V_B K_PM K_G) the unclipped loop's output."""
+    with y = (K_PM V_M + PIMi)/(1 + V_B K_PM K_G) the unclipped loop's output.  V_M is
+    the lag's state, or with T_A = 0 (PSS/E: no lag) the regulator's output itself."""
+    VM = x[2, i]
+    if P[i, E.TA] < LBND:
+        err = P[i, E.VREF] - lag(VTR_alg, x[0, i], P[i, E.TR])[0] + pss_out
+        VM = _st4b_regulator(P, x, i, err)[1]
     KPM, KG, VGmax = P[i, E.KPM], P[i, E.KG], P[i, E.VGMAX]
     lo, hi = P[i, E.VMMIN], P[i, E.VMMAX]
-    on_limit = VB * clip(KPM * (x[2, i] - VGmax) + x[3, i], lo, hi)
+    on_limit = VB * clip(KPM * (VM - VGmax) + x[3, i], lo, hi)
     if KG * on_limit >= VGmax:
         return on_limit
-    return VB * clip((KPM * x[2, i] + x[3, i]) / (1.0 + VB * KPM * KG), lo, hi)
+    return VB * clip((KPM * VM + x[3, i]) / (1.0 + VB * KPM * KG), lo, hi)
 
 
 @kernel(inline="always")
@@ -1780,11 +1802,10 @@ def _st4b_derivatives(P, x, i, err, efd, dx):
     """ESST4B (docs/pst_models.md 2.10): both PI regulators with ANDES's tracking
     anti-windup, dx_i/dt = K_I (u - k_s (ys - y)) (k_s = :data:`PID_TRACKING`), and the
     lag T_A; efd the field voltage (`_st4b_field_voltage`)."""
-    ys = P[i, E.KPID_P] * err + x[1, i]
-    y = clip(ys, P[i, E.VRMIN], P[i, E.VRMAX])
+    ys, y = _st4b_regulator(P, x, i, err)
     dx[1, i] = P[i, E.KPID_I] * (err - PID_TRACKING * (ys - y))
-    dx[2, i] = lag(y, x[2, i], P[i, E.TA])[1]
-    u = x[2, i] - min(P[i, E.KG] * efd, P[i, E.VGMAX])
+    VM, dx[2, i] = lag(y, x[2, i], P[i, E.TA])
+    u = VM - min(P[i, E.KG] * efd, P[i, E.VGMAX])
     ys = P[i, E.KPM] * u + x[3, i]
     y = clip(ys, P[i, E.VMMIN], P[i, E.VMMAX])
     dx[3, i] = P[i, E.KIM] * (u - PID_TRACKING * (ys - y))

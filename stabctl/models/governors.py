@@ -1,5 +1,5 @@
-"""Turbine-governors: PST `tg` (type 1) and the PSS/E models TGOV1 (type 2), IEEEG1
-(type 3), HYGOV (type 4), IEESGO (type 5) and GAST (type 6).
+"""Turbine-governors: PST `tg` (type 1), the PSS/E models TGOV1 (type 2), IEEEG1
+(type 3), HYGOV (type 4), IEESGO (type 5) and GAST (type 6), and ANDES's TG2 (type 7).
 
 Sources: PSTess 1.1 `tg_indx.m`, `tg.m` (docs/pst_models.md section 4); PSS/E Model
 Library `TGOV1`, `IEEEG1` (IEEE Committee Report 1973 steam turbine model), as
@@ -20,7 +20,10 @@ IEESGO: K_1 (omega - 1) through 1/(1 + s T_1) and (1 + s T_2)/(1 + s T_3), P_ref
 limited to [PMIN, PMAX], lags T_4, T_5, T_6, pmech = (1 - K_2) y_4 + (1 - K_3) K_2 y_5 +
 K_2 K_3 y_6 (the IEEEG1 fraction columns K1, K3, K5).  GAST: min(P_ref + (w_f - omega)/R,
 AT + KT (AT - y_3)) -> 1/(1 + s T1) non-windup [VMIN, VMAX] -> 1/(1 + s T2) = y_2 ->
-minus D_turb (omega - 1); y_3 = y_2/(1 + s T3).
+minus D_turb (omega - 1); y_3 = y_2/(1 + s T3).  TG2 (ANDES 2.0 ``governor/tg2.py``, not a
+PSS/E model; its deadband off, ANDES's default): pmech = clip(P_ref + (1 + s T1)/(1 + s
+T2) of (w_f - omega)/R, pmin, pmax), the limit on the output without windup (a hard
+limiter).
 States: up to N_STATES slots per governor (the most any type present uses), named per
 type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 """
@@ -32,7 +35,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, refuse_initial
 from stabctl.models.blocks import LBND, clip, lag, leadlag, nonwindup, nonwindup_lag
 from stabctl.models.declaration import (
     Declared,
@@ -74,9 +77,9 @@ GOVERNOR = Family(
             "code",
             1,
             integer=True,
-            choices=(1, 2, 3, 4, 5, 6),
+            choices=(1, 2, 3, 4, 5, 6, 7),
             label="governor type",
-            doc="1 PST tg, 2 TGOV1, 3 IEEEG1, 4 HYGOV, 5 IEESGO, 6 GAST",
+            doc="1 PST tg, 2 TGOV1, 3 IEEEG1, 4 HYGOV, 5 IEESGO, 6 GAST, 7 TG2 (ANDES)",
         ),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("wf", "pu", 3, doc="speed set point"),
@@ -242,10 +245,19 @@ GOVERNOR = Family(
             kind=6,
             andes=("GAST",),
         ),
+        # TG2 (ANDES's own, read by name from ANDES; no PSS/E record of that name in the
+        # Model Library) -> type 7: invR = 1/R, the lead-lag T1/T2, the output limits
+        DyrModel(
+            "TG2",
+            ("R", "wref0", "pmax", "pmin", "T1", "T2"),
+            {"wf": "wref0", "Tmax": "pmax", "Tmin": "pmin", "T3": "T1", "Tc": "T2"},
+            kind=7,
+            andes=("TG2",),
+        ),
     ),
 )
 
-TG, TGOV1, IEEEG1, HYGOV, IEESGO, GAST = 1, 2, 3, 4, 5, 6
+TG, TGOV1, IEEEG1, HYGOV, IEESGO, GAST, TG2 = 1, 2, 3, 4, 5, 6, 7
 N_STATES = 6
 STATE_NAMES = {
     TG: ("servo", "transient", "turbine"),
@@ -254,6 +266,7 @@ STATE_NAMES = {
     HYGOV: ("filter", "gate_integrator", "gate", "flow"),
     IEESGO: ("lag", "leadlag", "T4lag", "T5lag", "T6lag"),
     GAST: ("valve", "T2lag", "T3lag"),
+    TG2: ("leadlag",),
 }
 #: HYGOV's fields in tg_con columns 17-21 (alternative names of K1..K5)
 HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel")
@@ -337,6 +350,7 @@ class GovernorParams(Declared):
         act[0] |= ga
         act[1] |= ga & (self.Tc >= LBND)
         act[2] |= ga & (self.T3 >= LBND)
+        act[0] |= self.kind == TG2
         return act[: self.n_slots()]
 
     def time_constants(self):
@@ -350,7 +364,11 @@ class GovernorParams(Declared):
         ga = self.kind == GAST
         return (
             ("tg_con T_s", self.Ts, tg | t1 | g1 | hy | ga | lag["Ts"]),
-            ("tg_con T_c", self.Tc, tg | t1 | hy | lag["Tc"] | (ga & (self.Tc >= LBND))),
+            (
+                "tg_con T_c",
+                self.Tc,
+                tg | t1 | hy | lag["Tc"] | (ga & (self.Tc >= LBND)) | (self.kind == TG2),
+            ),
             ("tg_con T_3", self.T3, ga & (self.T3 >= LBND)),
             ("tg_con T_5", self.T5, tg | lag["T5"]),
             ("tg_con T_4", self.T4, hy | lag["T4"]),
@@ -371,8 +389,8 @@ def governor_params(case: Case) -> GovernorParams:
 
     Raises CaseError (tg_con row, field) for a time constant the model needs below 1e-3 s
     (tg: Ts, Tc, T5; TGOV1: T1 = Ts, T3 = Tc; IEEEG1: T3 = Ts; HYGOV: T_g = Ts, T_f = Tc,
-    T_w = T4: a lag below it would be absent, `blocks.LBND`), a zero HYGOV r = K2, or an
-    IEEEG1 without power fractions."""
+    T_w = T4; TG2: T2 = Tc: a lag below it would be absent, `blocks.LBND`), a zero HYGOV
+    r = K2, or an IEEEG1 without power fractions."""
     g = case.governors
     need = {
         TG: ("Ts", "Tc", "T5"),
@@ -381,6 +399,7 @@ def governor_params(case: Case) -> GovernorParams:
         HYGOV: ("Ts", "Tc", "T4"),
         IEESGO: (),
         GAST: ("Ts",),
+        TG2: ("Tc",),
     }
     for r in range(len(g)):
         for name in need[int(g.type[r])]:
@@ -465,18 +484,22 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
             f"{p.K[r].sum() * gate[r]:.4f} pu of the two machines' power"
         )
     gate = np.where(hy, pmech0 / np.where(hy, p.T5, 1.0) + p.qNL, gate)
-    bad = np.nonzero(beyond(gate, p.Tmin, p.Tmax))[0]
-    if bad.size:
-        raise CaseError(
-            f"tg_con row {bad[0] + 1}: initial power order {gate[bad[0]]:.4f} pu "
-            "outside [Tmin, Tmax]"
-        )
-    bad = np.nonzero((p.kind == GAST) & (p.AT + p.KT * (p.AT - pmech0) < pmech0))[0]
-    if bad.size:
-        raise CaseError(
-            f"tg_con row {bad[0] + 1}: GAST's load limit AT + KT (AT - Pm0) is below its "
-            f"initial power {pmech0[bad[0]]:.4f} pu"
-        )
+    refuse_initial(
+        "tg_con",
+        beyond(gate, p.Tmin, p.Tmax),
+        lambda r: (
+            f"tg_con row {r + 1}: initial power order {gate[r]:.4f} pu outside "
+            f"[Tmin, Tmax] = [{p.Tmin[r]:.4f}, {p.Tmax[r]:.4f}]"
+        ),
+    )
+    refuse_initial(
+        "tg_con",
+        (p.kind == GAST) & (p.AT + p.KT * (p.AT - pmech0) < pmech0),
+        lambda r: (
+            f"tg_con row {r + 1}: GAST's load limit AT + KT (AT - Pm0) is below its "
+            f"initial power {pmech0[r]:.4f} pu"
+        ),
+    )
     tg, t1, g1 = p.kind == TG, p.kind == TGOV1, p.kind == IEEEG1
     x[0] = np.where(g1, 0.0, pmech0)
     x[1] = np.where(tg | t1, (1 - p.T3 / tc) * pmech0, gate)
@@ -484,6 +507,7 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     x[3:] = np.where(g1, gate, 0.0)
     x[:5] = np.where(sg, np.array([0.0, 0.0, 1.0, 1.0, 1.0])[:, None] * gate, x[:5])
     x[:4] = np.where(hy, np.array([0.0, 1.0, 1.0, 1.0])[:, None] * gate, x[:4])
+    x[:2] = np.where(p.kind == TG2, 0.0, x[:2])  # the lead-lag at its input, 0
     x = x[: p.n_slots()]
     x[2:] *= p.has_state()[2:] | tg
     return x, np.where(hy, p.Rp * gate, gate)
@@ -513,6 +537,8 @@ def pmech(P, x, k, omega):
         return _hygov_pmech(P, x, k, omega)
     if kind == GAST:
         return lag(x[0, k], x[1, k], P[k, G.TC])[0] - P[k, G.DT] * (omega - 1.0)
+    if kind == TG2:
+        return _tg2(P, x, k, omega, None)
     return _fractions(P, k, _ieesgo_lags(P, x, k, omega))
 
 
@@ -541,6 +567,8 @@ def derivatives(P, x, k, omega, dx):
         _hygov_derivatives(P, x, k, omega, dx)
     elif kind == GAST:
         _gast_derivatives(P, x, k, omega, dx)
+    elif kind == TG2:
+        _tg2(P, x, k, omega, dx)
     else:
         _ieesgo_lags(P, x, k, omega, dx)
 
@@ -581,6 +609,20 @@ def _tg_derivatives(P, x, k, omega, dx):
     y2, dx[1, k] = leadlag(x[0, k], x[1, k], P[k, G.T3], P[k, G.TC])
     if P[k, G.KIND] == TG:
         dx[2, k] = leadlag(y2, x[2, k], P[k, G.T4], P[k, G.T5])[1]
+
+
+# -- TG2 (ANDES 2.0 tg2.py): the droop through a lead-lag, then a hard output limit
+
+
+@kernel(inline="always")
+def _tg2(P, x, k, omega, dx=None):
+    """TG2's mechanical power clip(P_ref + LL((w_f - omega)/R), pmin, pmax) (T3 = T1 the
+    lead, Tc = T2 the lag; ANDES's HardLimiter: no windup, the lead-lag runs on); its
+    state's derivative into dx when given."""
+    y, d = leadlag((P[k, G.WF] - omega) * P[k, G.INVR], x[0, k], P[k, G.T3], P[k, G.TC])
+    if dx is not None:
+        dx[0, k] = d
+    return clip(P[k, G.PREF] + y, P[k, G.TMIN], P[k, G.TMAX])
 
 
 # -- GAST (PSS/E GAST, ANDES 2.0 gast.py): the droop order and the load limit AT + KT (AT

@@ -11,7 +11,12 @@ Polar coordinates, sparse Jacobian, sparse LU solve. Conventions (PSTess ``loadf
 * after each update the magnitudes are clipped to [vmin, vmax] (0 means 0.5 / 1.5), so a
   solution with a voltage outside its limits does not converge unless a tap moves;
 * Q limits: after each iteration a PV bus whose ``Q + Ql`` leaves [qmin, qmax] (0 means
-  no limit, i.e. +-9999) becomes PQ with its generation fixed at the limit, for good;
+  no limit, i.e. +-9999) becomes PQ with its generation fixed at the limit (PST
+  ``chq_lim``); once converged, a bus held at qmax with its voltage above its set point,
+  or at qmin below it, returns to PV and the iterations go on (PSS/E's back-off, which
+  PST lacks: without it a bus switched by an early iterate stays switched, and
+  ACTIVSg2000's solution is missed by 0.017 pu); cases where no held bus ends on the
+  wrong side solve exactly as PST;
 * on-load tap changers (branches with ``tapmax != 0``): after a solution, a bus at or
   beyond its voltage limit moves the tap of the branches whose to-bus it is, in steps of
   ``tapstep`` within [tapmin, tapmax], and the flow is solved again from the start values
@@ -42,6 +47,10 @@ __all__ = ["PowerFlowResult", "solve_powerflow", "power_injections", "jacobian"]
 
 _NO_LIMIT = 9999.0
 _TAP_ITER_MAX = 10
+#: releases of wrong-side Q-limited buses per solve, and the voltage margin (pu) beyond
+#: the set point that counts as the wrong side (`_release_wrong_side`)
+_BACKOFF_ROUNDS = 20
+_BACKOFF_DV = 1e-6
 
 
 @dataclass(frozen=True, eq=False)
@@ -209,16 +218,54 @@ def _apply_q_limits(st: _State, s, qmax, qmin) -> bool:
     return bool(np.any(over | under))
 
 
+def _release_wrong_side(case: Case, st: _State, qmax, qmin) -> bool:
+    """Buses held at a Q limit whose voltage ended on the side the limit cannot explain
+    (at qmax above, at qmin below the set point) become PV again at their set point
+    (PSS/E's and PowerWorld's back-off; PST's ``chq_lim`` switches once, for good).
+    True if any did."""
+    b = case.buses
+    held = (b.kind == PV) & (st.kind == PQ)
+    limit = b.qload - st.ql  # the Q the bus's generation is held at
+    back = held & (
+        ((limit == qmax) & (st.vmag > b.vmag + _BACKOFF_DV))
+        | ((limit == qmin) & (st.vmag < b.vmag - _BACKOFF_DV))
+    )
+    st.kind[back] = PV
+    st.ql[back] = b.qload[back]
+    st.qg[back] = b.qgen[back]
+    st.vmag[back] = b.vmag[back]
+    return bool(back.any())
+
+
 def _newton(case, ybus, st: _State, tol, max_iter, q_limits):
     """Newton iterations in place on ``st``.
 
     Returns (iterations, mismatch norm, S, converged, dP, dQ). A singular Jacobian or a
     non-finite step raises :class:`PowerFlowError` at once; running out of iterations
-    does not (PST then tries its tap changer before giving up).
+    does not (PST then tries its tap changer before giving up).  With ``q_limits``, a
+    converged solution whose held buses sit on the wrong side of their set points
+    releases them and iterates on (`_release_wrong_side`, at most `_BACKOFF_ROUNDS`).
     """
-    qmax, qmin, vmax, vmin = _limits(case)
+    qmax, qmin = _limits(case)[:2]
     dp, dq, s = _mismatch(ybus, st)
     it = 0
+    for _ in range(_BACKOFF_ROUNDS + 1):
+        it = _iterate(case, ybus, st, tol, max_iter, q_limits, it)
+        dp, dq, s = _mismatch(ybus, st)
+        if _norm(dp, dq) > tol or not q_limits:
+            break
+        if not _release_wrong_side(case, st, qmax, qmin):
+            break
+        dp, dq, s = _mismatch(ybus, st)
+    mism = _norm(dp, dq)
+    return it, mism, s, mism <= tol, dp, dq
+
+
+def _iterate(case, ybus, st: _State, tol, max_iter, q_limits, it: int) -> int:
+    """Newton steps in place on ``st`` until converged or ``max_iter`` in all; returns the
+    iteration count so far."""
+    qmax, qmin, vmax, vmin = _limits(case)
+    dp, dq, s = _mismatch(ybus, st)
     while _norm(dp, dq) > tol and it < max_iter:
         it += 1
         ang_idx = np.flatnonzero(st.kind != SWING)
@@ -239,8 +286,7 @@ def _newton(case, ybus, st: _State, tol, max_iter, q_limits):
         dp, dq, s = _mismatch(ybus, st)
         if q_limits and _apply_q_limits(st, s, qmax, qmin):
             dp, dq, s = _mismatch(ybus, st)
-    mism = _norm(dp, dq)
-    return it, mism, s, mism <= tol, dp, dq
+    return it
 
 
 def _fail(case, it, dp, dq, what):

@@ -233,7 +233,6 @@ def test_machine_index():
             dict(mac=modified(MAC, 1, 0, 1)),
             r"mac_con row 2 \(machine 1\), field 'number': duplicate machine number 1",
         ),
-        (dict(line=modified(LINE, 0, 2, -0.01)), r"line row 1 \(1-3\), field 'r': must be >= 0"),
         (
             dict(line=modified(modified(LINE, 0, 2, 0.0), 0, 3, 0.0)),
             r"line row 1 \(1-3\), field 'x': series impedance",

@@ -30,6 +30,8 @@ import pytest
 pytestmark = pytest.mark.andes
 andes = pytest.importorskip("andes")
 
+from runs import flat_run  # noqa: E402
+
 from stabctl.dynamics.driver import Simulator  # noqa: E402
 from stabctl.dynamics.events import Fault, LineTrip, LoadStep  # noqa: E402
 from stabctl.errors import CaseError, InputError, NumericalInstabilityError  # noqa: E402
@@ -584,12 +586,14 @@ def test_ieee14_gast_power_and_speeds_match_andes():
         "npcc/npcc.xlsx",
         "ieee14/ieee14.json",
         "5bus/pjm5bus.json",
+        "ieee14/ieee14_conn.xlsx",
     ],
 )
 def test_imported_andes_case_power_flow_equals_andes(name):
     """The network as ANDES solves it: stabctl's power flow of the imported case (Q limits
     off) against ANDES's, the difference being ANDES's 1e-8 pu added to every branch's R
-    and X (pjm5bus: its bus idx 0 renumbered, next test)."""
+    and X (pjm5bus: its bus idx 0 renumbered, next test; ieee14_conn: its bus 15 out of
+    service, left out with the line, load, shunt and static generator at it)."""
     from stabctl.network.powerflow import solve_powerflow
 
     with warnings.catch_warnings():
@@ -613,6 +617,59 @@ def test_import_andes_numbers_a_bus_idx_0_above_the_others():
     ends = {tuple(sorted(e)) for e in zip(case.branches.from_bus, case.branches.to_bus)}
     theirs = {tuple(sorted((b1 or 5, b2 or 5))) for b1, b2 in zip(ss.Line.bus1.v, ss.Line.bus2.v)}
     assert ends == theirs
+
+
+def test_a_bus_out_of_service_is_left_out_with_its_devices():
+    """ieee14_conn's bus 15 has u = 0: ANDES takes its line, load, shunt and PV out of
+    service (their ``ue``); so does the import, with a warning naming the bus."""
+    path = andes.get_case("ieee14/ieee14_conn.xlsx")
+    with pytest.warns(UserWarning, match=r"bus\(es\) 15 out of service .* 4 device"):
+        case = import_andes(path)
+    assert 15 not in case.buses.number and len(case.buses) == 14
+    assert 15 not in case.branches.from_bus and 15 not in case.branches.to_bus
+
+
+def test_a_negative_line_resistance_of_an_equivalent_is_kept():
+    """EI_33 (an Eastern Interconnection equivalent) has a line of R = -0.00181 pu
+    (101733-100009): imported as it is (ANDES's own power flow of the case does not
+    converge, nor does stabctl's: the case imports, it does not run)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        case = import_andes(andes.get_case("ei/EI_33.xlsx"), on_unsupported="skip")
+    br = case.branches
+    k = np.nonzero((br.from_bus == 101733) & (br.to_bus == 100009))[0]
+    assert br.r[k] == pytest.approx([-0.00181], abs=1e-12)
+
+
+def test_pjm5bus_tg2_governors_follow_andes_through_its_own_line_trip():
+    """pjm5bus (four GENCLS with ANDES's TG2 governors, 1/R 20, lead-lag 0.2/10 s): its own
+    disturbance, line 6 opened at 2 s, 10 s at 5 ms.  ANDES 2.0's TG2 with its deadband
+    off (the default) never moves: DeadBandRT's flags, set once at the start inside the
+    band and never updated when disabled, zero its input, so its frequency drifts 0.013
+    pu in 8 s; with the deadband on (±1e-4 pu) it acts and stabctl's TG2 (no deadband)
+    follows it within 2e-5 pu of speed over a 2.4e-3 pu swing."""
+    path = andes.get_case("5bus/pjm5bus.json")
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    assert list(case.governors.type) == [7] * 4 and case.governors.invR[0] == 20
+    drift, _ = flat_run(case)
+    assert drift < 1e-8
+    swings = {}
+    for deadband in (0, 1):
+        ss = andes_system(path, config_option=(f"TG2.deadband={deadband}",))
+        andes_speeds(ss, 10.0, STEP)
+        t = np.asarray(ss.dae.ts.t)
+        wa = np.asarray(ss.dae.ts.x)[:, ss.GENCLS.omega.a]
+        swings[deadband] = np.max(np.abs(wa - 1))
+    line = list(ss.Line.idx.v).index(ss.Toggle.dev.v[0])
+    ends = [b or 5 for b in (ss.Line.bus1.v[line], ss.Line.bus2.v[line])]  # idx 0 is 5
+    res = Simulator(case, q_limits=False).run([LineTrip(*ends, 2.0)], 10.0, h=STEP)
+    rows = [list(case.machines.bus).index(b or 5) for b in ss.GENCLS.bus.v]
+    w = np.column_stack([np.interp(t, res.t, res.speed[:, r]) for r in rows])
+    dw = np.max(np.abs(w - wa))
+    print(f"\npjm5bus line trip vs ANDES (TG2 deadband on): speeds {dw:.2e} pu")
+    assert swings[0] > 0.01 and swings[1] < 3e-3  # measured 0.013, 2.4e-3
+    assert dw < 5e-5  # measured 1.2e-5
 
 
 def test_import_andes_maps_psse_models_as_the_dyr_reader():
@@ -1175,18 +1232,6 @@ def test_ieee14_regca1_rate_and_high_voltage_limits_match_andes(regca1_alone):
     np.testing.assert_allclose(
         res.ibr_q[high, 0] / v[high], cp.Q0[0] / 1.03 - 0.7 * (v[high] - 1.05), rtol=1e-12
     )
-
-
-def flat_run(case, t_end=10.0):
-    """(largest state drift, result) of a run of ``case`` without disturbance."""
-    from stabctl.dynamics.driver import _Run
-
-    sim = Simulator(case, q_limits=False)
-    m, sa, grid, nets = sim._prepare([], t_end, STEP, None, "exact")
-    run = _Run(sim, m, sa, grid, nets, False, np.pi, False)
-    run.advance(grid.t.size - 1)
-    res = run.finish(None)
-    return np.max(np.abs(run.x - m.x0)), res
 
 
 def test_ieee14_regca1_flat_run_stays_at_the_power_flow_point(regca1_alone):

@@ -16,7 +16,7 @@ from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import CaseError
 from stabctl.io import load_case
 from stabctl.io.psse import import_psse, load_psse
-from stabctl.io.psse_raw import read_raw, split_fields
+from stabctl.io.psse_raw import ZERO_Q_LIMIT, read_raw, split_fields
 from stabctl.network.powerflow import solve_powerflow
 from stabctl.network.ybus import branch_admittances
 
@@ -156,6 +156,84 @@ def test_dyr_machines_share_their_bus_generation():
     np.testing.assert_allclose(mac.H, [5.0, 4.0, 3.0])
 
 
+def _dyr(tmp_path, *lines):
+    """A DYR file of the given record lines."""
+    path = tmp_path / "edited.dyr"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+_GENROU = "8.0 0.03 0.4 0.05 {H} 0.0 1.8 1.7 0.3 0.55 0.25 0.06 0.0 0.0 /"
+
+
+def test_generators_without_a_machine_model_are_refused_or_netted(tmp_path):
+    """PSS/E's netting: generator 3 '2' (50 + j10 MW/Mvar) has no DYR machine record; it
+    is refused by name, or becomes a negative constant-power load at bus 3, where
+    generator 3 '1' holds the voltage: the power flow is the un-netted one (the same
+    injections), to round-off."""
+    dyr = _dyr(
+        tmp_path, f"1 'GENROU' 1 {_GENROU.format(H=5.0)}", f"3 'GENROU' 1 {_GENROU.format(H=4.0)}"
+    )
+    with pytest.raises(CaseError, match=r"machine 3 \(bus 3, id 2\).*--net-unmodelled"):
+        load_psse(V33, dyr)
+    with pytest.warns(UserWarning, match="netted 1 generator"):
+        case, left_out, netted = import_psse(V33, dyr, unmodelled="net")
+    assert left_out == () and netted == ("five_bus_v33.raw:19 generator at bus 3 '2'",)
+    assert list(case.machines.number) == [1, 2] and list(case.machines.pfrac) == [1, 1]
+    bus3 = case.bus_index(3)
+    assert case.buses.pgen[bus3] == pytest.approx(1.5, abs=1e-15)
+    assert case.buses.pload[bus3] == pytest.approx(-0.5, abs=1e-15)
+    assert case.buses.qload[bus3] == pytest.approx(-0.1, abs=1e-15)
+    assert case.buses.qmax[bus3] == pytest.approx(1.0, abs=1e-15)  # its QT only
+    full = solve_powerflow(load_psse(V33, DATA / "five_bus.dyr"), q_limits=False)
+    nett = solve_powerflow(case, q_limits=False)
+    np.testing.assert_allclose(nett.v, full.v, rtol=0, atol=1e-12)
+
+
+def test_netting_the_swing_generator_is_refused(tmp_path):
+    dyr = _dyr(
+        tmp_path, f"3 'GENROU' 1 {_GENROU.format(H=4.0)}", f"3 'GENROU' 2 {_GENROU.format(H=3.0)}"
+    )
+    with pytest.raises(CaseError, match="swing bus 1 has no generator left once netted"):
+        load_psse(V33, dyr, unmodelled="net")
+
+
+def test_records_of_generators_out_of_service_are_ignored(tmp_path):
+    """Generator 3 '3' has STAT 0: its DYR records are ignored (PSS/E), not refused."""
+    extra = f"3 'GENROU' 3 {_GENROU.format(H=2.0)}"
+    dyr = _dyr(tmp_path, (DATA / "five_bus.dyr").read_text(), extra)
+    case = load_psse(V33, dyr)
+    assert len(case.machines) == 3
+
+
+def test_magnetizing_admittance_is_a_shunt_at_the_winding_1_bus(tmp_path):
+    """MAG1 + jMAG2 (CM 1, pu on SBASE) of transformer 2-3: the branch's from-end shunt
+    (line columns 11-12), switched with it; CM 2 stays unsupported."""
+    old = "    2,     3,     0,'1 ',2,2,1, 0.00000E+0, 0.00000E+0,"
+    path = _edit(tmp_path, old, "    2,     3,     0,'1 ',2,2,1, 0.002, -0.01,")
+    line = read_raw(path).line
+    row = line[(line[:, 0] == 2) & (line[:, 1] == 3)][0]
+    np.testing.assert_array_equal(row[10:14], [0.002, -0.01, 0.0, 0.0])
+    path = _edit(tmp_path, old, "    2,     3,     0,'1 ',2,2,2, 0.002, -0.01,")
+    assert "CM 2" in str(read_raw(path).unsupported[0])
+
+
+def test_a_zero_q_limit_stays_a_limit(tmp_path):
+    """PSS/E QT = QB = 0 holds Q at 0; PST's bus table reads 0 as no limit, so the RAW
+    reader writes +-ZERO_Q_LIMIT and the power flow holds the bus at Q = 0."""
+    path = _edit(tmp_path, "100.000,   -50.000,1.01000", "0.000,     0.000,1.01000")
+    path.write_text(
+        path.read_text().replace("60.000,   -20.000,1.01000", "0.000,     0.000,1.01000")
+    )
+    raw = read_raw(path)
+    bus3 = raw.bus[raw.bus[:, 0] == 3][0]
+    assert (bus3[10], bus3[11]) == (ZERO_Q_LIMIT, -ZERO_Q_LIMIT)
+    case = load_psse(path, DATA / "five_bus.dyr")
+    pf = solve_powerflow(case, q_limits=True)
+    k = case.bus_index(3)
+    assert pf.q_limited[k] and abs(pf.qgen[k]) <= ZERO_Q_LIMIT
+
+
 # ---------------------------------------------------------------- errors, unsupported
 
 
@@ -216,7 +294,7 @@ def test_unsupported_records_refused_together_by_default(tmp_path):
 def test_unsupported_records_skipped_with_a_warning(tmp_path):
     path = _with_unsupported(tmp_path)
     with pytest.warns(UserWarning, match="left out 2 unsupported record"):
-        case, left_out = import_psse(path, on_unsupported="skip")
+        case, left_out, _ = import_psse(path, on_unsupported="skip")
     assert left_out == (
         "edited.raw:34 three-winding transformer 2-3-4 '2'",
         "edited.raw:51 facts device record",

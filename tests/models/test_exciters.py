@@ -452,6 +452,26 @@ def test_esst4b_regulators_track_their_limits():
     assert dx[3, 0] == 0.0  # the inner loop still balanced: V_M = K_G Efd
 
 
+def test_esst4b_without_its_lag_feeds_the_regulator_output_to_the_inner_loop():
+    """ESST4B with T_A = 0 (PSS/E: no lag; ACTIVSg2000's records): the inner loop takes
+    the regulator PI's clipped output y = clip(K_PR (V_ref - V_TR) + PIi, Vrmin, Vrmax)
+    in place of the lag's V_M, starts at rest, and its V_M slot is no state."""
+    row = ST4B.copy()
+    row[4] = 0.0  # T_A
+    P, x = started(row)
+    assert exc.field_voltage_at(P, x, 0, VT0, 0.0, VB0, EFD0, True) == pytest.approx(
+        EFD0, rel=1e-14
+    )
+    assert np.abs(derivatives(P, x)).max() < 1e-12
+    assert not params(row).has_state()[2, 0]
+    x[1, 0] += 0.05  # the regulator's integral moves: so does Efd, at once
+    y = min(1.0 * (P[0, exc.E.VREF] - x[0, 0]) + x[1, 0], 8.0)
+    efd = exc.field_voltage_at(P, x, 0, VT0, 0.0, VB0, EFD0, True)
+    inner = np.clip(1.0 * (y - min(1.0 * efd, 20.0)) + x[3, 0], 0.0, 8.0)
+    assert efd == pytest.approx(VB0 * inner, rel=1e-13)
+    assert efd > EFD0
+
+
 def test_layout_names_every_packed_column_once():
     assert exc.E._fields == tuple(name for name, _ in exc.PACKED)
     assert list(exc.E) == list(range(len(exc.PACKED)))

@@ -72,8 +72,12 @@ IEESGO = [
 #: GAST: 1/R = 20, T1 (Ts) 0.4, T2 (Tc) 0.1, T3 3, VMAX 1.0, VMIN -0.05, D_turb 0, AT 0.8,
 #: KT 2 (tg_con columns 4-8, 11, 12, 25, 26): the load limit 0.8 + 2 (0.8 - 0.7) = 1.0
 GAST = [6, 1, 1, 20, 1.0, 0.4, 0.1, 3.0, 0, 0, -0.05, 0.0] + [0] * 12 + [0.8, 2.0]
+#: TG2 (ANDES): 1/R = 20, pmax 1.0 (Tmax), pmin 0 (Tmin), T1 0.2 (T3, lead), T2 10 (Tc,
+#: lag), speed set point 1
+TG2 = [7, 1, 1, 20, 1.0, 0, 10.0, 0.2, 0, 0, 0.0, 0.0]
 ROWS = {
     "tg": TG,
+    "TG2": TG2,
     "TGOV1": TGOV1,
     "IEEEG1": IEEEG1,
     "HYGOV": HYGOV,
@@ -201,6 +205,22 @@ def test_lag_time_constants_below_the_threshold_are_refused():
 def test_layout_names_every_packed_column_once():
     assert gov.G._fields == tuple(name for name, _ in gov.PACKED)
     assert params(HYGOV).packed(np.zeros(1)).shape == (1, len(gov.G))
+
+
+def test_tg2_is_the_droop_through_its_lead_lag_then_a_hard_limit():
+    """TG2 (ANDES 2.0 tg2.py): a speed step d moves pmech at once by -d/R T1/T2 (the
+    lead-lag's ratio), then toward -d/R along T2 (closed form of (1 + s T1)/(1 + s T2):
+    after T2, the jump plus (1 - T1/T2)(1 - e^-1) of the rest); the output is cut at pmax
+    while the lead-lag runs on (no windup)."""
+    P, x = started(TG2)
+    d = 1e-3
+    assert gov.pmech(P, x, 0, 1.0 - d) - PM0 == pytest.approx(20 * d * 0.2 / 10.0, rel=1e-9)
+    after = pmech_after(P, x, 10.0, 1.0 - d) - PM0
+    assert after == pytest.approx(20 * d * (0.02 + 0.98 * (1 - np.exp(-1))), rel=1e-6)
+    assert gov.pmech(P, x, 0, 0.9) == pytest.approx(0.74, rel=1e-12)  # 0.7 + 20 x 0.1 x 0.02
+    assert gov.pmech(P, x, 0, 0.0) == 1.0  # 0.7 + 20 x 1 x 0.02 = 1.1, cut at pmax
+    dx = derivatives(P, x, 0.0)
+    assert dx[0, 0] != 0.0  # the lead-lag runs on at the limit
 
 
 def test_gast_load_limit_takes_over_the_droop_order():
