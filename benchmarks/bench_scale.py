@@ -8,7 +8,11 @@ Systems (smallest to largest): stabctl's built-in Kundur and miniWECC
 machine saturation set to 0 and N44's STAB2A / IEEET2 removed, as tests/io/test_andes.py,
 so that ANDES reads the same data); the GB network (ANDES's ``GBnetwork/GBnetwork.xlsx``,
 2224 buses, 394 GENCLS machines whose dynamic data ANDES's README calls "randomly
-generated", through ``import_andes``, its two Toggle records left out).  Cases imported
+generated", through ``import_andes``, its two Toggle records left out); ACTIVSg2000 (the
+synthetic 2000-bus Texas grid, PSS/E RAW + DYR of tests/data/activsg through
+``import_psse(..., on_unsupported="skip", unmodelled="net")`` and ``leave_out_infeasible``,
+as README's PSS/E section: 334 machines, 247 exciters, 246 PSS, 18 governors; no ANDES
+column, ANDES lacks its GGOV1, EXPIC1, EXAC2 and ESAC6A and nets nothing).  Cases imported
 through ANDES, NPCC and N44 are run without PV Q limits (ANDES's default,
 ``q_limits=False``; the GB power flow does not converge with them in stabctl: worst mismatch
 1.4e-3 pu at bus 1282 after 50 iterations).  Fault bus: the largest machine's HV bus, but
@@ -27,7 +31,7 @@ limited to one thread in both tools' subprocesses, one core each):
   ``linearise`` (the state matrix, no ESD inputs) + electromechanical modes:
   dense (``modal_analysis``, full eigen-decomposition) up to SPARSE_ABOVE states, above it
   sparse shift-invert (``scipy.sparse.linalg.eigs`` with sigma = j 2 pi f at shifts across
-  0.1-2 Hz) — for the largest case both are timed; one 1 ms CCT of a bolted fault at the
+  0.1-2 Hz) — for the largest cases (BOTH_EIG) both are timed; one 1 ms CCT of a bolted fault at the
   same bus (``critical_clearing_time``, no half-step check), one search;
 * ANDES 2.0 at its defaults (trapezoid, 1/30 s, tol 1e-4): PFlow + TDS to 20 s with the
   same fault (its stop-at-instability criterion off), numba on if it compiles (else off,
@@ -65,6 +69,8 @@ from _timing import best_of
 T_FAULT, T_CLEAR, T_END, X_FAULT, TOL_CCT = 1.0, 1.1, 20.0, 1e-4, 1e-3
 REPEAT, ANDES_REPEAT = 3, 3
 SPARSE_ABOVE = 1500  # states: dense eig below, sparse shift-invert above
+#: the systems where both are timed (the largest ones: which pays is the question)
+BOTH_EIG = ("gb", "activsg2000")
 SHIFTS_HZ = (0.2, 0.6, 1.0, 1.4, 1.8)
 GB_BUSES = 2224
 WORKERS_EXTRAPOLATED = (8, 32, 128)
@@ -74,9 +80,12 @@ ANDES_DEFAULT = {"tstep": 1 / 30, "tol": 1e-4}
 #: poles and run away (a speed 0.5 pu off synchronous at 9.6 s, NumericalInstabilityError);
 #: at bus 1001 the 0.1 s fault separates machines (CCT below 0.1 s) without running away;
 #: IEEE 39's largest machine's bus (29): a CCT probe cleared at 352 ms raises a numerical
-#: instability (exc.VR.G9 alternating) at h, h/2 and h/4 alike, so bus 16 (the tests')
-FAULT_BUS = {"gb": 1001, "ieee39": 16}
-SYSTEMS = ("kundur", "ieee39", "npcc", "miniwecc", "wecc179", "n44", "gb")
+#: instability (exc.VR.G9 alternating) at h, h/2 and h/4 alike, so bus 16 (the tests');
+#: ACTIVSg2000's largest machine's HV bus: machine 205 slips poles and runs away (1.5 pu at
+#: 6.4 s; most of its governors, GGOV1, are left out), so the 345 kV bus 2021 of its tests
+FAULT_BUS = {"gb": 1001, "ieee39": 16, "activsg2000": 2021}
+SYSTEMS = ("kundur", "ieee39", "npcc", "miniwecc", "wecc179", "n44", "gb", "activsg2000")
+ACTIVSG = Path(__file__).parents[1] / "tests" / "data" / "activsg"
 
 
 def _cases_dir() -> Path:
@@ -101,6 +110,8 @@ def load_system(label: str, work: str):
     from stabctl.io.andes_case import import_andes
     from stabctl.io.psse import load_psse
 
+    if label == "activsg2000":
+        return _activsg2000(work), True, FAULT_BUS[label], None
     if label in ("kundur", "miniwecc"):
         andes_files = None
         if label == "kundur":  # ANDES's own Kundur (its data, not stabctl's built-in)
@@ -131,6 +142,25 @@ def load_system(label: str, work: str):
         warnings.simplefilter("ignore")
         case = load_psse(raw, dyr, conventions="andes", on_unsupported="skip")
     return case, label != "n44" and label != "npcc", None, (raw, dyr, ())
+
+
+def _activsg2000(work: str):
+    """ACTIVSg2000 imported as README's PSS/E section does (files uncompressed in work)."""
+    import gzip
+    import shutil
+
+    from stabctl.dynamics.infeasible import leave_out_infeasible
+    from stabctl.io.psse import import_psse
+
+    paths = []
+    for name in ("ACTIVSg2000.RAW", "ACTIVSg2000.dyr"):
+        with gzip.open(ACTIVSG / f"{name}.gz", "rb") as src, open(Path(work) / name, "wb") as dst:
+            shutil.copyfileobj(src, dst)
+        paths.append(Path(work) / name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the records left out and the generators netted
+        case = import_psse(*paths, on_unsupported="skip", unmodelled="net").case
+    return leave_out_infeasible(case)[0]
 
 
 def fault_bus(case) -> int:
@@ -206,13 +236,13 @@ def ours(label: str, repeat: int) -> dict:
     lin = time.perf_counter() - t
     out["states"] = int(sys_.nstates)
     n = sys_.nstates
-    if n <= SPARSE_ABOVE or label == "gb":
+    if n <= SPARSE_ABOVE or label in BOTH_EIG:
         t = time.perf_counter()
         ma = modal_analysis(sys_)
         out["dense_s"] = time.perf_counter() - t
         out["n_em"] = int(len(ma.electromechanical))
         em = ma.eigenvalues[ma.electromechanical]
-    if n > SPARSE_ABOVE or label == "gb":
+    if n > SPARSE_ABOVE or label in BOTH_EIG:
         t = time.perf_counter()
         lam = em_modes_sparse(np.asarray(sys_.A), out.get("n_em", n // 4))
         out["sparse_s"] = time.perf_counter() - t
