@@ -97,7 +97,7 @@ def import_psse(
     """:func:`load_psse` that also returns the records left out (empty unless
     ``on_unsupported="skip"``) and the generators netted (empty unless
     ``unmodelled="net"``). Same arguments and errors."""
-    from stabctl.io.dyr import read_dyr
+    from stabctl.io.dyr import machine_id, read_dyr
 
     if on_unsupported not in _MODES:
         raise CaseError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
@@ -109,7 +109,8 @@ def import_psse(
     mats = raw.matrices()
     unsupported = [str(s) for s in raw.unsupported]
     if records is not None:
-        records = [r for r in records if (r.bus, r.id) not in raw.out_of_service]
+        off = {(bus, machine_id(gid)) for bus, gid in raw.out_of_service}
+        records = [r for r in records if (r.bus, r.id) not in off]
         dyn, dyr_unsupported = _dynamic_tables(raw, records, conventions)
         mats.update(dyn)
         unsupported += dyr_unsupported

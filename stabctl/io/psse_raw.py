@@ -188,8 +188,8 @@ class RawData:
         unsupported: records that could not be represented, in file order.
         netted: the in-service generators netted as negative loads (``read_raw``'s
             ``net``), in file order.
-        out_of_service: (bus, ID upper case) of the generators out of service (STAT 0)
-            at in-service buses: PSS/E ignores their dynamic records.
+        out_of_service: (bus, ID) of the generators out of service (STAT 0) at in-service
+            buses: PSS/E ignores their dynamic records.
     """
 
     name: str
@@ -527,7 +527,7 @@ def _generator(b: _Builder, rec: _Rec):
     row = b.bus_row(rec, num, "generator")
     o = 1 if b.version >= 34 else 0  # v34 inserts NREG after IREG
     if row is not None and rec.int(0, 14 + o, 1) == 0:
-        b.out_of_service.append((num, gid.upper()))
+        b.out_of_service.append((num, gid))
     if row is None or rec.int(0, 14 + o, 1) == 0:
         return
     what = f"generator at bus {num} '{gid}'"

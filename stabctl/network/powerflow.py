@@ -189,6 +189,8 @@ class _State:
     pl: np.ndarray
     ql: np.ndarray
     kind: np.ndarray
+    #: +1 held at qmax, -1 at qmin, 0 not held (`_apply_q_limits`)
+    held: np.ndarray
 
 
 def _mismatch(ybus, st: _State):
@@ -211,26 +213,25 @@ def _apply_q_limits(st: _State, s, qmax, qmin) -> bool:
     st.qg[pv] = s.imag[pv] + st.ql[pv]
     over = pv & (st.qg > qmax)
     under = pv & (st.qg < qmin)
-    for mask, lim in ((over, qmax), (under, qmin)):
+    for mask, lim, side in ((over, qmax, 1), (under, qmin, -1)):
         st.qg[mask] = 0.0
         st.ql[mask] -= lim[mask]
         st.kind[mask] = PQ
+        st.held[mask] = side
     return bool(np.any(over | under))
 
 
-def _release_wrong_side(case: Case, st: _State, qmax, qmin) -> bool:
+def _release_wrong_side(case: Case, st: _State) -> bool:
     """Buses held at a Q limit whose voltage ended on the side the limit cannot explain
     (at qmax above, at qmin below the set point) become PV again at their set point
     (PSS/E's and PowerWorld's back-off; PST's ``chq_lim`` switches once, for good).
     True if any did."""
     b = case.buses
-    held = (b.kind == PV) & (st.kind == PQ)
-    limit = b.qload - st.ql  # the Q the bus's generation is held at
-    back = held & (
-        ((limit == qmax) & (st.vmag > b.vmag + _BACKOFF_DV))
-        | ((limit == qmin) & (st.vmag < b.vmag - _BACKOFF_DV))
+    back = ((st.held == 1) & (st.vmag > b.vmag + _BACKOFF_DV)) | (
+        (st.held == -1) & (st.vmag < b.vmag - _BACKOFF_DV)
     )
     st.kind[back] = PV
+    st.held[back] = 0
     st.ql[back] = b.qload[back]
     st.qg[back] = b.qgen[back]
     st.vmag[back] = b.vmag[back]
@@ -246,25 +247,20 @@ def _newton(case, ybus, st: _State, tol, max_iter, q_limits):
     converged solution whose held buses sit on the wrong side of their set points
     releases them and iterates on (`_release_wrong_side`, at most `_BACKOFF_ROUNDS`).
     """
-    qmax, qmin = _limits(case)[:2]
-    dp, dq, s = _mismatch(ybus, st)
+    limits = _limits(case)
     it = 0
     for _ in range(_BACKOFF_ROUNDS + 1):
-        it = _iterate(case, ybus, st, tol, max_iter, q_limits, it)
-        dp, dq, s = _mismatch(ybus, st)
-        if _norm(dp, dq) > tol or not q_limits:
+        it, dp, dq, s = _iterate(case, ybus, st, tol, max_iter, q_limits, it, limits)
+        if _norm(dp, dq) > tol or not q_limits or not _release_wrong_side(case, st):
             break
-        if not _release_wrong_side(case, st, qmax, qmin):
-            break
-        dp, dq, s = _mismatch(ybus, st)
     mism = _norm(dp, dq)
     return it, mism, s, mism <= tol, dp, dq
 
 
-def _iterate(case, ybus, st: _State, tol, max_iter, q_limits, it: int) -> int:
-    """Newton steps in place on ``st`` until converged or ``max_iter`` in all; returns the
-    iteration count so far."""
-    qmax, qmin, vmax, vmin = _limits(case)
+def _iterate(case, ybus, st: _State, tol, max_iter, q_limits, it: int, limits):
+    """Newton steps in place on ``st`` until converged or ``max_iter`` in all, ``limits``
+    as `_limits`; returns (iterations so far, dP, dQ, S)."""
+    qmax, qmin, vmax, vmin = limits
     dp, dq, s = _mismatch(ybus, st)
     while _norm(dp, dq) > tol and it < max_iter:
         it += 1
@@ -286,7 +282,7 @@ def _iterate(case, ybus, st: _State, tol, max_iter, q_limits, it: int) -> int:
         dp, dq, s = _mismatch(ybus, st)
         if q_limits and _apply_q_limits(st, s, qmax, qmin):
             dp, dq, s = _mismatch(ybus, st)
-    return it
+    return it, dp, dq, s
 
 
 def _fail(case, it, dp, dq, what):
@@ -378,6 +374,7 @@ def _initial_state(case: Case) -> tuple[_State, np.ndarray, np.ndarray]:
             pl=b.pload.copy(),
             ql=b.qload.copy(),
             kind=b.kind.astype(int),
+            held=np.zeros(case.n_bus, int),
         ),
         inj_p,
         inj_q,
