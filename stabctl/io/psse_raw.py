@@ -44,17 +44,28 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   with the transformer (``line`` columns 11-12; MATPOWER's ``psse_convert_xfmr`` puts it
   at that bus too); CM 2 (no-load loss and current) and impedance correction tables
   (TAB1) are unsupported;
+* three-winding transformers (STAT 1 all windings in service; 2, 3, 4 winding 2, 3, 1
+  out; 0 all out): PSS/E's star equivalent (POM "Three-Winding Transformer Data"; MATPOWER's
+  ``psse_convert_xfmr``, powsybl's PSS/E converter): a star-point bus numbered above every
+  bus of the file (in file order of the transformers, PQ, no base kV, at VMSTAR/ANSTAR) and
+  per winding w a branch bus w - ideal t_w:1 - Z_w - star point, with t_w from CW, WINDV_w,
+  NOMV_w as for two windings, phase -ANG_w, and the star impedances from the measured
+  pair impedances (each on its SBASE and winding base by CZ, as above):
+  ``Z1 = (Z12 + Z31 - Z23)/2``, ``Z2 = (Z12 + Z23 - Z31)/2``, ``Z3 = (Z23 + Z31 - Z12)/2``,
+  so that the impedance measured between two windings' buses with the third open is the
+  RAW's. The magnetizing admittance (CM 1) is at the winding-1 bus, as for two windings;
 * switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt.
 
 Skipped without a word: area, zone, owner, inter-area transfer, substation and system
 switching device data (v34 breakers: none is accepted either, see below), v34 system-wide
-data. Unsupported, reported as ``file:line record``: three-winding transformers, dc lines,
-FACTS, GNE, induction machines, multi-section lines, v34 system switching devices,
-generators with a step-up transformer in the record (RT, XT) or remote voltage
-regulation (IREG), and the transformer features above.
+data. Unsupported, reported as ``file:line record``: dc lines, FACTS, GNE, induction
+machines, multi-section lines, v34 system switching devices, generators with a step-up
+transformer in the record (RT, XT) or remote voltage regulation (IREG), and the
+transformer features above.
 
-Bus numbers stay as in the RAW file. Branch rows: lines in file order, then transformers;
-``--circuit K`` of stabctl's commands is the K-th record of a bus pair in that order.
+Bus numbers stay as in the RAW file. Branch rows: lines in file order, then transformers
+(a three-winding one as its windings' branches, winding 1 first); ``--circuit K`` of
+stabctl's commands is the K-th record of a bus pair in that order.
 """
 
 from __future__ import annotations
@@ -325,6 +336,8 @@ _FIELDS = {
 }
 #: transformer record lines (line 1, 2, 3, 4) of a two-winding transformer: (fewest, most)
 _XFMR_FIELDS = (((12, 23), (2, 3), (3, 18), (2, 2)), ((12, 24), (2, 3), (3, 28), (2, 2)))
+#: record lines (1 to 5) of a three-winding transformer: (fewest, most)
+_XFMR3_FIELDS = tuple((two[0], (11, 11), two[2], two[2], two[2]) for two in _XFMR_FIELDS)
 #: sections that writers of an older version leave out: 'Q' may end the data before them
 _OPTIONAL_TAIL = {"gne device", "induction machine", "substation"}
 
@@ -335,8 +348,8 @@ def _check_fields(rec: _Rec, version: int) -> None:
     group = 1 if version >= 34 else 0
     if rec.section in _FIELDS:
         limits: Sequence[tuple[int, int]] = [_FIELDS[rec.section][group]]
-    elif rec.section == "transformer" and len(rec.lines) == 4:
-        limits = _XFMR_FIELDS[group]
+    elif rec.section == "transformer":
+        limits = (_XFMR_FIELDS if len(rec.lines) == 4 else _XFMR3_FIELDS)[group]
     else:
         return
     for row, ((lo, hi), vals) in enumerate(zip(limits, rec.lines)):
@@ -433,6 +446,8 @@ class _Builder:
     netted: list = field(default_factory=list)  # (bus, RawSource) of netted generators
     out_of_service: list = field(default_factory=list)  # (bus, ID) of generators
     seen: dict = field(default_factory=dict)  # (section, ids) -> first line
+    stars: int = 0  # star-point buses of three-winding transformers so far
+    base_kv: dict = field(default_factory=dict)  # bus number -> BASKV (isolated ones too)
 
     def once(self, rec: _Rec, key: tuple, what: str):
         """CaseError when a record with the same identity came before (a duplicated
@@ -461,6 +476,7 @@ def _bus(b: _Builder, rec: _Rec):
     num, ide = rec.int(0, 0), rec.int(0, 3, 1)
     if num <= 0 or num in b.buses or num in b.isolated:
         rec.fail(f"bus number {num} must be a positive integer used once")
+    b.base_kv[num] = rec.num(0, 2, 0.0)
     if ide == _IDE_ISOLATED:
         b.isolated.add(num)
         return
@@ -611,24 +627,22 @@ def _branch(b: _Builder, rec: _Rec):
 
 def _transformer(b: _Builder, rec: _Rec):
     """Transformer (POM Transformer Data): line 1 I, J, K, CKT, CW, CZ, CM, MAG1, MAG2,
-    NMETR, 'NAME', STAT; line 2 R1-2, X1-2, SBASE1-2; line 3 WINDV1, NOMV1, ANG1, ...,
-    TAB1 (field 14; v34: field 24, after 12 ratings and NODE1); line 4 WINDV2, NOMV2."""
+    NMETR, 'NAME', STAT; line 2 R1-2, X1-2, SBASE1-2 (three windings: then R2-3, X2-3,
+    SBASE2-3, R3-1, X3-1, SBASE3-1, VMSTAR, ANSTAR); per winding a line WINDV, NOMV, ANG,
+    ..., TAB (field 14; v34: field 24, after 12 ratings and NODE) (two windings: line 4
+    WINDV2, NOMV2 only)."""
     i, j, k3, ckt = rec.int(0, 0), rec.int(0, 1), rec.int(0, 2, 0), rec.text(0, 3)
     what = f"transformer {i}-{j}" + (f"-{k3}" if k3 else "") + f" '{ckt}'"
     b.once(rec, (*sorted((i, j, k3)), ckt), what)
     if k3 != 0:
-        return b.skip(rec, f"three-winding {what}")
+        return _three_winding(b, rec, (i, j, k3), f"three-winding {what}")
     ends = _ends(b, rec, i, j, "transformer")
-    if ends is None or rec.int(0, 11, 1) == 0:
+    if ends is None or rec.int(0, 11, 1) == 0 or not _modelled(b, rec, (2,), what):
         return
-    if rec.int(2, 23 if b.version >= 34 else 13, 0) != 0:
-        return b.skip(rec, f"{what}: impedance correction table (TAB1)")
     g_mag, b_mag = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
-    if (g_mag or b_mag) and rec.int(0, 6, 1) != 1:
-        return b.skip(rec, f"{what}: magnetizing admittance as no-load loss and current (CM 2)")
-    t1, t2 = _windings(rec, ends, what)
-    r, x = _impedance(b, rec, ends[0], what)
-    r2, x2 = r * t2**2, x * t2**2
+    t1, t2 = (_ratio(rec, row, bus[12], what) for row, bus in ((2, ends[0]), (3, ends[1])))
+    z = _impedance(b, rec, (0, 2), ends[0][12], what)
+    r2, x2 = z.real * t2**2, z.imag * t2**2
     if r2 == 0 and x2 == 0:
         rec.fail(f"{what}: R1-2 + jX1-2 must not be 0")
     ang = rec.num(2, 2, 0.0)
@@ -636,39 +650,88 @@ def _transformer(b: _Builder, rec: _Rec):
     b.branches.append(row + ([g_mag, b_mag, 0.0, 0.0] if g_mag or b_mag else []))
 
 
-def _windings(rec: _Rec, ends, what: str) -> tuple[float, float]:
-    """Turns ratios (t1, t2) in pu of the bus base voltages from CW, WINDV, NOMV."""
+def _modelled(b: _Builder, rec: _Rec, rows: tuple, what: str) -> bool:
+    """False (the record reported unsupported) for an impedance correction table (TAB) on
+    a winding line of ``rows`` or a magnetizing admittance given as losses (CM 2)."""
+    tab = 23 if b.version >= 34 else 13
+    if any(rec.int(row, tab, 0) != 0 for row in rows):
+        b.skip(rec, f"{what}: impedance correction table (TAB)")
+        return False
+    if (rec.num(0, 7, 0.0) or rec.num(0, 8, 0.0)) and rec.int(0, 6, 1) != 1:
+        b.skip(rec, f"{what}: magnetizing admittance as no-load loss and current (CM 2)")
+        return False
+    return True
+
+
+#: STAT of a three-winding transformer -> its windings in service (POM)
+_WINDINGS_IN = {1: (0, 1, 2), 2: (0, 2), 3: (0, 1), 4: (1, 2)}
+
+
+def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
+    """A three-winding transformer as its star equivalent (module doc)."""
+    if len(rec.lines) != 5:
+        rec.fail(f"{what}: {len(rec.lines)} record lines, a three-winding one has 5")
+    rows = [b.bus_row(rec, n, f"{what} winding {w + 1}") for w, n in enumerate(buses)]
+    if len(set(buses)) != 3:
+        rec.fail(f"{what}: its three windings must be at three different buses")
+    stat = rec.int(0, 11, 1)
+    if stat not in (0, *_WINDINGS_IN):
+        rec.fail(f"{what}: STAT {stat} must be 0, 1, 2, 3 or 4")
+    windings = [w for w in _WINDINGS_IN.get(stat, ()) if rows[w] is not None]
+    if len(windings) < 2 or not _modelled(b, rec, (2, 3, 4), what):
+        return
+    kvs = [b.base_kv[n] for n in buses]
+    z12, z23, z31 = (_impedance(b, rec, (3 * p, 2 + p), kvs[p], what) for p in range(3))
+    if 0 in (z12, z23, z31):
+        rec.fail(f"{what}: the pair impedances must not be 0")
+    star_z = ((z12 + z31 - z23) / 2, (z12 + z23 - z31) / 2, (z23 + z31 - z12) / 2)
+    b.stars += 1
+    star = max(b.base_kv) + b.stars  # above every bus of the file
+    vm = rec.num(1, 9, 1.0)
+    if vm <= 0:
+        rec.fail(f"{what}: VMSTAR {vm:g} must be > 0")
+    b.buses[star] = [star, vm, rec.num(1, 10, 0.0), *[0] * 6, PQ, 0, 0, 0.0, 0, 0]
+    g_mag, b_mag = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
+    for w in windings:
+        z, ang = star_z[w], rec.num(2 + w, 2, 0.0)
+        row = [buses[w], star, z.real, z.imag, 0, _ratio(rec, 2 + w, kvs[w], what)]
+        row += [-ang if ang else 0.0, 0, 0, 0]
+        mag = w == 0 and (g_mag or b_mag)
+        b.branches.append(row + ([g_mag, b_mag, 0.0, 0.0] if mag else []))
+
+
+def _ratio(rec: _Rec, row: int, kv: float, what: str) -> float:
+    """Turns ratio in pu of the bus base voltage of the winding on line ``row`` (CW, WINDV,
+    NOMV)."""
     cw = rec.int(0, 4, 1)
     if cw not in (1, 2, 3):
         rec.fail(f"{what}: CW {cw} must be 1, 2 or 3")
-    out = []
-    for row, bus in ((2, ends[0]), (3, ends[1])):
-        kv = bus[12] or 1.0
-        windv, nomv = rec.num(row, 0, 1.0) or 1.0, rec.num(row, 1, 0.0) or kv
-        out.append({1: windv, 2: windv / kv, 3: windv * nomv / kv}[cw])
-    return out[0], out[1]
+    kv = kv or 1.0
+    windv, nomv = rec.num(row, 0, 1.0) or 1.0, rec.num(row, 1, 0.0) or kv
+    return {1: windv, 2: windv / kv, 3: windv * nomv / kv}[cw]
 
 
-def _impedance(b: _Builder, rec: _Rec, bus_i: list, what: str) -> tuple[float, float]:
-    """R1-2, X1-2 on the system base and bus I's base voltage from CZ."""
+def _impedance(b: _Builder, rec: _Rec, at: tuple, kv: float, what: str) -> complex:
+    """A measured winding-pair impedance R + jX (R, X, SBASE from field ``at[0]`` of line
+    2) on the system base and the base voltage ``kv`` of the pair's first winding's bus
+    (its NOMV on line ``at[1]``) by CZ."""
     cz = rec.int(0, 5, 1)
-    r, x = rec.num(1, 0), rec.num(1, 1)
+    r, x = rec.num(1, at[0]), rec.num(1, at[0] + 1)
     if cz == 1:
-        return r, x
+        return complex(r, x)
     if cz not in (2, 3):
         rec.fail(f"{what}: CZ {cz} must be 1, 2 or 3")
-    sbase = rec.num(1, 2, b.base)
+    sbase = rec.num(1, at[0] + 2, b.base)
     if sbase <= 0:
-        rec.fail(f"{what}: SBASE1-2 {sbase:g} must be > 0")
-    if cz == 3:  # R1-2 is the load loss in W, X1-2 the impedance magnitude
+        rec.fail(f"{what}: SBASE {sbase:g} MVA of a winding pair must be > 0")
+    if cz == 3:  # R is the load loss in W, X the impedance magnitude
         r = r / 1e6 / sbase
         if x < r:
             rec.fail(f"{what}: |Z| {x:g} pu below the loss resistance {r:g} pu (CZ 3)")
         x = math.sqrt(x * x - r * r)
-    kv = bus_i[12] or 1.0
-    nomv = rec.num(2, 1, 0.0) or kv
-    scale = (b.base / sbase) * (nomv / kv) ** 2
-    return r * scale, x * scale
+    kv = kv or 1.0
+    nomv = rec.num(at[1], 1, 0.0) or kv
+    return complex(r, x) * (b.base / sbase) * (nomv / kv) ** 2
 
 
 def _switched_shunt(b: _Builder, rec: _Rec):

@@ -41,8 +41,20 @@ from stabctl.io.psse import load_psse
 
 HERE = Path(__file__).parents[1]
 PSSE = HERE / "data" / "psse"
+_V33 = (PSSE / "five_bus_v33.raw").read_text()
+#: a three-winding transformer record (v33) for the RAW seeds
+_THREE_WINDING = (
+    "    1,     3,     4,'T ',1,2,1, 0.0, 0.0,2,'T3          ',1,   1,1.0000\n"
+    " 0.002, 0.10, 200.0, 0.004, 0.05, 50.0, 0.003, 0.08, 80.0, 0.99, -3.0\n"
+    + "1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0, 0.0\n" * 3
+    + "0 / END OF TRANSFORMER DATA"
+)
 SEEDS = {
-    "raw": [(PSSE / "five_bus_v33.raw").read_text(), (PSSE / "five_bus_v34.raw").read_text()],
+    "raw": [
+        _V33,
+        (PSSE / "five_bus_v34.raw").read_text(),
+        _V33.replace("0 / END OF TRANSFORMER DATA", _THREE_WINDING, 1),
+    ],
     "dyr": [(PSSE / "five_bus.dyr").read_text()],
     "case_json": [(Path(pstio.__file__).parents[1] / "case" / "data" / "kundur.json").read_text()],
     "pst_m": [(HERE / "data" / "pstess" / "d2asbegp.m").read_text()],

@@ -18,7 +18,7 @@ from stabctl.io import load_case
 from stabctl.io.psse import import_psse, load_psse
 from stabctl.io.psse_raw import ZERO_Q_LIMIT, read_raw, split_fields
 from stabctl.network.powerflow import solve_powerflow
-from stabctl.network.ybus import branch_admittances
+from stabctl.network.ybus import branch_admittances, branch_stamp
 
 DATA = Path(__file__).parents[1] / "data" / "psse"
 V33 = DATA / "five_bus_v33.raw"
@@ -234,6 +234,108 @@ def test_a_zero_q_limit_stays_a_limit(tmp_path):
     assert pf.q_limited[k] and abs(pf.qgen[k]) <= ZERO_Q_LIMIT
 
 
+# --------------------------------------------------------- three-winding transformers
+
+#: winding lines (v33): WINDV, NOMV, ANG, RATA, RATB, RATC, COD, CONT, RMA, RMI, VMA, VMI,
+#: NTP, TAB, CR, CX, CNXA
+_WINDING = "{windv}, {nomv}, {ang}, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0, 0.0\n"
+
+
+def _three_winding(
+    tmp_path, cw=1, cz=2, stat=1, windv=(1.0, 1.0, 1.0), ang=(0.0, 0.0, 0.0), name="t3.raw"
+):
+    """The v33 case with transformer 1-3-4 (230/20/115 kV) 'T' added: pair impedances
+    on SBASE 200, 50, 80 MVA, VMSTAR 0.99, ANSTAR -3 deg."""
+    record = (
+        f"    1,     3,     4,'T ',{cw},{cz},1, 0.0, 0.0,2,'T3          ',{stat},   1,1.0000\n"
+        " 0.002, 0.10, 200.0, 0.004, 0.05, 50.0, 0.003, 0.08, 80.0, 0.99, -3.0\n"
+        + "".join(_WINDING.format(windv=w, nomv=0.0, ang=a) for w, a in zip(windv, ang))
+    )
+    path = _edit(tmp_path, "0 / END OF TRANSFORMER DATA", record + "0 / END OF TRANSFORMER DATA")
+    return path.rename(tmp_path / name)
+
+
+_Z_PAIRS = {
+    (0, 1): (0.002 + 0.10j) / 2,
+    (1, 2): (0.004 + 0.05j) * 2,
+    (2, 0): (0.003 + 0.08j) * 1.25,
+}
+
+
+def test_three_winding_pair_impedances_are_the_measured_ones(tmp_path):
+    """POM: R1-2 + jX1-2 is the impedance measured between the buses of windings 1 and 2
+    (the third open), on SBASE1-2 (CZ 2). Kron-reducing the star point and driving 1 pu
+    current from one winding's bus to another's gives the RAW's pair impedance on the
+    system base (100/SBASE) for each of the three pairs."""
+    case = load_psse(_three_winding(tmp_path))
+    star = case.bus_index(6)  # above the file's buses 1-5
+    buses = [case.bus_index(n) for n in (1, 3, 4)]
+    rows = [k for k in range(len(case.branches)) if case.branches.to_bus[k] == 6]
+    y = branch_stamp(case, rows).toarray()
+    keep = buses
+    y_red = y[np.ix_(keep, keep)] - np.outer(y[keep, star], y[star, keep]) / y[star, star]
+    for (a, c), z_pair in _Z_PAIRS.items():
+        ground = 3 - a - c  # the open winding: ground winding c instead, leave the third open
+        idx = [a, ground]
+        v = np.linalg.solve(y_red[np.ix_(idx, idx)], [1.0, 0.0])
+        assert v[0] == pytest.approx(z_pair, rel=1e-12), (a, c)
+
+
+def test_three_winding_star_rows_taps_phases_and_status(tmp_path):
+    """CW 2 (kV): t_w = WINDV_w / bus kV; PST's phase is -ANG_w; the star point is bus 6
+    at VMSTAR/ANSTAR; STAT 2 leaves winding 2 out, STAT 0 the whole transformer."""
+    path = _three_winding(tmp_path, cw=2, windv=(235.0, 21.0, 110.0), ang=(0.0, 30.0, 0.0))
+    raw = read_raw(path)
+    star = raw.bus[raw.bus[:, 0] == 6][0]
+    np.testing.assert_allclose(star[[1, 2, 9]], [0.99, -3.0, PQ])
+    rows = raw.line[raw.line[:, 1] == 6]
+    np.testing.assert_allclose(rows[:, 0], [1, 3, 4])
+    np.testing.assert_allclose(rows[:, 5], [235 / 230, 21 / 20, 110 / 115], rtol=1e-14)
+    np.testing.assert_allclose(rows[:, 6], [0, -30, 0])
+    z1, z2, z3 = (
+        (_Z_PAIRS[0, 1] + _Z_PAIRS[2, 0] - _Z_PAIRS[1, 2]) / 2,
+        (_Z_PAIRS[0, 1] + _Z_PAIRS[1, 2] - _Z_PAIRS[2, 0]) / 2,
+        (_Z_PAIRS[1, 2] + _Z_PAIRS[2, 0] - _Z_PAIRS[0, 1]) / 2,
+    )
+    np.testing.assert_allclose(rows[:, 2] + 1j * rows[:, 3], [z1, z2, z3], rtol=1e-13)
+    rows = read_raw(_three_winding(tmp_path, stat=2, name="s2.raw")).line
+    np.testing.assert_allclose(rows[rows[:, 1] == 6][:, 0], [1, 4])
+    raw = read_raw(_three_winding(tmp_path, stat=0, name="s0.raw"))
+    assert 6 not in raw.bus[:, 0] and not np.any(raw.line[:, 1] == 6)
+
+
+def test_three_winding_solves_as_its_star_of_two_winding_transformers(tmp_path):
+    """The power flow of the case with transformer 1-3-4 equals that of the same case with
+    the star point written as bus 6 and three two-winding transformers (CZ 1) holding the
+    star impedances and the windings' taps and phases: the two RAW paths agree to 1e-10."""
+    windv, ang = (1.03, 0.98, 1.01), (5.0, 0.0, -10.0)
+    case3 = load_psse(_three_winding(tmp_path, cz=2, windv=windv, ang=ang))
+    zs = read_raw(tmp_path / "t3.raw").line
+    zs = zs[zs[:, 1] == 6][:, 2:4]
+    star_bus = "    6,'STAR        ',   1.0000,1,   1,   1,   1,0.99000,  -3.0000,1.1,0.9,1.1,0.9\n"
+    two = "".join(
+        f"    {n},     6,     0,'T{w}',1,1,1, 0.0, 0.0,2,'T{w}          ',1,   1,1.0000\n"
+        f" {float(zs[w, 0])!r}, {float(zs[w, 1])!r}, 100.0\n"
+        + _WINDING.format(windv=windv[w], nomv=0.0, ang=ang[w])
+        + "1.0, 0.0\n"
+        for w, n in enumerate((1, 3, 4))
+    )
+    path = _edit(tmp_path, "0 / END OF TRANSFORMER DATA", two + "0 / END OF TRANSFORMER DATA")
+    path.write_text(
+        path.read_text().replace("0 / END OF BUS DATA", star_bus + "0 / END OF BUS DATA")
+    )
+    case2 = load_psse(path)
+    pf3, pf2 = solve_powerflow(case3), solve_powerflow(case2)
+    for n in (1, 2, 3, 4, 6):
+        k3, k2 = case3.bus_index(n), case2.bus_index(n)
+        assert pf3.vmag[k3] == pytest.approx(pf2.vmag[k2], abs=1e-10)
+        assert pf3.vang[k3] == pytest.approx(pf2.vang[k2], abs=1e-10)
+    assert pf3.qgen[case3.bus_index(1)] == pytest.approx(pf2.qgen[case2.bus_index(1)], abs=1e-9)
+    # the transformer carries power: the case without it solves differently
+    base = solve_powerflow(load_psse(V33))
+    assert abs(base.vmag[case3.bus_index(4)] - pf3.vmag[case3.bus_index(4)]) > 1e-3
+
+
 # ---------------------------------------------------------------- errors, unsupported
 
 
@@ -264,16 +366,12 @@ def test_unknown_bus_names_file_line_and_record(tmp_path):
 
 
 def _with_unsupported(tmp_path):
-    """The v33 case with a three-winding transformer and a FACTS device added."""
-    three = (
-        "    2,     3,     4,'2 ',1,1,1, 0.0, 0.0,2,'T3          ',1,   1,1.0000\n"
-        " 0.0, 0.1, 100.0, 0.0, 0.1, 100.0, 0.0, 0.1, 100.0, 1.0, 0.0\n"
-        "1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0\n"
-        "1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0\n"
-        "1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0\n"
-        "0 / END OF TRANSFORMER DATA"
+    """The v33 case with a multi-section line and a FACTS device added."""
+    path = _edit(
+        tmp_path,
+        "0 / END OF MULTI-SECTION LINE DATA",
+        "    1,     2,'&1',1,     4\n0 / END OF MULTI-SECTION LINE DATA",
     )
-    path = _edit(tmp_path, "0 / END OF TRANSFORMER DATA", three)
     text = path.read_text().replace(
         "0 / END OF FACTS DEVICE DATA", "'SVC1', 4, 0, 1\n0 / END OF FACTS DEVICE DATA", 1
     )
@@ -287,8 +385,8 @@ def test_unsupported_records_refused_together_by_default(tmp_path):
         load_psse(path)
     msg = str(err.value)
     assert "2 unsupported record(s)" in msg
-    assert "edited.raw:34 three-winding transformer 2-3-4 '2'" in msg
-    assert "edited.raw:51 facts device record" in msg
+    assert "edited.raw:41 multi-section line record" in msg
+    assert "edited.raw:47 facts device record" in msg
 
 
 def test_unsupported_records_skipped_with_a_warning(tmp_path):
@@ -296,8 +394,8 @@ def test_unsupported_records_skipped_with_a_warning(tmp_path):
     with pytest.warns(UserWarning, match="left out 2 unsupported record"):
         case, left_out, _ = import_psse(path, on_unsupported="skip")
     assert left_out == (
-        "edited.raw:34 three-winding transformer 2-3-4 '2'",
-        "edited.raw:51 facts device record",
+        "edited.raw:41 multi-section line record",
+        "edited.raw:47 facts device record",
     )
     assert len(case.branches) == 4  # the case without them
 
