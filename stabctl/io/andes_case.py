@@ -12,6 +12,12 @@ Network (ANDES's values after set-up, pu on the system base):
 * ``PQ``: ``p0 + j q0`` into the bus load (constant impedance in dynamic runs: ANDES's
   default ``PQ.config.p2z = q2z = 1``, stabctl's default);
 * ``Shunt``: ``g + j b`` into the bus shunt;
+* ``ZIP`` (replaces its ``PQ`` in dynamic runs, ``andes/models/dynload/zip.py``: ``P =
+  p0 (kpp + kpi V/V0 + kpz V^2/V0^2)/100``, Q alike): PST's non-conforming load
+  (``load_con``) at its bus, the constant-power and constant-current fractions the
+  ZIPs' shares of the bus load (the bus's other PQs constant impedance); percentages of
+  P (or of Q) that do not add up to 100 (ANDES warns, and its load then starts off its
+  power flow) are scaled to 100, a change that ``on_unsupported="skip"`` keeps and names;
 * ``PV`` / ``Slack``: ``p0``, ``q0``, ``v0``, ``qmax``, ``qmin`` (added up per bus; the
   bus becomes PV or swing);
 * ``Line`` (lines and transformers): ``r``, ``x``, tap ``tap`` on the from side, phase
@@ -135,7 +141,7 @@ WIND_CHAIN = (
     ("WTTQA1", "rep", "torque", "wq_"),
 )
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
-_NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt")
+_NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt", "ZIP")
 _MACHINES = ("GENROU", "GENCLS")
 #: ANDES parameters outside PSS/E's data that must keep the value stabctl's models have
 _FIXED = {
@@ -250,8 +256,10 @@ def read_andes_case(
     ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
+    mats["load_con"], zip_changed = _zip_loads(ss, numbers, mats["bus"])
     ibr_con, ibr_refused, with_converter = _converters(ss, numbers)
     gens, records, refused, changed = _dynamic_records(ss, path.name, numbers, with_converter)
+    changed += _grouped(zip_changed)
     refused += ibr_refused
     if ibr_con:
         mats["ibr_con"] = np.array(ibr_con, float)
@@ -398,6 +406,41 @@ def _network(ss, file: str) -> tuple[dict, dict]:
         },
         numbers,
     )
+
+
+def _zip_loads(ss, numbers: dict, bus: np.ndarray) -> tuple[np.ndarray, list]:
+    """PST ``load_con`` rows (bus, P and Q constant-power fractions, P and Q constant-
+    current fractions) of the buses with a ZIP in service (module doc), and the ZIPs kept
+    with a change, ``(model, idx, why)``: percentages that do not add up to 100 scaled to
+    100 (ANDES only warns, and its load then starts off its power flow)."""
+    zip_ = ss.models.get("ZIP")
+    parts: dict = {}  # bus number -> [Pp, Qp, Pi, Qi] of its ZIPs, pu
+    changed = []
+    for k in _in_service(zip_) if zip_ is not None else ():
+        pct = {n: float(getattr(zip_, n).v[k]) for n in ("kpp", "kpi", "kpz", "kqp", "kqi", "kqz")}
+        for what in "pq":
+            names = [f"k{what}{c}" for c in "piz"]
+            total = sum(pct[n] for n in names)
+            if total <= 0:
+                raise CaseError(f"ZIP {zip_.idx.v[k]}: {' + '.join(names)} = {total:g} %")
+            if abs(total - 100.0) > 1e-9:
+                was = ", ".join(f"{n} {pct[n]:g}" for n in names)
+                pct.update({n: pct[n] * 100.0 / total for n in names})
+                now = ", ".join(f"{pct[n]:.4g}" for n in names)
+                why = f"{was} (sum {total:g} %) scaled to 100 %: {now}"
+                changed.append(("ZIP", str(zip_.idx.v[k]), why))
+        pq = list(ss.PQ.idx.v).index(zip_.pq.v[k])
+        p0, q0 = ss.PQ.p0.v[pq], ss.PQ.q0.v[pq]
+        acc = parts.setdefault(numbers[ss.PQ.bus.v[pq]], [0.0] * 4)
+        for i, v in enumerate((p0 * pct["kpp"], q0 * pct["kqp"], p0 * pct["kpi"], q0 * pct["kqi"])):
+            acc[i] += v / 100.0
+    rows = []
+    for number, (pp, qp, pi, qi) in parts.items():
+        r = np.nonzero(bus[:, 0] == number)[0][0]
+        p, q = bus[r, 5], bus[r, 6]
+        rows.append([number, pp / p if p else 0.0, qp / q if q else 0.0])
+        rows[-1] += [pi / p if p else 0.0, qi / q if q else 0.0]
+    return np.array(rows, float).reshape(-1, 5), changed
 
 
 def _in_service(model) -> list[int]:
@@ -860,7 +903,8 @@ def _psse_params(ss, m, spec: dict, fields, k: int) -> tuple[float, ...]:
     in its own order, TB before TC): a parameter copied from a PSS/E
     input gives it back; H is M/2 (``M: "H; lambda x: 2 * x"``); remote buses None -> 0;
     EXDC2's and IEEEX1's Switch, which ANDES lacks, is 0; IEEEG1's second machine (JBUS)
-    is its bus number (0 without one)."""
+    is its bus number (0 without one); a stabiliser's input code left empty (NaN: ANDES's
+    input switch matches no option and the signal is 0) is 0, PSS/E's "no input"."""
     inputs = spec["inputs"][2:]
     if len(inputs) != len(fields):
         raise InputError(
@@ -881,6 +925,8 @@ def _psse_params(ss, m, spec: dict, fields, k: int) -> tuple[float, ...]:
         elif param is not None and param in m.params:
             v = m.params[param]
             values.append(_number(v.vin[k] if hasattr(v, "vin") else v.v[k]))
+            if name in _INPUT_CODES and np.isnan(values[-1]):
+                values[-1] = 0.0
         elif name == "BUS2":
             syn2 = m.syn2.v[k] if "syn2" in m.params else None
             values.append(0.0 if syn2 is None else float(ss.SynGen.get("bus", syn2)))
@@ -889,6 +935,10 @@ def _psse_params(ss, m, spec: dict, fields, k: int) -> tuple[float, ...]:
     if sorted(inputs) == sorted(fields):  # same names: the Model Library's order
         return tuple(values[inputs.index(name)] for name in fields)
     return tuple(values)
+
+
+#: the stabilisers' input-code fields (PSS/E Model Library: IEEEST ICS, ST2CUT MODE, MODE2)
+_INPUT_CODES = frozenset({"ICS", "MODE", "MODE2"})
 
 
 def _number(v) -> float:

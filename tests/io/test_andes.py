@@ -484,6 +484,61 @@ def test_ieee14_ieeet1_starts_flat_and_fault_speeds_match_andes():
     assert res.stable and not andes_separated(ss)
 
 
+def test_ieee14_zip_load_follows_andes_and_its_percentages_are_scaled_to_100(tmp_path):
+    """ieee14_zip.json: a ZIP replaces bus 2's PQ in dynamic runs (P 50 % constant power,
+    40 % constant current, 0 % impedance: 90 % in all, which ANDES only warns about and
+    then starts off its power flow). Imported, the percentages are scaled to 100 % and the
+    change named; with kpi = 50 in both tools the bus-9 fault's speeds agree within 2e-5
+    pu, where the same case with a constant-impedance load is 2.1e-4 pu from ANDES's."""
+    path = andes.get_case("ieee14/ieee14_zip.json")
+    with pytest.raises(InputError, match=r"to keep with a change: ZIP \(1: ZIP_1\)"):
+        import_andes(path)
+    with pytest.warns(UserWarning, match="scaled to 100"):
+        got = read_andes_case(path, on_unsupported="skip")
+    assert got.changed == (
+        "ZIP (1: ZIP_1): kpp 50, kpi 40, kpz 0 (sum 90 %) scaled to 100 %: 55.56, 44.44, 0",
+    )
+    loads = got.case.loads
+    np.testing.assert_allclose(
+        [loads.bus[0], loads.p_power[0], loads.p_current[0], loads.q_power[0]],
+        [2, 50 / 90, 40 / 90, 1.0],
+        rtol=1e-14,
+    )
+    data = json.loads(Path(path).read_text())
+    data["ZIP"][0]["kpi"] = 50.0
+    edited = tmp_path / "ieee14_zip_100.json"
+    edited.write_text(json.dumps(data))
+    sim, _res, ss, t, w, wa = andes_case_run(str(edited), 9)
+    assert sim.model.initial_residual[0] < 1e-8
+    assert np.max(np.abs(sim.run([], 10.0, h=STEP).speed - 1)) < 1e-10  # measured 0
+    data["ZIP"][0]["u"] = 0  # bus 2's PQ constant impedance (ANDES's default)
+    edited.write_text(json.dumps(data))
+    with pytest.warns(UserWarning):
+        case_z = import_andes(edited, on_unsupported="skip")
+    res_z = Simulator(case_z, q_limits=False).run([Fault(9, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
+    gap, gap_z = np.max(np.abs(w - wa)), np.max(np.abs(speeds_on(t, res_z, case_z, ss) - wa))
+    print(f"\nieee14 ZIP vs ANDES: speeds {gap:.2e} pu (impedance load: {gap_z:.2e})")
+    assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing (4.8e-3)
+    assert gap < 2e-5 < 1e-4 < gap_z  # measured 4.4e-6, 2.1e-4
+
+
+def test_kundur_st2cut_without_a_second_input_follows_andes():
+    """kundur_st2cut.xlsx: ST2CUT on machine 1 with speed input (MODE 1) and MODE2 left
+    empty, which ANDES's input switch reads as no signal (PSS/E's code 0). A 6-cycle fault
+    at bus 8, 10 s: speeds within 1e-4 pu of ANDES's (measured 5.3e-5, kundur_full's gap
+    without a stabiliser 5.4e-5), where leaving the stabiliser out of stabctl's run
+    moves them 2.6e-4 pu from ANDES's."""
+    sim, _res, ss, t, w, wa = andes_case_run("kundur/kundur_st2cut.xlsx", 8, t_end=10.0)
+    pss = sim.case.pss
+    assert list(pss.input1) == [1.0] and list(pss.input2) == [0.0] and ss.ST2CUT.n == 1
+    assert np.max(np.abs(sim.run([], 10.0, h=STEP).speed - 1)) < 1e-10  # measured 0
+    bare = sim.case.replace(pss=pss.select(np.zeros(1, bool)))
+    res0 = Simulator(bare, q_limits=False).run([Fault(8, 1.0, 1.1, x=1e-3)], 10.0, h=STEP)
+    gap, gap0 = np.max(np.abs(w - wa)), np.max(np.abs(speeds_on(t, res0, bare, ss) - wa))
+    print(f"\nkundur ST2CUT vs ANDES: speeds {gap:.2e} pu (without it: {gap0:.2e})")
+    assert gap < 1e-4 < 2e-4 < gap0  # measured 5.3e-5, 2.6e-4
+
+
 def device_output_run(name, model, off=("Toggle",), t_end=5.0, off_exc=()):
     """:func:`andes_case_run` of an IEEE 14 case with one device of ANDES model ``model``
     (an exciter or a governor; a 6-cycle fault at bus 9), after the checks every such
