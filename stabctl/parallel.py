@@ -17,7 +17,9 @@ completes, so an interrupted sweep (Ctrl-C, a killed job) keeps every finished j
 A job that raises is recorded as failed with the exception's type and message (and the
 traceback for anything but a stabctl error), never dropped; so is a job whose worker died.
 Rerunning with the same file skips the keys already there (failed ones too, unless
-`retry_failed`); the last line of a key wins.  One sweep per file at a time.
+`retry_failed`); the last line of a key wins.  One sweep per file at a time: a sweep
+holds the file's lock (`stabctl.locking.exclusive`) from its repair to its last line, and
+a second one is refused with the holder's pid.
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from stabctl.errors import InputError, StabctlError
+from stabctl.locking import exclusive
 from stabctl.progress import bar as progress_bar
 
 
@@ -395,13 +398,20 @@ def run_sweep(
 
     Raises:
         InputError: duplicate keys; `out` holds a key with other inputs; workers < 1;
-            Dask not installed or its scheduler unreachable.
+            Dask not installed or its scheduler unreachable; another process is writing
+            `out` (its lock, `stabctl.locking.exclusive`, names the holder's pid).
         KeyboardInterrupt: after cancelling pending jobs; finished ones are in `out`.
     """
     jobs = list(jobs)
     if workers is not None and workers < 1:
         raise InputError(f"workers must be >= 1, got {workers}")
     out = Path(out)
+    with exclusive(out):
+        return _sweep_locked(jobs, out, workers, scheduler, progress, retry_failed, pool)
+
+
+def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, pool) -> SweepReport:
+    """`run_sweep`'s work once it holds `out`'s lock: repair, read, run, append."""
     set_aside_damaged(out)
     done = read_records(out)
     _check_jobs(jobs, done, out)

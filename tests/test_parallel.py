@@ -5,6 +5,7 @@ pool), Dask, and the `stabctl sweep-cct` command.  Kundur only, to keep it short
 import json
 import os
 import signal
+import subprocess
 import sys
 import time
 
@@ -205,6 +206,52 @@ def test_damaged_line_in_the_middle_is_moved_aside_too(tmp_path):
         "square/2",
         "square/3",
     ]
+
+
+_HOLD = (
+    "import sys, time\n"
+    "from stabctl.locking import exclusive\n"
+    "with exclusive(sys.argv[1]):\n"
+    "    print('held', flush=True)\n"
+    "    time.sleep(120)\n"
+)
+
+
+def _holder(path):
+    """Another process holding the output lock of path (until killed)."""
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _HOLD, str(path)], stdout=subprocess.PIPE, text=True
+    )
+    assert proc.stdout.readline() == "held\n"
+    return proc
+
+
+def test_a_second_writer_of_a_sweep_file_is_refused_with_the_holders_pid(tmp_path):
+    """Two sweeps on one file: the second is refused at once, naming the first's pid, and
+    neither repairs nor appends; a killed holder holds nothing (the lock goes with its
+    process), so the next sweep runs and finds the first one's records."""
+    out = tmp_path / "one.jsonl"
+    run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
+    with out.open("a") as f:
+        f.write('{"key": "square/2", "inp')  # a cut line the second writer must not move
+    before = out.read_bytes()
+    holder = _holder(out)
+    try:
+        with pytest.raises(
+            InputError, match=rf"one\.jsonl: another stabctl process \(pid {holder.pid}\)"
+        ):
+            run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+        assert out.read_bytes() == before and not (tmp_path / "one.jsonl.damaged").exists()
+        res = CliRunner().invoke(
+            main, ["sweep-cct", "kundur", "--faults", "DEFAULT", "--out", str(out)]
+        )
+        assert res.exit_code == 2 and f"(pid {holder.pid})" in res.stderr
+    finally:
+        holder.kill()
+        holder.wait()
+    with pytest.warns(UserWarning, match="not a whole sweep record"):
+        rep = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+    assert (rep.ran, rep.skipped) == (1, 1)
 
 
 # ---------------------------------------------------------------------------- errors

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.errors import InputError
+from stabctl.locking import exclusive
 from stabctl.parallel import read_records, write_reproducible
 from stabctl.plotting import figures as plotting
 from stabctl.smib.coi import PAPER_TWO_MACHINE, PAPER_TWO_MACHINE_T_RELEASE
@@ -350,8 +351,12 @@ def write_paper_report(
     progress: callable(str) told every progress line (None: this module's logger, level
     INFO, `stabctl.progress`).
 
+    One run per out_dir at a time: the run holds WORK_DIR's lock
+    (`stabctl.locking.exclusive`) throughout.
+
     Raises:
-        InputError: an unknown part in `only`.
+        InputError: an unknown part in `only`; another run is writing out_dir (names its
+            pid).
     """
     keys = list(PARTS) if not only else list(only)
     bad = [k for k in keys if k not in PARTS]
@@ -359,6 +364,12 @@ def write_paper_report(
         raise InputError(f"unknown report part(s) {bad}; choose from {list(PARTS)}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    with exclusive(out / WORK_DIR):
+        return _write_locked(out, keys, progress, resume)
+
+
+def _write_locked(out: Path, keys: list, progress, resume: bool) -> Path:
+    """`write_paper_report`'s work once it holds the lock of out/WORK_DIR."""
     work = out / WORK_DIR
     work.mkdir(exist_ok=True)
     for key in keys:
@@ -431,6 +442,8 @@ def write_paper_report(
                 "simulations": _simulations(out / f.name),
             }
             f.unlink()
+    for f in work.glob(".*.lock"):  # the sweeps' locks, inside this run's own
+        f.unlink()
     try:
         work.rmdir()
     except OSError:  # something else left there: keep it

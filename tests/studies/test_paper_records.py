@@ -3,6 +3,7 @@ work directory, the old records are replaced only when the whole run succeeded, 
 timings go to a separate run log."""
 
 import json
+import os
 from pathlib import Path
 
 import pytest
@@ -73,6 +74,20 @@ def test_old_records_kept_until_the_run_completes(tmp_path, fake_parts):
     assert log["resume"] is True and log["records"]["fake_squares.jsonl"]["jobs"] == 6
     assert log["sections"][0]["section"] == "Fake part: squares."
     assert [m for _, m in log["progress"]] == calls
+
+
+def test_a_second_paper_run_on_one_directory_is_refused(tmp_path, fake_parts):
+    """One run per output directory: while a run holds out/.paper-work's lock another is
+    refused with its pid, before it touches the work directory."""
+    from stabctl.errors import InputError
+    from stabctl.locking import exclusive
+
+    with exclusive(tmp_path / paper.WORK_DIR):
+        with pytest.raises(InputError, match=rf"another stabctl process \(pid {os.getpid()}\)"):
+            paper.write_paper_report(tmp_path, progress=lambda m: None, only=["fake"])
+        assert not (tmp_path / paper.WORK_DIR).exists()
+    paper.write_paper_report(tmp_path, progress=lambda m: None, only=["fake"])
+    assert not (tmp_path / paper.WORK_DIR).exists()  # its sweeps' locks removed with it
 
 
 def test_two_runs_give_identical_reports_and_records(tmp_path, fake_parts):

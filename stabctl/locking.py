@@ -1,0 +1,61 @@
+"""An exclusive lock on an output that a long command appends to or replaces.
+
+A sweep's JSON-lines records, a screening's, ``stabctl paper``'s work directory: two
+processes writing one of them at once lose records (one repairs a damaged line by renaming a
+new file over the path while the other keeps appending to the old one) and both do all the
+work.  :func:`exclusive` holds a POSIX advisory lock (``flock``) on a lock file beside the
+output for as long as the output is written; a second writer is refused at once, with the
+holder's process id, instead of waiting.  The lock goes with the process (a killed writer
+holds nothing); the lock file itself stays, empty of meaning once unlocked (removing it
+while others may have it open would let two writers lock two different files).
+"""
+
+from __future__ import annotations
+
+import fcntl
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from stabctl.errors import InputError
+
+__all__ = ["exclusive", "lock_path"]
+
+
+def lock_path(path: str | os.PathLike) -> Path:
+    """The lock file of output ``path``: ``.<name>.lock`` beside it (``<name>.lock`` for a
+    name that is already hidden)."""
+    path = Path(path)
+    return path.with_name(("" if path.name.startswith(".") else ".") + path.name + ".lock")
+
+
+@contextmanager
+def exclusive(path: str | os.PathLike) -> Iterator[Path]:
+    """Hold the exclusive lock of output ``path`` (a file or a directory) while the block
+    runs; yields the lock file's path.
+
+    Raises
+    ------
+    InputError
+        Another process holds the lock: names the output and the holder's pid.
+    OSError
+        The lock file cannot be created (the directory is not writable).
+    """
+    lock = lock_path(path)
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+            raise InputError(
+                f"{path}: another stabctl process (pid {holder}) is writing it; wait for "
+                "it to end or choose another output"
+            ) from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield lock
+    finally:
+        os.close(fd)  # releases the lock
