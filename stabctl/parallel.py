@@ -214,13 +214,11 @@ def set_aside_damaged(path: str | Path) -> list[int]:
     return numbers
 
 
-def atomic_write(
-    path: str | Path, write: Callable, *, mode: str | None = "w", permissions: int | None = None
-) -> Path:
+def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -> Path:
     """Write a file atomically: into a temporary file beside it (hidden, same suffix, so
     that writers choosing the format by extension still do), renamed over `path` only when
-    complete; the temporary file is removed if writing fails.  The one atomic write of
-    stabctl.
+    complete; the temporary file is removed if writing fails.  The file gets the mode
+    ``open`` gives a new one (0o666 less the umask).  The one atomic write of stabctl.
 
     Parameters
     ----------
@@ -231,8 +229,6 @@ def atomic_write(
         ``write(tmp_path)`` with the temporary file's path (a str; the file exists, empty).
     mode : {"w", "wb", None}
         How the temporary file is opened for `write`.
-    permissions : int, optional
-        File mode bits to set before the rename (default: the temporary file's 0o600).
 
     Returns
     -------
@@ -254,8 +250,7 @@ def atomic_write(
         else:
             with os.fdopen(fd, mode) as f:
                 write(f)
-        if permissions is not None:
-            os.chmod(tmp, permissions)
+        os.chmod(tmp, 0o666 & ~_umask())  # as open() makes a new file (mkstemp: 0o600)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -263,13 +258,22 @@ def atomic_write(
     return path
 
 
+def _umask() -> int:
+    """The process's umask (set back at once: reading it means setting it)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def die_with_parent(parent: int) -> None:
     """Initializer of every worker process: on Linux the kernel kills the worker when its
     parent dies (prctl PR_SET_PDEATHSIG, SIGKILL), so a sweep killed with SIGKILL leaves
     no worker running (nor the resource tracker, which exits once no process holds its
-    pipe); a worker whose parent is already gone exits at once.  Workers ignore SIGINT:
-    Ctrl-C reaches the whole process group, and the parent stops the pool itself."""
+    pipe); a worker whose parent is already gone exits at once.  Workers ignore SIGINT and
+    SIGTERM: Ctrl-C, or a batch system's SIGTERM, reaches the whole process group, and the
+    parent stops the pool itself (`stop_pool`) rather than record its jobs as lost."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     if sys.platform.startswith("linux"):
         try:
             libc = ctypes.CDLL(None, use_errno=True)
@@ -295,10 +299,10 @@ def process_pool(workers: int) -> ProcessPoolExecutor:
 
 def stop_pool(pool: ProcessPoolExecutor) -> None:
     """Stop a pool at once (interrupted): pending jobs cancelled, running ones killed
-    (their workers terminated) instead of waited for."""
+    (their workers sent SIGKILL: they ignore SIGTERM) instead of waited for."""
     for proc in list((getattr(pool, "_processes", None) or {}).values()):
         try:
-            proc.terminate()
+            proc.kill()
         except (OSError, ValueError, AttributeError):  # already gone
             pass
     pool.shutdown(wait=False, cancel_futures=True)
@@ -488,7 +492,6 @@ def write_reproducible(src: str | Path, dst: str | Path) -> dict:
             json.dumps(strip_run_dependent(records[key]), default=_jsonable) + "\n"
             for key in sorted(records, key=natural_key)
         ),
-        permissions=0o644,
     )
     walls: dict[str, float] = {
         k: r["wall_time_s"]

@@ -14,7 +14,7 @@ from click.testing import CliRunner
 
 from stabctl.cli import main
 from stabctl.errors import InputError
-from stabctl.parallel import Job, pooled, read_records, run_sweep
+from stabctl.parallel import Job, atomic_write, pooled, read_records, run_sweep
 from stabctl.stability.cct import LineFault, cached_simulator, cct_job, cct_jobs
 from stabctl.studies.cases import DEFAULT_FAULTS
 
@@ -252,6 +252,23 @@ def test_a_second_writer_of_a_sweep_file_is_refused_with_the_holders_pid(tmp_pat
     with pytest.warns(UserWarning, match="not a whole sweep record"):
         rep = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
     assert (rep.ran, rep.skipped) == (1, 1)
+
+
+def test_written_files_get_the_mode_of_the_users_umask(tmp_path):
+    """Files written whole (imported cases, CSVs, reports) and a sweep file rewritten after
+    a repair get 0o666 less the umask, as any new file, not the temporary file's 0o600."""
+    old = os.umask(0o027)
+    try:
+        atomic_write(tmp_path / "case.json", lambda f: f.write("{}"))
+        out = tmp_path / "r.jsonl"
+        run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
+        with out.open("a") as f:
+            f.write('{"key": "square/2", "inp')
+        with pytest.warns(UserWarning, match="not a whole sweep record"):
+            run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+    finally:
+        os.umask(old)
+    assert [(p.stat().st_mode & 0o777) for p in (tmp_path / "case.json", out)] == [0o640] * 2
 
 
 # ---------------------------------------------------------------------------- errors

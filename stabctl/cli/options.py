@@ -22,8 +22,11 @@ from __future__ import annotations
 import functools
 import math
 import shlex
+import signal
 import sys
+import threading
 import warnings
+from contextlib import contextmanager
 
 import click
 
@@ -46,6 +49,30 @@ class AliasedOption(click.Option):
             self.opts = shown
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, a batch system's time limit) raised as an interrupt, so that a
+    command ends as on Ctrl-C (its pools shut down, finished records kept) with exit
+    status 143 (128 + SIGTERM)."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated
+
+
+@contextmanager
+def _sigterm_as_interrupt():
+    """SIGTERM raises :class:`Terminated` while the block runs (main thread only, where
+    Python delivers signals), the previous handler restored after."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def reports_errors(func):
     """Decorate a command so that stabctl errors become one line and exit status 2.
 
@@ -60,12 +87,12 @@ def reports_errors(func):
         The wrapped callback: numeric options are checked first (:func:`check_number`:
         finite, in range); Python warnings raised meanwhile are held back and printed as
         ``warning:`` lines on stderr on success (on error only the ``error:`` line); Ctrl-C
-        prints what was kept (exit status 130).
+        prints what was kept (exit status 130), and so does SIGTERM (exit status 143).
     """
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
-        with warnings.catch_warnings(record=True) as caught:
+        with warnings.catch_warnings(record=True) as caught, _sigterm_as_interrupt():
             warnings.simplefilter("default")
             try:
                 _check_numbers(kwargs)
@@ -73,9 +100,9 @@ def reports_errors(func):
             except StabctlError as exc:
                 click.echo(f"error: {one_line(exc)}", err=True)
                 sys.exit(2)
-            except KeyboardInterrupt:
+            except KeyboardInterrupt as exc:
                 click.echo(_interrupted(kwargs), err=True)
-                sys.exit(130)
+                sys.exit(143 if isinstance(exc, Terminated) else 130)
         for w in caught:
             click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
         return out
@@ -215,8 +242,8 @@ _KEPT = {
 
 
 def _interrupted(kwargs) -> str:
-    """The one line printed on Ctrl-C (SIGINT) by every command: what was kept and the
-    command that resumes (paper: with --resume)."""
+    """The one line printed on Ctrl-C (SIGINT) or SIGTERM by every command: what was kept
+    and the command that resumes (paper: with --resume)."""
     ctx = click.get_current_context(silent=True)
     name = ctx.info_name if ctx is not None else ""
     argv = ["stabctl", *sys.argv[1:]]

@@ -131,6 +131,33 @@ def test_sigint_of_a_screening_exits_130_with_the_resume_command(tmp_path):
     )
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
+def test_sigterm_of_a_sweep_ends_as_ctrl_c_with_exit_143(tmp_path):
+    """SIGTERM (kill, a batch system's time limit) to a sweep running on two workers: the
+    same resume line as Ctrl-C, exit status 143, no traceback, no leaked semaphore, no
+    worker left, and only whole records in the file; the rerun skips them."""
+    args = ["screen", "kundur", "--tol-ms", "0.05", "--workers", "2", "--out", "t.jsonl"]
+    proc = _start(args, tmp_path)
+    out = tmp_path / "t.jsonl"
+    try:
+        assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
+        kids = _children(proc.pid)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 143, err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("interrupted: finished searches are in t.jsonl (")
+    assert last.endswith("resume with: stabctl " + " ".join(args)), last
+    assert "Traceback" not in err and "leaked" not in err
+    assert _wait_for(lambda: not any(_alive(k) for k in kids), 10)
+    import json
+
+    assert all(json.loads(line)["status"] == "ok" for line in out.read_text().splitlines())
+
+
 @pytest.mark.parametrize(
     "command,target,kept",
     [
