@@ -30,8 +30,8 @@ def check_writable(path, option: str, directory: bool = False) -> None:
     ------
     InputError
         Unless a file can be created where ``path`` is (tried with a temporary file,
-        removed at once); ``path`` is a directory (a file is wanted) or a file (a
-        directory is wanted); or it exists and is not writable.
+        removed at once); ``path`` is a directory or another non-regular file (a file is
+        wanted) or a file (a directory is wanted); or it exists and is not writable.
     """
     p = Path(path)
     if directory:
@@ -41,6 +41,11 @@ def check_writable(path, option: str, directory: bool = False) -> None:
     else:
         if p.is_dir():
             raise InputError(f"{option} {path} is a directory")
+        if p.exists() and not p.is_file():
+            raise InputError(
+                f"{option} {path}: not a regular file (a device, a pipe or a link to one); "
+                "give a file"
+            )
         where = p.parent
     where = where if str(where) else Path(".")
     if not where.is_dir():

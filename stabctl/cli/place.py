@@ -259,13 +259,14 @@ def place(
             raise InputError(f"{opt} must be > 0, got {v:g}")
     req = Requirement(required_clearing_cycles, target_cct_gain, target_cct_s)
     levels = _load_levels(load_levels)
-    cost = CostModel(
-        cost_mw, cost_mwh, cost_site, read_site_costs(site_costs) if site_costs else {}
-    )
-    brackets = screening_brackets(screening) if screening else None
     if out_path:
         check_writable(out_path, "--out")
     case = load_case(case_name)
+    n_mac = len(case.machines.bus)
+    cost = CostModel(
+        cost_mw, cost_mwh, cost_site, read_site_costs(site_costs, n_mac) if site_costs else {}
+    )
+    brackets = screening_brackets(screening) if screening else None
     faults = read_fault_list(case_name, faults_src)
     overrides = read_requirements(faults_src) if faults_src != "DEFAULT" else {}
     sites = candidate_sites(case, max_site_pct)

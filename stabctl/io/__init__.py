@@ -9,8 +9,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from stabctl.case import CASE_DIR, Case
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, InputError
 from stabctl.io import pst as pstio
+from stabctl.io.inputs import input_file
 
 __all__ = ["load_case", "list_cases"]
 
@@ -49,7 +50,8 @@ def load_case(name_or_path: str | Path) -> Case:
     Raises
     ------
     CaseError
-        The name is neither a built-in nor an existing file, or the file is malformed.
+        The name is neither a built-in nor an existing file, the path is not a regular
+        file of bounded size (`stabctl.io.inputs.input_file`), or the file is malformed.
     """
     text = str(name_or_path)
     builtin = CASE_DIR / f"{text}.json"
@@ -58,6 +60,10 @@ def load_case(name_or_path: str | Path) -> Case:
             return pstio.read_case_json(builtin)
         raise CaseError(f"unknown case '{text}': built-ins are {', '.join(list_cases()) or 'none'}")
     path = Path(name_or_path)
-    if not path.is_file():
+    if not path.exists():
         raise CaseError(f"case file not found: {path}")
+    try:
+        input_file(path, "case file")
+    except InputError as exc:
+        raise CaseError(str(exc)) from None
     return pstio.read_any(path)

@@ -18,7 +18,6 @@ bracketed, where the planner's CCT searches start.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 
@@ -107,8 +106,8 @@ class Requirement:
 
 def read_requirements(path) -> dict:
     """Per-fault requirement overrides from a fault list CSV (`stabctl.stability.cct.
-    read_faults`'s columns plus any of ``required_clearing_cycles``,
-    ``target_cct_gain``, ``target_cct_s``; a row with none keeps the global one).
+    read_faults`: its columns ``required_clearing_cycles``, ``target_cct_gain``,
+    ``target_cct_s``; a row with none keeps the global one).
 
     Returns
     -------
@@ -118,30 +117,33 @@ def read_requirements(path) -> dict:
     Raises
     ------
     InputError
-        Unreadable file or a value that is not a number > 0 (naming the line).
+        What `read_faults` refuses, a requirement that is not a number > 0, or a fault
+        listed twice with requirements; naming file:line.
     """
-    from stabctl.stability.cct import csv_rows, read_faults
+    from stabctl.io.inputs import number, read_csv
+    from stabctl.stability.cct import FAULT_COLUMNS, read_faults
 
-    path = Path(path)
     faults = read_faults(path)
-    rows = csv_rows(path, "fault list", ("bus", "far_bus"))
-    out = {}
-    for line, (fault, row) in enumerate(zip(faults, rows), start=2):
+    rows = read_csv(path, "fault list", *FAULT_COLUMNS)
+    out: dict = {}
+    for fault, row in zip(faults, rows, strict=True):
         vals = {
-            k: (row.get(c) or "").strip()
+            k: number(row, c, 0.0) if row.values.get(c) else None
             for k, c in (
                 ("cycles", "required_clearing_cycles"),
                 ("gain_pct", "target_cct_gain"),
                 ("cct_s", "target_cct_s"),
             )
         }
-        if not any(vals.values()):
+        if all(v is None for v in vals.values()):
             continue
+        name = Contingency(fault, 1.0).fault_name
+        if name in out:
+            raise InputError(f"{row.where()}: fault {name} listed twice with requirements")
         try:
-            req = Requirement(**{k: float(v) if v else None for k, v in vals.items()})
-        except (ValueError, InputError) as exc:
-            raise InputError(f"fault list {path} line {line}: {exc}") from None
-        out[Contingency(fault, 1.0).fault_name] = req
+            out[name] = Requirement(**vals)
+        except InputError as exc:
+            raise InputError(f"{row.where()}: {exc}") from None
     return out
 
 
@@ -200,27 +202,38 @@ class CostModel:
         return out
 
 
-def read_site_costs(path) -> dict:
-    """Per-site cost overrides from a CSV with a ``machine`` column and any of
-    ``cost_mw``, ``cost_mwh``, ``cost_site``: machine -> {"per_mw", ...}.  Raises
-    InputError naming the line."""
-    from stabctl.stability.cct import csv_rows
+#: the columns of a site-cost table (`read_site_costs`): required, then optional
+SITE_COST_COLUMNS = (("machine",), ("cost_mw", "cost_mwh", "cost_site"))
 
-    rows = csv_rows(path, "site costs", ("machine",), " and any of cost_mw,cost_mwh,cost_site")
-    out = {}
-    for line, row in enumerate(rows, start=2):
-        try:
-            out[int(row["machine"])] = {
-                k: float(row[c])
-                for k, c in (
-                    ("per_mw", "cost_mw"),
-                    ("per_mwh", "cost_mwh"),
-                    ("per_site", "cost_site"),
-                )
-                if (row.get(c) or "").strip()
-            }
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"site costs {path} line {line}: {exc}") from None
+
+def read_site_costs(path, n_machines: int) -> dict:
+    """Per-site cost overrides from a CSV (a strict table, `stabctl.io.inputs.read_csv`,
+    of :data:`SITE_COST_COLUMNS`): machine -> {"per_mw", "per_mwh", "per_site"} (the
+    costs given, each >= 0).
+
+    Raises
+    ------
+    InputError
+        A row or header the table refuses, no cost column, a machine not in 1..n_machines
+        or listed twice, a cost that is not a finite number >= 0; naming file:line.
+    """
+    from stabctl.io.inputs import number, read_csv
+
+    rows = read_csv(path, "site costs", *SITE_COST_COLUMNS)
+    if not set(rows[0].values) & set(SITE_COST_COLUMNS[1]):
+        raise InputError(
+            f"site costs {path}: no cost column (any of {', '.join(SITE_COST_COLUMNS[1])})"
+        )
+    out: dict = {}
+    for row in rows:
+        m = int(number(row, "machine", 1, n_machines, integer=True))
+        if m in out:
+            raise InputError(f"{row.where()}: machine {m} listed twice")
+        out[m] = {
+            k: number(row, c, 0.0)
+            for k, c in (("per_mw", "cost_mw"), ("per_mwh", "cost_mwh"), ("per_site", "cost_site"))
+            if row.values.get(c)
+        }
     return out
 
 
@@ -230,12 +243,14 @@ def screening_brackets(path) -> dict:
     name (`Contingency.fault_name`) -> (t_stable, t_unstable), for `plan`'s `brackets`; a
     fault still stable at the screening's limit t_max: (t_max, None).  Records with
     storage or with another outcome are skipped.  Raises InputError for a file that is not
-    sweep records."""
+    a regular file, not sweep records, a malformed screening record, or records that
+    bracket no fault."""
+    from stabctl.io.inputs import input_file
     from stabctl.parallel import read_records
     from stabctl.stability.cct import LineFault
 
     try:
-        records = read_records(path)
+        records = read_records(input_file(path, "screening records"))
     except (OSError, ValueError) as exc:
         raise InputError(f"screening records {path}: {exc}") from None
     out = {}
@@ -247,15 +262,28 @@ def screening_brackets(path) -> dict:
         ):
             continue
         f = r.get("fault") or inputs
-        fault = LineFault(
-            int(f["bus"]),
-            None if f["far_bus"] is None else int(f["far_bus"]),
-            float(f["t_fault"]),
-            int(f["circuit"]),
-            tuple((int(a), int(b)) for a, b in f["trips"]),
-        )
-        out[Contingency(fault, 1.0).fault_name] = (
-            (float(inputs["t_max"]), None) if still else (r["t_stable_s"], r["t_unstable_s"])
+        try:
+            fault = LineFault(
+                int(f["bus"]),
+                None if f["far_bus"] is None else int(f["far_bus"]),
+                float(f["t_fault"]),
+                int(f["circuit"]),
+                tuple((int(a), int(b)) for a, b in f["trips"]),
+            )
+            out[Contingency(fault, 1.0).fault_name] = (
+                (float(inputs["t_max"]), None)
+                if still
+                else (float(r["t_stable_s"]), float(r["t_unstable_s"]))
+            )
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InputError(
+                f"screening records {path}: record {rec.get('key')!r} is not a screening "
+                f"record ({type(exc).__name__}: {exc})"
+            ) from None
+    if not out:
+        raise InputError(
+            f"screening records {path}: no fault bracketed without storage (give the "
+            "records of `stabctl screen --out`)"
         )
     return out
 

@@ -32,7 +32,6 @@ Sweeps of many faults or ratings (`cct_jobs`, `cct_job`) run through `stabctl.pa
 
 from __future__ import annotations
 
-import csv
 import functools
 import math
 import time
@@ -48,6 +47,7 @@ from stabctl.dynamics.events import Fault, LineTrip
 from stabctl.dynamics.options import ModelOptions
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
+from stabctl.io.inputs import CsvRow, number, read_csv
 from stabctl.network.ybus import circuit_row
 
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
@@ -722,56 +722,39 @@ def cct_jobs(
     ]
 
 
+#: the columns of a fault list (`read_faults`): required, then optional; the last three
+#: are a contingency's own clearing requirement, read by `stabctl place`
+#: (`stabctl.placement.requirements.read_requirements`)
+FAULT_COLUMNS = (
+    ("bus", "far_bus"),
+    ("t_fault", "circuit", "required_clearing_cycles", "target_cct_gain", "target_cct_s"),
+)
+#: latest fault start a run takes, s (the CLI's --t-fault range)
+T_FAULT_MAX_S = 1000.0
+
+
 def read_faults(path: str | Path) -> list[LineFault]:
-    """Faults from a CSV file with a header: bus, far_bus (empty: a bus fault cleared
-    without a trip)[, t_fault (s, default 1)][, circuit (default 1)], one fault per row.
-    Raises InputError naming the row."""
-    path = Path(path)
-    rows = csv_rows(path, "fault list", ("bus", "far_bus"), "[,t_fault,circuit]")
-    return [_fault_row(path, i, r) for i, r in enumerate(rows, start=2)]
-
-
-def csv_rows(path: str | Path, what: str, columns, more: str = "") -> list[dict]:
-    """The rows of a CSV file with a header, as dicts (column -> text).
-
-    Parameters
-    ----------
-    path : str or Path
-        The file.
-    what : str
-        What it is, for messages (e.g. ``"fault list"``).
-    columns : sequence of str
-        Columns the header must have.
-    more : str, optional
-        Optional columns, for the message (e.g. ``"[,t_fault,circuit]"``).
+    """Faults from a CSV file (a strict table, `stabctl.io.inputs.read_csv`, of
+    :data:`FAULT_COLUMNS`): bus, far_bus (empty: a bus fault cleared without a trip)
+    [, t_fault (s, default 1, at most T_FAULT_MAX_S)][, circuit (default 1)], one fault
+    per row.
 
     Raises
     ------
     InputError
-        Unreadable file, or no such header and at least one row.
+        A row or header the table refuses, a value out of range; naming file:line.
     """
-    path = Path(path)
-    try:
-        with path.open(newline="") as f:
-            rows = list(csv.DictReader(f))
-    except OSError as exc:
-        raise InputError(f"{what} {path}: {exc.strerror or exc}") from None
-    if not rows or not set(columns) <= set(rows[0]):
-        raise InputError(
-            f"{what} {path}: needs a header with columns {','.join(columns)}"
-            f"{more} and at least one row"
-        )
-    return rows
+    return [_fault_row(r) for r in read_csv(path, "fault list", *FAULT_COLUMNS)]
 
 
-def _fault_row(path, line: int, row: dict) -> LineFault:
-    try:
-        far = (row["far_bus"] or "").strip()
-        return LineFault(
-            bus=int(row["bus"]),
-            far_bus=int(far) if far else None,
-            t_fault=float(row.get("t_fault") or 1.0),
-            circuit=int(row.get("circuit") or 1),
-        )
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"fault list {path} line {line}: {exc}") from None
+def _fault_row(row: CsvRow) -> LineFault:
+    far = row.values["far_bus"]
+    return LineFault(
+        bus=int(number(row, "bus", 1, _LARGEST_BUS, integer=True)),
+        far_bus=int(number(row, "far_bus", 1, _LARGEST_BUS, integer=True)) if far else None,
+        t_fault=number(row, "t_fault", 0.0, T_FAULT_MAX_S, default=1.0),
+        circuit=int(number(row, "circuit", 1, 999, integer=True, default=1)),
+    )
+
+
+_LARGEST_BUS = 2**31 - 1  # bus numbers are int32 in the tables

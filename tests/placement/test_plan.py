@@ -369,7 +369,7 @@ def test_screening_brackets_and_requirement_overrides_are_read_from_their_files(
     assert req["3-101"].target_s(60.0, 1e-3) == pytest.approx(0.1)
     assert req["1"].target_s(60.0, 1e-3) == pytest.approx(0.3)
     csv.write_text("bus,far_bus,required_clearing_cycles\n3,101,-2\n")
-    with pytest.raises(InputError, match="line 2"):
+    with pytest.raises(InputError, match=r"f\.csv:2: required_clearing_cycles -2 is outside"):
         read_requirements(csv)
 
 

@@ -1,0 +1,180 @@
+"""Input files as a user gives them: regular files of bounded size, and strict CSV tables.
+
+Every file a command reads (a case, a fault list, site costs, screening records) must be a
+regular file no larger than :data:`MAX_INPUT_BYTES`: ``/dev/zero``, a pipe, a directory
+or a link to one is refused before a byte is read (reading one had no end).
+
+A CSV table (:func:`read_csv`) is UTF-8 text (a byte-order mark allowed) with a header
+naming its columns: every column must be one the table knows (a misspelt column is an
+error, not ignored), none twice, the required ones present; every row must have exactly
+the header's number of fields (a row cut short is an error, not a row with missing
+values); blank lines are skipped, values stripped.  Errors name ``file:line`` and what is
+wrong; :func:`number` parses one field the same way (finite, in range, an integer where
+one is needed).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import stat
+from dataclasses import dataclass
+from pathlib import Path
+
+from stabctl.errors import InputError
+
+__all__ = ["MAX_INPUT_BYTES", "CsvRow", "input_file", "number", "read_csv"]
+
+#: largest input file read, bytes (the largest case shipped, ACTIVSg2000's RAW, is 0.7 MB)
+MAX_INPUT_BYTES = 256 * 2**20
+
+
+def input_file(path: str | os.PathLike, what: str) -> Path:
+    """``path`` after checking that it is a regular file of at most MAX_INPUT_BYTES
+    (links followed).
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable, not a regular file (a device, a pipe, a directory), or too
+        large; the message names ``what`` and the path.
+    """
+    path = Path(path)
+    try:
+        st = os.stat(path)
+    except OSError as exc:
+        raise InputError(f"{what} {path}: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(
+            f"{what} {path}: not a regular file (a device, a pipe or a directory); give a file"
+        )
+    if st.st_size > MAX_INPUT_BYTES:
+        raise InputError(
+            f"{what} {path}: {st.st_size / 2**20:.0f} MiB, above the "
+            f"{MAX_INPUT_BYTES / 2**20:.0f} MiB an input file may have"
+        )
+    return path
+
+
+@dataclass(frozen=True)
+class CsvRow:
+    """One data row of a CSV table: its 1-based line in the file and its values (column ->
+    stripped text; every column of the header present)."""
+
+    file: str
+    line: int
+    values: dict[str, str]
+
+    def where(self) -> str:
+        """``file:line`` for messages."""
+        return f"{self.file}:{self.line}"
+
+
+def read_csv(
+    path: str | os.PathLike, what: str, required: tuple[str, ...], optional: tuple[str, ...] = ()
+) -> list[CsvRow]:
+    """The data rows of a strict CSV table (module doc).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str
+        What it is, for messages (``"fault list"``).
+    required, optional : tuple of str
+        The columns it must have, and the others it may have.
+
+    Returns
+    -------
+    list of CsvRow
+        In file order; at least one.
+
+    Raises
+    ------
+    InputError
+        Not a regular file of bounded size, not UTF-8, a field beyond the csv module's
+        limit, a header with an unknown, duplicated or missing column, a row with another
+        number of fields than the header, or no data row; naming ``file:line``.
+    """
+    path = input_file(path, what)
+    name, rows, header = path.name, [], None
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as f:
+            reader = csv.reader(f)
+            for fields in reader:
+                if not any(s.strip() for s in fields):
+                    continue
+                if header is None:
+                    header = _header(fields, f"{what} {name}:{reader.line_num}", required, optional)
+                    continue
+                if len(fields) != len(header):
+                    raise InputError(
+                        f"{what} {name}:{reader.line_num}: {len(fields)} field(s), the header "
+                        f"has {len(header)} ({','.join(header)}): a row cut short or with "
+                        "extra fields"
+                    )
+                values = dict(zip(header, (s.strip() for s in fields), strict=True))
+                rows.append(CsvRow(name, reader.line_num, values))
+    except UnicodeDecodeError as exc:
+        raise InputError(
+            f"{what} {path}: not UTF-8 text (byte {exc.start}: {exc.reason}); save it as UTF-8"
+        ) from None
+    except csv.Error as exc:
+        raise InputError(f"{what} {name}:{reader.line_num}: {exc}") from None
+    except OSError as exc:
+        raise InputError(f"{what} {path}: {exc.strerror or exc}") from None
+    if not rows:
+        columns = ",".join(required) + "".join(f"[,{c}]" for c in optional)
+        raise InputError(f"{what} {path}: needs a header ({columns}) and at least one row")
+    return rows
+
+
+def _header(fields: list[str], where: str, required, optional) -> list[str]:
+    """The stripped column names of a header line, checked against the table's columns."""
+    names = [s.strip() for s in fields]
+    known = (*required, *optional)
+    twice = sorted({n for n in names if names.count(n) > 1})
+    unknown = [n for n in names if n not in known]
+    missing = [n for n in required if n not in names]
+    for bad, why in ((twice, "twice"), (unknown, "unknown"), (missing, "missing")):
+        if bad:
+            raise InputError(
+                f"{where}: column(s) {', '.join(repr(n) for n in bad)} {why}; the columns are "
+                f"{', '.join(required)} (required) and {', '.join(optional) or 'no other'}"
+            )
+    return names
+
+
+def number(
+    row: CsvRow,
+    column: str,
+    lo: float = -math.inf,
+    hi: float = math.inf,
+    *,
+    integer: bool = False,
+    default: float | None = None,
+) -> float:
+    """The value of ``column`` in ``row`` as a finite number in [lo, hi] (an integer if
+    ``integer``); an empty field gives ``default``.
+
+    Raises
+    ------
+    InputError
+        Empty without a default, not a number, not finite, out of range, or not an
+        integer; naming ``file:line`` and the column.
+    """
+    text = row.values.get(column, "")
+    if not text:
+        if default is None:
+            raise InputError(f"{row.where()}: {column} is empty")
+        return default
+    try:
+        v = float(text)
+    except ValueError:
+        raise InputError(f"{row.where()}: {column} '{text}' is not a number") from None
+    if not math.isfinite(v) or not lo <= v <= hi:
+        raise InputError(f"{row.where()}: {column} {text} is outside [{lo:g}, {hi:g}]")
+    if integer and not v.is_integer():
+        raise InputError(f"{row.where()}: {column} {text} is not an integer")
+    return v

@@ -1,0 +1,152 @@
+"""Input files as a user gives them (stabctl.io.inputs): regular files of bounded size and
+strict CSV tables, on the fault list (`read_faults`, `read_requirements`) and the site
+costs (`read_site_costs`); each refusal names file:line and the field."""
+
+import os
+
+import pytest
+from click.testing import CliRunner
+
+from stabctl.cli import main
+from stabctl.errors import InputError
+from stabctl.io.inputs import input_file, read_csv
+from stabctl.placement.requirements import read_requirements, read_site_costs
+from stabctl.stability.cct import LineFault, read_faults
+
+
+def _csv(tmp_path, text, name="f.csv", encoding="utf-8"):
+    path = tmp_path / name
+    path.write_bytes(text.encode(encoding))
+    return path
+
+
+@pytest.mark.parametrize(
+    "text,needle",
+    [
+        # a row cut before far_bus ran as a bus fault (CCT 0.238 s instead of 0.157 s)
+        ("bus,far_bus,t_fault\n3,101,1.0\n3\n", r"f\.csv:3: 1 field\(s\), the header has 3"),
+        ("bus,far_bus\n3,101,1.0\n", r"f\.csv:2: 3 field\(s\), the header has 2"),
+        ("bus,far_bus,bus\n3,101,4\n", r"f\.csv:1: column\(s\) 'bus' twice"),
+        ("bus,far_bus,t_falt\n3,101,1\n", r"f\.csv:1: column\(s\) 't_falt' unknown"),
+        ("bus,t_fault\n3,1\n", r"f\.csv:1: column\(s\) 'far_bus' missing"),
+        ("bus,far_bus,t_fault\n3,101,nan\n", r"f\.csv:2: t_fault nan is outside \[0, 1000\]"),
+        ("bus,far_bus,t_fault\n3,101,inf\n", r"f\.csv:2: t_fault inf is outside"),
+        ("bus,far_bus,t_fault\n3,101,1e300\n", r"f\.csv:2: t_fault 1e300 is outside"),
+        ("bus,far_bus,t_fault\n3,101,1001\n", r"f\.csv:2: t_fault 1001 is outside"),
+        ("bus,far_bus,circuit\n3,101,1.5\n", r"f\.csv:2: circuit 1.5 is not an integer"),
+        ("bus,far_bus\n0,101\n", r"f\.csv:2: bus 0 is outside"),
+        ("bus,far_bus\n", r"needs a header \(bus,far_bus\[,t_fault\]"),
+    ],
+)
+def test_fault_list_refusals_name_file_line_and_field(tmp_path, text, needle):
+    with pytest.raises(InputError, match=needle):
+        read_faults(_csv(tmp_path, text))
+
+
+def test_a_fault_list_with_blank_lines_a_byte_order_mark_and_spaces_reads(tmp_path):
+    path = _csv(tmp_path, "\ufeffbus, far_bus ,t_fault\n\n 3 ,101, 0.5\n13,,\n\n")
+    assert read_faults(path) == [LineFault(3, 101, 0.5), LineFault(13, None, 1.0)]
+
+
+def test_latin1_and_over_long_fields_are_refused_without_a_traceback(tmp_path):
+    with pytest.raises(InputError, match=r"not UTF-8 text .*save it as UTF-8"):
+        read_faults(_csv(tmp_path, "bus,far_bus\n3,101 \u00e9\n", encoding="latin-1"))
+    long = _csv(tmp_path, 'bus,far_bus\n3,"' + "1" * 200_000 + '"\n', name="long.csv")
+    with pytest.raises(InputError, match=r"long\.csv:2: field larger than field limit"):
+        read_faults(long)
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="/dev/zero")
+def test_devices_pipes_and_directories_are_refused_before_reading(tmp_path):
+    link = tmp_path / "zero.csv"
+    link.symlink_to("/dev/zero")
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    for path in ("/dev/zero", link, fifo, tmp_path):
+        with pytest.raises(InputError, match="not a regular file"):
+            input_file(path, "fault list")
+    res = CliRunner().invoke(
+        main, ["sweep-cct", "kundur", "--faults", str(link), "--out", str(tmp_path / "o.jsonl")]
+    )
+    assert res.exit_code == 2 and "not a regular file" in res.stderr
+    assert not (tmp_path / "o.jsonl").exists()
+
+
+def test_requirement_columns_misspelt_are_refused_not_ignored(tmp_path):
+    """A misspelt override column was ignored and the plan reported verified against the
+    global requirement."""
+    path = _csv(tmp_path, "bus,far_bus,required_clearing_cycle\n3,101,6\n")
+    with pytest.raises(InputError, match=r"'required_clearing_cycle' unknown"):
+        read_requirements(path)
+    path = _csv(tmp_path, "bus,far_bus,target_cct_s\n3,101,0.3\n3,101,0.2\n")
+    with pytest.raises(InputError, match=r"f\.csv:3: fault 3-101 listed twice"):
+        read_requirements(path)
+
+
+@pytest.mark.parametrize(
+    "text,needle",
+    [
+        ("machine,cost_mv\n1,5\n", r"'cost_mv' unknown"),
+        ("machine\n1\n", "no cost column"),
+        ("machine,cost_mw\n0,5\n", r"c\.csv:2: machine 0 is outside \[1, 4\]"),
+        ("machine,cost_mw\n99,5\n", r"machine 99 is outside \[1, 4\]"),
+        ("machine,cost_mw\n2,5\n2,6\n", r"c\.csv:3: machine 2 listed twice"),
+        ("machine,cost_mw\n2,-5\n", r"cost_mw -5 is outside"),
+    ],
+)
+def test_site_costs_refusals(tmp_path, text, needle):
+    with pytest.raises(InputError, match=needle):
+        read_site_costs(_csv(tmp_path, text, name="c.csv"), 4)
+
+
+def test_site_costs_keep_the_costs_given_per_machine(tmp_path):
+    path = _csv(tmp_path, "machine,cost_mw,cost_site\n1,5,\n3,,7\n", name="c.csv")
+    assert read_site_costs(path, 4) == {1: {"per_mw": 5.0}, 3: {"per_site": 7.0}}
+
+
+def test_read_csv_rows_carry_their_file_lines(tmp_path):
+    rows = read_csv(_csv(tmp_path, "a,b\n\n1,2\n3,4\n"), "table", ("a",), ("b",))
+    assert [(r.line, r.values) for r in rows] == [
+        (3, {"a": "1", "b": "2"}),
+        (4, {"a": "3", "b": "4"}),
+    ]
+
+
+def test_screening_records_must_bracket_a_fault(tmp_path):
+    from stabctl.placement.requirements import screening_brackets
+
+    other = tmp_path / "other.jsonl"
+    other.write_text('{"key": "k", "status": "ok", "inputs": {}, "result": {"y": 1}}\n')
+    with pytest.raises(InputError, match="no fault bracketed without storage"):
+        screening_brackets(other)
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text('{"key": "k", "status": "ok", "inputs": {}, "result": {"t_stable_s": 1}}\n')
+    with pytest.raises(InputError, match=r"record 'k' is not a screening record \(KeyError"):
+        screening_brackets(bad)
+    with pytest.raises(InputError, match="not a regular file"):
+        screening_brackets(tmp_path)
+
+
+def test_outputs_that_are_devices_and_write_failures_end_in_one_error_line(tmp_path, monkeypatch):
+    """--out pointing at a device (or a link to /dev/full) is refused before any work; a
+    write the system refuses mid-run (a disk full) is one error line, exit 2."""
+    import errno
+
+    link = tmp_path / "full.jsonl"
+    link.symlink_to("/dev/full")
+    res = CliRunner().invoke(
+        main, ["sweep-cct", "kundur", "--faults", "DEFAULT", "--out", str(link)]
+    )
+    assert res.exit_code == 2 and "not a regular file" in res.stderr, res.stderr
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp_path / "o.jsonl"))
+
+    monkeypatch.setattr("stabctl.parallel.run_sweep", full)
+    res = CliRunner().invoke(
+        main, ["sweep-cct", "kundur", "--faults", "DEFAULT", "--out", str(tmp_path / "o.jsonl")]
+    )
+    assert res.exit_code == 2, res.output
+    assert res.stderr.strip().splitlines() == [
+        f"error: {tmp_path / 'o.jsonl'}: No space left on device"
+    ]
