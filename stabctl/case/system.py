@@ -345,7 +345,8 @@ class BusTable(Table):
     ==  ==========  ===============================================================
 
     Omitted columns (PST's ``loadflow`` defaults): qmax 9999, qmin -9999, kv 1, vmax 1.5,
-    vmin 0.5. Validation: unique positive integer numbers, kind in {1, 2, 3}, vmag > 0.
+    vmin 0.5. Validation: unique positive integer numbers, kind in {1, 2, 3}, vmag > 0,
+    qmax >= qmin and vmax >= vmin (0 read as above).
     """
 
     number: np.ndarray
@@ -382,6 +383,12 @@ class BusTable(Table):
         self._unique("number", "bus number")
         self._require(np.isin(self.kind, (SWING, PV, PQ)), "kind", "bus type must be 1, 2 or 3")
         self._require(self.vmag > 0, "vmag", "voltage magnitude must be > 0")
+        qmax = np.where(self.qmax == 0, np.inf, self.qmax)  # 0: no limit (PST)
+        qmin = np.where(self.qmin == 0, -np.inf, self.qmin)
+        self._require(qmax >= qmin, "qmax", "generator Q limits: qmax must be >= qmin")
+        vmax = np.where(self.vmax == 0, 1.5, self.vmax)
+        vmin = np.where(self.vmin == 0, 0.5, self.vmin)
+        self._require(vmax >= vmin, "vmax", "voltage limits: vmax must be >= vmin")
 
 
 @dataclass(frozen=True, eq=False)
@@ -460,7 +467,8 @@ class MachineTable(Table):
 
         Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``).
         Validation: unique positive integer machine numbers, mva > 0, H > 0, reactances and
-        ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), speed_effects and psse_sat 0 or 1.
+        ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), x_d >= x'd >= x"d (where given),
+        speed_effects and psse_sat 0 or 1.
     """
 
     def _check(self):
@@ -484,6 +492,18 @@ class MachineTable(Table):
             (self.xd == 0) | (self.xdpp == 0) | (self.Tdopp > 0),
             "Tdopp",
             'T"do must be > 0 s for a subtransient machine (x"d > 0)',
+        )
+        # the d-axis reactances as seen ever sooner after a disturbance can only fall
+        # (PSS/E Model Library, GENROU/GENSAL: Xd >= X'd >= X"d)
+        self._require(
+            (self.xd == 0) | (self.xd >= self.xdp),
+            "xd",
+            "x_d must be >= x'd (a transient or subtransient machine)",
+        )
+        self._require(
+            (self.xd == 0) | (self.xdpp == 0) | (self.xdp >= self.xdpp),
+            "xdp",
+            "x'd must be >= x\"d (a subtransient machine)",
         )
 
 

@@ -86,8 +86,11 @@ def reports_errors(func):
     callable
         The wrapped callback: numeric options are checked first (:func:`check_number`:
         finite, in range); Python warnings raised meanwhile are held back and printed as
-        ``warning:`` lines on stderr on success (on error only the ``error:`` line); Ctrl-C
-        prints what was kept (exit status 130), and so does SIGTERM (exit status 143).
+        ``warning:`` lines on stderr on success (on error only the ``error:`` line); an
+        ``OSError`` (a disk full, a file the system refuses) is one ``error:`` line too
+        (exit status 2; the outputs are written whole or not at all, and a sweep's
+        finished records stay); Ctrl-C prints what was kept (exit status 130), and so does
+        SIGTERM (exit status 143).
     """
 
     @functools.wraps(func)
@@ -99,6 +102,10 @@ def reports_errors(func):
                 out = func(*args, **kwargs)
             except StabctlError as exc:
                 click.echo(f"error: {one_line(exc)}", err=True)
+                sys.exit(2)
+            except OSError as exc:  # a read or write the system refused (disk full, ...)
+                where = f"{exc.filename}: " if exc.filename else ""
+                click.echo(f"error: {where}{exc.strerror or one_line(exc)}", err=True)
                 sys.exit(2)
             except KeyboardInterrupt as exc:
                 click.echo(_interrupted(kwargs), err=True)
@@ -145,12 +152,17 @@ _RANGES = {
     "--zeta-min": (0, 1, True, False, ""),
     "--max-sites": (1, 100000, True, True, ""),
     "--max-site-pct": (0, 100, False, True, "% of machine MVA"),
-    "--site-cost": (0, 1e6, True, True, "MW"),
+    # costs in any currency: a bound far above any real price, so that the optimisation
+    # stays well scaled (--cost-mw 1e308 ended in a solver error)
+    "--cost-mw": (0, 1e9, True, True, "per MW"),
+    "--cost-mwh": (0, 1e9, True, True, "per MWh"),
+    "--cost-site": (0, 1e9, True, True, "per site"),
     "--amplitude-hz": (0, 10, False, True, "Hz"),
     "--max-iter": (1, 1000, True, True, ""),
     "--rate": (1, 1000, True, True, "frames/s"),
     "--latency-ms": (0, 10000, True, True, "ms"),
     "--drop": (0, 1, True, False, ""),
+    "--window-cycles": (0, 60, False, True, "cycles"),
     "--tve-pct": (0, 100, True, True, "%"),
     "--fe-hz": (0, 10, True, True, "Hz"),
     "--rfe-hz-s": (0, 100, True, True, "Hz/s"),

@@ -465,6 +465,7 @@ def _table_from_json(cls, raw: Mapping, where: str):
         raise CaseError(
             f"{where}: table '{cls.TABLE}' has unknown column(s) {bad}; known: {list(known)}"
         )
+    _check_numbers(rows, cols, f"{where}: table '{cls.TABLE}'")
     from stabctl.case.system import _as_matrix
 
     mat = _as_matrix(rows, cls.TABLE)
@@ -481,6 +482,16 @@ def _table_from_json(cls, raw: Mapping, where: str):
         for c in known
     }
     return cls(**data)
+
+
+def _check_numbers(rows: list, cols: list, where: str) -> None:
+    """CaseError naming the row and column of the first value that is not a JSON number
+    (``true`` is not 1, ``"1"`` is not 1, ``null`` is no value)."""
+    for i, row in enumerate(rows, start=1):
+        for k, v in enumerate(row):
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                col = cols[k] if k < len(cols) else f"value {k + 1}"
+                raise CaseError(f"{where} row {i}, column '{col}': {json.dumps(v)} is not a number")
 
 
 def _dump_matrix(rows: list, indent: str) -> str:

@@ -119,6 +119,25 @@ def test_every_range_accepts_inside_and_refuses_outside_and_non_finite():
                 check_number(label, v)
 
 
+def _commands(group):
+    for cmd in group.commands.values():
+        yield from _commands(cmd) if hasattr(cmd, "commands") else (cmd,)
+
+
+def test_every_range_is_keyed_by_an_options_checked_name():
+    """A range is found by the option's first long name (or an argument's name): one keyed
+    under a hidden alias (--site-cost) was never checked."""
+    names = set()
+    for cmd in _commands(main):
+        for p in cmd.params:
+            names.add(next((o for o in p.opts if o.startswith("--")), p.human_readable_name))
+    assert set(_RANGES) <= names, sorted(set(_RANGES) - names)
+    res = run(
+        "place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "5", "--site-cost", "-1"
+    )
+    assert_error(res, "--cost-site -1: must be in [0, 1e+09]")
+
+
 def test_too_small_step_is_refused_not_run_for_minutes():
     res = run("simulate", "kundur", "--step", "1e-7")
     assert_error(
@@ -160,6 +179,31 @@ def test_zero_time_constant_is_a_case_error_not_a_zero_division(tmp_path, table,
         pstio.case_from_dict(d)
     assert where in str(err.value)
     path = tmp_path / "zero.json"
+    path.write_text(json.dumps(d))
+    assert_error(run("simulate", path, "--tf", 1), where)
+
+
+@pytest.mark.parametrize(
+    "table,field,value,where",
+    [
+        # "H": true ran as H = 1
+        ("machines", "H", True, "'mac_con' row 1, column 'H': true is not a number"),
+        ("machines", "H", "6.5", "'mac_con' row 1, column 'H': \"6.5\" is not a number"),
+        ("machines", "xd", 0.2, "field 'xd': x_d must be >= x'd"),
+        ("machines", "xdpp", 0.35, "field 'xdp': x'd must be >= x\"d"),
+        # reported as power-flow non-convergence
+        ("buses", "qmin", 99.0, "field 'qmax': generator Q limits: qmax must be >= qmin"),
+        ("buses", "vmin", 1.6, "field 'vmax': voltage limits: vmax must be >= vmin"),
+    ],
+)
+def test_case_values_of_the_wrong_type_or_order_name_row_and_field(
+    tmp_path, table, field, value, where
+):
+    d = _set(_kundur_dict(), table, field, value)
+    with pytest.raises(CaseError) as err:
+        pstio.case_from_dict(d)
+    assert where in str(err.value)
+    path = tmp_path / "bad.json"
     path.write_text(json.dumps(d))
     assert_error(run("simulate", path, "--tf", 1), where)
 
