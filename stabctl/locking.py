@@ -6,8 +6,8 @@ new file over the path while the other keeps appending to the old one) and both 
 work.  :func:`exclusive` holds a POSIX advisory lock (``flock``) on a lock file beside the
 output for as long as the output is written; a second writer is refused at once, with the
 holder's process id, instead of waiting.  The lock goes with the process (a killed writer
-holds nothing); the lock file itself stays, empty of meaning once unlocked (removing it
-while others may have it open would let two writers lock two different files).
+holds nothing; its lock file, left behind, is taken over by the next writer); the lock
+file is removed when the writer ends.
 """
 
 from __future__ import annotations
@@ -33,7 +33,11 @@ def lock_path(path: str | os.PathLike) -> Path:
 @contextmanager
 def exclusive(path: str | os.PathLike) -> Iterator[Path]:
     """Hold the exclusive lock of output ``path`` (a file or a directory) while the block
-    runs; yields the lock file's path.
+    runs; yields the lock file's path, which is removed when the block ends.
+
+    A lock file removed by its holder while another process had it open must not be
+    locked by that process: the lock counts only if the locked file is still the one at
+    the lock path (same inode), else the lock is taken again.
 
     Raises
     ------
@@ -44,18 +48,33 @@ def exclusive(path: str | os.PathLike) -> Iterator[Path]:
     """
     lock = lock_path(path)
     lock.parent.mkdir(parents=True, exist_ok=True)
-    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+    fd = _locked(lock, path)
     try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
-            raise InputError(
-                f"{path}: another stabctl process (pid {holder}) is writing it; wait for "
-                "it to end or choose another output"
-            ) from None
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         yield lock
     finally:
+        lock.unlink(missing_ok=True)  # still holding it: no one else has this file
         os.close(fd)  # releases the lock
+
+
+def _locked(lock: Path, path) -> int:
+    """A descriptor of ``lock`` holding its exclusive lock (see `exclusive`)."""
+    while True:
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+            os.close(fd)
+            raise InputError(
+                f"{path}: another stabctl process (pid {holder}) is writing it; wait for "
+                "it to end or choose another output"
+            ) from None
+        try:
+            same = os.fstat(fd).st_ino == os.stat(lock).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            return fd
+        os.close(fd)  # its holder removed it meanwhile: lock the file now at the path

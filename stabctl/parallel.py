@@ -598,10 +598,44 @@ def _completed(pool, jobs: list) -> Generator[dict, None, None]:
             yield _lost(futures[fut], exc)
 
 
+#: seconds the first contact with a Dask scheduler may take before it is given up
+SCHEDULER_TIMEOUT_S = 10.0
+
+
+def check_scheduler(address: str) -> str:
+    """``address`` once it is "local" or a Dask TCP address ``tcp://host[:port]`` (port
+    1-65535, Dask's 8786 if left out).
+
+    Raises
+    ------
+    InputError
+        Another scheme (tls:// and ucx:// need a configuration stabctl does not pass), no
+        host, or a port out of range.
+    """
+    from urllib.parse import urlsplit
+
+    if address == "local":
+        return address
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    try:
+        port = parts.port
+    except ValueError:
+        port = -1
+    if parts.scheme != "tcp" or not parts.hostname or port == -1 or parts.path:
+        raise InputError(
+            f"--scheduler {address}: give 'local' or a Dask scheduler's tcp://host:port "
+            "(port 1-65535; tls:// and ucx:// are not supported)"
+        )
+    return f"tcp://{parts.hostname}:{port or 8786}"
+
+
 def _dask_client(scheduler: str, workers: int):
-    """A Dask distributed client: of the cluster at `scheduler`, or for scheduler="local"
-    of a new local cluster of `workers` single-threaded processes (connects at once, so
-    that a missing Dask or a wrong address fails before anything is written; InputError)."""
+    """A Dask distributed client: of the cluster at `scheduler` (`check_scheduler`), or
+    for scheduler="local" of a new local cluster of `workers` single-threaded processes
+    (connects at once, within SCHEDULER_TIMEOUT_S, so that a missing Dask, a wrong
+    address or a service that is not a Dask scheduler fails before anything is written;
+    InputError)."""
+    address = check_scheduler(scheduler)
     try:
         from distributed import Client, LocalCluster
     except ImportError:
@@ -609,16 +643,19 @@ def _dask_client(scheduler: str, workers: int):
             f"--scheduler {scheduler} needs Dask distributed, which is not "
             "installed: pip install 'stabctl[dask]'"
         ) from None
-    try:
-        if scheduler == "local":
-            return Client(
-                LocalCluster(
-                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-                )
+    if address == "local":
+        return Client(
+            LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
             )
-        return Client(scheduler)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise InputError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
+        )
+    try:
+        return Client(address, timeout=SCHEDULER_TIMEOUT_S)
+    except Exception as exc:  # noqa: BLE001 - whatever a foreign service makes Dask raise
+        raise InputError(
+            f"no Dask scheduler answers at {address} within {SCHEDULER_TIMEOUT_S:g} s "
+            f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})"
+        ) from None
 
 
 def _dask(jobs: list, scheduler: str, workers: int | None) -> Generator[dict, None, None]:

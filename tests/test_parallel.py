@@ -14,7 +14,15 @@ from click.testing import CliRunner
 
 from stabctl.cli import main
 from stabctl.errors import InputError
-from stabctl.parallel import Job, atomic_write, pooled, read_records, run_sweep
+from stabctl.locking import lock_path
+from stabctl.parallel import (
+    Job,
+    atomic_write,
+    check_scheduler,
+    pooled,
+    read_records,
+    run_sweep,
+)
 from stabctl.stability.cct import LineFault, cached_simulator, cct_job, cct_jobs
 from stabctl.studies.cases import DEFAULT_FAULTS
 
@@ -229,7 +237,8 @@ def _holder(path):
 def test_a_second_writer_of_a_sweep_file_is_refused_with_the_holders_pid(tmp_path):
     """Two sweeps on one file: the second is refused at once, naming the first's pid, and
     neither repairs nor appends; a killed holder holds nothing (the lock goes with its
-    process), so the next sweep runs and finds the first one's records."""
+    process), so the next sweep takes its lock file over, runs and finds the first one's
+    records."""
     out = tmp_path / "one.jsonl"
     run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
     with out.open("a") as f:
@@ -249,9 +258,11 @@ def test_a_second_writer_of_a_sweep_file_is_refused_with_the_holders_pid(tmp_pat
     finally:
         holder.kill()
         holder.wait()
+    assert lock_path(out).exists()  # left by the killed holder: taken over
     with pytest.warns(UserWarning, match="not a whole sweep record"):
         rep = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
     assert (rep.ran, rep.skipped) == (1, 1)
+    assert not lock_path(out).exists()  # removed by the writer that ends
 
 
 def test_written_files_get_the_mode_of_the_users_umask(tmp_path):
@@ -296,6 +307,56 @@ def test_scheduler_without_dask_is_a_clear_error(tmp_path, monkeypatch):
             scheduler="tcp://127.0.0.1:8786",
             progress=False,
         )
+    assert not (tmp_path / "d.jsonl").exists()
+
+
+@pytest.mark.parametrize(
+    "address", ["tls://127.0.0.1:8786", "ucx://127.0.0.1:8786", "tcp://127.0.0.1:99999", "tcp://"]
+)
+def test_scheduler_addresses_are_checked_before_any_contact(tmp_path, address):
+    with pytest.raises(InputError, match=r"give 'local' or a Dask scheduler's tcp://host:port"):
+        run_sweep(jobs_of(square, 1), tmp_path / "d.jsonl", scheduler=address, progress=False)
+    assert not (tmp_path / "d.jsonl").exists()
+    assert check_scheduler("127.0.0.1") == "tcp://127.0.0.1:8786"
+
+
+@pytest.mark.dask
+def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time_box(
+    tmp_path, monkeypatch
+):
+    """A web server where the scheduler should be: "Unable to allocate 3.07 EiB" (a length
+    read from its HTTP reply) or a hang; now one InputError within SCHEDULER_TIMEOUT_S."""
+    pytest.importorskip("distributed")
+    import socket
+    import threading
+
+    monkeypatch.setattr("stabctl.parallel.SCHEDULER_TIMEOUT_S", 3.0)
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+
+    def serve():
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            conn.sendall(b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 50)
+
+    threading.Thread(target=serve, daemon=True).start()
+    t0 = time.perf_counter()
+    try:
+        with pytest.raises(
+            InputError, match=rf"no Dask scheduler answers at tcp://127.0.0.1:{port}"
+        ):
+            run_sweep(
+                jobs_of(square, 1),
+                tmp_path / "d.jsonl",
+                scheduler=f"tcp://127.0.0.1:{port}",
+                progress=False,
+            )
+    finally:
+        server.close()
+    assert time.perf_counter() - t0 < 20
     assert not (tmp_path / "d.jsonl").exists()
 
 

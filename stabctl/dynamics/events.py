@@ -174,7 +174,11 @@ class LoadStep(_AtOneTime):
 
 def validate(case: Case, events, t_end: float) -> None:
     """Check every event against the case (buses, lines, machines, times >= 0); raises
-    UnknownBusError, CaseError, InputError.  Events after t_end are allowed (not reached)."""
+    UnknownBusError, CaseError, InputError.  Events after t_end are allowed (not reached).
+    A circuit opened twice (a line trip of the line a fault's clearing opens, two trips of
+    one circuit) or a machine tripped twice is an InputError: the second would do
+    nothing."""
+    opened: dict = {}
     for ev in events:
         if isinstance(ev, Fault):
             case.bus_index(ev.bus)
@@ -190,11 +194,15 @@ def validate(case: Case, events, t_end: float) -> None:
             ):
                 raise InputError(f"fault at bus {ev.bus}: far end clears before near end")
             if ev.far_bus is not None:
-                circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
+                row = circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
+                if ev.clear_near is not None:
+                    _open_once(opened, _circuit(case, row), ev)
         elif isinstance(ev, LineTrip):
-            circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit)
+            row = circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit)
+            _open_once(opened, _circuit(case, row), ev)
         elif isinstance(ev, GeneratorTrip):
             case.machine_index(ev.machine)
+            _open_once(opened, f"machine {ev.machine}", ev)
         elif isinstance(ev, LoadStep):
             case.bus_index(ev.bus)
         else:
@@ -204,6 +212,22 @@ def validate(case: Case, events, t_end: float) -> None:
                 f"event {ev} has a negative time (events after t_end = {t_end} s "
                 "simply do not happen)"
             )
+
+
+def _circuit(case: Case, row: int) -> str:
+    br = case.branches
+    return f"circuit {int(br.from_bus[row])}-{int(br.to_bus[row])} (branch row {row + 1})"
+
+
+def _open_once(opened: dict, what: str, ev) -> None:
+    """Record that ``ev`` opens ``what`` (a circuit or a machine, `_circuit`); InputError
+    if an earlier event opens it already."""
+    first = opened.setdefault(what, ev)
+    if first is not ev:
+        raise InputError(
+            f"{what} is tripped twice, by {first} and by {ev}: the second would do nothing "
+            "(give each circuit or machine once)"
+        )
 
 
 def stage_boundaries(events, t_end: float) -> list[tuple[float, int, int]]:

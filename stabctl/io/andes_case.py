@@ -71,6 +71,7 @@ and governors above) and its ``psse-dyr.yaml``; PSS/E Model Library for the para
 
 from __future__ import annotations
 
+import json
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -223,7 +224,10 @@ def import_andes(
         ANDES model with its device count, and every refused model option.
     CaseError
         Data stabctl's tables refuse (a bus ``idx`` that is not an integer, a generator
-        without machine model, a value out of range), naming the device.
+        without machine model, a value out of range), a value stabctl reads that an xlsx
+        or json file leaves out or gives as other than a number (ANDES would run with its
+        default: :data:`_REQUIRED_INPUTS`), machines whose shares of their static
+        generator do not add up to 1 (a duplicated record), naming the device.
 
     Source: ANDES 2.0 documentation and ``psse-dyr.yaml`` (see module doc).
     """
@@ -244,6 +248,7 @@ def read_andes_case(
         raise InputError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
     path = Path(path)
     ss = _load(path, dyr)
+    _check_inputs(path, ss)
     counts = {name: m.n for name, m in ss.models.items() if m.n}
     lacking = [
         f"{name} ({n})"
@@ -303,6 +308,60 @@ def read_andes_case(
     )
     pf_bus, pf_vmag, pf_vang = _powerflow(ss, numbers)
     return AndesImport(case, left_out, ignored, pf_bus, pf_vmag, pf_vang, tuple(changed))
+
+
+#: parameters stabctl reads that ANDES fills with its default when the case file leaves
+#: them out (an empty cell, NaN, no column): refused instead (`_check_inputs`)
+_REQUIRED_INPUTS = {
+    "Line": ("r", "x"),
+    "PQ": ("p0", "q0"),
+    "PV": ("p0", "v0"),
+    "Slack": ("v0",),
+    "GENCLS": ("M", "xd1"),
+    "GENROU": ("M", "xd", "xq", "xd1", "xq1", "xd2", "Td10", "Tq10", "Td20", "Tq20"),
+}
+
+
+def _input_rows(path: Path) -> dict:
+    """ANDES model -> the rows (dicts) of an xlsx or json case file as written, before
+    ANDES fills its defaults ({} for other formats, whose own readers give defaults)."""
+    if path.suffix.lower() == ".json":
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError, UnicodeDecodeError):
+            return {}  # ANDES's own reading names what is wrong
+        return (
+            {k: v for k, v in data.items() if isinstance(v, list)} if isinstance(data, dict) else {}
+        )
+    if path.suffix.lower() == ".xlsx":
+        import pandas as pd  # type: ignore[import-untyped]  # ANDES reads xlsx with it
+
+        try:
+            sheets = pd.read_excel(path, sheet_name=None)
+        except Exception:  # noqa: BLE001 - ANDES's own reading names what is wrong
+            return {}
+        return {
+            name: df.dropna(axis=0, how="all").to_dict("records") for name, df in sheets.items()
+        }
+    return {}
+
+
+def _check_inputs(path: Path, ss) -> None:
+    """CaseError naming file, model, row and parameter of a value stabctl reads that the
+    case file leaves out (:data:`_REQUIRED_INPUTS`) or gives as something other than a
+    number: ANDES would run with its default (a line reactance of 1e-8 pu, H = 3 s)."""
+    for model, rows in _input_rows(path).items():
+        for k, row in enumerate(rows, start=1):
+            for name in _REQUIRED_INPUTS.get(model, ()):
+                v = row.get(name)
+                ok = isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+                if not ok:
+                    default = ss.models[model].params[name].default
+                    raise CaseError(
+                        f"{path.name}: {model} row {k} (idx {row.get('idx')}): {name} "
+                        f"{'missing' if v is None or v != v else repr(v)} (ANDES would "
+                        f"run with its default {default!r})"
+                    )
 
 
 def _load(path: Path, dyr):
@@ -779,6 +838,7 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
         for k in _in_service(m):
             machines.append((position.get(m.gen.v[k], len(static)), name, k))
     machines.sort()
+    _check_shares(ss, file, machines, with_converter)
     with_machine = {ss.models[name].gen.v[k] for _, name, k in machines}
     on = {(sg.class_name, k) for sg in (ss.PV, ss.Slack) for k in _in_service(sg)}
     bare = [
@@ -861,6 +921,24 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 params = tuple(float(m.params[f].vin[k]) for f in fields)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused, _grouped(changed)
+
+
+def _check_shares(ss, file: str, machines, with_converter) -> None:
+    """CaseError for a static generator whose machines' shares ``gammap``/``gammaq`` do not
+    add up to 1 (a duplicated machine record doubled its generation; ANDES runs it)."""
+    shares: dict = {}
+    for _, name, k in machines:
+        m = ss.models[name]
+        acc = shares.setdefault(m.gen.v[k], [0.0, 0.0, []])
+        acc[0] += float(m.gammap.v[k])
+        acc[1] += float(m.gammaq.v[k])
+        acc[2].append(f"{name} {m.idx.v[k]}")
+    for gen, (p, q, names) in shares.items():
+        if gen not in with_converter and (abs(p - 1) > 1e-9 or abs(q - 1) > 1e-9):
+            raise CaseError(
+                f"{file}: static generator {gen}: its machines ({', '.join(names)}) take "
+                f"gammap {p:g} and gammaq {q:g} of its power, not 1 (a duplicated record?)"
+            )
 
 
 def _grouped(changed) -> list[str]:

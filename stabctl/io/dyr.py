@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -113,11 +114,13 @@ def read_dyr(path) -> list[DyrRecord]:
     tokens: list = []
     start = 0
     for n, line in enumerate(text.splitlines(), 1):
-        for tok in _TOKEN.findall(line):
+        for m in _TOKEN.finditer(line):
+            tok = m.group()
             if tok == "/":
                 if tokens:
                     records.append(_record(path.name, start, tokens))
                 tokens = []
+                _warn_record_in_comment(path.name, n, line[m.end() :])
                 break  # the rest of the line after '/' is a comment
             if not tokens:
                 start = n
@@ -125,6 +128,22 @@ def read_dyr(path) -> list[DyrRecord]:
     if tokens:
         raise CaseError(f"{path.name}:{start}: record not terminated by '/'")
     return records
+
+
+#: a DYR record's start: a bus number and a quoted model name
+_RECORD_START = re.compile(r"^\s*-?\d+\s*,?\s*'[^']+'")
+
+
+def _warn_record_in_comment(file: str, n: int, rest: str) -> None:
+    """Warn when ``rest``, what follows a record's '/' on line n (a comment, as in PSS/E),
+    looks like a record: it is not read."""
+    if _RECORD_START.match(rest):
+        warnings.warn(
+            f"{file}:{n}: '{' '.join(rest.split())[:40]}' after '/' is a comment (PSS/E "
+            "reads one record up to '/'): put each record on its own line to read it",
+            UserWarning,
+            stacklevel=3,
+        )
 
 
 def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:

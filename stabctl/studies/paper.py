@@ -442,8 +442,6 @@ def _write_locked(out: Path, keys: list, progress, resume: bool) -> Path:
                 "simulations": _simulations(out / f.name),
             }
             f.unlink()
-    for f in work.glob(".*.lock"):  # the sweeps' locks, inside this run's own
-        f.unlink()
     try:
         work.rmdir()
     except OSError:  # something else left there: keep it

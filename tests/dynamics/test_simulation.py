@@ -253,6 +253,22 @@ def test_bad_clearing_and_times(kundur):
         kundur.run([], t_end=1.0, h=0.0)
 
 
+def test_a_circuit_or_machine_tripped_twice_is_refused(kundur):
+    """The second trip of an open circuit did nothing, silently."""
+    from stabctl.dynamics.events import GeneratorTrip
+
+    cleared = Fault(bus=3, t=1.0, clear_near=1.1, far_bus=101)
+    for events, needle in (
+        ([cleared, LineTrip(3, 101, 2.0)], r"circuit 3-101 \(branch row 5\) is tripped twice"),
+        ([LineTrip(101, 3, 2.0), LineTrip(3, 101, 3.0)], "circuit 3-101"),
+        ([GeneratorTrip(2, 1.5), GeneratorTrip(2, 2.0)], "machine 2 is tripped twice"),
+    ):
+        with pytest.raises(InputError, match=needle):
+            kundur.run(events, t_end=3.0)
+    # a fault that is never cleared leaves its line in: tripping it later is the clearing
+    kundur.run([Fault(bus=3, t=1.0, far_bus=101), LineTrip(3, 101, 1.1)], t_end=1.5)
+
+
 def tiny_inertia_case():
     """Kundur with machine 1's inertia at 1e-5 s: its swing mode is far beyond the explicit
     integrator's stability limit at the 10 ms step, so the run blows up numerically."""

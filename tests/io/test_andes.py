@@ -752,6 +752,32 @@ def test_import_andes_maps_psse_models_as_the_dyr_reader():
         )
 
 
+@pytest.mark.parametrize(
+    "edit,needle",
+    [
+        # a line reactance NaN or left out ran as ANDES's 1e-8 pu
+        (lambda d: d["Line"][2].update(x=float("nan")), r"Line row 3 \(idx Line_3\): x missing"),
+        (lambda d: d["Line"][2].pop("x"), r"Line row 3 \(idx Line_3\): x missing"),
+        # a machine's M left out ran as H = 3 s
+        (lambda d: d["GENROU"][0].pop("M"), r"GENROU row 1 \(idx GENROU_1\): M missing"),
+        (lambda d: d["GENROU"][0].update(M="8"), r"GENROU row 1 \(idx GENROU_1\): M '8'"),
+        # a duplicated machine record ran as 5 machines, the generator's power twice
+        (
+            lambda d: d["GENROU"].append(dict(d["GENROU"][0], idx="GENROU_9", name="GENROU_9")),
+            r"static generator 1: its machines \(GENROU GENROU_1, GENROU GENROU_9\) take "
+            r"gammap 2",
+        ),
+    ],
+)
+def test_import_andes_refuses_values_andes_would_default_silently(tmp_path, edit, needle):
+    data = json.loads(Path(andes.get_case("ieee14/ieee14.json")).read_text())
+    edit(data)
+    path = tmp_path / "edited.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(CaseError, match=needle):
+        read_andes_case(path, on_unsupported="skip")
+
+
 def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
     """A case with a distributed-generation protection (DGPRCT1 on ten PVD1) and ANDES's
     own disturbances: one error naming every model stabctl lacks with its device count,
