@@ -4,6 +4,7 @@ pool), Dask, and the `stabctl sweep-cct` command.  Kundur only, to keep it short
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -263,6 +264,48 @@ def test_a_second_writer_of_a_sweep_file_is_refused_with_the_holders_pid(tmp_pat
         rep = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
     assert (rep.ran, rep.skipped) == (1, 1)
     assert not lock_path(out).exists()  # removed by the writer that ends
+
+
+_WRITER = """
+import sys, time
+from stabctl.errors import InputError
+from stabctl.parallel import Job, run_sweep
+
+
+def slow(inputs):
+    time.sleep(0.02)
+    return {"x": inputs["x"]}
+
+
+try:
+    jobs = [Job(f"j/{i}", slow, {"x": i}) for i in range(30)]
+    rep = run_sweep(jobs, sys.argv[1], workers=1, progress=False)
+    print("ran", rep.ran, rep.skipped)
+except InputError as exc:
+    print("refused", exc)
+"""
+
+
+@pytest.mark.parametrize("writers", [2, 5])
+def test_concurrent_writers_of_one_sweep_file_never_duplicate_or_lose_records(tmp_path, writers):
+    """Several sweeps started at once on one file: each runs (all or the rest) or is
+    refused naming the pid of the one writing; the file ends with every job once, whole."""
+    out = tmp_path / "shared.jsonl"
+    script = tmp_path / "writer.py"
+    script.write_text(_WRITER)
+    procs = [
+        subprocess.Popen([sys.executable, str(script), str(out)], stdout=subprocess.PIPE, text=True)
+        for _ in range(writers)
+    ]
+    said = [p.communicate(timeout=120)[0].strip() for p in procs]
+    assert all(p.returncode == 0 for p in procs), said
+    ran = [t for t in said if t.startswith("ran")]
+    refused = [t for t in said if t.startswith("refused")]
+    assert ran and len(ran) + len(refused) == writers, said
+    assert all(re.search(r"\(pid \d+\) is writing it", t) for t in refused), refused
+    assert sum(int(t.split()[1]) for t in ran) == 30  # the jobs ran once in all
+    keys = [json.loads(line)["key"] for line in out.read_text().splitlines()]
+    assert sorted(keys) == sorted(f"j/{i}" for i in range(30))
 
 
 def test_written_files_get_the_mode_of_the_users_umask(tmp_path):

@@ -17,6 +17,7 @@ bracketed, where the planner's CCT searches start.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -264,16 +265,16 @@ def screening_brackets(path) -> dict:
         f = r.get("fault") or inputs
         try:
             fault = LineFault(
-                int(f["bus"]),
-                None if f["far_bus"] is None else int(f["far_bus"]),
-                float(f["t_fault"]),
-                int(f["circuit"]),
-                tuple((int(a), int(b)) for a, b in f["trips"]),
+                _whole(f["bus"]),
+                None if f["far_bus"] is None else _whole(f["far_bus"]),
+                _seconds(f["t_fault"]),
+                _whole(f["circuit"]),
+                tuple((_whole(a), _whole(b)) for a, b in f["trips"]),
             )
             out[Contingency(fault, 1.0).fault_name] = (
-                (float(inputs["t_max"]), None)
+                (_seconds(inputs["t_max"]), None)
                 if still
-                else (float(r["t_stable_s"]), float(r["t_unstable_s"]))
+                else (_seconds(r["t_stable_s"]), _seconds(r["t_unstable_s"]))
             )
         except (KeyError, TypeError, ValueError) as exc:
             raise InputError(
@@ -286,6 +287,20 @@ def screening_brackets(path) -> dict:
             "records of `stabctl screen --out`)"
         )
     return out
+
+
+def _whole(v) -> int:
+    """A bus, circuit number of a record: a JSON integer >= 1 (ValueError else)."""
+    if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+        raise ValueError(f"{v!r} is not a number >= 1")
+    return v
+
+
+def _seconds(v) -> float:
+    """A time of a record: a finite JSON number >= 0 (ValueError else)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < math.inf:
+        raise ValueError(f"{v!r} is not a time >= 0 s")
+    return float(v)
 
 
 def contingencies_of(

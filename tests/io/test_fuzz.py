@@ -58,6 +58,35 @@ SEEDS = {
     "dyr": [(PSSE / "five_bus.dyr").read_text()],
     "case_json": [(Path(pstio.__file__).parents[1] / "case" / "data" / "kundur.json").read_text()],
     "pst_m": [(HERE / "data" / "pstess" / "d2asbegp.m").read_text()],
+    "fault_csv": [
+        "bus,far_bus,t_fault,circuit,required_clearing_cycles,target_cct_s\n"
+        "3,101,1.0,1,6,\n13,101,1.5,1,,0.3\n1,,1.0,1,,\n"
+    ],
+    "site_costs": ["machine,cost_mw,cost_mwh,cost_site\n1,5,100,10\n3,,200,\n4,1.5,,\n"],
+    "screening": [
+        "".join(
+            json.dumps(
+                {
+                    "key": f"k{n}",
+                    "status": "ok",
+                    "inputs": {"esd_pct": None, "t_max": 0.5},
+                    "result": {
+                        "fault": {
+                            "bus": bus,
+                            "far_bus": far,
+                            "t_fault": 1.0,
+                            "circuit": 1,
+                            "trips": [],
+                        },
+                        "t_stable_s": 0.15 + 0.01 * n,
+                        "t_unstable_s": 0.16 + 0.01 * n,
+                    },
+                }
+            )
+            + "\n"
+            for n, (bus, far) in enumerate(((3, 101), (13, 101), (1, None)))
+        )
+    ],
 }
 TIME_BOX_S = 60  # no example may take longer (a hang fails the test)
 
@@ -209,6 +238,32 @@ def pst_m_property(text):
         outcome("pst_m", lambda: _valid(load_case(path)))
 
 
+def fault_csv_property(text):
+    from stabctl.placement.requirements import read_requirements
+    from stabctl.stability.cct import read_faults
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = _file(tmp, "fuzz.csv", text)
+        outcome("fault_csv", lambda: read_faults(path))
+        outcome("fault_csv", lambda: read_requirements(path))
+
+
+def site_costs_property(text):
+    from stabctl.placement.requirements import read_site_costs
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = _file(tmp, "costs.csv", text)
+        outcome("site_costs", lambda: read_site_costs(path, 4))
+
+
+def screening_property(text):
+    from stabctl.placement.requirements import screening_brackets
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = _file(tmp, "screening.jsonl", text)
+        outcome("screening", lambda: screening_brackets(path))
+
+
 def _valid(case):
     assert isinstance(case, Case)
     return case
@@ -219,6 +274,9 @@ for _name, _prop in (
     ("dyr", dyr_property),
     ("case_json", case_json_property),
     ("pst_m", pst_m_property),
+    ("fault_csv", fault_csv_property),
+    ("site_costs", site_costs_property),
+    ("screening", screening_property),
 ):
     _strategy = mutated(SEEDS[_name])
     globals()[f"test_fuzz_{_name}_reader"] = QUICK(given(_strategy)(_prop))
