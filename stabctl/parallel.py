@@ -436,8 +436,7 @@ def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, p
         ):
             for rec in results:
                 line = _line(rec)
-                f.write(line)
-                f.flush()
+                f.append(line)
                 rec = done[rec["key"]] = json.loads(line)  # as it reads back
                 failed += rec["status"] == "failed"
                 bar.update()
@@ -553,22 +552,32 @@ def _jsonable(x):
 
 
 class _appender:
-    """Append mode, first ending a last line cut short by a kill (so records stay one per
-    line)."""
+    """A sweep file open for appending whole records (unbuffered bytes): a last line cut
+    short by a kill is ended first (so records stay one per line), and a record whose write
+    fails (a disk full) is cut off again, so that the file holds only whole records (the
+    sweep holds the file's lock: no one else appends)."""
 
     def __init__(self, path: Path):
         self.path = path
 
     def __enter__(self):
-        cut = (
-            self.path.exists()
-            and self.path.stat().st_size > 0
-            and self.path.read_bytes()[-1:] != b"\n"
-        )
-        self.f = self.path.open("a")
-        if cut:
-            self.f.write("\n")
-        return self.f
+        self.f = self.path.open("a+b", buffering=0)
+        size = os.fstat(self.f.fileno()).st_size
+        if size and os.pread(self.f.fileno(), 1, size - 1) != b"\n":
+            self.append("\n")
+        return self
+
+    def append(self, line: str) -> None:
+        """Write ``line`` whole; if a write fails, truncate the file to where it began."""
+        fd = self.f.fileno()
+        start = os.fstat(fd).st_size
+        data = memoryview(line.encode())
+        try:
+            while data:
+                data = data[self.f.write(data) :]
+        except OSError:
+            os.ftruncate(fd, start)
+            raise
 
     def __exit__(self, *exc):
         self.f.close()
@@ -603,8 +612,8 @@ SCHEDULER_TIMEOUT_S = 10.0
 
 
 def check_scheduler(address: str) -> str:
-    """``address`` once it is "local" or a Dask TCP address ``tcp://host[:port]`` (port
-    1-65535, Dask's 8786 if left out).
+    """``address`` once it is "local", a Dask TCP address ``tcp://host[:port]`` (port
+    1-65535, Dask's 8786 if left out) or a cluster in this process (``inproc://``).
 
     Raises
     ------
@@ -614,7 +623,7 @@ def check_scheduler(address: str) -> str:
     """
     from urllib.parse import urlsplit
 
-    if address == "local":
+    if address == "local" or address.startswith("inproc://"):  # inproc: this process's
         return address
     parts = urlsplit(address if "://" in address else f"tcp://{address}")
     try:

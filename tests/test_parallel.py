@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -306,6 +307,48 @@ def test_concurrent_writers_of_one_sweep_file_never_duplicate_or_lose_records(tm
     assert sum(int(t.split()[1]) for t in ran) == 30  # the jobs ran once in all
     keys = [json.loads(line)["key"] for line in out.read_text().splitlines()]
     assert sorted(keys) == sorted(f"j/{i}" for i in range(30))
+
+
+def test_a_record_whose_write_fails_is_cut_off_so_the_file_holds_whole_records(
+    tmp_path, monkeypatch
+):
+    """A disk full in the middle of a record: the sweep ends with the error and the file
+    holds the records written before it, whole (a rerun needs no repair)."""
+    import errno
+
+    import stabctl.parallel as par
+
+    out = tmp_path / "full.jsonl"
+    run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
+    real_open = Path.open
+
+    class HalfDisk:
+        """Writes half of the second record it gets, then fails as a full disk."""
+
+        def __init__(self, f):
+            self.f, self.calls = f, 0
+
+        def write(self, data):
+            self.calls += 1
+            if self.calls == 2:
+                self.f.write(bytes(data[: len(data) // 2]))
+                raise OSError(errno.ENOSPC, "No space left on device")
+            return self.f.write(data)
+
+        def __getattr__(self, name):
+            return getattr(self.f, name)
+
+    def half_open(path, mode="r", *args, **kwargs):
+        f = real_open(path, mode, *args, **kwargs)
+        return HalfDisk(f) if mode == "a+b" else f
+
+    monkeypatch.setattr(par.Path, "open", half_open)
+    with pytest.raises(OSError, match="No space left"):
+        run_sweep(jobs_of(square, 1, 2, 3), out, workers=1, progress=False)
+    monkeypatch.undo()
+    assert [r["key"] for r in lines(out)] == ["square/1", "square/2"]
+    rep = run_sweep(jobs_of(square, 1, 2, 3), out, workers=1, progress=False)
+    assert (rep.ran, rep.skipped) == (1, 2)
 
 
 def test_written_files_get_the_mode_of_the_users_umask(tmp_path):
