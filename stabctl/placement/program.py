@@ -200,7 +200,10 @@ def solve_allocation(
         obj = obj + (10 * float(cost @ ub) if penalty is None else penalty) * cp.sum(slack)
     if trust is not None:
         cons.append(cp.abs(P - trust[0]) <= trust[1])
-    prob = cp.Problem(cp.Minimize(obj), cons)
+    # the optimum does not change with the cost's scale, the solver's numerics do: costs
+    # of 1e9 per MW made Clarabel report the program unbounded
+    scale = float(np.max(np.abs(cost), initial=0.0)) or 1.0
+    prob = cp.Problem(cp.Minimize(obj / scale), cons)
     wall = time.perf_counter()
     prob.solve(solver=cp.CLARABEL)
     wall = time.perf_counter() - wall
@@ -211,7 +214,7 @@ def solve_allocation(
     return Allocation(
         sites=tuple(sites),
         mw=mw,
-        objective=float(prob.value),
+        objective=float(prob.value) * scale,
         solve_time_s=float(prob.solver_stats.solve_time or 0.0),
         wall_time_s=wall,
         slack=0.0 if slack is None else float(np.sum(cast(np.ndarray, slack.value))),

@@ -135,6 +135,17 @@ def test_program_takes_the_cheapest_ccts_per_mw_and_respects_costs_and_safety():
     assert safe.mw[1] == pytest.approx(51.0, abs=1e-5)
 
 
+def test_the_allocation_does_not_depend_on_the_costs_scale():
+    """Costs of 1e9 per MW (any currency) made the solver report the program unbounded:
+    the objective is scaled before the solve, the plan is the same and its cost 1e9 times."""
+    cuts = [cut("a", [1, 2, 0]), cut("b", [0, 1, 3])]
+    base = solve_allocation(SITES, cuts)
+    dear = tuple(Site(s.bus, s.machine, s.max_mw, cost=1e9) for s in SITES)
+    big = solve_allocation(dear, cuts)
+    np.testing.assert_allclose(big.mw, base.mw, atol=1e-5)
+    assert big.objective == pytest.approx(1e9 * base.objective, rel=1e-6)
+
+
 def test_infeasible_bounds_name_the_contingency():
     cuts = [cut("easy", [0, 0, 2]), cut("hard", [0.1, 0.1, 0])]  # hard needs 1000 MW
     assert diagnose(cuts, [s.max_mw for s in SITES]) == ["hard"]
