@@ -29,6 +29,7 @@ import json
 import multiprocessing
 import os
 import re
+import shutil
 import signal
 import socket
 import sys
@@ -427,8 +428,9 @@ def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, p
     wall = time.perf_counter()
     failed = written = 0
     if todo:
-        results = _dask(todo, scheduler, workers) if scheduler else _local(todo, workers, pool)
         out.parent.mkdir(parents=True, exist_ok=True)
+        _check_space(out, len(todo))
+        results = _dask(todo, scheduler, workers) if scheduler else _local(todo, workers, pool)
         with (
             closing(results),
             _appender(out) as f,
@@ -549,6 +551,23 @@ def _jsonable(x):
     if hasattr(x, "tolist"):
         return x.tolist()
     raise TypeError(f"{type(x).__name__} is not JSON-serialisable")
+
+
+#: bytes a sweep record may take (a CCT search's record is about 1 KB; a failure's
+#: traceback a few)
+RECORD_BYTES = 8192
+
+
+def _check_space(out: Path, n_jobs: int) -> None:
+    """InputError before any job runs when the file system of ``out`` has less free space
+    than ``n_jobs`` records may need (RECORD_BYTES each)."""
+    free = shutil.disk_usage(out.parent).free
+    need = n_jobs * RECORD_BYTES
+    if free < need:
+        raise InputError(
+            f"{out}: {n_jobs} job(s) need up to {need / 2**20:.1f} MiB for their records, "
+            f"{free / 2**20:.1f} MiB are free there"
+        )
 
 
 class _appender:

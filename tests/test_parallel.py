@@ -351,6 +351,17 @@ def test_a_record_whose_write_fails_is_cut_off_so_the_file_holds_whole_records(
     assert (rep.ran, rep.skipped) == (1, 2)
 
 
+def test_a_sweep_without_room_for_its_records_is_refused_before_it_runs(tmp_path, monkeypatch):
+    import collections
+    import shutil
+
+    usage = collections.namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(10**9, 10**9 - 10000, 10000))
+    with pytest.raises(InputError, match=r"3 job\(s\) need up to 0.0 MiB .*0.0 MiB are free"):
+        run_sweep(jobs_of(square, 1, 2, 3), tmp_path / "n.jsonl", workers=1, progress=False)
+    assert not (tmp_path / "n.jsonl").exists()
+
+
 def test_written_files_get_the_mode_of_the_users_umask(tmp_path):
     """Files written whole (imported cases, CSVs, reports) and a sweep file rewritten after
     a repair get 0o666 less the umask, as any new file, not the temporary file's 0o600."""
