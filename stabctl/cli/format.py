@@ -364,6 +364,11 @@ def print_estimate(d) -> None:
             for _, k in cols
         ]
         click.echo(f"{name:9}" + "".join(cells))
+    if any(fig[k]["mean"] is None for fig in d["estimators"].values() for _, k in cols[:-1]):
+        click.echo(
+            "-: no error to take (a COI or relative speed needs an estimate of every "
+            "machine at one time; a machine none of whose frames arrived has none)"
+        )
     if d["false_actions"] is not None:
         a = d["ambient"]
         click.echo(

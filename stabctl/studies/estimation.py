@@ -118,13 +118,13 @@ def errors(
     true = result.speed_at(stream.t[sel])
     late = result.speed_at(stream.t[sel] + stream.settings.latency_s)
     rel = lambda s: relative_speeds(s, s, M, coi)[0]  # noqa: E731
-    rms = lambda e: float(np.sqrt(np.nanmean(e**2)) * f0 * 1e3)  # noqa: E731
+    rms = lambda e: _finite(e, lambda v: np.sqrt(np.mean(v**2))) * f0 * 1e3  # noqa: E731
     e_rel = rel(track.speed[sel]) - rel(true)
     out = {
         "speed_rmse_mhz": rms(track.speed[sel] - true),
         "coi_rmse_mhz": rms((track.speed[sel] - true) @ M / M.sum()),
         "rel_rmse_mhz": rms(e_rel),
-        "rel_max_mhz": float(np.nanmax(np.abs(e_rel)) * f0 * 1e3),
+        "rel_max_mhz": _finite(e_rel, lambda v: np.max(np.abs(v))) * f0 * 1e3,
         "rel_arrival_rmse_mhz": rms(rel(track.speed[sel]) - rel(late)),
         "rel_forecast_rmse_mhz": rms(rel(track.ahead[sel]) - rel(late)),
     }
@@ -136,6 +136,14 @@ def errors(
     else:
         out["nis_inside"] = float("nan")
     return out
+
+
+def _finite(values, stat) -> float:
+    """``stat`` of the finite entries of ``values``; NaN when there are none (every frame
+    lost: a COI or relative error needs a frame of every PMU at once)."""
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    return float(stat(v)) if v.size else float("nan")
 
 
 def monte_carlo(

@@ -375,6 +375,17 @@ def test_estimate_rmse_simulates_the_fault_run_with_wecc_batteries():
         assert bad.exit_code == 2 and "'foo' is not one of 'ideal', 'wecc'" in bad.output
 
 
+def test_estimate_rmse_with_nearly_every_frame_lost_says_why_a_figure_is_missing():
+    """--drop 0.999 (an issue-30 probe: a TypeError after half the table): a machine none
+    of whose frames arrived has no estimate, so the COI and relative errors are "-", said
+    in a footnote, with no numpy warning."""
+    args = ["estimate", "rmse", "kundur", "--fault", "3", "--far-bus", "101", "--drop", "0.999"]
+    res = CliRunner().invoke(main, [*args, "--runs", "2", "--ambient-s", "0", "--tf", "3"])
+    assert res.exit_code == 0, res.output
+    assert "-: no error to take (a COI or relative speed needs an estimate" in res.stdout
+    assert "warning" not in res.stderr, res.stderr
+
+
 def test_estimate_cct_commands_wecc_batteries():
     """`estimate cct --esd-model wecc`: every estimator's loop commands batteries, whose
     CCT with exact measurements is 11.5 cycles against the ideal devices' 12 (the
