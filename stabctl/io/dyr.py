@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import math
 import re
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -101,7 +100,8 @@ def read_dyr(path) -> list[DyrRecord]:
         list of DyrRecord.
     Raises:
         CaseError "{file}:{line}: ..." for an unreadable file, a record not ended by '/'
-        or without a quoted model name after the bus, and, for the models stabctl maps, a
+        or without a quoted model name after the bus, a record after another's '/' on
+        one line (a comment in PSS/E, so never read), and, for the models stabctl maps, a
         non-integer bus or a parameter that is not a number (other models' records are
         kept, with bus 0 and NaN parameters there, for the unsupported report).
     """
@@ -120,7 +120,7 @@ def read_dyr(path) -> list[DyrRecord]:
                 if tokens:
                     records.append(_record(path.name, start, tokens))
                 tokens = []
-                _warn_record_in_comment(path.name, n, line[m.end() :])
+                _refuse_record_in_comment(path.name, n, line[m.end() :])
                 break  # the rest of the line after '/' is a comment
             if not tokens:
                 start = n
@@ -134,15 +134,13 @@ def read_dyr(path) -> list[DyrRecord]:
 _RECORD_START = re.compile(r"^\s*-?\d+\s*,?\s*'[^']+'")
 
 
-def _warn_record_in_comment(file: str, n: int, rest: str) -> None:
-    """Warn when ``rest``, what follows a record's '/' on line n (a comment, as in PSS/E),
-    looks like a record: it is not read."""
+def _refuse_record_in_comment(file: str, n: int, rest: str) -> None:
+    """CaseError when ``rest``, what follows a record's '/' on line n (a comment, as in
+    PSS/E), looks like a record: it would not be read."""
     if _RECORD_START.match(rest):
-        warnings.warn(
-            f"{file}:{n}: '{' '.join(rest.split())[:40]}' after '/' is a comment (PSS/E "
-            "reads one record up to '/'): put each record on its own line to read it",
-            UserWarning,
-            stacklevel=3,
+        raise CaseError(
+            f"{file}:{n}: '{' '.join(rest.split())[:40]}' after '/' would be a comment "
+            "(PSS/E reads one record up to '/'): put each record on its own line"
         )
 
 

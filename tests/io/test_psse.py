@@ -166,18 +166,19 @@ def _dyr(tmp_path, *lines):
 _GENROU = "8.0 0.03 0.4 0.05 {H} 0.0 1.8 1.7 0.3 0.55 0.25 0.06 0.0 0.0 /"
 
 
-def test_a_record_after_a_slash_on_the_same_line_is_named_not_dropped_silently(tmp_path):
+def test_a_record_after_a_slash_on_the_same_line_is_refused_not_dropped_silently(tmp_path):
     """PSS/E reads one record up to '/', the rest of the line being a comment: a second
-    record there is not read, and the reader now says so."""
+    record there would not be read, so the reader refuses it (a comment is read as one)."""
     from stabctl.io.dyr import read_dyr
 
     path = tmp_path / "two.dyr"
     path.write_text(
         "1 'GENCLS' 1 6.0 0.0 / 3 'GENCLS' 1 5.0 0.0 /\n3 'GENCLS' 1 5.0 0.0 / a note\n"
     )
-    with pytest.warns(UserWarning, match=r"two\.dyr:1: '3 'GENCLS' 1 5.0 0.0 /' after '/'"):
-        records = read_dyr(path)
-    assert [(r.bus, r.model) for r in records] == [(1, "GENCLS"), (3, "GENCLS")]
+    with pytest.raises(CaseError, match=r"two\.dyr:1: '3 'GENCLS' 1 5.0 0.0 /' after '/'"):
+        read_dyr(path)
+    path.write_text("1 'GENCLS' 1 6.0 0.0 / machine 1\n3 'GENCLS' 1 5.0 0.0 / 2 units\n")
+    assert [(r.bus, r.model) for r in read_dyr(path)] == [(1, "GENCLS"), (3, "GENCLS")]
 
 
 def test_generators_without_a_machine_model_are_refused_or_netted(tmp_path):
