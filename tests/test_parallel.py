@@ -169,7 +169,17 @@ def test_interrupt_keeps_finished_lines_and_resume_runs_the_rest(tmp_path):
     assert [r["key"] for r in lines(out)] == ["square/1", "square/2", "square/3"]
 
 
-def test_ctrl_c_on_a_process_pool_keeps_finished_lines(tmp_path):
+@pytest.fixture
+def sigint_raises():
+    """SIGINT raising KeyboardInterrupt in this process for the test, as in a terminal:
+    pytest started with SIGINT ignored (nohup, a background job, some CI runners) would
+    ignore the Ctrl-C under test."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+def test_ctrl_c_on_a_process_pool_keeps_finished_lines(tmp_path, sigint_raises):
     out = tmp_path / "ctrl_c.jsonl"
     slow = jobs_of(sleepy, 2.0, 2.5)
     jobs = jobs_of(square, 1, 2) + jobs_of(ctrl_c_parent, 0.5) + slow

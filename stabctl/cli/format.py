@@ -82,11 +82,14 @@ def describe_event(ev) -> str:
         s = f"3-phase fault at bus {ev.bus} at {ev.t:g} s"
         if ev.clear_near is None:
             return s + ", never cleared"
+        near = f"at {_ms(ev.clear_near)} s (after {1000 * (ev.clear_near - ev.t):.1f} ms)"
         if ev.far_bus is None:
-            return s + f", cleared at {ev.clear_near:g} s without loss of a line"
+            return s + f", cleared {near} without loss of a line"
+        far = f"at {_ms(ev.far_clear)} s (after {1000 * (ev.far_clear - ev.t):.1f} ms)"
         return (
-            s + f" on line {ev.bus}-{ev.far_bus} (circuit {ev.circuit}), cleared at "
-            f"{ev.clear_near:g} s near / {ev.far_clear:g} s far end, line tripped"
+            s + f" on line {ev.bus}-{ev.far_bus} (circuit {ev.circuit}), cleared "
+            + (near if far == near else f"{near} near / {far} far end")
+            + ", line tripped"
         )
     if isinstance(ev, LineTrip):
         return f"line {ev.from_bus}-{ev.to_bus} (circuit {ev.circuit}) tripped at {ev.t:g} s"
@@ -95,6 +98,11 @@ def describe_event(ev) -> str:
     if isinstance(ev, LoadStep):
         return f"load step {ev.P:g}{ev.Q:+g}j pu at bus {ev.bus} at {ev.t:g} s"
     return repr(ev)
+
+
+def _ms(t: float) -> str:
+    """A time in s to the ms, without trailing zeros (1.18333 -> 1.183, 1.35 -> 1.35)."""
+    return f"{t:.3f}".rstrip("0").rstrip(".")
 
 
 def save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0) -> None:

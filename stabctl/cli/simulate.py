@@ -111,7 +111,8 @@ def _build_events(
     "--pstess-default",
     is_flag=True,
     help="Run the case file's own PST sw_con disturbance (with any of the above "
-    "added); --tf then defaults to its end time.",
+    "added); --tf then defaults to its end time.  It runs under --conventions (default "
+    "ieee): add --conventions pstess to reproduce PSTess's own run.",
 )
 @tf_option("; no disturbance: 5 s; with --pstess-default: the end of the data file's run")
 @model_options
