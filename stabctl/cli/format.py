@@ -87,7 +87,8 @@ def describe_event(ev) -> str:
             return s + f", cleared {near} without loss of a line"
         far = f"at {_ms(ev.far_clear)} s (after {1000 * (ev.far_clear - ev.t):.1f} ms)"
         return (
-            s + f" on line {ev.bus}-{ev.far_bus} (circuit {ev.circuit}), cleared "
+            s
+            + f" on line {ev.bus}-{ev.far_bus} (circuit {ev.circuit}), cleared "
             + (near if far == near else f"{near} near / {far} far end")
             + ", line tripped"
         )
