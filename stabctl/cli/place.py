@@ -297,12 +297,12 @@ def place(
         case_name, faults, req, options, study, progress=(lambda msg: None) if as_json else None
     )
     out = {"case": case.name, "esd_model": esd_model, **result.to_dict()}
-    if out_path:
-        atomic_write(out_path, lambda f: json.dump(out, f, indent=1, default=float))
     if as_json:
         print_json(out)
     else:
         print_plan(case.name, out)
+    if out_path:  # after the plan is shown: a full disk does not lose the run
+        atomic_write(out_path, lambda f: json.dump(out, f, indent=1, default=float))
     if not result.verified:
         sys.exit(1)
 

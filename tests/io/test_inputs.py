@@ -150,3 +150,21 @@ def test_outputs_that_are_devices_and_write_failures_end_in_one_error_line(tmp_p
     assert res.stderr.strip().splitlines() == [
         f"error: {tmp_path / 'o.jsonl'}: No space left on device"
     ]
+
+
+def test_a_plan_whose_file_cannot_be_written_is_still_shown(tmp_path, monkeypatch):
+    """place --out on a full disk lost the whole run: the plan is printed first."""
+    import errno
+
+    def full(path, write, **kw):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+
+    monkeypatch.setattr("stabctl.parallel.atomic_write", full)
+    out = tmp_path / "plan.json"
+    res = CliRunner().invoke(
+        main,
+        ["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "5", "--workers", "1"]
+        + ["--json", "--out", str(out)],
+    )
+    assert res.exit_code == 2 and "No space left on device" in res.stderr
+    assert '"verified": true' in res.stdout and not out.exists()
