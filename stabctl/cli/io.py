@@ -11,6 +11,7 @@ import click
 from stabctl.cli.checks import check_suffix
 from stabctl.cli.format import describe_sw_con, print_json
 from stabctl.cli.options import AliasedOption, json_option, reports_errors
+from stabctl.errors import InputError
 
 
 def _case_info(name: str) -> dict:
@@ -34,31 +35,110 @@ def _case_info(name: str) -> dict:
 
 
 @click.command()
-@json_option("the list of cases")
+@click.argument("case_name", metavar="[CASE]", required=False)
+@click.option(
+    "--bus-table", "buses", is_flag=True, help="List CASE's buses (number, type, kV, V, load)."
+)
+@click.option(
+    "--line-table",
+    "lines",
+    is_flag=True,
+    help="List CASE's branches (from, to, circuit as --circuit counts it, r, x, b, tap).",
+)
+@json_option("the list")
 @reports_errors
-def cases(as_json):
-    """List the built-in cases (usable as CASE in `stabctl simulate`).
+def cases(case_name, buses, lines, as_json):
+    """List the built-in cases (usable as CASE in `stabctl simulate`), or one case.
 
     For each: name, description, numbers of buses, branches (every circuit counted),
     machines, exciters, PSS, governors and non-conforming load buses, the base (MVA) and
     frequency (Hz), and the data file's own disturbance (PST sw_con, run by
-    `simulate --pstess-default`).
+    `simulate --pstess-default`).  With CASE (a built-in or a case file): that case, and
+    with --bus-table / --line-table its buses and branches, to choose --fault, --far-bus
+    and --circuit (bus numbers are the data file's: PST numbering).
     """
     from stabctl.io import list_cases
 
-    rows = [_case_info(name) for name in list_cases()]
+    if case_name is None and (buses or lines):
+        raise InputError("--bus-table and --line-table list one case's: give CASE")
+    rows = [_case_info(name) for name in ([case_name] if case_name else list_cases())]
+    tables = {}
+    if case_name and (buses or lines):
+        from stabctl.io import load_case
+
+        case = load_case(case_name)
+        tables = {
+            **({"buses": _bus_rows(case)} if buses else {}),
+            **({"lines": _line_rows(case)} if lines else {}),
+        }
     if as_json:
-        print_json(rows)
+        print_json({**rows[0], **tables} if case_name else rows)
         return
     for r in rows:
         click.echo(
             f"{r['name']}: {r['buses']} buses, {r['branches']} branches, "
-            f"{r['machines']} machines, {r['governors']} governors, "
-            f"{r['base_mva']:g} MVA base, {r['freq_hz']:g} Hz"
+            f"{r['machines']} machines, {r['exciters']} exciters, {r['pss']} PSS, "
+            f"{r['governors']} governors, {r['nonconforming_loads']} non-conforming load "
+            f"buses, {r['base_mva']:g} MVA base, {r['freq_hz']:g} Hz"
         )
         click.echo(f"    {r['description']}")
         if r["sw_con"]:
             click.echo(f"    data file disturbance: {r['sw_con']}")
+    for name, table in tables.items():
+        click.echo(f"\n{name}:")
+        click.echo("  ".join(f"{k:>8}" for k in table[0]) if table else "  (none)")
+        for row in table:
+            click.echo("  ".join(_cell(v) for v in row.values()))
+
+
+def _cell(v) -> str:
+    if isinstance(v, float):
+        return f"{v:>8.4g}"
+    return f"{'-' if v is None else v!s:>8}"
+
+
+def _bus_rows(case) -> list[dict]:
+    """One dict per bus: number, type, kV, |V| and angle of the data, load, machines."""
+    from stabctl.case import PQ, PV, SWING
+
+    b, kinds = case.buses, {SWING: "swing", PV: "PV", PQ: "PQ"}
+    at = {}
+    for k, bus in enumerate(case.machines.bus):
+        at.setdefault(int(bus), []).append(str(int(case.machines.number[k])))
+    return [
+        {
+            "bus": int(b.number[i]),
+            "type": kinds.get(int(b.kind[i]), "?"),
+            "kV": float(b.kv[i]),
+            "V_pu": float(b.vmag[i]),
+            "angle_deg": float(b.vang_deg[i]),
+            "P_load_pu": float(b.pload[i]),
+            "Q_load_pu": float(b.qload[i]),
+            "machines": ",".join(at.get(int(b.number[i]), [])) or None,
+        }
+        for i in range(case.n_bus)
+    ]
+
+
+def _line_rows(case) -> list[dict]:
+    """One dict per branch row: from, to, circuit (the k-th row of its bus pair, as
+    --circuit counts), r, x, b (pu), tap."""
+    br, seen, out = case.branches, {}, []
+    for k in range(len(br)):
+        a, c = int(br.from_bus[k]), int(br.to_bus[k])
+        n = seen[(min(a, c), max(a, c))] = seen.get((min(a, c), max(a, c)), 0) + 1
+        out.append(
+            {
+                "from": a,
+                "to": c,
+                "circuit": n,
+                "r_pu": float(br.r[k]),
+                "x_pu": float(br.x[k]),
+                "b_pu": float(br.b[k]),
+                "tap": float(br.tap[k]) or 1.0,
+            }
+        )
+    return out
 
 
 def _dyr_and_out(func):

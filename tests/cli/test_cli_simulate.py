@@ -51,8 +51,25 @@ def test_cases_json_lists_builtins_with_counts():
 def test_cases_text():
     res = run("cases")
     assert res.exit_code == 0
-    assert "kundur: 13 buses, 14 branches, 4 machines" in res.stdout
+    assert "kundur: 13 buses, 14 branches, 4 machines, 4 exciters, 4 PSS, 4 governors" in res.stdout
     assert "miniwecc: 122 buses, 171 branches, 34 machines" in res.stdout
+    assert "66 non-conforming load buses" in res.stdout  # all its help promises
+
+
+def test_cases_lists_one_cases_buses_and_lines_to_choose_a_fault():
+    """`cases CASE --bus-table --line-table`: the numbers --fault, --far-bus and --circuit take,
+    from the data file (Kundur's line 3-101 has two circuits)."""
+    res = run("cases", "kundur", "--bus-table", "--line-table", "--json")
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert d["name"] == "kundur" and len(d["buses"]) == 13 and len(d["lines"]) == 14
+    bus1 = d["buses"][0]
+    assert (bus1["bus"], bus1["type"], bus1["kV"], bus1["machines"]) == (1, "swing", 22.0, "1")
+    pairs = [(r["from"], r["to"], r["circuit"]) for r in d["lines"]]
+    assert (3, 101, 1) in pairs and (3, 101, 2) in pairs
+    text = run("cases", "kundur", "--line-table").stdout
+    assert "lines:" in text and "circuit" in text and "buses:" not in text
+    assert run("cases", "--bus-table").exit_code == 2
 
 
 def test_help_texts_state_units():
