@@ -11,7 +11,7 @@ so that ANDES reads the same data); the GB network (ANDES's ``GBnetwork/GBnetwor
 generated", through ``import_andes``, its two Toggle records left out); ACTIVSg2000 (the
 synthetic 2000-bus Texas grid, PSS/E RAW + DYR of tests/data/activsg through
 ``import_psse(..., on_unsupported="skip", unmodelled="net")`` and ``leave_out_infeasible``,
-as README's PSS/E section: 334 machines, 247 exciters, 246 PSS, 18 governors; no ANDES
+as docs/cli.md's PSS/E section: 334 machines, 247 exciters, 246 PSS, 18 governors; no ANDES
 column, ANDES lacks its GGOV1, EXPIC1, EXAC2 and ESAC6A and nets nothing).  Cases imported
 through ANDES, NPCC and N44 are run without PV Q limits (ANDES's default,
 ``q_limits=False``; the GB power flow does not converge with them in stabctl: worst mismatch
@@ -145,7 +145,7 @@ def load_system(label: str, work: str):
 
 
 def _activsg2000(work: str):
-    """ACTIVSg2000 imported as README's PSS/E section does (files uncompressed in work)."""
+    """ACTIVSg2000 imported as docs/cli.md's PSS/E section does (files uncompressed in work)."""
     import gzip
     import shutil
 
