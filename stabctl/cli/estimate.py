@@ -326,7 +326,7 @@ def rmse(
     load's P an Ornstein-Uhlenbeck process of --ambient-pct standard deviation and
     --ambient-tau-s correlation time, stabctl.estimation.ambient), the number of ESD
     actions (Table 3 rule with --deadband-hz) each estimate would trigger (all are
-    false), the largest |f_i - f_COI| and the largest standard deviation of f_i - f_COI
+    false), the largest abs(f_i - f_COI) and the largest standard deviation of f_i - f_COI
     (true: the ambient spread).
     """
     from stabctl.estimation import ambient as am

@@ -88,7 +88,7 @@ def cct(
     bound from 0.1 s while stable (up to --t-max), then bisects on multiples of --tol-ms.
     The CCT printed is the stable end of the final bracket (conservative).  Its numerical
     error bar: the bracket's ends rerun at half the step (the search continued there if a
-    verdict changes); numerical_error_s = |CCT(h/2) - CCT(h)| (0: below the tolerance).
+    verdict changes); numerical_error_s = abs(CCT(h/2) - CCT(h)) (0: below the tolerance).
     \b
     Examples:
       stabctl cct kundur --fault 3 --far-bus 101

@@ -126,7 +126,7 @@ class Simulator:
         (True, the default: a cold first run then costs about the longer of the two, not
         their sum, on two cores); False for a simulator that never runs (linearisation).
     off_equilibrium : {"refuse", "warn"}, optional
-        An initial point whose largest |derivative| exceeds 1e-8 (a model's
+        An initial point whose largest abs(derivative) exceeds 1e-8 (a model's
         initialisation disagreeing with its dynamics) is refused (the default) or warned
         about (`DynamicModel.check_equilibrium`, which names the state).
 

@@ -149,8 +149,8 @@ class GeneratorTrip(_AtOneTime):
 class LoadStep(_AtOneTime):
     """Add P + jQ of constant-impedance load at `bus` from `t`.
 
-    The load is the shunt admittance (P - jQ) / |V0|^2, V0 the bus voltage of the power
-    flow, so it draws P + jQ at that voltage and scales with |V|^2; negative values remove
+    The load is the shunt admittance (P - jQ) / abs(V0)^2, V0 the bus voltage of the power
+    flow, so it draws P + jQ at that voltage and scales with abs(V)^2; negative values remove
     load (a pulse is two steps of opposite sign).
 
     Attributes

@@ -124,7 +124,7 @@ class SimulationResult:
 
     @property
     def max_angle_spread(self) -> float:
-        """Largest |delta_i - delta_COI| over the run (rad)."""
+        """Largest abs(delta_i - delta_COI) over the run (rad)."""
         return float(np.max(np.abs(self.angle - self.coi_angle[:, None])))
 
     def speed_at(self, t: np.ndarray) -> np.ndarray:
@@ -200,7 +200,7 @@ class SimulationResult:
         -------
         dict
             ``stable`` (bool), ``t_separation_s`` (s or None), ``separated_machines``
-            (machine numbers), ``max_angle_spread_rad`` (largest |delta_i - delta_COI|,
+            (machine numbers), ``max_angle_spread_rad`` (largest abs(delta_i - delta_COI),
             rad), ``t_end_s`` (last recorded time, s), ``n_steps`` (recorded times - 1),
             then every entry of `meta`.
         """

@@ -2,7 +2,7 @@
 at the power-flow point and handed to python-control as a `control.StateSpace`.
 
 Method (PSTess `svm_mgen`, docs/pst_models.md 9; details and error study in docs/modal.md):
-every active state, then every input, is perturbed by +-h, h = rel_step * max(|value|, 1)
+every active state, then every input, is perturbed by +-h, h = rel_step * max(abs(value), 1)
 (PSTess: rel_step = 1e-4); each perturbed point is evaluated by `evaluate_kernel`, the
 compiled single evaluation behind `DynamicModel.evaluate`, which re-solves the algebraic
 network (non-conforming loads included) from the kept-bus voltages of the power flow, so
@@ -139,7 +139,7 @@ def linearise(
     extra_buses : iterable of int, optional
         Further ESD buses, appended (repeats ignored); default none.
     rel_step : float, optional
-        Relative perturbation h / max(|value|, 1), in (0, 0.1); default PSTess's 1e-4
+        Relative perturbation h / max(abs(value), 1), in (0, 0.1); default PSTess's 1e-4
         (REL_STEP).
     conventions : {"ieee", "pstess"}, optional
         Model conventions when `target` is a Case (a Simulator keeps its own); default

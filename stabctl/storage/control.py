@@ -93,7 +93,7 @@ class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
     Parameters
     ----------
     deadband_hz : float
-        |f_i - f_COI| below which the device is idle (Hz), >= 0.
+        abs(f_i - f_COI) below which the device is idle (Hz), >= 0.
     v_gate_pu : float
         Minimum bus voltage for the device to act (pu), in [0, MAX_V_GATE_PU].
     coi : {"system", "rest"}
