@@ -18,6 +18,7 @@ def test_docs_build_without_warnings(tmp_path):
     pytest.importorskip("sphinx_click")
     src = tmp_path / "docs"
     shutil.copytree(DOCS, src, ignore=shutil.ignore_patterns("_build", "api"))
+    shutil.copytree(DOCS.parent / "examples", tmp_path / "examples")  # literalinclude
     res = subprocess.run(
         [sys.executable, "-m", "sphinx", "-q", "-W", "--keep-going", "-b", "html", str(src)]
         + [str(tmp_path / "html")],
@@ -30,3 +31,4 @@ def test_docs_build_without_warnings(tmp_path):
     html = tmp_path / "html"
     assert (html / "cli_reference.html").read_text().count("stabctl simulate") > 0
     assert (html / "api" / "stabctl.critical_clearing_time.html").exists()
+    assert "critical_clearing_time" in (html / "examples.html").read_text()
