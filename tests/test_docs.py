@@ -32,3 +32,4 @@ def test_docs_build_without_warnings(tmp_path):
     assert (html / "cli_reference.html").read_text().count("stabctl simulate") > 0
     assert (html / "api" / "stabctl.critical_clearing_time.html").exists()
     assert "critical_clearing_time" in (html / "examples.html").read_text()
+    assert "exc_con" in (html / "models_reference.html").read_text()  # from the declarations
