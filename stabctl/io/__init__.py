@@ -52,6 +52,13 @@ def load_case(name_or_path: str | Path) -> Case:
     CaseError
         The name is neither a built-in nor an existing file, the path is not a regular
         file of bounded size (`stabctl.io.inputs.input_file`), or the file is malformed.
+
+    Examples
+    --------
+    >>> from stabctl.io import load_case
+    >>> case = load_case("kundur")
+    >>> case.n_bus, len(case.machines), case.base_mva, case.freq_hz
+    (13, 4, 100.0, 60.0)
     """
     text = str(name_or_path)
     builtin = CASE_DIR / f"{text}.json"

@@ -353,6 +353,20 @@ def critical_clearing_time(
     is cleared counts as unstable (voltage collapse).  Sources: Kundur, Power System
     Stability and Control, 1994, sec. 13.3; Pai, Energy Function Analysis for Power System
     Stability, 1989, ch. 1.
+
+    Examples
+    --------
+    The paper's Case 1 (Kundur, line 3-101), without storage and with 5 % ESDs:
+
+    >>> import stabctl
+    >>> case = stabctl.load_case("kundur")
+    >>> sim = stabctl.Simulator(case)
+    >>> fault = stabctl.LineFault(3, 101, 1.0)
+    >>> stabctl.critical_clearing_time(sim, fault).cct_s
+    0.154
+    >>> fleet = stabctl.uniform_fleet(case, 5)
+    >>> stabctl.critical_clearing_time(sim, fault, storage=fleet).cct_s
+    0.199
     """
     o = SearchOptions() if search is None else search
     tol, t_max = o.tol, o.t_max
