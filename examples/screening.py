@@ -17,9 +17,13 @@ def main():
         search=SearchOptions(t_max=0.5),
         runner=RunnerOptions(workers=2, progress=False),
     )
-    for r in rows:  # a fault still stable at t_max is recorded with the reason
-        cct = f"{1000 * r['cct_s']:.0f} ms" if r["status"] == "ok" else r["error"]
-        print(f"bus {r['bus']}: CCT {cct}")
+    for r in rows:  # verdict: "cct", "above t_max" (a robust fault) or "failed"
+        if r["verdict"] == "cct":
+            print(f"bus {r['bus']}: CCT {1000 * r['cct_s']:.0f} ms")
+        elif r["verdict"] == "above t_max":
+            print(f"bus {r['bus']}: CCT above the search limit {r['t_max_s']:g} s (robust)")
+        else:
+            print(f"bus {r['bus']}: failed ({r['error']})")
 
 
 if __name__ == "__main__":

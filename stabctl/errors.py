@@ -13,6 +13,12 @@ class InputError(StabctlError, ValueError):
     """A parameter is out of its physical range (negative H, Pm above Pmax, ...)."""
 
 
+class AboveSearchLimit(InputError):
+    """A CCT search found the fault still stable when cleared at its upper limit t_max: the
+    CCT is above it.  A verdict on a robust fault, not a failure: sweeps record it as such
+    and `screen`, `sweep-cct` and `cct` report it apart from failed searches."""
+
+
 class CaseError(StabctlError, ValueError):
     """Malformed case data: names the table, the row and the field."""
 

@@ -16,7 +16,7 @@ SHOWN = {
     "case2_with_storage.py": ["without storage: stable=False", "5 % ESDs: stable=True"],
     "cct_gain.py": ["no storage: CCT 154 ms", "5 % ESDs: CCT"],
     "modes.py": ["56 states", "0.612 Hz", "inter-area"],
-    "screening.py": ["bus 3: CCT", "above the search limit t_max = 0.5 s"],
+    "screening.py": ["bus 3: CCT 238 ms", "bus 13: CCT above the search limit 0.5 s (robust)"],
     "pmu_estimation.py": ["ekf : speed RMSE"],
 }
 

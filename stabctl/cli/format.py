@@ -243,7 +243,11 @@ def sweep_line(key, rec) -> str:
     -------
     str
     """
+    from stabctl.stability.screening import ABOVE, verdict
+
     if rec["status"] != "ok":
+        if verdict(rec) == ABOVE:
+            return f"{key:<34} above the search limit t_max = {rec['inputs']['t_max']:g} s (robust)"
         return f"{key:<34} failed: {rec['error']}"
     r, wall = rec["result"], rec.get("wall_time_s")  # none in a reproducible copy
     err = r.get("numerical_error_s")
@@ -266,10 +270,13 @@ def print_sweep(rep, n_jobs: int) -> None:
     click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'err ms':>6} {'sims':>5} {'wall s':>7}")
     for key, rec in rep.records.items():
         click.echo(sweep_line(key, rec))
-    n_bad = sum(r["status"] != "ok" for r in rep.records.values())
+    from stabctl.stability.screening import ABOVE, verdict
+
+    verdicts = [verdict(r) for r in rep.records.values()]
     click.echo(
         f"{n_jobs} job(s): {rep.ran} run now, {rep.skipped} already in {rep.out}; "
-        f"{n_bad} failed; wall {rep.wall_time_s:.1f} s"
+        f"{verdicts.count('cct')} CCT(s) found, {verdicts.count(ABOVE)} above the search "
+        f"limit (robust), {verdicts.count('failed')} failed; wall {rep.wall_time_s:.1f} s"
     )
 
 
@@ -289,8 +296,18 @@ def print_screening(rows) -> None:
             click.echo(
                 f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  {r['separated']}"
             )
+        elif r["verdict"] == "above t_max":
+            above = f">{r['t_max_s']:.3f}"
+            click.echo(
+                f"{where:<22} {above:>7} {'-':>7} {'-':>6}  robust: stable when cleared there"
+            )
         else:
-            click.echo(f"{where:<22} {'-':>7} {'-':>7}  {r['error'][:70]}")
+            click.echo(f"{where:<22} {'-':>7} {'-':>7} {'-':>6}  {r['error'][:70]}")
+    counts = {v: sum(r["verdict"] == v for r in rows) for v in ("cct", "above t_max", "failed")}
+    click.echo(
+        f"{len(rows)} fault(s): {counts['cct']} CCT(s) found, {counts['above t_max']} above the "
+        f"search limit (robust), {counts['failed']} failed"
+    )
 
 
 def print_modes(st, no_pss: bool) -> None:

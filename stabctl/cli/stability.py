@@ -94,10 +94,13 @@ def cct(
       stabctl cct kundur --fault 3 --far-bus 101
       stabctl cct miniwecc --fault 83 --far-bus 33 --json
 
-    Bad input (unknown bus or line, unstable at zero clearing, CCT above --t-max, storage
-    not available) exits with status 2 and one `error:` line.
+    A fault still stable when cleared at --t-max is a verdict (the CCT is above it: exit
+    0, ``"cct_s": null`` and ``"above_t_max_s"`` in --json).  Bad input (unknown bus or
+    line, unstable at zero clearing, storage not available) exits with status 2 and one
+    `error:` line.
     """
     from stabctl.dynamics.events import validate as validate_events
+    from stabctl.errors import AboveSearchLimit
     from stabctl.io import load_case
     from stabctl.stability.cct import LineFault, critical_clearing_time
     from stabctl.storage.devices import uniform_fleet
@@ -114,7 +117,24 @@ def cct(
     )
     line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
     validate_events(case, line_fault.events(0.0), t_fault + 1.0)  # before compiling
-    res = critical_clearing_time(model.simulator(case), line_fault, search, storage=storage, h=step)
+    try:
+        res = critical_clearing_time(
+            model.simulator(case), line_fault, search, storage=storage, h=step
+        )
+    except AboveSearchLimit as exc:  # a verdict: the fault is robust up to --t-max
+        if as_json:
+            print_json(
+                {
+                    "case": case.name,
+                    "esd_pct": esd_pct,
+                    "cct_s": None,
+                    "above_t_max_s": search.t_max,
+                    "verdict": str(exc),
+                }
+            )
+        else:
+            click.echo(f"CCT above the search limit: {exc}")
+        return
     out = {
         "case": case.name,
         "esd_pct": esd_pct,
@@ -258,7 +278,7 @@ def sweep_cct(
     is_flag=True,
     help="Also fault the from-end of every branch with the branch tripped (N-1).",
 )
-@tol_options(0.5, "a CCT above it is recorded as failed")
+@tol_options(0.5, "a fault still stable there is a verdict: CCT above it, robust")
 @out_file_option(
     "screening.jsonl", "FILE.jsonl", "JSON lines, one per finished search (rerunning resumes)."
 )
@@ -288,8 +308,9 @@ def screen(
 
     Bus faults are cleared without loss of a line (PST sw_con type 7); the CCT search and
     its stability criterion are `stabctl cct`'s. Rows are sorted by CCT, most critical
-    first; a failed search (e.g. voltage collapse during the fault) is listed with its
-    reason.
+    first; a fault still stable when cleared at --t-max is robust (CCT above it, shown as
+    ">t_max", its verdict "above t_max"); a failed search (e.g. voltage collapse during
+    the fault) is listed with its reason, and the last line counts each kind.
     """
     from stabctl.io import load_case
     from stabctl.parallel import RunnerOptions

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.errors import InputError, SimulationError
+from stabctl.errors import AboveSearchLimit, InputError, SimulationError
 from stabctl.placement.program import CCTCut
 from stabctl.stability.cct import (
     LineFault,
@@ -139,9 +139,7 @@ def evaluate(job: dict) -> dict:
                 stop=job.get("scan_to"),
                 step=job.get("scan_s", SCAN_S),
             )
-    except InputError as exc:
-        if "above the search limit" not in str(exc):
-            raise
+    except AboveSearchLimit:
         return {
             "cct_s": t_max,
             "t_unstable_s": None,
@@ -362,7 +360,7 @@ def scanned_cct(
             return res, runs
         prev, t = t, round(t + step, 12)
     if prev is None or prev >= t_max:
-        raise InputError(
+        raise AboveSearchLimit(
             f"{fault.describe()}: the CCT is above the search limit t_max = {t_max:g} s"
         )
     res = critical_clearing_time(

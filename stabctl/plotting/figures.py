@@ -494,7 +494,8 @@ def participation_bars(ma, modes, path, n_bars: int = 12) -> None:
 
 def screening_map(case, rows, path: Path) -> None:
     """Network drawn with `stabctl.plotting.layout.spectral_layout`, each bus coloured by the CCT
-    of a fault there (grey: failed search); bus numbers on the most critical ones."""
+    of a fault there (open circles: CCT above the search limit, a robust fault; grey
+    crosses: failed search), with a legend; bus numbers on the most critical ones."""
     from stabctl.plotting.layout import spectral_layout
 
     xy = spectral_layout(case)
@@ -516,7 +517,31 @@ def screening_map(case, rows, path: Path) -> None:
         edgecolors="k",
         linewidths=0.3,
     )
-    ax.scatter(xy[idx[~ok], 0], xy[idx[~ok], 1], c="0.5", s=40, zorder=2, marker="x")
+    above = np.array([r.get("verdict") == "above t_max" for r in bus_rows.values()], bool)
+    if above.any():
+        t_max = max(r["t_max_s"] for r in bus_rows.values() if r.get("verdict") == "above t_max")
+        ax.scatter(
+            xy[idx[above], 0],
+            xy[idx[above], 1],
+            facecolors="none",
+            edgecolors="darkgreen",
+            s=40,
+            zorder=2,
+            label=f"CCT above the search limit {t_max:g} s (robust)",
+        )
+    failed = ~ok & ~above
+    if failed.any():
+        ax.scatter(
+            xy[idx[failed], 0],
+            xy[idx[failed], 1],
+            c="0.5",
+            s=40,
+            zorder=2,
+            marker="x",
+            label="search failed (no verdict)",
+        )
+    if above.any() or failed.any():
+        ax.legend(loc="lower right", fontsize=8)
     for k in np.argsort(np.where(ok, cct, np.inf))[:10]:
         ax.annotate(str(int(case.buses.number[idx[k]])), xy[idx[k]], fontsize=7)
     fig.colorbar(sc, ax=ax, label="CCT of a bus fault (cycles)")

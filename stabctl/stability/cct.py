@@ -46,7 +46,12 @@ from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import Fault, LineTrip
 from stabctl.dynamics.options import ModelOptions
 from stabctl.dynamics.results import SimulationResult
-from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
+from stabctl.errors import (
+    AboveSearchLimit,
+    InputError,
+    NumericalInstabilityError,
+    SimulationError,
+)
 from stabctl.io.inputs import CsvRow, number, read_csv
 from stabctl.network.ybus import circuit_row
 
@@ -337,8 +342,9 @@ def critical_clearing_time(
     Raises
     ------
     InputError
-        Bad settings; unstable at t_lo (also at zero clearing); still stable at t_max (the
-        CCT is above it).
+        Bad settings; unstable at t_lo (also at zero clearing).
+    AboveSearchLimit
+        Still stable at t_max: the CCT is above it (an InputError, a verdict).
     UnknownBusError, CaseError
         No such bus or line.
     NumericalInstabilityError
@@ -511,7 +517,7 @@ def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple
     while stable_at(k_hi):
         if k_hi == k_max:
             t = _lattice(k_max, tol)
-            raise InputError(
+            raise AboveSearchLimit(
                 f"{fault.describe()}: the CCT is above the search limit "
                 f"t_max = {t:g} s "
                 f"({t * freq:.4g} cycles): still stable when cleared there"

@@ -35,6 +35,20 @@ def screening_faults(
     return faults
 
 
+#: the verdict of a search still stable at its upper limit (a robust fault)
+ABOVE = "above t_max"
+
+
+def verdict(rec: dict) -> str:
+    """A CCT record's verdict: "cct" (found), :data:`ABOVE` (still stable at the search's
+    upper limit: the CCT is above it, `stabctl.errors.AboveSearchLimit`; older records say
+    "still stable") or "failed" (no verdict: the reason is in the record)."""
+    if rec["status"] == "ok":
+        return "cct"
+    error = rec.get("error") or ""
+    return ABOVE if error.startswith("AboveSearchLimit") or "still stable" in error else "failed"
+
+
 def screen(
     case_name: str,
     out: str | Path,
@@ -64,8 +78,9 @@ def screen(
     Returns
     -------
     list of dict
-        One row per fault: key, bus, far_bus, status, CCT (s and cycles) with its
-        numerical error (s), separated machines, simulations, or the failure reason.
+        One row per fault: key, bus, far_bus, status, verdict (`verdict`; with
+        :data:`ABOVE` the search's limit ``t_max_s``), CCT (s and cycles) with its
+        numerical error (s), separated machines, simulations, or the reason.
 
     Raises
     ------
@@ -89,6 +104,9 @@ def screen(
             "far_bus": fault.far_bus,
             "status": rec["status"],
         }
+        row["verdict"] = verdict(rec)
+        if row["verdict"] == ABOVE:
+            row["t_max_s"] = search.t_max
         if rec["status"] == "ok":
             r = rec["result"]
             row.update(

@@ -440,6 +440,7 @@ def _write_locked(out: Path, keys: list, progress, resume: bool) -> Path:
             log["records"][f.name] = {
                 **write_reproducible(f, out / f.name),
                 "simulations": _simulations(out / f.name),
+                "above_limit": _above_limit(out / f.name),
             }
             f.unlink()
     try:
@@ -461,13 +462,23 @@ def _simulations(records: Path) -> int:
     return n
 
 
+def _above_limit(records: Path) -> int:
+    """Jobs of a sweep record file whose search found the fault still stable at its upper
+    limit (`stabctl.stability.screening.verdict`): robust faults, not failures."""
+    from stabctl.stability.screening import ABOVE, verdict
+
+    return sum(verdict(rec) == ABOVE for rec in read_records(records).values())
+
+
 def run_summary(log: dict) -> str:
     """The end-of-run summary of `stabctl paper` from its run log (`RUN_LOG`): seconds per
     section, jobs and simulations per sweep record file, the total."""
     lines = [f"{'seconds':>8}  section"]
     lines += [f"{s['seconds']:8.1f}  {s['section']}" for s in log["sections"]]
     lines += [
-        f"{'':8}  {name}: {r['jobs']} jobs ({r['failed']} failed), {r['simulations']} simulations"
+        f"{'':8}  {name}: {r['jobs']} jobs ("
+        + (f"{r['above_limit']} above the search limit, robust; " if r.get("above_limit") else "")
+        + f"{r['failed'] - r.get('above_limit', 0)} failed), {r['simulations']} simulations"
         for name, r in log["records"].items()
     ]
     lines.append(f"{log['total_s']:8.1f}  in all, on {log['cores']} cores")

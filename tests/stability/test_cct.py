@@ -312,7 +312,6 @@ def test_cli_cct_text():
         (("--fault", 99, "--far-bus", 101), "bus 99"),
         (("--fault", 3, "--far-bus", 13), "no branch between bus 3 and bus 13"),
         (("--fault", 3, "--far-bus", 101, "--tol-ms", 0), "--tol-ms"),
-        (("--fault", 3, "--far-bus", 101, "--t-max", 0.1), "above the search limit"),
         (("--fault", 3, "--far-bus", 101, "--tf", 1.5), "latest clearing"),
     ],
 )
@@ -322,6 +321,17 @@ def test_cli_cct_bad_input(args, needle):
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0]
     assert res.stdout == ""
+
+
+def test_cli_cct_above_its_search_limit_is_a_verdict_not_an_error():
+    """A fault still stable when cleared at --t-max is robust: exit 0 and the verdict (it
+    was an `error:` line with exit 2), ``cct_s`` null with the limit in --json."""
+    args = ("cct", "kundur", "--fault", 3, "--far-bus", 101, "--t-max", 0.1)
+    res = run(*args)
+    assert res.exit_code == 0, res.output
+    assert res.stdout.startswith("CCT above the search limit: ") and "t_max = 0.1 s" in res.stdout
+    d = json.loads(run(*args, "--json").stdout)
+    assert d["cct_s"] is None and d["above_t_max_s"] == 0.1
 
 
 def test_cli_cct_with_storage():

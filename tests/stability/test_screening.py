@@ -71,7 +71,14 @@ def test_cli_screen_writes_map_and_reports_failures(tmp_path):
     by_bus = {r["bus"]: r for r in rows}
     assert by_bus[3]["status"] == "ok" and by_bus[3]["separated"] == [1, 2]
     assert by_bus[101]["status"] == "failed" and "above the search limit" in by_bus[101]["error"]
+    # a robust fault is a verdict, told apart from a failed search
+    assert by_bus[3]["verdict"] == "cct" and by_bus[101]["verdict"] == "above t_max"
+    assert by_bus[101]["t_max_s"] == 0.4 and by_bus[101]["error"].startswith("AboveSearchLimit")
     assert (tmp_path / "m.png").stat().st_size > 10000
+    again = ["screen", "kundur", "--buses", "3,101", "--t-max", "0.4", "--workers", "1"]
+    text = CliRunner().invoke(main, [*again, "--out", str(tmp_path / "s.jsonl")]).stdout
+    assert ">0.400" in text and "robust: stable when cleared there" in text
+    assert "2 fault(s): 1 CCT(s) found, 1 above the search limit (robust), 0 failed" in text
 
 
 def test_spectral_layout_is_finite_and_distinct():

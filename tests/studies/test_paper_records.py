@@ -118,6 +118,7 @@ def test_resume_starts_from_the_records_in_out(tmp_path, fake_parts):
         "longest_job_s": None,
         "longest_job": None,
         "simulations": 0,
+        "above_limit": 0,
     }
 
 
