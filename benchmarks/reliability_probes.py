@@ -41,6 +41,11 @@ class Probe:
     no_file: str = ""  # a path that must not exist afterwards
 
 
+def cli(text: str) -> list[str]:
+    """A command's arguments as typed (no quoting needed in these probes)."""
+    return text.split()
+
+
 def run(args, cwd, timeout=600):
     return subprocess.run(
         STABCTL + [str(a) for a in args],
@@ -166,37 +171,13 @@ def probes(cwd: Path) -> list[Probe]:
         Probe(
             "7",
             "--window-cycles 1e6",
-            [
-                "estimate",
-                "rmse",
-                "kundur",
-                "--fault",
-                "3",
-                "--far-bus",
-                "101",
-                "--window-cycles",
-                "1e6",
-            ],
+            cli("estimate rmse kundur --fault 3 --far-bus 101 --window-cycles 1e6"),
             needle="--window-cycles",
         ),
         Probe(
             "7",
             "trip of a circuit the fault opens",
-            [
-                "simulate",
-                "kundur",
-                "--fault",
-                "3",
-                "--far-bus",
-                "101",
-                "--trip",
-                "3",
-                "101",
-                "--t-trip",
-                "2",
-                "--tf",
-                "3",
-            ],
+            cli("simulate kundur --fault 3 --far-bus 101 --trip 3 101 --t-trip 2 --tf 3"),
             needle="tripped twice",
         ),
     ]
@@ -260,23 +241,8 @@ def probes(cwd: Path) -> list[Probe]:
         Probe(
             "11",
             "--drop 0.999",
-            [
-                "estimate",
-                "rmse",
-                "kundur",
-                "--fault",
-                "3",
-                "--far-bus",
-                "101",
-                "--drop",
-                "0.999",
-                "--runs",
-                "2",
-                "--ambient-s",
-                "0",
-                "--tf",
-                "3",
-            ],
+            cli("estimate rmse kundur --fault 3 --far-bus 101 --drop 0.999")
+            + cli("--runs 2 --ambient-s 0 --tf 3"),
             exit=0,
             needle="-: no error to take",
         ),
@@ -362,18 +328,7 @@ def lock_probe(cwd: Path) -> tuple[Probe, str]:
     p = Probe(
         "1",
         "second sweep on a file being written",
-        [
-            "sweep-cct",
-            "miniwecc",
-            "--faults",
-            "DEFAULT",
-            "--esd-pct",
-            "none,5",
-            "--workers",
-            "1",
-            "--out",
-            "busy.jsonl",
-        ],
+        cli("sweep-cct miniwecc --faults DEFAULT --esd-pct none,5 --workers 1 --out busy.jsonl"),
         needle="is writing it",
     )
     first = subprocess.Popen(

@@ -105,57 +105,33 @@ def test_sigkill_of_a_sweep_leaves_no_worker_running(tmp_path):
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
-def test_sigint_of_a_screening_exits_130_with_the_resume_command(tmp_path):
+@pytest.mark.parametrize("sig,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_sigint_or_sigterm_of_a_screening_ends_with_the_resume_command(tmp_path, sig, status):
+    """Ctrl-C (SIGINT) or SIGTERM (kill, a batch system's time limit) to a screening on two
+    workers: the resume line, exit status 130 or 143, no traceback, no leaked semaphore,
+    no worker left, and only whole records in the file."""
     args = ["screen", "kundur", "--tol-ms", "0.05", "--workers", "2", "--out", "s.jsonl"]
     proc = _start(args, tmp_path)
     out = tmp_path / "s.jsonl"
     try:
         assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
         kids = _children(proc.pid)
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(sig)
         _, err = proc.communicate(timeout=30)
     finally:
         if proc.poll() is None:
             proc.kill()
-    assert proc.returncode == 130, err
+    assert proc.returncode == status, err
     last = err.strip().splitlines()[-1]
     assert last.startswith("interrupted: finished searches are in s.jsonl (")
     assert last.endswith("resume with: stabctl " + " ".join(args)), last
-    assert "Traceback" not in err and "Aborted" not in err
+    assert "Traceback" not in err and "Aborted" not in err and "leaked" not in err
     assert _wait_for(lambda: not any(_alive(k) for k in kids), 10)
-    # every line left is a whole record
     import json
 
     assert all(
         json.loads(line)["status"] in ("ok", "failed") for line in out.read_text().splitlines()
     )
-
-
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
-def test_sigterm_of_a_sweep_ends_as_ctrl_c_with_exit_143(tmp_path):
-    """SIGTERM (kill, a batch system's time limit) to a sweep running on two workers: the
-    same resume line as Ctrl-C, exit status 143, no traceback, no leaked semaphore, no
-    worker left, and only whole records in the file; the rerun skips them."""
-    args = ["screen", "kundur", "--tol-ms", "0.05", "--workers", "2", "--out", "t.jsonl"]
-    proc = _start(args, tmp_path)
-    out = tmp_path / "t.jsonl"
-    try:
-        assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
-        kids = _children(proc.pid)
-        proc.send_signal(signal.SIGTERM)
-        _, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 143, err
-    last = err.strip().splitlines()[-1]
-    assert last.startswith("interrupted: finished searches are in t.jsonl (")
-    assert last.endswith("resume with: stabctl " + " ".join(args)), last
-    assert "Traceback" not in err and "leaked" not in err
-    assert _wait_for(lambda: not any(_alive(k) for k in kids), 10)
-    import json
-
-    assert all(json.loads(line)["status"] == "ok" for line in out.read_text().splitlines())
 
 
 @pytest.mark.parametrize(
