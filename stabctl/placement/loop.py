@@ -80,7 +80,7 @@ class PlacementResult:
     allocation: the cheapest verified Allocation (or the last accepted one when none met
     every target); verified: every contingency's simulated CCT reaches its target (and,
     with zeta_min, the recomputed damping); evaluations: contingency name -> evaluation
-    (`placement_eval.evaluate`) at that allocation; base: the same without storage;
+    (`stabctl.placement.evaluation.evaluate`) at that allocation; base: the same without storage;
     iterations: one dict per allocation simulated; damping: (frequency Hz, damping ratio)
     of the electromechanical modes at the allocation, or None; message: why it stopped;
     solve_times_s: Clarabel's time of every program solved.

@@ -2,9 +2,9 @@
 the loop, for Kundur Case 1 (fault at bus 3, line 3-101) and miniWECC Case 2 (bus 83, line
 83-33).  `write_estimation_report(out_dir)` writes reports/estimation_<case>.md.
 
-Sources: RMSE during the post-fault swing, `estimation_study.monte_carlo` (PMU noise seeds
+Sources: RMSE during the post-fault swing, `stabctl.studies.estimation.monte_carlo` (PMU noise seeds
 0.., C37.118.1 limits as 3 sigma, 60 frames/s, 50 ms latency); false actions,
-`estimation_study.false_actions` on 60 s without fault with ambient load fluctuation
+`stabctl.studies.estimation.false_actions` on 60 s without fault with ambient load fluctuation
 (`stabctl.estimation.ambient`, AMBIENT: standard deviation 1 % of each load, correlation time 2 s,
 seeds 0..AMBIENT_RUNS-1); CCT, `closed_loop.cct_study` (estimators in the loop, ESDs of 5 %
 and 20 % of each generator's MVA; noise seeds per row by `closed_loop.SeedRule`).
@@ -85,9 +85,10 @@ def case_figures(
 def ambient_figures(
     case, h: float | None = None, runs: int = AMBIENT_RUNS, t_end: float = AMBIENT_S, progress=None
 ) -> dict:
-    """The false-actions figures (`estimation_study.false_actions`, default PMUs, noise seeds
-    0..runs-1) of `runs` runs of t_end s without fault with the AMBIENT load fluctuation
-    (load seeds 0..runs-1), integrated with step h (s; None: the case's default).
+    """The false-actions figures (`stabctl.studies.estimation.false_actions`, default PMUs,
+    noise seeds 0..runs-1) of `runs` runs of t_end s without fault with the AMBIENT load
+    fluctuation (load seeds 0..runs-1), integrated with step h (s; None: the case's
+    default).
     progress: callable(r) told before run r.  Raises as `ambient.simulate`."""
     sim = Simulator(case, step=h)
     flat = []
