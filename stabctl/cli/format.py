@@ -523,12 +523,15 @@ def estimator_cct_lines(
     -------
     list of str
     """
+    from stabctl.estimation.closed_loop import CCT_TOL_S
+
     rate, lat = settings.rate, settings.latency_s
     lines = [
         f"CCT of line {bus}-{far_bus}, {_ESD_NAMES[esd_model]} {esd_pct:g} %, {rate:g} "
         f"frames/s, latency "
         f"{1000 * lat:g} ms, frequency window {settings.window_cycles:g} cycles, {runs} "
-        f"seeds from {seed} (cycles):"
+        f"seeds from {seed} (cycles, each found on a {1000 * CCT_TOL_S:.2f} ms grid, 1/4 "
+        "cycle: coarser than stabctl cct's 1 ms):"
     ]
     lines += [
         f"  {e:5} "
