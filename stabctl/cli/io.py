@@ -102,7 +102,7 @@ def _bus_rows(case) -> list[dict]:
     from stabctl.case import PQ, PV, SWING
 
     b, kinds = case.buses, {SWING: "swing", PV: "PV", PQ: "PQ"}
-    at = {}
+    at: dict[int, list[str]] = {}
     for k, bus in enumerate(case.machines.bus):
         at.setdefault(int(bus), []).append(str(int(case.machines.number[k])))
     return [
@@ -123,7 +123,9 @@ def _bus_rows(case) -> list[dict]:
 def _line_rows(case) -> list[dict]:
     """One dict per branch row: from, to, circuit (the k-th row of its bus pair, as
     --circuit counts), r, x, b (pu), tap."""
-    br, seen, out = case.branches, {}, []
+    br = case.branches
+    seen: dict[tuple[int, int], int] = {}
+    out: list[dict] = []
     for k in range(len(br)):
         a, c = int(br.from_bus[k]), int(br.to_bus[k])
         n = seen[(min(a, c), max(a, c))] = seen.get((min(a, c), max(a, c)), 0) + 1
