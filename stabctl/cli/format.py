@@ -322,6 +322,8 @@ def print_modes(st, no_pss: bool) -> None:
     """
     import numpy as np
 
+    from stabctl.studies.eigenvalues import area_sides
+
     ma = st.ma
     click.echo(
         f"case {st.case.name}{' without PSS' if no_pss else ''}: {st.sys.nstates} "
@@ -335,10 +337,11 @@ def print_modes(st, no_pss: bool) -> None:
     em = ma.electromechanical
     for i in em[np.argsort(ma.freq_hz[em])]:
         g1, g2 = ma.groups(i)
-        against = " ".join(f"G{k}" for k in g2[:6]) or "-"
+        against = " ".join(f"G{k}" for k in g2[:6]) or "others (each < 0.2)"
+        areas = f"  [areas {area_sides(ma, i)}]" if ma.kind[i] == "inter-area" else ""
         click.echo(
             f"{i:5d} {ma.freq_hz[i]:7.3f} {ma.damping[i]:8.4f}  {ma.kind[i]:<10} "
-            f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}"
+            f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}{areas}"
         )
 
 

@@ -15,6 +15,8 @@ import control as ct
 import matplotlib.pyplot as plt
 import numpy as np
 
+from stabctl.smallsignal.modal import SIGNIFICANT
+
 
 def save_figure(fig, path) -> None:
     """Save a figure as the reports do (tight layout, 110 dpi, format from the suffix) and
@@ -27,7 +29,7 @@ def save_figure(fig, path) -> None:
         The image file.
     """
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight")  # legends placed outside the axes
     plt.close(fig)
 
 
@@ -156,8 +158,8 @@ def simulation_overview(
     (MW on `base_mva`, + absorbs).  Loss of synchronism, if any, is marked by a vertical
     line.  Machines keep one colour in every panel; with more than `max_labels` machines
     each has a distinct colour and line style and only the separated ones are drawn thick
-    and named (legend and a label at the end of the trace); buses are named only when
-    few."""
+    and named (legend and a label at the end of the trace); with more than `max_labels`
+    buses the three whose voltage falls lowest are named, the others drawn thin grey."""
     t = result.t
     storage = result.pesd is not None and result.devices.size > 0
     fig, axes = plt.subplots(
@@ -178,19 +180,11 @@ def simulation_overview(
                 st = mstyles[j]
                 ax.plot(t, data[:, j], **st)
                 if many and st["label"]:
-                    ax.annotate(
-                        st["label"],
-                        (t[-1], data[-1, j]),
-                        fontsize=8,
-                        color=st["color"],
-                        xytext=(2, 0),
-                        textcoords="offset points",
-                        va="center",
-                    )
-            else:
-                ax.plot(
-                    t, data[:, j], lw=0.8 if many else 1.2, label=None if many else f"B{int(n)}"
-                )
+                    _end_label(ax, t, data[:, j], st["label"], st["color"])
+            elif not many:
+                ax.plot(t, data[:, j], lw=1.2, label=f"B{int(n)}")
+        if prefix == "B" and many:
+            _deepest_buses(ax, t, data, numbers)
         if prefix == "G" and many:
             ax.plot(
                 [],
@@ -203,8 +197,7 @@ def simulation_overview(
             ax.axvline(result.t_separation, color="r", ls=":", lw=1.2, label="loss of synchronism")
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
-        if prefix == "G" or not many:
-            ax.legend(fontsize=7, ncol=min(5, data.shape[1] + 1) if not many else 1, loc="best")
+        ax.legend(fontsize=7, ncol=min(5, data.shape[1] + 1) if not many else 1, loc="best")
     if storage:
         ax = axes[3]
         info = result.meta.get("storage", [])
@@ -245,6 +238,34 @@ def simulation_overview(
     head = title or str(result.meta.get("case", "simulation"))
     axes[0].set_title(f"{head}\n{verdict}", fontsize=9)
     save_figure(fig, Path(path))
+
+
+def _end_label(ax, t, y, text: str, color) -> None:
+    """Name a trace at its last point, in its colour."""
+    ax.annotate(
+        text,
+        (t[-1], y[-1]),
+        fontsize=8,
+        color=color,
+        xytext=(2, 0),
+        textcoords="offset points",
+        va="center",
+    )
+
+
+def _deepest_buses(ax, t, vmag, numbers, n: int = 3) -> None:
+    """Bus voltages of a large case: every bus thin and grey, the n buses whose voltage
+    falls lowest over the run (the faulted bus and its neighbours) in colour, named in the
+    legend and at the end of their trace."""
+    deepest = np.argsort(vmag.min(axis=0))[:n]
+    for j in range(vmag.shape[1]):
+        if j not in deepest:
+            ax.plot(t, vmag[:, j], color="0.6", lw=0.5)
+    ax.plot([], [], color="0.6", lw=0.5, label=f"other {vmag.shape[1] - n} buses (thin)")
+    for j in deepest:
+        name = f"B{int(numbers[j])}"
+        line = ax.plot(t, vmag[:, j], lw=1.3, label=f"{name} (min {vmag[:, j].min():.2f} pu)")
+        _end_label(ax, t, vmag[:, j], name, line[0].get_color())
 
 
 def _machine_styles(numbers, highlight=(), max_labels: int = 10) -> list[dict]:
@@ -298,15 +319,7 @@ def _speed_panel(ax, res, styles, label: str) -> None:
     for j, st in enumerate(styles):
         ax.plot(res.t, res.speed[:, j], **st)
         if st["label"] and len(styles) > 10:
-            ax.annotate(
-                st["label"],
-                (res.t[-1], res.speed[-1, j]),
-                fontsize=8,
-                color=st["color"],
-                xytext=(2, 0),
-                textcoords="offset points",
-                va="center",
-            )
+            _end_label(ax, res.t, res.speed[:, j], st["label"], st["color"])
     if len(styles) > 10:  # room for the names at the end of the traces
         ax.set_xlim(res.t[0], res.t[-1] + 0.1 * (res.t[-1] - res.t[0]))
     quiet = sum(1 for st in styles if not st["label"])
@@ -445,10 +458,30 @@ def _grid(n: int):
     return rows, cols
 
 
+def _area_legend(fig, ma) -> None:
+    """One legend for the figure: the colour of each coherent area and its machines."""
+    from matplotlib.patches import Patch
+
+    colors = plt.get_cmap("tab10")
+    handles = [
+        Patch(color=colors(a % 10), label=f"area {a + 1} ({n} machine{'s' if n > 1 else ''})")
+        for a, n in zip(*np.unique(ma.areas, return_counts=True))
+    ]
+    fig.legend(
+        handles=handles,
+        loc="upper center",
+        bbox_to_anchor=(0.5, 0.0),
+        ncol=len(handles),
+        fontsize=8,
+        title="colour = coherent area",
+        title_fontsize=8,
+    )
+
+
 def mode_shape_compass(ma, modes, path, max_labels: int = 6) -> None:
     """Compass plots of the speed mode shapes (normalised, largest = 1 at 0 deg) of the
-    given modes, one arrow per machine coloured by coherent area; the largest machines
-    are labelled."""
+    given modes, one arrow per machine coloured by coherent area (legend below); the
+    largest machines are labelled inside the circle, clear of the angle ticks."""
     rows, cols = _grid(len(modes))
     fig = plt.figure(figsize=(4.2 * cols, 4.2 * rows))
     colors = plt.get_cmap("tab10")
@@ -463,17 +496,27 @@ def mode_shape_compass(ma, modes, path, max_labels: int = 6) -> None:
                 arrowprops=dict(arrowstyle="->", color=colors(ma.areas[k] % 10), lw=1.2),
             )
         for k in np.argsort(-np.abs(s))[:max_labels]:
-            ax.text(np.angle(s[k]), abs(s[k]) * 1.08, f"G{int(ma.machines[k])}", fontsize=7)
-        ax.set_ylim(0, 1.15)
+            if abs(s[k]) >= SIGNIFICANT:
+                ax.text(
+                    np.angle(s[k]),
+                    abs(s[k]) + 0.12,
+                    f"G{int(ma.machines[k])}",
+                    fontsize=7,
+                    ha="center",
+                    va="center",
+                )
+        ax.set_ylim(0, 1.35)
         ax.set_yticklabels([])
+        ax.set_xticks(np.radians([0, 90, 180, 270]), ["0°", "90°", "180°", "270°"], fontsize=8)
         ax.set_title(_mode_title(ma, i), fontsize=9)
-    fig.suptitle("speed mode shapes (colour = coherent area)")
+    fig.suptitle(f"speed mode shapes (machines of at least {SIGNIFICANT} of the largest named)")
+    _area_legend(fig, ma)
     save_figure(fig, Path(path))
 
 
 def participation_bars(ma, modes, path, n_bars: int = 12) -> None:
     """Bar charts of the participation of each machine (its states and controls summed)
-    in the given modes, largest n_bars machines per mode, coloured by area."""
+    in the given modes, largest n_bars machines per mode, coloured by area (legend below)."""
     rows, cols = _grid(len(modes))
     fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.4 * rows), squeeze=False)
     colors = plt.get_cmap("tab10")
@@ -488,7 +531,8 @@ def participation_bars(ma, modes, path, n_bars: int = 12) -> None:
         ax.title.set_fontsize(9)
     for ax in axes.flat[len(modes) :]:
         ax.set_visible(False)
-    fig.suptitle("participation factors per machine (each mode sums to 1; colour = area)")
+    fig.suptitle("participation factors per machine (each mode sums to 1)")
+    _area_legend(fig, ma)
     save_figure(fig, Path(path))
 
 

@@ -27,6 +27,10 @@ from stabctl.errors import InputError
 
 F_MIN_HZ, F_MAX_HZ = 0.1, 2.5  # electromechanical band
 INTER_AREA_ETA = 0.5  # area-momentum fraction above which a mode is inter-area
+# inter-area modes lie below about 1 Hz, local plant modes at 0.8-2 Hz (Kundur, Power System
+# Stability and Control, 12.1; Rogers, Power System Oscillations, 1.3): a mode above this
+# is local whatever its area momentum (a swing of neighbours across an area boundary)
+INTER_AREA_MAX_HZ = 1.0
 GAP_RATIO = 1.3  # consecutive EM frequencies this far apart: time-scale gap
 SIGNIFICANT = 0.2  # |speed shape| (of the largest) to count in a coherent group
 STATE_GROUPS = ("rotor angle/speed", "rotor flux", "exciter", "pss", "governor", "converter")
@@ -43,8 +47,9 @@ class ModalAnalysis:
         numbers; inertia (g,) H*MVA weights; speed_shape (g, m) complex omega components of
         phi_i scaled so the largest is 1 + 0j; reference_mode: index of the angle-reference
         mode; electromechanical: indices of the electromechanical modes; areas (g,) area
-        label (0..r-1) of each machine; kind (m,) 'angle reference', 'inter-area', 'local'
-        or 'other'; eta (m,) area-momentum fraction (NaN outside the EM modes).
+        label (0..r-1) of each machine; kind (m,) 'angle reference', 'inter-area' (area
+        momentum fraction above INTER_AREA_ETA at INTER_AREA_MAX_HZ or below), 'local' or
+        'other'; eta (m,) area-momentum fraction (NaN outside the EM modes).
     """
 
     eigenvalues: np.ndarray
@@ -72,6 +77,20 @@ class ModalAnalysis:
         order = np.argsort(-np.abs(s))
         sel = lambda m: [int(self.machines[k]) for k in order if big[k] and m[k]]  # noqa: E731
         return sel(s.real >= 0), sel(s.real < 0)
+
+    def area_groups(self, i: int) -> tuple[list[int], list[int]]:
+        """Areas (1-based labels) whose momentum, M s summed over the area, is at least
+        SIGNIFICANT of the largest area's in mode i: those in phase (within 90 degrees)
+        with the machine of the largest speed component, as `groups` orients its sides,
+        and those against it, each sorted by decreasing momentum.  An inter-area mode
+        moves the areas' centres of inertia, so a side may hold an area of many machines
+        each too small to count in `groups`."""
+        m = self.inertia * self.speed_shape[:, i]  # shape: largest component 1 + 0j
+        p = np.bincount(self.areas, m.real) + 1j * np.bincount(self.areas, m.imag)
+        big = np.abs(p) >= SIGNIFICANT * np.abs(p).max()
+        order = np.argsort(-np.abs(p))
+        sel = lambda m: [int(a) + 1 for a in order if big[a] and m[a]]  # noqa: E731
+        return sel(p.real >= 0), sel(p.real < 0)
 
     def machine_participation(self, i: int) -> np.ndarray:
         """Participation of each machine in mode i, (g,): the sum over all states of the
@@ -126,10 +145,13 @@ class ModalAnalysis:
         }
         if i in self.electromechanical:
             g1, g2 = self.groups(i)
+            a1, a2 = self.area_groups(i)
             rec.update(
                 dominant_machines=self.dominant_machines(i),
                 group=g1,
                 against=g2,
+                areas=a1,
+                areas_against=a2,
                 area_momentum_fraction=float(self.eta[i]),
                 speed_shape={
                     f"G{int(k)}": [float(abs(z)), float(np.degrees(np.angle(z)))]
@@ -220,7 +242,8 @@ def modal_analysis(
     eta = np.full(lam.size, np.nan)
     eta[em] = area_momentum_fraction(shape[:, em], inertia, area_of)
     kind = np.full(lam.size, "other", dtype=object)
-    kind[em] = np.where(eta[em] > INTER_AREA_ETA, "inter-area", "local")
+    inter = (eta[em] > INTER_AREA_ETA) & (f[em] <= INTER_AREA_MAX_HZ)
+    kind[em] = np.where(inter, "inter-area", "local")
     kind[ref] = "angle reference"
     return ModalAnalysis(
         eigenvalues=lam,

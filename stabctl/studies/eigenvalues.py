@@ -151,10 +151,32 @@ def _temp(out: Path, name: str) -> str:
     return path
 
 
-def _machines(numbers, most: int = 8) -> str:
-    """'G1, G2, ...' (at most `most` machines), '-' for none."""
-    text = ", ".join(f"G{k}" for k in numbers[:most]) or "-"
+def _machines(numbers, most: int = 8, none: str = "-") -> str:
+    """'G1, G2, ...' (at most `most` machines), `none` for none."""
+    text = ", ".join(f"G{k}" for k in numbers[:most]) or none
     return text + (" ..." if len(numbers) > most else "")
+
+
+def area_sides(ma: ModalAnalysis, i: int) -> str:
+    """The areas an inter-area mode swings against each other.
+
+    Parameters
+    ----------
+    ma : ModalAnalysis
+        The modes.
+    i : int
+        A mode's index.
+
+    Returns
+    -------
+    str
+        '1, 3 vs 2' (1-based area labels, `ModalAnalysis.area_groups`) for an
+        inter-area mode, '-' for any other.
+    """
+    if ma.kind[i] != "inter-area":
+        return "-"
+    a1, a2 = (", ".join(str(a) for a in sorted(side)) for side in ma.area_groups(i))
+    return f"{a1} vs {a2 or '-'}"
 
 
 def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str:
@@ -194,7 +216,9 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         "",
         "Slow coherency on the rigid-body direction and the slowest electromechanical "
         "mode shapes (docs/modal.md); a mode is inter-area when it moves the areas' "
-        "centres of inertia against each other (area-momentum fraction eta > 0.5).",
+        "centres of inertia against each other (area-momentum fraction eta > 0.5) at "
+        "1 Hz or below (above it a swing of neighbours across an area boundary is local: "
+        "Kundur 12.1 puts local plant modes at 0.8-2 Hz).",
         "",
     ]
     lines += [f"- {name}: " + ", ".join(f"G{k}" for k in ks) for name, ks in _areas(ma).items()]
@@ -202,9 +226,9 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         "",
         "## Electromechanical modes",
         "",
-        "| # | eigenvalue (1/s) | f (Hz) | damping | kind | eta | dominant machines | "
+        "| # | eigenvalue (1/s) | f (Hz) | damping | kind | eta | areas | dominant machines | "
         "swing together | against | best ESD bus (abs residue) |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for i in em[np.argsort(ma.freq_hz[em])]:
         lam = ma.eigenvalues[i]
@@ -212,16 +236,23 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         bus, r = best_esd(st, i)
         lines.append(
             f"| {i} | {lam.real:.4f} ± j{lam.imag:.4f} | {ma.freq_hz[i]:.4f} | "
-            f"{ma.damping[i]:.4f} | {ma.kind[i]} | {ma.eta[i]:.2f} | "
-            f"{_machines(ma.dominant_machines(i))} | {_machines(g1)} | {_machines(g2)} | "
+            f"{ma.damping[i]:.4f} | {ma.kind[i]} | {ma.eta[i]:.2f} | {area_sides(ma, i)} | "
+            f"{_machines(ma.dominant_machines(i))} | {_machines(g1)} | "
+            f"{_machines(g2, none='others, each < 0.2')} | "
             f"{bus} ({r:.2e}) |"
         )
     lines += [
         "",
+        "#: the mode's number among all the model's modes (one per conjugate pair, by "
+        "frequency), the `mode` of `stabctl eig --json`. Areas: for an inter-area mode, the "
+        "areas whose momentum (M times the speed shape, summed over the area) is at least "
+        "0.2 of the largest area's, in phase with it vs against it. "
         "Dominant machines: participation at least half the largest machine's "
         "(states and controls of a machine summed). Groups: speed mode-shape components "
         "of at least 0.2 of the largest, in phase (within 90 degrees) with it or against "
-        "it. Best ESD bus: the ESD power input with the largest residue to the "
+        "it; 'others, each < 0.2' when the machines swinging against it each move less "
+        "(a single machine against the system, or a heavy area against a light one). "
+        "Best ESD bus: the ESD power input with the largest residue to the "
         "relative speeds.",
         "",
         "## Figures",

@@ -84,6 +84,7 @@ def test_kundur_local_and_interarea_modes(nopss, expected, sys_k, sys_k_nopss):
     assert study_areas(ma) == {"area 1": [1, 2], "area 2": [3, 4]}
     ia = em[0]
     assert {frozenset(g) for g in ma.groups(ia)} == {frozenset({1, 2}), frozenset({3, 4})}
+    assert sorted(ma.area_groups(ia)) == [[1], [2]]  # area 1 against area 2 (Kundur 12.8)
     assert ma.eta[ia] > 0.9 and all(ma.eta[i] < 0.2 for i in em[1:])
     if nopss:
         assert ma.damping[ia] < 0  # the unstable inter-area mode
@@ -131,6 +132,14 @@ def test_miniwecc_modes_and_default_areas():
     assert em.size > 25 and ma.freq_hz[em[0]] == pytest.approx(0.207, abs=2e-3)
     assert len(np.unique(ma.areas)) == 3
     assert [ma.kind[i] for i in em[:2]] == ["inter-area", "inter-area"]
+    # above 1 Hz no mode is inter-area (Kundur 12.1: local plant modes 0.8-2 Hz), though
+    # the 1.297 Hz swing of G16 against G17, G18 across the area boundary moves the areas'
+    # momenta (eta 0.67)
+    high = em[ma.freq_hz[em] > 1.0]
+    assert set(ma.kind[high]) == {"local"} and np.nanmax(ma.eta[high]) > 0.5
+    # the slowest mode: G34 (Alberta, area 3) and area 1 against area 2 (the WECC's
+    # north-south mode), though no machine of area 2 reaches 0.2 of G34's speed
+    assert ma.groups(em[0])[1] == [] and ma.area_groups(em[0]) == ([3, 1], [2])
     assert abs(ma.eigenvalues[ma.reference_mode]) < 1e-5
     json.dumps([ma.mode_record(int(i)) for i in range(ma.eigenvalues.size)])
 
@@ -162,6 +171,7 @@ def test_eig_json_lists_every_mode():
     em = [modes[i] for i in out["electromechanical_modes"]]
     ia = [m for m in em if m["kind"] == "inter-area"]
     assert len(ia) == 1 and ia[0]["damping"] < 0 and ia[0]["best_esd_bus"].startswith("B")
+    assert sorted([ia[0]["areas"], ia[0]["areas_against"]]) == [[1], [2]]
     assert out["modes"][out["reference_mode"]]["kind"] == "angle reference"
 
 
@@ -177,7 +187,9 @@ def test_eig_report_files(tmp_path):
         "eig_kundur_shapes.png",
     ]
     md = (tmp_path / "eig_kundur.md").read_text()
-    assert "| inter-area |" in md and md.count("| local |") == 2
+    assert md.count("| inter-area |") == 1 and md.count("| local |") == 2
+    assert "| inter-area | 1.00 | 2 vs 1 |" in md or "| inter-area | 1.00 | 1 vs 2 |" in md
+    assert "#: the mode's number among all the model's modes" in md
     for png in names[1:]:
         assert f"({png})" in md
 

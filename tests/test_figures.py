@@ -1,0 +1,48 @@
+"""The figures name what a reader needs: a large case's bus voltages name the buses that
+fall lowest (a bolted fault holds its own bus at 0 pu), the mode-shape and participation
+figures carry a legend of the coherent areas."""
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+import stabctl
+from stabctl.plotting import figures
+from stabctl.studies.cases import CASE2
+
+
+@pytest.fixture
+def kept(monkeypatch):
+    """The figures a plotting function saves, kept open instead of written."""
+    out = []
+    monkeypatch.setattr(figures, "save_figure", lambda fig, path: out.append(fig))
+    yield out
+    for fig in out:
+        plt.close(fig)
+
+
+def legend_texts(fig_or_ax) -> list[str]:
+    legends = fig_or_ax.legends if hasattr(fig_or_ax, "legends") else [fig_or_ax.get_legend()]
+    return [t.get_text() for lg in legends if lg for t in lg.get_texts()]
+
+
+def test_large_case_bus_voltages_name_the_deepest_buses(kept):
+    case = stabctl.load_case(CASE2.case)
+    res = stabctl.Simulator(case).run(CASE2.fault.events(6 / case.freq_hz), t_end=1.3)
+    figures.simulation_overview(res, "unused.png")
+    names = legend_texts(kept[0].axes[2])
+    assert names[0] == f"other {case.n_bus - 3} buses (thin)"
+    # the faulted bus first: a bolted fault holds it at 0 pu
+    assert names[1] == f"B{CASE2.fault.bus} (min 0.00 pu)" and len(names) == 4
+    deepest = sorted(res.vmag.min(axis=0))[:3]
+    shown = [float(n.split("min ")[1].split(" pu")[0]) for n in names[1:]]
+    np.testing.assert_allclose(shown, deepest, atol=5e-3)
+
+
+def test_mode_figures_have_an_area_legend(kept):
+    ma = stabctl.modal_analysis(stabctl.linearise(stabctl.Simulator(stabctl.load_case("kundur"))))
+    em = list(ma.electromechanical)
+    figures.mode_shape_compass(ma, em, "unused.png")
+    figures.participation_bars(ma, em, "unused.png")
+    for fig in kept:  # Kundur's two areas of two machines each (Kundur 12.8)
+        assert legend_texts(fig) == ["area 1 (2 machines)", "area 2 (2 machines)"]
