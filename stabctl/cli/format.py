@@ -453,22 +453,26 @@ def print_plan(case_name, d) -> None:
     d : dict
         The result (`place --json`, `stabctl.placement.plan.PlanResult.to_dict`).
     """
+    from stabctl.placement.energy import MJ_PER_MWH
+
     c = d["cost"]
     click.echo(
         f"case {case_name} ({d['requirement']}; load levels "
         f"{', '.join(f'{x:g}' for x in d['load_levels'])}; "
         f"{_ESD_NAMES[d.get('esd_model', 'ideal')]}): {d['total_mw']:.1f} MW, "
         f"{d['total_mwh']:.2f} MWh at {d['n_sites']} site(s), cost {c['total']:.1f} "
-        f"(MW {c['mw']:.1f}, MWh {c['mwh']:.1f}, sites {c['site']:.1f}); "
+        f"in the --cost-* options' unit (MW {c['mw']:.1f}, MWh {c['mwh']:.1f}, "
+        f"sites {c['site']:.1f}); "
         f"{'VERIFIED' if d['verified'] else 'NOT verified'} ({d['message']})"
     )
     click.echo(
-        f"{'bus':>6} {'machine':>8} {'MW':>9} {'MWh':>8} {'absorbed MJ':>12} {'delivered MJ':>13}"
+        f"{'bus':>6} {'machine':>8} {'MW':>9} {'MWh':>8} {'absorbed MWh':>13} {'delivered MWh':>14}"
     )
     for r in d["allocation"]:
         click.echo(
             f"{r['bus']:>6} {r['machine']:>8} {r['mw']:9.1f} {r['mwh']:8.2f} "
-            f"{r.get('absorbed_mj', 0.0):12.1f} {r.get('delivered_mj', 0.0):13.1f}"
+            f"{r.get('absorbed_mj', 0.0) / MJ_PER_MWH:13.3f} "
+            f"{r.get('delivered_mj', 0.0) / MJ_PER_MWH:14.3f}"
         )
     click.echo(
         f"{d['n_met']} of {d['n_contingencies']} contingencies stable at their "

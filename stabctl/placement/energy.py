@@ -21,6 +21,7 @@ from stabctl.placement.context import PlanContext
 #: Relative margin on the sized energy (the simulator integrates the state of charge
 #: within its steps, the sizing on the recorded grid).
 ENERGY_MARGIN = 0.05
+MJ_PER_MWH = 3600.0  # 1 MWh = 3600 MJ
 
 
 def mwh_per_mw(n_sites: int, checks: dict) -> np.ndarray:
@@ -31,14 +32,14 @@ def mwh_per_mw(n_sites: int, checks: dict) -> np.ndarray:
     for ck in checks.values():
         if ck["site_excursion_s"]:
             exc = np.maximum(exc, ck["site_excursion_s"])
-    return (1 + ENERGY_MARGIN) * 2 * exc / 3600.0
+    return (1 + ENERGY_MARGIN) * 2 * exc / MJ_PER_MWH
 
 
 def energy_need(check: dict, k: int) -> float:
     """Energy need (MWh) of the k-th site with storage in a check run: twice its largest
     state-of-charge excursion (a device started half full)."""
     _, _, hi, lo = check["energy_mj"][k]
-    return 2 * max(hi, -lo) / 3600
+    return 2 * max(hi, -lo) / MJ_PER_MWH
 
 
 def size_energy(pl: PlanContext, cons, mw, checks) -> tuple:
@@ -68,7 +69,7 @@ def size_energy(pl: PlanContext, cons, mw, checks) -> tuple:
     for j in used:
         energy[j]["set_by"] = setter[j].name
     again = energy_setters({c.name: c for c in cons}, mw, energy)
-    rerun = pl.check(again, mw, energy_mj=3600 * mwh)
+    rerun = pl.check(again, mw, energy_mj=MJ_PER_MWH * mwh)
     ok = all(r["stable_at_check"] for r in rerun.values())
     pl.say(
         f"energy: {mwh.sum():.2f} MWh at {len(used)} site(s); {len(again)} run(s) "

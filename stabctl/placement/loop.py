@@ -565,8 +565,8 @@ def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float, say) 
         iterations.append(_record(it, setup, new, alloc, rho, radius))
         say(
             f"iteration {it}: {trial.sum():.1f} MW at {np.count_nonzero(trial)} site(s), "
-            f"{'meets every target' if new.feasible else 'misses'}, rho {rho:.2f}; "
-            + _cct_line(setup.contingencies, new.ev)
+            f"{'meets every target' if new.feasible else 'misses'}, "
+            f"saving {rho:.2f} of the predicted; " + _cct_line(setup.contingencies, new.ev)
         )
         if new.feasible and (best is None or setup.cost @ new.mw < setup.cost @ best.mw):
             best = new
@@ -644,7 +644,7 @@ def _restore(setup: _Setup, tried, best, prices, iterations, say):
                     which=missed,
                 )
             )
-            say(f"restoration x{k:g}: {mw.sum():.1f} MW, misses; " + _cct_line(missed, ev))
+            say(f"near miss scaled x{k:g}: {mw.sum():.1f} MW, misses; " + _cct_line(missed, ev))
             continue
         rest = [c for c in setup.contingencies if c.name not in ev]
         new = _point(setup, mw, {**ev, **(setup.verify(mw, rest) if rest else {})}, prices)
@@ -659,7 +659,7 @@ def _restore(setup: _Setup, tried, best, prices, iterations, say):
             )
         )
         say(
-            f"restoration x{k:g}: {mw.sum():.1f} MW, "
+            f"near miss scaled x{k:g}: {mw.sum():.1f} MW, "
             f"{'meets every target' if new.feasible else 'misses'}; "
             + _cct_line(setup.contingencies, new.ev)
         )

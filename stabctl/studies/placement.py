@@ -33,6 +33,7 @@ import numpy as np
 
 from stabctl.io import load_case
 from stabctl.parallel import run_sweep, strip_run_dependent, worker_pool
+from stabctl.placement.energy import MJ_PER_MWH
 from stabctl.placement.evaluation import Contingency, VerifyOptions
 from stabctl.placement.loop import PlaceOptions, Study, WarmStart, _rounded, evaluations, place
 from stabctl.placement.plan import PlanOptions, plan
@@ -312,13 +313,28 @@ def critical_only_mw(case, sites, uniform_mw, inertia, critical) -> float:
 
 
 def figure_allocation(d: dict, path: Path) -> None:
-    """Bars per site: optimised rating and the least uniform fleet's (MW)."""
+    """Bars per site: optimised rating and the least uniform fleet's (MW); a case that
+    needs no storage says so instead of drawing empty bars."""
     labels = [f"{s['bus']}\nG{s['machine']}" for s in d["sites"]]
     opt = np.array(d["mw_by_site"])
     u = d["plan"]["uniform"] or {}
     uni = np.array(u.get("mw_by_site") or np.zeros(len(opt)))
     x = np.arange(len(labels))
     fig, ax = plt.subplots(figsize=(max(6, 0.35 * len(x) + 2), 4))
+    ax.set_title(f"{d['case']}: allocation for {d['required_cycles']:g}-cycle clearing")
+    if not opt.any() and not uni.any():
+        ax.text(
+            0.5,
+            0.5,
+            f"no storage needed: all {d['plan']['n_contingencies']} contingencies are stable\n"
+            f"without storage when cleared after {d['required_cycles']:g} cycles",
+            ha="center",
+            va="center",
+            transform=ax.transAxes,
+        )
+        ax.set_axis_off()
+        _save(fig, path)
+        return
     ax.bar(
         x - 0.2,
         uni,
@@ -330,7 +346,6 @@ def figure_allocation(d: dict, path: Path) -> None:
     ax.set_xticks(x, labels, fontsize=7)
     ax.set_xlabel("site (HV bus, generator)")
     ax.set_ylabel("ESD rating (MW)")
-    ax.set_title(f"{d['case']}: allocation for {d['required_cycles']:g}-cycle clearing")
     ax.legend()
     _save(fig, path)
 
@@ -354,25 +369,42 @@ def figure_margins(d: dict, path: Path) -> None:
     _save(fig, path)
 
 
+def _requirement(q: dict) -> tuple:
+    """What a cost point was asked to meet besides its clearing time: its load levels and
+    the contingencies set aside as infeasible (points differing in them do not compare)."""
+    return tuple(q["load_levels"]), tuple(q.get("set_aside") or [])
+
+
 def figure_pareto(d: dict, path: Path) -> None:
-    """Cost against the required clearing time: optimised and least uniform."""
-    p = d["pareto"]
-    fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot(
-        [q["cycles"] for q in p],
-        [q["cost"] for q in p],
-        "o-",
-        color="C3",
-        label="optimised placement",
-    )
-    uni = [(q["cycles"], q["uniform_cost"]) for q in p if q["uniform_cost"] is not None]
-    ax.plot(
-        [c for c, _ in uni], [v for _, v in uni], "s--", color="C0", label="least uniform fleet"
-    )
+    """Cost against the required clearing time, optimised and least uniform; points are
+    joined only when they meet the same load levels with the same contingencies (a point
+    at more load levels, or with a contingency set aside, is another requirement)."""
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    groups: dict = {}
+    for q in d["pareto"]:
+        groups.setdefault(_requirement(q), []).append(q)
+    for k, ((levels, aside), pts) in enumerate(groups.items()):
+        what = "base load" if levels == (1.0,) else "loads " + ", ".join(f"{x:g}" for x in levels)
+        what += f", {', '.join(aside)} set aside" if aside else ""
+        ax.plot(
+            [q["cycles"] for q in pts],
+            [q["cost"] for q in pts],
+            "os^Dv"[k % 5] + "-",
+            color=f"C{3 + k}",
+            mfc="none" if aside else None,
+            label=f"optimised ({what})",
+        )
+        uni = [(q["cycles"], q["uniform_cost"]) for q in pts if q["uniform_cost"] is not None]
+        if uni:
+            ax.plot(*zip(*uni), "os^Dv"[k % 5] + "--", color="C0", label=f"least uniform ({what})")
+    ax.set_xticks(sorted({q["cycles"] for q in d["pareto"]}))
     ax.set_xlabel("required clearing time (cycles)")
     ax.set_ylabel("cost (M$, illustrative prices)")
+    costs = [c for q in d["pareto"] for c in (q["cost"], q["uniform_cost"]) if c is not None]
+    if min(costs) > 0:  # the least uniform fleet costs tens of times the optimised one
+        ax.set_yscale("log")
     ax.set_title(f"{d['case']}: cost against required clearing time")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     _save(fig, path)
 
 
@@ -429,7 +461,13 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
         )
         + "; "
         + ("verified on" if p["verified"] else "NOT verified on")
-        + f" {p['n_met']} of {p['n_contingencies']} contingencies ({p['message']}).",
+        + f" {p['n_met']} of {p['n_contingencies']} contingencies"
+        + (
+            f", {len(p['set_aside'])} more set aside as infeasible ({', '.join(p['set_aside'])})"
+            if p.get("set_aside")
+            else ""
+        )
+        + f" ({p['message']}).",
         "",
         f"Costs (illustrative): {d['costs']['per_mw']:g} M$/MW, "
         f"{d['costs']['per_mwh']:g} M$/MWh, {d['costs']['per_site']:g} M$ per site.",
@@ -440,7 +478,7 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
         "",
         "## Allocation",
         "",
-        "| HV bus | generator | MW | % of its MVA | MWh | absorbed MJ | delivered MJ "
+        "| HV bus | generator | MW | % of its MVA | MWh | absorbed MWh | delivered MWh "
         "| energy set by |",
         "|---|---|---|---|---|---|---|---|",
     ]
@@ -448,12 +486,14 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
         lines.append(
             f"| {a['bus']} | G{a['machine']} | {a['mw']:.1f} | "
             f"{100 * a['mw'] / mva[a['machine']]:.1f} | {a['mwh']:.2f} | "
-            f"{a.get('absorbed_mj', 0):.0f} | {a.get('delivered_mj', 0):.0f} | "
+            f"{a.get('absorbed_mj', 0) / MJ_PER_MWH:.3f} | "
+            f"{a.get('delivered_mj', 0) / MJ_PER_MWH:.3f} | "
             f"{a.get('set_by', '-')} |"
         )
     lines += [
         "",
-        "| | MW | MWh | sites | cost MW | cost MWh | cost sites | total (M$) |",
+        "| | MW | MWh | sites | cost of MW (M$) | cost of MWh (M$) | cost of sites (M$) "
+        "| total (M$) |",
         "|---|---|---|---|---|---|---|---|",
         f"| optimised | {p['total_mw']:.1f} | {p['total_mwh']:.2f} | {p['n_sites']} | "
         f"{c['mw']:.1f} | {c['mwh']:.2f} | {c['site']:.1f} | {c['total']:.1f} |",
@@ -462,7 +502,7 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
         uc = u["cost"]
         lines.append(
             f"| least uniform ({u['pct']:g} %) | {u['total_mw']:.1f} | "
-            f"{u['mwh']:.2f} | {len(d['sites'])} | {uc['mw']:.1f} | "
+            f"{u['mwh']:.2f} | {len(d['sites']) if u['total_mw'] else 0} | {uc['mw']:.1f} | "
             f"{uc['mwh']:.2f} | {uc['site']:.1f} | {uc['total']:.1f} |"
         )
     lines += [
@@ -568,8 +608,8 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
             else "Every point at every load level."
         ),
         "",
-        "| required (cycles) | load levels | optimised MW | MWh | sites | cost | "
-        "least uniform % | uniform MW | uniform cost | verified | set aside as "
+        "| required (cycles) | load levels | optimised MW | MWh | sites | cost (M$) | "
+        "least uniform % | uniform MW | uniform cost (M$) | verified | set aside as "
         "infeasible |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
@@ -602,7 +642,24 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
         )
         + ").",
     ]
-    return lines
+    return _empty_tables_said(lines, f"None: {p['message']}.")
+
+
+def _empty_tables_said(lines: list[str], text: str) -> list[str]:
+    """A markdown table with a header and no rows (Kundur needs no storage: nothing is
+    installed, solved for or binding) replaced by `text`."""
+    out: list[str] = []
+    k = 0
+    while k < len(lines):
+        empty = _is_row(lines, k) and _is_row(lines, k + 1) and not _is_row(lines, k + 2)
+        empty = empty and lines[k + 1].startswith("|---")
+        out.append(text if empty else lines[k])
+        k += 2 if empty else 1
+    return out
+
+
+def _is_row(lines: list[str], k: int) -> bool:
+    return k < len(lines) and lines[k].startswith("|")
 
 
 def timing_line(d: dict) -> str:
@@ -663,6 +720,23 @@ def _half_step_lines(hs) -> list[str]:
     return out + [""]
 
 
+def _contingency_count(d: dict) -> str:
+    """'360, of which 16 out of scope and 1 set aside as infeasible: 343 verified'."""
+    p = d["plan"]
+    total = d["n_faults"] * len(d["load_levels"])
+    parts = [
+        f"{n} {what}"
+        for n, what in (
+            (len(p["out_of_scope"]), "out of scope"),
+            (len(p.get("set_aside") or []), "set aside as infeasible"),
+        )
+        if n
+    ]
+    if not parts:
+        return f"{total} in all"
+    return f"{total}, of which {' and '.join(parts)} (below): {p['n_contingencies']} checked"
+
+
 def _screening_text(d: dict) -> str:
     ok = [r for r in d["screening"] if r["cct_s"] is not None]
     n_bus = sum(1 for r in d["screening"] if "-" not in r["name"])
@@ -675,7 +749,7 @@ def _screening_text(d: dict) -> str:
         f"{buses}; coarse CCT without storage, {1000 * SCREEN_TOL:g} ms, up to "
         f"{SCREEN_T_MAX:g} s: {len(ok)} with a CCT.  Every fault stable when cleared at "
         f"once ({d['n_faults']}) is a contingency at each of the "
-        f"{len(d['load_levels'])} load levels: {p['n_contingencies']} in all.  "
+        f"{len(d['load_levels'])} load levels: {_contingency_count(d)}.  "
         + (
             f"Out of scope, unstable without storage even when cleared at once (the "
             f"line trip alone) at that load level, which no clearing time can help "
