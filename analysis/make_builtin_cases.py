@@ -29,7 +29,9 @@ CASES = {
     "kundur": (
         "d2asbegp.m",
         "Kundur two-area 4-machine system (PSTess d2asbegp): subtransient machines, static "
-        "exciters, speed PSS, governors, 50% constant-current P load; 13 buses, 60 Hz",
+        "exciters, speed PSS, governors, 50% constant-current P load; 13 buses, 60 Hz; "
+        "PSTess's bus numbers: Kundur's book (Example 12.6) buses 1-11 are 1, 2, 11, 12, 10, "
+        "20, 3, 101, 13, 120, 110, and 4, 14 are PSTess's 115 kV load buses",
     ),
     "miniwecc": (
         "d_minniWECC_base.json",

@@ -430,3 +430,43 @@ def test_dyr_field_maps_come_from_the_declaration():
             assert len(row) == len(fam.params)
             for target, src in model.copy.items():
                 assert row[fam.col(target) - 1] == model.fields.index(src) + 1
+
+
+def test_kundur_bus_numbers_map_onto_kundurs_book():
+    """The description's PSTess-to-book bus map turns the case's branches into Kundur's
+    Example 12.6 network (Fig. 12.93): step-up transformers 1-5, 2-6, 3-11, 4-10, lines
+    5-6, 6-7, 7-8 (two circuits), 8-9 (two), 9-10, 10-11; PSTess's load buses 4 and 14
+    hang off 7 and 9 by transformers."""
+    case = load_case("kundur")
+    pst = [
+        int(b) for b in re.search(r"buses 1-11 are ([\d, ]+), and", case.description)[1].split(",")
+    ]
+    book = {p: k + 1 for k, p in enumerate(pst)}
+    branches = sorted(
+        tuple(sorted((book[int(a)], book[int(b)])))
+        for a, b in zip(case.branches.from_bus, case.branches.to_bus)
+        if int(a) in book and int(b) in book
+    )
+    assert branches == sorted(
+        [
+            (1, 5),
+            (2, 6),
+            (3, 11),
+            (4, 10),
+            (5, 6),
+            (6, 7),
+            (7, 8),
+            (7, 8),
+            (8, 9),
+            (8, 9),
+            (9, 10),
+            (10, 11),
+        ]
+    )
+    loads = {
+        int(a) if int(b) in book else int(b)
+        for a, b in zip(case.branches.from_bus, case.branches.to_bus)
+        if not (int(a) in book and int(b) in book)
+    }
+    assert loads == {4, 14}
+    assert {book[int(b)] for b in case.machines.bus} == {1, 2, 3, 4}
