@@ -150,6 +150,7 @@ _FIXED = {
     "GENCLS": {"kp": 0.0, "kw": 0.0},
     **{g: {"wref0": 1.0} for g in ("TGOV1", "TGOV1N", "IEEEG1", "HYGOV", "IEESGO", "GAST")},
     "ESST4B": {"VGMAX": 20.0},  # not in PSS/E's record: ANDES's default, as read
+    "HYGOV4": {"Hdam": 1.0},  # the head at the dam of stabctl's HYGOV4 (and HYGOV)
 }
 
 
@@ -917,7 +918,7 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
             fields = DYR_MODELS[psse].fields
             if psse in dyr:
                 params = _psse_params(ss, m, dyr[psse], fields, k)
-            else:  # ANDES's own model (TG2): its parameters by name, as given
+            else:  # ANDES's own model (TG2, HYGOV4): its parameters by name, as given
                 params = tuple(float(m.params[f].vin[k]) for f in fields)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused, _grouped(changed)

@@ -307,7 +307,10 @@ def _map_records(records, generators, conventions):
     gens = {(int(g["bus"]), machine_id(g["id"])): g for g in generators}
     rows: dict[str, dict[int, tuple[DyrRecord, list]]] = {k: {} for k in FAMILY}
     skipped = []
+    compensators = [r for r in records if r.model in COMPENSATORS]
     for rec in records:
+        if rec.model in COMPENSATORS:
+            continue
         kind = _KIND.get(rec.model)
         try:
             if kind is None:
@@ -336,7 +339,37 @@ def _map_records(records, generators, conventions):
         rows[kind][number] = (rec, row)
     for number in [k for k in rows["pss"] if k not in rows["exciter"]]:
         skipped.append((rows["pss"].pop(number)[0], "its machine has no (supported) exciter"))
+    skipped += _compensate(compensators, gens, rows["exciter"], andes)
     return rows, sorted(skipped, key=lambda item: (item[0].file, item[0].line))
+
+
+def _compensate(records, gens, exciters, andes) -> list:
+    """Load compensators (IEEEVC) into their machine's exciter row (exc_con Rcomp, Xcomp,
+    machine base); returns the records refused, with why.  andes: ANDES 2.0's IEEEVC
+    (``vcomp/ieeevc.py``) takes its R_C, X_C with the machine's currents on the system
+    base, read where the machine's MVA is the system base."""
+    refused = []
+    for rec in records:
+        _check_count(rec)
+        gen = gens.get((rec.bus, rec.id))
+        number = None if gen is None else int(gen["number"])
+        if number not in exciters:
+            refused.append((rec, "its machine has no (supported) exciter"))
+            continue
+        if andes and gen["mbase"] != gen.get("sbase", 100.0):
+            refused.append(
+                (
+                    rec,
+                    f"machine base {gen['mbase']:g} MVA differs from the system base "
+                    f"{gen.get('sbase', 100.0):g} MVA (ANDES's R_C, X_C are on the system base)",
+                )
+            )
+            continue
+        v = DYR_MODELS[rec.model].values(rec.params)
+        row = exciters[number][1]
+        for name, field in DYR_MODELS[rec.model].copy.items():
+            row[EXCITER.col(name) - 1] = v[field]
+    return refused
 
 
 def _check_count(rec: DyrRecord) -> None:
@@ -754,6 +787,20 @@ def _ieesgo(rec, gen, andes=False):
     return _tg_row(rec, gen, **cols)
 
 
+def _andes_hygov4(rec, gen):
+    """ANDES's HYGOV4 (`stabctl.models.governors`, type 8): the declared copies, where the
+    machine's MVA is the system base (ANDES 2.0 solves it on the system base, scaling
+    its flows, head and gate limits by the machine's MVA over it: ``NumParam(power=True)``,
+    a head that would no longer be 1 at the dam)."""
+    if gen["mbase"] != gen.get("sbase", 100.0):
+        raise _Unsupported(
+            f"machine base {gen['mbase']:g} MVA differs from the system base "
+            f"{gen.get('sbase', 100.0):g} MVA: ANDES scales HYGOV4's flows and head by their "
+            "ratio, which stabctl's HYGOV4 (head 1 at the dam) does not"
+        )
+    return _tg_row(rec, gen)
+
+
 #: DYR model -> its mapper, for the records whose row is not only the declared copies
 #: (unit changes, products, fits, options refused); the others take their family's
 #: default, `_DEFAULT_ROW`
@@ -781,7 +828,10 @@ _MAPPERS = {
     "TG2": _droop,
     "HYGOV": _hygov,
     "IEESGO": _ieesgo,
+    "ANDES_HYGOV4": _andes_hygov4,
 }
+#: records that complete another record's row: a load compensator the exciter's
+COMPENSATORS = ("IEEEVC",)
 #: table kind -> the row of a record that is its declared copies and the machine number
 _DEFAULT_ROW = {"machine": _mac_row, "exciter": _exc_row, "pss": _pss_row, "governor": _tg_row}
 #: DYR model -> its table kind

@@ -1,5 +1,6 @@
 """Turbine-governors: PST `tg` (type 1), the PSS/E models TGOV1 (type 2), IEEEG1
-(type 3), HYGOV (type 4), IEESGO (type 5) and GAST (type 6), and ANDES's TG2 (type 7).
+(type 3), HYGOV (type 4), IEESGO (type 5) and GAST (type 6), and ANDES's TG2 (type 7)
+and HYGOV4 (type 8).
 
 Sources: PSTess 1.1 `tg_indx.m`, `tg.m` (docs/pst_models.md section 4); PSS/E Model
 Library `TGOV1`, `IEEEG1` (IEEE Committee Report 1973 steam turbine model), as
@@ -23,7 +24,11 @@ AT + KT (AT - y_3)) -> 1/(1 + s T1) non-windup [VMIN, VMAX] -> 1/(1 + s T2) = y_
 minus D_turb (omega - 1); y_3 = y_2/(1 + s T3).  TG2 (ANDES 2.0 ``governor/tg2.py``, not a
 PSS/E model; its deadband off, ANDES's default): pmech = clip(P_ref + (1 + s T1)/(1 + s
 T2) of (w_f - omega)/R, pmin, pmax), the limit on the output without windup (a hard
-limiter).
+limiter).  HYGOV4 (ANDES 2.0 ``governor/hygov4.py``: PSS/E's HYGOV4 without its deadbands
+and gate-power curve; machine base, head at the dam 1): the error P_ref - (omega - w_f) -
+R_perm g - R_temp T_r s/(1 + s T_r) g (the dashpot) through the pilot servo 1/(1 + s T_p),
+the gate speed 1/T_g times it limited to [U_C, U_O], the gate integrator non-windup on
+[PMIN, PMAX]; water column and power as HYGOV's.
 States: up to N_STATES slots per governor (the most any type present uses), named per
 type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).
 """
@@ -77,9 +82,10 @@ GOVERNOR = Family(
             "code",
             1,
             integer=True,
-            choices=(1, 2, 3, 4, 5, 6, 7),
+            choices=(1, 2, 3, 4, 5, 6, 7, 8),
             label="governor type",
-            doc="1 PST tg, 2 TGOV1, 3 IEEEG1, 4 HYGOV, 5 IEESGO, 6 GAST, 7 TG2 (ANDES)",
+            doc="1 PST tg, 2 TGOV1, 3 IEEEG1, 4 HYGOV, 5 IEESGO, 6 GAST, 7 TG2 (ANDES), "
+            "8 HYGOV4 (ANDES)",
         ),
         Param("machine", "code", 2, integer=True, doc="machine number"),
         Param("wf", "pu", 3, doc="speed set point"),
@@ -254,10 +260,37 @@ GOVERNOR = Family(
             kind=7,
             andes=("TG2",),
         ),
+        # ANDES's HYGOV4 -> type 8, its parameters by name (ANDES maps no PSS/E record onto
+        # it, and PSS/E's HYGOV4 record, with deadbands and a gate-power curve, is another
+        # model: a DYR file's HYGOV4 is refused as not mapped); T_p the pilot servo (Tc),
+        # T_g (Ts), T_r the dashpot (T3), T_w (T4), A_t (T5), gate limits (Tmin, Tmax)
+        DyrModel(
+            "ANDES_HYGOV4",
+            ("wref0", "Rperm", "Rtemp", "UO", "UC", "PMAX", "PMIN", "Tp", "Tg", "Tr", "Tw")
+            + ("At", "Dturb", "qNL"),
+            {
+                "wf": "wref0",
+                "Rp": "Rperm",
+                "rt": "Rtemp",
+                "Uo": "UO",
+                "Uc": "UC",
+                "Tmax": "PMAX",
+                "Tmin": "PMIN",
+                "Tc": "Tp",
+                "Ts": "Tg",
+                "T3": "Tr",
+                "Tw": "Tw",
+                "At": "At",
+                "Dt": "Dturb",
+                "qNL": "qNL",
+            },
+            kind=8,
+            andes=("HYGOV4",),
+        ),
     ),
 )
 
-TG, TGOV1, IEEEG1, HYGOV, IEESGO, GAST, TG2 = 1, 2, 3, 4, 5, 6, 7
+TG, TGOV1, IEEEG1, HYGOV, IEESGO, GAST, TG2, HYGOV4 = 1, 2, 3, 4, 5, 6, 7, 8
 N_STATES = 6
 STATE_NAMES = {
     TG: ("servo", "transient", "turbine"),
@@ -267,6 +300,7 @@ STATE_NAMES = {
     IEESGO: ("lag", "leadlag", "T4lag", "T5lag", "T6lag"),
     GAST: ("valve", "T2lag", "T3lag"),
     TG2: ("leadlag",),
+    HYGOV4: ("pilot", "gate", "dashpot", "flow"),
 }
 #: HYGOV's fields in tg_con columns 17-21 (alternative names of K1..K5)
 HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel")
@@ -341,7 +375,7 @@ class GovernorParams(Declared):
         act[1] |= g1
         for r, T in zip(range(2, 6), (self.T4, self.T5, self.T6, self.T7)):
             act[r] |= g1 & (T >= LBND)
-        act[:4] |= hy
+        act[:4] |= hy | (self.kind == HYGOV4)
         act[0] |= sg & (self.Tc >= LBND)
         act[1] |= sg & (self.Ts >= LBND)
         for r, T in zip(range(2, 5), (self.T4, self.T5, self.T6)):
@@ -361,17 +395,17 @@ class GovernorParams(Declared):
             name: (g1 | sg) & (getattr(self, name) >= LBND)
             for name in ("Tc", "Ts", "T4", "T5", "T6", "T7")
         }
-        ga = self.kind == GAST
+        ga, h4 = self.kind == GAST, self.kind == HYGOV4
         return (
             ("tg_con T_s", self.Ts, tg | t1 | g1 | hy | ga | lag["Ts"]),
             (
                 "tg_con T_c",
                 self.Tc,
-                tg | t1 | hy | lag["Tc"] | (ga & (self.Tc >= LBND)) | (self.kind == TG2),
+                tg | t1 | hy | h4 | lag["Tc"] | (ga & (self.Tc >= LBND)) | (self.kind == TG2),
             ),
-            ("tg_con T_3", self.T3, ga & (self.T3 >= LBND)),
+            ("tg_con T_3", self.T3, h4 | (ga & (self.T3 >= LBND))),
             ("tg_con T_5", self.T5, tg | lag["T5"]),
-            ("tg_con T_4", self.T4, hy | lag["T4"]),
+            ("tg_con T_4", self.T4, hy | h4 | lag["T4"]),
             ("tg_con T_6", self.T6, lag["T6"]),
             ("tg_con T_7", self.T7, lag["T7"] & g1),
         )
@@ -400,6 +434,7 @@ def governor_params(case: Case) -> GovernorParams:
         IEESGO: (),
         GAST: ("Ts",),
         TG2: ("Tc",),
+        HYGOV4: ("Ts", "Tc", "T3", "T4"),
     }
     for r in range(len(g)):
         for name in need[int(g.type[r])]:
@@ -424,7 +459,7 @@ def governor_params(case: Case) -> GovernorParams:
         raise CaseError(
             f"tg_con row {bad[0] + 1}, fields 'K1'..'K8': IEEEG1 power fractions must sum to > 0"
         )
-    hy = g.type == HYGOV
+    hy = (g.type == HYGOV) | (g.type == HYGOV4)
     return GovernorParams(
         kind=g.type.astype(int),
         mac=mac,
@@ -461,7 +496,7 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     gate position (IEEEG1, IEESGO: pmech0 / sum K; a cross-compound IEEEG1: its two
     machines' power, pmech0_lp the LP machine's on its base, over the sum of all eight
     fractions) or R q_0 (HYGOV: flow, gate and gate integrator at q_0 = pmech0/A_t +
-    q_NL, head 1).
+    q_NL, head 1; HYGOV4: R_perm q_0, its gate and flow at q_0).
 
     Raises CaseError when the initial power order is outside [Tmin, Tmax] (PST's check
     for tg, the non-windup limits for TGOV1 and IEEEG1), or a cross-compound unit's
@@ -469,7 +504,7 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     ``_Pc`` check), beyond `START_LIMIT_TOL` (stabctl.models.declaration)."""
     x = np.zeros((N_STATES, p.n))
     tc = np.where(p.Tc >= LBND, p.Tc, 1.0)
-    hy, sg = p.kind == HYGOV, p.kind == IEESGO
+    hy, sg = (p.kind == HYGOV) | (p.kind == HYGOV4), p.kind == IEESGO
     cross = p.mac2 >= 0
     lp = np.zeros(p.n) if pmech0_lp is None else np.asarray(pmech0_lp, float)
     total = np.where(cross, pmech0 + lp / np.where(cross, p.lp_base, 1.0), pmech0)
@@ -506,6 +541,8 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     x[2] = np.where(tg, (1 - p.T4 / np.where(tg, p.T5, 1.0)) * pmech0, gate)
     x[3:] = np.where(g1, gate, 0.0)
     x[:5] = np.where(sg, np.array([0.0, 0.0, 1.0, 1.0, 1.0])[:, None] * gate, x[:5])
+    # HYGOV: filter 0, gate integrator, gate, flow; HYGOV4: pilot servo 0, gate, dashpot
+    # at the gate (no output), flow: all at q_0 (head 1)
     x[:4] = np.where(hy, np.array([0.0, 1.0, 1.0, 1.0])[:, None] * gate, x[:4])
     x[:2] = np.where(p.kind == TG2, 0.0, x[:2])  # the lead-lag at its input, 0
     x = x[: p.n_slots()]
@@ -534,11 +571,13 @@ def pmech(P, x, k, omega):
     if kind == IEEEG1:
         return _fractions(P, k, _ieeeg1_lags(P, x, k))
     if kind == HYGOV:
-        return _hygov_pmech(P, x, k, omega)
+        return _hygov_pmech(P, x, k, omega, x[2, k])
     if kind == GAST:
         return lag(x[0, k], x[1, k], P[k, G.TC])[0] - P[k, G.DT] * (omega - 1.0)
     if kind == TG2:
         return _tg2(P, x, k, omega, None)
+    if kind == HYGOV4:  # HYGOV's turbine, D_turb on omega - w_f
+        return _hygov_pmech(P, x, k, omega - P[k, G.WF] + 1.0, x[1, k])
     return _fractions(P, k, _ieesgo_lags(P, x, k, omega))
 
 
@@ -569,6 +608,8 @@ def derivatives(P, x, k, omega, dx):
         _gast_derivatives(P, x, k, omega, dx)
     elif kind == TG2:
         _tg2(P, x, k, omega, dx)
+    elif kind == HYGOV4:
+        _hygov4_derivatives(P, x, k, omega, dx)
     else:
         _ieesgo_lags(P, x, k, omega, dx)
 
@@ -681,9 +722,9 @@ def _head(q, g):
 
 
 @kernel(inline="always")
-def _hygov_pmech(P, x, k, omega):
-    """HYGOV: A_t h (q - q_NL) - D_turb (omega - 1) g."""
-    g, q = x[2, k], x[3, k]
+def _hygov_pmech(P, x, k, omega, g):
+    """HYGOV and HYGOV4: A_t h (q - q_NL) - D_turb (omega - 1) g, for gate g."""
+    q = x[3, k]
     return P[k, G.T5] * _head(q, g) * (q - P[k, G.QNL]) - P[k, G.DT] * (omega - 1.0) * g
 
 
@@ -699,6 +740,21 @@ def _hygov_derivatives(P, x, k, omega, dx):
     x[1, k], dx[1, k] = nonwindup(x[1, k], rate, P[k, G.TMIN], P[k, G.TMAX], _AT_LIMIT, 0.0)
     dx[2, k] = lag(c, x[2, k], P[k, G.TS])[1]
     dx[3, k] = (1.0 - _head(x[3, k], x[2, k])) / P[k, G.T4]
+
+
+@kernel(inline="always")
+def _hygov4_derivatives(P, x, k, omega, dx):
+    """HYGOV4 (module docstring; ANDES ``hygov4.py``): the dashpot R_temp T_r s/(1 + s T_r)
+    on the gate (T3), the pilot servo T_p (Tc), the gate speed clip(y_p / T_g, U_C, U_O)
+    (Ts) into the gate integrator non-windup on [PMIN, PMAX], the water column T_w (T4)."""
+    g = x[1, k]
+    dashpot = P[k, G.RT] * (g - x[2, k])
+    dx[2, k] = (g - x[2, k]) / P[k, G.T3]
+    error = P[k, G.PREF] - (omega - P[k, G.WF]) - P[k, G.RP] * g - dashpot
+    dx[0, k] = lag(error, x[0, k], P[k, G.TC])[1]
+    speed = clip(x[0, k] / P[k, G.TS], P[k, G.UC], P[k, G.UO])
+    x[1, k], dx[1, k] = nonwindup(g, speed, P[k, G.TMIN], P[k, G.TMAX], _AT_LIMIT, 0.0)
+    dx[3, k] = (1.0 - _head(x[3, k], x[1, k])) / P[k, G.T4]
 
 
 # -- IEESGO: K_1 (omega - 1) through 1/(1 + s T_1), (1 + s T_2)/(1 + s T_3); the order

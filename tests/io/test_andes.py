@@ -32,6 +32,7 @@ andes = pytest.importorskip("andes")
 
 from runs import flat_run  # noqa: E402
 
+from stabctl.case import ExciterTable  # noqa: E402
 from stabctl.dynamics.driver import Simulator  # noqa: E402
 from stabctl.dynamics.events import Fault, LineTrip, LoadStep  # noqa: E402
 from stabctl.errors import CaseError, InputError, NumericalInstabilityError  # noqa: E402
@@ -50,6 +51,7 @@ from stabctl.io.andes import (  # noqa: E402
 from stabctl.io.andes_case import import_andes, read_andes_case  # noqa: E402
 from stabctl.io.psse import load_psse  # noqa: E402
 from stabctl.models.converters import WTDS, WTDTA1, converter_params  # noqa: E402
+from stabctl.models.exciters import EXCITER  # noqa: E402
 from stabctl.models.pss import pss_inputs  # noqa: E402
 from stabctl.smallsignal.linearise import linearise  # noqa: E402
 from stabctl.smallsignal.modal import modal_analysis  # noqa: E402
@@ -425,7 +427,7 @@ def andes_case_run(name, bus, t_end=5.0, conventions="andes", off=("Toggle",), o
     left out of stabctl's.  Returns (stabctl's simulator and result, ANDES's system, t,
     stabctl's speeds, ANDES's speeds), speeds in ANDES's machine order."""
     path = andes.get_case(name)
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+    with pytest.warns(UserWarning, match=r"lacks .*(Toggle|Alter)"):
         case = import_andes(path, conventions=conventions, on_unsupported="skip")
     e = case.exciters
     case = case.replace(exciters=e.select(~np.isin(e.type, off_exc)))
@@ -631,6 +633,116 @@ def test_ieee14_gast_power_and_speeds_match_andes():
     )
     assert np.ptp(theirs) > 0.05  # the turbine responds (0.307-0.359 pu)
     assert np.max(np.abs(ours - theirs)) < 1e-4  # measured 1.8e-5
+
+
+@pytest.mark.parametrize("step", [0.1, -0.1])
+def test_ieee14_hygov4_power_and_speeds_match_andes(step):
+    """ANDES's ieee14_hygov4.xlsx, 0.1 pu of impedance load added at (or taken from) bus 4
+    at 1 s (ANDES: a PQ device off at set-up switched on by a Toggle; the file's own
+    disturbance, an Alter of PQ_7's Ppf, does nothing in ANDES's run, whose PQ loads are
+    impedances set at initialisation).  More load: the frequency falls and the hydro unit
+    at bus 8 opens its gate; over 10 s its mechanical power follows ``hygov4.py``
+    (dashpot, pilot servo, gate speed limit, water column: measured 8e-8 pu, speeds
+    1.5e-7).  Less load: the gate cannot close (its closing speed U_C is 0 in this file),
+    so the power stays where it was in both tools.  A 10 s flat run moves nothing."""
+    path = andes.get_case("ieee14/ieee14_hygov4.xlsx")
+    with pytest.warns(UserWarning, match=r"lacks .*Alter"):
+        case = import_andes(path, conventions="andes", on_unsupported="skip")
+    assert list(case.governors.type).count(8) == 1
+    sim = Simulator(case, q_limits=False)
+    flat = sim.run([], 10.0, h=STEP)
+    assert np.max(np.abs(flat.speed - 1)) < 1e-10 and np.ptp(flat.pmech, axis=0).max() < 1e-12
+    ss = andes.load(str(path), setup=False, no_output=True, default_config=True)
+    ss.Alter.u.v = [0] * ss.Alter.n
+    ss.add("PQ", {"idx": "step", "bus": 4, "p0": step, "q0": 0.0, "u": 0})
+    ss.add("Toggle", {"model": "PQ", "dev": "step", "t": 1.0})
+    ss.setup()
+    ss.PFlow.config.tol = 1e-12
+    t, wa = andes_speeds(ss, 10.0, STEP)
+    res = sim.run([LoadStep(4, 1.0, step)], 10.0, h=STEP)
+    w = speeds_on(t, res, case, ss)
+    m = list(case.machines.bus).index(8)
+    ours = np.interp(t, res.t, res.pmech[:, m])
+    theirs = ss.dae.ts.y[:, ss.HYGOV4.pout.a[0]]
+    dw, dp = np.max(np.abs(w - wa)), np.max(np.abs(ours - theirs))
+    print(f"\nieee14_hygov4 {step:+g} pu load vs ANDES: speeds {dw:.2e}, power {dp:.2e} pu")
+    assert np.max(np.abs(wa - 1)) > 1e-3  # a real excursion (1.6e-3 and 2.1e-3 pu)
+    if step > 0:
+        assert np.ptp(theirs) > 5e-3  # the unit answers the step (0.0067 pu)
+    else:
+        assert np.ptp(ours) < 1e-12 and np.ptp(theirs) < 1e-9  # the gate held at U_C = 0
+    assert dw < 1e-6
+    assert dp < 1e-6
+
+
+def test_ieee14_ieeevc2_load_compensation_starts_flat_and_sets_its_reference():
+    """ANDES's ieee14_ieeevc2.xlsx: two IEEEVC (R_C 0.05, X_C 0.1) in front of an IEEET1
+    and an ESST3A.  Their exciters regulate V_C = abs(V_t + (R_C + j X_C) I_t): at the
+    power flow each reference moves by V_C - V_t computed from the bus voltage and the
+    machine's power (I_t = conj(S/V)) and equal to ANDES's ``vcomp`` at initialisation,
+    every other exciter's does not, and a 10 s flat run moves nothing.  (ANDES 2.0 cannot
+    initialise this case: its IEEEVC adds V_C - V_t to the exciters' input after they
+    have been initialised, "Initialization FAILED" with exactly these residuals on their
+    input equations, so there is no like-for-like run.)"""
+    path = andes.get_case("ieee14/ieee14_ieeevc2.xlsx")
+    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
+        case = import_andes(path, conventions="andes", on_unsupported="skip")
+    e = case.exciters
+    comp = (e.Rcomp != 0) | (e.Xcomp != 0)
+    assert list(e.Rcomp[comp]) == [0.05, 0.05] and list(e.Xcomp[comp]) == [0.1, 0.1]
+    m = e.matrix()
+    m[:, [EXCITER.col("Rcomp") - 1, EXCITER.col("Xcomp") - 1]] = 0.0
+    plain = case.replace(exciters=ExciterTable.from_matrix(m))
+    sims = [Simulator(c, q_limits=False) for c in (case, plain)]
+    shift = sims[0].model.Vref - sims[1].model.Vref
+    op = sims[0].model.op
+    mac = e.machine.astype(int) - 1
+    bus = np.array([case.bus_index(b) for b in case.machines.bus[mac]])
+    V = op.V[bus]
+    Z = e.Rcomp + 1j * e.Xcomp  # machine base
+    I = np.conj(op.S_gen[bus] / V) * case.base_mva / case.machines.mva[mac]  # machine base
+    np.testing.assert_allclose(shift, np.abs(V + Z * I) - np.abs(V), atol=1e-12)
+    assert np.all(shift[comp] > 1e-3) and np.all(shift[~comp] == 0)
+    # ANDES's own V_C - V_t at its (failed) initialisation, ``IEEEVC.vcomp``, per machine bus
+    ss = andes_system(path, off=("Toggle",))
+    andes_powerflow(ss)
+    ss.TDS.init()
+    vc = ss.IEEEVC
+    theirs = {
+        ss.SynGen.get("bus", ss.Exciter.get("syn", vc.avr.v[k])): vc.vcomp.v[k] for k in range(vc.n)
+    }
+    ours = {int(case.machines.bus[mac[i]]): shift[i] for i in np.nonzero(comp)[0]}
+    assert ours.keys() == theirs.keys()
+    for b in ours:
+        assert ours[b] == pytest.approx(theirs[b], abs=1e-7)  # 0.0328 and 0.0246 pu
+    flat = sims[0].run([], 10.0, h=STEP)
+    assert np.max(np.abs(flat.speed - 1)) < 1e-10 and np.ptp(flat.efd, axis=0).max() < 1e-10
+
+
+@pytest.mark.parametrize(
+    "edit,needle",
+    [
+        (("GENROU", "Sn", 4, 200.0), "machine base 200 MVA differs from the system base 100"),
+        (("HYGOV4", "Hdam", 0, 1.2), r"Hdam = 1.2 \(stabctl's model has 1\)"),
+    ],
+)
+def test_andes_hygov4_outside_stabctl_s_model_is_refused_with_why(tmp_path, edit, needle):
+    """ANDES scales HYGOV4's head and flows by the machine's MVA over the system base, and
+    stabctl's HYGOV4 has the head 1 at the dam: a case outside that is refused by name
+    with the reason, not run differently."""
+    from andes.io import xlsx
+
+    ss = andes.load(
+        andes.get_case("ieee14/ieee14_hygov4.xlsx"),
+        setup=False,
+        no_output=True,
+        default_config=True,
+    )
+    model, param, k, value = edit
+    ss.models[model].params[param].v[k] = value
+    xlsx.write(ss, str(tmp_path / "edited.xlsx"), overwrite=True)
+    with pytest.raises(InputError, match=needle):
+        read_andes_case(tmp_path / "edited.xlsx")
 
 
 @pytest.mark.parametrize(

@@ -220,12 +220,16 @@ def test_unsupported_records_are_listed_with_file_and_line(tmp_path):
     text = (
         "1 'GENCLS' 1 3.0 0.0 /\n1 'ESST5B' 1 0 0 /\n"
         "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
+        "1 'HYGOV4' 1 0 0 0 0.05 0.1 0.2 0.3 -0.3 1 0 1 0.05 0.5 1 1 0 1 0.08 /\n"
     )
     with pytest.raises(CaseError) as e:
         dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
+    # PSS/E's HYGOV4 (deadbands, gate-power curve) is not ANDES's HYGOV4, which stabctl
+    # reads from ANDES only
     assert str(e.value).splitlines()[1:] == [
         "  t.dyr:2 ESST5B (bus 1, id 1): model ESST5B is not mapped",
         "  t.dyr:3 IEEEST (bus 1, id 1): its machine has no (supported) exciter",
+        "  t.dyr:4 HYGOV4 (bus 1, id 1): model HYGOV4 is not mapped",
     ]
 
 
@@ -416,7 +420,7 @@ def test_dc_exciter_steady_state_vr_equals_ke_plus_se_times_efd(KE):
     assert x[2, 0] == pytest.approx((KE_eff + SE) * Efd, abs=1e-15)
     assert Vref[0] == pytest.approx(Vt + x[2, 0] / 20, rel=1e-15)
     dx = np.zeros_like(x)
-    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, Efd, 1.0, dx, True, 0.0)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, Vt, 0.0, Efd, Efd, 1.0, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
 
 
@@ -460,7 +464,7 @@ def test_quadratic_saturation_passes_both_points_and_keeps_ke():
     x, Vref, p = exc.initialise(p, np.array([Efd]), np.array([Vt]))
     assert p.KE[0] == 0.0 and x[2, 0] == pytest.approx(B * (Efd - A) ** 2, rel=1e-14)
     dx = np.zeros_like(x)
-    exc.derivatives(p.packed(Vref), x, 0, Vt, 0.0, Efd, Efd, 1.0, dx, True, 0.0)
+    exc.derivatives(p.packed(Vref), x, 0, Vt, Vt, 0.0, Efd, Efd, 1.0, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
     row[23] = 0  # K_E = 0 computed: V_R0 = 0
     p = exc.exciter_params(load_case("kundur").replace(exciters=ExciterTable.from_matrix([row])))
@@ -475,7 +479,7 @@ def test_dc2_limit_scales_with_terminal_voltage():
         x, Vref, p = exc.initialise(p, np.array([1.0]), np.array([1.0]))
         x[2, 0] = 10.0
         dx = np.zeros_like(x)
-        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.0, 1.0, 1.0, 1.0, dx, True, 0.0)
+        exc.derivatives(p.packed(Vref + 1.0), x, 0, 0.5, 0.5, 0.0, 1.0, 1.0, 1.0, dx, True, 0.0)
         assert x[2, 0] == pytest.approx(bound, rel=1e-15) and dx[2, 0] == 0.0
 
 
@@ -493,7 +497,7 @@ def test_dc2_state_held_on_a_limit_that_rose_within_reach():
         x = x0.copy()
         x[2, 0] = 5.2 * 0.5
         dx = np.zeros_like(x)
-        exc.derivatives(P, x, 0, 0.51, 0.0, 1.0, 1.0, 1.0, dx, True, reach)
+        exc.derivatives(P, x, 0, 0.51, 0.51, 0.0, 1.0, 1.0, 1.0, dx, True, reach)
         if held:
             assert x[2, 0] == pytest.approx(5.2 * 0.51, rel=1e-15) and dx[2, 0] == 0.0
         else:
@@ -542,7 +546,7 @@ def test_exst1_steady_state_and_output_limit():
     P = p.packed(Vref)
     assert exc.field_voltage_at(P, x, 0, Vt, 0.0, 1.0, Efd, True) == Efd
     dx = np.full_like(x, np.nan)
-    exc.derivatives(P, x, 0, Vt, 0.0, Efd, Efd, 1.0, dx, True, 0.0)
+    exc.derivatives(P, x, 0, Vt, Vt, 0.0, Efd, Efd, 1.0, dx, True, 0.0)
     assert np.abs(dx).max() < 1e-12
     x[2, 0] = 10.0
     assert exc.field_voltage_at(P, x, 0, 0.9, 0.0, 1.0, 2.0, True) == pytest.approx(
@@ -1133,3 +1137,20 @@ def test_ieeet3_and_esst4b_records_land_in_their_columns(tmp_path):
     got += [e.KG, e.KP, e.KI, e.VBmax, e.KC, e.XL, e.thetaP]
     assert e.type[1] == 12 and [g[1] for g in got] == st4b
     assert e.VGmax[1] == VRMAX_UNLIMITED
+
+
+def test_ieeevc_load_compensator_completes_its_exciter_row(tmp_path):
+    """PSS/E's IEEEVC record (BUS 'IEEEVC' ID RC XC, machine base) sets the load
+    compensation of the machine's exciter row (exc_con Rcomp, Xcomp), in either order of
+    the records; one on a machine without exciter is refused with that reason."""
+    text = (
+        "1 'IEEEVC' 1 0.02 0.08 /\n"
+        "1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -3 3 /\n"
+        "2 'GENCLS' 1 3.0 0.0 /\n2 'IEEEVC' 1 0.0 0.1 /\n"
+    )
+    recs = read_dyr(write(tmp_path, text))
+    t = dyr_tables(recs, kundur_generators()[:2], on_unsupported="skip")
+    e = ExciterTable.from_matrix(t.exc_con)
+    assert (list(e.machine), list(e.Rcomp), list(e.Xcomp)) == ([1], [0.02], [0.08])
+    assert [(r.line, r.model) for r in t.unsupported] == [(5, "IEEEVC")]
+    assert "its machine has no (supported) exciter" in t.why[0]
