@@ -260,7 +260,10 @@ class DynamicModel:
         S0 = S0.real * mp.pfrac + 1j * S0.imag * mp.qfrac
         em = ep.mac
         VB0 = exc.initial_source_voltage(ep, mp, op.V[mp.bus_idx], S0, self.vex0)
-        xe, self.Vref, self.ep = exc.initialise(ep, self.vex0[em], eterm0[em], VB0)
+        V0 = op.V[mp.bus_idx]
+        I0 = np.conj(S0 / V0) * mp.mac_pot  # machine base
+        vc0 = np.abs(V0[em] + (ep.Rcomp + 1j * ep.Xcomp) * I0[em])
+        xe, self.Vref, self.ep = exc.initialise(ep, self.vex0[em], eterm0[em], VB0, vc0)
         ep = self.ep
         L.view(x, "exc")[:] = xe
         L.view(x, "pss")[:] = pss_.initialise(
@@ -723,8 +726,12 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     assign(efd, p.vex0)
     for i in range(ne):
         m = int(p.EP[i, exc.E.MAC])
+        vc = eterm[m]
+        if p.EP[i, exc.E.RCOMP] != 0.0 or p.EP[i, exc.E.XCOMP] != 0.0:
+            pot = p.MP[m, mac.K.POT]
+            vc = exc.compensated(p.EP, i, V_bus[p.mac_bus[m]], cur[m] * pot)
         exc.derivatives(
-            p.EP, xe, i, eterm[m], pss_exc[i], efd_alg[i], ifd[i], vb[i], dxe, p.ieee, p.reach
+            p.EP, xe, i, vc, eterm[m], pss_exc[i], efd_alg[i], ifd[i], vb[i], dxe, p.ieee, p.reach
         )
         efd[m] = exc.recorded_efd(p.EP, xe, i, efd_alg[i])
     for k in range(ng):

@@ -286,8 +286,20 @@ EXCITER = Family(
             doc="1: the field voltage is the exciter's output times the rotor speed (pu), "
             "ANDES 2.0's EXDC2 (exdc2.py vout = omega vp); 0 (default): the output",
         ),
+        Param(
+            "Rcomp",
+            "pu",
+            46,
+            doc="load compensation resistance R_C, machine base: the voltage transducer's "
+            "input is V_C = abs(V_t + (R_C + j X_C) I_t) (IEEE 421.5 load compensator; "
+            "PSS/E and ANDES IEEEVC); 0 with X_C: V_t",
+        ),
+        Param("Xcomp", "pu", 47, doc="load compensation reactance X_C, machine base"),
     ),
     dyr=(
+        # IEEEVC (the IEEE 1981 load compensator, a record of its own beside the machine's
+        # exciter record): R_C, X_C into that exciter's row (stabctl.io.dyr COMPENSATORS)
+        DyrModel("IEEEVC", ("RC", "XC"), {"Rcomp": "RC", "Xcomp": "XC"}, andes=("IEEEVC",)),
         # SEXS -> smpexc: T_C = (TA/TB) TB is computed
         DyrModel(
             "SEXS",
@@ -1084,15 +1096,17 @@ def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):
     return VB
 
 
-def initialise(p: ExciterParams, vex, eterm, VB=None):
+def initialise(p: ExciterParams, vex, eterm, VB=None, vc=None):
     """States (n_slots, n_exc), Vref (n_exc,) and the parameters with PSS/E's computed KE
     (DC exciters with KE = 0 get KE = -SE(Efd0), so that V_R starts at 0) from the
     machines' field voltage vex and terminal voltage eterm; VB is the ST3 source voltage
-    (`initial_source_voltage`; needed for type 3).  Raises CaseError when the initial
+    (`initial_source_voltage`; needed for type 3); vc the voltage the transducers measure
+    (`compensated`; default eterm).  Raises CaseError when the initial
     point violates a limit PST checks (ST3: Efdmax or the V_I range; DC: the V_R limits)
     by more than `START_LIMIT_TOL` (stabctl.models.declaration)."""
     x = np.zeros((6, p.n))
-    x[0] = eterm
+    vc = eterm if vc is None else vc
+    x[0] = vc
     smp, st3, dc = p.kind == SMP, p.kind == ST3, p.is_dc
     bus_fed = smp & (p.KG == 1)
     vex_smp = vex / np.where(bus_fed, eterm, 1.0)  # SCRX bus fed: Efd = V_t x Efd state
@@ -1143,7 +1157,7 @@ def initialise(p: ExciterParams, vex, eterm, VB=None):
         x[2] = np.where(st4b, VG, x[2])
         x[3] = np.where(st4b, VM, x[3])
         VA = np.where(st4b, 0.0, VA)  # a PI at rest: no error
-    Vref = eterm + np.where(st3, VI, VA)
+    Vref = vc + np.where(st3, VI, VA)
     return x[: p.n_slots()], Vref, p
 
 
@@ -1411,17 +1425,26 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
 
 
 @kernel
-def derivatives(P, x, i, eterm, pss_out, efd, ifd, VB, dx, ieee, reach):
+def compensated(P, i, vt, it):
+    """The voltage exciter i's transducer measures: abs(V_t + (R_C + j X_C) I_t) (IEEE
+    421.5 load compensator), for the terminal voltage vt and the machine's current it
+    (complex, one frame, machine base); abs(vt) without compensation."""
+    return abs(vt + complex(P[i, E.RCOMP], P[i, E.XCOMP]) * it)
+
+
+@kernel
+def derivatives(P, x, i, vc, eterm, pss_out, efd, ifd, VB, dx, ieee, reach):
     """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
 
-    Every type: the voltage transducer lag T_R on eterm (pu) and the error V_ref - V_TR +
-    pss_out; efd is the field voltage `field_voltage` gave, ifd the field current
-    `field_current` gave, VB the source term `source_voltage` gave; reach (s): DC2's V_t-scaled
-    V_R limits hold a state within that reach (`blocks.nonwindup`; the run's step, 0 in
+    Every type: the voltage transducer lag T_R on vc (pu; the terminal voltage eterm, or
+    the load-compensated voltage `compensated`) and the error V_ref - V_TR + pss_out;
+    efd is the field voltage `field_voltage` gave, ifd the field current `field_current`
+    gave, VB the source term `source_voltage` gave; reach (s): DC2's V_t-scaled V_R limits
+    (on eterm) hold a state within that reach (`blocks.nonwindup`; the run's step, 0 in
     the linearisation).
     """
     dx[:, i] = 0.0
-    VTR, dx[0, i] = lag(eterm, x[0, i], P[i, E.TR])
+    VTR, dx[0, i] = lag(vc, x[0, i], P[i, E.TR])
     err = P[i, E.VREF] - VTR + pss_out
     kind = P[i, E.KIND]
     if kind == SMP:

@@ -32,7 +32,7 @@ def smpexc_at_ceiling(model, error_pu):
     dx = np.zeros_like(x)
     ieee = model.params.ieee
     vex = exc.field_voltage_at(P, x, 0, 1.0, 0.0, 1.0, 0.0, ieee)
-    exc.derivatives(P, x, 0, 1.0, 0.0, vex, 0.0, 1.0, dx, ieee, 0.0)
+    exc.derivatives(P, x, 0, 1.0, 1.0, 0.0, vex, 0.0, 1.0, dx, ieee, 0.0)
     return dx[2, 0], x[2, 0], P[0, exc.E.VRMAX]
 
 

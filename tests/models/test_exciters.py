@@ -100,7 +100,7 @@ def started(row):
 
 def derivatives(P, x, eterm=VT0, efd=EFD0, ieee=True):
     dx = np.full_like(x, np.nan)
-    exc.derivatives(P, x, 0, eterm, 0.0, efd, efd, VB0, dx, ieee, 0.0)
+    exc.derivatives(P, x, 0, eterm, eterm, 0.0, efd, efd, VB0, dx, ieee, 0.0)
     return dx
 
 
@@ -254,7 +254,7 @@ def test_esst1a_error_step_passes_both_lead_lags():
     E.3 realisation, the lag E.2)."""
     P, x = started(ST1A)
     dV, dx = 1e-3, np.zeros_like(x)
-    exc.derivatives(P, x, 0, VT0, dV, EFD0, EFD0, 1.0, dx, True, 0.0)
+    exc.derivatives(P, x, 0, VT0, VT0, dV, EFD0, EFD0, 1.0, dx, True, 0.0)
     assert dx[2, 0] == pytest.approx(200 * dV * (1 / 10) * (0.5 / 2) / 0.04, rel=1e-12)
     assert dx[4, 0] == pytest.approx(dV * (1 / 10) / 2.0, rel=1e-12)
 
@@ -267,9 +267,9 @@ def test_esst1a_va_is_non_windup(ieee):
     P, x = started(ST1A)
     x[2, 0] = 6.0
     dx = np.zeros_like(x)
-    exc.derivatives(P, x, 0, VT0, 50.0, EFD0, EFD0, 1.0, dx, ieee, 0.0)
+    exc.derivatives(P, x, 0, VT0, VT0, 50.0, EFD0, EFD0, 1.0, dx, ieee, 0.0)
     assert x[2, 0] == 6.0 and dx[2, 0] == 0.0
-    exc.derivatives(P, x, 0, VT0, 0.0, EFD0, EFD0, 1.0, dx, ieee, 0.0)
+    exc.derivatives(P, x, 0, VT0, VT0, 0.0, EFD0, EFD0, 1.0, dx, ieee, 0.0)
     assert dx[2, 0] < 0
 
 
@@ -317,10 +317,10 @@ def test_exac1_exciter_integrates_vr_minus_vfe_and_vr_is_non_windup():
     E.5)."""
     P, x = started(AC1)
     dx = np.zeros_like(x)
-    exc.derivatives(P, x, 0, VT0, 0.0, EFD0, EFD0 + 0.1, 1.0, dx, True, 0.0)
+    exc.derivatives(P, x, 0, VT0, VT0, 0.0, EFD0, EFD0 + 0.1, 1.0, dx, True, 0.0)
     assert dx[3, 0] == pytest.approx(-0.38 * 0.1 / 0.8, rel=1e-12)
     x[2, 0] = 8.0
-    exc.derivatives(P, x, 0, VT0, 1.0, EFD0, EFD0, 1.0, dx, True, 0.0)
+    exc.derivatives(P, x, 0, VT0, VT0, 1.0, EFD0, EFD0, 1.0, dx, True, 0.0)
     assert x[2, 0] == 8.0 and dx[2, 0] == 0.0
 
 
@@ -392,7 +392,7 @@ def test_exac4_output_limits_fall_with_the_field_current():
     x[2, 0] = 6.0
     assert exc.field_voltage_at(P, x, 0, 0.3, 0.0, 1.0, 2.0, True) == pytest.approx(4.8)
     dx = np.zeros_like(x)
-    exc.derivatives(P, x, 0, VT0, 1.0, EFD0, EFD0, 1.0, dx, True, 0.0)
+    exc.derivatives(P, x, 0, VT0, VT0, 1.0, EFD0, EFD0, 1.0, dx, True, 0.0)
     u = x[1, 0] + 0.1 * (0.1 - x[1, 0])  # lead-lag output, ratio T_C/T_B
     assert dx[2, 0] == pytest.approx((200 * u - 6.0) / 0.04, rel=1e-12)
 
@@ -445,7 +445,7 @@ def test_esst4b_regulators_track_their_limits():
     P, x = started(ST4B)
     dx = np.zeros_like(x)
     x[0, 0] = VT0 - 10.0  # the transducer's output 10 pu below V_ref
-    exc.derivatives(P, x, 0, VT0 - 10.0, 0.0, EFD0, EFD0, VB0, dx, True, 0.0)
+    exc.derivatives(P, x, 0, VT0 - 10.0, VT0 - 10.0, 0.0, EFD0, EFD0, VB0, dx, True, 0.0)
     ys = 1.0 * 10.0 + x[1, 0]
     assert dx[1, 0] == pytest.approx(0.5 * (10.0 - 2 * (ys - 8.0)), rel=1e-12)
     assert dx[2, 0] == pytest.approx((8.0 - x[2, 0]) / 0.1, rel=1e-12)
