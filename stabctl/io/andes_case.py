@@ -18,6 +18,11 @@ Network (ANDES's values after set-up, pu on the system base):
   ZIPs' shares of the bus load (the bus's other PQs constant impedance); percentages of
   P (or of Q) that do not add up to 100 (ANDES warns, and its load then starts off its
   power flow) are scaled to 100, a change that ``on_unsupported="skip"`` keeps and names;
+* ``FLoad`` (replaces its ``PQ`` in dynamic runs, ``andes/models/dynload/fload.py``: ``P =
+  kp/100 p0 (V/V0)^ap f^bp``, Q alike with kq, aq, bq): a ZIP of one kind, constant power,
+  current or impedance for the exponent 0, 1 or 2, where it has no frequency dependence
+  (bp = bq = 0) and keeps its PQ's power (kp = kq = 100); any other is refused with the
+  parameter named (a load that is not PST's);
 * ``PV`` / ``Slack``: ``p0``, ``q0``, ``v0``, ``qmax``, ``qmin`` (added up per bus; the
   bus becomes PV or swing);
 * ``Line`` (lines and transformers): ``r``, ``x``, tap ``tap`` on the from side, phase
@@ -142,7 +147,7 @@ WIND_CHAIN = (
     ("WTTQA1", "rep", "torque", "wq_"),
 )
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
-_NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt", "ZIP")
+_NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt", "ZIP", "FLoad")
 _MACHINES = ("GENROU", "GENCLS")
 #: ANDES parameters outside PSS/E's data that must keep the value stabctl's models have
 _FIXED = {
@@ -470,26 +475,30 @@ def _network(ss, file: str) -> tuple[dict, dict]:
 
 def _zip_loads(ss, numbers: dict, bus: np.ndarray) -> tuple[np.ndarray, list]:
     """PST ``load_con`` rows (bus, P and Q constant-power fractions, P and Q constant-
-    current fractions) of the buses with a ZIP in service (module doc), and the ZIPs kept
+    current fractions) of the buses with a ZIP or FLoad in service (module doc; an FLoad
+    as `_fload_shares`), and the ZIPs kept
     with a change, ``(model, idx, why)``: percentages that do not add up to 100 scaled to
     100 (ANDES only warns, and its load then starts off its power flow)."""
-    zip_ = ss.models.get("ZIP")
     parts: dict = {}  # bus number -> [Pp, Qp, Pi, Qi] of its ZIPs, pu
     changed = []
-    for k in _in_service(zip_) if zip_ is not None else ():
-        pct = {n: float(getattr(zip_, n).v[k]) for n in ("kpp", "kpi", "kpz", "kqp", "kqi", "kqz")}
+    shares = []
+    for name, of in (("ZIP", _zip_shares), ("FLoad", _fload_shares)):
+        m = ss.models.get(name)
+        on = _in_service(m) if m is not None else ()
+        shares += [(name, str(m.idx.v[k]), m.pq.v[k], of(m, k)) for k in on]
+    for name, idx, pq_idx, pct in shares:
         for what in "pq":
             names = [f"k{what}{c}" for c in "piz"]
             total = sum(pct[n] for n in names)
             if total <= 0:
-                raise CaseError(f"ZIP {zip_.idx.v[k]}: {' + '.join(names)} = {total:g} %")
+                raise CaseError(f"{name} {idx}: {' + '.join(names)} = {total:g} %")
             if abs(total - 100.0) > 1e-9:
                 was = ", ".join(f"{n} {pct[n]:g}" for n in names)
                 pct.update({n: pct[n] * 100.0 / total for n in names})
                 now = ", ".join(f"{pct[n]:.4g}" for n in names)
                 why = f"{was} (sum {total:g} %) scaled to 100 %: {now}"
-                changed.append(("ZIP", str(zip_.idx.v[k]), why))
-        pq = list(ss.PQ.idx.v).index(zip_.pq.v[k])
+                changed.append((name, idx, why))
+        pq = list(ss.PQ.idx.v).index(pq_idx)
         p0, q0 = ss.PQ.p0.v[pq], ss.PQ.q0.v[pq]
         acc = parts.setdefault(numbers[ss.PQ.bus.v[pq]], [0.0] * 4)
         for i, v in enumerate((p0 * pct["kpp"], q0 * pct["kqp"], p0 * pct["kpi"], q0 * pct["kqi"])):
@@ -501,6 +510,36 @@ def _zip_loads(ss, numbers: dict, bus: np.ndarray) -> tuple[np.ndarray, list]:
         rows.append([number, pp / p if p else 0.0, qp / q if q else 0.0])
         rows[-1] += [pi / p if p else 0.0, qi / q if q else 0.0]
     return np.array(rows, float).reshape(-1, 5), changed
+
+
+def _zip_shares(zip_, k: int) -> dict:
+    """ZIP device k's percentages kpp, kpi, kpz, kqp, kqi, kqz."""
+    return {n: float(getattr(zip_, n).v[k]) for n in ("kpp", "kpi", "kpz", "kqp", "kqi", "kqz")}
+
+
+def _fload_shares(fl, k: int) -> dict:
+    """FLoad device k as ZIP percentages: 100 % constant power, current or impedance for
+    its voltage exponent 0, 1 or 2; CaseError for a frequency exponent other than 0, a
+    share of its PQ other than 100 % or another voltage exponent (not PST's loads)."""
+    v = {n: float(getattr(fl, n).v[k]) for n in ("kp", "kq", "ap", "aq", "bp", "bq")}
+    bad = [
+        f"{n} = {v[n]:g} ({why})"
+        for n, want, why in (
+            ("bp", (0.0,), "frequency dependence"),
+            ("bq", (0.0,), "frequency dependence"),
+            ("kp", (100.0,), "a share of its PQ's power"),
+            ("kq", (100.0,), "a share of its PQ's power"),
+            ("ap", (0.0, 1.0, 2.0), "a voltage exponent other than 0, 1, 2"),
+            ("aq", (0.0, 1.0, 2.0), "a voltage exponent other than 0, 1, 2"),
+        )
+        if v[n] not in want
+    ]
+    if bad:
+        raise CaseError(f"FLoad {fl.idx.v[k]}: {'; '.join(bad)}: not one of PST's loads")
+    pct = {f"k{w}{c}": 0.0 for w in "pq" for c in "piz"}
+    for w in "pq":
+        pct[f"k{w}{'piz'[int(v['a' + w])]}"] = 100.0
+    return pct
 
 
 def _in_service(model) -> list[int]:

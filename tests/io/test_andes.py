@@ -524,6 +524,35 @@ def test_ieee14_zip_load_follows_andes_and_its_percentages_are_scaled_to_100(tmp
     assert gap < 2e-5 < 1e-4 < gap_z  # measured 4.4e-6, 2.1e-4
 
 
+def test_ieee14_fload_is_read_as_pst_s_load_and_follows_andes(tmp_path):
+    """ieee14_fload.json: an FLoad replaces bus 2's PQ in dynamic runs, P = p0 V/V0
+    (ap = 1), Q = q0 (aq = 0), no frequency dependence (bp = bq = 0): PST's
+    non-conforming load with P all constant current and Q all constant power.  The bus-9
+    fault's speeds agree with ANDES's within 2e-5 pu, where the same case with the load
+    left a constant impedance differs by 9.1e-5; an FLoad with frequency
+    dependence is refused, the parameter named."""
+    path = andes.get_case("ieee14/ieee14_fload.json")
+    got = read_andes_case(path, on_unsupported="skip")
+    loads = got.case.loads
+    assert (loads.bus[0], loads.p_current[0], loads.q_power[0]) == (2, 1.0, 1.0)
+    assert (loads.p_power[0], loads.q_current[0]) == (0.0, 0.0)
+    sim, _res, ss, t, w, wa = andes_case_run(str(path), 9)
+    assert sim.model.initial_residual[0] < 1e-8
+    assert np.max(np.abs(sim.run([], 10.0, h=STEP).speed - 1)) < 1e-10
+    case_z = got.case.replace(loads=type(loads).from_matrix(np.zeros((0, 5))))
+    res_z = Simulator(case_z, q_limits=False).run([Fault(9, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
+    gap, gap_z = np.max(np.abs(w - wa)), np.max(np.abs(speeds_on(t, res_z, case_z, ss) - wa))
+    print(f"\nieee14 FLoad vs ANDES: speeds {gap:.2e} pu (impedance load: {gap_z:.2e})")
+    assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing
+    assert gap < 2e-5 < 5e-5 < gap_z  # measured 4.5e-6, 9.1e-5
+    data = json.loads(Path(path).read_text())
+    data["FLoad"][0]["bp"] = 1.5
+    edited = tmp_path / "fload_bp.json"
+    edited.write_text(json.dumps(data))
+    with pytest.raises(CaseError, match=r"FLoad FLoad_1: bp = 1.5 \(frequency dependence\)"):
+        read_andes_case(edited, on_unsupported="skip")
+
+
 def test_kundur_st2cut_without_a_second_input_follows_andes():
     """kundur_st2cut.xlsx: ST2CUT on machine 1 with speed input (MODE 1) and MODE2 left
     empty, which ANDES's input switch reads as no signal (PSS/E's code 0). A 6-cycle fault
