@@ -156,6 +156,7 @@ _FIXED = {
     **{g: {"wref0": 1.0} for g in ("TGOV1", "TGOV1N", "IEEEG1", "HYGOV", "IEESGO", "GAST")},
     "ESST4B": {"VGMAX": 20.0},  # not in PSS/E's record: ANDES's default, as read
     "HYGOV4": {"Hdam": 1.0},  # the head at the dam of stabctl's HYGOV4 (and HYGOV)
+    "HYGOVDB": {"wref0": 1.0, "dbL": 0.0, "dbU": 0.0},  # HYGOV: no speed deadband
 }
 
 

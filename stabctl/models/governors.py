@@ -212,7 +212,9 @@ GOVERNOR = Family(
                 "qNL": "qNL",
             },
             kind=4,
-            andes=("HYGOV",),
+            # HYGOVDB: HYGOV with a speed deadband, read where the band is empty
+            # (stabctl.io.andes_case refuses others)
+            andes=("HYGOV", "HYGOVDB"),
         ),
         # IEESGO -> type 5: K1 (speed gain), lag T1, lead-lag T2/T3, limits, lags T4-T6;
         # the power fractions after T4, T5, T6 (1 - K2, (1 - K3) K2, K2 K3) computed

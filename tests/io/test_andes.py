@@ -664,6 +664,17 @@ def test_ieee14_gast_power_and_speeds_match_andes():
     assert np.max(np.abs(ours - theirs)) < 1e-4  # measured 1.8e-5
 
 
+def test_ieee14_hygovdb_without_its_deadband_is_hygov_and_follows_andes():
+    """ANDES's ieee14_hygovdb.xlsx: HYGOVDB is HYGOV with a deadband [dbL, dbU] on the
+    speed deviation, empty in this file, so it is read as HYGOV (with a band it is refused,
+    named); over 10 s after the 6-cycle bus-9 fault its mechanical power follows
+    ANDES's."""
+    _ta, ours, theirs = device_output_run("ieee14/ieee14_hygovdb.xlsx", "HYGOVDB", t_end=10.0)
+    print(f"\nieee14_hygovdb vs ANDES: power {np.max(np.abs(ours - theirs)):.2e} pu")
+    assert np.ptp(theirs) > 1e-3  # the turbine responds
+    assert np.max(np.abs(ours - theirs)) < 1e-4  # measured 4.3e-6
+
+
 @pytest.mark.parametrize("step", [0.1, -0.1])
 def test_ieee14_hygov4_power_and_speeds_match_andes(step):
     """ANDES's ieee14_hygov4.xlsx, 0.1 pu of impedance load added at (or taken from) bus 4
@@ -749,20 +760,27 @@ def test_ieee14_ieeevc2_load_compensation_starts_flat_and_sets_its_reference():
 
 
 @pytest.mark.parametrize(
-    "edit,needle",
+    "name,edit,needle",
     [
-        (("GENROU", "Sn", 4, 200.0), "machine base 200 MVA differs from the system base 100"),
-        (("HYGOV4", "Hdam", 0, 1.2), r"Hdam = 1.2 \(stabctl's model has 1\)"),
+        (
+            "hygov4",
+            ("GENROU", "Sn", 4, 200.0),
+            "machine base 200 MVA differs from the system base 100",
+        ),
+        ("hygov4", ("HYGOV4", "Hdam", 0, 1.2), r"Hdam = 1.2 \(stabctl's model has 1\)"),
+        ("hygovdb", ("HYGOVDB", "dbU", 0, 1e-3), r"dbU = 0.001 \(stabctl's model has 0\)"),
     ],
 )
-def test_andes_hygov4_outside_stabctl_s_model_is_refused_with_why(tmp_path, edit, needle):
+def test_andes_hydro_governors_outside_stabctl_s_models_are_refused_with_why(
+    tmp_path, name, edit, needle
+):
     """ANDES scales HYGOV4's head and flows by the machine's MVA over the system base, and
-    stabctl's HYGOV4 has the head 1 at the dam: a case outside that is refused by name
-    with the reason, not run differently."""
+    stabctl's HYGOV4 has the head 1 at the dam; stabctl's HYGOV has no speed deadband: a
+    case outside that is refused by name with the reason, not run differently."""
     from andes.io import xlsx
 
     ss = andes.load(
-        andes.get_case("ieee14/ieee14_hygov4.xlsx"),
+        andes.get_case(f"ieee14/ieee14_{name}.xlsx"),
         setup=False,
         no_output=True,
         default_config=True,
