@@ -5,7 +5,13 @@ import importlib
 
 import pytest
 
-MODULES = ["stabctl.io", "stabctl.stability.cct", "stabctl.smallsignal.modal"]
+MODULES = [
+    "stabctl.io",
+    "stabctl.stability.cct",
+    "stabctl.smallsignal.modal",
+    "stabctl.smallsignal.linearise",
+    "stabctl.storage.devices",
+]
 
 
 @pytest.mark.parametrize("name", MODULES)

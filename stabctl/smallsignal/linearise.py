@@ -169,6 +169,16 @@ def linearise(
         limiter (the linearisation would be meaningless there).
     CaseError, PowerFlowError
         As `Simulator` when `target` is a Case.
+
+    Examples
+    --------
+    Kundur's system: 56 states, inputs the ESD powers at the generators' HV buses (then
+    the voltage and power references), outputs the speeds first:
+
+    >>> import stabctl
+    >>> lin = stabctl.linearise(stabctl.Simulator(stabctl.load_case("kundur")))
+    >>> lin.nstates, lin.input_labels[:2], lin.output_labels[0]
+    (56, ['P_esd_B10', 'P_esd_B20'], 'omega_G1')
     """
     from stabctl.dynamics.driver import Simulator
 

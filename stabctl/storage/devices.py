@@ -283,6 +283,16 @@ def uniform_fleet(
     ------
     InputError
         `pct` not in (0, MAX_ESD_PCT], or an unknown model.
+
+    Examples
+    --------
+    The paper's 5 % fleet on Kundur's system (900 MVA machines, HV buses 10, 20, 110,
+    120):
+
+    >>> import stabctl
+    >>> fleet = stabctl.uniform_fleet(stabctl.load_case("kundur"), 5)
+    >>> [(d.bus, d.machine, float(d.pmax_mw)) for d in fleet.devices]
+    [(10, 1, 45.0), (20, 2, 45.0), (110, 3, 45.0), (120, 4, 45.0)]
     """
     if not 0 < pct <= MAX_ESD_PCT:
         raise InputError(
