@@ -1,0 +1,317 @@
+"""IEEE C37.118.2-2011 frames of the simulated PMUs: one multi-PMU stream (as a PDC sends
+it), its configuration frame (CFG-2) and data frames, built and parsed with pyc37 (BSD-3,
+the maintained fork of pypmu; the ``pmu`` extra), and recordings of a stream as the
+frames themselves.
+
+Stream layout (C37.118.2-2011 Tables 5, 6, 8, 9):
+- one PMU block per `stabctl.estimation.pmu.PMU`, station name its label (``B3:G1``),
+  IDCODE = the stream's IDCODE + 1 + its index;
+- FORMAT 0x0002: phasors rectangular floating point in engineering units (volts and
+  amperes, phase-to-neutral: pu times `StreamConfig.v_base`, `StreamConfig.i_base`), FREQ
+  and DFREQ 16-bit integers: FREQ the deviation from nominal in mHz, DFREQ the ROCOF in
+  Hz/s times 100.  Integers, because pyc37 1.0.2 reads a floating-point FREQ as a
+  deviation limited to +-32.767 Hz where the standard (Table 6) makes it the actual
+  frequency (upstream iicsys/pypmu issue 4), so it could neither send nor read a
+  standard floating-point FREQ of a 60 Hz PMU.  Resolution: 1 mHz, 0.01 Hz/s;
+- two phasors per PMU (V, I), one (V) for a PMU without current channel;
+- a PMU's frame lost in the stream: STAT 0x8000 (bits 15-14 = 10, "absent data
+  inserted"), values 0 on the wire, NaN once parsed;
+- SOC/FRACSEC: the time stamp plus `StreamConfig.epoch` (UNIX seconds), TIME_BASE
+  1 000 000 (1 us).
+A recording is the CFG-2 frame followed by the data frames, each as sent (they carry their
+own FRAMESIZE): any C37.118.2 reader can replay it.
+"""
+
+from __future__ import annotations
+
+import collections.abc  # noqa: F401  pyc37 1.0.2 uses collections.abc without importing it
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from stabctl.errors import InputError
+from stabctl.estimation.pmu import Frame
+
+TIME_BASE = 1_000_000  # FRACSEC counts per second (1 us)
+#: FORMAT (Table 9): phasor polar, phasor float, analog float, FREQ/DFREQ float
+FORMAT = (False, True, False, False)
+STAT_GOOD, STAT_ABSENT = 0x0000, 0x8000  # STAT bits 15-14: 00 good, 10 absent data inserted
+MHZ_PER_HZ, DFREQ_PER_HZ_S = 1000.0, 100.0  # integer FREQ (mHz) and DFREQ (Hz/s x 100)
+INT16 = 32767
+
+
+@dataclass(frozen=True)
+class StreamConfig:
+    """What a C37.118.2 stream of simulated PMUs carries and how its values map to pu.
+
+    Attributes
+    ----------
+    idcode : int
+        The stream's IDCODE (1..65535 - number of PMUs); PMU k's block has idcode + 1 + k.
+    pmus : tuple of PMU
+        The PMUs, in block order.
+    f0 : float
+        Nominal frequency (Hz): 50 or 60 (FNOM).
+    rate : int
+        Frames per second (DATA_RATE).
+    v_base, i_base : ndarray
+        Volts and amperes per pu of each PMU's voltage and current (n_pmu,).
+    epoch : int
+        UNIX second of the run's t = 0 (SOC of a time stamp t: epoch + floor(t)).
+    """
+
+    idcode: int
+    pmus: tuple
+    f0: float
+    rate: int
+    v_base: np.ndarray
+    i_base: np.ndarray
+    epoch: int = 1_700_000_000
+
+    @property
+    def n(self) -> int:
+        return len(self.pmus)
+
+    def phasors(self, k: int) -> int:
+        """Phasor channels of PMU k: V and I, or V alone."""
+        p = self.pmus[k]
+        return 1 if p.machine is None and p.device is None else 2
+
+
+def stream_config(
+    case, pmus, rate: float, idcode: int = 1, epoch: int = 1_700_000_000
+) -> StreamConfig:
+    """The stream of `pmus` in `case`: engineering units from each PMU bus's rated kV
+    (V per pu = kV 1000 / sqrt(3), A per pu = base MVA 1e6 / (sqrt(3) kV 1000)).
+
+    Raises
+    ------
+    InputError
+        No PMU, a rate that is not a whole number of frames per second in [1, 240], an
+        IDCODE that leaves no room for the PMUs' own, a bus with no rated kV, or a nominal
+        frequency other than 50 or 60 Hz (FNOM has no other).
+    """
+    pmus = tuple(pmus)
+    if not pmus:
+        raise InputError("a C37.118.2 stream needs at least one PMU")
+    if rate != int(rate) or not 1 <= rate <= 240:
+        raise InputError(f"C37.118.2 data rate must be 1..240 frames/s, got {rate:g}")
+    if not 1 <= idcode <= 65535 - len(pmus):
+        raise InputError(f"IDCODE must be in [1, {65535 - len(pmus)}], got {idcode}")
+    if case.freq_hz not in (50.0, 60.0):
+        raise InputError(f"C37.118.2 FNOM is 50 or 60 Hz, the case has {case.freq_hz:g} Hz")
+    kv = np.array([case.buses.kv[case.bus_index(p.bus)] for p in pmus], float)
+    if np.any(kv <= 0):
+        bus = pmus[int(np.argmax(kv <= 0))].bus
+        raise InputError(f"PMU bus {bus} has no rated kV: its volts per pu are unknown")
+    v_base = kv * 1e3 / np.sqrt(3.0)
+    return StreamConfig(
+        idcode,
+        pmus,
+        float(case.freq_hz),
+        int(rate),
+        v_base,
+        case.base_mva * 1e6 / (3.0 * v_base),
+        int(epoch),
+    )
+
+
+def _pyc37():
+    try:
+        from pyc37 import frame
+    except ImportError as exc:  # the optional extra
+        raise InputError("C37.118.2 streams need pyc37: pip install 'stabctl[pmu]'") from exc
+    return frame
+
+
+def config_frame(cfg: StreamConfig):
+    """The stream's CFG-2 frame (a pyc37 ``ConfigFrame2``; ``convert2bytes()`` its
+    bytes), time-stamped at the run's start."""
+    f = _pyc37()
+    n = cfg.n
+    names = [[f"V {p.label}", f"I {p.label}"][: cfg.phasors(k)] for k, p in enumerate(cfg.pmus)]
+    one = _one_or_list(n)
+    return f.ConfigFrame2(
+        cfg.idcode,
+        TIME_BASE,
+        n,
+        one([p.label for p in cfg.pmus]),
+        one([cfg.idcode + 1 + k for k in range(n)]),
+        one([FORMAT] * n),
+        one([cfg.phasors(k) for k in range(n)]),
+        one([0] * n),
+        one([0] * n),
+        one(names),
+        one([[(0, "v"), (0, "i")][: cfg.phasors(k)] for k in range(n)]),
+        one([[] for _ in range(n)]),
+        one([[] for _ in range(n)]),
+        one([int(cfg.f0)] * n),
+        one([1] * n),
+        cfg.rate,
+        soc=cfg.epoch,
+        frasec=(0, "+"),
+    )
+
+
+def _one_or_list(n: int):
+    """pyc37 takes a single PMU's fields bare and several PMUs' as lists: the converter
+    for a stream of n PMUs."""
+    return (lambda values: values[0]) if n == 1 else (lambda values: values)
+
+
+def time_stamp(cfg: StreamConfig, t: float) -> tuple[int, int]:
+    """(SOC, FRACSEC count) of run time t (s): the second and its fraction in TIME_BASE
+    counts, rounded to the count (a count of TIME_BASE carries into the next second)."""
+    counts = int(round((t - np.floor(t)) * TIME_BASE))
+    second = int(np.floor(t)) + counts // TIME_BASE
+    return cfg.epoch + second, counts % TIME_BASE
+
+
+def data_frame(cfg: StreamConfig, cfg2, frame: Frame) -> bytes:
+    """One data frame of the stream (bytes, CRC included) from a `pmu.Frame` of its PMUs
+    (pu, Hz, Hz/s); cfg2: `config_frame`'s result.
+
+    Raises
+    ------
+    InputError
+        A frequency deviation beyond +-32.767 Hz or a ROCOF beyond +-327.67 Hz/s (the
+        16-bit FREQ and DFREQ), or a frame of another number of PMUs.
+    """
+    f = _pyc37()
+    if frame.valid.size != cfg.n:
+        raise InputError(f"a frame of {frame.valid.size} PMUs for a stream of {cfg.n}")
+    stat, phasors, freq, dfreq = [], [], [], []
+    for k in range(cfg.n):
+        ok = bool(frame.valid[k])
+        stat.append(STAT_GOOD if ok else STAT_ABSENT)
+        ph = [frame.v[k] * cfg.v_base[k], frame.i[k] * cfg.i_base[k]][: cfg.phasors(k)]
+        phasors.append([(float(z.real), float(z.imag)) if ok else (0.0, 0.0) for z in ph])
+        freq.append(_int16(ok and (frame.freq[k] - cfg.f0) * MHZ_PER_HZ, "FREQ", k))
+        dfreq.append(_int16(ok and frame.rocof[k] * DFREQ_PER_HZ_S, "DFREQ", k))
+    soc, counts = time_stamp(cfg, frame.t)
+    one = _one_or_list(cfg.n)
+    df = f.DataFrame(
+        cfg.idcode,
+        one(stat),
+        one(phasors),
+        one(freq),
+        one(dfreq),
+        one([[] for _ in range(cfg.n)]),
+        one([[] for _ in range(cfg.n)]),
+        cfg2,
+        soc=soc,
+        frasec=(counts, "+"),
+    )
+    return df.convert2bytes()
+
+
+def _int16(value, what: str, k: int) -> int:
+    v = int(round(float(value)))
+    if not -INT16 <= v <= INT16:
+        raise InputError(f"PMU {k}: {what} {v} does not fit C37.118.2's 16-bit field")
+    return v
+
+
+def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
+    """A data frame of the stream back to a `pmu.Frame` (pu, Hz, Hz/s) with pyc37's
+    parser (its CRC checked); PMUs whose STAT says absent data are invalid, their values
+    NaN.
+
+    Raises
+    ------
+    InputError
+        A frame pyc37 rejects (its CRC, size or layout), naming its reason.
+    """
+    f = _pyc37()
+    try:
+        df = f.CommonFrame.convert2frame(data, cfg2)
+    except f.FrameError as exc:
+        raise InputError(f"C37.118.2 data frame not readable: {exc}") from None
+    if not isinstance(df, f.DataFrame):
+        raise InputError(f"C37.118.2: a {type(df).__name__}, not a data frame")
+    many = (lambda x: [x]) if cfg.n == 1 else (lambda x: x)
+    valid = np.array([(s & 0xC000) == 0 for s in many(df._stat)])  # raw words: pyc37
+    # 1.0.2 decodes the data-error bits as STAT >> 15
+    v = np.full(cfg.n, np.nan + 0j)
+    i = np.full(cfg.n, np.nan + 0j)
+    # the phasors as sent, rectangular (re, im): pyc37 1.0.2's get_phasors converts a
+    # single PMU's to polar whatever it is asked
+    ph = [[f.DataFrame._int2phasor(p, FORMAT) for p in raw] for raw in many(df._phasors)]
+    for k in range(cfg.n):
+        if valid[k]:
+            v[k] = complex(*ph[k][0]) / cfg.v_base[k]
+            if cfg.phasors(k) == 2:
+                i[k] = complex(*ph[k][1]) / cfg.i_base[k]
+    nan = np.where(valid, 1.0, np.nan)
+    freq = (cfg.f0 + np.array(many(df.get_freq()), float) / MHZ_PER_HZ) * nan
+    rocof = np.array(many(df.get_dfreq()), float) / DFREQ_PER_HZ_S * nan
+    counts = df.get_frasec()[0]
+    t = df.get_soc() - cfg.epoch + counts / TIME_BASE
+    return Frame(float(t), valid, v, i, freq, rocof)
+
+
+def record(path, cfg: StreamConfig, frames) -> int:
+    """Write a recording: the CFG-2 frame then one data frame per `pmu.Frame` of
+    `frames`; returns the number of data frames."""
+    cfg2 = config_frame(cfg)
+    n = 0
+    with open(path, "wb") as fh:
+        fh.write(cfg2.convert2bytes())
+        for frame in frames:
+            fh.write(data_frame(cfg, cfg2, frame))
+            n += 1
+    return n
+
+
+def split_frames(data: bytes) -> list[bytes]:
+    """The frames of a byte string of consecutive C37.118.2 frames (each starts with
+    SYNC 0xAA and gives its FRAMESIZE in bytes 2-3).
+
+    Raises
+    ------
+    InputError
+        A frame not starting with 0xAA, or cut short, naming its byte offset.
+    """
+    out, at = [], 0
+    while at < len(data):
+        if data[at] != 0xAA or at + 4 > len(data):
+            raise InputError(f"C37.118.2 recording: no frame SYNC at byte {at}")
+        size = int.from_bytes(data[at + 2 : at + 4], "big")
+        if size < 16 or at + size > len(data):
+            raise InputError(f"C37.118.2 recording: frame at byte {at} cut short")
+        out.append(data[at : at + size])
+        at += size
+    return out
+
+
+def replay(path, cfg: StreamConfig) -> list[Frame]:
+    """The frames of a recording (`record`'s, or any capture of this stream), in file
+    order; cfg: the stream the recording's CFG-2 must describe (same PMUs and rate).
+
+    Raises
+    ------
+    InputError
+        No configuration frame first, one that does not describe cfg (names the field),
+        or a data frame that is not readable.
+    """
+    f = _pyc37()
+    frames = split_frames(Path(path).read_bytes())
+    if not frames:
+        raise InputError(f"{path}: empty C37.118.2 recording")
+    try:
+        cfg2 = f.CommonFrame.convert2frame(frames[0])
+    except f.FrameError as exc:
+        raise InputError(f"{path}: first frame is not a configuration frame: {exc}") from None
+    if not isinstance(cfg2, f.ConfigFrame1):
+        raise InputError(f"{path}: first frame is a {type(cfg2).__name__}, not CFG-2")
+    names = cfg2.get_station_name()
+    names = [str(s).strip() for s in (names if isinstance(names, list) else [names])]
+    for field, theirs, ours in (
+        ("station names", names, [p.label for p in cfg.pmus]),
+        ("data rate", cfg2.get_data_rate(), cfg.rate),
+        ("IDCODE", cfg2.get_id_code(), cfg.idcode),
+    ):
+        if theirs != ours:
+            raise InputError(f"{path}: its CFG-2 {field} {theirs} differ from the stream's {ours}")
+    return [parse_frame(cfg, cfg2, data) for data in frames[1:]]

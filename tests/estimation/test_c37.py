@@ -1,0 +1,147 @@
+"""IEEE C37.118.2-2011 frames of the simulated PMUs (stabctl.estimation.c37): miniWECC's
+34 PMUs through a recording and back (pyc37's parser), a data frame and the CFG-2 frame
+decoded by hand from the standard's layout with a CRC-CCITT written here, and the errors
+of broken recordings."""
+
+import struct
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pyc37")
+
+import stabctl
+from stabctl.errors import InputError
+from stabctl.estimation import c37
+from stabctl.estimation import pmu as pm
+from stabctl.estimation.settings import PMUSettings
+from stabctl.studies.cases import CASE2
+
+
+def crc_ccitt(data: bytes) -> int:
+    """CRC-CCITT of C37.118.2-2011 Annex B: polynomial x^16 + x^12 + x^5 + 1, initial
+    0xFFFF, no reflection, no final XOR."""
+    crc = 0xFFFF
+    for byte in data:
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else crc << 1
+            crc &= 0xFFFF
+    return crc
+
+
+@pytest.fixture(scope="module")
+def wecc_stream():
+    """miniWECC's Case 2 fault, 3 s; one PMU per generator terminal, 60 frames/s, 5 % of
+    the frames lost."""
+    case = stabctl.load_case("miniwecc")
+    res = stabctl.Simulator(case).run(CASE2.fault.events(6 / case.freq_hz), t_end=3.0)
+    pmus = pm.machine_pmus(case)
+    stream = pm.measure(pm.phasor_truth(case, res, pmus), PMUSettings(drop_prob=0.05), seed=1)
+    return case, c37.stream_config(case, pmus, 60), stream
+
+
+def test_a_recording_gives_back_every_frame(wecc_stream, tmp_path):
+    """34 PMUs, 181 frames: phasors back to float32 precision (the wire's), frequency to
+    its 1 mHz and ROCOF to its 0.01 Hz/s (the 16-bit FREQ and DFREQ), time stamps to the
+    microsecond, every lost PMU frame marked absent."""
+    _case, cfg, stream = wecc_stream
+    path = tmp_path / "wecc.c37"
+    assert c37.record(path, cfg, stream) == len(stream) == 181
+    back = c37.replay(path, cfg)
+    assert len(back) == len(stream) and cfg.n == 34
+    sent = list(stream)
+    valid = np.array([f.valid for f in sent])
+    assert 0 < (~valid).sum() and np.array_equal(np.array([b.valid for b in back]), valid)
+    for b, f in zip(back, sent):
+        ok = f.valid
+        assert abs(b.t - f.t) <= 0.5e-6
+        np.testing.assert_allclose(b.v[ok], f.v[ok], rtol=1.2e-7)
+        np.testing.assert_allclose(b.i[ok], f.i[ok], rtol=1.2e-7)
+        assert np.max(np.abs(b.freq[ok] - f.freq[ok])) <= 0.5e-3 + 1e-12
+        assert np.max(np.abs(b.rocof[ok] - f.rocof[ok])) <= 0.005 + 1e-12
+        assert np.all(np.isnan(b.v[~ok])) and np.all(np.isnan(b.freq[~ok]))
+
+
+def test_a_data_frame_decoded_by_hand_from_the_standard(wecc_stream):
+    """SYNC 0xAA01 (data frame, version 1), FRAMESIZE, IDCODE, SOC, FRACSEC (time quality
+    byte, then the count of TIME_BASE), per PMU STAT, phasors (float re, im), FREQ (mHz
+    deviation) and DFREQ (Hz/s x 100) as 16-bit integers, then CHK."""
+    case, cfg, stream = wecc_stream
+    k = 75  # 1.25 s: during the swing after clearing
+    frame = stream.frame(k)
+    data = c37.data_frame(cfg, c37.config_frame(cfg), frame)
+    sync, size, idcode, soc, fracsec = struct.unpack(">HHHII", data[:14])
+    assert (sync, size, idcode) == (0xAA01, len(data), cfg.idcode)
+    assert soc == cfg.epoch + 1 and fracsec >> 24 == 0
+    assert (fracsec & 0xFFFFFF) == round(0.25 * c37.TIME_BASE)
+    assert struct.unpack(">H", data[-2:])[0] == crc_ccitt(data[:-2])
+    at = 14
+    for j in range(cfg.n):
+        (stat,) = struct.unpack(">H", data[at : at + 2])
+        at += 2
+        re, im = struct.unpack(">ff", data[at : at + 8])
+        at += 8 * cfg.phasors(j)
+        freq, dfreq = struct.unpack(">hh", data[at : at + 4])
+        at += 4
+        if frame.valid[j]:
+            assert stat == 0
+            kv = case.buses.kv[case.bus_index(cfg.pmus[j].bus)]
+            v = frame.v[j] * kv * 1e3 / np.sqrt(3)  # volts, phase to neutral
+            assert (re, im) == pytest.approx((v.real, v.imag), rel=1e-7)
+            assert freq == round((frame.freq[j] - 60.0) * 1000)
+            assert dfreq == round(frame.rocof[j] * 100)
+        else:
+            assert stat == 0x8000  # bits 15-14 = 10: absent data inserted
+    assert at == len(data) - 2
+
+
+def test_the_configuration_frame_decoded_by_hand(wecc_stream):
+    """CFG-2: SYNC 0xAA31, TIME_BASE, NUM_PMU, the first PMU's station name, IDCODE,
+    FORMAT 0x0002 (rectangular float phasors, integer FREQ), PHNMR, FNOM (bit 0 = 0: 60
+    Hz), and DATA_RATE last before CHK."""
+    _case, cfg, _stream = wecc_stream
+    data = c37.config_frame(cfg).convert2bytes()
+    sync, size = struct.unpack(">HH", data[:4])
+    assert (sync, size) == (0xAA31, len(data))
+    time_base, num_pmu = struct.unpack(">IH", data[14:20])
+    assert (time_base & 0xFFFFFF, num_pmu) == (c37.TIME_BASE, 34)
+    name = data[20:36].decode().strip()
+    idcode, fmt, phnmr, annmr, dgnmr = struct.unpack(">HHHHH", data[36:46])
+    assert (name, idcode, fmt, phnmr, annmr, dgnmr) == (cfg.pmus[0].label, 2, 0x0002, 2, 0, 0)
+    assert struct.unpack(">h", data[-4:-2])[0] == 60
+    assert struct.unpack(">H", data[-2:])[0] == crc_ccitt(data[:-2])
+
+
+def test_a_single_pmu_stream(wecc_stream, tmp_path):
+    """One PMU per stream (a PMU server's own): pyc37's single-PMU layout."""
+    case, _cfg, stream = wecc_stream
+    one = c37.stream_config(case, stream.pmus[:1], 60)
+    frames = [pm.Frame(f.t, f.valid[:1], f.v[:1], f.i[:1], f.freq[:1], f.rocof[:1]) for f in stream]
+    c37.record(tmp_path / "one.c37", one, frames[:10])
+    back = c37.replay(tmp_path / "one.c37", one)
+    assert len(back) == 10
+    np.testing.assert_allclose(back[3].v, frames[3].v, rtol=1.2e-7)
+
+
+def test_broken_recordings_and_settings_are_named(wecc_stream, tmp_path):
+    case, cfg, stream = wecc_stream
+    path = tmp_path / "r.c37"
+    c37.record(path, cfg, list(stream)[:5])
+    data = path.read_bytes()
+    (tmp_path / "cut.c37").write_bytes(data[:-7])
+    with pytest.raises(InputError, match=r"frame at byte \d+ cut short"):
+        c37.replay(tmp_path / "cut.c37", cfg)
+    flipped = bytearray(data)
+    flipped[-10] ^= 0xFF  # a bit error in the last data frame
+    (tmp_path / "crc.c37").write_bytes(bytes(flipped))
+    with pytest.raises(InputError, match=r"data frame not readable.*CRC"):
+        c37.replay(tmp_path / "crc.c37", cfg)
+    other = c37.stream_config(case, cfg.pmus, 30)
+    with pytest.raises(InputError, match="data rate 60 differ from the stream's 30"):
+        c37.replay(path, other)
+    with pytest.raises(InputError, match=r"data rate must be 1\.\.240"):
+        c37.stream_config(case, cfg.pmus, 1000)
+    with pytest.raises(InputError, match="no frame SYNC at byte 0"):
+        (tmp_path / "junk.c37").write_bytes(b"\x00" * 40)
+        c37.replay(tmp_path / "junk.c37", cfg)
