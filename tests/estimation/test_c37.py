@@ -4,6 +4,7 @@ decoded by hand from the standard's layout with a CRC-CCITT written here, and th
 of broken recordings."""
 
 import struct
+import time
 
 import numpy as np
 import pytest
@@ -145,3 +146,73 @@ def test_broken_recordings_and_settings_are_named(wecc_stream, tmp_path):
     with pytest.raises(InputError, match="no frame SYNC at byte 0"):
         (tmp_path / "junk.c37").write_bytes(b"\x00" * 40)
         c37.replay(tmp_path / "junk.c37", cfg)
+
+
+def _quiet_pyc37():
+    """pyc37's loggers write every connection to stdout at INFO."""
+    import logging
+
+    for name in list(logging.root.manager.loggerDict):
+        if name.startswith(("pyc37", "CLIENT")):
+            logging.getLogger(name).setLevel(logging.WARNING)
+
+
+def test_loopback_stream_reaches_pyc37_s_client_whole(wecc_stream):
+    """miniWECC's 34 PMUs at 60 frames/s in real time over loopback TCP to pyc37's own PDC
+    client: the header and CFG-2 on request, then after 'start' all 181 data frames, in
+    order, each carrying what was sent (none lost).  Latency from each frame's due time
+    to its arrival is printed (benchmarks/c37_loopback.py measures a minute)."""
+    from pyc37.pdc import Pdc
+
+    from stabctl.estimation.c37_tcp import StreamServer
+
+    _quiet_pyc37()
+    _case, cfg, stream = wecc_stream
+    sent = list(stream)
+    with StreamServer(cfg, sent) as server:
+        host, port = server.address
+        pdc = Pdc(pdc_id=5, pmu_ip=host, pmu_port=port, buffer_size=4)
+        pdc.run()
+        _quiet_pyc37()
+        assert "34" in pdc.get_header().get_header()
+        cfg2 = pdc.get_config()
+        assert (cfg2.get_num_pmu(), cfg2.get_data_rate()) == (34, 60)
+        pdc.start()
+        got, arrived = [], []
+        for _ in sent:
+            got.append(pdc.get())
+            arrived.append(time.perf_counter())
+        pdc.quit()
+    late = np.array(arrived) - np.array(server.due_at)
+    print(
+        f"\nloopback 34 PMUs, 60 fps: latency median {1e3 * np.median(late):.2f} ms, "
+        f"99th percentile {1e3 * np.percentile(late, 99):.2f} ms"
+    )
+    assert len(got) == len(sent)
+    for g, f in zip(got, sent):
+        b = c37.parse_frame(cfg, cfg2, g.convert2bytes())
+        assert b.t == pytest.approx(f.t, abs=0.5e-6)
+        np.testing.assert_allclose(b.v[f.valid], f.v[f.valid], rtol=1.2e-7)
+
+
+def test_unpaced_stream_then_commands_again(wecc_stream):
+    """speed = inf sends as fast as the socket takes the frames; once the stream has been
+    sent the server answers commands again."""
+    from pyc37.pdc import Pdc
+
+    from stabctl.estimation.c37_tcp import StreamServer
+
+    _quiet_pyc37()
+    _case, cfg, stream = wecc_stream
+    with StreamServer(cfg, stream, speed=float("inf")) as server:
+        pdc = Pdc(pdc_id=5, pmu_ip=server.address[0], pmu_port=server.address[1], buffer_size=4)
+        pdc.run()
+        _quiet_pyc37()
+        cfg2 = pdc.get_config()
+        pdc.start()
+        frames = [pdc.get() for _ in range(len(stream))]
+        assert [f.get_soc() for f in frames[:2]] == [cfg.epoch, cfg.epoch]
+        assert pdc.get_config().get_num_pmu() == cfg2.get_num_pmu()  # answers again
+        pdc.quit()
+    with pytest.raises(InputError, match="speed must be > 0"):
+        StreamServer(cfg, stream, speed=0)

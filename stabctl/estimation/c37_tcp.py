@@ -1,0 +1,167 @@
+"""A C37.118.2-2011 PMU server on TCP for one stream of simulated PMUs
+(`stabctl.estimation.c37`): it answers the command frames (Table 15: send CFG-2 or the
+header, turn transmission on or off) and, once turned on, sends the stream's data frames
+paced at their time stamps (divided by `speed`: 1 real time, inf as fast as the socket
+takes them).
+
+Not pyc37's ``Pmu``: its client handler waits up to 100 ms for a command before sending
+each queued frame, so it sends at most about 9 frames/s, and drops frames silently once
+1000 are queued (pyc37 1.0.2 ``pmu.py``); a 60 frames/s stream needs a sender paced by
+the frames' own time stamps.  Its ``Pdc`` client reads this server's frames (with a
+receive buffer of at most one frame header, ``buffer_size=4``: its ``get`` keeps no bytes
+beyond the frame it reads).
+"""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+
+from stabctl.errors import InputError
+from stabctl.estimation import c37
+
+#: C37.118.2-2011 Table 15 command words this server acts on
+COMMANDS = {1: "stop", 2: "start", 3: "header", 5: "cfg2"}
+
+
+class StreamServer:
+    """Serve one stream's frames to one client at a time on ``host``:``port`` (0: a free
+    port, `address` tells which).
+
+    Parameters
+    ----------
+    cfg : c37.StreamConfig
+        The stream.
+    frames : iterable of stabctl.estimation.pmu.Frame
+        Its frames in time-stamp order (pu, Hz, Hz/s), encoded once here.
+    host : str, optional
+        Address to listen on (default loopback).
+    port : int, optional
+        TCP port (default 0: any free one).
+    speed : float, optional
+        Time-stamp seconds per wall-clock second (default 1, real time; ``inf``: no
+        pacing).
+
+    Attributes
+    ----------
+    sent_at : list of float
+        ``time.perf_counter()`` when each data frame was handed to the socket (NaN until).
+    due_at : list of float
+        ``time.perf_counter()`` at which each frame was due by its time stamp.
+
+    Raises
+    ------
+    InputError
+        A speed that is not > 0, or no frame to serve.
+    """
+
+    def __init__(self, cfg, frames, host: str = "127.0.0.1", port: int = 0, speed=1.0):
+        if not speed > 0:
+            raise InputError(f"speed must be > 0, got {speed}")
+        self.cfg, self.speed = cfg, float(speed)
+        self._cfg2 = c37.config_frame(cfg)
+        frames = list(frames)
+        if not frames:
+            raise InputError("a stream server needs at least one frame")
+        self._t = [f.t for f in frames]
+        self._data = [c37.data_frame(cfg, self._cfg2, f) for f in frames]
+        self.sent_at = [float("nan")] * len(frames)
+        self.due_at = [float("nan")] * len(frames)
+        self._sock = socket.create_server((host, port))
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._accept, daemon=True)
+        self._thread.start()
+
+    @property
+    def address(self) -> tuple[str, int]:
+        """(host, port) the server listens on."""
+        host, port = self._sock.getsockname()[:2]
+        return host, port
+
+    def close(self) -> None:
+        """Stop serving and close the listening socket."""
+        self._stop.set()
+        self._sock.close()
+        self._thread.join(timeout=5)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _accept(self) -> None:
+        while not self._stop.is_set():
+            try:
+                conn, _ = self._sock.accept()
+            except OSError:  # closed
+                return
+            with conn:
+                conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                self._serve(conn)
+
+    def _serve(self, conn: socket.socket) -> None:
+        """Commands until the client closes; a 'start' streams every frame (commands
+        received meanwhile are read between frames)."""
+        while not self._stop.is_set():
+            command = self._command(conn, block=True)
+            if command is None:
+                return
+            if command == "cfg2":
+                self._cfg2.set_time(self.cfg.epoch, (0, "+"))
+                conn.sendall(self._cfg2.convert2bytes())
+            elif command == "header":
+                conn.sendall(self._header())
+            elif command == "start" and not self._stream(conn):
+                return
+
+    def _stream(self, conn: socket.socket) -> bool:
+        """Send the data frames paced by their time stamps; False if the client left."""
+        start = time.perf_counter()
+        for k, data in enumerate(self._data):
+            due = start + (self._t[k] - self._t[0]) / self.speed
+            self.due_at[k] = due
+            while (wait := due - time.perf_counter()) > 0:
+                if self._command(conn, block=False, timeout=min(wait, 0.05)) == "stop":
+                    return True
+            try:
+                conn.sendall(data)
+            except OSError:
+                return False
+            self.sent_at[k] = time.perf_counter()
+        return True
+
+    def _command(self, conn: socket.socket, block: bool, timeout: float = 0.0):
+        """The next command frame's word as a name (None: the client closed; '' none or
+        one this server ignores)."""
+        conn.settimeout(None if block else timeout)
+        try:
+            head = _recv_exactly(conn, 4)
+            if head is None:
+                return None
+            body = _recv_exactly(conn, int.from_bytes(head[2:4], "big") - 4)
+        except TimeoutError:
+            return ""
+        finally:
+            conn.settimeout(None)
+        if body is None or head[1] & 0x70 != 0x40:  # frame type 100: a command frame
+            return None if body is None else ""
+        return COMMANDS.get(int.from_bytes(body[10:12], "big"), "")
+
+    def _header(self) -> bytes:
+        from pyc37.frame import HeaderFrame
+
+        text = f"stabctl simulated PMUs: {self.cfg.n}, {self.cfg.rate} frames/s"
+        return HeaderFrame(self.cfg.idcode, text, self.cfg.epoch, (0, "+")).convert2bytes()
+
+
+def _recv_exactly(conn: socket.socket, n: int):
+    """n bytes from conn (None if the peer closed first)."""
+    out = b""
+    while len(out) < n:
+        chunk = conn.recv(n - len(out))
+        if not chunk:
+            return None
+        out += chunk
+    return out
