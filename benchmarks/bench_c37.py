@@ -37,7 +37,7 @@ def main() -> None:
     frames = list(stream)
     cfg = c37.stream_config(case, pmus, args.rate)
     t0 = time.perf_counter()
-    server = StreamServer(cfg, frames)
+    server = StreamServer.of_frames(cfg, frames)
     encode = (time.perf_counter() - t0) / len(frames)
     with server:
         pdc = Pdc(pdc_id=9, pmu_ip=server.address[0], pmu_port=server.address[1], buffer_size=4)

@@ -285,15 +285,20 @@ def split_frames(data: bytes) -> list[bytes]:
     return out
 
 
-def replay(path, cfg: StreamConfig) -> list[Frame]:
-    """The frames of a recording (`record`'s, or any capture of this stream), in file
-    order; cfg: the stream the recording's CFG-2 must describe (same PMUs and rate).
+def frame_time(data: bytes) -> float:
+    """A frame's time stamp, SOC + FRACSEC / TIME_BASE (s, UNIX), read from its bytes
+    (C37.118.2-2011 Table 2: SOC bytes 6-9, FRACSEC's count bytes 11-13)."""
+    return int.from_bytes(data[6:10], "big") + int.from_bytes(data[11:14], "big") / TIME_BASE
+
+
+def recorded_frames(path) -> tuple:
+    """(CFG-2 as pyc37 reads it, the data frames' bytes) of a recording.
 
     Raises
     ------
     InputError
-        No configuration frame first, one that does not describe cfg (names the field),
-        or a data frame that is not readable.
+        An empty file, a first frame that is not a configuration frame, or a broken one
+        (`split_frames`).
     """
     f = _pyc37()
     frames = split_frames(Path(path).read_bytes())
@@ -305,6 +310,20 @@ def replay(path, cfg: StreamConfig) -> list[Frame]:
         raise InputError(f"{path}: first frame is not a configuration frame: {exc}") from None
     if not isinstance(cfg2, f.ConfigFrame1):
         raise InputError(f"{path}: first frame is a {type(cfg2).__name__}, not CFG-2")
+    return cfg2, frames[1:]
+
+
+def replay(path, cfg: StreamConfig) -> list[Frame]:
+    """The frames of a recording (`record`'s, or any capture of this stream), in file
+    order; cfg: the stream the recording's CFG-2 must describe (same PMUs and rate).
+
+    Raises
+    ------
+    InputError
+        No configuration frame first, one that does not describe cfg (names the field),
+        or a data frame that is not readable.
+    """
+    cfg2, data = recorded_frames(path)
     names = cfg2.get_station_name()
     names = [str(s).strip() for s in (names if isinstance(names, list) else [names])]
     for field, theirs, ours in (
@@ -314,4 +333,4 @@ def replay(path, cfg: StreamConfig) -> list[Frame]:
     ):
         if theirs != ours:
             raise InputError(f"{path}: its CFG-2 {field} {theirs} differ from the stream's {ours}")
-    return [parse_frame(cfg, cfg2, data) for data in frames[1:]]
+    return [parse_frame(cfg, cfg2, d) for d in data]

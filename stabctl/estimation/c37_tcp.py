@@ -27,14 +27,15 @@ COMMANDS = {1: "stop", 2: "start", 3: "header", 5: "cfg2"}
 
 class StreamServer:
     """Serve one stream's frames to one client at a time on ``host``:``port`` (0: a free
-    port, `address` tells which).
+    port, `address` tells which).  Build it with `of_frames` (simulated PMUs) or
+    `of_recording` (a recording, its frames re-sent as they are).
 
     Parameters
     ----------
-    cfg : c37.StreamConfig
-        The stream.
-    frames : iterable of stabctl.estimation.pmu.Frame
-        Its frames in time-stamp order (pu, Hz, Hz/s), encoded once here.
+    cfg2 : pyc37 ConfigFrame2
+        The stream's configuration frame.
+    data : list of bytes
+        The data frames, in time-stamp order.
     host : str, optional
         Address to listen on (default loopback).
     port : int, optional
@@ -54,24 +55,42 @@ class StreamServer:
     ------
     InputError
         A speed that is not > 0, or no frame to serve.
+    OSError
+        The address cannot be listened on (a port in use).
     """
 
-    def __init__(self, cfg, frames, host: str = "127.0.0.1", port: int = 0, speed=1.0):
+    def __init__(self, cfg2, data, host: str = "127.0.0.1", port: int = 0, speed=1.0):
         if not speed > 0:
             raise InputError(f"speed must be > 0, got {speed}")
-        self.cfg, self.speed = cfg, float(speed)
-        self._cfg2 = c37.config_frame(cfg)
-        frames = list(frames)
-        if not frames:
-            raise InputError("a stream server needs at least one frame")
-        self._t = [f.t for f in frames]
-        self._data = [c37.data_frame(cfg, self._cfg2, f) for f in frames]
-        self.sent_at = [float("nan")] * len(frames)
-        self.due_at = [float("nan")] * len(frames)
+        if not data:
+            raise InputError("a stream server needs at least one data frame")
+        self.speed, self._cfg2, self._data = float(speed), cfg2, list(data)
+        self._t = [c37.frame_time(d) for d in self._data]
+        self.sent_at = [float("nan")] * len(self._data)
+        self.due_at = [float("nan")] * len(self._data)
         self._sock = socket.create_server((host, port))
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._accept, daemon=True)
         self._thread.start()
+
+    @classmethod
+    def of_frames(cls, cfg, frames, **kw) -> StreamServer:
+        """The server of a stream's `pmu.Frame` objects (encoded once here; ``kw`` as the
+        constructor's)."""
+        cfg2 = c37.config_frame(cfg)
+        return cls(cfg2, [c37.data_frame(cfg, cfg2, f) for f in frames], **kw)
+
+    @classmethod
+    def of_recording(cls, path, **kw) -> StreamServer:
+        """The server of a recording (`c37.record`'s or any capture): its CFG-2 and data
+        frames re-sent as recorded.  Raises InputError as `c37.recorded_frames`."""
+        cfg2, data = c37.recorded_frames(path)
+        return cls(cfg2, data, **kw)
+
+    @property
+    def n_frames(self) -> int:
+        """Data frames served per session."""
+        return len(self._data)
 
     @property
     def address(self) -> tuple[str, int]:
@@ -109,7 +128,6 @@ class StreamServer:
             if command is None:
                 return
             if command == "cfg2":
-                self._cfg2.set_time(self.cfg.epoch, (0, "+"))
                 conn.sendall(self._cfg2.convert2bytes())
             elif command == "header":
                 conn.sendall(self._header())
@@ -152,8 +170,9 @@ class StreamServer:
     def _header(self) -> bytes:
         from pyc37.frame import HeaderFrame
 
-        text = f"stabctl simulated PMUs: {self.cfg.n}, {self.cfg.rate} frames/s"
-        return HeaderFrame(self.cfg.idcode, text, self.cfg.epoch, (0, "+")).convert2bytes()
+        c = self._cfg2
+        text = f"stabctl simulated PMUs: {c.get_num_pmu()}, {c.get_data_rate()} frames/s"
+        return HeaderFrame(c.get_id_code(), text, c.get_soc(), (0, "+")).convert2bytes()
 
 
 def _recv_exactly(conn: socket.socket, n: int):

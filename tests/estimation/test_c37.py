@@ -169,7 +169,7 @@ def test_loopback_stream_reaches_pyc37_s_client_whole(wecc_stream):
     _quiet_pyc37()
     _case, cfg, stream = wecc_stream
     sent = list(stream)
-    with StreamServer(cfg, sent) as server:
+    with StreamServer.of_frames(cfg, sent) as server:
         host, port = server.address
         pdc = Pdc(pdc_id=5, pmu_ip=host, pmu_port=port, buffer_size=4)
         pdc.run()
@@ -204,7 +204,7 @@ def test_unpaced_stream_then_commands_again(wecc_stream):
 
     _quiet_pyc37()
     _case, cfg, stream = wecc_stream
-    with StreamServer(cfg, stream, speed=float("inf")) as server:
+    with StreamServer.of_frames(cfg, stream, speed=float("inf")) as server:
         pdc = Pdc(pdc_id=5, pmu_ip=server.address[0], pmu_port=server.address[1], buffer_size=4)
         pdc.run()
         _quiet_pyc37()
@@ -215,4 +215,4 @@ def test_unpaced_stream_then_commands_again(wecc_stream):
         assert pdc.get_config().get_num_pmu() == cfg2.get_num_pmu()  # answers again
         pdc.quit()
     with pytest.raises(InputError, match="speed must be > 0"):
-        StreamServer(cfg, stream, speed=0)
+        StreamServer.of_frames(cfg, stream, speed=0)
