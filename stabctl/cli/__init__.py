@@ -23,7 +23,7 @@ import sys
 import click
 
 #: commands that run the compiled simulator (the others never compile anything)
-_SIMULATING = {"paper", "simulate", "cct", "sweep-cct", "screen", "eig", "place", "estimate"}
+_SIMULATING = {"paper", "simulate", "cct", "sweep-cct", "screen", "eig", "place", "estimate", "pmu"}
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -77,7 +77,7 @@ def _log_to_stderr() -> None:
 
 def _register() -> None:
     from stabctl.cli import compile as compile_
-    from stabctl.cli import eig, estimate, io, omib, paper, place, simulate, stability
+    from stabctl.cli import eig, estimate, io, omib, paper, place, pmu, simulate, stability
 
     for cmd in (
         omib.omib,
@@ -89,6 +89,7 @@ def _register() -> None:
         stability.screen,
         eig.eig,
         estimate.estimate,
+        pmu.pmu,
         place.place,
         io.import_psse,
         io.import_andes,

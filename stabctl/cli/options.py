@@ -174,6 +174,7 @@ _RANGES = {
     "--ambient-pct": (0, 100, True, True, "%"),
     "--ambient-tau-s": (0, 3600, False, True, "s"),
     "--ambient-runs": (1, 10000, True, True, ""),
+    "--speed": (0, 1000, True, True, "time-stamp s per s"),
 }
 
 

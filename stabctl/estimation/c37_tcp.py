@@ -50,6 +50,8 @@ class StreamServer:
         ``time.perf_counter()`` when each data frame was handed to the socket (NaN until).
     due_at : list of float
         ``time.perf_counter()`` at which each frame was due by its time stamp.
+    finished : threading.Event
+        Set when a session has ended (every frame sent, or the client gone).
 
     Raises
     ------
@@ -69,7 +71,7 @@ class StreamServer:
         self.sent_at = [float("nan")] * len(self._data)
         self.due_at = [float("nan")] * len(self._data)
         self._sock = socket.create_server((host, port))
-        self._stop = threading.Event()
+        self._stop, self.finished = threading.Event(), threading.Event()
         self._thread = threading.Thread(target=self._accept, daemon=True)
         self._thread.start()
 
@@ -91,6 +93,11 @@ class StreamServer:
     def n_frames(self) -> int:
         """Data frames served per session."""
         return len(self._data)
+
+    @property
+    def n_sent(self) -> int:
+        """Data frames handed to the socket in the last session."""
+        return sum(t == t for t in self.sent_at)  # NaN until sent
 
     @property
     def address(self) -> tuple[str, int]:
@@ -119,6 +126,7 @@ class StreamServer:
             with conn:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
                 self._serve(conn)
+            self.finished.set()
 
     def _serve(self, conn: socket.socket) -> None:
         """Commands until the client closes; a 'start' streams every frame (commands
@@ -131,18 +139,20 @@ class StreamServer:
                 conn.sendall(self._cfg2.convert2bytes())
             elif command == "header":
                 conn.sendall(self._header())
-            elif command == "start" and not self._stream(conn):
+            elif command == "start":
+                self._stream(conn)
                 return
 
     def _stream(self, conn: socket.socket) -> bool:
-        """Send the data frames paced by their time stamps; False if the client left."""
+        """Send the data frames paced by their time stamps; False if the client left or
+        said 'stop'."""
         start = time.perf_counter()
         for k, data in enumerate(self._data):
             due = start + (self._t[k] - self._t[0]) / self.speed
             self.due_at[k] = due
             while (wait := due - time.perf_counter()) > 0:
-                if self._command(conn, block=False, timeout=min(wait, 0.05)) == "stop":
-                    return True
+                if self._command(conn, block=False, timeout=min(wait, 0.05)) in ("stop", None):
+                    return False
             try:
                 conn.sendall(data)
             except OSError:
@@ -184,3 +194,45 @@ def _recv_exactly(conn: socket.socket, n: int):
             return None
         out += chunk
     return out
+
+
+def receive(host: str, port: int, n: int, pdc_id: int = 1, timeout: float = 30.0) -> tuple:
+    """The CFG-2 frame and n data frames (bytes, as received) of the C37.118.2 stream at
+    host:port: command frames (pyc37's) 'cfg2', then 'start', then 'stop' once n frames
+    have arrived.
+
+    Raises
+    ------
+    InputError
+        No server there, silence for `timeout` s, the connection closed early, or a reply
+        to 'cfg2' that is not a configuration frame.
+    """
+    from pyc37.frame import CommandFrame
+
+    try:
+        conn = socket.create_connection((host, port), timeout=timeout)
+    except OSError as exc:
+        raise InputError(f"no C37.118.2 server at {host}:{port}: {exc.strerror or exc}") from None
+    with conn:
+        try:
+            conn.sendall(CommandFrame(pdc_id, "cfg2").convert2bytes())
+            cfg2 = _frame(conn)
+            if cfg2[1] & 0x70 != 0x30:  # frame type 011: CFG-2
+                raise InputError(
+                    f"{host}:{port} answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}"
+                )
+            conn.sendall(CommandFrame(pdc_id, "start").convert2bytes())
+            data = [_frame(conn) for _ in range(n)]
+            conn.sendall(CommandFrame(pdc_id, "stop").convert2bytes())
+        except TimeoutError:
+            raise InputError(f"{host}:{port}: nothing received for {timeout:g} s") from None
+    return cfg2, data
+
+
+def _frame(conn: socket.socket) -> bytes:
+    """One whole frame from conn (SYNC and FRAMESIZE first); InputError if it closes."""
+    head = _recv_exactly(conn, 4)
+    body = None if head is None else _recv_exactly(conn, int.from_bytes(head[2:4], "big") - 4)
+    if head is None or body is None:
+        raise InputError("the C37.118.2 server closed the connection")
+    return head + body
