@@ -59,18 +59,28 @@ def estimate():
     """
 
 
+RATE = click.option(
+    "--rate",
+    type=float,
+    default=_PMU.rate,
+    show_default=True,
+    metavar="FPS",
+    help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120.",
+)
+PMU_AT = click.option(
+    "--pmu-at",
+    type=click.Choice(["terminal", "hv"]),
+    default="terminal",
+    show_default=True,
+    help="PMU of each generator at its terminal or HV bus.",
+)
+
+
 def _rate_latency(func):
     return _apply(
         func,
         (
-            click.option(
-                "--rate",
-                type=float,
-                default=_PMU.rate,
-                show_default=True,
-                metavar="FPS",
-                help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120.",
-            ),
+            RATE,
             click.option(
                 "--latency-ms",
                 type=float,
@@ -217,13 +227,7 @@ def _fault_run(func):
 
 @estimate.command()
 @_fault_run
-@click.option(
-    "--pmu-at",
-    type=click.Choice(["terminal", "hv"]),
-    default="terminal",
-    show_default=True,
-    help="PMU of each generator at its terminal or HV bus.",
-)
+@PMU_AT
 @storage_options(
     " In the fault run, controlled on the true speeds with the paper's "
     "settings; the controller options set the rule of the false actions."

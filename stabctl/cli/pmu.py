@@ -6,10 +6,9 @@ from __future__ import annotations
 import click
 
 from stabctl.cli.checks import check_writable
-from stabctl.cli.estimate import _fault_event, _pmu_noise, _settings
+from stabctl.cli.estimate import PMU_AT, RATE, _fault_event, _pmu_noise, _settings
 from stabctl.cli.options import clear_cycles_option, fault_options, reports_errors, tf_option
 from stabctl.errors import InputError
-from stabctl.estimation.settings import PMUSettings as _PMU
 
 #: IEEE C37.118.2's well-known TCP port
 C37_PORT = 4712
@@ -58,23 +57,10 @@ def _serving(func):
 @fault_options(required=True)
 @clear_cycles_option("Clearing after N cycles, both ends")
 @tf_option()
-@click.option(
-    "--rate",
-    type=float,
-    default=_PMU.rate,
-    show_default=True,
-    metavar="FPS",
-    help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120.",
-)
+@RATE
 @_pmu_noise
 @click.option("--seed", type=int, default=0, show_default=True, help="PMU noise seed.")
-@click.option(
-    "--pmu-at",
-    type=click.Choice(["terminal", "hv"]),
-    default="terminal",
-    show_default=True,
-    help="PMU of each generator at its terminal or HV bus.",
-)
+@PMU_AT
 @_serving
 @reports_errors
 def serve(

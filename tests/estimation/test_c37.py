@@ -195,9 +195,9 @@ def test_loopback_stream_reaches_pyc37_s_client_whole(wecc_stream):
         np.testing.assert_allclose(b.v[f.valid], f.v[f.valid], rtol=1.2e-7)
 
 
-def test_unpaced_stream_then_commands_again(wecc_stream):
-    """speed = inf sends as fast as the socket takes the frames; once the stream has been
-    sent the server answers commands again."""
+def test_unpaced_stream_ends_the_session_and_serves_the_next(wecc_stream):
+    """speed = inf sends as fast as the socket takes the frames; a session ends once every
+    frame is sent (`finished`), and the next client gets the whole stream again."""
     from pyc37.pdc import Pdc
 
     from stabctl.estimation.c37_tcp import StreamServer
@@ -205,14 +205,16 @@ def test_unpaced_stream_then_commands_again(wecc_stream):
     _quiet_pyc37()
     _case, cfg, stream = wecc_stream
     with StreamServer.of_frames(cfg, stream, speed=float("inf")) as server:
-        pdc = Pdc(pdc_id=5, pmu_ip=server.address[0], pmu_port=server.address[1], buffer_size=4)
-        pdc.run()
-        _quiet_pyc37()
-        cfg2 = pdc.get_config()
-        pdc.start()
-        frames = [pdc.get() for _ in range(len(stream))]
-        assert [f.get_soc() for f in frames[:2]] == [cfg.epoch, cfg.epoch]
-        assert pdc.get_config().get_num_pmu() == cfg2.get_num_pmu()  # answers again
-        pdc.quit()
+        for _ in range(2):
+            pdc = Pdc(pdc_id=5, pmu_ip=server.address[0], pmu_port=server.address[1], buffer_size=4)
+            pdc.run()
+            _quiet_pyc37()
+            pdc.get_config()
+            pdc.start()
+            frames = [pdc.get() for _ in range(len(stream))]
+            assert [f.get_soc() for f in frames[:2]] == [cfg.epoch, cfg.epoch]
+            assert server.finished.wait(10) and server.n_sent == len(stream)
+            server.finished.clear()
+            pdc.quit()
     with pytest.raises(InputError, match="speed must be > 0"):
         StreamServer.of_frames(cfg, stream, speed=0)
