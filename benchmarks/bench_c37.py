@@ -10,7 +10,6 @@ of encoding and parsing a frame.
 from __future__ import annotations
 
 import argparse
-import logging
 import time
 
 import numpy as np
@@ -18,7 +17,7 @@ import numpy as np
 import stabctl
 from stabctl.estimation import c37
 from stabctl.estimation import pmu as pm
-from stabctl.estimation.c37_tcp import StreamServer
+from stabctl.estimation.c37_tcp import StreamServer, pdc_client
 from stabctl.estimation.settings import PMUSettings
 from stabctl.studies.cases import CASE2
 
@@ -28,8 +27,6 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--rate", type=int, default=60)
     args = ap.parse_args()
-    from pyc37.pdc import Pdc
-
     case = stabctl.load_case("miniwecc")
     res = stabctl.Simulator(case).run(CASE2.fault.events(6 / case.freq_hz), t_end=args.seconds)
     pmus = pm.machine_pmus(case)
@@ -40,11 +37,7 @@ def main() -> None:
     server = StreamServer.of_frames(cfg, frames)
     encode = (time.perf_counter() - t0) / len(frames)
     with server:
-        pdc = Pdc(pdc_id=9, pmu_ip=server.address[0], pmu_port=server.address[1], buffer_size=4)
-        pdc.run()
-        for name in list(logging.root.manager.loggerDict):
-            if name.startswith(("pyc37", "CLIENT")):
-                logging.getLogger(name).setLevel(logging.WARNING)
+        pdc = pdc_client(*server.address, pdc_id=9)
         cfg2 = pdc.get_config()
         pdc.start()
         got, arrived = [], []

@@ -223,16 +223,7 @@ def probes(cwd: Path) -> list[Probe]:
             Probe(
                 "10",
                 f"--scheduler {address}",
-                [
-                    "sweep-cct",
-                    "kundur",
-                    "--faults",
-                    "f.csv",
-                    "--out",
-                    "o.jsonl",
-                    "--scheduler",
-                    address,
-                ],
+                _sweep_with_scheduler(address),
                 needle="tcp://host:port",
                 no_file="o.jsonl",
             )
@@ -286,6 +277,11 @@ def probes(cwd: Path) -> list[Probe]:
     return out
 
 
+def _sweep_with_scheduler(address: str) -> list[str]:
+    """The sweep the scheduler probes run, on the Dask scheduler at ``address``."""
+    return cli(f"sweep-cct kundur --faults f.csv --out o.jsonl --scheduler {address}")
+
+
 def foreign_server_probe(cwd: Path) -> tuple[Probe, str]:
     """A web server where the Dask scheduler should be."""
     server = socket.create_server(("127.0.0.1", 0))
@@ -303,16 +299,7 @@ def foreign_server_probe(cwd: Path) -> tuple[Probe, str]:
     p = Probe(
         "10",
         "--scheduler at a web server",
-        [
-            "sweep-cct",
-            "kundur",
-            "--faults",
-            "f.csv",
-            "--out",
-            "o.jsonl",
-            "--scheduler",
-            f"tcp://127.0.0.1:{port}",
-        ],
+        _sweep_with_scheduler(f"tcp://127.0.0.1:{port}"),
         needle="no Dask scheduler answers",
         no_file="o.jsonl",
     )

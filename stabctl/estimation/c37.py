@@ -11,7 +11,7 @@ Stream layout (C37.118.2-2011 Tables 5, 6, 8, 9):
   and DFREQ 16-bit integers: FREQ the deviation from nominal in mHz, DFREQ the ROCOF in
   Hz/s times 100.  Integers, because pyc37 1.0.2 reads a floating-point FREQ as a
   deviation limited to +-32.767 Hz where the standard (Table 6) makes it the actual
-  frequency (upstream iicsys/pypmu issue 4), so it could neither send nor read a
+  frequency (a defect reported upstream in pypmu), so it could neither send nor read a
   standard floating-point FREQ of a 60 Hz PMU.  Resolution: 1 mHz, 0.01 Hz/s;
 - two phasors per PMU (V, I), one (V) for a PMU without current channel;
 - a PMU's frame lost in the stream: STAT 0x8000 (bits 15-14 = 10, "absent data

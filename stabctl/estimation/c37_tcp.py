@@ -165,17 +165,16 @@ class StreamServer:
         one this server ignores)."""
         conn.settimeout(None if block else timeout)
         try:
-            head = _recv_exactly(conn, 4)
-            if head is None:
-                return None
-            body = _recv_exactly(conn, int.from_bytes(head[2:4], "big") - 4)
+            frame = _read_frame(conn)
         except TimeoutError:
             return ""
         finally:
             conn.settimeout(None)
-        if body is None or head[1] & 0x70 != 0x40:  # frame type 100: a command frame
-            return None if body is None else ""
-        return COMMANDS.get(int.from_bytes(body[10:12], "big"), "")
+        if frame is None:
+            return None
+        if frame[1] & 0x70 != 0x40:  # frame type 100: a command frame
+            return ""
+        return COMMANDS.get(int.from_bytes(frame[14:16], "big"), "")
 
     def _header(self) -> bytes:
         from pyc37.frame import HeaderFrame
@@ -230,9 +229,33 @@ def receive(host: str, port: int, n: int, pdc_id: int = 1, timeout: float = 30.0
 
 
 def _frame(conn: socket.socket) -> bytes:
-    """One whole frame from conn (SYNC and FRAMESIZE first); InputError if it closes."""
+    """One whole frame from conn; InputError if it closes first."""
+    frame = _read_frame(conn)
+    if frame is None:
+        raise InputError("the C37.118.2 server closed the connection")
+    return frame
+
+
+def _read_frame(conn: socket.socket):
+    """One whole frame from conn, SYNC and FRAMESIZE first (None if the peer closed)."""
     head = _recv_exactly(conn, 4)
     body = None if head is None else _recv_exactly(conn, int.from_bytes(head[2:4], "big") - 4)
-    if head is None or body is None:
-        raise InputError("the C37.118.2 server closed the connection")
-    return head + body
+    return None if body is None else head + body
+
+
+def pdc_client(host: str, port: int, pdc_id: int = 1):
+    """pyc37's own PDC client connected to host:port, set up to read a stream whole: a
+    receive buffer of one frame header (its ``get`` keeps no bytes beyond the frame it
+    reads, so a larger buffer loses the next frame when two arrive together) and its
+    loggers, which write every connection to stdout at INFO, at WARNING.  Used by the
+    tests and benchmarks/bench_c37.py as the independent client."""
+    import logging
+
+    from pyc37.pdc import Pdc
+
+    pdc = Pdc(pdc_id=pdc_id, pmu_ip=host, pmu_port=port, buffer_size=4)
+    pdc.run()
+    for name in list(logging.root.manager.loggerDict):
+        if name.startswith(("pyc37", "CLIENT")):
+            logging.getLogger(name).setLevel(logging.WARNING)
+    return pdc

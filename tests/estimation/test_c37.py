@@ -148,32 +148,17 @@ def test_broken_recordings_and_settings_are_named(wecc_stream, tmp_path):
         c37.replay(tmp_path / "junk.c37", cfg)
 
 
-def _quiet_pyc37():
-    """pyc37's loggers write every connection to stdout at INFO."""
-    import logging
-
-    for name in list(logging.root.manager.loggerDict):
-        if name.startswith(("pyc37", "CLIENT")):
-            logging.getLogger(name).setLevel(logging.WARNING)
-
-
 def test_loopback_stream_reaches_pyc37_s_client_whole(wecc_stream):
     """miniWECC's 34 PMUs at 60 frames/s in real time over loopback TCP to pyc37's own PDC
     client: the header and CFG-2 on request, then after 'start' all 181 data frames, in
     order, each carrying what was sent (none lost).  Latency from each frame's due time
     to its arrival is printed (benchmarks/c37_loopback.py measures a minute)."""
-    from pyc37.pdc import Pdc
+    from stabctl.estimation.c37_tcp import StreamServer, pdc_client
 
-    from stabctl.estimation.c37_tcp import StreamServer
-
-    _quiet_pyc37()
     _case, cfg, stream = wecc_stream
     sent = list(stream)
     with StreamServer.of_frames(cfg, sent) as server:
-        host, port = server.address
-        pdc = Pdc(pdc_id=5, pmu_ip=host, pmu_port=port, buffer_size=4)
-        pdc.run()
-        _quiet_pyc37()
+        pdc = pdc_client(*server.address, pdc_id=5)
         assert "34" in pdc.get_header().get_header()
         cfg2 = pdc.get_config()
         assert (cfg2.get_num_pmu(), cfg2.get_data_rate()) == (34, 60)
@@ -198,17 +183,12 @@ def test_loopback_stream_reaches_pyc37_s_client_whole(wecc_stream):
 def test_unpaced_stream_ends_the_session_and_serves_the_next(wecc_stream):
     """speed = inf sends as fast as the socket takes the frames; a session ends once every
     frame is sent (`finished`), and the next client gets the whole stream again."""
-    from pyc37.pdc import Pdc
+    from stabctl.estimation.c37_tcp import StreamServer, pdc_client
 
-    from stabctl.estimation.c37_tcp import StreamServer
-
-    _quiet_pyc37()
     _case, cfg, stream = wecc_stream
     with StreamServer.of_frames(cfg, stream, speed=float("inf")) as server:
         for _ in range(2):
-            pdc = Pdc(pdc_id=5, pmu_ip=server.address[0], pmu_port=server.address[1], buffer_size=4)
-            pdc.run()
-            _quiet_pyc37()
+            pdc = pdc_client(*server.address, pdc_id=5)
             pdc.get_config()
             pdc.start()
             frames = [pdc.get() for _ in range(len(stream))]
