@@ -275,6 +275,14 @@ def _fault_run(func):
     metavar="N",
     help="Runs without fault (load and PMU noise seeds S..S+N-1).",
 )
+@click.option(
+    "--source",
+    metavar="tcp://HOST:PORT[,...]|FILE",
+    default=None,
+    help="Take the PMU frames of the fault run from C37.118.2 streams over TCP (e.g. "
+    "`stabctl pmu serve` with the same fault and --seed) or from a recording, instead of "
+    "drawing --runs streams here; one run, no runs without fault.",
+)
 @model_options
 @json_option("the figures")
 @reports_errors
@@ -307,6 +315,7 @@ def rmse(
     ambient_pct,
     ambient_tau_s,
     ambient_runs,
+    source,
     conventions,
     step,
     as_json,
@@ -332,6 +341,9 @@ def rmse(
     actions (Table 3 rule with --deadband-hz) each estimate would trigger (all are
     false), the largest abs(f_i - f_COI) and the largest standard deviation of f_i - f_COI
     (true: the ambient spread).
+
+    With --source the frames come from C37.118.2 streams (docs/estimation.md 6): the
+    figures of the one stream received, the same seed's figures in process beside them.
     """
     from stabctl.estimation import ambient as am
     from stabctl.studies.estimate import ErrorRuns, estimator_errors
@@ -339,6 +351,7 @@ def rmse(
     _check_positive(tf=tf, runs=runs, deadband_hz=deadband_hz)
     if min(settle_ms, ambient_s, seed) < 0 or ambient_runs < 1:
         raise InputError("--settle-ms, --ambient-s and --seed must be >= 0, --ambient-runs >= 1")
+    src = _source(source)
     ambient = am.AmbientLoad(ambient_pct, ambient_tau_s, seed)
     settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
     case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
@@ -362,6 +375,7 @@ def rmse(
         t_end=tf,
         model=model_settings(conventions, step),
         esd_model=esd_model,
+        source=src,
     )
     out = {
         "case": case.name,
@@ -374,8 +388,9 @@ def rmse(
         "esd_pct": esd_pct,
         "esd_model": esd_model,
         "pmu": {**settings.__dict__, "at": pmu_at},
-        "runs": runs,
+        "runs": 1 if src else runs,
         "seed": seed,
+        "source": d.get("source"),
         "window_s": d["window_s"],
         "stable": d["stable"],
         "estimators": d["estimators"],
@@ -392,6 +407,28 @@ def rmse(
         print_json(out)
         return
     print_estimate(out)
+
+
+def _source(text):
+    """The `sources.Source` of --source (None without); the Monte-Carlo and ambient
+    options given with it are refused, not ignored."""
+    if text is None:
+        return None
+    from click.core import ParameterSource
+
+    from stabctl.estimation.sources import parse_source
+
+    ctx = click.get_current_context()
+    clash = [
+        f"--{name.replace('_', '-')}"
+        for name in ("runs", "ambient_s", "ambient_pct", "ambient_tau_s", "ambient_runs")
+        if ctx.get_parameter_source(name) is ParameterSource.COMMANDLINE
+    ]
+    if clash:
+        raise InputError(
+            f"--source evaluates the one stream received; {', '.join(clash)} cannot go with it"
+        )
+    return parse_source(text)
 
 
 def _check_positive(**values) -> None:

@@ -345,6 +345,33 @@ def print_modes(st, no_pss: bool) -> None:
         )
 
 
+def _source_line(src: dict, seed: int) -> str:
+    """What a received stream brought (`estimate rmse --source`)."""
+    return (
+        f"frames from {src['address']}: {src['frames']} time stamps, {src['data_frames']} "
+        f"data frames from {src['streams']} stream(s), {src['absent']} PMU values flagged "
+        f"absent, {src['missing']} missing (labelled seed {seed})"
+    )
+
+
+def _source_compare(src: dict, figures: dict) -> None:
+    """The received stream's relative-speed RMSE beside the same seed's in process."""
+    click.echo(
+        "relative-speed RMSE (mHz), received / in process through the frame codec / "
+        "in process as drawn:"
+    )
+    for name, fig in figures.items():
+        got, wire, drawn = (
+            x if x is None else f"{x:.4f}"
+            for x in (
+                fig["rel_rmse_mhz"]["mean"],
+                src["on_wire"][name]["rel_rmse_mhz"],
+                src["in_process"][name]["rel_rmse_mhz"],
+            )
+        )
+        click.echo(f"  {name:9}{got} / {wire} / {drawn}")
+
+
 def print_estimate(d) -> None:
     """Print the `estimate rmse` report as text.
 
@@ -371,7 +398,11 @@ def print_estimate(d) -> None:
         f"FE {p['fe_hz']:g} Hz, RFE {p['rfe_hz_s']:g} Hz/s ({p['k_sigma']:g} sigma), "
         f"frequency window {p['window_cycles']:g} cycles, latency {1000 * p['latency_s']:g} ms, "
         f"lost {p['drop_prob']:g}; "
-        f"{d['runs']} runs, seeds {d['seed']}..{d['seed'] + d['runs'] - 1}"
+        + (
+            f"{d['runs']} runs, seeds {d['seed']}..{d['seed'] + d['runs'] - 1}"
+            if d.get("source") is None
+            else _source_line(d["source"], d["seed"])
+        )
     )
     w = d["window_s"]
     click.echo(f"errors in mHz from {w[0]:.3f} s to {w[1]:g} s, mean +- std over the runs:")
@@ -398,6 +429,8 @@ def print_estimate(d) -> None:
             "-: no error to take (a COI or relative speed needs an estimate of every "
             "machine at one time; a machine none of whose frames arrived has none)"
         )
+    if d.get("source") is not None:
+        _source_compare(d["source"], d["estimators"])
     if d["false_actions"] is not None:
         a = d["ambient"]
         click.echo(

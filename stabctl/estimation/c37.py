@@ -246,9 +246,26 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
     nan = np.where(valid, 1.0, np.nan)
     freq = (cfg.f0 + np.array(many(df.get_freq()), float) / MHZ_PER_HZ) * nan
     rocof = np.array(many(df.get_dfreq()), float) / DFREQ_PER_HZ_S * nan
-    counts = df.get_frasec()[0]
-    t = df.get_soc() - cfg.epoch + counts / TIME_BASE
-    return Frame(float(t), valid, v, i, freq, rocof)
+    t = df.get_soc() - cfg.epoch + df.get_frasec()[0] / TIME_BASE
+    return Frame(reporting_instant(t, cfg.rate), valid, v, i, freq, rocof)
+
+
+def reporting_instant(t: float, rate: int) -> float:
+    """A received time stamp t (s) snapped to the reporting instant k / rate it stands for
+    when it is within one FRACSEC count of it (as a PDC rounds time stamps to its frame
+    rate): a TIME_BASE of 1 us cannot write k / 60 s exactly, and the estimators and their
+    error windows should see the instants the PMU reported at.  Other time stamps are
+    kept."""
+    k = round(t * rate)
+    return k / rate if abs(t - k / rate) <= 1.0 / TIME_BASE else float(t)
+
+
+def on_wire(cfg: StreamConfig, frames) -> list[Frame]:
+    """`frames` as a receiver gets them: each encoded as a data frame of the stream and
+    parsed back (float32 phasors, FREQ to 1 mHz, DFREQ to 0.01 Hz/s), with no transport
+    in between: the in-process twin of a stream sent over TCP or recorded."""
+    cfg2 = config_frame(cfg)
+    return [parse_frame(cfg, cfg2, data_frame(cfg, cfg2, f)) for f in frames]
 
 
 def record(path, cfg: StreamConfig, frames) -> int:
@@ -300,17 +317,28 @@ def recorded_frames(path) -> tuple:
         An empty file, a first frame that is not a configuration frame, or a broken one
         (`split_frames`).
     """
-    f = _pyc37()
     frames = split_frames(Path(path).read_bytes())
     if not frames:
         raise InputError(f"{path}: empty C37.118.2 recording")
+    return read_config(frames[0], f"{path}: first frame"), frames[1:]
+
+
+def read_config(data: bytes, what: str):
+    """A CFG-2 frame's bytes as pyc37 reads them (``ConfigFrame2``).
+
+    Raises
+    ------
+    InputError
+        Bytes that are not a readable configuration frame, named by ``what``.
+    """
+    f = _pyc37()
     try:
-        cfg2 = f.CommonFrame.convert2frame(frames[0])
+        cfg2 = f.CommonFrame.convert2frame(data)
     except f.FrameError as exc:
-        raise InputError(f"{path}: first frame is not a configuration frame: {exc}") from None
+        raise InputError(f"{what} is not a configuration frame: {exc}") from None
     if not isinstance(cfg2, f.ConfigFrame1):
-        raise InputError(f"{path}: first frame is a {type(cfg2).__name__}, not CFG-2")
-    return cfg2, frames[1:]
+        raise InputError(f"{what} is a {type(cfg2).__name__}, not CFG-2")
+    return cfg2
 
 
 def replay(path, cfg: StreamConfig) -> list[Frame]:

@@ -195,16 +195,19 @@ def _recv_exactly(conn: socket.socket, n: int):
     return out
 
 
-def receive(host: str, port: int, n: int, pdc_id: int = 1, timeout: float = 30.0) -> tuple:
-    """The CFG-2 frame and n data frames (bytes, as received) of the C37.118.2 stream at
+def receive(
+    host: str, port: int, n: int | None = None, pdc_id: int = 1, timeout: float = 30.0
+) -> tuple:
+    """The CFG-2 frame and the data frames (bytes, as received) of the C37.118.2 stream at
     host:port: command frames (pyc37's) 'cfg2', then 'start', then 'stop' once n frames
-    have arrived.
+    have arrived (n None: every frame until the server ends the stream by closing).
 
     Raises
     ------
     InputError
-        No server there, silence for `timeout` s, the connection closed early, or a reply
-        to 'cfg2' that is not a configuration frame.
+        No server there, silence for `timeout` s, the connection closed before n frames
+        (or before any with n None), or a reply to 'cfg2' that is not a configuration
+        frame.
     """
     from pyc37.frame import CommandFrame
 
@@ -221,8 +224,13 @@ def receive(host: str, port: int, n: int, pdc_id: int = 1, timeout: float = 30.0
                     f"{host}:{port} answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}"
                 )
             conn.sendall(CommandFrame(pdc_id, "start").convert2bytes())
-            data = [_frame(conn) for _ in range(n)]
-            conn.sendall(CommandFrame(pdc_id, "stop").convert2bytes())
+            if n is None:
+                data = list(iter(lambda: _read_frame(conn), None))
+                if not data:
+                    raise InputError(f"{host}:{port} closed the stream before a data frame")
+            else:
+                data = [_frame(conn) for _ in range(n)]
+                conn.sendall(CommandFrame(pdc_id, "stop").convert2bytes())
         except TimeoutError:
             raise InputError(f"{host}:{port}: nothing received for {timeout:g} s") from None
     return cfg2, data

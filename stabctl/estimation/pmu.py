@@ -404,6 +404,67 @@ def measure(
     )
 
 
+def stream_of_frames(
+    frames, truth: PhasorTruth, settings: PMUSettings, seed: int = 0
+) -> FrameStream:
+    """The `FrameStream` of frames received rather than drawn here (a recording, a
+    C37.118.2 stream over TCP: `stabctl.estimation.sources`), against the truth of the run
+    they measure.
+
+    Parameters
+    ----------
+    frames : sequence of Frame
+        In time-stamp order, one column per PMU of `truth` (its order).
+    truth : PhasorTruth
+        The noise-free quantities of the run the frames measure; its values at the frames'
+        time stamps become the stream's ``true``.
+    settings : PMUSettings
+        The PMUs' settings (rate, noise limits, latency) the estimators are tuned to.
+    seed : int, optional
+        The seed the frames were drawn with, as the stream's label (0).
+
+    Returns
+    -------
+    FrameStream
+        Arrival at time stamp + ``settings.latency_s`` for the frames of each PMU that
+        came (valid), inf for the others.
+
+    Raises
+    ------
+    InputError
+        No frame, frames of another number of PMUs, time stamps out of order or outside
+        the truth's span (more than a microsecond, the C37.118.2 time base).
+    """
+    frames = list(frames)
+    if not frames:
+        raise InputError("no PMU frame received")
+    n = len(truth.pmus)
+    if any(f.valid.size != n for f in frames):
+        raise InputError(f"frames of {frames[0].valid.size} PMUs for a run with {n}")
+    t = np.array([f.t for f in frames])
+    if np.any(np.diff(t) <= 0):
+        raise InputError(f"frame time stamps out of order at frame {int(np.argmin(np.diff(t)))}")
+    if t[0] < truth.t[0] - 1e-6 or t[-1] > truth.t[-1] + 1e-6:
+        raise InputError(
+            f"frames from {t[0]:g} s to {t[-1]:g} s, the run from {truth.t[0]:g} s to "
+            f"{truth.t[-1]:g} s: not a stream of this run"
+        )
+    valid = np.array([f.valid for f in frames], bool)
+    return FrameStream(
+        pmus=truth.pmus,
+        settings=settings,
+        seed=seed,
+        t=t,
+        arrival=np.where(valid, t[:, None] + settings.latency_s, np.inf),
+        valid=valid,
+        v=np.array([f.v for f in frames]),
+        i=np.array([f.i for f in frames]),
+        freq=np.array([f.freq for f in frames]),
+        rocof=np.array([f.rocof for f in frames]),
+        true=truth.at(np.clip(t, truth.t[0], truth.t[-1])),
+    )
+
+
 def _pmu_noise(rng: np.random.Generator, n: int, s: PMUSettings):
     """One PMU's errors for n frames, drawn in a fixed order: relative voltage and current
     phasor errors (complex), frequency (Hz) and ROCOF (Hz/s) errors, dropped mask."""

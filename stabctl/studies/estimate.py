@@ -66,6 +66,7 @@ def estimator_errors(
     t_end: float,
     model=None,
     esd_model: str = "ideal",
+    source=None,
 ) -> dict:
     """Errors of every estimator against the simulated truth, and false ESD actions.
 
@@ -88,18 +89,25 @@ def estimator_errors(
     esd_model : {"ideal", "wecc"}, optional
         The model of the fault run's storage (`stabctl.storage.devices.StorageFleet.model`);
         the runs without fault have none (their false actions are counted, not simulated).
+    source : stabctl.estimation.sources.Source or None, optional
+        Frames of this fault run received from a recording or over TCP (one run, labelled
+        with ``mc.seed``) instead of ``mc.runs`` streams drawn here; no runs without fault.
 
     Returns
     -------
     dict
         ``window_s``, ``stable`` (the fault run), ``estimators`` (figures per estimator,
         :func:`stabctl.studies.estimation.monte_carlo`) and ``false_actions`` (None
-        without ambient runs).
+        without ambient runs or with a source); with a source also ``source``: its counts
+        (`stabctl.estimation.sources.Received.summary`) and the mean figures of the same
+        seed's stream drawn in process as it is (``in_process``) and encoded and parsed
+        back as on the wire (``on_wire``, `stabctl.estimation.c37.on_wire`).
 
     Raises
     ------
     InputError
-        ``t_end`` before the errors start.
+        ``t_end`` before the errors start; a source as
+        `stabctl.estimation.sources.read_frames`.
     """
     from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import ambient as am
@@ -118,6 +126,13 @@ def estimator_errors(
     )
     compile_filters(machine_models(case, machine_pmus(case, mc.pmu_at)))
     res = sim.run([event], t_end=t_end, storage=fleet)
+    if source is not None:
+        return {
+            "window_s": list(window),
+            "stable": res.stable,
+            **_received(case, res, settings, source, mc, window),
+            "false_actions": None,
+        }
     figures = study.monte_carlo(case, res, settings, mc.runs, mc.seed, window, mc.pmu_at, mc.coi)
     actions = None
     if mc.ambient_s > 0:
@@ -131,6 +146,31 @@ def estimator_errors(
         "stable": res.stable,
         "estimators": figures,
         "false_actions": actions,
+    }
+
+
+def _received(case, res, settings, source, mc: ErrorRuns, window) -> dict:
+    """`estimator_errors`' figures of a source's frames, with the same seed's in-process
+    figures as drawn and as on the wire."""
+    from stabctl.estimation import c37, sources
+    from stabctl.estimation import pmu as pm
+    from stabctl.studies import estimation as study
+
+    pmus = pm.machine_pmus(case, mc.pmu_at)
+    got = sources.read_frames(source, case, pmus, settings.rate)
+    truth = pm.phasor_truth(case, res, pmus, settings.window_cycles)
+    drawn = pm.measure(truth, settings, mc.seed)
+    wire = c37.on_wire(c37.stream_config(case, pmus, settings.rate), drawn)
+    at = (mc.seed, window, mc.pmu_at, mc.coi)
+    means = lambda figs: {e: {m: v["mean"] for m, v in f.items()} for e, f in figs.items()}  # noqa: E731
+    return {
+        "estimators": study.received_errors(case, res, settings, got.frames, *at),
+        "source": {
+            "address": str(source),
+            **got.summary(),
+            "in_process": means(study.monte_carlo(case, res, settings, 1, *at)),
+            "on_wire": means(study.received_errors(case, res, settings, wire, *at)),
+        },
     }
 
 

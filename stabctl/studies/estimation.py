@@ -39,7 +39,13 @@ from stabctl.estimation.models import (
     machine_models,
     relative_speeds,
 )
-from stabctl.estimation.pmu import FrameStream, machine_pmus, measure, phasor_truth
+from stabctl.estimation.pmu import (
+    FrameStream,
+    machine_pmus,
+    measure,
+    phasor_truth,
+    stream_of_frames,
+)
 from stabctl.estimation.settings import PMUSettings
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
@@ -164,11 +170,61 @@ def monte_carlo(
     if runs < 1:
         raise InputError(f"need at least one Monte-Carlo run, got {runs}")
     pmus = machine_pmus(case, at)
-    models = machine_models(case, pmus)
     truth = phasor_truth(case, result, pmus, settings.window_cycles)
+    streams = (measure(truth, settings, seed + r) for r in range(runs))
+    return _stream_figures(case, result, pmus, streams, window, coi)
+
+
+def received_errors(
+    case: Case,
+    result: SimulationResult,
+    settings: PMUSettings,
+    frames,
+    seed: int,
+    window: tuple[float, float],
+    at: str = "terminal",
+    coi: str = "system",
+) -> dict:
+    """Errors of every estimator on frames received rather than drawn (a recording, a
+    C37.118.2 stream: `stabctl.estimation.sources`), as `monte_carlo` gives them for one
+    run.
+
+    Parameters
+    ----------
+    case, result : Case, SimulationResult
+        The run the frames measure (the truth).
+    settings : PMUSettings
+        The PMUs' settings the estimators are tuned to.
+    frames : sequence of Frame
+        The frames, one column per machine PMU (`machine_pmus(case, at)`).
+    seed : int
+        The seed the frames were drawn with (a label).
+    window : (float, float)
+        Time stamps evaluated (s).
+    at, coi : str
+        As `monte_carlo`.
+
+    Returns
+    -------
+    dict
+        {estimator: {metric: {"mean", "std", "min", "max", "runs": [one value]}}}.
+
+    Raises
+    ------
+    InputError
+        As `stabctl.estimation.pmu.stream_of_frames` and `errors`.
+    """
+    pmus = machine_pmus(case, at)
+    truth = phasor_truth(case, result, pmus, settings.window_cycles)
+    stream = stream_of_frames(frames, truth, settings, seed)
+    return _stream_figures(case, result, pmus, [stream], window, coi)
+
+
+def _stream_figures(case, result, pmus, streams, window, coi) -> dict:
+    """Every estimator's errors on each stream, summarised over the streams."""
+    models = machine_models(case, pmus)
     per_run: dict[str, list] = {name: [] for name in ESTIMATORS}
-    for r in range(runs):
-        stream = measure(truth, settings, seed + r)
+    for stream in streams:
         for name, track in run_estimators(stream, models).items():
             per_run[name].append(errors(track, result, stream, window, coi))
     return {

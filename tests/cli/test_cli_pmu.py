@@ -3,6 +3,7 @@ command line is the in-process PMU stream of the same seed, a recording served a
 recorded again is the same file byte for byte, and bad addresses and files are one error
 line each."""
 
+import json
 import re
 import subprocess
 import sys
@@ -37,6 +38,12 @@ def serving(*args):
     raise AssertionError(f"no server address printed (exit {proc.returncode})")
 
 
+def finished(proc):
+    """(exit status, stdout) of a `serving` process once it ends, its pipes closed."""
+    out, _ = proc.communicate(timeout=60)
+    return proc.returncode, out
+
+
 def record(address, frames, out):
     res = CliRunner().invoke(
         main, ["pmu", "record", address, "--frames", str(frames), "-o", str(out)]
@@ -49,7 +56,8 @@ def test_served_stream_is_the_in_process_stream_and_replays_byte_for_byte(tmp_pa
     args = ["kundur", "--fault", "3", "--far-bus", "101", "--tf", "2", "--seed", "4"]
     proc, address = serving("serve", *args)
     record(address, 121, tmp_path / "a.c37")
-    assert proc.wait(timeout=60) == 0 and "sent 121 of 121 frames" in proc.stdout.read()
+    status, out = finished(proc)
+    assert status == 0 and "sent 121 of 121 frames" in out
     case = stabctl.load_case("kundur")
     ev = fault_with_clearing(case, 3, 101, 1.0, 6.0)
     res = stabctl.Simulator(case).run([ev], t_end=2.0)
@@ -62,8 +70,54 @@ def test_served_stream_is_the_in_process_stream_and_replays_byte_for_byte(tmp_pa
         assert np.max(np.abs(b.freq - f.freq)) <= 0.5e-3 + 1e-12
     proc, address = serving("replay", str(tmp_path / "a.c37"), "--speed", "0")
     record(address, 121, tmp_path / "b.c37")
-    assert proc.wait(timeout=60) == 0
+    assert finished(proc)[0] == 0
     assert (tmp_path / "b.c37").read_bytes() == (tmp_path / "a.c37").read_bytes()
+
+
+def test_estimate_rmse_from_a_served_stream_equals_in_process(tmp_path):
+    """`estimate rmse --source tcp://...` on `pmu serve`'s stream of the same fault and
+    seed: every estimator's figures equal those of the same seed's frames through the
+    frame codec in process; the text report prints the three side by side."""
+    fault = ["kundur", "--fault", "3", "--far-bus", "101", "--tf", "4", "--seed", "2"]
+    proc, address = serving("serve", *fault, "--drop", "0.05", "--speed", "0")
+    res = CliRunner().invoke(
+        main,
+        ["estimate", "rmse", *fault, "--drop", "0.05", "--source", f"tcp://{address}", "--json"],
+    )
+    assert res.exit_code == 0, res.output
+    assert finished(proc)[0] == 0
+    d = json.loads(res.output)
+    src = d["source"]
+    assert (src["frames"], src["data_frames"], src["missing"], d["runs"]) == (241, 241, 0, 1)
+    assert src["absent"] > 0 and d["false_actions"] is None
+    for name, fig in d["estimators"].items():
+        assert {m: v["mean"] for m, v in fig.items()} == src["on_wire"][name]
+    gap = abs(
+        d["estimators"]["raw"]["speed_rmse_mhz"]["mean"]
+        - src["in_process"]["raw"]["speed_rmse_mhz"]
+    )
+    assert gap <= 1 / np.sqrt(12)  # FREQ in whole mHz: at most its rounding RMS
+
+
+def test_estimate_source_refuses_monte_carlo_options(tmp_path):
+    (tmp_path / "r.c37").write_bytes(b"")
+    res = CliRunner().invoke(
+        main,
+        [
+            "estimate",
+            "rmse",
+            "kundur",
+            "--fault",
+            "3",
+            "--far-bus",
+            "101",
+            "--runs",
+            "5",
+            "--source",
+            str(tmp_path / "r.c37"),
+        ],
+    )
+    assert res.exit_code == 2 and "--runs cannot go with it" in res.output, res.output
 
 
 @pytest.mark.parametrize(

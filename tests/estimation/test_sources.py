@@ -1,0 +1,167 @@
+"""The estimators fed from C37.118.2 streams (stabctl.estimation.sources): Kundur's fault
+run served over loopback TCP, as one stream or split into two, and as a recording, gives
+the estimators exactly the figures of the same seed's frames encoded and parsed back in
+process, and figures within the wire's quantisation of those drawn in process."""
+
+import contextlib
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pyc37")
+
+import stabctl
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.errors import InputError
+from stabctl.estimation import c37, sources
+from stabctl.estimation import pmu as pm
+from stabctl.estimation.c37_tcp import StreamServer
+from stabctl.estimation.settings import PMUSettings
+from stabctl.studies import estimation as study
+
+SETTINGS = PMUSettings(drop_prob=0.05)
+WINDOW = (1.0 + 7 / 60 + 0.1, 6.0)  # 100 ms after the clearing to the end
+#: FREQ is sent in whole mHz: a rounding error uniform in +-0.5 mHz, RMS 1 / sqrt(12) mHz,
+#: bounds how far an RMSE of the raw frequency can move (triangle inequality)
+FREQ_ROUNDING_RMS_MHZ = 1 / np.sqrt(12)
+
+
+@pytest.fixture(scope="module")
+def kundur_run():
+    """Kundur, bus-3 fault on line 3-101 cleared after 7 cycles, 6 s; its PMU stream of
+    seed 3 with 5 % of the frames lost."""
+    case = stabctl.load_case("kundur")
+    res = stabctl.Simulator(case).run([fault_with_clearing(case, 3, 101, 1.0, 7)], t_end=6.0)
+    pmus = pm.machine_pmus(case)
+    drawn = pm.measure(pm.phasor_truth(case, res, pmus), SETTINGS, seed=3)
+    return case, res, pmus, drawn
+
+
+def figures(case, res, frames):
+    return study.received_errors(case, res, SETTINGS, frames, 3, WINDOW)
+
+
+def read(case, pmus, servers):
+    """The frames of servers read over TCP as `--source tcp://...` reads them."""
+    with contextlib.ExitStack() as stack:
+        for server in servers:
+            stack.enter_context(server)
+        src = sources.Source(servers=tuple(s.address for s in servers))
+        return sources.read_frames(src, case, pmus, SETTINGS.rate, timeout=20)
+
+
+def test_over_tcp_equals_the_same_frames_in_process(kundur_run):
+    """Every figure of every estimator received over TCP equals that of the frames encoded
+    and parsed back in process (nothing lost or changed in transport); the raw frequency's
+    RMSE is within the FREQ rounding of the frames as drawn."""
+    case, res, pmus, drawn = kundur_run
+    cfg = c37.stream_config(case, pmus, SETTINGS.rate)
+    got = read(case, pmus, [StreamServer.of_frames(cfg, drawn, speed=float("inf"))])
+    assert got.summary() == {
+        "streams": 1,
+        "frames": len(drawn),
+        "data_frames": len(drawn),
+        "absent": int((~drawn.valid).sum()),
+        "missing": 0,
+    }
+    assert got.absent > 0
+    assert [f.t for f in got.frames] == list(drawn.t)  # the reporting instants k / 60
+    received = figures(case, res, got.frames)
+    assert received == figures(case, res, c37.on_wire(cfg, drawn))
+    in_process = study.monte_carlo(case, res, SETTINGS, 1, 3, WINDOW)
+    for metric in ("speed_rmse_mhz", "rel_rmse_mhz"):
+        moved = abs(received["raw"][metric]["mean"] - in_process["raw"][metric]["mean"])
+        assert moved <= FREQ_ROUNDING_RMS_MHZ
+    ekf = received["ekf"]["rel_rmse_mhz"]["mean"]
+    assert ekf == pytest.approx(in_process["ekf"]["rel_rmse_mhz"]["mean"], rel=0.02)
+
+
+def test_two_streams_merge_into_the_one_stream(kundur_run, tmp_path):
+    """The PMUs split over two servers (two PMUs each, as two PDCs would send them) give
+    the frames of the one stream; a recording of the one stream gives them too."""
+    case, res, pmus, drawn = kundur_run
+    cfg = c37.stream_config(case, pmus, SETTINGS.rate)
+    one = read(case, pmus, [StreamServer.of_frames(cfg, drawn, speed=float("inf"))])
+    halves = []
+    for cols, idcode in (([0, 1], 1), ([2, 3], 10)):
+        sub = c37.stream_config(case, [pmus[c] for c in cols], SETTINGS.rate, idcode)
+        frames = [columns(f, cols) for f in drawn]
+        halves.append(StreamServer.of_frames(sub, frames, speed=float("inf")))
+    two = read(case, pmus, halves)
+    assert two.streams == 2 and two.data_frames == 2 * len(drawn) and two.missing == 0
+    path = tmp_path / "kundur.c37"
+    c37.record(path, cfg, drawn)
+    recorded = sources.read_frames(sources.parse_source(str(path)), case, pmus, SETTINGS.rate)
+    for got in (two, recorded):
+        assert figures(case, res, got.frames) == figures(case, res, one.frames)
+
+
+def columns(frame, cols):
+    """The frame of the PMUs cols only."""
+    return pm.Frame(frame.t, *(x[cols] for x in frame[1:]))
+
+
+def encoded(case, pmus, cols, idcode, frames):
+    """(CFG-2, data frames) of a stream of the PMUs cols."""
+    cfg = c37.stream_config(case, [pmus[c] for c in cols], SETTINGS.rate, idcode)
+    cfg2 = c37.config_frame(cfg)
+    return cfg2, [c37.data_frame(cfg, cfg2, columns(f, cols)) for f in frames]
+
+
+def test_a_stream_missing_time_stamps_marks_them_missing(kundur_run):
+    """A stream that skips every tenth time stamp the other sends: those PMU values are
+    missing (NaN, invalid), counted apart from those flagged absent."""
+    case, _res, pmus, drawn = kundur_run
+    frames = list(drawn)
+    a = encoded(case, pmus, [0, 1], 1, frames)
+    b = encoded(case, pmus, [2, 3], 10, [f for k, f in enumerate(frames) if k % 10])
+    got = sources.merge(case, pmus, SETTINGS.rate, [a, b])
+    assert len(got.frames) == len(drawn)
+    assert got.missing == 2 * len(range(0, len(drawn), 10))
+    sent = np.arange(len(drawn)) % 10 != 0
+    assert got.absent == (~drawn.valid[:, :2]).sum() + (~drawn.valid[sent][:, 2:]).sum()
+    k = 10  # a time stamp the second stream skipped
+    assert not got.frames[k].valid[2:].any() and np.isnan(got.frames[k].freq[2:]).all()
+    assert np.array_equal(got.frames[k].valid[:2], drawn.valid[k, :2])
+
+
+@pytest.mark.parametrize(
+    "change, needle",
+    [
+        ("foreign", "station 'B9:G9' is not a PMU of this run"),
+        ("twice", "station 'B1:G1' is in streams 1 and 2"),
+        ("rate", "stream 1 sends 30 frames/s, the run's PMUs 60"),
+        ("half", "PMU B3:G3, B4:G4 in no stream"),
+    ],
+)
+def test_streams_that_do_not_fit_the_run_are_named(kundur_run, change, needle):
+    case, _res, pmus, _drawn = kundur_run
+    cfg = c37.stream_config(case, pmus, 60)
+    streams = [(c37.config_frame(cfg), [])]
+    if change == "foreign":
+        other = pm.PMU(bus=int(case.buses.number[0]))  # a voltage-only PMU
+        streams = [(c37.config_frame(c37.stream_config(case, [*pmus, other], 60)), [])]
+        needle = needle.replace("B9:G9", other.label)
+    elif change == "twice":
+        streams = streams * 2
+        needle = needle.replace("B1:G1", pmus[0].label)
+    elif change == "rate":
+        streams = [(c37.config_frame(c37.stream_config(case, pmus, 30)), [])]
+    else:
+        streams = [(c37.config_frame(c37.stream_config(case, pmus[:2], 60)), [])]
+        needle = f"PMU {pmus[2].label}, {pmus[3].label} in no stream"
+    with pytest.raises(InputError, match=needle.replace("(", r"\(")):
+        sources.merge(case, pmus, 60, streams)
+
+
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("tcp://localhost", "'localhost' is not HOST:PORT"),
+        ("tcp://a:1,b:70000", "'b:70000' is not HOST:PORT"),
+        ("no/such.c37", "no such recording"),
+    ],
+)
+def test_bad_sources_are_named(text, needle):
+    with pytest.raises(InputError, match=needle):
+        sources.parse_source(text)
