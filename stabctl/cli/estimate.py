@@ -444,6 +444,15 @@ def _check_positive(**values) -> None:
 @click.option(
     "--seed", type=int, default=0, show_default=True, metavar="S", help="Seed of the PMU noise."
 )
+@click.option(
+    "--transport",
+    type=click.Choice(["process", "codec", "tcp"]),
+    default="process",
+    show_default=True,
+    help="How the frames reach the controller: in memory; in memory through the C37.118.2 "
+    "frame codec; or as a C37.118.2 stream over loopback TCP with the modes sent back "
+    "(round trips measured).",
+)
 @model_options
 @json_option("the verdicts")
 @reports_errors
@@ -469,6 +478,7 @@ def closed_loop(
     hysteresis_hz,
     esd_model,
     seed,
+    transport,
     conventions,
     step,
     as_json,
@@ -476,7 +486,8 @@ def closed_loop(
     """The fault simulated with the ESDs commanded by each estimator in the loop.
 
     For each estimator (ideal, raw, kf, ekf; PMU noise seed --seed) the verdict, the
-    number of ESD switchings and the false actions.
+    number of ESD switchings and the false actions; with --transport tcp also the frames
+    and their measured round trips (docs/estimation.md 6).
     """
     from stabctl.studies.estimate import closed_loop_verdicts
 
@@ -496,9 +507,11 @@ def closed_loop(
         deadband_hz=deadband_hz,
         model=model_settings(conventions, step),
         esd_model=esd_model,
+        transport=transport,
     )
     out = {
         "closed_loop": rows,
+        "transport": transport,
         "esd_model": esd_model,
         "lines": closed_loop_lines(rows, fault, far_bus, esd_pct, seed, esd_model),
     }

@@ -611,6 +611,18 @@ def closed_loop_lines(
     )
     return [head] + [
         f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} switchings "
-        f"{r['switchings']:5d}  false actions {r['false_actions']}"
+        f"{r['switchings']:5d}  false actions {r['false_actions']}" + _link_text(r.get("link"))
         for e, r in rows.items()
     ]
+
+
+def _link_text(link) -> str:
+    """The C37.118.2 loop's figures of a closed-loop row (empty in process)."""
+    if link is None:
+        return ""
+    rt = link["round_trip_ms"]
+    return (
+        f"  over TCP: {link['frames']} frames, round trip median {rt['median']:.2f} ms, "
+        f"99th percentile {rt['p99']:.2f} ms, largest {rt['max']:.2f} ms, "
+        f"{link['late']} later than the latency"
+    )

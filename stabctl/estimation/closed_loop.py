@@ -53,6 +53,8 @@ if TYPE_CHECKING:
     from stabctl.dynamics.driver import Simulator
 
 ESTIMATORS = ("ideal", "raw", "kf", "ekf")
+#: how frames reach the controller (`LoopOptions.transport`)
+TRANSPORTS = ("process", "codec", "tcp")
 #: trajectory handed to the controller at each frame (PMU estimation windows): the two
 #: windows a frame reads (`_tail_truth`) and one more of margin; a longer tail only costs time
 HISTORY_WINDOWS = 3
@@ -118,32 +120,41 @@ class LoopController:
         self.mode = np.zeros(len(devices), np.int64)
         self.held = np.full(self.models.n, np.nan)
         self.rows: list = []
+        #: frame -> frame as on the wire (transport "codec"), None: as measured
+        self.wire: Callable | None = None
 
     def __call__(self, t_f: float, partial: SimulationResult) -> np.ndarray:
         """Modes (n_dev,) to take effect at t_f + latency."""
-        speed = self._speeds(t_f, partial)
+        if self.estimator == "ideal":
+            return self._command(t_f, partial.speed_at(np.array([t_f]))[0])
+        if partial.t.size < 2:  # the run start is not recorded yet: no frame
+            return self._command(t_f, np.ones(self.models.n))
+        frame = self.measure(t_f, partial)
+        return self.act(frame if self.wire is None else self.wire(frame))
+
+    def act(self, frame: Frame) -> np.ndarray:
+        """The controller's half: the modes (n_dev,) of a measured frame (the estimator fed
+        the frame, Table 3 on its speeds for the instant the modes take effect), wherever
+        the frame comes from (`measure`, or a C37.118.2 stream:
+        `stabctl.estimation.c37_loop`)."""
+        if self.estimator == "raw":
+            f = frame.freq[self.models.pmu] / self.models.f0
+            self.held = np.where(np.isfinite(f), f, self.held)
+            return self._command(frame.t, self.held)
+        self.filter.step(frame)
+        return self._command(frame.t, self.filter.forecast(self.settings.latency_s)[0])
+
+    def _command(self, t_f: float, speed: np.ndarray) -> np.ndarray:
+        """Table 3 modes on the relative speeds of `speed` (n_mac,) pu, recorded."""
         rel = relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
         rel = np.nan_to_num(rel)
         self.mode = law.desired_modes(self.sa, self.mode, rel)
         self.rows.append((t_f, rel * self.case.freq_hz, self.mode.copy()))
         return self.mode
 
-    def _speeds(self, t_f: float, partial: SimulationResult) -> np.ndarray:
-        """Speed estimates (n_mac,) pu for the instant the modes take effect."""
-        if self.estimator == "ideal":
-            return partial.speed_at(np.array([t_f]))[0]
-        if partial.t.size < 2:  # the run start is not recorded yet: no frame
-            return np.ones(self.models.n)
-        frame = self._frame(t_f, partial)
-        if self.estimator == "raw":
-            f = frame.freq[self.models.pmu] / self.models.f0
-            self.held = np.where(np.isfinite(f), f, self.held)
-            return self.held
-        self.filter.step(frame)
-        return self.filter.forecast(self.settings.latency_s)[0]
-
-    def _frame(self, t_f: float, partial: SimulationResult) -> Frame:
-        """The measured frame at t_f: true values from the trajectory's tail, plus noise."""
+    def measure(self, t_f: float, partial: SimulationResult) -> Frame:
+        """The PMUs' half: the measured frame at t_f, true values from the trajectory's
+        tail (`partial`, at least two recorded points) plus the seed's noise."""
         k = int(round(t_f * self.settings.rate))
         f0 = self.case.freq_hz
         v, i, f, rocof = _tail_truth(
@@ -265,10 +276,12 @@ def _tail_truth(
 @dataclass
 class ClosedLoopRun:
     """One closed-loop run: the SimulationResult (its meta["switchings"] and
-    meta["storage"] as `Simulator.run_commanded` gives them) and what the controller saw."""
+    meta["storage"] as `Simulator.run_commanded` gives them), what the controller saw, and
+    over TCP the link's figures (`c37_loop.LinkStats.summary`; None in process)."""
 
     result: SimulationResult
     diagnostics: Diagnostics
+    link: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -293,6 +306,12 @@ class LoopOptions:
     esd_model : str
         The ESDs' model, ``"ideal"`` or ``"wecc"`` (WECC batteries taking the commands as
         their plant reference, `stabctl.storage.devices.StorageFleet`).
+    transport : str
+        One of `TRANSPORTS`: ``"process"`` (frames handed over in memory as measured),
+        ``"codec"`` (in memory, each encoded as a C37.118.2 data frame and parsed back:
+        float32 phasors, FREQ to 1 mHz, DFREQ to 0.01 Hz/s) or ``"tcp"`` (the PMUs
+        publish a C37.118.2 stream on loopback, the controller subscribes in a thread and
+        sends the modes back, `stabctl.estimation.c37_loop`).
     """
 
     fleet_pct: float
@@ -302,6 +321,7 @@ class LoopOptions:
     control: law.BangBangCOI = law.BangBangCOI()
     at: str = "terminal"
     esd_model: str = "ideal"
+    transport: str = "process"
 
 
 def run_closed_loop(
@@ -351,9 +371,8 @@ def run_closed_loop(
     """
     settings, rate = loop.pmu, loop.pmu.rate
     fleet = st.uniform_fleet(sim.case, loop.fleet_pct, model=loop.esd_model)
-    ctrl = LoopController(
-        sim.case, fleet.devices, loop.estimator, settings, loop.seed, t_end, loop.control, loop.at
-    )
+    args = (loop.estimator, settings, loop.seed, t_end, loop.control, loop.at)
+    ctrl = LoopController(sim.case, fleet.devices, *args)
     frames = np.arange(int(np.floor(t_end * rate + 1e-9)) + 1) / rate
     devices = fleet.devices
     decide: Callable = ctrl
@@ -364,22 +383,56 @@ def run_closed_loop(
         devices = devices + loads
         decide = lambda t, p: np.r_[ctrl(t, p), set_points(t)]  # noqa: E731
     gate = law.ExternalCommands(v_gate_pu=loop.control.v_gate_pu)
-    schedule = CommandFrames(
-        frames,
-        decide,
-        latency=settings.latency_s,
-        history_s=HISTORY_WINDOWS * settings.window_s(sim.case.freq_hz),
-    )
-    res = sim.run_commanded(
+    history = HISTORY_WINDOWS * settings.window_s(sim.case.freq_hz)
+    run = lambda decide: sim.run_commanded(  # noqa: E731
         events,
         t_end,
         st.StorageFleet(devices, gate, model=fleet.model),
-        schedule,
+        CommandFrames(frames, decide, latency=settings.latency_s, history_s=history),
         h=h,
         separation_limit=separation_limit,
         stop_at_separation=stop_at_separation,
     )
-    return ClosedLoopRun(res, ctrl.diagnostics())
+    if loop.transport == "tcp":
+        if ambient is not None:
+            raise InputError("an ambient load fluctuation runs with the loop in process only")
+        return _over_tcp(run, ctrl, lambda: LoopController(sim.case, fleet.devices, *args))
+    if loop.transport == "codec":
+        ctrl.wire = _codec(ctrl)
+    elif loop.transport != "process":
+        raise InputError(
+            f"transport must be one of {', '.join(TRANSPORTS)}, got {loop.transport!r}"
+        )
+    return ClosedLoopRun(run(decide), ctrl.diagnostics())
+
+
+def _codec(ctrl: LoopController) -> Callable:
+    """frame -> the frame encoded as a C37.118.2 data frame of the loop's stream and
+    parsed back (`c37.on_wire`)."""
+    from stabctl.estimation import c37
+
+    cfg = c37.stream_config(ctrl.case, ctrl.pmus, ctrl.settings.rate)
+    cfg2 = c37.config_frame(cfg)
+    return lambda frame: c37.parse_frame(cfg, cfg2, c37.data_frame(cfg, cfg2, frame))
+
+
+def _over_tcp(run, plant: LoopController, remote_of) -> ClosedLoopRun:
+    """`run` with the plant's frames sent over loopback TCP to a controller (a second
+    `LoopController` from remote_of(), in a thread) and its modes sent back."""
+    from stabctl.estimation import c37, c37_loop
+
+    if plant.estimator == "ideal":
+        raise InputError("the ideal estimator reads the true speeds: it has no PMU stream")
+    remote = remote_of()
+    cfg = c37.stream_config(plant.case, plant.pmus, plant.settings.rate)
+    with c37_loop.PlantLink(plant, cfg) as link:
+        thread, errors = c37_loop.controller_thread(remote, cfg, link.address)
+        res = run(link)
+    thread.join(timeout=30)
+    if errors:
+        raise errors[0]
+    remote.rows[:0] = plant.rows  # the instants before a frame could be made
+    return ClosedLoopRun(res, remote.diagnostics(), link.stats().summary())
 
 
 def false_actions(run: ClosedLoopRun, deadband_hz: float = 0.1) -> int:

@@ -186,6 +186,7 @@ def closed_loop_verdicts(
     deadband_hz: float,
     model=None,
     esd_model: str = "ideal",
+    transport: str = "process",
 ) -> dict:
     """The fault simulated with the ESDs commanded by each estimator in the loop.
 
@@ -207,12 +208,16 @@ def closed_loop_verdicts(
         Conventions, step and Q limits (None: the defaults).
     esd_model : {"ideal", "wecc"}, optional
         The ESDs' model (`stabctl.storage.devices.StorageFleet.model`).
+    transport : {"process", "codec", "tcp"}, optional
+        How the frames reach the controller (`stabctl.estimation.closed_loop.LoopOptions`);
+        the ideal estimator, which reads the true speeds, runs in process.
 
     Returns
     -------
     dict
         Per estimator (`stabctl.estimation.closed_loop.ESTIMATORS`): ``stable``,
-        ``switchings`` and ``false_actions``.
+        ``switchings``, ``false_actions`` and ``link`` (over TCP the link's figures,
+        `stabctl.estimation.c37_loop.LinkStats.summary`; else None).
     """
     from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import closed_loop as cl
@@ -227,12 +232,21 @@ def closed_loop_verdicts(
             sim,
             [event],
             t_end,
-            cl.LoopOptions(esd_pct, e, settings, seed, control, esd_model=esd_model),
+            cl.LoopOptions(
+                esd_pct,
+                e,
+                settings,
+                seed,
+                control,
+                esd_model=esd_model,
+                transport="process" if e == "ideal" else transport,
+            ),
         )
         rows[e] = {
             "stable": run.result.stable,
             "switchings": len(run.result.meta.get("switchings", [])),
             "false_actions": cl.false_actions(run, deadband_hz),
+            "link": run.link,
         }
     return rows
 

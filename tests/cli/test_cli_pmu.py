@@ -99,6 +99,25 @@ def test_estimate_rmse_from_a_served_stream_equals_in_process(tmp_path):
     assert gap <= 1 / np.sqrt(12)  # FREQ in whole mHz: at most its rounding RMS
 
 
+def test_estimate_closed_loop_over_tcp_prints_the_link():
+    """`estimate closed-loop --transport tcp`: the PMU estimators' rows carry the link's
+    frames (one per reporting instant after the start) and round trips; the ideal
+    estimator, which reads the true speeds, has no link; the verdicts are those of the
+    loop in process through the codec."""
+    args = ["estimate", "closed-loop", "kundur", "--fault", "3", "--far-bus", "101"]
+    args += ["--clear-cycles", "7", "--tf", "3", "--esd-pct", "10", "--json"]
+    tcp = json.loads(CliRunner().invoke(main, [*args, "--transport", "tcp"]).output)
+    codec = json.loads(CliRunner().invoke(main, [*args, "--transport", "codec"]).output)
+    assert tcp["closed_loop"]["ideal"]["link"] is None
+    for e in ("raw", "kf", "ekf"):
+        row = tcp["closed_loop"][e]
+        assert row["link"]["frames"] == 3 * 60 and row["link"]["round_trip_ms"]["median"] > 0
+        assert {k: row[k] for k in ("stable", "switchings", "false_actions")} == {
+            k: codec["closed_loop"][e][k] for k in ("stable", "switchings", "false_actions")
+        }
+    assert "over TCP: 180 frames, round trip median" in "\n".join(tcp["lines"])
+
+
 def test_estimate_source_refuses_monte_carlo_options(tmp_path):
     (tmp_path / "r.c37").write_bytes(b"")
     res = CliRunner().invoke(

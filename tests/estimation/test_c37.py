@@ -11,24 +11,14 @@ import pytest
 
 pytest.importorskip("pyc37")
 
+from c37_check import crc_ccitt
+
 import stabctl
 from stabctl.errors import InputError
 from stabctl.estimation import c37
 from stabctl.estimation import pmu as pm
 from stabctl.estimation.settings import PMUSettings
 from stabctl.studies.cases import CASE2
-
-
-def crc_ccitt(data: bytes) -> int:
-    """CRC-CCITT of C37.118.2-2011 Annex B: polynomial x^16 + x^12 + x^5 + 1, initial
-    0xFFFF, no reflection, no final XOR."""
-    crc = 0xFFFF
-    for byte in data:
-        crc ^= byte << 8
-        for _ in range(8):
-            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else crc << 1
-            crc &= 0xFFFF
-    return crc
 
 
 @pytest.fixture(scope="module")

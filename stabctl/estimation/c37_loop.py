@@ -1,0 +1,273 @@
+"""The storage control loop closed over TCP: the simulator's PMUs publish C37.118.2 data
+frames, a controller subscribes, runs its estimator and the Table 3 law, and sends the ESD
+modes back, which the simulator applies (docs/estimation.md 6).
+
+Both ends are halves of one `closed_loop.LoopController`: the plant (`PlantLink`, a
+C37.118.2 server inside the simulator's `CommandFrames` callback) calls its `measure`,
+the controller (`serve_controller`, a C37.118.2 client) its `act`, so the loop over TCP
+runs the in-process loop's code with the wire in between.
+
+Protocol, one TCP connection per loop (C37.118.2-2011 frames throughout, CRC checked):
+1. the controller sends the command 'cfg2'; the plant answers with the stream's CFG-2
+   (one PMU per generator, `c37.config_frame`); the controller checks its station names;
+2. the controller sends 'start';
+3. at each reporting instant the plant sends one data frame and waits for the answer: an
+   extended command frame (CMD 0x0008, Table 15) time-stamped as the data frame it
+   answers, its extended data one signed byte per ESD: the mode (-1 inject, 0 idle,
+   +1 absorb);
+4. the plant closes the connection at the end of the run.
+
+The simulation waits for each answer (lock step), so the run is that of the in-process
+loop with the frames as on the wire (`c37.on_wire`) whatever the network does; the modes
+take effect at the time stamp plus the loop's modelled latency, and the wall-clock round
+trip of each frame is measured beside it (`LinkStats`): a frame whose round trip exceeds
+the modelled latency is counted late.
+"""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from stabctl.errors import InputError
+from stabctl.estimation import c37
+from stabctl.estimation.c37_tcp import _read_frame
+
+EXTENDED = 8  # C37.118.2-2011 Table 15: extended frame
+
+
+@dataclass(frozen=True)
+class LinkStats:
+    """What the loop's link did.
+
+    Attributes
+    ----------
+    frames : int
+        Data frames sent (each answered).
+    round_trip_s : ndarray
+        Wall-clock time from handing each data frame to the socket to its answer (s).
+    latency_s : float
+        The loop's modelled latency (s), the budget of a round trip.
+    """
+
+    frames: int
+    round_trip_s: np.ndarray
+    latency_s: float
+
+    def summary(self) -> dict:
+        """Frames, late frames and the round trip's median, 99th percentile and largest
+        (ms), for a report."""
+        ms = 1e3 * self.round_trip_s
+        some = ms.size > 0
+        return {
+            "frames": self.frames,
+            "late": int(np.sum(self.round_trip_s > self.latency_s)),
+            "round_trip_ms": {
+                "median": float(np.median(ms)) if some else None,
+                "p99": float(np.percentile(ms, 99)) if some else None,
+                "max": float(ms.max()) if some else None,
+            },
+        }
+
+
+def modes_frame(idcode: int, soc: int, fracsec: int, modes) -> bytes:
+    """The controller's answer to the data frame stamped (soc, fracsec): an extended
+    command frame carrying one signed byte per ESD mode."""
+    from pyc37.frame import CommandFrame
+
+    payload = np.asarray(modes, np.int8).tobytes()
+    return CommandFrame(idcode, "extended", payload, soc, (fracsec, "+")).convert2bytes()
+
+
+def read_modes(data: bytes, n_dev: int) -> tuple[int, np.ndarray]:
+    """(the answered time stamp's SOC and FRACSEC count as one integer of TIME_BASE
+    counts, the modes (n_dev,)) of an answer (`modes_frame`).
+
+    Raises
+    ------
+    InputError
+        Not an extended command frame, a CRC that fails, or not n_dev modes.
+    """
+    from pyc37.frame import CommandFrame, FrameError
+
+    try:
+        cmd = CommandFrame.convert2frame(data)
+    except FrameError as exc:
+        raise InputError(f"controller's answer not readable: {exc}") from None
+    if cmd._command != EXTENDED or len(cmd._extended_frame) != n_dev:
+        raise InputError(f"controller's answer is not the modes of {n_dev} ESDs")
+    stamp = cmd.get_soc() * c37.TIME_BASE + cmd.get_frasec()[0]
+    return stamp, np.frombuffer(cmd._extended_frame, np.int8).astype(np.int64)
+
+
+class PlantLink:
+    """The plant's end: a C37.118.2 server on ``host``:``port`` (0: a free one, see
+    `address`) for one controller, and the `CommandFrames` callback that sends each frame
+    and returns the controller's modes.
+
+    Parameters
+    ----------
+    controller : stabctl.estimation.closed_loop.LoopController
+        The loop whose `measure` makes the frames (PMUs, noise seed).
+    cfg : stabctl.estimation.c37.StreamConfig
+        The stream of its PMUs.
+    host : str, optional
+    port : int, optional
+    timeout : float, optional
+        Longest wait for the controller to connect, and for each answer (s).
+
+    Raises
+    ------
+    OSError
+        The address cannot be listened on.
+    """
+
+    def __init__(self, controller, cfg, host: str = "127.0.0.1", port: int = 0, timeout=30.0):
+        self.ctrl, self.cfg, self.timeout = controller, cfg, float(timeout)
+        self.cfg2 = c37.config_frame(cfg)
+        self._sock = socket.create_server((host, port))
+        self._conn: socket.socket | None = None
+        self._trips: list[float] = []
+
+    @property
+    def address(self) -> tuple[str, int]:
+        """(host, port) the plant listens on."""
+        host, port = self._sock.getsockname()[:2]
+        return host, port
+
+    def stats(self) -> LinkStats:
+        """The link's figures so far."""
+        trips = np.array(self._trips)
+        return LinkStats(trips.size, trips, self.ctrl.settings.latency_s)
+
+    def close(self) -> None:
+        """End the loop: close the controller's connection and the listening socket."""
+        for s in (self._conn, self._sock):
+            if s is not None:
+                s.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __call__(self, t_f: float, partial) -> np.ndarray:
+        """`CommandFrames.decide`: the frame at t_f sent, the controller's modes returned
+        (no frame before the run has two recorded points: the controller's in-process
+        rule for that instant)."""
+        if partial.t.size < 2:
+            return self.ctrl(t_f, partial)
+        conn = self._connected()
+        data = c37.data_frame(self.cfg, self.cfg2, self.ctrl.measure(t_f, partial))
+        sent = time.perf_counter()
+        conn.sendall(data)
+        answer = self._next(conn, f"the answer to the frame at {t_f:.4f} s")
+        self._trips.append(time.perf_counter() - sent)
+        stamp, modes = read_modes(answer, self.ctrl.mode.size)
+        soc, counts = c37.time_stamp(self.cfg, t_f)
+        if stamp != soc * c37.TIME_BASE + counts:
+            raise InputError(f"the controller answered another frame than that at {t_f:.4f} s")
+        self.ctrl.mode = modes
+        return modes
+
+    def _connected(self) -> socket.socket:
+        """The controller's connection, once it has asked for CFG-2 and said 'start'."""
+        if self._conn is not None:
+            return self._conn
+        self._sock.settimeout(self.timeout)
+        try:
+            conn, _ = self._sock.accept()
+        except TimeoutError:
+            raise InputError(f"no controller connected within {self.timeout:g} s") from None
+        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._conn = conn
+        while (word := _command(self._next(conn, "a command"))) != 2:  # 'start'
+            if word == 5:  # 'cfg2'
+                conn.sendall(self.cfg2.convert2bytes())
+        return conn
+
+    def _next(self, conn: socket.socket, what: str) -> bytes:
+        conn.settimeout(self.timeout)
+        try:
+            frame = _read_frame(conn)
+        except TimeoutError:
+            raise InputError(f"the controller sent no {what} within {self.timeout:g} s") from None
+        if frame is None:
+            raise InputError(f"the controller closed the loop before {what}")
+        return frame
+
+
+def _command(frame: bytes) -> int:
+    """The command word of a command frame (0 for any other frame)."""
+    return int.from_bytes(frame[14:16], "big") if frame[1] & 0x70 == 0x40 else 0
+
+
+def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.0) -> int:
+    """The controller's end: subscribe to the plant at host:port, then answer every data
+    frame with the modes `controller.act` gives, until the plant closes the loop.
+
+    Parameters
+    ----------
+    controller : stabctl.estimation.closed_loop.LoopController
+        The estimator and law (its `act`).
+    cfg : stabctl.estimation.c37.StreamConfig
+        The stream the controller expects (its PMUs' station names are checked against
+        the plant's CFG-2).
+    host, port : str, int
+        The plant.
+    timeout : float, optional
+        Longest silence of the plant (s).
+
+    Returns
+    -------
+    int
+        Frames answered.
+
+    Raises
+    ------
+    InputError
+        No plant there, silence, or a CFG-2 whose stations are not the controller's.
+    """
+    from pyc37.frame import CommandFrame
+
+    try:
+        conn = socket.create_connection((host, port), timeout=timeout)
+    except OSError as exc:
+        raise InputError(f"no plant at {host}:{port}: {exc.strerror or exc}") from None
+    n = 0
+    with conn:
+        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        conn.sendall(CommandFrame(cfg.idcode, "cfg2").convert2bytes())
+        cfg2 = c37.read_config(_read_frame(conn) or b"", f"{host}:{port}'s CFG-2")
+        names = cfg2.get_station_name()
+        names = [str(x).strip() for x in (names if isinstance(names, list) else [names])]
+        if names != [p.label for p in cfg.pmus]:
+            raise InputError(f"{host}:{port} streams PMUs {names}, not the controller's")
+        conn.sendall(CommandFrame(cfg.idcode, "start").convert2bytes())
+        while (data := _read_frame(conn)) is not None:
+            frame = c37.parse_frame(cfg, cfg2, data)
+            soc, counts = c37.time_stamp(cfg, frame.t)
+            conn.sendall(modes_frame(cfg.idcode, soc, counts, controller.act(frame)))
+            n += 1
+    return n
+
+
+def controller_thread(controller, cfg, address, timeout: float = 30.0):
+    """`serve_controller` in a daemon thread; returns (thread, errors): the thread's
+    exception, if any, is appended to errors."""
+    errors: list[Exception] = []
+
+    def run():
+        try:
+            serve_controller(controller, cfg, address[0], address[1], timeout=timeout)
+        except (InputError, OSError) as exc:  # handed to the caller
+            errors.append(exc)
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    return thread, errors

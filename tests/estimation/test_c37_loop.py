@@ -1,0 +1,142 @@
+"""The storage loop closed over C37.118.2 on loopback TCP (stabctl.estimation.c37_loop):
+the paper's Case 2 with the EKF controller subscribing to miniWECC's 34 PMUs runs exactly
+as the in-process loop with the frames through the codec, stays stable as in process, and
+every frame's round trip is measured; the answer frame decoded by hand; a broken loop is
+named."""
+
+import struct
+import threading
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pyc37")
+
+from c37_check import crc_ccitt
+
+import stabctl
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.errors import InputError
+from stabctl.estimation import c37, c37_loop
+from stabctl.estimation import closed_loop as cl
+from stabctl.studies.cases import CASE2
+
+T_END = 10.0
+
+
+@pytest.fixture(scope="module")
+def case2_runs():
+    """Case 2 (miniWECC, bus-83 fault on line 83-33 cleared after 6 cycles) with 5 % ESDs
+    commanded by the EKF, by each transport."""
+    case = stabctl.load_case("miniwecc")
+    sim = stabctl.Simulator(case)
+    events = CASE2.fault.events(CASE2.cycles["figure"] / case.freq_hz)
+    return {
+        t: cl.run_closed_loop(sim, events, T_END, cl.LoopOptions(5, "ekf", transport=t))
+        for t in cl.TRANSPORTS
+    }
+
+
+def test_case2_over_tcp_is_the_loop_in_process_through_the_codec(case2_runs):
+    tcp, codec = case2_runs["tcp"], case2_runs["codec"]
+    np.testing.assert_array_equal(tcp.result.speed, codec.result.speed)
+    np.testing.assert_array_equal(tcp.diagnostics.modes, codec.diagnostics.modes)
+    np.testing.assert_array_equal(tcp.diagnostics.t, codec.diagnostics.t)
+    assert tcp.result.meta["switchings"] == codec.result.meta["switchings"]
+
+
+def test_case2_over_tcp_is_stable_as_in_process(case2_runs):
+    """Stable with the same switchings and no false action; the speeds within 1e-5 pu of
+    the loop fed float64 frames (the codec's 1 mHz FREQ and float32 phasors only)."""
+    tcp, process = case2_runs["tcp"], case2_runs["process"]
+    assert tcp.result.stable and process.result.stable
+    assert cl.false_actions(tcp) == cl.false_actions(process) == 0
+    assert len(tcp.result.meta["switchings"]) == len(process.result.meta["switchings"])
+    assert np.max(np.abs(tcp.result.speed - process.result.speed)) < 1e-5
+
+
+def test_every_frame_of_the_loop_is_answered_and_timed(case2_runs):
+    """One frame per reporting instant after the start (60 frames/s for 10 s), each
+    answered; the round trips are wall-clock figures, all positive, counted late against
+    the modelled 50 ms latency."""
+    link = case2_runs["tcp"].link
+    assert link["frames"] == round(T_END * 60)
+    rt = link["round_trip_ms"]
+    assert 0 < rt["median"] <= rt["p99"] <= rt["max"]
+    late = link["late"]
+    assert (late == 0) == (rt["max"] <= 50.0)
+    assert case2_runs["process"].link is None
+
+
+def test_the_answer_frame_decoded_by_hand():
+    """SYNC 0xAA41 (command frame, version 1), FRAMESIZE, IDCODE, SOC, FRACSEC of the
+    answered data frame, CMD 0x0008 (extended frame), one signed byte per ESD, CHK."""
+    data = c37_loop.modes_frame(7, 1_700_000_001, 250_000, [1, 0, -1, 1])
+    sync, size, idcode, soc, fracsec, cmd = struct.unpack(">HHHIIH", data[:16])
+    assert (sync, size, idcode, soc, fracsec, cmd) == (0xAA41, 22, 7, 1_700_000_001, 250_000, 8)
+    assert struct.unpack(">4b", data[16:20]) == (1, 0, -1, 1)
+    assert struct.unpack(">H", data[-2:])[0] == crc_ccitt(data[:-2])
+    stamp, modes = c37_loop.read_modes(data, 4)
+    assert stamp == 1_700_000_001 * c37.TIME_BASE + 250_000 and modes.tolist() == [1, 0, -1, 1]
+    with pytest.raises(InputError, match="not the modes of 3 ESDs"):
+        c37_loop.read_modes(data, 3)
+    with pytest.raises(InputError, match="not readable"):
+        c37_loop.read_modes(data[:-1] + bytes([data[-1] ^ 1]), 4)
+
+
+@pytest.fixture
+def kundur_loop():
+    case = stabctl.load_case("kundur")
+    sim = stabctl.Simulator(case)
+    return sim, [fault_with_clearing(case, 3, 101, 1.0, 7)]
+
+
+def test_a_plant_without_controller_is_named(kundur_loop):
+    sim, events = kundur_loop
+    from stabctl.storage.devices import uniform_fleet
+
+    ctrl = cl.LoopController(sim.case, uniform_fleet(sim.case, 10).devices, "ekf", *_rest())
+    cfg = c37.stream_config(sim.case, ctrl.pmus, 60)
+    with c37_loop.PlantLink(ctrl, cfg, timeout=0.3) as link:
+        partial = sim.run(events, t_end=0.1)
+        with pytest.raises(InputError, match=r"no controller connected within 0\.3 s"):
+            link(0.05, partial)
+
+
+def test_a_controller_of_other_pmus_is_refused(kundur_loop):
+    sim, events = kundur_loop
+    from stabctl.storage.devices import uniform_fleet
+
+    ctrl = cl.LoopController(sim.case, uniform_fleet(sim.case, 10).devices, "ekf", *_rest())
+    cfg = c37.stream_config(sim.case, ctrl.pmus, 60)
+    other = c37.stream_config(sim.case, ctrl.pmus[:2], 60)
+    with c37_loop.PlantLink(ctrl, cfg, timeout=2) as link:
+        errors = []
+        thread = threading.Thread(
+            target=lambda: _catch(errors, c37_loop.serve_controller, ctrl, other, *link.address)
+        )
+        thread.start()
+        with pytest.raises(InputError, match="closed the loop"):
+            link(0.05, sim.run(events, t_end=0.1))
+        thread.join(timeout=10)
+    assert "not the controller's" in str(errors[0])
+
+
+def test_a_loop_of_the_ideal_estimator_has_no_stream(kundur_loop):
+    sim, events = kundur_loop
+    with pytest.raises(InputError, match="no PMU stream"):
+        cl.run_closed_loop(sim, events, 1.0, cl.LoopOptions(10, "ideal", transport="tcp"))
+
+
+def _rest():
+    """LoopController's arguments after the estimator: settings, seed, t_end."""
+    from stabctl.estimation.settings import PMUSettings
+
+    return PMUSettings(), 0, 2.0
+
+
+def _catch(errors, func, *args):
+    try:
+        func(*args)
+    except InputError as exc:
+        errors.append(exc)
