@@ -13,7 +13,6 @@ import click
 from stabctl.cli.checks import model_settings
 from stabctl.cli.format import closed_loop_lines, estimator_cct_lines, print_estimate, print_json
 from stabctl.cli.options import (
-    TF_AFTER_FAULT_S,
     _apply,
     clear_cycles_option,
     controller,
@@ -25,8 +24,15 @@ from stabctl.cli.options import (
     storage_options,
     tf_option,
 )
+from stabctl.cli.pmu_options import (
+    PMU_AT,
+    WINDOW,
+    fault_event,
+    pmu_noise_options,
+    pmu_settings,
+    rate_latency_options,
+)
 from stabctl.errors import InputError
-from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are the CLI's
 
 #: the old mode flags of `estimate CASE`, by the subcommand they select (first wins)
 _LEGACY_FLAGS = (("--cct", "cct"), ("--closed-loop", "closed-loop"))
@@ -59,96 +65,6 @@ def estimate():
     """
 
 
-RATE = click.option(
-    "--rate",
-    type=float,
-    default=_PMU.rate,
-    show_default=True,
-    metavar="FPS",
-    help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120.",
-)
-PMU_AT = click.option(
-    "--pmu-at",
-    type=click.Choice(["terminal", "hv"]),
-    default="terminal",
-    show_default=True,
-    help="PMU of each generator at its terminal or HV bus.",
-)
-
-
-def _rate_latency(func):
-    return _apply(
-        func,
-        (
-            RATE,
-            click.option(
-                "--latency-ms",
-                type=float,
-                default=1000 * _PMU.latency_s,
-                show_default=True,
-                metavar="MS",
-                help="Delay from a frame's time stamp to its arrival (ms).",
-            ),
-        ),
-    )
-
-
-def _pmu_noise(func):
-    return _apply(
-        func,
-        (
-            click.option(
-                "--drop",
-                type=float,
-                default=_PMU.drop_prob,
-                show_default=True,
-                metavar="P",
-                help="Probability that a frame is lost.",
-            ),
-            click.option(
-                "--tve-pct",
-                type=float,
-                default=100 * _PMU.tve,
-                show_default=True,
-                help="Total vector error limit (%), C37.118.1 Table 3.",
-            ),
-            click.option(
-                "--fe-hz",
-                type=float,
-                default=_PMU.fe_hz,
-                show_default=True,
-                help="Frequency error limit (Hz), C37.118.1 Table 4.",
-            ),
-            click.option(
-                "--rfe-hz-s",
-                type=float,
-                default=_PMU.rfe_hz_s,
-                show_default=True,
-                help="ROCOF error limit (Hz/s), C37.118.1 Table 4.",
-            ),
-            click.option(
-                "--k-sigma",
-                type=float,
-                default=_PMU.k_sigma,
-                show_default=True,
-                help="The limits are this many standard deviations of the errors.",
-            ),
-            _WINDOW,
-        ),
-    )
-
-
-_WINDOW = click.option(
-    "--window-cycles",
-    type=float,
-    default=_PMU.window_cycles,
-    show_default=True,
-    metavar="C",
-    help="Frequency and ROCOF estimation window (cycles): "
-    "the phase advance over it; 2 = P class (C37.118.1-2011 Annex C).",
-)
-
-
 def _runs_seed(func):
     return _apply(
         func,
@@ -173,41 +89,6 @@ def _runs_seed(func):
     )
 
 
-def _settings(
-    rate,
-    latency_ms,
-    drop=_PMU.drop_prob,
-    tve_pct=100 * _PMU.tve,
-    fe_hz=_PMU.fe_hz,
-    rfe_hz_s=_PMU.rfe_hz_s,
-    k_sigma=_PMU.k_sigma,
-    window_cycles=_PMU.window_cycles,
-):
-    """The PMUSettings of the command line's values (its units: %, ms)."""
-    return _PMU(
-        rate=rate,
-        tve=tve_pct / 100,
-        fe_hz=fe_hz,
-        rfe_hz_s=rfe_hz_s,
-        k_sigma=k_sigma,
-        latency_s=latency_ms / 1000,
-        drop_prob=drop,
-        window_cycles=window_cycles,
-    )
-
-
-def _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
-    """The case, the fault event and the end of the run (default: fault + 5 s)."""
-    from stabctl.dynamics.events import fault_with_clearing
-    from stabctl.io import load_case
-
-    tf = t_fault + TF_AFTER_FAULT_S if tf is None else tf
-    if not tf > 0:
-        raise InputError(f"--tf must be > 0, got {tf:g}")
-    case = load_case(case_name)
-    return case, fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles), tf
-
-
 def _fault_run(func):
     """The options of a PMU run through a fault (rmse, closed-loop): case, fault, clearing,
     end time, PMU rate and latency, PMU noise."""
@@ -217,8 +98,8 @@ def _fault_run(func):
             fault_options(required=True),
             clear_cycles_option("Clearing after N cycles, both ends"),
             tf_option(),
-            _rate_latency,
-            _pmu_noise,
+            rate_latency_options,
+            pmu_noise_options,
         )
     ):
         func = option(func)
@@ -353,8 +234,10 @@ def rmse(
         raise InputError("--settle-ms, --ambient-s and --seed must be >= 0, --ambient-runs >= 1")
     src = _source(source)
     ambient = am.AmbientLoad(ambient_pct, ambient_tau_s, seed)
-    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
-    case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    settings = pmu_settings(
+        rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
+    )
+    case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     mc = ErrorRuns(
         runs=runs,
         seed=seed,
@@ -494,8 +377,10 @@ def closed_loop(
     _check_positive(tf=tf, deadband_hz=deadband_hz)
     if esd_pct is None:
         raise InputError("estimate closed-loop needs --esd-pct")
-    settings = _settings(rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
-    case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    settings = pmu_settings(
+        rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
+    )
+    case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     rows = closed_loop_verdicts(
         case,
         ev,
@@ -521,7 +406,7 @@ def closed_loop(
 @estimate.command("cct")
 @click.argument("case_name", metavar="CASE")
 @fault_options(required=True, t_fault=False)
-@_rate_latency
+@rate_latency_options
 @click.option(
     "--esd-pct",
     type=float,
@@ -531,7 +416,7 @@ def closed_loop(
     help="ESD of P % of each generator's MVA at its HV bus (% of machine MVA), "
     "the paper's bang-bang COI control (Table 3).",
 )
-@_WINDOW
+@WINDOW
 @_runs_seed
 @esd_model_option
 @model_options
@@ -559,8 +444,8 @@ def cct(
     from stabctl.studies.estimate import estimator_ccts
 
     _check_positive(runs=runs)
-    settings = _settings(rate, latency_ms, window_cycles=window_cycles)
-    case, _, _ = _fault_event(case_name, fault, far_bus, 1.0, 6.0, None)  # checks the line
+    settings = pmu_settings(rate, latency_ms, window_cycles=window_cycles)
+    case, _, _ = fault_event(case_name, fault, far_bus, 1.0, 6.0, None)  # checks the line
     table = estimator_ccts(
         case.name,
         fault,

@@ -3,11 +3,31 @@ TCP, a recording served again, and a received stream recorded."""
 
 from __future__ import annotations
 
+import json
+
 import click
 
 from stabctl.cli.checks import check_writable
-from stabctl.cli.estimate import PMU_AT, RATE, _fault_event, _pmu_noise, _settings
-from stabctl.cli.options import clear_cycles_option, fault_options, reports_errors, tf_option
+from stabctl.cli.options import (
+    _apply,
+    clear_cycles_option,
+    controller,
+    esd_model_option,
+    fault_options,
+    json_option,
+    model_options,
+    reports_errors,
+    storage_options,
+    tf_option,
+)
+from stabctl.cli.pmu_options import (
+    PMU_AT,
+    RATE,
+    fault_event,
+    pmu_noise_options,
+    pmu_settings,
+    rate_latency_options,
+)
 from stabctl.errors import InputError
 
 #: IEEE C37.118.2's well-known TCP port
@@ -23,33 +43,36 @@ def pmu():
     serve    simulate CASE through a fault and serve its PMUs' frames over TCP
     replay   serve a recording's frames again
     record   receive a stream from a PMU or PDC and write it to a file
+    plant    simulate CASE through a fault with ESDs a controller commands over TCP
+    control  the ESD controller: subscribe to a plant's PMUs, send back the modes
     """
 
 
+_LISTEN = (
+    click.option("--host", default="127.0.0.1", show_default=True, help="Address to listen on."),
+    click.option(
+        "--port",
+        type=click.IntRange(0, 65535),
+        default=C37_PORT,
+        show_default=True,
+        help="TCP port (0: any free one, printed).",
+    ),
+)
+
+
 def _serving(func):
-    for option in reversed(
-        (
-            click.option(
-                "--host", default="127.0.0.1", show_default=True, help="Address to listen on."
-            ),
-            click.option(
-                "--port",
-                type=click.IntRange(0, 65535),
-                default=C37_PORT,
-                show_default=True,
-                help="TCP port (0: any free one, printed).",
-            ),
-            click.option(
-                "--speed",
-                type=float,
-                default=1.0,
-                show_default=True,
-                help="Time-stamp seconds per second: 1 real time, 0 as fast as the client reads.",
-            ),
-        )
-    ):
-        func = option(func)
-    return func
+    speed = click.option(
+        "--speed",
+        type=float,
+        default=1.0,
+        show_default=True,
+        help="Time-stamp seconds per second: 1 real time, 0 as fast as the client reads.",
+    )
+    return _apply(func, (*_LISTEN, speed))
+
+
+def _listening(func):
+    return _apply(func, _LISTEN)
 
 
 @pmu.command()
@@ -58,7 +81,7 @@ def _serving(func):
 @clear_cycles_option("Clearing after N cycles, both ends")
 @tf_option()
 @RATE
-@_pmu_noise
+@pmu_noise_options
 @click.option("--seed", type=int, default=0, show_default=True, help="PMU noise seed.")
 @PMU_AT
 @_serving
@@ -99,8 +122,8 @@ def serve(
     from stabctl.estimation import pmu as pm
     from stabctl.estimation.c37_tcp import StreamServer
 
-    case, ev, tf = _fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
-    settings = _settings(rate, 0.0, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
+    case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    settings = pmu_settings(rate, 0.0, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
     pmus = pm.machine_pmus(case, pmu_at)
     cfg = c37.stream_config(case, pmus, rate)
     res = Simulator(case).run([ev], t_end=tf)
@@ -164,10 +187,174 @@ def record(address, out, frames):
     from stabctl.estimation.c37_tcp import receive
     from stabctl.parallel import atomic_write
 
+    host, port = _host_port(address)
+    check_writable(out, "--out")
+    cfg2, data = receive(host, port, frames)
+    atomic_write(out, lambda f: f.write(cfg2 + b"".join(data)), mode="wb")
+    click.echo(f"recorded {len(data)} frames from {address} to {out}")
+
+
+def _host_port(address: str) -> tuple[str, int]:
     host, _, port = address.rpartition(":")
     if not host or not port.isdigit() or not 0 < int(port) < 65536:
         raise InputError(f"address {address!r}: expected HOST:PORT")
-    check_writable(out, "--out")
-    cfg2, data = receive(host, int(port), frames)
-    atomic_write(out, lambda f: f.write(cfg2 + b"".join(data)), mode="wb")
-    click.echo(f"recorded {len(data)} frames from {address} to {out}")
+    return host, int(port)
+
+
+@pmu.command()
+@click.argument("case_name", metavar="CASE")
+@fault_options(required=True)
+@clear_cycles_option("Clearing after N cycles, both ends")
+@tf_option()
+@rate_latency_options
+@pmu_noise_options
+@click.option("--seed", type=int, default=0, show_default=True, help="PMU noise seed.")
+@storage_options(" Required: the ESDs the controller commands.")
+@esd_model_option
+@_listening
+@click.option(
+    "--timeout",
+    type=float,
+    default=60.0,
+    show_default=True,
+    help="Longest wait for the controller to connect, and for each answer (s).",
+)
+@model_options
+@json_option("the verdict and the link's figures")
+@reports_errors
+def plant(
+    case_name,
+    fault,
+    far_bus,
+    t_fault,
+    clear_cycles,
+    tf,
+    rate,
+    latency_ms,
+    drop,
+    tve_pct,
+    fe_hz,
+    rfe_hz_s,
+    k_sigma,
+    window_cycles,
+    seed,
+    esd_pct,
+    deadband_hz,
+    v_gate,
+    coi,
+    hysteresis_hz,
+    esd_model,
+    host,
+    port,
+    timeout,
+    conventions,
+    step,
+    as_json,
+):
+    """Simulate CASE through a line fault with one ESD per generator commanded over the
+    network: the generators' PMUs are served as one C37.118.2 stream on HOST:PORT, the
+    controller that connects (`stabctl pmu control`) answers each data frame with the ESD
+    modes, which take effect --latency-ms after the frame's time stamp (docs/estimation.md
+    6).  The run waits for each answer.  Prints the verdict, the ESD switchings, the false
+    actions and the measured round trips.
+    \b
+    Example:
+      stabctl pmu plant miniwecc --fault 83 --far-bus 33 --tf 10 --esd-pct 5 --port 4713
+      stabctl pmu control miniwecc 127.0.0.1:4713 --esd-pct 5 --estimator ekf
+    """
+    from stabctl.cli.checks import model_settings
+    from stabctl.cli.format import closed_loop_lines
+    from stabctl.estimation import closed_loop as cl
+    from stabctl.estimation.c37_loop import Listen
+
+    if esd_pct is None:
+        raise InputError("pmu plant needs --esd-pct")
+    settings = pmu_settings(
+        rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
+    )
+    case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
+    # the plant only measures: the estimator named here is never run (the controller's is)
+    loop = cl.LoopOptions(esd_pct, "raw", settings, seed, law, esd_model=esd_model, transport="tcp")
+    listening = lambda a: click.echo(  # noqa: E731
+        f"plant: PMUs of {case.name} on {a[0]}:{a[1]} (C37.118.2); waiting for a controller",
+        err=True,
+    )
+    sim = model_settings(conventions, step).simulator(case)
+    run = cl.run_closed_loop(sim, [ev], tf, loop, serve=Listen(host, port, listening, timeout))
+    row = {
+        "stable": run.result.stable,
+        "switchings": len(run.result.meta.get("switchings", [])),
+        "false_actions": cl.false_actions(run, deadband_hz),
+        "link": run.link,
+    }
+    lines = closed_loop_lines({"remote": row}, fault, far_bus, esd_pct, seed, esd_model)
+    out = {"closed_loop": row, "esd_model": esd_model, "lines": lines}
+    click.echo(json.dumps(out, indent=1) if as_json else "\n".join(lines))
+
+
+@pmu.command()
+@click.argument("case_name", metavar="CASE")
+@click.argument("address", metavar="HOST:PORT")
+@click.option(
+    "--estimator",
+    type=click.Choice(["raw", "kf", "ekf"]),
+    default="ekf",
+    show_default=True,
+    help="The speed estimator fed the frames.",
+)
+@rate_latency_options
+@pmu_noise_options
+@storage_options(" Required: the ESDs commanded, as the plant's.")
+@PMU_AT
+@click.option("--timeout", type=float, default=60.0, show_default=True, help="Longest silence (s).")
+@reports_errors
+def control(
+    case_name,
+    address,
+    estimator,
+    rate,
+    latency_ms,
+    drop,
+    tve_pct,
+    fe_hz,
+    rfe_hz_s,
+    k_sigma,
+    window_cycles,
+    esd_pct,
+    deadband_hz,
+    v_gate,
+    coi,
+    hysteresis_hz,
+    pmu_at,
+    timeout,
+):
+    """The ESD controller of CASE over the network: subscribe to the C37.118.2 stream of
+    the plant at HOST:PORT (`stabctl pmu plant`), feed every data frame to the estimator,
+    apply the paper's Table 3 law to its relative speeds (forecast over --latency-ms) and
+    answer each frame with the ESD modes, until the plant ends the run.  The noise options
+    tune the estimator (they are the PMUs' stated accuracy).
+    \b
+    Example:
+      stabctl pmu control miniwecc 127.0.0.1:4713 --esd-pct 5 --estimator ekf
+    """
+    from stabctl.estimation import c37
+    from stabctl.estimation.c37_loop import serve_controller
+    from stabctl.estimation.closed_loop import LoopController
+    from stabctl.io import load_case
+    from stabctl.storage.devices import uniform_fleet
+
+    if esd_pct is None:
+        raise InputError("pmu control needs --esd-pct")
+    host, port = _host_port(address)
+    settings = pmu_settings(
+        rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
+    )
+    case = load_case(case_name)
+    law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
+    devices = uniform_fleet(case, esd_pct).devices
+    ctrl = LoopController(case, devices, estimator, settings, 0, 1.0, law, pmu_at)
+    n = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
+    d = ctrl.diagnostics()
+    starts = int(((d.modes[1:] != 0) & (d.modes[1:] != d.modes[:-1])).sum())
+    click.echo(f"controller ({estimator}): answered {n} frames from {address}, {starts} ESD starts")

@@ -29,6 +29,7 @@ from __future__ import annotations
 import socket
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,6 +105,28 @@ def read_modes(data: bytes, n_dev: int) -> tuple[int, np.ndarray]:
     return stamp, np.frombuffer(cmd._extended_frame, np.int8).astype(np.int64)
 
 
+@dataclass(frozen=True)
+class Listen:
+    """Where a plant waits for a controller of its own (`stabctl pmu control`).
+
+    Attributes
+    ----------
+    host : str
+        Address to listen on.
+    port : int
+        TCP port (0: a free one).
+    on_listen : callable or None
+        Called with (host, port) once listening (e.g. to print it).
+    timeout : float
+        Longest wait for the controller to connect, and for each answer (s).
+    """
+
+    host: str = "127.0.0.1"
+    port: int = 0
+    on_listen: Callable | None = None
+    timeout: float = 30.0
+
+
 class PlantLink:
     """The plant's end: a C37.118.2 server on ``host``:``port`` (0: a free one, see
     `address`) for one controller, and the `CommandFrames` callback that sends each frame
@@ -132,6 +155,8 @@ class PlantLink:
         self._sock = socket.create_server((host, port))
         self._conn: socket.socket | None = None
         self._trips: list[float] = []
+        #: (time stamp s, modes) of every answer
+        self.answers: list[tuple[float, np.ndarray]] = []
 
     @property
     def address(self) -> tuple[str, int]:
@@ -173,6 +198,7 @@ class PlantLink:
         if stamp != soc * c37.TIME_BASE + counts:
             raise InputError(f"the controller answered another frame than that at {t_f:.4f} s")
         self.ctrl.mode = modes
+        self.answers.append((t_f, modes))
         return modes
 
     def _connected(self) -> socket.socket:

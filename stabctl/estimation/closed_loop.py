@@ -334,6 +334,7 @@ def run_closed_loop(
     separation_limit: float = np.pi,
     stop_at_separation: bool = True,
     ambient: AmbientLoad | None = None,
+    serve=None,
 ) -> ClosedLoopRun:
     """Simulate `events` to t_end (s) with the ESDs commanded by Table 3 on the relative
     speeds the loop's estimator gives.
@@ -357,6 +358,10 @@ def run_closed_loop(
         Load fluctuations (`stabctl.estimation.ambient`) added to the fleet after the ESDs
         (the result's `pesd` and meta["storage"] list the ESDs, then the loads; the ESDs'
         voltage gate applies to both).
+    serve : stabctl.estimation.c37_loop.Listen or None, optional
+        With transport ``"tcp"``: where to wait for a controller of its own
+        (`stabctl.estimation.c37_loop.serve_controller`, `stabctl pmu control`); None: a
+        controller thread on a free loopback port.
 
     Returns
     -------
@@ -396,7 +401,7 @@ def run_closed_loop(
     if loop.transport == "tcp":
         if ambient is not None:
             raise InputError("an ambient load fluctuation runs with the loop in process only")
-        return _over_tcp(run, ctrl, lambda: LoopController(sim.case, fleet.devices, *args))
+        return _over_tcp(run, ctrl, lambda: LoopController(sim.case, fleet.devices, *args), serve)
     if loop.transport == "codec":
         ctrl.wire = _codec(ctrl)
     elif loop.transport != "process":
@@ -416,23 +421,34 @@ def _codec(ctrl: LoopController) -> Callable:
     return lambda frame: c37.parse_frame(cfg, cfg2, c37.data_frame(cfg, cfg2, frame))
 
 
-def _over_tcp(run, plant: LoopController, remote_of) -> ClosedLoopRun:
-    """`run` with the plant's frames sent over loopback TCP to a controller (a second
-    `LoopController` from remote_of(), in a thread) and its modes sent back."""
+def _over_tcp(run, plant: LoopController, remote_of, serve) -> ClosedLoopRun:
+    """`run` with the plant's frames sent over TCP to a controller and its modes sent
+    back: a second `LoopController` from remote_of() in a thread on loopback, or with
+    serve (`c37_loop.Listen`) whichever controller connects there.  The diagnostics
+    are the thread's (relative speeds included) or the plant's (modes only, relative
+    speeds NaN)."""
     from stabctl.estimation import c37, c37_loop
 
     if plant.estimator == "ideal":
         raise InputError("the ideal estimator reads the true speeds: it has no PMU stream")
-    remote = remote_of()
     cfg = c37.stream_config(plant.case, plant.pmus, plant.settings.rate)
-    with c37_loop.PlantLink(plant, cfg) as link:
-        thread, errors = c37_loop.controller_thread(remote, cfg, link.address)
+    where = serve or c37_loop.Listen()
+    with c37_loop.PlantLink(plant, cfg, where.host, where.port, where.timeout) as link:
+        if serve is None:
+            remote = remote_of()
+            thread, errors = c37_loop.controller_thread(remote, cfg, link.address)
+        elif serve.on_listen is not None:
+            serve.on_listen(link.address)
         res = run(link)
-    thread.join(timeout=30)
-    if errors:
-        raise errors[0]
-    remote.rows[:0] = plant.rows  # the instants before a frame could be made
-    return ClosedLoopRun(res, remote.diagnostics(), link.stats().summary())
+    if serve is None:
+        thread.join(timeout=30)
+        if errors:
+            raise errors[0]
+        remote.rows[:0] = plant.rows  # the instants before a frame could be made
+        return ClosedLoopRun(res, remote.diagnostics(), link.stats().summary())
+    nan = np.full(plant.models.n, np.nan)
+    plant.rows += [(t, nan, modes) for t, modes in link.answers]
+    return ClosedLoopRun(res, plant.diagnostics(), link.stats().summary())
 
 
 def false_actions(run: ClosedLoopRun, deadband_hz: float = 0.1) -> int:

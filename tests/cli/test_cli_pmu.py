@@ -118,6 +118,27 @@ def test_estimate_closed_loop_over_tcp_prints_the_link():
     assert "over TCP: 180 frames, round trip median" in "\n".join(tcp["lines"])
 
 
+def test_plant_and_controller_in_two_processes_close_the_loop():
+    """`pmu plant` in its own process, `pmu control` here: the run's verdict, switchings
+    and false actions are those of the EKF loop in process through the codec, every frame
+    is answered."""
+    fault = ["kundur", "--fault", "3", "--far-bus", "101", "--clear-cycles", "7"]
+    proc, address = serving("plant", *fault, "--tf", "3", "--esd-pct", "10", "--json")
+    res = CliRunner().invoke(main, ["pmu", "control", "kundur", address, "--esd-pct", "10"])
+    assert res.exit_code == 0, res.output
+    assert "controller (ekf): answered 180 frames" in res.output
+    status, out = finished(proc)
+    assert status == 0, out
+    remote = json.loads(out)["closed_loop"]
+    args = ["estimate", "closed-loop", *fault, "--tf", "3", "--esd-pct", "10"]
+    codec = json.loads(CliRunner().invoke(main, [*args, "--transport", "codec", "--json"]).output)
+    ekf = codec["closed_loop"]["ekf"]
+    assert {k: remote[k] for k in ("stable", "switchings", "false_actions")} == {
+        k: ekf[k] for k in ("stable", "switchings", "false_actions")
+    }
+    assert remote["link"]["frames"] == 180
+
+
 def test_estimate_source_refuses_monte_carlo_options(tmp_path):
     (tmp_path / "r.c37").write_bytes(b"")
     res = CliRunner().invoke(
@@ -147,6 +168,14 @@ def test_estimate_source_refuses_monte_carlo_options(tmp_path):
         (["replay", "missing.c37"], "RECORDING"),
         (["replay", "junk.c37"], "no frame SYNC at byte 0"),
         (["serve", "kundur", "--fault", "3", "--far-bus", "101", "--speed", "-1"], "--speed"),
+        (["control", "kundur", "127.0.0.1:1", "--esd-pct", "5"], "no plant at 127.0.0.1:1"),
+        (["control", "kundur", "127.0.0.1", "--esd-pct", "5"], "expected HOST:PORT"),
+        (["plant", "kundur", "--fault", "3", "--far-bus", "101"], "needs --esd-pct"),
+        (
+            ["plant", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"]
+            + ["--port", "0", "--timeout", "0.5"],
+            "no controller connected within 0.5 s",
+        ),
     ],
 )
 def test_bad_input_is_one_error_line(args, needle, tmp_path, monkeypatch):

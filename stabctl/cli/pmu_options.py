@@ -1,0 +1,135 @@
+"""The PMU options `stabctl estimate` and `stabctl pmu` share, each declared once: reporting
+rate, latency, the C37.118.1 noise limits, the PMU placement, and the fault run they
+measure."""
+
+from __future__ import annotations
+
+import click
+
+from stabctl.cli.options import TF_AFTER_FAULT_S, _apply
+from stabctl.errors import InputError
+from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are the CLI's
+
+RATE = click.option(
+    "--rate",
+    type=float,
+    default=_PMU.rate,
+    show_default=True,
+    metavar="FPS",
+    help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120.",
+)
+PMU_AT = click.option(
+    "--pmu-at",
+    type=click.Choice(["terminal", "hv"]),
+    default="terminal",
+    show_default=True,
+    help="PMU of each generator at its terminal or HV bus.",
+)
+
+
+def rate_latency_options(func):
+    return _apply(
+        func,
+        (
+            RATE,
+            click.option(
+                "--latency-ms",
+                type=float,
+                default=1000 * _PMU.latency_s,
+                show_default=True,
+                metavar="MS",
+                help="Delay from a frame's time stamp to its arrival (ms).",
+            ),
+        ),
+    )
+
+
+def pmu_noise_options(func):
+    return _apply(
+        func,
+        (
+            click.option(
+                "--drop",
+                type=float,
+                default=_PMU.drop_prob,
+                show_default=True,
+                metavar="P",
+                help="Probability that a frame is lost.",
+            ),
+            click.option(
+                "--tve-pct",
+                type=float,
+                default=100 * _PMU.tve,
+                show_default=True,
+                help="Total vector error limit (%), C37.118.1 Table 3.",
+            ),
+            click.option(
+                "--fe-hz",
+                type=float,
+                default=_PMU.fe_hz,
+                show_default=True,
+                help="Frequency error limit (Hz), C37.118.1 Table 4.",
+            ),
+            click.option(
+                "--rfe-hz-s",
+                type=float,
+                default=_PMU.rfe_hz_s,
+                show_default=True,
+                help="ROCOF error limit (Hz/s), C37.118.1 Table 4.",
+            ),
+            click.option(
+                "--k-sigma",
+                type=float,
+                default=_PMU.k_sigma,
+                show_default=True,
+                help="The limits are this many standard deviations of the errors.",
+            ),
+            WINDOW,
+        ),
+    )
+
+
+WINDOW = click.option(
+    "--window-cycles",
+    type=float,
+    default=_PMU.window_cycles,
+    show_default=True,
+    metavar="C",
+    help="Frequency and ROCOF estimation window (cycles): "
+    "the phase advance over it; 2 = P class (C37.118.1-2011 Annex C).",
+)
+
+
+def pmu_settings(
+    rate,
+    latency_ms,
+    drop=_PMU.drop_prob,
+    tve_pct=100 * _PMU.tve,
+    fe_hz=_PMU.fe_hz,
+    rfe_hz_s=_PMU.rfe_hz_s,
+    k_sigma=_PMU.k_sigma,
+    window_cycles=_PMU.window_cycles,
+):
+    """The PMUSettings of the command line's values (its units: %, ms)."""
+    return _PMU(
+        rate=rate,
+        tve=tve_pct / 100,
+        fe_hz=fe_hz,
+        rfe_hz_s=rfe_hz_s,
+        k_sigma=k_sigma,
+        latency_s=latency_ms / 1000,
+        drop_prob=drop,
+        window_cycles=window_cycles,
+    )
+
+
+def fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
+    """The case, the fault event and the end of the run (default: fault + 5 s)."""
+    from stabctl.dynamics.events import fault_with_clearing
+    from stabctl.io import load_case
+
+    tf = t_fault + TF_AFTER_FAULT_S if tf is None else tf
+    if not tf > 0:
+        raise InputError(f"--tf must be > 0, got {tf:g}")
+    case = load_case(case_name)
+    return case, fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles), tf
