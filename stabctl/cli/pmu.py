@@ -213,6 +213,14 @@ def _host_port(address: str) -> tuple[str, int]:
 @esd_model_option
 @_listening
 @click.option(
+    "--speed",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Time-stamp seconds per second: 1 real time (a real-time simulator), "
+    "0 as fast as the controller answers.",
+)
+@click.option(
     "--timeout",
     type=float,
     default=60.0,
@@ -246,6 +254,7 @@ def plant(
     esd_model,
     host,
     port,
+    speed,
     timeout,
     conventions,
     step,
@@ -255,8 +264,9 @@ def plant(
     network: the generators' PMUs are served as one C37.118.2 stream on HOST:PORT, the
     controller that connects (`stabctl pmu control`) answers each data frame with the ESD
     modes, which take effect --latency-ms after the frame's time stamp (docs/estimation.md
-    6).  The run waits for each answer.  Prints the verdict, the ESD switchings, the false
-    actions and the measured round trips.
+    6).  The run waits for each answer; with --speed 1 each frame is also sent no earlier
+    than its time stamp (real time), so a round trip above the latency is a real miss.
+    Prints the verdict, the ESD switchings, the false actions and the measured round trips.
     \b
     Example:
       stabctl pmu plant miniwecc --fault 83 --far-bus 33 --tf 10 --esd-pct 5 --port 4713
@@ -281,7 +291,9 @@ def plant(
         err=True,
     )
     sim = model_settings(conventions, step).simulator(case)
-    run = cl.run_closed_loop(sim, [ev], tf, loop, serve=Listen(host, port, listening, timeout))
+    run = cl.run_closed_loop(
+        sim, [ev], tf, loop, serve=Listen(host, port, listening, timeout, speed or _INF)
+    )
     row = {
         "stable": run.result.stable,
         "switchings": len(run.result.meta.get("switchings", [])),
@@ -341,6 +353,7 @@ def control(
     from stabctl.estimation import c37
     from stabctl.estimation.c37_loop import serve_controller
     from stabctl.estimation.closed_loop import LoopController
+    from stabctl.estimation.filters import compile_filters
     from stabctl.io import load_case
     from stabctl.storage.devices import uniform_fleet
 
@@ -354,6 +367,7 @@ def control(
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     devices = uniform_fleet(case, esd_pct).devices
     ctrl = LoopController(case, devices, estimator, settings, 0, 1.0, law, pmu_at)
+    compile_filters(ctrl.models)  # loaded before the first frame, not while it waits
     n = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
     d = ctrl.diagnostics()
     starts = int(((d.modes[1:] != 0) & (d.modes[1:] != d.modes[:-1])).sum())

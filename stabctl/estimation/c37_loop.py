@@ -119,12 +119,17 @@ class Listen:
         Called with (host, port) once listening (e.g. to print it).
     timeout : float
         Longest wait for the controller to connect, and for each answer (s).
+    speed : float
+        Time-stamp seconds per wall-clock second: each frame is sent no earlier than its
+        time stamp divided by speed after the first (1: real time, as a real-time
+        simulator; inf: as soon as the previous answer is in).
     """
 
     host: str = "127.0.0.1"
     port: int = 0
     on_listen: Callable | None = None
     timeout: float = 30.0
+    speed: float = float("inf")
 
 
 class PlantLink:
@@ -142,15 +147,22 @@ class PlantLink:
     port : int, optional
     timeout : float, optional
         Longest wait for the controller to connect, and for each answer (s).
+    speed : float, optional
+        Pacing of the frames (`Listen.speed`; default inf, unpaced).
 
     Raises
     ------
+    InputError
+        A speed that is not > 0.
     OSError
         The address cannot be listened on.
     """
 
-    def __init__(self, controller, cfg, host: str = "127.0.0.1", port: int = 0, timeout=30.0):
+    def __init__(self, controller, cfg, host="127.0.0.1", port=0, timeout=30.0, speed=float("inf")):
+        if not speed > 0:
+            raise InputError(f"speed must be > 0, got {speed}")
         self.ctrl, self.cfg, self.timeout = controller, cfg, float(timeout)
+        self.speed, self._start = float(speed), None
         self.cfg2 = c37.config_frame(cfg)
         self._sock = socket.create_server((host, port))
         self._conn: socket.socket | None = None
@@ -189,6 +201,11 @@ class PlantLink:
             return self.ctrl(t_f, partial)
         conn = self._connected()
         data = c37.data_frame(self.cfg, self.cfg2, self.ctrl.measure(t_f, partial))
+        if self._start is None:
+            self._start = (time.perf_counter(), t_f)
+        time.sleep(
+            max(0.0, self._start[0] + (t_f - self._start[1]) / self.speed - time.perf_counter())
+        )
         sent = time.perf_counter()
         conn.sendall(data)
         answer = self._next(conn, f"the answer to the frame at {t_f:.4f} s")

@@ -433,7 +433,8 @@ def _over_tcp(run, plant: LoopController, remote_of, serve) -> ClosedLoopRun:
         raise InputError("the ideal estimator reads the true speeds: it has no PMU stream")
     cfg = c37.stream_config(plant.case, plant.pmus, plant.settings.rate)
     where = serve or c37_loop.Listen()
-    with c37_loop.PlantLink(plant, cfg, where.host, where.port, where.timeout) as link:
+    link = c37_loop.PlantLink(plant, cfg, where.host, where.port, where.timeout, where.speed)
+    with link:
         if serve is None:
             remote = remote_of()
             thread, errors = c37_loop.controller_thread(remote, cfg, link.address)

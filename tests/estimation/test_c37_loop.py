@@ -6,6 +6,7 @@ named."""
 
 import struct
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -120,6 +121,29 @@ def test_a_controller_of_other_pmus_is_refused(kundur_loop):
             link(0.05, sim.run(events, t_end=0.1))
         thread.join(timeout=10)
     assert "not the controller's" in str(errors[0])
+
+
+def test_a_paced_plant_sends_at_its_time_stamps(kundur_loop):
+    """A plant at speed 2 with its own controller (`Listen`, as `pmu plant --speed`):
+    the frames from 1/60 s to 1 s go out over at least (1 - 1/60) / 2 s of wall clock,
+    every one answered."""
+    sim, events = kundur_loop
+    from stabctl.storage.devices import uniform_fleet
+
+    remote = cl.LoopController(sim.case, uniform_fleet(sim.case, 10).devices, "ekf", *_rest())
+    cfg = c37.stream_config(sim.case, remote.pmus, 60)
+    started = []
+    listen = c37_loop.Listen(
+        on_listen=lambda a: started.append(c37_loop.controller_thread(remote, cfg, a)), speed=2.0
+    )
+    t0 = time.perf_counter()
+    run = cl.run_closed_loop(
+        sim, events, 1.0, cl.LoopOptions(10, "ekf", transport="tcp"), serve=listen
+    )
+    assert time.perf_counter() - t0 >= (1 - 1 / 60) / 2
+    assert run.link["frames"] == 60 and not started[0][1]
+    assert np.isnan(run.diagnostics.rel[1:]).all()  # the plant sees the modes, not the speeds
+    np.testing.assert_array_equal(run.diagnostics.modes[1:], np.array(remote.diagnostics().modes))
 
 
 def test_a_loop_of_the_ideal_estimator_has_no_stream(kundur_loop):
