@@ -14,7 +14,6 @@ from stabctl.cli.checks import model_settings
 from stabctl.cli.format import closed_loop_lines, estimator_cct_lines, print_estimate, print_json
 from stabctl.cli.options import (
     _apply,
-    clear_cycles_option,
     controller,
     esd_model_option,
     fault_options,
@@ -22,13 +21,12 @@ from stabctl.cli.options import (
     model_options,
     reports_errors,
     storage_options,
-    tf_option,
 )
 from stabctl.cli.pmu_options import (
     PMU_AT,
     WINDOW,
     fault_event,
-    pmu_noise_options,
+    fault_run_options,
     pmu_settings,
     rate_latency_options,
 )
@@ -89,25 +87,8 @@ def _runs_seed(func):
     )
 
 
-def _fault_run(func):
-    """The options of a PMU run through a fault (rmse, closed-loop): case, fault, clearing,
-    end time, PMU rate and latency, PMU noise."""
-    for option in reversed(
-        (
-            click.argument("case_name", metavar="CASE"),
-            fault_options(required=True),
-            clear_cycles_option("Clearing after N cycles, both ends"),
-            tf_option(),
-            rate_latency_options,
-            pmu_noise_options,
-        )
-    ):
-        func = option(func)
-    return func
-
-
 @estimate.command()
-@_fault_run
+@fault_run_options
 @PMU_AT
 @storage_options(
     " In the fault run, controlled on the true speeds with the paper's "
@@ -321,7 +302,7 @@ def _check_positive(**values) -> None:
 
 
 @estimate.command("closed-loop")
-@_fault_run
+@fault_run_options
 @storage_options(" Required: the ESDs the estimators command.")
 @esd_model_option
 @click.option(

@@ -24,6 +24,7 @@ from stabctl.cli.pmu_options import (
     PMU_AT,
     RATE,
     fault_event,
+    fault_run_options,
     pmu_noise_options,
     pmu_settings,
     rate_latency_options,
@@ -202,12 +203,7 @@ def _host_port(address: str) -> tuple[str, int]:
 
 
 @pmu.command()
-@click.argument("case_name", metavar="CASE")
-@fault_options(required=True)
-@clear_cycles_option("Clearing after N cycles, both ends")
-@tf_option()
-@rate_latency_options
-@pmu_noise_options
+@fault_run_options
 @click.option("--seed", type=int, default=0, show_default=True, help="PMU noise seed.")
 @storage_options(" Required: the ESDs the controller commands.")
 @esd_model_option

@@ -6,7 +6,13 @@ from __future__ import annotations
 
 import click
 
-from stabctl.cli.options import TF_AFTER_FAULT_S, _apply
+from stabctl.cli.options import (
+    TF_AFTER_FAULT_S,
+    _apply,
+    clear_cycles_option,
+    fault_options,
+    tf_option,
+)
 from stabctl.errors import InputError
 from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are the CLI's
 
@@ -133,3 +139,19 @@ def fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
         raise InputError(f"--tf must be > 0, got {tf:g}")
     case = load_case(case_name)
     return case, fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles), tf
+
+
+def fault_run_options(func):
+    """The options of a PMU run through a fault (estimate rmse and closed-loop, pmu plant):
+    case, fault, clearing, end time, PMU rate and latency, PMU noise."""
+    return _apply(
+        func,
+        (
+            click.argument("case_name", metavar="CASE"),
+            fault_options(required=True),
+            clear_cycles_option("Clearing after N cycles, both ends"),
+            tf_option(),
+            rate_latency_options,
+            pmu_noise_options,
+        ),
+    )

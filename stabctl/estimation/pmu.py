@@ -389,19 +389,9 @@ def measure(
     ev, ei, ef, er, drop = (np.stack(a, axis=1) for a in zip(*noise))
     valid = ~drop
     nan = np.where(valid, 1.0, np.nan)
-    return FrameStream(
-        pmus=truth.pmus,
-        settings=settings,
-        seed=seed,
-        t=t,
-        arrival=np.where(valid, t[:, None] + settings.latency_s, np.inf),
-        valid=valid,
-        v=true.v * (1 + ev) * nan,
-        i=true.i * (1 + ei) * nan,
-        freq=(true.freq + ef) * nan,
-        rocof=(true.rocof + er) * nan,
-        true=true,
-    )
+    v, i = true.v * (1 + ev) * nan, true.i * (1 + ei) * nan
+    freq, rocof = (true.freq + ef) * nan, (true.rocof + er) * nan
+    return _stream(truth.pmus, settings, seed, t, valid, v, i, freq, rocof, true)
 
 
 def stream_of_frames(
@@ -450,18 +440,26 @@ def stream_of_frames(
             f"{truth.t[-1]:g} s: not a stream of this run"
         )
     valid = np.array([f.valid for f in frames], bool)
+    v, i, freq, rocof = (np.array([getattr(f, x) for f in frames]) for x in Frame._fields[2:])
+    true = truth.at(np.clip(t, truth.t[0], truth.t[-1]))
+    return _stream(truth.pmus, settings, seed, t, valid, v, i, freq, rocof, true)
+
+
+def _stream(pmus, settings, seed, t, valid, v, i, freq, rocof, true) -> FrameStream:
+    """The FrameStream of these frames, each valid one arriving latency_s after its time
+    stamp (the others never: inf)."""
     return FrameStream(
-        pmus=truth.pmus,
+        pmus=pmus,
         settings=settings,
         seed=seed,
         t=t,
         arrival=np.where(valid, t[:, None] + settings.latency_s, np.inf),
         valid=valid,
-        v=np.array([f.v for f in frames]),
-        i=np.array([f.i for f in frames]),
-        freq=np.array([f.freq for f in frames]),
-        rocof=np.array([f.rocof for f in frames]),
-        true=truth.at(np.clip(t, truth.t[0], truth.t[-1])),
+        v=v,
+        i=i,
+        freq=freq,
+        rocof=rocof,
+        true=true,
     )
 
 

@@ -66,7 +66,8 @@ measurements ``BusFreq``, ``BusROCOF``, ``ACEc``, ``PMU``, ``PLL1``, ``PLL2``, `
 converter's or plant control's frequency measurement to a BusFreq at its bus, even where
 ``busf`` names a FreqDiv).  Every
 other model is refused by name (:class:`~stabctl.errors.InputError` listing each with its
-device count), disturbances (``Toggle``, ``Fault``, ``Alter``) included, or left out with
+device count), disturbances (``Toggle``, ``Fault``, ``Alter``, ``TimeSeries``) included,
+events of a run for `simulate` to take (`stabctl.dynamics.events`), or left out with
 ``on_unsupported="skip"``.
 
 Source: ANDES 2.0 documentation (``andes.load``; model reference of ``Bus``, ``PQ``,

@@ -141,22 +141,9 @@ def test_plant_and_controller_in_two_processes_close_the_loop():
 
 def test_estimate_source_refuses_monte_carlo_options(tmp_path):
     (tmp_path / "r.c37").write_bytes(b"")
-    res = CliRunner().invoke(
-        main,
-        [
-            "estimate",
-            "rmse",
-            "kundur",
-            "--fault",
-            "3",
-            "--far-bus",
-            "101",
-            "--runs",
-            "5",
-            "--source",
-            str(tmp_path / "r.c37"),
-        ],
-    )
+    args = ["estimate", "rmse", "kundur", "--fault", "3", "--far-bus", "101"]
+    args += ["--runs", "5", "--source"]
+    res = CliRunner().invoke(main, [*args, str(tmp_path / "r.c37")])
     assert res.exit_code == 2 and "--runs cannot go with it" in res.output, res.output
 
 
