@@ -211,7 +211,7 @@ def _host_port(address: str) -> tuple[str, int]:
 @click.option(
     "--speed",
     type=float,
-    default=0.0,
+    default=1.0,
     show_default=True,
     help="Time-stamp seconds per second: 1 real time (a real-time simulator), "
     "0 as fast as the controller answers.",
@@ -260,8 +260,8 @@ def plant(
     network: the generators' PMUs are served as one C37.118.2 stream on HOST:PORT, the
     controller that connects (`stabctl pmu control`) answers each data frame with the ESD
     modes, which take effect --latency-ms after the frame's time stamp (docs/estimation.md
-    6).  The run waits for each answer; with --speed 1 each frame is also sent no earlier
-    than its time stamp (real time), so a round trip above the latency is a real miss.
+    6).  The run waits for each answer, and at --speed 1 (real time) sends each frame no
+    earlier than its time stamp, so a round trip above the latency is a real miss.
     Prints the verdict, the ESD switchings, the false actions and the measured round trips.
     \b
     Example:

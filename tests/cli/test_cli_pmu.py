@@ -123,7 +123,9 @@ def test_plant_and_controller_in_two_processes_close_the_loop():
     and false actions are those of the EKF loop in process through the codec, every frame
     is answered."""
     fault = ["kundur", "--fault", "3", "--far-bus", "101", "--clear-cycles", "7"]
-    proc, address = serving("plant", *fault, "--tf", "3", "--esd-pct", "10", "--json")
+    proc, address = serving(
+        "plant", *fault, "--tf", "3", "--esd-pct", "10", "--speed", "0", "--json"
+    )
     res = CliRunner().invoke(main, ["pmu", "control", "kundur", address, "--esd-pct", "10"])
     assert res.exit_code == 0, res.output
     assert "controller (ekf): answered 180 frames" in res.output
