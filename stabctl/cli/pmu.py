@@ -3,6 +3,7 @@ TCP, a recording served again, and a received stream recorded."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 
 import click
@@ -86,6 +87,12 @@ def _listening(func):
 @click.option("--seed", type=int, default=0, show_default=True, help="PMU noise seed.")
 @PMU_AT
 @_serving
+@click.option(
+    "--each-pmu",
+    is_flag=True,
+    help="One stream per PMU, on consecutive ports from --port (read them with "
+    "--source tcp://HOST:P1-P2).",
+)
 @reports_errors
 def serve(
     case_name,
@@ -106,10 +113,13 @@ def serve(
     host,
     port,
     speed,
+    each_pmu,
 ):
     """Simulate CASE through a line fault and serve one PMU per generator as one IEEE
     C37.118.2 stream on HOST:PORT, to one PDC: CFG-2 and header on request, then the data
-    frames from 'start', paced by their time stamps (docs/estimation.md 6).
+    frames from 'start', paced by their time stamps (docs/estimation.md 6).  With
+    --each-pmu every PMU is a server of its own, on PORT, PORT+1, ... (any free ports with
+    --port 0).
 
     The frames are those `stabctl estimate rmse` evaluates for the same seed (C37.118.1
     noise, lost frames as absent data).  Exits when the PDC has been sent every frame or
@@ -126,10 +136,24 @@ def serve(
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     settings = pmu_settings(rate, 0.0, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
     pmus = pm.machine_pmus(case, pmu_at)
-    cfg = c37.stream_config(case, pmus, rate)
     res = Simulator(case).run([ev], t_end=tf)
-    stream = pm.measure(pm.phasor_truth(case, res, pmus, window_cycles), settings, seed)
-    _serve(StreamServer.of_frames(cfg, stream, host=host, port=port, speed=speed or _INF))
+    frames = list(pm.measure(pm.phasor_truth(case, res, pmus, window_cycles), settings, seed))
+    # one stream of every PMU, or one per PMU (IDCODE 1 + 2k, its PMU's 2 + 2k)
+    streams = [range(len(pmus))] if not each_pmu else [[k] for k in range(len(pmus))]
+    with contextlib.ExitStack() as stack:
+        servers = [
+            stack.enter_context(
+                StreamServer.of_frames(
+                    c37.stream_config(case, [pmus[k] for k in cols], rate, 1 + 2 * j),
+                    [f.of(cols) for f in frames],
+                    host=host,
+                    port=port + j if port else 0,
+                    speed=speed or _INF,
+                )
+            )
+            for j, cols in enumerate(streams)
+        ]
+        _serve(servers)
 
 
 @pmu.command()
@@ -147,18 +171,24 @@ def replay(recording, host, port, speed):
     from stabctl.io.inputs import input_file
 
     path = input_file(recording, "RECORDING")
-    _serve(StreamServer.of_recording(path, host=host, port=port, speed=speed or _INF))
+    with StreamServer.of_recording(path, host=host, port=port, speed=speed or _INF) as server:
+        _serve([server])
 
 
-def _serve(server) -> None:
-    with server:
+def _serve(servers) -> None:
+    """Announce each listening server, wait until each has ended its session."""
+    for server in servers:
         host, port = server.address
         click.echo(
             f"serving {server.n_frames} frames on {host}:{port} (C37.118.2); waiting for a PDC",
             err=True,
         )
+    for server in servers:
         server.finished.wait()
-    click.echo(f"sent {server.n_sent} of {server.n_frames} frames")
+    sent, total = (sum(getattr(s, a) for s in servers) for a in ("n_sent", "n_frames"))
+    click.echo(
+        f"sent {sent} of {total} frames" + (f" on {len(servers)} ports" if len(servers) > 1 else "")
+    )
 
 
 @pmu.command()

@@ -149,6 +149,11 @@ class Frame(NamedTuple):
     freq: np.ndarray
     rocof: np.ndarray
 
+    def of(self, cols) -> Frame:
+        """The frame of the PMUs at indices cols only (a sequence of int)."""
+        cols = list(cols)
+        return Frame(self.t, *(x[cols] for x in self[1:]))
+
 
 @dataclass(frozen=True)
 class FrameStream:

@@ -47,12 +47,15 @@ class Source:
 
 
 def parse_source(text: str) -> Source:
-    """The `Source` of ``tcp://HOST:PORT[,HOST:PORT...]`` or of a recording's path.
+    """The `Source` of ``tcp://HOST:PORT[,HOST:PORT...]`` (a port range ``P1-P2`` for
+    one server per port, as `stabctl pmu serve --each-pmu` serves) or of a recording's
+    path.
 
     Raises
     ------
     InputError
-        A TCP address without a port in 1..65535, or a recording that is not a file.
+        A TCP address without a port in 1..65535 (or an empty range), or a recording that
+        is not a file.
     """
     if not text.startswith(TCP):
         path = Path(text)
@@ -61,10 +64,15 @@ def parse_source(text: str) -> Source:
         return Source(path=path)
     servers = []
     for item in text[len(TCP) :].split(","):
-        host, _, port = item.rpartition(":")
-        if not host or not port.isdigit() or not 0 < int(port) < 65536:
+        host, _, ports = item.rpartition(":")
+        first, _, last = ports.partition("-")
+        last = last or first
+        if not (host and first.isdigit() and last.isdigit()):
             raise InputError(f"--source {text}: {item!r} is not HOST:PORT")
-        servers.append((host, int(port)))
+        span = range(int(first), int(last) + 1)
+        if not span or span[0] < 1 or span[-1] > 65535:
+            raise InputError(f"--source {text}: {item!r} is not HOST:PORT")
+        servers += [(host, p) for p in span]
     return Source(servers=tuple(servers))
 
 

@@ -22,20 +22,22 @@ from stabctl.estimation import pmu as pm
 from stabctl.estimation.settings import PMUSettings
 
 
-def serving(*args):
-    """A `stabctl pmu ...` server in its own process, and the HOST:PORT it prints."""
+def serving(*args, servers=1):
+    """A `stabctl pmu ...` server in its own process, and the HOST:PORT it prints (with
+    servers > 1, the list of the first `servers` it prints)."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "stabctl.cli", "pmu", *args, "--port", "0"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
     )
+    found = []
     for line in proc.stderr:
-        found = re.search(r"on (127\.0\.0\.1:\d+)", line)
-        if found:
-            return proc, found[1]
+        found += re.findall(r"on (127\.0\.0\.1:\d+)", line)
+        if len(found) == servers:
+            return proc, found[0] if servers == 1 else found
     proc.wait(timeout=60)
-    raise AssertionError(f"no server address printed (exit {proc.returncode})")
+    raise AssertionError(f"{len(found)} server addresses printed (exit {proc.returncode})")
 
 
 def finished(proc):
@@ -86,7 +88,7 @@ def test_estimate_rmse_from_a_served_stream_equals_in_process(tmp_path):
     )
     assert res.exit_code == 0, res.output
     assert finished(proc)[0] == 0
-    d = json.loads(res.output)
+    d = json.loads(res.stdout)
     src = d["source"]
     assert (src["frames"], src["data_frames"], src["missing"], d["runs"]) == (241, 241, 0, 1)
     assert src["absent"] > 0 and d["false_actions"] is None
@@ -99,6 +101,24 @@ def test_estimate_rmse_from_a_served_stream_equals_in_process(tmp_path):
     assert gap <= 1 / np.sqrt(12)  # FREQ in whole mHz: at most its rounding RMS
 
 
+def test_one_server_per_pmu_gives_the_one_stream_s_figures():
+    """`pmu serve --each-pmu`: Kundur's four PMUs on four ports, read by `estimate rmse
+    --source tcp://A,B,C,D`, give the figures of the four PMUs as one stream."""
+    fault = ["kundur", "--fault", "3", "--far-bus", "101", "--tf", "3", "--seed", "1"]
+    rmse = ["estimate", "rmse", *fault, "--json", "--source"]
+    proc, address = serving("serve", *fault, "--speed", "0")
+    one = json.loads(CliRunner().invoke(main, [*rmse, f"tcp://{address}"]).stdout)
+    assert finished(proc)[0] == 0
+    proc, addresses = serving("serve", *fault, "--speed", "0", "--each-pmu", servers=4)
+    res = CliRunner().invoke(main, [*rmse, "tcp://" + ",".join(addresses)])
+    status, out = finished(proc)
+    assert res.exit_code == 0 and status == 0, res.output
+    assert "sent 724 of 724 frames on 4 ports" in out  # 181 time stamps x 4 PMUs
+    four = json.loads(res.stdout)
+    assert four["source"]["streams"] == 4 and four["source"]["data_frames"] == 4 * 181
+    assert four["estimators"] == one["estimators"]
+
+
 def test_estimate_closed_loop_over_tcp_prints_the_link():
     """`estimate closed-loop --transport tcp`: the PMU estimators' rows carry the link's
     frames (one per reporting instant after the start) and round trips; the ideal
@@ -106,8 +126,8 @@ def test_estimate_closed_loop_over_tcp_prints_the_link():
     loop in process through the codec."""
     args = ["estimate", "closed-loop", "kundur", "--fault", "3", "--far-bus", "101"]
     args += ["--clear-cycles", "7", "--tf", "3", "--esd-pct", "10", "--json"]
-    tcp = json.loads(CliRunner().invoke(main, [*args, "--transport", "tcp"]).output)
-    codec = json.loads(CliRunner().invoke(main, [*args, "--transport", "codec"]).output)
+    tcp = json.loads(CliRunner().invoke(main, [*args, "--transport", "tcp"]).stdout)
+    codec = json.loads(CliRunner().invoke(main, [*args, "--transport", "codec"]).stdout)
     assert tcp["closed_loop"]["ideal"]["link"] is None
     for e in ("raw", "kf", "ekf"):
         row = tcp["closed_loop"][e]
@@ -133,7 +153,7 @@ def test_plant_and_controller_in_two_processes_close_the_loop():
     assert status == 0, out
     remote = json.loads(out)["closed_loop"]
     args = ["estimate", "closed-loop", *fault, "--tf", "3", "--esd-pct", "10"]
-    codec = json.loads(CliRunner().invoke(main, [*args, "--transport", "codec", "--json"]).output)
+    codec = json.loads(CliRunner().invoke(main, [*args, "--transport", "codec", "--json"]).stdout)
     ekf = codec["closed_loop"]["ekf"]
     assert {k: remote[k] for k in ("stable", "switchings", "false_actions")} == {
         k: ekf[k] for k in ("stable", "switchings", "false_actions")

@@ -85,7 +85,7 @@ def test_two_streams_merge_into_the_one_stream(kundur_run, tmp_path):
     halves = []
     for cols, idcode in (([0, 1], 1), ([2, 3], 10)):
         sub = c37.stream_config(case, [pmus[c] for c in cols], SETTINGS.rate, idcode)
-        frames = [columns(f, cols) for f in drawn]
+        frames = [f.of(cols) for f in drawn]
         halves.append(StreamServer.of_frames(sub, frames, speed=float("inf")))
     two = read(case, pmus, halves)
     assert two.streams == 2 and two.data_frames == 2 * len(drawn) and two.missing == 0
@@ -96,16 +96,11 @@ def test_two_streams_merge_into_the_one_stream(kundur_run, tmp_path):
         assert figures(case, res, got.frames) == figures(case, res, one.frames)
 
 
-def columns(frame, cols):
-    """The frame of the PMUs cols only."""
-    return pm.Frame(frame.t, *(x[cols] for x in frame[1:]))
-
-
 def encoded(case, pmus, cols, idcode, frames):
     """(CFG-2, data frames) of a stream of the PMUs cols."""
     cfg = c37.stream_config(case, [pmus[c] for c in cols], SETTINGS.rate, idcode)
     cfg2 = c37.config_frame(cfg)
-    return cfg2, [c37.data_frame(cfg, cfg2, columns(f, cols)) for f in frames]
+    return cfg2, [c37.data_frame(cfg, cfg2, f.of(cols)) for f in frames]
 
 
 def test_a_stream_missing_time_stamps_marks_them_missing(kundur_run):
@@ -154,12 +149,25 @@ def test_streams_that_do_not_fit_the_run_are_named(kundur_run, change, needle):
         sources.merge(case, pmus, 60, streams)
 
 
+def test_a_port_range_is_one_server_per_port():
+    src = sources.parse_source("tcp://10.0.0.1:4712-4714,pdc:4800")
+    assert src.servers == (
+        ("10.0.0.1", 4712),
+        ("10.0.0.1", 4713),
+        ("10.0.0.1", 4714),
+        ("pdc", 4800),
+    )
+    assert str(src) == "tcp://10.0.0.1:4712,10.0.0.1:4713,10.0.0.1:4714,pdc:4800"
+
+
 @pytest.mark.parametrize(
     "text, needle",
     [
         ("tcp://localhost", "'localhost' is not HOST:PORT"),
         ("tcp://a:1,b:70000", "'b:70000' is not HOST:PORT"),
         ("no/such.c37", "no such recording"),
+        ("tcp://a:4714-4712", "'a:4714-4712' is not HOST:PORT"),
+        ("tcp://a:0-3", "'a:0-3' is not HOST:PORT"),
     ],
 )
 def test_bad_sources_are_named(text, needle):
