@@ -41,9 +41,16 @@ class Source:
     servers: tuple = ()
 
     def __str__(self) -> str:
+        """As written to `parse_source`, consecutive ports of a host as a range."""
         if self.path is not None:
             return str(self.path)
-        return TCP + ",".join(f"{h}:{p}" for h, p in self.servers)
+        runs: list[list] = []  # [host, first port, last port]
+        for host, port in self.servers:
+            if runs and runs[-1][0] == host and runs[-1][2] + 1 == port:
+                runs[-1][2] = port
+            else:
+                runs.append([host, port, port])
+        return TCP + ",".join(f"{h}:{a}" + (f"-{b}" if b > a else "") for h, a, b in runs)
 
 
 def parse_source(text: str) -> Source:
