@@ -399,6 +399,11 @@ def measure(
     return _stream(truth.pmus, settings, seed, t, valid, v, i, freq, rocof, true)
 
 
+#: a received stream whose frequency is further from the run's, RMS, than this many of its
+#: PMUs' stated standard deviations (`PMUSettings.sigma_freq`) does not measure that run
+NOT_THIS_RUN_SIGMAS = 10.0
+
+
 def stream_of_frames(
     frames, truth: PhasorTruth, settings: PMUSettings, seed: int = 0
 ) -> FrameStream:
@@ -428,7 +433,8 @@ def stream_of_frames(
     ------
     InputError
         No frame, frames of another number of PMUs, time stamps out of order or outside
-        the truth's span (more than a microsecond, the C37.118.2 time base).
+        the truth's span (more than a microsecond, the C37.118.2 time base), or frames
+        whose frequency is further from the truth than `NOT_THIS_RUN_SIGMAS` (RMS).
     """
     frames = list(frames)
     if not frames:
@@ -447,6 +453,14 @@ def stream_of_frames(
     valid = np.array([f.valid for f in frames], bool)
     v, i, freq, rocof = (np.array([getattr(f, x) for f in frames]) for x in Frame._fields[2:])
     true = truth.at(np.clip(t, truth.t[0], truth.t[-1]))
+    err = (freq - true.freq)[valid]
+    rms = float(np.sqrt(np.mean(err**2))) if err.size else 0.0
+    if rms > NOT_THIS_RUN_SIGMAS * settings.sigma_freq:
+        raise InputError(
+            f"the frames do not measure this run: their frequency is {1e3 * rms:.1f} mHz RMS "
+            f"from the simulated one, more than {NOT_THIS_RUN_SIGMAS:g} times the PMUs' "
+            f"stated {1e3 * settings.sigma_freq:.2f} mHz (another case, fault or clearing?)"
+        )
     return _stream(truth.pmus, settings, seed, t, valid, v, i, freq, rocof, true)
 
 

@@ -149,6 +149,15 @@ def test_streams_that_do_not_fit_the_run_are_named(kundur_run, change, needle):
         sources.merge(case, pmus, 60, streams)
 
 
+def test_frames_of_another_run_are_refused(kundur_run):
+    """The frames of the 7-cycle clearing against the truth of a 12-cycle one: their
+    frequency is far beyond the PMUs' stated accuracy from it, and the error says so."""
+    case, _res, _pmus, drawn = kundur_run
+    other = stabctl.Simulator(case).run([fault_with_clearing(case, 3, 101, 1.0, 12)], t_end=6.0)
+    with pytest.raises(InputError, match="the frames do not measure this run"):
+        study.received_errors(case, other, SETTINGS, list(drawn), 3, WINDOW)
+
+
 def test_a_port_range_is_one_server_per_port():
     src = sources.parse_source("tcp://10.0.0.1:4712-4714,pdc:4800")
     assert src.servers == (
