@@ -553,6 +553,29 @@ def test_ieee14_fload_is_read_as_pst_s_load_and_follows_andes(tmp_path):
         read_andes_case(edited, on_unsupported="skip")
 
 
+def test_ieee14_timeseries_schedule_is_not_read_by_andes_s_run():
+    """ieee14_timeseries.xlsx: its TimeSeries writes PQ.Ppf and Qpf over time, which
+    ANDES's time-domain run does not read (its loads are constant impedances from
+    initialisation): a bus-9 fault gives the same speeds, bit for bit, with the schedule
+    on and switched off.  So the import leaves it out as a disturbance record (with the
+    case's own Fault, off), and the fault's speeds follow ANDES's within 1e-4 pu."""
+    path = andes.get_case("ieee14/ieee14_timeseries.xlsx")
+    got = read_andes_case(path, on_unsupported="skip")
+    assert sorted(got.left_out) == ["Fault (1)", "TimeSeries (1)"]
+    fault = AndesFault(9, 1.0, 1.1, x=1e-3)
+    (t, wa), (_, w_off) = (
+        andes_speeds(andes_system(path, fault=fault, off=off), 5.0, STEP)
+        for off in (("Fault",), ("Fault", "TimeSeries"))
+    )
+    np.testing.assert_array_equal(wa, w_off)
+    assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing
+    res = Simulator(got.case, q_limits=False).run([Fault(9, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
+    ss = andes_system(path, off=("Fault",))
+    gap = np.max(np.abs(speeds_on(t, res, got.case, ss) - wa))
+    print(f"\nieee14_timeseries vs ANDES: speeds {gap:.2e} pu")
+    assert gap < 1e-4
+
+
 def test_kundur_st2cut_without_a_second_input_follows_andes():
     """kundur_st2cut.xlsx: ST2CUT on machine 1 with speed input (MODE 1) and MODE2 left
     empty, which ANDES's input switch reads as no signal (PSS/E's code 0). A 6-cycle fault
