@@ -9,8 +9,9 @@ from __future__ import annotations
 import json
 
 import click
+import numpy as np
 
-from stabctl.cli.checks import model_settings
+from stabctl.cli.checks import check_writable, model_settings
 from stabctl.cli.format import closed_loop_lines, estimator_cct_lines, print_estimate, print_json
 from stabctl.cli.options import (
     _apply,
@@ -19,6 +20,7 @@ from stabctl.cli.options import (
     fault_options,
     json_option,
     model_options,
+    out_file_option,
     reports_errors,
     storage_options,
 )
@@ -27,6 +29,7 @@ from stabctl.cli.pmu_options import (
     WINDOW,
     fault_event,
     fault_run_options,
+    pmu_noise_options,
     pmu_settings,
     rate_latency_options,
 )
@@ -57,6 +60,8 @@ def estimate():
                  swing-equation EKF (ekf) against the true speeds, false ESD actions
     closed-loop  the fault with the ESDs commanded by each estimator in the loop
     cct          the fault's CCT with each estimator in the loop over noise seeds
+    track        the speeds estimated from a recording or a C37.118.2 stream, no
+                 simulation (field data)
 
     `stabctl estimate CASE ...` (no subcommand) is `stabctl estimate rmse CASE ...`;
     the old flags --closed-loop and --cct select those subcommands.
@@ -446,3 +451,109 @@ def cct(
         ),
     }
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
+
+
+@estimate.command("track")
+@click.argument("case_name", metavar="CASE")
+@click.option(
+    "--source",
+    required=True,
+    default=None,
+    metavar="tcp://HOST:PORT[,...]|FILE",
+    help="The C37.118.2 streams over TCP or the recording to track.",
+)
+@click.option(
+    "--estimator",
+    type=click.Choice(["raw", "kf", "ekf"]),
+    default="ekf",
+    show_default=True,
+    help="The speed estimator fed the frames.",
+)
+@rate_latency_options
+@pmu_noise_options
+@PMU_AT
+@storage_options(" Optional: the ESDs whose Table 3 modes are written too.")
+@out_file_option(metavar="FILE.csv", help="The estimates, a row per frame.")
+@reports_errors
+def track(
+    case_name,
+    source,
+    estimator,
+    rate,
+    latency_ms,
+    drop,
+    tve_pct,
+    fe_hz,
+    rfe_hz_s,
+    k_sigma,
+    window_cycles,
+    pmu_at,
+    esd_pct,
+    deadband_hz,
+    v_gate,
+    coi,
+    hysteresis_hz,
+    out_path,
+):
+    """The speeds of CASE's machines estimated from PMU frames that come from outside (a
+    field recording, a PDC over TCP) with no simulation: per frame, each machine's speed
+    and the COI speed (Hz) and the relative speeds f_i - f_COI (mHz), forecast over
+    --latency-ms as the ESD controllers use them, and with --esd-pct the modes Table 3
+    would command.  The PMUs' station names must be CASE's generator PMUs
+    (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
+    tuned to.
+    \b
+    Example:
+      stabctl estimate track miniwecc --source wecc.c37 --out tracked.csv
+    """
+    from stabctl.estimation import closed_loop as cl
+    from stabctl.estimation import sources
+    from stabctl.estimation.filters import compile_filters
+    from stabctl.io import load_case
+    from stabctl.parallel import atomic_write
+    from stabctl.storage.devices import uniform_fleet
+
+    if out_path is None:
+        raise InputError("estimate track needs --out FILE.csv")
+    check_writable(out_path, "--out")
+    settings = pmu_settings(
+        rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
+    )
+    case = load_case(case_name)
+    law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
+    fleet = uniform_fleet(case, 1.0 if esd_pct is None else esd_pct)
+    ctrl = cl.LoopController(case, fleet.devices, estimator, settings, 0, 1.0, law, pmu_at)
+    compile_filters(ctrl.models)
+    src = sources.parse_source(source)
+    got = sources.read_frames(src, case, ctrl.pmus, settings.rate)
+    d = cl.track(ctrl, got.frames)
+    atomic_write(out_path, lambda f: f.write(_track_csv(ctrl, d, esd_pct is not None)))
+    worst = np.unravel_index(np.argmax(np.abs(d.rel)), d.rel.shape) if d.rel.size else None
+    starts = int(((d.modes[1:] != 0) & (d.modes[1:] != d.modes[:-1])).sum())
+    click.echo(
+        f"tracked {len(got.frames)} frames from {src} with {estimator}"
+        + (
+            ""
+            if worst is None
+            else f": largest |f_i - f_COI| {1e3 * abs(d.rel[worst]):.1f} mHz "
+            f"({ctrl.pmus[worst[1]].label} at {d.t[worst[0]]:.3f} s)"
+        )
+        + (f"; {starts} ESD starts" if esd_pct is not None else "")
+        + f"; wrote {out_path}"
+    )
+
+
+def _track_csv(ctrl, d, with_modes: bool) -> str:
+    """`estimate track`'s CSV: t, each machine's speed (Hz), the COI speed (Hz), each
+    relative speed (mHz), with_modes: each ESD's mode."""
+    labels = [p.label for p in ctrl.pmus]
+    head = ["t_s", *(f"f_{x}_hz" for x in labels), "f_coi_hz"]
+    head += [f"rel_{x}_mhz" for x in labels]
+    cols = [d.t[:, None], d.freq, (d.freq - d.rel)[:, :1], 1e3 * d.rel]
+    if with_modes:
+        buses = ctrl.case.buses.number[ctrl.sa.bus]
+        head += [f"mode_esd{k + 1}_bus{int(b)}" for k, b in enumerate(buses)]
+        cols.append(d.modes)
+    rows = np.hstack(cols) if d.t.size else np.zeros((0, len(head)))
+    body = "\n".join(",".join(f"{v:.9g}" for v in row) for row in rows)
+    return ",".join(head) + "\n" + body + ("\n" if body else "")

@@ -64,12 +64,14 @@ HISTORY_WINDOWS = 3
 class Diagnostics:
     """What the controller saw, per frame: t (n_f,) s time stamps; rel (n_f, n_mac) the
     relative speeds f_i - f_COI it acted on (Hz, the estimator's forecast to t + latency); modes
-    (n_f, n_dev) the commanded modes; mac: each device's machine index; latency (s), f0
-    (Hz), coi ("system" or "rest") of the loop."""
+    (n_f, n_dev) the commanded modes; freq (n_f, n_mac) the machine speeds those came from
+    (Hz); mac: each device's machine index; latency (s), f0 (Hz), coi ("system" or "rest")
+    of the loop."""
 
     t: np.ndarray
     rel: np.ndarray
     modes: np.ndarray
+    freq: np.ndarray
     mac: np.ndarray
     latency: float
     f0: float
@@ -149,7 +151,8 @@ class LoopController:
         rel = relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
         rel = np.nan_to_num(rel)
         self.mode = law.desired_modes(self.sa, self.mode, rel)
-        self.rows.append((t_f, rel * self.case.freq_hz, self.mode.copy()))
+        f0 = self.case.freq_hz
+        self.rows.append((t_f, rel * f0, self.mode.copy(), np.asarray(speed) * f0))
         return self.mode
 
     def measure(self, t_f: float, partial: SimulationResult) -> Frame:
@@ -178,20 +181,60 @@ class LoopController:
         )
 
     def diagnostics(self) -> Diagnostics:
-        t, rel, modes = (
+        n = self.models.n
+        t, rel, modes, freq = (
             (np.array(a) for a in zip(*self.rows))
             if self.rows
-            else (np.zeros(0), np.zeros((0, self.models.n)), np.zeros((0, self.mode.size), int))
+            else (
+                np.zeros(0),
+                np.zeros((0, n)),
+                np.zeros((0, self.mode.size), int),
+                np.zeros((0, n)),
+            )
         )
         return Diagnostics(
             t=t,
             rel=rel,
             modes=modes,
+            freq=freq,
             mac=np.asarray(self.sa.mac),
             latency=self.settings.latency_s,
             f0=self.case.freq_hz,
             coi=self.coi,
         )
+
+
+def track(controller: LoopController, frames) -> Diagnostics:
+    """The controller fed frames with no plant to act on (open loop): a recording or a
+    received stream, field data included, through its estimator and Table 3, frame by
+    frame in order.
+
+    Parameters
+    ----------
+    controller : LoopController
+        A fresh controller (its estimator not yet fed); not "ideal", which needs the truth.
+    frames : iterable of Frame
+        One column per PMU of the controller (`LoopController.pmus`).
+
+    Returns
+    -------
+    Diagnostics
+        Per frame: the speeds (Hz) and relative speeds (Hz) forecast to time stamp +
+        latency, and the ESD modes the law would command.
+
+    Raises
+    ------
+    InputError
+        The ideal estimator, or a frame of another number of PMUs.
+    """
+    if controller.estimator == "ideal":
+        raise InputError("the ideal estimator reads the true speeds: it cannot track frames")
+    n = len(controller.pmus)
+    for frame in frames:
+        if frame.valid.size != n:
+            raise InputError(f"a frame of {frame.valid.size} PMUs for a controller of {n}")
+        controller.act(frame)
+    return controller.diagnostics()
 
 
 def _make_filter(estimator: str, models: MachineModels, settings: PMUSettings):
@@ -425,8 +468,7 @@ def _over_tcp(run, plant: LoopController, remote_of, serve) -> ClosedLoopRun:
     """`run` with the plant's frames sent over TCP to a controller and its modes sent
     back: a second `LoopController` from remote_of() in a thread on loopback, or with
     serve (`c37_loop.Listen`) whichever controller connects there.  The diagnostics
-    are the thread's (relative speeds included) or the plant's (modes only, relative
-    speeds NaN)."""
+    are the thread's (speeds included) or the plant's (modes only, speeds NaN)."""
     from stabctl.estimation import c37, c37_loop
 
     if plant.estimator == "ideal":
@@ -448,7 +490,7 @@ def _over_tcp(run, plant: LoopController, remote_of, serve) -> ClosedLoopRun:
         remote.rows[:0] = plant.rows  # the instants before a frame could be made
         return ClosedLoopRun(res, remote.diagnostics(), link.stats().summary())
     nan = np.full(plant.models.n, np.nan)
-    plant.rows += [(t, nan, modes) for t, modes in link.answers]
+    plant.rows += [(t, nan, modes, nan) for t, modes in link.answers]
     return ClosedLoopRun(res, plant.diagnostics(), link.stats().summary())
 
 

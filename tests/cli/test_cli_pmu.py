@@ -161,6 +161,31 @@ def test_plant_and_controller_in_two_processes_close_the_loop():
     assert remote["link"]["frames"] == 180
 
 
+def test_estimate_track_writes_a_row_per_recorded_frame(tmp_path, monkeypatch):
+    """`estimate track` on a recording, no simulation: a CSV row per frame with each
+    machine's speed, the COI speed, the relative speeds and the ESD modes; the COI column
+    is each speed less its relative speed."""
+    monkeypatch.chdir(tmp_path)
+    proc, address = serving("serve", "kundur", "--fault", "3", "--far-bus", "101", "--tf", "2")
+    record(address, 121, tmp_path / "k.c37")
+    assert finished(proc)[0] == 0
+    res = CliRunner().invoke(
+        main,
+        ["estimate", "track", "kundur", "--source", "k.c37", "--esd-pct", "10", "--out", "t.csv"],
+    )
+    assert res.exit_code == 0, res.output
+    assert "tracked 121 frames from k.c37 with ekf" in res.stdout
+    head, *rows = (tmp_path / "t.csv").read_text().splitlines()
+    names = head.split(",")
+    assert len(rows) == 121 and len(names) == 1 + 4 + 1 + 4 + 4
+    data = np.array([[float(v) for v in r.split(",")] for r in rows])
+    coi = data[:, names.index("f_coi_hz")]
+    for k in range(1, 5):
+        rel = data[:, 5 + k] / 1e3
+        np.testing.assert_allclose(data[:, k] - rel, coi, atol=1e-6)
+    assert set(np.unique(data[:, -4:])) <= {-1.0, 0.0, 1.0}
+
+
 def test_estimate_source_refuses_monte_carlo_options(tmp_path):
     (tmp_path / "r.c37").write_bytes(b"")
     args = ["estimate", "rmse", "kundur", "--fault", "3", "--far-bus", "101"]
@@ -179,6 +204,8 @@ def test_estimate_source_refuses_monte_carlo_options(tmp_path):
         (["serve", "kundur", "--fault", "3", "--far-bus", "101", "--speed", "-1"], "--speed"),
         (["control", "kundur", "127.0.0.1:1", "--esd-pct", "5"], "no plant at 127.0.0.1:1"),
         (["control", "kundur", "127.0.0.1", "--esd-pct", "5"], "expected HOST:PORT"),
+        (["track", "kundur", "--source", "junk.c37", "--out", "t.csv"], "no frame SYNC"),
+        (["track", "kundur", "--source", "missing.c37", "--out", "t.csv"], "no such recording"),
         (["plant", "kundur", "--fault", "3", "--far-bus", "101"], "needs --esd-pct"),
         (
             ["plant", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"]
@@ -190,7 +217,7 @@ def test_estimate_source_refuses_monte_carlo_options(tmp_path):
 def test_bad_input_is_one_error_line(args, needle, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "junk.c37").write_bytes(b"\x00" * 40)
-    res = CliRunner().invoke(main, ["pmu", *args])
+    res = CliRunner().invoke(main, ["estimate" if args[0] == "track" else "pmu", *args])
     assert res.exit_code == 2, res.output
     assert needle in res.output and "Traceback" not in res.output
-    assert not (tmp_path / "r.c37").exists()
+    assert not (tmp_path / "r.c37").exists() and not (tmp_path / "t.csv").exists()

@@ -149,6 +149,29 @@ def test_streams_that_do_not_fit_the_run_are_named(kundur_run, change, needle):
         sources.merge(case, pmus, 60, streams)
 
 
+def test_tracking_frames_runs_the_estimator_the_study_evaluates(kundur_run):
+    """`closed_loop.track` (`estimate track`, no truth needed) on the stream's frames: the
+    relative speeds it forecasts over the latency have, against the simulated truth at
+    arrival, the RMSE `received_errors` reports for the EKF's forecast (one filter, one
+    set of frames, two paths to it)."""
+    case, res, _pmus, drawn = kundur_run
+    from stabctl.estimation import closed_loop as cl
+    from stabctl.estimation.models import relative_speeds
+    from stabctl.storage.devices import uniform_fleet
+
+    ctrl = cl.LoopController(case, uniform_fleet(case, 10).devices, "ekf", SETTINGS, 0, 1.0)
+    d = cl.track(ctrl, list(drawn))
+    assert d.t.size == len(drawn) and d.freq.shape == (len(drawn), 4)
+    sel = (d.t >= WINDOW[0]) & (d.t <= WINDOW[1])
+    late = res.speed_at(d.t[sel] + SETTINGS.latency_s)
+    true_rel = relative_speeds(late, late, res.inertia, "system")[0] * case.freq_hz
+    rms = 1e3 * np.sqrt(np.mean((d.rel[sel] - true_rel) ** 2))
+    study_fig = figures(case, res, list(drawn))["ekf"]["rel_forecast_rmse_mhz"]["mean"]
+    assert rms == pytest.approx(study_fig, rel=1e-9)
+    with pytest.raises(InputError, match="a frame of 2 PMUs for a controller of 4"):
+        cl.track(ctrl, [f.of([0, 1]) for f in drawn])
+
+
 def test_frames_of_another_run_are_refused(kundur_run):
     """The frames of the 7-cycle clearing against the truth of a 12-cycle one: their
     frequency is far beyond the PMUs' stated accuracy from it, and the error says so."""
