@@ -181,6 +181,28 @@ def probes(cwd: Path) -> list[Probe]:
             needle="tripped twice",
         ),
     ]
+    write(cwd, "cut.c37", "\xaa\x31\x00\x64" + "x" * 16, "latin-1")  # 100 bytes said, 20 there
+    out += [
+        Probe(
+            "C37",
+            "estimate rmse --source at no server",
+            cli("estimate rmse kundur --fault 3 --far-bus 101 --source tcp://127.0.0.1:1"),
+            needle="no C37.118.2 server at 127.0.0.1:1",
+        ),
+        Probe(
+            "C37",
+            "estimate track of a recording cut short",
+            cli("estimate track kundur --source cut.c37 --out t.csv"),
+            needle="cut short",
+            no_file="t.csv",
+        ),
+        Probe(
+            "C37",
+            "pmu control with no plant",
+            cli("pmu control kundur 127.0.0.1:1 --esd-pct 5"),
+            needle="no plant at 127.0.0.1:1",
+        ),
+    ]
     link = cwd / "full.jsonl"
     link.symlink_to("/dev/full")
     zero = cwd / "zero.json"
@@ -284,6 +306,33 @@ def _sweep_with_scheduler(address: str) -> list[str]:
 
 def foreign_server_probe(cwd: Path) -> tuple[Probe, str]:
     """A web server where the Dask scheduler should be."""
+    return _web_server_probe(
+        cwd,
+        "10",
+        "--scheduler at a web server",
+        lambda address: _sweep_with_scheduler(f"tcp://{address}"),
+        "no Dask scheduler answers",
+        "o.jsonl",
+    )
+
+
+def foreign_pmu_probe(cwd: Path) -> tuple[Probe, str]:
+    """A web server where a C37.118.2 PMU stream should be."""
+    return _web_server_probe(
+        cwd,
+        "C37",
+        "estimate rmse --source at a web server",
+        lambda address: cli(
+            f"estimate rmse kundur --fault 3 --far-bus 101 --source tcp://{address}"
+        ),
+        "does not speak C37.118.2",
+        "",
+    )
+
+
+def _web_server_probe(cwd: Path, finding, what, args_of, needle, no_file) -> tuple[Probe, str]:
+    """A command pointed at a web server (which answers anything with a page): it must
+    say so within a minute, not hang."""
     server = socket.create_server(("127.0.0.1", 0))
     port = server.getsockname()[1]
 
@@ -296,13 +345,7 @@ def foreign_server_probe(cwd: Path) -> tuple[Probe, str]:
             conn.sendall(b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 50)
 
     threading.Thread(target=serve, daemon=True).start()
-    p = Probe(
-        "10",
-        "--scheduler at a web server",
-        _sweep_with_scheduler(f"tcp://127.0.0.1:{port}"),
-        needle="no Dask scheduler answers",
-        no_file="o.jsonl",
-    )
+    p = Probe(finding, what, args_of(f"127.0.0.1:{port}"), needle=needle, no_file=no_file)
     t0 = time.perf_counter()
     res = run(p.args, cwd)
     server.close()
@@ -393,7 +436,13 @@ def main() -> int:
             res = run(p.args, cwd)
             rows.append((p, verdict(p, res, cwd)))
             (cwd / "o.jsonl").unlink(missing_ok=True)
-        for special in (foreign_server_probe, lock_probe, sigterm_probe, umask_probe):
+        for special in (
+            foreign_server_probe,
+            foreign_pmu_probe,
+            lock_probe,
+            sigterm_probe,
+            umask_probe,
+        ):
             rows.append(special(cwd))
     width = max(len(p.what) for p, _ in rows)
     print(f"{'finding':>7}  {'probe':<{width}}  verdict")

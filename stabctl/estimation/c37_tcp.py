@@ -125,7 +125,12 @@ class StreamServer:
                 return
             with conn:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                self._serve(conn)
+                try:
+                    self._serve(conn)
+                except InputError:  # a client of another protocol: dropped, serve on
+                    continue
+                except OSError:  # the client vanished mid-session: the session ends
+                    pass
             self.finished.set()
 
     def _serve(self, conn: socket.socket) -> None:
@@ -245,8 +250,17 @@ def _frame(conn: socket.socket) -> bytes:
 
 
 def _read_frame(conn: socket.socket):
-    """One whole frame from conn, SYNC and FRAMESIZE first (None if the peer closed)."""
+    """One whole frame from conn, SYNC and FRAMESIZE first (None if the peer closed).
+
+    Raises
+    ------
+    InputError
+        Bytes that do not start a C37.118.2 frame (SYNC 0xAA, FRAMESIZE of at least 16):
+        the peer speaks another protocol.
+    """
     head = _recv_exactly(conn, 4)
+    if head is not None and (head[0] != 0xAA or int.from_bytes(head[2:4], "big") < 16):
+        raise InputError(f"the peer does not speak C37.118.2: it sent {head!r} for a frame start")
     body = None if head is None else _recv_exactly(conn, int.from_bytes(head[2:4], "big") - 4)
     return None if body is None else head + body
 

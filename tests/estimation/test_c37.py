@@ -188,3 +188,35 @@ def test_unpaced_stream_ends_the_session_and_serves_the_next(wecc_stream):
             pdc.quit()
     with pytest.raises(InputError, match="speed must be > 0"):
         StreamServer.of_frames(cfg, stream, speed=0)
+
+
+def test_peers_of_another_protocol_are_named_or_dropped(wecc_stream):
+    """A web client at the stream server is dropped and the next PDC still gets the whole
+    stream; a web server where a C37.118.2 server should be is named as such, not waited
+    on."""
+    import socket
+    import threading
+
+    from stabctl.estimation.c37_tcp import StreamServer, receive
+
+    _case, cfg, stream = wecc_stream
+    with StreamServer.of_frames(cfg, stream, speed=float("inf")) as server:
+        with socket.create_connection(server.address) as web:
+            web.sendall(b"GET / HTTP/1.1\r\nHost: x\r\n\r\n")
+            try:
+                assert web.recv(100) == b""  # closed by the server
+            except ConnectionResetError:
+                pass  # closed with the request unread
+        cfg2, data = receive(*server.address, timeout=10)
+        assert len(data) == len(stream) and cfg2[0] == 0xAA
+    web_server = socket.create_server(("127.0.0.1", 0))
+
+    def answer():
+        conn, _ = web_server.accept()
+        with conn:
+            conn.recv(100)
+            conn.sendall(b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi")
+
+    threading.Thread(target=answer, daemon=True).start()
+    with web_server, pytest.raises(InputError, match=r"does not speak C37\.118\.2"):
+        receive(*web_server.getsockname()[:2], timeout=10)
