@@ -25,6 +25,7 @@ from stabctl.cli.options import (
     storage_options,
 )
 from stabctl.cli.pmu_options import (
+    ESTIMATOR,
     PMU_AT,
     WINDOW,
     fault_event,
@@ -32,6 +33,7 @@ from stabctl.cli.pmu_options import (
     pmu_noise_options,
     pmu_settings,
     rate_latency_options,
+    stream_controller,
 )
 from stabctl.errors import InputError
 
@@ -462,13 +464,7 @@ def cct(
     metavar="tcp://HOST:PORT[,...]|FILE",
     help="The C37.118.2 streams over TCP or the recording to track.",
 )
-@click.option(
-    "--estimator",
-    type=click.Choice(["raw", "kf", "ekf"]),
-    default="ekf",
-    show_default=True,
-    help="The speed estimator fed the frames.",
-)
+@ESTIMATOR
 @rate_latency_options
 @pmu_noise_options
 @PMU_AT
@@ -508,10 +504,8 @@ def track(
     """
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation import sources
-    from stabctl.estimation.filters import compile_filters
     from stabctl.io import load_case
     from stabctl.parallel import atomic_write
-    from stabctl.storage.devices import uniform_fleet
 
     if out_path is None:
         raise InputError("estimate track needs --out FILE.csv")
@@ -521,9 +515,7 @@ def track(
     )
     case = load_case(case_name)
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
-    fleet = uniform_fleet(case, 1.0 if esd_pct is None else esd_pct)
-    ctrl = cl.LoopController(case, fleet.devices, estimator, settings, 0, 1.0, law, pmu_at)
-    compile_filters(ctrl.models)
+    ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
     src = sources.parse_source(source)
     got = sources.read_frames(src, case, ctrl.pmus, settings.rate)
     d = cl.track(ctrl, got.frames)

@@ -22,6 +22,7 @@ from stabctl.cli.options import (
     tf_option,
 )
 from stabctl.cli.pmu_options import (
+    ESTIMATOR,
     PMU_AT,
     RATE,
     fault_event,
@@ -29,6 +30,7 @@ from stabctl.cli.pmu_options import (
     pmu_noise_options,
     pmu_settings,
     rate_latency_options,
+    stream_controller,
 )
 from stabctl.errors import InputError
 
@@ -334,13 +336,7 @@ def plant(
 @pmu.command()
 @click.argument("case_name", metavar="CASE")
 @click.argument("address", metavar="HOST:PORT")
-@click.option(
-    "--estimator",
-    type=click.Choice(["raw", "kf", "ekf"]),
-    default="ekf",
-    show_default=True,
-    help="The speed estimator fed the frames.",
-)
+@ESTIMATOR
 @rate_latency_options
 @pmu_noise_options
 @storage_options(" Required: the ESDs commanded, as the plant's.")
@@ -378,10 +374,7 @@ def control(
     """
     from stabctl.estimation import c37
     from stabctl.estimation.c37_loop import serve_controller
-    from stabctl.estimation.closed_loop import LoopController
-    from stabctl.estimation.filters import compile_filters
     from stabctl.io import load_case
-    from stabctl.storage.devices import uniform_fleet
 
     if esd_pct is None:
         raise InputError("pmu control needs --esd-pct")
@@ -391,9 +384,7 @@ def control(
     )
     case = load_case(case_name)
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
-    devices = uniform_fleet(case, esd_pct).devices
-    ctrl = LoopController(case, devices, estimator, settings, 0, 1.0, law, pmu_at)
-    compile_filters(ctrl.models)  # loaded before the first frame, not while it waits
+    ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
     n = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
     d = ctrl.diagnostics()
     starts = int(((d.modes[1:] != 0) & (d.modes[1:] != d.modes[:-1])).sum())

@@ -155,3 +155,27 @@ def fault_run_options(func):
             pmu_noise_options,
         ),
     )
+
+
+#: the speed estimator of a controller fed from outside (pmu control, estimate track)
+ESTIMATOR = click.option(
+    "--estimator",
+    type=click.Choice(["raw", "kf", "ekf"]),
+    default="ekf",
+    show_default=True,
+    help="The speed estimator fed the frames.",
+)
+
+
+def stream_controller(case, estimator, settings, esd_pct, law, pmu_at):
+    """The `LoopController` of CASE fed frames from outside (its PMUs, `estimator`, Table 3
+    with `law` on ESDs of esd_pct % of machine MVA, 1 % if None), its filters compiled
+    before the first frame arrives."""
+    from stabctl.estimation.closed_loop import LoopController
+    from stabctl.estimation.filters import compile_filters
+    from stabctl.storage.devices import uniform_fleet
+
+    devices = uniform_fleet(case, 1.0 if esd_pct is None else esd_pct).devices
+    ctrl = LoopController(case, devices, estimator, settings, 0, 1.0, law, pmu_at)
+    compile_filters(ctrl.models)
+    return ctrl
