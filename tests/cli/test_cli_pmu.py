@@ -92,6 +92,7 @@ def test_estimate_rmse_from_a_served_stream_equals_in_process(tmp_path):
     src = d["source"]
     assert (src["frames"], src["data_frames"], src["missing"], d["runs"]) == (241, 241, 0, 1)
     assert src["absent"] > 0 and d["false_actions"] is None
+    assert set(d["estimators"]) == {"raw", "kf", "ekf"}
     for name, fig in d["estimators"].items():
         assert {m: v["mean"] for m, v in fig.items()} == src["on_wire"][name]
     gap = abs(

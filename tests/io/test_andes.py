@@ -775,7 +775,7 @@ def test_ieee14_ieeevc2_load_compensation_starts_flat_and_sets_its_reference():
         ss.SynGen.get("bus", ss.Exciter.get("syn", vc.avr.v[k])): vc.vcomp.v[k] for k in range(vc.n)
     }
     ours = {int(case.machines.bus[mac[i]]): shift[i] for i in np.nonzero(comp)[0]}
-    assert ours.keys() == theirs.keys()
+    assert ours.keys() == theirs.keys() and len(ours) == 2  # both compensated machines
     for b in ours:
         assert ours[b] == pytest.approx(theirs[b], abs=1e-7)  # 0.0328 and 0.0246 pu
     flat = sims[0].run([], 10.0, h=STEP)
@@ -1257,6 +1257,7 @@ def test_kundur_esst3a_regulator_lag_matches_andes_at_a_step_its_inner_loop_allo
     t, wa = andes_speeds(ss, 5.0, STEP)
     assert np.max(np.abs(speeds_on(t, res, case, ss) - wa)) < 1e-5
     m, late = ss.ESST3A, t > 1.5
+    assert m.n == 4  # every machine's exciter is compared
     for j in range(m.n):
         k = list(case.machines.bus).index(ss.SynGen.get("bus", m.syn.v[j]))
         ours = np.interp(t, res.t, res.efd[:, k])
