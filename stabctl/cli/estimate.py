@@ -519,9 +519,12 @@ def track(
     src = sources.parse_source(source)
     got = sources.read_frames(src, case, ctrl.pmus, settings.rate)
     d = cl.track(ctrl, got.frames)
-    atomic_write(out_path, lambda f: f.write(_track_csv(ctrl, d, esd_pct is not None)))
+    head, rows = _track_columns(ctrl, d, esd_pct is not None)
+    atomic_write(
+        out_path,
+        lambda f: np.savetxt(f, rows, delimiter=",", header=head, comments="", fmt="%.9g"),
+    )
     worst = np.unravel_index(np.argmax(np.abs(d.rel)), d.rel.shape) if d.rel.size else None
-    starts = int(((d.modes[1:] != 0) & (d.modes[1:] != d.modes[:-1])).sum())
     click.echo(
         f"tracked {len(got.frames)} frames from {src} with {estimator}"
         + (
@@ -530,14 +533,14 @@ def track(
             else f": largest |f_i - f_COI| {1e3 * abs(d.rel[worst]):.1f} mHz "
             f"({ctrl.pmus[worst[1]].label} at {d.t[worst[0]]:.3f} s)"
         )
-        + (f"; {starts} ESD starts" if esd_pct is not None else "")
+        + (f"; {d.starts} ESD starts" if esd_pct is not None else "")
         + f"; wrote {out_path}"
     )
 
 
-def _track_csv(ctrl, d, with_modes: bool) -> str:
-    """`estimate track`'s CSV: t, each machine's speed (Hz), the COI speed (Hz), each
-    relative speed (mHz), with_modes: each ESD's mode."""
+def _track_columns(ctrl, d, with_modes: bool) -> tuple[str, np.ndarray]:
+    """`estimate track`'s CSV header and rows: t, each machine's speed (Hz), the COI speed
+    (Hz), each relative speed (mHz), with_modes: each ESD's mode."""
     labels = [p.label for p in ctrl.pmus]
     head = ["t_s", *(f"f_{x}_hz" for x in labels), "f_coi_hz"]
     head += [f"rel_{x}_mhz" for x in labels]
@@ -546,6 +549,4 @@ def _track_csv(ctrl, d, with_modes: bool) -> str:
         buses = ctrl.case.buses.number[ctrl.sa.bus]
         head += [f"mode_esd{k + 1}_bus{int(b)}" for k, b in enumerate(buses)]
         cols.append(d.modes)
-    rows = np.hstack(cols) if d.t.size else np.zeros((0, len(head)))
-    body = "\n".join(",".join(f"{v:.9g}" for v in row) for row in rows)
-    return ",".join(head) + "\n" + body + ("\n" if body else "")
+    return ",".join(head), np.hstack(cols) if d.t.size else np.zeros((0, len(head)))

@@ -387,5 +387,6 @@ def control(
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
     n = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
     d = ctrl.diagnostics()
-    starts = int(((d.modes[1:] != 0) & (d.modes[1:] != d.modes[:-1])).sum())
-    click.echo(f"controller ({estimator}): answered {n} frames from {address}, {starts} ESD starts")
+    click.echo(
+        f"controller ({estimator}): answered {n} frames from {address}, {d.starts} ESD starts"
+    )

@@ -260,12 +260,17 @@ def reporting_instant(t: float, rate: int) -> float:
     return k / rate if abs(t - k / rate) <= 1.0 / TIME_BASE else float(t)
 
 
-def on_wire(cfg: StreamConfig, frames) -> list[Frame]:
-    """`frames` as a receiver gets them: each encoded as a data frame of the stream and
+def codec(cfg: StreamConfig):
+    """frame -> the frame as a receiver gets it: encoded as a data frame of the stream and
     parsed back (float32 phasors, FREQ to 1 mHz, DFREQ to 0.01 Hz/s), with no transport
     in between: the in-process twin of a stream sent over TCP or recorded."""
     cfg2 = config_frame(cfg)
-    return [parse_frame(cfg, cfg2, data_frame(cfg, cfg2, f)) for f in frames]
+    return lambda frame: parse_frame(cfg, cfg2, data_frame(cfg, cfg2, frame))
+
+
+def on_wire(cfg: StreamConfig, frames) -> list[Frame]:
+    """`frames` each through `codec`."""
+    return list(map(codec(cfg), frames))
 
 
 def record(path, cfg: StreamConfig, frames) -> int:

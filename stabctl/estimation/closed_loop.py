@@ -77,6 +77,12 @@ class Diagnostics:
     f0: float
     coi: str
 
+    @property
+    def starts(self) -> int:
+        """Commands into a running mode (from idle or the opposite mode), all devices."""
+        m = self.modes
+        return int(((m[1:] != 0) & (m[1:] != m[:-1])).sum())
+
 
 class LoopController:
     """The `decide(t_f, partial)` callback of `Simulator.run_commanded` (`CommandFrames`).
@@ -446,22 +452,14 @@ def run_closed_loop(
             raise InputError("an ambient load fluctuation runs with the loop in process only")
         return _over_tcp(run, ctrl, lambda: LoopController(sim.case, fleet.devices, *args), serve)
     if loop.transport == "codec":
-        ctrl.wire = _codec(ctrl)
+        from stabctl.estimation import c37
+
+        ctrl.wire = c37.codec(c37.stream_config(sim.case, ctrl.pmus, settings.rate))
     elif loop.transport != "process":
         raise InputError(
             f"transport must be one of {', '.join(TRANSPORTS)}, got {loop.transport!r}"
         )
     return ClosedLoopRun(run(decide), ctrl.diagnostics())
-
-
-def _codec(ctrl: LoopController) -> Callable:
-    """frame -> the frame encoded as a C37.118.2 data frame of the loop's stream and
-    parsed back (`c37.on_wire`)."""
-    from stabctl.estimation import c37
-
-    cfg = c37.stream_config(ctrl.case, ctrl.pmus, ctrl.settings.rate)
-    cfg2 = c37.config_frame(cfg)
-    return lambda frame: c37.parse_frame(cfg, cfg2, c37.data_frame(cfg, cfg2, frame))
 
 
 def _over_tcp(run, plant: LoopController, remote_of, serve) -> ClosedLoopRun:
