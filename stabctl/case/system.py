@@ -466,7 +466,12 @@ class MachineTable(Table):
     {columns}
 
         Omitted columns: 0, except pfrac, qfrac and speed_effects 1 (PSTess ``mac_indx``).
-        Validation: unique positive integer machine numbers, mva > 0, H > 0, reactances and
+        A classical machine (x_d = 0) with H = 0 is an infinite bus (PSS/E's GENCLS with H =
+        0): its internal voltage E' and angle delta stay at their initial values, its speed at
+        1 pu; where a case holds infinite buses they are its centre of inertia
+        (:func:`stabctl.dynamics.coi.coi_inertia`).
+        Validation: unique positive integer machine numbers, mva > 0, H > 0 (or 0 for a
+        classical machine with x'd > 0), reactances and
         ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), x_d >= x'd >= x"d (where given),
         speed_effects and psse_sat 0 or 1.
     """
@@ -476,9 +481,10 @@ class MachineTable(Table):
         self._unique("number", "machine number")
         self._require(self.mva > 0, "mva", "machine base must be > 0")
         self._require(
-            self.H > 0,
+            (self.H > 0) | ((self.H == 0) & (self.xd == 0) & (self.xdp > 0)),
             "H",
-            "inertia constant must be > 0 s (H = 0, an infinite bus, is not modelled)",
+            "inertia constant must be > 0 s (H = 0, an infinite bus, only for a classical "
+            "machine, x_d = 0, with x'd > 0)",
         )
         # the open-circuit time constants a machine's model divides by (x_d = 0: classical,
         # none; x"d = 0: transient, T'do; else subtransient, T'do and T"do); T'qo, T"qo of 0

@@ -329,10 +329,13 @@ def print_modes(st, no_pss: bool) -> None:
         f"case {st.case.name}{' without PSS' if no_pss else ''}: {st.sys.nstates} "
         f"states; linearised in {st.t_linearise:.2f} s, analysed in {st.t_analyse:.2f} s"
     )
-    click.echo(
-        f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
-        "(excluded from damping statistics)"
-    )
+    if ma.reference_mode is None:
+        click.echo("no angle-reference mode: an infinite bus (H = 0) holds the angles")
+    else:
+        click.echo(
+            f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
+            "(excluded from damping statistics)"
+        )
     click.echo(f"{'mode':>5} {'f Hz':>7} {'damping':>8}  {'kind':<10} machines")
     em = ma.electromechanical
     for i in em[np.argsort(ma.freq_hz[em])]:

@@ -13,7 +13,31 @@ import numpy as np
 
 from stabctl.storage.control import coi_value
 
-__all__ = ["coi_weights", "coi_angle", "coi_speed", "coi_of_rest", "coi_value"]
+__all__ = ["coi_inertia", "coi_weights", "coi_angle", "coi_speed", "coi_of_rest", "coi_value"]
+
+
+def coi_inertia(H: np.ndarray, mva: np.ndarray) -> np.ndarray:
+    """The machines' COI weights M_i = H_i * MVA_i (MW s, paper eq. 40); where the case holds
+    infinite buses (H = 0, `stabctl.case.system.MachineTable`), theirs: 1 each, 0 for the
+    others (an infinite bus is a machine of infinite inertia, the reference the others
+    swing against, as in the paper's Section 2).
+
+    Parameters
+    ----------
+    H : ndarray, shape (n_mac,)
+        Inertia constants (s, machine base), >= 0.
+    mva : ndarray, shape (n_mac,)
+        Machine bases (MVA).
+
+    Returns
+    -------
+    ndarray, shape (n_mac,)
+        The weights (MW s, or 0/1 with infinite buses).
+    """
+    infinite = np.asarray(H) == 0
+    if infinite.any():
+        return infinite.astype(float)
+    return np.asarray(H) * np.asarray(mva)
 
 
 def coi_weights(inertia: np.ndarray) -> np.ndarray:

@@ -22,7 +22,7 @@ from stabctl._jit.cache import cached
 from stabctl.case import Case
 from stabctl.dynamics import events as ev_
 from stabctl.dynamics import integrator as ig
-from stabctl.dynamics.coi import coi_angle
+from stabctl.dynamics.coi import coi_angle, coi_inertia
 from stabctl.dynamics.grid import (
     check_step,
     check_step_count,
@@ -188,7 +188,7 @@ class Simulator:
         self.battery_rows: np.ndarray | None = None
         self.off_equilibrium = off_equilibrium
         self.model = self.model_for(injection_buses)
-        self.inertia = self.model.mp.H * case.machines.mva
+        self.inertia = coi_inertia(self.model.mp.H, case.machines.mva)
         if background_compile:
             self._compile_runs_elsewhere()
         self.model.check_equilibrium(off_equilibrium)

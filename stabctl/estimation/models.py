@@ -210,8 +210,15 @@ def machine_models(case: Case, pmus) -> MachineModels:
     """Swing-filter models of every machine of the case from its data (mac_con, tg_con)
     and the PMU measuring its current: at its terminal bus, or at a bus joined to the
     terminal by branches whose series impedance r + jx is added to Z (taps and charging
-    ignored).  Raises InputError if a machine has no PMU measuring its current."""
+    ignored).  Raises InputError if a machine has no PMU measuring its current, or is an
+    infinite bus (H = 0: no swing to filter)."""
     mp = machine_params(case)
+    infinite = case.machines.number[mp.H == 0].astype(int).tolist()
+    if infinite:
+        raise InputError(
+            f"machine(s) {infinite} are infinite buses (H = 0): the speed estimators filter "
+            "each machine's swing equation and need H > 0"
+        )
     which = {p.machine: j for j, p in enumerate(pmus) if p.machine is not None}
     missing = [int(n) for n in case.machines.number if int(n) not in which]
     if missing:

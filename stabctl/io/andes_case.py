@@ -24,7 +24,12 @@ Network (ANDES's values after set-up, pu on the system base):
   (bp = bq = 0) and keeps its PQ's power (kp = kq = 100); any other is refused with the
   parameter named (a load that is not PST's);
 * ``PV`` / ``Slack``: ``p0``, ``q0``, ``v0``, ``qmax``, ``qmin`` (added up per bus; the
-  bus becomes PV or swing);
+  bus becomes PV or swing); machines on one bus share its generation as their static
+  generators do in ANDES's power flow (its ``p``, ``q``); a ``Slack`` without machine,
+  held at ``v0``, ``a0`` in ANDES's run (``andes/models/static/slack.py``), becomes an
+  infinite bus (GENCLS, H = 0, behind :data:`INFINITE_BUS_X`); a machine whose static
+  generator is out of service is left out with its controls (one warning: ANDES starts it
+  from the generator's ``p0`` and fails to initialise);
 * ``Line`` (lines and transformers): ``r``, ``x``, tap ``tap`` on the from side, phase
   ``phi`` (PST's phase is its opposite, :mod:`stabctl.network.ybus`), and the shunts as
   ANDES's ``Line`` equations apply them: ``g1 + g/2 + j (b1 + b/2)`` at both ends, the
@@ -148,6 +153,9 @@ WIND_CHAIN = (
     ("WTTQA1", "rep", "torque", "wq_"),
 )
 _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
+#: source reactance (pu, system base) of the infinite bus an ANDES Slack without machine
+#: becomes: ANDES holds the bus voltage exactly; 10 pu of current move it by 1e-5 pu
+INFINITE_BUS_X = 1e-6
 _NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt", "ZIP", "FLoad")
 _MACHINES = ("GENROU", "GENCLS")
 #: ANDES parameters outside PSS/E's data that must keep the value stabctl's models have
@@ -269,6 +277,7 @@ def read_andes_case(
     ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
+    pf_bus, pf_vmag, pf_vang = _powerflow(ss, numbers)  # its generators' P, Q: shares
     mats["load_con"], zip_changed = _zip_loads(ss, numbers, mats["bus"])
     ibr_con, ibr_refused, with_converter = _converters(ss, numbers)
     gens, records, refused, changed = _dynamic_records(ss, path.name, numbers, with_converter)
@@ -314,7 +323,6 @@ def read_andes_case(
         description=f"ANDES case {path.name}",
         source=f"ANDES case {path.name}, imported by stabctl.io.andes_case.import_andes",
     )
-    pf_bus, pf_vmag, pf_vang = _powerflow(ss, numbers)
     return AndesImport(case, left_out, ignored, pf_bus, pf_vmag, pf_vang, tuple(changed))
 
 
@@ -569,6 +577,20 @@ def _warn_out_of_service(ss, file: str, buses: list, numbers: dict) -> None:
         UserWarning,
         stacklevel=4,
     )
+
+
+def _warn_generator_off(file: str, machines: set) -> None:
+    """One warning naming the machines left out because their static generator is out of
+    service (u = 0): the power flow gives them no power.  PSS/E ignores the records of a
+    generator out of service; ANDES 2.0 starts them from their generator's ``p0`` and its
+    initialisation then fails (a mismatch of that power at their bus)."""
+    if machines:
+        warnings.warn(
+            f"{file}: machine(s) {', '.join(sorted(map(str, machines)))} left out with their "
+            "controls: their static generator is out of service (u = 0)",
+            UserWarning,
+            stacklevel=4,
+        )
 
 
 def _integer(value) -> int | None:
@@ -874,24 +896,29 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
     dyr = _psse_yaml()
     static = [(m, k) for m in (ss.PV, ss.Slack) for k in range(m.n)]
     position = {m.idx.v[k]: n for n, (m, k) in enumerate(static)}
-    machines, refused, changed = [], [], []
+    on = {(sg.class_name, k) for sg in (ss.PV, ss.Slack) for k in _in_service(sg)}
+    gen_on = {sg.idx.v[k] for sg in (ss.PV, ss.Slack) for k in _in_service(sg)}
+    machines, refused, changed, off = [], [], [], set()
     for name in _MACHINES:
         m = ss.models[name]
         for k in _in_service(m):
-            machines.append((position.get(m.gen.v[k], len(static)), name, k))
+            if m.gen.v[k] in position and m.gen.v[k] not in gen_on:
+                off.add(m.idx.v[k])
+            else:
+                machines.append((position.get(m.gen.v[k], len(static)), name, k))
     machines.sort()
+    _warn_generator_off(file, off)
     _check_shares(ss, file, machines, with_converter)
     with_machine = {ss.models[name].gen.v[k] for _, name, k in machines}
-    on = {(sg.class_name, k) for sg in (ss.PV, ss.Slack) for k in _in_service(sg)}
     bare = [
-        f"{sg.class_name} {sg.idx.v[k]} (bus {numbers[sg.bus.v[k]]})"
+        (f"{sg.class_name} {sg.idx.v[k]} (bus {numbers[sg.bus.v[k]]})", sg, k)
         for sg, k in static
         if (sg.class_name, k) in on
         and sg.idx.v[k] not in with_machine
         and sg.idx.v[k] not in with_converter
     ]
     if machines:
-        refused += [f"{b}: {_NO_MACHINE}" for b in bare]
+        refused += [f"{b}: {_NO_MACHINE}" for b, sg, _ in bare if sg is not ss.Slack]
     gens, by_syn = [], {}
     for number, (_, name, k) in enumerate(machines, 1):
         m = ss.models[name]
@@ -906,8 +933,8 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 "mbase": float(m.Sn.v[k]),
                 "ra": float(m.ra.vin[k]),
                 "xsource": float(m.xd1.vin[k]),
-                "pg": float(m.gammap.v[k] * sg.p0.v[j]),
-                "qg": float(m.gammaq.v[k] * sg.q0.v[j]),
+                "pg": float(m.gammap.v[k] * sg.p.v[j]),
+                "qg": float(m.gammaq.v[k] * sg.q.v[j]),
                 "sbase": float(ss.config.mva),
             }
         )
@@ -932,6 +959,13 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                     "GENROU has one subtransient reactance)",
                 )
             )
+    records = []
+    if machines:  # a Slack without machine holds its bus's voltage: an infinite bus
+        for k in (k for _, sg, k in bare if sg is ss.Slack):
+            gens.append(_infinite_bus(ss, k, len(gens) + 1, numbers))
+            records.append(
+                DyrRecord(file, k + 1, gens[-1]["bus"], "GENCLS", gens[-1]["id"], (0.0, 0.0))
+            )
     avr_syn = {}
     for name, psse in MAPPED_MODELS.items():
         m = ss.models.get(name)
@@ -940,7 +974,6 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
         for k in _in_service(m):
             if "syn" in m.params:
                 avr_syn[m.idx.v[k]] = m.syn.v[k]
-    records = []
     for name, psse in MAPPED_MODELS.items():
         m = ss.models.get(name)
         if m is None or not m.n:
@@ -951,6 +984,8 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 if psse in _MACHINES
                 else (m.syn.v[k] if "syn" in m.params else avr_syn.get(m.avr.v[k]))
             )
+            if syn in off:  # out of service with its machine
+                continue
             gen = by_syn.get(syn)
             why = _fixed_differs(m, name, k)
             if gen is None or why:
@@ -963,6 +998,25 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 params = tuple(float(m.params[f].vin[k]) for f in fields)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused, _grouped(changed)
+
+
+def _infinite_bus(ss, k: int, number: int, numbers: dict) -> dict:
+    """The generator (a dict for :func:`stabctl.io.dyr.dyr_tables`) of Slack ``k`` without
+    a machine: in ANDES's time domain it keeps its equations ``a = a0``, ``v = v0``
+    (``andes/models/static/slack.py``), an ideal source, here a GENCLS of H = 0 behind
+    :data:`INFINITE_BUS_X` with the power its power flow gives it."""
+    sg = ss.Slack
+    return {
+        "number": number,
+        "bus": numbers[sg.bus.v[k]],
+        "id": f"SLACK{sg.idx.v[k]}",
+        "mbase": float(ss.config.mva),
+        "ra": 0.0,
+        "xsource": INFINITE_BUS_X,
+        "pg": float(sg.p.v[k]),
+        "qg": float(sg.q.v[k]),
+        "sbase": float(ss.config.mva),
+    }
 
 
 def _check_shares(ss, file: str, machines, with_converter) -> None:

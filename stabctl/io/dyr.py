@@ -439,7 +439,8 @@ def _mac_row(rec, gen, **cols) -> list:
 def _positive_h(rec, H) -> None:
     if H <= 0:
         raise CaseError(
-            f"{rec.label()}: H = {H} (PSS/E infinite bus) is not supported; H must be > 0"
+            f"{rec.label()}: H = {H}: a machine of this model needs H > 0 (an infinite "
+            "bus, PSS/E's H = 0, is a GENCLS)"
         )
 
 
@@ -460,8 +461,16 @@ def _gensal(rec, gen):
 
 
 def _gencls(rec, gen):
-    """GENCLS: H D -> PST classical mac_em (x_d = 0) behind x'd = ZSORCE X."""
-    _positive_h(rec, DYR_MODELS["GENCLS"].values(rec.params)["H"])
+    """GENCLS: H D -> PST classical mac_em (x_d = 0) behind x'd = ZSORCE X; H = 0 is PSS/E's
+    infinite bus (constant internal voltage and angle, `stabctl.case.system.MachineTable`)."""
+    H = DYR_MODELS["GENCLS"].values(rec.params)["H"]
+    if H < 0:
+        raise CaseError(f"{rec.label()}: H = {H} s must be >= 0 (0: an infinite bus)")
+    if H == 0 and gen["xsource"] <= 0:
+        raise CaseError(
+            f"{rec.label()}: an infinite bus (H = 0) needs its source reactance ZSORCE X > 0 "
+            f"(got {gen['xsource']})"
+        )
     return _mac_row(rec, gen, xdp=gen["xsource"])
 
 

@@ -575,7 +575,9 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
         pelect[i] = eq * curq + ed * curd
         qelect[i] = eq * curd - ed * curq
         eterm[i] = np.hypot(ed, eq)
-        dx[1, i] = (torque - P[i, K.D0] * (w - 1.0)) / (2.0 * P[i, K.H])
+        # H = 0: an infinite bus (classical, MachineTable), its speed held at 1 pu
+        h2 = 2.0 * P[i, K.H]
+        dx[1, i] = (torque - P[i, K.D0] * (w - 1.0)) / h2 if h2 > 0.0 else 0.0
 
 
 @kernel

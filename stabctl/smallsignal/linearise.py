@@ -40,7 +40,7 @@ from stabctl._jit.arrays import assign, max_abs
 from stabctl._jit.background import await_background, compile_in_background
 from stabctl._jit.decorators import njit
 from stabctl.case import Case
-from stabctl.dynamics.coi import coi_weights
+from stabctl.dynamics.coi import coi_inertia, coi_weights
 from stabctl.dynamics.model import (
     BUS_VOLTAGES,
     DynamicModel,
@@ -89,14 +89,15 @@ def active_states(model: DynamicModel) -> np.ndarray:
     """Boolean mask (n_x,) of the state slots that are states of the model.
 
     Unused slots (derivative identically 0, never read as a state): machines mac_tra
-    psikd/psikq, mac_em all but delta/omega; exciters V_TR without T_R, V_As without T_B,
-    the smpexc Efd without T_A; the third PSS lead-lag without T_4 (PSTess's lbnd = 1e-3 s);
-    slots a type does not use (`ExciterParams.has_state`, `GovernorParams.has_state`).
+    psikd/psikq, mac_em all but delta/omega, an infinite bus's (H = 0) delta/omega too;
+    exciters V_TR without T_R, V_As without T_B, the smpexc Efd without T_A; the third PSS
+    lead-lag without T_4 (PSTess's lbnd = 1e-3 s); slots a type does not use
+    (`ExciterParams.has_state`, `GovernorParams.has_state`).
     """
     L, mp, ep, pp = model.layout, model.mp, model.ep, model.pp
     act = np.zeros(L.size, bool)
     m = L.view(act, "mac")
-    m[[0, 1]] = True
+    m[[0, 1]] = mp.H > 0  # an infinite bus (H = 0) holds its angle and speed
     m[[2, 4]] = mp.kind != mac.EM
     m[[3, 5]] = mp.kind == mac.SUB
     L.view(act, "exc")[:] = ep.has_state()
@@ -511,9 +512,10 @@ def output_matrices(model: DynamicModel, act, A, B, dVx, dVu, V0):
     """
     nm = model.mp.n
     pos = {int(k): i for i, k in enumerate(act)}
-    S = np.zeros((nm, act.size))  # omega_k = S x
-    S[np.arange(nm), [pos[nm + k] for k in range(nm)]] = 1.0
-    w = model.mp.H * model.case.machines.mva
+    S = np.zeros((nm, act.size))  # omega_k = S x (an infinite bus's: constant)
+    swing = [k for k in range(nm) if nm + k in pos]
+    S[swing, [pos[nm + k] for k in swing]] = 1.0
+    w = coi_inertia(model.mp.H, model.case.machines.mva)
     coi = coi_weights(w) @ S
     Vm = np.abs(V0)[:, None]
     dmag = lambda dV: (np.conj(V0)[:, None] * dV).real / Vm  # noqa: E731

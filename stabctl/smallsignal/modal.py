@@ -13,7 +13,9 @@ Conventions (docs/modal.md):
   (Hz), damping ratio -Re lambda / |lambda|;
 - the angle-reference mode (the common rotation of all rotor angles, A e = 0 analytically
   since no machine is taken as reference) is the mode whose right eigenvector is closest
-  in direction to e; it is excluded from damping statistics.
+  in direction to e; it is excluded from damping statistics.  A model with an infinite
+  bus (a machine of H = 0, whose angle and speed are not states, so the model has fewer
+  speed states than omega_G outputs) has none: the infinite bus is the reference.
 """
 
 from __future__ import annotations
@@ -46,10 +48,11 @@ class ModalAnalysis:
         participation (n, m) real, columns sum to 1; states (n,) names; machines (g,)
         numbers; inertia (g,) H*MVA weights; speed_shape (g, m) complex omega components of
         phi_i scaled so the largest is 1 + 0j; reference_mode: index of the angle-reference
-        mode; electromechanical: indices of the electromechanical modes; areas (g,) area
-        label (0..r-1) of each machine; kind (m,) 'angle reference', 'inter-area' (area
-        momentum fraction above INTER_AREA_ETA at INTER_AREA_MAX_HZ or below), 'local' or
-        'other'; eta (m,) area-momentum fraction (NaN outside the EM modes).
+        mode (None where an infinite bus holds the angles); electromechanical: indices of
+        the electromechanical modes; areas (g,) area label (0..r-1) of each machine; kind
+        (m,) 'angle reference', 'inter-area' (area momentum fraction above INTER_AREA_ETA
+        at INTER_AREA_MAX_HZ or below), 'local' or 'other'; eta (m,) area-momentum
+        fraction (NaN outside the EM modes).
     """
 
     eigenvalues: np.ndarray
@@ -62,7 +65,7 @@ class ModalAnalysis:
     machines: np.ndarray
     inertia: np.ndarray
     speed_shape: np.ndarray
-    reference_mode: int
+    reference_mode: int | None
     electromechanical: np.ndarray
     areas: np.ndarray
     kind: np.ndarray
@@ -117,7 +120,8 @@ class ModalAnalysis:
     def damping_statistics(self) -> dict:
         """Least damping ratio and its mode, over all modes but the angle reference, and
         over the electromechanical modes."""
-        rest = np.setdiff1d(np.arange(self.eigenvalues.size), [self.reference_mode])
+        ref = [] if self.reference_mode is None else [self.reference_mode]
+        rest = np.setdiff1d(np.arange(self.eigenvalues.size), ref)
         out = {}
         for key, idx in (("all", rest), ("electromechanical", self.electromechanical)):
             if idx.size:
@@ -184,7 +188,8 @@ def modal_analysis(
     inertia : array_like or None, optional
         H*MVA per machine (shape (g,), s*MVA, in the order of the speed states) for the
         coherency weights (default: the weights of the model's 'omega_coi' output, i.e.
-        the ones `linearise` used).
+        the ones `linearise` used; equal weights where the COI is an infinite bus, whose
+        model gives the others no weight).
     n_areas : int or None, optional
         Number of coherent areas (default: from the largest gap between consecutive
         electromechanical frequencies, `coherent_areas`).
@@ -226,12 +231,15 @@ def modal_analysis(
     machines = np.array([int(states[i].rsplit("_G", 1)[1]) for i in speed])
     if inertia is None:
         inertia = sys.C[sys.output_labels.index("omega_coi"), speed]
+        if not np.any(inertia):  # the COI is an infinite bus: no weight on the others
+            inertia = np.ones(speed.size)
     lam, right, left = eigen(np.asarray(sys.A))
     P = participation_factors(right, left)
     shape = _normalised(right[speed])
-    e = np.zeros(states.size)
+    e = np.zeros(states.size)  # the common rotation of the rotor angles
     e[angle] = 1.0
-    ref = int(np.argmax(np.abs(e @ right)))
+    n_mac = sum(1 for n in sys.output_labels if n.startswith("omega_G"))
+    ref = None if n_mac > speed.size else int(np.argmax(np.abs(e @ right)))
     f, mag = np.abs(lam.imag) / (2 * np.pi), np.abs(lam)
     zeta = np.divide(-lam.real, mag, out=np.ones_like(mag), where=mag > 0)  # lambda = 0: 1
     em = electromechanical_modes(f, P, states)
@@ -244,7 +252,8 @@ def modal_analysis(
     kind = np.full(lam.size, "other", dtype=object)
     inter = (eta[em] > INTER_AREA_ETA) & (f[em] <= INTER_AREA_MAX_HZ)
     kind[em] = np.where(inter, "inter-area", "local")
-    kind[ref] = "angle reference"
+    if ref is not None:
+        kind[ref] = "angle reference"
     return ModalAnalysis(
         eigenvalues=lam,
         freq_hz=f,
@@ -326,7 +335,7 @@ def coherent_areas(
     g = shape.shape[0]
     em = em[np.argsort(freq_hz[em])]
     if n_areas is None:
-        n_areas = 1 + _slow_mode_count(freq_hz[em])
+        n_areas = min(1 + _slow_mode_count(freq_hz[em]), g)  # one machine: one area
     if not 1 <= n_areas <= min(em.size + 1, g):
         raise InputError(
             f"the number of areas must be between 1 and {min(em.size + 1, g)} "

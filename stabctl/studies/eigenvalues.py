@@ -60,7 +60,8 @@ def eig_study(
     t0 = time.perf_counter()
     sys = linearise(case, conventions=conventions, q_limits=q_limits)
     t1 = time.perf_counter()
-    ma = modal_analysis(sys, n_areas=n_areas)
+    H, mva = case.machines.H, case.machines.mva
+    ma = modal_analysis(sys, inertia=(H * mva)[H > 0], n_areas=n_areas)
     sens = mode_sensitivity(sys, ma)
     return EigStudy(case, no_pss, sys, ma, sens, t1 - t0, time.perf_counter() - t1)
 
@@ -182,7 +183,11 @@ def area_sides(ma: ModalAnalysis, i: int) -> str:
 def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str:
     """The report text (electromechanical-mode table, areas, statistics, figures)."""
     ma, sys = st.ma, st.sys
-    lam_ref = ma.eigenvalues[ma.reference_mode]
+    ref = (
+        "none: an infinite bus (H = 0) holds the angles"
+        if ma.reference_mode is None
+        else f"lambda = {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s"
+    )
     stats = ma.damping_statistics()
     em = ma.electromechanical
     n_inter = int(np.sum(ma.kind[em] == "inter-area"))
@@ -200,7 +205,7 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         f"{sys.ninputs} inputs, {sys.noutputs} outputs (timings: `stabctl eig` prints them; "
         "the report holds no run-dependent values).",
         f"- Angle-reference mode (common rotation of all rotor angles, excluded from damping "
-        f"statistics): lambda = {lam_ref.real:.2e} 1/s.",
+        f"statistics): {ref}.",
         f"- {em.size} electromechanical modes ({n_inter} inter-area, {em.size - n_inter} local): "
         f"0.1-2.5 Hz, rotor angle/speed the largest participating state group.",
     ]

@@ -223,7 +223,12 @@ def test_machine_index():
         (
             dict(mac=modified(MAC, 1, 15, -6.5)),
             r"mac_con row 2 \(machine 2\), field 'H': inertia constant must be > 0 s "
-            r"\(H = 0, an infinite bus, is not modelled\), got -6.5",
+            r"\(H = 0, an infinite bus, only for a classical machine, x_d = 0, with x'd > 0\), "
+            r"got -6.5",
+        ),
+        (  # H = 0 on a subtransient machine: an infinite bus is a classical one
+            dict(mac=modified(MAC, 1, 15, 0.0)),
+            r"mac_con row 2 \(machine 2\), field 'H': .*only for a classical machine.*got 0",
         ),
         (
             dict(mac=modified(MAC, 0, 6, -0.3)),

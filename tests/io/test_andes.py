@@ -2067,3 +2067,49 @@ def test_ieee14_ac8b_field_voltage_and_speeds_match_andes():
     assert np.max(gap[away]) < 0.05
     assert np.max(gap[ta > 1.5]) < 0.03
     assert np.max(np.abs(speeds_on(ta, res, case, ss) - wa)) < 2e-5  # measured 1.1e-5
+
+
+def _islands_without_generator_3(tmp_path) -> Path:
+    """kundur_islands.xlsx with GENROU 3 and its controls removed: its static generator PV 3
+    is out of service, and ANDES initialises GENROU 3 from PV 3's p0 = 7 pu, which its
+    power flow did not place (its own run fails at initialisation with a mismatch of 7 pu
+    at bus 3); stabctl leaves the machine out (`_warn_generator_off`)."""
+    import pandas as pd
+
+    sheets = pd.read_excel(andes.get_case("kundur/kundur_islands.xlsx"), sheet_name=None)
+    sheets["GENROU"] = sheets["GENROU"][sheets["GENROU"].idx != 3]
+    for name in ("TGOV1", "EXDC2"):
+        sheets[name] = sheets[name][sheets[name].syn != 3]
+    out = tmp_path / "kundur_islands_fixed.xlsx"
+    with pd.ExcelWriter(out) as w:
+        for name, rows in sheets.items():
+            rows.to_excel(w, sheet_name=name, index=False)
+    return out
+
+
+def test_kundur_islands_slack_without_machine_is_an_infinite_bus_as_in_andes(tmp_path):
+    """kundur_islands: lines 7-8 open, two islands; island 2's Slack 5 (bus 3) has no
+    machine, so ANDES holds bus 3 at v0, a0 in its run (``slack.py``): imported as an
+    infinite bus (GENCLS, H = 0).  Flat for 10 s; ANDES's own Toggle (Line_8, buses 8-9,
+    at 2 s) and a 6-cycle fault at bus 9 in island 2 give ANDES's speeds."""
+    path = andes.get_case("kundur/kundur_islands.xlsx")
+    with pytest.warns(UserWarning, match=r"machine\(s\) 3 left out .* out of service"):
+        case = import_andes(path, on_unsupported="skip")
+    m = case.machines
+    assert list(m.bus) == [2, 4, 1, 3] and list(m.H) == [6.5, 6.175, 6.5, 0.0]
+    drift, res = flat_run(case)
+    assert drift < 1e-8
+    assert res.pelect[0, 3] == pytest.approx(9.3137, abs=1e-4)  # ANDES's Slack 5 power
+    fixed = _islands_without_generator_3(tmp_path)
+    sim = Simulator(case, q_limits=False)
+    for event, ours_events, bound in (
+        (None, [LineTrip(8, 9, 2.0, circuit=2)], 2e-6),  # measured 8.4e-7
+        (AndesFault(9, 1.0, 1.1, x=1e-3), [Fault(9, 1.0, 1.1, x=1e-3)], 3e-5),  # 1.05e-5
+    ):
+        ss = andes_system(fixed, fault=event, off=() if event is None else ("Toggle",))
+        t, wa = andes_speeds(ss, 10.0, STEP)
+        res = sim.run(ours_events, 10.0, h=STEP)
+        w = speeds_on(t, res, case, ss)
+        assert np.max(np.abs(wa[:, 2] - 1)) > 4e-4  # island 2's machine swings
+        assert np.max(np.abs(w - wa)) < bound
+        assert np.all(res.speed[:, 3] == 1.0)  # the infinite bus

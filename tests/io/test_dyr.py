@@ -368,7 +368,7 @@ def test_malformed_records_name_file_and_line(tmp_path, text, message):
             "1 'GENCLS' 1 3.0 0 /\n1 'GENCLS' 1 3.0 0 /\n",
             r"t.dyr:2 GENCLS .*second machine model .*t.dyr:1",
         ),
-        ("1 'GENCLS' 1 0.0 0 /\n", r"H = 0.0 \(PSS/E infinite bus\)"),
+        ("1 'GENCLS' 1 -1.0 0 /\n", r"H = -1.0 s must be >= 0 \(0: an infinite bus\)"),
         ("1 'GENCLS' 1 3.0 0 /\n1 'TGOV1' 1 0 0.5 1 0 1 2 0 /\n", r"t.dyr:2 TGOV1 .*droop R = 0.0"),
         ("1 'TGOV1' 1 0.05 0.5 1 0 1 2 0 /\n", r"machine 1 \(bus 1, id 1\)"),
     ],
