@@ -19,8 +19,23 @@ import warnings
 from pathlib import Path
 
 import andes
+import numpy as np
 
+from stabctl.dynamics.driver import Simulator
 from stabctl.io.andes_case import read_andes_case
+
+FLAT_S = 10.0  # s, the issue's flat run
+#: why a file that imports fails its flat run, where known (printed only while it fails)
+FLAT_WHY = {
+    "ei/EI_33.xlsx": "its power flow does not converge in ANDES either",
+    "ieee14/ieee14_island.xlsx": "buses 8 and 14 are islands without a swing bus (the "
+    "line to each is out of service); stabctl's power flow refuses them by name",
+    "kundur/kundur_esst3a.xlsx": "stiff: its ESST3A data (K_M = 500, T_M = 0.1 s, V_B about "
+    "4.3) close the inner loop at -21600 1/s (time constant 4.6e-5 s), so the explicit "
+    "predictor-corrector's default step is 2.3e-5 s and a 10 s run needs more steps than "
+    "MAX_STEPS (200 000); 4 s stay flat (tests/io/test_andes.py); ANDES integrates "
+    "implicitly (trapezoidal rule)",
+}
 
 #: ANDES's disturbance models: events of a run, not devices.  TimeSeries is a schedule of
 #: values like Alter's; ieee14_timeseries's writes PQ.Ppf and Qpf, which ANDES's own
@@ -60,15 +75,34 @@ def dynamic_case_files(root: Path) -> list[Path]:
     return found
 
 
-def blockers(path: Path) -> list[str]:
-    """What keeps the file from importing (empty: it imports)."""
+def check(path: Path) -> tuple[list[str], str]:
+    """What keeps the file from importing (empty: it imports) and, if it imports, its flat
+    run (`flat_run`)."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             result = read_andes_case(str(path), on_unsupported="skip")
     except Exception as exc:  # noqa: BLE001 - every refusal is a row of the table
-        return [f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}"]
-    return [x for x in result.left_out if x.split(" (")[0] not in DISTURBANCES]
+        return [f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}"], ""
+    why = [x for x in result.left_out if x.split(" (")[0] not in DISTURBANCES]
+    return why, ("" if why else flat_run(result.case))
+
+
+def flat_run(case) -> str:
+    """10 s without disturbance at the case's default step, PV Q limits off (ANDES's
+    default): the largest
+    change of any recorded quantity (speeds, angles, P, Q, E_fd, P_m, bus voltages,
+    converter P and Q; pu, rad) and the largest initial derivative, or why it fails."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = Simulator(case, q_limits=False).run([], FLAT_S)
+    except Exception as exc:  # noqa: BLE001 - a refusal is the row's verdict
+        return f"{type(exc).__name__}: {str(exc).splitlines()[0][:120]}"
+    series = [res.speed, res.angle, res.pelect, res.pmech, res.efd, res.vmag, res.vang]
+    series += [x for x in (res.ibr_p, res.ibr_q) if x is not None and x.size]
+    drift = max(float(np.ptp(x, axis=0).max(initial=0.0)) for x in series)
+    return f"{drift:.1e} ({res.meta['max_initial_derivative']:.0e})"
 
 
 def main() -> None:
@@ -77,12 +111,16 @@ def main() -> None:
     args = ap.parse_args()
     andes.config_logger(50)
     root = Path(andes.__file__).parent / "cases"
-    rows = {}
+    rows, flat = {}, {}
     for path in dynamic_case_files(root):
-        rows[str(path.relative_to(root))] = why = blockers(path)
-        print(f"{path.relative_to(root)}: {'imports' if not why else '; '.join(why[:3])}")
+        key = str(path.relative_to(root))
+        rows[key], flat[key] = why, drift = check(path)
+        print(f"{key}: {f'imports, flat {drift}' if not why else '; '.join(why[:3])}")
     ok = sorted(k for k, v in rows.items() if not v)
+    worst = max((float(flat[k].split()[0]) for k in ok if flat[k][0].isdigit()), default=0.0)
+    failed = [k for k in ok if not flat[k][0].isdigit()]
     print(f"\n{len(ok)} of {len(rows)} ANDES {andes.__version__} case files with dynamics import")
+    print(f"flat {FLAT_S:g} s: largest drift {worst:.1e}; runs refused or failed: {failed}")
     if args.markdown:
         causes = collections.Counter(
             w.split(" (")[0] if not w.startswith(("CaseError", "InputError")) else w
@@ -99,6 +137,16 @@ def main() -> None:
             "writes PQ.Ppf and Qpf, which ANDES's own time-domain run does not read: its "
             "loads are constant impedances from initialisation).",
             "",
+            f"Flat run of each file that imports ({FLAT_S:g} s without disturbance at its "
+            "default step, PV Q limits off as ANDES): largest change of any recorded "
+            "quantity (speeds, angles, P, Q, E_fd, P_m, bus voltages, converter P and Q), "
+            "and in brackets the largest "
+            f"initial derivative: **{worst:.1e} at most** over the files"
+            + (f"; refused or failed: {', '.join(failed)}" if failed else "")
+            + ".",
+            "",
+            *(f"- `{k}`: {FLAT_WHY[k]}." for k in failed if k in FLAT_WHY),
+            "",
             "## What blocks the others (files per cause)",
             "",
             "| files | model left out, or refusal |",
@@ -107,10 +155,11 @@ def main() -> None:
             "",
             "## Per file",
             "",
-            "| case file | imports | left out / refused |",
-            "|---|---|---|",
+            "| case file | imports | flat 10 s: drift (initial derivative) | left out / refused |",
+            "|---|---|---|---|",
             *(
-                f"| `{k}` | {'yes' if not v else 'no'} | {'; '.join(v).replace('|', '/')} |"
+                f"| `{k}` | {'yes' if not v else 'no'} | {flat[k]} | "
+                f"{'; '.join(v).replace('|', '/')} |"
                 for k, v in sorted(rows.items())
             ),
             "",

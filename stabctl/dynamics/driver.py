@@ -139,7 +139,9 @@ class Simulator:
     inertia : ndarray, shape (n_mac,)
         COI weights H * MVA per machine, MW s (paper eq. 40).
     fastest : tuple of (float, str)
-        The case's fastest time constant (s) and where it is (`fastest_time_constant`).
+        The case's fastest time constant (s) and where it is (`fastest_time_constant`), or a
+        faster loop's at the operating point (`DynamicModel.fastest_loop`: an ST3's inner
+        loop, `ExciterParams.inner_loop_time_constants`).
     conventions : str
         ``"ieee"`` or ``"pstess"``.
 
@@ -178,9 +180,6 @@ class Simulator:
             case = _with_solved_taps(case, pf.taps)
         single_threaded_blas()
         self.case, self.op = case, op
-        self.fastest = fastest_time_constant(case)
-        self.default_h = default_step(case, conventions, self.fastest) if step is None else step
-        check_step(self.fastest, self.default_h)
         self._models: dict[frozenset, DynamicModel] = {}
         #: the simulators of this case with WECC batteries (`_for_storage`), and in one of
         #: them the batteries' converter rows
@@ -188,6 +187,10 @@ class Simulator:
         self.battery_rows: np.ndarray | None = None
         self.off_equilibrium = off_equilibrium
         self.model = self.model_for(injection_buses)
+        #: the fastest time constant of the data, or of a loop at the operating point
+        self.fastest = min(fastest_time_constant(case), self.model.fastest_loop)
+        self.default_h = default_step(case, conventions, self.fastest) if step is None else step
+        check_step(self.fastest, self.default_h)
         self.inertia = coi_inertia(self.model.mp.H, case.machines.mva)
         if background_compile:
             self._compile_runs_elsewhere()

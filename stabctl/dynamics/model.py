@@ -265,6 +265,14 @@ class DynamicModel:
         vc0 = np.abs(V0[em] + (ep.Rcomp + 1j * ep.Xcomp) * I0[em])
         xe, self.Vref, self.ep = exc.initialise(ep, self.vex0[em], eterm0[em], VB0, vc0)
         ep = self.ep
+        tau = ep.inner_loop_time_constants(VB0, self.vex0[em])
+        k = int(np.argmin(tau)) if tau.size else 0
+        #: the fastest loop the data's time constants do not show: (s, where)
+        self.fastest_loop = (
+            (float(tau[k]), f"exc_con row {k + 1}: ST3 inner loop T_A/(1 + K_A K_G V_B)")
+            if tau.size
+            else (np.inf, "")
+        )
         L.view(x, "exc")[:] = xe
         L.view(x, "pss")[:] = pss_.initialise(
             self.pp, *pss_.pss_inputs(self.pp, xm[1], self.pmech0)

@@ -7,8 +7,9 @@ stabctl's case tables, so that a case whose dynamic data exist only in ANDES's f
 
 Network (ANDES's values after set-up, pu on the system base):
 
-* ``Bus``: number (its ``idx``, which must be an integer), ``Vn`` (kV), ``v0``, ``a0``,
-  ``vmax``, ``vmin``;
+* ``Bus``: number (its ``idx``, which must be an integer), ``Vn`` (kV), ``v0``, ``a0``
+  (``vmax``, ``vmin`` are not limits of ANDES's power flow: the bus table's are left at
+  PST's 1.5, 0.5);
 * ``PQ``: ``p0 + j q0`` into the bus load (constant impedance in dynamic runs: ANDES's
   default ``PQ.config.p2z = q2z = 1``, stabctl's default);
 * ``Shunt``: ``g + j b`` into the bus shunt;
@@ -432,7 +433,9 @@ def _network(ss, file: str) -> tuple[dict, dict]:
     bus[:, 1], bus[:, 2] = np.asarray(b.v0.v)[on], np.rad2deg(np.asarray(b.a0.v)[on])
     bus[:, 9] = PQ
     bus[:, 12] = np.asarray(b.Vn.v)[on]
-    bus[:, 13], bus[:, 14] = np.asarray(b.vmax.v)[on], np.asarray(b.vmin.v)[on]
+    # ANDES's Bus vmax, vmin are not limits of its power flow (its Newton does not clip; the
+    # case's voltages may lie beyond them, WECC-179's up to 1.167 pu against 1.1): columns
+    # 13, 14 are left 0, PST's clip to [0.5, 1.5], as for a PSS/E RAW file
     row = {b.idx.v[k]: r for r, k in enumerate(on)}
     for m, cols in ((ss.PQ, ((5, "p0"), (6, "q0"))), (ss.Shunt, ((7, "g"), (8, "b")))):
         for k in _in_service(m):

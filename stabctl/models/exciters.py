@@ -895,6 +895,28 @@ class ExciterParams(Declared):
             ("exc_con T_D", self.Td, self.has_pid_d),
         )
 
+    def inner_loop_time_constants(self, VB0: np.ndarray, efd0: np.ndarray) -> np.ndarray:
+        """The ST3 inner loop's time constant at the operating point (s), (n_exc,): T_A
+        dV_R/dt = K_A (V_A - K_G E_fd) - V_R with E_fd = V_B V_R closes the pole -(1 + K_A
+        K_G V_B)/T_A (ESST3A's K_M, T_M; PST exc_st3), T_A / (1 + K_A K_G V_B0) where the
+        feedback is below VGmax (K_G E_fd0 < VGmax) and T_A > 0; inf for the others.  ANDES's
+        kundur_esst3a: K_M = 500, T_M = 0.1 s, V_B = 4.3, 4.6e-5 s where T_M suggests 0.1 s.
+
+        Parameters
+        ----------
+        VB0 : ndarray, shape (n_exc,)
+            The source voltages at the operating point (`initial_source_voltage`), pu.
+        efd0 : ndarray, shape (n_exc,)
+            The field voltages at the operating point, pu.
+
+        Returns
+        -------
+        ndarray, shape (n_exc,)
+        """
+        loop = (self.kind == ST3) & (self.TA > 0) & (self.KG * efd0 < self.VGmax)
+        gain = 1.0 + self.KA * self.KG * VB0
+        return np.where(loop, self.TA / np.where(loop, gain, 1.0), np.inf)
+
 
 check_packed(ExciterParams, PACKED, ("Vref",))
 

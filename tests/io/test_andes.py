@@ -2113,3 +2113,44 @@ def test_kundur_islands_slack_without_machine_is_an_infinite_bus_as_in_andes(tmp
         assert np.max(np.abs(wa[:, 2] - 1)) > 4e-4  # island 2's machine swings
         assert np.max(np.abs(w - wa)) < bound
         assert np.all(res.speed[:, 3] == 1.0)  # the infinite bus
+
+
+def test_andes_bus_voltage_limits_do_not_clip_the_power_flow():
+    """ANDES's Bus vmax, vmin are not power-flow limits (its Newton does not clip):
+    wecc_full.xlsx's solution reaches 1.167 pu at bus 108 against its vmax 1.1.  Read as
+    PST's clip limits they kept stabctl's power flow from converging (10 pu mismatch at
+    bus 107); the bus table keeps PST's [0.5, 1.5] as for a RAW file."""
+    from stabctl.network.powerflow import solve_powerflow
+
+    path = andes.get_case("wecc/wecc_full.xlsx")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        imported = read_andes_case(path, on_unsupported="skip")
+    ss = andes_system(path)
+    andes_powerflow(ss)
+    assert max(ss.Bus.v.v - ss.Bus.vmax.v) > 0.06  # the case lies beyond its vmax
+    pf = solve_powerflow(imported.case, q_limits=False, tol=1e-12)
+    rows = imported.case.bus_indices(imported.pf_bus)
+    assert np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)) < 5e-6  # measured 1.8e-6
+    assert np.max(np.abs(pf.vang[rows] - imported.pf_vang)) < 2e-5  # measured 8.9e-6
+
+
+def test_kundur_esst3a_inner_loop_sets_the_step():
+    """kundur_esst3a.xlsx's ESST3A data (K_M = 500, T_M = 0.1 s, V_B = 4.3 at the operating
+    point) close the inner loop T_M dV_M/dt = K_M (V_A - K_G E_fd) - V_M, E_fd = V_B V_M,
+    at -(1 + K_M K_G V_B)/T_M: the linearised model's fastest pole (-21600 1/s) is that
+    loop's, its time constant the simulator's fastest; the default step is half of it
+    and stays flat, 5 ms (5 of T_M's 100 ms, where the run blew up at 0.27 s) is refused."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        case = import_andes(andes.get_case("kundur/kundur_esst3a.xlsx"), on_unsupported="skip")
+    sim = Simulator(case, q_limits=False)
+    tau, where = sim.fastest
+    assert "ST3 inner loop" in where
+    lam = np.linalg.eigvals(np.asarray(linearise(sim).A))
+    assert abs(lam.real.min() * tau + 1) < 0.01  # measured -21600.1 1/s against 1/tau
+    assert sim.default_h == pytest.approx(tau / 2)
+    res = sim.run([], 4.0)
+    assert np.ptp(res.speed, axis=0).max() < 1e-10 and np.ptp(res.efd, axis=0).max() < 1e-10
+    with pytest.raises(InputError, match=r"step 0.005 s is too large.*ST3 inner loop"):
+        sim.run([], 1.0, h=0.005)
