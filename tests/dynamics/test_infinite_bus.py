@@ -1,6 +1,7 @@
 """An infinite bus (PSS/E's GENCLS with H = 0) in the multi-machine simulator: the paper's
-one-machine infinite-bus system written as a PSS/E case (tests/data/psse/smib_v33.raw,
-smib.dyr) against the closed forms of `stabctl.smib.omib`: the equal-area CCT (paper
+Section 2 machine (H = 3 s, Pm = 0.5 pu, no damping) against an infinite bus, written as a
+PSS/E case (tests/data/psse/smib_v33.raw, smib.dyr; delta0 = 0.455 rad from its
+reactances), against the closed forms of `stabctl.smib.omib`: the equal-area CCT (paper
 Section 2) and the small-signal swing frequency sqrt(omega_s Pmax cos(delta0) / 2H)."""
 
 from pathlib import Path
@@ -46,7 +47,7 @@ def test_cct_equals_the_equal_area_criterion(sim):
     0 and the closed form t_cr = sqrt(2 M (delta_cr - delta0) / Pm)."""
     cct = critical_clearing_time(sim, LineFault(1, None))
     t_eac = omib_of(sim).critical_clearing_time()  # 0.2564 s
-    assert cct.t_stable <= t_eac < cct.t_unstable
+    assert cct.t_stable <= t_eac < cct.t_unstable  # [0.256, 0.257) s against 0.25639 s
     assert cct.separated == (1,)  # the machine leaves the infinite bus
 
 
@@ -60,7 +61,7 @@ def test_swing_mode_equals_the_closed_form(sim):
     o = omib_of(sim)
     w = np.sqrt(o.omega_s * o.Pmax_pre * np.cos(o.delta0) / (2 * H))  # rad/s
     (lam,) = ma.eigenvalues
-    assert abs(lam - 1j * w) < 1e-4 * w
+    assert abs(lam - 1j * w) < 1e-7 * w  # measured 8.4e-10 (central differences)
 
 
 def test_an_infinite_bus_must_be_classical_with_a_source_reactance(tmp_path):
