@@ -45,7 +45,8 @@ the ANDES models read as it, ``DyrModel.andes``; :data:`MAPPED_MODELS` lists the
 ANDES's TGOV1N, TGOV1 with the reference after the droop, is read as TGOV1: the same
 dynamics at a constant reference.  Values are ANDES's inputs (``vin``: machine data on
 the machine base ``Sn``, as PSS/E).  Machine ``k`` of the case is the ``k``-th synchronous
-generator in the order of ANDES's static generators (``PV`` rows, then ``Slack``).
+generator in the order of ANDES's static generators (``PV`` rows, then ``Slack``), the
+infinite buses after them.
 
 Converter-interfaced devices (:mod:`stabctl.models.converters`, docs/ibr.md): ``PVD1``,
 ``ESD1``, ``REGCA1`` and ``REGCP1`` (a REGCA1 whose angle may come from a PLL) become rows
