@@ -2,25 +2,38 @@
 angles or speeds, weights M_i = H_i * MVA_i.
 
 The one implementation of the COI for the layers from `stabctl.dynamics` up (results,
-simulation, SIME, linearisation, estimation).  The compiled loop's counterpart,
-`coi_value`, lives in the storage layer, the lowest that needs it (its controller
-kernels), and is re-exported here.
+simulation, SIME, linearisation, estimation).  The compiled loop's counterparts,
+`coi_value` and `island_coi`, live in the storage layer, the lowest that needs them (its
+controller kernels), and are re-exported here.
+
+A network of several islands has one COI per island (`coi_of_islands`): a machine swings
+against the machines it is connected to, so its loss of synchronism and the relative
+speed its storage device acts on are judged there.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from stabctl.storage.control import coi_value
+from stabctl.storage.control import coi_value, island_coi
 
-__all__ = ["coi_inertia", "coi_weights", "coi_angle", "coi_speed", "coi_of_rest", "coi_value"]
+__all__ = [
+    "coi_inertia",
+    "coi_weights",
+    "coi_angle",
+    "coi_speed",
+    "coi_of_rest",
+    "coi_of_islands",
+    "coi_value",
+    "island_coi",
+]
 
 
-def coi_inertia(H: np.ndarray, mva: np.ndarray) -> np.ndarray:
-    """The machines' COI weights M_i = H_i * MVA_i (MW s, paper eq. 40); where the case holds
-    infinite buses (H = 0, `stabctl.case.system.MachineTable`), theirs: 1 each, 0 for the
-    others (an infinite bus is a machine of infinite inertia, the reference the others
-    swing against, as in the paper's Section 2).
+def coi_inertia(H: np.ndarray, mva: np.ndarray, island: np.ndarray | None = None) -> np.ndarray:
+    """The machines' COI weights M_i = H_i * MVA_i (MW s, paper eq. 40); in an island that
+    holds infinite buses (H = 0, `stabctl.case.system.MachineTable`), theirs: 1 each, 0 for
+    the island's others (an infinite bus is a machine of infinite inertia, the reference
+    the others swing against, as in the paper's Section 2).
 
     Parameters
     ----------
@@ -28,16 +41,44 @@ def coi_inertia(H: np.ndarray, mva: np.ndarray) -> np.ndarray:
         Inertia constants (s, machine base), >= 0.
     mva : ndarray, shape (n_mac,)
         Machine bases (MVA).
+    island : ndarray of int, shape (n_mac,), or None, optional
+        Each machine's island (`stabctl.network.topology.machine_islands`); default: one.
 
     Returns
     -------
     ndarray, shape (n_mac,)
-        The weights (MW s, or 0/1 with infinite buses).
+        The weights (MW s, or 0/1 in an island with infinite buses).
     """
-    infinite = np.asarray(H) == 0
-    if infinite.any():
-        return infinite.astype(float)
-    return np.asarray(H) * np.asarray(mva)
+    H = np.asarray(H, float)
+    M = H * np.asarray(mva, float)
+    island = np.zeros(H.size, int) if island is None else np.asarray(island)
+    for k in np.unique(island[H == 0]):
+        here = island == k
+        M[here] = (H[here] == 0).astype(float)
+    return M
+
+
+def coi_of_islands(values: np.ndarray, inertia: np.ndarray, island: np.ndarray) -> np.ndarray:
+    """Each machine's own island's COI value (eq. 40 over the machines of its island; the
+    system's COI, repeated, in a connected network).
+
+    Parameters
+    ----------
+    values : ndarray, shape (..., n_mac)
+        Rotor angles (rad) or speeds (pu), machines on the last axis.
+    inertia : ndarray, shape (n_mac,)
+        Weights M_i (`coi_inertia`).
+    island : ndarray of int, shape (n_mac,)
+        Each machine's island (`stabctl.network.topology.machine_islands`).
+
+    Returns
+    -------
+    ndarray, shape (..., n_mac)
+        The COI of machine i's island in column i.
+    """
+    same = np.asarray(island)[:, None] == np.asarray(island)[None, :]
+    W = same * np.asarray(inertia, float)[None, :]
+    return values @ (W / W.sum(axis=1, keepdims=True)).T
 
 
 def coi_weights(inertia: np.ndarray) -> np.ndarray:

@@ -3,8 +3,11 @@ driving the compiled loop (`stabctl.dynamics.integrator.integrate`) piecewise (`
 turning its recording into a `SimulationResult`.
 
 Loss of synchronism: a machine's angle leaves the centre of inertia (eq. 40, weights H*MVA)
-by more than `separation_limit` rad; the separated machines are the smaller coherent group
-(`separated_group`); the run can stop there.  A run that leaves the integrator's stability
+of its island (the machines its network joins it to before the disturbance,
+`machine_islands`) by more than `separation_limit` rad; the separated machines are the
+smaller coherent group (`separated_group`); the run can stop there.  A disturbance that
+splits the network is judged against the COI of the island before it: the parts it
+leaves drift apart, a separation.  A run that leaves the integrator's stability
 region raises NumericalInstabilityError naming the time and the state; a singular network
 raises SimulationError; both carry the trajectory up to that point.
 """
@@ -22,7 +25,7 @@ from stabctl._jit.cache import cached
 from stabctl.case import Case
 from stabctl.dynamics import events as ev_
 from stabctl.dynamics import integrator as ig
-from stabctl.dynamics.coi import coi_angle, coi_inertia
+from stabctl.dynamics.coi import coi_inertia, coi_of_islands
 from stabctl.dynamics.grid import (
     check_step,
     check_step_count,
@@ -44,6 +47,7 @@ from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
 from stabctl.models import converters as conv
+from stabctl.network.topology import machine_islands
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
 
@@ -137,7 +141,10 @@ class Simulator:
     model : DynamicModel
         The model keeping `injection_buses`.
     inertia : ndarray, shape (n_mac,)
-        COI weights H * MVA per machine, MW s (paper eq. 40).
+        COI weights H * MVA per machine, MW s (paper eq. 40; `coi_inertia`).
+    island : ndarray of int, shape (n_mac,)
+        Each machine's island in the case's network (`machine_islands`): its COI is its
+        island's.
     fastest : tuple of (float, str)
         The case's fastest time constant (s) and where it is (`fastest_time_constant`), or a
         faster loop's at the operating point (`DynamicModel.fastest_loop`: an ST3's inner
@@ -191,7 +198,8 @@ class Simulator:
         self.fastest = min(fastest_time_constant(case), self.model.fastest_loop)
         self.default_h = default_step(case, conventions, self.fastest) if step is None else step
         check_step(self.fastest, self.default_h)
-        self.inertia = coi_inertia(self.model.mp.H, case.machines.mva)
+        self.island = machine_islands(case)
+        self.inertia = coi_inertia(self.model.mp.H, case.machines.mva, self.island)
         if background_compile:
             self._compile_runs_elsewhere()
         self.model.check_equilibrium(off_equilibrium)
@@ -475,13 +483,13 @@ class Simulator:
     def _result(self, t, rec: ig.Recording, n, wall, limit) -> SimulationResult:
         c = self.case
         angle = rec.angle[:n]
-        dev = np.abs(angle - coi_angle(angle, self.inertia)[:, None])
+        dev = np.abs(angle - coi_of_islands(angle, self.inertia, self.island))
         lost = np.nonzero(dev.max(axis=1) > limit)[0]
         t_sep, separated = None, []
         if lost.size:
             k = int(lost[0])
             t_sep = float(t[k])
-            group = separated_group(angle[k], self.inertia)
+            group = separated_group(angle[k], self.inertia, self.island)
             separated = [int(x) for x in c.machines.number[group]]
         return SimulationResult(
             t=t[:n].copy(),
@@ -495,6 +503,7 @@ class Simulator:
             vmag=np.abs(rec.V[:n]),
             vang=np.angle(rec.V[:n]),
             inertia=self.inertia,
+            island=self.island,
             converters=c.converters.number.astype(int),
             ibr_p=rec.S_ibr[:n].real.copy() if len(c.converters) else None,
             ibr_q=rec.S_ibr[:n].imag.copy() if len(c.converters) else None,
@@ -564,7 +573,9 @@ class _Run:
             health=ig.Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3))),
         )
         self.nets, self.steps = stacked_networks(nets), ig.step_grid(grid)
-        self.opts = ig.RunOptions(pst=pst, inertia=sim.inertia, limit=limit, stop=stop)
+        self.opts = ig.RunOptions(
+            pst=pst, inertia=sim.inertia, island=sim.island, limit=limit, stop=stop
+        )
         self.limit = limit
         #: the model's parameters with the run's largest step as the limiters' reach
         self.params = m.params._replace(reach=float(np.max(grid.h)))
@@ -634,6 +645,7 @@ class _Run:
             vmag=np.abs(r.V[lo:n]),
             vang=np.angle(r.V[lo:n]),
             inertia=self.sim.inertia,
+            island=self.sim.island,
             devices=np.arange(1, self.sa.pmax.size + 1),
             pesd=self.rec.P[lo:n],
         )
@@ -724,11 +736,18 @@ def _attach_storage(
     ]
 
 
-def separated_group(delta: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+def separated_group(
+    delta: np.ndarray, inertia: np.ndarray, island: np.ndarray | None = None
+) -> np.ndarray:
     """Machines that lost synchronism: split the rotor angles at their largest gap into two
     coherent groups and return the indices of the group with the smaller inertia (the
-    leading group on a tie), sorted."""
-    order = np.argsort(delta)
+    leading group on a tie), sorted.  With islands (n_mac,) int, within the island of the
+    machine farthest from its island's COI."""
+    within = np.arange(delta.size)
+    if island is not None and np.max(island) > 0:
+        far = np.argmax(np.abs(delta - coi_of_islands(delta, inertia, island)))
+        within = np.flatnonzero(island == island[far])
+    order = within[np.argsort(delta[within])]
     cut = int(np.argmax(np.diff(delta[order]))) + 1
     lagging, leading = order[:cut], order[cut:]
     m_lag, m_lead = inertia[lagging].sum(), inertia[leading].sum()

@@ -28,7 +28,7 @@ import numpy as np
 from stabctl._jit.arrays import assign, max_abs
 from stabctl._jit.decorators import kernel, njit
 from stabctl.dynamics import switching as sw
-from stabctl.dynamics.coi import coi_value
+from stabctl.dynamics.coi import island_coi
 from stabctl.dynamics.model import (
     BUS_VOLTAGES,
     NO_BUS_VOLTAGES,
@@ -158,11 +158,12 @@ def step_grid(grid: TimeGrid) -> StepGrid:
 
 class RunOptions(NamedTuple):
     """Settings of a run: pst event semantics (module docstring); inertia (n_mac,) the COI
-    weights H * MVA; limit (rad) and stop: end the run when an angle leaves the COI by more
-    than limit."""
+    weights H * MVA; island (n_mac,) int, each machine's island (its COI is its island's);
+    limit (rad) and stop: end the run when an angle leaves its COI by more than limit."""
 
     pst: bool
     inertia: np.ndarray
+    island: np.ndarray
     limit: float
     stop: bool
 
@@ -261,8 +262,8 @@ def _healthy(x, est, nm, health):
 
 @kernel
 def _separated(x, nm, opts):
-    """Whether a rotor angle is more than opts.limit from the COI angle (eq. 40)."""
-    return max_abs(x[:nm] - coi_value(x[:nm], opts.inertia)) > opts.limit
+    """Whether a rotor angle is more than opts.limit from its island's COI angle (eq. 40)."""
+    return max_abs(x[:nm] - island_coi(x[:nm], opts.inertia, opts.island)[0]) > opts.limit
 
 
 # -- recording -------------------------------------------------------------------------------
@@ -316,7 +317,7 @@ def _evaluate(kn, x, stage, want, dx):
 def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
     """The controller at grid index k (events make voltages jump here): commands due,
     Table 3 modes, targets and powers; the network is solved again if a power changed."""
-    sw.observe(x, w.dx_k, kn.p.n_mac, opts.inertia, sa, kn.kept.V, w.a)
+    sw.observe(x, w.dx_k, kn.p.n_mac, opts, sa, kn.kept.V, w.a)
     if sa.kind == law.EXTERNAL:
         sw.apply_commands(ds, grid.t[k], rec, w.a.r)
     for d in range(sa.pmax.size):
@@ -339,7 +340,7 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, at):
     solved, derivatives)."""
     k, rem, first_d = at
     t_now = grid.t[k + 1] - rem
-    sw.observe(x_a, w.dx_j, kn.p.n_mac, opts.inertia, sa, kn.kept.V, w.a)
+    sw.observe(x_a, w.dx_j, kn.p.n_mac, opts, sa, kn.kept.V, w.a)
     if sa.kind == law.EXTERNAL:
         sw.apply_commands(ds, t_now, rec, w.a.r)
     if first_d >= 0:

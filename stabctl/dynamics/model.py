@@ -34,9 +34,9 @@ from stabctl.network.solution import (
     reduce_network,
     solve_nc,
 )
+from stabctl.network.topology import OPEN_X, bus_islands
 
 FAULT_B = 1e7  # PST's bolted-fault shunt susceptance (1/1e-7)
-OPEN_X = 1e7  # PST opens a branch by giving it this reactance (charging stays in PST)
 #: largest |derivative| at t = 0 of an equilibrium (DynamicModel.check_equilibrium)
 EQUILIBRIUM_TOL = 1e-8
 
@@ -810,20 +810,12 @@ call_evaluate = by_address(
 def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:
     """Raise InputError when a stage leaves buses without a path to any online machine
     (PST cannot solve such an island either); names the buses."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     if len(stage.machines) == 0:
         raise InputError(
             f"case '{stage.name}' has no machines (mac_con is empty): a dynamic "
             "run or linearisation needs at least one"
         )
-    br = stage.branches
-    closed = br.x < OPEN_X / 10
-    f, t = stage.bus_indices(br.from_bus[closed]), stage.bus_indices(br.to_bus[closed])
-    n = stage.n_bus
-    graph = coo_matrix((np.ones(f.size), (f, t)), shape=(n, n))
-    _, label = connected_components(graph, directed=False)
+    label = bus_islands(stage)
     live = np.isin(label, label[source_buses])
     dead = np.nonzero(~live[:n_orig])[0]
     if dead.size:

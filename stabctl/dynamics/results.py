@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.dynamics.coi import coi_angle, coi_speed
+from stabctl.dynamics.coi import coi_angle, coi_of_islands, coi_speed
 from stabctl.parallel import atomic_write
 
 SERIES = ("speed", "angle", "pelect", "pmech", "efd")
@@ -37,7 +37,7 @@ class SimulationResult:
     both ends at the same instant, as PSTess), n_mac the number of machines, n_bus
     of buses, n_dev of storage devices.
     The loss-of-synchronism verdict uses the centre of inertia (paper eq. 40, weights
-    `inertia`).
+    `inertia`) of each machine's island (`island`; one in a connected network).
 
     Attributes
     ----------
@@ -63,6 +63,9 @@ class SimulationResult:
         Bus voltage angles, rad.
     inertia : ndarray, shape (n_mac,)
         COI weights H * MVA per machine, MW s (MJ).
+    island : ndarray of int, shape (n_mac,), optional
+        Each machine's island in the network before the disturbance
+        (`stabctl.network.topology.machine_islands`); default all 0 (connected).
     devices : ndarray of int, shape (n_dev,), optional
         Storage device numbers (1, 2, ... in the fleet's order); empty (default) without
         storage.
@@ -101,6 +104,7 @@ class SimulationResult:
     vmag: np.ndarray
     vang: np.ndarray
     inertia: np.ndarray
+    island: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     devices: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     pesd: np.ndarray | None = None
     converters: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
@@ -111,21 +115,40 @@ class SimulationResult:
     separated: list = field(default_factory=list)
     meta: dict = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        if self.island.size == 0:
+            self.island = np.zeros(self.machines.size, int)
+
     # -- centre of inertia (paper eq. 40) ----------------------------------------------
     @property
     def coi_angle(self) -> np.ndarray:
-        """Inertia-weighted mean rotor angle (rad), shape (n_t,)."""
+        """Inertia-weighted mean rotor angle (rad), shape (n_t,), over every machine (the
+        system's COI in a connected network; per island: `relative_angle`)."""
         return coi_angle(self.angle, self.inertia)
 
     @property
     def coi_speed(self) -> np.ndarray:
-        """Inertia-weighted mean speed (pu), shape (n_t,)."""
+        """Inertia-weighted mean speed (pu), shape (n_t,), over every machine (the
+        system's COI in a connected network; per island: `relative_speed`)."""
         return coi_speed(self.speed, self.inertia)
 
     @property
+    def relative_angle(self) -> np.ndarray:
+        """delta_i - delta_COI of machine i's island (rad), shape (n_t, n_mac): what the
+        loss-of-synchronism verdict judges."""
+        return self.angle - coi_of_islands(self.angle, self.inertia, self.island)
+
+    @property
+    def relative_speed(self) -> np.ndarray:
+        """omega_i - omega_COI of machine i's island (pu), shape (n_t, n_mac): what a
+        storage device's controller acts on."""
+        return self.speed - coi_of_islands(self.speed, self.inertia, self.island)
+
+    @property
     def max_angle_spread(self) -> float:
-        """Largest abs(delta_i - delta_COI) over the run (rad)."""
-        return float(np.max(np.abs(self.angle - self.coi_angle[:, None])))
+        """Largest abs(delta_i - delta_COI) over the run, each machine against its
+        island's COI (rad)."""
+        return float(np.max(np.abs(self.relative_angle)))
 
     def speed_at(self, t: np.ndarray) -> np.ndarray:
         """Rotor speeds at given times, by linear interpolation in the trajectory.

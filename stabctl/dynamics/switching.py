@@ -142,10 +142,11 @@ def advance(sa, P, target, e, hh, stats):
 
 
 @kernel
-def observe(x, dx, nm, inertia, sa, V_nc, seen):
-    """Relative speeds, bus voltages and relative accelerations seen by the devices."""
-    law.relative_speeds(x, nm, inertia, sa, seen.r)
-    law.relative_speeds(dx, nm, inertia, sa, seen.acc)
+def observe(x, dx, nm, opts, sa, V_nc, seen):
+    """Relative speeds, bus voltages and relative accelerations seen by the devices (COI
+    weights and islands of the run's options, `stabctl.dynamics.integrator.RunOptions`)."""
+    law.relative_speeds(x, nm, opts.inertia, opts.island, sa, seen.r)
+    law.relative_speeds(dx, nm, opts.inertia, opts.island, sa, seen.acc)
     for d in range(seen.r.size):
         seen.v[d] = abs(V_nc[sa.pos[d]])
 
@@ -184,7 +185,7 @@ def locate_switching(kn, grid, sa, ds, opts, w, x_b, k):
     """First bang-bang switching inside the step from grid index k (state x_b and w.dx_j at
     its end): (fraction of the step, device), (2.0, -1) if none.  A device switches at most
     once per step; a voltage-gate jump at an event is taken at the grid point."""
-    observe(x_b, w.dx_j, kn.p.n_mac, opts.inertia, sa, kn.kept.V, w.b)
+    observe(x_b, w.dx_j, kn.p.n_mac, opts, sa, kn.kept.V, w.b)
     at_event = grid.interval[k + 1] != grid.interval[k]
     theta, first_d = 2.0, -1
     for d in range(sa.pmax.size):

@@ -41,6 +41,7 @@ import scipy.sparse.linalg as spla
 
 from stabctl.case import PQ, PV, SWING, Case
 from stabctl.errors import PowerFlowError
+from stabctl.network.topology import bus_islands
 from stabctl.network.ybus import branch_flows, build_ybus
 
 __all__ = ["PowerFlowResult", "solve_powerflow", "power_injections", "jacobian"]
@@ -298,16 +299,9 @@ def _check_islands(case: Case, drop=()) -> None:
     """PowerFlowError naming the buses without a path to a swing bus (an island of the
     case data, or left by the dropped branches): the Newton step would only report a
     singular Jacobian and the worst mismatch somewhere else."""
-    from scipy.sparse.csgraph import connected_components
-
-    n = case.n_bus
     keep = np.ones(len(case.branches), bool)
     keep[[d for d in drop if 0 <= d < keep.size]] = False
-    f = case.bus_indices(case.branches.from_bus[keep])
-    t = case.bus_indices(case.branches.to_bus[keep])
-    _, label = connected_components(
-        sp.coo_matrix((np.ones(f.size), (f, t)), shape=(n, n)), directed=False
-    )
+    label = bus_islands(case, keep)
     dead = np.flatnonzero(~np.isin(label, label[case.buses.kind == SWING]))
     if dead.size:
         nums = [int(b) for b in case.buses.number[dead]]

@@ -18,8 +18,11 @@ Inputs (columns of B and D, in this order):
     Pref_G<k>   power reference of machine k's governor (pu on the machine base).
 Outputs (rows of C and D, deviations from the operating point):
     omega_G<k>      machine speed (pu);
-    omega_coi       centre-of-inertia speed, weights H*MVA (paper eq. 40) (pu);
-    omega_rel_G<k>  omega_k - omega_coi (pu);
+    omega_coi       centre-of-inertia speed, weights H*MVA (paper eq. 40) (pu), over every
+                    machine (`stabctl.dynamics.coi.coi_inertia`);
+    omega_rel_G<k>  omega_k - the COI speed of machine k's island (pu): omega_k - omega_coi
+                    in a connected network; what the simulator's storage controllers act
+                    on (`stabctl.dynamics.coi.coi_of_islands`);
     vmag_B<n>       bus voltage magnitude (pu);
     f_bus_B<n>      bus frequency deviation (Hz) = (d theta_n / dt) / 2 pi, by the chain rule
                     (C, D) = dtheta/dx (A, B) / 2 pi; the term dtheta/du du/dt (an impulse at
@@ -40,7 +43,7 @@ from stabctl._jit.arrays import assign, max_abs
 from stabctl._jit.background import await_background, compile_in_background
 from stabctl._jit.decorators import njit
 from stabctl.case import Case
-from stabctl.dynamics.coi import coi_inertia, coi_weights
+from stabctl.dynamics.coi import coi_inertia, coi_of_islands, coi_weights
 from stabctl.dynamics.model import (
     BUS_VOLTAGES,
     DynamicModel,
@@ -56,6 +59,7 @@ from stabctl.errors import InputError, SimulationError
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
+from stabctl.network.topology import machine_islands
 
 REL_STEP = 1e-4  # PSTess svm_mgen's relative perturbation
 KINK_RATIO = 1e-2  # one-sided slopes differing more than this: a limit was crossed
@@ -515,14 +519,16 @@ def output_matrices(model: DynamicModel, act, A, B, dVx, dVu, V0):
     S = np.zeros((nm, act.size))  # omega_k = S x (an infinite bus's: constant)
     swing = [k for k in range(nm) if nm + k in pos]
     S[swing, [pos[nm + k] for k in swing]] = 1.0
-    w = coi_inertia(model.mp.H, model.case.machines.mva)
+    island = machine_islands(model.case)
+    w = coi_inertia(model.mp.H, model.case.machines.mva, island)
     coi = coi_weights(w) @ S
+    rel = S - coi_of_islands(S.T, w, island).T
     Vm = np.abs(V0)[:, None]
     dmag = lambda dV: (np.conj(V0)[:, None] * dV).real / Vm  # noqa: E731
     dang = lambda dV: (np.conj(V0)[:, None] * dV).imag / Vm**2  # noqa: E731
     Tx = dang(dVx)
     two_pi = 2 * np.pi
-    C = np.vstack([S, coi, S - coi, dmag(dVx), Tx @ A / two_pi])
+    C = np.vstack([S, coi, rel, dmag(dVx), Tx @ A / two_pi])
     D = np.vstack([np.zeros((2 * nm + 1, B.shape[1])), dmag(dVu), Tx @ B / two_pi])
     return C, D
 

@@ -214,21 +214,42 @@ def coi_value(values, inertia):
 
 
 @njit
-def relative_speeds(x, nm, inertia, sa, out):
-    """omega_i - omega_COI (pu) of each device's machine: COI of all machines (eq. 40) or of
-    the rest of the system (sa.rest); 0 for a device without a machine.  x: flat state
-    (speeds in x[nm:2 nm]); out (n_dev,) is written."""
-    M = inertia.sum()
-    coi = coi_value(x[nm : 2 * nm], inertia)
+def island_coi(values, inertia, island):
+    """Each machine's centre-of-inertia value and inertia: eq. 40 over the machines of its
+    island.  values, inertia (n_mac,); island (n_mac,) int labels 0, 1, ...
+    (`stabctl.network.topology.machine_islands`).  Returns coi, M (n_mac,) each; in one
+    island, `coi_value` and sum(inertia) for every machine (same digits)."""
+    nm = values.size
+    n_islands = island.max() + 1
+    if n_islands == 1:
+        return np.full(nm, coi_value(values, inertia)), np.full(nm, inertia.sum())
+    coi, M = np.empty(nm), np.empty(nm)
+    for k in range(n_islands):
+        w = np.where(island == k, inertia, 0.0)
+        m = w.sum()
+        c = coi_value(values, w)
+        for i in range(nm):
+            if island[i] == k:
+                coi[i], M[i] = c, m
+    return coi, M
+
+
+@njit
+def relative_speeds(x, nm, inertia, island, sa, out):
+    """omega_i - omega_COI (pu) of each device's machine: COI of the machines of its island
+    (eq. 40; the whole system when connected) or of the rest of them (sa.rest); 0 for a
+    device without a machine.  x: flat state (speeds in x[nm:2 nm]); island (n_mac,) int
+    (`island_coi`); out (n_dev,) is written."""
+    coi, M = island_coi(x[nm : 2 * nm], inertia, island)
     for d in range(sa.mac.size):
         i = sa.mac[d]
         w = x[nm + i]
         if i < 0:
             out[d] = 0.0
         elif sa.rest:
-            out[d] = w - (coi * M - w * inertia[i]) / (M - inertia[i])
+            out[d] = w - (coi[i] * M[i] - w * inertia[i]) / (M[i] - inertia[i])
         else:
-            out[d] = w - coi
+            out[d] = w - coi[i]
 
 
 @njit

@@ -33,6 +33,7 @@ andes = pytest.importorskip("andes")
 from runs import flat_run  # noqa: E402
 
 from stabctl.case import ExciterTable  # noqa: E402
+from stabctl.dynamics.coi import coi_of_islands  # noqa: E402
 from stabctl.dynamics.driver import Simulator  # noqa: E402
 from stabctl.dynamics.events import Fault, LineTrip, LoadStep  # noqa: E402
 from stabctl.errors import CaseError, InputError  # noqa: E402
@@ -2114,6 +2115,47 @@ def test_kundur_islands_slack_without_machine_is_an_infinite_bus_as_in_andes(tmp
         assert np.max(np.abs(wa[:, 2] - 1)) > 4e-4  # island 2's machine swings
         assert np.max(np.abs(w - wa)) < bound
         assert np.all(res.speed[:, 3] == 1.0)  # the infinite bus
+
+
+def test_kundur_islands_fault_in_the_island_without_infinite_bus_is_judged_in_its_island(
+    tmp_path,
+):
+    """A 6-cycle fault at bus 7 in island 1 (machines 1, 3 at buses 2, 1): the island's
+    frequency swings (0.7 %) and its angles drift 3 rad from island 2's infinite bus, no
+    loss of synchronism (its two machines stay together).  Judged against one COI, the
+    infinite bus, the run was a separation of machines 1 and 3 at 1.88 s; judged per
+    island (`machine_islands`) it is stable, as ANDES's angles are in each island."""
+    path = andes.get_case("kundur/kundur_islands.xlsx")
+    with pytest.warns(UserWarning, match="left out"):
+        case = import_andes(path, on_unsupported="skip")
+    sim = Simulator(case, q_limits=False)
+    assert list(sim.island) == [0, 1, 0, 1]
+    ss = andes_system(
+        _islands_without_generator_3(tmp_path),
+        fault=AndesFault(7, 1.0, 1.1, x=1e-3),
+        off=("Toggle",),
+    )
+    t, wa = andes_speeds(ss, 10.0, STEP)
+    res = sim.run([Fault(7, 1.0, 1.1, x=1e-3)], 10.0, h=STEP)
+    assert res.stable and res.max_angle_spread < 1.0
+    one_coi = res.angle - res.angle[:, [3]]  # against the infinite bus alone
+    assert np.max(np.abs(one_coi)) > np.pi
+    rows = paired_rows(case.machines.bus, andes_machine_buses(ss))
+    delta = np.array(res.angle[:1].repeat(t.size, 0))  # the infinite bus's angle: held
+    order = np.argsort(np.array(ss.GENROU.gen.v, dtype=float))  # andes_machine_buses's
+    delta[:, rows] = np.asarray(ss.dae.ts.x)[:, np.asarray(ss.GENROU.delta.a)[order]]
+    andes_rel = delta - coi_of_islands(delta, sim.inertia, sim.island)
+    assert np.max(np.abs(andes_rel)) < 1.0  # ANDES: stable in each island too
+    assert np.max(np.abs(wa - 1)) > 5e-3
+    assert np.max(np.abs(speeds_on(t, res, case, ss) - wa)) < 2e-4  # measured 1.1e-4
+    lin = linearise(sim)  # its relative speeds are the controllers': per island
+    C = np.asarray(lin.C)
+    out = {name: C[i] for i, name in enumerate(lin.output_labels)}
+    rel = np.array([out[f"omega_rel_G{k}"] for k in case.machines.number.astype(int)])
+    w = np.array([out[f"omega_G{k}"] for k in case.machines.number.astype(int)])
+    isl0 = sim.island == 0
+    assert np.allclose(rel[isl0], w[isl0] - sim.inertia[isl0] @ w[isl0] / 11700.0, atol=1e-15)
+    assert np.allclose(rel[~isl0], w[~isl0], atol=1e-15)  # island 2's COI: its infinite bus
 
 
 def test_andes_bus_voltage_limits_do_not_clip_the_power_flow():

@@ -1,0 +1,88 @@
+"""A network of several islands has one centre of inertia per island (paper eq. 40 over the
+machines each machine is connected to): the loss-of-synchronism verdict and the storage
+controllers' relative speeds are judged there.  Conservation: in each island the
+inertia-weighted relative values sum to zero; in a connected network every per-island
+figure is the system's, to the last digit."""
+
+import numpy as np
+import pytest
+
+from stabctl.dynamics.coi import coi_inertia, coi_of_islands, coi_value, island_coi
+from stabctl.dynamics.driver import separated_group
+from stabctl.io import load_case
+from stabctl.network.topology import bus_islands, machine_islands
+from stabctl.storage.control import relative_speeds
+from stabctl.storage.devices import pack, uniform_fleet
+
+RNG = np.random.default_rng(29)
+ISLAND = np.array([0, 0, 1, 1, 1])
+M = np.array([5850.0, 2000.0, 3000.0, 1000.0, 500.0])  # MW s
+
+
+@pytest.fixture(scope="module")
+def kundur():
+    return load_case("kundur")
+
+
+def test_a_connected_case_is_one_island(kundur):
+    assert np.all(bus_islands(kundur) == 0)
+    assert list(machine_islands(kundur)) == [0, 0, 0, 0]
+
+
+def test_opening_the_tie_lines_splits_kundur_into_its_two_areas(kundur):
+    """Kundur's areas join at buses 3 and 13 only (lines 3-101 and 13-101 through the
+    midpoint bus 101): open both and machines 1, 2 and 11, 12 form two islands."""
+    br = kundur.branches
+    tie = ((br.from_bus == 3) & (br.to_bus == 101)) | ((br.from_bus == 13) & (br.to_bus == 101))
+    tie |= ((br.to_bus == 3) & (br.from_bus == 101)) | ((br.to_bus == 13) & (br.from_bus == 101))
+    assert tie.sum() >= 2
+    split = kundur.replace(branches=br.replace(x=np.where(tie, 1e7, br.x)))
+    assert list(machine_islands(split)) == [0, 0, 1, 1]
+
+
+def test_infinite_bus_weights_stay_in_its_island():
+    H = np.array([6.5, 0.0, 6.5, 6.175])
+    mva = np.full(4, 900.0)
+    one = coi_inertia(H, mva)  # one island: the infinite bus is the COI
+    assert list(one) == [0.0, 1.0, 0.0, 0.0]
+    two = coi_inertia(H, mva, np.array([0, 1, 0, 1]))
+    assert list(two) == [5850.0, 1.0, 5850.0, 0.0]  # island 0 keeps H * MVA
+
+
+def test_island_coi_sums_to_zero_in_each_island_and_is_the_system_coi_when_connected():
+    x = RNG.normal(size=(7, M.size))
+    rel = x - coi_of_islands(x, M, ISLAND)
+    for k in (0, 1):
+        assert np.allclose(rel[:, ISLAND == k] @ M[ISLAND == k], 0.0, atol=1e-9)  # of ~1e4
+    coi, Mk = island_coi(x[0], M, ISLAND)
+    assert np.allclose(coi, coi_of_islands(x[0], M, ISLAND), rtol=0, atol=1e-14)
+    assert list(Mk) == [7850.0, 7850.0, 4500.0, 4500.0, 4500.0]
+    one = np.zeros(M.size, np.int64)
+    coi1, M1 = island_coi(x[0], M, one)
+    assert np.all(coi1 == coi_value(x[0], M)) and np.all(M1 == M.sum())  # same digits
+
+
+def test_storage_relative_speeds_are_against_their_island(kundur):
+    """Device d sits at machine d's HV bus (Kundur's uniform fleet): with machines 1, 2 and
+    3, 4 in two islands each reads its own island's COI (or the rest of it)."""
+    sa = pack(uniform_fleet(kundur, 5), kundur, np.arange(kundur.n_bus))
+    mac = np.asarray(sa.mac)
+    nm, island, Mk = 4, np.array([0, 0, 1, 1]), M[:4]
+    w = 1 + RNG.normal(scale=1e-3, size=nm)
+    x = np.r_[np.zeros(nm), w]
+    out = np.empty(mac.size)
+    relative_speeds(x, nm, Mk, island, sa, out)
+    expected = w - coi_of_islands(w, Mk, island)
+    assert np.allclose(out, expected[mac], rtol=0, atol=1e-15)
+    rest = sa._replace(rest=True)
+    relative_speeds(x, nm, Mk, island, rest, out)
+    partner = np.array([1, 0, 3, 2])  # the rest of a two-machine island is the other one
+    assert np.allclose(out, (w - w[partner])[mac], rtol=0, atol=1e-15)
+
+
+def test_separated_group_is_found_in_the_island_that_lost_synchronism():
+    """Island 1 (machines 3, 4, 5) has machine 5 pole-slipping; island 0 sits at a
+    different but steady angle, which one COI would have read as the largest gap."""
+    delta = np.array([10.0, 10.1, 0.0, 0.1, 4.0])
+    assert list(separated_group(delta, M)) == [2, 3, 4]  # one COI: the whole island
+    assert list(separated_group(delta, M, ISLAND)) == [4]
