@@ -36,6 +36,8 @@ INTER_AREA_MAX_HZ = 1.0
 GAP_RATIO = 1.3  # consecutive EM frequencies this far apart: time-scale gap
 SIGNIFICANT = 0.2  # |speed shape| (of the largest) to count in a coherent group
 STATE_GROUPS = ("rotor angle/speed", "rotor flux", "exciter", "pss", "governor", "converter")
+#: |Im lambda| / |lambda| at or below which an eigenvalue is real (`eigen`)
+REAL_TOL = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -285,17 +287,22 @@ def electromechanical_modes(freq_hz: np.ndarray, P: np.ndarray, states) -> np.nd
 def eigen(A: np.ndarray):
     """Eigenvalues with Im >= 0 (one per conjugate pair), right eigenvectors (unit 2-norm
     columns) and the matching rows of inv(right-eigenvector matrix) as left eigenvectors.
+    An eigenvalue with |Im| <= REAL_TOL |lambda| is real (Im set to 0, each one kept): a
+    repeated real eigenvalue (Kundur's three -100 1/s exciter lags) comes out of LAPACK
+    as a pair +-1e-13 j or as reals depending on rounding, which moved every mode number.
 
     Returns lam (m,), right (n, m), left (m, n), ordered by |Im| then real part.
     Raises InputError when the eigenvector matrix is numerically singular (defective A).
     """
     lam, V = la.eig(A)
+    real = np.abs(lam.imag) <= REAL_TOL * np.abs(lam)
+    lam = np.where(real, lam.real + 0j, lam)
     V /= np.linalg.norm(V, axis=0)
     try:
         W = la.solve(V, np.eye(V.shape[0], dtype=complex))
     except la.LinAlgError as exc:
         raise InputError(f"the state matrix is defective (no eigenvector basis): {exc}") from None
-    keep = np.nonzero(lam.imag >= 0)[0]
+    keep = np.nonzero(real | (lam.imag > 0))[0]
     keep = keep[np.lexsort((lam[keep].real, np.round(np.abs(lam[keep].imag), 9)))]
     return lam[keep], V[:, keep], W[keep]
 
