@@ -19,6 +19,7 @@ from stabctl.case import Case
 from stabctl.dynamics.coi import coi_weights
 from stabctl.errors import CaseError, InputError
 from stabctl.models.machines import SUB, TRA, machine_params
+from stabctl.network.topology import machine_islands
 
 
 # -- tuning ---------------------------------------------------------------------------------
@@ -210,14 +211,23 @@ def machine_models(case: Case, pmus) -> MachineModels:
     """Swing-filter models of every machine of the case from its data (mac_con, tg_con)
     and the PMU measuring its current: at its terminal bus, or at a bus joined to the
     terminal by branches whose series impedance r + jx is added to Z (taps and charging
-    ignored).  Raises InputError if a machine has no PMU measuring its current, or is an
-    infinite bus (H = 0: no swing to filter)."""
+    ignored).  Raises InputError if a machine has no PMU measuring its current, is an
+    infinite bus (H = 0: no swing to filter), or the machines lie in several islands (the
+    estimated COI, `coi_speed`, is the whole system's; the simulator's is each island's,
+    `stabctl.dynamics.coi.coi_of_islands`)."""
     mp = machine_params(case)
     infinite = case.machines.number[mp.H == 0].astype(int).tolist()
     if infinite:
         raise InputError(
             f"machine(s) {infinite} are infinite buses (H = 0): the speed estimators filter "
             "each machine's swing equation and need H > 0"
+        )
+    island = machine_islands(case)
+    if island.max() > 0:
+        raise InputError(
+            f"case '{case.name}': its machines lie in {island.max() + 1} islands (machine "
+            f"{int(case.machines.number[np.argmax(island)])} is not connected to machine "
+            f"{int(case.machines.number[0])}); the estimators' COI is one system's"
         )
     which = {p.machine: j for j, p in enumerate(pmus) if p.machine is not None}
     missing = [int(n) for n in case.machines.number if int(n) not in which]

@@ -4,16 +4,23 @@ controllers' relative speeds are judged there.  Conservation: in each island the
 inertia-weighted relative values sum to zero; in a connected network every per-island
 figure is the system's, to the last digit."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from stabctl.dynamics.coi import coi_inertia, coi_of_islands, coi_value, island_coi
 from stabctl.dynamics.driver import separated_group
+from stabctl.errors import InputError
+from stabctl.estimation.models import machine_models
+from stabctl.estimation.pmu import machine_pmus
 from stabctl.io import load_case
+from stabctl.io.psse import load_psse
 from stabctl.network.topology import bus_islands, machine_islands
 from stabctl.storage.control import relative_speeds
 from stabctl.storage.devices import pack, uniform_fleet
 
+DATA = Path(__file__).parents[1] / "data" / "psse"
 RNG = np.random.default_rng(29)
 ISLAND = np.array([0, 0, 1, 1, 1])
 M = np.array([5850.0, 2000.0, 3000.0, 1000.0, 500.0])  # MW s
@@ -29,15 +36,30 @@ def test_a_connected_case_is_one_island(kundur):
     assert list(machine_islands(kundur)) == [0, 0, 0, 0]
 
 
-def test_opening_the_tie_lines_splits_kundur_into_its_two_areas(kundur):
+def split_kundur(kundur):
     """Kundur's areas join at buses 3 and 13 only (lines 3-101 and 13-101 through the
-    midpoint bus 101): open both and machines 1, 2 and 11, 12 form two islands."""
+    midpoint bus 101): the case with both opened (PST's open-branch reactance)."""
     br = kundur.branches
     tie = ((br.from_bus == 3) & (br.to_bus == 101)) | ((br.from_bus == 13) & (br.to_bus == 101))
     tie |= ((br.to_bus == 3) & (br.from_bus == 101)) | ((br.to_bus == 13) & (br.from_bus == 101))
     assert tie.sum() >= 2
-    split = kundur.replace(branches=br.replace(x=np.where(tie, 1e7, br.x)))
-    assert list(machine_islands(split)) == [0, 0, 1, 1]
+    return kundur.replace(branches=br.replace(x=np.where(tie, 1e7, br.x)))
+
+
+def test_opening_the_tie_lines_splits_kundur_into_its_two_areas(kundur):
+    """Machines 1, 2 and 11, 12 form two islands."""
+    assert list(machine_islands(split_kundur(kundur))) == [0, 0, 1, 1]
+
+
+def test_speed_estimators_refuse_islands_and_infinite_buses(kundur):
+    """The estimators' COI is one system's: a case in two islands is refused by name, as
+    is an infinite bus (no swing equation to filter)."""
+    split = split_kundur(kundur)
+    with pytest.raises(InputError, match=r"'kundur': its machines lie in 2 islands"):
+        machine_models(split, machine_pmus(split))
+    smib = load_psse(DATA / "smib_v33.raw", DATA / "smib.dyr")
+    with pytest.raises(InputError, match=r"machine\(s\) \[2\] are infinite buses"):
+        machine_models(smib, machine_pmus(smib))
 
 
 def test_infinite_bus_weights_stay_in_its_island():
