@@ -2147,7 +2147,10 @@ def test_kundur_islands_fault_in_the_island_without_infinite_bus_is_judged_in_it
     andes_rel = delta - coi_of_islands(delta, sim.inertia, sim.island)
     assert np.max(np.abs(andes_rel)) < 1.0  # ANDES: stable in each island too
     assert np.max(np.abs(wa - 1)) > 5e-3
-    assert np.max(np.abs(speeds_on(t, res, case, ss) - wa)) < 2e-4  # measured 1.1e-4
+    # measured 1.1e-4, most of it ANDES's step error in the swinging island: its speeds
+    # move 5.8e-5 when its 5 ms step is halved (stabctl's 2.9e-6), and with both steps
+    # halved the tools are 4.9e-5 apart
+    assert np.max(np.abs(speeds_on(t, res, case, ss) - wa)) < 2e-4
     lin = linearise(sim)  # its relative speeds are the controllers': per island
     C = np.asarray(lin.C)
     out = {name: C[i] for i, name in enumerate(lin.output_labels)}
