@@ -133,9 +133,10 @@ def coi_speed(speed: np.ndarray, inertia: np.ndarray) -> np.ndarray:
     return coi_angle(speed, inertia)
 
 
-def coi_of_rest(values: np.ndarray, inertia: np.ndarray, idx) -> np.ndarray:
+def coi_of_rest(values: np.ndarray, inertia: np.ndarray, idx, island=None) -> np.ndarray:
     """COI of all machines but one, for each machine of idx: (sum_j M_j x_j - M_i x_i) /
-    (sum_j M_j - M_i) (the "rest" COI of `stabctl.storage.BangBangCOI`).
+    (sum_j M_j - M_i) (the "rest" COI of `stabctl.storage.BangBangCOI`), j over the
+    machines of i's island.
 
     Parameters
     ----------
@@ -145,10 +146,14 @@ def coi_of_rest(values: np.ndarray, inertia: np.ndarray, idx) -> np.ndarray:
         Weights M_i = H_i * MVA_i.
     idx : array of int, shape (k,)
         Machine indices.
+    island : ndarray of int, shape (n_mac,), or None, optional
+        Each machine's island (`stabctl.network.topology.machine_islands`); default: one.
 
     Returns
     -------
     ndarray, shape (n_t, k)
     """
-    total = values @ inertia
-    return (total[:, None] - values[:, idx] * inertia[idx]) / (inertia.sum() - inertia[idx])
+    idx = np.asarray(idx, int)
+    island = np.zeros(inertia.size, int) if island is None else np.asarray(island)
+    W = (island[idx][:, None] == island[None, :]) * inertia[None, :]  # (k, n_mac)
+    return (values @ W.T - values[:, idx] * inertia[idx]) / (W.sum(axis=1) - inertia[idx])

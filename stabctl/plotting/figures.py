@@ -165,7 +165,7 @@ def simulation_overview(
     fig, axes = plt.subplots(
         4 if storage else 3, 1, figsize=(9, 11.5 if storage else 9), sharex=True
     )
-    rel = result.angle - result.coi_angle[:, None]
+    rel = result.relative_angle  # against each machine's island's COI, as the verdict
     lost = set(int(m) for m in result.separated)
     mstyles = _machine_styles(result.machines, lost, max_labels)
     series = (

@@ -309,7 +309,7 @@ def compare_pulse(
     away = (np.abs(res.t - t_on) > edge) & (np.abs(res.t - t_on - width) > edge)
     pairs = {
         "omega": (pick("omega", G), res.speed - 1.0),
-        "omega_rel": (pick("omega_rel", G), res.speed - res.coi_speed[:, None]),
+        "omega_rel": (pick("omega_rel", G), res.relative_speed),
         "vmag": (pick("vmag", B), res.vmag - res.vmag[0]),
         "f_bus": (pick("f_bus", B)[away], f_nl[away]),
     }

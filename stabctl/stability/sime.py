@@ -170,10 +170,9 @@ def device_modes(
     idx = np.array([result.machine(int(k)) for k in machines], int)
     w, Mk = result.speed, np.asarray(result.inertia, float)
     if controller.coi == "rest":
-        coi = coi_of_rest(w, Mk, idx)
-    else:
-        coi = result.coi_speed[:, None]
-    rel = (w[:, idx] - coi) * freq_hz
+        rel = (w[:, idx] - coi_of_rest(w, Mk, idx, result.island)) * freq_hz
+    else:  # each machine's island's COI, as the simulator's controllers
+        rel = result.relative_speed[:, idx] * freq_hz
     v = result.vmag[:, [result.bus(int(b)) for b in buses]]
     return _table3(rel, v >= controller.v_gate_pu, controller.deadband_hz, controller.hysteresis_hz)
 

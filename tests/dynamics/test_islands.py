@@ -9,7 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stabctl.dynamics.coi import coi_inertia, coi_of_islands, coi_value, island_coi
+from stabctl.dynamics.coi import (
+    coi_inertia,
+    coi_of_islands,
+    coi_of_rest,
+    coi_value,
+    island_coi,
+)
 from stabctl.dynamics.driver import separated_group
 from stabctl.errors import InputError
 from stabctl.estimation.models import machine_models
@@ -100,6 +106,8 @@ def test_storage_relative_speeds_are_against_their_island(kundur):
     relative_speeds(x, nm, Mk, island, rest, out)
     partner = np.array([1, 0, 3, 2])  # the rest of a two-machine island is the other one
     assert np.allclose(out, (w - w[partner])[mac], rtol=0, atol=1e-15)
+    rest_coi = coi_of_rest(w[None], Mk, mac, island)[0]  # SIME's Table 3 reconstruction
+    assert np.allclose(out, w[mac] - rest_coi, rtol=0, atol=1e-15)
 
 
 def test_separated_group_is_found_in_the_island_that_lost_synchronism():
