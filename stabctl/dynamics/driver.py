@@ -4,7 +4,7 @@ turning its recording into a `SimulationResult`.
 
 Loss of synchronism: a machine's angle leaves the centre of inertia (eq. 40, weights H*MVA)
 of its island (the machines its network joins it to before the disturbance,
-`machine_islands`) by more than `separation_limit` rad; the separated machines are the
+`DynamicModel.island`) by more than `separation_limit` rad; the separated machines are the
 smaller coherent group (`separated_group`); the run can stop there.  A disturbance that
 splits the network is judged against the COI of the island before it: the parts it
 leaves drift apart, a separation.  A run that leaves the integrator's stability
@@ -25,7 +25,7 @@ from stabctl._jit.cache import cached
 from stabctl.case import Case
 from stabctl.dynamics import events as ev_
 from stabctl.dynamics import integrator as ig
-from stabctl.dynamics.coi import coi_inertia, coi_of_islands
+from stabctl.dynamics.coi import coi_of_islands
 from stabctl.dynamics.grid import (
     check_step,
     check_step_count,
@@ -47,7 +47,6 @@ from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
 from stabctl.models import converters as conv
-from stabctl.network.topology import machine_islands
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
 
@@ -143,7 +142,7 @@ class Simulator:
     inertia : ndarray, shape (n_mac,)
         COI weights H * MVA per machine, MW s (paper eq. 40; `coi_inertia`).
     island : ndarray of int, shape (n_mac,)
-        Each machine's island in the case's network (`machine_islands`): its COI is its
+        Each machine's island in the case's network (`DynamicModel.island`): its COI is its
         island's.
     fastest : tuple of (float, str)
         The case's fastest time constant (s) and where it is (`fastest_time_constant`), or a
@@ -198,8 +197,7 @@ class Simulator:
         self.fastest = min(fastest_time_constant(case), self.model.fastest_loop)
         self.default_h = default_step(case, conventions, self.fastest) if step is None else step
         check_step(self.fastest, self.default_h)
-        self.island = machine_islands(case)
-        self.inertia = coi_inertia(self.model.mp.H, case.machines.mva, self.island)
+        self.island, self.inertia = self.model.island, self.model.coi_inertia
         if background_compile:
             self._compile_runs_elsewhere()
         self.model.check_equilibrium(off_equilibrium)

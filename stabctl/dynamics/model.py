@@ -21,6 +21,7 @@ from stabctl._jit.address import address_of, by_address
 from stabctl._jit.arrays import assign
 from stabctl._jit.decorators import kernel, njit
 from stabctl.case import BranchTable, BusTable, Case
+from stabctl.dynamics.coi import coi_inertia
 from stabctl.errors import CaseError, InputError, SimulationError
 from stabctl.models import converters as conv
 from stabctl.models import exciters as exc
@@ -34,7 +35,7 @@ from stabctl.network.solution import (
     reduce_network,
     solve_nc,
 )
-from stabctl.network.topology import OPEN_X, bus_islands
+from stabctl.network.topology import OPEN_X, bus_islands, machine_islands
 
 FAULT_B = 1e7  # PST's bolted-fault shunt susceptance (1/1e-7)
 #: largest |derivative| at t = 0 of an equilibrium (DynamicModel.check_equilibrium)
@@ -314,6 +315,18 @@ class DynamicModel:
             n_tg=L.n_tg,
             n_ibr=L.n_ibr,
         )
+
+    @functools.cached_property
+    def island(self) -> np.ndarray:
+        """Each machine's island in the case's network, (n_mac,) int
+        (`stabctl.network.topology.machine_islands`)."""
+        return machine_islands(self.case)
+
+    @functools.cached_property
+    def coi_inertia(self) -> np.ndarray:
+        """The COI weights of the machines, (n_mac,) (`stabctl.dynamics.coi.coi_inertia`:
+        H * MVA, or 1 / 0 in an island with infinite buses), each machine's island's."""
+        return coi_inertia(self.mp.H, self.case.machines.mva, self.island)
 
     @functools.cached_property
     def initial_residual(self) -> tuple[float, str]:

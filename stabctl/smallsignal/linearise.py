@@ -43,7 +43,7 @@ from stabctl._jit.arrays import assign, max_abs
 from stabctl._jit.background import await_background, compile_in_background
 from stabctl._jit.decorators import njit
 from stabctl.case import Case
-from stabctl.dynamics.coi import coi_inertia, coi_of_islands, coi_weights
+from stabctl.dynamics.coi import coi_of_islands, coi_weights
 from stabctl.dynamics.model import (
     BUS_VOLTAGES,
     DynamicModel,
@@ -59,7 +59,6 @@ from stabctl.errors import InputError, SimulationError
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
-from stabctl.network.topology import machine_islands
 
 REL_STEP = 1e-4  # PSTess svm_mgen's relative perturbation
 KINK_RATIO = 1e-2  # one-sided slopes differing more than this: a limit was crossed
@@ -519,10 +518,9 @@ def output_matrices(model: DynamicModel, act, A, B, dVx, dVu, V0):
     S = np.zeros((nm, act.size))  # omega_k = S x (an infinite bus's: constant)
     swing = [k for k in range(nm) if nm + k in pos]
     S[swing, [pos[nm + k] for k in swing]] = 1.0
-    island = machine_islands(model.case)
-    w = coi_inertia(model.mp.H, model.case.machines.mva, island)
+    w = model.coi_inertia
     coi = coi_weights(w) @ S
-    rel = S - coi_of_islands(S.T, w, island).T
+    rel = S - coi_of_islands(S.T, w, model.island).T
     Vm = np.abs(V0)[:, None]
     dmag = lambda dV: (np.conj(V0)[:, None] * dV).real / Vm  # noqa: E731
     dang = lambda dV: (np.conj(V0)[:, None] * dV).imag / Vm**2  # noqa: E731
