@@ -83,8 +83,42 @@ ANDES_DEFAULT = {"tstep": 1 / 30, "tol": 1e-4}
 #: instability (exc.VR.G9 alternating) at h, h/2 and h/4 alike, so bus 16 (the tests');
 #: ACTIVSg2000's largest machine's HV bus: machine 205 slips poles and runs away (1.5 pu at
 #: 6.4 s; most of its governors, GGOV1, are left out), so the 345 kV bus 2021 of its tests
-FAULT_BUS = {"gb": 1001, "ieee39": 16, "activsg2000": 2021}
-SYSTEMS = ("kundur", "ieee39", "npcc", "miniwecc", "wecc179", "n44", "gb", "activsg2000")
+FAULT_BUS = {
+    "gb": 1001,
+    "ieee39": 16,
+    "activsg2000": 2021,
+    "ieee14": 9,
+    "ieee14_solar": 9,
+    "ieee14_wt3": 9,
+    "kundur_wt": 7,
+}
+#: cases read from ANDES's spreadsheets (its disturbance records left out); the IBR ones
+#: (issue 29's cost-per-state target) beside ieee14_full, the same network without them
+ANDES_XLSX = {
+    "ieee39": ("ieee39/ieee39_full.xlsx", ("Toggle",)),
+    "gb": ("GBnetwork/GBnetwork.xlsx", ("Toggle",)),
+    "ieee14": ("ieee14/ieee14_full.xlsx", ()),
+    "ieee14_solar": ("ieee14/ieee14_solar.xlsx", ("Toggle",)),
+    "ieee14_wt3": ("ieee14/ieee14_wt3.xlsx", ("Toggle",)),
+    "kundur_wt": ("kundur/kundur_wtdta1.xlsx", ("Toggle", "Fault")),
+}
+SYSTEMS = (
+    "kundur",
+    "ieee39",
+    "npcc",
+    "miniwecc",
+    "wecc179",
+    "n44",
+    "gb",
+    "activsg2000",
+    "ieee14",
+    "ieee14_solar",
+    "ieee14_wt3",
+    "kundur_wt",
+)
+#: today's cases, against which the IBR cases' cost per state and step is compared
+TODAY = ("kundur", "miniwecc")
+IBR = ("ieee14_solar", "ieee14_wt3", "kundur_wt")
 ACTIVSG = Path(__file__).parents[1] / "tests" / "data" / "activsg"
 
 
@@ -117,15 +151,13 @@ def load_system(label: str, work: str):
         if label == "kundur":  # ANDES's own Kundur (its data, not stabctl's built-in)
             andes_files = (_cases_dir() / "kundur" / "kundur_full.xlsx", None, ("Toggle",))
         return load_case(label), True, None, andes_files
-    if label in ("ieee39", "gb"):
-        path = (
-            _cases_dir()
-            / {"ieee39": "ieee39/ieee39_full.xlsx", "gb": "GBnetwork/GBnetwork.xlsx"}[label]
-        )
+    if label in ANDES_XLSX:
+        name, off = ANDES_XLSX[label]
+        path = _cases_dir() / name
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # "left out Toggle"
             case = import_andes(path, on_unsupported="skip")
-        return case, False, FAULT_BUS.get(label), (path, None, ("Toggle",))
+        return case, False, FAULT_BUS.get(label), (path, None, off)
     raw, dyr = {
         "npcc": lambda: _psse("npcc", "npcc.raw", "npcc_full.dyr", work),
         "wecc179": lambda: _psse("wecc", "wecc.raw", "wecc_full.dyr", work, unsaturated=True),
@@ -469,6 +501,20 @@ def table(rows, andes_rows, repeat, andes_repeat):
             if len(pts) >= 2:
                 x, y = np.array(pts).T
                 print(f"log-log slope of {what} wall against states: {np.polyfit(x, y, 1)[0]:.2f}")
+    per_state_table(ok)
+
+
+def per_state_table(ok) -> None:
+    """Cost per state and step of each run, and of the IBR cases against today's (issue 29's
+    target: at most 1.5 times)."""
+    cost = {r["label"]: r["us_per_step"] / r["states"] for r in ok}
+    today = {k: cost[k] for k in TODAY if k in cost}
+    print("\ncost per state and step (20 s run, µs):")
+    for k, c in cost.items():
+        vs = ", ".join(f"{c / t:.2f} x {name}'s" for name, t in today.items())
+        print(f"  {k:<13}{c:8.3f}" + (f"  ({vs})" if vs and k in IBR else ""))
+    if not today:
+        print("  (run kundur and miniwecc too for the IBR target)")
 
 
 def screening_table(s: dict) -> None:
