@@ -41,9 +41,18 @@ from stabctl.errors import InputError
 @out_dir_option("The report directory (with --report).")
 @conventions_option
 @q_limits_option
+@click.option(
+    "--limits",
+    type=click.Choice(["auto", "hold", "free", "refuse"]),
+    default="auto",
+    show_default=True,
+    help="A limit active at the operating point (a valve at VMIN, a pitch at its minimum): "
+    "free when reached, held when driven into (auto), always held, always free, or "
+    "refuse (docs/modal.md, Limiters).",
+)
 @json_option("every mode")
 @reports_errors
-def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, as_json):
+def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limits, as_json):
     """Small-signal modes: linearise CASE at its power flow and list its modes.
 
     The simulator's own equations are linearised by central differences (PSTess svm_mgen's
@@ -76,6 +85,7 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, as_j
         n_areas=n_areas,
         conventions=conventions,
         q_limits=q_limits,
+        limits=limits,
     )
     written = [str(write_report(st, out_dir))] if report else []
     if as_json:

@@ -33,6 +33,7 @@ named by `DynamicModel.state_name`; unused slots (docs/modal.md, "State counts")
 
 from __future__ import annotations
 
+import warnings
 from typing import NamedTuple
 
 import control as ct
@@ -62,30 +63,44 @@ from stabctl.models import machines as mac
 
 REL_STEP = 1e-4  # PSTess svm_mgen's relative perturbation
 KINK_RATIO = 1e-2  # one-sided slopes differing more than this: a limit was crossed
+#: a limit active at the operating point: one side of a perturbation changes a derivative by
+#: at most UNCHANGED times the column's largest change (exactly 0 on its limit, round-off of
+#: a state a hair inside it: IEEE 14's valve 3.3e-12 above VMIN), the other by more than MOVED
+UNCHANGED, MOVED = 1e-6, 1e-3
 STATE, ESD, VREF, PREF = 0, 1, 2, 3
+#: what linearise does with a limit active at the operating point (a column whose one side
+#: leaves a derivative exactly unchanged that the other side moves), `linearise` limits
+AUTO = 2
+LIMIT_RULES = {"auto": AUTO, "hold": 1, "free": -1, "refuse": 0}
+#: auto: the free side counts as linear in h when halving h halves its change within this
+LINEAR_TOL = 0.1
 
 
 class Perturbations(NamedTuple):
     """The difference columns of `_differences`, each array of shape (n_col,): kind what
     is perturbed (STATE, ESD, VREF, PREF; int64), which which one (STATE: flat state
     index; ESD: kept-bus position; VREF: exciter row; PREF: governor row; int64), step
-    the perturbation h (in the unit of the perturbed quantity)."""
+    the perturbation h (in the unit of the perturbed quantity); rule the
+    `LIMIT_RULES` value for limits active at the operating point."""
 
     kind: np.ndarray
     which: np.ndarray
     step: np.ndarray
+    rule: int
 
 
 class Differences(NamedTuple):
     """What `_differences` fills: J (n_col, n_x) d(dx/dt)/d(column), dV (n_col, n_bus)
     complex d(V_bus)/d(column), curv (n_col,) the kink measure max|f+ - 2 f0 + f-| /
     max|f+ - f-| of each column, V0 (n_bus,) complex the bus voltages at the operating
-    point."""
+    point, held (n_col,) int8: where a limit is active at the operating point
+    (`_held_side`), 1 if the column was taken with it held, -1 free, 0 no such limit."""
 
     J: np.ndarray
     dV: np.ndarray
     curv: np.ndarray
     V0: np.ndarray
+    held: np.ndarray
 
 
 def active_states(model: DynamicModel) -> np.ndarray:
@@ -124,6 +139,7 @@ def linearise(
     rel_step: float = REL_STEP,
     conventions: str = "ieee",
     q_limits: bool = True,
+    limits: str = "auto",
 ):
     """Linearised model of a case at its power-flow point, as a `control.StateSpace`.
 
@@ -151,6 +167,19 @@ def linearise(
     q_limits : bool, optional
         PV Q limits in the power flow when `target` is a Case (as `Simulator`); default
         True.
+    limits : {"auto", "hold", "free", "refuse"}, optional
+        A limit active at the operating point (an anti-windup integrator or a clipped
+        signal on its limit there, e.g. a wind turbine's pitch at its minimum, a torque
+        PI at its maximum): the model is not differentiable there, one side of a
+        perturbation meets the limit, the other does not.  "hold": the limit holds, the
+        slope of the side it clamps; "free": the other side's; "auto" (default): free
+        when the other side's change is linear in the step (the state reached the limit
+        with no drive beyond it: small-signal analysis with the limit inactive, as
+        ANDES 2.0 frees a valve exactly at VMIN), held when it jumps (a state driven
+        into its limit, held there as ANDES's ``AntiWindup`` flags freeze it,
+        andes/core/discrete.py); "refuse": SimulationError.  A `UserWarning` names
+        the columns and the choice; a limit crossed within the step but not active at
+        the point still raises (a smaller rel_step helps).
 
     Returns
     -------
@@ -167,10 +196,11 @@ def linearise(
     UnknownBusError
         An ESD bus not in the case.
     InputError
-        `rel_step` not in (0, 0.1); unknown conventions.
+        `rel_step` not in (0, 0.1); unknown conventions or limits.
     SimulationError
-        The network did not solve at a perturbed point, or a perturbation crossed a
-        limiter (the linearisation would be meaningless there).
+        The network did not solve at a perturbed point, a perturbation crossed a limiter
+        not active at the operating point (the linearisation would be meaningless), or
+        one active there with limits="refuse".
     CaseError, PowerFlowError
         As `Simulator` when `target` is a Case.
 
@@ -195,21 +225,36 @@ def linearise(
     buses = list(default_esd_buses(case) if esd_buses is None else esd_buses)
     buses = list(dict.fromkeys(int(b) for b in [*buses, *extra_buses]))
     case.bus_indices(buses)
-    return linearise_model(sim.model_for(buses), buses, rel_step)
+    return linearise_model(sim.model_for(buses), buses, rel_step, limits)
 
 
-def linearise_model(model: DynamicModel, esd_buses=(), rel_step: float = REL_STEP):
+def linearise_model(
+    model: DynamicModel, esd_buses=(), rel_step: float = REL_STEP, limits: str = "auto"
+):
     """`linearise` on a built model whose reduced network keeps every bus of esd_buses.
 
     Raises InputError when an ESD bus is not kept, plus the errors of `linearise`.
     """
     if not 0 < rel_step < 0.1:
         raise InputError(f"rel_step must be in (0, 0.1), got {rel_step}")
+    if limits not in LIMIT_RULES:
+        raise InputError(f"limits must be one of {sorted(LIMIT_RULES)}, got {limits!r}")
     case = model.case
     pos = _kept_positions(model, esd_buses)
     act = np.nonzero(active_states(model))[0]
     kind, index, values = _columns(model, act, pos)
-    J, dV, V0 = jacobian_columns(model, kind, index, rel_step * np.maximum(np.abs(values), 1.0))
+    step = rel_step * np.maximum(np.abs(values), 1.0)
+    J, dV, V0, held = jacobian_columns(model, kind, index, step, limits)
+    if held.any():
+        names = [
+            f"{_what(model, kind, index, c)} ({'held' if held[c] > 0 else 'free'})"
+            for c in np.nonzero(held)[0]
+        ]
+        warnings.warn(
+            f"{case.name}: {len(names)} perturbation(s) meet a limit active at the "
+            f"operating point (limits={limits!r}): {', '.join(names)}",
+            stacklevel=3,
+        )
     n = act.size
     A, B = J[:n, act].T, J[n:, act].T
     C, D = output_matrices(model, act, A, B, dV[:n].T, dV[n:].T, V0)
@@ -346,55 +391,70 @@ def _columns(model: DynamicModel, act: np.ndarray, pos: np.ndarray):
     return kind, index, values
 
 
-def jacobian_columns(model: DynamicModel, kind, index, step):
+def jacobian_columns(model: DynamicModel, kind, index, step, limits: str = "auto"):
     """Central differences of all derivatives and bus voltages, one column per perturbation.
 
     Args:
         model: the dynamic model (pre-disturbance network); kind, index: what to perturb
             (STATE: flat state index; ESD: kept-bus position; VREF: exciter row; PREF:
-            governor row), step: h per column, shape (n_col,).
+            governor row), step: h per column, shape (n_col,); limits: a `LIMIT_RULES`
+            key, what a column does whose one side a limit active at the operating
+            point holds (`linearise`).
     Returns:
         J (n_col, n_x) d(dx/dt)/d(column), dV (n_col, n_bus) complex d(V_bus)/d(column),
-        V0 (n_bus,) bus voltages at the operating point.
+        V0 (n_bus,) bus voltages at the operating point, held (n_col,) int8 per column a
+        limit active at the operating point taken held (1), free (-1), or none (0).
     Raises:
-        SimulationError: a perturbed network did not solve, or a column's forward and
-            backward slopes differ by more than KINK_RATIO (a limiter was crossed).
+        SimulationError: a perturbed network did not solve, a column's forward and
+            backward slopes differ by more than KINK_RATIO with no limit held at the
+            operating point (a limiter within the step: a smaller step helps), or a limit
+            held there with limits="refuse".
     """
-    args = _difference_arguments(model, kind, index, step)
+    args = _difference_arguments(model, kind, index, step, LIMIT_RULES[limits])
     # cold: _differences compiles in a child process while this one compiles the model
     compile_in_background(_differences, [typeof(a) for a in args])
     args[-1] = evaluate_address(args[3])
     await_background(_differences)
     bad = _differences(*args)
-    J, dV, curv, V0 = args[5]
+    J, dV, curv, V0, held = args[5]
     if bad >= 0:
         raise SimulationError(
             f"the network did not solve with {_what(model, kind, index, bad)} perturbed"
         )
-    k = int(np.argmax(curv))
+    if limits == "refuse" and held.any():
+        k = int(np.nonzero(held)[0][0])
+        raise SimulationError(
+            f"perturbing {_what(model, kind, index, k)} meets a limit active at the "
+            "operating point (one side of the perturbation leaves a derivative unchanged "
+            "that the other moves): the linear model differs on the two sides; choose "
+            'limits="hold" or "free"'
+        )
+    k = int(np.argmax(np.where(held != 0, 0.0, curv)))
     if curv[k] > KINK_RATIO:
         raise SimulationError(
             f"perturbing {_what(model, kind, index, k)} by +-{step[k]:.3g} "
             f"crosses a limiter (one-sided slopes differ by {curv[k]:.1%}); "
             "use a smaller rel_step"
         )
-    return J, dV, V0
+    return J, dV, V0, held
 
 
-def _difference_arguments(model: DynamicModel, kind, index, step) -> list:
+def _difference_arguments(model: DynamicModel, kind, index, step, rule: int = 1) -> list:
     """The arguments of `_differences` for `jacobian_columns` (its `Differences` zeroed
-    at position 5; the model's address 0 at the end, to be filled in)."""
+    at position 5; the model's address 0 at the end, to be filled in); rule a
+    `LIMIT_RULES` value."""
     net = model.network(StageConfig())
     p = model.params._replace(EP=model.params.EP.copy(), GP=model.params.GP.copy())
     n_col, n_bus = len(kind), model.case.n_bus
     cols = Perturbations(
-        np.asarray(kind, np.int64), np.asarray(index, np.int64), np.asarray(step, float)
+        np.asarray(kind, np.int64), np.asarray(index, np.int64), np.asarray(step, float), rule
     )
     res = Differences(
         np.zeros((n_col, model.layout.size)),
         np.zeros((n_col, n_bus), np.complex128),
         np.zeros(n_col),
         np.zeros(n_bus, np.complex128),
+        np.zeros(n_col, np.int8),
     )
     return [cols, model.x0, model.V_nc0, p, kernel_network(net), res, 0]
 
@@ -434,8 +494,8 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
     `KernelNetwork`; evaluate: the address of the model's evaluation (`call_evaluate`;
     the model is not compiled again into this kernel).  Returns -1, or the column whose
     network did not solve (-2: the unperturbed one)."""
-    kind, index, step = cols
-    J, dV, curv, V0 = res
+    kind, index, step, rule = cols
+    J, dV, curv, V0, held = res
     dx = np.zeros_like(x0)  # slots no kernel writes (unused by a model type) must stay 0:
     f0 = np.zeros_like(x0)  # the kink test below looks at every slot
     out = kernel_outputs(p.n_mac, net.R.shape[0], p.n_ibr)
@@ -457,6 +517,8 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
         < 0
     ):
         return -2
+    fp, fm = np.zeros_like(x0), np.zeros_like(x0)
+    Vp, Vm = np.zeros_like(V0), np.zeros_like(V0)
     for c in range(kind.size):
         j = index[c]
         if kind[c] == STATE:
@@ -467,44 +529,78 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
             nominal = p.EP[j, exc.E.VREF]
         else:
             nominal = p.GP[j, gov.G.PREF]
-        hi, lo = nominal + step[c], nominal - step[c]
-        fp = np.zeros_like(x0)
-        for side in range(2):
-            v = hi if side == 0 else lo
-            x = x0.copy()
-            S[:] = 0.0
-            if kind[c] == STATE:
-                x[j] = v
-            elif kind[c] == ESD:
-                S[j] = v
-            elif kind[c] == VREF:
-                p.EP[j, exc.E.VREF] = v
-            else:
-                p.GP[j, gov.G.PREF] = v
-            it = call_evaluate(
-                evaluate,
-                x,
-                p,
-                net,
-                KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_), S),
-                BUS_VOLTAGES,
-                dx,
-                out,
-            )
-            if kind[c] == VREF:
-                p.EP[j, exc.E.VREF] = nominal
-            elif kind[c] == PREF:
-                p.GP[j, gov.G.PREF] = nominal
-            if it < 0:
+        h = step[c]
+        for sign, f, V in ((1.0, fp, Vp), (-1.0, fm, Vm)):
+            if _perturbed(kind[c], j, nominal + sign * h, x0, V_nc0, p, net, S, evaluate, dx, out):
                 return c
-            if side == 0:
-                assign(fp, dx)
-                assign(dV[c], out.V_bus)
-            else:
-                assign(J[c], (fp - dx) / (hi - lo))
-                assign(dV[c], (dV[c] - out.V_bus) / (hi - lo))
-                curv[c] = max_abs(fp - 2.0 * f0 + dx) / max(max_abs(fp - dx), 1e-300)
+            assign(f, dx)
+            assign(V, out.V_bus)
+        curv[c] = max_abs(fp - 2.0 * f0 + fm) / max(max_abs(fp - fm), 1e-300)
+        clamp = _held_side(fp, fm, f0)
+        side = clamp * rule  # the side whose one-sided slope is taken (AUTO: below)
+        if clamp != 0 and rule == AUTO:
+            # the free side linear in h (the limit reached, not driven into): free, else held
+            free = fm if clamp > 0 else fp
+            v = nominal - clamp * h / 2
+            if _perturbed(kind[c], j, v, x0, V_nc0, p, net, S, evaluate, dx, out):
+                return c
+            linear = max_abs(free - 2.0 * dx + f0) <= LINEAR_TOL * max_abs(free - f0)
+            side = -clamp if linear else clamp
+        held[c] = 0 if clamp == 0 else (-1 if side == -clamp else 1)
+        if side > 0:
+            assign(J[c], (fp - f0) / h)
+            assign(dV[c], (Vp - V0) / h)
+        elif side < 0:
+            assign(J[c], (f0 - fm) / h)
+            assign(dV[c], (V0 - Vm) / h)
+        else:
+            assign(J[c], (fp - fm) / (2.0 * h))
+            assign(dV[c], (Vp - Vm) / (2.0 * h))
     return -1
+
+
+@njit
+def _perturbed(kind, j, v, x0, V_nc0, p, net, S, evaluate, dx, out) -> bool:
+    """Evaluate the model (derivatives into dx, outputs into out) with what column (kind,
+    j) perturbs set to v (the parameters restored after); True if the network did not
+    solve."""
+    x = x0.copy()
+    S[:] = 0.0
+    if kind == STATE:
+        x[j] = v
+    elif kind == ESD:
+        S[j] = v
+    elif kind == VREF:
+        saved = p.EP[j, exc.E.VREF]
+        p.EP[j, exc.E.VREF] = v
+    else:
+        saved = p.GP[j, gov.G.PREF]
+        p.GP[j, gov.G.PREF] = v
+    kept = KeptBuses(V_nc0.copy(), np.zeros(V_nc0.size, np.bool_), S)
+    it = call_evaluate(evaluate, x, p, net, kept, BUS_VOLTAGES, dx, out)
+    if kind == VREF:
+        p.EP[j, exc.E.VREF] = saved
+    elif kind == PREF:
+        p.GP[j, gov.G.PREF] = saved
+    return it < 0
+
+
+@njit
+def _held_side(fp, fm, f0) -> int:
+    """The side of a column on which a limit active at the operating point holds: +1 (or
+    -1) when the + (-) perturbation leaves some derivative as at f0 (`UNCHANGED`) that
+    the other side moves (`MOVED`; a clamp engaged on that side only), and no derivative
+    the other way round; 0 when neither side or both show that."""
+    big = max(max_abs(fp - f0), max_abs(fm - f0))
+    still, moved = UNCHANGED * big, MOVED * big
+    plus = minus = False
+    for i in range(f0.size):
+        dp, dm = abs(fp[i] - f0[i]), abs(fm[i] - f0[i])
+        plus = plus or (dp <= still and dm > moved)
+        minus = minus or (dm <= still and dp > moved)
+    if plus == minus:
+        return 0
+    return 1 if plus else -1
 
 
 def output_matrices(model: DynamicModel, act, A, B, dVx, dVu, V0):

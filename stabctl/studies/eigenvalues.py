@@ -52,13 +52,15 @@ def eig_study(
     n_areas: int | None = None,
     conventions: str = "ieee",
     q_limits: bool = True,
+    limits: str = "auto",
 ) -> EigStudy:
     """Linearise `case` (with its pss_con emptied if no_pss) under the model conventions,
-    from a power flow with or without PV Q limits, and analyse its modes."""
+    from a power flow with or without PV Q limits, limits active at the operating point
+    taken as `linearise`'s `limits` says, and analyse its modes."""
     if no_pss:
         case = case.replace(pss=PssTable.empty())
     t0 = time.perf_counter()
-    sys = linearise(case, conventions=conventions, q_limits=q_limits)
+    sys = linearise(case, conventions=conventions, q_limits=q_limits, limits=limits)
     t1 = time.perf_counter()
     H, mva = case.machines.H, case.machines.mva
     ma = modal_analysis(sys, inertia=(H * mva)[H > 0], n_areas=n_areas)

@@ -94,7 +94,7 @@ def test_state_counts_and_inactive_slots(kundur):
     assert unused == [f"exc.VAs.G{g}" for g in (1, 2, 3, 4)]
     # the excluded slots are dummies: zero rows and zero columns of the full Jacobian
     idx = np.arange(act.size)
-    J, _, _ = jacobian_columns(m, np.full(idx.size, STATE), idx, 1e-4 * np.maximum(abs(m.x0), 1))
+    J, _, _, _ = jacobian_columns(m, np.full(idx.size, STATE), idx, 1e-4 * np.maximum(abs(m.x0), 1))
     assert np.all(J[:, ~act] == 0) and np.all(J[~act] == 0)
     wecc = linearise(load_case("miniwecc"))
     assert wecc.nstates == 565 - 2 * 64  # PSTess count less 64 lmod + 64 rlmod
