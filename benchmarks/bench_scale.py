@@ -225,13 +225,12 @@ def em_modes_sparse(A: np.ndarray, n_em: int):
 
 
 def ours(label: str, repeat: int) -> dict:
-    import resource
     import tracemalloc
 
     from stabctl.dynamics.driver import Simulator
     from stabctl.dynamics.events import Fault
-    from stabctl.errors import NumericalInstabilityError
-    from stabctl.smallsignal.linearise import linearise
+    from stabctl.errors import NumericalInstabilityError, SimulationError
+    from stabctl.smallsignal.linearise import active_states, linearise
     from stabctl.smallsignal.modal import modal_analysis
     from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
 
@@ -262,11 +261,15 @@ def ours(label: str, repeat: int) -> dict:
         "fault_bus": bus,
         "us_per_step": 1e6 * wall / n_steps,
     }
-    linearise(sim, esd_buses=())  # compile
+    out["states"] = int(np.count_nonzero(active_states(sim.model)))
+    try:
+        linearise(sim, esd_buses=())  # compile
+    except SimulationError as exc:  # e.g. Kundur's wind cases: limits it cannot tell apart
+        out["lin_error"] = str(exc)[:200]
+        return _with_rss(out)
     t = time.perf_counter()
     sys_ = linearise(sim, esd_buses=())
     lin = time.perf_counter() - t
-    out["states"] = int(sys_.nstates)
     n = sys_.nstates
     if n <= SPARSE_ABOVE or label in BOTH_EIG:
         t = time.perf_counter()
@@ -313,6 +316,13 @@ def ours(label: str, repeat: int) -> dict:
         except Exception as exc:  # noqa: BLE001 - reported in the table, e.g. CCT > t_max
             out["cct_error"] = f"{type(exc).__name__}: {exc}"[:200]
             break
+    return _with_rss(out)
+
+
+def _with_rss(out: dict) -> dict:
+    """out with this process's peak RSS (MB) added."""
+    import resource
+
     out["rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return out
 

@@ -489,14 +489,16 @@ def andes_case_run(name, bus, t_end=5.0, conventions="andes", off=("Toggle",), o
     return sim, res, ss, t, speeds_on(t, res, case, ss), wa
 
 
-def test_ieee39_fault_speeds_verdict_and_modes_match_andes():
+def test_ieee39_fault_speeds_verdict_and_modes_match_andes(tmp_path):
     """IEEE 39 as ANDES has it (ieee39_full.xlsx: 10 GENROU, IEEEX1, IEEEST, TGOV1N; its
     dynamics exist only in ANDES's format), imported through ANDES's parser; 6-cycle fault
     at bus 16 through j1e-3 pu.  Its IEEEST take the electrical power (MODE 3) of
     machines with r_a (up to 0.0615, G6): ANDES's input is the air-gap power (``tm0`` at
     initialisation, ``te`` after); with the terminal power at initialisation stabctl
     started off equilibrium (0.015 on pss.leadlag1.G6), drifted 6.3e-5 pu in a 10 s flat
-    run (ANDES: 0) and the fault's speeds were 6.7e-5 pu apart."""
+    run (ANDES: 0) and the fault's speeds were 6.7e-5 pu apart.  Modes: ANDES is given
+    the IEEEST as the equivalent ST2CUT (its EIG mis-reduces the IEEEST's pass-through
+    filters, docs/pst_models.md 12.4: 0.5 % as written)."""
     sim, res, ss, _t, w, wa = andes_case_run("ieee39/ieee39_full.xlsx", 16)
     assert sim.model.initial_residual[0] < 1e-8  # measured 4.9e-13
     ss0 = andes_system(andes.get_case("ieee39/ieee39_full.xlsx"), off=("Toggle",))
@@ -517,10 +519,18 @@ def test_ieee39_fault_speeds_verdict_and_modes_match_andes():
     assert res.stable and not andes_separated(ss)
     ma = modal_analysis(linearise(sim))
     ours = ma.eigenvalues[ma.electromechanical]
-    theirs = andes_modes(andes_system(andes.get_case("ieee39/ieee39_full.xlsx"), off=("Toggle",)))
+    same = tmp_path / "ieee39_st2cut.xlsx"
+    assert ieeest_sheet_as_st2cut(andes.get_case("ieee39/ieee39_full.xlsx"), same)
+    with pytest.warns(UserWarning, match="lacks"):
+        case_same = import_andes(same, on_unsupported="skip")
+    ma_same = modal_analysis(linearise(Simulator(case_same, q_limits=False)))
+    np.testing.assert_allclose(ma_same.eigenvalues[ma_same.electromechanical], ours, atol=1e-9)
+    theirs = andes_modes(andes_system(same, off=("Toggle",)))
     near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
+    gap = np.max(relative_gaps(ours, near))
+    print(f"\nIEEE 39 electromechanical modes vs ANDES (IEEEST as ST2CUT): {gap:.2e}")
     assert len(ours) == 9  # ten machines
-    assert np.max(relative_gaps(ours, near)) < 0.01  # measured 0.5 %
+    assert gap < 1e-5  # measured 2.1e-7 (0.5 % with the IEEEST as written)
 
 
 def test_ieee14_ieeet1_starts_flat_and_fault_speeds_match_andes():
