@@ -71,6 +71,8 @@ STATE, ESD, VREF, PREF = 0, 1, 2, 3
 #: what linearise does with a limit active at the operating point (a column whose one side
 #: leaves a derivative exactly unchanged that the other side moves), `linearise` limits
 AUTO = 2
+#: a state taken held whose own derivative its limit holds too: left out of the linear model
+FROZEN = 2
 LIMIT_RULES = {"auto": AUTO, "hold": 1, "free": -1, "refuse": 0}
 #: auto: the free side counts as linear in h when halving h halves its change within this
 LINEAR_TOL = 0.1
@@ -94,7 +96,8 @@ class Differences(NamedTuple):
     complex d(V_bus)/d(column), curv (n_col,) the kink measure max|f+ - 2 f0 + f-| /
     max|f+ - f-| of each column, V0 (n_bus,) complex the bus voltages at the operating
     point, held (n_col,) int8: where a limit is active at the operating point
-    (`_held_side`), 1 if the column was taken with it held, -1 free, 0 no such limit."""
+    (`_held_side`), 1 if the column was taken with it held, -1 free, 0 no such limit,
+    FROZEN a state held on its own limit."""
 
     J: np.ndarray
     dV: np.ndarray
@@ -177,7 +180,8 @@ def linearise(
         with no drive beyond it: small-signal analysis with the limit inactive, as
         ANDES 2.0 frees a valve exactly at VMIN), held when it jumps (a state driven
         into its limit, held there as ANDES's ``AntiWindup`` flags freeze it,
-        andes/core/discrete.py); "refuse": SimulationError.  A `UserWarning` names
+        andes/core/discrete.py; such a state, its own rate held at 0, is left out of the
+        model); "refuse": SimulationError.  A `UserWarning` names
         the columns and the choice; a limit crossed within the step but not active at
         the point still raises (a smaller rel_step helps).
 
@@ -246,15 +250,17 @@ def linearise_model(
     step = rel_step * np.maximum(np.abs(values), 1.0)
     J, dV, V0, held = jacobian_columns(model, kind, index, step, limits)
     if held.any():
-        names = [
-            f"{_what(model, kind, index, c)} ({'held' if held[c] > 0 else 'free'})"
-            for c in np.nonzero(held)[0]
-        ]
+        how = {1: "held", -1: "free", FROZEN: "held, frozen: left out"}
+        names = [f"{_what(model, kind, index, c)} ({how[held[c]]})" for c in np.nonzero(held)[0]]
         warnings.warn(
             f"{case.name}: {len(names)} perturbation(s) meet a limit active at the "
             f"operating point (limits={limits!r}): {', '.join(names)}",
             stacklevel=3,
         )
+    n = act.size
+    moving = held[:n] != FROZEN  # a frozen state does not move: not a state of the model
+    rows = np.r_[np.nonzero(moving)[0], n : len(kind)]
+    J, dV, act = J[rows], dV[rows], act[moving]
     n = act.size
     A, B = J[:n, act].T, J[n:, act].T
     C, D = output_matrices(model, act, A, B, dV[:n].T, dV[n:].T, V0)
@@ -547,6 +553,10 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
             linear = max_abs(free - 2.0 * dx + f0) <= LINEAR_TOL * max_abs(free - f0)
             side = -clamp if linear else clamp
         held[c] = 0 if clamp == 0 else (-1 if side == -clamp else 1)
+        if held[c] > 0 and kind[c] == STATE:  # FROZEN: its own derivative held at 0 too
+            own = (fp[j] if side > 0 else fm[j]) - f0[j]
+            if abs(own) <= UNCHANGED * max(max_abs(fp - f0), max_abs(fm - f0)):
+                held[c] = FROZEN
         if side > 0:
             assign(J[c], (fp - f0) / h)
             assign(dV[c], (Vp - V0) / h)

@@ -5,7 +5,12 @@ inter-area classification, residues, controllability and observability.
 Conventions (docs/modal.md):
 - right eigenvectors phi_i (columns of `right`) have unit 2-norm; left eigenvectors psi_i
   (rows of `left`) are the rows of inv(right), so psi_i phi_j = delta_ij (Kundur, Power
-  System Stability and Control, 12.2);
+  System Stability and Control, 12.2).  When right is numerically singular (condition
+  number above MAX_COND: A defective, a Jordan block such as a chain of integrators held at
+  a limit, a wind turbine's pitch PI) they are LAPACK's left eigenvectors, each computed on
+  its own and scaled so that psi_i phi_i = 1, so that the defective eigenvalue does not
+  spoil the others; the defective one (|psi_i phi_i| below DEFECTIVE_TOL for unit vectors)
+  gets psi_i = 0 and the participations |phi_ki|^2;
 - participation factors p_ki = |phi_ki psi_ik| / sum_k |phi_ki psi_ik|: each MODE's
   participations (a column) sum to 1 over the states.  (ANDES 2.0's `pfactors` divides by
   the sum over the modes for each state instead, i.e. along the wrong axis.);
@@ -38,6 +43,11 @@ SIGNIFICANT = 0.2  # |speed shape| (of the largest) to count in a coherent group
 STATE_GROUPS = ("rotor angle/speed", "rotor flux", "exciter", "pss", "governor", "converter")
 #: |Im lambda| / |lambda| at or below which an eigenvalue is real (`eigen`)
 REAL_TOL = 1e-9
+#: condition number of the right-eigenvector matrix above which A counts as defective
+MAX_COND = 1e10
+#: |psi phi| of unit left and right eigenvectors below this (an eigenvalue condition number
+#: above 1e4; LAPACK splits a 2-block into two eigenvalues sqrt(eps) apart, |psi phi| ~ 1e-7)
+DEFECTIVE_TOL = 1e-4
 
 
 @dataclass(frozen=True, eq=False)
@@ -212,7 +222,7 @@ def modal_analysis(
     ------
     InputError
         A model without machine speed states, n_areas out of range, areas missing a
-        machine, or a numerically singular eigenvector matrix (defective A).
+        machine.
 
     Examples
     --------
@@ -286,22 +296,25 @@ def electromechanical_modes(freq_hz: np.ndarray, P: np.ndarray, states) -> np.nd
 
 def eigen(A: np.ndarray):
     """Eigenvalues with Im >= 0 (one per conjugate pair), right eigenvectors (unit 2-norm
-    columns) and the matching rows of inv(right-eigenvector matrix) as left eigenvectors.
-    An eigenvalue with |Im| <= REAL_TOL |lambda| is real (Im set to 0, each one kept): a
-    repeated real eigenvalue (Kundur's three -100 1/s exciter lags) comes out of LAPACK
-    as a pair +-1e-13 j or as reals depending on rounding, which moved every mode number.
+    columns) and left eigenvectors (rows) scaled so that psi_i phi_i = 1, zero for a
+    defective eigenvalue (module docstring).  An eigenvalue with |Im| <= REAL_TOL
+    |lambda| is real (Im set to 0, each one kept): a repeated real eigenvalue (Kundur's
+    three -100 1/s exciter lags) comes out of LAPACK as a pair +-1e-13 j or as reals
+    depending on rounding, which moved every mode number.
 
     Returns lam (m,), right (n, m), left (m, n), ordered by |Im| then real part.
-    Raises InputError when the eigenvector matrix is numerically singular (defective A).
     """
-    lam, V = la.eig(A)
+    lam, WL, V = la.eig(A, left=True, right=True)
     real = np.abs(lam.imag) <= REAL_TOL * np.abs(lam)
     lam = np.where(real, lam.real + 0j, lam)
     V /= np.linalg.norm(V, axis=0)
-    try:
-        W = la.solve(V, np.eye(V.shape[0], dtype=complex))
-    except la.LinAlgError as exc:
-        raise InputError(f"the state matrix is defective (no eigenvector basis): {exc}") from None
+    if V.size == 0 or np.linalg.cond(V) <= MAX_COND:
+        W = la.solve(V, np.eye(V.shape[0], dtype=complex)) if V.size else V.T.copy()
+    else:
+        WL /= np.linalg.norm(WL, axis=0)
+        dot = np.einsum("ij,ij->j", WL.conj(), V)  # psi_i phi_i of unit vectors
+        simple = np.abs(dot) > DEFECTIVE_TOL
+        W = np.where(simple[:, None], WL.conj().T / np.where(simple, dot, 1.0)[:, None], 0.0)
     keep = np.nonzero(real | (lam.imag > 0))[0]
     keep = keep[np.lexsort((lam[keep].real, np.round(np.abs(lam[keep].imag), 9)))]
     return lam[keep], V[:, keep], W[keep]
@@ -309,9 +322,10 @@ def eigen(A: np.ndarray):
 
 def participation_factors(right: np.ndarray, left: np.ndarray) -> np.ndarray:
     """|phi_ki psi_ik| normalised so that each mode's participations (columns) sum to 1;
-    shape (n_states, n_modes)."""
+    shape (n_states, n_modes); a defective mode (psi_i = 0, `eigen`) |phi_ki|^2."""
     P = np.abs(right * left.T)
-    return P / P.sum(axis=0)
+    total = P.sum(axis=0)
+    return np.where(total > 0, P / np.where(total > 0, total, 1.0), np.abs(right) ** 2)
 
 
 def _normalised(shape: np.ndarray) -> np.ndarray:

@@ -15,12 +15,14 @@ from stabctl.errors import InputError
 from stabctl.io import load_case
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import (
+    MAX_COND,
     REAL_TOL,
     STATE_GROUPS,
     _by_first_machine,
     eigen,
     modal_analysis,
     mode_sensitivity,
+    participation_factors,
     state_group,
 )
 from stabctl.studies.eigenvalues import _areas as study_areas
@@ -236,3 +238,31 @@ def test_a_repeated_real_eigenvalue_is_real_whatever_lapack_rounds(seed):
     assert np.allclose(A @ right, right * lam, atol=1e-9) and np.allclose(left @ right, np.eye(6))
     assert lam.size == 6 and np.all(lam.imag == 0)
     assert np.allclose(np.sort(lam.real), [-100] * 4 + [-2, -1], rtol=1e-9)
+
+
+def test_a_defective_eigenvalue_does_not_spoil_the_other_modes():
+    """A Jordan block of 0 (four integrators in a chain, as a wind turbine's pitch PI and
+    the plant integrators feeding it, at rest on their limits) beside an oscillatory pair
+    and a real mode, mixed by a similarity: LAPACK splits the block into eigenvalues 3e-4
+    apart with nearly parallel eigenvectors (condition number 9e11, above MAX_COND).  The
+    simple modes' left eigenvectors are the exact ones (psi_i phi_i = 1, psi_i A =
+    lambda_i psi_i) and the defective ones get psi = 0 and the participations |phi|^2
+    (before: inv(right), a LinAlgWarning, and every mode's left vector spoilt; ieee14_wt3's
+    eigenvector matrix has condition number 3e17)."""
+    J = np.zeros((7, 7))
+    J[[0, 1, 2], [1, 2, 3]] = 1.0  # the Jordan block of 0
+    J[4:6, 4:6] = [[-0.5, 6.0], [-6.0, -0.5]]  # -0.5 +- 6j
+    J[6, 6] = -3.0
+    Q = np.random.default_rng(3).normal(size=(7, 7))
+    A = Q @ J @ np.linalg.inv(Q)
+    _, V = scipy.linalg.eig(A)
+    assert np.linalg.cond(V / np.linalg.norm(V, axis=0)) > MAX_COND
+    lam, right, left = eigen(A)
+    simple = np.abs(lam) > 1e-3
+    assert np.sum(simple) == 2 and np.all(left[~simple] == 0)
+    for i in np.nonzero(simple)[0]:
+        assert abs(left[i] @ right[:, i] - 1) < 1e-9
+        assert np.allclose(left[i] @ A, lam[i] * left[i], atol=1e-8)
+    P = participation_factors(right, left)
+    assert np.allclose(P.sum(axis=0), 1.0)
+    assert np.allclose(P[:, ~simple], np.abs(right[:, ~simple]) ** 2)
