@@ -68,11 +68,11 @@ KINK_RATIO = 1e-2  # one-sided slopes differing more than this: a limit was cros
 #: a state a hair inside it: IEEE 14's valve 3.3e-12 above VMIN), the other by more than MOVED
 UNCHANGED, MOVED = 1e-6, 1e-3
 STATE, ESD, VREF, PREF = 0, 1, 2, 3
-#: what linearise does with a limit active at the operating point (a column whose one side
-#: leaves a derivative exactly unchanged that the other side moves), `linearise` limits
-AUTO = 2
 #: a state taken held whose own derivative its limit holds too: left out of the linear model
 FROZEN = 2
+#: what linearise does with a limit active at the operating point (a column whose one side
+#: leaves a derivative unchanged that the other side moves), `linearise` limits
+AUTO = 2
 LIMIT_RULES = {"auto": AUTO, "hold": 1, "free": -1, "refuse": 0}
 #: auto: the free side counts as linear in h when halving h halves its change within this
 LINEAR_TOL = 0.1
@@ -536,8 +536,9 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
         else:
             nominal = p.GP[j, gov.G.PREF]
         h = step[c]
-        for sign, f, V in ((1.0, fp, Vp), (-1.0, fm, Vm)):
-            if _perturbed(kind[c], j, nominal + sign * h, x0, V_nc0, p, net, S, evaluate, dx, out):
+        hi, lo = nominal + h, nominal - h  # the steps taken are hi - nominal, nominal - lo
+        for v, f, V in ((hi, fp, Vp), (lo, fm, Vm)):
+            if _perturbed(kind[c], j, v, x0, V_nc0, p, net, S, evaluate, dx, out):
                 return c
             assign(f, dx)
             assign(V, out.V_bus)
@@ -558,14 +559,14 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
             if abs(own) <= UNCHANGED * max(max_abs(fp - f0), max_abs(fm - f0)):
                 held[c] = FROZEN
         if side > 0:
-            assign(J[c], (fp - f0) / h)
-            assign(dV[c], (Vp - V0) / h)
+            assign(J[c], (fp - f0) / (hi - nominal))
+            assign(dV[c], (Vp - V0) / (hi - nominal))
         elif side < 0:
-            assign(J[c], (f0 - fm) / h)
-            assign(dV[c], (V0 - Vm) / h)
+            assign(J[c], (f0 - fm) / (nominal - lo))
+            assign(dV[c], (V0 - Vm) / (nominal - lo))
         else:
-            assign(J[c], (fp - fm) / (2.0 * h))
-            assign(dV[c], (Vp - Vm) / (2.0 * h))
+            assign(J[c], (fp - fm) / (hi - lo))
+            assign(dV[c], (Vp - Vm) / (hi - lo))
     return -1
 
 
