@@ -93,7 +93,7 @@ FAULT_BUS = {
     "kundur_wt": 7,
 }
 #: cases read from ANDES's spreadsheets (its disturbance records left out); the IBR ones
-#: (issue 29's cost-per-state target) beside ieee14_full, the same network without them
+#: (the 1.5x cost-per-state target, docs/scale.md) beside ieee14_full, the same network without them
 ANDES_XLSX = {
     "ieee39": ("ieee39/ieee39_full.xlsx", ("Toggle",)),
     "gb": ("GBnetwork/GBnetwork.xlsx", ("Toggle",)),
@@ -515,7 +515,7 @@ def table(rows, andes_rows, repeat, andes_repeat):
 
 
 def per_state_table(ok) -> None:
-    """Cost per state and step of each run, and of the IBR cases against today's (issue 29's
+    """Cost per state and step of each run, and of the IBR cases against today's (the
     target: at most 1.5 times)."""
     cost = {r["label"]: r["us_per_step"] / r["states"] for r in ok}
     today = {k: cost[k] for k in TODAY if k in cost}

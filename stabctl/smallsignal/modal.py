@@ -304,20 +304,33 @@ def eigen(A: np.ndarray):
 
     Returns lam (m,), right (n, m), left (m, n), ordered by |Im| then real part.
     """
-    lam, WL, V = la.eig(A, left=True, right=True)
-    real = np.abs(lam.imag) <= REAL_TOL * np.abs(lam)
-    lam = np.where(real, lam.real + 0j, lam)
+    lam, V = la.eig(A)
     V /= np.linalg.norm(V, axis=0)
-    if V.size == 0 or np.linalg.cond(V) <= MAX_COND:
-        W = la.solve(V, np.eye(V.shape[0], dtype=complex)) if V.size else V.T.copy()
-    else:
+    W = _inverse(V)
+    if W is None:  # defective: each left eigenvector on its own (module docstring)
+        lam, WL, V = la.eig(A, left=True, right=True)
+        V /= np.linalg.norm(V, axis=0)
         WL /= np.linalg.norm(WL, axis=0)
         dot = np.einsum("ij,ij->j", WL.conj(), V)  # psi_i phi_i of unit vectors
         simple = np.abs(dot) > DEFECTIVE_TOL
         W = np.where(simple[:, None], WL.conj().T / np.where(simple, dot, 1.0)[:, None], 0.0)
+    real = np.abs(lam.imag) <= REAL_TOL * np.abs(lam)
+    lam = np.where(real, lam.real + 0j, lam)
     keep = np.nonzero(real | (lam.imag > 0))[0]
     keep = keep[np.lexsort((lam[keep].real, np.round(np.abs(lam[keep].imag), 9)))]
     return lam[keep], V[:, keep], W[keep]
+
+
+def _inverse(V: np.ndarray) -> np.ndarray | None:
+    """inv(V) from its LU factors, or None when V's 1-norm condition number, estimated
+    from the same factors (LAPACK zgecon), exceeds MAX_COND."""
+    if V.size == 0:
+        return V.T.copy()
+    lu = la.lu_factor(V, check_finite=False)
+    rcond, _ = la.lapack.zgecon(lu[0], np.abs(V).sum(axis=0).max())
+    if rcond * MAX_COND < 1.0:
+        return None
+    return la.lu_solve(lu, np.eye(V.shape[0], dtype=complex), check_finite=False)
 
 
 def participation_factors(right: np.ndarray, left: np.ndarray) -> np.ndarray:
