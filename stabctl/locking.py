@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -21,6 +22,10 @@ from pathlib import Path
 from stabctl.errors import InputError
 
 __all__ = ["exclusive", "lock_path"]
+
+#: a holder writes its pid just after it takes the lock: a refused writer reads it this
+#: many times, 1 ms apart, before calling the holder unknown
+PID_READS = 100
 
 
 def lock_path(path: str | os.PathLike) -> Path:
@@ -58,6 +63,17 @@ def exclusive(path: str | os.PathLike) -> Iterator[Path]:
         os.close(fd)  # releases the lock
 
 
+def _holder(fd: int) -> str:
+    """The pid the lock's holder wrote in the lock file, "unknown" if none comes (the
+    holder is between taking the lock and writing its pid, see `exclusive`)."""
+    for _ in range(PID_READS):
+        pid = os.pread(fd, 32, 0).decode(errors="replace").strip()
+        if pid:
+            return pid
+        time.sleep(1e-3)
+    return "unknown"
+
+
 def _locked(lock: Path, path) -> int:
     """A descriptor of ``lock`` holding its exclusive lock (see `exclusive`)."""
     while True:
@@ -65,7 +81,7 @@ def _locked(lock: Path, path) -> int:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+            holder = _holder(fd)
             os.close(fd)
             raise InputError(
                 f"{path}: another stabctl process (pid {holder}) is writing it; wait for "
