@@ -605,43 +605,62 @@ BUS_VOLTAGES, NO_BUS_VOLTAGES = np.bool_(True), np.bool_(False)
 
 
 #: the converters' voltage-dependent currents (REGCA1): the network solution is repeated
-#: until no drawn current changes by more than this (pu), at most CURRENT_ITERATIONS times
+#: until no drawn current differs from the affine model it was solved with by more than
+#: this (pu), at most CURRENT_ITERATIONS times
 CURRENT_TOL = 1e-11
 CURRENT_ITERATIONS = 50
+#: voltage step (pu) of the drawn currents' slope in |V| (one-sided difference; their
+#: limits are piecewise linear in |V|, so it is exact away from a breakpoint)
+SLOPE_DV = 1e-6
 
 
 @kernel
-def _drawn_currents(p, xi, V_nc, I_dev, I_fix, tol):
-    """The converters' currents drawn at the kept buses at voltages V_nc, summed per bus:
-    I_dev (power per pu voltage) and I_fix (fixed in the network frame), each (n_nc,)
-    complex (`conv.drawn_current`, `KeptLoads`), written in place if one moved by more
-    than tol; returns the largest move."""
-    moved = 0.0
-    rel = np.zeros(V_nc.size, np.complex128)
-    fix = np.zeros(V_nc.size, np.complex128)
+def _drawn_currents(p, xi, V_nc, loads, tol):
+    """The converters' currents drawn at the kept buses at voltages V_nc, summed per bus
+    (`conv.drawn_current`), against the affine model of `KeptLoads` (I_dev + G_dev |V|,
+    I_fix + G_fix |V|, each (n_nc,) complex): if the model misses one by more than tol,
+    the model is made the tangent at V_nc (in place: the slope from `conv.drawn_current`
+    at |V| + SLOPE_DV).  Returns the largest miss."""
+    n = V_nc.size
+    rel, fix = np.zeros(n, np.complex128), np.zeros(n, np.complex128)
+    g_rel, g_fix = np.zeros(n, np.complex128), np.zeros(n, np.complex128)
     for k in range(p.n_ibr):
         pos = int(p.IP[k, conv.C.POS])
-        a, b = conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]))
+        v = abs(V_nc[pos])
+        a, b = conv.drawn_current(p.IP, xi, k, v)
+        a2, b2 = conv.drawn_current(p.IP, xi, k, v + SLOPE_DV)
         rel[pos] += a
         fix[pos] += b
-    for i in range(V_nc.size):
-        moved = max(moved, abs(rel[i] - I_dev[i]), abs(fix[i] - I_fix[i]))
+        g_rel[pos] += (a2 - a) / SLOPE_DV
+        g_fix[pos] += (b2 - b) / SLOPE_DV
+    moved = 0.0
+    for i in range(n):
+        m = abs(V_nc[i])
+        moved = max(
+            moved,
+            abs(rel[i] - loads.I_dev[i] - loads.G_dev[i] * m),
+            abs(fix[i] - loads.I_fix[i] - loads.G_fix[i] * m),
+        )
     if moved > tol:
-        assign(I_dev, rel)
-        assign(I_fix, fix)
+        for i in range(n):
+            m = abs(V_nc[i])
+            loads.G_dev[i], loads.G_fix[i] = g_rel[i], g_fix[i]
+            loads.I_dev[i], loads.I_fix[i] = rel[i] - g_rel[i] * m, fix[i] - g_fix[i] * m
     return moved
 
 
 @kernel
 def _converter_fixed_point(p, xi, net, psi, V_nc, loads, held, it):
-    """Fixed-point iteration of the network solution and the converters' drawn currents
-    when one depends on its bus voltage (REGCA1's LVG and HVG, `conv.drawn_current`):
-    loads.I_dev, loads.I_fix recomputed at the solved voltages (in place) and the network
-    solved again until no current moves by more than CURRENT_TOL.  Returns the total
-    load-iteration count, -1 without convergence (either loop)."""
+    """The network solution with the converters' drawn currents when one depends on its
+    bus voltage (REGCA1's LVG and HVG, `conv.drawn_current`): solved with their tangent
+    at the starting voltages (`_drawn_currents`), which is exact while no |V| crosses a
+    breakpoint of their piecewise-linear limits; otherwise the tangent is taken again at
+    the solved voltages and the network solved again, until the currents agree within
+    CURRENT_TOL.  Returns the total load-iteration count, -1 without convergence (either
+    loop)."""
     _Y11, _Y12, Y21, Y22, Z22, _R = net
     for _ in range(CURRENT_ITERATIONS):
-        if _drawn_currents(p, xi, V_nc, loads.I_dev, loads.I_fix, CURRENT_TOL) <= CURRENT_TOL:
+        if _drawn_currents(p, xi, V_nc, loads, CURRENT_TOL) <= CURRENT_TOL:
             return it
         more = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
         if more < 0:
@@ -698,10 +717,9 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     for k in range(ni):
         conv.clamp_states(p.IP, xi, k, p.reach)
         v_dep = v_dep or conv.voltage_dependent(p.IP, k)
-    I_dev = np.zeros(V_nc.size, np.complex128)
-    I_fix = np.zeros(V_nc.size, np.complex128)
-    _drawn_currents(p, xi, V_nc, I_dev, I_fix, -1.0)
-    loads = KeptLoads(p.S_P, p.I0, p.Y_low, S_extra, I_dev, I_fix)
+    zero = np.zeros((4, V_nc.size), np.complex128)
+    loads = KeptLoads(p.S_P, p.I0, p.Y_low, S_extra, zero[0], zero[1], zero[2], zero[3])
+    _drawn_currents(p, xi, V_nc, loads, -1.0)
     it = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
     if it < 0:
         return -1

@@ -147,8 +147,10 @@ class KeptLoads(NamedTuple):
     """What the kept buses draw in one network solution (`solve_nc`), arrays (n_nc,)
     complex: the non-conforming loads S_P, I0, Y_low (`NonConformingLoads`), the extra
     constant power S_extra (e.g. storage, dropped below 0.5 pu with the loads), the
-    converters' currents I_dev (power per pu voltage, drawn at every voltage) and I_fix
-    (a current fixed in the network frame: a converter whose angle comes from a PLL)."""
+    converters' currents, affine in the bus voltage magnitude |V| (their limits are
+    piecewise linear in it): I_dev + G_dev |V| (power per pu voltage, drawn at every
+    voltage at the bus voltage's angle) and I_fix + G_fix |V| (a current fixed in the
+    network frame: a converter whose angle comes from a PLL)."""
 
     S_P: np.ndarray
     I0: np.ndarray
@@ -156,22 +158,25 @@ class KeptLoads(NamedTuple):
     S_extra: np.ndarray
     I_dev: np.ndarray
     I_fix: np.ndarray
+    G_dev: np.ndarray
+    G_fix: np.ndarray
 
 
 @kernel
 def _load_currents(V, loads, low, out):
     """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out); loads a
     `KeptLoads`."""
-    S_P, I0, Y_low, S_extra, I_dev, I_fix = loads
+    S_P, I0, Y_low, S_extra, I_dev, I_fix, G_dev, G_fix = loads
     for i in range(V.size):
         m = abs(V[i])
         if m > V_SWITCH and not low[i]:
             out[i] = np.conj(S_P[i] + S_extra[i] + I0[i] * m) / np.conj(V[i])
         else:
             out[i] = np.conj(Y_low[i]) * V[i]
-        if I_dev[i] != 0.0:  # converters: current sources at every voltage
-            out[i] += np.conj(I_dev[i] * m) / np.conj(V[i])
-        out[i] += I_fix[i]
+        c = I_dev[i] + G_dev[i] * m
+        if c != 0.0:  # converters: current sources at every voltage
+            out[i] += np.conj(c * m) / np.conj(V[i])
+        out[i] += I_fix[i] + G_fix[i] * m
 
 
 @kernel
@@ -196,19 +201,24 @@ def _held_below(V, held, limit):
 def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
     """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
 
-    With loads the `KeptLoads` (S_P, I0, Y_low, S_extra, I_dev, I_fix): I_load = conj((S_P +
-    S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's low-voltage switch;
-    S_extra, e.g. storage power, is dropped below 0.5 pu with the rest), plus conj(I_dev
-    |V|/V) at every voltage: the converters' currents (`stabctl.models.converters`), I_dev
-    complex power per pu voltage drawn, a current of fixed magnitude and angle relative to
-    the bus voltage, and I_fix, a current drawn fixed in the network frame.
-    V (n_nc,) is the starting point and is updated in place.  First the chord
-    iteration V <- V - Z22 F(V) (the loads are small beside the network admittance, so it
-    contracts fast and costs one matrix-vector product per step); if that has not converged
-    in 30 steps, Newton's method in rectangular coordinates (as PST).  If Newton fails too,
-    the switch has left the equations without a solution (a load at 0.5 pu draws twice as
-    much just above the switch as just below; PSTess stops there): the loads within 0.05 pu
-    of the switch (at any iterate) are then held at their impedance model.
+    With loads the `KeptLoads` (S_P, I0, Y_low, S_extra, I_dev, I_fix, G_dev, G_fix):
+    I_load = conj((S_P + S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's
+    low-voltage switch; S_extra, e.g. storage power, is dropped below 0.5 pu with the rest),
+    plus conj(c |V|/V) at every voltage with c = I_dev + G_dev |V|: the converters'
+    currents (`stabctl.models.converters`), c complex power per pu voltage drawn, a current
+    whose angle is the bus voltage's, and I_fix + G_fix |V|, a current drawn fixed in the
+    network frame (both affine in |V|, as the converters' voltage-dependent limits are
+    piecewise linear).  V (n_nc,) is the starting point and is updated in place.  First the
+    chord iteration V <- V - Z22 F(V) (the loads are small beside the network admittance, so
+    it contracts fast and costs one matrix-vector product per step); if that has not
+    converged in 30 steps, Newton's method in rectangular coordinates (as PST).  A converter
+    current with a slope in |V| (G_dev or G_fix not 0: on the sloped part of a limit, e.g.
+    REGCA1's low-voltage gain, 11.7 pu per pu for Kundur's 7 pu wind turbine below 1 pu) is
+    a conductance the chord does not see, with which it can stop contracting: then Newton's
+    method straight away.  If Newton fails too, the switch has left the equations without a
+    solution (a load at 0.5 pu draws twice as much just above the switch as just below;
+    PSTess stops there): the loads within 0.05 pu of the switch (at any iterate) are then
+    held at their impedance model.
 
     held (n_nc, bool, in/out) carries that hold between calls: a call that needed it sets
     it, and the next call first solves with the same loads held and keeps the answer while
@@ -236,7 +246,8 @@ def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
         held[:] = False
         assign(V, V_start)
         assign(vmin, np.abs(V_start))
-    it = _chord(b, Z22, V, loads, F, held, vmin)
+    sloped = max_abs(loads.G_dev) > 0.0 or max_abs(loads.G_fix) > 0.0
+    it = -1 if sloped else _chord(b, Z22, V, loads, F, held, vmin)
     if it >= 0:
         return it
     assign(V, V_start)
@@ -300,7 +311,7 @@ def _newton_nc(b, Y22, V, loads, low, vmin):
     """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load);
     vmin keeps the smallest magnitude each bus reached.  Converged when the mismatch is
     below NEWTON_TOL (pu), within NEWTON_MAX_ITER iterations (else -1)."""
-    S_P, I0, Y_low, S_extra, I_dev, _I_fix = loads  # I_fix: no derivative
+    S_P, I0, Y_low, S_extra, I_dev, _I_fix, G_dev, G_fix = loads
     n = V.size
     J = np.empty((2 * n, 2 * n))
     rhs = np.empty(2 * n)
@@ -323,9 +334,13 @@ def _newton_nc(b, Y22, V, loads, low, vmin):
             else:
                 A = np.conj(Y_low[r])
                 B = 0.0 + 0.0j
-            if I_dev[r] != 0.0:  # the converters' current, as the I0 term at every voltage
-                A += np.conj(I_dev[r]) / (2 * m)
-                B -= np.conj(I_dev[r]) * m / (2 * Vc**2)
+            c = I_dev[r] + G_dev[r] * m
+            if c != 0.0 or G_dev[r] != 0.0:  # the converters' current, as the I0 term
+                A += np.conj(c) / (2 * m) + np.conj(G_dev[r]) / 2
+                B += (np.conj(G_dev[r]) * m - np.conj(c)) * m / (2 * Vc**2)
+            if G_fix[r] != 0.0:  # d(G_fix |V|)
+                A += G_fix[r] * Vc / (2 * m)
+                B += G_fix[r] * V[r] / (2 * m)
             J[r, r] += (A + B).real
             J[r, n + r] -= (A - B).imag
             J[n + r, r] += (A + B).imag

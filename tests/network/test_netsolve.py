@@ -39,7 +39,7 @@ def fault_network():
 def solve(m, net, psi, V, held):
     p = m.params
     none = np.zeros(V.size, complex)  # no extra power, no converters
-    loads = KeptLoads(p.S_P, p.I0, p.Y_low, none, none, none)
+    loads = KeptLoads(p.S_P, p.I0, p.Y_low, none, none, none, none, none)
     it = solve_nc(net.Y21, net.Y22, net.Z22, psi, V, loads, held)
     F = np.empty(V.size, complex)
     resid = _load_mismatch(net.Y21 @ psi, net.Y22, V, loads, F, held)
@@ -87,3 +87,44 @@ def test_lapack_solve_matches_numpy_and_reports_a_singular_matrix():
     assert np.array_equal(A, A_before)  # the input is left alone
     _, info = _lapack_solve(np.array([[1.0, 2.0], [2.0, 4.0]]), np.ones(2))
     assert info == 2  # U[1, 1] = 0 (dgesv's INFO)
+
+
+def test_a_converter_current_growing_with_the_voltage_is_solved_with_the_network():
+    """A REGCA1 below its low-voltage gain's upper point Lvpnt1 draws an active current Ip
+    (v - Lvpnt0)/(Lvpnt1 - Lvpnt0) that grows with its bus voltage v (ANDES regca1.py
+    192-196; the network solution takes it as affine in |V|, `KeptLoads`): the solved
+    kept-bus voltages satisfy the network equations with the currents the converters draw
+    at those voltages (`conv.drawn_current`), to 1e-10 pu, whether the voltage is on the
+    gain's slope or above it."""
+    from stabctl.models import converters as conv
+    from stabctl.storage.devices import StorageFleet, battery_case, uniform_fleet
+
+    case = load_case("kundur")
+    fleet = uniform_fleet(case, 5, model="wecc")
+    for lvpnt1, on_slope in ((1.5, True), (0.8, False)):
+        wecc = StorageFleet(fleet.devices, model="wecc", battery={"Lvpnt1": lvpnt1})
+        m = Simulator(battery_case(case, wecc)[0]).model
+        L, n, ni = m.layout, m.mp.n, m.cp.n
+        x = m.x0.copy()
+        xi = L.view(x, "ibr")
+        xi[0] = 4.0  # Ip: every battery injecting 4 pu (system base), idle at the start
+        net = m.network()
+        _dx, out = m.evaluate(x, net, m.V_nc0)
+        psi = np.empty(n, complex)
+        internal_voltage(m.params.MP, x[: 6 * n].reshape(6, n), psi)
+        V = out.V_nc
+        drawn = np.zeros(V.size, complex)
+        slope = 0.0
+        for k in range(ni):
+            pos = int(m.cp.pos[k])
+            rel, fix = conv.drawn_current(m.params.IP, xi, k, abs(V[pos]))
+            drawn[pos] += np.conj(rel * abs(V[pos])) / np.conj(V[pos]) + fix
+            up = conv.drawn_current(m.params.IP, xi, k, abs(V[pos]) + 0.01)[0]
+            slope = max(slope, abs(up - rel) / 0.01)
+        p = m.params
+        none = np.zeros(V.size, complex)
+        loads = KeptLoads(p.S_P, p.I0, p.Y_low, none, none, none, none, none)
+        F = np.empty(V.size, complex)
+        _load_mismatch(net.Y21 @ psi, net.Y22, V, loads, F, np.zeros(V.size, np.bool_))
+        assert np.max(np.abs(F + drawn)) < 1e-10
+        assert (slope > 1e-3) == on_slope  # the case is on the gain's slope or not
