@@ -264,7 +264,7 @@ def ours(label: str, repeat: int) -> dict:
     out["states"] = int(np.count_nonzero(active_states(sim.model)))
     try:
         linearise(sim, esd_buses=())  # compile
-    except SimulationError as exc:  # e.g. Kundur's wind cases: limits it cannot tell apart
+    except SimulationError as exc:  # e.g. a kink at the operating point (docs/modal.md)
         out["lin_error"] = str(exc)[:200]
         return _with_rss(out)
     t = time.perf_counter()

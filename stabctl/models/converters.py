@@ -922,6 +922,27 @@ def _lvg(v, Lvpnt0, Lvpnt1, kLVG):
     return 1.0
 
 
+#: a bus voltage within this of LVG's upper breakpoint Lvpnt1 sits on it (pu)
+ON_BREAKPOINT = 1e-9
+#: how far `flat_side_of_lvg` moves the breakpoint below such a voltage (pu): beyond any
+#: voltage change of a linearisation's perturbation
+BREAKPOINT_SHIFT = 1e-3
+
+
+def flat_side_of_lvg(P: np.ndarray, v0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The packed parameters P (n, len(C)) with the low-voltage gain of each REGCA1 whose
+    bus voltage v0 (n,) pu sits on its upper breakpoint Lvpnt1 (within ON_BREAKPOINT;
+    ANDES's default Lvpnt1 = 1 at a bus held at 1 pu: kundur_wtdta1) flat around it:
+    Lvpnt1 moved BREAKPOINT_SHIFT below v0, LVG = 1 there (kLVG, the ramp's slope, kept).
+    LVG has no derivative at the breakpoint; a linearisation on its flat side is what
+    ANDES 2.0's EIG gives (docs/modal.md).  Returns (the copy, the rows moved); P itself
+    is not changed."""
+    on = (P[:, C.TYPE] == REGCA1) & (np.abs(v0 - P[:, C.LVPNT1]) <= ON_BREAKPOINT)
+    out = P.copy()
+    out[on, C.LVPNT1] = v0[on] - BREAKPOINT_SHIFT
+    return out, np.nonzero(on)[0]
+
+
 @kernel
 def _regca1_currents(P, x, k, v):
     """REGCA1's output currents (Ipout, Iqout) of device k at voltage magnitude v (ANDES
