@@ -37,6 +37,9 @@ TOL_V = 1e-11
 #: Newton fallback of the kept-bus solution (`_newton_nc`): largest mismatch (pu) and
 #: iterations (PST nc_load's)
 NEWTON_TOL, NEWTON_MAX_ITER = 1e-10, 50
+#: with a converter current sloped in |V|, Newton first up to this many kept buses: its
+#: dense LU of order 2 n costs about what 30 chord steps (n^2 each) do at n = 64
+NEWTON_FIRST_MAX = 64
 
 # LAPACK's dgesv (scipy's, `scipy.linalg.cython_lapack`) for the kernels, called by symbol
 # name: numba links the symbol in each process that loads a kernel calling it, so they stay
@@ -215,10 +218,11 @@ def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
     current with a slope in |V| (G_dev or G_fix not 0: on the sloped part of a limit, e.g.
     REGCA1's low-voltage gain, 11.7 pu per pu for Kundur's 7 pu wind turbine below 1 pu) is
     a conductance the chord does not see, with which it can stop contracting: then Newton's
-    method straight away.  If Newton fails too, the switch has left the equations without a
-    solution (a load at 0.5 pu draws twice as much just above the switch as just below;
-    PSTess stops there): the loads within 0.05 pu of the switch (at any iterate) are then
-    held at their impedance model.
+    method straight away, up to NEWTON_FIRST_MAX kept buses (beyond, its dense Jacobian
+    costs more than the chord's 30 steps: the chord first).  If Newton fails too, the
+    switch has left the equations without a solution (a load at 0.5 pu draws twice as much
+    just above the switch as just below; PSTess stops there): the loads within 0.05 pu of
+    the switch (at any iterate) are then held at their impedance model.
 
     held (n_nc, bool, in/out) carries that hold between calls: a call that needed it sets
     it, and the next call first solves with the same loads held and keeps the answer while
@@ -247,7 +251,7 @@ def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
         assign(V, V_start)
         assign(vmin, np.abs(V_start))
     sloped = max_abs(loads.G_dev) > 0.0 or max_abs(loads.G_fix) > 0.0
-    it = -1 if sloped else _chord(b, Z22, V, loads, F, held, vmin)
+    it = -1 if sloped and n <= NEWTON_FIRST_MAX else _chord(b, Z22, V, loads, F, held, vmin)
     if it >= 0:
         return it
     assign(V, V_start)
