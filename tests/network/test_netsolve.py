@@ -107,7 +107,7 @@ def test_a_converter_current_growing_with_the_voltage_is_solved_with_the_network
         L, n, ni = m.layout, m.mp.n, m.cp.n
         x = m.x0.copy()
         xi = L.view(x, "ibr")
-        xi[0] = 4.0  # Ip: every battery injecting 4 pu (system base), idle at the start
+        xi[0] = 4.0  # Ip = 4 pu: every battery injecting (idle at the operating point)
         net = m.network()
         _dx, out = m.evaluate(x, net, m.V_nc0)
         psi = np.empty(n, complex)
