@@ -615,26 +615,29 @@ SLOPE_DV = 1e-6
 
 
 @kernel
-def _drawn_currents(p, xi, V_nc, loads, tol):
-    """The converters' currents drawn at the kept buses at voltages V_nc, summed per bus
-    (`conv.drawn_current`), against the affine model of `KeptLoads` (I_dev + G_dev |V|,
-    I_fix + G_fix |V|, each (n_nc,) complex): if the model misses one by more than tol,
-    the model is made the tangent at V_nc (in place: the slope from `conv.drawn_current`
-    at |V| + SLOPE_DV).  Returns the largest miss."""
-    n = V_nc.size
-    rel, fix = np.zeros(n, np.complex128), np.zeros(n, np.complex128)
-    g_rel, g_fix = np.zeros(n, np.complex128), np.zeros(n, np.complex128)
+def _summed_currents(p, xi, V_nc, dv):
+    """`conv.drawn_current` of every converter at its bus voltage magnitude + dv (pu),
+    summed per kept bus: (I_rel, I_fix), each (n_nc,) complex."""
+    rel = np.zeros(V_nc.size, np.complex128)
+    fix = np.zeros(V_nc.size, np.complex128)
     for k in range(p.n_ibr):
         pos = int(p.IP[k, conv.C.POS])
-        v = abs(V_nc[pos])
-        a, b = conv.drawn_current(p.IP, xi, k, v)
-        a2, b2 = conv.drawn_current(p.IP, xi, k, v + SLOPE_DV)
+        a, b = conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]) + dv)
         rel[pos] += a
         fix[pos] += b
-        g_rel[pos] += (a2 - a) / SLOPE_DV
-        g_fix[pos] += (b2 - b) / SLOPE_DV
+    return rel, fix
+
+
+@kernel
+def _drawn_currents(p, xi, V_nc, loads, tol):
+    """The converters' currents drawn at the kept buses at voltages V_nc (`_summed_currents`)
+    against the affine model of `KeptLoads` (I_dev + G_dev |V|, I_fix + G_fix |V|, each
+    (n_nc,) complex): if the model misses one by more than tol, the model is made the
+    tangent at V_nc (in place: the slope from the currents at |V| + SLOPE_DV, evaluated
+    only then).  Returns the largest miss."""
+    rel, fix = _summed_currents(p, xi, V_nc, 0.0)
     moved = 0.0
-    for i in range(n):
+    for i in range(V_nc.size):
         m = abs(V_nc[i])
         moved = max(
             moved,
@@ -642,10 +645,12 @@ def _drawn_currents(p, xi, V_nc, loads, tol):
             abs(fix[i] - loads.I_fix[i] - loads.G_fix[i] * m),
         )
     if moved > tol:
-        for i in range(n):
+        rel2, fix2 = _summed_currents(p, xi, V_nc, SLOPE_DV)
+        for i in range(V_nc.size):
             m = abs(V_nc[i])
-            loads.G_dev[i], loads.G_fix[i] = g_rel[i], g_fix[i]
-            loads.I_dev[i], loads.I_fix[i] = rel[i] - g_rel[i] * m, fix[i] - g_fix[i] * m
+            g_rel, g_fix = (rel2[i] - rel[i]) / SLOPE_DV, (fix2[i] - fix[i]) / SLOPE_DV
+            loads.G_dev[i], loads.G_fix[i] = g_rel, g_fix
+            loads.I_dev[i], loads.I_fix[i] = rel[i] - g_rel * m, fix[i] - g_fix * m
     return moved
 
 
@@ -719,7 +724,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         v_dep = v_dep or conv.voltage_dependent(p.IP, k)
     zero = np.zeros((4, V_nc.size), np.complex128)
     loads = KeptLoads(p.S_P, p.I0, p.Y_low, S_extra, zero[0], zero[1], zero[2], zero[3])
-    _drawn_currents(p, xi, V_nc, loads, -1.0)
+    if ni:  # the converters' tangent at the starting voltages
+        _drawn_currents(p, xi, V_nc, loads, -1.0)
     it = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
     if it < 0:
         return -1
