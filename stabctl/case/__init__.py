@@ -20,6 +20,7 @@ from stabctl.case.system import (
     LoadTable,
     MachineTable,
     PssTable,
+    ShaftTable,
     Table,
 )
 
@@ -39,5 +40,6 @@ __all__ = [
     "LoadTable",
     "MachineTable",
     "PssTable",
+    "ShaftTable",
     "Table",
 ]

@@ -5,7 +5,8 @@ Each family is declared beside its kernels, one parameter once
 (:mod:`stabctl.models.declaration`): ``MACHINE`` in :mod:`stabctl.models.machines`
 (``mac_con``), ``EXCITER`` in :mod:`stabctl.models.exciters` (``exc_con``), ``PSS`` in
 :mod:`stabctl.models.pss` (``pss_con``), ``GOVERNOR`` in :mod:`stabctl.models.governors`
-(``tg_con``) and ``CONVERTER`` in :mod:`stabctl.models.converters` (``ibr_con``).  The case
+(``tg_con``), ``CONVERTER`` in :mod:`stabctl.models.converters` (``ibr_con``) and ``SHAFT``
+in :mod:`stabctl.models.shafts` (``shaft_con``).  The case
 tables (:mod:`stabctl.case.system`), the DYR import and the model reference are built
 from this registry.
 """
@@ -21,6 +22,7 @@ from stabctl.models.exciters import EXCITER
 from stabctl.models.governors import GOVERNOR
 from stabctl.models.machines import MACHINE
 from stabctl.models.pss import PSS
+from stabctl.models.shafts import SHAFT
 
 __all__ = ["FAMILIES"]
 
@@ -32,5 +34,6 @@ FAMILIES: Mapping[str, Family] = MappingProxyType(
         "pss": PSS,
         "governors": GOVERNOR,
         "converters": CONVERTER,
+        "shafts": SHAFT,
     }
 )

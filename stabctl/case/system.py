@@ -46,6 +46,7 @@ from stabctl.models.exciters import EXCITER
 from stabctl.models.governors import GOVERNOR
 from stabctl.models.machines import MACHINE
 from stabctl.models.pss import PSS
+from stabctl.models.shafts import SHAFT
 
 __all__ = [
     "Table",
@@ -58,6 +59,7 @@ __all__ = [
     "LoadTable",
     "InjectionTable",
     "ConverterTable",
+    "ShaftTable",
     "Case",
     "SWING",
     "PV",
@@ -580,6 +582,23 @@ class GovernorTable(Table):
         self._unique("machine", "governor on machine")
 
 
+@_declared(SHAFT)
+class ShaftTable(Table):
+    """Multi-mass torsional shafts: stabctl's ``shaft_con`` (ANDES 2.0 ``SHAFT5``; the model
+        in :mod:`stabctl.models.shafts`, docs/pst_models.md section 13), one row per machine
+        whose rotor is the generator mass of a five-mass chain HP-IP-LP-generator-exciter.
+        Columns (declared in :data:`stabctl.models.shafts.SHAFT`; machine base):
+
+    {columns}
+
+        Omitted damping columns are 0.  Validation: inertias and stiffnesses >= 0 (> 0 is
+        checked when the model is built), one shaft per machine.
+    """
+
+    def _check(self):
+        self._unique("machine", "shaft on machine")
+
+
 @dataclass(frozen=True, eq=False)
 class LoadTable(Table):
     """Non-conforming load data: PST ``load_con``, 5 columns (PST manual 3.29 Table 12).
@@ -717,6 +736,7 @@ TABLES: Mapping[str, type[Table]] = MappingProxyType(
         "loads": LoadTable,
         "injections": InjectionTable,
         "converters": ConverterTable,
+        "shafts": ShaftTable,
     }
 )
 
@@ -757,6 +777,9 @@ class Case:
     converters : ConverterTable
         Converter-interfaced devices (ANDES PVD1, ESD1), one row each, pu on the device
         base (see the class for columns and units); empty by default.
+    shafts : ShaftTable
+        Multi-mass torsional shafts on machines (ANDES SHAFT5), one row each, machine
+        base; empty by default.
     sw_con : numpy.ndarray or None
         The data file's own switching (disturbance) matrix, shape (rows, 7), PST format
         (PST manual 2.5), read-only; None if the file has none.
@@ -789,6 +812,7 @@ class Case:
     loads: LoadTable = field(default_factory=LoadTable.empty)
     injections: InjectionTable = field(default_factory=InjectionTable.empty)
     converters: ConverterTable = field(default_factory=ConverterTable.empty)
+    shafts: ShaftTable = field(default_factory=ShaftTable.empty)
     sw_con: np.ndarray | None = None
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
     source: str = ""
@@ -831,7 +855,7 @@ class Case:
         self._check_buses(self.injections, "bus", known)
         self._check_buses(self.converters, "bus", known)
         macs = self.machines.number
-        for tab in (self.exciters, self.pss, self.governors):
+        for tab in (self.exciters, self.pss, self.governors, self.shafts):
             bad = np.flatnonzero(~np.isin(tab.machine, macs))
             if bad.size:
                 tab._fail(

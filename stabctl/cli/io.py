@@ -200,6 +200,9 @@ def _imported(case, out) -> tuple[dict, str]:
     if len(case.converters):  # a case without converters is summarised as before
         summary["converters"] = len(case.converters)
         text += f", {len(case.converters)} converters"
+    if len(case.shafts):  # likewise a case without torsional shafts
+        summary["shafts"] = len(case.shafts)
+        text += f", {len(case.shafts)} torsional shafts"
     return summary, text
 
 

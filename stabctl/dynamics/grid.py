@@ -88,8 +88,10 @@ def default_step(
 
 def fastest_time_constant(case: Case) -> tuple[float, str]:
     """Smallest time constant among the states of the case's models (s) and where it is
-    (table, field, row).  Raises CaseError for models stabctl does not have."""
-    from stabctl.models import converters, exciters, governors, machines, pss
+    (table, field, row); a torsional shaft's fastest mode w counts as 0.1 / w
+    (`stabctl.models.shafts.ShaftParams.time_constants`).  Raises CaseError for models
+    stabctl does not have."""
+    from stabctl.models import converters, exciters, governors, machines, pss, shafts
 
     cands = []
     mp, ep = machines.machine_params(case), exciters.exciter_params(case)
@@ -104,6 +106,7 @@ def fastest_time_constant(case: Case) -> tuple[float, str]:
         *ep.time_constants(),
         *gp.time_constants(),
         *cp.time_constants(),
+        *shafts.shaft_params(case).time_constants(mp.basrad),
     ):
         if np.any(sel):
             k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))

@@ -28,6 +28,7 @@ from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
 from stabctl.models import pss as pss_
+from stabctl.models import shafts as shaft
 from stabctl.network.solution import (
     KeptLoads,
     NonConformingLoads,
@@ -86,8 +87,8 @@ class StageConfig:
 class Layout:
     """Slices of the flat state vector: machines (6, n_mac), exciters (exc_rows, n_exc),
     pss (pss_rows, n_pss), governors (tg_rows, n_tg), converters (conv.N_STATES, n_ibr),
-    each stored state-major; the rows are the most slots any exciter / PSS / governor type
-    of the case uses."""
+    shafts (shaft.N_STATES, n_shaft), each stored state-major; the rows are the most
+    slots any exciter / PSS / governor type of the case uses."""
 
     n_mac: int
     n_exc: int
@@ -97,6 +98,7 @@ class Layout:
     pss_rows: int = 3
     tg_rows: int = 3
     n_ibr: int = 0
+    n_shaft: int = 0
     blocks: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -107,6 +109,7 @@ class Layout:
             ("pss", self.pss_rows, self.n_pss),
             ("tg", self.tg_rows, self.n_tg),
             ("ibr", conv.N_STATES, self.n_ibr),
+            ("shaft", shaft.N_STATES, self.n_shaft),
         ):
             self.blocks[name] = (slice(start, start + rows * n), (rows, n))
             start += rows * n
@@ -154,6 +157,7 @@ class DynamicModel:
         self.pp = pss_.pss_params(case)
         self.gp = gov.governor_params(case)
         self.cp = conv.converter_params(case, op.V, op.S_gen)
+        self.tp = shaft.shaft_params(case)
         self.layout = Layout(
             self.mp.n,
             self.ep.n,
@@ -163,6 +167,7 @@ class DynamicModel:
             self.pp.n_slots(),
             self.gp.n_slots(),
             self.cp.n,
+            self.tp.n,
         )
         self._setup_loads(injection_buses)
         self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
@@ -282,6 +287,9 @@ class DynamicModel:
         xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac], lp)
         L.view(x, "tg")[:] = xg
         L.view(x, "ibr")[:] = conv.initialise(self.cp, op.V)
+        L.view(x, "shaft")[:] = shaft.initialise(
+            self.tp, xm[0, self.tp.mac], self.pmech0[self.tp.mac]
+        )
         self.x0 = x
         self.V_nc0 = op.V[self.nc_idx].astype(complex)
         self.pss_of_exc = np.full(ep.n, -1)
@@ -297,6 +305,7 @@ class DynamicModel:
             SP=self.pp.packed(),
             GP=self.gp.packed(self.Pref),
             IP=self.cp.packed(),
+            TP=self.tp.packed(),
             pss_of_exc=self.pss_of_exc,
             exc_rows=L.exc_rows,
             pss_rows=L.pss_rows,
@@ -314,6 +323,7 @@ class DynamicModel:
             n_pss=L.n_pss,
             n_tg=L.n_tg,
             n_ibr=L.n_ibr,
+            n_shaft=L.n_shaft,
         )
 
     @functools.cached_property
@@ -402,6 +412,7 @@ class DynamicModel:
             "pss": self.pp.mac,
             "tg": self.gp.mac,
             "ibr": np.arange(self.cp.n),
+            "shaft": self.tp.mac,
         }
         names = {
             "mac": lambda i: mac.STATE_NAMES,
@@ -409,6 +420,7 @@ class DynamicModel:
             "exc": lambda i: exc.STATE_NAMES[int(self.ep.kind[i])],
             "tg": lambda i: gov.STATE_NAMES[int(self.gp.kind[i])],
             "ibr": lambda i: conv.STATE_NAMES[int(self.cp.type[i])],
+            "shaft": lambda i: shaft.STATE_NAMES,
         }
         for block, (sl, (_rows, n)) in self.layout.blocks.items():
             if sl.start <= k < sl.stop:
@@ -459,9 +471,9 @@ class DynamicModel:
 
 class KernelParams(NamedTuple):
     """Packed parameters of every model for the compiled kernels (see each model's
-    `packed`; IP the converters'), the non-conforming load data of the kept buses (S_P,
-    I0, Y_low, (n_nc,) complex pu) and the numbers of machines, exciters, PSSs, governors
-    and converters (the state layout, `Layout`)."""
+    `packed`; IP the converters', TP the shafts'), the non-conforming load data of the
+    kept buses (S_P, I0, Y_low, (n_nc,) complex pu) and the numbers of machines, exciters,
+    PSSs, governors, converters and shafts (the state layout, `Layout`)."""
 
     MP: np.ndarray
     basrad: float
@@ -469,6 +481,7 @@ class KernelParams(NamedTuple):
     SP: np.ndarray
     GP: np.ndarray
     IP: np.ndarray
+    TP: np.ndarray
     pss_of_exc: np.ndarray
     exc_rows: int
     pss_rows: int
@@ -488,6 +501,7 @@ class KernelParams(NamedTuple):
     n_pss: int
     n_tg: int
     n_ibr: int
+    n_shaft: int
 
 
 class KernelNetwork(NamedTuple):
@@ -716,6 +730,9 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     o += rg * ng
     ri = conv.N_STATES
     xi, dxi = x[o : o + ri * ni].reshape(ri, ni), dx[o : o + ri * ni].reshape(ri, ni)
+    o += ri * ni
+    rt, nt = shaft.N_STATES, p.n_shaft
+    xt, dxt = x[o : o + rt * nt].reshape(rt, nt), dx[o : o + rt * nt].reshape(rt, nt)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
     v_dep = False
@@ -767,7 +784,11 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         pmech[m] = gov.pmech(p.GP, xg, k, xm[1, m])
         if p.GP[k, gov.G.MAC2] >= 0:  # a cross-compound unit's LP shaft
             pmech[int(p.GP[k, gov.G.MAC2])] = gov.pmech_lp(p.GP, xg, k)
-    mac.derivatives(p.MP, p.basrad, xm, cur, vex, pmech, dxm, pelect, qelect, eterm)
+    mac.derivatives(
+        p.MP, p.basrad, xm, cur, vex, _rotor_inputs(p, xm, xt, pmech), dxm, pelect, qelect, eterm
+    )
+    for k in range(nt):
+        shaft.derivatives(p.TP, p.MP, p.basrad, xt, k, xm, pmech, dxt)
     assign(efd, p.vex0)
     for i in range(ne):
         m = int(p.EP[i, exc.E.MAC])
@@ -785,6 +806,21 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         V_k = V_nc[int(p.IP[k, conv.C.POS])]
         S_ibr[k] = conv.derivatives(p.IP, xi, k, V_k, V_nc, p.reach, dxi)
     return it
+
+
+@kernel
+def _rotor_inputs(p, xm, xt, pmech):
+    """The mechanical power each machine's swing equation takes: the turbine's P_m, or on
+    a machine with a torsional shaft the shaft's torque on its rotor
+    (`stabctl.models.shafts.rotor_torque`) as the P_m giving that torque."""
+    if p.n_shaft == 0:
+        return pmech
+    pm = pmech.copy()
+    for k in range(p.n_shaft):
+        m = int(p.TP[k, shaft.T.MAC])
+        torque = shaft.rotor_torque(p.TP, xt, k, xm[0, m], xm[1, m])
+        pm[m] = torque * (xm[1, m] if mac.divides_pmech_by_speed(p.MP, m) else 1.0)
+    return pm
 
 
 @functools.cache

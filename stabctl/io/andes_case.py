@@ -112,6 +112,7 @@ from stabctl.models.converters import (
     WTDS,
     WTDTA1,
 )
+from stabctl.models.shafts import SHAFT
 
 __all__ = [
     "AndesImport",
@@ -145,6 +146,8 @@ CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1, "REGCP1": REGC
 #: ANDES controls read into their converter's row (a REGCA1's REECA1 or REECB1, ibr_con
 #: ``reec``)
 CONVERTER_CONTROLS = ("REECA1", "REECB1", "REPCA1", "WTDTA1", "WTDS", "WTARA1", "WTPTA1", "WTTQA1")
+#: ANDES's torsional shafts, read into the shaft table (shaft_con, `stabctl.models.shafts`)
+SHAFT_MODELS = ("SHAFT5",)
 #: ANDES's wind drive trains (group RenGovernor) -> ibr_con ``wind``
 DRIVE_TRAINS = {"WTDTA1": WTDTA1, "WTDS": WTDS}
 #: the wind models after the drive train: (ANDES model, its parent's parameter, ibr_con
@@ -276,6 +279,7 @@ def read_andes_case(
         and name not in IGNORED_MODELS
         and name not in CONVERTER_MODELS
         and name not in CONVERTER_CONTROLS
+        and name not in SHAFT_MODELS
     ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
@@ -285,6 +289,10 @@ def read_andes_case(
     gens, records, refused, changed = _dynamic_records(ss, path.name, numbers, with_converter)
     changed += _grouped(zip_changed)
     refused += ibr_refused
+    shaft_con, shaft_refused = _shafts(ss, gens)
+    refused += shaft_refused
+    if shaft_con:
+        mats["shaft_con"] = np.array(shaft_con, float)
     if ibr_con:
         mats["ibr_con"] = np.array(ibr_con, float)
     if records:
@@ -1002,6 +1010,22 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 params = tuple(float(m.params[f].vin[k]) for f in fields)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused, _grouped(changed)
+
+
+def _shafts(ss, gens: list[dict]) -> tuple[list[list[float]], list[str]]:
+    """The shaft_con rows of ANDES's SHAFT5 devices in service (machine number, then its
+    parameters by name, as given: machine base), and the devices refused (their machine
+    not mapped), with why."""
+    m = ss.models.get("SHAFT5")
+    number = {g["id"]: g["number"] for g in gens}
+    rows, refused = [], []
+    for k in _in_service(m) if m is not None else ():
+        machine = number.get(str(m.syn.v[k]))
+        if machine is None:
+            refused.append(f"SHAFT5 {m.idx.v[k]}: its machine {m.syn.v[k]} is not mapped")
+            continue
+        rows.append([machine, *(float(m.params[f].vin[k]) for f in SHAFT.names[1:])])
+    return rows, refused
 
 
 def _infinite_bus(ss, k: int, number: int, numbers: dict) -> dict:

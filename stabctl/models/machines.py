@@ -472,6 +472,13 @@ def _stator_speed(P, x, i):
 
 
 @kernel
+def divides_pmech_by_speed(P, i):
+    """Whether machine i's swing equation takes P_m / omega as its torque (subtransient
+    with speed effects, PST mac_sub) rather than P_m (ANDES GENROU, mac_tra, mac_em)."""
+    return P[i, K.KIND] == SUB and P[i, K.SPEED] > 0
+
+
+@kernel
 def internal_voltage(P, x, psi):
     """Voltage behind the network reactance, network frame (PST flag 1), into psi (n_mac,).
 

@@ -130,6 +130,7 @@ def active_states(model: DynamicModel) -> np.ndarray:
     L.view(act, "pss")[:] = pp.has_state()
     L.view(act, "tg")[:] = model.gp.has_state()
     L.view(act, "ibr")[:] = model.cp.has_state()
+    L.view(act, "shaft")[:] = True
     return act
 
 

@@ -178,11 +178,14 @@ class ModalAnalysis:
 
 
 def state_group(name: str) -> str:
-    """STATE_GROUPS entry of a state name such as 'mac_omega_G3', 'exc_VTR_G1' or
-    'ibr_Ip_C1' (a converter-interfaced device, `stabctl.models.converters`)."""
+    """STATE_GROUPS entry of a state name such as 'mac_omega_G3', 'exc_VTR_G1',
+    'ibr_Ip_C1' (a converter-interfaced device, `stabctl.models.converters`) or
+    'shaft_wHP_G1' (a torsional shaft's mass, `stabctl.models.shafts`: rotor angle/speed)."""
     block, var = name.split("_", 2)[:2]
     if block == "mac":
         return STATE_GROUPS[0] if var in ("delta", "omega") else STATE_GROUPS[1]
+    if block == "shaft":  # a torsional shaft's masses: rotor angles and speeds too
+        return STATE_GROUPS[0]
     groups = {"exc": 2, "pss": 3, "tg": 4, "ibr": 5}
     return STATE_GROUPS[groups[block]]
 
