@@ -226,14 +226,25 @@ def test_every_state_block_of_the_model_has_a_group():
     assert [state_group(n) for n in [*names, "ibr_Ip_C1"]] == list(STATE_GROUPS)
 
 
-@pytest.mark.parametrize("seed", [1, 4, 9])
-def test_a_repeated_real_eigenvalue_is_real_whatever_lapack_rounds(seed):
-    """A = Q diag(-100, -100, -100, -100, -1, -2) Q^-1: for these Q LAPACK returns two of
-    the four -100 as a pair +-1e-13 j (checked below); each is still one real mode, so
-    the count and numbering of modes do not depend on rounding."""
+def _repeated_real(seed):
     Q = np.random.default_rng(seed).normal(size=(6, 6))
-    A = Q @ np.diag([-100.0, -100, -100, -100, -1, -2]) @ np.linalg.inv(Q)
-    assert np.any(np.abs(scipy.linalg.eigvals(A).imag) > 0)  # the spurious pair
+    return Q @ np.diag([-100.0, -100, -100, -100, -1, -2]) @ np.linalg.inv(Q)
+
+
+#: the Q (seeds) for which this machine's LAPACK returns two of the four -100 as a pair
+#: +-1e-13 j: which ones depends on the LAPACK build (seed 1 splits under OpenBLAS 0.3.2x,
+#: not under 0.3.31), so they are found, not listed
+SPLIT_SEEDS = [s for s in range(60) if np.any(scipy.linalg.eigvals(_repeated_real(s)).imag != 0)]
+
+
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_a_repeated_real_eigenvalue_is_real_whatever_lapack_rounds(k):
+    """A = Q diag(-100, -100, -100, -100, -1, -2) Q^-1 for a Q whose eigenvalues LAPACK
+    returns with a spurious pair (SPLIT_SEEDS): each is still one real mode, so the count
+    and numbering of modes do not depend on rounding."""
+    if len(SPLIT_SEEDS) <= k:
+        pytest.skip(f"this LAPACK splits the -100 of only {len(SPLIT_SEEDS)} of 60 Q")
+    A = _repeated_real(SPLIT_SEEDS[k])
     lam, right, left = eigen(A)
     assert np.allclose(A @ right, right * lam, atol=1e-9) and np.allclose(left @ right, np.eye(6))
     assert lam.size == 6 and np.all(lam.imag == 0)
