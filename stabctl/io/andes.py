@@ -30,6 +30,7 @@ Source: ANDES 2.0 documentation (``andes.load``, ``System.add``, ``PFlow``, ``TD
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -115,17 +116,29 @@ def andes_system(
     fault: AndesFault | None = None,
     config_option=(),
     off=(),
+    event_eps: float | None = None,
 ):
     """An ANDES ``System`` of the RAW (+ DYR) files, or of any case file ANDES reads
     (xlsx, json, MATPOWER: ``dyr`` None), with ``fault`` added, set up; config_option:
     ANDES config overrides such as "Runtime.numba=1"; off: ANDES models whose devices are
     switched off (``u = 0``) before set-up, e.g. ``("Toggle",)`` for a case's own
-    disturbance.  Only a RAW file gets :func:`_raw_network`'s corrections."""
+    disturbance.  Only a RAW file gets :func:`_raw_network`'s corrections.
+
+    event_eps: the length (s) of the steps ANDES takes beside each event time
+    (``System.store_switch_times``, 1e-4 s by default; None keeps it).  ANDES's trapezoid
+    takes the first step after a switch with the derivative stored before it (the switch
+    does not recompute it, ``andes/routines/daeint.py``, ``tds.py`` ``do_switch``), so every
+    state whose derivative jumps moves at the mean of its old and new rates for that step:
+    a delay of about event_eps / 2 whatever the step ``tstep``.  On Kundur's wind turbine
+    that delay is 1.0e-3 pu of P and 1.4e-3 of Q with both tools at 0.3125 ms; with 1e-7,
+    2.2e-4 and 1.7e-4 (`benchmarks/wind_step_error.py`, docs/ibr.md)."""
     andes = _andes()
     kw: dict[str, Any] = {} if dyr is None else {"addfile": str(dyr)}
     if config_option:
         kw["config_option"] = list(config_option)
     ss = andes.load(str(raw), setup=False, no_output=True, default_config=True, **kw)
+    if event_eps is not None:  # an instance attribute: the TDS calls system.store_switch_times
+        ss.store_switch_times = functools.partial(type(ss).store_switch_times, ss, eps=event_eps)
     for name in off:
         model = ss.models[name]
         model.u.v = [0] * model.n
