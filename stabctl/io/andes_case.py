@@ -99,6 +99,8 @@ from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
 from stabctl.io.pst import case_from_matrices
 from stabctl.models.converters import (
     CONVERTER,
+    DGPRCT1,
+    DGPRCTEXT,
     ESD1,
     PLL1,
     PVD1,
@@ -106,6 +108,7 @@ from stabctl.models.converters import (
     REECA1_FIELDS,
     REECB1,
     REGCA1,
+    RELAY_FIELDS,
     REPCA1,
     REPCA1_FIELDS,
     WIND_FIELDS,
@@ -146,6 +149,8 @@ CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1, "REGCP1": REGC
 #: ANDES controls read into their converter's row (a REGCA1's REECA1 or REECB1, ibr_con
 #: ``reec``)
 CONVERTER_CONTROLS = ("REECA1", "REECB1", "REPCA1", "WTDTA1", "WTDS", "WTARA1", "WTPTA1", "WTTQA1")
+#: ANDES's DG protections, read into their PVD1's or ESD1's row (ibr_con ``relay``)
+PROTECTIONS = {"DGPRCT1": DGPRCT1, "DGPRCTExt": DGPRCTEXT}
 #: ANDES's torsional shafts, read into the shaft table (shaft_con, `stabctl.models.shafts`)
 SHAFT_MODELS = ("SHAFT5",)
 #: ANDES's wind drive trains (group RenGovernor) -> ibr_con ``wind``
@@ -280,6 +285,7 @@ def read_andes_case(
         and name not in CONVERTER_MODELS
         and name not in CONVERTER_CONTROLS
         and name not in SHAFT_MODELS
+        and name not in PROTECTIONS
     ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
@@ -618,7 +624,7 @@ def _converters(ss, numbers: dict):
     order) of ANDES's PVD1, ESD1 and REGCA1 devices in service (a REGCA1 only without an
     electrical control: :data:`RENEWABLE_CONTROLS`), the devices refused (with why),
     and the static generators the mapped converters replace."""
-    rows, refused, replaced = [], [], set()
+    rows, refused, replaced, protected = [], [], set(), set()
     share: dict = {}
     sg_bus: dict = {}
     for m in (ss.PV, ss.Slack):
@@ -653,12 +659,20 @@ def _converters(ss, numbers: dict):
             if kind == REGCA1:
                 v.update(_reeca1_values(ss, m.idx.v[k], numbers))
                 v.update(_pll_values(ss, m, k))
+            else:
+                v.update(_protection_values(ss, m, k, refused))
+                protected.add(m.idx.v[k])
             rows.append([float(v[p.name]) for p in CONVERTER.params])
             got = share.setdefault(gen, [0.0, 0.0, []])
             got[0] += m.gammap.v[k]
             got[1] += m.gammaq.v[k]
             got[2].append(where)
             replaced.add(gen)
+    for name in PROTECTIONS:
+        r = ss.models.get(name)
+        for j in _in_service(r) if r is not None else ():
+            if r.dev.v[j] not in protected:
+                refused.append(f"{name} {r.idx.v[j]}: its device {r.dev.v[j]} is not mapped")
     for name in _MACHINES:
         m = ss.models[name]
         for k in _in_service(m):
@@ -674,6 +688,31 @@ def _converters(ss, numbers: dict):
                 "stabctl needs all of it, 1)"
             )
     return rows, refused, replaced
+
+
+def _protection_values(ss, m, k, refused: list) -> dict[str, float]:
+    """The ibr_con ``relay`` columns of PVD1/ESD1 device ``k`` of model ``m`` from the
+    DGPRCT1 or DGPRCTExt in service on it (its parameters by name, as given), {} without;
+    a second one, or one reading another BusFreq than its device, is appended to
+    ``refused`` with why."""
+    vals: dict[str, float] = {}
+    for name, code in PROTECTIONS.items():
+        r = ss.models.get(name)
+        for j in _in_service(r) if r is not None else ():
+            if r.dev.v[j] != m.idx.v[k]:
+                continue
+            where = f"{name} {r.idx.v[j]}"
+            if vals:
+                refused.append(f"{where}: a second protection of {m.class_name} {m.idx.v[k]}")
+            elif r.busfreq.v[j] != m.busfreq.v[k]:
+                refused.append(
+                    f"{where}: reads BusFreq {r.busfreq.v[j]}, its device BusFreq "
+                    f"{m.busfreq.v[k]} (stabctl: one frequency measurement per device)"
+                )
+            else:
+                vals = {f: float(r.params[f[3:]].vin[j]) for f in RELAY_FIELDS[1:]}
+                vals["relay"] = code
+    return vals
 
 
 def _converter_refusal(ss, m, k, bus, shared: bool, bf: int) -> str:

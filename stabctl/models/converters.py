@@ -261,6 +261,61 @@ _PLL_PARAMS = (
     Param("pll_Tf", "s", 186, default=0.05, lo=0.0, doc="PLL1: input angle filter"),
     Param("pll_Tp", "s", 187, default=0.05, lo=0.0, doc="PLL1: output angle lag"),
 )
+#: the DG protection of a PVD1 or ESD1 (ibr_con ``relay``): none, ANDES's DGPRCT1 (the bus
+#: voltage), DGPRCTExt (the voltage held at its initial value)
+NO_RELAY, DGPRCT1, DGPRCTEXT = 0, 1, 2
+
+
+def _relay_params(col: int) -> tuple[Param, ...]:
+    """The DG protection's columns from ``col`` on (ANDES 2.0
+    ``distributed/dgprct.py``, DGPRCT1 and DGPRCTExt, after IEEE 1547-2018's ride-through
+    categories), ANDES's defaults: its enables, then the frequency bands (Hz) and how long
+    the frequency may stay in each, the voltage bands (pu) and their times."""
+    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
+    rows: list[tuple[str, dict[str, Any]]] = [
+        ("pr_fen", dict(flag, default=1.0, doc="DGPRCT: frequency protection 1 on, 0 off")),
+        ("pr_Ven", dict(flag, doc="DGPRCT: voltage protection 1 on, 0 off")),
+        *(
+            (f"pr_{n}", dict(unit="Hz", default=d, doc=f"DGPRCT: frequency point {n}"))
+            for n, d in (("fl3", 50.0), ("fl2", 57.5), ("fl1", 59.2))
+        ),
+        *(
+            (f"pr_{n}", dict(unit="Hz", default=d, doc=f"DGPRCT: frequency point {n}"))
+            for n, d in (("fu1", 60.5), ("fu2", 61.5), ("fu3", 70.0))
+        ),
+        ("pr_Tfl1", dict(unit="s", default=300.0, lo=0.0, doc="DGPRCT: time in (fl3, fl1)")),
+        ("pr_Tfl2", dict(unit="s", default=10.0, lo=0.0, doc="DGPRCT: time in (fl3, fl2)")),
+        ("pr_Tfu1", dict(unit="s", default=300.0, lo=0.0, doc="DGPRCT: time in (fu1, fu3)")),
+        ("pr_Tfu2", dict(unit="s", default=10.0, lo=0.0, doc="DGPRCT: time in (fu2, fu3)")),
+        *(
+            (f"pr_{n}", dict(unit="pu", default=d, doc=f"DGPRCT: voltage point {n}"))
+            for n, d in (("vl4", 0.1), ("vl3", 0.45), ("vl2", 0.6), ("vl1", 0.88))
+        ),
+        *(
+            (f"pr_{n}", dict(unit="pu", default=d, doc=f"DGPRCT: voltage point {n}"))
+            for n, d in (("vu1", 1.1), ("vu2", 1.2), ("vu3", 2.0))
+        ),
+        ("pr_Tvl1", dict(unit="s", default=2.0, lo=0.0, doc="DGPRCT: time in (vl4, vl1)")),
+        ("pr_Tvl2", dict(unit="s", default=1.0, lo=0.0, doc="DGPRCT: time in (vl4, vl2)")),
+        (
+            "pr_Tvl3",
+            dict(
+                unit="s",
+                default=0.16,
+                lo=0.0,
+                doc="DGPRCT: time in (vl4, vl3) (ANDES's data; its vl3 timer runs to Tvl2)",
+            ),
+        ),
+        ("pr_Tvu1", dict(unit="s", default=1.0, lo=0.0, doc="DGPRCT: time in (vu1, vu3)")),
+        ("pr_Tvu2", dict(unit="s", default=0.16, lo=0.0, doc="DGPRCT: time in (vu2, vu3)")),
+        ("pr_Tres", dict(unit="s", default=0.05, lo=1e-3, doc="DGPRCT: timers' reset time")),
+    ]
+    return tuple(Param(name, col=col + j, **kw) for j, (name, kw) in enumerate(rows))
+
+
+_RELAY_PARAMS = _relay_params(189)
+#: the ibr_con fields a DG protection sets (``relay`` and its columns)
+RELAY_FIELDS = ("relay", *(p.name for p in _RELAY_PARAMS))
 #: the ibr_con fields a wind turbine sets (``wind`` and its models' columns)
 WIND_FIELDS = ("wind", *(p.name for p in _WIND_PARAMS))
 #: the ibr_con fields a REPCA1 sets (``pc_`` and ANDES's name)
@@ -464,6 +519,16 @@ CONVERTER = Family(
             "currents and the electrical control's voltage in the PLL's frame)",
         ),
         *_PLL_PARAMS,
+        Param(
+            "relay",
+            "code",
+            188,
+            choices=(NO_RELAY, DGPRCT1, DGPRCTEXT),
+            doc="a PVD1's or ESD1's DG protection: 0 none, 1 ANDES's DGPRCT1 (on its bus "
+            "voltage), 2 DGPRCTExt (the voltage held at its initial value); it ceases the "
+            "output while it trips (docs/ibr.md)",
+        ),
+        *_RELAY_PARAMS,
     ),
 )
 
@@ -474,6 +539,9 @@ __all__ = [
     "NO_WIND",
     "WTDTA1",
     "WTDS",
+    "NO_RELAY",
+    "DGPRCT1",
+    "DGPRCTEXT",
     "N_STATES",
     "STATE_NAMES",
     "ConverterParams",
@@ -523,9 +591,18 @@ _PLL_AF, _PLL_PI, _PLL_AE, _PLL_AM = (np.int64(j) for j in range(38, 42))
 N_STATES = 5 + len(REECA1_SLOTS) + len(REPCA1_SLOTS) + len(WIND_SLOTS) + len(PLL_SLOTS)
 #: state names per converter type (slots beyond a type's names, or that a device does not
 #: use, `has_state`, are unused, 0)
+#: a PVD1's or ESD1's DG protection (``relay``; ANDES DGPRCT1): its nine timers
+#: (IntegratorAntiWindup IAWfl1 ... IAWVu2), the reset extension (ExtendedEvent ``res``) and
+#: the trip flag (``lock``) in slots 5-15, the memory of its discrete logic (`_protection`)
+RELAY_SLOTS = (
+    *("fl1_timer", "fl2_timer", "fu1_timer", "fu2_timer"),
+    *("vl1_timer", "vl2_timer", "vl3_timer", "vu1_timer", "vu2_timer"),
+    *("reset_timer", "trip"),
+)
+_PR_T, _PR_RES, _PR_LOCK = np.int64(5), np.int64(14), np.int64(15)
 STATE_NAMES = {
-    PVD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
-    ESD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC"),
+    PVD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC", *RELAY_SLOTS),
+    ESD1: ("Ip", "Iq", "f_lag", "f_washout", "SOC", *RELAY_SLOTS),
     REGCA1: (
         *("Ip", "Iq", "V_filter", "", "SOC"),
         *(*REECA1_SLOTS, *REPCA1_SLOTS, *WIND_SLOTS, *PLL_SLOTS),
@@ -591,6 +668,7 @@ PACKED = (
     ("PC_VREF0", "pc_Vref0"),
     ("PC_QLINE0", "pc_Qline0"),
     ("PC_PLINE0", "pc_Pline0"),
+    ("PR_V0", "pr_v0"),
 )
 #: the kernels' column of each PACKED name: P[k, C.IALIM]
 C = layout("ConverterColumns", PACKED)
@@ -617,7 +695,8 @@ class ConverterParams(Declared):
     device's own bus without a line) and their positions pos1, pos2 among the kept buses
     (set by the dynamic model), isign (1 if the device's bus is bus1, else -1: the line
     current counted from it), and the initial compensated voltage pc_Vref0 (its voltage
-    reference, ANDES Vref0), line Q pc_Qline0 and P pc_Pline0 (0 elsewhere)."""
+    reference, ANDES Vref0), line Q pc_Qline0 and P pc_Pline0 (0 elsewhere); pr_v0 the
+    initial |V| of the bus (the voltage a DGPRCTExt protection reads)."""
 
     pmn: np.ndarray
     P0: np.ndarray
@@ -647,6 +726,7 @@ class ConverterParams(Declared):
     pc_Vref0: np.ndarray
     pc_Qline0: np.ndarray
     pc_Pline0: np.ndarray
+    pr_v0: np.ndarray
 
     @property
     def n(self) -> int:
@@ -692,6 +772,8 @@ class ConverterParams(Declared):
         act[2] = reg | (self.Tfm >= LBND)
         act[3] = ~reg
         act[4] = (self.type == ESD1) | self.is_battery
+        # REECA1's slots; a PVD1's protection in the same slots is discrete logic, at rest
+        # at 0: no state of the linear model
         act[5:_PC_V] = self.reec != NO_REEC
         act[_PC_V:] = self.repc == REPCA1
         act[_PC_FL] &= self.Tfm >= LBND
@@ -744,6 +826,9 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     bad = np.flatnonzero((t.pll != NO_PLL) & ~reg)
     if bad.size:
         t._fail(bad[0], "pll", "a PLL gives the angle of a REGCA1 (type 3) only")
+    bad = np.flatnonzero((t.relay != NO_RELAY) & reg)
+    if bad.size:
+        t._fail(bad[0], "relay", "a DG protection trips a PVD1 or ESD1 (types 1, 2) only")
     lags = [("tip", ~reg), ("tiq", ~reg), ("Tg", reg), ("Tfltr", reg)]
     pc = t.repc == REPCA1
     bad = np.flatnonzero(pc & ~ree)
@@ -802,6 +887,7 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         kLVPL=kLVPL,
         **_reeca1_services(vals, t.reec, P0, Q0, v0, np.where(reg, Ipcmd0, 0.0)),
         **_repca1_services(case, idx),
+        pr_v0=v0,
     )
     _repca1_references(cp, V0)
     _torque_limits(cp)
@@ -1390,7 +1476,7 @@ def _algebraic(P, x, k, V):
         room = np.sqrt(max(ialim**2 - Iqcmd**2, 0.0))
         Ipmin = -lo_ok * room if esd else 0.0
         Ipcmd = R * clip(Ipul, Ipmin, up_ok * room)
-    return Ipcmd, Iqcmd, dL, dW
+    return Ipcmd, Iqcmd, dL, dW, fHz
 
 
 @kernel
@@ -1579,7 +1665,9 @@ def derivatives(P, x, k, V, V_nc, reach, dx):
         _regca1_derivatives(P, x, k, v, Iq_target, reach, dx)
         dx[4, k] = _soc_rate(P, k, S.real)
         return S
-    Ipcmd, Iqcmd, dL, dW = _algebraic(P, x, k, V)
+    Ipcmd, Iqcmd, dL, dW, fHz = _algebraic(P, x, k, V)
+    if P[k, C.RELAY] != NO_RELAY and _protection(P, x, k, fHz, v, dx):
+        Ipcmd = Iqcmd = 0.0  # ANDES: Psum, Qsum and the droop's fHz set to 0
     _, dx[0, k] = lag(Ipcmd, x[0, k], P[k, C.TIP])
     _, dx[1, k] = lag(Iqcmd, x[1, k], P[k, C.TIQ])
     dx[2, k] = dL
@@ -1608,6 +1696,82 @@ def _pll(P, x, k, V, dx):
 
 
 @kernel
+def _relay_timer(x, dx, slot, k, e, upper):
+    """One protection timer of device k (ANDES IntegratorAntiWindup, T = K = 1, limits
+    [0, upper]; AntiWindup's flags zu = y >= upper and e >= 0, zl = y <= 0 and e <= 0 hold
+    the state at the limit in place): writes dy/dt = e or 0, returns zu as a float."""
+    y = x[slot, k]
+    dx[slot, k] = 0.0
+    if y >= upper and e >= 0.0:
+        x[slot, k] = upper
+        return 1.0
+    if y <= 0.0 and e <= 0.0:
+        x[slot, k] = 0.0
+        return 0.0
+    dx[slot, k] = e
+    return 0.0
+
+
+@kernel
+def _protection(P, x, k, fHz, v, dx):
+    """ANDES 2.0's DGPRCT1 / DGPRCTExt of device k (``distributed/dgprct.py``) at its
+    measured frequency fHz (Hz) and bus voltage v (pu; the initial one for DGPRCTExt):
+    True while it trips (``lock``).  Each timer integrates its band's flag (`_relay_sum`)
+    and runs down at T/Tres while ``res``, the Tres s after a trip ends (ExtendedEvent
+    extend_only), from the evaluation where the trip ends; the reset extension and the
+    trip flag are the memory slots _PR_RES, _PR_LOCK."""
+    if P[k, C.RELAY] == DGPRCTEXT:
+        v = P[k, C.PR_V0]
+    tripped = x[_PR_LOCK, k] == 1.0
+    res = 1.0 if x[_PR_RES, k] > 0.0 and not tripped else 0.0
+    lock = _relay_sum(P, x, k, fHz, v, res, dx) > 0.8  # ANDES: Limiter of dsum at 0.8
+    if tripped and not lock:  # the trip ends here: the reset runs from now
+        _relay_sum(P, x, k, fHz, v, 1.0, dx)
+    tres = P[k, C.PR_TRES]
+    _timer(x, dx, _PR_RES, k, lock, tres)
+    x[_PR_LOCK, k] = 1.0 if lock else 0.0
+    dx[_PR_LOCK, k] = 0.0
+    return lock
+
+
+@kernel
+def _relay_sum(P, x, k, fHz, v, res, dx):
+    """The protection's timers of device k (derivatives into dx) and ANDES's ``dsum``: over
+    the enabled timers, (at T) x (still in its band).  Band flags zi = lower <= u <= upper
+    (Limiter equal=False); a timer's input is its band's flag, or -T/Tres while res.  As
+    ANDES: the fu2 timer integrates the (fl3, fl2) flag and the vl3 timer the (vl4, vl2)
+    flag up to Tvl2 (their gates in the sum are their own bands)."""
+    tres = P[k, C.PR_TRES]
+    f_lo, f_hi = P[k, C.PR_FL3], P[k, C.PR_FU3]
+    v_lo, v_hi = P[k, C.PR_VL4], P[k, C.PR_VU3]
+    zf = (
+        1.0 if f_lo <= fHz <= P[k, C.PR_FL1] else 0.0,
+        1.0 if f_lo <= fHz <= P[k, C.PR_FL2] else 0.0,
+        1.0 if P[k, C.PR_FU1] <= fHz <= f_hi else 0.0,
+        1.0 if P[k, C.PR_FU2] <= fHz <= f_hi else 0.0,
+    )
+    zv = (
+        1.0 if v_lo <= v <= P[k, C.PR_VL1] else 0.0,
+        1.0 if v_lo <= v <= P[k, C.PR_VL2] else 0.0,
+        1.0 if v_lo <= v <= P[k, C.PR_VL3] else 0.0,
+        1.0 if P[k, C.PR_VU1] <= v <= v_hi else 0.0,
+        1.0 if P[k, C.PR_VU2] <= v <= v_hi else 0.0,
+    )
+    Tf = (P[k, C.PR_TFL1], P[k, C.PR_TFL2], P[k, C.PR_TFU1], P[k, C.PR_TFU2])
+    Tv = (P[k, C.PR_TVL1], P[k, C.PR_TVL2], P[k, C.PR_TVL2], P[k, C.PR_TVU1], P[k, C.PR_TVU2])
+    fed_f = (zf[0], zf[1], zf[2], zf[1])  # ANDES's IAWfu2 reads Lfl2_zi
+    fed_v = (zv[0], zv[1], zv[1], zv[3], zv[4])  # its IAWVl3 reads LVl2_zi, up to Tvl2
+    dsum = 0.0
+    for j in range(4):
+        e = fed_f[j] * (1.0 - res) - Tf[j] / tres * res
+        dsum += P[k, C.PR_FEN] * _relay_timer(x, dx, _PR_T + j, k, e, Tf[j]) * zf[j]
+    for j in range(5):
+        e = fed_v[j] * (1.0 - res) - Tv[j] / tres * res
+        dsum += P[k, C.PR_VEN] * _relay_timer(x, dx, _PR_T + 4 + j, k, e, Tv[j]) * zv[j]
+    return dsum
+
+
+@kernel
 def _soc_rate(P, k, pe):
     """dSOC/dt of device k injecting pe (pu, system base): Ksoc (-EtaC pe) charging, Ksoc
     (-pe/EtaD) discharging (ANDES 2.0 esd1.py; WECC REEC_C's SOC integrator with its
@@ -1625,7 +1789,7 @@ def commands(P, x, V):
     n = V.size
     Ip, Iq = np.empty(n), np.empty(n)
     for k in range(n):
-        Ip[k], Iq[k], _, _ = _algebraic(P, x, k, V[k])
+        Ip[k], Iq[k], _, _, _ = _algebraic(P, x, k, V[k])
     return Ip, Iq
 
 

@@ -1248,6 +1248,53 @@ def test_ieee14_converters_load_shed_step_matches_andes(model):
     assert dQ < 1e-5  # measured 1.1e-7
 
 
+def test_ieee14_dg_protection_trips_and_restores_the_pvd1_as_andes():
+    """ANDES's ieee14_dgprct1.xlsx with its own disturbance: the bus-14 load (0.3 pu, out
+    of service in the power flow) switched on at 1 s and off at 10 s (ANDES: its Toggler
+    records; stabctl: the same constant impedance, LoadStep).  PVD1_2's DGPRCT1 (frequency
+    bands (50, 59.9) for 2.5 s and (50, 59.85) for 3.5 s) trips it at 4.07 s in ANDES, when
+    the frequency has stayed below 59.9 Hz for 2.5 s; its current decays through tip; the
+    frequency back above 59.9 Hz at 10.43 s ends the trip and the device returns.  5 ms
+    step in both, 12 s."""
+    path = andes.get_case("ieee14/ieee14_dgprct1.xlsx")
+    with pytest.warns(UserWarning, match="lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    assert list(case.converters.relay) == [0, 1] + [0] * 8
+    ss = andes_system(path)
+    pq = list(ss.PQ.idx.v).index("PQ_12")
+    p0, q0, bus = ss.PQ.p0.v[pq], ss.PQ.q0.v[pq], ss.PQ.bus.v[pq]
+    assert (p0, q0, bus, ss.PQ.u.v[pq]) == (0.3, 0.0, 14, 0)
+    events = [LoadStep(14, 1.0, p0, q0), LoadStep(14, 10.0, -p0, -q0)]
+    sim = Simulator(case, q_limits=False)
+    assert sim.model.initial_residual[0] < 1e-9
+    res = sim.run(events, 12.0, h=STEP)
+    t, wa = andes_speeds(ss, 12.0, STEP)
+    Pa, _ = andes_converter_powers(ss, "PVD1")
+    P = np.interp(t, res.t, res.ibr_p[:, 1])
+    w = speeds_on(t, res, case, ss)
+    tripped = (t > 8.0) & (t < 10.0)
+    assert np.all(Pa[tripped, 1] < 1e-5) and np.all(P[tripped] < 1e-5)  # both tripped
+    assert Pa[-1, 1] > 4e-3 and P[-1] > 4e-3  # and back
+    jumps = (np.abs(t - 1.0) <= 2e-4) | (np.abs(t - 10.0) <= 2e-4)
+    assert np.max(np.abs(P - Pa[:, 1])[~jumps]) < 1e-4  # measured 2.3e-5 (of 5e-3)
+    assert np.max(np.abs(w - wa)) < 5e-6  # measured 4.6e-7 (swing 3.5e-3)
+
+
+def test_ieee14_dgprctext_follows_andes_through_a_fault_without_tripping():
+    """ANDES's ieee14_dgprctext.xlsx: PVD1_2's DGPRCTExt (voltage protection on a voltage
+    held at its initial value, as no co-simulation sets it) sees no dip in a 6-cycle bus-4
+    fault through j1e-3 pu; both tools' PVD1 powers and speeds agree (5 ms step)."""
+    sim, res, ss, t, w, wa = andes_case_run("ieee14/ieee14_dgprctext.xlsx", 4)
+    assert list(sim.case.converters.relay) == [0, 2] + [0] * 8
+    Pa, _ = andes_converter_powers(ss, "PVD1")
+    P = np.column_stack([np.interp(t, res.t, p) for p in res.ibr_p.T])
+    jumps = (np.abs(t - 1.0) <= 2e-4) | (np.abs(t - 1.1) <= 2e-4)
+    assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing (7.3e-3)
+    assert np.max(np.abs(w - wa)) < 2e-5  # measured 7.6e-6
+    assert np.max(np.abs(P - Pa)[~jumps]) < 2e-4  # measured 4.1e-5
+    assert P[-1, 1] > 4e-3  # not tripped
+
+
 def test_ieee14_pvd1_current_limits_match_andes():
     """The current limits in a fault, both priorities: ialim 0.7 pu on the device base
     (0.007 pu system base, above the 0.006 pu the devices start with), the trip curves

@@ -510,3 +510,60 @@ def test_torque_control_pi_sets_the_power_reference():
 def test_wind_turbine_chains_and_inertia_split_are_checked(cols, message):
     with pytest.raises(CaseError, match=message):
         regca1(**{**WT3, "reec": 1, "Vref0": 1.0, **cols})
+
+
+def relay_run(V_steps, h=1e-3, **cols):
+    """Forward-Euler steps of a PVD1 with ANDES's DG protection (``relay``) at bus voltage
+    magnitudes V_steps (one per step, at the power-flow angle): (trip flag, Ip) per step."""
+    case = make_case(**{"relay": 1, "recflag": 0, **cols})
+    V0 = np.ones(case.n_bus, complex)
+    cp = conv.converter_params(case, V0, case.buses.pgen + 1j * case.buses.qgen)
+    P, x = cp.packed(), conv.initialise(cp, V0)
+    dx = np.zeros_like(x)
+    trip, Ip = [], []
+    for v in V_steps:
+        V = np.array([v + 0j])
+        conv.derivatives_at(P, x, V, V, dx)
+        x += h * dx
+        trip.append(x[conv.STATE_NAMES[conv.PVD1].index("trip"), 0])
+        Ip.append(x[0, 0])
+    return np.array(trip), np.array(Ip), x
+
+
+def test_dg_protection_trips_after_its_band_time_and_resets_in_tres():
+    """Voltage protection only (fen 0, Ven 1), ANDES's defaults: at 0.5 pu the bus is in
+    (vl4, vl2) = (0.1, 0.6), whose timer Tvl2 = 1 s runs out first (Tvl1 = 2 s for (0.1,
+    0.88)): the device trips after 1 s (to the step) and its current decays through tip;
+    back at 0.95 pu the trip ends at once and every timer is reset to 0 within Tres = 0.05
+    s (they run down at T/Tres)."""
+    h = 1e-3
+    V = [0.5] * 1500 + [0.95] * 100
+    trip, Ip, x = relay_run(V, h, pr_fen=0, pr_Ven=1)
+    first = int(np.argmax(trip))
+    assert first * h == pytest.approx(1.0, abs=2 * h)
+    assert np.all(trip[first:1500] == 1) and np.all(trip[1500:] == 0)
+    tip = 0.02  # PVD1's default output lag
+    decay = Ip[first + 100] / Ip[first]
+    assert decay == pytest.approx((1 - h / tip) ** 100, rel=1e-9)
+    timers = x[5:14, 0]
+    assert np.all(timers == 0.0)  # reset within Tres = 50 steps of the 100 at 0.95 pu
+
+
+def test_dgprctext_reads_the_initial_voltage_not_the_bus_s():
+    """DGPRCTExt (relay 2): the voltage protection sees the power flow's 1 pu whatever
+    the bus does (ANDES's ExtService; a co-simulation would set it), so 1.5 s at 0.5 pu
+    trips nothing."""
+    trip, _, x = relay_run([0.5] * 1500, pr_fen=0, pr_Ven=1, relay=2)
+    assert np.all(trip == 0) and np.all(x[5:16, 0] == 0.0)
+
+
+def test_dg_protection_inside_no_band_stays_at_rest():
+    trip, Ip, x = relay_run([1.0] * 200, pr_fen=1, pr_Ven=1)
+    assert np.all(trip == 0) and np.all(x[5:16, 0] == 0.0)
+    np.testing.assert_allclose(Ip, 0.5, rtol=1e-12)  # P0/|V|, at rest
+
+
+def test_dg_protection_on_a_regca1_is_refused():
+    case = make_case([1, 2, 3, 100.0, 1.0, 1.0, 0.0, 1], relay=1)
+    with pytest.raises(CaseError, match=r"field 'relay'.*PVD1 or ESD1"):
+        conv.converter_params(case)
