@@ -29,6 +29,7 @@ _EXPORTS = {
     "LineTrip": "stabctl.dynamics.events",
     "GeneratorTrip": "stabctl.dynamics.events",
     "LoadStep": "stabctl.dynamics.events",
+    "MotorSwitch": "stabctl.dynamics.events",
     "fault_with_clearing": "stabctl.dynamics.events",
     "coi_speed": "stabctl.dynamics.coi",
     "StorageDevice": "stabctl.storage",

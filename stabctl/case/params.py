@@ -5,8 +5,9 @@ Each family is declared beside its kernels, one parameter once
 (:mod:`stabctl.models.declaration`): ``MACHINE`` in :mod:`stabctl.models.machines`
 (``mac_con``), ``EXCITER`` in :mod:`stabctl.models.exciters` (``exc_con``), ``PSS`` in
 :mod:`stabctl.models.pss` (``pss_con``), ``GOVERNOR`` in :mod:`stabctl.models.governors`
-(``tg_con``), ``CONVERTER`` in :mod:`stabctl.models.converters` (``ibr_con``) and ``SHAFT``
-in :mod:`stabctl.models.shafts` (``shaft_con``).  The case
+(``tg_con``), ``CONVERTER`` in :mod:`stabctl.models.converters` (``ibr_con``) ``SHAFT``
+in :mod:`stabctl.models.shafts` (``shaft_con``) and ``MOTOR`` in :mod:`stabctl.models.motors`
+(``mot_con``).  The case
 tables (:mod:`stabctl.case.system`), the DYR import and the model reference are built
 from this registry.
 """
@@ -21,6 +22,7 @@ from stabctl.models.declaration import Family
 from stabctl.models.exciters import EXCITER
 from stabctl.models.governors import GOVERNOR
 from stabctl.models.machines import MACHINE
+from stabctl.models.motors import MOTOR
 from stabctl.models.pss import PSS
 from stabctl.models.shafts import SHAFT
 
@@ -35,5 +37,6 @@ FAMILIES: Mapping[str, Family] = MappingProxyType(
         "governors": GOVERNOR,
         "converters": CONVERTER,
         "shafts": SHAFT,
+        "motors": MOTOR,
     }
 )

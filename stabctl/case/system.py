@@ -45,6 +45,7 @@ from stabctl.models.declaration import Family, array_dataclass, choices_message
 from stabctl.models.exciters import EXCITER
 from stabctl.models.governors import GOVERNOR
 from stabctl.models.machines import MACHINE
+from stabctl.models.motors import MOTOR
 from stabctl.models.pss import PSS
 from stabctl.models.shafts import SHAFT
 
@@ -60,6 +61,7 @@ __all__ = [
     "InjectionTable",
     "ConverterTable",
     "ShaftTable",
+    "MotorTable",
     "Case",
     "SWING",
     "PV",
@@ -599,6 +601,22 @@ class ShaftTable(Table):
         self._unique("machine", "shaft on machine")
 
 
+@_declared(MOTOR)
+class MotorTable(Table):
+    """Induction motors: stabctl's ``mot_con`` (ANDES 2.0 ``Motor5``; the model in
+        :mod:`stabctl.models.motors`, docs/pst_models.md section 14), one row per motor, a
+        dynamic load at its bus switched on by a ``MotorSwitch`` event.  Columns (declared
+        in :data:`stabctl.models.motors.MOTOR`; motor base):
+
+    {columns}
+
+        Validation: numbers unique, in_service 0 (a motor starts out of service).
+    """
+
+    def _check(self):
+        self._unique("number", "motor number")
+
+
 @dataclass(frozen=True, eq=False)
 class LoadTable(Table):
     """Non-conforming load data: PST ``load_con``, 5 columns (PST manual 3.29 Table 12).
@@ -737,6 +755,7 @@ TABLES: Mapping[str, type[Table]] = MappingProxyType(
         "injections": InjectionTable,
         "converters": ConverterTable,
         "shafts": ShaftTable,
+        "motors": MotorTable,
     }
 )
 
@@ -780,6 +799,8 @@ class Case:
     shafts : ShaftTable
         Multi-mass torsional shafts on machines (ANDES SHAFT5), one row each, machine
         base; empty by default.
+    motors : MotorTable
+        Induction motors (ANDES Motor5), one row each, motor base; empty by default.
     sw_con : numpy.ndarray or None
         The data file's own switching (disturbance) matrix, shape (rows, 7), PST format
         (PST manual 2.5), read-only; None if the file has none.
@@ -813,6 +834,7 @@ class Case:
     injections: InjectionTable = field(default_factory=InjectionTable.empty)
     converters: ConverterTable = field(default_factory=ConverterTable.empty)
     shafts: ShaftTable = field(default_factory=ShaftTable.empty)
+    motors: MotorTable = field(default_factory=MotorTable.empty)
     sw_con: np.ndarray | None = None
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
     source: str = ""
@@ -854,6 +876,7 @@ class Case:
         self._check_buses(self.loads, "bus", known)
         self._check_buses(self.injections, "bus", known)
         self._check_buses(self.converters, "bus", known)
+        self._check_buses(self.motors, "bus", known)
         macs = self.machines.number
         for tab in (self.exciters, self.pss, self.governors, self.shafts):
             bad = np.flatnonzero(~np.isin(tab.machine, macs))

@@ -172,6 +172,29 @@ class LoadStep(_AtOneTime):
     Q: float = 0.0
 
 
+@dataclass(frozen=True)
+class MotorSwitch(_AtOneTime):
+    """Switch an induction motor (`stabctl.models.motors`, the case's ``motors``) on or
+    off at `t` (ANDES's Toggle of a Motor5): on, it is a dynamic load at its bus from its
+    present states (at the first switching all 0: energised at synchronous speed without
+    flux, as ANDES's); off, it draws nothing and its states stand still.
+
+    Attributes
+    ----------
+    motor : int
+        Motor number (``mot_con`` column 1); an unknown motor raises CaseError when the
+        run starts.
+    t : float
+        Switching time, s (absolute run time, >= 0).
+    on : bool, optional
+        True (default) to switch on, False off.
+    """
+
+    motor: int
+    t: float
+    on: bool = True
+
+
 def validate(case: Case, events, t_end: float) -> None:
     """Check every event against the case (buses, lines, machines, times >= 0); raises
     UnknownBusError, CaseError, InputError.  Events after t_end are allowed (not reached).
@@ -205,6 +228,8 @@ def validate(case: Case, events, t_end: float) -> None:
             _open_once(opened, f"machine {ev.machine}", ev)
         elif isinstance(ev, LoadStep):
             case.bus_index(ev.bus)
+        elif isinstance(ev, MotorSwitch):
+            _motor_index(case, ev.motor)
         else:
             raise InputError(f"unknown event {ev!r}")
         if any(t < 0 for t in ev.times()):
@@ -212,6 +237,14 @@ def validate(case: Case, events, t_end: float) -> None:
                 f"event {ev} has a negative time (events after t_end = {t_end} s "
                 "simply do not happen)"
             )
+
+
+def _motor_index(case: Case, number: int) -> int:
+    """The row of motor ``number`` in ``case.motors``; CaseError if it has none."""
+    hit = np.flatnonzero(case.motors.number == number)
+    if hit.size == 0:
+        raise CaseError(f"motor {number} does not exist in mot_con")
+    return int(hit[0])
 
 
 def _circuit(case: Case, row: int) -> str:
@@ -254,7 +287,8 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
     """Network configuration with phases[i] changes of event i applied (see
     `stage_boundaries`)."""
     faults, opened, feeds, tripped, loads = [], [], [], [], []
-    for ev, n in zip(events, phases):
+    on = {k: bool(case.motors.in_service[k]) for k in range(len(case.motors))}
+    for ev, n in sorted(zip(events, phases), key=lambda e: e[0].times()[0]):
         if n == 0:
             continue
         if isinstance(ev, Fault):
@@ -270,12 +304,15 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
         elif isinstance(ev, LoadStep):
             b = case.bus_index(ev.bus)
             loads.append((b, complex(ev.P, -ev.Q) / abs(V0[b]) ** 2))
+        elif isinstance(ev, MotorSwitch):
+            on[_motor_index(case, ev.motor)] = ev.on
     return StageConfig(
         faults=tuple(faults),
         opened=tuple(sorted(set(opened))),
         fault_feeds=tuple(feeds),
         tripped_machines=tuple(sorted(set(tripped))),
         load_steps=tuple(loads),
+        motors_on=tuple(k for k, v in on.items() if v),
     )
 
 

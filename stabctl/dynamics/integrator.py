@@ -292,7 +292,15 @@ def _record(rec, k, x, out, P):
 @kernel
 def _stage(nets, s):
     """The matrices of network stage s from the stacked ones."""
-    return KernelNetwork(nets.Y11[s], nets.Y12[s], nets.Y21[s], nets.Y22[s], nets.Z22[s], nets.R[s])
+    return KernelNetwork(
+        nets.Y11[s],
+        nets.Y12[s],
+        nets.Y21[s],
+        nets.Y22[s],
+        nets.Z22[s],
+        nets.R[s],
+        nets.switched_on[s],
+    )
 
 
 # The stages that evaluate the model are inlined into `integrate` at numba IR level

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -27,6 +27,7 @@ from stabctl.models import converters as conv
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
+from stabctl.models import motors as mot
 from stabctl.models import pss as pss_
 from stabctl.models import shafts as shaft
 from stabctl.network.solution import (
@@ -73,7 +74,8 @@ class StageConfig:
     fault_feeds: (branch row, far-end bus number, still_faulted) for a line cleared at the
         near end: a copy of the line (with its charging) feeds a fault node from the far
         end until the far end clears too (PST y_switch; then, under ieee, without it);
-    tripped_machines: machine indices disconnected; load_steps: (bus index, admittance).
+    tripped_machines: machine indices disconnected; load_steps: (bus index, admittance);
+    motors_on: motor indices in service (switched on by events; `stabctl.models.motors`).
     """
 
     faults: tuple = ()
@@ -81,14 +83,16 @@ class StageConfig:
     fault_feeds: tuple = ()
     tripped_machines: tuple = ()
     load_steps: tuple = ()
+    motors_on: tuple = ()
 
 
 @dataclass
 class Layout:
     """Slices of the flat state vector: machines (6, n_mac), exciters (exc_rows, n_exc),
     pss (pss_rows, n_pss), governors (tg_rows, n_tg), converters (conv.N_STATES, n_ibr),
-    shafts (shaft.N_STATES, n_shaft), each stored state-major; the rows are the most
-    slots any exciter / PSS / governor type of the case uses."""
+    shafts (shaft.N_STATES, n_shaft), motors (mot.N_STATES, n_motor), each stored
+    state-major; the rows are the most slots any exciter / PSS / governor type of the case
+    uses."""
 
     n_mac: int
     n_exc: int
@@ -99,6 +103,7 @@ class Layout:
     tg_rows: int = 3
     n_ibr: int = 0
     n_shaft: int = 0
+    n_motor: int = 0
     blocks: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -110,6 +115,7 @@ class Layout:
             ("tg", self.tg_rows, self.n_tg),
             ("ibr", conv.N_STATES, self.n_ibr),
             ("shaft", shaft.N_STATES, self.n_shaft),
+            ("motor", mot.N_STATES, self.n_motor),
         ):
             self.blocks[name] = (slice(start, start + rows * n), (rows, n))
             start += rows * n
@@ -158,6 +164,7 @@ class DynamicModel:
         self.gp = gov.governor_params(case)
         self.cp = conv.converter_params(case, op.V, op.S_gen)
         self.tp = shaft.shaft_params(case)
+        self.mo = mot.motor_params(case)
         self.layout = Layout(
             self.mp.n,
             self.ep.n,
@@ -168,6 +175,7 @@ class DynamicModel:
             self.gp.n_slots(),
             self.cp.n,
             self.tp.n,
+            self.mo.n,
         )
         self._setup_loads(injection_buses)
         self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
@@ -196,9 +204,10 @@ class DynamicModel:
         extra = case.bus_indices(list(injection_buses)) if len(injection_buses) else []
         nc = np.asarray(case.bus_indices(lc[:, 0]) if lc.size else [], int)
         # the converters' buses and their plant controls' line ends (REPCA1)
-        ends = np.concatenate([cp.bus_idx, cp.bus1_idx, cp.bus2_idx]).astype(int)
+        ends = np.concatenate([cp.bus_idx, cp.bus1_idx, cp.bus2_idx, self.mo.bus_idx]).astype(int)
         self.nc_idx = np.unique(np.concatenate([nc, np.asarray(extra, int), ends])).astype(int)
-        for pos, rows in ((cp.pos, cp.bus_idx), (cp.pos1, cp.bus1_idx), (cp.pos2, cp.bus2_idx)):
+        rows_of = ((cp.pos, cp.bus_idx), (cp.pos1, cp.bus1_idx), (cp.pos2, cp.bus2_idx))
+        for pos, rows in (*rows_of, (self.mo.pos, self.mo.bus_idx)):
             pos[:] = np.searchsorted(self.nc_idx, rows)
         i = self.nc_idx
         S_P = fP[i] * S_L[i].real + 1j * fQ[i] * S_L[i].imag
@@ -222,6 +231,9 @@ class DynamicModel:
             bus[b, 7], bus[b, 8] = kept * bus[b, 7] + y.real, kept * bus[b, 8] + y.imag
         for b, y in config.load_steps:
             y_shunt[b] += y
+        on = np.zeros(self.mo.n)
+        on[list(config.motors_on)] = 1.0
+        np.add.at(y_shunt, self.mo.bus_idx, on * mot.admittance(self.mo))
         # PSTess keeps an opened line's charging; a breaker de-energises it (ieee)
         b_open = 1.0 if self.conventions == "pstess" else 0.0
         for row in config.opened:
@@ -250,9 +262,10 @@ class DynamicModel:
         online = np.ones(self.mp.n, bool)
         online[list(config.tripped_machines)] = False
         _check_islands(stage, self.mp.bus_idx[online], case.n_bus)
-        return reduce_network(
+        net = reduce_network(
             stage, y_shunt, self.mp.y_internal, self.mp.bus_idx, online, self.nc_idx, case.n_bus
         )
+        return replace(net, switched_on=on)
 
     # -- initialisation ---------------------------------------------------------------
     def _initialise(self):
@@ -306,6 +319,7 @@ class DynamicModel:
             GP=self.gp.packed(self.Pref),
             IP=self.cp.packed(),
             TP=self.tp.packed(),
+            MO=self.mo.packed(),
             pss_of_exc=self.pss_of_exc,
             exc_rows=L.exc_rows,
             pss_rows=L.pss_rows,
@@ -324,6 +338,7 @@ class DynamicModel:
             n_tg=L.n_tg,
             n_ibr=L.n_ibr,
             n_shaft=L.n_shaft,
+            n_motor=L.n_motor,
         )
 
     @functools.cached_property
@@ -413,6 +428,7 @@ class DynamicModel:
             "tg": self.gp.mac,
             "ibr": np.arange(self.cp.n),
             "shaft": self.tp.mac,
+            "motor": np.arange(self.mo.n),
         }
         names = {
             "mac": lambda i: mac.STATE_NAMES,
@@ -421,6 +437,7 @@ class DynamicModel:
             "tg": lambda i: gov.STATE_NAMES[int(self.gp.kind[i])],
             "ibr": lambda i: conv.STATE_NAMES[int(self.cp.type[i])],
             "shaft": lambda i: shaft.STATE_NAMES,
+            "motor": lambda i: mot.STATE_NAMES,
         }
         for block, (sl, (_rows, n)) in self.layout.blocks.items():
             if sl.start <= k < sl.stop:
@@ -429,6 +446,8 @@ class DynamicModel:
                 state = own[r] if r < len(own) else f"unused{r}"
                 if block == "ibr":
                     return f"ibr.{state}.C{int(self.case.converters.number[i])}"
+                if block == "motor":
+                    return f"motor.{state}.M{int(self.case.motors.number[i])}"
                 number = int(self.case.machines.number[owners[block][i]])
                 return f"{block}.{state}.G{number}"
         raise IndexError(f"state index {k} out of range")
@@ -471,9 +490,9 @@ class DynamicModel:
 
 class KernelParams(NamedTuple):
     """Packed parameters of every model for the compiled kernels (see each model's
-    `packed`; IP the converters', TP the shafts'), the non-conforming load data of the
-    kept buses (S_P, I0, Y_low, (n_nc,) complex pu) and the numbers of machines, exciters,
-    PSSs, governors, converters and shafts (the state layout, `Layout`)."""
+    `packed`; IP the converters', TP the shafts', MO the motors'), the non-conforming load
+    data of the kept buses (S_P, I0, Y_low, (n_nc,) complex pu) and the numbers of machines,
+    exciters, PSSs, governors, converters, shafts and motors (the state layout, `Layout`)."""
 
     MP: np.ndarray
     basrad: float
@@ -482,6 +501,7 @@ class KernelParams(NamedTuple):
     GP: np.ndarray
     IP: np.ndarray
     TP: np.ndarray
+    MO: np.ndarray
     pss_of_exc: np.ndarray
     exc_rows: int
     pss_rows: int
@@ -502,13 +522,15 @@ class KernelParams(NamedTuple):
     n_tg: int
     n_ibr: int
     n_shaft: int
+    n_motor: int
 
 
 class KernelNetwork(NamedTuple):
     """The matrices of a reduced network stage for the kernels (`ReducedNetwork`; in
     `stabctl.dynamics.integrator.integrate` each is stacked by stage on a first axis):
     Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 and Z22 = inv(Y22)
-    (n_nc, n_nc), R (n_bus, n_mac + n_nc); complex pu on the system base."""
+    (n_nc, n_nc), R (n_bus, n_mac + n_nc); complex pu on the system base; switched_on
+    (n_motor,) float, 1.0 for each motor in service in the stage (`ReducedNetwork.switched_on`)."""
 
     Y11: np.ndarray
     Y12: np.ndarray
@@ -516,6 +538,7 @@ class KernelNetwork(NamedTuple):
     Y22: np.ndarray
     Z22: np.ndarray
     R: np.ndarray
+    switched_on: np.ndarray
 
 
 def kernel_network(net: ReducedNetwork) -> KernelNetwork:
@@ -629,9 +652,12 @@ SLOPE_DV = 1e-6
 
 
 @kernel
-def _summed_currents(p, xi, V_nc, dv):
-    """`conv.drawn_current` of every converter at its bus voltage magnitude + dv (pu),
-    summed per kept bus: (I_rel, I_fix), each (n_nc,) complex."""
+def _summed_currents(p, dev, V_nc, dv):
+    """`conv.drawn_current` of every converter at its bus voltage magnitude + dv (pu), and
+    the current of every motor on beside its admittance (`mot.drawn_current`), summed per
+    kept bus: (I_rel, I_fix), each (n_nc,) complex; dev = (converter states, motor states,
+    motors on)."""
+    xi, xmo, on = dev
     rel = np.zeros(V_nc.size, np.complex128)
     fix = np.zeros(V_nc.size, np.complex128)
     for k in range(p.n_ibr):
@@ -639,17 +665,20 @@ def _summed_currents(p, xi, V_nc, dv):
         a, b = conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]) + dv)
         rel[pos] += a
         fix[pos] += b
+    for k in range(p.n_motor):
+        if on[k] != 0.0:
+            fix[int(p.MO[k, mot.Q.POS])] += mot.drawn_current(p.MO, xmo, k)
     return rel, fix
 
 
 @kernel
-def _drawn_currents(p, xi, V_nc, loads, tol):
+def _drawn_currents(p, dev, V_nc, loads, tol):
     """The converters' currents drawn at the kept buses at voltages V_nc (`_summed_currents`)
     against the affine model of `KeptLoads` (I_dev + G_dev |V|, I_fix + G_fix |V|, each
     (n_nc,) complex): if the model misses one by more than tol, the model is made the
     tangent at V_nc (in place: the slope from the currents at |V| + SLOPE_DV, evaluated
     only then).  Returns the largest miss."""
-    rel, fix = _summed_currents(p, xi, V_nc, 0.0)
+    rel, fix = _summed_currents(p, dev, V_nc, 0.0)
     moved = 0.0
     for i in range(V_nc.size):
         m = abs(V_nc[i])
@@ -659,7 +688,7 @@ def _drawn_currents(p, xi, V_nc, loads, tol):
             abs(fix[i] - loads.I_fix[i] - loads.G_fix[i] * m),
         )
     if moved > tol:
-        rel2, fix2 = _summed_currents(p, xi, V_nc, SLOPE_DV)
+        rel2, fix2 = _summed_currents(p, dev, V_nc, SLOPE_DV)
         for i in range(V_nc.size):
             m = abs(V_nc[i])
             g_rel, g_fix = (rel2[i] - rel[i]) / SLOPE_DV, (fix2[i] - fix[i]) / SLOPE_DV
@@ -669,7 +698,7 @@ def _drawn_currents(p, xi, V_nc, loads, tol):
 
 
 @kernel
-def _converter_fixed_point(p, xi, net, psi, V_nc, loads, held, it):
+def _converter_fixed_point(p, dev, net, psi, V_nc, loads, held, it):
     """The network solution with the converters' drawn currents when one depends on its
     bus voltage (REGCA1's LVG and HVG, `conv.drawn_current`): solved with their tangent
     at the starting voltages (`_drawn_currents`), which is exact while no |V| crosses a
@@ -677,9 +706,9 @@ def _converter_fixed_point(p, xi, net, psi, V_nc, loads, held, it):
     the solved voltages and the network solved again, until the currents agree within
     CURRENT_TOL.  Returns the total load-iteration count, -1 without convergence (either
     loop)."""
-    _Y11, _Y12, Y21, Y22, Z22, _R = net
+    Y21, Y22, Z22 = net.Y21, net.Y22, net.Z22
     for _ in range(CURRENT_ITERATIONS):
-        if _drawn_currents(p, xi, V_nc, loads, CURRENT_TOL) <= CURRENT_TOL:
+        if _drawn_currents(p, dev, V_nc, loads, CURRENT_TOL) <= CURRENT_TOL:
             return it
         more = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
         if more < 0:
@@ -717,7 +746,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         The load-iteration count, -1 without convergence.
     """
     nm, ne, nps, ng, ni = p.n_mac, p.n_exc, p.n_pss, p.n_tg, p.n_ibr
-    Y11, Y12, Y21, Y22, Z22, R = net
+    Y11, Y12, Y21, Y22, Z22, R, on = net
     V_nc, held, S_extra = kept
     cur, pelect, qelect, eterm, efd, pmech, V_bus, S_ibr = out
     o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
@@ -733,6 +762,10 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     o += ri * ni
     rt, nt = shaft.N_STATES, p.n_shaft
     xt, dxt = x[o : o + rt * nt].reshape(rt, nt), dx[o : o + rt * nt].reshape(rt, nt)
+    o += rt * nt
+    rm, nmo = mot.N_STATES, p.n_motor
+    xmo, dxmo = x[o : o + rm * nmo].reshape(rm, nmo), dx[o : o + rm * nmo].reshape(rm, nmo)
+    dev = (xi, xmo, on)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
     v_dep = False
@@ -741,13 +774,13 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         v_dep = v_dep or conv.voltage_dependent(p.IP, k)
     zero = np.zeros((4, V_nc.size), np.complex128)
     loads = KeptLoads(p.S_P, p.I0, p.Y_low, S_extra, zero[0], zero[1], zero[2], zero[3])
-    if ni:  # the converters' tangent at the starting voltages
-        _drawn_currents(p, xi, V_nc, loads, -1.0)
+    if ni or nmo:  # the converters' tangent at the starting voltages, the motors' currents
+        _drawn_currents(p, dev, V_nc, loads, -1.0)
     it = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
     if it < 0:
         return -1
     if v_dep:  # currents that depend on the voltage (REGCA1): repeat until they agree
-        it = _converter_fixed_point(p, xi, net, psi, V_nc, loads, held, it)
+        it = _converter_fixed_point(p, dev, net, psi, V_nc, loads, held, it)
         if it < 0:
             return -1
     assign(cur, Y11 @ psi + Y12 @ V_nc)
@@ -805,6 +838,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     for k in range(ni):
         V_k = V_nc[int(p.IP[k, conv.C.POS])]
         S_ibr[k] = conv.derivatives(p.IP, xi, k, V_k, V_nc, p.reach, dxi)
+    for k in range(nmo):
+        mot.derivatives(p.MO, xmo, k, V_nc[int(p.MO[k, mot.Q.POS])], on[k], dxmo)
     return it
 
 
@@ -830,7 +865,8 @@ def _evaluate_arg_types() -> tuple:
     from numba import typeof
 
     z, c = np.zeros(1), np.zeros(1, np.complex128)
-    net = KernelNetwork(*[np.zeros((1, 1), np.complex128)] * len(KernelNetwork._fields))
+    m = np.zeros((1, 1), np.complex128)
+    net = KernelNetwork(m, m, m, m, m, m, np.zeros(1))
     return (
         typeof(z),
         typeof(net),

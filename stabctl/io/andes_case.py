@@ -115,6 +115,7 @@ from stabctl.models.converters import (
     WTDS,
     WTDTA1,
 )
+from stabctl.models.motors import MOTOR
 from stabctl.models.shafts import SHAFT
 
 __all__ = [
@@ -151,6 +152,8 @@ CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1, "REGCP1": REGC
 CONVERTER_CONTROLS = ("REECA1", "REECB1", "REPCA1", "WTDTA1", "WTDS", "WTARA1", "WTPTA1", "WTTQA1")
 #: ANDES's DG protections, read into their PVD1's or ESD1's row (ibr_con ``relay``)
 PROTECTIONS = {"DGPRCT1": DGPRCT1, "DGPRCTExt": DGPRCTEXT}
+#: ANDES's induction motors, read into the motor table (mot_con, `stabctl.models.motors`)
+MOTOR_MODELS = ("Motor5",)
 #: ANDES's torsional shafts, read into the shaft table (shaft_con, `stabctl.models.shafts`)
 SHAFT_MODELS = ("SHAFT5",)
 #: ANDES's wind drive trains (group RenGovernor) -> ibr_con ``wind``
@@ -286,6 +289,7 @@ def read_andes_case(
         and name not in CONVERTER_CONTROLS
         and name not in SHAFT_MODELS
         and name not in PROTECTIONS
+        and name not in MOTOR_MODELS
     ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
@@ -299,6 +303,10 @@ def read_andes_case(
     refused += shaft_refused
     if shaft_con:
         mats["shaft_con"] = np.array(shaft_con, float)
+    mot_con, motor_refused = _motors(ss, numbers)
+    refused += motor_refused
+    if mot_con:
+        mats["mot_con"] = np.array(mot_con, float)
     if ibr_con:
         mats["ibr_con"] = np.array(ibr_con, float)
     if records:
@@ -1049,6 +1057,35 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 params = tuple(float(m.params[f].vin[k]) for f in fields)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused, _grouped(changed)
+
+
+def _motors(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:
+    """The mot_con rows of ANDES's Motor5 devices (number, bus, in service 0, Sn, then the
+    impedances on the motor base at the bus's voltage base, ANDES's system-base values
+    times Sn/Sb, Hm and c1-c3 as given), and those refused with why: in service at the
+    start (ANDES's power flow holds it at its initial slip, not an equilibrium), another
+    frequency, c1-c3 on a base other than the system's (ANDES reads them on the system
+    base, stabctl on the motor's)."""
+    m = ss.models.get("Motor5")
+    rows: list[list[float]] = []
+    refused: list[str] = []
+    sb = ss.config.mva
+    for k in range(m.n if m is not None else 0):
+        where = f"Motor5 {m.idx.v[k]}"
+        why = ""
+        if m.u.v[k] != 0:
+            why = "in service at the start (stabctl switches a motor on by a MotorSwitch)"
+        elif m.fn.v[k] != ss.config.freq:
+            why = f"fn = {m.fn.v[k]:g} Hz, not the system's {ss.config.freq:g} Hz"
+        elif m.Sn.v[k] != sb and any(m.params[c].v[k] != 0 for c in ("c1", "c2", "c3")):
+            why = f"Sn = {m.Sn.v[k]:g} MVA: ANDES reads its torque c1-c3 on the system base"
+        if why:
+            refused.append(f"{where}: {why}")
+            continue
+        z = [float(m.params[f].v[k]) * m.Sn.v[k] / sb for f in MOTOR.names[4:11]]
+        rest = [float(m.params[f].vin[k]) for f in MOTOR.names[11:]]
+        rows.append([len(rows) + 1, numbers[m.bus.v[k]], 0.0, float(m.Sn.v[k]), *z, *rest])
+    return rows, refused
 
 
 def _shafts(ss, gens: list[dict]) -> tuple[list[list[float]], list[str]]:

@@ -63,6 +63,7 @@ PST_TABLES: Mapping[str, str] = {
     "load_con": "loads",
     "ibr_con": "converters",  # stabctl's converter table (ANDES PVD1, ESD1), no PST matrix
     "shaft_con": "shafts",  # stabctl's torsional shafts (ANDES SHAFT5), no PST matrix
+    "mot_con": "motors",  # stabctl's induction motors (ANDES Motor5), no PST matrix
 }
 
 _SCALARS = {"basmva": "base_mva", "sys_freq": "freq_hz"}

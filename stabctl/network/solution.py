@@ -14,7 +14,7 @@ with I_nc the current injected at the kept buses by their loads and devices.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import llvmlite.binding as llvm
@@ -58,7 +58,8 @@ class ReducedNetwork:
 
     Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 (n_nc, n_nc); R (n_bus,
     n_mac + n_nc) gives every original bus voltage from [psi; V_nc]; Z22 = inv(Y22), the
-    chord of the load iteration.
+    chord of the load iteration.  switched_on (n_dev,) float: 1.0 for each device switched
+    by events (a motor, `stabctl.models.motors`) in service in this stage, else 0.0.
     """
 
     Y11: np.ndarray
@@ -67,6 +68,7 @@ class ReducedNetwork:
     Y22: np.ndarray
     R: np.ndarray
     Z22: np.ndarray
+    switched_on: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def reduce_network(

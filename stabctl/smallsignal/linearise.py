@@ -131,6 +131,7 @@ def active_states(model: DynamicModel) -> np.ndarray:
     L.view(act, "tg")[:] = model.gp.has_state()
     L.view(act, "ibr")[:] = model.cp.has_state()
     L.view(act, "shaft")[:] = True
+    L.view(act, "motor")[:] = model.case.motors.in_service == 1  # off: standing still
     return act
 
 

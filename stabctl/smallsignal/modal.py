@@ -40,7 +40,10 @@ INTER_AREA_ETA = 0.5  # area-momentum fraction above which a mode is inter-area
 INTER_AREA_MAX_HZ = 1.0
 GAP_RATIO = 1.3  # consecutive EM frequencies this far apart: time-scale gap
 SIGNIFICANT = 0.2  # |speed shape| (of the largest) to count in a coherent group
-STATE_GROUPS = ("rotor angle/speed", "rotor flux", "exciter", "pss", "governor", "converter")
+STATE_GROUPS = (
+    *("rotor angle/speed", "rotor flux", "exciter", "pss", "governor", "converter"),
+    "motor",
+)
 #: |Im lambda| / |lambda| at or below which an eigenvalue is real (`eigen`)
 REAL_TOL = 1e-9
 #: condition number of the right-eigenvector matrix above which A counts as defective
@@ -186,7 +189,7 @@ def state_group(name: str) -> str:
         return STATE_GROUPS[0] if var in ("delta", "omega") else STATE_GROUPS[1]
     if block == "shaft":  # a torsional shaft's masses: rotor angles and speeds too
         return STATE_GROUPS[0]
-    groups = {"exc": 2, "pss": 3, "tg": 4, "ibr": 5}
+    groups = {"exc": 2, "pss": 3, "tg": 4, "ibr": 5, "motor": 6}
     return STATE_GROUPS[groups[block]]
 
 

@@ -223,7 +223,7 @@ def test_every_state_block_of_the_model_has_a_group():
     (angle/speed, flux), exciters, stabilisers, governors and converter-interfaced devices
     ('ibr_Ip_C1'; before, a converter case's modal analysis raised KeyError)."""
     names = ["mac_delta_G1", "mac_psikd_G1", "exc_VTR_G1", "pss_washout_G1", "tg_valve_G1"]
-    assert [state_group(n) for n in [*names, "ibr_Ip_C1"]] == list(STATE_GROUPS)
+    assert [state_group(n) for n in [*names, "ibr_Ip_C1", "motor_slip_M1"]] == list(STATE_GROUPS)
 
 
 def _repeated_real(seed):
