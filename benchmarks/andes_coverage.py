@@ -30,11 +30,6 @@ FLAT_WHY = {
     "ei/EI_33.xlsx": "its power flow does not converge in ANDES either",
     "ieee14/ieee14_island.xlsx": "buses 8 and 14 are islands without a swing bus (the "
     "line to each is out of service); stabctl's power flow refuses them by name",
-    "kundur/kundur_esst3a.xlsx": "stiff: its ESST3A data (K_M = 500, T_M = 0.1 s, V_B about "
-    "4.3) close the inner loop at -21600 1/s (time constant 4.6e-5 s), so the explicit "
-    "predictor-corrector's default step is 2.3e-5 s and a 10 s run needs more steps than "
-    "MAX_STEPS (200 000); 4 s stay flat (tests/io/test_andes.py); ANDES integrates "
-    "implicitly (trapezoidal rule)",
 }
 
 #: ANDES's disturbance models: events of a run, not devices.  TimeSeries is a schedule of

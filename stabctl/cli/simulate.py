@@ -231,7 +231,7 @@ def simulate(
             f"{describe_event(late[0])}: starts at or after the end of the run (--tf {tf:g} s)"
         )
     if step is not None:
-        check_step_count(tf, step)  # refused before any work (building the model)
+        check_step_count(tf, step, case)  # refused before any work (building the model)
     fleet = None
     if esd_pct is not None:
         from stabctl.storage.devices import uniform_fleet

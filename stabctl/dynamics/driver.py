@@ -312,7 +312,7 @@ class Simulator:
         InputError
             Bad semantics, events (clearing before the fault, negative time), `t_end` or
             step (not positive and finite, too large for the case's fastest time
-            constant, or more than MAX_STEPS steps).
+            constant, or more steps than `stabctl.dynamics.grid.check_step_count` allows).
         UnknownBusError, CaseError
             An event or storage device naming a bus, line or machine not in the case.
         NumericalInstabilityError
@@ -375,7 +375,7 @@ class Simulator:
             xslot = start + int(conv.PLANT_PREF_SLOT) * m.cp.n + self.battery_rows
         sa = st.pack(storage, self.case, m.nc_idx, xslot)
         check_step(self.fastest, h)
-        check_step_count(t_end, h)
+        check_step_count(t_end, h, self.case)
         starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
         grid = time_grid(starts, t_end, h, self.conventions == "pstess")
         return m, sa, grid, [m.network(c) for c in configs]

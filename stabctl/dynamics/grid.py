@@ -10,7 +10,7 @@ conventions (`stabctl.dynamics.model.CONVENTIONS`, docs/conventions.md) set the 
 
 The default step comes from the case (`default_step`); a step is refused when the explicit
 predictor-corrector would be unstable with it (`check_step`) or a run would take more than
-MAX_STEPS steps (`check_step_count`).
+MAX_STEPS steps or record more than MAX_RECORD_BYTES (`check_step_count`).
 """
 
 from __future__ import annotations
@@ -129,21 +129,34 @@ def check_step(fastest: tuple[float, str], h: float) -> None:
         )
 
 
-#: most integration steps one run may take: a smaller step (or a longer run) is refused
-#: at once instead of running silently for minutes and filling the memory with the
-#: trajectory (miniWECC: 200000 steps are about 10 s and 0.7 GB)
-MAX_STEPS = 200_000
+#: most memory the recorded trajectory of one run may take, bytes (`check_step_count`): a
+#: smaller step (or a longer run) is refused at once instead of filling the memory with it
+#: (miniWECC, 5.3 kB per step: 188 000 steps; Kundur, 0.6 kB: 1.7 million)
+MAX_RECORD_BYTES = 1_000_000_000
+#: most integration steps of one run whatever its size: a run is refused at once instead
+#: of running silently for minutes (Kundur: about 25 us per step)
+MAX_STEPS = 2_000_000
 
 
-def check_step_count(t_end: float, h: float) -> None:
-    """Raise InputError when a run to t_end (s) with step h (s) needs more than MAX_STEPS
-    steps."""
+def recorded_bytes_per_step(case: Case) -> int:
+    """Bytes one grid point of a run of `case` records: per machine its speed, angle, P_e,
+    P_m and E_fd (5 x 8), per bus its complex voltage and the result's magnitude and angle
+    (16 + 16), per converter its complex power (16)."""
+    return 40 * len(case.machines) + 32 * case.n_bus + 16 * len(case.converters)
+
+
+def check_step_count(t_end: float, h: float, case: Case) -> None:
+    """Raise InputError when a run of `case` to t_end (s) with step h (s) needs more steps
+    than MAX_STEPS or than its recording may take in MAX_RECORD_BYTES
+    (`recorded_bytes_per_step`)."""
     if not 0 < h < float("inf"):
         raise InputError(f"step must be a finite number > 0 s, got {h}")
     n = t_end / h
-    if not n <= MAX_STEPS:
+    limit = min(MAX_STEPS, MAX_RECORD_BYTES // recorded_bytes_per_step(case))
+    if not n <= limit:
         raise InputError(
             f"step {h:g} s: a run to {t_end:g} s needs {n:.3g} steps, more than "
-            f"the limit {MAX_STEPS} (stabctl.dynamics.grid.MAX_STEPS); use a larger "
-            "step (--step) or a shorter run (--tf)"
+            f"the limit {limit} for case '{case.name}' (stabctl.dynamics.grid.MAX_STEPS, "
+            "MAX_RECORD_BYTES of recording); use a larger step (--step) or a shorter run "
+            "(--tf)"
         )
