@@ -22,6 +22,7 @@ from stabctl.case.system import (
     MotorTable,
     PssTable,
     ShaftTable,
+    SwitchedShuntTable,
     Table,
 )
 
@@ -43,5 +44,6 @@ __all__ = [
     "MotorTable",
     "PssTable",
     "ShaftTable",
+    "SwitchedShuntTable",
     "Table",
 ]

@@ -61,6 +61,7 @@ __all__ = [
     "InjectionTable",
     "ConverterTable",
     "ShaftTable",
+    "SwitchedShuntTable",
     "MotorTable",
     "Case",
     "SWING",
@@ -666,6 +667,73 @@ class LoadTable(Table):
         self._require(self.q_impedance >= -tol, "q_current", "q_power + q_current must be <= 1")
 
 
+#: the block groups a switched shunt may have (``swsh_con`` columns 8-19)
+SWITCHED_GROUPS = 4
+
+
+@dataclass(frozen=True, eq=False)
+class SwitchedShuntTable(Table):
+    """Switched shunts: stabctl's ``swsh_con`` (ANDES 2.0 ``ShuntSw``; PSS/E's switched
+    shunt), one row each, pu on the system base (susceptance capacitive > 0).
+
+    ==  ==========  ===========================================================
+    1   number      shunt number
+    2   bus         bus number
+    3   b0          initial susceptance (snapped to a level, `levels`)
+    4   g0          initial conductance
+    5   vref        voltage reference, pu
+    6   dv          half band: the shunt steps while |V| is outside vref +- dv
+    7   dt          s, the least time between two steps of it in a run
+    8   n1          steps of the first block group
+    9   b1          susceptance of one step of it
+    10  g1          conductance of one step of it
+    11  n2 ... 19   g4: the same for groups 2-4 (0 steps: no group)
+    ==  ==========  ===========================================================
+
+    Levels: 0, then b1 added n1 times, then b2 n2 times, ... (their conductances alike).
+    The power flow steps every shunt outside its band by one level toward it and solves
+    again until none is (`stabctl.network.switched_shunts`); a run steps it one level
+    while its bus is outside the band, at most once every dt s
+    (`stabctl.models.shunts`).
+    Validation: numbers unique, dv > 0, steps >= 0, step susceptances >= 0 (capacitors:
+    ANDES's starting rule assumes rising levels).
+    """
+
+    number: np.ndarray
+    bus: np.ndarray
+    b0: np.ndarray
+    g0: np.ndarray
+    vref: np.ndarray
+    dv: np.ndarray
+    dt: np.ndarray
+    n1: np.ndarray
+    b1: np.ndarray
+    g1: np.ndarray
+    n2: np.ndarray
+    b2: np.ndarray
+    g2: np.ndarray
+    n3: np.ndarray
+    b3: np.ndarray
+    g3: np.ndarray
+    n4: np.ndarray
+    b4: np.ndarray
+    g4: np.ndarray
+
+    TABLE: ClassVar[str] = "swsh_con"
+    MIN_COLUMNS: ClassVar[int] = 10
+    KEY: ClassVar[str] = "number"
+    KEY_LABEL: ClassVar[str] = "switched shunt"
+    INTEGER: ClassVar[tuple[str, ...]] = ("number", "bus", "n1", "n2", "n3", "n4")
+
+    def _check(self):
+        self._unique("number", "switched shunt number")
+        self._require(self.dv > 0, "dv", "half band must be > 0 pu")
+        self._require(self.dt >= 0, "dt", "must be >= 0 s")
+        for k in range(1, SWITCHED_GROUPS + 1):
+            self._require(getattr(self, f"n{k}") >= 0, f"n{k}", "steps must be >= 0")
+            self._require(getattr(self, f"b{k}") >= 0, f"b{k}", "capacitor steps (>= 0) only")
+
+
 @dataclass(frozen=True, eq=False)
 class InjectionTable(Table):
     """Fixed (constant-power) injections not in the bus table, e.g. storage or HVDC set points.
@@ -756,6 +824,7 @@ TABLES: Mapping[str, type[Table]] = MappingProxyType(
         "converters": ConverterTable,
         "shafts": ShaftTable,
         "motors": MotorTable,
+        "switched_shunts": SwitchedShuntTable,
     }
 )
 
@@ -801,6 +870,8 @@ class Case:
         base; empty by default.
     motors : MotorTable
         Induction motors (ANDES Motor5), one row each, motor base; empty by default.
+    switched_shunts : SwitchedShuntTable
+        Switched shunts (ANDES ShuntSw), one row each, system base; empty by default.
     sw_con : numpy.ndarray or None
         The data file's own switching (disturbance) matrix, shape (rows, 7), PST format
         (PST manual 2.5), read-only; None if the file has none.
@@ -835,6 +906,7 @@ class Case:
     converters: ConverterTable = field(default_factory=ConverterTable.empty)
     shafts: ShaftTable = field(default_factory=ShaftTable.empty)
     motors: MotorTable = field(default_factory=MotorTable.empty)
+    switched_shunts: SwitchedShuntTable = field(default_factory=SwitchedShuntTable.empty)
     sw_con: np.ndarray | None = None
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
     source: str = ""
@@ -877,6 +949,7 @@ class Case:
         self._check_buses(self.injections, "bus", known)
         self._check_buses(self.converters, "bus", known)
         self._check_buses(self.motors, "bus", known)
+        self._check_buses(self.switched_shunts, "bus", known)
         macs = self.machines.number
         for tab in (self.exciters, self.pss, self.governors, self.shafts):
             bad = np.flatnonzero(~np.isin(tab.machine, macs))

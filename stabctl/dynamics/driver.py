@@ -47,6 +47,7 @@ from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
 from stabctl.models import converters as conv
+from stabctl.network import switched_shunts as sws
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
 
@@ -183,7 +184,7 @@ class Simulator:
 
             pf = solve_powerflow(case, q_limits=self.q_limits)
             op = OperatingPoint.from_bus_matrix(pf.bus_matrix())
-            case = _with_solved_taps(case, pf.taps)
+            case = _with_solved_shunts(_with_solved_taps(case, pf.taps), pf.shunt_levels)
         single_threaded_blas()
         self.case, self.op = case, op
         self._models: dict[frozenset, DynamicModel] = {}
@@ -542,6 +543,31 @@ def _with_solved_taps(case: Case, taps: np.ndarray) -> Case:
     if np.array_equal(given, taps):
         return case
     return case.replace(branches=case.branches.replace(tap=np.asarray(taps, float)))
+
+
+def _with_solved_shunts(case: Case, levels: np.ndarray) -> Case:
+    """The case with its switched shunts at the levels its power flow stepped them to (their
+    b0, g0 those levels' values: `stabctl.network.switched_shunts`); the case itself
+    without switched shunts.  A run holds them there (docs/pst_models.md 15).
+
+    Parameters
+    ----------
+    case : Case
+        The case whose power flow was solved.
+    levels : numpy.ndarray
+        The power flow's levels, int (n_switched,)
+        (`stabctl.network.powerflow.PowerFlowResult.shunt_levels`).
+
+    Returns
+    -------
+    Case
+        ``case``, or a copy with ``switched_shunts.b0``, ``g0`` replaced.
+    """
+    t = case.switched_shunts
+    if not len(t):
+        return case
+    y = sws.admittances(t, levels)
+    return case.replace(switched_shunts=t.replace(b0=y.imag, g0=y.real))
 
 
 def simulator_cached() -> bool:

@@ -30,6 +30,8 @@ from stabctl.models import machines as mac
 from stabctl.models import motors as mot
 from stabctl.models import pss as pss_
 from stabctl.models import shafts as shaft
+from stabctl.models import shunts as shunt
+from stabctl.network import switched_shunts as sws
 from stabctl.network.solution import (
     KeptLoads,
     NonConformingLoads,
@@ -90,9 +92,9 @@ class StageConfig:
 class Layout:
     """Slices of the flat state vector: machines (6, n_mac), exciters (exc_rows, n_exc),
     pss (pss_rows, n_pss), governors (tg_rows, n_tg), converters (conv.N_STATES, n_ibr),
-    shafts (shaft.N_STATES, n_shaft), motors (mot.N_STATES, n_motor), each stored
-    state-major; the rows are the most slots any exciter / PSS / governor type of the case
-    uses."""
+    shafts (shaft.N_STATES, n_shaft), motors (mot.N_STATES, n_motor), switched shunts'
+    memory (shunt.N_STATES, n_swsh), each stored state-major; the rows are the most slots
+    any exciter / PSS / governor type of the case uses."""
 
     n_mac: int
     n_exc: int
@@ -104,6 +106,7 @@ class Layout:
     n_ibr: int = 0
     n_shaft: int = 0
     n_motor: int = 0
+    n_swsh: int = 0
     blocks: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -116,6 +119,7 @@ class Layout:
             ("ibr", conv.N_STATES, self.n_ibr),
             ("shaft", shaft.N_STATES, self.n_shaft),
             ("motor", mot.N_STATES, self.n_motor),
+            ("swsh", shunt.N_STATES, self.n_swsh),
         ):
             self.blocks[name] = (slice(start, start + rows * n), (rows, n))
             start += rows * n
@@ -176,6 +180,7 @@ class DynamicModel:
             self.cp.n,
             self.tp.n,
             self.mo.n,
+            len(case.switched_shunts),
         )
         self._setup_loads(injection_buses)
         self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
@@ -200,11 +205,15 @@ class DynamicModel:
         S_L = op.S_load - np.where(has_mac, 0.0, S_free)  # generation without machine
         fP, fQ, fIP, fIQ = frac.T
         S_Z = (1 - fP - fIP) * S_L.real + 1j * (1 - fQ - fIQ) * S_L.imag
-        self.y_load = np.conj(S_Z) / V0**2
+        # the switched shunts at the level they start at (the power flow's, `Simulator`)
+        self.y_load = np.conj(S_Z) / V0**2 + sws.bus_admittances(case)
         extra = case.bus_indices(list(injection_buses)) if len(injection_buses) else []
         nc = np.asarray(case.bus_indices(lc[:, 0]) if lc.size else [], int)
         # the converters' buses and their plant controls' line ends (REPCA1)
-        ends = np.concatenate([cp.bus_idx, cp.bus1_idx, cp.bus2_idx, self.mo.bus_idx]).astype(int)
+        sw = case.switched_shunts
+        self.sw_bus = np.asarray(case.bus_indices(sw.bus) if len(sw) else [], int)
+        ends = np.concatenate([cp.bus_idx, cp.bus1_idx, cp.bus2_idx, self.mo.bus_idx, self.sw_bus])
+        ends = ends.astype(int)
         self.nc_idx = np.unique(np.concatenate([nc, np.asarray(extra, int), ends])).astype(int)
         rows_of = ((cp.pos, cp.bus_idx), (cp.pos1, cp.bus1_idx), (cp.pos2, cp.bus2_idx))
         for pos, rows in (*rows_of, (self.mo.pos, self.mo.bus_idx)):
@@ -300,6 +309,7 @@ class DynamicModel:
         xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac], lp)
         L.view(x, "tg")[:] = xg
         L.view(x, "ibr")[:] = conv.initialise(self.cp, op.V)
+        L.view(x, "swsh")[0] = sws.initial_levels(self.case.switched_shunts)
         L.view(x, "shaft")[:] = shaft.initialise(
             self.tp, xm[0, self.tp.mac], self.pmech0[self.tp.mac]
         )
@@ -320,6 +330,8 @@ class DynamicModel:
             IP=self.cp.packed(),
             TP=self.tp.packed(),
             MO=self.mo.packed(),
+            SWP=self._shunts_packed(),
+            SWY=self._shunt_levels(),
             pss_of_exc=self.pss_of_exc,
             exc_rows=L.exc_rows,
             pss_rows=L.pss_rows,
@@ -339,7 +351,31 @@ class DynamicModel:
             n_ibr=L.n_ibr,
             n_shaft=L.n_shaft,
             n_motor=L.n_motor,
+            n_swsh=L.n_swsh,
         )
+
+    def _shunts_packed(self) -> np.ndarray:
+        """The switched shunts' packed columns (`stabctl.models.shunts.PACKED`)."""
+        t = self.case.switched_shunts
+        top = [sws.levels(t, k).size - 1 for k in range(len(t))]
+        cols = (
+            np.searchsorted(self.nc_idx, self.sw_bus),
+            t.vref - t.dv,
+            t.vref + t.dv,
+            t.dt,
+            top,
+            sws.initial_levels(t),
+        )
+        return np.column_stack(cols).astype(float).reshape(len(t), len(shunt.PACKED))
+
+    def _shunt_levels(self) -> np.ndarray:
+        """The switched shunts' levels g + j b, complex (n_swsh, most levels), padded."""
+        t = self.case.switched_shunts
+        ys = [sws.levels(t, k) for k in range(len(t))]
+        out = np.zeros((len(t), max((y.size for y in ys), default=1)), complex)
+        for k, y in enumerate(ys):
+            out[k, : y.size] = y
+        return out
 
     @functools.cached_property
     def island(self) -> np.ndarray:
@@ -429,6 +465,7 @@ class DynamicModel:
             "ibr": np.arange(self.cp.n),
             "shaft": self.tp.mac,
             "motor": np.arange(self.mo.n),
+            "swsh": np.arange(len(self.case.switched_shunts)),
         }
         names = {
             "mac": lambda i: mac.STATE_NAMES,
@@ -438,6 +475,7 @@ class DynamicModel:
             "ibr": lambda i: conv.STATE_NAMES[int(self.cp.type[i])],
             "shaft": lambda i: shaft.STATE_NAMES,
             "motor": lambda i: mot.STATE_NAMES,
+            "swsh": lambda i: shunt.SLOTS,
         }
         for block, (sl, (_rows, n)) in self.layout.blocks.items():
             if sl.start <= k < sl.stop:
@@ -448,6 +486,8 @@ class DynamicModel:
                     return f"ibr.{state}.C{int(self.case.converters.number[i])}"
                 if block == "motor":
                     return f"motor.{state}.M{int(self.case.motors.number[i])}"
+                if block == "swsh":
+                    return f"swsh.{state}.S{int(self.case.switched_shunts.number[i])}"
                 number = int(self.case.machines.number[owners[block][i]])
                 return f"{block}.{state}.G{number}"
         raise IndexError(f"state index {k} out of range")
@@ -490,9 +530,10 @@ class DynamicModel:
 
 class KernelParams(NamedTuple):
     """Packed parameters of every model for the compiled kernels (see each model's
-    `packed`; IP the converters', TP the shafts', MO the motors'), the non-conforming load
-    data of the kept buses (S_P, I0, Y_low, (n_nc,) complex pu) and the numbers of machines,
-    exciters, PSSs, governors, converters, shafts and motors (the state layout, `Layout`)."""
+    `packed`; IP the converters', TP the shafts', MO the motors', SWP and SWY the switched
+    shunts' columns and levels), the non-conforming load data of the kept buses (S_P, I0,
+    Y_low, (n_nc,) complex pu) and the numbers of machines, exciters, PSSs, governors,
+    converters, shafts, motors and switched shunts (the state layout, `Layout`)."""
 
     MP: np.ndarray
     basrad: float
@@ -502,6 +543,8 @@ class KernelParams(NamedTuple):
     IP: np.ndarray
     TP: np.ndarray
     MO: np.ndarray
+    SWP: np.ndarray
+    SWY: np.ndarray
     pss_of_exc: np.ndarray
     exc_rows: int
     pss_rows: int
@@ -523,6 +566,7 @@ class KernelParams(NamedTuple):
     n_ibr: int
     n_shaft: int
     n_motor: int
+    n_swsh: int
 
 
 class KernelNetwork(NamedTuple):
@@ -655,9 +699,10 @@ SLOPE_DV = 1e-6
 def _summed_currents(p, dev, V_nc, dv):
     """`conv.drawn_current` of every converter at its bus voltage magnitude + dv (pu), and
     the current of every motor on beside its admittance (`mot.drawn_current`), summed per
-    kept bus: (I_rel, I_fix), each (n_nc,) complex; dev = (converter states, motor states,
-    motors on)."""
-    xi, xmo, on = dev
+    kept bus, and the switched shunts' admittance beyond the network's
+    (`shunt.extra_admittance`) as a drawn current: (I_rel, I_fix), each (n_nc,) complex;
+    dev = (converter states, motor states, motors on, switched shunts' memory)."""
+    xi, xmo, on, xsw = dev
     rel = np.zeros(V_nc.size, np.complex128)
     fix = np.zeros(V_nc.size, np.complex128)
     for k in range(p.n_ibr):
@@ -668,6 +713,9 @@ def _summed_currents(p, dev, V_nc, dv):
     for k in range(p.n_motor):
         if on[k] != 0.0:
             fix[int(p.MO[k, mot.Q.POS])] += mot.drawn_current(p.MO, xmo, k)
+    for k in range(p.n_swsh):
+        pos = int(p.SWP[k, shunt.S.POS])
+        rel[pos] += np.conj(shunt.extra_admittance(p.SWP, p.SWY, xsw, k)) * (abs(V_nc[pos]) + dv)
     return rel, fix
 
 
@@ -715,6 +763,18 @@ def _converter_fixed_point(p, dev, net, psi, V_nc, loads, held, it):
             return -1
         it += more
     return -1
+
+
+@kernel
+def _switched(p, xsw, V_nc, dxsw):
+    """The switched shunts' discrete control (`shunt.switch`) at the solved kept-bus
+    voltages V_nc: True if one stepped."""
+    moved = False
+    for k in range(p.n_swsh):
+        level = xsw[0, k]
+        shunt.switch(p.SWP, xsw, k, abs(V_nc[int(p.SWP[k, shunt.S.POS])]), dxsw)
+        moved = moved or xsw[0, k] != level
+    return moved
 
 
 @njit(cache=True)
@@ -765,7 +825,10 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     o += rt * nt
     rm, nmo = mot.N_STATES, p.n_motor
     xmo, dxmo = x[o : o + rm * nmo].reshape(rm, nmo), dx[o : o + rm * nmo].reshape(rm, nmo)
-    dev = (xi, xmo, on)
+    o += rm * nmo
+    rs, nsw = shunt.N_STATES, p.n_swsh
+    xsw, dxsw = x[o : o + rs * nsw].reshape(rs, nsw), dx[o : o + rs * nsw].reshape(rs, nsw)
+    dev = (xi, xmo, on, xsw)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
     v_dep = False
@@ -774,7 +837,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         v_dep = v_dep or conv.voltage_dependent(p.IP, k)
     zero = np.zeros((4, V_nc.size), np.complex128)
     loads = KeptLoads(p.S_P, p.I0, p.Y_low, S_extra, zero[0], zero[1], zero[2], zero[3])
-    if ni or nmo:  # the converters' tangent at the starting voltages, the motors' currents
+    if ni or nmo or nsw:  # the converters' tangent at the starting voltages, the motors',
+        # the switched shunts' currents
         _drawn_currents(p, dev, V_nc, loads, -1.0)
     it = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
     if it < 0:
@@ -783,6 +847,16 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         it = _converter_fixed_point(p, dev, net, psi, V_nc, loads, held, it)
         if it < 0:
             return -1
+    if nsw and _switched(p, xsw, V_nc, dxsw):  # a shunt stepped: the network again with it
+        _drawn_currents(p, dev, V_nc, loads, -1.0)
+        more = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
+        if more < 0:
+            return -1
+        it += more
+        if v_dep:
+            it = _converter_fixed_point(p, dev, net, psi, V_nc, loads, held, it)
+            if it < 0:
+                return -1
     assign(cur, Y11 @ psi + Y12 @ V_nc)
     z = np.concatenate((psi, V_nc))
     if want_vbus:

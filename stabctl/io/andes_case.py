@@ -13,6 +13,9 @@ Network (ANDES's values after set-up, pu on the system base):
 * ``PQ``: ``p0 + j q0`` into the bus load (constant impedance in dynamic runs: ANDES's
   default ``PQ.config.p2z = q2z = 1``, stabctl's default);
 * ``Shunt``: ``g + j b`` into the bus shunt;
+* ``ShuntSw``: a row of the switched-shunt table (``swsh_con``,
+  :mod:`stabctl.network.switched_shunts`) with its system-base ``g``, ``b`` (start), ``bs``,
+  ``gs``, ``ns`` (at most four groups), ``vref``, ``dv``, ``dt``;
 * ``ZIP`` (replaces its ``PQ`` in dynamic runs, ``andes/models/dynload/zip.py``: ``P =
   p0 (kpp + kpi V/V0 + kpz V^2/V0^2)/100``, Q alike): PST's non-conforming load
   (``load_con``) at its bus, the constant-power and constant-current fractions the
@@ -93,6 +96,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.case import PQ, PV, SWING, Case
+from stabctl.case.system import SWITCHED_GROUPS
 from stabctl.errors import CaseError, InputError
 from stabctl.io.andes import _andes
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
@@ -169,7 +173,7 @@ _NO_MACHINE = "no synchronous machine model (GENROU, GENCLS)"
 #: source reactance (pu, system base) of the infinite bus an ANDES Slack without machine
 #: becomes: ANDES holds the bus voltage exactly; 10 pu of current move it by 1e-5 pu
 INFINITE_BUS_X = 1e-6
-_NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt", "ZIP", "FLoad")
+_NETWORK = ("Bus", "PQ", "PV", "Slack", "Line", "Shunt", "ShuntSw", "ZIP", "FLoad")
 _MACHINES = ("GENROU", "GENCLS")
 #: ANDES parameters outside PSS/E's data that must keep the value stabctl's models have
 _FIXED = {
@@ -303,6 +307,10 @@ def read_andes_case(
     refused += shaft_refused
     if shaft_con:
         mats["shaft_con"] = np.array(shaft_con, float)
+    swsh_con, shunt_refused = _switched_shunts(ss, numbers)
+    refused += shunt_refused
+    if swsh_con:
+        mats["swsh_con"] = np.array(swsh_con, float)
     mot_con, motor_refused = _motors(ss, numbers)
     refused += motor_refused
     if mot_con:
@@ -1057,6 +1065,41 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 params = tuple(float(m.params[f].vin[k]) for f in fields)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused, _grouped(changed)
+
+
+def _switched_shunts(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:
+    """The swsh_con rows of ANDES's ShuntSw devices in service (system-base values, its
+    block lists as groups), and those refused with why (more groups than the table has,
+    reactor steps, a nominal frequency other than the system's)."""
+    m = ss.models.get("ShuntSw")
+    rows: list[list[float]] = []
+    refused: list[str] = []
+    for k in _in_service(m) if m is not None else ():
+        ns, bs, gs = (
+            np.atleast_1d(np.asarray(m.params[f].v[k], float)) for f in ("ns", "bs", "gs")
+        )
+        why = ""
+        if ns.size > SWITCHED_GROUPS:
+            why = f"{ns.size} block groups (stabctl: at most {SWITCHED_GROUPS})"
+        elif np.any(bs < 0):
+            why = "reactor steps (bs < 0): ANDES's starting level assumes rising levels"
+        elif m.fn.v[k] != ss.config.freq:
+            why = f"fn = {m.fn.v[k]:g} Hz, not the system's {ss.config.freq:g} Hz"
+        if why:
+            refused.append(f"ShuntSw {m.idx.v[k]}: {why}")
+            continue
+        groups = [0.0] * (3 * SWITCHED_GROUPS)
+        for j, (n, b) in enumerate(zip(ns, bs)):
+            groups[3 * j : 3 * j + 3] = [n, b, gs[j] if j < gs.size else 0.0]
+        rows.append(
+            [
+                len(rows) + 1,
+                numbers[m.bus.v[k]],
+                *(float(m.params[f].v[k]) for f in ("b", "g", "vref", "dv", "dt")),
+                *groups,
+            ]
+        )
+    return rows, refused
 
 
 def _motors(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:

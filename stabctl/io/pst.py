@@ -64,6 +64,7 @@ PST_TABLES: Mapping[str, str] = {
     "ibr_con": "converters",  # stabctl's converter table (ANDES PVD1, ESD1), no PST matrix
     "shaft_con": "shafts",  # stabctl's torsional shafts (ANDES SHAFT5), no PST matrix
     "mot_con": "motors",  # stabctl's induction motors (ANDES Motor5), no PST matrix
+    "swsh_con": "switched_shunts",  # stabctl's switched shunts (ANDES ShuntSw), no PST matrix
 }
 
 _SCALARS = {"basmva": "base_mva", "sys_freq": "freq_hz"}
@@ -366,9 +367,9 @@ def _to_float(tok: str) -> float:
 _LICENCE_DEFAULT = ""
 
 
-#: tables written only when they have rows (a case without converters is written as before
-#: the converter table existed)
-_OPTIONAL_TABLES = ("converters",)
+#: tables written only when they have rows (a case without converters, shafts, motors or
+#: switched shunts is written as before those tables existed)
+_OPTIONAL_TABLES = ("converters", "shafts", "motors", "switched_shunts")
 
 
 def case_to_dict(case: Case, licence: str = "") -> dict:

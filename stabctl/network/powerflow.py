@@ -41,8 +41,9 @@ import scipy.sparse.linalg as spla
 
 from stabctl.case import PQ, PV, SWING, Case
 from stabctl.errors import PowerFlowError
+from stabctl.network import switched_shunts as sws
 from stabctl.network.topology import bus_islands
-from stabctl.network.ybus import branch_flows, build_ybus
+from stabctl.network.ybus import add_shunts, branch_flows, build_ybus
 
 __all__ = ["PowerFlowResult", "solve_powerflow", "power_injections", "jacobian"]
 
@@ -72,6 +73,8 @@ class PowerFlowResult:
         taps: branch tap ratios used (after tap changing), shape (n_branches,).
         tap_iterations: outer tap-changer iterations (1 when no tap moved).
         dropped: 0-based branch rows left out of the network.
+        shunt_levels: the switched shunts' levels (`stabctl.network.switched_shunts`),
+            int (n_switched,).
     """
 
     case: Case
@@ -88,6 +91,7 @@ class PowerFlowResult:
     taps: np.ndarray
     tap_iterations: int = 1
     dropped: tuple[int, ...] = field(default=())
+    shunt_levels: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
 
     @property
     def v(self) -> np.ndarray:
@@ -443,6 +447,10 @@ def solve_powerflow(
 
     Notes
     -----
+    Switched shunts (``case.switched_shunts``) are stepped one level at a time toward
+    their voltage bands, the flow solved again after each step
+    (`stabctl.network.switched_shunts`; ANDES 2.0 ShuntSw), their levels in the result.
+
     Source: PSTess ``loadflow.m``, ``calc.m``, ``form_jac.m``, ``chq_lim.m``, ``lftap.m``;
     PST manual section 1.4.
     """
@@ -450,10 +458,18 @@ def solve_powerflow(
     _check_islands(case, drop)
     taps = case.branches.tap.copy()
     taps[taps == 0] = 1.0
+    sw = case.switched_shunts
+    levels = sws.initial_levels(sw)
+    sw_bus = case.bus_indices(sw.bus) if len(sw) else np.zeros(0, int)
     for tap_it in range(1, _TAP_ITER_MAX + 1):  # noqa: B007 - the count is reported after
-        ybus = build_ybus(case, drop=drop, taps=taps)
-        st, inj_p, inj_q = _initial_state(case)
-        iters, mism, s, converged, dp, dq = _newton(case, ybus, st, tol, max_iter, q_limits)
+        for _ in range(sws.MAX_ROUNDS):
+            ybus = add_shunts(
+                build_ybus(case, drop=drop, taps=taps), sw_bus, sws.admittances(sw, levels)
+            )
+            st, inj_p, inj_q = _initial_state(case)
+            iters, mism, s, converged, dp, dq = _newton(case, ybus, st, tol, max_iter, q_limits)
+            if not (converged and sws.step(sw, levels, st.vmag[sw_bus])):
+                break
         if not (tap_changing and _move_taps(case, st.vmag, taps)):
             break
     else:
@@ -481,6 +497,7 @@ def solve_powerflow(
         taps=taps,
         tap_iterations=tap_it,
         dropped=drop,
+        shunt_levels=levels,
     )
 
 

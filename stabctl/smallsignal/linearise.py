@@ -132,6 +132,7 @@ def active_states(model: DynamicModel) -> np.ndarray:
     L.view(act, "ibr")[:] = model.cp.has_state()
     L.view(act, "shaft")[:] = True
     L.view(act, "motor")[:] = model.case.motors.in_service == 1  # off: standing still
+    L.view(act, "swsh")[:] = False  # a switched shunt's level and delay: discrete memory
     return act
 
 

@@ -993,6 +993,35 @@ def test_imported_andes_case_power_flow_equals_andes(name):
     assert np.max(np.abs(pf.vang[rows] - imported.pf_vang)) < 2e-6  # measured 8.2e-7
 
 
+@pytest.mark.parametrize("name", ["ieee14/ieee14_shuntsw.json", "ieee14/ieee14_shuntsw.xlsx"])
+def test_ieee14_switched_shunts_step_as_andes_in_the_power_flow_and_the_run(name):
+    """ANDES's ieee14_shuntsw files: ShuntSw at bus 9 (b 0.095 pu between its levels 0.075
+    and 0.1: starts at 0.1; steps of 0.025, dt 0.2 s) and bus 14 (0.15 pu: 1.05 pu, above
+    its band 1 +- 0.05, so stepped down to 0.1 in both power flows; steps of 0.05, dt 0.1
+    s); the voltages equal ANDES's within 1e-6 pu.  A 6-cycle fault at bus 9 through j1e-3
+    pu: both shunts step up in the fault and down after it, eight steps in both tools
+    (each within a step of ANDES's), ending at 0.075 and 0 pu in both; speeds within 1e-4
+    pu (measured 3.6e-5; 9.3e-4 with the shunts held), bus voltages within 1e-3 pu after
+    2 s (2.3e-4)."""
+    from stabctl.network.powerflow import solve_powerflow
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        imported = read_andes_case(andes.get_case(name), on_unsupported="skip")
+    pf = solve_powerflow(imported.case, q_limits=False, tol=1e-12)
+    assert list(pf.shunt_levels) == [4, 2]  # 0.1 pu each
+    rows = imported.case.bus_indices(imported.pf_bus)
+    assert np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)) < 1e-6
+    sim, res, ss, t, w, wa = andes_case_run(name, 9)
+    np.testing.assert_allclose(ss.ShuntSw.beff.v, [0.075, 0.0], atol=1e-12)  # ANDES's end
+    assert np.max(np.abs(wa - 1)) > 4e-3
+    assert np.max(np.abs(w - wa)) < 1e-4
+    for bus in (9, 14):
+        va = np.asarray(ss.dae.ts.y)[:, ss.Bus.v.a[list(ss.Bus.idx.v).index(bus)]]
+        v = np.interp(t, res.t, res.vmag[:, sim.case.bus_index(bus)])
+        assert np.max(np.abs(v - va)[t > 2.0]) < 1e-3  # the same levels at the end
+
+
 def test_import_andes_numbers_a_bus_idx_0_above_the_others():
     """pjm5bus's buses are idx 0-4 (ANDES allows 0; PSS/E and stabctl number from 1): bus 0
     becomes bus 5, with a warning naming both, its machine and lines with it."""
@@ -1112,16 +1141,16 @@ def test_import_andes_refuses_values_andes_would_default_silently(tmp_path, edit
 
 
 def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
-    """A case with a distributed-generation protection (DGPRCT1 on ten PVD1) and ANDES's
-    own disturbances: one error naming every model stabctl lacks with its device count,
-    the PVD1 read; a REGCP1 whose angle comes from a PLL2 (SRF loop, not modelled) is
-    refused by name, and with on_unsupported="skip" its static generator cannot be left
-    out."""
+    """A case with a DC network (two VSCShunt converters on DC nodes, ground and a
+    resistance) and ANDES's own disturbances: one error naming every model stabctl lacks
+    with its device count, the machines read; a REGCP1 whose angle comes from a PLL2 (SRF
+    loop, not modelled) is refused by name, and with on_unsupported="skip" its static
+    generator cannot be left out."""
     with pytest.raises(InputError) as err:
-        import_andes(andes.get_case("ieee14/ieee14_dgprct1.xlsx"))
-    for name in ("DGPRCT1 (1)", "Toggle (2)"):
+        import_andes(andes.get_case("kundur/kundur_vsc.xlsx"))
+    for name in ("Node (3)", "Ground (1)", "R (1)", "VSCShunt (2)", "Toggle (2)"):
         assert name in str(err.value)
-    assert "PVD1" not in str(err.value)
+    assert "GENROU" not in str(err.value)
     data = json.loads(Path(andes.get_case("ieee14/ieee14_regcp1_nopll.json")).read_text())
     data["REGCP1"][0]["pll"] = "PLL2_1"
     path = tmp_path / "ieee14_regcp1_pll2.json"
@@ -1162,12 +1191,12 @@ def test_import_andes_cli_writes_ieee39_and_refuses_what_it_lacks(tmp_path):
         len(case.pss),
         len(case.governors),
     ) == (39, 10, 10, 10, 10)
-    bad = tmp_path / "protected.json"
+    bad = tmp_path / "dc_network.json"
     res = CliRunner().invoke(
-        main, ["import-andes", andes.get_case("ieee14/ieee14_dgprct1.xlsx"), "-o", str(bad)]
+        main, ["import-andes", andes.get_case("kundur/kundur_vsc.xlsx"), "-o", str(bad)]
     )
     assert res.exit_code == 2 and not bad.exists()
-    assert "DGPRCT1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
+    assert "VSCShunt (2)" in res.stderr and "--skip-unsupported" in res.stderr
 
 
 # -- converter-interfaced devices (ANDES PVD1, ESD1; docs/ibr.md) --------------------------------
