@@ -288,7 +288,8 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
     `stage_boundaries`)."""
     faults, opened, feeds, tripped, loads = [], [], [], [], []
     on = {k: bool(case.motors.in_service[k]) for k in range(len(case.motors))}
-    for ev, n in sorted(zip(events, phases), key=lambda e: e[0].times()[0]):
+    switched = []
+    for ev, n in zip(events, phases):
         if n == 0:
             continue
         if isinstance(ev, Fault):
@@ -305,7 +306,9 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
             b = case.bus_index(ev.bus)
             loads.append((b, complex(ev.P, -ev.Q) / abs(V0[b]) ** 2))
         elif isinstance(ev, MotorSwitch):
-            on[_motor_index(case, ev.motor)] = ev.on
+            switched.append((ev.t, _motor_index(case, ev.motor), ev.on))
+    for _t, k, state in sorted(switched):  # the last switching of each motor holds
+        on[k] = state
     return StageConfig(
         faults=tuple(faults),
         opened=tuple(sorted(set(opened))),
