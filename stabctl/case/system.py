@@ -744,9 +744,11 @@ class InjectionTable(Table):
     3   q      injected Q, pu
     ==  =====  =====================================================================
 
-    The power flow adds them to the bus generation. PST data files carry their fixed
-    injections inside the bus loads (miniWECC's ``PDC`` is in ``bus`` column 6), so the
-    importer leaves this table empty.
+    The power flow adds them to the bus generation; a run keeps them at their buses as
+    constant power (below 0.5 pu as an admittance, as a constant-power load).  PST data
+    files carry their fixed injections inside the bus loads (miniWECC's ``PDC`` is in
+    ``bus`` column 6), so the PST importer leaves this table empty; ANDES's VSCShunt
+    converters are read into it (docs/pst_models.md section 16).
     """
 
     bus: np.ndarray

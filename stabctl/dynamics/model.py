@@ -210,16 +210,24 @@ class DynamicModel:
         extra = case.bus_indices(list(injection_buses)) if len(injection_buses) else []
         nc = np.asarray(case.bus_indices(lc[:, 0]) if lc.size else [], int)
         # the converters' buses and their plant controls' line ends (REPCA1)
-        sw = case.switched_shunts
+        sw, inj = case.switched_shunts, case.injections
         self.sw_bus = np.asarray(case.bus_indices(sw.bus) if len(sw) else [], int)
-        ends = np.concatenate([cp.bus_idx, cp.bus1_idx, cp.bus2_idx, self.mo.bus_idx, self.sw_bus])
+        # the fixed injections (case.injections: HVDC converters' set points): constant
+        # power at their kept buses, as in the power flow (which books them in neither
+        # the generation nor the load)
+        inj_bus = np.asarray(case.bus_indices(inj.bus) if len(inj) else [], int)
+        S_inj = np.zeros(case.n_bus, complex)
+        np.add.at(S_inj, inj_bus, inj.p + 1j * inj.q)
+        ends = np.concatenate(
+            [cp.bus_idx, cp.bus1_idx, cp.bus2_idx, self.mo.bus_idx, self.sw_bus, inj_bus]
+        )
         ends = ends.astype(int)
         self.nc_idx = np.unique(np.concatenate([nc, np.asarray(extra, int), ends])).astype(int)
         rows_of = ((cp.pos, cp.bus_idx), (cp.pos1, cp.bus1_idx), (cp.pos2, cp.bus2_idx))
         for pos, rows in (*rows_of, (self.mo.pos, self.mo.bus_idx)):
             pos[:] = np.searchsorted(self.nc_idx, rows)
         i = self.nc_idx
-        S_P = fP[i] * S_L[i].real + 1j * fQ[i] * S_L[i].imag
+        S_P = fP[i] * S_L[i].real + 1j * fQ[i] * S_L[i].imag - S_inj[i]
         S_I = fIP[i] * S_L[i].real + 1j * fIQ[i] * S_L[i].imag
         self.nc = NonConformingLoads(S_P=S_P, I0=S_I / V0[i], Y_low=np.conj(S_P + S_I) / V0[i] ** 2)
 

@@ -13,6 +13,9 @@ Network (ANDES's values after set-up, pu on the system base):
 * ``PQ``: ``p0 + j q0`` into the bus load (constant impedance in dynamic runs: ANDES's
   default ``PQ.config.p2z = q2z = 1``, stabctl's default);
 * ``Shunt``: ``g + j b`` into the bus shunt;
+* ``VSCShunt`` on a DC network of ``Node``, ``Ground`` and ``R``: a fixed injection
+  (``case.injections``) of its power-flow P + j Q (converters controlling P and Q, or the
+  DC voltage and Q);
 * ``ShuntSw``: a row of the switched-shunt table (``swsh_con``,
   :mod:`stabctl.network.switched_shunts`) with its system-base ``g``, ``b`` (start), ``bs``,
   ``gs``, ``ns`` (at most four groups), ``vref``, ``dv``, ``dt``;
@@ -156,6 +159,9 @@ CONVERTER_MODELS = {"PVD1": PVD1, "ESD1": ESD1, "REGCA1": REGCA1, "REGCP1": REGC
 CONVERTER_CONTROLS = ("REECA1", "REECB1", "REPCA1", "WTDTA1", "WTDS", "WTARA1", "WTPTA1", "WTTQA1")
 #: ANDES's DG protections, read into their PVD1's or ESD1's row (ibr_con ``relay``)
 PROTECTIONS = {"DGPRCT1": DGPRCT1, "DGPRCTExt": DGPRCTEXT}
+#: ANDES's DC network with its static AC/DC converters, read as the converters' fixed
+#: injections (`_dc_links`)
+DC_MODELS = ("Node", "Ground", "R", "VSCShunt")
 #: ANDES's induction motors, read into the motor table (mot_con, `stabctl.models.motors`)
 MOTOR_MODELS = ("Motor5",)
 #: ANDES's torsional shafts, read into the shaft table (shaft_con, `stabctl.models.shafts`)
@@ -294,6 +300,7 @@ def read_andes_case(
         and name not in SHAFT_MODELS
         and name not in PROTECTIONS
         and name not in MOTOR_MODELS
+        and name not in DC_MODELS
     ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
@@ -307,6 +314,10 @@ def read_andes_case(
     refused += shaft_refused
     if shaft_con:
         mats["shaft_con"] = np.array(shaft_con, float)
+    inj_con, dc_refused = _dc_links(ss, numbers)
+    refused += dc_refused
+    if inj_con:
+        mats["inj_con"] = np.array(inj_con, float)
     swsh_con, shunt_refused = _switched_shunts(ss, numbers)
     refused += shunt_refused
     if swsh_con:
@@ -1065,6 +1076,38 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 params = tuple(float(m.params[f].vin[k]) for f in fields)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused, _grouped(changed)
+
+
+def _dc_links(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:
+    """The fixed injections (``case.injections``) of ANDES's static AC/DC converters
+    (VSCShunt, in service) at their power-flow point (ANDES's psh + j qsh, injected: run
+    its power flow first), and the converters refused with why: one holding its AC bus
+    voltage (control 1 or 3: its Q is not fixed), or a DC network with more than nodes,
+    grounds and resistances (ANDES's L, C, ... have dynamics).  Converters controlling P
+    and Q (control 0) inject their set points in a run as ANDES's; one controlling its DC
+    voltage and Q (control 2) supplies what the DC network takes, which ANDES's run varies
+    with the other converter's losses (by 1.4e-3 pu on kundur_vsc's 0.1 pu in a fault)."""
+    m = ss.models.get("VSCShunt")
+    rows: list[list[float]] = []
+    refused: list[str] = []
+    if m is None or not m.n:
+        return rows, refused
+    dynamic = [
+        f"{n} ({d.n})"
+        for n, d in ss.models.items()
+        if d.group == "DCLink" and d.n and n not in DC_MODELS
+    ]
+    for k in _in_service(m):
+        why = ""
+        if dynamic:
+            why = f"its DC network holds {', '.join(dynamic)} (stabctl: resistances only)"
+        elif m.control.v[k] in (1, 3):
+            why = f"control {int(m.control.v[k])} holds its AC bus voltage (Q not fixed)"
+        if why:
+            refused.append(f"VSCShunt {m.idx.v[k]}: {why}")
+            continue
+        rows.append([numbers[m.bus.v[k]], float(m.psh.v[k]), float(m.qsh.v[k])])
+    return rows, refused
 
 
 def _switched_shunts(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:

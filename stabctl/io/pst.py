@@ -65,6 +65,7 @@ PST_TABLES: Mapping[str, str] = {
     "shaft_con": "shafts",  # stabctl's torsional shafts (ANDES SHAFT5), no PST matrix
     "mot_con": "motors",  # stabctl's induction motors (ANDES Motor5), no PST matrix
     "swsh_con": "switched_shunts",  # stabctl's switched shunts (ANDES ShuntSw), no PST matrix
+    "inj_con": "injections",  # stabctl's fixed injections (HVDC set points), no PST matrix
 }
 
 _SCALARS = {"basmva": "base_mva", "sys_freq": "freq_hz"}

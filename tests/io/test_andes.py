@@ -1022,6 +1022,33 @@ def test_ieee14_switched_shunts_step_as_andes_in_the_power_flow_and_the_run(name
         assert np.max(np.abs(v - va)[t > 2.0]) < 1e-3  # the same levels at the end
 
 
+def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections():
+    """ANDES's kundur_vsc.xlsx: two VSCShunt on a DC line (Node, Ground, R), the bus-6
+    converter holding P = -0.1 pu and Q = 0, the bus-1 one its DC voltage and Q = 0.01 pu:
+    read as fixed injections at their power-flow point (0.1009 + j0.01, -0.1 pu).  The
+    power flow is ANDES's within 1e-6 pu, the case starts at rest and stays flat, and a
+    6-cycle fault at bus 7 gives speeds within 1e-4 pu of ANDES's (measured 9.6e-5; the same
+    fault on kundur_full.xlsx, without the link, 7.3e-5: ANDES's bus-1 converter P moves by
+    up to 1.4e-3 pu with the other's losses, held here)."""
+    from stabctl.network.powerflow import solve_powerflow
+
+    path = andes.get_case("kundur/kundur_vsc.xlsx")
+    with pytest.warns(UserWarning, match="lacks .*Toggle"):
+        imported = read_andes_case(path, on_unsupported="skip")
+    case = imported.case
+    np.testing.assert_allclose(
+        case.injections.matrix(), [[1, 0.10088354, 0.01], [6, -0.1, 0]], atol=1e-8
+    )
+    pf = solve_powerflow(case, q_limits=False, tol=1e-12)
+    rows = case.bus_indices(imported.pf_bus)
+    assert np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)) < 1e-6  # measured 2.5e-7
+    drift, _ = flat_run(case, 10.0)
+    assert drift < 1e-8
+    _sim, _res, _ss, _t, w, wa = andes_case_run("kundur/kundur_vsc.xlsx", 7)
+    assert np.max(np.abs(wa - 1)) > 5e-3
+    assert np.max(np.abs(w - wa)) < 1e-4
+
+
 def test_import_andes_numbers_a_bus_idx_0_above_the_others():
     """pjm5bus's buses are idx 0-4 (ANDES allows 0; PSS/E and stabctl number from 1): bus 0
     becomes bus 5, with a warning naming both, its machine and lines with it."""
@@ -1141,16 +1168,17 @@ def test_import_andes_refuses_values_andes_would_default_silently(tmp_path, edit
 
 
 def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
-    """A case with a DC network (two VSCShunt converters on DC nodes, ground and a
-    resistance) and ANDES's own disturbances: one error naming every model stabctl lacks
-    with its device count, the machines read; a REGCP1 whose angle comes from a PLL2 (SRF
+    """A case with a playback source (PLBVFU1 driven by a TimeSeries, in place of the
+    bus-8 generator) and ANDES's own disturbance: one error naming every model stabctl
+    lacks with its device count, and the static generator left without a machine, the
+    other machines read; a REGCP1 whose angle comes from a PLL2 (SRF
     loop, not modelled) is refused by name, and with on_unsupported="skip" its static
     generator cannot be left out."""
     with pytest.raises(InputError) as err:
-        import_andes(andes.get_case("kundur/kundur_vsc.xlsx"))
-    for name in ("Node (3)", "Ground (1)", "R (1)", "VSCShunt (2)", "Toggle (2)"):
+        import_andes(andes.get_case("ieee14/ieee14_plbvfu1.xlsx"))
+    for name in ("PLBVFU1 (1)", "TimeSeries (1)", "Fault (1)", "PV 5 (bus 8): no synchronous"):
         assert name in str(err.value)
-    assert "GENROU" not in str(err.value)
+    assert "GENROU (" not in str(err.value)  # the machines are read
     data = json.loads(Path(andes.get_case("ieee14/ieee14_regcp1_nopll.json")).read_text())
     data["REGCP1"][0]["pll"] = "PLL2_1"
     path = tmp_path / "ieee14_regcp1_pll2.json"
@@ -1191,12 +1219,12 @@ def test_import_andes_cli_writes_ieee39_and_refuses_what_it_lacks(tmp_path):
         len(case.pss),
         len(case.governors),
     ) == (39, 10, 10, 10, 10)
-    bad = tmp_path / "dc_network.json"
+    bad = tmp_path / "playback.json"
     res = CliRunner().invoke(
-        main, ["import-andes", andes.get_case("kundur/kundur_vsc.xlsx"), "-o", str(bad)]
+        main, ["import-andes", andes.get_case("ieee14/ieee14_plbvfu1.xlsx"), "-o", str(bad)]
     )
     assert res.exit_code == 2 and not bad.exists()
-    assert "VSCShunt (2)" in res.stderr and "--skip-unsupported" in res.stderr
+    assert "PLBVFU1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
 
 
 # -- converter-interfaced devices (ANDES PVD1, ESD1; docs/ibr.md) --------------------------------
