@@ -30,6 +30,7 @@ _EXPORTS = {
     "GeneratorTrip": "stabctl.dynamics.events",
     "LoadStep": "stabctl.dynamics.events",
     "MotorSwitch": "stabctl.dynamics.events",
+    "Playback": "stabctl.dynamics.events",
     "fault_with_clearing": "stabctl.dynamics.events",
     "coi_speed": "stabctl.dynamics.coi",
     "StorageDevice": "stabctl.storage",

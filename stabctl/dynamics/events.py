@@ -195,6 +195,41 @@ class MotorSwitch(_AtOneTime):
     on: bool = True
 
 
+@dataclass(frozen=True)
+class Playback:
+    """Move a playback source's targets (a machine with ``playback`` 1: ANDES's PLBVFU1)
+    at given times: from at[k] on, its E' target is its initial E' + dV[k] and its speed
+    target 1 + df[k] (pu), held until the next time (ANDES's TimeSeries, mode 1); E' and
+    the speed follow through the lags pb_Tv, pb_Tf.  From a recorded V, f series (ANDES:
+    Vts, fts with Vscale, fscale): dV = (V - V[0]) / Vscale, df = (f - f[0]) / fscale.
+
+    Attributes
+    ----------
+    machine : int
+        Machine number (``mac_con`` column 1) of a playback source; another raises
+        CaseError when the run starts.
+    at : tuple of float
+        Times of the values, s, rising, >= 0.
+    dV, df : tuple of float
+        The targets' changes from those times on, pu (as many as `at`).
+    """
+
+    machine: int
+    at: tuple
+    dV: tuple
+    df: tuple
+
+    def times(self):
+        """The times the targets change.
+
+        Returns
+        -------
+        list of float
+            ``at``, s.
+        """
+        return [float(t) for t in self.at]
+
+
 def validate(case: Case, events, t_end: float) -> None:
     """Check every event against the case (buses, lines, machines, times >= 0); raises
     UnknownBusError, CaseError, InputError.  Events after t_end are allowed (not reached).
@@ -230,6 +265,8 @@ def validate(case: Case, events, t_end: float) -> None:
             case.bus_index(ev.bus)
         elif isinstance(ev, MotorSwitch):
             _motor_index(case, ev.motor)
+        elif isinstance(ev, Playback):
+            _check_playback(case, ev)
         else:
             raise InputError(f"unknown event {ev!r}")
         if any(t < 0 for t in ev.times()):
@@ -237,6 +274,18 @@ def validate(case: Case, events, t_end: float) -> None:
                 f"event {ev} has a negative time (events after t_end = {t_end} s "
                 "simply do not happen)"
             )
+
+
+def _check_playback(case: Case, ev: Playback) -> None:
+    """CaseError if ``ev``'s machine is not a playback source; InputError for values that
+    are not one per time or times that do not rise."""
+    m = case.machine_index(ev.machine)
+    if case.machines.playback[m] != 1:
+        raise CaseError(f"machine {ev.machine} is not a playback source (mac_con playback 0)")
+    if not len(ev.at) == len(ev.dV) == len(ev.df) or not len(ev.at):
+        raise InputError(f"playback of machine {ev.machine}: one dV and one df per time")
+    if np.any(np.diff(ev.at) <= 0):
+        raise InputError(f"playback of machine {ev.machine}: the times must rise")
 
 
 def _motor_index(case: Case, number: int) -> int:
@@ -288,7 +337,7 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
     `stage_boundaries`)."""
     faults, opened, feeds, tripped, loads = [], [], [], [], []
     on = {k: bool(case.motors.in_service[k]) for k in range(len(case.motors))}
-    switched = []
+    switched, played = [], []
     for ev, n in zip(events, phases):
         if n == 0:
             continue
@@ -307,6 +356,8 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
             loads.append((b, complex(ev.P, -ev.Q) / abs(V0[b]) ** 2))
         elif isinstance(ev, MotorSwitch):
             switched.append((ev.t, _motor_index(case, ev.motor), ev.on))
+        elif isinstance(ev, Playback):
+            played.append((case.machine_index(ev.machine), ev.dV[n - 1], ev.df[n - 1]))
     for _t, k, state in sorted(switched):  # the last switching of each motor holds
         on[k] = state
     return StageConfig(
@@ -316,6 +367,7 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
         tripped_machines=tuple(sorted(set(tripped))),
         load_steps=tuple(loads),
         motors_on=tuple(k for k, v in on.items() if v),
+        playback=tuple(played),
     )
 
 

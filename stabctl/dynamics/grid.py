@@ -102,6 +102,8 @@ def fastest_time_constant(case: Case) -> tuple[float, str]:
         ('mac_con T"qo', mp.Tqopp, mp.kind == 2),
         ("mac_con T'do", mp.Tdop, mp.kind >= 1),
         ("mac_con T'qo", mp.Tqop, mp.kind >= 1),
+        ("mac_con pb_Tv", mp.pb_Tv, mp.playback == 1),
+        ("mac_con pb_Tf", mp.pb_Tf, mp.playback == 1),
         *pp.time_constants(),
         *ep.time_constants(),
         *gp.time_constants(),

@@ -300,6 +300,7 @@ def _stage(nets, s):
         nets.Z22[s],
         nets.R[s],
         nets.switched_on[s],
+        nets.targets[s],
     )
 
 

@@ -77,7 +77,9 @@ class StageConfig:
         near end: a copy of the line (with its charging) feeds a fault node from the far
         end until the far end clears too (PST y_switch; then, under ieee, without it);
     tripped_machines: machine indices disconnected; load_steps: (bus index, admittance);
-    motors_on: motor indices in service (switched on by events; `stabctl.models.motors`).
+    motors_on: motor indices in service (switched on by events; `stabctl.models.motors`);
+    playback: (machine index, dV, df) of playback sources whose targets moved from their
+    initial E' and speed 1 pu (a Playback event).
     """
 
     faults: tuple = ()
@@ -86,6 +88,7 @@ class StageConfig:
     tripped_machines: tuple = ()
     load_steps: tuple = ()
     motors_on: tuple = ()
+    playback: tuple = ()
 
 
 @dataclass
@@ -282,7 +285,10 @@ class DynamicModel:
         net = reduce_network(
             stage, y_shunt, self.mp.y_internal, self.mp.bus_idx, online, self.nc_idx, case.n_bus
         )
-        return replace(net, switched_on=on)
+        targets = np.column_stack([self.eqp0, np.ones(self.mp.n)])
+        for m, dV, df in config.playback:
+            targets[m] += (dV, df)
+        return replace(net, switched_on=on, targets=targets)
 
     # -- initialisation ---------------------------------------------------------------
     def _initialise(self):
@@ -581,7 +587,8 @@ class KernelNetwork(NamedTuple):
     """The matrices of a reduced network stage for the kernels (`ReducedNetwork`; in
     `stabctl.dynamics.integrator.integrate` each is stacked by stage on a first axis):
     Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 and Z22 = inv(Y22)
-    (n_nc, n_nc), R (n_bus, n_mac + n_nc); complex pu on the system base; switched_on
+    (n_nc, n_nc), R (n_bus, n_mac + n_nc); complex pu on the system base; targets (n_mac, 2)
+    the playback sources' targets (`ReducedNetwork.targets`); switched_on
     (n_motor,) float, 1.0 for each motor in service in the stage (`ReducedNetwork.switched_on`)."""
 
     Y11: np.ndarray
@@ -591,6 +598,7 @@ class KernelNetwork(NamedTuple):
     Z22: np.ndarray
     R: np.ndarray
     switched_on: np.ndarray
+    targets: np.ndarray
 
 
 def kernel_network(net: ReducedNetwork) -> KernelNetwork:
@@ -814,7 +822,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         The load-iteration count, -1 without convergence.
     """
     nm, ne, nps, ng, ni = p.n_mac, p.n_exc, p.n_pss, p.n_tg, p.n_ibr
-    Y11, Y12, Y21, Y22, Z22, R, on = net
+    Y11, Y12, Y21, Y22, Z22, R, on, targets = net
     V_nc, held, S_extra = kept
     cur, pelect, qelect, eterm, efd, pmech, V_bus, S_ibr = out
     o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
@@ -900,7 +908,17 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         if p.GP[k, gov.G.MAC2] >= 0:  # a cross-compound unit's LP shaft
             pmech[int(p.GP[k, gov.G.MAC2])] = gov.pmech_lp(p.GP, xg, k)
     mac.derivatives(
-        p.MP, p.basrad, xm, cur, vex, _rotor_inputs(p, xm, xt, pmech), dxm, pelect, qelect, eterm
+        p.MP,
+        p.basrad,
+        xm,
+        cur,
+        vex,
+        _rotor_inputs(p, xm, xt, pmech),
+        targets,
+        dxm,
+        pelect,
+        qelect,
+        eterm,
     )
     for k in range(nt):
         shaft.derivatives(p.TP, p.MP, p.basrad, xt, k, xm, pmech, dxt)
@@ -948,7 +966,7 @@ def _evaluate_arg_types() -> tuple:
 
     z, c = np.zeros(1), np.zeros(1, np.complex128)
     m = np.zeros((1, 1), np.complex128)
-    net = KernelNetwork(m, m, m, m, m, m, np.zeros(1))
+    net = KernelNetwork(m, m, m, m, m, m, np.zeros(1), np.zeros((1, 2)))
     return (
         typeof(z),
         typeof(net),

@@ -122,6 +122,7 @@ from stabctl.models.converters import (
     WTDS,
     WTDTA1,
 )
+from stabctl.models.machines import MACHINE
 from stabctl.models.motors import MOTOR
 from stabctl.models.shafts import SHAFT
 
@@ -301,6 +302,7 @@ def read_andes_case(
         and name not in PROTECTIONS
         and name not in MOTOR_MODELS
         and name not in DC_MODELS
+        and name != "PLBVFU1"
     ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
     mats, numbers = _network(ss, path.name)
@@ -338,6 +340,7 @@ def read_andes_case(
                 if getattr(tables, k) is not None
             }
         )
+        _mark_playback(mats, gens)
     left_out = tuple(lacking + refused)
     if left_out or changed:
         listing = "; ".join(
@@ -988,6 +991,9 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
     _warn_generator_off(file, off)
     _check_shares(ss, file, machines, with_converter)
     with_machine = {ss.models[name].gen.v[k] for _, name, k in machines}
+    playback = ss.models.get("PLBVFU1")
+    played = list(_in_service(playback)) if playback is not None else []
+    with_machine |= {playback.gen.v[k] for k in played}
     bare = [
         (f"{sg.class_name} {sg.idx.v[k]} (bus {numbers[sg.bus.v[k]]})", sg, k)
         for sg, k in static
@@ -1038,6 +1044,11 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 )
             )
     records = []
+    for k in played:  # a playback source: a classical machine of H = 0 behind xs
+        gens.append(_playback_source(ss, k, len(gens) + 1, numbers))
+        records.append(
+            DyrRecord(file, k + 1, gens[-1]["bus"], "GENCLS", gens[-1]["id"], (0.0, 0.0))
+        )
     if machines:  # a Slack without machine holds its bus's voltage: an infinite bus
         for k in (k for _, sg, k in bare if sg is ss.Slack):
             gens.append(_infinite_bus(ss, k, len(gens) + 1, numbers))
@@ -1188,6 +1199,44 @@ def _shafts(ss, gens: list[dict]) -> tuple[list[list[float]], list[str]]:
             continue
         rows.append([machine, *(float(m.params[f].vin[k]) for f in SHAFT.names[1:])])
     return rows, refused
+
+
+def _mark_playback(mats: dict, gens: list[dict]) -> None:
+    """Set the mac_con playback columns (26-28: 1, Tv, Tf) of the playback sources' rows."""
+    marked = [g for g in gens if "playback" in g]
+    if not marked:
+        return
+    mac = mats["mac_con"]
+    width = MACHINE.col("pb_Tf")
+    if mac.shape[1] < width:  # the omitted columns at their declared defaults
+        pad = [p.default for p in MACHINE.params[mac.shape[1] : width]]
+        mac = np.hstack([mac, np.tile(pad, (mac.shape[0], 1))])
+    for g in marked:
+        r = int(np.flatnonzero(mac[:, 0] == g["number"])[0])
+        mac[r, MACHINE.col("playback") - 1 : width] = (1.0, *g["playback"])
+    mats["mac_con"] = mac
+
+
+def _playback_source(ss, k: int, number: int, numbers: dict) -> dict:
+    """The generator of ANDES's PLBVFU1 ``k`` (a dict for :func:`stabctl.io.dyr.dyr_tables`,
+    with ``playback`` (Tv, Tf) for the mac_con playback columns): E' behind ``xs`` with
+    its static generator's power-flow power; its TimeSeries is a run's Playback event."""
+    m = ss.PLBVFU1
+    sg = ss.PV if m.gen.v[k] in ss.PV.idx.v else ss.Slack
+    j = list(sg.idx.v).index(m.gen.v[k])
+    return {
+        "number": number,
+        "bus": numbers[m.bus.v[k]],
+        "id": f"PLB{m.idx.v[k]}",
+        "mbase": float(m.Sn.v[k]),
+        # on its Sn at the bus's voltage base: ANDES's system-base values (its Vn may differ)
+        "ra": float(m.ra.v[k] * m.Sn.v[k] / ss.config.mva),
+        "xsource": float(m.xs.v[k] * m.Sn.v[k] / ss.config.mva),
+        "pg": float(sg.p.v[j]),
+        "qg": float(sg.q.v[j]),
+        "sbase": float(ss.config.mva),
+        "playback": (float(m.Tv.v[k]), float(m.Tf.v[k])),
+    }
 
 
 def _infinite_bus(ss, k: int, number: int, numbers: dict) -> dict:

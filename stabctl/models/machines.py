@@ -94,6 +94,18 @@ MACHINE = Family(
             'GENROU saturation of the air-gap flux |psi"| through S(1.0), S(1.2) '
             "(ANDES GENROU/GENSAL)",
         ),
+        Param(
+            "playback",
+            "code",
+            26,
+            choices=(0.0, 1.0),
+            doc="classical with H = 0: 1 a playback source (ANDES PLBVFU1): E' and the "
+            "speed follow their targets (a Playback event) through the lags pb_Tv, pb_Tf",
+        ),
+        Param("pb_Tv", "s", 27, default=0.2, lo=0.0, doc="playback: lag of E' to its target"),
+        Param(
+            "pb_Tf", "s", 28, default=0.2, lo=0.0, doc="playback: lag of the speed to its target"
+        ),
     ),
     dyr=(
         # GENROU -> mac_sub with x"q = x"d (set by the importer)
@@ -198,6 +210,9 @@ PACKED = (
     ("GA", "gap_a"),
     ("GB", "gap_b"),
     ("GQD", "gqd"),
+    ("PB", "playback"),
+    ("PB_TV", "pb_Tv"),
+    ("PB_TF", "pb_Tf"),
 )
 #: the kernels' column of each PACKED name: P[i, K.XDP]
 K = layout("MachineColumns", PACKED)
@@ -220,6 +235,9 @@ class MachineParams(Declared):
     basrad: float
     speed_effects: np.ndarray  # bool: subtransient with speed in stator voltage and torque
     air_gap_sat: np.ndarray  # (n_mac, 2) A, B of PSS/E's GENROU saturation (0, 0: none)
+    playback: np.ndarray  # 1.0: a playback source (classical, H = 0; docs/pst_models.md 17)
+    pb_Tv: np.ndarray  # s, its E' lag
+    pb_Tf: np.ndarray  # s, its speed lag
 
     @property
     def n(self) -> int:
@@ -361,6 +379,9 @@ def machine_params(case: Case) -> MachineParams:
         sat=saturation_coefficients(m.S10, m.S12),
         basrad=2 * np.pi * case.freq_hz,
         speed_effects=sub & (m.speed_effects == 1),
+        playback=_playback(m, kind),
+        pb_Tv=m.pb_Tv.copy(),
+        pb_Tf=m.pb_Tf.copy(),
         air_gap_sat=np.column_stack(
             quadratic_fit(
                 1.0,
@@ -375,6 +396,19 @@ def machine_params(case: Case) -> MachineParams:
 
 
 check_packed(MachineParams, PACKED, ("eqp0", "gap_a", "gap_b", "sat_a", "sat_b", "sat_c"))
+
+
+def _playback(m, kind) -> np.ndarray:
+    """The playback flags (1.0 a playback source); CaseError for one that is not classical
+    with H = 0 and r_a = 0 (its E' behind x'_d, its speed its target's) or whose lags are
+    below 1e-3 s, naming the mac_con row."""
+    pb = m.playback == 1
+    for r in np.flatnonzero(pb & ((kind != EM) | (m.H != 0) | (m.ra != 0))):
+        m._fail(r, "playback", "a playback source is classical (x_d = 0) with H = 0, r_a = 0")
+    for name in ("pb_Tv", "pb_Tf"):
+        for r in np.flatnonzero(pb & (getattr(m, name) < 1e-3)):
+            m._fail(r, name, "a playback lag must be >= 0.001 s")
+    return pb.astype(float)
 
 
 def saturation_coefficients(S10: np.ndarray, S12: np.ndarray) -> np.ndarray:
@@ -533,11 +567,13 @@ def field_current(P, x, cur, i):
 
 
 @kernel
-def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
+def derivatives(P, basrad, x, cur, vex, pmech, target, dx, pelect, qelect, eterm):
     """Machine derivatives into dx (6, n_mac) and outputs (PST flag 2, docs 1.6-1.9).
 
     cur: terminal currents (system base, network frame); vex: field voltages; pmech:
-    mechanical power (machine base).  pelect, qelect on the system base; eterm in pu.
+    mechanical power (machine base); target (n_mac, 2): a playback source's targets of
+    E' and speed (pu; `playback` column, docs/pst_models.md 17).  pelect, qelect on the
+    system base; eterm in pu.
     """
     for i in range(P.shape[0]):
         w = x[1, i]
@@ -585,6 +621,9 @@ def derivatives(P, basrad, x, cur, vex, pmech, dx, pelect, qelect, eterm):
         # H = 0: an infinite bus (classical, MachineTable), its speed held at 1 pu
         h2 = 2.0 * P[i, K.H]
         dx[1, i] = (torque - P[i, K.D0] * (w - 1.0)) / h2 if h2 > 0.0 else 0.0
+        if P[i, K.PB] > 0.0:  # a playback source: E' and the speed lag their targets
+            dx[1, i] = (target[i, 1] - w) / P[i, K.PB_TF]
+            dx[2, i] = (target[i, 0] - x[2, i]) / P[i, K.PB_TV]
 
 
 @kernel

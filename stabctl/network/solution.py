@@ -59,7 +59,9 @@ class ReducedNetwork:
     Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 (n_nc, n_nc); R (n_bus,
     n_mac + n_nc) gives every original bus voltage from [psi; V_nc]; Z22 = inv(Y22), the
     chord of the load iteration.  switched_on (n_dev,) float: 1.0 for each device switched
-    by events (a motor, `stabctl.models.motors`) in service in this stage, else 0.0.
+    by events (a motor, `stabctl.models.motors`) in service in this stage, else 0.0;
+    targets (n_mac, 2) float: each playback source's targets of E' and speed in this
+    stage (pu; `stabctl.models.machines`, the ``playback`` column).
     """
 
     Y11: np.ndarray
@@ -69,6 +71,7 @@ class ReducedNetwork:
     R: np.ndarray
     Z22: np.ndarray
     switched_on: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    targets: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
 
 def reduce_network(

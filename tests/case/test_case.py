@@ -135,8 +135,8 @@ def test_matrix_gives_pst_matrix_back_and_col_is_1_based():
     assert c.machines.col(16) is c.machines.H
     assert c.machines.speed_effects.tolist() == [1, 1]  # stabctl's column 24, PST default
     assert c.machines.psse_sat.tolist() == [0, 0]  # column 25: PST's mac_sub, unsaturated
-    with pytest.raises(CaseError, match="no column 26"):
-        c.machines.col(26)
+    with pytest.raises(CaseError, match="no column 29"):
+        c.machines.col(29)
 
 
 def test_tables_are_read_only():

@@ -35,7 +35,7 @@ from runs import flat_run  # noqa: E402
 from stabctl.case import ExciterTable  # noqa: E402
 from stabctl.dynamics.coi import coi_of_islands  # noqa: E402
 from stabctl.dynamics.driver import Simulator  # noqa: E402
-from stabctl.dynamics.events import Fault, LineTrip, LoadStep, MotorSwitch  # noqa: E402
+from stabctl.dynamics.events import Fault, LineTrip, LoadStep, MotorSwitch, Playback  # noqa: E402
 from stabctl.errors import CaseError, InputError, SimulationError  # noqa: E402
 from stabctl.io.andes import (  # noqa: E402
     AndesFault,
@@ -1049,6 +1049,36 @@ def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections():
     assert np.max(np.abs(w - wa)) < 1e-4
 
 
+def test_ieee14_playback_source_follows_andes_through_its_time_series():
+    """ANDES's ieee14_plbvfu1.xlsx: PLBVFU1 (V-f playback behind xs, Tv = Tf = 0.2 s) in
+    place of the bus-8 generator, driven by its TimeSeries plbvf.xlsx (f stepping 1 ->
+    1.003 -> 0.997 -> 1 pu over 2.4 s; ANDES's mode 1, values held between points), read
+    as a playback machine and a Playback event.  Speeds within 1e-5 pu of ANDES's
+    (measured 1.6e-6), the source's own within 1e-6 (3.1e-7); xs on the system base at the
+    bus's voltage (ANDES's Vn 110 kV: read on the device's Vn, the gap was 2.4e-4)."""
+    import pandas as pd
+
+    path = andes.get_case("ieee14/ieee14_plbvfu1.xlsx")
+    with pytest.warns(UserWarning, match="lacks .*TimeSeries"):
+        case = import_andes(path, on_unsupported="skip")
+    k = int(np.flatnonzero(case.machines.playback == 1)[0])
+    assert case.machines.bus[k] == 8 and case.machines.H[k] == 0
+    data = pd.read_excel(Path(path).parent / "plbvf.xlsx", sheet_name="PLBVF")
+    v, f = data["V"].to_numpy(), data["f"].to_numpy()
+    event = Playback(
+        int(case.machines.number[k]), tuple(data["t"]), tuple(v - v[0]), tuple(f - f[0])
+    )
+    sim = Simulator(case, q_limits=False)
+    assert sim.model.initial_residual[0] < 1e-9
+    res = sim.run([event], 5.0, h=STEP)
+    ss = andes_system(path, off=("Fault",))
+    t, wa = andes_speeds(ss, 5.0, STEP)
+    assert np.max(np.abs(wa - 1)) > 3e-3
+    assert np.max(np.abs(speeds_on(t, res, case, ss) - wa)) < 1e-5
+    w_plb = np.asarray(ss.dae.ts.x)[:, ss.PLBVFU1.omega.a[0]]
+    assert np.max(np.abs(np.interp(t, res.t, res.speed[:, k]) - w_plb)) < 1e-6
+
+
 def test_import_andes_numbers_a_bus_idx_0_above_the_others():
     """pjm5bus's buses are idx 0-4 (ANDES allows 0; PSS/E and stabctl number from 1): bus 0
     becomes bus 5, with a warning naming both, its machine and lines with it."""
@@ -1167,16 +1197,27 @@ def test_import_andes_refuses_values_andes_would_default_silently(tmp_path, edit
         read_andes_case(path, on_unsupported="skip")
 
 
+def with_lacking_models(tmp_path) -> Path:
+    """ANDES's ieee14.json with two devices of models stabctl lacks (a third-order motor,
+    Motor3, out of service; a DC capacitor, C, between two DC nodes) beside its Toggle."""
+    data = json.loads(Path(andes.get_case("ieee14/ieee14.json")).read_text())
+    data["Motor3"] = [{"idx": 1, "u": 0, "name": "Motor3_1", "bus": 9}]
+    data["Node"] = [{"idx": n, "u": 1, "name": f"N{n}", "Vdcn": 100, "Idcn": 1} for n in (1, 2)]
+    data["C"] = [{"idx": 1, "u": 1, "name": "C1", "node1": 1, "node2": 2, "C": 1.0}]
+    path = tmp_path / "ieee14_lacking.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
 def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
-    """A case with a playback source (PLBVFU1 driven by a TimeSeries, in place of the
-    bus-8 generator) and ANDES's own disturbance: one error naming every model stabctl
-    lacks with its device count, and the static generator left without a machine, the
-    other machines read; a REGCP1 whose angle comes from a PLL2 (SRF
-    loop, not modelled) is refused by name, and with on_unsupported="skip" its static
-    generator cannot be left out."""
+    """A case with devices of models stabctl lacks (Motor3; a DC capacitor C on DC nodes,
+    which stabctl reads only under a VSCShunt) and ANDES's own disturbance: one error naming
+    every model stabctl lacks with its device count, the machines read; a REGCP1 whose
+    angle comes from a PLL2 (SRF loop, not modelled) is refused by name, and with
+    on_unsupported="skip" its static generator cannot be left out."""
     with pytest.raises(InputError) as err:
-        import_andes(andes.get_case("ieee14/ieee14_plbvfu1.xlsx"))
-    for name in ("PLBVFU1 (1)", "TimeSeries (1)", "Fault (1)", "PV 5 (bus 8): no synchronous"):
+        import_andes(with_lacking_models(tmp_path))
+    for name in ("Motor3 (1)", "C (1)", "Toggle (2)"):
         assert name in str(err.value)
     assert "GENROU (" not in str(err.value)  # the machines are read
     data = json.loads(Path(andes.get_case("ieee14/ieee14_regcp1_nopll.json")).read_text())
@@ -1219,12 +1260,12 @@ def test_import_andes_cli_writes_ieee39_and_refuses_what_it_lacks(tmp_path):
         len(case.pss),
         len(case.governors),
     ) == (39, 10, 10, 10, 10)
-    bad = tmp_path / "playback.json"
+    bad = tmp_path / "lacking.json"
     res = CliRunner().invoke(
-        main, ["import-andes", andes.get_case("ieee14/ieee14_plbvfu1.xlsx"), "-o", str(bad)]
+        main, ["import-andes", str(with_lacking_models(tmp_path)), "-o", str(bad)]
     )
     assert res.exit_code == 2 and not bad.exists()
-    assert "PLBVFU1 (1)" in res.stderr and "--skip-unsupported" in res.stderr
+    assert "Motor3 (1)" in res.stderr and "--skip-unsupported" in res.stderr
 
 
 # -- converter-interfaced devices (ANDES PVD1, ESD1; docs/ibr.md) --------------------------------
