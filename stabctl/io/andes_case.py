@@ -312,22 +312,15 @@ def read_andes_case(
     gens, records, refused, changed = _dynamic_records(ss, path.name, numbers, with_converter)
     changed += _grouped(zip_changed)
     refused += ibr_refused
-    shaft_con, shaft_refused = _shafts(ss, gens)
-    refused += shaft_refused
-    if shaft_con:
-        mats["shaft_con"] = np.array(shaft_con, float)
-    inj_con, dc_refused = _dc_links(ss, numbers)
-    refused += dc_refused
-    if inj_con:
-        mats["inj_con"] = np.array(inj_con, float)
-    swsh_con, shunt_refused = _switched_shunts(ss, numbers)
-    refused += shunt_refused
-    if swsh_con:
-        mats["swsh_con"] = np.array(swsh_con, float)
-    mot_con, motor_refused = _motors(ss, numbers)
-    refused += motor_refused
-    if mot_con:
-        mats["mot_con"] = np.array(mot_con, float)
+    for key, (rows, why) in (  # stabctl's own tables of the devices ANDES has
+        ("shaft_con", _shafts(ss, gens)),
+        ("inj_con", _dc_links(ss, numbers)),
+        ("swsh_con", _switched_shunts(ss, numbers)),
+        ("mot_con", _motors(ss, numbers)),
+    ):
+        refused += why
+        if rows:
+            mats[key] = np.array(rows, float)
     if ibr_con:
         mats["ibr_con"] = np.array(ibr_con, float)
     if records:
