@@ -143,8 +143,10 @@ def test_kundur_genrou_to_mac_sub(kundur_tables):
         H=6.175,
         D0=0,
     )
-    assert m.shape == (4, 25) and np.all(m[:, 21:24] == 1.0)  # pfrac, qfrac, speed effects
+    assert m.shape == (4, len(MACHINE.names)) and np.all(m[:, 21:24] == 1.0)  # pfrac, qfrac,
+    # speed effects
     assert np.all(m[:, 24] == 0)  # PST's mac_sub: no saturation
+    assert np.all(m[:, 25] == 0)  # not a playback source (column 26)
 
 
 def test_kundur_exdc2_to_dc2_and_tgov1(kundur_tables):
@@ -237,7 +239,7 @@ def test_wecc_imports_completely():
     recs = read_dyr(WECC_DYR)
     t = dyr_tables(recs, wecc_generators(recs))
     assert (t.mac_con.shape, t.exc_con.shape, t.pss_con.shape, t.tg_con.shape) == (
-        (29, 25),
+        (29, len(MACHINE.names)),  # every declared column (28, stabctl.models.machines)
         (29, len(EXCITER.names)),  # every declared column (43, stabctl.models.exciters)
         (29, len(PSS.names)),  # every declared column (26, stabctl.models.pss)
         (29, len(GOVERNOR.names)),  # every declared column (27, stabctl.models.governors)
@@ -383,7 +385,7 @@ def test_ids_compare_without_quotes_and_other_models_parse_leniently(tmp_path):
     recs = read_dyr(write(tmp_path, text))
     assert recs[0].id == "1" and recs[1].model == "USRMDL" and np.isnan(recs[1].params[0])
     t = dyr_tables(recs, [dict(kundur_generators()[0], id="'1'")], on_unsupported="skip")
-    assert t.mac_con.shape == (1, 25) and [r.line for r in t.unsupported] == [2]
+    assert t.mac_con.shape == (1, len(MACHINE.names)) and [r.line for r in t.unsupported] == [2]
 
 
 def test_generator_without_machine_model_is_named(tmp_path):
