@@ -37,7 +37,15 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import CaseError
-from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, leadlag_input_state, washout
+from stabctl.models.blocks import (
+    GAIN_BEFORE,
+    LBND,
+    clip,
+    lag,
+    leadlag_input_state,
+    nonwindup,
+    washout,
+)
 from stabctl.models.declaration import (
     Declared,
     Family,
@@ -1698,18 +1706,10 @@ def _pll(P, x, k, V, dx):
 @kernel
 def _relay_timer(x, dx, slot, k, e, upper):
     """One protection timer of device k (ANDES IntegratorAntiWindup, T = K = 1, limits
-    [0, upper]; AntiWindup's flags zu = y >= upper and e >= 0, zl = y <= 0 and e <= 0 hold
-    the state at the limit in place): writes dy/dt = e or 0, returns zu as a float."""
-    y = x[slot, k]
-    dx[slot, k] = 0.0
-    if y >= upper and e >= 0.0:
-        x[slot, k] = upper
-        return 1.0
-    if y <= 0.0 and e <= 0.0:
-        x[slot, k] = 0.0
-        return 0.0
-    dx[slot, k] = e
-    return 0.0
+    [0, upper]): the non-windup integrator `blocks.nonwindup` of dy/dt = e, its state held
+    in place; returns ANDES's flag zu = (y >= upper and e >= 0) as a float."""
+    x[slot, k], dx[slot, k] = nonwindup(x[slot, k], e, 0.0, upper, True, 0.0)
+    return 1.0 if x[slot, k] >= upper and e >= 0.0 else 0.0
 
 
 @kernel

