@@ -1703,12 +1703,17 @@ def _pll(P, x, k, V, dx):
     dx[_PLL_AM, k] = (x[_PLL_AE, k] - am) / P[k, C.PLL_TP]
 
 
+#: the protection timers' limit rule: the IEEE 421.5 annex's (`blocks.nonwindup`), a numpy
+#: bool so that the block compiles once for it and a variable (the kernel coding rules)
+_ANNEX_RULE = np.bool_(True)
+
+
 @kernel
 def _relay_timer(x, dx, slot, k, e, upper):
     """One protection timer of device k (ANDES IntegratorAntiWindup, T = K = 1, limits
     [0, upper]): the non-windup integrator `blocks.nonwindup` of dy/dt = e, its state held
     in place; returns ANDES's flag zu = (y >= upper and e >= 0) as a float."""
-    x[slot, k], dx[slot, k] = nonwindup(x[slot, k], e, 0.0, upper, True, 0.0)
+    x[slot, k], dx[slot, k] = nonwindup(x[slot, k], e, 0.0, upper, _ANNEX_RULE, 0.0)
     return 1.0 if x[slot, k] >= upper and e >= 0.0 else 0.0
 
 
