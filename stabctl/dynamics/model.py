@@ -33,9 +33,10 @@ from stabctl.models import shafts as shaft
 from stabctl.models import shunts as shunt
 from stabctl.network import switched_shunts as sws
 from stabctl.network.solution import (
-    KeptLoads,
+    L,
     NonConformingLoads,
     ReducedNetwork,
+    kept_loads,
     reduce_network,
     solve_nc,
 )
@@ -711,58 +712,76 @@ CURRENT_ITERATIONS = 50
 SLOPE_DV = 1e-6
 
 
+class KeptDevices(NamedTuple):
+    """The devices drawing current at the kept buses, for the network solution: the
+    converters' packed parameters IP (n_ibr, ...) and states xi (`conv.N_STATES`,
+    n_ibr), the motors' MO and states xmo, on (n_motor,) 1.0 for each motor in service,
+    the switched shunts' SWP, levels SWY and memory xsw (`KernelParams`, `Layout`).  The
+    kernels below take these eight arrays, not the whole `KernelParams`: a compiled call
+    costs an atomic reference count per array it is passed (about 5 ns each way)."""
+
+    IP: np.ndarray
+    xi: np.ndarray
+    MO: np.ndarray
+    xmo: np.ndarray
+    on: np.ndarray
+    SWP: np.ndarray
+    SWY: np.ndarray
+    xsw: np.ndarray
+
+
 @kernel
-def _summed_currents(p, dev, V_nc, dv):
+def _summed_currents(dev, V_nc, dv):
     """`conv.drawn_current` of every converter at its bus voltage magnitude + dv (pu), and
     the current of every motor on beside its admittance (`mot.drawn_current`), summed per
     kept bus, and the switched shunts' admittance beyond the network's
     (`shunt.extra_admittance`) as a drawn current: (I_rel, I_fix), each (n_nc,) complex;
-    dev = (converter states, motor states, motors on, switched shunts' memory)."""
-    xi, xmo, on, xsw = dev
+    dev the `KeptDevices`."""
     rel = np.zeros(V_nc.size, np.complex128)
     fix = np.zeros(V_nc.size, np.complex128)
-    for k in range(p.n_ibr):
-        pos = int(p.IP[k, conv.C.POS])
-        a, b = conv.drawn_current(p.IP, xi, k, abs(V_nc[pos]) + dv)
+    for k in range(dev.xi.shape[1]):
+        pos = int(dev.IP[k, conv.C.POS])
+        a, b = conv.drawn_current(dev.IP, dev.xi, k, abs(V_nc[pos]) + dv)
         rel[pos] += a
         fix[pos] += b
-    for k in range(p.n_motor):
-        if on[k] != 0.0:
-            fix[int(p.MO[k, mot.Q.POS])] += mot.drawn_current(p.MO, xmo, k)
-    for k in range(p.n_swsh):
-        pos = int(p.SWP[k, shunt.S.POS])
-        rel[pos] += np.conj(shunt.extra_admittance(p.SWP, p.SWY, xsw, k)) * (abs(V_nc[pos]) + dv)
+    for k in range(dev.xmo.shape[1]):
+        if dev.on[k] != 0.0:
+            fix[int(dev.MO[k, mot.Q.POS])] += mot.drawn_current(dev.MO, dev.xmo, k)
+    for k in range(dev.xsw.shape[1]):
+        pos = int(dev.SWP[k, shunt.S.POS])
+        y = shunt.extra_admittance(dev.SWP, dev.SWY, dev.xsw, k)
+        rel[pos] += np.conj(y) * (abs(V_nc[pos]) + dv)
     return rel, fix
 
 
 @kernel
-def _drawn_currents(p, dev, V_nc, loads, tol):
-    """The converters' currents drawn at the kept buses at voltages V_nc (`_summed_currents`)
-    against the affine model of `KeptLoads` (I_dev + G_dev |V|, I_fix + G_fix |V|, each
-    (n_nc,) complex): if the model misses one by more than tol, the model is made the
-    tangent at V_nc (in place: the slope from the currents at |V| + SLOPE_DV, evaluated
-    only then).  Returns the largest miss."""
-    rel, fix = _summed_currents(p, dev, V_nc, 0.0)
+def _drawn_currents(dev, V_nc, loads, tol):
+    """The devices' currents drawn at the kept buses at voltages V_nc (`_summed_currents`,
+    dev the `KeptDevices`) against the affine model of loads (rows `L`: I_dev + G_dev |V|,
+    I_fix + G_fix |V|, each (n_nc,) complex): if the model misses one by more than tol,
+    the model is made the tangent at V_nc (in place: the slope from the currents at |V| +
+    SLOPE_DV, evaluated only then).  Returns the largest miss."""
+    rel, fix = _summed_currents(dev, V_nc, 0.0)
     moved = 0.0
     for i in range(V_nc.size):
         m = abs(V_nc[i])
         moved = max(
             moved,
-            abs(rel[i] - loads.I_dev[i] - loads.G_dev[i] * m),
-            abs(fix[i] - loads.I_fix[i] - loads.G_fix[i] * m),
+            abs(rel[i] - loads[L.I_dev, i] - loads[L.G_dev, i] * m),
+            abs(fix[i] - loads[L.I_fix, i] - loads[L.G_fix, i] * m),
         )
     if moved > tol:
-        rel2, fix2 = _summed_currents(p, dev, V_nc, SLOPE_DV)
+        rel2, fix2 = _summed_currents(dev, V_nc, SLOPE_DV)
         for i in range(V_nc.size):
             m = abs(V_nc[i])
             g_rel, g_fix = (rel2[i] - rel[i]) / SLOPE_DV, (fix2[i] - fix[i]) / SLOPE_DV
-            loads.G_dev[i], loads.G_fix[i] = g_rel, g_fix
-            loads.I_dev[i], loads.I_fix[i] = rel[i] - g_rel * m, fix[i] - g_fix * m
+            loads[L.G_dev, i], loads[L.G_fix, i] = g_rel, g_fix
+            loads[L.I_dev, i], loads[L.I_fix, i] = rel[i] - g_rel * m, fix[i] - g_fix * m
     return moved
 
 
 @kernel
-def _converter_fixed_point(p, dev, net, psi, V_nc, loads, held, it):
+def _converter_fixed_point(dev, Y21, Y22, Z22, psi, V_nc, loads, held, it):
     """The network solution with the converters' drawn currents when one depends on its
     bus voltage (REGCA1's LVG and HVG, `conv.drawn_current`): solved with their tangent
     at the starting voltages (`_drawn_currents`), which is exact while no |V| crosses a
@@ -770,9 +789,8 @@ def _converter_fixed_point(p, dev, net, psi, V_nc, loads, held, it):
     the solved voltages and the network solved again, until the currents agree within
     CURRENT_TOL.  Returns the total load-iteration count, -1 without convergence (either
     loop)."""
-    Y21, Y22, Z22 = net.Y21, net.Y22, net.Z22
     for _ in range(CURRENT_ITERATIONS):
-        if _drawn_currents(p, dev, V_nc, loads, CURRENT_TOL) <= CURRENT_TOL:
+        if _drawn_currents(dev, V_nc, loads, CURRENT_TOL) <= CURRENT_TOL:
             return it
         more = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
         if more < 0:
@@ -782,13 +800,13 @@ def _converter_fixed_point(p, dev, net, psi, V_nc, loads, held, it):
 
 
 @kernel
-def _switched(p, xsw, V_nc, dxsw):
-    """The switched shunts' discrete control (`shunt.switch`) at the solved kept-bus
-    voltages V_nc: True if one stepped."""
+def _switched(SWP, xsw, V_nc, dxsw):
+    """The switched shunts' discrete control (`shunt.switch`; SWP their packed columns,
+    xsw their memory) at the solved kept-bus voltages V_nc: True if one stepped."""
     moved = False
-    for k in range(p.n_swsh):
+    for k in range(xsw.shape[1]):
         level = xsw[0, k]
-        shunt.switch(p.SWP, xsw, k, abs(V_nc[int(p.SWP[k, shunt.S.POS])]), dxsw)
+        shunt.switch(SWP, xsw, k, abs(V_nc[int(SWP[k, shunt.S.POS])]), dxsw)
         moved = moved or xsw[0, k] != level
     return moved
 
@@ -844,33 +862,32 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     o += rm * nmo
     rs, nsw = shunt.N_STATES, p.n_swsh
     xsw, dxsw = x[o : o + rs * nsw].reshape(rs, nsw), dx[o : o + rs * nsw].reshape(rs, nsw)
-    dev = (xi, xmo, on, xsw)
+    dev = KeptDevices(p.IP, xi, p.MO, xmo, on, p.SWP, p.SWY, xsw)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
     v_dep = False
     for k in range(ni):
         conv.clamp_states(p.IP, xi, k, p.reach)
         v_dep = v_dep or conv.voltage_dependent(p.IP, k)
-    zero = np.zeros((4, V_nc.size), np.complex128)
-    loads = KeptLoads(p.S_P, p.I0, p.Y_low, S_extra, zero[0], zero[1], zero[2], zero[3])
+    loads = kept_loads(p.S_P, p.I0, p.Y_low, S_extra)
     if ni or nmo or nsw:  # the converters' tangent at the starting voltages, the motors',
         # the switched shunts' currents
-        _drawn_currents(p, dev, V_nc, loads, -1.0)
+        _drawn_currents(dev, V_nc, loads, -1.0)
     it = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
     if it < 0:
         return -1
     if v_dep:  # currents that depend on the voltage (REGCA1): repeat until they agree
-        it = _converter_fixed_point(p, dev, net, psi, V_nc, loads, held, it)
+        it = _converter_fixed_point(dev, Y21, Y22, Z22, psi, V_nc, loads, held, it)
         if it < 0:
             return -1
-    if nsw and _switched(p, xsw, V_nc, dxsw):  # a shunt stepped: the network again with it
-        _drawn_currents(p, dev, V_nc, loads, -1.0)
+    if nsw and _switched(p.SWP, xsw, V_nc, dxsw):  # a shunt stepped: the network again
+        _drawn_currents(dev, V_nc, loads, -1.0)
         more = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
         if more < 0:
             return -1
         it += more
         if v_dep:
-            it = _converter_fixed_point(p, dev, net, psi, V_nc, loads, held, it)
+            it = _converter_fixed_point(dev, Y21, Y22, Z22, psi, V_nc, loads, held, it)
             if it < 0:
                 return -1
     assign(cur, Y11 @ psi + Y12 @ V_nc)
@@ -913,7 +930,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         xm,
         cur,
         vex,
-        _rotor_inputs(p, xm, xt, pmech),
+        _rotor_inputs(p.TP, p.MP, xm, xt, pmech),
         targets,
         dxm,
         pelect,
@@ -944,17 +961,18 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
 
 
 @kernel
-def _rotor_inputs(p, xm, xt, pmech):
+def _rotor_inputs(TP, MP, xm, xt, pmech):
     """The mechanical power each machine's swing equation takes: the turbine's P_m, or on
-    a machine with a torsional shaft the shaft's torque on its rotor
-    (`stabctl.models.shafts.rotor_torque`) as the P_m giving that torque."""
-    if p.n_shaft == 0:
+    a machine with a torsional shaft (TP their packed columns, xt their states) the
+    shaft's torque on its rotor (`stabctl.models.shafts.rotor_torque`) as the P_m giving
+    that torque."""
+    if xt.shape[1] == 0:
         return pmech
     pm = pmech.copy()
-    for k in range(p.n_shaft):
-        m = int(p.TP[k, shaft.T.MAC])
-        torque = shaft.rotor_torque(p.TP, xt, k, xm[0, m], xm[1, m])
-        pm[m] = torque * (xm[1, m] if mac.divides_pmech_by_speed(p.MP, m) else 1.0)
+    for k in range(xt.shape[1]):
+        m = int(TP[k, shaft.T.MAC])
+        torque = shaft.rotor_torque(TP, xt, k, xm[0, m], xm[1, m])
+        pm[m] = torque * (xm[1, m] if mac.divides_pmech_by_speed(MP, m) else 1.0)
     return pm
 
 

@@ -1624,7 +1624,7 @@ def _frame(P, x, k, V):
 @kernel
 def drawn_current(P, x, k, v):
     """The current device k draws at its bus as (I_rel, I_fix) at bus voltage magnitude
-    v, for the network solution (`stabctl.network.solution.KeptLoads`): I_rel = -(Ip + j
+    v, for the network solution (`stabctl.network.solution.L`): I_rel = -(Ip + j
     Iq) as complex power per pu voltage, so that the injected current is (Ip - j Iq)
     V/|V|; REGCA1 the same with its output currents Ipout, Iqout, which depend on v;
     with a PLL1 the current is set in the PLL's frame, not the bus's: I_fix = -(Ipout - j

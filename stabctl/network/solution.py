@@ -151,40 +151,59 @@ class NonConformingLoads:
     Y_low: np.ndarray
 
 
-class KeptLoads(NamedTuple):
-    """What the kept buses draw in one network solution (`solve_nc`), arrays (n_nc,)
-    complex: the non-conforming loads S_P, I0, Y_low (`NonConformingLoads`), the extra
-    constant power S_extra (e.g. storage, dropped below 0.5 pu with the loads), the
-    converters' currents, affine in the bus voltage magnitude |V| (their limits are
-    piecewise linear in it): I_dev + G_dev |V| (power per pu voltage, drawn at every
-    voltage at the bus voltage's angle) and I_fix + G_fix |V| (a current fixed in the
-    network frame: a converter whose angle comes from a PLL)."""
+class LoadRows(NamedTuple):
+    """The rows of the kept-bus load array of one network solution (`solve_nc`,
+    `kept_loads`), each (n_nc,) complex: the non-conforming loads S_P, I0, Y_low
+    (`NonConformingLoads`), the extra constant power S_extra (e.g. storage, dropped below
+    0.5 pu with the loads), the converters' currents, affine in the bus voltage magnitude
+    |V| (their limits are piecewise linear in it): I_dev + G_dev |V| (power per pu
+    voltage, drawn at every voltage at the bus voltage's angle) and I_fix + G_fix |V| (a
+    current fixed in the network frame: a converter whose angle comes from a PLL).  One
+    array, not a tuple of eight: a compiled call costs an atomic reference count per array
+    argument (about 5 ns each way), and the load iteration calls its helpers every step."""
 
-    S_P: np.ndarray
-    I0: np.ndarray
-    Y_low: np.ndarray
-    S_extra: np.ndarray
-    I_dev: np.ndarray
-    I_fix: np.ndarray
-    G_dev: np.ndarray
-    G_fix: np.ndarray
+    S_P: int
+    I0: int
+    Y_low: int
+    S_extra: int
+    I_dev: int
+    I_fix: int
+    G_dev: int
+    G_fix: int
+
+
+#: the row indices (a module-global constant: folded into the kernels)
+L = LoadRows(*range(len(LoadRows._fields)))
+
+
+@kernel
+def kept_loads(S_P, I0, Y_low, S_extra):
+    """The kept-bus load array of `solve_nc`, shape (8, n_nc) complex (rows `L`), with no
+    converter current (I_dev, I_fix, G_dev, G_fix 0); the arguments (n_nc,) complex."""
+    loads = np.zeros((len(L), S_P.size), np.complex128)
+    loads[L.S_P] = S_P
+    loads[L.I0] = I0
+    loads[L.Y_low] = Y_low
+    loads[L.S_extra] = S_extra
+    return loads
 
 
 @kernel
 def _load_currents(V, loads, low, out):
-    """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out); loads a
-    `KeptLoads`."""
-    S_P, I0, Y_low, S_extra, I_dev, I_fix, G_dev, G_fix = loads
+    """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out); loads
+    (8, n_nc) the rows `L`."""
     for i in range(V.size):
         m = abs(V[i])
         if m > V_SWITCH and not low[i]:
-            out[i] = np.conj(S_P[i] + S_extra[i] + I0[i] * m) / np.conj(V[i])
+            out[i] = np.conj(loads[L.S_P, i] + loads[L.S_extra, i] + loads[L.I0, i] * m) / np.conj(
+                V[i]
+            )
         else:
-            out[i] = np.conj(Y_low[i]) * V[i]
-        c = I_dev[i] + G_dev[i] * m
+            out[i] = np.conj(loads[L.Y_low, i]) * V[i]
+        c = loads[L.I_dev, i] + loads[L.G_dev, i] * m
         if c != 0.0:  # converters: current sources at every voltage
             out[i] += np.conj(c * m) / np.conj(V[i])
-        out[i] += I_fix[i] + G_fix[i] * m
+        out[i] += loads[L.I_fix, i] + loads[L.G_fix, i] * m
 
 
 @kernel
@@ -209,7 +228,7 @@ def _held_below(V, held, limit):
 def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
     """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
 
-    With loads the `KeptLoads` (S_P, I0, Y_low, S_extra, I_dev, I_fix, G_dev, G_fix):
+    With loads (8, n_nc) the rows `L` (S_P, I0, Y_low, S_extra, I_dev, I_fix, G_dev, G_fix):
     I_load = conj((S_P + S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's
     low-voltage switch; S_extra, e.g. storage power, is dropped below 0.5 pu with the rest),
     plus conj(c |V|/V) at every voltage with c = I_dev + G_dev |V|: the converters'
@@ -255,7 +274,7 @@ def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
         held[:] = False
         assign(V, V_start)
         assign(vmin, np.abs(V_start))
-    sloped = max_abs(loads.G_dev) > 0.0 or max_abs(loads.G_fix) > 0.0
+    sloped = max_abs(loads[L.G_dev]) > 0.0 or max_abs(loads[L.G_fix]) > 0.0
     it = -1 if sloped and n <= NEWTON_FIRST_MAX else _chord(b, Z22, V, loads, F, held, vmin)
     if it >= 0:
         return it
@@ -320,7 +339,8 @@ def _newton_nc(b, Y22, V, loads, low, vmin):
     """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load);
     vmin keeps the smallest magnitude each bus reached.  Converged when the mismatch is
     below NEWTON_TOL (pu), within NEWTON_MAX_ITER iterations (else -1)."""
-    S_P, I0, Y_low, S_extra, I_dev, _I_fix, G_dev, G_fix = loads
+    S_P, I0, Y_low, S_extra = loads[L.S_P], loads[L.I0], loads[L.Y_low], loads[L.S_extra]
+    I_dev, G_dev, G_fix = loads[L.I_dev], loads[L.G_dev], loads[L.G_fix]
     n = V.size
     J = np.empty((2 * n, 2 * n))
     rhs = np.empty(2 * n)

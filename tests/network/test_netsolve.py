@@ -15,8 +15,8 @@ from stabctl.models.machines import internal_voltage
 from stabctl.network.solution import (
     V_RELEASE,
     V_SWITCH,
-    KeptLoads,
     _load_mismatch,
+    kept_loads,
     solve_nc,
 )
 
@@ -39,7 +39,7 @@ def fault_network():
 def solve(m, net, psi, V, held):
     p = m.params
     none = np.zeros(V.size, complex)  # no extra power, no converters
-    loads = KeptLoads(p.S_P, p.I0, p.Y_low, none, none, none, none, none)
+    loads = kept_loads(p.S_P, p.I0, p.Y_low, none)
     it = solve_nc(net.Y21, net.Y22, net.Z22, psi, V, loads, held)
     F = np.empty(V.size, complex)
     resid = _load_mismatch(net.Y21 @ psi, net.Y22, V, loads, F, held)
@@ -92,7 +92,7 @@ def test_lapack_solve_matches_numpy_and_reports_a_singular_matrix():
 def test_a_converter_current_growing_with_the_voltage_is_solved_with_the_network():
     """A REGCA1 below its low-voltage gain's upper point Lvpnt1 draws an active current Ip
     (v - Lvpnt0)/(Lvpnt1 - Lvpnt0) that grows with its bus voltage v (ANDES regca1.py
-    192-196; the network solution takes it as affine in |V|, `KeptLoads`): the solved
+    192-196; the network solution takes it as affine in |V|, its load rows): the solved
     kept-bus voltages satisfy the network equations with the currents the converters draw
     at those voltages (`conv.drawn_current`), to 1e-10 pu, whether the voltage is on the
     gain's slope or above it."""
@@ -123,7 +123,7 @@ def test_a_converter_current_growing_with_the_voltage_is_solved_with_the_network
             slope = max(slope, abs(up - rel) / 0.01)
         p = m.params
         none = np.zeros(V.size, complex)
-        loads = KeptLoads(p.S_P, p.I0, p.Y_low, none, none, none, none, none)
+        loads = kept_loads(p.S_P, p.I0, p.Y_low, none)
         F = np.empty(V.size, complex)
         _load_mismatch(net.Y21 @ psi, net.Y22, V, loads, F, np.zeros(V.size, np.bool_))
         assert np.max(np.abs(F + drawn)) < 1e-10
