@@ -214,6 +214,25 @@ def test_assign_writes_views_as_numpys_slice_assignment_does():
     assert np.array_equal(F, want)
 
 
+def test_matvec_is_the_matrix_product_on_both_sides_of_the_blas_threshold():
+    # the loop (small matrices: Kundur's reduced network) and BLAS (miniWECC's Y11, R)
+    import numpy as np
+
+    from stabctl._jit.arrays import SMALL_MATVEC, matvec
+
+    rng = np.random.default_rng(2)
+    small = int(np.sqrt(SMALL_MATVEC))
+    for m, n in ((1, 1), (2, 2), (13, 6), (small, small), (small + 1, small), (40, 7)):
+        A = rng.normal(size=(m, n)) + 1j * rng.normal(size=(m, n))
+        x = rng.normal(size=n) + 1j * rng.normal(size=n)
+        out = np.full(m, np.nan, complex)
+        matvec(A, x, out)
+        assert np.allclose(out, A @ x, rtol=1e-14, atol=1e-14 * n), (m, n)
+    out = np.full(3, np.nan, complex)
+    matvec(np.zeros((3, 0), complex), np.zeros(0, complex), out)  # no kept bus
+    assert np.array_equal(out, np.zeros(3))
+
+
 def test_no_kernel_compiles_numbas_slice_assignment_message():
     # the point of `assign`: numba's shape-mismatch formatter (2-3 s of a cold first call)
     # is compiled by none of the simulator's, the linearisation's or the filters' kernels

@@ -369,9 +369,10 @@ def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
     """Heun's predictor-corrector over hh from x_a (derivatives dx_a), the devices' powers
     advanced on a copy of their energy: (network solved, corrected state); dx_j is written
     with the derivatives at the predictor (network of `stage`)."""
-    Pb = sw.advance(sa, ds.P, ds.target, ds.e.copy(), hh, np.zeros((sa.pmax.size, 5)))
     xp = x_a + hh * dx_a
-    sw.inject(sa, Pb, kn.kept.S_extra, xp)
+    if sa.pmax.size > 0:  # (a call passing the devices' arrays costs even without devices)
+        Pb = sw.advance(sa, ds.P, ds.target, ds.e.copy(), hh, np.zeros((sa.pmax.size, 5)))
+        sw.inject(sa, Pb, kn.kept.S_extra, xp)
     if _evaluate(kn, xp, stage, want, dx_j) < 0:
         return False, x_a
     return True, x_a + 0.5 * hh * (dx_a + dx_j)
@@ -388,7 +389,7 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
     x_a, dx_a, rem = x, w.dx_k, grid.h[s]
     x_b = x
     while True:
-        hh = sw.substep_length(grid, sa, ds, k, rem)
+        hh = sw.substep_length(grid.t[k + 1], sa.kind, ds.cmd_t, ds.cmd_next, rem)
         ok, x_b = _heun(
             kn, sa, ds, x_a, dx_a, hh, j if hh == rem else s, last and hh == rem, w.dx_j
         )
@@ -431,7 +432,8 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     step twice; the first pass's clamps stay), the controller there, the record of t_k,
     then the sub-steps.  Returns (status, index, state)."""
     s = grid.interval[k]
-    sw.inject(sa, ds.P, kn.kept.S_extra, x)
+    if sa.pmax.size > 0:
+        sw.inject(sa, ds.P, kn.kept.S_extra, x)
     if grid.first[k] and opts.pst:
         V_keep = kn.kept.V.copy()
         _evaluate(kn, x, s, NO_BUS_VOLTAGES, w.dx_k)

@@ -18,7 +18,7 @@ import numpy as np
 from numba import types
 
 from stabctl._jit.address import address_of, by_address
-from stabctl._jit.arrays import assign
+from stabctl._jit.arrays import assign, matvec
 from stabctl._jit.decorators import kernel, njit
 from stabctl.case import BranchTable, BusTable, Case
 from stabctl.dynamics.coi import coi_inertia
@@ -890,13 +890,20 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
             it = _converter_fixed_point(dev, Y21, Y22, Z22, psi, V_nc, loads, held, it)
             if it < 0:
                 return -1
-    assign(cur, Y11 @ psi + Y12 @ V_nc)
+    matvec(Y11, psi, cur)
+    I_kept = np.empty(nm, np.complex128)
+    matvec(Y12, V_nc, I_kept)
+    for m in range(nm):
+        cur[m] += I_kept[m]
     z = np.concatenate((psi, V_nc))
     if want_vbus:
-        assign(V_bus, R @ z)
+        matvec(R, z, V_bus)
     else:
         for m in range(nm):
-            V_bus[p.mac_bus[m]] = R[p.mac_bus[m]] @ z
+            b = p.mac_bus[m]
+            V_bus[b] = 0j
+            for j in range(z.size):
+                V_bus[b] += R[b, j] * z[j]
     pss_out = np.empty(nps)
     for k in range(nps):
         m = int(p.SP[k, pss_.S.MAC])

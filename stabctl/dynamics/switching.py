@@ -168,15 +168,12 @@ def apply_commands(ds, t_now, rec, r):
 
 
 @kernel
-def substep_length(grid, sa, ds, k, rem):
-    """Length of the next sub-step of step k with rem seconds left: the rest, or up to the
-    next scheduled command if one falls inside."""
-    if (
-        sa.kind == law.EXTERNAL
-        and ds.cmd_next[0] < ds.cmd_t.size
-        and ds.cmd_t[ds.cmd_next[0]] < grid.t[k + 1] - 1e-12
-    ):
-        return max(ds.cmd_t[ds.cmd_next[0]] - (grid.t[k + 1] - rem), 0.0)
+def substep_length(t_end, kind, cmd_t, cmd_next, rem):
+    """Length of the next sub-step of a step ending at t_end (s) with rem seconds left:
+    the rest, or for externally commanded devices (kind, `law.EXTERNAL`) up to the next
+    scheduled command (cmd_t, cmd_next: `DeviceState`) if one falls inside."""
+    if kind == law.EXTERNAL and cmd_next[0] < cmd_t.size and cmd_t[cmd_next[0]] < t_end - 1e-12:
+        return max(cmd_t[cmd_next[0]] - (t_end - rem), 0.0)
     return rem
 
 

@@ -23,7 +23,7 @@ import scipy.linalg as la
 from numba import types
 from numba.extending import get_cython_function_address
 
-from stabctl._jit.arrays import assign, max_abs
+from stabctl._jit.arrays import assign, matvec, max_abs
 from stabctl._jit.decorators import kernel
 from stabctl.case import Case
 from stabctl.errors import SimulationError
@@ -181,10 +181,10 @@ def kept_loads(S_P, I0, Y_low, S_extra):
     """The kept-bus load array of `solve_nc`, shape (8, n_nc) complex (rows `L`), with no
     converter current (I_dev, I_fix, G_dev, G_fix 0); the arguments (n_nc,) complex."""
     loads = np.zeros((len(L), S_P.size), np.complex128)
-    loads[L.S_P] = S_P
-    loads[L.I0] = I0
-    loads[L.Y_low] = Y_low
-    loads[L.S_extra] = S_extra
+    assign(loads[L.S_P], S_P)
+    assign(loads[L.I0], I0)
+    assign(loads[L.Y_low], Y_low)
+    assign(loads[L.S_extra], S_extra)
     return loads
 
 
@@ -211,7 +211,10 @@ def _load_mismatch(b, Y22, V, loads, F, low):
     """F = Y21 psi + Y22 V + I_load(V) (b = Y21 psi); returns max |F|.  Buses with low[i]
     are held at their low-voltage impedance model."""
     _load_currents(V, loads, low, F)
-    F += b + Y22 @ V
+    YV = np.empty(V.size, np.complex128)
+    matvec(Y22, V, YV)
+    for i in range(F.size):
+        F[i] += b[i] + YV[i]
     return max_abs(F)
 
 
@@ -260,7 +263,8 @@ def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
     n = V.size
     if n == 0:
         return 0
-    b = Y21 @ psi
+    b = np.empty(n, np.complex128)
+    matvec(Y21, psi, b)
     F = np.empty(n, np.complex128)
     V_start = V.copy()
     vmin = np.abs(V_start)
@@ -300,13 +304,20 @@ def _chord(b, Z22, V, loads, F, low, vmin):
     is then below the Newton fallback's 1e-10 pu on the built-in cases (measured:
     at most 8e-11 on miniWECC, 3e-11 on Kundur).
     """
-    w = -(Z22 @ b)
+    w = np.empty(V.size, np.complex128)
+    matvec(Z22, b, w)
+    ZF = np.empty(V.size, np.complex128)
     for it in range(30):
         _load_currents(V, loads, low, F)
-        V_new = w - Z22 @ F
-        step = max_abs(V_new - V)
-        assign(V, V_new)
-        assign(vmin, np.minimum(vmin, np.abs(V)))
+        matvec(Z22, F, ZF)
+        step = 0.0
+        for i in range(V.size):
+            v = -w[i] - ZF[i]
+            d = abs(v - V[i])
+            if d > step or d != d:  # a NaN stays: no convergence
+                step = d
+            V[i] = v
+            vmin[i] = min(vmin[i], abs(v))
         if step < TOL_V:
             return it + 1
     return -1
