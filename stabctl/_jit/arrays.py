@@ -51,9 +51,9 @@ def max_abs(a) -> float:
 
 
 #: up to this many matrix elements `matvec` loops instead of calling BLAS: numba's BLAS
-#: call costs about 0.1 us whatever the size (complex 2 x 2: 113 ns against 7 ns for the
-#: loop; equal near 16 x 16, BLAS 3 x faster at 64 x 64: benchmarks/bench_matvec.py)
-SMALL_MATVEC = 256
+#: call costs about 0.1 us whatever the size (complex 2 x 2: 109 ns against 34 ns for the
+#: loop; equal near 14 x 14, BLAS 1.2 x faster at 16 x 16: benchmarks/bench_matvec.py)
+SMALL_MATVEC = 196
 
 
 @kernel
