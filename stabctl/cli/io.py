@@ -169,6 +169,30 @@ def _static_option(func):
     )(func)
 
 
+def _islands_option(func):
+    """--leave-out-islands: disconnect islands without a swing bus, each named."""
+    return click.option(
+        "--leave-out-islands",
+        is_flag=True,
+        help="Leave out the islands without a swing bus (PSS/E's isolated buses: their "
+        "buses, branches, loads and machines with their controls), each named, instead "
+        "of writing a case whose power flow is refused.",
+    )(func)
+
+
+def _leave_out_islands(case, asked: bool):
+    """(case, lines): the case without its dead islands when asked (each line echoed as a
+    warning), else as it is."""
+    if not asked:
+        return case, ()
+    from stabctl.network.topology import without_dead_islands
+
+    case, lines = without_dead_islands(case)
+    for line in lines:
+        click.echo(f"warning: left out the {line}", err=True)
+    return case, lines
+
+
 def _check_dynamic(case, source: str, static: bool) -> None:
     """Refuse a case without machines unless --static asked for one."""
     from stabctl.errors import InputError
@@ -251,6 +275,7 @@ def _imported(case, out) -> tuple[dict, str]:
     "(PSS/E: 'initial conditions suspect'), each named, instead of writing a case that "
     "simulate refuses.",
 )
+@_islands_option
 @_static_option
 @json_option("the summary")
 @reports_errors
@@ -263,6 +288,7 @@ def import_psse(
     conventions,
     net_unmodelled,
     leave_out_infeasible,
+    leave_out_islands,
     static,
     as_json,
 ):
@@ -295,6 +321,7 @@ def import_psse(
         "net" if net_unmodelled else "error",
     )
     _check_dynamic(case, Path(raw_path).name, static)
+    case, islands = _leave_out_islands(case, leave_out_islands)
     infeasible: tuple[str, ...] = ()
     if leave_out_infeasible and len(case.machines):
         from stabctl.dynamics.infeasible import leave_out_infeasible as leave_out
@@ -309,6 +336,7 @@ def import_psse(
         left_out=list(left_out),
         netted=list(netted),
         infeasible=list(infeasible),
+        islands=list(islands),
     )
     if as_json:
         print_json(summary)
@@ -316,6 +344,7 @@ def import_psse(
     click.echo(
         f"{text}; {len(left_out)} record(s) left out, {len(netted)} generator(s) netted, "
         f"{len(infeasible)} control(s) outside their limits left out"
+        + (f", {len(islands)} island(s) without a swing bus left out" if islands else "")
     )
 
 
@@ -339,10 +368,20 @@ def import_psse(
     help="How to read the PSS/E models: as ANDES 2.0 solves them (the same "
     "equations as ANDES: machines without speed effects, ...) or as PST's.",
 )
+@_islands_option
 @_static_option
 @json_option("the summary")
 @reports_errors
-def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, static, as_json):
+def import_andes(
+    case_path,
+    dyr_path,
+    out_path,
+    skip_unsupported,
+    conventions,
+    leave_out_islands,
+    static,
+    as_json,
+):
     """Convert any case ANDES 2.0 loads (xlsx, json, PSS/E RAW [+ DYR], MATPOWER) to a
     stabctl case.
 
@@ -365,15 +404,16 @@ def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, s
     imported = read_andes_case(
         case_path, conventions, "skip" if skip_unsupported else "error", dyr_path
     )
-    case = imported.case
-    _check_dynamic(case, Path(case_path).name, static)
-    dv, da = _powerflow_gap(imported)
+    _check_dynamic(imported.case, Path(case_path).name, static)
+    case, islands = _leave_out_islands(imported.case, leave_out_islands)
+    dv, da = _powerflow_gap(imported, case)
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
     summary.update(
         left_out=list(imported.left_out),
         changed=list(imported.changed),
         ignored=list(imported.ignored),
+        islands=list(islands),
         powerflow_vmag_diff_pu=dv,
         powerflow_angle_diff_rad=da,
     )
@@ -382,6 +422,7 @@ def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, s
         return
     click.echo(
         f"{text}; {len(imported.left_out)} left out"
+        + (f"; {len(islands)} island(s) without a swing bus left out" if islands else "")
         + (f"; kept with a change: {'; '.join(imported.changed)}" if imported.changed else "")
         + (
             f"; ignored (no effect on the dynamics): {', '.join(imported.ignored)}"
@@ -397,10 +438,11 @@ def import_andes(case_path, dyr_path, out_path, skip_unsupported, conventions, s
 _PF_AGREEMENT = 1e-4
 
 
-def _powerflow_gap(imported) -> tuple[float | None, float | None]:
+def _powerflow_gap(imported, case) -> tuple[float | None, float | None]:
     """Largest |V| (pu) and angle (rad) differences between stabctl's power flow of the
-    imported case (Q limits off, as ANDES's default) and ANDES's; a warning when either
-    exceeds 1e-4 or one of the two does not converge."""
+    imported case (Q limits off, as ANDES's default; `case`, its dead islands perhaps left
+    out) and ANDES's at the buses `case` keeps; a warning when either exceeds 1e-4 or one
+    of the two does not converge."""
     import warnings
 
     import numpy as np
@@ -411,15 +453,15 @@ def _powerflow_gap(imported) -> tuple[float | None, float | None]:
     if imported.pf_bus is None:
         warnings.warn("ANDES's power flow of the case did not converge: not compared", stacklevel=2)
         return None, None
-    case = imported.case
     try:
         pf = solve_powerflow(case, q_limits=False, tol=1e-10)
     except PowerFlowError as exc:
         warnings.warn(f"stabctl's power flow of the case did not converge: {exc}", stacklevel=2)
         return None, None
-    rows = case.bus_indices(imported.pf_bus)
-    dv = float(np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)))
-    da = float(np.max(np.abs(pf.vang[rows] - imported.pf_vang)))
+    kept = np.isin(imported.pf_bus, case.buses.number)
+    rows = case.bus_indices(imported.pf_bus[kept])
+    dv = float(np.max(np.abs(pf.vmag[rows] - imported.pf_vmag[kept])))
+    da = float(np.max(np.abs(pf.vang[rows] - imported.pf_vang[kept])))
     if max(dv, da) > _PF_AGREEMENT:
         warnings.warn(
             f"the power flow differs from ANDES's by up to {dv:.1e} pu, {da:.1e} "

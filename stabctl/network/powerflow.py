@@ -42,7 +42,7 @@ import scipy.sparse.linalg as spla
 from stabctl.case import PQ, PV, SWING, Case
 from stabctl.errors import PowerFlowError
 from stabctl.network import switched_shunts as sws
-from stabctl.network.topology import bus_islands
+from stabctl.network.topology import OPEN_X, dead_buses
 from stabctl.network.ybus import add_shunts, branch_flows, build_ybus
 
 __all__ = ["PowerFlowResult", "solve_powerflow", "power_injections", "jacobian"]
@@ -303,16 +303,21 @@ def _check_islands(case: Case, drop=()) -> None:
     """PowerFlowError naming the buses without a path to a swing bus (an island of the
     case data, or left by the dropped branches): the Newton step would only report a
     singular Jacobian and the worst mismatch somewhere else."""
-    keep = np.ones(len(case.branches), bool)
+    keep = case.branches.x < OPEN_X / 10  # PST's opened branches join nothing
     keep[[d for d in drop if 0 <= d < keep.size]] = False
-    label = bus_islands(case, keep)
-    dead = np.flatnonzero(~np.isin(label, label[case.buses.kind == SWING]))
+    dead = dead_buses(case, keep)
     if dead.size:
         nums = [int(b) for b in case.buses.number[dead]]
         listing = ", ".join(map(str, nums[:10])) + (
             f" and {len(nums) - 10} more" if len(nums) > 10 else ""
         )
-        cause = "the dropped branch(es)" if drop else "the case data (no branch joins them)"
+        cause = (
+            "the dropped branch(es)"
+            if drop
+            else "the case data (no branch joins them; the import commands' "
+            "--leave-out-islands, stabctl.network.topology.without_dead_islands, "
+            "disconnects such islands as PSS/E's isolated buses)"
+        )
         raise PowerFlowError(
             f"power flow of case '{case.name}': bus(es) {listing} have no "
             f"path to a swing bus: an island left by {cause}"

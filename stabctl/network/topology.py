@@ -12,8 +12,9 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from stabctl.case import Case
+from stabctl.errors import CaseError
 
-__all__ = ["OPEN_X", "bus_islands", "machine_islands"]
+__all__ = ["OPEN_X", "bus_islands", "dead_buses", "machine_islands", "without_dead_islands"]
 
 #: PST opens a branch by giving it this reactance (its charging stays); a branch at a
 #: tenth of it or more is open for the topology
@@ -64,3 +65,122 @@ def machine_islands(case: Case) -> np.ndarray:
     _, first, inverse = np.unique(label, return_index=True, return_inverse=True)
     rank = np.argsort(np.argsort(first))
     return rank[inverse].astype(np.int64)
+
+
+def dead_buses(case: Case, keep: np.ndarray | None = None) -> np.ndarray:
+    """The buses with no path to a swing bus over the branches in service (`bus_islands`).
+
+    Parameters
+    ----------
+    case : Case
+        The network (buses, their kinds, branches).
+    keep : ndarray of bool, shape (n_branch,), or None, optional
+        Branches that join their buses (`bus_islands`).
+
+    Returns
+    -------
+    ndarray of int
+        Their 0-based rows in the bus table (empty when every island has a swing bus).
+    """
+    label = bus_islands(case, keep)
+    return np.flatnonzero(~np.isin(label, label[case.swing_index]))
+
+
+def without_dead_islands(case: Case) -> tuple[Case, tuple[str, ...]]:
+    """The case without its islands that have no swing bus, and without everything on them.
+
+    A bus with no path to a swing bus has nothing to hold its voltage and angle: the power
+    flow refuses it (`stabctl.network.powerflow.solve_powerflow`).  PSS/E's practice is to
+    disconnect such islands (bus type 4, "isolated") before solving; this does the same:
+    it removes their buses, every branch touching them (open ones included), their loads,
+    injections, converters, motors and switched shunts, their machines with each machine's
+    exciter, stabiliser, governor and shaft.  The user asks for it (``--leave-out-islands``
+    of the import commands); a case is never cut silently.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+
+    Returns
+    -------
+    (Case, tuple of str)
+        The case (the same object when every island has a swing bus) and one line per
+        island left out, naming its buses and what stood on them.
+
+    Raises
+    ------
+    CaseError
+        A device that stays refers to a bus or machine that goes: a converter's plant
+        controller measuring a line at a dead bus (``pc_bus1``/``pc_bus2``), a
+        cross-compound governor or an exciter reading a machine across the cut, or a PST
+        switching matrix (``sw_con``) naming a dead bus.
+
+    Source: PSS/E Program Operation Manual, "Bus type codes" (type 4: disconnected).
+    """
+    rows = dead_buses(case)
+    if rows.size == 0:
+        return case, ()
+    gone = case.buses.number[rows]
+    macs, br = case.machines, case.branches
+    mac_gone = macs.number[np.isin(macs.bus, gone)]
+    _check_cut(case, gone, mac_gone)
+    changes = {
+        "buses": case.buses.select(~np.isin(case.buses.number, gone)),
+        "branches": br.select(~(np.isin(br.from_bus, gone) | np.isin(br.to_bus, gone))),
+        "machines": macs.select(~np.isin(macs.number, mac_gone)),
+    }
+    for name in ("loads", "injections", "converters", "motors", "switched_shunts"):
+        table = getattr(case, name)
+        changes[name] = table.select(~np.isin(table.bus, gone))
+    for name in ("exciters", "pss", "governors", "shafts"):
+        table = getattr(case, name)
+        changes[name] = table.select(~np.isin(table.machine, mac_gone))
+    label = bus_islands(case)[rows]
+    lines = []
+    for island in np.unique(label):
+        buses = gone[label == island]
+        on = [
+            f"{n} {what}"
+            for what, n in (
+                ("machine(s)", int(np.isin(macs.bus, buses).sum())),
+                ("load(s)", int(np.isin(case.loads.bus, buses).sum())),
+                ("converter(s)", int(np.isin(case.converters.bus, buses).sum())),
+                ("motor(s)", int(np.isin(case.motors.bus, buses).sum())),
+            )
+            if n
+        ]
+        lines.append(
+            f"island of bus(es) {', '.join(str(int(b)) for b in buses)} without a swing bus"
+            + (f" ({', '.join(on)})" if on else "")
+        )
+    return case.replace(**changes), tuple(lines)
+
+
+def _check_cut(case: Case, gone: np.ndarray, mac_gone: np.ndarray) -> None:
+    """CaseError if a device that stays refers to a dead bus or a removed machine."""
+    conv = case.converters
+    live_conv = ~np.isin(conv.bus, gone)
+    for col in ("pc_bus1", "pc_bus2"):
+        bad = np.flatnonzero(live_conv & np.isin(getattr(conv, col), gone))
+        if bad.size:
+            raise CaseError(
+                f"converter {int(conv.number[bad[0]])}: its plant controller measures at "
+                f"bus {int(getattr(conv, col)[bad[0]])} ({col}), in an island left out"
+            )
+    refs = (
+        ("exciters", "ifd_machine", "exciter of machine"),
+        ("governors", "machine2", "governor of machine"),
+    )
+    for name, col, what in refs:
+        table = getattr(case, name)
+        bad = np.flatnonzero(
+            ~np.isin(table.machine, mac_gone) & np.isin(getattr(table, col), mac_gone)
+        )
+        if bad.size:
+            raise CaseError(
+                f"{what} {int(table.machine[bad[0]])}: reads machine "
+                f"{int(getattr(table, col)[bad[0]])} ({col}), in an island left out"
+            )
+    if case.sw_con is not None and np.isin(case.sw_con[:, 1:3], gone).any():
+        raise CaseError("sw_con names a bus in an island left out")

@@ -1048,6 +1048,60 @@ def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections():
     assert np.max(np.abs(w - wa)) < 1e-4
 
 
+def test_ieee14_island_runs_with_its_dead_islands_left_out(tmp_path):
+    """ANDES's ieee14_island.xlsx: the lines to buses 8 and 14 are out of service, leaving
+    two islands without a swing bus (bus 8 with its synchronous condenser, bus 14 with its
+    load).  The power flow refuses them by name; `without_dead_islands` disconnects them
+    (PSS/E's isolated buses) and names them.  The 12-bus rest starts at rest, stays flat for
+    10 s, and a 6-cycle fault at bus 9 gives the four machines' speeds within 1e-4 pu of
+    ANDES's run of the file, where the islands stay in but feed nothing (measured 5.1e-6).
+    ``import-andes --leave-out-islands`` writes the same case."""
+    from stabctl.errors import PowerFlowError
+    from stabctl.network.powerflow import solve_powerflow
+    from stabctl.network.topology import without_dead_islands
+
+    path = andes.get_case("ieee14/ieee14_island.xlsx")
+    with pytest.warns(UserWarning, match="lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    with pytest.raises(PowerFlowError, match=r"bus\(es\) 8, 14 have no path to a swing bus"):
+        solve_powerflow(case, q_limits=False)
+    live, lines = without_dead_islands(case)
+    assert lines == (
+        "island of bus(es) 8 without a swing bus (1 machine(s))",
+        "island of bus(es) 14 without a swing bus",
+    )
+    assert sorted(set(case.buses.number) - set(live.buses.number)) == [8, 14]
+    assert list(live.machines.bus) == [b for b in case.machines.bus if b != 8]
+    assert set(live.exciters.machine) <= set(live.machines.number)
+    drift, _ = flat_run(live, 10.0)
+    assert drift < 1e-8  # measured 1.1e-15
+    t_clear = 1.0 + 6 / 60
+    res = Simulator(live, q_limits=False).run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
+    ss = andes_system(path, fault=AndesFault(9, 1.0, t_clear, x=1e-3), off=("Toggle",))
+    t, wa = andes_speeds(ss, 5.0, STEP)
+    theirs = andes_machine_buses(ss)
+    on = np.asarray(theirs) != 8
+    rows = paired_rows(live.machines.bus, np.asarray(theirs)[on])
+    w = np.column_stack([np.interp(t, res.t, res.speed[:, k]) for k in rows])
+    assert np.max(np.abs(w - 1)) > 5e-3  # a real swing
+    gap = np.max(np.abs(w - wa[:, on]))
+    print(f"\nieee14_island, islands left out: speeds {gap:.1e} pu from ANDES")
+    assert gap < 1e-4
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+    from stabctl.io import load_case
+
+    out = tmp_path / "island.json"
+    args = ["import-andes", str(path), "-o", str(out), "--skip-unsupported", "--json"]
+    res = CliRunner().invoke(main, [*args, "--leave-out-islands"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    assert summary["islands"] == list(lines)
+    assert summary["powerflow_vmag_diff_pu"] < 1e-6  # ANDES's at the buses kept
+    assert load_case(out).equals(live)
+
+
 def test_ieee14_playback_source_follows_andes_through_its_time_series():
     """ANDES's ieee14_plbvfu1.xlsx: PLBVFU1 (V-f playback behind xs, Tv = Tf = 0.2 s) in
     place of the bus-8 generator, driven by its TimeSeries plbvf.xlsx (f stepping 1 ->

@@ -156,6 +156,54 @@ def test_islanded_bus_raises_powerflowerror():
         solve_powerflow(case, drop=[row])
 
 
+def with_dead_island(case):
+    """Kundur with a bus 99 joined to bus 1 by an open branch (x = OPEN_X, PST's opening),
+    carrying a copy of machine 1 (number 99) with its exciter, PSS and governor and a
+    non-conforming load: an island without a swing bus."""
+    from stabctl.network.topology import OPEN_X
+
+    def added(table, rows, **values):
+        extra = table.select(rows)
+        extra = extra.replace(**{k: np.full(len(extra), v) for k, v in values.items()})
+        return type(table).from_matrix(np.vstack([table.matrix(), extra.matrix()]))
+
+    k1 = np.flatnonzero(case.machines.number == 1)
+    return case.replace(
+        buses=added(case.buses, [1], number=99),  # a PV bus's row
+        branches=added(case.branches, [0], from_bus=1, to_bus=99, x=OPEN_X),
+        machines=added(case.machines, k1, number=99, bus=99),
+        exciters=added(case.exciters, case.exciters.machine == 1, machine=99),
+        pss=added(case.pss, case.pss.machine == 1, machine=99),
+        governors=added(case.governors, case.governors.machine == 1, machine=99),
+        loads=added(case.loads, [0], bus=99),
+    )
+
+
+def test_dead_islands_are_left_out_with_everything_on_them():
+    # PSS/E's isolated buses: the island goes with its branch, machine, controls and load,
+    # and what is left is the case as it was
+    from stabctl.network.topology import without_dead_islands
+
+    kundur = load_case("kundur")
+    case = with_dead_island(kundur)
+    with pytest.raises(PowerFlowError, match=r"bus\(es\) 99 have no path .*--leave-out-islands"):
+        solve_powerflow(case)
+    live, lines = without_dead_islands(case)
+    assert lines == ("island of bus(es) 99 without a swing bus (1 machine(s), 1 load(s))",)
+    assert live.equals(kundur)
+    assert without_dead_islands(kundur) == (kundur, ())
+
+
+def test_a_device_reading_across_the_cut_is_refused():
+    from stabctl.network.topology import without_dead_islands
+
+    case = with_dead_island(load_case("kundur"))
+    g = case.governors
+    crossed = case.replace(governors=g.replace(machine2=np.where(g.machine == 2, 99, 0)))
+    with pytest.raises(CaseError, match=r"governor of machine 2: reads machine 99 \(machine2\)"):
+        without_dead_islands(crossed)
+
+
 # ---------------------------------------------------------------------------- Ybus
 
 
