@@ -141,13 +141,16 @@ def nonwindup(x, d, lo, hi, ieee, reach):
 @kernel
 def nonwindup_lag(u, x, T, lo, hi, ieee, reach):
     """Non-windup limited lag 1/(1 + s T), limits [lo, hi] (IEEE 421.5 E.5):
-    `nonwindup` of x with dx/dt = (u - x)/T (no bypass: T must be >= LBND).
+    `nonwindup` of x with dx/dt = (u - x)/T; T < LBND: no lag, the input clamped to [lo,
+    hi] and derivative 0 (PSTess exc_dc12 "no TA": V_R = KA V_A within its limits).
 
     Returns
     -------
     (float, float)
         The clamped state (the output), its derivative.
     """
+    if T < LBND:
+        return min(max(u, lo), hi), 0.0
     return nonwindup(x, (u - x) / T, lo, hi, ieee, reach)
 
 

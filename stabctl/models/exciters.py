@@ -971,8 +971,10 @@ def _exponential_fit(e):
 
 def _check_dc(e) -> None:
     """DC exciter, EXST1 and ESST1A options stabctl does not model: raise CaseError naming
-    row and field (T_A, T_E, T_F must exist; Vrmax = 0 is PST's 'compute it')."""
-    dc = (("TA", "TA"), ("TE", "TE"), ("TF", "TF_dc"))  # (name in messages, declared)
+    row and field (T_E, T_F must exist, T_A but in the DC exciters; Vrmax = 0 is PST's
+    'compute it')."""
+    # (name in messages, declared); a DC regulator without T_A is PST's algebraic V_R
+    dc = (("TE", "TE"), ("TF", "TF_dc"))
     need = {
         DC1: dc,
         DC2: dc,

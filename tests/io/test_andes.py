@@ -1048,6 +1048,23 @@ def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections():
     assert np.max(np.abs(w - wa)) < 1e-4
 
 
+def test_ei33_with_an_ieeet1_without_ta_starts_at_rest_and_stays_flat():
+    """ANDES's EI_33.xlsx: one of its seven IEEET1 (exc_con row 36) has T_A = 0, read as
+    PSTess's DC1 without T_A (an algebraic regulator, no state).  ANDES's own power flow
+    of the file does not converge; stabctl's does without Q limits.  The case starts at
+    rest (initial residual below 1e-8) and a 10 s run moves nothing by more than 1e-8
+    (measured 5.8e-12): there is no ANDES run to compare with."""
+    path = andes.get_case("ei/EI_33.xlsx")
+    with pytest.warns(UserWarning, match="lacks .*Toggle"):
+        case = import_andes(path, on_unsupported="skip")
+    e = case.exciters
+    assert np.flatnonzero((e.type == 1) & (e.TA == 0)).tolist() == [35]
+    sim = Simulator(case, q_limits=False)
+    assert sim.model.initial_residual[0] < 1e-8
+    drift, _ = flat_run(case, 10.0)
+    assert drift < 1e-8
+
+
 def test_ieee14_island_runs_with_its_dead_islands_left_out(tmp_path):
     """ANDES's ieee14_island.xlsx: the lines to buses 8 and 14 are out of service, leaving
     two islands without a swing bus (bus 8 with its synchronous condenser, bus 14 with its

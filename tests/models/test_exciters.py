@@ -171,6 +171,21 @@ def test_dc1_step_response_is_two_lags():
     assert x[3, 0] - EFD0 == pytest.approx(exact, rel=1e-6)
 
 
+def test_dc1_without_ta_has_an_algebraic_regulator():
+    """DC1 with T_A = 0 (PSTess exc_dc12 "no TA"; EI_33's IEEET1 at row 36): V_R = K_A V_A
+    within [Vrmin, Vrmax] with no state, so the step response is the exciter's lag alone,
+    K_A dV (1 - e^(-t/T_E)) (K_E = 1); a step beyond the limit puts V_R on Vrmax at once."""
+    row = DC1[:2] + [0.0, 20, 0.0, 0.0, 0.0] + DC1[7:15] + [0.0] + DC1[16:]
+    P, x = started(row)
+    dV, TE, t = 1e-4, 0.83, 0.5
+    P[0, exc.E.VREF] += dV
+    x = simulate(P, x, t)
+    assert x[3, 0] - EFD0 == pytest.approx(20 * dV * (1 - np.exp(-t / TE)), rel=1e-6)
+    P[0, exc.E.VREF] += 10.0  # K_A V_A far above Vrmax
+    dx = derivatives(P, x)
+    assert x[2, 0] == P[0, exc.E.VRMAX] and dx[2, 0] == 0.0
+
+
 def test_ieeet2_rate_feedback_has_its_second_lag():
     """IEEET2: the rate feedback s K_F/((1 + s T_F1)(1 + s T_F2)): its state V_F lags
     K_F/T_F1 (Efd - R_f) by T_F2 (exc_con column 18, the layout's TF2; 0 for the other
