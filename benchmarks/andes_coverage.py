@@ -26,13 +26,9 @@ from stabctl.io.andes_case import read_andes_case
 from stabctl.network.topology import without_dead_islands
 
 FLAT_S = 10.0  # s, the flat run
-#: why a file that imports fails its flat run, where known (printed only while it fails)
-FLAT_WHY = {
-    "ei/EI_33.xlsx": "one of its seven IEEET1 exciters (exc_con row 36) has TA = 0, which "
-    "stabctl's DC1 model refuses (its regulator is a state); ANDES's own power flow of "
-    "the file does not converge ('large load-generation imbalance'), stabctl's does "
-    "(without Q limits, 4 iterations), so there is no ANDES run to compare with",
-}
+#: why a file that imports fails its flat run, where known (printed only while it fails;
+#: none now: EI_33, whose power flow ANDES cannot solve, runs flat in stabctl)
+FLAT_WHY: dict[str, str] = {}
 
 #: ANDES's disturbance models: events of a run, not devices.  TimeSeries is a schedule of
 #: values like Alter's; ieee14_timeseries's writes PQ.Ppf and Qpf, which ANDES's own
