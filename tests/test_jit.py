@@ -214,11 +214,11 @@ def test_assign_writes_views_as_numpys_slice_assignment_does():
     assert np.array_equal(F, want)
 
 
-def test_matvec_is_the_matrix_product_on_both_sides_of_the_blas_threshold():
+def test_matvec_and_dot_are_the_products_on_both_sides_of_the_blas_threshold():
     # the loop (small matrices: Kundur's reduced network) and BLAS (miniWECC's Y11, R)
     import numpy as np
 
-    from stabctl._jit.arrays import SMALL_MATVEC, matvec
+    from stabctl._jit.arrays import SMALL_MATVEC, dot, matvec
 
     rng = np.random.default_rng(2)
     small = int(np.sqrt(SMALL_MATVEC))
@@ -231,6 +231,10 @@ def test_matvec_is_the_matrix_product_on_both_sides_of_the_blas_threshold():
     out = np.full(3, np.nan, complex)
     matvec(np.zeros((3, 0), complex), np.zeros(0, complex), out)  # no kept bus
     assert np.array_equal(out, np.zeros(3))
+    for n in (1, 13, SMALL_MATVEC, SMALL_MATVEC + 1, 400):  # a machine's row of R
+        a = rng.normal(size=n) + 1j * rng.normal(size=n)
+        b = rng.normal(size=n) + 1j * rng.normal(size=n)
+        assert abs(dot(a, b) - a @ b) < 1e-13 * n, n
 
 
 def test_no_kernel_compiles_numbas_slice_assignment_message():

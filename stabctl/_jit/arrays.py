@@ -77,3 +77,24 @@ def matvec(A, x, out) -> None:
         for j in range(A.shape[1]):
             acc += A[i, j] * x[j]
         out[i] = acc
+
+
+@kernel
+def dot(a, b):
+    """``a @ b`` for complex 1-D a and b inside a kernel: a loop up to `SMALL_MATVEC`
+    elements, BLAS above (no temporary either way).
+
+    Parameters
+    ----------
+    a, b : ndarray, shape (n,), complex
+
+    Returns
+    -------
+    complex
+    """
+    if a.size > SMALL_MATVEC:
+        return a @ b
+    acc = 0j
+    for j in range(a.size):
+        acc += a[j] * b[j]
+    return acc

@@ -18,7 +18,7 @@ import numpy as np
 from numba import types
 
 from stabctl._jit.address import address_of, by_address
-from stabctl._jit.arrays import assign, matvec
+from stabctl._jit.arrays import assign, dot, matvec
 from stabctl._jit.decorators import kernel, njit
 from stabctl.case import BranchTable, BusTable, Case
 from stabctl.dynamics.coi import coi_inertia
@@ -900,10 +900,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         matvec(R, z, V_bus)
     else:
         for m in range(nm):
-            b = p.mac_bus[m]
-            V_bus[b] = 0j
-            for j in range(z.size):
-                V_bus[b] += R[b, j] * z[j]
+            V_bus[p.mac_bus[m]] = dot(R[p.mac_bus[m]], z)
     pss_out = np.empty(nps)
     for k in range(nps):
         m = int(p.SP[k, pss_.S.MAC])
