@@ -32,8 +32,8 @@ from stabctl.models import pss as pss_
 from stabctl.models import shafts as shaft
 from stabctl.models import shunts as shunt
 from stabctl.network import switched_shunts as sws
+from stabctl.network.solution import L as LOAD
 from stabctl.network.solution import (
-    L,
     NonConformingLoads,
     ReducedNetwork,
     kept_loads,
@@ -354,9 +354,7 @@ class DynamicModel:
             mac_bus=mp.bus_idx.astype(np.int64),
             vex0=self.vex0,
             pmech0=self.pmech0,
-            S_P=self.nc.S_P.astype(complex),
-            I0=self.nc.I0.astype(complex),
-            Y_low=self.nc.Y_low.astype(complex),
+            loads=kept_loads(self.nc),
             ieee=self.conventions == "ieee",
             reach=0.0,
             n_mac=L.n_mac,
@@ -546,9 +544,10 @@ class DynamicModel:
 class KernelParams(NamedTuple):
     """Packed parameters of every model for the compiled kernels (see each model's
     `packed`; IP the converters', TP the shafts', MO the motors', SWP and SWY the switched
-    shunts' columns and levels), the non-conforming load data of the kept buses (S_P, I0,
-    Y_low, (n_nc,) complex pu) and the numbers of machines, exciters, PSSs, governors,
-    converters, shafts, motors and switched shunts (the state layout, `Layout`)."""
+    shunts' columns and levels), the kept buses' load array loads (8, n_nc) complex pu
+    (`stabctl.network.solution.kept_loads`, copied by each evaluation) and the numbers of
+    machines, exciters, PSSs, governors, converters, shafts, motors and switched shunts
+    (the state layout, `Layout`)."""
 
     MP: np.ndarray
     basrad: float
@@ -567,9 +566,7 @@ class KernelParams(NamedTuple):
     mac_bus: np.ndarray
     vex0: np.ndarray
     pmech0: np.ndarray
-    S_P: np.ndarray
-    I0: np.ndarray
-    Y_low: np.ndarray
+    loads: np.ndarray
     ieee: bool
     #: limiter reach (s): the run's step in a simulation, 0 elsewhere
     #: (`stabctl.models.blocks.nonwindup`)
@@ -718,7 +715,7 @@ class KeptDevices(NamedTuple):
     n_ibr), the motors' MO and states xmo, on (n_motor,) 1.0 for each motor in service,
     the switched shunts' SWP, levels SWY and memory xsw (`KernelParams`, `Layout`).  The
     kernels below take these eight arrays, not the whole `KernelParams`: a compiled call
-    costs an atomic reference count per array it is passed (about 5 ns each way)."""
+    costs about 10 ns for every array it is passed (measured)."""
 
     IP: np.ndarray
     xi: np.ndarray
@@ -757,7 +754,7 @@ def _summed_currents(dev, V_nc, dv):
 @kernel
 def _drawn_currents(dev, V_nc, loads, tol):
     """The devices' currents drawn at the kept buses at voltages V_nc (`_summed_currents`,
-    dev the `KeptDevices`) against the affine model of loads (rows `L`: I_dev + G_dev |V|,
+    dev the `KeptDevices`) against the affine model of loads (rows `LOAD`: I_dev + G_dev |V|,
     I_fix + G_fix |V|, each (n_nc,) complex): if the model misses one by more than tol,
     the model is made the tangent at V_nc (in place: the slope from the currents at |V| +
     SLOPE_DV, evaluated only then).  Returns the largest miss."""
@@ -767,16 +764,17 @@ def _drawn_currents(dev, V_nc, loads, tol):
         m = abs(V_nc[i])
         moved = max(
             moved,
-            abs(rel[i] - loads[L.I_dev, i] - loads[L.G_dev, i] * m),
-            abs(fix[i] - loads[L.I_fix, i] - loads[L.G_fix, i] * m),
+            abs(rel[i] - loads[LOAD.I_dev, i] - loads[LOAD.G_dev, i] * m),
+            abs(fix[i] - loads[LOAD.I_fix, i] - loads[LOAD.G_fix, i] * m),
         )
     if moved > tol:
         rel2, fix2 = _summed_currents(dev, V_nc, SLOPE_DV)
         for i in range(V_nc.size):
             m = abs(V_nc[i])
             g_rel, g_fix = (rel2[i] - rel[i]) / SLOPE_DV, (fix2[i] - fix[i]) / SLOPE_DV
-            loads[L.G_dev, i], loads[L.G_fix, i] = g_rel, g_fix
-            loads[L.I_dev, i], loads[L.I_fix, i] = rel[i] - g_rel * m, fix[i] - g_fix * m
+            loads[LOAD.G_dev, i], loads[LOAD.G_fix, i] = g_rel, g_fix
+            loads[LOAD.I_dev, i] = rel[i] - g_rel * m
+            loads[LOAD.I_fix, i] = fix[i] - g_fix * m
     return moved
 
 
@@ -869,7 +867,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     for k in range(ni):
         conv.clamp_states(p.IP, xi, k, p.reach)
         v_dep = v_dep or conv.voltage_dependent(p.IP, k)
-    loads = kept_loads(p.S_P, p.I0, p.Y_low, S_extra)
+    loads = p.loads.copy()
+    assign(loads[LOAD.S_extra], S_extra)
     if ni or nmo or nsw:  # the converters' tangent at the starting voltages, the motors',
         # the switched shunts' currents
         _drawn_currents(dev, V_nc, loads, -1.0)

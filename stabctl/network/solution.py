@@ -159,8 +159,8 @@ class LoadRows(NamedTuple):
     |V| (their limits are piecewise linear in it): I_dev + G_dev |V| (power per pu
     voltage, drawn at every voltage at the bus voltage's angle) and I_fix + G_fix |V| (a
     current fixed in the network frame: a converter whose angle comes from a PLL).  One
-    array, not a tuple of eight: a compiled call costs an atomic reference count per array
-    argument (about 5 ns each way), and the load iteration calls its helpers every step."""
+    array, not a tuple of eight: a compiled call costs about 10 ns for every array it is
+    passed (measured), and the load iteration calls its helpers every step."""
 
     S_P: int
     I0: int
@@ -176,15 +176,22 @@ class LoadRows(NamedTuple):
 L = LoadRows(*range(len(LoadRows._fields)))
 
 
-@kernel
-def kept_loads(S_P, I0, Y_low, S_extra):
-    """The kept-bus load array of `solve_nc`, shape (8, n_nc) complex (rows `L`), with no
-    converter current (I_dev, I_fix, G_dev, G_fix 0); the arguments (n_nc,) complex."""
-    loads = np.zeros((len(L), S_P.size), np.complex128)
-    assign(loads[L.S_P], S_P)
-    assign(loads[L.I0], I0)
-    assign(loads[L.Y_low], Y_low)
-    assign(loads[L.S_extra], S_extra)
+def kept_loads(nc: NonConformingLoads) -> np.ndarray:
+    """The kept-bus load array of `solve_nc` for the non-conforming loads nc: shape (8,
+    n_nc) complex (rows `L`), S_extra and the converter rows 0.  Built once per model
+    (`stabctl.dynamics.model.KernelParams.loads`); each evaluation copies it.
+
+    Parameters
+    ----------
+    nc : NonConformingLoads
+        The loads at the kept buses.
+
+    Returns
+    -------
+    ndarray, shape (8, n_nc), complex
+    """
+    loads = np.zeros((len(L), nc.S_P.size), complex)
+    loads[L.S_P], loads[L.I0], loads[L.Y_low] = nc.S_P, nc.I0, nc.Y_low
     return loads
 
 

@@ -16,7 +16,6 @@ from stabctl.network.solution import (
     V_RELEASE,
     V_SWITCH,
     _load_mismatch,
-    kept_loads,
     solve_nc,
 )
 
@@ -38,8 +37,7 @@ def fault_network():
 
 def solve(m, net, psi, V, held):
     p = m.params
-    none = np.zeros(V.size, complex)  # no extra power, no converters
-    loads = kept_loads(p.S_P, p.I0, p.Y_low, none)
+    loads = p.loads.copy()
     it = solve_nc(net.Y21, net.Y22, net.Z22, psi, V, loads, held)
     F = np.empty(V.size, complex)
     resid = _load_mismatch(net.Y21 @ psi, net.Y22, V, loads, F, held)
@@ -122,8 +120,7 @@ def test_a_converter_current_growing_with_the_voltage_is_solved_with_the_network
             up = conv.drawn_current(m.params.IP, xi, k, abs(V[pos]) + 0.01)[0]
             slope = max(slope, abs(up - rel) / 0.01)
         p = m.params
-        none = np.zeros(V.size, complex)
-        loads = kept_loads(p.S_P, p.I0, p.Y_low, none)
+        loads = p.loads.copy()
         F = np.empty(V.size, complex)
         _load_mismatch(net.Y21 @ psi, net.Y22, V, loads, F, np.zeros(V.size, np.bool_))
         assert np.max(np.abs(F + drawn)) < 1e-10
