@@ -126,6 +126,15 @@ def _build_events(
     help="Loss of synchronism: a rotor angle more than RAD from the centre of inertia (rad).",
 )
 @click.option("--stop-at-separation", is_flag=True, help="Stop the run at loss of synchronism.")
+@click.option(
+    "--method",
+    type=click.Choice(["heun", "trapezoid"]),
+    default="heun",
+    show_default=True,
+    help="Integration method: heun, the compiled predictor-corrector (PSTess's); "
+    "trapezoid, the implicit trapezoidal rule (ANDES's; ieee conventions, no storage; "
+    "a Python loop, slower).",
+)
 @out_file_option(metavar="FILE.csv|FILE.npz", help="The trajectories (CSV or numpy .npz).")
 @plot_option("speeds, angles from the COI and bus voltages")
 @storage_options()
@@ -149,6 +158,7 @@ def simulate(
     q_limits,
     separation_limit,
     stop_at_separation,
+    method,
     out_path,
     plot_path,
     esd_pct,
@@ -249,6 +259,7 @@ def simulate(
         separation_limit=separation_limit,
         stop_at_separation=stop_at_separation,
         storage=fleet,
+        method=method,
     )
     esd = (
         None
@@ -285,6 +296,7 @@ def simulate(
             {
                 **summary,
                 "step_s": h,
+                "method": method,
                 "conventions": conventions,
                 "q_limits": q_limits,
                 "esd": esd,
@@ -295,7 +307,7 @@ def simulate(
         return
     click.echo(
         f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
-        f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {h:g} s, "
+        f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {h:g} s, {method}, "
         f"{conventions} conventions), "
         f"wall {summary.get('wall_time_s', float('nan')):.2f} s"
     )

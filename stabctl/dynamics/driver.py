@@ -25,6 +25,7 @@ from stabctl._jit.cache import cached
 from stabctl.case import Case
 from stabctl.dynamics import events as ev_
 from stabctl.dynamics import integrator as ig
+from stabctl.dynamics import trapezoid
 from stabctl.dynamics.coi import coi_of_islands
 from stabctl.dynamics.grid import (
     check_step,
@@ -271,6 +272,7 @@ class Simulator:
         separation_limit: float = np.pi,
         stop_at_separation: bool = False,
         storage=None,
+        method: str = "heun",
     ) -> SimulationResult:
         """Simulate disturbances from the power-flow point, t = 0 to `t_end`.
 
@@ -300,6 +302,11 @@ class Simulator:
         storage : StorageFleet or None, optional
             Energy-storage devices and their controller (`stabctl.storage.devices`); their
             buses are kept in the reduced network.  None (default): no storage.
+        method : {"heun", "trapezoid"}, optional
+            Integration method: "heun" (default), the compiled predictor-corrector
+            (`stabctl.dynamics.integrator`, PSTess's); "trapezoid", the implicit trapezoidal
+            rule (`stabctl.dynamics.trapezoid`, ANDES's), A-stable, "exact" semantics
+            only, without storage devices, a Python loop around the compiled evaluation.
 
         Returns
         -------
@@ -311,7 +318,8 @@ class Simulator:
         Raises
         ------
         InputError
-            Bad semantics, events (clearing before the fault, negative time), `t_end` or
+            Bad semantics or method (the trapezoid with "pst" semantics or storage),
+            events (clearing before the fault, negative time), `t_end` or
             step (not positive and finite, too large for the case's fastest time
             constant, or more steps than `stabctl.dynamics.grid.check_step_count` allows).
         UnknownBusError, CaseError
@@ -323,13 +331,16 @@ class Simulator:
             A singular network or non-convergent loads (voltage collapse).  Both carry
             the partial result as ``.result``.
         """
+        semantics = self._semantics(semantics)
+        _check_method(method, semantics, storage)
         sim = self._for_storage(storage)
         if sim is not self:
             return sim.run(
                 events, t_end, h, semantics, separation_limit, stop_at_separation, storage
             )
-        semantics = self._semantics(semantics)
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
+        if method == "trapezoid":
+            return trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation)
         run = _Run(
             self, m, sa, grid, nets, semantics == "pst", separation_limit, stop_at_separation
         )
@@ -568,6 +579,19 @@ def _with_solved_shunts(case: Case, levels: np.ndarray) -> Case:
         return case
     y = sws.admittances(t, levels)
     return case.replace(switched_shunts=t.replace(b0=y.imag, g0=y.real))
+
+
+def _check_method(method: str, semantics: str, storage) -> None:
+    """Refuse an unknown method, and the trapezoid with what it does not implement."""
+    if method not in ("heun", "trapezoid"):
+        raise InputError(f"method must be 'heun' or 'trapezoid', got {method!r}")
+    if method == "trapezoid" and semantics != "exact":
+        raise InputError("method 'trapezoid' takes the 'exact' event semantics only")
+    if method == "trapezoid" and storage is not None:
+        raise InputError(
+            "method 'trapezoid' takes no storage devices (their switching instants are"
+            " located inside Heun's steps): use method 'heun'"
+        )
 
 
 def simulator_cached() -> bool:

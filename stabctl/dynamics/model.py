@@ -541,6 +541,31 @@ class DynamicModel:
         )
 
 
+def active_states(model: DynamicModel) -> np.ndarray:
+    """Boolean mask (n_x,) of the state slots that are states of the model.
+
+    Unused slots (derivative identically 0, never read as a state): machines mac_tra
+    psikd/psikq, mac_em all but delta/omega, an infinite bus's (H = 0) delta/omega too;
+    exciters V_TR without T_R, V_As without T_B, the smpexc Efd without T_A; the third PSS
+    lead-lag without T_4 (PSTess's lbnd = 1e-3 s); slots a type does not use
+    (`ExciterParams.has_state`, `GovernorParams.has_state`).
+    """
+    L, mp, ep, pp = model.layout, model.mp, model.ep, model.pp
+    act = np.zeros(L.size, bool)
+    m = L.view(act, "mac")
+    m[[0, 1]] = mp.H > 0  # an infinite bus (H = 0) holds its angle and speed
+    m[[2, 4]] = mp.kind != mac.EM
+    m[[3, 5]] = mp.kind == mac.SUB
+    L.view(act, "exc")[:] = ep.has_state()
+    L.view(act, "pss")[:] = pp.has_state()
+    L.view(act, "tg")[:] = model.gp.has_state()
+    L.view(act, "ibr")[:] = model.cp.has_state()
+    L.view(act, "shaft")[:] = True
+    L.view(act, "motor")[:] = model.case.motors.in_service == 1  # off: standing still
+    L.view(act, "swsh")[:] = False  # a switched shunt's level and delay: discrete memory
+    return act
+
+
 class KernelParams(NamedTuple):
     """Packed parameters of every model for the compiled kernels (see each model's
     `packed`; IP the converters', TP the shafts', MO the motors', SWP and SWY the switched

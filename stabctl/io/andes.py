@@ -117,6 +117,7 @@ def andes_system(
     config_option=(),
     off=(),
     event_eps: float | None = None,
+    fixed_step: bool = False,
 ):
     """An ANDES ``System`` of the RAW (+ DYR) files, or of any case file ANDES reads
     (xlsx, json, MATPOWER: ``dyr`` None), with ``fault`` added, set up; config_option:
@@ -131,7 +132,16 @@ def andes_system(
     state whose derivative jumps moves at the mean of its old and new rates for that step:
     a delay of about event_eps / 2 whatever the step ``tstep``.  On Kundur's wind turbine
     that delay is 1.0e-3 pu of P and 1.4e-3 of Q with both tools at 0.3125 ms; with 1e-7,
-    2.2e-4 and 1.7e-4 (`benchmarks/wind_step_error.py`, docs/ibr.md)."""
+    2.2e-4 and 1.7e-4 (`benchmarks/wind_step_error.py`, docs/ibr.md).
+
+    fixed_step: keep ANDES's trapezoid at its step ``tstep`` (but for the event steps).
+    ANDES's "fixed" step is not fixed: after a step that took 7-14 Newton iterations it
+    multiplies the next by 0.95, after 15 or more by 0.5, and grows it back by 1.1 up to
+    ``tstep`` (``andes/routines/daeint.py`` ``ImplicitIter.niter_next_h``; on Kundur's
+    wind turbine at 5 ms, 3.7-4.75 ms steps in the fault and after it).  With fixed_step
+    ANDES keeps ``tstep`` after every converged step (a step that does not converge still
+    shrinks), so that its run is comparable with stabctl's trapezoid at the same step
+    (`stabctl.dynamics.trapezoid`)."""
     andes = _andes()
     kw: dict[str, Any] = {} if dyr is None else {"addfile": str(dyr)}
     if config_option:
@@ -139,6 +149,8 @@ def andes_system(
     ss = andes.load(str(raw), setup=False, no_output=True, default_config=True, **kw)
     if event_eps is not None:  # an instance attribute: the TDS calls system.store_switch_times
         ss.store_switch_times = functools.partial(type(ss).store_switch_times, ss, eps=event_eps)
+    if fixed_step:
+        _hold_step(ss.TDS)
     for name in off:
         model = ss.models[name]
         model.u.v = [0] * model.n
@@ -159,6 +171,32 @@ def andes_system(
     ss.setup()
     ss.PFlow.config.tol = 1e-12
     return ss
+
+
+def _hold_step(tds) -> None:
+    """Make ANDES's TDS ``tds`` (its trapezoid) take ``tstep`` again after each converged
+    step (`andes_system`, fixed_step); a step that does not converge shrinks as in ANDES.
+    The TDS sets its method again at ``init`` (``set_method``), so that is where the
+    method is replaced."""
+    from andes.routines.daeint import Trapezoid
+
+    class FixedStepTrapezoid(Trapezoid):
+        @staticmethod
+        def calc_h(tds):
+            if tds.converged:
+                tds.deltat = min(tds.config.tstep, tds.deltatmax)
+            else:
+                Trapezoid.calc_h(tds)
+
+    set_method = tds.set_method
+
+    def set_fixed(name: str = "trapezoid") -> None:
+        set_method(name)
+        if type(tds.method) is Trapezoid:
+            tds.method = FixedStepTrapezoid()
+
+    tds.set_method = set_fixed
+    tds.set_method(tds.config.method)
 
 
 def _repair_esdc1a(ss) -> None:

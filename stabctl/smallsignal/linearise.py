@@ -51,6 +51,7 @@ from stabctl.dynamics.model import (
     KeptBuses,
     KernelOutputs,
     StageConfig,
+    active_states,
     call_evaluate,
     evaluate_address,
     kernel_network,
@@ -60,7 +61,6 @@ from stabctl.errors import InputError, SimulationError
 from stabctl.models import converters as conv
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
-from stabctl.models import machines as mac
 
 REL_STEP = 1e-4  # PSTess svm_mgen's relative perturbation
 KINK_RATIO = 1e-2  # one-sided slopes differing more than this: a limit was crossed
@@ -109,31 +109,6 @@ class Differences(NamedTuple):
     curv: np.ndarray
     V0: np.ndarray
     held: np.ndarray
-
-
-def active_states(model: DynamicModel) -> np.ndarray:
-    """Boolean mask (n_x,) of the state slots that are states of the model.
-
-    Unused slots (derivative identically 0, never read as a state): machines mac_tra
-    psikd/psikq, mac_em all but delta/omega, an infinite bus's (H = 0) delta/omega too;
-    exciters V_TR without T_R, V_As without T_B, the smpexc Efd without T_A; the third PSS
-    lead-lag without T_4 (PSTess's lbnd = 1e-3 s); slots a type does not use
-    (`ExciterParams.has_state`, `GovernorParams.has_state`).
-    """
-    L, mp, ep, pp = model.layout, model.mp, model.ep, model.pp
-    act = np.zeros(L.size, bool)
-    m = L.view(act, "mac")
-    m[[0, 1]] = mp.H > 0  # an infinite bus (H = 0) holds its angle and speed
-    m[[2, 4]] = mp.kind != mac.EM
-    m[[3, 5]] = mp.kind == mac.SUB
-    L.view(act, "exc")[:] = ep.has_state()
-    L.view(act, "pss")[:] = pp.has_state()
-    L.view(act, "tg")[:] = model.gp.has_state()
-    L.view(act, "ibr")[:] = model.cp.has_state()
-    L.view(act, "shaft")[:] = True
-    L.view(act, "motor")[:] = model.case.motors.in_service == 1  # off: standing still
-    L.view(act, "swsh")[:] = False  # a switched shunt's level and delay: discrete memory
-    return act
 
 
 def default_esd_buses(case: Case) -> list[int]:

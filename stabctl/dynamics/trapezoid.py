@@ -1,0 +1,255 @@
+"""Implicit trapezoidal integration of the simulator's model (``Simulator.run(method=
+"trapezoid")``), the method ANDES 2.0 integrates with (``andes/routines/daeint.py``
+``Trapezoid``), for like-for-like comparisons with it and for stiff cases at long steps.
+
+Each step solves x_k+1 = x_k + h/2 (f(x_k) + f(x_k+1)) on the grid of
+`stabctl.dynamics.grid` (every event time a grid point, the network of the interval the step
+lies in: the "exact" semantics), f being the model's own evaluation
+(`stabctl.dynamics.model.evaluate_kernel`, the network and loads solved inside it). The
+solution is a chord Newton iteration on the model's states
+(`stabctl.dynamics.model.active_states`) with the matrix I - h/2 A, A = df/dx by forward
+differences of the same evaluation, factorised once per network stage and again after an
+iteration that is slow to converge. Non-windup limits follow ANDES's AntiWindup
+(``andes/core/discrete.py``; IEEE 421.5-2016 E.5): a state the evaluation has set on its
+limit in this step (the limiter's reach 0, `stabctl.models.blocks.nonwindup`) is held there,
+its residual and its correction zero, while its derivative stays zero; held at an iterate
+after the LOCK-th, it stays held for the step (ANDES's ``niter_lock``, against chattering on
+a limit that moves with the iterate). The other slots, the memory of discrete logic
+(REECA1's timers and held values), take the rule with each iterate's derivative, and the
+evaluation writes them at every iterate, as ANDES updates its discrete flags. The step is
+the grid's, always: ANDES's own "fixed" step shrinks by 0.95 after any step that took 7-14
+Newton iterations (``ImplicitIter.niter_next_h``), so a like-for-like comparison holds
+ANDES's step too (`stabctl.io.andes.andes_system`, ``fixed_step``).
+
+Heun's predictor-corrector (`stabctl.dynamics.integrator`) stays the simulator's method:
+compiled, with the storage devices' switching located inside the step and the PSTess event
+semantics. This method is a Python loop around the compiled evaluation; it takes no storage
+devices.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import scipy.linalg as sla
+
+from stabctl.dynamics.coi import coi_of_islands
+from stabctl.dynamics.integrator import SPEED_BAND, recording
+from stabctl.dynamics.model import (
+    BUS_VOLTAGES,
+    NO_BUS_VOLTAGES,
+    DynamicModel,
+    KeptBuses,
+    active_states,
+    evaluate_kernel,
+    kernel_network,
+    kernel_outputs,
+)
+from stabctl.dynamics.results import SimulationResult
+from stabctl.errors import NumericalInstabilityError, SimulationError
+
+#: Newton's convergence: the largest correction of a state below TOL (pu, rad)
+TOL = 1e-10
+#: iterations of one step at most; the matrix is formed again at the iterate after an
+#: iteration that shrank the correction by less than SLOW (not twice in a row)
+MAX_ITER, SLOW = 30, 0.25
+#: an iteration that has not converged in MAX_ITER is accepted if its last STALL
+#: corrections are all below STALL_TOL: a state on a limiter's kink (a non-windup limit
+#: that moves with the iterate, REGCA1's LVPL) alternates between held and free by less
+#: than that.  ANDES accepts any step whose correction is below 1e-4 (TDS tol).
+STALL, STALL_TOL = 10, 1e-5
+#: after this many iterations a state held on its limit stays held for the step (ANDES's
+#: AntiWindup ``niter_lock``, against chattering)
+LOCK = 4
+#: forward-difference step of the Jacobian, relative to max(1, |x|) (as the linearisation)
+REL_STEP = 1e-7
+
+
+class _Evaluation:
+    """The model's evaluation with the run's kept buses: each network stage's matrices, the
+    loads held low (released when the stage changes), the outputs of the last call."""
+
+    def __init__(self, m: DynamicModel, nets):
+        self.p = m.params._replace(reach=0.0)
+        self.nets = [kernel_network(n) for n in nets]
+        n_nc = m.V_nc0.size
+        self.kept = KeptBuses(
+            V=m.V_nc0.copy(),
+            held=np.zeros(n_nc, np.bool_),
+            S_extra=np.zeros(n_nc, np.complex128),
+        )
+        self.out = kernel_outputs(m.mp.n, m.case.n_bus, m.cp.n)
+        self.stage = -1
+
+    def __call__(self, x, stage, want=NO_BUS_VOLTAGES, kept=None) -> np.ndarray:
+        """dx/dt at x (clamped in place) with the network of `stage`; kept: other kept-bus
+        memory (a copy, for the difference quotients).  Raises SimulationError when the
+        loads do not converge."""
+        if kept is None:
+            kept = self.kept
+            if stage != self.stage:
+                kept.held[:] = False
+                self.stage = stage
+        dx = np.zeros_like(x)
+        if evaluate_kernel(x, self.p, self.nets[stage], kept, want, dx, self.out) < 0:
+            raise SimulationError("the network/load equations did not converge")
+        return dx
+
+    def jacobian(self, x, f_x, stage, act) -> np.ndarray:
+        """df/dx over the states act (n_act, n_act) at x (derivatives f_x) by forward
+        differences of the evaluation, the kept buses' memory untouched."""
+        A = np.empty((act.size, act.size))
+        for c, q in enumerate(act):
+            d = REL_STEP * max(1.0, abs(x[q]))
+            xp = x.copy()
+            xp[q] += d
+            kept = KeptBuses(self.kept.V.copy(), self.kept.held.copy(), self.kept.S_extra)
+            A[:, c] = (self(xp, stage, kept=kept)[act] - f_x[act]) / d
+        return A
+
+
+def _record(rec, k, x, out, nm) -> None:
+    rec.angle[k], rec.speed[k] = x[:nm], x[nm : 2 * nm]
+    rec.pelect[k], rec.pmech[k], rec.efd[k] = out.pelect, out.pmech, out.efd
+    rec.V[k] = out.V_bus
+    if out.S_ibr.size:
+        rec.S_ibr[k] = out.S_ibr
+
+
+class _Step:
+    """The chord Newton iteration of one trapezoidal step (module docstring)."""
+
+    def __init__(self, f: _Evaluation, active: np.ndarray):
+        self.f, self.act, self.rest = f, np.flatnonzero(active), np.flatnonzero(~active)
+        self.stage = -1  # the network stage the factorised matrix belongs to
+        self.lu = None
+
+    def factorise(self, x, f_x, stage, h) -> None:
+        A = self.f.jacobian(x, f_x, stage, self.act)
+        self.lu = sla.lu_factor(np.eye(self.act.size) - 0.5 * h * A)
+        self.stage = stage
+
+    def __call__(self, x, f_x, stage, h) -> tuple[np.ndarray, int]:
+        """(x_k+1, -1) from x_k = x (derivatives f_x), or (last iterate, worst state) when
+        Newton did not converge in MAX_ITER iterations."""
+        if self.stage != stage:  # (a stage's steps are equal, but for rounding)
+            self.factorise(x, f_x, stage, h)
+        act, rest, y = self.act, self.rest, x + h * f_x
+        pegged = np.zeros(x.size, bool)
+        held = np.zeros(act.size, bool)
+        last, slow = np.zeros(STALL), False
+        for it in range(MAX_ITER):
+            y_in = y.copy()
+            f_y = self.f(y, stage)
+            pegged[act] |= y[act] != y_in[act]
+            r = y - x - 0.5 * h * (f_x + f_y)
+            now = (pegged & (f_y == 0.0))[act]
+            held = now | (held & (it > LOCK))
+            r[act[held]] = 0.0
+            if slow:
+                self.factorise(y, f_y, stage, h)
+            dy = sla.lu_solve(self.lu, r[act])
+            dy[held] = 0.0
+            y[act] -= dy
+            y[rest] = x[rest] + 0.5 * h * (f_x[rest] + f_y[rest])
+            worst = int(np.argmax(np.abs(dy)))
+            last[it % STALL] = abs(dy[worst])
+            slow = it >= 1 and last[it % STALL] > SLOW * last[(it - 1) % STALL] and not slow
+            if last[it % STALL] <= TOL:
+                return y, -1
+        return y, -1 if np.max(last) <= STALL_TOL else int(act[worst])
+
+
+def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> SimulationResult:
+    """Integrate the grid's steps with the trapezoidal rule (module docstring).
+
+    Parameters
+    ----------
+    sim : Simulator
+        The simulator (case, COI weights, islands, result assembly).
+    m : DynamicModel
+        The model of the run (no storage buses).
+    grid : TimeGrid
+        The event grid (`stabctl.dynamics.grid.time_grid`).
+    nets : list of ReducedNetwork
+        The network of each interval of the grid.
+    limit : float
+        Loss of synchronism: an angle more than this from its island's COI (rad, eq. 40).
+    stop : bool
+        End the run at the first step after which the limit is exceeded.
+
+    Returns
+    -------
+    SimulationResult
+
+    Raises
+    ------
+    NumericalInstabilityError
+        Newton did not converge in a step, or a state left the physical range (non-finite,
+        a speed more than `SPEED_BAND` pu from synchronous); names the time and state.
+    SimulationError
+        The network/load equations did not converge.  Both carry the partial result.
+    """
+    wall = time.perf_counter()
+    f, nm, n_t = _Evaluation(m, nets), m.mp.n, grid.t.size
+    step = _Step(f, active_states(m))
+    rec = recording(n_t, nm, m.case.n_bus, 0, m.cp.n)
+    x = m.x0.copy()
+    for k in range(n_t):
+        s = int(grid.interval[k])
+        try:
+            f_x = f(x, s, BUS_VOLTAGES)
+        except SimulationError as e:
+            _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
+        _record(rec, k, x, f.out, nm)
+        h = float(grid.t[k + 1] - grid.t[k]) if k + 1 < n_t else 0.0
+        if k + 1 == n_t or (stop and _separated(sim, x, nm, limit)):
+            break
+        if h == 0.0:
+            continue
+        try:
+            x, bad = step(x, f_x, s, h)
+        except SimulationError as e:
+            _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
+        why = "Newton's iteration did not converge" if bad >= 0 else _unhealthy(x, nm)
+        if why:
+            q = bad if bad >= 0 else _bad_state(x, nm)
+            msg = (
+                f"case '{sim.case.name}': trapezoidal step ending at t = {grid.t[k + 1]:.4f} s:"
+                f" state {m.state_name(q)} = {x[q]:.6g} ({why}); use a smaller step"
+                f" (trajectory kept up to {grid.t[k]:.4f} s)"
+            )
+            _fail(sim, grid, rec, k, wall, limit, msg, NumericalInstabilityError)
+    return sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit)
+
+
+def _separated(sim, x, nm, limit) -> bool:
+    angle = x[:nm]
+    return bool(np.max(np.abs(angle - coi_of_islands(angle, sim.inertia, sim.island))) > limit)
+
+
+def _unhealthy(x, nm) -> str:
+    if not np.all(np.isfinite(x)):
+        return "not finite"
+    if np.max(np.abs(x[nm : 2 * nm] - 1.0)) > SPEED_BAND:
+        return f"speed more than {SPEED_BAND} pu from synchronous"
+    return ""
+
+
+def _bad_state(x, nm) -> int:
+    bad = np.flatnonzero(~np.isfinite(x))
+    if bad.size:
+        return int(bad[0])
+    return nm + int(np.argmax(np.abs(x[nm : 2 * nm] - 1.0)))
+
+
+def _fail(sim, grid, rec, k, wall, limit, why, error) -> None:
+    res = sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit)
+    if error is SimulationError:
+        why = (
+            f"case '{sim.case.name}': {why} in the step ending at t = "
+            f"{grid.t[min(k + 1, grid.t.size - 1)]:.4f} s (trajectory kept up to "
+            f"{grid.t[k]:.4f} s)"
+        )
+    raise error(why, result=res)
