@@ -118,6 +118,7 @@ def andes_system(
     off=(),
     event_eps: float | None = None,
     fixed_step: bool = False,
+    edit=None,
 ):
     """An ANDES ``System`` of the RAW (+ DYR) files, or of any case file ANDES reads
     (xlsx, json, MATPOWER: ``dyr`` None), with ``fault`` added, set up; config_option:
@@ -141,7 +142,10 @@ def andes_system(
     wind turbine at 5 ms, 3.7-4.75 ms steps in the fault and after it).  With fixed_step
     ANDES keeps ``tstep`` after every converged step (a step that does not converge still
     shrinks), so that its run is comparable with stabctl's trapezoid at the same step
-    (`stabctl.dynamics.trapezoid`)."""
+    (`stabctl.dynamics.trapezoid`).
+
+    edit: a callable given the System before set-up (after ``off``), to change its data,
+    e.g. ``lambda ss: ss.EXDC2.VRMAX.v.__imul__(10)``."""
     andes = _andes()
     kw: dict[str, Any] = {} if dyr is None else {"addfile": str(dyr)}
     if config_option:
@@ -157,6 +161,8 @@ def andes_system(
     if Path(raw).suffix.lower() == ".raw":
         _raw_network(ss, raw)
     _repair_esdc1a(ss)
+    if edit is not None:
+        edit(ss)
     if fault is not None:
         ss.add(
             "Fault",
