@@ -16,8 +16,12 @@ first step after a switch with the pre-switch derivative (`stabctl.io.andes.ande
 a delay of about 5e-5 s whatever its step: with both tools at 0.3125 ms it is the tools'
 gap, 1.0e-3 P and 1.4e-3 Q; with ``--event-eps 1e-7``, 2.2e-4 and 1.7e-4.
 
+Like for like (``--method trapezoid --fixed-step --event-eps 1e-7``): stabctl's trapezoid
+against ANDES's with its step held, the tools' gap at 5 ms is then what the models differ
+by (docs/ibr.md 8).
+
 Run: python benchmarks/wind_step_error.py [--case kundur/kundur_wtdta1.xlsx] [--bus 7]
-[--steps 0.005 ... 0.0003125] [--event-eps 1e-7]
+[--steps 0.005 ... 0.0003125] [--event-eps 1e-7] [--method heun|trapezoid] [--fixed-step]
 """
 
 from __future__ import annotations
@@ -31,7 +35,9 @@ STEPS = (0.005, 0.0025, 0.00125, 0.0003125)  # s; the last is the reference
 T_FAULT, CYCLES, X_FAULT, T_END = 1.0, 6, 1e-3, 5.0
 
 
-def runs(case_name: str, bus: int, steps=STEPS, event_eps=None) -> dict:
+def runs(
+    case_name: str, bus: int, steps=STEPS, event_eps=None, method="heun", fixed_step=False
+) -> dict:
     """{step: (t, P, Q, Pa, Qa)} on ANDES's grid t (stabctl's interpolated)."""
     import andes
 
@@ -48,10 +54,16 @@ def runs(case_name: str, bus: int, steps=STEPS, event_eps=None) -> dict:
     out = {}
     for h in steps:
         res = Simulator(case, q_limits=False).run(
-            [Fault(bus, T_FAULT, t_clear, x=X_FAULT)], T_END, h=h
+            [Fault(bus, T_FAULT, t_clear, x=X_FAULT)], T_END, h=h, method=method
         )
         fault = AndesFault(bus, T_FAULT, t_clear, x=X_FAULT)
-        ss = andes_system(path, fault=fault, off=("Toggle", "Fault"), event_eps=event_eps)
+        ss = andes_system(
+            path,
+            fault=fault,
+            off=("Toggle", "Fault"),
+            event_eps=event_eps,
+            fixed_step=fixed_step,
+        )
         t, _ = andes_speeds(ss, T_END, h)
         Pa, Qa = andes_converter_powers(ss, "REGCA1")
         P = np.interp(t, res.t, res.ibr_p[:, 0])
@@ -85,12 +97,25 @@ def main() -> None:
         "switch uses the pre-switch derivative, a delay of about eps/2 (stabctl.io.andes."
         "andes_system); 1e-7 makes it negligible",
     )
+    ap.add_argument(
+        "--method",
+        choices=("heun", "trapezoid"),
+        default="heun",
+        help="stabctl's integration method (trapezoid: ANDES's)",
+    )
+    ap.add_argument(
+        "--fixed-step",
+        action="store_true",
+        help="hold ANDES's step at tstep (its trapezoid otherwise shrinks it by 0.95 after "
+        "7-14 Newton iterations; stabctl.io.andes.andes_system)",
+    )
     args = ap.parse_args()
     steps = tuple(args.steps)
     print(f"{args.case}: fault at bus {args.bus} through j{X_FAULT} pu, {CYCLES} cycles, {T_END} s")
     eps = "ANDES's default 1e-4" if args.event_eps is None else f"{args.event_eps:g}"
     print(f"ANDES's event steps: {eps} s")
-    r = runs(args.case, args.bus, steps, args.event_eps)
+    print(f"stabctl: {args.method}; ANDES's step: {'held' if args.fixed_step else 'its own'}")
+    r = runs(args.case, args.bus, steps, args.event_eps, args.method, args.fixed_step)
     t_ref, P_ref, Q_ref, Pa_ref, Qa_ref = r[steps[-1]]
     print("step ms | tools' gap P, Q | stabctl step error P, Q | ANDES step error P, Q")
     for h in steps:

@@ -59,6 +59,9 @@ MAX_ITER, SLOW = 30, 0.25
 #: that moves with the iterate, REGCA1's LVPL) alternates between held and free by less
 #: than that.  ANDES accepts any step whose correction is below 1e-4 (TDS tol).
 STALL, STALL_TOL = 10, 1e-5
+#: a step whose iteration does not converge is taken as two half steps, each again, at
+#: most HALVINGS times
+HALVINGS = 3
 #: after this many iterations a state held on its limit stays held for the step (ANDES's
 #: AntiWindup ``niter_lock``, against chattering)
 LOCK = 4
@@ -122,18 +125,18 @@ class _Step:
 
     def __init__(self, f: _Evaluation, active: np.ndarray):
         self.f, self.act, self.rest = f, np.flatnonzero(active), np.flatnonzero(~active)
-        self.stage = -1  # the network stage the factorised matrix belongs to
+        self.key: tuple = ()  # (stage, step) the factorised matrix belongs to
         self.lu = None
 
     def factorise(self, x, f_x, stage, h) -> None:
         A = self.f.jacobian(x, f_x, stage, self.act)
         self.lu = sla.lu_factor(np.eye(self.act.size) - 0.5 * h * A)
-        self.stage = stage
+        self.key = _key(stage, h)
 
     def __call__(self, x, f_x, stage, h) -> tuple[np.ndarray, int]:
         """(x_k+1, -1) from x_k = x (derivatives f_x), or (last iterate, worst state) when
         Newton did not converge in MAX_ITER iterations."""
-        if self.stage != stage:  # (a stage's steps are equal, but for rounding)
+        if self.key != _key(stage, h):
             self.factorise(x, f_x, stage, h)
         act, rest, y = self.act, self.rest, x + h * f_x
         pegged = np.zeros(x.size, bool)
@@ -159,6 +162,22 @@ class _Step:
             if last[it % STALL] <= TOL:
                 return y, -1
         return y, -1 if np.max(last) <= STALL_TOL else int(act[worst])
+
+    def halving(self, x, f_x, stage, h, depth=0) -> tuple[np.ndarray, int]:
+        """The step, or where Newton does not converge, two steps of h/2 (each again, down
+        to h / 2**HALVINGS), as ANDES shrinks its step; the grid stays."""
+        y, bad = self(x, f_x, stage, h)
+        if bad < 0 or depth == HALVINGS:
+            return y, bad
+        y, bad = self.halving(x, f_x, stage, 0.5 * h, depth + 1)
+        if bad >= 0:
+            return y, bad
+        return self.halving(y, self.f(y, stage), stage, 0.5 * h, depth + 1)
+
+
+def _key(stage, h) -> tuple:
+    """The matrix's key: a stage's steps are equal but for rounding."""
+    return stage, round(h, 12)
 
 
 def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> SimulationResult:
@@ -209,7 +228,7 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
         if h == 0.0:
             continue
         try:
-            x, bad = step(x, f_x, s, h)
+            x, bad = step.halving(x, f_x, s, h)
         except SimulationError as e:
             _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
         why = "Newton's iteration did not converge" if bad >= 0 else _unhealthy(x, nm)

@@ -7,9 +7,10 @@ step for step, is in tests/io/test_andes.py."""
 import numpy as np
 import pytest
 
-from stabctl.dynamics.events import Fault
+from stabctl.dynamics.events import Fault, fault_with_clearing
 from stabctl.errors import InputError
 from stabctl.storage.devices import uniform_fleet
+from stabctl.studies.cases import CASE1
 
 #: Kundur (built-in, ieee conventions): a bolted fault at bus 3, 1.0-1.1 s, 3 s
 FAULT = [Fault(3, 1.0, 1.1)]
@@ -64,6 +65,19 @@ def test_trapezoid_holds_the_field_voltage_exactly_on_its_ceiling(kundur, kundur
     on = res.efd == ceiling
     assert np.all(on.sum(axis=0) >= 3)  # held for several steps
     assert np.all(res.efd[-1] < ceiling)  # and released
+
+
+def test_trapezoid_reaches_heuns_verdict_on_the_papers_case_1(kundur, kundur_case):
+    """The paper's Case 1 (bus-3 fault on line 3-101, 21 cycles: unstable without storage)
+    at 5 ms: machines 1 and 2 separate at the same instant in both methods (1.96 s).  The
+    trapezoid stops there (stop_at_separation): later in the pole slip a load alternates
+    between its two models at every iterate and its Newton iteration cannot converge
+    (docs/simulator.md)."""
+    fault = [fault_with_clearing(kundur_case, CASE1.bus, CASE1.far_bus, 1.0, 21)]
+    heun = kundur.run(fault, 5.0, h=0.005, stop_at_separation=True)
+    trap = kundur.run(fault, 5.0, h=0.005, stop_at_separation=True, method="trapezoid")
+    assert not heun.stable and not trap.stable
+    assert trap.t_separation == heun.t_separation and trap.separated == heun.separated == [1, 2]
 
 
 def test_trapezoid_refuses_what_it_does_not_implement(kundur, kundur_pstess, kundur_case):
