@@ -319,9 +319,9 @@ class Simulator:
         ------
         InputError
             Bad semantics or method (the trapezoid with "pst" semantics or storage),
-            events (clearing before the fault, negative time), `t_end` or
-            step (not positive and finite, too large for the case's fastest time
-            constant, or more steps than `stabctl.dynamics.grid.check_step_count` allows).
+            events (clearing before the fault, negative time), `t_end` or step (not
+            positive and finite, too large for the case's fastest time constant under
+            Heun, or more steps than `stabctl.dynamics.grid.check_step_count` allows).
         UnknownBusError, CaseError
             An event or storage device naming a bus, line or machine not in the case.
         NumericalInstabilityError
@@ -338,7 +338,7 @@ class Simulator:
             return sim.run(
                 events, t_end, h, semantics, separation_limit, stop_at_separation, storage
             )
-        m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
+        m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics, method)
         if method == "trapezoid":
             return trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation)
         run = _Run(
@@ -372,9 +372,10 @@ class Simulator:
             self._battery_sims[key] = sim
         return self._battery_sims[key]
 
-    def _prepare(self, events, t_end, h, storage, semantics):
+    def _prepare(self, events, t_end, h, storage, semantics, method="heun"):
         """Validate, choose the model (storage buses kept), pack the devices, build the
-        event grid and the network of every interval."""
+        event grid and the network of every interval (the step checked against the
+        fastest time constant for Heun only: the trapezoid is A-stable)."""
         if semantics not in ("pst", "exact"):
             raise InputError(f"semantics must be 'pst' or 'exact', got {semantics!r}")
         events = list(events)
@@ -386,7 +387,7 @@ class Simulator:
             start = m.layout.blocks["ibr"][0].start
             xslot = start + int(conv.PLANT_PREF_SLOT) * m.cp.n + self.battery_rows
         sa = st.pack(storage, self.case, m.nc_idx, xslot)
-        check_step(self.fastest, h)
+        check_step(self.fastest, h, explicit=method == "heun")
         check_step_count(t_end, h, self.case)
         starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
         grid = time_grid(starts, t_end, h, self.conventions == "pstess")

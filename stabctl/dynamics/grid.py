@@ -117,14 +117,15 @@ def fastest_time_constant(case: Case) -> tuple[float, str]:
     return min(cands) if cands else (np.inf, "")
 
 
-def check_step(fastest: tuple[float, str], h: float) -> None:
-    """Raise InputError when h is not a positive finite step or exceeds twice the fastest
-    time constant (`fastest_time_constant`): the explicit predictor-corrector is unstable
-    there (its stability interval is h/T < 2)."""
+def check_step(fastest: tuple[float, str], h: float, explicit: bool = True) -> None:
+    """Raise InputError when h is not a positive finite step or, for the explicit
+    predictor-corrector (explicit), exceeds twice the fastest time constant
+    (`fastest_time_constant`): it is unstable there (its stability interval is h/T < 2).
+    The implicit trapezoid (explicit False) is A-stable."""
     T, where = fastest
     if not 0 < h < np.inf:
         raise InputError(f"step must be a positive number of seconds, got {h}")
-    if h >= 2 * T:
+    if explicit and h >= 2 * T:
         raise InputError(
             f"step {h} s is too large: the fastest time constant is {T} s "
             f"({where}); the predictor-corrector needs h < {2 * T} s"
