@@ -569,7 +569,7 @@ def active_states(model: DynamicModel) -> np.ndarray:
 class KernelParams(NamedTuple):
     """Packed parameters of every model for the compiled kernels (see each model's
     `packed`; IP the converters', TP the shafts', MO the motors', SWP and SWY the switched
-    shunts' columns and levels), the kept buses' load array loads (8, n_nc) complex pu
+    shunts' columns and levels), the kept buses' load array loads (9, n_nc) complex pu
     (`stabctl.network.solution.kept_loads`, copied by each evaluation) and the numbers of
     machines, exciters, PSSs, governors, converters, shafts, motors and switched shunts
     (the state layout, `Layout`)."""

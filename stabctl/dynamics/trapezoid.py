@@ -48,6 +48,7 @@ from stabctl.dynamics.model import (
 )
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import NumericalInstabilityError, SimulationError
+from stabctl.network.solution import V_RELEASE, L
 
 #: Newton's convergence: the largest correction of a state below TOL (pu, rad)
 TOL = 1e-10
@@ -74,7 +75,7 @@ class _Evaluation:
     loads held low (released when the stage changes), the outputs of the last call."""
 
     def __init__(self, m: DynamicModel, nets):
-        self.p = m.params._replace(reach=0.0)
+        self.p = m.params._replace(reach=0.0, loads=m.params.loads.copy())
         self.nets = [kernel_network(n) for n in nets]
         n_nc = m.V_nc0.size
         self.kept = KeptBuses(
@@ -98,6 +99,12 @@ class _Evaluation:
         if evaluate_kernel(x, self.p, self.nets[stage], kept, want, dx, self.out) < 0:
             raise SimulationError("the network/load equations did not converge")
         return dx
+
+    def lock(self, on: bool) -> None:
+        """Within a step (on), a load held at its impedance model stays held: its release
+        voltage is raised out of reach (`stabctl.network.solution.solve_nc`), as ANDES
+        locks a flag; at the step's start (off) it is V_RELEASE again."""
+        self.p.loads[L.V_release] = np.inf if on else V_RELEASE
 
     def jacobian(self, x, f_x, stage, act) -> np.ndarray:
         """df/dx over the states act (n_act, n_act) at x (derivatives f_x) by forward
@@ -227,10 +234,13 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             break
         if h == 0.0:
             continue
+        f.lock(True)
         try:
             x, bad = step.halving(x, f_x, s, h)
         except SimulationError as e:
             _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
+        finally:
+            f.lock(False)
         why = "Newton's iteration did not converge" if bad >= 0 else _unhealthy(x, nm)
         if why:
             q = bad if bad >= 0 else _bad_state(x, nm)

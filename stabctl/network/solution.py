@@ -158,9 +158,12 @@ class LoadRows(NamedTuple):
     0.5 pu with the loads), the converters' currents, affine in the bus voltage magnitude
     |V| (their limits are piecewise linear in it): I_dev + G_dev |V| (power per pu
     voltage, drawn at every voltage at the bus voltage's angle) and I_fix + G_fix |V| (a
-    current fixed in the network frame: a converter whose angle comes from a PLL).  One
-    array, not a tuple of eight: a compiled call costs about 10 ns for every array it is
-    passed (measured), and the load iteration calls its helpers every step."""
+    current fixed in the network frame: a converter whose angle comes from a PLL), and
+    V_release (real) the voltage above which a load held at its impedance model is released
+    (V_RELEASE; `stabctl.dynamics.trapezoid` raises it within a step, so that a load held
+    at one iterate stays held for the step).  One array, not a tuple of nine: a compiled
+    call costs about 10 ns for every array it is passed (measured), and the load iteration
+    calls its helpers every step."""
 
     S_P: int
     I0: int
@@ -170,6 +173,7 @@ class LoadRows(NamedTuple):
     I_fix: int
     G_dev: int
     G_fix: int
+    V_release: int
 
 
 #: the row indices (a module-global constant: folded into the kernels)
@@ -177,8 +181,9 @@ L = LoadRows(*range(len(LoadRows._fields)))
 
 
 def kept_loads(nc: NonConformingLoads) -> np.ndarray:
-    """The kept-bus load array of `solve_nc` for the non-conforming loads nc: shape (8,
-    n_nc) complex (rows `L`), S_extra and the converter rows 0.  Built once per model
+    """The kept-bus load array of `solve_nc` for the non-conforming loads nc: shape (9,
+    n_nc) complex (rows `L`), S_extra and the converter rows 0, V_release V_RELEASE.
+    Built once per model
     (`stabctl.dynamics.model.KernelParams.loads`); each evaluation copies it.
 
     Parameters
@@ -188,17 +193,18 @@ def kept_loads(nc: NonConformingLoads) -> np.ndarray:
 
     Returns
     -------
-    ndarray, shape (8, n_nc), complex
+    ndarray, shape (9, n_nc), complex
     """
     loads = np.zeros((len(L), nc.S_P.size), complex)
     loads[L.S_P], loads[L.I0], loads[L.Y_low] = nc.S_P, nc.I0, nc.Y_low
+    loads[L.V_release] = V_RELEASE
     return loads
 
 
 @kernel
 def _load_currents(V, loads, low, out):
     """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out); loads
-    (8, n_nc) the rows `L`."""
+    (9, n_nc) the rows `L`."""
     for i in range(V.size):
         m = abs(V[i])
         if m > V_SWITCH and not low[i]:
@@ -227,9 +233,9 @@ def _load_mismatch(b, Y22, V, loads, F, low):
 
 @kernel
 def _held_below(V, held, limit):
-    """Whether |V| < limit at every held bus (False at a NaN voltage)."""
+    """Whether |V| < limit (n_nc,) at every held bus (False at a NaN voltage)."""
     for i in range(V.size):
-        if held[i] and not abs(V[i]) < limit:
+        if held[i] and not abs(V[i]) < limit[i].real:
             return False
     return True
 
@@ -238,7 +244,8 @@ def _held_below(V, held, limit):
 def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
     """Kept-bus voltages (PST nc_load): solve Y21 psi + Y22 V + I_load(V) = 0.
 
-    With loads (8, n_nc) the rows `L` (S_P, I0, Y_low, S_extra, I_dev, I_fix, G_dev, G_fix):
+    With loads (9, n_nc) the rows `L` (S_P, I0, Y_low, S_extra, I_dev, I_fix, G_dev, G_fix,
+    V_release):
     I_load = conj((S_P + S_extra + I0 |V|)/V) above 0.5 pu and conj(Y_low) V below (PST's
     low-voltage switch; S_extra, e.g. storage power, is dropped below 0.5 pu with the rest),
     plus conj(c |V|/V) at every voltage with c = I_dev + G_dev |V|: the converters'
@@ -260,8 +267,9 @@ def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
 
     held (n_nc, bool, in/out) carries that hold between calls: a call that needed it sets
     it, and the next call first solves with the same loads held and keeps the answer while
-    every held load stays below V_RELEASE = 0.6 pu (a 0.1 pu hysteresis band: held loads
-    settle at 0.55-0.58 pu in a deep fault on miniWECC); otherwise it clears held and
+    every held load stays below its row V_release, V_RELEASE = 0.6 pu (a 0.1 pu hysteresis
+    band: held loads settle at 0.55-0.58 pu in a deep fault on miniWECC); otherwise it
+    clears held and
     starts over as above.  Without it every evaluation through a deep fault would first spend
     a failing Newton run rediscovering that the switch has no solution.  The caller clears
     held when the network changes.  Returns the number of iterations, or -1 without
@@ -280,7 +288,7 @@ def solve_nc(Y21, Y22, Z22, psi, V, loads, held):
         if it < 0:
             assign(V, V_start)
             it = _newton_nc(b, Y22, V, loads, held, vmin)
-        if it >= 0 and _held_below(V, held, V_RELEASE):
+        if it >= 0 and _held_below(V, held, loads[L.V_release]):
             return it
         held[:] = False
         assign(V, V_start)
