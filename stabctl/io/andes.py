@@ -144,8 +144,9 @@ def andes_system(
     shrinks), so that its run is comparable with stabctl's trapezoid at the same step
     (`stabctl.dynamics.trapezoid`).
 
-    edit: a callable given the System before set-up (after ``off``), to change its data,
-    e.g. ``lambda ss: ss.EXDC2.VRMAX.v.__imul__(10)``."""
+    edit: a callable given the System before set-up (after ``off``), to change its data
+    (the parameter lists ``ss.<Model>.<param>.v``; tests/io/test_andes.py scales EXDC2's
+    VRMAX and VRMIN so)."""
     andes = _andes()
     kw: dict[str, Any] = {} if dyr is None else {"addfile": str(dyr)}
     if config_option:
