@@ -35,7 +35,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from stabctl.dynamics.coi import coi_of_islands
-from stabctl.dynamics.integrator import SPEED_BAND, recording
+from stabctl.dynamics.integrator import SPEED_BAND, record_point, recording, symptom
 from stabctl.dynamics.model import (
     BUS_VOLTAGES,
     NO_BUS_VOLTAGES,
@@ -66,6 +66,8 @@ HALVINGS = 3
 #: after this many iterations a state held on its limit stays held for the step (ANDES's
 #: AntiWindup ``niter_lock``, against chattering)
 LOCK = 4
+#: the storage devices' powers recorded at a grid point: none (`record_point`)
+NO_DEVICES = np.zeros(0)
 #: forward-difference step of the Jacobian, relative to max(1, |x|) (as the linearisation)
 REL_STEP = 1e-7
 
@@ -117,14 +119,6 @@ class _Evaluation:
             kept = KeptBuses(self.kept.V.copy(), self.kept.held.copy(), self.kept.S_extra)
             A[:, c] = (self(xp, stage, kept=kept)[act] - f_x[act]) / d
         return A
-
-
-def _record(rec, k, x, out, nm) -> None:
-    rec.angle[k], rec.speed[k] = x[:nm], x[nm : 2 * nm]
-    rec.pelect[k], rec.pmech[k], rec.efd[k] = out.pelect, out.pmech, out.efd
-    rec.V[k] = out.V_bus
-    if out.S_ibr.size:
-        rec.S_ibr[k] = out.S_ibr
 
 
 class _Step:
@@ -228,7 +222,7 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             f_x = f(x, s, BUS_VOLTAGES)
         except SimulationError as e:
             _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
-        _record(rec, k, x, f.out, nm)
+        record_point(rec, k, x, f.out, NO_DEVICES)
         h = float(grid.t[k + 1] - grid.t[k]) if k + 1 < n_t else 0.0
         if k + 1 == n_t or (stop and _separated(sim, x, nm, limit)):
             break
@@ -241,12 +235,14 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
         finally:
             f.lock(False)
-        why = "Newton's iteration did not converge" if bad >= 0 else _unhealthy(x, nm)
+        why = "Newton's iteration did not converge"
+        if bad < 0:
+            bad = _unhealthy_state(x, nm)
+            why = symptom(x[bad], bad, nm) if bad >= 0 else ""
         if why:
-            q = bad if bad >= 0 else _bad_state(x, nm)
             msg = (
                 f"case '{sim.case.name}': trapezoidal step ending at t = {grid.t[k + 1]:.4f} s:"
-                f" state {m.state_name(q)} = {x[q]:.6g} ({why}); use a smaller step"
+                f" state {m.state_name(bad)} = {x[bad]:.6g} ({why}); use a smaller step"
                 f" (trajectory kept up to {grid.t[k]:.4f} s)"
             )
             _fail(sim, grid, rec, k, wall, limit, msg, NumericalInstabilityError)
@@ -258,19 +254,14 @@ def _separated(sim, x, nm, limit) -> bool:
     return bool(np.max(np.abs(angle - coi_of_islands(angle, sim.inertia, sim.island))) > limit)
 
 
-def _unhealthy(x, nm) -> str:
-    if not np.all(np.isfinite(x)):
-        return "not finite"
-    if np.max(np.abs(x[nm : 2 * nm] - 1.0)) > SPEED_BAND:
-        return f"speed more than {SPEED_BAND} pu from synchronous"
-    return ""
-
-
-def _bad_state(x, nm) -> int:
+def _unhealthy_state(x, nm) -> int:
+    """The first non-finite state, else the machine speed more than SPEED_BAND pu from
+    synchronous (the integrator's health rule, `symptom`), else -1."""
     bad = np.flatnonzero(~np.isfinite(x))
     if bad.size:
         return int(bad[0])
-    return nm + int(np.argmax(np.abs(x[nm : 2 * nm] - 1.0)))
+    q = nm + int(np.argmax(np.abs(x[nm : 2 * nm] - 1.0)))
+    return q if abs(x[q] - 1.0) > SPEED_BAND else -1
 
 
 def _fail(sim, grid, rec, k, wall, limit, why, error) -> None:
