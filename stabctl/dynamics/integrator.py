@@ -270,7 +270,7 @@ def _separated(x, nm, opts):
 
 
 @kernel
-def record_point(rec, k, x, out, P):
+def _record(rec, k, x, out, P):
     """Store grid index k: angles and speeds of x, the evaluation outputs, device powers."""
     nm = out.pelect.size
     for i in range(nm):
@@ -443,7 +443,7 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     w.switched[:] = False
     if sa.pmax.size > 0:
         _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k)
-    record_point(rec, k, x, kn.out, ds.P)
+    _record(rec, k, x, kn.out, ds.P)
     return _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k)
 
 
@@ -453,7 +453,7 @@ def _after_step(kn, sa, ds, opts, rec, health, x, k):
     if not _healthy(x, health.est[k + 1], kn.p.n_mac, health):
         return UNSTABLE_STEP, k
     if opts.stop and _separated(x, kn.p.n_mac, opts):
-        record_point(rec, k + 1, x, kn.out, ds.P)
+        _record(rec, k + 1, x, kn.out, ds.P)
         return SEPARATED, k + 1
     return OK, k
 
@@ -469,7 +469,7 @@ def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
     assign(kn.kept.V, V_keep)
     assign(kn.kept.held, held_keep)
     kn.held_stage[0] = stage_keep
-    record_point(rec, k1, x, kn.out, ds.P)
+    _record(rec, k1, x, kn.out, ds.P)
 
 
 @njit
@@ -527,7 +527,7 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
             return status, k_end
     assign(c.x, x)
     if k1 >= n - 1:
-        record_point(rec, n - 1, x, kn.out, c.devices.P)
+        _record(rec, n - 1, x, kn.out, c.devices.P)
         return OK, n - 1
     _record_paused(kn, grid, sa, c.devices, rec, w, x, k1)
     return OK, k1

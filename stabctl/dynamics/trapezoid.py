@@ -35,7 +35,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from stabctl.dynamics.coi import coi_of_islands
-from stabctl.dynamics.integrator import SPEED_BAND, record_point, recording, symptom
+from stabctl.dynamics.integrator import SPEED_BAND, recording, symptom
 from stabctl.dynamics.model import (
     BUS_VOLTAGES,
     NO_BUS_VOLTAGES,
@@ -66,8 +66,6 @@ HALVINGS = 3
 #: after this many iterations a state held on its limit stays held for the step (ANDES's
 #: AntiWindup ``niter_lock``, against chattering)
 LOCK = 4
-#: the storage devices' powers recorded at a grid point: none (`record_point`)
-NO_DEVICES = np.zeros(0)
 #: forward-difference step of the Jacobian, relative to max(1, |x|) (as the linearisation)
 REL_STEP = 1e-7
 
@@ -119,6 +117,16 @@ class _Evaluation:
             kept = KeptBuses(self.kept.V.copy(), self.kept.held.copy(), self.kept.S_extra)
             A[:, c] = (self(xp, stage, kept=kept)[act] - f_x[act]) / d
         return A
+
+
+def _record(rec, k, x, out, nm) -> None:
+    """Store grid index k as the integrator's compiled `_record` does (a compiled-only
+    kernel: no call from Python, tests/test_jit_rules.py)."""
+    rec.angle[k], rec.speed[k] = x[:nm], x[nm : 2 * nm]
+    rec.pelect[k], rec.pmech[k], rec.efd[k] = out.pelect, out.pmech, out.efd
+    rec.V[k] = out.V_bus
+    if out.S_ibr.size:
+        rec.S_ibr[k] = out.S_ibr
 
 
 class _Step:
@@ -222,7 +230,7 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             f_x = f(x, s, BUS_VOLTAGES)
         except SimulationError as e:
             _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
-        record_point(rec, k, x, f.out, NO_DEVICES)
+        _record(rec, k, x, f.out, nm)
         h = float(grid.t[k + 1] - grid.t[k]) if k + 1 < n_t else 0.0
         if k + 1 == n_t or (stop and _separated(sim, x, nm, limit)):
             break
