@@ -149,7 +149,8 @@ class Simulator:
     fastest : tuple of (float, str)
         The case's fastest time constant (s) and where it is (`fastest_time_constant`), or a
         faster loop's at the operating point (`DynamicModel.fastest_loop`: an ST3's inner
-        loop, `ExciterParams.inner_loop_time_constants`).
+        loop or an EXST1/ESST1A regulator with its rate feedback,
+        `ExciterParams.inner_loop_time_constants`).
     conventions : str
         ``"ieee"`` or ``"pstess"``.
 

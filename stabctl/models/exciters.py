@@ -896,11 +896,15 @@ class ExciterParams(Declared):
         )
 
     def inner_loop_time_constants(self, VB0: np.ndarray, efd0: np.ndarray) -> np.ndarray:
-        """The ST3 inner loop's time constant at the operating point (s), (n_exc,): T_A
-        dV_R/dt = K_A (V_A - K_G E_fd) - V_R with E_fd = V_B V_R closes the pole -(1 + K_A
-        K_G V_B)/T_A (ESST3A's K_M, T_M; PST exc_st3), T_A / (1 + K_A K_G V_B0) where the
-        feedback is below VGmax (K_G E_fd0 < VGmax) and T_A > 0; inf for the others.  ANDES's
-        kundur_esst3a: K_M = 500, T_M = 0.1 s, V_B = 4.3, 4.6e-5 s where T_M suggests 0.1 s.
+        """The time constant of each exciter's fast closed loop at the operating point (s),
+        (n_exc,), which no single time constant of its data shows; inf where there is none.
+
+        * ST3 (ESST3A's K_M, T_M; PST exc_st3): T_A dV_R/dt = K_A (V_A - K_G E_fd) - V_R
+          with E_fd = V_B V_R closes the pole -(1 + K_A K_G V_B)/T_A: T_A / (1 + K_A K_G
+          V_B0) where the feedback is below VGmax (K_G E_fd0 < VGmax) and T_A > 0.
+          ANDES's kundur_esst3a: K_M = 500, T_M = 0.1 s, V_B = 4.3, 4.6e-5 s where T_M
+          suggests 0.1 s.
+        * EXST1 and ESST1A with a rate feedback (`rate_feedback_time_constants`).
 
         Parameters
         ----------
@@ -915,7 +919,45 @@ class ExciterParams(Declared):
         """
         loop = (self.kind == ST3) & (self.TA > 0) & (self.KG * efd0 < self.VGmax)
         gain = 1.0 + self.KA * self.KG * VB0
-        return np.where(loop, self.TA / np.where(loop, gain, 1.0), np.inf)
+        st3 = np.where(loop, self.TA / np.where(loop, gain, 1.0), np.inf)
+        return np.minimum(st3, self.rate_feedback_time_constants())
+
+    def rate_feedback_time_constants(self) -> np.ndarray:
+        """The fastest pole of the EXST1 and ESST1A regulator loops (s), (n_exc,); inf for
+        the others and where T_A or T_F is below 1e-3 s or K_F = 0.
+
+        The lead-lags T_C/T_B (and ESST1A's T_C1/T_B1) feed the lag K_A/(1 + s T_A)
+        (state V_R, V_A), whose output returns through s K_F/(1 + s T_F) (state R_f) to
+        the voltage error: the linear loop of those states (limits inactive, the terminal
+        voltage and field current held), whose fastest eigenvalue's time constant is
+        returned.  PSID's ESST1A run of PSS/E's (K_A = 200, T_A = 0.1 s, K_F = T_F =
+        0.01 s, lead-lags 14.1/20 s): 9.0e-4 s where T_F suggests 0.01 s, and Heun at
+        5 ms diverges.
+
+        Returns
+        -------
+        ndarray, shape (n_exc,)
+        """
+        tau = np.full(self.n, np.inf)
+        loop = np.isin(self.kind, (ST1, ST1A)) & self.has_Rf & self.has_TA & (self.TF >= LBND)
+        for i in np.nonzero(loop)[0]:
+            lags = [(r[i], T[i]) for r, T, on in ((self.tc_tb, self.TB, self.has_TB),
+                    (self.tc1_tb1, self.TB1, self.has_TB1)) if on[i]]  # fmt: skip
+            n = len(lags)
+            A = np.zeros((n + 2, n + 2))  # lead-lag states, V_A, R_f
+            kf = self.KF[i] / self.TF[i]
+            u = np.zeros(n + 2)  # the voltage error: -K_F/T_F (V_A - R_f)
+            u[n], u[n + 1] = -kf, kf
+            for k, (r, T) in enumerate(lags):  # PST form: y = r u + (1 - r) x
+                A[k] = u / T
+                A[k, k] -= 1.0 / T
+                u = r * u
+                u[k] += 1.0 - r
+            A[n] = self.KA[i] * u / self.TA[i]
+            A[n, n] -= 1.0 / self.TA[i]
+            A[n + 1, n], A[n + 1, n + 1] = 1.0 / self.TF[i], -1.0 / self.TF[i]
+            tau[i] = 1.0 / np.max(-np.linalg.eigvals(A).real)
+        return tau
 
 
 check_packed(ExciterParams, PACKED, ("Vref",))

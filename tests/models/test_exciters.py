@@ -300,6 +300,43 @@ def test_esst1a_rate_feedback_is_a_washout_of_the_regulator_output():
     assert dx[1, 0] == pytest.approx((err - x[1, 0]) / 10.0, rel=1e-12)
 
 
+#: ESST1A of PowerSimulationsDynamics.jl's PSS/E run (test 55): K_A 200, T_A 0.1 s, lead-lags
+#: 14.14/20 twice, K_F = T_F = 0.01 s (VAmin opened to start at EFD0)
+ST1A_PSSE = [6, 1, 0.01, 200, 0.1, 20.0, 14.1421356237310, 6.0, 0.0, 5.0, -5.0]
+ST1A_PSSE += [0, 0, 0, 0, 0, 0.5, 0, 0, 0, 0.01, 0.01, 0, 0, 0, 14.1421356237310, 20.0]
+ST1A_PSSE += [6.3, -10.0, 0.01, 2.8]
+
+
+@pytest.mark.parametrize(
+    "row, fed_back",
+    [(ST1A_PSSE, False), (ST1A, False), (ST1, True)],
+    ids=["ESST1A_psse", "ESST1A", "EXST1"],
+)
+def test_rate_feedback_loop_time_constant_is_the_fastest_pole(row, fed_back):
+    """`rate_feedback_time_constants` (the regulator loop built from the data) gives the
+    fastest eigenvalue of the exciter's own Jacobian without its transducer state
+    (central differences of `derivatives`, the terminal voltage and the machine's field
+    current held; EXST1's field voltage, its rate feedback's input, fed back):
+    PSS/E's ESST1A run at -1109 1/s, where T_F = 0.01 s suggests -100."""
+    P, x0 = started(row)
+    tau = params(row).rate_feedback_time_constants()[0]
+
+    def f(x):
+        x = x.reshape(x0.shape).copy()
+        efd = exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, EFD0, True) if fed_back else EFD0
+        return derivatives(P, x, efd=efd).ravel()
+
+    n, eps = x0.size, 1e-7
+    J = np.column_stack(
+        [(f(x0.ravel() + eps * e) - f(x0.ravel() - eps * e)) / (2 * eps) for e in np.eye(n)]
+    )
+    keep = np.any(J, 1) & (np.arange(n) > 0)  # the states, without V_TR
+    fastest = np.linalg.eigvals(J[np.ix_(keep, keep)]).real.min()
+    assert -1 / tau == pytest.approx(fastest, rel=1e-6)
+    if row is ST1A_PSSE:
+        assert tau == pytest.approx(1 / 1109.1, rel=1e-3)
+
+
 def test_exac1_initial_point_in_closed_form():
     """EXAC1 at rest with I_N0 <= 0.433: V_E0 = Efd0 + 0.577 K_C I_fd0 (I_fd0 = Efd0), V_R0
     = V_FE0 = K_E V_E0 + B (V_E0 - A)^2 + K_D I_fd0 with the quadratic through (2, 0.05),

@@ -252,6 +252,18 @@ def test_gast_valve_is_non_windup_and_power_is_its_lag():
     assert pmech_after(P, x, t) == pytest.approx(exact, rel=1e-9)
 
 
+def test_gast_starting_on_its_load_limit_is_at_rest():
+    """PSS/E's own GAST run (PowerSimulationsDynamics.jl test 21, ThreeBus_GAST.dyr:
+    AT = 1, KT = 2.5, the machine at Pm0 = 1) starts exactly on the load limit AT + KT
+    (AT - Pm0) = Pm0: accepted within START_LIMIT_TOL (a power flow's 1e-9 above it) and
+    at rest; 1e-5 above it refused."""
+    row = GAST[:4] + [1.2] + GAST[5:24] + [1.0, 2.5]  # VMAX 1.2: the valve limit aside
+    P, x = started(row, pm0=1.0 + 1e-9)
+    assert np.abs(derivatives(P, x)).max() < 1e-7
+    with pytest.raises(CaseError, match="GAST's load limit"):
+        started(row, pm0=1.0 + 1e-5)
+
+
 def test_gast_initial_power_above_its_load_limit_is_refused():
     """GAST starting where AT + KT (AT - Pm0) < Pm0 would not be at rest: refused."""
     with pytest.raises(CaseError, match="GAST's load limit"):
