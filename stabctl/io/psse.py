@@ -24,6 +24,8 @@ import warnings
 from pathlib import Path
 from typing import NamedTuple
 
+import numpy as np
+
 from stabctl.case import Case
 from stabctl.errors import CaseError
 from stabctl.io.psse_raw import RawData, read_raw
@@ -139,16 +141,28 @@ def _without_machine(records):
 
 
 def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]]:
-    """PST dynamic matrices from the DYR records and the unsupported ones (as text)."""
-    from stabctl.io.dyr import dyr_tables
+    """PST dynamic matrices from the DYR records (the converter table ``ibr_con`` from
+    the converter records, :mod:`stabctl.io.dyr_converters`; the machines, numbered 1, 2,
+    ... in RAW order, the other generators) and the unsupported ones (as text)."""
+    from stabctl.io.dyr import dyr_tables, machine_id
+    from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows
 
     gens = [{**g.as_dyr(), "sbase": raw.base_mva} for g in raw.generators]
+    conv = converter_rows(records, gens, raw.line)
+    gens = [g for g in gens if (int(g["bus"]), machine_id(g["id"])) not in conv.replaced]
+    for number, g in enumerate(gens, 1):
+        g["number"] = number
+    records = [r for r in records if r.model not in CONVERTER_RECORDS]
     tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
-    mats = {}
+    mats: dict = {"ibr_con": np.array(conv.rows, float)} if conv.rows else {}
     for key in ("mac_con", "exc_con", "pss_con", "tg_con"):
         if getattr(tables, key) is not None:
             mats[key] = getattr(tables, key)
-    return mats, [_dyr_text(r, why) for r, why in zip(tables.unsupported, tables.why)]
+    skipped = sorted(
+        [*conv.skipped, *zip(tables.unsupported, tables.why)],
+        key=lambda item: (item[0].file, item[0].line),
+    )
+    return mats, [_dyr_text(r, why) for r, why in skipped]
 
 
 def _dyr_text(rec, why: str) -> str:
