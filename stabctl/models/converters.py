@@ -915,9 +915,10 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     ------
     CaseError
         A lag time constant tip, tiq (PVD1, ESD1), Tg, Tfltr (REGCA1) or REECA1's
-        (:data:`REECA1_LAGS`; its Tp other than 0, no filter) below 1e-3 s (the current would be an algebraic function of
-        the voltage inside the network solution); an electrical control ``reec`` on a
-        device other than a REGCA1; naming the row and field.
+        (:data:`REECA1_LAGS`; its Tp other than 0, no filter) below 1e-3 s (the current
+        would be an algebraic function of the voltage inside the network solution); an
+        electrical control ``reec`` on a device other than a REGCA1; naming the row and
+        field.
     """
     t = case.converters
     n = len(t)
