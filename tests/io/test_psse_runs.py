@@ -23,9 +23,6 @@ SHORT = {
     "EXST1": "V2, V3 2e-3 pu off (tol 1e-3): GENSAL stator and saturation",
     "EXAC1": "V2, V3 2e-3 pu off (tol 1e-3): GENSAL stator and saturation",
     "ESST1A": "simulate: numerical instability of exc.VA at 0.33 s with h = 5 ms",
-    "RENA_DEFAULT": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
-    "RENA_REF_FLAG": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
-    "RENA_REF_FLAG_noV": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
 }
 
 
