@@ -275,8 +275,9 @@ def dyr_tables(
         generators: sequence of dicts in RAW order, keys "number" (1-based machine number,
             the row of mac_con), "bus", "id", "mbase" (MVA), "ra", "xsource" (ZSORCE on
             mbase, pu); optional "pg", "qg" (MW, Mvar) to split a bus's generation among
-            several machines (mac_con columns 22, 23), "pfrac", "qfrac" (a lone machine's
-            share of its bus's generation when converters take the rest; default 1),
+            several machines (mac_con columns 22, 23), "pfrac", "qfrac" (a machine's share
+            of its bus's generation when converters take the rest, given for each machine
+            of the bus; default 1),
             "sbase" (system base, MVA, default 100; used by conventions="andes").
         on_unsupported: "error" (raise, listing every unsupported record) or "skip" (leave
             those records out and return them in `unsupported`).
@@ -419,8 +420,8 @@ def _set_fractions(generators, machines) -> None:
     for g in generators:
         by_bus.setdefault(int(g["bus"]), []).append(g)
     for bus, gs in by_bus.items():
-        if len(gs) == 1:
-            continue
+        if len(gs) == 1 or all("pfrac" in g and "qfrac" in g for g in gs):
+            continue  # a lone machine, or machines given their shares (mac_con by _mac_row)
         if any("pg" not in g or "qg" not in g for g in gs):
             raise CaseError(
                 f"bus {bus} has {len(gs)} generators: give 'pg' and 'qg' of each to "

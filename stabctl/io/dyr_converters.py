@@ -20,8 +20,9 @@ parameter and is not read.
 
 Left out, with why (`ConverterRows.skipped`): a plant regulating a remote bus (IREG not 0
 nor its own bus), a monitored branch that is not one in-service RAW branch, a wind turbine
-of a REECB1 or with a link missing, a plant whose generator shares its bus with another
-generator, and every record of a plant left out; a control record without a REGCA1.
+of a REECB1 or with a link missing, and every record of a plant left out; a control
+record without a REGCA1.  A plant sharing its bus with other generators (machines or
+plants) takes its own PG, QG of the bus's generation (ibr_con pfrac, qfrac), as they do.
 
 Source: PSS/E Model Library (REGCA1, REECA1, REECB1, REPCA1, WTDTA1, WTARA1, WTPTA1,
 WTTQA1 ICONs and CONs); ANDES 2.0 ``andes/io/psse-dyr.yaml`` for the same orders.
@@ -44,7 +45,7 @@ from stabctl.models.converters import (
     WTDTA1,
 )
 
-__all__ = ["ConverterRows", "converter_rows", "CONVERTER_RECORDS"]
+__all__ = ["ConverterRows", "converter_rows", "shares", "CONVERTER_RECORDS"]
 
 #: the DYR records read into the converter table
 CONVERTER_RECORDS = tuple(CONVERTER_DYR)
@@ -89,7 +90,8 @@ def converter_rows(records, generators, branches) -> ConverterRows:
         models are ignored.
     generators : sequence of dict
         The RAW file's in-service generators in RAW order, keys ``"bus"``, ``"id"``,
-        ``"mbase"`` (MVA), as :func:`stabctl.io.dyr.dyr_tables` takes them.
+        ``"mbase"`` (MVA), ``"pg"``, ``"qg"`` (MW, Mvar), as
+        :func:`stabctl.io.dyr.dyr_tables` takes them.
     branches : numpy.ndarray
         The RAW file's PST ``line`` matrix, shape (n_branch, >= 4): from bus, to bus, r,
         x (pu, system base), for a REPCA1's monitored branch.
@@ -123,9 +125,6 @@ def converter_rows(records, generators, branches) -> ConverterRows:
             )
         plant[rec.model] = rec
     gens = {(int(g["bus"]), machine_id(g["id"])): g for g in generators}
-    at_bus: dict[int, int] = {}
-    for bus, _ in gens:
-        at_bus[bus] = at_bus.get(bus, 0) + 1
     rows, replaced, skipped = [], set(), []
     for key in sorted(plants, key=lambda k: list(gens).index(k) if k in gens else len(gens)):
         plant = plants[key]
@@ -135,12 +134,10 @@ def converter_rows(records, generators, branches) -> ConverterRows:
             gen = gens.get(key)
             if gen is None:
                 raise _Refused("no such generator in the RAW data (or out of service)")
-            if at_bus[key[0]] > 1:
-                raise _Refused(
-                    f"its generator shares bus {key[0]} with another (stabctl: a plant "
-                    "alone on its bus)"
-                )
             row = _plant_row(plant, gen, len(rows) + 1, branches)
+            row[CONVERTER.col("pfrac") - 1], row[CONVERTER.col("qfrac") - 1] = shares(
+                generators, gen
+            )
         except _Refused as why:
             skipped += [(rec, str(why)) for rec in plant.values()]
             continue
@@ -148,6 +145,21 @@ def converter_rows(records, generators, branches) -> ConverterRows:
         replaced.add(key)
     skipped.sort(key=lambda item: (item[0].file, item[0].line))
     return ConverterRows(rows, frozenset(replaced), tuple(skipped))
+
+
+def shares(generators, gen) -> tuple[float, float]:
+    """The share of generator ``gen`` in its bus's P and Q generation, PG / sum(PG) and
+    QG / sum(QG) over the ``generators`` at its bus (keys "bus", "pg", "qg"; equal shares
+    of a sum 0; 1, 1 alone on its bus): as PSS/E's generators, each keeps its own PG, QG
+    of the RAW's power flow."""
+    at = [g for g in generators if int(g["bus"]) == int(gen["bus"])]
+    if len(at) == 1:
+        return 1.0, 1.0
+    out = []
+    for key in ("pg", "qg"):
+        total = sum(float(g[key]) for g in at)
+        out.append(float(gen[key]) / total if total else 1.0 / len(at))
+    return out[0], out[1]
 
 
 def _plant_row(plant: dict[str, DyrRecord], gen: dict, number: int, branches) -> list[float]:

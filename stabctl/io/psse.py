@@ -151,12 +151,17 @@ def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]
     ... in RAW order, the other generators), the unsupported records (as text) and the
     generators whose REGCA1 plant was left out (``bus B 'ID'``)."""
     from stabctl.io.dyr import dyr_tables, machine_id
-    from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows
+    from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows, shares
 
     gens = [{**g.as_dyr(), "sbase": raw.base_mva} for g in raw.generators]
     conv = converter_rows(records, gens, raw.line)
-    lost = {(r.bus, r.id) for r, _ in conv.skipped if r.model == "REGCA1"}
-    gens = [g for g in gens if (int(g["bus"]), machine_id(g["id"])) not in conv.replaced | lost]
+    keys = [(int(g["bus"]), machine_id(g["id"])) for g in gens]
+    lost = {(r.bus, r.id) for r, _ in conv.skipped if r.model == "REGCA1"} & set(keys)
+    plant_buses = {bus for bus, _ in conv.replaced}
+    for g in gens:  # a machine sharing its bus with a plant: its own share (PSS/E's)
+        if int(g["bus"]) in plant_buses:
+            g["pfrac"], g["qfrac"] = shares(gens, g)
+    gens = [g for g, key in zip(gens, keys) if key not in conv.replaced | lost]
     for number, g in enumerate(gens, 1):
         g["number"] = number
     records = [r for r in records if r.model not in CONVERTER_RECORDS]

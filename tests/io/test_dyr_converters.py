@@ -246,3 +246,23 @@ def test_control_records_without_regca1_are_left_out(tmp_path):
         "plant.dyr:3 REPCA1 at bus 103 '1': no REGCA1 record for its generator",
     )
     assert res.netted == ("ThreeBusRenewable.raw:13 generator at bus 103 '1'",)
+
+
+def test_a_plant_sharing_its_bus_takes_its_own_generation(tmp_path):
+    """RENA with a second generator at bus 103 (PG 10 MW, QG 2.488 Mvar, a GENCLS of
+    H = 3 s): the plant takes 40/50 of the bus's P and 9.952/12.44 of its Q, the machine
+    the rest, as their RAW lines give; the case starts at rest."""
+    lines = RAW.read_text().splitlines(keepends=True)
+    k = next(j for j, s in enumerate(lines) if s.lstrip().startswith("103,'1 ',    40.000"))
+    second = lines[k].replace("'1 ',    40.000,     9.952", "'2 ',    10.000,     2.488")
+    raw = tmp_path / "shared.raw"
+    raw.write_text("".join(lines[: k + 1] + [second] + lines[k + 1 :]))
+    dyr = _dyr(tmp_path, [DYR.read_text(), "103 'GENCLS' 2 3.0 0.0 /\n"])
+    case = load_psse(raw, dyr)
+    t, m = case.converters, case.machines
+    assert (t.pfrac[0], t.qfrac[0]) == pytest.approx((0.8, 9.952 / 12.44))
+    k = list(m.bus).index(103)
+    assert (m.pfrac[k], m.qfrac[k]) == pytest.approx((0.2, 2.488 / 12.44))
+    res = Simulator(case, q_limits=False).run([], 0.5, h=0.005)
+    assert np.max(np.abs(res.speed - 1.0)) < 1e-9
+    assert np.max(np.abs(res.ibr_p[:, 0] - 0.4)) < 1e-9
