@@ -125,7 +125,9 @@ def converter_rows(records, generators, branches) -> ConverterRows:
             )
         plant[rec.model] = rec
     gens = {(int(g["bus"]), machine_id(g["id"])): g for g in generators}
-    rows, replaced, skipped = [], set(), []
+    rows: list[list[float]] = []
+    replaced: set[tuple[int, str]] = set()
+    skipped: list[tuple[DyrRecord, str]] = []
     for key in sorted(plants, key=lambda k: list(gens).index(k) if k in gens else len(gens)):
         plant = plants[key]
         try:
