@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from stabctl.errors import CaseError
+from stabctl.models.converters import CONVERTER
 from stabctl.models.declaration import DyrModel, Family
 from stabctl.models.exciters import EXCITER
 from stabctl.models.governors import GOVERNOR
@@ -44,15 +45,23 @@ FAMILY: dict[str, Family] = {
 }
 #: DYR model -> its declaration (parameter names and order, fields copied to the table)
 DYR_MODELS: dict[str, DyrModel] = {m.name: m for f in FAMILY.values() for m in f.dyr}
+#: DYR converter record -> its declaration (the converter table's, ibr_con; mapped by
+#: `stabctl.io.dyr_converters`)
+CONVERTER_DYR: dict[str, DyrModel] = {m.name: m for m in CONVERTER.dyr}
 #: numbers after the id per model (PSS/E Model Library: ICONs, then CONs)
-N_PARAMS = {name: len(m.fields) for name, m in DYR_MODELS.items()}
+N_PARAMS = {name: len(m.fields) for name, m in (DYR_MODELS | CONVERTER_DYR).items()}
+#: the fields of a record that are strings (a branch's circuit id): NaN among the numbers,
+#: the text kept in `DyrRecord.text`
+TEXT_FIELDS = {"REPCA1": ("CKTID",)}
 
 
 @dataclass(frozen=True)
 class DyrRecord:
     """One DYR record: file and 1-based line where it starts, bus number, model name
     (upper case), machine id (quotes and blanks stripped, upper case), the numbers after
-    the id (ICONs then CONs; NaN for a non-number of a model stabctl does not map)."""
+    the id (ICONs then CONs; NaN for a non-number of a model stabctl does not map, and
+    for a string field of `TEXT_FIELDS`), and those string fields' text (quotes and
+    blanks stripped, upper case), in order."""
 
     file: str
     line: int
@@ -60,6 +69,7 @@ class DyrRecord:
     model: str
     id: str
     params: tuple[float, ...]
+    text: tuple[str, ...] = ()
 
     def where(self) -> str:
         return f"{self.file}:{self.line}"
@@ -156,8 +166,15 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
         if model in N_PARAMS:
             raise CaseError(f"{file}:{line}: {model} bus field {tokens[0]!r} is not an integer")
         bus = 0
-    params = []
+    params, text = [], []
+    strings = [_field_number(model, name) for name in TEXT_FIELDS.get(model, ())]
     for k, tok in enumerate(tokens[3:], 1):
+        if k in strings:
+            if not tok.startswith("'"):
+                raise CaseError(f"{file}:{line}: {model} parameter {k} {tok!r} is not a quoted id")
+            params.append(float("nan"))
+            text.append(machine_id(tok))
+            continue
         try:
             value = float(tok.replace("D", "E").replace("d", "e"))
         except ValueError:
@@ -172,7 +189,12 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
                     f"{file}:{line}: {model} parameter {k} {tok!r} is not a finite number"
                 )
         params.append(value)
-    return DyrRecord(file, line, bus, model, machine_id(tokens[2]), tuple(params))
+    return DyrRecord(file, line, bus, model, machine_id(tokens[2]), tuple(params), tuple(text))
+
+
+def _field_number(model: str, name: str) -> int:
+    """1-based position of field ``name`` among ``model``'s numbers after the id."""
+    return CONVERTER_DYR[model].fields.index(name) + 1
 
 
 def machine_id(tok) -> str:
@@ -253,8 +275,9 @@ def dyr_tables(
         generators: sequence of dicts in RAW order, keys "number" (1-based machine number,
             the row of mac_con), "bus", "id", "mbase" (MVA), "ra", "xsource" (ZSORCE on
             mbase, pu); optional "pg", "qg" (MW, Mvar) to split a bus's generation among
-            several machines (mac_con columns 22, 23), "pfrac", "qfrac" (a lone machine's
-            share of its bus's generation when converters take the rest; default 1),
+            several machines (mac_con columns 22, 23), "pfrac", "qfrac" (a machine's share
+            of its bus's generation when converters take the rest, given for each machine
+            of the bus; default 1),
             "sbase" (system base, MVA, default 100; used by conventions="andes").
         on_unsupported: "error" (raise, listing every unsupported record) or "skip" (leave
             those records out and return them in `unsupported`).
@@ -405,8 +428,8 @@ def _set_fractions(generators, machines) -> None:
     for g in generators:
         by_bus.setdefault(int(g["bus"]), []).append(g)
     for bus, gs in by_bus.items():
-        if len(gs) == 1:
-            continue
+        if len(gs) == 1 or all("pfrac" in g and "qfrac" in g for g in gs):
+            continue  # a lone machine, or machines given their shares (mac_con by _mac_row)
         if any("pg" not in g or "qg" not in g for g in gs):
             raise CaseError(
                 f"bus {bus} has {len(gs)} generators: give 'pg' and 'qg' of each to "

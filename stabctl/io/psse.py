@@ -24,6 +24,8 @@ import warnings
 from pathlib import Path
 from typing import NamedTuple
 
+import numpy as np
+
 from stabctl.case import Case
 from stabctl.errors import CaseError
 from stabctl.io.psse_raw import RawData, read_raw
@@ -115,11 +117,16 @@ def import_psse(
     if records is not None:
         off = {(bus, machine_id(gid)) for bus, gid in raw.out_of_service}
         records = [r for r in records if (r.bus, r.id) not in off]
-        dyn, dyr_unsupported = _dynamic_tables(raw, records, conventions)
+        dyn, dyr_unsupported, lost = _dynamic_tables(raw, records, conventions)
         mats.update(dyn)
         unsupported += dyr_unsupported
     where = _files(raw_path, dyr_path)
     _report(unsupported, on_unsupported, where)
+    if records is not None and lost:
+        raise CaseError(
+            f"{where}: generator(s) left without a model, their converter records left "
+            f"out (listed above): {', '.join(lost)}"
+        )
     netted = tuple(str(s) for s in raw.netted)
     if netted:
         warnings.warn(
@@ -142,17 +149,40 @@ def _without_machine(records):
     return lambda bus, gid: (bus, machine_id(gid)) not in modelled
 
 
-def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]]:
-    """PST dynamic matrices from the DYR records and the unsupported ones (as text)."""
-    from stabctl.io.dyr import dyr_tables
+def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str], list[str]]:
+    """PST dynamic matrices from the DYR records (the converter table ``ibr_con`` from
+    the converter records, :mod:`stabctl.io.dyr_converters`; the machines, numbered 1, 2,
+    ... in RAW order, the other generators), the unsupported records (as text) and the
+    generators whose REGCA1 plant was left out (``bus B 'ID'``)."""
+    from stabctl.io.dyr import dyr_tables, machine_id
+    from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows, shares
 
     gens = [{**g.as_dyr(), "sbase": raw.base_mva} for g in raw.generators]
+    conv = converter_rows(records, gens, raw.line)
+    keys = [(int(g["bus"]), machine_id(g["id"])) for g in gens]
+    lost = {(r.bus, r.id) for r, _ in conv.skipped if r.model == "REGCA1"} & set(keys)
+    plant_buses = {bus for bus, _ in conv.replaced}
+    for g in gens:  # a machine sharing its bus with a plant: its own share (PSS/E's)
+        if int(g["bus"]) in plant_buses:
+            g["pfrac"], g["qfrac"] = shares(gens, g)
+    gens = [g for g, key in zip(gens, keys) if key not in conv.replaced | lost]
+    for number, g in enumerate(gens, 1):
+        g["number"] = number
+    records = [r for r in records if r.model not in CONVERTER_RECORDS]
     tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
-    mats = {}
+    mats: dict = {"ibr_con": np.array(conv.rows, float)} if conv.rows else {}
     for key in ("mac_con", "exc_con", "pss_con", "tg_con"):
         if getattr(tables, key) is not None:
             mats[key] = getattr(tables, key)
-    return mats, [_dyr_text(r, why) for r, why in zip(tables.unsupported, tables.why)]
+    skipped = sorted(
+        [*conv.skipped, *zip(tables.unsupported, tables.why)],
+        key=lambda item: (item[0].file, item[0].line),
+    )
+    return (
+        mats,
+        [_dyr_text(r, why) for r, why in skipped],
+        [f"bus {b} '{i}'" for b, i in sorted(lost)],
+    )
 
 
 def _dyr_text(rec, why: str) -> str:

@@ -48,6 +48,7 @@ from stabctl.models.blocks import (
 )
 from stabctl.models.declaration import (
     Declared,
+    DyrModel,
     Family,
     Param,
     check_packed,
@@ -331,6 +332,43 @@ REPCA1_FIELDS = tuple(p.name for p in _REPCA1_PARAMS)
 #: the ibr_con fields a REECA1 sets (its own columns, its PQFLAG and its Iq filter Tiq)
 REECA1_FIELDS = ("pqflag", "tiq", *(p.name for p in _REECA1_PARAMS))
 
+#: the ICONs of PSS/E's REECB1 record (REECA1 adds PFLAG before PQFLAG)
+_REEC_ICONS = ("IREG", "PFFLAG", "VFLAG", "QFLAG", "PQFLAG")
+#: REECB1's CONs in PSS/E order (REECA1 adds Iqfrz, Thld, Thld2 after Vref0, Vref1 after
+#: Kvi, and its VDL curves)
+_REEC_CONS = (
+    *("Vdip", "Vup", "Trv", "dbd1", "dbd2", "Kqv", "Iqh1", "Iql1", "Vref0", "Tp", "QMax"),
+    *("QMin", "VMAX", "VMIN", "Kqp", "Kqi", "Kvp", "Kvi", "Tiq", "dPmax", "dPmin", "PMAX"),
+    *("PMIN", "Imax", "Tpord"),
+)
+#: REECA1's ICONs and CONs in PSS/E order
+_REECA1_DYR = (
+    *_REEC_ICONS[:4],
+    *("PFLAG", "PQFLAG"),
+    *_REEC_CONS[:9],
+    *("Iqfrz", "Thld", "Thld2"),
+    *_REEC_CONS[9:18],
+    "Vref1",
+    *_REEC_CONS[18:],
+    *(f"{v}{j}" for pair in (("Vq", "Iq"), ("Vp", "Ip")) for j in range(1, 5) for v in pair),
+)
+
+
+def _reec_copies(fields: tuple[str, ...]) -> dict[str, str]:
+    """ibr_con field <- DYR field of a REECA1 or REECB1 record: all but IREG (the
+    regulated bus, read by the import), under the same name but PQFLAG (``pqflag``) and
+    Tiq (``tiq``)."""
+    rename = {"PQFLAG": "pqflag", "Tiq": "tiq"}
+    return {rename.get(f, f): f for f in fields if f != "IREG"}
+
+
+#: REPCA1's CONs in PSS/E order
+_REPC_CONS = (
+    *("Tfltr", "Kp", "Ki", "Tft", "Tfv", "Vfrz", "Rc", "Xc", "Kc", "emax", "emin", "dbd1"),
+    *("dbd2", "Qmax", "Qmin", "Kpg", "Kig", "Tp", "fdbd1", "fdbd2", "femax", "femin"),
+    *("Pmax", "Pmin", "Tg", "Ddn", "Dup"),
+)
+
 CONVERTER = Family(
     table="ibr_con",
     min_columns=8,
@@ -538,6 +576,59 @@ CONVERTER = Family(
         ),
         *_RELAY_PARAMS,
     ),
+    dyr=(
+        #: REGC_A (PSS/E Model Library "REGCA1"): ICON Lvplsw, then 14 CONs; Accel, the
+        #: network solution's acceleration factor, is not a model parameter
+        DyrModel(
+            "REGCA1",
+            (
+                "Lvplsw",
+                *("Tg", "Rrpwr", "Brkpt", "Zerox", "Lvpl1", "Volim", "Lvpnt1", "Lvpnt0"),
+                *("Iolim", "Tfltr", "Khv", "Iqrmax", "Iqrmin", "Accel"),
+            ),
+            {n: n for n in ("Lvplsw", "Tg", "Rrpwr", "Brkpt", "Zerox", "Lvpl1", "Volim")}
+            | {n: n for n in ("Lvpnt1", "Lvpnt0", "Iolim", "Tfltr", "Khv", "Iqrmax", "Iqrmin")},
+        ),
+        #: REEC_A: ICONs IREG (0: own bus), PFFLAG, VFLAG, QFLAG, PFLAG, PQFLAG; 45 CONs
+        DyrModel(
+            "REECA1",
+            _REECA1_DYR,
+            _reec_copies(_REECA1_DYR),
+        ),
+        #: REEC_B: ICONs IREG (0: own bus), PFFLAG, VFLAG, QFLAG, PQFLAG; 25 CONs
+        DyrModel("REECB1", _REEC_ICONS + _REEC_CONS, _reec_copies(_REEC_ICONS + _REEC_CONS)),
+        #: REPC_A: ICONs IREG (0: own bus), the monitored branch's from and to buses and
+        #: circuit id (a string, NaN among the numbers), VCFlag, RefFlag, Fflag; 27 CONs
+        DyrModel(
+            "REPCA1",
+            ("IREG", "BUS1", "BUS2", "CKTID", "VCFlag", "RefFlag", "Fflag") + tuple(_REPC_CONS),
+            {f"pc_{n}": n for n in ("VCFlag", "RefFlag", "Fflag", *_REPC_CONS)},
+        ),
+        DyrModel(
+            "WTDTA1",
+            ("H", "DAMP", "Htfrac", "Freq1", "Dshaft"),
+            {f"wt_{n}": n for n in ("H", "DAMP", "Htfrac", "Freq1", "Dshaft")},
+        ),
+        DyrModel("WTARA1", ("Ka", "Theta0"), {"wa_Ka": "Ka", "wa_theta0": "Theta0"}),
+        DyrModel(
+            "WTPTA1",
+            ("Kiw", "Kpw", "Kic", "Kpc", "Kcc", "Tp", "TetaMax", "TetaMin", "RTetaMax", "RTetaMin"),
+            {f"wp_{n}": n for n in ("Kiw", "Kpw", "Kic", "Kpc", "Kcc", "Tp")}
+            | {"wp_thmax": "TetaMax", "wp_thmin": "TetaMin"}
+            | {"wp_dthmax": "RTetaMax", "wp_dthmin": "RTetaMin"},
+        ),
+        #: WTTQ_A: ICON Tflag, then 15 CONs (TRATE: the turbine's MW rating, 0 its MBASE)
+        DyrModel(
+            "WTTQA1",
+            ("Tflag", "Kpp", "Kip", "Tp", "Twref", "Temax", "Temin")
+            + tuple(f"{v}{j}" for j in range(1, 5) for v in ("p", "spd"))
+            + ("TRATE",),
+            {f"wq_{n}": n for n in ("Tflag", "Kpp", "Kip", "Tp", "Twref", "Temax", "Temin")}
+            | {f"wq_p{j}": f"p{j}" for j in range(1, 5)}
+            | {f"wq_sp{j}": f"spd{j}" for j in range(1, 5)}
+            | {"wq_Tn": "TRATE"},
+        ),
+    ),
 )
 
 __all__ = [
@@ -626,8 +717,9 @@ MEMORY_SLOTS = [*range(int(_T_IQ), int(_IPCMD) + 1), int(_PC_E_H), int(PLANT_PRE
 ENERGY_SLOTS = [STATE_NAMES[ESD1].index("SOC")]
 #: the ibr_con fields the kernels take as given (pu quantities after the base change)
 TABLE_FIELDS = tuple(n for n in CONVERTER.names if n not in ("number", "bus", "mva"))
-#: REECA1's lag time constants (each must be >= LBND; its Iq filter is ``tiq``)
-REECA1_LAGS = ("Trv", "Tp", "tiq", "Tpfilt", "Tpord")
+#: REECA1's lag time constants (each must be >= LBND; its Iq filter is ``tiq``); its Pe
+#: filter Tp may also be 0, no filter (PSS/E's reading of Tp = 0)
+REECA1_LAGS = ("Trv", "tiq", "Tpfilt", "Tpord")
 #: REPCA1's (its lead time constant pc_Tft may be 0)
 REPCA1_LAGS = ("pc_Tfltr", "pc_Tfv", "pc_Tp", "pc_Tg", "Twm")
 #: fields on the device base: powers and currents (times Sn/Sb), the reactance (Sb/Sn)
@@ -759,6 +851,7 @@ class ConverterParams(Declared):
             ("ibr_con Tg", self.Tg, reg),
             ("ibr_con Tfltr", self.Tfltr, reg),
             *((f"ibr_con {n}", getattr(self, n), ree) for n in REECA1_LAGS),
+            ("ibr_con Tp", self.Tp, ree & (self.Tp >= LBND)),
             *((f"ibr_con {n}", getattr(self, n), self.repc == REPCA1) for n in REPCA1_LAGS),
             *(
                 (f"ibr_con {n}", getattr(self, n), getattr(self, flag) == 1)
@@ -783,6 +876,8 @@ class ConverterParams(Declared):
         # REECA1's slots; a PVD1's protection in the same slots is discrete logic, at rest
         # at 0: no state of the linear model
         act[5:_PC_V] = self.reec != NO_REEC
+        act[_PE] &= self.Tp >= LBND  # Tp 0: no Pe filter
+        act[_PIQ] &= (self.VFLAG == 1) & (self.QFLAG == 1)  # else out of the Iq path
         act[_PC_V:] = self.repc == REPCA1
         act[_PC_FL] &= self.Tfm >= LBND
         act[_WT:] = False
@@ -820,9 +915,10 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     ------
     CaseError
         A lag time constant tip, tiq (PVD1, ESD1), Tg, Tfltr (REGCA1) or REECA1's
-        (:data:`REECA1_LAGS`) below 1e-3 s (the current would be an algebraic function of
-        the voltage inside the network solution); an electrical control ``reec`` on a
-        device other than a REGCA1; naming the row and field.
+        (:data:`REECA1_LAGS`; its Tp other than 0, no filter) below 1e-3 s (the current
+        would be an algebraic function of the voltage inside the network solution); an
+        electrical control ``reec`` on a device other than a REGCA1; naming the row and
+        field.
     """
     t = case.converters
     n = len(t)
@@ -843,6 +939,7 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     if bad.size:
         t._fail(bad[0], "repc", "a plant control drives an electrical control (reec 1, 2) only")
     lags += [(name, ree) for name in REECA1_LAGS] + [(name, pc) for name in REPCA1_LAGS]
+    lags += [("Tp", ree & (t.Tp != 0))]  # REECA1's Pe filter: 0 none
     _check_wind(t, t.reec == REECA1)
     lags += [(n, getattr(t, flag) == 1) for flag, names in SWITCHED_LAGS for n in names]
     for name, sel in lags:
@@ -1290,16 +1387,19 @@ def _reeca1(P, x, k, v, S, ref, wg, dx):
     if frz:  # the Ipmax hold runs after the dip only (ExtendedEvent extend_only)
         hold = 0.0
     vt, dx[_VT, k] = lag(v, x[_VT, k], P[k, C.TRV])
-    _, dx[_PE, k] = lag(S.real, x[_PE, k], P[k, C.TP])
+    pe, dx[_PE, k] = lag(S.real, x[_PE, k], P[k, C.TP])  # Tp < LBND: no filter (PSS/E 0)
     vp = 0.01 if v <= 0.01 else v
     # reactive power reference: Q, or the power factor of the filtered Pe (Q0 at P0 = 0)
     PFsel = P[k, C.QREF] + ext.imag
     if P[k, C.PFFLAG] == 1.0:
-        PFsel = x[_PE, k] * P[k, C.TANPF] if P[k, C.P0] != 0.0 else P[k, C.Q0]
+        PFsel = pe * P[k, C.TANPF] if P[k, C.P0] != 0.0 else P[k, C.Q0]
     Qerr = clip(PFsel, P[k, C.QMIN], P[k, C.QMAX]) - S.imag
     vflag = P[k, C.VFLAG]
     lo, hi = P[k, C.VMIN], P[k, C.VMAX]
-    piq = _frozen_pi(P, x, k, vflag * Qerr, (C.KQP, C.KQI, C.KQS, _PIQ, _PIQ_H), lo, hi, frz, dx)
+    piq = 0.0  # the Q PI drives Iq with VFLAG and QFLAG 1 only (ANDES's drifts unread)
+    dx[_PIQ, k] = 0.0
+    if vflag == 1.0 and P[k, C.QFLAG] == 1.0:
+        piq = _frozen_pi(P, x, k, Qerr, (C.KQP, C.KQI, C.KQS, _PIQ, _PIQ_H), lo, hi, frz, dx)
     if P[k, C.REEC] == REECB1:
         u = P[k, C.QFLAG] * clip(vflag * piq, lo, hi)
     else:

@@ -393,6 +393,32 @@ def test_reecb1_v_pi_reads_the_q_pis_output_not_the_voltage():
     assert dx[S["PIV"], 0] == pytest.approx(0.3 * 0.1, rel=1e-13)
 
 
+def test_reec_tp_zero_is_no_pe_filter():
+    # PSS/E's Tp = 0: with PFFLAG 1 the Q reference is tan(phi0) times Pe itself, not
+    # the filter's state (held at 0.3 here, P0 0.5, Q0 0.1: the Q filter moves towards
+    # 0.2 Pe/|V| = 0.1, at rest); with Tp 0.02 the state's 0.3 gives 0.06
+    dx, _, _, cp = reecb1([(S["Pe_filter"], 0.3)], PFFLAG=1, Tp=0.0)
+    assert dx[S["Pe_filter"], 0] == 0.0 and dx[S["Iq_filter"], 0] == pytest.approx(0.0, abs=1e-14)
+    assert not cp.has_state()[S["Pe_filter"], 0]
+    dx, _, _, cp = reecb1([(S["Pe_filter"], 0.3)], PFFLAG=1, Tp=0.02)
+    assert dx[S["Iq_filter"], 0] == pytest.approx((0.06 - 0.1) / 0.02, rel=1e-13)
+    assert cp.has_state()[S["Pe_filter"], 0]
+    with pytest.raises(CaseError, match=r"field 'Tp': must be >= 0.001 s"):
+        reecb1(Tp=5e-4)
+
+
+@pytest.mark.parametrize("vflag, qflag", [(0, 0), (1, 0)])
+def test_reec_q_pi_out_of_the_iq_path_is_no_state(vflag, qflag):
+    # the Q PI feeds Iq only with VFLAG = QFLAG = 1: otherwise it stands still (ANDES's
+    # drifts from 0 towards [VMIN, VMAX] = [0.9, 1.05], unread; RENA's REECB1) and the
+    # plant starts at rest
+    for control in (reeca1, reecb1):
+        dx, _, _, cp = control(VFLAG=vflag, QFLAG=qflag, VMIN=0.9, VMAX=1.05, Vref1=1.0)
+        assert dx[S["PIQ"], 0] == 0.0 and not cp.has_state()[S["PIQ"], 0]
+    dx, _, _, cp = reecb1([(S["PIQ"], 0.1)], VFLAG=1, QFLAG=1, Kqp=0.0)
+    assert cp.has_state()[S["PIQ"], 0]
+
+
 # -- PLL1 (ANDES measurement/pll.py, renewable/regcp1.py; docs/ibr.md 9) -----------------
 
 #: the PLL1's slots

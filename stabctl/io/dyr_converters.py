@@ -1,0 +1,254 @@
+"""PSS/E DYR converter records to rows of the converter table (``ibr_con``).
+
+A RAW generator with a ``REGCA1`` record is a WECC second-generation renewable plant, the
+converter of :data:`stabctl.models.converters.REGCA1` (docs/ibr.md), the same row
+:mod:`stabctl.io.andes_case` builds from ANDES's devices: its electrical control ``REECA1``
+or ``REECB1``, that control's plant control ``REPCA1`` and (a REECA1's) wind turbine,
+drive train ``WTDTA1`` then ``WTARA1``, ``WTPTA1``, ``WTTQA1``, each a record of the same
+generator (bus, id).  Parameter order (ICONs first) and the ``ibr_con`` field each is
+copied to are declared with the table (``CONVERTER.dyr``, :mod:`stabctl.models.converters`);
+values as given (device base MBASE, as PSS/E's), the rest of the row the table's defaults
+(ANDES 2.0's: its REECA1/REPCA1 configuration kqs = kvs = ksg = 2, tpfilt 0.02 s, freeze 1,
+and the BusFreq of a REPCA1's frequency, Tf 0.02 s, Tw 0.1 s).
+
+PSS/E's conventions where ANDES's reading of the same record differs: IREG = 0 (REECx,
+REPCA1) is the plant's own bus (ANDES reads it as bus 0); REECx's Tp = 0 is no filter (a
+lag below :data:`stabctl.models.blocks.LBND` is bypassed); REPCA1's monitored branch
+(BUS1, BUS2, CKTID; 0 0: none) is the RAW branch between those buses (its r, x on the
+system base).  REGCA1's Accel (the network solution's acceleration factor) is not a model
+parameter and is not read.
+
+Left out, with why (`ConverterRows.skipped`): a plant regulating a remote bus (IREG not 0
+nor its own bus), a monitored branch that is not one in-service RAW branch, a wind turbine
+of a REECB1 or with a link missing, and every record of a plant left out; a control
+record without a REGCA1.  A plant sharing its bus with other generators (machines or
+plants) takes its own PG, QG of the bus's generation (ibr_con pfrac, qfrac), as they do.
+
+Source: PSS/E Model Library (REGCA1, REECA1, REECB1, REPCA1, WTDTA1, WTARA1, WTPTA1,
+WTTQA1 ICONs and CONs); ANDES 2.0 ``andes/io/psse-dyr.yaml`` for the same orders.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from stabctl.errors import CaseError
+from stabctl.io.dyr import CONVERTER_DYR, DyrRecord, machine_id
+from stabctl.models.converters import (
+    CONVERTER,
+    REECA1,
+    REECB1,
+    REGCA1,
+    REPCA1,
+    WTDTA1,
+)
+
+__all__ = ["ConverterRows", "converter_rows", "shares", "CONVERTER_RECORDS"]
+
+#: the DYR records read into the converter table
+CONVERTER_RECORDS = tuple(CONVERTER_DYR)
+#: electrical control record -> ibr_con ``reec`` code
+_REEC = {"REECA1": REECA1, "REECB1": REECB1}
+#: the wind turbine's records after the drive train, in chain order, with the ibr_con
+#: flag each sets
+_WIND_CHAIN = (("WTARA1", "aero"), ("WTPTA1", "pitch"), ("WTTQA1", "torque"))
+
+
+@dataclass(frozen=True)
+class ConverterRows:
+    """What `converter_rows` gives.
+
+    Attributes
+    ----------
+    rows : list of list of float
+        ``ibr_con`` rows (:data:`stabctl.models.converters.CONVERTER` column order), one
+        per plant, numbered 1, 2, ... in RAW generator order.
+    replaced : frozenset of (int, str)
+        The (bus, machine id) of the generators the rows model (not machines).
+    skipped : tuple of (DyrRecord, str)
+        The converter records left out, each with why, in file order.
+    """
+
+    rows: list[list[float]]
+    replaced: frozenset[tuple[int, str]]
+    skipped: tuple[tuple[DyrRecord, str], ...]
+
+
+class _Refused(Exception):
+    """A plant stabctl cannot represent: the reason."""
+
+
+def converter_rows(records, generators, branches) -> ConverterRows:
+    """The converter table's rows of the REGCA1 plants of a DYR file.
+
+    Parameters
+    ----------
+    records : sequence of DyrRecord
+        The DYR file's records (:func:`stabctl.io.dyr.read_dyr`); records of other
+        models are ignored.
+    generators : sequence of dict
+        The RAW file's in-service generators in RAW order, keys ``"bus"``, ``"id"``,
+        ``"mbase"`` (MVA), ``"pg"``, ``"qg"`` (MW, Mvar), as
+        :func:`stabctl.io.dyr.dyr_tables` takes them.
+    branches : numpy.ndarray
+        The RAW file's PST ``line`` matrix, shape (n_branch, >= 4): from bus, to bus, r,
+        x (pu, system base), for a REPCA1's monitored branch.
+
+    Returns
+    -------
+    ConverterRows
+        The rows, the generators they model and the records left out with why.
+
+    Raises
+    ------
+    CaseError
+        Naming file:line, model and (bus, id): a record with the wrong number of
+        parameters, a flag (ICON) not among its choices, two records of one model for a
+        generator.
+    """
+    plants: dict[tuple[int, str], dict[str, DyrRecord]] = {}
+    for rec in records:
+        if rec.model not in CONVERTER_DYR:
+            continue
+        want = len(CONVERTER_DYR[rec.model].fields)
+        if len(rec.params) != want:
+            raise CaseError(
+                f"{rec.label()}: needs {want} parameters after the id, got {len(rec.params)}"
+            )
+        plant = plants.setdefault((rec.bus, rec.id), {})
+        if rec.model in plant:
+            raise CaseError(
+                f"{rec.label()}: second {rec.model} record for this generator (first at "
+                f"{plant[rec.model].where()})"
+            )
+        plant[rec.model] = rec
+    gens = {(int(g["bus"]), machine_id(g["id"])): g for g in generators}
+    rows: list[list[float]] = []
+    replaced: set[tuple[int, str]] = set()
+    skipped: list[tuple[DyrRecord, str]] = []
+    for key in sorted(plants, key=lambda k: list(gens).index(k) if k in gens else len(gens)):
+        plant = plants[key]
+        try:
+            if "REGCA1" not in plant:
+                raise _Refused("no REGCA1 record for its generator")
+            gen = gens.get(key)
+            if gen is None:
+                raise _Refused("no such generator in the RAW data (or out of service)")
+            row = _plant_row(plant, gen, len(rows) + 1, branches)
+            row[CONVERTER.col("pfrac") - 1], row[CONVERTER.col("qfrac") - 1] = shares(
+                generators, gen
+            )
+        except _Refused as why:
+            skipped += [(rec, str(why)) for rec in plant.values()]
+            continue
+        rows.append(row)
+        replaced.add(key)
+    skipped.sort(key=lambda item: (item[0].file, item[0].line))
+    return ConverterRows(rows, frozenset(replaced), tuple(skipped))
+
+
+def shares(generators, gen) -> tuple[float, float]:
+    """The share of generator ``gen`` in its bus's P and Q generation, PG / sum(PG) and
+    QG / sum(QG) over the ``generators`` at its bus (keys "bus", "pg", "qg"; equal shares
+    of a sum 0; 1, 1 alone on its bus): as PSS/E's generators, each keeps its own PG, QG
+    of the RAW's power flow."""
+    at = [g for g in generators if int(g["bus"]) == int(gen["bus"])]
+    if len(at) == 1:
+        return 1.0, 1.0
+    out = []
+    for key in ("pg", "qg"):
+        total = sum(float(g[key]) for g in at)
+        out.append(float(gen[key]) / total if total else 1.0 / len(at))
+    return out[0], out[1]
+
+
+def _plant_row(plant: dict[str, DyrRecord], gen: dict, number: int, branches) -> list[float]:
+    """The ibr_con row of one plant's records (`_Refused` for what stabctl lacks)."""
+    v = {p.name: p.default for p in CONVERTER.params}
+    v.update(number=number, bus=int(gen["bus"]), type=REGCA1, mva=float(gen["mbase"]))
+    _copy(plant["REGCA1"], v)
+    reec = [plant[name] for name in _REEC if name in plant]
+    if len(reec) > 1:
+        raise _Refused("two electrical controls (REECA1 and REECB1; stabctl: one)")
+    if reec:
+        rec = reec[0]
+        _own_bus(rec)
+        v["reec"] = _REEC[rec.model]
+        _copy(rec, v)
+    if "REPCA1" in plant:
+        rec = plant["REPCA1"]
+        if not reec:
+            raise _Refused("a REPCA1 without an electrical control (REECA1 or REECB1)")
+        _own_bus(rec)
+        v["repc"] = REPCA1
+        _copy(rec, v)
+        v.update(_monitored_branch(rec, int(gen["bus"]), branches))
+    _wind(plant, reec[0] if reec else None, v)
+    return [float(v[p.name]) for p in CONVERTER.params]
+
+
+def _copy(rec: DyrRecord, v: dict) -> None:
+    """The declared copies of ``rec`` into ``v``; CaseError for a flag not among its
+    column's choices."""
+    model = CONVERTER_DYR[rec.model]
+    values = model.values(rec.params)
+    for name, src in model.copy.items():
+        p = CONVERTER.param(name)
+        if p.choices and values[src] not in p.choices:
+            raise CaseError(
+                f"{rec.label()}: {src} = {values[src]:g} must be one of "
+                f"{', '.join(f'{c:g}' for c in p.choices)}"
+            )
+        v[name] = values[src]
+
+
+def _own_bus(rec: DyrRecord) -> None:
+    """`_Refused` when ``rec`` regulates a remote bus (IREG neither 0 nor its own bus)."""
+    ireg = CONVERTER_DYR[rec.model].values(rec.params)["IREG"]
+    if ireg not in (0, rec.bus):
+        raise _Refused(f"{rec.model} regulates remote bus IREG = {ireg:g} (stabctl: its own)")
+
+
+def _monitored_branch(rec: DyrRecord, bus: int, branches) -> dict[str, float]:
+    """ibr_con pc_bus1, pc_bus2, pc_r, pc_x of a REPCA1's monitored branch (BUS1 BUS2 0 0:
+    none, the table's defaults): the one RAW branch between those buses."""
+    vals = CONVERTER_DYR["REPCA1"].values(rec.params)
+    b1, b2 = int(vals["BUS1"]), int(vals["BUS2"])
+    if b1 == 0 and b2 == 0:
+        return {}
+    ends = np.asarray(branches)[:, :2].astype(int)
+    found = np.flatnonzero(
+        ((ends[:, 0] == b1) & (ends[:, 1] == b2)) | ((ends[:, 0] == b2) & (ends[:, 1] == b1))
+    )
+    if found.size != 1:
+        raise _Refused(
+            f"REPCA1 monitors branch {b1}-{b2} circuit {rec.text[0]!r}: {found.size} "
+            "in-service RAW branches join those buses (stabctl: one)"
+        )
+    if bus not in (b1, b2):
+        raise _Refused(f"REPCA1 monitors branch {b1}-{b2}, which does not end at bus {bus}")
+    r, x = (float(branches[found[0], c]) for c in (2, 3))
+    return {"pc_bus1": b1, "pc_bus2": b2, "pc_r": r, "pc_x": x}
+
+
+def _wind(plant: dict[str, DyrRecord], reec: DyrRecord | None, v: dict) -> None:
+    """The wind turbine's columns into ``v``: its drive train WTDTA1 and each record of
+    `_WIND_CHAIN` after it; `_Refused` for a link missing or a REECB1's turbine."""
+    chain = [name for name, _ in _WIND_CHAIN if name in plant]
+    if "WTDTA1" not in plant and not chain:
+        return
+    if reec is None or reec.model != "REECA1":
+        raise _Refused("a wind turbine without a REECA1 (stabctl: a REECA1's only)")
+    links = ["WTDTA1", *(name for name, _ in _WIND_CHAIN)]
+    present = [name in plant for name in links]
+    if present != sorted(present, reverse=True):
+        missing = links[present.index(False)]
+        raise _Refused(f"its wind turbine lacks {missing}, which the next record needs")
+    v["wind"] = WTDTA1
+    _copy(plant["WTDTA1"], v)
+    for name, flag in _WIND_CHAIN:
+        if name in plant:
+            v[flag] = 1.0
+            _copy(plant[name], v)

@@ -1,0 +1,268 @@
+"""Converter records read natively from a PSS/E DYR file (stabctl.io.dyr_converters): the
+row import-andes builds from the same data, PSS/E's own-bus and no-filter readings, and
+the records left out with why.  The RAW + DYR data are PSS/E's RENA run
+(tests/data/psse_runs/RENA_DEFAULT, PowerSimulationsDynamics.jl, BSD-3; the agreement with
+PSS/E's trajectories is tests/io/test_psse_runs.py)."""
+
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import LineTrip
+from stabctl.errors import CaseError
+from stabctl.io.dyr import read_dyr
+from stabctl.io.psse import import_psse, load_psse
+from stabctl.models.converters import CONVERTER, REECB1, REGCA1, REPCA1
+
+RENA = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "RENA_DEFAULT"
+RAW = RENA / "ThreeBusRenewable.raw"
+DYR = RENA / "ThreeBus_REN_A_DEFAULT_FLAG.dyr"
+#: the ibr_con fields set by where the plant is, not by its records
+_PLACE = ("number", "bus", "mva", "pfrac", "qfrac")
+
+
+def _text(rec, **change) -> str:
+    """DYR text of record ``rec`` with the fields ``change`` (name -> value) replaced."""
+    from stabctl.io.dyr import CONVERTER_DYR, DYR_MODELS
+
+    fields = (DYR_MODELS | CONVERTER_DYR)[rec.model].fields
+    text = iter(rec.text)
+    vals = []
+    for name, v in zip(fields, rec.params):
+        v = change.get(name, v)
+        vals.append(f"'{next(text)}'" if name == "CKTID" else repr(float(v)))
+    return f"{rec.bus} '{rec.model}' '{rec.id}' {' '.join(vals)} /\n"
+
+
+def _dyr(tmp_path, records, name="plant.dyr") -> Path:
+    path = tmp_path / name
+    path.write_text("".join(records))
+    return path
+
+
+def _row(table, k=0) -> dict:
+    return {p.name: float(getattr(table, p.name)[k]) for p in CONVERTER.params}
+
+
+def test_rena_reads_as_one_regca1_with_its_reecb1_and_repca1():
+    """PSS/E's RENA record values (their file lines) land in their ibr_con columns: the
+    ICONs (REGCA1 Lvplsw 0, REECB1 IREG PFFLAG VFLAG QFLAG PQFLAG 0 0 0 0 0) first, then
+    REGCA1's Tg 0.02, REECB1's Tp 0 (no filter) and Imax 1.11, REPCA1's Kp 18, Tp 0.25."""
+    res = import_psse(RAW, DYR)
+    assert res.left_out == ()
+    t = res.case.converters
+    assert len(t) == 1 and len(res.case.machines) == 1  # the GENCLS infinite bus
+    row = _row(t)
+    assert (row["type"], row["reec"], row["repc"], row["bus"]) == (REGCA1, REECB1, REPCA1, 103)
+    assert (row["Lvplsw"], row["Tg"], row["Rrpwr"], row["Iqrmin"]) == (0.0, 0.02, 10.0, -100.0)
+    assert (row["VFLAG"], row["QFLAG"], row["pqflag"], row["Tp"], row["Imax"]) == (
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        1.11,
+    )
+    assert (row["Vdip"], row["Kvi"], row["tiq"], row["Tpord"]) == (-99.0, 60.0, 0.02, 0.02)
+    assert (row["pc_Kp"], row["pc_Ki"], row["pc_Tp"], row["pc_Dup"]) == (18.0, 5.0, 0.25, 0.0)
+    assert (row["pc_bus1"], row["pc_bus2"]) == (0.0, 0.0)  # BUS1 BUS2 0 0: no branch
+    assert res.case.machines.H[0] == 0.0  # the GENCLS H = 0 infinite bus
+
+
+@pytest.fixture
+def own_bus_andes(monkeypatch):
+    """ANDES's DYR reading with its REECx ``busr`` None: ANDES reads PSS/E's IREG = 0 (own
+    bus) as bus 0, which import-andes refuses as a remote bus."""
+    pytest.importorskip("andes")
+    import stabctl.io.andes_case as ac
+
+    load = ac._load
+
+    def own_bus(path, dyr):
+        ss = load(path, dyr)
+        for name in ("REECA1", "REECB1"):
+            ss.models[name].busr.v[:] = [None] * ss.models[name].n
+        return ss
+
+    monkeypatch.setattr(ac, "_load", own_bus)
+    return ac.read_andes_case
+
+
+def test_rena_row_and_trip_as_import_andes_reads_the_same_dyr(tmp_path, own_bus_andes):
+    """The DYR-read plant is import-andes's row for the same RAW + DYR, column for column,
+    and runs PSS/E's line trip the same (V103, P, Q within 1e-9).  Two readings ANDES
+    does not share are set aside: its REECB1 refuses Tp = 0 (RENA's; 0.02 s here) and
+    reads IREG = 0 as bus 0 (`own_bus_andes`)."""
+    recs = read_dyr(DYR)
+    dyr = _dyr(tmp_path, [_text(r, **({"Tp": 0.02} if r.model == "REECB1" else {})) for r in recs])
+    native = load_psse(RAW, dyr)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        andes = own_bus_andes(RAW, dyr=dyr).case
+    assert _row(native.converters) == _row(andes.converters)
+    runs = [
+        Simulator(c, q_limits=False).run([LineTrip(101, 103, 1.0)], 2.0, h=0.005)
+        for c in (native, andes)
+    ]
+    k = [list(c.buses.number).index(103) for c in (native, andes)]
+    n, a = runs
+    assert np.max(np.abs(n.vmag[:, k[0]] - a.vmag[:, k[1]])) < 1e-9
+    assert np.max(np.abs(n.ibr_p - a.ibr_p)) < 1e-9
+    assert np.max(np.abs(n.ibr_q - a.ibr_q)) < 1e-9
+    assert np.ptp(n.vmag[:, k[0]]) > 5e-3  # the trip moves V103 (1.015 -> 1.0245)
+
+
+#: PSS/E Model Library orders (ICONs first) -> ANDES 2.0's parameter names, written
+#: here from the Model Library, independently of the declarations under test
+_PSSE_ORDER = {
+    "REGCA1": "Lvplsw Tg Rrpwr Brkpt Zerox Lvpl1 Volim Lvpnt1 Lvpnt0 Iolim Tfltr Khv Iqrmax "
+    "Iqrmin -",
+    "REECA1": "busr PFFLAG VFLAG QFLAG PFLAG PQFLAG Vdip Vup Trv dbd1 dbd2 Kqv Iqh1 Iql1 "
+    "Vref0 Iqfrz Thld Thld2 Tp QMax QMin VMAX VMIN Kqp Kqi Kvp Kvi Vref1 Tiq dPmax dPmin "
+    "PMAX PMIN Imax Tpord Vq1 Iq1 Vq2 Iq2 Vq3 Iq3 Vq4 Iq4 Vp1 Ip1 Vp2 Ip2 Vp3 Ip3 Vp4 Ip4",
+    "WTDTA1": "H DAMP Htfrac Freq1 Dshaft",
+    "WTARA1": "Ka theta0",
+    "WTPTA1": "Kiw Kpw Kic Kpc Kcc Tp thmax thmin dthmax dthmin",
+    "WTTQA1": "Tflag Kpp Kip Tp Twref Temax Temin p1 sp1 p2 sp2 p3 sp3 p4 sp4 Tn",
+}
+
+
+def test_wind_turbine_records_read_as_andes_reads_its_wind_case(tmp_path):
+    """ANDES's ieee14_wt3 plant (REGCA1 + REECA1 + WTDTA1 + WTARA1 + WTPTA1 + WTTQA1),
+    written as PSS/E DYR records in the Model Library's orders and read natively on
+    RENA's bus 103, gives import-andes's row of that plant, column for column but the
+    place (number, bus, base, shares) and its REPCA1's (not written: its monitored line
+    is ieee14's).  (ANDES's own DYR reader fails on WTARA1 and
+    WTTQA1 records: its WTARA1 lookup and its WTTQA1 TRATE mapping.)"""
+    andes = pytest.importorskip("andes")
+    from stabctl.io.andes_case import read_andes_case
+
+    case = os.path.join(os.path.dirname(andes.__file__), "cases", "ieee14", "ieee14_wt3.xlsx")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ss = andes.load(case, setup=True, no_output=True, default_config=True)
+        want = _row(read_andes_case(case, on_unsupported="skip").case.converters)
+    assert want["wind"] and want["aero"] and want["pitch"] and want["torque"]
+    lines = ["102 'GENCLS' 1 0.0 0.0 /\n"]
+    for model, order in _PSSE_ORDER.items():
+        m = ss.models[model]
+        vals = []
+        for name in order.split():
+            if name == "busr" or name == "-":  # IREG 0 (own bus); REGCA1's Accel
+                vals.append("0")
+                continue
+            v = m.params[name].vin[0]
+            vals.append(repr(float(0.0 if v is None or not np.isfinite(v) else v)))
+        lines.append(f"103 '{model}' 1 {' '.join(vals)} /\n")
+    got = _row(load_psse(RAW, _dyr(tmp_path, lines)).converters)
+    plant = ("repc", "Tfm", "Twm")  # ieee14_wt3's REPCA1, on its own network: not written
+    same = [k for k in got if k not in _PLACE + plant and not k.startswith("pc_")]
+    differ = {k: (got[k], want[k]) for k in same if got[k] != want[k]}
+    assert differ == {}
+
+
+def _rena(tmp_path, **change) -> Path:
+    """RENA's DYR with ``change``: model -> {field: value}."""
+    recs = read_dyr(DYR)
+    return _dyr(tmp_path, [_text(r, **change.get(r.model, {})) for r in recs])
+
+
+def test_remote_regulation_is_left_out_naming_the_record(tmp_path):
+    """IREG other than 0 or the plant's bus: the whole plant (its three records) left out
+    with the REECB1's file:line and why; the generator then has no model (refused)."""
+    dyr = _rena(tmp_path, REECB1={"IREG": 101})
+    with pytest.raises(CaseError, match=r"plant\.dyr:3 REECB1 at bus 103 '1': REECB1 regulates"):
+        import_psse(RAW, dyr)
+    with (
+        pytest.raises(CaseError, match=r"generator\(s\) left without a model, .*: bus 103 '1'"),
+        pytest.warns(UserWarning, match="left out 3 unsupported record"),
+    ):
+        import_psse(RAW, dyr, on_unsupported="skip")
+    from stabctl.io.dyr_converters import converter_rows
+    from stabctl.io.psse_raw import read_raw
+
+    raw = read_raw(RAW)
+    res = converter_rows(read_dyr(dyr), [g.as_dyr() for g in raw.generators], raw.line)
+    assert res.rows == [] and [r.model for r, _ in res.skipped] == ["REGCA1", "REECB1", "REPCA1"]
+    assert all(
+        why == "REECB1 regulates remote bus IREG = 101 (stabctl: its own)" for _, why in res.skipped
+    )
+    own = _rena(tmp_path, REECB1={"IREG": 103}, REPCA1={"IREG": 103})
+    assert import_psse(RAW, own).left_out == ()  # its own bus, given by number
+
+
+def test_monitored_branch_is_the_raw_branch(tmp_path):
+    """REPCA1's BUS1 BUS2 name the RAW branch 103-101 (r 0.01, x 0.12 on 100 MVA)."""
+    dyr = _rena(tmp_path, REPCA1={"BUS1": 103, "BUS2": 101})
+    row = _row(load_psse(RAW, dyr).converters)
+    assert (row["pc_bus1"], row["pc_bus2"], row["pc_r"], row["pc_x"]) == (103, 101, 0.01, 0.12)
+    far = _rena(tmp_path, REPCA1={"BUS1": 101, "BUS2": 102})
+    with pytest.raises(CaseError, match=r"REPCA1 monitors branch 101-102, which does not end"):
+        import_psse(RAW, far)
+    with pytest.raises(CaseError, match=r"103-104 circuit '0': 0 in-service RAW branches join"):
+        import_psse(RAW, _rena(tmp_path, REPCA1={"BUS1": 103, "BUS2": 104}))
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (
+            {"REECB1": {"PQFLAG": 2}},
+            r"plant\.dyr:\d+ REECB1 \(bus 103, id 1\): PQFLAG = 2 must be one of 0, 1",
+        ),
+        (
+            {"REGCA1": {"Lvplsw": 0.5}},
+            r"REGCA1 \(bus 103, id 1\): Lvplsw = 0.5 must be one of 0, 1",
+        ),
+    ],
+)
+def test_a_flag_out_of_its_choices_is_refused_naming_the_record(tmp_path, change, message):
+    with pytest.raises(CaseError, match=message):
+        import_psse(RAW, _rena(tmp_path, **change))
+
+
+def test_repca1_circuit_id_must_be_quoted(tmp_path):
+    text = DYR.read_text().replace("'0 '", "0")
+    with pytest.raises(CaseError, match=r"REPCA1 parameter 4 '0' is not a quoted id"):
+        read_dyr(_dyr(tmp_path, [text]))
+
+
+def test_control_records_without_regca1_are_left_out(tmp_path):
+    """A REECB1 and REPCA1 without their REGCA1: each left out, named; the generator,
+    without a model, netted on request."""
+    recs = [r for r in read_dyr(DYR) if r.model != "REGCA1"]
+    with (
+        pytest.warns(UserWarning, match="left out 2 unsupported record"),
+        pytest.warns(UserWarning, match="netted 1 generator"),
+    ):
+        res = import_psse(
+            RAW, _dyr(tmp_path, [_text(r) for r in recs]), on_unsupported="skip", unmodelled="net"
+        )
+    assert res.left_out == (
+        "plant.dyr:2 REECB1 at bus 103 '1': no REGCA1 record for its generator",
+        "plant.dyr:3 REPCA1 at bus 103 '1': no REGCA1 record for its generator",
+    )
+    assert res.netted == ("ThreeBusRenewable.raw:13 generator at bus 103 '1'",)
+
+
+def test_a_plant_sharing_its_bus_takes_its_own_generation(tmp_path):
+    """RENA with a second generator at bus 103 (PG 10 MW, QG 2.488 Mvar, a GENCLS of
+    H = 3 s): the plant takes 40/50 of the bus's P and 9.952/12.44 of its Q, the machine
+    the rest, as their RAW lines give; the case starts at rest."""
+    lines = RAW.read_text().splitlines(keepends=True)
+    k = next(j for j, s in enumerate(lines) if s.lstrip().startswith("103,'1 ',    40.000"))
+    second = lines[k].replace("'1 ',    40.000,     9.952", "'2 ',    10.000,     2.488")
+    raw = tmp_path / "shared.raw"
+    raw.write_text("".join(lines[: k + 1] + [second] + lines[k + 1 :]))
+    dyr = _dyr(tmp_path, [DYR.read_text(), "103 'GENCLS' 2 3.0 0.0 /\n"])
+    case = load_psse(raw, dyr)
+    t, m = case.converters, case.machines
+    assert (t.pfrac[0], t.qfrac[0]) == pytest.approx((0.8, 9.952 / 12.44))
+    k = list(m.bus).index(103)
+    assert (m.pfrac[k], m.qfrac[k]) == pytest.approx((0.2, 2.488 / 12.44))
+    res = Simulator(case, q_limits=False).run([], 0.5, h=0.005)
+    assert np.max(np.abs(res.speed - 1.0)) < 1e-9
+    assert np.max(np.abs(res.ibr_p[:, 0] - 0.4)) < 1e-9
