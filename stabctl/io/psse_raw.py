@@ -338,8 +338,6 @@ _FIELDS = {
 _XFMR_FIELDS = (((12, 23), (2, 3), (3, 18), (2, 2)), ((12, 24), (2, 3), (3, 28), (2, 2)))
 #: record lines (1 to 5) of a three-winding transformer: (fewest, most)
 _XFMR3_FIELDS = tuple((two[0], (11, 11), two[2], two[2], two[2]) for two in _XFMR_FIELDS)
-#: sections that writers of an older version leave out: 'Q' may end the data before them
-_OPTIONAL_TAIL = {"gne device", "induction machine", "substation"}
 
 
 def _check_fields(rec: _Rec, version: int) -> None:
@@ -366,13 +364,13 @@ def _check_fields(rec: _Rec, version: int) -> None:
 def _records(lines: list[str], path: Path, version: int):
     """Yield records (``_Rec``, with ``section``) of the data sections, in file order.
 
-    A record whose first field is ``0`` ends a section, ``Q`` ends the data, ``@!``
-    lines (v34 column headings) and blank lines are skipped. Every section must be ended
-    by its ``0`` record before ``Q`` (sections that older writers leave out, GNE devices,
-    induction machines, substations, may be missing) and the file must end with ``Q`` or
-    after the last section: a file cut short is refused (CaseError naming file:line),
-    never read as a smaller case. Each record line must have its section's field count
-    (:data:`_FIELDS`).
+    A record whose first field is ``0`` ends a section, ``Q`` ends the data wherever a
+    record may start (PSS/E POM "Power Flow Raw Data File Contents": the sections not yet
+    read are empty, e.g. a RAW ending with ``Q`` right after the transformer data), ``@!``
+    lines (v34 column headings) and blank lines are skipped. A file without ``Q`` must
+    end after the last section's ``0`` record: a file cut short is refused (CaseError
+    naming file:line), never read as a smaller case. Each record line must have its
+    section's field count (:data:`_FIELDS`).
     """
     sections = _SECTIONS[version]
     k, pending, need, last = 0, None, 0, 3
@@ -390,14 +388,7 @@ def _records(lines: list[str], path: Path, version: int):
             continue
         head = fields[0].strip() if fields else ""
         if head.upper() == "Q":
-            missing = sections[k:]
-            if missing and not set(missing) <= _OPTIONAL_TAIL:
-                raise CaseError(
-                    f"{path.name}:{lineno}: 'Q' (end of data) inside the "
-                    f"{sections[k]} data: {len(missing)} section(s) not ended by "
-                    "their '0 /' record (a terminator is missing)"
-                )
-            return
+            return  # PSS/E: the sections not yet read are empty
         if k >= len(sections):
             raise CaseError(
                 f"{path.name}:{lineno}: data after the last section "

@@ -503,7 +503,9 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     Raises CaseError when the initial power order is outside [Tmin, Tmax] (PST's check
     for tg, the non-windup limits for TGOV1 and IEEEG1), or a cross-compound unit's
     machines do not share its power as its HP and LP fractions do (ANDES 2.0 ieeeg1.py's
-    ``_Pc`` check), beyond `START_LIMIT_TOL` (stabctl.models.declaration)."""
+    ``_Pc`` check), or GAST's initial power is above its load limit AT + KT (AT - Pm0),
+    each beyond `START_LIMIT_TOL` (stabctl.models.declaration): a GAST dispatched exactly
+    at AT (PSS/E's GAST test, AT = Pm0 = 1) starts."""
     x = np.zeros((N_STATES, p.n))
     tc = np.where(p.Tc >= LBND, p.Tc, 1.0)
     hy, sg = (p.kind == HYGOV) | (p.kind == HYGOV4), p.kind == IEESGO
@@ -531,7 +533,7 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     )
     refuse_initial(
         "tg_con",
-        (p.kind == GAST) & (p.AT + p.KT * (p.AT - pmech0) < pmech0),
+        (p.kind == GAST) & beyond(pmech0, -np.inf, p.AT + p.KT * (p.AT - pmech0)),
         lambda r: (
             f"tg_con row {r + 1}: GAST's load limit AT + KT (AT - Pm0) is below its "
             f"initial power {pmech0[r]:.4f} pu"

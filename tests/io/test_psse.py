@@ -586,3 +586,32 @@ def test_q_limits_switch_matches_andes_ieee14(tmp_path):
         r = CliRunner().invoke(main, ["simulate", str(out), "--tf", "0.1", "--json", flag])
         assert r.exit_code == 0, r.output
         assert json.loads(r.output)["q_limits"] is expected
+
+
+# ------------------------------------------------------------- PSS/E's own runs (issue 50)
+
+RUNS = Path(__file__).parents[1] / "data" / "psse_runs"
+
+
+def test_raw_ending_with_q_after_the_transformer_data_is_read():
+    """PSS/E's CSVGN1 run: its RAW ends with 'Q' right after the transformer section
+    (valid PSS/E: 'Q' ends the data, the sections after it empty): read, the step-up
+    transformer 1-2 (WINDV1 0.9524) among its branches."""
+    raw = read_raw(RUNS / "CSVGN1" / "3_BUS_System.raw")
+    assert sorted(raw.bus[:, 0].astype(int)) == [1, 2, 3]
+    assert raw.line.shape[0] == 3
+    assert raw.line[2, 5] == pytest.approx(0.9524, abs=1e-12)
+
+
+def test_gast_dispatched_at_its_load_limit_imports_and_runs_flat(tmp_path):
+    """PSS/E's GAST run: AT = 1 and the machine dispatched at Pm0 = 1 pu (the limit
+    AT + KT (AT - Pm0) = Pm0 to round-off) was refused by a strict start-up check
+    (issue 50); with the checks' tolerance it starts, and at rest: flat for 0.2 s."""
+    out = tmp_path / "gast.json"
+    gast = RUNS / "GAST"
+    res = run("import-psse", gast / "ThreeBusMulti.raw", gast / "ThreeBus_GAST.dyr", "-o", out)
+    assert res.exit_code == 0, res.output
+    res = run("simulate", out, "--tf", "0.2", "--out", tmp_path / "flat.npz", "--json")
+    assert res.exit_code == 0, res.output
+    flat = SimulationResult.from_npz(tmp_path / "flat.npz")
+    assert np.max(np.abs(flat.speed - 1.0)) < 1e-8
