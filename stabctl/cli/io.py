@@ -302,7 +302,9 @@ def import_psse(
     negative loads with --net-unmodelled (synthetic grids such as ACTIVSg2000 give their
     wind and solar plants no dynamic data). Exciters and governors that cannot start
     within their own limits make simulate refuse the case; --leave-out-infeasible leaves
-    them out, each named.
+    them out, each named. The summary names each record left out and generator netted
+    with why, and compares the power flow (Q limits on) with the RAW's own solution
+    (largest |dV|, |d angle| and their buses; a warning above 1e-3).
 
     \b
     Example:
@@ -396,8 +398,11 @@ def import_andes(
     cct, eig and screen (with --no-q-limits to solve ANDES's power flow). ANDES models
     stabctl lacks are named with their device counts; without --skip-unsupported they
     stop the import (exit status 2, nothing written), as does a case without machine
-    models unless --static asks for a power-flow-only case. The power flow of the case is
-    compared with ANDES's (PV Q limits off in both) and the largest differences reported.
+    models unless --static asks for a power-flow-only case. DYR records ANDES's reader
+    skips are left out by name, values ANDES holds other than the DYR's are named as
+    changes (PSS/E's infinite bus keeps H = 0). The power flow of the case is compared
+    with ANDES's (PV Q limits off in both) and, for a RAW file, with the RAW's own
+    solution, and the largest differences reported.
 
     \b
     Example:

@@ -1008,7 +1008,8 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
     position = {m.idx.v[k]: n for n, (m, k) in enumerate(static)}
     on = {(sg.class_name, k) for sg in (ss.PV, ss.Slack) for k in _in_service(sg)}
     gen_on = {sg.idx.v[k] for sg in (ss.PV, ss.Slack) for k in _in_service(sg)}
-    machines, refused, changed, off, unlike = [], [], [], set(), []
+    machines, refused, changed, off = [], [], [], set()
+    unlike: list[str] = []
     for name in _MACHINES:
         m = ss.models[name]
         for k in _in_service(m):

@@ -400,7 +400,7 @@ def _check_machines(generators, machines, skipped) -> None:
     missing = [g for g in generators if int(g["number"]) not in machines]
     if not missing:
         return
-    refused = {}
+    refused: dict[tuple[int, str], list[str]] = {}
     for rec, why in skipped:
         if has_machine_model(rec):
             refused.setdefault((rec.bus, rec.id), []).append(f"{rec.where()} {rec.model}: {why}")
