@@ -304,7 +304,9 @@ def import_psse(
     negative loads with --net-unmodelled (synthetic grids such as ACTIVSg2000 give their
     wind and solar plants no dynamic data). Exciters and governors that cannot start
     within their own limits make simulate refuse the case; --leave-out-infeasible leaves
-    them out, each named.
+    them out, each named. The summary names each record left out and generator netted
+    with why, and compares the power flow (Q limits on) with the RAW's own solution
+    (largest |dV|, |d angle| and their buses; a warning above 1e-3).
 
     \b
     Example:
@@ -314,7 +316,7 @@ def import_psse(
     from stabctl.io.psse import import_psse as run_import
 
     out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
-    case, left_out, netted = run_import(
+    case, left_out, netted, solution = run_import(
         raw_path,
         dyr_path,
         "skip" if skip_unsupported else "error",
@@ -331,6 +333,7 @@ def import_psse(
         case, infeasible = leave_out(case)
         for line in infeasible:
             click.echo(f"warning: left out the {line}", err=True)
+    against_raw = _raw_gap(case, solution, q_limits=True) if len(case.machines) else None
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
     summary.update(
@@ -339,6 +342,7 @@ def import_psse(
         netted=list(netted),
         infeasible=list(infeasible),
         islands=list(islands),
+        powerflow_against_raw=against_raw,
     )
     if as_json:
         print_json(summary)
@@ -348,6 +352,10 @@ def import_psse(
         f"{len(infeasible)} control(s) outside their limits left out"
         + (f", {len(islands)} island(s) without a swing bus left out" if islands else "")
     )
+    for what, items in (("left out", left_out), ("netted", netted)):
+        for item in items:
+            click.echo(f"  {what}: {item}")
+    _echo_raw_gap(against_raw, "Q limits on, as simulate solves it")
 
 
 @click.command("import-andes")
@@ -393,8 +401,11 @@ def import_andes(
     cct, eig and screen (with --no-q-limits to solve ANDES's power flow). ANDES models
     stabctl lacks are named with their device counts; without --skip-unsupported they
     stop the import (exit status 2, nothing written), as does a case without machine
-    models unless --static asks for a power-flow-only case. The power flow of the case is
-    compared with ANDES's (PV Q limits off in both) and the largest differences reported.
+    models unless --static asks for a power-flow-only case. DYR records ANDES's reader
+    skips are left out by name, values ANDES holds other than the DYR's are named as
+    changes (PSS/E's infinite bus keeps H = 0). The power flow of the case is compared
+    with ANDES's (PV Q limits off in both) and, for a RAW file, with the RAW's own
+    solution, and the largest differences reported.
 
     \b
     Example:
@@ -412,15 +423,20 @@ def import_andes(
     _check_dynamic(imported.case, Path(case_path).name, static)
     case, islands = _leave_out_islands(imported.case, leave_out_islands)
     dv, da = _powerflow_gap(imported, case)
+    against_raw = (
+        None if imported.data_solution is None else _raw_gap(case, imported.data_solution, False)
+    )
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
     summary.update(
         left_out=list(imported.left_out),
         changed=list(imported.changed),
+        unlike_andes=list(imported.unlike_andes),
         ignored=list(imported.ignored),
         islands=list(islands),
         powerflow_vmag_diff_pu=dv,
         powerflow_angle_diff_rad=da,
+        powerflow_against_raw=against_raw,
     )
     if as_json:
         print_json(summary)
@@ -428,15 +444,81 @@ def import_andes(
     click.echo(
         f"{text}; {len(imported.left_out)} left out"
         + (f"; {len(islands)} island(s) without a swing bus left out" if islands else "")
-        + (f"; kept with a change: {'; '.join(imported.changed)}" if imported.changed else "")
+        + (f"; {len(imported.changed)} kept with a change" if imported.changed else "")
         + (
             f"; ignored (no effect on the dynamics): {', '.join(imported.ignored)}"
             if imported.ignored
             else ""
         )
     )
+    for what, items in (
+        ("left out", imported.left_out),
+        ("changed", imported.changed),
+        ("kept as the file gives, unlike ANDES", imported.unlike_andes),
+    ):
+        for item in items:
+            click.echo(f"  {what}: {item}")
     if dv is not None:
         click.echo(f"power flow against ANDES's: max |dV| {dv:.1e} pu, max |d angle| {da:.1e} rad")
+    _echo_raw_gap(against_raw, "Q limits off, as ANDES's")
+
+
+#: largest difference (pu, rad) between a case's power flow and the RAW file's own
+#: solution accepted without a warning: the RAW's VM, VA are written to 4-5 decimals,
+#: a solved ACTIVSg2000 lands within 5e-5 pu
+RAW_AGREEMENT = 1e-3
+
+
+def _raw_gap(case, solution, q_limits: bool) -> dict | None:
+    """The largest |V| (pu) and angle (rad) differences, with their buses, between
+    stabctl's power flow of ``case`` (``q_limits`` as said) and the RAW file's own
+    solution ``solution`` (bus number, VM pu, VA degrees; :attr:`RawData.solution`) at
+    the buses the case keeps; a warning when either exceeds :data:`RAW_AGREEMENT` or the
+    power flow does not converge (then None)."""
+    import warnings
+
+    import numpy as np
+
+    from stabctl.errors import PowerFlowError
+    from stabctl.network.powerflow import solve_powerflow
+
+    try:
+        pf = solve_powerflow(case, q_limits=q_limits, tol=1e-10)
+    except PowerFlowError as exc:
+        warnings.warn(
+            f"stabctl's power flow of the case did not converge: not compared with the "
+            f"RAW's solution: {exc}",
+            stacklevel=2,
+        )
+        return None
+    kept = np.isin(solution[:, 0], case.buses.number)
+    buses, rows = solution[kept, 0], case.bus_indices(solution[kept, 0])
+    dv = np.abs(pf.vmag[rows] - solution[kept, 1])
+    da = np.abs(pf.vang[rows] - np.deg2rad(solution[kept, 2]))
+    gap = {
+        "vmag_diff_pu": float(dv.max()),
+        "vmag_bus": int(buses[dv.argmax()]),
+        "angle_diff_rad": float(da.max()),
+        "angle_bus": int(buses[da.argmax()]),
+    }
+    if max(dv.max(), da.max()) > RAW_AGREEMENT:
+        warnings.warn(
+            f"the power flow differs from the RAW file's own solution by up to "
+            f"{gap['vmag_diff_pu']:.1e} pu (bus {gap['vmag_bus']}), "
+            f"{gap['angle_diff_rad']:.1e} rad (bus {gap['angle_bus']}): the case does not "
+            "start where the RAW file says",
+            stacklevel=2,
+        )
+    return gap
+
+
+def _echo_raw_gap(gap: dict | None, how: str) -> None:
+    if gap is not None:
+        click.echo(
+            f"power flow against the RAW's solution ({how}): max |dV| "
+            f"{gap['vmag_diff_pu']:.1e} pu at bus {gap['vmag_bus']}, max |d angle| "
+            f"{gap['angle_diff_rad']:.1e} rad at bus {gap['angle_bus']}"
+        )
 
 
 #: largest power-flow difference to ANDES's (pu, rad) accepted without a warning

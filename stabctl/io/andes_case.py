@@ -214,7 +214,14 @@ class AndesImport:
         Devices kept with a change (``on_unsupported="skip"``), ``"MODEL (n: idx, ...):
         what"`` per model and change: a machine's rated frequency ``fn`` read as the
         system's (N44 read from PSS/E files: ANDES's DYR reader leaves ``fn`` at 60 Hz in a
-        50 Hz system), GENROU's ``xq2`` read as ``xd2``.
+        50 Hz system), GENROU's ``xq2`` read as ``xd2``, a DYR parameter ANDES replaced
+        by its default (``file:line MODEL (bus B, id I): NAME = v read by ANDES as w``).
+    unlike_andes : tuple of str
+        DYR values stabctl keeps as the file gives them where ANDES replaces them (the
+        infinite bus, a GENCLS of H = 0, which ANDES runs with its default H = 3 s).
+    data_solution : numpy.ndarray or None
+        The RAW file's own power-flow solution, shape (n, 3): bus number, VM (pu), VA
+        (degrees) (ANDES's ``Bus.v0``, ``a0``); None unless the case is a PSS/E RAW.
     """
 
     case: Case
@@ -224,6 +231,8 @@ class AndesImport:
     pf_vmag: np.ndarray | None
     pf_vang: np.ndarray | None
     changed: tuple[str, ...] = ()
+    unlike_andes: tuple[str, ...] = ()
+    data_solution: np.ndarray | None = None
 
 
 def import_andes(
@@ -310,7 +319,11 @@ def read_andes_case(
     pf_bus, pf_vmag, pf_vang = _powerflow(ss, numbers)  # its generators' P, Q: shares
     mats["load_con"], zip_changed = _zip_loads(ss, numbers, mats["bus"])
     ibr_con, ibr_refused, with_converter = _converters(ss, numbers)
-    gens, records, refused, changed = _dynamic_records(ss, path.name, numbers, with_converter)
+    dropped, by_device = ([], {}) if dyr is None else _dyr_against_andes(ss, dyr)
+    gens, records, refused, changed, unlike = _dynamic_records(
+        ss, path.name, numbers, with_converter, by_device
+    )
+    refused = dropped + refused
     changed += _grouped(zip_changed)
     refused += ibr_refused
     for key, (rows, why) in (  # stabctl's own tables of the devices ANDES has
@@ -363,7 +376,27 @@ def read_andes_case(
         description=f"ANDES case {path.name}",
         source=f"ANDES case {path.name}, imported by stabctl.io.andes_case.import_andes",
     )
-    return AndesImport(case, left_out, ignored, pf_bus, pf_vmag, pf_vang, tuple(changed))
+    solution = None
+    if path.suffix.lower() == ".raw":
+        on = _in_service(ss.Bus)
+        solution = np.column_stack(
+            (
+                [numbers[ss.Bus.idx.v[k]] for k in on],
+                np.asarray(ss.Bus.v0.v, float)[on],
+                np.rad2deg(np.asarray(ss.Bus.a0.v, float)[on]),
+            )
+        )
+    return AndesImport(
+        case,
+        left_out,
+        ignored,
+        pf_bus,
+        pf_vmag,
+        pf_vang,
+        tuple(changed),
+        tuple(unlike),
+        solution,
+    )
 
 
 #: parameters stabctl reads that ANDES fills with its default when the case file leaves
@@ -964,16 +997,20 @@ def _electrical_controls(ss, regc) -> list[tuple[str, int]]:
     return found
 
 
-def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
+def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), by_device=None):
     """The generators (dicts for :func:`stabctl.io.dyr.dyr_tables`), the PSS/E records of
-    the mapped ANDES devices, and the devices refused here (with why); static generators
-    in ``with_converter`` are replaced by converters, not machines."""
+    the mapped ANDES devices, the devices refused here (with why), those kept with a
+    change and the DYR values kept unlike ANDES; static generators in
+    ``with_converter`` are replaced by converters, not machines.  ``by_device``: the
+    DYR record of each ANDES device read from a DYR file (`_dyr_against_andes`), whose
+    values ANDES's own are checked against (`_against_dyr`)."""
     dyr = _psse_yaml()
     static = [(m, k) for m in (ss.PV, ss.Slack) for k in range(m.n)]
     position = {m.idx.v[k]: n for n, (m, k) in enumerate(static)}
     on = {(sg.class_name, k) for sg in (ss.PV, ss.Slack) for k in _in_service(sg)}
     gen_on = {sg.idx.v[k] for sg in (ss.PV, ss.Slack) for k in _in_service(sg)}
     machines, refused, changed, off = [], [], [], set()
+    unlike: list[str] = []
     for name in _MACHINES:
         m = ss.models[name]
         for k in _in_service(m):
@@ -1079,8 +1116,85 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset()):
                 params = _psse_params(ss, m, dyr[psse], fields, k)
             else:  # ANDES's own model (TG2, HYGOV4): its parameters by name, as given
                 params = tuple(float(m.params[f].vin[k]) for f in fields)
+            rec = (by_device or {}).get((name, k))
+            if rec is not None:
+                params = _against_dyr(rec, psse, params, changed, unlike)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
-    return gens, records, refused, _grouped(changed)
+    return gens, records, refused, _grouped(changed), unlike
+
+
+def _dyr_against_andes(ss, dyr) -> tuple[list[str], dict]:
+    """The records of the DYR file ANDES's reader left out (``file:line MODEL (bus B, id
+    I): why``: a model its ``psse-dyr.yaml`` lacks, which ANDES skips with only a log
+    line), and {(ANDES model, device k): DyrRecord} of those it read: ANDES adds the
+    records of each PSS/E model in file order, model after model in its dependency order
+    (``andes/io/psse.py`` ``read_add``), so the k-th device of a model is the k-th record
+    so added (left empty where the counts do not agree)."""
+    from andes.io.psse import sort_psse_models
+
+    from stabctl.io.dyr import read_dyr
+
+    spec = _psse_yaml()
+    order = [m for m in sort_psse_models(spec, ss) if m in spec]
+    records = read_dyr(dyr)
+    dropped = [
+        f"{r.label()}: model {r.model} is not read by ANDES's DYR reader (not in its "
+        "psse-dyr.yaml): left out"
+        for r in records
+        if r.model not in order
+    ]
+    by_dest: dict[str, list] = {}
+    for model in order:
+        by_dest.setdefault(spec[model]["destination"], []).extend(
+            r for r in records if r.model == model
+        )
+    by_device = {
+        (dest, k): rec
+        for dest, recs in by_dest.items()
+        if dest in ss.models and ss.models[dest].n == len(recs)
+        for k, rec in enumerate(recs)
+    }
+    return dropped, by_device
+
+
+def _against_dyr(rec, psse: str, params, changed: list, unlike: list) -> tuple[float, ...]:
+    """``params`` (ANDES's values of ``rec``'s device as PSS/E model ``psse``, in its
+    order) checked by name against the DYR record's own: values ANDES replaced (its
+    default for a zero it refuses, SEXS's defaults for an SCRX record) or read from
+    another position (its ``psse-dyr.yaml`` lists ESAC1A's and ESST1A's parameters in
+    another order than the PSS/E record's) are named in ``changed`` and kept as ANDES
+    runs them, except the infinite bus (GENCLS H = 0), kept at H = 0 and named in
+    ``unlike``."""
+    fields, given = DYR_MODELS[psse].fields, DYR_MODELS[rec.model].values(rec.params)
+    out, differ = list(params), []
+    for i, name in enumerate(fields):
+        mine = given.get(name)
+        if mine is None or np.isclose(mine, params[i], rtol=1e-9, atol=1e-12):
+            continue
+        if psse == "GENCLS" and name == "H" and mine == 0:
+            out[i] = 0.0
+            unlike.append(
+                f"{rec.label()}: H = 0, PSS/E's infinite bus, kept (ANDES replaces M = 0 "
+                f"by its default, H = {params[i]:g} s)"
+            )
+            continue
+        differ.append(f"{name} = {mine:g} read by ANDES as {params[i]:g}")
+    if rec.model != psse:  # read as another model: its own parameters are not read
+        differ += [f"{name} = {v:g} not read" for name, v in given.items() if name not in fields]
+    if differ:
+        order = _psse_yaml()[rec.model]["inputs"][2:]
+        if rec.model != psse:
+            why = f"ANDES reads the record as its {psse}, with that model's defaults"
+        elif list(order) != list(fields):
+            why = (
+                f"ANDES reads the record in its psse-dyr.yaml order ({' '.join(order)}), "
+                "not the PSS/E Model Library's"
+            )
+        else:
+            why = "ANDES's defaults for values it refuses"
+        where = f"{rec.where()} (bus {rec.bus}, id {rec.id})"
+        changed.append((rec.model, where, f"{', '.join(differ)}: {why}"))
+    return tuple(out)
 
 
 def _dc_links(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:

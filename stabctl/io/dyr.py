@@ -251,7 +251,16 @@ _SOURCE_MODELS = frozenset(
 def has_machine_model(rec: DyrRecord) -> bool:
     """Whether ``rec`` gives its generator a dynamic source model (a machine or a
     converter, mapped by stabctl or not): a generator without one is what PSS/E nets."""
-    return rec.model in _SOURCE_MODELS or _KIND.get(rec.model) == "machine"
+    return rec.model in _SOURCE_MODELS or maps_machine(rec)
+
+
+def maps_machine(rec: DyrRecord) -> bool:
+    """Whether ``rec`` is a machine record stabctl maps (a ``mac_con`` row)."""
+    return _KIND.get(rec.model) == "machine"
+
+
+#: why a generator model stabctl lacks is left out (its generator has no machine then)
+SOURCE_UNSUPPORTED = "generator model not supported by stabctl (yet)"
 
 
 def _integer(tok: str) -> int | None:
@@ -313,7 +322,7 @@ def dyr_tables(
             "unsupported DYR records (use on_unsupported='skip' to leave them "
             "out):\n" + "\n".join(f"  {r.label()}: {why}" for r, why in skipped)
         )
-    _check_machines(generators, rows["machine"])
+    _check_machines(generators, rows["machine"], skipped)
     _set_fractions(generators, rows["machine"])
     tables = {k: _matrix(rows[k], width) for k, width in _WIDTH.items()}
     return DyrTables(
@@ -340,7 +349,11 @@ def _map_records(records, generators, conventions):
         kind = _KIND.get(rec.model)
         try:
             if kind is None:
-                raise _Unsupported(f"model {rec.model} is not mapped")
+                raise _Unsupported(
+                    SOURCE_UNSUPPORTED
+                    if rec.model in _SOURCE_MODELS
+                    else f"model {rec.model} is not mapped"
+                )
             _check_count(rec)
             gen = gens.get((rec.bus, rec.id))
             if gen is None:
@@ -411,15 +424,44 @@ def _check_count(rec: DyrRecord) -> None:
         )
 
 
-def _check_machines(generators, machines) -> None:
+def _check_machines(generators, machines, skipped) -> None:
+    """CaseError naming every generator without a machine row: without a source record
+    in the DYR data, or whose source record is of a model stabctl does not support (that
+    record named ``file:line MODEL``, with why)."""
     missing = [g for g in generators if int(g["number"]) not in machines]
-    if missing:
-        raise CaseError(
+    if not missing:
+        return
+    refused: dict[tuple[int, str], list[str]] = {}
+    for rec, why in skipped:
+        if has_machine_model(rec):
+            refused.setdefault((rec.bus, rec.id), []).append(f"{rec.where()} {rec.model}: {why}")
+    bare = [g for g in missing if (int(g["bus"]), machine_id(g["id"])) not in refused]
+    named = [g for g in missing if (int(g["bus"]), machine_id(g["id"])) in refused]
+    parts = []
+    if bare:
+        parts.append(
             "generator(s) without a machine model record in the DYR data: "
-            + ", ".join(f"machine {g['number']} (bus {g['bus']}, id {g['id']})" for g in missing)
-            + " (stabctl.io.psse.import_psse with unmodelled='net', import-psse "
-            "--net-unmodelled, nets them as negative loads)"
+            + ", ".join(f"machine {g['number']} (bus {g['bus']}, id {g['id']})" for g in bare)
         )
+    if named:
+        parts.append(
+            "generator(s) whose machine model record stabctl cannot read: "
+            + ", ".join(
+                f"machine {g['number']} (bus {g['bus']}, id {g['id']}): "
+                + "; ".join(refused[(int(g["bus"]), machine_id(g["id"]))])
+                for g in named
+            )
+        )
+    raise CaseError(
+        "; ".join(parts) + " (stabctl.io.psse.import_psse with unmodelled='net', import-psse "
+        "--net-unmodelled, nets them as negative loads"
+        + (
+            ", with on_unsupported='skip' / --skip-unsupported leaving out the records "
+            "it cannot read)"
+            if named
+            else ")"
+        )
+    )
 
 
 def _set_fractions(generators, machines) -> None:

@@ -39,11 +39,14 @@ _UNMODELLED = ("error", "net")
 
 class PsseImport(NamedTuple):
     """What :func:`import_psse` gives: the case, the records left out and the generators
-    netted, each as ``"file:line record"`` text."""
+    netted, each as ``"file:line record: why"`` text, and the RAW file's own power-flow
+    solution (:attr:`stabctl.io.psse_raw.RawData.solution`: bus number, VM pu, VA
+    degrees; shape (n, 3)) to compare the case's power flow with."""
 
     case: Case
     left_out: tuple[str, ...]
     netted: tuple[str, ...]
+    solution: np.ndarray
 
 
 def load_psse(
@@ -130,23 +133,39 @@ def import_psse(
     netted = tuple(str(s) for s in raw.netted)
     if netted:
         warnings.warn(
-            f"{where}: netted {len(netted)} generator(s) without a machine model as "
-            f"negative loads: {'; '.join(netted)}",
+            f"{where}: netted {len(netted)} generator(s) without a (supported) machine "
+            f"model as negative loads: {'; '.join(netted)}",
             UserWarning,
             stacklevel=3,
         )
     case = case_from_matrices(
         mats, raw.name, source=_source(raw_path, dyr_path), description=raw.title
     )
-    return PsseImport(case, tuple(unsupported), netted)
+    return PsseImport(case, tuple(unsupported), netted, raw.solution)
 
 
 def _without_machine(records):
-    """``net`` for :func:`read_raw`: True for a (bus, ID) no DYR machine record names."""
-    from stabctl.io.dyr import has_machine_model, machine_id
+    """``net`` for :func:`read_raw`: for a (bus, ID) that no DYR machine record stabctl
+    maps names, the reason it is netted: no source record at all, or only records of a
+    generator model stabctl does not support (named ``file:line MODEL``; they are
+    reported unsupported, so left out only with ``on_unsupported="skip"``); else None."""
+    from stabctl.io.dyr import has_machine_model, machine_id, maps_machine
 
-    modelled = {(r.bus, r.id) for r in records if has_machine_model(r)}
-    return lambda bus, gid: (bus, machine_id(gid)) not in modelled
+    modelled = {(r.bus, r.id) for r in records if maps_machine(r)}
+    sources: dict = {}
+    for r in records:
+        if has_machine_model(r):
+            sources.setdefault((r.bus, r.id), []).append(f"{r.where()} {r.model}")
+
+    def net(bus, gid):
+        key = (bus, machine_id(gid))
+        if key in modelled:
+            return None
+        if key not in sources:
+            return "no machine model record in the DYR data"
+        return f"its machine record {', '.join(sources[key])} is not supported (left out)"
+
+    return net
 
 
 def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str], list[str]]:

@@ -198,9 +198,12 @@ class RawData:
         generators: in-service generators in RAW order (the netted ones left out).
         unsupported: records that could not be represented, in file order.
         netted: the in-service generators netted as negative loads (``read_raw``'s
-            ``net``), in file order.
+            ``net``), in file order, each record named with the reason.
         out_of_service: (bus, ID) of the generators out of service (STAT 0) at in-service
             buses: PSS/E ignores their dynamic records.
+        solution: the file's own power-flow solution, shape (n, 3): bus number, VM (pu),
+            VA (degrees) of each bus record not isolated, in file order (the ``bus``
+            matrix holds VS at generator buses instead; no three-winding star points).
     """
 
     name: str
@@ -215,6 +218,7 @@ class RawData:
     unsupported: tuple[RawSource, ...]
     netted: tuple[RawSource, ...] = ()
     out_of_service: frozenset[tuple[int, str]] = frozenset()
+    solution: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def matrices(self) -> dict:
         """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``)
@@ -338,8 +342,6 @@ _FIELDS = {
 _XFMR_FIELDS = (((12, 23), (2, 3), (3, 18), (2, 2)), ((12, 24), (2, 3), (3, 28), (2, 2)))
 #: record lines (1 to 5) of a three-winding transformer: (fewest, most)
 _XFMR3_FIELDS = tuple((two[0], (11, 11), two[2], two[2], two[2]) for two in _XFMR_FIELDS)
-#: sections that writers of an older version leave out: 'Q' may end the data before them
-_OPTIONAL_TAIL = {"gne device", "induction machine", "substation"}
 
 
 def _check_fields(rec: _Rec, version: int) -> None:
@@ -366,13 +368,13 @@ def _check_fields(rec: _Rec, version: int) -> None:
 def _records(lines: list[str], path: Path, version: int):
     """Yield records (``_Rec``, with ``section``) of the data sections, in file order.
 
-    A record whose first field is ``0`` ends a section, ``Q`` ends the data, ``@!``
-    lines (v34 column headings) and blank lines are skipped. Every section must be ended
-    by its ``0`` record before ``Q`` (sections that older writers leave out, GNE devices,
-    induction machines, substations, may be missing) and the file must end with ``Q`` or
-    after the last section: a file cut short is refused (CaseError naming file:line),
-    never read as a smaller case. Each record line must have its section's field count
-    (:data:`_FIELDS`).
+    A record whose first field is ``0`` ends a section, ``Q`` ends the data wherever a
+    record may start (PSS/E POM "Power Flow Raw Data File Contents": the sections not yet
+    read are empty, e.g. a RAW ending with ``Q`` right after the transformer data), ``@!``
+    lines (v34 column headings) and blank lines are skipped. A file without ``Q`` must
+    end after the last section's ``0`` record: a file cut short is refused (CaseError
+    naming file:line), never read as a smaller case. Each record line must have its
+    section's field count (:data:`_FIELDS`).
     """
     sections = _SECTIONS[version]
     k, pending, need, last = 0, None, 0, 3
@@ -390,14 +392,7 @@ def _records(lines: list[str], path: Path, version: int):
             continue
         head = fields[0].strip() if fields else ""
         if head.upper() == "Q":
-            missing = sections[k:]
-            if missing and not set(missing) <= _OPTIONAL_TAIL:
-                raise CaseError(
-                    f"{path.name}:{lineno}: 'Q' (end of data) inside the "
-                    f"{sections[k]} data: {len(missing)} section(s) not ended by "
-                    "their '0 /' record (a terminator is missing)"
-                )
-            return
+            return  # PSS/E: the sections not yet read are empty
         if k >= len(sections):
             raise CaseError(
                 f"{path.name}:{lineno}: data after the last section "
@@ -442,12 +437,13 @@ class _Builder:
     gens: list = field(default_factory=list)
     gen_vs: dict = field(default_factory=dict)
     unsupported: list = field(default_factory=list)
-    net: Callable[[int, str], bool] | None = None  # (bus, id) -> netted as a load?
+    net: Callable[[int, str], str | None] | None = None  # (bus, id) -> why netted, or None
     netted: list = field(default_factory=list)  # (bus, RawSource) of netted generators
     out_of_service: list = field(default_factory=list)  # (bus, ID) of generators
     seen: dict = field(default_factory=dict)  # (section, ids) -> first line
     stars: int = 0  # star-point buses of three-winding transformers so far
     base_kv: dict = field(default_factory=dict)  # bus number -> BASKV (isolated ones too)
+    solution: dict = field(default_factory=dict)  # bus number -> (VM, VA deg) of the file
 
     def once(self, rec: _Rec, key: tuple, what: str):
         """CaseError when a record with the same identity came before (a duplicated
@@ -486,6 +482,7 @@ def _bus(b: _Builder, rec: _Rec):
     if vm <= 0:
         rec.fail(f"bus {num}: VM {vm:g} must be > 0")
     kind = {1: PQ, 2: PV, 3: SWING}[ide]
+    b.solution[num] = (vm, rec.num(0, 8, 0.0))
     b.buses[num] = [
         num,
         vm,
@@ -547,8 +544,9 @@ def _generator(b: _Builder, rec: _Rec):
     if row is None or rec.int(0, 14 + o, 1) == 0:
         return
     what = f"generator at bus {num} '{gid}'"
-    if b.net is not None and b.net(num, gid):
-        return _net_generator(b, rec, num, what)
+    why = None if b.net is None else b.net(num, gid)
+    if why:
+        return _net_generator(b, rec, num, f"{what}: {why}")
     ireg = rec.int(0, 7, 0)
     if ireg not in (0, num):
         return b.skip(rec, f"{what}: remote voltage regulation of bus {ireg}")
@@ -817,7 +815,9 @@ def _check_netted_swing(b: _Builder):
 
 
 def read_raw(
-    path: str | Path, loads: str = "impedance", net: Callable[[int, str], bool] | None = None
+    path: str | Path,
+    loads: str = "impedance",
+    net: Callable[[int, str], str | None] | None = None,
 ) -> RawData:
     """Read a PSS/E RAW file (version 32, 33 or 34) into PST matrices.
 
@@ -826,8 +826,10 @@ def read_raw(
         loads: ``"impedance"`` makes every load constant impedance in the dynamic run;
             ``"raw"`` keeps each load's PSS/E composition there (``load_con``).
         net: called with each in-service generator's bus number and ID (stripped); a
-            generator it returns True for is netted: a negative constant-power load
-            PG + jQG at its bus (PSS/E's ``GNET``), not a generator (see module doc).
+            generator it returns a reason for (a non-empty str, e.g. "no machine model
+            record in the DYR data") is netted: a negative constant-power load PG + jQG
+            at its bus (PSS/E's ``GNET``), not a generator (see module doc), listed in
+            ``netted`` as ``file:line generator at bus B 'ID': reason``.
 
     Returns:
         :class:`RawData` (bus, line, load_con matrices in pu on SBASE, the generators,
@@ -894,4 +896,5 @@ def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawDat
         unsupported=tuple(sorted(b.unsupported, key=lambda s: s.line)),
         netted=tuple(src for _, src in b.netted),
         out_of_service=frozenset(b.out_of_service),
+        solution=np.array([[n, *vm_va] for n, vm_va in b.solution.items()], float).reshape(-1, 3),
     )

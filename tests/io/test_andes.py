@@ -2779,3 +2779,79 @@ def test_kundur_esst3a_inner_loop_sets_the_step():
     assert sim.default_h == pytest.approx(tau / 2)
     drift, _ = flat_run(case, 10.0, step=sim.default_h)
     assert drift < 1e-10  # measured 5.6e-17
+
+
+# ----------------------------------------- honest imports of PSS/E's own runs (issue 50)
+
+RUNS = Path(__file__).parents[1] / "data" / "psse_runs"
+
+
+@pytest.mark.parametrize(
+    "folder,dyr,model,line",
+    [
+        ("ST6B", "ThreeBus_ST6B.dyr", "ST6B", 5),
+        ("ST8C", "ThreeBus_ST8C.dyr", "ST8C", 5),
+        ("PIDGOV", "ThreeBus_PIDGOV_GateFlag.dyr", "PIDGOV", 6),
+        ("WPIDHY", "ThreeBus_WPIDHY.dyr", "WPIDHY", 6),
+        ("DEGOV1", "ThreeBus_DEGOV1_nodelay_flag0.dyr", "DEGOV1", 5),
+    ],
+)
+def test_dyr_records_andes_skips_are_named_left_out(folder, dyr, model, line):
+    """ANDES's DYR reader skips the models its psse-dyr.yaml lacks with a log line only:
+    these runs' records were dropped while the import reported '0 left out'.  Now each
+    is named with file:line, refused by default, left out (named) with skip."""
+    raw, path = RUNS / folder / "ThreeBusMulti.raw", RUNS / folder / dyr
+    named = (
+        f"{dyr}:{line} {model} (bus 102, id 1): model {model} is not read by ANDES's DYR "
+        "reader (not in its psse-dyr.yaml): left out"
+    )
+    with pytest.raises(InputError, match=re.escape(named)):
+        read_andes_case(raw, "andes", "error", path)
+    with pytest.warns(UserWarning, match=re.escape(named)):
+        imported = read_andes_case(raw, "andes", "skip", path)
+    assert imported.left_out == (named,)
+
+
+def test_psse_infinite_bus_keeps_h_0_and_andes_misread_records_are_named():
+    """PSS/E's GAST run through ANDES: its infinite bus (GENCLS H = 0), which ANDES runs
+    as H = 3 s (M = 0 replaced by its default), stays H = 0, named; its ESAC1A record,
+    which ANDES reads in its psse-dyr.yaml order (VAMAX where PSS/E has KA, ...), is named
+    with every value read otherwise: refused by default, kept as ANDES reads it with
+    skip (like for like)."""
+    gast = RUNS / "GAST"
+    raw, dyr = gast / "ThreeBusMulti.raw", gast / "ThreeBus_GAST.dyr"
+    with pytest.raises(InputError, match=r"to keep with a change: ESAC1A .*KA = 200 read by"):
+        read_andes_case(raw, "andes", "error", dyr)
+    with pytest.warns(UserWarning, match="kept with a change"):
+        imported = read_andes_case(raw, "andes", "skip", dyr)
+    assert imported.unlike_andes == (
+        "ThreeBus_GAST.dyr:1 GENCLS (bus 101, id 1): H = 0, PSS/E's infinite bus, kept "
+        "(ANDES replaces M = 0 by its default, H = 3 s)",
+    )
+    machines = imported.case.machines
+    assert list(machines.H[machines.bus == 101]) == [0.0]
+    (changed,) = imported.changed
+    assert changed.startswith(
+        "ESAC1A (1: ThreeBus_GAST.dyr:5 (bus 102, id 1)): KA = 200 read by ANDES as 7, "
+        "TA = 0.05 read by ANDES as 0.04, VAMAX = 7 read by ANDES as 200"
+    )
+    assert changed.endswith("not the PSS/E Model Library's")
+
+
+def test_import_andes_reports_its_power_flow_against_the_raw_solution(tmp_path):
+    """PSS/E's EXST1 run (TVC system): ANDES's RAW reader drops transformer 4-3's WINDV2 =
+    1.04, so its power flow, which stabctl's matches to 4e-7, starts bus 3 0.033 pu off
+    the RAW's own solution: reported with the bus, and warned of (import-psse: 5e-6)."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    exst1 = RUNS / "EXST1"
+    args = ["import-andes", str(exst1 / "TVC_System_32.raw"), str(exst1 / "TVC_System.dyr")]
+    res = CliRunner().invoke(main, [*args, "-o", str(tmp_path / "tvc.json"), "--json"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    assert summary["powerflow_vmag_diff_pu"] < 1e-6
+    gap = summary["powerflow_against_raw"]
+    assert gap["vmag_bus"] == 3 and gap["vmag_diff_pu"] == pytest.approx(0.033, abs=1e-3)
+    assert "differs from the RAW file's own solution by up to 3.3e-02 pu (bus 3)" in res.stderr

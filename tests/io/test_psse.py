@@ -192,8 +192,10 @@ def test_generators_without_a_machine_model_are_refused_or_netted(tmp_path):
     with pytest.raises(CaseError, match=r"machine 3 \(bus 3, id 2\).*--net-unmodelled"):
         load_psse(V33, dyr)
     with pytest.warns(UserWarning, match="netted 1 generator"):
-        case, left_out, netted = import_psse(V33, dyr, unmodelled="net")
-    assert left_out == () and netted == ("five_bus_v33.raw:19 generator at bus 3 '2'",)
+        case, left_out, netted, _ = import_psse(V33, dyr, unmodelled="net")
+    assert left_out == () and netted == (
+        "five_bus_v33.raw:19 generator at bus 3 '2': no machine model record in the DYR data",
+    )
     assert list(case.machines.number) == [1, 2] and list(case.machines.pfrac) == [1, 1]
     bus3 = case.bus_index(3)
     assert case.buses.pgen[bus3] == pytest.approx(1.5, abs=1e-15)
@@ -407,7 +409,7 @@ def test_unsupported_records_refused_together_by_default(tmp_path):
 def test_unsupported_records_skipped_with_a_warning(tmp_path):
     path = _with_unsupported(tmp_path)
     with pytest.warns(UserWarning, match="left out 2 unsupported record"):
-        case, left_out, _ = import_psse(path, on_unsupported="skip")
+        case, left_out, _, _ = import_psse(path, on_unsupported="skip")
     assert left_out == (
         "edited.raw:41 multi-section line record",
         "edited.raw:47 facts device record",
@@ -586,3 +588,108 @@ def test_q_limits_switch_matches_andes_ieee14(tmp_path):
         r = CliRunner().invoke(main, ["simulate", str(out), "--tf", "0.1", "--json", flag])
         assert r.exit_code == 0, r.output
         assert json.loads(r.output)["q_limits"] is expected
+
+
+# ------------------------------------------------------------- PSS/E's own runs (issue 50)
+
+RUNS = Path(__file__).parents[1] / "data" / "psse_runs"
+
+
+def test_raw_ending_with_q_after_the_transformer_data_is_read():
+    """PSS/E's CSVGN1 run: its RAW ends with 'Q' right after the transformer section
+    (valid PSS/E: 'Q' ends the data, the sections after it empty): read, the step-up
+    transformer 1-2 (WINDV1 0.9524) among its branches."""
+    raw = read_raw(RUNS / "CSVGN1" / "3_BUS_System.raw")
+    assert sorted(raw.bus[:, 0].astype(int)) == [1, 2, 3]
+    assert raw.line.shape[0] == 3
+    assert raw.line[2, 5] == pytest.approx(0.9524, abs=1e-12)
+
+
+def test_gast_dispatched_at_its_load_limit_imports_and_runs_flat(tmp_path):
+    """PSS/E's GAST run: AT = 1 and the machine dispatched at Pm0 = 1 pu (the limit
+    AT + KT (AT - Pm0) = Pm0 to round-off) was refused by a strict start-up check
+    (issue 50); with the checks' tolerance it starts, and at rest: flat for 0.2 s."""
+    out = tmp_path / "gast.json"
+    gast = RUNS / "GAST"
+    res = run("import-psse", gast / "ThreeBusMulti.raw", gast / "ThreeBus_GAST.dyr", "-o", out)
+    assert res.exit_code == 0, res.output
+    res = run("simulate", out, "--tf", "0.2", "--out", tmp_path / "flat.npz", "--json")
+    assert res.exit_code == 0, res.output
+    flat = SimulationResult.from_npz(tmp_path / "flat.npz")
+    assert np.max(np.abs(flat.speed - 1.0)) < 1e-8
+
+
+def _with_unsupported_machine(tmp_path):
+    """five_bus.dyr with generator 3 '2' given a generator model stabctl does not support
+    (GENTPJ1: any such record, e.g. REGCB1, takes the same path)."""
+    lines = (DATA / "five_bus.dyr").read_text().splitlines()
+    return _dyr(tmp_path, *lines[:2], "3 'GENTPJ1' '2' 8.0 0.03 0.4 0.05 3.0 0.0 1.8 1.7 /")
+
+
+def test_an_unsupported_machine_record_is_named_not_called_missing(tmp_path):
+    """Issue 50: a generator whose machine record is of a model stabctl lacks was
+    refused as 'without a machine model record', the record unnamed, with
+    --net-unmodelled --skip-unsupported failing the same way.  Now the record is named
+    with file:line and why; --net-unmodelled alone refuses it as unsupported; both flags
+    leave it out and net its generator, each named with why."""
+    dyr = _with_unsupported_machine(tmp_path)
+    named = "edited.dyr:3 GENTPJ1: generator model not supported by stabctl (yet)"
+    for mode in ("error", "skip"):
+        with pytest.raises(CaseError) as err:
+            import_psse(V33, dyr, on_unsupported=mode)
+        assert f"machine model record stabctl cannot read: machine 3 (bus 3, id 2): {named}" in (
+            str(err.value)
+        )
+        assert "--net-unmodelled" in str(err.value) and "--skip-unsupported" in str(err.value)
+    with pytest.raises(CaseError, match=r"1 unsupported record\(s\).*edited\.dyr:3 GENTPJ1"):
+        import_psse(V33, dyr, unmodelled="net")
+    with pytest.warns(UserWarning):
+        case, left_out, netted, _ = import_psse(V33, dyr, on_unsupported="skip", unmodelled="net")
+    assert left_out == (
+        "edited.dyr:3 GENTPJ1 at bus 3 '2': generator model not supported by stabctl (yet)",
+    )
+    assert netted == (
+        "five_bus_v33.raw:19 generator at bus 3 '2': its machine record edited.dyr:3 GENTPJ1 "
+        "is not supported (left out)",
+    )
+    assert list(case.machines.number) == [1, 2]
+    assert case.buses.pload[case.bus_index(3)] == pytest.approx(-0.5, abs=1e-15)
+
+
+def test_cli_names_every_record_left_out_and_generator_netted(tmp_path):
+    dyr = _with_unsupported_machine(tmp_path)
+    out = tmp_path / "x.json"
+    res = run("import-psse", V33, dyr, "-o", out)
+    assert res.exit_code == 2 and not out.exists()
+    assert "edited.dyr:3 GENTPJ1: generator model not supported" in res.stderr
+    res = run("import-psse", V33, dyr, "-o", out, "--skip-unsupported", "--net-unmodelled")
+    assert res.exit_code == 0, res.output
+    assert "  left out: edited.dyr:3 GENTPJ1 at bus 3 '2': generator model not supported" in (
+        res.stdout
+    )
+    assert "  netted: five_bus_v33.raw:19 generator at bus 3 '2': its machine record" in res.stdout
+    res = run(
+        "import-psse", V33, dyr, "-o", out, "--skip-unsupported", "--net-unmodelled", "--json"
+    )
+    summary = json.loads(res.stdout)
+    assert summary["left_out"][0].startswith("edited.dyr:3 GENTPJ1 at bus 3 '2'")
+    assert summary["netted"][0].endswith("edited.dyr:3 GENTPJ1 is not supported (left out)")
+
+
+def test_power_flow_is_reported_against_the_raw_files_own_solution(tmp_path):
+    """PSS/E's EXST1 run (TVC system: a step-down transformer 4-3 with WINDV2 1.04, which
+    ANDES's reader drops): stabctl's power flow of the imported case (Q limits on, as
+    simulate solves it) is compared with the RAW's VM, VA, bus by bus: within 1e-4 here
+    (the RAW's voltages are written to 5 decimals), no warning."""
+    exst1 = RUNS / "EXST1"
+    out = tmp_path / "exst1.json"
+    res = run("import-psse", exst1 / "TVC_System_32.raw", exst1 / "TVC_System.dyr", "-o", out)
+    assert res.exit_code == 0, res.output
+    assert "power flow against the RAW's solution (Q limits on" in res.stdout
+    assert "warning" not in res.stderr
+    res = run(
+        "import-psse", exst1 / "TVC_System_32.raw", exst1 / "TVC_System.dyr", "-o", out, "--json"
+    )
+    gap = json.loads(res.stdout)["powerflow_against_raw"]
+    assert gap["vmag_diff_pu"] < 1e-4 and gap["angle_diff_rad"] < 1e-4
+    assert gap["vmag_bus"] in (1, 2, 3, 4) and gap["angle_bus"] in (1, 2, 3, 4)

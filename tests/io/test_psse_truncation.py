@@ -3,6 +3,7 @@ refused with file:line, never imported as a smaller case."""
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from stabctl.errors import CaseError
@@ -63,23 +64,23 @@ def test_half_read_last_line_is_refused_not_read_with_a_wrong_value(tmp_path):
         read_raw(_write(tmp_path, cut))
 
 
-def test_q_before_a_section_terminator_is_refused(tmp_path):
+def test_a_missing_section_terminator_is_refused(tmp_path):
     text = V33.read_text().replace("0 / END OF LOAD DATA, BEGIN FIXED SHUNT DATA\n", "", 1)
     with pytest.raises(CaseError, match=r"cut\.raw:\d+"):
         read_raw(_write(tmp_path, text))
-    early_q = V33.read_text().split("0 / END OF BRANCH DATA")[0] + "0 / END OF BRANCH DATA\nQ\n"
-    with pytest.raises(
-        CaseError,
-        match=r"cut\.raw:\d+: 'Q' \(end of data\) inside the "
-        r"transformer data: 14 section\(s\) not ended",
-    ):
-        read_raw(_write(tmp_path, early_q))
 
 
-def test_q_may_leave_out_the_sections_older_writers_omit(tmp_path):
+def test_q_ends_the_data_after_any_section(tmp_path):
+    # PSS/E POM: 'Q' ends the data wherever a record may start; the sections after it are
+    # empty (issue 50: CSVGN1's and PSS2A's RAW files end with Q after the transformers)
     text = V33.read_text()
-    short = text[: text.index("0 / END OF GNE DATA")] + "Q\n"
-    assert read_raw(_write(tmp_path, short)).line.shape == read_raw(V33).line.shape
+    full = read_raw(V33)
+    early_q = text.split("0 / END OF BRANCH DATA")[0] + "0 / END OF BRANCH DATA\nQ\n"
+    early = read_raw(_write(tmp_path, early_q))
+    assert early.line.shape[0] == len(full.line) - 2  # the two transformers of the file
+    assert np.array_equal(early.bus[:, 0], full.bus[:, 0])
+    cut = read_raw(_write(tmp_path, text[: text.index("0 / END OF TRANSFORMER DATA")] + "Q\n"))
+    assert cut.line.shape == full.line.shape
 
 
 @pytest.mark.parametrize(

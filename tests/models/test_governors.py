@@ -268,6 +268,17 @@ def test_gast_initial_power_above_its_load_limit_is_refused():
     """GAST starting where AT + KT (AT - Pm0) < Pm0 would not be at rest: refused."""
     with pytest.raises(CaseError, match="GAST's load limit"):
         started(GAST[:24] + [0.6, 2.0])
+    with pytest.raises(CaseError, match="GAST's load limit"):  # 1e-5 pu beyond: refused
+        started(GAST[:24] + [PM0 - 1e-5, 2.0])
+
+
+def test_gast_starting_at_its_load_limit_within_the_tolerance_starts():
+    """PSS/E's GAST run dispatches the turbine exactly at AT = Pm0 = 1 (issue 50): the
+    limit AT + KT (AT - Pm0) equals Pm0, to the power flow's round-off; within
+    START_LIMIT_TOL (1e-6 pu) of it the governor starts, at rest on its droop branch."""
+    for at in (PM0, PM0 - 2e-7, PM0 + 1e-3):
+        _, x = started(GAST[:24] + [at, 2.0])
+        assert x[0, 0] == pytest.approx(PM0, abs=1e-15)
 
 
 def test_cross_compound_ieeeg1_shares_its_power_between_two_machines():
