@@ -385,9 +385,9 @@ def _controlled(case: Case, ev) -> None:
     governor (UnknownBusError-like CaseError for an unknown machine)."""
     case.machine_index(ev.machine)
     table, what = (
-        (case.exciters, "an exciter (exc_con)")
+        (case.exciters, "exciter (exc_con)")
         if isinstance(ev, VrefStep)
-        else (case.governors, "a governor (tg_con)")
+        else (case.governors, "governor (tg_con)")
     )
     if ev.machine not in set(np.asarray(table.machine, int).tolist()):
         raise CaseError(f"{ev}: machine {ev.machine} has no {what} whose reference to step")
