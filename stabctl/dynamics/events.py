@@ -14,7 +14,7 @@ change of VREF and of PREF, the PSS/E Program Operation Manual's ``change_vref``
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -578,6 +578,77 @@ def fault_with_clearing(
         far_bus=far_bus,
         circuit=circuit,
     )
+
+
+#: the event classes a case's own records may name (`Case.events`, ``kind``)
+EVENT_KINDS = {
+    cls.__name__: cls
+    for cls in (
+        Fault,
+        LineTrip,
+        LineClose,
+        GeneratorTrip,
+        LoadStep,
+        VrefStep,
+        PrefStep,
+        MotorSwitch,
+    )
+}
+
+
+def as_record(ev, source: str) -> dict:
+    """A `Case.events` record of an event: its class name as ``kind``, its fields, and
+    ``source`` (where it came from, e.g. ``"Toggle Toggler_1 (ieee14.xlsx)"``).
+
+    Parameters
+    ----------
+    ev : Fault, LineTrip, LineClose, GeneratorTrip, LoadStep, VrefStep, PrefStep or MotorSwitch
+        The event.
+    source : str
+        The record it was read from.
+
+    Returns
+    -------
+    dict
+        JSON-ready (numbers and strings).
+    """
+    return {"kind": type(ev).__name__, **asdict(ev), "source": source}
+
+
+def from_case(case: Case) -> list:
+    """The events of the case's own disturbance records (`Case.events`, written by
+    `as_record`), in their order.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+
+    Returns
+    -------
+    list
+        One event per record.
+
+    Raises
+    ------
+    CaseError
+        A record of an unknown ``kind`` or with fields its class does not take, named
+        with its ``source``.
+    """
+    out = []
+    for k, rec in enumerate(case.events):
+        fields = {f: v for f, v in rec.items() if f not in ("kind", "source")}
+        where = f"events[{k}] ({rec.get('source', 'no source')})"
+        cls = EVENT_KINDS.get(rec["kind"])
+        if cls is None:
+            raise CaseError(
+                f"{where}: unknown event kind {rec['kind']!r} (known: {', '.join(EVENT_KINDS)})"
+            )
+        try:
+            out.append(cls(**fields))
+        except TypeError as e:
+            raise CaseError(f"{where}: {rec['kind']} {e}") from None
+    return out
 
 
 def from_sw_con(case: Case) -> list:
