@@ -421,3 +421,32 @@ def test_bad_study_events_exit_2(tmp_path, args, needles):
     out_dir.mkdir()
     res = run("simulate", "kundur", *args, "--tf", 2, "--out", out_dir / "r.csv")
     assert_bad_input(res, out_dir, *needles)
+
+
+def test_case_events_runs_the_case_s_own_disturbance(tmp_path):
+    """--case-events runs the events stored in a case file (as import-andes stores ANDES's
+    Toggle records), before the options' own; without it the run is flat.  A record of an
+    unknown kind is refused naming its source."""
+    from stabctl.dynamics.events import LineClose, LineTrip, as_record
+
+    case = load_case("kundur")
+    own = (as_record(LineTrip(3, 101, 1.0), "Toggle 1"), as_record(LineClose(3, 101, 1.5), "2"))
+    path = pstio.write_case_json(case.replace(events=own), tmp_path / "own.json")
+    res = run("simulate", path, "--case-events", "--vref-step", 1, 2.0, 0.01, "--json")
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert s["events"] == [
+        "line 3-101 (circuit 1) tripped at 1 s",
+        "line 3-101 (circuit 1) closed at 1.5 s",
+        "VREF of machine 1 stepped by +0.01 pu at 2 s",
+    ]
+    assert s["t_end_s"] == 6.0  # the first event + 5 s
+    assert json.loads(run("simulate", path, "--tf", 2, "--json").stdout)["events"] == []
+    bad = pstio.write_case_json(
+        case.replace(events=({"kind": "Reclose", "bus": 3, "source": "Alter 7"},)),
+        tmp_path / "bad.json",
+    )
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    res = run("simulate", bad, "--case-events", "--out", out_dir / "r.csv")
+    assert_bad_input(res, out_dir, "events[0] (Alter 7): unknown event kind 'Reclose'")
