@@ -877,8 +877,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     """
     nm, ne, nps, ng, ni = p.n_mac, p.n_exc, p.n_pss, p.n_tg, p.n_ibr
     Y11, Y12, Y21, Y22, Z22, R, on, targets, steps = net
-    EP = _stepped(p.EP, steps, 0, ne, exc.E.VREF)
-    GP = _stepped(p.GP, steps, ne, ng, gov.G.PREF)
+    EP = _stepped(p.EP, steps[:ne], _VREF)
+    GP = _stepped(p.GP, steps[ne:], _PREF)
     V_nc, held, S_extra = kept
     cur, pelect, qelect, eterm, efd, pmech, V_bus, S_ibr = out
     o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
@@ -1001,18 +1001,21 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     return it
 
 
+#: the packed columns the VREF / PREF steps move, as numpy integers (a Python literal
+#: passed to a kernel compiles it once per value: tests/test_jit_rules.py)
+_VREF, _PREF = np.int64(exc.E.VREF), np.int64(gov.G.PREF)
+
+
 @kernel
-def _stepped(P, steps, start, n, col):
-    """Packed parameters P (n rows), or, if one of steps[start:start + n] is nonzero, a copy
-    with them added to column col: the exciters' VREF or the governors' PREF of a stage
-    (`KernelNetwork.steps`; VrefStep / PrefStep events)."""
-    if steps.size == 0:
-        return P
-    for k in range(n):
-        if steps[start + k] != 0.0:
+def _stepped(P, d, col):
+    """Packed parameters P, or, if one of the changes d (one per row of P, or none) is
+    nonzero, a copy with them added to column col: the exciters' VREF or the governors'
+    PREF of a stage (`KernelNetwork.steps`; VrefStep / PrefStep events)."""
+    for k in range(d.size):
+        if d[k] != 0.0:
             Q = P.copy()
-            for j in range(n):
-                Q[j, col] += steps[start + j]
+            for j in range(d.size):
+                Q[j, col] += d[j]
             return Q
     return P
 
