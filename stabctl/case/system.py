@@ -880,6 +880,12 @@ class Case:
     sw_con : numpy.ndarray or None
         The data file's own switching (disturbance) matrix, shape (rows, 7), PST format
         (PST manual 2.5), read-only; None if the file has none.
+    events : tuple of dict
+        The case's own disturbance as imported (ANDES's Toggle, Fault and Alter records,
+        `stabctl.io.andes_case`): each a dict with ``kind`` (the name of a
+        `stabctl.dynamics.events` class), that class's fields (s, pu on the system base,
+        bus and machine numbers as in the data) and ``source`` (the record it came from);
+        `stabctl.dynamics.events.from_case` makes them events.  Empty by default.
     extra : Mapping[str, numpy.ndarray]
         Other PST matrices of the data file kept as given (``lmod_con``, ``PDC``, ...),
         name -> read-only 2-D float array (units as in the file).
@@ -893,7 +899,8 @@ class Case:
     CaseError
         On construction: bus numbers referenced but not in ``buses`` (branches, machines,
         loads, injections, converters), controllers on machines not in ``machines``, no swing bus, a
-        malformed ``sw_con``, a table of the wrong class, or a non-positive base or
+        malformed ``sw_con``, an event record without a string ``kind``, a table of the
+        wrong class, or a non-positive base or
         frequency.
     """
 
@@ -913,6 +920,7 @@ class Case:
     motors: MotorTable = field(default_factory=MotorTable.empty)
     switched_shunts: SwitchedShuntTable = field(default_factory=SwitchedShuntTable.empty)
     sw_con: np.ndarray | None = None
+    events: tuple = ()
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
     source: str = ""
     description: str = ""
@@ -938,6 +946,7 @@ class Case:
             MappingProxyType({int(m): i for i, m in enumerate(self.machines.number)}),
         )
         object.__setattr__(self, "sw_con", _check_sw_con(self.sw_con))
+        object.__setattr__(self, "events", _check_events(self.events))
         object.__setattr__(self, "extra", _freeze_extra(self.extra))
         self._check_references()
 
@@ -1099,9 +1108,9 @@ class Case:
         Returns
         -------
         bool
-            True if the name, every table, base, frequency, ``sw_con`` and extra matrix
-            are identical (exact float equality; ``source`` and ``description`` are not
-            compared).
+            True if the name, every table, base, frequency, ``sw_con``, the events and
+            every extra matrix are identical (exact float equality; ``source`` and
+            ``description`` are not compared).
         """
         if not isinstance(other, Case):
             return False
@@ -1119,7 +1128,19 @@ class Case:
         same_extra = self.extra.keys() == other.extra.keys() and all(
             np.array_equal(self.extra[k], other.extra[k]) for k in self.extra
         )
-        return same_scalars and same_tables and same_sw and same_extra
+        same_events = self.events == other.events
+        return same_scalars and same_tables and same_sw and same_extra and same_events
+
+
+def _check_events(events) -> tuple:
+    """The event records as a tuple of dicts; CaseError for one that is not a mapping
+    with a string ``kind``."""
+    out = []
+    for k, rec in enumerate(events or ()):
+        if not isinstance(rec, Mapping) or not isinstance(rec.get("kind"), str):
+            raise CaseError(f"events[{k}]: not a record with a 'kind' (an event class name)")
+        out.append(dict(rec))
+    return tuple(out)
 
 
 def _check_sw_con(sw) -> np.ndarray | None:

@@ -66,7 +66,8 @@ def describe_sw_con(case) -> str | None:
 
 
 def describe_event(ev) -> str:
-    """One line describing a disturbance event (fault, line trip, machine trip, load step).
+    """One line describing a disturbance event (fault, line trip or reclosure, machine
+    trip, load step, VREF or PREF step, motor switching).
 
     Parameters
     ----------
@@ -76,10 +77,20 @@ def describe_event(ev) -> str:
     -------
     str
     """
-    from stabctl.dynamics.events import Fault, GeneratorTrip, LineTrip, LoadStep
+    from stabctl.dynamics.events import (
+        Fault,
+        GeneratorTrip,
+        LineClose,
+        LineTrip,
+        LoadStep,
+        MotorSwitch,
+        PrefStep,
+        VrefStep,
+    )
 
     if isinstance(ev, Fault):
-        s = f"3-phase fault at bus {ev.bus} at {ev.t:g} s"
+        z = "" if ev.r == 0 and ev.x == 0 else f" through {ev.r:g}{ev.x:+g}j pu"
+        s = f"3-phase fault{z} at bus {ev.bus} at {ev.t:g} s"
         if ev.clear_near is None:
             return s + ", never cleared"
         near = f"at {_ms(ev.clear_near)} s (after {1000 * (ev.clear_near - ev.t):.1f} ms)"
@@ -94,10 +105,18 @@ def describe_event(ev) -> str:
         )
     if isinstance(ev, LineTrip):
         return f"line {ev.from_bus}-{ev.to_bus} (circuit {ev.circuit}) tripped at {ev.t:g} s"
+    if isinstance(ev, LineClose):
+        return f"line {ev.from_bus}-{ev.to_bus} (circuit {ev.circuit}) closed at {ev.t:g} s"
     if isinstance(ev, GeneratorTrip):
         return f"machine {ev.machine} tripped at {ev.t:g} s"
     if isinstance(ev, LoadStep):
         return f"load step {ev.P:g}{ev.Q:+g}j pu at bus {ev.bus} at {ev.t:g} s"
+    if isinstance(ev, VrefStep):
+        return f"VREF of machine {ev.machine} stepped by {ev.dV:+g} pu at {ev.t:g} s"
+    if isinstance(ev, PrefStep):
+        return f"PREF of machine {ev.machine} stepped by {ev.dP:+g} pu at {ev.t:g} s"
+    if isinstance(ev, MotorSwitch):
+        return f"motor {ev.motor} switched {'on' if ev.on else 'off'} at {ev.t:g} s"
     return repr(ev)
 
 

@@ -9,7 +9,7 @@ from typing import cast
 import click
 
 from stabctl.cli.checks import check_suffix
-from stabctl.cli.format import describe_sw_con, print_json
+from stabctl.cli.format import describe_event, describe_sw_con, print_json
 from stabctl.cli.options import AliasedOption, json_option, reports_errors
 from stabctl.errors import InputError
 
@@ -227,6 +227,14 @@ def _imported(case, out) -> tuple[dict, str]:
     if len(case.shafts):  # likewise a case without torsional shafts
         summary["shafts"] = len(case.shafts)
         text += f", {len(case.shafts)} torsional shafts"
+    if case.events:  # the case's own disturbance (simulate --case-events runs it)
+        from stabctl.dynamics.events import from_case
+
+        named = [
+            f"{describe_event(e)} ({rec['source']})" for e, rec in zip(from_case(case), case.events)
+        ]
+        summary["events"] = named
+        text += "; its own events (simulate --case-events): " + "; ".join(named)
     return summary, text
 
 

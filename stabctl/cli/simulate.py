@@ -31,6 +31,44 @@ from stabctl.cli.options import (
 from stabctl.errors import InputError
 
 
+def _bus_fault(spec: str, t_on: float, t_off: float):
+    """The `Fault` of one ``--bus-fault BUS[:R:X] T_ON T_OFF`` (no line lost; T_OFF inf:
+    never cleared); InputError naming the option for a malformed BUS[:R:X] or times."""
+    from stabctl.dynamics.events import Fault
+
+    parts = spec.split(":")
+    try:
+        bus = int(parts[0])
+        r, x = (float(parts[1]), float(parts[2])) if len(parts) == 3 else (0.0, 0.0)
+    except ValueError:
+        parts = []
+    if len(parts) not in (1, 3):
+        raise InputError(
+            f"--bus-fault {spec} {t_on:g} {t_off:g}: BUS is a bus number or BUS:R:X "
+            "(fault resistance and reactance, pu on the system base)"
+        )
+    if r < 0 or x < 0:
+        raise InputError(f"--bus-fault {spec}: R and X must be >= 0 pu")
+    if not 0 <= t_on <= t_off:
+        raise InputError(f"--bus-fault {spec} {t_on:g} {t_off:g}: need 0 <= T_ON <= T_OFF (s)")
+    clear = None if t_off == float("inf") else t_off
+    return Fault(bus=bus, t=t_on, clear_near=clear, r=r, x=x)
+
+
+def _study_events(bus_faults, closes, gen_trips, load_steps, vref_steps, pref_steps):
+    """The events of the PSS/E-study options, in the order given per option."""
+    from stabctl.dynamics.events import GeneratorTrip, LineClose, LoadStep, PrefStep, VrefStep
+
+    return [
+        *(_bus_fault(*f) for f in bus_faults),
+        *(LineClose(a, b, t) for a, b, t in closes),
+        *(GeneratorTrip(m, t) for m, t in gen_trips),
+        *(LoadStep(b, t, p, q) for b, t, p, q in load_steps),
+        *(VrefStep(m, t, dv) for m, t, dv in vref_steps),
+        *(PrefStep(m, t, dp) for m, t, dp in pref_steps),
+    ]
+
+
 def _build_events(
     case,
     fault,
@@ -42,10 +80,13 @@ def _build_events(
     trips,
     t_trips,
     pstess_default,
+    case_events,
 ):
-    from stabctl.dynamics.events import LineTrip, fault_with_clearing, from_sw_con
+    from stabctl.dynamics.events import LineTrip, fault_with_clearing, from_case, from_sw_con
 
     events = list(from_sw_con(case)) if pstess_default else []
+    if case_events:
+        events += from_case(case)
     if fault is None:
         given = {"--far-bus": far_bus, "--far-clear-cycles": far_clear_cycles}
         stray = [k for k, v in given.items() if v is not None]
@@ -108,6 +149,60 @@ def _build_events(
     help="Trip time (s): once for all trips or once per --trip (default 1.0).",
 )
 @click.option(
+    "--bus-fault",
+    type=(str, float, float),
+    multiple=True,
+    metavar="BUS[:R:X] T_ON T_OFF",
+    help="Three-phase fault at BUS from T_ON to T_OFF (s; inf: never cleared), no line "
+    "lost (PSS/E's dist_bus_fault, dist_clear_fault); bolted, or through R + jX (pu on "
+    "the system base) as BUS:R:X (repeatable).",
+)
+@click.option(
+    "--close",
+    type=(int, int, float),
+    multiple=True,
+    metavar="FROM TO T",
+    help="Close again at T (s) circuit 1 of line FROM-TO, opened before by --trip, a "
+    "fault's clearing or the case's own events: a reclosure (repeatable).",
+)
+@click.option(
+    "--trip-gen",
+    type=(int, float),
+    multiple=True,
+    metavar="MACHINE T",
+    help="Disconnect machine MACHINE (number as in the data) at T (s) (repeatable).",
+)
+@click.option(
+    "--load-step",
+    type=(int, float, float, float),
+    multiple=True,
+    metavar="BUS T P Q",
+    help="Add P + jQ (pu on the system base at the power-flow voltage, constant "
+    "impedance; negative: shed) at bus BUS at T (s) (repeatable).",
+)
+@click.option(
+    "--vref-step",
+    type=(int, float, float),
+    multiple=True,
+    metavar="MACHINE T DV",
+    help="Step the voltage reference of machine MACHINE's exciter by DV (pu) at T (s): "
+    "PSS/E's change of VREF (repeatable; steps add up).",
+)
+@click.option(
+    "--pref-step",
+    type=(int, float, float),
+    multiple=True,
+    metavar="MACHINE T DP",
+    help="Step the power reference of machine MACHINE's governor by DP (pu on the "
+    "machine base) at T (s): PSS/E's change of PREF (repeatable; steps add up).",
+)
+@click.option(
+    "--case-events",
+    is_flag=True,
+    help="Run the case file's own disturbance events (imported from ANDES's Toggle, "
+    "Fault and Alter records by import-andes), with any of the above added.",
+)
+@click.option(
     "--pstess-default",
     is_flag=True,
     help="Run the case file's own PST sw_con disturbance (with any of the above "
@@ -151,6 +246,13 @@ def simulate(
     far_clear_cycles,
     trip,
     t_trip,
+    bus_fault,
+    close,
+    trip_gen,
+    load_step,
+    vref_step,
+    pref_step,
+    case_events,
     pstess_default,
     tf,
     conventions,
@@ -181,6 +283,12 @@ def simulate(
     fault through the line), after M cycles the far end opens too and the line stays out.
 
     \b
+    PSS/E study events, each with its time, in any number and order: --bus-fault (through
+    an impedance as BUS:R:X), --trip with --close (a reclosure), --trip-gen, --load-step,
+    --vref-step, --pref-step; --case-events adds the case's own (ANDES Toggle, Fault,
+    Alter).
+
+    \b
     Units: times s, cycles of the case frequency (60 Hz: 1 cycle = 16.67 ms), speeds pu,
     angles rad (absolute, synchronous frame, as PSTess), pelect pu on the system base,
     pmech pu on the machine base, efd pu, bus voltages pu and rad.
@@ -202,6 +310,8 @@ def simulate(
       stabctl simulate kundur --fault 3 --far-bus 101 --t-fault 1 --clear-cycles 21 --json
       stabctl simulate miniwecc --trip 40 44 --t-trip 1 --tf 10 --plot wecc.png
       stabctl simulate miniwecc --fault 83 --far-bus 33 --clear-cycles 6 --esd-pct 5 --json
+      stabctl simulate kundur --bus-fault 3:0:0.05 1 1.1 --trip 3 101 --t-trip 1.1 \\
+        --close 3 101 1.6 --vref-step 2 3 0.02 --pref-step 1 4 0.05 --tf 10
 
     Bad input (unknown case or bus, no such line, negative cycles, power flow not
     converging) and a run that diverges exit with status 2 and one `error:` line; no file
@@ -228,7 +338,9 @@ def simulate(
         trip,
         t_trip,
         pstess_default,
+        case_events,
     )
+    events += _study_events(bus_fault, close, trip_gen, load_step, vref_step, pref_step)
     if tf is None and pstess_default and case.sw_con is not None:
         tf = float(case.sw_con[-1, 0])
     elif tf is None:

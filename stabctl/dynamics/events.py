@@ -5,12 +5,16 @@ three-phase fault at a bus, cleared at the near end (the faulted circuit opens t
 far end keeps feeding the fault through it) and later at the far end (the circuit is out);
 a fault without a far bus is cleared without loss of a line.  A line is opened as PST does:
 its reactance becomes 1e7 pu; its charging stays connected under the pstess conventions and
-goes with it under ieee (docs/conventions.md 9).  Any number of events per run.
+goes with it under ieee (docs/conventions.md 9); a line opened by a trip or a fault's
+clearing may be closed again (`LineClose`, a reclosure).  A machine's exciter voltage
+reference and its governor's power reference can be stepped (`VrefStep`, `PrefStep`: PSS/E's
+change of VREF and of PREF, the PSS/E Program Operation Manual's ``change_vref`` /
+``change_gref``).  Any number of events per run, in any order.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -129,6 +133,30 @@ class LineTrip(_AtOneTime):
 
 
 @dataclass(frozen=True)
+class LineClose(_AtOneTime):
+    """Close again at `t` one circuit of the line `from_bus`-`to_bus` that an earlier
+    `LineTrip` or a `Fault`'s clearing opened (a reclosure; PSS/E's ``dist_branch_close``):
+    from `t` the line is back in the network with its charging.
+
+    Attributes
+    ----------
+    from_bus, to_bus : int
+        Bus numbers (as in the data) of the line's ends, in either order.
+    t : float
+        Closing time, s (absolute run time, >= 0); after the opening (and after a fault's
+        far-end clearing), else InputError when the run starts.
+    circuit : int, optional
+        Which of the parallel circuits between the two buses (1 = the first branch row
+        joining them); default 1.
+    """
+
+    from_bus: int
+    to_bus: int
+    t: float
+    circuit: int = 1
+
+
+@dataclass(frozen=True)
 class GeneratorTrip(_AtOneTime):
     """Disconnect a generator at `t`.
 
@@ -170,6 +198,54 @@ class LoadStep(_AtOneTime):
     t: float
     P: float
     Q: float = 0.0
+
+
+@dataclass(frozen=True)
+class VrefStep(_AtOneTime):
+    """Step the voltage reference of a machine's exciter by `dV` at `t` (PSS/E's change of
+    VREF, ``change_vref``; ANDES's Alter of an exciter's ``vref0``): from `t` the exciter's
+    summing junction takes VREF0 + dV, VREF0 its initial reference.  Steps of one machine
+    add up.
+
+    Attributes
+    ----------
+    machine : int
+        Machine number (as in the data, ``mac_con`` column 1); a machine without an exciter
+        (``exc_con``) raises CaseError when the run starts.
+    t : float
+        Time of the step, s (absolute run time, >= 0).
+    dV : float
+        Change of the reference, pu of the machine's terminal voltage base.
+    """
+
+    machine: int
+    t: float
+    dV: float
+
+
+@dataclass(frozen=True)
+class PrefStep(_AtOneTime):
+    """Step the power reference of a machine's governor by `dP` at `t` (PSS/E's change of
+    PREF, ``change_gref``; ANDES's Alter of a governor's ``pref0``): from `t` the governor
+    takes PREF0 + dP, PREF0 its initial reference (its load reference).  With droop R the
+    speed settles (1 / R) dP per unit of the machine's own reference change, the others'
+    governors sharing it.  Steps of one machine add up.
+
+    Attributes
+    ----------
+    machine : int
+        Machine number (as in the data, ``mac_con`` column 1; a cross-compound unit's HP
+        machine); a machine without a governor (``tg_con``) raises CaseError when the run
+        starts.
+    t : float
+        Time of the step, s (absolute run time, >= 0).
+    dP : float
+        Change of the reference, pu on the machine's base.
+    """
+
+    machine: int
+    t: float
+    dP: float
 
 
 @dataclass(frozen=True)
@@ -234,9 +310,11 @@ def validate(case: Case, events, t_end: float) -> None:
     """Check every event against the case (buses, lines, machines, times >= 0); raises
     UnknownBusError, CaseError, InputError.  Events after t_end are allowed (not reached).
     A circuit opened twice (a line trip of the line a fault's clearing opens, two trips of
-    one circuit) or a machine tripped twice is an InputError: the second would do
-    nothing."""
+    one circuit without a `LineClose` between) or a machine tripped twice is an InputError:
+    the second would do nothing; so is a `LineClose` of a circuit that is not open then
+    (or whose fault is not cleared at both ends yet)."""
     opened: dict = {}
+    switchings: dict = {}
     for ev in events:
         if isinstance(ev, Fault):
             case.bus_index(ev.bus)
@@ -254,10 +332,12 @@ def validate(case: Case, events, t_end: float) -> None:
             if ev.far_bus is not None:
                 row = circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
                 if ev.clear_near is not None:
-                    _open_once(opened, _circuit(case, row), ev)
-        elif isinstance(ev, LineTrip):
+                    switchings.setdefault(row, []).append((ev.clear_near, ev.far_clear, ev))
+        elif isinstance(ev, (LineTrip, LineClose)):
             row = circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit)
-            _open_once(opened, _circuit(case, row), ev)
+            switchings.setdefault(row, []).append((ev.t, ev.t, ev))
+        elif isinstance(ev, (VrefStep, PrefStep)):
+            _controlled(case, ev)
         elif isinstance(ev, GeneratorTrip):
             case.machine_index(ev.machine)
             _open_once(opened, f"machine {ev.machine}", ev)
@@ -274,6 +354,43 @@ def validate(case: Case, events, t_end: float) -> None:
                 f"event {ev} has a negative time (events after t_end = {t_end} s "
                 "simply do not happen)"
             )
+    for row, sw in switchings.items():
+        _check_switchings(_circuit(case, row), sw)
+
+
+def _check_switchings(what: str, sw: list) -> None:
+    """InputError unless the openings (a `LineTrip`, a `Fault`'s clearing) and closings
+    (`LineClose`) of one circuit alternate, starting closed, each closing strictly after
+    the opening before it is complete (a fault's far-end clearing).  sw: (time, time the
+    opening is complete, event), in any order."""
+    last = None
+    for t, _done, ev in sorted(sw, key=lambda s: (s[0], isinstance(s[2], LineClose))):
+        closing = isinstance(ev, LineClose)
+        if closing and last is None:
+            raise InputError(f"{what}: {ev} closes it while it is not open")
+        if closing and not t > last[1]:
+            raise InputError(
+                f"{what}: {ev} closes it at or before {last[2]} opens it ({last[1]:g} s)"
+            )
+        if not closing and last is not None:
+            raise InputError(
+                f"{what} is tripped twice, by {last[2]} and by {ev}: the second would do "
+                "nothing (close it between with LineClose, or give it once)"
+            )
+        last = None if closing else (t, _done, ev)
+
+
+def _controlled(case: Case, ev) -> None:
+    """CaseError if the machine of a `VrefStep` has no exciter or that of a `PrefStep` no
+    governor (UnknownBusError-like CaseError for an unknown machine)."""
+    case.machine_index(ev.machine)
+    table, what = (
+        (case.exciters, "exciter (exc_con)")
+        if isinstance(ev, VrefStep)
+        else (case.governors, "governor (tg_con)")
+    )
+    if ev.machine not in set(np.asarray(table.machine, int).tolist()):
+        raise CaseError(f"{ev}: machine {ev.machine} has no {what} whose reference to step")
 
 
 def _check_playback(case: Case, ev: Playback) -> None:
@@ -302,13 +419,13 @@ def _circuit(case: Case, row: int) -> str:
 
 
 def _open_once(opened: dict, what: str, ev) -> None:
-    """Record that ``ev`` opens ``what`` (a circuit or a machine, `_circuit`); InputError
-    if an earlier event opens it already."""
+    """Record that ``ev`` trips ``what`` (a machine); InputError if an earlier event trips
+    it already."""
     first = opened.setdefault(what, ev)
     if first is not ev:
         raise InputError(
             f"{what} is tripped twice, by {first} and by {ev}: the second would do nothing "
-            "(give each circuit or machine once)"
+            "(give each machine once)"
         )
 
 
@@ -335,9 +452,11 @@ def stage_boundaries(events, t_end: float) -> list[tuple[float, int, int]]:
 def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
     """Network configuration with phases[i] changes of event i applied (see
     `stage_boundaries`)."""
-    faults, opened, feeds, tripped, loads = [], [], [], [], []
+    faults, feeds, tripped, loads, lines = [], [], [], [], []
     on = {k: bool(case.motors.in_service[k]) for k in range(len(case.motors))}
     switched, played = [], []
+    vref: dict = {}
+    pref: dict = {}
     for ev, n in zip(events, phases):
         if n == 0:
             continue
@@ -347,8 +466,16 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
             elif ev.far_bus is not None:
                 row = circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
                 feeds.append((row, ev.far_bus, n == 2))
-        elif isinstance(ev, LineTrip):
-            opened.append(circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit))
+                lines.append((ev.clear_near, row, True))
+        elif isinstance(ev, (LineTrip, LineClose)):
+            row = circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit)
+            lines.append((ev.t, row, isinstance(ev, LineTrip)))
+        elif isinstance(ev, VrefStep):
+            m = case.machine_index(ev.machine)
+            vref[m] = vref.get(m, 0.0) + ev.dV
+        elif isinstance(ev, PrefStep):
+            m = case.machine_index(ev.machine)
+            pref[m] = pref.get(m, 0.0) + ev.dP
         elif isinstance(ev, GeneratorTrip):
             tripped.append(case.machine_index(ev.machine))
         elif isinstance(ev, LoadStep):
@@ -360,14 +487,20 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
             played.append((case.machine_index(ev.machine), ev.dV[n - 1], ev.df[n - 1]))
     for _t, k, state in sorted(switched):  # the last switching of each motor holds
         on[k] = state
+    is_open: dict = {}
+    for _t, row, state in sorted(lines):  # the last switching of each circuit holds
+        is_open[row] = state
+    faulted = {f[0] for f in feeds}
     return StageConfig(
         faults=tuple(faults),
-        opened=tuple(sorted(set(opened))),
-        fault_feeds=tuple(feeds),
+        opened=tuple(sorted(r for r, o in is_open.items() if o and r not in faulted)),
+        fault_feeds=tuple(f for f in feeds if is_open[f[0]]),
         tripped_machines=tuple(sorted(set(tripped))),
         load_steps=tuple(loads),
         motors_on=tuple(k for k, v in on.items() if v),
         playback=tuple(played),
+        vref_steps=tuple(sorted(vref.items())),
+        pref_steps=tuple(sorted(pref.items())),
     )
 
 
@@ -445,6 +578,77 @@ def fault_with_clearing(
         far_bus=far_bus,
         circuit=circuit,
     )
+
+
+#: the event classes a case's own records may name (`Case.events`, ``kind``)
+EVENT_KINDS = {
+    cls.__name__: cls
+    for cls in (
+        Fault,
+        LineTrip,
+        LineClose,
+        GeneratorTrip,
+        LoadStep,
+        VrefStep,
+        PrefStep,
+        MotorSwitch,
+    )
+}
+
+
+def as_record(ev, source: str) -> dict:
+    """A `Case.events` record of an event: its class name as ``kind``, its fields, and
+    ``source`` (where it came from, e.g. ``"Toggle Toggler_1 (ieee14.xlsx)"``).
+
+    Parameters
+    ----------
+    ev : Fault, LineTrip, LineClose, GeneratorTrip, LoadStep, VrefStep, PrefStep or MotorSwitch
+        The event.
+    source : str
+        The record it was read from.
+
+    Returns
+    -------
+    dict
+        JSON-ready (numbers and strings).
+    """
+    return {"kind": type(ev).__name__, **asdict(ev), "source": source}
+
+
+def from_case(case: Case) -> list:
+    """The events of the case's own disturbance records (`Case.events`, written by
+    `as_record`), in their order.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+
+    Returns
+    -------
+    list
+        One event per record.
+
+    Raises
+    ------
+    CaseError
+        A record of an unknown ``kind`` or with fields its class does not take, named
+        with its ``source``.
+    """
+    out = []
+    for k, rec in enumerate(case.events):
+        fields = {f: v for f, v in rec.items() if f not in ("kind", "source")}
+        where = f"events[{k}] ({rec.get('source', 'no source')})"
+        cls = EVENT_KINDS.get(rec["kind"])
+        if cls is None:
+            raise CaseError(
+                f"{where}: unknown event kind {rec['kind']!r} (known: {', '.join(EVENT_KINDS)})"
+            )
+        try:
+            out.append(cls(**fields))
+        except TypeError as e:
+            raise CaseError(f"{where}: {rec['kind']} {e}") from None
+    return out
 
 
 def from_sw_con(case: Case) -> list:

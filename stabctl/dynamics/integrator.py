@@ -301,6 +301,7 @@ def _stage(nets, s):
         nets.R[s],
         nets.switched_on[s],
         nets.targets[s],
+        nets.steps[s],
     )
 
 

@@ -80,7 +80,10 @@ class StageConfig:
     tripped_machines: machine indices disconnected; load_steps: (bus index, admittance);
     motors_on: motor indices in service (switched on by events; `stabctl.models.motors`);
     playback: (machine index, dV, df) of playback sources whose targets moved from their
-    initial E' and speed 1 pu (a Playback event).
+    initial E' and speed 1 pu (a Playback event);
+    vref_steps, pref_steps: (machine index, change) of the machines whose exciter's voltage
+    reference (pu) or governor's power reference (pu on the machine base) moved from its
+    initial value (VrefStep / PrefStep events: PSS/E's change of VREF / PREF).
     """
 
     faults: tuple = ()
@@ -90,6 +93,8 @@ class StageConfig:
     load_steps: tuple = ()
     motors_on: tuple = ()
     playback: tuple = ()
+    vref_steps: tuple = ()
+    pref_steps: tuple = ()
 
 
 @dataclass
@@ -289,7 +294,12 @@ class DynamicModel:
         targets = np.column_stack([self.eqp0, np.ones(self.mp.n)])
         for m, dV, df in config.playback:
             targets[m] += (dV, df)
-        return replace(net, switched_on=on, targets=targets)
+        steps = np.zeros(self.ep.n + self.gp.n)
+        for m, dv in config.vref_steps:
+            steps[np.flatnonzero(self.ep.mac == m)] += dv
+        for m, dp in config.pref_steps:
+            steps[self.ep.n + np.flatnonzero(self.gp.mac == m)] += dp
+        return replace(net, switched_on=on, targets=targets, steps=steps)
 
     # -- initialisation ---------------------------------------------------------------
     def _initialise(self):
@@ -615,7 +625,9 @@ class KernelNetwork(NamedTuple):
     Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 and Z22 = inv(Y22)
     (n_nc, n_nc), R (n_bus, n_mac + n_nc); complex pu on the system base; targets (n_mac, 2)
     the playback sources' targets (`ReducedNetwork.targets`); switched_on
-    (n_motor,) float, 1.0 for each motor in service in the stage (`ReducedNetwork.switched_on`)."""
+    (n_motor,) float, 1.0 for each motor in service in the stage (`ReducedNetwork.switched_on`);
+    steps (n_exc + n_tg,) float, the exciters' VREF and governors' PREF changes in the stage
+    (`ReducedNetwork.steps`)."""
 
     Y11: np.ndarray
     Y12: np.ndarray
@@ -625,6 +637,7 @@ class KernelNetwork(NamedTuple):
     R: np.ndarray
     switched_on: np.ndarray
     targets: np.ndarray
+    steps: np.ndarray
 
 
 def kernel_network(net: ReducedNetwork) -> KernelNetwork:
@@ -866,7 +879,9 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         The load-iteration count, -1 without convergence.
     """
     nm, ne, nps, ng, ni = p.n_mac, p.n_exc, p.n_pss, p.n_tg, p.n_ibr
-    Y11, Y12, Y21, Y22, Z22, R, on, targets = net
+    Y11, Y12, Y21, Y22, Z22, R, on, targets, steps = net
+    EP = _stepped(p.EP, steps[:ne], _VREF)
+    GP = _stepped(p.GP, steps[ne:], _PREF)
     V_nc, held, S_extra = kept
     cur, pelect, qelect, eterm, efd, pmech, V_bus, S_ibr = out
     o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
@@ -940,21 +955,19 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     vb = np.empty(ne)
     pss_exc = np.zeros(ne)
     for i in range(ne):
-        m = int(p.EP[i, exc.E.MAC])
+        m = int(EP[i, exc.E.MAC])
         if p.pss_of_exc[i] >= 0:
             pss_exc[i] = pss_out[p.pss_of_exc[i]]
-        ifd[i] = exc.field_current(p.EP, i, p.MP, xm, cur)
-        vb[i] = exc.source_voltage(p.EP, i, p.MP, xm, cur, V_bus[p.mac_bus[m]], ifd[i])
-        efd_alg[i] = exc.field_voltage(
-            p.EP, xe, i, p.MP, xm, cur, pss_exc[i], ifd[i], vb[i], p.ieee
-        )
+        ifd[i] = exc.field_current(EP, i, p.MP, xm, cur)
+        vb[i] = exc.source_voltage(EP, i, p.MP, xm, cur, V_bus[p.mac_bus[m]], ifd[i])
+        efd_alg[i] = exc.field_voltage(EP, xe, i, p.MP, xm, cur, pss_exc[i], ifd[i], vb[i], p.ieee)
         vex[m] = efd_alg[i]
     assign(pmech, p.pmech0)
     for k in range(ng):
-        m = int(p.GP[k, gov.G.MAC])
-        pmech[m] = gov.pmech(p.GP, xg, k, xm[1, m])
-        if p.GP[k, gov.G.MAC2] >= 0:  # a cross-compound unit's LP shaft
-            pmech[int(p.GP[k, gov.G.MAC2])] = gov.pmech_lp(p.GP, xg, k)
+        m = int(GP[k, gov.G.MAC])
+        pmech[m] = gov.pmech(GP, xg, k, xm[1, m])
+        if GP[k, gov.G.MAC2] >= 0:  # a cross-compound unit's LP shaft
+            pmech[int(GP[k, gov.G.MAC2])] = gov.pmech_lp(GP, xg, k)
     mac.derivatives(
         p.MP,
         p.basrad,
@@ -972,23 +985,42 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         shaft.derivatives(p.TP, p.MP, p.basrad, xt, k, xm, pmech, dxt)
     assign(efd, p.vex0)
     for i in range(ne):
-        m = int(p.EP[i, exc.E.MAC])
+        m = int(EP[i, exc.E.MAC])
         vc = eterm[m]
-        if p.EP[i, exc.E.RCOMP] != 0.0 or p.EP[i, exc.E.XCOMP] != 0.0:
+        if EP[i, exc.E.RCOMP] != 0.0 or EP[i, exc.E.XCOMP] != 0.0:
             pot = p.MP[m, mac.K.POT]
-            vc = exc.compensated(p.EP, i, V_bus[p.mac_bus[m]], cur[m] * pot)
+            vc = exc.compensated(EP, i, V_bus[p.mac_bus[m]], cur[m] * pot)
         exc.derivatives(
-            p.EP, xe, i, vc, eterm[m], pss_exc[i], efd_alg[i], ifd[i], vb[i], dxe, p.ieee, p.reach
+            EP, xe, i, vc, eterm[m], pss_exc[i], efd_alg[i], ifd[i], vb[i], dxe, p.ieee, p.reach
         )
-        efd[m] = exc.recorded_efd(p.EP, xe, i, efd_alg[i])
+        efd[m] = exc.recorded_efd(EP, xe, i, efd_alg[i])
     for k in range(ng):
-        gov.derivatives(p.GP, xg, k, xm[1, int(p.GP[k, gov.G.MAC])], dxg)
+        gov.derivatives(GP, xg, k, xm[1, int(GP[k, gov.G.MAC])], dxg)
     for k in range(ni):
         V_k = V_nc[int(p.IP[k, conv.C.POS])]
         S_ibr[k] = conv.derivatives(p.IP, xi, k, V_k, V_nc, p.reach, dxi)
     for k in range(nmo):
         mot.derivatives(p.MO, xmo, k, V_nc[int(p.MO[k, mot.Q.POS])], on[k], dxmo)
     return it
+
+
+#: the packed columns the VREF / PREF steps move, as numpy integers (a Python literal
+#: passed to a kernel compiles it once per value: tests/test_jit_rules.py)
+_VREF, _PREF = np.int64(exc.E.VREF), np.int64(gov.G.PREF)
+
+
+@kernel
+def _stepped(P, d, col):
+    """Packed parameters P, or, if one of the changes d (one per row of P, or none) is
+    nonzero, a copy with them added to column col: the exciters' VREF or the governors'
+    PREF of a stage (`KernelNetwork.steps`; VrefStep / PrefStep events)."""
+    for k in range(d.size):
+        if d[k] != 0.0:
+            Q = P.copy()
+            for j in range(d.size):
+                Q[j, col] += d[j]
+            return Q
+    return P
 
 
 @kernel
@@ -1015,7 +1047,7 @@ def _evaluate_arg_types() -> tuple:
 
     z, c = np.zeros(1), np.zeros(1, np.complex128)
     m = np.zeros((1, 1), np.complex128)
-    net = KernelNetwork(m, m, m, m, m, m, np.zeros(1), np.zeros((1, 2)))
+    net = KernelNetwork(m, m, m, m, m, m, np.zeros(1), np.zeros((1, 2)), np.zeros(1))
     return (
         typeof(z),
         typeof(net),

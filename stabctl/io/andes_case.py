@@ -165,6 +165,12 @@ PROTECTIONS = {"DGPRCT1": DGPRCT1, "DGPRCTExt": DGPRCTEXT}
 DC_MODELS = ("Node", "Ground", "R", "VSCShunt")
 #: ANDES's induction motors, read into the motor table (mot_con, `stabctl.models.motors`)
 MOTOR_MODELS = ("Motor5",)
+#: ANDES's disturbance records, read into the case's own events (`Case.events`,
+#: `_disturbances`)
+EVENT_MODELS = ("Toggle", "Fault", "Alter")
+#: ANDES Alter targets read as reference steps: (model group, source) -> event kind; a
+#: TGOV1's ``paux0`` enters its order as (paux - dw) / R: a PREF step of d / R
+ALTERED = {("Exciter", "vref0"): "VrefStep", ("TGOV1", "paux0"): "PrefStep"}
 #: ANDES's torsional shafts, read into the shaft table (shaft_con, `stabctl.models.shafts`)
 SHAFT_MODELS = ("SHAFT5",)
 #: ANDES's wind drive trains (group RenGovernor) -> ibr_con ``wind``
@@ -312,6 +318,7 @@ def read_andes_case(
         and name not in PROTECTIONS
         and name not in MOTOR_MODELS
         and name not in DC_MODELS
+        and name not in EVENT_MODELS
         and name != "PLBVFU1"
     ]
     ignored = tuple(f"{name} ({counts[name]})" for name in IGNORED_MODELS if name in counts)
@@ -326,11 +333,12 @@ def read_andes_case(
     refused = dropped + refused
     changed += _grouped(zip_changed)
     refused += ibr_refused
+    motor_numbers: dict = {}
     for key, (rows, why) in (  # stabctl's own tables of the devices ANDES has
         ("shaft_con", _shafts(ss, gens)),
         ("inj_con", _dc_links(ss, numbers)),
         ("swsh_con", _switched_shunts(ss, numbers)),
-        ("mot_con", _motors(ss, numbers)),
+        ("mot_con", _motors(ss, numbers, motor_numbers)),
     ):
         refused += why
         if rows:
@@ -348,6 +356,9 @@ def read_andes_case(
             }
         )
         _mark_playback(mats, gens)
+    events, ev_refused, ev_off = _disturbances(ss, numbers, gens, mats, motor_numbers)
+    refused += ev_refused
+    ignored += tuple(ev_off)
     left_out = tuple(lacking + refused)
     if left_out or changed:
         listing = "; ".join(
@@ -375,7 +386,7 @@ def read_andes_case(
         path.stem,
         description=f"ANDES case {path.name}",
         source=f"ANDES case {path.name}, imported by stabctl.io.andes_case.import_andes",
-    )
+    ).replace(events=tuple(events))
     solution = None
     if path.suffix.lower() == ".raw":
         on = _in_service(ss.Bus)
@@ -1264,13 +1275,13 @@ def _switched_shunts(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:
     return rows, refused
 
 
-def _motors(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:
+def _motors(ss, numbers: dict, kept: dict) -> tuple[list[list[float]], list[str]]:
     """The mot_con rows of ANDES's Motor5 devices (number, bus, in service 0, Sn, then the
     impedances on the motor base at the bus's voltage base, ANDES's system-base values
     times Sn/Sb, Hm and c1-c3 as given), and those refused with why: in service at the
     start (ANDES's power flow holds it at its initial slip, not an equilibrium), another
     frequency, c1-c3 on a base other than the system's (ANDES reads them on the system
-    base, stabctl on the motor's)."""
+    base, stabctl on the motor's).  ``kept`` is filled with motor idx -> number."""
     m = ss.models.get("Motor5")
     rows: list[list[float]] = []
     refused: list[str] = []
@@ -1290,7 +1301,133 @@ def _motors(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:
         z = [float(m.params[f].v[k]) * m.Sn.v[k] / sb for f in MOTOR.names[4:11]]
         rest = [float(m.params[f].vin[k]) for f in MOTOR.names[11:]]
         rows.append([len(rows) + 1, numbers[m.bus.v[k]], 0.0, float(m.Sn.v[k]), *z, *rest])
+        kept[m.idx.v[k]] = len(rows)
     return rows, refused
+
+
+def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict):
+    """The case's own events (`Case.events` records) from ANDES's Toggle, Fault and Alter
+    devices in service, those refused (``"MODEL idx: why"``) and those off (u = 0: ANDES
+    does not run them either).
+
+    Toggle (a flip of a device's ``u``, in time order per device): of a Line, a LineTrip,
+    then a LineClose, alternately; of a machine (GENROU, GENCLS), a GeneratorTrip (a
+    second, reconnecting it, is refused); of a PQ (or StaticLoad), a LoadStep of its power
+    (P, Q at the power flow's voltage: ANDES's PQ in a run is a constant impedance), minus
+    when it goes out of service, plus when it comes in, at a bus whose load is all
+    constant impedance;
+    of a Motor5, a MotorSwitch on, then off.  Fault: a Fault through rf + j xf from tf to
+    tc (none: never cleared), without loss of a line.  Alter (``+``, ``-``, ``=``; ``*``,
+    ``/`` of a known value) of an exciter's ``vref0``: a VrefStep; of a TGOV1's
+    ``paux0`` (0 at the start): a PrefStep of the change / R (machine base).  Any other
+    target is refused with the device and attribute."""
+    events: list = []
+    refused: list = []
+    off: list = []
+    machine_of = {g["id"]: g["number"] for g in gens}
+    have = {
+        key: set(np.asarray(mats[key])[:, col].astype(int).tolist()) if key in mats else set()
+        for key, col in (("mac_con", 0), ("exc_con", 1), ("tg_con", 1))
+    }
+    line_rows = {ss.Line.idx.v[k]: r for r, k in enumerate(_in_service(ss.Line))}
+    line = np.asarray(mats["line"])
+    non_conforming = set(np.asarray(mats["load_con"])[:, 0].astype(int).tolist())
+    timed = []
+    for name in EVENT_MODELS:
+        m = ss.models.get(name)
+        for k in range(m.n if m is not None else 0):
+            if m.u.v[k] == 0:
+                off.append(f"{name} {m.idx.v[k]} (u = 0: not run, as in ANDES)")
+                continue
+            t = float(m.tf.v[k] if name == "Fault" else m.t.v[k])
+            timed.append((t, name, k))
+    state: dict = {}
+    for t, name, k in sorted(timed, key=lambda e: e[0]):
+        m = ss.models[name]
+        where = f"{name} {m.idx.v[k]}"
+        rec: dict = {}
+        why = ""
+        if name == "Fault":
+            tc = float(m.tc.v[k]) if m.tc.v[k] is not None else np.nan
+            rec = {
+                "kind": "Fault",
+                "bus": numbers[m.bus.v[k]],
+                "t": t,
+                "clear_near": tc if np.isfinite(tc) else None,
+                "r": float(m.rf.v[k]),
+                "x": float(m.xf.v[k]),
+            }
+        elif name == "Toggle":
+            model, dev = m.model.v[k], m.dev.v[k]
+            n = state[(model, dev)] = state.get((model, dev), 0) + 1
+            if model == "Line" and dev in line_rows:
+                a, b = int(line[line_rows[dev], 0]), int(line[line_rows[dev], 1])
+                same = [r for r in range(line_rows[dev] + 1) if {*line[r, :2]} == {a, b}]
+                kind = "LineTrip" if n % 2 else "LineClose"
+                rec = {"kind": kind, "from_bus": a, "to_bus": b, "t": t, "circuit": len(same)}
+            elif model == "Line":
+                why = f"Line {dev} is out of service at the start (not in the case)"
+            elif model in _MACHINES and machine_of.get(str(dev)) in have["mac_con"]:
+                if n > 1:
+                    why = f"reconnects machine {dev} (stabctl trips a machine for good)"
+                rec = {"kind": "GeneratorTrip", "machine": machine_of[str(dev)], "t": t}
+            elif model in ("PQ", "StaticLoad") and dev in ss.PQ.idx.v:
+                j = list(ss.PQ.idx.v).index(dev)
+                bus = numbers[ss.PQ.bus.v[j]]
+                on = (ss.PQ.u.v[j] != 0) != (n % 2 == 1)  # in service after this toggle
+                sign = 1.0 if on else -1.0
+                if bus in non_conforming:
+                    why = f"PQ {dev} at bus {bus}, whose load is not all constant impedance"
+                rec = {
+                    "kind": "LoadStep",
+                    "bus": bus,
+                    "t": t,
+                    "P": sign * float(ss.PQ.p0.v[j]),
+                    "Q": sign * float(ss.PQ.q0.v[j]),
+                }
+            elif model == "Motor5" and dev in motor_numbers:
+                rec = {"kind": "MotorSwitch", "motor": motor_numbers[dev], "t": t, "on": n % 2 == 1}
+            else:
+                why = f"a Toggle of {model} {dev}, which stabctl does not switch or has not kept"
+        else:
+            rec, why = _alter(ss, m, k, t, state, machine_of, have)
+        if why or not rec:
+            refused.append(f"{where}: {why}")
+        else:
+            events.append({**rec, "source": where})
+    return events, refused, off
+
+
+def _alter(ss, m, k, t: float, state: dict, machine_of: dict, have: dict):
+    """The event record of Alter row k (`_disturbances`) and why it is refused ("" if
+    not); state holds each altered value known so far, (model, dev, src) -> value."""
+    model, dev, src = m.model.v[k], m.dev.v[k], m.src.v[k]
+    target = ss.models.get(model)
+    group = getattr(target, "group", "")
+    kind = ALTERED.get((group, src)) or ALTERED.get((model, src))
+    what = f"{model} {dev} {src}"
+    if target is None or kind is None:
+        return {}, f"alters {what}, which stabctl does not map (mapped: exciter vref0, TGOV1 paux0)"
+    j = list(target.idx.v).index(dev)
+    number = machine_of.get(str(target.syn.v[j]))
+    table = "exc_con" if kind == "VrefStep" else "tg_con"
+    if number not in have[table]:
+        return {}, f"alters {what}, whose machine or controller is not in the case"
+    key = (model, dev, src)
+    old = state.get(key, 0.0 if src == "paux0" else None)
+    amount, method = float(m.amount.v[k]), str(m.method.v[k])
+    ops = {"+": lambda v: v + amount, "-": lambda v: v - amount}
+    ops.update({"*": lambda v: v * amount, "/": lambda v: v / amount, "=": lambda v: amount})
+    if method not in ops:
+        return {}, f"alters {what} by method {method!r} (ANDES: +, -, *, /, =)"
+    if old is None and method not in "+-":
+        return {}, f"alters {what} by {method!r}: its value at the start is ANDES's own"
+    new = ops[method](0.0 if old is None else old)
+    change = new - (0.0 if old is None else old)
+    state[key] = new if old is not None else None
+    if kind == "VrefStep":
+        return {"kind": kind, "machine": number, "t": t, "dV": change}, ""
+    return {"kind": kind, "machine": number, "t": t, "dP": change / float(target.R.vin[j])}, ""
 
 
 def _shafts(ss, gens: list[dict]) -> tuple[list[list[float]], list[str]]:

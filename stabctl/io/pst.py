@@ -391,6 +391,7 @@ def case_to_dict(case: Case, licence: str = "") -> dict:
         "freq_hz": case.freq_hz,
         "tables": tables,
         "sw_con": None if case.sw_con is None else case.sw_con.tolist(),
+        **({"events": [dict(e) for e in case.events]} if case.events else {}),
         "extra": {k: v.tolist() for k, v in case.extra.items()},
     }
 
@@ -433,6 +434,7 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
         base_mva=_field_number(data, "base_mva", where),
         freq_hz=_field_number(data, "freq_hz", where),
         sw_con=data.get("sw_con"),
+        events=_events_field(data.get("events"), where),
         extra=extra,
         source=str(data.get("source", "")),
         description=str(data.get("description", "")),
@@ -517,7 +519,8 @@ def write_case_json(case: Case, path: str | Path, licence: str = "") -> Path:
     Layout: ``format`` ("stabctl-case"), ``version`` (1), ``name``, ``description``,
     ``source``, ``licence``, ``base_mva`` (MVA), ``freq_hz`` (Hz), ``tables`` (table field
     -> ``{"columns": [names in PST order], "rows": [[...], ...]}``, one row per line),
-    ``sw_con`` (PST rows or null), ``extra`` (name -> rows). Floats are written with
+    ``sw_con`` (PST rows or null), ``events`` (the case's own disturbance records, one
+    per line; only when it has some), ``extra`` (name -> rows). Floats are written with
     Python's shortest round-trip repr, so reading gives back identical values.
     """
     d = case_to_dict(case, licence)
@@ -548,12 +551,24 @@ def write_case_json(case: Case, path: str | Path, licence: str = "") -> Path:
     parts.append("  },")
     sw = "null" if d["sw_con"] is None else _dump_matrix(d["sw_con"], "  ")
     parts.append(f'  "sw_con": {sw},')
+    if "events" in d:
+        ev = ",\n".join(f"    {json.dumps(e)}" for e in d["events"])
+        parts.append(f'  "events": [\n{ev}\n  ],')
     eparts = [f"    {json.dumps(k)}: {_dump_matrix(v, '    ')}" for k, v in d["extra"].items()]
     parts.append('  "extra": {' + ("\n" + ",\n".join(eparts) + "\n  " if eparts else "") + "}")
     parts.append("}")
     path = Path(path)
     path.write_text("\n".join(parts) + "\n", encoding="utf-8")
     return path
+
+
+def _events_field(events, where: str) -> tuple:
+    """The ``events`` of a case file: a list of records (objects), or absent."""
+    if events is None:
+        return ()
+    if not isinstance(events, list):
+        raise CaseError(f"{where}: 'events' must be a list of event records")
+    return tuple(events)
 
 
 def read_case_json(path: str | Path) -> Case:
@@ -565,4 +580,4 @@ def read_case_json(path: str | Path) -> Case:
 def read_case_header(path: str | Path) -> dict:
     """The scalar header of an own-format case file (name, description, source, ...)."""
     data = _load_json(Path(path))
-    return {k: v for k, v in data.items() if k not in ("tables", "sw_con", "extra")}
+    return {k: v for k, v in data.items() if k not in ("tables", "sw_con", "events", "extra")}

@@ -61,7 +61,9 @@ class ReducedNetwork:
     chord of the load iteration.  switched_on (n_dev,) float: 1.0 for each device switched
     by events (a motor, `stabctl.models.motors`) in service in this stage, else 0.0;
     targets (n_mac, 2) float: each playback source's targets of E' and speed in this
-    stage (pu; `stabctl.models.machines`, the ``playback`` column).
+    stage (pu; `stabctl.models.machines`, the ``playback`` column); steps (n_exc + n_tg,)
+    float: each exciter's VREF change (pu), then each governor's PREF change (pu on its
+    machine's base) in this stage (VrefStep / PrefStep events; empty: none).
     """
 
     Y11: np.ndarray
@@ -72,6 +74,7 @@ class ReducedNetwork:
     Z22: np.ndarray
     switched_on: np.ndarray = field(default_factory=lambda: np.zeros(0))
     targets: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    steps: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def reduce_network(

@@ -82,6 +82,13 @@ def test_help_texts_state_units():
         "--far-clear-cycles M",
         "--trip FROM TO",
         "--t-trip",
+        "--bus-fault BUS[:R:X] T_ON T_OFF",
+        "--close FROM TO T",
+        "--trip-gen MACHINE T",
+        "--load-step BUS T P Q",
+        "--vref-step MACHINE T DV",
+        "--pref-step MACHINE T DP",
+        "--case-events",
         "--tf S",
         "--step H",
         "--pstess-default",
@@ -316,3 +323,130 @@ def test_simulate_method_trapezoid_runs_and_matches_heun_within_the_step(tmp_pat
     bad.mkdir()
     res = run(*args, "--method", "trapezoid", "--esd-pct", 5, "--out", bad / "x.csv")
     assert_bad_input(res, bad, "method 'trapezoid' takes no storage devices")
+
+
+def test_pss_e_study_events_in_any_number_and_order():
+    """Every study event on the command line, named in the summary in the order given; the
+    bus fault through an impedance and the reclosure reach the run (a VREF step alone is a
+    different run from one with it and a PREF step)."""
+    args = [
+        "simulate",
+        "kundur",
+        "--bus-fault",
+        "3:0:0.05",
+        1,
+        1.1,
+        "--trip",
+        3,
+        101,
+        "--t-trip",
+        1.1,
+        "--close",
+        3,
+        101,
+        1.6,
+        "--load-step",
+        13,
+        2,
+        0.5,
+        0.1,
+        "--vref-step",
+        2,
+        3,
+        0.02,
+        "--pref-step",
+        1,
+        4,
+        0.05,
+        "--trip-gen",
+        4,
+        4.5,
+        "--tf",
+        5,
+        "--json",
+    ]
+    res = run(*args)
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert s["events"] == [
+        "line 3-101 (circuit 1) tripped at 1.1 s",
+        "3-phase fault through 0+0.05j pu at bus 3 at 1 s, cleared at 1.1 s (after 100.0 ms)"
+        " without loss of a line",
+        "line 3-101 (circuit 1) closed at 1.6 s",
+        "machine 4 tripped at 4.5 s",
+        "load step 0.5+0.1j pu at bus 13 at 2 s",
+        "VREF of machine 2 stepped by +0.02 pu at 3 s",
+        "PREF of machine 1 stepped by +0.05 pu at 4 s",
+    ]
+    text = run(*args[:-1])
+    assert "  PREF of machine 1 stepped by +0.05 pu at 4 s" in text.stdout.splitlines()
+
+
+def test_study_events_match_the_library(tmp_path):
+    """The CLI's events are the library's: a fault through j0.05 pu and a PREF step give the
+    same trajectories as `Simulator.run` with Fault(r=0, x=0.05) and PrefStep."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import Fault, PrefStep
+
+    out = tmp_path / "r.npz"
+    res = run(
+        "simulate", "kundur", "--bus-fault", "3:0:0.05", 1, 1.1, "--pref-step", 1, 1.5, 0.05,
+        "--tf", 3, "--out", out,
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    cli = SimulationResult.from_npz(out)
+    lib = Simulator(load_case("kundur")).run(
+        [Fault(bus=3, t=1.0, clear_near=1.1, x=0.05), PrefStep(1, 1.5, 0.05)], t_end=3.0
+    )
+    assert np.array_equal(cli.speed, lib.speed)
+    bolted = Simulator(load_case("kundur")).run([Fault(bus=3, t=1.0, clear_near=1.1)], t_end=3.0)
+    assert np.abs(bolted.speed - lib.speed).max() > 1e-4
+
+
+@pytest.mark.parametrize(
+    "args, needles",
+    [
+        (["--bus-fault", "3:0.1", 1, 1.1], ["BUS is a bus number or BUS:R:X"]),
+        (["--bus-fault", "3", 1.2, 1.1], ["0 <= T_ON <= T_OFF"]),
+        (["--bus-fault", "3:-1:0", 1, 1.1], ["R and X must be >= 0"]),
+        (["--close", 3, 101, 1.0], ["closes it while it is not open"]),
+        (["--trip", 3, 101, "--t-trip", 1.5, "--close", 3, 101, 1.0], ["not open"]),
+        (["--trip-gen", 9, 1.0], ["machine 9"]),
+        (["--load-step", 999, 1.0, 0.1, 0.0], ["bus 999"]),
+        (["--vref-step", 9, 1.0, 0.01], ["machine 9"]),
+    ],
+)
+def test_bad_study_events_exit_2(tmp_path, args, needles):
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    res = run("simulate", "kundur", *args, "--tf", 2, "--out", out_dir / "r.csv")
+    assert_bad_input(res, out_dir, *needles)
+
+
+def test_case_events_runs_the_case_s_own_disturbance(tmp_path):
+    """--case-events runs the events stored in a case file (as import-andes stores ANDES's
+    Toggle records), before the options' own; without it the run is flat.  A record of an
+    unknown kind is refused naming its source."""
+    from stabctl.dynamics.events import LineClose, LineTrip, as_record
+
+    case = load_case("kundur")
+    own = (as_record(LineTrip(3, 101, 1.0), "Toggle 1"), as_record(LineClose(3, 101, 1.5), "2"))
+    path = pstio.write_case_json(case.replace(events=own), tmp_path / "own.json")
+    res = run("simulate", path, "--case-events", "--vref-step", 1, 2.0, 0.01, "--json")
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert s["events"] == [
+        "line 3-101 (circuit 1) tripped at 1 s",
+        "line 3-101 (circuit 1) closed at 1.5 s",
+        "VREF of machine 1 stepped by +0.01 pu at 2 s",
+    ]
+    assert s["t_end_s"] == 6.0  # the first event + 5 s
+    assert json.loads(run("simulate", path, "--tf", 2, "--json").stdout)["events"] == []
+    bad = pstio.write_case_json(
+        case.replace(events=({"kind": "Reclose", "bus": 3, "source": "Alter 7"},)),
+        tmp_path / "bad.json",
+    )
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    res = run("simulate", bad, "--case-events", "--out", out_dir / "r.csv")
+    assert_bad_input(res, out_dir, "events[0] (Alter 7): unknown event kind 'Reclose'")

@@ -419,8 +419,7 @@ def test_ieee14_shaft5_fault_speeds_and_torsional_modes_match_andes():
     equal ANDES's within 1e-5, the electromechanical ones within 1 % (0.33 %: ANDES's
     IEEEST, as in the IEEE 14 test)."""
     path = andes.get_case("ieee14/ieee14_shaft5.json")
-    with pytest.warns(UserWarning, match="lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     assert len(case.shafts) == 1 and case.machines.bus[int(case.shafts.machine[0]) - 1] == 1
     sim = Simulator(case, q_limits=False)
     assert sim.model.initial_residual[0] < 1e-9  # measured 3.3e-14
@@ -450,8 +449,7 @@ def test_kundur_motor_energised_as_andes_does_it():
     1e-4 pu (measured 5.5e-6; in the first 0.1 s 2.5e-3 at 5 ms, 3.8e-4 at 1 ms: the
     step), the speeds within 1e-5 pu (2.5e-6)."""
     path = andes.get_case("kundur/kundur_motor.xlsx")
-    with pytest.warns(UserWarning, match="lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     assert len(case.motors) == 1 and case.motors.bus[0] == 7
     sim = Simulator(case, q_limits=False)
     drift, _ = flat_run(case, 10.0)
@@ -561,15 +559,14 @@ def test_n44_whole_case_imports_simulates_and_linearises():
 
 
 def andes_case_run(name, bus, t_end=5.0, conventions="andes", off=("Toggle",), off_exc=()):
-    """An ANDES case file imported by :func:`import_andes` (its own disturbance, Toggle,
-    left out) and ANDES's run of the same file (Toggle switched off): a 6-cycle fault at
-    ``bus`` through j1e-3 pu, 5 ms step in both, PV Q limits off in both (ANDES's
+    """An ANDES case file imported by :func:`import_andes` (its own disturbance kept as the
+    case's events, not run here) and ANDES's run of the same file (Toggle switched off):
+    a 6-cycle fault at ``bus`` through j1e-3 pu, 5 ms step in both, PV Q limits off in both (ANDES's
     default); ``off`` ANDES models switched off in ANDES's run, ``off_exc`` exciter types
     left out of stabctl's.  Returns (stabctl's simulator and result, ANDES's system, t,
     stabctl's speeds, ANDES's speeds), speeds in ANDES's machine order."""
     path = andes.get_case(name)
-    with pytest.warns(UserWarning, match=r"lacks .*(Toggle|Alter)"):
-        case = import_andes(path, conventions=conventions, on_unsupported="skip")
+    case = import_andes(path, conventions=conventions, on_unsupported="skip")
     e = case.exciters
     case = case.replace(exciters=e.select(~np.isin(e.type, off_exc)))
     t_clear = 1.0 + 6 / 60
@@ -712,7 +709,8 @@ def test_ieee14_timeseries_schedule_is_not_read_by_andes_s_run():
     case's own Fault, off), and the fault's speeds follow ANDES's within 1e-4 pu."""
     path = andes.get_case("ieee14/ieee14_timeseries.xlsx")
     got = read_andes_case(path, on_unsupported="skip")
-    assert sorted(got.left_out) == ["Fault (1)", "TimeSeries (1)"]
+    assert sorted(got.left_out) == ["TimeSeries (1)"]
+    assert "Fault 1 (u = 0: not run, as in ANDES)" in got.ignored
     fault = AndesFault(9, 1.0, 1.1, x=1e-3)
     (t, wa), (_, w_off) = (
         andes_speeds(andes_system(path, fault=fault, off=off), 5.0, STEP)
@@ -860,7 +858,7 @@ def test_ieee14_hygov4_power_and_speeds_match_andes(step):
     1.5e-7).  Less load: the gate cannot close (its closing speed U_C is 0 in this file),
     so the power stays where it was in both tools.  A 10 s flat run moves nothing."""
     path = andes.get_case("ieee14/ieee14_hygov4.xlsx")
-    with pytest.warns(UserWarning, match=r"lacks .*Alter"):
+    with pytest.warns(UserWarning, match=r"Alter LoadRamp_1: alters PQ PQ_7 Ppf"):
         case = import_andes(path, conventions="andes", on_unsupported="skip")
     assert list(case.governors.type).count(8) == 1
     sim = Simulator(case, q_limits=False)
@@ -899,8 +897,7 @@ def test_ieee14_ieeevc2_load_compensation_starts_flat_and_sets_its_reference():
     have been initialised, "Initialization FAILED" with exactly these residuals on their
     input equations, so there is no like-for-like run.)"""
     path = andes.get_case("ieee14/ieee14_ieeevc2.xlsx")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, conventions="andes", on_unsupported="skip")
+    case = import_andes(path, conventions="andes", on_unsupported="skip")
     e = case.exciters
     comp = (e.Rcomp != 0) | (e.Xcomp != 0)
     assert list(e.Rcomp[comp]) == [0.05, 0.05] and list(e.Xcomp[comp]) == [0.1, 0.1]
@@ -1032,8 +1029,7 @@ def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections():
     from stabctl.network.powerflow import solve_powerflow
 
     path = andes.get_case("kundur/kundur_vsc.xlsx")
-    with pytest.warns(UserWarning, match="lacks .*Toggle"):
-        imported = read_andes_case(path, on_unsupported="skip")
+    imported = read_andes_case(path, on_unsupported="skip")
     case = imported.case
     np.testing.assert_allclose(
         case.injections.matrix(), [[1, 0.10088354, 0.01], [6, -0.1, 0]], atol=1e-8
@@ -1055,8 +1051,7 @@ def test_ei33_with_an_ieeet1_without_ta_starts_at_rest_and_stays_flat():
     rest (initial residual below 1e-8) and a 10 s run moves nothing by more than 1e-8
     (measured 5.8e-12): there is no ANDES run to compare with."""
     path = andes.get_case("ei/EI_33.xlsx")
-    with pytest.warns(UserWarning, match="lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     e = case.exciters
     assert np.flatnonzero((e.type == 1) & (e.TA == 0)).tolist() == [35]
     sim = Simulator(case, q_limits=False)
@@ -1078,8 +1073,7 @@ def test_ieee14_island_runs_with_its_dead_islands_left_out(tmp_path):
     from stabctl.network.topology import without_dead_islands
 
     path = andes.get_case("ieee14/ieee14_island.xlsx")
-    with pytest.warns(UserWarning, match="lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     with pytest.raises(PowerFlowError, match=r"bus\(es\) 8, 14 have no path to a swing bus"):
         solve_powerflow(case, q_limits=False)
     live, lines = without_dead_islands(case)
@@ -1196,8 +1190,7 @@ def test_pjm5bus_tg2_governors_follow_andes_through_its_own_line_trip():
     pu in 8 s; with the deadband on (±1e-4 pu) it acts and stabctl's TG2 (no deadband)
     follows it within 2e-5 pu of speed over a 2.4e-3 pu swing."""
     path = andes.get_case("5bus/pjm5bus.json")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     assert list(case.governors.type) == [7] * 4 and case.governors.invR[0] == 20
     drift, _ = flat_run(case)
     assert drift < 1e-8
@@ -1226,8 +1219,7 @@ def test_import_andes_maps_psse_models_as_the_dyr_reader():
     raw, dyr = CASES / "kundur" / "kundur.raw", CASES / "kundur" / "kundur_full.dyr"
     with pytest.warns(UserWarning, match="TOGGLE"):
         ours = load_psse(raw, dyr, on_unsupported="skip", conventions="andes")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle \(1\)"):
-        theirs = import_andes(raw, dyr=dyr, on_unsupported="skip")
+    theirs = import_andes(raw, dyr=dyr, on_unsupported="skip")
 
     def by_bus(case, table):
         """The table's matrix, rows ordered by machine bus, machine numbers (which follow
@@ -1290,7 +1282,7 @@ def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
     on_unsupported="skip" its static generator cannot be left out."""
     with pytest.raises(InputError) as err:
         import_andes(with_lacking_models(tmp_path))
-    for name in ("Motor3 (1)", "C (1)", "Toggle (2)"):
+    for name in ("Motor3 (1)", "C (1)"):
         assert name in str(err.value)
     assert "GENROU (" not in str(err.value)  # the machines are read
     data = json.loads(Path(andes.get_case("ieee14/ieee14_regcp1_nopll.json")).read_text())
@@ -1323,7 +1315,7 @@ def test_import_andes_cli_writes_ieee39_and_refuses_what_it_lacks(tmp_path):
     )
     assert res.exit_code == 0, res.output
     summary = json.loads(res.stdout)
-    assert summary["left_out"] == ["Toggle (1)"]
+    assert summary["left_out"] == []  # its Toggle is off (u = 0): ignored, as by ANDES
     assert summary["powerflow_vmag_diff_pu"] < 1e-6
     case = load_case(out)
     assert (
@@ -1349,9 +1341,9 @@ CONVERTER_CASES = {"PVD1": "ieee14/ieee14_pvd1.xlsx", "ESD1": "ieee14/ieee14_esd
 
 
 def converter_case(model, **changes):
-    """The imported case (ANDES's Toggle left out), converter columns changed as given."""
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(andes.get_case(CONVERTER_CASES[model]), on_unsupported="skip")
+    """The imported case (ANDES's Toggles kept as its events), converter columns changed as
+    given."""
+    case = import_andes(andes.get_case(CONVERTER_CASES[model]), on_unsupported="skip")
     n = len(case.converters)
     cols = {k: np.full(n, float(v)) for k, v in changes.items()}
     return case.replace(converters=case.converters.replace(**cols)) if cols else case
@@ -1452,8 +1444,7 @@ def test_ieee14_dg_protection_trips_and_restores_the_pvd1_as_andes():
     frequency back above 59.9 Hz at 10.43 s ends the trip and the device returns.  5 ms
     step in both, 12 s."""
     path = andes.get_case("ieee14/ieee14_dgprct1.xlsx")
-    with pytest.warns(UserWarning, match="lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     assert list(case.converters.relay) == [0, 1] + [0] * 8
     ss = andes_system(path)
     pq = list(ss.PQ.idx.v).index("PQ_12")
@@ -1562,7 +1553,7 @@ def test_import_andes_cli_writes_converters_to_the_json_case(tmp_path):
     assert res.exit_code == 0, res.output
     summary = json.loads(res.stdout)
     assert summary["converters"] == 10 and summary["machines"] == 5
-    assert summary["left_out"] == ["Toggle (2)"]
+    assert summary["left_out"] == []  # its two Toggles: the case's own line trip, reclose
     case = load_case(out)
     assert case.equals(converter_case("ESD1"))
     conv = case.converters
@@ -1614,8 +1605,7 @@ def test_kundur_esst3a_regulator_lag_matches_andes_at_a_step_its_inner_loop_allo
     measured 2.9e-6) and field voltages within 1e-2 pu after
     1.5 s (measured 5.3e-3)."""
     path = andes.get_case("kundur/kundur_esst3a.xlsx")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, conventions="andes", on_unsupported="skip")
+    case = import_andes(path, conventions="andes", on_unsupported="skip")
     assert set(case.exciters.TA_st3a) == {0.1}
     sim = Simulator(case, q_limits=False)
     fault = [Fault(7, 1.0, 1.1, x=1e-3)]
@@ -1640,8 +1630,7 @@ def test_kundur_esst3a_runs_at_5_ms_with_the_trapezoid():
     trapezoid at the same 5 ms steps (its step held, `andes_system` fixed_step; measured
     1.3e-8)."""
     path = andes.get_case("kundur/kundur_esst3a.xlsx")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, conventions="andes", on_unsupported="skip")
+    case = import_andes(path, conventions="andes", on_unsupported="skip")
     sim = Simulator(case, q_limits=False)
     fault = [Fault(7, 1.0, 1.1, x=1e-3)]
     ref = sim.run(fault, 5.0, h=4e-5)
@@ -1814,8 +1803,7 @@ def regca1_alone(tmp_path_factory):
     """ieee14_solar with the REGCA1 alone (REECA1, REPCA1 removed): constant current
     commands, and the imported case."""
     path = solar_case_file(tmp_path_factory.mktemp("regca1"), ("REECA1", "REPCA1"))
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     return path, case
 
 
@@ -2031,8 +2019,7 @@ def reeca1_case(tmp_path_factory):
     """ieee14_solar without its plant control REPCA1 (REECA1's references constant) and
     the imported case."""
     path = solar_case_file(tmp_path_factory.mktemp("reeca1"), ("REPCA1",))
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     return path, case
 
 
@@ -2112,8 +2099,7 @@ def solar_case():
     """ANDES's ieee14_solar as it is (REGCA1 + REECA1 + REPCA1), imported (its Toggle
     records left to the run)."""
     path = andes.get_case("ieee14/ieee14_solar.xlsx")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     return path, case
 
 
@@ -2157,8 +2143,7 @@ def test_ieee14_solar_plant_frequency_path_matches_andes(tmp_path, solar_case):
     8.5e-5 and 7.3e-6; after 2 s 3.0e-5 at 5 ms."""
     edits = dict(Fflag=1.0, PLflag=1.0, fdbd1=-2e-4, fdbd2=2e-4, Ddn=20.0, Dup=20.0)
     path = solar_case_file(tmp_path, (), REPCA1=edits)
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     assert (case.converters.pc_Fflag[0], case.converters.pc_Ddn[0]) == (1.0, 20.0)
     gaps = {}
     for h, t_end in ((STEP, 3.0), (STEP / 4, 2.0)):
@@ -2198,8 +2183,7 @@ def reecb1_case():
     """ANDES's ieee14_reecb1.json (REGCA1 + REECB1 + REPCA1 on the bus-8 generator),
     imported (its Toggle and Fault records left to the run)."""
     path = andes.get_case("ieee14/ieee14_reecb1.json")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     return path, case
 
 
@@ -2246,8 +2230,7 @@ def test_ieee14_regcp1_without_pll_is_a_regca1_and_matches_andes():
     REPCA1), it starts flat and follows ANDES through a 6-cycle fault at bus 9 through
     j0.3 pu (bus 8 at 0.62 pu)."""
     path = andes.get_case("ieee14/ieee14_regcp1_nopll.json")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     assert (case.converters.type[0], case.converters.reec[0]) == (3, 1)
     drift, _ = flat_run(case)
     assert drift < 1e-8  # measured 7.3e-14
@@ -2261,8 +2244,7 @@ def regcp1_case():
     """ANDES's ieee14_regcp1.xlsx: the bus-8 generator a REGCP1 whose angle comes from a
     PLL1, with REECA1 and REPCA1."""
     path = andes.get_case("ieee14/ieee14_regcp1.xlsx")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     return path, case
 
 
@@ -2306,8 +2288,7 @@ def test_fault_through_an_impedance_keeps_the_bus_shunt_as_andes():
     (the speeds 2.2e-4 pu from ANDES: a third of the swing).  A bolted fault replaces it
     under both (the shunt is immaterial at 0 V)."""
     path = andes.get_case("ieee14/ieee14.json")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     ss = andes_system(path, fault=AndesFault(9, 1.0, 1.1, x=2.0), off=("Toggle",))
     t, wa = andes_speeds(ss, 1.5, STEP)
     i = np.argmin(np.abs(t - 1.005))
@@ -2345,8 +2326,7 @@ def wind_cases():
     """Each wind case imported, its own disturbance records (Toggle, Fault) left out."""
     cases = {}
     for name in WIND_CASES:
-        with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-            cases[name] = import_andes(andes.get_case(name), on_unsupported="skip")
+        cases[name] = import_andes(andes.get_case(name), on_unsupported="skip")
     return cases
 
 
@@ -2422,8 +2402,7 @@ def test_kundur_wind_turbine_controls_shape_the_response_and_match_andes_in_the_
     run's P and Q agree within 2e-3 pu (1.3e-3, 1.8e-3: the 5 ms gaps are the step)."""
     name = "kundur/kundur_wtdta1.xlsx"
     path = andes.get_case(name)
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     dw, dP, dQ, run = fault_gaps(path, case, 7, 6, STEP / 4, 5.0)
     print(f"\nkundur_wtdta1 at 1.25 ms: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}")
     assert dw < 3e-5 and dP < 2e-3 and dQ < 3e-3
@@ -2564,8 +2543,7 @@ def test_ieee14_line_trip_drops_the_line_charging_as_andes():
     ANDES's voltage under the ieee conventions (the breakers de-energise the line);
     pstess keeps PST's charging (y_switch.m), 5e-3 pu higher."""
     path = andes.get_case("ieee14/ieee14_linetrip.xlsx")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, on_unsupported="skip")
+    case = import_andes(path, on_unsupported="skip")
     ss = andes_system(path)
     andes_speeds(ss, 1.01, 1e-3)
     t = np.asarray(ss.dae.ts.t)
@@ -2586,8 +2564,7 @@ def test_ieee14_esac1a_field_voltage_matches_andes_where_andes_models_it():
     ANDES's field voltage (4.4 pu peak) until ANDES's goes below 0 (to -0.021 pu, through
     the diodes stabctl's V_E limit models), and 0 there."""
     path = andes.get_case("ieee14/ieee14_esac1a.xlsx")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, conventions="andes", on_unsupported="skip")
+    case = import_andes(path, conventions="andes", on_unsupported="skip")
     e = case.exciters
     ac1a = e.type == 9
     assert ac1a.sum() == 1 and e.KF[ac1a] == 0.1 and e.Vrmax[ac1a] == 7.3  # ANDES's defaults
@@ -2627,8 +2604,7 @@ def test_ieee14_ac8b_field_voltage_and_speeds_match_andes():
     docs/pst_models.md 2.7): flat 10 s; after a 3-cycle fault at bus 9, V_R rides both
     limits and the field voltage and speeds follow ANDES's ``ac8b.py``."""
     path = andes.get_case("ieee14/ieee14_ac8b.xlsx")
-    with pytest.warns(UserWarning, match=r"lacks .*Toggle"):
-        case = import_andes(path, conventions="andes", on_unsupported="skip")
+    case = import_andes(path, conventions="andes", on_unsupported="skip")
     assert np.sum(case.exciters.type == 10) == 1
     sim = Simulator(case, q_limits=False)
     assert np.max(np.abs(sim.run([], 10.0, h=STEP).speed - 1)) < 1e-10
@@ -2855,3 +2831,81 @@ def test_import_andes_reports_its_power_flow_against_the_raw_solution(tmp_path):
     gap = summary["powerflow_against_raw"]
     assert gap["vmag_bus"] == 3 and gap["vmag_diff_pu"] == pytest.approx(0.033, abs=1e-3)
     assert "differs from the RAW file's own solution by up to 3.3e-02 pu (bus 3)" in res.stderr
+
+
+# -- the case's own disturbance (ANDES's Toggle, Fault, Alter) ------------------------------
+
+
+def own_events_gap(name, t_end, tripped=()):
+    """Both tools running the ANDES file's own disturbance: stabctl the imported case's
+    events (`from_case`), ANDES its records; 5 ms step, PV Q limits off (ANDES's default).
+    Returns (largest speed gap, largest ANDES swing) over the machines not in ``tripped``
+    (ANDES's machine rows: a tripped machine's speed stands still in ANDES, u = 0, and
+    runs away in stabctl, which no longer reports it)."""
+    from stabctl.dynamics.events import from_case
+
+    path = andes.get_case(name)
+    case = import_andes(path, on_unsupported="skip")
+    res = Simulator(case, q_limits=False).run(from_case(case), t_end, h=STEP)
+    ss = andes_system(path)
+    t, wa = andes_speeds(ss, t_end, STEP)
+    keep = [k for k in range(wa.shape[1]) if k not in tripped]
+    w = speeds_on(t, res, case, ss)
+    return np.max(np.abs(w - wa)[:, keep]), np.max(np.abs(wa - 1))
+
+
+@pytest.mark.parametrize(
+    "name, t_end, tripped, measured",
+    [
+        ("ieee14/ieee14_linetrip.xlsx", 5.0, (), 1.8e-6),  # Line_1 out at 1 s, in at 1.1 s
+        ("kundur/kundur_full.xlsx", 5.0, (), 1.3e-6),  # Line_8 (8-9, circuit 2) out at 2 s
+        ("ieee14/ieee14_gentrip.xlsx", 3.0, (1,), 6.3e-7),  # GENROU_2 off at 1 s
+    ],
+)
+def test_own_toggles_run_as_andes_runs_them(name, t_end, tripped, measured):
+    gap, swing = own_events_gap(name, t_end, tripped)
+    print(f"\n{name} own disturbance vs ANDES: speeds {gap:.2e} pu (swing {swing:.2e})")
+    assert swing > 1e-3
+    assert gap < 1e-5  # measured: see the parameters
+
+
+def test_import_andes_reads_toggle_fault_alter_as_the_case_s_events(tmp_path):
+    """Each ANDES disturbance record becomes an event of the case, named by its source;
+    one off (u = 0) is ignored as ANDES ignores it; one stabctl cannot map is refused by
+    name with the attribute.  TGOV1's paux0 enters its order as (paux - dw) / R: +0.001
+    at R = 0.05 is a PREF step of 0.02 pu, undone by the '=' 0 at 1.2 s.  The events go
+    through the JSON case file unchanged."""
+    from stabctl.dynamics.events import from_case
+    from stabctl.io.pst import read_case_json, write_case_json
+
+    def imported(name):
+        return read_andes_case(andes.get_case(name), on_unsupported="skip")
+
+    got = imported("ieee14/ieee14_linetrip.xlsx")
+    assert got.case.events == (
+        {"kind": "LineTrip", "from_bus": 1, "to_bus": 2, "t": 1.0, "circuit": 1}
+        | {"source": "Toggle Toggler_1"},
+        {"kind": "LineClose", "from_bus": 1, "to_bus": 2, "t": 1.1, "circuit": 1}
+        | {"source": "Toggle Toggler_2"},
+    )
+    path = write_case_json(got.case, tmp_path / "linetrip.json")
+    assert read_case_json(path).events == got.case.events
+    alter = from_case(imported("ieee14/ieee14_alter.xlsx").case)
+    assert [(type(e).__name__, e.machine, e.t) for e in alter] == [
+        ("PrefStep", 5, 1.0),
+        ("PrefStep", 5, 1.2),
+    ]
+    assert alter[0].dP == pytest.approx(0.02) and alter[1].dP == pytest.approx(-0.02)
+    fault = imported("ieee14/ieee14_fault.xlsx").case.events  # xf left empty: ANDES's 1e-4
+    assert [(e["kind"], e["bus"], e["clear_near"], e["x"]) for e in fault] == [
+        ("Fault", 9, 1.1, 1e-4)
+    ]
+    shed = from_case(imported("ieee14/ieee14_dgprct1.xlsx").case)  # PQ_12 off at the start
+    assert [(e.bus, e.t, e.P) for e in shed] == [(14, 1.0, 0.3), (14, 10.0, -0.3)]
+    assert from_case(imported("kundur/kundur_motor.xlsx").case)[0].on
+    wt3n = imported("ieee14/ieee14_wt3n.xlsx")
+    assert [e["kind"] for e in wt3n.case.events] == ["LineTrip"]
+    assert "Toggle Toggler_2 (u = 0: not run, as in ANDES)" in wt3n.ignored
+    with pytest.warns(UserWarning, match=r"Alter LoadRamp_1: alters PQ PQ_7 Ppf, which"):
+        hygov4 = imported("ieee14/ieee14_hygov4.xlsx")
+    assert hygov4.case.events == () and any("Alter LoadRamp_1" in s for s in hygov4.left_out)

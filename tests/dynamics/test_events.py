@@ -1,0 +1,133 @@
+"""The events of a PSS/E study (`stabctl.dynamics.events`): a line closed again after a trip
+or a fault's clearing, and steps of an exciter's VREF and of a governor's PREF, against
+closed forms.
+
+* A reclosed line returns the network to its pre-trip configuration: the last stage's
+  configuration and reduced matrices are the initial ones, and a run settles back at the
+  initial bus voltages.
+* Kundur's exciters (PST's simple exciter, type 0: K_A / (1 + s T_A) on V_ref - V_t) settle
+  with delta E_fd = K_A (delta V_ref - delta V_t) after a VREF step; the governors (PST's tg:
+  P_ref + (1 - omega) / R through lags of unit gain) settle on the droop line delta P_m =
+  delta P_ref - delta omega / R after a PREF step or a load step, at one common speed.
+  Kundur's PSS washes out in T_w = 10 s: 120 s runs settle within 1e-6 pu.
+"""
+
+import numpy as np
+import pytest
+
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import (
+    Fault,
+    LineClose,
+    LineTrip,
+    LoadStep,
+    PrefStep,
+    VrefStep,
+    stages,
+)
+from stabctl.dynamics.model import StageConfig
+from stabctl.errors import CaseError, InputError
+from stabctl.io import load_case
+from stabctl.io.psse import load_psse
+from tests.dynamics.test_infinite_bus import DYR, RAW
+
+T_SETTLE = 120.0  # s: Kundur's PSS washout (10 s) decays to 6e-6 of its input
+KA, INV_R = 200.0, 25.0  # Kundur's exc_con column 4 and tg_con column 4 (1 / R)
+
+
+@pytest.fixture(scope="module")
+def kundur():
+    return Simulator(load_case("kundur"))
+
+
+@pytest.fixture(scope="module")
+def flat(kundur):
+    return kundur.run([], t_end=T_SETTLE)
+
+
+@pytest.mark.parametrize(
+    "opening",
+    [LineTrip(3, 101, 1.0), Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.15, far_bus=101)],
+    ids=["trip", "fault"],
+)
+def test_a_reclosed_line_restores_the_initial_network(kundur, opening):
+    events = [opening, LineClose(101, 3, 1.5)]
+    starts, configs = stages(kundur.case, events, 3.0, kundur.op.V)
+    assert configs[0] == StageConfig() and configs[-1] == StageConfig()
+    assert configs[-2] != StageConfig()  # the line was out
+    assert starts[-1] == 1.5
+    model = kundur.model
+    first = model.network(configs[0])
+    last = model._reduce(configs[-1])  # built afresh, not the cached first stage
+    for name in ("Y11", "Y12", "Y22", "R"):
+        assert np.array_equal(getattr(first, name), getattr(last, name)), name
+
+
+def test_a_trip_and_reclose_settles_back_at_the_initial_voltages(kundur, flat):
+    res = kundur.run([LineTrip(3, 101, 1.0), LineClose(3, 101, 1.2)], t_end=T_SETTLE)
+    assert np.abs(res.vmag[int(1.1 / (res.t[1] - res.t[0]))] - flat.vmag[0]).max() > 1e-3
+    assert np.abs(res.vmag[-1] - flat.vmag[-1]).max() < 1e-6
+    assert np.abs(res.speed[-1] - 1.0).max() < 1e-6
+
+
+def test_vref_step_settles_at_the_exciter_gain(kundur, flat):
+    dv = 0.01
+    res = kundur.run([VrefStep(1, 1.0, dv)], t_end=T_SETTLE)
+    d_efd = res.efd[-1, 0] - flat.efd[-1, 0]
+    d_vt = res.vmag[-1, res.bus(1)] - flat.vmag[-1, res.bus(1)]
+    assert d_efd > 0.01  # the step moved the field (0.017 pu)
+    assert d_efd == pytest.approx(KA * (dv - d_vt), rel=2e-3)
+    # two half steps are one step
+    halves = kundur.run([VrefStep(1, 1.0, dv / 2), VrefStep(1, 1.0, dv / 2)], t_end=3.0)
+    whole = kundur.run([VrefStep(1, 1.0, dv)], t_end=3.0)
+    assert np.abs(halves.efd - whole.efd).max() < 1e-12
+
+
+@pytest.mark.parametrize(
+    "event, dpref",
+    [(PrefStep(1, 1.0, 0.05), [0.05, 0, 0, 0]), (LoadStep(3, 1.0, 0.5), [0, 0, 0, 0])],
+    ids=["pref", "load"],
+)
+def test_governors_settle_on_their_droop_line(kundur, flat, event, dpref):
+    res = kundur.run([event], t_end=T_SETTLE)
+    dw = res.speed[-1] - flat.speed[-1]
+    assert np.ptp(dw) < 1e-8  # one speed
+    assert abs(dw[0]) > 4e-4  # about dP / (4 / R) = 5e-4 pu
+    assert np.sign(dw[0]) == (1 if isinstance(event, PrefStep) else -1)
+    d_pm = res.pmech[-1] - flat.pmech[-1]
+    np.testing.assert_allclose(d_pm, np.array(dpref) - dw * INV_R, atol=1e-6)
+
+
+def test_reference_steps_need_the_controller():
+    sim = Simulator(load_psse(RAW, DYR))  # GENCLS machines, no exciter or governor
+    with pytest.raises(CaseError, match=r"machine 1 has no exciter"):
+        sim.run([VrefStep(1, 0.5, 0.01)], t_end=1.0)
+    with pytest.raises(CaseError, match=r"machine 1 has no governor"):
+        sim.run([PrefStep(1, 0.5, 0.01)], t_end=1.0)
+
+
+@pytest.mark.parametrize(
+    "events, needle",
+    [
+        ([LineClose(3, 101, 1.0)], "closes it while it is not open"),
+        ([LineTrip(3, 101, 1.0), LineClose(3, 101, 1.0)], "at or before"),
+        (
+            [
+                Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.3, far_bus=101),
+                LineClose(3, 101, 1.2),
+            ],
+            "at or before",
+        ),
+        (
+            [LineTrip(3, 101, 1.0), LineClose(3, 101, 1.5), LineClose(3, 101, 2.0)],
+            "closes it while it is not open",
+        ),
+        ([LineTrip(3, 101, 1.0), LineClose(3, 101, 1.5), LineTrip(3, 101, 2.0)], None),
+    ],
+)
+def test_line_switchings_must_alternate(kundur, events, needle):
+    if needle is None:  # open, close, open again: fine
+        kundur.run(events, t_end=2.5)
+        return
+    with pytest.raises(InputError, match=needle):
+        kundur.run(events, t_end=2.5)
