@@ -32,14 +32,16 @@ from stabctl.models import pss as pss_
 from stabctl.models import shafts as shaft
 from stabctl.models import shunts as shunt
 from stabctl.network import switched_shunts as sws
-from stabctl.network.solution import L as LOAD
 from stabctl.network.solution import (
+    NEWTON_MAX_ITER,
     NonConformingLoads,
     ReducedNetwork,
     kept_loads,
+    newton_step,
     reduce_network,
     solve_nc,
 )
+from stabctl.network.solution import L as LOAD
 from stabctl.network.topology import OPEN_X, bus_islands, machine_islands
 
 FAULT_B = 1e7  # PST's bolted-fault shunt susceptance (1/1e-7)
@@ -820,21 +822,41 @@ def _drawn_currents(dev, V_nc, loads, tol):
 
 
 @kernel
-def _converter_fixed_point(dev, Y21, Y22, Z22, psi, V_nc, loads, held, it):
+def _converter_fixed_point(dev, Y21, Y22, Z22, psi, V_nc, loads, held, it, V_start):
     """The network solution with the converters' drawn currents when one depends on its
     bus voltage (REGCA1's LVG and HVG, `conv.drawn_current`): solved with their tangent
-    at the starting voltages (`_drawn_currents`), which is exact while no |V| crosses a
-    breakpoint of their piecewise-linear limits; otherwise the tangent is taken again at
-    the solved voltages and the network solved again, until the currents agree within
-    CURRENT_TOL.  Returns the total load-iteration count, -1 without convergence (either
-    loop)."""
+    at the starting voltages (`_drawn_currents`; it the iteration count of that solution,
+    -1 if it failed), which is exact while no |V| crosses a breakpoint of their
+    piecewise-linear limits; otherwise the tangent is taken again at the solved voltages
+    and the network solved again, until the currents agree within CURRENT_TOL.  If that
+    fails, `_converter_newton` from the starting voltages V_start.  Returns the total
+    load-iteration count, -1 without convergence."""
     for _ in range(CURRENT_ITERATIONS):
+        if it < 0:
+            break
         if _drawn_currents(dev, V_nc, loads, CURRENT_TOL) <= CURRENT_TOL:
             return it
         more = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
-        if more < 0:
-            return -1
-        it += more
+        it = it + more if more >= 0 else -1
+    assign(V_nc, V_start)
+    return _converter_newton(dev, Y21, Y22, psi, V_nc, loads, held)
+
+
+@kernel
+def _converter_newton(dev, Y21, Y22, psi, V_nc, loads, held):
+    """Newton's method on the kept-bus equations with the converters' currents as they
+    are, piecewise linear in |V|: their tangent taken again at every iterate, as ANDES's
+    Newton iteration reads its Piecewise blocks (LVG, HVG) at every iterate.  Needed where
+    the tangent at the starting voltages has no solution at all: a fault beside a REGCA1
+    (kundur_reg, bus 8: the pre-fault LVG of 1 keeps the 7 pu current source at full
+    active current, and behind the bus's 0.045 pu Thevenin reactance, 0.22 pu of
+    Thevenin voltage, no bus voltage carries it, while at the voltage that solves the
+    equations LVG is 0).  Returns the iteration count, -1 without convergence within
+    NEWTON_MAX_ITER."""
+    for it in range(NEWTON_MAX_ITER):
+        _drawn_currents(dev, V_nc, loads, -1.0)
+        if newton_step(Y21, Y22, psi, V_nc, loads, held):
+            return it
     return -1
 
 
@@ -915,23 +937,22 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     if ni or nmo or nsw:  # the converters' tangent at the starting voltages, the motors',
         # the switched shunts' currents
         _drawn_currents(dev, V_nc, loads, -1.0)
+    V_start = V_nc.copy() if v_dep else V_nc
     it = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
+    if v_dep:  # currents that depend on the voltage (REGCA1): repeat until they agree
+        it = _converter_fixed_point(dev, Y21, Y22, Z22, psi, V_nc, loads, held, it, V_start)
     if it < 0:
         return -1
-    if v_dep:  # currents that depend on the voltage (REGCA1): repeat until they agree
-        it = _converter_fixed_point(dev, Y21, Y22, Z22, psi, V_nc, loads, held, it)
-        if it < 0:
-            return -1
     if nsw and _switched(p.SWP, xsw, V_nc, dxsw):  # a shunt stepped: the network again
         _drawn_currents(dev, V_nc, loads, -1.0)
+        if v_dep:
+            assign(V_start, V_nc)
         more = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
+        if v_dep:
+            more = _converter_fixed_point(dev, Y21, Y22, Z22, psi, V_nc, loads, held, more, V_start)
         if more < 0:
             return -1
         it += more
-        if v_dep:
-            it = _converter_fixed_point(dev, Y21, Y22, Z22, psi, V_nc, loads, held, it)
-            if it < 0:
-                return -1
     matvec(Y11, psi, cur)
     I_kept = np.empty(nm, np.complex128)
     matvec(Y12, V_nc, I_kept)

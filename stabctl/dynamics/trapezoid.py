@@ -66,6 +66,8 @@ HALVINGS = 3
 #: after this many iterations a state held on its limit stays held for the step (ANDES's
 #: AntiWindup ``niter_lock``, against chattering)
 LOCK = 4
+#: `_Step`'s mark of a step whose network/load equations had no solution at an iterate
+NO_NETWORK = -2
 #: forward-difference step of the Jacobian, relative to max(1, |x|) (as the linearisation)
 REL_STEP = 1e-7
 
@@ -144,7 +146,10 @@ class _Step:
 
     def __call__(self, x, f_x, stage, h) -> tuple[np.ndarray, int]:
         """(x_k+1, -1) from x_k = x (derivatives f_x), or (last iterate, worst state) when
-        Newton did not converge in MAX_ITER iterations."""
+        Newton did not converge in MAX_ITER iterations, or (iterate, NO_NETWORK) when the
+        network/load equations have no solution at an iterate (an iterate far from the
+        step's solution: ieee14_wt3 after clearing a bus-8 fault through j0.05 pu, the
+        first iterate's REGCA1 Ip at -16 pu, which a half step does not reach)."""
         if self.key != _key(stage, h):
             self.factorise(x, f_x, stage, h)
         act, rest, y = self.act, self.rest, x + h * f_x
@@ -153,7 +158,10 @@ class _Step:
         last, slow = np.zeros(STALL), False
         for it in range(MAX_ITER):
             y_in = y.copy()
-            f_y = self.f(y, stage)
+            try:
+                f_y = self.f(y, stage)
+            except SimulationError:  # an iterate off the solution: the halving retries
+                return y, NO_NETWORK
             pegged[act] |= y[act] != y_in[act]
             r = y - x - 0.5 * h * (f_x + f_y)
             now = (pegged & (f_y == 0.0))[act]
@@ -176,10 +184,10 @@ class _Step:
         """The step, or where Newton does not converge, two steps of h/2 (each again, down
         to h / 2**HALVINGS), as ANDES shrinks its step; the grid stays."""
         y, bad = self(x, f_x, stage, h)
-        if bad < 0 or depth == HALVINGS:
+        if bad == -1 or depth == HALVINGS:
             return y, bad
         y, bad = self.halving(x, f_x, stage, 0.5 * h, depth + 1)
-        if bad >= 0:
+        if bad != -1:
             return y, bad
         return self.halving(y, self.f(y, stage), stage, 0.5 * h, depth + 1)
 
@@ -243,6 +251,9 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
         finally:
             f.lock(False)
+        if bad == NO_NETWORK:
+            why = "the network/load equations did not converge"
+            _fail(sim, grid, rec, k, wall, limit, why, SimulationError)
         why = "Newton's iteration did not converge"
         if bad < 0:
             bad = _unhealthy_state(x, nm)

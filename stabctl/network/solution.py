@@ -364,17 +364,17 @@ def _lapack_solve(A, b):
 
 
 @kernel
-def _newton_nc(b, Y22, V, loads, low, vmin):
+def _newton_nc(b, Y22, V, loads, low, vmin, max_iter=NEWTON_MAX_ITER):
     """Newton's method for the kept-bus voltages (rectangular coordinates, PST nc_load);
     vmin keeps the smallest magnitude each bus reached.  Converged when the mismatch is
-    below NEWTON_TOL (pu), within NEWTON_MAX_ITER iterations (else -1)."""
+    below NEWTON_TOL (pu), within max_iter iterations (else -1)."""
     S_P, I0, Y_low, S_extra = loads[L.S_P], loads[L.I0], loads[L.Y_low], loads[L.S_extra]
     I_dev, G_dev, G_fix = loads[L.I_dev], loads[L.G_dev], loads[L.G_fix]
     n = V.size
     J = np.empty((2 * n, 2 * n))
     rhs = np.empty(2 * n)
     F = np.empty(n, np.complex128)
-    for it in range(NEWTON_MAX_ITER):
+    for it in range(max_iter):
         if _load_mismatch(b, Y22, V, loads, F, low) < NEWTON_TOL:
             return it
         # Wirtinger derivatives: d(load current) = A dV + B conj(dV), A, B diagonal
@@ -412,3 +412,16 @@ def _newton_nc(b, Y22, V, loads, low, vmin):
             V[i] += d[i] + 1j * d[n + i]
             vmin[i] = min(vmin[i], abs(V[i]))
     return -1
+
+
+@kernel
+def newton_step(Y21, Y22, psi, V, loads, held):
+    """One step of Newton's method on the kept-bus equations of `solve_nc` (same arguments;
+    V updated in place), for a caller that changes the loads' rows between steps: True if
+    V already solves them (mismatch below NEWTON_TOL, V left as it is), else False (V
+    moved by one step, or left as it is at a singular Jacobian)."""
+    if V.size == 0:
+        return True
+    b = np.empty(V.size, np.complex128)
+    matvec(Y21, psi, b)
+    return _newton_nc(b, Y22, V, loads, held, np.abs(V), 1) == 0
