@@ -463,8 +463,11 @@ class MachineTable(Table):
         stabctl's column 24 ``speed_effects`` for subtransient machines: 1 (PST ``mac_sub``)
         the stator voltage is proportional to rotor speed and the torque is Pm/omega; 0 speed
         1 in both (ANDES's GENROU/GENSAL, which have no speed effects; docs/pst_models.md
-        1.5-1.6), and column 25 ``psse_sat``: 1 PSS/E's GENROU saturation of the air-gap flux
-        through S(1.0), S(1.2) as ANDES solves it, 0 none (PST ``mac_sub``; docs 1.6a).
+        1.5-1.6), column 25 ``psse_sat``: PSS/E's saturation through S(1.0), S(1.2), 1
+        GENROU's of the air-gap flux as ANDES solves it, 2 GENROE's, 3 GENSAL's (of E'q,
+        d axis), 4 GENSAE's, 0 none (PST ``mac_sub``; docs 1.6a), and column 29
+        ``psse_swing``: 1 PSS/E's swing equation (P_m - D (omega - 1)) / omega - T_e
+        (docs 1.6b), 0 PST's.
         Columns (declared in :data:`stabctl.models.machines.MACHINE`; reactances on the
         machine base):
 
@@ -478,7 +481,7 @@ class MachineTable(Table):
         Validation: unique positive integer machine numbers, mva > 0, H > 0 (or 0 for a
         classical machine with x'd > 0), reactances and
         ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), x_d >= x'd >= x"d (where given),
-        speed_effects and psse_sat 0 or 1.
+        speed_effects and psse_swing 0 or 1, psse_sat 0 to 4.
     """
 
     def _check(self):

@@ -253,12 +253,14 @@ def _imported(case, out) -> tuple[dict, str]:
     "--conventions",
     "conventions",
     cls=AliasedOption,
-    type=click.Choice(["pst", "andes"]),
-    default="pst",
+    type=click.Choice(["psse", "pst", "andes"]),
+    default="psse",
     show_default=True,
-    help="How to read the DYR models: PST's (machines with speed effects, "
-    "EXDC2 limits times the terminal voltage) or ANDES 2.0's (neither), "
-    "to compare with ANDES like for like.",
+    help="How to read the DYR models: PSS/E's (its Model Library's machines: stator "
+    "at rated speed, Pm and D divided by speed, each model's saturation), PST's "
+    "(machines with speed effects and no saturation, EXDC2 limits times the "
+    "terminal voltage) or ANDES 2.0's (to compare with ANDES like for like); "
+    "docs/pst_models.md section 12.",
 )
 @click.option(
     "--net-unmodelled",
@@ -362,11 +364,12 @@ def import_psse(
     "--conventions",
     "conventions",
     cls=AliasedOption,
-    type=click.Choice(["pst", "andes"]),
-    default="andes",
-    show_default=True,
+    type=click.Choice(["psse", "pst", "andes"]),
+    default=None,
     help="How to read the PSS/E models: as ANDES 2.0 solves them (the same "
-    "equations as ANDES: machines without speed effects, ...) or as PST's.",
+    "equations as ANDES: machines without speed effects, ...), as PSS/E's Model "
+    "Library states them or as PST's.  [default: psse for RAW + DYR files, andes "
+    "otherwise]",
 )
 @_islands_option
 @_static_option
@@ -401,6 +404,8 @@ def import_andes(
     from stabctl.io.andes_case import read_andes_case
 
     out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
+    if conventions is None:
+        conventions = "psse" if dyr_path is not None else "andes"
     imported = read_andes_case(
         case_path, conventions, "skip" if skip_unsupported else "error", dyr_path
     )

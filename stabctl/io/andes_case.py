@@ -238,10 +238,11 @@ def import_andes(
     ----------
     path : str or pathlib.Path
         Any case ANDES 2.0 loads: ``.xlsx``, ``.json``, PSS/E ``.raw``, MATPOWER ``.m``.
-    conventions : {"andes", "pst"}, optional
+    conventions : {"andes", "psse", "pst"}, optional
         How the PSS/E models are read (:func:`stabctl.io.dyr.dyr_tables`): ``"andes"``
         (default) as ANDES 2.0 solves them, so that both tools solve the same equations;
-        ``"pst"`` as PST's models.
+        ``"psse"`` as the PSS/E Model Library states them; ``"pst"`` as PST's models.
+        (``stabctl import-andes`` reads a RAW + DYR pair with ``"psse"`` by default.)
     on_unsupported : {"error", "skip"}, optional
         Refuse models (and model options) stabctl lacks, or leave them out with one
         :class:`UserWarning` listing them.

@@ -244,7 +244,7 @@ def _integer(tok: str) -> int | None:
 
 
 def dyr_tables(
-    records, generators, on_unsupported: str = "error", conventions: str = "pst"
+    records, generators, on_unsupported: str = "error", conventions: str = "psse"
 ) -> DyrTables:
     """PST matrices for the generators of a RAW file from their DYR records.
 
@@ -258,7 +258,10 @@ def dyr_tables(
             "sbase" (system base, MVA, default 100; used by conventions="andes").
         on_unsupported: "error" (raise, listing every unsupported record) or "skip" (leave
             those records out and return them in `unsupported`).
-        conventions: "pst" (PST's models as they are) or "andes" (ANDES 2.0's reading of
+        conventions: "psse" (the PSS/E Model Library's machines, `_PSSE_MACHINE`: stator
+            at rated speed, P_m and D divided by speed, each model's saturation; the
+            other models as "pst"), "pst" (PST's models as they are: machines with
+            speed effects and without saturation) or "andes" (ANDES 2.0's reading of
             the PSS/E models, for like-for-like comparisons: GENROU/GENSAL without speed
             effects, mac_con column 24 = 0, and with PSS/E's saturation of the air-gap flux
             through S(1.0), S(1.2) (column 25 = 1; ANDES ``genrou.py``); EXDC2's regulator
@@ -330,6 +333,11 @@ def _map_records(records, generators, conventions):
         if kind == "machine" and andes:
             row[MACHINE.col("speed_effects") - 1] = 0.0
             row[MACHINE.col("psse_sat") - 1] = 1.0
+        elif kind == "machine" and conventions == "psse":
+            row[MACHINE.col("speed_effects") - 1] = 0.0
+            sat, swing = _PSSE_MACHINE[rec.model]
+            row[MACHINE.col("psse_sat") - 1] = sat
+            row[MACHINE.col("psse_swing") - 1] = swing
         number = int(gen["number"])
         if number in rows[kind]:
             raise CaseError(
@@ -445,17 +453,17 @@ def _positive_h(rec, H) -> None:
 
 
 def _genrou(rec, gen):
-    """GENROU: T'do T''do T'qo T''qo H D Xd Xq X'd X'q X''d Xl S(1.0) S(1.2) -> mac_sub
-    with x''q = x''d (as PSS/E)."""
-    v = DYR_MODELS["GENROU"].values(rec.params)
+    """GENROU (and GENROE): T'do T''do T'qo T''qo H D Xd Xq X'd X'q X''d Xl S(1.0) S(1.2)
+    -> mac_sub with x''q = x''d (as PSS/E)."""
+    v = DYR_MODELS[rec.model].values(rec.params)
     _positive_h(rec, v["H"])
     return _mac_row(rec, gen, xqpp=v["X''d"])
 
 
 def _gensal(rec, gen):
-    """GENSAL: T'do T''do T''qo H D Xd Xq X'd X''d Xl S(1.0) S(1.2) -> mac_sub without the
-    q-axis transient circuit: x'q = x_q, T'qo = 0 (E'd stays 0, docs 12.1)."""
-    v = DYR_MODELS["GENSAL"].values(rec.params)
+    """GENSAL (and GENSAE): T'do T''do T''qo H D Xd Xq X'd X''d Xl S(1.0) S(1.2) -> mac_sub
+    without the q-axis transient circuit: x'q = x_q, T'qo = 0 (E'd stays 0, docs 12.1)."""
+    v = DYR_MODELS[rec.model].values(rec.params)
     _positive_h(rec, v["H"])
     return _mac_row(rec, gen, xqp=v["Xq"], xqpp=v["X''d"], Tqop=0.0)
 
@@ -815,7 +823,9 @@ def _andes_hygov4(rec, gen):
 #: default, `_DEFAULT_ROW`
 _MAPPERS = {
     "GENROU": _genrou,
+    "GENROE": _genrou,
     "GENSAL": _gensal,
+    "GENSAE": _gensal,
     "GENCLS": _gencls,
     "SEXS": _sexs,
     "IEEEX1": _dc("IEEEX1"),
@@ -900,6 +910,13 @@ def _gensal_andes(rec, gen):
     return _mac_row(rec, gen, xqp=v["X'd"], Tqop=v["T'do"], xqpp=v["X''d"])
 
 
+def _not_in_andes(rec, gen):
+    """A PSS/E model ANDES 2.0 lacks (GENROE, GENSAE): nothing to compare like for like."""
+    raise _Unsupported(
+        f"ANDES 2.0 has no {rec.model} (read it with the psse or pst DYR conventions)"
+    )
+
+
 #: conventions="andes": ANDES 2.0's DC exciters (IEEEX1, EXDC2, ESDC2A) use the quadratic
 #: saturation and keep K_E = 0; its EXDC2 limits V_R to [VRMIN, VRMAX], not scaled by the
 #: terminal voltage as PSS/E's and IEEE DC2 (and times the rotor speed,
@@ -930,11 +947,29 @@ _ANDES_MAPPERS = {
     #: ESST4B: ANDES's VGMAX, 20 (its default; stabctl.io.andes_case refuses others)
     "ESST4B": _source_on_system_base(lambda rec, gen: _esst4b(rec, gen, vgmax=20.0)),
     "GENSAL": _gensal_andes,
+    "GENROE": _not_in_andes,
+    "GENSAE": _not_in_andes,
     "SCRX": _scrx_andes,
     "IEEET1": _dc("IEEET1", zero_vrmax_unlimited=True, andes=True),
     "IEEET2": _dc("IEEET2", andes=True),
     "HYGOV": lambda rec, gen: _hygov(rec, gen, andes=True),
     "IEESGO": lambda rec, gen: _ieesgo(rec, gen, andes=True),
 }
-CONVENTIONS = ("pst", "andes")
+#: conventions="psse": each machine's mac_con psse_sat and psse_swing
+#: (stabctl.models.machines.MACHINE), with speed_effects 0 (stator at rated speed):
+#: GENROU's quadratic, GENROE's and GENSAE's exponential saturation of the air-gap flux
+#: |psi"| on both axes, GENSAL's quadratic saturation of E'q on the d axis only (PSS/E
+#: Model Library; GENSAE's q-axis saturation, which GENSAL lacks, sets its initial rotor
+#: angle: 33.49 deg in PSS/E's run tests/data/psse_runs/GENSAE, 35.49 without), with the
+#: swing equation (P_m - D (omega - 1)) / omega - T_e; GENCLS neither: PSS/E's run
+#: OMIB_GENCLS agrees with P_m - T_e - D (omega - 1) (1.1e-3 rad at a 1 ms step, 2.3e-3
+#: rad with the divided form, the Julia test's tolerance being 2e-3)
+_PSSE_MACHINE = {
+    "GENROU": (1.0, 1.0),
+    "GENROE": (2.0, 1.0),
+    "GENSAL": (3.0, 1.0),
+    "GENSAE": (4.0, 1.0),
+    "GENCLS": (0.0, 0.0),
+}
+CONVENTIONS = ("psse", "pst", "andes")
 _WIDTH = {kind: len(family.params) for kind, family in FAMILY.items()}

@@ -49,7 +49,7 @@ def load_psse(
     dyr_path: str | Path | None = None,
     on_unsupported: str = "error",
     loads: str = "impedance",
-    conventions: str = "pst",
+    conventions: str = "psse",
     unmodelled: str = "error",
 ) -> Case:
     """Build a :class:`~stabctl.case.Case` from a PSS/E RAW (v32-34) and a DYR file.
@@ -62,10 +62,14 @@ def load_psse(
             leaves them out and warns (:class:`UserWarning`) with the list.
         loads: ``"impedance"`` makes all loads constant impedance in the dynamic run,
             ``"raw"`` keeps the PSS/E load composition (see :mod:`stabctl.io.psse_raw`).
-        conventions: ``"pst"`` maps the DYR models onto PST's as they are (machines with
-            speed effects, EXDC2 limits scaled by the terminal voltage); ``"andes"``
-            follows ANDES 2.0's reading for like-for-like comparisons (no speed effects
-            in GENROU/GENSAL, EXDC2 limits constant; :func:`stabctl.io.dyr.dyr_tables`).
+        conventions: ``"psse"`` (default) reads the machines as the PSS/E Model Library
+            states them (stator at rated speed, P_m and D divided by speed, GENROU's and
+            GENROE's saturation of the air-gap flux, GENSAL's and GENSAE's of E'q; the
+            other models as ``"pst"``); ``"pst"`` maps the DYR models onto PST's as they
+            are (machines with speed effects and no saturation, EXDC2 limits scaled by
+            the terminal voltage); ``"andes"`` follows ANDES 2.0's reading for
+            like-for-like comparisons (no speed effects in GENROU/GENSAL, EXDC2 limits
+            constant; :func:`stabctl.io.dyr.dyr_tables`; docs/pst_models.md 12).
         unmodelled: ``"error"`` refuses generators without a machine model record in the
             DYR file, ``"net"`` nets them (negative constant-power loads PG + jQG at their
             buses, listed in a :class:`UserWarning`).
@@ -91,7 +95,7 @@ def import_psse(
     dyr_path: str | Path | None = None,
     on_unsupported: str = "error",
     loads: str = "impedance",
-    conventions: str = "pst",
+    conventions: str = "psse",
     unmodelled: str = "error",
 ) -> PsseImport:
     """:func:`load_psse` that also returns the records left out (empty unless

@@ -29,7 +29,7 @@ from stabctl.models.declaration import (
     pack,
     params_class,
 )
-from stabctl.models.saturation import quadratic_fit
+from stabctl.models.saturation import exponential_fit, quadratic_fit
 
 if TYPE_CHECKING:
     from stabctl.case import Case
@@ -41,6 +41,44 @@ if TYPE_CHECKING:
 
 _REACT: dict[str, Any] = dict(unit="pu", lo=0.0)
 _TC: dict[str, Any] = dict(unit="s", lo=0.0)
+
+#: GENROU's and GENROE's parameters (PSS/E Model Library order) and the mac_con fields
+#: each is copied to
+_ROUND_ROTOR = (
+    "T'do",
+    "T''do",
+    "T'qo",
+    "T''qo",
+    "H",
+    "D",
+    "Xd",
+    "Xq",
+    "X'd",
+    "X'q",
+    "X''d",
+    "Xl",
+    "S(1.0)",
+    "S(1.2)",
+)
+_ROUND_ROTOR_COPY = {
+    "Tdop": "T'do",
+    "Tdopp": "T''do",
+    "Tqop": "T'qo",
+    "Tqopp": "T''qo",
+    "H": "H",
+    "D0": "D",
+    "xd": "Xd",
+    "xq": "Xq",
+    "xdp": "X'd",
+    "xqp": "X'q",
+    "xdpp": "X''d",
+    "xl": "Xl",
+    "S10": "S(1.0)",
+    "S12": "S(1.2)",
+}
+#: GENSAL's and GENSAE's: GENROU's without T'qo and X'q
+_SALIENT_POLE = tuple(f for f in _ROUND_ROTOR if f not in ("T'qo", "X'q"))
+_SALIENT_POLE_COPY = {k: v for k, v in _ROUND_ROTOR_COPY.items() if v in _SALIENT_POLE}
 
 MACHINE = Family(
     table="mac_con",
@@ -82,17 +120,20 @@ MACHINE = Family(
             default=1.0,
             choices=(0.0, 1.0),
             doc="subtransient: 1 stator voltage and torque with speed (PST mac_sub), "
-            "0 without (ANDES GENROU/GENSAL)",
+            "0 without (ANDES GENROU/GENSAL; PSS/E's stator, with psse_swing 1)",
         ),
         Param(
             "psse_sat",
             "code",
             25,
             default=0.0,
-            choices=(0.0, 1.0),
-            doc="subtransient: 0 no saturation (PST mac_sub as modelled here), 1 PSS/E's "
-            'GENROU saturation of the air-gap flux |psi"| through S(1.0), S(1.2) '
-            "(ANDES GENROU/GENSAL)",
+            choices=(0.0, 1.0, 2.0, 3.0, 4.0),
+            doc="subtransient: PSS/E's saturation through S(1.0), S(1.2) (PSS/E Model "
+            "Library): 0 none (PST mac_sub as modelled here); of the air-gap flux "
+            '|psi"| on both axes, 1 quadratic (GENROU; ANDES GENROU/GENSAL), 2 '
+            "exponential (GENROE), 4 exponential with the q axis's in its subtransient "
+            "circuit (GENSAE, salient pole); 3 quadratic of E'q on the d axis only "
+            "(GENSAL)",
         ),
         Param(
             "playback",
@@ -106,77 +147,26 @@ MACHINE = Family(
         Param(
             "pb_Tf", "s", 28, default=0.2, lo=0.0, doc="playback: lag of the speed to its target"
         ),
+        Param(
+            "psse_swing",
+            "code",
+            29,
+            choices=(0.0, 1.0),
+            doc="swing equation: 0 P_m / omega - T_e - D (omega - 1) with speed effects, "
+            "P_m - T_e - D (omega - 1) without (PST); 1 PSS/E's (P_m - D (omega - 1)) / "
+            "omega - T_e, the stator as speed_effects says (PSS/E Model Library GENROU, "
+            "GENROE, GENSAL, GENSAE: stator at rated speed, speed_effects 0)",
+        ),
     ),
     dyr=(
-        # GENROU -> mac_sub with x"q = x"d (set by the importer)
-        DyrModel(
-            "GENROU",
-            (
-                "T'do",
-                "T''do",
-                "T'qo",
-                "T''qo",
-                "H",
-                "D",
-                "Xd",
-                "Xq",
-                "X'd",
-                "X'q",
-                "X''d",
-                "Xl",
-                "S(1.0)",
-                "S(1.2)",
-            ),
-            {
-                "Tdop": "T'do",
-                "Tdopp": "T''do",
-                "Tqop": "T'qo",
-                "Tqopp": "T''qo",
-                "H": "H",
-                "D0": "D",
-                "xd": "Xd",
-                "xq": "Xq",
-                "xdp": "X'd",
-                "xqp": "X'q",
-                "xdpp": "X''d",
-                "xl": "Xl",
-                "S10": "S(1.0)",
-                "S12": "S(1.2)",
-            },
-            andes=("GENROU",),
-        ),
-        # GENSAL -> mac_sub without the q-axis transient circuit (x'q = x_q, T'qo = 0)
-        DyrModel(
-            "GENSAL",
-            (
-                "T'do",
-                "T''do",
-                "T''qo",
-                "H",
-                "D",
-                "Xd",
-                "Xq",
-                "X'd",
-                "X''d",
-                "Xl",
-                "S(1.0)",
-                "S(1.2)",
-            ),
-            {
-                "Tdop": "T'do",
-                "Tdopp": "T''do",
-                "Tqopp": "T''qo",
-                "H": "H",
-                "D0": "D",
-                "xd": "Xd",
-                "xq": "Xq",
-                "xdp": "X'd",
-                "xdpp": "X''d",
-                "xl": "Xl",
-                "S10": "S(1.0)",
-                "S12": "S(1.2)",
-            },
-        ),
+        # GENROU (GENROE: exponential saturation) -> mac_sub with x"q = x"d (set by the
+        # importer)
+        DyrModel("GENROU", _ROUND_ROTOR, _ROUND_ROTOR_COPY, andes=("GENROU",)),
+        DyrModel("GENROE", _ROUND_ROTOR, _ROUND_ROTOR_COPY),
+        # GENSAL (GENSAE: exponential saturation) -> mac_sub without the q-axis transient
+        # circuit (x'q = x_q, T'qo = 0)
+        DyrModel("GENSAL", _SALIENT_POLE, _SALIENT_POLE_COPY),
+        DyrModel("GENSAE", _SALIENT_POLE, _SALIENT_POLE_COPY),
         # GENCLS -> mac_em behind x'd = ZSORCE X (set by the importer)
         DyrModel(
             "GENCLS",
@@ -195,8 +185,8 @@ STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
 TABLE_FIELDS = (*MACHINE.names[MACHINE.col("xl") - 1 : MACHINE.col("D0")], "pfrac", "qfrac")
 #: packed parameter matrix of the kernels, (column name, MachineParams attribute) per
 #: column: kind, mac_pot, mac_con columns 4-17 in declared order, PST's derived constants
-#: (mac_pot columns 6-15), saturation, initial E'q, speed effects, the air-gap saturation
-#: A, B and gamma_qd of PSS/E's GENROU
+#: (mac_pot columns 6-15), saturation, initial E'q, speed effects, PSS/E's saturation A, B,
+#: gamma_qd and kind (mac_con psse_sat), the playback lags and PSS/E's swing equation
 PACKED = (
     ("KIND", "kind"),
     ("POT", "mac_pot"),
@@ -213,6 +203,8 @@ PACKED = (
     ("PB", "playback"),
     ("PB_TV", "pb_Tv"),
     ("PB_TF", "pb_Tf"),
+    ("GK", "sat_kind"),
+    ("SWING", "psse_swing"),
 )
 #: the kernels' column of each PACKED name: P[i, K.XDP]
 K = layout("MachineColumns", PACKED)
@@ -234,7 +226,9 @@ class MachineParams(Declared):
     sat: np.ndarray  # (n_mac, 3) quadratic saturation a, b, c
     basrad: float
     speed_effects: np.ndarray  # bool: subtransient with speed in stator voltage and torque
-    air_gap_sat: np.ndarray  # (n_mac, 2) A, B of PSS/E's GENROU saturation (0, 0: none)
+    air_gap_sat: np.ndarray  # (n_mac, 2) A, B of PSS/E's saturation (0, 0: none)
+    sat_kind: np.ndarray  # PSS/E's saturation: mac_con psse_sat of subtransient machines, else 0
+    psse_swing: np.ndarray  # 1.0: PSS/E's swing equation (P_m - D (omega - 1)) / omega - T_e
     playback: np.ndarray  # 1.0: a playback source (classical, H = 0; docs/pst_models.md 17)
     pb_Tv: np.ndarray  # s, its E' lag
     pb_Tf: np.ndarray  # s, its speed lag
@@ -338,12 +332,16 @@ class MachineParams(Declared):
         (ANDES ``genrou.py`` ``gqd``)."""
         return (self.xq - self.xl) / (self.xd - self.xl)
 
-    def air_gap_saturation(self, psi):
-        """S_e(|psi"|) = B (|psi"| - A)^2 / |psi"| of PSS/E's GENROU, 0 for |psi"| <= A
-        (ANDES ``genrou.py`` ``Se``, ``Se0``); psi: air-gap flux magnitudes (n_mac,)."""
+    def psse_saturation(self, psi):
+        """PSS/E's S_e(psi) per machine (`sat_kind`): quadratic B (psi - A)^2 / psi, 0 for
+        psi <= A (GENROU, GENSAL; ANDES ``genrou.py`` ``Se``, ``Se0``), or exponential B
+        psi^A (GENROE, GENSAE); 0 without saturation; psi (n_mac,): the air-gap flux
+        magnitude |psi"| (GENROU, GENROE) or E'q (GENSAL, GENSAE)."""
         A, B = self.air_gap_sat.T
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(psi > A, B * (psi - A) ** 2 / psi, 0.0)
+        exp = np.isin(self.sat_kind, _EXPONENTIAL)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            quad = np.where(psi > A, B * (psi - A) ** 2 / psi, 0.0)
+            return np.where(self.sat_kind == 0, 0.0, np.where(exp, B * np.abs(psi) ** A, quad))
 
 
 def machine_params(case: Case) -> MachineParams:
@@ -382,17 +380,29 @@ def machine_params(case: Case) -> MachineParams:
         playback=_playback(m, kind),
         pb_Tv=m.pb_Tv.copy(),
         pb_Tf=m.pb_Tf.copy(),
-        air_gap_sat=np.column_stack(
-            quadratic_fit(
-                1.0,
-                m.S10,
-                1.2,
-                m.S12,
-                sub & (m.psse_sat == 1),
-                "mac_con row {row}: GENROU saturation points (1.0, S(1.0)), (1.2, S(1.2))",
-            )
-        ),
+        air_gap_sat=_psse_saturation_fit(m, sub),
+        sat_kind=np.where(sub, m.psse_sat, 0.0),
+        psse_swing=m.psse_swing.copy(),
     )
+
+
+#: psse_sat codes: saturation of the air-gap flux on both axes (GENROU, GENROE, GENSAE),
+#: of E'q on the d axis (GENSAL); exponential (GENROE, GENSAE), the others quadratic;
+#: GENSAE's q-axis saturation acts in its subtransient circuit (salient pole: no q-axis
+#: transient circuit), GENROU's and GENROE's in the transient one
+_AIR_GAP = (1.0, 2.0, 4.0)
+_EXPONENTIAL = (2.0, 4.0)
+_SALIENT_GAP = 4.0
+
+
+def _psse_saturation_fit(m, sub) -> np.ndarray:
+    """(n_mac, 2) A, B of each subtransient machine's PSS/E saturation (mac_con psse_sat)
+    through (1.0, S(1.0)), (1.2, S(1.2)); (0, 0) without."""
+    what = "mac_con row {row}: PSS/E saturation points (1.0, S(1.0)), (1.2, S(1.2))"
+    exp = np.isin(m.psse_sat, _EXPONENTIAL)
+    quad = quadratic_fit(1.0, m.S10, 1.2, m.S12, sub & (m.psse_sat > 0) & ~exp, what)
+    expo = exponential_fit(1.0, m.S10, 1.2, m.S12, sub & exp, what)
+    return np.column_stack([np.where(exp, e, q) for q, e in zip(quad, expo)])
 
 
 check_packed(MachineParams, PACKED, ("eqp0", "gap_a", "gap_b", "sat_a", "sat_b", "sat_c"))
@@ -447,7 +457,8 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     # (1 + gamma_qd S_e0) psi" + j (x_q - x"q) I (ANDES genrou.py delta0: |psi"| (1 + S_e0
     # gamma_qd) against |I| (x"q - x_q)), where the q-axis flux equation is 0
     psi_pp = v + (p.ra + 1j * p.xqpp) * I
-    Se0 = np.where(sub, p.air_gap_saturation(np.abs(psi_pp)), 0.0)
+    air_gap = np.isin(p.sat_kind, _AIR_GAP)
+    Se0 = np.where(air_gap, p.psse_saturation(np.abs(psi_pp)), 0.0)
     with np.errstate(invalid="ignore"):
         gap_q = np.where(Se0 > 0, p.gqd * Se0, 0.0)
     E_q = (1 + gap_q) * psi_pp + 1j * (p.xq - p.xqpp) * I
@@ -462,8 +473,17 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     edra = -ed - p.ra * curdg
     eqp_sub, psikd = eqra + p.xdp * curdg, eqra + p.xl * curdg
     edp_sub, psikq = edra + p.xqp * curqg, edra + p.xl * curqg
+    # GENSAE: E'd = 0 (no q-axis transient circuit), psi"_q = p15 psi_kq
+    salient_gap = p.sat_kind == _SALIENT_GAP
+    with np.errstate(divide="ignore", invalid="ignore"):
+        edp_sub = np.where(salient_gap, 0.0, edp_sub)
+        psikq = np.where(salient_gap, (edra + p.xqpp * curqg) / p.p15, psikq)
     Eqpe = eqp_sub - psikd - p.p8 * curdg
-    vex_sub = eqp_sub + p.p7 * (curdg + p.p6 * Eqpe) + Se0 * to_dq(x[0], psi_pp)[1]
+    # PSS/E's GENSAL, GENSAE: S_e(E'q) E'q on the d axis (no q-axis saturation)
+    Se_eqp = np.where(sub & ~air_gap, p.psse_saturation(eqp_sub), 0.0)
+    vex_sub = (
+        eqp_sub + p.p7 * (curdg + p.p6 * Eqpe) + Se0 * to_dq(x[0], psi_pp)[1] + Se_eqp * eqp_sub
+    )
     # transient / classical: E' in the rotor frame
     E = np.where(p.kind == EM, E_em, E_tr)
     edp_t, eqp_t = to_dq(x[0], E)
@@ -508,8 +528,9 @@ def _stator_speed(P, x, i):
 @kernel
 def divides_pmech_by_speed(P, i):
     """Whether machine i's swing equation takes P_m / omega as its torque (subtransient
-    with speed effects, PST mac_sub) rather than P_m (ANDES GENROU, mac_tra, mac_em)."""
-    return P[i, K.KIND] == SUB and P[i, K.SPEED] > 0
+    with speed effects, PST mac_sub; PSS/E's swing equation, mac_con psse_swing) rather
+    than P_m (ANDES GENROU, mac_tra, mac_em)."""
+    return (P[i, K.KIND] == SUB and P[i, K.SPEED] > 0) or P[i, K.SWING] > 0
 
 
 @kernel
@@ -529,13 +550,31 @@ def internal_voltage(P, x, psi):
 
 
 @kernel
-def _gap_saturation(P, i, psidpp, psiqpp):
-    """S_e(|psi"|) = B (|psi"| - A)^2 / |psi"| of machine i, PSS/E's GENROU saturation of
-    the air-gap flux (ANDES ``genrou.py`` ``Se``; 0 for |psi"| <= A and without it)."""
+def _psse_saturation(P, i, psi):
+    """PSS/E's S_e(psi) of machine i (MachineParams.psse_saturation): quadratic B (psi -
+    A)^2 / psi (0 for psi <= A) or exponential B psi^A (psse_sat 2, 4); 0 without."""
     if P[i, K.GB] == 0.0:
         return 0.0
-    psi = np.hypot(psidpp, psiqpp)
+    if P[i, K.GK] == 2.0 or P[i, K.GK] == 4.0:
+        return P[i, K.GB] * abs(psi) ** P[i, K.GA]
     return P[i, K.GB] * (psi - P[i, K.GA]) ** 2 / psi if psi > P[i, K.GA] else 0.0
+
+
+@kernel
+def _gap_saturation(P, i, psidpp, psiqpp):
+    """S_e(|psi"|) of machine i, PSS/E's GENROU (GENROE, GENSAE) saturation of the
+    air-gap flux (ANDES ``genrou.py`` ``Se``); 0 without it and for GENSAL."""
+    if P[i, K.GK] == 0.0 or P[i, K.GK] == 3.0:
+        return 0.0
+    return _psse_saturation(P, i, np.hypot(psidpp, psiqpp))
+
+
+@kernel
+def _eqp_saturation(P, i, eqp):
+    """S_e(E'q) E'q of machine i, PSS/E's GENSAL d-axis saturation; 0 otherwise."""
+    if P[i, K.GK] != 3.0:
+        return 0.0
+    return _psse_saturation(P, i, eqp) * eqp
 
 
 @kernel
@@ -543,8 +582,9 @@ def _field_current(P, x, i, cdg):
     """Field current of machine i (machine base, vex = it in steady state) for the d-axis
     current cdg (machine base): subtransient E'q + p7 (i_d + p6 (E'q - psi_kd - p8 i_d))
     (no saturation, docs 1.6) + S_e psi"_d with PSS/E's GENROU saturation (ANDES
-    ``genrou.py`` ``XadIfd``); transient E_Isat(E'q) + (x_d - x'_d) i_d (docs 1.8, with
-    PST's test on the initial E'q); classical: E' (constant)."""
+    ``genrou.py`` ``XadIfd``) or + S_e(E'q) E'q with PSS/E's GENSAL's; transient
+    E_Isat(E'q) + (x_d - x'_d) i_d (docs 1.8, with PST's test on the initial E'q);
+    classical: E' (constant)."""
     kind = P[i, K.KIND]
     e = x[2, i]
     if kind == SUB:
@@ -553,6 +593,7 @@ def _field_current(P, x, i, cdg):
             e
             + P[i, K.P7] * (cdg + P[i, K.P6] * (e - x[3, i] - P[i, K.P8] * cdg))
             + _gap_saturation(P, i, psidpp, psiqpp) * psidpp
+            + _eqp_saturation(P, i, e)
         )
     if kind == TRA:
         esat = e if P[i, K.EQP0] < 0.8 else P[i, K.SA] * e * e + P[i, K.SB] * e + P[i, K.SC]
@@ -595,32 +636,43 @@ def derivatives(P, basrad, x, cur, vex, pmech, target, dx, pelect, qelect, eterm
             dx[2, i] = (vex[i] - fld) / P[i, K.TDOP]
             dx[3, i] = Eqpe / P[i, K.TDOPP]
             # PSS/E's GENROU saturation: - gamma_qd S_e psi"_q (ANDES genrou.py XaqI1q, whose
-            # e'_d, psi"_q are -E'd, -psi"_q here)
-            dx[4, i] = (
-                -x[4, i]
-                + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe)
-                - P[i, K.GQD] * _gap_saturation(P, i, psidpp, psiqpp) * psiqpp
-            ) / P[i, K.TQOP]
-            dx[5, i] = Edpe / P[i, K.TQOPP]
-            torque = pmech[i] / ws - (psidpp * cqg - psiqpp * cdg)
+            # e'_d, psi"_q are -E'd, -psi"_q here); GENSAE's in the subtransient circuit,
+            # T"qo dpsi"_q/dt = -psi"_q - (x_q - x"q) i_q - gamma_qd S_e psi"_q
+            gap_q = P[i, K.GQD] * _gap_saturation(P, i, psidpp, psiqpp) * psiqpp
+            if P[i, K.GK] == _SALIENT_GAP:
+                dx[4, i] = (-x[4, i] + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe)) / P[i, K.TQOP]
+                dx[5, i] = (Edpe - gap_q / P[i, K.P15]) / P[i, K.TQOPP]
+            else:
+                dx[4, i] = (-x[4, i] + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe) - gap_q) / P[
+                    i, K.TQOP
+                ]
+                dx[5, i] = Edpe / P[i, K.TQOPP]
+            pm = pmech[i] / ws
+            te = psidpp * cqg - psiqpp * cdg
         elif kind == TRA:
             ed = x[4, i] - P[i, K.RA] * cdg + P[i, K.XDP] * cqg
             eq = x[2, i] - P[i, K.RA] * cqg - P[i, K.XDP] * cdg
             dx[2, i] = (vex[i] - fld) / P[i, K.TDOP]
             dx[4, i] = (-x[4, i] + (P[i, K.XQ] - P[i, K.XQP]) * cqg) / P[i, K.TQOP]
-            torque = pmech[i] - ((eq * curq + ed * curd) * pot + P[i, K.RA] * (cdg**2 + cqg**2))
+            pm = pmech[i]
+            te = (eq * curq + ed * curd) * pot + P[i, K.RA] * (cdg**2 + cqg**2)
         else:
             ed = x[4, i] + P[i, K.XDP] * cqg
             eq = x[2, i] - P[i, K.XDP] * cdg
             dx[2, i] = 0.0
             dx[4, i] = 0.0
-            torque = pmech[i] - (eq * curq + ed * curd) * pot
+            pm = pmech[i]
+            te = (eq * curq + ed * curd) * pot
         pelect[i] = eq * curq + ed * curd
         qelect[i] = eq * curd - ed * curq
         eterm[i] = np.hypot(ed, eq)
         # H = 0: an infinite bus (classical, MachineTable), its speed held at 1 pu
         h2 = 2.0 * P[i, K.H]
-        dx[1, i] = (torque - P[i, K.D0] * (w - 1.0)) / h2 if h2 > 0.0 else 0.0
+        if P[i, K.SWING] > 0.0:  # PSS/E: (P_m - D (omega - 1)) / omega - T_e
+            acc = (pmech[i] - P[i, K.D0] * (w - 1.0)) / w - te
+        else:
+            acc = (pm - te) - P[i, K.D0] * (w - 1.0)
+        dx[1, i] = acc / h2 if h2 > 0.0 else 0.0
         if P[i, K.PB] > 0.0:  # a playback source: E' and the speed lag their targets
             dx[1, i] = (target[i, 1] - w) / P[i, K.PB_TF]
             dx[2, i] = (target[i, 0] - x[2, i]) / P[i, K.PB_TV]

@@ -69,7 +69,9 @@ def write(tmp_path, text, name="t.dyr"):
 
 @pytest.fixture(scope="module")
 def kundur_tables():
-    return dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip")
+    return dyr_tables(
+        read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip", conventions="pst"
+    )
 
 
 # -- parsing and mapping against the files ------------------------------------------------------
@@ -177,7 +179,9 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
 
 
 def test_andes_conventions_change_only_what_andes_reads_differently():
-    pst = dyr_tables(read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip")
+    pst = dyr_tables(
+        read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip", conventions="pst"
+    )
     andes_ = dyr_tables(
         read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip", conventions="andes"
     )
@@ -210,7 +214,7 @@ def test_andes_conventions_change_only_what_andes_reads_differently():
     assert (g_pst.Uo[0], g_pst.Uc[0]) == (1.0, -1.0)
     assert (g_andes.Uo[0], g_andes.Uc[0]) == (0.25, -0.25)
     with pytest.raises(CaseError, match="conventions"):
-        dyr_tables(recs, gens, conventions="psse")
+        dyr_tables(recs, gens, conventions="pss/e")
 
 
 def test_unsupported_records_are_listed_with_file_and_line(tmp_path):

@@ -13,15 +13,7 @@ from psse_reference import BY_NAME, RUNS, compare, psse_channels
 
 #: run -> why it is short today (measured with benchmarks/psse_runs.py)
 SHORT = {
-    "GENROU": "rotor angle 0.154 rad off (tol 0.1): PSS/E's GENROU saturation and speed terms",
-    "GENROE": "import refused: GENROE is not mapped",
-    "GENSAE": "import refused: GENSAE is not mapped",
-    "ESAC1A": "rotor angle 0.101 rad off (tol 0.01): PSS/E's GENROU saturation",
     "GAST": "simulate refuses GAST starting at its load limit AT = Pm0 = 1.0",
-    "SEXS": "Efd 0.244 pu off, line flows 0.018-0.032 pu (tol 0.01): GENROU saturation",
-    "IEEEST": "Efd 0.247 pu off (tol 0.01): GENROU saturation",
-    "EXST1": "V2, V3 2e-3 pu off (tol 1e-3): GENSAL stator and saturation",
-    "EXAC1": "V2, V3 2e-3 pu off (tol 1e-3): GENSAL stator and saturation",
     "ESST1A": "simulate: numerical instability of exc.VA at 0.33 s with h = 5 ms",
     "RENA_DEFAULT": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
     "RENA_REF_FLAG": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",

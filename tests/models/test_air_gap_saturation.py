@@ -64,7 +64,7 @@ def test_saturated_initial_point_is_an_equilibrium_at_andes_field_voltage_and_an
     assert plain.initial_residual[0] < 1e-9
 
 
-def test_saturation_points_0_mean_none_and_column_25_is_0_or_1():
+def test_saturation_points_0_mean_none_and_column_25_is_a_code():
     a = Simulator(saturated(s10=0.0)).model_for(())
     b = Simulator(saturated(psse_sat=0.0, s10=0.0)).model_for(())
     np.testing.assert_array_equal(a.vex0, b.vex0)
