@@ -260,9 +260,11 @@ def dyr_tables(
             those records out and return them in `unsupported`).
         conventions: "psse" (the PSS/E Model Library's machines, `_PSSE_MACHINE`: stator
             at rated speed, P_m and D divided by speed, each model's saturation; the
-            other models as "pst"), "pst" (PST's models as they are: machines with
-            speed effects and without saturation) or "andes" (ANDES 2.0's reading of
-            the PSS/E models, for like-for-like comparisons: GENROU/GENSAL without speed
+            controls of `_PSSE_MAPPERS` as PSS/E solves them, e.g. EXST1's output
+            limits and rate feedback; the other models as "pst"), "pst" (PST's models
+            as they are: machines with speed effects and without saturation) or
+            "andes" (ANDES 2.0's reading of the PSS/E models, for like-for-like
+            comparisons: GENROU/GENSAL without speed
             effects, mac_con column 24 = 0, and with PSS/E's saturation of the air-gap flux
             through S(1.0), S(1.2) (column 25 = 1; ANDES ``genrou.py``); EXDC2's regulator
             limits not scaled by the terminal voltage, i.e. PST's DC1 instead of DC2, and
@@ -322,7 +324,7 @@ def _map_records(records, generators, conventions):
             gen = gens.get((rec.bus, rec.id))
             if gen is None:
                 raise _Unsupported("no such generator in the RAW data (or out of service)")
-            mapper = _ANDES_MAPPERS.get(rec.model) if andes else None
+            mapper = _CONVENTION_MAPPERS.get(conventions, {}).get(rec.model)
             if rec.model == "IEEEG1":  # its LP shaft may be another generator's
                 row = (_ieeeg1_andes if andes else _ieeeg1)(rec, gen, _lp_generator(rec, gens))
             else:
@@ -971,5 +973,20 @@ _PSSE_MACHINE = {
     "GENSAE": (4.0, 1.0),
     "GENCLS": (0.0, 0.0),
 }
+
+
+def _exst1_psse(rec, gen):
+    """EXST1 as the PSS/E Model Library solves it (exc_con psse_st1 = 1): its output
+    limits [V_t VRMIN - K_C I_fd, V_t VRMAX - K_C I_fd] and its rate feedback of V_R
+    before them (OpenIPSL's PSS/E-verified ``PSSE.ES.EXST1``; PowerSimulationsDynamics.jl's
+    EXST1, within 1e-3 pu of PSS/E's run tests/data/psse_runs/EXST1)."""
+    return _exc_row(rec, gen, psse_st1=1.0)
+
+
+#: conventions="psse": the controls whose PSS/E Model Library equations differ from
+#: stabctl's own reading (the others as "pst"; docs/pst_models.md 12.5)
+_PSSE_MAPPERS = {"EXST1": _exst1_psse}
+#: conventions -> the mappers that replace `_MAPPERS`' for it
+_CONVENTION_MAPPERS = {"andes": _ANDES_MAPPERS, "psse": _PSSE_MAPPERS}
 CONVENTIONS = ("psse", "pst", "andes")
 _WIDTH = {kind: len(family.params) for kind, family in FAMILY.items()}

@@ -178,6 +178,25 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
     np.testing.assert_allclose(p.K[0], [0, 0, 0.3, 0.7])
 
 
+def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently():
+    """conventions="psse" (the default) marks WECC's EXST1 rows psse_st1 = 1 (PSS/E's
+    output limits and rate feedback, docs/pst_models.md 12.5) and leaves every other
+    exciter, PSS and governor column as "pst" reads it."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    pst = dyr_tables(recs, gens, on_unsupported="skip", conventions="pst")
+    psse = dyr_tables(recs, gens, on_unsupported="skip")
+    col = ExciterTable.columns().index("psse_st1")
+    st1 = pst.exc_con[:, 0] == exc.ST1
+    assert st1.sum() > 0
+    assert np.all(psse.exc_con[st1, col] == 1) and np.all(psse.exc_con[~st1, col] == 0)
+    assert np.all(pst.exc_con[:, col] == 0)
+    others = np.arange(pst.exc_con.shape[1]) != col
+    np.testing.assert_array_equal(pst.exc_con[:, others], psse.exc_con[:, others])
+    np.testing.assert_array_equal(pst.tg_con, psse.tg_con)
+    np.testing.assert_array_equal(pst.pss_con, psse.pss_con)
+
+
 def test_andes_conventions_change_only_what_andes_reads_differently():
     pst = dyr_tables(
         read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip", conventions="pst"

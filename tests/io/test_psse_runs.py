@@ -13,8 +13,6 @@ from psse_reference import BY_NAME, RUNS, compare, psse_channels
 
 #: run -> why it is short today (measured with benchmarks/psse_runs.py)
 SHORT = {
-    "GAST": "simulate refuses GAST starting at its load limit AT = Pm0 = 1.0",
-    "ESST1A": "simulate: numerical instability of exc.VA at 0.33 s with h = 5 ms",
     "RENA_DEFAULT": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
     "RENA_REF_FLAG": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
     "RENA_REF_FLAG_noV": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
