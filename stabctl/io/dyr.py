@@ -777,12 +777,15 @@ def _lp_generator(rec, gens):
     return at[0]
 
 
-def _hygov(rec, gen, andes=False):
+def _hygov(rec, gen, andes=False, psse=False):
     """HYGOV: R r Tr Tf Tg VELM GMAX GMIN TW At Dturb qNL -> type 4 with the gate integrator
     gain K_g = 1/(r Tr) and the rate limits [-VELM, VELM] (PSS/E).  andes: as ANDES 2.0
     solves it on the system base (``hygov.py``: the integrator without 1/(r Tr), the rate
     limits shifted by -e/r, the water column and D_turb power-scaled), on the machine base
-    K_g = SBASE/MBASE, T_w and D_turb times MBASE/SBASE, rate limits relative."""
+    K_g = SBASE/MBASE, T_w and D_turb times MBASE/SBASE, rate limits relative.  psse: the
+    PI's whole output is the desired gate, rate- and position-limited (tg_con
+    psse_gate = 1; OpenIPSL's PSS/E-verified ``PSSE.TG.HYGOV``: the lead (1 + s T_r)/(r
+    T_r) into a rate limiter and a limited integrator)."""
     v = DYR_MODELS["HYGOV"].values(rec.params)
     for name in ("r", "Tr", "TW"):
         if v[name] <= 0:
@@ -791,6 +794,8 @@ def _hygov(rec, gen, andes=False):
     if andes:
         s = gen["mbase"] / gen.get("sbase", 100.0)
         cols.update(Kg=1 / s, velm_rel=1.0, Tw=v["TW"] * s, Dt=v["Dturb"] * s)
+    if psse:
+        cols["psse_gate"] = 1.0
     return _tg_row(rec, gen, **cols)
 
 
@@ -985,7 +990,7 @@ def _exst1_psse(rec, gen):
 
 #: conventions="psse": the controls whose PSS/E Model Library equations differ from
 #: stabctl's own reading (the others as "pst"; docs/pst_models.md 12.5)
-_PSSE_MAPPERS = {"EXST1": _exst1_psse}
+_PSSE_MAPPERS = {"EXST1": _exst1_psse, "HYGOV": lambda rec, gen: _hygov(rec, gen, psse=True)}
 #: conventions -> the mappers that replace `_MAPPERS`' for it
 _CONVENTION_MAPPERS = {"andes": _ANDES_MAPPERS, "psse": _PSSE_MAPPERS}
 CONVENTIONS = ("psse", "pst", "andes")
