@@ -292,9 +292,11 @@ def dyr_tables(
             those records out and return them in `unsupported`).
         conventions: "psse" (the PSS/E Model Library's machines, `_PSSE_MACHINE`: stator
             at rated speed, P_m and D divided by speed, each model's saturation; the
-            other models as "pst"), "pst" (PST's models as they are: machines with
-            speed effects and without saturation) or "andes" (ANDES 2.0's reading of
-            the PSS/E models, for like-for-like comparisons: GENROU/GENSAL without speed
+            controls of `_PSSE_MAPPERS` as PSS/E solves them, e.g. EXST1's output
+            limits and rate feedback; the other models as "pst"), "pst" (PST's models
+            as they are: machines with speed effects and without saturation) or
+            "andes" (ANDES 2.0's reading of the PSS/E models, for like-for-like
+            comparisons: GENROU/GENSAL without speed
             effects, mac_con column 24 = 0, and with PSS/E's saturation of the air-gap flux
             through S(1.0), S(1.2) (column 25 = 1; ANDES ``genrou.py``); EXDC2's regulator
             limits not scaled by the terminal voltage, i.e. PST's DC1 instead of DC2, and
@@ -358,7 +360,7 @@ def _map_records(records, generators, conventions):
             gen = gens.get((rec.bus, rec.id))
             if gen is None:
                 raise _Unsupported("no such generator in the RAW data (or out of service)")
-            mapper = _ANDES_MAPPERS.get(rec.model) if andes else None
+            mapper = _CONVENTION_MAPPERS.get(conventions, {}).get(rec.model)
             if rec.model == "IEEEG1":  # its LP shaft may be another generator's
                 row = (_ieeeg1_andes if andes else _ieeeg1)(rec, gen, _lp_generator(rec, gens))
             else:
@@ -840,12 +842,15 @@ def _lp_generator(rec, gens):
     return at[0]
 
 
-def _hygov(rec, gen, andes=False):
+def _hygov(rec, gen, andes=False, psse=False):
     """HYGOV: R r Tr Tf Tg VELM GMAX GMIN TW At Dturb qNL -> type 4 with the gate integrator
     gain K_g = 1/(r Tr) and the rate limits [-VELM, VELM] (PSS/E).  andes: as ANDES 2.0
     solves it on the system base (``hygov.py``: the integrator without 1/(r Tr), the rate
     limits shifted by -e/r, the water column and D_turb power-scaled), on the machine base
-    K_g = SBASE/MBASE, T_w and D_turb times MBASE/SBASE, rate limits relative."""
+    K_g = SBASE/MBASE, T_w and D_turb times MBASE/SBASE, rate limits relative.  psse: the
+    PI's whole output is the desired gate, rate- and position-limited (tg_con
+    psse_gate = 1; OpenIPSL's PSS/E-verified ``PSSE.TG.HYGOV``: the lead (1 + s T_r)/(r
+    T_r) into a rate limiter and a limited integrator)."""
     v = DYR_MODELS["HYGOV"].values(rec.params)
     for name in ("r", "Tr", "TW"):
         if v[name] <= 0:
@@ -854,6 +859,8 @@ def _hygov(rec, gen, andes=False):
     if andes:
         s = gen["mbase"] / gen.get("sbase", 100.0)
         cols.update(Kg=1 / s, velm_rel=1.0, Tw=v["TW"] * s, Dt=v["Dturb"] * s)
+    if psse:
+        cols["psse_gate"] = 1.0
     return _tg_row(rec, gen, **cols)
 
 
@@ -1036,5 +1043,20 @@ _PSSE_MACHINE = {
     "GENSAE": (4.0, 1.0),
     "GENCLS": (0.0, 0.0),
 }
+
+
+def _exst1_psse(rec, gen):
+    """EXST1 as the PSS/E Model Library solves it (exc_con psse_st1 = 1): its output
+    limits [V_t VRMIN - K_C I_fd, V_t VRMAX - K_C I_fd] and its rate feedback of V_R
+    before them (OpenIPSL's PSS/E-verified ``PSSE.ES.EXST1``; PowerSimulationsDynamics.jl's
+    EXST1, within 1e-3 pu of PSS/E's run tests/data/psse_runs/EXST1)."""
+    return _exc_row(rec, gen, psse_st1=1.0)
+
+
+#: conventions="psse": the controls whose PSS/E Model Library equations differ from
+#: stabctl's own reading (the others as "pst"; docs/pst_models.md 12.6)
+_PSSE_MAPPERS = {"EXST1": _exst1_psse, "HYGOV": lambda rec, gen: _hygov(rec, gen, psse=True)}
+#: conventions -> the mappers that replace `_MAPPERS`' for it
+_CONVENTION_MAPPERS = {"andes": _ANDES_MAPPERS, "psse": _PSSE_MAPPERS}
 CONVENTIONS = ("psse", "pst", "andes")
 _WIDTH = {kind: len(family.params) for kind, family in FAMILY.items()}

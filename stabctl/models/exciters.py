@@ -295,6 +295,16 @@ EXCITER = Family(
             "PSS/E and ANDES IEEEVC); 0 with X_C: V_t",
         ),
         Param("Xcomp", "pu", 47, doc="load compensation reactance X_C, machine base"),
+        Param(
+            "psse_st1",
+            "code",
+            48,
+            choices=(0, 1),
+            doc="EXST1: 1 the PSS/E Model Library's output limits [V_t VRMIN - K_C I_fd, "
+            "V_t VRMAX - K_C I_fd] and rate feedback of V_R before them (OpenIPSL's "
+            "PSSE.ES.EXST1, PowerSimulationsDynamics.jl); 0 (default) the lower limit "
+            "V_t VRMIN and the feedback of the field voltage",
+        ),
     ),
     dyr=(
         # IEEEVC (the IEEE 1981 load compensator, a record of its own beside the machine's
@@ -1316,11 +1326,13 @@ def ac_initial_exciter(p: ExciterParams, Efd):
 
 def _check_st1_initial(p: ExciterParams, Efd, eterm, VA):
     """EXST1, ESST1A and EXAC4 at the initial point: Efd0 inside its output limits, [V_t
-    Vrmin, V_t Vrmax - K_C I_fd0] (EXAC4: [Vrmin - K_C I_fd0, Vrmax - K_C I_fd0]) with
+    Vrmin, V_t Vrmax - K_C I_fd0] (EXAC4: [Vrmin - K_C I_fd0, Vrmax - K_C I_fd0]; EXST1
+    with psse_st1: [V_t Vrmin - K_C I_fd0, V_t Vrmax - K_C I_fd0]) with
     I_fd0 = Efd0, the regulator input VA/K_A inside [VImin, VImax] (VA: Efd0, or ESST1A's
     `st1a_regulator_output`), ESST1A's VA inside [VAmin, VAmax]; raises CaseError."""
     ac4 = p.kind == AC4
-    lo = np.where(ac4, p.Vrmin - p.KC * Efd, eterm * p.Vrmin)
+    drop = np.where(ac4 | ((p.kind == ST1) & (p.psse_st1 == 1)), p.KC * Efd, 0.0)
+    lo = np.where(ac4, p.Vrmin, eterm * p.Vrmin) - drop
     hi = np.where(ac4, p.Vrmax, eterm * p.Vrmax) - p.KC * Efd
     bad = np.isin(p.kind, (ST1, ST1A, AC4)) & (
         beyond(Efd, lo, hi)
@@ -1635,16 +1647,20 @@ def _st3_derivatives(P, x, i, err, efd, dx, ieee):
 @kernel(inline="always")
 def _st1_field_voltage(P, x, i, VTR_alg, ifd):
     """EXST1: V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd] (ifd the machine's field
-    current)."""
-    return clip(x[2, i], VTR_alg * P[i, E.VRMIN], VTR_alg * P[i, E.VRMAX] - P[i, E.KC] * ifd)
+    current); psse_st1: to [V_t Vrmin - K_C I_fd, V_t Vrmax - K_C I_fd] (PSS/E)."""
+    drop = P[i, E.KC] * ifd
+    lo = VTR_alg * P[i, E.VRMIN] - (drop if P[i, E.PSSE_ST1] == 1 else 0.0)
+    return clip(x[2, i], lo, VTR_alg * P[i, E.VRMAX] - drop)
 
 
 @kernel(inline="always")
 def _st1_derivatives(P, x, i, err, efd, dx):
     """EXST1 (PSS/E; docs/pst_models.md 2.4): the rate feedback (state R_f, only with
-    K_F != 0) subtracted before the V_I limits."""
+    K_F != 0) of the field voltage efd (psse_st1: of V_R, before the output limits)
+    subtracted before the V_I limits."""
     if P[i, E.KF] != 0:
-        VF, dx[3, i] = washout(efd, x[3, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
+        fed = x[2, i] if P[i, E.PSSE_ST1] == 1 else efd
+        VF, dx[3, i] = washout(fed, x[3, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
         err = err - VF
     VA, dx[1, i] = leadlag_input_state(
         clip(err, P[i, E.VIMIN], P[i, E.VIMAX]), x[1, i], P[i, E.TCTB], P[i, E.TB]

@@ -69,6 +69,12 @@ _HYGOV_ALT = {
     3: ("qNL", " | HYGOV: no-load flow qNL, pu"),
     4: ("Kg", " | HYGOV: gate integrator gain, 1/s (PSS/E: 1/(r Tr))"),
     5: ("velm_rel", " | HYGOV: 1 gate rate limits [-VELM, VELM] - e/r (ANDES), 0 [-VELM, VELM]"),
+    6: (
+        "psse_gate",
+        " | HYGOV: 1 PSS/E's desired gate: the PI (1 + s Tr)/(r Tr s) of e whole, its rate "
+        "limited to [-VELM, VELM] and its position non-windup on [GMIN, GMAX] (OpenIPSL's "
+        "PSSE.TG.HYGOV), 0 the integral part x_g alone (c = x_g + e/r, ANDES hygov.py)",
+    ),
 }
 
 GOVERNOR = Family(
@@ -305,7 +311,7 @@ STATE_NAMES = {
     HYGOV4: ("pilot", "gate", "dashpot", "flow"),
 }
 #: HYGOV's fields in tg_con columns 17-21 (alternative names of K1..K5)
-HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel")
+HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel", "psse_gate")
 #: tg_con fields (stabctl.models.governors.GOVERNOR) the kernels take as given: columns 3-16
 #: and GAST's 25-26 (the IEEEG1 fractions K1..K8 enter summed per shaft stage, K)
 TABLE_FIELDS = GOVERNOR.names[2:16] + GOVERNOR.names[24:26]
@@ -334,8 +340,8 @@ class GovernorParams(Declared):
     K5+K6, K7+K8, or a cross-compound IEEEG1's HP fractions K1, K3, K5, K7, whose LP
     fractions K2, K4, K6, K8 are K_lp (n_tg, 4; 0 otherwise) driving machine row mac2 (-1
     none) with its power times lp_base (the HP machine's MVA over the LP machine's); Rp,
-    rt, qNL, Kg, velm_rel: HYGOV's columns 17-21 (0 for other types; T4 is its T_w, T5
-    its A_t)."""
+    rt, qNL, Kg, velm_rel, psse_gate: HYGOV's columns 17-22 (0 for other types; T4 is its
+    T_w, T5 its A_t)."""
 
     K: np.ndarray
     mac2: np.ndarray
@@ -346,6 +352,7 @@ class GovernorParams(Declared):
     qNL: np.ndarray
     Kg: np.ndarray
     velm_rel: np.ndarray
+    psse_gate: np.ndarray
 
     @property
     def n(self) -> int:
@@ -735,12 +742,17 @@ def _hygov_pmech(P, x, k, omega, g):
 @kernel(inline="always")
 def _hygov_derivatives(P, x, k, omega, dx):
     """HYGOV: filter, rate- and position-limited gate integrator, gate servo, water column
-    (module docstring; ANDES ``hygov.py``)."""
+    (module docstring; ANDES ``hygov.py``); psse_gate: the state is the desired gate c,
+    d c/dt = (e + T_r de/dt)/(r T_r) (the PI whole) rate- and position-limited (PSS/E)."""
     e = x[0, k]
-    c = x[1, k] + e / P[k, G.RT]
+    psse = P[k, G.PSSE_GATE] == 1
+    c = x[1, k] if psse else x[1, k] + e / P[k, G.RT]
     dx[0, k] = lag(P[k, G.PREF] - (omega - 1.0) - P[k, G.RP] * c, e, P[k, G.TC])[1]
-    shift = P[k, G.VELM_REL] * e / P[k, G.RT]
-    rate = clip(P[k, G.KG] * e, P[k, G.UC] - shift, P[k, G.UO] - shift)
+    if psse:
+        rate = clip(P[k, G.KG] * e + dx[0, k] / P[k, G.RT], P[k, G.UC], P[k, G.UO])
+    else:
+        shift = P[k, G.VELM_REL] * e / P[k, G.RT]
+        rate = clip(P[k, G.KG] * e, P[k, G.UC] - shift, P[k, G.UO] - shift)
     x[1, k], dx[1, k] = nonwindup(x[1, k], rate, P[k, G.TMIN], P[k, G.TMAX], _AT_LIMIT, 0.0)
     dx[2, k] = lag(c, x[2, k], P[k, G.TS])[1]
     dx[3, k] = (1.0 - _head(x[3, k], x[2, k])) / P[k, G.T4]

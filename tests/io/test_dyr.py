@@ -13,6 +13,7 @@ from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
 from stabctl.io import load_case
 from stabctl.io.dyr import VRMAX_UNLIMITED, dyr_tables, exp_saturation, read_dyr
+from stabctl.io.psse import load_psse
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
 from stabctl.models import machines as mac
@@ -176,6 +177,39 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
         )
     )
     np.testing.assert_allclose(p.K[0], [0, 0, 0.3, 0.7])
+
+
+def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently():
+    """conventions="psse" (the default) marks WECC's EXST1 rows psse_st1 = 1 (PSS/E's
+    output limits and rate feedback, docs/pst_models.md 12.5) and leaves every other
+    exciter, PSS and governor column as "pst" reads it."""
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    pst = dyr_tables(recs, gens, on_unsupported="skip", conventions="pst")
+    psse = dyr_tables(recs, gens, on_unsupported="skip")
+    col = ExciterTable.columns().index("psse_st1")
+    st1 = pst.exc_con[:, 0] == exc.ST1
+    assert st1.sum() > 0
+    assert np.all(psse.exc_con[st1, col] == 1) and np.all(psse.exc_con[~st1, col] == 0)
+    assert np.all(pst.exc_con[:, col] == 0)
+    others = np.arange(pst.exc_con.shape[1]) != col
+    np.testing.assert_array_equal(pst.exc_con[:, others], psse.exc_con[:, others])
+    np.testing.assert_array_equal(pst.tg_con, psse.tg_con)  # WECC has no HYGOV
+    np.testing.assert_array_equal(pst.pss_con, psse.pss_con)
+
+
+def test_psse_conventions_read_hygov_with_pss_e_gate():
+    """conventions="psse" marks HYGOV psse_gate = 1 (tg_con column 22, the PI's whole
+    output rate- and position-limited, docs/pst_models.md 12.5), every other column as
+    "pst"; PSS/E's HYGOV run (tests/data/psse_runs/HYGOV)."""
+    run = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "HYGOV"
+    raw, dyr = run / "ThreeBusMulti.raw", run / "ThreeBus_HYGOV.dyr"
+    psse = load_psse(raw, dyr).governors
+    pst = load_psse(raw, dyr, conventions="pst").governors
+    n = len(GovernorTable.columns())
+    assert psse.col(22).tolist() == [1.0] and pst.col(22).tolist() == [0.0]
+    for c in set(range(1, n + 1)) - {22}:
+        np.testing.assert_array_equal(psse.col(c), pst.col(c))
 
 
 def test_andes_conventions_change_only_what_andes_reads_differently():

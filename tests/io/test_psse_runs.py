@@ -9,12 +9,18 @@ flips to a failure ("XPASS(strict)") when it comes within tolerance: then remove
 
 import numpy as np
 import pytest
-from psse_reference import BY_NAME, RUNS, compare, psse_channels
+from psse_reference import BY_NAME, DATA, RUNS, compare, psse_channels
+
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import LineTrip
+from stabctl.errors import InputError
+from stabctl.io.psse import load_psse
 
 #: run -> why it is short today (measured with benchmarks/psse_runs.py)
 SHORT = {
-    "GAST": "simulate refuses GAST starting at its load limit AT = Pm0 = 1.0",
-    "ESST1A": "simulate: numerical instability of exc.VA at 0.33 s with h = 5 ms",
+    "RENA_DEFAULT": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
+    "RENA_REF_FLAG": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
+    "RENA_REF_FLAG_noV": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
 }
 
 
@@ -44,3 +50,17 @@ def test_psse_event_rows_drop_the_pre_event_value():
     t, m = psse_channels(BY_NAME["EXST1"])
     assert 1.0 not in t and 0.995 in t and 1.005 in t
     assert np.all(np.diff(t) > 0)
+
+
+def test_esst1a_regulator_loop_sets_the_step():
+    """PSS/E's ESST1A run: its regulator closed through the rate feedback (K_A = 200, T_A
+    = 0.1 s, K_F = T_F = 0.01 s) has its pole at -1109 1/s (9.0e-4 s,
+    `ExciterParams.rate_feedback_time_constants`): the case's fastest time constant, so
+    Heun's default step is 4.5e-4 s and PSS/E's 5 ms is refused at once, naming the loop,
+    where it diverged at 0.33 s before."""
+    d = DATA / "ESST1A"
+    sim = Simulator(load_psse(d / "TVC_System_32.raw", d / "TVC_System.dyr"))
+    assert sim.fastest[0] == pytest.approx(1 / 1109.1, rel=1e-3)
+    assert "regulator loop" in sim.fastest[1]
+    with pytest.raises(InputError, match=r"step 0.005 s is too large.*regulator loop"):
+        sim.run([LineTrip(1, 4, 1.0)], 2.0, h=0.005)

@@ -68,6 +68,8 @@ T3 += [0.1, 1.0, *[0] * 10, 18.0]
 #: VGmax (19-20), VBmax (33), K_PR K_IR (34-35), K_PM K_IM VMmax VMmin (40-43)
 ST4B = [12, 1, 0.01, 0, 0.1, 0, 0, 8.0, 0.0, 0, 0, 0, 4.0, 0, 0.1, 0.01, 0.1, 0, 1.0, 20.0]
 ST4B += [*[0] * 12, 18.0, 1.0, 0.5, 0, 0, 0, 0, 1.0, 0.5, 8.0, 0.0]
+#: EXST1 read as PSS/E (psse_st1, exc_con column 48)
+ST1_PSSE = ST1 + [0] * (47 - len(ST1)) + [1]
 ROWS = {
     "smpexc": SMP,
     "SCRX": SCRX,
@@ -76,6 +78,7 @@ ROWS = {
     "IEEET2": IEEET2,
     "ST3": ST3,
     "EXST1": ST1,
+    "EXST1_psse": ST1_PSSE,
     "ESST1A": ST1A,
     "EXAC1": AC1,
     "EXAC4": AC4,
@@ -235,6 +238,32 @@ def test_exst1_rate_feedback_is_a_washout_on_efd():
     error before the V_I limits; its state lags Efd by T_F."""
     P, x = started(ST1)
     dx = derivatives(P, x, efd=EFD0 + 0.5)
+    assert dx[3, 0] == pytest.approx(0.5 / 1.0, rel=1e-14)
+    err = P[0, exc.E.VREF] - x[0, 0] - 0.01 / 1.0 * 0.5
+    assert dx[1, 0] == pytest.approx((err - x[1, 0]) / 0.02, rel=1e-12)
+
+
+def test_exst1_psse_output_limits_both_lose_the_rectifier_drop():
+    """EXST1 as PSS/E (OpenIPSL's PSSE.ES.EXST1, PowerSimulationsDynamics.jl): the field
+    voltage V_R clipped to [V_t VRMIN - K_C I_fd, V_t VRMAX - K_C I_fd]; stabctl's own
+    reading keeps V_t VRMIN: V_R = -5 at V_t 1.02, I_fd 2 (K_C 0.1, VRMIN -3) gives -3.26
+    against -3.06."""
+    for row, lo in ((ST1_PSSE, 1.02 * -3.0 - 0.1 * 2.0), (ST1, 1.02 * -3.0)):
+        P, x = started(row)
+        x[2, 0] = -5.0
+        assert exc.field_voltage_at(P, x, 0, VT0, 0.0, VB0, 2.0, True) == pytest.approx(lo)
+        x[2, 0] = 9.0
+        hi = exc.field_voltage_at(P, x, 0, VT0, 0.0, VB0, 2.0, True)
+        assert hi == pytest.approx(1.02 * 4.0 - 0.1 * 2.0)
+
+
+def test_exst1_psse_rate_feedback_is_a_washout_on_vr():
+    """EXST1 as PSS/E: the feedback s K_F/(1 + s T_F) takes V_R before the output limits
+    (OpenIPSL's imDerivativeLag.u = EFD1), not the field voltage handed over: V_R 0.5
+    above rest moves R_f at 0.5/T_F whatever the field voltage."""
+    P, x = started(ST1_PSSE)
+    x[2, 0] += 0.5
+    dx = derivatives(P, x, efd=EFD0)
     assert dx[3, 0] == pytest.approx(0.5 / 1.0, rel=1e-14)
     err = P[0, exc.E.VREF] - x[0, 0] - 0.01 / 1.0 * 0.5
     assert dx[1, 0] == pytest.approx((err - x[1, 0]) / 0.02, rel=1e-12)

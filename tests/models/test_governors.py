@@ -174,6 +174,25 @@ def test_hygov_gate_integrator_is_non_windup_and_rate_limited():
     assert dx[1, 0] == 0.0 and x[1, 0] == 1.0
 
 
+def test_hygov_psse_gate_is_the_whole_pi_rate_and_position_limited():
+    """HYGOV as PSS/E (psse_gate, tg_con column 22; OpenIPSL's PSSE.TG.HYGOV: the lead
+    (1 + s T_r)/(r T_r) of e into the VELM rate limiter and the [GMIN, GMAX] integrator):
+    the state is the desired gate c itself, d c/dt = K_g e + (de/dt)/r.  At rest and 1 %
+    over speed de/dt = -0.01/T_f = -0.2, so c moves at -0.2/r = -0.4, limited to -VELM;
+    at 0.1 % it moves freely at -0.04 where stabctl's own reading (the integral part
+    alone) moves at K_g e = 0; the gate servo follows c, not c + e/r."""
+    P, x = started(HYGOV + [1.0])
+    assert derivatives(P, x, 1.01)[1, 0] == pytest.approx(-0.2, rel=1e-14)  # -VELM
+    assert derivatives(P, x, 1.001)[1, 0] == pytest.approx(-0.001 / 0.05 / 0.5, rel=1e-12)
+    assert derivatives(*started(HYGOV), 1.001)[1, 0] == 0.0
+    x[0, 0], x[1, 0] = 0.1, x[2, 0] + 0.05  # e 0.1: c + e/r would be 0.2 above c
+    assert derivatives(P, x)[2, 0] == pytest.approx(0.05 / 0.5, rel=1e-12)
+    P[0, gov.G.PREF] += 1.0
+    x[1, 0] = 1.3  # beyond GMAX, opening: put back with a zero derivative
+    dx = derivatives(P, x)
+    assert dx[1, 0] == 0.0 and x[1, 0] == 1.0
+
+
 def test_hygov_water_column_starts_at_rated_head():
     """HYGOV: at the initial point the flow is q0 = pm0/A_t + q_NL at head (q/g)^2 = 1;
     pm drops by D_turb g dw at a speed step."""
