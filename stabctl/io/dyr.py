@@ -13,7 +13,9 @@ field each parameter is copied to are declared once, with the table columns, in 
 model modules (`stabctl.models.declaration.DyrModel`); the mappers here only compute
 what is not a copy
 (unit changes, products, saturation fits, the PSS type).  Mapping and the known
-modelling differences: docs/pst_models.md section 12.
+modelling differences: docs/pst_models.md section 12.  The converter records (REGCA1 and
+its controls) are parsed here (`CONVERTER_DYR`) and mapped by
+:mod:`stabctl.io.dyr_converters`.
 
 Units: machine, exciter and governor data on the machine base `mbase` (MVA), as PSS/E.
 """

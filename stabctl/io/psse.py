@@ -7,6 +7,10 @@ is the k-th in-service generator of the RAW file); where several machines share 
 each takes the share PG_k / sum(PG) of the bus generation and QG_k / sum(QG) of its Q
 (``mac_con`` columns 22, 23).
 
+A generator with a ``REGCA1`` record is a converter plant, a row of ``ibr_con`` with its
+``REECA1``/``REECB1``, ``REPCA1`` and wind records (:mod:`stabctl.io.dyr_converters`),
+not a machine; machines are numbered in RAW order without them.
+
 Generators without a machine model in the DYR file are refused (``unmodelled="error"``)
 or netted (``"net"``, PSS/E's netting: a negative constant-power load at their bus,
 :func:`stabctl.io.psse_raw.read_raw`), listed in one warning; wind and solar plants of

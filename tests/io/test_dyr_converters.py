@@ -266,3 +266,18 @@ def test_a_plant_sharing_its_bus_takes_its_own_generation(tmp_path):
     res = Simulator(case, q_limits=False).run([], 0.5, h=0.005)
     assert np.max(np.abs(res.speed - 1.0)) < 1e-9
     assert np.max(np.abs(res.ibr_p[:, 0] - 0.4)) < 1e-9
+
+
+@pytest.mark.parametrize(
+    "extra, why",
+    [
+        ("103 'WTDTA1' 1 3.0 0.0 0.5 1.0 1.0 /\n", "a wind turbine without a REECA1"),
+        ("103 'WTARA1' 1 1.0 0.0 /\n", "a wind turbine without a REECA1"),
+    ],
+)
+def test_wind_records_of_a_reecb1_plant_leave_it_out(tmp_path, extra, why):
+    """stabctl's wind turbine is a REECA1's (as import-andes): RENA's REECB1 plant with a
+    wind record is left out whole, each record named with why."""
+    model = extra.split("'")[1]
+    with pytest.raises(CaseError, match=rf"plant\.dyr:21 {model} at bus 103 '1': {why}"):
+        import_psse(RAW, _dyr(tmp_path, [DYR.read_text(), extra]))
