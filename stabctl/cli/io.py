@@ -419,7 +419,7 @@ def import_andes(
     case, islands = _leave_out_islands(imported.case, leave_out_islands)
     dv, da = _powerflow_gap(imported, case)
     against_raw = (
-        None if imported.data_solution is None else _raw_gap(case, imported.data_solution, False)
+        None if imported.data_solution is None else _raw_gap(case, imported.data_solution, True)
     )
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
@@ -455,7 +455,7 @@ def import_andes(
             click.echo(f"  {what}: {item}")
     if dv is not None:
         click.echo(f"power flow against ANDES's: max |dV| {dv:.1e} pu, max |d angle| {da:.1e} rad")
-    _echo_raw_gap(against_raw, "Q limits off, as ANDES's")
+    _echo_raw_gap(against_raw, "Q limits on, as PSS/E solved it")
 
 
 #: largest difference (pu, rad) between a case's power flow and the RAW file's own
