@@ -501,7 +501,8 @@ def _raw_gap(case, solution, q_limits: bool) -> dict | None:
             f"the power flow differs from the RAW file's own solution by up to "
             f"{gap['vmag_diff_pu']:.1e} pu (bus {gap['vmag_bus']}), "
             f"{gap['angle_diff_rad']:.1e} rad (bus {gap['angle_bus']}): the case does not "
-            "start where the RAW file says",
+            "start where the RAW file says (network data read otherwise, or a RAW file "
+            "whose voltages are not its solved power flow)",
             stacklevel=2,
         )
     return gap
