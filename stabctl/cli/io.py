@@ -314,7 +314,7 @@ def import_psse(
     from stabctl.io.psse import import_psse as run_import
 
     out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
-    case, left_out, netted, solution = run_import(
+    case, left_out, netted, solution, changed = run_import(
         raw_path,
         dyr_path,
         "skip" if skip_unsupported else "error",
@@ -338,6 +338,7 @@ def import_psse(
         nonconforming_loads=len(case.loads),
         left_out=list(left_out),
         netted=list(netted),
+        changed=list(changed),
         infeasible=list(infeasible),
         islands=list(islands),
         powerflow_against_raw=against_raw,
@@ -350,7 +351,7 @@ def import_psse(
         f"{len(infeasible)} control(s) outside their limits left out"
         + (f", {len(islands)} island(s) without a swing bus left out" if islands else "")
     )
-    for what, items in (("left out", left_out), ("netted", netted)):
+    for what, items in (("left out", left_out), ("netted", netted), ("changed", changed)):
         for item in items:
             click.echo(f"  {what}: {item}")
     _echo_raw_gap(against_raw, "Q limits on, as simulate solves it")

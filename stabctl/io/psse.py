@@ -39,14 +39,16 @@ _UNMODELLED = ("error", "net")
 
 class PsseImport(NamedTuple):
     """What :func:`import_psse` gives: the case, the records left out and the generators
-    netted, each as ``"file:line record: why"`` text, and the RAW file's own power-flow
+    netted, each as ``"file:line record: why"`` text, the RAW file's own power-flow
     solution (:attr:`stabctl.io.psse_raw.RawData.solution`: bus number, VM pu, VA
-    degrees; shape (n, 3)) to compare the case's power flow with."""
+    degrees; shape (n, 3)) to compare the case's power flow with, and the DYR records
+    read with a value other than the file's (:attr:`stabctl.io.dyr.DyrTables.changed`)."""
 
     case: Case
     left_out: tuple[str, ...]
     netted: tuple[str, ...]
     solution: np.ndarray
+    changed: tuple[str, ...] = ()
 
 
 def load_psse(
@@ -113,10 +115,11 @@ def import_psse(
     raw = read_raw(raw_path, loads=loads, net=net)
     mats = raw.matrices()
     unsupported = [str(s) for s in raw.unsupported]
+    changed: tuple[str, ...] = ()
     if records is not None:
         off = {(bus, machine_id(gid)) for bus, gid in raw.out_of_service}
         records = [r for r in records if (r.bus, r.id) not in off]
-        dyn, dyr_unsupported = _dynamic_tables(raw, records, conventions)
+        dyn, dyr_unsupported, changed = _dynamic_tables(raw, records, conventions)
         mats.update(dyn)
         unsupported += dyr_unsupported
     where = _files(raw_path, dyr_path)
@@ -132,7 +135,14 @@ def import_psse(
     case = case_from_matrices(
         mats, raw.name, source=_source(raw_path, dyr_path), description=raw.title
     )
-    return PsseImport(case, tuple(unsupported), netted, raw.solution)
+    if changed:
+        warnings.warn(
+            f"{where}: read {len(changed)} record(s) with a value other than the file's: "
+            + "; ".join(changed),
+            UserWarning,
+            stacklevel=3,
+        )
+    return PsseImport(case, tuple(unsupported), netted, raw.solution, changed)
 
 
 def _without_machine(records):
@@ -159,8 +169,9 @@ def _without_machine(records):
     return net
 
 
-def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]]:
-    """PST dynamic matrices from the DYR records and the unsupported ones (as text)."""
+def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str], tuple]:
+    """PST dynamic matrices from the DYR records, the unsupported ones (as text) and those
+    read with a value other than the file's."""
     from stabctl.io.dyr import dyr_tables
 
     gens = [{**g.as_dyr(), "sbase": raw.base_mva} for g in raw.generators]
@@ -169,7 +180,11 @@ def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]
     for key in ("mac_con", "exc_con", "pss_con", "tg_con"):
         if getattr(tables, key) is not None:
             mats[key] = getattr(tables, key)
-    return mats, [_dyr_text(r, why) for r, why in zip(tables.unsupported, tables.why)]
+    return (
+        mats,
+        [_dyr_text(r, why) for r, why in zip(tables.unsupported, tables.why)],
+        tables.changed,
+    )
 
 
 def _dyr_text(rec, why: str) -> str:
