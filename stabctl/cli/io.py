@@ -304,7 +304,7 @@ def import_psse(
     within their own limits make simulate refuse the case; --leave-out-infeasible leaves
     them out, each named. The summary names each record left out and generator netted
     with why, and compares the power flow (Q limits on) with the RAW's own solution
-    (largest |dV|, |d angle| and their buses; a warning above 1e-3).
+    (the largest voltage and angle differences and their buses; a warning above 1e-3).
 
     \b
     Example:
