@@ -314,7 +314,7 @@ def import_psse(
     within their own limits make simulate refuse the case; --leave-out-infeasible leaves
     them out, each named. The summary names each record left out and generator netted
     with why, and compares the power flow (Q limits on) with the RAW's own solution
-    (largest |dV|, |d angle| and their buses; a warning above 1e-3).
+    (the largest voltage and angle differences and their buses; a warning above 1e-3).
 
     \b
     Example:
@@ -324,7 +324,7 @@ def import_psse(
     from stabctl.io.psse import import_psse as run_import
 
     out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
-    case, left_out, netted, solution = run_import(
+    case, left_out, netted, solution, changed = run_import(
         raw_path,
         dyr_path,
         "skip" if skip_unsupported else "error",
@@ -348,6 +348,7 @@ def import_psse(
         nonconforming_loads=len(case.loads),
         left_out=list(left_out),
         netted=list(netted),
+        changed=list(changed),
         infeasible=list(infeasible),
         islands=list(islands),
         powerflow_against_raw=against_raw,
@@ -360,7 +361,7 @@ def import_psse(
         f"{len(infeasible)} control(s) outside their limits left out"
         + (f", {len(islands)} island(s) without a swing bus left out" if islands else "")
     )
-    for what, items in (("left out", left_out), ("netted", netted)):
+    for what, items in (("left out", left_out), ("netted", netted), ("changed", changed)):
         for item in items:
             click.echo(f"  {what}: {item}")
     _echo_raw_gap(against_raw, "Q limits on, as simulate solves it")
@@ -432,7 +433,7 @@ def import_andes(
     case, islands = _leave_out_islands(imported.case, leave_out_islands)
     dv, da = _powerflow_gap(imported, case)
     against_raw = (
-        None if imported.data_solution is None else _raw_gap(case, imported.data_solution, False)
+        None if imported.data_solution is None else _raw_gap(case, imported.data_solution, True)
     )
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
@@ -468,7 +469,7 @@ def import_andes(
             click.echo(f"  {what}: {item}")
     if dv is not None:
         click.echo(f"power flow against ANDES's: max |dV| {dv:.1e} pu, max |d angle| {da:.1e} rad")
-    _echo_raw_gap(against_raw, "Q limits off, as ANDES's")
+    _echo_raw_gap(against_raw, "Q limits on, as PSS/E solved it")
 
 
 #: largest difference (pu, rad) between a case's power flow and the RAW file's own
@@ -514,7 +515,8 @@ def _raw_gap(case, solution, q_limits: bool) -> dict | None:
             f"the power flow differs from the RAW file's own solution by up to "
             f"{gap['vmag_diff_pu']:.1e} pu (bus {gap['vmag_bus']}), "
             f"{gap['angle_diff_rad']:.1e} rad (bus {gap['angle_bus']}): the case does not "
-            "start where the RAW file says",
+            "start where the RAW file says (network data read otherwise, or a RAW file "
+            "whose voltages are not its solved power flow)",
             stacklevel=2,
         )
     return gap

@@ -1128,7 +1128,8 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
             else:  # ANDES's own model (TG2, HYGOV4): its parameters by name, as given
                 params = tuple(float(m.params[f].vin[k]) for f in fields)
             rec = (by_device or {}).get((name, k))
-            if rec is not None:
+            decl = None if rec is None else DYR_MODELS.get(rec.model)
+            if rec is not None and decl is not None and len(rec.params) == len(decl.fields):
                 params = _against_dyr(rec, psse, params, changed, unlike)
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused, _grouped(changed), unlike
@@ -1147,17 +1148,18 @@ def _dyr_against_andes(ss, dyr) -> tuple[list[str], dict]:
 
     spec = _psse_yaml()
     order = [m for m in sort_psse_models(spec, ss) if m in spec]
-    records = read_dyr(dyr)
+    records = read_dyr(dyr)  # its model names upper case; ANDES's Toggle, Fault are not
+    known = {m.upper() for m in order}
     dropped = [
         f"{r.label()}: model {r.model} is not read by ANDES's DYR reader (not in its "
         "psse-dyr.yaml): left out"
         for r in records
-        if r.model not in order
+        if r.model not in known
     ]
     by_dest: dict[str, list] = {}
     for model in order:
         by_dest.setdefault(spec[model]["destination"], []).extend(
-            r for r in records if r.model == model
+            r for r in records if r.model == model.upper()
         )
     by_device = {
         (dest, k): rec

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import re
+from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -86,7 +87,10 @@ class DyrTables:
     tables (MachineTable, ExciterTable, PssTable, GovernorTable): mac_con (n_gen, 24),
     exc_con (n, 24), pss_con (n, 24), tg_con (n, 24) (None when no record of that kind);
     unsupported: the records skipped (`on_unsupported="skip"`), in file order; why: the
-    reason each was skipped (same order), e.g. "model TOGGLE is not mapped"."""
+    reason each was skipped (same order), e.g. "model TOGGLE is not mapped"; changed: the
+    records read with a value other than the file's, ``"file:line MODEL (bus B, id I):
+    what"`` (VRMAX = 0 read as no upper limit; with conventions="andes" an SCRX read as
+    ANDES's SEXS with its defaults)."""
 
     mac_con: np.ndarray
     exc_con: np.ndarray | None
@@ -94,10 +98,21 @@ class DyrTables:
     tg_con: np.ndarray | None
     unsupported: tuple[DyrRecord, ...]
     why: tuple[str, ...] = ()
+    changed: tuple[str, ...] = ()
 
 
 class _Unsupported(Exception):
     """A record of a model (or model option) stabctl does not represent."""
+
+
+#: the records read with a value other than the file's, while `dyr_tables` maps them
+_CHANGED: ContextVar[list[str]] = ContextVar("_CHANGED")
+
+
+def _read_as(rec, what: str) -> None:
+    """Name record ``rec`` as read with a value other than its file's (``what``) in the
+    `DyrTables.changed` of the `dyr_tables` call mapping it."""
+    _CHANGED.get().append(f"{rec.label()}: {what}")
 
 
 # -- parsing ----------------------------------------------------------------------------------
@@ -320,7 +335,12 @@ def dyr_tables(
         raise CaseError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
     if conventions not in CONVENTIONS:
         raise CaseError(f"conventions must be one of {CONVENTIONS}, got {conventions!r}")
-    rows, skipped = _map_records(records, generators, conventions)
+    token = _CHANGED.set([])
+    try:
+        rows, skipped = _map_records(records, generators, conventions)
+        changed = tuple(_CHANGED.get())
+    finally:
+        _CHANGED.reset(token)
     if skipped and on_unsupported == "error":
         raise CaseError(
             "unsupported DYR records (use on_unsupported='skip' to leave them "
@@ -336,6 +356,7 @@ def dyr_tables(
         tg_con=tables["governor"],
         unsupported=tuple(r for r, _ in skipped),
         why=tuple(why for _, why in skipped),
+        changed=changed,
     )
 
 
@@ -600,7 +621,7 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False):
         v = decl.values(rec.params)
         cols = {}
         if zero_vrmax_unlimited and v["VRMAX"] == 0:
-            cols["Vrmax"] = VRMAX_UNLIMITED
+            cols["Vrmax"] = _unlimited_vrmax(rec)
         if v.get("Switch", 0.0) != 0:
             raise _Unsupported(f"Switch = {v['Switch']} is not modelled (only 0)")
         points = (v["E1"], v["SE(E1)"], v["E2"], v["SE(E2)"])
@@ -643,7 +664,12 @@ ANDES_SEXS_DEFAULTS = (0.4, 5.0, 20.0, 1.0, -99.0, 99.0)
 def _scrx_andes(rec, gen):
     """SCRX as ANDES 2.0 reads it: its ``psse-dyr.yaml`` makes an SCRX record a SEXS
     passing only the machine, so every parameter takes SEXS's default
-    (:data:`ANDES_SEXS_DEFAULTS`), never bus fed."""
+    (:data:`ANDES_SEXS_DEFAULTS`), never bus fed; named as read so."""
+    _read_as(
+        rec,
+        "read as ANDES 2.0 reads it, a SEXS with SEXS's defaults (TA/TB TB K TE EMIN EMAX "
+        f"= {' '.join(f'{x:g}' for x in ANDES_SEXS_DEFAULTS)}), CSWITCH and rc/rfd not read",
+    )
     return EXCITER.dyr_row(
         DYR_MODELS["SEXS"],
         ANDES_SEXS_DEFAULTS,
@@ -679,7 +705,13 @@ def _ieeet3(rec, gen):
     """IEEET3: TR KA TA VRMAX VRMIN TE KF TF KP KI VBMAX KE -> type 11; VRMAX = 0 read as
     no upper limit (ANDES ``ieeet3.py`` ``VRMAXc``)."""
     v = DYR_MODELS["IEEET3"].values(rec.params)
-    return _exc_row(rec, gen, **({"Vrmax": VRMAX_UNLIMITED} if v["VRMAX"] == 0 else {}))
+    return _exc_row(rec, gen, **({"Vrmax": _unlimited_vrmax(rec)} if v["VRMAX"] == 0 else {}))
+
+
+def _unlimited_vrmax(rec) -> float:
+    """:data:`VRMAX_UNLIMITED`, the upper limit a record's VRMAX = 0 is read as, named."""
+    _read_as(rec, f"VRMAX = 0 read as no upper limit ({VRMAX_UNLIMITED:g})")
+    return VRMAX_UNLIMITED
 
 
 def _esst4b(rec, gen, vgmax=VRMAX_UNLIMITED):

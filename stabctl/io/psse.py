@@ -43,14 +43,16 @@ _UNMODELLED = ("error", "net")
 
 class PsseImport(NamedTuple):
     """What :func:`import_psse` gives: the case, the records left out and the generators
-    netted, each as ``"file:line record: why"`` text, and the RAW file's own power-flow
+    netted, each as ``"file:line record: why"`` text, the RAW file's own power-flow
     solution (:attr:`stabctl.io.psse_raw.RawData.solution`: bus number, VM pu, VA
-    degrees; shape (n, 3)) to compare the case's power flow with."""
+    degrees; shape (n, 3)) to compare the case's power flow with, and the DYR records
+    read with a value other than the file's (:attr:`stabctl.io.dyr.DyrTables.changed`)."""
 
     case: Case
     left_out: tuple[str, ...]
     netted: tuple[str, ...]
     solution: np.ndarray
+    changed: tuple[str, ...] = ()
 
 
 def load_psse(
@@ -121,10 +123,12 @@ def import_psse(
     raw = read_raw(raw_path, loads=loads, net=net)
     mats = raw.matrices()
     unsupported = [str(s) for s in raw.unsupported]
+    changed: tuple[str, ...] = ()
+    lost: list[str] = []
     if records is not None:
         off = {(bus, machine_id(gid)) for bus, gid in raw.out_of_service}
         records = [r for r in records if (r.bus, r.id) not in off]
-        dyn, dyr_unsupported, lost = _dynamic_tables(raw, records, conventions)
+        dyn, dyr_unsupported, lost, changed = _dynamic_tables(raw, records, conventions)
         mats.update(dyn)
         unsupported += dyr_unsupported
     where = _files(raw_path, dyr_path)
@@ -145,7 +149,14 @@ def import_psse(
     case = case_from_matrices(
         mats, raw.name, source=_source(raw_path, dyr_path), description=raw.title
     )
-    return PsseImport(case, tuple(unsupported), netted, raw.solution)
+    if changed:
+        warnings.warn(
+            f"{where}: read {len(changed)} record(s) with a value other than the file's: "
+            + "; ".join(changed),
+            UserWarning,
+            stacklevel=3,
+        )
+    return PsseImport(case, tuple(unsupported), netted, raw.solution, changed)
 
 
 def _without_machine(records):
@@ -172,11 +183,12 @@ def _without_machine(records):
     return net
 
 
-def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str], list[str]]:
+def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str], list[str], tuple]:
     """PST dynamic matrices from the DYR records (the converter table ``ibr_con`` from
     the converter records, :mod:`stabctl.io.dyr_converters`; the machines, numbered 1, 2,
-    ... in RAW order, the other generators), the unsupported records (as text) and the
-    generators whose REGCA1 plant was left out (``bus B 'ID'``)."""
+    ... in RAW order, the other generators), the unsupported records (as text), the
+    generators whose REGCA1 plant was left out (``bus B 'ID'``) and the records read with
+    a value other than the file's."""
     from stabctl.io.dyr import dyr_tables, machine_id
     from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows, shares
 
@@ -205,6 +217,7 @@ def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]
         mats,
         [_dyr_text(r, why) for r, why in skipped],
         [f"bus {b} '{i}'" for b, i in sorted(lost)],
+        tables.changed,
     )
 
 

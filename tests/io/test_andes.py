@@ -1681,19 +1681,31 @@ def test_kundur_cross_compound_ieeeg1_matches_andes():
 def test_import_andes_n44_keeps_its_machines_and_says_what_changed():
     """N44's PSS/E files through ANDES's parser: its DYR reader leaves the 80 machines'
     fn at 60 Hz in the 50 Hz system; with on_unsupported="skip" they are kept at the
-    system frequency and reported so, not as left out (which the warning said)."""
+    system frequency and reported so, not as left out.  Its reader also skips the 53
+    STAB2A and 12 IEEET2 records (not in its psse-dyr.yaml) and reads the 54 SCRX records
+    as SEXS with SEXS's defaults (issue 50: both were silent): each named."""
     raw, dyr = CASES / "nordic44" / "N44_BC.raw", CASES / "nordic44" / "N44_BC.dyr"
     with pytest.raises(InputError, match=r"to keep with a change: GENROU \(80: "):
         read_andes_case(raw, dyr=dyr)
-    with pytest.warns(UserWarning) as record:
+    with pytest.warns(UserWarning):
         imported = read_andes_case(raw, dyr=dyr, on_unsupported="skip")
-    text = " ".join(str(w.message) for w in record)
-    assert "left out" not in text
-    assert imported.changed == (
+    assert imported.changed[0] == (
         "GENROU (80: GENROU_51, GENROU_52, GENROU_53, GENROU_1, GENROU_2, ...): fn = 60 Hz "
-        "read as the system frequency 50 Hz (one frequency in stabctl)",
+        "read as the system frequency 50 Hz (one frequency in stabctl)"
     )
-    assert imported.left_out == () and len(imported.case.machines) == 80
+    scrx = imported.changed[1:]
+    assert all(c.startswith("SCRX (") for c in scrx)
+    assert all(
+        c.endswith("ANDES reads the record as its SEXS, with that model's defaults") for c in scrx
+    )
+    assert sum(int(c.split("(", 1)[1].split(":", 1)[0]) for c in scrx) == 54
+    models = [x.split(" ", 2)[1] for x in imported.left_out]
+    assert (models.count("STAB2A"), models.count("IEEET2"), len(models)) == (53, 12, 65)
+    assert imported.left_out[0] == (
+        "N44_BC.dyr:4 STAB2A (bus 3000, id 1): model STAB2A is not read by ANDES's DYR "
+        "reader (not in its psse-dyr.yaml): left out"
+    )
+    assert len(imported.case.machines) == 80
 
 
 def test_import_andes_ignores_the_summary_notes():

@@ -192,7 +192,7 @@ def test_generators_without_a_machine_model_are_refused_or_netted(tmp_path):
     with pytest.raises(CaseError, match=r"machine 3 \(bus 3, id 2\).*--net-unmodelled"):
         load_psse(V33, dyr)
     with pytest.warns(UserWarning, match="netted 1 generator"):
-        case, left_out, netted, _ = import_psse(V33, dyr, unmodelled="net")
+        case, left_out, netted, _, _ = import_psse(V33, dyr, unmodelled="net")
     assert left_out == () and netted == (
         "five_bus_v33.raw:19 generator at bus 3 '2': no machine model record in the DYR data",
     )
@@ -409,7 +409,7 @@ def test_unsupported_records_refused_together_by_default(tmp_path):
 def test_unsupported_records_skipped_with_a_warning(tmp_path):
     path = _with_unsupported(tmp_path)
     with pytest.warns(UserWarning, match="left out 2 unsupported record"):
-        case, left_out, _, _ = import_psse(path, on_unsupported="skip")
+        case, left_out, *_ = import_psse(path, on_unsupported="skip")
     assert left_out == (
         "edited.raw:41 multi-section line record",
         "edited.raw:47 facts device record",
@@ -644,7 +644,9 @@ def test_an_unsupported_machine_record_is_named_not_called_missing(tmp_path):
     with pytest.raises(CaseError, match=r"1 unsupported record\(s\).*edited\.dyr:3 GENTPJ1"):
         import_psse(V33, dyr, unmodelled="net")
     with pytest.warns(UserWarning):
-        case, left_out, netted, _ = import_psse(V33, dyr, on_unsupported="skip", unmodelled="net")
+        case, left_out, netted, _, _ = import_psse(
+            V33, dyr, on_unsupported="skip", unmodelled="net"
+        )
     assert left_out == (
         "edited.dyr:3 GENTPJ1 at bus 3 '2': generator model not supported by stabctl (yet)",
     )
@@ -693,3 +695,27 @@ def test_power_flow_is_reported_against_the_raw_files_own_solution(tmp_path):
     gap = json.loads(res.stdout)["powerflow_against_raw"]
     assert gap["vmag_diff_pu"] < 1e-4 and gap["angle_diff_rad"] < 1e-4
     assert gap["vmag_bus"] in (1, 2, 3, 4) and gap["angle_bus"] in (1, 2, 3, 4)
+
+
+def test_a_dyr_value_read_otherwise_is_named_changed(tmp_path):
+    """Issue 50: nothing changed silently.  An ESDC2A's VRMAX = 0 is read as no upper
+    limit (ANDES's reading): named with file:line in `changed`, a warning and the CLI's
+    summary; an SCRX read with conventions="andes" (ANDES's SEXS with SEXS's defaults)
+    likewise."""
+    esdc2a = "1 'ESDC2A' 1 0.0 400 0.04 0 0 0.0 -7.3 1.0 0.8 0.03 1.0 0 3.1 0.33 2.3 0.1 /"
+    lines = (DATA / "five_bus.dyr").read_text().splitlines()
+    dyr = _dyr(tmp_path, *lines, esdc2a)
+    with pytest.warns(UserWarning, match=r"read 1 record\(s\) with a value other than"):
+        imported = import_psse(V33, dyr)
+    assert imported.changed == (
+        "edited.dyr:5 ESDC2A (bus 1, id 1): VRMAX = 0 read as no upper limit (999)",
+    )
+    assert imported.case.exciters.Vrmax[0] == 999.0
+    res = run("import-psse", V33, dyr, "-o", tmp_path / "x.json", "--json")
+    assert json.loads(res.stdout)["changed"] == list(imported.changed)
+    scrx = _dyr(tmp_path, *lines, "1 'SCRX' 1 0.1 10 200 0.05 -5 5 0 0 /")
+    with pytest.warns(UserWarning, match="SEXS's defaults"):
+        imported = import_psse(V33, scrx, conventions="andes")
+    (changed,) = imported.changed
+    assert changed.startswith("edited.dyr:5 SCRX (bus 1, id 1): read as ANDES 2.0 reads it")
+    assert import_psse(V33, scrx).changed == ()
