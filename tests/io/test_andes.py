@@ -2494,6 +2494,109 @@ def test_kundur_wtdta1_matches_andes_step_for_step_but_where_andes_pegs_a_limit(
     assert dw < 1e-7 and dP < 1e-5 and dQ < 1e-5  # measured 1.5e-8, 1.1e-6, 1.2e-6
 
 
+# -- bus faults beside a converter (docs/ibr.md section 12) -------------------------------
+
+#: ANDES's converter cases and the bolted bus faults (1 to 1.1 s) that have no network
+#: solution in either tool (ANDES stops at them too, through j1e-4 pu): the converter's
+#: current, whose angle is its bus voltage's, cannot flow into the short through the
+#: lines' resistance (Kundur's buses 9 and 10), or its REECA1's reactive current holds the
+#: bus at about 0.8 pu behind 0.08 pu of Thevenin voltage, where no angle carries its
+#: active current (IEEE 14's bus 4).  ieee14_wt3n is left out: its reference machine (M =
+#: 0.01 s) loses step in any bus fault, in both tools (section 8).
+CONVERTER_FAULT_CASES = {
+    "kundur/kundur_reg.xlsx": [9, 10],
+    "kundur/kundur_wtdta1.xlsx": [9, 10],
+    "kundur/kundur_wtds.xlsx": [9, 10],
+    "ieee14/ieee14_solar.xlsx": [4],
+    "ieee14/ieee14_solar_abn.xlsx": [4],
+    "ieee14/ieee14_wt3.xlsx": [],
+    "ieee14/ieee14_reecb1.json": [],
+    "ieee14/ieee14_regcp1_nopll.json": [],
+}
+
+
+@pytest.mark.parametrize("name", list(CONVERTER_FAULT_CASES))
+def test_a_bolted_fault_at_any_bus_of_a_converter_case_runs(name):
+    """A 6-cycle bolted fault at each bus of the case runs to 0.1 s after clearing (5 ms,
+    Heun), but at the buses without a network solution (CONVERTER_FAULT_CASES).  Before
+    the network solution took the REGCA1's low-voltage gain at each Newton iterate
+    (`stabctl.dynamics.model._converter_newton`), the faults beside the converter stopped
+    at the fault instant: Kundur's buses 3 and 8 (the cases' own fault) as well, IEEE 14's
+    bus 7 (and ieee14_solar's 4)."""
+    _, case = like_for_like_case(name)
+    sim = Simulator(case, q_limits=False)
+    stopped = []
+    for bus in case.buses.number.astype(int):
+        try:
+            res = sim.run([Fault(bus, 1.0, 1.1)], 1.2, h=STEP)
+        except SimulationError:
+            stopped.append(bus)
+            continue
+        assert res.t[-1] == pytest.approx(1.2)
+    assert stopped == CONVERTER_FAULT_CASES[name]
+
+
+#: case: bounds on the speed, P and Q gaps (pu) of its own fault (bus 8 through j1e-4 pu,
+#: 0.1 s), like for like.  Speeds meet the 1e-4 pu target on kundur_reg only; the P and Q
+#: gaps open in the step in which the REGCA1's filtered voltage crosses Brkpt after
+#: clearing (LVPL jumps from 0.98 to 9999 pu: kundur_reg's Ip rises 0.276 pu in that step
+#: in stabctl, 0.137 in ANDES), then close (3e-4 pu of P at 2 s); the wind turbines carry
+#: the gap into the speeds (docs/ibr.md section 12, an open difference)
+OWN_FAULTS = {
+    "kundur/kundur_reg.xlsx": (1e-4, 0.2, 1e-2),  # measured 6.2e-5, 0.147, 5.6e-3
+    "kundur/kundur_wtdta1.xlsx": (1.5e-3, 0.3, 0.2),  # measured 1.1e-3, 0.237, 0.132
+    "kundur/kundur_wtds.xlsx": (8e-4, 0.3, 0.12),  # measured 5.4e-4, 0.234, 8.5e-2
+}
+
+
+@pytest.mark.parametrize("name", list(OWN_FAULTS))
+def test_kundur_converter_cases_own_fault_matches_andes_step_for_step(name):
+    """The Fault record of kundur_reg, kundur_wtdta1 and kundur_wtds (bus 8, j1e-4 pu, 0.1
+    s; from 1 s here, the records' own time in kundur_reg), both tools' trapezoid at 5 ms
+    (`test_ibr_cases_match_andes_step_for_step`), 3 s: it stopped stabctl at the fault
+    instant, with either integrator.  Through the fault and up to the LVPL's release
+    (1.17 s) both tools agree within 1e-8 pu in speed and 1e-4 pu in P (OWN_FAULTS)."""
+    path, case = like_for_like_case(name)
+    dw, dP, dQ, _ = fault_gaps(path, case, 8, 6, STEP, 3.0, x=1e-4, like_for_like=True)
+    print(f"\n{name} own fault like for like: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}")
+    assert max(np.array((dw, dP, dQ)) / np.array(OWN_FAULTS[name])) < 1
+
+
+def test_ieee14_wt3_trapezoid_runs_through_a_fault_beside_the_turbine():
+    """ieee14_wt3, a 6-cycle bus-8 fault (the turbine's bus) through j0.05 pu: the
+    trapezoid's first iterate after clearing puts the REGCA1's Ip at -16 pu, where the
+    network has no solution; it stopped there (1.11 s), and now halves the step
+    (`stabctl.dynamics.trapezoid`).  Speeds within 1.5e-5 pu of ANDES's trapezoid, Q
+    within 5.6e-4 pu, P within 8.7e-3 pu (the LVPL release, OWN_FAULTS)."""
+    name = "ieee14/ieee14_wt3.xlsx"
+    path, case = like_for_like_case(name)
+    dw, dP, dQ, run = fault_gaps(path, case, 8, 6, STEP, 2.0, x=0.05, like_for_like=True)
+    print(f"\n{name} bus 8 through j0.05 like for like: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}")
+    assert run["res"].t[-1] == pytest.approx(2.0)
+    assert dw < 1e-4 and dP < 1.5e-2 and dQ < 1e-3
+
+
+def test_kundur_reg_cct_beside_the_converter_completes_and_andes_agrees():
+    """The CCT of a bolted fault at Kundur's bus 8 beside the REGCA1 (kundur_reg): the
+    search ran into the fault instant's failure at every probe; now 0.76 s (10 ms
+    bisection), and ANDES (j1e-4 pu, its Toggle off) is stable 20 ms below it and unstable
+    20 ms above."""
+    path, case = like_for_like_case("kundur/kundur_reg.xlsx")
+    cct = critical_clearing_time(
+        Simulator(case, q_limits=False), LineFault(8, None, 1.0), SearchOptions(tol=1e-2), h=STEP
+    ).cct_s
+    assert cct == pytest.approx(0.76, abs=0.015)
+    for t_clear, stable in ((cct - 0.02, True), (cct + 0.02, False)):
+        ss = andes_system(path, fault=AndesFault(8, 1.0, 1.0 + t_clear), off=("Toggle", "Fault"))
+        ss.TDS.config.criteria = 0
+        try:
+            andes_speeds(ss, 3.0, STEP)
+            verdict = not andes_separated(ss)
+        except RuntimeError:
+            verdict = False
+        assert verdict is stable
+
+
 @pytest.mark.parametrize("name", ["kundur/kundur_wtdta1.xlsx", "kundur/kundur_wtds.xlsx"])
 def test_kundur_wind_cases_modes_match_andes_on_the_gains_flat_side(wind_cases, name):
     """The turbine's bus is held at 1 pu, exactly its REGCA1's low-voltage gain breakpoint
