@@ -17,11 +17,7 @@ from stabctl.errors import InputError
 from stabctl.io.psse import load_psse
 
 #: run -> why it is short today (measured with benchmarks/psse_runs.py)
-SHORT = {
-    "RENA_DEFAULT": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
-    "RENA_REF_FLAG": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
-    "RENA_REF_FLAG_noV": "import refused: REGCA1 + REECB1 + REPCA1 not read from DYR",
-}
+SHORT: dict[str, str] = {}
 
 
 def _param(run):
