@@ -35,7 +35,14 @@ from runs import flat_run  # noqa: E402
 from stabctl.case import ExciterTable  # noqa: E402
 from stabctl.dynamics.coi import coi_of_islands  # noqa: E402
 from stabctl.dynamics.driver import Simulator  # noqa: E402
-from stabctl.dynamics.events import Fault, LineTrip, LoadStep, MotorSwitch, Playback  # noqa: E402
+from stabctl.dynamics.events import (  # noqa: E402
+    Fault,
+    LineTrip,
+    LoadStep,
+    MotorSwitch,
+    Playback,
+    from_case,
+)
 from stabctl.errors import CaseError, InputError, SimulationError  # noqa: E402
 from stabctl.io.andes import (  # noqa: E402
     AndesFault,
@@ -1436,20 +1443,21 @@ def test_ieee14_converters_load_shed_step_matches_andes(model):
 
 
 def test_ieee14_dg_protection_trips_and_restores_the_pvd1_as_andes():
-    """ANDES's ieee14_dgprct1.xlsx with its own disturbance: the bus-14 load (0.3 pu, out
-    of service in the power flow) switched on at 1 s and off at 10 s (ANDES: its Toggler
-    records; stabctl: the same constant impedance, LoadStep).  PVD1_2's DGPRCT1 (frequency
-    bands (50, 59.9) for 2.5 s and (50, 59.85) for 3.5 s) trips it at 4.07 s in ANDES, when
-    the frequency has stayed below 59.9 Hz for 2.5 s; its current decays through tip; the
-    frequency back above 59.9 Hz at 10.43 s ends the trip and the device returns.  5 ms
-    step in both, 12 s."""
+    """ANDES's ieee14_dgprct1.xlsx with its own disturbance: the bus-14 load (0.3 pu, out of
+    service in the power flow) switched on at 1 s and off at 10 s (ANDES: its Toggler
+    records; stabctl: the same constant impedance, LoadStep, the case's own events).
+    PVD1_2's DGPRCT1 (frequency bands (50, 59.9) for 2.5 s and (50, 59.85) for 3.5 s) trips
+    it at 4.07 s in ANDES, when the frequency has stayed below 59.9 Hz for 2.5 s; its
+    current decays through tip; the frequency back above 59.9 Hz at 10.43 s ends the trip
+    and the device returns. 5 ms step in both, 12 s."""
     path = andes.get_case("ieee14/ieee14_dgprct1.xlsx")
     case = import_andes(path, on_unsupported="skip")
     assert list(case.converters.relay) == [0, 1] + [0] * 8
     ss = andes_system(path)
     pq = list(ss.PQ.idx.v).index("PQ_12")
     p0, q0, bus = ss.PQ.p0.v[pq], ss.PQ.q0.v[pq], ss.PQ.bus.v[pq]
-    events = [LoadStep(int(bus), 1.0, p0, q0), LoadStep(int(bus), 10.0, -p0, -q0)]
+    events = from_case(case)  # the file's own Toggles, read by the import
+    assert events == [LoadStep(int(bus), 1.0, p0, q0), LoadStep(int(bus), 10.0, -p0, -q0)]
     sim = Simulator(case, q_limits=False)
     assert sim.model.initial_residual[0] < 1e-9
     res = sim.run(events, 12.0, h=STEP)
@@ -2957,8 +2965,6 @@ def own_events_gap(name, t_end, tripped=()):
     Returns (largest speed gap, largest ANDES swing) over the machines not in ``tripped``
     (ANDES's machine rows: a tripped machine's speed stands still in ANDES, u = 0, and
     runs away in stabctl, which no longer reports it)."""
-    from stabctl.dynamics.events import from_case
-
     path = andes.get_case(name)
     case = import_andes(path, on_unsupported="skip")
     res = Simulator(case, q_limits=False).run(from_case(case), t_end, h=STEP)
@@ -2990,7 +2996,6 @@ def test_import_andes_reads_toggle_fault_alter_as_the_case_s_events(tmp_path):
     name with the attribute.  TGOV1's paux0 enters its order as (paux - dw) / R: +0.001
     at R = 0.05 is a PREF step of 0.02 pu, undone by the '=' 0 at 1.2 s.  The events go
     through the JSON case file unchanged."""
-    from stabctl.dynamics.events import from_case
     from stabctl.io.pst import read_case_json, write_case_json
 
     def imported(name):
