@@ -212,6 +212,21 @@ def test_psse_conventions_read_hygov_with_pss_e_gate():
         np.testing.assert_array_equal(psse.col(c), pst.col(c))
 
 
+def test_esst1a_vos_2_read_by_psse_refused_by_pst(tmp_path):
+    """ESST1A with VOS = 2 (the stabiliser after V_A): conventions="psse" reads it
+    (vos_after_va, exc_con column 20, = 1); "pst" leaves it out, naming VOS."""
+    run = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "ESST1A"
+    dyr = tmp_path / "vos2.dyr"
+    dyr.write_text(
+        (run / "TVC_System.dyr").read_text().replace("'ESST1A'  1   1  1", "'ESST1A'  1   1  2")
+    )
+    raw = run / "TVC_System_32.raw"
+    assert load_psse(raw, dyr).exciters.VGmax.tolist() == [1.0]
+    assert load_psse(raw, run / "TVC_System.dyr").exciters.VGmax.tolist() == [0.0]
+    with pytest.raises(CaseError, match=r"ESST1A.*VOS = 2: not modelled"):
+        load_psse(raw, dyr, conventions="pst")
+
+
 def test_andes_conventions_change_only_what_andes_reads_differently():
     pst = dyr_tables(
         read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip", conventions="pst"
