@@ -100,6 +100,23 @@ def _delta(tol, col=1):
     return Quantity(col, "delta", (102,), tol)
 
 
+#: the load runs' channels: V102, V103 and their angles from bus 101
+_LOADS = (
+    Quantity(1, "v", (102,), 0.05),
+    Quantity(2, "angle", (102, 101), None),
+    Quantity(3, "v", (103,), 0.05),
+    Quantity(4, "angle", (103, 101), None),
+)
+#: the four-bus runs' (EXST1, EXAC1) channels: V1-V4 and the speed deviation of G2
+_TVC_CHANNELS = (
+    Quantity(1, "v", (1,), None),
+    Quantity(2, "v", (2,), 1e-3),
+    Quantity(3, "v", (3,), 1e-3),
+    Quantity(4, "v", (4,), None),
+    Quantity(5, "speed_dev", (2,), 1e-3),
+)
+
+
 RUNS: tuple[Run, ...] = (
     Run("OMIB_GENCLS", "OMIB.raw", "OMIB.dyr", "Test01_delta.csv", _trip(101, 102), 20.0,
         (_delta(2e-3),), models="GENCLS"),
@@ -141,37 +158,14 @@ RUNS: tuple[Run, ...] = (
         ), models="GENROU SEXS HYGOV"),
     Run("LOAD_CONST_P", _THREE, "ThreeBus_GENROU.dyr", "constantpower.csv", _trip(101, 102),
         20.0,
-        (
-            Quantity(1, "v", (102,), 0.05),
-            Quantity(2, "angle", (102, 101), None),
-            Quantity(3, "v", (103,), 0.05),
-            Quantity(4, "angle", (103, 101), None),
-        ), import_options=("--loads", "raw"), models="GENROU, constant-power loads"),
+        _LOADS, import_options=("--loads", "raw"), models="GENROU, constant-power loads"),
     Run("LOAD_CONST_I", "ThreeBusMulti_const_i.raw", "ThreeBus_GENROU.dyr",
         "constantcurrent.csv", _trip(101, 102), 20.0,
-        (
-            Quantity(1, "v", (102,), 0.05),
-            Quantity(2, "angle", (102, 101), None),
-            Quantity(3, "v", (103,), 0.05),
-            Quantity(4, "angle", (103, 101), None),
-        ), import_options=("--loads", "raw"), models="GENROU, constant-current loads"),
+        _LOADS, import_options=("--loads", "raw"), models="GENROU, constant-current loads"),
     Run("EXST1", _TVC, "TVC_System.dyr", "results_PSSe.csv", _trip(1, 4), 20.0,
-        (
-            Quantity(1, "v", (1,), None),
-            Quantity(2, "v", (2,), 1e-3),
-            Quantity(3, "v", (3,), 1e-3),
-            Quantity(4, "v", (4,), None),
-            Quantity(5, "speed_dev", (2,), 1e-3),
-            Quantity(6, "efd", (2,), None),
-        ), inf_bus=1, models="GENSAL EXST1 HYGOV"),
+        (*_TVC_CHANNELS, Quantity(6, "efd", (2,), None)), inf_bus=1, models="GENSAL EXST1 HYGOV"),
     Run("EXAC1", _TVC, "TVC_System.dyr", "results_PSSe.csv", _trip(1, 4), 20.0,
-        (
-            Quantity(1, "v", (1,), None),
-            Quantity(2, "v", (2,), 1e-3),
-            Quantity(3, "v", (3,), 1e-3),
-            Quantity(4, "v", (4,), None),
-            Quantity(5, "speed_dev", (2,), 1e-3),
-        ), inf_bus=1, models="GENSAL EXAC1 HYGOV"),
+        _TVC_CHANNELS, inf_bus=1, models="GENSAL EXAC1 HYGOV"),
     # ESST1A's regulator closed through its rate feedback has a pole at -1109 1/s
     # (ExciterParams.rate_feedback_time_constants): Heun refuses PSS/E's 5 ms step, the
     # A-stable trapezoid takes it (docs/simulator.md, default step)

@@ -995,7 +995,7 @@ def _exst1_psse(rec, gen):
 
 
 #: conventions="psse": the controls whose PSS/E Model Library equations differ from
-#: stabctl's own reading (the others as "pst"; docs/pst_models.md 12.5)
+#: stabctl's own reading (the others as "pst"; docs/pst_models.md 12.6)
 _PSSE_MAPPERS = {
     "EXST1": _exst1_psse,
     "ESST1A": lambda rec, gen: _esst1a(rec, gen, psse=True),

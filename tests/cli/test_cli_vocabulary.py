@@ -22,8 +22,8 @@ DIFFERENCES = {
     ("screen", "--t-max"): "bus faults cleared without loss of a line: CCTs above 0.5 s "
     "are recorded as failed, not searched",
     ("sweep-cct", "--esd-pct"): "a list of ratings (repeatable, comma-separated, 'none')",
-    ("import-andes", "--dyr-conventions"): "an ANDES case is read as ANDES solves it unless "
-    "told otherwise",
+    ("import-andes", "--dyr-conventions"): "an ANDES case is read as ANDES solves it (a "
+    "RAW + DYR pair as PSS/E states it, as import-psse) unless told otherwise",
 }
 #: options whose default is each command's own (an output file name)
 OWN_DEFAULT = {"--out"}

