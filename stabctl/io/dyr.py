@@ -678,15 +678,21 @@ def _scrx_andes(rec, gen):
     )
 
 
-def _esst1a(rec, gen, andes=False):
+def _esst1a(rec, gen, andes=False, psse=False):
     """ESST1A: UEL VOS TR VIMAX VIMIN TC TB TC1 TB1 KA TA VAMAX VAMIN VRMAX VRMIN KC KF TF
     KLR ILR -> stabctl type 6 (columns as declared).  UEL, the under-excitation limiter's
     input location, is free: no limiter model feeds it.  VOS = 2 (the stabiliser after
     V_A) is not modelled (only 1, at the voltage error); andes: ANDES 2.0's ``esst1a.py``
-    adds the stabiliser at the voltage error whatever VOS, and so does stabctl."""
+    adds the stabiliser at the voltage error whatever VOS, and so does stabctl.  psse:
+    VOS = 2 adds it to the regulator output after V_A (exc_con column 20
+    ``vos_after_va`` = 1, PSS/E Model Library; PowerSimulationsDynamics.jl's ESST1A
+    ``Va_sum``), VOS other than 1, 2 refused."""
     vos = DYR_MODELS["ESST1A"].values(rec.params)["VOS"]
+    if psse and vos == 2:
+        return _exc_row(rec, gen, vos_after_va=1.0)
     if vos != 1 and not andes:
-        raise _Unsupported(f"VOS = {vos:g}: the stabiliser after V_A is not modelled (only 1)")
+        modelled = "1 or 2" if psse else "only 1; 2 with the psse conventions"
+        raise _Unsupported(f"VOS = {vos:g}: not modelled ({modelled})")
     return _exc_row(rec, gen)
 
 
@@ -1089,7 +1095,11 @@ def _exst1_psse(rec, gen):
 
 #: conventions="psse": the controls whose PSS/E Model Library equations differ from
 #: stabctl's own reading (the others as "pst"; docs/pst_models.md 12.6)
-_PSSE_MAPPERS = {"EXST1": _exst1_psse, "HYGOV": lambda rec, gen: _hygov(rec, gen, psse=True)}
+_PSSE_MAPPERS = {
+    "EXST1": _exst1_psse,
+    "ESST1A": lambda rec, gen: _esst1a(rec, gen, psse=True),
+    "HYGOV": lambda rec, gen: _hygov(rec, gen, psse=True),
+}
 #: conventions -> the mappers that replace `_MAPPERS`' for it
 _CONVENTION_MAPPERS = {"andes": _ANDES_MAPPERS, "psse": _PSSE_MAPPERS}
 CONVENTIONS = ("psse", "pst", "andes")

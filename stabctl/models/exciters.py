@@ -204,7 +204,14 @@ EXCITER = Family(
             doc="ST3, ESST4B: inner loop feedback constant | smpexc: 1 the output times the "
             "terminal voltage (bus-fed SCRX), 0 not",
         ),
-        Param("VGmax", "pu", 20, doc="ST3, ESST4B: maximum inner loop feedback"),
+        Param(
+            "VGmax",
+            "pu",
+            20,
+            alt="vos_after_va",
+            doc="ST3, ESST4B: maximum inner loop feedback | ESST1A: 1 the stabiliser output "
+            "added after V_A (PSS/E VOS = 2), 0 at the voltage error (VOS = 1)",
+        ),
         Param("KF", "", 21, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback gain"),
         Param(
             "TF", "s", 22, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback time constant"
@@ -1490,7 +1497,7 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     if kind == ST1:
         return _st1_field_voltage(P, x, i, VTR_alg, ifd)
     if kind == ST1A:
-        return _st1a_field_voltage(P, x, i, VTR_alg, ifd)
+        return _st1a_field_voltage(P, x, i, VTR_alg, ifd, pss_out)
     if kind == AC1 or kind == AC1A or kind == AC8B:
         return _ac1_field_voltage(P, x, i, ifd)
     if kind == AC4:
@@ -1532,7 +1539,7 @@ def derivatives(P, x, i, vc, eterm, pss_out, efd, ifd, VB, dx, ieee, reach):
     elif kind == ST1:
         _st1_derivatives(P, x, i, err, efd, dx)
     elif kind == ST1A:
-        _st1a_derivatives(P, x, i, err, ifd, dx)
+        _st1a_derivatives(P, x, i, err, ifd, pss_out, dx)
     elif kind == AC1 or kind == AC1A:
         _ac1_derivatives(P, x, i, err, ifd, dx)
     elif kind == AC8B:
@@ -1677,30 +1684,39 @@ def _st1_derivatives(P, x, i, err, efd, dx):
 
 
 @kernel(inline="always")
-def _st1a_regulator(P, x, i, ifd):
-    """ESST1A: V_A clipped to [VAmin, VAmax] minus K_LR max(0, I_fd - I_LR)."""
+def _st1a_regulator(P, x, i, ifd, pss_out):
+    """ESST1A: V_A clipped to [VAmin, VAmax] minus K_LR max(0, I_fd - I_LR); plus the
+    stabiliser output pss_out with VOS = 2 (exc_con column 20 ``vos_after_va`` = 1)."""
     VA = clip(x[2, i], P[i, E.VAMIN], P[i, E.VAMAX])
-    return VA - P[i, E.KLR] * max(ifd - P[i, E.ILR], 0.0)
+    after = pss_out if P[i, E.VGMAX] == 1 else 0.0
+    return VA - P[i, E.KLR] * max(ifd - P[i, E.ILR], 0.0) + after
 
 
 @kernel(inline="always")
-def _st1a_field_voltage(P, x, i, VTR_alg, ifd):
+def _st1a_field_voltage(P, x, i, VTR_alg, ifd, pss_out):
     """ESST1A: `_st1a_regulator` clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd]."""
     return clip(
-        _st1a_regulator(P, x, i, ifd),
+        _st1a_regulator(P, x, i, ifd, pss_out),
         VTR_alg * P[i, E.VRMIN],
         VTR_alg * P[i, E.VRMAX] - P[i, E.KC] * ifd,
     )
 
 
 @kernel(inline="always")
-def _st1a_derivatives(P, x, i, err, ifd, dx):
+def _st1a_derivatives(P, x, i, err, ifd, pss_out, dx):
     """ESST1A (docs/pst_models.md 2.6): the rate feedback of `_st1a_regulator` (state R_f,
     only with K_F != 0) subtracted before the V_I limits, the lead-lags T_C/T_B (state
-    V_As) and T_C1/T_B1 (state V_As1), V_A non-windup."""
+    V_As) and T_C1/T_B1 (state V_As1), V_A non-windup; with VOS = 2 the stabiliser
+    output pss_out (in err) moves to the regulator output."""
+    if P[i, E.VGMAX] == 1:
+        err = err - pss_out
     if P[i, E.KF] != 0:
         VF, dx[3, i] = washout(
-            _st1a_regulator(P, x, i, ifd), x[3, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T
+            _st1a_regulator(P, x, i, ifd, pss_out),
+            x[3, i],
+            P[i, E.TF],
+            P[i, E.KF],
+            GAIN_OVER_T,
         )
         err = err - VF
     u, dx[1, i] = leadlag_input_state(

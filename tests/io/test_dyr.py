@@ -181,7 +181,7 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
 
 def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently():
     """conventions="psse" (the default) marks WECC's EXST1 rows psse_st1 = 1 (PSS/E's
-    output limits and rate feedback, docs/pst_models.md 12.5) and leaves every other
+    output limits and rate feedback, docs/pst_models.md 12.6) and leaves every other
     exciter, PSS and governor column as "pst" reads it."""
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
@@ -200,7 +200,7 @@ def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently()
 
 def test_psse_conventions_read_hygov_with_pss_e_gate():
     """conventions="psse" marks HYGOV psse_gate = 1 (tg_con column 22, the PI's whole
-    output rate- and position-limited, docs/pst_models.md 12.5), every other column as
+    output rate- and position-limited, docs/pst_models.md 12.6), every other column as
     "pst"; PSS/E's HYGOV run (tests/data/psse_runs/HYGOV)."""
     run = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "HYGOV"
     raw, dyr = run / "ThreeBusMulti.raw", run / "ThreeBus_HYGOV.dyr"
@@ -210,6 +210,21 @@ def test_psse_conventions_read_hygov_with_pss_e_gate():
     assert psse.col(22).tolist() == [1.0] and pst.col(22).tolist() == [0.0]
     for c in set(range(1, n + 1)) - {22}:
         np.testing.assert_array_equal(psse.col(c), pst.col(c))
+
+
+def test_esst1a_vos_2_read_by_psse_refused_by_pst(tmp_path):
+    """ESST1A with VOS = 2 (the stabiliser after V_A): conventions="psse" reads it
+    (vos_after_va, exc_con column 20, = 1); "pst" leaves it out, naming VOS."""
+    run = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "ESST1A"
+    dyr = tmp_path / "vos2.dyr"
+    dyr.write_text(
+        (run / "TVC_System.dyr").read_text().replace("'ESST1A'  1   1  1", "'ESST1A'  1   1  2")
+    )
+    raw = run / "TVC_System_32.raw"
+    assert load_psse(raw, dyr).exciters.VGmax.tolist() == [1.0]
+    assert load_psse(raw, run / "TVC_System.dyr").exciters.VGmax.tolist() == [0.0]
+    with pytest.raises(CaseError, match=r"ESST1A.*VOS = 2: not modelled"):
+        load_psse(raw, dyr, conventions="pst")
 
 
 def test_andes_conventions_change_only_what_andes_reads_differently():

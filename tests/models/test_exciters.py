@@ -80,6 +80,7 @@ ROWS = {
     "EXST1": ST1,
     "EXST1_psse": ST1_PSSE,
     "ESST1A": ST1A,
+    "ESST1A_vos2": ST1A[:19] + [1] + ST1A[20:],
     "EXAC1": AC1,
     "EXAC4": AC4,
     "ESAC1A": AC1A,
@@ -315,6 +316,24 @@ def test_esst1a_va_is_non_windup(ieee):
     assert x[2, 0] == 6.0 and dx[2, 0] == 0.0
     exc.derivatives(P, x, 0, VT0, VT0, 0.0, EFD0, EFD0, 1.0, dx, ieee, 0.0)
     assert dx[2, 0] < 0
+
+
+def test_esst1a_vos_2_adds_the_stabiliser_after_va():
+    """ESST1A with VOS = 2 (exc_con column 20 vos_after_va = 1; PSS/E, PSID's Va_sum =
+    Va - I_result + Vs): a stabiliser output 0.1 moves the field voltage at once by 0.1
+    and the rate feedback's input with it, and leaves the voltage error (lead-lag input)
+    alone; with VOS = 1 it enters the error and the field voltage waits for V_A."""
+    row = ST1A[:19] + [1] + ST1A[20:]
+    P, x = started(row)
+    P1, _ = started(ST1A)
+    vs = 0.1
+    assert exc.field_voltage_at(P, x, 0, VT0, vs, VB0, EFD0, True) == pytest.approx(EFD0 + vs)
+    assert exc.field_voltage_at(P1, x, 0, VT0, vs, VB0, EFD0, True) == pytest.approx(EFD0)
+    dx = np.full_like(x, np.nan)
+    exc.derivatives(P, x, 0, VT0, VT0, vs, EFD0, EFD0, VB0, dx, True, 0.0)
+    assert dx[3, 0] == pytest.approx(vs / 1.0, rel=1e-12)  # R_f follows the output
+    err = P[0, exc.E.VREF] - x[0, 0] - 0.05 / 1.0 * vs  # only the feedback moves it
+    assert dx[1, 0] == pytest.approx((err - x[1, 0]) / 10.0, rel=1e-12)
 
 
 def test_esst1a_rate_feedback_is_a_washout_of_the_regulator_output():
