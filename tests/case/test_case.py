@@ -135,8 +135,9 @@ def test_matrix_gives_pst_matrix_back_and_col_is_1_based():
     assert c.machines.col(16) is c.machines.H
     assert c.machines.speed_effects.tolist() == [1, 1]  # stabctl's column 24, PST default
     assert c.machines.psse_sat.tolist() == [0, 0]  # column 25: PST's mac_sub, unsaturated
-    with pytest.raises(CaseError, match="no column 29"):
-        c.machines.col(29)
+    assert c.machines.psse_swing.tolist() == [0, 0]  # column 29: PST's swing equation
+    with pytest.raises(CaseError, match="no column 30"):
+        c.machines.col(30)
 
 
 def test_tables_are_read_only():
@@ -341,6 +342,7 @@ def test_case_layer_never_reads_shared():
 
 from stabctl.case import params as decl  # noqa: E402
 from stabctl.io import dyr as dyr_io  # noqa: E402
+from stabctl.io import dyr_converters  # noqa: E402
 from stabctl.models import exciters as exc_m  # noqa: E402
 from stabctl.models import governors as gov_m  # noqa: E402
 from stabctl.models import machines as mac_m  # noqa: E402
@@ -427,6 +429,9 @@ def test_packed_kernel_columns_come_from_the_declaration():
 def test_dyr_field_maps_come_from_the_declaration():
     for fam in decl.FAMILIES.values():
         for model in fam.dyr:
+            if model.name in dyr_converters.CONVERTER_DYR:  # read by stabctl.io.dyr_converters
+                assert dyr_converters.CONVERTER_DYR[model.name] is model
+                continue
             assert dyr_io.N_PARAMS[model.name] == len(model.fields)
             assert dyr_io.DYR_MODELS[model.name] is model
             for target in model.copy:  # every copy lands in a declared column

@@ -21,7 +21,7 @@ def kundur_playback():
     row = np.zeros(mac.shape[1])
     row[[0, 1, 2, 6]] = 1, 1, 900.0, 0.3  # number, bus, mva, x'd; x_d = 0, H = 0
     row[[21, 22]] = 1.0, 1.0  # pfrac, qfrac: all of the bus's generation
-    row[MachineTable.FAMILY.col("playback") - 1 :] = 1, 0.2, 0.2
+    row[MachineTable.FAMILY.col("playback") - 1 : MachineTable.FAMILY.col("pb_Tf")] = 1, 0.2, 0.2
     mac[0] = row
     others = {
         name: getattr(case, name).select(getattr(case, name).machine != 1)

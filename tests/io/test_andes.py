@@ -616,8 +616,7 @@ def test_ieee39_fault_speeds_verdict_and_modes_match_andes(tmp_path):
     ours = ma.eigenvalues[ma.electromechanical]
     same = tmp_path / "ieee39_st2cut.xlsx"
     assert ieeest_sheet_as_st2cut(andes.get_case("ieee39/ieee39_full.xlsx"), same)
-    with pytest.warns(UserWarning, match="lacks"):
-        case_same = import_andes(same, on_unsupported="skip")
+    case_same = import_andes(same, on_unsupported="skip")  # its Toggle read as an event
     ma_same = modal_analysis(linearise(Simulator(case_same, q_limits=False)))
     np.testing.assert_allclose(ma_same.eigenvalues[ma_same.electromechanical], ours, atol=1e-9)
     theirs = andes_modes(andes_system(same, off=("Toggle",)))
@@ -670,8 +669,8 @@ def test_ieee14_zip_load_follows_andes_and_its_percentages_are_scaled_to_100(tmp
     assert np.max(np.abs(sim.run([], 10.0, h=STEP).speed - 1)) < 1e-10  # measured 0
     data["ZIP"][0]["u"] = 0  # bus 2's PQ constant impedance (ANDES's default)
     edited.write_text(json.dumps(data))
-    with pytest.warns(UserWarning):
-        case_z = import_andes(edited, on_unsupported="skip")
+    case_z = import_andes(edited, on_unsupported="skip")  # its Toggle read as an event
+    assert case_z.events
     res_z = Simulator(case_z, q_limits=False).run([Fault(9, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
     gap, gap_z = np.max(np.abs(w - wa)), np.max(np.abs(speeds_on(t, res_z, case_z, ss) - wa))
     print(f"\nieee14 ZIP vs ANDES: speeds {gap:.2e} pu (impedance load: {gap_z:.2e})")
@@ -1718,14 +1717,12 @@ def test_import_andes_n44_keeps_its_machines_and_says_what_changed():
 
 def test_import_andes_ignores_the_summary_notes():
     """ANDES's SMIB case carries three ``Summary`` rows (notes, no equations:
-    ``andes/models/info.py``) and its own Fault: only the Fault is refused."""
-    with pytest.raises(InputError) as err:
-        import_andes(andes.get_case("smib/SMIB.xlsx"))
-    assert "Fault (1)" in str(err.value) and "Summary" not in str(err.value)
-    with pytest.warns(UserWarning, match=r"lacks .*Fault \(1\)"):
-        imported = read_andes_case(andes.get_case("smib/SMIB.xlsx"), on_unsupported="skip")
+    ``andes/models/info.py``) and its own Fault: the notes are ignored by name, the Fault
+    read as the case's own event (it was refused before issue 50)."""
+    imported = read_andes_case(andes.get_case("smib/SMIB.xlsx"), on_unsupported="error")
     assert imported.ignored == ("Area (1)", "Summary (3)")
-    assert imported.left_out == ("Fault (1)",)
+    assert imported.left_out == ()
+    assert [e["kind"] for e in imported.case.events] == ["Fault"]
     assert len(imported.case.machines) == 2  # the machine and the infinite bus (1e9 MVA)
 
 
@@ -1741,13 +1738,13 @@ def test_import_andes_ignores_the_summary_notes():
 def test_import_andes_ignores_calculations_no_equation_reads(name, ignored, disturbance):
     """ANDES's COI (``coi.py``: machines name it, no equation reads its output), PMU and
     PLL1 (measurements read only by models stabctl refuses: REGCP1, REGF2) are ignored
-    and named; only the case's own disturbance is refused, and the case starts at rest."""
-    with pytest.raises(InputError) as err:
-        import_andes(andes.get_case(name))
-    assert disturbance in str(err.value) and ignored.split()[0] not in str(err.value)
-    with pytest.warns(UserWarning, match="lacks"):
-        imported = read_andes_case(andes.get_case(name), on_unsupported="skip")
-    assert ignored in imported.ignored and imported.left_out == (disturbance,)
+    and named; the case's own disturbance is read as its events (refused before issue 50:
+    ``disturbance`` counts its records), and the case starts at rest."""
+    imported = read_andes_case(andes.get_case(name), on_unsupported="error")
+    assert ignored in imported.ignored and imported.left_out == ()
+    model, count = disturbance[:-1].split(" (")
+    assert {e["source"].split()[0] for e in imported.case.events} <= {model}
+    assert len({e["source"] for e in imported.case.events}) == int(count)
     assert Simulator(imported.case, q_limits=False).model.initial_residual[0] < 1e-8
 
 
@@ -1999,8 +1996,7 @@ def test_ieee14_converter_cases_modes_match_andes(name, tmp_path):
     left out of the model.  pvd1 and esd1 hold bus 3's power-input IEEEST: ANDES is
     given it as the equivalent ST2CUT (its EIG mis-reduces the IEEEST's pass-through
     filters: 1.67 % on a 0.17 Hz mode as written), stabctl's modes the same for both."""
-    with pytest.warns(UserWarning, match="lacks"):
-        case = import_andes(andes.get_case(name), on_unsupported="skip")
+    case = import_andes(andes.get_case(name), on_unsupported="skip")  # Toggles as events
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
         sys_ = linearise(Simulator(case, q_limits=False), esd_buses=())
@@ -2015,8 +2011,7 @@ def test_ieee14_converter_cases_modes_match_andes(name, tmp_path):
     ours = lam[(f >= 0.1) & (f <= 3.0)]
     path = tmp_path / "st2cut.xlsx"
     if ieeest_sheet_as_st2cut(andes.get_case(name), path):
-        with pytest.warns(UserWarning, match="lacks"):
-            same = import_andes(path, on_unsupported="skip")
+        same = import_andes(path, on_unsupported="skip")
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the same limits named
             again = np.linalg.eigvals(linearise(Simulator(same, q_limits=False), esd_buses=()).A)

@@ -245,7 +245,10 @@ def test_control_records_without_regca1_are_left_out(tmp_path):
         "plant.dyr:2 REECB1 at bus 103 '1': no REGCA1 record for its generator",
         "plant.dyr:3 REPCA1 at bus 103 '1': no REGCA1 record for its generator",
     )
-    assert res.netted == ("ThreeBusRenewable.raw:13 generator at bus 103 '1'",)
+    assert res.netted == (
+        "ThreeBusRenewable.raw:13 generator at bus 103 '1': no machine model record in the "
+        "DYR data",
+    )
 
 
 def test_a_plant_sharing_its_bus_takes_its_own_generation(tmp_path):
