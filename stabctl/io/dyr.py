@@ -310,7 +310,8 @@ def dyr_tables(
         conventions: "psse" (the PSS/E Model Library's machines, `_PSSE_MACHINE`: stator
             at rated speed, P_m and D divided by speed, each model's saturation; the
             controls of `_PSSE_MAPPERS` as PSS/E solves them, e.g. EXST1's output
-            limits and rate feedback; the other models as "pst"), "pst" (PST's models
+            limits and rate feedback, the DC exciters' quadratic saturation; the other
+            models as "pst"), "pst" (PST's models
             as they are: machines with speed effects and without saturation) or
             "andes" (ANDES 2.0's reading of the PSS/E models, for like-for-like
             comparisons: GENROU/GENSAL without speed
@@ -607,7 +608,7 @@ def exp_saturation(E1, SE1, E2, SE2) -> tuple[float, float]:
 VRMAX_UNLIMITED = 999.0
 
 
-def _dc(model, zero_vrmax_unlimited=False, andes=False):
+def _dc(model, zero_vrmax_unlimited=False, andes=False, psse=False):
     """Mapper of a DC exciter record read as DYR model ``model`` (its PST type)."""
     decl = DYR_MODELS[model]
 
@@ -617,7 +618,10 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False):
         VRMIN KE TE KF TF1 TF2 E1 SE(E1) E2 SE(E2), DC1 without the lead-lag and with the
         rate feedback's second lag TF2 (exc_con column 18); saturation as Asat, Bsat (E2
         column 0); K_E = 0 is computed at initialisation (V_R0 = 0, docs 2.3).  andes: the
-        quadratic saturation through the points and K_E as given (exc_con columns 23, 24)."""
+        quadratic saturation through the points and K_E as given (exc_con columns 23, 24).
+        psse: the quadratic saturation through the points, S_E(E) = B (E - A)^2 / E (the PSS/E
+        Model Library's exciter saturation; OpenIPSL's ``NonElectrical.Functions.SE``), and
+        K_E = 0 computed at initialisation as PSS/E does (V_R0 = 0)."""
         v = decl.values(rec.params)
         cols = {}
         if zero_vrmax_unlimited and v["VRMAX"] == 0:
@@ -625,7 +629,7 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False):
         if v.get("Switch", 0.0) != 0:
             raise _Unsupported(f"Switch = {v['Switch']} is not modelled (only 0)")
         points = (v["E1"], v["SE(E1)"], v["E2"], v["SE(E2)"])
-        if andes:
+        if andes or psse:
             return _exc_row(
                 rec,
                 gen,
@@ -633,7 +637,7 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False):
                 **cols,
                 **dict(zip(("E1", "SE1", "E2", "SE2"), points)),
                 dc_sat=1,
-                ke_given=1,
+                ke_given=int(andes),
             )
         try:
             A, B = exp_saturation(*points)
@@ -1096,6 +1100,12 @@ def _exst1_psse(rec, gen):
 #: conventions="psse": the controls whose PSS/E Model Library equations differ from
 #: stabctl's own reading (the others as "pst"; docs/pst_models.md 12.6)
 _PSSE_MAPPERS = {
+    "IEEEX1": _dc("IEEEX1", psse=True),
+    "EXDC2": _dc("EXDC2", psse=True),
+    "ESDC2A": _dc("ESDC2A", zero_vrmax_unlimited=True, psse=True),
+    "ESDC1A": _dc("ESDC1A", zero_vrmax_unlimited=True, psse=True),
+    "IEEET1": _dc("IEEET1", zero_vrmax_unlimited=True, psse=True),
+    "IEEET2": _dc("IEEET2", psse=True),
     "EXST1": _exst1_psse,
     "ESST1A": lambda rec, gen: _esst1a(rec, gen, psse=True),
     "HYGOV": lambda rec, gen: _hygov(rec, gen, psse=True),

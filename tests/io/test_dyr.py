@@ -181,8 +181,9 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
 
 def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently():
     """conventions="psse" (the default) marks WECC's EXST1 rows psse_st1 = 1 (PSS/E's
-    output limits and rate feedback, docs/pst_models.md 12.6) and leaves every other
-    exciter, PSS and governor column as "pst" reads it."""
+    output limits and rate feedback, docs/pst_models.md 12.6), gives its DC exciters
+    (ESDC2A) PSS/E's quadratic saturation through their own points (next tests) and
+    leaves every other exciter, PSS and governor column as "pst" reads it."""
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
     pst = dyr_tables(recs, gens, on_unsupported="skip", conventions="pst")
@@ -192,8 +193,14 @@ def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently()
     assert st1.sum() > 0
     assert np.all(psse.exc_con[st1, col] == 1) and np.all(psse.exc_con[~st1, col] == 0)
     assert np.all(pst.exc_con[:, col] == 0)
-    others = np.arange(pst.exc_con.shape[1]) != col
+    dc = np.isin(pst.exc_con[:, 0], (exc.DC1, exc.DC2))
+    assert dc.sum() == 8 and np.all(psse.exc_con[dc, 22] == 1)  # dc_sat: the quadratic
+    sat = [11, 12, 13, 14, 22]  # E1 SE1 E2 SE2 dc_sat (columns 12-15, 23)
+    others = (np.arange(pst.exc_con.shape[1]) != col) & ~np.isin(
+        np.arange(pst.exc_con.shape[1]), sat
+    )
     np.testing.assert_array_equal(pst.exc_con[:, others], psse.exc_con[:, others])
+    np.testing.assert_array_equal(pst.exc_con[~dc][:, sat], psse.exc_con[~dc][:, sat])
     np.testing.assert_array_equal(pst.tg_con, psse.tg_con)  # WECC has no HYGOV
     np.testing.assert_array_equal(pst.pss_con, psse.pss_con)
 
@@ -304,16 +311,42 @@ def test_wecc_imports_completely():
 def test_wecc_esdc2a_to_dc2():
     """Line 60 (bus 10): TR .02 KA 50 TA .05 TB .02 TC 0 VRMAX 0 (no limit, as ANDES) VRMIN -3
     KE 0 (computed at initialisation) TE .512 KF .07 TF1 1.3 Switch 0 E1 3.9825 SE1 .5
-    E2 5.31 SE2 1.049."""
+    E2 5.31 SE2 1.049.  Saturation: read as PSS/E (the default), the two points themselves
+    for PSS/E's quadratic (dc_sat = 1, column 23) with K_E computed (ke_given = 0, column
+    24); read as PST, its exponential A exp(B E) through them (E2 column 0)."""
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
-    t = dyr_tables(recs, gens)
     n10 = next(g["number"] for g in gens if g["bus"] == 10)
-    e = t.exc_con[t.exc_con[:, 1] == n10][0]
-    np.testing.assert_array_equal(e[:11], [2, n10, 0.02, 50, 0.05, 0.02, 0, 999, -3, 0, 0.512])
-    assert (e[15], e[16]) == (0.07, 1.3)
-    A, B = e[12], e[14]
-    np.testing.assert_allclose(A * np.exp(B * np.array([3.9825, 5.31])), [0.5, 1.049], rtol=1e-14)
+    for conventions in ("psse", "pst"):
+        t = dyr_tables(recs, gens, conventions=conventions)
+        e = t.exc_con[t.exc_con[:, 1] == n10][0]
+        head = [2, n10, 0.02, 50, 0.05, 0.02, 0, 999, -3, 0, 0.512]
+        np.testing.assert_array_equal(e[:11], head)
+        assert (e[15], e[16]) == (0.07, 1.3)
+        if conventions == "psse":
+            assert (e[11], e[12], e[13], e[14], e[22], e[23]) == (3.9825, 0.5, 5.31, 1.049, 1, 0)
+            continue
+        A, B = e[12], e[14]
+        assert (e[13], e[22], e[23]) == (0, 0, 0)
+        points = A * np.exp(B * np.array([3.9825, 5.31]))
+        np.testing.assert_allclose(points, [0.5, 1.049], rtol=1e-14)
+
+
+def test_psse_dc_exciter_saturation_is_pss_e_quadratic():
+    """Read as PSS/E, WECC's ESDC2A at bus 10 saturates as the PSS/E Model Library's
+    S_E(E) = B (E - A)^2 / E through its two points (OpenIPSL's "PTI PSS/E" ``SE``):
+    S_E(3.9825) = 0.5 and S_E(5.31) = 1.049; K_E = 0 resolves to -S_E(Efd0) (V_R0 = 0)."""
+    from stabctl.models.exciters import _dc_saturation, dc_feedback
+
+    recs = read_dyr(WECC_DYR)
+    gens = wecc_generators(recs)
+    t = dyr_tables(recs, gens, on_unsupported="skip")
+    n10 = next(g["number"] for g in gens if g["bus"] == 10)
+    r = int(np.nonzero(t.exc_con[:, 1] == n10)[0][0])
+    (A,), (B,) = _dc_saturation(ExciterTable.from_matrix(t.exc_con[r : r + 1]))
+    for E, SE in ((3.9825, 0.5), (5.31, 1.049)):
+        assert B * (E - A) ** 2 / E == pytest.approx(SE, rel=1e-12)
+        assert dc_feedback(-SE, A, B, 1.0, E) == pytest.approx(0, abs=1e-12)
 
 
 def test_wecc_esst3a_to_exc_st3():
