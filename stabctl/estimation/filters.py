@@ -15,7 +15,9 @@ Estimators, one filter per machine, all machines advanced together (docs/estimat
   (PST tg, started in equilibrium at the first measured P_ag, driven by the estimated
   speed), both averaged over the interval's ends (trapezoid):
       a = ((P_m + dPm - P_ag) / omega - D w) / 2H     (subtransient; transient and
-                                                        classical machines without 1/omega)
+                                                        classical machines without 1/omega;
+                                                        PSS/E's ((P_m + dPm - D w) / omega -
+                                                        P_ag) / 2H, `swing_acceleration`)
       w' = w + dt a,   delta' = delta + omega_b dt (w + dt a / 2),   dPm' = dPm,
       q' = A_d q + b_d (I_q(delta, I) + I_q(delta', I')) / 2
   (A_d, b_d: exact zero-order-hold discretisation of the machine's linear q-axis circuits,
@@ -84,6 +86,7 @@ _MACHINE_ROW = (
     ("ZRE", 1, lambda m: m.z_emf.real),
     ("ZIM", 1, lambda m: m.z_emf.imag),
     ("PERSPEED", 1, lambda m: m.per_speed),
+    ("SWING", 1, lambda m: m.psse_swing),
     ("QC1", 1, lambda m: m.qaxis.c[:, 0]),
     ("QC2", 1, lambda m: m.qaxis.c[:, 1]),
     ("QSIGN", 1, lambda m: m.qaxis.sign),
@@ -305,12 +308,9 @@ def swing_transition(x, pm, pag, cur0, cur1, dt, pr, Adq, bdq, f0):
     of one machine over dt (module docstring)."""
     d, w, p = x[0], x[1], x[2]
     wb = 2 * math.pi * f0
-    omega = 1.0 + w if pr[C.PERSPEED] > 0 else 1.0
-    c = 1.0 / (2 * pr[C.H] * omega)
-    acc = c * (pm + p - pag) - pr[C.D] * w / (2 * pr[C.H])
-    da_dw = -pr[C.D] / (2 * pr[C.H])
-    if pr[C.PERSPEED] > 0:
-        da_dw -= c * (pm + p - pag) / omega
+    acc, c, cg, da_dw = swing_acceleration(
+        pm + p, pag, w, pr[C.H], pr[C.D], pr[C.PERSPEED], pr[C.SWING]
+    )
     d1 = d + wb * dt * (w + 0.5 * dt * acc)
     r0 = cmath.exp(-1j * d) * cur0 * pr[C.POT]
     r1 = cmath.exp(-1j * d1) * cur1 * pr[C.POT]
@@ -329,8 +329,31 @@ def swing_transition(x, pm, pag, cur0, cur1, dt, pr, Adq, bdq, f0):
         dIq = 0.5 * r1.imag * F[0, j] + (0.5 * r0.imag if j == 0 else 0.0)
         F[3, j], F[4, j] = bdq[0] * dIq, bdq[1] * dIq
     g = np.zeros(5)
-    g[0], g[1] = -wb * 0.5 * dt * dt * c, -dt * c
+    g[0], g[1] = -wb * 0.5 * dt * dt * cg, -dt * cg
     return xn, F, g
+
+
+@kernel
+def swing_acceleration(pn, pag, w, H, D, per_speed, psse):
+    """Rotor acceleration a = d omega/dt (pu/s) of the swing equation the simulator solves
+    for the machine (`stabctl.models.machines`), from the mechanical power pn = P_m + dPm
+    and the air-gap power pag (pu machine base) at speed deviation w (pu):
+
+    - PST (per_speed 1, subtransient with speed effects): a = ((pn - pag)/omega - D w)/2H;
+    - PSS/E (psse 1, mac_con psse_swing): a = ((pn - D w)/omega - pag)/2H (the stator at
+      rated speed: the air-gap power is the torque);
+    - otherwise: a = (pn - pag - D w)/2H.
+
+    Arithmetic only: also evaluated on arrays (``swing_acceleration.py_func``).  Returns
+    (a, da/dpn, -da/dpag, da/dw)."""
+    speed = per_speed + psse - per_speed * psse  # 1 where the torque is a power / omega
+    omega = 1.0 + w * speed
+    cp = 1.0 / (2 * H * omega)
+    cg = (1.0 - psse) * cp + psse / (2 * H)
+    net = pn - psse * D * w - (1.0 - psse) * pag
+    acc = cp * net - psse * pag / (2 * H) - (1.0 - psse) * D * w / (2 * H)
+    da_dw = -(1.0 - psse) * D / (2 * H) - psse * D * cp - speed * cp * net / omega
+    return acc, cp, cg, da_dw
 
 
 @kernel
@@ -663,9 +686,10 @@ class SwingEKF(_MachineFilters):
         gov = m.governor
         hold = self.held.hold
         pm = np.where(gov.active, gov.output(self.held.g), hold[:, H.PM0])
-        c = 1.0 / (2 * m.H * np.where(m.per_speed, 1.0 + w, 1.0))
-        acc = c * (pm + self.x[:, 2] - hold[:, H.PAG]) - m.D * w / (2 * m.H)
-        return acc, c**2 * (self.P[:, 2, 2] + hold[:, H.PAGVAR]), c * self.P[:, 1, 2]
+        acc, c, cg, _ = swing_acceleration.py_func(
+            pm + self.x[:, 2], hold[:, H.PAG], w, m.H, m.D, m.per_speed, m.psse_swing
+        )
+        return acc, c**2 * self.P[:, 2, 2] + cg**2 * hold[:, H.PAGVAR], c * self.P[:, 1, 2]
 
 
 def compile_filters(models: MachineModels) -> None:

@@ -185,8 +185,9 @@ class MachineModels:
     machine base; pot = base MVA / machine MVA; ra: armature resistance in the torque (pu
     machine base; 0 for classical machines); z_emf: impedance from the PMU bus to the
     internal voltage (complex pu, system base); per_speed: torque = power / omega (PST's
-    subtransient model); inertia: H * MVA (MJ), the COI weights; f0 (Hz); governor,
-    qaxis: `Governors`, `QAxis`.
+    subtransient model); psse_swing: PSS/E's swing equation ((P_m - D w)/omega - P_ag)/2H
+    (mac_con psse_swing, `stabctl.estimation.filters.swing_acceleration`); inertia: H *
+    MVA (MJ), the COI weights; f0 (Hz); governor, qaxis: `Governors`, `QAxis`.
     """
 
     numbers: np.ndarray
@@ -197,6 +198,7 @@ class MachineModels:
     ra: np.ndarray
     z_emf: np.ndarray
     per_speed: np.ndarray
+    psse_swing: np.ndarray
     inertia: np.ndarray
     f0: float
     governor: Governors
@@ -246,6 +248,7 @@ def machine_models(case: Case, pmus) -> MachineModels:
         ra=mp.ra_network,
         z_emf=z,
         per_speed=mp.speed_effects,
+        psse_swing=mp.psse_swing,
         inertia=mp.H * case.machines.mva,
         f0=case.freq_hz,
         governor=Governors.from_case(case),
