@@ -326,10 +326,11 @@ def read_andes_case(
     pf_bus, pf_vmag, pf_vang = _powerflow(ss, numbers)  # its generators' P, Q: shares
     mats["load_con"], zip_changed = _zip_loads(ss, numbers, mats["bus"])
     ibr_con, ibr_refused, with_converter = _converters(ss, numbers)
-    dropped, by_device = ([], {}) if dyr is None else _dyr_against_andes(ss, dyr)
+    dropped, by_device, unchecked = ([], {}, []) if dyr is None else _dyr_against_andes(ss, dyr)
     gens, records, refused, changed, unlike = _dynamic_records(
         ss, path.name, numbers, with_converter, by_device
     )
+    changed += unchecked
     refused = dropped + refused
     changed += _grouped(zip_changed)
     refused += ibr_refused
@@ -1131,17 +1132,31 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
             decl = None if rec is None else DYR_MODELS.get(rec.model)
             if rec is not None and decl is not None and len(rec.params) == len(decl.fields):
                 params = _against_dyr(rec, psse, params, changed, unlike)
+            elif rec is not None:
+                why = (
+                    f"{len(rec.params)} parameters, not {rec.model}'s {len(decl.fields)}"
+                    if decl is not None
+                    else f"model {rec.model} has no PSS/E declaration in stabctl"
+                )
+                changed.append(
+                    (
+                        rec.model,
+                        f"{rec.where()} (bus {rec.bus}, id {rec.id})",
+                        "not checked: " + why,
+                    )
+                )
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
     return gens, records, refused, _grouped(changed), unlike
 
 
-def _dyr_against_andes(ss, dyr) -> tuple[list[str], dict]:
+def _dyr_against_andes(ss, dyr) -> tuple[list[str], dict, list[str]]:
     """The records of the DYR file ANDES's reader left out (``file:line MODEL (bus B, id
     I): why``: a model its ``psse-dyr.yaml`` lacks, which ANDES skips with only a log
-    line), and {(ANDES model, device k): DyrRecord} of those it read: ANDES adds the
+    line), {(ANDES model, device k): DyrRecord} of those it read: ANDES adds the
     records of each PSS/E model in file order, model after model in its dependency order
     (``andes/io/psse.py`` ``read_add``), so the k-th device of a model is the k-th record
-    so added (left empty where the counts do not agree)."""
+    so added, and, where the counts do not agree, one line per ANDES model whose values
+    are therefore not checked against the file (reported with the changes)."""
     from andes.io.psse import sort_psse_models
 
     from stabctl.io.dyr import read_dyr
@@ -1161,13 +1176,19 @@ def _dyr_against_andes(ss, dyr) -> tuple[list[str], dict]:
         by_dest.setdefault(spec[model]["destination"], []).extend(
             r for r in records if r.model == model.upper()
         )
-    by_device = {
-        (dest, k): rec
-        for dest, recs in by_dest.items()
-        if dest in ss.models and ss.models[dest].n == len(recs)
-        for k, rec in enumerate(recs)
-    }
-    return dropped, by_device
+    by_device, unchecked = {}, []
+    for dest, recs in by_dest.items():
+        n = ss.models[dest].n if dest in ss.models else 0
+        if n == len(recs):
+            by_device.update({(dest, k): rec for k, rec in enumerate(recs)})
+        elif recs:
+            models = ", ".join(sorted({r.model for r in recs}))
+            unchecked.append(
+                f"{dest} ({n} devices): values not checked against the DYR file's "
+                f"{len(recs)} {models} record(s) (ANDES built another number of devices, "
+                "so a device cannot be matched to its record); run as ANDES read them"
+            )
+    return dropped, by_device, unchecked
 
 
 def _against_dyr(rec, psse: str, params, changed: list, unlike: list) -> tuple[float, ...]:
