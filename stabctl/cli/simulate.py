@@ -55,13 +55,34 @@ def _bus_fault(spec: str, t_on: float, t_off: float):
     return Fault(bus=bus, t=t_on, clear_near=clear, r=r, x=x)
 
 
+def _far_end(spec: str, option: str) -> tuple[int, int]:
+    """(bus, circuit) of a line's far end given as TO or TO:K (circuit K, default 1)."""
+    head, _, ckt = spec.partition(":")
+    try:
+        to, k = int(head), int(ckt) if ckt else 1
+    except ValueError:
+        msg = f"{option} ... {spec}: give the far bus as TO or TO:K (integers)"
+        raise InputError(msg) from None
+    if k < 1:
+        raise InputError(f"{option} ... {spec}: circuit K must be >= 1")
+    return to, k
+
+
+def _line_close(a: int, b: str, t: float):
+    """LineClose of --close FROM TO[:K] T."""
+    from stabctl.dynamics.events import LineClose
+
+    to, k = _far_end(b, "--close")
+    return LineClose(a, to, t, circuit=k)
+
+
 def _study_events(bus_faults, closes, gen_trips, load_steps, vref_steps, pref_steps):
     """The events of the PSS/E-study options, in the order given per option."""
-    from stabctl.dynamics.events import GeneratorTrip, LineClose, LoadStep, PrefStep, VrefStep
+    from stabctl.dynamics.events import GeneratorTrip, LoadStep, PrefStep, VrefStep
 
     return [
         *(_bus_fault(*f) for f in bus_faults),
-        *(LineClose(a, b, t) for a, b, t in closes),
+        *(_line_close(a, b, t) for a, b, t in closes),
         *(GeneratorTrip(m, t) for m, t in gen_trips),
         *(LoadStep(b, t, p, q) for b, t, p, q in load_steps),
         *(VrefStep(m, t, dv) for m, t, dv in vref_steps),
@@ -116,7 +137,8 @@ def _build_events(
         for (a, b), t in zip(trips, times):
             if t < 0:
                 raise InputError(f"--t-trip must be >= 0 s, got {t:g}")
-            events.append(LineTrip(a, b, t))
+            to, k = _far_end(b, "--trip")
+            events.append(LineTrip(a, to, t, circuit=k))
     elif t_trips:
         raise InputError("--t-trip given without --trip")
     return events
@@ -136,10 +158,11 @@ def _build_events(
 )
 @click.option(
     "--trip",
-    type=(int, int),
+    type=(int, str),
     multiple=True,
-    metavar="FROM TO",
-    help="Trip one circuit of line FROM-TO without fault (repeatable).",
+    metavar="FROM TO[:K]",
+    help="Trip circuit K (default 1; in data order, as --circuit counts) of line FROM-TO "
+    "without fault (repeatable).",
 )
 @click.option(
     "--t-trip",
@@ -159,11 +182,11 @@ def _build_events(
 )
 @click.option(
     "--close",
-    type=(int, int, float),
+    type=(int, str, float),
     multiple=True,
-    metavar="FROM TO T",
-    help="Close again at T (s) circuit 1 of line FROM-TO, opened before by --trip, a "
-    "fault's clearing or the case's own events: a reclosure (repeatable).",
+    metavar="FROM TO[:K] T",
+    help="Close again at T (s) circuit K (default 1) of line FROM-TO, opened before by "
+    "--trip, a fault's clearing or the case's own events: a reclosure (repeatable).",
 )
 @click.option(
     "--trip-gen",

@@ -80,10 +80,10 @@ def test_help_texts_state_units():
         "--far-bus",
         "--clear-cycles N",
         "--far-clear-cycles M",
-        "--trip FROM TO",
+        "--trip FROM TO[:K]",
         "--t-trip",
         "--bus-fault BUS[:R:X] T_ON T_OFF",
-        "--close FROM TO T",
+        "--close FROM TO[:K] T",
         "--trip-gen MACHINE T",
         "--load-step BUS T P Q",
         "--vref-step MACHINE T DV",
@@ -401,6 +401,34 @@ def test_study_events_match_the_library(tmp_path):
     assert np.array_equal(cli.speed, lib.speed)
     bolted = Simulator(load_case("kundur")).run([Fault(bus=3, t=1.0, clear_near=1.1)], t_end=3.0)
     assert np.abs(bolted.speed - lib.speed).max() > 1e-4
+
+
+def test_trip_and_close_name_a_circuit(tmp_path):
+    """--trip FROM TO:K and --close FROM TO:K T act on circuit K of the line (Kundur's 3-101
+    has two): the CLI's run is the library's with LineTrip/LineClose(circuit=2), and a
+    close of circuit 2 after a trip of circuit 1 is refused (circuit 2 is not open)."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import LineClose, LineTrip
+
+    out = tmp_path / "r.npz"
+    res = run(
+        "simulate", "kundur", "--trip", 3, "101:2", "--t-trip", 1.0, "--close", 3, "101:2",
+        1.5, "--tf", 3, "--out", out, "--json",
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout[: res.stdout.rindex("}") + 1])["events"] == [
+        "line 3-101 (circuit 2) tripped at 1 s",
+        "line 3-101 (circuit 2) closed at 1.5 s",
+    ]
+    lib = Simulator(load_case("kundur")).run(
+        [LineTrip(3, 101, 1.0, circuit=2), LineClose(3, 101, 1.5, circuit=2)], t_end=3.0
+    )
+    assert np.array_equal(SimulationResult.from_npz(out).speed, lib.speed)
+    res = run("simulate", "kundur", "--trip", 3, 101, "--close", 3, "101:2", 1.5, "--tf", 2)
+    assert res.exit_code == 2 and "not open" in res.output
+    for bad in ("101:x", "101:0"):
+        res = run("simulate", "kundur", "--trip", 3, bad, "--tf", 2)
+        assert res.exit_code == 2 and ("TO:K" in res.output or "K must be" in res.output)
 
 
 @pytest.mark.parametrize(
