@@ -13,10 +13,30 @@ class InputError(StabctlError, ValueError):
     """A parameter is out of its physical range (negative H, Pm above Pmax, ...)."""
 
 
-class AboveSearchLimit(InputError):
+class Verdict(StabctlError):
+    """A study's answer that ends a search without a number, not a failure: sweeps
+    (`stabctl.parallel.run_job`) record it with status "verdict", its `label` and the
+    message, and never rerun it as failed.  A library call raises it (as its
+    `InputError` subclasses do) so that code expecting a number cannot mistake it for one."""
+
+    #: the verdict's label in records, tables and summaries
+    label = "verdict"
+
+
+class AboveSearchLimit(InputError, Verdict):
     """A CCT search found the fault still stable when cleared at its upper limit t_max: the
     CCT is above it.  A verdict on a robust fault, not a failure: sweeps record it as such
     and `screen`, `sweep-cct` and `cct` report it apart from failed searches."""
+
+    label = "above t_max"
+
+
+class InsecureContingency(InputError, Verdict):
+    """A fault whose post-fault system loses synchronism even when cleared at once (the
+    line trip alone is unstable): the system is N-1 insecure for this contingency, its CCT
+    is 0.  A verdict, not a failure (`Verdict`)."""
+
+    label = "N-1 insecure"
 
 
 class CaseError(StabctlError, ValueError):

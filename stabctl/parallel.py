@@ -13,8 +13,12 @@ completes, so an interrupted sweep (Ctrl-C, a killed job) keeps every finished j
     {"key": ..., "inputs": {...}, "status": "ok", "result": {...}, "wall_time_s": ...,
      "worker": "host:pid"}          (one line in the file)
     {"key": ..., "inputs": {...}, "status": "failed", "error": "SimulationError: ...", ...}
+    {"key": ..., "inputs": {...}, "status": "verdict", "verdict": "N-1 insecure",
+     "reason": "...", ...}
 
-A job that raises is recorded as failed with the exception's type and message (and the
+A job that raises a `stabctl.errors.Verdict` (a robust fault, an N-1 insecure one) is
+recorded as that verdict, not as a failure.  A job that raises anything else is recorded
+as failed with the exception's type and message (and the
 traceback for anything but a stabctl error), never dropped; so is a job whose worker died.
 Rerunning with the same file skips the keys already there (failed ones too, unless
 `retry_failed`); the last line of a key wins.  One sweep per file at a time: a sweep
@@ -43,7 +47,7 @@ from contextlib import closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from stabctl.errors import InputError, StabctlError
+from stabctl.errors import InputError, StabctlError, Verdict
 from stabctl.locking import exclusive
 from stabctl.progress import bar as progress_bar
 
@@ -122,6 +126,8 @@ def run_job(func: Callable[..., dict], key: str, inputs: Mapping) -> dict:
     wall = time.perf_counter()
     try:
         rec = {"status": "ok", "result": func(dict(inputs))}
+    except Verdict as exc:  # an answer without a number (robust, N-1 insecure)
+        rec = {"status": "verdict", "verdict": exc.label, "reason": " ".join(str(exc).split())}
     except Exception as exc:  # noqa: BLE001 - every failure is recorded with its reason
         rec = _failure_fields(exc)
     return {
@@ -195,7 +201,7 @@ def set_aside_damaged(path: str | Path) -> list[int]:
                 ok = (
                     isinstance(rec, dict)
                     and isinstance(rec.get("key"), str)
-                    and rec.get("status") in ("ok", "failed")
+                    and rec.get("status") in ("ok", "verdict", "failed")
                 )
             except ValueError:
                 ok = False

@@ -109,13 +109,16 @@ def test_kundur_cct_sweep_in_processes_then_resume(tmp_path):
 
 
 def test_failures_are_recorded_with_their_reason(tmp_path):
+    """Errors are recorded as failed with their reason; a CCT above the search limit is a
+    verdict (status "verdict", stabctl.errors.Verdict), not counted as failed and not
+    rerun by retry_failed."""
     out = tmp_path / "mixed.jsonl"
     too_low = Job(
         "cct-above-limit", cct_job, {"case": "kundur", "bus": 3, "far_bus": 101, "t_max": 0.1}
     )
     jobs = jobs_of(square, 2) + jobs_of(boom, 3) + jobs_of(refuse, 4) + [too_low]
     rep = run_sweep(jobs, out, workers=2, progress=False)
-    assert (rep.ran, rep.failed) == (4, 3)
+    assert (rep.ran, rep.failed) == (4, 2)
     recs = {r["key"]: r for r in lines(out)}
     assert recs["square/2"] == {**recs["square/2"], "status": "ok", "result": {"y": 4}}
     bad = recs["boom/3"]
@@ -123,12 +126,14 @@ def test_failures_are_recorded_with_their_reason(tmp_path):
     assert "in boom" in bad["traceback"] and bad["inputs"] == {"x": 3}
     assert recs["refuse/4"]["error"] == "InputError: no result for 4"
     assert "traceback" not in recs["refuse/4"]  # stabctl errors: reason only
-    assert "above the search limit t_max = 0.1 s" in recs["cct-above-limit"]["error"]
+    above = recs["cct-above-limit"]
+    assert (above["status"], above["verdict"]) == ("verdict", "above t_max")
+    assert "above the search limit t_max = 0.1 s" in above["reason"]
     # failed jobs are finished: skipped on resume unless retried
     assert run_sweep(jobs, out, workers=1, progress=False).ran == 0
     retry = run_sweep(jobs, out, workers=1, progress=False, retry_failed=True)
-    assert (retry.ran, retry.failed) == (3, 3)
-    assert len(lines(out)) == 7 and read_records(out)["boom/3"]["status"] == "failed"
+    assert (retry.ran, retry.failed) == (2, 2)
+    assert len(lines(out)) == 6 and read_records(out)["boom/3"]["status"] == "failed"
 
 
 def test_a_dying_worker_is_recorded_not_dropped(tmp_path):

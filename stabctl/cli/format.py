@@ -262,11 +262,14 @@ def sweep_line(key, rec) -> str:
     -------
     str
     """
-    from stabctl.stability.screening import ABOVE, verdict
+    from stabctl.stability.screening import ABOVE, INSECURE, verdict
 
     if rec["status"] != "ok":
         if verdict(rec) == ABOVE:
             return f"{key:<34} above the search limit t_max = {rec['inputs']['t_max']:g} s (robust)"
+        if verdict(rec) == INSECURE:
+            insecure = "N-1 insecure: unstable even when cleared at once"
+            return f"{key:<34} {0.0:7.3f} {0.0:8.2f}  {insecure}"
         return f"{key:<34} failed: {rec['error']}"
     r, wall = rec["result"], rec.get("wall_time_s")  # none in a reproducible copy
     err = r.get("numerical_error_s")
@@ -289,13 +292,14 @@ def print_sweep(rep, n_jobs: int) -> None:
     click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'err ms':>6} {'sims':>5} {'wall s':>7}")
     for key, rec in rep.records.items():
         click.echo(sweep_line(key, rec))
-    from stabctl.stability.screening import ABOVE, verdict
+    from stabctl.stability.screening import ABOVE, INSECURE, verdict
 
     verdicts = [verdict(r) for r in rep.records.values()]
     click.echo(
         f"{n_jobs} job(s): {rep.ran} run now, {rep.skipped} already in {rep.out}; "
         f"{verdicts.count('cct')} CCT(s) found, {verdicts.count(ABOVE)} above the search "
-        f"limit (robust), {verdicts.count('failed')} failed; wall {rep.wall_time_s:.1f} s"
+        f"limit (robust), {verdicts.count(INSECURE)} N-1 insecure (CCT 0), "
+        f"{verdicts.count('failed')} failed; wall {rep.wall_time_s:.1f} s"
     )
 
 
@@ -307,6 +311,8 @@ def print_screening(rows) -> None:
     rows : list of dict
         Screening rows (`stabctl.stability.screening.screen`).
     """
+    from stabctl.stability.screening import ABOVE, INSECURE, VERDICTS
+
     click.echo(f"{'fault':<22} {'CCT s':>7} {'cycles':>7} {'err ms':>6}  separated / reason")
     for r in rows:
         where = f"bus {r['bus']}" + (f" line to {r['far_bus']}" if r["far_bus"] else "")
@@ -315,17 +321,23 @@ def print_screening(rows) -> None:
             click.echo(
                 f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  {r['separated']}"
             )
-        elif r["verdict"] == "above t_max":
+        elif r["verdict"] == ABOVE:
             above = f">{r['t_max_s']:.3f}"
             click.echo(
                 f"{where:<22} {above:>7} {'-':>7} {'-':>6}  robust: stable when cleared there"
             )
+        elif r["verdict"] == INSECURE:
+            click.echo(
+                f"{where:<22} {0.0:7.3f} {0.0:7.2f} {'-':>6}  N-1 insecure: unstable even "
+                "when cleared at once"
+            )
         else:
             click.echo(f"{where:<22} {'-':>7} {'-':>7} {'-':>6}  {r['error'][:70]}")
-    counts = {v: sum(r["verdict"] == v for r in rows) for v in ("cct", "above t_max", "failed")}
+    counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
     click.echo(
-        f"{len(rows)} fault(s): {counts['cct']} CCT(s) found, {counts['above t_max']} above the "
-        f"search limit (robust), {counts['failed']} failed"
+        f"{len(rows)} fault(s): {counts['cct']} CCT(s) found, {counts[ABOVE]} above the "
+        f"search limit (robust), {counts[INSECURE]} N-1 insecure (CCT 0), "
+        f"{counts['failed']} failed"
     )
 
 

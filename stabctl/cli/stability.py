@@ -95,12 +95,13 @@ def cct(
       stabctl cct miniwecc --fault 83 --far-bus 33 --json
 
     A fault still stable when cleared at --t-max is a verdict (the CCT is above it: exit
-    0, ``"cct_s": null`` and ``"above_t_max_s"`` in --json).  Bad input (unknown bus or
-    line, unstable at zero clearing, storage not available) exits with status 2 and one
-    `error:` line.
+    0, ``"cct_s": null`` and ``"above_t_max_s"`` in --json); so is one unstable even
+    when cleared at once (N-1 insecure: exit 0, ``"cct_s": 0`` and ``"verdict": "N-1
+    insecure"``).  Bad input (unknown bus or line, storage not available) exits with
+    status 2 and one `error:` line.
     """
     from stabctl.dynamics.events import validate as validate_events
-    from stabctl.errors import AboveSearchLimit
+    from stabctl.errors import AboveSearchLimit, InsecureContingency
     from stabctl.io import load_case
     from stabctl.stability.cct import LineFault, critical_clearing_time
     from stabctl.storage.devices import uniform_fleet
@@ -121,6 +122,20 @@ def cct(
         res = critical_clearing_time(
             model.simulator(case), line_fault, search, storage=storage, h=step
         )
+    except InsecureContingency as exc:  # a verdict: N-1 insecure, CCT 0
+        if as_json:
+            print_json(
+                {
+                    "case": case.name,
+                    "esd_pct": esd_pct,
+                    "cct_s": 0.0,
+                    "verdict": exc.label,
+                    "reason": str(exc),
+                }
+            )
+        else:
+            click.echo(f"CCT 0 s, N-1 insecure: {exc}")
+        return
     except AboveSearchLimit as exc:  # a verdict: the fault is robust up to --t-max
         if as_json:
             print_json(

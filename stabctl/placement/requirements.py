@@ -249,6 +249,7 @@ def screening_brackets(path) -> dict:
     from stabctl.io.inputs import input_file
     from stabctl.parallel import read_records
     from stabctl.stability.cct import LineFault
+    from stabctl.stability.screening import ABOVE, verdict
 
     try:
         records = read_records(input_file(path, "screening records"))
@@ -257,7 +258,7 @@ def screening_brackets(path) -> dict:
     out = {}
     for rec in records.values():
         r, inputs = rec.get("result") or {}, rec.get("inputs") or {}
-        still = "still stable" in (rec.get("error") or "") and "t_max" in inputs
+        still = verdict(rec) == ABOVE and "t_max" in inputs
         if inputs.get("esd_pct") is not None or not (
             (rec.get("status") == "ok" and "t_stable_s" in r) or still
         ):

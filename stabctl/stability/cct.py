@@ -49,6 +49,7 @@ from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import (
     AboveSearchLimit,
     InputError,
+    InsecureContingency,
     NumericalInstabilityError,
     SimulationError,
 )
@@ -342,7 +343,10 @@ def critical_clearing_time(
     Raises
     ------
     InputError
-        Bad settings; unstable at t_lo (also at zero clearing).
+        Bad settings; unstable at t_lo > 0.
+    InsecureContingency
+        Unstable even when cleared at once (t_lo = 0): N-1 insecure, CCT 0 (an
+        InputError, a verdict).
     AboveSearchLimit
         Still stable at t_max: the CCT is above it (an InputError, a verdict).
     UnknownBusError, CaseError
@@ -506,9 +510,9 @@ def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple
     """Check stable at k_lo, then double k_hi (up to k_max) until it is unstable."""
     if not stable_at(k_lo):
         if k_lo == 0:
-            raise InputError(
+            raise InsecureContingency(
                 f"{fault.describe()}: unstable even when cleared instantly "
-                "(the line trip alone loses synchronism), no CCT"
+                "(the line trip alone loses synchronism): N-1 insecure, CCT 0"
             )
         raise InputError(
             f"{fault.describe()}: unstable already at the lower bound "

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from stabctl.case import Case
 from stabctl.dynamics.options import ModelOptions
+from stabctl.errors import AboveSearchLimit, InsecureContingency
 from stabctl.io import load_case
 from stabctl.parallel import RunnerOptions, run_sweep
 from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs
@@ -36,17 +37,28 @@ def screening_faults(
 
 
 #: the verdict of a search still stable at its upper limit (a robust fault)
-ABOVE = "above t_max"
+ABOVE = AboveSearchLimit.label
+#: the verdict of a fault unstable even when cleared at once (CCT 0)
+INSECURE = InsecureContingency.label
+#: every verdict of a CCT record, in the order summaries count them
+VERDICTS = ("cct", ABOVE, INSECURE, "failed")
 
 
 def verdict(rec: dict) -> str:
     """A CCT record's verdict: "cct" (found), :data:`ABOVE` (still stable at the search's
-    upper limit: the CCT is above it, `stabctl.errors.AboveSearchLimit`; older records say
-    "still stable") or "failed" (no verdict: the reason is in the record)."""
+    upper limit: the CCT is above it, `stabctl.errors.AboveSearchLimit`), :data:`INSECURE`
+    (unstable even when cleared at once: N-1 insecure, CCT 0,
+    `stabctl.errors.InsecureContingency`) or "failed" (no verdict: the reason is in the
+    record).  Records written before verdicts had their own status (status "failed" with
+    the exception's name) are read the same."""
     if rec["status"] == "ok":
         return "cct"
+    if rec["status"] == "verdict":
+        return rec["verdict"]
     error = rec.get("error") or ""
-    return ABOVE if error.startswith("AboveSearchLimit") or "still stable" in error else "failed"
+    if error.startswith("AboveSearchLimit") or "still stable" in error:
+        return ABOVE
+    return INSECURE if "unstable even when cleared instantly" in error else "failed"
 
 
 def screen(
@@ -79,8 +91,9 @@ def screen(
     -------
     list of dict
         One row per fault: key, bus, far_bus, status, verdict (`verdict`; with
-        :data:`ABOVE` the search's limit ``t_max_s``), CCT (s and cycles) with its
-        numerical error (s), separated machines, simulations, or the reason.
+        :data:`ABOVE` the search's limit ``t_max_s``; with :data:`INSECURE` CCT 0 and the
+        reason), CCT (s and cycles) with its numerical error (s), separated machines,
+        simulations, or the error.
 
     Raises
     ------
@@ -107,6 +120,8 @@ def screen(
         row["verdict"] = verdict(rec)
         if row["verdict"] == ABOVE:
             row["t_max_s"] = search.t_max
+        if row["verdict"] == INSECURE:
+            row.update(cct_s=0.0, cct_cycles=0.0)
         if rec["status"] == "ok":
             r = rec["result"]
             row.update(
@@ -116,6 +131,8 @@ def screen(
                 separated=r["separated_machines"],
                 n_simulations=r["n_simulations"],
             )
+        elif rec["status"] == "verdict":
+            row["reason"] = rec.get("reason", "")
         else:
             row["error"] = rec.get("error", "")
         rows.append(row)

@@ -196,7 +196,7 @@ def _sweep_results(jobs, keys, path: Path, what: str, progress: bool) -> dict:
     out = {}
     for job, key in zip(report.records.values(), keys):
         if job["status"] != "ok":
-            raise RuntimeError(f"{what} job {job['key']} failed: {job.get('error')}")
+            raise RuntimeError(f"{what} job {job['key']}: {job.get('error') or job.get('reason')}")
         out[key] = job["result"]
     return out
 

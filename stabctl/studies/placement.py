@@ -109,7 +109,7 @@ def screen(case_name: str, out_dir: Path, workers: int, progress=None) -> list[d
                 "fault": f,
                 "cct_s": rec["result"]["cct_s"] if ok else None,
                 "t_unstable_s": rec["result"]["t_unstable_s"] if ok else None,
-                "error": None if ok else rec.get("error", ""),
+                "error": None if ok else rec.get("error") or rec.get("reason", ""),
             }
         )
     return rows

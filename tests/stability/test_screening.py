@@ -70,18 +70,53 @@ def test_cli_screen_writes_map_and_reports_failures(tmp_path):
     rows = json.loads(res.stdout)
     by_bus = {r["bus"]: r for r in rows}
     assert by_bus[3]["status"] == "ok" and by_bus[3]["separated"] == [1, 2]
-    assert by_bus[101]["status"] == "failed" and "above the search limit" in by_bus[101]["error"]
-    # a robust fault is a verdict, told apart from a failed search
+    # a robust fault is a verdict (its own status), told apart from a failed search
+    assert by_bus[101]["status"] == "verdict" and "above the search limit" in by_bus[101]["reason"]
     assert by_bus[3]["verdict"] == "cct" and by_bus[101]["verdict"] == "above t_max"
-    assert by_bus[101]["t_max_s"] == 0.4 and by_bus[101]["error"].startswith("AboveSearchLimit")
+    assert by_bus[101]["t_max_s"] == 0.4 and "error" not in by_bus[101]
     assert (tmp_path / "m.png").stat().st_size > 10000
     again = ["screen", "kundur", "--buses", "3,101", "--t-max", "0.4", "--workers", "1"]
     text = CliRunner().invoke(main, [*again, "--out", str(tmp_path / "s.jsonl")]).stdout
     assert ">0.400" in text and "robust: stable when cleared there" in text
-    assert "2 fault(s): 1 CCT(s) found, 1 above the search limit (robust), 0 failed" in text
+    assert (
+        "2 fault(s): 1 CCT(s) found, 1 above the search limit (robust), 0 N-1 insecure "
+        "(CCT 0), 0 failed" in text
+    )
 
 
 def test_spectral_layout_is_finite_and_distinct():
     xy = spectral_layout(load_case("miniwecc"))
     assert xy.shape == (122, 2) and (abs(xy) < 1e6).all()
     assert len({tuple(p.round(9)) for p in xy}) > 100
+
+
+#: Kundur's tie 3-101 faulted on circuit 2 with circuit 1 also opened: the two areas lose
+#: their last link, unstable however fast the fault is cleared (N-1 insecure)
+BOTH_TIES = LineFault(3, 101, circuit=2, trips=((3, 101),))
+
+
+def test_n1_insecure_is_a_verdict_not_a_failure(tmp_path):
+    """A contingency unstable even when cleared at once is recorded by a sweep as the
+    verdict "N-1 insecure" (status "verdict", CCT 0), never as failed: the sweep counts no
+    failure, a rerun with retry_failed does not run it again, and `stabctl cct` exits 0
+    with CCT 0 s."""
+    from stabctl.parallel import run_sweep
+    from stabctl.stability.cct import cct_jobs
+    from stabctl.stability.screening import INSECURE, verdict
+
+    out = tmp_path / "r.jsonl"
+    jobs = cct_jobs("kundur", [BOTH_TIES], search=SearchOptions(t_max=0.5))
+    rep = run_sweep(jobs, out, workers=1)
+    (rec,) = rep.records.values()
+    assert rep.failed == 0 and rec["status"] == "verdict" and verdict(rec) == INSECURE
+    assert "unstable even when cleared instantly" in rec["reason"]
+    again = run_sweep(jobs, out, workers=1, retry_failed=True)
+    assert (again.ran, again.skipped) == (0, 1)
+    # a record of the older form (status failed with the exception's text) reads the same
+    old = {"status": "failed", "error": "InputError: " + rec["reason"]}
+    assert verdict(old) == INSECURE
+    args = ["cct", "kundur", "--fault", 3, "--far-bus", 101, "--circuit", 2]
+    res = CliRunner().invoke(main, [*args, "--trip", 3, 101, "--json"])
+    assert res.exit_code == 0, res.output
+    got = json.loads(res.stdout)
+    assert (got["cct_s"], got["verdict"]) == (0.0, "N-1 insecure")
