@@ -448,6 +448,12 @@ def simulate(
     )
     for e in events or ["flat run (no disturbance)"]:
         click.echo(f"  {e if isinstance(e, str) else describe_event(e)}")
+    for isl in result.meta.get("islanded", []):
+        P, Q = isl["load_shed_pu"]
+        click.echo(
+            f"  at t = {isl['t_s']:g} s bus(es) {isl['buses']} islanded from every generator: "
+            f"de-energised, load shed {P * case.base_mva:.1f} MW, {Q * case.base_mva:.1f} Mvar"
+        )
     if esd is not None:
         print_storage(esd, result)
     if result.stable:

@@ -341,12 +341,17 @@ class Simulator:
             )
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics, method)
         if method == "trapezoid":
-            return trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation)
-        run = _Run(
-            self, m, sa, grid, nets, semantics == "pst", separation_limit, stop_at_separation
-        )
-        run.advance(grid.t.size - 1)
-        return run.finish(storage)
+            res = trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation)
+        else:
+            run = _Run(
+                self, m, sa, grid, nets, semantics == "pst", separation_limit, stop_at_separation
+            )
+            run.advance(grid.t.size - 1)
+            res = run.finish(storage)
+        islanded = islanding_log(grid, nets)
+        if islanded:
+            res.meta["islanded"] = islanded
+        return res
 
     def _for_storage(self, storage) -> Simulator:
         """This simulator, or for a fleet of WECC batteries (`StorageFleet.model` "wecc")
@@ -530,6 +535,40 @@ class Simulator:
                 "max_initial_derivative_state": self.model.initial_residual[1],
             },
         )
+
+
+def islanding_log(grid, nets) -> list[dict]:
+    """The buses each stage of a run newly cuts from every machine (de-energised, their
+    load shed: PSS/E's islanding, `stabctl.dynamics.model.Model.network`).
+
+    Parameters
+    ----------
+    grid : TimeGrid
+        The run's grid (its interval start times).
+    nets : sequence of ReducedNetwork
+        The network of each interval.
+
+    Returns
+    -------
+    list of dict
+        One per stage that islands buses: ``t_s`` (its start, s), ``buses`` (numbers),
+        ``load_shed_pu`` (P and Q shed, [P, Q] pu on the system base).  Empty when no
+        stage islands a bus.
+    """
+    out, seen = [], set()
+    for start, net in zip(grid.starts, nets):
+        new = [(b, S) for b, S in net.islanded if b not in seen]
+        if new:
+            shed = sum(S for _, S in new)
+            out.append(
+                {
+                    "t_s": float(start),
+                    "buses": [b for b, _ in new],
+                    "load_shed_pu": [float(shed.real), float(shed.imag)],
+                }
+            )
+        seen = {b for b, _ in net.islanded}
+    return out
 
 
 def _with_solved_taps(case: Case, taps: np.ndarray) -> Case:

@@ -289,7 +289,12 @@ class DynamicModel:
         )
         online = np.ones(self.mp.n, bool)
         online[list(config.tripped_machines)] = False
-        _check_islands(stage, self.mp.bus_idx[online], case.n_bus)
+        dead = _islanded(stage, self.mp.bus_idx[online], case.n_bus)
+        if dead.size:  # PSS/E: the island is de-energised, its load and shunts shed
+            self._check_sheddable(dead)
+            bus[dead, 7], bus[dead, 8] = 0.0, -FAULT_B  # grounded as by a bolted fault:
+            y_shunt[dead] = 0.0  # the island's Y is regular and its voltages 0
+            stage = stage.replace(buses=BusTable.from_matrix(bus))
         net = reduce_network(
             stage, y_shunt, self.mp.y_internal, self.mp.bus_idx, online, self.nc_idx, case.n_bus
         )
@@ -301,7 +306,32 @@ class DynamicModel:
             steps[np.flatnonzero(self.ep.mac == m)] += dv
         for m, dp in config.pref_steps:
             steps[self.ep.n + np.flatnonzero(self.gp.mac == m)] += dp
-        return replace(net, switched_on=on, targets=targets, steps=steps)
+        shed = case.buses.pload[dead] + 1j * case.buses.qload[dead]
+        islanded = tuple((int(case.buses.number[b]), complex(shed[k])) for k, b in enumerate(dead))
+        return replace(net, switched_on=on, targets=targets, steps=steps, islanded=islanded)
+
+    def _check_sheddable(self, dead: np.ndarray) -> None:
+        """Refuse to de-energise an island holding a device whose model needs a live
+        network (a converter, an induction motor, a fixed injection): InputError naming
+        the buses and devices."""
+        held = {
+            "converter": np.concatenate([self.cp.bus_idx, self.cp.bus1_idx, self.cp.bus2_idx]),
+            "induction motor": self.mo.bus_idx,
+            "fixed injection": self.case.bus_indices(self.case.injections.bus)
+            if len(self.case.injections)
+            else np.zeros(0, int),
+        }
+        hit = [
+            f"{what} at bus {int(self.case.buses.number[b])}"
+            for what, buses in held.items()
+            for b in sorted(set(np.asarray(buses, int).tolist()) & set(dead.tolist()))
+        ]
+        if hit:
+            numbers = [int(b) for b in self.case.buses.number[dead]]
+            raise InputError(
+                f"the disturbance islands bus(es) {numbers} from every generator; stabctl "
+                f"sheds an island's load and shunts but not a {', '.join(hit)}"
+            )
 
     # -- initialisation ---------------------------------------------------------------
     def _initialise(self):
@@ -1118,9 +1148,9 @@ call_evaluate = by_address(
 )
 
 
-def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:
-    """Raise InputError when a stage leaves buses without a path to any online machine
-    (PST cannot solve such an island either); names the buses."""
+def _islanded(stage: Case, source_buses: np.ndarray, n_orig: int) -> np.ndarray:
+    """Indices (< n_orig) of the buses a stage leaves without a path to any online
+    machine (source_buses: their bus indices); InputError for a case without machines."""
     if len(stage.machines) == 0:
         raise InputError(
             f"case '{stage.name}' has no machines (mac_con is empty): a dynamic "
@@ -1128,12 +1158,7 @@ def _check_islands(stage: Case, source_buses: np.ndarray, n_orig: int) -> None:
         )
     label = bus_islands(stage)
     live = np.isin(label, label[source_buses])
-    dead = np.nonzero(~live[:n_orig])[0]
-    if dead.size:
-        raise InputError(
-            "the disturbance islands bus(es) "
-            f"{[int(b) for b in stage.buses.number[dead]]} from every generator"
-        )
+    return np.nonzero(~live[:n_orig])[0]
 
 
 @dataclass

@@ -63,7 +63,9 @@ class ReducedNetwork:
     targets (n_mac, 2) float: each playback source's targets of E' and speed in this
     stage (pu; `stabctl.models.machines`, the ``playback`` column); steps (n_exc + n_tg,)
     float: each exciter's VREF change (pu), then each governor's PREF change (pu on its
-    machine's base) in this stage (VrefStep / PrefStep events; empty: none).
+    machine's base) in this stage (VrefStep / PrefStep events; empty: none); islanded:
+    (bus number, load P + jQ shed, pu system base) of each bus the stage cuts from every
+    machine, de-energised (PSS/E's islanding: its load and shunts shed, its voltage 0).
     """
 
     Y11: np.ndarray
@@ -75,6 +77,7 @@ class ReducedNetwork:
     switched_on: np.ndarray = field(default_factory=lambda: np.zeros(0))
     targets: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     steps: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    islanded: tuple = ()
 
 
 def reduce_network(

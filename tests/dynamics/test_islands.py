@@ -116,3 +116,24 @@ def test_separated_group_is_found_in_the_island_that_lost_synchronism():
     delta = np.array([10.0, 10.1, 0.0, 0.1, 4.0])
     assert list(separated_group(delta, M)) == [2, 3, 4]  # one COI: the whole island
     assert list(separated_group(delta, M, ISLAND)) == [4]
+
+
+def test_a_trip_that_islands_a_load_bus_sheds_its_load_as_pss_e(kundur):
+    """Tripping Kundur's transformer 3-4 cuts load bus 4 (976 MW + j100 Mvar, half of it
+    constant current) from every generator.  PSS/E de-energises such an island and sheds
+    its load; so does stabctl: the run goes on, bus 4's voltage is 0 from the trip, the
+    result names the bus and the load shed, and the machines see the lost load (area 1
+    accelerates ahead of area 2); a run that islands nothing has no such record."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import LineTrip
+
+    sim = Simulator(kundur)
+    res = sim.run([LineTrip(3, 4, 1.0)], 3.0)
+    assert res.meta["islanded"] == [{"t_s": 1.0, "buses": [4], "load_shed_pu": [9.76, 1.0]}]
+    b4 = list(res.buses).index(4)
+    after = res.t > 1.0
+    assert np.max(res.vmag[after, b4]) < 1e-6 and res.vmag[0, b4] > 0.9
+    area1 = [list(res.machines).index(m) for m in (1, 2)]
+    assert np.all(res.speed[-1, area1] > res.speed[-1, [2, 3]])  # area 1 lost its load
+    flat = sim.run([], 3.0)
+    assert "islanded" not in flat.meta
