@@ -165,9 +165,19 @@ def evaluate(job: dict) -> dict:
             "gradient_s_per_mw": [0.0] * len(sites),
             **checked,
         }
-    grad = cct_gradient(
-        sim, f, res.t_unstable, fleet, sites, np.asarray(job["beta"]), ctrl, job.get("eps_s", EPS_S)
-    )
+    try:
+        grad = cct_gradient(
+            sim,
+            f,
+            res.t_unstable,
+            fleet,
+            sites,
+            np.asarray(job["beta"]),
+            ctrl,
+            job.get("eps_s", EPS_S),
+        )
+    except NoMarginSlope:  # the margin does not fall beyond the CCT: difference the CCT
+        grad = cct_difference_gradient(sim, f, job, ctrl, res)
     grad.pop("n_runs")
     return {
         "cct_s": res.cct_s,
@@ -393,7 +403,8 @@ def cct_gradient(
 
     Returns {"gradient_s_per_mw", "margin" (pu*rad), "dmargin_dtc" (pu*rad/s),
     "slope_from" ("difference" or "clearing energy"), "critical" (machine numbers),
-    "n_runs"}.  Raises InputError when neither slope is negative.
+    "n_runs"}.  Raises NoMarginSlope (an InputError) when neither slope is negative
+    (`evaluate` then differences the CCT itself, `cct_difference_gradient`).
     """
     case = sim.case
     r1 = _run(sim, fault, t_clear, fleet)
@@ -414,7 +425,7 @@ def cct_gradient(
     if not slope < 0:
         slope, how = -clearing_energy_rate(eq, fault.t_fault + t_clear), "clearing energy"
     if not slope < 0:
-        raise InputError(
+        raise NoMarginSlope(
             f"{fault.describe()}: no SIME margin slope in the clearing time near {t_clear:g} s"
         )
     return {
@@ -425,6 +436,82 @@ def cct_gradient(
         "critical": crit,
         "n_runs": runs,
     }
+
+
+class NoMarginSlope(InputError):
+    """SIME's margin gives no slope in the clearing time near the CCT (`cct_gradient`)."""
+
+
+#: the rating added along the fleet's direction by `cct_difference_gradient`: this
+#: fraction of the fleet's total, at least DIFF_MIN_MW
+DIFF_FRACTION, DIFF_MIN_MW = 0.25, 50.0
+
+
+def cct_difference_gradient(sim, fault: LineFault, job: dict, ctrl, res) -> dict:
+    """Gradient of the CCT in the site ratings (s/MW) when SIME's margin gives none: the
+    CCT again with DIFF_FRACTION of the fleet's total rating (at least DIFF_MIN_MW) added
+    in proportion to the present ratings (every site alike without storage), by bisection
+    below and above the present CCT; the difference over the MW added is the derivative
+    along that direction, given to every site (a cut exact along the fleet's own
+    direction).  Never raises for a missing slope: the placement loop goes on.
+
+    Parameters
+    ----------
+    sim : Simulator
+        The job's (memoised) simulator.
+    fault : LineFault
+        The contingency's fault.
+    job : dict
+        The `evaluate` job (sites, devices, tol, t_max, esd_model).
+    ctrl : BangBangCOI
+        The devices' controller.
+    res : CCTResult
+        The present CCT search.
+
+    Returns
+    -------
+    dict
+        As `cct_gradient`, with "slope_from" "CCT difference", "margin" and
+        "dmargin_dtc" None, "added_mw" the rating added.
+    """
+    sites = job["sites"]
+    have = {(int(d[0]), int(d[1])): float(d[2]) for d in job["devices"]}
+    mw = np.array([have.get((int(b), int(m)), 0.0) for b, m in sites])
+    direction = mw / mw.sum() if mw.sum() > 0 else np.full(len(sites), 1.0 / len(sites))
+    added = max(DIFF_FRACTION * mw.sum(), DIFF_MIN_MW)
+    more = {**job, "devices": devices_of_pairs(sites, mw + added * direction)}
+    fleet = _fleet(more, ctrl)
+    before = sim.n_runs
+    try:
+        cct2 = critical_clearing_time(
+            sim,
+            fault,
+            SearchOptions(
+                tol=job["tol"],
+                t_lo=0.0,
+                t_hi=res.t_unstable,
+                t_max=job["t_max"],
+                error_check=False,
+            ),
+            storage=fleet,
+        ).cct_s
+    except AboveSearchLimit:
+        cct2 = float(job["t_max"])
+    slope = (cct2 - res.cct_s) / added
+    return {
+        "gradient_s_per_mw": [slope] * len(sites),
+        "margin": None,
+        "dmargin_dtc": None,
+        "slope_from": "CCT difference",
+        "critical": list(res.separated),
+        "added_mw": added,
+        "n_runs": sim.n_runs - before,
+    }
+
+
+def devices_of_pairs(sites, mw) -> list:
+    """[bus, machine, MW] of every [bus, machine] site with a rating > 0."""
+    return [[int(b), int(m), float(p)] for (b, m), p in zip(sites, mw) if p > 0]
 
 
 def _margin(result, crit, t_clear_abs: float, case):

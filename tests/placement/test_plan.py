@@ -464,3 +464,34 @@ def test_cli_place_rejects_an_unknown_esd_model_and_damping_rows_for_batteries()
     check_damping_model(None, "wecc")
     with pytest.raises(InputError, match="not a WECC battery"):
         check_damping_model(0.0, "wecc")
+
+
+def test_a_missing_sime_slope_falls_back_to_a_cct_difference(monkeypatch):
+    """Where SIME's margin gives no slope near the CCT (WECC-179's fault 169-170 stopped a
+    placement with "no SIME margin slope"), `evaluate` differences the CCT itself: the CCT
+    again with the fleet's rating raised by 25 % (at least 50 MW) along its own direction,
+    the slope given to every site.  Kundur's 3-101 with 88 MW at bus 110: the cut it
+    gives is exact along that direction (the CCT at 138 MW, bisected independently, equals
+    the cut's prediction), the slope positive (storage helps), the loop never stopped."""
+    import stabctl.placement.evaluation as ev
+
+    def no_slope(*args, **kwargs):
+        raise ev.NoMarginSlope("no SIME margin slope (forced)")
+
+    monkeypatch.setattr(ev, "cct_gradient", no_slope)
+    job = {
+        "case": "kundur",
+        "fault": fault_inputs(LineFault(3, 101)),
+        "devices": [[110, 3, 88.0]],
+        "sites": [[110, 3], [120, 4]],
+        "controller": controller_dict(BangBangCOI()),
+        "beta": [[0.0, 0.0]] * 4,
+        "tol": 0.001,
+        "t_max": 0.5,
+    }
+    out = evaluate(job)
+    assert out["slope_from"] == "CCT difference" and out["cct_s"] == pytest.approx(0.184)
+    g = np.asarray(out["gradient_s_per_mw"])
+    assert g.shape == (2,) and g[0] == g[1] > 0
+    more = evaluate({**job, "devices": [[110, 3, 138.0]], "gradient": False})
+    assert out["cct_s"] + 50.0 * g[0] == pytest.approx(more["cct_s"], abs=1e-12)
