@@ -218,9 +218,14 @@ def print_cct(case_name, rating, d) -> None:
     """
     f = d["fault"]
     circ = f" (circuit {f['circuit']})" if f["circuit"] != 1 else ""
+    where = (
+        f"fault at bus {f['bus']} at {f['t_fault']:g} s, cleared without loss of a line"
+        if f["far_bus"] is None
+        else f"fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']}{circ} at "
+        f"{f['t_fault']:g} s, cleared at both ends, line tripped"
+    )
     click.echo(
-        f"case {case_name}: fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']}"
-        f"{circ} at {f['t_fault']:g} s, cleared at both ends, line tripped"
+        f"case {case_name}: {where}"
         + "".join(f", {a}-{b} also opened" for a, b in f["trips"])
         + (
             "; no storage"

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import shlex
 import signal
 import sys
@@ -73,6 +74,13 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
 
 
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null, so that the interpreter's final flush of a closed pipe
+    raises nothing more (Python's documented handling of SIGPIPE)."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+
+
 def reports_errors(func):
     """Decorate a command so that stabctl errors become one line and exit status 2.
 
@@ -90,7 +98,8 @@ def reports_errors(func):
         ``OSError`` (a disk full, a file the system refuses) is one ``error:`` line too
         (exit status 2; the outputs are written whole or not at all, and a sweep's
         finished records stay); Ctrl-C prints what was kept (exit status 130), and so does
-        SIGTERM (exit status 143).
+        SIGTERM (exit status 143); a closed pipe on stdout (``stabctl cases | head``)
+        ends the command without a word (exit status 141, as SIGPIPE).
     """
 
     @functools.wraps(func)
@@ -103,6 +112,9 @@ def reports_errors(func):
             except StabctlError as exc:
                 click.echo(f"error: {one_line(exc)}", err=True)
                 sys.exit(2)
+            except BrokenPipeError:  # the reader went away (`stabctl cases | head`)
+                _quiet_stdout()
+                sys.exit(141)  # as a process killed by SIGPIPE
             except OSError as exc:  # a read or write the system refused (disk full, ...)
                 where = f"{exc.filename}: " if exc.filename else ""
                 click.echo(f"error: {where}{exc.strerror or one_line(exc)}", err=True)
@@ -381,8 +393,11 @@ def tf_option(extra: str = ""):
     )
 
 
-def fault_options(required: bool, t_fault: bool = True):
-    """``--fault BUS --far-bus BUS`` and (``t_fault``) ``--t-fault S``: a bolted fault."""
+def fault_options(required: bool, t_fault: bool = True, far_required: bool | None = None):
+    """``--fault BUS --far-bus BUS`` and (``t_fault``) ``--t-fault S``: a bolted fault;
+    `far_required` (default `required`): whether --far-bus must be given (without it the
+    fault is cleared without loss of a line)."""
+    far_required = required if far_required is None else far_required
     return lambda func: _apply(
         func,
         (
@@ -397,11 +412,15 @@ def fault_options(required: bool, t_fault: bool = True):
             click.option(
                 "--far-bus",
                 type=int,
-                required=required,
+                required=far_required,
                 default=None,
                 metavar="BUS",
                 help="Far end of the faulted line BUS-FAR_BUS, tripped at clearing."
-                + ("" if required else " Without it the fault is cleared without loss of a line."),
+                + (
+                    ""
+                    if far_required
+                    else " Without it the fault is cleared without loss of a line."
+                ),
             ),
             *(
                 [
@@ -577,6 +596,37 @@ def storage_options(rating_help: str = "", multiple: bool = False, with_rating: 
             ),
         ),
     )
+
+
+#: the storage options that mean nothing without a rating (`check_storage_given`)
+STORAGE_SETTINGS = ("esd_model", "deadband_hz", "v_gate", "coi", "hysteresis_hz")
+
+
+def check_storage_given(esd_pct) -> None:
+    """Refuse storage settings given on the command line without --esd-pct: InputError
+    naming them (nothing is ignored silently).
+
+    Parameters
+    ----------
+    esd_pct : float or None
+        The command's --esd-pct.
+
+    Raises
+    ------
+    InputError
+        A storage setting given without a rating.
+    """
+    if esd_pct is not None:
+        return
+    ctx = click.get_current_context()
+    given = [
+        "--" + name.replace("_", "-")
+        for name in STORAGE_SETTINGS
+        if name in ctx.params
+        and ctx.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
+    ]
+    if given:
+        raise InputError(f"{', '.join(given)} given without --esd-pct (no storage to set)")
 
 
 def controller(deadband_hz, v_gate, coi, hysteresis_hz):

@@ -14,6 +14,7 @@ from stabctl.cli.format import (
 )
 from stabctl.cli.options import (
     TF_AFTER_FAULT_S,
+    check_storage_given,
     circuit_option,
     clear_cycles_option,
     controller,
@@ -377,6 +378,7 @@ def simulate(
         )
     if step is not None:
         check_step_count(tf, step, case)  # refused before any work (building the model)
+    check_storage_given(esd_pct)
     fleet = None
     if esd_pct is not None:
         from stabctl.storage.devices import uniform_fleet

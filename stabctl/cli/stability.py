@@ -14,6 +14,7 @@ from stabctl.cli.checks import (
 from stabctl.cli.format import print_cct, print_json, print_screening, print_sweep
 from stabctl.cli.options import (
     check_number,
+    check_storage_given,
     circuit_option,
     controller,
     esd_model_option,
@@ -36,7 +37,7 @@ from stabctl.errors import InputError
 
 @click.command()
 @click.argument("case_name", metavar="CASE")
-@fault_options(required=True)
+@fault_options(required=True, far_required=False)
 @circuit_option
 @click.option(
     "--trip",
@@ -76,10 +77,12 @@ def cct(
     q_limits,
     as_json,
 ):
-    """Critical clearing time of a line fault by bisection on the clearing time.
+    """Critical clearing time of a line or bus fault by bisection on the clearing time.
 
     The fault at BUS on line BUS-FAR_BUS starts at --t-fault and is cleared at both ends
     at once after the clearing time (s after the fault start); the line stays out.
+    Without --far-bus the fault at BUS is cleared without loss of a line (as `screen`'s
+    bus faults).
 
     \b
     Criterion: unstable if a rotor angle leaves the centre of inertia (H*MVA weights) by
@@ -92,6 +95,7 @@ def cct(
     \b
     Examples:
       stabctl cct kundur --fault 3 --far-bus 101
+      stabctl cct kundur --fault 3
       stabctl cct miniwecc --fault 83 --far-bus 33 --json
 
     A fault still stable when cleared at --t-max is a verdict (the CCT is above it: exit
@@ -106,6 +110,7 @@ def cct(
     from stabctl.stability.cct import LineFault, critical_clearing_time
     from stabctl.storage.devices import uniform_fleet
 
+    check_storage_given(esd_pct)
     search = search_settings(tol_ms, t_max, tf)
     model = model_settings(conventions, None, q_limits)
     case = load_case(case_name)

@@ -225,7 +225,8 @@ class SimulationResult:
             ``stable`` (bool), ``t_separation_s`` (s or None), ``separated_machines``
             (machine numbers), ``max_angle_spread_rad`` (largest abs(delta_i - delta_COI),
             rad), ``t_end_s`` (last recorded time, s), ``n_steps`` (recorded times - 1),
-            then every entry of `meta`.
+            then every entry of `meta` but its trajectories (arrays, e.g. the WECC
+            batteries' ``pesd_command``: in `meta`, not in a summary).
         """
         return {
             "stable": self.stable,
@@ -234,7 +235,7 @@ class SimulationResult:
             "max_angle_spread_rad": self.max_angle_spread,
             "t_end_s": float(self.t[-1]),
             "n_steps": int(self.t.size - 1),
-            **self.meta,
+            **{k: v for k, v in self.meta.items() if not isinstance(v, np.ndarray)},
         }
 
     def switching_records(self) -> list[dict]:

@@ -478,3 +478,57 @@ def test_case_events_runs_the_case_s_own_disturbance(tmp_path):
     out_dir.mkdir()
     res = run("simulate", bad, "--case-events", "--out", out_dir / "r.csv")
     assert_bad_input(res, out_dir, "events[0] (Alter 7): unknown event kind 'Reclose'")
+
+
+def test_storage_settings_without_a_rating_are_refused(tmp_path):
+    """--esd-model, --deadband-hz, ... without --esd-pct set nothing: refused by name (exit
+    2, nothing written), never ignored; with --esd-pct the WECC batteries' run prints its
+    JSON summary (the command trajectory pesd_command stays out of it)."""
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    for args in (["--esd-model", "wecc"], ["--deadband-hz", 0.2, "--coi", "rest"]):
+        res = run("simulate", "kundur", *args, "--tf", 1, "--out", out_dir / "r.csv")
+        names = [a for a in args if str(a).startswith("--")]
+        assert_bad_input(res, out_dir, f"{', '.join(names)} given without --esd-pct")
+    res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--esd-model", "wecc")
+    assert res.exit_code == 2 and "--esd-model given without --esd-pct" in res.output
+    res = run(
+        "simulate", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", 5,
+        "--esd-model", "wecc", "--tf", 2, "--json",
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert s["stable"] and s["esd"]["devices"] == 4 and "pesd_command" not in s
+
+
+def test_cct_of_a_bus_fault_is_labelled_as_one():
+    """`stabctl cct kundur --fault 3` without --far-bus is a bus fault cleared without
+    loss of a line (its CCT 0.238 s, the screening's), not "line 3-None" with a line
+    tripped (whose CCT is 0.154 s)."""
+    res = run("cct", "kundur", "--fault", 3)
+    assert res.exit_code == 0, res.output
+    head = res.stdout.splitlines()[0]
+    assert head == "case kundur: fault at bus 3 at 1 s, cleared without loss of a line; no storage"
+    assert "CCT 0.238 s" in res.stdout and "None" not in res.stdout
+
+
+def test_a_closed_pipe_ends_a_command_quietly():
+    """`stabctl cases | head -1`: the reader goes away; stabctl ends without an error line
+    (exit status 141, as a process stopped by SIGPIPE), not "error: Broken pipe".  The
+    pipe's reading end is closed before stabctl writes, so every write meets it closed."""
+    import os
+    import subprocess
+    import sys
+
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-m", "stabctl.cli", "cases"],
+            stdout=write,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+    finally:
+        os.close(write)
+    assert (proc.returncode, proc.stderr) == (141, "")
