@@ -598,6 +598,37 @@ def storage_options(rating_help: str = "", multiple: bool = False, with_rating: 
     )
 
 
+def far_end(spec: str, option: str) -> tuple[int, int]:
+    """(bus, circuit) of a line's far end given as TO or TO:K (circuit K, default 1).
+
+    Parameters
+    ----------
+    spec : str
+        The option's TO[:K] value.
+    option : str
+        The option's name, for the message.
+
+    Returns
+    -------
+    tuple of int
+        (TO, K).
+
+    Raises
+    ------
+    InputError
+        Not integers, or K < 1.
+    """
+    head, _, ckt = spec.partition(":")
+    try:
+        to, k = int(head), int(ckt) if ckt else 1
+    except ValueError:
+        msg = f"{option} ... {spec}: give the far bus as TO or TO:K (integers)"
+        raise InputError(msg) from None
+    if k < 1:
+        raise InputError(f"{option} ... {spec}: circuit K must be >= 1")
+    return to, k
+
+
 #: the storage options that mean nothing without a rating (`check_storage_given`)
 STORAGE_SETTINGS = ("esd_model", "deadband_hz", "v_gate", "coi", "hysteresis_hz")
 

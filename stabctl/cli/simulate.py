@@ -19,6 +19,7 @@ from stabctl.cli.options import (
     clear_cycles_option,
     controller,
     esd_model_option,
+    far_end,
     fault_options,
     json_option,
     model_options,
@@ -56,24 +57,11 @@ def _bus_fault(spec: str, t_on: float, t_off: float):
     return Fault(bus=bus, t=t_on, clear_near=clear, r=r, x=x)
 
 
-def _far_end(spec: str, option: str) -> tuple[int, int]:
-    """(bus, circuit) of a line's far end given as TO or TO:K (circuit K, default 1)."""
-    head, _, ckt = spec.partition(":")
-    try:
-        to, k = int(head), int(ckt) if ckt else 1
-    except ValueError:
-        msg = f"{option} ... {spec}: give the far bus as TO or TO:K (integers)"
-        raise InputError(msg) from None
-    if k < 1:
-        raise InputError(f"{option} ... {spec}: circuit K must be >= 1")
-    return to, k
-
-
 def _line_close(a: int, b: str, t: float):
     """LineClose of --close FROM TO[:K] T."""
     from stabctl.dynamics.events import LineClose
 
-    to, k = _far_end(b, "--close")
+    to, k = far_end(b, "--close")
     return LineClose(a, to, t, circuit=k)
 
 
@@ -138,7 +126,7 @@ def _build_events(
         for (a, b), t in zip(trips, times):
             if t < 0:
                 raise InputError(f"--t-trip must be >= 0 s, got {t:g}")
-            to, k = _far_end(b, "--trip")
+            to, k = far_end(b, "--trip")
             events.append(LineTrip(a, to, t, circuit=k))
     elif t_trips:
         raise InputError("--t-trip given without --trip")

@@ -18,6 +18,7 @@ from stabctl.cli.options import (
     circuit_option,
     controller,
     esd_model_option,
+    far_end,
     fault_options,
     faults_option,
     json_option,
@@ -35,18 +36,32 @@ from stabctl.cli.options import (
 from stabctl.errors import InputError
 
 
+def _trips(trip) -> tuple[tuple[int, int], ...]:
+    """cct's --trip FROM TO[:K] pairs: circuit 1 only (`LineFault.trips`)."""
+    out = []
+    for a, b in trip:
+        to, k = far_end(b, "--trip")
+        if k != 1:
+            raise InputError(
+                f"--trip {a} {b}: cct opens circuit 1 of a further line; to open both "
+                f"circuits of {a}-{to}, fault circuit 2 (--circuit 2) and --trip {a} {to}"
+            )
+        out.append((a, to))
+    return tuple(out)
+
+
 @click.command()
 @click.argument("case_name", metavar="CASE")
 @fault_options(required=True, far_required=False)
 @circuit_option
 @click.option(
     "--trip",
-    type=(int, int),
+    type=(int, str),
     multiple=True,
-    metavar="FROM TO",
+    metavar="FROM TO[:K]",
     help="Also open circuit 1 of line FROM-TO at the clearing instant "
-    "(repeatable); both circuits of a double line: --circuit 2 --trip "
-    "BUS FAR_BUS.",
+    "(repeatable; TO or TO:1, the option's form in simulate); both circuits of a double "
+    "line: --circuit 2 --trip BUS FAR_BUS.",
 )
 @storage_options()
 @esd_model_option
@@ -121,7 +136,7 @@ def cct(
             case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz), model=esd_model
         )
     )
-    line_fault = LineFault(fault, far_bus, t_fault, circuit, tuple(trip))
+    line_fault = LineFault(fault, far_bus, t_fault, circuit, _trips(trip))
     validate_events(case, line_fault.events(0.0), t_fault + 1.0)  # before compiling
     try:
         res = critical_clearing_time(
