@@ -36,7 +36,7 @@ from __future__ import annotations
 import dataclasses
 import inspect
 from collections import namedtuple
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
@@ -54,6 +54,7 @@ __all__ = [
     "Declared",
     "params_class",
     "layout",
+    "states",
     "check_packed",
     "pack",
 ]
@@ -376,6 +377,27 @@ def layout(name: str, packed):
     """
     names = [column for column, _ in packed]
     return namedtuple(name, names)(*range(len(names)))
+
+
+def states(name: str, names: Sequence[str]) -> Any:
+    """The named slots of a model type's states, as `layout` names packed columns: a
+    namedtuple instance whose field ``N`` is the slot of state ``N``, e.g. ``S.VE``
+    (a compile-time constant to numba, as a layout is), read by the kernels as
+    ``x[S.VE, i]``.
+
+    Parameters
+    ----------
+    name : str
+        The namedtuple's type name (e.g. ``"AC8BStates"``).
+    names : sequence of str
+        The state names in slot order.
+
+    Returns
+    -------
+    namedtuple
+        Fields: the state names in order, values 0 .. len(names) - 1.
+    """
+    return layout(name, [(n, n) for n in names])
 
 
 def check_packed(cls, packed, values=()) -> None:
