@@ -207,6 +207,5 @@ def derivatives(P, x, i, eterm, err, dx, ieee, reach):
         reach if kind == DC2 else 0.0,
     )
     dx[S.Efd, i] = (
-        x[S.VR, i]
-        - dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ], x[S.Efd, i])
+        x[S.VR, i] - dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ], x[S.Efd, i])
     ) / P[i, E.TE]

@@ -111,6 +111,6 @@ def derivatives(P, x, i, err, VB, dx):
     x[S.VR, i], dx[S.VR, i] = nonwindup_lag(
         P[i, E.KA] * err, x[S.VR, i], P[i, E.TA], P[i, E.VRMIN], P[i, E.VRMAX], IEEE_RULE, 0.0
     )
-    dx[S.Efd, i] = (
-        clip(VB + x[S.VR, i], 0.0, P[i, E.VBCAP]) - P[i, E.KE] * x[S.Efd, i]
-    ) / P[i, E.TE]
+    dx[S.Efd, i] = (clip(VB + x[S.VR, i], 0.0, P[i, E.VBCAP]) - P[i, E.KE] * x[S.Efd, i]) / P[
+        i, E.TE
+    ]

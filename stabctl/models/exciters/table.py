@@ -29,196 +29,193 @@ def upper(*names: str, **renamed: str) -> dict[str, str]:
 
 #: exc_con columns 2-48 (column 1, the type, is declared by the registry from the types)
 PARAMS = (
-        Param("machine", "code", 2, integer=True, doc="machine number"),
-        Param("TR", "s", 3, lo=0.0, doc="input filter time constant"),
-        Param("KA", "", 4, doc="voltage regulator gain"),
-        Param("TA", "s", 5, lo=0.0, doc="voltage regulator time constant"),
-        Param("TB", "s", 6, lo=0.0, doc="transient gain reduction time constant"),
-        Param("TC", "s", 7, doc="transient gain reduction time constant"),
-        Param("Vrmax", "pu", 8, doc="maximum regulator output"),
-        Param("Vrmin", "pu", 9, doc="minimum regulator output"),
-        Param(
-            "VImax",
-            "pu",
-            10,
-            alt="KE",
-            doc="ST3, EXST1: max internal signal | DC1/2, EXAC1/ESAC1A, IEEET3: KE exciter "
-            "constant",
-        ),
-        Param(
-            "VImin",
-            "pu",
-            11,
-            alt="TE",
-            doc="ST3, EXST1: min internal signal | DC1/2, EXAC1/ESAC1A, IEEET3: TE exciter time "
-            "constant, s",
-        ),
-        Param(
-            "KJ",
-            "",
-            12,
-            alt="E1",
-            doc="ST3: first stage regulator gain | DC1/2, EXAC1/ESAC1A: E1, pu",
-        ),
-        Param(
-            "KP",
-            "",
-            13,
-            alt="SE1",
-            doc="ST3, IEEET3, ESST4B: potential circuit gain | DC1/2, EXAC1/ESAC1A: SE(E1)",
-        ),
-        Param(
-            "thetaP",
-            "deg",
-            14,
-            alt="E2",
-            doc="ST3, ESST4B: potential circuit angle | DC1/2, EXAC1/ESAC1A: E2, pu",
-        ),
-        Param(
-            "KI",
-            "",
-            15,
-            alt="SE2",
-            doc="ST3, IEEET3, ESST4B: current circuit gain | DC1/2, EXAC1/ESAC1A: SE(E2)",
-        ),
-        Param(
-            "XL",
-            "pu",
-            16,
-            alt="KF_dc",
-            doc="ST3, ESST4B: potential source reactance | DC1/2: KF stabilizer gain",
-        ),
-        Param(
-            "KC",
-            "",
-            17,
-            alt="TF_dc",
-            doc="ST3, EXST1, ESST1A, EXAC1, EXAC4, ESAC1A, ESST4B: rectifier loading factor "
-            "| DC1/2: TF stabilizer time constant, s",
-        ),
-        Param(
-            "Efdmax",
-            "pu",
-            18,
-            alt="TF2",
-            doc="ST3: maximum field voltage | IEEET2: second rate feedback time constant TF2, s",
-        ),
-        Param(
-            "KG",
-            "",
-            19,
-            alt="bus_fed",
-            doc="ST3, ESST4B: inner loop feedback constant | smpexc: 1 the output times the "
-            "terminal voltage (bus-fed SCRX), 0 not",
-        ),
-        Param(
-            "VGmax",
-            "pu",
-            20,
-            alt="vos_after_va",
-            doc="ST3, ESST4B: maximum inner loop feedback | ESST1A: 1 the stabiliser output "
-            "added after V_A (PSS/E VOS = 2), 0 at the voltage error (VOS = 1)",
-        ),
-        Param("KF", "", 21, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback gain"),
-        Param(
-            "TF", "s", 22, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback time constant"
-        ),
-        Param(
-            "dc_sat",
-            "code",
-            23,
-            choices=(0, 1),
-            doc="DC1/2 saturation through (E1, SE1), (E2, SE2): 0 PST's exponential, "
-            "1 PSS/E's quadratic",
-        ),
-        Param(
-            "ke_given",
-            "code",
-            24,
-            choices=(0, 1),
-            doc="DC1/2: 0 K_E = 0 computed so that V_R starts at 0 (PST), 1 as given (ANDES)",
-        ),
-        Param(
-            "ifd_machine",
-            "code",
-            25,
-            choices=(0, 1),
-            doc="ST3: field current of I_N = K_C I_fd / V_E, 0 PST exc_st3's own estimate "
-            "E_Isat(E'q) + p6 (E'q - psi_kd) + p7 i_d, 1 the machine's (IEEE 421.5 "
-            "I_FD; ANDES esst3a.py XadIfd)",
-        ),
-        Param("TC1", "s", 26, doc="ESST1A: second lead time constant"),
-        Param("TB1", "s", 27, lo=0.0, doc="ESST1A: second lag time constant"),
-        Param(
-            "VAmax",
-            "pu",
-            28,
-            doc="ESST1A, ESAC1A: maximum regulator output V_A | ST3: ESST3A's VRMAX on "
-            "its regulator lag (with TA_st3a)",
-        ),
-        Param(
-            "VAmin",
-            "pu",
-            29,
-            doc="ESST1A, ESAC1A: minimum regulator output V_A | ST3: ESST3A's VRMIN on "
-            "its regulator lag (with TA_st3a)",
-        ),
-        Param("KLR", "", 30, doc="ESST1A: field current limiter gain"),
-        Param("ILR", "pu", 31, doc="ESST1A: field current limiter pick-up (machine base)"),
-        Param("KD", "", 32, doc="EXAC1, ESAC1A: demagnetising factor of the field current"),
-        Param(
-            "VBmax",
-            "pu",
-            33,
-            lo=0.0,
-            doc="ST3, ESST4B: upper limit of the source voltage V_B = V_E F_EX (PSS/E "
-            "ESST3A, ESST4B VBMAX); IEEET3: of V_B + V_R; 0 none (PST exc_st3)",
-        ),
-        Param("Kpid_P", "", 34, doc="AC8B: PID proportional gain | ESST4B: K_PR"),
-        Param("Kpid_I", "1/s", 35, doc="AC8B: PID integral gain | ESST4B: K_IR"),
-        Param("Kpid_D", "s", 36, doc="AC8B: PID derivative gain"),
-        Param("Td", "s", 37, lo=0.0, doc="AC8B: PID derivative time constant"),
-        Param("VPmax", "pu", 38, doc="AC8B: PID output upper limit"),
-        Param("VPmin", "pu", 39, doc="AC8B: PID output lower limit"),
-        Param("KPM", "", 40, doc="ESST4B: inner-loop PI proportional gain"),
-        Param("KIM", "1/s", 41, doc="ESST4B: inner-loop PI integral gain"),
-        Param("VMmax", "pu", 42, doc="ESST4B: inner-loop PI output upper limit"),
-        Param("VMmin", "pu", 43, doc="ESST4B: inner-loop PI output lower limit"),
-        Param(
-            "TA_st3a",
-            "s",
-            44,
-            lo=0.0,
-            doc="ST3: ESST3A's regulator lag 1/(1 + s T_A) before the inner loop, non-windup "
-            "on [VAmin, VAmax] (below 1e-3 s: none, as PST exc_st3)",
-        ),
-        Param(
-            "efd_speed",
-            "code",
-            45,
-            choices=(0, 1),
-            doc="1: the field voltage is the exciter's output times the rotor speed (pu), "
-            "ANDES 2.0's EXDC2 (exdc2.py vout = omega vp); 0 (default): the output",
-        ),
-        Param(
-            "Rcomp",
-            "pu",
-            46,
-            doc="load compensation resistance R_C, machine base: the voltage transducer's "
-            "input is V_C = abs(V_t + (R_C + j X_C) I_t) (IEEE 421.5 load compensator; "
-            "PSS/E and ANDES IEEEVC); 0 with X_C: V_t",
-        ),
-        Param("Xcomp", "pu", 47, doc="load compensation reactance X_C, machine base"),
-        Param(
-            "psse_st1",
-            "code",
-            48,
-            choices=(0, 1),
-            doc="EXST1: 1 the PSS/E Model Library's output limits [V_t VRMIN - K_C I_fd, "
-            "V_t VRMAX - K_C I_fd] and rate feedback of V_R before them (OpenIPSL's "
-            "PSSE.ES.EXST1, PowerSimulationsDynamics.jl); 0 (default) the lower limit "
-            "V_t VRMIN and the feedback of the field voltage",
-        ),
+    Param("machine", "code", 2, integer=True, doc="machine number"),
+    Param("TR", "s", 3, lo=0.0, doc="input filter time constant"),
+    Param("KA", "", 4, doc="voltage regulator gain"),
+    Param("TA", "s", 5, lo=0.0, doc="voltage regulator time constant"),
+    Param("TB", "s", 6, lo=0.0, doc="transient gain reduction time constant"),
+    Param("TC", "s", 7, doc="transient gain reduction time constant"),
+    Param("Vrmax", "pu", 8, doc="maximum regulator output"),
+    Param("Vrmin", "pu", 9, doc="minimum regulator output"),
+    Param(
+        "VImax",
+        "pu",
+        10,
+        alt="KE",
+        doc="ST3, EXST1: max internal signal | DC1/2, EXAC1/ESAC1A, IEEET3: KE exciter constant",
+    ),
+    Param(
+        "VImin",
+        "pu",
+        11,
+        alt="TE",
+        doc="ST3, EXST1: min internal signal | DC1/2, EXAC1/ESAC1A, IEEET3: TE exciter time "
+        "constant, s",
+    ),
+    Param(
+        "KJ",
+        "",
+        12,
+        alt="E1",
+        doc="ST3: first stage regulator gain | DC1/2, EXAC1/ESAC1A: E1, pu",
+    ),
+    Param(
+        "KP",
+        "",
+        13,
+        alt="SE1",
+        doc="ST3, IEEET3, ESST4B: potential circuit gain | DC1/2, EXAC1/ESAC1A: SE(E1)",
+    ),
+    Param(
+        "thetaP",
+        "deg",
+        14,
+        alt="E2",
+        doc="ST3, ESST4B: potential circuit angle | DC1/2, EXAC1/ESAC1A: E2, pu",
+    ),
+    Param(
+        "KI",
+        "",
+        15,
+        alt="SE2",
+        doc="ST3, IEEET3, ESST4B: current circuit gain | DC1/2, EXAC1/ESAC1A: SE(E2)",
+    ),
+    Param(
+        "XL",
+        "pu",
+        16,
+        alt="KF_dc",
+        doc="ST3, ESST4B: potential source reactance | DC1/2: KF stabilizer gain",
+    ),
+    Param(
+        "KC",
+        "",
+        17,
+        alt="TF_dc",
+        doc="ST3, EXST1, ESST1A, EXAC1, EXAC4, ESAC1A, ESST4B: rectifier loading factor "
+        "| DC1/2: TF stabilizer time constant, s",
+    ),
+    Param(
+        "Efdmax",
+        "pu",
+        18,
+        alt="TF2",
+        doc="ST3: maximum field voltage | IEEET2: second rate feedback time constant TF2, s",
+    ),
+    Param(
+        "KG",
+        "",
+        19,
+        alt="bus_fed",
+        doc="ST3, ESST4B: inner loop feedback constant | smpexc: 1 the output times the "
+        "terminal voltage (bus-fed SCRX), 0 not",
+    ),
+    Param(
+        "VGmax",
+        "pu",
+        20,
+        alt="vos_after_va",
+        doc="ST3, ESST4B: maximum inner loop feedback | ESST1A: 1 the stabiliser output "
+        "added after V_A (PSS/E VOS = 2), 0 at the voltage error (VOS = 1)",
+    ),
+    Param("KF", "", 21, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback gain"),
+    Param("TF", "s", 22, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback time constant"),
+    Param(
+        "dc_sat",
+        "code",
+        23,
+        choices=(0, 1),
+        doc="DC1/2 saturation through (E1, SE1), (E2, SE2): 0 PST's exponential, "
+        "1 PSS/E's quadratic",
+    ),
+    Param(
+        "ke_given",
+        "code",
+        24,
+        choices=(0, 1),
+        doc="DC1/2: 0 K_E = 0 computed so that V_R starts at 0 (PST), 1 as given (ANDES)",
+    ),
+    Param(
+        "ifd_machine",
+        "code",
+        25,
+        choices=(0, 1),
+        doc="ST3: field current of I_N = K_C I_fd / V_E, 0 PST exc_st3's own estimate "
+        "E_Isat(E'q) + p6 (E'q - psi_kd) + p7 i_d, 1 the machine's (IEEE 421.5 "
+        "I_FD; ANDES esst3a.py XadIfd)",
+    ),
+    Param("TC1", "s", 26, doc="ESST1A: second lead time constant"),
+    Param("TB1", "s", 27, lo=0.0, doc="ESST1A: second lag time constant"),
+    Param(
+        "VAmax",
+        "pu",
+        28,
+        doc="ESST1A, ESAC1A: maximum regulator output V_A | ST3: ESST3A's VRMAX on "
+        "its regulator lag (with TA_st3a)",
+    ),
+    Param(
+        "VAmin",
+        "pu",
+        29,
+        doc="ESST1A, ESAC1A: minimum regulator output V_A | ST3: ESST3A's VRMIN on "
+        "its regulator lag (with TA_st3a)",
+    ),
+    Param("KLR", "", 30, doc="ESST1A: field current limiter gain"),
+    Param("ILR", "pu", 31, doc="ESST1A: field current limiter pick-up (machine base)"),
+    Param("KD", "", 32, doc="EXAC1, ESAC1A: demagnetising factor of the field current"),
+    Param(
+        "VBmax",
+        "pu",
+        33,
+        lo=0.0,
+        doc="ST3, ESST4B: upper limit of the source voltage V_B = V_E F_EX (PSS/E "
+        "ESST3A, ESST4B VBMAX); IEEET3: of V_B + V_R; 0 none (PST exc_st3)",
+    ),
+    Param("Kpid_P", "", 34, doc="AC8B: PID proportional gain | ESST4B: K_PR"),
+    Param("Kpid_I", "1/s", 35, doc="AC8B: PID integral gain | ESST4B: K_IR"),
+    Param("Kpid_D", "s", 36, doc="AC8B: PID derivative gain"),
+    Param("Td", "s", 37, lo=0.0, doc="AC8B: PID derivative time constant"),
+    Param("VPmax", "pu", 38, doc="AC8B: PID output upper limit"),
+    Param("VPmin", "pu", 39, doc="AC8B: PID output lower limit"),
+    Param("KPM", "", 40, doc="ESST4B: inner-loop PI proportional gain"),
+    Param("KIM", "1/s", 41, doc="ESST4B: inner-loop PI integral gain"),
+    Param("VMmax", "pu", 42, doc="ESST4B: inner-loop PI output upper limit"),
+    Param("VMmin", "pu", 43, doc="ESST4B: inner-loop PI output lower limit"),
+    Param(
+        "TA_st3a",
+        "s",
+        44,
+        lo=0.0,
+        doc="ST3: ESST3A's regulator lag 1/(1 + s T_A) before the inner loop, non-windup "
+        "on [VAmin, VAmax] (below 1e-3 s: none, as PST exc_st3)",
+    ),
+    Param(
+        "efd_speed",
+        "code",
+        45,
+        choices=(0, 1),
+        doc="1: the field voltage is the exciter's output times the rotor speed (pu), "
+        "ANDES 2.0's EXDC2 (exdc2.py vout = omega vp); 0 (default): the output",
+    ),
+    Param(
+        "Rcomp",
+        "pu",
+        46,
+        doc="load compensation resistance R_C, machine base: the voltage transducer's "
+        "input is V_C = abs(V_t + (R_C + j X_C) I_t) (IEEE 421.5 load compensator; "
+        "PSS/E and ANDES IEEEVC); 0 with X_C: V_t",
+    ),
+    Param("Xcomp", "pu", 47, doc="load compensation reactance X_C, machine base"),
+    Param(
+        "psse_st1",
+        "code",
+        48,
+        choices=(0, 1),
+        doc="EXST1: 1 the PSS/E Model Library's output limits [V_t VRMIN - K_C I_fd, "
+        "V_t VRMAX - K_C I_fd] and rate feedback of V_R before them (OpenIPSL's "
+        "PSSE.ES.EXST1, PowerSimulationsDynamics.jl); 0 (default) the lower limit "
+        "V_t VRMIN and the feedback of the field voltage",
+    ),
 )
 
 #: exc_con field names in column order, the type first
