@@ -160,7 +160,7 @@ def rectifier_loading(IN):
     annex D, rectifier regulation): 1 for I_N <= 0, 1 - 0.577 I_N up to 0.433, sqrt(0.75
     - I_N^2) up to 0.75, 1.732 (1 - I_N) up to 1, 0 beyond (ANDES ``exac1.py`` ``FEX``).
     PST's exc_st3 spells it with 0.5771 and an initialisation quirk, kept as its own
-    variant (`stabctl.models.exciters._fex`) so that PSTess's results stay bit for bit.
+    variant (`stabctl.models.exciters.st3._fex`) so that PSTess's results stay bit for bit.
     Callable from Python too (EXAC1's initialisation solves through it)."""
     if IN <= 0.0:
         return 1.0

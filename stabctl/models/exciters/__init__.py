@@ -176,17 +176,18 @@ EXCITER = Family(
 )
 
 #: the types whose equations read the machine's field current (`field_current`)
-READS_IFD = (ST1, ST1A, AC1, AC4, AC1A, AC8B, T3, ST4B)
+READS_IFD = tuple(kind for kind, m in TYPES.items() if m.READS_IFD)
 #: the types with a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (the DC
 #: exciters read theirs from columns 16-17): EXST1, ESST1A, EXAC1, ESAC1A, IEEET3
-RATE_FEEDBACK = (ST1, ST1A, AC1, AC1A, T3)
+RATE_FEEDBACK = tuple(kind for kind, m in TYPES.items() if m.RATE_FEEDBACK)
 #: the types fed by a potential (and compound) source V_B computed from the machine's
 #: terminal voltage and current (`source_voltage`): ST3, IEEET3, ESST4B
-SOURCE_KINDS = (ST3, T3, ST4B)
+SOURCE_KINDS = tuple(kind for kind, m in TYPES.items() if m.SOURCE)
 #: the AC exciters with an exciter voltage V_E and PSS/E's quadratic saturation: EXAC1,
 #: ESAC1A, AC8B
-AC_KINDS = (AC1, AC1A, AC8B)
-DC_KINDS = (DC1, DC2, T2)
+AC_KINDS = (*exac1.KINDS, *ac8b.KINDS)
+#: the DC exciters (their saturation fits, K_E computed): DC1, DC2, IEEET2
+DC_KINDS = tuple(dc.KINDS)
 #: the machine's speed among its states (``efd_speed``)
 _OMEGA = mac.STATE_NAMES.index("omega")
 
@@ -294,13 +295,10 @@ class ExciterParams(Declared):
     def has_state(self) -> np.ndarray:
         """Boolean (n_slots, n_exc): the slots that are states (docs/modal.md)."""
         act = np.zeros((6, self.n), bool)
-        act[0], act[1] = self.has_TR, self.has_TB | (self.kind == AC8B)
-        act[1] |= (self.kind == ST4B) & (self.Kpid_I != 0)  # the regulator PI's integral
-        act[2] = (self.kind == ST3) | self.has_TA
-        t3, st4b = self.kind == T3, self.kind == ST4B
-        act[3] = self.has_Rf | self.is_ac | t3 | (st4b & (self.KIM != 0)) | self.has_TA3A
-        act[4] = self.is_dc | self.has_TB1 | ((self.is_ac | t3) & self.has_Rf) | self.has_pid_d
-        act[5] = self.has_VF
+        for module in MODULES:
+            rows = np.isin(self.kind, tuple(module.KINDS))
+            for slot, on in enumerate(module.has_state(self)):
+                act[slot] |= rows & on
         return act[: self.n_slots()]
 
     @property
@@ -441,27 +439,12 @@ def _exponential_fit(e):
 
 def _check_dc(e) -> None:
     """DC exciter, EXST1 and ESST1A options stabctl does not model: raise CaseError naming
-    row and field (T_E, T_F must exist, T_A but in the DC exciters; Vrmax = 0 is PST's
-    'compute it')."""
-    # (name in messages, declared); a DC regulator without T_A is PST's algebraic V_R
-    dc = (("TE", "TE"), ("TF", "TF_dc"))
-    need = {
-        DC1: dc,
-        DC2: dc,
-        T2: dc,
-        ST1: (("TA", "TA"),),
-        ST1A: (("TA", "TA"),),
-        AC1: (("TA", "TA"), ("TE", "TE")),
-        AC4: (("TA", "TA"),),
-        AC1A: (("TA", "TA"), ("TE", "TE")),
-        AC8B: (("TA", "TA"), ("TE", "TE")),
-        T3: (("TA", "TA"), ("TE", "TE")),
-        ST4B: (),  # T_A = 0: no lag (PSS/E), `_st4b_field_voltage`
-    }
+    row and field (the time constants each type's ``NEEDS`` lists, and T_F with a rate
+    feedback, must exist; Vrmax = 0 is PST's 'compute it')."""
     for r in np.nonzero(np.isin(e.type, (*DC_KINDS, *READS_IFD)))[0]:
         kind = int(e.type[r])
         extra = (("TF", "TF"),) if kind in RATE_FEEDBACK and e.KF[r] != 0 else ()
-        for name, declared in need[kind] + extra:
+        for name, declared in TYPES[kind].NEEDS + extra:
             k = EXCITER.col(declared)
             if e.col(k)[r] < LBND:
                 raise CaseError(
@@ -584,7 +567,7 @@ def source_voltage(P, i, MP, xm, cur, vt, ifd):
     (`field_current`; the ST3 reads its own, `st3.field_current`); at most VBmax (PSS/E
     ESST3A's and ESST4B's ``VB`` limiter; inf without); MP, xm, cur as `field_voltage`."""
     kind = P[i, E.KIND]
-    if kind != ST3 and kind != T3 and kind != ST4B:
+    if kind not in SOURCE_KINDS:
         return 1.0
     m = int(P[i, E.MAC])
     ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, m)

@@ -25,6 +25,14 @@ if TYPE_CHECKING:
 
 AC8B = 10
 KINDS = {AC8B: "AC8B (IEEE 421.5 AC8B, PID regulator)"}
+#: reads the machine's field current (`stabctl.models.exciters.field_current`)
+READS_IFD = True
+#: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
+RATE_FEEDBACK = False
+#: fed by a potential (and compound) source V_B (its ``source_voltage``)
+SOURCE = False
+#: the time constants that must be >= 1e-3 s: (name in messages, declared field)
+NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"), ("TE", "TE"))
 
 DYR = (
     # AC8B -> type 10 (IEEE 421.5 AC8B as PowerWorld's AC8B record and ANDES 2.0
@@ -85,6 +93,14 @@ DYR = (
 #: V_R, the exciter's V_E
 S = states("AC8BStates", ("VTR", "PIDi", "VR", "VE", "PIDd"))
 STATE_NAMES = {AC8B: S._fields}
+
+
+def has_state(p: ExciterParams):
+    """Which of the slots of `S` are states (a block whose time constant is below 1e-3 s,
+    or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
+    on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
+    on = np.ones(p.n, bool)
+    return (p.has_TR, on, p.has_TA, on, p.has_pid_d)
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

@@ -27,6 +27,14 @@ if TYPE_CHECKING:
 
 DC1, DC2, T2 = 1, 2, 5
 KINDS = {DC1: "DC1", DC2: "DC2 (exc_dc12)", T2: "IEEET2 (DC1 with a two-lag rate feedback)"}
+#: reads the machine's field current (`stabctl.models.exciters.field_current`)
+READS_IFD = False
+#: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
+RATE_FEEDBACK = False
+#: fed by a potential (and compound) source V_B (its ``source_voltage``)
+SOURCE = False
+#: the time constants that must be >= 1e-3 s: (name in messages, declared field)
+NEEDS: tuple[tuple[str, str], ...] = (("TE", "TE"), ("TF", "TF_dc"))  # no T_A: PST's algebraic V_R
 
 #: the copies the IEEE 1968 DC records IEEET1 and IEEET2 share (PSS/E Model Library)
 _IEEET_COPY = {
@@ -131,6 +139,14 @@ DYR = (
 #: washout R_f and IEEET2's second feedback lag V_F
 S = states("DCStates", ("VTR", "VAs", "VR", "Efd", "Rf", "VF"))
 STATE_NAMES = {DC1: S._fields[: S.VF], DC2: S._fields[: S.VF], T2: S._fields}
+
+
+def has_state(p: ExciterParams):
+    """Which of the slots of `S` are states (a block whose time constant is below 1e-3 s,
+    or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
+    on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
+    on = np.ones(p.n, bool)
+    return (p.has_TR, p.has_TB, p.has_TA, on, on, p.has_VF)
 
 
 @njit

@@ -26,6 +26,14 @@ if TYPE_CHECKING:
 
 ST1A = 6
 KINDS = {ST1A: "ESST1A (IEEE 421.5 ST1A)"}
+#: reads the machine's field current (`stabctl.models.exciters.field_current`)
+READS_IFD = True
+#: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
+RATE_FEEDBACK = True
+#: fed by a potential (and compound) source V_B (its ``source_voltage``)
+SOURCE = False
+#: the time constants that must be >= 1e-3 s: (name in messages, declared field)
+NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"),)
 
 DYR = (
     # ESST1A -> type 6; UEL (no under-excitation limiter is modelled: no signal) and
@@ -83,6 +91,13 @@ DYR = (
 #: second lead-lag
 S = states("ESST1AStates", ("VTR", "VAs", "VA", "Rf", "VAs1"))
 STATE_NAMES = {ST1A: S._fields}
+
+
+def has_state(p: ExciterParams):
+    """Which of the slots of `S` are states (a block whose time constant is below 1e-3 s,
+    or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
+    on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
+    return (p.has_TR, p.has_TB, p.has_TA, p.has_Rf, p.has_TB1)
 
 
 def st1a_regulator_output(p: ExciterParams, Efd):

@@ -26,6 +26,14 @@ if TYPE_CHECKING:
 
 ST4B = 12
 KINDS = {ST4B: "ESST4B (IEEE 421.5 ST4B, PI regulators)"}
+#: reads the machine's field current (`stabctl.models.exciters.field_current`)
+READS_IFD = True
+#: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
+RATE_FEEDBACK = False
+#: fed by a potential (and compound) source V_B (its ``source_voltage``)
+SOURCE = True
+#: the time constants that must be >= 1e-3 s: (name in messages, declared field)
+NEEDS: tuple[tuple[str, str], ...] = ()  # T_A = 0: no lag (PSS/E), `field_voltage`
 
 DYR = (
     # ESST4B -> type 12 (IEEE 421.5 ST4B); VGmax, which PSS/E's record lacks, is set
@@ -79,6 +87,13 @@ DYR = (
 #: integral
 S = states("ESST4BStates", ("VTR", "PIi", "VM", "PIMi"))
 STATE_NAMES = {ST4B: S._fields}
+
+
+def has_state(p: ExciterParams):
+    """Which of the slots of `S` are states (a block whose time constant is below 1e-3 s,
+    or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
+    on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
+    return (p.has_TR, p.has_TB | (p.Kpid_I != 0), p.has_TA, p.KIM != 0)
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

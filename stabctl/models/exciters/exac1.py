@@ -37,6 +37,14 @@ if TYPE_CHECKING:
 
 AC1, AC1A = 7, 9
 KINDS = {AC1: "EXAC1 (IEEE AC1)", AC1A: "ESAC1A (IEEE 421.5 AC1A)"}
+#: reads the machine's field current (`stabctl.models.exciters.field_current`)
+READS_IFD = True
+#: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
+RATE_FEEDBACK = True
+#: fed by a potential (and compound) source V_B (its ``source_voltage``)
+SOURCE = False
+#: the time constants that must be >= 1e-3 s: (name in messages, declared field)
+NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"), ("TE", "TE"))
 
 #: ESAC1A's record, every parameter a copy, in the PSS/E Model Library's order
 _ESAC1A_COPY = upper(
@@ -105,6 +113,13 @@ DYR = (
 #: exciter's V_E, the rate feedback's washout R_f
 S = states("EXAC1States", ("VTR", "VAs", "VR", "VE", "Rf"))
 STATE_NAMES = {AC1: S._fields, AC1A: ("VTR", "VAs", "VA", "VE", "Rf")}
+
+
+def has_state(p: ExciterParams):
+    """Which of the slots of `S` are states (a block whose time constant is below 1e-3 s,
+    or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
+    on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
+    return (p.has_TR, p.has_TB, p.has_TA, np.ones(p.n, bool), p.has_Rf)
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

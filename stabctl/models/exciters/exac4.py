@@ -19,6 +19,14 @@ if TYPE_CHECKING:
 
 AC4 = 8
 KINDS = {AC4: "EXAC4 (IEEE AC4)"}
+#: reads the machine's field current (`stabctl.models.exciters.field_current`)
+READS_IFD = True
+#: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
+RATE_FEEDBACK = False
+#: fed by a potential (and compound) source V_B (its ``source_voltage``)
+SOURCE = False
+#: the time constants that must be >= 1e-3 s: (name in messages, declared field)
+NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"),)
 
 DYR = (
     # EXAC4 -> type 8 (IEEE 1981 AC4)
@@ -34,6 +42,13 @@ DYR = (
 #: the states: transducer, lead-lag, regulator V_R
 S = states("EXAC4States", ("VTR", "VAs", "VR"))
 STATE_NAMES = {AC4: S._fields}
+
+
+def has_state(p: ExciterParams):
+    """Which of the slots of `S` are states (a block whose time constant is below 1e-3 s,
+    or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
+    on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
+    return (p.has_TR, p.has_TB, p.has_TA)
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

@@ -23,6 +23,14 @@ if TYPE_CHECKING:
 
 T3 = 11
 KINDS = {T3: "IEEET3 (IEEE 1968 type 3, compound source)"}
+#: reads the machine's field current (`stabctl.models.exciters.field_current`)
+READS_IFD = True
+#: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
+RATE_FEEDBACK = True
+#: fed by a potential (and compound) source V_B (its ``source_voltage``)
+SOURCE = True
+#: the time constants that must be >= 1e-3 s: (name in messages, declared field)
+NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"), ("TE", "TE"))
 
 DYR = (
     # IEEET3 -> type 11 (IEEE 1968 type 3), PSS/E's CON order (ANDES's psse-dyr.yaml
@@ -53,6 +61,13 @@ DYR = (
 #: exciter's Efd, the rate feedback's washout R_f
 S = states("IEEET3States", ("VTR", "VAs", "VR", "Efd", "Rf"))
 STATE_NAMES = {T3: S._fields}
+
+
+def has_state(p: ExciterParams):
+    """Which of the slots of `S` are states (a block whose time constant is below 1e-3 s,
+    or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
+    on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
+    return (p.has_TR, p.has_TB, p.has_TA, np.ones(p.n, bool), p.has_Rf)
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

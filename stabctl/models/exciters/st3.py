@@ -26,6 +26,14 @@ if TYPE_CHECKING:
 
 ST3 = 3
 KINDS = {ST3: "ST3 (exc_st3)"}
+#: reads the machine's field current (`stabctl.models.exciters.field_current`)
+READS_IFD = False
+#: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
+RATE_FEEDBACK = False
+#: fed by a potential (and compound) source V_B (its ``source_voltage``)
+SOURCE = True
+#: the time constants that must be >= 1e-3 s: (name in messages, declared field)
+NEEDS: tuple[tuple[str, str], ...] = ()
 
 DYR = (
     # ESST3A -> exc_st3: its KA is PST's K_J, its inner loop KM/(1 + s TM) limited
@@ -89,6 +97,13 @@ DYR = (
 #: (a state only with TA_st3a)
 S = states("ST3States", ("VTR", "VAs", "VR", "VA"))
 STATE_NAMES = {ST3: S._fields}
+
+
+def has_state(p: ExciterParams):
+    """Which of the slots of `S` are states (a block whose time constant is below 1e-3 s,
+    or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
+    on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
+    return (p.has_TR, p.has_TB, np.ones(p.n, bool), p.has_TA3A)
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
