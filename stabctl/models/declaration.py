@@ -23,7 +23,9 @@ Everything else is derived from it:
 
 Adding a model parameter is one :class:`Param` line; adding a DYR model one
 :class:`DyrModel` (plus a mapper in :mod:`stabctl.io.dyr` for values it computes);
-adding a model type is its declaration and kernel in its family's module.
+adding a model type is its declaration and kernel in its family's module (an exciter type:
+its own module of the package :mod:`stabctl.models.exciters`, with its named states,
+:func:`states`).
 
 Sources: PST manual (Power System Toolbox 3.0, Rogers & Chow) section 3.22 Table 10
 (``mac_con``), 3.11 Table 2 and 3.13 Table 3 (``exc_con``), 3.30 Table 13 (``pss_con``),
