@@ -147,6 +147,8 @@ MODULES = (
 TYPES = dict(sorted((kind, m) for m in MODULES for kind in m.KINDS))
 #: exc_con type -> its state names, in slot order (the module's ``S``)
 STATE_NAMES = {kind: m.STATE_NAMES[kind] for kind, m in TYPES.items()}
+if len(TYPES) != sum(len(m.KINDS) for m in MODULES):
+    raise ValueError("an exc_con type is claimed by two exciter modules")
 if any(names[VTR] != "VTR" for names in STATE_NAMES.values()):
     raise ValueError("every exciter type's first state is its transducer V_TR")
 
