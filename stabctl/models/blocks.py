@@ -160,7 +160,7 @@ def rectifier_loading(IN):
     annex D, rectifier regulation): 1 for I_N <= 0, 1 - 0.577 I_N up to 0.433, sqrt(0.75
     - I_N^2) up to 0.75, 1.732 (1 - I_N) up to 1, 0 beyond (ANDES ``exac1.py`` ``FEX``).
     PST's exc_st3 spells it with 0.5771 and an initialisation quirk, kept as its own
-    variant (`stabctl.models.exciters._fex`) so that PSTess's results stay bit for bit.
+    variant (`stabctl.models.exciters.st3._fex`) so that PSTess's results stay bit for bit.
     Callable from Python too (EXAC1's initialisation solves through it)."""
     if IN <= 0.0:
         return 1.0
@@ -171,3 +171,52 @@ def rectifier_loading(IN):
     if IN <= 1.0:
         return 1.732 * (1.0 - IN)
     return 0.0
+
+
+# -- the PI/PID family with tracking anti-windup (ANDES 2.0 andes/core/block.py PITrackAW,
+# -- PIDTrackAW): the output is the unlimited sum ys clipped to [lo, hi], and the
+# -- integrator is driven back by ks times the part of ys the limit cuts off,
+# -- dx_i/dt = K_I (u - ks (ys - y)); at rest (u = 0, inside the limits) x_i is the output
+
+
+@kernel
+def _tracking(u, ys, KI, lo, hi, ks):
+    """The tracking anti-windup of a PI/PID: (y = ys clipped to [lo, hi], dx_i/dt = K_I (u -
+    ks (ys - y)))."""
+    y = clip(ys, lo, hi)
+    return y, KI * (u - ks * (ys - y))
+
+
+@kernel
+def pi_track_aw(u, x, KP, KI, lo, hi, ks):
+    """PI K_P + K_I/s with tracking anti-windup (ANDES PITrackAW): ys = K_P u + x, output
+    ys clipped to [lo, hi], dx/dt = K_I (u - ks (ys - y)) (ks the tracking gain; ESST4B's
+    regulator and inner-loop PIs, ks = 2).
+
+    Returns
+    -------
+    (float, float)
+        Output, the integral state's derivative.
+    """
+    return _tracking(u, KP * u + x, KI, lo, hi, ks)
+
+
+@kernel
+def pid_track_aw(u, xi, xd, KP, KI, KD, TD, lo, hi, ks):
+    """PID K_P + K_I/s + s K_D/(1 + s T_D) with tracking anti-windup (ANDES PIDTrackAW;
+    AC8B): ys = K_P u + xi + K_D (u - xd)/T_D (the derivative a washout, state xd, T_D
+    dxd/dt = u - xd; absent, derivative 0, where K_D = 0 or T_D < LBND), output ys clipped
+    to [lo, hi], dxi/dt = K_I (u - ks (ys - y)).
+
+    Returns
+    -------
+    (float, float, float)
+        Output, the integral's derivative, the derivative washout's derivative.
+    """
+    ys = KP * u + xi
+    dxd = 0.0
+    if KD != 0 and TD >= LBND:
+        yd, dxd = washout(u, xd, TD, KD, GAIN_BEFORE)
+        ys = ys + yd
+    y, dxi = _tracking(u, ys, KI, lo, hi, ks)
+    return y, dxi, dxd

@@ -23,7 +23,9 @@ Everything else is derived from it:
 
 Adding a model parameter is one :class:`Param` line; adding a DYR model one
 :class:`DyrModel` (plus a mapper in :mod:`stabctl.io.dyr` for values it computes);
-adding a model type is its declaration and kernel in its family's module.
+adding a model type is its declaration and kernel in its family's module (an exciter type:
+its own module of the package :mod:`stabctl.models.exciters`, with its named states,
+:func:`states`).
 
 Sources: PST manual (Power System Toolbox 3.0, Rogers & Chow) section 3.22 Table 10
 (``mac_con``), 3.11 Table 2 and 3.13 Table 3 (``exc_con``), 3.30 Table 13 (``pss_con``),
@@ -36,7 +38,7 @@ from __future__ import annotations
 import dataclasses
 import inspect
 from collections import namedtuple
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
@@ -54,6 +56,7 @@ __all__ = [
     "Declared",
     "params_class",
     "layout",
+    "states",
     "check_packed",
     "pack",
 ]
@@ -376,6 +379,27 @@ def layout(name: str, packed):
     """
     names = [column for column, _ in packed]
     return namedtuple(name, names)(*range(len(names)))
+
+
+def states(name: str, names: Sequence[str]) -> Any:
+    """The named slots of a model type's states, as `layout` names packed columns: a
+    namedtuple instance whose field ``N`` is the slot of state ``N``, e.g. ``S.VE``
+    (a compile-time constant to numba, as a layout is), read by the kernels as
+    ``x[S.VE, i]``.
+
+    Parameters
+    ----------
+    name : str
+        The namedtuple's type name (e.g. ``"AC8BStates"``).
+    names : sequence of str
+        The state names in slot order.
+
+    Returns
+    -------
+    namedtuple
+        Fields: the state names in order, values 0 .. len(names) - 1.
+    """
+    return layout(name, [(n, n) for n in names])
 
 
 def check_packed(cls, packed, values=()) -> None:

@@ -1,0 +1,713 @@
+"""Exciter models (exc_con), one module per type, and this package: the registry of the
+types, the exc_con table they fill (`EXCITER`), their parameters (`ExciterParams`,
+packed for the kernels as :data:`PACKED`, columns `E`) and the dispatch on the type of
+the compiled kernels (`field_voltage`, `field_voltage_at`, `derivatives`,
+`recorded_efd`) and of the initialisation (`initialise`).
+
+The types (exc_con column 1), each a module holding its DYR/ANDES records, its named
+states (``S``, read by its kernels as ``x[S.VE, i]``), its initialisation and its
+field-voltage and derivative kernels:
+
+* :mod:`~stabctl.models.exciters.sexs`: PST `smpexc` (type 0, simple static; also PSS/E's
+  SEXS and SCRX, bus fed: the output times the terminal voltage, column 19 ``bus_fed``);
+* :mod:`~stabctl.models.exciters.dc`: PST `exc_dc12` (types 1 and 2, IEEE DC1 / DC2) and
+  `IEEET2` (type 5: DC1 whose rate feedback has a second lag);
+* :mod:`~stabctl.models.exciters.st3`: PST `exc_st3` (type 3, IEEE ST3; PSS/E ESST3A);
+* :mod:`~stabctl.models.exciters.exst1`: PSS/E `EXST1` (type 4, IEEE ST1 simplified);
+* :mod:`~stabctl.models.exciters.esst1a`: `ESST1A` (type 6, IEEE ST1A with its field
+  current limiter);
+* :mod:`~stabctl.models.exciters.exac1`: `EXAC1` (type 7, IEEE AC1) and `ESAC1A` (type 9,
+  IEEE 421.5 AC1A: EXAC1 whose V_A and V_R have limits of their own);
+* :mod:`~stabctl.models.exciters.exac4`: `EXAC4` (type 8, IEEE AC4);
+* :mod:`~stabctl.models.exciters.ac8b`: `AC8B` (type 10, the AC exciter behind a PID);
+* :mod:`~stabctl.models.exciters.ieeet3`: `IEEET3` (type 11, IEEE 1968 type 3: the
+  compound source added to the regulator);
+* :mod:`~stabctl.models.exciters.esst4b`: `ESST4B` (type 12, IEEE 421.5 ST4B: two PI
+  regulators and the potential/compound source).
+
+Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
+Table 2, 3.13 Table 3); PSS/E Model Library; IEEE Std 421.5; ANDES 2.0
+``andes/models/exciter``; equations, limits and PST's quirks in docs/pst_models.md
+section 2, how to add a type in docs/models.md.  A time constant below 1e-3 s means the
+block is absent (no state).  States, named per type in STATE_NAMES (each type's ``S``).
+Units: pu on the machine base; times in s.
+
+The kernels read the packed parameters by name (`E`, from :data:`PACKED`), are built of
+the control blocks of `stabctl.models.blocks`; the family computes the machine
+quantities a type needs (the source voltage of the types in :data:`SOURCE_KINDS`,
+`source_voltage`; the field current of the types in :data:`READS_IFD`,
+`field_current`).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from stabctl._jit.decorators import kernel, njit
+from stabctl.errors import CaseError
+from stabctl.models import machines as mac
+from stabctl.models.blocks import LBND, lag
+from stabctl.models.declaration import (
+    Declared,
+    DyrModel,
+    Family,
+    Param,
+    check_packed,
+    pack,
+    params_class,
+)
+from stabctl.models.exciters import (
+    ac8b,
+    dc,
+    esst1a,
+    esst4b,
+    exac1,
+    exac4,
+    exst1,
+    ieeet3,
+    sexs,
+    st3,
+)
+from stabctl.models.exciters.ac8b import AC8B
+from stabctl.models.exciters.dc import DC1, DC2, T2, dc_feedback
+from stabctl.models.exciters.esst1a import ST1A, st1a_regulator_output
+from stabctl.models.exciters.esst4b import ST4B
+from stabctl.models.exciters.exac1 import AC1, AC1A
+from stabctl.models.exciters.exac4 import AC4
+from stabctl.models.exciters.exst1 import ST1
+from stabctl.models.exciters.ieeet3 import T3
+from stabctl.models.exciters.sexs import SMP
+from stabctl.models.exciters.st3 import ST3, st3_source_voltage
+from stabctl.models.exciters.table import (
+    PACKED,
+    PARAMS,
+    PID_TRACKING,
+    RUNNING,
+    TABLE_FIELDS,
+    VTR,
+    E,
+    ST3Machine,
+    StatorQuantities,
+    potential_source,
+)
+from stabctl.models.saturation import quadratic_fit
+
+if TYPE_CHECKING:
+    from stabctl.case import Case
+
+__all__ = [
+    "EXCITER",
+    "TYPES",
+    "STATE_NAMES",
+    "ExciterParams",
+    "exciter_params",
+    "initialise",
+    "initial_source_voltage",
+    "field_voltage",
+    "field_voltage_at",
+    "derivatives",
+    "recorded_efd",
+    "field_current",
+    "source_voltage",
+    "source_voltage_of",
+    "compensated",
+    "E",
+    "PACKED",
+    "TABLE_FIELDS",
+    "PID_TRACKING",
+    "ST3Machine",
+    "StatorQuantities",
+    "potential_source",
+    "st3_source_voltage",
+    "dc_feedback",
+    "st1a_regulator_output",
+    "SMP", "DC1", "DC2", "ST3", "ST1", "T2", "ST1A", "AC1", "AC4", "AC1A", "AC8B", "T3", "ST4B",
+]  # fmt: skip
+
+# --------------------------------------------------------------------------------------
+# the registry: one line per type module, in the order their start-up checks run
+# (`initialise`); a module serves the exc_con types of its KINDS
+# --------------------------------------------------------------------------------------
+
+MODULES = (
+    st3,
+    dc,
+    exst1,
+    esst1a,
+    exac4,
+    exac1,
+    ac8b,
+    ieeet3,
+    esst4b,
+    sexs,
+)
+#: exc_con type -> the module of its equations
+TYPES = dict(sorted((kind, m) for m in MODULES for kind in m.KINDS))
+#: exc_con type -> its state names, in slot order (the module's ``S``)
+STATE_NAMES = {kind: m.STATE_NAMES[kind] for kind, m in TYPES.items()}
+if len(TYPES) != sum(len(m.KINDS) for m in MODULES):
+    raise ValueError("an exc_con type is claimed by two exciter modules")
+if any(names[VTR] != "VTR" for names in STATE_NAMES.values()):
+    raise ValueError("every exciter type's first state is its transducer V_TR")
+
+EXCITER = Family(
+    table="exc_con",
+    min_columns=9,
+    key="machine",
+    key_label="machine",
+    params=(
+        Param(
+            "type",
+            "code",
+            1,
+            integer=True,
+            choices=tuple(TYPES),
+            label="exciter type",
+            doc=", ".join(f"{kind} {m.KINDS[kind]}" for kind, m in TYPES.items()),
+        ),
+        *PARAMS,
+    ),
+    dyr=(
+        # IEEEVC (the IEEE 1981 load compensator, a record of its own beside the machine's
+        # exciter record): R_C, X_C into that exciter's row (stabctl.io.dyr COMPENSATORS)
+        DyrModel("IEEEVC", ("RC", "XC"), {"Rcomp": "RC", "Xcomp": "XC"}, andes=("IEEEVC",)),
+        *(model for m in MODULES for model in m.DYR),
+    ),
+)
+
+#: the types whose equations read the machine's field current (`field_current`)
+READS_IFD = tuple(kind for kind, m in TYPES.items() if m.READS_IFD)
+#: the types with a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (the DC
+#: exciters read theirs from columns 16-17): EXST1, ESST1A, EXAC1, ESAC1A, IEEET3
+RATE_FEEDBACK = tuple(kind for kind, m in TYPES.items() if m.RATE_FEEDBACK)
+#: the types fed by a potential (and compound) source V_B computed from the machine's
+#: terminal voltage and current (`source_voltage`): ST3, IEEET3, ESST4B
+SOURCE_KINDS = tuple(kind for kind, m in TYPES.items() if m.SOURCE)
+#: the AC exciters with an exciter voltage V_E and PSS/E's quadratic saturation: EXAC1,
+#: ESAC1A, AC8B
+AC_KINDS = (*exac1.KINDS, *ac8b.KINDS)
+#: the DC exciters (their saturation fits, K_E computed): DC1, DC2, IEEET2
+DC_KINDS = tuple(dc.KINDS)
+#: the machine's speed among its states (``efd_speed``)
+_OMEGA = mac.STATE_NAMES.index("omega")
+
+
+@params_class(("kind", "mac"), TABLE_FIELDS)
+class ExciterParams(Declared):
+    """Exciter data of a case, arrays of shape (n_exc,): ``kind`` the exc_con type,
+    ``mac`` the machine's row (index), then the exc_con fields :data:`TABLE_FIELDS` under
+    their declared names (stabctl.models.exciters.EXCITER; KP the complex K_P exp(j
+    theta_P), KA = 0 read as 1 for the regulated types), then the derived fields below.
+    DC exciters (types 1, 2): KE, TE and the saturation SE(E) = Asat exp(Bsat |E|), or
+    with sat_quadratic SE(E) E = Bsat (E - Asat)^2 above Asat (0 for the other types);
+    ke_given: KE used as given (else 0 means computed at initialisation); KF, TF: rate
+    feedback of the DC exciters and EXST1; ifd_machine: ST3 whose I_N takes the machine's
+    field current, not PST exc_st3's estimate (exc_con column 25); VB_cap: the ST3 source
+    voltage's upper limit (exc_con column 33, VBmax; inf where 0 or not ST3)."""
+
+    KE: np.ndarray
+    TE: np.ndarray
+    Asat: np.ndarray
+    Bsat: np.ndarray
+    KF: np.ndarray
+    TF: np.ndarray
+    sat_quadratic: np.ndarray
+    ke_given: np.ndarray
+    ifd_machine: np.ndarray
+    VB_cap: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.kind.size
+
+    def packed(self, Vref: np.ndarray) -> np.ndarray:
+        """Parameter matrix (n_exc, len(PACKED)) for the compiled kernels, with Vref, columns
+        as :data:`PACKED`."""
+        return pack(self, PACKED, Vref=Vref)
+
+    @property
+    def has_TR(self):
+        return self.TR >= LBND
+
+    @property
+    def has_TB(self):
+        return self.TB >= LBND
+
+    @property
+    def has_pid_d(self):
+        """AC8B with the PID's derivative branch (K_D != 0, T_D >= 1e-3 s)."""
+        return (self.kind == AC8B) & (self.Kpid_D != 0) & (self.Td >= LBND)
+
+    @property
+    def has_TA(self):
+        return self.TA >= LBND
+
+    @property
+    def is_dc(self):
+        """DC exciters: DC1, DC2 and IEEET2."""
+        return np.isin(self.kind, DC_KINDS)
+
+    @property
+    def has_VF(self):
+        """IEEET2 with a second rate-feedback lag (T_F2 >= 1e-3 s, exc_con column 18)."""
+        return self.TF2 >= LBND
+
+    @property
+    def TF2(self):
+        """IEEET2's second rate-feedback time constant T_F2 (s; exc_con column 18, read
+        as Efdmax by the other types), 0 for the other types."""
+        return np.where(self.kind == T2, self.Efdmax, 0.0)
+
+    @property
+    def tc_tb(self):
+        """T_C/T_B where the lead-lag exists, 1 otherwise (PST exc_pot column 5)."""
+        return np.where(self.has_TB, self.TC / np.where(self.has_TB, self.TB, 1.0), 1.0)
+
+    @property
+    def is_ac(self):
+        """AC exciters (EXAC1, ESAC1A): the exciter voltage V_E and the rectifier
+        regulation."""
+        return np.isin(self.kind, AC_KINDS)
+
+    @property
+    def has_TB1(self):
+        """ESST1A's second lead-lag exists (T_B1 >= 1e-3 s)."""
+        return (self.kind == ST1A) & (self.TB1 >= LBND)
+
+    @property
+    def tc1_tb1(self):
+        """ESST1A's T_C1/T_B1 where its second lead-lag exists, 1 otherwise."""
+        return np.where(self.has_TB1, self.TC1 / np.where(self.has_TB1, self.TB1, 1.0), 1.0)
+
+    def n_slots(self) -> int:
+        """State slots per exciter: the most any exciter of the case uses (3 if none; an ST3
+        uses its fourth, ESST3A's regulator lag, only with T_A)."""
+        used = [len(STATE_NAMES[int(k)]) for k in self.kind]
+        return max(
+            [3, *(u - (k == ST3 and not a) for u, k, a in zip(used, self.kind, self.has_TA3A))]
+        )
+
+    @property
+    def has_TA3A(self):
+        """ST3 with ESST3A's regulator lag (T_A >= 1e-3 s, exc_con column 44)."""
+        return (self.kind == ST3) & (self.TA_st3a >= LBND)
+
+    def has_state(self) -> np.ndarray:
+        """Boolean (n_slots, n_exc): the slots that are states (docs/modal.md)."""
+        act = np.zeros((6, self.n), bool)
+        for module in MODULES:
+            rows = np.isin(self.kind, tuple(module.KINDS))
+            for slot, on in enumerate(module.has_state(self)):
+                act[slot] |= rows & on
+        return act[: self.n_slots()]
+
+    @property
+    def has_Rf(self):
+        """The rate-feedback state exists: DC exciters, and :data:`RATE_FEEDBACK` types with
+        K_F != 0."""
+        return self.is_dc | (np.isin(self.kind, RATE_FEEDBACK) & (self.KF != 0))
+
+    def time_constants(self):
+        """(label, values, mask) of every time constant that sets a state's speed."""
+        return (
+            ("exc_con T_R", self.TR, self.has_TR),
+            ("exc_con T_A", self.TA, self.has_TA),
+            ("exc_con T_B", self.TB, self.has_TB),
+            ("exc_con T_B1", self.TB1, self.has_TB1),
+            ("exc_con TA_st3a", self.TA_st3a, self.has_TA3A),
+            ("exc_con T_E", self.TE, self.is_dc | self.is_ac | (self.kind == T3)),
+            ("exc_con T_F", self.TF, self.has_Rf),
+            ("exc_con T_F2", self.TF2, self.has_VF),
+            ("exc_con T_D", self.Td, self.has_pid_d),
+        )
+
+    def inner_loop_time_constants(self, VB0: np.ndarray, efd0: np.ndarray) -> np.ndarray:
+        """The time constant of each exciter's fast closed loop at the operating point (s),
+        (n_exc,), which no single time constant of its data shows; inf where there is none.
+
+        * ST3 (ESST3A's K_M, T_M; PST exc_st3): T_A dV_R/dt = K_A (V_A - K_G E_fd) - V_R
+          with E_fd = V_B V_R closes the pole -(1 + K_A K_G V_B)/T_A: T_A / (1 + K_A K_G
+          V_B0) where the feedback is below VGmax (K_G E_fd0 < VGmax) and T_A > 0.
+          ANDES's kundur_esst3a: K_M = 500, T_M = 0.1 s, V_B = 4.3, 4.6e-5 s where T_M
+          suggests 0.1 s.
+        * EXST1 and ESST1A with a rate feedback (`rate_feedback_time_constants`).
+
+        Parameters
+        ----------
+        VB0 : ndarray, shape (n_exc,)
+            The source voltages at the operating point (`initial_source_voltage`), pu.
+        efd0 : ndarray, shape (n_exc,)
+            The field voltages at the operating point, pu.
+
+        Returns
+        -------
+        ndarray, shape (n_exc,)
+        """
+        loop = (self.kind == ST3) & (self.TA > 0) & (self.KG * efd0 < self.VGmax)
+        gain = 1.0 + self.KA * self.KG * VB0
+        st3 = np.where(loop, self.TA / np.where(loop, gain, 1.0), np.inf)
+        return np.minimum(st3, self.rate_feedback_time_constants())
+
+    def rate_feedback_time_constants(self) -> np.ndarray:
+        """The fastest pole of the EXST1 and ESST1A regulator loops (s), (n_exc,); inf for
+        the others and where T_A or T_F is below 1e-3 s or K_F = 0.
+
+        The lead-lags T_C/T_B (and ESST1A's T_C1/T_B1) feed the lag K_A/(1 + s T_A)
+        (state V_R, V_A), whose output returns through s K_F/(1 + s T_F) (state R_f) to
+        the voltage error: the linear loop of those states (limits inactive, the terminal
+        voltage and field current held), whose fastest eigenvalue's time constant is
+        returned.  PSID's ESST1A run of PSS/E's (K_A = 200, T_A = 0.1 s, K_F = T_F =
+        0.01 s, lead-lags 14.1/20 s): 9.0e-4 s where T_F suggests 0.01 s, and Heun at
+        5 ms diverges.
+
+        Returns
+        -------
+        ndarray, shape (n_exc,)
+        """
+        tau = np.full(self.n, np.inf)
+        loop = np.isin(self.kind, (ST1, ST1A)) & self.has_Rf & self.has_TA & (self.TF >= LBND)
+        for i in np.nonzero(loop)[0]:
+            lags = [(r[i], T[i]) for r, T, on in ((self.tc_tb, self.TB, self.has_TB),
+                    (self.tc1_tb1, self.TB1, self.has_TB1)) if on[i]]  # fmt: skip
+            n = len(lags)
+            A = np.zeros((n + 2, n + 2))  # lead-lag states, V_A, R_f
+            kf = self.KF[i] / self.TF[i]
+            u = np.zeros(n + 2)  # the voltage error: -K_F/T_F (V_A - R_f)
+            u[n], u[n + 1] = -kf, kf
+            for k, (r, T) in enumerate(lags):  # PST form: y = r u + (1 - r) x
+                A[k] = u / T
+                A[k, k] -= 1.0 / T
+                u = r * u
+                u[k] += 1.0 - r
+            A[n] = self.KA[i] * u / self.TA[i]
+            A[n, n] -= 1.0 / self.TA[i]
+            A[n + 1, n], A[n + 1, n + 1] = 1.0 / self.TF[i], -1.0 / self.TF[i]
+            tau[i] = 1.0 / np.max(-np.linalg.eigvals(A).real)
+        return tau
+
+
+check_packed(ExciterParams, PACKED, ("Vref",))
+
+
+def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
+    """(Asat, Bsat) of the DC exciters' saturation from exc_con columns 12-15.
+
+    dc_sat 0, PST exc_dc12's SE(E) = Asat exp(Bsat |E|): E2 (column 14) = 0 means columns
+    13, 15 are Asat, Bsat themselves; otherwise PST's fit through (E1, SE1), (E2, SE2) --
+    **QUIRK**: Bsat = ln(SE2 E2 / (SE1 E1)) / (E2 - E1), Asat = SE1 exp(-Bsat E1), so
+    SE(E1) = SE1 but SE(E2) = SE2 E2 / E1 (docs 2.3).  dc_sat 1, and EXAC1/ESAC1A always, the
+    quadratic SE(E) E = Bsat (E - Asat)^2 through both points (PSS/E; ANDES
+    `ExcQuadSat`)."""
+    A, B = _exponential_fit(e)
+    quad = (e.dc_sat == 1) | np.isin(e.type, AC_KINDS)
+    if quad.any():
+        Aq, Bq = quadratic_fit(
+            *_dc_points(e),
+            quad,
+            "exc_con row {row}: DC exciter saturation points (E1, SE1, E2, SE2)",
+        )
+        A, B = np.where(quad, Aq, A), np.where(quad, Bq, B)
+    return A, B
+
+
+def _dc(e, name: str) -> np.ndarray:
+    """exc_con column of a DC exciter quantity by its PST manual 3.11 Table 2 name (the
+    declaration's ``alt`` name: KE, TE, E1, SE1, E2, SE2, KF_dc, TF_dc)."""
+    return e.col(EXCITER.col(name))
+
+
+def _dc_points(e):
+    """The DC exciters' saturation points E1, SE1, E2, SE2 (exc_con columns 12-15)."""
+    return tuple(_dc(e, name) for name in ("E1", "SE1", "E2", "SE2"))
+
+
+def _exponential_fit(e):
+    E1, SE1, E2, SE2 = _dc_points(e)
+    fit = (E2 != 0) & (e.dc_sat == 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        B = np.where(fit, np.log(SE2 * E2 / (SE1 * E1)) / (E2 - E1), SE2)
+        A = np.where(fit, SE1 / np.exp(B * E1), SE1)
+    bad = np.nonzero(np.isin(e.type, DC_KINDS) & (e.dc_sat == 0))[0]
+    bad = bad[~np.isfinite(A[bad] + B[bad])]
+    if bad.size:
+        raise CaseError(
+            f"exc_con row {bad[0] + 1}: DC exciter saturation points (E1, SE1, E2, "
+            "SE2) give no exponential fit (need E1 != E2, SE1 E1 > 0, SE2 E2 > 0)"
+        )
+    return A, B
+
+
+def _check_dc(e) -> None:
+    """DC exciter, EXST1 and ESST1A options stabctl does not model: raise CaseError naming
+    row and field (the time constants each type's ``NEEDS`` lists, and T_F with a rate
+    feedback, must exist; Vrmax = 0 is PST's 'compute it')."""
+    for r in np.nonzero(np.isin(e.type, (*DC_KINDS, *READS_IFD)))[0]:
+        kind = int(e.type[r])
+        extra = (("TF", "TF"),) if kind in RATE_FEEDBACK and e.KF[r] != 0 else ()
+        for name, declared in TYPES[kind].NEEDS + extra:
+            k = EXCITER.col(declared)
+            if e.col(k)[r] < LBND:
+                raise CaseError(
+                    f"exc_con row {r + 1}, field '{name}' (column {k}): exciter "
+                    f"type {kind} needs {name} >= {LBND} s"
+                )
+        if kind not in READS_IFD and e.Vrmax[r] == 0:
+            raise CaseError(
+                f"exc_con row {r + 1}, field 'Vrmax': 0 (PST computes it from E2) "
+                "is not supported; give the limit"
+            )
+
+
+def exciter_params(case: Case) -> ExciterParams:
+    """Exciter parameters; raises CaseError for a type or option stabctl does not model."""
+    e = case.exciters
+    _check_dc(e)
+    A, B = _dc_saturation(e)
+    dc = np.isin(e.type, DC_KINDS)
+    ac = np.isin(e.type, AC_KINDS)
+    t3 = e.type == T3
+    KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
+    given = {n: getattr(e, n).copy() for n in TABLE_FIELDS}
+    given.update(KA=KA, KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)))
+    return ExciterParams(
+        kind=e.type.astype(int),
+        mac=np.array([case.machine_index(m) for m in e.machine], int),
+        **given,
+        KE=np.where(dc | ac | t3, _dc(e, "KE"), 0.0),
+        TE=np.where(dc | ac | t3, _dc(e, "TE"), 0.0),
+        Asat=np.where(dc | ac, A, 0.0),
+        Bsat=np.where(dc | ac, B, 0.0),
+        KF=np.where(dc, _dc(e, "KF_dc"), np.where(np.isin(e.type, RATE_FEEDBACK), e.KF, 0.0)),
+        TF=np.where(dc, _dc(e, "TF_dc"), np.where(np.isin(e.type, RATE_FEEDBACK), e.TF, 0.0)),
+        sat_quadratic=(dc & (e.dc_sat == 1)) | ac,
+        ke_given=dc & (e.ke_given == 1),
+        ifd_machine=(e.type == ST3) & (e.ifd_machine == 1),
+        VB_cap=np.where(np.isin(e.type, SOURCE_KINDS) & (e.VBmax > 0), e.VBmax, np.inf),
+    )
+
+
+@njit
+def source_voltage_of(kind, KP, KI, XL, KC, cap, machine, init):
+    """The source term V_B of an exciter of type ``kind`` (:data:`SOURCE_KINDS`) from its
+    machine's quantities (`ST3Machine`; fldcur the field current, pu on the machine base):
+    ST3 `st3.source_voltage` (at most cap, VBmax; init PST's flag 0), IEEET3
+    `ieeet3.source_voltage` (its cap applies to V_B + V_R), ESST4B `esst4b.source_voltage`
+    (at most cap)."""
+    if kind == ST3:
+        return st3.source_voltage(KP, KI, XL, KC, cap, machine, init)
+    if kind == T3:
+        return ieeet3.source_voltage(KP, KI, XL, KC, cap, machine, init)
+    return esst4b.source_voltage(KP, KI, XL, KC, cap, machine, init)
+
+
+def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):
+    """The source term V_B (`source_voltage_of`; PST exc_st3 flag 0 for the ST3) of every
+    exciter of :data:`SOURCE_KINDS` at the initial point (1 for the other types), (n_exc,):
+    V_mac the complex terminal voltages, S_mac the machines' complex generation (system
+    base), vex their field voltages (= field currents at rest), all (n_mac,); mp the
+    MachineParams."""
+    eterm, theta = np.abs(V_mac), np.angle(V_mac)
+    VB = np.ones(p.n)
+    for i in np.nonzero(np.isin(p.kind, SOURCE_KINDS))[0]:
+        m = p.mac[i]
+        machine = ST3Machine(
+            eterm[m], theta[m], S_mac.real[m], S_mac.imag[m], mp.mac_pot[m], vex[m]
+        )
+        VB[i] = source_voltage_of(
+            p.kind[i], p.KP[i], p.KI[i], p.XL[i], p.KC[i], p.VB_cap[i], machine, True
+        )
+    return VB
+
+
+def initialise(p: ExciterParams, vex, eterm, VB=None, vc=None):
+    """States (n_slots, n_exc), Vref (n_exc,) and the parameters with PSS/E's computed KE
+    (DC exciters with KE = 0 get KE = -SE(Efd0), so that V_R starts at 0) from the
+    machines' field voltage vex and terminal voltage eterm; VB is the ST3 source voltage
+    (`initial_source_voltage`; needed for type 3); vc the voltage the transducers measure
+    (`compensated`; default eterm).  Every transducer starts at vc; each type's module
+    sets its other states on its rows and gives V_ref - vc (its ``initialise``), in the
+    registry's order.  Raises CaseError when the initial point violates a limit PST
+    checks (ST3: Efdmax or the V_I range; DC: the V_R limits) by more than
+    `START_LIMIT_TOL` (stabctl.models.declaration)."""
+    x = np.zeros((6, p.n))
+    vc = eterm if vc is None else vc
+    x[VTR] = vc
+    VB = np.ones(p.n) if VB is None else VB
+    ref = np.zeros(p.n)
+    for module in MODULES:
+        rows = np.isin(p.kind, tuple(module.KINDS))
+        if rows.any():
+            ref[rows], p = module.initialise(p, rows, vex, eterm, VB, x)
+    return x[: p.n_slots()], vc + ref, p
+
+
+# -- compiled runtime kernels: P is ExciterParams.packed(), x the exciter block of the
+# -- state vector (n_slots, n_exc), i the exciter; each type's kernels are its module's,
+# -- dispatched on kind by `field_voltage_at`, `derivatives` and `recorded_efd` (one line
+# -- per type)
+
+
+@kernel(inline="always")
+def field_current(P, i, MP, xm, cur):
+    """The field current (pu on the machine base) of exciter i's machine where its type's
+    equations read it (:data:`READS_IFD`), 0 for the other types; MP, xm, cur as
+    `field_voltage`."""
+    kind = P[i, E.KIND]
+    if kind in READS_IFD:
+        return mac.field_current(MP, xm, cur, int(P[i, E.MAC]))
+    return 0.0
+
+
+@kernel(inline="always")
+def source_voltage(P, i, MP, xm, cur, vt, ifd):
+    """The source term V_B of exciter i (`source_voltage_of`; :data:`SOURCE_KINDS`), 1 for
+    the other types: from its machine's terminal quantities as PST exc_st3 flag 1
+    recomputes them (`machines.stator_without_speed`), vt the machine's terminal bus
+    voltage (complex; its angle sets the source phasor), ifd the field current
+    (`field_current`; the ST3 reads its own, `st3.field_current`); at most VBmax (PSS/E
+    ESST3A's and ESST4B's ``VB`` limiter; inf without); MP, xm, cur as `field_voltage`."""
+    kind = P[i, E.KIND]
+    if kind not in SOURCE_KINDS:
+        return 1.0
+    m = int(P[i, E.MAC])
+    ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, m)
+    stator = StatorQuantities(ed, eq, cd, cq, np.hypot(ed, eq), vt)
+    fld = st3.field_current(P, i, MP, xm, cur, m) if kind == ST3 else ifd
+    return source_voltage_of(
+        kind,
+        P[i, E.KPR] + 1j * P[i, E.KPI],
+        P[i, E.KI],
+        P[i, E.XL],
+        P[i, E.KC],
+        P[i, E.VBCAP],
+        _source_machine(MP, m, stator, fld),
+        RUNNING,
+    )
+
+
+@kernel(inline="always")
+def _source_machine(MP, m, stator, fld):
+    """`ST3Machine` of machine m from its `StatorQuantities` and field current fld."""
+    ed, eq, cd, cq, et, vt = stator
+    return ST3Machine(et, np.angle(vt), eq * cq + ed * cd, eq * cd - ed * cq, MP[m, mac.K.POT], fld)
+
+
+@kernel(inline="always")
+def field_voltage(P, x, i, MP, xm, cur, pss_out, ifd, VB, ieee):
+    """Field voltage exciter i hands its machine (PST flag 1), pu on the machine base:
+    `field_voltage_at` with its machine's terminal voltage (times its speed with
+    exc_con column 45, ``efd_speed``, = 1).
+
+    Parameters
+    ----------
+    P, x, i : ndarray, ndarray, int
+        The exciters' packed parameters, states (n_slots, n_exc), the exciter.
+    MP, xm, cur : ndarray
+        The machines' packed parameters (machines.PACKED), states (6, n_mac)
+        and network currents (n_mac,) complex, system base: the terminal voltage V_t
+        comes from them (PST exc_st3's speed-free stator equations,
+        `machines.stator_without_speed`).
+    pss_out : float
+        The output of the machine's PSS (0 without).
+    ifd : float
+        The machine's field current, `field_current`.
+    VB : float
+        The source term, `source_voltage`.
+    ieee : bool
+        The IEEE 421.5 convention (limited states are read clipped to their limits).
+    """
+    m = int(P[i, E.MAC])
+    ed, eq, _, _ = mac.stator_without_speed(MP, xm, cur, m)
+    efd = field_voltage_at(P, x, i, np.hypot(ed, eq), pss_out, VB, ifd, ieee)
+    return efd * xm[_OMEGA, m] if P[i, E.EFD_SPEED] == 1 else efd
+
+
+@kernel(inline="always")
+def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
+    """Field voltage of exciter i given its machine's terminal voltage VTR_alg (pu), the
+    source term VB (`source_voltage`) and the field current ifd (`field_current`): its
+    type module's ``field_voltage``."""
+    kind = P[i, E.KIND]
+    if kind == ST3:
+        return st3.field_voltage(P, x, i, VB, ieee)
+    if kind == ST1:
+        return exst1.field_voltage(P, x, i, VTR_alg, ifd)
+    if kind == ST1A:
+        return esst1a.field_voltage(P, x, i, VTR_alg, ifd, pss_out)
+    if kind == AC1 or kind == AC1A:
+        return exac1.field_voltage(P, x, i, ifd)
+    if kind == AC8B:
+        return ac8b.field_voltage(P, x, i, ifd)
+    if kind == AC4:
+        return exac4.field_voltage(P, x, i, ifd)
+    if kind == ST4B:
+        return esst4b.field_voltage(P, x, i, VTR_alg, pss_out, VB)
+    if kind == DC1 or kind == DC2 or kind == T2:
+        return dc.field_voltage(P, x, i)
+    if kind == T3:
+        return ieeet3.field_voltage(P, x, i)
+    return sexs.field_voltage(P, x, i, VTR_alg, pss_out, ieee)
+
+
+@kernel
+def compensated(P, i, vt, it):
+    """The voltage exciter i's transducer measures: abs(V_t + (R_C + j X_C) I_t) (IEEE
+    421.5 load compensator), for the terminal voltage vt and the machine's current it
+    (complex, one frame, machine base); abs(vt) without compensation."""
+    return abs(vt + complex(P[i, E.RCOMP], P[i, E.XCOMP]) * it)
+
+
+@kernel
+def derivatives(P, x, i, vc, eterm, pss_out, efd, ifd, VB, dx, ieee, reach):
+    """Derivatives of exciter i into dx[:, i] (PST flag 2); clamps its limited state in x.
+
+    Every type: the voltage transducer lag T_R on vc (pu; the terminal voltage eterm, or
+    the load-compensated voltage `compensated`) and the error V_ref - V_TR + pss_out;
+    then its type module's ``derivatives``.  efd is the field voltage `field_voltage`
+    gave, ifd the field current `field_current` gave, VB the source term
+    `source_voltage` gave; reach (s): DC2's V_t-scaled V_R limits (on eterm) hold a state
+    within that reach (`blocks.nonwindup`; the run's step, 0 in the linearisation).
+    """
+    dx[:, i] = 0.0
+    vtr, dx[VTR, i] = lag(vc, x[VTR, i], P[i, E.TR])
+    err = P[i, E.VREF] - vtr + pss_out
+    kind = P[i, E.KIND]
+    if kind == SMP:
+        sexs.derivatives(P, x, i, err, dx, ieee)
+    elif kind == ST3:
+        st3.derivatives(P, x, i, err, efd, dx, ieee)
+    elif kind == ST1:
+        exst1.derivatives(P, x, i, err, efd, dx)
+    elif kind == ST1A:
+        esst1a.derivatives(P, x, i, err, ifd, pss_out, dx)
+    elif kind == AC1 or kind == AC1A:
+        exac1.derivatives(P, x, i, err, ifd, dx)
+    elif kind == AC8B:
+        ac8b.derivatives(P, x, i, err, ifd, dx)
+    elif kind == AC4:
+        exac4.derivatives(P, x, i, err, dx)
+    elif kind == T3:
+        ieeet3.derivatives(P, x, i, err, VB, dx)
+    elif kind == ST4B:
+        esst4b.derivatives(P, x, i, err, efd, dx)
+    else:
+        dc.derivatives(P, x, i, eterm, err, dx, ieee, reach)
+
+
+@kernel
+def recorded_efd(P, x, i, efd_alg):
+    """Efd as PST records it: the (clamped) smpexc state, the DC Efd state, or the ST3
+    (and bus-fed smpexc) algebraic value efd_alg (`field_voltage`); efd_alg, the
+    machine's, with ``efd_speed``."""
+    kind = P[i, E.KIND]
+    if P[i, E.EFD_SPEED] == 1:
+        return efd_alg
+    if kind == DC1 or kind == DC2 or kind == T2:
+        return dc.field_voltage(P, x, i)
+    if kind == T3:
+        return ieeet3.field_voltage(P, x, i)
+    if kind == SMP:
+        return sexs.recorded_efd(P, x, i, efd_alg)
+    return efd_alg

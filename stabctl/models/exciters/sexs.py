@@ -1,0 +1,112 @@
+"""smpexc (exc_con type 0): PST's simple static exciter, also PSS/E's SEXS and SCRX.
+
+T_R, lead-lag T_C/T_B, K_A/(1 + s T_A) limited [Vrmin, Vrmax]; bus fed (SCRX, exc_con
+column 19 ``bus_fed`` = 1): the output times the terminal voltage.  Source: PSTess 1.1
+`smpexc.m`; PSS/E Model Library SEXS, SCRX; docs/pst_models.md 2.1.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from stabctl._jit.decorators import kernel
+from stabctl.models.blocks import LBND, clip, lag, leadlag_input_state, nonwindup_lag
+from stabctl.models.declaration import DyrModel, states
+from stabctl.models.exciters.table import E
+
+if TYPE_CHECKING:
+    from stabctl.models.exciters import ExciterParams
+
+SMP = 0
+KINDS = {SMP: "simple (smpexc)"}
+#: reads the machine's field current (`stabctl.models.exciters.field_current`)
+READS_IFD = False
+#: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
+RATE_FEEDBACK = False
+#: fed by a potential (and compound) source V_B (its ``source_voltage``)
+SOURCE = False
+#: the time constants that must be >= 1e-3 s: (name in messages, declared field)
+NEEDS: tuple[tuple[str, str], ...] = ()
+
+DYR = (
+    # SEXS -> smpexc: T_C = (TA/TB) TB is computed
+    DyrModel(
+        "SEXS",
+        ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX"),
+        {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"},
+        kind=SMP,
+        andes=("SEXS",),
+    ),
+    # SCRX -> smpexc: T_C = (TA/TB) TB computed; CSWITCH 0 (bus fed): bus_fed = 1
+    DyrModel(
+        "SCRX",
+        ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX", "CSWITCH", "rc/rfd"),
+        {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"},
+        kind=SMP,
+    ),
+)
+
+#: the states: the transducer, the lead-lag's, the regulator's output (the field voltage)
+S = states("SEXSStates", ("VTR", "VAs", "Efd"))
+STATE_NAMES = {SMP: S._fields}
+
+
+def has_state(p: ExciterParams):
+    """Which of the slots of `S` are states (a block whose time constant is below 1e-3 s,
+    or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
+    on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
+    return (p.has_TR, p.has_TB, p.has_TA)
+
+
+def initialise(p: ExciterParams, r, vex, eterm, VB, x):
+    """smpexc at rest on rows r: the lead-lag holds the regulator's input Efd0/K_A, the
+    lag Efd0 (bus fed: Efd0/V_t); writes x, returns (V_ref - V_TR, p)."""
+    bus_fed = p.KG[r] == 1
+    efd = vex[r] / np.where(bus_fed, eterm[r], 1.0)  # SCRX bus fed: Efd = V_t x Efd state
+    VA = efd / p.KA[r]
+    x[S.VAs, r] = VA
+    x[S.Efd, r] = efd
+    return VA, p
+
+
+@kernel(inline="always")
+def field_voltage(P, x, i, VTR_alg, pss_out, ieee):
+    """smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
+    ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error, without
+    limits; bus fed (SCRX, exc_con column 19 = 1): times the terminal voltage VTR_alg."""
+    mult = VTR_alg if P[i, E.KG] == 1 else 1.0
+    if P[i, E.TA] >= LBND:
+        return (clip(x[S.Efd, i], P[i, E.VRMIN], P[i, E.VRMAX]) if ieee else x[S.Efd, i]) * mult
+    VTR = lag(VTR_alg, x[S.VTR, i], P[i, E.TR])[0]
+    err = P[i, E.VREF] - VTR + pss_out
+    VA = leadlag_input_state(err, x[S.VAs, i], P[i, E.TCTB], P[i, E.TB])[0]
+    return P[i, E.KA] * VA * mult
+
+
+@kernel(inline="always")
+def recorded_efd(P, x, i, efd_alg):
+    """The Efd PST records: the (clamped) state with T_A and not bus fed, else efd_alg."""
+    if P[i, E.TA] >= LBND and P[i, E.KG] != 1:
+        return x[S.Efd, i]
+    return efd_alg
+
+
+@kernel(inline="always")
+def derivatives(P, x, i, err, dx, ieee):
+    """smpexc: PSTess clamps the Efd state to [Vrmin, Vrmax] after its derivative is
+    computed and keeps the derivative (a windup clamp; PST's misspelt dEFD,
+    docs/pst_models.md 2.1); ieee: a non-windup limit as IEEE Std 421.5-2016 (SEXS/ST1A
+    lag).  No T_A: no state (the output is algebraic)."""
+    VA, dx[S.VAs, i] = leadlag_input_state(err, x[S.VAs, i], P[i, E.TCTB], P[i, E.TB])
+    if P[i, E.TA] < LBND:
+        return
+    lo, hi = P[i, E.VRMIN], P[i, E.VRMAX]
+    if ieee:
+        x[S.Efd, i], dx[S.Efd, i] = nonwindup_lag(
+            P[i, E.KA] * VA, x[S.Efd, i], P[i, E.TA], lo, hi, ieee, 0.0
+        )
+    else:
+        dx[S.Efd, i] = lag(P[i, E.KA] * VA, x[S.Efd, i], P[i, E.TA])[1]
+        x[S.Efd, i] = clip(x[S.Efd, i], lo, hi)
