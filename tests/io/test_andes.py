@@ -297,6 +297,7 @@ def relative_gaps(ours, theirs):
     return np.abs(ours - theirs) / np.abs(theirs)
 
 
+@live_too
 def test_kundur_electromechanical_modes_match_andes(kundur, ref):
     ours, theirs = em_modes(ref, kundur, conventions="andes")
     assert len(ours) == 3  # one inter-area, two local modes
@@ -797,6 +798,7 @@ def test_ieee14_fload_is_read_as_pst_s_load_and_follows_andes(tmp_path, ref):
         read_andes_case(edited, on_unsupported="skip")
 
 
+@live_too
 def test_ieee14_timeseries_schedule_is_not_read_by_andes_s_run(ref):
     """ieee14_timeseries.xlsx: its TimeSeries writes PQ.Ppf and Qpf over time, which
     ANDES's time-domain run does not read (its loads are constant impedances from
@@ -2076,6 +2078,7 @@ def regca1_fault_run(
     }
 
 
+@live_too
 def test_ieee14_regca1_fault_speeds_and_powers_match_andes(regca1_alone, ref):
     """ANDES's IEEE 14 with the bus-8 generator a REGCA1 (ieee14_solar without REECA1 and
     REPCA1), 6-cycle fault at bus 9 through j1e-3 pu, 5 ms step in both.  In the fault
