@@ -87,10 +87,9 @@ def file_key(name: str) -> str:
     """The file name (without ``.npz``) of the test node ``name``: its parametrize ids kept,
     `live_too`'s left out, characters other than letters, digits, ``._-`` as ``_``."""
     base, _, ids = name.partition("[")
-    parts = [p for p in ids.rstrip("]").split("-") if p] if ids else []
-    text = "-".join(parts)
-    for token in (LIVE_ID, STORED_ID):
-        text = re.sub(rf"(^|-){re.escape(token)}(-|$)", r"\1", text).strip("-")
+    text = ids[:-1]
+    for token in map(re.escape, (LIVE_ID, STORED_ID)):
+        text = re.sub(rf"^{token}$|^{token}-|-{token}(?=-|$)", "", text)
     key = f"{base}[{text}]" if text else base
     return re.sub(r"[^A-Za-z0-9._\[\]-]", "_", key).replace("[", "__").replace("]", "")
 

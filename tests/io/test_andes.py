@@ -843,7 +843,7 @@ def test_kundur_st2cut_without_a_second_input_follows_andes(ref):
 
 
 def device_output(model):
-    """ANDES model ``model``'s device count ``n``, its first device's machine bus ``bus``
+    """ANDES model ``model``'s device count ``n``, its first device's machine bus ``dev_bus``
     and that device's output over the run ``out`` (an exciter's field voltage ``vout``, a
     governor's mechanical power ``pout``), with whether it is an exciter, as functions of
     the system for `speeds_run`."""
@@ -855,7 +855,7 @@ def device_output(model):
 
     return dict(
         n=lambda ss: getattr(ss, model).n,
-        bus=lambda ss: ss.SynGen.get("bus", getattr(ss, model).syn.v[0]),
+        dev_bus=lambda ss: ss.SynGen.get("bus", getattr(ss, model).syn.v[0]),
         exciter=lambda ss: "vout" in getattr(ss, model).__dict__,
         out=out,
     )
@@ -875,7 +875,7 @@ def device_output_run(ref, name, model, off=("Toggle",), t_end=5.0, off_exc=()):
     flat = sim.run([], 10.0, h=STEP)
     assert np.max(np.abs(flat.speed - 1)) < 1e-10 and np.ptp(flat.pmech, axis=0).max() < 1e-12
     assert np.max(np.abs(w - wa)) < 2e-5
-    k = list(sim.case.machines.bus).index(a["bus"])
+    k = list(sim.case.machines.bus).index(a["dev_bus"])
     series = "efd" if a["exciter"] else "pmech"
     return ta, np.interp(ta, res.t, getattr(res, series)[:, k]), a["out"]
 
@@ -2929,7 +2929,7 @@ def test_ieee14_esac1a_field_voltage_matches_andes_where_andes_models_it(ref):
         ),
     )
     ta, theirs = a["t"], a["out"]
-    k = list(case.machines.bus).index(a["bus"])
+    k = list(case.machines.bus).index(a["dev_bus"])
     sim = Simulator(opened, q_limits=False)
     assert sim.model.initial_residual[0] < 1e-8
     res = sim.run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
@@ -2971,7 +2971,7 @@ def test_ieee14_ac8b_field_voltage_and_speeds_match_andes(ref):
     )
     ta, wa, vr = a["t"], a["wa"], a["vr"]
     assert vr.max() == pytest.approx(7.3) and vr.min() == pytest.approx(1.0)  # both limits
-    k = list(case.machines.bus).index(a["bus"])
+    k = list(case.machines.bus).index(a["dev_bus"])
     gap = np.abs(np.interp(ta, res.t, res.efd[:, k]) - a["out"])
     away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - t_clear) > AWAY)
     # measured 0.030 (24 ms after clearing) and 0.018 after 1.5 s at this step; 0.011 with
