@@ -1814,10 +1814,10 @@ def test_kundur_esst3a_runs_at_5_ms_with_the_trapezoid(ref):
     case = import_andes(path, conventions="andes", on_unsupported="skip")
     sim = Simulator(case, q_limits=False)
     fault = [Fault(7, 1.0, 1.1, x=1e-3)]
-    ref = sim.run(fault, 5.0, h=4e-5)
+    heun = sim.run(fault, 5.0, h=4e-5)
     res = sim.run(fault, 5.0, h=STEP, method="trapezoid")
-    w = np.column_stack([np.interp(ref.t, res.t, res.speed[:, j]) for j in range(4)])
-    dw_heun = np.max(np.abs(w - ref.speed))
+    w = np.column_stack([np.interp(heun.t, res.t, res.speed[:, j]) for j in range(4)])
+    dw_heun = np.max(np.abs(w - heun.speed))
     a = ref.run(
         "trapezoid",
         lambda: speeds_run(
