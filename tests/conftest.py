@@ -6,7 +6,10 @@ Session fixtures load each built-in case and build each Simulator once for the w
 Markers (registered in pyproject.toml):
 
 * ``slow``  -- long property-based fuzzing, deselected by default (``-m slow`` runs it);
-* ``andes`` -- cross-validation against ANDES (needs the ``andes`` extra; skipped without);
+* ``andes`` -- cross-validation against ANDES (needs the ``andes`` extra; skipped without).
+  ANDES's runs are stored (tests/andes_refs.py, tests/data/andes_refs/): by default no ANDES
+  time simulation runs; ``STABCTL_ANDES_REFS=live`` (CI) adds the live smoke tests, which
+  check the stored traces against fresh ANDES runs;
 * ``dask``  -- sweeps on a Dask cluster (needs ``distributed``; skipped without).
 
 A quick run: ``python -m pytest -m "not andes and not dask"``.

@@ -16,7 +16,12 @@ GENROU without speed effects, EXDC2 limits not scaled by the terminal voltage, I
 rate limits on the system base; then the two tools solve the same equations and the bounds
 are tight), and as PST's models (the default), where those three differences remain and
 the bounds say how much they matter. The bounds are the measured differences with a
-margin."""
+margin.
+
+ANDES's runs are stored (tests/andes_refs.py, tests/data/andes_refs/): by default each test
+runs stabctl live against ANDES's stored traces, made by tests/data/andes_refs/make_refs.py;
+the tests marked `live_too` also run ANDES live under ``STABCTL_ANDES_REFS=live`` (CI) and
+check the stored traces still equal ANDES's fresh run."""
 
 import dataclasses
 import json
@@ -30,6 +35,7 @@ import pytest
 pytestmark = pytest.mark.andes
 andes = pytest.importorskip("andes")
 
+from andes_refs import live_too, logged, ref_for  # noqa: E402
 from runs import flat_run  # noqa: E402
 
 from stabctl.case import ExciterTable  # noqa: E402
@@ -65,6 +71,12 @@ from stabctl.smallsignal.linearise import linearise  # noqa: E402
 from stabctl.smallsignal.modal import modal_analysis  # noqa: E402
 from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time  # noqa: E402
 
+# each ANDES call of a stored run is named in its file's metadata (tests/andes_refs.py)
+andes_system, andes_speeds, andes_modes, andes_stable = map(
+    logged, (andes_system, andes_speeds, andes_modes, andes_stable)
+)
+andes_load = logged(andes.load)
+
 CASES = Path(andes.__file__).parent / "cases"
 WECC_CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
 STEP = 0.005  # s, both tools
@@ -80,10 +92,33 @@ def paired_rows(ours, theirs):
     return [rows[int(b)].pop(0) for b in theirs]
 
 
-def speeds_on(t, res, case, ss):
-    """stabctl's speeds on ANDES's time grid, columns in ANDES's machine order."""
-    rows = paired_rows(case.machines.bus, andes_machine_buses(ss))
+def speeds_on(t, res, case, buses):
+    """stabctl's speeds on ANDES's time grid, columns in ANDES's machine order (its
+    machines' ``buses``, `andes_machine_buses`)."""
+    rows = paired_rows(case.machines.bus, buses)
     return np.column_stack([np.interp(t, res.t, res.speed[:, k]) for k in rows])
+
+
+@pytest.fixture
+def ref(request):
+    """The test's stored ANDES runs (tests/andes_refs.py); written at its end when
+    recording."""
+    r = ref_for(request)
+    yield r
+    r.finish()
+
+
+def speeds_run(ss, t_end, step=STEP, **more):
+    """ANDES's run of ``ss`` to ``t_end``: a dict of its time grid ``t``, its speeds ``wa``
+    and its machines' ``buses`` (`andes_speeds`), and ``more``'s items, each a function of
+    ``ss`` after the run, for `AndesRef.run`."""
+    t, wa = andes_speeds(ss, t_end, step)
+    return dict(t=t, wa=wa, buses=andes_machine_buses(ss), **{k: f(ss) for k, f in more.items()})
+
+
+def bus_v(ss, bus):
+    """ANDES's voltage magnitude (pu) at ``bus`` over its run, shape (n_t,)."""
+    return np.asarray(ss.dae.ts.y)[:, ss.Bus.v.a[list(ss.Bus.idx.v).index(bus)]]
 
 
 @pytest.fixture(scope="module")
@@ -110,52 +145,55 @@ def wecc_no_controls(tmp_path_factory):
     return CASES / "wecc" / "wecc.raw", dyr
 
 
-def fault_speeds(files, bus, cycles, t_end, conventions="pst", off_equilibrium="refuse"):
-    """Speeds (pu) of both tools on ANDES's time grid: (t, stabctl, ANDES)."""
+def fault_speeds(ref, files, bus, cycles, t_end, conventions="pst", off_equilibrium="refuse"):
+    """Speeds (pu) of both tools on ANDES's time grid: (t, stabctl, ANDES); ANDES's run
+    stored as ``fault``."""
     raw, dyr = files
     t_clear = 1.0 + cycles / 60.0
     case = load_psse(raw, dyr, conventions=conventions)
     res = Simulator(case, off_equilibrium=off_equilibrium).run(
         [Fault(bus, 1.0, t_clear, x=1e-4)], t_end, h=STEP
     )
-    ss = andes_system(raw, dyr, AndesFault(bus, 1.0, t_clear))
-    t, w_andes = andes_speeds(ss, t_end, STEP)
-    return t, speeds_on(t, res, case, ss), w_andes
+    a = ref.run(
+        "fault", lambda: speeds_run(andes_system(raw, dyr, AndesFault(bus, 1.0, t_clear)), t_end)
+    )
+    return a["t"], speeds_on(a["t"], res, case, a["buses"]), a["wa"]
 
 
-def test_kundur_fault_speeds_match_andes(kundur):
+@live_too
+def test_kundur_fault_speeds_match_andes(kundur, ref):
     # 6-cycle fault at bus 7 (0.0001j pu), no line lost; governors and exciters on.
     # ANDES's reading of the models: the same equations, the same trajectories
-    t, w, wa = fault_speeds(kundur, 7, 6, 5.0, conventions="andes")
+    t, w, wa = fault_speeds(ref, kundur, 7, 6, 5.0, conventions="andes")
     # (1.94e-4 before EXDC2's field voltage took the rotor speed, as ANDES's exdc2.py)
     assert np.max(np.abs(w - wa)) < 1e-4  # measured 7.8e-5 (target 1e-4)
     assert np.max(np.abs(wa - 1)) > 7e-3  # a real swing
     # PST's models (speed effects, EXDC2 limits times the terminal voltage, its output
     # not times the speed): the common
     # speed drifts apart after 2 s, the swings between machines agree
-    t, w, wa = fault_speeds(kundur, 7, 6, 5.0)
+    t, w, wa = fault_speeds(ref, kundur, 7, 6, 5.0)
     assert np.max(np.abs(w[t <= 2.0] - wa[t <= 2.0])) < 3e-4  # measured 2.1e-4
     assert np.max(np.abs(w - wa)) < 1.5e-3  # measured 1.13e-3
     rel, rel_a = w - w.mean(1, keepdims=True), wa - wa.mean(1, keepdims=True)
     assert np.max(np.abs(rel - rel_a)) < 4e-4  # measured 2.5e-4
 
 
-def test_wecc_fault_speeds_match_andes(wecc):
+def test_wecc_fault_speeds_match_andes(wecc, ref):
     # 6-cycle fault at bus 1 (Coronado 500 kV): 29 GENROU, exciters, PSS, IEEEG1
     # ESST3A's V_E from system-base currents as ANDES (2.31e-4 pu with machine-base ones),
     # its V_B limited to VBMAX (2.6e-5 pu without)
-    t, w, wa = fault_speeds(wecc, 1, 6, 5.0, conventions="andes")
+    t, w, wa = fault_speeds(ref, wecc, 1, 6, 5.0, conventions="andes")
     assert np.max(np.abs(w - wa)) < 2e-5  # measured 8.5e-6
     assert np.max(np.abs(wa - 1)) > 5e-3
     # PST's models, IEEEG1 rate limits; PST's exc_st3 (ESST3A) feeds K_C a field current
     # other than its initialisation's: off equilibrium at the start, as in PST
     with pytest.warns(UserWarning, match=r"not an equilibrium: \|dexc\.VR\.G6/dt\| = 0\.0097"):
-        t, w, wa = fault_speeds(wecc, 1, 6, 5.0, off_equilibrium="warn")
+        t, w, wa = fault_speeds(ref, wecc, 1, 6, 5.0, off_equilibrium="warn")
     assert np.max(np.abs(w[t <= 2.0] - wa[t <= 2.0])) < 4e-4  # measured 2.8e-4
     assert np.max(np.abs(w - wa)) < 1.5e-3  # measured 1.03e-3
 
 
-def test_wecc_saturated_fault_speeds_match_andes(tmp_path):
+def test_wecc_saturated_fault_speeds_match_andes(tmp_path, ref):
     """WECC-179's whole DYR with its GENROU saturation kept (S(1.2) up to 11.2; bus 3: S(1.0)
     = 1.97, S(1.2) = 6.9, S_e0 = 2.5-3.3 at nominal flux, field voltages 3.5-4.8 pu),
     read as ANDES solves it; the 6-cycle bus-1 fault.  The machines alone (exciters and
@@ -167,7 +205,8 @@ def test_wecc_saturated_fault_speeds_match_andes(tmp_path):
     unsaturated) made the missing limit matter."""
     dyr = tmp_path / "wecc.dyr"
     strip_dyr(CASES / "wecc" / "wecc_full.dyr", dyr, ())
-    _t, w, wa = fault_speeds((CASES / "wecc" / "wecc.raw", dyr), 1, 6, 5.0, conventions="andes")
+    files = (CASES / "wecc" / "wecc.raw", dyr)
+    _t, w, wa = fault_speeds(ref, files, 1, 6, 5.0, conventions="andes")
     assert np.max(np.abs(wa - 1)) > 5e-3
     assert np.max(np.abs(w - wa)) < 2e-5  # measured 6.9e-6
 
@@ -189,22 +228,28 @@ def test_kundur_dc2_exciters_converge_in_the_step(kundur):
     assert np.max(np.abs(runs[0].speed[-1] - runs[1].speed[-1])) < 1e-4
 
 
-def test_kundur_line_trip_speeds_match_andes():
+def toggled_line(ss):
+    """The ends and time of the line ANDES's first Toggle switches: (bus1, bus2, t)."""
+    line = list(ss.Line.idx.v).index(ss.Toggle.dev.v[0])
+    return np.array([ss.Line.bus1.v[line], ss.Line.bus2.v[line], ss.Toggle.t.v[0]], float)
+
+
+def test_kundur_line_trip_speeds_match_andes(ref):
     """ANDES's own disturbance of kundur_full.dyr: its Toggle record opens Line_8 (buses 8-9,
     one of two circuits) at 2 s; stabctl reads the same DYR (Toggle reported unsupported
     and left out) and trips that circuit."""
     raw, dyr = CASES / "kundur" / "kundur.raw", CASES / "kundur" / "kundur_full.dyr"
-    ss = andes_system(raw, dyr)
-    line = list(ss.Line.idx.v).index(ss.Toggle.dev.v[0])
-    a, b = int(ss.Line.bus1.v[line]), int(ss.Line.bus2.v[line])
-    assert (ss.Toggle.t.v[0], a, b) == (2.0, 8, 9)
-    t, wa = andes_speeds(ss, 10.0, STEP)
+    r = ref.run("toggle", lambda: speeds_run(andes_system(raw, dyr), 10.0, line=toggled_line))
+    a, b, t_toggle = r["line"]
+    a, b = int(a), int(b)
+    assert (t_toggle, a, b) == (2.0, 8, 9)
+    t, wa = r["t"], r["wa"]
     gaps = {}
     for conventions in ("andes", "pst"):
         with pytest.warns(UserWarning, match="TOGGLE"):
             case = load_psse(raw, dyr, on_unsupported="skip", conventions=conventions)
         res = Simulator(case).run([LineTrip(a, b, 2.0)], 10.0, h=STEP)
-        w = speeds_on(t, res, case, ss)
+        w = speeds_on(t, res, case, r["buses"])
         gaps[conventions] = np.max(np.abs(w - wa))
     assert np.max(np.abs(wa - 1)) > 5e-3  # a real swing
     # 1.06e-4 with the opened line's charging kept (PST's y_switch) and EXDC2's field
@@ -213,7 +258,7 @@ def test_kundur_line_trip_speeds_match_andes():
     assert gaps["pst"] < 7e-4  # measured 4.7e-4
 
 
-def test_kundur_cct_matches_andes_verdicts(kundur):
+def test_kundur_cct_matches_andes_verdicts(kundur, ref):
     """stabctl's 1 ms CCT of a bolted fault at bus 7 (cleared without line loss); ANDES
     (j1e-4 pu fault) is stable 8 ms below it and unstable 8 ms above it (ANDES's own
     bisection: 494 ms, benchmarks/bench_andes.py)."""
@@ -225,15 +270,26 @@ def test_kundur_cct_matches_andes_verdicts(kundur):
     assert abs(cct - 0.493) < 2e-3  # measured 493 ms (491 before EXDC2 took the speed)
     for t_clear, stable in ((cct - 0.008, True), (cct + 0.008, False)):
         fault = AndesFault(7, 1.0, 1.0 + t_clear)
-        assert andes_stable(raw, dyr, fault, 6.0, STEP) is stable
+        verdict = ref.run(
+            f"stable_{stable}",
+            lambda fault=fault: {"stable": andes_stable(raw, dyr, fault, 6.0, STEP)},
+            inputs={"t_clear": t_clear},
+        )
+        assert verdict["stable"] is stable
 
 
-def em_modes(files, conventions="pst"):
-    """stabctl's electromechanical eigenvalues and, for each, ANDES's nearest one."""
+def modes_run(ref, tag, *args, **kw):
+    """ANDES's eigenvalues of ``andes_system(*args, **kw)``, stored as run ``tag``."""
+    return ref.run(tag, lambda: {"modes": andes_modes(andes_system(*args, **kw))})["modes"]
+
+
+def em_modes(ref, files, conventions="pst"):
+    """stabctl's electromechanical eigenvalues and, for each, ANDES's nearest one (ANDES's
+    stored as run ``modes``)."""
     raw, dyr = files
     ma = modal_analysis(linearise(load_psse(raw, dyr, conventions=conventions)))
     ours = ma.eigenvalues[ma.electromechanical]
-    theirs = andes_modes(andes_system(raw, dyr))
+    theirs = modes_run(ref, "modes", raw, dyr)
     return ours, np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
 
 
@@ -241,26 +297,27 @@ def relative_gaps(ours, theirs):
     return np.abs(ours - theirs) / np.abs(theirs)
 
 
-def test_kundur_electromechanical_modes_match_andes(kundur):
-    ours, theirs = em_modes(kundur, conventions="andes")
+@live_too
+def test_kundur_electromechanical_modes_match_andes(kundur, ref):
+    ours, theirs = em_modes(ref, kundur, conventions="andes")
     assert len(ours) == 3  # one inter-area, two local modes
     assert np.max(relative_gaps(ours, theirs)) < 2e-3  # measured 0.07 %
-    ours, theirs = em_modes(kundur)  # PST's machines: speed effects damp a little more
+    ours, theirs = em_modes(ref, kundur)  # PST's machines: speed effects damp a little more
     np.testing.assert_allclose(ours.imag, theirs.imag, rtol=3e-3)  # measured 1.7e-3
     assert np.max(relative_gaps(ours, theirs)) < 0.015  # measured 1.2 %
 
 
-def test_wecc_machines_and_governors_modes_equal_andes(wecc_no_controls):
+def test_wecc_machines_and_governors_modes_equal_andes(wecc_no_controls, ref):
     # GENROU + IEEEG1 read as ANDES does: the same linear model to round-off
-    ours, theirs = em_modes(wecc_no_controls, conventions="andes")
+    ours, theirs = em_modes(ref, wecc_no_controls, conventions="andes")
     assert len(ours) >= 28
     assert np.max(relative_gaps(ours, theirs)) < 1e-3  # measured 2e-5
-    ours, theirs = em_modes(wecc_no_controls)  # speed effects: the slow modes move most
+    ours, theirs = em_modes(ref, wecc_no_controls)  # speed effects: the slow modes move most
     f = ours.imag / (2 * np.pi)
     assert np.max(relative_gaps(ours, theirs)[f > 0.6]) < 0.016  # measured 1.47 %
 
 
-def test_wecc_esdc2a_modes_equal_andes(tmp_path):
+def test_wecc_esdc2a_modes_equal_andes(tmp_path, ref):
     """Machines and governors plus the ESDC2A of bus 111 read as ANDES solves it (quadratic
     saturation, K_E = 0 kept, T_R bypassed): the same linear model."""
     text = (CASES / "wecc" / "wecc_full.dyr").read_text()
@@ -273,7 +330,7 @@ def test_wecc_esdc2a_modes_equal_andes(tmp_path):
     src.write_text("\n".join(r.strip("\n") for r in records) + "\n")
     dyr = tmp_path / "g20_unsat.dyr"
     strip_dyr(src, dyr, (), unsaturated=True)
-    ours, theirs = em_modes((CASES / "wecc" / "wecc.raw", dyr), conventions="andes")
+    ours, theirs = em_modes(ref, (CASES / "wecc" / "wecc.raw", dyr), conventions="andes")
     assert len(ours) >= 28
     assert np.max(relative_gaps(ours, theirs)) < 1e-3  # measured 1e-5
 
@@ -336,7 +393,7 @@ def ieeest_sheet_as_st2cut(path, out) -> bool:
     return True
 
 
-def test_wecc_whole_case_modes_match_andes(wecc, tmp_path):
+def test_wecc_whole_case_modes_match_andes(wecc, tmp_path, ref):
     """Exciters (ESDC2A, EXST1, ESST3A) and stabilisers (IEEEST, ST2CUT) as well.  ANDES's
     EIG mis-reduces the IEEEST's pass-through filters (its F1 ``Lag2ndOrd`` and F2
     ``LeadLag2ndOrd`` with A1-A6 = 0: zero-time-constant states no equation determines),
@@ -351,7 +408,7 @@ def test_wecc_whole_case_modes_match_andes(wecc, tmp_path):
     raw, dyr = wecc
     same = tmp_path / "wecc_st2cut.dyr"
     same.write_text(ieeest_as_st2cut(dyr.read_text()))
-    ours, theirs = em_modes((raw, same), conventions="andes")
+    ours, theirs = em_modes(ref, (raw, same), conventions="andes")
     as_is = modal_analysis(linearise(load_psse(raw, dyr, conventions="andes")))
     as_is = as_is.eigenvalues[as_is.electromechanical]
     np.testing.assert_allclose(np.sort_complex(as_is), np.sort_complex(ours), atol=1e-9)
@@ -371,7 +428,7 @@ def ieee14(tmp_path_factory):
     return CASES / "ieee14" / "ieee14.raw", dyr
 
 
-def test_ieee14_fault_speeds_and_modes_match_andes(ieee14):
+def test_ieee14_fault_speeds_and_modes_match_andes(ieee14, ref):
     """Like for like as a new user would run it: the DYR read as ANDES reads it, the power
     flow without PV Q limits (ANDES's default), a 6-cycle fault at bus 9 through j1e-3 pu
     (ANDES clears it cleanly), 5 ms step in both.  The machines keep their saturation
@@ -388,14 +445,21 @@ def test_ieee14_fault_speeds_and_modes_match_andes(ieee14):
     case = load_psse(raw, dyr, conventions="andes")
     sim = Simulator(case, q_limits=False)
     res = sim.run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
-    ss = andes_system(raw, dyr, AndesFault(9, 1.0, t_clear, x=1e-3))
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    w = speeds_on(t, res, case, ss)
+    a = ref.run(
+        "fault",
+        lambda: speeds_run(
+            andes_system(raw, dyr, AndesFault(9, 1.0, t_clear, x=1e-3)),
+            5.0,
+            vf0=lambda ss: ss.GENROU.vf0.v,
+        ),
+    )
+    t, wa = a["t"], a["wa"]
+    w = speeds_on(t, res, case, a["buses"])
     # saturated initial field voltages (ANDES's vf0, S_e0 0.09-0.24): the power flows'
     # difference (ANDES's 1e-8 pu line R) only
-    rows = paired_rows(case.machines.bus, andes_machine_buses(ss))
+    rows = paired_rows(case.machines.bus, a["buses"])
     vex0 = sim.model_for(()).vex0[rows]
-    assert np.max(np.abs(vex0 - ss.GENROU.vf0.v)) < 5e-7  # measured 9e-8
+    assert np.max(np.abs(vex0 - a["vf0"])) < 5e-7  # measured 9e-8
     # ESST3A's I_N from the machine's field current, as at initialisation (ANDES): a flat
     # start (with PST exc_st3's estimate, 0.022 on a V_R derivative)
     assert sim.model_for(()).initial_residual[0] < 1e-9  # measured 4e-14
@@ -408,13 +472,13 @@ def test_ieee14_fault_speeds_and_modes_match_andes(ieee14):
     sim_same = Simulator(load_psse(raw, same, conventions="andes"), q_limits=False)
     ma_same = modal_analysis(linearise(sim_same))
     np.testing.assert_allclose(ma_same.eigenvalues[ma_same.electromechanical], ours, atol=1e-9)
-    theirs = andes_modes(andes_system(raw, same))
+    theirs = modes_run(ref, "modes", raw, same)
     near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
     assert len(ours) == 4
     assert np.max(relative_gaps(ours, near)) < 1e-3  # measured 0.015 % (0.31 % before)
 
 
-def test_ieee14_shaft5_fault_speeds_and_torsional_modes_match_andes():
+def test_ieee14_shaft5_fault_speeds_and_torsional_modes_match_andes(ref):
     """ANDES's ieee14_shaft5.json: IEEE 14 with a five-mass torsional shaft (SHAFT5, ANDES's
     default data) on bus 1's GENROU, imported with its Toggle records left out.  It starts
     flat and stays so for 10 s; after a 6-cycle fault at bus 4 through j1e-3 pu the speeds
@@ -434,13 +498,14 @@ def test_ieee14_shaft5_fault_speeds_and_torsional_modes_match_andes():
     assert drift < 1e-8
     t_clear = 1.0 + 6 / 60
     res = sim.run([Fault(4, 1.0, t_clear, x=1e-3)], 5.0)
-    ss = andes_system(path, fault=AndesFault(4, 1.0, t_clear, x=1e-3), off=("Toggle",))
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    w = speeds_on(t, res, case, ss)
+    fault = AndesFault(4, 1.0, t_clear, x=1e-3)
+    a = ref.run("fault", lambda: speeds_run(andes_system(path, fault=fault, off=("Toggle",)), 5.0))
+    t, wa = a["t"], a["wa"]
+    w = speeds_on(t, res, case, a["buses"])
     assert np.max(np.abs(w - 1)) > 5e-3  # a real swing (6.5e-3)
     assert np.max(np.abs(w - wa)) < 1e-4  # measured 4.4e-5 (generator with the shaft)
     ma = modal_analysis(linearise(sim))
-    theirs = andes_modes(andes_system(path, off=("Toggle",)))
+    theirs = modes_run(ref, "modes", path, off=("Toggle",))
     fast = ma.eigenvalues[np.abs(ma.eigenvalues.imag) > 2 * np.pi * 5]
     assert len(fast) == 5 and sum(lam.real > 0 for lam in fast) == 2
     for ours, bound in ((fast, 1e-5), (ma.eigenvalues[ma.electromechanical], 1e-2)):
@@ -448,7 +513,8 @@ def test_ieee14_shaft5_fault_speeds_and_torsional_modes_match_andes():
         assert np.max(relative_gaps(ours, near)) < bound  # measured 1.1e-6, 3.3e-3
 
 
-def test_kundur_motor_energised_as_andes_does_it():
+@live_too
+def test_kundur_motor_energised_as_andes_does_it(ref):
     """ANDES's kundur_motor.xlsx: a Motor5 at bus 7 out of service in the power flow,
     switched on at 2 s by its Toggle (stabctl: MotorSwitch), energised without flux at
     synchronous speed; 6 s at 5 ms in both.  The inrush (|V|/|Z| = 5 pu of mostly reactive
@@ -462,13 +528,12 @@ def test_kundur_motor_energised_as_andes_does_it():
     drift, _ = flat_run(case, 10.0)
     assert drift < 1e-8  # the motor off: measured 0
     res = sim.run([MotorSwitch(1, 2.0)], 6.0, h=STEP)
-    ss = andes_system(path)
-    t, wa = andes_speeds(ss, 6.0, STEP)
-    va = np.asarray(ss.dae.ts.y)[:, ss.Bus.v.a[list(ss.Bus.idx.v).index(7)]]
+    a = ref.run("motor", lambda: speeds_run(andes_system(path), 6.0, v7=lambda ss: bus_v(ss, 7)))
+    t, wa, va = a["t"], a["wa"], a["v7"]
     v = np.interp(t, res.t, res.vmag[:, case.bus_index(7)])
     assert va.min() < 0.86 and v.min() < 0.86  # the inrush dip, both
     assert np.max(np.abs(v - va)[t > 2.1]) < 1e-4
-    assert np.max(np.abs(speeds_on(t, res, case, ss) - wa)) < 1e-5
+    assert np.max(np.abs(speeds_on(t, res, case, a["buses"]) - wa)) < 1e-5
 
 
 @pytest.fixture(scope="module")
@@ -484,16 +549,16 @@ def n44(tmp_path_factory):
     return CASES / "nordic44" / "N44_BC.raw", dyr
 
 
-def test_n44_fault_speeds_verdict_and_modes_match_andes(n44):
+def test_n44_fault_speeds_verdict_and_modes_match_andes(n44, ref):
     """Like for like (stabctl.io.andes): ANDES given the RAW's network (SBASE 1000 MVA lines,
     line-end shunts, 50 Hz machines), the DYR read as ANDES reads it (GENSAL as GENROU, SCRX
     as a default SEXS, HYGOV's system-base integrator); 6-cycle fault at bus 5101 through
     j1e-3 pu, 5 ms step in both."""
     raw, dyr = n44
-    res, ss, wa, w, ours, near = fault_and_modes(raw, dyr, 5101, 1.0 + 6 / 60)
+    res, a, wa, w, ours, near = fault_and_modes(ref, raw, dyr, 5101, 1.0 + 6 / 60)
     assert np.max(np.abs(wa - 1)) > 3e-3  # a real swing
     assert np.max(np.abs(w - wa)) < 5e-5  # measured 9.6e-6
-    assert res.stable and not andes_separated(ss)
+    assert res.stable and not a["separated"]
     assert len(ours) >= 70
     assert np.max(relative_gaps(ours, near)) < 1e-5  # measured 6e-8
     # ANDES's reading of N44 (no stabilisers, default SEXS for SCRX) has an unstable
@@ -501,22 +566,26 @@ def test_n44_fault_speeds_verdict_and_modes_match_andes(n44):
     assert np.sum(ours.real > 0) == np.sum(near.real > 0) == 1
 
 
-def fault_and_modes(raw, dyr, bus: int, t_clear: float):
+def fault_and_modes(ref, raw, dyr, bus: int, t_clear: float):
     """A PSS/E case (DYR read as ANDES reads it, PV Q limits off) in both tools: a bus
     fault from 1 s to t_clear through j1e-3 pu, 5 s at STEP, and the electromechanical
-    eigenvalues.  Returns (stabctl result, ANDES system, ANDES speeds, stabctl speeds on
-    ANDES's grid and machine order, stabctl EM eigenvalues, the nearest ANDES one to each)."""
+    eigenvalues.  Returns (stabctl result, ANDES's stored run ``fault`` (with its verdict
+    ``separated``), ANDES speeds, stabctl speeds on ANDES's grid and machine order, stabctl
+    EM eigenvalues, the nearest ANDES one to each)."""
     case = load_psse(raw, dyr, conventions="andes")
     sim = Simulator(case, q_limits=False)
     res = sim.run([Fault(bus, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
-    ss = andes_system(raw, dyr, AndesFault(bus, 1.0, t_clear, x=1e-3))
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    w = speeds_on(t, res, case, ss)
+    fault = AndesFault(bus, 1.0, t_clear, x=1e-3)
+    a = ref.run(
+        "fault", lambda: speeds_run(andes_system(raw, dyr, fault), 5.0, separated=andes_separated)
+    )
+    t, wa = a["t"], a["wa"]
+    w = speeds_on(t, res, case, a["buses"])
     ma = modal_analysis(linearise(sim))
     ours = ma.eigenvalues[ma.electromechanical]
-    theirs = andes_modes(andes_system(raw, dyr))
+    theirs = modes_run(ref, "modes", raw, dyr)
     near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
-    return res, ss, wa, w, ours, near
+    return res, a, wa, w, ours, near
 
 
 @pytest.fixture(scope="module")
@@ -528,15 +597,15 @@ def npcc(tmp_path_factory):
     return CASES / "npcc" / "npcc.raw", dyr
 
 
-def test_npcc_fault_speeds_verdict_and_modes_match_andes(npcc):
+def test_npcc_fault_speeds_verdict_and_modes_match_andes(npcc, ref):
     """The DYR read as ANDES reads it (IEEEX1 as PST's DC1), PV Q limits off; 6-cycle
     fault at bus 6 through j1e-3 pu, 5 ms step in both.  Two units at buses 23 and 54:
     paired in order (paired with one stabctl unit each, the speeds were 6.2e-3 pu apart)."""
     raw, dyr = npcc
-    res, ss, wa, w, ours, near = fault_and_modes(raw, dyr, 6, 1.1)
+    res, a, wa, w, ours, near = fault_and_modes(ref, raw, dyr, 6, 1.1)
     assert np.max(np.abs(wa - 1)) > 5e-3  # a real swing (9.4e-3)
     assert np.max(np.abs(w - wa)) < 5e-5  # measured 2.95e-5
-    assert res.stable and not andes_separated(ss)
+    assert res.stable and not a["separated"]
     assert len(ours) >= 40  # 42 of 48 machines
     assert np.max(relative_gaps(ours, near)) < 1e-5  # measured 1.7e-7
 
@@ -565,13 +634,16 @@ def test_n44_whole_case_imports_simulates_and_linearises():
     assert sum("tg_flow" in n for n in names) == 50
 
 
-def andes_case_run(name, bus, t_end=5.0, conventions="andes", off=("Toggle",), off_exc=()):
+def andes_case_run(
+    ref, name, bus, t_end=5.0, conventions="andes", off=("Toggle",), off_exc=(), **more
+):
     """An ANDES case file imported by :func:`import_andes` (its own disturbance kept as the
     case's events, not run here) and ANDES's run of the same file (Toggle switched off):
     a 6-cycle fault at ``bus`` through j1e-3 pu, 5 ms step in both, PV Q limits off in both (ANDES's
     default); ``off`` ANDES models switched off in ANDES's run, ``off_exc`` exciter types
-    left out of stabctl's.  Returns (stabctl's simulator and result, ANDES's system, t,
-    stabctl's speeds, ANDES's speeds), speeds in ANDES's machine order."""
+    left out of stabctl's; ``more``: values of ANDES's system after its run to store
+    (`speeds_run`).  Returns (stabctl's simulator and result, ANDES's stored run ``fault``,
+    t, stabctl's speeds, ANDES's speeds), speeds in ANDES's machine order."""
     path = andes.get_case(name)
     case = import_andes(path, conventions=conventions, on_unsupported="skip")
     e = case.exciters
@@ -579,12 +651,15 @@ def andes_case_run(name, bus, t_end=5.0, conventions="andes", off=("Toggle",), o
     t_clear = 1.0 + 6 / 60
     sim = Simulator(case, q_limits=False)
     res = sim.run([Fault(bus, 1.0, t_clear, x=1e-3)], t_end, h=STEP)
-    ss = andes_system(path, fault=AndesFault(bus, 1.0, t_clear, x=1e-3), off=off)
-    t, wa = andes_speeds(ss, t_end, STEP)
-    return sim, res, ss, t, speeds_on(t, res, case, ss), wa
+    fault = AndesFault(bus, 1.0, t_clear, x=1e-3)
+    a = ref.run(
+        "fault", lambda: speeds_run(andes_system(path, fault=fault, off=off), t_end, **more)
+    )
+    t, wa = a["t"], a["wa"]
+    return sim, res, a, t, speeds_on(t, res, case, a["buses"]), wa
 
 
-def test_ieee39_fault_speeds_verdict_and_modes_match_andes(tmp_path):
+def test_ieee39_fault_speeds_verdict_and_modes_match_andes(tmp_path, ref):
     """IEEE 39 as ANDES has it (ieee39_full.xlsx: 10 GENROU, IEEEX1, IEEEST, TGOV1N; its
     dynamics exist only in ANDES's format), imported through ANDES's parser; 6-cycle fault
     at bus 16 through j1e-3 pu.  Its IEEEST take the electrical power (MODE 3) of
@@ -594,24 +669,32 @@ def test_ieee39_fault_speeds_verdict_and_modes_match_andes(tmp_path):
     run (ANDES: 0) and the fault's speeds were 6.7e-5 pu apart.  Modes: ANDES is given
     the IEEEST as the equivalent ST2CUT (its EIG mis-reduces the IEEEST's pass-through
     filters, docs/pst_models.md 12.4: 0.5 % as written)."""
-    sim, res, ss, _t, w, wa = andes_case_run("ieee39/ieee39_full.xlsx", 16)
+    sim, res, a, _t, w, wa = andes_case_run(
+        ref, "ieee39/ieee39_full.xlsx", 16, separated=andes_separated
+    )
     assert sim.model.initial_residual[0] < 1e-8  # measured 4.9e-13
-    ss0 = andes_system(andes.get_case("ieee39/ieee39_full.xlsx"), off=("Toggle",))
-    andes_powerflow(ss0)
-    ss0.TDS.init()
+
+    def initialised():
+        ss0 = andes_system(andes.get_case("ieee39/ieee39_full.xlsx"), off=("Toggle",))
+        andes_powerflow(ss0)
+        ss0.TDS.init()
+        bus = dict(zip(ss0.GENROU.idx.v, ss0.GENROU.bus.v))
+        buses = [bus[s] for s in ss0.IEEEST.syn.v]
+        return dict(bus=buses, sig=ss0.IEEEST.sig.v, MODE=ss0.IEEEST.MODE.v)
+
+    init = ref.run("init", initialised, note="power flow and TDS.init only")
     m = sim.model
     u1, _ = pss_inputs(m.pp, np.ones(m.mp.n), m.pmech0)
     ours = dict(zip(sim.case.machines.bus[m.pp.mac], u1))
-    bus = dict(zip(ss0.GENROU.idx.v, ss0.GENROU.bus.v))
-    theirs = {bus[s]: v for s, v in zip(ss0.IEEEST.syn.v, ss0.IEEEST.sig.v)}
-    assert set(ss0.IEEEST.MODE.v) == {3} and len(theirs) == 10
+    theirs = dict(zip(init["bus"], init["sig"]))
+    assert set(init["MODE"]) == {3} and len(theirs) == 10
     # the power flows' difference (ANDES's 1e-8 pu branch R) only; r_a |I|^2 is 2.4e-2
     # at G6 (bus 35)
     assert max(abs(ours[b] - theirs[b]) for b in theirs) < 2e-6  # measured 4.7e-7
     assert np.abs(sim.run([], 10.0, h=STEP).speed - 1).max() < 1e-9  # ANDES: 0
     assert np.max(np.abs(wa - 1)) > 5e-3  # a real swing
     assert np.max(np.abs(w - wa)) < 3e-5  # measured 1.4e-5
-    assert res.stable and not andes_separated(ss)
+    assert res.stable and not a["separated"]
     ma = modal_analysis(linearise(sim))
     ours = ma.eigenvalues[ma.electromechanical]
     same = tmp_path / "ieee39_st2cut.xlsx"
@@ -619,7 +702,7 @@ def test_ieee39_fault_speeds_verdict_and_modes_match_andes(tmp_path):
     case_same = import_andes(same, on_unsupported="skip")  # its Toggle read as an event
     ma_same = modal_analysis(linearise(Simulator(case_same, q_limits=False)))
     np.testing.assert_allclose(ma_same.eigenvalues[ma_same.electromechanical], ours, atol=1e-9)
-    theirs = andes_modes(andes_system(same, off=("Toggle",)))
+    theirs = modes_run(ref, "modes", same, off=("Toggle",))
     near = np.array([theirs[np.argmin(np.abs(theirs - lam))] for lam in ours])
     gap = np.max(relative_gaps(ours, near))
     print(f"\nIEEE 39 electromechanical modes vs ANDES (IEEEST as ST2CUT): {gap:.2e}")
@@ -627,20 +710,22 @@ def test_ieee39_fault_speeds_verdict_and_modes_match_andes(tmp_path):
     assert gap < 1e-5  # measured 2.1e-7 (0.5 % with the IEEEST as written)
 
 
-def test_ieee14_ieeet1_starts_flat_and_fault_speeds_match_andes():
+def test_ieee14_ieeet1_starts_flat_and_fault_speeds_match_andes(ref):
     """IEEE 14 with IEEET1 exciters (ANDES's ieee14_ieeet1.xlsx; read as DC1 without the
     lead-lag, docs/pst_models.md 12.2): a 10 s flat run stays at 1 pu, and after a 6-cycle
     fault at bus 9 the speeds are those of ANDES's ``ieeet1.py``."""
-    sim, res, ss, _t, w, wa = andes_case_run("ieee14/ieee14_ieeet1.xlsx", 9)
-    assert np.sum(sim.case.exciters.type == 1) == ss.IEEET1.n > 0
+    sim, res, a, _t, w, wa = andes_case_run(
+        ref, "ieee14/ieee14_ieeet1.xlsx", 9, n=lambda ss: ss.IEEET1.n, separated=andes_separated
+    )
+    assert np.sum(sim.case.exciters.type == 1) == a["n"] > 0
     flat = sim.run([], 10.0, h=STEP)
     assert np.max(np.abs(flat.speed - 1)) < 1e-10  # measured 0
     assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing (4.9e-3)
     assert np.max(np.abs(w - wa)) < 2e-5  # measured 4.5e-6
-    assert res.stable and not andes_separated(ss)
+    assert res.stable and not a["separated"]
 
 
-def test_ieee14_zip_load_follows_andes_and_its_percentages_are_scaled_to_100(tmp_path):
+def test_ieee14_zip_load_follows_andes_and_its_percentages_are_scaled_to_100(tmp_path, ref):
     """ieee14_zip.json: a ZIP replaces bus 2's PQ in dynamic runs (P 50 % constant power,
     40 % constant current, 0 % impedance: 90 % in all, which ANDES only warns about and
     then starts off its power flow). Imported, the percentages are scaled to 100 % and the
@@ -664,7 +749,7 @@ def test_ieee14_zip_load_follows_andes_and_its_percentages_are_scaled_to_100(tmp
     data["ZIP"][0]["kpi"] = 50.0
     edited = tmp_path / "ieee14_zip_100.json"
     edited.write_text(json.dumps(data))
-    sim, _res, ss, t, w, wa = andes_case_run(str(edited), 9)
+    sim, _res, a, t, w, wa = andes_case_run(ref, str(edited), 9)
     assert sim.model.initial_residual[0] < 1e-8
     assert np.max(np.abs(sim.run([], 10.0, h=STEP).speed - 1)) < 1e-10  # measured 0
     data["ZIP"][0]["u"] = 0  # bus 2's PQ constant impedance (ANDES's default)
@@ -672,13 +757,16 @@ def test_ieee14_zip_load_follows_andes_and_its_percentages_are_scaled_to_100(tmp
     case_z = import_andes(edited, on_unsupported="skip")  # its Toggle read as an event
     assert case_z.events
     res_z = Simulator(case_z, q_limits=False).run([Fault(9, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
-    gap, gap_z = np.max(np.abs(w - wa)), np.max(np.abs(speeds_on(t, res_z, case_z, ss) - wa))
+    gap, gap_z = (
+        np.max(np.abs(w - wa)),
+        np.max(np.abs(speeds_on(t, res_z, case_z, a["buses"]) - wa)),
+    )
     print(f"\nieee14 ZIP vs ANDES: speeds {gap:.2e} pu (impedance load: {gap_z:.2e})")
     assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing (4.8e-3)
     assert gap < 2e-5 and gap_z > 1e-4  # measured 4.4e-6, 2.1e-4
 
 
-def test_ieee14_fload_is_read_as_pst_s_load_and_follows_andes(tmp_path):
+def test_ieee14_fload_is_read_as_pst_s_load_and_follows_andes(tmp_path, ref):
     """ieee14_fload.json: an FLoad replaces bus 2's PQ in dynamic runs, P = p0 V/V0
     (ap = 1), Q = q0 (aq = 0), no frequency dependence (bp = bq = 0): PST's
     non-conforming load with P all constant current and Q all constant power.  The bus-9
@@ -690,12 +778,15 @@ def test_ieee14_fload_is_read_as_pst_s_load_and_follows_andes(tmp_path):
     loads = got.case.loads
     assert (loads.bus[0], loads.p_current[0], loads.q_power[0]) == (2, 1.0, 1.0)
     assert (loads.p_power[0], loads.q_current[0]) == (0.0, 0.0)
-    sim, _res, ss, t, w, wa = andes_case_run(str(path), 9)
+    sim, _res, a, t, w, wa = andes_case_run(ref, str(path), 9)
     assert sim.model.initial_residual[0] < 1e-8
     assert np.max(np.abs(sim.run([], 10.0, h=STEP).speed - 1)) < 1e-10
     case_z = got.case.replace(loads=type(loads).from_matrix(np.zeros((0, 5))))
     res_z = Simulator(case_z, q_limits=False).run([Fault(9, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
-    gap, gap_z = np.max(np.abs(w - wa)), np.max(np.abs(speeds_on(t, res_z, case_z, ss) - wa))
+    gap, gap_z = (
+        np.max(np.abs(w - wa)),
+        np.max(np.abs(speeds_on(t, res_z, case_z, a["buses"]) - wa)),
+    )
     print(f"\nieee14 FLoad vs ANDES: speeds {gap:.2e} pu (impedance load: {gap_z:.2e})")
     assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing
     assert gap < 2e-5 and gap_z > 5e-5  # measured 4.5e-6, 9.1e-5
@@ -707,7 +798,8 @@ def test_ieee14_fload_is_read_as_pst_s_load_and_follows_andes(tmp_path):
         read_andes_case(edited, on_unsupported="skip")
 
 
-def test_ieee14_timeseries_schedule_is_not_read_by_andes_s_run():
+@live_too
+def test_ieee14_timeseries_schedule_is_not_read_by_andes_s_run(ref):
     """ieee14_timeseries.xlsx: its TimeSeries writes PQ.Ppf and Qpf over time, which
     ANDES's time-domain run does not read (its loads are constant impedances from
     initialisation): a bus-9 fault gives the same speeds, bit for bit, with the schedule
@@ -718,53 +810,74 @@ def test_ieee14_timeseries_schedule_is_not_read_by_andes_s_run():
     assert sorted(got.left_out) == ["TimeSeries (1)"]
     assert "Fault 1 (u = 0: not run, as in ANDES)" in got.ignored
     fault = AndesFault(9, 1.0, 1.1, x=1e-3)
-    (t, wa), (_, w_off) = (
-        andes_speeds(andes_system(path, fault=fault, off=off), 5.0, STEP)
-        for off in (("Fault",), ("Fault", "TimeSeries"))
+    on, off = (
+        ref.run(tag, lambda off=off: speeds_run(andes_system(path, fault=fault, off=off), 5.0))
+        for tag, off in (("schedule_on", ("Fault",)), ("schedule_off", ("Fault", "TimeSeries")))
     )
-    np.testing.assert_array_equal(wa, w_off)
+    t, wa = on["t"], on["wa"]
+    np.testing.assert_array_equal(wa, off["wa"])
     assert np.max(np.abs(wa - 1)) > 4e-3  # a real swing
     res = Simulator(got.case, q_limits=False).run([Fault(9, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
-    ss = andes_system(path, off=("Fault",))
-    gap = np.max(np.abs(speeds_on(t, res, got.case, ss) - wa))
+    gap = np.max(np.abs(speeds_on(t, res, got.case, on["buses"]) - wa))
     print(f"\nieee14_timeseries vs ANDES: speeds {gap:.2e} pu")
     assert gap < 1e-4
 
 
-def test_kundur_st2cut_without_a_second_input_follows_andes():
+def test_kundur_st2cut_without_a_second_input_follows_andes(ref):
     """kundur_st2cut.xlsx: ST2CUT on machine 1 with speed input (MODE 1) and MODE2 left
     empty, which ANDES's input switch reads as no signal (PSS/E's code 0). A 6-cycle fault
     at bus 8, 10 s: speeds within 1e-4 pu of ANDES's (measured 5.3e-5, kundur_full's gap
     without a stabiliser 5.4e-5), where leaving the stabiliser out of stabctl's run
     moves them 2.6e-4 pu from ANDES's."""
-    sim, _res, ss, t, w, wa = andes_case_run("kundur/kundur_st2cut.xlsx", 8, t_end=10.0)
+    sim, _res, a, t, w, wa = andes_case_run(
+        ref, "kundur/kundur_st2cut.xlsx", 8, t_end=10.0, n=lambda ss: ss.ST2CUT.n
+    )
     pss = sim.case.pss
-    assert list(pss.input1) == [1.0] and list(pss.input2) == [0.0] and ss.ST2CUT.n == 1
+    assert list(pss.input1) == [1.0] and list(pss.input2) == [0.0] and a["n"] == 1
     assert np.max(np.abs(sim.run([], 10.0, h=STEP).speed - 1)) < 1e-10  # measured 0
     bare = sim.case.replace(pss=pss.select(np.zeros(1, bool)))
     res0 = Simulator(bare, q_limits=False).run([Fault(8, 1.0, 1.1, x=1e-3)], 10.0, h=STEP)
-    gap, gap0 = np.max(np.abs(w - wa)), np.max(np.abs(speeds_on(t, res0, bare, ss) - wa))
+    gap, gap0 = np.max(np.abs(w - wa)), np.max(np.abs(speeds_on(t, res0, bare, a["buses"]) - wa))
     print(f"\nkundur ST2CUT vs ANDES: speeds {gap:.2e} pu (without it: {gap0:.2e})")
     assert gap < 1e-4 and gap0 > 2e-4  # measured 5.3e-5, 2.6e-4
 
 
-def device_output_run(name, model, off=("Toggle",), t_end=5.0, off_exc=()):
+def device_output(model):
+    """ANDES model ``model``'s device count ``n``, its first device's machine bus ``dev_bus``
+    and that device's output over the run ``out`` (an exciter's field voltage ``vout``, a
+    governor's mechanical power ``pout``), with whether it is an exciter, as functions of
+    the system for `speeds_run`."""
+
+    def out(ss):
+        dev = getattr(ss, model)
+        var = dev.vout if "vout" in dev.__dict__ else dev.pout
+        return np.asarray(ss.dae.ts.y)[:, var.a[0]]
+
+    return dict(
+        n=lambda ss: getattr(ss, model).n,
+        dev_bus=lambda ss: ss.SynGen.get("bus", getattr(ss, model).syn.v[0]),
+        exciter=lambda ss: "vout" in getattr(ss, model).__dict__,
+        out=out,
+    )
+
+
+def device_output_run(ref, name, model, off=("Toggle",), t_end=5.0, off_exc=()):
     """:func:`andes_case_run` of an IEEE 14 case with one device of ANDES model ``model``
     (an exciter or a governor; a 6-cycle fault at bus 9), after the checks every such
     case passes: a 10 s flat run moves no speed and no mechanical power, and the fault
     speeds agree within 2e-5 pu (measured 4.5e-6 in each).  Returns ANDES's time grid,
     stabctl's output of the device on it and ANDES's (exciter: the field voltage ``vout``;
     governor: the mechanical power ``pout``)."""
-    sim, res, ss, _t, w, wa = andes_case_run(name, 9, t_end=t_end, off=off, off_exc=off_exc)
-    dev = getattr(ss, model)
-    assert dev.n == 1
+    sim, res, a, ta, w, wa = andes_case_run(
+        ref, name, 9, t_end=t_end, off=off, off_exc=off_exc, **device_output(model)
+    )
+    assert a["n"] == 1
     flat = sim.run([], 10.0, h=STEP)
     assert np.max(np.abs(flat.speed - 1)) < 1e-10 and np.ptp(flat.pmech, axis=0).max() < 1e-12
     assert np.max(np.abs(w - wa)) < 2e-5
-    k = list(sim.case.machines.bus).index(ss.SynGen.get("bus", dev.syn.v[0]))
-    ta = ss.dae.ts.t
-    series, var = ("efd", dev.vout) if "vout" in dev.__dict__ else ("pmech", dev.pout)
-    return ta, np.interp(ta, res.t, getattr(res, series)[:, k]), ss.dae.ts.y[:, var.a[0]]
+    k = list(sim.case.machines.bus).index(a["dev_bus"])
+    series = "efd" if a["exciter"] else "pmech"
+    return ta, np.interp(ta, res.t, getattr(res, series)[:, k]), a["out"]
 
 
 #: ANDES's grid points at the fault and its clearing (1 s, 1.1 s), where it records the
@@ -772,89 +885,89 @@ def device_output_run(name, model, off=("Toggle",), t_end=5.0, off_exc=()):
 AWAY = 0.011
 
 
-def test_ieee14_esst1a_field_voltage_and_speeds_match_andes():
+def test_ieee14_esst1a_field_voltage_and_speeds_match_andes(ref):
     """ANDES's ieee14_esst1a.xlsx (K_LR = 1, I_LR = 1: the field current limiter on from
     the start; docs/pst_models.md 2.6): the field voltage follows ``esst1a.py``."""
-    ta, ours, theirs = device_output_run("ieee14/ieee14_esst1a.xlsx", "ESST1A")
+    ta, ours, theirs = device_output_run(ref, "ieee14/ieee14_esst1a.xlsx", "ESST1A")
     assert np.ptp(theirs) > 4.5  # the field voltage swings (0.9-5.8 pu)
     away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
     assert np.max(np.abs(ours - theirs)[away]) < 0.15  # measured 0.086, 15 ms after clearing
     assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 2e-3  # measured 5e-4
 
 
-def test_ieee14_exac1_field_voltage_and_speeds_match_andes():
+def test_ieee14_exac1_field_voltage_and_speeds_match_andes(ref):
     """ANDES's ieee14_exac1.xlsx (docs/pst_models.md 2.7): the field voltage follows
     ``exac1.py``."""
-    ta, ours, theirs = device_output_run("ieee14/ieee14_exac1.xlsx", "EXAC1")
+    ta, ours, theirs = device_output_run(ref, "ieee14/ieee14_exac1.xlsx", "EXAC1")
     assert np.ptp(theirs) > 1.0  # the field voltage swings (1.36-2.60 pu)
     away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
     assert np.max(np.abs(ours - theirs)[away]) < 0.04  # measured 0.019, 12 ms after clearing
     assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 2e-3
 
 
-def test_ieee14_exac4_field_voltage_and_speeds_match_andes():
+def test_ieee14_exac4_field_voltage_and_speeds_match_andes(ref):
     """ANDES's ieee14_exac4.xlsx (docs/pst_models.md 2.8): the field voltage rides both
     output limits (8 pu, then 0) as ``exac4.py``'s."""
-    ta, ours, theirs = device_output_run("ieee14/ieee14_exac4.xlsx", "EXAC4")
+    ta, ours, theirs = device_output_run(ref, "ieee14/ieee14_exac4.xlsx", "EXAC4")
     assert np.max(theirs) == pytest.approx(8.0) and np.min(theirs) < 1e-9  # both limits
     assert np.max(np.abs(ours - theirs)[ta > 1.3]) < 5e-3
 
 
-def test_ieee14_esdc1a_field_voltage_and_speeds_match_andes():
+def test_ieee14_esdc1a_field_voltage_and_speeds_match_andes(ref):
     """ANDES's ieee14_esdc1a.xlsx, ESDC1A read as DC1 (PSS/E ESDC1A: ESDC2A's record with
     V_R limits not scaled by V_t); ANDES's run with its limiter repaired
     (`stabctl.io.andes._repair_esdc1a`: as shipped, ANDES 2.0 cannot initialise it)."""
-    ta, ours, theirs = device_output_run("ieee14/ieee14_esdc1a.xlsx", "ESDC1A")
+    ta, ours, theirs = device_output_run(ref, "ieee14/ieee14_esdc1a.xlsx", "ESDC1A")
     assert np.ptp(theirs) > 0.9  # the field voltage swings (1.97-3.0 pu)
     away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
     assert np.max(np.abs(ours - theirs)[away]) < 0.02  # measured 8.1e-3, 11 ms after clearing
     assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 2e-3  # measured 6.4e-4
 
 
-def test_ieee14_ieeet3_field_voltage_and_speeds_match_andes():
+def test_ieee14_ieeet3_field_voltage_and_speeds_match_andes(ref):
     """ANDES's ieee14_ieeet3.xlsx (docs/pst_models.md 2.9): the compound source
     sqrt(V_E^2 - (0.78 I_fd)^2) plus V_R drives the exciter as ``ieeet3.py``'s."""
-    ta, ours, theirs = device_output_run("ieee14/ieee14_ieeet3.xlsx", "IEEET3")
+    ta, ours, theirs = device_output_run(ref, "ieee14/ieee14_ieeet3.xlsx", "IEEET3")
     assert np.ptp(theirs) > 0.15  # the field voltage swings (its source follows I_t)
     away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
     assert np.max(np.abs(ours - theirs)[away]) < 1e-3  # measured 3.0e-4
     assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 2e-4  # measured 3.7e-5
 
 
-def test_ieee14_esst4b_field_voltage_and_speeds_match_andes():
+def test_ieee14_esst4b_field_voltage_and_speeds_match_andes(ref):
     """ANDES's ieee14_esst4b.xlsx (docs/pst_models.md 2.10): the two PI regulators and
     the inner loop's algebraic feedback K_G Efd as ``esst4b.py``'s."""
-    ta, ours, theirs = device_output_run("ieee14/ieee14_esst4b.xlsx", "ESST4B")
+    ta, ours, theirs = device_output_run(ref, "ieee14/ieee14_esst4b.xlsx", "ESST4B")
     assert np.ptp(theirs) > 0.35  # the field voltage swings
     away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
     assert np.max(np.abs(ours - theirs)[away]) < 4e-3  # measured 1.1e-3
     assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 5e-5  # measured 5.9e-6
 
 
-def test_ieee14_gast_power_and_speeds_match_andes():
+def test_ieee14_gast_power_and_speeds_match_andes(ref):
     """ANDES's ieee14_gast.xlsx (docs/pst_models.md 4.4), its AC8B exciter off in both
     runs (after this 6-cycle fault AC8B's speeds differ by 7.9e-5 pu, docs 2.7): over
     10 s the gas turbine's mechanical power follows ``gast.py``."""
     _ta, ours, theirs = device_output_run(
-        "ieee14/ieee14_gast.xlsx", "GAST", off=("Toggle", "AC8B"), t_end=10.0, off_exc=(10,)
+        ref, "ieee14/ieee14_gast.xlsx", "GAST", off=("Toggle", "AC8B"), t_end=10.0, off_exc=(10,)
     )
     assert np.ptp(theirs) > 0.05  # the turbine responds (0.307-0.359 pu)
     assert np.max(np.abs(ours - theirs)) < 1e-4  # measured 1.8e-5
 
 
-def test_ieee14_hygovdb_without_its_deadband_is_hygov_and_follows_andes():
+def test_ieee14_hygovdb_without_its_deadband_is_hygov_and_follows_andes(ref):
     """ANDES's ieee14_hygovdb.xlsx: HYGOVDB is HYGOV with a deadband [dbL, dbU] on the
     speed deviation, empty in this file, so it is read as HYGOV (with a band it is refused,
     named); over 10 s after the 6-cycle bus-9 fault its mechanical power follows
     ANDES's."""
-    _ta, ours, theirs = device_output_run("ieee14/ieee14_hygovdb.xlsx", "HYGOVDB", t_end=10.0)
+    _ta, ours, theirs = device_output_run(ref, "ieee14/ieee14_hygovdb.xlsx", "HYGOVDB", t_end=10.0)
     print(f"\nieee14_hygovdb vs ANDES: power {np.max(np.abs(ours - theirs)):.2e} pu")
     assert np.ptp(theirs) > 1e-3  # the turbine responds
     assert np.max(np.abs(ours - theirs)) < 1e-4  # measured 4.3e-6
 
 
 @pytest.mark.parametrize("step", [0.1, -0.1])
-def test_ieee14_hygov4_power_and_speeds_match_andes(step):
+def test_ieee14_hygov4_power_and_speeds_match_andes(step, ref):
     """ANDES's ieee14_hygov4.xlsx, 0.1 pu of impedance load added at (or taken from) bus 4
     at 1 s (ANDES: a PQ device off at set-up switched on by a Toggle; the file's own
     disturbance, an Alter of PQ_7's Ppf, does nothing in ANDES's run, whose PQ loads are
@@ -870,18 +983,24 @@ def test_ieee14_hygov4_power_and_speeds_match_andes(step):
     sim = Simulator(case, q_limits=False)
     flat = sim.run([], 10.0, h=STEP)
     assert np.max(np.abs(flat.speed - 1)) < 1e-10 and np.ptp(flat.pmech, axis=0).max() < 1e-12
-    ss = andes.load(str(path), setup=False, no_output=True, default_config=True)
-    ss.Alter.u.v = [0] * ss.Alter.n
-    ss.add("PQ", {"idx": "step", "bus": 4, "p0": step, "q0": 0.0, "u": 0})
-    ss.add("Toggle", {"model": "PQ", "dev": "step", "t": 1.0})
-    ss.setup()
-    ss.PFlow.config.tol = 1e-12
-    t, wa = andes_speeds(ss, 10.0, STEP)
+
+    def load_step():
+        ss = andes_load(str(path), setup=False, no_output=True, default_config=True)
+        ss.Alter.u.v = [0] * ss.Alter.n
+        ss.add("PQ", {"idx": "step", "bus": 4, "p0": step, "q0": 0.0, "u": 0})
+        ss.add("Toggle", {"model": "PQ", "dev": "step", "t": 1.0})
+        ss.setup()
+        ss.PFlow.config.tol = 1e-12
+        return speeds_run(ss, 10.0, pout=lambda ss: ss.dae.ts.y[:, ss.HYGOV4.pout.a[0]])
+
+    note = f"Alter off; a PQ of {step} pu at bus 4, off at set-up, toggled on at 1 s"
+    a = ref.run("load_step", load_step, note=note)
+    t, wa = a["t"], a["wa"]
     res = sim.run([LoadStep(4, 1.0, step)], 10.0, h=STEP)
-    w = speeds_on(t, res, case, ss)
+    w = speeds_on(t, res, case, a["buses"])
     m = list(case.machines.bus).index(8)
     ours = np.interp(t, res.t, res.pmech[:, m])
-    theirs = ss.dae.ts.y[:, ss.HYGOV4.pout.a[0]]
+    theirs = a["pout"]
     dw, dp = np.max(np.abs(w - wa)), np.max(np.abs(ours - theirs))
     print(f"\nieee14_hygov4 {step:+g} pu load vs ANDES: speeds {dw:.2e}, power {dp:.2e} pu")
     assert np.max(np.abs(wa - 1)) > 1e-3  # a real excursion (1.6e-3 and 2.1e-3 pu)
@@ -893,7 +1012,7 @@ def test_ieee14_hygov4_power_and_speeds_match_andes(step):
     assert dp < 1e-6
 
 
-def test_ieee14_ieeevc2_load_compensation_starts_flat_and_sets_its_reference():
+def test_ieee14_ieeevc2_load_compensation_starts_flat_and_sets_its_reference(ref):
     """ANDES's ieee14_ieeevc2.xlsx: two IEEEVC (R_C 0.05, X_C 0.1) in front of an IEEET1
     and an ESST3A.  Their exciters regulate V_C = abs(V_t + (R_C + j X_C) I_t): at the
     power flow each reference moves by V_C - V_t computed from the bus voltage and the
@@ -921,13 +1040,17 @@ def test_ieee14_ieeevc2_load_compensation_starts_flat_and_sets_its_reference():
     np.testing.assert_allclose(shift, np.abs(V + Z * I) - np.abs(V), atol=1e-12)
     assert np.all(shift[comp] > 1e-3) and np.all(shift[~comp] == 0)
     # ANDES's own V_C - V_t at its (failed) initialisation, ``IEEEVC.vcomp``, per machine bus
-    ss = andes_system(path, off=("Toggle",))
-    andes_powerflow(ss)
-    ss.TDS.init()
-    vc = ss.IEEEVC
-    theirs = {
-        ss.SynGen.get("bus", ss.Exciter.get("syn", vc.avr.v[k])): vc.vcomp.v[k] for k in range(vc.n)
-    }
+
+    def initialised():
+        ss = andes_system(path, off=("Toggle",))
+        andes_powerflow(ss)
+        ss.TDS.init()
+        vc = ss.IEEEVC
+        buses = [ss.SynGen.get("bus", ss.Exciter.get("syn", vc.avr.v[k])) for k in range(vc.n)]
+        return dict(bus=buses, vcomp=vc.vcomp.v)
+
+    init = ref.run("init", initialised, note="power flow and TDS.init only")
+    theirs = dict(zip(init["bus"].tolist(), init["vcomp"]))
     ours = {int(case.machines.bus[mac[i]]): shift[i] for i in np.nonzero(comp)[0]}
     assert ours.keys() == theirs.keys() and len(ours) == 2  # both compensated machines
     for b in ours:
@@ -997,7 +1120,7 @@ def test_imported_andes_case_power_flow_equals_andes(name):
 
 
 @pytest.mark.parametrize("name", ["ieee14/ieee14_shuntsw.json", "ieee14/ieee14_shuntsw.xlsx"])
-def test_ieee14_switched_shunts_step_as_andes_in_the_power_flow_and_the_run(name):
+def test_ieee14_switched_shunts_step_as_andes_in_the_power_flow_and_the_run(name, ref):
     """ANDES's ieee14_shuntsw files: ShuntSw at bus 9 (b 0.095 pu between its levels 0.075
     and 0.1: starts at 0.1; steps of 0.025, dt 0.2 s) and bus 14 (0.15 pu: 1.05 pu, above
     its band 1 +- 0.05, so stepped down to 0.1 in both power flows; steps of 0.05, dt 0.1
@@ -1015,16 +1138,18 @@ def test_ieee14_switched_shunts_step_as_andes_in_the_power_flow_and_the_run(name
     assert list(pf.shunt_levels) == [4, 2]  # 0.1 pu each
     rows = imported.case.bus_indices(imported.pf_bus)
     assert np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)) < 1e-6
-    sim, res, ss, t, w, wa = andes_case_run(name, 9)
+    sim, res, a, t, w, wa = andes_case_run(
+        ref, name, 9, v9=lambda ss: bus_v(ss, 9), v14=lambda ss: bus_v(ss, 14)
+    )
     assert np.max(np.abs(w - 1)) > 4e-3
     assert np.max(np.abs(w - wa)) < 1e-4
     for bus in (9, 14):
-        va = np.asarray(ss.dae.ts.y)[:, ss.Bus.v.a[list(ss.Bus.idx.v).index(bus)]]
+        va = a[f"v{bus}"]
         v = np.interp(t, res.t, res.vmag[:, sim.case.bus_index(bus)])
         assert np.max(np.abs(v - va)[t > 2.0]) < 1e-3  # the same levels at the end
 
 
-def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections():
+def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections(ref):
     """ANDES's kundur_vsc.xlsx: two VSCShunt on a DC line (Node, Ground, R), the bus-6
     converter holding P = -0.1 pu and Q = 0, the bus-1 one its DC voltage and Q = 0.01 pu:
     read as fixed injections at their power-flow point (0.1009 + j0.01, -0.1 pu).  The
@@ -1045,7 +1170,7 @@ def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections():
     assert np.max(np.abs(pf.vmag[rows] - imported.pf_vmag)) < 1e-6  # measured 2.5e-7
     drift, _ = flat_run(case, 10.0)
     assert drift < 1e-8
-    _sim, _res, _ss, _t, w, wa = andes_case_run("kundur/kundur_vsc.xlsx", 7)
+    _sim, _res, _a, _t, w, wa = andes_case_run(ref, "kundur/kundur_vsc.xlsx", 7)
     assert np.max(np.abs(w - 1)) > 5e-3
     assert np.max(np.abs(w - wa)) < 1e-4
 
@@ -1066,7 +1191,7 @@ def test_ei33_with_an_ieeet1_without_ta_starts_at_rest_and_stays_flat():
     assert drift < 1e-8
 
 
-def test_ieee14_island_runs_with_its_dead_islands_left_out(tmp_path):
+def test_ieee14_island_runs_with_its_dead_islands_left_out(tmp_path, ref):
     """ANDES's ieee14_island.xlsx: the lines to buses 8 and 14 are out of service, leaving
     two islands without a swing bus (bus 8 with its synchronous condenser, bus 14 with its
     load).  The power flow refuses them by name; `without_dead_islands` disconnects them
@@ -1096,9 +1221,9 @@ def test_ieee14_island_runs_with_its_dead_islands_left_out(tmp_path):
     assert drift < 1e-8  # measured 1.1e-15
     t_clear = 1.0 + 6 / 60
     res = Simulator(live, q_limits=False).run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
-    ss = andes_system(path, fault=AndesFault(9, 1.0, t_clear, x=1e-3), off=("Toggle",))
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    theirs = andes_machine_buses(ss)
+    fault = AndesFault(9, 1.0, t_clear, x=1e-3)
+    a = ref.run("fault", lambda: speeds_run(andes_system(path, fault=fault, off=("Toggle",)), 5.0))
+    t, wa, theirs = a["t"], a["wa"], a["buses"]
     on = np.asarray(theirs) != 8
     rows = paired_rows(live.machines.bus, np.asarray(theirs)[on])
     w = np.column_stack([np.interp(t, res.t, res.speed[:, k]) for k in rows])
@@ -1121,7 +1246,7 @@ def test_ieee14_island_runs_with_its_dead_islands_left_out(tmp_path):
     assert load_case(out).equals(live)
 
 
-def test_ieee14_playback_source_follows_andes_through_its_time_series():
+def test_ieee14_playback_source_follows_andes_through_its_time_series(ref):
     """ANDES's ieee14_plbvfu1.xlsx: PLBVFU1 (V-f playback behind xs, Tv = Tf = 0.2 s) in
     place of the bus-8 generator, driven by its TimeSeries plbvf.xlsx (f stepping 1 ->
     1.003 -> 0.997 -> 1 pu over 2.4 s; ANDES's mode 1, values held between points), read
@@ -1143,12 +1268,19 @@ def test_ieee14_playback_source_follows_andes_through_its_time_series():
     sim = Simulator(case, q_limits=False)
     assert sim.model.initial_residual[0] < 1e-9
     res = sim.run([event], 5.0, h=STEP)
-    ss = andes_system(path, off=("Fault",))
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    w = speeds_on(t, res, case, ss)
+    a = ref.run(
+        "playback",
+        lambda: speeds_run(
+            andes_system(path, off=("Fault",)),
+            5.0,
+            w_plb=lambda ss: np.asarray(ss.dae.ts.x)[:, ss.PLBVFU1.omega.a[0]],
+        ),
+    )
+    t, wa = a["t"], a["wa"]
+    w = speeds_on(t, res, case, a["buses"])
     assert np.max(np.abs(w - 1)) > 3e-3
     assert np.max(np.abs(w - wa)) < 1e-5
-    w_plb = np.asarray(ss.dae.ts.x)[:, ss.PLBVFU1.omega.a[0]]
+    w_plb = a["w_plb"]
     assert np.max(np.abs(np.interp(t, res.t, res.speed[:, k]) - w_plb)) < 1e-6
 
 
@@ -1188,7 +1320,7 @@ def test_a_negative_line_resistance_of_an_equivalent_is_kept():
     assert br.r[k] == pytest.approx([-0.00181], abs=1e-12)
 
 
-def test_pjm5bus_tg2_governors_follow_andes_through_its_own_line_trip():
+def test_pjm5bus_tg2_governors_follow_andes_through_its_own_line_trip(ref):
     """pjm5bus (four GENCLS with ANDES's TG2 governors, 1/R 20, lead-lag 0.2/10 s): its own
     disturbance, line 6 opened at 2 s, 10 s at 5 ms.  ANDES 2.0's TG2 with its deadband
     off (the default) never moves: DeadBandRT's flags, set once at the start inside the
@@ -1201,16 +1333,20 @@ def test_pjm5bus_tg2_governors_follow_andes_through_its_own_line_trip():
     drift, _ = flat_run(case)
     assert drift < 1e-8
     swings = {}
-    for deadband in (0, 1):
+
+    def own_trip(deadband):
         ss = andes_system(path, config_option=(f"TG2.deadband={deadband}",))
         andes_speeds(ss, 10.0, STEP)
-        t = np.asarray(ss.dae.ts.t)
         wa = np.asarray(ss.dae.ts.x)[:, ss.GENCLS.omega.a]
+        return dict(t=ss.dae.ts.t, wa=wa, line=toggled_line(ss), buses=ss.GENCLS.bus.v)
+
+    for deadband in (0, 1):
+        a = ref.run(f"deadband_{deadband}", lambda deadband=deadband: own_trip(deadband))
+        t, wa = a["t"], a["wa"]
         swings[deadband] = np.max(np.abs(wa - 1))
-    line = list(ss.Line.idx.v).index(ss.Toggle.dev.v[0])
-    ends = [b or 5 for b in (ss.Line.bus1.v[line], ss.Line.bus2.v[line])]  # idx 0 is 5
+    ends = [int(b) or 5 for b in a["line"][:2]]  # idx 0 is 5
     res = Simulator(case, q_limits=False).run([LineTrip(*ends, 2.0)], 10.0, h=STEP)
-    rows = [list(case.machines.bus).index(b or 5) for b in ss.GENCLS.bus.v]
+    rows = [list(case.machines.bus).index(b or 5) for b in a["buses"]]
     w = np.column_stack([np.interp(t, res.t, res.speed[:, r]) for r in rows])
     dw = np.max(np.abs(w - wa))
     print(f"\npjm5bus line trip vs ANDES (TG2 deadband on): speeds {dw:.2e} pu")
@@ -1355,26 +1491,40 @@ def converter_case(model, **changes):
     return case.replace(converters=case.converters.replace(**cols)) if cols else case
 
 
-def converter_gaps(model, case, events, andes_edit, t_end=5.0):
+def converter_powers(model):
+    """ANDES ``model``'s converter powers ``Pa``, ``Qa`` (`andes_converter_powers`) as
+    functions of the system for `speeds_run`."""
+    return dict(
+        Pa=lambda ss: andes_converter_powers(ss, model)[0],
+        Qa=lambda ss: andes_converter_powers(ss, model)[1],
+    )
+
+
+def converter_gaps(ref, model, case, events, andes_edit, t_end=5.0):
     """Both tools' runs of the same case and disturbance, 5 ms step, PV Q limits off:
     the largest speed gap and converter P and Q gaps (pu), on ANDES's time grid without
     the points ANDES adds 1e-4 s around each event (a jump's instant, recorded before it
     by ANDES, after it by stabctl), and stabctl's result.  ``andes_edit(ss)`` adds the
-    disturbance to ANDES's system (and changes its converters) before set-up."""
-    ss = andes.load(
-        str(andes.get_case(CONVERTER_CASES[model])),
-        setup=False,
-        no_output=True,
-        default_config=True,
-    )
-    ss.Toggle.u.v = [0] * ss.Toggle.n
-    andes_edit(ss)
-    ss.setup()
-    ss.PFlow.config.tol = 1e-12
-    t, wa = andes_speeds(ss, t_end, STEP)
-    Pa, Qa = andes_converter_powers(ss, model)
+    disturbance to ANDES's system (and changes its converters) before set-up; ANDES's
+    run is stored as ``run``."""
+
+    def make():
+        ss = andes_load(
+            str(andes.get_case(CONVERTER_CASES[model])),
+            setup=False,
+            no_output=True,
+            default_config=True,
+        )
+        ss.Toggle.u.v = [0] * ss.Toggle.n
+        andes_edit(ss)
+        ss.setup()
+        ss.PFlow.config.tol = 1e-12
+        return speeds_run(ss, t_end, **converter_powers(model))
+
+    a = ref.run("run", make, note=f"Toggle off; {andes_edit.__qualname__}")
+    t, wa, Pa, Qa = a["t"], a["wa"], a["Pa"], a["Qa"]
     res = Simulator(case, q_limits=False).run(events, t_end, h=STEP)
-    w = speeds_on(t, res, case, ss)
+    w = speeds_on(t, res, case, a["buses"])
     P = np.column_stack([np.interp(t, res.t, p) for p in res.ibr_p.T])
     Q = np.column_stack([np.interp(t, res.t, q) for q in res.ibr_q.T])
     jumps = np.zeros(t.size, bool)
@@ -1399,7 +1549,7 @@ def _fault(bus, t_clear):
 
 
 @pytest.mark.parametrize("model", ["PVD1", "ESD1"])
-def test_ieee14_converters_fault_speeds_and_powers_match_andes(model):
+def test_ieee14_converters_fault_speeds_and_powers_match_andes(model, ref):
     """Issue 29's like-for-like check: ANDES's IEEE 14 with ten PVD1 (ESD1) devices replacing
     the bus-4 generator, imported through ANDES's parser; 6-cycle fault at bus 9 through
     j1e-3 pu, 5 ms step in both.  The converters' currents fall to zero in the fault (the
@@ -1408,7 +1558,7 @@ def test_ieee14_converters_fault_speeds_and_powers_match_andes(model):
     case = converter_case(model)
     t_clear = 1.0 + 6 / 60
     dw, dP, dQ, swing, res = converter_gaps(
-        model, case, [Fault(9, 1.0, t_clear, x=1e-3)], _fault(9, t_clear)
+        ref, model, case, [Fault(9, 1.0, t_clear, x=1e-3)], _fault(9, t_clear)
     )
     print(f"\n{model} fault vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert swing > 4e-3  # a real swing
@@ -1419,7 +1569,7 @@ def test_ieee14_converters_fault_speeds_and_powers_match_andes(model):
 
 
 @pytest.mark.parametrize("model", ["PVD1", "ESD1"])
-def test_ieee14_converters_load_shed_step_matches_andes(model):
+def test_ieee14_converters_load_shed_step_matches_andes(model, ref):
     """A step: the bus-14 load (0.2 + j0.07 pu in these cases) shed at 1 s (ANDES: its PQ
     device toggled off; stabctl: the same constant impedance removed).  The angle step
     makes the measured frequency spike past the trip curve; the devices drop out and
@@ -1433,7 +1583,7 @@ def test_ieee14_converters_load_shed_step_matches_andes(model):
         k = list(ss.PQ.bus.v).index(14)
         ss.add("Toggle", {"model": "PQ", "dev": ss.PQ.idx.v[k], "t": 1.0})
 
-    dw, dP, dQ, swing, res = converter_gaps(model, case, [shed_load], shed)
+    dw, dP, dQ, swing, res = converter_gaps(ref, model, case, [shed_load], shed)
     print(f"\n{model} load shed vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert swing > 2e-3 and np.ptp(res.ibr_p) > 4e-3
     assert dw < 2e-6  # measured 3.1e-7
@@ -1441,7 +1591,7 @@ def test_ieee14_converters_load_shed_step_matches_andes(model):
     assert dQ < 1e-5  # measured 1.1e-7
 
 
-def test_ieee14_dg_protection_trips_and_restores_the_pvd1_as_andes():
+def test_ieee14_dg_protection_trips_and_restores_the_pvd1_as_andes(ref):
     """ANDES's ieee14_dgprct1.xlsx with its own disturbance: the bus-14 load (0.3 pu, out of
     service in the power flow) switched on at 1 s and off at 10 s (ANDES: its Toggler
     records; stabctl: the same constant impedance, LoadStep, the case's own events).
@@ -1452,18 +1602,23 @@ def test_ieee14_dg_protection_trips_and_restores_the_pvd1_as_andes():
     path = andes.get_case("ieee14/ieee14_dgprct1.xlsx")
     case = import_andes(path, on_unsupported="skip")
     assert list(case.converters.relay) == [0, 1] + [0] * 8
-    ss = andes_system(path)
-    pq = list(ss.PQ.idx.v).index("PQ_12")
-    p0, q0, bus = ss.PQ.p0.v[pq], ss.PQ.q0.v[pq], ss.PQ.bus.v[pq]
+
+    def pq12(ss):
+        pq = list(ss.PQ.idx.v).index("PQ_12")
+        return [ss.PQ.p0.v[pq], ss.PQ.q0.v[pq], ss.PQ.bus.v[pq]]
+
+    a = ref.run(
+        "own", lambda: speeds_run(andes_system(path), 12.0, pq=pq12, **converter_powers("PVD1"))
+    )
+    p0, q0, bus = a["pq"]
     events = from_case(case)  # the file's own Toggles, read by the import
     assert events == [LoadStep(int(bus), 1.0, p0, q0), LoadStep(int(bus), 10.0, -p0, -q0)]
     sim = Simulator(case, q_limits=False)
     assert sim.model.initial_residual[0] < 1e-9
     res = sim.run(events, 12.0, h=STEP)
-    t, wa = andes_speeds(ss, 12.0, STEP)
-    Pa, _ = andes_converter_powers(ss, "PVD1")
+    t, wa, Pa = a["t"], a["wa"], a["Pa"]
     P = np.interp(t, res.t, res.ibr_p[:, 1])
-    w = speeds_on(t, res, case, ss)
+    w = speeds_on(t, res, case, a["buses"])
     tripped = (t > 8.0) & (t < 10.0)
     assert np.all(Pa[tripped, 1] < 1e-5) and np.all(P[tripped] < 1e-5)  # both tripped
     assert Pa[-1, 1] > 4e-3 and P[-1] > 4e-3  # and back
@@ -1472,13 +1627,15 @@ def test_ieee14_dg_protection_trips_and_restores_the_pvd1_as_andes():
     assert np.max(np.abs(w - wa)) < 5e-6  # measured 4.6e-7 (swing 3.5e-3)
 
 
-def test_ieee14_dgprctext_follows_andes_through_a_fault_without_tripping():
+def test_ieee14_dgprctext_follows_andes_through_a_fault_without_tripping(ref):
     """ANDES's ieee14_dgprctext.xlsx: PVD1_2's DGPRCTExt (voltage protection on a voltage
     held at its initial value, as no co-simulation sets it) sees no dip in a 6-cycle bus-4
     fault through j1e-3 pu; both tools' PVD1 powers and speeds agree (5 ms step)."""
-    sim, res, ss, t, w, wa = andes_case_run("ieee14/ieee14_dgprctext.xlsx", 4)
+    sim, res, a, t, w, wa = andes_case_run(
+        ref, "ieee14/ieee14_dgprctext.xlsx", 4, **converter_powers("PVD1")
+    )
     assert list(sim.case.converters.relay) == [0, 2] + [0] * 8
-    Pa, _ = andes_converter_powers(ss, "PVD1")
+    Pa = a["Pa"]
     P = np.column_stack([np.interp(t, res.t, p) for p in res.ibr_p.T])
     jumps = (np.abs(t - 1.0) <= 2e-4) | (np.abs(t - 1.1) <= 2e-4)
     assert np.max(np.abs(w - 1)) > 4e-3  # a real swing (7.3e-3)
@@ -1487,7 +1644,7 @@ def test_ieee14_dgprctext_follows_andes_through_a_fault_without_tripping():
     assert P[-1, 1] > 4e-3  # not tripped
 
 
-def test_ieee14_pvd1_current_limits_match_andes():
+def test_ieee14_pvd1_current_limits_match_andes(ref):
     """The current limits in a fault, both priorities: ialim 0.7 pu on the device base
     (0.007 pu system base, above the 0.006 pu the devices start with), the trip curves
     (recflag 0) and the frequency droop (ddn 0) off, so that the commands reach the limits.
@@ -1502,7 +1659,7 @@ def test_ieee14_pvd1_current_limits_match_andes():
         ss.PVD1.ddn.v = [0.0] * ss.PVD1.n
         _fault(9, 1.1)(ss)
 
-    dw, dP, dQ, _, res = converter_gaps("PVD1", case, [Fault(9, 1.0, 1.1, x=1e-3)], edit)
+    dw, dP, dQ, _, res = converter_gaps(ref, "PVD1", case, [Fault(9, 1.0, 1.1, x=1e-3)], edit)
     print(f"\nPVD1 current limits vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert dw < 2e-5  # measured 4.5e-6
     assert dP < 2e-4  # measured 4.2e-5
@@ -1585,25 +1742,30 @@ def test_import_andes_gives_the_reason_of_a_refused_device(tmp_path):
     ]
 
 
-def test_kundur_ieeest_output_cut_off_matches_andes():
+def test_kundur_ieeest_output_cut_off_matches_andes(ref):
     """ANDES's kundur_ieeest.xlsx: an IEEEST with a filter (A1..A6 = 1) and the output
     cut-off VCU 1.2, VCL 0.8 pu (pss_con columns 25-26, the kernel's rule in
     tests/models/test_pss.py); a 6-cycle fault at bus 7 takes bus 1 below 0.8 pu in both
     tools over the same grid points, where ANDES's output is 0; speeds within 3e-4 pu
     (measured 2.1e-4; this PSS's gain is small: without the cut-off 2.9e-11 pu apart)."""
-    sim, res, ss, t, w, wa = andes_case_run("kundur/kundur_ieeest.xlsx", 7)
+    sim, res, a, t, w, wa = andes_case_run(
+        ref,
+        "kundur/kundur_ieeest.xlsx",
+        7,
+        v_pss=lambda ss: bus_v(ss, ss.IEEEST.bus.v[0]),
+        vsout=lambda ss: np.asarray(ss.dae.ts.y)[:, ss.IEEEST.vsout.a[0]],
+    )
     assert sim.model.initial_residual[0] < 1e-8
     assert (sim.case.pss.VCU[0], sim.case.pss.VCL[0]) == (1.2, 0.8)
     assert np.max(np.abs(w - wa)) < 3e-4 and np.max(np.abs(wa - 1)) > 7e-3
-    m = ss.IEEEST
-    v_a = ss.dae.ts.y[:, ss.Bus.v.a[list(ss.Bus.idx.v).index(m.bus.v[0])]]
+    v_a = a["v_pss"]
     v = np.interp(t, res.t, res.vmag[:, list(res.buses).index(1)])
     low = (t > 1.0 + AWAY) & (t < 1.1 - AWAY)
     assert np.all(v_a[low] < 0.8) and np.all(v[low] < 0.8)
-    assert np.all(ss.dae.ts.y[low, m.vsout.a[0]] == 0.0)
+    assert np.all(a["vsout"][low] == 0.0)
 
 
-def test_kundur_esst3a_regulator_lag_matches_andes_at_a_step_its_inner_loop_allows():
+def test_kundur_esst3a_regulator_lag_matches_andes_at_a_step_its_inner_loop_allows(ref):
     """ANDES's kundur_esst3a.xlsx: ESST3A with its regulator lag T_A = 0.1 s on [VRMIN,
     VRMAX] (exc_con columns 44, 28-29, docs/pst_models.md 12.2) and an inner loop K_M =
     500, T_M = 0.1 s whose eigenvalue is -2.2e4 1/s: the explicit integrator refuses 5 ms
@@ -1619,18 +1781,30 @@ def test_kundur_esst3a_regulator_lag_matches_andes_at_a_step_its_inner_loop_allo
     with pytest.raises(InputError, match=r"step 0.005 s is too large.*ST3 inner loop"):
         sim.run(fault, 1.0, h=STEP)
     res = sim.run(fault, 5.0, h=4e-5)
-    ss = andes_system(path, fault=AndesFault(7, 1.0, 1.1, x=1e-3), off=("Toggle",))
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    assert np.max(np.abs(speeds_on(t, res, case, ss) - wa)) < 1e-5
-    m, late = ss.ESST3A, t > 1.5
-    assert m.n == 4  # every machine's exciter is compared
-    for j in range(m.n):
-        k = list(case.machines.bus).index(ss.SynGen.get("bus", m.syn.v[j]))
+
+    def exciters(ss):
+        m = ss.ESST3A
+        return dict(
+            exc_bus=lambda ss: [ss.SynGen.get("bus", s) for s in m.syn.v],
+            vout=lambda ss: np.asarray(ss.dae.ts.y)[:, m.vout.a],
+        )
+
+    def make():
+        ss = andes_system(path, fault=AndesFault(7, 1.0, 1.1, x=1e-3), off=("Toggle",))
+        return speeds_run(ss, 5.0, **exciters(ss))
+
+    a = ref.run("fault", make)
+    t, wa = a["t"], a["wa"]
+    assert np.max(np.abs(speeds_on(t, res, case, a["buses"]) - wa)) < 1e-5
+    late = t > 1.5
+    assert len(a["exc_bus"]) == 4  # every machine's exciter is compared
+    for j, bus in enumerate(a["exc_bus"]):
+        k = list(case.machines.bus).index(bus)
         ours = np.interp(t, res.t, res.efd[:, k])
-        assert np.max(np.abs(ours - ss.dae.ts.y[:, m.vout.a[j]])[late]) < 1e-2
+        assert np.max(np.abs(ours - a["vout"][:, j])[late]) < 1e-2
 
 
-def test_kundur_esst3a_runs_at_5_ms_with_the_trapezoid():
+def test_kundur_esst3a_runs_at_5_ms_with_the_trapezoid(ref):
     """The same case and fault with the A-stable trapezoid (`method="trapezoid"`), which
     takes the 5 ms Heun refuses: speeds within 5e-6 pu of Heun's at 40 us (measured
     9.2e-7; 3.4e-6 at 10 ms, 2.4e-7 at 2.5 ms: second order) and within 1e-6 pu of ANDES's
@@ -1640,26 +1814,32 @@ def test_kundur_esst3a_runs_at_5_ms_with_the_trapezoid():
     case = import_andes(path, conventions="andes", on_unsupported="skip")
     sim = Simulator(case, q_limits=False)
     fault = [Fault(7, 1.0, 1.1, x=1e-3)]
-    ref = sim.run(fault, 5.0, h=4e-5)
+    heun = sim.run(fault, 5.0, h=4e-5)
     res = sim.run(fault, 5.0, h=STEP, method="trapezoid")
-    w = np.column_stack([np.interp(ref.t, res.t, res.speed[:, j]) for j in range(4)])
-    dw_heun = np.max(np.abs(w - ref.speed))
-    ss = andes_system(
-        path,
-        fault=AndesFault(7, 1.0, 1.1, x=1e-3),
-        off=("Toggle",),
-        event_eps=1e-7,
-        fixed_step=True,
+    w = np.column_stack([np.interp(heun.t, res.t, res.speed[:, j]) for j in range(4)])
+    dw_heun = np.max(np.abs(w - heun.speed))
+    a = ref.run(
+        "trapezoid",
+        lambda: speeds_run(
+            andes_system(
+                path,
+                fault=AndesFault(7, 1.0, 1.1, x=1e-3),
+                off=("Toggle",),
+                event_eps=1e-7,
+                fixed_step=True,
+            ),
+            5.0,
+        ),
     )
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    dw_andes = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
+    t, wa = a["t"], a["wa"]
+    dw_andes = np.max(np.abs(speeds_on(t, res, case, a["buses"]) - wa))
     print(
         f"\nesst3a trapezoid at 5 ms: {dw_heun:.2e} from Heun at 40 us, {dw_andes:.2e} from ANDES"
     )
     assert dw_heun < 5e-6 and dw_andes < 1e-6
 
 
-def test_kundur_cross_compound_ieeeg1_matches_andes():
+def test_kundur_cross_compound_ieeeg1_matches_andes(ref):
     """ANDES's kundur_ieeeg1.xlsx: machine 3's IEEEG1 drives machine 4 with its LP shaft
     (syn2; tg_con column 27, docs/pst_models.md 4.2), on the turbine's base 1800 MVA (Tn
     0: both machines'); flat 10 s; after a 6-cycle fault at bus 7 the speeds stay within
@@ -1667,7 +1847,14 @@ def test_kundur_cross_compound_ieeeg1_matches_andes():
     within 1e-4 pu (system base) for the first second after the fault (measured 3e-6),
     as close later as the single-shaft units' (drift to 6e-3 by 10 s on each, the gate
     dynamics after 2 s differing as in kundur_full's)."""
-    sim, res, ss, t, w, wa = andes_case_run("kundur/kundur_ieeeg1.xlsx", 7, t_end=10.0)
+    sim, res, a, t, w, wa = andes_case_run(
+        ref,
+        "kundur/kundur_ieeeg1.xlsx",
+        7,
+        t_end=10.0,
+        pout=lambda ss: np.asarray(ss.dae.ts.y)[:, ss.IEEEG1.pout.a[:3]],
+        plp3=lambda ss: np.asarray(ss.dae.ts.y)[:, ss.IEEEG1.PLP.a[2]],
+    )
     g, c = sim.case.governors, sim.case
     cross = [(c.machines.bus[c.machine_index(a)], c.machines.bus[c.machine_index(b)])
              for a, b in zip(g.machine, g.machine2) if b]  # fmt: skip
@@ -1675,12 +1862,13 @@ def test_kundur_cross_compound_ieeeg1_matches_andes():
     flat = sim.run([], 10.0, h=STEP)
     assert np.max(np.abs(flat.speed - 1)) < 1e-10 and np.ptp(flat.pmech, axis=0).max() < 1e-12
     assert np.max(np.abs(w - wa)) < 5e-4
-    m, first = ss.IEEEG1, (t > 1.1 + AWAY) & (t < 2.0)
+    first = (t > 1.1 + AWAY) & (t < 2.0)
     gaps = []
-    for bus, var in ((1, m.pout.a[0]), (2, m.pout.a[1]), (3, m.pout.a[2]), (4, m.PLP.a[2])):
+    theirs = (a["pout"][:, 0], a["pout"][:, 1], a["pout"][:, 2], a["plp3"])
+    for bus, y in zip((1, 2, 3, 4), theirs):
         k = list(sim.case.machines.bus).index(bus)
         ours = np.interp(t, res.t, res.pmech[:, k]) * sim.case.machines.mva[k] / 100.0
-        gaps.append(np.abs(ours - ss.dae.ts.y[:, var]))
+        gaps.append(np.abs(ours - y))
     assert max(np.max(gap[first]) for gap in gaps) < 1e-4
     assert max(np.max(gaps[2]), np.max(gaps[3])) <= 1.2 * max(np.max(gaps[0]), np.max(gaps[1]))
 
@@ -1748,7 +1936,7 @@ def test_import_andes_ignores_calculations_no_equation_reads(name, ignored, dist
     assert Simulator(imported.case, q_limits=False).model.initial_residual[0] < 1e-8
 
 
-def test_ieee14_slow_mode_at_the_valve_limit_is_andes_s(ieee14, tmp_path):
+def test_ieee14_slow_mode_at_the_valve_limit_is_andes_s(ieee14, tmp_path, ref):
     """IEEE 14 without stabilisers: the bus-6 TGOV1 valve starts on VMIN = 0.3 (3.3e-12
     above it), where the model is not differentiable (issue 29: "the 0.1 Hz mode 4 % from
     ANDES").  linearise's central difference straddled it and gave half the free lead-lag
@@ -1781,7 +1969,7 @@ def test_ieee14_slow_mode_at_the_valve_limit_is_andes_s(ieee14, tmp_path):
         A = np.asarray(sys_.A)
         slope = A[s.index("tg_leadlag_G4"), s.index("tg_valve_G4")]
         lam = np.linalg.eigvals(A)
-        theirs = andes_modes(andes_system(raw, path))
+        theirs = modes_run(ref, f"modes_{path.stem}", raw, path)
         mode = theirs[np.argmin(np.abs(theirs - (-0.6388 + 0.6102j)))]
         ours = lam[np.argmin(np.abs(lam - mode))]
         named = any("tg.valve.G4" in str(w.message) for w in seen)
@@ -1836,47 +2024,69 @@ def algebraic_gaps(t, ours, theirs, events, step=STEP):
 
 
 def regca1_fault_run(
-    path, case, bus, cycles, h, t_end, x=1e-3, model="REGCA1", like_for_like=False, edit=None
+    ref,
+    path,
+    case,
+    bus,
+    cycles,
+    h,
+    t_end,
+    x=1e-3,
+    model="REGCA1",
+    like_for_like=False,
+    edit=None,
 ):
     """A bus fault through j x pu from 1 s, both tools at step h, on ANDES's grid t (the
     case's own Toggle and Fault off): the largest speed gap dw, the converter's P, Q
     (stabctl's interpolated) and Pa, Qa (ANDES ``model``'s).  like_for_like: stabctl's
     trapezoid against ANDES's, its step held at h and its event steps 1e-7 s
-    (`andes_system` fixed_step, event_eps); edit: ANDES's data changed before set-up."""
+    (`andes_system` fixed_step, event_eps); edit: ANDES's data changed before set-up.
+    ANDES's run is stored under a tag made of these arguments (the same run in one test
+    made once)."""
     t_clear = 1.0 + cycles / 60
     method = "trapezoid" if like_for_like else "heun"
     res = Simulator(case, q_limits=False).run(
         [Fault(bus, 1.0, t_clear, x=x)], t_end, h=h, method=method
     )
-    ss = andes_system(
-        path,
-        fault=AndesFault(bus, 1.0, t_clear, x=x),
-        off=("Toggle", "Fault"),
-        event_eps=1e-7 if like_for_like else None,
-        fixed_step=like_for_like,
-        edit=edit,
+    tag = f"bus{bus}_{cycles}c_x{x:g}_h{h:g}_{t_end:g}s" + "_lfl" * like_for_like
+    tag += f"_{edit.__name__}" if edit else ""
+    a = ref.run(
+        tag,
+        lambda: speeds_run(
+            andes_system(
+                path,
+                fault=AndesFault(bus, 1.0, t_clear, x=x),
+                off=("Toggle", "Fault"),
+                event_eps=1e-7 if like_for_like else None,
+                fixed_step=like_for_like,
+                edit=edit,
+            ),
+            t_end,
+            h,
+            **converter_powers(model),
+        ),
     )
-    t, wa = andes_speeds(ss, t_end, h)
-    Pa, Qa = andes_converter_powers(ss, model)
+    t, wa = a["t"], a["wa"]
     return {
         "t": t,
-        "dw": np.max(np.abs(speeds_on(t, res, case, ss) - wa)),
+        "dw": np.max(np.abs(speeds_on(t, res, case, a["buses"]) - wa)),
         "P": np.interp(t, res.t, res.ibr_p[:, 0]),
         "Q": np.interp(t, res.t, res.ibr_q[:, 0]),
-        "Pa": Pa[:, 0],
-        "Qa": Qa[:, 0],
+        "Pa": a["Pa"][:, 0],
+        "Qa": a["Qa"][:, 0],
         "res": res,
     }
 
 
-def test_ieee14_regca1_fault_speeds_and_powers_match_andes(regca1_alone):
+@live_too
+def test_ieee14_regca1_fault_speeds_and_powers_match_andes(regca1_alone, ref):
     """ANDES's IEEE 14 with the bus-8 generator a REGCA1 (ieee14_solar without REECA1 and
     REPCA1), 6-cycle fault at bus 9 through j1e-3 pu, 5 ms step in both.  In the fault
     the bus-8 voltage (0.17 pu) takes the low-voltage gain LVG to 0 and the filtered
     voltage below Zerox, so that the LVPL limit resets Ip to 0; after clearing Ip
     recovers along Tg and LVPL."""
     path, case = regca1_alone
-    dw, dP, dQ, run = fault_gaps(path, case, 9, 6, STEP, 5.0)
+    dw, dP, dQ, run = fault_gaps(ref, path, case, 9, 6, STEP, 5.0)
     res = run["res"]
     print(f"\nREGCA1 fault vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert np.max(np.abs(res.speed - 1)) > 4e-3  # a real swing
@@ -1886,7 +2096,7 @@ def test_ieee14_regca1_fault_speeds_and_powers_match_andes(regca1_alone):
     assert dQ < 1e-4  # measured 2.3e-5 (target 1e-3)
 
 
-def test_ieee14_regca1_rate_and_high_voltage_limits_match_andes(regca1_alone):
+def test_ieee14_regca1_rate_and_high_voltage_limits_match_andes(regca1_alone, ref):
     """The same fault with Rrpwr 0.05 and Volim 1.05 pu (the case's 999 and 1.2 never act):
     after clearing Ip rises at the rate limit, Tg dIp/dt = Rrpwr (ANDES bounds the lag
     equation's right-hand side: 0.5 pu/s here, not 0.05), and the post-fault voltage
@@ -1896,16 +2106,20 @@ def test_ieee14_regca1_rate_and_high_voltage_limits_match_andes(regca1_alone):
     reg = case.converters.replace(**{k: np.full(1, v) for k, v in changes.items()})
     case = case.replace(converters=reg)
     res = Simulator(case, q_limits=False).run([Fault(9, 1.0, 1.1, x=1e-3)], 5.0, h=STEP)
-    ss = andes.load(str(path), setup=False, no_output=True, default_config=True)
-    ss.Toggle.u.v = [0] * ss.Toggle.n
-    for name, value in changes.items():
-        getattr(ss.REGCA1, name).v = [value]
-    _fault(9, 1.1)(ss)
-    ss.setup()
-    ss.PFlow.config.tol = 1e-12
-    t, wa = andes_speeds(ss, 5.0, STEP)
-    Pa, Qa = andes_converter_powers(ss, "REGCA1")
-    dw = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
+
+    def make():
+        ss = andes_load(str(path), setup=False, no_output=True, default_config=True)
+        ss.Toggle.u.v = [0] * ss.Toggle.n
+        for name, value in changes.items():
+            getattr(ss.REGCA1, name).v = [value]
+        _fault(9, 1.1)(ss)
+        ss.setup()
+        ss.PFlow.config.tol = 1e-12
+        return speeds_run(ss, 5.0, **converter_powers("REGCA1"))
+
+    a = ref.run("fault", make, note=f"Toggle off; REGCA1 {changes}; fault at bus 9, 1-1.1 s, j1e-3")
+    t, wa, Pa, Qa = a["t"], a["wa"], a["Pa"], a["Qa"]
+    dw = np.max(np.abs(speeds_on(t, res, case, a["buses"]) - wa))
     dP = algebraic_gaps(t, np.interp(t, res.t, res.ibr_p[:, 0]), Pa[:, 0], (1.0, 1.1))
     dQ = algebraic_gaps(t, np.interp(t, res.t, res.ibr_q[:, 0]), Qa[:, 0], (1.0, 1.1))
     print(f"\nREGCA1 rate and HV limits vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
@@ -1951,7 +2165,7 @@ def test_ieee14_renewable_controls_flat_run_stays_at_the_power_flow_point(fixtur
     assert drift < 1e-8
 
 
-def test_ieee14_regca1_modes_match_andes(regca1_alone):
+def test_ieee14_regca1_modes_match_andes(regca1_alone, ref):
     """The state matrix at the power flow (REGCA1 states included, `has_state`): the
     REGCA1's own modes, -1/Tg twice and -1/Tfltr (-10 1/s each), in both tools, and the
     three electromechanical modes (above 5 rad/s) within 0.5 % of ANDES's (measured
@@ -1962,7 +2176,7 @@ def test_ieee14_regca1_modes_match_andes(regca1_alone):
     with pytest.warns(UserWarning, match="limit active"):
         A = linearise_model(Simulator(case, q_limits=False).model).A
     ours = np.linalg.eigvals(A)
-    theirs = andes_modes(andes_system(path, off=("Toggle",)))
+    theirs = modes_run(ref, "modes", path, off=("Toggle",))
     for modes in (ours, theirs):
         assert np.sum(np.abs(modes + 10.0) < 1e-6) == 3
     em = ours[(ours.imag > 5.0) & (ours.imag < 2 * np.pi * 3)]
@@ -1985,7 +2199,7 @@ CONVERTER_MODE_CASES = {
 
 
 @pytest.mark.parametrize("name", sorted(CONVERTER_MODE_CASES))
-def test_ieee14_converter_cases_modes_match_andes(name, tmp_path):
+def test_ieee14_converter_cases_modes_match_andes(name, tmp_path, ref):
     """The whole case (converters, their controls, wind turbines, machines and their
     controls): every eigenvalue of 0.1-3 Hz within 0.5 % of ANDES's nearest (issue 29's
     target 1 %).  Each operating point sits on limits (a governor valve at VMIN, the pitch
@@ -2018,7 +2232,7 @@ def test_ieee14_converter_cases_modes_match_andes(name, tmp_path):
         assert np.max(np.min(np.abs(lam[:, None] - again[None, :]), axis=1)) < 1e-9
     else:
         path = andes.get_case(name)
-    theirs = andes_modes(andes_system(path, off=("Toggle",)))
+    theirs = modes_run(ref, "modes", path, off=("Toggle",))
     near = np.array([theirs[np.argmin(np.abs(theirs - z))] for z in ours])
     gap = np.max(relative_gaps(ours, near))
     print(f"\n{name}: {len(ours)} modes of 0.1-3 Hz, largest gap to ANDES {gap:.3%}")
@@ -2038,10 +2252,10 @@ def reeca1_case(tmp_path_factory):
     return path, case
 
 
-def fault_gaps(path, case, bus, cycles, h, t_end, **kw):
+def fault_gaps(ref, path, case, bus, cycles, h, t_end, **kw):
     """(speed, P, Q) gaps to ANDES of a bus fault through j1e-3 pu (or ``x``), both tools at
     step h (`regca1_fault_run`, returned last)."""
-    run = regca1_fault_run(path, case, bus, cycles, h, t_end, **kw)
+    run = regca1_fault_run(ref, path, case, bus, cycles, h, t_end, **kw)
     t, t_clear = run["t"], 1.0 + cycles / 60
     gaps = [
         algebraic_gaps(t, run[ours], run[theirs], (1.0, t_clear), h)
@@ -2060,7 +2274,7 @@ def test_import_andes_reads_the_reeca1_into_its_regca1s_row(reeca1_case):
     assert (t.Imax[0], t.Kqs[0], t.Kvs[0], t.Tpfilt[0], t.pqflag[0]) == (10, 2, 2, 0.02, 0)
 
 
-def test_ieee14_reeca1_fault_speeds_and_powers_match_andes(reeca1_case):
+def test_ieee14_reeca1_fault_speeds_and_powers_match_andes(reeca1_case, ref):
     """3-cycle fault at bus 9 (ANDES 2.0 stops at clearing for 6 cycles here, with or
     without the REPCA1): the bus-8 voltage dips to 0.5 pu, the REECA1 freezes and injects
     Kqv (Vref0 - V) = up to 9.5 pu of reactive current command, held |Thld| = 2 s after
@@ -2070,11 +2284,11 @@ def test_ieee14_reeca1_fault_speeds_and_powers_match_andes(reeca1_case):
     in both they agree within P 1.1e-3, Q 9.1e-3, speeds 3.0e-6 (0.5 ms: 6.9e-4, 5.8e-3,
     2.6e-6), so the equations are the same and the gap is the step."""
     path, case = reeca1_case
-    dw, dP, dQ, _ = fault_gaps(path, case, 9, 3, STEP, 5.0)
+    dw, dP, dQ, _ = fault_gaps(ref, path, case, 9, 3, STEP, 5.0)
     print(f"\nREECA1 fault vs ANDES at 5 ms: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert dw < 5e-5  # measured 1.75e-5 (target 1e-4)
     assert dP < 2e-2 and dQ < 0.15  # measured 8.9e-3, 8.5e-2: the step (docstring)
-    dw, dP, dQ, _ = fault_gaps(path, case, 9, 3, STEP / 4, 2.0)
+    dw, dP, dQ, _ = fault_gaps(ref, path, case, 9, 3, STEP / 4, 2.0)
     print(f"REECA1 fault vs ANDES at 1.25 ms: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert dw < 1e-5  # measured 3.0e-6
     assert dP < 2e-3 and dQ < 2e-2  # measured 1.1e-3, 9.1e-3
@@ -2132,13 +2346,13 @@ def test_import_andes_reads_the_repca1_with_its_monitored_line(solar_case):
     assert m.cp.pc_Vref0[0] == pytest.approx(abs(m.op.V[case.bus_index(7)]), rel=1e-12)
 
 
-def test_ieee14_solar_with_its_plant_control_matches_andes(solar_case, reeca1_case):
+def test_ieee14_solar_with_its_plant_control_matches_andes(solar_case, reeca1_case, ref):
     """The whole ieee14_solar, 3-cycle fault at bus 9, 5 ms in both: the plant control's
     slow PI (Ki 0.1) moves the reactive power after the fault (Q 5 s after 0.0745 pu
     where without REPCA1 it returns to 0.0740), and stabctl follows ANDES there within
     1e-5 pu; the fast part is the REECA1's (its step gaps: see the REECA1 test)."""
     path, case = solar_case
-    run = regca1_fault_run(path, case, 9, 3, STEP, 5.0)
+    run = regca1_fault_run(ref, path, case, 9, 3, STEP, 5.0)
     res, dw, late = run["res"], run["dw"], run["t"] > 2.0
     dQ_late = np.max(np.abs(run["Q"][late] - run["Qa"][late]))
     print(f"\nieee14_solar vs ANDES: speed {dw:.2e}, Q after 2 s {dQ_late:.2e} pu")
@@ -2149,7 +2363,7 @@ def test_ieee14_solar_with_its_plant_control_matches_andes(solar_case, reeca1_ca
     assert res.ibr_q[-1, 0] - res0.ibr_q[-1, 0] > 4e-4  # the plant control acts
 
 
-def test_ieee14_solar_plant_frequency_path_matches_andes(tmp_path, solar_case):
+def test_ieee14_solar_plant_frequency_path_matches_andes(tmp_path, solar_case, ref):
     """The REPCA1's frequency path switched on (Fflag 1, PLflag 1; deadband +-2e-4 pu,
     Ddn = Dup = 20; the case's +-0.01 pu is never left): after the 3-cycle fault at bus 9
     the bus frequency's dip and the line P's error move Pext (P 0.357 pu 0.2 s after
@@ -2162,14 +2376,14 @@ def test_ieee14_solar_plant_frequency_path_matches_andes(tmp_path, solar_case):
     assert (case.converters.pc_Fflag[0], case.converters.pc_Ddn[0]) == (1.0, 20.0)
     gaps = {}
     for h, t_end in ((STEP, 3.0), (STEP / 4, 2.0)):
-        run = regca1_fault_run(path, case, 9, 3, h, t_end)
+        run = regca1_fault_run(ref, path, case, 9, 3, h, t_end)
         gap = np.abs(run["P"] - run["Pa"])
         gaps[h] = [np.max(gap[run["t"] >= a]) for a in (1.2, 1.5, 2.0)]
         assert run["dw"] < 5e-5  # measured 1.9e-5 at 5 ms
     print(f"\nREPCA1 frequency path vs ANDES, P from 1.2, 1.5, 2 s: {gaps}")
     assert gaps[STEP][1] < 2e-4 and gaps[STEP][2] < 5e-5  # measured 8.5e-5, 3.0e-5
     assert gaps[STEP / 4][0] < 3e-4 and gaps[STEP / 4][1] < 2e-5  # measured 1.3e-4, 7.3e-6
-    base = regca1_fault_run(solar_case[0], solar_case[1], 9, 3, STEP, 1.3)
+    base = regca1_fault_run(ref, solar_case[0], solar_case[1], 9, 3, STEP, 1.3)
     at = np.argmin(np.abs(base["t"] - 1.2))
     assert base["P"][at] - run["P"][np.argmin(np.abs(run["t"] - 1.2))] > 0.02  # it acts
 
@@ -2219,7 +2433,7 @@ def test_ieee14_reecb1_flat_run_stays_at_the_power_flow_point(reecb1_case):
     assert drift < 1e-8  # measured 7.3e-14
 
 
-def test_ieee14_reecb1_fault_speeds_and_powers_match_andes(reecb1_case):
+def test_ieee14_reecb1_fault_speeds_and_powers_match_andes(reecb1_case, ref):
     """6-cycle fault at bus 9 through j2 pu, 5 s, 5 ms in both: the bus-8 voltage stays
     above Vdip (0.94 pu), so that the REECB1's Q and V PIs, its REPCA1's voltage control
     and the converter act all along: speeds, P and Q within the targets (1e-4, 1e-3 pu).
@@ -2229,17 +2443,17 @@ def test_ieee14_reecb1_fault_speeds_and_powers_match_andes(reecb1_case):
     command at any step, stabctl at the value before the fault: speeds still within the
     target, P and Q 1.2e-2 and 3.8e-2 pu apart, the same at 1.25 ms."""
     path, case = reecb1_case
-    dw, dP, dQ, run = fault_gaps(path, case, 9, 6, STEP, 5.0, x=2.0)
+    dw, dP, dQ, run = fault_gaps(ref, path, case, 9, 6, STEP, 5.0, x=2.0)
     print(f"\nREECB1, fault through j2 vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert np.ptp(run["Pa"]) > 0.05 and np.ptp(run["Qa"]) > 0.03  # it acts
     assert dw < 1e-5 and dP < 5e-4 and dQ < 1e-3  # measured 8.2e-7, 6.0e-5, 1.8e-4
-    dw, dP, dQ, _ = fault_gaps(path, case, 9, 6, STEP, 5.0)
+    dw, dP, dQ, _ = fault_gaps(ref, path, case, 9, 6, STEP, 5.0)
     print(f"REECB1, fault through j1e-3 vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert dw < 1e-4  # measured 5.9e-5
     assert dP < 2e-2 and dQ < 5e-2  # measured 1.2e-2, 3.8e-2: ANDES's freeze (docstring)
 
 
-def test_ieee14_regcp1_without_pll_is_a_regca1_and_matches_andes():
+def test_ieee14_regcp1_without_pll_is_a_regca1_and_matches_andes(ref):
     """ieee14_regcp1_nopll.json: a REGCP1 with no PLL uses the bus angle (ANDES
     regcp1.py: pll None), which is the REGCA1; imported as one (with its REECA1 and
     REPCA1), it starts flat and follows ANDES through a 6-cycle fault at bus 9 through
@@ -2249,7 +2463,7 @@ def test_ieee14_regcp1_without_pll_is_a_regca1_and_matches_andes():
     assert (case.converters.type[0], case.converters.reec[0]) == (3, 1)
     drift, _ = flat_run(case)
     assert drift < 1e-8  # measured 7.3e-14
-    dw, dP, dQ, _ = fault_gaps(path, case, 9, 6, STEP, 5.0, x=0.3, model="REGCP1")
+    dw, dP, dQ, _ = fault_gaps(ref, path, case, 9, 6, STEP, 5.0, x=0.3, model="REGCP1")
     print(f"\nREGCP1 without PLL vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert dw < 1e-5 and dP < 1e-3 and dQ < 1e-3  # measured 2.7e-6, 4.4e-4, 8.6e-4
 
@@ -2271,7 +2485,7 @@ def test_import_andes_reads_the_regcp1s_pll1(regcp1_case):
     assert (t.pll_Kp[0], t.pll_Ki[0], t.pll_Tf[0], t.pll_Tp[0]) == (1.0, 0.2, 0.05, 0.05)
 
 
-def test_ieee14_regcp1_with_its_pll_matches_andes(regcp1_case):
+def test_ieee14_regcp1_with_its_pll_matches_andes(regcp1_case, ref):
     """Flat 10 s within 1e-8.  A 6-cycle fault at bus 9 through j2 pu (bus 8 at 0.94 pu),
     5 ms in both: speeds, P and Q within the targets.  Through j1e-3 pu (bus 8 at 0.18
     pu, the REECA1's Kqv = 20 loop injecting up to 4.9 pu of Q), at 1.25 ms in both:
@@ -2281,10 +2495,10 @@ def test_ieee14_regcp1_with_its_pll_matches_andes(regcp1_case):
     path, case = regcp1_case
     drift, _ = flat_run(case)
     assert drift < 1e-8  # measured 7.3e-14
-    dw, dP, dQ, _ = fault_gaps(path, case, 9, 6, STEP, 5.0, x=2.0, model="REGCP1")
+    dw, dP, dQ, _ = fault_gaps(ref, path, case, 9, 6, STEP, 5.0, x=2.0, model="REGCP1")
     print(f"\nREGCP1 + PLL1, fault through j2: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e} pu")
     assert dw < 1e-5 and dP < 1e-3 and dQ < 1e-3  # measured 8.6e-7, 1.1e-4, 5.3e-4
-    gaps = fault_gaps(path, case, 9, 6, STEP / 4, 3.0, model="REGCP1")[:3]
+    gaps = fault_gaps(ref, path, case, 9, 6, STEP / 4, 3.0, model="REGCP1")[:3]
     print(
         "REGCP1 + PLL1, fault through j1e-3 at 1.25 ms: speed {:.2e}, P {:.2e}, Q {:.2e}".format(
             *gaps
@@ -2292,10 +2506,10 @@ def test_ieee14_regcp1_with_its_pll_matches_andes(regcp1_case):
     )
     assert gaps[0] < 1e-5 and gaps[1] < 4e-3 and gaps[2] < 3e-2  # 2.4e-6, 2.0e-3, 1.4e-2
     off = case.replace(converters=case.converters.replace(pll=np.zeros(1)))
-    assert fault_gaps(path, off, 9, 6, STEP / 4, 3.0, model="REGCP1")[1] > 0.1  # 0.37
+    assert fault_gaps(ref, path, off, 9, 6, STEP / 4, 3.0, model="REGCP1")[1] > 0.1  # 0.37
 
 
-def test_fault_through_an_impedance_keeps_the_bus_shunt_as_andes():
+def test_fault_through_an_impedance_keeps_the_bus_shunt_as_andes(ref):
     """IEEE 14's bus 9 has a 0.19 pu capacitor.  A fault there through j2 pu: under the ieee
     conventions it adds to the capacitor (ANDES's Fault, PSS/E), so that the bus-9
     voltage 5 ms into the fault is ANDES's and the speeds follow ANDES within 1e-6 pu;
@@ -2304,16 +2518,22 @@ def test_fault_through_an_impedance_keeps_the_bus_shunt_as_andes():
     under both (the shunt is immaterial at 0 V)."""
     path = andes.get_case("ieee14/ieee14.json")
     case = import_andes(path, on_unsupported="skip")
-    ss = andes_system(path, fault=AndesFault(9, 1.0, 1.1, x=2.0), off=("Toggle",))
-    t, wa = andes_speeds(ss, 1.5, STEP)
+    fault = AndesFault(9, 1.0, 1.1, x=2.0)
+    a = ref.run(
+        "fault",
+        lambda: speeds_run(
+            andes_system(path, fault=fault, off=("Toggle",)), 1.5, v9=lambda ss: bus_v(ss, 9)
+        ),
+    )
+    t, wa = a["t"], a["wa"]
     i = np.argmin(np.abs(t - 1.005))
-    v9 = np.asarray(ss.dae.ts.y)[i, ss.Bus.v.a[list(ss.Bus.idx.v).index(9)]]
+    v9 = a["v9"][i]
     row = list(case.buses.number).index(9)
     ours = {}
     for conventions in ("ieee", "pstess"):
         sim = Simulator(case, q_limits=False, conventions=conventions, off_equilibrium="warn")
         res = sim.run([Fault(9, 1.0, 1.1, x=2.0)], 1.5, h=STEP)
-        dw = np.max(np.abs(speeds_on(t, res, case, ss) - wa))
+        dw = np.max(np.abs(speeds_on(t, res, case, a["buses"]) - wa))
         ours[conventions] = (np.interp(t[i], res.t, res.vmag[:, row]), dw)
     v_ieee, v_pst = ours["ieee"][0], ours["pstess"][0]
     print(f"\nbus-9 V at 1.005 s: ANDES {v9:.6f}, ieee {v_ieee:.6f}, pstess {v_pst:.6f}")
@@ -2394,7 +2614,7 @@ def test_wind_case_flat_run_stays_at_the_power_flow_point(wind_cases, name):
         ("kundur/kundur_wtds.xlsx", (5e-5, 1.5e-2, 3e-2, 1.5e-3)),
     ],
 )
-def test_wind_fault_speeds_and_powers_match_andes(wind_cases, name, gaps):
+def test_wind_fault_speeds_and_powers_match_andes(wind_cases, name, gaps, ref):
     """6-cycle fault through j1e-3 pu, 5 s, 5 ms in both: speeds within the target (1e-4
     pu); the turbine's P and Q within the REECA1's step gap while its fast loops react
     (at 1.25 ms in both kundur_wtdta1 agrees within P 1.3e-3, Q 1.8e-3, next test), and
@@ -2403,14 +2623,14 @@ def test_wind_fault_speeds_and_powers_match_andes(wind_cases, name, gaps):
     1.1e-3 pu (1.5e-4 of its output, 8.1e-4 at 1.25 ms: not the step, Kundur's own gap
     to ANDES, speeds 7.8e-5 pu without the turbine)."""
     case, bus = wind_cases[name], WIND_CASES[name]
-    dw, dP, dQ, run = fault_gaps(andes.get_case(name), case, bus, 6, STEP, 5.0)
+    dw, dP, dQ, run = fault_gaps(ref, andes.get_case(name), case, bus, 6, STEP, 5.0)
     late = run["t"] >= 2.0
     late_gap = max(np.max(np.abs(run[k][late] - run[k + "a"][late])) for k in ("P", "Q"))
     print(f"\n{name} vs ANDES: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}, from 2 s {late_gap:.2e}")
     assert max(np.array((dw, dP, dQ, late_gap)) / np.array(gaps)) < 1
 
 
-def test_kundur_wind_turbine_controls_shape_the_response_and_match_andes_in_the_step():
+def test_kundur_wind_turbine_controls_shape_the_response_and_match_andes_in_the_step(ref):
     """kundur_wtdta1 with the turbine's models off (a REECA1 with a constant P reference)
     answers the fault otherwise: the drive train's speed, the torque control's PI and the
     pitch move the power by far more than the gap to ANDES; at 1.25 ms in both the whole
@@ -2418,7 +2638,7 @@ def test_kundur_wind_turbine_controls_shape_the_response_and_match_andes_in_the_
     name = "kundur/kundur_wtdta1.xlsx"
     path = andes.get_case(name)
     case = import_andes(path, on_unsupported="skip")
-    dw, dP, dQ, run = fault_gaps(path, case, 7, 6, STEP / 4, 5.0)
+    dw, dP, dQ, run = fault_gaps(ref, path, case, 7, 6, STEP / 4, 5.0)
     print(f"\nkundur_wtdta1 at 1.25 ms: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}")
     assert dw < 3e-5 and dP < 2e-3 and dQ < 3e-3
     none = np.zeros(1)
@@ -2454,7 +2674,7 @@ def like_for_like_case(name):
 
 
 @pytest.mark.parametrize("name", list(LIKE_FOR_LIKE))
-def test_ibr_cases_match_andes_step_for_step(name):
+def test_ibr_cases_match_andes_step_for_step(name, ref):
     """The like-for-like target (bus fault through j1e-3 pu, 5 s, 5 ms): both tools
     integrate with the trapezoid at the same 5 ms steps (stabctl's `method="trapezoid"`;
     ANDES's step held at 5 ms, where its own control shrinks it by 0.95 after each step of
@@ -2464,12 +2684,12 @@ def test_ibr_cases_match_andes_step_for_step(name):
     (ieee14_wt3: P 3.0e-3, Q 2.8e-2, test_wind_fault_speeds_and_powers_match_andes)."""
     bus, cycles, bounds = LIKE_FOR_LIKE[name]
     path, case = like_for_like_case(name)
-    dw, dP, dQ, _ = fault_gaps(path, case, bus, cycles, STEP, 5.0, like_for_like=True)
+    dw, dP, dQ, _ = fault_gaps(ref, path, case, bus, cycles, STEP, 5.0, like_for_like=True)
     print(f"\n{name} like for like at 5 ms: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}")
     assert max(np.array((dw, dP, dQ)) / np.array(bounds)) < 1
 
 
-def test_kundur_wtdta1_matches_andes_step_for_step_but_where_andes_pegs_a_limit():
+def test_kundur_wtdta1_matches_andes_step_for_step_but_where_andes_pegs_a_limit(ref):
     """kundur_wtdta1 like for like (previous test): speeds 2.2e-5 pu, Q 9.3e-4, but P 1.2e-3
     pu (1.8e-4 of the turbine's 7 pu).  It all comes from the steps in which the machines'
     EXDC2 regulators reach their limit V_Rmax = 5.2 pu: ANDES evaluates the other
@@ -2480,7 +2700,7 @@ def test_kundur_wtdta1_matches_andes_step_for_step_but_where_andes_pegs_a_limit(
     speed and 1.2e-6 pu in P and Q.  ANDES's step is held: every step not beside an event
     is 5 ms."""
     path, case = like_for_like_case("kundur/kundur_wtdta1.xlsx")
-    dw, dP, dQ, run = fault_gaps(path, case, 7, 6, STEP, 5.0, like_for_like=True)
+    dw, dP, dQ, run = fault_gaps(ref, path, case, 7, 6, STEP, 5.0, like_for_like=True)
     print(f"\nkundur_wtdta1 like for like: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}")
     assert dw < 5e-5 and dP < 1.5e-3 and dQ < 1.5e-3  # measured 2.2e-5, 1.2e-3, 9.3e-4
     steps = np.diff(run["t"])
@@ -2492,7 +2712,7 @@ def test_kundur_wtdta1_matches_andes_step_for_step_but_where_andes_pegs_a_limit(
         ss.EXDC2.VRMAX.v = [10 * v for v in ss.EXDC2.VRMAX.v]
         ss.EXDC2.VRMIN.v = [10 * v for v in ss.EXDC2.VRMIN.v]
 
-    dw, dP, dQ, _ = fault_gaps(path, wide, 7, 6, STEP, 5.0, like_for_like=True, edit=widen)
+    dw, dP, dQ, _ = fault_gaps(ref, path, wide, 7, 6, STEP, 5.0, like_for_like=True, edit=widen)
     print(f"limits out of reach: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}")
     assert dw < 1e-7 and dP < 1e-5 and dQ < 1e-5  # measured 1.5e-8, 1.1e-6, 1.2e-6
 
@@ -2553,19 +2773,19 @@ OWN_FAULTS = {
 
 
 @pytest.mark.parametrize("name", list(OWN_FAULTS))
-def test_kundur_converter_cases_own_fault_matches_andes_step_for_step(name):
+def test_kundur_converter_cases_own_fault_matches_andes_step_for_step(name, ref):
     """The Fault record of kundur_reg, kundur_wtdta1 and kundur_wtds (bus 8, j1e-4 pu, 0.1
     s; from 1 s here, the records' own time in kundur_reg), both tools' trapezoid at 5 ms
     (`test_ibr_cases_match_andes_step_for_step`), 3 s: it stopped stabctl at the fault
     instant, with either integrator.  Through the fault and up to the LVPL's release
     (1.17 s) both tools agree within 1e-8 pu in speed and 1e-4 pu in P (OWN_FAULTS)."""
     path, case = like_for_like_case(name)
-    dw, dP, dQ, _ = fault_gaps(path, case, 8, 6, STEP, 3.0, x=1e-4, like_for_like=True)
+    dw, dP, dQ, _ = fault_gaps(ref, path, case, 8, 6, STEP, 3.0, x=1e-4, like_for_like=True)
     print(f"\n{name} own fault like for like: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}")
     assert max(np.array((dw, dP, dQ)) / np.array(OWN_FAULTS[name])) < 1
 
 
-def test_ieee14_wt3_trapezoid_runs_through_a_fault_beside_the_turbine():
+def test_ieee14_wt3_trapezoid_runs_through_a_fault_beside_the_turbine(ref):
     """ieee14_wt3, a 6-cycle bus-8 fault (the turbine's bus) through j0.05 pu: the
     trapezoid's first iterate after clearing puts the REGCA1's Ip at -16 pu, where the
     network has no solution; it stopped there (1.11 s), and now halves the step
@@ -2573,13 +2793,13 @@ def test_ieee14_wt3_trapezoid_runs_through_a_fault_beside_the_turbine():
     within 5.6e-4 pu, P within 8.7e-3 pu (the LVPL release, OWN_FAULTS)."""
     name = "ieee14/ieee14_wt3.xlsx"
     path, case = like_for_like_case(name)
-    dw, dP, dQ, run = fault_gaps(path, case, 8, 6, STEP, 2.0, x=0.05, like_for_like=True)
+    dw, dP, dQ, run = fault_gaps(ref, path, case, 8, 6, STEP, 2.0, x=0.05, like_for_like=True)
     print(f"\n{name} bus 8 through j0.05 like for like: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}")
     assert run["res"].t[-1] == pytest.approx(2.0)
     assert dw < 1e-4 and dP < 1.5e-2 and dQ < 1e-3
 
 
-def test_kundur_reg_cct_beside_the_converter_completes_and_andes_agrees():
+def test_kundur_reg_cct_beside_the_converter_completes_and_andes_agrees(ref):
     """The CCT of a bolted fault at Kundur's bus 8 beside the REGCA1 (kundur_reg): every
     probe of the search stopped at the fault instant before; now 0.76 s (10 ms bisection),
     and ANDES (j1e-4 pu, its Toggle off) keeps its rotor angles within 180 degrees of each
@@ -2590,14 +2810,19 @@ def test_kundur_reg_cct_beside_the_converter_completes_and_andes_agrees():
         Simulator(case, q_limits=False), LineFault(8, None, 1.0), SearchOptions(tol=1e-2), h=STEP
     ).cct_s
     assert cct == pytest.approx(0.76, abs=0.015)
-    ss = andes_system(path, fault=AndesFault(8, 1.0, 1.0 + cct - 0.02), off=("Toggle", "Fault"))
-    andes_speeds(ss, 2.5, STEP)
-    delta = np.asarray(ss.dae.ts.x)[:, ss.GENROU.delta.a]
+
+    def make():
+        fault = AndesFault(8, 1.0, 1.0 + cct - 0.02)
+        ss = andes_system(path, fault=fault, off=("Toggle", "Fault"))
+        andes_speeds(ss, 2.5, STEP)
+        return {"delta": np.asarray(ss.dae.ts.x)[:, ss.GENROU.delta.a]}
+
+    delta = ref.run("below_cct", make, inputs={"cct": cct})["delta"]
     assert np.ptp(delta, axis=1).max() < np.pi
 
 
 @pytest.mark.parametrize("name", ["kundur/kundur_wtdta1.xlsx", "kundur/kundur_wtds.xlsx"])
-def test_kundur_wind_cases_modes_match_andes_on_the_gains_flat_side(wind_cases, name):
+def test_kundur_wind_cases_modes_match_andes_on_the_gains_flat_side(wind_cases, name, ref):
     """The turbine's bus is held at 1 pu, exactly its REGCA1's low-voltage gain breakpoint
     Lvpnt1 = 1 (ANDES's default), where LVG has no derivative: the central difference
     straddled it (one-sided slopes 39 % apart at every step; refused as a kink at the point
@@ -2612,7 +2837,7 @@ def test_kundur_wind_cases_modes_match_andes_on_the_gains_flat_side(wind_cases, 
     assert any("breakpoint Lvpnt1" in str(w.message) for w in seen)
     f = lam.imag / (2 * np.pi)
     ours = lam[(f >= 0.1) & (f <= 3.0)]
-    theirs = andes_modes(andes_system(andes.get_case(name), off=("Toggle", "Fault")))
+    theirs = modes_run(ref, "modes", andes.get_case(name), off=("Toggle", "Fault"))
     near = np.array([theirs[np.argmin(np.abs(theirs - z))] for z in ours])
     gap = np.max(relative_gaps(ours, near))
     print(f"\n{name}: {len(ours)} modes of 0.1-3 Hz, largest gap to ANDES {gap:.3%}")
@@ -2628,7 +2853,7 @@ def test_kundur_wind_cases_modes_match_andes_on_the_gains_flat_side(wind_cases, 
         linearise(Simulator(above, q_limits=False), esd_buses=())
 
 
-def test_ieee14_wt3n_own_line_trip_matches_andes(wind_cases):
+def test_ieee14_wt3n_own_line_trip_matches_andes(wind_cases, ref):
     """ieee14_wt3n's own disturbance, line 1-2 opened at 1 s (its Toggle): five turbines
     and a zero-power GENCLS (M 0.01 s) as the angle reference, which runs away in both
     tools (1.48 pu 0.1 s after the trip); stabctl's reference speed follows ANDES's
@@ -2636,13 +2861,17 @@ def test_ieee14_wt3n_own_line_trip_matches_andes(wind_cases):
     opened line's charging kept, as PSTess, the excursion was half as fast)."""
     path = andes.get_case("ieee14/ieee14_wt3n.xlsx")
     case = wind_cases["ieee14/ieee14_wt3n.xlsx"]
-    ss = andes_system(path, off=("Fault",))
-    line = list(ss.Line.idx.v).index(ss.Toggle.dev.v[0])
-    a, b = int(ss.Line.bus1.v[line]), int(ss.Line.bus2.v[line])
-    andes_speeds(ss, 1.1, STEP)
-    t = np.asarray(ss.dae.ts.t)
-    wa = np.asarray(ss.dae.ts.x)[:, ss.GENCLS.omega.a[0]]
-    Pa, _ = andes_converter_powers(ss, "REGCA1")
+
+    def make():
+        ss = andes_system(path, off=("Fault",))
+        line = toggled_line(ss)
+        andes_speeds(ss, 1.1, STEP)
+        w_ref = np.asarray(ss.dae.ts.x)[:, ss.GENCLS.omega.a[0]]
+        return dict(t=ss.dae.ts.t, wa=w_ref, line=line, Pa=andes_converter_powers(ss, "REGCA1")[0])
+
+    r = ref.run("own_trip", make)
+    t, wa, Pa = r["t"], r["wa"], r["Pa"]
+    a, b = (int(x) for x in r["line"][:2])
     res = Simulator(case, q_limits=False).run([LineTrip(a, b, 1.0)], 1.1, h=STEP)
     dw = np.max(np.abs(np.interp(t, res.t, res.speed[:, 0]) - wa))
     P = np.column_stack([np.interp(t, res.t, res.ibr_p[:, k]) for k in range(5)])
@@ -2652,16 +2881,17 @@ def test_ieee14_wt3n_own_line_trip_matches_andes(wind_cases):
     assert dw < 1e-3 and dP < 1e-4  # measured 5.8e-4, 2.9e-5
 
 
-def test_ieee14_line_trip_drops_the_line_charging_as_andes():
+def test_ieee14_line_trip_drops_the_line_charging_as_andes(ref):
     """ieee14_linetrip's line 1-2 (b 0.053 pu) opened at 1 s: 1 ms later bus 1 is at
     ANDES's voltage under the ieee conventions (the breakers de-energise the line);
     pstess keeps PST's charging (y_switch.m), 5e-3 pu higher."""
     path = andes.get_case("ieee14/ieee14_linetrip.xlsx")
     case = import_andes(path, on_unsupported="skip")
-    ss = andes_system(path)
-    andes_speeds(ss, 1.01, 1e-3)
-    t = np.asarray(ss.dae.ts.t)
-    v1 = np.asarray(ss.dae.ts.y)[:, ss.Bus.v.a[0]][np.argmin(np.abs(t - 1.001))]
+    a = ref.run(
+        "own_trip", lambda: speeds_run(andes_system(path), 1.01, 1e-3, v1=lambda ss: bus_v(ss, 1))
+    )
+    t = a["t"]
+    v1 = a["v1"][np.argmin(np.abs(t - 1.001))]
     ours = {}
     for conventions in ("ieee", "pstess"):
         sim = Simulator(case, q_limits=False, conventions=conventions)
@@ -2671,7 +2901,7 @@ def test_ieee14_line_trip_drops_the_line_charging_as_andes():
     assert ours["pstess"] - v1 > 4e-3  # measured 4.9e-3
 
 
-def test_ieee14_esac1a_field_voltage_matches_andes_where_andes_models_it():
+def test_ieee14_esac1a_field_voltage_matches_andes_where_andes_models_it(ref):
     """ANDES's ieee14_esac1a.xlsx (docs/pst_models.md 2.7): ANDES 2.0's ``esac1a.py``
     leaves out the rate feedback (its ``vi`` omits ``WF_y``), the V_R limits and V_E >= 0.
     With K_F = 0 and the V_R limits opened in stabctl, a 3-cycle fault at bus 9 gives
@@ -2691,10 +2921,15 @@ def test_ieee14_esac1a_field_voltage_matches_andes_where_andes_models_it():
         )
     )
     t_clear = 1.0 + 3 / 60
-    ss = andes_system(path, fault=AndesFault(9, 1.0, t_clear, x=1e-3), off=("Toggle",))
-    ta, _ = andes_speeds(ss, 5.0, STEP)
-    theirs = ss.dae.ts.y[:, ss.ESAC1A.vout.a[0]]
-    k = list(case.machines.bus).index(ss.SynGen.get("bus", ss.ESAC1A.syn.v[0]))
+    fault = AndesFault(9, 1.0, t_clear, x=1e-3)
+    a = ref.run(
+        "fault",
+        lambda: speeds_run(
+            andes_system(path, fault=fault, off=("Toggle",)), 5.0, **device_output("ESAC1A")
+        ),
+    )
+    ta, theirs = a["t"], a["out"]
+    k = list(case.machines.bus).index(a["dev_bus"])
     sim = Simulator(opened, q_limits=False)
     assert sim.model.initial_residual[0] < 1e-8
     res = sim.run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
@@ -2713,7 +2948,7 @@ def test_ieee14_esac1a_field_voltage_matches_andes_where_andes_models_it():
     assert res.stable and 1.0 < np.min(res.efd[:, k]) < np.max(res.efd[:, k]) < 3.0
 
 
-def test_ieee14_ac8b_field_voltage_and_speeds_match_andes():
+def test_ieee14_ac8b_field_voltage_and_speeds_match_andes(ref):
     """ANDES's ieee14_ac8b.xlsx (AC8B's PID K_P 3, K_I 1, K_D 1, T_D 0.2; V_R on [1, 7.3];
     docs/pst_models.md 2.7): flat 10 s; after a 3-cycle fault at bus 9, V_R rides both
     limits and the field voltage and speeds follow ANDES's ``ac8b.py``."""
@@ -2724,19 +2959,26 @@ def test_ieee14_ac8b_field_voltage_and_speeds_match_andes():
     assert np.max(np.abs(sim.run([], 10.0, h=STEP).speed - 1)) < 1e-10
     t_clear = 1.0 + 3 / 60
     res = sim.run([Fault(9, 1.0, t_clear, x=1e-3)], 5.0, h=STEP)
-    ss = andes_system(path, fault=AndesFault(9, 1.0, t_clear, x=1e-3), off=("Toggle",))
-    ta, wa = andes_speeds(ss, 5.0, STEP)
-    dev = ss.AC8B
-    vr = ss.dae.ts.x[:, dev.LA_y.a[0]]
+    fault = AndesFault(9, 1.0, t_clear, x=1e-3)
+    a = ref.run(
+        "fault",
+        lambda: speeds_run(
+            andes_system(path, fault=fault, off=("Toggle",)),
+            5.0,
+            vr=lambda ss: np.asarray(ss.dae.ts.x)[:, ss.AC8B.LA_y.a[0]],
+            **device_output("AC8B"),
+        ),
+    )
+    ta, wa, vr = a["t"], a["wa"], a["vr"]
     assert vr.max() == pytest.approx(7.3) and vr.min() == pytest.approx(1.0)  # both limits
-    k = list(case.machines.bus).index(ss.SynGen.get("bus", dev.syn.v[0]))
-    gap = np.abs(np.interp(ta, res.t, res.efd[:, k]) - ss.dae.ts.y[:, dev.vout.a[0]])
+    k = list(case.machines.bus).index(a["dev_bus"])
+    gap = np.abs(np.interp(ta, res.t, res.efd[:, k]) - a["out"])
     away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - t_clear) > AWAY)
     # measured 0.030 (24 ms after clearing) and 0.018 after 1.5 s at this step; 0.011 with
     # both steps 1 ms: a gap that stays as the step shrinks (docs/pst_models.md 2.7)
     assert np.max(gap[away]) < 0.05
     assert np.max(gap[ta > 1.5]) < 0.03
-    assert np.max(np.abs(speeds_on(ta, res, case, ss) - wa)) < 2e-5  # measured 1.1e-5
+    assert np.max(np.abs(speeds_on(ta, res, case, a["buses"]) - wa)) < 2e-5  # measured 1.1e-5
 
 
 def _islands_without_generator_3(tmp_path) -> Path:
@@ -2757,7 +2999,7 @@ def _islands_without_generator_3(tmp_path) -> Path:
     return out
 
 
-def test_kundur_islands_slack_without_machine_is_an_infinite_bus_as_in_andes(tmp_path):
+def test_kundur_islands_slack_without_machine_is_an_infinite_bus_as_in_andes(tmp_path, ref):
     """kundur_islands: lines 7-8 open, two islands; island 2's Slack 5 (bus 3) has no
     machine, so ANDES holds bus 3 at v0, a0 in its run (``slack.py``): imported as an
     infinite bus (GENCLS, H = 0).  Flat for 10 s; ANDES's own Toggle (Line_8, buses 8-9,
@@ -2772,14 +3014,20 @@ def test_kundur_islands_slack_without_machine_is_an_infinite_bus_as_in_andes(tmp
     assert res.pelect[0, 3] == pytest.approx(9.3137, abs=1e-4)  # ANDES's Slack 5 power
     fixed = _islands_without_generator_3(tmp_path)
     sim = Simulator(case, q_limits=False)
-    for event, ours_events, bound in (
-        (None, [LineTrip(8, 9, 2.0, circuit=2)], 2e-6),  # measured 8.4e-7
-        (AndesFault(9, 1.0, 1.1, x=1e-3), [Fault(9, 1.0, 1.1, x=1e-3)], 3e-5),  # 1.05e-5
+    for tag, event, ours_events, bound in (
+        ("own_trip", None, [LineTrip(8, 9, 2.0, circuit=2)], 2e-6),  # measured 8.4e-7
+        ("fault", AndesFault(9, 1.0, 1.1, x=1e-3), [Fault(9, 1.0, 1.1, x=1e-3)], 3e-5),  # 1.05e-5
     ):
-        ss = andes_system(fixed, fault=event, off=() if event is None else ("Toggle",))
-        t, wa = andes_speeds(ss, 10.0, STEP)
+        off = () if event is None else ("Toggle",)
+        a = ref.run(
+            tag,
+            lambda event=event, off=off: speeds_run(
+                andes_system(fixed, fault=event, off=off), 10.0
+            ),
+        )
+        t, wa = a["t"], a["wa"]
         res = sim.run(ours_events, 10.0, h=STEP)
-        w = speeds_on(t, res, case, ss)
+        w = speeds_on(t, res, case, a["buses"])
         assert np.max(np.abs(w[:, 2] - 1)) > 4e-4  # island 2's machine swings
         assert np.max(np.abs(w - wa)) < bound
         assert np.all(res.speed[:, 3] == 1.0)  # the infinite bus
@@ -2787,6 +3035,7 @@ def test_kundur_islands_slack_without_machine_is_an_infinite_bus_as_in_andes(tmp
 
 def test_kundur_islands_fault_in_the_island_without_infinite_bus_is_judged_in_its_island(
     tmp_path,
+    ref,
 ):
     """A 6-cycle fault at bus 7 in island 1 (machines 1, 3 at buses 2, 1): the island's
     frequency swings (0.7 %) and its angles drift 3 rad from island 2's infinite bus, no
@@ -2798,23 +3047,34 @@ def test_kundur_islands_fault_in_the_island_without_infinite_bus_is_judged_in_it
         case = import_andes(path, on_unsupported="skip")
     sim = Simulator(case, q_limits=False)
     assert list(sim.island) == [0, 1, 0, 1]
-    ss = andes_system(
-        _islands_without_generator_3(tmp_path),
-        fault=AndesFault(7, 1.0, 1.1, x=1e-3),
-        off=("Toggle",),
+
+    def angles(ss):
+        order = np.argsort(np.array(ss.GENROU.gen.v, dtype=float))  # andes_machine_buses's
+        return np.asarray(ss.dae.ts.x)[:, np.asarray(ss.GENROU.delta.a)[order]]
+
+    a = ref.run(
+        "fault",
+        lambda: speeds_run(
+            andes_system(
+                _islands_without_generator_3(tmp_path),
+                fault=AndesFault(7, 1.0, 1.1, x=1e-3),
+                off=("Toggle",),
+            ),
+            10.0,
+            delta=angles,
+        ),
     )
-    t, wa = andes_speeds(ss, 10.0, STEP)
+    t, wa = a["t"], a["wa"]
     res = sim.run([Fault(7, 1.0, 1.1, x=1e-3)], 10.0, h=STEP)
     assert res.stable and res.max_angle_spread < 1.0
     one_coi = res.angle - res.angle[:, [3]]  # against the infinite bus alone
     assert np.max(np.abs(one_coi)) > np.pi
-    rows = paired_rows(case.machines.bus, andes_machine_buses(ss))
+    rows = paired_rows(case.machines.bus, a["buses"])
     delta = np.array(res.angle[:1].repeat(t.size, 0))  # the infinite bus's angle: held
-    order = np.argsort(np.array(ss.GENROU.gen.v, dtype=float))  # andes_machine_buses's
-    delta[:, rows] = np.asarray(ss.dae.ts.x)[:, np.asarray(ss.GENROU.delta.a)[order]]
+    delta[:, rows] = a["delta"]
     andes_rel = delta - coi_of_islands(delta, sim.inertia, sim.island)
     assert np.max(np.abs(andes_rel)) < 1.0  # ANDES: stable in each island too
-    w_ours = speeds_on(t, res, case, ss)
+    w_ours = speeds_on(t, res, case, a["buses"])
     assert np.max(np.abs(w_ours - 1)) > 5e-3  # island 1's frequency swings
     # measured 1.1e-4, most of it ANDES's step error in the swinging island: its speeds
     # move 5.8e-5 when its 5 ms step is halved (stabctl's 2.9e-6), and with both steps
@@ -2950,7 +3210,7 @@ def test_import_andes_reports_its_power_flow_against_the_raw_solution(tmp_path):
 # -- the case's own disturbance (ANDES's Toggle, Fault, Alter) ------------------------------
 
 
-def own_events_gap(name, t_end, tripped=()):
+def own_events_gap(ref, name, t_end, tripped=()):
     """Both tools running the ANDES file's own disturbance: stabctl the imported case's
     events (`from_case`), ANDES its records; 5 ms step, PV Q limits off (ANDES's default).
     Returns (largest speed gap, largest ANDES swing) over the machines not in ``tripped``
@@ -2959,10 +3219,10 @@ def own_events_gap(name, t_end, tripped=()):
     path = andes.get_case(name)
     case = import_andes(path, on_unsupported="skip")
     res = Simulator(case, q_limits=False).run(from_case(case), t_end, h=STEP)
-    ss = andes_system(path)
-    t, wa = andes_speeds(ss, t_end, STEP)
+    a = ref.run("own", lambda: speeds_run(andes_system(path), t_end))
+    t, wa = a["t"], a["wa"]
     keep = [k for k in range(wa.shape[1]) if k not in tripped]
-    w = speeds_on(t, res, case, ss)
+    w = speeds_on(t, res, case, a["buses"])
     return np.max(np.abs(w - wa)[:, keep]), np.max(np.abs(wa - 1))
 
 
@@ -2974,8 +3234,8 @@ def own_events_gap(name, t_end, tripped=()):
         ("ieee14/ieee14_gentrip.xlsx", 3.0, (1,), 6.3e-7),  # GENROU_2 off at 1 s
     ],
 )
-def test_own_toggles_run_as_andes_runs_them(name, t_end, tripped, measured):
-    gap, swing = own_events_gap(name, t_end, tripped)
+def test_own_toggles_run_as_andes_runs_them(name, t_end, tripped, measured, ref):
+    gap, swing = own_events_gap(ref, name, t_end, tripped)
     print(f"\n{name} own disturbance vs ANDES: speeds {gap:.2e} pu (swing {swing:.2e})")
     assert swing > 1e-3
     assert gap < 1e-5  # measured: see the parameters
