@@ -138,23 +138,52 @@ class _Step:
         self.f, self.act, self.rest = f, np.flatnonzero(active), np.flatnonzero(~active)
         self.key: tuple = ()  # (stage, step) the factorised matrix belongs to
         self.lu = None
+        # the states held on a limit at the last iterate of the last step (derivative 0
+        # there) and the side of it (+1 upper, -1 lower): `start`
+        self.held_end = np.zeros(0, np.int64)
+        self.side = np.zeros(0)
+
+    def start(self, f_x) -> np.ndarray:
+        """The derivatives the rule takes at the start of the step that follows the last
+        one in the same network stage: f_x, but 0 for a state held on a limit at the last
+        step's last iterate that f_x still drives into it.  ANDES's trapezoid takes its
+        stored derivative f0 (0 for a state its AntiWindup set on the limit at that
+        iterate, which it also resets onto the limit there), the rule of a non-windup
+        limit (IEEE 421.5-2016 E.5; WECC REGC_A's LVPL on Ip); stabctl's evaluation at the
+        step's end leaves a state held on a limit that moves with other states (REGCA1's
+        LVPL of its filtered voltage) below it by the last correction, free, so that the
+        rule took the free derivative at the start of the step in which the limit lets
+        go: kundur_reg's Ip rose by a whole step (0.276 pu) after the LVPL's release,
+        ANDES's by half a step (docs/ibr.md section 12).  The predictor and the matrix
+        keep the evaluated f_x (a held state's predictor past its limit clamps it from
+        the first iterate)."""
+        q = self.held_end
+        f0 = f_x.copy()
+        if q.size:
+            into = f_x[q] * self.side[q] > 0.0
+            f0[q[into]] = 0.0
+        return f0
 
     def factorise(self, x, f_x, stage, h) -> None:
         A = self.f.jacobian(x, f_x, stage, self.act)
         self.lu = sla.lu_factor(np.eye(self.act.size) - 0.5 * h * A)
         self.key = _key(stage, h)
 
-    def __call__(self, x, f_x, stage, h) -> tuple[np.ndarray, int]:
-        """(x_k+1, -1) from x_k = x (derivatives f_x), or (last iterate, worst state) when
+    def __call__(self, x, f_x, stage, h, f0=None) -> tuple[np.ndarray, int]:
+        """(x_k+1, -1) from x_k = x (derivatives f_x; f0 those the rule takes at x,
+        `start`, f_x if None), or (last iterate, worst state) when
         Newton did not converge in MAX_ITER iterations, or (iterate, NO_NETWORK) when the
         network/load equations have no solution at an iterate (an iterate far from the
         step's solution: ieee14_wt3 after clearing a bus-8 fault through j0.05 pu, the
         first iterate's REGCA1 Ip at -16 pu, which a half step does not reach)."""
         if self.key != _key(stage, h):
             self.factorise(x, f_x, stage, h)
+        f0 = f_x if f0 is None else f0
         act, rest, y = self.act, self.rest, x + h * f_x
         pegged = np.zeros(x.size, bool)
+        side = np.zeros(x.size)
         held = np.zeros(act.size, bool)
+        self.held_end = np.zeros(0, np.int64)
         last, slow = np.zeros(STALL), False
         for it in range(MAX_ITER):
             y_in = y.copy()
@@ -162,8 +191,10 @@ class _Step:
                 f_y = self.f(y, stage)
             except SimulationError:  # an iterate off the solution: the halving retries
                 return y, NO_NETWORK
-            pegged[act] |= y[act] != y_in[act]
-            r = y - x - 0.5 * h * (f_x + f_y)
+            moved = act[y[act] != y_in[act]]
+            pegged[moved] = True
+            side[moved] = np.sign(y_in[moved] - y[moved])
+            r = y - x - 0.5 * h * (f0 + f_y)
             now = (pegged & (f_y == 0.0))[act]
             held = now | (held & (it > LOCK))
             r[act[held]] = 0.0
@@ -172,24 +203,29 @@ class _Step:
             dy = sla.lu_solve(self.lu, r[act])
             dy[held] = 0.0
             y[act] -= dy
-            y[rest] = x[rest] + 0.5 * h * (f_x[rest] + f_y[rest])
+            y[rest] = x[rest] + 0.5 * h * (f0[rest] + f_y[rest])
             worst = int(np.argmax(np.abs(dy)))
             last[it % STALL] = abs(dy[worst])
             slow = it >= 1 and last[it % STALL] > SLOW * last[(it - 1) % STALL] and not slow
+            self.held_end, self.side = act[now], side
             if last[it % STALL] <= TOL:
                 return y, -1
         return y, -1 if np.max(last) <= STALL_TOL else int(act[worst])
 
-    def halving(self, x, f_x, stage, h, depth=0) -> tuple[np.ndarray, int]:
+    def halving(self, x, f_x, stage, h, f0=None, depth=0) -> tuple[np.ndarray, int]:
         """The step, or where Newton does not converge, two steps of h/2 (each again, down
-        to h / 2**HALVINGS), as ANDES shrinks its step; the grid stays."""
-        y, bad = self(x, f_x, stage, h)
+        to h / 2**HALVINGS), as ANDES shrinks its step; the grid stays.  f0: `start`'s
+        derivatives at x (f_x if None)."""
+        held, side = self.held_end, self.side
+        y, bad = self(x, f_x, stage, h, f0)
         if bad == -1 or depth == HALVINGS:
             return y, bad
-        y, bad = self.halving(x, f_x, stage, 0.5 * h, depth + 1)
+        self.held_end, self.side = held, side
+        y, bad = self.halving(x, f_x, stage, 0.5 * h, f0, depth + 1)
         if bad != -1:
             return y, bad
-        return self.halving(y, self.f(y, stage), stage, 0.5 * h, depth + 1)
+        f_y = self.f(y, stage)
+        return self.halving(y, f_y, stage, 0.5 * h, self.start(f_y), depth + 1)
 
 
 def _key(stage, h) -> tuple:
@@ -232,6 +268,7 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
     step = _Step(f, active_states(m))
     rec = recording(n_t, nm, m.case.n_bus, 0, m.cp.n)
     x = m.x0.copy()
+    s_step = -1  # the network stage of the last step taken (`_Step.start`)
     for k in range(n_t):
         s = int(grid.interval[k])
         try:
@@ -246,7 +283,8 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             continue
         f.lock(True)
         try:
-            x, bad = step.halving(x, f_x, s, h)
+            x, bad = step.halving(x, f_x, s, h, step.start(f_x) if s == s_step else None)
+            s_step = s
         except SimulationError as e:
             _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
         finally:
