@@ -14,9 +14,17 @@ iteration that is slow to converge. Non-windup limits follow ANDES's AntiWindup
 limit in this step (the limiter's reach 0, `stabctl.models.blocks.nonwindup`) is held there,
 its residual and its correction zero, while its derivative stays zero; held at an iterate
 after the LOCK-th, it stays held for the step (ANDES's ``niter_lock``, against chattering on
-a limit that moves with the iterate). The other slots, the memory of discrete logic
-(REECA1's timers and held values), take the rule with each iterate's derivative, and the
-evaluation writes them at every iterate, as ANDES updates its discrete flags. The step is
+a limit that moves with the iterate).  A state held on a limit at the end of a step starts
+the next one (in the same network stage) with derivative 0 while still driven into it,
+and a held state's row of the matrix is taken 0 (`_Step.start`, `_Step.factorise`).  The
+other slots, the memory of discrete logic (REECA1's timers and held values), are written
+by the evaluation at every iterate, as ANDES updates its discrete flags, and advance by
+their derivative at the step's start (x_k+1 = x_k + h f(x_k)): a timer (an event flag
+extended by a time, REECA1's Thld, Thld2) runs down by h in each step and ends at the
+first step end at or past its time, as ANDES's ExtendedEvent compares its end time with
+the step's (the rule's mean of the derivatives -1 and 0 has no solution in a step that
+ends within half a step of the timer's end: the iterates alternated, kundur_wtdta1's
+Ipmax hold ending at 2.1 s). The step is
 the grid's, always: ANDES's own "fixed" step shrinks by 0.95 after any step that took 7-14
 Newton iterations (``ImplicitIter.niter_next_h``), so a like-for-like comparison holds
 ANDES's step too (`stabctl.io.andes.andes_system`, ``fixed_step``).
@@ -164,8 +172,17 @@ class _Step:
             f0[q[into]] = 0.0
         return f0
 
-    def factorise(self, x, f_x, stage, h) -> None:
+    def factorise(self, x, f_x, stage, h, held=None) -> None:
+        """Factorise I - h/2 A at x; held: the rows (over the active states) of the states
+        held on a limit there, whose derivative is 0 while held: their rows of A are
+        taken 0, as ANDES leaves a pegged state's Jacobian row out of its iteration (its
+        residual set to 0).  A forward difference there crosses the limit's kink: REGCA1's
+        Ip held on its LVPL is freed by a perturbation of the filtered voltage the LVPL
+        follows, a derivative of 75 pu/s over 1e-7 (kundur_wtdta1: the next iterate's Ip
+        at -700 pu and the step halved twice)."""
         A = self.f.jacobian(x, f_x, stage, self.act)
+        if held is not None:
+            A[held, :] = 0.0
         self.lu = sla.lu_factor(np.eye(self.act.size) - 0.5 * h * A)
         self.key = _key(stage, h)
 
@@ -177,7 +194,7 @@ class _Step:
         step's solution: ieee14_wt3 after clearing a bus-8 fault through j0.05 pu, the
         first iterate's REGCA1 Ip at -16 pu, which a half step does not reach)."""
         if self.key != _key(stage, h):
-            self.factorise(x, f_x, stage, h)
+            self.factorise(x, f_x, stage, h, np.isin(self.act, self.held_end))
         f0 = f_x if f0 is None else f0
         act, rest, y = self.act, self.rest, x + h * f_x
         pegged = np.zeros(x.size, bool)
@@ -199,15 +216,15 @@ class _Step:
             held = now | (held & (it > LOCK))
             r[act[held]] = 0.0
             if slow:
-                self.factorise(y, f_y, stage, h)
+                self.factorise(y, f_y, stage, h, held)
             dy = sla.lu_solve(self.lu, r[act])
             dy[held] = 0.0
             y[act] -= dy
-            y[rest] = x[rest] + 0.5 * h * (f0[rest] + f_y[rest])
+            y[rest] = x[rest] + h * f0[rest]
             worst = int(np.argmax(np.abs(dy)))
             last[it % STALL] = abs(dy[worst])
             slow = it >= 1 and last[it % STALL] > SLOW * last[(it - 1) % STALL] and not slow
-            self.held_end, self.side = act[now], side
+            self.held_end, self.side = act[held], side
             if last[it % STALL] <= TOL:
                 return y, -1
         return y, -1 if np.max(last) <= STALL_TOL else int(act[worst])
