@@ -14,9 +14,17 @@ iteration that is slow to converge. Non-windup limits follow ANDES's AntiWindup
 limit in this step (the limiter's reach 0, `stabctl.models.blocks.nonwindup`) is held there,
 its residual and its correction zero, while its derivative stays zero; held at an iterate
 after the LOCK-th, it stays held for the step (ANDES's ``niter_lock``, against chattering on
-a limit that moves with the iterate). The other slots, the memory of discrete logic
-(REECA1's timers and held values), take the rule with each iterate's derivative, and the
-evaluation writes them at every iterate, as ANDES updates its discrete flags. The step is
+a limit that moves with the iterate).  A state held on a limit at the end of a step starts
+the next one (in the same network stage) with derivative 0 while still driven into it,
+and a held state's row of the matrix is taken 0 (`_Step.start`, `_Step.factorise`).  The
+other slots, the memory of discrete logic (REECA1's timers and held values), are written
+by the evaluation at every iterate, as ANDES updates its discrete flags, and advance by
+their derivative at the step's start (x_k+1 = x_k + h f(x_k)): a timer (an event flag
+extended by a time, REECA1's Thld, Thld2) runs down by h in each step and ends at the
+first step end at or past its time, as ANDES's ExtendedEvent compares its end time with
+the step's (the rule's mean of the derivatives -1 and 0 has no solution in a step that
+ends within half a step of the timer's end: the iterates alternated, kundur_wtdta1's
+Ipmax hold ending at 2.1 s). The step is
 the grid's, always: ANDES's own "fixed" step shrinks by 0.95 after any step that took 7-14
 Newton iterations (``ImplicitIter.niter_next_h``), so a like-for-like comparison holds
 ANDES's step too (`stabctl.io.andes.andes_system`, ``fixed_step``).
@@ -138,23 +146,61 @@ class _Step:
         self.f, self.act, self.rest = f, np.flatnonzero(active), np.flatnonzero(~active)
         self.key: tuple = ()  # (stage, step) the factorised matrix belongs to
         self.lu = None
+        # the states held on a limit at the last iterate of the last step (derivative 0
+        # there) and the side of it (+1 upper, -1 lower): `start`
+        self.held_end = np.zeros(0, np.int64)
+        self.side = np.zeros(0)
 
-    def factorise(self, x, f_x, stage, h) -> None:
+    def start(self, f_x) -> np.ndarray:
+        """The derivatives the rule takes at the start of the step that follows the last
+        one in the same network stage: f_x, but 0 for a state held on a limit at the last
+        step's last iterate that f_x still drives into it.  ANDES's trapezoid takes its
+        stored derivative f0 (0 for a state its AntiWindup set on the limit at that
+        iterate, which it also resets onto the limit there), the rule of a non-windup
+        limit (IEEE 421.5-2016 E.5; WECC REGC_A's LVPL on Ip); stabctl's evaluation at the
+        step's end leaves a state held on a limit that moves with other states (REGCA1's
+        LVPL of its filtered voltage) below it by the last correction, free, so that the
+        rule took the free derivative at the start of the step in which the limit lets
+        go: kundur_reg's Ip rose by a whole step (0.276 pu) after the LVPL's release,
+        ANDES's by half a step (docs/ibr.md section 12).  The predictor and the matrix
+        keep the evaluated f_x (a held state's predictor past its limit clamps it from
+        the first iterate)."""
+        q = self.held_end
+        f0 = f_x.copy()
+        if q.size:
+            into = f_x[q] * self.side[q] > 0.0
+            f0[q[into]] = 0.0
+        return f0
+
+    def factorise(self, x, f_x, stage, h, held=None) -> None:
+        """Factorise I - h/2 A at x; held: the rows (over the active states) of the states
+        held on a limit there, whose derivative is 0 while held: their rows of A are
+        taken 0, as ANDES leaves a pegged state's Jacobian row out of its iteration (its
+        residual set to 0).  A forward difference there crosses the limit's kink: REGCA1's
+        Ip held on its LVPL is freed by a perturbation of the filtered voltage the LVPL
+        follows, a derivative of 75 pu/s over 1e-7 (kundur_wtdta1: the next iterate's Ip
+        at -700 pu and the step halved twice)."""
         A = self.f.jacobian(x, f_x, stage, self.act)
+        if held is not None:
+            A[held, :] = 0.0
         self.lu = sla.lu_factor(np.eye(self.act.size) - 0.5 * h * A)
         self.key = _key(stage, h)
 
-    def __call__(self, x, f_x, stage, h) -> tuple[np.ndarray, int]:
-        """(x_k+1, -1) from x_k = x (derivatives f_x), or (last iterate, worst state) when
+    def __call__(self, x, f_x, stage, h, f0=None) -> tuple[np.ndarray, int]:
+        """(x_k+1, -1) from x_k = x (derivatives f_x; f0 those the rule takes at x,
+        `start`, f_x if None), or (last iterate, worst state) when
         Newton did not converge in MAX_ITER iterations, or (iterate, NO_NETWORK) when the
         network/load equations have no solution at an iterate (an iterate far from the
         step's solution: ieee14_wt3 after clearing a bus-8 fault through j0.05 pu, the
         first iterate's REGCA1 Ip at -16 pu, which a half step does not reach)."""
         if self.key != _key(stage, h):
-            self.factorise(x, f_x, stage, h)
+            self.factorise(x, f_x, stage, h, np.isin(self.act, self.held_end))
+        f0 = f_x if f0 is None else f0
         act, rest, y = self.act, self.rest, x + h * f_x
         pegged = np.zeros(x.size, bool)
+        side = np.zeros(x.size)
         held = np.zeros(act.size, bool)
+        self.held_end = np.zeros(0, np.int64)
         last, slow = np.zeros(STALL), False
         for it in range(MAX_ITER):
             y_in = y.copy()
@@ -162,34 +208,41 @@ class _Step:
                 f_y = self.f(y, stage)
             except SimulationError:  # an iterate off the solution: the halving retries
                 return y, NO_NETWORK
-            pegged[act] |= y[act] != y_in[act]
-            r = y - x - 0.5 * h * (f_x + f_y)
+            moved = act[y[act] != y_in[act]]
+            pegged[moved] = True
+            side[moved] = np.sign(y_in[moved] - y[moved])
+            r = y - x - 0.5 * h * (f0 + f_y)
             now = (pegged & (f_y == 0.0))[act]
             held = now | (held & (it > LOCK))
             r[act[held]] = 0.0
             if slow:
-                self.factorise(y, f_y, stage, h)
+                self.factorise(y, f_y, stage, h, held)
             dy = sla.lu_solve(self.lu, r[act])
             dy[held] = 0.0
             y[act] -= dy
-            y[rest] = x[rest] + 0.5 * h * (f_x[rest] + f_y[rest])
+            y[rest] = x[rest] + h * f0[rest]
             worst = int(np.argmax(np.abs(dy)))
             last[it % STALL] = abs(dy[worst])
             slow = it >= 1 and last[it % STALL] > SLOW * last[(it - 1) % STALL] and not slow
+            self.held_end, self.side = act[held], side
             if last[it % STALL] <= TOL:
                 return y, -1
         return y, -1 if np.max(last) <= STALL_TOL else int(act[worst])
 
-    def halving(self, x, f_x, stage, h, depth=0) -> tuple[np.ndarray, int]:
+    def halving(self, x, f_x, stage, h, f0=None, depth=0) -> tuple[np.ndarray, int]:
         """The step, or where Newton does not converge, two steps of h/2 (each again, down
-        to h / 2**HALVINGS), as ANDES shrinks its step; the grid stays."""
-        y, bad = self(x, f_x, stage, h)
+        to h / 2**HALVINGS), as ANDES shrinks its step; the grid stays.  f0: `start`'s
+        derivatives at x (f_x if None)."""
+        held, side = self.held_end, self.side
+        y, bad = self(x, f_x, stage, h, f0)
         if bad == -1 or depth == HALVINGS:
             return y, bad
-        y, bad = self.halving(x, f_x, stage, 0.5 * h, depth + 1)
+        self.held_end, self.side = held, side
+        y, bad = self.halving(x, f_x, stage, 0.5 * h, f0, depth + 1)
         if bad != -1:
             return y, bad
-        return self.halving(y, self.f(y, stage), stage, 0.5 * h, depth + 1)
+        f_y = self.f(y, stage)
+        return self.halving(y, f_y, stage, 0.5 * h, self.start(f_y), depth + 1)
 
 
 def _key(stage, h) -> tuple:
@@ -232,6 +285,7 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
     step = _Step(f, active_states(m))
     rec = recording(n_t, nm, m.case.n_bus, 0, m.cp.n)
     x = m.x0.copy()
+    s_step = -1  # the network stage of the last step taken (`_Step.start`)
     for k in range(n_t):
         s = int(grid.interval[k])
         try:
@@ -246,7 +300,8 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             continue
         f.lock(True)
         try:
-            x, bad = step.halving(x, f_x, s, h)
+            x, bad = step.halving(x, f_x, s, h, step.start(f_x) if s == s_step else None)
+            s_step = s
         except SimulationError as e:
             _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
         finally:
