@@ -112,8 +112,10 @@ class ModalAnalysis:
 
     def machine_participation(self, i: int) -> np.ndarray:
         """Participation of each machine in mode i, (g,): the sum over all states of the
-        machine and of its controls (exciter, PSS, governor)."""
-        owner = np.array([int(n.rsplit("_G", 1)[1]) for n in self.states])
+        machine and of its controls (exciter, PSS, governor, shaft; names ending
+        ``_G<k>``); the states of converters, motors and switched shunts belong to no
+        machine (their share: `group_shares`)."""
+        owner = np.array([_machine_of(n) for n in self.states])
         return np.array([self.participation[owner == k, i].sum() for k in self.machines])
 
     def group_shares(self, i: int) -> dict[str, float]:
@@ -496,3 +498,9 @@ def match_modes(
             }
         )
     return out
+
+
+def _machine_of(name: str) -> int:
+    """The machine number of a state named ``..._G<k>``; -1 for any other device's."""
+    _, sep, tail = name.rpartition("_G")
+    return int(tail) if sep and tail.isdigit() else -1

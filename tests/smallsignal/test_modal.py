@@ -277,3 +277,32 @@ def test_a_defective_eigenvalue_does_not_spoil_the_other_modes():
     P = participation_factors(right, left)
     assert np.allclose(P.sum(axis=0), 1.0)
     assert np.allclose(P[:, ~simple], np.abs(right[:, ~simple]) ** 2)
+
+
+def test_eig_of_a_converter_case_reports_machines_and_converters_apart(tmp_path):
+    """`stabctl eig --json` and `--report` on a case with converters (Kundur with four WECC
+    batteries, REGCA1 + REECA1 + REPCA1 rows: states named ``ibr_..._C<k>``) crashed in
+    `machine_participation` (IndexError: a converter state has no ``_G<k>``).  A machine's
+    participation now sums its own states and its controls'; the converters' states count
+    in the "converter" group: over every mode the machines' and the groups' shares add up
+    to the same total."""
+    from stabctl.io.pst import write_case_json
+    from stabctl.storage.control import BangBangCOI
+    from stabctl.storage.devices import battery_case, uniform_fleet
+
+    kundur = load_case("kundur")
+    case, _ = battery_case(kundur, uniform_fleet(kundur, 5, BangBangCOI(), model="wecc"))
+    path = write_case_json(case, tmp_path / "kundur_batteries.json")
+    res = run("eig", path, "--json")
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["n_states"] > 44
+    res = run("eig", path, "--report", "--out-dir", tmp_path)
+    assert res.exit_code == 0, res.output
+    ma = modal_analysis(linearise(case))
+    assert any(s.startswith("ibr_") for s in ma.states)
+    for i in ma.electromechanical:
+        shares = ma.group_shares(i)
+        machines = ma.machine_participation(i).sum()
+        assert machines + shares["converter"] + shares["motor"] == pytest.approx(
+            sum(shares.values()), abs=1e-12
+        )
