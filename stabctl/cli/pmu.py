@@ -138,6 +138,12 @@ def serve(
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     settings = pmu_settings(rate, 0.0, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
     pmus = pm.machine_pmus(case, pmu_at)
+    if each_pmu and port and port + len(pmus) - 1 > 65535:
+        raise InputError(
+            f"--each-pmu --port {port}: {len(pmus)} PMUs need ports {port}-"
+            f"{port + len(pmus) - 1}, beyond 65535 (give --port <= {65536 - len(pmus)}, "
+            "or 0 for any free ones)"
+        )
     res = Simulator(case).run([ev], t_end=tf)
     frames = list(pm.measure(pm.phasor_truth(case, res, pmus, window_cycles), settings, seed))
     # one stream of every PMU, or one per PMU (IDCODE 1 + 2k, its PMU's 2 + 2k)

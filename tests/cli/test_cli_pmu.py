@@ -222,3 +222,16 @@ def test_bad_input_is_one_error_line(args, needle, tmp_path, monkeypatch):
     assert res.exit_code == 2, res.output
     assert needle in res.output and "Traceback" not in res.output
     assert not (tmp_path / "r.c37").exists() and not (tmp_path / "t.csv").exists()
+
+
+def test_each_pmu_ports_beyond_65535_are_refused_by_name():
+    """`pmu serve --each-pmu --port 65534` on Kundur (4 PMUs) needs ports 65534-65537: refused
+    before any work (exit 2, the range and the largest port that fits), not an
+    OverflowError from bind()."""
+    res = CliRunner().invoke(
+        main,
+        ["pmu", "serve", "kundur", "--fault", "3", "--far-bus", "101", "--each-pmu",
+         "--port", "65534"],
+    )  # fmt: skip
+    assert res.exit_code == 2
+    assert "4 PMUs need ports 65534-65537, beyond 65535 (give --port <= 65532" in res.output
