@@ -177,7 +177,7 @@ def read_records(path: str | Path) -> dict[str, dict]:
             try:
                 rec = json.loads(line)
                 records[rec["key"]] = rec
-            except (ValueError, KeyError, TypeError):
+            except (ValueError, KeyError, TypeError, RecursionError):
                 warnings.warn(f"{path} line {n}: not a sweep record, ignored", stacklevel=2)
     return records
 
@@ -203,7 +203,7 @@ def set_aside_damaged(path: str | Path) -> list[int]:
                     and isinstance(rec.get("key"), str)
                     and rec.get("status") in ("ok", "verdict", "failed")
                 )
-            except ValueError:
+            except (ValueError, RecursionError):  # a damaged or absurdly nested line
                 ok = False
             (good if ok else bad).append((n, line if line.endswith("\n") else line + "\n"))
     if not bad:

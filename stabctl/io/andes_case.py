@@ -429,7 +429,7 @@ def _input_rows(path: Path) -> dict:
     if path.suffix.lower() == ".json":
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError, UnicodeDecodeError):
+        except (OSError, ValueError, UnicodeDecodeError, RecursionError):
             return {}  # ANDES's own reading names what is wrong
         return (
             {k: v for k, v in data.items() if isinstance(v, list)} if isinstance(data, dict) else {}

@@ -26,11 +26,11 @@ import math
 import re
 from contextvars import ContextVar
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from stabctl.errors import CaseError
+from stabctl.io.inputs import input_file
 from stabctl.models.converters import CONVERTER
 from stabctl.models.declaration import DyrModel, Family
 from stabctl.models.exciters import EXCITER
@@ -132,7 +132,7 @@ def read_dyr(path) -> list[DyrRecord]:
         non-integer bus or a parameter that is not a number (other models' records are
         kept, with bus 0 and NaN parameters there, for the unsupported report).
     """
-    path = Path(path)
+    path = input_file(path, "DYR file")
     try:
         text = path.read_text(errors="replace")
     except OSError as exc:

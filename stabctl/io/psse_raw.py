@@ -82,6 +82,7 @@ import numpy as np
 
 from stabctl.case import PQ, PV, SWING
 from stabctl.errors import CaseError
+from stabctl.io.inputs import input_file
 
 __all__ = ["RawSource", "Generator", "RawData", "read_raw", "split_fields"]
 
@@ -845,7 +846,7 @@ def read_raw(
     """
     if loads not in ("raw", "impedance"):
         raise CaseError(f"loads must be 'raw' or 'impedance', got {loads!r}")
-    path = Path(path)
+    path = input_file(path, "RAW file")
     try:
         lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
     except OSError as exc:

@@ -31,6 +31,7 @@ import numpy as np
 
 from stabctl.case import TABLES, Case
 from stabctl.errors import CaseError
+from stabctl.io.inputs import input_file
 
 __all__ = [
     "FORMAT",
@@ -211,11 +212,14 @@ def read_any(path: str | Path) -> Case:
 
 
 def _load_json(path: Path):
+    path = input_file(path, "case file")
     try:
         with open(path, encoding="utf-8") as fh:
             return json.load(fh)
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
+    except RecursionError:
+        raise CaseError(f"{path}: JSON nested too deeply to be a case") from None
     except json.JSONDecodeError as exc:
         raise CaseError(f"{path}: invalid JSON at line {exc.lineno}: {exc.msg}") from None
 

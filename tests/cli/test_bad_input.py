@@ -367,3 +367,24 @@ def test_unknown_bus_or_line_is_refused_before_the_model_is_built(args, monkeypa
     monkeypatch.setattr("stabctl.dynamics.driver.Simulator.__init__", built)
     res = run(*args)
     assert res.exit_code == 2 and re.search(r"bus \d+|line", res.stderr), res.stderr
+
+
+def test_devices_and_deeply_nested_json_are_refused_by_name(tmp_path):
+    """`import-psse /dev/zero` read without end (MemoryError) and a case file of 100 000
+    nested JSON arrays stopped `simulate` with a RecursionError; each is now one error line
+    naming the file (exit 2), as is a sweep record of that depth, set aside as damaged."""
+    from stabctl.parallel import read_records, set_aside_damaged
+
+    res = CliRunner().invoke(main, ["import-psse", "/dev/zero", "-o", str(tmp_path / "z.json")])
+    assert res.exit_code == 2 and "RAW file /dev/zero: not a regular file" in res.output
+    assert not (tmp_path / "z.json").exists()
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100_000 + "]" * 100_000)
+    res = CliRunner().invoke(main, ["simulate", str(deep)])
+    assert res.exit_code == 2 and "JSON nested too deeply to be a case" in res.output
+    records = tmp_path / "r.jsonl"
+    good = '{"key": "a", "status": "ok", "result": {}}'
+    records.write_text(good + "\n" + "[" * 100_000 + "]" * 100_000 + "\n")
+    with pytest.warns(UserWarning):
+        assert set_aside_damaged(records) == [2]
+    assert list(read_records(records)) == ["a"]
