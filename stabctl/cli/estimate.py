@@ -464,6 +464,20 @@ def cct(
     metavar="tcp://HOST:PORT[,...]|FILE",
     help="The C37.118.2 streams over TCP or the recording to track.",
 )
+@click.option(
+    "--tf",
+    "until_s",
+    type=float,
+    default=None,
+    help="Last time stamp to track (s after the CFG-2's time stamp, t = 0). A TCP source "
+    "needs --tf or --frames.",
+)
+@click.option(
+    "--frames",
+    type=click.IntRange(1, 10_000_000),
+    default=None,
+    help="Data frames to take from each stream.",
+)
 @ESTIMATOR
 @rate_latency_options
 @pmu_noise_options
@@ -474,6 +488,8 @@ def cct(
 def track(
     case_name,
     source,
+    until_s,
+    frames,
     estimator,
     rate,
     latency_ms,
@@ -497,13 +513,16 @@ def track(
     --latency-ms as the ESD controllers use them, and with --esd-pct the modes Table 3
     would command.  The PMUs' station names must be CASE's generator PMUs
     (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
-    tuned to.
+    tuned to.  A stream that stops before --tf or --frames is tracked as far as it came,
+    written, and named an error (exit status 2).
     \b
     Example:
       stabctl estimate track miniwecc --source wecc.c37 --out tracked.csv
+      stabctl estimate track miniwecc --source tcp://127.0.0.1:4712 --tf 60 --out t.csv
     """
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation import sources
+    from stabctl.estimation.c37_tcp import End
     from stabctl.io import load_case
     from stabctl.parallel import atomic_write
 
@@ -517,7 +536,10 @@ def track(
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
     src = sources.parse_source(source)
-    got = sources.read_frames(src, case, ctrl.pmus, settings.rate)
+    end = End(frames, until_s)
+    if src.path is None and not end.given:
+        raise InputError("a TCP --source needs its end: --tf S or --frames N")
+    got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end)
     d = cl.track(ctrl, got.frames)
     head, rows = _track_columns(ctrl, d, esd_pct is not None)
     atomic_write(
@@ -536,6 +558,11 @@ def track(
         + (f"; {d.starts} ESD starts" if esd_pct is not None else "")
         + f"; wrote {out_path}"
     )
+    if got.short:
+        raise InputError(
+            f"--source {src} stopped before {end}: {'; '.join(got.short)}; "
+            f"{out_path} holds the {len(got.frames)} frames tracked"
+        )
 
 
 def _track_columns(ctrl, d, with_modes: bool) -> tuple[str, np.ndarray]:

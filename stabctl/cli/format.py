@@ -664,4 +664,5 @@ def _link_text(link) -> str:
         f"  over TCP: {link['frames']} frames, round trip median {rt['median']:.2f} ms, "
         f"99th percentile {rt['p99']:.2f} ms, largest {rt['max']:.2f} ms, "
         f"{link['late']} later than the latency"
+        + "".join(f"\n  dropped peer {p}" for p in link.get("dropped_peers", ()))
     )

@@ -53,7 +53,13 @@ def pmu():
 
 
 _LISTEN = (
-    click.option("--host", default="127.0.0.1", show_default=True, help="Address to listen on."),
+    click.option(
+        "--host",
+        default="127.0.0.1",
+        show_default=True,
+        help="Address to listen on (another than loopback: any host that reaches it may "
+        "connect unless --allow names them).",
+    ),
     click.option(
         "--port",
         type=click.IntRange(0, 65535),
@@ -61,7 +67,35 @@ _LISTEN = (
         show_default=True,
         help="TCP port (0: any free one, printed).",
     ),
+    click.option(
+        "--allow",
+        default="",
+        metavar="IP[,IP...]",
+        help="Peers allowed to connect (IP addresses); others are closed at once and named. "
+        "Default: any.",
+    ),
 )
+_LOOPBACK = ("127.0.0.1", "::1", "localhost")
+
+
+def _allowed(host: str, allow: str) -> tuple:
+    """The --allow list as a tuple; warns when listening beyond loopback to any peer."""
+    import ipaddress
+    import warnings
+
+    peers = tuple(a.strip() for a in allow.split(",") if a.strip())
+    for a in peers:
+        try:
+            ipaddress.ip_address(a)
+        except ValueError:
+            raise InputError(f"--allow {allow}: {a!r} is not an IP address") from None
+    if host not in _LOOPBACK and not peers:
+        warnings.warn(
+            f"listening on {host}: any host that reaches this port may connect "
+            "(name the peers with --allow IP[,IP...])",
+            stacklevel=2,
+        )
+    return peers
 
 
 def _serving(func):
@@ -72,7 +106,15 @@ def _serving(func):
         show_default=True,
         help="Time-stamp seconds per second: 1 real time, 0 as fast as the client reads.",
     )
-    return _apply(func, (*_LISTEN, speed))
+    timeout = click.option(
+        "--timeout",
+        type=float,
+        default=30.0,
+        show_default=True,
+        help="Longest silence of a peer before its command, and longest wait for it to "
+        "take a frame (s); a peer past it is dropped.",
+    )
+    return _apply(func, (*_LISTEN, speed, timeout))
 
 
 def _listening(func):
@@ -114,7 +156,9 @@ def serve(
     pmu_at,
     host,
     port,
+    allow,
     speed,
+    timeout,
     each_pmu,
 ):
     """Simulate CASE through a line fault and serve one PMU per generator as one IEEE
@@ -133,8 +177,9 @@ def serve(
     from stabctl.dynamics.driver import Simulator
     from stabctl.estimation import c37
     from stabctl.estimation import pmu as pm
-    from stabctl.estimation.c37_tcp import StreamServer
+    from stabctl.estimation.c37_tcp import Guard, StreamServer
 
+    guard = Guard(_allowed(host, allow), timeout)
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     settings = pmu_settings(rate, 0.0, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
     pmus = pm.machine_pmus(case, pmu_at)
@@ -157,6 +202,7 @@ def serve(
                     host=host,
                     port=port + j if port else 0,
                     speed=speed or _INF,
+                    guard=guard,
                 )
             )
             for j, cols in enumerate(streams)
@@ -168,18 +214,21 @@ def serve(
 @click.argument("recording", type=click.Path(dir_okay=False))
 @_serving
 @reports_errors
-def replay(recording, host, port, speed):
+def replay(recording, host, port, allow, speed, timeout):
     """Serve RECORDING (a file `pmu record` wrote, or any capture of C37.118.2 frames,
     CFG-2 first) to one PDC, its frames as recorded, paced by their time stamps.
     \b
     Example:
       stabctl pmu replay wecc.c37 --speed 0
     """
-    from stabctl.estimation.c37_tcp import StreamServer
+    from stabctl.estimation.c37_tcp import Guard, StreamServer
     from stabctl.io.inputs import input_file
 
+    guard = Guard(_allowed(host, allow), timeout)
     path = input_file(recording, "RECORDING")
-    with StreamServer.of_recording(path, host=host, port=port, speed=speed or _INF) as server:
+    with StreamServer.of_recording(
+        path, host=host, port=port, speed=speed or _INF, guard=guard
+    ) as server:
         _serve([server])
 
 
@@ -192,7 +241,11 @@ def _serve(servers) -> None:
             err=True,
         )
     for server in servers:
-        server.finished.wait()
+        while not server.finished.wait(0.2):  # a wait with a time-out lets Ctrl-C through
+            pass
+    for server in servers:
+        for peer in server.refused:
+            click.echo(f"dropped {peer}", err=True)
     sent, total = (sum(getattr(s, a) for s in servers) for a in ("n_sent", "n_frames"))
     click.echo(
         f"sent {sent} of {total} frames" + (f" on {len(servers)} ports" if len(servers) > 1 else "")
@@ -217,20 +270,23 @@ def _serve(servers) -> None:
 @reports_errors
 def record(address, out, frames):
     """Receive a C37.118.2 stream from the PMU or PDC at HOST:PORT (pyc37's client: CFG-2,
-    then 'start') and write its CFG-2 and FRAMES data frames to OUT, as received; written
-    whole or not at all.
+    then 'start') and write its CFG-2 and FRAMES data frames to OUT, as received.  A
+    stream that stops before FRAMES (the server closes, resets or falls silent) is
+    written as far as it came and named an error (exit status 2).
     \b
     Example:
       stabctl pmu record 127.0.0.1:4712 --frames 3600 -o wecc.c37
     """
-    from stabctl.estimation.c37_tcp import receive
+    from stabctl.estimation.c37_tcp import End, receive
     from stabctl.parallel import atomic_write
 
     host, port = _host_port(address)
     check_writable(out, "--out")
-    cfg2, data = receive(host, port, frames)
-    atomic_write(out, lambda f: f.write(cfg2 + b"".join(data)), mode="wb")
-    click.echo(f"recorded {len(data)} frames from {address} to {out}")
+    got = receive(host, port, End(frames=frames))
+    atomic_write(out, lambda f: f.write(got.cfg2 + b"".join(got.data)), mode="wb")
+    if got.short:
+        raise InputError(f"{address}: {got.short}; the {len(got.data)} received are in {out}")
+    click.echo(f"recorded {len(got.data)} frames from {address} to {out}")
 
 
 def _host_port(address: str) -> tuple[str, int]:
@@ -288,6 +344,7 @@ def plant(
     esd_model,
     host,
     port,
+    allow,
     speed,
     timeout,
     conventions,
@@ -313,6 +370,7 @@ def plant(
 
     if esd_pct is None:
         raise InputError("pmu plant needs --esd-pct")
+    peers = _allowed(host, allow)
     settings = pmu_settings(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )
@@ -326,7 +384,7 @@ def plant(
     )
     sim = model_settings(conventions, step).simulator(case)
     run = cl.run_closed_loop(
-        sim, [ev], tf, loop, serve=Listen(host, port, listening, timeout, speed or _INF)
+        sim, [ev], tf, loop, serve=Listen(host, port, listening, timeout, speed or _INF, peers)
     )
     row = {
         "stable": run.result.stable,

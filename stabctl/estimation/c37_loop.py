@@ -36,7 +36,7 @@ import numpy as np
 
 from stabctl.errors import InputError
 from stabctl.estimation import c37
-from stabctl.estimation.c37_tcp import _read_frame
+from stabctl.estimation.c37_tcp import Guard, _read_frame, command_word
 
 EXTENDED = 8  # C37.118.2-2011 Table 15: extended frame
 
@@ -91,7 +91,8 @@ def read_modes(data: bytes, n_dev: int) -> tuple[int, np.ndarray]:
     Raises
     ------
     InputError
-        Not an extended command frame, a CRC that fails, or not n_dev modes.
+        Not an extended command frame, a CRC that fails, not n_dev modes, or a mode
+        other than -1, 0, +1.
     """
     from pyc37.frame import CommandFrame, FrameError
 
@@ -102,7 +103,10 @@ def read_modes(data: bytes, n_dev: int) -> tuple[int, np.ndarray]:
     if cmd._command != EXTENDED or len(cmd._extended_frame) != n_dev:
         raise InputError(f"controller's answer is not the modes of {n_dev} ESDs")
     stamp = cmd.get_soc() * c37.TIME_BASE + cmd.get_frasec()[0]
-    return stamp, np.frombuffer(cmd._extended_frame, np.int8).astype(np.int64)
+    modes = np.frombuffer(cmd._extended_frame, np.int8).astype(np.int64)
+    if bad := sorted({int(m) for m in modes} - {-1, 0, 1}):
+        raise InputError(f"controller's answer holds mode(s) {bad}: an ESD's mode is -1, 0 or +1")
+    return stamp, modes
 
 
 @dataclass(frozen=True)
@@ -123,6 +127,8 @@ class Listen:
         Time-stamp seconds per wall-clock second: each frame is sent no earlier than its
         time stamp divided by speed after the first (1: real time, as a real-time
         simulator; inf: as soon as the previous answer is in).
+    allow : tuple of str
+        Controller addresses allowed to connect (empty: any).
     """
 
     host: str = "127.0.0.1"
@@ -130,6 +136,7 @@ class Listen:
     on_listen: Callable | None = None
     timeout: float = 30.0
     speed: float = float("inf")
+    allow: tuple = ()
 
 
 class PlantLink:
@@ -149,6 +156,10 @@ class PlantLink:
         Longest wait for the controller to connect, and for each answer (s).
     speed : float, optional
         Pacing of the frames (`Listen.speed`; default inf, unpaced).
+    allow : tuple of str, optional
+        Controller addresses allowed (default: any).  A peer not allowed, or one that does
+        not ask for CFG-2 and say 'start' in valid command frames within the time-out, is
+        dropped (named in `refused`) and the plant waits for the next, until `timeout`.
 
     Raises
     ------
@@ -158,10 +169,22 @@ class PlantLink:
         The address cannot be listened on.
     """
 
-    def __init__(self, controller, cfg, host="127.0.0.1", port=0, timeout=30.0, speed=float("inf")):
+    def __init__(
+        self,
+        controller,
+        cfg,
+        host="127.0.0.1",
+        port=0,
+        timeout=30.0,
+        speed=float("inf"),
+        allow=(),
+    ):
         if not speed > 0:
             raise InputError(f"speed must be > 0, got {speed}")
         self.ctrl, self.cfg, self.timeout = controller, cfg, float(timeout)
+        self.guard = Guard(tuple(allow), float(timeout))
+        #: peers dropped before a controller took the loop, each with the reason
+        self.refused: list[str] = []
         self.speed, self._start = float(speed), None
         self.cfg2 = c37.config_frame(cfg)
         self._sock = socket.create_server((host, port))
@@ -219,20 +242,68 @@ class PlantLink:
         return modes
 
     def _connected(self) -> socket.socket:
-        """The controller's connection, once it has asked for CFG-2 and said 'start'."""
+        """The controller's connection: the first allowed peer that asks for CFG-2 and
+        says 'start' (valid command frames) within the time-out, each peer's handshake
+        on a thread of its own (a silent stranger holds no one up); others are dropped."""
         if self._conn is not None:
             return self._conn
-        self._sock.settimeout(self.timeout)
-        try:
-            conn, _ = self._sock.accept()
-        except TimeoutError:
-            raise InputError(f"no controller connected within {self.timeout:g} s") from None
+        deadline = time.monotonic() + self.timeout
+        won: list[socket.socket] = []
+        lock = threading.Lock()
+
+        def shake(conn, peer):
+            try:
+                self._handshake(conn, deadline)
+            except (InputError, OSError) as exc:
+                self.refused.append(f"{peer[0]}:{peer[1]}: {exc}")
+                conn.close()
+                return
+            with lock:
+                if won:  # another peer took the loop first
+                    conn.close()
+                else:
+                    won.append(conn)
+
+        self._sock.settimeout(0.05)
+        while not won and time.monotonic() < deadline:
+            try:
+                conn, peer = self._sock.accept()
+            except TimeoutError:
+                continue
+            if self.guard.admits(peer):
+                threading.Thread(target=shake, args=(conn, peer), daemon=True).start()
+            else:
+                self.refused.append(f"{peer[0]}:{peer[1]}: not in the allowed peers")
+                conn.close()
+        with lock:
+            if won:
+                self._conn = won[0]
+                return self._conn
+            won.append(None)  # type: ignore[arg-type]  # a late handshake closes its peer
+        refused = (
+            f" ({len(self.refused)} peer(s) dropped, the last {self.refused[-1]})"
+            if self.refused
+            else ""
+        )
+        raise InputError(f"no controller connected within {self.timeout:g} s{refused}")
+
+    def _handshake(self, conn: socket.socket, deadline: float) -> None:
+        """Answer 'cfg2' until 'start' (InputError past the deadline or on a peer that
+        closes or speaks another protocol)."""
         conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self._conn = conn
-        while (word := _command(self._next(conn, "a command"))) != 2:  # 'start'
+        while True:
+            conn.settimeout(max(deadline - time.monotonic(), 1e-3))
+            try:
+                frame = _read_frame(conn)
+            except TimeoutError:
+                raise InputError("sent no 'start' in time") from None
+            if frame is None:
+                raise InputError("closed before 'start'")
+            word = command_word(frame)
+            if word == 2:  # 'start'
+                return
             if word == 5:  # 'cfg2'
                 conn.sendall(self.cfg2.convert2bytes())
-        return conn
 
     def _next(self, conn: socket.socket, what: str) -> bytes:
         conn.settimeout(self.timeout)
@@ -243,11 +314,6 @@ class PlantLink:
         if frame is None:
             raise InputError(f"the controller closed the loop before {what}")
         return frame
-
-
-def _command(frame: bytes) -> int:
-    """The command word of a command frame (0 for any other frame)."""
-    return int.from_bytes(frame[14:16], "big") if frame[1] & 0x70 == 0x40 else 0
 
 
 def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.0) -> int:
@@ -291,6 +357,11 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
         names = [str(x).strip() for x in (names if isinstance(names, list) else [names])]
         if names != [p.label for p in cfg.pmus]:
             raise InputError(f"{host}:{port} streams PMUs {names}, not the controller's")
+        if cfg2.get_data_rate() != cfg.rate:
+            raise InputError(
+                f"{host}:{port} streams {cfg2.get_data_rate()} frames/s, the controller's "
+                f"estimator is tuned to {cfg.rate:g} (give --rate {cfg2.get_data_rate()})"
+            )
         conn.sendall(CommandFrame(cfg.idcode, "start").convert2bytes())
         while (data := _read_frame(conn)) is not None:
             frame = c37.parse_frame(cfg, cfg2, data)

@@ -14,9 +14,11 @@ beyond the frame it reads).
 
 from __future__ import annotations
 
+import contextlib
 import socket
 import threading
 import time
+from dataclasses import dataclass
 
 from stabctl.errors import InputError
 from stabctl.estimation import c37
@@ -25,10 +27,39 @@ from stabctl.estimation import c37
 COMMANDS = {1: "stop", 2: "start", 3: "header", 5: "cfg2"}
 
 
+@dataclass(frozen=True)
+class Guard:
+    """Who may talk to a server and how long it waits for them.
+
+    Attributes
+    ----------
+    allow : tuple of str
+        Peer addresses (IP, as the socket reports them) allowed to connect; empty: any.
+        A connection from another address is closed at once and counted in
+        `StreamServer.refused`.
+    timeout : float
+        Longest silence of a peer expected to send (a command, an answer), and longest
+        wait for a peer to take a frame (s); a peer past it is dropped.
+    max_peers : int
+        Peers served at once; one more is closed at once.
+    """
+
+    allow: tuple = ()
+    timeout: float = 30.0
+    max_peers: int = 8
+
+    def admits(self, peer) -> bool:
+        """True if the peer's address (a socket's ``getpeername``) may connect."""
+        return not self.allow or peer[0] in self.allow
+
+
 class StreamServer:
-    """Serve one stream's frames to one client at a time on ``host``:``port`` (0: a free
-    port, `address` tells which).  Build it with `of_frames` (simulated PMUs) or
-    `of_recording` (a recording, its frames re-sent as they are).
+    """Serve one stream's frames on ``host``:``port`` (0: a free port, `address` tells
+    which), each peer on a thread of its own: CFG-2 and header on request, the data frames
+    from 'start'.  Build it with `of_frames` (simulated PMUs) or `of_recording` (a
+    recording, its frames re-sent as they are).  Command frames are obeyed only with a
+    valid CRC; a peer that is not allowed (`Guard.allow`), falls silent, speaks another
+    protocol or connects and closes is dropped without ending the server's session.
 
     Parameters
     ----------
@@ -43,15 +74,21 @@ class StreamServer:
     speed : float, optional
         Time-stamp seconds per wall-clock second (default 1, real time; ``inf``: no
         pacing).
+    guard : Guard, optional
+        Allowed peers and time-outs (default: any peer, 30 s).
 
     Attributes
     ----------
     sent_at : list of float
-        ``time.perf_counter()`` when each data frame was handed to the socket (NaN until).
+        ``time.perf_counter()`` when each data frame was handed to the socket in the last
+        session that streamed (NaN until).
     due_at : list of float
         ``time.perf_counter()`` at which each frame was due by its time stamp.
     finished : threading.Event
-        Set when a session has ended (every frame sent, or the client gone).
+        Set when a session that streamed has ended (every frame sent, the peer said
+        'stop' or went away).
+    refused : list of str
+        Peers refused or dropped, each with the reason.
 
     Raises
     ------
@@ -61,17 +98,21 @@ class StreamServer:
         The address cannot be listened on (a port in use).
     """
 
-    def __init__(self, cfg2, data, host: str = "127.0.0.1", port: int = 0, speed=1.0):
+    def __init__(
+        self, cfg2, data, host: str = "127.0.0.1", port: int = 0, speed=1.0, guard=Guard()
+    ):
         if not speed > 0:
             raise InputError(f"speed must be > 0, got {speed}")
         if not data:
             raise InputError("a stream server needs at least one data frame")
-        self.speed, self._cfg2, self._data = float(speed), cfg2, list(data)
+        self.speed, self._cfg2, self._data, self.guard = float(speed), cfg2, list(data), guard
         self._t = [c37.frame_time(d) for d in self._data]
         self.sent_at = [float("nan")] * len(self._data)
         self.due_at = [float("nan")] * len(self._data)
+        self.refused: list[str] = []
         self._sock = socket.create_server((host, port))
         self._stop, self.finished = threading.Event(), threading.Event()
+        self._peers = threading.BoundedSemaphore(guard.max_peers)
         self._thread = threading.Thread(target=self._accept, daemon=True)
         self._thread.start()
 
@@ -120,66 +161,85 @@ class StreamServer:
     def _accept(self) -> None:
         while not self._stop.is_set():
             try:
-                conn, _ = self._sock.accept()
+                conn, peer = self._sock.accept()
             except OSError:  # closed
                 return
+            if not self.guard.admits(peer):
+                self.refused.append(f"{peer[0]}:{peer[1]}: not in the allowed peers")
+                conn.close()
+            elif not self._peers.acquire(blocking=False):
+                self.refused.append(f"{peer[0]}:{peer[1]}: {self.guard.max_peers} peers served")
+                conn.close()
+            else:
+                threading.Thread(target=self._session, args=(conn, peer), daemon=True).start()
+
+    def _session(self, conn: socket.socket, peer) -> None:
+        """One peer's session; the server's `finished` is set if it streamed."""
+        streamed = False
+        try:
             with conn:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                try:
-                    self._serve(conn)
-                except InputError:  # a client of another protocol: dropped, serve on
-                    continue
-                except OSError:  # the client vanished mid-session: the session ends
-                    pass
+                streamed = self._serve(conn)
+        except InputError as exc:  # another protocol, a cut frame: dropped, serve on
+            self.refused.append(f"{peer[0]}:{peer[1]}: {exc}")
+        except TimeoutError:
+            self.refused.append(f"{peer[0]}:{peer[1]}: silent for {self.guard.timeout:g} s")
+        except OSError:  # the peer vanished mid-session
+            pass
+        finally:
+            self._peers.release()
+        if streamed:
             self.finished.set()
 
-    def _serve(self, conn: socket.socket) -> None:
-        """Commands until the client closes; a 'start' streams every frame (commands
-        received meanwhile are read between frames)."""
+    def _serve(self, conn: socket.socket) -> bool:
+        """Commands until the peer closes; a 'start' streams every frame (commands
+        received meanwhile are read between frames).  True if it streamed."""
         while not self._stop.is_set():
             command = self._command(conn, block=True)
             if command is None:
-                return
+                return False
             if command == "cfg2":
                 conn.sendall(self._cfg2.convert2bytes())
             elif command == "header":
                 conn.sendall(self._header())
             elif command == "start":
                 self._stream(conn)
-                return
+                return True
+        return False
 
     def _stream(self, conn: socket.socket) -> bool:
-        """Send the data frames paced by their time stamps; False if the client left or
+        """Send the data frames paced by their time stamps; False if the peer left or
         said 'stop'."""
         start = time.perf_counter()
+        self.sent_at[:] = [float("nan")] * len(self._data)
         for k, data in enumerate(self._data):
             due = start + (self._t[k] - self._t[0]) / self.speed
             self.due_at[k] = due
             while (wait := due - time.perf_counter()) > 0:
                 if self._command(conn, block=False, timeout=min(wait, 0.05)) in ("stop", None):
                     return False
+            conn.settimeout(self.guard.timeout)
             try:
                 conn.sendall(data)
-            except OSError:
+            except OSError:  # gone, or not reading for the time-out
                 return False
             self.sent_at[k] = time.perf_counter()
         return True
 
     def _command(self, conn: socket.socket, block: bool, timeout: float = 0.0):
-        """The next command frame's word as a name (None: the client closed; '' none or
-        one this server ignores)."""
-        conn.settimeout(None if block else timeout)
+        """The next command frame's word as a name (None: the peer closed; '' none, one
+        this server ignores, or one whose CRC fails).  Raises TimeoutError after
+        `Guard.timeout` s of silence when block is True."""
+        conn.settimeout(self.guard.timeout if block else timeout)
         try:
             frame = _read_frame(conn)
         except TimeoutError:
+            if block:
+                raise
             return ""
-        finally:
-            conn.settimeout(None)
         if frame is None:
             return None
-        if frame[1] & 0x70 != 0x40:  # frame type 100: a command frame
-            return ""
-        return COMMANDS.get(int.from_bytes(frame[14:16], "big"), "")
+        return COMMANDS.get(command_word(frame), "")
 
     def _header(self) -> bytes:
         from pyc37.frame import HeaderFrame
@@ -189,30 +249,100 @@ class StreamServer:
         return HeaderFrame(c.get_id_code(), text, c.get_soc(), (0, "+")).convert2bytes()
 
 
+def command_word(frame: bytes) -> int:
+    """The command word of a command frame whose CRC is valid (C37.118.2-2011 Table 15;
+    0 for any other frame, or a command frame whose CRC fails)."""
+    from pyc37.frame import CommonFrame
+
+    if frame[1] & 0x70 != 0x40 or not CommonFrame._check_crc(frame):
+        return 0
+    return int.from_bytes(frame[14:16], "big")
+
+
 def _recv_exactly(conn: socket.socket, n: int):
-    """n bytes from conn (None if the peer closed first)."""
+    """n bytes from conn (None if the peer closed first; CutFrame if it closed after
+    some of them)."""
     out = b""
     while len(out) < n:
         chunk = conn.recv(n - len(out))
         if not chunk:
+            if out:
+                raise CutFrame("the peer closed the connection in the middle of a frame")
             return None
         out += chunk
     return out
 
 
+#: Most data frames a receiver keeps from one stream (about 12 h at 60 frames/s): a
+#: stream without an end (`End`) is refused beyond it instead of filling the memory.
+MAX_FRAMES = 2_600_000
+
+
+@dataclass(frozen=True)
+class End:
+    """Where a received stream ends: after ``frames`` data frames, or at the first frame
+    stamped ``tf`` s or later after the CFG-2's time stamp (its SOC, t = 0 of the run);
+    both None: when the server closes the connection.
+
+    Attributes
+    ----------
+    frames : int or None
+        Data frames to receive.
+    tf : float or None
+        Last time stamp to receive (s after the CFG-2's SOC).
+    """
+
+    frames: int | None = None
+    tf: float | None = None
+
+    def __str__(self) -> str:
+        parts = [] if self.frames is None else [f"{self.frames} frames"]
+        parts += [] if self.tf is None else [f"t = {self.tf:g} s"]
+        return " or ".join(parts) or "the server's close"
+
+    @property
+    def given(self) -> bool:
+        """An end the client states (not the server's close)."""
+        return self.frames is not None or self.tf is not None
+
+
+@dataclass(frozen=True)
+class Stream:
+    """A received stream: its CFG-2 frame and data frames (bytes, as received) and, if it
+    stopped before its `End`, why.
+
+    Attributes
+    ----------
+    cfg2 : bytes
+        The CFG-2 frame.
+    data : list of bytes
+        The data frames received, in arrival order.
+    short : str
+        Empty if the stream reached its end; else what cut it (the server closed, the
+        connection was reset or went silent, a frame cut in the middle), with the frames
+        and the last time stamp received.
+    """
+
+    cfg2: bytes
+    data: list
+    short: str = ""
+
+
 def receive(
-    host: str, port: int, n: int | None = None, pdc_id: int = 1, timeout: float = 30.0
-) -> tuple:
-    """The CFG-2 frame and the data frames (bytes, as received) of the C37.118.2 stream at
-    host:port: command frames (pyc37's) 'cfg2', then 'start', then 'stop' once n frames
-    have arrived (n None: every frame until the server ends the stream by closing).
+    host: str, port: int, end: End = End(), pdc_id: int = 1, timeout: float = 30.0
+) -> Stream:
+    """The CFG-2 frame and the data frames of the C37.118.2 stream at host:port: command
+    frames (pyc37's) 'cfg2', then 'start', then 'stop' once `end` is reached.  A stream
+    that stops before its stated end (the server closes, resets or falls silent for
+    `timeout` s, or cuts a frame) is returned with what arrived and `Stream.short` saying
+    so; a stream with no stated end ends when the server closes.
 
     Raises
     ------
     InputError
-        No server there, silence for `timeout` s, the connection closed before n frames
-        (or before any with n None), or a reply to 'cfg2' that is not a configuration
-        frame.
+        No server there, silence for `timeout` s before the first data frame, a reply to
+        'cfg2' that is not a configuration frame, a peer of another protocol, or more than
+        `MAX_FRAMES` frames of a stream without a stated end.
     """
     from pyc37.frame import CommandFrame
 
@@ -229,16 +359,50 @@ def receive(
                     f"{host}:{port} answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}"
                 )
             conn.sendall(CommandFrame(pdc_id, "start").convert2bytes())
-            if n is None:
-                data = list(iter(lambda: _read_frame(conn), None))
-                if not data:
-                    raise InputError(f"{host}:{port} closed the stream before a data frame")
-            else:
-                data = [_frame(conn) for _ in range(n)]
-                conn.sendall(CommandFrame(pdc_id, "stop").convert2bytes())
         except TimeoutError:
             raise InputError(f"{host}:{port}: nothing received for {timeout:g} s") from None
-    return cfg2, data
+        data: list[bytes] = []
+        short = _data_frames(conn, cfg2, end, data)
+        if not data and short:
+            raise InputError(f"{host}:{port}: {short}")
+        if not short and end.given:
+            with contextlib.suppress(OSError):
+                conn.sendall(CommandFrame(pdc_id, "stop").convert2bytes())
+    return Stream(cfg2, data, short)
+
+
+def _data_frames(conn: socket.socket, cfg2: bytes, end: End, data: list) -> str:
+    """Append data frames from conn to data until `end`; '' if it was reached (or, with
+    no end stated, the server closed), else what cut the stream."""
+    soc = int.from_bytes(cfg2[6:10], "big")
+    while end.frames is None or len(data) < end.frames:
+        try:
+            frame = _read_frame(conn)
+        except TimeoutError:
+            cut = "fell silent"
+        except ConnectionError:
+            cut = "reset the connection"
+        except CutFrame:
+            cut = "closed the connection in the middle of a frame"
+        else:
+            if frame is not None:
+                if frame[1] & 0x70 != 0:  # not a data frame (a CFG or header resent)
+                    continue
+                data.append(frame)
+                if end.tf is not None and c37.frame_time(frame) - soc >= end.tf - 0.5e-6:
+                    return ""
+                if not end.given and len(data) > MAX_FRAMES:
+                    raise InputError(
+                        f"more than {MAX_FRAMES} frames without an end: give the frames or "
+                        "the last time stamp to receive"
+                    )
+                continue
+            if not end.given:
+                return ""
+            cut = "closed the connection"
+        last = f", the last stamped {c37.frame_time(data[-1]) - soc:.4f} s" if data else ""
+        return f"the server {cut} after {len(data)} data frames{last}, before {end}"
+    return ""
 
 
 def _frame(conn: socket.socket) -> bytes:
@@ -249,20 +413,31 @@ def _frame(conn: socket.socket) -> bytes:
     return frame
 
 
+class CutFrame(InputError):
+    """The peer closed the connection in the middle of a frame."""
+
+
 def _read_frame(conn: socket.socket):
-    """One whole frame from conn, SYNC and FRAMESIZE first (None if the peer closed).
+    """One whole frame from conn, SYNC and FRAMESIZE first (None if the peer closed
+    between frames).
 
     Raises
     ------
     InputError
         Bytes that do not start a C37.118.2 frame (SYNC 0xAA, FRAMESIZE of at least 16):
         the peer speaks another protocol.
+    CutFrame
+        The peer closed in the middle of a frame.
     """
     head = _recv_exactly(conn, 4)
-    if head is not None and (head[0] != 0xAA or int.from_bytes(head[2:4], "big") < 16):
+    if head is None:
+        return None
+    if head[0] != 0xAA or int.from_bytes(head[2:4], "big") < 16:
         raise InputError(f"the peer does not speak C37.118.2: it sent {head!r} for a frame start")
-    body = None if head is None else _recv_exactly(conn, int.from_bytes(head[2:4], "big") - 4)
-    return None if body is None else head + body
+    body = _recv_exactly(conn, int.from_bytes(head[2:4], "big") - 4)
+    if body is None:
+        raise CutFrame("the peer closed the connection in the middle of a frame")
+    return head + body
 
 
 def pdc_client(host: str, port: int, pdc_id: int = 1):

@@ -473,7 +473,9 @@ def _over_tcp(run, plant: LoopController, remote_of, serve) -> ClosedLoopRun:
         raise InputError("the ideal estimator reads the true speeds: it has no PMU stream")
     cfg = c37.stream_config(plant.case, plant.pmus, plant.settings.rate)
     where = serve or c37_loop.Listen()
-    link = c37_loop.PlantLink(plant, cfg, where.host, where.port, where.timeout, where.speed)
+    link = c37_loop.PlantLink(
+        plant, cfg, where.host, where.port, where.timeout, where.speed, where.allow
+    )
     with link:
         if serve is None:
             remote = remote_of()
@@ -489,7 +491,8 @@ def _over_tcp(run, plant: LoopController, remote_of, serve) -> ClosedLoopRun:
         return ClosedLoopRun(res, remote.diagnostics(), link.stats().summary())
     nan = np.full(plant.models.n, np.nan)
     plant.rows += [(t, nan, modes, nan) for t, modes in link.answers]
-    return ClosedLoopRun(res, plant.diagnostics(), link.stats().summary())
+    summary = {**link.stats().summary(), "dropped_peers": list(link.refused)}
+    return ClosedLoopRun(res, plant.diagnostics(), summary)
 
 
 def false_actions(run: ClosedLoopRun, deadband_hz: float = 0.1) -> int:

@@ -12,7 +12,8 @@ stamp (SOC), as `c37.config_frame` writes it.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
+import dataclasses
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -62,13 +63,14 @@ def parse_source(text: str) -> Source:
     ------
     InputError
         A TCP address without a port in 1..65535 (or an empty range), or a recording that
-        is not a file.
+        is not a regular file of at most `stabctl.io.inputs.MAX_INPUT_BYTES`.
     """
     if not text.startswith(TCP):
-        path = Path(text)
-        if not path.is_file():
+        from stabctl.io.inputs import input_file
+
+        if not Path(text).exists():
             raise InputError(f"--source {text}: no such recording (or write tcp://HOST:PORT)")
-        return Source(path=path)
+        return Source(path=input_file(text, "--source"))
     servers = []
     for item in text[len(TCP) :].split(","):
         host, _, ports = item.rpartition(":")
@@ -99,6 +101,9 @@ class Received:
         PMU values the streams flagged absent (STAT bits 15-14 = 10: lost at the source).
     missing : int
         PMU values of a time stamp some streams sent and this PMU's did not.
+    short : tuple of str
+        Each stream that stopped before its stated end (`c37_tcp.End`), with what cut it;
+        empty: every stream whole.
     """
 
     frames: list
@@ -106,6 +111,7 @@ class Received:
     data_frames: int
     absent: int
     missing: int
+    short: tuple = ()
 
     def summary(self) -> dict:
         """The counts, for a report (JSON)."""
@@ -115,36 +121,90 @@ class Received:
             "data_frames": self.data_frames,
             "absent": self.absent,
             "missing": self.missing,
+            "short": list(self.short),
         }
 
 
-def read_frames(source: Source, case, pmus, rate: float, timeout: float = 30.0) -> Received:
-    """Every frame of `source` for the PMUs `pmus` of `case` at `rate` frames/s: the
-    recording read whole, or each TCP stream received to its end (all at once, one thread
-    each, as a PDC does), then merged.
+def read_frames(
+    source: Source, case, pmus, rate: float, end=None, timeout: float = 30.0
+) -> Received:
+    """Every frame of `source` for the PMUs `pmus` of `case` at `rate` frames/s up to
+    `end` (`c37_tcp.End`; None: a recording whole, each TCP stream until its server
+    closes): the recording read, or each TCP stream received (all at once, one thread
+    each, as a PDC does; Ctrl-C ends the wait), then merged.  A stream that stops before
+    `end` is kept and named in `Received.short`.
 
     Raises
     ------
     InputError
-        As `c37.recorded_frames` and `c37_tcp.receive`; a stream at another rate, a station
-        that is not one of `pmus` or in two streams, a PMU in no stream, or a data frame
-        that is not readable.
+        As `c37.recorded_frames` and `c37_tcp.receive`; more TCP servers than PMUs; a
+        stream at another rate, a station that is not one of `pmus` or in two streams, a
+        PMU in no stream, a data frame that is not readable, a stream whose time stamps
+        repeat or go backwards, or frames whose every value is absent.
     """
-    if source.path is not None:
-        return merge(case, pmus, rate, [c37.recorded_frames(source.path)])
-    from stabctl.estimation.c37_tcp import receive
+    from stabctl.estimation.c37_tcp import End, Stream, receive
 
-    with ThreadPoolExecutor(max_workers=len(source.servers)) as pool:
-        streams = list(pool.map(lambda hp: receive(hp[0], hp[1], timeout=timeout), source.servers))
-    return merge(
-        case,
-        pmus,
-        rate,
-        [
-            (c37.read_config(cfg2, f"{h}:{p}'s CFG-2"), data)
-            for (h, p), (cfg2, data) in zip(source.servers, streams)
-        ],
+    end = end or End()
+    if source.path is not None:
+        cfg2, data = c37.recorded_frames(source.path)
+        streams = [_recorded_to(end, cfg2, data, str(source.path))]
+    else:
+        if len(source.servers) > len(pmus):
+            raise InputError(
+                f"--source {source}: {len(source.servers)} servers for {len(pmus)} PMUs "
+                "(each stream carries at least one PMU)"
+            )
+        got: list[Stream | Exception | None] = [None] * len(source.servers)
+
+        def fetch(k, host, port):
+            try:
+                got[k] = receive(host, port, end, timeout=timeout)
+            except (InputError, OSError) as exc:  # handed to the caller
+                got[k] = exc
+
+        threads = [
+            threading.Thread(target=fetch, args=(k, h, p), daemon=True)
+            for k, (h, p) in enumerate(source.servers)
+        ]
+        for t in threads:
+            t.start()
+        for t in threads:
+            while t.is_alive():  # a join with a time-out lets Ctrl-C through
+                t.join(0.2)
+        if errors := [g for g in got if isinstance(g, Exception)]:
+            raise errors[0]
+        streams = [
+            (
+                c37.read_config(g.cfg2, f"{h}:{p}'s CFG-2"),
+                g.data,
+                f"{h}:{p}: {g.short}" if g.short else "",
+            )
+            for (h, p), g in zip(source.servers, got)
+            if isinstance(g, Stream)
+        ]
+    received = merge(case, pmus, rate, [(cfg2, data) for cfg2, data, _ in streams])
+    if received.frames and not any(f.valid.any() for f in received.frames):
+        raise InputError(
+            f"--source {source}: every PMU value of its {len(received.frames)} frames is "
+            "flagged absent or missing: nothing was measured"
+        )
+    return dataclasses.replace(received, short=tuple(s for _, _, s in streams if s))
+
+
+def _recorded_to(end, cfg2, data, name: str) -> tuple:
+    """(cfg2, the recording's data frames up to `end`, what is short of it or '')."""
+    soc = cfg2.get_soc()
+    if end.frames is not None:
+        data = data[: end.frames]
+    if end.tf is not None:
+        stamps = [c37.frame_time(d) - soc for d in data]
+        reached = [k for k, t in enumerate(stamps) if t >= end.tf - 0.5e-6]
+        data = data[: reached[0] + 1] if reached else data
+    whole = (end.frames is None or len(data) == end.frames) and (
+        end.tf is None or (data and c37.frame_time(data[-1]) - soc >= end.tf - 0.5e-6)
     )
+    last = f", the last stamped {c37.frame_time(data[-1]) - soc:.4f} s" if data else ""
+    return cfg2, data, "" if whole else f"{name}: {len(data)} data frames{last}, before {end}"
 
 
 def merge(case, pmus, rate: float, streams) -> Received:
@@ -161,6 +221,7 @@ def merge(case, pmus, rate: float, streams) -> Received:
     owner: dict[str, int] = {}
     parsed = []
     for s, (cfg2, data) in enumerate(streams):
+        _check_order(data, s)
         names = cfg2.get_station_name()
         names = [str(x).strip() for x in (names if isinstance(names, list) else [names])]
         for name in names:
@@ -181,6 +242,19 @@ def merge(case, pmus, rate: float, streams) -> Received:
     if lost := [x for x in labels if x not in owner]:
         raise InputError(f"PMU {', '.join(lost)} in no stream")
     return _by_time_stamp(len(labels), parsed)
+
+
+def _check_order(data, s: int) -> None:
+    """InputError if stream s's time stamps repeat or go backwards (a frame would replace
+    or be sorted before another without a word)."""
+    stamps = np.array([round(c37.frame_time(d) * c37.TIME_BASE) for d in data], np.int64)
+    if (bad := np.flatnonzero(np.diff(stamps) <= 0)).size:
+        k = int(bad[0]) + 1
+        how = "repeats" if stamps[k] == stamps[k - 1] else "goes back from"
+        raise InputError(
+            f"stream {s + 1}: data frame {k + 1} {how} the time stamp of frame {k} "
+            f"({stamps[k - 1] / c37.TIME_BASE:.6f} s, UNIX); {bad.size} such frame(s)"
+        )
 
 
 def _by_time_stamp(n: int, parsed) -> Received:

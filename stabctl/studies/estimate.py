@@ -107,7 +107,8 @@ def estimator_errors(
     ------
     InputError
         ``t_end`` before the errors start; a source as
-        `stabctl.estimation.sources.read_frames`.
+        `stabctl.estimation.sources.read_frames`, or one whose streams stop before the
+        run's end.
     """
     from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import ambient as am
@@ -154,10 +155,16 @@ def _received(case, res, settings, source, mc: ErrorRuns, window) -> dict:
     figures as drawn and as on the wire."""
     from stabctl.estimation import c37, sources
     from stabctl.estimation import pmu as pm
+    from stabctl.estimation.c37_tcp import End
     from stabctl.studies import estimation as study
 
     pmus = pm.machine_pmus(case, mc.pmu_at)
-    got = sources.read_frames(source, case, pmus, settings.rate)
+    end = End(tf=float(res.t[-1]) - 0.5 / settings.rate)  # the run's last reporting instant
+    got = sources.read_frames(source, case, pmus, settings.rate, end)
+    if got.short:
+        raise InputError(
+            f"--source {source} is short of the run's {res.t[-1]:g} s: {'; '.join(got.short)}"
+        )
     truth = pm.phasor_truth(case, res, pmus, settings.window_cycles)
     drawn = pm.measure(truth, settings, mc.seed)
     wire = c37.on_wire(c37.stream_config(case, pmus, settings.rate), drawn)

@@ -207,8 +207,9 @@ def test_peers_of_another_protocol_are_named_or_dropped(wecc_stream):
                 assert web.recv(100) == b""  # closed by the server
             except ConnectionResetError:
                 pass  # closed with the request unread
-        cfg2, data = receive(*server.address, timeout=10)
-        assert len(data) == len(stream) and cfg2[0] == 0xAA
+        got = receive(*server.address, timeout=10)
+        assert len(got.data) == len(stream) and got.cfg2[0] == 0xAA and not got.short
+        assert "does not speak C37.118.2" in server.refused[0]
     web_server = socket.create_server(("127.0.0.1", 0))
 
     def answer():

@@ -63,6 +63,7 @@ def test_over_tcp_equals_the_same_frames_in_process(kundur_run):
         "data_frames": len(drawn),
         "absent": int((~drawn.valid).sum()),
         "missing": 0,
+        "short": [],
     }
     assert got.absent > 0
     assert [f.t for f in got.frames] == list(drawn.t)  # the reporting instants k / 60

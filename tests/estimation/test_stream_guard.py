@@ -1,0 +1,245 @@
+"""C37.118.2 streams that end early, lie about time, or come from strangers (issue 54,
+items 2, 3, 5, 7): a receiver knows its end (`c37_tcp.End`) and says what it got short of
+it, keeping what arrived; a server obeys only CRC-valid commands, drops silent, foreign
+or not-allowed peers without ending its session, and serves peers side by side; a plant
+takes as controller only an allowed peer that completes the handshake and refuses modes
+outside {-1, 0, +1}; recordings whose time stamps repeat or go back, or whose every value
+is absent, are refused by name."""
+
+import socket
+import threading
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pyc37")
+
+import stabctl
+from stabctl.dynamics.events import fault_with_clearing
+from stabctl.errors import InputError
+from stabctl.estimation import c37, c37_loop, sources
+from stabctl.estimation import closed_loop as cl
+from stabctl.estimation import pmu as pm
+from stabctl.estimation.c37_tcp import End, Guard, StreamServer, receive
+from stabctl.estimation.settings import PMUSettings
+
+RATE = 60
+
+
+@pytest.fixture(scope="module")
+def kundur_stream():
+    """Kundur's bus-3 fault, 1 s: its 4 PMUs' 61 frames (t = 0 .. 1 s)."""
+    case = stabctl.load_case("kundur")
+    res = stabctl.Simulator(case).run([fault_with_clearing(case, 3, 101, 0.5, 7)], t_end=1.0)
+    pmus = pm.machine_pmus(case)
+    frames = list(pm.measure(pm.phasor_truth(case, res, pmus), PMUSettings(), seed=1))
+    cfg = c37.stream_config(case, pmus, RATE)
+    cfg2 = c37.config_frame(cfg)
+    return case, pmus, cfg, cfg2, frames
+
+
+def _cut_server(cfg2, data, cut_last: bool):
+    """A server that sends CFG-2 and the data frames, then (cut_last) half of one more
+    frame, and closes."""
+    srv = socket.create_server(("127.0.0.1", 0))
+
+    def run():
+        conn, _ = srv.accept()
+        with conn:
+            conn.recv(100)  # 'cfg2'
+            conn.sendall(cfg2.convert2bytes())
+            conn.recv(100)  # 'start'
+            conn.sendall(b"".join(data))
+            if cut_last:
+                conn.sendall(data[0][: len(data[0]) // 2])
+        srv.close()
+
+    threading.Thread(target=run, daemon=True).start()
+    return srv.getsockname()[:2]
+
+
+def _encoded(cfg, cfg2, frames):
+    return [c37.data_frame(cfg, cfg2, f) for f in frames]
+
+
+def test_a_stream_shorter_than_its_end_keeps_what_came_and_says_so(kundur_stream):
+    """A server with 61 frames asked for 100 (the finding: `pmu record --frames N` with N
+    too large discarded every frame): the 61 are kept, `short` names the close, the count
+    and the last time stamp (1 s); a frame cut in the middle is named as such."""
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames)
+    with StreamServer(cfg2, data, speed=float("inf")) as server:
+        got = receive(*server.address, End(frames=100), timeout=10)
+    assert len(got.data) == 61 and got.data == data
+    assert got.short == (
+        "the server closed the connection after 61 data frames, the last stamped 1.0000 s, "
+        "before 100 frames"
+    )
+    got = receive(*_cut_server(cfg2, data[:10], cut_last=True), End(tf=1.0), timeout=10)
+    assert len(got.data) == 10
+    assert "closed the connection in the middle of a frame after 10 data frames" in got.short
+
+
+def test_a_stream_ends_at_its_end_and_the_server_is_told_stop(kundur_stream):
+    """End(tf = 0.5 s) takes the frames stamped 0 .. 0.5 s (31) and says 'stop'; End(frames
+    = 5) five; no end: every frame until the server closes, not short."""
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames)
+    with StreamServer(cfg2, data, speed=float("inf")) as server:
+        assert len(receive(*server.address, End(tf=0.5), timeout=10).data) == 31
+        assert len(receive(*server.address, End(frames=5), timeout=10).data) == 5
+        whole = receive(*server.address, timeout=10)
+    assert len(whole.data) == 61 and not whole.short
+
+
+def test_server_drops_scans_silent_peers_bad_crc_and_strangers(kundur_stream):
+    """A port scan (connect, close) does not end the server's session; a silent peer is
+    dropped after the time-out while a PDC beside it gets the whole stream; a 'start' whose
+    CRC fails is not obeyed; a peer not allowed is closed at once."""
+    from pyc37.frame import CommandFrame
+
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames)
+    with StreamServer(cfg2, data, speed=float("inf"), guard=Guard(timeout=0.5)) as server:
+        socket.create_connection(server.address).close()  # a scan
+        silent = socket.create_connection(server.address)
+        time.sleep(0.2)
+        assert not server.finished.is_set()
+        got = receive(*server.address, timeout=10)  # served beside the silent peer
+        assert len(got.data) == 61 and server.finished.wait(5)
+        server.finished.clear()
+        time.sleep(0.6)
+        assert any("silent for 0.5 s" in r for r in server.refused)
+        silent.close()
+        bad = bytearray(CommandFrame(1, "start").convert2bytes())
+        bad[-1] ^= 0xFF
+        with socket.create_connection(server.address, timeout=2) as peer:
+            peer.sendall(bytes(bad))
+            peer.settimeout(0.3)
+            try:
+                assert peer.recv(100) == b""  # dropped when silent, nothing streamed
+            except (TimeoutError, ConnectionError):
+                pass  # nothing streamed
+    assert server.n_sent == 61  # from the PDC's session only
+    with StreamServer(cfg2, data, speed=float("inf"), guard=Guard(allow=("10.9.9.9",))) as s:
+        with socket.create_connection(s.address, timeout=2) as peer:
+            peer.sendall(CommandFrame(1, "cfg2").convert2bytes())
+            try:
+                assert peer.recv(100) == b""  # closed, no CFG-2
+            except ConnectionError:
+                pass  # closed with the command unread
+        time.sleep(0.1)
+        assert s.refused and "not in the allowed peers" in s.refused[0]
+
+
+def _plant(case, timeout, allow=()):
+    from stabctl.storage.devices import uniform_fleet
+
+    ctrl = cl.LoopController(case, uniform_fleet(case, 10).devices, "ekf", PMUSettings(), 0, 2.0)
+    cfg = c37.stream_config(case, ctrl.pmus, RATE)
+    return ctrl, cfg, c37_loop.PlantLink(ctrl, cfg, timeout=timeout, allow=allow)
+
+
+def test_a_plant_takes_no_stranger_as_controller():
+    """The first peer of the plant is a stranger that never says 'start': it is dropped and
+    the controller that connects next runs the loop; a peer not allowed is closed; an
+    answer carrying mode +127 (the finding: it drove a 45 MW device at 57 pu) is
+    refused by name."""
+    case = stabctl.load_case("kundur")
+    sim = stabctl.Simulator(case)
+    events = [fault_with_clearing(case, 3, 101, 1.0, 7)]
+    partial = sim.run(events, t_end=0.1)
+    ctrl, cfg, link = _plant(case, timeout=1.5)
+    with link:
+        stranger = socket.create_connection(link.address)
+        thread = threading.Thread(
+            target=lambda: (
+                time.sleep(0.2),
+                c37_loop.serve_controller(ctrl, cfg, *link.address, timeout=5),
+            ),
+            daemon=True,
+        )
+        thread.start()
+        modes = link(0.05, partial)
+        assert modes.shape == (ctrl.mode.size,) and not link.refused  # still waiting
+        stranger.close()
+        time.sleep(0.3)
+        assert "closed before 'start'" in link.refused[0]
+    _, _, link = _plant(case, timeout=0.5, allow=("10.9.9.9",))
+    with link, socket.create_connection(link.address):
+        with pytest.raises(InputError, match="not in the allowed peers"):
+            link(0.05, partial)
+    n = ctrl.mode.size
+    answer = c37_loop.modes_frame(1, 0, 0, np.r_[127, np.zeros(n - 1, int)])
+    with pytest.raises(InputError, match=r"mode\(s\) \[127\]: an ESD's mode is -1, 0 or \+1"):
+        c37_loop.read_modes(answer, n)
+
+
+def test_a_controller_at_another_rate_is_refused(kundur_stream):
+    """`pmu control --rate 30` against a 60 frames/s plant: named, not accepted."""
+    case, pmus, cfg, cfg2, frames = kundur_stream
+    ctrl, _, link = _plant(case, timeout=2)
+    slow = c37.stream_config(case, ctrl.pmus, 30)
+    with link:
+        threading.Thread(target=lambda: _quiet(link, 0.05), daemon=True).start()
+        with pytest.raises(InputError, match="streams 60 frames/s, the controller's .* 30"):
+            c37_loop.serve_controller(ctrl, slow, *link.address, timeout=5)
+
+
+def _quiet(link, t):
+    case = link.ctrl.case
+    sim = stabctl.Simulator(case)
+    try:
+        link(t, sim.run([fault_with_clearing(case, 3, 101, 1.0, 7)], t_end=0.1))
+    except (InputError, OSError):  # the controller refused, the plant closed
+        pass
+
+
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        ("repeat", r"data frame 11 repeats the time stamp of frame 10"),
+        ("back", r"data frame 11 goes back from the time stamp of frame 10"),
+    ],
+)
+def test_recordings_whose_time_stamps_repeat_or_go_back_are_refused(
+    kundur_stream, tmp_path, edit, needle
+):
+    """Two frames of one time stamp or one stamped backwards (the finding: the later frame
+    replaced the earlier without a word, 548.7 mHz reported for 228.0)."""
+    case, pmus, cfg, cfg2, frames = kundur_stream
+    frames = list(frames)
+    frames[10] = frames[9] if edit == "repeat" else frames[8]
+    path = tmp_path / "r.c37"
+    path.write_bytes(cfg2.convert2bytes() + b"".join(_encoded(cfg, cfg2, frames)))
+    with pytest.raises(InputError, match=needle):
+        sources.read_frames(sources.parse_source(str(path)), case, pmus, RATE)
+
+
+def test_an_all_absent_recording_is_refused_and_ends_cut_it(kundur_stream, tmp_path):
+    """A recording whose every value is flagged absent (the finding: reported as measured
+    0 mHz) is refused; a recording read to an end it does not reach is short."""
+    case, pmus, cfg, cfg2, frames = kundur_stream
+    dead = [pm.Frame(f.t, np.zeros_like(f.valid), *f[2:]) for f in frames]
+    path = tmp_path / "dead.c37"
+    path.write_bytes(cfg2.convert2bytes() + b"".join(_encoded(cfg, cfg2, dead)))
+    with pytest.raises(InputError, match="every PMU value of its 61 frames is flagged absent"):
+        sources.read_frames(sources.parse_source(str(path)), case, pmus, RATE)
+    path = tmp_path / "r.c37"
+    path.write_bytes(cfg2.convert2bytes() + b"".join(_encoded(cfg, cfg2, frames)))
+    src = sources.parse_source(str(path))
+    got = sources.read_frames(src, case, pmus, RATE, End(tf=0.5))
+    assert len(got.frames) == 31 and not got.short
+    got = sources.read_frames(src, case, pmus, RATE, End(tf=2.0))
+    assert len(got.frames) == 61
+    assert got.short == (f"{path}: 61 data frames, the last stamped 1.0000 s, before t = 2 s",)
+
+
+def test_more_servers_than_pmus_are_refused(kundur_stream):
+    """`--source tcp://127.0.0.1:1-65535` (the finding: a thread per port): refused before
+    any connection, as Kundur has 4 PMUs."""
+    case, pmus, *_ = kundur_stream
+    src = sources.parse_source("tcp://127.0.0.1:1-65535")
+    with pytest.raises(InputError, match="65535 servers for 4 PMUs"):
+        sources.read_frames(src, case, pmus, RATE)
