@@ -207,6 +207,11 @@ def test_estimate_source_refuses_monte_carlo_options(tmp_path):
         (["control", "kundur", "127.0.0.1", "--esd-pct", "5"], "expected HOST:PORT"),
         (["track", "kundur", "--source", "junk.c37", "--out", "t.csv"], "no frame SYNC"),
         (["track", "kundur", "--source", "missing.c37", "--out", "t.csv"], "no such recording"),
+        (
+            ["track", "kundur", "--source", "tcp://127.0.0.1:1", "--out", "t.csv"],
+            "a TCP --source needs its end: --tf S or --frames N",
+        ),
+        (["replay", "junk.c37", "--allow", "pdc.example"], "'pdc.example' is not an IP address"),
         (["plant", "kundur", "--fault", "3", "--far-bus", "101"], "needs --esd-pct"),
         (
             ["plant", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"]
@@ -235,3 +240,36 @@ def test_each_pmu_ports_beyond_65535_are_refused_by_name():
     )  # fmt: skip
     assert res.exit_code == 2
     assert "4 PMUs need ports 65534-65537, beyond 65535 (give --port <= 65532" in res.output
+
+
+def test_record_beyond_the_stream_keeps_what_came_and_says_so(tmp_path):
+    """`pmu record --frames 500` of a 121-frame stream (the finding: every frame received
+    was discarded, or a partial result presented as whole): the 121 frames are written,
+    the shortfall is one error line (exit 2); the server is told nothing else."""
+    args = ["kundur", "--fault", "3", "--far-bus", "101", "--tf", "2", "--speed", "0"]
+    proc, address = serving("serve", *args)
+    out = tmp_path / "a.c37"
+    res = CliRunner().invoke(main, ["pmu", "record", address, "--frames", "500", "-o", str(out)])
+    assert finished(proc)[0] == 0
+    assert res.exit_code == 2
+    assert (
+        "the server closed the connection after 121 data frames, the last stamped 2.0000 s, "
+        f"before 500 frames; the 121 received are in {out}"
+    ) in res.output
+    case = stabctl.load_case("kundur")
+    assert len(c37.replay(out, c37.stream_config(case, pm.machine_pmus(case), 60))) == 121
+
+
+def test_listening_beyond_loopback_without_allow_list_warns():
+    """`--host 0.0.0.0` with no --allow is named a warning (any host that reaches the
+    port may connect); with --allow it is not."""
+    import warnings
+
+    from stabctl.cli.pmu import _allowed
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert _allowed("0.0.0.0", "") == ()
+        assert _allowed("0.0.0.0", "10.0.0.5, 10.0.0.6") == ("10.0.0.5", "10.0.0.6")
+        assert _allowed("127.0.0.1", "") == ()
+    assert len(caught) == 1 and "listening on 0.0.0.0: any host" in str(caught[0].message)

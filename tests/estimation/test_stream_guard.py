@@ -167,9 +167,12 @@ def test_a_plant_takes_no_stranger_as_controller():
         time.sleep(0.3)
         assert "closed before 'start'" in link.refused[0]
     _, _, link = _plant(case, timeout=0.5, allow=("10.9.9.9",))
-    with link, socket.create_connection(link.address):
-        with pytest.raises(InputError, match="not in the allowed peers"):
-            link(0.05, partial)
+    with (
+        link,
+        socket.create_connection(link.address),
+        pytest.raises(InputError, match="not in the allowed peers"),
+    ):
+        link(0.05, partial)
     n = ctrl.mode.size
     answer = c37_loop.modes_frame(1, 0, 0, np.r_[127, np.zeros(n - 1, int)])
     with pytest.raises(InputError, match=r"mode\(s\) \[127\]: an ESD's mode is -1, 0 or \+1"):
@@ -178,12 +181,12 @@ def test_a_plant_takes_no_stranger_as_controller():
 
 def test_a_controller_at_another_rate_is_refused(kundur_stream):
     """`pmu control --rate 30` against a 60 frames/s plant: named, not accepted."""
-    case, pmus, cfg, cfg2, frames = kundur_stream
+    case = kundur_stream[0]
     ctrl, _, link = _plant(case, timeout=2)
     slow = c37.stream_config(case, ctrl.pmus, 30)
     with link:
         threading.Thread(target=lambda: _quiet(link, 0.05), daemon=True).start()
-        with pytest.raises(InputError, match="streams 60 frames/s, the controller's .* 30"):
+        with pytest.raises(InputError, match=r"streams 60 frames/s, the controller's .* 30"):
             c37_loop.serve_controller(ctrl, slow, *link.address, timeout=5)
 
 
