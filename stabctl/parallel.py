@@ -47,7 +47,7 @@ from contextlib import closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from stabctl.errors import InputError, StabctlError, Verdict
+from stabctl.errors import InputError, SimulationError, StabctlError, Verdict
 from stabctl.locking import exclusive
 from stabctl.progress import bar as progress_bar
 
@@ -148,6 +148,11 @@ def _failure_fields(exc: BaseException) -> dict:
     if not isinstance(exc, StabctlError):
         fields["traceback"] = "".join(traceback.format_exception(exc))
     return fields
+
+
+class SweepIncomplete(SimulationError):
+    """Jobs a sweep could not run (its cluster went away): none of them is recorded, so
+    the same command runs them."""
 
 
 def _lost(job: Job, exc: BaseException) -> dict:
@@ -699,8 +704,12 @@ def _dask(jobs: list, scheduler: str, workers: int | None) -> Generator[dict, No
 
 
 def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
-    from distributed import as_completed
+    """Records in completion order; a job that killed its worker DASK_RETRIES + 1 times
+    is recorded failed; jobs the cluster lost otherwise (the scheduler gone, cancelled)
+    are not recorded: `SweepIncomplete` once the others are in."""
+    from distributed import KilledWorker, as_completed
 
+    lost: list[str] = []
     try:
         futures = {
             client.submit(
@@ -711,8 +720,16 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
         for fut in as_completed(futures):
             try:
                 yield fut.result()
-            except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker, cancelled
+            except KilledWorker as exc:  # the job killed its worker, each time it ran
                 yield _lost(futures[fut], exc)
+            except Exception as exc:  # noqa: BLE001 - the cluster lost the job: not a result
+                lost.append(f"{type(exc).__name__}: {' '.join(str(exc).split())[:120]}")
+        if lost:
+            raise SweepIncomplete(
+                f"{len(lost)} of {len(jobs)} jobs not run: the Dask cluster lost them "
+                f"({lost[0]}); the finished records are kept, and the same command runs "
+                "the rest"
+            )
     finally:
         cluster = client.cluster  # ours (scheduler="local") or None
         client.close()

@@ -501,6 +501,77 @@ def test_local_dask_cluster_records_a_dead_worker_as_failed_and_resumes(tmp_path
     assert (again.ran, again.skipped) == (1, 2)
 
 
+@pytest.mark.dask
+def test_a_scheduler_killed_mid_sweep_records_no_job_it_did_not_run(tmp_path):
+    """A Dask scheduler and its worker started apart (as on a cluster), the scheduler
+    killed while 8 one-second jobs run on one worker (the finding: the sweep exited 0 and
+    recorded the never-run jobs as failed, which the next run skipped): the finished
+    jobs are recorded, the others are not, the sweep ends with SweepIncomplete naming how
+    many were not run, and the same call on a new cluster runs exactly those."""
+    import socket
+
+    pytest.importorskip("distributed")
+    from stabctl.parallel import SweepIncomplete
+
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parent)}
+
+    def start_cluster():
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
+        sched = subprocess.Popen(
+            [*dask, "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+            env=env,
+            stderr=subprocess.DEVNULL,
+        )
+        worker = subprocess.Popen(
+            [sys.executable, "-m", "distributed.cli.dask_worker", f"tcp://127.0.0.1:{port}",
+             "--nthreads", "1", "--no-dashboard"],
+            env=env,
+            stderr=subprocess.DEVNULL,
+        )  # fmt: skip
+        return f"tcp://127.0.0.1:{port}", sched, worker
+
+    out = tmp_path / "d.jsonl"
+    jobs = jobs_of(sleepy, *[1.0 + 0.01 * k for k in range(8)])
+    address, sched, worker = start_cluster()
+    try:
+        written = []
+
+        def kill_after_three(done, total):
+            written.append(done)
+            if done == 3:
+                sched.kill()
+
+        with pytest.raises(SweepIncomplete, match=r"(\d) of 8 jobs not run: the Dask cluster lost"):
+            run_sweep(jobs, out, scheduler=_wait_for(address), progress=kill_after_three)
+        kept = read_records(out)
+        assert 3 <= len(kept) < 8 and all(r["status"] == "ok" for r in kept.values())
+    finally:
+        for p in (sched, worker):
+            p.kill()
+            p.wait()
+    address, sched, worker = start_cluster()
+    try:
+        rest = run_sweep(jobs, out, scheduler=_wait_for(address), progress=False)
+    finally:
+        for p in (sched, worker):
+            p.kill()
+            p.wait()
+    assert (rest.ran, rest.skipped, rest.failed) == (8 - len(kept), len(kept), 0)
+    assert len(lines(out)) == 8
+
+
+def _wait_for(address: str, timeout: float = 60.0) -> str:
+    """address once its scheduler has a worker."""
+    from distributed import Client
+
+    with Client(address, timeout=timeout) as client:
+        client.wait_for_workers(1, timeout=timeout)
+    return address
+
+
 # ------------------------------------------------------------------------------- CLI
 
 
