@@ -16,7 +16,9 @@ mechanical-power and derivative kernels:
 * :mod:`~stabctl.models.governors.ieesgo`: `IEESGO` (type 5);
 * :mod:`~stabctl.models.governors.gast`: `GAST` (type 6);
 * :mod:`~stabctl.models.governors.tg2`: ANDES's `TG2` (type 7);
-* :mod:`~stabctl.models.governors.hygov4`: ANDES's `HYGOV4` (type 8).
+* :mod:`~stabctl.models.governors.hygov4`: ANDES's `HYGOV4` (type 8);
+* :mod:`~stabctl.models.governors.ggov1`: PSS/E's `GGOV1` (type 9, the general
+  governor-turbine; it reads its machine's electrical power).
 
 Sources: PSTess 1.1 `tg_indx.m`, `tg.m` (docs/pst_models.md section 4); PSS/E Model
 Library; ANDES 2.0 ``andes/models/governor``; how to add a type in docs/simulator.md.
@@ -43,13 +45,15 @@ from stabctl.models.declaration import (
     pack,
     params_class,
 )
-from stabctl.models.governors import gast, hygov, hygov4, ieeeg1, ieesgo, tg, tg2, tgov1
+from stabctl.models.governors import gast, ggov1, hygov, hygov4, ieeeg1, ieesgo, tg, tg2, tgov1
 from stabctl.models.governors.gast import GAST
+from stabctl.models.governors.ggov1 import GGOV1
 from stabctl.models.governors.hygov import HYGOV
 from stabctl.models.governors.hygov4 import HYGOV4
 from stabctl.models.governors.ieeeg1 import IEEEG1
 from stabctl.models.governors.ieesgo import IEESGO
 from stabctl.models.governors.table import (
+    GGOV1_FIELDS,
     HYGOV_FIELDS,
     PACKED,
     PARAMS,
@@ -78,7 +82,7 @@ __all__ = [
     "PACKED",
     "TABLE_FIELDS",
     "HYGOV_FIELDS",
-    "TG", "TGOV1", "IEEEG1", "HYGOV", "IEESGO", "GAST", "TG2", "HYGOV4",
+    "TG", "TGOV1", "IEEEG1", "HYGOV", "IEESGO", "GAST", "TG2", "HYGOV4", "GGOV1",
 ]  # fmt: skip
 
 # --------------------------------------------------------------------------------------
@@ -95,6 +99,7 @@ MODULES = (
     gast,
     tg2,
     hygov4,
+    ggov1,
 )
 #: tg_con type -> the module of its equations
 TYPES = dict(sorted((kind, m) for m in MODULES for kind in m.KINDS))
@@ -134,10 +139,11 @@ _TIME_CONSTANT_LABELS = {
     "T4": "tg_con T_4",
     "T6": "tg_con T_6",
     "T7": "tg_con T_7",
+    **{n: f"tg_con {n}" for n in (*ggov1.NEEDS, "Tdgov")},
 }
 
 
-@params_class(("kind", "mac"), TABLE_FIELDS)
+@params_class(("kind", "mac"), TABLE_FIELDS + GGOV1_FIELDS)
 class GovernorParams(Declared):
     """Governor data, arrays of shape (n_tg,): ``kind`` the tg_con type, ``mac`` the
     machine's row (index), the tg_con fields :data:`TABLE_FIELDS` under their declared
@@ -146,7 +152,9 @@ class GovernorParams(Declared):
     fractions K2, K4, K6, K8 are K_lp (n_tg, 4; 0 otherwise) driving machine row mac2 (-1
     none) with its power times lp_base (the HP machine's MVA over the LP machine's); Rp,
     rt, qNL, Kg, velm_rel, psse_gate: HYGOV's columns 17-22 (0 for other types; T4 is its
-    T_w, T5 its A_t)."""
+    T_w, T5 its A_t); GGOV1's fields :data:`GGOV1_FIELDS` (tg_con columns 28-59) and
+    turbine_scale, its turbine rating Trate over its machine's MVA (1 where Trate = 0
+    or another type)."""
 
     K: np.ndarray
     mac2: np.ndarray
@@ -158,6 +166,7 @@ class GovernorParams(Declared):
     Kg: np.ndarray
     velm_rel: np.ndarray
     psse_gate: np.ndarray
+    turbine_scale: np.ndarray
 
     @property
     def n(self) -> int:
@@ -246,12 +255,13 @@ def governor_params(case: Case) -> GovernorParams:
     return GovernorParams(
         kind=g.type.astype(int),
         mac=mac,
-        **{n: getattr(g, n).copy() for n in TABLE_FIELDS},
+        **{n: getattr(g, n).copy() for n in TABLE_FIELDS + GGOV1_FIELDS},
         K=np.where(hy[:, None], 0.0, np.where(cross[:, None], K_hp, K)),
         mac2=mac2,
         K_lp=np.where(cross[:, None], K_lp, 0.0),
         lp_base=np.where(cross, mva[mac] / mva[np.maximum(mac2, 0)], 0.0),
         **{n: np.where(hy, g.col(17 + i), 0.0) for i, n in enumerate(HYGOV_FIELDS)},
+        turbine_scale=np.where((g.type == GGOV1) & (g.Trate > 0), g.Trate / mva[mac], 1.0),
     )
 
 
@@ -307,7 +317,7 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     gate = np.where(hy, pmech0 / np.where(hy, p.T5, 1.0) + p.qNL, gate)
     refuse_initial(
         "tg_con",
-        beyond(gate, p.Tmin, p.Tmax),
+        beyond(gate, p.Tmin, p.Tmax) & (p.kind != GGOV1),  # GGOV1: its fuel order, its own
         lambda r: (
             f"tg_con row {r + 1}: initial power order {gate[r]:.4f} pu outside "
             f"[Tmin, Tmax] = [{p.Tmin[r]:.4f}, {p.Tmax[r]:.4f}]"
@@ -355,6 +365,8 @@ def pmech(P, x, k, omega):
         return tg2.output(P, x, k, omega, None)
     if kind == HYGOV4:
         return hygov4.pmech(P, x, k, omega)
+    if kind == GGOV1:
+        return ggov1.pmech(P, x, k, omega)
     return ieesgo.pmech(P, x, k, omega)
 
 
@@ -366,8 +378,9 @@ def pmech_lp(P, x, k):
 
 
 @kernel
-def derivatives(P, x, k, omega, dx):
-    """Derivatives of governor k into dx[:, k] for its machine speed omega (pu), flag 2:
+def derivatives(P, x, k, omega, pe, dx):
+    """Derivatives of governor k into dx[:, k] for its machine speed omega (pu) and
+    electrical power pe (pu on the machine base; read by GGOV1), flag 2:
     its type module's ``derivatives`` (which clamp the limited valve and gate states in
     x)."""
     kind = P[k, G.KIND]
@@ -386,5 +399,7 @@ def derivatives(P, x, k, omega, dx):
         tg2.output(P, x, k, omega, dx)
     elif kind == HYGOV4:
         hygov4.derivatives(P, x, k, omega, dx)
+    elif kind == GGOV1:
+        ggov1.derivatives(P, x, k, omega, pe, dx)
     else:
         ieesgo.derivatives(P, x, k, omega, dx)

@@ -84,6 +84,45 @@ PARAMS = (
         doc="IEEEG1: machine number of the LP shaft of a cross-compound unit (PSS/E JBUS, "
         "M): K2, K4, K6, K8 drive it; 0 one shaft (every fraction on `machine`)",
     ),
+    *(
+        Param(name, unit, 28 + i, doc="GGOV1: " + doc)
+        for i, (name, unit, doc) in enumerate(
+            (
+                ("Rselect", "code", "droop feedback: 1 electrical power, 0 none, -2 valve stroke"),
+                ("Flag", "code", "1 fuel flow proportional to speed, 0 independent of it"),
+                ("Rdroop", "pu", "permanent droop R"),
+                ("Tpelec", "s", "electrical power transducer time constant"),
+                ("maxerr", "pu", "maximum speed error"),
+                ("minerr", "pu", "minimum speed error"),
+                ("Kpgov", "pu", "governor proportional gain"),
+                ("Kigov", "1/s", "governor integral gain"),
+                ("Kdgov", "s", "governor derivative gain"),
+                ("Tdgov", "s", "governor derivative time constant"),
+                ("Tact", "s", "actuator time constant"),
+                ("Kturb", "pu", "turbine gain"),
+                ("Wfnl", "pu", "no-load fuel flow"),
+                ("Tb", "s", "turbine lag time constant (the lead is Tc, column 7)"),
+                ("Teng", "s", "transport delay of a diesel engine (0 only)"),
+                ("Tfload", "s", "load limiter time constant"),
+                ("Kpload", "pu", "load limiter proportional gain"),
+                ("Kiload", "1/s", "load limiter integral gain"),
+                ("Ldref", "pu", "load limiter reference"),
+                ("Dm", "pu", "speed damping (>= 0)"),
+                ("Ropen", "pu/s", "maximum valve opening rate"),
+                ("Rclose", "pu/s", "maximum valve closing rate (< 0)"),
+                ("Kimw", "1/s", "supplementary load controller gain (0 only)"),
+                ("Aset", "pu/s", "acceleration limiter set point"),
+                ("Kacc", "pu", "acceleration limiter gain Ka"),
+                ("Tacc", "s", "acceleration limiter time constant Ta"),
+                ("Trate", "MW", "turbine rating (0: the machine's MVA)"),
+                ("db", "pu", "speed deadband"),
+                ("Tsa", "s", "temperature detection lead time constant"),
+                ("Tsb", "s", "temperature detection lag time constant"),
+                ("Rup", "pu/s", "maximum rate of the load limit's increase"),
+                ("Rdown", "pu/s", "maximum rate of the load limit's decrease (< 0)"),
+            )
+        )
+    ),
 )
 
 _NAMES = tuple(p.name for p in PARAMS)
@@ -92,8 +131,11 @@ HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel", "psse_gate")
 #: tg_con fields the kernels take as given: columns 3-16 and GAST's 25-26 (the IEEEG1
 #: fractions K1..K8 enter summed per shaft stage, K)
 TABLE_FIELDS = _NAMES[1:15] + _NAMES[23:25]
+#: GGOV1's tg_con fields (columns 28-59)
+GGOV1_FIELDS = _NAMES[26:58]
 #: packed parameter matrix of the kernels, (column name, GovernorParams attribute) per
-#: column: tg_con columns 1-16 in declared order, K's four columns, P_ref, HYGOV's fields
+#: column: tg_con columns 1-16 in declared order, K's four columns, P_ref, HYGOV's fields,
+#: GGOV1's fields and its turbine rating over the machine's MVA
 PACKED = (
     ("KIND", "kind"),
     ("MAC", "mac"),
@@ -104,6 +146,8 @@ PACKED = (
     ("LP_BASE", "lp_base"),
     ("PREF", "Pref"),
     *((n.upper(), n) for n in HYGOV_FIELDS),
+    *((n.upper(), n) for n in GGOV1_FIELDS),
+    ("TSCALE", "turbine_scale"),
 )
 #: the kernels' column of each PACKED name: P[k, G.TS]
 G = layout("GovernorColumns", PACKED)
