@@ -1046,7 +1046,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         )
         efd[m] = exc.recorded_efd(EP, xe, i, efd_alg[i])
     for k in range(ng):
-        gov.derivatives(GP, xg, k, xm[1, int(GP[k, gov.G.MAC])], dxg)
+        m = int(GP[k, gov.G.MAC])
+        gov.derivatives(GP, xg, k, xm[1, m], pelect[m] * p.MP[m, mac.K.POT], dxg)
     for k in range(ni):
         V_k = V_nc[int(p.IP[k, conv.C.POS])]
         S_ibr[k] = conv.derivatives(p.IP, xi, k, V_k, V_nc, p.reach, dxi)

@@ -302,7 +302,7 @@ def test_wecc_imports_completely():
         (29, len(MACHINE.names)),  # every declared column (28, stabctl.models.machines)
         (29, len(EXCITER.names)),  # every declared column (43, stabctl.models.exciters)
         (29, len(PSS.names)),  # every declared column (26, stabctl.models.pss)
-        (29, len(GOVERNOR.names)),  # every declared column (27, stabctl.models.governors)
+        (29, len(GOVERNOR.names)),  # every declared column (59, stabctl.models.governors)
     ) and t.unsupported == ()
     kinds = dict(zip(*np.unique(t.exc_con[:, 0], return_counts=True)))
     assert kinds == {2: 8, 3: 4, 4: 17}  # ESDC2A, ESST3A, EXST1
@@ -661,7 +661,7 @@ def test_tgov1_pm_equals_pref_at_rated_speed_and_damps_with_dt():
     assert Pref[0] == 0.78 and gov.pmech(P, x, 0, 1.0) == pytest.approx(0.78, rel=1e-15)
     assert gov.pmech(P, x, 0, 1.01) == pytest.approx(0.78 - 2.0 * 0.01, rel=1e-14)
     dx = np.zeros_like(x)
-    gov.derivatives(P, x, 0, 1.0, dx)
+    gov.derivatives(P, x, 0, 1.0, 0.0, dx)
     assert np.abs(dx).max() < 1e-15
 
 
@@ -692,7 +692,7 @@ def test_tgov1_step_response_matches_closed_form():
 
     def f(t, y):
         x, dx = y.reshape(x0.shape).copy(), np.zeros_like(x0)
-        gov.derivatives(P, x, 0, 1.0, dx)
+        gov.derivatives(P, x, 0, 1.0, 0.0, dx)
         return dx.ravel()
 
     t = 3.0
@@ -709,7 +709,7 @@ def test_tgov1_valve_is_non_windup():
     x, Pref = gov.initialise(p, np.array([1.1]))
     dx = np.zeros_like(x)
     x[0, 0] = 1.3
-    gov.derivatives(p.packed(Pref + 1.0), x, 0, 1.0, dx)
+    gov.derivatives(p.packed(Pref + 1.0), x, 0, 1.0, 0.0, dx)
     assert x[0, 0] == 1.2 and dx[0, 0] == 0.0
 
 
@@ -726,14 +726,14 @@ def test_ieeeg1_steady_state_and_gate_rate_limit():
     P = p.packed(gate)
     assert gov.pmech(P, x, 0, 1.0) == pytest.approx(0.7, rel=1e-15)
     dx = np.zeros_like(x)
-    gov.derivatives(P, x, 0, 1.0, dx)
+    gov.derivatives(P, x, 0, 1.0, 0.0, dx)
     assert np.abs(dx).max() < 1e-15
-    gov.derivatives(p.packed(gate + 0.2), x, 0, 1.0, dx)
+    gov.derivatives(p.packed(gate + 0.2), x, 0, 1.0, 0.0, dx)
     assert dx[1, 0] == 0.5  # (0.2 / T3 = 1) limited to Uo
-    gov.derivatives(P, x, 0, 1.01, dx)  # speed up 1 %: the T1 lag starts at K dw/T1
+    gov.derivatives(P, x, 0, 1.01, 0.0, dx)  # speed up 1 %: the T1 lag starts at K dw/T1
     assert dx[1, 0] == 0.0 and dx[0, 0] == pytest.approx(20 * 0.01 / 0.1, rel=1e-12)
     x[0, 0] = 0.4  # lag output K dw = 0.4: (0 - 0.4)/T3 -> Uc
-    gov.derivatives(P, x, 0, 1.02, dx)
+    gov.derivatives(P, x, 0, 1.02, 0.0, dx)
     assert dx[1, 0] == -1.0 and dx[0, 0] == pytest.approx(0.0, abs=1e-12)
 
 

@@ -75,7 +75,25 @@ GAST = [6, 1, 1, 20, 1.0, 0.4, 0.1, 3.0, 0, 0, -0.05, 0.0] + [0] * 12 + [0.8, 2.
 #: TG2 (ANDES): 1/R = 20, pmax 1.0 (Tmax), pmin 0 (Tmin), T1 0.2 (T3, lead), T2 10 (Tc,
 #: lag), speed set point 1
 TG2 = [7, 1, 1, 20, 1.0, 0, 10.0, 0.2, 0, 0, 0.0, 0.0]
+#: GGOV1 (tg_con columns 28-59; Vmax 1, Vmin 0.15 in columns 5, 11, Tc 0 in 7): the
+#: PSS/E Model Library's example values (OpenIPSL PSSE.TG.GGOV1 defaults) with Rselect 1,
+#: Flag 1, Tact 0.5, Kturb 1.5, Wfnl 0.2, Tb 0.1, Ldref 1, Aset 0.1, Trate 0 (machine base)
+GGOV1_FIELDS = dict(
+    Rselect=1, Flag=1, Rdroop=0.04, Tpelec=1.0, maxerr=0.05, minerr=-0.05, Kpgov=10.0,
+    Kigov=2.0, Kdgov=0.0, Tdgov=1.0, Tact=0.5, Kturb=1.5, Wfnl=0.2, Tb=0.1, Teng=0.0,
+    Tfload=3.0, Kpload=2.0, Kiload=0.67, Ldref=1.0, Dm=0.0, Ropen=0.1, Rclose=-0.1, Kimw=0.0,
+    Aset=0.1, Kacc=10.0, Tacc=0.1, Trate=0.0, db=0.0, Tsa=4.0, Tsb=5.0, Rup=99.0, Rdown=-99.0,
+)  # fmt: skip
+
+
+def ggov1_row(**changed):
+    """A GGOV1 tg_con row (type 9) of `GGOV1_FIELDS` with `changed`."""
+    row = [9, 1, 1, 0, 1.0, 0, 0.0, 0, 0, 0, 0.15] + [0] * 16
+    return row + list({**GGOV1_FIELDS, **changed}.values())
+
+
 ROWS = {
+    "GGOV1": ggov1_row(),
     "tg": TG,
     "TG2": TG2,
     "TGOV1": TGOV1,
@@ -98,8 +116,10 @@ def started(row, pm0=PM0):
 
 
 def derivatives(P, x, omega=1.0):
+    """The derivatives with the machine's electrical power at the governor's mechanical
+    power (the machine in steady state; read by GGOV1 only)."""
     dx = np.full_like(x, np.nan)
-    gov.derivatives(P, x, 0, omega, dx)
+    gov.derivatives(P, x, 0, omega, gov.pmech(P, x, 0, omega), dx)
     return dx
 
 
@@ -322,3 +342,54 @@ def test_cross_compound_ieeeg1_shares_its_power_between_two_machines():
     row[26] = 1
     with pytest.raises(CaseError, match="'machine2': machine 1 is the unit's own"):
         gov.governor_params(case.replace(governors=GovernorTable.from_matrix([row])))
+
+
+def test_ggov1_flag_and_layout():
+    """GGOV1's record fields land in tg_con columns 28-59 and its packed columns."""
+    p = params(ggov1_row())
+    assert gov.GOVERNOR.col("Rselect") == 28 and gov.GOVERNOR.col("Rdown") == 59
+    assert p.Kturb[0] == 1.5 and p.Tmax[0] == 1.0 and p.Tmin[0] == 0.15
+    assert p.turbine_scale[0] == 1.0
+
+
+def test_ggov1_settles_on_its_droop():
+    """Speed held 0.1 % low, the machine's power following the turbine's: the PID's
+    integral drives the error to 0, P_ref - (omega - 1) - R P_e = 0, so P_m rises by
+    0.001/R = 0.025 pu (droop on the electrical power, Rselect 1); Flag 1: the valve
+    settles where Kturb (valve omega - Wfnl) = that power."""
+    P, x = started(ggov1_row())
+    pm = pmech_after(P, x, 200.0, omega=0.999)
+    assert pm == pytest.approx(PM0 + 0.001 / 0.04, abs=1e-7)
+
+
+def test_ggov1_load_limiter_holds_the_power_at_ldref():
+    """Speed held 2 % low asks for 0.7 + 0.02/0.04 = 1.2 pu; the load limiter takes over
+    where the measured exhaust temperature (the fuel flow, lagged) reaches Ldref/Kturb +
+    Wfnl, so the turbine's power settles at Kturb (w_f - Wfnl) = Ldref = 1 pu."""
+    P, x = started(ggov1_row())
+    assert pmech_after(P, x, 400.0, omega=0.98) == pytest.approx(1.0, abs=1e-6)
+
+
+def test_ggov1_valve_stays_within_its_limits_and_rates():
+    """With Ldref out of the way, 2 % speed drop: the order fsr0 + min(Kpgov 0.02, Ta Ka
+    Aset) (the acceleration limiter's headroom, 0.1) asks (0.1 pu)/Tact = 0.2 pu/s of the
+    actuator, which opens at Ropen = 0.1 pu/s; it stops at Vmax (non-windup) and the
+    power settles at Kturb (Vmax omega - Wfnl)."""
+    P, x = started(ggov1_row(Ldref=5.0))
+    dx = derivatives(P, x, omega=0.98)
+    assert dx[gov.ggov1.S.valve, 0] == pytest.approx(0.1, abs=1e-15)
+    pm = pmech_after(P, x, 400.0, omega=0.98)
+    assert pm == pytest.approx(1.5 * (1.0 * 0.98 - 0.2), abs=1e-6)
+
+
+def test_ggov1_options_it_does_not_model_are_refused():
+    for changed, field in (({"Teng": 0.1}, "Teng"), ({"Rselect": -1}, "Rselect"),
+                           ({"Kimw": 0.01}, "Kimw"), ({"Dm": -0.1}, "Dm")):  # fmt: skip
+        with pytest.raises(CaseError, match=f"'{field}'"):
+            params(ggov1_row(**changed))
+
+
+def test_ggov1_start_above_its_load_limit_is_refused():
+    """Starting at 1.1 pu with Ldref 1 the load limiter, not the governor, would hold it."""
+    with pytest.raises(CaseError, match="load limiter"):
+        gov.initialise(params(ggov1_row()), np.array([1.1]))

@@ -1,0 +1,405 @@
+"""Turbine-governor models (tg_con), one module per type, and this package: the registry
+of the types, the tg_con table they fill (`GOVERNOR`), their parameters
+(`GovernorParams`, packed for the kernels as :data:`PACKED`, columns `G`), the dispatch
+on the type of the compiled kernels (`pmech`, `pmech_lp`, `derivatives`) and of the
+initialisation (`initialise`).
+
+The types (tg_con column 1), each a module holding its DYR/ANDES records, its named
+states (``S``, read by its kernels as ``x[S.gate, k]``), its initialisation and its
+mechanical-power and derivative kernels:
+
+* :mod:`~stabctl.models.governors.tg`: PST `tg` (type 1);
+* :mod:`~stabctl.models.governors.tgov1`: PSS/E `TGOV1` (type 2);
+* :mod:`~stabctl.models.governors.ieeeg1`: `IEEEG1` (type 3, with the cross-compound LP
+  shaft);
+* :mod:`~stabctl.models.governors.hygov`: `HYGOV` (type 4);
+* :mod:`~stabctl.models.governors.ieesgo`: `IEESGO` (type 5);
+* :mod:`~stabctl.models.governors.gast`: `GAST` (type 6);
+* :mod:`~stabctl.models.governors.tg2`: ANDES's `TG2` (type 7);
+* :mod:`~stabctl.models.governors.hygov4`: ANDES's `HYGOV4` (type 8);
+* :mod:`~stabctl.models.governors.ggov1`: PSS/E's `GGOV1` (type 9, the general
+  governor-turbine; it reads its machine's electrical power).
+
+Sources: PSTess 1.1 `tg_indx.m`, `tg.m` (docs/pst_models.md section 4); PSS/E Model
+Library; ANDES 2.0 ``andes/models/governor``; how to add a type in docs/simulator.md.
+States: up to N_STATES slots per governor (the most any type present uses), named per
+type in STATE_NAMES; slots a type does not use stay 0 (`has_state`).  A time constant
+below 1e-3 s means the block is absent (no state).  Units: pu on the machine base; s.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from stabctl._jit.decorators import kernel
+from stabctl.errors import CaseError, refuse_initial
+from stabctl.models.blocks import LBND
+from stabctl.models.declaration import (
+    Declared,
+    Family,
+    Param,
+    beyond,
+    check_packed,
+    pack,
+    params_class,
+)
+from stabctl.models.governors import gast, ggov1, hygov, hygov4, ieeeg1, ieesgo, tg, tg2, tgov1
+from stabctl.models.governors.gast import GAST
+from stabctl.models.governors.ggov1 import GGOV1
+from stabctl.models.governors.hygov import HYGOV
+from stabctl.models.governors.hygov4 import HYGOV4
+from stabctl.models.governors.ieeeg1 import IEEEG1
+from stabctl.models.governors.ieesgo import IEESGO
+from stabctl.models.governors.table import (
+    GGOV1_FIELDS,
+    HYGOV_FIELDS,
+    PACKED,
+    PARAMS,
+    TABLE_FIELDS,
+    G,
+)
+from stabctl.models.governors.tg import TG
+from stabctl.models.governors.tg2 import TG2
+from stabctl.models.governors.tgov1 import TGOV1
+
+if TYPE_CHECKING:
+    from stabctl.case import Case
+
+__all__ = [
+    "GOVERNOR",
+    "TYPES",
+    "STATE_NAMES",
+    "N_STATES",
+    "GovernorParams",
+    "governor_params",
+    "initialise",
+    "pmech",
+    "pmech_lp",
+    "derivatives",
+    "G",
+    "PACKED",
+    "TABLE_FIELDS",
+    "HYGOV_FIELDS",
+    "TG", "TGOV1", "IEEEG1", "HYGOV", "IEESGO", "GAST", "TG2", "HYGOV4", "GGOV1",
+]  # fmt: skip
+
+# --------------------------------------------------------------------------------------
+# the registry: one line per type module; a module serves the tg_con types of its KINDS
+# (the order of the DYR records)
+# --------------------------------------------------------------------------------------
+
+MODULES = (
+    tg,
+    tgov1,
+    ieeeg1,
+    hygov,
+    ieesgo,
+    gast,
+    tg2,
+    hygov4,
+    ggov1,
+)
+#: tg_con type -> the module of its equations
+TYPES = dict(sorted((kind, m) for m in MODULES for kind in m.KINDS))
+#: tg_con type -> its state names, in slot order (the module's ``S``)
+STATE_NAMES = {kind: m.STATE_NAMES[kind] for kind, m in TYPES.items()}
+#: state slots of the widest type
+N_STATES = max(len(names) for names in STATE_NAMES.values())
+if len(TYPES) != sum(len(m.KINDS) for m in MODULES):
+    raise ValueError("a tg_con type is claimed by two governor modules")
+
+GOVERNOR = Family(
+    table="tg_con",
+    min_columns=10,
+    key="machine",
+    key_label="machine",
+    params=(
+        Param(
+            "type",
+            "code",
+            1,
+            integer=True,
+            choices=tuple(TYPES),
+            label="governor type",
+            doc=", ".join(f"{kind} {m.KINDS[kind]}" for kind, m in TYPES.items()),
+        ),
+        *PARAMS,
+    ),
+    dyr=tuple(model for m in MODULES for model in m.DYR),
+)
+
+#: the labels of `GovernorParams.time_constants`, by declared field, in reporting order
+_TIME_CONSTANT_LABELS = {
+    "Ts": "tg_con T_s",
+    "Tc": "tg_con T_c",
+    "T3": "tg_con T_3",
+    "T5": "tg_con T_5",
+    "T4": "tg_con T_4",
+    "T6": "tg_con T_6",
+    "T7": "tg_con T_7",
+    **{n: f"tg_con {n}" for n in (*ggov1.NEEDS, "Tdgov")},
+}
+
+
+@params_class(("kind", "mac"), TABLE_FIELDS + GGOV1_FIELDS)
+class GovernorParams(Declared):
+    """Governor data, arrays of shape (n_tg,): ``kind`` the tg_con type, ``mac`` the
+    machine's row (index), the tg_con fields :data:`TABLE_FIELDS` under their declared
+    names (stabctl.models.governors.GOVERNOR); K (n_tg, 4): IEEEG1 (and IEESGO) K1+K2, K3+K4,
+    K5+K6, K7+K8, or a cross-compound IEEEG1's HP fractions K1, K3, K5, K7, whose LP
+    fractions K2, K4, K6, K8 are K_lp (n_tg, 4; 0 otherwise) driving machine row mac2 (-1
+    none) with its power times lp_base (the HP machine's MVA over the LP machine's); Rp,
+    rt, qNL, Kg, velm_rel, psse_gate: HYGOV's columns 17-22 (0 for other types; T4 is its
+    T_w, T5 its A_t); GGOV1's fields :data:`GGOV1_FIELDS` (tg_con columns 28-59) and
+    turbine_scale, its turbine rating Trate over its machine's MVA (1 where Trate = 0
+    or another type)."""
+
+    K: np.ndarray
+    mac2: np.ndarray
+    K_lp: np.ndarray
+    lp_base: np.ndarray
+    Rp: np.ndarray
+    rt: np.ndarray
+    qNL: np.ndarray
+    Kg: np.ndarray
+    velm_rel: np.ndarray
+    psse_gate: np.ndarray
+    turbine_scale: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.mac.size
+
+    def packed(self, Pref: np.ndarray) -> np.ndarray:
+        """Parameter matrix (n_tg, len(PACKED)) for the compiled kernels, with P_ref, columns
+        as :data:`PACKED`."""
+        return pack(
+            self,
+            PACKED,
+            Pref=Pref,
+            **{f"K_{i}": self.K[:, i] for i in range(4)},
+            **{f"K_lp_{i}": self.K_lp[:, i] for i in range(4)},
+        )
+
+    def n_slots(self) -> int:
+        """State slots per governor: the most any governor of the case uses (3 if none)."""
+        return max([2, *(len(STATE_NAMES[int(k)]) for k in self.kind)]) if self.n else 3
+
+    def has_state(self) -> np.ndarray:
+        """Boolean (n_slots, n_tg): the slots that are states of each governor (each type
+        module's ``has_state`` on its rows)."""
+        act = np.zeros((N_STATES, self.n), bool)
+        for module in MODULES:
+            rows = np.isin(self.kind, tuple(module.KINDS))
+            for slot, on in enumerate(module.has_state(self)):
+                act[slot] |= rows & on
+        return act[: self.n_slots()]
+
+    def time_constants(self):
+        """(label, values, mask) of every time constant that sets a state's speed (each
+        type module's ``time_constants`` on its rows)."""
+        masks = {name: np.zeros(self.n, bool) for name in _TIME_CONSTANT_LABELS}
+        for module in MODULES:
+            rows = np.isin(self.kind, tuple(module.KINDS))
+            for name, on in module.time_constants(self).items():
+                masks[name] |= rows & on
+        return tuple(
+            (label, getattr(self, name), masks[name])
+            for name, label in _TIME_CONSTANT_LABELS.items()
+        )
+
+
+check_packed(
+    GovernorParams,
+    PACKED,
+    ("Pref", *(f"K_{i}" for i in range(4)), *(f"K_lp_{i}" for i in range(4))),
+)
+
+
+def governor_params(case: Case) -> GovernorParams:
+    """Governor parameters.
+
+    Raises CaseError (tg_con row, field) for a time constant the type needs below 1e-3 s
+    (each type module's ``NEEDS``; tg: Ts, Tc, T5; TGOV1: T1 = Ts, T3 = Tc; IEEEG1: T3 =
+    Ts; HYGOV: T_g = Ts, T_f = Tc, T_w = T4; TG2: T2 = Tc: a lag below it would be absent,
+    `blocks.LBND`), a row its module's ``check`` refuses (a zero HYGOV r = K2), or an
+    IEEEG1 without power fractions."""
+    g = case.governors
+    for r in range(len(g)):
+        module = TYPES[int(g.type[r])]
+        for name in module.NEEDS:
+            if getattr(g, name)[r] < LBND:
+                raise CaseError(
+                    f"tg_con row {r + 1}, field '{name}': must be >= {LBND} s for "
+                    f"governor type {int(g.type[r])}"
+                )
+        check = getattr(module, "check", None)
+        problem = check(g, r) if check is not None else None
+        if problem:
+            raise CaseError(f"tg_con row {r + 1}, {problem}")
+    K = np.column_stack([g.K1 + g.K2, g.K3 + g.K4, g.K5 + g.K6, g.K7 + g.K8]).reshape(len(g), 4)
+    bad = np.nonzero((g.type == IEEEG1) & (K.sum(axis=1) <= 0))[0]
+    cross = (g.type == IEEEG1) & (g.machine2 != 0)
+    K_hp = np.column_stack([g.K1, g.K3, g.K5, g.K7]).reshape(len(g), 4)
+    K_lp = np.column_stack([g.K2, g.K4, g.K6, g.K8]).reshape(len(g), 4)
+    mac2 = _lp_machines(case, g, cross)
+    mac = np.array([case.machine_index(m) for m in g.machine], int)
+    mva = case.machines.mva
+    if bad.size:
+        raise CaseError(
+            f"tg_con row {bad[0] + 1}, fields 'K1'..'K8': IEEEG1 power fractions must sum to > 0"
+        )
+    hy = (g.type == HYGOV) | (g.type == HYGOV4)
+    return GovernorParams(
+        kind=g.type.astype(int),
+        mac=mac,
+        **{n: getattr(g, n).copy() for n in TABLE_FIELDS + GGOV1_FIELDS},
+        K=np.where(hy[:, None], 0.0, np.where(cross[:, None], K_hp, K)),
+        mac2=mac2,
+        K_lp=np.where(cross[:, None], K_lp, 0.0),
+        lp_base=np.where(cross, mva[mac] / mva[np.maximum(mac2, 0)], 0.0),
+        **{n: np.where(hy, g.col(17 + i), 0.0) for i, n in enumerate(HYGOV_FIELDS)},
+        turbine_scale=np.where((g.type == GGOV1) & (g.Trate > 0), g.Trate / mva[mac], 1.0),
+    )
+
+
+def _lp_machines(case: Case, g, cross) -> np.ndarray:
+    """The LP machines' rows of the cross-compound IEEEG1 (-1 for the others); raises
+    CaseError for an unknown machine, the unit's own machine, or one with a governor of
+    its own."""
+    mac2 = np.full(len(g), -1, int)
+    own = set(int(m) for m in g.machine)
+    for r in np.nonzero(cross)[0]:
+        number = int(g.machine2[r])
+        if number == int(g.machine[r]) or number in own:
+            raise CaseError(
+                f"tg_con row {r + 1}, field 'machine2': machine {number} is the unit's own "
+                "or has a governor of its own"
+            )
+        mac2[r] = case.machine_index(number)
+    return mac2
+
+
+def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
+    """States (n_slots, n_tg) and P_ref (n_tg,) from the initial mechanical power pmech0
+    (machine base) at rated speed: every lag at its input, lead-lag states at
+    (1 - T_lead/T_lag) times their input.  P_ref is the power order (tg, TGOV1), the
+    gate position (IEEEG1, IEESGO: pmech0 / sum K; a cross-compound IEEEG1: its two
+    machines' power, pmech0_lp the LP machine's on its base, over the sum of all eight
+    fractions) or R q_0 (HYGOV: flow, gate and gate integrator at q_0 = pmech0/A_t +
+    q_NL, head 1; HYGOV4: R_perm q_0, its gate and flow at q_0).  The family computes
+    that start-up order (the gate, or q_0) and checks it; each type's module sets its
+    states on its rows (its ``initialise``).
+
+    Raises CaseError when the initial power order is outside [Tmin, Tmax] (PST's check
+    for tg, the non-windup limits for TGOV1 and IEEEG1), GAST's initial power above its
+    load limit AT + KT (AT - Pm0) (PSS/E's own GAST run starts on it, AT = Pm0 = 1), or
+    a cross-compound unit's machines do not share its power as its HP and LP fractions
+    do (ANDES 2.0 ieeeg1.py's ``_Pc`` check), beyond `START_LIMIT_TOL`
+    (stabctl.models.declaration)."""
+    x = np.zeros((N_STATES, p.n))
+    hy, sg = (p.kind == HYGOV) | (p.kind == HYGOV4), p.kind == IEESGO
+    cross = p.mac2 >= 0
+    lp = np.zeros(p.n) if pmech0_lp is None else np.asarray(pmech0_lp, float)
+    total = np.where(cross, pmech0 + lp / np.where(cross, p.lp_base, 1.0), pmech0)
+    K_all = p.K.sum(axis=1) + p.K_lp.sum(axis=1)
+    gate = total / np.where((p.kind == IEEEG1) | sg, K_all, 1.0)
+    bad = np.nonzero(cross & beyond(pmech0, p.K.sum(axis=1) * gate, p.K.sum(axis=1) * gate))[0]
+    if bad.size:
+        r = bad[0]
+        raise CaseError(
+            f"tg_con row {r + 1}: the cross-compound unit's HP machine starts at "
+            f"{pmech0[r]:.4f} pu, its fractions K1, K3, K5, K7 give "
+            f"{p.K[r].sum() * gate[r]:.4f} pu of the two machines' power"
+        )
+    gate = np.where(hy, pmech0 / np.where(hy, p.T5, 1.0) + p.qNL, gate)
+    refuse_initial(
+        "tg_con",
+        beyond(gate, p.Tmin, p.Tmax) & (p.kind != GGOV1),  # GGOV1: its fuel order, its own
+        lambda r: (
+            f"tg_con row {r + 1}: initial power order {gate[r]:.4f} pu outside "
+            f"[Tmin, Tmax] = [{p.Tmin[r]:.4f}, {p.Tmax[r]:.4f}]"
+        ),
+    )
+    refuse_initial(
+        "tg_con",
+        (p.kind == GAST) & beyond(pmech0, -np.inf, p.AT + p.KT * (p.AT - pmech0)),
+        lambda r: (
+            f"tg_con row {r + 1}: GAST's load limit AT + KT (AT - Pm0) is below its "
+            f"initial power {pmech0[r]:.4f} pu"
+        ),
+    )
+    Pref = np.zeros(p.n)
+    for module in MODULES:
+        rows = np.isin(p.kind, tuple(module.KINDS))
+        if rows.any():
+            Pref[rows] = module.initialise(p, rows, pmech0, gate, x)
+    x = x[: p.n_slots()]
+    x[2:] *= p.has_state()[2:] | (p.kind == TG)
+    return x, Pref
+
+
+# -- compiled runtime kernels: P is GovernorParams.packed(), x the governor block of the
+# -- state vector (n_slots, n_tg), k the governor; each type's kernels are its module's,
+# -- dispatched on kind by `pmech` and `derivatives` (one line per type)
+
+
+@kernel
+def pmech(P, x, k, omega):
+    """Mechanical power of governor k (machine base) at machine speed omega (pu), flag 1:
+    its type module's ``pmech``."""
+    kind = P[k, G.KIND]
+    if kind == TG:
+        return tg.pmech(P, x, k)
+    if kind == TGOV1:
+        return tgov1.pmech(P, x, k, omega)
+    if kind == IEEEG1:
+        return ieeeg1.pmech(P, x, k)
+    if kind == HYGOV:
+        return hygov.pmech(P, x, k, omega)
+    if kind == GAST:
+        return gast.pmech(P, x, k, omega)
+    if kind == TG2:
+        return tg2.output(P, x, k, omega, None)
+    if kind == HYGOV4:
+        return hygov4.pmech(P, x, k, omega)
+    if kind == GGOV1:
+        return ggov1.pmech(P, x, k, omega)
+    return ieesgo.pmech(P, x, k, omega)
+
+
+@kernel
+def pmech_lp(P, x, k):
+    """Mechanical power (its machine's base) a cross-compound IEEEG1 k hands its LP
+    machine (column MAC2), `ieeeg1.pmech_lp`."""
+    return ieeeg1.pmech_lp(P, x, k)
+
+
+@kernel
+def derivatives(P, x, k, omega, pe, dx):
+    """Derivatives of governor k into dx[:, k] for its machine speed omega (pu) and
+    electrical power pe (pu on the machine base; read by GGOV1), flag 2:
+    its type module's ``derivatives`` (which clamp the limited valve and gate states in
+    x)."""
+    kind = P[k, G.KIND]
+    dx[:, k] = 0.0
+    if kind == TG:
+        tg.derivatives(P, x, k, omega, dx)
+    elif kind == TGOV1:
+        tgov1.derivatives(P, x, k, omega, dx)
+    elif kind == IEEEG1:
+        ieeeg1.derivatives(P, x, k, omega, dx)
+    elif kind == HYGOV:
+        hygov.derivatives(P, x, k, omega, dx)
+    elif kind == GAST:
+        gast.derivatives(P, x, k, omega, dx)
+    elif kind == TG2:
+        tg2.output(P, x, k, omega, dx)
+    elif kind == HYGOV4:
+        hygov4.derivatives(P, x, k, omega, dx)
+    elif kind == GGOV1:
+        ggov1.derivatives(P, x, k, omega, pe, dx)
+    else:
+        ieesgo.derivatives(P, x, k, omega, dx)
