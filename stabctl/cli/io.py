@@ -441,6 +441,7 @@ def import_andes(
         left_out=list(imported.left_out),
         changed=list(imported.changed),
         unlike_andes=list(imported.unlike_andes),
+        defaulted=list(imported.defaulted),
         ignored=list(imported.ignored),
         islands=list(islands),
         powerflow_vmag_diff_pu=dv,
@@ -464,6 +465,7 @@ def import_andes(
         ("left out", imported.left_out),
         ("changed", imported.changed),
         ("kept as the file gives, unlike ANDES", imported.unlike_andes),
+        ("not in the file, ANDES's default", imported.defaulted),
     ):
         for item in items:
             click.echo(f"  {what}: {item}")

@@ -225,6 +225,10 @@ class AndesImport:
     unlike_andes : tuple of str
         DYR values stabctl keeps as the file gives them where ANDES replaces them (the
         infinite bus, a GENCLS of H = 0, which ANDES runs with its default H = 3 s).
+    defaulted : tuple of str
+        Converter, plant-control, wind and battery parameters the case file leaves out
+        (no column, an empty cell, NaN), run with ANDES's default: ``"MODEL NAME = default
+        (rows ...)"`` per model and parameter (`_converter_inputs`).
     data_solution : numpy.ndarray or None
         The RAW file's own power-flow solution, shape (n, 3): bus number, VM (pu), VA
         (degrees) (ANDES's ``Bus.v0``, ``a0``); None unless the case is a PSS/E RAW.
@@ -239,6 +243,7 @@ class AndesImport:
     changed: tuple[str, ...] = ()
     unlike_andes: tuple[str, ...] = ()
     data_solution: np.ndarray | None = None
+    defaulted: tuple[str, ...] = ()
 
 
 def import_andes(
@@ -305,6 +310,7 @@ def read_andes_case(
     path = Path(path)
     ss = _load(path, dyr)
     _check_inputs(path, ss)
+    defaulted = _converter_inputs(path, ss)
     counts = {name: m.n for name, m in ss.models.items() if m.n}
     lacking = [
         f"{name} ({n})"
@@ -408,6 +414,7 @@ def read_andes_case(
         tuple(changed),
         tuple(unlike),
         solution,
+        tuple(defaulted),
     )
 
 
@@ -463,6 +470,115 @@ def _check_inputs(path: Path, ss) -> None:
                         f"{'missing' if v is None or v != v else repr(v)} (ANDES would "
                         f"run with its default {default!r})"
                     )
+
+
+#: the converter family's models whose input rows are checked before ANDES fills its
+#: defaults (`_converter_inputs`)
+_CONVERTER_FAMILY = (
+    "REGCA1", "REGCP1", "REECA1", "REECA1E", "REECB1", "REPCA1", "PVD1", "ESD1",
+    "WTDTA1", "WTDS", "WTARA1", "WTPTA1", "WTTQA1",
+)  # fmt: skip
+
+#: physically impossible converter and battery data, refused (`_converter_inputs`):
+#: model -> (test on a row's values, what it must be); ANDES runs them
+_CONVERTER_RULES: dict[str, tuple] = {
+    "REECA1": (
+        (lambda r: r["Imax"] > 0, "Imax > 0"),
+        (lambda r: r["Vdip"] < r["Vup"], "Vdip < Vup"),
+    ),
+    "REECA1E": (
+        (lambda r: r["Imax"] > 0, "Imax > 0"),
+        (lambda r: r["Vdip"] < r["Vup"], "Vdip < Vup"),
+    ),
+    "REECB1": (
+        (lambda r: r["Imax"] > 0, "Imax > 0"),
+        (lambda r: r["Vdip"] < r["Vup"], "Vdip < Vup"),
+    ),
+    "ESD1": (
+        (lambda r: r["En"] > 0, "En > 0"),
+        (lambda r: 0 <= r["SOCmin"] < r["SOCmax"] <= 1, "0 <= SOCmin < SOCmax <= 1"),
+        (lambda r: r["SOCmin"] <= r["SOCinit"] <= r["SOCmax"], "SOCmin <= SOCinit <= SOCmax"),
+        (lambda r: r["ialim"] > 0, "ialim > 0"),
+    ),
+    "PVD1": ((lambda r: r["ialim"] > 0, "ialim > 0"),),
+    "WTDTA1": ((lambda r: r["H"] > 0 and r["Htfrac"] < 1, "H > 0, Htfrac < 1"),),
+}
+
+
+def _converter_inputs(path: Path, ss) -> list[str]:
+    """The converter family's parameters as the case file gives them, before ANDES's
+    defaults: CaseError naming file, model, row and parameter for a value ANDES would
+    replace by its default (0 where it must be non-zero, a sign it must not have: a PVD1
+    current limit of 0 or -1.1 run at 1.3, a WTDTA1 H of 0 at 3 s), an infinite one, or
+    data that cannot be (`_CONVERTER_RULES`: REECA1 Imax <= 0, Vdip >= Vup, ESD1 SOC
+    limits, En <= 0); returns the parameters left out and run with ANDES's default, one
+    line per model and parameter (``AndesImport.defaulted``)."""
+    from andes.core.param import NumParam
+
+    missing: dict[tuple[str, str, str], list[int]] = {}
+    for model, rows in _input_rows(path).items():
+        if model not in _CONVERTER_FAMILY or model not in ss.models:
+            continue
+        m = ss.models[model]
+        for k, row in enumerate(rows, start=1):
+            where = f"{path.name}: {model} row {k} (idx {row.get('idx')})"
+            values = {}
+            for name, p in m.params.items():
+                if not isinstance(p, NumParam):
+                    continue
+                v = row.get(name)
+                if v is None or (isinstance(v, float) and v != v):
+                    missing.setdefault((model, name, repr(p.default)), []).append(k)
+                    values[name] = p.default
+                    continue
+                if not isinstance(v, (int, float)) or isinstance(v, bool):
+                    continue  # text: ANDES's own reading names it
+                values[name] = v
+                rule = _violated(p, v)
+                if rule:
+                    raise CaseError(
+                        f"{where}: {name} = {v:g} ({rule}: ANDES would run with its "
+                        f"default {p.default!r})"
+                    )
+            for test, what in _CONVERTER_RULES.get(model, ()):
+                if not test(values):
+                    shown = ", ".join(f"{n} = {values[n]:g}" for n in _names_in(what, values))
+                    raise CaseError(f"{where}: {shown}: it must be {what}")
+    return [
+        f"{model} {name} = {default} (row{'s' * (len(rows) > 1)} {_row_list(rows)})"
+        for (model, name, default), rows in missing.items()
+    ]
+
+
+def _violated(p, v: float) -> str:
+    """Why ANDES would replace a given value v of NumParam p by its default ('' if not)."""
+    if not np.isfinite(v):
+        return "not a finite number"
+    if v == 0 and p.get_property("non_zero"):
+        return "must not be 0"
+    if v > 0 and p.get_property("non_positive"):
+        return "must not be positive"
+    if v < 0 and p.get_property("non_negative"):
+        return "must not be negative"
+    return ""
+
+
+def _names_in(what: str, values: dict) -> list[str]:
+    """The parameter names a rule's text mentions, in its order."""
+    import re
+
+    return [n for n in dict.fromkeys(re.findall(r"[A-Za-z]\w*", what)) if n in values]
+
+
+def _row_list(rows: list[int]) -> str:
+    """1, 2, 3, 7 -> '1-3, 7'."""
+    runs: list[list[int]] = []
+    for r in rows:
+        if runs and runs[-1][1] + 1 == r:
+            runs[-1][1] = r
+        else:
+            runs.append([r, r])
+    return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs)
 
 
 def _load(path: Path, dyr):

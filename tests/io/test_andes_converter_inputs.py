@@ -1,0 +1,78 @@
+"""Converter, wind and battery data checked before ANDES fills its defaults (issue 54,
+item 8): a value ANDES would replace by its default (0 where it must be non-zero, a sign
+it must not have) and data that cannot be (REECA1 Imax <= 0, Vdip >= Vup; ESD1 En <= 0,
+SOC limits out of order or above 100 %) are refused naming file, model, row and
+parameter; a parameter the file leaves out is run with ANDES's default and named."""
+
+import pytest
+
+from stabctl.errors import CaseError
+from stabctl.io.andes_case import read_andes_case
+
+andes = pytest.importorskip("andes")
+pd = pytest.importorskip("pandas")
+
+
+def edited(tmp_path, case: str, model: str, **values):
+    """ANDES's case file with `values` written into every row of `model`'s sheet."""
+    sheets = pd.read_excel(andes.get_case(case), sheet_name=None)
+    for name, v in values.items():
+        sheets[model][name] = v
+    out = tmp_path / f"{model}_{'_'.join(values)}.xlsx"
+    with pd.ExcelWriter(out) as w:
+        for name, rows in sheets.items():
+            rows.to_excel(w, sheet_name=name, index=False)
+    return out
+
+
+@pytest.mark.parametrize(
+    "case, model, values, needle",
+    [
+        # ANDES would replace them by its defaults (the findings: 1.3, 3 s)
+        ("ieee14/ieee14_pvd1.xlsx", "PVD1", {"ialim": 0.0}, "ialim = 0 (must not be 0"),
+        ("ieee14/ieee14_pvd1.xlsx", "PVD1", {"ialim": -1.1}, "ialim = -1.1 (must not be negative"),
+        ("kundur/kundur_wtdta1.xlsx", "WTDTA1", {"H": 0.0}, "H = 0 (must not be 0: ANDES would"),
+        # impossible data ANDES runs
+        ("kundur/kundur_reg.xlsx", "REECA1", {"Imax": -10.0}, "Imax = -10: it must be Imax > 0"),
+        (
+            "kundur/kundur_reg.xlsx",
+            "REECA1",
+            {"Vdip": 1.2, "Vup": 0.9},
+            "Vdip = 1.2, Vup = 0.9: it must be Vdip < Vup",
+        ),
+        ("ieee14/ieee14_esd1.xlsx", "ESD1", {"En": -10.0}, "En = -10: it must be En > 0"),
+        (
+            "ieee14/ieee14_esd1.xlsx",
+            "ESD1",
+            {"SOCmin": 0.9, "SOCmax": 0.2},
+            "SOCmin = 0.9, SOCmax = 0.2: it must be 0 <= SOCmin < SOCmax <= 1",
+        ),
+        (
+            "ieee14/ieee14_esd1.xlsx",
+            "ESD1",
+            {"SOCmax": 2.0},
+            "SOCmax = 2: it must be 0 <= SOCmin < SOCmax <= 1",
+        ),
+    ],
+)
+def test_converter_data_andes_would_default_or_that_cannot_be_is_refused(
+    tmp_path, case, model, values, needle
+):
+    path = edited(tmp_path, case, model, **values)
+    with pytest.raises(CaseError, match=rf"{path.name}: {model} row 1 \(idx .*\): ") as err:
+        read_andes_case(path, on_unsupported="skip")
+    assert needle in str(err.value)
+
+
+def test_parameters_left_out_are_named_with_andes_s_default(tmp_path):
+    """kundur_reg.xlsx with REGCA1's Tg emptied (the finding: run at ANDES's 0.1 s without a
+    word): the import names it, with the default and the row."""
+    path = edited(tmp_path, "kundur/kundur_reg.xlsx", "REGCA1", Tg=float("nan"))
+    got = read_andes_case(path, on_unsupported="skip")
+    assert "REGCA1 Tg = 0.1 (row 1)" in got.defaulted
+    assert (
+        "REGCA1 Tg = 0.1 (row 1)"
+        not in read_andes_case(
+            andes.get_case("kundur/kundur_reg.xlsx"), on_unsupported="skip"
+        ).defaulted
+    )
