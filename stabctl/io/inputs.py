@@ -175,6 +175,6 @@ def number(
         raise InputError(f"{row.where()}: {column} '{text}' is not a number") from None
     if not math.isfinite(v) or not lo <= v <= hi:
         raise InputError(f"{row.where()}: {column} {text} is outside [{lo:g}, {hi:g}]")
-    if integer and not v.is_integer():
-        raise InputError(f"{row.where()}: {column} {text} is not an integer")
+    if integer and not text.lstrip("+-").isdigit():  # 3.0, 3e0: a measured value, not a label
+        raise InputError(f"{row.where()}: {column} {text} is not an integer (write it as digits)")
     return v

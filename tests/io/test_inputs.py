@@ -34,6 +34,9 @@ def _csv(tmp_path, text, name="f.csv", encoding="utf-8"):
         ("bus,far_bus,t_fault\n3,101,1e300\n", r"f\.csv:2: t_fault 1e300 is outside"),
         ("bus,far_bus,t_fault\n3,101,1001\n", r"f\.csv:2: t_fault 1001 is outside"),
         ("bus,far_bus,circuit\n3,101,1.5\n", r"f\.csv:2: circuit 1.5 is not an integer"),
+        # a bus number written as a measured value (accepted before as bus 3)
+        ("bus,far_bus\n3.0,101\n", r"f\.csv:2: bus 3.0 is not an integer \(write it as digits\)"),
+        ("bus,far_bus\n3,1.01e2\n", r"f\.csv:2: far_bus 1.01e2 is not an integer"),
         ("bus,far_bus\n0,101\n", r"f\.csv:2: bus 0 is outside"),
         ("bus,far_bus\n", r"needs a header \(bus,far_bus\[,t_fault\]"),
     ],
