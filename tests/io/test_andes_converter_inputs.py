@@ -76,3 +76,11 @@ def test_parameters_left_out_are_named_with_andes_s_default(tmp_path):
             andes.get_case("kundur/kundur_reg.xlsx"), on_unsupported="skip"
         ).defaulted
     )
+
+
+def test_a_pvd1_naming_a_missing_generator_is_refused(tmp_path):
+    """A PVD1 whose gen is no static generator of the case (the finding: a ValueError
+    traceback from list.index): refused naming the device and the generator."""
+    path = edited(tmp_path, "ieee14/ieee14_pvd1.xlsx", "PVD1", gen=9999)
+    with pytest.raises(CaseError, match=r"PVD1 \S+: its static generator 9999 is no PV or Slack"):
+        read_andes_case(path, on_unsupported="skip")
