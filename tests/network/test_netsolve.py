@@ -125,3 +125,23 @@ def test_a_converter_current_growing_with_the_voltage_is_solved_with_the_network
         _load_mismatch(net.Y21 @ psi, net.Y22, V, loads, F, np.zeros(V.size, np.bool_))
         assert np.max(np.abs(F + drawn)) < 1e-10
         assert (slope > 1e-3) == on_slope  # the case is on the gain's slope or not
+
+
+@pytest.mark.parametrize("name", ["kundur", "miniwecc"])
+def test_the_sparse_reduction_is_the_dense_one(name, monkeypatch):
+    """Above `DENSE_MAX` buses the network is reduced with a sparse LU (SuperLU) of its
+    eliminated part, so that a 10 000-bus case needs memory in its kept buses only (a
+    dense LU of order 10 400 took 1.7 GB): on Kundur and miniWECC, reduced both ways, a
+    6-cycle fault's run gives the same speeds within 1e-12 pu."""
+    import stabctl
+    from stabctl.dynamics.events import fault_with_clearing
+    from stabctl.network import solution
+
+    case = stabctl.load_case(name)
+    bus, far = (3, 101) if name == "kundur" else (83, 33)
+    events = [fault_with_clearing(case, bus, far, 1.0, 6)]
+    dense = stabctl.Simulator(case).run(events, t_end=2.0)
+    monkeypatch.setattr(solution, "DENSE_MAX", 0)
+    sparse = stabctl.Simulator(case).run(events, t_end=2.0)
+    assert np.max(np.abs(sparse.speed - dense.speed)) < 1e-12
+    assert np.max(np.abs(sparse.vmag - dense.vmag)) < 1e-10
