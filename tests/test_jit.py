@@ -321,3 +321,78 @@ def test_a_kernel_called_by_address_returns_raises_and_checks_its_types():
         caller(address, x, 2, np.bool_(True))
     with pytest.raises(numba.core.errors.TypingError, match="x must be"):
         caller(address, np.zeros(2, np.int64), 2, np.bool_(False))
+
+
+def _fresh_process(code: str, cache_dir, **env):
+    import os
+    import subprocess
+    import sys
+
+    return subprocess.run(
+        [sys.executable, "-c", code],
+        env={**os.environ, "NUMBA_CACHE_DIR": str(cache_dir), **env},
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+
+
+_LOAD = (
+    "from stabctl.models.blocks import rectifier_loading as f\nprint(f(0.5), f.stats.cache_hits)\n"
+)
+
+
+def test_a_damaged_cache_entry_is_compiled_again(tmp_path):
+    """A kernel's cache index truncated or garbage (the finding: `simulate` died with an
+    UnpicklingError): the next process compiles the kernel again and answers."""
+    first = _fresh_process(_LOAD, tmp_path)
+    assert first.returncode == 0, first.stderr
+    index = next(tmp_path.rglob("blocks.rectifier_loading-*.nbi"))
+    assert _fresh_process(_LOAD, tmp_path).stdout.split()[1] != "Counter()"  # a cache hit
+    for damage in (index.read_bytes()[:10], b"garbage, not a pickle"):
+        index.write_bytes(damage)
+        again = _fresh_process(_LOAD, tmp_path)
+        assert again.returncode == 0, again.stderr
+        assert again.stdout.split()[0] == first.stdout.split()[0]  # sqrt(0.75 - 0.25)
+
+
+def test_a_cache_others_may_write_into_is_not_used(tmp_path):
+    """NUMBA_CACHE_DIR writable by everyone (the finding: a pickle planted there ran in
+    every stabctl process): not used; the kernels go to this user's own directory (mode
+    0700) with a warning naming why; a directory of this user's alone is used."""
+    shared = tmp_path / "shared"
+    shared.mkdir(mode=0o777)
+    shared.chmod(0o777)
+    home = tmp_path / "home"
+    code = (
+        "import warnings\n"
+        "warnings.simplefilter('always')\n"
+        "import numba\n"
+        "import stabctl.models.blocks\n"
+        "print(numba.config.CACHE_DIR)\n"
+    )
+    run = _fresh_process(code, shared, XDG_CACHE_HOME=str(home))
+    assert run.returncode == 0, run.stderr
+    assert f"numba cache: {shared} is writable by others than its owner" in run.stderr
+    assert run.stdout.strip() == str(home / "stabctl-numba")
+    assert (home / "stabctl-numba").stat().st_mode & 0o777 == 0o700
+    assert not list(shared.iterdir())
+    shared.chmod(0o700)
+    run = _fresh_process(code, shared, XDG_CACHE_HOME=str(home))
+    assert run.stdout.strip() == str(shared) and "numba cache" not in run.stderr
+
+
+def test_a_compiling_child_dies_with_its_parent():
+    """A background compile's child started by a parent that is then SIGKILLed (the
+    finding: the child outlived it): the kernel kills the child with its parent (prctl
+    PR_SET_PDEATHSIG); here a child whose parent is already gone exits at once."""
+    import subprocess
+    import sys
+
+    child = subprocess.run(
+        [sys.executable, "-m", "stabctl._jit.background", "x", "y", "1"],
+        input=b"",
+        capture_output=True,
+        timeout=60,
+    )
+    assert child.returncode == 1 and child.stderr == b""  # told its parent is pid 1: gone

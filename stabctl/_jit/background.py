@@ -86,6 +86,7 @@ def compile_in_background(dispatcher, argtypes, opt: int | None = None) -> bool:
             __name__,
             dispatcher.py_func.__module__,
             dispatcher.py_func.__qualname__,
+            str(os.getpid()),
         ],
         stdin=subprocess.PIPE,
         stdout=subprocess.DEVNULL,
@@ -135,6 +136,23 @@ def _stop(proc: subprocess.Popen) -> None:
         proc.wait()
 
 
+def _die_with(parent: int) -> None:
+    """In the child: the kernel kills it when its parent dies (Linux prctl
+    PR_SET_PDEATHSIG, SIGKILL), so a SIGKILLed parent leaves no compile running; a child
+    whose parent is already gone exits at once."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+        import signal
+
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):  # pragma: no cover - no libc prctl
+            pass
+    if os.getppid() != parent:
+        os._exit(1)
+
+
 if __name__ == "__main__":  # the child of `compile_in_background`
-    _module, _qualname = sys.argv[1:3]
+    _module, _qualname, _parent = sys.argv[1:4]
+    _die_with(int(_parent))
     getattr(importlib.import_module(_module), _qualname).compile(pickle.load(sys.stdin.buffer))

@@ -13,6 +13,13 @@ package that declares a compiled function (a line decorated with `kernel`, `njit
 level (what numba compiles, inlines or freezes as a constant: the kernels they call, the
 constants and NamedTuple argument types they read).  Editing any other module (a CLI help
 string, a report) keeps the compiled kernels.
+
+Safety: a cached kernel's index is a pickle, so whoever can write into the cache directory
+can run code in every process that loads a kernel.  A cache directory (NUMBA_CACHE_DIR, or a
+``__pycache__`` of the package) owned by another user than this one or root, or writable
+by others than its owner, is not used: the kernels are cached in this user's own
+directory instead, with a warning (`ensure_safe_cache`).  A damaged entry (truncated,
+garbage) is deleted and the kernel compiled again (`GuardedCache`).
 """
 
 from __future__ import annotations
@@ -20,9 +27,12 @@ from __future__ import annotations
 import hashlib
 import os
 import re
+import stat
+import warnings
 from pathlib import Path
 
 import numba
+from numba.core.caching import FunctionCache
 
 _PKG = Path(__file__).resolve().parents[1]
 
@@ -189,10 +199,75 @@ def cached(dispatcher) -> bool:
     return any(Path(dispatcher.stats.cache_path).glob(stem + "*.nbi"))
 
 
+class GuardedCache(FunctionCache):
+    """numba's on-disk cache of one kernel, whose load survives a damaged entry: an index
+    or data file that does not unpickle (truncated, garbage) is deleted and the kernel
+    compiled again, instead of the run stopping with an UnpicklingError."""
+
+    def load_overload(self, sig, target_context):
+        """The cached kernel for sig, or None (compile it) if none or damaged."""
+        try:
+            return super().load_overload(sig, target_context)
+        except Exception:  # noqa: BLE001 - whatever a damaged pickle raises
+            cache_file = self._cache_file
+            index = Path(cache_file._index_path)
+            for path in (index, *index.parent.glob(index.stem + "*.nbc")):
+                path.unlink(missing_ok=True)
+            return None
+
+
+def guard(dispatcher):
+    """`dispatcher` with its on-disk cache a `GuardedCache` (returned)."""
+    if isinstance(dispatcher._cache, FunctionCache):
+        dispatcher._cache.__class__ = GuardedCache
+    return dispatcher
+
+
+def unsafe_reason(directory: Path) -> str:
+    """Why numba must not load kernels from `directory` ('' if it may): it belongs to
+    another user than this one or root, or others than its owner may write into it (a
+    kernel index is a pickle: whoever can plant one runs code in every process that
+    loads it)."""
+    try:
+        st = directory.stat()
+    except OSError:
+        return ""  # not there yet: numba creates it with this process's umask
+    if st.st_uid not in (os.geteuid(), 0):
+        return f"{directory} belongs to user {st.st_uid}"
+    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        return f"{directory} is writable by others than its owner"
+    return ""
+
+
+def private_cache_dir() -> Path:
+    """This user's own cache directory (``~/.cache/stabctl-numba``, mode 0700), used
+    instead of an unsafe one (`unsafe_reason`)."""
+    path = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "stabctl-numba"
+    path.mkdir(parents=True, exist_ok=True, mode=0o700)
+    os.chmod(path, 0o700)
+    return path
+
+
+def ensure_safe_cache() -> None:
+    """Point numba's cache at `private_cache_dir` (a RuntimeWarning names why) if
+    NUMBA_CACHE_DIR or one of stabctl's cache directories is unsafe (`unsafe_reason`)."""
+    root = numba.config.CACHE_DIR
+    places = ([Path(root)] if root else []) + cache_dirs()
+    why = next((r for r in map(unsafe_reason, places) if r), "")
+    if why:
+        numba.config.CACHE_DIR = str(private_cache_dir())
+        warnings.warn(
+            f"numba cache: {why}; stabctl's kernels are cached in {numba.config.CACHE_DIR} instead",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+
+
 def ensure_fresh_cache() -> None:
     """Delete stabctl's compiled kernels (`clear_cache`) if a kernel source changed since
     they were written (`source_digest`; the stamp sits beside the first cache directory).
     A read-only installation is left alone (numba then compiles in memory)."""
+    ensure_safe_cache()
     stamp = cache_dirs()[0] / "numba-sources.sha256"
     now = source_digest()
     try:

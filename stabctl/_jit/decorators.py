@@ -7,18 +7,38 @@ ensure_fresh_cache`), so that no kernel is declared, let alone loaded, against a
 
 from __future__ import annotations
 
-import functools
-
 import numba
 from numba.core.registry import CPUDispatcher
 
-from stabctl._jit.cache import ensure_fresh_cache
+from stabctl._jit.cache import ensure_fresh_cache, guard
 
 ensure_fresh_cache()
 
-#: ``numba.njit`` with ``cache=True``: the decorator of a kernel that Python code calls.
-#: No C-callable (``cfunc``) wrapper: nothing takes a kernel's C address.
-njit = functools.partial(numba.njit, cache=True, no_cfunc_wrapper=True)
+
+def njit(func=None, **options):
+    """Decorator of a kernel that Python code calls: ``numba.njit`` with ``cache=True``
+    (its on-disk cache guarded against damaged entries, `stabctl._jit.cache.guard`) and
+    no C-callable (``cfunc``) wrapper: nothing takes a kernel's C address.
+
+    Parameters
+    ----------
+    func : callable, optional
+        The function (``@njit``), or None (``@njit(...)`` with options).
+    **options
+        Further ``numba.njit`` options.
+
+    Returns
+    -------
+    numba.core.registry.CPUDispatcher
+        The dispatcher.
+    """
+
+    options = {"cache": True, "no_cfunc_wrapper": True, **options}
+
+    def declare(f):
+        return guard(numba.njit(f, **options))
+
+    return declare if func is None else declare(func)
 
 
 class CompiledOnly(CPUDispatcher):
@@ -74,6 +94,6 @@ def kernel(func=None, **options):
             f, cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True, **options
         )
         dispatcher.__class__ = CompiledOnly
-        return dispatcher
+        return guard(dispatcher)
 
     return declare if func is None else declare(func)
