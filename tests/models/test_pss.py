@@ -237,11 +237,16 @@ def test_pss2_ramp_tracking_filter_is_its_transfer_function():
 
 def test_pss2b_limits_its_inputs():
     """PSS2B's power input is limited to [VS2MIN, VS2MAX] = [0.6, 0.8] before its
-    washouts: 0.9 and 1.5 pu give the same output and derivatives."""
+    washouts: 0.9 and 1.5 pu give the same output and derivatives, the KS2/(1 + s T7)
+    lag moving at KS2 (0.8 - 0.7)/T7 (its washout Tw3 at 0.7, Tw4 absent); 0.75 pu,
+    inside, at KS2 (0.75 - 0.7)/T7."""
     P, x = started(PSS2B)
+    S = pss_.pss2b.S
     a, b = output(P, x, pe=0.9), output(P, x, pe=1.5)
     assert a[0] == b[0] and np.array_equal(a[1], b[1])
-    assert output(P, x, pe=0.79)[0] != a[0]
+    assert a[1][S.lag2, 0] == pytest.approx(0.1875 * 0.1 / 1.5, rel=1e-12)
+    inside = output(P, x, pe=0.75)[1]
+    assert inside[S.lag2, 0] == pytest.approx(0.1875 * 0.05 / 1.5, rel=1e-12)
 
 
 def test_pss2c_output_logic_switches_on_the_power_with_hysteresis():

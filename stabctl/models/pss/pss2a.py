@@ -87,6 +87,10 @@ S = states(
         "switch",
     ),
 )
+#: the two input branches' slots (washout, second washout, lag) as numpy scalars: the
+#: `branch` kernel takes them as arguments (one compile for both branches)
+_W1, _W2, _L1 = np.int64(S.washout1), np.int64(S.washout2), np.int64(S.lag1)
+_W3, _W4, _L2 = np.int64(S.washout3), np.int64(S.washout4), np.int64(S.lag2)
 #: state names of each PSS2 type: PSS2A and PSS2B without the switch (their kernel is
 #: PSS2C's chain: the lead-lags they do not have, T10/T11 and T12/T13 0, are never states)
 STATE_NAMES = {PSS2A: S._fields[: S.leadlag4 + 1]}
@@ -186,14 +190,14 @@ def output(P, x, k, omega, pe, dx):
     dx[:, k] = 0.0
     u1 = signal(P[k, C.IN1], omega, pe)
     y1 = branch(
-        x, k, u1, P[k, C.IN1_LO], P[k, C.IN1_HI], S.washout1, S.washout2, S.lag1,
+        x, k, u1, P[k, C.IN1_LO], P[k, C.IN1_HI], _W1, _W2, _L1,
         P[k, C.TW], P[k, C.TW2], 1.0, P[k, C.TR1], dx,
     )  # fmt: skip
     y2 = 0.0
     if P[k, C.IN2] != 0:
         u2 = signal(P[k, C.IN2], omega, pe)
         y2 = branch(
-            x, k, u2, P[k, C.IN2_LO], P[k, C.IN2_HI], S.washout3, S.washout4, S.lag2,
+            x, k, u2, P[k, C.IN2_LO], P[k, C.IN2_HI], _W3, _W4, _L2,
             P[k, C.TW3], P[k, C.TW4], P[k, C.K2], P[k, C.TR2], dx,
         )  # fmt: skip
     y = y1 + P[k, C.KS3] * y2
