@@ -36,10 +36,11 @@ class Quantity:
     """One compared PSS/E channel: ``col`` its 0-based CSV column, ``kind`` (``delta``
     rotor angle of the machine at ``at[0]`` from the infinite bus's, ``speed_dev`` /
     ``speed`` PSS/E's speed as deviation / in pu, ``v`` bus voltage magnitude, ``angle``
-    bus angle ``at[0]`` minus ``at[1]``, ``efd``, ``pm`` (machine base), ``p_flow`` /
-    ``q_flow`` branch ``at[0]``-``at[1]`` (circuit 1) flow at its ``at[0]`` end, ``p_ibr``
-    / ``q_ibr`` the converter's output), ``tol`` the Julia test's tolerance (None: the
-    test reads the column but asserts nothing on it), ``norm`` ``max`` or ``l2``."""
+    bus angle ``at[0]`` minus ``at[1]``, ``efd``, ``pm`` (machine base), ``pe``
+    electrical power (system base), ``p_flow`` / ``q_flow`` branch ``at[0]``-``at[1]``
+    (circuit 1) flow at its ``at[0]`` end, ``p_ibr`` / ``q_ibr`` the converter's
+    output), ``tol`` the Julia test's tolerance (None: the test reads the column but
+    asserts nothing on it), ``norm`` ``max`` or ``l2``."""
 
     col: int
     kind: str
@@ -57,6 +58,7 @@ class Quantity:
             "angle": "angle V{}-V{}",
             "efd": "Efd G{}",
             "pm": "Pm G{}",
+            "pe": "Pe G{}",
             "p_flow": "P {}->{}",
             "q_flow": "Q {}->{}",
             "p_ibr": "P G{}",
@@ -87,6 +89,11 @@ class Run:
     inf_bus: int = 101
     import_options: tuple[str, ...] = field(default=())
     models: str = ""
+    #: (bus, time s, value pu): PSS/E's change of VREF of the exciter of the machine at
+    #: the bus to the value at the time (PowerSimulationsDynamics.jl's
+    #: ControlReferenceChange to V_ref); run as ``--vref-step MACHINE TIME DV`` with DV
+    #: the value minus the exciter's initial reference (`vref_step`)
+    vref: tuple[int, float, float] | None = None
 
 
 def _trip(a: int, b: int) -> tuple[str, ...]:
@@ -95,6 +102,11 @@ def _trip(a: int, b: int) -> tuple[str, ...]:
 
 _THREE = "ThreeBusMulti.raw"
 _TVC = "TVC_System_32.raw"
+
+
+def _vref(bus: int, t: float, value: float) -> dict:
+    """The keywords of a run whose disturbance is a step of VREF (`Run.vref`)."""
+    return {"vref": (bus, t, value)}
 
 
 def _delta(tol, col=1):
@@ -195,6 +207,21 @@ RUNS: tuple[Run, ...] = (
         "TEST_RENA_NOFREQ_REF_FLAG.csv", _trip(101, 103), 10.0,
         (Quantity(1, "angle", (103, 102), 0.01, "l2"), Quantity(2, "v", (103,), 0.01, "l2")),
         inf_bus=102, models="REGCA1 REECB1 REPCA1"),
+    # the stabiliser runs: VREF of the machine at bus 1 stepped at 1 s (PSS/E's own
+    # runs; the PSS2 DYRs written from the Julia tests' values, README there)
+    Run("STAB1", "OMIB_SSS_60Hz.raw", "OMIB_SSS.dyr", "results_PSSe.csv", (), 20.0,
+        (Quantity(1, "v", (1,), 1e-3), Quantity(2, "speed_dev", (1,), 1e-3)),
+        inf_bus=2, models="GENROU SEXS STAB1", **_vref(1, 1.0, 1.0472)),
+    *(
+        Run(m, "OMIB.raw", f"OMIB_{m}.dyr", "results_PSSe.csv", (), 20.0,
+            (
+                Quantity(1, "pe", (1,), 5e-3),
+                Quantity(2, "v", (1,), 2e-3),
+                Quantity(3, "speed", (1,), 1e-4),
+            ),
+            inf_bus=2, models=f"GENROU SEXS {m}", **_vref(1, 1.0, 1.04691))
+        for m in ("PSS2A", "PSS2B", "PSS2C")
+    ),
 )  # fmt: skip
 BY_NAME = {r.name: r for r in RUNS}
 
@@ -257,7 +284,29 @@ def psse_channels(run: Run) -> tuple[np.ndarray, np.ndarray]:
 
 def _event_times(run: Run) -> list[float]:
     d = run.disturbance
-    return [float(d[k + 1]) for k, a in enumerate(d) if a == "--t-trip"]
+    return [float(d[k + 1]) for k, a in enumerate(d) if a == "--t-trip"] + (
+        [run.vref[1]] if run.vref else []
+    )
+
+
+def vref_step(run: Run, case_file: Path) -> tuple[str, ...]:
+    """The ``stabctl simulate`` options of the run's VREF step (`Run.vref`): the machine
+    at the bus, the time and the change from its exciter's initial reference (as the
+    run starts: ``Simulator(case).model.Vref``); () for a run without one."""
+    if run.vref is None:
+        return ()
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.io import load_case
+
+    bus, t, value = run.vref
+    machine = _machine(json.loads(case_file.read_text()), bus)
+    case = load_case(case_file)
+    model = Simulator(case).model
+    exc = np.flatnonzero(model.ep.mac == case.machine_index(machine))
+    if exc.size != 1:
+        raise KeyError(f"machine {machine} (bus {bus}) has {exc.size} exciters, expected one")
+    dv = value - float(model.Vref[exc[0]])
+    return ("--vref-step", str(machine), f"{t:g}", repr(dv))
 
 
 def _stabctl(args: list[str]) -> tuple[int, str]:
@@ -325,6 +374,8 @@ def _stabctl_series(q: Quantity, run: Run, case: dict, tr: dict) -> np.ndarray:
         return tr[f"vmag_pu.B{q.at[0]}"]
     if k == "angle":
         return tr[f"vang_rad.B{q.at[0]}"] - tr[f"vang_rad.B{q.at[1]}"]
+    if k == "pe":
+        return tr[f"pelect_pu.G{_machine(case, q.at[0])}"]
     if k in ("efd", "pm"):
         col = "efd_pu" if k == "efd" else "pmech_pu"
         return tr[f"{col}.G{_machine(case, q.at[0])}"]
@@ -367,7 +418,8 @@ def simulate(run: Run, workdir: Path, step: float) -> tuple[dict, dict]:
             raise RuntimeError(f"import-psse: {_last_error(out)}")
     csv = workdir / f"{run.name}_{step:g}.csv"
     code, out = _stabctl(
-        ["simulate", str(case_file), *run.disturbance, "--tf", f"{run.tf:g}",
+        ["simulate", str(case_file), *run.disturbance, *vref_step(run, case_file),
+         "--tf", f"{run.tf:g}",
          "--step", f"{step:g}", "--out", str(csv)]
     )  # fmt: skip
     if code != 0:
@@ -421,7 +473,10 @@ def markdown(outcomes: list[Outcome]) -> str:
         "between the runs at 5 ms and 2.5 ms (the step's own error). A run that stabctl",
         "cannot import or run is listed with its message. ESST1A adds `--method trapezoid`:",
         "its regulator loop's pole (-1109 1/s) is beyond Heun at 5 ms, whose default step",
-        "for it is 0.45 ms (docs/simulator.md).",
+        "for it is 0.45 ms (docs/simulator.md). The stabiliser runs (STAB1, PSS2A, PSS2B,",
+        "PSS2C) step VREF of the machine at bus 1 at 1 s instead of a trip: `--vref-step 1",
+        "1 DV`, DV the Julia test's new V_ref minus the exciter's initial one; their DYRs",
+        "and STAB1's 60 Hz are in `tests/data/psse_runs/README.md`.",
         "",
         "Generated by `python benchmarks/psse_runs.py --markdown docs/psse_runs.md`;",
         "asserted by `tests/io/test_psse_runs.py` (runs still short are expected failures",

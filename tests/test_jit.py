@@ -62,6 +62,9 @@ def test_the_cache_key_hashes_the_kernel_sources_only(tmp_path):
         "models/governors/table.py",
         *(f"models/governors/{t}.py" for t in ("tg", "tgov1", "ieeeg1", "hygov", "ieesgo")),
         *(f"models/governors/{t}.py" for t in ("gast", "tg2", "hygov4")),
+        "models/pss/__init__.py",
+        "models/pss/table.py",
+        *(f"models/pss/{t}.py" for t in ("pst", "ieeest", "stab2a", "pss2a", "pss2c")),
         "errors.py",
     } <= names
     assert not names & {

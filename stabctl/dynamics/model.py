@@ -363,7 +363,9 @@ class DynamicModel:
         )
         L.view(x, "exc")[:] = xe
         L.view(x, "pss")[:] = pss_.initialise(
-            self.pp, *pss_.pss_inputs(self.pp, xm[1], self.pmech0)
+            self.pp,
+            *pss_.pss_inputs(self.pp, xm[1], self.pmech0),
+            self.pmech0[self.pp.mac],
         )
         lp = np.where(self.gp.mac2 >= 0, self.pmech0[np.maximum(self.gp.mac2, 0)], 0.0)
         xg, self.Pref = gov.initialise(self.gp, self.pmech0[self.gp.mac], lp)

@@ -825,6 +825,31 @@ def _stab2a(rec, gen):
     return _pss_row(rec, gen, KTw=v["K2"] * v["T2"], ymin=-v["HLIM"])
 
 
+def _stab1(rec, gen):
+    """STAB1: K/T T T1/T3 T3 T2/T4 T4 HLIM -> PST pss type 1 (the same equations,
+    stabctl.models.pss.stab1): washout K_Tw s/(1 + s T_w) with K_Tw = (K/T) T, T_w = T;
+    lead-lags T1 = (T1/T3) T3 over T3 and (T2/T4) T4 over T4; limits [-HLIM, HLIM]."""
+    v = DYR_MODELS["STAB1"].values(rec.params)
+    _washout(v["K_T"] * v["T"], v["T"])
+    return _pss_row(
+        rec,
+        gen,
+        KTw=v["K_T"] * v["T"],
+        T1=v["T1_T3"] * v["T3"],
+        T3=v["T2_T4"] * v["T4"],
+        ymin=-v["HLIM"],
+    )
+
+
+def _pss2(rec, gen):
+    """PSS2A, PSS2B, PSS2C: ICS1 IB1 ICS2 IB2 M N then the CONs -> pss_con types 5-7 (the
+    copies of stabctl.models.pss.pss2a, pss2b, pss2c); only local inputs (IB1 = IB2 = 0)
+    of speed (1) or electrical power (3)."""
+    v = DYR_MODELS[rec.model].values(rec.params)
+    _local_inputs((v["ICS1"], v["IB1"]), (v["ICS2"], v["IB2"]))
+    return _pss_row(rec, gen)
+
+
 # -- governors (PST tg_con, GovernorTable) ----------------------------------------------------
 
 
@@ -958,6 +983,10 @@ _MAPPERS = {
     "IEEEST": _ieeest,
     "ST2CUT": _st2cut,
     "STAB2A": _stab2a,
+    "STAB1": _stab1,
+    "PSS2A": _pss2,
+    "PSS2B": _pss2,
+    "PSS2C": _pss2,
     "TGOV1": _droop,
     "GAST": _droop,
     "TG2": _droop,

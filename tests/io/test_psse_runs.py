@@ -1,7 +1,8 @@
 """PSS/E's own runs (tests/data/psse_runs, PowerSimulationsDynamics.jl's PSS/E results,
 BSD-3) repeated as a user runs them: ``stabctl import-psse RAW DYR`` with no option, then
-``stabctl simulate`` with the run's line trip; every quantity within the tolerance of the
-Julia test that reads the run (tests/psse_reference.py; the table: docs/psse_runs.md).
+``stabctl simulate`` with the run's line trip (the stabiliser runs: its VREF step); every
+quantity within the tolerance of the Julia test that reads the run
+(tests/psse_reference.py; the table: docs/psse_runs.md).
 
 Runs still short are strict expected failures with the measured reason, so that each
 flips to a failure ("XPASS(strict)") when it comes within tolerance: then remove it from
@@ -10,11 +11,13 @@ flips to a failure ("XPASS(strict)") when it comes within tolerance: then remove
 import numpy as np
 import pytest
 from psse_reference import BY_NAME, DATA, RUNS, compare, psse_channels
+from runs import flat_run
 
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import LineTrip
 from stabctl.errors import InputError
 from stabctl.io.psse import load_psse
+from stabctl.models.pss import PSS
 
 #: run -> why it is short today (measured with benchmarks/psse_runs.py)
 SHORT: dict[str, str] = {}
@@ -60,3 +63,39 @@ def test_esst1a_regulator_loop_sets_the_step():
     assert "regulator loop" in sim.fastest[1]
     with pytest.raises(InputError, match=r"step 0.005 s is too large.*regulator loop"):
         sim.run([LineTrip(1, 4, 1.0)], 2.0, h=0.005)
+
+
+#: the stabiliser runs: pss_con row of the machine at bus 1, as imported (type, fields)
+STABILISERS = {
+    # STAB1 K/T = 6, T = 1.5, T1/T3 = T2/T4 = 13.3, T3 = T4 = 0.0447, HLIM = 0.2: PST's
+    # pss on the speed with K_Tw = 6 * 1.5 and leads 13.3 * 0.0447
+    "STAB1": dict(type=1, KTw=9.0, Tw=1.5, T1=13.3 * 0.0447, T2=0.0447, T3=13.3 * 0.0447,
+                  T4=0.0447, ymax=0.2, ymin=-0.2),
+    "PSS2A": dict(type=5, input1=1, input2=3, M=5, N=1, Tw=1.5, Tw2=1.5, Tr1=0.0, Tw3=1.5,
+                  Tw4=0.0, Tr2=1.5, K2=0.1875, Ks3=1.0, K1=2.0, ymax=0.1, ymin=-0.1),
+    "PSS2B": dict(type=6, T5=1.0, T6=1.0, VS1MAX=0.00035, VS1MIN=-0.00055, VS2MAX=0.915,
+                  VS2MIN=0.895),
+    "PSS2C": dict(type=7, T12=1.0, T13=1.0, PSSON=0.895, PSSOFF=0.885, XCOMP=1.0,
+                  TCOMP=1.0),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", sorted(STABILISERS))
+def test_stabiliser_record_is_read_into_its_columns(name):
+    """Each stabiliser run's record lands in the pss_con fields of its type (the PSS2
+    records in PSS/E's order; STAB1's ratios multiplied out)."""
+    run = BY_NAME[name]
+    pss = load_psse(DATA / name / run.raw, DATA / name / run.dyr).pss
+    assert len(pss) == 1
+    for field, v in STABILISERS[name].items():
+        assert pss.col(PSS.col(field))[0] == pytest.approx(v, rel=1e-15), field
+
+
+@pytest.mark.parametrize("name", sorted(STABILISERS))
+def test_stabiliser_run_starts_flat(name):
+    """The stabiliser runs' cases at rest: no state moves by 1e-8 in 10 s without the
+    VREF step (the PSS2 washouts at the initial speed and power, PSS2B's limited power
+    inside [0.895, 0.915], PSS2C's switch on at 0.9 pu)."""
+    run = BY_NAME[name]
+    drift, _ = flat_run(load_psse(DATA / name / run.raw, DATA / name / run.dyr), t_end=10.0)
+    assert drift < 1e-8

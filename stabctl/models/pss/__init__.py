@@ -1,0 +1,359 @@
+"""Power system stabilisers (pss_con), one module per type, and this package: the registry
+of the types, the pss_con table they fill (`PSS`), their parameters (`PssParams`, packed
+for the kernels as :data:`PACKED`, columns `C`), the dispatch on the type of the
+compiled kernel (`output_and_derivatives`) and of the initialisation (`initialise`).
+
+The types (pss_con column 1), each a module holding its DYR records, its named states
+(``S``, read by its kernel as ``x[S.washout, k]``), its initialisation and its kernel:
+
+* :mod:`~stabctl.models.pss.pst`: PST `pss` (types 1, speed input, and 2, electrical
+  power input);
+* :mod:`~stabctl.models.pss.ieeest`: stabctl's PSS/E stabiliser (type 3: IEEEST with its
+  filter, ST2CUT);
+* :mod:`~stabctl.models.pss.stab2a`: PSS/E's STAB2A (type 4);
+* :mod:`~stabctl.models.pss.pss2a`: PSS/E's PSS2A (type 5; its kernel is the PSS2
+  family's), :mod:`~stabctl.models.pss.pss2b` PSS2B (type 6),
+  :mod:`~stabctl.models.pss.pss2c` PSS2C (type 7, with its output logic);
+* :mod:`~stabctl.models.pss.stab1`: PSS/E's STAB1, read as PST's type 1 (the same
+  equations; the module holds the record).
+
+Sources: PSTess 1.1 `pss_indx.m`, `pss.m` (docs/pst_models.md section 3); PSS/E Model
+Library; IEEE Std 421.5; how to add a type in docs/simulator.md.  States: up to N_STATES
+slots per PSS (the most any type present uses), named per type in STATE_NAMES; slots a
+type does not use stay 0 (`has_state`).  A time constant below 1e-3 s means the block is
+absent (no state).  Output in pu, added to the exciter summing junction of the same
+machine; 0 while the terminal voltage is outside [VCL, VCU] (pss_con columns 25-26,
+PSS/E's output cut-off; 0 none).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from stabctl._jit.decorators import kernel
+from stabctl.errors import CaseError
+from stabctl.models.blocks import LBND
+from stabctl.models.declaration import (
+    Declared,
+    Family,
+    Param,
+    check_packed,
+    pack,
+    params_class,
+)
+from stabctl.models.pss import ieeest, pss2a, pss2b, pss2c, pst, stab1, stab2a
+from stabctl.models.pss.ieeest import PSSE
+from stabctl.models.pss.pss2a import PSS2A
+from stabctl.models.pss.pss2b import PSS2B
+from stabctl.models.pss.pss2c import PSS2C
+from stabctl.models.pss.pst import PST_POWER, PST_SPEED
+from stabctl.models.pss.stab2a import STAB2A
+from stabctl.models.pss.table import (
+    PACKED,
+    PARAMS,
+    POWER,
+    PSS2_FIELDS,
+    SPEED,
+    TABLE_FIELDS,
+    C,
+)
+
+if TYPE_CHECKING:
+    from stabctl.case import Case
+
+__all__ = [
+    "PSS",
+    "TYPES",
+    "STATE_NAMES",
+    "N_STATES",
+    "PssParams",
+    "pss_params",
+    "pss_inputs",
+    "initialise",
+    "output_and_derivatives",
+    "C",
+    "S",
+    "PACKED",
+    "TABLE_FIELDS",
+    "PSS2_FIELDS",
+    "SPEED",
+    "POWER",
+    "W_PSSE",
+    "LL_PSSE",
+    "PST_SPEED", "PST_POWER", "PSSE", "STAB2A", "PSS2A", "PSS2B", "PSS2C",
+]  # fmt: skip
+
+# --------------------------------------------------------------------------------------
+# the registry: one line per type module; a module serves the pss_con types of its KINDS
+# (the order of the DYR records)
+# --------------------------------------------------------------------------------------
+
+MODULES = (pst, ieeest, stab2a, stab1, pss2a, pss2b, pss2c)
+#: pss_con type -> the module of its equations
+TYPES = dict(sorted((kind, m) for m in MODULES for kind in m.KINDS))
+#: pss_con type -> its state names, in slot order (the module's ``S``)
+STATE_NAMES = {kind: m.STATE_NAMES[kind] for kind, m in TYPES.items()}
+#: state slots of the widest type
+N_STATES = max(len(names) for names in STATE_NAMES.values())
+if len(TYPES) != sum(len(m.KINDS) for m in MODULES):
+    raise ValueError("a pss_con type is claimed by two stabiliser modules")
+#: the types whose inputs are PSS/E input codes (pss_con input1, input2)
+PSSE_INPUTS = (PSSE, PSS2A, PSS2B, PSS2C)
+#: the PSS2 family (`pss2a.output`)
+PSS2 = (PSS2A, PSS2B, PSS2C)
+
+PSS = Family(
+    table="pss_con",
+    min_columns=10,
+    key="machine",
+    key_label="machine",
+    params=(
+        Param(
+            "type",
+            "code",
+            1,
+            integer=True,
+            choices=tuple(TYPES),
+            label="pss type",
+            doc="; ".join(f"{kind} {m.KINDS[kind]}" for kind, m in TYPES.items()),
+        ),
+        *PARAMS,
+    ),
+    dyr=tuple(model for m in MODULES for model in m.DYR),
+)
+
+#: the kernels' column of each PACKED name, under the name it had before the package
+#: (pss.S.TW): the same layout as `C`
+S = C
+#: type 3's washout and first lead-lag slots (`ieeest.S`)
+W_PSSE, LL_PSSE = ieeest.S.washout, ieeest.S.leadlag1
+
+#: the labels of `PssParams.time_constants`, by declared field, in reporting order
+_TIME_CONSTANT_LABELS = {
+    "Tw": "pss_con T_w",
+    "T2": "pss_con T_2",
+    "T4": "pss_con T_4",
+    "T6": "pss_con T_6",
+    "Tr1": "pss_con Tr1",
+    "Tr2": "pss_con Tr2",
+    **{n: f"pss_con {n}" for n in ("Tw2", "Tw3", "Tw4", "T9", "T13")},
+}
+_LIMITS = ("in1_lo", "in1_hi", "in2_lo", "in2_hi")
+
+
+@params_class(("kind", "mac"), TABLE_FIELDS + PSS2_FIELDS)
+class PssParams(Declared):
+    """PSS data, arrays of shape (n_pss,): ``kind`` the pss_con type, ``mac`` the machine's
+    row (index), the pss_con fields :data:`TABLE_FIELDS` and :data:`PSS2_FIELDS` under
+    their declared names (stabctl.models.pss.PSS; input1, input2 0 for the types without
+    PSS/E inputs).  Type 3: the filter in controllable canonical form of order nf (<= 4):
+    fa (n, 4) the monic denominator coefficients a_0..a_3, fc (n, 4) output
+    coefficients, fe the feedthrough.  Every type: v_cut_high, v_cut_low the output
+    cut-off's terminal voltages (pu; VCU, VCL with 0 read as none: +inf, -inf).  PSS2B,
+    PSS2C: in1_lo, in1_hi, in2_lo, in2_hi the input limits VS1MIN .. VS2MAX (pu; -inf,
+    +inf for the other types)."""
+
+    nf: np.ndarray
+    fa: np.ndarray
+    fc: np.ndarray
+    fe: np.ndarray
+    v_cut_high: np.ndarray
+    v_cut_low: np.ndarray
+    in1_lo: np.ndarray
+    in1_hi: np.ndarray
+    in2_lo: np.ndarray
+    in2_hi: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.mac.size
+
+    @property
+    def power_input(self):
+        return self.kind == PST_POWER
+
+    def packed(self) -> np.ndarray:
+        """Parameter matrix (n_pss, len(PACKED)) for the compiled kernels, columns as
+        :data:`PACKED`."""
+        return pack(
+            self,
+            PACKED,
+            **{f"fa_{i}": self.fa[:, i] for i in range(4)},
+            **{f"fc_{i}": self.fc[:, i] for i in range(4)},
+        )
+
+    @property
+    def has_T4(self):
+        return self.T4 >= LBND
+
+    def n_slots(self) -> int:
+        """State slots per PSS: the most any PSS of the case uses (3 if none)."""
+        return max([3, *(len(STATE_NAMES[int(k)]) for k in self.kind)])
+
+    def has_state(self) -> np.ndarray:
+        """Boolean (n_slots, n_pss): the slots that are states of each PSS (each type
+        module's ``has_state`` on its rows)."""
+        act = np.zeros((N_STATES, self.n), bool)
+        for module in MODULES:
+            rows = np.isin(self.kind, tuple(module.KINDS))
+            if module.KINDS:
+                for slot, on in enumerate(module.has_state(self)):
+                    act[slot] |= rows & on
+        return act[: self.n_slots()]
+
+    def time_constants(self):
+        """(label, values, mask) of every time constant that sets a state's speed (each
+        type module's ``time_constants`` on its rows)."""
+        masks = {name: np.zeros(self.n, bool) for name in _TIME_CONSTANT_LABELS}
+        for module in MODULES:
+            rows = np.isin(self.kind, tuple(module.KINDS))
+            if module.KINDS:
+                for name, on in module.time_constants(self).items():
+                    masks[name] |= rows & on
+        return tuple(
+            (label, getattr(self, name), masks[name])
+            for name, label in _TIME_CONSTANT_LABELS.items()
+        )
+
+
+check_packed(PssParams, PACKED, (*(f"fa_{i}" for i in range(4)), *(f"fc_{i}" for i in range(4))))
+
+
+def pss_params(case: Case) -> PssParams:
+    """PSS parameters of a case.
+
+    Raises CaseError (pss_con row, field) for a PSS/E type (3-7) whose washout is below
+    1e-3 s, or a row its type module's ``check`` refuses: a PST pss (types 1, 2) whose
+    first lead-lag has no lag (T_2 below 1e-3 s; PST has no such case); a type-3 or PSS2
+    lead-lag with a lead but no lag, an input code other than 1 (speed) or 3 (power); an
+    improper type-3 filter (A6 without a second-order denominator); a PSS2 ramp-tracking
+    filter with N > 0 and M = 0, M N > 8 or T9 below 1e-3 s."""
+    s = case.pss
+    for r in range(len(s)):
+        kind = int(s.type[r])
+        if kind >= PSSE and s.Tw[r] < LBND:
+            raise CaseError(f"pss_con row {r + 1}, field 'Tw': washout needs Tw >= {LBND} s")
+        problem = TYPES[kind].check(s, r)
+        if problem:
+            raise CaseError(f"pss_con row {r + 1}, {problem}")
+    nf, fa, fc, fe = ieeest.filters(s)
+    e = np.isin(s.type, PSSE_INPUTS)
+    limited = np.isin(s.type, (PSS2B, PSS2C))
+    given = {n: getattr(s, n).copy() for n in TABLE_FIELDS + PSS2_FIELDS}
+    given.update(input1=np.where(e, s.input1, 0), input2=np.where(e, s.input2, 0))
+    inf = np.full(len(s), np.inf)
+    return PssParams(
+        kind=s.type.astype(int),
+        mac=np.array([case.machine_index(m) for m in s.machine], int),
+        **given,
+        nf=nf,
+        fa=fa,
+        fc=fc,
+        fe=fe,
+        v_cut_high=np.where(s.VCU == 0, np.inf, s.VCU),
+        v_cut_low=np.where(s.VCL == 0, -np.inf, s.VCL),
+        in1_lo=np.where(limited, s.VS1MIN, -inf),
+        in1_hi=np.where(limited, s.VS1MAX, inf),
+        in2_lo=np.where(limited, s.VS2MIN, -inf),
+        in2_hi=np.where(limited, s.VS2MAX, inf),
+    )
+
+
+def pss_inputs(p: PssParams, omega, pe_machine):
+    """Signals 1 and 2 of each PSS at the initial point, shape (n_pss,) each.
+
+    Parameters
+    ----------
+    p : PssParams
+        The stabilisers.
+    omega : numpy.ndarray
+        Machine speeds (pu), shape (n_mac,).
+    pe_machine : numpy.ndarray
+        Electrical power of each machine on its own base (pu), shape (n_mac,): the air-gap
+        power ``Re(psi conj(I))`` of the internal voltage the network sees, the signal
+        :func:`output_and_derivatives` is given in a run (at the initial point the
+        mechanical power, terminal power plus ``r_a |I|^2``).  ANDES's IEEEST takes the
+        same (``sig``: ``tm0`` at initialisation, ``te`` after, ``andes/models/pss/
+        ieeest.py``); with the terminal power here a machine with ``r_a`` started off
+        equilibrium (IEEE 39 G6: 0.015 on ``pss.leadlag1``).
+
+    Returns
+    -------
+    u1 : numpy.ndarray
+        PST types: speed (pu) or the power; types 3, 5-7: the first PSS/E input (speed
+        deviation or power, before any input limit); type 4: the power.
+    u2 : numpy.ndarray
+        Types 3, 5-7: the second PSS/E input (0 none); the other types: 0.
+    """
+    w, pe = omega[p.mac], pe_machine[p.mac]
+    u1, u2 = np.zeros(p.n), np.zeros(p.n)
+    for module in MODULES:
+        rows = np.isin(p.kind, tuple(module.KINDS))
+        if rows.any():
+            u1[rows], u2[rows] = module.signals(p, rows, w, pe)
+    return u1, u2
+
+
+def initialise(p: PssParams, u1, u2, pe0=None):
+    """States (n_slots, n_pss) from the initial inputs (`pss_inputs`), each type module's
+    ``initialise`` on its rows: every washout input state at its input, input lags at K
+    u, type 3's filter state 1 at its input times the denominator's leading coefficient
+    (controllable form, zero derivative), PSS2C's switch from the initial power, others 0.
+
+    Parameters
+    ----------
+    p : PssParams
+        The stabilisers.
+    u1, u2 : numpy.ndarray
+        Their inputs at the initial point, shape (n_pss,) each (`pss_inputs`).
+    pe0 : numpy.ndarray, optional
+        Each PSS's machine's initial electrical power (machine base), shape (n_pss,);
+        needed where a PSS2C is (its output logic).
+
+    Returns
+    -------
+    numpy.ndarray
+        The states, shape (n_slots, n_pss).
+
+    Raises
+    ------
+    ValueError
+        A PSS2C without pe0.
+    """
+    if pe0 is None:
+        if np.any(p.kind == PSS2C):
+            raise ValueError("initialise: a PSS2C needs its machine's initial power pe0")
+        pe0 = np.zeros(p.n)
+    x = np.zeros((N_STATES, p.n))
+    for module in MODULES:
+        rows = np.isin(p.kind, tuple(module.KINDS))
+        if rows.any():
+            module.initialise(p, rows, u1, u2, np.asarray(pe0, float), x)
+    return x[: p.n_slots()]
+
+
+# -- compiled runtime kernel: P is PssParams.packed(), x the PSS block of the state
+# -- vector (n_slots, n_pss), k the PSS; each type's kernel is its module's, dispatched on
+# -- kind by `output_and_derivatives` (one branch per type)
+
+
+@kernel
+def output_and_derivatives(P, x, k, omega, pe, vt, dx):
+    """Output of PSS k (pu, to its exciter's summing junction) at machine speed omega (pu),
+    electrical power pe (machine base) and terminal voltage magnitude vt (pu), PST flag
+    1/2; its derivatives into dx[:, k].  The output is 0 while vt is outside [VCL, VCU]
+    (PSS/E IEEEST, ST2CUT; ANDES 2.0 ``ieeest.py`` ``OLIM``); the states move on."""
+    kind = P[k, C.KIND]
+    if kind == PSSE:
+        y = ieeest.output(P, x, k, omega, pe, dx)
+    elif kind == STAB2A:
+        y = stab2a.output(P, x, k, pe, dx)
+    elif kind == PSS2C:
+        y = pss2c.output(P, x, k, omega, pe, dx)
+    elif kind == PSS2A or kind == PSS2B:
+        y = pss2a.output(P, x, k, omega, pe, dx)
+    else:
+        y = pst.output(P, x, k, pe if kind == PST_POWER else omega, dx)
+    return y if P[k, C.VCUT_LO] <= vt <= P[k, C.VCUT_HI] else 0.0
