@@ -4,7 +4,8 @@ and of the converter's P and Q, and the buses where either tool stops.
 
 The fault and the runs (tests/andes_compare.py `sweep_case`, shared with
 tests/io/test_andes.py ``test_converter_case_bus_faults_match_andes``): each bus in turn,
-through j1e-4 pu (ANDES's Fault needs an impedance; stabctl takes the same) from 1.0 to
+through j1e-4 pu on Kundur, j1e-3 pu on IEEE 14 (ANDES's Fault needs an impedance; its
+Newton iteration fails at the fault instant through j1e-4 pu at most IEEE 14 buses) from 1.0 to
 1.1 s (6 cycles), 3 s, both tools' trapezoid at a 5 ms step (ANDES's step held at 5 ms,
 its event steps 1e-7 s), PV Q limits off, loads constant impedance; ANDES edited in two
 places (`keep_ipmax_restore_angles`: its Fault's restore at clearing keeps the REECA1's
@@ -58,7 +59,9 @@ TARGET = 1e-4  # pu, the issue's bound on the speed gap
 def settings() -> str:
     """The sweep's settings, one line."""
     return (
-        f"fault through j{X_FAULT:g} pu at each bus, 1.0 to {1 + CYCLES / 60:.1f} s "
+        "fault at each bus through j x pu (x: "
+        + ", ".join(f"{k} {v:g}" for k, v in X_FAULT.items())
+        + f"), 1.0 to {1 + CYCLES / 60:.1f} s "
         f"({CYCLES} cycles), {T_END:g} s, trapezoid at {STEP * 1e3:g} ms in both (ANDES's "
         "step held, event steps 1e-7 s), PV Q limits off, loads constant impedance; ANDES "
         "edited by keep_ipmax_restore_angles (tests/andes_compare.py); gaps on ANDES's "
