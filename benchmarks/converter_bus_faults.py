@@ -70,13 +70,12 @@ def settings() -> str:
 
 
 def ref_of(name: str, mode: str):
-    """ANDES's runs of case ``name``: the test's stored file, or live."""
+    """ANDES's runs of case ``name``: the test's stored file (None if there is none), or
+    live."""
     if mode == "live":
         return LIVE
     ref = AndesRef(file_key(f"{TEST}[{name}]"), "stored", TEST)
-    if not ref.path.exists():
-        sys.exit(f"{ref.path} missing: python tests/data/andes_refs/make_refs.py -k {TEST}")
-    return ref
+    return ref if ref.path.exists() else None
 
 
 def cell(row: dict, key: str) -> str:
@@ -107,7 +106,12 @@ def main() -> None:
     worst = []
     for name in args.case or CASES:
         t0 = time.perf_counter()
-        rows = sweep_case(ref_of(name, args.andes), name)
+        ref = ref_of(name, args.andes)
+        if ref is None:
+            print(f"{name}: ANDES's runs not stored (make_refs.py -k {TEST}; or --andes live)")
+            lines.append(f"| {name.split('/')[1]} | - | ANDES's runs not stored | | | | |")
+            continue
+        rows = sweep_case(ref, name)
         took = time.perf_counter() - t0
         for r in rows:
             flag = " > target" if r.get("dw", 0.0) > TARGET else ""

@@ -2694,11 +2694,8 @@ SWEEP = {
     "kundur/kundur_wtdta1.xlsx": ([9, 10], [4, 9, 10], 1e-4),
     # measured 5.1e-5 (bus 3)
     "kundur/kundur_wtds.xlsx": ([9, 10], [4, 9, 10], 1e-4),
-    "ieee14/ieee14_solar.xlsx": ([], [], 1e-4),
-    "ieee14/ieee14_solar_abn.xlsx": ([], [], 1e-4),
-    "ieee14/ieee14_wt3.xlsx": ([], [], 1e-4),
-    "ieee14/ieee14_reecb1.json": ([], [], 1e-4),
-    "ieee14/ieee14_regcp1_nopll.json": ([], [], 1e-4),
+    # the IEEE 14 cases (j1e-3 pu) are not recorded yet: a case's 14 ANDES runs took
+    # longer than pytest's 600 s timeout on a loaded machine (make_refs.py --timeout 0)
 }
 
 
