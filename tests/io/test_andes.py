@@ -35,6 +35,19 @@ import pytest
 pytestmark = pytest.mark.andes
 andes = pytest.importorskip("andes")
 
+from andes_compare import (  # noqa: E402
+    STEP,
+    algebraic_gaps,
+    converter_powers,
+    fault_gaps,
+    keep_reeca1_ipmax,
+    like_for_like_case,
+    paired_rows,
+    regca1_fault_run,
+    speeds_on,
+    speeds_run,
+    sweep_case,
+)
 from andes_refs import live_too, logged, ref_for  # noqa: E402
 from runs import flat_run  # noqa: E402
 
@@ -53,7 +66,6 @@ from stabctl.errors import CaseError, InputError, SimulationError  # noqa: E402
 from stabctl.io.andes import (  # noqa: E402
     AndesFault,
     andes_converter_powers,
-    andes_machine_buses,
     andes_modes,
     andes_powerflow,
     andes_separated,
@@ -79,24 +91,6 @@ andes_load = logged(andes.load)
 
 CASES = Path(andes.__file__).parent / "cases"
 WECC_CONTROLS = {"ESDC2A", "ESST3A", "EXST1", "ST2CUT", "IEEEST"}
-STEP = 0.005  # s, both tools
-
-
-def paired_rows(ours, theirs):
-    """stabctl's machine row for each ANDES machine, given the machines' buses in each
-    tool's order: the k-th ANDES unit at a bus is the k-th stabctl unit there (NPCC has
-    two units at buses 23 and 54)."""
-    rows = {}
-    for k, b in enumerate(ours):
-        rows.setdefault(int(b), []).append(k)
-    return [rows[int(b)].pop(0) for b in theirs]
-
-
-def speeds_on(t, res, case, buses):
-    """stabctl's speeds on ANDES's time grid, columns in ANDES's machine order (its
-    machines' ``buses``, `andes_machine_buses`)."""
-    rows = paired_rows(case.machines.bus, buses)
-    return np.column_stack([np.interp(t, res.t, res.speed[:, k]) for k in rows])
 
 
 @pytest.fixture
@@ -106,14 +100,6 @@ def ref(request):
     r = ref_for(request)
     yield r
     r.finish()
-
-
-def speeds_run(ss, t_end, step=STEP, **more):
-    """ANDES's run of ``ss`` to ``t_end``: a dict of its time grid ``t``, its speeds ``wa``
-    and its machines' ``buses`` (`andes_speeds`), and ``more``'s items, each a function of
-    ``ss`` after the run, for `AndesRef.run`."""
-    t, wa = andes_speeds(ss, t_end, step)
-    return dict(t=t, wa=wa, buses=andes_machine_buses(ss), **{k: f(ss) for k, f in more.items()})
 
 
 def bus_v(ss, bus):
@@ -1491,15 +1477,6 @@ def converter_case(model, **changes):
     return case.replace(converters=case.converters.replace(**cols)) if cols else case
 
 
-def converter_powers(model):
-    """ANDES ``model``'s converter powers ``Pa``, ``Qa`` (`andes_converter_powers`) as
-    functions of the system for `speeds_run`."""
-    return dict(
-        Pa=lambda ss: andes_converter_powers(ss, model)[0],
-        Qa=lambda ss: andes_converter_powers(ss, model)[1],
-    )
-
-
 def converter_gaps(ref, model, case, events, andes_edit, t_end=5.0):
     """Both tools' runs of the same case and disturbance, 5 ms step, PV Q limits off:
     the largest speed gap and converter P and Q gaps (pu), on ANDES's time grid without
@@ -2012,72 +1989,6 @@ def regca1_alone(tmp_path_factory):
     return path, case
 
 
-def algebraic_gaps(t, ours, theirs, events, step=STEP):
-    """Largest |ours - theirs| of an algebraic output on ANDES's grid t, leaving out the
-    points in (te - step, te + 2e-4] of each event time te: ANDES records the instant
-    before a jump and adds points 1e-4 s around it, stabctl records after it, so that an
-    interpolation of stabctl's values there mixes both sides."""
-    out = np.zeros(t.size, bool)
-    for te in events:
-        out |= (t > te - step) & (t <= te + 2e-4)
-    return np.max(np.abs(ours - theirs)[~out])
-
-
-def regca1_fault_run(
-    ref,
-    path,
-    case,
-    bus,
-    cycles,
-    h,
-    t_end,
-    x=1e-3,
-    model="REGCA1",
-    like_for_like=False,
-    edit=None,
-):
-    """A bus fault through j x pu from 1 s, both tools at step h, on ANDES's grid t (the
-    case's own Toggle and Fault off): the largest speed gap dw, the converter's P, Q
-    (stabctl's interpolated) and Pa, Qa (ANDES ``model``'s).  like_for_like: stabctl's
-    trapezoid against ANDES's, its step held at h and its event steps 1e-7 s
-    (`andes_system` fixed_step, event_eps); edit: ANDES's data changed before set-up.
-    ANDES's run is stored under a tag made of these arguments (the same run in one test
-    made once)."""
-    t_clear = 1.0 + cycles / 60
-    method = "trapezoid" if like_for_like else "heun"
-    res = Simulator(case, q_limits=False).run(
-        [Fault(bus, 1.0, t_clear, x=x)], t_end, h=h, method=method
-    )
-    tag = f"bus{bus}_{cycles}c_x{x:g}_h{h:g}_{t_end:g}s" + "_lfl" * like_for_like
-    tag += f"_{edit.__name__}" if edit else ""
-    a = ref.run(
-        tag,
-        lambda: speeds_run(
-            andes_system(
-                path,
-                fault=AndesFault(bus, 1.0, t_clear, x=x),
-                off=("Toggle", "Fault"),
-                event_eps=1e-7 if like_for_like else None,
-                fixed_step=like_for_like,
-                edit=edit,
-            ),
-            t_end,
-            h,
-            **converter_powers(model),
-        ),
-    )
-    t, wa = a["t"], a["wa"]
-    return {
-        "t": t,
-        "dw": np.max(np.abs(speeds_on(t, res, case, a["buses"]) - wa)),
-        "P": np.interp(t, res.t, res.ibr_p[:, 0]),
-        "Q": np.interp(t, res.t, res.ibr_q[:, 0]),
-        "Pa": a["Pa"][:, 0],
-        "Qa": a["Qa"][:, 0],
-        "res": res,
-    }
-
-
 @live_too
 def test_ieee14_regca1_fault_speeds_and_powers_match_andes(regca1_alone, ref):
     """ANDES's IEEE 14 with the bus-8 generator a REGCA1 (ieee14_solar without REECA1 and
@@ -2250,18 +2161,6 @@ def reeca1_case(tmp_path_factory):
     path = solar_case_file(tmp_path_factory.mktemp("reeca1"), ("REPCA1",))
     case = import_andes(path, on_unsupported="skip")
     return path, case
-
-
-def fault_gaps(ref, path, case, bus, cycles, h, t_end, **kw):
-    """(speed, P, Q) gaps to ANDES of a bus fault through j1e-3 pu (or ``x``), both tools at
-    step h (`regca1_fault_run`, returned last)."""
-    run = regca1_fault_run(ref, path, case, bus, cycles, h, t_end, **kw)
-    t, t_clear = run["t"], 1.0 + cycles / 60
-    gaps = [
-        algebraic_gaps(t, run[ours], run[theirs], (1.0, t_clear), h)
-        for ours, theirs in (("P", "Pa"), ("Q", "Qa"))
-    ]
-    return run["dw"], *gaps, run
 
 
 def test_import_andes_reads_the_reeca1_into_its_regca1s_row(reeca1_case):
@@ -2665,14 +2564,6 @@ LIKE_FOR_LIKE = {
 }
 
 
-def like_for_like_case(name):
-    """ANDES's case file and its import (its Toggle and Fault records left out)."""
-    path = andes.get_case(name)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return path, import_andes(path, on_unsupported="skip")
-
-
 @pytest.mark.parametrize("name", list(LIKE_FOR_LIKE))
 def test_ibr_cases_match_andes_step_for_step(name, ref):
     """The like-for-like target (bus fault through j1e-3 pu, 5 s, 5 ms): both tools
@@ -2773,26 +2664,6 @@ OWN_FAULTS = {
 }
 
 
-def keep_reeca1_ipmax(ss) -> None:
-    """Before ANDES's set-up: its Fault, clearing, restores every algebraic variable to its
-    pre-fault value (``Fault.config.restore``, mode 1: ANDES stops at clearing without it),
-    the REECA1's Ipmax too; its VarHold Ipmaxh, evaluated at the first iterate after the dip
-    before the Thld2 flag rises, then holds that pre-fault Ipmax (9.944 pu on Kundur's
-    turbine) for Thld2, where the WECC REEC_A holds the limit of the dip (9.537 pu: 0.4 pu
-    more active current for 1 s).  Ipmax is kept at its value at clearing."""
-    fault = ss.Fault
-    clear = fault.tc.callback
-
-    def clear_keeping_ipmax(is_time):
-        a = ss.REECA1.Ipmax.a
-        kept = ss.dae.y[a].copy()
-        out = clear(is_time)
-        ss.dae.y[a] = kept
-        return out
-
-    fault.tc.callback = clear_keeping_ipmax
-
-
 @pytest.mark.parametrize("name", list(OWN_FAULTS))
 def test_kundur_converter_cases_own_fault_matches_andes_step_for_step(name, ref):
     """The Fault record of kundur_reg, kundur_wtdta1 and kundur_wtds (bus 8, j1e-4 pu, 0.1
@@ -2809,6 +2680,38 @@ def test_kundur_converter_cases_own_fault_matches_andes_step_for_step(name, ref)
     )
     print(f"\n{name} own fault like for like: speed {dw:.2e}, P {dP:.2e}, Q {dQ:.2e}")
     assert max(np.array((dw, dP, dQ)) / np.array(OWN_FAULTS[name])) < 1
+
+
+#: case: (buses where stabctl stops, buses where ANDES stops, bound on the largest speed gap
+#: over the other buses, pu) of the sweep (`sweep_case`: each bus, 6 cycles through j1e-4
+#: pu, 3 s, like for like, ANDES edited by `keep_ipmax_restore_angles`; the table of
+#: docs/ibr.md 12, benchmarks/converter_bus_faults.py)
+SWEEP = {
+    # measured 4.5e-5 (bus 3; bus 6 4.1e-5)
+    "kundur/kundur_reg.xlsx": ([9, 10], [4, 9, 10], 1e-4),
+    # measured 4.5e-5 (bus 6; 4.8e-2 with ANDES's angles not restored, where it stops at
+    # buses 1 and 3 too: `restore_fault_angles`)
+    "kundur/kundur_wtdta1.xlsx": ([9, 10], [4, 9, 10], 1e-4),
+    # measured 5.1e-5 (bus 3)
+    "kundur/kundur_wtds.xlsx": ([9, 10], [4, 9, 10], 1e-4),
+    # the IEEE 14 cases (j1e-3 pu) are not recorded yet: a case's 14 ANDES runs took
+    # longer than pytest's 600 s timeout on a loaded machine (make_refs.py --timeout 0)
+}
+
+
+@pytest.mark.parametrize("name", list(SWEEP))
+def test_converter_case_bus_faults_match_andes(name, ref):
+    """The fault of the sweep at every bus of ANDES's converter cases (issue 50): the
+    speeds of every bus's run within the bound of SWEEP (the target 1e-4 pu) of ANDES's
+    stored run (on its 10 ms points), and the runs that stop stop in the same buses."""
+    rows = sweep_case(ref, name)
+    for r in rows:
+        print(r)
+    stopped = [r["bus"] for r in rows if r["stabctl"] is not None]
+    andes_stopped = [r["bus"] for r in rows if r["andes"] is not None]
+    ours, theirs, bound = SWEEP[name]
+    assert (stopped, andes_stopped) == (ours, theirs)
+    assert max(r["dw"] for r in rows if "dw" in r) < bound
 
 
 def test_ieee14_wt3_trapezoid_runs_through_a_fault_beside_the_turbine(ref):
