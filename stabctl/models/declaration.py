@@ -277,6 +277,82 @@ class Family:  # fields of a dataclass: numpydoc ignore=PR02
         return "\n".join(lines)
 
 
+def model_types(modules, table: str) -> tuple[dict, dict]:
+    """A model family's registry from its type modules (each with ``KINDS``, type code ->
+    name, and ``STATE_NAMES``, type code -> its state names in slot order).
+
+    Parameters
+    ----------
+    modules : sequence of module
+        The family's type modules.
+    table : str
+        The family's table (``exc_con``), for the error.
+
+    Returns
+    -------
+    types : dict
+        Type code -> its module, in code order.
+    state_names : dict
+        Type code -> its state names.
+
+    Raises
+    ------
+    ValueError
+        A type code claimed by two modules.
+    """
+    types = dict(sorted((kind, m) for m in modules for kind in m.KINDS))
+    if len(types) != sum(len(m.KINDS) for m in modules):
+        raise ValueError(f"a {table} type is claimed by two modules")
+    return types, {kind: m.STATE_NAMES[kind] for kind, m in types.items()}
+
+
+def typed_family(
+    table: str, min_columns: int, label: str, types, params, dyr, sep: str = ", "
+) -> Family:
+    """The `Family` of a machine's controller table (keyed by machine, column 1 its type
+    from `model_types`), with `params` after the type and the DYR records `dyr`.
+
+    Parameters
+    ----------
+    table : str
+        The table (``tg_con``).
+    min_columns : int
+        Columns a row must have.
+    label : str
+        The type column's label (``governor type``).
+    types : dict
+        Type code -> its module (`model_types`).
+    params : sequence of Param
+        The parameters after the type.
+    dyr : tuple of DyrModel
+        The DYR records read into the table.
+    sep : str, optional
+        Separator of the types in the type column's doc (default ", ").
+
+    Returns
+    -------
+    Family
+        The declaration.
+    """
+    kind = Param(
+        "type",
+        "code",
+        1,
+        integer=True,
+        choices=tuple(types),
+        label=label,
+        doc=sep.join(f"{k} {m.KINDS[k]}" for k, m in types.items()),
+    )
+    return Family(
+        table=table,
+        min_columns=min_columns,
+        key="machine",
+        key_label="machine",
+        params=(kind, *params),
+        dyr=dyr,
+    )
+
+
 def _choices_text(values) -> str:
     """'0, 1, 2 or 3' for the choices message."""
     txt = [str(int(v)) if float(v).is_integer() else repr(v) for v in values]

@@ -38,12 +38,12 @@ from stabctl.errors import CaseError, refuse_initial
 from stabctl.models.blocks import LBND
 from stabctl.models.declaration import (
     Declared,
-    Family,
-    Param,
     beyond,
     check_packed,
+    model_types,
     pack,
     params_class,
+    typed_family,
 )
 from stabctl.models.governors import gast, ggov1, hygov, hygov4, ieeeg1, ieesgo, tg, tg2, tgov1
 from stabctl.models.governors.gast import GAST
@@ -101,33 +101,13 @@ MODULES = (
     hygov4,
     ggov1,
 )
-#: tg_con type -> the module of its equations
-TYPES = dict(sorted((kind, m) for m in MODULES for kind in m.KINDS))
-#: tg_con type -> its state names, in slot order (the module's ``S``)
-STATE_NAMES = {kind: m.STATE_NAMES[kind] for kind, m in TYPES.items()}
+#: tg_con type -> the module of its equations; -> its state names, in slot order (``S``)
+TYPES, STATE_NAMES = model_types(MODULES, "tg_con")
 #: state slots of the widest type
 N_STATES = max(len(names) for names in STATE_NAMES.values())
-if len(TYPES) != sum(len(m.KINDS) for m in MODULES):
-    raise ValueError("a tg_con type is claimed by two governor modules")
 
-GOVERNOR = Family(
-    table="tg_con",
-    min_columns=10,
-    key="machine",
-    key_label="machine",
-    params=(
-        Param(
-            "type",
-            "code",
-            1,
-            integer=True,
-            choices=tuple(TYPES),
-            label="governor type",
-            doc=", ".join(f"{kind} {m.KINDS[kind]}" for kind, m in TYPES.items()),
-        ),
-        *PARAMS,
-    ),
-    dyr=tuple(model for m in MODULES for model in m.DYR),
+GOVERNOR = typed_family(
+    "tg_con", 10, "governor type", TYPES, PARAMS, tuple(m for mod in MODULES for m in mod.DYR)
 )
 
 #: the labels of `GovernorParams.time_constants`, by declared field, in reporting order

@@ -37,11 +37,11 @@ from stabctl.errors import CaseError
 from stabctl.models.blocks import LBND
 from stabctl.models.declaration import (
     Declared,
-    Family,
-    Param,
     check_packed,
+    model_types,
     pack,
     params_class,
+    typed_family,
 )
 from stabctl.models.pss import ieeest, pss2a, pss2b, pss2c, pst, stab1, stab2a
 from stabctl.models.pss.ieeest import PSSE
@@ -91,37 +91,23 @@ __all__ = [
 # --------------------------------------------------------------------------------------
 
 MODULES = (pst, ieeest, stab2a, stab1, pss2a, pss2b, pss2c)
-#: pss_con type -> the module of its equations
-TYPES = dict(sorted((kind, m) for m in MODULES for kind in m.KINDS))
-#: pss_con type -> its state names, in slot order (the module's ``S``)
-STATE_NAMES = {kind: m.STATE_NAMES[kind] for kind, m in TYPES.items()}
+#: pss_con type -> the module of its equations; -> its state names, in slot order (``S``)
+TYPES, STATE_NAMES = model_types(MODULES, "pss_con")
 #: state slots of the widest type
 N_STATES = max(len(names) for names in STATE_NAMES.values())
-if len(TYPES) != sum(len(m.KINDS) for m in MODULES):
-    raise ValueError("a pss_con type is claimed by two stabiliser modules")
 #: the types whose inputs are PSS/E input codes (pss_con input1, input2)
 PSSE_INPUTS = (PSSE, PSS2A, PSS2B, PSS2C)
 #: the PSS2 family (`pss2a.output`)
 PSS2 = (PSS2A, PSS2B, PSS2C)
 
-PSS = Family(
-    table="pss_con",
-    min_columns=10,
-    key="machine",
-    key_label="machine",
-    params=(
-        Param(
-            "type",
-            "code",
-            1,
-            integer=True,
-            choices=tuple(TYPES),
-            label="pss type",
-            doc="; ".join(f"{kind} {m.KINDS[kind]}" for kind, m in TYPES.items()),
-        ),
-        *PARAMS,
-    ),
-    dyr=tuple(model for m in MODULES for model in m.DYR),
+PSS = typed_family(
+    "pss_con",
+    10,
+    "pss type",
+    TYPES,
+    PARAMS,
+    tuple(m for mod in MODULES for m in mod.DYR),
+    sep="; ",
 )
 
 #: the kernels' column of each PACKED name, under the name it had before the package
