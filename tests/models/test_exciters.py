@@ -70,7 +70,50 @@ ST4B = [12, 1, 0.01, 0, 0.1, 0, 0, 8.0, 0.0, 0, 0, 0, 4.0, 0, 0.1, 0.01, 0.1, 0,
 ST4B += [*[0] * 12, 18.0, 1.0, 0.5, 0, 0, 0, 0, 1.0, 0.5, 8.0, 0.0]
 #: EXST1 read as PSS/E (psse_st1, exc_con column 48)
 ST1_PSSE = ST1 + [0] * (47 - len(ST1)) + [1]
+
+
+def row(kind, **cols):
+    """An exc_con row of type ``kind`` for machine 1, its other fields by declared name
+    (stabctl.models.exciters.EXCITER), the rest 0."""
+    out = [0.0] * len(exc.EXCITER.params)
+    out[0], out[1] = kind, 1
+    for name, value in cols.items():
+        out[exc.EXCITER.col(name) - 1] = value
+    return out
+
+
+#: the AC exciter of IEEE 421.5's AC2A sample data (K_E 1, T_E 0.6, K_C 0.28, K_D 0.35,
+#: saturation 0.037 at 4.4, 0.012 at 3.3)
+AC_EXCITER = dict(KE=1.0, TE=0.6, KC=0.28, KD=0.35, E1=4.4, SE1=0.037, E2=3.3, SE2=0.012)
+#: EXAC2 (type 13): IEEE 1981 AC2's sample regulator (K_A 400, T_A 0.01, V_A on [-8, 8],
+#: K_B 25, V_R on [-95, 105], K_H 1, K_F 0.03, T_F 1), K_L 1, V_LR 4.4; V_FE0 = 2.32 so
+#: that the gate passes V_H (K_B K_L (V_LR - V_FE0) = 52 > V_FE0)
+AC2 = row(13, TR=0.01, KA=400, TA=0.01, VAmax=8, VAmin=-8, KB=25, Vrmax=105, Vrmin=-95,
+          KL=1.0, KH=1.0, VLR=4.4, KF=0.03, TF=1.0, TB=1.0, TC=0.5, **AC_EXCITER)  # fmt: skip
+#: ESAC6A (type 14): IEEE 421.5's AC6A sample data; V_FE0 = 7.0 < V_FELIM = 19 (V_H0 = 0)
+AC6A_EXCITER = dict(KE=1.6, TE=1.0, KC=0.173, KD=1.91, E1=7.4, SE1=0.214, E2=5.55, SE2=0.044)
+AC6A_COLS = dict(TR=0.01, KA=536, TA=0.086, TK=0.18, TB=9, TC=3, VAmax=75, VAmin=-75,
+                 Vrmax=44, Vrmin=-36, VFELIM=19, KH=92, VHMAX=75, TH=0.08, TJ=0.02,
+                 **AC6A_EXCITER)  # fmt: skip
+AC6A = row(14, **AC6A_COLS)
+#: ESAC6A with the field current limiter on from the start: V_FELIM 5, K_H 1 (V_H0 = 2.0)
+AC6A_VH = row(14, **{**AC6A_COLS, "VFELIM": 5.0, "KH": 1.0})
+#: EXPIC1 (type 15): K_A 3, T_A1 1, the PI on [-0.87, 1], T_A2 0.05, T_A3 0.1, T_A4 0.2,
+#: V_R on [-0.87, 1], K_F 0.05, T_F1 1, T_F2 0.1, E_0 on [0, 7.4], K_E 0.4, T_E 0.5,
+#: saturation 0.05 at 2, 0.2 at 3, K_P 6.4 (V_B: the test's VB0), K_C 0.08
+PIC1 = row(15, TR=0.01, KA=3, TA1=1, VAmax=1, VAmin=-0.87, TA=0.05, TC=0.1, TB=0.2, Vrmax=1,
+           Vrmin=-0.87, KF=0.05, TF=1, TF_2=0.1, Efdmax=7.4, Efdmin=0, KE=0.4, TE=0.5, E1=2,
+           SE1=0.05, E2=3, SE2=0.2, KP_pic=6.4, KC=0.08)  # fmt: skip
+#: EXPIC1 as ACTIVSg2000's (bus 1051): no T_R, T_A2, T_A4, T_E or rate feedback, so the
+#: field voltage V_B clip(3 (V_ref - V_t) + PIi) is algebraic in the terminal voltage
+PIC1_ALG = row(15, KA=3, TA1=1, VAmax=1, VAmin=-0.87, Vrmax=1, Vrmin=-0.87, TF=1,
+               Efdmax=7.4304, E1=1, E2=1.2, KP_pic=6.4388, KC=0.08)  # fmt: skip
 ROWS = {
+    "EXAC2": AC2,
+    "ESAC6A": AC6A,
+    "ESAC6A limiter on": AC6A_VH,
+    "EXPIC1": PIC1,
+    "EXPIC1 algebraic": PIC1_ALG,
     "smpexc": SMP,
     "SCRX": SCRX,
     "DC1": DC1,
