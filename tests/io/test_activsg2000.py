@@ -1,8 +1,10 @@
 """ACTIVSg2000, the synthetic 2000-bus Texas grid (PSS/E RAW v33 + DYR, tests/data/activsg,
 see its NOTICE), through `import-psse` as a planning engineer meets it: 98 wind and solar
-plants without dynamic data (netted), models stabctl lacks (GGOV1, EXPIC1, EXAC2, ESAC6A:
-left out), 30 exciters and governors whose power-flow point lies outside their own limits
-(left out, each named).  The references: the RAW file's own solved power flow, and the
+plants without dynamic data (netted), a model stabctl lacks (GGOV1: left out), 32
+exciters and governors whose power-flow point lies outside their own limits (left out,
+each named; PSS/E's "initial conditions suspect").  Its 61 EXPIC1, 38 EXAC2 and 7 ESAC6A
+records are read (stabctl.models.exciters expic1, exac2, esac6a; two ESAC6A start
+outside their limits).  The references: the RAW file's own solved power flow, and the
 flat run (every state still at rest after 10 s)."""
 
 import gzip
@@ -79,13 +81,13 @@ def test_the_import_says_what_it_left_out_and_netted(imported):
     # out, or none; the out-of-service generators' records are not among them
     reasons = {r.split(": ", 1)[1] for r in summary["left_out"]}
     assert "no such generator in the RAW data (or out of service)" not in reasons
-    assert {"model GGOV1 is not mapped", "model EXPIC1 is not mapped"} <= reasons
-    assert len(summary["infeasible"]) == 30
+    assert reasons == {"model GGOV1 is not mapped"}
+    assert len(summary["infeasible"]) == 32
     assert all(
         line.startswith(("exciter of machine", "governor of machine"))
         for line in summary["infeasible"]
     )
-    assert len(case.exciters) == 247 and len(case.governors) == 18
+    assert len(case.exciters) == 330 and len(case.governors) == 18
 
 
 def test_power_flow_reproduces_the_raw_solution(files, imported):
@@ -106,15 +108,20 @@ def test_power_flow_reproduces_the_raw_solution(files, imported):
 def test_without_the_leave_out_the_case_is_refused_by_name(files):
     """stabctl refuses to start a control outside its limits (the ESDC2A at bus 6216,
     whose saturation data give V_R = 11.4 pu against VRMAX = 1.17); the leave-out names
-    all 30 (2 exciters, each with its stabiliser, and 28 governors dispatched above Tmax)."""
+    all 32 (4 exciters, each with its stabiliser -- the ESDC2A, an ESST4B and two ESAC6A
+    whose K_D = 22.5 gives V_A0 = 36.9 pu against VAMAX = 9.08 -- and 28 governors
+    dispatched above Tmax)."""
     case = import_psse(*files, on_unsupported="skip", unmodelled="net").case
     with pytest.raises(InitialLimitError, match="initial DC regulator output") as err:
         Simulator(case, background_compile=False)
     assert err.value.table == "exc_con"
     left, names = leave_out_infeasible(case)
     assert names[0].startswith("exciter of machine 157 (bus 6216): initial DC regulator")
-    assert sum(n.startswith("exciter") for n in names) == 2 and len(names) == 30
-    assert len(left.pss) == len(case.pss) - 2 and len(left.governors) == len(case.governors) - 28
+    assert sum(n.startswith("exciter") for n in names) == 4 and len(names) == 32
+    esac6a = [n for n in names if "ESAC6A" in n]
+    assert [n.split(" (bus ")[1][:4] for n in esac6a] == ["4030", "6110"]
+    assert all("V_A = 36." in n and "[VAmin, VAmax] = [-9.0800, 9.0800]" in n for n in esac6a)
+    assert len(left.pss) == len(case.pss) - 4 and len(left.governors) == len(case.governors) - 28
 
 
 def test_flat_run_stays_at_rest(imported):

@@ -172,12 +172,13 @@ def initial_exciter(p: ExciterParams, r, Efd, name, limits, checks=None):
             tests = [(what, names, VFE[i], lo, hi) for what, names, lo, hi in own]
         else:
             tests = checks(i, VFE[i])
-        for what, names, value, lo, hi in tests:
-            if beyond(value, lo, hi):
-                bad[i] = (
-                    f"exc_con row {i + 1}: {name(i)} initial regulator output {what} = "
-                    f"{value:.4f} pu outside [{names}] = [{lo:.4f}, {hi:.4f}]"
-                )
+        out = [
+            f"{what} = {value:.4f} pu outside [{names}] = [{lo:.4f}, {hi:.4f}]"
+            for what, names, value, lo, hi in tests
+            if beyond(value, lo, hi)
+        ]
+        if out:
+            bad[i] = f"exc_con row {i + 1}: {name(i)} initial regulator output " + "; ".join(out)
     refuse_initial("exc_con", [i in bad for i in range(p.n)], bad.get)
     return VE, VFE
 
