@@ -21,7 +21,7 @@ from stabctl.cli import main
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import Fault
 from stabctl.dynamics.infeasible import leave_out_infeasible
-from stabctl.errors import InitialLimitError
+from stabctl.errors import InitialLimitError, InputError
 from stabctl.io import load_case
 from stabctl.io.psse import import_psse
 from stabctl.io.psse_raw import split_fields
@@ -125,10 +125,10 @@ def test_without_the_leave_out_the_case_is_refused_by_name(files):
 
 
 def test_flat_run_stays_at_rest(imported):
-    """10 s without disturbance: every state within 1e-8 of its initial value (the issue's
-    flat-run target; measured 1.7e-13 in the speeds)."""
+    """10 s without disturbance at a quarter cycle: every state within 1e-8 of its initial
+    value (the issue's flat-run target; measured 2.7e-13)."""
     _, case = imported
-    drift, _ = flat_run(case, step=CYCLE / 2, q_limits=True)
+    drift, _ = flat_run(case, step=CYCLE / 4, q_limits=True)
     print(f"\nACTIVSg2000 flat 10 s: largest drift {drift:.2e}")
     assert drift < 1e-8
 
@@ -136,15 +136,20 @@ def test_flat_run_stays_at_rest(imported):
 def test_six_cycle_fault_is_stable_and_converged_in_the_step(imported):
     """A 6-cycle fault at 345 kV bus 2021 cleared by tripping line 2021-2002, the case read
     as PSS/E (the default): stable, its largest angle spread the same at half the step
-    (1.13017 against 1.13012 rad).  The GENSAL at bus 6268 starts at E_fd0 = 10.2 pu; with
-    PSS/E's quadratic exciter saturation its ESDC1A's computed K_E is -3.66 (PST's
-    exponential made it -3573 and the field voltage ran away at the fault,
-    docs/pst_models.md 12.6)."""
+    (1.11897 against 1.11894 rad at a quarter and an eighth of a cycle).  Half a cycle is
+    refused by name: the EXAC2 at bus 1079 (K_A = 1000, T_A = 0.05 s, K_F = 0.49, T_E =
+    0.55 s, a saturated exciter) has a regulator and exciter mode at -12 +- 184j 1/s, which
+    Heun's method keeps only below h = 4.85 ms (`exac2.heun_step_limit`).  The GENSAL at
+    bus 6268 starts at E_fd0 = 10.2 pu; with PSS/E's quadratic exciter saturation its
+    ESDC1A's computed K_E is -3.66 (PST's exponential made it -3573 and the field voltage
+    ran away at the fault, docs/pst_models.md 12.6)."""
     _, case = imported
     sim = Simulator(case)
     fault = Fault(bus=2021, t=1.0, clear_near=1.0 + 6 * CYCLE, far_bus=2002)
+    with pytest.raises(InputError, match=r"exc_con row 9: EXAC2 regulator.*h < 0.0048538"):
+        sim.run([fault], t_end=5.0, h=CYCLE / 2)
     spread = []
-    for h in (CYCLE / 2, CYCLE / 4):
+    for h in (CYCLE / 4, CYCLE / 8):
         res = sim.run([fault], t_end=5.0, h=h)
         assert res.stable
         spread.append(res.max_angle_spread)

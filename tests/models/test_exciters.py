@@ -717,3 +717,18 @@ def test_expic1_pi_ramps_and_leaves_its_limit_at_once():
     assert efd(xt) == VB0 * 1.0 and xt[1, 0] == pytest.approx(1 - 3 * dV, rel=1e-9)
     P[0, exc.E.VREF] -= 2 * dV
     assert efd(xt) == pytest.approx(VB0 * (1 - 3 * dV - 3 * dV), rel=1e-9)
+
+
+@pytest.mark.parametrize("lam", [-50.0, -12 + 184j, -0.5 + 3j])
+def test_heun_step_limit_is_the_root_of_its_stability_polynomial(lam):
+    """Heun's |R(lam h)|^2 = 1 with R(z) = 1 + z + z^2/2, divided by h: |lam|^4/4 h^3 + a
+    |lam|^2 h^2 + 2 a^2 h + 2 a = 0 (a = Re lam); the step limit is its smallest positive
+    root (2/|lam| for a real lam)."""
+    from stabctl.models.exciters.exac2 import heun_step_limit
+
+    a, m2 = np.real(lam), abs(lam) ** 2
+    roots = np.roots([m2**2 / 4, a * m2, 2 * a**2, 2 * a])
+    exact = min(r.real for r in roots if abs(r.imag) < 1e-12 and r.real > 0)
+    assert heun_step_limit(np.array([lam, np.conj(lam)])) == pytest.approx(exact, rel=1e-8)
+    # a mode that does not decay (Re lam >= 0) is the model's growth, not the step's: no limit
+    assert heun_step_limit(np.array([1j, -1j, 0.5])) == np.inf

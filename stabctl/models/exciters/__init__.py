@@ -351,6 +351,8 @@ class ExciterParams(Declared):
           ANDES's kundur_esst3a: K_M = 500, T_M = 0.1 s, V_B = 4.3, 4.6e-5 s where T_M
           suggests 0.1 s.
         * EXST1 and ESST1A with a rate feedback (`rate_feedback_time_constants`).
+        * EXAC2: its regulator, exciter and rate feedback loop, as Heun's method sees it
+          (`exciter_loop_time_constants`).
 
         Parameters
         ----------
@@ -366,7 +368,35 @@ class ExciterParams(Declared):
         loop = (self.kind == ST3) & (self.TA > 0) & (self.KG * efd0 < self.VGmax)
         gain = 1.0 + self.KA * self.KG * VB0
         st3 = np.where(loop, self.TA / np.where(loop, gain, 1.0), np.inf)
-        return np.minimum(st3, self.rate_feedback_time_constants())
+        return np.minimum(
+            np.minimum(st3, self.rate_feedback_time_constants()),
+            self.exciter_loop_time_constants(efd0),
+        )
+
+    def exciter_loop_time_constants(self, efd0: np.ndarray) -> np.ndarray:
+        """Per EXAC2, half the largest step at which Heun's method keeps its regulator and
+        exciter loop (`exac2.loop_matrix`) stable (`exac2.heun_step_limit`), s, (n_exc,);
+        inf for the other types: the "time constant" that `check_step`'s h < 2 T and the
+        default step's 0.5 T read (for a real mode 1/|lambda| itself).  efd0 the field
+        voltages at rest (pu, (n_exc,)): V_E0 as `exac1.initial_exciter` solves it.
+
+        Parameters
+        ----------
+        efd0 : ndarray, shape (n_exc,)
+            The field voltages at the operating point, pu.
+
+        Returns
+        -------
+        ndarray, shape (n_exc,)
+        """
+        tau = np.full(self.n, np.inf)
+        rows = self.kind == AC2
+        if rows.any():
+            VE, _ = exac1.initial_exciter(self, rows, efd0, lambda i: "EXAC2", None, lambda i, v: [])
+            for i in np.nonzero(rows)[0]:
+                lam = np.linalg.eigvals(exac2.loop_matrix(self, i, VE[i]))
+                tau[i] = 0.5 * exac2.heun_step_limit(lam)
+        return tau
 
     def rate_feedback_time_constants(self) -> np.ndarray:
         """The fastest pole of the EXST1 and ESST1A regulator loops (s), (n_exc,); inf for

@@ -143,3 +143,64 @@ def derivatives(P, x, i, err, ifd, dx):
     gate = min(x[S.VA, i] - P[i, E.KH] * VFE, P[i, E.KL] * (P[i, E.VLR] - VFE))
     VR = clip(P[i, E.KB] * gate, P[i, E.VRMIN], P[i, E.VRMAX])
     x[S.VE, i], dx[S.VE, i] = exciter(P, i, x[S.VE, i], VR, VFE, UNLIMITED_VE)
+
+
+def heun_step_limit(lam: np.ndarray) -> float:
+    """The largest step h (s) at which Heun's predictor-corrector (the explicit
+    integrator, stability function R(z) = 1 + z + z^2/2) keeps every mode ``lam`` (1/s,
+    complex, shape (n,)) from growing, |R(lam h)| <= 1: 2/|lam| for a real negative lam,
+    less for a lightly damped pair (R grows along the imaginary axis); inf when no mode
+    has Re(lam) < 0.  Bisection on h, relative accuracy 1e-9."""
+    lam = lam[lam.real < 0]
+    if lam.size == 0:
+        return np.inf
+
+    def grows(h):
+        z = lam * h
+        return bool(np.any(np.abs(1 + z + z * z / 2) > 1 + 1e-12))
+
+    hi = 2.0 / np.max(np.abs(lam))  # the real axis' limit bounds every mode's
+    if not grows(hi):
+        return float(hi)
+    lo = 0.0
+    while hi - lo > 1e-9 * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if grows(mid) else (mid, hi)
+    return float(lo)
+
+
+def loop_matrix(p: ExciterParams, i: int, VE0: float) -> np.ndarray:
+    """The state matrix (1/s) of EXAC2 row i's regulator and exciter at rest, limits
+    inactive, the gate passing V_H, the terminal voltage and field current held: states
+    (those that exist) the lead-lag V_As, the regulator V_A, the exciter V_E, the rate
+    feedback's washout R_f; V_FE's slope g = K_E + d(S_E V_E)/dV_E at V_E0 (PSS/E's
+    quadratic).  Its fast pair is the rate feedback's loop through T_E: with ACTIVSg2000's
+    K_A = 1000, T_A = 0.05 s, K_F = 0.49, T_E = 0.55 s and saturated exciters, -12 +-
+    184j 1/s (bus 1079), which Heun's method at half a cycle does not keep stable.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        n the number of those states, in that order.
+    """
+    g = p.KE[i] + (2 * p.Bsat[i] * (VE0 - p.Asat[i]) if VE0 > p.Asat[i] else 0.0)
+    on = [p.has_TB[i], p.has_TA[i], True, p.KF[i] != 0]
+
+    def rhs(z):
+        VAs, VA, VE, Rf = z
+        err = -(p.KF[i] / p.TF[i] * (g * VE - Rf) if on[3] else 0.0)
+        u = p.tc_tb[i] * err + (1 - p.tc_tb[i]) * VAs if on[0] else err
+        if not on[1]:
+            VA = p.KA[i] * u
+        VR = p.KB[i] * (VA - p.KH[i] * g * VE)
+        d = [
+            (err - VAs) / p.TB[i] if on[0] else 0.0,
+            (p.KA[i] * u - VA) / p.TA[i] if on[1] else 0.0,
+            (VR - g * VE) / p.TE[i],
+            (g * VE - Rf) / p.TF[i] if on[3] else 0.0,
+        ]
+        return np.array(d)
+
+    keep = [k for k in range(4) if on[k]]
+    J = np.column_stack([rhs(np.eye(4)[k]) for k in keep])
+    return J[keep]
