@@ -110,7 +110,7 @@ def field_voltage(P, x, i, ifd):
 
 @kernel(inline="always")
 def derivatives(P, x, i, err, eterm, ifd, dx):
-    """ESAC6A (docs/pst_models.md 2.7): K_A (1 + s T_K)/(1 + s T_A) on the error, the
+    """ESAC6A (docs/pst_models.md 2.13): K_A (1 + s T_K)/(1 + s T_A) on the error, the
     lead-lag T_C/T_B, V_A clipped to [VAmin, VAmax], V_R = V_A - V_H clipped to [eterm
     Vrmin, eterm Vrmax] (eterm the terminal voltage, pu), the exciter T_E dV_E/dt = V_R -
     V_FE with V_E >= 0 non-windup; V_H the lead-lag T_J/T_H of the limiter's input."""

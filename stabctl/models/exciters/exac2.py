@@ -13,7 +13,7 @@ I_fd/V_E).
 At rest V_R0 = V_FE0 and V_A0 = V_FE0 (1/K_B + K_H), the gate passing V_H: a start where
 K_B K_L (V_LR - V_FE0) < V_FE0 (the limiter would hold the exciter) is refused by name
 (PSS/E: "initial conditions suspect"), as V_R0 or V_A0 outside their limits.  ANDES 2.0
-differs twice (docs/pst_models.md 2.7): its V_ref is V_t + (K_L + 1/K_B) V_FE0/K_A (K_L
+differs twice (docs/pst_models.md 2.12): its V_ref is V_t + (K_L + 1/K_B) V_FE0/K_A (K_L
 where the diagram has K_H) and it raises V_LR to V_FE0 (1 + 1/(K_L K_B)) where the gate
 would pass V_L at the start.
 """
@@ -128,7 +128,7 @@ def field_voltage(P, x, i, ifd):
 
 @kernel(inline="always")
 def derivatives(P, x, i, err, ifd, dx):
-    """EXAC2 (docs/pst_models.md 2.7): the rate feedback of V_FE (state R_f, with K_F !=
+    """EXAC2 (docs/pst_models.md 2.12): the rate feedback of V_FE (state R_f, with K_F !=
     0) subtracted from the error, the lead-lag T_C/T_B, the regulator lag V_A non-windup
     on [VAmin, VAmax], V_R = K_B min(V_A - K_H V_FE, K_L (V_LR - V_FE)) clipped to [Vrmin,
     Vrmax], the exciter T_E dV_E/dt = V_R - V_FE."""

@@ -193,7 +193,7 @@ def field_voltage(P, x, i, VTR_alg, pss_out, VB):
 
 @kernel(inline="always")
 def derivatives(P, x, i, err, VB, dx):
-    """EXPIC1 (docs/pst_models.md 2.11): the regulator (`regulator`), the rate feedback
+    """EXPIC1 (docs/pst_models.md 2.14): the regulator (`regulator`), the rate feedback
     of V_R (washout T_F1 with gain K_F, lag T_F2), the exciter T_E dEfd/dt = E_0 - (K_E +
     S_E(Efd)) Efd with T_E."""
     VR, dx[S.PIi, i], dx[S.VLL, i], dx[S.VRl, i] = regulator(P, x, i, err)
