@@ -677,10 +677,14 @@ def test_esac6a_regulator_step_is_its_two_lead_lags():
     assert va(x) - va0 == pytest.approx(KA * dV * TK * TC / (TA * TB), rel=1e-12)
     for t in (0.05, 0.5):
         xt = simulate(P, x, t)
-        exact = KA * dV * (
-            1
-            - (TA - TK) * (TA - TC) / (TA * (TA - TB)) * np.exp(-t / TA)
-            - (TB - TK) * (TB - TC) / (TB * (TB - TA)) * np.exp(-t / TB)
+        exact = (
+            KA
+            * dV
+            * (
+                1
+                - (TA - TK) * (TA - TC) / (TA * (TA - TB)) * np.exp(-t / TA)
+                - (TB - TK) * (TB - TC) / (TB * (TB - TA)) * np.exp(-t / TB)
+            )
         )
         assert va(xt) - va0 == pytest.approx(exact, rel=1e-7)
 

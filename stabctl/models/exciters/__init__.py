@@ -61,8 +61,8 @@ from stabctl.models.declaration import (
 from stabctl.models.exciters import (
     ac8b,
     dc,
-    esst1a,
     esac6a,
+    esst1a,
     esst4b,
     exac1,
     exac2,
@@ -75,10 +75,10 @@ from stabctl.models.exciters import (
 )
 from stabctl.models.exciters.ac8b import AC8B
 from stabctl.models.exciters.dc import DC1, DC2, T2, dc_feedback
+from stabctl.models.exciters.esac6a import AC6A
 from stabctl.models.exciters.esst1a import ST1A, st1a_regulator_output
 from stabctl.models.exciters.esst4b import ST4B
 from stabctl.models.exciters.exac1 import AC1, AC1A
-from stabctl.models.exciters.esac6a import AC6A
 from stabctl.models.exciters.exac2 import AC2
 from stabctl.models.exciters.exac4 import AC4
 from stabctl.models.exciters.expic1 import PIC1
@@ -392,7 +392,9 @@ class ExciterParams(Declared):
         tau = np.full(self.n, np.inf)
         rows = self.kind == AC2
         if rows.any():
-            VE, _ = exac1.initial_exciter(self, rows, efd0, lambda i: "EXAC2", None, lambda i, v: [])
+            VE, _ = exac1.initial_exciter(
+                self, rows, efd0, lambda i: "EXAC2", None, lambda i, v: []
+            )
             for i in np.nonzero(rows)[0]:
                 lam = np.linalg.eigvals(exac2.loop_matrix(self, i, VE[i]))
                 tau[i] = 0.5 * exac2.heun_step_limit(lam)

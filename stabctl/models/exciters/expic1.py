@@ -33,8 +33,8 @@ from stabctl.models.blocks import (
     washout,
 )
 from stabctl.models.declaration import DyrModel, beyond, states
-from stabctl.models.exciters.esst4b import source_voltage as rectified_source
 from stabctl.models.exciters.dc import dc_feedback
+from stabctl.models.exciters.esst4b import source_voltage as rectified_source
 from stabctl.models.exciters.table import E, upper
 
 if TYPE_CHECKING:
@@ -56,10 +56,31 @@ DYR = (
     DyrModel(
         "EXPIC1",
         (
-            "TR", "KA", "TA1", "VR1", "VR2", "TA2", "TA3", "TA4", "VRMAX", "VRMIN", "KF",
-            "TF1", "TF2", "EFDMAX", "EFDMIN", "KE", "TE", "E1", "SE1", "E2", "SE2", "KP",
-            "KI", "KC",
-        ),  # fmt: skip
+            "TR",
+            "KA",
+            "TA1",
+            "VR1",
+            "VR2",
+            "TA2",
+            "TA3",
+            "TA4",
+            "VRMAX",
+            "VRMIN",
+            "KF",
+            "TF1",
+            "TF2",
+            "EFDMAX",
+            "EFDMIN",
+            "KE",
+            "TE",
+            "E1",
+            "SE1",
+            "E2",
+            "SE2",
+            "KP",
+            "KI",
+            "KC",
+        ),
         {
             **upper("TR", "KA", "TA1", "Vrmax", "Vrmin", "KF", "Efdmax", "KE", "TE"),
             **upper("E1", "SE1", "E2", "SE2", "KC", "Efdmin"),

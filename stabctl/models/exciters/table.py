@@ -220,7 +220,9 @@ PARAMS = (
     Param("KL", "", 50, doc="EXAC2: gain of the exciter field current limit signal V_L"),
     Param("KH", "", 51, doc="EXAC2, ESAC6A: exciter field current feedback gain K_H"),
     Param("VLR", "pu", 52, doc="EXAC2: exciter field current limit reference V_LR"),
-    Param("TK", "s", 53, doc="ESAC6A: lead time constant of the regulator K_A (1 + s T_K)/(1 + s T_A)"),
+    Param(
+        "TK", "s", 53, doc="ESAC6A: lead time constant of the regulator K_A (1 + s T_K)/(1 + s T_A)"
+    ),
     Param("VFELIM", "pu", 54, doc="ESAC6A: exciter field current limit reference"),
     Param("VHMAX", "pu", 55, doc="ESAC6A: upper limit of the field current limiter signal V_H"),
     Param("TH", "s", 56, lo=0.0, doc="ESAC6A: lag time constant of the field current limiter"),
