@@ -110,7 +110,14 @@ PIC1 = row(15, TR=0.01, KA=3, TA1=1, VAmax=1, VAmin=-0.87, TA=0.05, TC=0.1, TB=0
 #: field voltage V_B clip(3 (V_ref - V_t) + PIi) is algebraic in the terminal voltage
 PIC1_ALG = row(15, KA=3, TA1=1, VAmax=1, VAmin=-0.87, Vrmax=1, Vrmin=-0.87, TF=1,
                Efdmax=7.4304, E1=1, E2=1.2, KP_pic=6.4388, KC=0.08)  # fmt: skip
+#: ST6B (type 16): PSS/E's ST6B run's record (PowerSimulationsDynamics.jl's ST6B test: K_PA
+#: 50.038, K_IA 45.094, V_A on [-3.85, 4.81], K_FF 1, K_M 1, K_CI 1.0577, K_LR 17.33, I_LR
+#: 2.15, V_R on [-3.85, 4.81], K_G 1, T_G 0.02), with a derivative K_DA 0.5, T_DA 0.1
+ST6B_ROW = row(16, TR=0.012, Kpid_P=50.038, Kpid_I=45.094, Kpid_D=0.5, Td=0.1, VAmax=4.81,
+               VAmin=-3.85, KFF=1, KM=1, KCI=1.0577, KLR=17.33, ILR=2.15, Vrmax=4.81,
+               Vrmin=-3.85, KG=1, TG=0.02)  # fmt: skip
 ROWS = {
+    "ST6B": ST6B_ROW,
     "EXAC2": AC2,
     "ESAC6A": AC6A,
     "ESAC6A limiter on": AC6A_VH,
@@ -736,3 +743,14 @@ def test_heun_step_limit_is_the_root_of_its_stability_polynomial(lam):
     assert heun_step_limit(np.array([lam, np.conj(lam)])) == pytest.approx(exact, rel=1e-8)
     # a mode that does not decay (Re lam >= 0) is the model's growth, not the step's: no limit
     assert heun_step_limit(np.array([1j, -1j, 0.5])) == np.inf
+
+
+def test_st6b_gate_hands_the_field_current_limiter_on():
+    """ST6B: V_R = min(K_LR (K_CI I_LR - I_fd), clip(K_M (V_A - V_G) + K_FF V_A)) and Efd =
+    V_R V_t: at rest (I_fd0 = 1.9) the inner loop's V_R0 = Efd0/V_t0 = 1.8627 passes; with
+    I_fd = 2.2 the limiter's 17.33 (1.0577 2.15 - 2.2) = 1.3844 pu takes over."""
+    P, x = started(ST6B_ROW)
+    efd = exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, EFD0, True)
+    assert efd == pytest.approx(EFD0, rel=1e-14)
+    limited = exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, 2.2, True)
+    assert limited == pytest.approx(17.33 * (1.0577 * 2.15 - 2.2) * VT0, rel=1e-14)

@@ -72,6 +72,7 @@ from stabctl.models.exciters import (
     ieeet3,
     sexs,
     st3,
+    st6b,
 )
 from stabctl.models.exciters.ac8b import AC8B
 from stabctl.models.exciters.dc import DC1, DC2, T2, dc_feedback
@@ -86,6 +87,7 @@ from stabctl.models.exciters.exst1 import ST1
 from stabctl.models.exciters.ieeet3 import T3
 from stabctl.models.exciters.sexs import SMP
 from stabctl.models.exciters.st3 import ST3, st3_source_voltage
+from stabctl.models.exciters.st6b import ST6B
 from stabctl.models.exciters.table import (
     PACKED,
     PARAMS,
@@ -130,7 +132,7 @@ __all__ = [
     "dc_feedback",
     "st1a_regulator_output",
     "SMP", "DC1", "DC2", "ST3", "ST1", "T2", "ST1A", "AC1", "AC4", "AC1A", "AC8B", "T3", "ST4B",
-    "AC2", "AC6A", "PIC1",
+    "AC2", "AC6A", "PIC1", "ST6B",
 ]  # fmt: skip
 
 # --------------------------------------------------------------------------------------
@@ -151,6 +153,7 @@ MODULES = (
     exac2,
     esac6a,
     expic1,
+    st6b,
     sexs,
 )
 #: exc_con type -> the module of its equations
@@ -339,6 +342,12 @@ class ExciterParams(Declared):
             ("exc_con T_F", self.TF, self.has_Rf),
             ("exc_con T_F2", self.TF2, self.has_VF),
             ("exc_con T_D", self.Td, self.has_pid_d),
+            (
+                "exc_con T_DA (ST6B)",
+                self.Td,
+                (self.kind == ST6B) & (self.Kpid_D != 0) & (self.Td >= LBND),
+            ),
+            ("exc_con T_G (ST6B)", self.TG, self.kind == ST6B),
         )
 
     def inner_loop_time_constants(self, VB0: np.ndarray, efd0: np.ndarray) -> np.ndarray:
@@ -703,6 +712,8 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
         return esac6a.field_voltage(P, x, i, ifd)
     if kind == PIC1:
         return expic1.field_voltage(P, x, i, VTR_alg, pss_out, VB)
+    if kind == ST6B:
+        return st6b.field_voltage(P, x, i, VTR_alg, pss_out, ifd)
     if kind == AC4:
         return exac4.field_voltage(P, x, i, ifd)
     if kind == ST4B:
@@ -755,6 +766,8 @@ def derivatives(P, x, i, vc, eterm, pss_out, efd, ifd, VB, dx, ieee, reach):
         esac6a.derivatives(P, x, i, err, eterm, ifd, dx)
     elif kind == PIC1:
         expic1.derivatives(P, x, i, err, VB, dx)
+    elif kind == ST6B:
+        st6b.derivatives(P, x, i, err, eterm, ifd, dx)
     elif kind == AC4:
         exac4.derivatives(P, x, i, err, dx)
     elif kind == T3:

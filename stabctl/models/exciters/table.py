@@ -238,6 +238,10 @@ PARAMS = (
     Param("Efdmin", "pu", 60, doc="EXPIC1: lower limit of E_0 = V_B V_R (Efdmax: column 18)"),
     Param("KP_pic", "", 61, doc="EXPIC1: potential circuit gain K_P (real; 0 with K_I: V_B = 1)"),
     Param("KI_pic", "", 62, doc="EXPIC1: current circuit gain K_I"),
+    Param("KFF", "", 63, doc="ST6B: feed-forward gain of the regulator output V_A"),
+    Param("KM", "", 64, doc="ST6B: gain of the inner loop K_M (V_A - V_G)"),
+    Param("KCI", "", 65, doc="ST6B: field current limiter's current reference factor"),
+    Param("TG", "s", 66, lo=0.0, doc="ST6B: lag of the inner loop's field voltage feedback"),
 )
 
 #: exc_con field names in column order, the type first
