@@ -202,6 +202,24 @@ def pi_track_aw(u, x, KP, KI, lo, hi, ks):
 
 
 @kernel
+def pi_nonwindup(u, x, KP, KI, lo, hi):
+    """PI K_P + K_I/s with non-windup limits (IEEE 421.5-2016 E.6, as PSS/E's EXPIC1 and
+    PowerSimulationsDynamics.jl's ``pi_block_nonwindup``): ys = K_P u + x, output ys
+    clipped to [lo, hi]; the integral stops (dx/dt = 0) while ys is at or beyond a limit
+    and u drives it further out, else dx/dt = K_I u.
+
+    Returns
+    -------
+    (float, float)
+        Output, the integral state's derivative.
+    """
+    ys = KP * u + x
+    if (ys >= hi and u > 0) or (ys <= lo and u < 0):
+        return clip(ys, lo, hi), 0.0
+    return clip(ys, lo, hi), KI * u
+
+
+@kernel
 def pid_track_aw(u, xi, xd, KP, KI, KD, TD, lo, hi, ks):
     """PID K_P + K_I/s + s K_D/(1 + s T_D) with tracking anti-windup (ANDES PIDTrackAW;
     AC8B): ys = K_P u + xi + K_D (u - xd)/T_D (the derivative a washout, state xd, T_D

@@ -1,8 +1,10 @@
 """ACTIVSg2000, the synthetic 2000-bus Texas grid (PSS/E RAW v33 + DYR, tests/data/activsg,
 see its NOTICE), through `import-psse` as a planning engineer meets it: 98 wind and solar
-plants without dynamic data (netted), models stabctl lacks (EXPIC1, EXAC2, ESAC6A:
-left out), 32 exciters and governors whose power-flow point lies outside their own limits
-(left out, each named).  The references: the RAW file's own solved power flow, and the
+plants without dynamic data (netted), no model stabctl lacks, 34 exciters and governors
+whose power-flow point lies outside their own limits (left out, each named; PSS/E's
+"initial conditions suspect").  Its 367 GGOV1 (stabctl.models.governors.ggov1) and 61
+EXPIC1, 38 EXAC2 and 7 ESAC6A records (stabctl.models.exciters expic1, exac2, esac6a) are
+read; two GGOV1 and two ESAC6A start outside their limits.  The references: the RAW file's own solved power flow, and the
 flat run (every state still at rest after 10 s)."""
 
 import gzip
@@ -19,7 +21,7 @@ from stabctl.cli import main
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import Fault
 from stabctl.dynamics.infeasible import leave_out_infeasible
-from stabctl.errors import InitialLimitError
+from stabctl.errors import InitialLimitError, InputError
 from stabctl.io import load_case
 from stabctl.io.psse import import_psse
 from stabctl.io.psse_raw import split_fields
@@ -79,14 +81,13 @@ def test_the_import_says_what_it_left_out_and_netted(imported):
     # out, or none; the out-of-service generators' records are not among them
     reasons = {r.split(": ", 1)[1] for r in summary["left_out"]}
     assert "no such generator in the RAW data (or out of service)" not in reasons
-    assert "model EXPIC1 is not mapped" in reasons
-    assert "model GGOV1 is not mapped" not in reasons  # GGOV1: tg_con type 9
-    assert len(summary["infeasible"]) == 32
+    assert not any(r.startswith("model ") and r.endswith("is not mapped") for r in reasons)
+    assert len(summary["infeasible"]) == 34
     assert all(
         line.startswith(("exciter of machine", "governor of machine"))
         for line in summary["infeasible"]
     )
-    assert len(case.exciters) == 247 and len(case.governors) == 304
+    assert len(case.exciters) == 330 and len(case.governors) == 304
 
 
 def test_power_flow_reproduces_the_raw_solution(files, imported):
@@ -107,23 +108,27 @@ def test_power_flow_reproduces_the_raw_solution(files, imported):
 def test_without_the_leave_out_the_case_is_refused_by_name(files):
     """stabctl refuses to start a control outside its limits (the ESDC2A at bus 6216,
     whose saturation data give V_R = 11.4 pu against VRMAX = 1.17); the leave-out names
-    all 32 (2 exciters, each with its stabiliser, 28 governors dispatched above Tmax and 2
-    GGOV1 starting outside their limits)."""
+    all 34 (4 exciters, each with its stabiliser -- the ESDC2A, an ESST4B and two ESAC6A
+    whose K_D = 22.5 gives V_A0 = 36.9 pu against VAMAX = 9.08 -- 28 governors dispatched
+    above Tmax and 2 GGOV1 whose fuel order starts above Vmax)."""
     case = import_psse(*files, on_unsupported="skip", unmodelled="net").case
     with pytest.raises(InitialLimitError, match="initial DC regulator output") as err:
         Simulator(case, background_compile=False)
     assert err.value.table == "exc_con"
     left, names = leave_out_infeasible(case)
     assert names[0].startswith("exciter of machine 157 (bus 6216): initial DC regulator")
-    assert sum(n.startswith("exciter") for n in names) == 2 and len(names) == 32
-    assert len(left.pss) == len(case.pss) - 2 and len(left.governors) == len(case.governors) - 30
+    assert sum(n.startswith("exciter") for n in names) == 4 and len(names) == 34
+    esac6a = [n for n in names if "ESAC6A" in n]
+    assert [n.split(" (bus ")[1][:4] for n in esac6a] == ["4030", "6110"]
+    assert all("V_A = 36." in n and "[VAmin, VAmax] = [-9.0800, 9.0800]" in n for n in esac6a)
+    assert len(left.pss) == len(case.pss) - 4 and len(left.governors) == len(case.governors) - 30
 
 
 def test_flat_run_stays_at_rest(imported):
-    """10 s without disturbance: every state within 1e-8 of its initial value (the issue's
-    flat-run target; measured 1.7e-13 in the speeds)."""
+    """10 s without disturbance at a quarter cycle: every state within 1e-8 of its initial
+    value (the issue's flat-run target; measured 2.7e-13)."""
     _, case = imported
-    drift, _ = flat_run(case, step=CYCLE / 2, q_limits=True)
+    drift, _ = flat_run(case, step=CYCLE / 4, q_limits=True)
     print(f"\nACTIVSg2000 flat 10 s: largest drift {drift:.2e}")
     assert drift < 1e-8
 
@@ -131,15 +136,20 @@ def test_flat_run_stays_at_rest(imported):
 def test_six_cycle_fault_is_stable_and_converged_in_the_step(imported):
     """A 6-cycle fault at 345 kV bus 2021 cleared by tripping line 2021-2002, the case read
     as PSS/E (the default): stable, its largest angle spread the same at half the step
-    (1.13017 against 1.13012 rad).  The GENSAL at bus 6268 starts at E_fd0 = 10.2 pu; with
-    PSS/E's quadratic exciter saturation its ESDC1A's computed K_E is -3.66 (PST's
-    exponential made it -3573 and the field voltage ran away at the fault,
-    docs/pst_models.md 12.6)."""
+    (1.11897 against 1.11894 rad at a quarter and an eighth of a cycle).  Half a cycle is
+    refused by name: the EXAC2 at bus 1079 (K_A = 1000, T_A = 0.05 s, K_F = 0.49, T_E =
+    0.55 s, a saturated exciter) has a regulator and exciter mode at -12 +- 184j 1/s, which
+    Heun's method keeps only below h = 4.85 ms (`exac2.heun_step_limit`).  The GENSAL at
+    bus 6268 starts at E_fd0 = 10.2 pu; with PSS/E's quadratic exciter saturation its
+    ESDC1A's computed K_E is -3.66 (PST's exponential made it -3573 and the field voltage
+    ran away at the fault, docs/pst_models.md 12.6)."""
     _, case = imported
     sim = Simulator(case)
     fault = Fault(bus=2021, t=1.0, clear_near=1.0 + 6 * CYCLE, far_bus=2002)
+    with pytest.raises(InputError, match=r"exc_con row 9: EXAC2 regulator.*h < 0.0048538"):
+        sim.run([fault], t_end=5.0, h=CYCLE / 2)
     spread = []
-    for h in (CYCLE / 2, CYCLE / 4):
+    for h in (CYCLE / 4, CYCLE / 8):
         res = sim.run([fault], t_end=5.0, h=h)
         assert res.stable
         spread.append(res.max_angle_spread)

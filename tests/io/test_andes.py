@@ -891,6 +891,58 @@ def test_ieee14_exac1_field_voltage_and_speeds_match_andes(ref):
     assert np.max(np.abs(ours - theirs)[ta > 1.5]) < 2e-3
 
 
+#: EXAC2 on ieee14_exac1.xlsx's machine (bus 8) in place of its EXAC1: IEEE 1981 AC2's
+#: sample regulator and exciter (K_A 400, T_A 0.02, V_A on [-8, 8], K_B 25, K_F 0.03,
+#: T_F 1, T_E 0.6, K_C 0.28, K_D 0.35, saturation 0.037 at 4.4, 0.012 at 3.3), a lead-lag
+#: T_C/T_B = 0.5/1 s, and K_L = K_H = 1 (ANDES 2.0's V_ref reads K_L where the diagram
+#: has K_H, docs/pst_models.md 2.12); V_LR = 2.6 pu, above the start's 2.31 (V_FE0 (1 +
+#: 1/(K_B K_L))) so that ANDES keeps it, below what the fault's field forcing asks
+EXAC2_ROW = dict(
+    TR=0.02, TB=1.0, TC=0.5, KA=400.0, TA=0.02, VAMAX=8.0, VAMIN=-8.0, KB=25.0, VRMAX=105.0,
+    VRMIN=-95.0, TE=0.6, KL=1.0, KH=1.0, KF=0.03, TF=1.0, KC=0.28, KD=0.35, KE=1.0, VLR=2.6,
+    E1=4.4, SE1=0.037, E2=3.3, SE2=0.012,
+)  # fmt: skip
+
+
+def exac2_case(out) -> None:
+    """ANDES's ieee14_exac1.xlsx written to ``out`` with its EXAC1 replaced by an EXAC2 of
+    `EXAC2_ROW` on the same machine."""
+    import pandas as pd
+
+    sheets = pd.read_excel(andes.get_case("ieee14/ieee14_exac1.xlsx"), sheet_name=None)
+    old = sheets["EXAC1"]
+    row = dict(uid=0, idx=1, u=1, name="EXAC2_1", syn=old["syn"].iloc[0], **EXAC2_ROW)
+    sheets["EXAC1"] = old.iloc[0:0]
+    sheets["EXAC2"] = pd.DataFrame([row])
+    with pd.ExcelWriter(out) as w:
+        for k, v in sheets.items():
+            v.to_excel(w, sheet_name=k, index=False)
+
+
+def test_ieee14_exac2_field_voltage_and_speeds_match_andes(tmp_path, ref):
+    """ANDES 2.0's ``exac2.py`` on IEEE 14 (`exac2_case`; docs/pst_models.md 2.12), a
+    6-cycle fault at bus 9: after the fault V_A rides VAMAX = 8 and the low-value gate
+    passes the exciter field current limiter K_L (V_LR - V_FE) (V_H would force V_FE
+    towards K_B VAMAX/(1 + K_B K_H) = 7.7 pu), a plateau of 1.75 pu on which the field
+    voltages agree within 3.5e-4 pu.  During the fault they differ by up to 0.053 pu (the
+    machine's field current in F_EX(K_C I_fd/V_E), as EXAC1's 0.019 and AC8B's 0.030 with
+    smaller K_C), and ANDES's leaves the plateau about 10 ms earlier (at 1.58 s, 0.07 pu
+    apart for a few steps; the gate's handover back to V_H, not located yet); 4.5e-3 pu
+    after 2 s, 1.1e-3 after 3 s."""
+    same = tmp_path / "ieee14_exac2.xlsx"
+    exac2_case(same)
+    ta, ours, theirs = device_output_run(ref, str(same), "EXAC2")
+    assert np.ptp(theirs) > 0.4  # the field voltage swings (measured 0.42 pu)
+    gap = np.abs(ours - theirs)
+    away = (np.abs(ta - 1.0) > AWAY) & (np.abs(ta - 1.1) > AWAY)
+    plateau = away & (ta > 1.1) & (ta < 1.5)
+    assert np.min(theirs[plateau & (ta > 1.2)]) > 1.74  # the limiter's plateau
+    assert np.max(gap[plateau]) < 1e-3  # measured 3.5e-4
+    assert np.max(gap[away & (ta < 1.1)]) < 0.06  # measured 0.053, 15 ms into the fault
+    assert np.max(gap[away]) < 0.08  # measured 0.070, at 1.61 s
+    assert np.max(gap[ta > 2.0]) < 6e-3 and np.max(gap[ta > 3.0]) < 2e-3
+
+
 def test_ieee14_exac4_field_voltage_and_speeds_match_andes(ref):
     """ANDES's ieee14_exac4.xlsx (docs/pst_models.md 2.8): the field voltage rides both
     output limits (8 pu, then 0) as ``exac4.py``'s."""

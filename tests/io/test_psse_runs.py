@@ -99,3 +99,27 @@ def test_stabiliser_run_starts_flat(name):
     run = BY_NAME[name]
     drift, _ = flat_run(load_psse(DATA / name / run.raw, DATA / name / run.dyr), t_end=10.0)
     assert drift < 1e-8
+
+
+def test_st6b_record_imports_and_runs_flat():
+    """PSS/E's ST6B run's DYR (tests/data/psse_runs/ST6B, no PSS/E trajectory published):
+    its ST6B record imports as type 16 in the PSS/E Model Library's order (K_PA 50.038,
+    K_IA 45.094, V_A on [-3.85, 4.81], K_CI 1.0577, K_LR 17.33, I_LR 2.15, T_G 0.02).  Its
+    power flow starts the field current limiter's branch K_LR (K_CI I_LR - I_fd0) = 2.0959
+    pu below the inner loop's V_R0 = Efd0/V_t0 = 2.1109: the start is refused by name
+    (PSS/E: "initial conditions suspect"); with I_LR = 2.2 the limiter stays off and a 10 s
+    run without disturbance stays at rest."""
+    from runs import flat_run
+
+    from stabctl.errors import InitialLimitError
+
+    folder = DATA / "ST6B"
+    case = load_psse(folder / "ThreeBusMulti.raw", folder / "ThreeBus_ST6B.dyr")
+    e = case.exciters
+    assert list(e.type) == [16]
+    assert (e.Kpid_P[0], e.Kpid_I[0], e.VAmax[0], e.VAmin[0]) == (50.038, 45.094, 4.81, -3.85)
+    assert (e.KCI[0], e.KLR[0], e.ILR[0], e.TG[0], e.TR[0]) == (1.0577, 17.33, 2.15, 0.02, 0.012)
+    with pytest.raises(InitialLimitError, match=r"V_R = 2\.1109 .* V_R1 = 2\.0959"):
+        Simulator(case, background_compile=False)
+    drift, _ = flat_run(case.replace(exciters=e.replace(ILR=np.array([2.2]))), 10.0, step=0.005)
+    assert drift < 1e-10

@@ -70,7 +70,59 @@ ST4B = [12, 1, 0.01, 0, 0.1, 0, 0, 8.0, 0.0, 0, 0, 0, 4.0, 0, 0.1, 0.01, 0.1, 0,
 ST4B += [*[0] * 12, 18.0, 1.0, 0.5, 0, 0, 0, 0, 1.0, 0.5, 8.0, 0.0]
 #: EXST1 read as PSS/E (psse_st1, exc_con column 48)
 ST1_PSSE = ST1 + [0] * (47 - len(ST1)) + [1]
+
+
+def row(kind, **cols):
+    """An exc_con row of type ``kind`` for machine 1, its other fields by declared name
+    (stabctl.models.exciters.EXCITER), the rest 0."""
+    out = [0.0] * len(exc.EXCITER.params)
+    out[0], out[1] = kind, 1
+    for name, value in cols.items():
+        out[exc.EXCITER.col(name) - 1] = value
+    return out
+
+
+#: the AC exciter of IEEE 421.5's AC2A sample data (K_E 1, T_E 0.6, K_C 0.28, K_D 0.35,
+#: saturation 0.037 at 4.4, 0.012 at 3.3)
+AC_EXCITER = dict(KE=1.0, TE=0.6, KC=0.28, KD=0.35, E1=4.4, SE1=0.037, E2=3.3, SE2=0.012)
+#: EXAC2 (type 13): IEEE 1981 AC2's sample regulator (K_A 400, T_A 0.01, V_A on [-8, 8],
+#: K_B 25, V_R on [-95, 105], K_H 1, K_F 0.03, T_F 1), K_L 1, V_LR 4.4; V_FE0 = 2.32 so
+#: that the gate passes V_H (K_B K_L (V_LR - V_FE0) = 52 > V_FE0)
+_AC2_COLS = dict(TR=0.01, KA=400, TA=0.01, VAmax=8, VAmin=-8, KB=25, Vrmax=105, Vrmin=-95,
+                 KL=1.0, KH=1.0, VLR=4.4, KF=0.03, TF=1.0, TB=1.0, TC=0.5,
+                 **AC_EXCITER)  # fmt: skip
+AC2 = row(13, **_AC2_COLS)
+#: ESAC6A (type 14): IEEE 421.5's AC6A sample data; V_FE0 = 7.0 < V_FELIM = 19 (V_H0 = 0)
+AC6A_EXCITER = dict(KE=1.6, TE=1.0, KC=0.173, KD=1.91, E1=7.4, SE1=0.214, E2=5.55, SE2=0.044)
+AC6A_COLS = dict(TR=0.01, KA=536, TA=0.086, TK=0.18, TB=9, TC=3, VAmax=75, VAmin=-75,
+                 Vrmax=44, Vrmin=-36, VFELIM=19, KH=92, VHMAX=75, TH=0.08, TJ=0.02,
+                 **AC6A_EXCITER)  # fmt: skip
+AC6A = row(14, **AC6A_COLS)
+#: ESAC6A with the field current limiter on from the start: V_FELIM 5, K_H 1 (V_H0 = 2.0)
+AC6A_VH = row(14, **{**AC6A_COLS, "VFELIM": 5.0, "KH": 1.0})
+#: EXPIC1 (type 15): K_A 3, T_A1 1, the PI on [-0.87, 1], T_A2 0.05, T_A3 0.1, T_A4 0.2,
+#: V_R on [-0.87, 1], K_F 0.05, T_F1 1, T_F2 0.1, E_0 on [0, 7.4], K_E 0.4, T_E 0.5,
+#: saturation 0.05 at 2, 0.2 at 3, K_P 6.4 (V_B: the test's VB0), K_C 0.08
+PIC1 = row(15, TR=0.01, KA=3, TA1=1, VAmax=1, VAmin=-0.87, TA=0.05, TC=0.1, TB=0.2, Vrmax=1,
+           Vrmin=-0.87, KF=0.05, TF=1, TF_2=0.1, Efdmax=7.4, Efdmin=0, KE=0.4, TE=0.5, E1=2,
+           SE1=0.05, E2=3, SE2=0.2, KP_pic=6.4, KC=0.08)  # fmt: skip
+#: EXPIC1 as ACTIVSg2000's (bus 1051): no T_R, T_A2, T_A4, T_E or rate feedback, so the
+#: field voltage V_B clip(3 (V_ref - V_t) + PIi) is algebraic in the terminal voltage
+PIC1_ALG = row(15, KA=3, TA1=1, VAmax=1, VAmin=-0.87, Vrmax=1, Vrmin=-0.87, TF=1,
+               Efdmax=7.4304, E1=1, E2=1.2, KP_pic=6.4388, KC=0.08)  # fmt: skip
+#: ST6B (type 16): PSS/E's ST6B run's record (PowerSimulationsDynamics.jl's ST6B test: K_PA
+#: 50.038, K_IA 45.094, V_A on [-3.85, 4.81], K_FF 1, K_M 1, K_CI 1.0577, K_LR 17.33, I_LR
+#: 2.15, V_R on [-3.85, 4.81], K_G 1, T_G 0.02), with a derivative K_DA 0.5, T_DA 0.1
+ST6B_ROW = row(16, TR=0.012, Kpid_P=50.038, Kpid_I=45.094, Kpid_D=0.5, Td=0.1, VAmax=4.81,
+               VAmin=-3.85, KFF=1, KM=1, KCI=1.0577, KLR=17.33, ILR=2.15, Vrmax=4.81,
+               Vrmin=-3.85, KG=1, TG=0.02)  # fmt: skip
 ROWS = {
+    "ST6B": ST6B_ROW,
+    "EXAC2": AC2,
+    "ESAC6A": AC6A,
+    "ESAC6A limiter on": AC6A_VH,
+    "EXPIC1": PIC1,
+    "EXPIC1 algebraic": PIC1_ALG,
     "smpexc": SMP,
     "SCRX": SCRX,
     "DC1": DC1,
@@ -579,3 +631,126 @@ def test_layout_names_every_packed_column_once():
         layout("Twice", (("KA", "KA"), ("KA", "TA")))
     with pytest.raises(AttributeError, match="KX reads 'KX'"):
         check_packed(exc.ExciterParams, (*exc.PACKED, ("KX", "KX")), ("Vref",))
+
+
+def _leadlag_lag_step(t, K, T_lead, T_lag1, T_lag2):
+    """Step response of K (1 + s T_lead)/((1 + s T_lag1)(1 + s T_lag2)) (unit step, T_lag1
+    != T_lag2): K (1 - sum over the two lags T of (T - T_lead)/(T - T_other) e^(-t/T))."""
+    a = (T_lag1 - T_lead) / (T_lag1 - T_lag2)
+    b = (T_lag2 - T_lead) / (T_lag2 - T_lag1)
+    return K * (1 - a * np.exp(-t / T_lag1) - b * np.exp(-t / T_lag2))
+
+
+def test_exac2_regulator_step_is_its_lead_lag_and_lag():
+    """EXAC2 (K_F = 0, V_t held): a step dV of V_ref moves V_A as K_A dV (1 + s T_C)/((1 +
+    s T_B)(1 + s T_A)) whatever the exciter does (the block diagram: V_A has no feedback
+    but the rate feedback's)."""
+    P, x = started(row(13, **{**_AC2_COLS, "KF": 0}))
+    va0, dV, t = x[2, 0], 2e-3, 0.03
+    P[0, exc.E.VREF] += dV
+    x = simulate(P, x, t)
+    exact = _leadlag_lag_step(t, 400 * dV, 0.5, 1.0, 0.01)
+    assert x[2, 0] - va0 == pytest.approx(exact, rel=1e-7)
+
+
+def test_exac2_field_current_limiter_holds_the_exciter():
+    """EXAC2 after a large V_ref step (K_A dV = 200 pu against VAMAX = 8): V_A rests on
+    VAMAX (non-windup), V_H = 8 - K_H V_FE falls below V_L = K_L (V_LR - V_FE) no longer
+    and the low-value gate hands V_L on: the exciter settles where K_B K_L (V_LR - V_FE) =
+    V_FE, V_FE = K_B K_L V_LR/(1 + K_B K_L) = 25 4.4/26 = 4.2308 pu (the rate feedback's
+    washout R_f at rest is V_FE)."""
+    P, x = started(AC2)
+    P[0, exc.E.VREF] += 0.5
+    x = simulate(P, x, 30.0)
+    dx = derivatives(P, x, efd=exc.field_voltage_at(P, x, 0, VT0, 0, 1, 0, True))  # clamps x
+    assert x[2, 0] == 8.0 and np.abs(dx).max() < 1e-8
+    assert x[4, 0] == pytest.approx(25 * 4.4 / 26, rel=1e-8)
+
+
+def test_esac6a_regulator_step_is_its_two_lead_lags():
+    """ESAC6A (V_t held, the limiter off): V_A = K_A dV (1 + s T_K)(1 + s T_C)/((1 + s
+    T_A)(1 + s T_B)) after a step dV of V_ref: at once K_A dV T_K T_C/(T_A T_B), then
+    K_A dV (1 - (T_A - T_K)(T_A - T_C)/(T_A (T_A - T_B)) e^(-t/T_A) - (T_B - T_K)(T_B -
+    T_C)/(T_B (T_B - T_A)) e^(-t/T_B)) (IEEE 421.5 AC6A sample data)."""
+    P, x = started(AC6A)
+    KA, TA, TK, TB, TC = 536, 0.086, 0.18, 9.0, 3.0
+    va0, dV = x[2, 0], 1e-3
+    P[0, exc.E.VREF] += dV
+
+    def va(x):
+        y = TK / TA * KA * (P[0, exc.E.VREF] - VT0) + x[1, 0]
+        return TC / TB * y + (1 - TC / TB) * x[2, 0]
+
+    assert va(x) - va0 == pytest.approx(KA * dV * TK * TC / (TA * TB), rel=1e-12)
+    for t in (0.05, 0.5):
+        xt = simulate(P, x, t)
+        exact = (
+            KA
+            * dV
+            * (
+                1
+                - (TA - TK) * (TA - TC) / (TA * (TA - TB)) * np.exp(-t / TA)
+                - (TB - TK) * (TB - TC) / (TB * (TB - TA)) * np.exp(-t / TB)
+            )
+        )
+        assert va(xt) - va0 == pytest.approx(exact, rel=1e-7)
+
+
+def test_esac6a_field_current_limiter_holds_the_exciter():
+    """ESAC6A after a large V_ref step (K_A dV = 268 pu): V_A on VAMAX = 75, the limiter
+    V_H = K_H (V_FE - V_FELIM) (below V_HMAX) subtracted, V_R below V_t VRMAX: the exciter
+    settles at V_FE = (VAMAX + K_H V_FELIM)/(1 + K_H) = (75 + 92 19)/93 = 19.602 pu; V_FE =
+    (K_E + K_D) V_E + S_E(V_E) V_E with I_fd = Efd = V_E (the harness's field current)."""
+    P, x = started(AC6A)
+    P[0, exc.E.VREF] += 0.5
+    x = simulate(P, x, 20.0)
+    VE, p = x[3, 0], params(AC6A)
+    VFE = (1.6 + 1.91) * VE + p.Bsat[0] * (VE - p.Asat[0]) ** 2
+    assert VFE == pytest.approx((75 + 92 * 19) / 93, rel=1e-8)
+
+
+def test_expic1_pi_ramps_and_leaves_its_limit_at_once():
+    """EXPIC1 as ACTIVSg2000's (no T_R, T_A2, T_A4, T_E, rate feedback): after a step dV
+    of V_ref the field voltage is V_B (V_R0 + K_A T_A1 dV + K_A dV t) (the PI), until
+    the PI reaches VR1 = 1: Efd = V_B; the integral stops there (non-windup), so a step
+    back down leaves the limit at once: V_B (1 - K_A T_A1 dV - K_A T_A1 dV)."""
+    P, x = started(PIC1_ALG)
+    dV = 0.01
+    P[0, exc.E.VREF] += dV
+
+    def efd(x):
+        return exc.field_voltage_at(P, x, 0, VT0, 0.0, VB0, EFD0, True)
+
+    assert efd(x) == pytest.approx(EFD0 + VB0 * 3 * dV, rel=1e-14)
+    xt = simulate(P, x, 10.0)
+    assert efd(xt) == pytest.approx(VB0 * (0.475 + 3 * dV * (1 + 10.0)), rel=1e-9)
+    xt = simulate(P, x, 20.0)  # 0.475 + 0.03 (1 + t) reaches 1 at t = 16.5 s
+    assert efd(xt) == VB0 * 1.0 and xt[1, 0] == pytest.approx(1 - 3 * dV, rel=1e-9)
+    P[0, exc.E.VREF] -= 2 * dV
+    assert efd(xt) == pytest.approx(VB0 * (1 - 3 * dV - 3 * dV), rel=1e-9)
+
+
+@pytest.mark.parametrize("lam", [-50.0, -12 + 184j, -0.5 + 3j])
+def test_heun_step_limit_is_the_root_of_its_stability_polynomial(lam):
+    """Heun's |R(lam h)|^2 = 1 with R(z) = 1 + z + z^2/2, divided by h: |lam|^4/4 h^3 + a
+    |lam|^2 h^2 + 2 a^2 h + 2 a = 0 (a = Re lam); the step limit is its smallest positive
+    root (2/|lam| for a real lam)."""
+    from stabctl.models.exciters.exac2 import heun_step_limit
+
+    a, m2 = np.real(lam), abs(lam) ** 2
+    roots = np.roots([m2**2 / 4, a * m2, 2 * a**2, 2 * a])
+    exact = min(r.real for r in roots if abs(r.imag) < 1e-12 and r.real > 0)
+    assert heun_step_limit(np.array([lam, np.conj(lam)])) == pytest.approx(exact, rel=1e-8)
+    # a mode that does not decay (Re lam >= 0) is the model's growth, not the step's: no limit
+    assert heun_step_limit(np.array([1j, -1j, 0.5])) == np.inf
+
+
+def test_st6b_gate_hands_the_field_current_limiter_on():
+    """ST6B: V_R = min(K_LR (K_CI I_LR - I_fd), clip(K_M (V_A - V_G) + K_FF V_A)) and Efd =
+    V_R V_t: at rest (I_fd0 = 1.9) the inner loop's V_R0 = Efd0/V_t0 = 1.8627 passes; with
+    I_fd = 2.2 the limiter's 17.33 (1.0577 2.15 - 2.2) = 1.3844 pu takes over."""
+    P, x = started(ST6B_ROW)
+    efd = exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, EFD0, True)
+    assert efd == pytest.approx(EFD0, rel=1e-14)
+    limited = exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, 2.2, True)
+    assert limited == pytest.approx(17.33 * (1.0577 * 2.15 - 2.2) * VT0, rel=1e-14)

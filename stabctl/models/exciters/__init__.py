@@ -61,25 +61,33 @@ from stabctl.models.declaration import (
 from stabctl.models.exciters import (
     ac8b,
     dc,
+    esac6a,
     esst1a,
     esst4b,
     exac1,
+    exac2,
     exac4,
+    expic1,
     exst1,
     ieeet3,
     sexs,
     st3,
+    st6b,
 )
 from stabctl.models.exciters.ac8b import AC8B
 from stabctl.models.exciters.dc import DC1, DC2, T2, dc_feedback
+from stabctl.models.exciters.esac6a import AC6A
 from stabctl.models.exciters.esst1a import ST1A, st1a_regulator_output
 from stabctl.models.exciters.esst4b import ST4B
 from stabctl.models.exciters.exac1 import AC1, AC1A
+from stabctl.models.exciters.exac2 import AC2
 from stabctl.models.exciters.exac4 import AC4
+from stabctl.models.exciters.expic1 import PIC1
 from stabctl.models.exciters.exst1 import ST1
 from stabctl.models.exciters.ieeet3 import T3
 from stabctl.models.exciters.sexs import SMP
 from stabctl.models.exciters.st3 import ST3, st3_source_voltage
+from stabctl.models.exciters.st6b import ST6B
 from stabctl.models.exciters.table import (
     PACKED,
     PARAMS,
@@ -124,6 +132,7 @@ __all__ = [
     "dc_feedback",
     "st1a_regulator_output",
     "SMP", "DC1", "DC2", "ST3", "ST1", "T2", "ST1A", "AC1", "AC4", "AC1A", "AC8B", "T3", "ST4B",
+    "AC2", "AC6A", "PIC1", "ST6B",
 ]  # fmt: skip
 
 # --------------------------------------------------------------------------------------
@@ -141,6 +150,10 @@ MODULES = (
     ac8b,
     ieeet3,
     esst4b,
+    exac2,
+    esac6a,
+    expic1,
+    st6b,
     sexs,
 )
 #: exc_con type -> the module of its equations
@@ -186,8 +199,13 @@ RATE_FEEDBACK = tuple(kind for kind, m in TYPES.items() if m.RATE_FEEDBACK)
 #: terminal voltage and current (`source_voltage`): ST3, IEEET3, ESST4B
 SOURCE_KINDS = tuple(kind for kind, m in TYPES.items() if m.SOURCE)
 #: the AC exciters with an exciter voltage V_E and PSS/E's quadratic saturation: EXAC1,
-#: ESAC1A, AC8B
-AC_KINDS = (*exac1.KINDS, *ac8b.KINDS)
+#: ESAC1A, AC8B, EXAC2, ESAC6A
+AC_KINDS = (*exac1.KINDS, *ac8b.KINDS, *exac2.KINDS, *esac6a.KINDS)
+#: the types with K_E, T_E and PSS/E's quadratic saturation (exc_con columns 10-15): the AC
+#: exciters and EXPIC1 (its exciter T_E dEfd/dt = E_0 - (K_E + S_E) Efd)
+QUAD_KINDS = (*AC_KINDS, *expic1.KINDS)
+#: the most state slots of a type (EXPIC1's 7)
+MAX_SLOTS = max(len(names) for names in STATE_NAMES.values())
 #: the DC exciters (their saturation fits, K_E computed): DC1, DC2, IEEET2
 DC_KINDS = tuple(dc.KINDS)
 #: the machine's speed among its states (``efd_speed``)
@@ -296,7 +314,7 @@ class ExciterParams(Declared):
 
     def has_state(self) -> np.ndarray:
         """Boolean (n_slots, n_exc): the slots that are states (docs/modal.md)."""
-        act = np.zeros((6, self.n), bool)
+        act = np.zeros((MAX_SLOTS, self.n), bool)
         for module in MODULES:
             rows = np.isin(self.kind, tuple(module.KINDS))
             for slot, on in enumerate(module.has_state(self)):
@@ -318,9 +336,18 @@ class ExciterParams(Declared):
             ("exc_con T_B1", self.TB1, self.has_TB1),
             ("exc_con TA_st3a", self.TA_st3a, self.has_TA3A),
             ("exc_con T_E", self.TE, self.is_dc | self.is_ac | (self.kind == T3)),
+            ("exc_con T_E (EXPIC1)", self.TE, (self.kind == PIC1) & (self.TE >= LBND)),
+            ("exc_con T_H", self.TH, (self.kind == AC6A) & (self.TH >= LBND)),
+            ("exc_con T_F2 (EXPIC1)", self.TF_2, (self.kind == PIC1) & (self.TF_2 >= LBND)),
             ("exc_con T_F", self.TF, self.has_Rf),
             ("exc_con T_F2", self.TF2, self.has_VF),
             ("exc_con T_D", self.Td, self.has_pid_d),
+            (
+                "exc_con T_DA (ST6B)",
+                self.Td,
+                (self.kind == ST6B) & (self.Kpid_D != 0) & (self.Td >= LBND),
+            ),
+            ("exc_con T_G (ST6B)", self.TG, self.kind == ST6B),
         )
 
     def inner_loop_time_constants(self, VB0: np.ndarray, efd0: np.ndarray) -> np.ndarray:
@@ -333,6 +360,8 @@ class ExciterParams(Declared):
           ANDES's kundur_esst3a: K_M = 500, T_M = 0.1 s, V_B = 4.3, 4.6e-5 s where T_M
           suggests 0.1 s.
         * EXST1 and ESST1A with a rate feedback (`rate_feedback_time_constants`).
+        * EXAC2: its regulator, exciter and rate feedback loop, as Heun's method sees it
+          (`exciter_loop_time_constants`).
 
         Parameters
         ----------
@@ -348,7 +377,37 @@ class ExciterParams(Declared):
         loop = (self.kind == ST3) & (self.TA > 0) & (self.KG * efd0 < self.VGmax)
         gain = 1.0 + self.KA * self.KG * VB0
         st3 = np.where(loop, self.TA / np.where(loop, gain, 1.0), np.inf)
-        return np.minimum(st3, self.rate_feedback_time_constants())
+        return np.minimum(
+            np.minimum(st3, self.rate_feedback_time_constants()),
+            self.exciter_loop_time_constants(efd0),
+        )
+
+    def exciter_loop_time_constants(self, efd0: np.ndarray) -> np.ndarray:
+        """Per EXAC2, half the largest step at which Heun's method keeps its regulator and
+        exciter loop (`exac2.loop_matrix`) stable (`exac2.heun_step_limit`), s, (n_exc,);
+        inf for the other types: the "time constant" that `check_step`'s h < 2 T and the
+        default step's 0.5 T read (for a real mode 1/|lambda| itself).  efd0 the field
+        voltages at rest (pu, (n_exc,)): V_E0 as `exac1.initial_exciter` solves it.
+
+        Parameters
+        ----------
+        efd0 : ndarray, shape (n_exc,)
+            The field voltages at the operating point, pu.
+
+        Returns
+        -------
+        ndarray, shape (n_exc,)
+        """
+        tau = np.full(self.n, np.inf)
+        rows = self.kind == AC2
+        if rows.any():
+            VE, _ = exac1.initial_exciter(
+                self, rows, efd0, lambda i: "EXAC2", None, lambda i, v: []
+            )
+            for i in np.nonzero(rows)[0]:
+                lam = np.linalg.eigvals(exac2.loop_matrix(self, i, VE[i]))
+                tau[i] = 0.5 * exac2.heun_step_limit(lam)
+        return tau
 
     def rate_feedback_time_constants(self) -> np.ndarray:
         """The fastest pole of the EXST1 and ESST1A regulator loops (s), (n_exc,); inf for
@@ -401,7 +460,7 @@ def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
     quadratic SE(E) E = Bsat (E - Asat)^2 through both points (PSS/E; ANDES
     `ExcQuadSat`)."""
     A, B = _exponential_fit(e)
-    quad = (e.dc_sat == 1) | np.isin(e.type, AC_KINDS)
+    quad = (e.dc_sat == 1) | np.isin(e.type, QUAD_KINDS)
     if quad.any():
         Aq, Bq = quadratic_fit(
             *_dc_points(e),
@@ -466,11 +525,16 @@ def exciter_params(case: Case) -> ExciterParams:
     _check_dc(e)
     A, B = _dc_saturation(e)
     dc = np.isin(e.type, DC_KINDS)
-    ac = np.isin(e.type, AC_KINDS)
+    ac = np.isin(e.type, QUAD_KINDS)
     t3 = e.type == T3
+    pic = e.type == PIC1
     KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
     given = {n: getattr(e, n).copy() for n in TABLE_FIELDS}
-    given.update(KA=KA, KP=e.KP * np.exp(1j * np.deg2rad(e.thetaP)))
+    given.update(
+        KA=KA,
+        KP=np.where(pic, e.KP_pic, e.KP * np.exp(1j * np.deg2rad(e.thetaP))),
+        KI=np.where(pic, e.KI_pic, e.KI),
+    )
     return ExciterParams(
         kind=e.type.astype(int),
         mac=np.array([case.machine_index(m) for m in e.machine], int),
@@ -499,6 +563,8 @@ def source_voltage_of(kind, KP, KI, XL, KC, cap, machine, init):
         return st3.source_voltage(KP, KI, XL, KC, cap, machine, init)
     if kind == T3:
         return ieeet3.source_voltage(KP, KI, XL, KC, cap, machine, init)
+    if kind == PIC1:
+        return expic1.source_voltage(KP.real, KI, XL, KC, cap, machine, init)
     return esst4b.source_voltage(KP, KI, XL, KC, cap, machine, init)
 
 
@@ -531,7 +597,7 @@ def initialise(p: ExciterParams, vex, eterm, VB=None, vc=None):
     registry's order.  Raises CaseError when the initial point violates a limit PST
     checks (ST3: Efdmax or the V_I range; DC: the V_R limits) by more than
     `START_LIMIT_TOL` (stabctl.models.declaration)."""
-    x = np.zeros((6, p.n))
+    x = np.zeros((MAX_SLOTS, p.n))
     vc = eterm if vc is None else vc
     x[VTR] = vc
     VB = np.ones(p.n) if VB is None else VB
@@ -640,6 +706,14 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
         return exac1.field_voltage(P, x, i, ifd)
     if kind == AC8B:
         return ac8b.field_voltage(P, x, i, ifd)
+    if kind == AC2:
+        return exac2.field_voltage(P, x, i, ifd)
+    if kind == AC6A:
+        return esac6a.field_voltage(P, x, i, ifd)
+    if kind == PIC1:
+        return expic1.field_voltage(P, x, i, VTR_alg, pss_out, VB)
+    if kind == ST6B:
+        return st6b.field_voltage(P, x, i, VTR_alg, pss_out, ifd)
     if kind == AC4:
         return exac4.field_voltage(P, x, i, ifd)
     if kind == ST4B:
@@ -686,6 +760,14 @@ def derivatives(P, x, i, vc, eterm, pss_out, efd, ifd, VB, dx, ieee, reach):
         exac1.derivatives(P, x, i, err, ifd, dx)
     elif kind == AC8B:
         ac8b.derivatives(P, x, i, err, ifd, dx)
+    elif kind == AC2:
+        exac2.derivatives(P, x, i, err, ifd, dx)
+    elif kind == AC6A:
+        esac6a.derivatives(P, x, i, err, eterm, ifd, dx)
+    elif kind == PIC1:
+        expic1.derivatives(P, x, i, err, VB, dx)
+    elif kind == ST6B:
+        st6b.derivatives(P, x, i, err, eterm, ifd, dx)
     elif kind == AC4:
         exac4.derivatives(P, x, i, err, dx)
     elif kind == T3:

@@ -141,13 +141,15 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     return VA, p
 
 
-def initial_exciter(p: ExciterParams, r, Efd, name, limits):
-    """The AC exciters (EXAC1, ESAC1A, AC8B) at rest on rows r (a mask), arrays (n_exc,)
-    (0 for the other rows): the exciter voltage V_E0 solving V_E F_EX(K_C I_fd0/V_E) = Efd0
-    (`blocks.rectifier_loading`, increasing in V_E; I_fd0 = Efd0) and V_FE0 = K_E V_E0 +
-    S_E(V_E0) V_E0 + K_D I_fd0 (= V_R0); raises CaseError if V_R0 is outside [Vrmin, Vrmax]
-    or the type's `limits` (row -> list of (what, limit names, lo, hi)) or V_R0/K_A has no
-    V_E0; name(row) is the type's name in messages."""
+def initial_exciter(p: ExciterParams, r, Efd, name, limits, checks=None):
+    """The AC exciters (EXAC1, ESAC1A, AC8B, EXAC2, ESAC6A) at rest on rows r (a mask),
+    arrays (n_exc,) (0 for the other rows): the exciter voltage V_E0 solving V_E
+    F_EX(K_C I_fd0/V_E) = Efd0 (`blocks.rectifier_loading`, increasing in V_E; I_fd0 =
+    Efd0) and V_FE0 = K_E V_E0 + S_E(V_E0) V_E0 + K_D I_fd0 (= V_R0); raises CaseError if
+    V_R0 is outside [Vrmin, Vrmax] or the type's `limits` (row -> list of (what, limit
+    names, lo, hi)) or V_R0/K_A has no V_E0; name(row) is the type's name in messages.
+    ``checks`` (row, V_FE0 -> list of (what, limit names, value, lo, hi)), where given,
+    replaces those two: the type's own start-up limits on the signals V_FE0 sets."""
     from scipy.optimize import brentq  # here: the case layer imports this module (0.5 s)
 
     VE, VFE = np.zeros(p.n), np.zeros(p.n)
@@ -165,12 +167,18 @@ def initial_exciter(p: ExciterParams, r, Efd, name, limits):
 
         VE[i] = brentq(residual, efd0, efd0 + KC * ifd0 + 1.0, xtol=1e-15, rtol=1e-15)
         VFE[i] = dc_feedback(p.KE[i], p.Asat[i], p.Bsat[i], 1.0, VE[i]) + p.KD[i] * ifd0
-        for what, names, lo, hi in [("V_R", "Vrmin, Vrmax", p.Vrmin[i], p.Vrmax[i])] + limits(i):
-            if beyond(VFE[i], lo, hi):
-                bad[i] = (
-                    f"exc_con row {i + 1}: {name(i)} initial regulator output {what} = "
-                    f"{VFE[i]:.4f} pu outside [{names}] = [{lo:.4f}, {hi:.4f}]"
-                )
+        if checks is None:
+            own = [("V_R", "Vrmin, Vrmax", p.Vrmin[i], p.Vrmax[i]), *limits(i)]
+            tests = [(what, names, VFE[i], lo, hi) for what, names, lo, hi in own]
+        else:
+            tests = checks(i, VFE[i])
+        out = [
+            f"{what} = {value:.4f} pu outside [{names}] = [{lo:.4f}, {hi:.4f}]"
+            for what, names, value, lo, hi in tests
+            if beyond(value, lo, hi)
+        ]
+        if out:
+            bad[i] = f"exc_con row {i + 1}: {name(i)} initial regulator output " + "; ".join(out)
     refuse_initial("exc_con", [i in bad for i in range(p.n)], bad.get)
     return VE, VFE
 

@@ -216,6 +216,32 @@ PARAMS = (
         "PSSE.ES.EXST1, PowerSimulationsDynamics.jl); 0 (default) the lower limit "
         "V_t VRMIN and the feedback of the field voltage",
     ),
+    Param("KB", "", 49, doc="EXAC2: second stage regulator gain K_B (> 0)"),
+    Param("KL", "", 50, doc="EXAC2: gain of the exciter field current limit signal V_L"),
+    Param("KH", "", 51, doc="EXAC2, ESAC6A: exciter field current feedback gain K_H"),
+    Param("VLR", "pu", 52, doc="EXAC2: exciter field current limit reference V_LR"),
+    Param(
+        "TK", "s", 53, doc="ESAC6A: lead time constant of the regulator K_A (1 + s T_K)/(1 + s T_A)"
+    ),
+    Param("VFELIM", "pu", 54, doc="ESAC6A: exciter field current limit reference"),
+    Param("VHMAX", "pu", 55, doc="ESAC6A: upper limit of the field current limiter signal V_H"),
+    Param("TH", "s", 56, lo=0.0, doc="ESAC6A: lag time constant of the field current limiter"),
+    Param("TJ", "s", 57, doc="ESAC6A: lead time constant of the field current limiter"),
+    Param("TA1", "s", 58, doc="EXPIC1: the PI regulator K_A (1 + s T_A1)/s's time constant"),
+    Param(
+        "TF_2",
+        "s",
+        59,
+        lo=0.0,
+        doc="EXPIC1: second lag of the rate feedback s K_F/((1 + s T_F1)(1 + s T_F2))",
+    ),
+    Param("Efdmin", "pu", 60, doc="EXPIC1: lower limit of E_0 = V_B V_R (Efdmax: column 18)"),
+    Param("KP_pic", "", 61, doc="EXPIC1: potential circuit gain K_P (real; 0 with K_I: V_B = 1)"),
+    Param("KI_pic", "", 62, doc="EXPIC1: current circuit gain K_I"),
+    Param("KFF", "", 63, doc="ST6B: feed-forward gain of the regulator output V_A"),
+    Param("KM", "", 64, doc="ST6B: gain of the inner loop K_M (V_A - V_G)"),
+    Param("KCI", "", 65, doc="ST6B: field current limiter's current reference factor"),
+    Param("TG", "s", 66, lo=0.0, doc="ST6B: lag of the inner loop's field voltage feedback"),
 )
 
 #: exc_con field names in column order, the type first
