@@ -52,11 +52,11 @@ from stabctl.models.blocks import LBND, lag
 from stabctl.models.declaration import (
     Declared,
     DyrModel,
-    Family,
-    Param,
     check_packed,
+    model_types,
     pack,
     params_class,
+    typed_family,
 )
 from stabctl.models.exciters import (
     ac8b,
@@ -156,33 +156,18 @@ MODULES = (
     st6b,
     sexs,
 )
-#: exc_con type -> the module of its equations
-TYPES = dict(sorted((kind, m) for m in MODULES for kind in m.KINDS))
-#: exc_con type -> its state names, in slot order (the module's ``S``)
-STATE_NAMES = {kind: m.STATE_NAMES[kind] for kind, m in TYPES.items()}
-if len(TYPES) != sum(len(m.KINDS) for m in MODULES):
-    raise ValueError("an exc_con type is claimed by two exciter modules")
+#: exc_con type -> the module of its equations; -> its state names, in slot order (``S``)
+TYPES, STATE_NAMES = model_types(MODULES, "exc_con")
 if any(names[VTR] != "VTR" for names in STATE_NAMES.values()):
     raise ValueError("every exciter type's first state is its transducer V_TR")
 
-EXCITER = Family(
-    table="exc_con",
-    min_columns=9,
-    key="machine",
-    key_label="machine",
-    params=(
-        Param(
-            "type",
-            "code",
-            1,
-            integer=True,
-            choices=tuple(TYPES),
-            label="exciter type",
-            doc=", ".join(f"{kind} {m.KINDS[kind]}" for kind, m in TYPES.items()),
-        ),
-        *PARAMS,
-    ),
-    dyr=(
+EXCITER = typed_family(
+    "exc_con",
+    9,
+    "exciter type",
+    TYPES,
+    PARAMS,
+    (
         # IEEEVC (the IEEE 1981 load compensator, a record of its own beside the machine's
         # exciter record): R_C, X_C into that exciter's row (stabctl.io.dyr COMPENSATORS)
         DyrModel("IEEEVC", ("RC", "XC"), {"Rcomp": "RC", "Xcomp": "XC"}, andes=("IEEEVC",)),
