@@ -4,8 +4,8 @@ plants without dynamic data (netted), no model stabctl lacks, 34 exciters and go
 whose power-flow point lies outside their own limits (left out, each named; PSS/E's
 "initial conditions suspect").  Its 367 GGOV1 (stabctl.models.governors.ggov1) and 61
 EXPIC1, 38 EXAC2 and 7 ESAC6A records (stabctl.models.exciters expic1, exac2, esac6a) are
-read; two GGOV1 and two ESAC6A start outside their limits.  The references: the RAW file's own solved power flow, and the
-flat run (every state still at rest after 10 s)."""
+read; two GGOV1 and two ESAC6A start outside their limits.  The references: the RAW
+file's own solved power flow, and the flat run (every state still at rest after 10 s)."""
 
 import gzip
 import json
