@@ -465,12 +465,12 @@ def cct(
     help="The C37.118.2 streams over TCP or the recording to track.",
 )
 @click.option(
-    "--tf",
+    "--until",
     "until_s",
     type=float,
     default=None,
-    help="Last time stamp to track (s after the CFG-2's time stamp, t = 0). A TCP source "
-    "needs --tf or --frames.",
+    help="Last time stamp to track (s; t = 0 is the CFG-2's time stamp). A TCP source "
+    "needs --until or --frames.",
 )
 @click.option(
     "--frames",
@@ -513,12 +513,12 @@ def track(
     --latency-ms as the ESD controllers use them, and with --esd-pct the modes Table 3
     would command.  The PMUs' station names must be CASE's generator PMUs
     (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
-    tuned to.  A stream that stops before --tf or --frames is tracked as far as it came,
+    tuned to.  A stream that stops before --until or --frames is tracked as far as it came,
     written, and named an error (exit status 2).
     \b
     Example:
       stabctl estimate track miniwecc --source wecc.c37 --out tracked.csv
-      stabctl estimate track miniwecc --source tcp://127.0.0.1:4712 --tf 60 --out t.csv
+      stabctl estimate track miniwecc --source tcp://127.0.0.1:4712 --until 60 --out t.csv
     """
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation import sources
@@ -538,7 +538,7 @@ def track(
     src = sources.parse_source(source)
     end = End(frames, until_s)
     if src.path is None and not end.given:
-        raise InputError("a TCP --source needs its end: --tf S or --frames N")
+        raise InputError("a TCP --source needs its end: --until S or --frames N")
     got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end)
     d = cl.track(ctrl, got.frames)
     head, rows = _track_columns(ctrl, d, esd_pct is not None)

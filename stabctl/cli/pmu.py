@@ -109,7 +109,7 @@ def _serving(func):
     timeout = click.option(
         "--timeout",
         type=float,
-        default=30.0,
+        default=60.0,
         show_default=True,
         help="Longest silence of a peer before its command, and longest wait for it to "
         "take a frame (s); a peer past it is dropped.",

@@ -209,7 +209,7 @@ def test_estimate_source_refuses_monte_carlo_options(tmp_path):
         (["track", "kundur", "--source", "missing.c37", "--out", "t.csv"], "no such recording"),
         (
             ["track", "kundur", "--source", "tcp://127.0.0.1:1", "--out", "t.csv"],
-            "a TCP --source needs its end: --tf S or --frames N",
+            "a TCP --source needs its end: --until S or --frames N",
         ),
         (["replay", "junk.c37", "--allow", "pdc.example"], "'pdc.example' is not an IP address"),
         (["plant", "kundur", "--fault", "3", "--far-bus", "101"], "needs --esd-pct"),

@@ -24,6 +24,8 @@ DIFFERENCES = {
     ("sweep-cct", "--esd-pct"): "a list of ratings (repeatable, comma-separated, 'none')",
     ("import-andes", "--dyr-conventions"): "an ANDES case is read as ANDES solves it (a "
     "RAW + DYR pair as PSS/E states it, as import-psse) unless told otherwise",
+    ("estimate track", "--frames"): "optional there: one of the two ends a TCP source needs "
+    "(--until or --frames); pmu record's only end",
 }
 #: options whose default is each command's own (an output file name)
 OWN_DEFAULT = {"--out"}
