@@ -1,5 +1,5 @@
 """A bus fault at every bus of ANDES 2.0's converter cases, stabctl against ANDES like for
-like (issue 50; docs/ibr.md section 12): per bus the largest gaps of the machines' speeds
+like (docs/ibr.md section 12): per bus the largest gaps of the machines' speeds
 and of the converter's P and Q, and the buses where either tool stops.
 
 The fault and the runs (tests/andes_compare.py `sweep_case`, shared with
@@ -41,7 +41,7 @@ from andes_compare import (  # noqa: E402
 )
 from andes_refs import AndesRef, file_key  # noqa: E402
 
-#: ANDES's converter cases (issue 50): the six of its cases folder and the two JSON ones
+#: ANDES's converter cases: the six of its cases folder and the two JSON ones
 CASES = (
     "kundur/kundur_reg.xlsx",
     "kundur/kundur_wtdta1.xlsx",

@@ -1,5 +1,5 @@
 """Like-for-like runs of stabctl and ANDES on the same case and bus fault, shared by
-tests/io/test_andes.py and benchmarks/converter_bus_faults.py (issue 50): stabctl's run and
+tests/io/test_andes.py and benchmarks/converter_bus_faults.py: stabctl's run and
 ANDES's (through ``ref.run``, tests/andes_refs.py: stored or live), both on ANDES's time
 grid, and their gaps.  ANDES's calls are `logged` (a stored run's metadata names them).
 
