@@ -45,13 +45,16 @@ class Source:
         """As written to `parse_source`, consecutive ports of a host as a range."""
         if self.path is not None:
             return str(self.path)
-        runs: list[list] = []  # [host, first port, last port]
-        for host, port in self.servers:
-            if runs and runs[-1][0] == host and runs[-1][2] + 1 == port:
-                runs[-1][2] = port
-            else:
-                runs.append([host, port, port])
-        return TCP + ",".join(f"{h}:{a}" + (f"-{b}" if b > a else "") for h, a, b in runs)
+        from itertools import groupby
+
+        from stabctl.io.inputs import number_ranges
+
+        items = [
+            f"{host}:{a}" + (f"-{b}" if b > a else "")
+            for host, ports in groupby(self.servers, key=lambda hp: hp[0])
+            for a, b in number_ranges(p for _, p in ports)
+        ]
+        return TCP + ",".join(items)
 
 
 def parse_source(text: str) -> Source:

@@ -103,6 +103,7 @@ from stabctl.case.system import SWITCHED_GROUPS
 from stabctl.errors import CaseError, InputError
 from stabctl.io.andes import _andes
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
+from stabctl.io.inputs import number_ranges
 from stabctl.io.pst import case_from_matrices
 from stabctl.models.converters import (
     CONVERTER,
@@ -572,13 +573,7 @@ def _names_in(what: str, values: dict) -> list[str]:
 
 def _row_list(rows: list[int]) -> str:
     """1, 2, 3, 7 -> '1-3, 7'."""
-    runs: list[list[int]] = []
-    for r in rows:
-        if runs and runs[-1][1] + 1 == r:
-            runs[-1][1] = r
-        else:
-            runs.append([r, r])
-    return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs)
+    return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in number_ranges(rows))
 
 
 def _load(path: Path, dyr):

@@ -57,6 +57,29 @@ def input_file(path: str | os.PathLike, what: str) -> Path:
     return path
 
 
+def number_ranges(numbers) -> list[tuple[int, int]]:
+    """Consecutive integers as (first, last) ranges, in the given order: 1, 2, 3, 7 ->
+    [(1, 3), (7, 7)] (a list of rows, of ports, for a message).
+
+    Parameters
+    ----------
+    numbers : iterable of int
+        The integers.
+
+    Returns
+    -------
+    list of (int, int)
+        The ranges.
+    """
+    runs: list[list[int]] = []
+    for n in numbers:
+        if runs and runs[-1][1] + 1 == n:
+            runs[-1][1] = n
+        else:
+            runs.append([n, n])
+    return [(a, b) for a, b in runs]
+
+
 @dataclass(frozen=True)
 class CsvRow:
     """One data row of a CSV table: its 1-based line in the file and its values (column ->
