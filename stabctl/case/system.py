@@ -63,6 +63,7 @@ __all__ = [
     "ShaftTable",
     "SwitchedShuntTable",
     "MotorTable",
+    "RegulationTable",
     "Case",
     "SWING",
     "PV",
@@ -765,6 +766,48 @@ class InjectionTable(Table):
     INTEGER: ClassVar[tuple[str, ...]] = ("bus",)
 
 
+@dataclass(frozen=True, eq=False)
+class RegulationTable(Table):
+    """Remote voltage regulation: generator buses that hold the voltage of another bus
+    (PSS/E's IREG, shared by RMPCT; POM Generator Data), one row per generator bus.
+
+    ==  =========  ====================================================================
+    1   bus        generator bus number (a PV bus of the bus table)
+    2   regulated  bus whose voltage it holds (a PQ bus)
+    3   vset       voltage set point of the regulated bus, pu (PSS/E's VS)
+    4   share      the bus's share of the reactive power that holds the regulated bus
+                   (its machines' RMPCT over the sum of every regulating bus's), in (0, 1]
+    ==  =========  ====================================================================
+
+    The power flow (`stabctl.network.powerflow`) holds the regulated bus at ``vset`` and
+    lets the generator bus's voltage float, the group's reactive power an unknown shared
+    by ``share``; a bus at a Q limit leaves its group (the others go on; with none left the
+    regulated bus floats).  In a run the exciters regulate their own terminals from their
+    solved voltage, as PSS/E's exciter models do.  Validation: unique positive integer
+    buses, regulated != bus, vset > 0, 0 < share <= 1; the case checks that every
+    generator bus is PV, every regulated bus PQ, one ``vset`` per regulated bus and shares
+    summing to 1.
+    """
+
+    bus: np.ndarray
+    regulated: np.ndarray
+    vset: np.ndarray
+    share: np.ndarray
+
+    TABLE: ClassVar[str] = "vreg_con"
+    MIN_COLUMNS: ClassVar[int] = 4
+    KEY: ClassVar[str] = "bus"
+    KEY_LABEL: ClassVar[str] = "bus"
+    INTEGER: ClassVar[tuple[str, ...]] = ("bus", "regulated")
+
+    def _check(self):
+        self._require(self.bus > 0, "bus", "bus number must be a positive integer")
+        self._unique("bus", "regulating bus")
+        self._require(self.regulated != self.bus, "regulated", "must differ from bus")
+        self._require(self.vset > 0, "vset", "voltage set point must be > 0 pu")
+        self._require((self.share > 0) & (self.share <= 1), "share", "must be in (0, 1]")
+
+
 @_declared(CONVERTER)
 class ConverterTable(Table):
     """Converter-interfaced devices (inverter-based resources): stabctl's ``ibr_con``,
@@ -830,6 +873,7 @@ TABLES: Mapping[str, type[Table]] = MappingProxyType(
         "shafts": ShaftTable,
         "motors": MotorTable,
         "switched_shunts": SwitchedShuntTable,
+        "remote_regulation": RegulationTable,
     }
 )
 
@@ -877,6 +921,9 @@ class Case:
         Induction motors (ANDES Motor5), one row each, motor base; empty by default.
     switched_shunts : SwitchedShuntTable
         Switched shunts (ANDES ShuntSw), one row each, system base; empty by default.
+    remote_regulation : RegulationTable
+        Generator buses holding another bus's voltage (PSS/E's IREG, RMPCT), one row each;
+        empty by default.
     sw_con : numpy.ndarray or None
         The data file's own switching (disturbance) matrix, shape (rows, 7), PST format
         (PST manual 2.5), read-only; None if the file has none.
@@ -919,6 +966,7 @@ class Case:
     shafts: ShaftTable = field(default_factory=ShaftTable.empty)
     motors: MotorTable = field(default_factory=MotorTable.empty)
     switched_shunts: SwitchedShuntTable = field(default_factory=SwitchedShuntTable.empty)
+    remote_regulation: RegulationTable = field(default_factory=RegulationTable.empty)
     sw_con: np.ndarray | None = None
     events: tuple = ()
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
@@ -964,6 +1012,7 @@ class Case:
         self._check_buses(self.converters, "bus", known)
         self._check_buses(self.motors, "bus", known)
         self._check_buses(self.switched_shunts, "bus", known)
+        self._check_regulation()
         macs = self.machines.number
         for tab in (self.exciters, self.pss, self.governors, self.shafts):
             bad = np.flatnonzero(~np.isin(tab.machine, macs))
@@ -972,6 +1021,34 @@ class Case:
                     bad[0],
                     "machine",
                     f"machine {_fmt(tab.machine[bad[0]])} does not exist in mac_con",
+                )
+
+    def _check_regulation(self):
+        """Remote regulation: PV generator buses, PQ regulated buses, one set point and
+        shares summing to 1 per regulated bus."""
+        reg = self.remote_regulation
+        if not len(reg):
+            return
+        self._check_buses(reg, "bus", self.buses.number)
+        self._check_buses(reg, "regulated", self.buses.number)
+        kind = self.buses.kind
+        gen_kind = kind[self.bus_indices(reg.bus)]
+        reg_kind = kind[self.bus_indices(reg.regulated)]
+        reg._require(gen_kind == PV, "bus", "a regulating bus must be a PV bus (kind 2)")
+        reg._require(reg_kind == PQ, "regulated", "a regulated bus must be a PQ bus (kind 3)")
+        for r in np.unique(reg.regulated):
+            rows = np.flatnonzero(reg.regulated == r)
+            if np.ptp(reg.vset[rows]) > 0:
+                reg._fail(
+                    rows[-1],
+                    "vset",
+                    f"differs from bus {int(reg.bus[rows[0]])}'s set point for bus {int(r)}",
+                )
+            if abs(reg.share[rows].sum() - 1.0) > 1e-9:
+                reg._fail(
+                    rows[-1],
+                    "share",
+                    f"shares of bus {int(r)} sum to {reg.share[rows].sum():.12g}, not 1",
                 )
 
     @staticmethod

@@ -485,7 +485,50 @@ def _raw_gap(case, solution, q_limits: bool) -> dict | None:
     stabctl's power flow of ``case`` (``q_limits`` as said) and the RAW file's own
     solution ``solution`` (bus number, VM pu, VA degrees; :attr:`RawData.solution`) at
     the buses the case keeps; a warning when either exceeds :data:`RAW_AGREEMENT` or the
-    power flow does not converge (then None)."""
+    power flow does not converge (then None).  Generator buses whose RAW generation QG
+    lies outside their own limits QB, QT (a RAW solved with those limits ignored) are
+    named, with the gap of a power flow without Q limits beside it."""
+    import warnings
+
+    gap = _solution_gap(case, solution, q_limits)
+    if gap is None or max(gap["vmag_diff_pu"], gap["angle_diff_rad"]) <= RAW_AGREEMENT:
+        return gap
+    outside = _raw_q_outside(case) if q_limits else []
+    if outside:
+        gap["raw_q_outside_limits"] = outside
+        gap["without_q_limits"] = _solution_gap(case, solution, False)
+    free = gap.get("without_q_limits")
+    warnings.warn(
+        f"the power flow differs from the RAW file's own solution by up to "
+        f"{gap['vmag_diff_pu']:.1e} pu (bus {gap['vmag_bus']}), "
+        f"{gap['angle_diff_rad']:.1e} rad (bus {gap['angle_bus']}): the case does not "
+        "start where the RAW file says ("
+        + (
+            "the RAW's generation lies outside its Q limits at "
+            + ", ".join(
+                f"bus {o['bus']} ({o['qgen_mvar']:.1f} Mvar, limits "
+                f"[{o['qmin_mvar']:.1f}, {o['qmax_mvar']:.1f}])"
+                for o in outside
+            )
+            + ": it was solved with those limits ignored"
+            + (
+                f"; without Q limits (simulate/cct --no-q-limits) the gap is "
+                f"{max(free['vmag_diff_pu'], free['angle_diff_rad']):.1e}"
+                if free
+                else ""
+            )
+            if outside
+            else "network data read otherwise, or a RAW file whose voltages are not its "
+            "solved power flow"
+        )
+        + ")",
+        stacklevel=2,
+    )
+    return gap
+
+
+def _solution_gap(case, solution, q_limits: bool) -> dict | None:
+    """`_raw_gap`'s differences, without the warning on their size."""
     import warnings
 
     import numpy as np
@@ -499,38 +542,55 @@ def _raw_gap(case, solution, q_limits: bool) -> dict | None:
         warnings.warn(
             f"stabctl's power flow of the case did not converge: not compared with the "
             f"RAW's solution: {exc}",
-            stacklevel=2,
+            stacklevel=3,
         )
         return None
     kept = np.isin(solution[:, 0], case.buses.number)
     buses, rows = solution[kept, 0], case.bus_indices(solution[kept, 0])
     dv = np.abs(pf.vmag[rows] - solution[kept, 1])
     da = np.abs(pf.vang[rows] - np.deg2rad(solution[kept, 2]))
-    gap = {
+    return {
         "vmag_diff_pu": float(dv.max()),
         "vmag_bus": int(buses[dv.argmax()]),
         "angle_diff_rad": float(da.max()),
         "angle_bus": int(buses[da.argmax()]),
     }
-    if max(dv.max(), da.max()) > RAW_AGREEMENT:
-        warnings.warn(
-            f"the power flow differs from the RAW file's own solution by up to "
-            f"{gap['vmag_diff_pu']:.1e} pu (bus {gap['vmag_bus']}), "
-            f"{gap['angle_diff_rad']:.1e} rad (bus {gap['angle_bus']}): the case does not "
-            "start where the RAW file says (network data read otherwise, or a RAW file "
-            "whose voltages are not its solved power flow)",
-            stacklevel=2,
-        )
-    return gap
+
+
+def _raw_q_outside(case) -> list[dict]:
+    """PV buses whose data generation QG (the RAW's solution) lies outside [qmin, qmax]
+    by more than 0.01 Mvar."""
+    import numpy as np
+
+    from stabctl.case import PV
+
+    b = case.buses
+    tol = 1e-4 * 0.1 / case.base_mva * 100  # 0.01 Mvar in pu
+    qmax = np.where(b.qmax == 0, np.inf, b.qmax)
+    qmin = np.where(b.qmin == 0, -np.inf, b.qmin)
+    bad = (b.kind == PV) & ((b.qgen > qmax + tol) | (b.qgen < qmin - tol))
+    mva = case.base_mva
+    return [
+        {
+            "bus": int(b.number[i]),
+            "qgen_mvar": float(b.qgen[i] * mva),
+            "qmin_mvar": float(qmin[i] * mva),
+            "qmax_mvar": float(qmax[i] * mva),
+        }
+        for i in np.flatnonzero(bad)
+    ]
 
 
 def _echo_raw_gap(gap: dict | None, how: str) -> None:
-    if gap is not None:
-        click.echo(
-            f"power flow against the RAW's solution ({how}): max |dV| "
-            f"{gap['vmag_diff_pu']:.1e} pu at bus {gap['vmag_bus']}, max |d angle| "
-            f"{gap['angle_diff_rad']:.1e} rad at bus {gap['angle_bus']}"
-        )
+    if gap is None:
+        return
+    for label, g in ((how, gap), ("Q limits off", gap.get("without_q_limits"))):
+        if g:
+            click.echo(
+                f"power flow against the RAW's solution ({label}): max |dV| "
+                f"{g['vmag_diff_pu']:.1e} pu at bus {g['vmag_bus']}, max |d angle| "
+                f"{g['angle_diff_rad']:.1e} rad at bus {g['angle_bus']}"
+            )
 
 
 #: largest power-flow difference to ANDES's (pu, rad) accepted without a warning

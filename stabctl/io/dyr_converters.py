@@ -13,7 +13,11 @@ and the BusFreq of a REPCA1's frequency, Tf 0.02 s, Tw 0.1 s).
 
 PSS/E's conventions where ANDES's reading of the same record differs: IREG = 0 (REECx,
 REPCA1) is the plant's own bus (ANDES reads it as bus 0); REECx's Tp = 0 is no filter (a
-lag below :data:`stabctl.models.blocks.LBND` is bypassed); REPCA1's monitored branch
+lag below :data:`stabctl.models.blocks.LBND` is bypassed); REPCA1's Pmax, Pmin bound the
+plant's P reference (PSS/E's block diagram, GridPACK's ``repca1.cpp``: the PI starts at the
+dispatch), where ANDES's bound the increment Pext that the table holds, so the table gets
+Pmax - P0, Pmin - P0 (P0 = PG / MBASE; ``conventions="andes"`` keeps ANDES's reading);
+REPCA1's monitored branch
 (BUS1, BUS2, CKTID; 0 0: none) is the RAW branch between those buses (its r, x on the
 system base).  REGCA1's Accel (the network solution's acceleration factor) is not a model
 parameter and is not read.
@@ -80,7 +84,7 @@ class _Refused(Exception):
     """A plant stabctl cannot represent: the reason."""
 
 
-def converter_rows(records, generators, branches) -> ConverterRows:
+def converter_rows(records, generators, branches, conventions: str = "psse") -> ConverterRows:
     """The converter table's rows of the REGCA1 plants of a DYR file.
 
     Parameters
@@ -95,6 +99,11 @@ def converter_rows(records, generators, branches) -> ConverterRows:
     branches : numpy.ndarray
         The RAW file's PST ``line`` matrix, shape (n_branch, >= 4): from bus, to bus, r,
         x (pu, system base), for a REPCA1's monitored branch.
+    conventions : str, optional
+        ``"psse"`` (default): a REPCA1's Pmax, Pmin bound its P reference, as PSS/E's
+        (and GridPACK's) REPCA1, so the table's bounds of the increment Pext are
+        Pmax - P0 and Pmin - P0 with P0 = PG / MBASE the plant's dispatch; ``"andes"``
+        or ``"pst"``: as given (ANDES 2.0's REPCA1 bounds the increment itself).
 
     Returns
     -------
@@ -136,7 +145,7 @@ def converter_rows(records, generators, branches) -> ConverterRows:
             gen = gens.get(key)
             if gen is None:
                 raise _Refused("no such generator in the RAW data (or out of service)")
-            row = _plant_row(plant, gen, len(rows) + 1, branches)
+            row = _plant_row(plant, gen, len(rows) + 1, branches, conventions)
             row[CONVERTER.col("pfrac") - 1], row[CONVERTER.col("qfrac") - 1] = shares(
                 generators, gen
             )
@@ -164,8 +173,11 @@ def shares(generators, gen) -> tuple[float, float]:
     return out[0], out[1]
 
 
-def _plant_row(plant: dict[str, DyrRecord], gen: dict, number: int, branches) -> list[float]:
-    """The ibr_con row of one plant's records (`_Refused` for what stabctl lacks)."""
+def _plant_row(
+    plant: dict[str, DyrRecord], gen: dict, number: int, branches, conventions: str
+) -> list[float]:
+    """The ibr_con row of one plant's records (`_Refused` for what stabctl lacks); a
+    REPCA1's P bounds as ``conventions`` (`converter_rows`)."""
     v = {p.name: p.default for p in CONVERTER.params}
     v.update(number=number, bus=int(gen["bus"]), type=REGCA1, mva=float(gen["mbase"]))
     _copy(plant["REGCA1"], v)
@@ -185,6 +197,9 @@ def _plant_row(plant: dict[str, DyrRecord], gen: dict, number: int, branches) ->
         v["repc"] = REPCA1
         _copy(rec, v)
         v.update(_monitored_branch(rec, int(gen["bus"]), branches))
+        if conventions == "psse":  # bounds of the P reference -> of its increment Pext
+            p0 = float(gen["pg"]) / float(gen["mbase"])
+            v["pc_Pmax"], v["pc_Pmin"] = v["pc_Pmax"] - p0, v["pc_Pmin"] - p0
     _wind(plant, reec[0] if reec else None, v)
     return [float(v[p.name]) for p in CONVERTER.params]
 

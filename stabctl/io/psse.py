@@ -149,6 +149,7 @@ def import_psse(
     case = case_from_matrices(
         mats, raw.name, source=_source(raw_path, dyr_path), description=raw.title
     )
+    changed = (*(str(c) for c in raw.changed), *changed)
     if changed:
         warnings.warn(
             f"{where}: read {len(changed)} record(s) with a value other than the file's: "
@@ -193,7 +194,7 @@ def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]
     from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows, shares
 
     gens = [{**g.as_dyr(), "sbase": raw.base_mva} for g in raw.generators]
-    conv = converter_rows(records, gens, raw.line)
+    conv = converter_rows(records, gens, raw.line, conventions)
     keys = [(int(g["bus"]), machine_id(g["id"])) for g in gens]
     lost = {(r.bus, r.id) for r, _ in conv.skipped if r.model == "REGCA1"} & set(keys)
     plant_buses = {bus for bus, _ in conv.replaced}

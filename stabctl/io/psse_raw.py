@@ -31,6 +31,11 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   (``net``: those without a machine model in the DYR data, PSS/E's netting) are a
   negative constant-power load PG + jQG at their bus instead (its composition in the
   dynamic run as the bus's loads, above), and leave the bus's Q limits;
+* remote voltage regulation (IREG of a load bus, IDE 1): the plant holds that bus at VS
+  and its own bus floats (PSS/E's power flow; `stabctl.case.RegulationTable`, one row per
+  plant bus, its share the plant's RMPCT over the sum of the plants regulating the bus);
+  an IREG naming a generator bus, an isolated bus or given at the swing bus is PSS/E's
+  own-bus regulation, listed in ``changed``; the machines of one bus take one IREG;
 * non-transformer branches (in service): R, X, B; line shunts GI + jBI, GJ + jBJ at their
   ends (``line`` columns 11-14, switched with the branch; the ``line`` matrix has these
   columns only when a branch has them);
@@ -60,8 +65,8 @@ Skipped without a word: area, zone, owner, inter-area transfer, substation and s
 switching device data (v34 breakers: none is accepted either, see below), v34 system-wide
 data. Unsupported, reported as ``file:line record``: dc lines, FACTS, GNE, induction
 machines, multi-section lines, v34 system switching devices, generators with a step-up
-transformer in the record (RT, XT) or remote voltage regulation (IREG), and the
-transformer features above.
+transformer in the record (RT, XT) or an IREG other than the first generator's of their
+bus, and the transformer features above.
 
 Bus numbers stay as in the RAW file. Branch rows: lines in file order, then transformers
 (a three-winding one as its windings' branches, winding 1 first); ``--circuit K`` of
@@ -205,6 +210,10 @@ class RawData:
         solution: the file's own power-flow solution, shape (n, 3): bus number, VM (pu),
             VA (degrees) of each bus record not isolated, in file order (the ``bus``
             matrix holds VS at generator buses instead; no three-winding star points).
+        vreg_con: remote voltage regulation (:class:`stabctl.case.RegulationTable`
+            rows: generator bus, regulated bus, VS, share), shape (n, 4).
+        changed: records read otherwise than they say, each named with the reason
+            (a plant whose IREG bus is a generator bus regulates its own bus, as PSS/E).
     """
 
     name: str
@@ -220,16 +229,20 @@ class RawData:
     netted: tuple[RawSource, ...] = ()
     out_of_service: frozenset[tuple[int, str]] = frozenset()
     solution: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    vreg_con: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+    changed: tuple[RawSource, ...] = ()
 
     def matrices(self) -> dict:
-        """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``)
-        for :func:`stabctl.io.pst.case_from_matrices`."""
+        """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``,
+        ``vreg_con`` when a plant regulates a remote bus) for
+        :func:`stabctl.io.pst.case_from_matrices`."""
         return {
             "bus": self.bus,
             "line": self.line,
             "load_con": self.load_con,
             "basmva": self.base_mva,
             "sys_freq": self.freq_hz,
+            **({"vreg_con": self.vreg_con} if len(self.vreg_con) else {}),
         }
 
 
@@ -437,6 +450,7 @@ class _Builder:
     branches: list = field(default_factory=list)
     gens: list = field(default_factory=list)
     gen_vs: dict = field(default_factory=dict)
+    gen_ireg: dict = field(default_factory=dict)  # bus -> IREG of its first generator
     unsupported: list = field(default_factory=list)
     net: Callable[[int, str], str | None] | None = None  # (bus, id) -> why netted, or None
     netted: list = field(default_factory=list)  # (bus, RawSource) of netted generators
@@ -445,6 +459,10 @@ class _Builder:
     stars: int = 0  # star-point buses of three-winding transformers so far
     base_kv: dict = field(default_factory=dict)  # bus number -> BASKV (isolated ones too)
     solution: dict = field(default_factory=dict)  # bus number -> (VM, VA deg) of the file
+    #: generator bus -> [IREG, VS, sum of RMPCT, first record] of a plant regulating a
+    #: remote bus
+    remote: dict = field(default_factory=dict)
+    changed: list = field(default_factory=list)  # RawSource of records read otherwise
 
     def once(self, rec: _Rec, key: tuple, what: str):
         """CaseError when a record with the same identity came before (a duplicated
@@ -535,7 +553,7 @@ def _fixed_shunt(b: _Builder, rec: _Rec):
 
 def _generator(b: _Builder, rec: _Rec):
     """Generator: I, ID, PG, QG, QT, QB, VS, IREG, [NREG (v34)], MBASE, ZR, ZX, RT, XT,
-    GTAP, STAT (POM Generator Data)."""
+    GTAP, STAT, RMPCT (POM Generator Data)."""
     num, gid = rec.int(0, 0), rec.text(0, 1)
     b.once(rec, (num, gid), f"generator at bus {num} '{gid}'")
     row = b.bus_row(rec, num, "generator")
@@ -548,9 +566,6 @@ def _generator(b: _Builder, rec: _Rec):
     why = None if b.net is None else b.net(num, gid)
     if why:
         return _net_generator(b, rec, num, f"{what}: {why}")
-    ireg = rec.int(0, 7, 0)
-    if ireg not in (0, num):
-        return b.skip(rec, f"{what}: remote voltage regulation of bus {ireg}")
     if rec.num(0, 11 + o, 0.0) != 0 or rec.num(0, 12 + o, 0.0) != 0:
         return b.skip(rec, f"{what}: step-up transformer in the generator record (RT, XT)")
     if row[9] == PQ:
@@ -558,7 +573,16 @@ def _generator(b: _Builder, rec: _Rec):
     vs = rec.num(0, 6, 1.0)
     if b.gen_vs.setdefault(num, vs) != vs:
         return b.skip(rec, f"{what}: VS {vs:g} differs from bus {num}'s first generator")
-    _add_generator(b, rec, row, vs, o, gid)
+    ireg = rec.int(0, 7, 0) or num
+    first = b.gen_ireg.setdefault(num, ireg)
+    if first != ireg:
+        return b.skip(rec, f"{what}: IREG {ireg} differs from bus {num}'s first generator's")
+    if ireg != num:
+        rmpct = rec.num(0, 15 + o, 100.0)
+        if rmpct < 0:
+            rec.fail(f"{what}: RMPCT {rmpct:g} must be >= 0")
+        b.remote.setdefault(num, [ireg, vs, 0.0, rec])[2] += rmpct
+    _add_generator(b, rec, row, vs if ireg == num else row[1], o, gid)
 
 
 def _net_generator(b: _Builder, rec: _Rec, num: int, what: str):
@@ -796,6 +820,50 @@ def _zero_q_limits(b: _Builder):
         row[11] = row[11] or -ZERO_Q_LIMIT
 
 
+def _remote_regulation(b: _Builder) -> np.ndarray:
+    """``vreg_con`` rows of the plants regulating a remote bus (share: the plant's RMPCT
+    over its group's); a plant whose IREG bus is not a load bus regulates its own bus, as
+    PSS/E (POM Generator Data, IREG), listed in ``changed``; CaseError for an IREG bus not
+    in the bus data or a group without reactive share."""
+    with_gen = {g.bus for g in b.gens}
+    rows = []
+    for num, (ireg, vs, rmpct, rec) in b.remote.items():
+        if num not in with_gen:  # netted: a load, no control
+            continue
+        if b.buses[num][9] == SWING:
+            b.changed.append(
+                rec.source(
+                    f"generator at bus {num}: the swing bus holds its own voltage at VS "
+                    f"{vs:g}, not bus {ireg}'s (PSS/E)"
+                )
+            )
+            b.buses[num][1] = vs
+            continue
+        if ireg not in b.buses and ireg not in b.isolated:
+            rec.fail(f"generator at bus {num}: IREG bus {ireg} is not in the bus data")
+        if ireg in b.isolated or b.buses[ireg][9] != PQ:
+            kind = "isolated" if ireg in b.isolated else "a generator bus"
+            b.changed.append(
+                rec.source(
+                    f"generator at bus {num}: IREG bus {ireg} is {kind}, so bus {num} regulates "
+                    f"its own voltage at VS {vs:g} (PSS/E)"
+                )
+            )
+            b.buses[num][1] = vs
+            continue
+        rows.append([num, ireg, vs, rmpct])
+    out = np.array(rows, float).reshape(-1, 4)
+    for r in np.unique(out[:, 1]):
+        grp = out[:, 1] == r
+        total = out[grp, 3].sum()
+        if total <= 0:
+            b.remote[int(out[grp, 0][0])][3].fail(
+                f"the plants regulating bus {int(r)} have RMPCT 0 in all"
+            )
+        out[grp, 3] /= total
+    return out
+
+
 def _demote_idle_pv(b: _Builder):
     """IDE 2 buses without an in-service generator are load buses (PSS/E)."""
     with_gen = {g.bus for g in b.gens}
@@ -873,6 +941,7 @@ def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawDat
     if not b.buses:
         raise CaseError(f"{path.name}: no bus data")
     _demote_idle_pv(b)
+    vreg_con = _remote_regulation(b)
     _zero_q_limits(b)
     _check_netted_swing(b)
     load_con = _load_con(b)
@@ -898,4 +967,6 @@ def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawDat
         netted=tuple(src for _, src in b.netted),
         out_of_service=frozenset(b.out_of_service),
         solution=np.array([[n, *vm_va] for n, vm_va in b.solution.items()], float).reshape(-1, 3),
+        vreg_con=vreg_con,
+        changed=tuple(b.changed),
     )

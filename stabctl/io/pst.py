@@ -67,6 +67,7 @@ PST_TABLES: Mapping[str, str] = {
     "mot_con": "motors",  # stabctl's induction motors (ANDES Motor5), no PST matrix
     "swsh_con": "switched_shunts",  # stabctl's switched shunts (ANDES ShuntSw), no PST matrix
     "inj_con": "injections",  # stabctl's fixed injections (HVDC set points), no PST matrix
+    "vreg_con": "remote_regulation",  # stabctl's remote voltage regulation, no PST matrix
 }
 
 _SCALARS = {"basmva": "base_mva", "sys_freq": "freq_hz"}
@@ -372,9 +373,15 @@ def _to_float(tok: str) -> float:
 _LICENCE_DEFAULT = ""
 
 
-#: tables written only when they have rows (a case without converters, shafts, motors or
-#: switched shunts is written as before those tables existed)
-_OPTIONAL_TABLES = ("converters", "shafts", "motors", "switched_shunts")
+#: tables written only when they have rows (a case without converters, shafts, motors,
+#: switched shunts or remote regulation is written as before those tables existed)
+_OPTIONAL_TABLES = (
+    "converters",
+    "shafts",
+    "motors",
+    "switched_shunts",
+    "remote_regulation",
+)
 
 
 def case_to_dict(case: Case, licence: str = "") -> dict:

@@ -10,6 +10,11 @@ Polar coordinates, sparse Jacobian, sparse LU solve. Conventions (PSTess ``loadf
 * convergence when ``max|dP| + max|dQ| <= tol`` over non-swing (P) and PQ (Q) buses;
 * after each update the magnitudes are clipped to [vmin, vmax] (0 means 0.5 / 1.5), so a
   solution with a voltage outside its limits does not converge unless a tap moves;
+* remote regulation (``case.remote_regulation``, PSS/E's IREG and RMPCT): the
+  regulated bus is held at ``vset`` while the generator buses regulating it float, their
+  reactive generation the group's total (one more unknown per group) shared by
+  ``share``; a generator bus at a Q limit leaves its group (the others take its share),
+  and with none left the regulated bus floats (PSS/E's remote control, POM 6.3);
 * Q limits: after each iteration a PV bus whose ``Q + Ql`` leaves [qmin, qmax] (0 means
   no limit, i.e. +-9999) becomes PQ with its generation fixed at the limit (PST
   ``chq_lim``); once converged, a bus held at qmax with its voltage above its set point,
@@ -53,6 +58,8 @@ _TAP_ITER_MAX = 10
 #: the set point that counts as the wrong side (`_release_wrong_side`)
 _BACKOFF_ROUNDS = 20
 _BACKOFF_DV = 1e-6
+#: the Newton state's kind of a generator bus holding another bus's voltage (reported as PV)
+_REMOTE = 4
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,15 +167,24 @@ def power_injections(ybus: sp.spmatrix, v: np.ndarray) -> np.ndarray:
     return v * np.conj(ybus @ v)
 
 
-def jacobian(ybus: sp.csr_matrix, v: np.ndarray, ang_idx: np.ndarray, mag_idx: np.ndarray):
-    """Sparse power-flow Jacobian d(P[ang_idx], Q[mag_idx]) / d(angle[ang_idx], |V|[mag_idx]).
+def jacobian(
+    ybus: sp.csr_matrix,
+    v: np.ndarray,
+    ang_idx: np.ndarray,
+    mag_idx: np.ndarray,
+    q_idx: np.ndarray | None = None,
+):
+    """Sparse power-flow Jacobian d(P[ang_idx], Q[q_idx]) / d(angle[ang_idx], |V|[mag_idx]).
 
     Args:
         ybus: complex CSR (n, n); v: complex voltages (n,); ang_idx: buses whose angle is
-        unknown (non-swing); mag_idx: buses whose magnitude is unknown (PQ).
+        unknown (non-swing); mag_idx: buses whose magnitude is unknown (PQ); q_idx: buses
+        whose Q balance is an equation (default ``mag_idx``; remote regulation holds a
+        regulated bus's magnitude while its Q balance stays).
     Returns:
-        CSC matrix of shape (len(ang_idx) + len(mag_idx),) * 2.
+        CSC matrix of shape (len(ang_idx) + len(q_idx), len(ang_idx) + len(mag_idx)).
     """
+    q_idx = mag_idx if q_idx is None else q_idx
     i = ybus @ v
     vn = v / np.abs(v)
     dv = sp.diags(v)
@@ -178,8 +194,8 @@ def jacobian(ybus: sp.csr_matrix, v: np.ndarray, ang_idx: np.ndarray, mag_idx: n
     ds_dmag = ds_dmag.tocsr()
     j11 = ds_dang[ang_idx][:, ang_idx].real
     j12 = ds_dmag[ang_idx][:, mag_idx].real
-    j21 = ds_dang[mag_idx][:, ang_idx].imag
-    j22 = ds_dmag[mag_idx][:, mag_idx].imag
+    j21 = ds_dang[q_idx][:, ang_idx].imag
+    j22 = ds_dmag[q_idx][:, mag_idx].imag
     return sp.bmat([[j11, j12], [j21, j22]], format="csc")
 
 
@@ -196,6 +212,57 @@ class _State:
     kind: np.ndarray
     #: +1 held at qmax, -1 at qmin, 0 not held (`_apply_q_limits`)
     held: np.ndarray
+    #: remote regulation groups (empty arrays without)
+    remote: _Remote
+
+
+@dataclass
+class _Remote:
+    """Remote regulation in a solve: member generator buses (rows ``gen``, of group
+    ``group``, RMPCT ``share``) and per group the regulated bus row ``reg``, its set point
+    ``vset`` and the unknown reactive generation ``q`` (pu) the members share."""
+
+    gen: np.ndarray
+    group: np.ndarray
+    share: np.ndarray
+    reg: np.ndarray
+    vset: np.ndarray
+    q: np.ndarray
+
+    @classmethod
+    def of(cls, case: Case) -> _Remote:
+        """The groups of ``case.remote_regulation``, ``q`` started at the members' data."""
+        rr = case.remote_regulation
+        regulated, group = np.unique(rr.regulated, return_inverse=True)
+        gen = case.bus_indices(rr.bus) if len(rr) else np.zeros(0, int)
+        q = np.zeros(regulated.size)
+        np.add.at(q, group, case.buses.qgen[gen])
+        vset = np.zeros(regulated.size)
+        vset[group] = rr.vset
+        reg = case.bus_indices(regulated) if regulated.size else np.zeros(0, int)
+        return cls(gen, group, rr.share.copy(), reg, vset, q)
+
+    def active(self, kind: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(members still regulating, groups with a member still regulating), bool."""
+        on = kind[self.gen] == _REMOTE
+        groups = np.zeros(self.reg.size, bool)
+        groups[self.group[on]] = True
+        return on, groups
+
+    def shares(self, on: np.ndarray) -> np.ndarray:
+        """Each regulating member's share among its group's regulating members."""
+        total = np.zeros(self.reg.size)
+        np.add.at(total, self.group[on], self.share[on])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(on, self.share / total[self.group], 0.0)
+
+
+def _hold_remote(st: _State) -> None:
+    """Regulated buses of active groups at their set points, members' Q from the groups."""
+    r = st.remote
+    on, groups = r.active(st.kind)
+    st.vmag[r.reg[groups]] = r.vset[groups]
+    st.qg[r.gen[on]] = (r.shares(on) * r.q[r.group])[on]
 
 
 def _mismatch(ybus, st: _State):
@@ -204,7 +271,7 @@ def _mismatch(ybus, st: _State):
     dp = st.pg - st.pl - s.real
     dq = st.qg - st.ql - s.imag
     dp[st.kind == SWING] = 0.0
-    dq[st.kind != PQ] = 0.0
+    dq[(st.kind != PQ) & (st.kind != _REMOTE)] = 0.0
     return dp, dq, s
 
 
@@ -213,11 +280,13 @@ def _norm(dp, dq) -> float:
 
 
 def _apply_q_limits(st: _State, s, qmax, qmin) -> bool:
-    """PST ``chq_lim``: PV buses outside [qmin, qmax] become PQ at the limit. True if any."""
+    """PST ``chq_lim``: PV buses outside [qmin, qmax] become PQ at the limit (a remote
+    regulating bus likewise leaves its group). True if any."""
     pv = st.kind == PV
     st.qg[pv] = s.imag[pv] + st.ql[pv]
-    over = pv & (st.qg > qmax)
-    under = pv & (st.qg < qmin)
+    gen = pv | (st.kind == _REMOTE)
+    over = gen & (st.qg > qmax)
+    under = gen & (st.qg < qmin)
     for mask, lim, side in ((over, qmax, 1), (under, qmin, -1)):
         st.qg[mask] = 0.0
         st.ql[mask] -= lim[mask]
@@ -232,14 +301,21 @@ def _release_wrong_side(case: Case, st: _State) -> bool:
     (PSS/E's and PowerWorld's back-off; PST's ``chq_lim`` switches once, for good).
     True if any did."""
     b = case.buses
-    back = ((st.held == 1) & (st.vmag > b.vmag + _BACKOFF_DV)) | (
-        (st.held == -1) & (st.vmag < b.vmag - _BACKOFF_DV)
+    r = st.remote
+    vset, v = b.vmag.copy(), st.vmag.copy()  # a remote member's set point is its group's
+    vset[r.gen], v[r.gen] = r.vset[r.group], st.vmag[r.reg[r.group]]
+    back = ((st.held == 1) & (v > vset + _BACKOFF_DV)) | (
+        (st.held == -1) & (v < vset - _BACKOFF_DV)
     )
-    st.kind[back] = PV
+    remote = np.zeros(back.size, bool)
+    remote[r.gen] = True
+    st.kind[back] = np.where(remote[back], _REMOTE, PV)
     st.held[back] = 0
     st.ql[back] = b.qload[back]
     st.qg[back] = b.qgen[back]
-    st.vmag[back] = b.vmag[back]
+    local = back & ~remote
+    st.vmag[local] = b.vmag[local]
+    _hold_remote(st)
     return bool(back.any())
 
 
@@ -266,13 +342,19 @@ def _iterate(case, ybus, st: _State, tol, max_iter, q_limits, it: int, limits):
     """Newton steps in place on ``st`` until converged or ``max_iter`` in all, ``limits``
     as `_limits`; returns (iterations so far, dP, dQ, S)."""
     qmax, qmin, vmax, vmin = limits
+    _hold_remote(st)
     dp, dq, s = _mismatch(ybus, st)
     while _norm(dp, dq) > tol and it < max_iter:
         it += 1
-        ang_idx = np.flatnonzero(st.kind != SWING)
-        mag_idx = np.flatnonzero(st.kind == PQ)
-        jac = jacobian(ybus, st.vmag * np.exp(1j * st.vang), ang_idx, mag_idx)
-        rhs = np.concatenate([dp[ang_idx], dq[mag_idx]])
+        ang_idx, mag_idx, q_idx, groups = _unknowns(st)
+        jac = _remote_columns(
+            jacobian(ybus, st.vmag * np.exp(1j * st.vang), ang_idx, mag_idx, q_idx),
+            st,
+            ang_idx.size,
+            q_idx,
+            groups,
+        )
+        rhs = np.concatenate([dp[ang_idx], dq[q_idx]])
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("error", spla.MatrixRankWarning)
@@ -281,13 +363,46 @@ def _iterate(case, ybus, st: _State, tol, max_iter, q_limits, it: int, limits):
             _fail(case, it, dp, dq, "singular Jacobian (islanded bus or voltage collapse)")
         if not np.all(np.isfinite(dx)):
             _fail(case, it, dp, dq, "non-finite Newton step")
+        n_va = ang_idx.size + mag_idx.size
         st.vang[ang_idx] += dx[: ang_idx.size]
-        st.vmag[mag_idx] += dx[ang_idx.size :]
+        st.vmag[mag_idx] += dx[ang_idx.size : n_va]
+        st.remote.q[groups] += dx[n_va:]
         np.clip(st.vmag, vmin, vmax, out=st.vmag)
+        _hold_remote(st)
         dp, dq, s = _mismatch(ybus, st)
         if q_limits and _apply_q_limits(st, s, qmax, qmin):
+            _hold_remote(st)
             dp, dq, s = _mismatch(ybus, st)
     return it, dp, dq, s
+
+
+def _unknowns(st: _State):
+    """(angle buses, magnitude buses, Q-balance buses, active remote groups): a regulated
+    bus of an active group keeps its Q balance but not its magnitude (the group's Q takes
+    its place)."""
+    ang_idx = np.flatnonzero(st.kind != SWING)
+    q_buses = (st.kind == PQ) | (st.kind == _REMOTE)
+    _, groups = st.remote.active(st.kind)
+    fixed = np.zeros(q_buses.size, bool)
+    fixed[st.remote.reg[groups]] = True
+    return ang_idx, np.flatnonzero(q_buses & ~fixed), np.flatnonzero(q_buses), groups
+
+
+def _remote_columns(jac, st: _State, n_ang: int, q_idx, groups):
+    """The Jacobian with one column per active remote group: d(mismatch)/d(group Q) is
+    minus each regulating member's share in its Q-balance row."""
+    if not groups.any():
+        return jac
+    r = st.remote
+    on, _ = r.active(st.kind)
+    row_of = np.full(st.kind.size, -1)
+    row_of[q_idx] = n_ang + np.arange(q_idx.size)
+    col_of = np.cumsum(groups) - 1
+    rows = row_of[r.gen[on]]
+    extra = sp.csc_matrix(
+        (-r.shares(on)[on], (rows, col_of[r.group[on]])), shape=(jac.shape[0], int(groups.sum()))
+    )
+    return sp.hstack([jac, extra], format="csc")
 
 
 def _fail(case, it, dp, dq, what):
@@ -376,22 +491,31 @@ def _initial_state(case: Case) -> tuple[_State, np.ndarray, np.ndarray]:
             qg=b.qgen + inj_q,
             pl=b.pload.copy(),
             ql=b.qload.copy(),
-            kind=b.kind.astype(int),
+            kind=_remote_kind(case),
             held=np.zeros(case.n_bus, int),
+            remote=_Remote.of(case),
         ),
         inj_p,
         inj_q,
     )
 
 
+def _remote_kind(case: Case) -> np.ndarray:
+    """The bus table's kinds with remote regulating buses marked `_REMOTE`."""
+    kind = case.buses.kind.astype(int)
+    if len(case.remote_regulation):
+        kind[case.bus_indices(case.remote_regulation.bus)] = _REMOTE
+    return kind
+
+
 def _report(case: Case, st: _State, s, inj_p, inj_q):
     """PST's end-of-loadflow bookkeeping: (pgen, qgen, pload, qload, q_limited)."""
     b = case.buses
     pg, qg, pl, ql = st.pg.copy(), st.qg.copy(), st.pl.copy(), st.ql.copy()
-    gen = st.kind == PV
+    gen = (st.kind == PV) | (st.kind == _REMOTE)
     pg[gen] = s.real[gen] + pl[gen]
     qg[gen] = s.imag[gen] + ql[gen]
-    limited = (b.kind == PV) & (st.kind != PV)
+    limited = (b.kind == PV) & ~gen
     qg[limited] -= ql[limited] - b.qload[limited]  # back to the limit value
     ql[limited] = b.qload[limited]
     load = st.kind == PQ
@@ -494,7 +618,7 @@ def solve_powerflow(
         qgen=qg,
         pload=pl,
         qload=ql,
-        kind=st.kind,
+        kind=np.where(st.kind == _REMOTE, PV, st.kind),
         q_limited=limited,
         iterations=iters,
         max_mismatch=mism,

@@ -14,7 +14,7 @@ import pytest
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import LineTrip
 from stabctl.errors import CaseError
-from stabctl.io.dyr import read_dyr
+from stabctl.io.dyr import CONVERTER_DYR, read_dyr
 from stabctl.io.psse import import_psse, load_psse
 from stabctl.models.converters import CONVERTER, REECB1, REGCA1, REPCA1
 
@@ -72,6 +72,24 @@ def test_rena_reads_as_one_regca1_with_its_reecb1_and_repca1():
     assert res.case.machines.H[0] == 0.0  # the GENCLS H = 0 infinite bus
 
 
+def test_repca1_p_bounds_are_the_p_reference_bounds_of_pss_e():
+    """PSS/E's REPCA1 limits its P reference, which starts at the dispatch (the Model
+    Library's block diagram; GridPACK's repca1.cpp initialises its PI at Pref = Pg): the
+    table's bounds of the increment are Pmax - P0, Pmin - P0, P0 = PG / MBASE; ANDES's
+    reading keeps the file's numbers."""
+    from stabctl.io.psse_raw import read_raw
+
+    gen = read_raw(RAW).generators[-1]
+    p0 = gen.pg / gen.mbase
+    rec = next(r for r in read_dyr(DYR) if r.model == "REPCA1")
+    given = CONVERTER_DYR["REPCA1"].values(rec.params)
+    psse, andes = (_row(load_psse(RAW, DYR, conventions=c).converters) for c in ("psse", "andes"))
+    assert (andes["pc_Pmax"], andes["pc_Pmin"]) == (given["Pmax"], given["Pmin"])
+    assert psse["pc_Pmax"] == pytest.approx(given["Pmax"] - p0, abs=1e-15)
+    assert psse["pc_Pmin"] == pytest.approx(given["Pmin"] - p0, abs=1e-15)
+    assert 0 < p0 < given["Pmax"]
+
+
 @pytest.fixture
 def own_bus_andes(monkeypatch):
     """ANDES's DYR reading with its REECx ``busr`` None: ANDES reads PSS/E's IREG = 0 (own
@@ -95,10 +113,11 @@ def test_rena_row_and_trip_as_import_andes_reads_the_same_dyr(tmp_path, own_bus_
     """The DYR-read plant is import-andes's row for the same RAW + DYR, column for column,
     and runs PSS/E's line trip the same (V103, P, Q within 1e-9).  Two readings ANDES
     does not share are set aside: its REECB1 refuses Tp = 0 (RENA's; 0.02 s here) and
-    reads IREG = 0 as bus 0 (`own_bus_andes`)."""
+    reads IREG = 0 as bus 0 (`own_bus_andes`); and read like for like, with ANDES's
+    conventions (its REPCA1's Pmax, Pmin bound the increment Pext)."""
     recs = read_dyr(DYR)
     dyr = _dyr(tmp_path, [_text(r, **({"Tp": 0.02} if r.model == "REECB1" else {})) for r in recs])
-    native = load_psse(RAW, dyr)
+    native = load_psse(RAW, dyr, conventions="andes")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         andes = own_bus_andes(RAW, dyr=dyr).case

@@ -441,12 +441,14 @@ def test_load_of_mixed_sign_has_no_load_con_fractions(tmp_path):
     assert load_psse(path).buses.pload[1] == pytest.approx((100 - 200 * 0.98) / 100)
 
 
-def test_remote_regulation_is_unsupported(tmp_path):
+def test_two_iregs_at_one_bus_are_unsupported(tmp_path):
+    """PSS/E's plant data is per bus: its machines regulate one bus (remote regulation
+    itself: tests/network/test_remote_regulation.py)."""
     path = _edit(tmp_path, "1.01000,     3,   100.000", "1.01000,     4,   100.000")
     with pytest.raises(
         CaseError,
-        match=r"edited\.raw:19 generator at bus 3 '2': remote "
-        r"voltage regulation of bus 4",
+        match=r"edited\.raw:19 generator at bus 3 '2': IREG 4 differs from bus 3's first "
+        r"generator's",
     ):
         load_psse(path)
 
