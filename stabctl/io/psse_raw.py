@@ -123,20 +123,45 @@ _SECTIONS[34] = (
     + _SECTIONS[32][6:]
     + ("induction machine", "substation")
 )
+_SECTIONS[35] = _SECTIONS[34]
+_SECTIONS[36] = (
+    (
+        "system-wide data",
+        "bus",
+        "load",
+        "fixed shunt",
+        "voltage droop control",
+        "generator",
+        "switching device rating set",
+        "branch",
+        "system switching device",
+        "transformer",
+    )
+    + _SECTIONS[32][6:]
+    + ("induction machine", "load type", "interface", "interface element", "substation")
+)
 
 _SKIPPED = {
-    "system-wide data",
     "area",
     "zone",
     "inter-area transfer",
     "owner",
     "substation",
     "impedance correction table",
+    "switching device rating set",
+    "load type",
+    "interface",
+    "interface element",
 }
+#: first words of the system-wide data records (v34: GENERAL to RATING; v36 adds SWDRATNAM)
+_SYSTEM_WIDE = ("GENERAL", "GAUSS", "NEWTON", "ADJUST", "TYSL", "SOLVER", "RATING", "SWDRATNAM")
 _IDE_ISOLATED = 4
 #: largest magnitude of a RAW number (bus numbers, MW, kV, pu alike are far below)
 _LARGEST = 1e12
 _TOKEN = re.compile(r"'[^']*'?|/|,|[^,\s'/]+")
+#: v35 and later: character data in single or double quotes (PSS/E 35 writes the names of
+#: dc lines, FACTS devices and the rating sets of the system-wide data in double quotes)
+_TOKEN_35 = re.compile(r"'[^']*'?|\"[^\"]*\"?|/|,|[^,\s'\"/]+")
 
 
 @dataclass(frozen=True)
@@ -238,13 +263,14 @@ class RawData:
 # --------------------------------------------------------------------------------------
 
 
-def split_fields(text: str) -> list[str]:
+def split_fields(text: str, double_quotes: bool = False) -> list[str]:
     """Fields of one RAW data line (POM "Power Flow Raw Data File Contents"): separated by
     commas or blanks, ``'...'`` strings kept whole (quotes removed, blanks inside kept),
     a ``/`` outside quotes starts a comment; two commas in a row give an empty field (the
-    PSS/E default value)."""
+    PSS/E default value). ``double_quotes`` (RAW v35 and later) also keeps ``"..."``
+    strings whole."""
     fields, expect_value = [], True
-    for tok in _TOKEN.findall(text):
+    for tok in (_TOKEN_35 if double_quotes else _TOKEN).findall(text):
         if tok == "/":
             break
         if tok == ",":
@@ -252,7 +278,8 @@ def split_fields(text: str) -> list[str]:
                 fields.append("")
             expect_value = True
         else:
-            fields.append(tok[1:].removesuffix("'") if tok.startswith("'") else tok)
+            quoted = tok[0] in "'\""
+            fields.append(tok[1:].removesuffix(tok[0]) if quoted else tok)
             expect_value = False
     return fields
 
@@ -305,17 +332,23 @@ class _Rec:
         raise CaseError(f"{self.file}:{self.line} {self.section} record: {what}")
 
 
-def _header(lines: list[str], path: Path) -> tuple[float, int, float]:
-    """(SBASE, version, BASFRQ) from the case identification record."""
-    if len(lines) < 3:
-        raise CaseError(f"{path}:1 case identification: a RAW file starts with three lines")
-    rec = _Rec(path.name, 1, [split_fields(lines[0])], "case identification")
+def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
+    """(SBASE, version, BASFRQ, index of its line) from the case identification record:
+    IC, SBASE, REV, XFRRAT, NXFRAT, BASFRQ (the same six fields in v32-v36), after the
+    ``@!`` column-heading lines PSS/E 35 and later write above it."""
+    first = next((i for i, t in enumerate(lines) if not t.lstrip().startswith("@!")), len(lines))
+    if len(lines) < first + 3:
+        raise CaseError(
+            f"{path}:{first + 1} case identification: a RAW file starts with three lines "
+            "(after its '@!' column headings)"
+        )
+    rec = _Rec(path.name, first + 1, [split_fields(lines[first])], "case identification")
     sbase, rev, freq = rec.num(0, 1), rec.int(0, 2, 33), rec.num(0, 5, 60.0)
     if rev not in _SECTIONS:
-        rec.fail(f"RAW version {rev} is not supported (32, 33 or 34)")
+        rec.fail(f"RAW version {rev} is not supported (32, 33, 34, 35 or 36)")
     if sbase <= 0 or freq <= 0:
         rec.fail(f"SBASE {sbase:g} MVA and BASFRQ {freq:g} Hz must be > 0")
-    return sbase, rev, freq
+    return sbase, rev, freq, first
 
 
 def _record_lines(sec: str, first: list[str], rec_file: str, lineno: int) -> int:
@@ -326,33 +359,43 @@ def _record_lines(sec: str, first: list[str], rec_file: str, lineno: int) -> int
     return {"two-terminal dc line": 3, "vsc dc line": 3}.get(sec, 1)
 
 
-#: Fields per record line of the sections stabctl reads: (fewest, most) by version
-#: group (32/33, 34). The fewest are the fields up to the last one the reader uses (a
-#: shorter line would silently take PSS/E defaults for data that are in every file
-#: PSS/E writes); the most are the POM record layouts (with ownership data), so that a
-#: record of another section is not read as one of this section.
-_FIELDS = {
-    "bus": ((9, 13), (9, 13)),
-    "load": ((11, 15), (11, 20)),
-    "fixed shunt": ((5, 5), (5, 5)),
-    "generator": ((15, 28), (16, 30)),
-    "branch": ((14, 24), (24, 34)),
-    "switched shunt": ((10, 26), (11, 36)),
+#: Fields per record line of the sections stabctl reads: (fewest, most), keyed by the
+#: first version of each layout (it holds until the next key). The fewest are the fields
+#: up to the last one the reader uses (a shorter line would silently take PSS/E defaults
+#: for data that are in every file PSS/E writes); the most are the POM record layouts
+#: (with ownership data), so that a record of another section is not read as one of this
+#: section. v35: the switched shunt gains its ID (field 2); v36: a NAME at the end of the
+#: fixed shunt, DROOPNAME and NAME at the end of the generator, a NAME after the
+#: switched shunt's BINIT (the column headings PSS/E 36 writes).
+_FIELDS: dict[str, dict[int, tuple[int, int]]] = {
+    "bus": {32: (9, 13)},
+    "load": {32: (11, 15), 34: (11, 20)},
+    "fixed shunt": {32: (5, 5), 36: (5, 6)},
+    "generator": {32: (15, 28), 34: (16, 30), 36: (16, 32)},
+    "branch": {32: (14, 24), 34: (24, 34)},
+    "switched shunt": {32: (10, 26), 34: (11, 36), 35: (12, 36), 36: (12, 37)},
 }
 #: transformer record lines (line 1, 2, 3, 4) of a two-winding transformer: (fewest, most)
-_XFMR_FIELDS = (((12, 23), (2, 3), (3, 18), (2, 2)), ((12, 24), (2, 3), (3, 28), (2, 2)))
+_XFMR_FIELDS = {
+    32: ((12, 23), (2, 3), (3, 18), (2, 2)),
+    34: ((12, 24), (2, 3), (3, 28), (2, 2)),
+}
 #: record lines (1 to 5) of a three-winding transformer: (fewest, most)
-_XFMR3_FIELDS = tuple((two[0], (11, 11), two[2], two[2], two[2]) for two in _XFMR_FIELDS)
+_XFMR3_FIELDS = {v: (two[0], (11, 11), two[2], two[2], two[2]) for v, two in _XFMR_FIELDS.items()}
+
+
+def _layout(table: dict, version: int):
+    """The entry of ``table`` (keyed by the first version of a layout) for ``version``."""
+    return table[max(v for v in table if v <= version)]
 
 
 def _check_fields(rec: _Rec, version: int) -> None:
     """CaseError naming file:line when a record line has fewer or more fields than its
     section's layout (a cut or merged line, or a record of another section)."""
-    group = 1 if version >= 34 else 0
     if rec.section in _FIELDS:
-        limits: Sequence[tuple[int, int]] = [_FIELDS[rec.section][group]]
+        limits: Sequence[tuple[int, int]] = [_layout(_FIELDS[rec.section], version)]
     elif rec.section == "transformer":
-        limits = (_XFMR_FIELDS if len(rec.lines) == 4 else _XFMR3_FIELDS)[group]
+        limits = _layout(_XFMR_FIELDS if len(rec.lines) == 4 else _XFMR3_FIELDS, version)
     else:
         return
     for row, ((lo, hi), vals) in enumerate(zip(limits, rec.lines)):
@@ -366,24 +409,25 @@ def _check_fields(rec: _Rec, version: int) -> None:
             )
 
 
-def _records(lines: list[str], path: Path, version: int):
-    """Yield records (``_Rec``, with ``section``) of the data sections, in file order.
+def _records(lines: list[str], path: Path, version: int, start: int):
+    """Yield records (``_Rec``, with ``section``) of the data sections, in file order,
+    from ``lines[start]`` on (the line after the two title lines).
 
     A record whose first field is ``0`` ends a section, ``Q`` ends the data wherever a
     record may start (PSS/E POM "Power Flow Raw Data File Contents": the sections not yet
     read are empty, e.g. a RAW ending with ``Q`` right after the transformer data), ``@!``
-    lines (v34 column headings) and blank lines are skipped. A file without ``Q`` must
-    end after the last section's ``0`` record: a file cut short is refused (CaseError
-    naming file:line), never read as a smaller case. Each record line must have its
-    section's field count (:data:`_FIELDS`).
+    lines (v34 and later: column headings) and blank lines are skipped. A file without
+    ``Q`` must end after the last section's ``0`` record: a file cut short is refused
+    (CaseError naming file:line), never read as a smaller case. Each record line must have
+    its section's field count (:data:`_FIELDS`).
     """
     sections = _SECTIONS[version]
-    k, pending, need, last = 0, None, 0, 3
-    for lineno, text in enumerate(lines[3:], start=4):
+    k, pending, need, last = 0, None, 0, start
+    for lineno, text in enumerate(lines[start:], start=start + 1):
         if not text.strip() or text.lstrip().startswith("@!"):
             continue
         last = lineno
-        fields = split_fields(text)
+        fields = split_fields(text, double_quotes=version >= 35)
         if pending is not None:
             pending.lines.append(fields)
             if len(pending.lines) == need:
@@ -503,13 +547,30 @@ def _bus(b: _Builder, rec: _Rec):
     ]
 
 
+def _system_wide(b: _Builder, rec: _Rec):
+    """System-wide data (v34 and later): solution parameters (GENERAL, GAUSS, NEWTON,
+    ADJUST, TYSL, SOLVER) and rating-set names (RATING; v36 SWDRATNAM). They do not change
+    the case (stabctl's power flow has its own settings): each record is checked to start
+    with its keyword, then skipped."""
+    key = rec.text(0, 0, "")
+    if not key[:1].isalpha():
+        rec.fail(
+            f"'{key}' where a record starts with its keyword ({', '.join(_SYSTEM_WIDE)}): "
+            "the '0 / END OF SYSTEM-WIDE DATA' record is missing"
+        )
+
+
 def _load(b: _Builder, rec: _Rec):
-    """Load: I, ID, STATUS, AREA, ZONE, PL, QL, IP, IQ, YP, YQ (POM Load Data)."""
+    """Load: I, ID, STATUS, AREA, ZONE, PL, QL, IP, IQ, YP, YQ, [OWNER, SCALE, INTRPT,
+    DGENP, DGENQ, DGENM (v34), LOADTYPE (v35), NAME (v36)] (POM Load Data)."""
     num = rec.int(0, 0)
     b.once(rec, (num, rec.text(0, 1)), f"load at bus {num} '{rec.text(0, 1)}'")
     row = b.bus_row(rec, num, "load")
     if row is None or rec.int(0, 2, 1) == 0:
         return
+    if b.version >= 34 and rec.int(0, 16, 0) == 1 and (rec.num(0, 14, 0.0) or rec.num(0, 15, 0.0)):
+        what = f"load at bus {num} '{rec.text(0, 1)}'"
+        return b.skip(rec, f"{what}: distributed generation in service (DGENM 1, DGENP, DGENQ)")
     pl, ql, ip, iq, yp, yq = (rec.num(0, k, 0.0) for k in range(5, 11))
     v0 = b.v0(num)
     b.load_src.setdefault(num, rec)
@@ -734,17 +795,22 @@ def _impedance(b: _Builder, rec: _Rec, at: tuple, kv: float, what: str) -> compl
 
 
 def _switched_shunt(b: _Builder, rec: _Rec):
-    """Switched shunt at its initial susceptance: I, MODSW, ADJM, STAT, VSWHI, VSWLO,
-    SWREM, [NREG (v34)], RMPCT, 'RMIDNT', BINIT (POM Switched Shunt Data); v32/v33 have
-    one per bus."""
+    """Switched shunt at its initial susceptance: I, [ID (v35)], MODSW, ADJM, STAT, VSWHI,
+    VSWLO, SWREM, [NREG (v34)], RMPCT, 'RMIDNT', BINIT (POM Switched Shunt Data); v32/v33
+    have one per bus, v35 and later one per bus and ID."""
+    num = rec.int(0, 0)
     if b.version < 34:
-        b.once(rec, (rec.int(0, 0),), f"switched shunt at bus {rec.int(0, 0)}")
-    row = b.bus_row(rec, rec.int(0, 0), "switched shunt")
-    if row is not None and rec.int(0, 3, 1) != 0:
-        row[8] += rec.num(0, 10 if b.version >= 34 else 9) / b.base
+        b.once(rec, (num,), f"switched shunt at bus {num}")
+    elif b.version >= 35:
+        b.once(rec, (num, rec.text(0, 1)), f"switched shunt at bus {num} '{rec.text(0, 1)}'")
+    row = b.bus_row(rec, num, "switched shunt")
+    o = 1 if b.version >= 35 else 0  # v35 inserts ID after I
+    if row is not None and rec.int(0, 3 + o, 1) != 0:
+        row[8] += rec.num(0, (10 if b.version >= 34 else 9) + o) / b.base
 
 
 _HANDLERS = {
+    "system-wide data": _system_wide,
     "bus": _bus,
     "load": _load,
     "fixed shunt": _fixed_shunt,
@@ -851,11 +917,11 @@ def read_raw(
         lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
-    base, version, freq = _header(lines, path)
+    base, version, freq, first = _header(lines, path)
     b = _Builder(version, base, loads, net=net)
-    for rec in _records(lines, path, version):
+    for rec in _records(lines, path, version, first + 3):
         _dispatch(b, rec)
-    return _finish(b, path, lines, version, freq)
+    return _finish(b, path, lines[first + 1 : first + 3], version, freq)
 
 
 def _dispatch(b: _Builder, rec: _Rec):
@@ -869,7 +935,7 @@ def _dispatch(b: _Builder, rec: _Rec):
         b.skip(rec, f"{rec.section} record")
 
 
-def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawData:
+def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawData:
     if not b.buses:
         raise CaseError(f"{path.name}: no bus data")
     _demote_idle_pv(b)
@@ -883,7 +949,7 @@ def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawDat
     line = np.array([row + [0.0] * (width - len(row)) for row in b.branches], dtype=float).reshape(
         -1, width
     )
-    title = " / ".join(t.strip() for t in lines[1:3] if t.strip())
+    title = " / ".join(t.strip() for t in titles if t.strip())
     return RawData(
         name=path.stem,
         title=title,
