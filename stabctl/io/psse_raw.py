@@ -278,7 +278,7 @@ def split_fields(text: str, double_quotes: bool = False) -> list[str]:
                 fields.append("")
             expect_value = True
         else:
-            quoted = tok[0] in "'\""
+            quoted = tok[0] == "'" or (double_quotes and tok[0] == '"')
             fields.append(tok[1:].removesuffix(tok[0]) if quoted else tok)
             expect_value = False
     return fields
