@@ -1,10 +1,23 @@
-"""PSS/E RAW power-flow data (versions 32, 33, 34) as stabctl's PST tables.
+"""PSS/E RAW power-flow data (versions 32 to 36) as stabctl's PST tables.
 
 Source of the record layouts: PSS/E Program Operation Manual (POM), chapter "Power Flow
 Raw Data File Contents" of versions 32, 33 and 34 (sections "Case Identification Data",
 "Bus Data", "Load Data", "Fixed Shunt Data", "Generator Data", "Non-Transformer Branch
-Data", "Transformer Data", "Switched Shunt Data"), and MATPOWER's ``psse_convert_xfmr``
-for the transformer base conversions.
+Data", "Transformer Data", "Switched Shunt Data"); for versions 35 and 36 the column
+headings (``@!`` lines) PSS/E 35.1 and 36.1 write above each section of their RAW
+exports; MATPOWER's ``psse_convert_xfmr`` for the transformer base conversions.
+
+Versions: v34 adds the system-wide data (before the buses), the system switching devices
+(after the branches), NREG in generators and switched shunts, a NAME and 12 ratings in
+branches and transformer windings, and substations. v35 keeps v34's sections and field
+orders except the switched shunt, which gains its ID (I, ID, MODSW, ...: several per
+bus), and the load's LOADTYPE at the end; ``@!`` lines may precede the case
+identification; strings may be in double quotes. v36 adds the sections voltage droop
+control (after the fixed shunts), switching device rating sets (after the generators),
+load types, interfaces and interface elements (before the substations), NAME fields at
+the end of loads, fixed shunts and generators (after WMOD, WPF, DROOPNAME) and after the
+switched shunt's BINIT. The case identification is IC, SBASE, REV, XFRRAT, NXFRAT,
+BASFRQ in every version.
 
 Read (everything in per unit on the system base ``SBASE`` after conversion):
 
@@ -56,12 +69,17 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   RAW's. The magnetizing admittance (CM 1) is at the winding-1 bus, as for two windings;
 * switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt.
 
-Skipped without a word: area, zone, owner, inter-area transfer, substation and system
-switching device data (v34 breakers: none is accepted either, see below), v34 system-wide
-data. Unsupported, reported as ``file:line record``: dc lines, FACTS, GNE, induction
-machines, multi-section lines, v34 system switching devices, generators with a step-up
-transformer in the record (RT, XT) or remote voltage regulation (IREG), and the
-transformer features above.
+Skipped without a word: area, zone, owner, inter-area transfer and substation data,
+v36 switching device rating sets, load types, interfaces and interface elements (names,
+ratings and monitoring definitions), and the system-wide data (v34 and later: solution
+settings GENERAL, GAUSS, NEWTON, ADJUST, TYSL, SOLVER and rating-set names RATING,
+SWDRATNAM, which do not change the case; each record must start with its keyword, so a
+file without the ``0 /`` record that ends them is refused rather than read with its
+buses taken for settings). Unsupported, reported as ``file:line record``: dc lines, FACTS,
+GNE, induction machines, multi-section lines, system switching devices (v34 and later),
+v36 voltage droop controls, loads with distributed generation in service (v34 and later:
+DGENM 1 with DGENP or DGENQ not 0), generators with a step-up transformer in the record
+(RT, XT) or remote voltage regulation (IREG), and the transformer features above.
 
 Bus numbers stay as in the RAW file. Branch rows: lines in file order, then transformers
 (a three-winding one as its windings' branches, winding 1 first); ``--circuit K`` of
@@ -216,7 +234,7 @@ class RawData:
 
     Attributes:
         name: case name (file stem); title: the two title lines joined by " / ".
-        version: RAW version (32, 33, 34); base_mva: SBASE (MVA); freq_hz: BASFRQ (Hz).
+        version: RAW version (32 to 36); base_mva: SBASE (MVA); freq_hz: BASFRQ (Hz).
         bus: PST ``bus`` matrix, shape (n_bus, 15) (:class:`stabctl.case.BusTable`).
         line: PST ``line`` matrix, shape (n_branch, 10), or (n_branch, 14) when a branch
             has line-end shunts (:class:`stabctl.case.BranchTable` columns 11-14).
@@ -886,7 +904,7 @@ def read_raw(
     loads: str = "impedance",
     net: Callable[[int, str], str | None] | None = None,
 ) -> RawData:
-    """Read a PSS/E RAW file (version 32, 33 or 34) into PST matrices.
+    """Read a PSS/E RAW file (version 32, 33, 34, 35 or 36) into PST matrices.
 
     Args:
         path: the ``.raw`` file.
@@ -908,7 +926,8 @@ def read_raw(
             naming ``file:line`` and the record; no swing bus; a swing bus whose every
             generator is netted.
 
-    Source: PSS/E POM v32-v34 "Power Flow Raw Data File Contents" (see module doc).
+    Source: PSS/E POM v32-v34 "Power Flow Raw Data File Contents"; v35 and v36: PSS/E's
+    own column headings in its RAW exports (see module doc).
     """
     if loads not in ("raw", "impedance"):
         raise CaseError(f"loads must be 'raw' or 'impedance', got {loads!r}")
