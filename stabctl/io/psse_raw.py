@@ -69,17 +69,19 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   RAW's. The magnetizing admittance (CM 1) is at the winding-1 bus, as for two windings;
 * switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt.
 
-Skipped without a word: area, zone, owner, inter-area transfer and substation data,
-v36 switching device rating sets, load types, interfaces and interface elements (names,
-ratings and monitoring definitions), and the system-wide data (v34 and later: solution
-settings GENERAL, GAUSS, NEWTON, ADJUST, TYSL, SOLVER and rating-set names RATING,
-SWDRATNAM, which do not change the case; each record must start with its keyword, so a
-file without the ``0 /`` record that ends them is refused rather than read with its
-buses taken for settings). Unsupported, reported as ``file:line record``: dc lines, FACTS,
-GNE, induction machines, multi-section lines, system switching devices (v34 and later),
-v36 voltage droop controls, loads with distributed generation in service (v34 and later:
-DGENM 1 with DGENP or DGENQ not 0), generators with a step-up transformer in the record
-(RT, XT) or remote voltage regulation (IREG), and the transformer features above.
+Skipped without a word: area, zone, owner and inter-area transfer data, substations
+without node-breaker data, v36 switching device rating sets, load types, interfaces and
+interface elements (names, ratings and monitoring definitions), and the system-wide data
+(v34 and later: solution settings GENERAL, GAUSS, NEWTON, ADJUST, TYSL, SOLVER and
+rating-set names RATING, SWDRATNAM, which do not change the case; each record must start
+with its keyword, so a file without the ``0 /`` record that ends them is refused rather
+than read with its buses taken for settings). Unsupported, reported as
+``file:line record``: dc lines, FACTS, GNE, induction machines, multi-section lines, system
+switching devices and substations with node-breaker data (nodes, switching devices,
+terminals; v34 and later), v36 voltage droop controls, loads with distributed generation
+in service (v34 and later: DGENM 1 with DGENP or DGENQ not 0), generators with a step-up
+transformer in the record (RT, XT) or remote voltage regulation (IREG), and the
+transformer features above.
 
 Bus numbers stay as in the RAW file. Branch rows: lines in file order, then transformers
 (a three-winding one as its windings' branches, winding 1 first); ``--circuit K`` of
@@ -164,7 +166,6 @@ _SKIPPED = {
     "zone",
     "inter-area transfer",
     "owner",
-    "substation",
     "impedance correction table",
     "switching device rating set",
     "load type",
@@ -370,11 +371,25 @@ def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
 
 
 def _record_lines(sec: str, first: list[str], rec_file: str, lineno: int) -> int:
-    """Lines of a record that starts with ``first`` in section ``sec``."""
+    """Lines of a record that starts with ``first`` in section ``sec``; 0 for a substation
+    (v34 and later), whose record is followed by its node, switching device and terminal
+    data, each ending with a ``0`` record (the record holds them all)."""
     if sec == "transformer":
         k = _Rec(rec_file, lineno, [first], sec).int(0, 2, 0)
         return 5 if k != 0 else 4
-    return {"two-terminal dc line": 3, "vsc dc line": 3}.get(sec, 1)
+    return {"two-terminal dc line": 3, "vsc dc line": 3, "substation": 0}.get(sec, 1)
+
+
+#: data blocks after a substation record (node, switching device, terminal data), each
+#: ending with a ``0`` record
+_SUBSTATION_BLOCKS = 3
+
+
+def _complete(rec: _Rec, need: int) -> bool:
+    """True when ``rec`` has its ``need`` lines (0: its substation blocks' ``0`` records)."""
+    if need:
+        return len(rec.lines) == need
+    return sum(line[:1] == ["0"] for line in rec.lines[1:]) == _SUBSTATION_BLOCKS
 
 
 #: Fields per record line of the sections stabctl reads: (fewest, most), keyed by the
@@ -448,7 +463,7 @@ def _records(lines: list[str], path: Path, version: int, start: int):
         fields = split_fields(text, double_quotes=version >= 35)
         if pending is not None:
             pending.lines.append(fields)
-            if len(pending.lines) == need:
+            if _complete(pending, need):
                 _check_fields(pending, version)
                 yield pending
                 pending = None
@@ -466,12 +481,17 @@ def _records(lines: list[str], path: Path, version: int, start: int):
             continue
         pending = _Rec(path.name, lineno, [fields], sections[k])
         need = _record_lines(sections[k], fields, path.name, lineno)
-        if need == 1:
+        if _complete(pending, need):
             _check_fields(pending, version)
             yield pending
             pending = None
     if pending is not None:
-        pending.fail(f"file ends inside the record ({len(pending.lines)} of {need} lines)")
+        pending.fail(
+            f"file ends inside the record ({len(pending.lines)} of {need} lines)"
+            if need
+            else "file ends inside the record (its node, switching device and terminal "
+            "data must each end with a '0 /' record)"
+        )
     if k < len(sections):
         raise CaseError(
             f"{path.name}:{last}: the file ends in the {sections[k]} data, "
@@ -575,6 +595,19 @@ def _system_wide(b: _Builder, rec: _Rec):
         rec.fail(
             f"'{key}' where a record starts with its keyword ({', '.join(_SYSTEM_WIDE)}): "
             "the '0 / END OF SYSTEM-WIDE DATA' record is missing"
+        )
+
+
+def _substation(b: _Builder, rec: _Rec):
+    """Substation (v34 and later): I, 'NAME', LATI, LONG, SRG, then its node, switching
+    device and terminal data (node-breaker topology). A substation without them is
+    skipped; one with them is unsupported (stabctl reads the bus-branch records only)."""
+    data = [line for line in rec.lines[1:] if line and line[:1] != ["0"]]
+    if data:
+        what = f"substation {rec.int(0, 0)} '{rec.text(0, 1, '')}'"
+        b.skip(
+            rec,
+            f"{what}: node-breaker data ({len(data)} node, switching device and terminal records)",
         )
 
 
@@ -836,6 +869,7 @@ _HANDLERS = {
     "branch": _branch,
     "transformer": _transformer,
     "switched shunt": _switched_shunt,
+    "substation": _substation,
 }
 
 

@@ -178,3 +178,37 @@ def test_v36_voltage_droop_control_is_unsupported(tmp_path):
     )
     raw = read_raw(_write(tmp_path, text))
     assert [str(u) for u in raw.unsupported] == ["v35.raw:34 voltage droop control record"]
+
+
+_SUBSTATIONS = """0 / END OF INDUCTION MACHINE DATA, BEGIN SUBSTATION DATA
+    1,'STATION 1   ', 0.0, 0.0, 0.1
+  / BEGIN SUBSTATION NODE DATA
+    1,'NB1', 1, 1, 1.0, 0.0
+    2,'NL1', 1, 1, 1.0, 0.0
+0 / END OF SUBSTATION NODE DATA, BEGIN SUBSTATION SWITCHING DEVICE DATA
+    1, 2,'1 ','SW-1', 2, 1, 1, 0.0001, 0.0, 0.0, 0.0
+0 / END OF SUBSTATION SWITCHING DEVICE DATA, BEGIN SUBSTATION TERMINAL DATA
+    1, 2,'B', 2,'1 '
+0 / END OF SUBSTATION TERMINAL DATA
+    3,'STATION 3   ', 0.0, 0.0, 0.1
+0 / END OF SUBSTATION NODE DATA, BEGIN SUBSTATION SWITCHING DEVICE DATA
+0 / END OF SUBSTATION SWITCHING DEVICE DATA, BEGIN SUBSTATION TERMINAL DATA
+0 / END OF SUBSTATION TERMINAL DATA
+"""
+
+
+def test_node_breaker_substations_are_unsupported_and_the_rest_is_read(tmp_path):
+    # a substation record is followed by its node, switching device and terminal data,
+    # each ending with '0 /' (the case's last section: read whole, not as data after it)
+    text = V35.read_text().replace(
+        "0 / END OF INDUCTION MACHINE DATA, BEGIN SUBSTATION DATA\n", _SUBSTATIONS
+    )
+    raw = read_raw(_write(tmp_path, text))
+    assert [str(u) for u in raw.unsupported] == [
+        "v35.raw:100 substation 1 'STATION 1': node-breaker data (4 node, switching "
+        "device and terminal records)"
+    ]
+    np.testing.assert_array_equal(raw.bus, read_raw(V33).bus)
+    cut = text[: text.index("0 / END OF SUBSTATION TERMINAL DATA\n    3,")]
+    with pytest.raises(CaseError, match=r"v35\.raw:100 substation record: file ends inside"):
+        read_raw(_write(tmp_path, cut))
