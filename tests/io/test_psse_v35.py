@@ -4,8 +4,8 @@ malformed v35/v36 files are refused naming file:line.
 
 Layouts: the column headings (``@!`` lines) PSS/E 35 and 36 write above each section
 (also in the five-bus files here, converted by hand from ``five_bus_v33.raw``). The IEEE
-14-bus pair is public (tests/data/psse/NOTICE): a v33 file and its v35 form, whose bus
-records carry the IEEE solution."""
+14-bus and 24-bus pairs are public (tests/data/psse/NOTICE): v33 files and their v35
+forms; the 14-bus bus records carry the IEEE solution."""
 
 from pathlib import Path
 
@@ -69,6 +69,15 @@ def test_generator_lines_are_named_by_their_own_file_line():
     # v36 adds the voltage droop control section before the generators
     assert [g.source.line for g in read_raw(V35).generators] == [32, 33, 34]
     assert [g.source.line for g in read_raw(V36).generators] == [36, 37, 38]
+
+
+def test_ieee24_v35_with_switched_shunts_reads_as_its_v33():
+    # v35 switched shunts carry an ID after the bus number (1 '1' and 6 '1': BINIT 120,
+    # 100 Mvar)
+    new, old = read_raw(DATA / "ieee24_v35.raw"), read_raw(DATA / "ieee24_v33.raw")
+    _same_raw(new, old)
+    bus = {int(r[0]): r for r in new.bus}
+    np.testing.assert_allclose([bus[1][8], bus[6][8]], [1.2, 1.0], rtol=0, atol=1e-15)
 
 
 def test_ieee14_v35_reads_as_its_v33_and_solves_to_the_raws_own_solution():
