@@ -221,3 +221,33 @@ def test_node_breaker_substations_are_unsupported_and_the_rest_is_read(tmp_path)
     cut = text[: text.index("0 / END OF SUBSTATION TERMINAL DATA\n    3,")]
     with pytest.raises(CaseError, match=r"v35\.raw:100 substation record: file ends inside"):
         read_raw(_write(tmp_path, cut))
+
+
+#: a three-winding transformer 1-3-4 in the v33 layout and in the v35 one (12 ratings per
+#: winding, NOD, CNXA; VECGRP and ZCOD on line 1), the same data
+_THREE_WINDING_V33 = (
+    "    1,     3,     4,'T ',1,2,1, 0.0, 0.0,2,'T3          ',1,   1,1.0000\n"
+    " 0.002, 0.10, 200.0, 0.004, 0.05, 50.0, 0.003, 0.08, 80.0, 0.99, -3.0\n"
+    "1.02, 0.0, 5.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0, 0.0\n"
+    "0.98, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0, 0.0\n"
+    "1.00, 0.0, -2.0, 0.0, 0.0, 0.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0, 0.0\n"
+)
+_RATINGS = ", 0.0" * 12
+_THREE_WINDING_V35 = (
+    "    1,     3,     4,'T ',1,2,1, 0.0, 0.0,2,'T3          ',1,   1,1.0000,   0,1.0000,"
+    "   0,1.0000,   0,1.0000,'YN0yn0d1    ', 0\n"
+    " 0.002, 0.10, 200.0, 0.004, 0.05, 50.0, 0.003, 0.08, 80.0, 0.99, -3.0\n"
+    f"1.02, 0.0, 5.0{_RATINGS}, 0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0, 0.0\n"
+    f"0.98, 0.0, 0.0{_RATINGS}, 0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0, 0.0\n"
+    f"1.00, 0.0, -2.0{_RATINGS}, 0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0, 0.0\n"
+)
+
+
+def test_three_winding_transformer_reads_as_in_v33(tmp_path):
+    end = "0 / END OF TRANSFORMER DATA"
+    old = read_raw(
+        _write(tmp_path, V33.read_text().replace(end, _THREE_WINDING_V33 + end), "a.raw")
+    )
+    new = read_raw(_write(tmp_path, V35.read_text().replace(end, _THREE_WINDING_V35 + end)))
+    _same_raw(new, old)
+    assert new.line.shape[0] == old.line.shape[0] == 7  # 2 lines, 2 transformers, 3 windings
