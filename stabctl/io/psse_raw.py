@@ -9,15 +9,15 @@ exports; MATPOWER's ``psse_convert_xfmr`` for the transformer base conversions.
 
 Versions: v34 adds the system-wide data (before the buses), the system switching devices
 (after the branches), NREG in generators and switched shunts, a NAME and 12 ratings in
-branches and transformer windings, and substations. v35 keeps v34's sections and field
-orders except the switched shunt, which gains its ID (I, ID, MODSW, ...: several per
-bus), and the load's LOADTYPE at the end; ``@!`` lines may precede the case
-identification; strings may be in double quotes. v36 adds the sections voltage droop
-control (after the fixed shunts), switching device rating sets (after the generators),
-load types, interfaces and interface elements (before the substations), NAME fields at
-the end of loads, fixed shunts and generators (after WMOD, WPF, DROOPNAME) and after the
-switched shunt's BINIT. The case identification is IC, SBASE, REV, XFRRAT, NXFRAT,
-BASFRQ in every version.
+branches and transformer windings, and substations. v35 keeps v34's sections; of the
+records stabctl reads only the switched shunt changes, which gains its ID (I, ID, MODSW,
+...: several per bus), and the load, which gains LOADTYPE at its end; ``@!`` lines may
+precede the case identification; strings may be in double quotes. v36 adds the sections
+voltage droop control (after the fixed shunts), switching device rating sets (after the
+generators), load types, interfaces and interface elements (before the substations),
+NAME fields at the end of loads, fixed shunts and generators (after WMOD, WPF,
+DROOPNAME) and after the switched shunt's BINIT. The case identification is IC, SBASE,
+REV, XFRRAT, NXFRAT, BASFRQ in every version.
 
 Read (everything in per unit on the system base ``SBASE`` after conversion):
 
