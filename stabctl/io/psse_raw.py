@@ -1,23 +1,26 @@
 """PSS/E RAW power-flow data (versions 32 to 36) as stabctl's PST tables.
 
 Source of the record layouts: PSS/E Program Operation Manual (POM), chapter "Power Flow
-Raw Data File Contents" of versions 32, 33 and 34 (sections "Case Identification Data",
-"Bus Data", "Load Data", "Fixed Shunt Data", "Generator Data", "Non-Transformer Branch
-Data", "Transformer Data", "Switched Shunt Data"); for versions 35 and 36 the column
-headings (``@!`` lines) PSS/E 35.1 and 36.1 write above each section of their RAW
-exports; MATPOWER's ``psse_convert_xfmr`` for the transformer base conversions.
+Raw Data File Contents" of versions 32 and 33 (sections "Case Identification Data", "Bus
+Data", "Load Data", "Fixed Shunt Data", "Generator Data", "Non-Transformer Branch Data",
+"Transformer Data", "Switched Shunt Data"); for versions 34, 35 and 36 the column
+headings (``@!`` lines) PSS/E writes above each section of its RAW exports (rawd34,
+rawd35, PSS/E Xplore 36.1); MATPOWER's ``psse_convert_xfmr`` for the transformer base
+conversions.
 
 Versions: v34 adds the system-wide data (before the buses), the system switching devices
-(after the branches), NREG in generators and switched shunts, a NAME and 12 ratings in
-branches and transformer windings, and substations. v35 keeps v34's sections; of the
-records stabctl reads only the switched shunt changes, which gains its ID (I, ID, MODSW,
-...: several per bus), and the load, which gains LOADTYPE at its end; ``@!`` lines may
-precede the case identification; strings may be in double quotes. v36 adds the sections
-voltage droop control (after the fixed shunts), switching device rating sets (after the
-generators), load types, interfaces and interface elements (before the substations),
-NAME fields at the end of loads, fixed shunts and generators (after WMOD, WPF,
-DROOPNAME) and after the switched shunt's BINIT. The case identification is IC, SBASE,
-REV, XFRRAT, NXFRAT, BASFRQ in every version.
+(after the branches), the substations (last), a NAME and 12 ratings in branches and
+transformer windings, DGENP, DGENQ, DGENM at the end of loads, NREG at the end of
+generators and switched shunts and NOD at the end of transformer windings. v35 keeps
+v34's sections and moves NREG after IREG (generators, which also gain BASLOD after PB)
+and after SWREG (switched shunts, which also gain their ID after I: several per bus, and
+a status per block), NOD after CONT (transformer windings); loads gain LOADTYPE at their
+end. From v34 on, ``@!`` lines may precede the case identification and strings may be
+in double quotes. v36 adds the sections voltage droop control (after the fixed
+shunts), switching device rating sets (after the generators), load types, interfaces and
+interface elements (before the substations), NAME fields at the end of loads, fixed
+shunts and generators (after WMOD, WPF, DROOPNAME) and after the switched shunt's BINIT.
+The case identification is IC, SBASE, REV, XFRRAT, NXFRAT, BASFRQ in every version.
 
 Read (everything in per unit on the system base ``SBASE`` after conversion):
 
@@ -178,9 +181,10 @@ _IDE_ISOLATED = 4
 #: largest magnitude of a RAW number (bus numbers, MW, kV, pu alike are far below)
 _LARGEST = 1e12
 _TOKEN = re.compile(r"'[^']*'?|/|,|[^,\s'/]+")
-#: v35 and later: character data in single or double quotes (PSS/E 35 writes the names of
-#: dc lines, FACTS devices and the rating sets of the system-wide data in double quotes)
-_TOKEN_35 = re.compile(r"'[^']*'?|\"[^\"]*\"?|/|,|[^,\s'\"/]+")
+#: v34 and later: character data in single or double quotes (rawd34 and later write the
+#: names of dc lines, FACTS devices and the rating sets of the system-wide data in double
+#: quotes)
+_TOKEN_34 = re.compile(r"'[^']*'?|\"[^\"]*\"?|/|,|[^,\s'\"/]+")
 
 
 @dataclass(frozen=True)
@@ -286,10 +290,10 @@ def split_fields(text: str, double_quotes: bool = False) -> list[str]:
     """Fields of one RAW data line (POM "Power Flow Raw Data File Contents"): separated by
     commas or blanks, ``'...'`` strings kept whole (quotes removed, blanks inside kept),
     a ``/`` outside quotes starts a comment; two commas in a row give an empty field (the
-    PSS/E default value). ``double_quotes`` (RAW v35 and later) also keeps ``"..."``
+    PSS/E default value). ``double_quotes`` (RAW v34 and later) also keeps ``"..."``
     strings whole."""
     fields, expect_value = [], True
-    for tok in (_TOKEN_35 if double_quotes else _TOKEN).findall(text):
+    for tok in (_TOKEN_34 if double_quotes else _TOKEN).findall(text):
         if tok == "/":
             break
         if tok == ",":
@@ -397,16 +401,18 @@ def _complete(rec: _Rec, need: int) -> bool:
 #: up to the last one the reader uses (a shorter line would silently take PSS/E defaults
 #: for data that are in every file PSS/E writes); the most are the POM record layouts
 #: (with ownership data), so that a record of another section is not read as one of this
-#: section. v35: the switched shunt gains its ID (field 2); v36: a NAME at the end of the
-#: fixed shunt, DROOPNAME and NAME at the end of the generator, a NAME after the
-#: switched shunt's BINIT (the column headings PSS/E 36 writes).
+#: section. v34: NREG at the end of generators and switched shunts (PSS/E's rawd34); v35:
+#: NREG moved after IREG (and BASLOD after PB) in generators, after SWREG in switched
+#: shunts, which also gain their ID (field 2) and a status per block; v36: a NAME at the
+#: end of the fixed shunt, DROOPNAME and NAME at the end of the generator, a NAME after
+#: the switched shunt's BINIT (the column headings PSS/E 36 writes).
 _FIELDS: dict[str, dict[int, tuple[int, int]]] = {
     "bus": {32: (9, 13)},
     "load": {32: (11, 15), 34: (11, 20)},
     "fixed shunt": {32: (5, 5), 36: (5, 6)},
-    "generator": {32: (15, 28), 34: (16, 30), 36: (16, 32)},
+    "generator": {32: (15, 28), 34: (15, 29), 35: (16, 30), 36: (16, 32)},
     "branch": {32: (14, 24), 34: (24, 34)},
-    "switched shunt": {32: (10, 26), 34: (11, 36), 35: (12, 36), 36: (12, 37)},
+    "switched shunt": {32: (10, 26), 34: (10, 27), 35: (12, 36), 36: (12, 37)},
 }
 #: transformer record lines (line 1, 2, 3, 4) of a two-winding transformer: (fewest, most)
 _XFMR_FIELDS = {
@@ -460,7 +466,7 @@ def _records(lines: list[str], path: Path, version: int, start: int):
         if not text.strip() or text.lstrip().startswith("@!"):
             continue
         last = lineno
-        fields = split_fields(text, double_quotes=version >= 35)
+        fields = split_fields(text, double_quotes=version >= 34)
         if pending is not None:
             pending.lines.append(fields)
             if _complete(pending, need):
@@ -645,13 +651,20 @@ def _fixed_shunt(b: _Builder, rec: _Rec):
         row[8] += rec.num(0, 4, 0.0) / b.base
 
 
+def _nreg_offset(version: int) -> int:
+    """Shift of the generator fields after IREG (MBASE, ZR, ZX, RT, XT, GTAP, STAT, RMPCT)
+    and of the switched shunt's after SWREG: v35 inserts NREG there (v34 writes it at
+    the end of the record, where stabctl does not read)."""
+    return 1 if version >= 35 else 0
+
+
 def _generator(b: _Builder, rec: _Rec):
-    """Generator: I, ID, PG, QG, QT, QB, VS, IREG, [NREG (v34)], MBASE, ZR, ZX, RT, XT,
+    """Generator: I, ID, PG, QG, QT, QB, VS, IREG, [NREG (v35)], MBASE, ZR, ZX, RT, XT,
     GTAP, STAT (POM Generator Data)."""
     num, gid = rec.int(0, 0), rec.text(0, 1)
     b.once(rec, (num, gid), f"generator at bus {num} '{gid}'")
     row = b.bus_row(rec, num, "generator")
-    o = 1 if b.version >= 34 else 0  # v34 inserts NREG after IREG
+    o = _nreg_offset(b.version)
     if row is not None and rec.int(0, 14 + o, 1) == 0:
         b.out_of_service.append((num, gid))
     if row is None or rec.int(0, 14 + o, 1) == 0:
@@ -740,8 +753,8 @@ def _transformer(b: _Builder, rec: _Rec):
     """Transformer (POM Transformer Data): line 1 I, J, K, CKT, CW, CZ, CM, MAG1, MAG2,
     NMETR, 'NAME', STAT; line 2 R1-2, X1-2, SBASE1-2 (three windings: then R2-3, X2-3,
     SBASE2-3, R3-1, X3-1, SBASE3-1, VMSTAR, ANSTAR); per winding a line WINDV, NOMV, ANG,
-    ..., TAB (field 14; v34: field 24, after 12 ratings and NODE) (two windings: line 4
-    WINDV2, NOMV2 only)."""
+    ..., TAB (field 14; v34: field 23, after 12 ratings; v35: field 24, NOD moved before
+    it) (two windings: line 4 WINDV2, NOMV2 only)."""
     i, j, k3, ckt = rec.int(0, 0), rec.int(0, 1), rec.int(0, 2, 0), rec.text(0, 3)
     what = f"transformer {i}-{j}" + (f"-{k3}" if k3 else "") + f" '{ckt}'"
     b.once(rec, (*sorted((i, j, k3)), ckt), what)
@@ -764,7 +777,7 @@ def _transformer(b: _Builder, rec: _Rec):
 def _modelled(b: _Builder, rec: _Rec, rows: tuple, what: str) -> bool:
     """False (the record reported unsupported) for an impedance correction table (TAB) on
     a winding line of ``rows`` or a magnetizing admittance given as losses (CM 2)."""
-    tab = 23 if b.version >= 34 else 13
+    tab = {32: 13, 33: 13, 34: 22}.get(b.version, 23)
     if any(rec.int(row, tab, 0) != 0 for row in rows):
         b.skip(rec, f"{what}: impedance correction table (TAB)")
         return False
@@ -847,8 +860,8 @@ def _impedance(b: _Builder, rec: _Rec, at: tuple, kv: float, what: str) -> compl
 
 def _switched_shunt(b: _Builder, rec: _Rec):
     """Switched shunt at its initial susceptance: I, [ID (v35)], MODSW, ADJM, STAT, VSWHI,
-    VSWLO, SWREM, [NREG (v34)], RMPCT, 'RMIDNT', BINIT (POM Switched Shunt Data); v32/v33
-    have one per bus, v35 and later one per bus and ID."""
+    VSWLO, SWREG, [NREG (v35; v34 writes it at the end)], RMPCT, 'RMIDNT', BINIT (POM
+    Switched Shunt Data); v32/v33 have one per bus, v35 and later one per bus and ID."""
     num = rec.int(0, 0)
     if b.version < 34:
         b.once(rec, (num,), f"switched shunt at bus {num}")
@@ -857,7 +870,7 @@ def _switched_shunt(b: _Builder, rec: _Rec):
     row = b.bus_row(rec, num, "switched shunt")
     o = 1 if b.version >= 35 else 0  # v35 inserts ID after I
     if row is not None and rec.int(0, 3 + o, 1) != 0:
-        row[8] += rec.num(0, (10 if b.version >= 34 else 9) + o) / b.base
+        row[8] += rec.num(0, 9 + o + _nreg_offset(b.version)) / b.base
 
 
 _HANDLERS = {

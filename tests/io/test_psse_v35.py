@@ -1,9 +1,11 @@
-"""PSS/E RAW versions 35 and 36: the same cases written in the v33 layout and in the v35 or
-v36 layout import as the same case (buses, branches, generators, power flow), and
-malformed v35/v36 files are refused naming file:line.
+"""PSS/E RAW versions 34, 35 and 36: the same cases written in the v33 layout and in the
+v34, v35 or v36 layout import as the same case (buses, branches, generators, power flow),
+and malformed v35/v36 files are refused naming file:line.
 
-Layouts: the column headings (``@!`` lines) PSS/E 35 and 36 write above each section
-(also in the five-bus files here, converted by hand from ``five_bus_v33.raw``). The IEEE
+Layouts: the column headings (``@!`` lines) PSS/E 34, 35 and 36 write above each section
+(the five-bus files here are ``five_bus_v33.raw`` converted by hand to them: v34 has
+NREG at the end of generators and switched shunts and NOD at the end of transformer
+windings, v35 moves them after IREG, SWREG and CONT). The IEEE
 14-bus and 24-bus pairs are public (tests/data/psse/NOTICE): v33 files and their v35
 forms; the 14-bus bus records carry the IEEE solution."""
 
@@ -20,7 +22,7 @@ from stabctl.io.psse_raw import read_raw, split_fields
 from stabctl.network.powerflow import solve_powerflow
 
 DATA = Path(__file__).parents[1] / "data" / "psse"
-V33, V35, V36 = (DATA / f"five_bus_v{v}.raw" for v in (33, 35, 36))
+V33, V34, V35, V36 = (DATA / f"five_bus_v{v}.raw" for v in (33, 34, 35, 36))
 DYR = DATA / "five_bus.dyr"
 IEEE14_V33, IEEE14_V35 = DATA / "ieee14_v33.raw", DATA / "ieee14_v35.raw"
 
@@ -44,7 +46,7 @@ def _write(tmp_path, text, name="v35.raw"):
 # ------------------------------------------------------------ the same case, new layout
 
 
-@pytest.mark.parametrize("path", [V35, V36], ids=["v35", "v36"])
+@pytest.mark.parametrize("path", [V34, V35, V36], ids=["v34", "v35", "v36"])
 def test_five_bus_reads_as_its_v33_original(path):
     for loads in ("raw", "impedance"):
         new, old = read_raw(path, loads=loads), read_raw(V33, loads=loads)
@@ -52,7 +54,7 @@ def test_five_bus_reads_as_its_v33_original(path):
     assert new.version == int(path.stem[-2:])
     # the title is the two lines after the case identification (not the '@!' heading)
     assert new.title.startswith("FIVE-BUS TEST CASE FOR THE PSS/E IMPORT / FIELDS AS IN")
-    # switched shunts at bus 4: '1' in service at BINIT = 30 Mvar, '2' (ST 0) out
+    # switched shunts at bus 4: BINIT = 30 Mvar (v35, v36: '1' in service, '2' (ST 0) out)
     assert new.bus[new.bus[:, 0] == 4][0, 8] == pytest.approx(0.30, abs=1e-15)
 
 
