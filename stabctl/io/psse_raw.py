@@ -405,13 +405,14 @@ def _complete(rec: _Rec, need: int) -> bool:
 #: NREG moved after IREG (and BASLOD after PB) in generators, after SWREG in switched
 #: shunts, which also gain their ID (field 2) and a status per block; v36: a NAME at the
 #: end of the fixed shunt, DROOPNAME and NAME at the end of the generator, a NAME after
-#: the switched shunt's BINIT (the column headings PSS/E 36 writes).
+#: the switched shunt's BINIT (the column headings PSS/E 36 writes), and one field more
+#: after the branch's STAT than its heading shows (PSS/E Xplore 36.1's branch records).
 _FIELDS: dict[str, dict[int, tuple[int, int]]] = {
     "bus": {32: (9, 13)},
     "load": {32: (11, 15), 34: (11, 20)},
     "fixed shunt": {32: (5, 5), 36: (5, 6)},
     "generator": {32: (15, 28), 34: (15, 29), 35: (16, 30), 36: (16, 32)},
-    "branch": {32: (14, 24), 34: (24, 34)},
+    "branch": {32: (14, 24), 34: (24, 34), 36: (24, 35)},
     "switched shunt": {32: (10, 26), 34: (10, 27), 35: (12, 36), 36: (12, 37)},
 }
 #: transformer record lines (line 1, 2, 3, 4) of a two-winding transformer: (fewest, most)
