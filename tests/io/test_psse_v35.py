@@ -253,3 +253,15 @@ def test_three_winding_transformer_reads_as_in_v33(tmp_path):
     new = read_raw(_write(tmp_path, V35.read_text().replace(end, _THREE_WINDING_V35 + end)))
     _same_raw(new, old)
     assert new.line.shape[0] == old.line.shape[0] == 7  # 2 lines, 2 transformers, 3 windings
+
+
+def test_v36_branch_with_the_field_after_stat_and_four_owners(tmp_path):
+    # PSS/E Xplore 36.1 writes one field more after STAT than its heading (35 with four
+    # owners); the fields read (R, X, B, GI..BJ, STAT) come before it
+    text = V36.read_text().replace(
+        " 0.00000,1,1, 10.00,   1,1.0000\n",
+        " 0.00000,1,0,1, 10.00,   1,0.5000,   2,0.2000,   3,0.2000,   4,0.1000\n",
+        1,
+    )
+    assert text != V36.read_text()
+    _same_raw(read_raw(_write(tmp_path, text)), read_raw(V33))
