@@ -302,7 +302,7 @@ def import_psse(
     static,
     as_json,
 ):
-    """Convert a PSS/E RAW file (v32-34) and optionally a DYR file to a stabctl case.
+    """Convert a PSS/E RAW file (v32-36) and optionally a DYR file to a stabctl case.
 
     The case (stabctl's JSON format) is usable as CASE by simulate, cct, eig and screen.
     Unsupported records are named as FILE:LINE RECORD with the reason; without

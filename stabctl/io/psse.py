@@ -63,7 +63,7 @@ def load_psse(
     conventions: str = "psse",
     unmodelled: str = "error",
 ) -> Case:
-    """Build a :class:`~stabctl.case.Case` from a PSS/E RAW (v32-34) and a DYR file.
+    """Build a :class:`~stabctl.case.Case` from a PSS/E RAW (v32-36) and a DYR file.
 
     Args:
         raw_path: the ``.raw`` power-flow file.

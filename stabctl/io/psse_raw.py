@@ -1,10 +1,26 @@
-"""PSS/E RAW power-flow data (versions 32, 33, 34) as stabctl's PST tables.
+"""PSS/E RAW power-flow data (versions 32 to 36) as stabctl's PST tables.
 
 Source of the record layouts: PSS/E Program Operation Manual (POM), chapter "Power Flow
-Raw Data File Contents" of versions 32, 33 and 34 (sections "Case Identification Data",
-"Bus Data", "Load Data", "Fixed Shunt Data", "Generator Data", "Non-Transformer Branch
-Data", "Transformer Data", "Switched Shunt Data"), and MATPOWER's ``psse_convert_xfmr``
-for the transformer base conversions.
+Raw Data File Contents" of versions 32 and 33 (sections "Case Identification Data", "Bus
+Data", "Load Data", "Fixed Shunt Data", "Generator Data", "Non-Transformer Branch Data",
+"Transformer Data", "Switched Shunt Data"); for versions 34, 35 and 36 the column
+headings (``@!`` lines) PSS/E writes above each section of its RAW exports (rawd34,
+rawd35, PSS/E Xplore 36.1); MATPOWER's ``psse_convert_xfmr`` for the transformer base
+conversions.
+
+Versions: v34 adds the system-wide data (before the buses), the system switching devices
+(after the branches), the substations (last), a NAME and 12 ratings in branches and
+transformer windings, DGENP, DGENQ, DGENM at the end of loads, NREG at the end of
+generators and switched shunts and NOD at the end of transformer windings. v35 keeps
+v34's sections and moves NREG after IREG (generators, which also gain BASLOD after PB)
+and after SWREG (switched shunts, which also gain their ID after I: several per bus, and
+a status per block), NOD after CONT (transformer windings); loads gain LOADTYPE at their
+end. From v34 on, ``@!`` lines may precede the case identification and strings may be
+in double quotes. v36 adds the sections voltage droop control (after the fixed
+shunts), switching device rating sets (after the generators), load types, interfaces and
+interface elements (before the substations), NAME fields at the end of loads, fixed
+shunts and generators (after WMOD, WPF, DROOPNAME) and after the switched shunt's BINIT.
+The case identification is IC, SBASE, REV, XFRRAT, NXFRAT, BASFRQ in every version.
 
 Read (everything in per unit on the system base ``SBASE`` after conversion):
 
@@ -61,10 +77,17 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   RAW's. The magnetizing admittance (CM 1) is at the winding-1 bus, as for two windings;
 * switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt.
 
-Skipped without a word: area, zone, owner, inter-area transfer, substation and system
-switching device data (v34 breakers: none is accepted either, see below), v34 system-wide
-data. Unsupported, reported as ``file:line record``: dc lines, FACTS, GNE, induction
-machines, multi-section lines, v34 system switching devices, generators with a step-up
+Skipped without a word: area, zone, owner and inter-area transfer data, substations
+without node-breaker data, v36 switching device rating sets, load types, interfaces and
+interface elements (names, ratings and monitoring definitions), and the system-wide data
+(v34 and later: solution settings GENERAL, GAUSS, NEWTON, ADJUST, TYSL, SOLVER and
+rating-set names RATING, SWDRATNAM, which do not change the case; each record must start
+with its keyword, so a file without the ``0 /`` record that ends them is refused rather
+than read with its buses taken for settings). Unsupported, reported as
+``file:line record``: dc lines, FACTS, GNE, induction machines, multi-section lines, system
+switching devices and substations with node-breaker data (nodes, switching devices,
+terminals; v34 and later), v36 voltage droop controls, loads with distributed generation
+in service (v34 and later: DGENM 1 with DGENP or DGENQ not 0), generators with a step-up
 transformer in the record (RT, XT) or an IREG other than the first generator's of their
 bus, and the transformer features above.
 
@@ -128,20 +151,45 @@ _SECTIONS[34] = (
     + _SECTIONS[32][6:]
     + ("induction machine", "substation")
 )
+_SECTIONS[35] = _SECTIONS[34]
+_SECTIONS[36] = (
+    (
+        "system-wide data",
+        "bus",
+        "load",
+        "fixed shunt",
+        "voltage droop control",
+        "generator",
+        "switching device rating set",
+        "branch",
+        "system switching device",
+        "transformer",
+    )
+    + _SECTIONS[32][6:]
+    + ("induction machine", "load type", "interface", "interface element", "substation")
+)
 
 _SKIPPED = {
-    "system-wide data",
     "area",
     "zone",
     "inter-area transfer",
     "owner",
-    "substation",
     "impedance correction table",
+    "switching device rating set",
+    "load type",
+    "interface",
+    "interface element",
 }
+#: first words of the system-wide data records (v34: GENERAL to RATING; v36 adds SWDRATNAM)
+_SYSTEM_WIDE = ("GENERAL", "GAUSS", "NEWTON", "ADJUST", "TYSL", "SOLVER", "RATING", "SWDRATNAM")
 _IDE_ISOLATED = 4
 #: largest magnitude of a RAW number (bus numbers, MW, kV, pu alike are far below)
 _LARGEST = 1e12
 _TOKEN = re.compile(r"'[^']*'?|/|,|[^,\s'/]+")
+#: v34 and later: character data in single or double quotes (rawd34 and later write the
+#: names of dc lines, FACTS devices and the rating sets of the system-wide data in double
+#: quotes)
+_TOKEN_34 = re.compile(r"'[^']*'?|\"[^\"]*\"?|/|,|[^,\s'\"/]+")
 
 
 @dataclass(frozen=True)
@@ -196,7 +244,7 @@ class RawData:
 
     Attributes:
         name: case name (file stem); title: the two title lines joined by " / ".
-        version: RAW version (32, 33, 34); base_mva: SBASE (MVA); freq_hz: BASFRQ (Hz).
+        version: RAW version (32 to 36); base_mva: SBASE (MVA); freq_hz: BASFRQ (Hz).
         bus: PST ``bus`` matrix, shape (n_bus, 15) (:class:`stabctl.case.BusTable`).
         line: PST ``line`` matrix, shape (n_branch, 10), or (n_branch, 14) when a branch
             has line-end shunts (:class:`stabctl.case.BranchTable` columns 11-14).
@@ -251,13 +299,14 @@ class RawData:
 # --------------------------------------------------------------------------------------
 
 
-def split_fields(text: str) -> list[str]:
+def split_fields(text: str, double_quotes: bool = False) -> list[str]:
     """Fields of one RAW data line (POM "Power Flow Raw Data File Contents"): separated by
     commas or blanks, ``'...'`` strings kept whole (quotes removed, blanks inside kept),
     a ``/`` outside quotes starts a comment; two commas in a row give an empty field (the
-    PSS/E default value)."""
+    PSS/E default value). ``double_quotes`` (RAW v34 and later) also keeps ``"..."``
+    strings whole."""
     fields, expect_value = [], True
-    for tok in _TOKEN.findall(text):
+    for tok in (_TOKEN_34 if double_quotes else _TOKEN).findall(text):
         if tok == "/":
             break
         if tok == ",":
@@ -265,7 +314,8 @@ def split_fields(text: str) -> list[str]:
                 fields.append("")
             expect_value = True
         else:
-            fields.append(tok[1:].removesuffix("'") if tok.startswith("'") else tok)
+            quoted = tok[0] == "'" or (double_quotes and tok[0] == '"')
+            fields.append(tok[1:].removesuffix(tok[0]) if quoted else tok)
             expect_value = False
     return fields
 
@@ -318,54 +368,87 @@ class _Rec:
         raise CaseError(f"{self.file}:{self.line} {self.section} record: {what}")
 
 
-def _header(lines: list[str], path: Path) -> tuple[float, int, float]:
-    """(SBASE, version, BASFRQ) from the case identification record."""
-    if len(lines) < 3:
-        raise CaseError(f"{path}:1 case identification: a RAW file starts with three lines")
-    rec = _Rec(path.name, 1, [split_fields(lines[0])], "case identification")
+def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
+    """(SBASE, version, BASFRQ, index of its line) from the case identification record:
+    IC, SBASE, REV, XFRRAT, NXFRAT, BASFRQ (the same six fields in v32-v36), after the
+    ``@!`` column-heading lines PSS/E 35 and later write above it."""
+    first = next((i for i, t in enumerate(lines) if not t.lstrip().startswith("@!")), len(lines))
+    if len(lines) < first + 3:
+        raise CaseError(
+            f"{path}:{first + 1} case identification: a RAW file starts with three lines "
+            "(after its '@!' column headings)"
+        )
+    rec = _Rec(path.name, first + 1, [split_fields(lines[first])], "case identification")
     sbase, rev, freq = rec.num(0, 1), rec.int(0, 2, 33), rec.num(0, 5, 60.0)
     if rev not in _SECTIONS:
-        rec.fail(f"RAW version {rev} is not supported (32, 33 or 34)")
+        rec.fail(f"RAW version {rev} is not supported (32, 33, 34, 35 or 36)")
     if sbase <= 0 or freq <= 0:
         rec.fail(f"SBASE {sbase:g} MVA and BASFRQ {freq:g} Hz must be > 0")
-    return sbase, rev, freq
+    return sbase, rev, freq, first
 
 
 def _record_lines(sec: str, first: list[str], rec_file: str, lineno: int) -> int:
-    """Lines of a record that starts with ``first`` in section ``sec``."""
+    """Lines of a record that starts with ``first`` in section ``sec``; 0 for a substation
+    (v34 and later), whose record is followed by its node, switching device and terminal
+    data, each ending with a ``0`` record (the record holds them all)."""
     if sec == "transformer":
         k = _Rec(rec_file, lineno, [first], sec).int(0, 2, 0)
         return 5 if k != 0 else 4
-    return {"two-terminal dc line": 3, "vsc dc line": 3}.get(sec, 1)
+    return {"two-terminal dc line": 3, "vsc dc line": 3, "substation": 0}.get(sec, 1)
 
 
-#: Fields per record line of the sections stabctl reads: (fewest, most) by version
-#: group (32/33, 34). The fewest are the fields up to the last one the reader uses (a
-#: shorter line would silently take PSS/E defaults for data that are in every file
-#: PSS/E writes); the most are the POM record layouts (with ownership data), so that a
-#: record of another section is not read as one of this section.
-_FIELDS = {
-    "bus": ((9, 13), (9, 13)),
-    "load": ((11, 15), (11, 20)),
-    "fixed shunt": ((5, 5), (5, 5)),
-    "generator": ((15, 28), (16, 30)),
-    "branch": ((14, 24), (24, 34)),
-    "switched shunt": ((10, 26), (11, 36)),
+#: data blocks after a substation record (node, switching device, terminal data), each
+#: ending with a ``0`` record
+_SUBSTATION_BLOCKS = 3
+
+
+def _complete(rec: _Rec, need: int) -> bool:
+    """True when ``rec`` has its ``need`` lines (0: its substation blocks' ``0`` records)."""
+    if need:
+        return len(rec.lines) == need
+    return sum(line[:1] == ["0"] for line in rec.lines[1:]) == _SUBSTATION_BLOCKS
+
+
+#: Fields per record line of the sections stabctl reads: (fewest, most), keyed by the
+#: first version of each layout (it holds until the next key). The fewest are the fields
+#: up to the last one the reader uses (a shorter line would silently take PSS/E defaults
+#: for data that are in every file PSS/E writes); the most are the POM record layouts
+#: (with ownership data), so that a record of another section is not read as one of this
+#: section. v34: NREG at the end of generators and switched shunts (PSS/E's rawd34); v35:
+#: NREG moved after IREG (and BASLOD after PB) in generators, after SWREG in switched
+#: shunts, which also gain their ID (field 2) and a status per block; v36: a NAME at the
+#: end of the fixed shunt, DROOPNAME and NAME at the end of the generator, a NAME after
+#: the switched shunt's BINIT (the column headings PSS/E 36 writes), and one field more
+#: after the branch's STAT than its heading shows (PSS/E Xplore 36.1's branch records).
+_FIELDS: dict[str, dict[int, tuple[int, int]]] = {
+    "bus": {32: (9, 13)},
+    "load": {32: (11, 15), 34: (11, 20)},
+    "fixed shunt": {32: (5, 5), 36: (5, 6)},
+    "generator": {32: (15, 28), 34: (15, 29), 35: (16, 30), 36: (16, 32)},
+    "branch": {32: (14, 24), 34: (24, 34), 36: (24, 35)},
+    "switched shunt": {32: (10, 26), 34: (10, 27), 35: (12, 36), 36: (12, 37)},
 }
 #: transformer record lines (line 1, 2, 3, 4) of a two-winding transformer: (fewest, most)
-_XFMR_FIELDS = (((12, 23), (2, 3), (3, 18), (2, 2)), ((12, 24), (2, 3), (3, 28), (2, 2)))
+_XFMR_FIELDS = {
+    32: ((12, 23), (2, 3), (3, 18), (2, 2)),
+    34: ((12, 24), (2, 3), (3, 28), (2, 2)),
+}
 #: record lines (1 to 5) of a three-winding transformer: (fewest, most)
-_XFMR3_FIELDS = tuple((two[0], (11, 11), two[2], two[2], two[2]) for two in _XFMR_FIELDS)
+_XFMR3_FIELDS = {v: (two[0], (11, 11), two[2], two[2], two[2]) for v, two in _XFMR_FIELDS.items()}
+
+
+def _layout(table: dict, version: int):
+    """The entry of ``table`` (keyed by the first version of a layout) for ``version``."""
+    return table[max(v for v in table if v <= version)]
 
 
 def _check_fields(rec: _Rec, version: int) -> None:
     """CaseError naming file:line when a record line has fewer or more fields than its
     section's layout (a cut or merged line, or a record of another section)."""
-    group = 1 if version >= 34 else 0
     if rec.section in _FIELDS:
-        limits: Sequence[tuple[int, int]] = [_FIELDS[rec.section][group]]
+        limits: Sequence[tuple[int, int]] = [_layout(_FIELDS[rec.section], version)]
     elif rec.section == "transformer":
-        limits = (_XFMR_FIELDS if len(rec.lines) == 4 else _XFMR3_FIELDS)[group]
+        limits = _layout(_XFMR_FIELDS if len(rec.lines) == 4 else _XFMR3_FIELDS, version)
     else:
         return
     for row, ((lo, hi), vals) in enumerate(zip(limits, rec.lines)):
@@ -379,27 +462,28 @@ def _check_fields(rec: _Rec, version: int) -> None:
             )
 
 
-def _records(lines: list[str], path: Path, version: int):
-    """Yield records (``_Rec``, with ``section``) of the data sections, in file order.
+def _records(lines: list[str], path: Path, version: int, start: int):
+    """Yield records (``_Rec``, with ``section``) of the data sections, in file order,
+    from ``lines[start]`` on (the line after the two title lines).
 
     A record whose first field is ``0`` ends a section, ``Q`` ends the data wherever a
     record may start (PSS/E POM "Power Flow Raw Data File Contents": the sections not yet
     read are empty, e.g. a RAW ending with ``Q`` right after the transformer data), ``@!``
-    lines (v34 column headings) and blank lines are skipped. A file without ``Q`` must
-    end after the last section's ``0`` record: a file cut short is refused (CaseError
-    naming file:line), never read as a smaller case. Each record line must have its
-    section's field count (:data:`_FIELDS`).
+    lines (v34 and later: column headings) and blank lines are skipped. A file without
+    ``Q`` must end after the last section's ``0`` record: a file cut short is refused
+    (CaseError naming file:line), never read as a smaller case. Each record line must have
+    its section's field count (:data:`_FIELDS`).
     """
     sections = _SECTIONS[version]
-    k, pending, need, last = 0, None, 0, 3
-    for lineno, text in enumerate(lines[3:], start=4):
+    k, pending, need, last = 0, None, 0, start
+    for lineno, text in enumerate(lines[start:], start=start + 1):
         if not text.strip() or text.lstrip().startswith("@!"):
             continue
         last = lineno
-        fields = split_fields(text)
+        fields = split_fields(text, double_quotes=version >= 34)
         if pending is not None:
             pending.lines.append(fields)
-            if len(pending.lines) == need:
+            if _complete(pending, need):
                 _check_fields(pending, version)
                 yield pending
                 pending = None
@@ -417,12 +501,17 @@ def _records(lines: list[str], path: Path, version: int):
             continue
         pending = _Rec(path.name, lineno, [fields], sections[k])
         need = _record_lines(sections[k], fields, path.name, lineno)
-        if need == 1:
+        if _complete(pending, need):
             _check_fields(pending, version)
             yield pending
             pending = None
     if pending is not None:
-        pending.fail(f"file ends inside the record ({len(pending.lines)} of {need} lines)")
+        pending.fail(
+            f"file ends inside the record ({len(pending.lines)} of {need} lines)"
+            if need
+            else "file ends inside the record (its node, switching device and terminal "
+            "data must each end with a '0 /' record)"
+        )
     if k < len(sections):
         raise CaseError(
             f"{path.name}:{last}: the file ends in the {sections[k]} data, "
@@ -521,13 +610,43 @@ def _bus(b: _Builder, rec: _Rec):
     ]
 
 
+def _system_wide(b: _Builder, rec: _Rec):
+    """System-wide data (v34 and later): solution parameters (GENERAL, GAUSS, NEWTON,
+    ADJUST, TYSL, SOLVER) and rating-set names (RATING; v36 SWDRATNAM). They do not change
+    the case (stabctl's power flow has its own settings): each record is checked to start
+    with its keyword, then skipped."""
+    key = rec.text(0, 0, "")
+    if not key[:1].isalpha():
+        rec.fail(
+            f"'{key}' where a record starts with its keyword ({', '.join(_SYSTEM_WIDE)}): "
+            "the '0 / END OF SYSTEM-WIDE DATA' record is missing"
+        )
+
+
+def _substation(b: _Builder, rec: _Rec):
+    """Substation (v34 and later): I, 'NAME', LATI, LONG, SRG, then its node, switching
+    device and terminal data (node-breaker topology). A substation without them is
+    skipped; one with them is unsupported (stabctl reads the bus-branch records only)."""
+    data = [line for line in rec.lines[1:] if line and line[:1] != ["0"]]
+    if data:
+        what = f"substation {rec.int(0, 0)} '{rec.text(0, 1, '')}'"
+        b.skip(
+            rec,
+            f"{what}: node-breaker data ({len(data)} node, switching device and terminal records)",
+        )
+
+
 def _load(b: _Builder, rec: _Rec):
-    """Load: I, ID, STATUS, AREA, ZONE, PL, QL, IP, IQ, YP, YQ (POM Load Data)."""
+    """Load: I, ID, STATUS, AREA, ZONE, PL, QL, IP, IQ, YP, YQ, [OWNER, SCALE, INTRPT,
+    DGENP, DGENQ, DGENM (v34), LOADTYPE (v35), NAME (v36)] (POM Load Data)."""
     num = rec.int(0, 0)
     b.once(rec, (num, rec.text(0, 1)), f"load at bus {num} '{rec.text(0, 1)}'")
     row = b.bus_row(rec, num, "load")
     if row is None or rec.int(0, 2, 1) == 0:
         return
+    if b.version >= 34 and rec.int(0, 16, 0) == 1 and (rec.num(0, 14, 0.0) or rec.num(0, 15, 0.0)):
+        what = f"load at bus {num} '{rec.text(0, 1)}'"
+        return b.skip(rec, f"{what}: distributed generation in service (DGENM 1, DGENP, DGENQ)")
     pl, ql, ip, iq, yp, yq = (rec.num(0, k, 0.0) for k in range(5, 11))
     v0 = b.v0(num)
     b.load_src.setdefault(num, rec)
@@ -551,13 +670,20 @@ def _fixed_shunt(b: _Builder, rec: _Rec):
         row[8] += rec.num(0, 4, 0.0) / b.base
 
 
+def _nreg_offset(version: int) -> int:
+    """Shift of the generator fields after IREG (MBASE, ZR, ZX, RT, XT, GTAP, STAT, RMPCT)
+    and of the switched shunt's after SWREG: v35 inserts NREG there (v34 writes it at
+    the end of the record, where stabctl does not read)."""
+    return 1 if version >= 35 else 0
+
+
 def _generator(b: _Builder, rec: _Rec):
-    """Generator: I, ID, PG, QG, QT, QB, VS, IREG, [NREG (v34)], MBASE, ZR, ZX, RT, XT,
+    """Generator: I, ID, PG, QG, QT, QB, VS, IREG, [NREG (v35)], MBASE, ZR, ZX, RT, XT,
     GTAP, STAT, RMPCT (POM Generator Data)."""
     num, gid = rec.int(0, 0), rec.text(0, 1)
     b.once(rec, (num, gid), f"generator at bus {num} '{gid}'")
     row = b.bus_row(rec, num, "generator")
-    o = 1 if b.version >= 34 else 0  # v34 inserts NREG after IREG
+    o = _nreg_offset(b.version)
     if row is not None and rec.int(0, 14 + o, 1) == 0:
         b.out_of_service.append((num, gid))
     if row is None or rec.int(0, 14 + o, 1) == 0:
@@ -652,8 +778,8 @@ def _transformer(b: _Builder, rec: _Rec):
     """Transformer (POM Transformer Data): line 1 I, J, K, CKT, CW, CZ, CM, MAG1, MAG2,
     NMETR, 'NAME', STAT; line 2 R1-2, X1-2, SBASE1-2 (three windings: then R2-3, X2-3,
     SBASE2-3, R3-1, X3-1, SBASE3-1, VMSTAR, ANSTAR); per winding a line WINDV, NOMV, ANG,
-    ..., TAB (field 14; v34: field 24, after 12 ratings and NODE) (two windings: line 4
-    WINDV2, NOMV2 only)."""
+    ..., TAB (field 14; v34: field 23, after 12 ratings; v35: field 24, NOD moved before
+    it) (two windings: line 4 WINDV2, NOMV2 only)."""
     i, j, k3, ckt = rec.int(0, 0), rec.int(0, 1), rec.int(0, 2, 0), rec.text(0, 3)
     what = f"transformer {i}-{j}" + (f"-{k3}" if k3 else "") + f" '{ckt}'"
     b.once(rec, (*sorted((i, j, k3)), ckt), what)
@@ -676,7 +802,7 @@ def _transformer(b: _Builder, rec: _Rec):
 def _modelled(b: _Builder, rec: _Rec, rows: tuple, what: str) -> bool:
     """False (the record reported unsupported) for an impedance correction table (TAB) on
     a winding line of ``rows`` or a magnetizing admittance given as losses (CM 2)."""
-    tab = 23 if b.version >= 34 else 13
+    tab = {32: 13, 33: 13, 34: 22}.get(b.version, 23)
     if any(rec.int(row, tab, 0) != 0 for row in rows):
         b.skip(rec, f"{what}: impedance correction table (TAB)")
         return False
@@ -758,17 +884,22 @@ def _impedance(b: _Builder, rec: _Rec, at: tuple, kv: float, what: str) -> compl
 
 
 def _switched_shunt(b: _Builder, rec: _Rec):
-    """Switched shunt at its initial susceptance: I, MODSW, ADJM, STAT, VSWHI, VSWLO,
-    SWREM, [NREG (v34)], RMPCT, 'RMIDNT', BINIT (POM Switched Shunt Data); v32/v33 have
-    one per bus."""
+    """Switched shunt at its initial susceptance: I, [ID (v35)], MODSW, ADJM, STAT, VSWHI,
+    VSWLO, SWREG, [NREG (v35; v34 writes it at the end)], RMPCT, 'RMIDNT', BINIT (POM
+    Switched Shunt Data); v32/v33 have one per bus, v35 and later one per bus and ID."""
+    num = rec.int(0, 0)
     if b.version < 34:
-        b.once(rec, (rec.int(0, 0),), f"switched shunt at bus {rec.int(0, 0)}")
-    row = b.bus_row(rec, rec.int(0, 0), "switched shunt")
-    if row is not None and rec.int(0, 3, 1) != 0:
-        row[8] += rec.num(0, 10 if b.version >= 34 else 9) / b.base
+        b.once(rec, (num,), f"switched shunt at bus {num}")
+    elif b.version >= 35:
+        b.once(rec, (num, rec.text(0, 1)), f"switched shunt at bus {num} '{rec.text(0, 1)}'")
+    row = b.bus_row(rec, num, "switched shunt")
+    o = 1 if b.version >= 35 else 0  # v35 inserts ID after I
+    if row is not None and rec.int(0, 3 + o, 1) != 0:
+        row[8] += rec.num(0, 9 + o + _nreg_offset(b.version)) / b.base
 
 
 _HANDLERS = {
+    "system-wide data": _system_wide,
     "bus": _bus,
     "load": _load,
     "fixed shunt": _fixed_shunt,
@@ -776,6 +907,7 @@ _HANDLERS = {
     "branch": _branch,
     "transformer": _transformer,
     "switched shunt": _switched_shunt,
+    "substation": _substation,
 }
 
 
@@ -888,7 +1020,7 @@ def read_raw(
     loads: str = "impedance",
     net: Callable[[int, str], str | None] | None = None,
 ) -> RawData:
-    """Read a PSS/E RAW file (version 32, 33 or 34) into PST matrices.
+    """Read a PSS/E RAW file (version 32, 33, 34, 35 or 36) into PST matrices.
 
     Args:
         path: the ``.raw`` file.
@@ -910,7 +1042,8 @@ def read_raw(
             naming ``file:line`` and the record; no swing bus; a swing bus whose every
             generator is netted.
 
-    Source: PSS/E POM v32-v34 "Power Flow Raw Data File Contents" (see module doc).
+    Source: PSS/E POM v32-v34 "Power Flow Raw Data File Contents"; v35 and v36: PSS/E's
+    own column headings in its RAW exports (see module doc).
     """
     if loads not in ("raw", "impedance"):
         raise CaseError(f"loads must be 'raw' or 'impedance', got {loads!r}")
@@ -919,11 +1052,11 @@ def read_raw(
         lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
-    base, version, freq = _header(lines, path)
+    base, version, freq, first = _header(lines, path)
     b = _Builder(version, base, loads, net=net)
-    for rec in _records(lines, path, version):
+    for rec in _records(lines, path, version, first + 3):
         _dispatch(b, rec)
-    return _finish(b, path, lines, version, freq)
+    return _finish(b, path, lines[first + 1 : first + 3], version, freq)
 
 
 def _dispatch(b: _Builder, rec: _Rec):
@@ -937,7 +1070,7 @@ def _dispatch(b: _Builder, rec: _Rec):
         b.skip(rec, f"{rec.section} record")
 
 
-def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawData:
+def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawData:
     if not b.buses:
         raise CaseError(f"{path.name}: no bus data")
     _demote_idle_pv(b)
@@ -952,7 +1085,7 @@ def _finish(b: _Builder, path: Path, lines, version: int, freq: float) -> RawDat
     line = np.array([row + [0.0] * (width - len(row)) for row in b.branches], dtype=float).reshape(
         -1, width
     )
-    title = " / ".join(t.strip() for t in lines[1:3] if t.strip())
+    title = " / ".join(t.strip() for t in titles if t.strip())
     return RawData(
         name=path.stem,
         title=title,

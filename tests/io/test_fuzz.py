@@ -53,6 +53,8 @@ SEEDS = {
     "raw": [
         _V33,
         (PSSE / "five_bus_v34.raw").read_text(),
+        (PSSE / "five_bus_v35.raw").read_text(),
+        (PSSE / "five_bus_v36.raw").read_text(),
         _V33.replace("0 / END OF TRANSFORMER DATA", _THREE_WINDING, 1),
     ],
     "dyr": [(PSSE / "five_bus.dyr").read_text()],
