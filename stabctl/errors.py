@@ -4,6 +4,10 @@ Every error names what is wrong and where (bus, row, field, iteration, time) so 
 CLI can print it and exit non-zero without a traceback.
 """
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+
 
 class StabctlError(Exception):
     """Base class of all stabctl errors (the CLI turns these into exit status 2)."""
@@ -57,12 +61,43 @@ class InitialLimitError(CaseError):
         super().__init__(self.messages[0] + also)
 
 
+#: where `refuse_initial` records instead of raising (`run_on_suspect_starts`), or None
+_SUSPECT: ContextVar[list[str] | None] = ContextVar("stabctl_suspect_starts", default=None)
+
+
 def refuse_initial(table: str, bad, message) -> None:
     """Raise :class:`InitialLimitError` for the True entries of ``bad`` (boolean array over
-    the table's rows), ``message(i)`` describing row i (0-based); nothing if none."""
+    the table's rows), ``message(i)`` describing row i (0-based); nothing if none.  Inside
+    `run_on_suspect_starts` each message is recorded there instead and the
+    initialisation goes on with the state outside its limit."""
     rows = [int(i) for i, b in enumerate(bad) if b]
-    if rows:
+    if not rows:
+        return
+    found = _SUSPECT.get()
+    if found is None:
         raise InitialLimitError(table, rows, [message(i) for i in rows])
+    found.extend(message(i) for i in rows)
+
+
+@contextmanager
+def run_on_suspect_starts() -> Iterator[list[str]]:
+    """Within this block, controls whose initial point lies outside their own limits are
+    not refused (`refuse_initial`) but listed in the yielded list, one line each, and
+    keep that initial point: PSS/E's "initial conditions suspect", where the run goes on
+    and the limiter takes the state to its limit at the first step (PSS/E Program
+    Operation Manual, "Dynamic Simulation Initialization").
+
+    Yields
+    ------
+    list of str
+        Filled with the suspect starts met inside the block.
+    """
+    found: list[str] = []
+    token = _SUSPECT.set(found)
+    try:
+        yield found
+    finally:
+        _SUSPECT.reset(token)
 
 
 class UnknownBusError(CaseError, KeyError):

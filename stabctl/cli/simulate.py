@@ -242,6 +242,16 @@ def _build_events(
     "trapezoid, the implicit trapezoidal rule (ANDES's; ieee conventions, no storage; "
     "a Python loop, slower).",
 )
+@click.option(
+    "--suspect-starts",
+    type=click.Choice(["refuse", "run"]),
+    default="refuse",
+    show_default=True,
+    help="Controls whose initial point lies outside their own limits: refuse the case "
+    "(naming them), or run on as PSS/E does from its 'initial conditions suspect', each "
+    "listed, the limiter taking the state to its limit at the first step (the run then "
+    "does not start at rest). The import's --leave-out-infeasible is the third way.",
+)
 @out_file_option(metavar="FILE.csv|FILE.npz", help="The trajectories (CSV or numpy .npz).")
 @plot_option("speeds, angles from the COI and bus voltages")
 @storage_options()
@@ -273,6 +283,7 @@ def simulate(
     separation_limit,
     stop_at_separation,
     method,
+    suspect_starts,
     out_path,
     plot_path,
     esd_pct,
@@ -375,7 +386,7 @@ def simulate(
             case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz), model=esd_model
         )
     validate_events(case, events, tf)  # an unknown bus or line before compiling
-    sim = Simulator(case, conventions=conventions, q_limits=q_limits)
+    sim = Simulator(case, conventions=conventions, q_limits=q_limits, suspect_starts=suspect_starts)
     h = sim.default_h if step is None else step
     result = sim.run(
         events,
@@ -426,6 +437,7 @@ def simulate(
                 "q_limits": q_limits,
                 "esd": esd,
                 "events": [describe_event(e) for e in events],
+                "suspect_starts": list(sim.suspect),
                 "files": written,
             }
         )
@@ -438,6 +450,8 @@ def simulate(
     )
     for e in events or ["flat run (no disturbance)"]:
         click.echo(f"  {e if isinstance(e, str) else describe_event(e)}")
+    for line in sim.suspect:
+        click.echo(f"  initial condition suspect, run on: {line}")
     for isl in result.meta.get("islanded", []):
         P, Q = isl["load_shed_pu"]
         click.echo(

@@ -46,7 +46,12 @@ from stabctl.dynamics.model import (
 )
 from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.switching import device_state
-from stabctl.errors import InputError, NumericalInstabilityError, SimulationError
+from stabctl.errors import (
+    InputError,
+    NumericalInstabilityError,
+    SimulationError,
+    run_on_suspect_starts,
+)
 from stabctl.models import converters as conv
 from stabctl.network import switched_shunts as sws
 from stabctl.storage import control as law
@@ -134,6 +139,13 @@ class Simulator:
         An initial point whose largest abs(derivative) exceeds 1e-8 (a model's
         initialisation disagreeing with its dynamics) is refused (the default) or warned
         about (`DynamicModel.check_equilibrium`, which names the state).
+    suspect_starts : {"refuse", "run"}, optional
+        A control whose initial point lies outside its own limits (a governor dispatched
+        above its Tmax, ...) is refused (the default, `stabctl.errors.InitialLimitError`)
+        or, as PSS/E runs on from its "initial conditions suspect", kept at that point,
+        listed in `suspect` and in each result's ``meta["suspect_starts"]``: its limiter
+        takes it to the limit at the first step, so such a case does not start at rest
+        (the equilibrium check then warns instead of refusing).
 
     Attributes
     ----------
@@ -153,6 +165,9 @@ class Simulator:
         `ExciterParams.inner_loop_time_constants`).
     conventions : str
         ``"ieee"`` or ``"pstess"``.
+    suspect : tuple of str
+        The suspect starts run on (``suspect_starts="run"``), one line each naming the
+        table, row, control and the limit with the value; empty otherwise.
 
     Raises
     ------
@@ -178,7 +193,12 @@ class Simulator:
         q_limits: bool = True,
         background_compile: bool = True,
         off_equilibrium: str = "refuse",
+        suspect_starts: str = "refuse",
     ):
+        if suspect_starts not in ("refuse", "run"):
+            raise InputError(f"suspect_starts must be 'refuse' or 'run', got {suspect_starts!r}")
+        self.suspect_starts = suspect_starts
+        self.suspect: tuple[str, ...] = ()
         self.conventions = check_conventions(conventions)
         self.q_limits = bool(q_limits)
         if op is None:
@@ -203,7 +223,7 @@ class Simulator:
         self.island, self.inertia = self.model.island, self.model.coi_inertia
         if background_compile:
             self._compile_runs_elsewhere()
-        self.model.check_equilibrium(off_equilibrium)
+        self.model.check_equilibrium("warn" if self.suspect else off_equilibrium)
 
     def _compile_runs_elsewhere(self) -> None:
         """When `stabctl.dynamics.integrator.integrate` is neither compiled in this process
@@ -261,7 +281,13 @@ class Simulator:
         """
         key = frozenset(int(b) for b in buses)
         if key not in self._models:
-            self._models[key] = DynamicModel(self.case, self.op, sorted(key), self.conventions)
+            if self.suspect_starts == "refuse":
+                model = DynamicModel(self.case, self.op, sorted(key), self.conventions)
+            else:
+                with run_on_suspect_starts() as found:
+                    model = DynamicModel(self.case, self.op, sorted(key), self.conventions)
+                self.suspect = tuple(dict.fromkeys((*self.suspect, *found)))
+            self._models[key] = model
         return self._models[key]
 
     def run(
@@ -351,6 +377,8 @@ class Simulator:
         islanded = islanding_log(grid, nets)
         if islanded:
             res.meta["islanded"] = islanded
+        if self.suspect:
+            res.meta["suspect_starts"] = list(self.suspect)
         return res
 
     def _for_storage(self, storage) -> Simulator:

@@ -4,8 +4,10 @@ Large planning cases carry exciters and governors whose power-flow operating poi
 a limited state outside its own limits (a governor dispatched above its Tmax, an ESST4B
 whose inner loop would start above VMmax).  PSS/E reports such records as "initial
 conditions suspect" and runs on (the state then jumps to its limit at the first step);
-stabctl refuses the case instead (`stabctl.errors.InitialLimitError`: a run must start at
-rest).  :func:`leave_out_infeasible` gives the case without those controls -- each
+stabctl refuses the case by default (`stabctl.errors.InitialLimitError`: a run must start
+at rest), runs on as PSS/E when asked (`Simulator(suspect_starts="run")`, ``simulate
+--suspect-starts run``, each listed), or :func:`leave_out_infeasible` gives the case
+without those controls -- each
 exciter with its stabiliser (the machine keeps its initial field voltage), each governor
 (the machine keeps its initial mechanical power) -- and names every one, so that a user
 decides with the list in hand; it is the explicit ``--leave-out-infeasible`` of the
