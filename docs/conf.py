@@ -22,6 +22,9 @@ autodoc_typehints = "none"  # the docstrings state shapes and units
 napoleon_numpy_docstring = True
 napoleon_google_docstring = True
 html_theme = "alabaster"
+# docutils' SmartQuotes would print the options' "--" as en dashes in the command-line
+# reference (sphinx-click writes rst), examples included: keep the characters typed
+smartquotes = False
 html_title = "stabctl"
 
 

@@ -29,7 +29,9 @@ def test_docs_build_without_warnings(tmp_path):
     assert res.returncode == 0, res.stderr[-3000:]
     assert res.stderr.strip() == "", res.stderr[-3000:]
     html = tmp_path / "html"
-    assert (html / "cli_reference.html").read_text().count("stabctl simulate") > 0
+    cli = (html / "cli_reference.html").read_text()
+    assert cli.count("stabctl simulate") > 0
+    assert "\u2013" not in cli and "--fault" in cli  # options as typed, no en dashes
     assert (html / "api" / "stabctl.critical_clearing_time.html").exists()
     assert "critical_clearing_time" in (html / "examples.html").read_text()
     assert "exc_con" in (html / "models_reference.html").read_text()  # from the declarations

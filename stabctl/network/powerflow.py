@@ -608,7 +608,10 @@ def solve_powerflow(
             stacklevel=2,
         )
     if not converged:
-        _fail(case, iters, dp, dq, "did not converge")
+        try:
+            _fail(case, iters, dp, dq, "did not converge")
+        except PowerFlowError as exc:
+            raise PowerFlowError(f"{exc}{_without_limits_hint(case, q_limits, drop)}") from None
     pg, qg, pl, ql, limited = _report(case, st, s, inj_p, inj_q)
     return PowerFlowResult(
         case=case,
@@ -626,6 +629,21 @@ def solve_powerflow(
         tap_iterations=tap_it,
         dropped=drop,
         shunt_levels=levels,
+    )
+
+
+def _without_limits_hint(case: Case, q_limits: bool, drop) -> str:
+    """With Q limits on, whether the flow converges without them (ANDES solves its cases
+    so, pv2pq = 0): said after the failure, not done in its place."""
+    if not q_limits:
+        return ""
+    try:
+        solve_powerflow(case, q_limits=False, drop=drop)
+    except PowerFlowError:
+        return ""
+    return (
+        "; with the PV buses' Q limits off it converges (q_limits=False, the commands' "
+        "--no-q-limits: ANDES's default, pv2pq = 0)"
     )
 
 

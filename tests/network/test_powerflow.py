@@ -309,3 +309,25 @@ def test_add_shunts():
     y2 = network.add_shunts(y, [0, 0, 3], [1 + 1j, 2, -5j])
     d = (y2 - y).toarray()
     assert d[0, 0] == 3 + 1j and d[3, 3] == -5j and np.count_nonzero(d) == 2
+
+
+@pytest.mark.filterwarnings("ignore:.*tap iterations:RuntimeWarning")
+def test_a_flow_that_fails_only_with_q_limits_says_so():
+    """Kundur with three times its reactive load and +-5 Mvar at its generators diverges
+    with the Q limits and converges without them: the error says the second (as ANDES
+    solves its cases), and a flow that fails both ways says nothing of it."""
+    case = load_case("kundur")
+    b = case.buses
+    pv = b.kind == PV
+    tight = case.replace(
+        buses=b.replace(
+            qmax=np.where(pv, 0.05, b.qmax), qmin=np.where(pv, -0.05, b.qmin), qload=3 * b.qload
+        )
+    )
+    with pytest.raises(PowerFlowError, match="with the PV buses' Q limits off it converges"):
+        solve_powerflow(tight)
+    assert solve_powerflow(tight, q_limits=False).max_mismatch < 1e-8
+    hopeless = case.replace(buses=b.replace(pload=30 * b.pload))
+    with pytest.raises(PowerFlowError) as err:
+        solve_powerflow(hopeless)
+    assert "Q limits off" not in str(err.value)
