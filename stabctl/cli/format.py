@@ -356,10 +356,6 @@ def print_modes(st, no_pss: bool) -> None:
     no_pss : bool
         The case was analysed without its PSS.
     """
-    import numpy as np
-
-    from stabctl.studies.eigenvalues import area_sides
-
     ma = st.ma
     click.echo(
         f"case {st.case.name}{' without PSS' if no_pss else ''}: {st.sys.nstates} "
@@ -372,16 +368,7 @@ def print_modes(st, no_pss: bool) -> None:
             f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
             "(excluded from damping statistics)"
         )
-    click.echo(f"{'mode':>5} {'f Hz':>7} {'damping':>8}  {'kind':<10} machines")
-    em = ma.electromechanical
-    for i in em[np.argsort(ma.freq_hz[em])]:
-        g1, g2 = ma.groups(i)
-        against = " ".join(f"G{k}" for k in g2[:6]) or "others (each < 0.2)"
-        areas = f"  [areas {area_sides(ma, i)}]" if ma.kind[i] == "inter-area" else ""
-        click.echo(
-            f"{i:5d} {ma.freq_hz[i]:7.3f} {ma.damping[i]:8.4f}  {ma.kind[i]:<10} "
-            f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}{areas}"
-        )
+    click.echo(ma.table())
 
 
 def _source_line(src: dict, seed: int) -> str:

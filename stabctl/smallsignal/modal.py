@@ -110,6 +110,39 @@ class ModalAnalysis:
         sel = lambda m: [int(a) + 1 for a in order if big[a] and m[a]]  # noqa: E731
         return sel(p.real >= 0), sel(p.real < 0)
 
+    def area_sides(self, i: int) -> str:
+        """The areas inter-area mode i swings against each other: '1, 3 vs 2' (1-based
+        area labels, `area_groups`); '-' for any other mode."""
+        if self.kind[i] != "inter-area":
+            return "-"
+        a1, a2 = (", ".join(str(a) for a in sorted(side)) for side in self.area_groups(i))
+        return f"{a1} vs {a2 or '-'}"
+
+    def table(self) -> str:
+        """The electromechanical modes as text, one line each by frequency: index,
+        frequency (Hz), damping ratio, kind, the machines swinging against each other (at
+        most six a side) and an inter-area mode's areas (what ``stabctl eig`` prints).
+
+        Returns
+        -------
+        str
+            A header line and one line per electromechanical mode.
+        """
+        lines = [f"{'mode':>5} {'f Hz':>7} {'damping':>8}  {'kind':<10} machines"]
+        em = self.electromechanical
+        for i in em[np.argsort(self.freq_hz[em])]:
+            g1, g2 = self.groups(i)
+            against = " ".join(f"G{k}" for k in g2[:6]) or "others (each < 0.2)"
+            areas = f"  [areas {self.area_sides(i)}]" if self.kind[i] == "inter-area" else ""
+            lines.append(
+                f"{i:5d} {self.freq_hz[i]:7.3f} {self.damping[i]:8.4f}  {self.kind[i]:<10} "
+                f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}{areas}"
+            )
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.table()
+
     def machine_participation(self, i: int) -> np.ndarray:
         """Participation of each machine in mode i, (g,): the sum over all states of the
         machine and of its controls (exciter, PSS, governor, shaft; names ending

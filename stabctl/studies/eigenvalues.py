@@ -160,28 +160,6 @@ def _machines(numbers, most: int = 8, none: str = "-") -> str:
     return text + (" ..." if len(numbers) > most else "")
 
 
-def area_sides(ma: ModalAnalysis, i: int) -> str:
-    """The areas an inter-area mode swings against each other.
-
-    Parameters
-    ----------
-    ma : ModalAnalysis
-        The modes.
-    i : int
-        A mode's index.
-
-    Returns
-    -------
-    str
-        '1, 3 vs 2' (1-based area labels, `ModalAnalysis.area_groups`) for an
-        inter-area mode, '-' for any other.
-    """
-    if ma.kind[i] != "inter-area":
-        return "-"
-    a1, a2 = (", ".join(str(a) for a in sorted(side)) for side in ma.area_groups(i))
-    return f"{a1} vs {a2 or '-'}"
-
-
 def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str:
     """The report text (electromechanical-mode table, areas, statistics, figures)."""
     ma, sys = st.ma, st.sys
@@ -243,7 +221,7 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         bus, r = best_esd(st, i)
         lines.append(
             f"| {i} | {lam.real:.4f} ± j{lam.imag:.4f} | {ma.freq_hz[i]:.4f} | "
-            f"{ma.damping[i]:.4f} | {ma.kind[i]} | {ma.eta[i]:.2f} | {area_sides(ma, i)} | "
+            f"{ma.damping[i]:.4f} | {ma.kind[i]} | {ma.eta[i]:.2f} | {ma.area_sides(i)} | "
             f"{_machines(ma.dominant_machines(i))} | {_machines(g1)} | "
             f"{_machines(g2, none='others, each < 0.2')} | "
             f"{bus} ({r:.2e}) |"

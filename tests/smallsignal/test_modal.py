@@ -102,6 +102,11 @@ def test_kundur_local_and_interarea_modes(nopss, expected, sys_k, sys_k_nopss):
     # with the two areas given explicitly the classification is the same
     given = modal_analysis(sys_k_nopss if nopss else sys_k, areas={1: "A", 2: "A", 3: "B", 4: "B"})
     assert list(given.kind[em]) == [k for _, k in expected]
+    # the table view: one line per electromechanical mode, by frequency, as `eig` prints
+    lines = str(ma).splitlines()
+    assert lines[0].split() == ["mode", "f", "Hz", "damping", "kind", "machines"]
+    assert [float(line.split()[1]) for line in lines[1:]] == [f for f, _ in expected]
+    assert lines[1].endswith("[areas 2 vs 1]") or lines[1].endswith("[areas 1 vs 2]")
 
 
 def test_areas_numbered_by_their_first_machine():
