@@ -1092,7 +1092,21 @@ class Case:
         try:
             return self._bus_map[int(number)]
         except (KeyError, ValueError, TypeError):
-            raise UnknownBusError(f"bus {number} is not in case '{self.name}'") from None
+            raise UnknownBusError(self._unknown_bus(number)) from None
+
+    def _unknown_bus(self, number) -> str:
+        """The message of an unknown bus: the case's bus numbers (the first 20) and, where
+        its description says how they map to a book's, that sentence."""
+        nums = [int(b) for b in self.buses.number]
+        shown = ", ".join(map(str, nums[:20])) + (
+            f", ... ({len(nums)} in all)" if len(nums) > 20 else ""
+        )
+        mapping = [p.strip() for p in self.description.split(";") if "bus numbers" in p]
+        return (
+            f"bus {number} is not in case '{self.name}' (its buses: {shown}"
+            + (f"; {mapping[0]}" if mapping else "")
+            + ")"
+        )
 
     def bus_indices(self, numbers) -> np.ndarray:
         """0-based rows of many bus numbers.

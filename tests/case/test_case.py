@@ -178,6 +178,17 @@ def test_bus_index_and_unknown_bus():
     assert isinstance(e.value, CaseError) and isinstance(e.value, KeyError)
     with pytest.raises(UnknownBusError, match="bus 5 "):
         c.bus_indices([1, 5])
+    with pytest.raises(UnknownBusError, match=r"\(its buses: 1, 2, 3\)$"):
+        c.bus_index(77)
+
+
+def test_an_unknown_bus_of_kundur_names_the_book_numbering():
+    """Kundur's book numbers its buses 1-11; PSTess's data (and stabctl's case) do not:
+    a book number that is not a bus gets the map in the message."""
+    from stabctl.io import load_case
+
+    with pytest.raises(UnknownBusError, match=r"Kundur's book \(Example 12.6\) buses 1-11 are"):
+        load_case("kundur").bus_index(7)
 
 
 def test_machine_index():
