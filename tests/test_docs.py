@@ -35,3 +35,7 @@ def test_docs_build_without_warnings(tmp_path):
     assert (html / "api" / "stabctl.critical_clearing_time.html").exists()
     assert "critical_clearing_time" in (html / "examples.html").read_text()
     assert "exc_con" in (html / "models_reference.html").read_text()  # from the declarations
+    # one page per model type, from its module: its states and its DYR record's columns
+    tgov1 = (html / "models" / "tg_con_2_tgov1.html").read_text()
+    assert "valve" in tgov1 and "VMAX" in tgov1 and "Tmax" in tgov1
+    assert "PSS2A" in (html / "models" / "index.html").read_text()
