@@ -962,28 +962,18 @@ def _remote_regulation(b: _Builder) -> np.ndarray:
     for num, (ireg, vs, rmpct, rec) in b.remote.items():
         if num not in with_gen:  # netted: a load, no control
             continue
-        if b.buses[num][9] == SWING:
-            b.changed.append(
-                rec.source(
-                    f"generator at bus {num}: the swing bus holds its own voltage at VS "
-                    f"{vs:g}, not bus {ireg}'s (PSS/E)"
-                )
-            )
-            b.buses[num][1] = vs
-            continue
         if ireg not in b.buses and ireg not in b.isolated:
             rec.fail(f"generator at bus {num}: IREG bus {ireg} is not in the bus data")
-        if ireg in b.isolated or b.buses[ireg][9] != PQ:
+        if b.buses[num][9] == SWING:
+            why = f"the swing bus holds its own voltage at VS {vs:g}, not bus {ireg}'s"
+        elif ireg in b.isolated or b.buses[ireg][9] != PQ:
             kind = "isolated" if ireg in b.isolated else "a generator bus"
-            b.changed.append(
-                rec.source(
-                    f"generator at bus {num}: IREG bus {ireg} is {kind}, so bus {num} regulates "
-                    f"its own voltage at VS {vs:g} (PSS/E)"
-                )
-            )
-            b.buses[num][1] = vs
+            why = f"IREG bus {ireg} is {kind}, so bus {num} regulates its own voltage at VS {vs:g}"
+        else:
+            rows.append([num, ireg, vs, rmpct])
             continue
-        rows.append([num, ireg, vs, rmpct])
+        b.changed.append(rec.source(f"generator at bus {num}: {why} (PSS/E)"))
+        b.buses[num][1] = vs
     out = np.array(rows, float).reshape(-1, 4)
     for r in np.unique(out[:, 1]):
         grp = out[:, 1] == r
