@@ -463,7 +463,8 @@ def simulate(
     if result.stable:
         click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
     else:
-        machines = ", ".join(str(m) for m in result.separated)
+        bus = dict(zip(case.machines.number.astype(int), case.machines.bus.astype(int)))
+        machines = ", ".join(f"{m} (bus {bus[int(m)]})" for m in result.separated)
         click.echo(
             f"loss of synchronism at t = {result.t_separation:.4f} s: machine(s) "
             f"{machines} separate" + (" (run stopped)" if stop_at_separation else "")
