@@ -4,12 +4,13 @@
 Runs a set of simulations and linearisations covering the machine models and every
 converter component (PVD1, ESD1 and its state of charge, REGCA1 with REECA1 / REECB1,
 REPCA1, the WECC wind models WTDTA1 / WTDS / WTARA1 / WTPTA1 / WTTQA1, the PLL1, the DG
-protections DGPRCT1 / DGPRCTExt) and prints one sha256 per run of its result arrays
+protections DGPRCT1 / DGPRCTExt), the multi-mass shaft, the induction motor and the
+switched shunts, and prints one sha256 per run of its result arrays
 (time grid, speeds, angles, powers, field voltages, bus voltages, converter P and Q; the
 state matrix A of a linearisation), then one over all of them.  Run it before and after a
 change that must not change results and compare the lines.
 
-Cases: the paper's Kundur and miniWECC (PST data, built in) with a 6-cycle bus fault,
+Cases: the paper's Kundur and miniWECC (PST data, built in) with the paper's faults,
 and ANDES 2.0's converter cases (read from the installed ``andes`` package's case
 folder, imported by `stabctl.io.andes_case.import_andes`) with a 6-cycle fault through
 j1e-3 pu, 5 ms step, 3 s.
@@ -31,7 +32,8 @@ from stabctl.io import load_case
 from stabctl.smallsignal.linearise import linearise
 from stabctl.studies.cases import CASE1, CASE2
 
-#: ANDES cases with converters: (case file, fault bus, step s, linearise too)
+#: ANDES cases with converters (and three with a shaft, a motor, switched shunts): (case
+#: file, fault bus, step s, linearise too)
 ANDES_CASES = (
     ("kundur/kundur_reg.xlsx", 7, 0.005, True),
     ("kundur/kundur_wtdta1.xlsx", 7, 0.005, True),
@@ -45,6 +47,11 @@ ANDES_CASES = (
     ("ieee14/ieee14_dgprctext.xlsx", 4, 0.005, False),
     ("ieee14/ieee14_regcp1.xlsx", 9, 0.005, False),
     ("ieee14/ieee14_reecb1.json", 9, 0.005, False),
+    # the other models with states of their own: the multi-mass shaft, the induction
+    # motor, the switched shunts
+    ("ieee14/ieee14_shaft5.json", 9, 0.0004, True),
+    ("kundur/kundur_motor.xlsx", 7, 0.005, False),
+    ("ieee14/ieee14_shuntsw.xlsx", 9, 0.005, False),
 )
 
 #: the result arrays hashed (a `Result`'s fields)
