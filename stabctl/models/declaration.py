@@ -57,6 +57,7 @@ __all__ = [
     "params_class",
     "layout",
     "states",
+    "slots",
     "check_packed",
     "pack",
 ]
@@ -476,6 +477,32 @@ def states(name: str, names: Sequence[str]) -> Any:
         Fields: the state names in order, values 0 .. len(names) - 1.
     """
     return layout(name, [(n, n) for n in names])
+
+
+def slots(name: str, names: Sequence[str], first: int = 0) -> Any:
+    """The named slots of a component's states in a state vector that several components
+    share (the converters: one column per device, each component its own run of slots),
+    as `states` names a model type's: a namedtuple instance whose field ``N`` is the slot
+    of state ``N``, here from `first` on and numpy int64 (so that a kernel given a slot as
+    an argument compiles once for every slot, the kernel coding rules).
+
+    Parameters
+    ----------
+    name : str
+        The namedtuple's type name (e.g. ``"REECA1Slots"``).
+    names : sequence of str
+        The state names in slot order; an empty name is a slot the component leaves
+        unused (no field).
+    first : int, optional
+        The slot of ``names[0]`` (default 0).
+
+    Returns
+    -------
+    namedtuple
+        Fields: the non-empty names, values ``first + j`` (numpy int64) for ``names[j]``.
+    """
+    named = [(n, np.int64(first + j)) for j, n in enumerate(names) if n]
+    return namedtuple(name, [n for n, _ in named])(*(j for _, j in named))
 
 
 def check_packed(cls, packed, values=()) -> None:

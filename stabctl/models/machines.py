@@ -28,6 +28,7 @@ from stabctl.models.declaration import (
     layout,
     pack,
     params_class,
+    states,
 )
 from stabctl.models.saturation import exponential_fit, quadratic_fit
 
@@ -179,6 +180,9 @@ MACHINE = Family(
 
 SUB, TRA, EM = 2, 1, 0
 STATE_NAMES = ("delta", "omega", "eqp", "psikd", "edp", "psikq")
+#: the named slots of the machine states (`STATE_NAMES`), read by the kernels as
+#: ``x[S.eqp, i]``: rotor angle (rad), speed (pu), E'q, psi_kd, E'd, psi_kq (pu)
+S = states("MachineStates", STATE_NAMES)
 
 #: mac_con fields (stabctl.models.machines.MACHINE) of MachineParams: columns 4-17 (xl .. D0,
 #: after PST's substitutions) and the generation fractions pfrac, qfrac (22, 23)
@@ -447,10 +451,10 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     Source: docs/pst_models.md 1.7-1.9 (PST flag 0).
     """
     v = V[p.bus_idx]
-    S = S_gen[p.bus_idx].real * p.pfrac + 1j * S_gen[p.bus_idx].imag * p.qfrac
-    I = np.conj(S / v) * p.mac_pot  # terminal current, machine base
-    x = np.zeros((6, p.n))
-    x[1] = 1.0
+    S_mac = S_gen[p.bus_idx].real * p.pfrac + 1j * S_gen[p.bus_idx].imag * p.qfrac
+    I = np.conj(S_mac / v) * p.mac_pot  # terminal current, machine base
+    x = np.zeros((len(STATE_NAMES), p.n))
+    x[S.omega] = 1.0
     sub = p.kind == SUB
     # the q axis (sub, tra): along v + (r_a + j x_q) I, i.e. psi" + j (x_q - x"q) I with the
     # air-gap flux psi" = v + (r_a + j x"q) I; with PSS/E's GENROU saturation along
@@ -464,10 +468,12 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     E_q = (1 + gap_q) * psi_pp + 1j * (p.xq - p.xqpp) * I
     E_tr = v + (p.ra + 1j * p.xdp) * I
     E_em = v + 1j * p.xdp * I
-    x[0] = np.where(p.kind == EM, np.angle(E_em), np.angle(E_q))
-    curdg, curqg = to_dq(x[0], I)
-    ed, eq = to_dq(x[0], v)
-    pmech = np.where(p.kind == EM, S.real * p.mac_pot, S.real * p.mac_pot + p.ra * np.abs(I) ** 2)
+    x[S.delta] = np.where(p.kind == EM, np.angle(E_em), np.angle(E_q))
+    curdg, curqg = to_dq(x[S.delta], I)
+    ed, eq = to_dq(x[S.delta], v)
+    pmech = np.where(
+        p.kind == EM, S_mac.real * p.mac_pot, S_mac.real * p.mac_pot + p.ra * np.abs(I) ** 2
+    )
     # subtransient
     eqra = eq + p.ra * curqg
     edra = -ed - p.ra * curdg
@@ -482,18 +488,21 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
     # PSS/E's GENSAL, GENSAE: S_e(E'q) E'q on the d axis (no q-axis saturation)
     Se_eqp = np.where(sub & ~air_gap, p.psse_saturation(eqp_sub), 0.0)
     vex_sub = (
-        eqp_sub + p.p7 * (curdg + p.p6 * Eqpe) + Se0 * to_dq(x[0], psi_pp)[1] + Se_eqp * eqp_sub
+        eqp_sub
+        + p.p7 * (curdg + p.p6 * Eqpe)
+        + Se0 * to_dq(x[S.delta], psi_pp)[1]
+        + Se_eqp * eqp_sub
     )
     # transient / classical: E' in the rotor frame
     E = np.where(p.kind == EM, E_em, E_tr)
-    edp_t, eqp_t = to_dq(x[0], E)
+    edp_t, eqp_t = to_dq(x[S.delta], E)
     a, b, c = p.sat.T
     esat = np.where(eqp_t < 0.8, eqp_t, a * eqp_t**2 + b * eqp_t + c)
     vex_tra = np.where(p.kind == EM, eqp_t, esat + (p.xd - p.xdp) * curdg)
-    x[2] = np.where(sub, eqp_sub, eqp_t)
-    x[3] = np.where(sub, psikd, 0.0)
-    x[4] = np.where(sub, edp_sub, edp_t)
-    x[5] = np.where(sub, psikq, 0.0)
+    x[S.eqp] = np.where(sub, eqp_sub, eqp_t)
+    x[S.psikd] = np.where(sub, psikd, 0.0)
+    x[S.edp] = np.where(sub, edp_sub, edp_t)
+    x[S.psikq] = np.where(sub, psikq, 0.0)
     vex = np.where(sub, vex_sub, vex_tra)
     return x, vex, pmech
 
@@ -506,8 +515,8 @@ def initialise(p: MachineParams, V: np.ndarray, S_gen: np.ndarray):
 def _fluxes(P, x, i):
     """psi"_d, psi"_q of machine i (subtransient model)."""
     return (
-        P[i, K.P9] * x[2, i] + P[i, K.P10] * x[3, i],
-        P[i, K.P14] * x[4, i] + P[i, K.P15] * x[5, i],
+        P[i, K.P9] * x[S.eqp, i] + P[i, K.P10] * x[S.psikd, i],
+        P[i, K.P14] * x[S.edp, i] + P[i, K.P15] * x[S.psikq, i],
     )
 
 
@@ -522,7 +531,7 @@ def _dq(delta, X):
 def _stator_speed(P, x, i):
     """Speed in the subtransient stator voltage and torque: omega with speed effects (PST
     mac_sub), 1 without (ANDES GENROU)."""
-    return x[1, i] if P[i, K.SPEED] > 0 else 1.0
+    return x[S.omega, i] if P[i, K.SPEED] > 0 else 1.0
 
 
 @kernel
@@ -541,12 +550,12 @@ def internal_voltage(P, x, psi):
     effects); transient and classical: exp(j delta) (E'q - j E'd).
     """
     for i in range(P.shape[0]):
-        e = np.exp(1j * x[0, i])
+        e = np.exp(1j * x[S.delta, i])
         if P[i, K.KIND] == SUB:
             psidpp, psiqpp = _fluxes(P, x, i)
             psi[i] = _stator_speed(P, x, i) * e * (psidpp + 1j * psiqpp)
         else:
-            psi[i] = e * (x[2, i] - 1j * x[4, i])
+            psi[i] = e * (x[S.eqp, i] - 1j * x[S.edp, i])
 
 
 @kernel
@@ -586,12 +595,12 @@ def _field_current(P, x, i, cdg):
     E_Isat(E'q) + (x_d - x'_d) i_d (docs 1.8, with PST's test on the initial E'q);
     classical: E' (constant)."""
     kind = P[i, K.KIND]
-    e = x[2, i]
+    e = x[S.eqp, i]
     if kind == SUB:
         psidpp, psiqpp = _fluxes(P, x, i)
         return (
             e
-            + P[i, K.P7] * (cdg + P[i, K.P6] * (e - x[3, i] - P[i, K.P8] * cdg))
+            + P[i, K.P7] * (cdg + P[i, K.P6] * (e - x[S.psikd, i] - P[i, K.P8] * cdg))
             + _gap_saturation(P, i, psidpp, psiqpp) * psidpp
             + _eqp_saturation(P, i, e)
         )
@@ -604,7 +613,7 @@ def _field_current(P, x, i, cdg):
 @kernel
 def field_current(P, x, cur, i):
     """Field current of machine i (machine base) at network current cur[i] (system base)."""
-    return _field_current(P, x, i, _dq(x[0, i], cur[i])[0] * P[i, K.POT])
+    return _field_current(P, x, i, _dq(x[S.delta, i], cur[i])[0] * P[i, K.POT])
 
 
 @kernel
@@ -617,50 +626,52 @@ def derivatives(P, basrad, x, cur, vex, pmech, target, dx, pelect, qelect, eterm
     system base; eterm in pu.
     """
     for i in range(P.shape[0]):
-        w = x[1, i]
+        w = x[S.omega, i]
         ws = _stator_speed(P, x, i)
-        curd, curq = _dq(x[0, i], cur[i])
+        curd, curq = _dq(x[S.delta, i], cur[i])
         pot = P[i, K.POT]
         cdg, cqg = curd * pot, curq * pot
         kind = P[i, K.KIND]
-        dx[0, i] = basrad * (w - 1.0)
-        dx[3, i] = 0.0
-        dx[5, i] = 0.0
+        dx[S.delta, i] = basrad * (w - 1.0)
+        dx[S.psikd, i] = 0.0
+        dx[S.psikq, i] = 0.0
         fld = _field_current(P, x, i, cdg)
         if kind == SUB:
             psidpp, psiqpp = _fluxes(P, x, i)
-            Eqpe = x[2, i] - x[3, i] - P[i, K.P8] * cdg
-            Edpe = x[4, i] - x[5, i] - P[i, K.P13] * cqg
+            Eqpe = x[S.eqp, i] - x[S.psikd, i] - P[i, K.P8] * cdg
+            Edpe = x[S.edp, i] - x[S.psikq, i] - P[i, K.P13] * cqg
             ed = -P[i, K.RA] * cdg - (ws * psiqpp - P[i, K.XQPP] * cqg)
             eq = -P[i, K.RA] * cqg + (ws * psidpp - P[i, K.XDPP] * cdg)
-            dx[2, i] = (vex[i] - fld) / P[i, K.TDOP]
-            dx[3, i] = Eqpe / P[i, K.TDOPP]
+            dx[S.eqp, i] = (vex[i] - fld) / P[i, K.TDOP]
+            dx[S.psikd, i] = Eqpe / P[i, K.TDOPP]
             # PSS/E's GENROU saturation: - gamma_qd S_e psi"_q (ANDES genrou.py XaqI1q, whose
             # e'_d, psi"_q are -E'd, -psi"_q here); GENSAE's in the subtransient circuit,
             # T"qo dpsi"_q/dt = -psi"_q - (x_q - x"q) i_q - gamma_qd S_e psi"_q
             gap_q = P[i, K.GQD] * _gap_saturation(P, i, psidpp, psiqpp) * psiqpp
             if P[i, K.GK] == _SALIENT_GAP:
-                dx[4, i] = (-x[4, i] + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe)) / P[i, K.TQOP]
-                dx[5, i] = (Edpe - gap_q / P[i, K.P15]) / P[i, K.TQOPP]
-            else:
-                dx[4, i] = (-x[4, i] + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe) - gap_q) / P[
+                dx[S.edp, i] = (-x[S.edp, i] + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe)) / P[
                     i, K.TQOP
                 ]
-                dx[5, i] = Edpe / P[i, K.TQOPP]
+                dx[S.psikq, i] = (Edpe - gap_q / P[i, K.P15]) / P[i, K.TQOPP]
+            else:
+                dx[S.edp, i] = (
+                    -x[S.edp, i] + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe) - gap_q
+                ) / P[i, K.TQOP]
+                dx[S.psikq, i] = Edpe / P[i, K.TQOPP]
             pm = pmech[i] / ws
             te = psidpp * cqg - psiqpp * cdg
         elif kind == TRA:
-            ed = x[4, i] - P[i, K.RA] * cdg + P[i, K.XDP] * cqg
-            eq = x[2, i] - P[i, K.RA] * cqg - P[i, K.XDP] * cdg
-            dx[2, i] = (vex[i] - fld) / P[i, K.TDOP]
-            dx[4, i] = (-x[4, i] + (P[i, K.XQ] - P[i, K.XQP]) * cqg) / P[i, K.TQOP]
+            ed = x[S.edp, i] - P[i, K.RA] * cdg + P[i, K.XDP] * cqg
+            eq = x[S.eqp, i] - P[i, K.RA] * cqg - P[i, K.XDP] * cdg
+            dx[S.eqp, i] = (vex[i] - fld) / P[i, K.TDOP]
+            dx[S.edp, i] = (-x[S.edp, i] + (P[i, K.XQ] - P[i, K.XQP]) * cqg) / P[i, K.TQOP]
             pm = pmech[i]
             te = (eq * curq + ed * curd) * pot + P[i, K.RA] * (cdg**2 + cqg**2)
         else:
-            ed = x[4, i] + P[i, K.XDP] * cqg
-            eq = x[2, i] - P[i, K.XDP] * cdg
-            dx[2, i] = 0.0
-            dx[4, i] = 0.0
+            ed = x[S.edp, i] + P[i, K.XDP] * cqg
+            eq = x[S.eqp, i] - P[i, K.XDP] * cdg
+            dx[S.eqp, i] = 0.0
+            dx[S.edp, i] = 0.0
             pm = pmech[i]
             te = (eq * curq + ed * curd) * pot
         pelect[i] = eq * curq + ed * curd
@@ -672,17 +683,17 @@ def derivatives(P, basrad, x, cur, vex, pmech, target, dx, pelect, qelect, eterm
             acc = (pmech[i] - P[i, K.D0] * (w - 1.0)) / w - te
         else:
             acc = (pm - te) - P[i, K.D0] * (w - 1.0)
-        dx[1, i] = acc / h2 if h2 > 0.0 else 0.0
+        dx[S.omega, i] = acc / h2 if h2 > 0.0 else 0.0
         if P[i, K.PB] > 0.0:  # a playback source: E' and the speed lag their targets
-            dx[1, i] = (target[i, 1] - w) / P[i, K.PB_TF]
-            dx[2, i] = (target[i, 0] - x[2, i]) / P[i, K.PB_TV]
+            dx[S.omega, i] = (target[i, 1] - w) / P[i, K.PB_TF]
+            dx[S.eqp, i] = (target[i, 0] - x[S.eqp, i]) / P[i, K.PB_TV]
 
 
 @kernel
 def stator_without_speed(P, x, cur, i):
     """(ed, eq, curd, curq) of machine i from the subtransient stator equations without the
     speed factor (PST `exc_st3` flag 1 recomputes them this way); currents system base."""
-    curd, curq = _dq(x[0, i], cur[i])
+    curd, curq = _dq(x[S.delta, i], cur[i])
     pot = P[i, K.POT]
     psidpp, psiqpp = _fluxes(P, x, i)
     ed = -P[i, K.RA] * curd * pot - (psiqpp - P[i, K.XQPP] * curq * pot)
@@ -693,7 +704,7 @@ def stator_without_speed(P, x, cur, i):
 @kernel
 def st3_field_current(P, x, cur, i):
     """PST exc_st3's own field-current estimate E_Isat + p6 (E'q - psi_kd) + p7 i_d."""
-    e = x[2, i]
+    e = x[S.eqp, i]
     esat = max(e, P[i, K.SA] * e * e + P[i, K.SB] * e + P[i, K.SC])
-    curd = _dq(x[0, i], cur[i])[0]
-    return esat + P[i, K.P6] * (e - x[3, i]) + P[i, K.P7] * curd * P[i, K.POT]
+    curd = _dq(x[S.delta, i], cur[i])[0]
+    return esat + P[i, K.P6] * (e - x[S.psikd, i]) + P[i, K.P7] * curd * P[i, K.POT]

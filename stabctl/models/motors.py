@@ -44,6 +44,7 @@ from stabctl.models.declaration import (
     layout,
     pack,
     params_class,
+    states,
 )
 
 if TYPE_CHECKING:
@@ -97,8 +98,10 @@ MOTOR = Family(
     ),
 )
 
-N_STATES = 5
 STATE_NAMES = ("slip", "e1d", "e1q", "e2d", "e2q")
+N_STATES = len(STATE_NAMES)
+#: the named slots of a motor's states, read by the kernels as ``x[S.slip, k]``
+S = states("MotorStates", STATE_NAMES)
 #: the system-base constants the kernels take
 PACKED = (
     ("POS", "pos"),
@@ -206,18 +209,18 @@ def drawn_current(P, x, k):
     """The current motor k draws besides its admittance 1/Z: j E"/Z (network frame, system
     base)."""
     Z = P[k, Q.RS] + 1j * P[k, Q.X2]
-    return 1j * (x[3, k] + 1j * x[4, k]) / Z
+    return 1j * (x[S.e2d, k] + 1j * x[S.e2q, k]) / Z
 
 
 @kernel
 def derivatives(P, x, k, V, on, dx):
-    """Derivatives of motor k into dx (5, n_motor) at its bus voltage V (complex) and the
+    """Derivatives of motor k into dx (N_STATES, n_motor) at its bus voltage V (complex) and the
     power it draws (P + j Q, system base); 0 and standing still while off (on 0)."""
     if on == 0.0:
         for r in range(N_STATES):
             dx[r, k] = 0.0
         return 0.0j
-    s, e1d, e1q, e2d, e2q = x[0, k], x[1, k], x[2, k], x[3, k], x[4, k]
+    s, e1d, e1q, e2d, e2q = x[S.slip, k], x[S.e1d, k], x[S.e1q, k], x[S.e2d, k], x[S.e2q, k]
     Z = P[k, Q.RS] + 1j * P[k, Q.X2]
     Idq = (1j * V - (e2d + 1j * e2q)) / Z
     Id, Iq = Idq.real, Idq.imag
@@ -225,11 +228,11 @@ def derivatives(P, x, k, V, on, dx):
     dx01, dx12 = P[k, Q.X0] - P[k, Q.X1], P[k, Q.X1] - P[k, Q.X2]
     te = e2d * Id + e2q * Iq
     tm = P[k, Q.A] + P[k, Q.B] * s + P[k, Q.C2] * s * s
-    dx[0, k] = (tm - te) / P[k, Q.M]
+    dx[S.slip, k] = (tm - te) / P[k, Q.M]
     de1d = wb * s * e1q - (e1d + dx01 * Iq) / T10
     de1q = -wb * s * e1d - (e1q - dx01 * Id) / T10
-    dx[1, k] = de1d
-    dx[2, k] = de1q
-    dx[3, k] = -wb * s * (e1q - e2q) + de1d + (e1d - e2d - dx12 * Iq) / T20
-    dx[4, k] = wb * s * (e1d - e2d) + de1q + (e1q - e2q + dx12 * Id) / T20
+    dx[S.e1d, k] = de1d
+    dx[S.e1q, k] = de1q
+    dx[S.e2d, k] = -wb * s * (e1q - e2q) + de1d + (e1d - e2d - dx12 * Iq) / T20
+    dx[S.e2q, k] = wb * s * (e1d - e2d) + de1q + (e1q - e2q + dx12 * Id) / T20
     return V * np.conj(Idq / 1j)

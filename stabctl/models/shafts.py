@@ -45,6 +45,7 @@ from stabctl.models.declaration import (
     layout,
     pack,
     params_class,
+    states,
 )
 
 if TYPE_CHECKING:
@@ -97,8 +98,11 @@ SHAFT = Family(
     ),
 )
 
-N_STATES = 8
 STATE_NAMES = ("dHP", "wHP", "dIP", "wIP", "dLP", "wLP", "dEX", "wEX")
+N_STATES = len(STATE_NAMES)
+#: the named slots of a shaft's states (the masses' angles, rad, and speeds, pu), read by
+#: the kernels as ``xs[S.wLP, k]``
+S = states("ShaftStates", STATE_NAMES)
 TABLE_FIELDS = SHAFT.names[1:]
 #: packed parameter matrix of the kernels: the machine's row, then shaft_con columns 2-17
 PACKED = (("MAC", "mac"), *((n, n) for n in TABLE_FIELDS))
@@ -197,10 +201,10 @@ def initialise(p: ShaftParams, delta0: np.ndarray, tm0: np.ndarray) -> np.ndarra
     ndarray, shape (8, n_shaft)
     """
     x = np.ones((N_STATES, p.n))
-    x[6] = delta0
-    x[4] = delta0 + tm0 / p.KLP
-    x[2] = x[4] + tm0 / p.KIP
-    x[0] = x[2] + tm0 / p.KHP
+    x[S.dEX] = delta0
+    x[S.dLP] = delta0 + tm0 / p.KLP
+    x[S.dIP] = x[S.dLP] + tm0 / p.KIP
+    x[S.dHP] = x[S.dIP] + tm0 / p.KHP
     return x
 
 
@@ -210,10 +214,10 @@ def rotor_torque(P, xs, k, delta, omega):
     exciter springs and mutual dampers, which replaces the turbine torque in its swing
     equation."""
     return (
-        -P[k, T.D34] * (omega - xs[5, k])
-        - P[k, T.D45] * (omega - xs[7, k])
-        + P[k, T.KLP] * (xs[4, k] - delta)
-        + P[k, T.KEX] * (xs[6, k] - delta)
+        -P[k, T.D34] * (omega - xs[S.wLP, k])
+        - P[k, T.D45] * (omega - xs[S.wEX, k])
+        + P[k, T.KLP] * (xs[S.dLP, k] - delta)
+        + P[k, T.KEX] * (xs[S.dEX, k] - delta)
     )
 
 
@@ -223,32 +227,32 @@ def derivatives(P, MP, basrad, xs, k, xm, pmech, dx):
     states (6, n_mac), pmech the turbines' P_m (machine base), MP the machines' packed
     parameters (whether the machine divides P_m by its speed)."""
     m = int(P[k, T.MAC])
-    delta, omega = xm[0, m], xm[1, m]
-    w_hp, w_ip, w_lp, w_ex = xs[1, k], xs[3, k], xs[5, k], xs[7, k]
-    d_hp, d_ip, d_lp, d_ex = xs[0, k], xs[2, k], xs[4, k], xs[6, k]
+    delta, omega = xm[mac.S.delta, m], xm[mac.S.omega, m]
+    w_hp, w_ip, w_lp, w_ex = xs[S.wHP, k], xs[S.wIP, k], xs[S.wLP, k], xs[S.wEX, k]
+    d_hp, d_ip, d_lp, d_ex = xs[S.dHP, k], xs[S.dIP, k], xs[S.dLP, k], xs[S.dEX, k]
     speed = w_hp if mac.divides_pmech_by_speed(MP, m) else 1.0
-    for r in (0, 2, 4, 6):
-        dx[r, k] = basrad * (xs[r + 1, k] - 1.0)
-    dx[1, k] = (
+    for d, w in ((S.dHP, S.wHP), (S.dIP, S.wIP), (S.dLP, S.wLP), (S.dEX, S.wEX)):
+        dx[d, k] = basrad * (xs[w, k] - 1.0)
+    dx[S.wHP, k] = (
         pmech[m] / speed
         - P[k, T.DHP] * (w_hp - 1.0)
         - P[k, T.D12] * (w_hp - w_ip)
         + P[k, T.KHP] * (d_ip - d_hp)
     ) / P[k, T.MHP]
-    dx[3, k] = (
+    dx[S.wIP, k] = (
         -P[k, T.DIP] * (w_ip - 1.0)
         - P[k, T.D12] * (w_ip - w_hp)
         - P[k, T.D23] * (w_ip - w_lp)
         + P[k, T.KHP] * (d_hp - d_ip)
         + P[k, T.KIP] * (d_lp - d_ip)
     ) / P[k, T.MIP]
-    dx[5, k] = (
+    dx[S.wLP, k] = (
         -P[k, T.DLP] * (w_lp - 1.0)
         - P[k, T.D23] * (w_lp - w_ip)
         - P[k, T.D34] * (w_lp - omega)
         + P[k, T.KIP] * (d_ip - d_lp)
         + P[k, T.KLP] * (delta - d_lp)
     ) / P[k, T.MLP]
-    dx[7, k] = (
+    dx[S.wEX, k] = (
         -P[k, T.DEX] * (w_ex - 1.0) - P[k, T.D45] * (w_ex - omega) + P[k, T.KEX] * (delta - d_ex)
     ) / P[k, T.MEX]

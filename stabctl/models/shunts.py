@@ -15,13 +15,15 @@ a shunt at rest moves no memory.  docs/pst_models.md section 15.
 from __future__ import annotations
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.declaration import layout
+from stabctl.models.declaration import layout, states
 
-__all__ = ["SLOTS", "N_STATES", "PACKED", "S", "switch", "extra_admittance"]
+__all__ = ["SLOTS", "N_STATES", "M", "PACKED", "S", "switch", "extra_admittance"]
 
 #: the memory slots of a shunt: its level and the delay left (s)
 SLOTS = ("level", "delay")
 N_STATES = len(SLOTS)
+#: the named memory slots, read by the kernels as ``x[M.level, k]``
+M = states("ShuntSlots", SLOTS)
 #: the packed columns: the bus's position among the kept buses, the band, dt, the top
 #: level and the level of the network's admittance (the power flow's)
 PACKED = ("POS", "VLO", "VHI", "DT", "TOP", "LEVEL0")
@@ -32,8 +34,8 @@ S = layout("ShuntColumns", [(c, c.lower()) for c in PACKED])
 @kernel
 def switch(P, x, k, v, dx):
     """Shunt k's discrete control at its bus voltage magnitude v (pu): its level stepped
-    in place as the module says; dx (2, n) written (the delay's rate)."""
-    lev, left = x[0, k], x[1, k]
+    in place as the module says; dx (N_STATES, n) written (the delay's rate)."""
+    lev, left = x[M.level, k], x[M.delay, k]
     if left <= 0.0:
         step = 0.0
         if v < P[k, S.VLO] and lev < P[k, S.TOP]:
@@ -41,16 +43,16 @@ def switch(P, x, k, v, dx):
         elif v > P[k, S.VHI] and lev > 0.0:
             step = -1.0
         if step != 0.0:
-            x[0, k] = lev + step
-            x[1, k] = P[k, S.DT]
-    if x[1, k] <= 0.0:
-        x[1, k] = 0.0
-    dx[0, k] = 0.0
-    dx[1, k] = -1.0 if x[1, k] > 0.0 else 0.0
+            x[M.level, k] = lev + step
+            x[M.delay, k] = P[k, S.DT]
+    if x[M.delay, k] <= 0.0:
+        x[M.delay, k] = 0.0
+    dx[M.level, k] = 0.0
+    dx[M.delay, k] = -1.0 if x[M.delay, k] > 0.0 else 0.0
 
 
 @kernel
 def extra_admittance(P, Y, x, k):
     """The admittance shunt k draws beyond the network's (its level's less the power
     flow's), complex pu; Y (n, n_levels) its levels."""
-    return Y[k, int(x[0, k])] - Y[k, int(P[k, S.LEVEL0])]
+    return Y[k, int(x[M.level, k])] - Y[k, int(P[k, S.LEVEL0])]

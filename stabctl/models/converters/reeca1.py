@@ -1,0 +1,325 @@
+"""REECA1 and REECB1, the WECC renewable energy electrical controls (REEC_A, REEC_B; ANDES
+2.0 ``renewable/reeca1.py``, ``reecb1.py``) of a REGCA1 (ibr_con ``reec`` 1, 2): their DYR
+records, named slots, initial services and states, and the control kernel (docs/ibr.md 6).
+
+The control filters the voltage (Trv) and the electrical power (Tp), runs the reactive
+power or power-factor reference through the Q and V PIs (PITrackAWFreeze) or the Q lag
+(Tiq), adds the reactive current injection Iqinj of a voltage dip, orders the power through
+the rate-limited filter Tpfilt and the lag Tpord, and limits both current commands (the
+VDL curves, Imax, the priority PQFLAG); while the voltage is outside [Vdip, Vup] it is
+frozen.  With ``storage`` 1 (a battery, WECC REEC_C) the active current runs in [-Ipmax,
+Ipmax] and its state of charge (slot ``SOC``) bounds it.  Its parameters are ibr_con
+columns 54-104 (:mod:`.table`).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from stabctl._jit.decorators import kernel
+from stabctl.models.blocks import clip, lag
+from stabctl.models.converters.table import NO_REEC, REECB1, C
+from stabctl.models.declaration import DyrModel, slots
+
+if TYPE_CHECKING:
+    from stabctl.models.converters import ConverterParams
+
+
+#: the ICONs of PSS/E's REECB1 record (REECA1 adds PFLAG before PQFLAG)
+_REEC_ICONS = ("IREG", "PFFLAG", "VFLAG", "QFLAG", "PQFLAG")
+#: REECB1's CONs in PSS/E order (REECA1 adds Iqfrz, Thld, Thld2 after Vref0, Vref1 after
+#: Kvi, and its VDL curves)
+_REEC_CONS = (
+    *("Vdip", "Vup", "Trv", "dbd1", "dbd2", "Kqv", "Iqh1", "Iql1", "Vref0", "Tp", "QMax"),
+    *("QMin", "VMAX", "VMIN", "Kqp", "Kqi", "Kvp", "Kvi", "Tiq", "dPmax", "dPmin", "PMAX"),
+    *("PMIN", "Imax", "Tpord"),
+)
+#: REECA1's ICONs and CONs in PSS/E order
+_REECA1_DYR = (
+    *_REEC_ICONS[:4],
+    *("PFLAG", "PQFLAG"),
+    *_REEC_CONS[:9],
+    *("Iqfrz", "Thld", "Thld2"),
+    *_REEC_CONS[9:18],
+    "Vref1",
+    *_REEC_CONS[18:],
+    *(f"{v}{j}" for pair in (("Vq", "Iq"), ("Vp", "Ip")) for j in range(1, 5) for v in pair),
+)
+
+
+def _reec_copies(fields: tuple[str, ...]) -> dict[str, str]:
+    """ibr_con field <- DYR field of a REECA1 or REECB1 record: all but IREG (the
+    regulated bus, read by the import), under the same name but PQFLAG (``pqflag``) and
+    Tiq (``tiq``)."""
+    rename = {"PQFLAG": "pqflag", "Tiq": "tiq"}
+    return {rename.get(f, f): f for f in fields if f != "IREG"}
+
+
+DYR = (
+    #: REEC_A: ICONs IREG (0: own bus), PFFLAG, VFLAG, QFLAG, PFLAG, PQFLAG; 45 CONs
+    DyrModel(
+        "REECA1",
+        _REECA1_DYR,
+        _reec_copies(_REECA1_DYR),
+    ),
+    #: REEC_B: ICONs IREG (0: own bus), PFFLAG, VFLAG, QFLAG, PQFLAG; 25 CONs
+    DyrModel("REECB1", _REEC_ICONS + _REEC_CONS, _reec_copies(_REEC_ICONS + _REEC_CONS)),
+)
+
+#: REECA1's slots (a REGCA1 with ``reec`` 1): its states, then its memory (`MEMORY_SLOTS`)
+REECA1_SLOTS = (
+    *("Vt_filter", "Pe_filter", "PIQ", "Iq_filter", "Pref_filter", "Pord", "PIV"),
+    *("Iqinj_timer", "Ipmax_timer", "Ipmax_held", "PIQ_held", "PIV_held", "Ipcmd_last"),
+)
+#: the named slots: a battery's state of charge (``storage`` 1, WECC REEC_C; the slot of an
+#: ESD1's), then `REECA1_SLOTS`
+RE = slots("REECA1Slots", ("SOC", *REECA1_SLOTS), first=4)
+#: the slots of REECA1's memory (`MEMORY_SLOTS` of the package): its timers, the held
+#: Ipmax and PI outputs, the last Ipcmd
+MEMORY = tuple(range(int(RE.Iqinj_timer), int(RE.Ipcmd_last) + 1))
+
+
+def services(vals: dict, reec, P0, Q0, v0, Ipcmd0) -> dict[str, np.ndarray]:
+    """REECA1's and REECB1's initial services (ANDES reeca1.py, reecb1.py ConstServices;
+    `ConverterParams`) from the system-base fields ``vals``, for the rows with an
+    electrical control ``reec`` (0 elsewhere)."""
+
+    def rising(a: str, b: str):
+        pts = [vals[f"{c}{j}"] for c in (a, b) for j in (1, 2, 3)]
+        nxt = [vals[f"{c}{j}"] for c in (a, b) for j in (2, 3, 4)]
+        return np.all(np.array(pts) <= np.array(nxt), axis=0)
+
+    # qref0 (reeca1.py 412): QFLAG (v - Vref1), else Iqcmd0 vp (vp = v above 0.01 pu);
+    # REECB1's -Q0 (reecb1.py 304)
+    vp0 = np.where(v0 <= 0.01, 0.01, v0)
+    qref0 = np.where(vals["QFLAG"] == 1, v0 - vals["Vref1"], -Q0 / v0 * vp0)
+    qref0 = np.where(reec == REECB1, -Q0, qref0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tanpf = np.where(P0 != 0, Q0 / np.where(P0 != 0, P0, 1.0), 0.0)
+    on = {
+        "Vref0r": np.where(vals["Vref0"] == 0, v0, vals["Vref0"]),
+        "Qref": -qref0,
+        "tanpf": tanpf,
+        "Ipoff": Ipcmd0 - P0 / v0,
+        "Imaxr": np.where(vals["Imax"] <= 0, 1e8, vals["Imax"]),
+        "zVDL1": rising("Vq", "Iq").astype(float),
+        "zVDL2": rising("Vp", "Ip").astype(float),
+    }
+    return {name: np.where(reec != NO_REEC, value, 0.0) for name, value in on.items()}
+
+
+def initial(cp: ConverterParams, x: np.ndarray, v: np.ndarray) -> None:
+    """REECA1's initial states in x (N_STATES, n_ibr), in place, at the voltage
+    magnitudes v (ANDES reeca1.py v_str): the filters at |V0|, P0, P0, P0; the Q filter
+    at PFsel/vp (Qref, or Q0 with PFFLAG); the V PI's integrator at QFLAG Q0/|V0| (its
+    x0 -QFLAG Iqcmd0), the Q PI's at 0; the last Ipcmd the REGCA1's Ipcmd0."""
+    ree = cp.reec != NO_REEC
+    vp = np.where(v <= 0.01, 0.01, v)
+    pfsel = np.where(cp.PFFLAG == 1, cp.Q0, cp.Qref)
+    init = {
+        RE.Vt_filter: v,
+        RE.Pe_filter: cp.P0,
+        RE.Iq_filter: pfsel / vp,
+        RE.Pref_filter: cp.P0,
+        RE.Pord: cp.P0,
+        RE.PIV: cp.QFLAG * cp.Q0 / v,
+        RE.Ipcmd_last: cp.Ipcmd0,
+    }
+    for slot, value in init.items():
+        x[slot] = np.where(ree, value, 0.0)
+
+
+@kernel
+def extended_event(x, dx, slot, k, on, t_ext):
+    """An event flag extended by t_ext s after its input ``on`` falls (ANDES
+    ExtendedEvent, andes/core/service.py): while on, the timer slot is set to t_ext in
+    place; after, it runs down at 1/s to 0.  Returns 1.0 while the timer runs (the
+    extension, on or after the event), else 0.0."""
+    dx[slot, k] = 0.0
+    if on:
+        x[slot, k] = t_ext
+    elif x[slot, k] > 0.0:
+        dx[slot, k] = -1.0
+    else:
+        x[slot, k] = 0.0
+    return 1.0 if x[slot, k] > 0.0 else 0.0
+
+
+@kernel
+def _frozen_pi(P, x, k, u, gains, lo, hi, frz, dx):
+    """ANDES's PITrackAWFreeze of device k: ys = kp u + xi, y = clip(ys, lo, hi), dxi/dt
+    = ki (u - ks (ys - y)); frozen (frz 1) the output held and the integrator stopped.
+    ``gains`` the columns (kp, ki, ks, state slot, held slot); returns y."""
+    kp, ki, ks = P[k, gains[0]], P[k, gains[1]], P[k, gains[2]]
+    slot, held = gains[3], gains[4]
+    if frz:
+        dx[slot, k] = 0.0
+        return x[held, k]
+    ys = kp * u + x[slot, k]
+    y = clip(ys, lo, hi)
+    dx[slot, k] = ki * (u - ks * (ys - y))
+    x[held, k] = y
+    return y
+
+
+@kernel
+def _vdl(P, k, c, u):
+    """REECA1's voltage-dependent current limit (ANDES Piecewise VDL1/VDL2) of device k at
+    filtered voltage u: the four voltages in columns c..c+3, the currents c+4..c+7."""
+    if u <= P[k, c]:
+        return P[k, c + 4]
+    for j in range(1, 4):
+        if u <= P[k, c + j]:
+            v0, v1, i0, i1 = P[k, c + j - 1], P[k, c + j], P[k, c + j + 3], P[k, c + j + 4]
+            return (u - v0) * ((i1 - i0) / (v1 - v0)) + i0
+    return P[k, c + 7]
+
+
+#: REECA1's VDL curves as (flag column, first point column), numpy scalars
+_VDL1 = (np.int64(C.ZVDL1), np.int64(C.VQ1))
+_VDL2 = (np.int64(C.ZVDL2), np.int64(C.VP1))
+
+
+@kernel
+def _vdl_limit(P, k, curve, u):
+    """REECA1's VDL limit of device k at filtered voltage u: min(VDL(u), Imaxr) (`_vdl`,
+    columns c) if the curve's points rise (flag column z), else 1e8 (ANDES Iqmax1,
+    Ipmax1); curve = (z, c), `_VDL1` or `_VDL2`.  A REECB1 has no curves: Imaxr (ANDES
+    reecb1.py Ipmax, Iqmax)."""
+    z, c = curve
+    if P[k, C.REEC] == REECB1:
+        return P[k, C.IMAXR]
+    if P[k, z] == 0.0:
+        return 1e8
+    return min(_vdl(P, k, c, u), P[k, C.IMAXR])
+
+
+@kernel
+def _room(P, k, other):
+    """The current room sqrt(max(Imax^2 - other^2, 0)) the other command leaves (a
+    REECB1's Imaxr: ANDES reecb1.py Ipmax2sq, Iqmax2sq)."""
+    Imax = P[k, C.IMAXR] if P[k, C.REEC] == REECB1 else P[k, C.IMAX]
+    return np.sqrt(max(Imax**2 - other**2, 0.0))
+
+
+@kernel
+def _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx):
+    """REECA1's reactive current command IqHL of device k: the V PI (`_frozen_pi`, input
+    u, limits +-Iqmax) with QFLAG, else the filtered Q command s4, plus Iqinj, limited to
+    +-Iqmax."""
+    piv = _frozen_pi(P, x, k, u, (C.KVP, C.KVI, C.KVS, RE.PIV, RE.PIV_held), -Iqmax, Iqmax, frz, dx)
+    Qsel = piv if P[k, C.QFLAG] == 1.0 else s4
+    return clip(Qsel + Iqinj, -Iqmax, Iqmax)
+
+
+@kernel
+def _ip_command(P, x, k, Ip_order, Ipmax, hold):
+    """REECA1's active current command IpHL = clip(Ip_order, 0, Ipmax) of device k (a
+    battery, ``storage`` 1: clip(Ip_order, -Ipmax, Ipmax), WECC REEC_C, whose state of
+    charge, with a finite En, stops discharging at SOCmin and charging at SOCmax), Ipmax
+    held at its value before ``hold`` (1.0 for Thld2 s after a dip; ANDES VarHold
+    Ipmaxh), tracked in place otherwise."""
+    if hold:
+        Ipmax = x[RE.Ipmax_held, k]
+    else:
+        x[RE.Ipmax_held, k] = Ipmax
+    lo, hi = -P[k, C.STORAGE] * Ipmax, Ipmax
+    if P[k, C.KSOC] > 0.0:
+        if x[RE.SOC, k] <= P[k, C.SOCMIN]:
+            hi = 0.0
+        if x[RE.SOC, k] >= P[k, C.SOCMAX]:
+            lo = 0.0
+    return clip(Ip_order, lo, hi)
+
+
+@kernel
+def _p_order(P, x, k, Pref, wg, frz, dx):
+    """REECA1's power order Pord of device k: the reference Pref through the rate-limited
+    filter Tpfilt (ANDES LagRate, rates dPmin, dPmax on its right-hand side), times the
+    speed wg with PFLAG (Psel), then the lag Tpord frozen in a dip with the anti-windup
+    limits [PMIN, PMAX] (LagAWFreeze; the state reset to a limit in place)."""
+    e = clip(Pref - x[RE.Pref_filter, k], P[k, C.DPMIN], P[k, C.DPMAX])
+    dx[RE.Pref_filter, k] = e / P[k, C.TPFILT]
+    Psel = wg * x[RE.Pref_filter, k] if P[k, C.PFLAG] == 1.0 else x[RE.Pref_filter, k]
+    e = 0.0 if frz else Psel - x[RE.Pord, k]
+    if x[RE.Pord, k] >= P[k, C.PMAX] and e >= 0.0:
+        x[RE.Pord, k], e = P[k, C.PMAX], 0.0
+    elif x[RE.Pord, k] <= P[k, C.PMIN] and e <= 0.0:
+        x[RE.Pord, k], e = P[k, C.PMIN], 0.0
+    dx[RE.Pord, k] = e / P[k, C.TPORD]
+    return x[RE.Pord, k]
+
+
+@kernel
+def _iq_injection(P, k, vt, frz, extended):
+    """REECA1's Iqinj of device k at filtered voltage vt: Kqv times the deadbanded error
+    Vref0r - vt (DeadBand1, strict) in a dip; for |Thld| s after it (``extended``) the
+    same (Thld < 0) or Iqfrz (Thld > 0); limited to [Iql1, Iqh1] (ANDES leaves the limits
+    out).  A REECB1's at all times (its GainLimiter, no hold)."""
+    err = P[k, C.VREF0R] - vt
+    db = 0.0
+    if err > P[k, C.DBD2]:
+        db = err - P[k, C.DBD2]
+    elif err < P[k, C.DBD1]:
+        db = err - P[k, C.DBD1]
+    Iqv = db * P[k, C.KQV]
+    Iqinj = 0.0
+    if frz or (extended and P[k, C.THLD] < 0.0) or P[k, C.REEC] == REECB1:
+        Iqinj = Iqv
+    elif extended and P[k, C.THLD] > 0.0:
+        Iqinj = P[k, C.IQFRZ]
+    return clip(Iqinj, P[k, C.IQL1], P[k, C.IQH1])
+
+
+@kernel
+def control(P, x, k, v, S, ref, wg, dx):
+    """REECA1 (ANDES 2.0 reeca1.py; docs/ibr.md 6) driving REGCA1 k at voltage magnitude v
+    with its injected power S = Pe + j Qe, its references ref = Pref + j Qext (Pref: P0,
+    or its wind turbine's, plus its plant control's Pext; Qext the plant control's Q
+    increment, 0 without one) and its speed wg (1 without a wind turbine): the
+    derivatives of its slots written, its memory (`MEMORY_SLOTS`) updated in place;
+    returns the commands (IpHL, IqHL), pu.  Frozen (Volt_dip) while v < Vdip or v > Vup
+    (strict).  A REECB1 (ANDES reecb1.py) the same but: the V PI's input the selected
+    Vsel (the Q PI's output with VFLAG, else 0), no VDL curves, Iqinj at all times, no
+    holds (its Thld, Thld2 0) and no PFLAG (0)."""
+    ext = ref - P[k, C.P0]
+    frz = v < P[k, C.VDIP] or v > P[k, C.VUP]
+    extended = extended_event(x, dx, RE.Iqinj_timer, k, frz, abs(P[k, C.THLD]))
+    hold = extended_event(x, dx, RE.Ipmax_timer, k, frz, P[k, C.THLD2])
+    if frz:  # the Ipmax hold runs after the dip only (ExtendedEvent extend_only)
+        hold = 0.0
+    vt, dx[RE.Vt_filter, k] = lag(v, x[RE.Vt_filter, k], P[k, C.TRV])
+    pe, dx[RE.Pe_filter, k] = lag(
+        S.real, x[RE.Pe_filter, k], P[k, C.TP]
+    )  # Tp < LBND: no filter (PSS/E 0)
+    vp = 0.01 if v <= 0.01 else v
+    # reactive power reference: Q, or the power factor of the filtered Pe (Q0 at P0 = 0)
+    PFsel = P[k, C.QREF] + ext.imag
+    if P[k, C.PFFLAG] == 1.0:
+        PFsel = pe * P[k, C.TANPF] if P[k, C.P0] != 0.0 else P[k, C.Q0]
+    Qerr = clip(PFsel, P[k, C.QMIN], P[k, C.QMAX]) - S.imag
+    vflag = P[k, C.VFLAG]
+    lo, hi = P[k, C.VMIN], P[k, C.VMAX]
+    piq = 0.0  # the Q PI drives Iq with VFLAG and QFLAG 1 only (ANDES's drifts unread)
+    dx[RE.PIQ, k] = 0.0
+    if vflag == 1.0 and P[k, C.QFLAG] == 1.0:
+        piq = _frozen_pi(P, x, k, Qerr, (C.KQP, C.KQI, C.KQS, RE.PIQ, RE.PIQ_held), lo, hi, frz, dx)
+    if P[k, C.REEC] == REECB1:
+        u = P[k, C.QFLAG] * clip(vflag * piq, lo, hi)
+    else:
+        Vsel = clip(P[k, C.VREF1] + PFsel if vflag == 0.0 else piq, lo, hi)
+        u = P[k, C.QFLAG] * (Vsel - vt * (1.0 - vflag))
+    s4 = x[RE.Iq_filter, k]
+    dx[RE.Iq_filter, k] = 0.0 if frz else (PFsel / vp - s4) / P[k, C.TIQ]
+    Iqinj = _iq_injection(P, k, vt, frz, extended)
+    Ip_order = _p_order(P, x, k, ref.real, wg, frz, dx) / vp
+    if P[k, C.PQFLAG] == 0.0:  # Q priority
+        Iqmax = _vdl_limit(P, k, _VDL1, vt)
+        IqHL = _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx)
+        IpHL = _ip_command(P, x, k, Ip_order, _room(P, k, IqHL), hold)
+    else:
+        IpHL = _ip_command(P, x, k, Ip_order, _vdl_limit(P, k, _VDL2, vt), hold)
+        IqHL = _iq_command(P, x, k, u, s4, Iqinj, _room(P, k, IpHL), frz, dx)
+    return IpHL, IqHL
