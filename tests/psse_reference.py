@@ -207,6 +207,11 @@ RUNS: tuple[Run, ...] = (
         "TEST_RENA_NOFREQ_REF_FLAG.csv", _trip(101, 103), 10.0,
         (Quantity(1, "angle", (103, 102), 0.01, "l2"), Quantity(2, "v", (103,), 0.01, "l2")),
         inf_bus=102, models="REGCA1 REECB1 REPCA1"),
+    # DEGOV: PSS/E's DYR has GAST on G102; the Julia test replaces it with its DEGOV
+    # (README there), its reference read as the speed in pu over 5 s
+    Run("DEGOV", _THREE, "ThreeBus_DEGOV.dyr", "degov_nodelay_speed_final.csv",
+        _trip(101, 102), 5.0, (Quantity(1, "speed", (102,), 4.7e-5),),
+        models="GENCLS DEGOV"),
     # the stabiliser runs: VREF of the machine at bus 1 stepped at 1 s (PSS/E's own
     # runs; the PSS2 DYRs written from the Julia tests' values, README there)
     Run("STAB1", "OMIB_SSS_60Hz.raw", "OMIB_SSS.dyr", "results_PSSe.csv", (), 20.0,
