@@ -469,11 +469,11 @@ def compensator_rows(records, generators) -> Compensators:
         generators: the RAW's in-service generators (dicts: bus, id, mbase, pg, qg).
 
     Returns:
-        `Compensators`; a record without its generator, or whose generator has PG != 0,
-        is skipped with the reason.
+        `Compensators`; a record without its generator is skipped with the reason.
 
     Raises:
-        CaseError: a record with the wrong number of parameters.
+        CaseError: a record with the wrong number of parameters, or whose generator has
+        PG != 0.
     """
     from stabctl.io.dyr_converters import shares
 
@@ -489,10 +489,10 @@ def compensator_rows(records, generators) -> Compensators:
             out.skipped.append((rec, "no such generator in the RAW data (or out of service)"))
             continue
         if float(gen["pg"]) != 0.0:
-            out.skipped.append(
-                (rec, f"its generator has PG = {float(gen['pg']):g} pu (a compensator: 0)")
+            raise CaseError(
+                f"{rec.label()}: its generator has PG = {float(gen['pg']):g} MW; a static "
+                "var compensator's generator carries no real power (PG 0)"
             )
-            continue
         v = model.values(rec.params)
         row = {
             "number": len(out.rows) + 1,
