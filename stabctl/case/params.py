@@ -6,8 +6,8 @@ Each family is declared beside its kernels, one parameter once
 (``mac_con``), ``EXCITER`` in :mod:`stabctl.models.exciters` (``exc_con``), ``PSS`` in
 :mod:`stabctl.models.pss` (``pss_con``), ``GOVERNOR`` in :mod:`stabctl.models.governors`
 (``tg_con``), ``CONVERTER`` in :mod:`stabctl.models.converters` (``ibr_con``) ``SHAFT``
-in :mod:`stabctl.models.shafts` (``shaft_con``) and ``MOTOR`` in :mod:`stabctl.models.motors`
-(``mot_con``).  The case
+in :mod:`stabctl.models.shafts` (``shaft_con``), ``MOTOR`` in :mod:`stabctl.models.motors`
+(``mot_con``) and ``SVC`` in :mod:`stabctl.models.svcs` (``svc_con``).  The case
 tables (:mod:`stabctl.case.system`), the DYR import and the model reference are built
 from this registry.
 """
@@ -25,6 +25,7 @@ from stabctl.models.machines import MACHINE
 from stabctl.models.motors import MOTOR
 from stabctl.models.pss import PSS
 from stabctl.models.shafts import SHAFT
+from stabctl.models.svcs import SVC
 
 __all__ = ["FAMILIES"]
 
@@ -38,5 +39,6 @@ FAMILIES: Mapping[str, Family] = MappingProxyType(
         "converters": CONVERTER,
         "shafts": SHAFT,
         "motors": MOTOR,
+        "svcs": SVC,
     }
 )

@@ -48,6 +48,7 @@ from stabctl.models.machines import MACHINE
 from stabctl.models.motors import MOTOR
 from stabctl.models.pss import PSS
 from stabctl.models.shafts import SHAFT
+from stabctl.models.svcs import SVC
 
 __all__ = [
     "Table",
@@ -63,6 +64,7 @@ __all__ = [
     "ShaftTable",
     "SwitchedShuntTable",
     "MotorTable",
+    "SvcTable",
     "RegulationTable",
     "Case",
     "SWING",
@@ -622,6 +624,23 @@ class MotorTable(Table):
         self._unique("number", "motor number")
 
 
+@_declared(SVC)
+class SvcTable(Table):
+    """Static var compensators: stabctl's ``svc_con`` (PSS/E CSVGN1; the model in
+        :mod:`stabctl.models.svcs`, docs/pst_models.md section 18), one row per
+        compensator, a susceptance at its bus whose initial value is its share of the
+        bus's reactive generation in the power flow.  Columns (declared in
+        :data:`stabctl.models.svcs.SVC`; the regulator in pu of the reactor rating):
+
+    {columns}
+
+        Validation: numbers unique.
+    """
+
+    def _check(self):
+        self._unique("number", "compensator number")
+
+
 @dataclass(frozen=True, eq=False)
 class LoadTable(Table):
     """Non-conforming load data: PST ``load_con``, 5 columns (PST manual 3.29 Table 12).
@@ -872,6 +891,7 @@ TABLES: Mapping[str, type[Table]] = MappingProxyType(
         "converters": ConverterTable,
         "shafts": ShaftTable,
         "motors": MotorTable,
+        "svcs": SvcTable,
         "switched_shunts": SwitchedShuntTable,
         "remote_regulation": RegulationTable,
     }
@@ -919,6 +939,8 @@ class Case:
         base; empty by default.
     motors : MotorTable
         Induction motors (ANDES Motor5), one row each, motor base; empty by default.
+    svcs : SvcTable
+        Static var compensators (PSS/E CSVGN1), one row each; empty by default.
     switched_shunts : SwitchedShuntTable
         Switched shunts (ANDES ShuntSw), one row each, system base; empty by default.
     remote_regulation : RegulationTable
@@ -965,6 +987,7 @@ class Case:
     converters: ConverterTable = field(default_factory=ConverterTable.empty)
     shafts: ShaftTable = field(default_factory=ShaftTable.empty)
     motors: MotorTable = field(default_factory=MotorTable.empty)
+    svcs: SvcTable = field(default_factory=SvcTable.empty)
     switched_shunts: SwitchedShuntTable = field(default_factory=SwitchedShuntTable.empty)
     remote_regulation: RegulationTable = field(default_factory=RegulationTable.empty)
     sw_con: np.ndarray | None = None
@@ -1011,6 +1034,7 @@ class Case:
         self._check_buses(self.injections, "bus", known)
         self._check_buses(self.converters, "bus", known)
         self._check_buses(self.motors, "bus", known)
+        self._check_buses(self.svcs, "bus", known)
         self._check_buses(self.switched_shunts, "bus", known)
         self._check_regulation()
         macs = self.machines.number

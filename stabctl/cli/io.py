@@ -227,6 +227,9 @@ def _imported(case, out) -> tuple[dict, str]:
     if len(case.shafts):  # likewise a case without torsional shafts
         summary["shafts"] = len(case.shafts)
         text += f", {len(case.shafts)} torsional shafts"
+    if len(case.svcs):  # likewise a case without static var compensators
+        summary["svcs"] = len(case.svcs)
+        text += f", {len(case.svcs)} static var compensators"
     if case.events:  # the case's own disturbance (simulate --case-events runs it)
         from stabctl.dynamics.events import from_case
 

@@ -92,7 +92,7 @@ def fastest_time_constant(case: Case) -> tuple[float, str]:
     (table, field, row); a torsional shaft's fastest mode w counts as 0.1 / w
     (`stabctl.models.shafts.ShaftParams.time_constants`).  Raises CaseError for models
     stabctl does not have."""
-    from stabctl.models import converters, exciters, governors, machines, motors, pss, shafts
+    from stabctl.models import converters, exciters, governors, machines, motors, pss, shafts, svcs
 
     cands = []
     mp, ep = machines.machine_params(case), exciters.exciter_params(case)
@@ -111,6 +111,7 @@ def fastest_time_constant(case: Case) -> tuple[float, str]:
         *cp.time_constants(),
         *shafts.shaft_params(case).time_constants(mp.basrad),
         *motors.motor_params(case).time_constants(),
+        *svcs.time_constants(case),
     ):
         if np.any(sel):
             k = int(np.argmin(np.where(sel, np.abs(arr), np.inf)))

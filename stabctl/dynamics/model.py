@@ -31,6 +31,7 @@ from stabctl.models import motors as mot
 from stabctl.models import pss as pss_
 from stabctl.models import shafts as shaft
 from stabctl.models import shunts as shunt
+from stabctl.models import svcs as svc
 from stabctl.network import switched_shunts as sws
 from stabctl.network.solution import (
     NEWTON_MAX_ITER,
@@ -104,7 +105,8 @@ class Layout:
     """Slices of the flat state vector: machines (6, n_mac), exciters (exc_rows, n_exc),
     pss (pss_rows, n_pss), governors (tg_rows, n_tg), converters (conv.N_STATES, n_ibr),
     shafts (shaft.N_STATES, n_shaft), motors (mot.N_STATES, n_motor), switched shunts'
-    memory (shunt.N_STATES, n_swsh), each stored state-major; the rows are the most slots
+    memory (shunt.N_STATES, n_swsh), static var compensators (svc.N_STATES, n_svc), each
+    stored state-major; the rows are the most slots
     any exciter / PSS / governor type of the case uses."""
 
     n_mac: int
@@ -118,6 +120,7 @@ class Layout:
     n_shaft: int = 0
     n_motor: int = 0
     n_swsh: int = 0
+    n_svc: int = 0
     blocks: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -131,6 +134,7 @@ class Layout:
             ("shaft", shaft.N_STATES, self.n_shaft),
             ("motor", mot.N_STATES, self.n_motor),
             ("swsh", shunt.N_STATES, self.n_swsh),
+            ("svc", svc.N_STATES, self.n_svc),
         ):
             self.blocks[name] = (slice(start, start + rows * n), (rows, n))
             start += rows * n
@@ -180,6 +184,7 @@ class DynamicModel:
         self.cp = conv.converter_params(case, op.V, op.S_gen)
         self.tp = shaft.shaft_params(case)
         self.mo = mot.motor_params(case)
+        self.sv = svc.svc_params(case, op.V, op.S_gen)
         self.layout = Layout(
             self.mp.n,
             self.ep.n,
@@ -192,6 +197,7 @@ class DynamicModel:
             self.tp.n,
             self.mo.n,
             len(case.switched_shunts),
+            self.sv.n,
         )
         self._setup_loads(injection_buses)
         self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
@@ -213,11 +219,17 @@ class DynamicModel:
             S_conv = np.zeros(case.n_bus, complex)
             np.add.at(S_conv, cp.bus_idx, cp.P0 + 1j * cp.Q0)
             S_free = op.S_gen - S_conv
+        sv = self.sv
+        # the compensators' shares of the reactive generation: their susceptance B0 at
+        # their bus, beside (not netted with) the bus's load
+        y_svc = np.zeros(case.n_bus, complex)
+        np.add.at(y_svc, sv.bus_idx, 1j * sv.B0)
+        S_free = S_free - 1j * y_svc.imag * V0**2
         S_L = op.S_load - np.where(has_mac, 0.0, S_free)  # generation without machine
         fP, fQ, fIP, fIQ = frac.T
         S_Z = (1 - fP - fIP) * S_L.real + 1j * (1 - fQ - fIQ) * S_L.imag
         # the switched shunts at the level they start at (the power flow's, `Simulator`)
-        self.y_load = np.conj(S_Z) / V0**2 + sws.bus_admittances(case)
+        self.y_load = np.conj(S_Z) / V0**2 + sws.bus_admittances(case) + y_svc
         extra = case.bus_indices(list(injection_buses)) if len(injection_buses) else []
         nc = np.asarray(case.bus_indices(lc[:, 0]) if lc.size else [], int)
         # the converters' buses and their plant controls' line ends (REPCA1)
@@ -231,11 +243,12 @@ class DynamicModel:
         np.add.at(S_inj, inj_bus, inj.p + 1j * inj.q)
         ends = np.concatenate(
             [cp.bus_idx, cp.bus1_idx, cp.bus2_idx, self.mo.bus_idx, self.sw_bus, inj_bus]
+            + [sv.bus_idx]
         )
         ends = ends.astype(int)
         self.nc_idx = np.unique(np.concatenate([nc, np.asarray(extra, int), ends])).astype(int)
         rows_of = ((cp.pos, cp.bus_idx), (cp.pos1, cp.bus1_idx), (cp.pos2, cp.bus2_idx))
-        for pos, rows in (*rows_of, (self.mo.pos, self.mo.bus_idx)):
+        for pos, rows in (*rows_of, (self.mo.pos, self.mo.bus_idx), (sv.pos, sv.bus_idx)):
             pos[:] = np.searchsorted(self.nc_idx, rows)
         i = self.nc_idx
         S_P = fP[i] * S_L[i].real + 1j * fQ[i] * S_L[i].imag - S_inj[i]
@@ -317,6 +330,7 @@ class DynamicModel:
         held = {
             "converter": np.concatenate([self.cp.bus_idx, self.cp.bus1_idx, self.cp.bus2_idx]),
             "induction motor": self.mo.bus_idx,
+            "static var compensator": self.sv.bus_idx,
             "fixed injection": self.case.bus_indices(self.case.injections.bus)
             if len(self.case.injections)
             else np.zeros(0, int),
@@ -375,6 +389,7 @@ class DynamicModel:
         L.view(x, "tg")[:] = xg
         L.view(x, "ibr")[:] = conv.initialise(self.cp, op.V)
         L.view(x, "swsh")[0] = sws.initial_levels(self.case.switched_shunts)
+        L.view(x, "svc")[:] = svc.initialise(self.sv)
         L.view(x, "shaft")[:] = shaft.initialise(
             self.tp, xm[0, self.tp.mac], self.pmech0[self.tp.mac]
         )
@@ -397,6 +412,7 @@ class DynamicModel:
             MO=self.mo.packed(),
             SWP=self._shunts_packed(),
             SWY=self._shunt_levels(),
+            SVP=self.sv.packed(),
             pss_of_exc=self.pss_of_exc,
             exc_rows=L.exc_rows,
             pss_rows=L.pss_rows,
@@ -415,6 +431,7 @@ class DynamicModel:
             n_shaft=L.n_shaft,
             n_motor=L.n_motor,
             n_swsh=L.n_swsh,
+            n_svc=L.n_svc,
         )
 
     def _shunts_packed(self) -> np.ndarray:
@@ -529,6 +546,7 @@ class DynamicModel:
             "shaft": self.tp.mac,
             "motor": np.arange(self.mo.n),
             "swsh": np.arange(len(self.case.switched_shunts)),
+            "svc": np.arange(self.sv.n),
         }
         names = {
             "mac": lambda i: mac.STATE_NAMES,
@@ -539,6 +557,7 @@ class DynamicModel:
             "shaft": lambda i: shaft.STATE_NAMES,
             "motor": lambda i: mot.STATE_NAMES,
             "swsh": lambda i: shunt.SLOTS,
+            "svc": lambda i: svc.STATE_NAMES,
         }
         for block, (sl, (_rows, n)) in self.layout.blocks.items():
             if sl.start <= k < sl.stop:
@@ -551,6 +570,8 @@ class DynamicModel:
                     return f"motor.{state}.M{int(self.case.motors.number[i])}"
                 if block == "swsh":
                     return f"swsh.{state}.S{int(self.case.switched_shunts.number[i])}"
+                if block == "svc":
+                    return f"svc.{state}.V{int(self.case.svcs.number[i])}"
                 number = int(self.case.machines.number[owners[block][i]])
                 return f"{block}.{state}.G{number}"
         raise IndexError(f"state index {k} out of range")
@@ -613,16 +634,18 @@ def active_states(model: DynamicModel) -> np.ndarray:
     L.view(act, "shaft")[:] = True
     L.view(act, "motor")[:] = model.case.motors.in_service == 1  # off: standing still
     L.view(act, "swsh")[:] = False  # a switched shunt's level and delay: discrete memory
+    L.view(act, "svc")[:] = model.sv.has_state()
     return act
 
 
 class KernelParams(NamedTuple):
     """Packed parameters of every model for the compiled kernels (see each model's
     `packed`; IP the converters', TP the shafts', MO the motors', SWP and SWY the switched
-    shunts' columns and levels), the kept buses' load array loads (9, n_nc) complex pu
-    (`stabctl.network.solution.kept_loads`, copied by each evaluation) and the numbers of
-    machines, exciters, PSSs, governors, converters, shafts, motors and switched shunts
-    (the state layout, `Layout`)."""
+    shunts' columns and levels, SVP the static var compensators'), the kept buses' load
+    array loads (9, n_nc) complex pu (`stabctl.network.solution.kept_loads`, copied by
+    each evaluation) and the numbers of
+    machines, exciters, PSSs, governors, converters, shafts, motors, switched shunts and
+    compensators (the state layout, `Layout`)."""
 
     MP: np.ndarray
     basrad: float
@@ -634,6 +657,7 @@ class KernelParams(NamedTuple):
     MO: np.ndarray
     SWP: np.ndarray
     SWY: np.ndarray
+    SVP: np.ndarray
     pss_of_exc: np.ndarray
     exc_rows: int
     pss_rows: int
@@ -654,6 +678,7 @@ class KernelParams(NamedTuple):
     n_shaft: int
     n_motor: int
     n_swsh: int
+    n_svc: int
 
 
 class KernelNetwork(NamedTuple):
@@ -791,9 +816,10 @@ class KeptDevices(NamedTuple):
     """The devices drawing current at the kept buses, for the network solution: the
     converters' packed parameters IP (n_ibr, ...) and states xi (`conv.N_STATES`,
     n_ibr), the motors' MO and states xmo, on (n_motor,) 1.0 for each motor in service,
-    the switched shunts' SWP, levels SWY and memory xsw (`KernelParams`, `Layout`).  The
-    kernels below take these eight arrays, not the whole `KernelParams`: a compiled call
-    costs about 10 ns for every array it is passed (measured)."""
+    the switched shunts' SWP, levels SWY and memory xsw, the compensators' SVP and states
+    xsv (`KernelParams`, `Layout`).  The kernels below take these ten arrays, not the
+    whole `KernelParams`: a compiled call costs about 10 ns for every array it is passed
+    (measured)."""
 
     IP: np.ndarray
     xi: np.ndarray
@@ -803,15 +829,17 @@ class KeptDevices(NamedTuple):
     SWP: np.ndarray
     SWY: np.ndarray
     xsw: np.ndarray
+    SVP: np.ndarray
+    xsv: np.ndarray
 
 
 @kernel
 def _summed_currents(dev, V_nc, dv):
     """`conv.drawn_current` of every converter at its bus voltage magnitude + dv (pu), and
     the current of every motor on beside its admittance (`mot.drawn_current`), summed per
-    kept bus, and the switched shunts' admittance beyond the network's
-    (`shunt.extra_admittance`) as a drawn current: (I_rel, I_fix), each (n_nc,) complex;
-    dev the `KeptDevices`."""
+    kept bus, and the switched shunts' and compensators' admittance beyond the network's
+    (`shunt.extra_admittance`, `svc.extra_admittance`) as a drawn current: (I_rel,
+    I_fix), each (n_nc,) complex; dev the `KeptDevices`."""
     rel = np.zeros(V_nc.size, np.complex128)
     fix = np.zeros(V_nc.size, np.complex128)
     for k in range(dev.xi.shape[1]):
@@ -825,6 +853,10 @@ def _summed_currents(dev, V_nc, dv):
     for k in range(dev.xsw.shape[1]):
         pos = int(dev.SWP[k, shunt.S.POS])
         y = shunt.extra_admittance(dev.SWP, dev.SWY, dev.xsw, k)
+        rel[pos] += np.conj(y) * (abs(V_nc[pos]) + dv)
+    for k in range(dev.xsv.shape[1]):
+        pos = int(dev.SVP[k, svc.V.POS])
+        y = svc.extra_admittance(dev.SVP, dev.xsv, k)
         rel[pos] += np.conj(y) * (abs(V_nc[pos]) + dv)
     return rel, fix
 
@@ -960,7 +992,10 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     o += rm * nmo
     rs, nsw = shunt.N_STATES, p.n_swsh
     xsw, dxsw = x[o : o + rs * nsw].reshape(rs, nsw), dx[o : o + rs * nsw].reshape(rs, nsw)
-    dev = KeptDevices(p.IP, xi, p.MO, xmo, on, p.SWP, p.SWY, xsw)
+    o += rs * nsw
+    rv, nv = svc.N_STATES, p.n_svc
+    xsv, dxsv = x[o : o + rv * nv].reshape(rv, nv), dx[o : o + rv * nv].reshape(rv, nv)
+    dev = KeptDevices(p.IP, xi, p.MO, xmo, on, p.SWP, p.SWY, xsw, p.SVP, xsv)
     psi = np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi)
     v_dep = False
@@ -969,8 +1004,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         v_dep = v_dep or conv.voltage_dependent(p.IP, k)
     loads = p.loads.copy()
     assign(loads[LOAD.S_extra], S_extra)
-    if ni or nmo or nsw:  # the converters' tangent at the starting voltages, the motors',
-        # the switched shunts' currents
+    if ni or nmo or nsw or nv:  # the converters' tangent at the starting voltages, the
+        # motors', the switched shunts' and the compensators' currents
         _drawn_currents(dev, V_nc, loads, -1.0)
     V_start = V_nc.copy() if v_dep else V_nc
     it = solve_nc(Y21, Y22, Z22, psi, V_nc, loads, held)
@@ -1058,6 +1093,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         S_ibr[k] = conv.derivatives(p.IP, xi, k, V_k, V_nc, p.reach, dxi)
     for k in range(nmo):
         mot.derivatives(p.MO, xmo, k, V_nc[int(p.MO[k, mot.Q.POS])], on[k], dxmo)
+    for k in range(nv):
+        svc.derivatives(p.SVP, xsv, k, abs(V_nc[int(p.SVP[k, svc.V.POS])]), dxsv)
     return it
 
 

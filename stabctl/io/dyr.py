@@ -26,6 +26,7 @@ import math
 import re
 from contextvars import ContextVar
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -37,6 +38,8 @@ from stabctl.models.exciters import EXCITER
 from stabctl.models.governors import GOVERNOR
 from stabctl.models.machines import MACHINE
 from stabctl.models.pss import PSS
+from stabctl.models.svcs import DYR as SVC_RECORDS
+from stabctl.models.svcs import SVC
 
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
 #: table kind -> the declaration of its columns and DYR models (stabctl.models)
@@ -51,8 +54,11 @@ DYR_MODELS: dict[str, DyrModel] = {m.name: m for f in FAMILY.values() for m in f
 #: DYR converter record -> its declaration (the converter table's, ibr_con; mapped by
 #: `stabctl.io.dyr_converters`)
 CONVERTER_DYR: dict[str, DyrModel] = {m.name: m for m in CONVERTER.dyr}
+#: DYR compensator record -> its declaration (the compensator table's, svc_con;
+#: `compensator_rows`)
+SVC_DYR: dict[str, DyrModel] = {m.name: m for m in SVC_RECORDS}
 #: numbers after the id per model (PSS/E Model Library: ICONs, then CONs)
-N_PARAMS = {name: len(m.fields) for name, m in (DYR_MODELS | CONVERTER_DYR).items()}
+N_PARAMS = {name: len(m.fields) for name, m in (DYR_MODELS | CONVERTER_DYR | SVC_DYR).items()}
 #: the fields of a record that are strings (a branch's circuit id): NaN among the numbers,
 #: the text kept in `DyrRecord.text`
 TEXT_FIELDS = {"REPCA1": ("CKTID",)}
@@ -440,6 +446,64 @@ def _compensate(records, gens, exciters, andes) -> list:
         for name, field in DYR_MODELS[rec.model].copy.items():
             row[EXCITER.col(name) - 1] = v[field]
     return refused
+
+
+class Compensators(NamedTuple):
+    """What `compensator_rows` gives: the svc_con rows, the generators (bus, ID) they
+    are, and the records left out with why."""
+
+    rows: list
+    replaced: set
+    skipped: list
+
+
+def compensator_rows(records, generators) -> Compensators:
+    """The svc_con rows (`stabctl.models.svcs.SVC`) of the static var compensator records
+    (CSVGN1): a compensator is its generator in the RAW power flow (PSS/E attaches the
+    record to a generator, P = 0), numbered 1, 2, ... in record order, its reactor rating
+    RBASE the generator's MBASE, its share of the bus's reactive generation the
+    generator's (`stabctl.io.dyr_converters.shares`).
+
+    Args:
+        records: DyrRecord sequence (`read_dyr`); those of other models are ignored.
+        generators: the RAW's in-service generators (dicts: bus, id, mbase, pg, qg).
+
+    Returns:
+        `Compensators`; a record without its generator is skipped with the reason.
+
+    Raises:
+        CaseError: a record with the wrong number of parameters, or whose generator has
+        PG != 0.
+    """
+    from stabctl.io.dyr_converters import shares
+
+    by_key = {(int(g["bus"]), machine_id(g["id"])): g for g in generators}
+    out = Compensators([], set(), [])
+    for rec in records:
+        model = SVC_DYR.get(rec.model)
+        if model is None:
+            continue
+        _check_count(rec)
+        gen = by_key.get((rec.bus, rec.id))
+        if gen is None:
+            out.skipped.append((rec, "no such generator in the RAW data (or out of service)"))
+            continue
+        if float(gen["pg"]) != 0.0:
+            raise CaseError(
+                f"{rec.label()}: its generator has PG = {float(gen['pg']):g} MW; a static "
+                "var compensator's generator carries no real power (PG 0)"
+            )
+        v = model.values(rec.params)
+        row = {
+            "number": len(out.rows) + 1,
+            "bus": int(gen["bus"]),
+            "qfrac": shares(generators, gen)[1],
+            "mva": float(gen["mbase"]),
+            **{field: v[name] for field, name in model.copy.items()},
+        }
+        out.rows.append([row[name] for name in SVC.names])
+        out.replaced.add((rec.bus, rec.id))
+    return out
 
 
 def _check_count(rec: DyrRecord) -> None:

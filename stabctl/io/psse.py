@@ -9,7 +9,9 @@ each takes the share PG_k / sum(PG) of the bus generation and QG_k / sum(QG) of 
 
 A generator with a ``REGCA1`` record is a converter plant, a row of ``ibr_con`` with its
 ``REECA1``/``REECB1``, ``REPCA1`` and wind records (:mod:`stabctl.io.dyr_converters`),
-not a machine; machines are numbered in RAW order without them.
+not a machine; one with a ``CSVGN1`` record is a static var compensator, a row of
+``svc_con`` (:func:`stabctl.io.dyr.compensator_rows`); machines are numbered in RAW order
+without them.
 
 Generators without a machine model in the DYR file are refused (``unmodelled="error"``)
 or netted (``"net"``, PSS/E's netting: a negative constant-power load at their bus,
@@ -165,9 +167,9 @@ def _without_machine(records):
     maps names, the reason it is netted: no source record at all, or only records of a
     generator model stabctl does not support (named ``file:line MODEL``; they are
     reported unsupported, so left out only with ``on_unsupported="skip"``); else None."""
-    from stabctl.io.dyr import has_machine_model, machine_id, maps_machine
+    from stabctl.io.dyr import SVC_DYR, has_machine_model, machine_id, maps_machine
 
-    modelled = {(r.bus, r.id) for r in records if maps_machine(r)}
+    modelled = {(r.bus, r.id) for r in records if maps_machine(r) or r.model in SVC_DYR}
     sources: dict = {}
     for r in records:
         if has_machine_model(r):
@@ -190,28 +192,31 @@ def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]
     ... in RAW order, the other generators), the unsupported records (as text), the
     generators whose REGCA1 plant was left out (``bus B 'ID'``) and the records read with
     a value other than the file's."""
-    from stabctl.io.dyr import dyr_tables, machine_id
+    from stabctl.io.dyr import SVC_DYR, compensator_rows, dyr_tables, machine_id
     from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows, shares
 
     gens = [{**g.as_dyr(), "sbase": raw.base_mva} for g in raw.generators]
     conv = converter_rows(records, gens, raw.line, conventions)
+    svc = compensator_rows(records, gens)
     keys = [(int(g["bus"]), machine_id(g["id"])) for g in gens]
     lost = {(r.bus, r.id) for r, _ in conv.skipped if r.model == "REGCA1"} & set(keys)
-    plant_buses = {bus for bus, _ in conv.replaced}
+    plant_buses = {bus for bus, _ in conv.replaced | svc.replaced}
     for g in gens:  # a machine sharing its bus with a plant: its own share (PSS/E's)
         if int(g["bus"]) in plant_buses:
             g["pfrac"], g["qfrac"] = shares(gens, g)
-    gens = [g for g, key in zip(gens, keys) if key not in conv.replaced | lost]
+    gens = [g for g, key in zip(gens, keys) if key not in conv.replaced | lost | svc.replaced]
     for number, g in enumerate(gens, 1):
         g["number"] = number
-    records = [r for r in records if r.model not in CONVERTER_RECORDS]
+    records = [r for r in records if r.model not in CONVERTER_RECORDS and r.model not in SVC_DYR]
     tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
     mats: dict = {"ibr_con": np.array(conv.rows, float)} if conv.rows else {}
+    if svc.rows:
+        mats["svc_con"] = np.array(svc.rows, float)
     for key in ("mac_con", "exc_con", "pss_con", "tg_con"):
         if getattr(tables, key) is not None:
             mats[key] = getattr(tables, key)
     skipped = sorted(
-        [*conv.skipped, *zip(tables.unsupported, tables.why)],
+        [*conv.skipped, *svc.skipped, *zip(tables.unsupported, tables.why)],
         key=lambda item: (item[0].file, item[0].line),
     )
     return (

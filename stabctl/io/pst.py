@@ -65,6 +65,7 @@ PST_TABLES: Mapping[str, str] = {
     "ibr_con": "converters",  # stabctl's converter table (ANDES PVD1, ESD1), no PST matrix
     "shaft_con": "shafts",  # stabctl's torsional shafts (ANDES SHAFT5), no PST matrix
     "mot_con": "motors",  # stabctl's induction motors (ANDES Motor5), no PST matrix
+    "svc_con": "svcs",  # stabctl's static var compensators (PSS/E CSVGN1), no PST matrix
     "swsh_con": "switched_shunts",  # stabctl's switched shunts (ANDES ShuntSw), no PST matrix
     "inj_con": "injections",  # stabctl's fixed injections (HVDC set points), no PST matrix
     "vreg_con": "remote_regulation",  # stabctl's remote voltage regulation, no PST matrix
@@ -374,11 +375,13 @@ _LICENCE_DEFAULT = ""
 
 
 #: tables written only when they have rows (a case without converters, shafts, motors,
-#: switched shunts or remote regulation is written as before those tables existed)
+#: compensators, switched shunts or remote regulation is written as before those tables
+#: existed)
 _OPTIONAL_TABLES = (
     "converters",
     "shafts",
     "motors",
+    "svcs",
     "switched_shunts",
     "remote_regulation",
 )

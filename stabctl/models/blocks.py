@@ -87,6 +87,29 @@ def leadlag_input_state(u, x, ratio, T_lag):
 
 
 @kernel
+def leadlag2(u, x1, x2, T_lead, A1, A2):
+    """Lead over a second-order lag, (1 + s T_lead)/(1 + s A1 + s^2 A2) (PSS/E DEGOV's
+    electric control box and actuator; PowerSimulationsDynamics.jl's
+    ``lead_lag_2nd_mass_matrix``), in controllable form: dx1/dt = x2, A2 dx2/dt = u - x1
+    - A1 x2, output x1 + T_lead x2; at rest x1 = u, x2 = 0.  A2 = 0: the first-order
+    lead-lag (1 + s T_lead)/(1 + s A1) with x1 the lagged input (`leadlag_input_state`;
+    x2 no state, derivative 0); A1 < LBND too: output u, no state (the caller refuses a
+    lead without a lag).
+
+    Returns
+    -------
+    (float, float, float)
+        Output, dx1/dt, dx2/dt.
+    """
+    if A1 < LBND:
+        return u, 0.0, 0.0
+    if A2 == 0.0:
+        y, d1 = leadlag_input_state(u, x1, T_lead / A1, A1)
+        return y, d1, 0.0
+    return x1 + T_lead * x2, x2, (u - x1 - A1 * x2) / A2
+
+
+@kernel
 def washout(u, x, T, K, form):
     """Washout K s T/(1 + s T) (IEEE 421.5 E.4; K s/(1 + s T) with K the caller's
     gain): the state lags the input, dx/dt = (u - x)/T, and the output is the gain times

@@ -130,7 +130,7 @@ def without_dead_islands(case: Case) -> tuple[Case, tuple[str, ...]]:
         "branches": br.select(~(np.isin(br.from_bus, gone) | np.isin(br.to_bus, gone))),
         "machines": macs.select(~np.isin(macs.number, mac_gone)),
     }
-    for name in ("loads", "injections", "converters", "motors", "switched_shunts"):
+    for name in ("loads", "injections", "converters", "motors", "svcs", "switched_shunts"):
         table = getattr(case, name)
         changes[name] = table.select(~np.isin(table.bus, gone))
     for name in ("exciters", "pss", "governors", "shafts"):
@@ -147,6 +147,7 @@ def without_dead_islands(case: Case) -> tuple[Case, tuple[str, ...]]:
                 ("load(s)", int(np.isin(case.loads.bus, buses).sum())),
                 ("converter(s)", int(np.isin(case.converters.bus, buses).sum())),
                 ("motor(s)", int(np.isin(case.motors.bus, buses).sum())),
+                ("compensator(s)", int(np.isin(case.svcs.bus, buses).sum())),
             )
             if n
         ]

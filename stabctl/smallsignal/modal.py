@@ -43,6 +43,7 @@ SIGNIFICANT = 0.2  # |speed shape| (of the largest) to count in a coherent group
 STATE_GROUPS = (
     *("rotor angle/speed", "rotor flux", "exciter", "pss", "governor", "converter"),
     "motor",
+    "compensator",
 )
 #: |Im lambda| / |lambda| at or below which an eigenvalue is real (`eigen`)
 REAL_TOL = 1e-9
@@ -146,8 +147,8 @@ class ModalAnalysis:
     def machine_participation(self, i: int) -> np.ndarray:
         """Participation of each machine in mode i, (g,): the sum over all states of the
         machine and of its controls (exciter, PSS, governor, shaft; names ending
-        ``_G<k>``); the states of converters, motors and switched shunts belong to no
-        machine (their share: `group_shares`)."""
+        ``_G<k>``); the states of converters, motors, switched shunts and compensators
+        belong to no machine (their share: `group_shares`)."""
         owner = np.array([_machine_of(n) for n in self.states])
         return np.array([self.participation[owner == k, i].sum() for k in self.machines])
 
@@ -218,13 +219,14 @@ class ModalAnalysis:
 def state_group(name: str) -> str:
     """STATE_GROUPS entry of a state name such as 'mac_omega_G3', 'exc_VTR_G1',
     'ibr_Ip_C1' (a converter-interfaced device, `stabctl.models.converters`) or
-    'shaft_wHP_G1' (a torsional shaft's mass, `stabctl.models.shafts`: rotor angle/speed)."""
+    'shaft_wHP_G1' (a torsional shaft's mass, `stabctl.models.shafts`: rotor angle/speed);
+    'svc_thyristor_V1' is a static var compensator's (`stabctl.models.svcs`)."""
     block, var = name.split("_", 2)[:2]
     if block == "mac":
         return STATE_GROUPS[0] if var in ("delta", "omega") else STATE_GROUPS[1]
     if block == "shaft":  # a torsional shaft's masses: rotor angles and speeds too
         return STATE_GROUPS[0]
-    groups = {"exc": 2, "pss": 3, "tg": 4, "ibr": 5, "motor": 6}
+    groups = {"exc": 2, "pss": 3, "tg": 4, "ibr": 5, "motor": 6, "svc": 7}
     return STATE_GROUPS[groups[block]]
 
 

@@ -607,6 +607,26 @@ def test_raw_ending_with_q_after_the_transformer_data_is_read():
     assert raw.line[2, 5] == pytest.approx(0.9524, abs=1e-12)
 
 
+def test_csvgn1_generator_imports_as_a_compensator_and_round_trips(tmp_path):
+    """PSS/E's CSVGN1 run as written (tests/data/psse_runs/README.md): its generator at bus
+    3 with the CSVGN1 record is a static var compensator, not a machine; the case file
+    keeps the svc_con table; a CSVGN1 whose generator carries real power is refused by
+    name."""
+    out = tmp_path / "svc.json"
+    svc = RUNS / "CSVGN1"
+    res = run("import-psse", svc / "3_BUS_System_SVC.raw", svc / "3_BUS_System_SVC.dyr", "-o", out)
+    assert res.exit_code == 0, res.output
+    assert "1 machines" in res.output and "1 static var compensators" in res.output
+    case = load_case(out)
+    assert case.svcs.equals(
+        load_psse(svc / "3_BUS_System_SVC.raw", svc / "3_BUS_System_SVC.dyr").svcs
+    )
+    raw = (svc / "3_BUS_System_SVC.raw").read_text().replace("3, '1', 0.000,", "3, '1', 5.000,")
+    (tmp_path / "p.raw").write_text(raw)
+    with pytest.raises(CaseError, match=r"CSVGN1 \(bus 3, id 1\): its generator has PG = 5 MW"):
+        load_psse(tmp_path / "p.raw", svc / "3_BUS_System_SVC.dyr")
+
+
 def test_gast_dispatched_at_its_load_limit_imports_and_runs_flat(tmp_path):
     """PSS/E's GAST run: AT = 1 and the machine dispatched at Pm0 = 1 pu (the limit
     AT + KT (AT - Pm0) = Pm0 to round-off) was refused by a strict start-up check

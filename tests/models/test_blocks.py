@@ -43,6 +43,30 @@ def test_leadlag_jumps_by_tlead_over_tlag_then_settles(block, x_rest, ratio):
     )
 
 
+def test_second_order_leadlag_step_response_is_its_two_exponentials():
+    """(1 + s T_3)/(1 + s T_1 + s^2 T_1 T_2) = (1 + s T_3)/((1 + s a)(1 + s b)), a + b =
+    T_1, a b = T_1 T_2: after a unit step y(t) = 1 - (a - T_3)/(a - b) e^(-t/a) - (b -
+    T_3)/(b - a) e^(-t/b) (partial fractions); A2 = 0 is the first-order lead-lag; A1 below
+    the threshold passes the input."""
+    T1, T2, T3, t = 0.5, 0.1, 0.2, 0.3
+    a, bb = (T1 + np.sqrt(T1 * T1 - 4 * T1 * T2)) / 2, (T1 - np.sqrt(T1 * T1 - 4 * T1 * T2)) / 2
+    sol = solve_ivp(
+        lambda _, x: b.leadlag2(1.0, x[0], x[1], T3, T1, T1 * T2)[1:],
+        (0, t),
+        [0.0, 0.0],
+        rtol=1e-12,
+        atol=1e-14,
+    )
+    y = b.leadlag2(1.0, sol.y[0, -1], sol.y[1, -1], T3, T1, T1 * T2)[0]
+    exact = 1 - (a - T3) / (a - bb) * np.exp(-t / a) - (bb - T3) / (bb - a) * np.exp(-t / bb)
+    assert y == pytest.approx(exact, rel=1e-8)
+    assert b.leadlag2(0.7, 0.2, 9.0, 2.0, 0.5, 0.0) == (
+        *b.leadlag_input_state(0.7, 0.2, 4.0, 0.5),
+        0.0,
+    )
+    assert b.leadlag2(0.7, 0.2, 9.0, 2.0, 0.5e-3, 0.0) == (0.7, 0.0, 0.0)
+
+
 def test_leadlag_gain_multiplies_the_response_and_one_is_exact():
     """K (1 + s T_lead)/(1 + s T_lag): K times the plain response; K = 1 bit for bit."""
     u, x = 0.123456789, -0.0987654321

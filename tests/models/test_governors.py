@@ -92,7 +92,22 @@ def ggov1_row(**changed):
     return row + list({**GGOV1_FIELDS, **changed}.values())
 
 
+#: DEGOV (type 10) with PSS/E's published run's values (PowerSimulationsDynamics.jl test
+#: 57): T1 = T2 = T3 = 0 (no control box), K 18 (invR), T4 12, T5 5, T6 0.2, TD 0 (Teng),
+#: TMAX 1.1, TMIN 0 (tg_con columns 4-13; Teng in column 42)
+DEGOV = [10, 1, 1, 18.0, 1.1, 0.0, 0.0, 0.0, 12.0, 5.0, 0.0, 0.0, 0.2]
+
+
+def degov_row(**changed):
+    """A DEGOV tg_con row (`DEGOV`, zeros to GGOV1's columns) with fields `changed`."""
+    row = DEGOV + [0.0] * (59 - len(DEGOV))
+    for name, v in changed.items():
+        row[gov.GOVERNOR.col(name) - 1] = v
+    return row
+
+
 ROWS = {
+    "DEGOV": DEGOV,
     "GGOV1": ggov1_row(),
     "tg": TG,
     "TG2": TG2,
@@ -393,3 +408,49 @@ def test_ggov1_start_above_its_load_limit_is_refused():
     """Starting at 1.1 pu with Ldref 1 the load limiter, not the governor, would hold it."""
     with pytest.raises(CaseError, match="load limiter"):
         gov.initialise(params(ggov1_row()), np.array([1.1]))
+
+
+def test_degov_actuator_ramps_the_torque_as_its_closed_form():
+    """DEGOV without its control box, the speed held d below 1: the torque is Pm0 + K d
+    times the inverse transform of (1 + s T4)/(s^2 (1 + s T5)(1 + s T6)) = t + (T4 - T5 -
+    T6) + T5 (T5 - T4)/(T5 - T6) e^(-t/T5) + T6 (T6 - T4)/(T6 - T5) e^(-t/T6) (partial
+    fractions), handed to the machine as its power (not times the speed)."""
+    P, x = started(degov_row())
+    K, T4, T5, T6, d, t = 18.0, 12.0, 5.0, 0.2, 1e-5, 1.5
+    f = t + (T4 - T5 - T6) + T5 * (T5 - T4) / (T5 - T6) * np.exp(-t / T5)
+    f += T6 * (T6 - T4) / (T6 - T5) * np.exp(-t / T6)
+    assert pmech_after(P, x, t, omega=1 - d) == pytest.approx(PM0 + K * d * f, rel=1e-10)
+
+
+def test_degov_control_box_is_its_second_order_lead_lag():
+    """DEGOV with the actuator absent (T4 = T5 = T6 = 0) and the control box T1 0.5, T2
+    0.1, T3 0.2: the torque rises at K times the box's step response, so after t it is
+    Pm0 + K d (t - sum over its poles a, b of (a - T3) a/(a - b) (1 - e^(-t/a)))."""
+    P, x = started(degov_row(Tc=0.5, Ts=0.1, T3=0.2, T4=0.0, T5=0.0, T6=0.0))
+    K, T1, T2, T3, d, t = 18.0, 0.5, 0.1, 0.2, 1e-5, 0.4
+    r = np.sqrt(T1 * T1 - 4 * T1 * T2)
+    a, b = (T1 + r) / 2, (T1 - r) / 2
+    f = t - (a - T3) * a / (a - b) * (1 - np.exp(-t / a))
+    f -= (b - T3) * b / (b - a) * (1 - np.exp(-t / b))
+    assert pmech_after(P, x, t, omega=1 - d) == pytest.approx(PM0 + K * d * f, rel=1e-9)
+
+
+def test_degov_torque_is_non_windup_at_tmax():
+    """Driven outward at TMAX the torque stays there with a zero derivative (IEEE 421.5
+    E.5 rule)."""
+    P, x = started(degov_row())
+    x[gov.degov.S.torque, 0] = 1.1
+    dx = derivatives(P, x, omega=0.9)
+    assert x[gov.degov.S.torque, 0] == 1.1 and dx[gov.degov.S.torque, 0] == 0.0
+
+
+def test_degov_options_it_does_not_model_are_refused():
+    """The engine delay TD (tg_con 'Teng'), a lead without its lag, TMAX below TMIN."""
+    for changed, match in (
+        ({"Teng": 0.1}, "DEGOV's TD"),
+        ({"T3": 0.2}, "'T3'"),
+        ({"T5": 0.0, "T6": 0.0}, "'T4'"),
+        ({"Tmin": 1.2}, "'Tmax', 'Tmin'"),
+    ):
+        with pytest.raises(CaseError, match=match):
+            params(degov_row(**changed))

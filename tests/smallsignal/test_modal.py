@@ -225,10 +225,12 @@ def test_eig_bad_input(args, needle, tmp_path):
 
 def test_every_state_block_of_the_model_has_a_group():
     """Participation sums per group cover every state block `linearise` names: machines
-    (angle/speed, flux), exciters, stabilisers, governors and converter-interfaced devices
-    ('ibr_Ip_C1'; before, a converter case's modal analysis raised KeyError)."""
+    (angle/speed, flux), exciters, stabilisers, governors, converter-interfaced devices
+    ('ibr_Ip_C1'; before, a converter case's modal analysis raised KeyError), motors and
+    static var compensators ('svc_thyristor_V1')."""
     names = ["mac_delta_G1", "mac_psikd_G1", "exc_VTR_G1", "pss_washout_G1", "tg_valve_G1"]
-    assert [state_group(n) for n in [*names, "ibr_Ip_C1", "motor_slip_M1"]] == list(STATE_GROUPS)
+    devices = ["ibr_Ip_C1", "motor_slip_M1", "svc_thyristor_V1"]
+    assert [state_group(n) for n in [*names, *devices]] == list(STATE_GROUPS)
 
 
 def _repeated_real(seed):

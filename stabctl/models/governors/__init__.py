@@ -18,7 +18,9 @@ mechanical-power and derivative kernels:
 * :mod:`~stabctl.models.governors.tg2`: ANDES's `TG2` (type 7);
 * :mod:`~stabctl.models.governors.hygov4`: ANDES's `HYGOV4` (type 8);
 * :mod:`~stabctl.models.governors.ggov1`: PSS/E's `GGOV1` (type 9, the general
-  governor-turbine; it reads its machine's electrical power).
+  governor-turbine; it reads its machine's electrical power);
+* :mod:`~stabctl.models.governors.degov`: PSS/E's `DEGOV` (type 10, the Woodward diesel
+  governor, isochronous; its power the torque times the speed).
 
 Sources: PSTess 1.1 `tg_indx.m`, `tg.m` (docs/pst_models.md section 4); PSS/E Model
 Library; ANDES 2.0 ``andes/models/governor``; how to add a type in docs/simulator.md.
@@ -45,7 +47,19 @@ from stabctl.models.declaration import (
     params_class,
     typed_family,
 )
-from stabctl.models.governors import gast, ggov1, hygov, hygov4, ieeeg1, ieesgo, tg, tg2, tgov1
+from stabctl.models.governors import (
+    degov,
+    gast,
+    ggov1,
+    hygov,
+    hygov4,
+    ieeeg1,
+    ieesgo,
+    tg,
+    tg2,
+    tgov1,
+)
+from stabctl.models.governors.degov import DEGOV
 from stabctl.models.governors.gast import GAST
 from stabctl.models.governors.ggov1 import GGOV1
 from stabctl.models.governors.hygov import HYGOV
@@ -82,7 +96,7 @@ __all__ = [
     "PACKED",
     "TABLE_FIELDS",
     "HYGOV_FIELDS",
-    "TG", "TGOV1", "IEEEG1", "HYGOV", "IEESGO", "GAST", "TG2", "HYGOV4", "GGOV1",
+    "TG", "TGOV1", "IEEEG1", "HYGOV", "IEESGO", "GAST", "TG2", "HYGOV4", "GGOV1", "DEGOV",
 ]  # fmt: skip
 
 # --------------------------------------------------------------------------------------
@@ -100,6 +114,7 @@ MODULES = (
     tg2,
     hygov4,
     ggov1,
+    degov,
 )
 #: tg_con type -> the module of its equations; -> its state names, in slot order (``S``)
 TYPES, STATE_NAMES = model_types(MODULES, "tg_con")
@@ -347,6 +362,8 @@ def pmech(P, x, k, omega):
         return hygov4.pmech(P, x, k, omega)
     if kind == GGOV1:
         return ggov1.pmech(P, x, k, omega)
+    if kind == DEGOV:
+        return degov.pmech(P, x, k, omega)
     return ieesgo.pmech(P, x, k, omega)
 
 
@@ -381,5 +398,7 @@ def derivatives(P, x, k, omega, pe, dx):
         hygov4.derivatives(P, x, k, omega, dx)
     elif kind == GGOV1:
         ggov1.derivatives(P, x, k, omega, pe, dx)
+    elif kind == DEGOV:
+        degov.derivatives(P, x, k, omega, dx)
     else:
         ieesgo.derivatives(P, x, k, omega, dx)

@@ -1,8 +1,8 @@
 """The ``tg_con`` table every governor type reads: its columns (PST manual 3.45; PSS/E
-TGOV1, IEEEG1, HYGOV, IEESGO, GAST; ANDES TG2, HYGOV4; docs/pst_models.md section 4), the
-packed parameter layout of the compiled kernels (`PACKED`, its named columns `G`) and
-the pieces several types share (the shaft power of the power fractions, `fractions`;
-the blocks' numpy-boolean non-windup flag, `AT_LIMIT`).
+TGOV1, IEEEG1, HYGOV, IEESGO, GAST, GGOV1, DEGOV; ANDES TG2, HYGOV4; docs/pst_models.md
+section 4), the packed parameter layout of the compiled kernels (`PACKED`, its named
+columns `G`) and the pieces several types share (the shaft power of the power
+fractions, `fractions`; the blocks' numpy-boolean non-windup flag, `AT_LIMIT`).
 
 The ``type`` column and the DYR records are declared by the types themselves (one module
 per type, :mod:`stabctl.models.governors`); this module is imported by every one of
@@ -36,18 +36,36 @@ _HYGOV_ALT = {
 PARAMS = (
     Param("machine", "code", 2, integer=True, doc="machine number"),
     Param("wf", "pu", 3, doc="speed set point"),
-    Param("invR", "pu", 4, doc="steady-state gain 1/R (IEEEG1: K), on machine base"),
-    Param("Tmax", "pu", 5, doc="maximum power order (TGOV1: VMAX, IEEEG1: PMAX)"),
-    Param("Ts", "s", 6, lo=0.0, doc="servo time constant (TGOV1: T1; IEEEG1: T3, gate servo)"),
-    Param("Tc", "s", 7, lo=0.0, doc="governor lag time constant (TGOV1: T3; IEEEG1: T1)"),
-    Param("T3", "s", 8, doc="transient gain (lead) time constant (TGOV1, IEEEG1: T2)"),
+    Param(
+        "invR",
+        "pu",
+        4,
+        doc="steady-state gain 1/R (IEEEG1: K; DEGOV: the actuator gain K), on machine base",
+    ),
+    Param("Tmax", "pu", 5, doc="maximum power order (TGOV1: VMAX, IEEEG1: PMAX, DEGOV: TMAX)"),
+    Param(
+        "Ts",
+        "s",
+        6,
+        lo=0.0,
+        doc="servo time constant (TGOV1: T1; IEEEG1: T3, gate servo; DEGOV: T2)",
+    ),
+    Param(
+        "Tc", "s", 7, lo=0.0, doc="governor lag time constant (TGOV1: T3; IEEEG1: T1; DEGOV: T1)"
+    ),
+    Param(
+        "T3",
+        "s",
+        8,
+        doc="transient gain (lead) time constant (TGOV1, IEEEG1: T2; DEGOV: control-box lead T3)",
+    ),
     Param(
         "T4",
         "s",
         9,
         alt="Tw",
         doc="HP section time constant (IEEEG1: T4, steam "
-        "chest); < 0 hydro | HYGOV: water time constant Tw",
+        "chest); < 0 hydro | HYGOV: water time constant Tw | DEGOV: actuator lead T4",
     ),
     Param(
         "T5",
@@ -55,11 +73,16 @@ PARAMS = (
         10,
         lo=0.0,
         alt="At",
-        doc="reheater time constant (IEEEG1: T5) | HYGOV: turbine gain At",
+        doc="reheater time constant (IEEEG1: T5; DEGOV: actuator lag T5) | HYGOV: turbine gain At",
     ),
-    Param("Tmin", "pu", 11, doc="minimum power order (tg: 0 as PST; TGOV1: VMIN; IEEEG1: PMIN)"),
+    Param(
+        "Tmin",
+        "pu",
+        11,
+        doc="minimum power order (tg: 0 as PST; TGOV1: VMIN; IEEEG1: PMIN; DEGOV: TMIN)",
+    ),
     Param("Dt", "pu", 12, doc="turbine damping (TGOV1), pu power / pu speed"),
-    Param("T6", "s", 13, lo=0.0, doc="IEEEG1 third turbine time constant"),
+    Param("T6", "s", 13, lo=0.0, doc="IEEEG1 third turbine time constant; DEGOV actuator lag T6"),
     Param("T7", "s", 14, lo=0.0, doc="IEEEG1 fourth turbine time constant"),
     Param("Uo", "pu/s", 15, doc="IEEEG1 maximum valve opening rate"),
     Param("Uc", "pu/s", 16, doc="IEEEG1 maximum valve closing rate (< 0)"),
@@ -102,7 +125,7 @@ PARAMS = (
                 ("Kturb", "pu", "turbine gain"),
                 ("Wfnl", "pu", "no-load fuel flow"),
                 ("Tb", "s", "turbine lag time constant (the lead is Tc, column 7)"),
-                ("Teng", "s", "transport delay of a diesel engine (0 only)"),
+                ("Teng", "s", "transport delay of a diesel engine (0 only; also DEGOV's TD)"),
                 ("Tfload", "s", "load limiter time constant"),
                 ("Kpload", "pu", "load limiter proportional gain"),
                 ("Kiload", "1/s", "load limiter integral gain"),
