@@ -46,6 +46,7 @@ from stabctl.models.declaration import (
     layout,
     pack,
     params_class,
+    states,
 )
 
 if TYPE_CHECKING:
@@ -112,6 +113,8 @@ DYR = (
 
 N_STATES = 3
 STATE_NAMES = ("lead2", "lead1", "thyristor")
+#: the named slots, read by the kernels as ``x[S.thyristor, k]``
+S = states("SvcStates", STATE_NAMES)
 #: the kernels' packed columns: the kept-bus position, the susceptances on the system base
 #: (capacitor C = CBASE/S_b, reactor R = RBASE/S_b, initial B0), the regulator, the
 #: thyristor's limits
@@ -272,7 +275,7 @@ def initialise(p: SvcParams) -> np.ndarray:
 @kernel
 def susceptance(P, x, k):
     """Compensator k's susceptance (system base, capacitive > 0) from its thyristor."""
-    return P[k, V.C] - clip(x[2, k], P[k, V.YMIN], 1.0) * P[k, V.R]
+    return P[k, V.C] - clip(x[S.thyristor, k], P[k, V.YMIN], 1.0) * P[k, V.R]
 
 
 @kernel
@@ -288,14 +291,14 @@ def _regulator(P, x, k, vmag):
     lag state in x: (y_V, d lead2/dt, d lead1/dt)."""
     u = P[k, V.K] * (vmag - P[k, V.VREF])
     T2, T4 = P[k, V.T2], P[k, V.T4]
-    y2, d2 = leadlag_input_state(u, x[0, k], T2 / max(T4, LBND), T4)
+    y2, d2 = leadlag_input_state(u, x[S.lead2, k], T2 / max(T4, LBND), T4)
     T1, T3 = P[k, V.T1], P[k, V.T3]
     lo, hi = P[k, V.VMIN], P[k, V.VMAX]
     if T3 < LBND:
         return clip(y2, lo, hi), d2, 0.0
-    x[1, k], d1 = nonwindup(x[1, k], (y2 - x[1, k]) / T3, lo, hi, _AT_LIMIT, 0.0)
+    x[S.lead1, k], d1 = nonwindup(x[S.lead1, k], (y2 - x[S.lead1, k]) / T3, lo, hi, _AT_LIMIT, 0.0)
     r = T1 / T3
-    return clip(r * y2 + (1 - r) * x[1, k], lo, hi), d2, d1
+    return clip(r * y2 + (1 - r) * x[S.lead1, k], lo, hi), d2, d1
 
 
 @kernel
@@ -303,7 +306,7 @@ def derivatives(P, x, k, vmag, dx):
     """Derivatives of compensator k into dx (3, n_svc) at its bus voltage magnitude vmag
     (pu): the regulator, then the thyristor lag non-windup on [RMIN/RBASE, 1] (clamps its
     state in x)."""
-    y, dx[0, k], dx[1, k] = _regulator(P, x, k, vmag)
-    x[2, k], dx[2, k] = nonwindup(
-        x[2, k], (y - x[2, k]) / P[k, V.T5], P[k, V.YMIN], 1.0, _AT_LIMIT, 0.0
+    y, dx[S.lead2, k], dx[S.lead1, k] = _regulator(P, x, k, vmag)
+    x[S.thyristor, k], dx[S.thyristor, k] = nonwindup(
+        x[S.thyristor, k], (y - x[S.thyristor, k]) / P[k, V.T5], P[k, V.YMIN], 1.0, _AT_LIMIT, 0.0
     )
