@@ -119,3 +119,23 @@ def test_a_long_compile_is_announced_again_while_it_lasts():
         event.start_event = real_start
     stop()
     assert len(heard) > n and heard == sorted(heard) and heard[n] > before + 0.5
+
+
+def test_model_files_stay_small_and_read_states_by_name():
+    """The model library's two rules: no file in stabctl/models over 800 lines, and no
+    kernel reading a state slot by its number (``x[2, k]``): states are read by name
+    (``x[S.eqp, i]``, `stabctl.models.declaration.states`)."""
+    import re
+
+    literal = re.compile(r"\bd?x\[\d+, *[a-z_]\w*\]")
+    long, literal_reads = [], []
+    for path in sorted((ROOT / "stabctl" / "models").rglob("*.py")):
+        lines = path.read_text().splitlines()
+        if len(lines) > 800:
+            long.append(f"{path.relative_to(ROOT)}: {len(lines)} lines")
+        literal_reads += [
+            f"{path.relative_to(ROOT)}:{n}"
+            for n, line in enumerate(lines, 1)
+            if literal.search(line)
+        ]
+    assert long == [] and literal_reads == []
