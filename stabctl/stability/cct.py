@@ -55,6 +55,7 @@ from stabctl.errors import (
 )
 from stabctl.io.inputs import CsvRow, number, read_csv
 from stabctl.network.ybus import circuit_row
+from stabctl.stability.sime import EarlyVerdict, critical_machines, probe_margin
 
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
 #: to the limit), the limit, tolerance, and the run length after the fault.
@@ -264,6 +265,15 @@ class SearchOptions:
     error_check : bool
         Also search the CCT at h/2 from the final bracket
         (`CCTResult.numerical_error_s`, module docstring); default True.
+    method : {"sime", "bisection"}
+        How the bracket is found (module docstring): "sime" (default), from SIME's
+        margins of the runs, confirmed on both sides, bisection only to finish;
+        "bisection", the bound checks, doubling and bisection.  Both end in the same
+        lattice cell when the verdict is monotone in the clearing time.
+    early_stop : bool
+        End each run as soon as SIME makes its verdict certain
+        (`stabctl.stability.sime.EarlyVerdict`; the default criterion and a `Simulator`
+        only); default True.
 
     A sweep (`cct_jobs`) records tol, t_max, t_end and error_check (when off) in each
     job's inputs (`to_inputs`); the other fields must keep their defaults there.
@@ -278,11 +288,13 @@ class SearchOptions:
     criterion: Callable[[SimulationResult], bool] | None = None
     stop_at_separation: bool | None = None
     error_check: bool = True
+    method: str = "sime"
+    early_stop: bool = True
 
     def to_inputs(self) -> dict:
-        """Fields of a sweep job's recorded inputs: tol, t_max, t_end, and error_check
-        when off.  Raises InputError when a field a record cannot hold is not its
-        default."""
+        """Fields of a sweep job's recorded inputs: tol, t_max, t_end, error_check when
+        off, method and early_stop when not their defaults.  Raises InputError when a
+        field a record cannot hold is not its default."""
         default = SearchOptions()
         for name in ("t_lo", "t_hi", "separation_limit", "criterion", "stop_at_separation"):
             if getattr(self, name) != getattr(default, name):
@@ -295,6 +307,8 @@ class SearchOptions:
             "t_max": self.t_max,
             "t_end": self.t_end,
             **({} if self.error_check else {"error_check": False}),
+            **({} if self.method == default.method else {"method": self.method}),
+            **({} if self.early_stop else {"early_stop": False}),
         }
 
     @classmethod
@@ -305,6 +319,8 @@ class SearchOptions:
             t_max=inputs.get("t_max", T_MAX),
             t_end=inputs.get("t_end"),
             error_check=inputs.get("error_check", True),
+            method=inputs.get("method", "sime"),
+            early_stop=inputs.get("early_stop", True),
         )
 
 
@@ -388,23 +404,38 @@ def critical_clearing_time(
     crit = no_separation if o.criterion is None else o.criterion
     stop = o.criterion is None if o.stop_at_separation is None else o.stop_at_separation
     extra = {} if storage is None else {"storage": storage}
+    if o.method not in METHODS:
+        raise InputError(f"CCT search method must be one of {METHODS}, got {o.method!r}")
+    early = o.early_stop and o.criterion is None and getattr(sim, "takes_monitor", False)
     probes: dict[float, list] = {h: [], h / 2: []}
     separated: dict = {}
+    margins: dict = {}
 
     def stable_at(k: int, step: float = h) -> bool:
         t_clear = _lattice(k, tol)
-        res, diverged = _run(sim, fault, t_clear, t_end, step, o.separation_limit, stop, extra)
-        ok = not diverged and bool(crit(res))
+        t_cl = fault.t_fault + t_clear
+        more = {**extra, "monitor": EarlyVerdict(t_cl)} if early else extra
+        res, diverged = _run(sim, fault, t_clear, t_end, step, o.separation_limit, stop, more)
+        verdict = None if diverged else res.meta.get("early_verdict")
+        ok = not diverged and (verdict == "stable" if verdict else bool(crit(res)))
         probes[step].append((t_clear, ok))
         if not ok and step == h:
-            separated[k] = tuple(int(m) for m in res.separated)
+            separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))
+        if o.method == "sime" and step == h:
+            margins[k] = probe_margin(res, t_cl, not ok, sim.case.base_mva, sim.case.freq_hz)
         return ok
 
     wall = time.perf_counter()
     k_lo, k_hi, k_max = _lattice_bounds(tol, o.t_lo, t_hi, t_max)
-    k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
-    start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
-    k_lo, k_hi = _bisect(stable_at, k_lo, k_hi)
+    if o.method == "sime":
+        k_lo, k_hi, start_k = _sime_search(
+            stable_at, margins, (k_lo, k_hi, k_max), fault, tol, sim.case.freq_hz
+        )
+        start = (_lattice(start_k[0], tol), _lattice(start_k[1], tol))
+    else:
+        k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
+        start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
+        k_lo, k_hi = _bisect(stable_at, k_lo, k_hi)
     half = None
     if o.error_check:
         half = _lattice(_half_step_cct(lambda k: stable_at(k, h / 2), k_lo, k_hi, k_max), tol)
@@ -425,6 +456,77 @@ def critical_clearing_time(
         half_step_probes=tuple(probes[h / 2]),
         conventions=sim.conventions,
     )
+
+
+#: the CCT search methods (`SearchOptions.method`)
+METHODS = ("sime", "bisection")
+#: probes placed from SIME's margins before the "sime" search bisects what is left
+SIME_GUIDED = 4
+
+
+def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
+    """The "sime" search on the lattice: returns (k_stable, k_unstable = k_stable + 1,
+    the first (stable, unstable) pair found).
+
+    The first probe is at k_hi, doubled while stable (as `_bracket`, without the check at
+    k_lo).  Then each probe goes to the lattice cell where SIME's unstable margin
+    vanishes (`_margin_zero`), or the next one up when that cell is known stable; a zero
+    below the stable end or above the unstable one sends the probe a quarter of the
+    bracket in from that end (a margin that is not linear must not make the bracket creep
+    one cell at a time, and a new unstable probe near the zero corrects the
+    extrapolation); without two unstable margins, or after SIME_GUIDED such probes,
+    bisection.  A
+    probe at k_lo found unstable raises as `_bracket`; one at k_max found stable raises
+    AboveSearchLimit.  `margins` (lattice index -> `probe_margin` or None) is filled by
+    `stable_at`."""
+    k_lo, k_hi, k_max = bounds
+    known: dict[int, bool] = {}
+    start = None
+    guided = 0
+    k = k_hi
+    while True:
+        known[k] = stable_at(k)
+        if k == k_lo and not known[k]:
+            _lower_bound_unstable(k_lo, fault, tol)
+        if k == k_max and known[k]:
+            _above_limit(k_max, fault, tol, freq)
+        u = min((j for j, ok in known.items() if not ok), default=None)
+        s = max((j for j, ok in known.items() if ok and (u is None or j < u)), default=None)
+        if s is not None and u is not None:
+            start = start or (s, u)
+            if u - s == 1:
+                return s, u, start
+        if u is None:
+            k = min(2 * s, k_max)
+            continue
+        lo = k_lo if s is None else s + 1
+        x = _margin_zero(margins, u) if guided < SIME_GUIDED else None
+        if x is None:
+            k = k_lo if s is None else (s + u) // 2
+            continue
+        guided += 1
+        quarter = max(1, (u - lo) // 4)
+        kf = math.floor(x)
+        if x >= u:
+            k = u - quarter
+        elif s is not None and kf <= s:
+            k = s + 1 if kf == s else s + quarter
+        else:
+            k = kf
+        k = min(max(k, lo), u - 1)
+
+
+def _margin_zero(margins: dict, u: int) -> float | None:
+    """Lattice position (real) where SIME's unstable margin vanishes, extrapolated
+    through the two unstable probes with a negative margin closest to the boundary (at
+    or above u, `probe_margin`); None without two or with a slope that does not fall
+    (then `_sime_search` bisects)."""
+    have = sorted(k for k, m in margins.items() if k >= u and m is not None and m[0] < 0)
+    if len(have) < 2:
+        return None
+    a, b = have[:2]
+    slope = (margins[b][0] - margins[a][0]) / (b - a)
+    return a - margins[a][0] / slope if slope < 0 else None
 
 
 def _bisect(stable_at, k_lo: int, k_hi: int) -> tuple[int, int]:
@@ -509,25 +611,34 @@ def _lattice_bounds(tol, t_lo, t_hi, t_max) -> tuple[int, int, int]:
 def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple[int, int]:
     """Check stable at k_lo, then double k_hi (up to k_max) until it is unstable."""
     if not stable_at(k_lo):
-        if k_lo == 0:
-            raise InsecureContingency(
-                f"{fault.describe()}: unstable even when cleared instantly "
-                "(the line trip alone loses synchronism): N-1 insecure, CCT 0"
-            )
-        raise InputError(
-            f"{fault.describe()}: unstable already at the lower bound "
-            f"{_lattice(k_lo, tol):g} s; lower it"
-        )
+        _lower_bound_unstable(k_lo, fault, tol)
     while stable_at(k_hi):
         if k_hi == k_max:
-            t = _lattice(k_max, tol)
-            raise AboveSearchLimit(
-                f"{fault.describe()}: the CCT is above the search limit "
-                f"t_max = {t:g} s "
-                f"({t * freq:.4g} cycles): still stable when cleared there"
-            )
+            _above_limit(k_max, fault, tol, freq)
         k_lo, k_hi = k_hi, min(2 * k_hi, k_max)
     return k_lo, k_hi
+
+
+def _lower_bound_unstable(k_lo: int, fault: LineFault, tol):
+    """Raise for a search whose lower bound is unstable: InsecureContingency at 0."""
+    if k_lo == 0:
+        raise InsecureContingency(
+            f"{fault.describe()}: unstable even when cleared instantly "
+            "(the line trip alone loses synchronism): N-1 insecure, CCT 0"
+        )
+    raise InputError(
+        f"{fault.describe()}: unstable already at the lower bound "
+        f"{_lattice(k_lo, tol):g} s; lower it"
+    )
+
+
+def _above_limit(k_max: int, fault: LineFault, tol, freq):
+    """Raise AboveSearchLimit: still stable at the search limit."""
+    t = _lattice(k_max, tol)
+    raise AboveSearchLimit(
+        f"{fault.describe()}: the CCT is above the search limit t_max = {t:g} s "
+        f"({t * freq:.4g} cycles): still stable when cleared there"
+    )
 
 
 def _run(sim, fault: LineFault, t_clear, t_end, h, limit, stop, extra):

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stabctl.dynamics.coi import coi_angle, coi_of_rest, coi_speed
+from stabctl.dynamics.coi import coi_angle, coi_of_islands, coi_of_rest, coi_speed
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import InputError
 
@@ -210,3 +210,190 @@ def distribution_factors(sys, buses, machines, inertia, base_mva: float) -> np.n
     cols = [inputs.index(f"P_esd_B{int(b)}") for b in buses]
     B = np.asarray(sys.B)[np.ix_(rows, cols)]
     return -(2 * np.asarray(inertia, float) / base_mva)[:, None] * B
+
+
+# -- early verdicts and the margin of a probe (the CCT search, `stabctl.stability.cct`) ------
+
+
+@dataclass(frozen=True)
+class EarlyVerdict:
+    """A run monitor (`stabctl.dynamics.driver.Simulator.run`) that ends a run as soon as
+    SIME's criteria make its verdict certain (Pavella, Ernst, Ruiz-Vega 2000, ch. 2).
+
+    After the clearing instant `t_clear` (s, absolute), the machines are split at the
+    largest gap of their rotor angles (`stabctl.dynamics.driver.separated_group`) into a
+    candidate critical group and the rest, and their OMIB (module docstring) is followed:
+
+    - unstable: on the swing since the OMIB last stood still, its speed passed through a
+      positive minimum (the unstable angle, where the accelerating power turns positive)
+      and has risen ever since, for at least `confirm_s` s (a numerical wiggle never
+      passes for it), and a machine is more than `min_excursion` rad from the centre of
+      inertia (a swing of several machine groups can pass through such a minimum and
+      still turn back: the excursion keeps the verdict safe);
+    - stable: the OMIB of the group split at the instant of the largest excursion from
+      the centre of inertia has come to rest (its speed changed sign, a return point
+      below the unstable angle) `returns` times, and its last swing (between the last two
+      return points) was no wider than the one before (no growing oscillation).
+
+    Attributes
+    ----------
+    t_clear : float
+        Clearing instant, s (absolute run time).
+    returns : int, optional
+        Return points before a stable verdict (>= 2); default 3.
+    confirm_s : float, optional
+        Time the OMIB speed must rise after its positive minimum, s; default 0.05.
+    min_excursion : float, optional
+        Angle from the centre of inertia a machine must reach before an unstable
+        verdict, rad; default pi/2 (half the default separation limit).
+    """
+
+    t_clear: float
+    returns: int = 3
+    confirm_s: float = 0.05
+    min_excursion: float = np.pi / 2
+
+    def __call__(self, result: SimulationResult) -> str | None:
+        """ "unstable", "stable" or None (not certain yet) for the trajectory so far."""
+        t = result.t
+        k_cl = max(int(np.searchsorted(t, self.t_clear + 1e-9)) - 1, 0)
+        if t[-1] - self.t_clear < 2 * self.confirm_s:
+            return None
+        angle, speed = result.angle[k_cl:], result.speed[k_cl:]
+        inertia, island = np.asarray(result.inertia, float), result.island
+        from stabctl.dynamics.driver import separated_group
+
+        dev = np.abs(angle - coi_of_islands(angle, inertia, island)).max(axis=1)
+        if dev[-1] > self.min_excursion:
+            group = separated_group(angle[-1], inertia, island)
+            now = _omib_motion(angle, speed, inertia, group)
+            if now is not None and _passed_unstable_angle(t[k_cl:], *now, self.confirm_s):
+                return "unstable"
+        k_far = int(np.argmax(dev))
+        first = _omib_motion(angle, speed, inertia, separated_group(angle[k_far], inertia, island))
+        if first is not None and _swings_died_down(*first, self.returns):
+            return "stable"
+        return None
+
+
+def _omib_motion(angle, speed, inertia, group):
+    """(delta, omega) of the OMIB of `group` (indices) against the rest, unoriented (rad,
+    pu speed difference); None when either side has no inertia weight."""
+    C = np.zeros(inertia.size, bool)
+    C[group] = True
+    if not (inertia[C].sum() > 0 and inertia[~C].sum() > 0):
+        return None
+    delta = coi_angle(angle[:, C], inertia[C]) - coi_angle(angle[:, ~C], inertia[~C])
+    omega = coi_speed(speed[:, C], inertia[C]) - coi_speed(speed[:, ~C], inertia[~C])
+    return delta, omega
+
+
+def _passed_unstable_angle(t, delta, omega, confirm_s: float) -> bool:
+    """SIME's instability: oriented so that the group runs away in +delta, the OMIB speed
+    had a positive minimum since it last stood still and rose for confirm_s s since."""
+    w = omega if delta[-1] >= delta[0] else -omega
+    rest = np.nonzero(w <= 0)[0]
+    j0 = int(rest[-1]) + 1 if rest.size else 0
+    k = w.size - 1
+    while k > j0 and w[k - 1] < w[k]:
+        k -= 1
+    return j0 < k < w.size - 1 and w[k] > 0 and t[-1] - t[k] >= confirm_s
+
+
+def _swings_died_down(delta, omega, returns: int) -> bool:
+    """At least `returns` return points (sign changes of the OMIB speed), the swing
+    between the last two no wider than the one before."""
+    s = np.sign(omega)
+    turns = np.nonzero(s[1:] * s[:-1] < 0)[0] + 1
+    if turns.size < returns:
+        return False
+    ext = np.r_[delta[0], delta[turns]]
+    return abs(ext[-1] - ext[-2]) <= abs(ext[-2] - ext[-3])
+
+
+def probe_margin(
+    result: SimulationResult, t_clear: float, unstable: bool, base_mva: float, freq_hz: float
+):
+    """SIME's margin of one probe of a CCT search and its rate in the clearing time.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The run (stopped early or at separation, or complete).
+    t_clear : float
+        Clearing instant, s (absolute run time).
+    unstable : bool
+        The run's verdict.
+    base_mva, freq_hz : float
+        The case's base (MVA) and frequency (Hz).
+
+    Returns
+    -------
+    tuple of float or None
+        (eta, deta_dtc): the margin (pu*rad; < 0 unstable: `unstable_margin` at the
+        unstable point; > 0 stable: 0.5 |P_a(delta_r)| (delta_u - delta_r) at the first
+        return point delta_r, delta_u where a quadratic fit of P_a(delta) over the
+        post-fault swing vanishes, Pavella et al. 2000, sec. 2.3) and its first-order rate
+        in the clearing time, -omega_c (P_a(t_c-) - P_a(t_c+)) (pu*rad/s: one more
+        instant of fault adds the fault-on accelerating power and removes the post-fault
+        decelerating one, over the angle the OMIB moves).  None when the run gives no
+        margin (no second swing point, a stable swing whose P_a(delta) never returns to
+        0, a single machine group).
+    """
+    t = result.t
+    if t.size < 4:
+        return None
+    try:
+        crit = critical_machines(result) if unstable else _first_swing_group(result, t_clear)
+        eq = omib_equivalent(result, crit, base_mva, freq_hz)
+    except InputError:
+        return None
+    k_cl = max(int(np.searchsorted(t, t_clear + 1e-9)) - 1, 1)
+    if k_cl + 2 >= t.size:
+        return None
+    w = eq.omega  # the rate below does not depend on the orientation
+    pa = eq.M * np.diff(w) / np.maximum(np.diff(t), 1e-12)  # over each step
+    pa = np.r_[pa, pa[-1]]
+    k0 = k_cl - 1
+    while k0 > 0 and t[k0 + 1] - t[k0] < 1e-12:
+        k0 -= 1
+    rate = -float(w[k_cl]) * (float(pa[k0]) - float(pa[k_cl]))
+    if unstable:
+        return unstable_margin(eq, unstable_point(eq, t_clear)), rate
+    return _stable_margin(eq.delta, eq.omega, pa, k_cl), rate
+
+
+def _stable_margin(delta, omega, pa, k_cl: int) -> float | None:
+    """The smallest SIME stable margin over the swings after k_cl: at each return point
+    k_r (the OMIB speed changes sign), 0.5 |P_a(delta_r)| (delta_u - delta_r), oriented
+    along that swing, delta_u where a quadratic fit of P_a(delta) over the swing (from
+    the previous return point or clearing) vanishes beyond delta_r; None when no swing
+    gives one."""
+    s = np.sign(omega)
+    turns = np.nonzero(s[k_cl + 1 :] * s[k_cl : -1] < 0)[0] + k_cl + 1
+    out = []
+    for a, k_r in zip(np.r_[k_cl, turns[:-1]], turns):
+        if k_r - a < 4:
+            continue
+        o = np.sign(omega[k_r - 1])
+        d, p = o * delta, o * pa
+        dm, pm = 0.5 * (d[a + 1 : k_r] + d[a + 2 : k_r + 1]), p[a + 1 : k_r]
+        coef = np.polyfit(dm, pm, 2)
+        dr, pr = float(d[k_r]), float(np.polyval(coef, d[k_r]))
+        beyond = [float(r.real) for r in np.roots(coef) if abs(r.imag) < 1e-12 and r.real > dr]
+        if pr < 0 and beyond:
+            out.append(0.5 * abs(pr) * (min(beyond) - dr))
+    return min(out) if out else None
+
+
+def _first_swing_group(result: SimulationResult, t_clear: float) -> list[int]:
+    """Machine numbers of the smaller coherent group at the largest excursion from the
+    centre of inertia after clearing (`stabctl.dynamics.driver.separated_group`)."""
+    from stabctl.dynamics.driver import separated_group
+
+    k_cl = int(np.searchsorted(result.t, t_clear - 1e-9))
+    a = result.angle[k_cl:]
+    inertia = np.asarray(result.inertia, float)
+    k = k_cl + int(np.argmax(np.abs(a - coi_of_islands(a, inertia, result.island)).max(axis=1)))
+    group = separated_group(result.angle[k], inertia, result.island)
+    return [int(m) for m in result.machines[group]]
