@@ -316,7 +316,8 @@ class Simulator:
             Heun only: ``monitor(partial) -> str or None`` is called every
             `MONITOR_EVERY_S` of simulated time with the trajectory so far (a
             SimulationResult without verdict, arrays are views); a string ends the run
-            there and is kept as ``meta["early_verdict"]`` (e.g.
+            there and is kept as ``meta["early_verdict"]`` (the partial's vmag and vang
+            are empty; e.g.
             `stabctl.stability.sime.EarlyVerdict`).  The trajectory up to the stop equals
             the unmonitored run's.  None (default): no monitor.
 
@@ -564,7 +565,7 @@ class Simulator:
 
 
 #: simulated time between two calls of a run's monitor (`Simulator.run`), s
-MONITOR_EVERY_S = 0.05
+MONITOR_EVERY_S = 0.1
 
 
 def _advance_monitored(run: _Run, monitor) -> str | None:
@@ -578,7 +579,7 @@ def _advance_monitored(run: _Run, monitor) -> str | None:
         run.advance(max(k1, run.k + 1))
         if run.status != ig.OK:
             return None
-        verdict = monitor(run.partial(run.k, np.inf))
+        verdict = monitor(run.partial(run.k, np.inf, voltages=False))
         if verdict is not None:
             return verdict
     return None
@@ -763,12 +764,15 @@ class _Run:
         ds = self.carry.devices
         ds.cmd_t[i], ds.cmd_mode[i] = t_apply, modes
 
-    def partial(self, k: int, history_s: float) -> SimulationResult:
+    def partial(self, k: int, history_s: float, voltages: bool = True) -> SimulationResult:
         """The trajectory of the last `history_s` seconds up to grid index k (views, no
         verdict): a callback at every frame then costs the same late in a long run as
-        early (the whole trajectory would make a run's cost grow with its length squared)."""
+        early (the whole trajectory would make a run's cost grow with its length squared).
+        Without `voltages`, vmag and vang are empty (n_t, 0) (a monitor of the machines
+        only, `Simulator.run`, is spared their computation)."""
         r, c, n = self.rec, self.sim.case, k + 1
         lo = max(int(np.searchsorted(self.grid.t[:n], self.grid.t[k] - history_s)) - 1, 0)
+        V = r.V[lo:n] if voltages else np.zeros((n - lo, 0))
         return SimulationResult(
             t=self.grid.t[lo:n],
             machines=c.machines.number.astype(int),
@@ -778,8 +782,8 @@ class _Run:
             pelect=r.pelect[lo:n],
             pmech=r.pmech[lo:n],
             efd=r.efd[lo:n],
-            vmag=np.abs(r.V[lo:n]),
-            vang=np.angle(r.V[lo:n]),
+            vmag=np.abs(V),
+            vang=np.angle(V),
             inertia=self.sim.inertia,
             island=self.sim.island,
             devices=np.arange(1, self.sa.pmax.size + 1),

@@ -421,8 +421,8 @@ def critical_clearing_time(
         probes[step].append((t_clear, ok))
         if not ok and step == h:
             separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))
-        if o.method == "sime" and step == h:
-            margins[k] = probe_margin(res, t_cl, not ok, sim.case.base_mva, sim.case.freq_hz)
+        if o.method == "sime" and step == h and not ok:
+            margins[k] = probe_margin(res, t_cl, sim.case.base_mva, sim.case.freq_hz)
         return ok
 
     wall = time.perf_counter()
@@ -460,25 +460,27 @@ def critical_clearing_time(
 
 #: the CCT search methods (`SearchOptions.method`)
 METHODS = ("sime", "bisection")
-#: probes placed from SIME's margins before the "sime" search bisects what is left
-SIME_GUIDED = 4
 
 
 def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
     """The "sime" search on the lattice: returns (k_stable, k_unstable = k_stable + 1,
     the first (stable, unstable) pair found).
 
-    The first probe is at k_hi, doubled while stable (as `_bracket`, without the check at
-    k_lo).  Then each probe goes to the lattice cell where SIME's unstable margin
-    vanishes (`_margin_zero`), or the next one up when that cell is known stable; a zero
-    below the stable end or above the unstable one sends the probe a quarter of the
-    bracket in from that end (a margin that is not linear must not make the bracket creep
-    one cell at a time, and a new unstable probe near the zero corrects the
-    extrapolation); without two unstable margins, or after SIME_GUIDED such probes,
-    bisection.  A
-    probe at k_lo found unstable raises as `_bracket`; one at k_max found stable raises
-    AboveSearchLimit.  `margins` (lattice index -> `probe_margin` or None) is filled by
-    `stable_at`."""
+    SIME's unstable margin is close to linear in the clearing time (`probe_margin`), so
+    two unstable probes extrapolate to the CCT (`_margin_zero`).  The first probe is at
+    k_hi, doubled while stable (as `_bracket`, without the check at k_lo); while fewer
+    than two unstable probes have a margin, the next goes as far above the unstable end
+    as the bracket is wide (unstable, and cheap: such runs stop early), or bisects when
+    that is beyond k_max.  Then, up to SIME_GUIDED times, the zero x of the margin
+    extrapolated from the two unstable probes closest to it sets the probe: more than
+    SIME_NEAR cells below the unstable end, at ceil(x) moved a tenth of the way to the
+    nearer of those probes (to land just on the unstable side: the next extrapolation
+    is then short); within SIME_NEAR cells, at x rounded (the cell above a known stable
+    end when floor(x) is that end); below the stable end (the margin was
+    not linear), a quarter of the bracket above it.  Then bisection.  A probe at k_lo
+    found unstable raises as `_bracket`; one at k_max found stable raises
+    AboveSearchLimit.  `margins` (lattice index -> margin or None) is filled by
+    `stable_at` for each unstable probe."""
     k_lo, k_hi, k_max = bounds
     known: dict[int, bool] = {}
     start = None
@@ -496,37 +498,51 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
             start = start or (s, u)
             if u - s == 1:
                 return s, u, start
-        if u is None:
+        if u is None:  # stable so far: double
             k = min(2 * s, k_max)
             continue
         lo = k_lo if s is None else s + 1
-        x = _margin_zero(margins, u) if guided < SIME_GUIDED else None
-        if x is None:
-            k = k_lo if s is None else (s + u) // 2
+        zero = _margin_zero(margins, u) if guided < SIME_GUIDED else None
+        if zero is None:
+            width = u - (k_lo if s is None else s)
+            usable = sum(1 for j, m in margins.items() if j >= u and m is not None and m < 0)
+            if guided < SIME_GUIDED and usable < 2 and u + width <= k_max:
+                k = u + width
+                if k not in known:
+                    continue
+            k = lo if s is None else (s + u) // 2
             continue
         guided += 1
-        quarter = max(1, (u - lo) // 4)
+        x, near = zero
         kf = math.floor(x)
-        if x >= u:
-            k = u - quarter
-        elif s is not None and kf <= s:
-            k = s + 1 if kf == s else s + quarter
+        if s is not None and kf < s:
+            k = s + max(1, (u - s) // 4)
+        elif kf == s:
+            k = s + 1
+        elif u - x <= SIME_NEAR:
+            k = max(round(x), s + 1) if s is not None else round(x)
         else:
-            k = kf
+            k = math.ceil(x + 0.1 * (near - x))
         k = min(max(k, lo), u - 1)
 
 
-def _margin_zero(margins: dict, u: int) -> float | None:
-    """Lattice position (real) where SIME's unstable margin vanishes, extrapolated
-    through the two unstable probes with a negative margin closest to the boundary (at
-    or above u, `probe_margin`); None without two or with a slope that does not fall
-    (then `_sime_search` bisects)."""
-    have = sorted(k for k, m in margins.items() if k >= u and m is not None and m[0] < 0)
+#: probes placed from SIME's margins before the "sime" search bisects what is left, and
+#: the distance (lattice cells) below the unstable end within which the probe goes to
+#: the stable side of the extrapolated zero
+SIME_GUIDED, SIME_NEAR = 6, 3
+
+
+def _margin_zero(margins: dict, u: int):
+    """(x, near): the lattice position (real) where SIME's unstable margin vanishes,
+    extrapolated through the two unstable probes with a negative margin closest to the
+    boundary (at or above u), and the nearer of them; None without two, or with a slope
+    that does not fall (then `_sime_search` bisects)."""
+    have = sorted(k for k, m in margins.items() if k >= u and m is not None and m < 0)
     if len(have) < 2:
         return None
     a, b = have[:2]
-    slope = (margins[b][0] - margins[a][0]) / (b - a)
-    return a - margins[a][0] / slope if slope < 0 else None
+    slope = (margins[b] - margins[a]) / (b - a)
+    return (a - margins[a] / slope, a) if slope < 0 else None
 
 
 def _bisect(stable_at, k_lo: int, k_hi: int) -> tuple[int, int]:

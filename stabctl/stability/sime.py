@@ -227,13 +227,17 @@ class EarlyVerdict:
     - unstable: on the swing since the OMIB last stood still, its speed passed through a
       positive minimum (the unstable angle, where the accelerating power turns positive)
       and has risen ever since, for at least `confirm_s` s (a numerical wiggle never
-      passes for it), and a machine is more than `min_excursion` rad from the centre of
-      inertia (a swing of several machine groups can pass through such a minimum and
-      still turn back: the excursion keeps the verdict safe);
+      passes for it), and a machine has moved more than `min_excursion` rad from its
+      pre-fault angle to the centre of inertia (swings of several machine groups pass
+      through such minima and still turn back: on miniWECC up to 1.6 rad);
     - stable: the OMIB of the group split at the instant of the largest excursion from
       the centre of inertia has come to rest (its speed changed sign, a return point
-      below the unstable angle) `returns` times, and its last swing (between the last two
-      return points) was no wider than the one before (no growing oscillation).
+      below the unstable angle) `returns` times, its last swing (between the last two
+      return points) was no wider than the one before (no growing oscillation), and the
+      machines have settled: over the last `settle_s` s no machine's speed left its
+      island's centre of inertia by more than `settle_pu` (the return points alone are
+      not enough: on miniWECC a machine whose swings died down can still drift out of
+      step 1-2 s later).
 
     Attributes
     ----------
@@ -244,14 +248,21 @@ class EarlyVerdict:
     confirm_s : float, optional
         Time the OMIB speed must rise after its positive minimum, s; default 0.05.
     min_excursion : float, optional
-        Angle from the centre of inertia a machine must reach before an unstable
-        verdict, rad; default pi/2 (half the default separation limit).
+        Move of a machine's angle to the centre of inertia since before the fault that
+        an unstable verdict needs, rad; default 2.
+    settle_pu : float, optional
+        Largest speed from the centre of inertia of a settled machine, pu; default 3e-4
+        (0.018 Hz at 60 Hz).
+    settle_s : float, optional
+        How long the machines must have stayed settled, s; default 0.5.
     """
 
     t_clear: float
     returns: int = 3
     confirm_s: float = 0.05
-    min_excursion: float = np.pi / 2
+    min_excursion: float = 2.0
+    settle_pu: float = 3e-4
+    settle_s: float = 0.5
 
     def __call__(self, result: SimulationResult) -> str | None:
         """ "unstable", "stable" or None (not certain yet) for the trajectory so far."""
@@ -263,12 +274,17 @@ class EarlyVerdict:
         inertia, island = np.asarray(result.inertia, float), result.island
         from stabctl.dynamics.driver import separated_group
 
-        dev = np.abs(angle - coi_of_islands(angle, inertia, island)).max(axis=1)
-        if dev[-1] > self.min_excursion:
+        rel = angle - coi_of_islands(angle, inertia, island)
+        dev = np.abs(rel).max(axis=1)
+        pre = result.angle[0] - coi_of_islands(result.angle[:1], inertia, island)[0]
+        if np.abs(rel[-1] - pre).max() > self.min_excursion:
             group = separated_group(angle[-1], inertia, island)
             now = _omib_motion(angle, speed, inertia, group)
             if now is not None and _passed_unstable_angle(t[k_cl:], *now, self.confirm_s):
                 return "unstable"
+        recent = speed[t[k_cl:] >= t[-1] - self.settle_s]
+        if np.abs(recent - coi_of_islands(recent, inertia, island)).max() > self.settle_pu:
+            return None
         k_far = int(np.argmax(dev))
         first = _omib_motion(angle, speed, inertia, separated_group(angle[k_far], inertia, island))
         if first is not None and _swings_died_down(*first, self.returns):
@@ -311,89 +327,29 @@ def _swings_died_down(delta, omega, returns: int) -> bool:
     return abs(ext[-1] - ext[-2]) <= abs(ext[-2] - ext[-3])
 
 
-def probe_margin(
-    result: SimulationResult, t_clear: float, unstable: bool, base_mva: float, freq_hz: float
-):
-    """SIME's margin of one probe of a CCT search and its rate in the clearing time.
+def probe_margin(result: SimulationResult, t_clear: float, base_mva, freq_hz) -> float | None:
+    """SIME's unstable margin of an unstable probe of a CCT search.
 
     Parameters
     ----------
     result : SimulationResult
-        The run (stopped early or at separation, or complete).
+        An unstable run (stopped early or at separation, or complete).
     t_clear : float
         Clearing instant, s (absolute run time).
-    unstable : bool
-        The run's verdict.
     base_mva, freq_hz : float
         The case's base (MVA) and frequency (Hz).
 
     Returns
     -------
-    tuple of float or None
-        (eta, deta_dtc): the margin (pu*rad; < 0 unstable: `unstable_margin` at the
-        unstable point; > 0 stable: 0.5 |P_a(delta_r)| (delta_u - delta_r) at the first
-        return point delta_r, delta_u where a quadratic fit of P_a(delta) over the
-        post-fault swing vanishes, Pavella et al. 2000, sec. 2.3) and its first-order rate
-        in the clearing time, -omega_c (P_a(t_c-) - P_a(t_c+)) (pu*rad/s: one more
-        instant of fault adds the fault-on accelerating power and removes the post-fault
-        decelerating one, over the angle the OMIB moves).  None when the run gives no
-        margin (no second swing point, a stable swing whose P_a(delta) never returns to
-        0, a single machine group).
+    float or None
+        `unstable_margin` (pu*rad, <= 0) at the unstable point (`unstable_point`) of the
+        OMIB of the critical machines (`critical_machines`); None when that group is not
+        a proper subset of the machines.  Close to linear in the clearing time near the
+        CCT (Pavella, Ernst, Ruiz-Vega 2000, ch. 3), so that two unstable probes
+        extrapolate to it.
     """
-    t = result.t
-    if t.size < 4:
-        return None
     try:
-        crit = critical_machines(result) if unstable else _first_swing_group(result, t_clear)
-        eq = omib_equivalent(result, crit, base_mva, freq_hz)
+        eq = omib_equivalent(result, critical_machines(result), base_mva, freq_hz)
     except InputError:
         return None
-    k_cl = max(int(np.searchsorted(t, t_clear + 1e-9)) - 1, 1)
-    if k_cl + 2 >= t.size:
-        return None
-    w = eq.omega  # the rate below does not depend on the orientation
-    pa = eq.M * np.diff(w) / np.maximum(np.diff(t), 1e-12)  # over each step
-    pa = np.r_[pa, pa[-1]]
-    k0 = k_cl - 1
-    while k0 > 0 and t[k0 + 1] - t[k0] < 1e-12:
-        k0 -= 1
-    rate = -float(w[k_cl]) * (float(pa[k0]) - float(pa[k_cl]))
-    if unstable:
-        return unstable_margin(eq, unstable_point(eq, t_clear)), rate
-    return _stable_margin(eq.delta, eq.omega, pa, k_cl), rate
-
-
-def _stable_margin(delta, omega, pa, k_cl: int) -> float | None:
-    """The smallest SIME stable margin over the swings after k_cl: at each return point
-    k_r (the OMIB speed changes sign), 0.5 |P_a(delta_r)| (delta_u - delta_r), oriented
-    along that swing, delta_u where a quadratic fit of P_a(delta) over the swing (from
-    the previous return point or clearing) vanishes beyond delta_r; None when no swing
-    gives one."""
-    s = np.sign(omega)
-    turns = np.nonzero(s[k_cl + 1 :] * s[k_cl : -1] < 0)[0] + k_cl + 1
-    out = []
-    for a, k_r in zip(np.r_[k_cl, turns[:-1]], turns):
-        if k_r - a < 4:
-            continue
-        o = np.sign(omega[k_r - 1])
-        d, p = o * delta, o * pa
-        dm, pm = 0.5 * (d[a + 1 : k_r] + d[a + 2 : k_r + 1]), p[a + 1 : k_r]
-        coef = np.polyfit(dm, pm, 2)
-        dr, pr = float(d[k_r]), float(np.polyval(coef, d[k_r]))
-        beyond = [float(r.real) for r in np.roots(coef) if abs(r.imag) < 1e-12 and r.real > dr]
-        if pr < 0 and beyond:
-            out.append(0.5 * abs(pr) * (min(beyond) - dr))
-    return min(out) if out else None
-
-
-def _first_swing_group(result: SimulationResult, t_clear: float) -> list[int]:
-    """Machine numbers of the smaller coherent group at the largest excursion from the
-    centre of inertia after clearing (`stabctl.dynamics.driver.separated_group`)."""
-    from stabctl.dynamics.driver import separated_group
-
-    k_cl = int(np.searchsorted(result.t, t_clear - 1e-9))
-    a = result.angle[k_cl:]
-    inertia = np.asarray(result.inertia, float)
-    k = k_cl + int(np.argmax(np.abs(a - coi_of_islands(a, inertia, result.island)).max(axis=1)))
-    group = separated_group(result.angle[k], inertia, result.island)
-    return [int(m) for m in result.machines[group]]
+    return unstable_margin(eq, unstable_point(eq, t_clear))
