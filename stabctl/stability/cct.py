@@ -173,6 +173,9 @@ class CCTResult:
     the criterion failed without separation).  step_s: integration step h; wall_time_s:
     the whole search.  cct_half_step_s: the CCT at h/2 (module docstring; None when the
     check was not asked for), half_step_probes: its runs; conventions: the model's.
+    n_simulations: every run of the search (probes and half_step_probes); early_stops:
+    those ended by an early verdict (`stabctl.stability.sime.EarlyVerdict`); method:
+    the search's (`SearchOptions.method`).
     """
 
     fault: LineFault
@@ -190,6 +193,8 @@ class CCTResult:
     cct_half_step_s: float | None = None
     half_step_probes: tuple[tuple[float, bool], ...] = field(default=(), repr=False)
     conventions: str = "ieee"
+    method: str = "bisection"
+    early_stops: int = 0
 
     @property
     def numerical_error_s(self) -> float | None:
@@ -229,6 +234,9 @@ class CCTResult:
             "tol_s": self.tol_s,
             "step_s": self.step_s,
             "n_simulations": self.n_simulations,
+            "n_simulations_half_step": len(self.half_step_probes),
+            "early_stops": self.early_stops,
+            "search": self.method,
             "wall_time_s": self.wall_time_s,
             "criterion": self.criterion,
             "separated_machines": list(self.separated),
@@ -410,6 +418,7 @@ def critical_clearing_time(
     probes: dict[float, list] = {h: [], h / 2: []}
     separated: dict = {}
     margins: dict = {}
+    early_stops = []
 
     def stable_at(k: int, step: float = h) -> bool:
         t_clear = _lattice(k, tol)
@@ -417,6 +426,8 @@ def critical_clearing_time(
         more = {**extra, "monitor": EarlyVerdict(t_cl)} if early else extra
         res, diverged = _run(sim, fault, t_clear, t_end, step, o.separation_limit, stop, more)
         verdict = None if diverged else res.meta.get("early_verdict")
+        if verdict:
+            early_stops.append(t_clear)
         ok = not diverged and (verdict == "stable" if verdict else bool(crit(res)))
         probes[step].append((t_clear, ok))
         if not ok and step == h:
@@ -455,6 +466,8 @@ def critical_clearing_time(
         cct_half_step_s=half,
         half_step_probes=tuple(probes[h / 2]),
         conventions=sim.conventions,
+        method=o.method,
+        early_stops=len(early_stops),
     )
 
 
@@ -467,63 +480,63 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
     the first (stable, unstable) pair found).
 
     SIME's unstable margin is close to linear in the clearing time (`probe_margin`), so
-    two unstable probes extrapolate to the CCT (`_margin_zero`).  The first probe is at
-    k_hi, doubled while stable (as `_bracket`, without the check at k_lo); while fewer
-    than two unstable probes have a margin, the next goes as far above the unstable end
-    as the bracket is wide (unstable, and cheap: such runs stop early), or bisects when
-    that is beyond k_max.  Then, up to SIME_GUIDED times, the zero x of the margin
-    extrapolated from the two unstable probes closest to it sets the probe: more than
-    SIME_NEAR cells below the unstable end, at ceil(x) moved a tenth of the way to the
-    nearer of those probes (to land just on the unstable side: the next extrapolation
-    is then short); within SIME_NEAR cells, at x rounded (the cell above a known stable
-    end when floor(x) is that end); below the stable end (the margin was
-    not linear), a quarter of the bracket above it.  Then bisection.  A probe at k_lo
-    found unstable raises as `_bracket`; one at k_max found stable raises
-    AboveSearchLimit.  `margins` (lattice index -> margin or None) is filled by
-    `stable_at` for each unstable probe."""
+    two unstable probes extrapolate to the CCT (`_margin_zero`).  After the check at
+    k_lo (as `_bracket`: the verdicts of both searches agree even where stability is
+    not monotone in the clearing time), the first probe is at k_hi, doubled while
+    stable; while fewer than two unstable probes have a margin, the next goes as far
+    above the unstable end as the bracket is wide (unstable, and cheap: such runs stop
+    early), or bisects when that is beyond k_max.  Then, up to SIME_GUIDED times, the
+    zero x of the margin extrapolated from the two unstable probes closest to it sets
+    the probe: more than SIME_NEAR cells below the unstable end, at ceil(x) moved a
+    tenth of the way to the nearer of those probes (to land just on the unstable side:
+    the next extrapolation is then short); within SIME_NEAR cells, at x rounded (the
+    cell above the stable end when floor(x) is that end); below the stable end (the
+    margin was not linear), a quarter of the bracket above it.  Two guided probes in a
+    row on the same side (a margin that bends: the bracket would creep) are followed by
+    a bisection step; after SIME_GUIDED guided probes, bisection.  A probe at k_max
+    found stable raises AboveSearchLimit.  `margins` (lattice index -> margin or None)
+    is filled by `stable_at` for each unstable probe."""
     k_lo, k_hi, k_max = bounds
-    known: dict[int, bool] = {}
+    if not stable_at(k_lo):
+        _lower_bound_unstable(k_lo, fault, tol)
+    known: dict[int, bool] = {k_lo: True}
     start = None
-    guided = 0
+    n_guided, guided, side = 0, None, None  # count, the pending guided probe, its side
     k = k_hi
     while True:
         known[k] = stable_at(k)
-        if k == k_lo and not known[k]:
-            _lower_bound_unstable(k_lo, fault, tol)
         if k == k_max and known[k]:
             _above_limit(k_max, fault, tol, freq)
+        repeat = k == guided and side == known[k]  # two guided probes on one side
+        side = known[k] if k == guided else None
         u = min((j for j, ok in known.items() if not ok), default=None)
-        s = max((j for j, ok in known.items() if ok and (u is None or j < u)), default=None)
-        if s is not None and u is not None:
-            start = start or (s, u)
-            if u - s == 1:
-                return s, u, start
+        s = max(j for j, ok in known.items() if ok and (u is None or j < u))
         if u is None:  # stable so far: double
-            k = min(2 * s, k_max)
+            k = min(2 * k, k_max)
             continue
-        lo = k_lo if s is None else s + 1
-        zero = _margin_zero(margins, u) if guided < SIME_GUIDED else None
-        if zero is None:
-            width = u - (k_lo if s is None else s)
-            usable = sum(1 for j, m in margins.items() if j >= u and m is not None and m < 0)
-            if guided < SIME_GUIDED and usable < 2 and u + width <= k_max:
-                k = u + width
-                if k not in known:
-                    continue
-            k = lo if s is None else (s + u) // 2
+        start = start or (s, u)
+        if u - s == 1:
+            return s, u, start
+        zero = _margin_zero(margins, u) if n_guided < SIME_GUIDED else None
+        usable = sum(1 for j, m in margins.items() if j >= u and m is not None and m < 0)
+        if zero is None and usable < 2 and u + (u - s) <= k_max:
+            k, guided = u + (u - s), None  # a second unstable margin
             continue
-        guided += 1
+        if zero is None or repeat:
+            k, guided, side = (s + u) // 2, None, None
+            continue
         x, near = zero
         kf = math.floor(x)
-        if s is not None and kf < s:
+        if kf < s:
             k = s + max(1, (u - s) // 4)
         elif kf == s:
             k = s + 1
         elif u - x <= SIME_NEAR:
-            k = max(round(x), s + 1) if s is not None else round(x)
+            k = max(round(x), s + 1)
         else:
             k = math.ceil(x + 0.1 * (near - x))
-        k = min(max(k, lo), u - 1)
+        k = guided = min(max(k, s + 1), u - 1)
+        n_guided += 1
 
 
 #: probes placed from SIME's margins before the "sime" search bisects what is left, and
