@@ -487,13 +487,13 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
     above the unstable end as the bracket is wide (unstable, and cheap: such runs stop
     early), or bisects when that is beyond k_max.  Then, up to SIME_GUIDED times, the
     zero x of the margin extrapolated from the two unstable probes closest to it sets
-    the probe: more than SIME_NEAR cells below the unstable end, at ceil(x) moved a
-    tenth of the way to the nearer of those probes (to land just on the unstable side:
-    the next extrapolation is then short); within SIME_NEAR cells, at x rounded (the
-    cell above the stable end when floor(x) is that end); below the stable end (the
-    margin was not linear), a quarter of the bracket above it.  Two guided probes in a
-    row on the same side (a margin that bends: the bracket would creep) are followed by
-    a bisection step; after SIME_GUIDED guided probes, bisection.  A probe at k_max
+    the probe: more than SIME_NEAR cells below the unstable end, at ceil(x) (the margin
+    bends towards 0 near the CCT, so the zero extrapolated from above mostly lands on
+    the unstable side, and the next extrapolation is short); within SIME_NEAR cells, at
+    x rounded (the cell above the stable end when floor(x) is that end); below the
+    stable end, a quarter of the bracket above it.  SIME_STREAK guided probes in a row
+    on the same side (the bracket creeping) are followed by a bisection step; after
+    SIME_GUIDED guided probes, bisection.  A probe at k_max
     found stable raises AboveSearchLimit.  `margins` (lattice index -> margin or None)
     is filled by `stable_at` for each unstable probe."""
     k_lo, k_hi, k_max = bounds
@@ -501,14 +501,15 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
         _lower_bound_unstable(k_lo, fault, tol)
     known: dict[int, bool] = {k_lo: True}
     start = None
-    n_guided, guided, side = 0, None, None  # count, the pending guided probe, its side
-    k = k_hi
+    n_guided, guided, side, streak = 0, None, None, 0  # the guided probes: count, the
+    k = k_hi  # pending one, the side of the last and how many in a row were on it
     while True:
         known[k] = stable_at(k)
         if k == k_max and known[k]:
             _above_limit(k_max, fault, tol, freq)
-        repeat = k == guided and side == known[k]  # two guided probes on one side
+        streak = (streak + 1 if side == known[k] else 1) if k == guided else 0
         side = known[k] if k == guided else None
+        repeat = streak >= SIME_STREAK
         u = min((j for j, ok in known.items() if not ok), default=None)
         s = max(j for j, ok in known.items() if ok and (u is None or j < u))
         if u is None:  # stable so far: double
@@ -523,9 +524,9 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
             k, guided = u + (u - s), None  # a second unstable margin
             continue
         if zero is None or repeat:
-            k, guided, side = (s + u) // 2, None, None
+            k, guided, side, streak = (s + u) // 2, None, None, 0
             continue
-        x, near = zero
+        x = zero
         kf = math.floor(x)
         if kf < s:
             k = s + max(1, (u - s) // 4)
@@ -534,28 +535,28 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
         elif u - x <= SIME_NEAR:
             k = max(round(x), s + 1)
         else:
-            k = math.ceil(x + 0.1 * (near - x))
+            k = math.ceil(x)
         k = guided = min(max(k, s + 1), u - 1)
         n_guided += 1
 
 
-#: probes placed from SIME's margins before the "sime" search bisects what is left, and
-#: the distance (lattice cells) below the unstable end within which the probe goes to
-#: the stable side of the extrapolated zero
-SIME_GUIDED, SIME_NEAR = 6, 3
+#: probes placed from SIME's margins before the "sime" search bisects what is left; the
+#: distance (lattice cells) below the unstable end within which the probe goes to the
+#: extrapolated zero rounded; guided probes in a row on one side before a bisection step
+SIME_GUIDED, SIME_NEAR, SIME_STREAK = 8, 3, 3
 
 
-def _margin_zero(margins: dict, u: int):
-    """(x, near): the lattice position (real) where SIME's unstable margin vanishes,
-    extrapolated through the two unstable probes with a negative margin closest to the
-    boundary (at or above u), and the nearer of them; None without two, or with a slope
-    that does not fall (then `_sime_search` bisects)."""
+def _margin_zero(margins: dict, u: int) -> float | None:
+    """The lattice position (real) where SIME's unstable margin vanishes, extrapolated
+    through the two unstable probes with a negative margin closest to the boundary (at
+    or above u); None without two, or with a slope that does not fall (then
+    `_sime_search` bisects)."""
     have = sorted(k for k, m in margins.items() if k >= u and m is not None and m < 0)
     if len(have) < 2:
         return None
     a, b = have[:2]
     slope = (margins[b] - margins[a]) / (b - a)
-    return (a - margins[a] / slope, a) if slope < 0 else None
+    return a - margins[a] / slope if slope < 0 else None
 
 
 def _bisect(stable_at, k_lo: int, k_hi: int) -> tuple[int, int]:
