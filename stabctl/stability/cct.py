@@ -423,9 +423,10 @@ def critical_clearing_time(
     def stable_at(k: int, step: float = h) -> bool:
         t_clear = _lattice(k, tol)
         t_cl = fault.t_fault + t_clear
-        more = {**extra, "monitor": EarlyVerdict(t_cl)} if early else extra
+        monitor = EarlyVerdict(t_cl, t_end, sim.case.freq_hz, o.separation_limit)
+        more = {**extra, "monitor": monitor} if early else extra
         res, diverged = _run(sim, fault, t_clear, t_end, step, o.separation_limit, stop, more)
-        verdict = None if diverged else res.meta.get("early_verdict")
+        verdict = res.meta.get("early_verdict") if early and not diverged else None
         if verdict:
             early_stops.append(t_clear)
         ok = not diverged and (verdict == "stable" if verdict else bool(crit(res)))

@@ -227,9 +227,12 @@ class EarlyVerdict:
     - unstable: on the swing since the OMIB last stood still, its speed passed through a
       positive minimum (the unstable angle, where the accelerating power turns positive)
       and has risen ever since, for at least `confirm_s` s (a numerical wiggle never
-      passes for it), and a machine has moved more than `min_excursion` rad from its
+      passes for it), a machine has moved more than `min_excursion` rad from its
       pre-fault angle to the centre of inertia (swings of several machine groups pass
-      through such minima and still turn back: on miniWECC up to 1.6 rad);
+      through such minima and still turn back: on miniWECC up to 1.6 rad), and the
+      machine farthest from it, moving on at its present speed without accelerating
+      further, would pass `limit` within half the time left before `t_end` (a slow
+      drift that the full run might still judge stable at its end is left to it);
     - stable: the OMIB of the group split at the instant of the largest excursion from
       the centre of inertia has come to rest (its speed changed sign, a return point
       below the unstable angle) `returns` times, its last swing (between the last two
@@ -243,6 +246,12 @@ class EarlyVerdict:
     ----------
     t_clear : float
         Clearing instant, s (absolute run time).
+    t_end : float
+        End of the run, s (absolute).
+    freq_hz : float
+        The case frequency, Hz.
+    limit : float, optional
+        The run's separation limit (angle from the centre of inertia), rad; default pi.
     returns : int, optional
         Return points before a stable verdict (>= 2); default 3.
     confirm_s : float, optional
@@ -258,6 +267,9 @@ class EarlyVerdict:
     """
 
     t_clear: float
+    t_end: float
+    freq_hz: float
+    limit: float = np.pi
     returns: int = 3
     confirm_s: float = 0.05
     min_excursion: float = 2.0
@@ -277,7 +289,10 @@ class EarlyVerdict:
         rel = angle - coi_of_islands(angle, inertia, island)
         dev = np.abs(rel).max(axis=1)
         pre = result.angle[0] - coi_of_islands(result.angle[:1], inertia, island)[0]
-        if np.abs(rel[-1] - pre).max() > self.min_excursion:
+        rel_speed = speed[-1] - coi_of_islands(speed[-1], inertia, island)
+        if np.abs(rel[-1] - pre).max() > self.min_excursion and self._runs_away(
+            rel[-1], rel_speed, float(t[-1])
+        ):
             group = separated_group(angle[-1], inertia, island)
             now = _omib_motion(angle, speed, inertia, group)
             if now is not None and _passed_unstable_angle(t[k_cl:], *now, self.confirm_s):
@@ -290,6 +305,14 @@ class EarlyVerdict:
         if first is not None and _swings_died_down(*first, self.returns):
             return "stable"
         return None
+
+    def _runs_away(self, rel, rel_speed, t_now: float) -> bool:
+        """Whether the machine farthest from its centre of inertia (rel: angles from it
+        now, rad; rel_speed: speeds from it now, pu) reaches `limit` at its present
+        speed within half the time left before `t_end`."""
+        i = int(np.argmax(np.abs(rel)))
+        outward = np.sign(rel[i]) * rel_speed[i] * 2 * np.pi * self.freq_hz  # rad/s
+        return bool(outward > 0 and self.limit - abs(rel[i]) < outward * 0.5 * (self.t_end - t_now))
 
 
 def _omib_motion(angle, speed, inertia, group):
