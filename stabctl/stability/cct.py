@@ -1,4 +1,4 @@
-"""Critical clearing time (CCT) of a line fault by bisection on the clearing time.
+"""Critical clearing time (CCT) of a line fault, searched on the clearing time.
 
 The fault (`LineFault`) is a bolted three-phase fault at `bus` on the line `bus`-`far_bus`
 from `t_fault`, cleared at both ends at once after a clearing time tc (s, counted from the
@@ -10,13 +10,27 @@ Function Analysis for Power System Stability, 1989, ch. 1, for the time-domain d
 
 Stability criterion (default `no_separation`): no machine's rotor angle leaves the centre of
 inertia (paper eq. 40, weights H*MVA) by more than `separation_limit` (pi rad) before
-`t_end` (default fault time + 5 s); the runs stop at separation to save time.  Any
-callable(SimulationResult) -> bool (True = stable) can replace it.
+`t_end` (default fault time + 5 s); the runs stop at separation to save time, and (with
+`SearchOptions.early_stop`, the default) as soon as SIME makes their verdict certain
+(`stabctl.stability.sime.EarlyVerdict`, tested against the full runs on the screenings of
+Kundur and miniWECC).  Any callable(SimulationResult) -> bool (True = stable) can replace
+it (its runs then go to the end).
+
+Two searches (`SearchOptions.method`), both on the lattice below:
+
+- "bisection": stable at t_lo, the upper bound doubled from 0.1 s while stable, bisection;
+- "sime" (the default): stable at t_lo, the first probe at 0.1 s (doubled while stable),
+  then the probes placed where SIME's unstable margin (`stabctl.stability.sime.
+  probe_margin`, close to linear in the clearing time) extrapolated from two unstable
+  probes vanishes, on both sides of it, bisection only to finish (`_sime_search`).
+
+Both end in the same cell where the verdict is monotone in the clearing time (every CCT of
+Kundur's screening and of every third fault of miniWECC's, `benchmarks/bench_cct.py`).
 
 Grid: the simulator's grid lands on every event time (`stabctl.dynamics.grid.time_grid`), so a
 clearing time is never rounded to a multiple of the step h: the fault-on interval of length
 tc gets fix(tc/h) equal steps (each in [h, 2h)) and the post-fault interval restarts at the
-clearing instant.  The bisection probes only clearing times k*tol (k integer), so results
+clearing instant.  Both searches probe only clearing times k*tol (k integer), so results
 are reproducible to the last digit and the final bracket is one lattice cell, exactly tol
 wide.  A tol far below h resolves the discretised model, not the physics.
 
@@ -340,7 +354,7 @@ def critical_clearing_time(
     h: float | None = None,
     storage=None,
 ) -> CCTResult:
-    """CCT of `fault` on `sim`'s case by bisection on the clearing time (see module doc).
+    """CCT of `fault` on `sim`'s case, searched on the clearing time (see module doc).
 
     Parameters
     ----------

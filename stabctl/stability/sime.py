@@ -295,14 +295,14 @@ class EarlyVerdict:
         ):
             group = separated_group(angle[-1], inertia, island)
             now = _omib_motion(angle, speed, inertia, group)
-            if now is not None and _passed_unstable_angle(t[k_cl:], *now, self.confirm_s):
+            if now is not None and _passed_unstable_angle(t[k_cl:], now[0], now[1], self.confirm_s):
                 return "unstable"
         recent = speed[t[k_cl:] >= t[-1] - self.settle_s]
         if np.abs(recent - coi_of_islands(recent, inertia, island)).max() > self.settle_pu:
             return None
         k_far = int(np.argmax(dev))
         first = _omib_motion(angle, speed, inertia, separated_group(angle[k_far], inertia, island))
-        if first is not None and _swings_died_down(*first, self.returns):
+        if first is not None and _swings_died_down(first[0], first[1], self.returns):
             return "stable"
         return None
 

@@ -96,9 +96,7 @@ def test_early_verdicts_equal_full_runs_on_miniweccs_whole_screening():
     assert bad == []
 
 
-@pytest.mark.parametrize(
-    ("bus", "far_bus"), [(3, 101), (13, 120), (13, 101), (3, None), (110, 120)]
-)
+@pytest.mark.parametrize(("bus", "far_bus"), [(3, 101), (13, 101), (13, 14), (3, None), (1, None)])
 def test_sime_search_ends_in_the_bisections_cell(kundur, bus, far_bus):
     fault = LineFault(bus, far_bus)
     ref = critical_clearing_time(kundur, fault, SearchOptions(method="bisection", early_stop=False))
