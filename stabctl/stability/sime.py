@@ -231,8 +231,10 @@ class EarlyVerdict:
       pre-fault angle to the centre of inertia (swings of several machine groups pass
       through such minima and still turn back: on miniWECC up to 1.6 rad), and the
       machine farthest from it, moving on at its present speed without accelerating
-      further, would pass `limit` within half the time left before `t_end` (a slow
-      drift that the full run might still judge stable at its end is left to it);
+      further, would pass `limit` within `horizon_s` and within half the time left
+      before `t_end` (a slow drift that the full run might still judge stable at its
+      end is left to it: on miniWECC a machine 2.94 rad from the centre of inertia,
+      moving out at 0.36 rad/s on the unstable side of its OMIB, turned back at 3.05);
     - stable: the OMIB of the group split at the instant of the largest excursion from
       the centre of inertia has come to rest (its speed changed sign, a return point
       below the unstable angle) `returns` times, its last swing (between the last two
@@ -252,6 +254,9 @@ class EarlyVerdict:
         The case frequency, Hz.
     limit : float, optional
         The run's separation limit (angle from the centre of inertia), rad; default pi.
+    horizon_s : float, optional
+        Longest time to `limit` at the present speed of an unstable verdict, s; default
+        0.2.
     returns : int, optional
         Return points before a stable verdict (>= 2); default 3.
     confirm_s : float, optional
@@ -270,6 +275,7 @@ class EarlyVerdict:
     t_end: float
     freq_hz: float
     limit: float = np.pi
+    horizon_s: float = 0.2
     returns: int = 3
     confirm_s: float = 0.05
     min_excursion: float = 2.0
@@ -309,10 +315,11 @@ class EarlyVerdict:
     def _runs_away(self, rel, rel_speed, t_now: float) -> bool:
         """Whether the machine farthest from its centre of inertia (rel: angles from it
         now, rad; rel_speed: speeds from it now, pu) reaches `limit` at its present
-        speed within half the time left before `t_end`."""
+        speed within `horizon_s` and half the time left before `t_end`."""
         i = int(np.argmax(np.abs(rel)))
         outward = np.sign(rel[i]) * rel_speed[i] * 2 * np.pi * self.freq_hz  # rad/s
-        return bool(outward > 0 and self.limit - abs(rel[i]) < outward * 0.5 * (self.t_end - t_now))
+        within = min(self.horizon_s, 0.5 * (self.t_end - t_now))
+        return bool(outward > 0 and self.limit - abs(rel[i]) < outward * within)
 
 
 def _omib_motion(angle, speed, inertia, group):
