@@ -498,33 +498,34 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
     two unstable probes extrapolate to the CCT (`_margin_zero`).  After the check at
     k_lo (as `_bracket`: the verdicts of both searches agree even where stability is
     not monotone in the clearing time), the first probe is at k_hi, doubled while
-    stable; while fewer than two unstable probes have a margin, the next goes as far
-    above the unstable end as the bracket is wide (unstable, and cheap: such runs stop
-    early), or bisects when that is beyond k_max.  Then, up to SIME_GUIDED times, the
-    zero x of the margin extrapolated from the two unstable probes closest to it sets
-    the probe: more than SIME_NEAR cells below the unstable end, at ceil(x) (the margin
-    bends towards 0 near the CCT, so the zero extrapolated from above mostly lands on
-    the unstable side, and the next extrapolation is short); within SIME_NEAR cells, at
-    x rounded (the cell above the stable end when floor(x) is that end); below the
-    stable end, a quarter of the bracket above it.  SIME_STREAK guided probes in a row
-    on the same side (the bracket creeping) are followed by a bisection step; after
-    SIME_GUIDED guided probes, bisection.  A probe at k_max
-    found stable raises AboveSearchLimit.  `margins` (lattice index -> margin or None)
-    is filled by `stable_at` for each unstable probe."""
+    stable; then bisection until two unstable probes have a margin.  Then, up to
+    SIME_GUIDED times, the zero x of the margin extrapolated from the two unstable
+    probes closest to it sets the probe: more than SIME_NEAR cells below the unstable
+    end, at ceil(x) (the margin bends towards 0 near the CCT, so the zero extrapolated
+    from above mostly lands on the unstable side, and the next extrapolation is short);
+    within SIME_NEAR cells, at x rounded (the cell above the stable end when floor(x)
+    is that end, the cell below the unstable end when x is above it); below the stable
+    end, a quarter of the bracket above it.  Two guided probes in a row that moved the
+    same end by at most 2 cells (the bracket creeping) are followed by a bisection
+    step; after SIME_GUIDED guided probes, bisection.  A probe at k_max found stable
+    raises AboveSearchLimit.  `margins` (lattice index -> margin or None) is filled by
+    `stable_at` for each unstable probe."""
     k_lo, k_hi, k_max = bounds
     if not stable_at(k_lo):
         _lower_bound_unstable(k_lo, fault, tol)
     known: dict[int, bool] = {k_lo: True}
     start = None
-    n_guided, guided, side, streak = 0, None, None, 0  # the guided probes: count, the
-    k = k_hi  # pending one, the side of the last and how many in a row were on it
+    n_guided, guided, ends, last = 0, None, (k_lo, k_max), None
+    k = k_hi
     while True:
         known[k] = stable_at(k)
         if k == k_max and known[k]:
             _above_limit(k_max, fault, tol, freq)
-        streak = (streak + 1 if side == known[k] else 1) if k == guided else 0
-        side = known[k] if k == guided else None
-        repeat = streak >= SIME_STREAK
+        creeping, moved = False, None
+        if k == guided:  # the cells the bracket's end moved, and whether it creeps
+            moved = (known[k], k - ends[0] if known[k] else ends[1] - k)
+            creeping = last is not None and last[0] == moved[0] and max(last[1], moved[1]) <= 2
+        last = moved
         u = min((j for j, ok in known.items() if not ok), default=None)
         s = max(j for j, ok in known.items() if ok and (u is None or j < u))
         if u is None:  # stable so far: double
@@ -534,31 +535,27 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
         if u - s == 1:
             return s, u, start
         zero = _margin_zero(margins, u) if n_guided < SIME_GUIDED else None
-        usable = sum(1 for j, m in margins.items() if j >= u and m is not None and m < 0)
-        if zero is None and usable < 2 and u + (u - s) <= k_max:
-            k, guided = u + (u - s), None  # a second unstable margin
+        if zero is None or creeping:
+            k, guided, last = (s + u) // 2, None, None
             continue
-        if zero is None or repeat:
-            k, guided, side, streak = (s + u) // 2, None, None, 0
-            continue
-        x = zero
-        kf = math.floor(x)
+        kf = math.floor(zero)
         if kf < s:
             k = s + max(1, (u - s) // 4)
         elif kf == s:
             k = s + 1
-        elif u - x <= SIME_NEAR:
-            k = max(round(x), s + 1)
+        elif u - zero <= SIME_NEAR:
+            k = max(round(zero), s + 1)
         else:
-            k = math.ceil(x)
-        k = guided = min(max(k, s + 1), u - 1)
+            k = math.ceil(zero)
+        k = guided = min(k, u - 1)
+        ends = (s, u)
         n_guided += 1
 
 
 #: probes placed from SIME's margins before the "sime" search bisects what is left; the
 #: distance (lattice cells) below the unstable end within which the probe goes to the
-#: extrapolated zero rounded; guided probes in a row on one side before a bisection step
-SIME_GUIDED, SIME_NEAR, SIME_STREAK = 8, 3, 3
+#: extrapolated zero rounded
+SIME_GUIDED, SIME_NEAR = 8, 3
 
 
 def _margin_zero(margins: dict, u: int) -> float | None:
