@@ -9,7 +9,8 @@ step), pinned to one core after a warm-up run (compilation and the power flow ex
   SIME's (check at 0, doubling from 0.1 s, bisection; every run to its end or to
   separation);
 * ``sime``: SearchOptions() (method "sime", early stops), SIME's unstable margins
-  extrapolated to the CCT, runs ended at SIME's certain verdicts.
+  extrapolated to the CCT, runs ended at SIME's certain verdicts;
+* ``sime-full``: the same search, every run to its end or to separation.
 
 Systems: kundur (every bus and line fault), miniwecc (every --every-th of its bus and
 line faults), activsg2000 (with --activsg: the line fault 2021-2002 and the bus fault
@@ -39,6 +40,7 @@ from stabctl.studies.cases import CASE1, CASE2
 METHODS = {
     "bisection": SearchOptions(method="bisection", early_stop=False),
     "sime": SearchOptions(),
+    "sime-full": SearchOptions(early_stop=False),
 }
 
 

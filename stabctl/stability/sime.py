@@ -292,12 +292,12 @@ class EarlyVerdict:
         inertia, island = np.asarray(result.inertia, float), result.island
         from stabctl.dynamics.driver import separated_group
 
-        rel = angle - coi_of_islands(angle, inertia, island)
-        dev = np.abs(rel).max(axis=1)
-        pre = result.angle[0] - coi_of_islands(result.angle[:1], inertia, island)[0]
+        # the cheap tests first (the last point, the last settle_s): most calls stop there
+        rel = angle[-1] - coi_of_islands(angle[-1], inertia, island)
+        pre = result.angle[0] - coi_of_islands(result.angle[0], inertia, island)
         rel_speed = speed[-1] - coi_of_islands(speed[-1], inertia, island)
-        if np.abs(rel[-1] - pre).max() > self.min_excursion and self._runs_away(
-            rel[-1], rel_speed, float(t[-1])
+        if np.abs(rel - pre).max() > self.min_excursion and self._runs_away(
+            rel, rel_speed, float(t[-1])
         ):
             group = separated_group(angle[-1], inertia, island)
             now = _omib_motion(angle, speed, inertia, group)
@@ -306,6 +306,7 @@ class EarlyVerdict:
         recent = speed[t[k_cl:] >= t[-1] - self.settle_s]
         if np.abs(recent - coi_of_islands(recent, inertia, island)).max() > self.settle_pu:
             return None
+        dev = np.abs(angle - coi_of_islands(angle, inertia, island)).max(axis=1)
         k_far = int(np.argmax(dev))
         first = _omib_motion(angle, speed, inertia, separated_group(angle[k_far], inertia, island))
         if first is not None and _swings_died_down(first[0], first[1], self.returns):
