@@ -75,9 +75,8 @@ def _trips(trip) -> tuple[tuple[int, int], ...]:
     type=click.Choice(["sime", "bisection"]),
     default="sime",
     show_default=True,
-    help="How the bracket is found: from SIME's margins of the runs (runs ended as soon "
-    "as their verdict is certain), or the bound checks, doubling and bisection alone "
-    "(every run to the end or to separation: the search before SIME's).",
+    help="How the bracket is found: from SIME's margins of the unstable runs, or the "
+    "bound checks, doubling and bisection alone (the search before SIME's).",
 )
 @model_options
 @q_limits_option
@@ -120,8 +119,8 @@ def cct(
     (up to --t-max), then bisects.  --search sime (the default) starts at 0.1 s (doubled
     while stable), extrapolates SIME's unstable margin (close to linear in the clearing
     time) from two unstable runs to the CCT, probes there on both sides and bisects only
-    what is left; its runs end as soon as SIME makes their verdict certain.  Both end in
-    the same bracket when the verdict is monotone in the clearing time.
+    what is left.  Both end in the same bracket when the verdict is monotone in the
+    clearing time.
     The CCT printed is the stable end of the final bracket (conservative).  Its numerical
     error bar: the bracket's ends rerun at half the step (the search continued there if a
     verdict changes); numerical_error_s = abs(CCT(h/2) - CCT(h)) (0: below the tolerance).
@@ -144,7 +143,7 @@ def cct(
     from stabctl.storage.devices import uniform_fleet
 
     check_storage_given(esd_pct)
-    search = replace(search_settings(tol_ms, t_max, tf), method=method, early_stop=method == "sime")
+    search = replace(search_settings(tol_ms, t_max, tf), method=method)
     model = model_settings(conventions, None, q_limits)
     case = load_case(case_name)
     storage = (
