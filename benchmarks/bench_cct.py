@@ -1,65 +1,146 @@
-"""Wall time and number of simulations of one CCT search per case and model conventions
-(not a test).
+"""Simulations and wall time per CCT search, the bisection against SIME's search (not a test).
 
-Searches (defaults of `stabctl.stability.cct.critical_clearing_time`: tol 1 ms, t_end = fault + 5 s,
-stop at separation, each convention's default step) for the paper's Case 2 fault
-(miniWECC, bus 83, line 83-33, at 1 s) and Case 1 fault (Kundur, bus 3, line 3-101, at
-1 s), pinned to one core, after a warm-up run (compilation and the power flow excluded;
-the Simulator build is printed apart).  Each convention twice: without the numerical
-error bar (the bisection alone, as before the error bar existed) and with it (the default:
-the bracket rerun at half the step).  Target: the ieee default with its error bar at most
-2x the pstess search without it (Kundur 0.1 s, miniWECC 1.7 s before), miniWECC <= 3 s.
-Run: python benchmarks/bench_cct.py
+Per system, the CCT of every fault of a screening sample at the defaults of
+`stabctl.stability.cct.critical_clearing_time` (1 ms bracket, t_end = fault + 5 s, runs
+stopped at separation, the half-step error bar, ieee conventions, the case's default
+step), pinned to one core after a warm-up run (compilation and the power flow excluded):
+
+* ``bisection``: SearchOptions(method="bisection", early_stop=False), the search before
+  SIME's (check at 0, doubling from 0.1 s, bisection; every run to its end or to
+  separation);
+* ``sime``: SearchOptions() (method "sime"), SIME's unstable margins extrapolated to
+  the CCT, bisection to finish;
+* ``sime-early``: the same search, its runs ended at SIME's certain verdicts
+  (early_stop=True).
+
+Systems: kundur (every bus and line fault), miniwecc (every --every-th of its bus and
+line faults), activsg2000 (with --activsg: the line fault 2021-2002 and the bus fault
+2021 of the project's tests, imported from tests/data/activsg as docs/cli.md does; a
+few minutes).  Prints per system: faults searched, CCTs found (the others: verdicts N-1
+insecure or above t_max, counted apart), the mean simulations per CCT (all, and at
+the step only), the wall time per CCT, and whether every CCT and half-step CCT of
+"sime" equals the bisection's (same 1 ms bracket).  ``--paper`` adds the paper's two
+faults under both conventions, with and without the error bar (the earlier table).
+Run: python benchmarks/bench_cct.py [--every 4] [--activsg] [--paper]
 """
 
+import argparse
 import os
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 from stabctl.dynamics.driver import Simulator
+from stabctl.errors import InputError
 from stabctl.io import load_case
-from stabctl.stability.cct import SearchOptions, critical_clearing_time
+from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
+from stabctl.stability.screening import screening_faults
 from stabctl.studies.cases import CASE1, CASE2
 
-SEARCHES = (  # case, fault, target s (None: no target), label
-    ("miniwecc", CASE2.fault, 3.0, "Case 2: bus 83, line 83-33"),
-    ("kundur", CASE1.fault, None, "Case 1: bus 3, line 3-101"),
-)
+METHODS = {
+    "bisection": SearchOptions(method="bisection", early_stop=False),
+    "sime": SearchOptions(),
+    "sime-early": SearchOptions(early_stop=True),
+}
 
 
-def main():
+def activsg2000():
+    """ACTIVSg2000 as bench_scale.py imports it."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from bench_scale import _activsg2000
+
+    with tempfile.TemporaryDirectory() as work:
+        return _activsg2000(work)
+
+
+def compare(label, case, faults):
+    """Search every fault with both methods; print one line per method."""
+    t = time.perf_counter()
+    sim = Simulator(case)
+    build = time.perf_counter() - t
+    sim.run(faults[0].events(0.05), t_end=faults[0].t_fault + 1.0)  # warm-up (compilation)
+    out = {m: [] for m in METHODS}
+    for f in faults:
+        for m, opts in METHODS.items():
+            try:
+                out[m].append(critical_clearing_time(sim, f, opts))
+            except InputError as exc:  # verdicts (N-1 insecure, above t_max) and failures
+                out[m].append(type(exc).__name__)
+    same = sum(
+        1
+        for a, b in zip(out["bisection"], out["sime"])
+        if (isinstance(a, str) and a == b)
+        or (
+            not isinstance(a, str)
+            and not isinstance(b, str)
+            and a.bracket == b.bracket
+            and a.cct_half_step_s == b.cct_half_step_s
+        )
+    )
+    for m, res in out.items():
+        found = [r for r in res if not isinstance(r, str)]
+        n = max(len(found), 1)
+        sims = sum(r.n_simulations for r in found) / n
+        at_h = sum(len(r.probes) for r in found) / n
+        wall = sum(r.wall_time_s for r in found) / n
+        early = sum(r.early_stops for r in found) / n
+        print(
+            f"{label:12} {len(faults):6d} {len(found):5d} {m:9} {sims:8.2f} {at_h:8.2f} "
+            f"{early:7.2f} {wall:9.3f} {build:7.2f} {same:4d}/{len(faults)}",
+            flush=True,
+        )
+
+
+def paper_table():
+    """The paper's two faults, both conventions, without and with the error bar."""
+    print(
+        f"\n{'case':9} {'conv':7} {'h ms':>6} {'err bar':>7} {'method':9} {'CCT s':>7} "
+        f"{'sims':>5} {'wall s':>7}"
+    )
+    for name, fault in (("miniwecc", CASE2.fault), ("kundur", CASE1.fault)):
+        for conv in ("pstess", "ieee"):
+            sim = Simulator(load_case(name), conventions=conv)
+            sim.run(fault.events(0.05), t_end=fault.t_fault + 1.0)
+            for check in (False, True):
+                for m, opts in METHODS.items():
+                    o = SearchOptions(**{**opts.__dict__, "error_check": check})
+                    res = min(
+                        (critical_clearing_time(sim, fault, o) for _ in range(3)),
+                        key=lambda r: r.wall_time_s,
+                    )
+                    print(
+                        f"{name:9} {conv:7} {1000 * res.step_s:6.3g} "
+                        f"{'yes' if check else 'no':>7} {m:9} {res.cct_s:7.3f} "
+                        f"{res.n_simulations:5d} {res.wall_time_s:7.2f}",
+                        flush=True,
+                    )
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--every", type=int, default=4, help="miniWECC: every N-th fault")
+    ap.add_argument("--activsg", action="store_true", help="also ACTIVSg2000 (minutes)")
+    ap.add_argument("--paper", action="store_true", help="also the paper's two faults")
+    args = ap.parse_args(argv)
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     print(
-        f"{'case':9} {'fault':28} {'conv':7} {'h ms':>6} {'err bar':>7} {'build s':>8} "
-        f"{'CCT s':>7} {'cycles':>7} {'err ms':>6} {'sims':>5} {'wall s':>7} {'target s':>9}"
+        "settings: tol 1 ms, t_max 1 s, t_end fault + 5 s, stop at separation, half-step "
+        "error bar, ieee conventions, default step; early stops in sime-early only"
     )
-    for name, fault, target, label in SEARCHES:
-        for conv in ("pstess", "ieee"):
-            t = time.perf_counter()
-            sim = Simulator(load_case(name), conventions=conv)
-            build = time.perf_counter() - t
-            sim.run(fault.events(0.05), t_end=fault.t_fault + 1.0)  # warm-up (compilation)
-            for check in (False, True):
-                res = min(
-                    (
-                        critical_clearing_time(sim, fault, SearchOptions(error_check=check))
-                        for _ in range(3)
-                    ),
-                    key=lambda r: r.wall_time_s,
-                )
-                verdict = (
-                    ""
-                    if target is None or conv == "pstess"
-                    else f"{target:9.1f} {'ok' if res.wall_time_s <= target else 'MISSED'}"
-                )
-                err = "-" if res.numerical_error_s is None else f"{1000 * res.numerical_error_s:g}"
-                print(
-                    f"{name:9} {label:28} {conv:7} {1000 * res.step_s:6.3g} "
-                    f"{'yes' if check else 'no':>7} {build:8.2f} {res.cct_s:7.3f} "
-                    f"{res.cct_cycles:7.2f} {err:>6} {res.n_simulations:5d} "
-                    f"{res.wall_time_s:7.2f} {verdict}",
-                    flush=True,
-                )
+    print(
+        f"{'system':12} {'faults':>6} {'CCTs':>5} {'method':9} {'sims/CCT':>8} {'at step':>8} "
+        f"{'early':>7} {'wall/CCT':>9} {'build s':>7} same"
+    )
+    kundur = load_case("kundur")
+    compare("kundur", kundur, screening_faults(kundur, lines=True))
+    mini = load_case("miniwecc")
+    compare(f"miniwecc/{args.every}", mini, screening_faults(mini, lines=True)[:: args.every])
+    if args.activsg:
+        compare("activsg2000", activsg2000(), [LineFault(2021, 2002), LineFault(2021, None)])
+    if args.paper:
+        paper_table()
 
 
 if __name__ == "__main__":

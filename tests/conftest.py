@@ -5,7 +5,8 @@ Session fixtures load each built-in case and build each Simulator once for the w
 
 Markers (registered in pyproject.toml):
 
-* ``slow``  -- long property-based fuzzing, deselected by default (``-m slow`` runs it);
+* ``slow``  -- long runs (the property-based fuzzing profile, the early verdicts on miniWECC's
+  whole screening), deselected by default (``-m slow`` runs them);
 * ``andes`` -- cross-validation against ANDES (needs the ``andes`` extra; skipped without).
   ANDES's runs are stored (tests/andes_refs.py, tests/data/andes_refs/): by default no ANDES
   time simulation runs; ``STABCTL_ANDES_REFS=live`` (CI) adds the live smoke tests, which

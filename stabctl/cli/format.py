@@ -250,7 +250,11 @@ def print_cct(case_name, rating, d) -> None:
             f"machine(s) {', '.join(map(str, d['separated_machines']))} lose "
             f"synchronism when cleared at {d['t_unstable_s']:.3f} s"
         )
-    click.echo(f"{d['n_simulations']} simulations, wall {d['wall_time_s']:.2f} s")
+    click.echo(
+        f"{d['n_simulations']} simulations ({d['n_simulations_half_step']} at half the step, "
+        f"{d['early_stops']} ended at an early verdict; {d['search']} search), "
+        f"wall {d['wall_time_s']:.2f} s"
+    )
 
 
 def sweep_line(key, rec) -> str:

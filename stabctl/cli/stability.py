@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import click
 
 from stabctl.cli.checks import (
@@ -67,6 +69,15 @@ def _trips(trip) -> tuple[tuple[int, int], ...]:
 @esd_model_option
 @tol_options()
 @tf_option()
+@click.option(
+    "--search",
+    "method",
+    type=click.Choice(["sime", "bisection"]),
+    default="sime",
+    show_default=True,
+    help="How the bracket is found: from SIME's margins of the unstable runs, or the "
+    "bound checks, doubling and bisection alone (the search before SIME's).",
+)
 @model_options
 @q_limits_option
 @json_option()
@@ -87,12 +98,13 @@ def cct(
     tol_ms,
     t_max,
     tf,
+    method,
     conventions,
     step,
     q_limits,
     as_json,
 ):
-    """Critical clearing time of a line or bus fault by bisection on the clearing time.
+    """Critical clearing time of a line or bus fault, searched on the clearing time.
 
     The fault at BUS on line BUS-FAR_BUS starts at --t-fault and is cleared at both ends
     at once after the clearing time (s after the fault start); the line stays out.
@@ -102,8 +114,13 @@ def cct(
     \b
     Criterion: unstable if a rotor angle leaves the centre of inertia (H*MVA weights) by
     more than pi rad before --tf (default fault time + 5 s); runs stop at separation.
-    The search checks stability at zero clearing (the line trip alone), doubles the upper
-    bound from 0.1 s while stable (up to --t-max), then bisects on multiples of --tol-ms.
+    Clearing times are multiples of --tol-ms.  --search bisection checks stability at
+    zero clearing (the line trip alone), doubles the upper bound from 0.1 s while stable
+    (up to --t-max), then bisects.  --search sime (the default) starts at 0.1 s (doubled
+    while stable), extrapolates SIME's unstable margin (close to linear in the clearing
+    time) from two unstable runs to the CCT, probes there on both sides and bisects only
+    what is left.  Both end in the same bracket when the verdict is monotone in the
+    clearing time.
     The CCT printed is the stable end of the final bracket (conservative).  Its numerical
     error bar: the bracket's ends rerun at half the step (the search continued there if a
     verdict changes); numerical_error_s = abs(CCT(h/2) - CCT(h)) (0: below the tolerance).
@@ -126,7 +143,7 @@ def cct(
     from stabctl.storage.devices import uniform_fleet
 
     check_storage_given(esd_pct)
-    search = search_settings(tol_ms, t_max, tf)
+    search = replace(search_settings(tol_ms, t_max, tf), method=method)
     model = model_settings(conventions, None, q_limits)
     case = load_case(case_name)
     storage = (

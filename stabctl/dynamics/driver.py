@@ -183,6 +183,9 @@ class Simulator:
         The power flow (when `op` is None) did not converge.
     """
 
+    #: `run` takes a monitor that can end a run early (the CCT search's early verdicts)
+    takes_monitor = True
+
     def __init__(
         self,
         case: Case,
@@ -300,6 +303,7 @@ class Simulator:
         stop_at_separation: bool = False,
         storage=None,
         method: str = "heun",
+        monitor: Callable[[SimulationResult], str | None] | None = None,
     ) -> SimulationResult:
         """Simulate disturbances from the power-flow point, t = 0 to `t_end`.
 
@@ -334,6 +338,14 @@ class Simulator:
             (`stabctl.dynamics.integrator`, PSTess's); "trapezoid", the implicit trapezoidal
             rule (`stabctl.dynamics.trapezoid`, ANDES's), A-stable, "exact" semantics
             only, without storage devices, a Python loop around the compiled evaluation.
+        monitor : callable or None, optional
+            Heun only: ``monitor(partial) -> str or None`` is called every
+            `MONITOR_EVERY_S` of simulated time with the trajectory so far (a
+            SimulationResult without verdict, arrays are views); a string ends the run
+            there and is kept as ``meta["early_verdict"]`` (the partial's vmag and vang
+            are empty; e.g.
+            `stabctl.stability.sime.EarlyVerdict`).  The trajectory up to the stop equals
+            the unmonitored run's.  None (default): no monitor.
 
         Returns
         -------
@@ -363,8 +375,17 @@ class Simulator:
         sim = self._for_storage(storage)
         if sim is not self:
             return sim.run(
-                events, t_end, h, semantics, separation_limit, stop_at_separation, storage
+                events,
+                t_end,
+                h,
+                semantics,
+                separation_limit,
+                stop_at_separation,
+                storage,
+                monitor=monitor,
             )
+        if monitor is not None and method != "heun":
+            raise InputError(f"a run monitor needs the heun method, got {method!r}")
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics, method)
         if method == "trapezoid":
             res = trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation)
@@ -372,8 +393,14 @@ class Simulator:
             run = _Run(
                 self, m, sa, grid, nets, semantics == "pst", separation_limit, stop_at_separation
             )
-            run.advance(grid.t.size - 1)
+            verdict = None
+            if monitor is None:
+                run.advance(grid.t.size - 1)
+            else:
+                verdict = _advance_monitored(run, monitor)
             res = run.finish(storage)
+            if verdict is not None:
+                res.meta["early_verdict"] = verdict
         islanded = islanding_log(grid, nets)
         if islanded:
             res.meta["islanded"] = islanded
@@ -565,6 +592,27 @@ class Simulator:
         )
 
 
+#: simulated time between two calls of a run's monitor (`Simulator.run`), s
+MONITOR_EVERY_S = 0.1
+
+
+def _advance_monitored(run: _Run, monitor) -> str | None:
+    """Advance `run` to its end in pieces of MONITOR_EVERY_S, calling `monitor` with the
+    trajectory so far after each; returns its first verdict (the run stops there) or None
+    (the run went to its end or stopped by itself).  Pausing does not change the
+    trajectory (`integrate` continues from its carry)."""
+    t, last = run.grid.t, run.grid.t.size - 1
+    while run.k < last and run.status == ig.OK:
+        k1 = min(int(np.searchsorted(t, t[run.k] + MONITOR_EVERY_S - 1e-12)), last)
+        run.advance(max(k1, run.k + 1))
+        if run.status != ig.OK:
+            return None
+        verdict = monitor(run.partial(run.k, np.inf, voltages=False))
+        if verdict is not None:
+            return verdict
+    return None
+
+
 def islanding_log(grid, nets) -> list[dict]:
     """The buses each stage of a run newly cuts from every machine (de-energised, their
     load shed: PSS/E's islanding, `stabctl.dynamics.model.Model.network`).
@@ -744,12 +792,15 @@ class _Run:
         ds = self.carry.devices
         ds.cmd_t[i], ds.cmd_mode[i] = t_apply, modes
 
-    def partial(self, k: int, history_s: float) -> SimulationResult:
+    def partial(self, k: int, history_s: float, voltages: bool = True) -> SimulationResult:
         """The trajectory of the last `history_s` seconds up to grid index k (views, no
         verdict): a callback at every frame then costs the same late in a long run as
-        early (the whole trajectory would make a run's cost grow with its length squared)."""
+        early (the whole trajectory would make a run's cost grow with its length squared).
+        Without `voltages`, vmag and vang are empty (n_t, 0) (a monitor of the machines
+        only, `Simulator.run`, is spared their computation)."""
         r, c, n = self.rec, self.sim.case, k + 1
         lo = max(int(np.searchsorted(self.grid.t[:n], self.grid.t[k] - history_s)) - 1, 0)
+        V = r.V[lo:n] if voltages else np.zeros((n - lo, 0))
         return SimulationResult(
             t=self.grid.t[lo:n],
             machines=c.machines.number.astype(int),
@@ -759,8 +810,8 @@ class _Run:
             pelect=r.pelect[lo:n],
             pmech=r.pmech[lo:n],
             efd=r.efd[lo:n],
-            vmag=np.abs(r.V[lo:n]),
-            vang=np.angle(r.V[lo:n]),
+            vmag=np.abs(V),
+            vang=np.angle(V),
             inertia=self.sim.inertia,
             island=self.sim.island,
             devices=np.arange(1, self.sa.pmax.size + 1),

@@ -310,6 +310,7 @@ class _Memo:
         separation_limit: float = np.pi,
         stop_at_separation: bool = False,
         storage=None,
+        monitor=None,
     ):
         h = self._sim.default_h if h is None else h
         key = (
@@ -320,6 +321,7 @@ class _Memo:
             separation_limit,
             stop_at_separation,
             id(storage),
+            monitor,
         )
         if key not in self._done:
             self.n_runs += 1
@@ -331,6 +333,7 @@ class _Memo:
                 separation_limit=separation_limit,
                 stop_at_separation=stop_at_separation,
                 storage=storage,
+                monitor=monitor,
             )
         return self._done[key]
 

@@ -1,4 +1,4 @@
-"""Critical clearing time (CCT) of a line fault by bisection on the clearing time.
+"""Critical clearing time (CCT) of a line fault, searched on the clearing time.
 
 The fault (`LineFault`) is a bolted three-phase fault at `bus` on the line `bus`-`far_bus`
 from `t_fault`, cleared at both ends at once after a clearing time tc (s, counted from the
@@ -10,13 +10,27 @@ Function Analysis for Power System Stability, 1989, ch. 1, for the time-domain d
 
 Stability criterion (default `no_separation`): no machine's rotor angle leaves the centre of
 inertia (paper eq. 40, weights H*MVA) by more than `separation_limit` (pi rad) before
-`t_end` (default fault time + 5 s); the runs stop at separation to save time.  Any
-callable(SimulationResult) -> bool (True = stable) can replace it.
+`t_end` (default fault time + 5 s); the runs stop at separation to save time, and (with
+`SearchOptions.early_stop`) as soon as SIME makes their verdict certain
+(`stabctl.stability.sime.EarlyVerdict`, tested against the full runs on the screenings of
+Kundur and miniWECC).  Any callable(SimulationResult) -> bool (True = stable) can replace
+it (its runs then go to the end).
+
+Two searches (`SearchOptions.method`), both on the lattice below:
+
+- "bisection": stable at t_lo, the upper bound doubled from 0.1 s while stable, bisection;
+- "sime" (the default): stable at t_lo, the first probe at 0.1 s (doubled while stable),
+  then the probes placed where SIME's unstable margin (`stabctl.stability.sime.
+  probe_margin`, close to linear in the clearing time) extrapolated from two unstable
+  probes vanishes, on both sides of it, bisection only to finish (`_sime_search`).
+
+Both end in the same cell where the verdict is monotone in the clearing time (every CCT of
+Kundur's screening and of every third fault of miniWECC's, `benchmarks/bench_cct.py`).
 
 Grid: the simulator's grid lands on every event time (`stabctl.dynamics.grid.time_grid`), so a
 clearing time is never rounded to a multiple of the step h: the fault-on interval of length
 tc gets fix(tc/h) equal steps (each in [h, 2h)) and the post-fault interval restarts at the
-clearing instant.  The bisection probes only clearing times k*tol (k integer), so results
+clearing instant.  Both searches probe only clearing times k*tol (k integer), so results
 are reproducible to the last digit and the final bracket is one lattice cell, exactly tol
 wide.  A tol far below h resolves the discretised model, not the physics.
 
@@ -55,6 +69,7 @@ from stabctl.errors import (
 )
 from stabctl.io.inputs import CsvRow, number, read_csv
 from stabctl.network.ybus import circuit_row
+from stabctl.stability.sime import EarlyVerdict, critical_machines, probe_margin
 
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
 #: to the limit), the limit, tolerance, and the run length after the fault.
@@ -172,6 +187,9 @@ class CCTResult:
     the criterion failed without separation).  step_s: integration step h; wall_time_s:
     the whole search.  cct_half_step_s: the CCT at h/2 (module docstring; None when the
     check was not asked for), half_step_probes: its runs; conventions: the model's.
+    n_simulations: every run of the search (probes and half_step_probes); early_stops:
+    those ended by an early verdict (`stabctl.stability.sime.EarlyVerdict`); method:
+    the search's (`SearchOptions.method`).
     """
 
     fault: LineFault
@@ -189,6 +207,8 @@ class CCTResult:
     cct_half_step_s: float | None = None
     half_step_probes: tuple[tuple[float, bool], ...] = field(default=(), repr=False)
     conventions: str = "ieee"
+    method: str = "bisection"
+    early_stops: int = 0
 
     @property
     def numerical_error_s(self) -> float | None:
@@ -228,6 +248,9 @@ class CCTResult:
             "tol_s": self.tol_s,
             "step_s": self.step_s,
             "n_simulations": self.n_simulations,
+            "n_simulations_half_step": len(self.half_step_probes),
+            "early_stops": self.early_stops,
+            "search": self.method,
             "wall_time_s": self.wall_time_s,
             "criterion": self.criterion,
             "separated_machines": list(self.separated),
@@ -264,6 +287,17 @@ class SearchOptions:
     error_check : bool
         Also search the CCT at h/2 from the final bracket
         (`CCTResult.numerical_error_s`, module docstring); default True.
+    method : {"sime", "bisection"}
+        How the bracket is found (module docstring): "sime" (default), from SIME's
+        margins of the runs, confirmed on both sides, bisection only to finish;
+        "bisection", the bound checks, doubling and bisection.  Both end in the same
+        lattice cell when the verdict is monotone in the clearing time.
+    early_stop : bool
+        End each run as soon as SIME makes its verdict certain
+        (`stabctl.stability.sime.EarlyVerdict`; the default criterion and a `Simulator`
+        only); default False: with the gates that keep every verdict equal to the full
+        run's, the runs end less than 10 % sooner and the monitor costs more than that
+        (`benchmarks/bench_cct.py`).
 
     A sweep (`cct_jobs`) records tol, t_max, t_end and error_check (when off) in each
     job's inputs (`to_inputs`); the other fields must keep their defaults there.
@@ -278,11 +312,13 @@ class SearchOptions:
     criterion: Callable[[SimulationResult], bool] | None = None
     stop_at_separation: bool | None = None
     error_check: bool = True
+    method: str = "sime"
+    early_stop: bool = False
 
     def to_inputs(self) -> dict:
-        """Fields of a sweep job's recorded inputs: tol, t_max, t_end, and error_check
-        when off.  Raises InputError when a field a record cannot hold is not its
-        default."""
+        """Fields of a sweep job's recorded inputs: tol, t_max, t_end, error_check when
+        off, method when not the default, early_stop when on.  Raises InputError when a
+        field a record cannot hold is not its default."""
         default = SearchOptions()
         for name in ("t_lo", "t_hi", "separation_limit", "criterion", "stop_at_separation"):
             if getattr(self, name) != getattr(default, name):
@@ -295,6 +331,8 @@ class SearchOptions:
             "t_max": self.t_max,
             "t_end": self.t_end,
             **({} if self.error_check else {"error_check": False}),
+            **({} if self.method == default.method else {"method": self.method}),
+            **({"early_stop": True} if self.early_stop else {}),
         }
 
     @classmethod
@@ -305,6 +343,8 @@ class SearchOptions:
             t_max=inputs.get("t_max", T_MAX),
             t_end=inputs.get("t_end"),
             error_check=inputs.get("error_check", True),
+            method=inputs.get("method", "sime"),
+            early_stop=inputs.get("early_stop", False),
         )
 
 
@@ -316,7 +356,7 @@ def critical_clearing_time(
     h: float | None = None,
     storage=None,
 ) -> CCTResult:
-    """CCT of `fault` on `sim`'s case by bisection on the clearing time (see module doc).
+    """CCT of `fault` on `sim`'s case, searched on the clearing time (see module doc).
 
     Parameters
     ----------
@@ -388,23 +428,42 @@ def critical_clearing_time(
     crit = no_separation if o.criterion is None else o.criterion
     stop = o.criterion is None if o.stop_at_separation is None else o.stop_at_separation
     extra = {} if storage is None else {"storage": storage}
+    if o.method not in METHODS:
+        raise InputError(f"CCT search method must be one of {METHODS}, got {o.method!r}")
+    early = o.early_stop and o.criterion is None and getattr(sim, "takes_monitor", False)
     probes: dict[float, list] = {h: [], h / 2: []}
     separated: dict = {}
+    margins: dict = {}
+    early_stops = []
 
     def stable_at(k: int, step: float = h) -> bool:
         t_clear = _lattice(k, tol)
-        res, diverged = _run(sim, fault, t_clear, t_end, step, o.separation_limit, stop, extra)
-        ok = not diverged and bool(crit(res))
+        t_cl = fault.t_fault + t_clear
+        monitor = EarlyVerdict(t_cl, t_end, sim.case.freq_hz, o.separation_limit)
+        more = {**extra, "monitor": monitor} if early else extra
+        res, diverged = _run(sim, fault, t_clear, t_end, step, o.separation_limit, stop, more)
+        verdict = res.meta.get("early_verdict") if early and not diverged else None
+        if verdict:
+            early_stops.append(t_clear)
+        ok = not diverged and (verdict == "stable" if verdict else bool(crit(res)))
         probes[step].append((t_clear, ok))
         if not ok and step == h:
-            separated[k] = tuple(int(m) for m in res.separated)
+            separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))
+        if o.method == "sime" and step == h and not ok:
+            margins[k] = probe_margin(res, t_cl, sim.case.base_mva, sim.case.freq_hz)
         return ok
 
     wall = time.perf_counter()
     k_lo, k_hi, k_max = _lattice_bounds(tol, o.t_lo, t_hi, t_max)
-    k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
-    start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
-    k_lo, k_hi = _bisect(stable_at, k_lo, k_hi)
+    if o.method == "sime":
+        k_lo, k_hi, start_k = _sime_search(
+            stable_at, margins, (k_lo, k_hi, k_max), fault, tol, sim.case.freq_hz
+        )
+        start = (_lattice(start_k[0], tol), _lattice(start_k[1], tol))
+    else:
+        k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
+        start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
+        k_lo, k_hi = _bisect(stable_at, k_lo, k_hi)
     half = None
     if o.error_check:
         half = _lattice(_half_step_cct(lambda k: stable_at(k, h / 2), k_lo, k_hi, k_max), tol)
@@ -424,7 +483,94 @@ def critical_clearing_time(
         cct_half_step_s=half,
         half_step_probes=tuple(probes[h / 2]),
         conventions=sim.conventions,
+        method=o.method,
+        early_stops=len(early_stops),
     )
+
+
+#: the CCT search methods (`SearchOptions.method`)
+METHODS = ("sime", "bisection")
+
+
+def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
+    """The "sime" search on the lattice: returns (k_stable, k_unstable = k_stable + 1,
+    the first (stable, unstable) pair found).
+
+    SIME's unstable margin is close to linear in the clearing time (`probe_margin`), so
+    two unstable probes extrapolate to the CCT (`_margin_zero`).  After the check at
+    k_lo (as `_bracket`: the verdicts of both searches agree even where stability is
+    not monotone in the clearing time), the first probe is at k_hi, doubled while
+    stable; then bisection until two unstable probes have a margin.  Then, up to
+    SIME_GUIDED times, the zero x of the margin extrapolated from the two unstable
+    probes closest to it sets the probe: more than SIME_NEAR cells below the unstable
+    end, at ceil(x) (the margin bends towards 0 near the CCT, so the zero extrapolated
+    from above mostly lands on the unstable side, and the next extrapolation is short);
+    within SIME_NEAR cells, at x rounded (the cell above the stable end when floor(x)
+    is that end, the cell below the unstable end when x is above it); below the stable
+    end, a quarter of the bracket above it.  Two guided probes in a row that moved the
+    same end by at most 2 cells (the bracket creeping) are followed by a bisection
+    step; after SIME_GUIDED guided probes, bisection.  A probe at k_max found stable
+    raises AboveSearchLimit.  `margins` (lattice index -> margin or None) is filled by
+    `stable_at` for each unstable probe."""
+    k_lo, k_hi, k_max = bounds
+    if not stable_at(k_lo):
+        _lower_bound_unstable(k_lo, fault, tol)
+    known: dict[int, bool] = {k_lo: True}
+    start = None
+    n_guided, guided, ends, last = 0, None, (k_lo, k_max), None
+    k = k_hi
+    while True:
+        known[k] = stable_at(k)
+        if k == k_max and known[k]:
+            _above_limit(k_max, fault, tol, freq)
+        creeping, moved = False, None
+        if k == guided:  # the cells the bracket's end moved, and whether it creeps
+            moved = (known[k], k - ends[0] if known[k] else ends[1] - k)
+            creeping = last is not None and last[0] == moved[0] and max(last[1], moved[1]) <= 2
+        last = moved
+        u = min((j for j, ok in known.items() if not ok), default=None)
+        s = max(j for j, ok in known.items() if ok and (u is None or j < u))
+        if u is None:  # stable so far: double
+            k = min(2 * k, k_max)
+            continue
+        start = start or (s, u)
+        if u - s == 1:
+            return s, u, start
+        zero = _margin_zero(margins, u) if n_guided < SIME_GUIDED else None
+        if zero is None or creeping:
+            k, guided, last = (s + u) // 2, None, None
+            continue
+        kf = math.floor(zero)
+        if kf < s:
+            k = s + max(1, (u - s) // 4)
+        elif kf == s:
+            k = s + 1
+        elif u - zero <= SIME_NEAR:
+            k = max(round(zero), s + 1)
+        else:
+            k = math.ceil(zero)
+        k = guided = min(k, u - 1)
+        ends = (s, u)
+        n_guided += 1
+
+
+#: probes placed from SIME's margins before the "sime" search bisects what is left; the
+#: distance (lattice cells) below the unstable end within which the probe goes to the
+#: extrapolated zero rounded
+SIME_GUIDED, SIME_NEAR = 8, 3
+
+
+def _margin_zero(margins: dict, u: int) -> float | None:
+    """The lattice position (real) where SIME's unstable margin vanishes, extrapolated
+    through the two unstable probes with a negative margin closest to the boundary (at
+    or above u); None without two, or with a slope that does not fall (then
+    `_sime_search` bisects)."""
+    have = sorted(k for k, m in margins.items() if k >= u and m is not None and m < 0)
+    if len(have) < 2:
+        return None
+    a, b = have[:2]
+    slope = (margins[b] - margins[a]) / (b - a)
+    return a - margins[a] / slope if slope < 0 else None
 
 
 def _bisect(stable_at, k_lo: int, k_hi: int) -> tuple[int, int]:
@@ -509,25 +655,34 @@ def _lattice_bounds(tol, t_lo, t_hi, t_max) -> tuple[int, int, int]:
 def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple[int, int]:
     """Check stable at k_lo, then double k_hi (up to k_max) until it is unstable."""
     if not stable_at(k_lo):
-        if k_lo == 0:
-            raise InsecureContingency(
-                f"{fault.describe()}: unstable even when cleared instantly "
-                "(the line trip alone loses synchronism): N-1 insecure, CCT 0"
-            )
-        raise InputError(
-            f"{fault.describe()}: unstable already at the lower bound "
-            f"{_lattice(k_lo, tol):g} s; lower it"
-        )
+        _lower_bound_unstable(k_lo, fault, tol)
     while stable_at(k_hi):
         if k_hi == k_max:
-            t = _lattice(k_max, tol)
-            raise AboveSearchLimit(
-                f"{fault.describe()}: the CCT is above the search limit "
-                f"t_max = {t:g} s "
-                f"({t * freq:.4g} cycles): still stable when cleared there"
-            )
+            _above_limit(k_max, fault, tol, freq)
         k_lo, k_hi = k_hi, min(2 * k_hi, k_max)
     return k_lo, k_hi
+
+
+def _lower_bound_unstable(k_lo: int, fault: LineFault, tol):
+    """Raise for a search whose lower bound is unstable: InsecureContingency at 0."""
+    if k_lo == 0:
+        raise InsecureContingency(
+            f"{fault.describe()}: unstable even when cleared instantly "
+            "(the line trip alone loses synchronism): N-1 insecure, CCT 0"
+        )
+    raise InputError(
+        f"{fault.describe()}: unstable already at the lower bound "
+        f"{_lattice(k_lo, tol):g} s; lower it"
+    )
+
+
+def _above_limit(k_max: int, fault: LineFault, tol, freq):
+    """Raise AboveSearchLimit: still stable at the search limit."""
+    t = _lattice(k_max, tol)
+    raise AboveSearchLimit(
+        f"{fault.describe()}: the CCT is above the search limit t_max = {t:g} s "
+        f"({t * freq:.4g} cycles): still stable when cleared there"
+    )
 
 
 def _run(sim, fault: LineFault, t_clear, t_end, h, limit, stop, extra):

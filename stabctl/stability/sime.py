@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stabctl.dynamics.coi import coi_angle, coi_of_rest, coi_speed
+from stabctl.dynamics.coi import coi_angle, coi_of_islands, coi_of_rest, coi_speed
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import InputError
 
@@ -210,3 +210,177 @@ def distribution_factors(sys, buses, machines, inertia, base_mva: float) -> np.n
     cols = [inputs.index(f"P_esd_B{int(b)}") for b in buses]
     B = np.asarray(sys.B)[np.ix_(rows, cols)]
     return -(2 * np.asarray(inertia, float) / base_mva)[:, None] * B
+
+
+# -- early verdicts and the margin of a probe (the CCT search, `stabctl.stability.cct`) ------
+
+
+@dataclass(frozen=True)
+class EarlyVerdict:
+    """A run monitor (`stabctl.dynamics.driver.Simulator.run`) that ends a run as soon as
+    SIME's criteria make its verdict certain (Pavella, Ernst, Ruiz-Vega 2000, ch. 2).
+
+    After the clearing instant `t_clear` (s, absolute), the machines are split at the
+    largest gap of their rotor angles (`stabctl.dynamics.driver.separated_group`) into a
+    candidate critical group and the rest, and their OMIB (module docstring) is followed:
+
+    - unstable: on the swing since the OMIB last stood still, its speed passed through a
+      positive minimum (the unstable angle, where the accelerating power turns positive)
+      and has risen ever since, for at least `confirm_s` s (a numerical wiggle never
+      passes for it), a machine has moved more than `min_excursion` rad from its
+      pre-fault angle to the centre of inertia (swings of several machine groups pass
+      through such minima and still turn back: on miniWECC up to 1.6 rad), and the
+      machine farthest from it, moving on at its present speed without accelerating
+      further, would pass `limit` within `horizon_s` and within half the time left
+      before `t_end` (a slow drift that the full run might still judge stable at its
+      end is left to it: on miniWECC a machine 2.94 rad from the centre of inertia,
+      moving out at 0.36 rad/s on the unstable side of its OMIB, turned back at 3.05);
+    - stable: the OMIB of the group split at the instant of the largest excursion from
+      the centre of inertia has come to rest (its speed changed sign, a return point
+      below the unstable angle) `returns` times, its last swing (between the last two
+      return points) was no wider than the one before (no growing oscillation), and the
+      machines have settled: over the last `settle_s` s no machine's speed left its
+      island's centre of inertia by more than `settle_pu` (the return points alone are
+      not enough: on miniWECC a machine whose swings died down can still drift out of
+      step 1-2 s later).
+
+    Attributes
+    ----------
+    t_clear : float
+        Clearing instant, s (absolute run time).
+    t_end : float
+        End of the run, s (absolute).
+    freq_hz : float
+        The case frequency, Hz.
+    limit : float, optional
+        The run's separation limit (angle from the centre of inertia), rad; default pi.
+    horizon_s : float, optional
+        Longest time to `limit` at the present speed of an unstable verdict, s; default
+        0.2.
+    returns : int, optional
+        Return points before a stable verdict (>= 2); default 3.
+    confirm_s : float, optional
+        Time the OMIB speed must rise after its positive minimum, s; default 0.05.
+    min_excursion : float, optional
+        Move of a machine's angle to the centre of inertia since before the fault that
+        an unstable verdict needs, rad; default 2.
+    settle_pu : float, optional
+        Largest speed from the centre of inertia of a settled machine, pu; default 3e-4
+        (0.018 Hz at 60 Hz).
+    settle_s : float, optional
+        How long the machines must have stayed settled, s; default 0.5.
+    """
+
+    t_clear: float
+    t_end: float
+    freq_hz: float
+    limit: float = np.pi
+    horizon_s: float = 0.2
+    returns: int = 3
+    confirm_s: float = 0.05
+    min_excursion: float = 2.0
+    settle_pu: float = 3e-4
+    settle_s: float = 0.5
+
+    def __call__(self, result: SimulationResult) -> str | None:
+        """ "unstable", "stable" or None (not certain yet) for the trajectory so far."""
+        t = result.t
+        k_cl = max(int(np.searchsorted(t, self.t_clear + 1e-9)) - 1, 0)
+        if t[-1] - self.t_clear < 2 * self.confirm_s:
+            return None
+        angle, speed = result.angle[k_cl:], result.speed[k_cl:]
+        inertia, island = np.asarray(result.inertia, float), result.island
+        from stabctl.dynamics.driver import separated_group
+
+        # the cheap tests first (the last point, the last settle_s): most calls stop there
+        rel = angle[-1] - coi_of_islands(angle[-1], inertia, island)
+        pre = result.angle[0] - coi_of_islands(result.angle[0], inertia, island)
+        rel_speed = speed[-1] - coi_of_islands(speed[-1], inertia, island)
+        if np.abs(rel - pre).max() > self.min_excursion and self._runs_away(
+            rel, rel_speed, float(t[-1])
+        ):
+            group = separated_group(angle[-1], inertia, island)
+            now = _omib_motion(angle, speed, inertia, group)
+            if now is not None and _passed_unstable_angle(t[k_cl:], now[0], now[1], self.confirm_s):
+                return "unstable"
+        recent = speed[t[k_cl:] >= t[-1] - self.settle_s]
+        if np.abs(recent - coi_of_islands(recent, inertia, island)).max() > self.settle_pu:
+            return None
+        dev = np.abs(angle - coi_of_islands(angle, inertia, island)).max(axis=1)
+        k_far = int(np.argmax(dev))
+        first = _omib_motion(angle, speed, inertia, separated_group(angle[k_far], inertia, island))
+        if first is not None and _swings_died_down(first[0], first[1], self.returns):
+            return "stable"
+        return None
+
+    def _runs_away(self, rel, rel_speed, t_now: float) -> bool:
+        """Whether the machine farthest from its centre of inertia (rel: angles from it
+        now, rad; rel_speed: speeds from it now, pu) reaches `limit` at its present
+        speed within `horizon_s` and half the time left before `t_end`."""
+        i = int(np.argmax(np.abs(rel)))
+        outward = np.sign(rel[i]) * rel_speed[i] * 2 * np.pi * self.freq_hz  # rad/s
+        within = min(self.horizon_s, 0.5 * (self.t_end - t_now))
+        return bool(outward > 0 and self.limit - abs(rel[i]) < outward * within)
+
+
+def _omib_motion(angle, speed, inertia, group):
+    """(delta, omega) of the OMIB of `group` (indices) against the rest, unoriented (rad,
+    pu speed difference); None when either side has no inertia weight."""
+    C = np.zeros(inertia.size, bool)
+    C[group] = True
+    if not (inertia[C].sum() > 0 and inertia[~C].sum() > 0):
+        return None
+    delta = coi_angle(angle[:, C], inertia[C]) - coi_angle(angle[:, ~C], inertia[~C])
+    omega = coi_speed(speed[:, C], inertia[C]) - coi_speed(speed[:, ~C], inertia[~C])
+    return delta, omega
+
+
+def _passed_unstable_angle(t, delta, omega, confirm_s: float) -> bool:
+    """SIME's instability: oriented so that the group runs away in +delta, the OMIB speed
+    had a positive minimum since it last stood still and rose for confirm_s s since."""
+    w = omega if delta[-1] >= delta[0] else -omega
+    rest = np.nonzero(w <= 0)[0]
+    j0 = int(rest[-1]) + 1 if rest.size else 0
+    k = w.size - 1
+    while k > j0 and w[k - 1] < w[k]:
+        k -= 1
+    return j0 < k < w.size - 1 and w[k] > 0 and t[-1] - t[k] >= confirm_s
+
+
+def _swings_died_down(delta, omega, returns: int) -> bool:
+    """At least `returns` return points (sign changes of the OMIB speed), the swing
+    between the last two no wider than the one before."""
+    s = np.sign(omega)
+    turns = np.nonzero(s[1:] * s[:-1] < 0)[0] + 1
+    if turns.size < returns:
+        return False
+    ext = np.r_[delta[0], delta[turns]]
+    return abs(ext[-1] - ext[-2]) <= abs(ext[-2] - ext[-3])
+
+
+def probe_margin(result: SimulationResult, t_clear: float, base_mva, freq_hz) -> float | None:
+    """SIME's unstable margin of an unstable probe of a CCT search.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        An unstable run (stopped early or at separation, or complete).
+    t_clear : float
+        Clearing instant, s (absolute run time).
+    base_mva, freq_hz : float
+        The case's base (MVA) and frequency (Hz).
+
+    Returns
+    -------
+    float or None
+        `unstable_margin` (pu*rad, <= 0) at the unstable point (`unstable_point`) of the
+        OMIB of the critical machines (`critical_machines`); None when that group is not
+        a proper subset of the machines.  Close to linear in the clearing time near the
+        CCT (Pavella, Ernst, Ruiz-Vega 2000, ch. 3), so that two unstable probes
+        extrapolate to it.
+    """
+    try:
+        eq = omib_equivalent(result, critical_machines(result), base_mva, freq_hz)
+    except InputError:
+        return None
+    return unstable_margin(eq, unstable_point(eq, t_clear))

@@ -1,0 +1,122 @@
+"""The SIME-guided CCT search and the runs' early verdicts (`stabctl.stability.sime`):
+each early verdict equals the full run's (the reference: the run to fault + 5 s judged by
+the pi-from-the-COI criterion), and the search ends in the bisection's 1 ms cell."""
+
+import json
+
+import numpy as np
+import pytest
+
+from stabctl.dynamics.driver import Simulator
+from stabctl.errors import InputError, SimulationError
+from stabctl.io import load_case
+from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
+from stabctl.stability.screening import screening_faults
+from stabctl.stability.sime import EarlyVerdict
+
+#: clearing times (s) every screened fault is run at, full and with early verdicts, beside
+#: the ends of its bisection bracket and 5 ms above it (where late separations hide)
+CLEARING_S = (0.05, 0.1, 0.2)
+
+
+def early_and_full(sim, fault: LineFault, tc: float):
+    """(verdict of the monitored run, its end s, the full run's verdict, its end s)."""
+    t_end = fault.t_fault + 5.0
+    full = sim.run(fault.events(tc), t_end, stop_at_separation=True)
+    early = sim.run(
+        fault.events(tc),
+        t_end,
+        stop_at_separation=True,
+        monitor=EarlyVerdict(fault.t_fault + tc, t_end, sim.case.freq_hz),
+    )
+    verdict = early.meta.get("early_verdict")
+    ok = verdict == "stable" if verdict else early.stable
+    return ok, float(early.t[-1]), full.stable, float(full.t[-1])
+
+
+def mismatches(name: str, every: int = 1):
+    """Screened faults (buses and lines, every `every`-th) whose early verdict differs
+    from the full run's at CLEARING_S and around the bisection's CCT, and the fraction
+    of simulated time the early stops saved."""
+    sim = Simulator(load_case(name))
+    bisection = SearchOptions(method="bisection", early_stop=False, error_check=False)
+    bad, t_early, t_full = [], 0.0, 0.0
+    for fault in screening_faults(sim.case, lines=True)[::every]:
+        times = list(CLEARING_S)
+        try:
+            ref = critical_clearing_time(sim, fault, bisection)
+            times += [ref.t_stable, ref.t_unstable, ref.t_unstable + 0.005]
+        except InputError:  # N-1 insecure, above t_max: no bracket
+            pass
+        for tc in times:
+            try:
+                ok, te, ok_full, tf = early_and_full(sim, fault, tc)
+            except (SimulationError, InputError):  # no verdict either way (e.g. islanding)
+                continue
+            t_early, t_full = t_early + te - fault.t_fault, t_full + tf - fault.t_fault
+            if ok != ok_full:
+                bad.append((fault, tc, ok, ok_full))
+    return bad, 1 - t_early / t_full
+
+
+def test_monitored_run_is_the_same_trajectory_up_to_its_stop(kundur):
+    fault = LineFault(3, 101)
+    full = kundur.run(fault.events(0.1), 6.0)
+    seen = []
+    part = kundur.run(fault.events(0.1), 6.0, monitor=lambda r: seen.append(r.t[-1]))
+    assert np.array_equal(part.angle, full.angle) and np.array_equal(part.vmag, full.vmag)
+    assert len(seen) > 50 and "early_verdict" not in part.meta
+    stopped = kundur.run(
+        fault.events(0.1), 6.0, monitor=lambda r: "stable" if r.t[-1] > 2 else None
+    )
+    n = stopped.t.size
+    assert stopped.meta["early_verdict"] == "stable" and 2 < stopped.t[-1] < 2.2
+    assert np.array_equal(stopped.angle, full.angle[:n])
+
+
+def test_early_verdicts_equal_full_runs_on_kundurs_screening():
+    bad, saved = mismatches("kundur")
+    assert bad == []
+    assert saved > 0.05  # simulated time saved
+
+
+def test_early_verdicts_equal_full_runs_on_a_tenth_of_miniweccs_screening():
+    """Every tenth fault of miniWECC's bus and line screening (the whole screening: the
+    ``slow`` test below)."""
+    bad, saved = mismatches("miniwecc", every=10)
+    assert bad == []
+    assert saved > 0.0
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(3600)
+def test_early_verdicts_equal_full_runs_on_miniweccs_whole_screening():
+    """Every bus and line fault of miniWECC (about 20 minutes on one core)."""
+    bad, _ = mismatches("miniwecc")
+    assert bad == []
+
+
+@pytest.mark.parametrize(("bus", "far_bus"), [(3, 101), (13, 101), (13, 14), (3, None), (1, None)])
+def test_sime_search_ends_in_the_bisections_cell(kundur, bus, far_bus):
+    fault = LineFault(bus, far_bus)
+    ref = critical_clearing_time(kundur, fault, SearchOptions(method="bisection"))
+    res = critical_clearing_time(kundur, fault, SearchOptions(early_stop=True))
+    assert res.bracket == ref.bracket and res.cct_half_step_s == ref.cct_half_step_s
+    assert res.n_simulations == len(res.probes) + len(res.half_step_probes)
+    assert res.to_dict()["n_simulations"] == res.n_simulations
+
+
+def test_cli_cct_searches_agree_and_say_how():
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    out = {}
+    for method in ("sime", "bisection"):
+        args = ["cct", "kundur", "--fault", "3", "--far-bus", "101", "--search", method]
+        res = CliRunner().invoke(main, [*args, "--json"])
+        assert res.exit_code == 0, res.output
+        out[method] = json.loads(res.stdout)
+    assert out["sime"]["cct_s"] == out["bisection"]["cct_s"]
+    assert out["bisection"]["search"] == "bisection" and out["bisection"]["early_stops"] == 0
+    assert out["sime"]["n_simulations"] < out["bisection"]["n_simulations"]
