@@ -100,7 +100,7 @@ def test_early_verdicts_equal_full_runs_on_miniweccs_whole_screening():
 def test_sime_search_ends_in_the_bisections_cell(kundur, bus, far_bus):
     fault = LineFault(bus, far_bus)
     ref = critical_clearing_time(kundur, fault, SearchOptions(method="bisection"))
-    res = critical_clearing_time(kundur, fault, SearchOptions(early_stop=True))
+    res = critical_clearing_time(kundur, fault, SearchOptions(method="sime", early_stop=True))
     assert res.bracket == ref.bracket and res.cct_half_step_s == ref.cct_half_step_s
     assert res.n_simulations == len(res.probes) + len(res.half_step_probes)
     assert res.to_dict()["n_simulations"] == res.n_simulations
