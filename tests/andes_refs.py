@@ -43,16 +43,16 @@ RTOL, ATOL = 1e-8, 1e-10
 
 
 def _canonical(fresh: np.ndarray, stored: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The two arrays to compare: eigenvalues (1-D complex) each in one canonical order,
-    by real part (to 1e-6) then imaginary part, since LAPACK's order of the same spectrum
-    depends on its build (scipy 1.17's OpenBLAS lists ANDES's IEEE 39 modes in another
-    order than the stored run, the same values within 5e-13); anything else as it is."""
+    """The two arrays to compare: eigenvalues (1-D complex) each paired with its nearest
+    in the other (`scipy.optimize.linear_sum_assignment` on their distances), since
+    LAPACK's order of one spectrum depends on its build (scipy 1.17's OpenBLAS lists ANDES's
+    IEEE 39 modes in another order than the stored run, the same values within 5e-13; a
+    sort cannot pair near-equal eigenvalues reliably); anything else as it is."""
     if fresh.ndim == 1 and np.iscomplexobj(fresh) and fresh.shape == stored.shape:
+        from scipy.optimize import linear_sum_assignment
 
-        def order(z):
-            return z[np.lexsort((z.imag, np.round(z.real, 6)))]
-
-        return order(fresh), order(stored)
+        rows, cols = linear_sum_assignment(np.abs(fresh[:, None] - stored[None, :]))
+        return fresh[rows], stored[cols]
     return fresh, stored
 
 
