@@ -530,8 +530,11 @@ def _raw_gap(case, solution, q_limits: bool) -> dict | None:
     return gap
 
 
-def _solution_gap(case, solution, q_limits: bool) -> dict | None:
-    """`_raw_gap`'s differences, without the warning on their size."""
+def _solution_gap(case, solution, q_limits: bool, against: str = "the RAW's") -> dict | None:
+    """The largest |V| (pu) and angle (rad) differences, with their buses, between
+    stabctl's power flow of ``case`` and a solution (bus number, VM pu, VA degrees, shape
+    (n, 3)) at the buses the case keeps, without a warning on their size; None (and a
+    warning naming ``against``) when the power flow does not converge."""
     import warnings
 
     import numpy as np
@@ -543,8 +546,8 @@ def _solution_gap(case, solution, q_limits: bool) -> dict | None:
         pf = solve_powerflow(case, q_limits=q_limits, tol=1e-10)
     except PowerFlowError as exc:
         warnings.warn(
-            f"stabctl's power flow of the case did not converge: not compared with the "
-            f"RAW's solution: {exc}",
+            f"stabctl's power flow of the case did not converge: not compared with "
+            f"{against} solution: {exc}",
             stacklevel=3,
         )
         return None
@@ -603,27 +606,20 @@ _PF_AGREEMENT = 1e-4
 def _powerflow_gap(imported, case) -> tuple[float | None, float | None]:
     """Largest |V| (pu) and angle (rad) differences between stabctl's power flow of the
     imported case (Q limits off, as ANDES's default; `case`, its dead islands perhaps left
-    out) and ANDES's at the buses `case` keeps; a warning when either exceeds 1e-4 or one
-    of the two does not converge."""
+    out) and ANDES's at the buses `case` keeps (`_solution_gap`); a warning when either
+    exceeds 1e-4 or one of the two does not converge."""
     import warnings
 
     import numpy as np
 
-    from stabctl.errors import PowerFlowError
-    from stabctl.network.powerflow import solve_powerflow
-
     if imported.pf_bus is None:
         warnings.warn("ANDES's power flow of the case did not converge: not compared", stacklevel=2)
         return None, None
-    try:
-        pf = solve_powerflow(case, q_limits=False, tol=1e-10)
-    except PowerFlowError as exc:
-        warnings.warn(f"stabctl's power flow of the case did not converge: {exc}", stacklevel=2)
+    andes = np.column_stack([imported.pf_bus, imported.pf_vmag, np.rad2deg(imported.pf_vang)])
+    gap = _solution_gap(case, andes, False, "ANDES's")
+    if gap is None:
         return None, None
-    kept = np.isin(imported.pf_bus, case.buses.number)
-    rows = case.bus_indices(imported.pf_bus[kept])
-    dv = float(np.max(np.abs(pf.vmag[rows] - imported.pf_vmag[kept])))
-    da = float(np.max(np.abs(pf.vang[rows] - imported.pf_vang[kept])))
+    dv, da = gap["vmag_diff_pu"], gap["angle_diff_rad"]
     if max(dv, da) > _PF_AGREEMENT:
         warnings.warn(
             f"the power flow differs from ANDES's by up to {dv:.1e} pu, {da:.1e} "
