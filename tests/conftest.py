@@ -11,7 +11,8 @@ Markers (registered in pyproject.toml):
   ANDES's runs are stored (tests/andes_refs.py, tests/data/andes_refs/): by default no ANDES
   time simulation runs; ``STABCTL_ANDES_REFS=live`` (CI) adds the live smoke tests, which
   check the stored traces against fresh ANDES runs;
-* ``dask``  -- sweeps on a Dask cluster (needs ``distributed``; skipped without).
+* ``dask``  -- sweeps on a Dask cluster (needs ``distributed``; skipped without);
+* ``heavy`` -- a minute or more of a core (`pytest_collection_modifyitems` runs them first).
 
 A quick run: ``python -m pytest -m "not andes and not dask"``.
 
@@ -40,6 +41,13 @@ def pytest_configure(config):
         subprocess.run(
             [sys.executable, "-m", "stabctl.cli", "compile"], capture_output=True, timeout=1200
         )
+
+
+def pytest_collection_modifyitems(config, items):
+    """The ``heavy`` tests first (in their order, the others after in theirs): pytest-xdist
+    hands out tests in collection order, so the longest start at once on every worker
+    instead of keeping one worker busy after the others have run out of tests."""
+    items.sort(key=lambda item: item.get_closest_marker("heavy") is None)
 
 
 @pytest.fixture(scope="session")

@@ -4,6 +4,7 @@ them, and how they compile (`stabctl._jit`)."""
 import inspect
 
 import numba
+import pytest
 from numba.core.caching import InTreeCacheLocator, UserProvidedCacheLocator
 
 from stabctl._jit import cache as jc
@@ -177,6 +178,7 @@ print(json.dumps({"started": started, "hits": sum(integrate.stats.cache_hits.val
 """
 
 
+@pytest.mark.heavy
 def test_a_cold_first_run_compiles_the_integrator_in_a_child_and_loads_it(tmp_path):
     # on an empty cache, the integrator compiles in a child process while this one compiles
     # the model; the run then loads the child's kernel (a cache hit, no compile here) and
@@ -247,50 +249,6 @@ def test_matvec_and_dot_are_the_products_on_both_sides_of_the_blas_threshold():
         a = rng.normal(size=n) + 1j * rng.normal(size=n)
         b = rng.normal(size=n) + 1j * rng.normal(size=n)
         assert abs(dot(a, b) - a @ b) < 1e-13 * n, n
-
-
-def test_no_kernel_compiles_numbas_slice_assignment_message():
-    # the point of `assign`: numba's shape-mismatch formatter (2-3 s of a cold first call)
-    # is compiled by none of the simulator's, the linearisation's or the filters' kernels
-    import os
-    import subprocess
-    import sys
-    import tempfile
-
-    code = (
-        "import numba.np.arrayobj as ao\n"
-        "from numba.core import types\n"
-        "seen = []\n"
-        "orig = ao.fancy_setslice\n"
-        "def spy(ctx, b, sig, args, it, ix):\n"
-        "    if isinstance(sig.args[2], types.Buffer): seen.append(b.function.name)\n"
-        "    return orig(ctx, b, sig, args, it, ix)\n"
-        "ao.fancy_setslice = spy\n"
-        "from stabctl.io import load_case\n"
-        "from stabctl.dynamics.driver import Simulator\n"
-        "from stabctl.dynamics.integrator import integrate\n"
-        "from stabctl.dynamics.model import evaluate_address\n"
-        "from stabctl.estimation.filters import compile_filters\n"
-        "from stabctl.estimation.models import machine_models\n"
-        "from stabctl.estimation.pmu import machine_pmus\n"
-        "case = load_case('kundur')\n"
-        "sim = Simulator(case, background_compile=False)\n"
-        "evaluate_address(sim.model.params)\n"
-        "integrate.compile(tuple(sim.run_argument_types()))\n"
-        "from stabctl.smallsignal.linearise import compile_differences\n"
-        "compile_differences(sim.model)\n"
-        "compile_filters(machine_models(case, machine_pmus(case)))\n"
-        "print(len(seen), seen[:3])\n"
-    )
-    with tempfile.TemporaryDirectory() as cache:
-        out = subprocess.run(
-            [sys.executable, "-c", code],
-            capture_output=True,
-            text=True,
-            env={**os.environ, "NUMBA_CACHE_DIR": cache},
-            check=True,
-        ).stdout
-    assert out.startswith("0 "), out
 
 
 def test_a_kernel_called_by_address_returns_raises_and_checks_its_types():

@@ -102,6 +102,7 @@ def test_estimate_rmse_from_a_served_stream_equals_in_process(tmp_path):
     assert gap <= 1 / np.sqrt(12)  # FREQ in whole mHz: at most its rounding RMS
 
 
+@pytest.mark.heavy
 def test_one_server_per_pmu_gives_the_one_stream_s_figures():
     """`pmu serve --each-pmu`: Kundur's four PMUs on four ports, read by `estimate rmse
     --source tcp://A,B,C,D`, give the figures of the four PMUs as one stream."""

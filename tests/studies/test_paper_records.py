@@ -163,6 +163,7 @@ def test_write_reproducible_keeps_last_line_per_key(tmp_path):
     assert not list(tmp_path.glob(".dst*"))
 
 
+@pytest.mark.heavy
 def test_analytic_part_is_byte_identical_twice(tmp_path):
     for out in (tmp_path / "a", tmp_path / "b"):
         paper.write_paper_report(out, progress=lambda m: None, only=["analytic"])
