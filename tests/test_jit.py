@@ -120,7 +120,6 @@ def test_a_kernel_for_compiled_callers_answers_python_through_a_trampoline():
     # `kernel` drops the CPython wrapper; a Python call goes through a compiled trampoline
     # (a direct call would jump into missing code) and gives the kernel's value
     import numpy as np
-    import pytest
 
     from stabctl.storage.control import coi_value
 
@@ -160,51 +159,6 @@ def test_the_probe_types_are_those_of_runs_with_storage_and_commands():
             n_commands=n_commands,
         )
         assert [typeof(a) for a in run.arguments(5)] == sim.run_argument_types()
-
-
-_COLD_RUN = """
-import json, sys
-from stabctl._jit import background
-from stabctl.dynamics.events import Fault
-from stabctl.dynamics.driver import Simulator
-from stabctl.dynamics.integrator import integrate
-from stabctl.io import load_case
-sim = Simulator(load_case("kundur"))
-started = sorted(background._BACKGROUND)
-res = sim.run([Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0)
-print(json.dumps({"started": started, "hits": sum(integrate.stats.cache_hits.values()),
-                  "misses": sum(integrate.stats.cache_misses.values()),
-                  "speed": res.speed[-1].tolist()}))
-"""
-
-
-@pytest.mark.heavy
-def test_a_cold_first_run_compiles_the_integrator_in_a_child_and_loads_it(tmp_path):
-    # on an empty cache, the integrator compiles in a child process while this one compiles
-    # the model; the run then loads the child's kernel (a cache hit, no compile here) and
-    # gives the trajectory of the kernels this test process uses
-    import json
-    import os
-    import subprocess
-    import sys
-
-    import numpy as np
-
-    from stabctl.dynamics.driver import Simulator
-    from stabctl.dynamics.events import Fault
-    from stabctl.io import load_case
-
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
-    out = subprocess.run(
-        [sys.executable, "-c", _COLD_RUN], env=env, capture_output=True, text=True, check=True
-    )
-    got = json.loads(out.stdout.strip().splitlines()[-1])
-    assert got["started"] == ["stabctl.dynamics.integrator.integrate"]
-    assert (got["hits"], got["misses"]) == (1, 0)
-    here = Simulator(load_case("kundur")).run(
-        [Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0
-    )
-    np.testing.assert_allclose(got["speed"], here.speed[-1], rtol=0, atol=1e-13)
 
 
 def test_assign_writes_views_as_numpys_slice_assignment_does():
@@ -256,7 +210,6 @@ def test_a_kernel_called_by_address_returns_raises_and_checks_its_types():
     # another type than the address was compiled for is refused when typing the caller
     import numba
     import numpy as np
-    import pytest
     from numba import typeof, types
 
     from stabctl._jit.address import address_of, by_address

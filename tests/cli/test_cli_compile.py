@@ -1,17 +1,26 @@
-"""`stabctl compile`: on an empty cache it compiles every part and exits 0; `--check` says
-cold (exit 1) before and warm (exit 0) after, compiling nothing; a second call loads all.
+"""A cold kernel cache, from empty to warm, in one cold compile (each costs a minute or two
+of a core): `stabctl compile --check` says cold (exit 1) and compiles nothing; a first
+simulation compiles the integrator in a child process while it compiles the model, then
+loads the child's kernel and gives the trajectory of the kernels this process uses;
+`stabctl compile` then loads what the run compiled and compiles the rest; `--check` says
+warm (exit 0); a second `compile` loads every part.
 
-The cold compile is also where no kernel may compile numba's slice-assignment message (the
-point of `stabctl._jit.arrays.assign`: numba's shape-mismatch formatter costs 2-3 s of a
-cold first call): a ``sitecustomize`` on the commands' PYTHONPATH watches numba's
-``fancy_setslice`` in every process, the integrator's compile child included (one cold
-compile serves both checks; each costs a minute or two of a core)."""
+Throughout, no kernel may compile numba's slice-assignment message (the point of
+`stabctl._jit.arrays.assign`: numba's shape-mismatch formatter costs 2-3 s of a cold first
+call): a ``sitecustomize`` on the commands' PYTHONPATH watches numba's ``fancy_setslice``
+in every process, the integrator's compile child included."""
 
+import json
 import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
+
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.events import Fault
+from stabctl.io import load_case
 
 PARTS = ("model evaluation", "filters", "linearisation", "integrator")
 
@@ -33,7 +42,26 @@ ao.fancy_setslice = _spy
 """
 
 
-def _stabctl(*args, cache, spy=None):
+#: a first simulation of Kundur on the cache, printing which kernels it started compiling
+#: in the background, the integrator's cache hits and misses and the final speeds
+_COLD_RUN = """
+import json
+from stabctl._jit import background
+from stabctl.dynamics.events import Fault
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.integrator import integrate
+from stabctl.io import load_case
+sim = Simulator(load_case("kundur"))
+started = sorted(background._BACKGROUND)
+res = sim.run([Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0)
+print(json.dumps({"started": started, "hits": sum(integrate.stats.cache_hits.values()),
+                  "misses": sum(integrate.stats.cache_misses.values()),
+                  "speed": res.speed[-1].tolist()}))
+"""
+
+
+def _python(*args, cache, spy=None):
+    """Run ``python *args`` on the kernel cache ``cache``, watched by the spy in ``spy``."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
     if spy is not None:
         spy.mkdir(exist_ok=True)
@@ -41,12 +69,16 @@ def _stabctl(*args, cache, spy=None):
         path = os.pathsep.join(filter(None, (str(spy), env.get("PYTHONPATH"))))
         env.update(PYTHONPATH=path, STABCTL_TEST_SETSLICE=str(spy / "seen.txt"))
     return subprocess.run(
-        [sys.executable, "-m", "stabctl.cli", *args],
+        [sys.executable, *args],
         env=env,
         capture_output=True,
         text=True,
         timeout=900,
     )
+
+
+def _stabctl(*args, cache, spy=None):
+    return _python("-m", "stabctl.cli", *args, cache=cache, spy=spy)
 
 
 def _parts(stdout: str) -> dict[str, str]:
@@ -60,23 +92,37 @@ def _parts(stdout: str) -> dict[str, str]:
 
 
 @pytest.mark.heavy
-def test_compile_warms_an_empty_cache_without_numbas_slice_message_and_check_says_so(tmp_path):
-    cache = tmp_path / "cache"
+def test_a_cold_cache_from_a_first_run_and_compile_to_warm(tmp_path):
+    cache, spy = tmp_path / "cache", tmp_path / "spy"
     cold = _stabctl("compile", "--check", cache=cache)
     assert cold.returncode == 1, cold.stdout + cold.stderr
     assert "kernel cache cold" in cold.stdout and "not cached" in cold.stdout
     assert not list(tmp_path.rglob("*.nbi"))  # --check compiles nothing
 
-    spy = tmp_path / "spy"
+    run = _python("-c", _COLD_RUN, cache=cache, spy=spy)
+    assert run.returncode == 0, run.stderr
+    got = json.loads(run.stdout.strip().splitlines()[-1])
+    assert got["started"] == ["stabctl.dynamics.integrator.integrate"]
+    assert (got["hits"], got["misses"]) == (1, 0)  # the child's kernel, loaded
+    here = Simulator(load_case("kundur")).run(
+        [Fault(bus=3, t=1.0, clear_near=1.1, clear_far=1.1, far_bus=101)], t_end=3.0
+    )
+    np.testing.assert_allclose(got["speed"], here.speed[-1], rtol=0, atol=1e-13)
+
     first = _stabctl("compile", "kundur", cache=cache, spy=spy)
     assert first.returncode == 0, first.stdout + first.stderr
-    assert _parts(first.stdout) == dict.fromkeys(PARTS, "compiled"), first.stdout
-    # the watch ran in the command and in its integrator's compile child ...
-    assert len(set((spy / "seen.txt.pids").read_text().split())) >= 2
+    assert _parts(first.stdout) == {
+        "model evaluation": "loaded",
+        "filters": "compiled",
+        "linearisation": "compiled",
+        "integrator": "loaded",
+    }, first.stdout
+    assert "kernel cache warm" in first.stdout
+    # the watch ran in the run, its integrator's compile child and the command ...
+    assert len(set((spy / "seen.txt.pids").read_text().split())) >= 3
     # ... and no kernel compiled numba's slice-assignment message
     seen = (spy / "seen.txt").read_text().split() if (spy / "seen.txt").exists() else []
     assert seen == [], seen
-    assert "kernel cache warm" in first.stdout
 
     warm = _stabctl("compile", "--check", cache=cache)
     assert warm.returncode == 0, warm.stdout + warm.stderr
