@@ -12,7 +12,8 @@ argument or a `form`), so that every model computes exactly what it did.
 Sources: PSTess 1.1 `smpexc.m`, `exc_dc12.m`, `exc_st3.m`, `pss.m`, `tg.m`; IEEE Std
 421.5-2016 annex E (E.2 lag, E.3 lead-lag, E.4 washout, E.5 non-windup limits, E.7
 windup limits) and annex D (rectifier regulation); PSS/E Model Library (the PSS/E
-models' blocks).
+models' blocks); ANDES 2.0 ``andes/core/block.py`` and ``discrete.py`` (the PI/PID family
+and AntiWindup of the converter models).
 """
 
 from __future__ import annotations
