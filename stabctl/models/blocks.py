@@ -12,7 +12,8 @@ argument or a `form`), so that every model computes exactly what it did.
 Sources: PSTess 1.1 `smpexc.m`, `exc_dc12.m`, `exc_st3.m`, `pss.m`, `tg.m`; IEEE Std
 421.5-2016 annex E (E.2 lag, E.3 lead-lag, E.4 washout, E.5 non-windup limits, E.7
 windup limits) and annex D (rectifier regulation); PSS/E Model Library (the PSS/E
-models' blocks).
+models' blocks); ANDES 2.0 ``andes/core/block.py`` and ``discrete.py`` (the PI/PID family
+and AntiWindup of the converter models).
 """
 
 from __future__ import annotations
@@ -196,10 +197,97 @@ def rectifier_loading(IN):
     return 0.0
 
 
-# -- the PI/PID family with tracking anti-windup (ANDES 2.0 andes/core/block.py PITrackAW,
-# -- PIDTrackAW): the output is the unlimited sum ys clipped to [lo, hi], and the
-# -- integrator is driven back by ks times the part of ys the limit cuts off,
-# -- dx_i/dt = K_I (u - ks (ys - y)); at rest (u = 0, inside the limits) x_i is the output
+@kernel
+def anti_windup(x, d, lo, hi):
+    """Anti-windup limit of a state x whose derivative is d (ANDES 2.0 andes/core/discrete.py
+    AntiWindup; the integrator of PIAWHardLimit, the lags of LagAntiWindupRate and
+    LagAWFreeze): at or beyond hi with d >= 0, or at or beyond lo with d <= 0, the state is
+    set to that limit and its derivative to 0; otherwise both pass (a state beyond a limit
+    that d drives back inside is left where it is).  Unlike `nonwindup` the rate 0 at a
+    limit also resets, and no clamp follows.
+
+    Parameters
+    ----------
+    x : float
+        The state.
+    d : float
+        Its derivative dx/dt (or any quantity of its sign: the lags pass their input error
+        before the division by T).
+    lo, hi : float
+        The limits.
+
+    Returns
+    -------
+    (float, float)
+        The state (set to a limit where held), its derivative (0 where held).
+    """
+    if x >= hi and d >= 0.0:
+        return hi, 0.0
+    if x <= lo and d <= 0.0:
+        return lo, 0.0
+    return x, d
+
+
+# -- the PI/PID family (ANDES 2.0 andes/core/block.py): the plain PI, the PI with an
+# -- anti-windup integrator and a hard output limit, and the PI/PID with tracking
+# -- anti-windup
+
+
+@kernel
+def pi(u, x, KP, KI):
+    """PI K_P + K_I/s without limits (ANDES 2.0 PIController; the PLL1's PI): output K_P u +
+    x, dx/dt = K_I u.
+
+    Parameters
+    ----------
+    u : float
+        The input (the error).
+    x : float
+        The integral state.
+    KP, KI : float
+        Proportional gain, integral gain (1/s).
+
+    Returns
+    -------
+    (float, float)
+        Output, the integral state's derivative.
+    """
+    return KP * u + x, KI * u
+
+
+@kernel
+def pi_aw_hard_limit(u, x, KP, KI, lo, hi):
+    """PI K_P + K_I/s with an anti-windup integrator and a hard output limit (ANDES 2.0
+    PIAWHardLimit, with the integrator's limits aw_lower, aw_upper equal to the output's
+    lower, upper, as WTTQA1's torque PI and WTPTA1's two pitch PIs give them): dx/dt = K_I
+    u through `anti_windup` on [lo, hi], output K_P u + x (the held state) clipped to [lo,
+    hi].
+
+    Parameters
+    ----------
+    u : float
+        The input (the error).
+    x : float
+        The integral state.
+    KP, KI : float
+        Proportional gain, integral gain (1/s).
+    lo, hi : float
+        The limits of the integrator and of the output.
+
+    Returns
+    -------
+    (float, float, float)
+        Output, the integral state (set to a limit where held: the caller writes it back),
+        its derivative.
+    """
+    x, d = anti_windup(x, KI * u, lo, hi)
+    return clip(KP * u + x, lo, hi), x, d
+
+
+# -- tracking anti-windup (ANDES 2.0 PITrackAW, PIDTrackAW, PITrackAWFreeze): the output
+# -- is the unlimited sum ys clipped to [lo, hi], and the integrator is driven back by ks
+# -- times the part of ys the limit cuts off, dx_i/dt = K_I (u - ks (ys - y)); at rest
+# -- (u = 0, inside the limits) x_i is the output
 
 
 @kernel
@@ -261,3 +349,37 @@ def pid_track_aw(u, xi, xd, KP, KI, KD, TD, lo, hi, ks):
         ys = ys + yd
     y, dxi = _tracking(u, ys, KI, lo, hi, ks)
     return y, dxi, dxd
+
+
+@kernel
+def pi_track_aw_freeze(u, x, held, KP, KI, lo, hi, ks, frz):
+    """PI K_P + K_I/s with tracking anti-windup and freeze (ANDES 2.0 PITrackAWFreeze;
+    REECA1's V and Q PIs, frozen in a voltage dip): unfrozen, `pi_track_aw`; frozen (frz
+    true) the output held at its last unfrozen value and the integrator stopped.
+
+    Parameters
+    ----------
+    u : float
+        The input (the error).
+    x : float
+        The integral state.
+    held : float
+        The output before the freeze (the caller's memory slot, which it sets to the
+        returned output at every call).
+    KP, KI : float
+        Proportional gain, integral gain (1/s).
+    lo, hi : float
+        The output limits.
+    ks : float
+        The tracking gain.
+    frz : bool
+        Frozen.
+
+    Returns
+    -------
+    (float, float)
+        Output, the integral state's derivative.
+    """
+    if frz:
+        return held, 0.0
+    return pi_track_aw(u, x, KP, KI, lo, hi, ks)

@@ -154,3 +154,51 @@ def test_rectifier_loading_segments_and_continuity():
     assert f(1.2) == 0.0
     for edge in (0.433, 0.75, 1.0):
         assert abs(f(edge - 1e-12) - f(edge + 1e-12)) < 3e-4
+
+
+def test_anti_windup_resets_at_a_limit_with_an_outward_or_zero_rate():
+    """ANDES 2.0 AntiWindup: at or beyond a limit with a rate outward or 0, the state is
+    set to the limit and stopped; driven back inside it is left where it is (no clamp,
+    unlike IEEE 421.5 E.5's `nonwindup`)."""
+    assert b.anti_windup(2.5, 4.0, -1.0, 2.0) == (2.0, 0.0)
+    assert b.anti_windup(2.0, 0.0, -1.0, 2.0) == (2.0, 0.0)
+    assert b.anti_windup(-1.5, -4.0, -1.0, 2.0) == (-1.0, 0.0)
+    assert b.anti_windup(2.5, -4.0, -1.0, 2.0) == (2.5, -4.0)
+    assert b.anti_windup(0.5, 4.0, -1.0, 2.0) == (0.5, 4.0)
+
+
+def test_pi_ramps_at_its_integral_gain():
+    """K_P + K_I/s after a unit step from rest: y(t) = K_P + K_I t (ANDES PIController)."""
+    KP, KI, t = 0.7, 3.0, 0.4
+    assert step_response(b.pi, 0.0, t, KP, KI) == pytest.approx(KP + KI * t, rel=1e-9)
+
+
+def test_pi_aw_hard_limit_holds_its_integrator_at_the_limit():
+    """ANDES PIAWHardLimit, unit step from rest, limits [-1, 2]: the integrator ramps at
+    K_I until it reaches 2 at t = 2/K_I and stays there (reset, derivative 0); the output
+    K_P + K_I t clipped to 2 meanwhile; after the input reverses the integrator leaves
+    the limit at once (no windup), y(t) = K_P u + 2 + K_I u t."""
+    KP, KI, lo, hi = 0.5, 4.0, -1.0, 2.0
+    y, x, d = b.pi_aw_hard_limit(1.0, 0.3, KP, KI, lo, hi)
+    assert (y, x, d) == (pytest.approx(KP + 0.3), 0.3, KI)
+    assert b.pi_aw_hard_limit(1.0, 1.8, KP, KI, lo, hi)[0] == hi  # output clipped
+    assert b.pi_aw_hard_limit(1.0, 2.3, KP, KI, lo, hi)[1:] == (hi, 0.0)
+    y, x, d = b.pi_aw_hard_limit(-1.0, hi, KP, KI, lo, hi)
+    assert (y, x, d) == (pytest.approx(hi - KP), hi, -KI)
+
+
+def test_pi_track_aw_settles_where_the_tracking_balances_the_input():
+    """ANDES PITrackAW with a constant input u beyond the limit hi: at rest u = ks (ys -
+    hi), so the integral settles at x = hi + u/ks - K_P u (closed form of dx/dt = 0)."""
+    u, KP, KI, lo, hi, ks = 0.5, 2.0, 3.0, -1.0, 1.0, 2.0
+    x_rest = hi + u / ks - KP * u
+    y, d = b.pi_track_aw(u, x_rest, KP, KI, lo, hi, ks)
+    assert y == hi and d == pytest.approx(0.0, abs=1e-15)
+
+
+def test_pi_track_aw_freeze_holds_its_output_and_stops_its_integrator():
+    """ANDES PITrackAWFreeze: frozen, the output is the held value and dx/dt = 0;
+    unfrozen, PITrackAW."""
+    args = (2.0, 3.0, -1.0, 1.0, 2.0)
+    assert b.pi_track_aw_freeze(0.2, 0.1, 0.77, *args, True) == (0.77, 0.0)
+    assert b.pi_track_aw_freeze(0.2, 0.1, 0.77, *args, False) == b.pi_track_aw(0.2, 0.1, *args)

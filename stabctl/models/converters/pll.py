@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
+from stabctl.models.blocks import pi
 from stabctl.models.converters.table import NO_PLL, PLL1, C
 from stabctl.models.converters.wind import WT
 from stabctl.models.declaration import slots
@@ -49,9 +50,10 @@ def frame(P, x, k, V):
 @kernel
 def derivatives(P, x, k, V, dx):
     """PLL1's derivatives of device k at its bus voltage V (ANDES 2.0 measurement/pll.py
-    PLL1): the bus angle a through the lag Tf (af), the PI on af - am (Kp, Ki), the
-    estimated angle ae' = 2 pi fn PI_y and the measured angle am the lag Tp of ae; a
-    taken within pi of am (ANDES's bus angle is not wrapped); nothing without a PLL."""
+    PLL1): the bus angle a through the lag Tf (af), the PI on af - am (Kp, Ki; ANDES's
+    PIController, `blocks.pi`), the estimated angle ae' = 2 pi fn PI_y and the measured
+    angle am the lag Tp of ae; a taken within pi of am (ANDES's bus angle is not wrapped);
+    nothing without a PLL."""
     for j in range(len(PLL_SLOTS)):
         dx[PL.af_pll + j, k] = 0.0
     if P[k, C.PLL] == NO_PLL:
@@ -60,6 +62,6 @@ def derivatives(P, x, k, V, dx):
     a = am + np.angle(V * np.exp(-1j * am)) if V != 0.0 else x[PL.af_pll, k]
     dx[PL.af_pll, k] = (a - x[PL.af_pll, k]) / P[k, C.PLL_TF]
     e = x[PL.af_pll, k] - am
-    dx[PL.PI_pll, k] = P[k, C.PLL_KI] * e
-    dx[PL.ae_pll, k] = 2.0 * np.pi * P[k, C.FN] * (P[k, C.PLL_KP] * e + x[PL.PI_pll, k])
+    y, dx[PL.PI_pll, k] = pi(e, x[PL.PI_pll, k], P[k, C.PLL_KP], P[k, C.PLL_KI])
+    dx[PL.ae_pll, k] = 2.0 * np.pi * P[k, C.FN] * y
     dx[PL.am_pll, k] = (x[PL.ae_pll, k] - am) / P[k, C.PLL_TP]

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.blocks import clip, lag
+from stabctl.models.blocks import anti_windup, clip, lag, pi_track_aw_freeze
 from stabctl.models.converters.table import NO_REEC, REECB1, C
 from stabctl.models.declaration import DyrModel, slots
 
@@ -148,23 +148,6 @@ def extended_event(x, dx, slot, k, on, t_ext):
 
 
 @kernel
-def _frozen_pi(P, x, k, u, gains, lo, hi, frz, dx):
-    """ANDES's PITrackAWFreeze of device k: ys = kp u + xi, y = clip(ys, lo, hi), dxi/dt
-    = ki (u - ks (ys - y)); frozen (frz 1) the output held and the integrator stopped.
-    ``gains`` the columns (kp, ki, ks, state slot, held slot); returns y."""
-    kp, ki, ks = P[k, gains[0]], P[k, gains[1]], P[k, gains[2]]
-    slot, held = gains[3], gains[4]
-    if frz:
-        dx[slot, k] = 0.0
-        return x[held, k]
-    ys = kp * u + x[slot, k]
-    y = clip(ys, lo, hi)
-    dx[slot, k] = ki * (u - ks * (ys - y))
-    x[held, k] = y
-    return y
-
-
-@kernel
 def _vdl(P, k, c, u):
     """REECA1's voltage-dependent current limit (ANDES Piecewise VDL1/VDL2) of device k at
     filtered voltage u: the four voltages in columns c..c+3, the currents c+4..c+7."""
@@ -206,10 +189,21 @@ def _room(P, k, other):
 
 @kernel
 def _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx):
-    """REECA1's reactive current command IqHL of device k: the V PI (`_frozen_pi`, input
-    u, limits +-Iqmax) with QFLAG, else the filtered Q command s4, plus Iqinj, limited to
-    +-Iqmax."""
-    piv = _frozen_pi(P, x, k, u, (C.KVP, C.KVI, C.KVS, RE.PIV, RE.PIV_held), -Iqmax, Iqmax, frz, dx)
+    """REECA1's reactive current command IqHL of device k: the V PI (ANDES PITrackAWFreeze,
+    `blocks.pi_track_aw_freeze`: input u, limits +-Iqmax, its output held in slot PIV_held)
+    with QFLAG, else the filtered Q command s4, plus Iqinj, limited to +-Iqmax."""
+    piv, dx[RE.PIV, k] = pi_track_aw_freeze(
+        u,
+        x[RE.PIV, k],
+        x[RE.PIV_held, k],
+        P[k, C.KVP],
+        P[k, C.KVI],
+        -Iqmax,
+        Iqmax,
+        P[k, C.KVS],
+        frz,
+    )
+    x[RE.PIV_held, k] = piv
     Qsel = piv if P[k, C.QFLAG] == 1.0 else s4
     return clip(Qsel + Iqinj, -Iqmax, Iqmax)
 
@@ -239,15 +233,13 @@ def _p_order(P, x, k, Pref, wg, frz, dx):
     """REECA1's power order Pord of device k: the reference Pref through the rate-limited
     filter Tpfilt (ANDES LagRate, rates dPmin, dPmax on its right-hand side), times the
     speed wg with PFLAG (Psel), then the lag Tpord frozen in a dip with the anti-windup
-    limits [PMIN, PMAX] (LagAWFreeze; the state reset to a limit in place)."""
+    limits [PMIN, PMAX] (LagAWFreeze; `blocks.anti_windup`, the state reset to a limit in
+    place)."""
     e = clip(Pref - x[RE.Pref_filter, k], P[k, C.DPMIN], P[k, C.DPMAX])
     dx[RE.Pref_filter, k] = e / P[k, C.TPFILT]
     Psel = wg * x[RE.Pref_filter, k] if P[k, C.PFLAG] == 1.0 else x[RE.Pref_filter, k]
     e = 0.0 if frz else Psel - x[RE.Pord, k]
-    if x[RE.Pord, k] >= P[k, C.PMAX] and e >= 0.0:
-        x[RE.Pord, k], e = P[k, C.PMAX], 0.0
-    elif x[RE.Pord, k] <= P[k, C.PMIN] and e <= 0.0:
-        x[RE.Pord, k], e = P[k, C.PMIN], 0.0
+    x[RE.Pord, k], e = anti_windup(x[RE.Pord, k], e, P[k, C.PMIN], P[k, C.PMAX])
     dx[RE.Pord, k] = e / P[k, C.TPORD]
     return x[RE.Pord, k]
 
@@ -305,7 +297,18 @@ def control(P, x, k, v, S, ref, wg, dx):
     piq = 0.0  # the Q PI drives Iq with VFLAG and QFLAG 1 only (ANDES's drifts unread)
     dx[RE.PIQ, k] = 0.0
     if vflag == 1.0 and P[k, C.QFLAG] == 1.0:
-        piq = _frozen_pi(P, x, k, Qerr, (C.KQP, C.KQI, C.KQS, RE.PIQ, RE.PIQ_held), lo, hi, frz, dx)
+        piq, dx[RE.PIQ, k] = pi_track_aw_freeze(
+            Qerr,
+            x[RE.PIQ, k],
+            x[RE.PIQ_held, k],
+            P[k, C.KQP],
+            P[k, C.KQI],
+            lo,
+            hi,
+            P[k, C.KQS],
+            frz,
+        )
+        x[RE.PIQ_held, k] = piq
     if P[k, C.REEC] == REECB1:
         u = P[k, C.QFLAG] * clip(vflag * piq, lo, hi)
     else:

@@ -6,8 +6,9 @@ The reactive path: the compensated voltage (or the monitored line's Q) filtered 
 Tfltr, its error through the deadband and limits (held below Vfrz), the tracking PI in
 [Qmin, Qmax] and the lead-lag Tft/Tfv give Qext; the frequency path: the droop of the bus
 frequency (ANDES BusFreq, `pvd1.bus_frequency`) beyond its deadband plus the line P error,
-the tracking PI in [Pmin, Pmax] and the lag Tg give Pext.  Its parameters are ibr_con
-columns 106-143 (``pc_``, :mod:`.table`).
+the tracking PI in [Pmin, Pmax] and the lag Tg give Pext (both PIs ANDES's PITrackAW,
+`blocks.pi_track_aw`).  Its parameters are ibr_con columns 106-143 (``pc_``,
+:mod:`.table`).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
-from stabctl.models.blocks import clip, lag, leadlag_input_state
+from stabctl.models.blocks import clip, lag, leadlag_input_state, pi_track_aw
 from stabctl.models.converters import pvd1
 from stabctl.models.converters.reeca1 import RE
 from stabctl.models.converters.table import REPCA1, C
@@ -141,9 +142,15 @@ def control(P, x, k, V, V_nc, dx):
     if abs(V) < P[k, C.PC_VFRZ] and P[k, C.PC_FREEZE] == 1.0:  # held (ANDES VarHold)
         enf = x[PC.e_held, k]
     x[PC.e_held, k] = enf
-    ys = P[k, C.PC_KP] * enf + x[PC.PI_plant, k]
-    y = clip(ys, P[k, C.PC_QMIN], P[k, C.PC_QMAX])
-    dx[PC.PI_plant, k] = P[k, C.PC_KI] * (enf - P[k, C.PC_KQS] * (ys - y))
+    y, dx[PC.PI_plant, k] = pi_track_aw(
+        enf,
+        x[PC.PI_plant, k],
+        P[k, C.PC_KP],
+        P[k, C.PC_KI],
+        P[k, C.PC_QMIN],
+        P[k, C.PC_QMAX],
+        P[k, C.PC_KQS],
+    )
     dx[PC.e_held, k] = 0.0
     Tfv = P[k, C.PC_TFV]
     Qext, dx[PC.LeadLag_plant, k] = leadlag_input_state(
@@ -178,8 +185,14 @@ def _frequency_path(P, x, k, V, Pline, dx):
         P[k, C.PC_FEMAX],
     )
     dx[PC.Plant_pref_command, k] = 0.0
-    ys = P[k, C.PC_KPG] * e + x[PC.PI_P_plant, k]
-    y = clip(ys, P[k, C.PC_PMIN], P[k, C.PC_PMAX])
-    dx[PC.PI_P_plant, k] = P[k, C.PC_KIG] * (e - P[k, C.PC_KSG] * (ys - y))
+    y, dx[PC.PI_P_plant, k] = pi_track_aw(
+        e,
+        x[PC.PI_P_plant, k],
+        P[k, C.PC_KPG],
+        P[k, C.PC_KIG],
+        P[k, C.PC_PMIN],
+        P[k, C.PC_PMAX],
+        P[k, C.PC_KSG],
+    )
     Pext, dx[PC.Pext_lag, k] = lag(y, x[PC.Pext_lag, k], P[k, C.PC_TG])
     return P[k, C.PC_FFLAG] * Pext

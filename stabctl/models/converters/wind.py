@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.blocks import clip, lag
+from stabctl.models.blocks import anti_windup, clip, lag, pi_aw_hard_limit
 from stabctl.models.converters.reeca1 import RE
 from stabctl.models.converters.repca1 import PC
 from stabctl.models.converters.table import NO_WIND, WTDS, WTDTA1, C
@@ -155,28 +155,15 @@ def _speed_curve(P, k, u):
 
 
 @kernel
-def _windup_pi(x, k, slot, u, kp, ki, lo, hi, dx):
-    """ANDES's PIAWHardLimit of device k: integrator xi (slot) with dxi/dt = ki u held in
-    [lo, hi] (AntiWindup: at or beyond a limit with an outward rate, reset to it in
-    place and stopped), output clip(kp u + xi, lo, hi)."""
-    d = ki * u
-    if x[slot, k] >= hi and d >= 0.0:
-        x[slot, k], d = hi, 0.0
-    elif x[slot, k] <= lo and d <= 0.0:
-        x[slot, k], d = lo, 0.0
-    dx[slot, k] = d
-    return clip(kp * u + x[slot, k], lo, hi)
-
-
-@kernel
 def reference(P, x, k, Pe, dx):
     """The REECA1's speed and P reference from device k's wind turbine at its output Pe
     (pu): WTTQA1 (ANDES wttqa1.py) Pe through the lag Tp to the speed curve fPe, fPe
     through the lag Twref to wref, the PI (Kpp, Kip; windup and output limits [Temin,
-    Temax]) of (Pe - P0)/wg (Tflag 1) or wref - wg (0), Pref = PI wg; the REECA1's speed
-    1 + wg - fPe (ANDES's sum of the drive train's wg - 1 and the torque control's 1 -
-    fPe).  Without a torque control: Pref = P0/wg, the speed wg.  Returns (speed, Pref,
-    the drive train's speed reference wr0: fPe, or w0 without WTTQA1)."""
+    Temax]: ANDES's PIAWHardLimit, `blocks.pi_aw_hard_limit`) of (Pe - P0)/wg (Tflag 1)
+    or wref - wg (0), Pref = PI wg; the REECA1's speed 1 + wg - fPe (ANDES's sum of the
+    drive train's wg - 1 and the torque control's 1 - fPe).  Without a torque control:
+    Pref = P0/wg, the speed wg.  Returns (speed, Pref, the drive train's speed reference
+    wr0: fPe, or w0 without WTTQA1)."""
     _, wg = _speeds(P, x, k)
     if P[k, C.TORQUE] == 0.0:
         return wg, P[k, C.P0] / wg, P[k, C.WT_W0]
@@ -185,7 +172,9 @@ def reference(P, x, k, Pe, dx):
     wref, dx[WT.wref_tq, k] = lag(fPe, x[WT.wref_tq, k], P[k, C.WQ_TWREF])
     Tsel = (Pe - P[k, C.P0]) / wg if P[k, C.WQ_TFLAG] == 1.0 else wref - wg
     lo, hi = P[k, C.WQ_TEMIN], P[k, C.WQ_TEMAX]
-    y = _windup_pi(x, k, WT.PI_tq, Tsel, P[k, C.WQ_KPP], P[k, C.WQ_KIP], lo, hi, dx)
+    y, x[WT.PI_tq, k], dx[WT.PI_tq, k] = pi_aw_hard_limit(
+        Tsel, x[WT.PI_tq, k], P[k, C.WQ_KPP], P[k, C.WQ_KIP], lo, hi
+    )
     return 1.0 + wg - fPe, y * wg, fPe
 
 
@@ -194,18 +183,20 @@ def _pitch_angle(P, x, k, wt, Pord, Pref, dx):
     """WTPTA1's pitch angle of device k (ANDES wtpta1.py, deg): the PI (Kpc, Kic) of
     Pord - Pref plus the PI (Kpw, Kiw) of Kcc (Pord - Pref) + wt - w0 (its speed
     reference: the drive train's w0, as ANDES initialises it), each limited to [thmin,
-    thmax], through the lag Tp with the rate limits [dthmin, dthmax] on Tp dtheta/dt and
-    the anti-windup limits [thmin, thmax] (LagAntiWindupRate)."""
+    thmax] (ANDES's PIAWHardLimit, `blocks.pi_aw_hard_limit`), through the lag Tp with
+    the rate limits [dthmin, dthmax] on Tp dtheta/dt and the anti-windup limits [thmin,
+    thmax] (LagAntiWindupRate; `blocks.anti_windup`)."""
     lo, hi = P[k, C.WP_THMIN], P[k, C.WP_THMAX]
     e = Pord - Pref
-    yc = _windup_pi(x, k, WT.PIc_pitch, e, P[k, C.WP_KPC], P[k, C.WP_KIC], lo, hi, dx)
+    yc, x[WT.PIc_pitch, k], dx[WT.PIc_pitch, k] = pi_aw_hard_limit(
+        e, x[WT.PIc_pitch, k], P[k, C.WP_KPC], P[k, C.WP_KIC], lo, hi
+    )
     u = P[k, C.WP_KCC] * e + wt - P[k, C.WT_W0]
-    yw = _windup_pi(x, k, WT.PIw_pitch, u, P[k, C.WP_KPW], P[k, C.WP_KIW], lo, hi, dx)
+    yw, x[WT.PIw_pitch, k], dx[WT.PIw_pitch, k] = pi_aw_hard_limit(
+        u, x[WT.PIw_pitch, k], P[k, C.WP_KPW], P[k, C.WP_KIW], lo, hi
+    )
     r = clip(yw + yc - x[WT.theta_pitch, k], P[k, C.WP_DTHMIN], P[k, C.WP_DTHMAX])
-    if x[WT.theta_pitch, k] >= hi and r >= 0.0:
-        x[WT.theta_pitch, k], r = hi, 0.0
-    elif x[WT.theta_pitch, k] <= lo and r <= 0.0:
-        x[WT.theta_pitch, k], r = lo, 0.0
+    x[WT.theta_pitch, k], r = anti_windup(x[WT.theta_pitch, k], r, lo, hi)
     dx[WT.theta_pitch, k] = r / P[k, C.WP_TP]
     return x[WT.theta_pitch, k]
 
