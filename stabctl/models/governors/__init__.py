@@ -75,6 +75,7 @@ __all__ = [
     "TABLE_FIELDS",
     "HYGOV_FIELDS",
     "OWN_PARAMS",
+    "N_OWN",
     "MODULES",
 ]
 
