@@ -96,6 +96,7 @@ MODULES = type_modules(
     "hygov4",
     "ggov1",
     "degov",
+    "degov1",
 )
 #: tg_con type -> the module of its equations; -> its state names, in slot order (``S``)
 TYPES, STATE_NAMES = model_types(MODULES, "tg_con")

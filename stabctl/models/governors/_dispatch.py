@@ -7,6 +7,7 @@ from __future__ import annotations
 from stabctl._jit.decorators import kernel
 from stabctl.models.governors import (
     degov,
+    degov1,
     gast,
     ggov1,
     hygov,
@@ -43,7 +44,9 @@ def pmech(P, x, k, omega):
         return hygov4.pmech(P, x, k, omega)
     if kind == 9:  # GGOV1
         return ggov1.pmech(P, x, k, omega)
-    return degov.pmech(P, x, k, omega)  # DEGOV
+    if kind == 10:  # DEGOV
+        return degov.pmech(P, x, k, omega)
+    return degov1.pmech(P, x, k, omega)  # DEGOV1
 
 
 @kernel
@@ -71,5 +74,7 @@ def derivatives(P, x, k, omega, pe, dx):
         hygov4.derivatives(P, x, k, omega, pe, dx)
     elif kind == 9:  # GGOV1
         ggov1.derivatives(P, x, k, omega, pe, dx)
-    else:  # DEGOV
+    elif kind == 10:  # DEGOV
         degov.derivatives(P, x, k, omega, pe, dx)
+    else:  # DEGOV1
+        degov1.derivatives(P, x, k, omega, pe, dx)
