@@ -60,6 +60,8 @@ __all__ = [
     "states",
     "slots",
     "own_columns",
+    "own_params",
+    "pack_own",
     "type_modules",
     "check_packed",
     "pack",
@@ -549,6 +551,49 @@ def own_columns(name: str, params: Sequence[Param], first: int) -> Any:
         Fields: the upper-case names, values ``first .. first + len(params) - 1``.
     """
     return namedtuple(name, [p.name.upper() for p in params])(*range(first, first + len(params)))
+
+
+def own_params(modules) -> tuple[Param, ...]:
+    """The parameters a family's type modules declare as their own (each module's
+    ``PARAMS``, in registry order): the table's columns after its shared ones.
+
+    Parameters
+    ----------
+    modules : sequence of module
+        The family's type modules (its ``MODULES``).
+
+    Returns
+    -------
+    tuple of Param
+        The parameters.
+    """
+    return tuple(p for module in modules for p in getattr(module, "PARAMS", ()))
+
+
+def pack_own(obj, modules) -> np.ndarray:
+    """The own columns of a family's packed matrix (`own_columns`): on each row its
+    type's own parameters (its module's ``PARAMS``), in order, 0 beyond them.
+
+    Parameters
+    ----------
+    obj : object
+        The parameter dataclass, ``obj.n`` rows, with ``kind`` and a field per own
+        parameter.
+    modules : sequence of module
+        The family's type modules (each with ``KINDS``).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, shape (obj.n, the most own parameters of a module).
+    """
+    width = max((len(getattr(m, "PARAMS", ())) for m in modules), default=0)
+    own = np.zeros((obj.n, width))
+    for module in modules:
+        rows = np.isin(obj.kind, tuple(module.KINDS))
+        for j, param in enumerate(getattr(module, "PARAMS", ())):
+            own[rows, j] = getattr(obj, param.name)[rows]
+    return own
 
 
 def check_packed(cls, packed, values=()) -> None:

@@ -50,6 +50,9 @@ class Kernel:  # fields of a dataclass: numpydoc ignore=PR02
         results into its arguments.
     first : str
         A statement run before the dispatch (empty: none).
+    inline : bool
+        Compiled into its caller (``@kernel(inline="always")``), for a dispatch the
+        family's own kernel wraps.
     """
 
     name: str
@@ -57,6 +60,7 @@ class Kernel:  # fields of a dataclass: numpydoc ignore=PR02
     doc: str
     returns: bool
     first: str = ""
+    inline: bool = False
 
 
 @dataclass(frozen=True)
@@ -107,6 +111,22 @@ FAMILIES = (
             ),
         ),
     ),
+    Dispatch(
+        "stabctl.models.pss",
+        "stabiliser type (pss_con column 1)",
+        "table.C",
+        (
+            Kernel(
+                "output",
+                ("P", "x", "k", "omega", "pe", "dx"),
+                "Output of PSS k (pu, before the output cut-off) at machine speed omega (pu) "
+                "and electrical power pe (machine base); its derivatives into dx[:, k]: its "
+                "type module's ``output``.",
+                returns=True,
+                inline=True,
+            ),
+        ),
+    ),
 )
 
 
@@ -153,11 +173,10 @@ def render(family: Dispatch) -> str:
     ValueError
         A type module without one of the kernels, or with other arguments.
     """
-    modules = importlib.import_module(family.package).MODULES
+    modules = [m for m in importlib.import_module(family.package).MODULES if m.KINDS]
     for module in modules:
         for kernel in family.kernels:
             _check(module, kernel)
-    short = [m.__name__.rsplit(".", 1)[1] for m in modules]
     layout_module, layout = family.layout.rsplit(".", 1)
     names = ", ".join(f"`{k.name}`" for k in family.kernels)
     header = (
@@ -165,6 +184,8 @@ def render(family: Dispatch) -> str:
         f"by ``{COMMAND}`` from the registry ({family.package}.MODULES), do not edit."
         '"""'
     )
+    branches = {k.name: _branches(modules, k) for k in family.kernels}
+    used = sorted({s for kernel in branches.values() for s, _, _ in kernel})
     out = [
         *_wrapped(header, ""),
         "",
@@ -172,35 +193,59 @@ def render(family: Dispatch) -> str:
         "",
         "from stabctl._jit.decorators import kernel",
         f"from {family.package} import (",
-        *(f"    {s}," for s in sorted(short)),
+        *(f"    {s}," for s in used),
         ")",
         f"from {family.package}.{layout_module} import {layout}",
     ]
     for kernel in family.kernels:
         args = ", ".join(kernel.args)
-        out += ["", "", "@kernel", f"def {kernel.name}({args}):"]
+        decorator = '@kernel(inline="always")' if kernel.inline else "@kernel"
+        out += ["", "", decorator, f"def {kernel.name}({args}):"]
         out += _wrapped(f'"""{kernel.doc}"""', "    ")
         out.append(f"    kind = P[k, {layout}.KIND]")
         if kernel.first:
             out.append(f"    {kernel.first}")
-        for i, (module, s) in enumerate(zip(modules, short)):
+        chain = branches[kernel.name]
+        for i, (s, kinds, label) in enumerate(chain):
             call = f"{s}.{kernel.name}({args})"
-            kinds = " or ".join(f"kind == {kind}" for kind in module.KINDS)
-            last = i == len(modules) - 1
+            test = " or ".join(f"kind == {kind}" for kind in kinds)
+            last = i == len(chain) - 1
             if kernel.returns:
                 if not last:
-                    out.append(f"    if {kinds}:  # {', '.join(module.KINDS.values())}")
+                    out.append(f"    if {test}:  # {label}")
                     out.append(f"        return {call}")
                 else:
-                    out.append(f"    return {call}  # {', '.join(module.KINDS.values())}")
+                    out.append(f"    return {call}  # {label}")
             else:
                 keyword = "if" if i == 0 else "elif"
                 if not last:
-                    out.append(f"    {keyword} {kinds}:  # {', '.join(module.KINDS.values())}")
+                    out.append(f"    {keyword} {test}:  # {label}")
                 else:
-                    out.append(f"    else:  # {', '.join(module.KINDS.values())}")
+                    out.append(f"    else:  # {label}")
                 out.append(f"        {call}")
     return "\n".join(out) + "\n"
+
+
+def _branches(modules, kernel: Kernel) -> list[tuple[str, list[int], str]]:
+    """The dispatch chain of `kernel`: (module, its types, their names) per branch, in
+    registry order; the modules whose kernel is one function (PSS2B runs PSS2A's) share
+    the first one's branch."""
+    chain: list[tuple[str, list[int], str]] = []
+    seen: dict[int, int] = {}
+    for module in modules:
+        fn = getattr(module, kernel.name)
+        if id(fn) in seen:
+            s, kinds, label = chain[seen[id(fn)]]
+            chain[seen[id(fn)]] = (
+                s,
+                [*kinds, *module.KINDS],
+                label + "; " + "; ".join(module.KINDS.values()),
+            )
+            continue
+        seen[id(fn)] = len(chain)
+        short = module.__name__.rsplit(".", 1)[1]
+        chain.append((short, list(module.KINDS), "; ".join(module.KINDS.values())))
+    return chain
 
 
 def target(family: Dispatch) -> Path:

@@ -33,7 +33,9 @@ from stabctl.models.declaration import (
     beyond,
     check_packed,
     model_types,
+    own_params,
     pack,
+    pack_own,
     params_class,
     type_modules,
     typed_family,
@@ -105,7 +107,7 @@ N_STATES = max(len(names) for names in STATE_NAMES.values())
 
 #: the tg_con columns only one type reads, each type's module's ``PARAMS`` in registry
 #: order (columns after `table.PARAMS`'s); packed after :data:`PACKED` (`table.own`)
-OWN_PARAMS = tuple(p for mod in MODULES for p in getattr(mod, "PARAMS", ()))
+OWN_PARAMS = own_params(MODULES)
 #: the packed columns after :data:`PACKED`: the most own parameters of a type
 N_OWN = max(len(getattr(mod, "PARAMS", ())) for mod in MODULES)
 
@@ -172,12 +174,7 @@ class GovernorParams(Declared):
             **{f"K_{i}": self.K[:, i] for i in range(4)},
             **{f"K_lp_{i}": self.K_lp[:, i] for i in range(4)},
         )
-        own = np.zeros((self.n, N_OWN))
-        for module in MODULES:
-            rows = np.isin(self.kind, tuple(module.KINDS))
-            for j, param in enumerate(getattr(module, "PARAMS", ())):
-                own[rows, j] = getattr(self, param.name)[rows]
-        return np.hstack([shared, own])
+        return np.hstack([shared, pack_own(self, MODULES)])
 
     def n_slots(self) -> int:
         """State slots per governor: the most any governor of the case uses (3 if none)."""
