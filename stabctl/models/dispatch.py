@@ -53,6 +53,11 @@ class Kernel:  # fields of a dataclass: numpydoc ignore=PR02
     inline : bool
         Compiled into its caller (``@kernel(inline="always")``), for a dispatch the
         family's own kernel wraps.
+    generated : str
+        The generated kernel's name (empty: `name`).
+    default : str
+        For a kernel a type module may leave out: the expression the generated kernel
+        returns for its types (empty: every module has the kernel).
     """
 
     name: str
@@ -61,6 +66,8 @@ class Kernel:  # fields of a dataclass: numpydoc ignore=PR02
     returns: bool
     first: str = ""
     inline: bool = False
+    generated: str = ""
+    default: str = ""
 
 
 @dataclass(frozen=True)
@@ -127,6 +134,56 @@ FAMILIES = (
             ),
         ),
     ),
+    Dispatch(
+        "stabctl.models.exciters",
+        "exciter type (exc_con column 1)",
+        "table.E",
+        (
+            Kernel(
+                "field_voltage",
+                ("P", "x", "i", "VTR_alg", "pss_out", "VB", "ifd", "ieee"),
+                "Field voltage of exciter i given its machine's terminal voltage VTR_alg "
+                "(pu), its PSS's output pss_out, the source term VB (`source_voltage`), the "
+                "field current ifd (`field_current`) and the IEEE 421.5 convention ieee: "
+                "its type module's ``field_voltage``.",
+                returns=True,
+                inline=True,
+                generated="field_voltage_at",
+            ),
+            Kernel(
+                "derivatives",
+                (
+                    "P",
+                    "x",
+                    "i",
+                    "err",
+                    "eterm",
+                    "efd",
+                    "ifd",
+                    "pss_out",
+                    "VB",
+                    "dx",
+                    "ieee",
+                    "reach",
+                ),
+                "Derivatives of exciter i past its transducer (`derivatives`) into dx[:, i] "
+                "for its voltage error err: its type module's ``derivatives``.",
+                returns=False,
+                inline=True,
+                generated="type_derivatives",
+            ),
+            Kernel(
+                "recorded_efd",
+                ("P", "x", "i", "efd_alg"),
+                "Efd as PST records exciter i's: its type module's ``recorded_efd`` where it "
+                "has one, else the algebraic field voltage efd_alg.",
+                returns=True,
+                inline=True,
+                generated="type_recorded_efd",
+                default="efd_alg",
+            ),
+        ),
+    ),
 )
 
 
@@ -176,9 +233,10 @@ def render(family: Dispatch) -> str:
     modules = [m for m in importlib.import_module(family.package).MODULES if m.KINDS]
     for module in modules:
         for kernel in family.kernels:
-            _check(module, kernel)
+            if not kernel.default or hasattr(module, kernel.name):
+                _check(module, kernel)
     layout_module, layout = family.layout.rsplit(".", 1)
-    names = ", ".join(f"`{k.name}`" for k in family.kernels)
+    names = ", ".join(f"`{k.generated or k.name}`" for k in family.kernels)
     header = (
         f'"""The dispatch on the {family.what} of the compiled kernels {names}: generated '
         f"by ``{COMMAND}`` from the registry ({family.package}.MODULES), do not edit."
@@ -200,30 +258,38 @@ def render(family: Dispatch) -> str:
     for kernel in family.kernels:
         args = ", ".join(kernel.args)
         decorator = '@kernel(inline="always")' if kernel.inline else "@kernel"
-        out += ["", "", decorator, f"def {kernel.name}({args}):"]
+        out += ["", "", decorator, f"def {kernel.generated or kernel.name}({args}):"]
         out += _wrapped(f'"""{kernel.doc}"""', "    ")
-        out.append(f"    kind = P[k, {layout}.KIND]")
+        out.append(f"    kind = P[{kernel.args[2]}, {layout}.KIND]")
         if kernel.first:
             out.append(f"    {kernel.first}")
         chain = branches[kernel.name]
         for i, (s, kinds, label) in enumerate(chain):
             call = f"{s}.{kernel.name}({args})"
             test = " or ".join(f"kind == {kind}" for kind in kinds)
-            last = i == len(chain) - 1
+            last = i == len(chain) - 1 and not kernel.default
             if kernel.returns:
                 if not last:
-                    out.append(f"    if {test}:  # {label}")
+                    out.append(_noted(f"    if {test}:", label))
                     out.append(f"        return {call}")
                 else:
-                    out.append(f"    return {call}  # {label}")
+                    out.append(_noted(f"    return {call}", label))
             else:
                 keyword = "if" if i == 0 else "elif"
                 if not last:
-                    out.append(f"    {keyword} {test}:  # {label}")
+                    out.append(_noted(f"    {keyword} {test}:", label))
                 else:
-                    out.append(f"    else:  # {label}")
+                    out.append(_noted("    else:", label))
                 out.append(f"        {call}")
+        if kernel.default:
+            out.append(f"    return {kernel.default}  # the other types")
     return "\n".join(out) + "\n"
+
+
+def _noted(line: str, label: str) -> str:
+    """`line` with the comment `label`, or without it where it would pass 100 characters."""
+    noted = f"{line}  # {label}"
+    return noted if len(noted) <= 100 else line
 
 
 def _branches(modules, kernel: Kernel) -> list[tuple[str, list[int], str]]:
@@ -233,7 +299,9 @@ def _branches(modules, kernel: Kernel) -> list[tuple[str, list[int], str]]:
     chain: list[tuple[str, list[int], str]] = []
     seen: dict[int, int] = {}
     for module in modules:
-        fn = getattr(module, kernel.name)
+        fn = getattr(module, kernel.name, None)
+        if fn is None:  # a kernel with a default
+            continue
         if id(fn) in seen:
             s, kinds, label = chain[seen[id(fn)]]
             chain[seen[id(fn)]] = (
@@ -262,7 +330,8 @@ def _placeholder(family: Dispatch) -> str:
     imports and its dispatch can be generated."""
     lines = [f'"""Placeholder: run ``{COMMAND}``."""']
     for kernel in family.kernels:
-        lines += ["", "", f"def {kernel.name}(*args):", "    raise NotImplementedError"]
+        name = kernel.generated or kernel.name
+        lines += ["", "", f"def {name}(*args):", "    raise NotImplementedError"]
     return "\n".join(lines) + "\n"
 
 
