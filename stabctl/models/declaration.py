@@ -36,6 +36,7 @@ Sources: PST manual (Power System Toolbox 3.0, Rogers & Chow) section 3.22 Table
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import inspect
 from collections import namedtuple
 from collections.abc import Callable, Mapping, Sequence
@@ -58,6 +59,10 @@ __all__ = [
     "layout",
     "states",
     "slots",
+    "own_columns",
+    "own_params",
+    "pack_own",
+    "type_modules",
     "check_packed",
     "pack",
 ]
@@ -307,6 +312,25 @@ def model_types(modules, table: str) -> tuple[dict, dict]:
     return types, {kind: m.STATE_NAMES[kind] for kind, m in types.items()}
 
 
+def type_modules(package: str, *names: str) -> tuple:
+    """A family's registry: its type modules ``package.name``, imported, in the order
+    given (the order of the DYR records and of the generated dispatch).
+
+    Parameters
+    ----------
+    package : str
+        The family's package (``stabctl.models.governors``).
+    *names : str
+        The type modules' names in it.
+
+    Returns
+    -------
+    tuple of module
+        The modules.
+    """
+    return tuple(importlib.import_module(f"{package}.{name}") for name in names)
+
+
 def typed_family(
     table: str, min_columns: int, label: str, types, params, dyr, sep: str = ", "
 ) -> Family:
@@ -503,6 +527,73 @@ def slots(name: str, names: Sequence[str], first: int = 0) -> Any:
     """
     named = [(n, np.int64(first + j)) for j, n in enumerate(names) if n]
     return namedtuple(name, [n for n, _ in named])(*(j for _, j in named))
+
+
+def own_columns(name: str, params: Sequence[Param], first: int) -> Any:
+    """The packed columns of a type's own parameters (those no other type of its family
+    reads), as `layout` names a family's: a namedtuple instance whose field ``N`` (the
+    parameter's name, upper case) is column ``first + j`` for ``params[j]``.  The own
+    columns of every type of a family start at the same column `first` (the end of the
+    shared layout): a row holds one type, whose own parameters fill them.
+
+    Parameters
+    ----------
+    name : str
+        The namedtuple's type name (e.g. ``"DEGOV1Columns"``).
+    params : sequence of Param
+        The type's own parameters, in column order.
+    first : int
+        The first own column (the shared layout's width).
+
+    Returns
+    -------
+    namedtuple
+        Fields: the upper-case names, values ``first .. first + len(params) - 1``.
+    """
+    return namedtuple(name, [p.name.upper() for p in params])(*range(first, first + len(params)))
+
+
+def own_params(modules) -> tuple[Param, ...]:
+    """The parameters a family's type modules declare as their own (each module's
+    ``PARAMS``, in registry order): the table's columns after its shared ones.
+
+    Parameters
+    ----------
+    modules : sequence of module
+        The family's type modules (its ``MODULES``).
+
+    Returns
+    -------
+    tuple of Param
+        The parameters.
+    """
+    return tuple(p for module in modules for p in getattr(module, "PARAMS", ()))
+
+
+def pack_own(obj, modules) -> np.ndarray:
+    """The own columns of a family's packed matrix (`own_columns`): on each row its
+    type's own parameters (its module's ``PARAMS``), in order, 0 beyond them.
+
+    Parameters
+    ----------
+    obj : object
+        The parameter dataclass, ``obj.n`` rows, with ``kind`` and a field per own
+        parameter.
+    modules : sequence of module
+        The family's type modules (each with ``KINDS``).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, shape (obj.n, the most own parameters of a module).
+    """
+    width = max((len(getattr(m, "PARAMS", ())) for m in modules), default=0)
+    own = np.zeros((obj.n, width))
+    for module in modules:
+        rows = np.isin(obj.kind, tuple(module.KINDS))
+        for j, param in enumerate(getattr(module, "PARAMS", ())):
+            own[rows, j] = getattr(obj, param.name)[rows]
+    return own
 
 
 def check_packed(cls, packed, values=()) -> None:

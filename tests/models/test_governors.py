@@ -257,8 +257,9 @@ def test_lag_time_constants_below_the_threshold_are_refused():
 
 
 def test_layout_names_every_packed_column_once():
+    """The shared columns named by `G`, then the most own columns of a type."""
     assert gov.G._fields == tuple(name for name, _ in gov.PACKED)
-    assert params(HYGOV).packed(np.zeros(1)).shape == (1, len(gov.G))
+    assert params(HYGOV).packed(np.zeros(1)).shape == (1, len(gov.G) + gov.N_OWN)
 
 
 def test_tg2_is_the_droop_through_its_lead_lag_then_a_hard_limit():

@@ -176,7 +176,7 @@ def test_pst_pss_first_lead_lag_needs_its_lag():
 
 def test_layout_names_every_packed_column_once():
     assert pss_.S._fields == tuple(name for name, _ in pss_.PACKED)
-    assert params(PSSE).packed().shape == (1, len(pss_.S))
+    assert params(PSSE).packed().shape == (1, len(pss_.S) + pss_.N_OWN)
 
 
 @pytest.mark.parametrize("name", sorted(ROWS))

@@ -1,29 +1,18 @@
 """Exciter models (exc_con), one module per type, and this package: the registry of the
 types, the exc_con table they fill (`EXCITER`), their parameters (`ExciterParams`,
-packed for the kernels as :data:`PACKED`, columns `E`) and the dispatch on the type of
-the compiled kernels (`field_voltage`, `field_voltage_at`, `derivatives`,
-`recorded_efd`) and of the initialisation (`initialise`).
+packed for the kernels as :data:`PACKED`, columns `E`, then each type's own), the
+compiled kernels (`field_voltage`, `derivatives`, `recorded_efd`; their dispatch on the
+type, `field_voltage_at`, `type_derivatives`, `type_recorded_efd`, generated from the
+registry into ``_dispatch.py`` by ``python -m stabctl.models.dispatch``) and the
+initialisation (`initialise`).
 
-The types (exc_con column 1), each a module holding its DYR/ANDES records, its named
-states (``S``, read by its kernels as ``x[S.VE, i]``), its initialisation and its
-field-voltage and derivative kernels:
-
-* :mod:`~stabctl.models.exciters.sexs`: PST `smpexc` (type 0, simple static; also PSS/E's
-  SEXS and SCRX, bus fed: the output times the terminal voltage, column 19 ``bus_fed``);
-* :mod:`~stabctl.models.exciters.dc`: PST `exc_dc12` (types 1 and 2, IEEE DC1 / DC2) and
-  `IEEET2` (type 5: DC1 whose rate feedback has a second lag);
-* :mod:`~stabctl.models.exciters.st3`: PST `exc_st3` (type 3, IEEE ST3; PSS/E ESST3A);
-* :mod:`~stabctl.models.exciters.exst1`: PSS/E `EXST1` (type 4, IEEE ST1 simplified);
-* :mod:`~stabctl.models.exciters.esst1a`: `ESST1A` (type 6, IEEE ST1A with its field
-  current limiter);
-* :mod:`~stabctl.models.exciters.exac1`: `EXAC1` (type 7, IEEE AC1) and `ESAC1A` (type 9,
-  IEEE 421.5 AC1A: EXAC1 whose V_A and V_R have limits of their own);
-* :mod:`~stabctl.models.exciters.exac4`: `EXAC4` (type 8, IEEE AC4);
-* :mod:`~stabctl.models.exciters.ac8b`: `AC8B` (type 10, the AC exciter behind a PID);
-* :mod:`~stabctl.models.exciters.ieeet3`: `IEEET3` (type 11, IEEE 1968 type 3: the
-  compound source added to the regulator);
-* :mod:`~stabctl.models.exciters.esst4b`: `ESST4B` (type 12, IEEE 421.5 ST4B: two PI
-  regulators and the potential/compound source).
+The types (exc_con column 1) are the modules of the registry `MODULES` (one line each;
+their codes and names their ``KINDS``, listed by the exc_con ``type`` column's help), each
+holding its DYR/ANDES records, its own exc_con columns if any (``PARAMS``), its named
+states (``S``, read by its kernels as ``x[S.VE, i]``), its initialisation and its kernels
+``field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)``, ``derivatives(P, x, i, err,
+eterm, efd, ifd, pss_out, VB, dx, ieee, reach)`` and, where PST records another Efd than
+the algebraic one, ``recorded_efd(P, x, i, efd_alg)``.
 
 Source: PSTess 1.1 `exc_indx.m`, `smpexc.m`, `exc_dc12.m`, `exc_st3.m` (PST manual 3.11
 Table 2, 3.13 Table 3); PSS/E Model Library; IEEE Std 421.5; ANDES 2.0
@@ -54,25 +43,18 @@ from stabctl.models.declaration import (
     DyrModel,
     check_packed,
     model_types,
+    own_params,
     pack,
+    pack_own,
     params_class,
+    type_modules,
     typed_family,
 )
-from stabctl.models.exciters import (
-    ac8b,
-    dc,
-    esac6a,
-    esst1a,
-    esst4b,
-    exac1,
-    exac2,
-    exac4,
-    expic1,
-    exst1,
-    ieeet3,
-    sexs,
-    st3,
-    st6b,
+from stabctl.models.exciters import ac8b, dc, esac6a, esst4b, exac1, exac2, expic1, ieeet3, st3
+from stabctl.models.exciters._dispatch import (
+    field_voltage_at,
+    type_derivatives,
+    type_recorded_efd,
 )
 from stabctl.models.exciters.ac8b import AC8B
 from stabctl.models.exciters.dc import DC1, DC2, T2, dc_feedback
@@ -123,6 +105,9 @@ __all__ = [
     "compensated",
     "E",
     "PACKED",
+    "OWN_PARAMS",
+    "N_OWN",
+    "MODULES",
     "TABLE_FIELDS",
     "PID_TRACKING",
     "ST3Machine",
@@ -140,33 +125,40 @@ __all__ = [
 # (`initialise`); a module serves the exc_con types of its KINDS
 # --------------------------------------------------------------------------------------
 
-MODULES = (
-    st3,
-    dc,
-    exst1,
-    esst1a,
-    exac4,
-    exac1,
-    ac8b,
-    ieeet3,
-    esst4b,
-    exac2,
-    esac6a,
-    expic1,
-    st6b,
-    sexs,
+MODULES = type_modules(
+    __name__,
+    "st3",
+    "dc",
+    "exst1",
+    "esst1a",
+    "exac4",
+    "exac1",
+    "ac8b",
+    "ieeet3",
+    "esst4b",
+    "exac2",
+    "esac6a",
+    "expic1",
+    "st6b",
+    "sexs",
 )
 #: exc_con type -> the module of its equations; -> its state names, in slot order (``S``)
 TYPES, STATE_NAMES = model_types(MODULES, "exc_con")
 if any(names[VTR] != "VTR" for names in STATE_NAMES.values()):
     raise ValueError("every exciter type's first state is its transducer V_TR")
 
+#: the exc_con columns only one type reads, each type's module's ``PARAMS`` in registry
+#: order (columns after `table.PARAMS`'s); packed after :data:`PACKED` (`table.own`)
+OWN_PARAMS = own_params(MODULES)
+#: the packed columns after :data:`PACKED`: the most own parameters of a type
+N_OWN = max(len(getattr(mod, "PARAMS", ())) for mod in MODULES)
+
 EXCITER = typed_family(
     "exc_con",
     9,
     "exciter type",
     TYPES,
-    PARAMS,
+    PARAMS + OWN_PARAMS,
     (
         # IEEEVC (the IEEE 1981 load compensator, a record of its own beside the machine's
         # exciter record): R_C, X_C into that exciter's row (stabctl.io.dyr COMPENSATORS)
@@ -197,7 +189,7 @@ DC_KINDS = tuple(dc.KINDS)
 _OMEGA = mac.STATE_NAMES.index("omega")
 
 
-@params_class(("kind", "mac"), TABLE_FIELDS)
+@params_class(("kind", "mac"), TABLE_FIELDS + tuple(p.name for p in OWN_PARAMS))
 class ExciterParams(Declared):
     """Exciter data of a case, arrays of shape (n_exc,): ``kind`` the exc_con type,
     ``mac`` the machine's row (index), then the exc_con fields :data:`TABLE_FIELDS` under
@@ -226,9 +218,10 @@ class ExciterParams(Declared):
         return self.kind.size
 
     def packed(self, Vref: np.ndarray) -> np.ndarray:
-        """Parameter matrix (n_exc, len(PACKED)) for the compiled kernels, with Vref, columns
-        as :data:`PACKED`."""
-        return pack(self, PACKED, Vref=Vref)
+        """Parameter matrix (n_exc, len(PACKED) + N_OWN) for the compiled kernels, with
+        Vref: columns as :data:`PACKED`, then on each row its type's own parameters (its
+        module's ``PARAMS``, `table.own`)."""
+        return np.hstack([pack(self, PACKED, Vref=Vref), pack_own(self, MODULES)])
 
     @property
     def has_TR(self):
@@ -514,7 +507,7 @@ def exciter_params(case: Case) -> ExciterParams:
     t3 = e.type == T3
     pic = e.type == PIC1
     KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
-    given = {n: getattr(e, n).copy() for n in TABLE_FIELDS}
+    given = {n: getattr(e, n).copy() for n in TABLE_FIELDS + tuple(p.name for p in OWN_PARAMS)}
     given.update(
         KA=KA,
         KP=np.where(pic, e.KP_pic, e.KP * np.exp(1j * np.deg2rad(e.thetaP))),
@@ -675,41 +668,6 @@ def field_voltage(P, x, i, MP, xm, cur, pss_out, ifd, VB, ieee):
     return efd * xm[_OMEGA, m] if P[i, E.EFD_SPEED] == 1 else efd
 
 
-@kernel(inline="always")
-def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
-    """Field voltage of exciter i given its machine's terminal voltage VTR_alg (pu), the
-    source term VB (`source_voltage`) and the field current ifd (`field_current`): its
-    type module's ``field_voltage``."""
-    kind = P[i, E.KIND]
-    if kind == ST3:
-        return st3.field_voltage(P, x, i, VB, ieee)
-    if kind == ST1:
-        return exst1.field_voltage(P, x, i, VTR_alg, ifd)
-    if kind == ST1A:
-        return esst1a.field_voltage(P, x, i, VTR_alg, ifd, pss_out)
-    if kind == AC1 or kind == AC1A:
-        return exac1.field_voltage(P, x, i, ifd)
-    if kind == AC8B:
-        return ac8b.field_voltage(P, x, i, ifd)
-    if kind == AC2:
-        return exac2.field_voltage(P, x, i, ifd)
-    if kind == AC6A:
-        return esac6a.field_voltage(P, x, i, ifd)
-    if kind == PIC1:
-        return expic1.field_voltage(P, x, i, VTR_alg, pss_out, VB)
-    if kind == ST6B:
-        return st6b.field_voltage(P, x, i, VTR_alg, pss_out, ifd)
-    if kind == AC4:
-        return exac4.field_voltage(P, x, i, ifd)
-    if kind == ST4B:
-        return esst4b.field_voltage(P, x, i, VTR_alg, pss_out, VB)
-    if kind == DC1 or kind == DC2 or kind == T2:
-        return dc.field_voltage(P, x, i)
-    if kind == T3:
-        return ieeet3.field_voltage(P, x, i)
-    return sexs.field_voltage(P, x, i, VTR_alg, pss_out, ieee)
-
-
 @kernel
 def compensated(P, i, vt, it):
     """The voltage exciter i's transducer measures: abs(V_t + (R_C + j X_C) I_t) (IEEE
@@ -732,35 +690,7 @@ def derivatives(P, x, i, vc, eterm, pss_out, efd, ifd, VB, dx, ieee, reach):
     dx[:, i] = 0.0
     vtr, dx[VTR, i] = lag(vc, x[VTR, i], P[i, E.TR])
     err = P[i, E.VREF] - vtr + pss_out
-    kind = P[i, E.KIND]
-    if kind == SMP:
-        sexs.derivatives(P, x, i, err, dx, ieee)
-    elif kind == ST3:
-        st3.derivatives(P, x, i, err, efd, dx, ieee)
-    elif kind == ST1:
-        exst1.derivatives(P, x, i, err, efd, dx)
-    elif kind == ST1A:
-        esst1a.derivatives(P, x, i, err, ifd, pss_out, dx)
-    elif kind == AC1 or kind == AC1A:
-        exac1.derivatives(P, x, i, err, ifd, dx)
-    elif kind == AC8B:
-        ac8b.derivatives(P, x, i, err, ifd, dx)
-    elif kind == AC2:
-        exac2.derivatives(P, x, i, err, ifd, dx)
-    elif kind == AC6A:
-        esac6a.derivatives(P, x, i, err, eterm, ifd, dx)
-    elif kind == PIC1:
-        expic1.derivatives(P, x, i, err, VB, dx)
-    elif kind == ST6B:
-        st6b.derivatives(P, x, i, err, eterm, ifd, dx)
-    elif kind == AC4:
-        exac4.derivatives(P, x, i, err, dx)
-    elif kind == T3:
-        ieeet3.derivatives(P, x, i, err, VB, dx)
-    elif kind == ST4B:
-        esst4b.derivatives(P, x, i, err, efd, dx)
-    else:
-        dc.derivatives(P, x, i, eterm, err, dx, ieee, reach)
+    type_derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
 
 
 @kernel
@@ -768,13 +698,6 @@ def recorded_efd(P, x, i, efd_alg):
     """Efd as PST records it: the (clamped) smpexc state, the DC Efd state, or the ST3
     (and bus-fed smpexc) algebraic value efd_alg (`field_voltage`); efd_alg, the
     machine's, with ``efd_speed``."""
-    kind = P[i, E.KIND]
     if P[i, E.EFD_SPEED] == 1:
         return efd_alg
-    if kind == DC1 or kind == DC2 or kind == T2:
-        return dc.field_voltage(P, x, i)
-    if kind == T3:
-        return ieeet3.field_voltage(P, x, i)
-    if kind == SMP:
-        return sexs.recorded_efd(P, x, i, efd_alg)
-    return efd_alg
+    return type_recorded_efd(P, x, i, efd_alg)

@@ -122,13 +122,13 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, ifd):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """AC8B: the AC exciter's output (`exac1.rectified`)."""
     return rectified(P, i, x[S.VE, i], ifd)
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, ifd, dx):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """AC8B (docs/pst_models.md 2.7): the PID on the voltage error (states PIDi, PIDd),
     the regulator lag V_R, the exciter V_E."""
     y, dx[S.PIDi, i], dx[S.PIDd, i] = pid_track_aw(

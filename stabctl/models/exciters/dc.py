@@ -196,13 +196,19 @@ def initial_regulator(p: ExciterParams, r, Efd, eterm):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """The DC exciters: the Efd state."""
     return x[S.Efd, i]
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, eterm, err, dx, ieee, reach):
+def recorded_efd(P, x, i, efd_alg):
+    """Efd as PST records it: the Efd state."""
+    return x[S.Efd, i]
+
+
+@kernel(inline="always")
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """exc_dc12 flag 2 and IEEET2: the rate feedback K_F/T_F (Efd - R_f) = s K_F/(1 + s
     T_F) Efd (IEEET2: then the lag 1/(1 + s T_F2), state V_F), subtracted from the error;
     V_R non-windup (DC2: limits times eterm, held within `reach`);

@@ -145,13 +145,13 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, ifd):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """ESAC6A: the AC exciter's output (`exac1.rectified`)."""
     return rectified(P, i, x[S.VE, i], ifd)
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, eterm, ifd, dx):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """ESAC6A (docs/pst_models.md 2.13): K_A (1 + s T_K)/(1 + s T_A) on the error, the
     lead-lag T_C/T_B, V_A clipped to [VAmin, VAmax], V_R = V_A - V_H clipped to [eterm
     Vrmin, eterm Vrmax] (eterm the terminal voltage, pu), the exciter T_E dV_E/dt = V_R -

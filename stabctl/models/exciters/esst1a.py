@@ -131,7 +131,7 @@ def regulator(P, x, i, ifd, pss_out):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, VTR_alg, ifd, pss_out):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """ESST1A: `regulator` clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd]."""
     return clip(
         regulator(P, x, i, ifd, pss_out),
@@ -141,7 +141,7 @@ def field_voltage(P, x, i, VTR_alg, ifd, pss_out):
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, ifd, pss_out, dx):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """ESST1A (docs/pst_models.md 2.6): the rate feedback of `regulator` (state R_f, only
     with K_F != 0) subtracted before the V_I limits, the lead-lags T_C/T_B (state V_As) and
     T_C1/T_B1 (state V_As1), V_A non-windup; with VOS = 2 the stabiliser output pss_out

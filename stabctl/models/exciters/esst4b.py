@@ -146,7 +146,7 @@ def regulator(P, x, i, err):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, VTR_alg, pss_out, VB):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """ESST4B: Efd = V_B clip(K_PM (V_M - min(K_G Efd, VGmax)) + PIMi, VMmin, VMmax),
     solved for Efd (ANDES solves it with its algebraic equations): the right side does
     not rise with Efd (K_PM K_G >= 0, V_B >= 0), so there is one solution, on the
@@ -166,7 +166,7 @@ def field_voltage(P, x, i, VTR_alg, pss_out, VB):
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, efd, dx):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """ESST4B (docs/pst_models.md 2.10): both PI regulators with ANDES's tracking
     anti-windup, dx_i/dt = K_I (u - k_s (ys - y)) (k_s = `table.PID_TRACKING`), and the
     lag T_A; efd the field voltage (`field_voltage`)."""

@@ -214,13 +214,13 @@ def exciter(P, i, VE, VR, VFE, hold):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, ifd):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """EXAC1, ESAC1A: `rectified` V_E."""
     return rectified(P, i, x[S.VE, i], ifd)
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, ifd, dx):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """EXAC1 and ESAC1A (docs/pst_models.md 2.7): the rate feedback of V_FE (state R_f,
     with K_F != 0) subtracted from the error, the lead-lag T_C/T_B, the regulator lag
     non-windup (EXAC1: V_R on [Vrmin, Vrmax]; ESAC1A: V_A on [VAmin, VAmax], then V_R = V_A

@@ -142,13 +142,13 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, ifd):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """EXAC2: the AC exciter's output (`exac1.rectified`)."""
     return rectified(P, i, x[S.VE, i], ifd)
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, ifd, dx):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """EXAC2 (docs/pst_models.md 2.12): the rate feedback of V_FE (state R_f, with K_F !=
     0) subtracted from the error, the lead-lag T_C/T_B, the regulator lag V_A non-windup
     on [VAmin, VAmax], V_R = K_B min(V_A - K_H V_FE, K_L (V_LR - V_FE)) clipped to [Vrmin,

@@ -63,14 +63,14 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, ifd):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """EXAC4: V_R clipped to [Vrmin - K_C I_fd, Vrmax - K_C I_fd]."""
     drop = P[i, E.KC] * ifd
     return clip(x[S.VR, i], P[i, E.VRMIN] - drop, P[i, E.VRMAX] - drop)
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, dx):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """EXAC4 (docs/pst_models.md 2.8): the error limited to [VImin, VImax], the lead-lag
     T_C/T_B, the lag K_A/(1 + s T_A)."""
     u, dx[S.VAs, i] = leadlag_input_state(

@@ -203,7 +203,7 @@ def exciter_input(P, i, VR, VB):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, VTR_alg, pss_out, VB):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """EXPIC1: the exciter's state Efd with T_E, else E_0 from the regulator
     (`regulator`, on the error of the transducer's output for VTR_alg, pu)."""
     if P[i, E.TE] >= LBND:
@@ -213,7 +213,7 @@ def field_voltage(P, x, i, VTR_alg, pss_out, VB):
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, VB, dx):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """EXPIC1 (docs/pst_models.md 2.14): the regulator (`regulator`), the rate feedback
     of V_R (washout T_F1 with gain K_F, lag T_F2), the exciter T_E dEfd/dt = E_0 - (K_E +
     S_E(Efd)) Efd with T_E."""

@@ -87,7 +87,7 @@ def check_start(p: ExciterParams, r, name, Efd, lo, hi, VA, VA_limits=False):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, VTR_alg, ifd):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """EXST1: V_R clipped to [V_t Vrmin, V_t Vrmax - K_C I_fd] (ifd the machine's field
     current); psse_st1: to [V_t Vrmin - K_C I_fd, V_t Vrmax - K_C I_fd] (PSS/E)."""
     drop = P[i, E.KC] * ifd
@@ -96,7 +96,7 @@ def field_voltage(P, x, i, VTR_alg, ifd):
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, efd, dx):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """EXST1 (PSS/E; docs/pst_models.md 2.4): the rate feedback (state R_f, only with
     K_F != 0) of the field voltage efd (psse_st1: of V_R, before the output limits)
     subtracted before the V_I limits."""

@@ -110,13 +110,19 @@ def source_voltage(KP, KI, XL, KC, cap, machine, init):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """IEEET3: the Efd state."""
     return x[S.Efd, i]
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, VB, dx):
+def recorded_efd(P, x, i, efd_alg):
+    """Efd as PST records it: the Efd state."""
+    return x[S.Efd, i]
+
+
+@kernel(inline="always")
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """IEEET3 (docs/pst_models.md 2.9): the rate feedback (state R_f, with K_F != 0), the
     regulator V_R non-windup on [Vrmin, Vrmax], the exciter Efd fed by V_B + V_R clipped
     to [0, VBmax] (VB the source term, `source_voltage`)."""

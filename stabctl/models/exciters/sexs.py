@@ -72,7 +72,7 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, VTR_alg, pss_out, ieee):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
     ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error, without
     limits; bus fed (SCRX, exc_con column 19 = 1): times the terminal voltage VTR_alg."""
@@ -94,7 +94,7 @@ def recorded_efd(P, x, i, efd_alg):
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, dx, ieee):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """smpexc: PSTess clamps the Efd state to [Vrmin, Vrmax] after its derivative is
     computed and keeps the derivative (a windup clamp; PST's misspelt dEFD,
     docs/pst_models.md 2.1); ieee: a non-windup limit as IEEE Std 421.5-2016 (SEXS/ST1A

@@ -172,14 +172,14 @@ def field_current(P, i, MP, xm, cur, m):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, VB, ieee):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """exc_st3: min(V_R V_B, Efdmax) (ieee: V_R clipped to [Vrmin, Vrmax])."""
     VR = clip(x[S.VR, i], P[i, E.VRMIN], P[i, E.VRMAX]) if ieee else x[S.VR, i]
     return min(VR * VB, P[i, E.EFDMAX])
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, efd, dx, ieee):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """exc_st3: V_R clamped and its derivative zeroed when it pushes outward
     (`blocks.nonwindup`); with TA_st3a ESST3A's regulator lag (state V_A, non-windup on
     [VAmin, VAmax], IEEE 421.5's rule) between the lead-lag and the inner loop."""

@@ -149,7 +149,7 @@ def regulator(P, x, i, err, ifd):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, VTR_alg, pss_out, ifd):
+def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """ST6B: Efd = V_R V_t (`regulator` on the error of the transducer's output for the
     terminal voltage VTR_alg, pu)."""
     err = P[i, E.VREF] - lag(VTR_alg, x[S.VTR, i], P[i, E.TR])[0] + pss_out
@@ -157,7 +157,7 @@ def field_voltage(P, x, i, VTR_alg, pss_out, ifd):
 
 
 @kernel(inline="always")
-def derivatives(P, x, i, err, eterm, ifd, dx):
+def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """ST6B (docs/pst_models.md 2.15): the PID's integral and derivative, the feedback lag
     T_G dV_G/dt = K_G V_R V_t - V_G (eterm the terminal voltage, pu)."""
     VR, dx[S.PIi, i], dx[S.PIDd, i] = regulator(P, x, i, err, ifd)

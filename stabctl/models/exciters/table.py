@@ -4,11 +4,12 @@ packed parameter layout of the compiled kernels (`PACKED`, its named columns `E`
 the pieces several types share (the state every type starts with, `VTR`; the
 potential/compound source `potential_source`; the blocks' numpy-boolean flags).
 
-The ``type`` column and the DYR records are declared by the types themselves (one module
-per type, :mod:`stabctl.models.exciters`); this module is imported by every one of them.
-Many exc_con columns are read under another name by another type (the ``alt`` names of
-PST's Table 2: columns 10-17 are K_E, T_E, ... of the DC exciters), so the columns are
-declared here once, not per type.
+The ``type`` column, the DYR records and the columns only one type reads (its module's
+``PARAMS``, after these; packed after `PACKED`, `own`) are declared by the types
+themselves (one module per type, :mod:`stabctl.models.exciters`); this module is
+imported by every one of them.  Many exc_con columns are read under another name by
+another type (the ``alt`` names of PST's Table 2: columns 10-17 are K_E, T_E, ... of the
+DC exciters), so the columns are declared here once, not per type.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import NamedTuple
 import numpy as np
 
 from stabctl._jit.decorators import njit
-from stabctl.models.declaration import Param, layout
+from stabctl.models.declaration import Param, layout, own_columns
 
 
 def upper(*names: str, **renamed: str) -> dict[str, str]:
@@ -289,6 +290,27 @@ PACKED = (
 )
 #: the kernels' column of each PACKED name: P[i, E.KA]
 E = layout("ExciterColumns", PACKED)
+
+
+def own(name: str, params):
+    """An exciter type's own packed columns (its module's ``PARAMS``, the exc_con columns
+    no other type reads), read by its kernels as ``P[i, O.NAME]``: after the shared
+    `PACKED`, where every type's own columns start (`own_columns`).
+
+    Parameters
+    ----------
+    name : str
+        The namedtuple's type name.
+    params : sequence of Param
+        The type's own parameters.
+
+    Returns
+    -------
+    namedtuple
+        Their packed columns, by upper-case name.
+    """
+    return own_columns(name, params, len(PACKED))
+
 
 #: the state slot of the voltage transducer T_R, every type's first state (``S.VTR`` of
 #: each type's layout)

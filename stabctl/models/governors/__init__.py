@@ -1,26 +1,16 @@
 """Turbine-governor models (tg_con), one module per type, and this package: the registry
 of the types, the tg_con table they fill (`GOVERNOR`), their parameters
-(`GovernorParams`, packed for the kernels as :data:`PACKED`, columns `G`), the dispatch
-on the type of the compiled kernels (`pmech`, `pmech_lp`, `derivatives`) and of the
-initialisation (`initialise`).
+(`GovernorParams`, packed for the kernels as :data:`PACKED`, columns `G`, then each
+type's own), the compiled kernels (`pmech`, `derivatives`: the dispatch on the type
+generated from the registry into ``_dispatch.py`` by ``python -m
+stabctl.models.dispatch``; `pmech_lp`) and the initialisation (`initialise`).
 
-The types (tg_con column 1), each a module holding its DYR/ANDES records, its named
+The types (tg_con column 1) are the modules of the registry `MODULES` (one line each;
+their codes and names their ``KINDS``, listed by the tg_con ``type`` column's help), each
+holding its DYR/ANDES records, its own tg_con columns if any (``PARAMS``), its named
 states (``S``, read by its kernels as ``x[S.gate, k]``), its initialisation and its
-mechanical-power and derivative kernels:
-
-* :mod:`~stabctl.models.governors.tg`: PST `tg` (type 1);
-* :mod:`~stabctl.models.governors.tgov1`: PSS/E `TGOV1` (type 2);
-* :mod:`~stabctl.models.governors.ieeeg1`: `IEEEG1` (type 3, with the cross-compound LP
-  shaft);
-* :mod:`~stabctl.models.governors.hygov`: `HYGOV` (type 4);
-* :mod:`~stabctl.models.governors.ieesgo`: `IEESGO` (type 5);
-* :mod:`~stabctl.models.governors.gast`: `GAST` (type 6);
-* :mod:`~stabctl.models.governors.tg2`: ANDES's `TG2` (type 7);
-* :mod:`~stabctl.models.governors.hygov4`: ANDES's `HYGOV4` (type 8);
-* :mod:`~stabctl.models.governors.ggov1`: PSS/E's `GGOV1` (type 9, the general
-  governor-turbine; it reads its machine's electrical power);
-* :mod:`~stabctl.models.governors.degov`: PSS/E's `DEGOV` (type 10, the Woodward diesel
-  governor, isochronous; its power the torque times the speed).
+mechanical-power and derivative kernels, ``pmech(P, x, k, omega)`` and ``derivatives(P,
+x, k, omega, pe, dx)``.
 
 Sources: PSTess 1.1 `tg_indx.m`, `tg.m` (docs/pst_models.md section 4); PSS/E Model
 Library; ANDES 2.0 ``andes/models/governor``; how to add a type in docs/simulator.md.
@@ -43,23 +33,15 @@ from stabctl.models.declaration import (
     beyond,
     check_packed,
     model_types,
+    own_params,
     pack,
+    pack_own,
     params_class,
+    type_modules,
     typed_family,
 )
-from stabctl.models.governors import (
-    degov,
-    gast,
-    ggov1,
-    hygov,
-    hygov4,
-    ieeeg1,
-    ieesgo,
-    tg,
-    tg2,
-    tgov1,
-)
-from stabctl.models.governors.degov import DEGOV
+from stabctl.models.governors import ggov1, ieeeg1
+from stabctl.models.governors._dispatch import derivatives, pmech
 from stabctl.models.governors.gast import GAST
 from stabctl.models.governors.ggov1 import GGOV1
 from stabctl.models.governors.hygov import HYGOV
@@ -75,8 +57,6 @@ from stabctl.models.governors.table import (
     G,
 )
 from stabctl.models.governors.tg import TG
-from stabctl.models.governors.tg2 import TG2
-from stabctl.models.governors.tgov1 import TGOV1
 
 if TYPE_CHECKING:
     from stabctl.case import Case
@@ -96,33 +76,48 @@ __all__ = [
     "PACKED",
     "TABLE_FIELDS",
     "HYGOV_FIELDS",
-    "TG", "TGOV1", "IEEEG1", "HYGOV", "IEESGO", "GAST", "TG2", "HYGOV4", "GGOV1", "DEGOV",
-]  # fmt: skip
+    "OWN_PARAMS",
+    "N_OWN",
+    "MODULES",
+]
 
 # --------------------------------------------------------------------------------------
 # the registry: one line per type module; a module serves the tg_con types of its KINDS
 # (the order of the DYR records)
 # --------------------------------------------------------------------------------------
 
-MODULES = (
-    tg,
-    tgov1,
-    ieeeg1,
-    hygov,
-    ieesgo,
-    gast,
-    tg2,
-    hygov4,
-    ggov1,
-    degov,
+MODULES = type_modules(
+    __name__,
+    "tg",
+    "tgov1",
+    "ieeeg1",
+    "hygov",
+    "ieesgo",
+    "gast",
+    "tg2",
+    "hygov4",
+    "ggov1",
+    "degov",
+    "degov1",
 )
 #: tg_con type -> the module of its equations; -> its state names, in slot order (``S``)
 TYPES, STATE_NAMES = model_types(MODULES, "tg_con")
 #: state slots of the widest type
 N_STATES = max(len(names) for names in STATE_NAMES.values())
 
+#: the tg_con columns only one type reads, each type's module's ``PARAMS`` in registry
+#: order (columns after `table.PARAMS`'s); packed after :data:`PACKED` (`table.own`)
+OWN_PARAMS = own_params(MODULES)
+#: the packed columns after :data:`PACKED`: the most own parameters of a type
+N_OWN = max(len(getattr(mod, "PARAMS", ())) for mod in MODULES)
+
 GOVERNOR = typed_family(
-    "tg_con", 10, "governor type", TYPES, PARAMS, tuple(m for mod in MODULES for m in mod.DYR)
+    "tg_con",
+    10,
+    "governor type",
+    TYPES,
+    PARAMS + OWN_PARAMS,
+    tuple(m for mod in MODULES for m in mod.DYR),
 )
 
 #: the labels of `GovernorParams.time_constants`, by declared field, in reporting order
@@ -135,10 +130,11 @@ _TIME_CONSTANT_LABELS = {
     "T6": "tg_con T_6",
     "T7": "tg_con T_7",
     **{n: f"tg_con {n}" for n in (*ggov1.NEEDS, "Tdgov")},
+    **{p.name: f"tg_con {p.name}" for p in OWN_PARAMS if p.unit == "s"},
 }
 
 
-@params_class(("kind", "mac"), TABLE_FIELDS + GGOV1_FIELDS)
+@params_class(("kind", "mac"), TABLE_FIELDS + GGOV1_FIELDS + tuple(p.name for p in OWN_PARAMS))
 class GovernorParams(Declared):
     """Governor data, arrays of shape (n_tg,): ``kind`` the tg_con type, ``mac`` the
     machine's row (index), the tg_con fields :data:`TABLE_FIELDS` under their declared
@@ -149,7 +145,7 @@ class GovernorParams(Declared):
     rt, qNL, Kg, velm_rel, psse_gate: HYGOV's columns 17-22 (0 for other types; T4 is its
     T_w, T5 its A_t); GGOV1's fields :data:`GGOV1_FIELDS` (tg_con columns 28-59) and
     turbine_scale, its turbine rating Trate over its machine's MVA (1 where Trate = 0
-    or another type)."""
+    or another type); then every type's own fields (:data:`OWN_PARAMS`)."""
 
     K: np.ndarray
     mac2: np.ndarray
@@ -168,15 +164,17 @@ class GovernorParams(Declared):
         return self.mac.size
 
     def packed(self, Pref: np.ndarray) -> np.ndarray:
-        """Parameter matrix (n_tg, len(PACKED)) for the compiled kernels, with P_ref, columns
-        as :data:`PACKED`."""
-        return pack(
+        """Parameter matrix (n_tg, len(PACKED) + N_OWN) for the compiled kernels, with
+        P_ref: columns as :data:`PACKED`, then on each row its type's own parameters
+        (its module's ``PARAMS``, `table.own`)."""
+        shared = pack(
             self,
             PACKED,
             Pref=Pref,
             **{f"K_{i}": self.K[:, i] for i in range(4)},
             **{f"K_lp_{i}": self.K_lp[:, i] for i in range(4)},
         )
+        return np.hstack([shared, pack_own(self, MODULES)])
 
     def n_slots(self) -> int:
         """State slots per governor: the most any governor of the case uses (3 if none)."""
@@ -251,6 +249,7 @@ def governor_params(case: Case) -> GovernorParams:
         kind=g.type.astype(int),
         mac=mac,
         **{n: getattr(g, n).copy() for n in TABLE_FIELDS + GGOV1_FIELDS},
+        **{p.name: getattr(g, p.name).copy() for p in OWN_PARAMS},
         K=np.where(hy[:, None], 0.0, np.where(cross[:, None], K_hp, K)),
         mac2=mac2,
         K_lp=np.where(cross[:, None], K_lp, 0.0),
@@ -337,34 +336,8 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
 
 
 # -- compiled runtime kernels: P is GovernorParams.packed(), x the governor block of the
-# -- state vector (n_slots, n_tg), k the governor; each type's kernels are its module's,
-# -- dispatched on kind by `pmech` and `derivatives` (one line per type)
-
-
-@kernel
-def pmech(P, x, k, omega):
-    """Mechanical power of governor k (machine base) at machine speed omega (pu), flag 1:
-    its type module's ``pmech``."""
-    kind = P[k, G.KIND]
-    if kind == TG:
-        return tg.pmech(P, x, k)
-    if kind == TGOV1:
-        return tgov1.pmech(P, x, k, omega)
-    if kind == IEEEG1:
-        return ieeeg1.pmech(P, x, k)
-    if kind == HYGOV:
-        return hygov.pmech(P, x, k, omega)
-    if kind == GAST:
-        return gast.pmech(P, x, k, omega)
-    if kind == TG2:
-        return tg2.output(P, x, k, omega, None)
-    if kind == HYGOV4:
-        return hygov4.pmech(P, x, k, omega)
-    if kind == GGOV1:
-        return ggov1.pmech(P, x, k, omega)
-    if kind == DEGOV:
-        return degov.pmech(P, x, k, omega)
-    return ieesgo.pmech(P, x, k, omega)
+# -- state vector (n_slots, n_tg), k the governor; `pmech` and `derivatives`, the dispatch
+# -- on the type, are generated (`_dispatch`)
 
 
 @kernel
@@ -372,33 +345,3 @@ def pmech_lp(P, x, k):
     """Mechanical power (its machine's base) a cross-compound IEEEG1 k hands its LP
     machine (column MAC2), `ieeeg1.pmech_lp`."""
     return ieeeg1.pmech_lp(P, x, k)
-
-
-@kernel
-def derivatives(P, x, k, omega, pe, dx):
-    """Derivatives of governor k into dx[:, k] for its machine speed omega (pu) and
-    electrical power pe (pu on the machine base; read by GGOV1), flag 2:
-    its type module's ``derivatives`` (which clamp the limited valve and gate states in
-    x)."""
-    kind = P[k, G.KIND]
-    dx[:, k] = 0.0
-    if kind == TG:
-        tg.derivatives(P, x, k, omega, dx)
-    elif kind == TGOV1:
-        tgov1.derivatives(P, x, k, omega, dx)
-    elif kind == IEEEG1:
-        ieeeg1.derivatives(P, x, k, omega, dx)
-    elif kind == HYGOV:
-        hygov.derivatives(P, x, k, omega, dx)
-    elif kind == GAST:
-        gast.derivatives(P, x, k, omega, dx)
-    elif kind == TG2:
-        tg2.output(P, x, k, omega, dx)
-    elif kind == HYGOV4:
-        hygov4.derivatives(P, x, k, omega, dx)
-    elif kind == GGOV1:
-        ggov1.derivatives(P, x, k, omega, pe, dx)
-    elif kind == DEGOV:
-        degov.derivatives(P, x, k, omega, dx)
-    else:
-        ieesgo.derivatives(P, x, k, omega, dx)

@@ -126,7 +126,7 @@ def pmech(P, x, k, omega):
 
 
 @kernel(inline="always")
-def derivatives(P, x, k, omega, dx):
+def derivatives(P, x, k, omega, pe, dx):
     """DEGOV (module docstring): P_ref - (omega - 1) through the control box and the
     actuator into the integrator K/s (clamps the torque in x)."""
     t1 = _lag(P[k, G.TC])

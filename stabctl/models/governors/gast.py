@@ -74,7 +74,7 @@ def pmech(P, x, k, omega):
 
 
 @kernel(inline="always")
-def derivatives(P, x, k, omega, dx):
+def derivatives(P, x, k, omega, pe, dx):
     """GAST (docs/pst_models.md 4.4): min(P_ref + (w_f - omega)/R, AT + KT (AT - y_3))
     through the valve (Ts = T1), y_2 its lag T2 (Tc), y_3 the lag T3 of y_2 (a lag below
     1e-3 s passes its input)."""

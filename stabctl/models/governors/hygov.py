@@ -104,7 +104,7 @@ def pmech(P, x, k, omega):
 
 
 @kernel(inline="always")
-def derivatives(P, x, k, omega, dx):
+def derivatives(P, x, k, omega, pe, dx):
     """HYGOV: filter, rate- and position-limited gate integrator, gate servo, water column
     (module docstring; ANDES ``hygov.py``); psse_gate: the state is the desired gate c,
     d c/dt = (e + T_r de/dt)/(r T_r) (the PI whole) rate- and position-limited (PSS/E)."""

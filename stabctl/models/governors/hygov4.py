@@ -85,7 +85,7 @@ def pmech(P, x, k, omega):
 
 
 @kernel(inline="always")
-def derivatives(P, x, k, omega, dx):
+def derivatives(P, x, k, omega, pe, dx):
     """HYGOV4 (module docstring; ANDES ``hygov4.py``): the dashpot R_temp T_r s/(1 + s T_r)
     on the gate (T3), the pilot servo T_p (Tc), the gate speed clip(y_p / T_g, U_C, U_O)
     (Ts) into the gate integrator non-windup on [PMIN, PMAX], the water column T_w (T4)."""

@@ -90,7 +90,7 @@ def lags(P, x, k, dx=None):
 
 
 @kernel(inline="always")
-def pmech(P, x, k):
+def pmech(P, x, k, omega):
     """IEEEG1: the lags' outputs times their (HP or summed) fractions."""
     return fractions(P, k, lags(P, x, k))
 
@@ -106,7 +106,7 @@ def pmech_lp(P, x, k):
 
 
 @kernel(inline="always")
-def derivatives(P, x, k, omega, dx):
+def derivatives(P, x, k, omega, pe, dx):
     """IEEEG1: K (1 + s T_2)/(1 + s T_1) on the speed deviation, the gate's rate
     (P_ref - that - gate)/T_3 limited to [Uc, Uo], position [PMIN, PMAX] non-windup."""
     u, dx[S.leadlag, k] = leadlag(

@@ -96,6 +96,6 @@ def pmech(P, x, k, omega):
 
 
 @kernel(inline="always")
-def derivatives(P, x, k, omega, dx):
+def derivatives(P, x, k, omega, pe, dx):
     """IEESGO: the derivatives of its five states into dx[:, k]."""
     lags(P, x, k, omega, dx)

@@ -4,10 +4,12 @@ section 4), the packed parameter layout of the compiled kernels (`PACKED`, its n
 columns `G`) and the pieces several types share (the shaft power of the power
 fractions, `fractions`; the blocks' numpy-boolean non-windup flag, `AT_LIMIT`).
 
-The ``type`` column and the DYR records are declared by the types themselves (one module
-per type, :mod:`stabctl.models.governors`); this module is imported by every one of
-them.  Many tg_con columns are read under another name by another type (HYGOV reads
-IEEEG1's K1..K6 as its R, r, q_NL, K_g, ...), so the columns are declared here once.
+The ``type`` column, the DYR records and the columns only one type reads (its module's
+``PARAMS``, after these; packed after `PACKED`, `own`) are declared by the types
+themselves (one module per type, :mod:`stabctl.models.governors`); this module is
+imported by every one of them.  Many tg_con columns are read under another name by
+another type (HYGOV reads IEEEG1's K1..K6 as its R, r, q_NL, K_g, ...), so the columns
+are declared here once.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.declaration import Param, layout
+from stabctl.models.declaration import Param, layout, own_columns
 
 #: tg_con columns 17-22 (IEEEG1's K1..K6) as HYGOV reads them: (alternative name, doc)
 _HYGOV_ALT = {
@@ -174,6 +176,27 @@ PACKED = (
 )
 #: the kernels' column of each PACKED name: P[k, G.TS]
 G = layout("GovernorColumns", PACKED)
+
+
+def own(name: str, params):
+    """A governor type's own packed columns (its module's ``PARAMS``, the tg_con columns
+    no other type reads), read by its kernels as ``P[k, O.DROOP]``: after the shared
+    `PACKED`, where every type's own columns start (`own_columns`).
+
+    Parameters
+    ----------
+    name : str
+        The namedtuple's type name (``"DEGOV1Columns"``).
+    params : sequence of Param
+        The type's own parameters.
+
+    Returns
+    -------
+    namedtuple
+        Their packed columns, by upper-case name.
+    """
+    return own_columns(name, params, len(PACKED))
+
 
 #: the governors' non-windup rule (`blocks.nonwindup`): at or beyond a limit, always, as
 #: a numpy boolean (a Python True from compiled code is typed as a literal, a second

@@ -55,14 +55,14 @@ def initialise(p: GovernorParams, r, pmech0, order, x):
 
 
 @kernel(inline="always")
-def pmech(P, x, k):
+def pmech(P, x, k, omega):
     """tg: (1 + s T_4)/(1 + s T_5) of the output of (1 + s T_3)/(1 + s T_c)."""
     y2 = leadlag(x[S.servo, k], x[S.transient, k], P[k, G.T3], P[k, G.TC])[0]
     return leadlag(y2, x[S.turbine, k], P[k, G.T4], P[k, G.T5])[0]
 
 
 @kernel(inline="always")
-def derivatives(P, x, k, omega, dx):
+def derivatives(P, x, k, omega, pe, dx):
     """tg: the order P_ref + (w_f - omega)/R clipped to [Tmin, Tmax] through the servo
     1/(1 + s T_s), then the two lead-lags."""
     order = P[k, G.PREF] + (P[k, G.WF] - omega) * P[k, G.INVR]

@@ -55,7 +55,7 @@ def initialise(p: GovernorParams, r, pmech0, order, x):
 
 
 @kernel(inline="always")
-def output(P, x, k, omega, dx=None):
+def _output(P, x, k, omega, dx=None):
     """TG2's mechanical power clip(P_ref + LL((w_f - omega)/R), pmin, pmax) (T3 = T1 the
     lead, Tc = T2 the lag; ANDES's HardLimiter: no windup, the lead-lag runs on); its
     state's derivative into dx when given."""
@@ -63,3 +63,15 @@ def output(P, x, k, omega, dx=None):
     if dx is not None:
         dx[S.leadlag, k] = d
     return clip(P[k, G.PREF] + y, P[k, G.TMIN], P[k, G.TMAX])
+
+
+@kernel(inline="always")
+def pmech(P, x, k, omega):
+    """TG2's mechanical power (`_output`)."""
+    return _output(P, x, k, omega, None)
+
+
+@kernel(inline="always")
+def derivatives(P, x, k, omega, pe, dx):
+    """TG2's lead-lag state's derivative into dx (`_output`)."""
+    _output(P, x, k, omega, dx)

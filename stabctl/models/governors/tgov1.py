@@ -66,7 +66,7 @@ def pmech(P, x, k, omega):
 
 
 @kernel(inline="always")
-def derivatives(P, x, k, omega, dx):
+def derivatives(P, x, k, omega, pe, dx):
     """TGOV1: the order P_ref + (w_f - omega)/R through the non-windup valve 1/(1 + s T_1)
     on [VMIN, VMAX] (clamps the valve state in x), then the lead-lag."""
     order = P[k, G.PREF] + (P[k, G.WF] - omega) * P[k, G.INVR]

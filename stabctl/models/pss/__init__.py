@@ -1,21 +1,16 @@
 """Power system stabilisers (pss_con), one module per type, and this package: the registry
 of the types, the pss_con table they fill (`PSS`), their parameters (`PssParams`, packed
-for the kernels as :data:`PACKED`, columns `C`), the dispatch on the type of the
-compiled kernel (`output_and_derivatives`) and of the initialisation (`initialise`).
+for the kernels as :data:`PACKED`, columns `C`, then each type's own), the compiled
+kernel (`output_and_derivatives`: the type's ``output``, dispatched on the type by
+``_dispatch.py``, generated from the registry by ``python -m stabctl.models.dispatch``,
+then the output cut-off) and the initialisation (`initialise`).
 
-The types (pss_con column 1), each a module holding its DYR records, its named states
-(``S``, read by its kernel as ``x[S.washout, k]``), its initialisation and its kernel:
-
-* :mod:`~stabctl.models.pss.pst`: PST `pss` (types 1, speed input, and 2, electrical
-  power input);
-* :mod:`~stabctl.models.pss.ieeest`: stabctl's PSS/E stabiliser (type 3: IEEEST with its
-  filter, ST2CUT);
-* :mod:`~stabctl.models.pss.stab2a`: PSS/E's STAB2A (type 4);
-* :mod:`~stabctl.models.pss.pss2a`: PSS/E's PSS2A (type 5; its kernel is the PSS2
-  family's), :mod:`~stabctl.models.pss.pss2b` PSS2B (type 6),
-  :mod:`~stabctl.models.pss.pss2c` PSS2C (type 7, with its output logic);
-* :mod:`~stabctl.models.pss.stab1`: PSS/E's STAB1, read as PST's type 1 (the same
-  equations; the module holds the record).
+The types (pss_con column 1) are the modules of the registry `MODULES` (one line each;
+their codes and names their ``KINDS``, listed by the pss_con ``type`` column's help),
+each holding its DYR records, its own pss_con columns if any (``PARAMS``), its named
+states (``S``, read by its kernel as ``x[S.washout, k]``), its initialisation and its
+kernel ``output(P, x, k, omega, pe, dx)`` (a module may run another's: PSS2B PSS2A's;
+one may claim no type and hold a record only: STAB1, read as PST's type 1).
 
 Sources: PSTess 1.1 `pss_indx.m`, `pss.m` (docs/pst_models.md section 3); PSS/E Model
 Library; IEEE Std 421.5; how to add a type in docs/simulator.md.  States: up to N_STATES
@@ -39,11 +34,15 @@ from stabctl.models.declaration import (
     Declared,
     check_packed,
     model_types,
+    own_params,
     pack,
+    pack_own,
     params_class,
+    type_modules,
     typed_family,
 )
-from stabctl.models.pss import ieeest, pss2a, pss2b, pss2c, pst, stab1, stab2a
+from stabctl.models.pss import ieeest
+from stabctl.models.pss._dispatch import output
 from stabctl.models.pss.ieeest import PSSE
 from stabctl.models.pss.pss2a import PSS2A
 from stabctl.models.pss.pss2b import PSS2B
@@ -78,6 +77,9 @@ __all__ = [
     "PACKED",
     "TABLE_FIELDS",
     "PSS2_FIELDS",
+    "OWN_PARAMS",
+    "N_OWN",
+    "MODULES",
     "SPEED",
     "POWER",
     "W_PSSE",
@@ -90,7 +92,16 @@ __all__ = [
 # (the order of the DYR records)
 # --------------------------------------------------------------------------------------
 
-MODULES = (pst, ieeest, stab2a, stab1, pss2a, pss2b, pss2c)
+MODULES = type_modules(
+    __name__,
+    "pst",
+    "ieeest",
+    "stab2a",
+    "stab1",
+    "pss2a",
+    "pss2b",
+    "pss2c",
+)
 #: pss_con type -> the module of its equations; -> its state names, in slot order (``S``)
 TYPES, STATE_NAMES = model_types(MODULES, "pss_con")
 #: state slots of the widest type
@@ -100,12 +111,18 @@ PSSE_INPUTS = (PSSE, PSS2A, PSS2B, PSS2C)
 #: the PSS2 family (`pss2a.output`)
 PSS2 = (PSS2A, PSS2B, PSS2C)
 
+#: the pss_con columns only one type reads, each type's module's ``PARAMS`` in registry
+#: order (columns after `table.PARAMS`'s); packed after :data:`PACKED` (`table.own`)
+OWN_PARAMS = own_params(MODULES)
+#: the packed columns after :data:`PACKED`: the most own parameters of a type
+N_OWN = max(len(getattr(mod, "PARAMS", ())) for mod in MODULES)
+
 PSS = typed_family(
     "pss_con",
     10,
     "pss type",
     TYPES,
-    PARAMS,
+    PARAMS + OWN_PARAMS,
     tuple(m for mod in MODULES for m in mod.DYR),
     sep="; ",
 )
@@ -129,7 +146,7 @@ _TIME_CONSTANT_LABELS = {
 _LIMITS = ("in1_lo", "in1_hi", "in2_lo", "in2_hi")
 
 
-@params_class(("kind", "mac"), TABLE_FIELDS + PSS2_FIELDS)
+@params_class(("kind", "mac"), TABLE_FIELDS + PSS2_FIELDS + tuple(p.name for p in OWN_PARAMS))
 class PssParams(Declared):
     """PSS data, arrays of shape (n_pss,): ``kind`` the pss_con type, ``mac`` the machine's
     row (index), the pss_con fields :data:`TABLE_FIELDS` and :data:`PSS2_FIELDS` under
@@ -139,7 +156,7 @@ class PssParams(Declared):
     coefficients, fe the feedthrough.  Every type: v_cut_high, v_cut_low the output
     cut-off's terminal voltages (pu; VCU, VCL with 0 read as none: +inf, -inf).  PSS2B,
     PSS2C: in1_lo, in1_hi, in2_lo, in2_hi the input limits VS1MIN .. VS2MAX (pu; -inf,
-    +inf for the other types)."""
+    +inf for the other types); then every type's own fields (:data:`OWN_PARAMS`)."""
 
     nf: np.ndarray
     fa: np.ndarray
@@ -161,14 +178,16 @@ class PssParams(Declared):
         return self.kind == PST_POWER
 
     def packed(self) -> np.ndarray:
-        """Parameter matrix (n_pss, len(PACKED)) for the compiled kernels, columns as
-        :data:`PACKED`."""
-        return pack(
+        """Parameter matrix (n_pss, len(PACKED) + N_OWN) for the compiled kernels:
+        columns as :data:`PACKED`, then on each row its type's own parameters (its
+        module's ``PARAMS``, `table.own`)."""
+        shared = pack(
             self,
             PACKED,
             **{f"fa_{i}": self.fa[:, i] for i in range(4)},
             **{f"fc_{i}": self.fc[:, i] for i in range(4)},
         )
+        return np.hstack([shared, pack_own(self, MODULES)])
 
     @property
     def has_T4(self):
@@ -321,8 +340,8 @@ def initialise(p: PssParams, u1, u2, pe0=None):
 
 
 # -- compiled runtime kernel: P is PssParams.packed(), x the PSS block of the state
-# -- vector (n_slots, n_pss), k the PSS; each type's kernel is its module's, dispatched on
-# -- kind by `output_and_derivatives` (one branch per type)
+# -- vector (n_slots, n_pss), k the PSS; each type's kernel is its module's ``output``,
+# -- dispatched on the type by the generated `output` (`_dispatch`)
 
 
 @kernel
@@ -331,15 +350,5 @@ def output_and_derivatives(P, x, k, omega, pe, vt, dx):
     electrical power pe (machine base) and terminal voltage magnitude vt (pu), PST flag
     1/2; its derivatives into dx[:, k].  The output is 0 while vt is outside [VCL, VCU]
     (PSS/E IEEEST, ST2CUT; ANDES 2.0 ``ieeest.py`` ``OLIM``); the states move on."""
-    kind = P[k, C.KIND]
-    if kind == PSSE:
-        y = ieeest.output(P, x, k, omega, pe, dx)
-    elif kind == STAB2A:
-        y = stab2a.output(P, x, k, pe, dx)
-    elif kind == PSS2C:
-        y = pss2c.output(P, x, k, omega, pe, dx)
-    elif kind == PSS2A or kind == PSS2B:
-        y = pss2a.output(P, x, k, omega, pe, dx)
-    else:
-        y = pst.output(P, x, k, pe if kind == PST_POWER else omega, dx)
+    y = output(P, x, k, omega, pe, dx)
     return y if P[k, C.VCUT_LO] <= vt <= P[k, C.VCUT_HI] else 0.0

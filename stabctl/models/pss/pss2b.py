@@ -26,4 +26,4 @@ DYR = (DyrModel("PSS2B", pss2a.ICONS + pss2a.CONS + MORE, COPY, kind=PSS2B),)
 S = pss2a.S
 STATE_NAMES = {PSS2B: S._fields[: S.leadlag4 + 1]}
 check, has_state, time_constants = pss2a.check, pss2a.has_state, pss2a.time_constants
-signals, initialise = pss2a.signals, pss2a.initialise
+signals, initialise, output = pss2a.signals, pss2a.initialise, pss2a.output

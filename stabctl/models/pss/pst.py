@@ -63,10 +63,11 @@ def signals(p: PssParams, r, omega, pe):
 
 
 @kernel(inline="always")
-def output(P, x, k, u, dx):
-    """PST pss (pss.m): washout s T_w/(1 + s T_w) on u (speed or power), then
-    K (1 + s T_1)/(1 + s T_2) (K T_w given, column 3), then (1 + s T_3)/(1 + s T_4)
-    (absent for T_4 < 1e-3 s), output limits [ymin, ymax]."""
+def output(P, x, k, omega, pe, dx):
+    """PST pss (pss.m): washout s T_w/(1 + s T_w) on u (the speed omega, type 1, or the
+    electrical power pe, type 2), then K (1 + s T_1)/(1 + s T_2) (K T_w given, column 3),
+    then (1 + s T_3)/(1 + s T_4) (absent for T_4 < 1e-3 s), output limits [ymin, ymax]."""
+    u = pe if P[k, C.KIND] == PST_POWER else omega
     y, dx[S.washout, k] = washout(u, x[S.washout, k], P[k, C.TW], 1.0, GAIN_AFTER)
     y, dx[S.leadlag1, k] = leadlag(y, x[S.leadlag1, k], P[k, C.T1], P[k, C.T2], P[k, C.KTW])
     y, dx[S.leadlag2, k] = leadlag(y, x[S.leadlag2, k], P[k, C.T3], P[k, C.T4])

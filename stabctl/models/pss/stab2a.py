@@ -73,7 +73,7 @@ def initialise(p: PssParams, r, u1, u2, pe0, x):
 
 
 @kernel(inline="always")
-def output(P, x, k, pe, dx):
+def output(P, x, k, omega, pe, dx):
     """STAB2A: -(K_Tw s/(1 + s T_w))^3 on pe (K_Tw = K_2 T_2, T_w = T_2), then
     K_3/(1 + s T_3) + K_4 (columns K1, Tr1, K2), then (K_5/(1 + s T_5))^2 (columns K5 = T5,
     T6), limited to [ymin, ymax]."""

@@ -3,17 +3,18 @@
 packed parameter layout of the compiled kernels (`PACKED`, its named columns `C`) and
 the pieces several types share (the PSS/E input codes and their signal, `signal`).
 
-The ``type`` column and the DYR records are declared by the types themselves (one module
-per type, :mod:`stabctl.models.pss`); this module is imported by every one of them.  Many
-pss_con columns are read under another name by another type (STAB2A reads K1, Tr1, K2 as
-its K3, T3, K4; the PSS2 family reads Tr1, Tr2 as its input lags T6, T7), so the
-columns are declared here once.
+The ``type`` column, the DYR records and the columns only one type reads (its module's
+``PARAMS``, after these; packed after `PACKED`, `own`) are declared by the types
+themselves (one module per type, :mod:`stabctl.models.pss`); this module is imported by
+every one of them.  Many pss_con columns are read under another name by another type
+(STAB2A reads K1, Tr1, K2 as its K3, T3, K4; the PSS2 family reads Tr1, Tr2 as its input
+lags T6, T7), so the columns are declared here once.
 """
 
 from __future__ import annotations
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.declaration import Param, layout
+from stabctl.models.declaration import Param, layout, own_columns
 
 #: PSS/E input codes (IEEEST ICS, ST2CUT MODE, PSS2A/B/C ICS1, ICS2): rotor speed
 #: deviation, generator electrical power (machine base)
@@ -148,6 +149,26 @@ PACKED = (
 )
 #: the kernels' column of each PACKED name: P[k, C.TW]
 C = layout("PssColumns", PACKED)
+
+
+def own(name: str, params):
+    """A PSS type's own packed columns (its module's ``PARAMS``, the pss_con columns no
+    other type reads), read by its kernel as ``P[k, O.NAME]``: after the shared
+    `PACKED`, where every type's own columns start (`own_columns`).
+
+    Parameters
+    ----------
+    name : str
+        The namedtuple's type name.
+    params : sequence of Param
+        The type's own parameters.
+
+    Returns
+    -------
+    namedtuple
+        Their packed columns, by upper-case name.
+    """
+    return own_columns(name, params, len(PACKED))
 
 
 @kernel

@@ -1,0 +1,168 @@
+"""PSS/E's DEGOV1 (tg_con type 11): the Woodward diesel governor with droop.
+
+DEGOV (:mod:`~stabctl.models.governors.degov`) with a permanent droop R fed back at the
+speed summing junction: P_ref - (omega - 1) - R f -> electric control box (1 + s T3)/(1
++ s T1 + s^2 T1 T2) -> actuator (1 + s T4)/((1 + s T5)(1 + s T6)) -> K/s, non-windup on
+[TMIN, TMAX] = the engine's torque T_m; the mechanical power P_m = T_m omega (PSS/E's
+block diagram; PowerSimulationsDynamics.jl's DEGOV1 forms the same P_m and hands its
+shaft P_m / omega = T_m, as stabctl's PSS/E machines, mac_con psse_swing 1, divide it).
+The droop's feedback f (the ICON M, the droop control flag): 0 the throttle, T_m itself;
+1 the machine's electrical power through 1/(1 + s TE) (absent below 1e-3 s: the power
+itself).
+
+At rest every state but the torque (at Pm0) and the measured power (at the electrical
+power, Pm0 at rated speed) is 0, with P_ref = R Pm0: after a step dP of P_ref the unit
+settles where P_ref - (omega - 1) = R f, its droop line.
+
+A block whose lag is below 1e-3 s is absent, as DEGOV's.  Refused by name (`check`): the
+engine's transport delay TD > 0 (an ODE model has no delay; PSS/E's runs are "nodelay"),
+a lead without its lag, TMAX < TMIN.
+
+The DYR record (PSS/E Model Library DEGOV1; PowerSystems.jl's DEGOV1): ICON M, then T1
+T2 T3 K T4 T5 T6 TD TMAX TMIN DROOP TE; T1 .. TMIN in DEGOV's tg_con columns, M, DROOP
+and TE in DEGOV1's own (``PARAMS``).  Sources: PSS/E Model Library DEGOV1;
+PowerSimulationsDynamics.jl ``tg_models.jl`` (DEGOV1), ``init_tg.jl`` and
+``test_case63_degov1.jl``.  ANDES 2.0 has no DEGOV1.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from stabctl._jit.decorators import kernel
+from stabctl.models.blocks import LBND, lag, leadlag2, nonwindup
+from stabctl.models.declaration import DyrModel, Param, states
+from stabctl.models.governors.degov import _lag
+from stabctl.models.governors.table import AT_LIMIT, G, own
+
+if TYPE_CHECKING:
+    from stabctl.models.governors import GovernorParams
+
+DEGOV1 = 11
+KINDS = {DEGOV1: "DEGOV1"}
+#: the time constants that must be >= 1e-3 s (declared tg_con fields): none, an absent
+#: lag drops its block
+NEEDS: tuple[str, ...] = ()
+#: DEGOV1's own tg_con columns
+PARAMS = (
+    Param(
+        "droop_flag",
+        "code",
+        60,
+        integer=True,
+        choices=(0.0, 1.0),
+        label="DEGOV1's droop_flag",
+        doc="DEGOV1: droop feedback (ICON M): 0 the throttle (torque), 1 the electrical power",
+    ),
+    Param("droop", "pu", 61, lo=0.0, doc="DEGOV1: permanent droop R, pu speed / pu power"),
+    Param("Te", "s", 62, lo=0.0, doc="DEGOV1: electrical power transducer time constant TE"),
+)
+#: the packed columns of `PARAMS`: P[k, O.DROOP]
+O = own("DEGOV1Columns", PARAMS)
+DYR = (
+    DyrModel(
+        "DEGOV1",
+        ("M", "T1", "T2", "T3", "K", "T4", "T5", "T6", "TD", "TMAX", "TMIN", "DROOP", "TE"),
+        {
+            "droop_flag": "M",
+            "Tc": "T1",
+            "Ts": "T2",
+            "T3": "T3",
+            "invR": "K",
+            "T4": "T4",
+            "T5": "T5",
+            "T6": "T6",
+            "Teng": "TD",
+            "Tmax": "TMAX",
+            "Tmin": "TMIN",
+            "droop": "DROOP",
+            "Te": "TE",
+        },
+        kind=DEGOV1,
+    ),
+)
+
+#: the states: DEGOV's five, then the measured electrical power (droop flag 1)
+S = states("DEGOV1States", ("ecb1", "ecb2", "act1", "act2", "torque", "pelec"))
+STATE_NAMES = {DEGOV1: S._fields}
+
+
+def has_state(p: GovernorParams):
+    """Which slots of `S` are states: DEGOV's (the control box's with T1, its second with
+    T2 too; the actuator's with T5 or T6, its second with both; the torque), the measured
+    power with droop flag 1 and TE."""
+    t1, t2, t5, t6 = (v >= LBND for v in (p.Tc, p.Ts, p.T5, p.T6))
+    return (t1, t1 & t2, t5 | t6, t5 & t6, True, (p.droop_flag == 1) & (p.Te >= LBND))
+
+
+def time_constants(p: GovernorParams):
+    """The declared time constants that set a state's speed: field -> where."""
+    t1 = p.Tc >= LBND
+    return {
+        "Tc": t1,
+        "Ts": t1 & (p.Ts >= LBND),
+        "T5": p.T5 >= LBND,
+        "T6": p.T6 >= LBND,
+        "Te": (p.droop_flag == 1) & (p.Te >= LBND),
+    }
+
+
+def check(g, r: int) -> str | None:
+    """The first DEGOV1 option of tg_con row r (0-based) stabctl does not model (module
+    docstring), with the reason, or None."""
+    if g.Teng[r] != 0:
+        return (
+            "field 'Teng' (DEGOV1's TD): the engine's transport delay is not modelled; only TD = 0"
+        )
+    if g.Tc[r] < LBND and abs(g.T3[r]) >= LBND:
+        return f"field 'T3': DEGOV1's control-box lead T3 needs its lag T1 (field 'Tc') >= {LBND} s"
+    if g.T5[r] < LBND and g.T6[r] < LBND and abs(g.T4[r]) >= LBND:
+        return f"field 'T4': DEGOV1's actuator lead T4 needs T5 or T6 >= {LBND} s"
+    if g.Tmax[r] < g.Tmin[r]:
+        return f"fields 'Tmax', 'Tmin': DEGOV1's TMAX {g.Tmax[r]:g} is below TMIN {g.Tmin[r]:g}"
+    return None
+
+
+def initialise(p: GovernorParams, r, pmech0, order, x):
+    """DEGOV1 at rest on rows r: the torque and the measured power at pmech0 (rated
+    speed; the family refuses it outside [TMIN, TMAX]), the other states 0; returns
+    P_ref = R pmech0 on r."""
+    x[S.torque, r] = pmech0[r]
+    x[S.pelec, r] = np.where(p.droop_flag[r] == 1, pmech0[r], 0.0)
+    return p.droop[r] * pmech0[r]
+
+
+@kernel(inline="always")
+def pmech(P, x, k, omega):
+    """DEGOV1: the engine's torque times the speed (module docstring)."""
+    return x[S.torque, k] * omega
+
+
+@kernel(inline="always")
+def derivatives(P, x, k, omega, pe, dx):
+    """DEGOV1 (module docstring): P_ref - (omega - 1) - R f through the control box and
+    the actuator into the integrator K/s (clamps the torque in x); f the torque (flag 0)
+    or the electrical power pe through TE (flag 1)."""
+    if P[k, O.DROOP_FLAG] == 1.0:
+        feedback, dx[S.pelec, k] = lag(pe, x[S.pelec, k], P[k, O.TE])
+    else:
+        feedback = x[S.torque, k]
+    t1 = _lag(P[k, G.TC])
+    a2 = t1 * P[k, G.TS] if P[k, G.TS] >= LBND else 0.0
+    y1, dx[S.ecb1, k], dx[S.ecb2, k] = leadlag2(
+        P[k, G.PREF] - (omega - 1.0) - P[k, O.DROOP] * feedback,
+        x[S.ecb1, k],
+        x[S.ecb2, k],
+        P[k, G.T3],
+        t1,
+        a2,
+    )
+    t5, t6 = _lag(P[k, G.T5]), _lag(P[k, G.T6])
+    y2, dx[S.act1, k], dx[S.act2, k] = leadlag2(
+        y1, x[S.act1, k], x[S.act2, k], P[k, G.T4], t5 + t6, t5 * t6
+    )
+    x[S.torque, k], dx[S.torque, k] = nonwindup(
+        x[S.torque, k], P[k, G.INVR] * y2, P[k, G.TMIN], P[k, G.TMAX], AT_LIMIT, 0.0
+    )

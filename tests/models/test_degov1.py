@@ -1,0 +1,163 @@
+"""PSS/E's DEGOV1 (stabctl.models.governors.degov1): PSS/E's ThreeBus case with its
+GENROU on DEGOV1 (both droop flags), imported as a user imports it, initialises to
+PowerSimulationsDynamics.jl's states and its linearisation has that program's
+eigenvalues (its test 63, tests/data/psse_runs/DEGOV1/README.md); the droop's steady
+state after a step of P_ref is the closed form P_ref - (omega - 1) = R f."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from stabctl.case import GovernorTable
+from stabctl.dynamics.driver import Simulator
+from stabctl.errors import CaseError
+from stabctl.io import load_case
+from stabctl.io.psse import load_psse
+from stabctl.models import governors as gov
+from stabctl.smallsignal.linearise import linearise
+
+DATA = Path(__file__).parents[1] / "data" / "psse_runs" / "DEGOV1"
+PSID = json.loads((DATA / "psid_test63.json").read_text())
+FLAGS = (0, 1)
+
+
+def imported(flag):
+    """The run's case as ``stabctl import-psse RAW DYR`` builds it (constant-impedance
+    loads, as the Julia test converts them)."""
+    return load_psse(DATA / "ThreeBusMulti.raw", DATA / f"ThreeBus_DEGOV1_nodelay_flag{flag}.dyr")
+
+
+@pytest.fixture(scope="module", params=FLAGS, ids=lambda f: f"flag{f}")
+def run(request):
+    flag = request.param
+    sim = Simulator(imported(flag), background_compile=False)
+    return flag, sim
+
+
+def test_record_fills_the_shared_and_its_own_columns(run):
+    """The DYR record: M, T1 .. TMIN in DEGOV's columns, DROOP and TE in DEGOV1's own."""
+    flag, sim = run
+    g = sim.case.governors
+    assert g.type[0] == 11 and g.droop_flag[0] == flag
+    got = [g.Tc[0], g.Ts[0], g.T3[0], g.invR[0], g.T4[0], g.T5[0], g.T6[0], g.Teng[0]]
+    assert got == [0.1905, 0.0476, 0.018, 1.0, 5.1, 0.322, 0.0, 0.0]
+    assert (g.Tmax[0], g.Tmin[0], g.droop[0], g.Te[0]) == (99.99, -99.99, 0.07, 0.05)
+
+
+def test_initial_states_are_psid_s(run):
+    """PSID's initial point: its bus voltages, its GENROU's states (E'q, E'd, psi_kd,
+    psi_kq, the angle from bus 101's, the speed; stabctl's E'd and psi_kq in PST's sign)
+    and its DEGOV1's (control box and actuator 0; the torque and, flag 1, the measured
+    power at tau_m0), within 1e-9 (measured 4.2e-12: the power flow's round-off); P_ref
+    = R tau_m0 (its init_tg.jl)."""
+    flag, sim = run
+    ref = PSID[f"x0_flag{flag}"]
+    psid = np.array(ref["generator-102-1"])
+    m = sim.model
+    np.testing.assert_allclose(sim.op.V.real, ref["V_R"], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sim.op.V.imag, ref["V_I"], rtol=0, atol=1e-9)
+    xm = m.layout.view(m.x0, "mac")[:, m.gp.mac[0]]  # the governor's machine, bus 102
+    mac = np.array([xm[2], -xm[4], xm[3], -xm[5], xm[0], xm[1]])
+    np.testing.assert_allclose(mac, psid[:6], rtol=0, atol=1e-9)
+    S = gov.degov1.S
+    # PSID's x_g1..x_g5: the control box's two, the actuator's two, the torque; flag 1
+    # x_g6: the measured power
+    slots = (S.ecb1, S.ecb2, S.act1, S.act2, S.torque, S.pelec)[: psid.size - 6]
+    xg = m.layout.view(m.x0, "tg")[:, 0]
+    np.testing.assert_allclose(xg[list(slots)], psid[6:], rtol=0, atol=1e-9)
+    assert m.Pref[0] == pytest.approx(0.07 * psid[10], abs=1e-9)
+
+
+def test_eigenvalues_are_psid_s(run):
+    """The whole spectrum of PSID's linearisation (GENROU, DEGOV1 and the infinite bus,
+    loads at constant impedance; flag 0: 10 eigenvalues, T6 = 0 leaving the actuator one
+    state; flag 1: 11) is stabctl's, each within 1e-6 1/s: stabctl's central
+    differences (relative step 1e-4) err by O(h^2), measured 4.7e-8 at most (PSID's
+    values are its automatic differentiation's, to double precision)."""
+    flag, sim = run
+    psid = np.array([complex(*v) for v in PSID[f"eigvals_flag{flag}"]])
+    lam = np.linalg.eigvals(np.asarray(linearise(sim).A))
+    assert lam.size == psid.size
+    for z in psid:
+        assert np.min(np.abs(lam - z)) < 1e-6, (z, lam[np.argmin(np.abs(lam - z))])
+
+
+# -- closed forms of the droop: the governor alone at rated speed, its machine's
+# -- electrical power at the governor's mechanical power (a machine at rest)
+
+PM0 = 0.7
+
+
+def _row(flag):
+    """A DEGOV1 tg_con row: PSS/E's run's values, droop flag `flag`."""
+    g = imported(flag).governors
+    return [float(getattr(g, name)[0]) for name in g.columns()]
+
+
+def _started(row, pm0=PM0):
+    case = load_case("kundur").replace(governors=GovernorTable.from_matrix([row]))
+    p = gov.governor_params(case)
+    x, Pref = gov.initialise(p, np.array([pm0]))
+    return p, x, Pref
+
+
+def _settled(P, x0, omega, t=400.0):
+    """The governor's torque after t s at speed omega, its electrical power at its
+    mechanical power."""
+
+    def f(_, y):
+        x = y.reshape(x0.shape).copy()
+        dx = np.zeros_like(x)
+        gov.derivatives(P, x, 0, omega, gov.pmech(P, x, 0, omega), dx)
+        return dx.ravel()
+
+    sol = solve_ivp(f, (0, t), x0.ravel(), method="LSODA", rtol=1e-10, atol=1e-12)
+    return sol.y[:, -1].reshape(x0.shape)
+
+
+@pytest.mark.parametrize("flag", FLAGS)
+def test_initial_point_is_an_equilibrium(flag):
+    p, x, Pref = _started(_row(flag))
+    P = p.packed(Pref)
+    dx = np.full_like(x, np.nan)
+    gov.derivatives(P, x, 0, 1.0, gov.pmech(P, x, 0, 1.0), dx)
+    assert gov.pmech(P, x, 0, 1.0) == PM0
+    assert np.abs(dx).max() < 1e-14
+    assert Pref[0] == pytest.approx(0.07 * PM0, rel=1e-15)
+
+
+@pytest.mark.parametrize("flag", FLAGS)
+def test_pref_step_settles_on_the_droop_line(flag):
+    """At rated speed a step dP of P_ref settles where P_ref + dP = R f, f the torque
+    (flag 0) or the electrical power, here the mechanical (flag 1): the torque rises by
+    dP / R."""
+    p, x, Pref = _started(_row(flag))
+    dP, R = 0.002, 0.07
+    x = _settled(p.packed(Pref + dP), x, 1.0)
+    assert x[gov.degov1.S.torque, 0] == pytest.approx(PM0 + dP / R, rel=1e-8)
+
+
+def test_speed_held_off_rated_settles_on_the_droop_line():
+    """Flag 0, the speed held d above rated: the torque falls by d / R."""
+    p, x, Pref = _started(_row(0))
+    d, R = 1e-3, 0.07
+    x = _settled(p.packed(Pref), x, 1.0 + d)
+    assert x[gov.degov1.S.torque, 0] == pytest.approx(PM0 - d / R, rel=1e-8)
+
+
+def test_options_it_does_not_model_are_refused():
+    """The engine delay TD (tg_con 'Teng'), a lead without its lag, TMAX below TMIN, a
+    droop flag other than 0 or 1."""
+    row = _row(0)
+    for name, value, match in (
+        ("Teng", 0.1, "DEGOV1's TD"),
+        ("Tmin", 100.0, "'Tmax', 'Tmin'"),
+        ("droop_flag", 2.0, "droop_flag must be 0 or 1"),
+    ):
+        changed = list(row)
+        changed[gov.GOVERNOR.col(name) - 1] = value
+        with pytest.raises(CaseError, match=match):
+            _started(changed)
