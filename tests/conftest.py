@@ -24,6 +24,7 @@ carries its compile notice.
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -31,6 +32,17 @@ import pytest
 
 from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_xdist_auto_num_workers(config):
+    """``-n auto``: one worker more than the cores (at least 3).  About a fifth of the
+    suite's wall time is waiting, not computing (servers and plants started as processes,
+    streams paced or timed out, examples run as commands), during which the extra worker
+    computes; PYTEST_XDIST_AUTO_NUM_WORKERS (pytest-xdist's) still sets the number."""
+    if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
+        return None
+    return max(3, (os.cpu_count() or 1) + 1)
 
 
 def pytest_configure(config):

@@ -394,7 +394,7 @@ def _stabctl_series(q: Quantity, run: Run, case: dict, tr: dict) -> np.ndarray:
     if k == "pe":
         return tr[f"pelect_pu.G{_machine(case, q.at[0])}"]
     if k in ("efd", "pm"):
-        col = "efd_pu" if k == "efd" else "pmech_pu"
+        col = "efd_pu" if k == "efd" else "pmech_pu_mbase"
         return tr[f"{col}.G{_machine(case, q.at[0])}"]
     if k in ("p_flow", "q_flow"):
         s = _branch_flow(case, tr, *q.at)

@@ -317,7 +317,7 @@ def simulate(
     pmech pu on the machine base, efd pu, bus voltages pu and rad.
 
     \b
-    CSV columns: t, speed_pu.G<k>, angle_rad.G<k>, pelect_pu.G<k>, pmech_pu.G<k>,
+    CSV columns: t, speed_pu.G<k>, angle_rad.G<k>, pelect_pu.G<k>, pmech_pu_mbase.G<k>,
     efd_pu.G<k> per machine k, vmag_pu.B<n>, vang_rad.B<n> per bus n, and with
     --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also gives the storage
     settings (`esd`), per device switchings, energy absorbed and delivered (MJ) and peak

@@ -2,7 +2,7 @@
 
 Columns of the CSV: `t` (s), then per machine k (number as in the
 data) `speed_pu.G<k>`, `angle_rad.G<k>` (absolute, synchronous frame, as PSTess),
-`pelect_pu.G<k>` (system base), `pmech_pu.G<k>` (machine base), `efd_pu.G<k>`, per bus n
+`pelect_pu.G<k>` (system base), `pmech_pu_mbase.G<k>` (machine base, as its name says), `efd_pu.G<k>`, per bus n
 `vmag_pu.B<n>`, `vang_rad.B<n>`, per storage device d `pesd_pu.D<d>` (+ absorbs), and per
 converter c `pibr_pu.C<c>`, `qibr_pu.C<c>` (injected P, Q on the system base).
 """
@@ -23,7 +23,7 @@ SERIES_UNITS = {
     "speed": "speed_pu",
     "angle": "angle_rad",
     "pelect": "pelect_pu",
-    "pmech": "pmech_pu",
+    "pmech": "pmech_pu_mbase",
     "efd": "efd_pu",
 }
 
@@ -280,7 +280,7 @@ class SimulationResult:
         names : list of str
             Column names, n_columns = 1 + 5 n_mac + 2 n_bus (+ n_dev with storage, + 2
             n_ibr with converters): ``t``, then ``speed_pu.G<k>``, ``angle_rad.G<k>``,
-            ``pelect_pu.G<k>``, ``pmech_pu.G<k>``, ``efd_pu.G<k>`` per machine k,
+            ``pelect_pu.G<k>``, ``pmech_pu_mbase.G<k>``, ``efd_pu.G<k>`` per machine k,
             ``vmag_pu.B<n>`` and ``vang_rad.B<n>`` per bus n, ``pesd_pu.D<d>`` per device
             d, ``pibr_pu.C<c>`` then ``qibr_pu.C<c>`` per converter c (injected, system
             base).

@@ -304,7 +304,7 @@ def expected_columns(res):
         + [f"speed_pu.G{k}" for k in m]
         + [f"angle_rad.G{k}" for k in m]
         + [f"pelect_pu.G{k}" for k in m]
-        + [f"pmech_pu.G{k}" for k in m]
+        + [f"pmech_pu_mbase.G{k}" for k in m]
         + [f"efd_pu.G{k}" for k in m]
         + [f"vmag_pu.B{n}" for n in b]
         + [f"vang_rad.B{n}" for n in b]
