@@ -2,9 +2,10 @@
 
 Columns of the CSV: `t` (s), then per machine k (number as in the
 data) `speed_pu.G<k>`, `angle_rad.G<k>` (absolute, synchronous frame, as PSTess),
-`pelect_pu.G<k>` (system base), `pmech_pu_mbase.G<k>` (machine base, as its name says), `efd_pu.G<k>`, per bus n
-`vmag_pu.B<n>`, `vang_rad.B<n>`, per storage device d `pesd_pu.D<d>` (+ absorbs), and per
-converter c `pibr_pu.C<c>`, `qibr_pu.C<c>` (injected P, Q on the system base).
+`pelect_pu.G<k>` (system base), `pmech_pu_mbase.G<k>` (machine base, as its name says),
+`efd_pu.G<k>`, per bus n `vmag_pu.B<n>`, `vang_rad.B<n>`, per storage device d
+`pesd_pu.D<d>` (+ absorbs), and per converter c `pibr_pu.C<c>`, `qibr_pu.C<c>` (injected
+P, Q on the system base).
 """
 
 from __future__ import annotations
