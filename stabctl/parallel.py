@@ -46,6 +46,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from stabctl.errors import InputError, SimulationError, StabctlError, Verdict
 from stabctl.locking import exclusive
@@ -363,8 +364,9 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
     Yields
     ------
     callable
-        ``map(func, jobs: list[dict]) -> list``; func must be a module-level function
-        taking one dict.
+        ``map(func, jobs: list[dict], done=None) -> list``; func must be a module-level
+        function taking one dict; ``done(k, n)``, if given, is called in this process as
+        each job finishes (k of the n jobs done, in the order they finish).
 
     Raises
     ------
@@ -372,10 +374,12 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
         Dask not installed or its scheduler unreachable.
     """
     if scheduler:
+        from distributed import as_completed as dask_completed
+
         client = _dask_client(scheduler, workers)
         try:
-            yield lambda func, jobs: client.gather(
-                [client.submit(func, j, pure=False) for j in jobs]
+            yield lambda func, jobs, done=None: client.gather(
+                _told([client.submit(func, j, pure=False) for j in jobs], dask_completed, done)
             )
         finally:
             cluster = client.cluster  # ours (scheduler="local") or None
@@ -384,10 +388,31 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
                 cluster.close()
         return
     if workers == 1:
-        yield lambda func, jobs: [func(j) for j in jobs]
+        yield _in_process
         return
     with pooled(workers) as pool:
-        yield lambda func, jobs: [f.result() for f in [pool.submit(func, j) for j in jobs]]
+        yield lambda func, jobs, done=None: [
+            f.result() for f in _told([pool.submit(func, j) for j in jobs], as_completed, done)
+        ]
+
+
+def _in_process(func: Callable[[dict], Any], jobs: list, done=None) -> list:
+    """`worker_pool`'s map for one worker: each job in turn in this process."""
+    out = []
+    for j in jobs:
+        out.append(func(j))
+        if done is not None:
+            done(len(out), len(jobs))
+    return out
+
+
+def _told(futures: list, completed: Callable, done) -> list:
+    """The futures, after calling done(k, n) as each finishes (`completed`: concurrent.
+    futures' or Dask's as_completed); without done, at once."""
+    if done is not None:
+        for k, _ in enumerate(completed(futures), 1):
+            done(k, len(futures))
+    return futures
 
 
 def run_sweep(

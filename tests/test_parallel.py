@@ -693,5 +693,8 @@ def test_worker_pool_runs_on_a_local_dask_cluster():
     pytest.importorskip("distributed")
     from stabctl.parallel import worker_pool
 
+    seen: list = []
     with worker_pool(1, "local") as run_map:
         assert run_map(dict, [{"a": 1}, {"b": 2}]) == [{"a": 1}, {"b": 2}]
+        done = run_map(dict, [{"a": 1}, {"b": 2}], done=lambda k, n: seen.append((k, n)))
+    assert done == [{"a": 1}, {"b": 2}] and seen == [(1, 2), (2, 2)]  # told as each finished

@@ -56,3 +56,54 @@ def test_the_command_line_shows_library_log_lines_on_stderr_once(capsys):
     finally:
         root.setLevel(before[0])
         root.handlers[:] = before[1]
+
+
+def _simulated(job: dict) -> dict:
+    """A stand-in job reporting its simulations (`PlanContext.counting` adds them)."""
+    return {"n_simulations": job["n"]}
+
+
+def test_worker_pool_tells_each_finished_job_in_process_and_in_processes():
+    import json
+
+    from stabctl.parallel import worker_pool
+
+    jobs = [{"n": k} for k in range(5)]
+    for workers in (1, 2):
+        seen: list = []
+        with worker_pool(workers) as run:
+            out = run(json.dumps, jobs, done=lambda k, n, seen=seen: seen.append((k, n)))
+            assert run(json.dumps, jobs) == out  # without done, as before
+        assert out == [json.dumps(j) for j in jobs]  # job order, whatever the finishing order
+        assert seen == [(k, 5) for k in range(1, 6)]
+
+
+def test_a_plans_batch_says_its_fraction_done_and_time_left():
+    """Placement's stretches of simulations (`PlanContext.counting`): the heartbeat's
+    status names each batch's jobs done, their share and the time left at the pace so far;
+    the simulations the jobs report are counted."""
+    from stabctl.parallel import worker_pool
+    from stabctl.placement.context import PlanContext
+
+    class Beat:
+        def __init__(self):
+            self.notes = []
+
+        def note(self, status):
+            self.notes.append(status)
+
+    pl = PlanContext("kundur", (), None, None, None, None, 1e-3, 0.5, None, n_runs=7)
+    beat = Beat()
+    with worker_pool(1) as run:
+        counted = pl.counting(run, beat)
+        counted(_simulated, [{"n": 3}, {"n": 4}, {"n": 5}, {"n": 6}])
+    assert beat.notes[0] == "4 _simulated job(s) running, 7 runs simulated before them"
+    for k, note in enumerate(beat.notes[1:], 1):
+        assert note.startswith(f"_simulated: {k} of 4 job(s) done ({k / 4:.0%}), about ")
+        assert note.endswith(" s left in this batch, 7 runs simulated before them")
+    assert beat.notes[-1].startswith("_simulated: 4 of 4 job(s) done (100%), about 0 s left")
+    assert pl.n_runs == 7 + 18
+    # a caller's own map without `done` still runs, with the batch's first status only
+    beat = Beat()
+    pl.counting(lambda func, jobs: [func(j) for j in jobs], beat)(_simulated, [{"n": 1}])
+    assert len(beat.notes) == 1 and pl.n_runs == 26

@@ -120,6 +120,12 @@ def describe_event(ev) -> str:
     return repr(ev)
 
 
+def step_text(h: float) -> str:
+    """An integration step for a person: in ms to four significant digits (0.00634328 s ->
+    '6.343 ms', 1/120 s -> '8.333 ms'); JSON keeps the step in s, whole."""
+    return f"{1000 * h:.4g} ms"
+
+
 def _ms(t: float) -> str:
     """A time in s to the ms, without trailing zeros (1.18333 -> 1.183, 1.35 -> 1.35)."""
     return f"{t:.3f}".rstrip("0").rstrip(".")
@@ -238,7 +244,7 @@ def print_cct(case_name, rating, d) -> None:
         f"CCT {d['cct_s']:.3f} s = {d['cct_cycles']:.2f} cycles (stable at "
         f"{d['t_stable_s']:.3f} s, unstable at {d['t_unstable_s']:.3f} s = "
         f"{d['t_unstable_cycles']:.2f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
-        f"step {d['step_s']:g} s, {d['conventions']} conventions)"
+        f"step {step_text(d['step_s'])}, {d['conventions']} conventions)"
     )
     if d["numerical_error_s"] is not None:
         click.echo(

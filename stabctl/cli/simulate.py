@@ -11,6 +11,7 @@ from stabctl.cli.format import (
     print_json,
     print_storage,
     save_plot_atomically,
+    step_text,
 )
 from stabctl.cli.options import (
     TF_AFTER_FAULT_S,
@@ -444,7 +445,7 @@ def simulate(
         return
     click.echo(
         f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
-        f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {h:g} s, {method}, "
+        f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {step_text(h)}, {method}, "
         f"{conventions} conventions), "
         f"wall {summary.get('wall_time_s', float('nan')):.2f} s"
     )

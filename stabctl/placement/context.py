@@ -7,7 +7,9 @@ constraint generation (`stabctl.placement.plan`), the energy sizing
 
 from __future__ import annotations
 
+import inspect
 import threading
+import time
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -97,15 +99,25 @@ class PlanContext:
         )
 
     def counting(self, run_map, beat):
-        """run_map that adds the simulations its jobs report to n_runs (and tells the
-        heartbeat `beat`)."""
+        """run_map that adds the simulations its jobs report to n_runs and tells the
+        heartbeat `beat` how far each batch is: jobs done of the batch's and the time
+        left at the pace so far (when run_map takes ``done``, as `stabctl.parallel.
+        worker_pool`'s does), repeated while nothing else is said."""
 
         def counted(func, jobs):
-            beat.note(
-                f"{len(jobs)} {func.__name__} job(s) running, {self.n_runs} runs "
-                "simulated before them"
-            )
-            out = run_map(func, jobs)
+            before = f"{self.n_runs} runs simulated before them"
+            beat.note(f"{len(jobs)} {func.__name__} job(s) running, {before}")
+            t0 = time.monotonic()
+
+            def done(k, n):
+                left = (time.monotonic() - t0) * (n - k) / k
+                beat.note(
+                    f"{func.__name__}: {k} of {n} job(s) done ({k / n:.0%}), about "
+                    f"{left:.0f} s left in this batch, {before}"
+                )
+
+            takes_done = "done" in inspect.signature(run_map).parameters
+            out = run_map(func, jobs, done=done) if takes_done else run_map(func, jobs)
             with self.lock:  # `faults_alone` runs batches from several threads
                 self.n_runs += sum(o.get("n_simulations") or 0 for o in out)
             return out
