@@ -14,6 +14,7 @@ DC exciters), so the columns are declared here once, not per type.
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import numpy as np
@@ -292,24 +293,10 @@ PACKED = (
 E = layout("ExciterColumns", PACKED)
 
 
-def own(name: str, params):
-    """An exciter type's own packed columns (its module's ``PARAMS``, the exc_con columns
-    no other type reads), read by its kernels as ``P[i, O.NAME]``: after the shared
-    `PACKED`, where every type's own columns start (`own_columns`).
-
-    Parameters
-    ----------
-    name : str
-        The namedtuple's type name.
-    params : sequence of Param
-        The type's own parameters.
-
-    Returns
-    -------
-    namedtuple
-        Their packed columns, by upper-case name.
-    """
-    return own_columns(name, params, len(PACKED))
+#: a type's own packed columns (its module's ``PARAMS``, the columns no other type reads),
+#: ``own("NAMEColumns", PARAMS)``, read by its kernels as ``P[k, O.NAME]``: after the shared
+#: `PACKED`, where every type's own columns start (`own_columns`)
+own = functools.partial(own_columns, first=len(PACKED))
 
 
 #: the state slot of the voltage transducer T_R, every type's first state (``S.VTR`` of

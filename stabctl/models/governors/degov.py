@@ -90,19 +90,23 @@ def time_constants(p: GovernorParams):
     return {"Tc": t1, "Ts": t1 & (p.Ts >= LBND), "T5": p.T5 >= LBND, "T6": p.T6 >= LBND}
 
 
-def check(g, r: int) -> str | None:
+def check(g, r: int, model: str = "DEGOV") -> str | None:
     """The first DEGOV option of tg_con row r (0-based) stabctl does not model (module
-    docstring), with the reason, or None."""
+    docstring), with the reason, or None; ``model`` the name in the message (DEGOV1, which
+    shares the chain)."""
     if g.Teng[r] != 0:
         return (
-            "field 'Teng' (DEGOV's TD): the engine's transport delay is not modelled; only TD = 0"
+            f"field 'Teng' ({model}'s TD): the engine's transport delay is not modelled; "
+            "only TD = 0"
         )
     if g.Tc[r] < LBND and abs(g.T3[r]) >= LBND:
-        return f"field 'T3': DEGOV's control-box lead T3 needs its lag T1 (field 'Tc') >= {LBND} s"
+        return (
+            f"field 'T3': {model}'s control-box lead T3 needs its lag T1 (field 'Tc') >= {LBND} s"
+        )
     if g.T5[r] < LBND and g.T6[r] < LBND and abs(g.T4[r]) >= LBND:
-        return f"field 'T4': DEGOV's actuator lead T4 needs T5 or T6 >= {LBND} s"
+        return f"field 'T4': {model}'s actuator lead T4 needs T5 or T6 >= {LBND} s"
     if g.Tmax[r] < g.Tmin[r]:
-        return f"fields 'Tmax', 'Tmin': DEGOV's TMAX {g.Tmax[r]:g} is below TMIN {g.Tmin[r]:g}"
+        return f"fields 'Tmax', 'Tmin': {model}'s TMAX {g.Tmax[r]:g} is below TMIN {g.Tmin[r]:g}"
     return None
 
 
@@ -127,13 +131,18 @@ def pmech(P, x, k, omega):
 
 @kernel(inline="always")
 def derivatives(P, x, k, omega, pe, dx):
-    """DEGOV (module docstring): P_ref - (omega - 1) through the control box and the
-    actuator into the integrator K/s (clamps the torque in x)."""
+    """DEGOV (module docstring): P_ref - (omega - 1) through `chain`."""
+    chain(P, x, k, P[k, G.PREF] - (omega - 1.0), dx)
+
+
+@kernel(inline="always")
+def chain(P, x, k, u, dx):
+    """The control box and the actuator of governor k into the integrator K/s (clamps the
+    torque in x) from the speed junction's output u: DEGOV's, and DEGOV1's, whose states
+    begin with these five in `S`'s order."""
     t1 = _lag(P[k, G.TC])
     a2 = t1 * P[k, G.TS] if P[k, G.TS] >= LBND else 0.0
-    y1, dx[S.ecb1, k], dx[S.ecb2, k] = leadlag2(
-        P[k, G.PREF] - (omega - 1.0), x[S.ecb1, k], x[S.ecb2, k], P[k, G.T3], t1, a2
-    )
+    y1, dx[S.ecb1, k], dx[S.ecb2, k] = leadlag2(u, x[S.ecb1, k], x[S.ecb2, k], P[k, G.T3], t1, a2)
     t5, t6 = _lag(P[k, G.T5]), _lag(P[k, G.T6])
     y2, dx[S.act1, k], dx[S.act2, k] = leadlag2(
         y1, x[S.act1, k], x[S.act2, k], P[k, G.T4], t5 + t6, t5 * t6

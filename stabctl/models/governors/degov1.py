@@ -32,10 +32,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.blocks import LBND, lag, leadlag2, nonwindup
+from stabctl.models.blocks import LBND, lag
 from stabctl.models.declaration import DyrModel, Param, states
-from stabctl.models.governors.degov import _lag
-from stabctl.models.governors.table import AT_LIMIT, G, own
+from stabctl.models.governors import degov
+from stabctl.models.governors.table import G, own
 
 if TYPE_CHECKING:
     from stabctl.models.governors import GovernorParams
@@ -84,45 +84,27 @@ DYR = (
     ),
 )
 
-#: the states: DEGOV's five, then the measured electrical power (droop flag 1)
-S = states("DEGOV1States", ("ecb1", "ecb2", "act1", "act2", "torque", "pelec"))
+#: the states: DEGOV's five (its `chain` writes them), then the measured electrical
+#: power (droop flag 1)
+S = states("DEGOV1States", (*degov.S._fields, "pelec"))
 STATE_NAMES = {DEGOV1: S._fields}
 
 
 def has_state(p: GovernorParams):
-    """Which slots of `S` are states: DEGOV's (the control box's with T1, its second with
-    T2 too; the actuator's with T5 or T6, its second with both; the torque), the measured
+    """Which slots of `S` are states: DEGOV's five (`degov.has_state`), the measured
     power with droop flag 1 and TE."""
-    t1, t2, t5, t6 = (v >= LBND for v in (p.Tc, p.Ts, p.T5, p.T6))
-    return (t1, t1 & t2, t5 | t6, t5 & t6, True, (p.droop_flag == 1) & (p.Te >= LBND))
+    return (*degov.has_state(p), (p.droop_flag == 1) & (p.Te >= LBND))
 
 
 def time_constants(p: GovernorParams):
     """The declared time constants that set a state's speed: field -> where."""
-    t1 = p.Tc >= LBND
-    return {
-        "Tc": t1,
-        "Ts": t1 & (p.Ts >= LBND),
-        "T5": p.T5 >= LBND,
-        "T6": p.T6 >= LBND,
-        "Te": (p.droop_flag == 1) & (p.Te >= LBND),
-    }
+    return {**degov.time_constants(p), "Te": (p.droop_flag == 1) & (p.Te >= LBND)}
 
 
 def check(g, r: int) -> str | None:
-    """The first DEGOV1 option of tg_con row r (0-based) stabctl does not model (module
-    docstring), with the reason, or None."""
-    if g.Teng[r] != 0:
-        return (
-            "field 'Teng' (DEGOV1's TD): the engine's transport delay is not modelled; only TD = 0"
-        )
-    if g.Tc[r] < LBND and abs(g.T3[r]) >= LBND:
-        return f"field 'T3': DEGOV1's control-box lead T3 needs its lag T1 (field 'Tc') >= {LBND} s"
-    if g.T5[r] < LBND and g.T6[r] < LBND and abs(g.T4[r]) >= LBND:
-        return f"field 'T4': DEGOV1's actuator lead T4 needs T5 or T6 >= {LBND} s"
-    if g.Tmax[r] < g.Tmin[r]:
-        return f"fields 'Tmax', 'Tmin': DEGOV1's TMAX {g.Tmax[r]:g} is below TMIN {g.Tmin[r]:g}"
-    return None
+    """The first DEGOV1 option of tg_con row r (0-based) stabctl does not model (DEGOV's,
+    `degov.check`), with the reason, or None."""
+    return degov.check(g, r, "DEGOV1")
 
 
 def initialise(p: GovernorParams, r, pmech0, order, x):
@@ -149,20 +131,4 @@ def derivatives(P, x, k, omega, pe, dx):
         feedback, dx[S.pelec, k] = lag(pe, x[S.pelec, k], P[k, O.TE])
     else:
         feedback = x[S.torque, k]
-    t1 = _lag(P[k, G.TC])
-    a2 = t1 * P[k, G.TS] if P[k, G.TS] >= LBND else 0.0
-    y1, dx[S.ecb1, k], dx[S.ecb2, k] = leadlag2(
-        P[k, G.PREF] - (omega - 1.0) - P[k, O.DROOP] * feedback,
-        x[S.ecb1, k],
-        x[S.ecb2, k],
-        P[k, G.T3],
-        t1,
-        a2,
-    )
-    t5, t6 = _lag(P[k, G.T5]), _lag(P[k, G.T6])
-    y2, dx[S.act1, k], dx[S.act2, k] = leadlag2(
-        y1, x[S.act1, k], x[S.act2, k], P[k, G.T4], t5 + t6, t5 * t6
-    )
-    x[S.torque, k], dx[S.torque, k] = nonwindup(
-        x[S.torque, k], P[k, G.INVR] * y2, P[k, G.TMIN], P[k, G.TMAX], AT_LIMIT, 0.0
-    )
+    degov.chain(P, x, k, P[k, G.PREF] - (omega - 1.0) - P[k, O.DROOP] * feedback, dx)

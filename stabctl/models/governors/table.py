@@ -14,6 +14,8 @@ are declared here once.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from stabctl._jit.decorators import kernel
@@ -178,24 +180,10 @@ PACKED = (
 G = layout("GovernorColumns", PACKED)
 
 
-def own(name: str, params):
-    """A governor type's own packed columns (its module's ``PARAMS``, the tg_con columns
-    no other type reads), read by its kernels as ``P[k, O.DROOP]``: after the shared
-    `PACKED`, where every type's own columns start (`own_columns`).
-
-    Parameters
-    ----------
-    name : str
-        The namedtuple's type name (``"DEGOV1Columns"``).
-    params : sequence of Param
-        The type's own parameters.
-
-    Returns
-    -------
-    namedtuple
-        Their packed columns, by upper-case name.
-    """
-    return own_columns(name, params, len(PACKED))
+#: a type's own packed columns (its module's ``PARAMS``, the columns no other type reads),
+#: ``own("NAMEColumns", PARAMS)``, read by its kernels as ``P[k, O.NAME]``: after the shared
+#: `PACKED`, where every type's own columns start (`own_columns`)
+own = functools.partial(own_columns, first=len(PACKED))
 
 
 #: the governors' non-windup rule (`blocks.nonwindup`): at or beyond a limit, always, as

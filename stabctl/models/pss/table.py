@@ -13,6 +13,8 @@ lags T6, T7), so the columns are declared here once.
 
 from __future__ import annotations
 
+import functools
+
 from stabctl._jit.decorators import kernel
 from stabctl.models.declaration import Param, layout, own_columns
 
@@ -151,24 +153,10 @@ PACKED = (
 C = layout("PssColumns", PACKED)
 
 
-def own(name: str, params):
-    """A PSS type's own packed columns (its module's ``PARAMS``, the pss_con columns no
-    other type reads), read by its kernel as ``P[k, O.NAME]``: after the shared
-    `PACKED`, where every type's own columns start (`own_columns`).
-
-    Parameters
-    ----------
-    name : str
-        The namedtuple's type name.
-    params : sequence of Param
-        The type's own parameters.
-
-    Returns
-    -------
-    namedtuple
-        Their packed columns, by upper-case name.
-    """
-    return own_columns(name, params, len(PACKED))
+#: a type's own packed columns (its module's ``PARAMS``, the columns no other type reads),
+#: ``own("NAMEColumns", PARAMS)``, read by its kernels as ``P[k, O.NAME]``: after the shared
+#: `PACKED`, where every type's own columns start (`own_columns`)
+own = functools.partial(own_columns, first=len(PACKED))
 
 
 @kernel
