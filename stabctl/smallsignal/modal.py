@@ -121,15 +121,16 @@ class ModalAnalysis:
 
     def table(self) -> str:
         """The electromechanical modes as text, one line each by frequency: index,
-        frequency (Hz), damping ratio, kind, the machines swinging against each other (at
-        most six a side) and an inter-area mode's areas (what ``stabctl eig`` prints).
+        frequency (Hz), damping ratio (column ``zeta``, -Re lambda / |lambda|), kind, the
+        machines swinging against each other (at most six a side) and an inter-area mode's
+        areas (what ``stabctl eig`` prints).
 
         Returns
         -------
         str
             A header line and one line per electromechanical mode.
         """
-        lines = [f"{'mode':>5} {'f Hz':>7} {'damping':>8}  {'kind':<10} machines"]
+        lines = [f"{'mode':>5} {'f Hz':>7} {'zeta':>8}  {'kind':<10} machines"]
         em = self.electromechanical
         for i in em[np.argsort(self.freq_hz[em])]:
             g1, g2 = self.groups(i)

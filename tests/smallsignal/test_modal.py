@@ -104,7 +104,7 @@ def test_kundur_local_and_interarea_modes(nopss, expected, sys_k, sys_k_nopss):
     assert list(given.kind[em]) == [k for _, k in expected]
     # the table view: one line per electromechanical mode, by frequency, as `eig` prints
     lines = str(ma).splitlines()
-    assert lines[0].split() == ["mode", "f", "Hz", "damping", "kind", "machines"]
+    assert lines[0].split() == ["mode", "f", "Hz", "zeta", "kind", "machines"]
     assert [float(line.split()[1]) for line in lines[1:]] == [f for f, _ in expected]
     assert lines[1].endswith("[areas 2 vs 1]") or lines[1].endswith("[areas 1 vs 2]")
 
