@@ -46,3 +46,35 @@ def test_mode_figures_have_an_area_legend(kept):
     figures.participation_bars(ma, em, "unused.png")
     for fig in kept:  # Kundur's two areas of two machines each (Kundur 12.8)
         assert legend_texts(fig) == ["area 1 (2 machines)", "area 2 (2 machines)"]
+
+
+def test_a_screening_of_some_buses_maps_them_readably(kept):
+    """`stabctl screen --buses` of 6 of miniWECC's 122 buses: the others drawn as small grey
+    points, every screened bus labelled, the title saying how many, the view zoomed to
+    the screened buses (their spectral-layout box); a whole screening keeps the whole
+    network and labels the ten most critical."""
+    from stabctl.plotting.layout import spectral_layout
+
+    case = stabctl.load_case("miniwecc")
+    buses = [int(b) for b in case.buses.number[:: case.n_bus // 6][:6]]
+    rows = [
+        {"bus": b, "far_bus": None, "verdict": "cct", "cct_s": 0.1 + 0.01 * k}
+        for k, b in enumerate(buses)
+    ]
+    figures.screening_map(case, rows, "unused.png")
+    ax = kept[-1].axes[0]
+    assert f"each of 6 of {case.n_bus} buses" in ax.get_title()
+    assert sorted(int(t.get_text()) for t in ax.texts) == sorted(buses)
+    assert "not screened" in legend_texts(ax)
+    xy = spectral_layout(case)[case.bus_indices(buses)]
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    assert x0 < xy[:, 0].min() and xy[:, 0].max() < x1 and y0 < xy[:, 1].min()
+    whole = spectral_layout(case)
+    assert (x1 - x0) * (y1 - y0) < np.ptp(whole[:, 0]) * np.ptp(whole[:, 1])  # zoomed in
+    every = [
+        {"bus": int(b), "far_bus": None, "verdict": "cct", "cct_s": 0.1 + 1e-3 * k}
+        for k, b in enumerate(case.buses.number)
+    ]
+    figures.screening_map(case, every, "unused.png")
+    ax = kept[-1].axes[0]
+    assert ax.get_title().endswith("at each bus") and len(ax.texts) == 10

@@ -536,10 +536,18 @@ def participation_bars(ma, modes, path, n_bars: int = 12) -> None:
     save_figure(fig, Path(path))
 
 
+#: a screening of at most this many buses has every one labelled and, when it covers under
+#: SUBSET_ZOOM of the case's buses, the map zoomed to them
+LABEL_ALL, SUBSET_ZOOM = 40, 0.25
+
+
 def screening_map(case, rows, path: Path) -> None:
     """Network drawn with `stabctl.plotting.layout.spectral_layout`, each bus coloured by the CCT
     of a fault there (open circles: CCT above the search limit, a robust fault; grey
-    crosses: failed search), with a legend; bus numbers on the most critical ones."""
+    crosses: failed search), with a legend; bus numbers on the most critical ones.  A
+    screening of some buses only (``stabctl screen --buses``) shows the others as small grey
+    points, labels every screened bus when they are at most LABEL_ALL, zooms to them when
+    they are under SUBSET_ZOOM of the buses, and says "k of n buses" in its title."""
     from stabctl.plotting.layout import spectral_layout
 
     xy = spectral_layout(case)
@@ -549,6 +557,10 @@ def screening_map(case, rows, path: Path) -> None:
         ax.plot(xy[[a, b], 0], xy[[a, b], 1], color="0.8", lw=0.7, zorder=1)
     bus_rows = {r["bus"]: r for r in rows if r["far_bus"] is None}
     idx = case.bus_indices(list(bus_rows))
+    subset = len(idx) < case.n_bus
+    if subset:
+        rest = np.setdiff1d(np.arange(case.n_bus), idx)
+        ax.scatter(xy[rest, 0], xy[rest, 1], c="0.6", s=4, zorder=1, label="not screened")
     cct = np.array([r.get("cct_s", np.nan) for r in bus_rows.values()])
     ok = np.isfinite(cct)
     sc = ax.scatter(
@@ -584,12 +596,16 @@ def screening_map(case, rows, path: Path) -> None:
             marker="x",
             label="search failed (no verdict)",
         )
-    if above.any() or failed.any():
+    if above.any() or failed.any() or subset:
         ax.legend(loc="lower right", fontsize=8)
-    for k in np.argsort(np.where(ok, cct, np.inf))[:10]:
+    labelled = len(idx) if len(idx) <= LABEL_ALL else 10
+    for k in np.argsort(np.where(ok, cct, np.inf))[:labelled]:
         ax.annotate(str(int(case.buses.number[idx[k]])), xy[idx[k]], fontsize=7)
     fig.colorbar(sc, ax=ax, label="CCT of a bus fault (cycles)")
-    ax.set(
-        title=f"{case.name}: critical clearing time of a fault at each bus", xticks=[], yticks=[]
-    )
+    where = f"each of {len(idx)} of {case.n_bus} buses" if subset else "each bus"
+    ax.set(title=f"{case.name}: critical clearing time of a fault at {where}", xticks=[], yticks=[])
+    if subset and len(idx) < SUBSET_ZOOM * case.n_bus:
+        lo, hi = xy[idx].min(axis=0), xy[idx].max(axis=0)
+        pad = 0.15 * np.maximum(hi - lo, 0.05 * np.ptp(xy, axis=0))
+        ax.set(xlim=(lo[0] - pad[0], hi[0] + pad[0]), ylim=(lo[1] - pad[1], hi[1] + pad[1]))
     save_figure(fig, path)
