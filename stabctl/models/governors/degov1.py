@@ -64,22 +64,8 @@ O = own("DEGOV1Columns", PARAMS)
 DYR = (
     DyrModel(
         "DEGOV1",
-        ("M", "T1", "T2", "T3", "K", "T4", "T5", "T6", "TD", "TMAX", "TMIN", "DROOP", "TE"),
-        {
-            "droop_flag": "M",
-            "Tc": "T1",
-            "Ts": "T2",
-            "T3": "T3",
-            "invR": "K",
-            "T4": "T4",
-            "T5": "T5",
-            "T6": "T6",
-            "Teng": "TD",
-            "Tmax": "TMAX",
-            "Tmin": "TMIN",
-            "droop": "DROOP",
-            "Te": "TE",
-        },
+        ("M", *degov.DYR[0].fields, "DROOP", "TE"),
+        {"droop_flag": "M", **degov.DYR[0].copy, "droop": "DROOP", "Te": "TE"},
         kind=DEGOV1,
     ),
 )
