@@ -116,8 +116,13 @@ PIC1_ALG = row(15, KA=3, TA1=1, VAmax=1, VAmin=-0.87, Vrmax=1, Vrmin=-0.87, TF=1
 ST6B_ROW = row(16, TR=0.012, Kpid_P=50.038, Kpid_I=45.094, Kpid_D=0.5, Td=0.1, VAmax=4.81,
                VAmin=-3.85, KFF=1, KM=1, KCI=1.0577, KLR=17.33, ILR=2.15, Vrmax=4.81,
                Vrmin=-3.85, KG=1, TG=0.02)  # fmt: skip
+#: ST8C (type 17): PSS/E's ST8C run's record (PowerSimulationsDynamics.jl's test 61)
+ST8C_ROW = row(17, TR=0.01, Kpid_P=5, Kpid_I=5, VPmax=99.99, VPmin=0, KPA=4, KIA=0.1,
+               VAmax=99.9962, VAmin=-99.866, KA=1.35, TA=0.003, Vrmax=99.3449,
+               Vrmin=-99.1691, KF_ifd=0.5, TF_ifd=0.005, KC=0.1, KP=4, VB1max=99)  # fmt: skip
 ROWS = {
     "ST6B": ST6B_ROW,
+    "ST8C": ST8C_ROW,
     "EXAC2": AC2,
     "ESAC6A": AC6A,
     "ESAC6A limiter on": AC6A_VH,

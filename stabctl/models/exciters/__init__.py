@@ -70,6 +70,7 @@ from stabctl.models.exciters.ieeet3 import T3
 from stabctl.models.exciters.sexs import SMP
 from stabctl.models.exciters.st3 import ST3, st3_source_voltage
 from stabctl.models.exciters.st6b import ST6B
+from stabctl.models.exciters.st8c import ST8C
 from stabctl.models.exciters.table import (
     PACKED,
     PARAMS,
@@ -117,7 +118,7 @@ __all__ = [
     "dc_feedback",
     "st1a_regulator_output",
     "SMP", "DC1", "DC2", "ST3", "ST1", "T2", "ST1A", "AC1", "AC4", "AC1A", "AC8B", "T3", "ST4B",
-    "AC2", "AC6A", "PIC1", "ST6B",
+    "AC2", "AC6A", "PIC1", "ST6B", "ST8C",
 ]  # fmt: skip
 
 # --------------------------------------------------------------------------------------
@@ -140,6 +141,7 @@ MODULES = type_modules(
     "esac6a",
     "expic1",
     "st6b",
+    "st8c",
     "sexs",
 )
 #: exc_con type -> the module of its equations; -> its state names, in slot order (``S``)
@@ -326,6 +328,7 @@ class ExciterParams(Declared):
                 (self.kind == ST6B) & (self.Kpid_D != 0) & (self.Td >= LBND),
             ),
             ("exc_con T_G (ST6B)", self.TG, self.kind == ST6B),
+            ("exc_con T_F (ST8C)", self.TF_ifd, self.kind == ST8C),
         )
 
     def inner_loop_time_constants(self, VB0: np.ndarray, efd0: np.ndarray) -> np.ndarray:

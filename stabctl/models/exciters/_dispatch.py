@@ -21,6 +21,7 @@ from stabctl.models.exciters import (
     sexs,
     st3,
     st6b,
+    st8c,
 )
 from stabctl.models.exciters.table import E
 
@@ -58,6 +59,8 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
         return expic1.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)
     if kind == 16:  # ST6B (IEEE 421.5 ST6B)
         return st6b.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)
+    if kind == 17:  # ST8C (IEEE 421.5 ST8C, field current regulator)
+        return st8c.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)
     return sexs.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)  # simple (smpexc)
 
 
@@ -92,6 +95,8 @@ def type_derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach
         expic1.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
     elif kind == 16:  # ST6B (IEEE 421.5 ST6B)
         st6b.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
+    elif kind == 17:  # ST8C (IEEE 421.5 ST8C, field current regulator)
+        st8c.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
     else:  # simple (smpexc)
         sexs.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
 
