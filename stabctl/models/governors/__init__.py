@@ -48,6 +48,7 @@ from stabctl.models.governors.hygov import HYGOV
 from stabctl.models.governors.hygov4 import HYGOV4
 from stabctl.models.governors.ieeeg1 import IEEEG1
 from stabctl.models.governors.ieesgo import IEESGO
+from stabctl.models.governors.pidgov import PIDGOV
 from stabctl.models.governors.table import (
     GGOV1_FIELDS,
     HYGOV_FIELDS,
@@ -99,6 +100,7 @@ MODULES = type_modules(
     "ggov1",
     "degov",
     "degov1",
+    "pidgov",
 )
 #: tg_con type -> the module of its equations; -> its state names, in slot order (``S``)
 TYPES, STATE_NAMES = model_types(MODULES, "tg_con")
@@ -311,7 +313,8 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     gate = np.where(hy, pmech0 / np.where(hy, p.T5, 1.0) + p.qNL, gate)
     refuse_initial(
         "tg_con",
-        beyond(gate, p.Tmin, p.Tmax) & (p.kind != GGOV1),  # GGOV1: its fuel order, its own
+        # GGOV1: its fuel order, its own; PIDGOV: its gate, its own (the table's inverse)
+        beyond(gate, p.Tmin, p.Tmax) & (p.kind != GGOV1) & (p.kind != PIDGOV),
         lambda r: (
             f"tg_con row {r + 1}: initial power order {gate[r]:.4f} pu outside "
             f"[Tmin, Tmax] = [{p.Tmin[r]:.4f}, {p.Tmax[r]:.4f}]"

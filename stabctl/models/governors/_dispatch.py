@@ -14,6 +14,7 @@ from stabctl.models.governors import (
     hygov4,
     ieeeg1,
     ieesgo,
+    pidgov,
     tg,
     tg2,
     tgov1,
@@ -46,7 +47,9 @@ def pmech(P, x, k, omega):
         return ggov1.pmech(P, x, k, omega)
     if kind == 10:  # DEGOV
         return degov.pmech(P, x, k, omega)
-    return degov1.pmech(P, x, k, omega)  # DEGOV1
+    if kind == 11:  # DEGOV1
+        return degov1.pmech(P, x, k, omega)
+    return pidgov.pmech(P, x, k, omega)  # PIDGOV
 
 
 @kernel
@@ -76,5 +79,7 @@ def derivatives(P, x, k, omega, pe, dx):
         ggov1.derivatives(P, x, k, omega, pe, dx)
     elif kind == 10:  # DEGOV
         degov.derivatives(P, x, k, omega, pe, dx)
-    else:  # DEGOV1
+    elif kind == 11:  # DEGOV1
         degov1.derivatives(P, x, k, omega, pe, dx)
+    else:  # PIDGOV
+        pidgov.derivatives(P, x, k, omega, pe, dx)

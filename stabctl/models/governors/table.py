@@ -69,7 +69,8 @@ PARAMS = (
         9,
         alt="Tw",
         doc="HP section time constant (IEEEG1: T4, steam "
-        "chest); < 0 hydro | HYGOV: water time constant Tw | DEGOV: actuator lead T4",
+        "chest); < 0 hydro | HYGOV, PIDGOV: water time constant Tw | DEGOV: actuator "
+        "lead T4",
     ),
     Param(
         "T5",
