@@ -419,7 +419,8 @@ def test_packed_kernel_columns_come_from_the_declaration():
     )
     ep = exc_m.exciter_params(case)
     P = ep.packed(np.zeros(1))
-    assert P.shape == (1, len(exc_m.E)) == (1, len(exc_m.PACKED))
+    # the shared layout, then the widest type's own columns (`exciters.N_OWN`)
+    assert P.shape == (1, len(exc_m.E) + exc_m.N_OWN) == (1, len(exc_m.PACKED) + exc_m.N_OWN)
     for name in exc_m.TABLE_FIELDS:  # given columns as the table holds them
         if name not in ("KP", "KA"):
             assert P[0, getattr(exc_m.E, name.upper())] == getattr(case.exciters, name)[0]
