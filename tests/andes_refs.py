@@ -250,9 +250,15 @@ def ref_for(request) -> AndesRef:
         if mode == "record":
             pytest.skip("recorded by its [refs] variant")
         mode = "check"
+    elif mode == "live":  # the smoke tests above run ANDES; every other test reads its file
+        mode = "stored"
     return AndesRef(file_key(request.node.name), mode, request.node.nodeid)
 
 
 #: a test run twice: against the stored traces, and (``[live-andes]``) with ANDES live,
 #: checking the stored traces still equal ANDES's fresh run (the smoke tests)
-live_too = pytest.mark.parametrize("ref", [STORED_ID, LIVE_ID], indirect=True)
+#: the live variant runs ANDES's time simulation (tens of seconds each): ``heavy``, so that
+#: it starts first under pytest-xdist (tests/conftest.py)
+live_too = pytest.mark.parametrize(
+    "ref", [STORED_ID, pytest.param(LIVE_ID, marks=pytest.mark.heavy)], indirect=True
+)
