@@ -9,12 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+from governor_alone import settled, started
 
-from stabctl.case import GovernorTable
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
-from stabctl.io import load_case
 from stabctl.io.psse import load_psse
 from stabctl.models import governors as gov
 from stabctl.smallsignal.linearise import linearise
@@ -97,30 +95,13 @@ def _row(flag):
     return [float(getattr(g, name)[0]) for name in g.columns()]
 
 
-def _started(row, pm0=PM0):
-    case = load_case("kundur").replace(governors=GovernorTable.from_matrix([row]))
-    p = gov.governor_params(case)
-    x, Pref = gov.initialise(p, np.array([pm0]))
-    return p, x, Pref
-
-
-def _settled(P, x0, omega, t=400.0):
-    """The governor's torque after t s at speed omega, its electrical power at its
-    mechanical power."""
-
-    def f(_, y):
-        x = y.reshape(x0.shape).copy()
-        dx = np.zeros_like(x)
-        gov.derivatives(P, x, 0, omega, gov.pmech(P, x, 0, omega), dx)
-        return dx.ravel()
-
-    sol = solve_ivp(f, (0, t), x0.ravel(), method="LSODA", rtol=1e-10, atol=1e-12)
-    return sol.y[:, -1].reshape(x0.shape)
+#: the time the closed-form tests let the governor settle (s)
+T_SETTLE = 400.0
 
 
 @pytest.mark.parametrize("flag", FLAGS)
 def test_initial_point_is_an_equilibrium(flag):
-    p, x, Pref = _started(_row(flag))
+    p, x, Pref = started(_row(flag), PM0)
     P = p.packed(Pref)
     dx = np.full_like(x, np.nan)
     gov.derivatives(P, x, 0, 1.0, gov.pmech(P, x, 0, 1.0), dx)
@@ -134,17 +115,17 @@ def test_pref_step_settles_on_the_droop_line(flag):
     """At rated speed a step dP of P_ref settles where P_ref + dP = R f, f the torque
     (flag 0) or the electrical power, here the mechanical (flag 1): the torque rises by
     dP / R."""
-    p, x, Pref = _started(_row(flag))
+    p, x, Pref = started(_row(flag), PM0)
     dP, R = 0.002, 0.07
-    x = _settled(p.packed(Pref + dP), x, 1.0)
+    x = settled(p.packed(Pref + dP), x, 1.0, T_SETTLE)
     assert x[gov.degov1.S.torque, 0] == pytest.approx(PM0 + dP / R, rel=1e-8)
 
 
 def test_speed_held_off_rated_settles_on_the_droop_line():
     """Flag 0, the speed held d above rated: the torque falls by d / R."""
-    p, x, Pref = _started(_row(0))
+    p, x, Pref = started(_row(0), PM0)
     d, R = 1e-3, 0.07
-    x = _settled(p.packed(Pref), x, 1.0 + d)
+    x = settled(p.packed(Pref), x, 1.0 + d, T_SETTLE)
     assert x[gov.degov1.S.torque, 0] == pytest.approx(PM0 - d / R, rel=1e-8)
 
 
@@ -160,4 +141,4 @@ def test_options_it_does_not_model_are_refused():
         changed = list(row)
         changed[gov.GOVERNOR.col(name) - 1] = value
         with pytest.raises(CaseError, match=match):
-            _started(changed)
+            started(changed, PM0)

@@ -9,12 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+from governor_alone import settled, started
 
-from stabctl.case import GovernorTable
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
-from stabctl.io import load_case
 from stabctl.io.psse import load_psse
 from stabctl.models import governors as gov
 from stabctl.smallsignal.linearise import linearise
@@ -102,31 +100,14 @@ def _row(flag):
     return [float(getattr(g, name)[0]) for name in g.columns()]
 
 
-def _started(row, pm0=PM0):
-    case = load_case("kundur").replace(governors=GovernorTable.from_matrix([row]))
-    p = gov.governor_params(case)
-    x, Pref = gov.initialise(p, np.array([pm0]))
-    return p, x, Pref
-
-
-def _settled(P, x0, omega, t=600.0):
-    """The governor's states after t s at speed omega, its electrical power at its
-    mechanical power."""
-
-    def f(_, y):
-        x = y.reshape(x0.shape).copy()
-        dx = np.zeros_like(x)
-        gov.derivatives(P, x, 0, omega, gov.pmech(P, x, 0, omega), dx)
-        return dx.ravel()
-
-    sol = solve_ivp(f, (0, t), x0.ravel(), method="LSODA", rtol=1e-10, atol=1e-12)
-    return sol.y[:, -1].reshape(x0.shape)
+#: the time the closed-form tests let the governor settle (s)
+T_SETTLE = 600.0
 
 
 @pytest.mark.parametrize("flag", tuple(RUNS))
 def test_initial_point_is_an_equilibrium(flag):
     """At rest the gate is the table's inverse of Pm0 (0.9 + (0.7 - 0.5)/4 = 0.95)."""
-    p, x, Pref = _started(_row(flag))
+    p, x, Pref = started(_row(flag), PM0)
     P = p.packed(Pref)
     dx = np.full_like(x, np.nan)
     gov.derivatives(P, x, 0, 1.0, gov.pmech(P, x, 0, 1.0), dx)
@@ -140,10 +121,10 @@ def test_pref_step_settles_on_the_droop_line(flag):
     """At rated speed a step dP of P_ref settles where P_ref + dP = f: the power rises
     by dP (flag 0), or the gate by dP and the power by the table's slope times dP
     (flag 1)."""
-    p, x, Pref = _started(_row(flag))
+    p, x, Pref = started(_row(flag), PM0)
     dP = 0.002
     P = p.packed(Pref + dP)
-    x = _settled(P, x, 1.0)
+    x = settled(P, x, 1.0, T_SETTLE)
     rise = SLOPE * dP if flag else dP
     assert gov.pmech(P, x, 0, 1.0) == pytest.approx(PM0 + rise, rel=1e-8)
 
@@ -151,10 +132,10 @@ def test_pref_step_settles_on_the_droop_line(flag):
 def test_speed_held_off_rated_settles_on_the_droop_line():
     """Flag 0, the speed held d above rated: Rperm (P_ref - P_e) = d, the power falls by
     d / Rperm."""
-    p, x, Pref = _started(_row(0))
+    p, x, Pref = started(_row(0), PM0)
     d = 1e-3
     P = p.packed(Pref)
-    x = _settled(P, x, 1.0 + d)
+    x = settled(P, x, 1.0 + d, T_SETTLE)
     assert gov.pmech(P, x, 0, 1.0 + d) == pytest.approx(PM0 - d / RPERM, rel=1e-8)
 
 
@@ -174,4 +155,4 @@ def test_options_it_does_not_model_are_refused():
         for name, value in changes.items():
             changed[gov.GOVERNOR.col(name) - 1] = value
         with pytest.raises(CaseError, match=match):
-            _started(changed)
+            started(changed, PM0)
