@@ -327,11 +327,17 @@ def target(family: Dispatch) -> Path:
 def _placeholder(family: Dispatch) -> str:
     """A ``_dispatch.py`` that imports no type module: written in place of one that names
     a module the registry no longer has (whose import fails), so that the package
-    imports and its dispatch can be generated."""
+    imports and its dispatch can be generated; `_generated` overwrites it at once, and a
+    kernel called meanwhile raises naming the command."""
     lines = [f'"""Placeholder: run ``{COMMAND}``."""']
     for kernel in family.kernels:
         name = kernel.generated or kernel.name
-        lines += ["", "", f"def {name}(*args):", "    raise NotImplementedError"]
+        lines += [
+            "",
+            "",
+            f"def {name}(*args):",
+            f'    raise RuntimeError("{family.package}._dispatch is being written: run {COMMAND}")',
+        ]
     return "\n".join(lines) + "\n"
 
 
