@@ -1009,6 +1009,19 @@ def _ieesgo(rec, gen, andes=False):
     return _tg_row(rec, gen, **cols)
 
 
+def _wpidhy(rec, gen):
+    """WPIDHY: TREG REG KP KI KD TA TB VELMX VELMN GATMX GATMN TW PMAX PMIN D G0 G1 P1 G2 P2
+    P3 -> type 13 (stabctl.models.governors.pidgov): the declared copies, Rperm = -REG
+    (PSS/E's REG, the gain on P_e - P_ref, is negative: a positive one refused), feedback
+    flag 0 (the electrical power) and ATW 1 (the water column's lead is TW)."""
+    reg = DYR_MODELS["WPIDHY"].values(rec.params)["REG"]
+    if reg > 0:
+        raise CaseError(
+            f"{rec.label()}: REG = {reg:g} must be <= 0 (the droop gain on P_e - P_ref)"
+        )
+    return _tg_row(rec, gen, Rperm=-reg, feedback_flag=0.0, Atw=1.0)
+
+
 def _andes_hygov4(rec, gen):
     """ANDES's HYGOV4 (`stabctl.models.governors`, type 8): the declared copies, where the
     machine's MVA is the system base (ANDES 2.0 solves it on the system base, scaling
@@ -1056,6 +1069,7 @@ _MAPPERS = {
     "TG2": _droop,
     "HYGOV": _hygov,
     "IEESGO": _ieesgo,
+    "WPIDHY": _wpidhy,
     "ANDES_HYGOV4": _andes_hygov4,
 }
 #: records that complete another record's row: a load compensator the exciter's

@@ -48,7 +48,7 @@ from stabctl.models.governors.hygov import HYGOV
 from stabctl.models.governors.hygov4 import HYGOV4
 from stabctl.models.governors.ieeeg1 import IEEEG1
 from stabctl.models.governors.ieesgo import IEESGO
-from stabctl.models.governors.pidgov import PIDGOV
+from stabctl.models.governors.pidgov import PIDGOV, WPIDHY
 from stabctl.models.governors.table import (
     GGOV1_FIELDS,
     HYGOV_FIELDS,
@@ -313,8 +313,9 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     gate = np.where(hy, pmech0 / np.where(hy, p.T5, 1.0) + p.qNL, gate)
     refuse_initial(
         "tg_con",
-        # GGOV1: its fuel order, its own; PIDGOV: its gate, its own (the table's inverse)
-        beyond(gate, p.Tmin, p.Tmax) & (p.kind != GGOV1) & (p.kind != PIDGOV),
+        # GGOV1: its fuel order, its own; PIDGOV, WPIDHY: the gate, their own (the table's
+        # inverse)
+        beyond(gate, p.Tmin, p.Tmax) & ~np.isin(p.kind, (GGOV1, PIDGOV, WPIDHY)),
         lambda r: (
             f"tg_con row {r + 1}: initial power order {gate[r]:.4f} pu outside "
             f"[Tmin, Tmax] = [{p.Tmin[r]:.4f}, {p.Tmax[r]:.4f}]"

@@ -49,7 +49,7 @@ def pmech(P, x, k, omega):
         return degov.pmech(P, x, k, omega)
     if kind == 11:  # DEGOV1
         return degov1.pmech(P, x, k, omega)
-    return pidgov.pmech(P, x, k, omega)  # PIDGOV
+    return pidgov.pmech(P, x, k, omega)  # PIDGOV; WPIDHY
 
 
 @kernel
@@ -81,5 +81,5 @@ def derivatives(P, x, k, omega, pe, dx):
         degov.derivatives(P, x, k, omega, pe, dx)
     elif kind == 11:  # DEGOV1
         degov1.derivatives(P, x, k, omega, pe, dx)
-    else:  # PIDGOV
+    else:  # PIDGOV; WPIDHY
         pidgov.derivatives(P, x, k, omega, pe, dx)

@@ -1,4 +1,5 @@
-"""PSS/E's PIDGOV (tg_con type 12): the hydro turbine governor with a PID controller.
+"""PSS/E's PIDGOV (tg_con type 12) and WPIDHY (type 13): the hydro turbine governors
+with a PID controller, the same droop, PID, gate table and water column.
 
 P_ref - f through the permanent droop Rperm/(1 + s TREG), minus the speed deviation
 omega - 1, is the PID's input e: the PI Kp + Ki/s through 1/(1 + s TA), plus the
@@ -25,13 +26,33 @@ whose gates G0 < G1 < G2 < 1 or powers 0 < P1 < P2 < P3 do not rise (its inverse
 the start-up gate), GMAX < GMIN, VELMAX <= 0 or VELMIN >= 0; by `initialise`, a start-up
 gate outside [GMIN, GMAX].
 
+WPIDHY (the Woodward PID hydro governor) differs in its gate: the PID's output is the
+gate's velocity, not its position.  The droop REG/(1 + s TREG) on P_e - P_ref (PSS/E's
+REG is negative: Rperm = -REG, a positive REG refused by name) minus omega - 1 is e;
+(Kp + Ki/s + s Kd)/(1 + s TA)^2 of it, realised as PowerSimulationsDynamics.jl does
+with three states (the PI Kp' + Ki/s with Kp' = Kp - TA Ki, the washout s Kd'/(1 + s
+TA) with Kd' = Kd - TA Kp + TA^2 Ki, their sum through one TA lag), through 1/(1 + s
+TB), limited to [VELMIN, VELMAX], is integrated into the gate, non-windup on [GATMN,
+GATMX] (PowerSimulationsDynamics.jl integrates it with windup: the same within the
+limits).  The gate table and the water column (1 - s TW)/(1 + s TW/2) are PIDGOV's
+(ATW = 1), the column's output limited to [PMIN, PMAX], P_m = that minus D (omega -
+1).  At rest the velocity is 0: every state but the gate (the table's inverse of Pm0)
+and the water column's (3 Pm0) is 0 and P_ref = Pm0; `initialise` refuses a start-up
+gate outside [GATMN, GATMX] and a Pm0 outside [PMIN, PMAX].
+
 The DYR record (PSS/E Model Library PIDGOV; PowerSystems.jl's PIDGOV, PowerWorld's
 PIDGOV): ICON feedback flag, then RPERM TREG KP KI KD TA TB DTURB G0 G1 P1 G2 P2 P3 GMAX
 GMIN ATW TW VELMAX VELMIN; GMAX, GMIN in the shared Tmax, Tmin columns, DTURB in Dt, TW
 in T4 (HYGOV's Tw), VELMAX, VELMIN in Uo, Uc, the rest in PIDGOV's own (``PARAMS``).
-Sources: PSS/E Model Library PIDGOV; PowerSimulationsDynamics.jl ``tg_models.jl``
-(PIDGOV), ``common_controls.jl`` (the gate table), ``init_tg.jl`` and
-``test_case58_pidgov.jl``.  ANDES 2.0 has no PIDGOV.
+WPIDHY's (PSS/E Model Library WPIDHY; PowerSystems.jl's psse_dynamic_mapping.yaml):
+TREG REG KP KI KD TA TB VELMX VELMN GATMX GATMN TW PMAX PMIN D G0 G1 P1 G2 P2 P3 into
+the same columns (TB in Tgate, GATMX, GATMN in Tmax, Tmin, D in Dt, PMAX, PMIN in its
+own Pmax, Pmin; REG as Rperm = -REG, feedback flag 0 and ATW 1 set by
+`stabctl.io.dyr`'s mapper).
+Sources: PSS/E Model Library PIDGOV, WPIDHY; PowerSimulationsDynamics.jl
+``tg_models.jl`` (PIDGOV, WPIDHY), ``common_controls.jl`` (the gate table),
+``init_tg.jl``, ``test_case58_pidgov.jl`` and ``test_case60_wpidhy.jl``.  ANDES 2.0
+has neither.
 """
 
 from __future__ import annotations
@@ -49,10 +70,10 @@ from stabctl.models.governors.table import AT_LIMIT, G, own
 if TYPE_CHECKING:
     from stabctl.models.governors import GovernorParams
 
-PIDGOV = 12
-KINDS = {PIDGOV: "PIDGOV"}
-#: the time constants that must be >= 1e-3 s (declared tg_con fields): the three TA
-#: lags (the derivative's among them) and the gate servo
+PIDGOV, WPIDHY = 12, 13
+KINDS = {PIDGOV: "PIDGOV", WPIDHY: "WPIDHY"}
+#: the time constants that must be >= 1e-3 s (declared tg_con fields): the TA lags (the
+#: derivative's among them) and the gate servo (WPIDHY: the velocity lag TB)
 NEEDS: tuple[str, ...] = ("Ta", "Tgate")
 #: PIDGOV's own tg_con columns
 PARAMS = (
@@ -79,6 +100,8 @@ PARAMS = (
     Param("P2", "pu", 75, doc="PIDGOV: power at gate opening G2"),
     Param("P3", "pu", 76, doc="PIDGOV: power at full gate"),
     Param("Atw", "pu", 77, lo=0.0, doc="PIDGOV: factor ATW of the water time constant"),
+    Param("Pmax", "pu", 78, doc="WPIDHY: maximum power PMAX"),
+    Param("Pmin", "pu", 79, doc="WPIDHY: minimum power PMIN"),
 )
 #: the packed columns of `PARAMS`: P[k, O.KP]
 O = own("PIDGOVColumns", PARAMS)
@@ -133,12 +156,65 @@ DYR = (
         },
         kind=PIDGOV,
     ),
+    DyrModel(
+        "WPIDHY",
+        (
+            "TREG",
+            "REG",
+            "KP",
+            "KI",
+            "KD",
+            "TA",
+            "TB",
+            "VELMX",
+            "VELMN",
+            "GATMX",
+            "GATMN",
+            "TW",
+            "PMAX",
+            "PMIN",
+            "D",
+            "G0",
+            "G1",
+            "P1",
+            "G2",
+            "P2",
+            "P3",
+        ),
+        {
+            "Treg": "TREG",
+            "Kp": "KP",
+            "Ki": "KI",
+            "Kd": "KD",
+            "Ta": "TA",
+            "Tgate": "TB",
+            "Uo": "VELMX",
+            "Uc": "VELMN",
+            "Tmax": "GATMX",
+            "Tmin": "GATMN",
+            "T4": "TW",
+            "Pmax": "PMAX",
+            "Pmin": "PMIN",
+            "Dt": "D",
+            "G0": "G0",
+            "G1": "G1",
+            "P1": "P1",
+            "G2": "G2",
+            "P2": "P2",
+            "P3": "P3",
+        },
+        kind=WPIDHY,
+    ),
 )
 
 #: the states: the droop lag, the PI's integral, the PI's TA lag, the derivative's
 #: (its input lagged by TA), the second TA lag, the gate, the water column's lead-lag
 S = states("PIDGOVStates", ("droop", "integral", "pi_lag", "deriv", "pid_lag", "gate", "water"))
-STATE_NAMES = {PIDGOV: S._fields}
+#: WPIDHY's: the droop lag, the PI's integral, the TA lag of the PID, the derivative's,
+#: the TB lag (the gate's velocity), the gate, the water column's (in
+#: PowerSimulationsDynamics.jl's order, x_g1..x_g7)
+W = states("WPIDHYStates", ("droop", "integral", "pid_lag", "deriv", "velocity", "gate", "water"))
+STATE_NAMES = {PIDGOV: S._fields, WPIDHY: W._fields}
 
 
 def _tz(p: GovernorParams):
@@ -158,8 +234,9 @@ def time_constants(p: GovernorParams):
 
 
 def check(g, r: int) -> str | None:
-    """The first PIDGOV option of tg_con row r (0-based) stabctl does not model (module
-    docstring), with the reason, or None."""
+    """The first PIDGOV or WPIDHY option of tg_con row r (0-based) stabctl does not model
+    (module docstring), with the reason, or None (the messages name PIDGOV's DYR fields;
+    WPIDHY's GATMX, GATMN, VELMX, VELMN are the same columns)."""
     gates = (g.G0[r], g.G1[r], g.G2[r], 1.0)
     powers = (0.0, g.P1[r], g.P2[r], g.P3[r])
     if not all(a < b for a, b in zip(gates, gates[1:])):
@@ -170,6 +247,8 @@ def check(g, r: int) -> str | None:
         return f"fields 'Tmax', 'Tmin': PIDGOV's GMAX {g.Tmax[r]:g} is below GMIN {g.Tmin[r]:g}"
     if g.Uo[r] <= 0 or g.Uc[r] >= 0:
         return "fields 'Uo', 'Uc': PIDGOV's gate velocity limits need VELMAX > 0 > VELMIN"
+    if g.type[r] == WPIDHY and g.Pmax[r] < g.Pmin[r]:
+        return f"fields 'Pmax', 'Pmin': WPIDHY's PMAX {g.Pmax[r]:g} is below PMIN {g.Pmin[r]:g}"
     return None
 
 
@@ -185,11 +264,12 @@ def gate_at(p: GovernorParams, r, power):
 
 
 def initialise(p: GovernorParams, r, pmech0, order, x):
-    """PIDGOV at rest on rows r (module docstring): the gate at the table's inverse of
-    pmech0, refused outside [GMIN, GMAX]; returns P_ref, pmech0 (flag 0) or the gate
-    (flag 1), on r.
+    """PIDGOV and WPIDHY at rest on rows r (module docstring): the gate at the table's
+    inverse of pmech0, refused outside [GMIN, GMAX]; returns P_ref, pmech0 (flag 0,
+    WPIDHY) or the gate (flag 1), on r.
 
-    Raises CaseError when the start-up gate is outside [GMIN, GMAX]."""
+    Raises CaseError when the start-up gate is outside [GMIN, GMAX] or a WPIDHY's pmech0
+    outside [PMIN, PMAX]."""
     pm = pmech0[r]
     gate = np.zeros(p.n)
     gate[r] = gate_at(p, r, pm)
@@ -201,11 +281,21 @@ def initialise(p: GovernorParams, r, pmech0, order, x):
             f"[GMIN, GMAX] = [{p.Tmin[k]:.4f}, {p.Tmax[k]:.4f}]"
         ),
     )
-    gate = gate[r]
-    for slot in (S.integral, S.pi_lag, S.pid_lag, S.gate):
-        x[slot, r] = gate
+    w = r & (p.kind == WPIDHY)
+    refuse_initial(
+        "tg_con",
+        w & beyond(pmech0, p.Pmin, p.Pmax),
+        lambda k: (
+            f"tg_con row {k + 1}: WPIDHY's start-up power {pmech0[k]:.4f} pu outside "
+            f"[PMIN, PMAX] = [{p.Pmin[k]:.4f}, {p.Pmax[k]:.4f}]"
+        ),
+    )
+    pid = r & ~w
+    for slot in (S.integral, S.pi_lag, S.pid_lag):
+        x[slot, pid] = gate[pid]
+    x[S.gate, r] = gate[r]
     x[S.water, r] = np.where(_tz(p)[r] / 2 >= LBND, 3.0 * pm, 0.0)
-    return np.where(p.feedback_flag[r] == 1, gate, pm)
+    return np.where(p.feedback_flag[r] == 1, gate[r], pm)
 
 
 @kernel(inline="always")
@@ -233,21 +323,29 @@ def _water(P, x, k):
 
 @kernel(inline="always")
 def pmech(P, x, k, omega):
-    """PIDGOV: the water column's output minus DTURB (omega - 1) (module docstring)."""
-    return _water(P, x, k)[0] - P[k, G.DT] * (omega - 1.0)
+    """PIDGOV: the water column's output minus DTURB (omega - 1); WPIDHY: the output
+    limited to [PMIN, PMAX], minus D (omega - 1) (module docstring)."""
+    power = _water(P, x, k)[0]
+    if P[k, G.KIND] == WPIDHY:
+        power = clip(power, P[k, O.PMIN], P[k, O.PMAX])
+    return power - P[k, G.DT] * (omega - 1.0)
 
 
 @kernel(inline="always")
 def derivatives(P, x, k, omega, pe, dx):
-    """PIDGOV (module docstring): the droop, the PID, the gate servo (clamps the gate in
-    x) and the water column; the feedback the electrical power pe (flag 0) or the gate
-    (flag 1)."""
+    """PIDGOV and WPIDHY (module docstring): the droop, the PID, the gate servo (clamps
+    the gate in x) and the water column; the feedback the electrical power pe (flag 0)
+    or the gate (flag 1)."""
     feedback = x[S.gate, k] if P[k, O.FEEDBACK_FLAG] == 1.0 else pe
     droop, dx[S.droop, k] = lag(
         P[k, O.RPERM] * (P[k, G.PREF] - feedback), x[S.droop, k], P[k, O.TREG]
     )
     e = droop - (omega - 1.0)
     ta = P[k, O.TA]
+    if P[k, G.KIND] == WPIDHY:
+        _wpidhy_gate(P, x, k, e, dx)
+        dx[W.water, k] = _water(P, x, k)[1]
+        return
     y_pi, dx[S.integral, k] = pi(e, x[S.integral, k], P[k, O.KP], P[k, O.KI])
     _, dx[S.pi_lag, k] = lag(y_pi, x[S.pi_lag, k], ta)
     y_d, dx[S.deriv, k] = washout(e, x[S.deriv, k], ta, P[k, O.KD], GAIN_OVER_T)
@@ -257,3 +355,19 @@ def derivatives(P, x, k, omega, pe, dx):
         x[S.gate, k], rate, P[k, G.TMIN], P[k, G.TMAX], AT_LIMIT, 0.0
     )
     dx[S.water, k] = _water(P, x, k)[1]
+
+
+@kernel(inline="always")
+def _wpidhy_gate(P, x, k, e, dx):
+    """WPIDHY's PID on e, its velocity lag and the gate's integrator (module docstring):
+    writes their derivatives into dx (clamps the gate in x)."""
+    ta, kp, ki = P[k, O.TA], P[k, O.KP], P[k, O.KI]
+    y_pi, dx[W.integral, k] = pi(e, x[W.integral, k], kp - ta * ki, ki)
+    kd = P[k, O.KD] - ta * kp + ta * ta * ki
+    y_d, dx[W.deriv, k] = washout(e, x[W.deriv, k], ta, kd, GAIN_OVER_T)
+    _, dx[W.pid_lag, k] = lag(y_pi + y_d, x[W.pid_lag, k], ta)
+    _, dx[W.velocity, k] = lag(x[W.pid_lag, k], x[W.velocity, k], P[k, O.TGATE])
+    rate = clip(x[W.velocity, k], P[k, G.UC], P[k, G.UO])
+    x[W.gate, k], dx[W.gate, k] = nonwindup(
+        x[W.gate, k], rate, P[k, G.TMIN], P[k, G.TMAX], AT_LIMIT, 0.0
+    )

@@ -12,6 +12,8 @@ TEST: the test's number; each LABEL=SUFFIX one run, read from PSID's ``test<TEST
         flag0=_Flag0 flag1=_Flag1 > DEGOV1/psid_test63.json
     python psid_reference.py PSID d94d74e7daaa445517da69cd0d528570fa438f28 58 \\
         flag0=_PowerFlag flag1=_GateFlag > PIDGOV/psid_test58.json
+    python psid_reference.py PSID d94d74e7daaa445517da69cd0d528570fa438f28 60 \\
+        > WPIDHY/psid_test60.json
     python psid_reference.py PSID d94d74e7daaa445517da69cd0d528570fa438f28 61 \\
         > ST8C/psid_test61.json
 """
