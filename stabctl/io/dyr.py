@@ -714,14 +714,12 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False, psse=False):
 
 def _scrx(rec, gen):
     """SCRX: TA/TB TB K TE EMIN EMAX CSWITCH rc/rfd -> smpexc (type 0) as SEXS, bus fed
-    (output times the terminal voltage, exc_con column 19 = 1) when CSWITCH = 0.  PSS/E's
-    negative field current logic is not modelled: rc/rfd = 0 (no negative current; no
-    effect while the field current stays positive) only."""
+    (output times the terminal voltage, exc_con column 19 = 1) when CSWITCH = 0; rc/rfd
+    in smpexc's column 74 (the negative field current logic,
+    stabctl.models.exciters.sexs; a negative rc/rfd refused by name)."""
     v = DYR_MODELS["SCRX"].values(rec.params)
-    if v["rc/rfd"] != 0:
-        raise _Unsupported(
-            f"rc/rfd = {v['rc/rfd']:g}: the field discharge resistor is not modelled (only 0)"
-        )
+    if v["rc/rfd"] < 0:
+        raise CaseError(f"{rec.label()}: rc/rfd = {v['rc/rfd']:g} must be >= 0")
     return _exc_row(rec, gen, TC=v["TA/TB"] * v["TB"], bus_fed=float(v["CSWITCH"] == 0))
 
 

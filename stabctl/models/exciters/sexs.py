@@ -1,8 +1,15 @@
 """smpexc (exc_con type 0): PST's simple static exciter, also PSS/E's SEXS and SCRX.
 
 T_R, lead-lag T_C/T_B, K_A/(1 + s T_A) limited [Vrmin, Vrmax]; bus fed (SCRX, exc_con
-column 19 ``bus_fed`` = 1): the output times the terminal voltage.  Source: PSTess 1.1
-`smpexc.m`; PSS/E Model Library SEXS, SCRX; docs/pst_models.md 2.1.
+column 19 ``bus_fed`` = 1): the output times the terminal voltage.  SCRX's negative
+field current logic (its own exc_con column 74 ``rc_rfd``, PSS/E's rc/rfd, the field
+discharge resistance over the field's): with rc/rfd != 0 the bridge blocks a negative
+field current, so while the machine's field current I_fd (X_ad I_fd, pu) is <= 0 the
+field voltage is -rc/rfd I_fd, the discharge resistor's, not the regulator's output;
+rc/rfd = 0 (a bridge that conducts both ways) leaves the output as it is.  At rest I_fd =
+Efd0, so `initialise` refuses Efd0 <= 0 with rc/rfd != 0 (no rest point on the
+resistor).  Source: PSTess 1.1 `smpexc.m`; PSS/E Model Library SEXS, SCRX;
+PowerSimulationsDynamics.jl ``avr_models.jl`` (SCRX); docs/pst_models.md 2.1, 2.5.
 """
 
 from __future__ import annotations
@@ -12,23 +19,38 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
+from stabctl.errors import refuse_initial
 from stabctl.models.blocks import LBND, clip, lag, leadlag_input_state, nonwindup_lag
-from stabctl.models.declaration import DyrModel, states
-from stabctl.models.exciters.table import E
+from stabctl.models.declaration import DyrModel, Param, states
+from stabctl.models.exciters.table import E, own
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
 
 SMP = 0
 KINDS = {SMP: "simple (smpexc)"}
-#: reads the machine's field current (`stabctl.models.exciters.field_current`)
-READS_IFD = False
+#: reads the machine's field current (`stabctl.models.exciters.field_current`): SCRX's
+#: negative field current logic
+READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
 RATE_FEEDBACK = False
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = False
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = ()
+#: smpexc's own exc_con column
+PARAMS = (
+    Param(
+        "rc_rfd",
+        "",
+        74,
+        lo=0.0,
+        doc="SCRX: rc/rfd, the field discharge resistance over the field resistance; "
+        "!= 0: Efd = -rc/rfd I_fd while I_fd <= 0 (no negative field current), 0: none",
+    ),
+)
+#: the packed columns of `PARAMS`: P[i, O.RC_RFD]
+O = own("SEXSColumns", PARAMS)
 
 DYR = (
     # SEXS -> smpexc: T_C = (TA/TB) TB is computed
@@ -43,7 +65,14 @@ DYR = (
     DyrModel(
         "SCRX",
         ("TA/TB", "TB", "K", "TE", "EMIN", "EMAX", "CSWITCH", "rc/rfd"),
-        {"KA": "K", "TA": "TE", "TB": "TB", "Vrmax": "EMAX", "Vrmin": "EMIN"},
+        {
+            "KA": "K",
+            "TA": "TE",
+            "TB": "TB",
+            "Vrmax": "EMAX",
+            "Vrmin": "EMIN",
+            "rc_rfd": "rc/rfd",
+        },
         kind=SMP,
     ),
 )
@@ -62,7 +91,18 @@ def has_state(p: ExciterParams):
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """smpexc at rest on rows r: the lead-lag holds the regulator's input Efd0/K_A, the
-    lag Efd0 (bus fed: Efd0/V_t); writes x, returns (V_ref - V_TR, p)."""
+    lag Efd0 (bus fed: Efd0/V_t); writes x, returns (V_ref - V_TR, p).
+
+    Raises CaseError (`refuse_initial`) for an SCRX with rc/rfd != 0 whose Efd0 (its
+    field current at rest) is <= 0."""
+    refuse_initial(
+        "exc_con",
+        r & (p.rc_rfd != 0) & (vex <= 0),
+        lambda k: (
+            f"exc_con row {k + 1}: SCRX's start-up field current {vex[k]:.4f} pu is not "
+            f"positive, where rc/rfd = {p.rc_rfd[k]:g} holds it on the discharge resistor"
+        ),
+    )
     bus_fed = p.KG[r] == 1
     efd = vex[r] / np.where(bus_fed, eterm[r], 1.0)  # SCRX bus fed: Efd = V_t x Efd state
     VA = efd / p.KA[r]
@@ -75,7 +115,11 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
     ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error, without
-    limits; bus fed (SCRX, exc_con column 19 = 1): times the terminal voltage VTR_alg."""
+    limits; bus fed (SCRX, exc_con column 19 = 1): times the terminal voltage VTR_alg;
+    SCRX with rc/rfd != 0 and the field current ifd <= 0: -rc/rfd ifd."""
+    rc_rfd = P[i, O.RC_RFD]
+    if rc_rfd != 0.0 and ifd <= 0.0:
+        return -rc_rfd * ifd
     mult = VTR_alg if P[i, E.KG] == 1 else 1.0
     if P[i, E.TA] >= LBND:
         return (clip(x[S.Efd, i], P[i, E.VRMIN], P[i, E.VRMAX]) if ieee else x[S.Efd, i]) * mult
@@ -87,8 +131,9 @@ def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
 
 @kernel(inline="always")
 def recorded_efd(P, x, i, efd_alg):
-    """The Efd PST records: the (clamped) state with T_A and not bus fed, else efd_alg."""
-    if P[i, E.TA] >= LBND and P[i, E.KG] != 1:
+    """The Efd PST records: the (clamped) state with T_A, not bus fed and rc/rfd = 0,
+    else efd_alg."""
+    if P[i, E.TA] >= LBND and P[i, E.KG] != 1 and P[i, O.RC_RFD] == 0.0:
         return x[S.Efd, i]
     return efd_alg
 

@@ -8,6 +8,8 @@ TEST: the test's number; each LABEL=SUFFIX one run, read from PSID's ``test<TEST
 <SUFFIX>`` and ``test<TEST>_eigvals<SUFFIX>`` and written as ``x0_<LABEL>`` and
 ``eigvals_<LABEL>`` (without runs: one run, ``x0`` and ``eigvals``).  The files here:
 
+    python psid_reference.py PSID d94d74e7daaa445517da69cd0d528570fa438f28 47 \\
+        plain= switch=_withSwitch rcrfd=_withRcRfd > SCRX/psid_test47.json
     python psid_reference.py PSID 4a2ff3d7098ab488174041ed6e18fb92076ab435 63 \\
         flag0=_Flag0 flag1=_Flag1 > DEGOV1/psid_test63.json
     python psid_reference.py PSID d94d74e7daaa445517da69cd0d528570fa438f28 58 \\

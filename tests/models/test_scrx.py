@@ -1,0 +1,177 @@
+"""PSS/E's SCRX (stabctl.models.exciters.sexs, smpexc type 0, with its negative field
+current logic): PSS/E's ThreeBus case with its GENROU on SCRX (solid fed, bus fed, bus
+fed with rc/rfd = 1), imported as a user imports it, initialises to
+PowerSimulationsDynamics.jl's states (its test 47, tests/data/psse_runs/SCRX/README.md);
+its eigenvalues are PSID's but for a gap this file names; the negative field current
+logic is the closed form of PSS/E's block diagram; bad values are refused by name."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from stabctl.case import ExciterTable
+from stabctl.dynamics.driver import Simulator
+from stabctl.errors import CaseError
+from stabctl.io import load_case
+from stabctl.io.psse import load_psse
+from stabctl.models import exciters as exc
+from stabctl.models.exciters.sexs import S
+from stabctl.smallsignal.linearise import linearise
+
+DATA = Path(__file__).parents[1] / "data" / "psse_runs" / "SCRX"
+RAW = DATA / "ThreeBusMulti.raw"
+PSID = json.loads((DATA / "psid_test47.json").read_text())
+#: PSID's run -> (its DYR, CSWITCH, rc/rfd)
+RUNS = {
+    "plain": ("ThreeBus_SCRX.dyr", 1.0, 0.0),
+    "switch": ("ThreeBus_SCRX_withSwitch.dyr", 0.0, 0.0),
+    "rcrfd": ("ThreeBus_SCRX_withRcRfd.dyr", 0.0, 1.0),
+}
+TA_TB = 0.4  # the records' TA/TB
+
+
+def imported(run):
+    """The run's case as ``stabctl import-psse RAW DYR`` builds it (constant-impedance
+    loads, as the Julia test converts them)."""
+    return load_psse(RAW, DATA / RUNS[run][0])
+
+
+@pytest.fixture(scope="module", params=tuple(RUNS))
+def run(request):
+    return request.param, Simulator(imported(request.param), background_compile=False)
+
+
+def test_record_fills_smpexc_and_its_column(run):
+    """SCRX TA/TB TB K TE EMIN EMAX CSWITCH rc/rfd: smpexc with T_C = (TA/TB) TB, bus fed
+    (column 19) when CSWITCH = 0, rc/rfd in column 74."""
+    name, sim = run
+    e = sim.case.exciters
+    _, cswitch, rc_rfd = RUNS[name]
+    assert e.type[0] == 0 and e.rc_rfd[0] == rc_rfd and e.KG[0] == float(cswitch == 0)
+    assert [e.TC[0], e.TB[0], e.KA[0], e.TA[0], e.Vrmin[0], e.Vrmax[0]] == [
+        2.0,
+        5.0,
+        20.0,
+        1.0,
+        -50.0,
+        50.0,
+    ]
+
+
+def test_initial_states_are_psid_s(run):
+    """PSID's initial point: its bus voltages, its GENROU's states (stabctl's E'd and
+    psi_kq in PST's sign) and its SCRX's: Vr1, the lead-lag's state ((1 - TA/TB) times
+    stabctl's, the lagged input), Vr2 (the regulator's output before the bus-fed
+    product), within 1e-9 (measured 4.2e-12)."""
+    name, sim = run
+    ref = PSID[f"x0_{name}"]
+    psid = np.array(ref["generator-102-1"])
+    m = sim.model
+    np.testing.assert_allclose(sim.op.V.real, ref["V_R"], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sim.op.V.imag, ref["V_I"], rtol=0, atol=1e-9)
+    xm = m.layout.view(m.x0, "mac")[:, 1]  # bus 102's GENROU (bus 101: the GENCLS)
+    mac = np.array([xm[2], -xm[4], xm[3], -xm[5], xm[0], xm[1]])
+    np.testing.assert_allclose(mac, psid[:6], rtol=0, atol=1e-9)
+    xe = m.layout.view(m.x0, "exc")[:, 0]
+    got = [(1 - TA_TB) * xe[S.VAs], xe[S.Efd]]
+    np.testing.assert_allclose(got, psid[6:], rtol=0, atol=1e-9)
+
+
+def _gaps(sim, name) -> dict:
+    """PSID's eigenvalue -> its distance to stabctl's nearest (1/s)."""
+    psid = np.array([complex(*v) for v in PSID[f"eigvals_{name}"]])
+    lam = np.linalg.eigvals(np.asarray(linearise(sim).A))
+    assert lam.size == psid.size == 8  # GENROU, SCRX
+    return {z: float(np.min(np.abs(lam - z))) for z in psid}
+
+
+def test_eigenvalues_are_psid_s_within_the_known_gap(run):
+    """PSID's spectrum (GENROU, SCRX, the infinite bus; 8 eigenvalues) against stabctl's
+    (measured, all three runs: the electromechanical pair -0.689 +- 8.594j 0.0419 away,
+    stabctl's -0.731 +- 8.595j; -8.136 1.9e-3; the -39.2 pair 5.5e-4; the others within
+    1.1e-4): this pins the gap `test_eigenvalues_are_psid_s` names."""
+    name, sim = run
+    gaps = _gaps(sim, name)
+    em = {z: g for z, g in gaps.items() if abs(abs(z.imag) - 8.59) < 0.01}
+    assert len(em) == 2 and max(em.values()) < 0.043
+    assert max(g for z, g in gaps.items() if z not in em) < 2e-3
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="the electromechanical pair is 0.042 1/s from PSID's (its damping), the other "
+    "modes up to 1.9e-3, with rc/rfd = 0 as well (the SCRX stabctl read before); the same "
+    "GENROU without an exciter (DEGOV1, test 63) agrees to 4.7e-8 and SEXS on an "
+    "unsaturated GENROU (PIDGOV, WPIDHY) to 2e-8, so the gap is an exciter on this "
+    "saturated GENROU (S(1.0) = 0.1, S(1.2) = 0.8), as ST8C's (test 61, 0.034), not SCRX's "
+    "blocks; not yet explained",
+)
+def test_eigenvalues_are_psid_s(run):
+    name, sim = run
+    assert max(_gaps(sim, name).values()) < 1e-6
+
+
+def test_rc_rfd_leaves_the_linearisation_while_the_field_current_is_positive():
+    """At rest I_fd = Efd0 > 0, where PSS/E's logic passes the regulator's output: PSID's
+    rc/rfd = 1 run has its bus-fed run's initial point and eigenvalues, and so has
+    stabctl's."""
+    assert PSID["x0_rcrfd"] == PSID["x0_switch"]
+    assert PSID["eigvals_rcrfd"] == PSID["eigvals_switch"]
+    a = [
+        np.asarray(linearise(Simulator(imported(r), background_compile=False)).A)
+        for r in ("switch", "rcrfd")
+    ]
+    np.testing.assert_array_equal(a[0], a[1])
+
+
+# -- the exciter alone at rest (kundur's machine 1, the rc/rfd run's record)
+
+EFD0, VT0 = 2.0, 1.02
+
+
+def _row(**changed):
+    e = imported("rcrfd").exciters
+    out = [float(getattr(e, name)[0]) for name in e.columns()]
+    for name, value in changed.items():
+        out[exc.EXCITER.col(name) - 1] = value
+    out[1] = 1  # kundur's machine 1
+    return out
+
+
+def _started(row, efd0=EFD0):
+    case = load_case("kundur").replace(exciters=ExciterTable.from_matrix([row]))
+    x, Vref, p = exc.initialise(exc.exciter_params(case), np.array([efd0]), np.array([VT0]))
+    return p.packed(Vref), x
+
+
+@pytest.mark.parametrize("ieee", (True, False))
+def test_negative_field_current_meets_the_discharge_resistor(ieee):
+    """PSS/E's SCRX: with rc/rfd != 0 the field voltage is -rc/rfd I_fd while I_fd <= 0,
+    the regulator's output (bus fed: times V_t) while I_fd > 0; with rc/rfd = 0 the
+    regulator's output whatever I_fd."""
+    for rc in (1.0, 2.5):
+        P, x = _started(_row(rc_rfd=rc))
+        assert exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, EFD0, ieee) == pytest.approx(
+            EFD0, rel=1e-14
+        )
+        assert exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, -0.3, ieee) == rc * 0.3
+        assert exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, 0.0, ieee) == 0.0
+    P, x = _started(_row(rc_rfd=0.0))
+    efd = exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, -0.3, ieee)
+    assert efd == pytest.approx(EFD0, rel=1e-14)
+
+
+def test_bad_values_are_refused_by_name(tmp_path):
+    """A negative rc/rfd (DYR: naming the record; exc_con: the field), and a start-up
+    field current <= 0 with rc/rfd != 0 (no rest point on the regulator's output)."""
+    text = (DATA / "ThreeBus_SCRX_withRcRfd.dyr").read_text().replace("1.0/", "-1.0/")
+    bad = tmp_path / "ThreeBus_SCRX_withRcRfd.dyr"
+    bad.write_text(text)
+    with pytest.raises(CaseError, match=r"_withRcRfd.dyr:\d+ SCRX .*rc/rfd = -1 must be >= 0"):
+        load_psse(RAW, bad)
+    with pytest.raises(CaseError, match="rc_rfd"):
+        _started(_row(rc_rfd=-1.0))
+    with pytest.raises(CaseError, match=r"SCRX's start-up field current -0.1000 pu"):
+        _started(_row(), efd0=-0.1)
