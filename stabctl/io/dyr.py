@@ -6,8 +6,8 @@ RAW file, to the PST matrices `mac_con`, `exc_con`, `pss_con`, `tg_con` that
 
 Record syntax (PSS/E Program Operation Manual, "Dynamics Data File"): ``IBUS 'MODEL' ID
 CON(J) ... CON(J+n) /`` over one or more lines, fields separated by blanks or commas;
-ICONs of IEEEG1 (JBUS, M), IEEEST (ICS, IB) and ST2CUT (MODE, BUSR, MODE2, BUSR2) come
-first among the numbers.  Parameter
+ICONs of IEEEG1 (JBUS, M), IEEEST (ICS, IB), PSS1A (ICS) and ST2CUT (MODE, BUSR,
+MODE2, BUSR2) come first among the numbers.  Parameter
 order per model (PSS/E Model Library, as ANDES `andes/io/psse-dyr.yaml`) and the table
 field each parameter is copied to are declared once, with the table columns, in the
 model modules (`stabctl.models.declaration.DyrModel`); the mappers here only compute
@@ -868,6 +868,19 @@ def _ieeest(rec, gen):
     )
 
 
+def _pss1a(rec, gen):
+    """PSS1A: ICS A1 A2 T1 T2 T3 T4 T5 T6 KS LSMAX LSMIN VCU VCL -> stabctl's PSS/E
+    stabiliser (type 3, stabctl.models.pss.ieeest): the transducer 1/(1 + s T6) its
+    input lag (K1 = 1), the washout KS s T5/(1 + s T5) as K_w = KS T5, T_w = T5; inputs
+    1 (speed) and 3 (electrical power) only, a washout T5 below 1e-3 s unsupported."""
+    v = DYR_MODELS["PSS1A"].values(rec.params)
+    _local_inputs((v["ICS"], 0.0))
+    _washout(v["T5"], v["T5"])
+    if v["ICS"] == 0:
+        raise _Unsupported("no input (ICS 0)")
+    return _pss_row(rec, gen, K1=1.0, KTw=v["KS"] * v["T5"])
+
+
 def _st2cut(rec, gen):
     """ST2CUT: MODE BUSR MODE2 BUSR2 K1 K2 T1..T10 LSMAX LSMIN VCU VCL -> stabctl's PSS/E
     stabiliser (type 3): K1/(1 + sT1) + K2/(1 + sT2) inputs, washout sT3/(1 + sT4), lead-lags
@@ -1057,6 +1070,7 @@ _MAPPERS = {
     "SCRX": _scrx,
     "IEEEST": _ieeest,
     "ST2CUT": _st2cut,
+    "PSS1A": _pss1a,
     "STAB2A": _stab2a,
     "STAB1": _stab1,
     "PSS2A": _pss2,

@@ -1,4 +1,4 @@
-"""stabctl's PSS/E stabiliser (pss_con type 3): PSS/E's IEEEST and ST2CUT.
+"""stabctl's PSS/E stabiliser (pss_con type 3): PSS/E's IEEEST, ST2CUT and PSS1A.
 
 Input lags K_i/(1 + s Tr_i) on one or two PSS/E inputs (speed deviation or electrical
 power) summed, the filter (1 + A5 s + A6 s^2)/((1 + A1 s + A2 s^2)(1 + A3 s + A4 s^2)),
@@ -7,6 +7,16 @@ Model Library IEEEST (IEEE Std 421.5 PSS1A-type with its filter) and ST2CUT (as 
 ``andes/models/pss/ieeest.py``, ``st2cut.py``), docs/pst_models.md 3.1.  An IEEEST
 without filter whose lead-lags have their lags is PST's `pss` (types 1, 2; the mapper
 in `stabctl.io.dyr` chooses).
+
+PSS/E's PSS1A (IEEE Std 421.5-2005 PSS1A) is this model with parameters mapped: its
+transducer 1/(1 + s T6) the first input lag (K1 = 1, Tr1 = T6), its washout K_S s
+T5/(1 + s T5) the washout (K_w = K_S T5, T_w = T5), its filter 1/(1 + A1 s + A2 s^2) the
+filter's first factor (A3..A6 = 0), its lead-lags T1/T2 and T3/T4 the first two, its
+output limits and cut-off [VCL, VCU] the same columns.  The blocks are linear up to the
+output limit, where both models limit, so their order (PSS1A's washout before the
+filter) does not change the output.  Record: ICS A1 A2 T1 T2 T3 T4 T5 T6 KS LSMAX LSMIN
+VCU VCL (PowerWorld's PSS1A, InterPSS's PSS/E DYR reader); IEEE Std 421.5-2005 section
+8.1 and InterPSS's ``Ieee1992PSS1AStabilizer`` for the blocks.
 """
 
 from __future__ import annotations
@@ -62,6 +72,28 @@ DYR = (
         },
         kind=PSSE,
         andes=("ST2CUT",),
+    ),
+    # PSS1A -> type 3 (module docstring); the mapper computes K_w = KS T5, sets K1 = 1
+    DyrModel(
+        "PSS1A",
+        ("ICS", "A1", "A2", "T1", "T2", "T3", "T4", "T5", "T6", "KS")
+        + ("LSMAX", "LSMIN", "VCU", "VCL"),
+        {
+            "input1": "ICS",
+            "A1": "A1",
+            "A2": "A2",
+            "T1": "T1",
+            "T2": "T2",
+            "T3": "T3",
+            "T4": "T4",
+            "Tw": "T5",
+            "Tr1": "T6",
+            "ymax": "LSMAX",
+            "ymin": "LSMIN",
+            "VCU": "VCU",
+            "VCL": "VCL",
+        },
+        kind=PSSE,
     ),
 )
 
