@@ -1,15 +1,17 @@
 """PSS/E's SCRX (stabctl.models.exciters.sexs, smpexc type 0, with its negative field
 current logic): PSS/E's ThreeBus case with its GENROU on SCRX (solid fed, bus fed, bus
 fed with rc/rfd = 1), imported as a user imports it, initialises to
-PowerSimulationsDynamics.jl's states (its test 47, tests/data/psse_runs/SCRX/README.md);
-its eigenvalues are PSID's but for a gap this file names; the negative field current
-logic is the closed form of PSS/E's block diagram; bad values are refused by name."""
+PowerSimulationsDynamics.jl's states (its test 47, tests/data/psse_runs/SCRX/README.md)
+and, with PSID's shaft for a machine without a governor, has its eigenvalues; the
+negative field current logic is the closed form of PSS/E's block diagram; bad values are
+refused by name."""
 
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+from psid_shaft import torque_held
 
 from stabctl.case import ExciterTable
 from stabctl.dynamics.driver import Simulator
@@ -79,38 +81,22 @@ def test_initial_states_are_psid_s(run):
     np.testing.assert_allclose(got, psid[6:], rtol=0, atol=1e-9)
 
 
-def _gaps(sim, name) -> dict:
+def _gaps(case, name) -> dict:
     """PSID's eigenvalue -> its distance to stabctl's nearest (1/s)."""
     psid = np.array([complex(*v) for v in PSID[f"eigvals_{name}"]])
-    lam = np.linalg.eigvals(np.asarray(linearise(sim).A))
+    lam = np.linalg.eigvals(np.asarray(linearise(Simulator(case, background_compile=False)).A))
     assert lam.size == psid.size == 8  # GENROU, SCRX
     return {z: float(np.min(np.abs(lam - z))) for z in psid}
 
 
-def test_eigenvalues_are_psid_s_within_the_known_gap(run):
-    """PSID's spectrum (GENROU, SCRX, the infinite bus; 8 eigenvalues) against stabctl's
-    (measured, all three runs: the electromechanical pair -0.689 +- 8.594j 0.0419 away,
-    stabctl's -0.731 +- 8.595j; -8.136 1.9e-3; the -39.2 pair 5.5e-4; the others within
-    1.1e-4): this pins the gap `test_eigenvalues_are_psid_s` names."""
-    name, sim = run
-    gaps = _gaps(sim, name)
-    em = {z: g for z, g in gaps.items() if abs(abs(z.imag) - 8.59) < 0.01}
-    assert len(em) == 2 and max(em.values()) < 0.043
-    assert max(g for z, g in gaps.items() if z not in em) < 2e-3
-
-
-@pytest.mark.xfail(
-    strict=True,
-    reason="the electromechanical pair is 0.042 1/s from PSID's (its damping), the other "
-    "modes up to 1.9e-3, with rc/rfd = 0 as well (the SCRX stabctl read before); the same "
-    "GENROU without an exciter (DEGOV1, test 63) agrees to 4.7e-8 and SEXS on an "
-    "unsaturated GENROU (PIDGOV, WPIDHY) to 2e-8, so the gap is an exciter on this "
-    "saturated GENROU (S(1.0) = 0.1, S(1.2) = 0.8), as ST8C's (test 61, 0.034), not SCRX's "
-    "blocks; not yet explained",
-)
-def test_eigenvalues_are_psid_s(run):
-    name, sim = run
-    assert max(_gaps(sim, name).values()) < 1e-6
+@pytest.mark.parametrize("name", tuple(RUNS))
+def test_eigenvalues_are_psid_s_with_its_held_torque(name):
+    """PSID's spectrum (GENROU, SCRX, the infinite bus; 8 eigenvalues) is stabctl's, each
+    within 1e-6 1/s (measured 4.1e-8), once the machine, which has no governor, holds its
+    torque as PSID's does (`torque_held`).  As imported (PSS/E's held power) the
+    electromechanical pair is 0.042 1/s better damped than PSID's: the torque P_m/omega
+    falls as the speed rises."""
+    assert max(_gaps(torque_held(imported(name)), name).values()) < 1e-6
 
 
 def test_rc_rfd_leaves_the_linearisation_while_the_field_current_is_positive():

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from psid_shaft import torque_held
 
 from stabctl.case import ExciterTable
 from stabctl.dynamics.driver import Simulator
@@ -62,41 +63,21 @@ def test_initial_states_are_psid_s(sim):
     np.testing.assert_allclose(got, psid[6:], rtol=0, atol=1e-9)
 
 
-#: PSID's eigenvalues stabctl does not reproduce yet (1/s): the electromechanical pair
-#: (stabctl -2.785 +- 8.066j, 0.034 away) and the real mode near -1.590 (0.0083 away)
-OPEN = (complex(-2.752, 8.057), complex(-2.752, -8.057), complex(-1.590, 0.0))
-
-
-def _gaps(sim) -> dict:
+def _gaps(case) -> dict:
     """PSID's eigenvalue -> its distance to stabctl's nearest (1/s)."""
     psid = np.array([complex(*v) for v in PSID["eigvals"]])
-    lam = np.linalg.eigvals(np.asarray(linearise(sim).A))
+    lam = np.linalg.eigvals(np.asarray(linearise(Simulator(case, background_compile=False)).A))
     assert lam.size == psid.size  # 11: GENROU, ST8C
     return {z: float(np.min(np.abs(lam - z))) for z in psid}
 
 
-def _is_open(z) -> bool:
-    return min(abs(z - o) for o in OPEN) < 0.01
-
-
-def test_eigenvalues_are_psid_s_but_the_open_ones(sim):
+def test_eigenvalues_are_psid_s_with_its_held_torque():
     """PSID's spectrum (GENROU, ST8C, the infinite bus; 11 eigenvalues) is stabctl's, each
-    within 1.5e-3 1/s (measured: the fastest six within 1.2e-3, -0.364 3.2e-4, -0.0251
-    7.5e-9), but for the modes in OPEN (`test_open_modes_are_psid_s`)."""
-    gaps = {z: g for z, g in _gaps(sim).items() if not _is_open(z)}
-    assert len(gaps) == 8
-    assert max(gaps.values()) < 1.5e-3, gaps
-
-
-@pytest.mark.xfail(
-    strict=True,
-    reason="the electromechanical pair is 0.034 1/s and the -1.590 mode 0.0083 from PSID's; "
-    "the same GENROU under DEGOV1 agrees to 4.7e-8, so the gap is in ST8C's coupling to "
-    "the machine (its field current, its source switch SW1) and not yet explained",
-)
-def test_open_modes_are_psid_s(sim):
-    gaps = {z: g for z, g in _gaps(sim).items() if _is_open(z)}
-    assert len(gaps) == 3 and max(gaps.values()) < 1.5e-3, gaps
+    within 1e-6 1/s (measured 4.0e-8), once the machine, which has no governor, holds its
+    torque as PSID's does (`psid_shaft.torque_held`).  As imported (PSS/E's held power,
+    the torque P_m/omega) the electromechanical pair is 0.034 1/s and the -1.590 mode
+    0.0083 from PSID's."""
+    assert max(_gaps(torque_held(imported())).values()) < 1e-6
 
 
 # -- the exciter alone at rest (kundur's machine 1, the run's record)
