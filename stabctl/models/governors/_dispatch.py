@@ -13,6 +13,7 @@ from stabctl.models.governors import (
     hygov,
     hygov4,
     ieeeg1,
+    ieeeg2,
     ieesgo,
     pidgov,
     tg,
@@ -49,7 +50,9 @@ def pmech(P, x, k, omega):
         return degov.pmech(P, x, k, omega)
     if kind == 11:  # DEGOV1
         return degov1.pmech(P, x, k, omega)
-    return pidgov.pmech(P, x, k, omega)  # PIDGOV; WPIDHY
+    if kind == 12 or kind == 13:  # PIDGOV; WPIDHY
+        return pidgov.pmech(P, x, k, omega)
+    return ieeeg2.pmech(P, x, k, omega)  # IEEEG2
 
 
 @kernel
@@ -81,5 +84,7 @@ def derivatives(P, x, k, omega, pe, dx):
         degov.derivatives(P, x, k, omega, pe, dx)
     elif kind == 11:  # DEGOV1
         degov1.derivatives(P, x, k, omega, pe, dx)
-    else:  # PIDGOV; WPIDHY
+    elif kind == 12 or kind == 13:  # PIDGOV; WPIDHY
         pidgov.derivatives(P, x, k, omega, pe, dx)
+    else:  # IEEEG2
+        ieeeg2.derivatives(P, x, k, omega, pe, dx)
