@@ -27,12 +27,15 @@ Two searches (`SearchOptions.method`), both on the lattice below:
   close to linear in the clearing time) extrapolated from two unstable probes
   vanishes, on both sides of it, bisection only to finish (`_sime_search`).
 
-Both end in the same cell where the verdict is monotone in the clearing time (every CCT of
-Kundur's screening and of every third fault of miniWECC's, `benchmarks/bench_cct.py`).
-"sime" saves about one run in fourteen there (Kundur 13.4 against 14.5 per CCT, miniWECC
-13.3 against 14.0) and cost more on two ACTIVSg2000 faults (14.5 against 12.5): SIME's
-margins near the CCT are erratic on these systems (runs that leave rest a few ms above
-it, multi-swing margins that are not monotone), so bisection stays the default.
+Both end in the same cell where the verdict is monotone in the clearing time (every fault
+of Kundur's screening and every fourth of miniWECC's, `benchmarks/bench_cct.py`).
+"sime" takes fewer runs there (Kundur 12.4 against 14.5 per CCT, 10.3 against 12.4 at the
+step h; miniWECC 12.8 against 14.4, 10.7 against 12.3 at h) and one more on ACTIVSg2000's
+line fault 2021-2002 (15 against 14): SIME's margins near the CCT are erratic on these
+systems (runs that leave rest a few ms above it, multi-swing margins that are not
+monotone), so bisection stays the default.  Neither comes near 5 runs per CCT: the two
+ends of the final cell and their reruns at h/2 make 4, and the margins of runs far from
+the CCT (those of the doubling) place no probe within a cell of it.
 
 Grid: the simulator's grid lands on every event time (`stabctl.dynamics.grid.time_grid`), so a
 clearing time is never rounded to a multiple of the step h: the fault-on interval of length
