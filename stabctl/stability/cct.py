@@ -30,12 +30,13 @@ Two searches (`SearchOptions.method`), both on the lattice below:
 Both end in the same cell where the verdict is monotone in the clearing time (every fault
 of Kundur's screening and every fourth of miniWECC's, `benchmarks/bench_cct.py`).
 "sime" takes fewer runs there (Kundur 12.4 against 14.5 per CCT, 10.3 against 12.4 at the
-step h; miniWECC 12.8 against 14.4, 10.7 against 12.3 at h) and one more on ACTIVSg2000's
-line fault 2021-2002 (15 against 14): SIME's margins near the CCT are erratic on these
-systems (runs that leave rest a few ms above it, multi-swing margins that are not
-monotone), so bisection stays the default.  Neither comes near 5 runs per CCT: the two
-ends of the final cell and their reruns at h/2 make 4, and the margins of runs far from
-the CCT (those of the doubling) place no probe within a cell of it.
+step h; miniWECC 12.8 against 14.4, 10.7 against 12.3 at h) and one more on each of
+ACTIVSg2000's two faults (line 2021-2002: 15 against 14; bus 2021: 12 against 11):
+SIME's margins near the CCT are erratic on these systems (runs that leave rest a few ms
+above it, multi-swing margins that are not monotone), so bisection stays the default.
+Neither comes near 5 runs per CCT: the two ends of the final cell and their reruns at
+h/2 make 4, and the margins of runs far from the CCT (those of the doubling) place no
+probe within a cell of it.
 
 Grid: the simulator's grid lands on every event time (`stabctl.dynamics.grid.time_grid`), so a
 clearing time is never rounded to a multiple of the step h: the fault-on interval of length
