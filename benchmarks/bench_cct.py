@@ -8,8 +8,8 @@ step), pinned to one core after a warm-up run (compilation and the power flow ex
 * ``bisection``: SearchOptions(method="bisection", early_stop=False), the search before
   SIME's (check at 0, doubling from 0.1 s, bisection; every run to its end or to
   separation);
-* ``sime``: SearchOptions() (method "sime"), SIME's unstable margins extrapolated to
-  the CCT, bisection to finish;
+* ``sime``: SearchOptions(method="sime"), SIME's unstable margins extrapolated to
+  the CCT, bisection to finish, the check at 0 only when no stable probe came first;
 * ``sime-early``: the same search, its runs ended at SIME's certain verdicts
   (early_stop=True).
 
@@ -40,8 +40,8 @@ from stabctl.studies.cases import CASE1, CASE2
 
 METHODS = {
     "bisection": SearchOptions(method="bisection", early_stop=False),
-    "sime": SearchOptions(),
-    "sime-early": SearchOptions(early_stop=True),
+    "sime": SearchOptions(method="sime"),
+    "sime-early": SearchOptions(method="sime", early_stop=True),
 }
 
 

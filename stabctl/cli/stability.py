@@ -76,8 +76,9 @@ def _trips(trip) -> tuple[tuple[int, int], ...]:
     default="bisection",
     show_default=True,
     help="How the bracket is found: the bound checks, doubling and bisection, or from "
-    "SIME's margins of the unstable runs (about 7 % fewer runs on Kundur and miniWECC, "
-    "the same CCT cell).",
+    "SIME's margins of the unstable runs, clearing at once checked only when no probe "
+    "was stable first (about 12 % fewer runs on Kundur and miniWECC, the same CCT "
+    "cell; docs/cli.md).",
 )
 @model_options
 @q_limits_option

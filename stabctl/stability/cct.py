@@ -20,17 +20,23 @@ Two searches (`SearchOptions.method`), both on the lattice below:
 
 - "bisection" (the default): stable at t_lo, the upper bound doubled from 0.1 s while
   stable, bisection;
-- "sime": stable at t_lo, the first probe at 0.1 s (doubled while stable),
-  then the probes placed where SIME's unstable margin (`stabctl.stability.sime.
-  probe_margin`, close to linear in the clearing time) extrapolated from two unstable
-  probes vanishes, on both sides of it, bisection only to finish (`_sime_search`).
+- "sime": the first probe at 0.1 s (doubled while stable), stable at t_lo checked only
+  when a probe is unstable before any is stable (a probe found stable above t_lo is
+  taken to make t_lo stable too: the verdict is assumed monotone below it), then the
+  probes placed where SIME's unstable margin (`stabctl.stability.sime.probe_margin`,
+  close to linear in the clearing time) extrapolated from two unstable probes
+  vanishes, on both sides of it, bisection only to finish (`_sime_search`).
 
-Both end in the same cell where the verdict is monotone in the clearing time (every CCT of
-Kundur's screening and of every third fault of miniWECC's, `benchmarks/bench_cct.py`).
-"sime" saves about one run in fourteen there (Kundur 13.4 against 14.5 per CCT, miniWECC
-13.3 against 14.0) and cost more on two ACTIVSg2000 faults (14.5 against 12.5): SIME's
-margins near the CCT are erratic on these systems (runs that leave rest a few ms above
-it, multi-swing margins that are not monotone), so bisection stays the default.
+Both end in the same cell where the verdict is monotone in the clearing time (every fault
+of Kundur's screening and every fourth of miniWECC's, `benchmarks/bench_cct.py`).
+"sime" takes fewer runs there (Kundur 12.4 against 14.5 per CCT, 10.3 against 12.4 at the
+step h; miniWECC 12.8 against 14.4, 10.7 against 12.3 at h) and one more on each of
+ACTIVSg2000's two faults (line 2021-2002: 15 against 14; bus 2021: 12 against 11):
+SIME's margins near the CCT are erratic on these systems (runs that leave rest a few ms
+above it, multi-swing margins that are not monotone), so bisection stays the default.
+Neither comes near 5 runs per CCT: the two ends of the final cell and their reruns at
+h/2 make 4, and the margins of runs far from the CCT (those of the doubling) place no
+probe within a cell of it.
 
 Grid: the simulator's grid lands on every event time (`stabctl.dynamics.grid.time_grid`), so a
 clearing time is never rounded to a multiple of the step h: the fault-on interval of length
@@ -295,8 +301,9 @@ class SearchOptions:
     method : {"bisection", "sime"}
         How the bracket is found (module docstring): "bisection" (default), the bound
         checks, doubling and bisection; "sime", from SIME's margins of the runs,
-        confirmed on both sides, bisection only to finish.  Both end in the same
-        lattice cell when the verdict is monotone in the clearing time.
+        confirmed on both sides, bisection only to finish, t_lo run only when no probe
+        above it was found stable first (it is then assumed stable).  Both end in the
+        same lattice cell when the verdict is monotone in the clearing time.
     early_stop : bool
         End each run as soon as SIME makes its verdict certain
         (`stabctl.stability.sime.EarlyVerdict`; the default criterion and a `Simulator`
@@ -502,25 +509,27 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
     the first (stable, unstable) pair found).
 
     SIME's unstable margin is close to linear in the clearing time (`probe_margin`), so
-    two unstable probes extrapolate to the CCT (`_margin_zero`).  After the check at
-    k_lo (as `_bracket`: the verdicts of both searches agree even where stability is
-    not monotone in the clearing time), the first probe is at k_hi, doubled while
-    stable; then bisection until two unstable probes have a margin.  Then, up to
-    SIME_GUIDED times, the zero x of the margin extrapolated from the two unstable
-    probes closest to it sets the probe: more than SIME_NEAR cells below the unstable
-    end, at ceil(x) (the margin bends towards 0 near the CCT, so the zero extrapolated
-    from above mostly lands on the unstable side, and the next extrapolation is short);
-    within SIME_NEAR cells, at x rounded (the cell above the stable end when floor(x)
-    is that end, the cell below the unstable end when x is above it); below the stable
-    end, a quarter of the bracket above it.  Two guided probes in a row that moved the
-    same end by at most 2 cells (the bracket creeping) are followed by a bisection
-    step; after SIME_GUIDED guided probes, bisection.  A probe at k_max found stable
-    raises AboveSearchLimit.  `margins` (lattice index -> margin or None) is filled by
-    `stable_at` for each unstable probe."""
+    two unstable probes extrapolate to the CCT (`_margin_zero`).  The first probe is at
+    k_hi, doubled while stable; the check at k_lo (as `_bracket`) is run only when an
+    unstable probe comes before any stable one, i.e. it is assumed that a probe found
+    stable above k_lo makes k_lo stable too (a verdict monotone below the first stable
+    probe).  That is not always so: Kundur's fault at bus 3 on line 3-4 is unstable when
+    cleared within 0-10 ms and stable at 30-67 ms; its verdict (N-1 insecure) equals the
+    bisection's because its first probe, 0.1 s, is unstable, but a first probe (t_hi) in
+    30-67 ms would give a CCT there.  Then bisection until two unstable probes have a
+    margin.  Then, up to SIME_GUIDED times, the zero x of the margin extrapolated from
+    the two unstable probes closest to it sets the probe: more than SIME_NEAR cells below
+    the unstable end, at ceil(x) (the margin bends towards 0 near the CCT, so the zero
+    extrapolated from above mostly lands on the unstable side, and the next
+    extrapolation is short); within SIME_NEAR cells, at x rounded (the cell above the
+    stable end when floor(x) is that end, the cell below the unstable end when x is above
+    it); below the stable end, a quarter of the bracket above it.  Two guided probes in a
+    row that moved the same end by at most 2 cells (the bracket creeping) are followed by
+    a bisection step; after SIME_GUIDED guided probes, bisection.  A probe at k_max found
+    stable raises AboveSearchLimit.  `margins` (lattice index -> margin or None) is
+    filled by `stable_at` for each unstable probe."""
     k_lo, k_hi, k_max = bounds
-    if not stable_at(k_lo):
-        _lower_bound_unstable(k_lo, fault, tol)
-    known: dict[int, bool] = {k_lo: True}
+    known: dict[int, bool] = {}
     start = None
     n_guided, guided, ends, last = 0, None, (k_lo, k_max), None
     k = k_hi
@@ -534,6 +543,10 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
             creeping = last is not None and last[0] == moved[0] and max(last[1], moved[1]) <= 2
         last = moved
         u = min((j for j, ok in known.items() if not ok), default=None)
+        if u is not None and not any(ok for j, ok in known.items() if j < u):
+            if not stable_at(k_lo):  # no stable probe yet: the check at k_lo
+                _lower_bound_unstable(k_lo, fault, tol)
+            known[k_lo] = True
         s = max(j for j, ok in known.items() if ok and (u is None or j < u))
         if u is None:  # stable so far: double
             k = min(2 * k, k_max)
