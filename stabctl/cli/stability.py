@@ -118,11 +118,11 @@ def cct(
     more than pi rad before --tf (default fault time + 5 s); runs stop at separation.
     Clearing times are multiples of --tol-ms.  --search bisection checks stability at
     zero clearing (the line trip alone), doubles the upper bound from 0.1 s while stable
-    (up to --t-max), then bisects.  --search sime (the default) starts at 0.1 s (doubled
-    while stable), extrapolates SIME's unstable margin (close to linear in the clearing
-    time) from two unstable runs to the CCT, probes there on both sides and bisects only
-    what is left.  Both end in the same bracket when the verdict is monotone in the
-    clearing time.
+    (up to --t-max), then bisects (the default).  --search sime starts at 0.1 s (doubled
+    while stable; zero clearing checked only when no probe was stable first),
+    extrapolates SIME's unstable margin (close to linear in the clearing time) from two
+    unstable runs to the CCT, probes there on both sides and bisects only what is left.
+    Both end in the same bracket when the verdict is monotone in the clearing time.
     The CCT printed is the stable end of the final bracket (conservative).  Its numerical
     error bar: the bracket's ends rerun at half the step (the search continued there if a
     verdict changes); numerical_error_s = abs(CCT(h/2) - CCT(h)) (0: below the tolerance).
