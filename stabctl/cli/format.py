@@ -251,6 +251,13 @@ def print_cct(case_name, rating, d) -> None:
             f"numerical error {1000 * d['numerical_error_s']:g} ms (CCT at half the "
             f"step {d['cct_half_step_s']:.3f} s)"
         )
+    if "critical_group" in d:
+        g = d["critical_group"]
+        click.echo(
+            f"storage on the critical group's COI: machines {g['machines']} separate without "
+            f"storage (CCT {g['cct_without_storage_s']:.3f} s); their devices brake them "
+            "against the other machines' COI, the other devices drive theirs after them"
+        )
     if d["separated_machines"]:
         click.echo(
             f"machine(s) {', '.join(map(str, d['separated_machines']))} lose "

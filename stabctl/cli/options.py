@@ -582,10 +582,12 @@ def storage_options(rating_help: str = "", multiple: bool = False, with_rating: 
             ),
             click.option(
                 "--coi",
-                type=click.Choice(["system", "rest"]),
+                type=click.Choice(["system", "rest", "critical"]),
                 default="system",
                 show_default=True,
-                help="COI of the whole system or of the rest of it.",
+                help="COI of the whole system or of the rest of it; critical (cct only, "
+                "not the paper's law): of the other group, the fault's critical machines "
+                "(SIME, from the run without storage) or the rest.",
             ),
             click.option(
                 "--hysteresis-hz",
@@ -660,16 +662,33 @@ def check_storage_given(esd_pct) -> None:
         raise InputError(f"{', '.join(given)} given without --esd-pct (no storage to set)")
 
 
-def controller(deadband_hz, v_gate, coi, hysteresis_hz):
+def controller(deadband_hz, v_gate, coi, hysteresis_hz, critical=()):
     """The ESD controller of the storage options.
+
+    Parameters
+    ----------
+    deadband_hz, v_gate, coi, hysteresis_hz : float, float, str, float
+        The options' values (`stabctl.storage.control.BangBangCOI`).
+    critical : tuple of int, optional
+        The critical machines of ``--coi critical`` (found by the command).
 
     Returns
     -------
     stabctl.storage.devices.BangBangCOI
+
+    Raises
+    ------
+    InputError
+        ``--coi critical`` in a command that does not find the critical machines.
     """
     from stabctl.storage.control import BangBangCOI
 
-    return BangBangCOI(deadband_hz, v_gate, coi, hysteresis_hz)
+    if coi == "critical" and not critical:
+        raise InputError(
+            "--coi critical needs the fault's critical machines, which only `stabctl cct` "
+            "finds (from its search without storage)"
+        )
+    return BangBangCOI(deadband_hz, v_gate, coi, hysteresis_hz, critical)
 
 
 def parallel_options(func):

@@ -148,19 +148,24 @@ def cct(
     search = replace(search_settings(tol_ms, t_max, tf), method=method)
     model = model_settings(conventions, None, q_limits)
     case = load_case(case_name)
+    line_fault = LineFault(fault, far_bus, t_fault, circuit, _trips(trip))
+    validate_events(case, line_fault.events(0.0), t_fault + 1.0)  # before compiling
+    sim = model.simulator(case)
+    base = None
+    if esd_pct is not None and coi == "critical":
+        base = _without_storage(sim, line_fault, search, step)
     storage = (
         None
         if esd_pct is None
         else uniform_fleet(
-            case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz), model=esd_model
+            case,
+            esd_pct,
+            controller(deadband_hz, v_gate, coi, hysteresis_hz, base.separated if base else ()),
+            model=esd_model,
         )
     )
-    line_fault = LineFault(fault, far_bus, t_fault, circuit, _trips(trip))
-    validate_events(case, line_fault.events(0.0), t_fault + 1.0)  # before compiling
     try:
-        res = critical_clearing_time(
-            model.simulator(case), line_fault, search, storage=storage, h=step
-        )
+        res = critical_clearing_time(sim, line_fault, search, storage=storage, h=step)
     except InsecureContingency as exc:  # a verdict: N-1 insecure, CCT 0
         if as_json:
             print_json(
@@ -196,10 +201,37 @@ def cct(
         **res.to_dict(),
         "q_limits": q_limits,
     }
+    if base is not None:
+        out["critical_group"] = {
+            "machines": list(base.separated),
+            "cct_without_storage_s": base.cct_s,
+        }
     if as_json:
         print_json(out)
     else:
         print_cct(case.name, esd_pct, out)
+
+
+def _without_storage(sim, line_fault, search, step):
+    """The CCT search without storage that names ``--coi critical``'s critical machines
+    (the machines separated at its unstable end, SIME's critical group).
+
+    Raises
+    ------
+    InputError
+        No critical group: the fault is N-1 insecure or still stable at --t-max
+        without storage.
+    """
+    from stabctl.errors import AboveSearchLimit, InsecureContingency
+    from stabctl.stability.cct import critical_clearing_time
+
+    try:
+        return critical_clearing_time(sim, line_fault, search, h=step)
+    except (InsecureContingency, AboveSearchLimit) as exc:
+        raise InputError(
+            f"--coi critical: no critical group without storage ({exc}); the law needs "
+            "the machines that separate when the fault is cleared just too late"
+        ) from None
 
 
 def _ratings(values) -> list:

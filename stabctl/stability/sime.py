@@ -38,6 +38,7 @@ import numpy as np
 from stabctl.dynamics.coi import coi_angle, coi_of_islands, coi_of_rest, coi_speed
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import InputError
+from stabctl.storage.control import group_reference
 
 
 @dataclass(frozen=True)
@@ -163,14 +164,21 @@ def device_modes(
     of `buses`, driven by the matching machine of `machines`, would take along `result`
     (whether or not it is installed), on the run's grid: (n_t, n_dev).
 
-    controller: `stabctl.storage.devices.BangBangCOI` (deadband, voltage gate, system/rest COI,
-    hysteresis); freq_hz: the case frequency.  Switching instants are those of the grid
-    (the simulator locates them inside the step; the difference is below one step).
+    controller: `stabctl.storage.devices.BangBangCOI` (deadband, voltage gate, system, rest
+    or critical-group COI, hysteresis); freq_hz: the case frequency.  Switching instants
+    are those of the grid (the simulator locates them inside the step; the difference is
+    below one step).
     """
     idx = np.array([result.machine(int(k)) for k in machines], int)
     w, Mk = result.speed, np.asarray(result.inertia, float)
     if controller.coi == "rest":
         rel = (w[:, idx] - coi_of_rest(w, Mk, idx, result.island)) * freq_hz
+    elif controller.coi == "critical":
+        group = np.zeros(w.shape[1], np.int64)
+        group[[result.machine(int(k)) for k in controller.critical]] = 1
+        island = np.asarray(result.island, np.int64)
+        ref = np.array([group_reference(wk, Mk, island, group) for wk in w])
+        rel = (w[:, idx] - ref[:, idx]) * freq_hz
     else:  # each machine's island's COI, as the simulator's controllers
         rel = result.relative_speed[:, idx] * freq_hz
     v = result.vmag[:, [result.bus(int(b)) for b in buses]]

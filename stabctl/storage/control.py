@@ -10,6 +10,11 @@ fleet packing (`stabctl.storage.devices.pack`) asks the law, never tests its cla
   absorb +Pmax above the deadband (100 mHz), inject -Pmax below minus the deadband, nothing
   inside; only while its bus voltage is at least the gate (0.8 pu).  Optional hysteresis:
   a device switches off only when the relative speed is back inside deadband - hysteresis.
+  Its option ``coi="critical"`` (not the paper's) takes as reference, instead of the COI,
+  the COI of the other group, the groups being SIME's critical machines of a contingency
+  and the rest: a device at a critical machine brakes it while it runs ahead of the rest,
+  every other device drives its machine after the critical group (and brakes it once it
+  runs ahead of that group).
 - `LinearFeedback`, the Section 3 laws in multi-machine form: P = Kv (omega_i - omega_COI)
   + Ka d(omega_i - omega_COI)/dt (rad/s and rad/s^2 of electrical speed), clipped to
   +-Pmax; the acceleration is the one of the latest evaluation (the algebraic loop is
@@ -43,7 +48,8 @@ class LawConstants(NamedTuple):
 
     kind: NO_STORAGE, BANG_BANG, LINEAR or EXTERNAL; db, hyst: deadband and hysteresis
     (pu speed); vgate: voltage gate (pu); rest: COI of the other machines (else of all);
-    Kv: pu power per pu speed; Ka: pu power per pu speed per s.
+    Kv: pu power per pu speed; Ka: pu power per pu speed per s; critical: machine numbers
+    of the critical group (``coi="critical"``; empty for every other law).
     """
 
     kind: int
@@ -53,10 +59,14 @@ class LawConstants(NamedTuple):
     rest: bool
     Kv: float
     Ka: float
+    critical: tuple[int, ...] = ()
 
 
 #: the constants of no law (a run without storage)
 NO_LAW = LawConstants(NO_STORAGE, 0.0, 0.0, 0.0, False, 0.0, 0.0)
+
+#: the reference speeds of `BangBangCOI.coi`
+COI_CHOICES = ("system", "rest", "critical")
 
 
 @runtime_checkable
@@ -96,26 +106,41 @@ class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
         abs(f_i - f_COI) below which the device is idle (Hz), >= 0.
     v_gate_pu : float
         Minimum bus voltage for the device to act (pu), in [0, MAX_V_GATE_PU].
-    coi : {"system", "rest"}
-        COI of all machines (eq. 40) or of all but the device's own machine.
+    coi : {"system", "rest", "critical"}
+        COI of all machines (eq. 40) or of all but the device's own machine; "critical"
+        (not the paper's): the COI of the group the device's machine is not in (the
+        machines of `critical`, or the others), per island (the island's COI when it
+        lacks one of the groups).
     hysteresis_hz : float
         Switch-off margin inside the band (Hz), in [0, deadband_hz].
+    critical : tuple of int
+        Machine numbers of the critical group (SIME's critical machines of the
+        contingency, `stabctl.stability.sime.critical_machines`); required with
+        coi="critical", empty otherwise.
 
     Raises
     ------
     InputError
-        Any value outside its range.
+        Any value outside its range; `critical` empty with coi="critical" or given with
+        another coi.
     """
 
     deadband_hz: float = 0.1
     v_gate_pu: float = 0.8
     coi: str = "system"
     hysteresis_hz: float = 0.0
+    critical: tuple[int, ...] = ()
     kind: ClassVar[int] = BANG_BANG
 
     def __post_init__(self):
-        if self.coi not in ("system", "rest"):
-            raise InputError(f"coi must be 'system' or 'rest', got {self.coi!r}")
+        if self.coi not in COI_CHOICES:
+            raise InputError(f"coi must be one of {COI_CHOICES}, got {self.coi!r}")
+        if (self.coi == "critical") != bool(self.critical):
+            raise InputError(
+                "coi='critical' needs the critical machines (critical=(...)), "
+                "and only it takes them"
+            )
+        object.__setattr__(self, "critical", tuple(int(m) for m in self.critical))
         if not (
             0 <= self.deadband_hz < float("inf") and 0 <= self.hysteresis_hz <= self.deadband_hz
         ):
@@ -138,7 +163,7 @@ class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
         LawConstants
             Kind BANG_BANG, deadband and hysteresis in pu speed (`deadband_hz / f0`,
             `hysteresis_hz / f0`), the voltage gate (pu), the COI choice (``rest`` True
-            for ``coi="rest"``), gains 0.
+            for ``coi="rest"``), gains 0, the critical machines.
         """
         return LawConstants(
             self.kind,
@@ -148,6 +173,7 @@ class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
             self.coi == "rest",
             0.0,
             0.0,
+            self.critical,
         )
 
 
@@ -237,10 +263,14 @@ def island_coi(values, inertia, island):
 @njit
 def relative_speeds(x, nm, inertia, island, sa, out):
     """omega_i - omega_COI (pu) of each device's machine: COI of the machines of its island
-    (eq. 40; the whole system when connected) or of the rest of them (sa.rest); 0 for a
-    device without a machine.  x: flat state (speeds in x[nm:2 nm]); island (n_mac,) int
-    (`island_coi`); out (n_dev,) is written."""
-    coi, M = island_coi(x[nm : 2 * nm], inertia, island)
+    (eq. 40; the whole system when connected) or of the rest of them (sa.rest); with a
+    critical group (sa.group, `BangBangCOI` coi="critical"), the COI of the other group in
+    its island (`group_reference`); 0 for a device without a machine.  x: flat state
+    (speeds in x[nm:2 nm]); island (n_mac,) int (`island_coi`); out (n_dev,) is
+    written."""
+    w_all = x[nm : 2 * nm]
+    coi, M = island_coi(w_all, inertia, island)
+    ref = group_reference(w_all, inertia, island, sa.group) if sa.group.size else coi
     for d in range(sa.mac.size):
         i = sa.mac[d]
         w = x[nm + i]
@@ -248,8 +278,31 @@ def relative_speeds(x, nm, inertia, island, sa, out):
             out[d] = 0.0
         elif sa.rest:
             out[d] = w - (coi[i] * M[i] - w * inertia[i]) / (M[i] - inertia[i])
+        elif sa.group.size:
+            out[d] = w - ref[i]
         else:
             out[d] = w - coi[i]
+
+
+@njit
+def group_reference(speed, inertia, island, group):
+    """Each machine's reference speed under a critical group (pu): within its island, the
+    COI speed (eq. 40) of the machines of the other group (group (n_mac,) int, 1 critical,
+    0 the rest); the island's COI when the island lacks one of the two groups.  speed,
+    inertia (n_mac,).  Returns (n_mac,)."""
+    out = np.empty(speed.size)
+    for k in range(island.max() + 1):
+        m, s = np.zeros(2), np.zeros(2)
+        for j in range(speed.size):
+            if island[j] == k:
+                m[group[j]] += inertia[j]
+                s[group[j]] += inertia[j] * speed[j]
+        for j in range(speed.size):
+            if island[j] != k:
+                continue
+            g = 1 - group[j]
+            out[j] = s[g] / m[g] if m[0] > 0 and m[1] > 0 else (s[0] + s[1]) / (m[0] + m[1])
+    return out
 
 
 @njit

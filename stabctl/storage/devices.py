@@ -373,6 +373,7 @@ class StorageArrays(NamedTuple):
     rest: bool
     Kv: float  # pu per pu speed
     Ka: float  # pu per pu speed per s
+    group: np.ndarray  # (n_mac,) 1 critical, 0 other (coi="critical"); empty otherwise
 
 
 def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray, xslot=None) -> StorageArrays:
@@ -417,7 +418,18 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray, xslot=None)
         rest=law.rest,
         Kv=law.Kv,
         Ka=law.Ka,
+        group=_groups(case, law.critical),
     )
+
+
+def _groups(case: Case, critical) -> np.ndarray:
+    """(n_mac,) int: 1 for the machines numbered in `critical`, 0 for the others; empty
+    when `critical` is (no critical group).  Raises CaseError naming an unknown machine."""
+    if not critical:
+        return np.zeros(0, np.int64)
+    out = np.zeros(len(case.machines.number), np.int64)
+    out[[case.machine_index(m) for m in critical]] = 1
+    return out
 
 
 # -- compiled device kernel (used by stabctl.dynamics.integrator.integrate) -------------------
