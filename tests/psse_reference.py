@@ -222,6 +222,12 @@ RUNS: tuple[Run, ...] = (
         ("--load-step", "2", "0.005", "-0.55", "0"), 0.07,
         tuple(Quantity(b, "v", (b,), 1e-3) for b in (1, 2, 3)),
         inf_bus=1, models="GENCLS CSVGN1", step=1e-4),
+    # DERA1: the line 101-102 tripped at 2 s, 4 s (as its Julia test); PSS/E's DYR has the
+    # infinite bus only, the DERA1 record written from the Julia test's values (README there)
+    Run("DERA_FREQFLAG0", _THREE, "ThreeBus_DERA1.dyr", "dera_freqflag0.csv",
+        ("--trip", "101", "102", "--t-trip", "2"), 4.0,
+        (Quantity(1, "v", (102,), 0.1), Quantity(2, "angle", (102, 101), 0.1)),
+        models="GENCLS DERA1"),
     # the stabiliser runs: VREF of the machine at bus 1 stepped at 1 s (PSS/E's own
     # runs; the PSS2 DYRs written from the Julia tests' values, README there)
     Run("STAB1", "OMIB_SSS_60Hz.raw", "OMIB_SSS.dyr", "results_PSSe.csv", (), 20.0,

@@ -199,7 +199,7 @@ def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]
     conv = converter_rows(records, gens, raw.line, conventions)
     svc = compensator_rows(records, gens)
     keys = [(int(g["bus"]), machine_id(g["id"])) for g in gens]
-    lost = {(r.bus, r.id) for r, _ in conv.skipped if r.model == "REGCA1"} & set(keys)
+    lost = {(r.bus, r.id) for r, _ in conv.skipped if r.model in ("REGCA1", "DERA1")} & set(keys)
     plant_buses = {bus for bus, _ in conv.replaced | svc.replaced}
     for g in gens:  # a machine sharing its bus with a plant: its own share (PSS/E's)
         if int(g["bus"]) in plant_buses:
