@@ -190,8 +190,8 @@ def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]
     """PST dynamic matrices from the DYR records (the converter table ``ibr_con`` from
     the converter records, :mod:`stabctl.io.dyr_converters`; the machines, numbered 1, 2,
     ... in RAW order, the other generators), the unsupported records (as text), the
-    generators whose REGCA1 plant was left out (``bus B 'ID'``) and the records read with
-    a value other than the file's."""
+    generators whose REGCA1 plant or DERA1 was left out (``bus B 'ID'``) and the records
+    read with a value other than the file's."""
     from stabctl.io.dyr import SVC_DYR, compensator_rows, dyr_tables, machine_id
     from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows, shares
 

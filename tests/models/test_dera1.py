@@ -141,3 +141,13 @@ def test_q_priority_limits_ip(sim):
     iq = Q0 / 0.7
     assert x[DA.Iq] == pytest.approx(iq, rel=1e-9)
     assert x[DA.Ip] == pytest.approx(np.sqrt(1.2**2 - iq**2), rel=1e-6)
+
+
+def test_a_dera1_with_other_converter_records_is_left_out(tmp_path):
+    """A DERA1 and a REGCA1 for one generator: both records left out, named with why, and
+    the generator, left without a model, stops the import."""
+    dyr = _dyr(tmp_path)
+    regca1 = "102 'REGCA1' 1 1 0.02 10 0.9 0.4 1.22 1.2 0.8 0.4 -1.3 0.02 0.7 999 -999 0.7 /"
+    dyr.write_text(dyr.read_text() + regca1 + "\n")
+    with pytest.raises(CaseError, match=r"a DERA1 with other converter records \(REGCA1\)"):
+        load_psse(RAW, dyr)
