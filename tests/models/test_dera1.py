@@ -151,3 +151,24 @@ def test_a_dera1_with_other_converter_records_is_left_out(tmp_path):
     dyr.write_text(dyr.read_text() + regca1 + "\n")
     with pytest.raises(CaseError, match=r"a DERA1 with other converter records \(REGCA1\)"):
         load_psse(RAW, dyr)
+
+
+def test_power_factor_control_without_power_is_refused(tmp_path):
+    """Bus 102's generator at PG 0 (its Q from the power flow): PfFlag 1 has no power
+    factor to hold, refused naming the field; PfFlag 0 (constant Q) starts at rest and,
+    held at 0.95 pu, settles at its Q0 (Iq = Q0/0.95)."""
+    raw = tmp_path / "no_p.raw"
+    text = RAW.read_text()
+    assert text.count("   102,'1 ',   100.000,") == 1
+    raw.write_text(text.replace("   102,'1 ',   100.000,", "   102,'1 ',     0.000,"))
+    with pytest.raises(
+        CaseError,
+        match=r"field 'da_PfFlag': a DERA1 holding its power factor \(1\) needs \|P0\| >= 1e-06 pu",
+    ):
+        Simulator(load_psse(raw, _dyr(tmp_path)), background_compile=False)
+    sim = Simulator(load_psse(raw, _dyr(tmp_path, (0, 0, 0, 1, 0, 0))), background_compile=False)
+    Q0 = sim.model.cp.Q0[0]
+    assert abs(sim.model.cp.P0[0]) < 1e-9 and Q0 > 0.1
+    x, S = _settled(sim, 0.95)
+    assert x[DA.Iq] == pytest.approx(Q0 / 0.95, rel=1e-9)
+    assert S == pytest.approx(1j * Q0, abs=1e-9)

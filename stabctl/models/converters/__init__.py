@@ -356,7 +356,8 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         (:data:`REECA1_LAGS`; its Tp other than 0, no filter) or a DERA1's
         (`dera1.LAGS`) below 1e-3 s (the current
         would be an algebraic function of the voltage inside the network solution); an
-        electrical control ``reec`` on a device other than a REGCA1; naming the row and
+        electrical control ``reec`` on a device other than a REGCA1; a DERA1 holding its
+        power factor (PfFlag 1) with |P0| below `dera1.MIN_P_PF`; naming the row and
         field.
     """
     t = case.converters
@@ -404,6 +405,15 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     Q0 = t.qfrac * S_gen[idx].imag
     a0 = np.angle(V0[idx])
     v0 = np.abs(V0[idx])
+    da = dera1.services(vals, t.type, P0, Q0, v0)
+    bad = np.flatnonzero((t.type == DERA1) & (t.da_PfFlag == 1) & (np.abs(P0) < dera1.MIN_P_PF))
+    if bad.size:
+        t._fail(
+            bad[0],
+            "da_PfFlag",
+            f"a DERA1 holding its power factor (1) needs |P0| >= {dera1.MIN_P_PF:g} pu "
+            f"(P0 = {P0[bad[0]]:.3g} pu: tan(pfaref) = Q0/P0)",
+        )
     with np.errstate(divide="ignore", invalid="ignore"):
         kLVG = np.where(reg, 1.0 / (t.Lvpnt1 - t.Lvpnt0), 0.0)
         kLVPL = np.where(reg, t.Lvplsw * t.Lvpl1 / (t.Brkpt - t.Zerox), 0.0)
@@ -434,7 +444,7 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         **reeca1.services(vals, t.reec, P0, Q0, v0, np.where(reg, Ipcmd0, 0.0)),
         **repca1.services(case, idx),
         pr_v0=v0,
-        **dera1.services(vals, t.type, P0, Q0, v0),
+        **da,
     )
     repca1.references(cp, V0)
     wind.torque_limits(cp)

@@ -65,6 +65,10 @@ REFUSED_FLAGS = {
     "VtripFlag": "the voltage tripping with partial reconnection",
     "FtripFlag": "the frequency tripping",
 }
+#: the least |P0| (pu, system base) of a DERA1 holding its power factor (PfFlag 1): below
+#: it tan(pfaref) = Q0/P0 is the power flow's round-off (a generator at PG 0 solves to
+#: |P0| ~ 1e-12 pu), refused
+MIN_P_PF = 1e-6
 #: the DERA1's lags (each >= LBND: Iq and Ip would otherwise follow the voltage at once)
 LAGS = ("da_Trv", "da_Tp", "da_Tiq", "da_Tg")
 
