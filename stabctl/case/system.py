@@ -832,7 +832,8 @@ class ConverterTable(Table):
     """Converter-interfaced devices (inverter-based resources): stabctl's ``ibr_con``,
         one row per device, as ANDES 2.0's distributed models PVD1 (WECC distributed PV)
         and ESD1 (PVD1 with a state of charge), and the renewable generator/converter
-        REGCA1 (WECC REGC_A) have them (docs/ibr.md): a current source
+        REGCA1 (WECC REGC_A) have them, and PSS/E's DERA1 (WECC DER_A) (docs/ibr.md): a
+        current source
         at its bus, whose initial P and Q are the fractions ``pfrac``, ``qfrac`` of the
         bus generation of the power flow.  Columns (declared in
         :data:`stabctl.models.converters.CONVERTER`; powers, currents and reactances on the
@@ -841,7 +842,7 @@ class ConverterTable(Table):
     {columns}
 
         Omitted columns take ANDES's defaults (as declared).  Validation: unique positive
-        integer numbers, type 1, 2 or 3, mva > 0, Twm > 0, tip, tiq, Tfm >= 0, ft0 < ft1 <=
+        integer numbers, type 1, 2, 3 or 4, mva > 0, Twm > 0, tip, tiq, Tfm >= 0, ft0 < ft1 <=
         ft2 < ft3 and vt0 < vt1 <= vt2 < vt3 (the trip curves divide by the differences),
         dqdv < 0, ESD1: Tf > 0, En > 0, 0 < EtaC, EtaD and SOCmin <= SOCinit <= SOCmax;
         REGCA1: Lvpnt0 < Lvpnt1 and (Lvplsw 1) Zerox < Brkpt (the piecewise gains divide by
@@ -932,8 +933,9 @@ class Case:
         Fixed constant-power injections not in the bus table (storage or HVDC set
         points), one row each, pu on the system base; empty by default.
     converters : ConverterTable
-        Converter-interfaced devices (ANDES PVD1, ESD1), one row each, pu on the device
-        base (see the class for columns and units); empty by default.
+        Converter-interfaced devices (ANDES PVD1, ESD1, REGCA1; PSS/E DERA1), one row
+        each, pu on the device base (see the class for columns and units); empty by
+        default.
     shafts : ShaftTable
         Multi-mass torsional shafts on machines (ANDES SHAFT5), one row each, machine
         base; empty by default.

@@ -14,7 +14,7 @@ model modules (`stabctl.models.declaration.DyrModel`); the mappers here only com
 what is not a copy
 (unit changes, products, saturation fits, the PSS type).  Mapping and the known
 modelling differences: docs/pst_models.md section 12.  The converter records (REGCA1 and
-its controls) are parsed here (`CONVERTER_DYR`) and mapped by
+its controls, DERA1) are parsed here (`CONVERTER_DYR`) and mapped by
 :mod:`stabctl.io.dyr_converters`.
 
 Units: machine, exciter and governor data on the machine base `mbase` (MVA), as PSS/E.

@@ -11,6 +11,13 @@ values as given (device base MBASE, as PSS/E's), the rest of the row the table's
 (ANDES 2.0's: its REECA1/REPCA1 configuration kqs = kvs = ksg = 2, tpfilt 0.02 s, freeze 1,
 and the BusFreq of a REPCA1's frequency, Tf 0.02 s, Tw 0.1 s).
 
+A RAW generator with a ``DERA1`` record (WECC DER_A, aggregated distributed energy
+resources) is a converter of :data:`stabctl.models.converters.DERA1`, alone (no other
+converter record of that generator): its flags and the parameters of what stabctl models
+(:mod:`stabctl.models.converters.dera1`) copied, values as given on MBASE.  Its FreqFlag,
+VtripFlag and FtripFlag must be 0 (their controls are not modelled: CaseError naming the
+record and the flag).
+
 PSS/E's conventions where ANDES's reading of the same record differs: IREG = 0 (REECx,
 REPCA1) is the plant's own bus (ANDES reads it as bus 0); REECx's Tp = 0 is no filter (a
 lag below :data:`stabctl.models.blocks.LBND` is bypassed); REPCA1's Pmax, Pmin bound the
@@ -25,7 +32,7 @@ parameter and is not read.
 Left out, with why (`ConverterRows.skipped`): a plant regulating a remote bus (IREG not 0
 nor its own bus), a monitored branch that is not one in-service RAW branch, a wind turbine
 of a REECB1 or with a link missing, and every record of a plant left out; a control
-record without a REGCA1.  A plant sharing its bus with other generators (machines or
+record without a REGCA1; a DERA1 with other converter records of its generator.  A plant sharing its bus with other generators (machines or
 plants) takes its own PG, QG of the bus's generation (ibr_con pfrac, qfrac), as they do.
 
 Source: PSS/E Model Library (REGCA1, REECA1, REECB1, REPCA1, WTDTA1, WTARA1, WTPTA1,
@@ -42,11 +49,13 @@ from stabctl.errors import CaseError
 from stabctl.io.dyr import CONVERTER_DYR, DyrRecord, machine_id
 from stabctl.models.converters import (
     CONVERTER,
+    DERA1,
     REECA1,
     REECB1,
     REGCA1,
     REPCA1,
     WTDTA1,
+    dera1,
 )
 
 __all__ = ["ConverterRows", "converter_rows", "shares", "CONVERTER_RECORDS"]
@@ -85,7 +94,7 @@ class _Refused(Exception):
 
 
 def converter_rows(records, generators, branches, conventions: str = "psse") -> ConverterRows:
-    """The converter table's rows of the REGCA1 plants of a DYR file.
+    """The converter table's rows of the REGCA1 and DERA1 plants of a DYR file.
 
     Parameters
     ----------
@@ -115,7 +124,8 @@ def converter_rows(records, generators, branches, conventions: str = "psse") -> 
     CaseError
         Naming file:line, model and (bus, id): a record with the wrong number of
         parameters, a flag (ICON) not among its choices, two records of one model for a
-        generator.
+        generator; a DERA1 with a flag of a control stabctl does not model (FreqFlag,
+        VtripFlag, FtripFlag other than 0).
     """
     plants: dict[tuple[int, str], dict[str, DyrRecord]] = {}
     for rec in records:
@@ -140,12 +150,18 @@ def converter_rows(records, generators, branches, conventions: str = "psse") -> 
     for key in sorted(plants, key=lambda k: list(gens).index(k) if k in gens else len(gens)):
         plant = plants[key]
         try:
-            if "REGCA1" not in plant:
+            if "DERA1" in plant and len(plant) > 1:
+                others = ", ".join(sorted(set(plant) - {"DERA1"}))
+                raise _Refused(f"a DERA1 with other converter records ({others})")
+            if "REGCA1" not in plant and "DERA1" not in plant:
                 raise _Refused("no REGCA1 record for its generator")
             gen = gens.get(key)
             if gen is None:
                 raise _Refused("no such generator in the RAW data (or out of service)")
-            row = _plant_row(plant, gen, len(rows) + 1, branches, conventions)
+            if "DERA1" in plant:
+                row = _dera1_row(plant["DERA1"], gen, len(rows) + 1)
+            else:
+                row = _plant_row(plant, gen, len(rows) + 1, branches, conventions)
             row[CONVERTER.col("pfrac") - 1], row[CONVERTER.col("qfrac") - 1] = shares(
                 generators, gen
             )
@@ -201,6 +217,22 @@ def _plant_row(
             p0 = float(gen["pg"]) / float(gen["mbase"])
             v["pc_Pmax"], v["pc_Pmin"] = v["pc_Pmax"] - p0, v["pc_Pmin"] - p0
     _wind(plant, reec[0] if reec else None, v)
+    return [float(v[p.name]) for p in CONVERTER.params]
+
+
+def _dera1_row(rec: DyrRecord, gen: dict, number: int) -> list[float]:
+    """The ibr_con row of a DERA1 record (CaseError naming a flag of a control stabctl
+    does not model, `dera1.REFUSED_FLAGS`)."""
+    values = CONVERTER_DYR["DERA1"].values(rec.params)
+    for flag, what in dera1.REFUSED_FLAGS.items():
+        if values[flag] != 0:
+            raise CaseError(
+                f"{rec.label()}: {flag} = {values[flag]:g} switches on {what}, which "
+                f"stabctl does not model (its DERA1 needs {flag} = 0)"
+            )
+    v = {p.name: p.default for p in CONVERTER.params}
+    v.update(number=number, bus=int(gen["bus"]), type=DERA1, mva=float(gen["mbase"]))
+    _copy(rec, v)
     return [float(v[p.name]) for p in CONVERTER.params]
 
 

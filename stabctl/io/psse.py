@@ -190,8 +190,8 @@ def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]
     """PST dynamic matrices from the DYR records (the converter table ``ibr_con`` from
     the converter records, :mod:`stabctl.io.dyr_converters`; the machines, numbered 1, 2,
     ... in RAW order, the other generators), the unsupported records (as text), the
-    generators whose REGCA1 plant was left out (``bus B 'ID'``) and the records read with
-    a value other than the file's."""
+    generators whose REGCA1 plant or DERA1 was left out (``bus B 'ID'``) and the records
+    read with a value other than the file's."""
     from stabctl.io.dyr import SVC_DYR, compensator_rows, dyr_tables, machine_id
     from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows, shares
 
@@ -199,7 +199,7 @@ def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]
     conv = converter_rows(records, gens, raw.line, conventions)
     svc = compensator_rows(records, gens)
     keys = [(int(g["bus"]), machine_id(g["id"])) for g in gens]
-    lost = {(r.bus, r.id) for r, _ in conv.skipped if r.model == "REGCA1"} & set(keys)
+    lost = {(r.bus, r.id) for r, _ in conv.skipped if r.model in ("REGCA1", "DERA1")} & set(keys)
     plant_buses = {bus for bus, _ in conv.replaced | svc.replaced}
     for g in gens:  # a machine sharing its bus with a plant: its own share (PSS/E's)
         if int(g["bus"]) in plant_buses:

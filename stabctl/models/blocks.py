@@ -37,6 +37,18 @@ def clip(v, lo, hi):
 
 
 @kernel
+def deadband(u, lo, hi):
+    """Deadband without offset (WECC's and PSS/E's ``dbd`` blocks, PowerSimulationsDynamics.jl's
+    ``deadband_function``): 0 within [lo, hi], else the distance beyond the nearer edge
+    (u - hi above, u - lo below)."""
+    if u > hi:
+        return u - hi
+    if u < lo:
+        return u - lo
+    return 0.0
+
+
+@kernel
 def lag(u, x, T):
     """First-order lag 1/(1 + s T) (IEEE 421.5 E.2): output x, dx/dt = (u - x)/T;
     T < LBND: output u, derivative 0 (no state).

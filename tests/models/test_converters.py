@@ -129,7 +129,7 @@ def test_soc_derivative_is_the_discharge_over_the_energy():
 @pytest.mark.parametrize(
     "field, value, message",
     [
-        ("type", 4, r"converter type must be 1, 2 or 3"),
+        ("type", 5, r"converter type must be 1, 2, 3 or 4"),
         ("dqdv", 0.5, r"Q-V droop must be < 0"),
         ("ft1", 59.0, r"field 'ft1': must be > ft0"),
         ("Twm", 0.0, r"washout time constant must be > 0"),

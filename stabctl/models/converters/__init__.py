@@ -13,7 +13,9 @@ built of components as ANDES 2.0 builds them (docs/ibr.md), one module each:
 * :mod:`~stabctl.models.converters.wind`: the wind turbine's drive train WTDTA1 / WTDS,
   aerodynamics WTARA1, pitch control WTPTA1 and torque control WTTQA1 (``wind``, ``aero``,
   ``pitch``, ``torque``);
-* :mod:`~stabctl.models.converters.pll`: the PLL1 whose angle a REGCA1 reads (``pll``).
+* :mod:`~stabctl.models.converters.pll`: the PLL1 whose angle a REGCA1 reads (``pll``);
+* :mod:`~stabctl.models.converters.dera1`: DERA1 (type 4), PSS/E's WECC aggregated
+  distributed energy resources (DER_A).
 
 Each holds its DYR records (``DYR``), its named slots in the device's state column
 (``RG``, ``RE``, ``PC``, ``WT``, ``PL``, ``PV``, ``PR``; read by the kernels as
@@ -39,7 +41,8 @@ import numpy as np
 from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import CaseError
 from stabctl.models.blocks import LBND, lag
-from stabctl.models.converters import pll, pvd1, reeca1, regca1, relays, repca1, wind
+from stabctl.models.converters import dera1, pll, pvd1, reeca1, regca1, relays, repca1, wind
+from stabctl.models.converters.dera1 import DA
 from stabctl.models.converters.pll import PL, PLL_SLOTS
 from stabctl.models.converters.pvd1 import PV, commands
 from stabctl.models.converters.reeca1 import RE, REECA1_SLOTS
@@ -47,6 +50,7 @@ from stabctl.models.converters.regca1 import RG, clamp_states, flat_side_of_lvg
 from stabctl.models.converters.relays import PR, RELAY_SLOTS
 from stabctl.models.converters.repca1 import PC, PLANT_PREF_SLOT, REPCA1_SLOTS, line_measures
 from stabctl.models.converters.table import (
+    DERA1,
     DGPRCT1,
     DGPRCTEXT,
     ESD1,
@@ -88,6 +92,7 @@ __all__ = [
     "PVD1",
     "ESD1",
     "REGCA1",
+    "DERA1",
     "NO_REEC",
     "REECA1",
     "REECB1",
@@ -137,7 +142,7 @@ __all__ = [
 # --------------------------------------------------------------------------------------
 
 #: the component modules (each with its ``DYR`` records)
-MODULES = (regca1, reeca1, repca1, wind)
+MODULES = (regca1, reeca1, repca1, wind, dera1)
 
 CONVERTER = Family(
     table="ibr_con",
@@ -175,6 +180,7 @@ STATE_NAMES = {
     PVD1: _state_names(PV, PR),
     ESD1: _state_names(PV, PR),
     REGCA1: _state_names(RG, RE, PC, WT, PL),
+    DERA1: _state_names(DA),
 }
 N_STATES = max(len(names) for names in STATE_NAMES.values())
 # the slots every type reads alike (the initialisation writes them for all devices at once)
@@ -186,6 +192,8 @@ if (RG.Ip, RG.Iq, RG.V_filter, regca1.SPARE, RE.SOC) != (
     PV.SOC,
 ):
     raise ValueError("a REGCA1's slots 0-4 must be a PVD1's: Ip, Iq, the filter, -, SOC")
+if (DA.Ip, DA.Iq) != (PV.Ip, PV.Iq):
+    raise ValueError("a DERA1's slots 0-1 must be a PVD1's: Ip, Iq (its injected current)")
 #: slots that are not states but the memory of the discrete logic of REECA1 and REPCA1,
 #: written in place by the kernels (ANDES's ExtendedEvent timers, its VarHold of Ipmax,
 #: the frozen PI outputs, the held error, the plant P reference's commanded increment): at
@@ -218,7 +226,9 @@ class ConverterParams(Declared):
     (set by the dynamic model), isign (1 if the device's bus is bus1, else -1: the line
     current counted from it), and the initial compensated voltage pc_Vref0 (its voltage
     reference, ANDES Vref0), line Q pc_Qline0 and P pc_Pline0 (0 elsewhere); pr_v0 the
-    initial |V| of the bus (the voltage a DGPRCTExt protection reads)."""
+    initial |V| of the bus (the voltage a DGPRCTExt protection reads); DERA1: its voltage
+    reference da_Vref, Q reference da_Qref and power factor da_tanpf = tan(pfaref)
+    (`dera1.services`; 0 for the other types)."""
 
     pmn: np.ndarray
     P0: np.ndarray
@@ -249,6 +259,9 @@ class ConverterParams(Declared):
     pc_Qline0: np.ndarray
     pc_Pline0: np.ndarray
     pr_v0: np.ndarray
+    da_Vref: np.ndarray
+    da_Qref: np.ndarray
+    da_tanpf: np.ndarray
 
     @property
     def n(self) -> int:
@@ -261,10 +274,11 @@ class ConverterParams(Declared):
     def time_constants(self):
         """(label, values, mask) of every time constant that sets a state's speed."""
         esd = self.type == ESD1
-        pvd = self.type != REGCA1
-        reg = ~pvd
+        pvd = (self.type == PVD1) | esd
+        reg = self.type == REGCA1
         ree = self.reec != NO_REEC
         return (
+            *((f"ibr_con {n}", getattr(self, n), self.type == DERA1) for n in dera1.LAGS),
             ("ibr_con tip", self.tip, pvd),
             ("ibr_con tiq", self.tiq, pvd | ree),
             ("ibr_con Tfm", self.Tfm, (pvd | (self.repc == REPCA1)) & (self.Tfm >= LBND)),
@@ -309,6 +323,9 @@ class ConverterParams(Declared):
         act[WT.PIc_pitch : WT.theta_pitch + 1] = self.pitch == 1
         act[PL.af_pll : PL.am_pll + 1] = self.pll == PLL1
         act[MEMORY_SLOTS] = False
+        dera = self.type == DERA1
+        act[:, dera] = False
+        act[np.array(DA)[:, None], dera] = True
         return act
 
 
@@ -335,10 +352,12 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     Raises
     ------
     CaseError
-        A lag time constant tip, tiq (PVD1, ESD1), Tg, Tfltr (REGCA1) or REECA1's
-        (:data:`REECA1_LAGS`; its Tp other than 0, no filter) below 1e-3 s (the current
+        A lag time constant tip, tiq (PVD1, ESD1), Tg, Tfltr (REGCA1), REECA1's
+        (:data:`REECA1_LAGS`; its Tp other than 0, no filter) or a DERA1's
+        (`dera1.LAGS`) below 1e-3 s (the current
         would be an algebraic function of the voltage inside the network solution); an
-        electrical control ``reec`` on a device other than a REGCA1; naming the row and
+        electrical control ``reec`` on a device other than a REGCA1; a DERA1 holding its
+        power factor (PfFlag 1) with |P0| below `dera1.MIN_P_PF`; naming the row and
         field.
     """
     t = case.converters
@@ -354,7 +373,9 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     bad = np.flatnonzero((t.relay != NO_RELAY) & reg)
     if bad.size:
         t._fail(bad[0], "relay", "a DG protection trips a PVD1 or ESD1 (types 1, 2) only")
-    lags = [("tip", ~reg), ("tiq", ~reg), ("Tg", reg), ("Tfltr", reg)]
+    pvd = (t.type == PVD1) | (t.type == ESD1)
+    lags = [("tip", pvd), ("tiq", pvd), ("Tg", reg), ("Tfltr", reg)]
+    lags += [(name, t.type == DERA1) for name in dera1.LAGS]
     pc = t.repc == REPCA1
     bad = np.flatnonzero(pc & ~ree)
     if bad.size:
@@ -384,6 +405,15 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     Q0 = t.qfrac * S_gen[idx].imag
     a0 = np.angle(V0[idx])
     v0 = np.abs(V0[idx])
+    da = dera1.services(vals, t.type, P0, Q0, v0)
+    bad = np.flatnonzero((t.type == DERA1) & (t.da_PfFlag == 1) & (np.abs(P0) < dera1.MIN_P_PF))
+    if bad.size:
+        t._fail(
+            bad[0],
+            "da_PfFlag",
+            f"a DERA1 holding its power factor (1) needs |P0| >= {dera1.MIN_P_PF:g} pu "
+            f"(P0 = {P0[bad[0]]:.3g} pu: tan(pfaref) = Q0/P0)",
+        )
     with np.errstate(divide="ignore", invalid="ignore"):
         kLVG = np.where(reg, 1.0 / (t.Lvpnt1 - t.Lvpnt0), 0.0)
         kLVPL = np.where(reg, t.Lvplsw * t.Lvpl1 / (t.Brkpt - t.Zerox), 0.0)
@@ -414,6 +444,7 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         **reeca1.services(vals, t.reec, P0, Q0, v0, np.where(reg, Ipcmd0, 0.0)),
         **repca1.services(case, idx),
         pr_v0=v0,
+        **da,
     )
     repca1.references(cp, V0)
     wind.torque_limits(cp)
@@ -451,6 +482,8 @@ def derivatives(P, x, k, V, V_nc, reach, dx):
     its LVPL limit (`regca1.clamp_states`; reach s: the simulator's step, 0 the limit alone),
     its controls' memory updated in place."""
     v = abs(V)
+    if P[k, C.TYPE] == DERA1:
+        return dera1.derivatives(P, x, k, V, dx)
     if P[k, C.TYPE] == REGCA1:
         Ipout, Iqout = regca1.currents(P, x, k, v)
         rot = pll.frame(P, x, k, V)
@@ -512,7 +545,8 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
         PVD1, ESD1: Ip = P0/|V|, Iq = Q0/|V|, the measurement states 0, SOC = SOCinit
         (ESD1).  REGCA1 (ANDES regca1.py 184-211): Ip = Ipcmd0, Iq = -Iqcmd0 = Q0/|V|,
         the voltage filter |V|; with a REECA1, its states (`reeca1.initial`) and memory
-        (the held outputs: their values at the start).
+        (the held outputs: their values at the start).  DERA1: Ip = P0/|V|, Iq = Q0/|V|
+        and its measurements (`dera1.initial`).
 
     Raises
     ------
@@ -521,8 +555,9 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
         current limit, a trip curve, the Q droop or the power-order limit active at the
         start); a REGCA1 that does not start at rest at P0, Q0 (LVG 0 at its voltage, Ip
         at the LVPL limit, the high-voltage management or Iolim active; its REECA1's
-        references not at rest: a current limit, a frozen start, a PI input not 0),
-        naming it and the fastest-moving state.
+        references not at rest: a current limit, a frozen start, a PI input not 0); a
+        DERA1 that does not start at rest (a current limit active), naming it and the
+        fastest-moving state.
     """
     x = np.zeros((N_STATES, cp.n))
     V = V0[cp.bus_idx]
@@ -538,11 +573,15 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
         wind.initial(cp, x)
     repca1.initial(cp, x)
     pll.initial(cp, x, V)
-    if np.any(reg):
-        _check_regca1(cp, P, x, Vc, V_nc)
+    dera = cp.type == DERA1
+    if np.any(dera):
+        dera1.initial(cp, x, v)
+    for kind, why in ((REGCA1, _REGCA1_AT_REST), (DERA1, _DERA1_AT_REST)):
+        if np.any(cp.type == kind):
+            _check_at_rest(cp, P, x, Vc, V_nc, kind, why)
     Ip, Iq = commands(P, x, Vc) if cp.n else ((), ())
     for k, (Ipcmd, Iqcmd) in enumerate(zip(Ip, Iq)):
-        if reg[k]:
+        if reg[k] or dera[k]:
             continue
         if abs(Ipcmd - x[PV.Ip, k]) > 1e-9 or abs(Iqcmd - x[PV.Iq, k]) > 1e-9:
             raise CaseError(
@@ -568,10 +607,21 @@ def at_power_flow(cp: ConverterParams, V0: np.ndarray):
     return P, V_nc[:n].copy(), V_nc
 
 
-def _check_regca1(cp: ConverterParams, P, x: np.ndarray, Vc, V_nc) -> None:
-    """Refuse a REGCA1 (with its controls) that does not start at rest at its power-flow
-    point: x (N_STATES, n_ibr) the initial states, its controls' memory filled in place by
-    a first evaluation; P, Vc, V_nc as `at_power_flow` gives them."""
+#: why a REGCA1 (with its controls) may not start at rest
+_REGCA1_AT_REST = (
+    "the low-voltage gain LVG 0, Ip at the LVPL limit, the high-voltage management Volim "
+    "or the limit Iolim is active at the start, or its REECA1's current limits, voltage dip "
+    "freeze or PI references"
+)
+#: why a DERA1 may not start at rest
+_DERA1_AT_REST = "a current limit Imax (with its PQFlag, GenFlag) is active at the start"
+
+
+def _check_at_rest(cp: ConverterParams, P, x: np.ndarray, Vc, V_nc, kind: int, why: str) -> None:
+    """Refuse a device of type `kind` (REGCA1 with its controls, DERA1) that does not start
+    at rest at its power-flow point: x (N_STATES, n_ibr) the initial states, its controls'
+    memory filled in place by a first evaluation; P, Vc, V_nc as `at_power_flow` gives
+    them; `why` the causes the message names."""
     x0 = x.copy()
     dx = np.zeros_like(x)
     derivatives_at(P, x, Vc, V_nc, dx)  # the held outputs take their initial values
@@ -579,18 +629,16 @@ def _check_regca1(cp: ConverterParams, P, x: np.ndarray, Vc, V_nc) -> None:
     S = derivatives_at(P, x_in, Vc, V_nc, dx)
     act = cp.has_state()
     states = ~np.isin(np.arange(N_STATES), MEMORY_SLOTS)
-    for k in np.flatnonzero(cp.type == REGCA1):
+    name = {REGCA1: "REGCA1", DERA1: "DERA1"}[kind]
+    for k in np.flatnonzero(cp.type == kind):
         speed = np.where(act[:, k], np.abs(dx[:, k]), 0.0)
         worst = int(np.argmax(speed))
         gap = abs(S[k] - (cp.P0[k] + 1j * cp.Q0[k]))
         clamped = np.any(x_in[:, k] != x[:, k]) or np.any((x[:, k] != x0[:, k])[states])
         if gap > 1e-9 or speed[worst] > 1e-9 or clamped:
             raise CaseError(
-                f"ibr_con row {k + 1}: the REGCA1 cannot start at its power-flow point "
+                f"ibr_con row {k + 1}: the {name} cannot start at its power-flow point "
                 f"P0 = {cp.P0[k]:.6g}, Q0 = {cp.Q0[k]:.6g} pu at |V| = {abs(Vc[k]):.6g} pu: "
                 f"it injects {S[k].real:.6g} + j{S[k].imag:.6g} pu there, its states "
-                f"moving at up to {speed[worst]:.3g} pu/s ({STATE_NAMES[REGCA1][worst]}; "
-                "the low-voltage gain LVG 0, Ip at the LVPL limit, the high-voltage "
-                "management Volim or the limit Iolim is active at the start, or its "
-                "REECA1's current limits, voltage dip freeze or PI references)"
+                f"moving at up to {speed[worst]:.3g} pu/s ({STATE_NAMES[kind][worst]}; {why})"
             )

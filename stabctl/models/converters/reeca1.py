@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.blocks import anti_windup, clip, lag, pi_track_aw_freeze
+from stabctl.models.blocks import anti_windup, clip, deadband, lag, pi_track_aw_freeze
 from stabctl.models.converters.table import NO_REEC, REECB1, C
 from stabctl.models.declaration import DyrModel, slots
 
@@ -250,13 +250,7 @@ def _iq_injection(P, k, vt, frz, extended):
     Vref0r - vt (DeadBand1, strict) in a dip; for |Thld| s after it (``extended``) the
     same (Thld < 0) or Iqfrz (Thld > 0); limited to [Iql1, Iqh1] (ANDES leaves the limits
     out).  A REECB1's at all times (its GainLimiter, no hold)."""
-    err = P[k, C.VREF0R] - vt
-    db = 0.0
-    if err > P[k, C.DBD2]:
-        db = err - P[k, C.DBD2]
-    elif err < P[k, C.DBD1]:
-        db = err - P[k, C.DBD1]
-    Iqv = db * P[k, C.KQV]
+    Iqv = deadband(P[k, C.VREF0R] - vt, P[k, C.DBD1], P[k, C.DBD2]) * P[k, C.KQV]
     Iqinj = 0.0
     if frz or (extended and P[k, C.THLD] < 0.0) or P[k, C.REEC] == REECB1:
         Iqinj = Iqv

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
-from stabctl.models.blocks import clip, lag, leadlag_input_state, pi_track_aw
+from stabctl.models.blocks import clip, deadband, lag, leadlag_input_state, pi_track_aw
 from stabctl.models.converters import pvd1
 from stabctl.models.converters.reeca1 import RE
 from stabctl.models.converters.table import REPCA1, C
@@ -133,11 +133,7 @@ def control(P, x, k, V, V_nc, dx):
     s0, dx[PC.Vc_filter, k] = lag(VCsel, x[PC.Vc_filter, k], T)
     s1, dx[PC.Qline_filter, k] = lag(Sline.imag, x[PC.Qline_filter, k], T)
     ref = P[k, C.PC_VREF0] - s0 if P[k, C.PC_REFFLAG] == 1.0 else P[k, C.PC_QLINE0] - s1
-    db = 0.0
-    if ref > P[k, C.PC_DBD2]:
-        db = ref - P[k, C.PC_DBD2]
-    elif ref < P[k, C.PC_DBD1]:
-        db = ref - P[k, C.PC_DBD1]
+    db = deadband(ref, P[k, C.PC_DBD1], P[k, C.PC_DBD2])
     enf = clip(db, P[k, C.PC_EMIN], P[k, C.PC_EMAX])
     if abs(V) < P[k, C.PC_VFRZ] and P[k, C.PC_FREEZE] == 1.0:  # held (ANDES VarHold)
         enf = x[PC.e_held, k]
@@ -171,12 +167,7 @@ def _frequency_path(P, x, k, V, Pline, dx):
     f, dx[PC.f_lag_plant, k], dx[PC.f_washout_plant, k] = pvd1.bus_frequency(
         P, x, k, V, PC.f_lag_plant, PC.f_washout_plant
     )
-    err = 1.0 - f
-    db = 0.0
-    if err > P[k, C.PC_FDBD2]:
-        db = err - P[k, C.PC_FDBD2]
-    elif err < P[k, C.PC_FDBD1]:
-        db = err - P[k, C.PC_FDBD1]
+    db = deadband(1.0 - f, P[k, C.PC_FDBD1], P[k, C.PC_FDBD2])
     droop = db * (P[k, C.PC_DDN] if db < 0.0 else P[k, C.PC_DUP])
     s4, dx[PC.Pline_filter, k] = lag(Pline, x[PC.Pline_filter, k], P[k, C.PC_TP])
     e = clip(

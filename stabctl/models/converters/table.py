@@ -1,6 +1,7 @@
 """The ``ibr_con`` table every converter component reads: its columns (the device's own,
 then each component's: REECA1 54-104, REPCA1 105-143, the wind turbine 145-182, the PLL1
-183-187, the DG protection 188-213; ANDES 2.0's parameters, docs/ibr.md), the codes that
+183-187, the DG protection 188-213, the DERA1 214-227; ANDES 2.0's and PSS/E's
+parameters, docs/ibr.md), the codes that
 switch the components on, and the packed parameter layout of the compiled kernels
 (`PACKED`, its named columns `C`).
 
@@ -16,9 +17,10 @@ from typing import Any
 
 from stabctl.models.declaration import Param, layout
 
-#: ANDES's converter types: PVD1 (WECC distributed PV), ESD1 (PVD1 with a state of charge),
-#: REGCA1 (WECC second-generation renewable generator/converter, REGC_A)
-PVD1, ESD1, REGCA1 = 1, 2, 3
+#: the converter types: ANDES's PVD1 (WECC distributed PV), ESD1 (PVD1 with a state of
+#: charge), REGCA1 (WECC second-generation renewable generator/converter, REGC_A); PSS/E's
+#: DERA1 (WECC aggregated distributed energy resources, DER_A)
+PVD1, ESD1, REGCA1, DERA1 = 1, 2, 3, 4
 
 _DEV_PU: dict[str, Any] = dict(unit="pu")  # on the device base mva (ANDES ``power=True``)
 
@@ -274,6 +276,38 @@ def _relay_params(col: int) -> tuple[Param, ...]:
 
 
 _RELAY_PARAMS = _relay_params(189)
+
+
+def _dera1_params(col: int) -> tuple[Param, ...]:
+    """DERA1's columns from ``col`` on, prefixed ``da_`` (PSS/E Model Library DERA1, the
+    WECC DER_A specification; its PQFlag is the table's ``pqflag``): the flags, the
+    voltage and power measurements, the voltage control and the current limits and lags
+    its FreqFlag 0 reads.  Currents and gains on the device base, as PSS/E's; the
+    defaults are the typical values of the WECC DER_A specification."""
+    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
+    rows: list[tuple[str, dict[str, Any]]] = [
+        ("PfFlag", dict(flag, default=1.0, doc="1 constant power factor, 0 constant Q")),
+        ("GenFlag", dict(flag, default=1.0, doc="1 a generator (Ip >= 0), 0 storage")),
+        ("Trv", dict(unit="s", default=0.02, lo=0.0, doc="voltage measurement lag")),
+        ("dbd1", dict(unit="pu", default=-99.0, hi=0.0, doc="lower voltage deadband")),
+        ("dbd2", dict(unit="pu", default=99.0, lo=0.0, doc="upper voltage deadband")),
+        ("Kqv", dict(_DEV_PU, default=0.0, doc="Iq per pu voltage error beyond the deadband")),
+        ("Vref0", dict(unit="pu", doc="voltage reference (0: the initial voltage)")),
+        ("Tp", dict(unit="s", default=0.02, lo=0.0, doc="power measurement lag")),
+        ("Tiq", dict(unit="s", default=0.02, lo=0.0, doc="reactive current reference lag")),
+        ("Imax", dict(_DEV_PU, default=1.2, lo=0.0, doc="apparent current limit")),
+        ("Tg", dict(unit="s", default=0.02, lo=0.0, doc="current control lag")),
+        ("rrpwr", dict(_DEV_PU, default=99.0, lo=0.0, doc="upper rate of |Ip| (1/s)")),
+        ("Iqh1", dict(_DEV_PU, default=1.0, doc="upper limit of the voltage control's Iq")),
+        ("Iql1", dict(_DEV_PU, default=-1.0, doc="lower limit of the voltage control's Iq")),
+    ]
+    return tuple(
+        Param(f"da_{name}", col=col + j, **{**kw, "doc": "DERA1: " + kw["doc"]})
+        for j, (name, kw) in enumerate(rows)
+    )
+
+
+_DERA1_PARAMS = _dera1_params(214)
 #: the ibr_con fields a DG protection sets (``relay`` and its columns)
 RELAY_FIELDS = ("relay", *(p.name for p in _RELAY_PARAMS))
 #: the ibr_con fields a wind turbine sets (``wind`` and its models' columns)
@@ -284,7 +318,7 @@ REPCA1_FIELDS = tuple(p.name for p in _REPCA1_PARAMS)
 REECA1_FIELDS = ("pqflag", "tiq", *(p.name for p in _REECA1_PARAMS))
 
 
-#: every ibr_con column, in column order (the type is a REGCA1, PVD1 or ESD1; the codes
+#: every ibr_con column, in column order (the type is a REGCA1, PVD1, ESD1 or DERA1; the codes
 #: reec, repc, wind, pll, relay switch the components on)
 PARAMS = (
     Param("number", "code", 1, integer=True, doc="converter number"),
@@ -294,10 +328,11 @@ PARAMS = (
         "code",
         3,
         integer=True,
-        choices=(PVD1, ESD1, REGCA1),
+        choices=(PVD1, ESD1, REGCA1, DERA1),
         label="converter type",
         doc="1 PVD1 (ANDES distributed PV), 2 ESD1 (PVD1 with a state of charge), "
-        "3 REGCA1 (WECC renewable generator/converter, constant current commands)",
+        "3 REGCA1 (WECC renewable generator/converter, constant current commands), "
+        "4 DERA1 (WECC aggregated distributed energy resources, PSS/E's DER_A)",
     ),
     Param("mva", "MVA", 4, default=100.0, lo=0.0, doc="device base Sn"),
     Param("pfrac", "", 5, default=1.0, doc="fraction of the bus generation P (ANDES gammap)"),
@@ -486,6 +521,7 @@ PARAMS = (
         "output while it trips (docs/ibr.md)",
     ),
     *_RELAY_PARAMS,
+    *_DERA1_PARAMS,
 )
 
 #: the ibr_con fields the kernels take as given (pu quantities after the base change)
@@ -501,6 +537,7 @@ POWER_FIELDS = (
     *("QMax", "QMin", "dPmax", "dPmin", "PMAX", "PMIN", "Imax", "pc_Pmax", "pc_Pmin"),
     *(f"{a}{j}" for a in ("Iq", "Ip") for j in range(1, 5)),
     *("wt_H", "wt_DAMP", "wt_Dshaft"),
+    *("da_Kqv", "da_Imax", "da_rrpwr", "da_Iqh1", "da_Iql1"),
 )
 #: the torque control's fields on its turbine's base (``wq_Tn``, else the device's)
 TORQUE_POWER_FIELDS = ("wq_Temax", "wq_Temin", *(f"wq_p{j}" for j in range(1, 5)))
@@ -542,6 +579,9 @@ PACKED = (
     ("PC_QLINE0", "pc_Qline0"),
     ("PC_PLINE0", "pc_Pline0"),
     ("PR_V0", "pr_v0"),
+    ("DA_VREF", "da_Vref"),
+    ("DA_QREF", "da_Qref"),
+    ("DA_TANPF", "da_tanpf"),
 )
 #: the kernels' column of each PACKED name: P[k, C.IALIM]
 C = layout("ConverterColumns", PACKED)

@@ -2,11 +2,13 @@
 eigenvalues, ``test/results/results_initial_conditions.jl`` and ``results_eigenvalues.jl``)
 as JSON, read from a clone of that repository at a commit.
 
-    python psid_reference.py PSID_CLONE COMMIT TEST [LABEL=SUFFIX ...] > FILE.json
+    python psid_reference.py [--x0 NAME] PSID_CLONE COMMIT TEST [LABEL=SUFFIX ...] > FILE.json
 
 TEST: the test's number; each LABEL=SUFFIX one run, read from PSID's ``test<TEST>_x0_init
 <SUFFIX>`` and ``test<TEST>_eigvals<SUFFIX>`` and written as ``x0_<LABEL>`` and
-``eigvals_<LABEL>`` (without runs: one run, ``x0`` and ``eigvals``).  The files here:
+``eigvals_<LABEL>`` (without runs: one run, ``x0`` and ``eigvals``); ``--x0 NAME`` names
+the initial point where PSID names it otherwise, ``{suffix}`` standing for SUFFIX (test 42:
+``test_psse_dera{suffix}_init``).  The files here:
 
     python psid_reference.py PSID d94d74e7daaa445517da69cd0d528570fa438f28 47 \\
         plain= switch=_withSwitch rcrfd=_withRcRfd > SCRX/psid_test47.json
@@ -18,6 +20,9 @@ TEST: the test's number; each LABEL=SUFFIX one run, read from PSID's ``test<TEST
         > WPIDHY/psid_test60.json
     python psid_reference.py PSID d94d74e7daaa445517da69cd0d528570fa438f28 61 \\
         > ST8C/psid_test61.json
+    python psid_reference.py --x0 'test_psse_dera{suffix}_init' PSID \
+        d94d74e7daaa445517da69cd0d528570fa438f28 42 flag0=_freqflag0 flag1=_freqflag1 \
+        > DERA_FREQFLAG0/psid_test42.json
 """
 
 import json
@@ -45,9 +50,10 @@ def numbers(text: str) -> list[float]:
     return [float(v) for v in re.findall(NUM, text)]
 
 
-def main(repo: str, commit: str, test: str, runs: dict[str, str]) -> dict:
+def main(repo: str, commit: str, test: str, runs: dict[str, str], x0: str = "") -> dict:
     """The reference: source, then per run its x0 (bus voltages, states of
-    generator-102-1) and its eigenvalues as [real, imaginary]."""
+    generator-102-1; PSID's ``test<test>_x0_init<suffix>``, or `x0` with ``{suffix}``
+    filled) and its eigenvalues as [real, imaginary]."""
     ic = show(repo, commit, "test/results/results_initial_conditions.jl")
     ev = show(repo, commit, "test/results/results_eigenvalues.jl")
     out: dict = {
@@ -56,7 +62,8 @@ def main(repo: str, commit: str, test: str, runs: dict[str, str]) -> dict:
     }
     for label, suffix in runs.items():
         key = f"_{label}" if label else ""
-        b = block(ic, f"test{test}_x0_init{suffix}", "\n)\n")
+        name = x0.format(suffix=suffix) if x0 else f"test{test}_x0_init{suffix}"
+        b = block(ic, name, "\n)\n")
         vr, vi, gen = b.index('"V_R"'), b.index('"V_I"'), b.index('"generator-102-1"')
         out[f"x0{key}"] = {
             "V_R": numbers(b[vr:vi]),
@@ -72,6 +79,10 @@ def main(repo: str, commit: str, test: str, runs: dict[str, str]) -> dict:
 
 
 if __name__ == "__main__":
-    repo, commit, test, *pairs = sys.argv[1:]
+    args = sys.argv[1:]
+    x0 = ""
+    if args[:1] == ["--x0"]:
+        x0, args = args[1], args[2:]
+    repo, commit, test, *pairs = args
     runs = dict(p.split("=", 1) for p in pairs) or {"": ""}
-    print(json.dumps(main(repo, commit, test, runs), indent=1))
+    print(json.dumps(main(repo, commit, test, runs, x0), indent=1))
