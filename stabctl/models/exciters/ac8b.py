@@ -103,6 +103,13 @@ def has_state(p: ExciterParams):
     return (p.has_TR, on, p.has_TA, on, p.has_pid_d)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E, the PID's derivative lag T_D; label -> (values, where)."""
+    return {"exc_con T_E": (p.TE, True), "exc_con T_D": (p.Td, p.has_pid_d)}
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """AC8B at rest on rows r (a mask): the exciter as EXAC1's (`exac1.initial_exciter`;
     the PID's output V_R0/K_A must be inside [VPmin, VPmax]), the PID's integral its

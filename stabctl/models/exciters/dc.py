@@ -149,6 +149,26 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TB, p.has_TA, on, on, p.has_VF)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E, the rate feedback's T_F (exc_con column 17, always a state) and
+    IEEET2's second rate-feedback lag T_F2; label -> (values, where)."""
+    return {
+        "exc_con T_E": (p.TE, True),
+        "exc_con T_F": (p.TF, True),
+        "exc_con T_F2": (p.TF2, p.has_VF),
+    }
+
+
+def check(e, r: int) -> str | None:
+    """Why exc_con row r (0-based) of a DC exciter is not modelled, or None: Vrmax = 0,
+    PST's 'compute it from E2'."""
+    if e.Vrmax[r] == 0:
+        return "field 'Vrmax': 0 (PST computes it from E2) is not supported; give the limit"
+    return None
+
+
 @njit
 def dc_feedback(KE, Asat, Bsat, quadratic, Efd):
     """V_FE of a DC exciter: (K_E + S_E(Efd)) Efd with S_E = sign(Efd) Asat exp(Bsat |Efd|)

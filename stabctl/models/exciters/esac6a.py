@@ -109,6 +109,13 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TA, p.has_TB, np.ones(p.n, bool), p.TH >= LBND)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E, the limiter's lag T_H; label -> (values, where)."""
+    return {"exc_con T_E": (p.TE, True), "exc_con T_H": (p.TH, p.TH >= LBND)}
+
+
 def limiter_input(KH, VFE, VFELIM, VHMAX):
     """The field current limiter's input clip(K_H (V_FE - V_FELIM), 0, V_HMAX), pu."""
     return np.clip(KH * (VFE - VFELIM), 0.0, VHMAX)

@@ -100,6 +100,13 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TB, p.has_TA, p.has_Rf, p.has_TB1)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the second lead-lag's T_B1; label -> (values, where)."""
+    return {"exc_con T_B1": (p.TB1, p.has_TB1)}
+
+
 def st1a_regulator_output(p: ExciterParams, Efd):
     """ESST1A's regulator output V_A at rest, (n_exc,): Efd0 plus the field current
     limiter's K_LR max(0, I_fd0 - I_LR) with I_fd0 = Efd0 (the field current at rest; ANDES

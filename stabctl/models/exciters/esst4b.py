@@ -96,6 +96,13 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TB | (p.Kpid_I != 0), p.has_TA, p.KIM != 0)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    none beyond the shared ones; label -> (values, where)."""
+    return {}
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """ESST4B at rest on rows r (a mask, `initial_regulators`): each PI's integral its
     output, the lag V_G0, no error; writes x, returns (V_ref - V_TR = 0, p)."""

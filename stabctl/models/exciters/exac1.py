@@ -122,6 +122,13 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TB, p.has_TA, np.ones(p.n, bool), p.has_Rf)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E; label -> (values, where)."""
+    return {"exc_con T_E": (p.TE, True)}
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """EXAC1 and ESAC1A at rest on rows r (a mask): `initial_exciter`'s V_E0 and V_FE0 =
     V_R0 (ESAC1A's V_A0), the lead-lag V_FE0/K_A, the washout V_FE0; writes x, returns

@@ -51,6 +51,13 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TB, p.has_TA)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    none beyond the shared ones; label -> (values, where)."""
+    return {}
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """EXAC4 at rest on rows r (a mask): V_R0 = Efd0 within [Vrmin - K_C I_fd0, Vrmax - K_C
     I_fd0] (`exst1.check_start`), the lead-lag Efd0/K_A; writes x, returns (V_ref - V_TR,

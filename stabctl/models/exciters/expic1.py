@@ -113,6 +113,17 @@ def has_state(p: ExciterParams):
     return (p.has_TR, on, p.has_TB, p.has_TA, p.TE >= LBND, rf, rf & (p.TF_2 >= LBND))
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E and the rate feedback's second lag T_F2, each where it exists; label ->
+    (values, where)."""
+    return {
+        "exc_con T_E (EXPIC1)": (p.TE, p.TE >= LBND),
+        "exc_con T_F2 (EXPIC1)": (p.TF_2, p.TF_2 >= LBND),
+    }
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """EXPIC1 at rest on rows r (a mask): E_0 = (K_E + S_E(Efd0)) Efd0 with T_E (Efd0
     without), V_R0 = E_0/V_B0 (VB the source voltages, `source_voltage`), the PI's

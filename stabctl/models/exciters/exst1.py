@@ -54,6 +54,13 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TB, p.has_TA, p.has_Rf)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    none beyond the shared ones; label -> (values, where)."""
+    return {}
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """EXST1 at rest on rows r (a mask): V_R0 = Efd0 within its output limits
     (`check_start`), the lead-lag Efd0/K_A, the washout Efd0 (with K_F != 0); writes x,

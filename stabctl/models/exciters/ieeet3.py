@@ -70,6 +70,13 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TB, p.has_TA, np.ones(p.n, bool), p.has_Rf)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E; label -> (values, where)."""
+    return {"exc_con T_E": (p.TE, True)}
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """IEEET3 at rest on rows r (a mask): V_R0 = K_E Efd0 - V_B0 (`initial_regulator`),
     the exciter and the rate feedback's washout Efd0; writes x, returns (V_ref - V_TR, p)."""

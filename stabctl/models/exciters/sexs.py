@@ -89,6 +89,13 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TB, p.has_TA)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    none beyond the shared ones; label -> (values, where)."""
+    return {}
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """smpexc at rest on rows r: the lead-lag holds the regulator's input Efd0/K_A, the
     lag Efd0 (bus fed: Efd0/V_t); writes x, returns (V_ref - V_TR, p).

@@ -106,6 +106,13 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TB, np.ones(p.n, bool), p.has_TA3A)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    ESST3A's regulator lag T_A; label -> (values, where)."""
+    return {"exc_con TA_st3a": (p.TA_st3a, p.has_TA3A)}
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """exc_st3 at rest on rows r (a mask): V_R0 = Efd0/V_B0, the lead-lag's V_A0 = V_R0/K_A
     + min(VGmax, K_G Efd0), V_ref - V_TR = V_I0 = V_A0/K_J; raises CaseError when Efd0

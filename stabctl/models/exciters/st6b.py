@@ -90,6 +90,16 @@ def has_state(p: ExciterParams):
     )
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the PID's derivative lag T_DA, the field current feedback's T_G; label -> (values, where)."""
+    return {
+        "exc_con T_DA (ST6B)": (p.Td, (p.Kpid_D != 0) & (p.Td >= LBND)),
+        "exc_con T_G (ST6B)": (p.TG, True),
+    }
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """ST6B at rest on rows r (a mask): V_R0 = Efd0/V_t0, V_G0 = K_G Efd0, V_A0 = (V_R0 + K_M
     V_G0)/(K_M + K_FF), the integral V_A0 (with K_IA; else the error V_A0/K_PA); writes x,

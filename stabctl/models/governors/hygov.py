@@ -25,6 +25,9 @@ HYGOV = 4
 KINDS = {HYGOV: "HYGOV"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields: T_g, T_f, T_w)
 NEEDS = ("Ts", "Tc", "T4")
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the gate limits on the start-up flow q_0
+ORDER_LIMITS = True
 DYR = (
     # HYGOV -> type 4: Kg = 1/(r Tr) and Uc = -VELM computed
     DyrModel(

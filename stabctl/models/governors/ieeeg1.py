@@ -25,6 +25,9 @@ IEEEG1 = 3
 KINDS = {IEEEG1: "IEEEG1"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts",)
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the gate's non-windup limits PMAX, PMIN on the start-up gate
+ORDER_LIMITS = True
 DYR = (
     DyrModel(
         "IEEEG1",

@@ -24,6 +24,9 @@ IEESGO = 5
 KINDS = {IEESGO: "IEESGO"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): none
 NEEDS: tuple[str, ...] = ()
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the power limits on the start-up gate
+ORDER_LIMITS = True
 DYR = (
     # IEESGO -> type 5: K1 (speed gain), lag T1, lead-lag T2/T3, limits, lags T4-T6;
     # the power fractions after T4, T5, T6 (1 - K2, (1 - K3) K2, K2 K3) computed
