@@ -2,9 +2,9 @@
 types, the exc_con table they fill (`EXCITER`), their parameters (`ExciterParams`,
 packed for the kernels as :data:`PACKED`, columns `E`, then each type's own), the
 compiled kernels (`field_voltage`, `derivatives`, `recorded_efd`; their dispatch on the
-type, `field_voltage_at`, `type_derivatives`, `type_recorded_efd`, generated from the
-registry into ``_dispatch.py`` by ``python -m stabctl.models.dispatch``) and the
-initialisation (`initialise`).
+type, `field_voltage_at`, `type_derivatives`, `type_recorded_efd`, and the source
+voltage's, `source_voltage_of`, generated from the registry into ``_dispatch.py`` by
+``python -m stabctl.models.dispatch``) and the initialisation (`initialise`).
 
 The types (exc_con column 1) are the modules of the registry `MODULES` (one line each;
 their codes and names their ``KINDS``, listed by the exc_con ``type`` column's help), each
@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stabctl._jit.decorators import kernel, njit
+from stabctl._jit.decorators import kernel
 from stabctl.errors import CaseError
 from stabctl.models import machines as mac
 from stabctl.models.blocks import LBND, lag
@@ -50,9 +50,10 @@ from stabctl.models.declaration import (
     type_modules,
     typed_family,
 )
-from stabctl.models.exciters import ac8b, dc, esac6a, esst4b, exac1, exac2, expic1, ieeet3, st3
+from stabctl.models.exciters import ac8b, dc, esac6a, exac1, exac2, expic1, st3
 from stabctl.models.exciters._dispatch import (
     field_voltage_at,
+    source_voltage_of,
     type_derivatives,
     type_recorded_efd,
 )
@@ -523,22 +524,6 @@ def exciter_params(case: Case) -> ExciterParams:
         ifd_machine=(e.type == ST3) & (e.ifd_machine == 1),
         VB_cap=np.where(np.isin(e.type, SOURCE_KINDS) & (e.VBmax > 0), e.VBmax, np.inf),
     )
-
-
-@njit
-def source_voltage_of(kind, KP, KI, XL, KC, cap, machine, init):
-    """The source term V_B of an exciter of type ``kind`` (:data:`SOURCE_KINDS`) from its
-    machine's quantities (`ST3Machine`; fldcur the field current, pu on the machine base):
-    ST3 `st3.source_voltage` (at most cap, VBmax; init PST's flag 0), IEEET3
-    `ieeet3.source_voltage` (its cap applies to V_B + V_R), ESST4B `esst4b.source_voltage`
-    (at most cap)."""
-    if kind == ST3:
-        return st3.source_voltage(KP, KI, XL, KC, cap, machine, init)
-    if kind == T3:
-        return ieeet3.source_voltage(KP, KI, XL, KC, cap, machine, init)
-    if kind == PIC1:
-        return expic1.source_voltage(KP.real, KI, XL, KC, cap, machine, init)
-    return esst4b.source_voltage(KP, KI, XL, KC, cap, machine, init)
 
 
 def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):

@@ -176,10 +176,12 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 @njit
 def source_voltage(KP, KI, XL, KC, cap, machine, init):
     """EXPIC1's source V_B: `esst4b.source_voltage` (V_E F_EX(K_C I_fd/V_E), V_E = |K_P V_t
-    + j K_I I_t| with X_L = 0 and K_P real), 1 where K_P = K_I = 0 (PSS/E Model Library)."""
-    if KP == 0 and KI == 0:
+    + j K_I I_t| with X_L = 0 and K_P real: the real part of the complex KP the family
+    hands every source type), 1 where K_P = K_I = 0 (PSS/E Model Library)."""
+    kp = KP.real
+    if kp == 0 and KI == 0:
         return 1.0
-    return rectified_source(KP, KI, XL, KC, cap, machine, init)
+    return rectified_source(kp, KI, XL, KC, cap, machine, init)
 
 
 @kernel(inline="always")
