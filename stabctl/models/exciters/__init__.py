@@ -50,7 +50,7 @@ from stabctl.models.declaration import (
     type_modules,
     typed_family,
 )
-from stabctl.models.exciters import ac8b, dc, esac6a, exac1, exac2, expic1, st3
+from stabctl.models.exciters import exac1, exac2, st3
 from stabctl.models.exciters._dispatch import (
     field_voltage_at,
     source_voltage_of,
@@ -173,16 +173,16 @@ RATE_FEEDBACK = tuple(kind for kind, m in TYPES.items() if m.RATE_FEEDBACK)
 #: the types fed by a potential (and compound) source V_B computed from the machine's
 #: terminal voltage and current (`source_voltage`): ST3, IEEET3, ESST4B
 SOURCE_KINDS = tuple(kind for kind, m in TYPES.items() if m.SOURCE)
-#: the AC exciters with an exciter voltage V_E and PSS/E's quadratic saturation: EXAC1,
-#: ESAC1A, AC8B, EXAC2, ESAC6A
-AC_KINDS = (*exac1.KINDS, *ac8b.KINDS, *exac2.KINDS, *esac6a.KINDS)
-#: the types with K_E, T_E and PSS/E's quadratic saturation (exc_con columns 10-15): the AC
-#: exciters and EXPIC1 (its exciter T_E dEfd/dt = E_0 - (K_E + S_E) Efd)
-QUAD_KINDS = (*AC_KINDS, *expic1.KINDS)
+#: the types reading K_E, T_E and PSS/E's quadratic saturation from exc_con columns
+#: 10-15 (their modules' ``EXCITER_COLUMNS``): the AC exciters and EXPIC1 (its exciter
+#: T_E dEfd/dt = E_0 - (K_E + S_E) Efd)
+QUAD_KINDS = tuple(k for k, m in TYPES.items() if m.EXCITER_COLUMNS == "quadratic")
 #: the most state slots of a type (EXPIC1's 7)
 MAX_SLOTS = max(len(names) for names in STATE_NAMES.values())
 #: the DC exciters (their saturation fits, K_E computed): DC1, DC2, IEEET2
-DC_KINDS = tuple(dc.KINDS)
+DC_KINDS = tuple(k for k, m in TYPES.items() if m.EXCITER_COLUMNS == "dc")
+#: the types reading K_E and T_E (exc_con columns 10-11): those above and IEEET3
+KE_KINDS = tuple(k for k, m in TYPES.items() if m.EXCITER_COLUMNS)
 #: the machine's speed among its states (``efd_speed``)
 _OMEGA = mac.STATE_NAMES.index("omega")
 
@@ -258,12 +258,6 @@ class ExciterParams(Declared):
     def tc_tb(self):
         """T_C/T_B where the lead-lag exists, 1 otherwise (PST exc_pot column 5)."""
         return np.where(self.has_TB, self.TC / np.where(self.has_TB, self.TB, 1.0), 1.0)
-
-    @property
-    def is_ac(self):
-        """AC exciters (EXAC1, ESAC1A): the exciter voltage V_E and the rectifier
-        regulation."""
-        return np.isin(self.kind, AC_KINDS)
 
     @property
     def has_TB1(self):
@@ -500,7 +494,7 @@ def exciter_params(case: Case) -> ExciterParams:
     A, B = _dc_saturation(e)
     dc = np.isin(e.type, DC_KINDS)
     ac = np.isin(e.type, QUAD_KINDS)
-    t3 = e.type == T3
+    ke = np.isin(e.type, KE_KINDS)
     pic = e.type == PIC1
     KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
     given = {n: getattr(e, n).copy() for n in TABLE_FIELDS + tuple(p.name for p in OWN_PARAMS)}
@@ -513,8 +507,8 @@ def exciter_params(case: Case) -> ExciterParams:
         kind=e.type.astype(int),
         mac=np.array([case.machine_index(m) for m in e.machine], int),
         **given,
-        KE=np.where(dc | ac | t3, _dc(e, "KE"), 0.0),
-        TE=np.where(dc | ac | t3, _dc(e, "TE"), 0.0),
+        KE=np.where(ke, _dc(e, "KE"), 0.0),
+        TE=np.where(ke, _dc(e, "TE"), 0.0),
         Asat=np.where(dc | ac, A, 0.0),
         Bsat=np.where(dc | ac, B, 0.0),
         KF=np.where(dc, _dc(e, "KF_dc"), np.where(np.isin(e.type, RATE_FEEDBACK), e.KF, 0.0)),

@@ -35,6 +35,10 @@ READS_IFD = True
 RATE_FEEDBACK = False
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = False
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = "quadratic"
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TE", "TE"),)
 
