@@ -46,7 +46,6 @@ from stabctl.models.governors.ggov1 import GGOV1
 from stabctl.models.governors.hygov import HYGOV
 from stabctl.models.governors.hygov4 import HYGOV4
 from stabctl.models.governors.ieeeg1 import IEEEG1
-from stabctl.models.governors.ieesgo import IEESGO
 from stabctl.models.governors.table import (
     GGOV1_FIELDS,
     HYGOV_FIELDS,
@@ -287,10 +286,12 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     gate position (IEEEG1, IEESGO: pmech0 / sum K; a cross-compound IEEEG1: its two
     machines' power, pmech0_lp the LP machine's on its base, over the sum of all eight
     fractions) or R q_0 (HYGOV: flow, gate and gate integrator at q_0 = pmech0/A_t +
-    q_NL, head 1; HYGOV4: R_perm q_0, its gate and flow at q_0).  The family computes
-    that start-up order (the gate, or q_0) and, for the types of :data:`ORDER_LIMITED`,
-    checks it; each type's module sets its states on its rows and checks its own start
-    (its ``initialise``), in the registry's order.
+    q_NL, head 1; HYGOV4: R_perm q_0, its gate and flow at q_0).  The start-up order is
+    each type module's ``start_order(p, rows, pmech0, total)`` on its rows (the gate, or
+    q_0; total the unit's power, both machines' for a cross-compound unit), the power
+    total itself where the module has none; the family checks it for the types of
+    :data:`ORDER_LIMITED`; each type's module sets its states on its rows and checks its
+    own start (its ``initialise``), in the registry's order.
 
     Raises CaseError when the initial power order of an :data:`ORDER_LIMITED` type is
     outside [Tmin, Tmax] (PST's check for tg, the non-windup limits for TGOV1 and
@@ -298,12 +299,15 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     fractions do (ANDES 2.0 ieeeg1.py's ``_Pc`` check), beyond `START_LIMIT_TOL`
     (stabctl.models.declaration), or a type's ``initialise`` refuses its start."""
     x = np.zeros((N_STATES, p.n))
-    hy, sg = (p.kind == HYGOV) | (p.kind == HYGOV4), p.kind == IEESGO
     cross = p.mac2 >= 0
     lp = np.zeros(p.n) if pmech0_lp is None else np.asarray(pmech0_lp, float)
     total = np.where(cross, pmech0 + lp / np.where(cross, p.lp_base, 1.0), pmech0)
-    K_all = p.K.sum(axis=1) + p.K_lp.sum(axis=1)
-    gate = total / np.where((p.kind == IEEEG1) | sg, K_all, 1.0)
+    gate = total.copy()
+    for module in MODULES:
+        rows = np.isin(p.kind, tuple(module.KINDS))
+        start_order = getattr(module, "start_order", None)
+        if start_order is not None and rows.any():
+            gate[rows] = start_order(p, rows, pmech0, total)
     bad = np.nonzero(cross & beyond(pmech0, p.K.sum(axis=1) * gate, p.K.sum(axis=1) * gate))[0]
     if bad.size:
         r = bad[0]
@@ -312,7 +316,6 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
             f"{pmech0[r]:.4f} pu, its fractions K1, K3, K5, K7 give "
             f"{p.K[r].sum() * gate[r]:.4f} pu of the two machines' power"
         )
-    gate = np.where(hy, pmech0 / np.where(hy, p.T5, 1.0) + p.qNL, gate)
     refuse_initial(
         "tg_con",
         beyond(gate, p.Tmin, p.Tmax) & np.isin(p.kind, ORDER_LIMITED),

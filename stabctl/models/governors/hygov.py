@@ -78,6 +78,12 @@ def check(g, r: int) -> str | None:
     return None
 
 
+def start_order(p: GovernorParams, r, pmech0, total):
+    """HYGOV's (and HYGOV4's) start-up order on rows r: the flow q_0 = pmech0/A_t + q_NL
+    at head 1 (A_t in T5)."""
+    return pmech0[r] / p.T5[r] + p.qNL[r]
+
+
 def initialise(p: GovernorParams, r, pmech0, q0, x):
     """HYGOV (and HYGOV4) at rest on rows r: the filter (pilot servo) at 0, the other
     three states at the flow q_0 = pmech0/A_t + q_NL (head 1, from the family); returns

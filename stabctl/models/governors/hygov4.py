@@ -72,6 +72,10 @@ def time_constants(p: GovernorParams):
     return {"Tc": True, "T3": True, "T4": True}
 
 
+#: the start-up order: HYGOV's flow q_0 = pmech0/A_t + q_NL
+start_order = hygov.start_order
+
+
 def initialise(p: GovernorParams, r, pmech0, q0, x):
     """HYGOV4 at rest on rows r: the pilot servo at 0, the gate, the dashpot (no output)
     and the flow at q_0 (head 1, from the family); returns P_ref = R_perm q_0 on r."""

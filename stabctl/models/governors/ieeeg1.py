@@ -69,6 +69,13 @@ def time_constants(p: GovernorParams):
     return {"Ts": True, **{n: getattr(p, n) >= LBND for n in ("Tc", "T4", "T5", "T6", "T7")}}
 
 
+def start_order(p: GovernorParams, r, pmech0, total):
+    """IEEEG1's start-up order on rows r: the gate, total (its machine's power, or a
+    cross-compound unit's two machines', `stabctl.models.governors.initialise`) over the
+    sum of its power fractions K1..K8."""
+    return total[r] / (p.K.sum(axis=1) + p.K_lp.sum(axis=1))[r]
+
+
 def initialise(p: GovernorParams, r, pmech0, gate, x):
     """IEEEG1 at rest on rows r: the lead-lag at 0 (no speed deviation), the gate and every
     lag at the gate position (pmech0 / sum K, from the family); returns P_ref = the gate."""

@@ -64,6 +64,12 @@ def time_constants(p: GovernorParams):
     return {n: getattr(p, n) >= LBND for n in ("Ts", "Tc", "T4", "T5", "T6")}
 
 
+def start_order(p: GovernorParams, r, pmech0, total):
+    """IEESGO's start-up order on rows r: the gate, its machine's power total over the sum
+    of its power fractions."""
+    return total[r] / (p.K.sum(axis=1) + p.K_lp.sum(axis=1))[r]
+
+
 def initialise(p: GovernorParams, r, pmech0, gate, x):
     """IEESGO at rest on rows r: the speed path at 0, the lags at the gate (pmech0 / sum
     of the fractions, from the family); returns P_ref = the gate."""
