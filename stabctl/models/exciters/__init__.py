@@ -50,7 +50,7 @@ from stabctl.models.declaration import (
     type_modules,
     typed_family,
 )
-from stabctl.models.exciters import exac1, exac2, st3
+from stabctl.models.exciters import st3
 from stabctl.models.exciters._dispatch import (
     field_voltage_at,
     source_voltage_of,
@@ -60,7 +60,6 @@ from stabctl.models.exciters._dispatch import (
 from stabctl.models.exciters.ac8b import AC8B
 from stabctl.models.exciters.dc import DC1, DC2, T2, dc_feedback
 from stabctl.models.exciters.esst1a import ST1A, st1a_regulator_output
-from stabctl.models.exciters.exac2 import AC2
 from stabctl.models.exciters.expic1 import PIC1
 from stabctl.models.exciters.exst1 import ST1
 from stabctl.models.exciters.ieeet3 import T3
@@ -114,7 +113,7 @@ __all__ = [
     "st1a_regulator_output",
     # the type codes read through the package (its own code, stabctl.dynamics, the
     # tests); a type's code is its module's, and a new type is not imported here
-    "SMP", "DC1", "DC2", "ST3", "ST1", "T2", "ST1A", "AC8B", "T3", "AC2", "PIC1",
+    "SMP", "DC1", "DC2", "ST3", "ST1", "T2", "ST1A", "AC8B", "T3", "PIC1",
 ]  # fmt: skip
 
 # --------------------------------------------------------------------------------------
@@ -318,16 +317,13 @@ class ExciterParams(Declared):
 
     def inner_loop_time_constants(self, VB0: np.ndarray, efd0: np.ndarray) -> np.ndarray:
         """The time constant of each exciter's fast closed loop at the operating point (s),
-        (n_exc,), which no single time constant of its data shows; inf where there is none.
-
-        * ST3 (ESST3A's K_M, T_M; PST exc_st3): T_A dV_R/dt = K_A (V_A - K_G E_fd) - V_R
-          with E_fd = V_B V_R closes the pole -(1 + K_A K_G V_B)/T_A: T_A / (1 + K_A K_G
-          V_B0) where the feedback is below VGmax (K_G E_fd0 < VGmax) and T_A > 0.
-          ANDES's kundur_esst3a: K_M = 500, T_M = 0.1 s, V_B = 4.3, 4.6e-5 s where T_M
-          suggests 0.1 s.
-        * EXST1 and ESST1A with a rate feedback (`rate_feedback_time_constants`).
-        * EXAC2: its regulator, exciter and rate feedback loop, as Heun's method sees it
-          (`exciter_loop_time_constants`).
+        (n_exc,), which no single time constant of its data shows: each type module's
+        ``inner_loop_time_constants(p, rows, VB0, efd0)`` on its rows, where it has one
+        (its ``INNER_LOOP`` names the loop, `inner_loop`); inf elsewhere.  ST3: T_A/(1 +
+        K_A K_G V_B0) (`st3.inner_loop_time_constants`); EXST1, ESST1A: the regulator
+        closed through its rate feedback (`exst1.inner_loop_time_constants`); EXAC2: its
+        regulator, exciter and rate feedback loop, as Heun's method sees it
+        (`exac2.inner_loop_time_constants`).
 
         Parameters
         ----------
@@ -340,77 +336,28 @@ class ExciterParams(Declared):
         -------
         ndarray, shape (n_exc,)
         """
-        loop = (self.kind == ST3) & (self.TA > 0) & (self.KG * efd0 < self.VGmax)
-        gain = 1.0 + self.KA * self.KG * VB0
-        st3 = np.where(loop, self.TA / np.where(loop, gain, 1.0), np.inf)
-        return np.minimum(
-            np.minimum(st3, self.rate_feedback_time_constants()),
-            self.exciter_loop_time_constants(efd0),
-        )
+        tau = np.full(self.n, np.inf)
+        for module in MODULES:
+            loop = getattr(module, "inner_loop_time_constants", None)
+            rows = np.isin(self.kind, tuple(module.KINDS))
+            if loop is not None and rows.any():
+                tau = np.where(rows, loop(self, rows, VB0, efd0), tau)
+        return tau
 
-    def exciter_loop_time_constants(self, efd0: np.ndarray) -> np.ndarray:
-        """Per EXAC2, half the largest step at which Heun's method keeps its regulator and
-        exciter loop (`exac2.loop_matrix`) stable (`exac2.heun_step_limit`), s, (n_exc,);
-        inf for the other types: the "time constant" that `check_step`'s h < 2 T and the
-        default step's 0.5 T read (for a real mode 1/|lambda| itself).  efd0 the field
-        voltages at rest (pu, (n_exc,)): V_E0 as `exac1.initial_exciter` solves it.
+    def inner_loop(self, i: int) -> str:
+        """The fast loop `inner_loop_time_constants` measures for exciter i (0-based): its
+        type module's ``INNER_LOOP``.
 
         Parameters
         ----------
-        efd0 : ndarray, shape (n_exc,)
-            The field voltages at the operating point, pu.
+        i : int
+            The exciter.
 
         Returns
         -------
-        ndarray, shape (n_exc,)
+        str
         """
-        tau = np.full(self.n, np.inf)
-        rows = self.kind == AC2
-        if rows.any():
-            VE, _ = exac1.initial_exciter(
-                self, rows, efd0, lambda i: "EXAC2", None, lambda i, v: []
-            )
-            for i in np.nonzero(rows)[0]:
-                lam = np.linalg.eigvals(exac2.loop_matrix(self, i, VE[i]))
-                tau[i] = 0.5 * exac2.heun_step_limit(lam)
-        return tau
-
-    def rate_feedback_time_constants(self) -> np.ndarray:
-        """The fastest pole of the EXST1 and ESST1A regulator loops (s), (n_exc,); inf for
-        the others and where T_A or T_F is below 1e-3 s or K_F = 0.
-
-        The lead-lags T_C/T_B (and ESST1A's T_C1/T_B1) feed the lag K_A/(1 + s T_A)
-        (state V_R, V_A), whose output returns through s K_F/(1 + s T_F) (state R_f) to
-        the voltage error: the linear loop of those states (limits inactive, the terminal
-        voltage and field current held), whose fastest eigenvalue's time constant is
-        returned.  PSID's ESST1A run of PSS/E's (K_A = 200, T_A = 0.1 s, K_F = T_F =
-        0.01 s, lead-lags 14.1/20 s): 9.0e-4 s where T_F suggests 0.01 s, and Heun at
-        5 ms diverges.
-
-        Returns
-        -------
-        ndarray, shape (n_exc,)
-        """
-        tau = np.full(self.n, np.inf)
-        loop = np.isin(self.kind, (ST1, ST1A)) & self.has_Rf & self.has_TA & (self.TF >= LBND)
-        for i in np.nonzero(loop)[0]:
-            lags = [(r[i], T[i]) for r, T, on in ((self.tc_tb, self.TB, self.has_TB),
-                    (self.tc1_tb1, self.TB1, self.has_TB1)) if on[i]]  # fmt: skip
-            n = len(lags)
-            A = np.zeros((n + 2, n + 2))  # lead-lag states, V_A, R_f
-            kf = self.KF[i] / self.TF[i]
-            u = np.zeros(n + 2)  # the voltage error: -K_F/T_F (V_A - R_f)
-            u[n], u[n + 1] = -kf, kf
-            for k, (r, T) in enumerate(lags):  # PST form: y = r u + (1 - r) x
-                A[k] = u / T
-                A[k, k] -= 1.0 / T
-                u = r * u
-                u[k] += 1.0 - r
-            A[n] = self.KA[i] * u / self.TA[i]
-            A[n, n] -= 1.0 / self.TA[i]
-            A[n + 1, n], A[n + 1, n + 1] = 1.0 / self.TF[i], -1.0 / self.TF[i]
-            tau[i] = 1.0 / np.max(-np.linalg.eigvals(A).real)
-        return tau
+        return TYPES[int(self.kind[i])].INNER_LOOP
 
 
 check_packed(ExciterParams, PACKED, ("Vref",))

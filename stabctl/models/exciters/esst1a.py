@@ -18,6 +18,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import GAIN_OVER_T, clip, leadlag_input_state, nonwindup_lag, washout
 from stabctl.models.declaration import DyrModel, states
+from stabctl.models.exciters import exst1
 from stabctl.models.exciters.exst1 import check_start
 from stabctl.models.exciters.table import IEEE_RULE, E, upper
 
@@ -116,6 +117,10 @@ def st1a_regulator_output(p: ExciterParams, Efd):
     limiter's K_LR max(0, I_fd0 - I_LR) with I_fd0 = Efd0 (the field current at rest; ANDES
     ``esst1a.py`` ``VA0``); Efd0 for the other types."""
     return np.where(p.kind == ST1A, Efd + p.KLR * np.maximum(Efd - p.ILR, 0.0), Efd)
+
+
+#: the regulator loop through the rate feedback, EXST1's (with the second lead-lag)
+INNER_LOOP, inner_loop_time_constants = exst1.INNER_LOOP, exst1.inner_loop_time_constants
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

@@ -119,6 +119,27 @@ def time_constants(p: ExciterParams):
     return {"exc_con T_E": (p.TE, True)}
 
 
+#: the fast loop `inner_loop_time_constants` measures, named where it sets the step
+INNER_LOOP = (
+    "EXAC2 regulator and exciter loop K_A/(1 + s T_A), 1/(s T_E) with its rate feedback "
+    "s K_F/(1 + s T_F) (half Heun's largest stable step)"
+)
+
+
+def inner_loop_time_constants(p: ExciterParams, r, VB0, efd0):
+    """Per EXAC2 of rows r, half the largest step at which Heun's method keeps its
+    regulator and exciter loop (`loop_matrix`) stable (`heun_step_limit`), s, (n_exc,);
+    inf for the other rows: the "time constant" that `check_step`'s h < 2 T and the
+    default step's 0.5 T read (for a real mode 1/|lambda| itself).  efd0 the field
+    voltages at rest (pu): V_E0 as `exac1.initial_exciter` solves it; VB0 unused."""
+    tau = np.full(p.n, np.inf)
+    VE, _ = initial_exciter(p, r, efd0, lambda i: "EXAC2", None, lambda i, v: [])
+    for i in np.nonzero(r)[0]:
+        lam = np.linalg.eigvals(loop_matrix(p, i, VE[i]))
+        tau[i] = 0.5 * heun_step_limit(lam)
+    return tau
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """EXAC2 at rest on rows r (a mask): `exac1.initial_exciter`'s V_E0 and V_FE0 = V_R0,
     V_A0 = V_FE0 (1/K_B + K_H) (the gate passing V_H), the lead-lag V_A0/K_A, the washout

@@ -117,6 +117,22 @@ def time_constants(p: ExciterParams):
     return {"exc_con TA_st3a": (p.TA_st3a, p.has_TA3A)}
 
 
+#: the fast loop `inner_loop_time_constants` measures, named where it sets the step
+INNER_LOOP = "ST3 inner loop T_A/(1 + K_A K_G V_B)"
+
+
+def inner_loop_time_constants(p: ExciterParams, r, VB0, efd0):
+    """The ST3's inner loop (ESST3A's K_M, T_M; PST exc_st3) on rows r, (n_exc,): T_A
+    dV_R/dt = K_A (V_A - K_G E_fd) - V_R with E_fd = V_B V_R closes the pole -(1 + K_A
+    K_G V_B)/T_A: T_A / (1 + K_A K_G V_B0) where the feedback is below VGmax (K_G E_fd0 <
+    VGmax) and T_A > 0, inf elsewhere (VB0, efd0 the source and field voltages at rest,
+    pu).  ANDES's kundur_esst3a: K_M = 500, T_M = 0.1 s, V_B = 4.3, 4.6e-5 s where T_M
+    suggests 0.1 s."""
+    loop = r & (p.TA > 0) & (p.KG * efd0 < p.VGmax)
+    gain = 1.0 + p.KA * p.KG * VB0
+    return np.where(loop, p.TA / np.where(loop, gain, 1.0), np.inf)
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """exc_st3 at rest on rows r (a mask): V_R0 = Efd0/V_B0, the lead-lag's V_A0 = V_R0/K_A
     + min(VGmax, K_G Efd0), V_ref - V_TR = V_I0 = V_A0/K_J; raises CaseError when Efd0
