@@ -184,7 +184,7 @@ RUNS: tuple[Run, ...] = (
     Run("EXAC1", _TVC, "TVC_System.dyr", "results_PSSe.csv", _trip(1, 4), 20.0,
         _TVC_CHANNELS, inf_bus=1, models="GENSAL EXAC1 HYGOV"),
     # ESST1A's regulator closed through its rate feedback has a pole at -1109 1/s
-    # (ExciterParams.rate_feedback_time_constants): Heun refuses PSS/E's 5 ms step, the
+    # (exst1.inner_loop_time_constants): Heun refuses PSS/E's 5 ms step, the
     # A-stable trapezoid takes it (docs/simulator.md, default step)
     Run("ESST1A", _TVC, "TVC_System.dyr", "results_PSSe.csv",
         _trip(1, 4) + ("--method", "trapezoid"), 20.0,

@@ -367,16 +367,10 @@ class DynamicModel:
         tau = ep.inner_loop_time_constants(VB0, self.vex0[em])
         k = int(np.argmin(tau)) if tau.size else 0
         #: the fastest loop the data's time constants do not show: (s, where)
-        loop = {
-            exc.ST3: "ST3 inner loop T_A/(1 + K_A K_G V_B)",
-            exc.AC2: "EXAC2 regulator and exciter loop K_A/(1 + s T_A), 1/(s T_E) with its "
-            "rate feedback s K_F/(1 + s T_F) (half Heun's largest stable step)",
-        }.get(
-            int(ep.kind[k]) if tau.size else -1,
-            "regulator loop K_A/(1 + s T_A) with its rate feedback s K_F/(1 + s T_F)",
-        )
         self.fastest_loop = (
-            (float(tau[k]), f"exc_con row {k + 1}: {loop}") if tau.size else (np.inf, "")
+            (float(tau[k]), f"exc_con row {k + 1}: {ep.inner_loop(k)}")
+            if tau.size and np.isfinite(tau[k])
+            else (np.inf, "")
         )
         L.view(x, "exc")[:] = xe
         L.view(x, "pss")[:] = pss_.initialise(

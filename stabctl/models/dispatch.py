@@ -58,6 +58,10 @@ class Kernel:  # fields of a dataclass: numpydoc ignore=PR02
     default : str
         For a kernel a type module may leave out: the expression the generated kernel
         returns for its types (empty: every module has the kernel).
+    kind : bool
+        The first of `args`, ``kind``, is the type itself, not passed on to the type's kernel (a
+        function Python code calls too, ``@njit``); else the type is the packed type
+        column of the row ``args[2]``.
     """
 
     name: str
@@ -68,6 +72,12 @@ class Kernel:  # fields of a dataclass: numpydoc ignore=PR02
     inline: bool = False
     generated: str = ""
     default: str = ""
+    kind: bool = False
+
+    @property
+    def passed(self) -> tuple[str, ...]:
+        """The arguments the type's kernel takes: `args`, without the type with `kind`."""
+        return self.args[1:] if self.kind else self.args
 
 
 @dataclass(frozen=True)
@@ -182,6 +192,18 @@ FAMILIES = (
                 generated="type_recorded_efd",
                 default="efd_alg",
             ),
+            Kernel(
+                "source_voltage",
+                ("kind", "KP", "KI", "XL", "KC", "cap", "machine", "init"),
+                "The source term V_B of an exciter of type kind from its machine's "
+                "quantities machine (`table.ST3Machine`), its K_P (complex), K_I, X_L, K_C, "
+                "its cap VBmax and init (PST's flag 0): its type module's "
+                "``source_voltage`` (the types that declare ``SOURCE``), 1 for the others.",
+                returns=True,
+                generated="source_voltage_of",
+                default="1.0",
+                kind=True,
+            ),
         ),
     ),
 )
@@ -205,10 +227,10 @@ def _check(module, kernel: Kernel) -> None:
     if fn is None:
         raise ValueError(f"{module.__name__} has no kernel '{kernel.name}'")
     params = tuple(inspect.signature(getattr(fn, "py_func", fn)).parameters)
-    if params != kernel.args:
+    if params != kernel.passed:
         raise ValueError(
             f"{module.__name__}.{kernel.name}{params}: the family's kernels take "
-            f"({', '.join(kernel.args)})"
+            f"({', '.join(kernel.passed)})"
         )
 
 
@@ -244,12 +266,13 @@ def render(family: Dispatch) -> str:
     )
     branches = {k.name: _branches(modules, k) for k in family.kernels}
     used = sorted({s for kernel in branches.values() for s, _, _ in kernel})
+    decorators = "kernel, njit" if any(k.kind for k in family.kernels) else "kernel"
     out = [
         *_wrapped(header, ""),
         "",
         "from __future__ import annotations",
         "",
-        "from stabctl._jit.decorators import kernel",
+        f"from stabctl._jit.decorators import {decorators}",
         f"from {family.package} import (",
         *(f"    {s}," for s in used),
         ")",
@@ -258,14 +281,16 @@ def render(family: Dispatch) -> str:
     for kernel in family.kernels:
         args = ", ".join(kernel.args)
         decorator = '@kernel(inline="always")' if kernel.inline else "@kernel"
-        out += ["", "", decorator, f"def {kernel.generated or kernel.name}({args}):"]
+        out += ["", "", "@njit" if kernel.kind else decorator]
+        out.append(f"def {kernel.generated or kernel.name}({args}):")
         out += _wrapped(f'"""{kernel.doc}"""', "    ")
-        out.append(f"    kind = P[{kernel.args[2]}, {layout}.KIND]")
+        if not kernel.kind:
+            out.append(f"    kind = P[{kernel.args[2]}, {layout}.KIND]")
         if kernel.first:
             out.append(f"    {kernel.first}")
         chain = branches[kernel.name]
         for i, (s, kinds, label) in enumerate(chain):
-            call = f"{s}.{kernel.name}({args})"
+            call = f"{s}.{kernel.name}({', '.join(kernel.passed)})"
             test = " or ".join(f"kind == {kind}" for kind in kinds)
             last = i == len(chain) - 1 and not kernel.default
             if kernel.returns:

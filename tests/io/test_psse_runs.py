@@ -54,7 +54,7 @@ def test_psse_event_rows_drop_the_pre_event_value():
 def test_esst1a_regulator_loop_sets_the_step():
     """PSS/E's ESST1A run: its regulator closed through the rate feedback (K_A = 200, T_A
     = 0.1 s, K_F = T_F = 0.01 s) has its pole at -1109 1/s (9.0e-4 s,
-    `ExciterParams.rate_feedback_time_constants`): the case's fastest time constant, so
+    `exst1.inner_loop_time_constants`): the case's fastest time constant, so
     Heun's default step is 4.5e-4 s and PSS/E's 5 ms is refused at once, naming the loop,
     where it diverged at 0.33 s before."""
     d = DATA / "ESST1A"

@@ -418,13 +418,13 @@ ST1A_PSSE += [6.3, -10.0, 0.01, 2.8]
     ids=["ESST1A_psse", "ESST1A", "EXST1"],
 )
 def test_rate_feedback_loop_time_constant_is_the_fastest_pole(row, fed_back):
-    """`rate_feedback_time_constants` (the regulator loop built from the data) gives the
+    """`exst1.inner_loop_time_constants` (the regulator loop built from the data) gives the
     fastest eigenvalue of the exciter's own Jacobian without its transducer state
     (central differences of `derivatives`, the terminal voltage and the machine's field
     current held; EXST1's field voltage, its rate feedback's input, fed back):
     PSS/E's ESST1A run at -1109 1/s, where T_F = 0.01 s suggests -100."""
     P, x0 = started(row)
-    tau = params(row).rate_feedback_time_constants()[0]
+    tau = params(row).inner_loop_time_constants(np.ones(1), np.array([EFD0]))[0]
 
     def f(x):
         x = x.reshape(x0.shape).copy()

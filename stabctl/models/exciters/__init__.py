@@ -2,9 +2,9 @@
 types, the exc_con table they fill (`EXCITER`), their parameters (`ExciterParams`,
 packed for the kernels as :data:`PACKED`, columns `E`, then each type's own), the
 compiled kernels (`field_voltage`, `derivatives`, `recorded_efd`; their dispatch on the
-type, `field_voltage_at`, `type_derivatives`, `type_recorded_efd`, generated from the
-registry into ``_dispatch.py`` by ``python -m stabctl.models.dispatch``) and the
-initialisation (`initialise`).
+type, `field_voltage_at`, `type_derivatives`, `type_recorded_efd`, and the source
+voltage's, `source_voltage_of`, generated from the registry into ``_dispatch.py`` by
+``python -m stabctl.models.dispatch``) and the initialisation (`initialise`).
 
 The types (exc_con column 1) are the modules of the registry `MODULES` (one line each;
 their codes and names their ``KINDS``, listed by the exc_con ``type`` column's help), each
@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stabctl._jit.decorators import kernel, njit
+from stabctl._jit.decorators import kernel
 from stabctl.errors import CaseError
 from stabctl.models import machines as mac
 from stabctl.models.blocks import LBND, lag
@@ -50,27 +50,21 @@ from stabctl.models.declaration import (
     type_modules,
     typed_family,
 )
-from stabctl.models.exciters import ac8b, dc, esac6a, esst4b, exac1, exac2, expic1, ieeet3, st3
+from stabctl.models.exciters import st3
 from stabctl.models.exciters._dispatch import (
     field_voltage_at,
+    source_voltage_of,
     type_derivatives,
     type_recorded_efd,
 )
 from stabctl.models.exciters.ac8b import AC8B
 from stabctl.models.exciters.dc import DC1, DC2, T2, dc_feedback
-from stabctl.models.exciters.esac6a import AC6A
 from stabctl.models.exciters.esst1a import ST1A, st1a_regulator_output
-from stabctl.models.exciters.esst4b import ST4B
-from stabctl.models.exciters.exac1 import AC1, AC1A
-from stabctl.models.exciters.exac2 import AC2
-from stabctl.models.exciters.exac4 import AC4
 from stabctl.models.exciters.expic1 import PIC1
 from stabctl.models.exciters.exst1 import ST1
 from stabctl.models.exciters.ieeet3 import T3
 from stabctl.models.exciters.sexs import SMP
 from stabctl.models.exciters.st3 import ST3, st3_source_voltage
-from stabctl.models.exciters.st6b import ST6B
-from stabctl.models.exciters.st8c import ST8C
 from stabctl.models.exciters.table import (
     PACKED,
     PARAMS,
@@ -117,8 +111,9 @@ __all__ = [
     "st3_source_voltage",
     "dc_feedback",
     "st1a_regulator_output",
-    "SMP", "DC1", "DC2", "ST3", "ST1", "T2", "ST1A", "AC1", "AC4", "AC1A", "AC8B", "T3", "ST4B",
-    "AC2", "AC6A", "PIC1", "ST6B", "ST8C",
+    # the type codes read through the package (its own code, stabctl.dynamics, the
+    # tests); a type's code is its module's, and a new type is not imported here
+    "SMP", "DC1", "DC2", "ST3", "ST1", "T2", "ST1A", "AC8B", "T3", "PIC1",
 ]  # fmt: skip
 
 # --------------------------------------------------------------------------------------
@@ -177,16 +172,16 @@ RATE_FEEDBACK = tuple(kind for kind, m in TYPES.items() if m.RATE_FEEDBACK)
 #: the types fed by a potential (and compound) source V_B computed from the machine's
 #: terminal voltage and current (`source_voltage`): ST3, IEEET3, ESST4B
 SOURCE_KINDS = tuple(kind for kind, m in TYPES.items() if m.SOURCE)
-#: the AC exciters with an exciter voltage V_E and PSS/E's quadratic saturation: EXAC1,
-#: ESAC1A, AC8B, EXAC2, ESAC6A
-AC_KINDS = (*exac1.KINDS, *ac8b.KINDS, *exac2.KINDS, *esac6a.KINDS)
-#: the types with K_E, T_E and PSS/E's quadratic saturation (exc_con columns 10-15): the AC
-#: exciters and EXPIC1 (its exciter T_E dEfd/dt = E_0 - (K_E + S_E) Efd)
-QUAD_KINDS = (*AC_KINDS, *expic1.KINDS)
+#: the types reading K_E, T_E and PSS/E's quadratic saturation from exc_con columns
+#: 10-15 (their modules' ``EXCITER_COLUMNS``): the AC exciters and EXPIC1 (its exciter
+#: T_E dEfd/dt = E_0 - (K_E + S_E) Efd)
+QUAD_KINDS = tuple(k for k, m in TYPES.items() if m.EXCITER_COLUMNS == "quadratic")
 #: the most state slots of a type (EXPIC1's 7)
 MAX_SLOTS = max(len(names) for names in STATE_NAMES.values())
 #: the DC exciters (their saturation fits, K_E computed): DC1, DC2, IEEET2
-DC_KINDS = tuple(dc.KINDS)
+DC_KINDS = tuple(k for k, m in TYPES.items() if m.EXCITER_COLUMNS == "dc")
+#: the types reading K_E and T_E (exc_con columns 10-11): those above and IEEET3
+KE_KINDS = tuple(k for k, m in TYPES.items() if m.EXCITER_COLUMNS)
 #: the machine's speed among its states (``efd_speed``)
 _OMEGA = mac.STATE_NAMES.index("omega")
 
@@ -264,12 +259,6 @@ class ExciterParams(Declared):
         return np.where(self.has_TB, self.TC / np.where(self.has_TB, self.TB, 1.0), 1.0)
 
     @property
-    def is_ac(self):
-        """AC exciters (EXAC1, ESAC1A): the exciter voltage V_E and the rectifier
-        regulation."""
-        return np.isin(self.kind, AC_KINDS)
-
-    @property
     def has_TB1(self):
         """ESST1A's second lead-lag exists (T_B1 >= 1e-3 s)."""
         return (self.kind == ST1A) & (self.TB1 >= LBND)
@@ -308,41 +297,33 @@ class ExciterParams(Declared):
         return self.is_dc | (np.isin(self.kind, RATE_FEEDBACK) & (self.KF != 0))
 
     def time_constants(self):
-        """(label, values, mask) of every time constant that sets a state's speed."""
-        return (
-            ("exc_con T_R", self.TR, self.has_TR),
-            ("exc_con T_A", self.TA, self.has_TA),
-            ("exc_con T_B", self.TB, self.has_TB),
-            ("exc_con T_B1", self.TB1, self.has_TB1),
-            ("exc_con TA_st3a", self.TA_st3a, self.has_TA3A),
-            ("exc_con T_E", self.TE, self.is_dc | self.is_ac | (self.kind == T3)),
-            ("exc_con T_E (EXPIC1)", self.TE, (self.kind == PIC1) & (self.TE >= LBND)),
-            ("exc_con T_H", self.TH, (self.kind == AC6A) & (self.TH >= LBND)),
-            ("exc_con T_F2 (EXPIC1)", self.TF_2, (self.kind == PIC1) & (self.TF_2 >= LBND)),
-            ("exc_con T_F", self.TF, self.has_Rf),
-            ("exc_con T_F2", self.TF2, self.has_VF),
-            ("exc_con T_D", self.Td, self.has_pid_d),
-            (
-                "exc_con T_DA (ST6B)",
-                self.Td,
-                (self.kind == ST6B) & (self.Kpid_D != 0) & (self.Td >= LBND),
-            ),
-            ("exc_con T_G (ST6B)", self.TG, self.kind == ST6B),
-            ("exc_con T_F (ST8C)", self.TF_ifd, self.kind == ST8C),
-        )
+        """(label, values, mask) of every time constant that sets a state's speed: the
+        transducer T_R, the regulator T_A and the lead-lag T_B every type may have, the
+        rate feedback T_F of the :data:`RATE_FEEDBACK` types with K_F != 0, then each type
+        module's ``time_constants`` (label -> (values, where)) on its rows; a label names
+        one array, its rows gathered from every type that gives it."""
+        found = {
+            "exc_con T_R": (self.TR, self.has_TR),
+            "exc_con T_A": (self.TA, self.has_TA),
+            "exc_con T_B": (self.TB, self.has_TB),
+            "exc_con T_F": (self.TF, np.isin(self.kind, RATE_FEEDBACK) & (self.KF != 0)),
+        }
+        for module in MODULES:
+            rows = np.isin(self.kind, tuple(module.KINDS))
+            for label, (values, on) in module.time_constants(self).items():
+                before = found[label][1] if label in found else False
+                found[label] = (values, before | (rows & on))
+        return tuple((label, values, mask) for label, (values, mask) in found.items())
 
     def inner_loop_time_constants(self, VB0: np.ndarray, efd0: np.ndarray) -> np.ndarray:
         """The time constant of each exciter's fast closed loop at the operating point (s),
-        (n_exc,), which no single time constant of its data shows; inf where there is none.
-
-        * ST3 (ESST3A's K_M, T_M; PST exc_st3): T_A dV_R/dt = K_A (V_A - K_G E_fd) - V_R
-          with E_fd = V_B V_R closes the pole -(1 + K_A K_G V_B)/T_A: T_A / (1 + K_A K_G
-          V_B0) where the feedback is below VGmax (K_G E_fd0 < VGmax) and T_A > 0.
-          ANDES's kundur_esst3a: K_M = 500, T_M = 0.1 s, V_B = 4.3, 4.6e-5 s where T_M
-          suggests 0.1 s.
-        * EXST1 and ESST1A with a rate feedback (`rate_feedback_time_constants`).
-        * EXAC2: its regulator, exciter and rate feedback loop, as Heun's method sees it
-          (`exciter_loop_time_constants`).
+        (n_exc,), which no single time constant of its data shows: each type module's
+        ``inner_loop_time_constants(p, rows, VB0, efd0)`` on its rows, where it has one
+        (its ``INNER_LOOP`` names the loop, `inner_loop`); inf elsewhere.  ST3: T_A/(1 +
+        K_A K_G V_B0) (`st3.inner_loop_time_constants`); EXST1, ESST1A: the regulator
+        closed through its rate feedback (`exst1.inner_loop_time_constants`); EXAC2: its
+        regulator, exciter and rate feedback loop, as Heun's method sees it
+        (`exac2.inner_loop_time_constants`).
 
         Parameters
         ----------
@@ -355,77 +336,28 @@ class ExciterParams(Declared):
         -------
         ndarray, shape (n_exc,)
         """
-        loop = (self.kind == ST3) & (self.TA > 0) & (self.KG * efd0 < self.VGmax)
-        gain = 1.0 + self.KA * self.KG * VB0
-        st3 = np.where(loop, self.TA / np.where(loop, gain, 1.0), np.inf)
-        return np.minimum(
-            np.minimum(st3, self.rate_feedback_time_constants()),
-            self.exciter_loop_time_constants(efd0),
-        )
+        tau = np.full(self.n, np.inf)
+        for module in MODULES:
+            loop = getattr(module, "inner_loop_time_constants", None)
+            rows = np.isin(self.kind, tuple(module.KINDS))
+            if loop is not None and rows.any():
+                tau = np.where(rows, loop(self, rows, VB0, efd0), tau)
+        return tau
 
-    def exciter_loop_time_constants(self, efd0: np.ndarray) -> np.ndarray:
-        """Per EXAC2, half the largest step at which Heun's method keeps its regulator and
-        exciter loop (`exac2.loop_matrix`) stable (`exac2.heun_step_limit`), s, (n_exc,);
-        inf for the other types: the "time constant" that `check_step`'s h < 2 T and the
-        default step's 0.5 T read (for a real mode 1/|lambda| itself).  efd0 the field
-        voltages at rest (pu, (n_exc,)): V_E0 as `exac1.initial_exciter` solves it.
+    def inner_loop(self, i: int) -> str:
+        """The fast loop `inner_loop_time_constants` measures for exciter i (0-based): its
+        type module's ``INNER_LOOP``.
 
         Parameters
         ----------
-        efd0 : ndarray, shape (n_exc,)
-            The field voltages at the operating point, pu.
+        i : int
+            The exciter.
 
         Returns
         -------
-        ndarray, shape (n_exc,)
+        str
         """
-        tau = np.full(self.n, np.inf)
-        rows = self.kind == AC2
-        if rows.any():
-            VE, _ = exac1.initial_exciter(
-                self, rows, efd0, lambda i: "EXAC2", None, lambda i, v: []
-            )
-            for i in np.nonzero(rows)[0]:
-                lam = np.linalg.eigvals(exac2.loop_matrix(self, i, VE[i]))
-                tau[i] = 0.5 * exac2.heun_step_limit(lam)
-        return tau
-
-    def rate_feedback_time_constants(self) -> np.ndarray:
-        """The fastest pole of the EXST1 and ESST1A regulator loops (s), (n_exc,); inf for
-        the others and where T_A or T_F is below 1e-3 s or K_F = 0.
-
-        The lead-lags T_C/T_B (and ESST1A's T_C1/T_B1) feed the lag K_A/(1 + s T_A)
-        (state V_R, V_A), whose output returns through s K_F/(1 + s T_F) (state R_f) to
-        the voltage error: the linear loop of those states (limits inactive, the terminal
-        voltage and field current held), whose fastest eigenvalue's time constant is
-        returned.  PSID's ESST1A run of PSS/E's (K_A = 200, T_A = 0.1 s, K_F = T_F =
-        0.01 s, lead-lags 14.1/20 s): 9.0e-4 s where T_F suggests 0.01 s, and Heun at
-        5 ms diverges.
-
-        Returns
-        -------
-        ndarray, shape (n_exc,)
-        """
-        tau = np.full(self.n, np.inf)
-        loop = np.isin(self.kind, (ST1, ST1A)) & self.has_Rf & self.has_TA & (self.TF >= LBND)
-        for i in np.nonzero(loop)[0]:
-            lags = [(r[i], T[i]) for r, T, on in ((self.tc_tb, self.TB, self.has_TB),
-                    (self.tc1_tb1, self.TB1, self.has_TB1)) if on[i]]  # fmt: skip
-            n = len(lags)
-            A = np.zeros((n + 2, n + 2))  # lead-lag states, V_A, R_f
-            kf = self.KF[i] / self.TF[i]
-            u = np.zeros(n + 2)  # the voltage error: -K_F/T_F (V_A - R_f)
-            u[n], u[n + 1] = -kf, kf
-            for k, (r, T) in enumerate(lags):  # PST form: y = r u + (1 - r) x
-                A[k] = u / T
-                A[k, k] -= 1.0 / T
-                u = r * u
-                u[k] += 1.0 - r
-            A[n] = self.KA[i] * u / self.TA[i]
-            A[n, n] -= 1.0 / self.TA[i]
-            A[n + 1, n], A[n + 1, n + 1] = 1.0 / self.TF[i], -1.0 / self.TF[i]
-            tau[i] = 1.0 / np.max(-np.linalg.eigvals(A).real)
-        return tau
+        return TYPES[int(self.kind[i])].INNER_LOOP
 
 
 check_packed(ExciterParams, PACKED, ("Vref",))
@@ -479,35 +411,37 @@ def _exponential_fit(e):
     return A, B
 
 
-def _check_dc(e) -> None:
-    """DC exciter, EXST1 and ESST1A options stabctl does not model: raise CaseError naming
-    row and field (the time constants each type's ``NEEDS`` lists, and T_F with a rate
-    feedback, must exist; Vrmax = 0 is PST's 'compute it')."""
-    for r in np.nonzero(np.isin(e.type, (*DC_KINDS, *READS_IFD)))[0]:
+def _check(e) -> None:
+    """Raise CaseError naming row and field for an exc_con row stabctl does not model: a
+    time constant its type's ``NEEDS`` lists (and T_F with a :data:`RATE_FEEDBACK` type's
+    K_F != 0) below 1e-3 s, or a row its type module's ``check`` refuses (where it has
+    one)."""
+    for r in range(len(e)):
         kind = int(e.type[r])
-        extra = (("TF", "TF"),) if kind in RATE_FEEDBACK and e.KF[r] != 0 else ()
-        for name, declared in TYPES[kind].NEEDS + extra:
+        module = TYPES[kind]
+        extra = (("TF", "TF"),) if module.RATE_FEEDBACK and e.KF[r] != 0 else ()
+        for name, declared in module.NEEDS + extra:
             k = EXCITER.col(declared)
             if e.col(k)[r] < LBND:
                 raise CaseError(
                     f"exc_con row {r + 1}, field '{name}' (column {k}): exciter "
                     f"type {kind} needs {name} >= {LBND} s"
                 )
-        if kind not in READS_IFD and e.Vrmax[r] == 0:
-            raise CaseError(
-                f"exc_con row {r + 1}, field 'Vrmax': 0 (PST computes it from E2) "
-                "is not supported; give the limit"
-            )
+        check = getattr(module, "check", None)
+        problem = check(e, r) if check is not None else None
+        if problem:
+            raise CaseError(f"exc_con row {r + 1}, {problem}")
 
 
 def exciter_params(case: Case) -> ExciterParams:
-    """Exciter parameters; raises CaseError for a type or option stabctl does not model."""
+    """Exciter parameters; raises CaseError for a type or option stabctl does not model
+    (`_check`)."""
     e = case.exciters
-    _check_dc(e)
+    _check(e)
     A, B = _dc_saturation(e)
     dc = np.isin(e.type, DC_KINDS)
     ac = np.isin(e.type, QUAD_KINDS)
-    t3 = e.type == T3
+    ke = np.isin(e.type, KE_KINDS)
     pic = e.type == PIC1
     KA = np.where((e.type != SMP) & (e.KA == 0), 1.0, e.KA)
     given = {n: getattr(e, n).copy() for n in TABLE_FIELDS + tuple(p.name for p in OWN_PARAMS)}
@@ -520,8 +454,8 @@ def exciter_params(case: Case) -> ExciterParams:
         kind=e.type.astype(int),
         mac=np.array([case.machine_index(m) for m in e.machine], int),
         **given,
-        KE=np.where(dc | ac | t3, _dc(e, "KE"), 0.0),
-        TE=np.where(dc | ac | t3, _dc(e, "TE"), 0.0),
+        KE=np.where(ke, _dc(e, "KE"), 0.0),
+        TE=np.where(ke, _dc(e, "TE"), 0.0),
         Asat=np.where(dc | ac, A, 0.0),
         Bsat=np.where(dc | ac, B, 0.0),
         KF=np.where(dc, _dc(e, "KF_dc"), np.where(np.isin(e.type, RATE_FEEDBACK), e.KF, 0.0)),
@@ -531,22 +465,6 @@ def exciter_params(case: Case) -> ExciterParams:
         ifd_machine=(e.type == ST3) & (e.ifd_machine == 1),
         VB_cap=np.where(np.isin(e.type, SOURCE_KINDS) & (e.VBmax > 0), e.VBmax, np.inf),
     )
-
-
-@njit
-def source_voltage_of(kind, KP, KI, XL, KC, cap, machine, init):
-    """The source term V_B of an exciter of type ``kind`` (:data:`SOURCE_KINDS`) from its
-    machine's quantities (`ST3Machine`; fldcur the field current, pu on the machine base):
-    ST3 `st3.source_voltage` (at most cap, VBmax; init PST's flag 0), IEEET3
-    `ieeet3.source_voltage` (its cap applies to V_B + V_R), ESST4B `esst4b.source_voltage`
-    (at most cap)."""
-    if kind == ST3:
-        return st3.source_voltage(KP, KI, XL, KC, cap, machine, init)
-    if kind == T3:
-        return ieeet3.source_voltage(KP, KI, XL, KC, cap, machine, init)
-    if kind == PIC1:
-        return expic1.source_voltage(KP.real, KI, XL, KC, cap, machine, init)
-    return esst4b.source_voltage(KP, KI, XL, KC, cap, machine, init)
 
 
 def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):

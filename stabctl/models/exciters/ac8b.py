@@ -31,6 +31,10 @@ READS_IFD = True
 RATE_FEEDBACK = False
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = False
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = "quadratic"
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"), ("TE", "TE"))
 
@@ -101,6 +105,13 @@ def has_state(p: ExciterParams):
     on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
     on = np.ones(p.n, bool)
     return (p.has_TR, on, p.has_TA, on, p.has_pid_d)
+
+
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E, the PID's derivative lag T_D; label -> (values, where)."""
+    return {"exc_con T_E": (p.TE, True), "exc_con T_D": (p.Td, p.has_pid_d)}
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

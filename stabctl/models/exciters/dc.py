@@ -33,6 +33,10 @@ READS_IFD = False
 RATE_FEEDBACK = False
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = False
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = "dc"
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TE", "TE"), ("TF", "TF_dc"))  # no T_A: PST's algebraic V_R
 
@@ -147,6 +151,26 @@ def has_state(p: ExciterParams):
     on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
     on = np.ones(p.n, bool)
     return (p.has_TR, p.has_TB, p.has_TA, on, on, p.has_VF)
+
+
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E, the rate feedback's T_F (exc_con column 17, always a state) and
+    IEEET2's second rate-feedback lag T_F2; label -> (values, where)."""
+    return {
+        "exc_con T_E": (p.TE, True),
+        "exc_con T_F": (p.TF, True),
+        "exc_con T_F2": (p.TF2, p.has_VF),
+    }
+
+
+def check(e, r: int) -> str | None:
+    """Why exc_con row r (0-based) of a DC exciter is not modelled, or None: Vrmax = 0,
+    PST's 'compute it from E2'."""
+    if e.Vrmax[r] == 0:
+        return "field 'Vrmax': 0 (PST computes it from E2) is not supported; give the limit"
+    return None
 
 
 @njit

@@ -35,6 +35,10 @@ READS_IFD = True
 RATE_FEEDBACK = False
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = False
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = "quadratic"
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TE", "TE"),)
 
@@ -107,6 +111,13 @@ def has_state(p: ExciterParams):
     has none), boolean arrays (n_exc,) in slot order, read on this type's rows by
     `stabctl.models.exciters.ExciterParams.has_state`."""
     return (p.has_TR, p.has_TA, p.has_TB, np.ones(p.n, bool), p.TH >= LBND)
+
+
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E, the limiter's lag T_H; label -> (values, where)."""
+    return {"exc_con T_E": (p.TE, True), "exc_con T_H": (p.TH, p.TH >= LBND)}
 
 
 def limiter_input(KH, VFE, VFELIM, VHMAX):

@@ -18,6 +18,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import GAIN_OVER_T, clip, leadlag_input_state, nonwindup_lag, washout
 from stabctl.models.declaration import DyrModel, states
+from stabctl.models.exciters import exst1
 from stabctl.models.exciters.exst1 import check_start
 from stabctl.models.exciters.table import IEEE_RULE, E, upper
 
@@ -32,6 +33,10 @@ READS_IFD = True
 RATE_FEEDBACK = True
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = False
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = ""
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"),)
 
@@ -100,11 +105,22 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.has_TB, p.has_TA, p.has_Rf, p.has_TB1)
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the second lead-lag's T_B1; label -> (values, where)."""
+    return {"exc_con T_B1": (p.TB1, p.has_TB1)}
+
+
 def st1a_regulator_output(p: ExciterParams, Efd):
     """ESST1A's regulator output V_A at rest, (n_exc,): Efd0 plus the field current
     limiter's K_LR max(0, I_fd0 - I_LR) with I_fd0 = Efd0 (the field current at rest; ANDES
     ``esst1a.py`` ``VA0``); Efd0 for the other types."""
     return np.where(p.kind == ST1A, Efd + p.KLR * np.maximum(Efd - p.ILR, 0.0), Efd)
+
+
+#: the regulator loop through the rate feedback, EXST1's (with the second lead-lag)
+INNER_LOOP, inner_loop_time_constants = exst1.INNER_LOOP, exst1.inner_loop_time_constants
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

@@ -51,6 +51,10 @@ READS_IFD = True
 RATE_FEEDBACK = True
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = False
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = "quadratic"
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TE", "TE"),)
 
@@ -106,6 +110,34 @@ def has_state(p: ExciterParams):
     or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
     on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
     return (p.has_TR, p.has_TB, p.has_TA, np.ones(p.n, bool), p.has_Rf)
+
+
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E; label -> (values, where)."""
+    return {"exc_con T_E": (p.TE, True)}
+
+
+#: the fast loop `inner_loop_time_constants` measures, named where it sets the step
+INNER_LOOP = (
+    "EXAC2 regulator and exciter loop K_A/(1 + s T_A), 1/(s T_E) with its rate feedback "
+    "s K_F/(1 + s T_F) (half Heun's largest stable step)"
+)
+
+
+def inner_loop_time_constants(p: ExciterParams, r, VB0, efd0):
+    """Per EXAC2 of rows r, half the largest step at which Heun's method keeps its
+    regulator and exciter loop (`loop_matrix`) stable (`heun_step_limit`), s, (n_exc,);
+    inf for the other rows: the "time constant" that `check_step`'s h < 2 T and the
+    default step's 0.5 T read (for a real mode 1/|lambda| itself).  efd0 the field
+    voltages at rest (pu): V_E0 as `exac1.initial_exciter` solves it; VB0 unused."""
+    tau = np.full(p.n, np.inf)
+    VE, _ = initial_exciter(p, r, efd0, lambda i: "EXAC2", None, lambda i, v: [])
+    for i in np.nonzero(r)[0]:
+        lam = np.linalg.eigvals(loop_matrix(p, i, VE[i]))
+        tau[i] = 0.5 * heun_step_limit(lam)
+    return tau
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

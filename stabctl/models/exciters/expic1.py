@@ -48,6 +48,10 @@ READS_IFD = True
 RATE_FEEDBACK = True
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = True
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = "quadratic"
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = ()
 
@@ -113,6 +117,17 @@ def has_state(p: ExciterParams):
     return (p.has_TR, on, p.has_TB, p.has_TA, p.TE >= LBND, rf, rf & (p.TF_2 >= LBND))
 
 
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the exciter T_E and the rate feedback's second lag T_F2, each where it exists; label ->
+    (values, where)."""
+    return {
+        "exc_con T_E (EXPIC1)": (p.TE, p.TE >= LBND),
+        "exc_con T_F2 (EXPIC1)": (p.TF_2, p.TF_2 >= LBND),
+    }
+
+
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """EXPIC1 at rest on rows r (a mask): E_0 = (K_E + S_E(Efd0)) Efd0 with T_E (Efd0
     without), V_R0 = E_0/V_B0 (VB the source voltages, `source_voltage`), the PI's
@@ -165,10 +180,12 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 @njit
 def source_voltage(KP, KI, XL, KC, cap, machine, init):
     """EXPIC1's source V_B: `esst4b.source_voltage` (V_E F_EX(K_C I_fd/V_E), V_E = |K_P V_t
-    + j K_I I_t| with X_L = 0 and K_P real), 1 where K_P = K_I = 0 (PSS/E Model Library)."""
-    if KP == 0 and KI == 0:
+    + j K_I I_t| with X_L = 0 and K_P real: the real part of the complex KP the family
+    hands every source type), 1 where K_P = K_I = 0 (PSS/E Model Library)."""
+    kp = KP.real
+    if kp == 0 and KI == 0:
         return 1.0
-    return rectified_source(KP, KI, XL, KC, cap, machine, init)
+    return rectified_source(kp, KI, XL, KC, cap, machine, init)
 
 
 @kernel(inline="always")

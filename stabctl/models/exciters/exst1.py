@@ -14,7 +14,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
-from stabctl.models.blocks import GAIN_OVER_T, clip, lag, leadlag_input_state, washout
+from stabctl.models.blocks import GAIN_OVER_T, LBND, clip, lag, leadlag_input_state, washout
 from stabctl.models.declaration import DyrModel, beyond, states
 from stabctl.models.exciters.table import E, upper
 
@@ -29,6 +29,10 @@ READS_IFD = True
 RATE_FEEDBACK = True
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = False
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = ""
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"),)
 
@@ -52,6 +56,51 @@ def has_state(p: ExciterParams):
     or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
     on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
     return (p.has_TR, p.has_TB, p.has_TA, p.has_Rf)
+
+
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    none beyond the shared ones; label -> (values, where)."""
+    return {}
+
+
+#: the fast loop `inner_loop_time_constants` measures, named where it sets the step
+INNER_LOOP = "regulator loop K_A/(1 + s T_A) with its rate feedback s K_F/(1 + s T_F)"
+
+
+def inner_loop_time_constants(p: ExciterParams, r, VB0, efd0):
+    """The fastest pole of the EXST1 (and ESST1A) regulator loops of rows r (s),
+    (n_exc,); inf for the other rows and where T_A or T_F is below 1e-3 s or K_F = 0 (VB0,
+    efd0 unused).
+
+    The lead-lags T_C/T_B (and ESST1A's T_C1/T_B1) feed the lag K_A/(1 + s T_A)
+    (state V_R, V_A), whose output returns through s K_F/(1 + s T_F) (state R_f) to
+    the voltage error: the linear loop of those states (limits inactive, the terminal
+    voltage and field current held), whose fastest eigenvalue's time constant is
+    returned.  PSID's ESST1A run of PSS/E's (K_A = 200, T_A = 0.1 s, K_F = T_F =
+    0.01 s, lead-lags 14.1/20 s): 9.0e-4 s where T_F suggests 0.01 s, and Heun at
+    5 ms diverges."""
+    tau = np.full(p.n, np.inf)
+    loop = r & p.has_Rf & p.has_TA & (p.TF >= LBND)
+    for i in np.nonzero(loop)[0]:
+        lags = [(ratio[i], T[i]) for ratio, T, on in ((p.tc_tb, p.TB, p.has_TB),
+                (p.tc1_tb1, p.TB1, p.has_TB1)) if on[i]]  # fmt: skip
+        n = len(lags)
+        A = np.zeros((n + 2, n + 2))  # lead-lag states, V_A, R_f
+        kf = p.KF[i] / p.TF[i]
+        u = np.zeros(n + 2)  # the voltage error: -K_F/T_F (V_A - R_f)
+        u[n], u[n + 1] = -kf, kf
+        for k, (ratio, T) in enumerate(lags):  # PST form: y = r u + (1 - r) x
+            A[k] = u / T
+            A[k, k] -= 1.0 / T
+            u = ratio * u
+            u[k] += 1.0 - ratio
+        A[n] = p.KA[i] * u / p.TA[i]
+        A[n, n] -= 1.0 / p.TA[i]
+        A[n + 1, n], A[n + 1, n + 1] = 1.0 / p.TF[i], -1.0 / p.TF[i]
+        tau[i] = 1.0 / np.max(-np.linalg.eigvals(A).real)
+    return tau
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

@@ -32,6 +32,10 @@ READS_IFD = False
 RATE_FEEDBACK = False
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = True
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = ""
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = ()
 
@@ -104,6 +108,29 @@ def has_state(p: ExciterParams):
     or a feedback whose gain is 0, has none), boolean arrays (n_exc,) in slot order, read
     on this type's rows by `stabctl.models.exciters.ExciterParams.has_state`."""
     return (p.has_TR, p.has_TB, np.ones(p.n, bool), p.has_TA3A)
+
+
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    ESST3A's regulator lag T_A; label -> (values, where)."""
+    return {"exc_con TA_st3a": (p.TA_st3a, p.has_TA3A)}
+
+
+#: the fast loop `inner_loop_time_constants` measures, named where it sets the step
+INNER_LOOP = "ST3 inner loop T_A/(1 + K_A K_G V_B)"
+
+
+def inner_loop_time_constants(p: ExciterParams, r, VB0, efd0):
+    """The ST3's inner loop (ESST3A's K_M, T_M; PST exc_st3) on rows r, (n_exc,): T_A
+    dV_R/dt = K_A (V_A - K_G E_fd) - V_R with E_fd = V_B V_R closes the pole -(1 + K_A
+    K_G V_B)/T_A: T_A / (1 + K_A K_G V_B0) where the feedback is below VGmax (K_G E_fd0 <
+    VGmax) and T_A > 0, inf elsewhere (VB0, efd0 the source and field voltages at rest,
+    pu).  ANDES's kundur_esst3a: K_M = 500, T_M = 0.1 s, V_B = 4.3, 4.6e-5 s where T_M
+    suggests 0.1 s."""
+    loop = r & (p.TA > 0) & (p.KG * efd0 < p.VGmax)
+    gain = 1.0 + p.KA * p.KG * VB0
+    return np.where(loop, p.TA / np.where(loop, gain, 1.0), np.inf)
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

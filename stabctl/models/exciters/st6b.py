@@ -34,6 +34,10 @@ READS_IFD = True
 RATE_FEEDBACK = False
 #: fed by a potential (and compound) source V_B (its ``source_voltage``)
 SOURCE = False
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = ""
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TG", "TG"),)
 
@@ -88,6 +92,16 @@ def has_state(p: ExciterParams):
         (p.Kpid_D != 0) & (p.Td >= LBND),
         np.ones(p.n, bool),
     )
+
+
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the PID's derivative lag T_DA, the field current feedback's T_G; label -> (values, where)."""
+    return {
+        "exc_con T_DA (ST6B)": (p.Td, (p.Kpid_D != 0) & (p.Td >= LBND)),
+        "exc_con T_G (ST6B)": (p.TG, True),
+    }
 
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.errors import CaseError, refuse_initial
+from stabctl.errors import refuse_initial
 from stabctl.models.blocks import clip, lag, nonwindup_lag, pi_nonwindup, rectifier_loading
 from stabctl.models.declaration import DyrModel, Param, beyond, states
 from stabctl.models.exciters.table import E, own, upper
@@ -41,6 +41,10 @@ READS_IFD = True
 RATE_FEEDBACK = False
 #: fed by a potential (and compound) source V_B (its ``source_voltage``): V_E = K_P here
 SOURCE = False
+#: how it reads exc_con columns 10-15 (K_E, T_E, E1, SE1, E2, SE2; `exciter_params`): "dc"
+#: PST's DC exciter (saturation fit by dc_sat, K_E computed where 0), "quadratic" K_E,
+#: T_E and PSS/E's quadratic saturation, "linear" K_E and T_E alone, "" not at all
+EXCITER_COLUMNS = ""
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"), ("TF", "TF_ifd"))
 #: ST8C's own exc_con columns
@@ -129,26 +133,28 @@ def has_state(p: ExciterParams):
     return (p.has_TR, p.Kpid_I != 0, on, on, on)
 
 
-def check(p: ExciterParams, r) -> None:
-    """Refuse the ST8C options stabctl does not model, on rows r (a mask).
+def time_constants(p: ExciterParams):
+    """The time constants of this type that set a state's speed besides the family's T_R,
+    T_A, T_B and rate feedback T_F (`stabctl.models.exciters.ExciterParams.time_constants`):
+    the field current feedback's T_F; label -> (values, where)."""
+    return {"exc_con T_F (ST8C)": (p.TF_ifd, True)}
 
-    Raises
-    ------
-    CaseError
-        SW1 = 1 (a source fed by the terminal voltage), K_I2 != 0 (the terminal current
-        feed-forward V_B2), K_IA = 0, K_IR = K_PR = 0, or K_P <= 0, naming the row and
-        field.
-    """
-    for i in np.nonzero(r)[0]:
-        for bad, field in (
-            (p.SW1[i] != 0, "SW1: 1 (the power source fed by the terminal voltage)"),
-            (p.KI2[i] != 0, "KI2: the terminal current feed-forward V_B2"),
-            (p.KIA[i] == 0, "KIA: 0 (the field current regulator needs its integral)"),
-            (p.Kpid_I[i] == 0 and p.Kpid_P[i] == 0, "Kpid_P, Kpid_I (K_PR, K_IR): both 0"),
-            (p.KP[i].real <= 0 or p.KP[i].imag != 0, "KP: V_E = K_P must be real and > 0"),
-        ):
-            if bad:
-                raise CaseError(f"exc_con row {i + 1}, ST8C field {field} is not modelled")
+
+def check(e, r: int) -> str | None:
+    """The first ST8C option of exc_con row r (0-based) stabctl does not model, with the
+    reason, or None: SW1 = 1 (a source fed by the terminal voltage), K_I2 != 0 (the
+    terminal current feed-forward V_B2), K_IA = 0, K_IR = K_PR = 0, or K_P <= 0."""
+    KP = e.KP[r] * np.exp(1j * np.deg2rad(e.thetaP[r]))
+    for bad, field in (
+        (e.SW1[r] != 0, "SW1: 1 (the power source fed by the terminal voltage)"),
+        (e.KI2[r] != 0, "KI2: the terminal current feed-forward V_B2"),
+        (e.KIA[r] == 0, "KIA: 0 (the field current regulator needs its integral)"),
+        (e.Kpid_I[r] == 0 and e.Kpid_P[r] == 0, "Kpid_P, Kpid_I (K_PR, K_IR): both 0"),
+        (KP.real <= 0 or KP.imag != 0, "KP: V_E = K_P must be real and > 0"),
+    ):
+        if bad:
+            return f"ST8C field {field} is not modelled"
+    return None
 
 
 def source(p: ExciterParams, ifd):
@@ -167,13 +173,10 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 
     Raises
     ------
-    CaseError
-        An option `check` refuses.
     InitialLimitError
         V_B1 <= 0, I_fdref0 outside [VPImin, VPImax], V_R0 / K_A outside [VAmin, VAmax] or
         V_R0 outside [Vrmin, Vrmax].
     """
-    check(p, r)
     VB1 = source(p, vex)
     VR = vex / np.where(VB1 > 0, VB1, 1.0)
     VA = VR / p.KA

@@ -42,13 +42,10 @@ from stabctl.models.declaration import (
 )
 from stabctl.models.governors import ggov1, ieeeg1
 from stabctl.models.governors._dispatch import derivatives, pmech
-from stabctl.models.governors.gast import GAST
 from stabctl.models.governors.ggov1 import GGOV1
 from stabctl.models.governors.hygov import HYGOV
 from stabctl.models.governors.hygov4 import HYGOV4
 from stabctl.models.governors.ieeeg1 import IEEEG1
-from stabctl.models.governors.ieesgo import IEESGO
-from stabctl.models.governors.pidgov import PIDGOV, WPIDHY
 from stabctl.models.governors.table import (
     GGOV1_FIELDS,
     HYGOV_FIELDS,
@@ -107,6 +104,9 @@ MODULES = type_modules(
 TYPES, STATE_NAMES = model_types(MODULES, "tg_con")
 #: state slots of the widest type
 N_STATES = max(len(names) for names in STATE_NAMES.values())
+#: the types whose start-up order `initialise` refuses outside [Tmin, Tmax] (their
+#: modules' ``ORDER_LIMITS``; the others' ``initialise`` checks their own start)
+ORDER_LIMITED = tuple(kind for kind, m in TYPES.items() if m.ORDER_LIMITS)
 
 #: the tg_con columns only one type reads, each type's module's ``PARAMS`` in registry
 #: order (columns after `table.PARAMS`'s); packed after :data:`PACKED` (`table.own`)
@@ -286,23 +286,28 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
     gate position (IEEEG1, IEESGO: pmech0 / sum K; a cross-compound IEEEG1: its two
     machines' power, pmech0_lp the LP machine's on its base, over the sum of all eight
     fractions) or R q_0 (HYGOV: flow, gate and gate integrator at q_0 = pmech0/A_t +
-    q_NL, head 1; HYGOV4: R_perm q_0, its gate and flow at q_0).  The family computes
-    that start-up order (the gate, or q_0) and checks it; each type's module sets its
-    states on its rows (its ``initialise``).
+    q_NL, head 1; HYGOV4: R_perm q_0, its gate and flow at q_0).  The start-up order is
+    each type module's ``start_order(p, rows, pmech0, total)`` on its rows (the gate, or
+    q_0; total the unit's power, both machines' for a cross-compound unit), the power
+    total itself where the module has none; the family checks it for the types of
+    :data:`ORDER_LIMITED`; each type's module sets its states on its rows and checks its
+    own start (its ``initialise``), in the registry's order.
 
-    Raises CaseError when the initial power order is outside [Tmin, Tmax] (PST's check
-    for tg, the non-windup limits for TGOV1 and IEEEG1), GAST's initial power above its
-    load limit AT + KT (AT - Pm0) (PSS/E's own GAST run starts on it, AT = Pm0 = 1), or
-    a cross-compound unit's machines do not share its power as its HP and LP fractions
-    do (ANDES 2.0 ieeeg1.py's ``_Pc`` check), beyond `START_LIMIT_TOL`
-    (stabctl.models.declaration)."""
+    Raises CaseError when the initial power order of an :data:`ORDER_LIMITED` type is
+    outside [Tmin, Tmax] (PST's check for tg, the non-windup limits for TGOV1 and
+    IEEEG1), a cross-compound unit's machines do not share its power as its HP and LP
+    fractions do (ANDES 2.0 ieeeg1.py's ``_Pc`` check), beyond `START_LIMIT_TOL`
+    (stabctl.models.declaration), or a type's ``initialise`` refuses its start."""
     x = np.zeros((N_STATES, p.n))
-    hy, sg = (p.kind == HYGOV) | (p.kind == HYGOV4), p.kind == IEESGO
     cross = p.mac2 >= 0
     lp = np.zeros(p.n) if pmech0_lp is None else np.asarray(pmech0_lp, float)
     total = np.where(cross, pmech0 + lp / np.where(cross, p.lp_base, 1.0), pmech0)
-    K_all = p.K.sum(axis=1) + p.K_lp.sum(axis=1)
-    gate = total / np.where((p.kind == IEEEG1) | sg, K_all, 1.0)
+    gate = total.copy()
+    for module in MODULES:
+        rows = np.isin(p.kind, tuple(module.KINDS))
+        start_order = getattr(module, "start_order", None)
+        if start_order is not None and rows.any():
+            gate[rows] = start_order(p, rows, pmech0, total)
     bad = np.nonzero(cross & beyond(pmech0, p.K.sum(axis=1) * gate, p.K.sum(axis=1) * gate))[0]
     if bad.size:
         r = bad[0]
@@ -311,23 +316,12 @@ def initialise(p: GovernorParams, pmech0, pmech0_lp=None):
             f"{pmech0[r]:.4f} pu, its fractions K1, K3, K5, K7 give "
             f"{p.K[r].sum() * gate[r]:.4f} pu of the two machines' power"
         )
-    gate = np.where(hy, pmech0 / np.where(hy, p.T5, 1.0) + p.qNL, gate)
     refuse_initial(
         "tg_con",
-        # GGOV1: its fuel order, its own; PIDGOV, WPIDHY: the gate, their own (the table's
-        # inverse)
-        beyond(gate, p.Tmin, p.Tmax) & ~np.isin(p.kind, (GGOV1, PIDGOV, WPIDHY)),
+        beyond(gate, p.Tmin, p.Tmax) & np.isin(p.kind, ORDER_LIMITED),
         lambda r: (
             f"tg_con row {r + 1}: initial power order {gate[r]:.4f} pu outside "
             f"[Tmin, Tmax] = [{p.Tmin[r]:.4f}, {p.Tmax[r]:.4f}]"
-        ),
-    )
-    refuse_initial(
-        "tg_con",
-        (p.kind == GAST) & beyond(pmech0, -np.inf, p.AT + p.KT * (p.AT - pmech0)),
-        lambda r: (
-            f"tg_con row {r + 1}: GAST's load limit AT + KT (AT - Pm0) is below its "
-            f"initial power {pmech0[r]:.4f} pu"
         ),
     )
     Pref = np.zeros(p.n)

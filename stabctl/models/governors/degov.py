@@ -51,6 +51,9 @@ KINDS = {DEGOV: "DEGOV"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): none, an absent
 #: lag drops its block
 NEEDS: tuple[str, ...] = ()
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the torque limits TMAX, TMIN on the start-up torque
+ORDER_LIMITS = True
 DYR = (
     DyrModel(
         "DEGOV",

@@ -10,9 +10,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from stabctl._jit.decorators import kernel
+from stabctl.errors import refuse_initial
 from stabctl.models.blocks import LBND, lag, nonwindup_lag
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, beyond, states
 from stabctl.models.governors.table import AT_LIMIT, G
 
 if TYPE_CHECKING:
@@ -22,6 +25,9 @@ GAST = 6
 KINDS = {GAST: "GAST"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts",)
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the valve limits VMAX, VMIN on the power order
+ORDER_LIMITS = True
 DYR = (
     # GAST -> type 6: invR = 1/R is computed; T1 the valve (Ts), T2 the power lag (Tc), T3
     # the load-limit feedback lag
@@ -59,8 +65,20 @@ def time_constants(p: GovernorParams):
 
 
 def initialise(p: GovernorParams, r, pmech0, order, x):
-    """GAST at rest on rows r: every state at pmech0 (the power order; the family refuses
-    a start above the load limit); returns P_ref on r."""
+    """GAST at rest on rows r: every state at pmech0 (the power order); returns P_ref on
+    r.
+
+    Raises CaseError (`refuse_initial`) when the initial power is above the load limit AT
+    + KT (AT - Pm0) (PSS/E's own GAST run starts on it, AT = Pm0 = 1), beyond
+    `START_LIMIT_TOL` (stabctl.models.declaration)."""
+    refuse_initial(
+        "tg_con",
+        r & beyond(pmech0, -np.inf, p.AT + p.KT * (p.AT - pmech0)),
+        lambda k: (
+            f"tg_con row {k + 1}: GAST's load limit AT + KT (AT - Pm0) is below its "
+            f"initial power {pmech0[k]:.4f} pu"
+        ),
+    )
     x[S.valve, r] = pmech0[r]
     x[S.T2lag, r] = order[r]
     x[S.T3lag, r] = order[r]

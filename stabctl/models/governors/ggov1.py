@@ -60,6 +60,9 @@ GGOV1 = 9
 KINDS = {GGOV1: "GGOV1"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Tpelec", "Tact", "Tb", "Tfload", "Tsb", "Tacc")
+#: not the family's start-up check of the order against [Tmin, Tmax]: `initialise`
+#: checks its fuel order, against [Vmin, Vmax]
+ORDER_LIMITS = False
 #: PSS/E's record (ICONs, then CONs) -> tg_con fields
 _RECORD = ("Rselect", "Flag", "R", "Tpelec", "maxerr", "minerr", "Kpgov", "Kigov", "Kdgov")
 _RECORD += ("Tdgov", "Vmax", "Vmin", "Tact", "Kturb", "Wfnl", "Tb", "Tc", "Teng", "Tfload")

@@ -25,6 +25,9 @@ HYGOV = 4
 KINDS = {HYGOV: "HYGOV"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields: T_g, T_f, T_w)
 NEEDS = ("Ts", "Tc", "T4")
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the gate limits on the start-up flow q_0
+ORDER_LIMITS = True
 DYR = (
     # HYGOV -> type 4: Kg = 1/(r Tr) and Uc = -VELM computed
     DyrModel(
@@ -73,6 +76,12 @@ def check(g, r: int) -> str | None:
     if g.K2[r] == 0:
         return f"field 'K2': must be non-zero for governor type {HYGOV}"
     return None
+
+
+def start_order(p: GovernorParams, r, pmech0, total):
+    """HYGOV's (and HYGOV4's) start-up order on rows r: the flow q_0 = pmech0/A_t + q_NL
+    at head 1 (A_t in T5)."""
+    return pmech0[r] / p.T5[r] + p.qNL[r]
 
 
 def initialise(p: GovernorParams, r, pmech0, q0, x):

@@ -24,6 +24,9 @@ HYGOV4 = 8
 KINDS = {HYGOV4: "HYGOV4 (ANDES)"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields: T_g, T_p, T_r, T_w)
 NEEDS = ("Ts", "Tc", "T3", "T4")
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the gate limits on the start-up flow q_0
+ORDER_LIMITS = True
 DYR = (
     # ANDES's HYGOV4 -> type 8, its parameters by name (ANDES maps no PSS/E record onto
     # it, and PSS/E's HYGOV4 record, with deadbands and a gate-power curve, is another
@@ -67,6 +70,10 @@ def has_state(p: GovernorParams):
 def time_constants(p: GovernorParams):
     """The declared time constants that set a state's speed: field -> where."""
     return {"Tc": True, "T3": True, "T4": True}
+
+
+#: the start-up order: HYGOV's flow q_0 = pmech0/A_t + q_NL
+start_order = hygov.start_order
 
 
 def initialise(p: GovernorParams, r, pmech0, q0, x):

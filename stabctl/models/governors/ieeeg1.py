@@ -25,6 +25,9 @@ IEEEG1 = 3
 KINDS = {IEEEG1: "IEEEG1"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts",)
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the gate's non-windup limits PMAX, PMIN on the start-up gate
+ORDER_LIMITS = True
 DYR = (
     DyrModel(
         "IEEEG1",
@@ -64,6 +67,13 @@ def has_state(p: GovernorParams):
 def time_constants(p: GovernorParams):
     """The declared time constants that set a state's speed: field -> where."""
     return {"Ts": True, **{n: getattr(p, n) >= LBND for n in ("Tc", "T4", "T5", "T6", "T7")}}
+
+
+def start_order(p: GovernorParams, r, pmech0, total):
+    """IEEEG1's start-up order on rows r: the gate, total (its machine's power, or a
+    cross-compound unit's two machines', `stabctl.models.governors.initialise`) over the
+    sum of its power fractions K1..K8."""
+    return total[r] / (p.K.sum(axis=1) + p.K_lp.sum(axis=1))[r]
 
 
 def initialise(p: GovernorParams, r, pmech0, gate, x):

@@ -34,6 +34,9 @@ KINDS = {IEEEG2: "IEEEG2"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): none (each lag
 #: may be absent)
 NEEDS: tuple[str, ...] = ()
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: PMAX, PMIN on the power order (P_ref)
+ORDER_LIMITS = True
 DYR = (
     DyrModel(
         "IEEEG2",

@@ -24,6 +24,9 @@ IEESGO = 5
 KINDS = {IEESGO: "IEESGO"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): none
 NEEDS: tuple[str, ...] = ()
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the power limits on the start-up gate
+ORDER_LIMITS = True
 DYR = (
     # IEESGO -> type 5: K1 (speed gain), lag T1, lead-lag T2/T3, limits, lags T4-T6;
     # the power fractions after T4, T5, T6 (1 - K2, (1 - K3) K2, K2 K3) computed
@@ -59,6 +62,12 @@ def has_state(p: GovernorParams):
 def time_constants(p: GovernorParams):
     """The declared time constants that set a state's speed: field -> where."""
     return {n: getattr(p, n) >= LBND for n in ("Ts", "Tc", "T4", "T5", "T6")}
+
+
+def start_order(p: GovernorParams, r, pmech0, total):
+    """IEESGO's start-up order on rows r: the gate, its machine's power total over the sum
+    of its power fractions."""
+    return total[r] / (p.K.sum(axis=1) + p.K_lp.sum(axis=1))[r]
 
 
 def initialise(p: GovernorParams, r, pmech0, gate, x):

@@ -75,6 +75,9 @@ KINDS = {PIDGOV: "PIDGOV", WPIDHY: "WPIDHY"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): the TA lags (the
 #: derivative's among them) and the gate servo (WPIDHY: the velocity lag TB)
 NEEDS: tuple[str, ...] = ("Ta", "Tgate")
+#: not the family's start-up check of the order against [Tmin, Tmax]: `initialise`
+#: checks the table's start-up gate, against [GMIN, GMAX]
+ORDER_LIMITS = False
 #: PIDGOV's own tg_con columns
 PARAMS = (
     Param(

@@ -24,6 +24,9 @@ TG = 1
 KINDS = {TG: "PST tg"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts", "Tc", "T5")
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: PST tg's check: the power order
+ORDER_LIMITS = True
 #: no PSS/E record: tg rows come from PST data files
 DYR: tuple[DyrModel, ...] = ()
 

@@ -21,6 +21,9 @@ TG2 = 7
 KINDS = {TG2: "TG2 (ANDES)"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Tc",)
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the power limits on the power order
+ORDER_LIMITS = True
 DYR = (
     # TG2 (ANDES's own, read by name from ANDES; no PSS/E record of that name in the
     # Model Library) -> type 7: invR = 1/R, the lead-lag T1/T2, the output limits

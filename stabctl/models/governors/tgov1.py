@@ -23,6 +23,9 @@ TGOV1 = 2
 KINDS = {TGOV1: "TGOV1"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts", "Tc")
+#: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
+#: the valve's non-windup limits VMAX, VMIN on the power order
+ORDER_LIMITS = True
 DYR = (
     # TGOV1: invR = 1/R is computed
     DyrModel(

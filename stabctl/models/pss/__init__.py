@@ -43,12 +43,7 @@ from stabctl.models.declaration import (
 )
 from stabctl.models.pss import ieeest
 from stabctl.models.pss._dispatch import output
-from stabctl.models.pss.ieeest import PSSE
-from stabctl.models.pss.pss2a import PSS2A
-from stabctl.models.pss.pss2b import PSS2B
 from stabctl.models.pss.pss2c import PSS2C
-from stabctl.models.pss.pst import PST_POWER, PST_SPEED
-from stabctl.models.pss.stab2a import STAB2A
 from stabctl.models.pss.table import (
     PACKED,
     PARAMS,
@@ -84,7 +79,9 @@ __all__ = [
     "POWER",
     "W_PSSE",
     "LL_PSSE",
-    "PST_SPEED", "PST_POWER", "PSSE", "STAB2A", "PSS2A", "PSS2B", "PSS2C",
+    # the type codes read through the package (its own code); a type's code is its
+    # module's, and a new type is not imported here
+    "PSS2C",
 ]  # fmt: skip
 
 # --------------------------------------------------------------------------------------
@@ -106,10 +103,13 @@ MODULES = type_modules(
 TYPES, STATE_NAMES = model_types(MODULES, "pss_con")
 #: state slots of the widest type
 N_STATES = max(len(names) for names in STATE_NAMES.values())
-#: the types whose inputs are PSS/E input codes (pss_con input1, input2)
-PSSE_INPUTS = (PSSE, PSS2A, PSS2B, PSS2C)
-#: the PSS2 family (`pss2a.output`)
-PSS2 = (PSS2A, PSS2B, PSS2C)
+#: the types whose inputs are PSS/E input codes (pss_con input1, input2; their modules'
+#: ``PSSE_INPUTS``)
+PSSE_INPUTS = tuple(k for k, m in TYPES.items() if m.PSSE_INPUTS)
+#: the types that read the input limits VS1MIN .. VS2MAX (``INPUT_LIMITS``)
+INPUT_LIMITED = tuple(k for k, m in TYPES.items() if m.INPUT_LIMITS)
+#: the types whose washout T_w must be >= 1e-3 s (``NEEDS_TW``)
+NEEDS_TW = tuple(k for k, m in TYPES.items() if m.NEEDS_TW)
 
 #: the pss_con columns only one type reads, each type's module's ``PARAMS`` in registry
 #: order (columns after `table.PARAMS`'s); packed after :data:`PACKED` (`table.own`)
@@ -173,10 +173,6 @@ class PssParams(Declared):
     def n(self) -> int:
         return self.mac.size
 
-    @property
-    def power_input(self):
-        return self.kind == PST_POWER
-
     def packed(self) -> np.ndarray:
         """Parameter matrix (n_pss, len(PACKED) + N_OWN) for the compiled kernels:
         columns as :data:`PACKED`, then on each row its type's own parameters (its
@@ -229,23 +225,24 @@ check_packed(PssParams, PACKED, (*(f"fa_{i}" for i in range(4)), *(f"fc_{i}" for
 def pss_params(case: Case) -> PssParams:
     """PSS parameters of a case.
 
-    Raises CaseError (pss_con row, field) for a PSS/E type (3-7) whose washout is below
-    1e-3 s, or a row its type module's ``check`` refuses: a PST pss (types 1, 2) whose
-    first lead-lag has no lag (T_2 below 1e-3 s; PST has no such case); a type-3 or PSS2
-    lead-lag with a lead but no lag, an input code other than 1 (speed) or 3 (power); an
-    improper type-3 filter (A6 without a second-order denominator); a PSS2 ramp-tracking
-    filter with N > 0 and M = 0, M N > 8 or T9 below 1e-3 s."""
+    Raises CaseError (pss_con row, field) for a type of :data:`NEEDS_TW` (the PSS/E
+    types 3-7) whose washout is below 1e-3 s, or a row its type module's ``check``
+    refuses: a PST pss (types 1, 2) whose first lead-lag has no lag (T_2 below 1e-3 s;
+    PST has no such case); a type-3 or PSS2 lead-lag with a lead but no lag, an input
+    code other than 1 (speed) or 3 (power); an improper type-3 filter (A6 without a
+    second-order denominator); a PSS2 ramp-tracking filter with N > 0 and M = 0, M N > 8
+    or T9 below 1e-3 s."""
     s = case.pss
     for r in range(len(s)):
         kind = int(s.type[r])
-        if kind >= PSSE and s.Tw[r] < LBND:
+        if kind in NEEDS_TW and s.Tw[r] < LBND:
             raise CaseError(f"pss_con row {r + 1}, field 'Tw': washout needs Tw >= {LBND} s")
         problem = TYPES[kind].check(s, r)
         if problem:
             raise CaseError(f"pss_con row {r + 1}, {problem}")
     nf, fa, fc, fe = ieeest.filters(s)
     e = np.isin(s.type, PSSE_INPUTS)
-    limited = np.isin(s.type, (PSS2B, PSS2C))
+    limited = np.isin(s.type, INPUT_LIMITED)
     given = {n: getattr(s, n).copy() for n in TABLE_FIELDS + PSS2_FIELDS}
     given.update(input1=np.where(e, s.input1, 0), input2=np.where(e, s.input2, 0))
     inf = np.full(len(s), np.inf)

@@ -36,6 +36,12 @@ if TYPE_CHECKING:
 
 PSSE = 3
 KINDS = {PSSE: "PSS/E IEEEST, ST2CUT"}
+#: the family refuses a washout T_w below 1e-3 s (`stabctl.models.pss.pss_params`)
+NEEDS_TW = True
+#: pss_con input1, input2 are PSS/E input codes (else read as 0)
+PSSE_INPUTS = True
+#: reads the input limits VS1MIN .. VS2MAX (else -inf, +inf)
+INPUT_LIMITS = False
 DYR = (
     # IEEEST -> PST pss (types 1, 2) when exactly equivalent, else type 3; the mapper
     # chooses the type and computes K_Tw = KS T5

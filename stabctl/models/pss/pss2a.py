@@ -36,6 +36,12 @@ if TYPE_CHECKING:
 
 PSS2A = 5
 KINDS = {PSS2A: "PSS/E PSS2A"}
+#: the family refuses a washout T_w below 1e-3 s (`stabctl.models.pss.pss_params`)
+NEEDS_TW = True
+#: pss_con input1, input2 are PSS/E input codes (else read as 0)
+PSSE_INPUTS = True
+#: reads the input limits VS1MIN .. VS2MAX (else -inf, +inf)
+INPUT_LIMITS = False
 #: the PSS2 family's ICONs and its first CONs, PSS/E order (PSS2A's whole record)
 ICONS = ("ICS1", "IB1", "ICS2", "IB2", "M", "N")
 CONS = ("TW1", "TW2", "T6", "TW3", "TW4", "T7", "KS2", "KS3", "T8", "T9", "KS1")

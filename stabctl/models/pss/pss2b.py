@@ -12,6 +12,12 @@ from stabctl.models.pss import pss2a
 
 PSS2B = 6
 KINDS = {PSS2B: "PSS/E PSS2B"}
+#: the family refuses a washout T_w below 1e-3 s (`stabctl.models.pss.pss_params`)
+NEEDS_TW = True
+#: pss_con input1, input2 are PSS/E input codes (else read as 0)
+PSSE_INPUTS = True
+#: reads the input limits VS1MIN .. VS2MAX (else -inf, +inf)
+INPUT_LIMITS = True
 #: PSS2B's CONs after PSS2A's first fifteen: the third lead-lag, the input limits, the
 #: output limits
 MORE = ("T10", "T11", "VS1MAX", "VS1MIN", "VS2MAX", "VS2MIN", "VSTMAX", "VSTMIN")

@@ -25,6 +25,12 @@ if TYPE_CHECKING:
 
 PSS2C = 7
 KINDS = {PSS2C: "PSS/E PSS2C"}
+#: the family refuses a washout T_w below 1e-3 s (`stabctl.models.pss.pss_params`)
+NEEDS_TW = True
+#: pss_con input1, input2 are PSS/E input codes (else read as 0)
+PSSE_INPUTS = True
+#: reads the input limits VS1MIN .. VS2MAX (else -inf, +inf)
+INPUT_LIMITS = True
 #: PSS2C's CONs after PSS2B's: the fourth lead-lag, the output logic's powers, the
 #: compensated frequency's reactance and time constant
 MORE = ("T12", "T13", "PSSON", "PSSOFF", "XCOMP", "TCOMP")

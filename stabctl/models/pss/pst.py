@@ -23,6 +23,12 @@ if TYPE_CHECKING:
 
 PST_SPEED, PST_POWER = 1, 2
 KINDS = {PST_SPEED: "PST pss, speed input", PST_POWER: "PST pss, electrical power input"}
+#: the family refuses a washout T_w below 1e-3 s (`stabctl.models.pss.pss_params`)
+NEEDS_TW = False
+#: pss_con input1, input2 are PSS/E input codes (else read as 0)
+PSSE_INPUTS = False
+#: reads the input limits VS1MIN .. VS2MAX (else -inf, +inf)
+INPUT_LIMITS = False
 #: PST's records are its .m data; PSS/E's IEEEST (declared with the PSS/E stabiliser,
 #: `ieeest`) and STAB1 (`stab1`) map here when exactly equivalent
 DYR = ()

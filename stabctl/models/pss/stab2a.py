@@ -22,6 +22,12 @@ if TYPE_CHECKING:
 
 STAB2A = 4
 KINDS = {STAB2A: "PSS/E STAB2A"}
+#: the family refuses a washout T_w below 1e-3 s (`stabctl.models.pss.pss_params`)
+NEEDS_TW = True
+#: pss_con input1, input2 are PSS/E input codes (else read as 0)
+PSSE_INPUTS = False
+#: reads the input limits VS1MIN .. VS2MAX (else -inf, +inf)
+INPUT_LIMITS = False
 DYR = (
     # STAB2A -> type 4: three washouts K2 T2 s/(1 + s T2) (KTw = K2 T2 computed), K3/(1 +
     # s T3) + K4, two lags K5/(1 + s T5), output limits +-HLIM
