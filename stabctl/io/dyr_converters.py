@@ -32,8 +32,9 @@ parameter and is not read.
 Left out, with why (`ConverterRows.skipped`): a plant regulating a remote bus (IREG not 0
 nor its own bus), a monitored branch that is not one in-service RAW branch, a wind turbine
 of a REECB1 or with a link missing, and every record of a plant left out; a control
-record without a REGCA1; a DERA1 with other converter records of its generator.  A plant sharing its bus with other generators (machines or
-plants) takes its own PG, QG of the bus's generation (ibr_con pfrac, qfrac), as they do.
+record without a REGCA1; a DERA1 with other converter records of its generator.  A plant
+sharing its bus with other generators (machines or plants) takes its own PG, QG of the
+bus's generation (ibr_con pfrac, qfrac), as they do.
 
 Source: PSS/E Model Library (REGCA1, REECA1, REECB1, REPCA1, WTDTA1, WTARA1, WTPTA1,
 WTTQA1 ICONs and CONs); ANDES 2.0 ``andes/io/psse-dyr.yaml`` for the same orders.
