@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from governor_alone import settled, started
+from psid import assert_start_is_psids
 
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
@@ -53,13 +54,8 @@ def test_initial_states_are_psid_s(run):
     = R tau_m0 (its init_tg.jl)."""
     flag, sim = run
     ref = PSID[f"x0_flag{flag}"]
-    psid = np.array(ref["generator-102-1"])
     m = sim.model
-    np.testing.assert_allclose(sim.op.V.real, ref["V_R"], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(sim.op.V.imag, ref["V_I"], rtol=0, atol=1e-9)
-    xm = m.layout.view(m.x0, "mac")[:, m.gp.mac[0]]  # the governor's machine, bus 102
-    mac = np.array([xm[2], -xm[4], xm[3], -xm[5], xm[0], xm[1]])
-    np.testing.assert_allclose(mac, psid[:6], rtol=0, atol=1e-9)
+    psid = assert_start_is_psids(sim, ref, machine=m.gp.mac[0])  # the governor's, bus 102
     S = gov.degov1.S
     # PSID's x_g1..x_g5: the control box's two, the actuator's two, the torque; flag 1
     # x_g6: the measured power

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from psid_shaft import torque_held
+from psid import assert_start_is_psids, torque_held
 
 from stabctl.case import ExciterTable
 from stabctl.dynamics.driver import Simulator
@@ -69,13 +69,8 @@ def test_initial_states_are_psid_s(run):
     product), within 1e-9 (measured 4.2e-12)."""
     name, sim = run
     ref = PSID[f"x0_{name}"]
-    psid = np.array(ref["generator-102-1"])
     m = sim.model
-    np.testing.assert_allclose(sim.op.V.real, ref["V_R"], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(sim.op.V.imag, ref["V_I"], rtol=0, atol=1e-9)
-    xm = m.layout.view(m.x0, "mac")[:, 1]  # bus 102's GENROU (bus 101: the GENCLS)
-    mac = np.array([xm[2], -xm[4], xm[3], -xm[5], xm[0], xm[1]])
-    np.testing.assert_allclose(mac, psid[:6], rtol=0, atol=1e-9)
+    psid = assert_start_is_psids(sim, ref, machine=1)  # bus 102's GENROU (101: the GENCLS)
     xe = m.layout.view(m.x0, "exc")[:, 0]
     got = [(1 - TA_TB) * xe[S.VAs], xe[S.Efd]]
     np.testing.assert_allclose(got, psid[6:], rtol=0, atol=1e-9)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from psid_shaft import torque_held
+from psid import assert_start_is_psids, torque_held
 
 from stabctl.case import ExciterTable
 from stabctl.dynamics.driver import Simulator
@@ -51,13 +51,8 @@ def test_initial_states_are_psid_s(sim):
     psi_kq in PST's sign) and its ST8C's (V_m, x_a1 .. x_a4; stabctl's PI integrals are
     K_IR x_a1 and K_IA x_a2), within 1e-9 (the power flow's round-off)."""
     ref = PSID["x0"]
-    psid = np.array(ref["generator-102-1"])
     m = sim.model
-    np.testing.assert_allclose(sim.op.V.real, ref["V_R"], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(sim.op.V.imag, ref["V_I"], rtol=0, atol=1e-9)
-    xm = m.layout.view(m.x0, "mac")[:, 1]  # bus 102's GENROU (bus 101: the GENCLS)
-    mac = np.array([xm[2], -xm[4], xm[3], -xm[5], xm[0], xm[1]])
-    np.testing.assert_allclose(mac, psid[:6], rtol=0, atol=1e-9)
+    psid = assert_start_is_psids(sim, ref, machine=1)  # bus 102's GENROU (101: the GENCLS)
     xe = m.layout.view(m.x0, "exc")[:, 0]
     got = [xe[S.VTR], xe[S.PIi] / 5.0, xe[S.PIa] / 0.1, xe[S.VR], xe[S.VF]]
     np.testing.assert_allclose(got, psid[6:], rtol=0, atol=1e-9)
@@ -74,7 +69,7 @@ def _gaps(case) -> dict:
 def test_eigenvalues_are_psid_s_with_its_held_torque():
     """PSID's spectrum (GENROU, ST8C, the infinite bus; 11 eigenvalues) is stabctl's, each
     within 1e-6 1/s (measured 4.0e-8), once the machine, which has no governor, holds its
-    torque as PSID's does (`psid_shaft.torque_held`).  As imported (PSS/E's held power,
+    torque as PSID's does (`psid.torque_held`).  As imported (PSS/E's held power,
     the torque P_m/omega) the electromechanical pair is 0.034 1/s and the -1.590 mode
     0.0083 from PSID's."""
     assert max(_gaps(torque_held(imported())).values()) < 1e-6
