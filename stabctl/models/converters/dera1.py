@@ -140,12 +140,9 @@ def services(vals: dict, kind: np.ndarray, P0, Q0, v0) -> dict[str, np.ndarray]:
     """
     dera = kind == DERA1
     vref = np.where(vals["da_Vref0"] == 0.0, v0, vals["da_Vref0"])
-    err = vref - v0
-    db = np.where(
-        err > vals["da_dbd2"],
-        err - vals["da_dbd2"],
-        np.where(err < vals["da_dbd1"], err - vals["da_dbd1"], 0.0),
-    )
+    db = np.vectorize(deadband.py_func, otypes=[float])(
+        vref - v0, vals["da_dbd1"], vals["da_dbd2"]
+    )  # the voltage control's deadband, as `derivatives` applies it
     Iqv0 = np.clip(vals["da_Kqv"] * db, vals["da_Iql1"], vals["da_Iqh1"])
     with np.errstate(divide="ignore", invalid="ignore"):
         qref = (Q0 / v0 - Iqv0) * v0

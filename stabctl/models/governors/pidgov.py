@@ -108,6 +108,8 @@ PARAMS = (
 )
 #: the packed columns of `PARAMS`: P[k, O.KP]
 O = own("PIDGOVColumns", PARAMS)
+#: the gate-power table's fields, under the same names in both records and in tg_con
+TABLE = ("G0", "G1", "P1", "G2", "P2", "P3")
 DYR = (
     DyrModel(
         "PIDGOV",
@@ -121,12 +123,7 @@ DYR = (
             "TA",
             "TB",
             "DTURB",
-            "G0",
-            "G1",
-            "P1",
-            "G2",
-            "P2",
-            "P3",
+            *TABLE,
             "GMAX",
             "GMIN",
             "ATW",
@@ -144,12 +141,7 @@ DYR = (
             "Ta": "TA",
             "Tgate": "TB",
             "Dt": "DTURB",
-            "G0": "G0",
-            "G1": "G1",
-            "P1": "P1",
-            "G2": "G2",
-            "P2": "P2",
-            "P3": "P3",
+            **{f: f for f in TABLE},
             "Tmax": "GMAX",
             "Tmin": "GMIN",
             "Atw": "ATW",
@@ -177,12 +169,7 @@ DYR = (
             "PMAX",
             "PMIN",
             "D",
-            "G0",
-            "G1",
-            "P1",
-            "G2",
-            "P2",
-            "P3",
+            *TABLE,
         ),
         {
             "Treg": "TREG",
@@ -199,12 +186,7 @@ DYR = (
             "Pmax": "PMAX",
             "Pmin": "PMIN",
             "Dt": "D",
-            "G0": "G0",
-            "G1": "G1",
-            "P1": "P1",
-            "G2": "G2",
-            "P2": "P2",
-            "P3": "P3",
+            **{f: f for f in TABLE},
         },
         kind=WPIDHY,
     ),
