@@ -5,11 +5,14 @@ converter of :data:`stabctl.models.converters.REGCA1` (docs/ibr.md), the same ro
 :mod:`stabctl.io.andes_case` builds from ANDES's devices: its electrical control ``REECA1``
 or ``REECB1``, that control's plant control ``REPCA1`` and (a REECA1's) wind turbine,
 drive train ``WTDTA1`` then ``WTARA1``, ``WTPTA1``, ``WTTQA1``, each a record of the same
-generator (bus, id).  Parameter order (ICONs first) and the ``ibr_con`` field each is
-copied to are declared with the table (``CONVERTER.dyr``, :mod:`stabctl.models.converters`);
-values as given (device base MBASE, as PSS/E's), the rest of the row the table's defaults
-(ANDES 2.0's: its REECA1/REPCA1 configuration kqs = kvs = ksg = 2, tpfilt 0.02 s, freeze 1,
-and the BusFreq of a REPCA1's frequency, Tf 0.02 s, Tw 0.1 s).
+generator (bus, id).  A ``REGCB1`` record in place of the REGCA1 is the same plant with
+the WECC REGC_B interface (ibr_con ``regc`` 1, :mod:`stabctl.models.converters.regcb1`),
+its source impedance the RAW generator's ZSORCE (on MBASE).  Parameter order (ICONs
+first) and the ``ibr_con`` field each is copied to are declared with the table
+(``CONVERTER.dyr``, :mod:`stabctl.models.converters`); values as given (device base
+MBASE, as PSS/E's), the rest of the row the table's defaults (ANDES 2.0's: its
+REECA1/REPCA1 configuration kqs = kvs = ksg = 2, tpfilt 0.02 s, freeze 1, and the BusFreq
+of a REPCA1's frequency, Tf 0.02 s, Tw 0.1 s).
 
 A RAW generator with a ``DERA1`` record (WECC DER_A, aggregated distributed energy
 resources) is a converter of :data:`stabctl.models.converters.DERA1`, alone (no other
@@ -32,11 +35,11 @@ parameter and is not read.
 Left out, with why (`ConverterRows.skipped`): a plant regulating a remote bus (IREG not 0
 nor its own bus), a monitored branch that is not one in-service RAW branch, a wind turbine
 of a REECB1 or with a link missing, and every record of a plant left out; a control
-record without a REGCA1; a DERA1 with other converter records of its generator.  A plant
+record without a REGCA1 or REGCB1; a DERA1 with other converter records of its generator.  A plant
 sharing its bus with other generators (machines or plants) takes its own PG, QG of the
 bus's generation (ibr_con pfrac, qfrac), as they do.
 
-Source: PSS/E Model Library (REGCA1, REECA1, REECB1, REPCA1, WTDTA1, WTARA1, WTPTA1,
+Source: PSS/E Model Library (REGCA1, REGCB1, REECA1, REECB1, REPCA1, WTDTA1, WTARA1, WTPTA1,
 WTTQA1 ICONs and CONs); ANDES 2.0 ``andes/io/psse-dyr.yaml`` for the same orders.
 """
 
@@ -53,6 +56,8 @@ from stabctl.models.converters import (
     DERA1,
     REECA1,
     REECB1,
+    REGC_A,
+    REGC_B,
     REGCA1,
     REPCA1,
     WTDTA1,
@@ -63,6 +68,8 @@ __all__ = ["ConverterRows", "converter_rows", "shares", "CONVERTER_RECORDS"]
 
 #: the DYR records read into the converter table
 CONVERTER_RECORDS = tuple(CONVERTER_DYR)
+#: converter interface record -> ibr_con ``regc`` code
+_REGC = {"REGCA1": REGC_A, "REGCB1": REGC_B}
 #: electrical control record -> ibr_con ``reec`` code
 _REEC = {"REECA1": REECA1, "REECB1": REECB1}
 #: the wind turbine's records after the drive train, in chain order, with the ibr_con
@@ -95,7 +102,7 @@ class _Refused(Exception):
 
 
 def converter_rows(records, generators, branches, conventions: str = "psse") -> ConverterRows:
-    """The converter table's rows of the REGCA1 and DERA1 plants of a DYR file.
+    """The converter table's rows of the REGCA1 (or REGCB1) and DERA1 plants of a DYR file.
 
     Parameters
     ----------
@@ -154,8 +161,11 @@ def converter_rows(records, generators, branches, conventions: str = "psse") -> 
             if "DERA1" in plant and len(plant) > 1:
                 others = ", ".join(sorted(set(plant) - {"DERA1"}))
                 raise _Refused(f"a DERA1 with other converter records ({others})")
-            if "REGCA1" not in plant and "DERA1" not in plant:
-                raise _Refused("no REGCA1 record for its generator")
+            regc = [name for name in _REGC if name in plant]
+            if len(regc) > 1:
+                raise _Refused("two converter interfaces (REGCA1 and REGCB1; stabctl: one)")
+            if not regc and "DERA1" not in plant:
+                raise _Refused("no REGCA1 or REGCB1 record for its generator")
             gen = gens.get(key)
             if gen is None:
                 raise _Refused("no such generator in the RAW data (or out of service)")
@@ -197,7 +207,11 @@ def _plant_row(
     REPCA1's P bounds as ``conventions`` (`converter_rows`)."""
     v = {p.name: p.default for p in CONVERTER.params}
     v.update(number=number, bus=int(gen["bus"]), type=REGCA1, mva=float(gen["mbase"]))
-    _copy(plant["REGCA1"], v)
+    (interface,) = (name for name in _REGC if name in plant)
+    v["regc"] = _REGC[interface]
+    _copy(plant[interface], v)
+    if interface == "REGCB1":  # its source impedance, ZSORCE on MBASE
+        v["gb_Rsource"], v["gb_Xsource"] = float(gen["ra"]), float(gen["xsource"])
     reec = [plant[name] for name in _REEC if name in plant]
     if len(reec) > 1:
         raise _Refused("two electrical controls (REECA1 and REECB1; stabctl: one)")

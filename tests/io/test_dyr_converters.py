@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from stabctl.dynamics.driver import Simulator
-from stabctl.dynamics.events import LineTrip
+from stabctl.dynamics.events import Fault, LineTrip
 from stabctl.errors import CaseError
 from stabctl.io.dyr import CONVERTER_DYR, read_dyr
 from stabctl.io.psse import import_psse, load_psse
-from stabctl.models.converters import CONVERTER, REECB1, REGCA1, REPCA1
+from stabctl.models.converters import CONVERTER, REECB1, REGC_B, REGCA1, REPCA1
 
 RENA = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "RENA_DEFAULT"
 RAW = RENA / "ThreeBusRenewable.raw"
@@ -261,8 +261,8 @@ def test_control_records_without_regca1_are_left_out(tmp_path):
             RAW, _dyr(tmp_path, [_text(r) for r in recs]), on_unsupported="skip", unmodelled="net"
         )
     assert res.left_out == (
-        "plant.dyr:2 REECB1 at bus 103 '1': no REGCA1 record for its generator",
-        "plant.dyr:3 REPCA1 at bus 103 '1': no REGCA1 record for its generator",
+        "plant.dyr:2 REECB1 at bus 103 '1': no REGCA1 or REGCB1 record for its generator",
+        "plant.dyr:3 REPCA1 at bus 103 '1': no REGCA1 or REGCB1 record for its generator",
     )
     assert res.netted == (
         "ThreeBusRenewable.raw:13 generator at bus 103 '1': no machine model record in the "
@@ -303,3 +303,68 @@ def test_wind_records_of_a_reecb1_plant_leave_it_out(tmp_path, extra, why):
     model = extra.split("'")[1]
     with pytest.raises(CaseError, match=rf"plant\.dyr:21 {model} at bus 103 '1': {why}"):
         import_psse(RAW, _dyr(tmp_path, [DYR.read_text(), extra]))
+
+
+def _regcb1_plant(tmp_path, regcb1="0 0 0.02 0.02 100.0 -100.0 10.0 0.02 1.11") -> tuple:
+    """RENA's RAW + DYR with a REGCB1 record (ICONs RateFlag PQFlag, CONs Tg Tfltr Iqrmax
+    Iqrmin Rrpwr Te Imax) in place of its REGCA1 and the plant's ZSORCE 0.2 pu (RENA's
+    j9999: a current source)."""
+    raw = RAW.read_text().replace("0.00000E+0, 9.99900E+3,", "0.00000E+0, 2.00000E-1,")
+    recs = [r for r in read_dyr(DYR) if r.model != "REGCA1"]
+    text = [f"103 'REGCB1' 1 {regcb1} /\n", *(_text(r) for r in recs)]
+    (tmp_path / "plant.raw").write_text(raw)
+    return tmp_path / "plant.raw", _dyr(tmp_path, text)
+
+
+def test_regcb1_record_reads_as_the_regc_b_interface_with_its_zsorce(tmp_path):
+    """The REGCB1's values land in the REGC_B columns (its Tg, Tfltr the REGCA1's), its
+    source impedance the generator's ZSORCE on MBASE; the plant keeps its REECB1, REPCA1."""
+    t = load_psse(*_regcb1_plant(tmp_path)).converters
+    row = _row(t)
+    assert (row["type"], row["regc"], row["reec"], row["repc"]) == (REGCA1, REGC_B, REECB1, REPCA1)
+    assert (row["Tg"], row["Tfltr"], row["gb_Iqrmax"], row["gb_Iqrmin"]) == (
+        0.02,
+        0.02,
+        100.0,
+        -100.0,
+    )
+    assert (row["gb_Rrpwr"], row["gb_Te"], row["gb_Imax"]) == (10.0, 0.02, 1.11)
+    assert (row["gb_Rsource"], row["gb_Xsource"]) == (0.0, 0.2)
+
+
+def test_regcb1_plant_runs_flat_and_rides_through_a_fault(tmp_path):
+    """REGCB1 + REECB1 + REPCA1 from the DYR: 10 s without a disturbance move no state
+    (1e-8).  A 0.1 s fault at bus 101 drops V103 to about 0.58 pu: the internal voltage
+    held, its current (E - v)/Z is beyond Imax 1.11 at once, all of it reactive (Q
+    priority, PQFlag 0): Q = v Imax, P = 0; P returns to the dispatch within 1 % 2.4 s
+    after the clearing."""
+    from runs import flat_run
+
+    case = load_psse(*_regcb1_plant(tmp_path))
+    drift, _ = flat_run(case, t_end=10.0)
+    assert drift < 1e-8
+    res = Simulator(case, q_limits=False).run([Fault(101, 1.0, 1.1, x=1e-3)], 3.5, h=0.002)
+    k = list(case.buses.number).index(103)
+    on = np.searchsorted(res.t, 1.0)
+    assert res.vmag[on, k] < 0.6
+    assert res.ibr_q[on, 0] == pytest.approx(res.vmag[on, k] * 1.11, rel=1e-9)
+    assert res.ibr_p[on, 0] == pytest.approx(0.0, abs=1e-12)
+    assert abs(res.ibr_p[-1, 0] / res.ibr_p[0, 0] - 1.0) < 0.01
+
+
+def test_two_converter_interfaces_leave_the_plant_out(tmp_path):
+    """A REGCA1 and a REGCB1 for one generator: the plant (its four records) left out,
+    each named with why."""
+    from stabctl.io.dyr_converters import converter_rows
+    from stabctl.io.psse_raw import read_raw
+
+    raw, dyr = _regcb1_plant(tmp_path)
+    regca1 = next(r for r in read_dyr(DYR) if r.model == "REGCA1")
+    dyr.write_text(dyr.read_text() + _text(regca1))
+    r = read_raw(raw)
+    res = converter_rows(read_dyr(dyr), [g.as_dyr() for g in r.generators], r.line)
+    assert res.rows == [] and len(res.skipped) == 4
+    assert all(
+        why == "two converter interfaces (REGCA1 and REGCB1; stabctl: one)"
+        for _, why in res.skipped
+    )

@@ -643,7 +643,7 @@ def test_gast_dispatched_at_its_load_limit_imports_and_runs_flat(tmp_path):
 
 def _with_unsupported_machine(tmp_path):
     """five_bus.dyr with generator 3 '2' given a generator model stabctl does not support
-    (GENTPJ1: any such record, e.g. REGCB1, takes the same path)."""
+    (GENTPJ1: any such record, e.g. REGCC1, takes the same path)."""
     lines = (DATA / "five_bus.dyr").read_text().splitlines()
     return _dyr(tmp_path, *lines[:2], "3 'GENTPJ1' '2' 8.0 0.03 0.4 0.05 3.0 0.0 1.8 1.7 /")
 

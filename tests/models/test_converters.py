@@ -3,7 +3,7 @@ closed form: the commands of ANDES's equations at chosen voltages and states, th
 limits of both priorities, the trip curves, ESD1's state-of-charge bounds, REGCA1's
 low-voltage gain, high-voltage management, LVPL anti-windup limit and rate limits, the
 initialisation checks, and the converter table's validation and JSON round trip.  The
-runs against ANDES are in tests/io/test_andes.py."""
+runs against ANDES are in tests/io/test_andes.py; REGCB1 (WECC REGC_B) at the end."""
 
 import numpy as np
 import pytest
@@ -12,6 +12,8 @@ from stabctl.case import BranchTable, BusTable, Case, ConverterTable
 from stabctl.errors import CaseError
 from stabctl.io.pst import case_from_dict, case_to_dict
 from stabctl.models import converters as conv
+from stabctl.models.converters.regca1 import RG
+from stabctl.models.converters.regcb1 import GB
 
 # a 2-bus system: swing bus 1, bus 2 generating 0.5 + j0.1 pu (100 MVA base)
 BUS = [[1, 1.0, 0, 0, 0, 0, 0, 0, 0, 1], [2, 1.0, 0, 0.5, 0.1, 0, 0, 0, 0, 2]]
@@ -593,3 +595,139 @@ def test_dg_protection_on_a_regca1_is_refused():
     case = make_case([1, 2, 3, 100.0, 1.0, 1.0, 0.0, 1], relay=1)
     with pytest.raises(CaseError, match=r"field 'relay'.*PVD1 or ESD1"):
         conv.converter_params(case)
+
+
+# -- REGCB1 (WECC REGC_B, stabctl.models.converters.regcb1) --------------------------------
+# In closed form: its start at rest
+# at the power-flow point with its internal voltage on its target, the voltage-source step of
+# its output current (-dv/Z at once, taken back within Te), the rate limits of its current
+# lags, RateFlag's power lag, the output current limit of both priorities, and the two-lag
+# step response Tg, Te of its output current to an active-current command step (integrated
+# with the kernel's derivatives, against 1 - (Tg e^(-t/Tg) - Te e^(-t/Te))/(Tg - Te)).
+
+#: a REGCA1 row on bus 2 (0.5 + j0.1 pu at 1 pu) with the REGC_B interface: Tg 0.02 s,
+#: Te 0.01 s, Z = 0.01 + j0.2 pu (100 MVA, the system base)
+REGCB_ROW = [1, 2, 3, 100.0, 1.0, 1.0, 0.0, 0]
+COLS = dict(regc=1, Tg=0.02, gb_Te=0.01, gb_Rsource=0.01, gb_Xsource=0.2)
+Z = 0.01 + 0.2j
+
+
+def regcb1(x_changes=(), V=1.0, P_changes=(), **cols):
+    """(derivatives dx, injected S, states x, packed P) of the bus-2 REGCB1 at bus voltage
+    V, its initial states (at 1 pu) changed as given (slot, value) and its packed columns
+    P_changes (name, value)."""
+    case = make_case(REGCB_ROW, **{**COLS, **cols})
+    V0 = np.ones(2, complex)
+    cp = conv.converter_params(case, V0, case.buses.pgen + 1j * case.buses.qgen)
+    x = conv.initialise(cp, V0)
+    for slot, value in x_changes:
+        x[slot, 0] = value
+    P, _, _ = conv.at_power_flow(cp, V0)
+    for name, value in P_changes:
+        P[0, getattr(conv.C, name)] = value
+    dx = np.zeros_like(x)
+    Vk = np.full(3, V, complex)
+    S = conv.derivatives_at(P, x, Vk[:1], Vk, dx)
+    return dx, S[0], x, P
+
+
+def test_regcb1_starts_at_rest_with_its_internal_voltage_on_its_target():
+    # Ip = P0/v, Iq = Q0/v, E = v + Z (Ip - j Iq) = 1 + (0.01 + 0.2j)(0.5 - 0.1j)
+    dx, S, x, _ = regcb1()
+    E = 1.0 + Z * (0.5 - 0.1j)
+    assert (x[RG.Ip, 0], x[RG.Iq, 0], x[RG.V_filter, 0]) == (0.5, 0.1, 1.0)
+    assert x[GB.Ed, 0] == pytest.approx(E.real, abs=1e-15)
+    assert x[GB.Eq, 0] == pytest.approx(E.imag, abs=1e-15)
+    assert S == pytest.approx(0.5 + 0.1j, abs=1e-14) and np.max(np.abs(dx)) < 1e-12
+
+
+def test_regcb1_voltage_step_moves_the_output_current_by_dv_over_z_at_once():
+    # E held: the output current (E - v)/Z moves by -dv/Z; E then runs to v + Z I within Te
+    dv = -0.1
+    dx, S, _, _ = regcb1(V=1.0 + dv)
+    I = (0.5 - 0.1j) - dv / Z
+    assert S == pytest.approx((1.0 + dv) * np.conj(I), rel=1e-13)
+    assert dx[GB.Ed, 0] == pytest.approx(dv / 0.01, rel=1e-12)  # (target - E)/Te
+    assert dx[GB.Eq, 0] == pytest.approx(0.0, abs=1e-12)
+    assert dx[RG.V_filter, 0] == pytest.approx(dv / 0.1, rel=1e-12)  # Tfltr 0.1 s
+    # Te 0: a current source, the step does not move the current
+    _, S, _, _ = regcb1(V=1.0 + dv, gb_Te=0.0)
+    assert S == pytest.approx((1.0 + dv) * (0.5 + 0.1j), rel=1e-14)
+
+
+def test_regcb1_rate_limits_bound_the_current_derivatives():
+    # PSS/E's reading: Rrpwr bounds dIp/dt (command >= 0: its rise), Iqrmax dIq/dt (Q0 > 0)
+    dx, _, _, _ = regcb1([(RG.Ip, 0.2), (RG.Iq, 0.0)], gb_Rrpwr=2.0, gb_Iqrmax=3.0)
+    assert dx[RG.Ip, 0] == 2.0 and dx[RG.Iq, 0] == 3.0
+    # unbounded: (cmd - Ip)/Tg; a falling Ip is not bounded by Rrpwr
+    dx, _, _, _ = regcb1([(RG.Ip, 0.8)], gb_Rrpwr=2.0)
+    assert dx[RG.Ip, 0] == pytest.approx(-0.3 / 0.02, rel=1e-14)
+    # a negative command (charging): Rrpwr bounds the fall
+    dx, _, _, _ = regcb1(P_changes=[("IPCMD0", -0.5)], gb_Rrpwr=2.0)
+    assert dx[RG.Ip, 0] == -2.0
+
+
+def test_regcb1_rateflag_lags_the_power_over_the_filtered_voltage():
+    # RateFlag 1: the state is Ipcmd Vf (0.5 at 1 pu); at Vf 0.8 its input is 0.4
+    dx, S, x, _ = regcb1([(RG.V_filter, 0.8)], gb_RateFlag=1, gb_Te=0.0)
+    assert x[RG.Ip, 0] == 0.5
+    assert dx[RG.Ip, 0] == pytest.approx((0.5 * 0.8 - 0.5) / 0.02, rel=1e-14)
+    assert S.real == pytest.approx(0.5 / 0.8, rel=1e-14)  # current P/Vf at v = 1
+
+
+@pytest.mark.parametrize(
+    "pq, Iq, want",
+    [(0, 0.9, np.sqrt(1 - 0.81) + 0.9j), (1, 1.2, 0.5 + np.sqrt(1 - 0.25) * 1j)],
+)
+def test_regcb1_output_current_limit_priorities(pq, Iq, want):
+    # Imax 1, Ip 0.5 (Te 0, v 1): Q priority keeps Iq 0.9 and leaves Ip sqrt(1 - 0.81);
+    # P priority keeps Ip 0.5 and leaves Iq 1.2 the room sqrt(1 - 0.25)
+    _, S, _, _ = regcb1([(RG.Iq, Iq)], gb_Te=0.0, gb_Imax=1.0, gb_PQFlag=pq)
+    assert S == pytest.approx(want, rel=1e-14)
+
+
+def test_regcb1_output_follows_two_lags_after_a_command_step():
+    # Ipcmd 0.5 -> 1.0 at a fixed 1 pu: Ip lags Tg, E lags Te behind it, the output
+    # current rises as 1 - (Tg e^-t/Tg - Te e^-t/Te)/(Tg - Te) of the step (RK4, 20 us;
+    # Rrpwr beyond the lag's fastest rise, 25 pu/s)
+    _, _, x, P = regcb1(P_changes=[("IPCMD0", 1.0)], gb_Rrpwr=999.0)
+    Tg, Te, h = 0.02, 0.01, 2e-5
+    V = np.ones(1, complex)
+    Vk = np.ones(3, complex)
+
+    def f(x):
+        dx = np.zeros_like(x)
+        conv.derivatives_at(P, x.copy(), V, Vk, dx)
+        return dx
+
+    worst = 0.0
+    for n in range(1, 3001):
+        k1 = f(x)
+        k2 = f(x + h / 2 * k1)
+        k3 = f(x + h / 2 * k2)
+        k4 = f(x + h * k3)
+        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        t = n * h
+        dx = np.zeros_like(x)
+        S = conv.derivatives_at(P, x.copy(), V, Vk, dx)[0]
+        want = 0.5 + 0.5 * (1 - (Tg * np.exp(-t / Tg) - Te * np.exp(-t / Te)) / (Tg - Te))
+        worst = max(worst, abs(S.real - want))
+    assert worst < 1e-12  # 2.3e-14 measured
+
+
+@pytest.mark.parametrize(
+    "cols, field, message",
+    [
+        (dict(type=1), "regc", "a REGC_B is the interface of a REGCA1"),
+        (dict(pll=1), "pll", "a REGC_B reads its bus's angle"),
+        (dict(gb_Rsource=0.0, gb_Xsource=0.0), "gb_Xsource", "needs a source impedance"),
+    ],
+)
+def test_regcb1_refusals_name_the_field(cols, field, message):
+    with pytest.raises(CaseError, match=rf"ibr_con row 1.*{field}.*{message}"):
+        regcb1(**cols)
+
+
+def test_regcb1_start_beyond_its_current_limit_is_refused():
+    with pytest.raises(CaseError, match=r"the REGCA1 cannot start.*gb_Imax"):
+        regcb1(gb_Imax=0.4)

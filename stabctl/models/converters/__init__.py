@@ -6,7 +6,8 @@ built of components as ANDES 2.0 builds them (docs/ibr.md), one module each:
 * :mod:`~stabctl.models.converters.relays`: their DG protection DGPRCT1 / DGPRCTExt
   (``relay``);
 * :mod:`~stabctl.models.converters.regca1`: REGCA1 (type 3), the WECC generator/converter
-  interface;
+  interface REGC_A, and :mod:`~stabctl.models.converters.regcb1` its REGC_B (PSS/E
+  REGCB1, ``regc`` 1) instead;
 * :mod:`~stabctl.models.converters.reeca1`: its electrical control REECA1 / REECB1
   (``reec``; a battery's state of charge with ``storage``);
 * :mod:`~stabctl.models.converters.repca1`: their plant control REPCA1 (``repc``);
@@ -41,12 +42,23 @@ import numpy as np
 from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import CaseError
 from stabctl.models.blocks import LBND, lag
-from stabctl.models.converters import dera1, pll, pvd1, reeca1, regca1, relays, repca1, wind
+from stabctl.models.converters import (
+    dera1,
+    pll,
+    pvd1,
+    reeca1,
+    regca1,
+    regcb1,
+    relays,
+    repca1,
+    wind,
+)
 from stabctl.models.converters.dera1 import DA
 from stabctl.models.converters.pll import PL, PLL_SLOTS
 from stabctl.models.converters.pvd1 import PV, commands
 from stabctl.models.converters.reeca1 import RE, REECA1_SLOTS
 from stabctl.models.converters.regca1 import RG, clamp_states, flat_side_of_lvg
+from stabctl.models.converters.regcb1 import GB
 from stabctl.models.converters.relays import PR, RELAY_SLOTS
 from stabctl.models.converters.repca1 import PC, PLANT_PREF_SLOT, REPCA1_SLOTS, line_measures
 from stabctl.models.converters.table import (
@@ -54,6 +66,7 @@ from stabctl.models.converters.table import (
     DGPRCT1,
     DGPRCTEXT,
     ESD1,
+    IMPEDANCE_FIELDS,
     NO_PLL,
     NO_REEC,
     NO_RELAY,
@@ -68,6 +81,8 @@ from stabctl.models.converters.table import (
     REECA1_FIELDS,
     REECA1_LAGS,
     REECB1,
+    REGC_A,
+    REGC_B,
     REGCA1,
     RELAY_FIELDS,
     REPCA1,
@@ -92,6 +107,8 @@ __all__ = [
     "PVD1",
     "ESD1",
     "REGCA1",
+    "REGC_A",
+    "REGC_B",
     "DERA1",
     "NO_REEC",
     "REECA1",
@@ -129,6 +146,7 @@ __all__ = [
     "at_power_flow",
     "drawn_current",
     "voltage_dependent",
+    "regc_currents",
     "derivatives",
     "derivatives_at",
     "commands",
@@ -142,7 +160,7 @@ __all__ = [
 # --------------------------------------------------------------------------------------
 
 #: the component modules (each with its ``DYR`` records)
-MODULES = (regca1, reeca1, repca1, wind, dera1)
+MODULES = (regca1, regcb1, reeca1, repca1, wind, dera1)
 
 CONVERTER = Family(
     table="ibr_con",
@@ -175,11 +193,11 @@ def _state_names(*layouts) -> tuple[str, ...]:
 #: state names per converter type, in slot order (slots beyond a type's names, or that a
 #: device does not use, `has_state`, are unused, 0): a PVD1's or ESD1's own slots then its
 #: protection's; a REGCA1's, its electrical control's (the state of charge first), its plant
-#: control's, its wind turbine's, its PLL's
+#: control's, its wind turbine's, its PLL's, a REGC_B's internal voltage
 STATE_NAMES = {
     PVD1: _state_names(PV, PR),
     ESD1: _state_names(PV, PR),
-    REGCA1: _state_names(RG, RE, PC, WT, PL),
+    REGCA1: _state_names(RG, RE, PC, WT, PL, GB),
     DERA1: _state_names(DA),
 }
 N_STATES = max(len(names) for names in STATE_NAMES.values())
@@ -218,7 +236,8 @@ class ConverterParams(Declared):
     ANDES reeca1.py, reecb1.py): Vref0r (Vref0, the initial |V| where 0), Qref = -qref0
     (its Q reference: Q0, or with a REECA1's QFLAG Vref1 - |V0|), tanpf = Q0/P0 (the
     power-factor reference, 0 where P0 = 0: Qcpf held at Q0), Ipoff = Ipcmd0 - P0/|V0|
-    (the REGCA1's Ipcmd less the REECA1's, ANDES's two initial commands summed), Imaxr
+    (the REGCA1's Ipcmd less the REECA1's, ANDES's two initial commands summed; 0 for a
+    REGC_B, whose Ipcmd0 is P0/|V0|: it has no LVG), Imaxr
     (Imax, 1e8 where <= 0), zVDL1, zVDL2 (1 where the VDL curve's points rise: the curve
     applies); REPCA1 (``repc``,
     ANDES repca1.py): the monitored line's end buses (rows bus1_idx, bus2_idx; the
@@ -286,6 +305,7 @@ class ConverterParams(Declared):
             ("ibr_con Tf", self.Tf, esd),
             ("ibr_con Tg", self.Tg, reg),
             ("ibr_con Tfltr", self.Tfltr, reg),
+            ("ibr_con gb_Te", self.gb_Te, reg & (self.regc == REGC_B) & (self.gb_Te >= LBND)),
             *((f"ibr_con {n}", getattr(self, n), ree) for n in REECA1_LAGS),
             ("ibr_con Tp", self.Tp, ree & (self.Tp >= LBND)),
             *((f"ibr_con {n}", getattr(self, n), self.repc == REPCA1) for n in REPCA1_LAGS),
@@ -322,6 +342,7 @@ class ConverterParams(Declared):
         act[WT.Pe_filter_tq : WT.PI_tq + 1] = self.torque == 1
         act[WT.PIc_pitch : WT.theta_pitch + 1] = self.pitch == 1
         act[PL.af_pll : PL.am_pll + 1] = self.pll == PLL1
+        act[GB.Ed : GB.Eq + 1] = reg & (self.regc == REGC_B) & (self.gb_Te >= LBND)
         act[MEMORY_SLOTS] = False
         dera = self.type == DERA1
         act[:, dera] = False
@@ -356,7 +377,9 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         (:data:`REECA1_LAGS`; its Tp other than 0, no filter) or a DERA1's
         (`dera1.LAGS`) below 1e-3 s (the current
         would be an algebraic function of the voltage inside the network solution); an
-        electrical control ``reec`` on a device other than a REGCA1; a DERA1 holding its
+        electrical control ``reec`` or a REGC_B (``regc`` 1) on a device other than a
+        REGCA1; a REGC_B with a PLL1, or with an internal voltage lag gb_Te and no source
+        impedance (gb_Rsource = gb_Xsource = 0); a DERA1 holding its
         power factor (PfFlag 1) with |P0| below `dera1.MIN_P_PF`; naming the row and
         field.
     """
@@ -370,6 +393,20 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     bad = np.flatnonzero((t.pll != NO_PLL) & ~reg)
     if bad.size:
         t._fail(bad[0], "pll", "a PLL gives the angle of a REGCA1 (type 3) only")
+    gb = t.regc == REGC_B
+    bad = np.flatnonzero(gb & ~reg)
+    if bad.size:
+        t._fail(bad[0], "regc", "a REGC_B is the interface of a REGCA1 (type 3) only")
+    bad = np.flatnonzero(gb & (t.pll != NO_PLL))
+    if bad.size:
+        t._fail(bad[0], "pll", "a REGC_B reads its bus's angle (no PLL1)")
+    bad = np.flatnonzero(gb & (t.gb_Te >= LBND) & (t.gb_Rsource == 0) & (t.gb_Xsource == 0))
+    if bad.size:
+        t._fail(
+            bad[0],
+            "gb_Xsource",
+            "a REGC_B with an internal voltage lag gb_Te needs a source impedance",
+        )
     bad = np.flatnonzero((t.relay != NO_RELAY) & reg)
     if bad.size:
         t._fail(bad[0], "relay", "a DG protection trips a PVD1 or ESD1 (types 1, 2) only")
@@ -398,7 +435,8 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     vals = {name: getattr(t, name).copy() for name in TABLE_FIELDS}
     for name in POWER_FIELDS:
         vals[name] = vals[name] * scale
-    vals["xc"] = vals["xc"] / scale
+    for name in IMPEDANCE_FIELDS:
+        vals[name] = vals[name] / scale
     for name in TORQUE_POWER_FIELDS:
         vals[name] = vals[name] * np.where(t.wq_Tn > 0, t.wq_Tn, t.mva) / case.base_mva
     P0 = t.pfrac * S_gen[idx].real
@@ -419,6 +457,7 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         kLVPL = np.where(reg, t.Lvplsw * t.Lvpl1 / (t.Brkpt - t.Zerox), 0.0)
         # LVG at the initial voltage, as `regca1._lvg`
         LVG0 = np.where(v0 <= t.Lvpnt0, 0.0, np.where(v0 <= t.Lvpnt1, (v0 - t.Lvpnt0) * kLVG, 1.0))
+        LVG0 = np.where(gb, 1.0, LVG0)  # a REGC_B has no LVG
         # ANDES's Ipcmd at an initial LVG of 0 is 1 (regca1.py 202); refused by initialise
         Ipcmd0 = np.where(LVG0 > 0, P0 / v0 / np.where(LVG0 > 0, LVG0, 1.0), 1.0)
     with np.errstate(divide="ignore"):
@@ -458,13 +497,23 @@ def drawn_current(P, x, k, v):
     Iq) as complex power per pu voltage, so that the injected current is (Ip - j Iq)
     V/|V|; REGCA1 the same with its output currents Ipout, Iqout, which depend on v;
     with a PLL1 the current is set in the PLL's frame, not the bus's: I_fix = -(Ipout - j
-    Iqout) exp(j am) drawn whatever V (ANDES regcp1.py), I_rel 0."""
+    Iqout) exp(j am) drawn whatever V (ANDES regcp1.py), I_rel 0; a REGC_B's output
+    currents (`regcb1.currents`, in its bus's frame)."""
     if P[k, C.TYPE] == REGCA1:
-        Ipout, Iqout = regca1.currents(P, x, k, v)
+        Ipout, Iqout = regc_currents(P, x, k, v)
         if P[k, C.PLL] == PLL1:
             return 0.0j, -(Ipout - 1j * Iqout) * np.exp(1j * x[PL.am_pll, k])
         return -(Ipout + 1j * Iqout), 0.0j
     return -(x[PV.Ip, k] + 1j * x[PV.Iq, k]), 0.0j
+
+
+@kernel
+def regc_currents(P, x, k, v):
+    """The output currents (Ipout, Iqout) of REGCA1 k's interface at voltage magnitude v:
+    its REGC_A's (`regca1.currents`) or REGC_B's (`regcb1.currents`)."""
+    if P[k, C.REGC] == REGC_B:
+        return regcb1.currents(P, x, k, v)
+    return regca1.currents(P, x, k, v)
 
 
 @kernel
@@ -485,7 +534,7 @@ def derivatives(P, x, k, V, V_nc, reach, dx):
     if P[k, C.TYPE] == DERA1:
         return dera1.derivatives(P, x, k, V, dx)
     if P[k, C.TYPE] == REGCA1:
-        Ipout, Iqout = regca1.currents(P, x, k, v)
+        Ipout, Iqout = regc_currents(P, x, k, v)
         rot = pll.frame(P, x, k, V)
         S = v * rot * (Ipout + 1j * Iqout)  # Pe + j Qe (ANDES regcp1.py)
         pll.derivatives(P, x, k, V, dx)
@@ -502,7 +551,12 @@ def derivatives(P, x, k, V, V_nc, reach, dx):
             x[RE.Ipcmd_last, k] = Ipcmd + P[k, C.IPOFF]
             if P[k, C.WIND] != NO_WIND:
                 wind.mechanics(P, x, k, S.real, wg, wr0, ref.real, dx)
-        regca1.derivatives(P, x, k, v, Iq_target, reach, dx)
+        if P[k, C.REGC] == REGC_B:
+            regcb1.derivatives(P, x, k, v, regca1.ipcmd(P, x, k), Iq_target, dx)
+            dx[regca1.SPARE, k] = 0.0
+        else:
+            regca1.derivatives(P, x, k, v, Iq_target, reach, dx)
+            dx[GB.Ed, k] = dx[GB.Eq, k] = 0.0
         dx[RE.SOC, k] = pvd1.soc_rate(P, k, S.real)
         return S
     Ipcmd, Iqcmd, dL, dW, fHz = pvd1.algebraic(P, x, k, V)
@@ -544,9 +598,9 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     ndarray, shape (N_STATES, n_ibr)
         PVD1, ESD1: Ip = P0/|V|, Iq = Q0/|V|, the measurement states 0, SOC = SOCinit
         (ESD1).  REGCA1 (ANDES regca1.py 184-211): Ip = Ipcmd0, Iq = -Iqcmd0 = Q0/|V|,
-        the voltage filter |V|; with a REECA1, its states (`reeca1.initial`) and memory
-        (the held outputs: their values at the start).  DERA1: Ip = P0/|V|, Iq = Q0/|V|
-        and its measurements (`dera1.initial`).
+        the voltage filter |V| (a REGC_B: `regcb1.initial`); with a REECA1, its states
+        (`reeca1.initial`) and memory (the held outputs: their values at the start).
+        DERA1: Ip = P0/|V|, Iq = Q0/|V| and its measurements (`dera1.initial`).
 
     Raises
     ------
@@ -566,6 +620,7 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     x[PV.Ip], x[PV.Iq] = np.where(reg, cp.Ipcmd0, cp.P0 / v), cp.Q0 / v
     x[RG.V_filter] = np.where(reg, v, 0.0)
     x[PV.SOC] = np.where((cp.type == ESD1) | cp.is_battery, cp.SOCinit, 0.0)
+    regcb1.initial(cp, x, v)
     P, Vc, V_nc = at_power_flow(cp, V0)
     if np.any(cp.reec != NO_REEC):
         reeca1.initial(cp, x, v)
@@ -610,8 +665,8 @@ def at_power_flow(cp: ConverterParams, V0: np.ndarray):
 #: why a REGCA1 (with its controls) may not start at rest
 _REGCA1_AT_REST = (
     "the low-voltage gain LVG 0, Ip at the LVPL limit, the high-voltage management Volim "
-    "or the limit Iolim is active at the start, or its REECA1's current limits, voltage dip "
-    "freeze or PI references"
+    "or the limit Iolim is active at the start (a REGC_B: its current limit gb_Imax), or "
+    "its REECA1's current limits, voltage dip freeze or PI references"
 )
 #: why a DERA1 may not start at rest
 _DERA1_AT_REST = "a current limit Imax (with its PQFlag, GenFlag) is active at the start"

@@ -16,7 +16,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import lag
 from stabctl.models.converters.reeca1 import RE
-from stabctl.models.converters.table import NO_REEC, REGCA1, C
+from stabctl.models.converters.table import NO_REEC, REGC_A, REGCA1, C
 from stabctl.models.declaration import DyrModel, slots
 
 DYR = (
@@ -67,7 +67,11 @@ def flat_side_of_lvg(P: np.ndarray, v0: np.ndarray) -> tuple[np.ndarray, np.ndar
     LVG has no derivative at the breakpoint; a linearisation on its flat side is what
     ANDES 2.0's EIG gives (docs/modal.md).  Returns (the copy, the rows moved); P itself
     is not changed."""
-    on = (P[:, C.TYPE] == REGCA1) & (np.abs(v0 - P[:, C.LVPNT1]) <= ON_BREAKPOINT)
+    on = (
+        (P[:, C.TYPE] == REGCA1)
+        & (P[:, C.REGC] == REGC_A)
+        & (np.abs(v0 - P[:, C.LVPNT1]) <= ON_BREAKPOINT)
+    )
     out = P.copy()
     out[on, C.LVPNT1] = v0[on] - BREAKPOINT_SHIFT
     return out, np.nonzero(on)[0]
@@ -89,7 +93,7 @@ def currents(P, x, k, v):
 
 
 @kernel
-def _ipcmd(P, x, k):
+def ipcmd(P, x, k):
     """REGCA1 k's active current command: Ipcmd0, or with a REECA1 its last command
     (slot ``Ipcmd_last``, ANDES's algebraic Ipcmd of the previous iterate, which its
     anti-windup check reads before the network solution)."""
@@ -112,7 +116,7 @@ def _ip_limits(P, x, k):
         LVPL = (S2 - P[k, C.ZEROX]) * P[k, C.KLVPL] + 9999.0 * (1.0 - sw)
     else:
         LVPL = 9999.0
-    e = _ipcmd(P, x, k) - x[RG.Ip, k]
+    e = ipcmd(P, x, k) - x[RG.Ip, k]
     if e > P[k, C.RRPWR]:
         e = P[k, C.RRPWR]
     return LVPL, e
@@ -135,8 +139,8 @@ def clamp_states(P, x, k, reach):
     """Clamp device k's limited states in place before the network solution, as ANDES's
     AntiWindup does within its iteration (andes/core/discrete.py AntiWindup.check_eq):
     REGCA1's Ip at its LVPL limit when held there (`_at_lvpl`; reach 0: at or above it
-    with a non-negative e).  Other types: nothing."""
-    if P[k, C.TYPE] == REGCA1:
+    with a non-negative e).  Other types and a REGC_B (``regc`` 1): nothing."""
+    if P[k, C.TYPE] == REGCA1 and P[k, C.REGC] == REGC_A:
         held, LVPL, _ = _at_lvpl(P, x, k, reach)
         if held:
             x[RG.Ip, k] = LVPL
@@ -145,7 +149,7 @@ def clamp_states(P, x, k, reach):
 @kernel
 def derivatives(P, x, k, v, Iq_target, reach, dx):
     """REGCA1's state derivatives of device k at voltage magnitude v (ANDES regca1.py
-    219-256) toward its commands (`_ipcmd`, Iq_target = -Iqcmd), slots `RG` and `SPARE`
+    219-256) toward its commands (`ipcmd`, Iq_target = -Iqcmd), slots `RG` and `SPARE`
     of column k of dx (the Ip state clamped first, `clamp_states` with `reach`)."""
     _, dx[RG.V_filter, k] = lag(v, x[RG.V_filter, k], P[k, C.TFLTR])
     # S0: Ip lag with the rate limit, then the anti-windup upper limit LVPL

@@ -308,6 +308,37 @@ def _dera1_params(col: int) -> tuple[Param, ...]:
 
 
 _DERA1_PARAMS = _dera1_params(214)
+
+#: the WECC generator/converter interface of a type-3 device (ibr_con ``regc``): REGC_A
+#: (PSS/E REGCA1, ANDES 2.0's REGCA1) or REGC_B (PSS/E REGCB1, :mod:`.regcb1`)
+REGC_A, REGC_B = 0, 1
+
+
+def _regcb1_params(col: int) -> tuple[Param, ...]:
+    """REGCB1's columns from ``col`` on, prefixed ``gb_`` (PSS/E Model Library REGCB1, the
+    WECC REGC_B specification; its Tg and Tfltr are the table's): its flags, the rate
+    limits of its current lags (dy/dt, device base, as PSS/E's: not ANDES's Tg dy/dt of a
+    REGCA1's Rrpwr, Iqrmax, Iqrmin), the lag Te of its internal voltage, its current
+    limit and the source impedance it sits behind (the RAW generator's ZSORCE)."""
+    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
+    rows: list[tuple[str, dict[str, Any]]] = [
+        ("RateFlag", dict(flag, doc="1 Rrpwr bounds the active power, 0 the active current")),
+        ("PQFlag", dict(flag, doc="output current limit priority: 1 active, 0 reactive")),
+        ("Rrpwr", dict(_DEV_PU, unit="pu/s", default=10.0, lo=0.0, doc="rate of |Ip| (or |P|)")),
+        ("Iqrmax", dict(_DEV_PU, unit="pu/s", default=999.0, doc="upper rate of Iq (Q0 > 0)")),
+        ("Iqrmin", dict(_DEV_PU, unit="pu/s", default=-999.0, doc="lower rate of Iq (Q0 < 0)")),
+        ("Te", dict(unit="s", default=0.02, lo=0.0, doc="internal voltage lag (< 1e-3: none)")),
+        ("Imax", dict(_DEV_PU, default=999.0, lo=0.0, doc="output current limit")),
+        ("Rsource", dict(unit="pu", lo=0.0, doc="source resistance (device base)")),
+        ("Xsource", dict(unit="pu", default=0.2, doc="source reactance (device base)")),
+    ]
+    return tuple(
+        Param(f"gb_{name}", col=col + j, **{**kw, "doc": "REGCB1: " + kw["doc"]})
+        for j, (name, kw) in enumerate(rows)
+    )
+
+
+_REGCB1_PARAMS = _regcb1_params(229)
 #: the ibr_con fields a DG protection sets (``relay`` and its columns)
 RELAY_FIELDS = ("relay", *(p.name for p in _RELAY_PARAMS))
 #: the ibr_con fields a wind turbine sets (``wind`` and its models' columns)
@@ -522,6 +553,16 @@ PARAMS = (
     ),
     *_RELAY_PARAMS,
     *_DERA1_PARAMS,
+    Param(
+        "regc",
+        "code",
+        228,
+        choices=(REGC_A, REGC_B),
+        doc="a REGCA1's (type 3) generator/converter interface: 0 REGC_A (REGCA1), 1 REGC_B "
+        "(PSS/E REGCB1: rate-limited current lags, a voltage source behind gb_Rsource + j "
+        "gb_Xsource lagged by gb_Te, the output current limit gb_Imax)",
+    ),
+    *_REGCB1_PARAMS,
 )
 
 #: the ibr_con fields the kernels take as given (pu quantities after the base change)
@@ -531,14 +572,18 @@ TABLE_FIELDS = tuple(p.name for p in PARAMS if p.name not in ("number", "bus", "
 REECA1_LAGS = ("Trv", "tiq", "Tpfilt", "Tpord")
 #: REPCA1's (its lead time constant pc_Tft may be 0)
 REPCA1_LAGS = ("pc_Tfltr", "pc_Tfv", "pc_Tp", "pc_Tg", "Twm")
-#: fields on the device base: powers and currents (times Sn/Sb), the reactance (Sb/Sn)
+#: fields on the device base that are powers and currents (times Sn/Sb)
 POWER_FIELDS = (
     *("qmx", "qmn", "pmx", "dqdv", "ddn", "ialim", "Iolim", "Iqrmax", "Iqrmin"),
     *("QMax", "QMin", "dPmax", "dPmin", "PMAX", "PMIN", "Imax", "pc_Pmax", "pc_Pmin"),
     *(f"{a}{j}" for a in ("Iq", "Ip") for j in range(1, 5)),
     *("wt_H", "wt_DAMP", "wt_Dshaft"),
     *("da_Kqv", "da_Imax", "da_rrpwr", "da_Iqh1", "da_Iql1"),
+    *("gb_Rrpwr", "gb_Iqrmax", "gb_Iqrmin", "gb_Imax"),
 )
+#: fields that are impedances on the device base (times Sb/Sn): the Q-droop's coupling
+#: reactance, REGCB1's source impedance
+IMPEDANCE_FIELDS = ("xc", "gb_Rsource", "gb_Xsource")
 #: the torque control's fields on its turbine's base (``wq_Tn``, else the device's)
 TORQUE_POWER_FIELDS = ("wq_Temax", "wq_Temin", *(f"wq_p{j}" for j in range(1, 5)))
 #: the lag time constants of the models switched on by a code (wind models, PLL): (code,
