@@ -2,17 +2,17 @@
 
 A RAW generator with a ``REGCA1`` record is a WECC second-generation renewable plant, the
 converter of :data:`stabctl.models.converters.REGCA1` (docs/ibr.md), the same row
-:mod:`stabctl.io.andes_case` builds from ANDES's devices: its electrical control ``REECA1``
-or ``REECB1``, that control's plant control ``REPCA1`` and (a REECA1's) wind turbine,
-drive train ``WTDTA1`` then ``WTARA1``, ``WTPTA1``, ``WTTQA1``, each a record of the same
-generator (bus, id).  A ``REGCB1`` record in place of the REGCA1 is the same plant with
-the WECC REGC_B interface (ibr_con ``regc`` 1, :mod:`stabctl.models.converters.regcb1`),
-its source impedance the RAW generator's ZSORCE (on MBASE).  Parameter order (ICONs
-first) and the ``ibr_con`` field each is copied to are declared with the table
-(``CONVERTER.dyr``, :mod:`stabctl.models.converters`); values as given (device base
-MBASE, as PSS/E's), the rest of the row the table's defaults (ANDES 2.0's: its
-REECA1/REPCA1 configuration kqs = kvs = ksg = 2, tpfilt 0.02 s, freeze 1, and the BusFreq
-of a REPCA1's frequency, Tf 0.02 s, Tw 0.1 s).
+:mod:`stabctl.io.andes_case` builds from ANDES's devices: its electrical control
+``REECA1``, ``REECB1`` or ``REECD1`` (WECC REEC_D, no IREG), that control's plant control
+``REPCA1`` and (a REECA1's) wind turbine, drive train ``WTDTA1`` then ``WTARA1``,
+``WTPTA1``, ``WTTQA1``, each a record of the same generator (bus, id). A ``REGCB1`` record
+in place of the REGCA1 is the same plant with the WECC REGC_B interface (ibr_con ``regc``
+1, :mod:`stabctl.models.converters.regcb1`), its source impedance the RAW generator's
+ZSORCE (on MBASE). Parameter order (ICONs first) and the ``ibr_con`` field each is copied
+to are declared with the table (``CONVERTER.dyr``, :mod:`stabctl.models.converters`);
+values as given (device base MBASE, as PSS/E's), the rest of the row the table's defaults
+(ANDES 2.0's: its REECA1/REPCA1 configuration kqs = kvs = ksg = 2, tpfilt 0.02 s, freeze
+1, and the BusFreq of a REPCA1's frequency, Tf 0.02 s, Tw 0.1 s).
 
 A RAW generator with a ``DERA1`` record (WECC DER_A, aggregated distributed energy
 resources) is a converter of :data:`stabctl.models.converters.DERA1`, alone (no other
@@ -56,6 +56,7 @@ from stabctl.models.converters import (
     DERA1,
     REECA1,
     REECB1,
+    REECD1,
     REGC_A,
     REGC_B,
     REGCA1,
@@ -71,7 +72,7 @@ CONVERTER_RECORDS = tuple(CONVERTER_DYR)
 #: converter interface record -> ibr_con ``regc`` code
 _REGC = {"REGCA1": REGC_A, "REGCB1": REGC_B}
 #: electrical control record -> ibr_con ``reec`` code
-_REEC = {"REECA1": REECA1, "REECB1": REECB1}
+_REEC = {"REECA1": REECA1, "REECB1": REECB1, "REECD1": REECD1}
 #: the wind turbine's records after the drive train, in chain order, with the ibr_con
 #: flag each sets
 _WIND_CHAIN = (("WTARA1", "aero"), ("WTPTA1", "pitch"), ("WTTQA1", "torque"))
@@ -214,7 +215,8 @@ def _plant_row(
         v["gb_Rsource"], v["gb_Xsource"] = float(gen["ra"]), float(gen["xsource"])
     reec = [plant[name] for name in _REEC if name in plant]
     if len(reec) > 1:
-        raise _Refused("two electrical controls (REECA1 and REECB1; stabctl: one)")
+        names = " and ".join(r.model for r in reec)
+        raise _Refused(f"two electrical controls ({names}; stabctl: one)")
     if reec:
         rec = reec[0]
         _own_bus(rec)
@@ -223,7 +225,7 @@ def _plant_row(
     if "REPCA1" in plant:
         rec = plant["REPCA1"]
         if not reec:
-            raise _Refused("a REPCA1 without an electrical control (REECA1 or REECB1)")
+            raise _Refused("a REPCA1 without an electrical control (REECA1, REECB1 or REECD1)")
         _own_bus(rec)
         v["repc"] = REPCA1
         _copy(rec, v)
@@ -267,8 +269,9 @@ def _copy(rec: DyrRecord, v: dict) -> None:
 
 
 def _own_bus(rec: DyrRecord) -> None:
-    """`_Refused` when ``rec`` regulates a remote bus (IREG neither 0 nor its own bus)."""
-    ireg = CONVERTER_DYR[rec.model].values(rec.params)["IREG"]
+    """`_Refused` when ``rec`` regulates a remote bus (IREG neither 0 nor its own bus; a
+    record without IREG, REECD1, regulates its own)."""
+    ireg = CONVERTER_DYR[rec.model].values(rec.params).get("IREG", 0)
     if ireg not in (0, rec.bus):
         raise _Refused(f"{rec.model} regulates remote bus IREG = {ireg:g} (stabctl: its own)")
 

@@ -16,7 +16,7 @@ from stabctl.dynamics.events import Fault, LineTrip
 from stabctl.errors import CaseError
 from stabctl.io.dyr import CONVERTER_DYR, read_dyr
 from stabctl.io.psse import import_psse, load_psse
-from stabctl.models.converters import CONVERTER, REECB1, REGC_B, REGCA1, REPCA1
+from stabctl.models.converters import CONVERTER, REECB1, REECD1, REGC_B, REGCA1, REPCA1
 
 RENA = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "RENA_DEFAULT"
 RAW = RENA / "ThreeBusRenewable.raw"
@@ -368,3 +368,57 @@ def test_two_converter_interfaces_leave_the_plant_out(tmp_path):
         why == "two converter interfaces (REGCA1 and REGCB1; stabctl: one)"
         for _, why in res.skipped
     )
+
+
+#: REECD1's own CONs in the plant of `_reecd1_plant`: VDL1 (Iq) flat at Imax, VDL2 (Ip)
+#: rising from 0 at 0.2 pu to Imax at 0.5 pu (the rest of each table 0: unused), no
+#: compensation, Tr1 0.02 s, Ke 1 (storage), no blocking band
+_REECD1_OWN = {"Vq1": 0.0, "Iq1": 1.11, "Vq2": 2.0, "Iq2": 1.11}
+_REECD1_OWN |= {"Vp1": 0.2, "Ip1": 0.0, "Vp2": 0.5, "Ip2": 1.11, "Vp3": 2.0, "Ip3": 1.11}
+_REECD1_OWN |= {"Tr1": 0.02, "Ke": 1.0, "Vblkl": -1.0, "Vblkh": 9.0, "Tblk": 0.0}
+
+
+def _reecd1_plant(tmp_path) -> tuple:
+    """`_regcb1_plant` with a REECD1 in place of its REECB1: the REECB1's values (PSS/E's
+    RENA), PMIN -1.2 (a battery's range), VCMPFLAG 0, Iqfrz Thld Thld2 0, Vbias 1 and
+    `_REECD1_OWN`."""
+    raw, dyr = _regcb1_plant(tmp_path)
+    b1 = next(r for r in read_dyr(DYR) if r.model == "REECB1")
+    vals = CONVERTER_DYR["REECB1"].values(b1.params) | {"PMIN": -1.2, "Vbias": 1.0}
+    fields = CONVERTER_DYR["REECD1"].fields
+    nums = [vals.get(f, _REECD1_OWN.get(f, 0.0)) for f in fields]
+    rec = f"103 'REECD1' 1 {' '.join(repr(float(v)) for v in nums)} /\n"
+    dyr.write_text(
+        "".join(ln for ln in dyr.read_text().splitlines(True) if "REECB1" not in ln) + rec
+    )
+    return raw, dyr
+
+
+def test_reecd1_record_reads_into_reeca1_s_columns_and_its_own(tmp_path):
+    """REECD1's 6 ICONs and 77 CONs: the shared ones in REECA1's columns (Vbias in Vref1's),
+    the ten-point tables in Vq1 ... Ip10, its own in ``rd_``; no IREG (its own bus)."""
+    t = load_psse(*_reecd1_plant(tmp_path)).converters
+    row = _row(t)
+    assert (row["reec"], row["regc"], row["repc"]) == (REECD1, REGC_B, REPCA1)
+    assert (row["Kvi"], row["Imax"], row["PMIN"], row["Vref1"], row["tiq"]) == (
+        60.0,
+        1.11,
+        -1.2,
+        1.0,
+        0.02,
+    )
+    assert (row["Vp2"], row["Ip2"], row["Vp3"], row["Vp4"], row["Ip10"]) == (0.5, 1.11, 2.0, 0, 0)
+    assert (row["rd_Tr1"], row["rd_Ke"], row["rd_Vblkl"], row["rd_Vblkh"]) == (0.02, 1.0, -1.0, 9.0)
+
+
+def test_reecd1_plant_runs_flat_and_through_a_fault(tmp_path):
+    """REGCB1 + REECD1 + REPCA1 from the DYR: 10 s without a disturbance move no state
+    (1e-8); through a 0.1 s fault at bus 101 it returns to its dispatch within 1 %."""
+    from runs import flat_run
+
+    case = load_psse(*_reecd1_plant(tmp_path))
+    drift, _ = flat_run(case, t_end=10.0)
+    assert drift < 1e-8
+    res = Simulator(case, q_limits=False).run([Fault(101, 1.0, 1.1, x=1e-3)], 3.5, h=0.002)
+    assert np.all(np.isfinite(res.ibr_p))
+    assert abs(res.ibr_p[-1, 0] / res.ibr_p[0, 0] - 1.0) < 0.01

@@ -731,3 +731,91 @@ def test_regcb1_refusals_name_the_field(cols, field, message):
 def test_regcb1_start_beyond_its_current_limit_is_refused():
     with pytest.raises(CaseError, match=r"the REGCA1 cannot start.*gb_Imax"):
         regcb1(gb_Imax=0.4)
+
+
+# -- REECD1 (WECC REEC_D, stabctl.models.converters.reecd1) ---------------------------------
+# REEC_A's control with the compensated voltage in its voltage loop, ten-point VDL curves,
+# the active range [-Ke Ipmax, Ipmax] and blocking, in closed form.
+
+from stabctl.models.converters.reecd1 import RD  # noqa: E402
+
+
+def reecd1(x_changes=(), V=1.0, **cols):
+    """`regca1` with a REECD1 (``reec`` 3, Vref0 1 pu: no voltage error at the start)."""
+    return regca1(x_changes, V, reec=3, **{"Vref0": 1.0, **cols})
+
+
+def _vcmp(v, S, Rc, Xc):
+    """|v - (Rc + j Xc) conj(S)/v|: the compensated voltage (PSS/E's Vcmp = |Vt - Zc It|)."""
+    return abs(v - (Rc + 1j * Xc) * np.conj(S) / v)
+
+
+def test_reecd1_starts_at_rest_with_its_compensated_voltage_filter():
+    # VCMPFLAG 1, Xc 0.05: Vcmp0 = |1 - j0.05 (0.5 - j0.1)|; the voltage loop (QFLAG 1,
+    # VFLAG 0) at rest with Vbias (Vref1) there
+    vc0 = _vcmp(1.0, 0.5 + 0.1j, 0.0, 0.05)
+    cols = dict(rd_VCMPFLAG=1, rd_Xc=0.05, rd_Tr1=0.02, QFLAG=1, Vref1=vc0)
+    dx, S_, x, cp = reecd1(**cols)
+    assert x[RD.Vcmp_filter, 0] == pytest.approx(vc0, abs=1e-15) and 0.99 < vc0 < 1.0
+    assert S_ == 0.5 + 0.1j and np.max(np.abs(dx)) < 1e-12
+    assert (cp.nVDL1[0], cp.nVDL2[0]) == (4.0, 4.0)  # REECA1's four points, 5-10 unused
+
+
+def test_reecd1_voltage_loop_compares_the_compensated_voltage():
+    # QFLAG 1, VFLAG 0, Tr1 0 (no filter): the V PI's input is Vsel - Vcmp at the bus
+    # voltage 0.95 pu and the injected power there (the REGCA1's states at rest), not
+    # Vsel - Vt; dPIV/dt = Kvi (Vsel - Vcmp), Vsel = Vref1 + Qref = Vcmp0 + 0
+    vc0 = _vcmp(1.0, 0.5 + 0.1j, 0.0, 0.05)
+    cols = dict(rd_VCMPFLAG=1, rd_Xc=0.05, QFLAG=1, Vref1=vc0, Kvi=10.0, Vdip=0.5)
+    dx, S_, _, _ = reecd1(V=0.95, **cols)
+    vc = _vcmp(0.95, S_, 0.0, 0.05)
+    assert dx[S["PIV"], 0] == pytest.approx(10.0 * (vc0 - vc), rel=1e-12)
+    # VCMPFLAG 0: |V| + Kc Q
+    cols = dict(rd_Kc=0.1, QFLAG=1, Vref1=1.0 + 0.1 * 0.1, Kvi=10.0, Vdip=0.5)
+    dx, S_, _, _ = reecd1(V=0.95, **cols)
+    assert dx[S["PIV"], 0] == pytest.approx(10.0 * (1.01 - 0.95 - 0.1 * S_.imag), rel=1e-12)
+
+
+def test_reecd1_ten_point_curve_ends_at_its_first_point_not_rising():
+    # VDL2 points (0.1, 0.1) ... (0.6, 0.35), (1.2, 1.1) rising, point 8 at 0.9 V not: seven
+    # points (9 and 10, rising again, unused); at the filtered 0.55 pu the limit is between
+    # points 5 (0.5, 0.3) and 6 (0.6, 0.35): 0.325, below the order 0.5/0.55 (P priority,
+    # Vdip 0.05: no freeze); above point 7 its 1.1 (below the order 1.8/1.5)
+    pts = {f"Vp{j}": 0.1 * j for j in range(1, 7)} | {
+        f"Ip{j}": 0.05 + 0.05 * j for j in range(1, 7)
+    }
+    pts |= {"Vp7": 1.2, "Ip7": 1.1, "Vp8": 0.9, "Ip8": 0.2, "Vp9": 1.3, "Ip9": 0.1, "Vp10": 1.4}
+    cols = dict(pts, Ip10=0.1, pqflag=1, Vdip=0.05, Imax=2.0, Vup=2.0)
+    _, _, x, cp = reecd1([(S["Vt_filter"], 0.55)], V=0.55, **cols)
+    assert cp.nVDL2[0] == 7.0
+    assert x[S["Ipcmd_last"], 0] == pytest.approx(0.325, rel=1e-14)
+    _, _, x, _ = reecd1([(S["Vt_filter"], 1.5), (S["Pord"], 1.8)], V=1.5, **cols, PMAX=2.0)
+    assert x[S["Ipcmd_last"], 0] == pytest.approx(1.1, rel=1e-14)
+    # all points 0: no curve, Imax 0.52 alone bounds Ip
+    zero = {f"{a}{j}": 0.0 for a in ("Vp", "Ip") for j in range(1, 11)}
+    _, _, x, cp = reecd1([(S["Vt_filter"], 0.55)], V=0.55, **zero, pqflag=1, Vdip=0.05, Imax=0.52)
+    assert cp.nVDL2[0] == 0.0 and x[S["Ipcmd_last"], 0] == pytest.approx(0.52, rel=1e-14)
+
+
+def test_reecd1_charges_down_to_minus_ke_ipmax():
+    # a power order of -0.3 pu (PMIN -1): Ke 0.5 with Ipmax = Imax 0.52 (no curves, P
+    # priority) bounds the charging current at -0.26; Ke 0 (a generator) at 0
+    zero = {f"{a}{j}": 0.0 for a in ("Vp", "Ip") for j in range(1, 11)}
+    cols = dict(zero, pqflag=1, Imax=0.52, PMIN=-1.0)
+    for ke, want in ((0.5, -0.26), (0.0, 0.0)):
+        _, _, x, _ = reecd1([(S["Pord"], -0.3)], rd_Ke=ke, **cols)
+        assert x[S["Ipcmd_last"], 0] == pytest.approx(want, abs=1e-15)
+
+
+def test_reecd1_blocks_both_commands_below_vblkl_and_for_tblk_after():
+    # filtered voltage 0.4 below Vblkl 0.5 (Vdip 0.3: no freeze): Ipcmd 0 and Iqcmd 0
+    # (the Iq lag runs to 0: (0 - 0.1)/Tg), the timer set to Tblk 0.1; back at 1 pu the
+    # commands stay 0 while the timer runs down at 1/s
+    cols = dict(rd_Vblkl=0.5, rd_Tblk=0.1, Vdip=0.3)
+    dx, _, x, _ = reecd1([(S["Vt_filter"], 0.4)], V=0.4, **cols)
+    assert x[S["Ipcmd_last"], 0] == 0.0 and dx[1, 0] == pytest.approx(-0.1 / 0.1, rel=1e-14)
+    assert x[RD.Tblk_timer, 0] == 0.1 and dx[RD.Tblk_timer, 0] == 0.0
+    dx, _, x, _ = reecd1([(RD.Tblk_timer, 0.05)], **cols)
+    assert x[S["Ipcmd_last"], 0] == 0.0 and dx[RD.Tblk_timer, 0] == -1.0
+    with pytest.raises(CaseError, match=r"the REGCA1 cannot start.*rd_Vblkl"):
+        reecd1(rd_Vblkh=0.9)  # 1 pu above Vblkh: blocked at the start

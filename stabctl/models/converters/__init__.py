@@ -9,7 +9,8 @@ built of components as ANDES 2.0 builds them (docs/ibr.md), one module each:
   interface REGC_A, and :mod:`~stabctl.models.converters.regcb1` its REGC_B (PSS/E
   REGCB1, ``regc`` 1) instead;
 * :mod:`~stabctl.models.converters.reeca1`: its electrical control REECA1 / REECB1
-  (``reec``; a battery's state of charge with ``storage``);
+  (``reec``; a battery's state of charge with ``storage``), and
+  :mod:`~stabctl.models.converters.reecd1` REECD1 (WECC REEC_D, built on REECA1's);
 * :mod:`~stabctl.models.converters.repca1`: their plant control REPCA1 (``repc``);
 * :mod:`~stabctl.models.converters.wind`: the wind turbine's drive train WTDTA1 / WTDS,
   aerodynamics WTARA1, pitch control WTPTA1 and torque control WTTQA1 (``wind``, ``aero``,
@@ -47,6 +48,7 @@ from stabctl.models.converters import (
     pll,
     pvd1,
     reeca1,
+    reecd1,
     regca1,
     regcb1,
     relays,
@@ -57,6 +59,7 @@ from stabctl.models.converters.dera1 import DA
 from stabctl.models.converters.pll import PL, PLL_SLOTS
 from stabctl.models.converters.pvd1 import PV, commands
 from stabctl.models.converters.reeca1 import RE, REECA1_SLOTS
+from stabctl.models.converters.reecd1 import RD
 from stabctl.models.converters.regca1 import RG, clamp_states, flat_side_of_lvg
 from stabctl.models.converters.regcb1 import GB
 from stabctl.models.converters.relays import PR, RELAY_SLOTS
@@ -81,6 +84,7 @@ from stabctl.models.converters.table import (
     REECA1_FIELDS,
     REECA1_LAGS,
     REECB1,
+    REECD1,
     REGC_A,
     REGC_B,
     REGCA1,
@@ -113,6 +117,7 @@ __all__ = [
     "NO_REEC",
     "REECA1",
     "REECB1",
+    "REECD1",
     "NO_REPC",
     "REPCA1",
     "NO_WIND",
@@ -160,7 +165,7 @@ __all__ = [
 # --------------------------------------------------------------------------------------
 
 #: the component modules (each with its ``DYR`` records)
-MODULES = (regca1, regcb1, reeca1, repca1, wind, dera1)
+MODULES = (regca1, regcb1, reeca1, reecd1, repca1, wind, dera1)
 
 CONVERTER = Family(
     table="ibr_con",
@@ -193,11 +198,11 @@ def _state_names(*layouts) -> tuple[str, ...]:
 #: state names per converter type, in slot order (slots beyond a type's names, or that a
 #: device does not use, `has_state`, are unused, 0): a PVD1's or ESD1's own slots then its
 #: protection's; a REGCA1's, its electrical control's (the state of charge first), its plant
-#: control's, its wind turbine's, its PLL's, a REGC_B's internal voltage
+#: control's, its wind turbine's, its PLL's, a REGC_B's internal voltage, a REECD1's
 STATE_NAMES = {
     PVD1: _state_names(PV, PR),
     ESD1: _state_names(PV, PR),
-    REGCA1: _state_names(RG, RE, PC, WT, PL, GB),
+    REGCA1: _state_names(RG, RE, PC, WT, PL, GB, RD),
     DERA1: _state_names(DA),
 }
 N_STATES = max(len(names) for names in STATE_NAMES.values())
@@ -216,7 +221,7 @@ if (DA.Ip, DA.Iq) != (PV.Ip, PV.Iq):
 #: written in place by the kernels (ANDES's ExtendedEvent timers, its VarHold of Ipmax,
 #: the frozen PI outputs, the held error, the plant P reference's commanded increment): at
 #: rest they do not move; the linearisation leaves them out (`has_state`)
-MEMORY_SLOTS = [int(s) for s in (*reeca1.MEMORY, *repca1.MEMORY)]
+MEMORY_SLOTS = [int(s) for s in (*reeca1.MEMORY, *repca1.MEMORY, *reecd1.MEMORY)]
 #: the slots that integrate energy (ESD1's and a battery's state of charge): at rest only
 #: at zero output, so the initial-point check leaves them out (unused, 0, in the other types)
 ENERGY_SLOTS = [STATE_NAMES[ESD1].index("SOC")]
@@ -239,7 +244,8 @@ class ConverterParams(Declared):
     (the REGCA1's Ipcmd less the REECA1's, ANDES's two initial commands summed; 0 for a
     REGC_B, whose Ipcmd0 is P0/|V0|: it has no LVG), Imaxr
     (Imax, 1e8 where <= 0), zVDL1, zVDL2 (1 where the VDL curve's points rise: the curve
-    applies); REPCA1 (``repc``,
+    applies), nVDL1, nVDL2 (a REECD1's: the points its ten-point curves use, 0 none);
+    REPCA1 (``repc``,
     ANDES repca1.py): the monitored line's end buses (rows bus1_idx, bus2_idx; the
     device's own bus without a line) and their positions pos1, pos2 among the kept buses
     (set by the dynamic model), isign (1 if the device's bus is bus1, else -1: the line
@@ -269,6 +275,8 @@ class ConverterParams(Declared):
     Imaxr: np.ndarray
     zVDL1: np.ndarray
     zVDL2: np.ndarray
+    nVDL1: np.ndarray
+    nVDL2: np.ndarray
     pos1: np.ndarray
     pos2: np.ndarray
     bus1_idx: np.ndarray
@@ -308,6 +316,7 @@ class ConverterParams(Declared):
             ("ibr_con gb_Te", self.gb_Te, reg & (self.regc == REGC_B) & (self.gb_Te >= LBND)),
             *((f"ibr_con {n}", getattr(self, n), ree) for n in REECA1_LAGS),
             ("ibr_con Tp", self.Tp, ree & (self.Tp >= LBND)),
+            ("ibr_con rd_Tr1", self.rd_Tr1, (self.reec == REECD1) & (self.rd_Tr1 >= LBND)),
             *((f"ibr_con {n}", getattr(self, n), self.repc == REPCA1) for n in REPCA1_LAGS),
             *(
                 (f"ibr_con {n}", getattr(self, n), getattr(self, flag) == 1)
@@ -343,6 +352,7 @@ class ConverterParams(Declared):
         act[WT.PIc_pitch : WT.theta_pitch + 1] = self.pitch == 1
         act[PL.af_pll : PL.am_pll + 1] = self.pll == PLL1
         act[GB.Ed : GB.Eq + 1] = reg & (self.regc == REGC_B) & (self.gb_Te >= LBND)
+        act[RD.Vcmp_filter] = (self.reec == REECD1) & (self.rd_Tr1 >= LBND)
         act[MEMORY_SLOTS] = False
         dera = self.type == DERA1
         act[:, dera] = False
@@ -419,6 +429,7 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         t._fail(bad[0], "repc", "a plant control drives an electrical control (reec 1, 2) only")
     lags += [(name, ree) for name in REECA1_LAGS] + [(name, pc) for name in REPCA1_LAGS]
     lags += [("Tp", ree & (t.Tp != 0))]  # REECA1's Pe filter: 0 none
+    lags += [("rd_Tr1", (t.reec == REECD1) & (t.rd_Tr1 != 0))]  # REECD1's: 0 none
     wind.check(t, t.reec == REECA1)
     lags += [(n, getattr(t, flag) == 1) for flag, names in SWITCHED_LAGS for n in names]
     for name, sel in lags:
@@ -480,7 +491,15 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         Iqcmd0=np.where(reg, -Q0 / v0, 0.0),
         kLVG=kLVG,
         kLVPL=kLVPL,
-        **reeca1.services(vals, t.reec, P0, Q0, v0, np.where(reg, Ipcmd0, 0.0)),
+        **reeca1.services(
+            vals,
+            t.reec,
+            P0,
+            Q0,
+            v0,
+            np.where(reg, Ipcmd0, 0.0),
+            reecd1.initial_voltage(t.reec, vals, P0, Q0, v0),
+        ),
         **repca1.services(case, idx),
         pr_v0=v0,
         **da,
@@ -547,7 +566,11 @@ def derivatives(P, x, k, V, V_nc, reach, dx):
                 wg, Pref, wr0 = wind.reference(P, x, k, S.real, dx)
             ref = Pref + ext
             # the electrical control reads Vd, the voltage in the PLL's frame (|V| without)
-            Ipcmd, Iq_target = reeca1.control(P, x, k, v * rot.real, S, ref, wg, dx)
+            if P[k, C.REEC] == REECD1:
+                Ipcmd, Iq_target = reecd1.control(P, x, k, v * rot.real, S, ref, wg, dx)
+            else:
+                vt = x[RE.Vt_filter, k]  # its voltage control compares the filtered voltage
+                Ipcmd, Iq_target = reeca1.control(P, x, k, v * rot.real, S, ref, wg, vt, dx)
             x[RE.Ipcmd_last, k] = Ipcmd + P[k, C.IPOFF]
             if P[k, C.WIND] != NO_WIND:
                 wind.mechanics(P, x, k, S.real, wg, wr0, ref.real, dx)
@@ -599,7 +622,8 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
         PVD1, ESD1: Ip = P0/|V|, Iq = Q0/|V|, the measurement states 0, SOC = SOCinit
         (ESD1).  REGCA1 (ANDES regca1.py 184-211): Ip = Ipcmd0, Iq = -Iqcmd0 = Q0/|V|,
         the voltage filter |V| (a REGC_B: `regcb1.initial`); with a REECA1, its states
-        (`reeca1.initial`) and memory (the held outputs: their values at the start).
+        (`reeca1.initial`; a REECD1's, `reecd1.initial`) and memory (the held outputs:
+        their values at the start).
         DERA1: Ip = P0/|V|, Iq = Q0/|V| and its measurements (`dera1.initial`).
 
     Raises
@@ -624,6 +648,7 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     P, Vc, V_nc = at_power_flow(cp, V0)
     if np.any(cp.reec != NO_REEC):
         reeca1.initial(cp, x, v)
+        reecd1.initial(cp, x, v)
     if np.any(cp.wind != NO_WIND):
         wind.initial(cp, x)
     repca1.initial(cp, x)
@@ -666,7 +691,8 @@ def at_power_flow(cp: ConverterParams, V0: np.ndarray):
 _REGCA1_AT_REST = (
     "the low-voltage gain LVG 0, Ip at the LVPL limit, the high-voltage management Volim "
     "or the limit Iolim is active at the start (a REGC_B: its current limit gb_Imax), or "
-    "its REECA1's current limits, voltage dip freeze or PI references"
+    "its REECA1's current limits, voltage dip freeze or PI references (a REECD1: also its "
+    "blocking band rd_Vblkl, rd_Vblkh)"
 )
 #: why a DERA1 may not start at rest
 _DERA1_AT_REST = "a current limit Imax (with its PQFlag, GenFlag) is active at the start"

@@ -9,7 +9,8 @@ the rate-limited filter Tpfilt and the lag Tpord, and limits both current comman
 VDL curves, Imax, the priority PQFLAG); while the voltage is outside [Vdip, Vup] it is
 frozen.  With ``storage`` 1 (a battery, WECC REEC_C) the active current runs in [-Ipmax,
 Ipmax] and its state of charge (slot ``SOC``) bounds it.  Its parameters are ibr_con
-columns 54-104 (:mod:`.table`).
+columns 54-104 (:mod:`.table`).  REECD1 (WECC REEC_D, :mod:`.reecd1`) runs this control
+with its own voltage, current-limit curves, charging range and blocking.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import anti_windup, clip, deadband, lag, pi_track_aw_freeze
-from stabctl.models.converters.table import NO_REEC, REECB1, C
+from stabctl.models.converters.table import NO_REEC, REECB1, REECD1, C
 from stabctl.models.declaration import DyrModel, slots
 
 if TYPE_CHECKING:
@@ -81,10 +82,12 @@ RE = slots("REECA1Slots", ("SOC", *REECA1_SLOTS), first=4)
 MEMORY = tuple(range(int(RE.Iqinj_timer), int(RE.Ipcmd_last) + 1))
 
 
-def services(vals: dict, reec, P0, Q0, v0, Ipcmd0) -> dict[str, np.ndarray]:
+def services(vals: dict, reec, P0, Q0, v0, Ipcmd0, vc0) -> dict[str, np.ndarray]:
     """REECA1's and REECB1's initial services (ANDES reeca1.py, reecb1.py ConstServices;
     `ConverterParams`) from the system-base fields ``vals``, for the rows with an
-    electrical control ``reec`` (0 elsewhere)."""
+    electrical control ``reec`` (0 elsewhere); a REECD1's the same at the voltage vc0 its
+    voltage control compares (`reecd1.initial_voltage`; |V0| of the others), with the
+    point counts nVDL1, nVDL2 of its ten-point curves (`_table_points`)."""
 
     def rising(a: str, b: str):
         pts = [vals[f"{c}{j}"] for c in (a, b) for j in (1, 2, 3)]
@@ -94,7 +97,7 @@ def services(vals: dict, reec, P0, Q0, v0, Ipcmd0) -> dict[str, np.ndarray]:
     # qref0 (reeca1.py 412): QFLAG (v - Vref1), else Iqcmd0 vp (vp = v above 0.01 pu);
     # REECB1's -Q0 (reecb1.py 304)
     vp0 = np.where(v0 <= 0.01, 0.01, v0)
-    qref0 = np.where(vals["QFLAG"] == 1, v0 - vals["Vref1"], -Q0 / v0 * vp0)
+    qref0 = np.where(vals["QFLAG"] == 1, vc0 - vals["Vref1"], -Q0 / v0 * vp0)
     qref0 = np.where(reec == REECB1, -Q0, qref0)
     with np.errstate(divide="ignore", invalid="ignore"):
         tanpf = np.where(P0 != 0, Q0 / np.where(P0 != 0, P0, 1.0), 0.0)
@@ -106,8 +109,21 @@ def services(vals: dict, reec, P0, Q0, v0, Ipcmd0) -> dict[str, np.ndarray]:
         "Imaxr": np.where(vals["Imax"] <= 0, 1e8, vals["Imax"]),
         "zVDL1": rising("Vq", "Iq").astype(float),
         "zVDL2": rising("Vp", "Ip").astype(float),
+        "nVDL1": np.where(reec == REECD1, _table_points(vals, "Vq", "Iq"), 0.0),
+        "nVDL2": np.where(reec == REECD1, _table_points(vals, "Vp", "Ip"), 0.0),
     }
     return {name: np.where(reec != NO_REEC, value, 0.0) for name, value in on.items()}
+
+
+def _table_points(vals: dict, v_name: str, i_name: str) -> np.ndarray:
+    """The points a REECD1's ten-point VDL curve uses (PSS/E's and InterPSS's
+    ``tablePointCount``): 0 if all its voltages and currents are 0 (no curve), else the
+    first point and each next one while its voltage is not 0 and above the one before."""
+    v = np.array([vals[f"{v_name}{j}"] for j in range(1, 11)])
+    i = np.array([vals[f"{i_name}{j}"] for j in range(1, 11)])
+    rising = (v[1:] != 0) & (v[1:] > v[:-1])
+    n = 1 + np.cumprod(rising, axis=0).sum(axis=0)
+    return np.where(np.any((v != 0) | (i != 0), axis=0), n, 0).astype(float)
 
 
 def initial(cp: ConverterParams, x: np.ndarray, v: np.ndarray) -> None:
@@ -160,20 +176,52 @@ def _vdl(P, k, c, u):
     return P[k, c + 7]
 
 
-#: REECA1's VDL curves as (flag column, first point column), numpy scalars
-_VDL1 = (np.int64(C.ZVDL1), np.int64(C.VQ1))
-_VDL2 = (np.int64(C.ZVDL2), np.int64(C.VP1))
+#: REECA1's VDL curves as (flag column, first point column; a REECD1's point count column,
+#: its points 5-10's first voltage and current columns), numpy scalars
+_VDL1 = tuple(np.int64(c) for c in (C.ZVDL1, C.VQ1, C.NVDL1, C.VQ5, C.IQ5))
+_VDL2 = tuple(np.int64(c) for c in (C.ZVDL2, C.VP1, C.NVDL2, C.VP5, C.IP5))
+
+
+@kernel
+def _table_point(P, k, curve, j):
+    """(voltage, current) of point j (from 0) of device k's VDL curve (`_VDL1`, `_VDL2`):
+    points 0-3 REECA1's columns, 4-9 a REECD1's."""
+    _, c, _, v5, i5 = curve
+    if j < 4:
+        return P[k, c + j], P[k, c + 4 + j]
+    return P[k, v5 + j - 4], P[k, i5 + j - 4]
+
+
+@kernel
+def _vdl_table(P, k, curve, u):
+    """A REECD1's VDL curve of device k at filtered voltage u: linear between its points
+    (the count in the curve's column), its first current below them, its last above."""
+    n = int(P[k, curve[2]])
+    v0, i0 = _table_point(P, k, curve, 0)
+    if u <= v0:
+        return i0
+    for j in range(1, n):
+        v1, i1 = _table_point(P, k, curve, j)
+        if u <= v1:
+            return (u - v0) * ((i1 - i0) / (v1 - v0)) + i0
+        v0, i0 = v1, i1
+    return i0
 
 
 @kernel
 def _vdl_limit(P, k, curve, u):
     """REECA1's VDL limit of device k at filtered voltage u: min(VDL(u), Imaxr) (`_vdl`,
     columns c) if the curve's points rise (flag column z), else 1e8 (ANDES Iqmax1,
-    Ipmax1); curve = (z, c), `_VDL1` or `_VDL2`.  A REECB1 has no curves: Imaxr (ANDES
-    reecb1.py Ipmax, Iqmax)."""
-    z, c = curve
+    Ipmax1); curve `_VDL1` or `_VDL2`.  A REECB1 has no curves: Imaxr (ANDES reecb1.py
+    Ipmax, Iqmax).  A REECD1: min(its ten-point curve, Imaxr) (`_vdl_table`; Imaxr
+    without a curve, InterPSS's ``currentLimits``)."""
+    z, c = curve[0], curve[1]
     if P[k, C.REEC] == REECB1:
         return P[k, C.IMAXR]
+    if P[k, C.REEC] == REECD1:
+        if P[k, curve[2]] == 0.0:
+            return P[k, C.IMAXR]
+        return min(_vdl_table(P, k, curve, u), P[k, C.IMAXR])
     if P[k, z] == 0.0:
         return 1e8
     return min(_vdl(P, k, c, u), P[k, C.IMAXR])
@@ -182,8 +230,9 @@ def _vdl_limit(P, k, curve, u):
 @kernel
 def _room(P, k, other):
     """The current room sqrt(max(Imax^2 - other^2, 0)) the other command leaves (a
-    REECB1's Imaxr: ANDES reecb1.py Ipmax2sq, Iqmax2sq)."""
-    Imax = P[k, C.IMAXR] if P[k, C.REEC] == REECB1 else P[k, C.IMAX]
+    REECB1's and a REECD1's Imaxr: ANDES reecb1.py Ipmax2sq, Iqmax2sq)."""
+    limited = P[k, C.REEC] == REECB1 or P[k, C.REEC] == REECD1
+    Imax = P[k, C.IMAXR] if limited else P[k, C.IMAX]
     return np.sqrt(max(Imax**2 - other**2, 0.0))
 
 
@@ -212,14 +261,16 @@ def _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx):
 def _ip_command(P, x, k, Ip_order, Ipmax, hold):
     """REECA1's active current command IpHL = clip(Ip_order, 0, Ipmax) of device k (a
     battery, ``storage`` 1: clip(Ip_order, -Ipmax, Ipmax), WECC REEC_C, whose state of
-    charge, with a finite En, stops discharging at SOCmin and charging at SOCmax), Ipmax
+    charge, with a finite En, stops discharging at SOCmin and charging at SOCmax; a
+    REECD1: clip(Ip_order, -Ke Ipmax, Ipmax), its state of charge as a battery's), Ipmax
     held at its value before ``hold`` (1.0 for Thld2 s after a dip; ANDES VarHold
     Ipmaxh), tracked in place otherwise."""
     if hold:
         Ipmax = x[RE.Ipmax_held, k]
     else:
         x[RE.Ipmax_held, k] = Ipmax
-    lo, hi = -P[k, C.STORAGE] * Ipmax, Ipmax
+    share = P[k, C.RD_KE] if P[k, C.REEC] == REECD1 else P[k, C.STORAGE]
+    lo, hi = -share * Ipmax, Ipmax
     if P[k, C.KSOC] > 0.0:
         if x[RE.SOC, k] <= P[k, C.SOCMIN]:
             hi = 0.0
@@ -260,13 +311,15 @@ def _iq_injection(P, k, vt, frz, extended):
 
 
 @kernel
-def control(P, x, k, v, S, ref, wg, dx):
+def control(P, x, k, v, S, ref, wg, vc, dx):
     """REECA1 (ANDES 2.0 reeca1.py; docs/ibr.md 6) driving REGCA1 k at voltage magnitude v
     with its injected power S = Pe + j Qe, its references ref = Pref + j Qext (Pref: P0,
     or its wind turbine's, plus its plant control's Pext; Qext the plant control's Q
-    increment, 0 without one) and its speed wg (1 without a wind turbine): the
-    derivatives of its slots written, its memory (`MEMORY_SLOTS`) updated in place;
-    returns the commands (IpHL, IqHL), pu.  Frozen (Volt_dip) while v < Vdip or v > Vup
+    increment, 0 without one), its speed wg (1 without a wind turbine) and the voltage
+    vc its voltage control compares (its filtered voltage, the slot Vt_filter; a
+    REECD1's compensated voltage, `reecd1.control`): the derivatives of its slots
+    written, its memory (`MEMORY_SLOTS`) updated in place; returns the commands (IpHL,
+    IqHL), pu.  Frozen (Volt_dip) while v < Vdip or v > Vup
     (strict).  A REECB1 (ANDES reecb1.py) the same but: the V PI's input the selected
     Vsel (the Q PI's output with VFLAG, else 0), no VDL curves, Iqinj at all times, no
     holds (its Thld, Thld2 0) and no PFLAG (0)."""
@@ -307,7 +360,7 @@ def control(P, x, k, v, S, ref, wg, dx):
         u = P[k, C.QFLAG] * clip(vflag * piq, lo, hi)
     else:
         Vsel = clip(P[k, C.VREF1] + PFsel if vflag == 0.0 else piq, lo, hi)
-        u = P[k, C.QFLAG] * (Vsel - vt * (1.0 - vflag))
+        u = P[k, C.QFLAG] * (Vsel - vc * (1.0 - vflag))
     s4 = x[RE.Iq_filter, k]
     dx[RE.Iq_filter, k] = 0.0 if frz else (PFsel / vp - s4) / P[k, C.TIQ]
     Iqinj = _iq_injection(P, k, vt, frz, extended)

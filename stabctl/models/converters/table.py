@@ -1,7 +1,7 @@
 """The ``ibr_con`` table every converter component reads: its columns (the device's own,
 then each component's: REECA1 54-104, REPCA1 105-143, the wind turbine 145-182, the PLL1
-183-187, the DG protection 188-213, the DERA1 214-227; ANDES 2.0's and PSS/E's
-parameters, docs/ibr.md), the codes that
+183-187, the DG protection 188-213, the DERA1 214-227, the REGCB1 228-237, the REECD1
+238-270; ANDES 2.0's and PSS/E's parameters, docs/ibr.md), the codes that
 switch the components on, and the packed parameter layout of the compiled kernels
 (`PACKED`, its named columns `C`).
 
@@ -26,8 +26,9 @@ _DEV_PU: dict[str, Any] = dict(unit="pu")  # on the device base mva (ANDES ``pow
 
 #: REGCA1's electrical control (ibr_con ``reec``): none, REECA1 (WECC REEC_A), REECB1 (WECC
 #: REEC_B: REECA1's columns without its VDL curves, Iqinj hold, PFLAG and Vref1; ANDES 2.0
-#: ``renewable/reecb1.py``)
-NO_REEC, REECA1, REECB1 = 0, 1, 2
+#: ``renewable/reecb1.py``), REECD1 (WECC REEC_D, PSS/E REECD1: REECA1's columns, its Vref1
+#: PSS/E's Vbias, ten-point VDL curves and the ``rd_`` columns, :mod:`.reecd1`)
+NO_REEC, REECA1, REECB1, REECD1 = 0, 1, 2, 3
 
 
 def _reeca1_params(col: int) -> tuple[Param, ...]:
@@ -339,6 +340,46 @@ def _regcb1_params(col: int) -> tuple[Param, ...]:
 
 
 _REGCB1_PARAMS = _regcb1_params(229)
+
+
+def _reecd1_params(col: int) -> tuple[Param, ...]:
+    """REECD1's columns from ``col`` on (PSS/E Model Library REECD1, the WECC REEC_D
+    specification; the rest of its record is REECA1's columns): the compensated voltage
+    (``rd_``), the charging share Ke of the active current range, the blocking band, and
+    points 5-10 of its voltage-dependent current limits (points 1-4 are REECA1's).
+    Impedances, droop and currents on the device base, as PSS/E's."""
+    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
+    rows: list[tuple[str, dict[str, Any]]] = [
+        ("rd_VCMPFLAG", dict(flag, doc="1 |V - (Rc + j Xc) I|, 0 |V| + Kc Q (compensated V)")),
+        ("rd_Rc", dict(unit="pu", doc="compensation resistance (device base)")),
+        ("rd_Xc", dict(unit="pu", doc="compensation reactance (device base)")),
+        ("rd_Tr1", dict(unit="s", lo=0.0, doc="compensated voltage filter (< 1e-3: none)")),
+        ("rd_Kc", dict(unit="pu", doc="reactive droop gain (VCMPFLAG 0; device base)")),
+        (
+            "rd_Ke",
+            dict(unit="", lo=0.0, hi=1.0, doc="lower active current limit -Ke Ipmax (1: storage)"),
+        ),
+        ("rd_Vblkl", dict(unit="pu", default=-99.0, doc="blocked below this filtered voltage")),
+        ("rd_Vblkh", dict(unit="pu", default=99.0, doc="blocked above this filtered voltage")),
+        ("rd_Tblk", dict(unit="s", lo=0.0, doc="blocking held after the voltage returns")),
+        *(
+            (f"{a}{j}", dict(unit="pu", doc=f"{curve} point {j}, voltage (0: unused)"))
+            for a, curve in (("Vq", "VDL1, Iq limit"), ("Vp", "VDL2, Ip limit"))
+            for j in range(5, 11)
+        ),
+        *(
+            (f"{a}{j}", dict(_DEV_PU, doc=f"{curve} point {j}, current"))
+            for a, curve in (("Iq", "VDL1, Iq limit"), ("Ip", "VDL2, Ip limit"))
+            for j in range(5, 11)
+        ),
+    ]
+    return tuple(
+        Param(name, col=col + j, **{**kw, "doc": "REECD1: " + kw["doc"]})
+        for j, (name, kw) in enumerate(rows)
+    )
+
+
+_REECD1_PARAMS = _reecd1_params(238)
 #: the ibr_con fields a DG protection sets (``relay`` and its columns)
 RELAY_FIELDS = ("relay", *(p.name for p in _RELAY_PARAMS))
 #: the ibr_con fields a wind turbine sets (``wind`` and its models' columns)
@@ -503,8 +544,9 @@ PARAMS = (
         "reec",
         "code",
         53,
-        choices=(NO_REEC, REECA1, REECB1),
-        doc="REGCA1's electrical control: 0 none (constant current commands), 1 REECA1, 2 REECB1",
+        choices=(NO_REEC, REECA1, REECB1, REECD1),
+        doc="REGCA1's electrical control: 0 none (constant current commands), 1 REECA1, 2 REECB1, "
+        "3 REECD1",
     ),
     *_REECA1_PARAMS,
     Param(
@@ -563,6 +605,7 @@ PARAMS = (
         "gb_Xsource lagged by gb_Te, the output current limit gb_Imax)",
     ),
     *_REGCB1_PARAMS,
+    *_REECD1_PARAMS,
 )
 
 #: the ibr_con fields the kernels take as given (pu quantities after the base change)
@@ -580,10 +623,12 @@ POWER_FIELDS = (
     *("wt_H", "wt_DAMP", "wt_Dshaft"),
     *("da_Kqv", "da_Imax", "da_rrpwr", "da_Iqh1", "da_Iql1"),
     *("gb_Rrpwr", "gb_Iqrmax", "gb_Iqrmin", "gb_Imax"),
+    *(f"{a}{j}" for a in ("Iq", "Ip") for j in range(5, 11)),
 )
 #: fields that are impedances on the device base (times Sb/Sn): the Q-droop's coupling
-#: reactance, REGCB1's source impedance
-IMPEDANCE_FIELDS = ("xc", "gb_Rsource", "gb_Xsource")
+#: reactance, REGCB1's source impedance, REECD1's compensation impedance and droop (Q on the
+#: device base per pu voltage)
+IMPEDANCE_FIELDS = ("xc", "gb_Rsource", "gb_Xsource", "rd_Rc", "rd_Xc", "rd_Kc")
 #: the torque control's fields on its turbine's base (``wq_Tn``, else the device's)
 TORQUE_POWER_FIELDS = ("wq_Temax", "wq_Temin", *(f"wq_p{j}" for j in range(1, 5)))
 #: the lag time constants of the models switched on by a code (wind models, PLL): (code,
@@ -617,6 +662,8 @@ PACKED = (
     ("IMAXR", "Imaxr"),
     ("ZVDL1", "zVDL1"),
     ("ZVDL2", "zVDL2"),
+    ("NVDL1", "nVDL1"),
+    ("NVDL2", "nVDL2"),
     ("POS1", "pos1"),
     ("POS2", "pos2"),
     ("ISIGN", "isign"),
