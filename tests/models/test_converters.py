@@ -686,33 +686,44 @@ def test_regcb1_output_current_limit_priorities(pq, Iq, want):
     assert S == pytest.approx(want, rel=1e-14)
 
 
+def _lags_step(t, T):
+    """The unit step response at t of the cascade of lags 1/(1 + s T_i), distinct T_i:
+    1 - sum_i T_i^(n-1)/prod_(j != i)(T_i - T_j) e^(-t/T_i)."""
+    out = 1.0
+    for i, Ti in enumerate(T):
+        den = np.prod([Ti - Tj for j, Tj in enumerate(T) if j != i])
+        out -= Ti ** (len(T) - 1) / den * np.exp(-t / Ti)
+    return out
+
+
+def _rk4_injection(P, x, h, n):
+    """The injected power (n,) of the one device at a fixed 1 pu bus after each of n
+    classical RK4 steps of h s from the states x (its derivatives `derivatives_at`)."""
+    V, Vk = np.ones(1, complex), np.ones(3, complex)
+
+    def f(x):
+        dx = np.zeros_like(x)
+        out = conv.derivatives_at(P, x.copy(), V, Vk, dx)
+        return dx, out[0]
+
+    S = np.empty(n, complex)
+    for m in range(n):
+        k1 = f(x)[0]
+        k2 = f(x + h / 2 * k1)[0]
+        k3 = f(x + h / 2 * k2)[0]
+        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + f(x + h * k3)[0])
+        S[m] = f(x)[1]
+    return S
+
+
 def test_regcb1_output_follows_two_lags_after_a_command_step():
     # Ipcmd 0.5 -> 1.0 at a fixed 1 pu: Ip lags Tg, E lags Te behind it, the output
     # current rises as 1 - (Tg e^-t/Tg - Te e^-t/Te)/(Tg - Te) of the step (RK4, 20 us;
     # Rrpwr beyond the lag's fastest rise, 25 pu/s)
     _, _, x, P = regcb1(P_changes=[("IPCMD0", 1.0)], gb_Rrpwr=999.0)
-    Tg, Te, h = 0.02, 0.01, 2e-5
-    V = np.ones(1, complex)
-    Vk = np.ones(3, complex)
-
-    def f(x):
-        dx = np.zeros_like(x)
-        conv.derivatives_at(P, x.copy(), V, Vk, dx)
-        return dx
-
-    worst = 0.0
-    for n in range(1, 3001):
-        k1 = f(x)
-        k2 = f(x + h / 2 * k1)
-        k3 = f(x + h / 2 * k2)
-        k4 = f(x + h * k3)
-        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        t = n * h
-        dx = np.zeros_like(x)
-        S = conv.derivatives_at(P, x.copy(), V, Vk, dx)[0]
-        want = 0.5 + 0.5 * (1 - (Tg * np.exp(-t / Tg) - Te * np.exp(-t / Te)) / (Tg - Te))
-        worst = max(worst, abs(S.real - want))
-    assert worst < 1e-12  # 2.3e-14 measured
+    S = _rk4_injection(P, x, 2e-5, 3000)
+    t = 2e-5 * np.arange(1, 3001)
+    assert np.max(np.abs(S.real - (0.5 + 0.5 * _lags_step(t, (0.02, 0.01))))) < 1e-12
 
 
 @pytest.mark.parametrize(
@@ -740,8 +751,12 @@ def test_regcb1_start_beyond_its_current_limit_is_refused():
 from stabctl.models.converters.reecd1 import RD  # noqa: E402
 
 
-def reecd1(x_changes=(), V=1.0, **cols):
-    """`regca1` with a REECD1 (``reec`` 3, Vref0 1 pu: no voltage error at the start)."""
+def reecd1(x_changes=(), V=1.0, P_changes=(), **cols):
+    """`regca1` with a REECD1 (``reec`` 3, Vref0 1 pu: no voltage error at the start); a
+    REGCB1 (``regc`` 1 in cols) the same through `regcb1`, its packed columns P_changes
+    (name, value) changed."""
+    if cols.get("regc") == 1:
+        return regcb1(x_changes, V, P_changes, reec=3, **{"Vref0": 1.0, **cols})
     return regca1(x_changes, V, reec=3, **{"Vref0": 1.0, **cols})
 
 
@@ -819,3 +834,23 @@ def test_reecd1_blocks_both_commands_below_vblkl_and_for_tblk_after():
     assert x[S["Ipcmd_last"], 0] == 0.0 and dx[RD.Tblk_timer, 0] == -1.0
     with pytest.raises(CaseError, match=r"the REGCA1 cannot start.*rd_Vblkl"):
         reecd1(rd_Vblkh=0.9)  # 1 pu above Vblkh: blocked at the start
+
+
+@pytest.mark.parametrize(
+    "column, to, lags",
+    [("P0", 0.7, ("Tpfilt", "Tpord", "Tg", "gb_Te")), ("QREF", 0.3, ("tiq", "Tg", "gb_Te"))],
+)
+def test_reecd1_p_and_q_paths_step_as_their_lags(column, to, lags):
+    # REECD1 on a REGCB1 at a fixed 1 pu: a P reference step 0.5 -> 0.7 passes the
+    # reference filter Tpfilt, the order lag Tpord, the converter's Tg and Te; a Q
+    # reference step 0.1 -> 0.3 (QFLAG 0) the Iq filter Tiq, Tg and Te: the injected P, Q
+    # follow the cascade's step response (RK4, 50 us over 0.2 s; rates and limits open)
+    T = dict(Tpfilt=0.015, Tpord=0.03, Tg=0.02, gb_Te=0.01, tiq=0.025)
+    cols = dict(T, regc=1, gb_Xsource=0.2, gb_Rsource=0.01, gb_Rrpwr=999.0)
+    _, _, x, P = reecd1(P_changes=[(column, to)], **cols)
+    S = _rk4_injection(P, x, 5e-5, 4000)
+    t = 5e-5 * np.arange(1, 4001)
+    got = S.real if column == "P0" else S.imag
+    start = 0.5 if column == "P0" else 0.1
+    want = start + (to - start) * _lags_step(t, [T[n] for n in lags])
+    assert np.max(np.abs(got - want)) < 1e-12  # 6.1e-14 (P), 1.7e-13 (Q) measured
