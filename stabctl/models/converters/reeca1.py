@@ -196,14 +196,11 @@ def _table_point(P, k, curve, j):
 def _vdl_table(P, k, curve, u):
     """A REECD1's VDL curve of device k at filtered voltage u: linear between its points
     (the count in the curve's column), its first current below them, its last above."""
-    n = int(P[k, curve[2]])
-    v0, i0 = _table_point(P, k, curve, 0)
-    if u <= v0:
-        return i0
-    for j in range(1, n):
+    v0 = i0 = 0.0
+    for j in range(int(P[k, curve[2]])):
         v1, i1 = _table_point(P, k, curve, j)
         if u <= v1:
-            return (u - v0) * ((i1 - i0) / (v1 - v0)) + i0
+            return i1 if j == 0 else (u - v0) * ((i1 - i0) / (v1 - v0)) + i0
         v0, i0 = v1, i1
     return i0
 

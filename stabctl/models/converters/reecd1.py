@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stabctl._jit.decorators import kernel
+from stabctl._jit.decorators import kernel, njit
 from stabctl.models.blocks import lag
 from stabctl.models.converters import reeca1
 from stabctl.models.converters.reeca1 import RE, _reec_copies
@@ -73,7 +73,7 @@ RD = slots("REECD1Slots", ("Vcmp_filter", "Tblk_timer"), first=int(GB[-1]) + 1)
 MEMORY = (RD.Tblk_timer,)
 
 
-@kernel
+@njit(cache=True)
 def compensated_voltage(flag, Rc, Xc, Kc, v, S):
     """REECD1's compensated voltage at voltage magnitude v with the injected power S = P +
     j Q (pu, system base; the current conj(S)/v in the voltage's frame): |v - (Rc + j Xc)
