@@ -612,12 +612,12 @@ COLS = dict(regc=1, Tg=0.02, gb_Te=0.01, gb_Rsource=0.01, gb_Xsource=0.2)
 Z = 0.01 + 0.2j
 
 
-def regcb1(x_changes=(), V=1.0, P_changes=(), **cols):
+def regcb1(x_changes=(), V=1.0, P_changes=(), v0=1.0, **cols):
     """(derivatives dx, injected S, states x, packed P) of the bus-2 REGCB1 at bus voltage
-    V, its initial states (at 1 pu) changed as given (slot, value) and its packed columns
-    P_changes (name, value)."""
+    V, its initial states (at v0 pu, default 1) changed as given (slot, value) and its
+    packed columns P_changes (name, value)."""
     case = make_case(REGCB_ROW, **{**COLS, **cols})
-    V0 = np.ones(2, complex)
+    V0 = np.full(2, v0, complex)
     cp = conv.converter_params(case, V0, case.buses.pgen + 1j * case.buses.qgen)
     x = conv.initialise(cp, V0)
     for slot, value in x_changes:
@@ -724,6 +724,35 @@ def test_regcb1_output_follows_two_lags_after_a_command_step():
     S = _rk4_injection(P, x, 2e-5, 3000)
     t = 2e-5 * np.arange(1, 3001)
     assert np.max(np.abs(S.real - (0.5 + 0.5 * _lags_step(t, (0.02, 0.01))))) < 1e-12
+
+
+#: InterPSS's REGCB1 test data (Regcb1ModelTest ``data``): Tg .021, Tfltr .018, Iqrmax 70,
+#: Iqrmin -72, Rrpwr .40, Te .012, Imax 1.25, P priority; its fixture's source impedance
+#: j0.04 (the one its published initial Ed 1.008, Eq .02 give)
+INTERPSS = dict(Tg=0.021, Tfltr=0.018, gb_Iqrmax=70.0, gb_Iqrmin=-72.0, gb_Rrpwr=0.4)
+INTERPSS |= dict(gb_Te=0.012, gb_Imax=1.25, gb_PQFlag=1, gb_Rsource=0.0, gb_Xsource=0.04)
+
+
+def test_regcb1_meets_interpss_s_published_test_values():
+    # InterPSS's Regcb1ModelTest (its published asserts, not a run of ours): at 1 pu, P .5,
+    # Q .2 the states Ip .5, Iq .2, Vf 1, Eq .02, Ed 1.008, at rest
+    dx, _, x, _ = regcb1(qfrac=2.0, **INTERPSS)
+    want = {RG.Ip: 0.5, RG.Iq: 0.2, RG.V_filter: 1.0, GB.Eq: 0.02, GB.Ed: 1.008}
+    assert all(x[slot, 0] == pytest.approx(v, abs=1e-12) for slot, v in want.items())
+    assert np.max(np.abs(dx)) < 1e-12
+    # at 0.8 pu, P .4, Q 0: Ip .5 (RateFlag 0) or the power .4 (RateFlag 1); one 1 ms step
+    # toward Ipcmd 1 on the rate .4 pu/s: .5004, .4004
+    for flag, ip in ((0, 0.5004), (1, 0.4004)):
+        cols = dict(INTERPSS, gb_RateFlag=flag, pfrac=0.8, qfrac=0.0)
+        dx, _, x, _ = regcb1(V=0.8, v0=0.8, P_changes=[("IPCMD0", 1.0)], **cols)
+        assert x[RG.Ip, 0] + 1e-3 * dx[RG.Ip, 0] == pytest.approx(ip, abs=1e-12)
+    # "unrestricted" (Tg .005, rates 1000, Te 0, Imax 1.25) settled at Ipcmd 2, Iqcmd 1
+    # (Iq -1): P priority 1.25, 0; Q priority .75, -1 (InterPSS's currents; here the
+    # output currents of the lagged 2, -1)
+    free = dict(INTERPSS, Tg=0.005, gb_Iqrmax=1e3, gb_Iqrmin=-1e3, gb_Rrpwr=1e3, gb_Te=0.0)
+    for pq, want in ((1, 1.25 + 0.0j), (0, 0.75 - 1.0j)):
+        _, S_, _, _ = regcb1([(RG.Ip, 2.0), (RG.Iq, -1.0)], **dict(free, gb_PQFlag=pq))
+        assert S_ == pytest.approx(want, abs=1e-12)
 
 
 @pytest.mark.parametrize(
