@@ -796,12 +796,13 @@ def _vcmp(v, S, Rc, Xc):
 
 def test_reecd1_starts_at_rest_with_its_compensated_voltage_filter():
     # VCMPFLAG 1, Xc 0.05: Vcmp0 = |1 - j0.05 (0.5 - j0.1)|; the voltage loop (QFLAG 1,
-    # VFLAG 0) at rest with Vbias (Vref1) there
+    # VFLAG 0) at rest with Vbias 1.02: its Q reference the offset Vcmp0 - Vbias
     vc0 = _vcmp(1.0, 0.5 + 0.1j, 0.0, 0.05)
-    cols = dict(rd_VCMPFLAG=1, rd_Xc=0.05, rd_Tr1=0.02, QFLAG=1, Vref1=vc0)
+    cols = dict(rd_VCMPFLAG=1, rd_Xc=0.05, rd_Tr1=0.02, QFLAG=1, Vref1=1.02)
     dx, S_, x, cp = reecd1(**cols)
     assert x[RD.Vcmp_filter, 0] == pytest.approx(vc0, abs=1e-15) and 0.99 < vc0 < 1.0
     assert S_ == 0.5 + 0.1j and np.max(np.abs(dx)) < 1e-12
+    assert cp.Qref[0] == pytest.approx(vc0 - 1.02, abs=1e-15)
     assert (cp.nVDL1[0], cp.nVDL2[0]) == (4.0, 4.0)  # REECA1's four points, 5-10 unused
 
 
@@ -818,6 +819,20 @@ def test_reecd1_voltage_loop_compares_the_compensated_voltage():
     cols = dict(rd_Kc=0.1, QFLAG=1, Vref1=1.0 + 0.1 * 0.1, Kvi=10.0, Vdip=0.5)
     dx, S_, _, _ = reecd1(V=0.95, **cols)
     assert dx[S["PIV"], 0] == pytest.approx(10.0 * (1.01 - 0.95 - 0.1 * S_.imag), rel=1e-12)
+
+
+def test_reecd1_q_pi_output_is_the_voltage_reference_of_the_v_pi():
+    # QFLAG 1, VFLAG 1 (PSS/E's diagram): the Q PI (Kqp 0) starts at Vc0 = |1 - j0.05 (0.5
+    # - j0.1)|, inside [VMIN 0.9, VMAX 1.1], at rest; at 0.95 pu the V PI's input is Vc0 -
+    # Vc, the Q PI's Qref - Qe (Qref Q0 = 0.1)
+    vc0 = _vcmp(1.0, 0.5 + 0.1j, 0.0, 0.05)
+    cols = dict(rd_VCMPFLAG=1, rd_Xc=0.05, QFLAG=1, VFLAG=1, VMIN=0.9, VMAX=1.1, Kqp=0.0)
+    dx, _, x, _ = reecd1(**cols, Kqi=2.0, Kvi=10.0, Vdip=0.5)
+    assert x[S["PIQ"], 0] == pytest.approx(vc0, abs=1e-15) and np.max(np.abs(dx)) < 1e-12
+    dx, S_, _, _ = reecd1(V=0.95, **cols, Kqi=2.0, Kvi=10.0, Vdip=0.5)
+    vc = _vcmp(0.95, S_, 0.0, 0.05)
+    assert dx[S["PIV"], 0] == pytest.approx(10.0 * (vc0 - vc), rel=1e-12)
+    assert dx[S["PIQ"], 0] == pytest.approx(2.0 * (0.1 - S_.imag), rel=1e-12)
 
 
 def test_reecd1_ten_point_curve_ends_at_its_first_point_not_rising():

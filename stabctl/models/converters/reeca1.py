@@ -85,9 +85,10 @@ MEMORY = tuple(range(int(RE.Iqinj_timer), int(RE.Ipcmd_last) + 1))
 def services(vals: dict, reec, P0, Q0, v0, Ipcmd0, vc0) -> dict[str, np.ndarray]:
     """REECA1's and REECB1's initial services (ANDES reeca1.py, reecb1.py ConstServices;
     `ConverterParams`) from the system-base fields ``vals``, for the rows with an
-    electrical control ``reec`` (0 elsewhere); a REECD1's the same at the voltage vc0 its
-    voltage control compares (`reecd1.initial_voltage`; |V0| of the others), with the
-    point counts nVDL1, nVDL2 of its ten-point curves (`_table_points`)."""
+    electrical control ``reec`` (0 elsewhere); a REECD1's the same but its Q reference
+    (Q0, or with QFLAG 1 and VFLAG 0 vc0 - Vbias, vc0 the voltage its voltage control
+    compares, `reecd1.initial_voltage`; |V0| of the others) and the point counts nVDL1,
+    nVDL2 of its ten-point curves (`_table_points`)."""
 
     def rising(a: str, b: str):
         pts = [vals[f"{c}{j}"] for c in (a, b) for j in (1, 2, 3)]
@@ -99,6 +100,10 @@ def services(vals: dict, reec, P0, Q0, v0, Ipcmd0, vc0) -> dict[str, np.ndarray]
     vp0 = np.where(v0 <= 0.01, 0.01, v0)
     qref0 = np.where(vals["QFLAG"] == 1, vc0 - vals["Vref1"], -Q0 / v0 * vp0)
     qref0 = np.where(reec == REECB1, -Q0, qref0)
+    # REECD1 (PSS/E's diagram): Q0 the Q PI's reference, or with QFLAG 1, VFLAG 0 the
+    # offset Vc0 - Vbias that puts Vsel = Vbias + Qref at its compensated voltage vc0
+    offset = (vals["QFLAG"] == 1) & (vals["VFLAG"] == 0)
+    qref0 = np.where(reec == REECD1, np.where(offset, vals["Vref1"] - vc0, -Q0), qref0)
     with np.errstate(divide="ignore", invalid="ignore"):
         tanpf = np.where(P0 != 0, Q0 / np.where(P0 != 0, P0, 1.0), 0.0)
     on = {
@@ -357,7 +362,9 @@ def control(P, x, k, v, S, ref, wg, vc, dx):
         u = P[k, C.QFLAG] * clip(vflag * piq, lo, hi)
     else:
         Vsel = clip(P[k, C.VREF1] + PFsel if vflag == 0.0 else piq, lo, hi)
-        u = P[k, C.QFLAG] * (Vsel - vc * (1.0 - vflag))
+        # ANDES's REECA1 compares no voltage with VFLAG 1; PSS/E's REECD1 always does
+        seen = 1.0 if P[k, C.REEC] == REECD1 else 1.0 - vflag
+        u = P[k, C.QFLAG] * (Vsel - vc * seen)
     s4 = x[RE.Iq_filter, k]
     dx[RE.Iq_filter, k] = 0.0 if frz else (PFsel / vp - s4) / P[k, C.TIQ]
     Iqinj = _iq_injection(P, k, vt, frz, extended)

@@ -4,7 +4,9 @@ control kernel (docs/ibr.md 15).
 
 REEC_D is REEC_A (:mod:`.reeca1`, whose columns, blocks and kernel it runs) with: its
 voltage control comparing the compensated voltage |V - (Rc + j Xc) I| (VCMPFLAG 1) or |V|
-+ Kc Q (VCMPFLAG 0), filtered through Tr1, where REEC_A compares the filtered voltage;
++ Kc Q (VCMPFLAG 0), filtered through Tr1, where REEC_A compares the filtered voltage,
+and comparing it with VFLAG 1 too (the Q PI's output its voltage reference, PSS/E's
+diagram; ANDES's REEC_A feeds that output to the V PI alone);
 ten-point voltage-dependent current limits VDL1 (Iq) and VDL2 (Ip), each ending at its
 first point whose voltage is 0 or not above the one before (none if all 0: Imax alone);
 the active current range [-Ke Ipmax, Ipmax] (Ke 0 a generator, 1 storage); and blocking:
@@ -100,10 +102,14 @@ def initial_voltage(
 
 def initial(cp: ConverterParams, x: np.ndarray, v: np.ndarray) -> None:
     """REECD1's initial states in x (N_STATES, n_ibr), in place, at the voltage magnitudes
-    v: the compensated voltage filter at its initial value (`initial_voltage`)."""
+    v: the compensated voltage filter at its initial value (`initial_voltage`); with
+    QFLAG and VFLAG 1 the Q PI's integrator there too (its output, the voltage reference,
+    equal to the compensated voltage: the V PI at rest)."""
     vals = {f"rd_{n}": getattr(cp, f"rd_{n}") for n in ("VCMPFLAG", "Rc", "Xc", "Kc")}
     vc0 = initial_voltage(cp.reec, vals, cp.P0, cp.Q0, v)
-    x[RD.Vcmp_filter] = np.where(cp.reec == REECD1, vc0, 0.0)
+    d = cp.reec == REECD1
+    x[RD.Vcmp_filter] = np.where(d, vc0, 0.0)
+    x[RE.PIQ] = np.where(d & (cp.QFLAG == 1) & (cp.VFLAG == 1), vc0, x[RE.PIQ])
 
 
 @kernel
