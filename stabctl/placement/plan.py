@@ -533,6 +533,16 @@ def _set_aside(pl: PlanContext, st: _Rounds, rnd: int, exc: InfeasibleError) -> 
 def _recheck(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw) -> bool:
     """Nothing left to solve for: every contingency checked at the allocation; the most
     binding of those that fail are the next active set.  Returns whether none fails."""
+    if not st.cons:
+        st.mw = np.zeros_like(st.mw)
+        st.verified, st.message = (
+            True,
+            (
+                f"every contingency set aside as infeasible ({', '.join(pl.set_aside)}): "
+                "no storage to place"
+            ),
+        )
+        return True
     st.checks = pl.check(st.cons, st.mw)
     fails = [c for c in st.cons if not st.checks[c.name]["stable_at_check"]]
     if not fails:
