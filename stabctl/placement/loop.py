@@ -29,8 +29,11 @@ penalty merit (Nocedal, Wright, Numerical Optimization, 2nd ed., 2006, sec. 18.5
    verified one, the contingencies it missed first (`_restore`).
 The cheapest allocation that met every target in simulation is returned.  Whenever the
 hard program (no slack) is infeasible, the contingencies it names (`placement.diagnose`)
-are simulated with every site at its bound: still below target there proves the
-infeasibility (`InfeasibleError` naming them).
+are simulated with every site at its bound and, when that misses, with only the sites
+whose rating raises their linearised CCT at their bound (`bound_allocations`: a device
+that lowers a CCT is not forced in); below target at both proves the infeasibility
+(`InfeasibleError` naming them).  So are the contingencies a loop that verified nothing
+never met at any allocation it simulated, so that each gets a verdict.
 """
 
 from __future__ import annotations
@@ -792,7 +795,20 @@ def _prove_never_met(setup: _Setup, cuts, points, checked: set) -> None:
     }
     if never:
         checked.update(never)
-        _raise_if_infeasible(setup, [c for c in cuts if c.contingency in never])
+        best = {
+            c.name: max(((p.ev[c.name]["cct_s"], p.mw) for p in points), key=lambda x: x[0])
+            for c in setup.contingencies
+            if c.name in never
+        }
+        _raise_if_infeasible(
+            setup,
+            [c for c in cuts if c.contingency in never],
+            {
+                n: f"; its best over the {len(points)} allocation(s) the loop simulated "
+                f"{cct:.3f} s at {mw.sum():.1f} MW"
+                for n, (cct, mw) in best.items()
+            },
+        )
 
 
 def bound_allocations(cut, upper) -> list:
@@ -822,11 +838,12 @@ def bound_allocations(cut, upper) -> list:
     return [ub]
 
 
-def _raise_if_infeasible(setup: _Setup, cuts) -> None:
+def _raise_if_infeasible(setup: _Setup, cuts, also: dict | None = None) -> None:
     """Simulate the contingency of every cut at its bound allocations (`bound_allocations`:
     every site at its bound, then only the sites that raise its linearised CCT), the
     latter only when the former misses; InfeasibleError naming the contingencies that miss
-    their target at every one (each CCT simulated once per allocation, `_Setup.bound_ccts`)."""
+    their target at every one (each CCT simulated once per allocation, `_Setup.bound_ccts`;
+    also: name -> text added to its verdict)."""
     by_name = {c.name: c for c in setup.contingencies}
     tried: dict[str, list] = {}
     for cut in cuts:
@@ -846,7 +863,10 @@ def _raise_if_infeasible(setup: _Setup, cuts) -> None:
     ]
     if failing:
         raise InfeasibleError(
-            "infeasible: " + "; ".join(_infeasible_text(c, tried[c.name]) for c in failing),
+            "infeasible: "
+            + "; ".join(
+                _infeasible_text(c, tried[c.name]) + (also or {}).get(c.name, "") for c in failing
+            ),
             [c.name for c in failing],
         )
 
