@@ -13,7 +13,9 @@ them (smallest CCT without storage relative to the requirement, up to `n_active`
 first active set.  Each round solves the verified trust-region loop
 (`stabctl.placement.loop.place`) for the active set, warm-started from the last
 allocation with the evaluations already simulated, then checks every contingency at the
-allocation (one run each) and adds those that fail; it ends when none fails.  The
+allocation (one run each) and adds those that fail; it ends when none fails.  A round
+whose loop verifies no allocation restarts, once per plan, from the least uniform fleet
+meeting the active set (`_uniform_start`).  The
 energies are then sized (`stabctl.placement.energy`) and, when asked, the references
 computed (`stabctl.placement.references`).
 """
