@@ -15,9 +15,9 @@ first active set.  Each round solves the verified trust-region loop
 allocation with the evaluations already simulated, then checks every contingency at the
 allocation (one run each) and adds those that fail; it ends when none fails.  A round
 whose loop verifies no allocation restarts, once per plan, from the least uniform fleet
-meeting the active set (`_uniform_start`).  The
-energies are then sized (`stabctl.placement.energy`) and, when asked, the references
-computed (`stabctl.placement.references`).
+meeting the active set (`_uniform_start`).  The energies are then sized
+(`stabctl.placement.energy`) and, when asked, the references computed
+(`stabctl.placement.references`).
 """
 
 from __future__ import annotations
@@ -546,13 +546,10 @@ def _recheck(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw) -> bool:
     """Nothing left to solve for: every contingency checked at the allocation; the most
     binding of those that fail are the next active set.  Returns whether none fails."""
     if not st.cons:
-        st.mw = np.zeros_like(st.mw)
-        st.verified, st.message = (
-            True,
-            (
-                f"every contingency set aside as infeasible ({', '.join(pl.set_aside)}): "
-                "no storage to place"
-            ),
+        st.mw, st.verified = np.zeros_like(st.mw), True
+        st.message = (
+            f"every contingency set aside as infeasible ({', '.join(pl.set_aside)}): "
+            "no storage to place"
         )
         return True
     st.checks = pl.check(st.cons, st.mw)
@@ -614,10 +611,11 @@ def _uniform_start(pl: PlanContext, st: _Rounds, rnd: int, kw: Study) -> bool:
     """Once per plan, when a round's loop verified no allocation: the least uniform fleet
     meeting the active set (`references.least_pct`, the same % of MVA at every site, by
     its check runs) and the active set's CCTs there; when they meet every target, the
-    next round starts from it (the loop then returns nothing costlier, section 4).  The
-    loop's linearisations can miss an allocation the paper's law needs far from where it
-    starts (WECC-179's 75-77: lower CCTs at every allocation up to 3.6 GW on 15 sites,
-    0.421 s with every site at its bound).  Returns whether the next round starts there."""
+    next round starts from it (the loop then returns nothing costlier, docs/placement.md
+    section 4).  The loop's linearisations can miss an allocation the paper's law needs
+    far from where it starts (WECC-179's 75-77: lower CCTs at every allocation up to 3.6
+    GW on 15 sites, 0.421 s with every site at its bound).  Returns whether the next round
+    starts there."""
     if st.uniform_tried:
         return False
     st.uniform_tried = True
