@@ -292,6 +292,17 @@ def test_infeasible_requirement_names_the_contingency_and_its_load_level():
     )
     assert res.set_aside == ["3-101@110%"] and "load 110 %" in res.infeasible[0]
     assert [c["name"] for c in res.contingencies] == ["3-101"] and res.verified
+    # every contingency set aside: nothing placed, and the message says so (it used to
+    # read "verified on every contingency" with none left)
+    res = plan(
+        "kundur",
+        [LineFault(3, 101)],
+        Requirement(cycles=12),
+        PlanOptions(load_levels=(1.1,), drop_infeasible=True),
+        Study(sites=sites),
+    )
+    assert res.set_aside == ["3-101@110%"] and res.contingencies == []
+    assert res.total_mw == 0 and "every contingency set aside" in res.message
 
 
 def test_cli_place_with_a_clearing_time_requirement_and_bad_input(tmp_path):
