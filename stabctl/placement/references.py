@@ -137,7 +137,7 @@ def least_uniform(pl: PlanContext, cons, failing, kw) -> dict:
     (`CostModel.split`), "verified", "energy" (per site, as `PlanResult.energy`), and the
     energy's half-step figures (`energy_half_step`)}; pct None
     and verified False when even the site bounds fail."""
-    fleet, pct_max = _uniform_fleet(pl)
+    fleet, pct_max = uniform_fleet(pl)
     if not failing:
         zero = np.zeros(len(pl.sites))
         return {
@@ -147,7 +147,7 @@ def least_uniform(pl: PlanContext, cons, failing, kw) -> dict:
             "cost": pl.cost.split(pl.sites, zero, zero),
             "verified": True,
         }
-    pct = _least_pct(pl, failing, fleet, pct_max)
+    pct = least_pct(pl, failing, fleet, pct_max)
     if pct is None:
         pl.say(f"uniform: not met even at {pct_max:g} % of every MVA")
         return {"pct": None, "total_mw": None, "verified": False}
@@ -159,10 +159,22 @@ def least_uniform(pl: PlanContext, cons, failing, kw) -> dict:
     return _uniform_result(pl, cons, pct, fleet(pct), ok, checks)
 
 
-def _uniform_fleet(pl: PlanContext) -> tuple:
-    """(fleet, pct_max): fleet(pct) the MW per site (n_sites,) of pct % of each site's
-    machine MVA, within the site bounds and rounded (`stabctl.placement.loop._rounded`);
-    pct_max the largest % every site bound allows."""
+def uniform_fleet(pl: PlanContext) -> tuple:
+    """The uniform fleets of a plan's candidate sites.
+
+    Parameters
+    ----------
+    pl : PlanContext
+        The plan (its sites and case).
+
+    Returns
+    -------
+    fleet : callable
+        fleet(pct): the MW per site, shape (n_sites,), of pct % of each site's machine
+        MVA, within the site bounds and rounded (`stabctl.placement.loop._rounded`).
+    pct_max : float
+        The largest % every site bound allows (%).
+    """
     mva = _mva(pl)
     upper = np.array([s.max_mw for s in pl.sites])
     return (
@@ -178,10 +190,29 @@ def _stable(pl: PlanContext, which, mw) -> tuple:
     return all(r["stable_at_check"] for r in checks.values()), checks
 
 
-def _least_pct(pl: PlanContext, failing, fleet, pct_max: float) -> float | None:
-    """The least % (rounded up to UNIFORM_RES_PCT) whose fleet makes every contingency of
-    `failing` stable at its required time: doubling from 5 %, then bisection; None when
-    not even pct_max does."""
+def least_pct(pl: PlanContext, failing, fleet, pct_max: float) -> float | None:
+    """The least uniform fleet making contingencies stable at their required time.
+
+    Doubling from 5 %, then bisection to UNIFORM_RES_PCT, on the check runs (one per
+    contingency and %): stability need not be monotonic in the %, so the result is the
+    bisection's, not necessarily the least.
+
+    Parameters
+    ----------
+    pl : PlanContext
+        The plan (its check runs).
+    failing : sequence of Contingency
+        The contingencies to make stable.
+    fleet : callable
+        fleet(pct) -> MW per site (`uniform_fleet`).
+    pct_max : float
+        The largest % tried (%).
+
+    Returns
+    -------
+    float or None
+        The % (rounded up to UNIFORM_RES_PCT); None when not even pct_max does.
+    """
     lo, hi = 0.0, min(5.0, pct_max)
     while not _stable(pl, failing, fleet(hi))[0]:
         if hi >= pct_max:

@@ -292,6 +292,17 @@ def test_infeasible_requirement_names_the_contingency_and_its_load_level():
     )
     assert res.set_aside == ["3-101@110%"] and "load 110 %" in res.infeasible[0]
     assert [c["name"] for c in res.contingencies] == ["3-101"] and res.verified
+    # every contingency set aside: nothing placed, and the message says so (it used to
+    # read "verified on every contingency" with none left)
+    res = plan(
+        "kundur",
+        [LineFault(3, 101)],
+        Requirement(cycles=12),
+        PlanOptions(load_levels=(1.1,), drop_infeasible=True),
+        Study(sites=sites),
+    )
+    assert res.set_aside == ["3-101@110%"] and res.contingencies == []
+    assert res.total_mw == 0 and "every contingency set aside" in res.message
 
 
 def test_cli_place_with_a_clearing_time_requirement_and_bad_input(tmp_path):
@@ -495,3 +506,35 @@ def test_a_missing_sime_slope_falls_back_to_a_cct_difference(monkeypatch):
     assert g.shape == (2,) and g[0] == g[1] > 0
     more = evaluate({**job, "devices": [[110, 3, 138.0]], "gradient": False})
     assert out["cct_s"] + 50.0 * g[0] == pytest.approx(more["cct_s"], abs=1e-12)
+
+
+def test_a_round_whose_loop_verifies_nothing_restarts_from_the_least_uniform_fleet(monkeypatch):
+    """The first round's loop is made to report no verified allocation (as WECC-179's
+    75-77 did, storage lowering its CCT everywhere the loop looked): the plan finds the
+    least uniform fleet meeting the active set by its check runs, starts the next round
+    there, and ends verified with no more MW than that fleet (the loop from a feasible
+    start returns nothing costlier); an independent run cleared at the required time is
+    stable with the plan and unstable without storage."""
+    import stabctl.placement.plan as plan_module
+
+    real, calls = plan_module.place, []
+
+    def first_unverified(*args, **kwargs):
+        res = real(*args, **kwargs)
+        calls.append(kwargs.get("warm", args[4] if len(args) > 4 else None))
+        return res if len(calls) > 1 else replace(res, verified=False, message="forced")
+
+    monkeypatch.setattr(plan_module, "place", first_unverified)
+    fault = LineFault(3, 101)
+    res = plan("kundur", [fault], Requirement(cycles=11), PlanOptions(max_rounds=3))
+    first = res.rounds[0]
+    assert not first["loop_verified"] and first["uniform_start_pct"] > 0
+    assert len(calls) == 2 and res.verified
+    start = np.asarray(calls[1].start)
+    pct = first["uniform_start_pct"]
+    mva = np.array([900.0] * 4)  # Kundur's four machines, 900 MVA each
+    assert start == pytest.approx(np.ceil(pct / 100 * mva * 10 - 1e-6) / 10)
+    assert res.total_mw <= start.sum() + 1e-9
+    t = res.contingencies[0]["required_s"]
+    assert independently_stable("kundur", fault, t, res.allocation())
+    assert not independently_stable("kundur", fault, t, [])
