@@ -520,6 +520,15 @@ def print_placement(case_name, d) -> None:
     )
 
 
+def _plan_verdict(d) -> str:
+    """The plan's label: VERIFIED, NOT verified, or NOTHING TO PLACE when every
+    contingency was set aside as infeasible (a verdict on the contingencies, not a plan
+    verified on them)."""
+    if d["verified"] and d["set_aside"] and not d["n_met"]:
+        return "NOTHING TO PLACE: every contingency set aside as infeasible"
+    return "VERIFIED" if d["verified"] else "NOT verified"
+
+
 def print_plan(case_name, d) -> None:
     """Print the `place` result as text.
 
@@ -538,8 +547,7 @@ def print_plan(case_name, d) -> None:
         f"{_ESD_NAMES[d.get('esd_model', 'ideal')]}): {d['total_mw']:.1f} MW, "
         f"{d['total_mwh']:.2f} MWh at {d['n_sites']} site(s), cost {c['total']:.1f} "
         f"in the --cost-* options' unit (MW {c['mw']:.1f}, MWh {c['mwh']:.1f}, "
-        f"sites {c['site']:.1f}); "
-        f"{'VERIFIED' if d['verified'] else 'NOT verified'} ({d['message']})"
+        f"sites {c['site']:.1f}); {_plan_verdict(d)} ({d['message']})"
     )
     click.echo(
         f"{'bus':>6} {'machine':>8} {'MW':>9} {'MWh':>8} {'absorbed MWh':>13} {'delivered MWh':>14}"
