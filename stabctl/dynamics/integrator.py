@@ -47,9 +47,11 @@ if TYPE_CHECKING:
 class Recording(NamedTuple):
     """Preallocated buffers filled by `integrate` (`recording`): speed, angle, pelect,
     pmech, efd (n_t, n_mac) and V (n_t, n_bus) complex at every grid index (the predictor
-    stage's outputs); the device powers P (n_t, n_dev) pu; per device stats (n_dev, 5) =
+    stage's outputs); the powers the network takes from the devices P (n_t, n_dev) pu
+    (`stabctl.dynamics.switching.delivered`); per device stats (n_dev, 5) =
     (switchings, energy absorbed, energy delivered, highest and lowest stored energy
-    relative to the start, all in pu*s; `stabctl.dynamics.switching.advance`); the
+    relative to the start, all in pu*s, of the power the network takes;
+    `stabctl.dynamics.switching.account`); the
     switching log (rows: time s, device, new mode, relative speed pu; NaN rows unused);
     the converters' injected P + j Q, S_ibr (n_t, n_ibr) complex pu (system base)."""
 
