@@ -865,7 +865,8 @@ def _attach_storage(
 ) -> None:
     """Device powers and per-device figures: switchings, chattering (switchings within
     CHATTER_S of the previous one), energy absorbed and delivered (MJ), highest and lowest
-    stored energy relative to the start (MJ, exact at located switchings: `_advance`),
+    stored energy relative to the start (MJ, exact at located switchings:
+    `stabctl.dynamics.switching.account`), all of the power the network takes (`pesd`),
     peak power actually used (MW); the switching log (time s, device number, new mode,
     relative speed Hz) in res.meta["switchings"].  WECC batteries (their converter rows
     `battery_rows`): the power is the converter's (its P injection, sign changed), the

@@ -47,9 +47,11 @@ if TYPE_CHECKING:
 class Recording(NamedTuple):
     """Preallocated buffers filled by `integrate` (`recording`): speed, angle, pelect,
     pmech, efd (n_t, n_mac) and V (n_t, n_bus) complex at every grid index (the predictor
-    stage's outputs); the device powers P (n_t, n_dev) pu; per device stats (n_dev, 5) =
+    stage's outputs); the powers the network takes from the devices P (n_t, n_dev) pu
+    (`stabctl.dynamics.switching.delivered`); per device stats (n_dev, 5) =
     (switchings, energy absorbed, energy delivered, highest and lowest stored energy
-    relative to the start, all in pu*s; `stabctl.dynamics.switching.advance`); the
+    relative to the start, all in pu*s, of the power the network takes;
+    `stabctl.dynamics.switching.account`); the
     switching log (rows: time s, device, new mode, relative speed pu; NaN rows unused);
     the converters' injected P + j Q, S_ibr (n_t, n_ibr) complex pu (system base)."""
 
@@ -196,14 +198,17 @@ class _Kernel(NamedTuple):
 
 class _Workspace(NamedTuple):
     """Scratch arrays of `integrate`: derivatives at the step start (dx_k) and at the
-    predictor (dx_j), what the devices see at the sub-step start (a) and end (b), and which
-    devices switched in the current step."""
+    predictor (dx_j), what the devices see at the sub-step start (a) and end (b), which
+    devices switched in the current step, and the powers the network takes from the
+    devices at the sub-step start (P_a) and end (P_b) (`stabctl.dynamics.switching.delivered`)."""
 
     dx_k: np.ndarray
     dx_j: np.ndarray
     a: sw.Seen
     b: sw.Seen
     switched: np.ndarray
+    P_a: np.ndarray
+    P_b: np.ndarray
 
 
 class _SplitPoint(NamedTuple):
@@ -223,6 +228,8 @@ def _workspace(x, nd):
         sw.Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)),
         sw.Seen(np.zeros(nd), np.zeros(nd), np.zeros(nd)),
         np.zeros(nd, np.bool_),
+        np.zeros(nd),
+        np.zeros(nd),
     )
 
 
@@ -271,7 +278,8 @@ def _separated(x, nm, opts):
 
 @kernel
 def _record(rec, k, x, out, P):
-    """Store grid index k: angles and speeds of x, the evaluation outputs, device powers."""
+    """Store grid index k: angles and speeds of x, the evaluation outputs, device powers P
+    (those the network takes, `stabctl.dynamics.switching.delivered`)."""
     nm = out.pelect.size
     for i in range(nm):
         rec.angle[k, i] = x[i]
@@ -346,8 +354,8 @@ def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
 def _resume(kn, grid, sa, ds, opts, w, rec, x_a, at):
     """The controller at a split point `at` of the step from grid index at.k (a switching
     or a command, at.rem seconds before t_k+1; `_SplitPoint`) with the state x_a there:
-    commands, switchings, targets, powers, then the derivatives there.  Returns (network
-    solved, derivatives)."""
+    commands, switchings, targets, powers, then the derivatives there and the powers the
+    network takes (w.P_a).  Returns (network solved, derivatives)."""
     k, rem, first_d = at
     t_now = grid.t[k + 1] - rem
     sw.observe(x_a, w.dx_j, kn.p.n_mac, opts, sa, kn.kept.V, w.a)
@@ -359,7 +367,9 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, at):
     sw.powers_now(sa, ds)
     sw.inject(sa, ds.P, kn.kept.S_extra, x_a)
     dx_a = np.empty_like(x_a)
-    return _evaluate(kn, x_a, grid.interval[k], NO_BUS_VOLTAGES, dx_a) >= 0, dx_a
+    ok = _evaluate(kn, x_a, grid.interval[k], NO_BUS_VOLTAGES, dx_a) >= 0
+    sw.delivered(sa, ds.P, kn.kept, w.P_a)
+    return ok, dx_a
 
 
 # -- the step ------------------------------------------------------------------------------
@@ -368,11 +378,11 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, at):
 @kernel(inline="always")
 def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
     """Heun's predictor-corrector over hh from x_a (derivatives dx_a), the devices' powers
-    advanced on a copy of their energy: (network solved, corrected state); dx_j is written
-    with the derivatives at the predictor (network of `stage`)."""
+    advanced (their energy left as it is): (network solved, corrected state); dx_j is
+    written with the derivatives at the predictor (network of `stage`)."""
     xp = x_a + hh * dx_a
     if sa.pmax.size > 0:  # (a call passing the devices' arrays costs even without devices)
-        Pb = sw.advance(sa, ds.P, ds.target, ds.e.copy(), hh, np.zeros((sa.pmax.size, 5)))
+        Pb = sw.powers_after(sa, ds.P, ds.target, ds.e, hh)
         sw.inject(sa, Pb, kn.kept.S_extra, xp)
     if _evaluate(kn, xp, stage, want, dx_j) < 0:
         return False, x_a
@@ -405,15 +415,17 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
             break
         if first_d >= 0:  # re-integrate up to the first switching instant
             hh = theta * rem
-        Pm = sw.advance(sa, ds.P, ds.target, ds.e, hh, rec.stats)
+        Pm = sw.powers_after(sa, ds.P, ds.target, ds.e, hh)
         if first_d >= 0:
             xm = x_a + hh * dx_a
             sw.inject(sa, Pm, kn.kept.S_extra, xm)
             if _evaluate(kn, xm, s, NO_BUS_VOLTAGES, w.dx_j) < 0:
                 return NO_LOAD_FLOW, k, x
             x_a = x_a + 0.5 * hh * (dx_a + w.dx_j)
-        else:  # up to the scheduled command
+        else:  # up to the scheduled command (the predictor drew Pm)
             x_a = x_b
+        sw.delivered(sa, Pm, kn.kept, w.P_b)
+        sw.account(sa, w.P_a, w.P_b, ds.e, hh, rec.stats)
         rem -= hh
         assign(ds.P, Pm)
         ok, dx_a = _resume(kn, grid, sa, ds, opts, w, rec, x_a, _SplitPoint(k, rem, first_d))
@@ -422,8 +434,11 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
         x_b = x_a
         if rem <= 1e-15:
             break
-    if sa.pmax.size > 0 and rem > 1e-15:
-        assign(ds.P, sw.advance(sa, ds.P, ds.target, ds.e, rem, rec.stats))
+    if sa.pmax.size > 0 and rem > 1e-15:  # the predictor drew these powers
+        Pn = sw.powers_after(sa, ds.P, ds.target, ds.e, rem)
+        sw.delivered(sa, Pn, kn.kept, w.P_b)
+        sw.account(sa, w.P_a, w.P_b, ds.e, rem, rec.stats)
+        assign(ds.P, Pn)
     return OK, k, x_b
 
 
@@ -444,17 +459,19 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     w.switched[:] = False
     if sa.pmax.size > 0:
         _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k)
-    _record(rec, k, x, kn.out, ds.P)
+        sw.delivered(sa, ds.P, kn.kept, w.P_a)
+    _record(rec, k, x, kn.out, w.P_a)
     return _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k)
 
 
 @kernel(inline="always")
-def _after_step(kn, sa, ds, opts, rec, health, x, k):
+def _after_step(kn, sa, ds, opts, w, rec, health, x, k):
     """Numerical health and loss of synchronism after the step from k: (status, index)."""
     if not _healthy(x, health.est[k + 1], kn.p.n_mac, health):
         return UNSTABLE_STEP, k
     if opts.stop and _separated(x, kn.p.n_mac, opts):
-        _record(rec, k + 1, x, kn.out, ds.P)
+        sw.delivered(sa, ds.P, kn.kept, w.P_b)
+        _record(rec, k + 1, x, kn.out, w.P_b)
         return SEPARATED, k + 1
     return OK, k
 
@@ -467,10 +484,11 @@ def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
     xc = x.copy()
     sw.inject(sa, ds.P, kn.kept.S_extra, xc)
     _evaluate(kn, xc, grid.interval[k1], BUS_VOLTAGES, w.dx_k)
+    sw.delivered(sa, ds.P, kn.kept, w.P_b)
     assign(kn.kept.V, V_keep)
     assign(kn.kept.held, held_keep)
     kn.held_stage[0] = stage_keep
-    _record(rec, k1, x, kn.out, ds.P)
+    _record(rec, k1, x, kn.out, w.P_b)
 
 
 @njit
@@ -522,13 +540,14 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
     for k in range(k0, min(k1, n - 1)):
         status, k_end, x = _step(kn, grid, sa, c.devices, opts, w, rec, c.health, x, k)
         if status == OK:
-            status, k_end = _after_step(kn, sa, c.devices, opts, rec, c.health, x, k)
+            status, k_end = _after_step(kn, sa, c.devices, opts, w, rec, c.health, x, k)
         if status != OK:
             assign(c.x, x)
             return status, k_end
     assign(c.x, x)
     if k1 >= n - 1:
-        _record(rec, n - 1, x, kn.out, c.devices.P)
+        sw.delivered(sa, c.devices.P, kn.kept, w.P_b)
+        _record(rec, n - 1, x, kn.out, w.P_b)
         return OK, n - 1
     _record_paused(kn, grid, sa, c.devices, rec, w, x, k1)
     return OK, k1

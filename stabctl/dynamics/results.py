@@ -71,8 +71,9 @@ class SimulationResult:
         Storage device numbers (1, 2, ... in the fleet's order); empty (default) without
         storage.
     pesd : ndarray, shape (n_t, n_dev), or None, optional
-        Storage device powers, pu on the system base (+ absorbs); None (default) without
-        storage.
+        Storage device powers, pu on the system base (+ absorbs): the power the network
+        takes (0 while a device's bus is below the 0.5 pu low-voltage switch, whatever its
+        law commands; a WECC battery's converter power); None (default) without storage.
     converters : ndarray of int, shape (n_ibr,), optional
         Converter numbers as in the data (``ibr_con``), the column order of `ibr_p` and
         `ibr_q`; empty (default) without converters.

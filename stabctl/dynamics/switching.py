@@ -2,6 +2,10 @@
 set-points and powers, energy accounting, scheduled commands and the location of bang-bang
 switchings within a step.
 
+What the devices' energies count is the power the network takes (`delivered`): a device
+at a bus below PST's low-voltage switch is dropped by the network solution, and neither
+its recorded power nor its state of charge counts its command there.
+
 Bang-bang devices (paper Table 3): a mode change within a step has its instant located
 (`locate_switching`, `stabctl.storage.control.crossing`) and the step is re-integrated in
 two parts (`stabctl.dynamics.integrator`); each device switches at most once per step.
@@ -17,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from stabctl._jit.decorators import kernel
+from stabctl.network.solution import constant_power_on
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
 
@@ -124,21 +129,47 @@ def powers_now(sa, ds):
 
 
 @kernel
-def advance(sa, P, target, e, hh, stats):
-    """Device powers after hh seconds; energy (SOC, absorbed, delivered) by trapezoid, and
-    the extremes of the SOC relative to its start.  Sub-steps end at every located
-    switching, so for ideal devices (power constant within a sub-step, the SOC linear)
-    these extremes are exact, not sampled at grid points."""
+def powers_after(sa, P, target, e, hh):
+    """Device powers after hh seconds from P following their targets (`device_power`,
+    with the energy content e at the start: e is not changed)."""
     Pn = np.empty_like(P)
     for d in range(P.size):
         Pn[d] = st.device_power(sa, d, target[d], P[d], e[d], hh)
-        e[d] += 0.5 * hh * (P[d] + Pn[d])
-        stats[d, 1] += 0.5 * hh * (max(P[d], 0.0) + max(Pn[d], 0.0))
-        stats[d, 2] += 0.5 * hh * (max(-P[d], 0.0) + max(-Pn[d], 0.0))
+    return Pn
+
+
+@kernel
+def delivered(sa, P, kept, out):
+    """The powers the network takes from the devices (out, n_dev; + absorbs) with their
+    powers P injected and the kept buses `kept` (`stabctl.dynamics.model.KeptBuses`) as the
+    network solution left them: P, except at a bus below PST's low-voltage switch (or held
+    at its impedance model), where the network drops the device's power entirely
+    (`stabctl.network.solution.constant_power_on`): 0.  A WECC battery's power is its
+    converter's (a current drawn at every voltage): P, its plant's reference."""
+    for d in range(P.size):
+        i = sa.pos[d]
+        if sa.xslot[d] >= 0 or constant_power_on(kept.V[i], kept.held[i]):
+            out[d] = P[d]
+        else:
+            out[d] = 0.0
+
+
+@kernel
+def account(sa, Pa, Pb, e, hh, stats):
+    """Energy over a sub-step of hh seconds from the delivered powers Pa at its start and
+    Pb at its end (`delivered`; pu): the energy content e (pu*s) and the energy absorbed
+    and delivered (stats columns 1, 2) by trapezoid, and the extremes of the SOC relative
+    to its start (columns 3, 4).  Sub-steps end at every located switching, so for ideal
+    devices (power constant within a sub-step, the SOC linear) these extremes are exact,
+    not sampled at grid points.  A device dropped by the network at both ends keeps its
+    SOC."""
+    for d in range(Pa.size):
+        e[d] += 0.5 * hh * (Pa[d] + Pb[d])
+        stats[d, 1] += 0.5 * hh * (max(Pa[d], 0.0) + max(Pb[d], 0.0))
+        stats[d, 2] += 0.5 * hh * (max(-Pa[d], 0.0) + max(-Pb[d], 0.0))
         soc = e[d] - sa.e0[d]
         stats[d, 3] = max(stats[d, 3], soc)
         stats[d, 4] = min(stats[d, 4], soc)
-    return Pn
 
 
 @kernel

@@ -254,12 +254,24 @@ def kept_loads(nc: NonConformingLoads) -> np.ndarray:
 
 
 @kernel
+def constant_power_on(V, held):
+    """Whether a kept bus's constant-power and constant-current rows (S_P, S_extra, I0 of
+    `L`) apply at its voltage V (complex pu) and hold flag held (`solve_nc`): above
+    V_SWITCH and not held.  Otherwise PST's low-voltage switch draws the bus's load as the
+    impedance Y_low, and its extra power S_extra (e.g. a storage device's) is dropped
+    entirely, none of it reaching the network (PSTess `nc_load`: below 0.5 pu the
+    constant-impedance equivalents of the initial load replace the constant-power rows,
+    the modulation included)."""
+    return abs(V) > V_SWITCH and not held
+
+
+@kernel
 def _load_currents(V, loads, low, out):
     """Load currents drawn at the kept buses, I_load(V) of `solve_nc` (into out); loads
     (9, n_nc) the rows `L`."""
     for i in range(V.size):
         m = abs(V[i])
-        if m > V_SWITCH and not low[i]:
+        if constant_power_on(V[i], low[i]):
             out[i] = np.conj(loads[L.S_P, i] + loads[L.S_extra, i] + loads[L.I0, i] * m) / np.conj(
                 V[i]
             )
@@ -435,7 +447,7 @@ def _newton_nc(b, Y22, V, loads, low, vmin, max_iter=NEWTON_MAX_ITER):
                 J[n + r, n + c] = Y22[r, c].real
             m = abs(V[r])
             Vc = np.conj(V[r])
-            if m > V_SWITCH and not low[r]:
+            if constant_power_on(V[r], low[r]):
                 A = np.conj(I0[r]) / (2 * m)
                 B = -np.conj(S_P[r] + S_extra[r]) / Vc**2 - np.conj(I0[r]) * m / (2 * Vc**2)
             else:

@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 
 from stabctl.dynamics.driver import CommandFrames, Simulator
-from stabctl.dynamics.events import fault_with_clearing
+from stabctl.dynamics.events import Fault, fault_with_clearing
 from stabctl.errors import InputError
 from stabctl.io import load_case
+from stabctl.network.ybus import build_ybus
 from stabctl.storage.control import BangBangCOI, LinearFeedback, desired_mode, desired_modes
 from stabctl.storage.devices import (
     StorageDevice,
@@ -160,6 +161,42 @@ def test_voltage_gate_idles_devices_near_the_fault(kundur):
     on = (r.t > 1.0) & (r.t < 1.28)
     v10 = r.vmag[on, r.bus(10)]
     assert np.all(v10 < 0.8) and np.all(r.pesd[on, 0] == 0)
+
+
+def _ungated_device_at_bus_10():
+    """G1's device at its HV bus 10 (no load there), bang-bang without the voltage gate, so
+    that it is commanded through a fault at its own bus."""
+    dev = StorageDevice(bus=10, machine=1, pmax_mw=45.0)
+    return StorageFleet((dev,), BangBangCOI(v_gate_pu=0.0))
+
+
+@pytest.mark.parametrize("x", [0.01, 0.03, 0.1])  # bus 10 at 0.24-0.30, 0.49-0.60, 0.76-0.87 pu
+def test_recorded_device_power_is_what_the_network_takes(kundur, x):
+    # Kirchhoff's current law at bus 10, which has no load and no machine: the real power
+    # the network takes there, Re(V conj((Y V)_10)) with Y the bus admittance matrix (the
+    # fault's shunt is a pure reactance), is the device's power, at every recorded point:
+    # below the 0.5 pu switch the network drops the device (0), above it the command.
+    case, sim = kundur
+    Y = build_ybus(case)
+    r = sim.run([Fault(10, 1.0, 1.5, x=x)], t_end=2.5, storage=_ungated_device_at_bus_10())
+    V = r.vmag * np.exp(1j * r.vang)
+    b = r.bus(10)
+    taken = (V[:, b] * np.conj(Y[[b]] @ V.T)[0]).real
+    np.testing.assert_allclose(r.pesd[:, 0], -taken, rtol=0, atol=1e-9)
+    assert np.any(r.pesd[:, 0] != 0.0)  # (the device acts in each run)
+
+
+def test_dropped_device_keeps_its_state_of_charge(kundur):
+    # the fault holds bus 10 at 0.24-0.30 pu, below the 0.5 pu switch, to the end of the
+    # run: the device is commanded to absorb its rating from 1.05 s, the network takes
+    # none of it, so no energy moves (the device is idle, inside its deadband, before)
+    _case, sim = kundur
+    r = sim.run([Fault(10, 1.0, None, x=0.01)], t_end=1.4, storage=_ungated_device_at_bus_10())
+    dev = r.meta["storage"][0]
+    assert [m for _, _, m, _ in r.meta["switchings"]] == [1]
+    assert np.all(r.pesd == 0.0) and dev["peak_power_mw"] == 0.0
+    for key in ("energy_absorbed_mj", "energy_delivered_mj", "soc_high_mj", "soc_low_mj"):
+        assert dev[key] == 0.0
 
 
 def test_energy_limit_stops_absorption_when_full(kundur):

@@ -99,6 +99,7 @@ MODULES = type_modules(
     "degov1",
     "pidgov",
     "ieeeg2",
+    "ieeeg3",
 )
 #: tg_con type -> the module of its equations; -> its state names, in slot order (``S``)
 TYPES, STATE_NAMES = model_types(MODULES, "tg_con")

@@ -14,6 +14,7 @@ from stabctl.models.governors import (
     hygov4,
     ieeeg1,
     ieeeg2,
+    ieeeg3,
     ieesgo,
     pidgov,
     tg,
@@ -52,7 +53,9 @@ def pmech(P, x, k, omega):
         return degov1.pmech(P, x, k, omega)
     if kind == 12 or kind == 13:  # PIDGOV; WPIDHY
         return pidgov.pmech(P, x, k, omega)
-    return ieeeg2.pmech(P, x, k, omega)  # IEEEG2
+    if kind == 14:  # IEEEG2
+        return ieeeg2.pmech(P, x, k, omega)
+    return ieeeg3.pmech(P, x, k, omega)  # IEEEG3
 
 
 @kernel
@@ -86,5 +89,7 @@ def derivatives(P, x, k, omega, pe, dx):
         degov1.derivatives(P, x, k, omega, pe, dx)
     elif kind == 12 or kind == 13:  # PIDGOV; WPIDHY
         pidgov.derivatives(P, x, k, omega, pe, dx)
-    else:  # IEEEG2
+    elif kind == 14:  # IEEEG2
         ieeeg2.derivatives(P, x, k, omega, pe, dx)
+    else:  # IEEEG3
+        ieeeg3.derivatives(P, x, k, omega, pe, dx)
