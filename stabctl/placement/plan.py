@@ -614,8 +614,8 @@ def _uniform_start(pl: PlanContext, st: _Rounds, rnd: int, kw: Study) -> bool:
     next round starts from it (the loop then returns nothing costlier, docs/placement.md
     section 4).  The loop's linearisations can miss an allocation the paper's law needs
     far from where it starts (WECC-179's 75-77: 0.228-0.256 s at every allocation up to
-    3.6 GW on 15 sites, 0.255 s without storage, 0.421 s with every site at its bound).  Returns whether the next round
-    starts there."""
+    3.6 GW on 15 sites, 0.255 s without storage, 0.421 s with every site at its bound).
+    Returns whether the next round starts there."""
     if st.uniform_tried:
         return False
     st.uniform_tried = True
