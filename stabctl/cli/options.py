@@ -247,7 +247,13 @@ def _check_numbers(kwargs) -> None:
             next((o for o in param.opts if o.startswith("--")), None) or param.human_readable_name
         )
         for value in _numbers(kwargs[param.name]):
-            check_number(label, value)
+            if not (label in _INF_MEANS and value == math.inf):
+                check_number(label, value)
+
+
+#: options where inf has a meaning (``--bus-fault``'s T_OFF: never cleared), checked
+#: in place by their command
+_INF_MEANS = {"--bus-fault"}
 
 
 def _numbers(value):

@@ -388,3 +388,45 @@ def test_devices_and_deeply_nested_json_are_refused_by_name(tmp_path):
     with pytest.warns(UserWarning):
         assert set_aside_damaged(records) == [2]
     assert list(read_records(records)) == ["a"]
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (
+            FAULT[:2] + ("--fault", "3.0"),
+            "Invalid value for '--fault': '3.0' is not a valid integer",
+        ),
+        (FAULT[:2] + ("--fault", "bus3"), "'bus3' is not a valid integer"),
+        (("simulate", "kundur", "--nope"), "No such option '--nope'"),
+        (("pmu", "record"), "Missing argument 'HOST:PORT' (see `stabctl pmu record --help`)"),
+        (("bogus",), "No such command 'bogus' (see `stabctl --help`)"),
+    ],
+)
+def test_usage_errors_are_one_error_line(no_simulation, args, needle):
+    """A bus given as 3.0 or by name, an unknown option or command: one `error:` line
+    naming the option and the command's --help, exit 2, as every other bad input (click's
+    own was the usage, a blank line and a capitalised `Error:`)."""
+    assert_error(run(*args), needle)
+
+
+@pytest.mark.parametrize(
+    "times,needle",
+    [
+        ((1, "1e308"), "T_ON and T_OFF must be at most 1000 s"),
+        (("inf", "inf"), "T_ON and T_OFF must be at most 1000 s"),
+        ((1, "-inf"), "--bus-fault -inf: must be a finite number"),
+        (("nan", 2), "--bus-fault nan: must be a finite number"),
+    ],
+)
+def test_bus_fault_times_are_bounded_and_only_t_off_may_be_inf(no_simulation, times, needle):
+    """--bus-fault 3 1 1e308 ran and printed a 309-digit clearing time 'after inf ms';
+    T_OFF inf (never cleared, as its help says) was refused as not finite."""
+    assert_error(run("simulate", "kundur", "--bus-fault", 3, *times, "--tf", 2), needle)
+    res = run("simulate", "kundur", "--bus-fault", "3:nan:0.1", 1, 1.1)
+    assert_error(res, "R and X must be finite numbers >= 0 pu")
+
+
+def test_bus_fault_never_cleared_runs():
+    res = run("simulate", "kundur", "--bus-fault", 3, 1, "inf", "--tf", 1.2)
+    assert res.exit_code == 0 and "3-phase fault at bus 3 at 1 s, never cleared" in res.output
