@@ -641,7 +641,7 @@ def far_end(spec: str, option: str) -> tuple[int, int]:
 STORAGE_SETTINGS = ("esd_model", "deadband_hz", "v_gate", "coi", "hysteresis_hz")
 
 
-def check_storage_given(esd_pct) -> None:
+def check_storage_given(esd_pct, settings: tuple[str, ...] = STORAGE_SETTINGS) -> None:
     """Refuse storage settings given on the command line without --esd-pct: InputError
     naming them (nothing is ignored silently).
 
@@ -649,6 +649,9 @@ def check_storage_given(esd_pct) -> None:
     ----------
     esd_pct : float or None
         The command's --esd-pct.
+    settings : tuple of str, optional
+        The parameter names checked: the storage settings, less those with a meaning of
+        their own in the command (the estimators' ``coi``, the speed they estimate).
 
     Raises
     ------
@@ -660,7 +663,7 @@ def check_storage_given(esd_pct) -> None:
     ctx = click.get_current_context()
     given = [
         "--" + name.replace("_", "-")
-        for name in STORAGE_SETTINGS
+        for name in settings
         if name in ctx.params
         and ctx.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
     ]

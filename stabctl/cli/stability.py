@@ -330,6 +330,7 @@ def sweep_cct(
     check_writable(out_path, "--out")
     case = load_case(case_name)
     ratings = _ratings(esd_pct)
+    check_storage_given(next((p for p in ratings if p is not None), None))
     for p in ratings:
         storage_fleet(case, p)
     faults = read_fault_list(case_name, faults_src)

@@ -430,3 +430,67 @@ def test_bus_fault_times_are_bounded_and_only_t_off_may_be_inf(no_simulation, ti
 def test_bus_fault_never_cleared_runs():
     res = run("simulate", "kundur", "--bus-fault", 3, 1, "inf", "--tf", 1.2)
     assert res.exit_code == 0 and "3-phase fault at bus 3 at 1 s, never cleared" in res.output
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (
+            ("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 101, "--esd-model", "wecc"),
+            "--esd-model given without --esd-pct",
+        ),
+        (
+            (
+                "estimate",
+                "track",
+                "kundur",
+                "--source",
+                "x.c37",
+                "--deadband-hz",
+                0.1,
+                "--out",
+                "o.csv",
+            ),
+            "--deadband-hz given without --esd-pct",
+        ),
+        (
+            (
+                "sweep-cct",
+                "kundur",
+                "--faults",
+                "DEFAULT",
+                "--esd-model",
+                "wecc",
+                "--out",
+                "o.jsonl",
+            ),
+            "--esd-model given without --esd-pct",
+        ),
+        (
+            (
+                "sweep-cct",
+                "kundur",
+                "--faults",
+                "DEFAULT",
+                "--esd-pct",
+                "none",
+                "--v-gate",
+                0.5,
+                "--out",
+                "o.jsonl",
+            ),
+            "--v-gate given without --esd-pct",
+        ),
+    ],
+)
+def test_storage_settings_without_a_rating_are_refused_on_every_command(
+    no_simulation, tmp_path, monkeypatch, args, needle
+):
+    """`estimate rmse --esd-model wecc` and `sweep-cct --esd-model wecc` without a rating
+    ran without storage, the setting ignored (simulate and cct refused it already)."""
+    monkeypatch.chdir(tmp_path)
+    import stabctl.parallel
+
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
+    assert_error(run(*args), needle)
+    assert list(tmp_path.iterdir()) == []
