@@ -187,6 +187,8 @@ _RANGES = {
     "--ambient-tau-s": (0, 3600, False, True, "s"),
     "--ambient-runs": (1, 10000, True, True, ""),
     "--speed": (0, 1000, True, True, "time-stamp s per s"),
+    # a PMU link's longest silence: 0 or below waited for ever or timed out at once
+    "--timeout": (0, 86400, False, True, "s"),
 }
 
 

@@ -90,6 +90,13 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
         (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "5,nan"), "--esd-pct nan"),
         (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "1e6"), "--esd-pct 1e+06"),
         (("screen", "kundur", "--buses", "3,x"), "--buses 'x': not a bus number"),
+        # a PMU link's --timeout 0 waited for ever, a negative one timed out at once
+        (
+            ("pmu", "serve", "kundur", "--fault", 3, "--far-bus", 101, "--timeout", 0),
+            "--timeout 0: must be in (0, 86400] s",
+        ),
+        (("pmu", "control", "kundur", "127.0.0.1:1", "--timeout", -1), "--timeout -1"),
+        (("pmu", "replay", "r.c37", "--timeout", "nan"), "--timeout nan"),
         (
             ("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "nan"),
             "--target-cct-gain nan",
