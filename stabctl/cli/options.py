@@ -94,7 +94,8 @@ def reports_errors(func):
     callable
         The wrapped callback: numeric options are checked first (:func:`check_number`:
         finite, in range); Python warnings raised meanwhile are held back and printed as
-        ``warning:`` lines on stderr on success (on error only the ``error:`` line); an
+        ``warning:`` lines on stderr on success or the command's own exit status (on
+        error only the ``error:`` line); an
         ``OSError`` (a disk full, a file the system refuses) is one ``error:`` line too
         (exit status 2; the outputs are written whole or not at all, and a sweep's
         finished records stay); Ctrl-C prints what was kept (exit status 130), and so does
@@ -122,11 +123,19 @@ def reports_errors(func):
             except KeyboardInterrupt as exc:
                 click.echo(_interrupted(kwargs), err=True)
                 sys.exit(143 if isinstance(exc, Terminated) else 130)
-        for w in caught:
-            click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
+            except SystemExit:  # the command's own status (`compile --check`'s 1)
+                _say(caught)
+                raise
+        _say(caught)
         return out
 
     return wrapper
+
+
+def _say(caught) -> None:
+    """The warnings held back while a command ran, one ``warning:`` line each."""
+    for w in caught:
+        click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
 
 
 # -- numeric options checked at the edge -------------------------------------------------

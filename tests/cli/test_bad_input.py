@@ -501,3 +501,24 @@ def test_storage_settings_without_a_rating_are_refused_on_every_command(
     monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
     assert_error(run(*args), needle)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_warnings_are_said_when_a_command_exits_with_its_own_status():
+    """`compile --check` (exit status 1 on a cold cache) dropped the warning that a
+    world-writable NUMBA_CACHE_DIR was not used: the warnings a command raised are said on
+    its own exit status too, not only on success."""
+    import warnings
+
+    import click
+
+    from stabctl.cli.options import reports_errors
+
+    @click.command()
+    @reports_errors
+    def check():
+        warnings.warn("numba cache: /shared is writable by others", RuntimeWarning, stacklevel=1)
+        raise SystemExit(1)
+
+    res = CliRunner().invoke(check, [])
+    assert res.exit_code == 1
+    assert res.stderr == "warning: numba cache: /shared is writable by others\n"
