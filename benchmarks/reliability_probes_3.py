@@ -46,6 +46,7 @@ from reliability_probes import (
 
 FAULT = "kundur --fault 3 --far-bus 101"
 RMSE = f"estimate rmse {FAULT} --runs 1 --tf 2"
+RMSE_OF = f"estimate rmse {FAULT} --tf 2 --source"  # one stream evaluated, no --runs
 
 
 def simple(cwd: Path) -> list[Probe]:
@@ -470,9 +471,7 @@ def recording_probes(cwd: Path) -> list[Probe]:
             )
         )
         out.append(
-            Probe(
-                "7", f"estimate rmse --source {name}", cli(f"{RMSE} --source {name}"), needle=needle
-            )
+            Probe("7", f"estimate rmse --source {name}", cli(f"{RMSE_OF} {name}"), needle=needle)
         )
     for name in ("dup.c37", "back.c37", "cfg_only.c37"):
         out.append(
@@ -550,19 +549,19 @@ def stream_probes(cwd: Path, head: bytes, body: list) -> list[tuple[Probe, str]]
             "estimate track, frame cut then close",
             body[40][:20],
             lambda a: f"estimate track kundur --source tcp://{a} --until 1.9 --out t.csv",
-            "cut",
+            "middle of a frame",
         ),
         (
             "estimate rmse, server dies mid-stream",
             b"",
-            lambda a: f"{RMSE} --source tcp://{a}",
-            "stopped",
+            lambda a: f"{RMSE_OF} tcp://{a}",
+            "closed the connection",
         ),
         (
             "estimate rmse, frame cut then close",
             body[40][:20],
-            lambda a: f"{RMSE} --source tcp://{a}",
-            "cut",
+            lambda a: f"{RMSE_OF} tcp://{a}",
+            "middle of a frame",
         ),
     ):
         srv, port = _fake_server(head, body[:40], tail)
@@ -589,6 +588,85 @@ def stream_probes(cwd: Path, head: bytes, body: list) -> list[tuple[Probe, str]]
         kept = cwd / "r.c37"
         v = "ok" if kept.exists() and kept.stat().st_size > len(head) else "frames not kept"
     rows.append((p, v))
+    return rows
+
+
+def _slow_server(head: bytes, body: list):
+    """A server that sends CFG-2, then a frame each 0.1 s, and never closes (an endless
+    stream, as far as its client knows)."""
+    srv = socket.create_server(("127.0.0.1", 0))
+    stop = threading.Event()
+
+    def serve():
+        try:
+            conn, _ = srv.accept()
+        except OSError:
+            return
+        with conn:
+            try:
+                conn.recv(1000)
+                conn.sendall(head)
+                conn.recv(1000)
+                for frame in body:
+                    conn.sendall(frame)
+                    time.sleep(0.1)
+                stop.wait(120)
+            except OSError:
+                pass
+
+    threading.Thread(target=serve, daemon=True).start()
+    return srv, srv.getsockname()[1], stop
+
+
+def endless_probes(cwd: Path, head: bytes, body: list) -> list[tuple[Probe, str]]:
+    """SIGTERM of `estimate track` on an endless stream ends it within seconds (exit 143);
+    `pmu control --rate 30` against a 60 frames/s plant is refused."""
+    rows = []
+    srv, port, stop = _slow_server(head, body)
+    p = Probe(
+        "5",
+        "SIGTERM of estimate track on an endless stream",
+        cli(f"estimate track kundur --source tcp://127.0.0.1:{port} --until 100 --out e.csv"),
+        exit=143,
+    )
+    proc = subprocess.Popen(
+        STABCTL + p.args, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    time.sleep(8)
+    t0 = time.monotonic()
+    proc.send_signal(15)
+    try:
+        stdout, stderr = proc.communicate(timeout=20)
+        res = subprocess.CompletedProcess(p.args, proc.returncode, stdout, stderr)
+        v = verdict(p, res, cwd)
+        if v == "ok" and time.monotonic() - t0 > 10:
+            v = f"took {time.monotonic() - t0:.0f} s"
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+        v = "ignored SIGTERM for 20 s"
+    stop.set()
+    srv.close()
+    rows.append((p, v))
+    srv, port = _fake_server(head, body[:40])
+    p = Probe(
+        "7",
+        "pmu control --rate 30 against a 60 fps plant",
+        cli(f"pmu control kundur 127.0.0.1:{port} --esd-pct 5 --rate 30 --timeout 10"),
+        needle="60",
+    )
+    res = run(p.args, cwd, timeout=120)
+    srv.close()
+    rows.append((p, verdict(p, res, cwd)))
+    srv, port = _fake_server(head, body[:40])
+    p = Probe(
+        "2",
+        "pmu control, plant dies mid-stream",
+        cli(f"pmu control kundur 127.0.0.1:{port} --esd-pct 5 --timeout 10"),
+    )
+    res = run(p.args, cwd, timeout=120)
+    srv.close()
+    rows.append((p, verdict(p, res, cwd)))
     return rows
 
 
@@ -805,6 +883,7 @@ def main() -> int:
             if "-v" in sys.argv:
                 print(f"{time.perf_counter() - t0:6.1f} s  {p.what}: {v}", flush=True)
         rows += stream_probes(cwd, head, body)
+        rows += endless_probes(cwd, head, body)
         rows += replay_probes(cwd)
         rows += cache_probes(cwd)
         rows += broken_pipe_probe(cwd)
