@@ -97,6 +97,12 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
         ),
         (("pmu", "control", "kundur", "127.0.0.1:1", "--timeout", -1), "--timeout -1"),
         (("pmu", "replay", "r.c37", "--timeout", "nan"), "--timeout nan"),
+        # the rate was refused without naming the option
+        (
+            ("pmu", "control", "kundur", "127.0.0.1:1", "--esd-pct", 5, "--rate", 7),
+            "--rate 7: must be one of 10, 12, 15, 20, 30, 60, 120 frames/s",
+        ),
+        (("estimate", "kundur", "--fault", 3, "--far-bus", 101, "--rate", 25), "--rate 25"),
         (
             ("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "nan"),
             "--target-cct-gain nan",

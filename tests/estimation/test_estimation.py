@@ -318,7 +318,7 @@ def test_estimate_command_json_and_bad_input():
     bad = CliRunner().invoke(
         main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101", "--rate", "50"]
     )
-    assert bad.exit_code == 2 and bad.stderr.startswith("error: PMU rate must be one of")
+    assert bad.exit_code == 2 and bad.stderr.startswith("error: --rate 50: must be one of")
 
 
 def test_baseline_kf_forecast_does_not_amplify_a_bus_angle_step():
