@@ -291,7 +291,9 @@ def simple(cwd: Path) -> list[Probe]:
     for name in ("empty.json", "adir.json", "deep.json", "deep_obj.json", "text.json", "list.json"):
         add("var", f"simulate case {name}", ["simulate", name, "--tf", "1"], needle=name)
         add("var", f"eig case {name}", ["eig", name], needle=name)
-    for name in ("empty.csv", "adir.csv", "locked.csv", "deep.csv"):
+    # root reads a file of mode 0: the unreadable file is a probe for other users only
+    locked = () if os.geteuid() == 0 else ("locked.csv",)
+    for name in ("empty.csv", "adir.csv", *locked, "deep.csv"):
         add(
             "var",
             f"sweep-cct --faults {name}",
@@ -344,7 +346,7 @@ def simple(cwd: Path) -> list[Probe]:
             needle=name.split("/")[-1],
             no_file="a.json",
         )
-    for name in ("empty.c37", "adir.json", "locked.csv", "/dev/zero"):
+    for name in ("empty.c37", "adir.json", *locked, "/dev/zero"):
         add(
             "7",
             f"estimate track --source {name}",
