@@ -221,11 +221,17 @@ def replay(recording, host, port, allow, speed, timeout):
     Example:
       stabctl pmu replay wecc.c37 --speed 0
     """
+    from stabctl.estimation import c37
     from stabctl.estimation.c37_tcp import Guard, StreamServer
+    from stabctl.estimation.sources import check_order
     from stabctl.io.inputs import input_file
 
     guard = Guard(_allowed(host, allow), timeout)
     path = input_file(recording, "RECORDING")
+    _, data = c37.recorded_frames(path)
+    if not data:
+        raise InputError(f"RECORDING {path}: no data frame (a configuration frame only)")
+    check_order(data, f"RECORDING {path}")
     with StreamServer.of_recording(
         path, host=host, port=port, speed=speed or _INF, guard=guard
     ) as server:
