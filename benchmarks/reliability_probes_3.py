@@ -371,7 +371,7 @@ def simple(cwd: Path) -> list[Probe]:
         ("neg0_t.csv", "bus,far_bus,t_fault\n3,101,-0\n", ""),
         ("circuit0.csv", "bus,far_bus,circuit\n3,101,0\n", "circuit"),
         ("circuit9.csv", "bus,far_bus,circuit\n3,101,9\n", "circuit"),
-        ("header_only.csv", "bus,far_bus\n", "no"),
+        ("header_only.csv", "bus,far_bus\n", "at least one row"),
         ("same_bus.csv", "bus,far_bus\n3,3\n", "3"),
     ):
         write(cwd, name, text)
