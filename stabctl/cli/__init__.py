@@ -36,9 +36,10 @@ class UsageLine(click.ClickException):
     exit_code = 2
 
     def __init__(self, exc: click.UsageError):
-        names, ctx = [], exc.ctx
+        names: list[str] = []
+        ctx = exc.ctx
         while ctx is not None and ctx.parent is not None:
-            names.append(ctx.info_name)
+            names.append(ctx.info_name or "")
             ctx = ctx.parent
         help_ = " ".join(["stabctl", *reversed(names), "--help"])
         text = " ".join(exc.format_message().split()).rstrip(".")
