@@ -522,6 +522,7 @@ def track(
     (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
     tuned to.  A stream that stops before --until or --frames is tracked as far as it came,
     written, and named an error (exit status 2).
+
     \b
     Example:
       stabctl estimate track miniwecc --source wecc.c37 --out tracked.csv
