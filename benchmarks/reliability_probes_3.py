@@ -744,6 +744,64 @@ def replay_probes(cwd: Path) -> list[tuple[Probe, str]]:
     return rows
 
 
+def dask_probe(cwd: Path) -> list[tuple[Probe, str]]:
+    """A Dask scheduler killed mid-sweep: the jobs it never ran are not recorded (as
+    failed or done), the sweep does not exit 0, and the same command run again (here on
+    local workers) runs exactly those."""
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        return []
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    env = dict(os.environ)
+    sched = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+         "--port", str(port), "--no-dashboard"],
+        cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    worker = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_worker", f"tcp://127.0.0.1:{port}",
+         "--nthreads", "1", "--no-dashboard"],
+        cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    args = cli("sweep-cct kundur --faults DEFAULT --esd-pct none,5,10 --tol-ms 0.2 --out d.jsonl")
+    p = Probe("1", "Dask scheduler killed mid-sweep", [*args, "--scheduler",
+              f"tcp://127.0.0.1:{port}"])  # fmt: skip
+    out = cwd / "d.jsonl"
+    try:
+        time.sleep(5)
+        proc = subprocess.Popen(STABCTL + p.args, cwd=cwd, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)  # fmt: skip
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline and proc.poll() is None:
+            if out.exists() and out.read_text().count("\n") >= 1:
+                break
+            time.sleep(0.2)
+        sched.kill()
+        stderr = proc.communicate(timeout=120)[1]
+    finally:
+        for q in (sched, worker):
+            q.kill()
+            q.wait()
+    records = [json.loads(x) for x in out.read_text().splitlines() if x.strip()]
+    if proc.returncode == 0:
+        v = f"exit 0 with {len(records)} of 6 jobs recorded"
+    elif "Traceback" in stderr:
+        (cwd / "dask_stderr.txt").write_text(stderr)
+        v = "traceback: " + stderr.strip().splitlines()[-1][-100:]
+    elif any(r.get("status") != "ok" for r in records):
+        v = "a job it never ran recorded as " + next(
+            r["status"] for r in records if r.get("status") != "ok"
+        )
+    else:
+        again = run([*args, "--workers", "1"], cwd, timeout=600)
+        n = len([x for x in out.read_text().splitlines() if x.strip()])
+        v = "ok" if again.returncode == 0 and n == 6 else f"rerun: exit {again.returncode}, {n}"
+    return [(p, v)]
+
+
 def cache_probes(cwd: Path) -> list[tuple[Probe, str]]:
     """A shared writable kernel cache directory with a planted pickle is not used."""
     shared = cwd / "shared_cache"
@@ -888,6 +946,7 @@ def main() -> int:
         rows += endless_probes(cwd, head, body)
         rows += replay_probes(cwd)
         rows += cache_probes(cwd)
+        rows += dask_probe(cwd)
         rows += broken_pipe_probe(cwd)
     return table(rows)
 
