@@ -363,7 +363,7 @@ def simple(cwd: Path) -> list[Probe]:
     # faults CSV variants
     for name, text, needle in (
         ("nofar.csv", "bus\n3\n", "far_bus"),
-        ("dup_rows.csv", "bus,far_bus\n3,101\n3,101\n", "twice"),
+        ("dup_rows.csv", "bus,far_bus\n3,101\n3,101\n", "line 2 again"),
         ("name.csv", "bus,far_bus\nbus3,101\n", "bus3"),
         ("float_bus.csv", "bus,far_bus\n3.0,101\n", "3.0"),
         ("unknown_bus.csv", "bus,far_bus\n7,8\n", "bus 7"),
@@ -802,6 +802,49 @@ def dask_probe(cwd: Path) -> list[tuple[Probe, str]]:
     return [(p, v)]
 
 
+def plant_probes(cwd: Path) -> list[tuple[Probe, str]]:
+    """`pmu plant` with --allow naming another host: a stranger that connects first and
+    completes the handshake does not get the loop (no data frame reaches it), and the
+    plant ends with the error naming the peer it dropped."""
+    from pyc37.frame import CommandFrame
+
+    p = Probe(
+        "3",
+        "pmu plant: a stranger first gets no frame",
+        cli(f"pmu plant {FAULT} --esd-pct 5 --tf 2 --port 0 --allow 10.9.9.9 --timeout 6"),
+        needle="dropped",
+    )
+    proc = subprocess.Popen(
+        STABCTL + p.args, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        env=dict(os.environ, PYTHONUNBUFFERED="1"),
+    )  # fmt: skip
+    port, seen = _started(proc)
+    extra = "ok"
+    if port is None:
+        proc.kill()
+        proc.wait()
+        return [(p, f"no port printed: {seen[-120:]!r}")]
+    with socket.create_connection(("127.0.0.1", port)) as peer:
+        peer.settimeout(3)
+        try:
+            peer.sendall(CommandFrame(1, "cfg2").convert2bytes())
+            peer.sendall(CommandFrame(1, "start").convert2bytes())
+            got = b""
+            while len(got) < 4 or got[1] & 0x70 != 0:  # skip CFG-2: wait for a data frame
+                chunk = peer.recv(65536)
+                if not chunk:
+                    break
+                got = chunk
+            if got[:1] == b"\xaa" and got[1] & 0x70 == 0:
+                extra = "a stranger got a data frame"
+        except OSError:  # refused: closed or silent
+            pass
+    stdout, stderr = proc.communicate(timeout=60)
+    res = subprocess.CompletedProcess(p.args, proc.returncode, stdout.decode(), stderr.decode())
+    v = verdict(p, res, cwd)
+    return [(p, v if v != "ok" else extra)]
+
+
 def cache_probes(cwd: Path) -> list[tuple[Probe, str]]:
     """A shared writable kernel cache directory with a planted pickle is not used."""
     shared = cwd / "shared_cache"
@@ -946,6 +989,7 @@ def main() -> int:
         rows += endless_probes(cwd, head, body)
         rows += replay_probes(cwd)
         rows += cache_probes(cwd)
+        rows += plant_probes(cwd)
         rows += dask_probe(cwd)
         rows += broken_pipe_probe(cwd)
     return table(rows)
