@@ -54,7 +54,7 @@ def _bus_fault(spec: str, t_on: float, t_off: float):
             "(fault resistance and reactance, pu on the system base)"
         )
     if not (0 <= r < math.inf and 0 <= x < math.inf):
-        raise InputError(f"--bus-fault {spec}: R and X must be finite numbers >= 0 pu")
+        raise InputError(f"--bus-fault {spec}: R and X must be >= 0 pu (finite numbers)")
     if not 0 <= t_on <= t_off:
         raise InputError(f"--bus-fault {spec} {t_on:g} {t_off:g}: need 0 <= T_ON <= T_OFF (s)")
     latest = _RANGES["--t-fault"][1]  # as a line fault's start
