@@ -444,6 +444,11 @@ def main() -> int:
             umask_probe,
         ):
             rows.append(special(cwd))
+    return table(rows)
+
+
+def table(rows) -> int:
+    """Print the probes' verdicts and the ok / short counts; 1 if any probe is short."""
     width = max(len(p.what) for p, _ in rows)
     print(f"{'finding':>7}  {'probe':<{width}}  verdict")
     for p, v in rows:

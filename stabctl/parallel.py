@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import ctypes
 import json
+import logging
 import multiprocessing
 import os
 import re
@@ -735,6 +736,16 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
     from distributed import KilledWorker, as_completed
 
     lost: list[str] = []
+    # distributed logs a traceback of its own when the scheduler goes away; the jobs it
+    # lost are said in one line (SweepIncomplete)
+    dask_logs = [
+        logging.getLogger(name)
+        for name in list(logging.root.manager.loggerDict)
+        if name == "distributed" or name.startswith("distributed.")
+    ]
+    levels = [log.level for log in dask_logs]
+    for log in dask_logs:
+        log.setLevel(logging.CRITICAL)
     try:
         futures = {
             client.submit(
@@ -760,3 +771,5 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
         client.close()
         if cluster is not None:
             cluster.close()
+        for log, lvl in zip(dask_logs, levels, strict=True):
+            log.setLevel(lvl)

@@ -147,6 +147,11 @@ class Table:
             bad = np.flatnonzero(~np.isfinite(arr))
             if bad.size:
                 self._fail(bad[0], name, f"non-finite value {arr[bad[0]]}")
+            bad = np.flatnonzero(np.abs(arr) > LARGEST_VALUE)
+            if bad.size:
+                self._fail(
+                    bad[0], name, f"{arr[bad[0]]:g} is beyond +-{LARGEST_VALUE:g}: no datum is"
+                )
             if name in self.INTEGER:
                 bad = np.flatnonzero(arr != np.round(arr))
                 if bad.size:
@@ -692,6 +697,11 @@ class LoadTable(Table):
 
 #: the block groups a switched shunt may have (``swsh_con`` columns 8-19)
 SWITCHED_GROUPS = 4
+
+#: largest magnitude of any case value: beyond it a datum is no physical quantity (a
+#: machine's H of 1e308 overflowed in the run), and the sentinels real files use (9999,
+#: PST's -1e7 pu fault shunt, bus numbers below 2**31) stay far inside
+LARGEST_VALUE = 1e15
 
 
 @dataclass(frozen=True, eq=False)

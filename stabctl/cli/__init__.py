@@ -19,6 +19,7 @@ from __future__ import annotations
 import logging
 import os
 import sys
+from typing import IO, Any
 
 import click
 
@@ -26,7 +27,40 @@ import click
 _SIMULATING = {"paper", "simulate", "cct", "sweep-cct", "screen", "eig", "place", "estimate", "pmu"}
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class UsageLine(click.ClickException):
+    """A usage error (an option's value of the wrong type, an unknown or missing option)
+    shown as the input errors are: one ``error:`` line naming the option and the command's
+    ``--help``, exit status 2 (click's own shows the usage and a capitalised ``Error:``
+    after a blank line)."""
+
+    exit_code = 2
+
+    def __init__(self, exc: click.UsageError):
+        names: list[str] = []
+        ctx = exc.ctx
+        while ctx is not None and ctx.parent is not None:
+            names.append(ctx.info_name or "")
+            ctx = ctx.parent
+        help_ = " ".join(["stabctl", *reversed(names), "--help"])
+        text = " ".join(exc.format_message().split()).rstrip(".")
+        super().__init__(f"{text} (see `{help_}`)")
+
+    def show(self, file: IO[Any] | None = None) -> None:
+        """Print the one line on stderr."""
+        click.echo(f"error: {self.format_message()}", err=True, file=file)
+
+
+class _Group(click.Group):
+    """The `stabctl` group: its commands' usage errors as one line (`UsageLine`)."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except click.UsageError as exc:
+            raise UsageLine(exc) from None
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="stabctl")
 @click.pass_context
 def main(ctx):

@@ -63,6 +63,7 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limi
     coherent groups, speed mode shape and the ESD bus with the largest residue).
     Under either --conventions the linear model is the same (a point inside every
     limit; docs/conventions.md).
+
     \b
     Examples:
       stabctl eig kundur --report

@@ -14,7 +14,9 @@ import numpy as np
 from stabctl.cli.checks import check_writable, model_settings
 from stabctl.cli.format import closed_loop_lines, estimator_cct_lines, print_estimate, print_json
 from stabctl.cli.options import (
+    STORAGE_SETTINGS,
     _apply,
+    check_storage_given,
     controller,
     esd_model_option,
     fault_options,
@@ -36,6 +38,10 @@ from stabctl.cli.pmu_options import (
     stream_controller,
 )
 from stabctl.errors import InputError
+
+#: the storage settings that mean nothing without --esd-pct here (--coi also picks the
+#: centre of inertia the relative speeds are taken from)
+_STORAGE_NOT_COI = tuple(n for n in STORAGE_SETTINGS if n != "coi")
 
 #: the old mode flags of `estimate CASE`, by the subcommand they select (first wins)
 _LEGACY_FLAGS = (("--cct", "cct"), ("--closed-loop", "closed-loop"))
@@ -225,6 +231,7 @@ def rmse(
     settings = pmu_settings(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )
+    check_storage_given(esd_pct, _STORAGE_NOT_COI)
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     mc = ErrorRuns(
         runs=runs,
@@ -515,6 +522,7 @@ def track(
     (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
     tuned to.  A stream that stops before --until or --frames is tracked as far as it came,
     written, and named an error (exit status 2).
+
     \b
     Example:
       stabctl estimate track miniwecc --source wecc.c37 --out tracked.csv
@@ -532,6 +540,7 @@ def track(
     settings = pmu_settings(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )
+    check_storage_given(esd_pct, _STORAGE_NOT_COI)
     case = load_case(case_name)
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)

@@ -482,10 +482,19 @@ def print_estimate(d) -> None:
             "actions per run (largest |f_i - f_COI|, largest std of f_i - f_COI; mHz)"
         )
         for name, fig in d["false_actions"].items():
-            click.echo(
-                f"  {name:5} {fig['actions']['mean']:8.2f}  "
-                f"({fig['max_rel_mhz']['mean']:.2f}, {fig['std_rel_mhz']['mean']:.2f})"
-            )
+            act, mx, sd = (fig[k]["mean"] for k in ("actions", "max_rel_mhz", "std_rel_mhz"))
+            click.echo(f"  {name:5} {_or_dash(act, '8.2f')}  ({_or_dash(mx)}, {_or_dash(sd)})")
+        if any(f[k]["mean"] is None for f in d["false_actions"].values() for k in f):
+            click.echo("-: no run to take it from (no estimate of every machine at one time)")
+
+
+def _or_dash(value, spec: str = ".2f") -> str:
+    """A figure formatted by spec, or '-' (right-aligned to its width) for None (no run
+    gave it)."""
+    if value is None:
+        width = spec.split(".")[0]
+        return f"{'-':>{width}}" if width else "-"
+    return format(value, spec)
 
 
 def print_placement(case_name, d) -> None:

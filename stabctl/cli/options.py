@@ -94,7 +94,8 @@ def reports_errors(func):
     callable
         The wrapped callback: numeric options are checked first (:func:`check_number`:
         finite, in range); Python warnings raised meanwhile are held back and printed as
-        ``warning:`` lines on stderr on success (on error only the ``error:`` line); an
+        ``warning:`` lines on stderr on success or the command's own exit status (on
+        error only the ``error:`` line); an
         ``OSError`` (a disk full, a file the system refuses) is one ``error:`` line too
         (exit status 2; the outputs are written whole or not at all, and a sweep's
         finished records stay); Ctrl-C prints what was kept (exit status 130), and so does
@@ -122,11 +123,19 @@ def reports_errors(func):
             except KeyboardInterrupt as exc:
                 click.echo(_interrupted(kwargs), err=True)
                 sys.exit(143 if isinstance(exc, Terminated) else 130)
-        for w in caught:
-            click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
+            except SystemExit:  # the command's own status (`compile --check`'s 1)
+                _say(caught)
+                raise
+        _say(caught)
         return out
 
     return wrapper
+
+
+def _say(caught) -> None:
+    """The warnings held back while a command ran, one ``warning:`` line each."""
+    for w in caught:
+        click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
 
 
 # -- numeric options checked at the edge -------------------------------------------------
@@ -187,6 +196,8 @@ _RANGES = {
     "--ambient-tau-s": (0, 3600, False, True, "s"),
     "--ambient-runs": (1, 10000, True, True, ""),
     "--speed": (0, 1000, True, True, "time-stamp s per s"),
+    # a PMU link's longest silence: 0 or below waited for ever or timed out at once
+    "--timeout": (0, 86400, False, True, "s"),
 }
 
 
@@ -247,7 +258,13 @@ def _check_numbers(kwargs) -> None:
             next((o for o in param.opts if o.startswith("--")), None) or param.human_readable_name
         )
         for value in _numbers(kwargs[param.name]):
-            check_number(label, value)
+            if not (label in _INF_MEANS and value == math.inf):
+                check_number(label, value)
+
+
+#: options where inf has a meaning (``--bus-fault``'s T_OFF: never cleared), checked
+#: in place by their command
+_INF_MEANS = {"--bus-fault"}
 
 
 def _numbers(value):
@@ -635,7 +652,7 @@ def far_end(spec: str, option: str) -> tuple[int, int]:
 STORAGE_SETTINGS = ("esd_model", "deadband_hz", "v_gate", "coi", "hysteresis_hz")
 
 
-def check_storage_given(esd_pct) -> None:
+def check_storage_given(esd_pct, settings: tuple[str, ...] = STORAGE_SETTINGS) -> None:
     """Refuse storage settings given on the command line without --esd-pct: InputError
     naming them (nothing is ignored silently).
 
@@ -643,6 +660,9 @@ def check_storage_given(esd_pct) -> None:
     ----------
     esd_pct : float or None
         The command's --esd-pct.
+    settings : tuple of str, optional
+        The parameter names checked: the storage settings, less those with a meaning of
+        their own in the command (the estimators' ``coi``, the speed they estimate).
 
     Raises
     ------
@@ -654,7 +674,7 @@ def check_storage_given(esd_pct) -> None:
     ctx = click.get_current_context()
     given = [
         "--" + name.replace("_", "-")
-        for name in STORAGE_SETTINGS
+        for name in settings
         if name in ctx.params
         and ctx.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
     ]

@@ -215,6 +215,7 @@ def place(
     contingency is then simulated cleared at its required time, those that fail are
     added, and so on. Each device's energy (MWh) is sized from the state of charge
     along the verifying runs and checked by simulation (docs/placement.md).
+
     \b
     Examples:
       stabctl place kundur --faults DEFAULT --target-cct-gain 10

@@ -170,6 +170,7 @@ def serve(
     The frames are those `stabctl estimate rmse` evaluates for the same seed (C37.118.1
     noise, lost frames as absent data).  Exits when the PDC has been sent every frame or
     has closed the connection.
+
     \b
     Example:
       stabctl pmu serve miniwecc --fault 83 --far-bus 33 --tf 60 --port 4712
@@ -217,15 +218,22 @@ def serve(
 def replay(recording, host, port, allow, speed, timeout):
     """Serve RECORDING (a file `pmu record` wrote, or any capture of C37.118.2 frames,
     CFG-2 first) to one PDC, its frames as recorded, paced by their time stamps.
+
     \b
     Example:
       stabctl pmu replay wecc.c37 --speed 0
     """
+    from stabctl.estimation import c37
     from stabctl.estimation.c37_tcp import Guard, StreamServer
+    from stabctl.estimation.sources import check_order
     from stabctl.io.inputs import input_file
 
     guard = Guard(_allowed(host, allow), timeout)
     path = input_file(recording, "RECORDING")
+    _, data = c37.recorded_frames(path)
+    if not data:
+        raise InputError(f"RECORDING {path}: no data frame (a configuration frame only)")
+    check_order(data, f"RECORDING {path}")
     with StreamServer.of_recording(
         path, host=host, port=port, speed=speed or _INF, guard=guard
     ) as server:
@@ -273,6 +281,7 @@ def record(address, out, frames):
     then 'start') and write its CFG-2 and FRAMES data frames to OUT, as received.  A
     stream that stops before FRAMES (the server closes, resets or falls silent) is
     written as far as it came and named an error (exit status 2).
+
     \b
     Example:
       stabctl pmu record 127.0.0.1:4712 --frames 3600 -o wecc.c37
@@ -358,6 +367,7 @@ def plant(
     6).  The run waits for each answer, and at --speed 1 (real time) sends each frame no
     earlier than its time stamp, so a round trip above the latency is a real miss.
     Prints the verdict, the ESD switchings, the false actions and the measured round trips.
+
     \b
     Example:
       stabctl pmu plant miniwecc --fault 83 --far-bus 33 --tf 10 --esd-pct 5 --port 4713
@@ -432,6 +442,7 @@ def control(
     apply the paper's Table 3 law to its relative speeds (forecast over --latency-ms) and
     answer each frame with the ESD modes, until the plant ends the run.  The noise options
     tune the estimator (they are the PMUs' stated accuracy).
+
     \b
     Example:
       stabctl pmu control miniwecc 127.0.0.1:4713 --esd-pct 5 --estimator ekf

@@ -14,6 +14,7 @@ from stabctl.cli.options import (
     tf_option,
 )
 from stabctl.errors import InputError
+from stabctl.estimation.settings import RATES
 from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are the CLI's
 
 RATE = click.option(
@@ -116,7 +117,13 @@ def pmu_settings(
     k_sigma=_PMU.k_sigma,
     window_cycles=_PMU.window_cycles,
 ):
-    """The PMUSettings of the command line's values (its units: %, ms)."""
+    """The PMUSettings of the command line's values (its units: %, ms); InputError
+    naming --rate for a rate C37.118.1 does not list."""
+    if rate not in RATES:
+        raise InputError(
+            f"--rate {rate:g}: must be one of {', '.join(f'{r:g}' for r in RATES)} frames/s "
+            "(C37.118.1 reporting rates at 60 Hz)"
+        )
     return _PMU(
         rate=rate,
         tve=tve_pct / 100,

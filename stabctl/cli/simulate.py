@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import click
 
 from stabctl.cli.checks import OUT_SUFFIXES, PLOT_SUFFIXES, check_suffix
@@ -14,6 +16,7 @@ from stabctl.cli.format import (
     step_text,
 )
 from stabctl.cli.options import (
+    _RANGES,
     TF_AFTER_FAULT_S,
     check_storage_given,
     circuit_option,
@@ -50,10 +53,16 @@ def _bus_fault(spec: str, t_on: float, t_off: float):
             f"--bus-fault {spec} {t_on:g} {t_off:g}: BUS is a bus number or BUS:R:X "
             "(fault resistance and reactance, pu on the system base)"
         )
-    if r < 0 or x < 0:
-        raise InputError(f"--bus-fault {spec}: R and X must be >= 0 pu")
+    if not (0 <= r < math.inf and 0 <= x < math.inf):
+        raise InputError(f"--bus-fault {spec}: R and X must be >= 0 pu (finite numbers)")
     if not 0 <= t_on <= t_off:
         raise InputError(f"--bus-fault {spec} {t_on:g} {t_off:g}: need 0 <= T_ON <= T_OFF (s)")
+    latest = _RANGES["--t-fault"][1]  # as a line fault's start
+    if t_on > latest or latest < t_off < math.inf:
+        raise InputError(
+            f"--bus-fault {spec} {t_on:g} {t_off:g}: T_ON and T_OFF must be at most "
+            f"{latest:g} s (T_OFF inf: never cleared)"
+        )
     clear = None if t_off == float("inf") else t_off
     return Fault(bus=bus, t=t_on, clear_near=clear, r=r, x=x)
 

@@ -126,6 +126,7 @@ def cct(
     The CCT printed is the stable end of the final bracket (conservative).  Its numerical
     error bar: the bracket's ends rerun at half the step (the search continued there if a
     verdict changes); numerical_error_s = abs(CCT(h/2) - CCT(h)) (0: below the tolerance).
+
     \b
     Examples:
       stabctl cct kundur --fault 3 --far-bus 101
@@ -312,6 +313,7 @@ def sweep_cct(
     diverging run). Lines are written as jobs finish, so an interrupted sweep (Ctrl-C)
     keeps them; rerun the same command to finish it. A progress bar goes to stderr.
     Criterion and search as `stabctl cct` (see its --help).
+
     \b
     Examples:
       stabctl sweep-cct kundur --faults DEFAULT --esd-pct none,5,10 --out kundur.jsonl
@@ -330,6 +332,7 @@ def sweep_cct(
     check_writable(out_path, "--out")
     case = load_case(case_name)
     ratings = _ratings(esd_pct)
+    check_storage_given(next((p for p in ratings if p is not None), None))
     for p in ratings:
         storage_fleet(case, p)
     faults = read_fault_list(case_name, faults_src)

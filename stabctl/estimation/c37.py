@@ -286,22 +286,23 @@ def record(path, cfg: StreamConfig, frames) -> int:
     return n
 
 
-def split_frames(data: bytes) -> list[bytes]:
+def split_frames(data: bytes, what: str = "C37.118.2 recording") -> list[bytes]:
     """The frames of a byte string of consecutive C37.118.2 frames (each starts with
-    SYNC 0xAA and gives its FRAMESIZE in bytes 2-3).
+    SYNC 0xAA and gives its FRAMESIZE in bytes 2-3); what: the bytes' source, for
+    messages (a recording's path).
 
     Raises
     ------
     InputError
-        A frame not starting with 0xAA, or cut short, naming its byte offset.
+        A frame not starting with 0xAA, or cut short, naming what and its byte offset.
     """
     out, at = [], 0
     while at < len(data):
         if data[at] != 0xAA or at + 4 > len(data):
-            raise InputError(f"C37.118.2 recording: no frame SYNC at byte {at}")
+            raise InputError(f"{what}: no frame SYNC at byte {at} (not a C37.118.2 recording)")
         size = int.from_bytes(data[at + 2 : at + 4], "big")
         if size < 16 or at + size > len(data):
-            raise InputError(f"C37.118.2 recording: frame at byte {at} cut short")
+            raise InputError(f"{what}: frame at byte {at} cut short")
         out.append(data[at : at + size])
         at += size
     return out
@@ -322,7 +323,7 @@ def recorded_frames(path) -> tuple:
         An empty file, a first frame that is not a configuration frame, or a broken one
         (`split_frames`).
     """
-    frames = split_frames(Path(path).read_bytes())
+    frames = split_frames(Path(path).read_bytes(), f"C37.118.2 recording {path}")
     if not frames:
         raise InputError(f"{path}: empty C37.118.2 recording")
     return read_config(frames[0], f"{path}: first frame"), frames[1:]

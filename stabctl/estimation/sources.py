@@ -185,7 +185,12 @@ def read_frames(
             for (h, p), g in zip(source.servers, got)
             if isinstance(g, Stream)
         ]
-    received = merge(case, pmus, rate, [(cfg2, data) for cfg2, data, _ in streams])
+    try:
+        received = merge(case, pmus, rate, [(cfg2, data) for cfg2, data, _ in streams])
+    except InputError as exc:
+        raise InputError(f"--source {source}: {exc}") from None
+    if not received.frames:
+        raise InputError(f"--source {source}: no data frame (a configuration frame only)")
     if received.frames and not any(f.valid.any() for f in received.frames):
         raise InputError(
             f"--source {source}: every PMU value of its {len(received.frames)} frames is "
@@ -224,7 +229,7 @@ def merge(case, pmus, rate: float, streams) -> Received:
     owner: dict[str, int] = {}
     parsed = []
     for s, (cfg2, data) in enumerate(streams):
-        _check_order(data, s)
+        check_order(data, f"stream {s + 1}")
         names = cfg2.get_station_name()
         names = [str(x).strip() for x in (names if isinstance(names, list) else [names])]
         for name in names:
@@ -247,15 +252,29 @@ def merge(case, pmus, rate: float, streams) -> Received:
     return _by_time_stamp(len(labels), parsed)
 
 
-def _check_order(data, s: int) -> None:
-    """InputError if stream s's time stamps repeat or go backwards (a frame would replace
-    or be sorted before another without a word)."""
+def check_order(data, what: str) -> None:
+    """Refuse data frames whose time stamps repeat or go backwards (a frame would replace
+    or be sorted before another without a word, or a replay paced by them would wait a
+    negative time).
+
+    Parameters
+    ----------
+    data : sequence of bytes
+        The data frames, in order.
+    what : str
+        Their source, for messages (``stream 2``, a recording's path).
+
+    Raises
+    ------
+    InputError
+        The first frame whose time stamp repeats or goes back, and how many do.
+    """
     stamps = np.array([round(c37.frame_time(d) * c37.TIME_BASE) for d in data], np.int64)
     if (bad := np.flatnonzero(np.diff(stamps) <= 0)).size:
         k = int(bad[0]) + 1
         how = "repeats" if stamps[k] == stamps[k - 1] else "goes back from"
         raise InputError(
-            f"stream {s + 1}: data frame {k + 1} {how} the time stamp of frame {k} "
+            f"{what}: data frame {k + 1} {how} the time stamp of frame {k} "
             f"({stamps[k - 1] / c37.TIME_BASE:.6f} s, UNIX); {bad.size} such frame(s)"
         )
 

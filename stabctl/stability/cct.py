@@ -939,9 +939,18 @@ def read_faults(path: str | Path) -> list[LineFault]:
     Raises
     ------
     InputError
-        A row or header the table refuses, a value out of range; naming file:line.
+        A row or header the table refuses, a value out of range, a fault listed twice;
+        naming file:line.
     """
-    return [_fault_row(r) for r in read_csv(path, "fault list", *FAULT_COLUMNS)]
+    faults: dict[LineFault, int] = {}
+    for row in read_csv(path, "fault list", *FAULT_COLUMNS):
+        fault = _fault_row(row)
+        if fault in faults:
+            raise InputError(
+                f"{row.where()}: the fault of line {faults[fault]} again (each fault once)"
+            )
+        faults[fault] = row.line
+    return list(faults)
 
 
 def _fault_row(row: CsvRow) -> LineFault:

@@ -260,7 +260,9 @@ def false_actions(
     Returns {estimate: {"actions": summary of the actions per run, "max_rel_mhz": of the
     largest |f_i - f_COI| seen, "std_rel_mhz": of the largest standard deviation of a
     machine's f_i - f_COI over the run}}; "true" uses the simulated speeds (its
-    std_rel_mhz is the ambient spread itself).  Raises InputError without a run.
+    std_rel_mhz is the ambient spread itself); a run in which an estimator estimated
+    nothing (every frame lost) gives it no figure (None in the summary when no run does).
+    Raises InputError without a run.
     """
     if not results:
         raise InputError("need at least one run without fault")
@@ -280,9 +282,14 @@ def false_actions(
         for name, speed in tracks.items():
             rel = relative_speeds(speed, speed, models.inertia, controller.coi)[0]
             mhz = rel * models.f0 * 1e3
+            seen = np.isfinite(mhz).any(axis=0)  # machines with an estimate at some time
+            if not seen.any():  # nothing estimated: no figure, not 0 actions and 0 mHz
+                for values in figs[name].values():
+                    values.append(np.nan)
+                continue
             figs[name]["actions"].append(_count_actions(sa, np.nan_to_num(rel)))
             figs[name]["max_rel_mhz"].append(float(np.nanmax(np.abs(mhz))))
-            figs[name]["std_rel_mhz"].append(float(np.nanstd(mhz, axis=0).max()))
+            figs[name]["std_rel_mhz"].append(float(np.nanstd(mhz[:, seen], axis=0).max()))
     return {name: {k: _summary(v) for k, v in fig.items()} for name, fig in figs.items()}
 
 

@@ -90,6 +90,19 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
         (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "5,nan"), "--esd-pct nan"),
         (("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "1e6"), "--esd-pct 1e+06"),
         (("screen", "kundur", "--buses", "3,x"), "--buses 'x': not a bus number"),
+        # a PMU link's --timeout 0 waited for ever, a negative one timed out at once
+        (
+            ("pmu", "serve", "kundur", "--fault", 3, "--far-bus", 101, "--timeout", 0),
+            "--timeout 0: must be in (0, 86400] s",
+        ),
+        (("pmu", "control", "kundur", "127.0.0.1:1", "--timeout", -1), "--timeout -1"),
+        (("pmu", "replay", "r.c37", "--timeout", "nan"), "--timeout nan"),
+        # the rate was refused without naming the option
+        (
+            ("pmu", "control", "kundur", "127.0.0.1:1", "--esd-pct", 5, "--rate", 7),
+            "--rate 7: must be one of 10, 12, 15, 20, 30, 60, 120 frames/s",
+        ),
+        (("estimate", "kundur", "--fault", 3, "--far-bus", 101, "--rate", 25), "--rate 25"),
         (
             ("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "nan"),
             "--target-cct-gain nan",
@@ -205,6 +218,9 @@ def _set(d, table, field, value, row=0):
         # reported as power-flow non-convergence
         ("buses", "qmin", 99.0, "field 'qmax': generator Q limits: qmax must be >= qmin"),
         ("buses", "vmin", 1.6, "field 'vmax': voltage limits: vmax must be >= vmin"),
+        # H = 1e308 ran, overflowing (numpy's warnings the only word)
+        ("machines", "H", 1e308, "field 'H': 1e+308 is beyond +-1e+15: no datum is"),
+        ("buses", "pload", -1e16, "field 'pload': -1e+16 is beyond +-1e+15"),
     ],
 )
 def test_case_values_out_of_range_of_the_wrong_type_or_order_name_row_and_field(
@@ -388,3 +404,130 @@ def test_devices_and_deeply_nested_json_are_refused_by_name(tmp_path):
     with pytest.warns(UserWarning):
         assert set_aside_damaged(records) == [2]
     assert list(read_records(records)) == ["a"]
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (
+            FAULT[:2] + ("--fault", "3.0"),
+            "Invalid value for '--fault': '3.0' is not a valid integer",
+        ),
+        (FAULT[:2] + ("--fault", "bus3"), "'bus3' is not a valid integer"),
+        (("simulate", "kundur", "--nope"), "No such option '--nope'"),
+        (("pmu", "record"), "Missing argument 'HOST:PORT' (see `stabctl pmu record --help`)"),
+        (("bogus",), "No such command 'bogus' (see `stabctl --help`)"),
+    ],
+)
+def test_usage_errors_are_one_error_line(no_simulation, args, needle):
+    """A bus given as 3.0 or by name, an unknown option or command: one `error:` line
+    naming the option and the command's --help, exit 2, as every other bad input (click's
+    own was the usage, a blank line and a capitalised `Error:`)."""
+    assert_error(run(*args), needle)
+
+
+@pytest.mark.parametrize(
+    "times,needle",
+    [
+        ((1, "1e308"), "T_ON and T_OFF must be at most 1000 s"),
+        (("inf", "inf"), "T_ON and T_OFF must be at most 1000 s"),
+        ((1, "-inf"), "--bus-fault -inf: must be a finite number"),
+        (("nan", 2), "--bus-fault nan: must be a finite number"),
+    ],
+)
+def test_bus_fault_times_are_bounded_and_only_t_off_may_be_inf(no_simulation, times, needle):
+    """--bus-fault 3 1 1e308 ran and printed a 309-digit clearing time 'after inf ms';
+    T_OFF inf (never cleared, as its help says) was refused as not finite."""
+    assert_error(run("simulate", "kundur", "--bus-fault", 3, *times, "--tf", 2), needle)
+    res = run("simulate", "kundur", "--bus-fault", "3:nan:0.1", 1, 1.1)
+    assert_error(res, "R and X must be >= 0 pu (finite numbers)")
+
+
+def test_bus_fault_never_cleared_runs():
+    res = run("simulate", "kundur", "--bus-fault", 3, 1, "inf", "--tf", 1.2)
+    assert res.exit_code == 0 and "3-phase fault at bus 3 at 1 s, never cleared" in res.output
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (
+            ("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 101, "--esd-model", "wecc"),
+            "--esd-model given without --esd-pct",
+        ),
+        (
+            (
+                "estimate",
+                "track",
+                "kundur",
+                "--source",
+                "x.c37",
+                "--deadband-hz",
+                0.1,
+                "--out",
+                "o.csv",
+            ),
+            "--deadband-hz given without --esd-pct",
+        ),
+        (
+            (
+                "sweep-cct",
+                "kundur",
+                "--faults",
+                "DEFAULT",
+                "--esd-model",
+                "wecc",
+                "--out",
+                "o.jsonl",
+            ),
+            "--esd-model given without --esd-pct",
+        ),
+        (
+            (
+                "sweep-cct",
+                "kundur",
+                "--faults",
+                "DEFAULT",
+                "--esd-pct",
+                "none",
+                "--v-gate",
+                0.5,
+                "--out",
+                "o.jsonl",
+            ),
+            "--v-gate given without --esd-pct",
+        ),
+    ],
+)
+def test_storage_settings_without_a_rating_are_refused_on_every_command(
+    no_simulation, tmp_path, monkeypatch, args, needle
+):
+    """`estimate rmse --esd-model wecc` and `sweep-cct --esd-model wecc` without a rating
+    ran without storage, the setting ignored (simulate and cct refused it already)."""
+    monkeypatch.chdir(tmp_path)
+    import stabctl.parallel
+
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
+    assert_error(run(*args), needle)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_warnings_are_said_when_a_command_exits_with_its_own_status():
+    """`compile --check` (exit status 1 on a cold cache) dropped the warning that a
+    world-writable NUMBA_CACHE_DIR was not used: the warnings a command raised are said on
+    its own exit status too, not only on success."""
+    import warnings
+
+    import click
+
+    from stabctl.cli.options import reports_errors
+
+    @click.command()
+    @reports_errors
+    def check():
+        warnings.warn("numba cache: /shared is writable by others", RuntimeWarning, stacklevel=1)
+        raise SystemExit(1)
+
+    res = CliRunner().invoke(check, [])
+    assert res.exit_code == 1
+    assert res.stderr == "warning: numba cache: /shared is writable by others\n"

@@ -202,11 +202,11 @@ def test_estimate_source_refuses_monte_carlo_options(tmp_path):
         (["record", "nonsense", "--frames", "5", "-o", "r.c37"], "expected HOST:PORT"),
         (["record", "127.0.0.1:1", "--frames", "5", "-o", "r.c37"], "no C37.118.2 server"),
         (["replay", "missing.c37"], "RECORDING"),
-        (["replay", "junk.c37"], "no frame SYNC at byte 0"),
+        (["replay", "junk.c37"], "C37.118.2 recording junk.c37: no frame SYNC at byte 0"),
         (["serve", "kundur", "--fault", "3", "--far-bus", "101", "--speed", "-1"], "--speed"),
         (["control", "kundur", "127.0.0.1:1", "--esd-pct", "5"], "no plant at 127.0.0.1:1"),
         (["control", "kundur", "127.0.0.1", "--esd-pct", "5"], "expected HOST:PORT"),
-        (["track", "kundur", "--source", "junk.c37", "--out", "t.csv"], "no frame SYNC"),
+        (["track", "kundur", "--source", "junk.c37", "--out", "t.csv"], "junk.c37: no frame SYNC"),
         (["track", "kundur", "--source", "missing.c37", "--out", "t.csv"], "no such recording"),
         (
             ["track", "kundur", "--source", "tcp://127.0.0.1:1", "--out", "t.csv"],

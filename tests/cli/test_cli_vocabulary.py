@@ -172,3 +172,14 @@ def test_old_estimate_form_goes_to_the_subcommands():
     ):
         res = CliRunner().invoke(main, ["estimate", *args, "--help"])
         assert res.exit_code == 0 and doc in res.output, res.output
+
+
+def test_examples_in_help_keep_their_lines():
+    """An example block (click's ``\\b``) right after a paragraph was rewrapped into it
+    ("...exit status 2).  Example:   stabctl estimate track miniwecc --source ..."): every
+    example line is a line of its own in ``--help``."""
+    for name, _ in _commands():
+        out = CliRunner().invoke(main, [*name.split(), "--help"]).output
+        for line in out.splitlines():
+            assert not re.search(r"\S\s+Examples?:", line), (name, line)
+            assert not re.search(r"Examples?:\s+\S", line), (name, line)

@@ -221,3 +221,9 @@ def test_peers_of_another_protocol_are_named_or_dropped(wecc_stream):
     threading.Thread(target=answer, daemon=True).start()
     with web_server, pytest.raises(InputError, match=r"does not speak C37\.118\.2"):
         receive(*web_server.getsockname()[:2], timeout=10)
+
+
+def test_a_file_that_is_no_recording_is_named():
+    """A CSV given as a recording: the message names the file, not only 'recording'."""
+    with pytest.raises(InputError, match=r"^faults\.csv: no frame SYNC at byte 0"):
+        c37.split_frames(b"bus,far_bus\n", "faults.csv")

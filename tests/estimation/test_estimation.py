@@ -318,7 +318,7 @@ def test_estimate_command_json_and_bad_input():
     bad = CliRunner().invoke(
         main, ["estimate", "kundur", "--fault", "3", "--far-bus", "101", "--rate", "50"]
     )
-    assert bad.exit_code == 2 and bad.stderr.startswith("error: PMU rate must be one of")
+    assert bad.exit_code == 2 and bad.stderr.startswith("error: --rate 50: must be one of")
 
 
 def test_baseline_kf_forecast_does_not_amplify_a_bus_angle_step():
@@ -433,3 +433,20 @@ def test_swing_filter_accelerates_as_the_simulator_under_each_reading():
         )[0]
         gaps.append(np.max(np.abs(acc - dw)))
     assert gaps[0] < 1e-9 and min(gaps[1:]) > 1e-5
+
+
+def test_false_actions_of_an_estimator_that_estimated_nothing_are_no_figure():
+    """--drop 0.999 with runs without fault: no estimator saw every machine at one time,
+    yet each was reported with 0.00 false actions (its NaN speeds read as 0) and the text
+    output then crashed on the None of the spreads; now there is no figure ('-'), the
+    true speeds' figures stay."""
+    res = CliRunner().invoke(
+        main,
+        ["estimate", "rmse", "kundur", "--fault", "3", "--far-bus", "101", "--runs", "1"]
+        + ["--tf", "2", "--ambient-runs", "1", "--ambient-s", "2", "--drop", "0.999"],
+    )
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.splitlines()
+    assert "  ekf          -  (-, -)" in lines and "  raw          -  (-, -)" in lines
+    assert any(line.startswith("  true      0.00  (") for line in lines)
+    assert "-: no run to take it from (no estimate of every machine at one time)" in lines

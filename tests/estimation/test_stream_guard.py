@@ -220,6 +220,31 @@ def test_recordings_whose_time_stamps_repeat_or_go_back_are_refused(
         sources.read_frames(sources.parse_source(str(path)), case, pmus, RATE)
 
 
+def test_replay_refuses_what_a_reader_refuses_and_a_configuration_alone(kundur_stream, tmp_path):
+    """`pmu replay` of a recording with a repeated time stamp served it (paced by stamps
+    that go back) until a reader refused it; one with the CFG-2 alone was tracked as 0
+    frames with exit 0.  Both are refused by name, by `pmu replay` before it listens."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    case, pmus, cfg, cfg2, frames = kundur_stream
+    frames = list(frames)
+    frames[10] = frames[9]
+    dup = tmp_path / "dup.c37"
+    dup.write_bytes(cfg2.convert2bytes() + b"".join(_encoded(cfg, cfg2, frames)))
+    bare = tmp_path / "bare.c37"
+    bare.write_bytes(cfg2.convert2bytes())
+    for path, needle in (
+        (dup, f"RECORDING {dup}: data frame 11 repeats the time stamp of frame 10"),
+        (bare, f"RECORDING {bare}: no data frame (a configuration frame only)"),
+    ):
+        res = CliRunner().invoke(main, ["pmu", "replay", str(path), "--port", "0"])
+        assert res.exit_code == 2 and needle in res.stderr, res.output
+    with pytest.raises(InputError, match=f"--source {bare}: no data frame"):
+        sources.read_frames(sources.parse_source(str(bare)), case, pmus, RATE)
+
+
 def test_an_all_absent_recording_is_refused_and_ends_cut_it(kundur_stream, tmp_path):
     """A recording whose every value is flagged absent (the finding: reported as measured
     0 mHz) is refused; a recording read to an end it does not reach is short."""

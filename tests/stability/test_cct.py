@@ -273,6 +273,11 @@ def test_read_faults(tmp_path):
     p.write_text("from,to\n3,101\n")
     with pytest.raises(InputError, match=r"f\.csv:1: column\(s\) 'from', 'to' unknown"):
         read_faults(p)
+    # a row given twice (1 and 1.0 s the same time) was one 'duplicate job key' of the
+    # sweep, naming neither file nor line
+    p.write_text("bus,far_bus,t_fault\n3,101,1\n13,101,1\n3,101,1.0\n")
+    with pytest.raises(InputError, match=r"f\.csv:4: the fault of line 2 again"):
+        read_faults(p)
 
 
 def test_storage_fleet_none_means_no_storage():
