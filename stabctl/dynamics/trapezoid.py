@@ -15,11 +15,26 @@ limits follow ANDES's AntiWindup (``andes/core/discrete.py``; IEEE 421.5-2016 E.
 the evaluation has set on its limit in this step (the limiter's reach 0,
 `stabctl.models.blocks.nonwindup`) is held there, its residual and its correction zero,
 while its derivative stays zero; held at an iterate after the LOCK-th, it stays held for the
-step (ANDES's ``niter_lock``, against chattering on a limit that moves with the iterate).  A
-state held on a limit at the end of a step starts the next one (in the same network stage)
-with derivative 0 while still driven into it, and a held state's row of the matrix is taken
-0 (`_Step.start`, `_Step.factorise`).  The
-other slots, the memory of discrete logic (REECA1's timers and held values), are written
+step (ANDES's ``niter_lock``, against chattering on a limit that moves with the iterate).
+After the LOCK-th iterate a state the evaluation has clamped at that iterate whose rule
+update x_k + h/2 (f(x_k) + f(x_k+1)) lies past the limit is held on it too, though its
+derivative there points back inside (`_pushed`): the rule's equation has no solution
+within the limits (its residual keeps the sign that pushes the state out), the
+evaluation clamps every Newton correction back onto the limit (a clamp's derivative is
+0, so the iteration cannot move the state) and, its derivative not being 0, the hold
+above does not take it; the step then ends on the limit, as PSS/E applies the limits of
+its states after each step (the rule's update projected onto the limits).  ANDES leaves
+such a state past the limit instead (its AntiWindup frees a state beyond a limit whose
+derivative points inside), where stabctl's evaluation does not let a state be.  Without
+it, ACTIVSg2000's EXAC2 regulators (K_A 1000, T_A 0.05 s) stalled in its first faulted
+step (docs/cli.md) and tests/data/psse/smib_exac2.dyr's in its fifth, until the step was
+halved.  Gated at LOCK (by then a converging iteration is near its step's solution,
+where a clamped state's residual points inside) it is meant to act only where Newton
+would not converge: benchmarks/fingerprint.py's runs and the ANDES comparisons are
+bit-identical with it.  A state held on a limit at the end of a step starts the next one
+(in the same network stage) with derivative 0 while still driven into it, and a held
+state's row of the matrix is taken 0 (`_Step.start`, `_Step.factorise`).  The other
+slots, the memory of discrete logic (REECA1's timers and held values), are written
 by the evaluation at every iterate, as ANDES updates its discrete flags, and advance by
 their derivative at the step's start (x_k+1 = x_k + h f(x_k)): a timer (an event flag
 extended by a time, REECA1's Thld, Thld2) runs down by h in each step and ends at the
@@ -234,6 +249,10 @@ class _Step:
             side[moved] = np.sign(y_in[moved] - y[moved])
             r = y - x - 0.5 * h * (f0 + f_y)
             now = (pegged & (f_y == 0.0))[act]
+            if it > LOCK:
+                # clamped at this iterate with the rule's update beyond the limit: held
+                # there (`_pushed`)
+                now |= _pushed(y_in, y, r)[act]
             held = now | (held & (it > LOCK))
             r[act[held]] = 0.0
             if slow:
@@ -344,6 +363,13 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             )
             _fail(sim, grid, rec, k, wall, limit, msg, NumericalInstabilityError)
     return sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit)
+
+
+def _pushed(y_in, y, r) -> np.ndarray:
+    """The states the evaluation clamped onto a limit at this iterate (y_in before the
+    evaluation, y after it) whose rule residual r = y - x - h/2 (f0 + f(y)) points past
+    that limit: the rule's update x + h/2 (f0 + f(y)) lies beyond it (module docstring)."""
+    return (y != y_in) & (r * (y_in - y) < 0.0)
 
 
 def _separated(sim, x, nm, limit) -> bool:
