@@ -84,8 +84,8 @@ def main():
         nargs="+",
         choices=("heun", "trapezoid"),
         default=["heun", "trapezoid"],
-        help="the rows to run (the trapezoid's take many minutes: its Newton iteration "
-        "stalls in the fault steps, each stall costing a new Jacobian)",
+        help="the rows to run (the trapezoid's take many minutes: from the fault on its "
+        "Newton iteration is slow in most steps, each slow iteration costing a new Jacobian)",
     )
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as work:
