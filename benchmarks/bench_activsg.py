@@ -16,7 +16,7 @@ below).  The trapezoid's own step-halving difference is the 1/60 s row's differe
 the 1/120 s row, printed below the table.
 
 Run (one core, as bench_scale): OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1
-    python benchmarks/bench_activsg.py [--repeat 1] [--methods heun trapezoid]
+    python benchmarks/bench_activsg.py [--repeat 1] [--methods heun trapezoid] [--tf 20]
 """
 
 from __future__ import annotations
@@ -66,12 +66,12 @@ def _difference(sim, res, ref) -> tuple[float, float]:
     return float(da), float(dw)
 
 
-def run(sim, events, method, h, repeat):
-    """(best in-run wall s, result) of `repeat` 20 s runs after a warm-up."""
+def run(sim, events, method, h, repeat, tf=T_END):
+    """(best in-run wall s, result) of `repeat` runs of tf s after a warm-up."""
     sim.run(events, 1.15, h=h, method=method)
     best, res = np.inf, None
     for _ in range(repeat):
-        res = sim.run(events, T_END, h=h, method=method)
+        res = sim.run(events, tf, h=h, method=method)
         best = min(best, res.meta["wall_time_s"])
     return best, res
 
@@ -84,8 +84,14 @@ def main():
         nargs="+",
         choices=("heun", "trapezoid"),
         default=["heun", "trapezoid"],
-        help="the rows to run (the trapezoid's take many minutes: its Newton iteration "
-        "stalls in the fault steps, each stall costing a new Jacobian)",
+        help="the rows to run (the trapezoid's take many minutes: from the fault on its "
+        "Newton iteration is slow in most steps, each slow iteration costing a new Jacobian)",
+    )
+    ap.add_argument(
+        "--tf",
+        type=float,
+        default=T_END,
+        help=f"the runs' end (s; default {T_END:g}): the trapezoid's 20 s rows outlast a session",
     )
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as work:
@@ -93,12 +99,12 @@ def main():
     sim = Simulator(case)
     events = [Fault(BUS, T_FAULT, T_CLEAR, x=X_FAULT)]
     print(
-        f"ACTIVSg2000, fault j{X_FAULT:g} pu at bus {BUS} {T_FAULT}-{T_CLEAR} s, {T_END:g} s run,"
+        f"ACTIVSg2000, fault j{X_FAULT:g} pu at bus {BUS} {T_FAULT}-{T_CLEAR} s, {args.tf:g} s run,"
         f" best of {args.repeat}; default step {sim.default_h * 1e3:.3f} ms ({sim.fastest[1]});"
         f" reference Heun at {REF_STEP * 1e3:.3f} ms; target {TARGET_S} s in-run"
     )
     t = time.perf_counter()
-    ref = sim.run(events, T_END, h=REF_STEP)
+    ref = sim.run(events, args.tf, h=REF_STEP)
     print(f"reference run: {time.perf_counter() - t:.1f} s wall")
     print(
         f"{'method':10} {'step ms':>8} {'wall s':>8} {'vs target':>9} {'d angle rad':>12} "
@@ -110,7 +116,7 @@ def main():
             continue
         step = sim.default_h if h is None else h
         try:
-            wall, res = run(sim, events, method, step, args.repeat)
+            wall, res = run(sim, events, method, step, args.repeat, args.tf)
         except InputError as err:
             print(f"{method:10} {step * 1e3:8.3f}  refused: {err}")
             continue

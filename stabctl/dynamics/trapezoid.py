@@ -10,16 +10,33 @@ solution is a chord Newton iteration on the model's states
 (`stabctl.dynamics.model.active_states`) with the matrix I - h/2 A, A = df/dx by forward
 differences of the same evaluation, factorised once per network stage and again after an
 iteration that is slow to converge (above `SPARSE_ABOVE` states: sparse, its smallest
-entries left out, and kept into the next stage until an iteration is slow). Non-windup
+entries left out, kept into the next stage until an iteration is slow, and the columns of
+the exciters', stabilisers' and governors' states of distinct machines differenced
+together, `_column_groups`). Non-windup
 limits follow ANDES's AntiWindup (``andes/core/discrete.py``; IEEE 421.5-2016 E.5): a state
 the evaluation has set on its limit in this step (the limiter's reach 0,
 `stabctl.models.blocks.nonwindup`) is held there, its residual and its correction zero,
 while its derivative stays zero; held at an iterate after the LOCK-th, it stays held for the
-step (ANDES's ``niter_lock``, against chattering on a limit that moves with the iterate).  A
-state held on a limit at the end of a step starts the next one (in the same network stage)
-with derivative 0 while still driven into it, and a held state's row of the matrix is taken
-0 (`_Step.start`, `_Step.factorise`).  The
-other slots, the memory of discrete logic (REECA1's timers and held values), are written
+step (ANDES's ``niter_lock``, against chattering on a limit that moves with the iterate).
+After the LOCK-th iterate a state the evaluation has clamped at that iterate whose rule
+update x_k + h/2 (f(x_k) + f(x_k+1)) lies past the limit is held on it too, though its
+derivative there points back inside (`_pushed`): the rule's equation has no solution
+within the limits (its residual keeps the sign that pushes the state out), the
+evaluation clamps every Newton correction back onto the limit (a clamp's derivative is
+0, so the iteration cannot move the state) and, its derivative not being 0, the hold
+above does not take it; the step then ends on the limit, as PSS/E applies the limits of
+its states after each step (the rule's update projected onto the limits).  ANDES leaves
+such a state past the limit instead (its AntiWindup frees a state beyond a limit whose
+derivative points inside), where stabctl's evaluation does not let a state be.  Without
+it, ACTIVSg2000's EXAC2 regulators (K_A 1000, T_A 0.05 s) stalled in its first faulted
+step (docs/cli.md) and tests/data/psse/smib_exac2.dyr's in its fifth, until the step was
+halved.  Gated at LOCK (by then a converging iteration is near its step's solution,
+where a clamped state's residual points inside) it is meant to act only where Newton
+would not converge: benchmarks/fingerprint.py's runs and the ANDES comparisons are
+bit-identical with it.  A state held on a limit at the end of a step starts the next one
+(in the same network stage) with derivative 0 while still driven into it, and a held
+state's row of the matrix is taken 0 (`_Step.start`, `_Step.factorise`).  The other
+slots, the memory of discrete logic (REECA1's timers and held values), are written
 by the evaluation at every iterate, as ANDES updates its discrete flags, and advance by
 their derivative at the step's start (x_k+1 = x_k + h f(x_k)): a timer (an event flag
 extended by a time, REECA1's Thld, Thld2) runs down by h in each step and ends at the
@@ -131,17 +148,37 @@ class _Evaluation:
         locks a flag; at the step's start (off) it is V_RELEASE again."""
         self.p.loads[L.V_release] = np.inf if on else V_RELEASE
 
-    def jacobian(self, x, f_x, stage, act) -> np.ndarray:
+    def jacobian(self, x, f_x, stage, act, groups=()) -> np.ndarray:
         """df/dx over the states act (n_act, n_act) at x (derivatives f_x) by forward
-        differences of the evaluation, the kept buses' memory untouched."""
-        A = np.empty((act.size, act.size))
-        for c, q in enumerate(act):
+        differences of the evaluation, the kept buses' memory untouched.  groups
+        (`_column_groups`): columns (over act) differenced together in one evaluation,
+        each with the rows (over act) it can reach; the other columns one at a time."""
+        A = np.zeros((act.size, act.size))
+        alone = np.ones(act.size, bool)
+        for cols, rows in groups:
+            q = act[cols]
+            d = REL_STEP * np.maximum(1.0, np.abs(x[q]))
+            xp = x.copy()
+            xp[q] += d
+            df = self._difference(xp, f_x, stage, act)
+            for c, r, dc in zip(cols, rows, d, strict=True):
+                A[r, c] = df[r] / dc
+            alone[cols] = False
+        for c in np.flatnonzero(alone):
+            q = act[c]
             d = REL_STEP * max(1.0, abs(x[q]))
             xp = x.copy()
             xp[q] += d
-            kept = KeptBuses(self.kept.V.copy(), self.kept.held.copy(), self.kept.S_extra)
-            A[:, c] = (self(xp, stage, kept=kept)[act] - f_x[act]) / d
+            A[:, c] = self._difference(xp, f_x, stage, act) / d
         return A
+
+    def _difference(self, xp, f_x, stage, act) -> np.ndarray:
+        """f(xp) - f_x over act, with a copy of the kept buses' memory."""
+        return self(xp, stage, kept=self.kept_copy())[act] - f_x[act]
+
+    def kept_copy(self) -> KeptBuses:
+        """A copy of the kept buses' memory (the extra injections shared)."""
+        return KeptBuses(self.kept.V.copy(), self.kept.held.copy(), self.kept.S_extra)
 
 
 def _record(rec, k, x, out, nm) -> None:
@@ -157,9 +194,11 @@ def _record(rec, k, x, out, nm) -> None:
 class _Step:
     """The chord Newton iteration of one trapezoidal step (module docstring)."""
 
-    def __init__(self, f: _Evaluation, active: np.ndarray):
+    def __init__(self, f: _Evaluation, active: np.ndarray, groups=()):
         self.f, self.act, self.rest = f, np.flatnonzero(active), np.flatnonzero(~active)
         self.sparse = self.act.size > SPARSE_ABOVE
+        # the Jacobian's column groups (`_column_groups`), on the sparse path only
+        self.groups = groups if self.sparse else ()
         self.key: tuple = ()  # (stage, step) the factorised matrix belongs to (`_key`)
         self.lu: Any = None  # solves with the factorised matrix (`factorise`)
         # the states held on a limit at the last iterate of the last step (derivative 0
@@ -195,8 +234,16 @@ class _Step:
         residual set to 0).  A forward difference there crosses the limit's kink: REGCA1's
         Ip held on its LVPL is freed by a perturbation of the filtered voltage the LVPL
         follows, a derivative of 75 pu/s over 1e-7 (kundur_wtdta1: the next iterate's Ip
-        at -700 pu and the step halved twice)."""
-        A = self.f.jacobian(x, f_x, stage, self.act)
+        at -700 pu and the step halved twice).  Sparse, A is differenced against one more
+        evaluation at x as the evaluation has clamped it, not against f_x: a state the
+        evaluation clamped onto a limit, its derivative pointing inside, keeps in f_x the
+        derivative of the iterate before the clamp, and its row of A was that gap over
+        the difference step in every column (ACTIVSg2000's first faulted step: EXAC2 V_A
+        past VAMAX by 5.4 pu, T_A 0.05 s: 1e9 1/s), a matrix that slowed the iteration it
+        was formed for."""
+        if self.sparse:  # the derivatives at x as the evaluation has clamped it
+            f_x = self.f(x.copy(), stage, kept=self.f.kept_copy())
+        A = self.f.jacobian(x, f_x, stage, self.act, self.groups)
         if held is not None:
             A[held, :] = 0.0
         M = np.eye(self.act.size) - 0.5 * h * A
@@ -234,6 +281,10 @@ class _Step:
             side[moved] = np.sign(y_in[moved] - y[moved])
             r = y - x - 0.5 * h * (f0 + f_y)
             now = (pegged & (f_y == 0.0))[act]
+            if it > LOCK:
+                # clamped at this iterate with the rule's update beyond the limit: held
+                # there (`_pushed`)
+                now |= _pushed(y_in, y, r)[act]
             held = now | (held & (it > LOCK))
             r[act[held]] = 0.0
             if slow:
@@ -305,7 +356,8 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
     """
     wall = time.perf_counter()
     f, nm, n_t = _Evaluation(m, nets), m.mp.n, grid.t.size
-    step = _Step(f, active_states(m))
+    active = active_states(m)
+    step = _Step(f, active, _column_groups(m, np.flatnonzero(active)))
     rec = recording(n_t, nm, m.case.n_bus, 0, m.cp.n)
     x = m.x0.copy()
     s_step = -1  # the network stage of the last step taken (`_Step.start`)
@@ -344,6 +396,51 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             )
             _fail(sim, grid, rec, k, wall, limit, msg, NumericalInstabilityError)
     return sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit)
+
+
+def _pushed(y_in, y, r) -> np.ndarray:
+    """The states the evaluation clamped onto a limit at this iterate (y_in before the
+    evaluation, y after it) whose rule residual r = y - x - h/2 (f0 + f(y)) points past
+    that limit: the rule's update x + h/2 (f0 + f(y)) lies beyond it (module docstring)."""
+    return (y != y_in) & (r * (y_in - y) < 0.0)
+
+
+#: the state blocks whose states reach only their machine's own states and controls: an
+#: exciter's, stabiliser's or governor's state enters the derivatives of its own states,
+#: of the other controls of its machine (the field voltage, the stabilising signal, the
+#: mechanical power) and of the machine's, never the network's currents
+LOCAL_BLOCKS = ("exc", "pss", "tg")
+
+
+def _column_groups(m: DynamicModel, act: np.ndarray) -> list[tuple[np.ndarray, list]]:
+    """The Jacobian's column groups: per slot of a `LOCAL_BLOCKS` block, its active states
+    of distinct machines, each with the rows it can reach (over act: its machine's states
+    and the states of every control of that machine, its shaft's).  Their difference
+    quotients have disjoint rows, so one evaluation gives a group's columns, the same
+    numbers as one evaluation per column: the network's solution, which couples the
+    machines, does not move (bit for bit in every matrix of Kundur's fault run forced
+    sparse, tests/dynamics/test_trapezoid.py, and in ACTIVSg2000's first three).
+    ACTIVSg2000: 4463 of its 6467 columns in 19 groups, its Jacobian in 2.3 s instead of
+    4.9 s."""
+    L, n_x = m.layout, m.layout.size
+    owner = np.full(n_x, -1)
+    L.view(owner, "mac")[:] = np.arange(m.mp.n)
+    for block, p in zip((*LOCAL_BLOCKS, "shaft"), (m.ep, m.pp, m.gp, m.tp), strict=True):
+        L.view(owner, block)[:] = p.mac  # a shaft's: its machine's (the governor's torque)
+    pos = np.full(n_x, -1)
+    pos[act] = np.arange(act.size)
+    on = owner[act]
+    reach = {i: np.flatnonzero(on == i) for i in np.unique(on[on >= 0])}
+    groups = []
+    for block in LOCAL_BLOCKS:
+        for slot in L.view(np.arange(n_x), block):
+            cols = pos[slot][pos[slot] >= 0]
+            mine = owner[act[cols]]
+            while cols.size:  # a machine with two controls of a block: its own group
+                _, first = np.unique(mine, return_index=True)
+                groups.append((cols[first], [reach[i] for i in mine[first]]))
+                cols, mine = np.delete(cols, first), np.delete(mine, first)
+    return groups
 
 
 def _separated(sim, x, nm, limit) -> bool:
