@@ -363,7 +363,7 @@ def simple(cwd: Path) -> list[Probe]:
     # faults CSV variants
     for name, text, needle in (
         ("nofar.csv", "bus\n3\n", "far_bus"),
-        ("dup_rows.csv", "bus,far_bus\n3,101\n3,101\n", "line 2 again"),
+        ("dup_rows.csv", "bus,far_bus\n3,101\n3,101\n", "listed twice (first at line 2"),
         ("name.csv", "bus,far_bus\nbus3,101\n", "bus3"),
         ("float_bus.csv", "bus,far_bus\n3.0,101\n", "3.0"),
         ("unknown_bus.csv", "bus,far_bus\n7,8\n", "bus 7"),

@@ -946,8 +946,10 @@ def read_faults(path: str | Path) -> list[LineFault]:
     for row in read_csv(path, "fault list", *FAULT_COLUMNS):
         fault = _fault_row(row)
         if fault in faults:
+            name = f"{fault.bus}" if fault.far_bus is None else f"{fault.bus}-{fault.far_bus}"
             raise InputError(
-                f"{row.where()}: the fault of line {faults[fault]} again (each fault once)"
+                f"{row.where()}: fault {name} listed twice (first at line {faults[fault]}; "
+                "each fault once)"
             )
         faults[fault] = row.line
     return list(faults)

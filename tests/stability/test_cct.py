@@ -276,7 +276,7 @@ def test_read_faults(tmp_path):
     # a row given twice (1 and 1.0 s the same time) was one 'duplicate job key' of the
     # sweep, naming neither file nor line
     p.write_text("bus,far_bus,t_fault\n3,101,1\n13,101,1\n3,101,1.0\n")
-    with pytest.raises(InputError, match=r"f\.csv:4: the fault of line 2 again"):
+    with pytest.raises(InputError, match=r"f\.csv:4: fault 3-101 listed twice \(first at line 2"):
         read_faults(p)
 
 
