@@ -31,3 +31,27 @@ def settled(P, x0, omega: float, t: float):
 
     sol = solve_ivp(f, (0, t), x0.ravel(), method="LSODA", rtol=1e-10, atol=1e-12)
     return sol.y[:, -1].reshape(x0.shape)
+
+
+def frequency_response(P, x0, freqs_hz):
+    """The governor's response of P_m to the speed at each frequency (Hz) and its
+    steady-state gain: its derivatives and output linearised at x0 by central differences
+    (exact for linear blocks), H(s) = C (sI - A)^-1 B + D; P packed parameters."""
+    n, h = x0.shape[0], 1e-7
+
+    def f(x, omega):
+        dx = np.zeros_like(x)
+        gov.derivatives(P, x, 0, omega, gov.pmech(P, x, 0, omega), dx)
+        return dx[:, 0], gov.pmech(P, x, 0, omega)
+
+    A, C = np.zeros((n, n)), np.zeros(n)
+    for j in range(n):
+        xp, xm = x0.copy(), x0.copy()
+        xp[j, 0] += h
+        xm[j, 0] -= h
+        (fp, yp), (fm, ym) = f(xp, 1.0), f(xm, 1.0)
+        A[:, j], C[j] = (fp - fm) / (2 * h), (yp - ym) / (2 * h)
+    (fp, yp), (fm, ym) = f(x0.copy(), 1.0 + h), f(x0.copy(), 1.0 - h)
+    B, D = (fp - fm) / (2 * h), (yp - ym) / (2 * h)
+    H = [C @ np.linalg.solve(2j * np.pi * fr * np.eye(n) - A, B) + D for fr in freqs_hz]
+    return np.array(H), -C @ np.linalg.solve(A, B) + D
