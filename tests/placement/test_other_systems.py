@@ -9,9 +9,9 @@ import types
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from plan_checks import stable_when_cleared
 
 from stabctl.cli import main
-from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
 from stabctl.placement.evaluation import Contingency
 from stabctl.placement.loop import _raise_if_infeasible, bound_allocations
@@ -19,24 +19,6 @@ from stabctl.placement.plan import PlanOptions, plan
 from stabctl.placement.program import CCTCut, InfeasibleError
 from stabctl.placement.requirements import Requirement
 from stabctl.stability.cct import LineFault
-from stabctl.storage.control import BangBangCOI
-from stabctl.storage.devices import StorageDevice, StorageFleet
-
-
-def stable_when_cleared(case_path, fault, t_clear, rows) -> bool:
-    """The fault cleared t_clear after its start, simulated 5 s with the devices of `rows`
-    (bus, machine, MW; the paper's law) or without storage: stable?"""
-    sim = Simulator(load_case(case_path))
-    fleet = (
-        StorageFleet(
-            tuple(StorageDevice(r["bus"], r["machine"], r["mw"]) for r in rows), BangBangCOI()
-        )
-        if rows
-        else None
-    )
-    return sim.run(
-        fault.events(t_clear), fault.t_fault + 5.0, storage=fleet, stop_at_separation=True
-    ).stable
 
 
 @pytest.fixture(scope="module")
@@ -66,8 +48,8 @@ def test_ieee39_plan_is_verified_by_its_definition(ieee39):
     sites = res.allocation()
     assert sites and res.total_mw == pytest.approx(sum(r["mw"] for r in sites))
     assert all(r["mw"] >= 1.0 and r["mwh"] > 0 for r in sites)
-    assert stable_when_cleared(ieee39, fault, t, sites)
-    assert not stable_when_cleared(ieee39, fault, t, [])
+    assert stable_when_cleared(load_case(ieee39), fault, t, sites)
+    assert not stable_when_cleared(load_case(ieee39), fault, t, [])
     assert row["met"] and row["cct_s"] >= t
 
 

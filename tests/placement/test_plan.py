@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from plan_checks import stable_when_cleared
 from scipy.integrate import quad
 
 from stabctl.cli import main
@@ -171,17 +172,7 @@ def test_cost_split_is_per_mw_per_mwh_and_per_used_site():
 
 
 def independently_stable(case_name, fault, t_clear, rows, load=1.0):
-    sim = Simulator(scale_load(load_case(case_name), load))
-    fleet = (
-        StorageFleet(
-            tuple(StorageDevice(r["bus"], r["machine"], r["mw"]) for r in rows), BangBangCOI()
-        )
-        if rows
-        else None
-    )
-    return sim.run(
-        fault.events(t_clear), fault.t_fault + 5.0, storage=fleet, stop_at_separation=True
-    ).stable
+    return stable_when_cleared(scale_load(load_case(case_name), load), fault, t_clear, rows)
 
 
 def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verified():
