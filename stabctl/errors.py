@@ -25,6 +25,9 @@ class Verdict(StabctlError):
 
     #: the verdict's label in records, tables and summaries
     label = "verdict"
+    #: buses the contingency islands from every generator (`SimulationResult.meta`
+    #: ``islanded``: t_s, buses, load_shed_pu per stage), set by the search; empty: none
+    islanded: tuple = ()
 
 
 class AboveSearchLimit(InputError, Verdict):

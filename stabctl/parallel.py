@@ -130,6 +130,8 @@ def run_job(func: Callable[..., dict], key: str, inputs: Mapping) -> dict:
         rec = {"status": "ok", "result": func(dict(inputs))}
     except Verdict as exc:  # an answer without a number (robust, N-1 insecure)
         rec = {"status": "verdict", "verdict": exc.label, "reason": " ".join(str(exc).split())}
+        if exc.islanded:
+            rec["islanded"] = list(exc.islanded)
     except Exception as exc:  # noqa: BLE001 - every failure is recorded with its reason
         rec = _failure_fields(exc)
     return {

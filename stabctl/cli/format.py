@@ -338,6 +338,8 @@ def print_screening(rows) -> None:
     click.echo(f"{'fault':<22} {'CCT s':>7} {'cycles':>7} {'err ms':>6}  separated / reason")
     for r in rows:
         where = f"bus {r['bus']}" + (f" line to {r['far_bus']}" if r["far_bus"] else "")
+        if r.get("islanded"):
+            click.echo(f"{where:<22} islands bus(es) {r['islanded']} (their load shed):")
         if r["status"] == "ok":
             err = "-" if r["numerical_error_s"] is None else f"{1000 * r['numerical_error_s']:g}"
             click.echo(
@@ -359,7 +361,8 @@ def print_screening(rows) -> None:
     click.echo(
         f"{len(rows)} fault(s): {counts['cct']} CCT(s) found, {counts[ABOVE]} above the "
         f"search limit (robust), {counts[INSECURE]} N-1 insecure (CCT 0), "
-        f"{counts['failed']} failed"
+        f"{counts['failed']} failed; {sum(bool(r.get('islanded')) for r in rows)} island "
+        "load buses (their load shed, counted in the verdicts above)"
     )
 
 

@@ -77,6 +77,7 @@ from stabctl.errors import (
     InsecureContingency,
     NumericalInstabilityError,
     SimulationError,
+    Verdict,
 )
 from stabctl.io.inputs import CsvRow, number, read_csv
 from stabctl.network.ybus import circuit_row
@@ -215,6 +216,7 @@ class CCTResult:
     criterion: str
     probes: tuple[tuple[float, bool], ...] = field(repr=False)
     separated: tuple[int, ...] = ()
+    islanded: tuple = ()
     cct_half_step_s: float | None = None
     half_step_probes: tuple[tuple[float, bool], ...] = field(default=(), repr=False)
     conventions: str = "ieee"
@@ -265,6 +267,7 @@ class CCTResult:
             "wall_time_s": self.wall_time_s,
             "criterion": self.criterion,
             "separated_machines": list(self.separated),
+            "islanded": list(self.islanded),
             "probes": [[t, ok] for t, ok in self.probes],
             "half_step_probes": [[t, ok] for t, ok in self.half_step_probes],
         }
@@ -447,6 +450,7 @@ def critical_clearing_time(
     separated: dict = {}
     margins: dict = {}
     early_stops = []
+    islanded: list = []
 
     def stable_at(k: int, step: float = h) -> bool:
         t_clear = _lattice(k, tol)
@@ -459,6 +463,8 @@ def critical_clearing_time(
             early_stops.append(t_clear)
         ok = not diverged and (verdict == "stable" if verdict else bool(crit(res)))
         probes[step].append((t_clear, ok))
+        if not islanded:
+            islanded.extend(res.meta.get("islanded", []))
         if not ok and step == h:
             separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))
         if o.method == "sime" and step == h and not ok:
@@ -467,15 +473,19 @@ def critical_clearing_time(
 
     wall = time.perf_counter()
     k_lo, k_hi, k_max = _lattice_bounds(tol, o.t_lo, t_hi, t_max)
-    if o.method == "sime":
-        k_lo, k_hi, start_k = _sime_search(
-            stable_at, margins, (k_lo, k_hi, k_max), fault, tol, sim.case.freq_hz
-        )
-        start = (_lattice(start_k[0], tol), _lattice(start_k[1], tol))
-    else:
-        k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
-        start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
-        k_lo, k_hi = _bisect(stable_at, k_lo, k_hi)
+    try:
+        if o.method == "sime":
+            k_lo, k_hi, start_k = _sime_search(
+                stable_at, margins, (k_lo, k_hi, k_max), fault, tol, sim.case.freq_hz
+            )
+            start = (_lattice(start_k[0], tol), _lattice(start_k[1], tol))
+        else:
+            k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
+            start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
+            k_lo, k_hi = _bisect(stable_at, k_lo, k_hi)
+    except Verdict as exc:  # robust or N-1 insecure: the islanding goes with the verdict
+        exc.islanded = tuple(islanded)
+        raise
     half = None
     if o.error_check:
         half = _lattice(_half_step_cct(lambda k: stable_at(k, h / 2), k_lo, k_hi, k_max), tol)
@@ -492,6 +502,7 @@ def critical_clearing_time(
         criterion=getattr(crit, "__name__", repr(crit)),
         probes=tuple(probes[h]),
         separated=separated.get(k_hi, ()),
+        islanded=tuple(islanded),
         cct_half_step_s=half,
         half_step_probes=tuple(probes[h / 2]),
         conventions=sim.conventions,

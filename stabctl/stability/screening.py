@@ -61,6 +61,14 @@ def verdict(rec: dict) -> str:
     return INSECURE if "unstable even when cleared instantly" in error else "failed"
 
 
+def islanded_buses(rec: dict) -> list[int]:
+    """The buses a CCT record's contingency islands from every generator (their load shed,
+    as PSS/E does; `stabctl.dynamics.driver.islanding_log`), from a CCT found or a verdict;
+    empty when it islands none or the search failed."""
+    log = rec.get("islanded") or (rec.get("result") or {}).get("islanded") or []
+    return sorted({b for stage in log for b in stage["buses"]})
+
+
 def screen(
     case_name: str,
     out: str | Path,
@@ -118,6 +126,7 @@ def screen(
             "status": rec["status"],
         }
         row["verdict"] = verdict(rec)
+        row["islanded"] = islanded_buses(rec)
         if row["verdict"] == ABOVE:
             row["t_max_s"] = search.t_max
         if row["verdict"] == INSECURE:

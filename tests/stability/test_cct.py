@@ -208,9 +208,11 @@ class FakeSim:
     def run(self, events, t_end, **kw):
         self.calls.append(kw)
         tc = events[0].clear_near - events[0].t
-        res = SimpleNamespace(stable=tc < self.cct, separated=[] if tc < self.cct else [7])
+        res = SimpleNamespace(stable=tc < self.cct, separated=[] if tc < self.cct else [7], meta={})
         if self.diverge_after is not None and tc > self.diverge_after:
-            partial = SimpleNamespace(stable=not self.sep, separated=[7] if self.sep else [])
+            partial = SimpleNamespace(
+                stable=not self.sep, separated=[7] if self.sep else [], meta={}
+            )
             raise SimulationError("non-finite state at t = 9 s", result=partial)
         return res
 

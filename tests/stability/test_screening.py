@@ -120,3 +120,43 @@ def test_n1_insecure_is_a_verdict_not_a_failure(tmp_path):
     assert res.exit_code == 0, res.output
     got = json.loads(res.stdout)
     assert (got["cct_s"], got["verdict"]) == (0.0, "N-1 insecure")
+
+
+def test_a_contingency_that_islands_a_load_bus_names_it_in_its_verdict(tmp_path, capsys):
+    """Kundur's 3-4 trip cuts load bus 4 from every generator (its 976 MW shed, as PSS/E
+    does; tests/dynamics/test_islands.py): the search's verdict (N-1 insecure: area 1
+    loses its load) names the islanded bus in the sweep record and the screening table,
+    and the summary counts it; a contingency that islands nothing names none."""
+    from stabctl.cli.format import print_screening
+    from stabctl.parallel import run_sweep
+    from stabctl.stability.cct import cct_jobs
+    from stabctl.stability.screening import INSECURE, islanded_buses, verdict
+
+    faults = [LineFault(3, 4), LineFault(3, 101)]
+    rep = run_sweep(
+        cct_jobs("kundur", faults, search=SearchOptions(t_max=0.5)), tmp_path / "r.jsonl", workers=1
+    )
+    trip, tie = rep.records.values()
+    assert trip["status"] == "verdict" and verdict(trip) == INSECURE
+    assert islanded_buses(trip) == [4]
+    assert trip["islanded"][0]["load_shed_pu"] == [9.76, 1.0]
+    assert islanded_buses(tie) == [] and tie["status"] == "ok"
+    rows = [
+        {"bus": 3, "far_bus": 4, "status": "verdict", "verdict": INSECURE, "islanded": [4]},
+        {
+            "bus": 3,
+            "far_bus": 101,
+            "status": "ok",
+            "verdict": "cct",
+            "islanded": [],
+            "cct_s": 0.154,
+            "cct_cycles": 9.24,
+            "numerical_error_s": 0.0,
+            "separated": [1, 2],
+        },
+    ]
+    capsys.readouterr()
+    print_screening(rows)
+    text = capsys.readouterr().out
+    assert "bus 3 line to 4        islands bus(es) [4] (their load shed)" in text
+    assert "1 N-1 insecure (CCT 0), 0 failed; 1 island load buses" in text
