@@ -2,6 +2,8 @@
 (tests/models/test_degov1.py, test_pidgov.py): started from one tg_con row, and settled at
 a held speed by a stiff integration of its own derivatives."""
 
+from pathlib import Path
+
 import numpy as np
 from scipy.integrate import solve_ivp
 
@@ -55,3 +57,18 @@ def frequency_response(P, x0, freqs_hz):
     B, D = (fp - fm) / (2 * h), (yp - ym) / (2 * h)
     H = [C @ np.linalg.solve(2j * np.pi * fr * np.eye(n) - A, B) + D for fr in freqs_hz]
     return np.array(H), -C @ np.linalg.solve(A, B) + D
+
+
+#: PSS/E's ThreeBus WPIDHY run (its RAW, and its DYR as the base of `threebus_dyr`)
+WPIDHY = Path(__file__).parent / "data" / "psse_runs" / "WPIDHY"
+
+
+def threebus_dyr(tmp_path, record: str, values: dict) -> Path:
+    """PSS/E's ThreeBus WPIDHY run's DYR with governor `record` (its CONs `values` in
+    order) instead of the WPIDHY, written under tmp_path."""
+    text = (WPIDHY / "ThreeBus_WPIDHY.dyr").read_text()
+    head = text[: text.index("    102 'WPIDHY'")]
+    path = tmp_path / f"ThreeBus_{record}.dyr"
+    cons = " ".join(f"{x:g}" for x in values.values())
+    path.write_text(f"{head}    102 '{record}' 1 {cons} /\n")
+    return path

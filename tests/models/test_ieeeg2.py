@@ -9,14 +9,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from governor_alone import frequency_response, settled, started
+from governor_alone import WPIDHY, frequency_response, settled, started, threebus_dyr
 
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
 from stabctl.io.psse import load_psse
 from stabctl.models import governors as gov
 
-WPIDHY = Path(__file__).parents[1] / "data" / "psse_runs" / "WPIDHY"
 #: IEEEG2: K T1 T2 T3 PMAX PMIN T4 (K = 1/R for a 5 % droop)
 VALUES = dict(K=20.0, T1=0.25, T2=0.1, T3=0.1, PMAX=1.0, PMIN=0.0, T4=1.0)
 PM0 = 0.7
@@ -24,12 +23,7 @@ PM0 = 0.7
 
 def dyr(tmp_path, **changed) -> Path:
     """PSS/E's ThreeBus WPIDHY run's DYR with an IEEEG2 instead of the WPIDHY."""
-    v = {**VALUES, **changed}
-    text = (WPIDHY / "ThreeBus_WPIDHY.dyr").read_text()
-    head = text[: text.index("    102 'WPIDHY'")]
-    path = tmp_path / "ThreeBus_IEEEG2.dyr"
-    path.write_text(head + "    102 'IEEEG2' 1 " + " ".join(f"{x:g}" for x in v.values()) + " /\n")
-    return path
+    return threebus_dyr(tmp_path, "IEEEG2", {**VALUES, **changed})
 
 
 @pytest.fixture(scope="module")

@@ -11,14 +11,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from governor_alone import frequency_response, settled, started
+from governor_alone import WPIDHY, frequency_response, settled, started, threebus_dyr
 
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
 from stabctl.io.psse import load_psse
 from stabctl.models import governors as gov
 
-WPIDHY = Path(__file__).parents[1] / "data" / "psse_runs" / "WPIDHY"
 #: IEEEG3: TG TP Uo Uc PMAX PMIN SIGMA DELTA TR TW A11 A13 A21 A23 (PSS/E's typical
 #: hydro values: 5 % permanent, 30 % transient droop; A11 A23 - A13 A21 = -1, so the
 #: water column's high-frequency gain is -2 as the ideal (1 - s TW)/(1 + s TW/2))
@@ -43,12 +42,7 @@ PM0 = 0.7
 
 def dyr(tmp_path, **changed) -> Path:
     """PSS/E's ThreeBus WPIDHY run's DYR with an IEEEG3 instead of the WPIDHY."""
-    v = {**VALUES, **changed}
-    text = (WPIDHY / "ThreeBus_WPIDHY.dyr").read_text()
-    head = text[: text.index("    102 'WPIDHY'")]
-    path = tmp_path / "ThreeBus_IEEEG3.dyr"
-    path.write_text(head + "    102 'IEEEG3' 1 " + " ".join(f"{x:g}" for x in v.values()) + " /\n")
-    return path
+    return threebus_dyr(tmp_path, "IEEEG3", {**VALUES, **changed})
 
 
 @pytest.fixture(scope="module")
