@@ -16,10 +16,8 @@ values as given (device base MBASE, as PSS/E's), the rest of the row the table's
 
 A RAW generator with a ``DERA1`` record (WECC DER_A, aggregated distributed energy
 resources) is a converter of :data:`stabctl.models.converters.DERA1`, alone (no other
-converter record of that generator): its flags and the parameters of what stabctl models
-(:mod:`stabctl.models.converters.dera1`) copied, values as given on MBASE.  Its FreqFlag,
-VtripFlag and FtripFlag must be 0 (their controls are not modelled: CaseError naming the
-record and the flag).
+converter record of that generator): its flags and parameters copied
+(:mod:`stabctl.models.converters.dera1`, every flag modelled), values as given on MBASE.
 
 PSS/E's conventions where ANDES's reading of the same record differs: IREG = 0 (REECx,
 REPCA1) is the plant's own bus (ANDES reads it as bus 0); REECx's Tp = 0 is no filter (a
@@ -62,7 +60,6 @@ from stabctl.models.converters import (
     REGCA1,
     REPCA1,
     WTDTA1,
-    dera1,
 )
 
 __all__ = ["ConverterRows", "converter_rows", "shares", "CONVERTER_RECORDS"]
@@ -133,8 +130,7 @@ def converter_rows(records, generators, branches, conventions: str = "psse") -> 
     CaseError
         Naming file:line, model and (bus, id): a record with the wrong number of
         parameters, a flag (ICON) not among its choices, two records of one model for a
-        generator; a DERA1 with a flag of a control stabctl does not model (FreqFlag,
-        VtripFlag, FtripFlag other than 0).
+        generator.
     """
     plants: dict[tuple[int, str], dict[str, DyrRecord]] = {}
     for rec in records:
@@ -238,15 +234,7 @@ def _plant_row(
 
 
 def _dera1_row(rec: DyrRecord, gen: dict, number: int) -> list[float]:
-    """The ibr_con row of a DERA1 record (CaseError naming a flag of a control stabctl
-    does not model, `dera1.REFUSED_FLAGS`)."""
-    values = CONVERTER_DYR["DERA1"].values(rec.params)
-    for flag, what in dera1.REFUSED_FLAGS.items():
-        if values[flag] != 0:
-            raise CaseError(
-                f"{rec.label()}: {flag} = {values[flag]:g} switches on {what}, which "
-                f"stabctl does not model (its DERA1 needs {flag} = 0)"
-            )
+    """The ibr_con row of a DERA1 record (every field copied, `dera1.DYR`)."""
     v = {p.name: p.default for p in CONVERTER.params}
     v.update(number=number, bus=int(gen["bus"]), type=DERA1, mva=float(gen["mbase"]))
     _copy(rec, v)

@@ -306,6 +306,10 @@ class ConverterParams(Declared):
         ree = self.reec != NO_REEC
         return (
             *((f"ibr_con {n}", getattr(self, n), self.type == DERA1) for n in dera1.LAGS),
+            *(
+                (f"ibr_con {n}", getattr(self, n), dera1.switched_on(self, flags))
+                for n, flags in dera1.SWITCHED_LAGS
+            ),
             ("ibr_con tip", self.tip, pvd),
             ("ibr_con tiq", self.tiq, pvd | ree),
             ("ibr_con Tfm", self.Tfm, (pvd | (self.repc == REPCA1)) & (self.Tfm >= LBND)),
@@ -356,7 +360,13 @@ class ConverterParams(Declared):
         act[MEMORY_SLOTS] = False
         dera = self.type == DERA1
         act[:, dera] = False
-        act[np.array(DA)[:, None], dera] = True
+        for name in ("Ip", "Iq", "Vmeas", "Pmeas", "Q_V"):
+            act[getattr(DA, name), dera] = True
+        freq, trip = self.da_FreqFlag == 1, (self.da_VtripFlag == 1) | (self.da_FtripFlag == 1)
+        act[DA.theta_f] |= dera & (freq | (self.da_FtripFlag == 1))
+        act[DA.PowerPI] |= dera & freq
+        act[DA.Pord] |= dera & freq
+        act[DA.Mult] |= dera & trip
         return act
 
 
@@ -390,8 +400,9 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
         electrical control ``reec`` or a REGC_B (``regc`` 1) on a device other than a
         REGCA1; a REGC_B with a PLL1, or with an internal voltage lag gb_Te and no source
         impedance (gb_Rsource = gb_Xsource = 0); a DERA1 holding its
-        power factor (PfFlag 1) with |P0| below `dera1.MIN_P_PF`; naming the row and
-        field.
+        power factor (PfFlag 1) with |P0| below `dera1.MIN_P_PF`, a DERA1 lag of a
+        control it switches on (`dera1.SWITCHED_LAGS`) below 1e-3 s or trip bands out
+        of order (`dera1.check`); naming the row and field.
     """
     t = case.converters
     n = len(t)
@@ -423,6 +434,8 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     pvd = (t.type == PVD1) | (t.type == ESD1)
     lags = [("tip", pvd), ("tiq", pvd), ("Tg", reg), ("Tfltr", reg)]
     lags += [(name, t.type == DERA1) for name in dera1.LAGS]
+    lags += [(name, dera1.switched_on(t, flags)) for name, flags in dera1.SWITCHED_LAGS]
+    dera1.check(t)
     pc = t.repc == REPCA1
     bad = np.flatnonzero(pc & ~ree)
     if bad.size:
@@ -624,7 +637,8 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
         the voltage filter |V| (a REGC_B: `regcb1.initial`); with a REECA1, its states
         (`reeca1.initial`; a REECD1's, `reecd1.initial`) and memory (the held outputs:
         their values at the start).
-        DERA1: Ip = P0/|V|, Iq = Q0/|V| and its measurements (`dera1.initial`).
+        DERA1: Ip = P0/|V|, Iq = Q0/|V|, its measurements and controls
+        (`dera1.initial`).
 
     Raises
     ------
@@ -655,7 +669,7 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
     pll.initial(cp, x, V)
     dera = cp.type == DERA1
     if np.any(dera):
-        dera1.initial(cp, x, v)
+        dera1.initial(cp, x, V)
     for kind, why in ((REGCA1, _REGCA1_AT_REST), (DERA1, _DERA1_AT_REST)):
         if np.any(cp.type == kind):
             _check_at_rest(cp, P, x, Vc, V_nc, kind, why)
@@ -695,7 +709,10 @@ _REGCA1_AT_REST = (
     "blocking band rd_Vblkl, rd_Vblkh)"
 )
 #: why a DERA1 may not start at rest
-_DERA1_AT_REST = "a current limit Imax (with its PQFlag, GenFlag) is active at the start"
+_DERA1_AT_REST = (
+    "a current limit Imax (with its PQFlag, GenFlag), P0 outside [Pmin, Pmax] (FreqFlag 1) "
+    "or a trip band (vl1, vh1, fl, fh) is active at the start"
+)
 
 
 def _check_at_rest(cp: ConverterParams, P, x: np.ndarray, Vc, V_nc, kind: int, why: str) -> None:

@@ -1,7 +1,7 @@
 """The ``ibr_con`` table every converter component reads: its columns (the device's own,
 then each component's: REECA1 54-104, REPCA1 105-143, the wind turbine 145-182, the PLL1
-183-187, the DG protection 188-213, the DERA1 214-227, the REGCB1 228-237, the REECD1
-238-270; ANDES 2.0's and PSS/E's parameters, docs/ibr.md), the codes that
+183-187, the DG protection 188-213, the DERA1 214-227 and 271-302, the REGCB1 228-237, the
+REECD1 238-270; ANDES 2.0's and PSS/E's parameters, docs/ibr.md), the codes that
 switch the components on, and the packed parameter layout of the compiled kernels
 (`PACKED`, its named columns `C`).
 
@@ -310,6 +310,60 @@ def _dera1_params(col: int) -> tuple[Param, ...]:
 
 _DERA1_PARAMS = _dera1_params(214)
 
+
+def _dera1_control_params(col: int) -> tuple[Param, ...]:
+    """DERA1's columns from ``col`` on, prefixed ``da_`` (PSS/E Model Library DERA1, the
+    WECC DER_A specification): the active power-frequency control (FreqFlag 1) and the
+    voltage and frequency tripping (VtripFlag 1, FtripFlag 1), :mod:`.dera1`.  Powers
+    (droop gains, the error, power and ramp limits) on the device base, as PSS/E's;
+    frequencies in pu of the nominal; the defaults are PowerSimulationsDynamics.jl's
+    test 42 values (tests/data/psse_runs/DERA_FREQFLAG0/README.md)."""
+    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
+    rows: list[tuple[str, dict[str, Any]]] = [
+        ("FreqFlag", dict(flag, doc="1 the power-frequency control (droop, PI), 0 P held")),
+        ("VtripFlag", dict(flag, doc="1 the voltage tripping, 0 none")),
+        ("FtripFlag", dict(flag, doc="1 the frequency tripping, 0 none")),
+        ("Trf", dict(unit="s", default=0.02, lo=0.0, doc="frequency measurement lag")),
+        ("Ddn", dict(_DEV_PU, default=20.0, doc="droop, P per pu frequency above fdbd2")),
+        ("Dup", dict(_DEV_PU, default=0.0, doc="droop, P per pu frequency below fdbd1")),
+        ("fdbd1", dict(unit="pu", default=-0.0006, hi=0.0, doc="lower frequency deadband")),
+        ("fdbd2", dict(unit="pu", default=0.0006, lo=0.0, doc="upper frequency deadband")),
+        ("femax", dict(_DEV_PU, default=99.0, doc="upper limit of the power PI's error")),
+        ("femin", dict(_DEV_PU, default=-99.0, doc="lower limit of the power PI's error")),
+        ("Pmax", dict(_DEV_PU, default=1.1, doc="upper limit of the PI output and Pord")),
+        ("Pmin", dict(_DEV_PU, default=0.0, doc="lower limit of the PI output and Pord")),
+        ("dPmax", dict(_DEV_PU, default=0.5, doc="upper rate of Pord (1/s)")),
+        ("dPmin", dict(_DEV_PU, default=-0.5, doc="lower rate of Pord (1/s)")),
+        ("Tpord", dict(unit="s", default=0.02, lo=0.0, doc="power order lag")),
+        ("Kpg", dict(unit="pu", default=0.1, doc="power PI proportional gain")),
+        ("Kig", dict(unit="1/s", default=10.0, doc="power PI integral gain")),
+        ("vl0", dict(unit="pu", default=0.44, doc="voltage below which all trip")),
+        ("vl1", dict(unit="pu", default=0.49, doc="voltage below which a share trips")),
+        ("vh0", dict(unit="pu", default=1.2, doc="voltage above which all trip")),
+        ("vh1", dict(unit="pu", default=1.15, doc="voltage above which a share trips")),
+        ("tvl0", dict(unit="s", default=0.16, lo=0.0, doc="time below vl0 to trip all")),
+        ("tvl1", dict(unit="s", default=0.16, lo=0.0, doc="time below vl1 to trip a share")),
+        ("tvh0", dict(unit="s", default=0.16, lo=0.0, doc="time above vh0 to trip all")),
+        ("tvh1", dict(unit="s", default=0.16, lo=0.0, doc="time above vh1 to trip a share")),
+        (
+            "Vrfrac",
+            dict(unit="", default=0.7, lo=0.0, hi=1.0, doc="share of the tripped that reconnects"),
+        ),
+        ("fl", dict(unit="pu", default=0.0, doc="frequency below which all trip")),
+        ("fh", dict(unit="pu", default=2.0, doc="frequency above which all trip")),
+        ("tfl", dict(unit="s", default=99.0, lo=0.0, doc="time below fl to trip")),
+        ("tfh", dict(unit="s", default=99.0, lo=0.0, doc="time above fh to trip")),
+        ("Tv", dict(unit="s", default=0.02, lo=0.0, doc="lag of the trip multiplier")),
+        ("Vpr", dict(unit="pu", default=0.8, doc="voltage below which no frequency trip")),
+    ]
+    return tuple(
+        Param(f"da_{name}", col=col + j, **{**kw, "doc": "DERA1: " + kw["doc"]})
+        for j, (name, kw) in enumerate(rows)
+    )
+
+
+_DERA1_CONTROL_PARAMS = _dera1_control_params(271)
+
 #: the WECC generator/converter interface of a type-3 device (ibr_con ``regc``): REGC_A
 #: (PSS/E REGCA1, ANDES 2.0's REGCA1) or REGC_B (PSS/E REGCB1, :mod:`.regcb1`)
 REGC_A, REGC_B = 0, 1
@@ -606,6 +660,7 @@ PARAMS = (
     ),
     *_REGCB1_PARAMS,
     *_REECD1_PARAMS,
+    *_DERA1_CONTROL_PARAMS,
 )
 
 #: the ibr_con fields the kernels take as given (pu quantities after the base change)
@@ -622,6 +677,8 @@ POWER_FIELDS = (
     *(f"{a}{j}" for a in ("Iq", "Ip") for j in range(1, 5)),
     *("wt_H", "wt_DAMP", "wt_Dshaft"),
     *("da_Kqv", "da_Imax", "da_rrpwr", "da_Iqh1", "da_Iql1"),
+    *("da_Ddn", "da_Dup", "da_femax", "da_femin", "da_Pmax", "da_Pmin", "da_dPmax"),
+    "da_dPmin",
     *("gb_Rrpwr", "gb_Iqrmax", "gb_Iqrmin", "gb_Imax"),
     *(f"{a}{j}" for a in ("Iq", "Ip") for j in range(5, 11)),
 )
