@@ -382,3 +382,22 @@ def test_trip_bands_out_of_order_are_refused(tmp_path):
     """VtripFlag 1 with vl0 0.5 above vl1 0.49: refused naming the field."""
     with pytest.raises(CaseError, match=r"da_vl1.*vl0 < vl1 <= vh1 < vh0"):
         _sim(tmp_path, (1, 0, 0, 1, 1, 0), vl0=0.5)
+
+
+def test_freqflag1_line_trip_settles_where_freqflag0_does(tmp_path):
+    """PSS/E's ThreeBus event (line 101-102 tripped, here at 1 s, 6 s at 5 ms) with
+    FreqFlag, VtripFlag and FtripFlag 1: the infinite bus brings the frequency back to 1,
+    the PI the power to Pref, and |V102| stays inside [vl1, vh1] (nothing trips): the
+    run ends at P0 + j Q0 (within 1e-9) with the bus voltages of the FreqFlag 0 run
+    (within 1e-9)."""
+    from stabctl.dynamics.events import LineTrip
+
+    ends = []
+    for flags in ((1, 1, 0, 1, 1, 1), (1, 0, 0, 1, 0, 0)):
+        sim = _sim(tmp_path, flags)
+        res = sim.run([LineTrip(101, 102, 1.0)], t_end=6.0, h=0.005)
+        S0 = sim.model.cp.P0[0] + 1j * sim.model.cp.Q0[0]
+        assert res.ibr_p[-1, 0] + 1j * res.ibr_q[-1, 0] == pytest.approx(S0, abs=1e-9)
+        assert res.vmag[:, 1].min() > 0.49 and res.vmag[:, 1].max() < 1.15
+        ends.append(res.vmag[-1] * np.exp(1j * res.vang[-1]))
+    np.testing.assert_allclose(ends[0], ends[1], rtol=0, atol=1e-9)

@@ -387,10 +387,9 @@ def initial(cp, x: np.ndarray, V: np.ndarray) -> None:
     x[DA.Vmeas, dera] = v[dera]
     x[DA.Pmeas, dera] = cp.P0[dera]
     x[DA.Q_V, dera] = cp.da_Qref[dera] / v[dera]
+    measured = switched_on(cp, ("da_FreqFlag", "da_FtripFlag"))
+    x[DA.theta_f, measured] = np.angle(V[measured])
     freq = switched_on(cp, ("da_FreqFlag",))
-    x[DA.theta_f, switched_on(cp, ("da_FreqFlag", "da_FtripFlag"))] = np.angle(V)[
-        switched_on(cp, ("da_FreqFlag", "da_FtripFlag"))
-    ]
     x[DA.PowerPI, freq] = x[DA.Pord, freq] = cp.P0[freq]
     trip = switched_on(cp, ("da_VtripFlag", "da_FtripFlag"))
     x[DA.Mult, trip] = 1.0
