@@ -30,7 +30,6 @@ from stabctl._jit.decorators import kernel, njit
 from stabctl.dynamics import switching as sw
 from stabctl.dynamics.coi import island_coi
 from stabctl.dynamics.model import (
-    BUS_VOLTAGES,
     NO_BUS_VOLTAGES,
     KeptBuses,
     KernelNetwork,
@@ -47,7 +46,8 @@ if TYPE_CHECKING:
 class Recording(NamedTuple):
     """Preallocated buffers filled by `integrate` (`recording`): speed, angle, pelect,
     pmech, efd (n_t, n_mac) and V (n_t, n_bus) complex at every grid index (the predictor
-    stage's outputs); the powers the network takes from the devices P (n_t, n_dev) pu
+    stage's outputs; V (n_t, 0): the run solves only the machine buses' voltages, the
+    others are not computed); the powers the network takes from the devices P (n_t, n_dev) pu
     (`stabctl.dynamics.switching.delivered`); per device stats (n_dev, 5) =
     (switchings, energy absorbed, energy delivered, highest and lowest stored energy
     relative to the start, all in pu*s, of the power the network takes;
@@ -287,7 +287,8 @@ def _record(rec, k, x, out, P):
     assign(rec.pelect[k], out.pelect)
     assign(rec.pmech[k], out.pmech)
     assign(rec.efd[k], out.efd)
-    assign(rec.V[k], out.V_bus)
+    if rec.V.shape[1] > 0:  # a run that records the bus voltages (`Simulator.run`)
+        assign(rec.V[k], out.V_bus)
     if P.size > 0:
         assign(rec.P[k], P)
     if out.S_ibr.size > 0:
@@ -347,7 +348,7 @@ def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
     sw.targets(sa, ds.mode, w.a.r, w.a.v, w.a.acc, ds.target)
     if sw.powers_now(sa, ds):
         sw.inject(sa, ds.P, kn.kept.S_extra, x)
-        _evaluate(kn, x, grid.interval[k], BUS_VOLTAGES, w.dx_k)
+        _evaluate(kn, x, grid.interval[k], rec.V.shape[1] > 0, w.dx_k)
 
 
 @kernel(inline="always")
@@ -454,7 +455,7 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
         V_keep = kn.kept.V.copy()
         _evaluate(kn, x, s, NO_BUS_VOLTAGES, w.dx_k)
         assign(kn.kept.V, V_keep)
-    if _evaluate(kn, x, s, BUS_VOLTAGES, w.dx_k) < 0:
+    if _evaluate(kn, x, s, rec.V.shape[1] > 0, w.dx_k) < 0:
         return NO_LOAD_FLOW, max(k - 1, 0), x
     w.switched[:] = False
     if sa.pmax.size > 0:
@@ -483,7 +484,7 @@ def _record_paused(kn, grid, sa, ds, rec, w, x, k1):
     V_keep, held_keep, stage_keep = kn.kept.V.copy(), kn.kept.held.copy(), kn.held_stage[0]
     xc = x.copy()
     sw.inject(sa, ds.P, kn.kept.S_extra, xc)
-    _evaluate(kn, xc, grid.interval[k1], BUS_VOLTAGES, w.dx_k)
+    _evaluate(kn, xc, grid.interval[k1], rec.V.shape[1] > 0, w.dx_k)
     sw.delivered(sa, ds.P, kn.kept, w.P_b)
     assign(kn.kept.V, V_keep)
     assign(kn.kept.held, held_keep)

@@ -443,6 +443,8 @@ def critical_clearing_time(
     crit = no_separation if o.criterion is None else o.criterion
     stop = o.criterion is None if o.stop_at_separation is None else o.stop_at_separation
     extra = {} if storage is None else {"storage": storage}
+    if o.criterion is None and getattr(sim, "takes_monitor", False):
+        extra["voltages"] = False  # the default criterion reads the machines only
     if o.method not in METHODS:
         raise InputError(f"CCT search method must be one of {METHODS}, got {o.method!r}")
     early = o.early_stop and o.criterion is None and getattr(sim, "takes_monitor", False)

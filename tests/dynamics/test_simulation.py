@@ -28,6 +28,7 @@ from stabctl.dynamics.grid import default_step
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import CaseError, InputError, SimulationError, UnknownBusError
 from stabctl.io import load_case
+from stabctl.stability.cct import LineFault
 
 DATA = Path(__file__).parents[1] / "data" / "pstess"
 
@@ -380,3 +381,29 @@ def test_load_level_with_moved_taps_starts_at_equilibrium():
     sim = Simulator(case)
     np.testing.assert_array_equal(sim.case.branches.tap, pf.taps)
     assert sim.model.initial_residual[0] < 1e-9  # measured 4.4e-13
+
+
+@pytest.mark.parametrize(
+    ("name", "bus", "far_bus", "same_bits"), [("kundur", 3, 101, True), ("wecc", 40, 44, False)]
+)
+def test_a_run_without_bus_voltages_has_the_same_trajectories(
+    request, name, bus, far_bus, same_bits
+):
+    """voltages=False (the CCT search's probes) skips the other buses' voltages: the
+    machines' trajectories are those of the full run, bit for bit where the reduced
+    network's products are loops (Kundur), to round-off where they are BLAS calls
+    (miniWECC: the machine buses' voltages summed in another order)."""
+    sim = request.getfixturevalue(name)
+    events = LineFault(bus, far_bus).events(0.1)
+    full = sim.run(events, 4.0)
+    lean = sim.run(events, 4.0, voltages=False)
+    assert full.vmag.shape[1] == full.buses.size == len(sim.case.buses)
+    assert lean.vmag.shape == lean.vang.shape == (lean.t.size, 0) and lean.buses.size == 0
+    np.testing.assert_array_equal(lean.t, full.t)
+    for q in ("angle", "speed", "pelect", "pmech", "efd"):
+        a, b = getattr(lean, q), getattr(full, q)
+        if same_bits:
+            np.testing.assert_array_equal(a, b)
+        else:
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * max(1.0, np.abs(b).max()))
+    assert lean.stable == full.stable
