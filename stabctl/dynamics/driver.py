@@ -26,6 +26,7 @@ from stabctl.case import Case
 from stabctl.dynamics import events as ev_
 from stabctl.dynamics import integrator as ig
 from stabctl.dynamics import trapezoid
+from stabctl.dynamics.bounded import BoundedCache
 from stabctl.dynamics.coi import coi_of_islands
 from stabctl.dynamics.grid import (
     check_step,
@@ -104,6 +105,11 @@ class CommandFrames:
     decide: Callable
     latency: float = 0.0
     history_s: float = 1.0
+
+
+#: models (one per set of storage buses kept, `Simulator.model_for`) and simulators of
+#: WECC battery fleets a simulator keeps: a placement study tries many
+MODELS_KEPT = 8
 
 
 class Simulator:
@@ -213,10 +219,10 @@ class Simulator:
             case = _with_solved_shunts(_with_solved_taps(case, pf.taps), pf.shunt_levels)
         single_threaded_blas()
         self.case, self.op = case, op
-        self._models: dict[frozenset, DynamicModel] = {}
+        self._models: BoundedCache[DynamicModel] = BoundedCache(MODELS_KEPT)
         #: the simulators of this case with WECC batteries (`_for_storage`), and in one of
         #: them the batteries' converter rows
-        self._battery_sims: dict[tuple, Simulator] = {}
+        self._battery_sims: BoundedCache[Simulator] = BoundedCache(MODELS_KEPT)
         self.battery_rows: np.ndarray | None = None
         self.off_equilibrium = off_equilibrium
         self.model = self.model_for(injection_buses)
@@ -271,7 +277,8 @@ class Simulator:
 
     def model_for(self, buses=()) -> DynamicModel:
         """The dynamic model keeping given buses in the reduced network (built once per set
-        of buses, then cached); storage devices need their buses kept.
+        of buses, the MODELS_KEPT most recently used kept); storage devices need their
+        buses kept.
 
         Parameters
         ----------
@@ -284,15 +291,15 @@ class Simulator:
             The case's model at this simulator's operating point and conventions.
         """
         key = frozenset(int(b) for b in buses)
-        if key not in self._models:
-            if self.suspect_starts == "refuse":
-                model = DynamicModel(self.case, self.op, sorted(key), self.conventions)
-            else:
-                with run_on_suspect_starts() as found:
-                    model = DynamicModel(self.case, self.op, sorted(key), self.conventions)
-                self.suspect = tuple(dict.fromkeys((*self.suspect, *found)))
-            self._models[key] = model
-        return self._models[key]
+        return self._models.get(key, lambda: self._build_model(sorted(key)))
+
+    def _build_model(self, buses: list) -> DynamicModel:
+        if self.suspect_starts == "refuse":
+            return DynamicModel(self.case, self.op, buses, self.conventions)
+        with run_on_suspect_starts() as found:
+            model = DynamicModel(self.case, self.op, buses, self.conventions)
+        self.suspect = tuple(dict.fromkeys((*self.suspect, *found)))
+        return model
 
     def run(
         self,
@@ -435,26 +442,28 @@ class Simulator:
         """This simulator, or for a fleet of WECC batteries (`StorageFleet.model` "wecc")
         the simulator of the case with them (`stabctl.storage.devices.battery_case`, same
         operating point: the batteries start idle), built once per fleet layout (bus,
-        rating, energy and initial charge of each device, the battery fields)."""
+        rating, energy and initial charge of each device, the battery fields; the
+        MODELS_KEPT most recently used kept)."""
         if storage is None or storage.model != "wecc" or self.battery_rows is not None:
             return self
         key = (
             tuple((d.bus, d.pmax_mw, d.energy_mj, d.soc0) for d in storage.devices),
             tuple(sorted(storage.battery.items())),
         )
-        if key not in self._battery_sims:
-            case, rows = st.battery_case(self.case, storage)
-            sim = Simulator(
-                case,
-                self.op,
-                conventions=self.conventions,
-                step=self.default_h,
-                background_compile=False,
-                off_equilibrium=self.off_equilibrium,
-            )
-            sim.battery_rows = rows
-            self._battery_sims[key] = sim
-        return self._battery_sims[key]
+        return self._battery_sims.get(key, lambda: self._battery_simulator(storage))
+
+    def _battery_simulator(self, storage) -> Simulator:
+        case, rows = st.battery_case(self.case, storage)
+        sim = Simulator(
+            case,
+            self.op,
+            conventions=self.conventions,
+            step=self.default_h,
+            background_compile=False,
+            off_equilibrium=self.off_equilibrium,
+        )
+        sim.battery_rows = rows
+        return sim
 
     def _prepare(self, events, t_end, h, storage, semantics, method="heun"):
         """Validate, choose the model (storage buses kept), pack the devices, build the

@@ -21,6 +21,7 @@ from stabctl._jit.address import address_of, by_address
 from stabctl._jit.arrays import assign, dot, matvec
 from stabctl._jit.decorators import kernel, njit
 from stabctl.case import BranchTable, BusTable, Case
+from stabctl.dynamics.bounded import BoundedCache
 from stabctl.dynamics.coi import coi_inertia
 from stabctl.errors import CaseError, InputError, SimulationError
 from stabctl.models import converters as conv
@@ -159,6 +160,12 @@ def check_conventions(conventions: str) -> str:
     return conventions
 
 
+#: reduced network stages a model keeps (`DynamicModel.network`): a run uses one per
+#: interval between events (a CCT probe 3, the pre-fault one shared), a screening worker's
+#: model would otherwise keep every fault's (ACTIVSg2000: about 11 MB a stage)
+STAGES_KEPT = 16
+
+
 class DynamicModel:
     """Dynamic model of a case at an operating point.
 
@@ -200,7 +207,7 @@ class DynamicModel:
             self.sv.n,
         )
         self._setup_loads(injection_buses)
-        self._stage_cache: dict[StageConfig, ReducedNetwork] = {}
+        self._stage_cache: BoundedCache[ReducedNetwork] = BoundedCache(STAGES_KEPT)
         self._initialise()
 
     # -- loads and kept buses ---------------------------------------------------------
@@ -257,10 +264,8 @@ class DynamicModel:
 
     # -- network stages ---------------------------------------------------------------
     def network(self, config: StageConfig = StageConfig()) -> ReducedNetwork:
-        """Reduced network of a stage (cached)."""
-        if config not in self._stage_cache:
-            self._stage_cache[config] = self._reduce(config)
-        return self._stage_cache[config]
+        """Reduced network of a stage (the STAGES_KEPT most recently used are kept)."""
+        return self._stage_cache.get(config, lambda: self._reduce(config))
 
     def _reduce(self, config: StageConfig) -> ReducedNetwork:
         case = self.case

@@ -17,6 +17,7 @@ bound (1e-6) guards against silent drift of the engine.
 
 import gzip
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -407,3 +408,32 @@ def test_a_run_without_bus_voltages_has_the_same_trajectories(
         else:
             np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * max(1.0, np.abs(b).max()))
     assert lean.stable == full.stable
+
+
+def test_a_screening_workers_simulator_keeps_a_bounded_number_of_networks(kundur_case):
+    """A worker's simulator runs every fault of a screening: its reduced networks and
+    models are kept for the most recently used only (ACTIVSg2000 grew by about 33 MB a
+    fault before, docs/scale.md), and a stage built again equals the one dropped."""
+    from stabctl.dynamics.driver import MODELS_KEPT
+    from stabctl.dynamics.model import STAGES_KEPT
+    from stabctl.stability.screening import screening_faults
+    from stabctl.storage.devices import uniform_fleet
+
+    sim = Simulator(kundur_case)
+    first = LineFault(3, 101).events(0.1)
+    ref = sim.run(first, 2.0)
+    faults = screening_faults(kundur_case, lines=True)
+    for f in faults:
+        sim.run(f.events(0.05), 1.2)
+    assert len(sim.model._stage_cache) == STAGES_KEPT < 2 * len(faults)
+    again = sim.run(first, 2.0)
+    np.testing.assert_array_equal(again.angle, ref.angle)
+    fleet = uniform_fleet(kundur_case, 5)
+    subsets = [
+        [d for i, d in enumerate(fleet.devices) if mask >> i & 1]
+        for mask in range(1, 2 ** len(fleet.devices))
+    ]
+    assert len(subsets) > MODELS_KEPT  # each a model keeping other buses
+    for devices in subsets:
+        sim.run(first, 1.2, storage=replace(fleet, devices=tuple(devices)))
+    assert len(sim._models) == MODELS_KEPT
