@@ -163,7 +163,7 @@ def check_conventions(conventions: str) -> str:
 #: reduced network stages a model keeps (`DynamicModel.network`): a run uses one per
 #: interval between events (a CCT probe 3, the pre-fault one shared), a screening worker's
 #: model would otherwise keep every fault's (ACTIVSg2000: about 11 MB a stage)
-STAGES_KEPT = 16
+STAGES_KEPT = 8
 
 
 class DynamicModel:
