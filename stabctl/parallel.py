@@ -424,7 +424,7 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
         while not pending.is_empty():
             if not pending.has_ready():
                 workers.check()
-                time.sleep(0.05)
+                time.sleep(0.01)
                 continue
             fut = next(pending)
             try:
@@ -745,10 +745,10 @@ def check_scheduler(address: str) -> str:
 
 def _dask_client(scheduler: str, workers: int):
     """A Dask distributed client: of the cluster at `scheduler` (`check_scheduler`), or
-    for scheduler="local" of a new local cluster of `workers` single-threaded processes
-    (connects at once, within SCHEDULER_TIMEOUT_S, so that a missing Dask, a wrong
-    address or a service that is not a Dask scheduler fails before anything is written;
-    InputError)."""
+    for scheduler="local" of a new local cluster of `workers` single-threaded processes,
+    each sent only the job it runs (worker-saturation 1.0).  Connects at once, within
+    SCHEDULER_TIMEOUT_S, so that a missing Dask, a wrong address or a service that is not
+    a Dask scheduler fails before anything is written (InputError)."""
     address = check_scheduler(scheduler)
     try:
         from distributed import Client, LocalCluster
@@ -758,11 +758,15 @@ def _dask_client(scheduler: str, workers: int):
             "installed: pip install 'stabctl[dask]'"
         ) from None
     if address == "local":
-        return Client(
-            LocalCluster(
+        import dask
+
+        # a worker is sent only the job it runs (Dask's default, 1.1, queues a second
+        # one there, which a worker killed by the first counts against: KilledWorker)
+        with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
+            cluster = LocalCluster(
                 n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
             )
-        )
+        return Client(cluster)
     try:
         return Client(address, timeout=SCHEDULER_TIMEOUT_S)
     except Exception as exc:  # noqa: BLE001 - whatever a foreign service makes Dask raise
@@ -814,7 +818,7 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
         while not pending.is_empty():
             if not pending.has_ready():
                 workers.check()
-                time.sleep(0.05)
+                time.sleep(0.01)
                 continue
             fut = next(pending)
             job = futures.pop(fut)
