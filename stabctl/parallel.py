@@ -19,8 +19,14 @@ completes, so an interrupted sweep (Ctrl-C, a killed job) keeps every finished j
 A job that raises a `stabctl.errors.Verdict` (a robust fault, an N-1 insecure one) is
 recorded as that verdict, not as a failure.  A job that raises anything else is recorded
 as failed with the exception's type and message (and the
-traceback for anything but a stabctl error), never dropped; so is a job whose worker died.
-Rerunning with the same file skips the keys already there (failed ones too, unless
+traceback for anything but a stabctl error), never dropped; so is a job whose worker
+process died in a local pool.  On Dask a job whose worker died runs again on another
+worker (the scheduler's ``distributed.scheduler.allowed-failures``, default 3) and is
+recorded failed only when it killed a worker each time (KilledWorker); each job is
+released once recorded, so that a worker's death makes no finished job run again.  Jobs
+a Dask cluster could not run (its scheduler gone, or no worker left for
+DASK_NO_WORKER_S) are not recorded: `SweepIncomplete` names them, and the same call runs
+them.  Rerunning with the same file skips the keys already there (failed ones too, unless
 `retry_failed`); the last line of a key wins.  One sweep per file at a time: a sweep
 holds the file's lock (`stabctl.locking.exclusive`) from its repair to its last line, and
 a second one is refused with the holder's pid.
@@ -52,6 +58,8 @@ from typing import Any
 from stabctl.errors import InputError, SimulationError, StabctlError, Verdict
 from stabctl.locking import exclusive
 from stabctl.progress import bar as progress_bar
+
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -110,8 +118,11 @@ class SweepReport:
     wall_time_s: float
 
 
-#: Dask resubmits a job whose worker died this many times (a job's own errors are recorded
-#: by `run_job` and never retried); after that the job is recorded as failed, with why.
+#: Dask runs a job again this many times when its task fails outside `run_job` (which
+#: records the job's own errors, never retried), e.g. its function cannot be unpickled on
+#: a worker.  A job whose worker died is run again by the Dask scheduler itself
+#: (allowed-failures) and recorded failed (KilledWorker) only when it killed a worker
+#: each time.
 DASK_RETRIES = 1
 
 
@@ -375,15 +386,14 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
     ------
     InputError
         Dask not installed or its scheduler unreachable.
+    SweepIncomplete
+        (from map, on Dask) The cluster has had no worker for DASK_NO_WORKER_S; a job
+        whose worker died runs again on another worker.
     """
     if scheduler:
-        from distributed import as_completed as dask_completed
-
         client = _dask_client(scheduler, workers)
         try:
-            yield lambda func, jobs, done=None: client.gather(
-                _told([client.submit(func, j, pure=False) for j in jobs], dask_completed, done)
-            )
+            yield lambda func, jobs, done=None: _dask_map(client, func, jobs, done)
         finally:
             cluster = client.cluster  # ours (scheduler="local") or None
             client.close()
@@ -399,6 +409,43 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
         ]
 
 
+def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> list:
+    """`worker_pool`'s map on Dask: each result taken, and its future released, as it
+    finishes (so that a worker's death makes no finished job run again: a job its worker
+    was running runs again on another); a job's exception is raised; `SweepIncomplete`
+    when the cluster has had no worker for DASK_NO_WORKER_S."""
+    from distributed import as_completed
+
+    futures = {client.submit(func, j, pure=False): i for i, j in enumerate(jobs)}
+    results: list = [None] * len(jobs)
+    workers = _DaskWorkers(client)
+    pending = as_completed(futures)
+    try:
+        while not pending.is_empty():
+            if not pending.has_ready():
+                workers.check()
+                time.sleep(0.01)
+                continue
+            fut = next(pending)
+            try:
+                results[futures[fut]] = _dask_result(fut, workers)
+            finally:
+                fut.release()
+            del futures[fut]
+            if done is not None:
+                done(len(jobs) - len(futures), len(jobs))
+    except _NoWorker:
+        raise SweepIncomplete(
+            f"{len(futures)} of {len(jobs)} jobs not run: the Dask cluster at "
+            f"{client.scheduler.address} has had no worker for {DASK_NO_WORKER_S:g} s (its "
+            "last one died or left)"
+        ) from None
+    finally:
+        for fut in futures:
+            fut.release()
+    return results
+
+
 def _in_process(func: Callable[[dict], Any], jobs: list, done=None) -> list:
     """`worker_pool`'s map for one worker: each job in turn in this process."""
     out = []
@@ -410,8 +457,8 @@ def _in_process(func: Callable[[dict], Any], jobs: list, done=None) -> list:
 
 
 def _told(futures: list, completed: Callable, done) -> list:
-    """The futures, after calling done(k, n) as each finishes (`completed`: concurrent.
-    futures' or Dask's as_completed); without done, at once."""
+    """The futures, after calling done(k, n) as each finishes (`completed`:
+    concurrent.futures' as_completed); without done, at once."""
     if done is not None:
         for k, _ in enumerate(completed(futures), 1):
             done(k, len(futures))
@@ -698,10 +745,10 @@ def check_scheduler(address: str) -> str:
 
 def _dask_client(scheduler: str, workers: int):
     """A Dask distributed client: of the cluster at `scheduler` (`check_scheduler`), or
-    for scheduler="local" of a new local cluster of `workers` single-threaded processes
-    (connects at once, within SCHEDULER_TIMEOUT_S, so that a missing Dask, a wrong
-    address or a service that is not a Dask scheduler fails before anything is written;
-    InputError)."""
+    for scheduler="local" of a new local cluster of `workers` single-threaded processes,
+    each sent only the job it runs (worker-saturation 1.0).  Connects at once, within
+    SCHEDULER_TIMEOUT_S, so that a missing Dask, a wrong address or a service that is not
+    a Dask scheduler fails before anything is written (InputError)."""
     address = check_scheduler(scheduler)
     try:
         from distributed import Client, LocalCluster
@@ -711,11 +758,15 @@ def _dask_client(scheduler: str, workers: int):
             "installed: pip install 'stabctl[dask]'"
         ) from None
     if address == "local":
-        return Client(
-            LocalCluster(
+        import dask
+
+        # a worker is sent only the job it runs (Dask's default, 1.1, queues a second
+        # one there, which a worker killed by the first counts against: KilledWorker)
+        with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
+            cluster = LocalCluster(
                 n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
             )
-        )
+        return Client(cluster)
     try:
         return Client(address, timeout=SCHEDULER_TIMEOUT_S)
     except Exception as exc:  # noqa: BLE001 - whatever a foreign service makes Dask raise
@@ -732,9 +783,16 @@ def _dask(jobs: list, scheduler: str, workers: int | None) -> Generator[dict, No
 
 
 def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
-    """Records in completion order; a job that killed its worker DASK_RETRIES + 1 times
-    is recorded failed; jobs the cluster lost otherwise (the scheduler gone, cancelled)
-    are not recorded: `SweepIncomplete` once the others are in."""
+    """Records in completion order from a Dask cluster (see the module docstring).
+
+    A job running on a worker that dies is run again by Dask on another worker (the
+    scheduler's ``distributed.scheduler.allowed-failures``, 3 by default); each future is
+    released as soon as its record is taken, so that the death of a worker does not make
+    Dask run again the finished jobs whose results it held.  A job that killed its worker
+    every time it ran (Dask's KilledWorker) is recorded as failed.  Jobs the cluster lost
+    otherwise are not recorded: `SweepIncomplete` once the others are in, naming them;
+    this includes every job left when the cluster has had no worker for
+    DASK_NO_WORKER_S after having one (its last worker died)."""
     from distributed import KilledWorker, as_completed
 
     lost: list[str] = []
@@ -755,19 +813,43 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
             ): j
             for j in jobs
         }
-        for fut in as_completed(futures):
+        workers = _DaskWorkers(client)
+        pending = as_completed(futures)
+        while not pending.is_empty():
+            if not pending.has_ready():
+                workers.check()
+                time.sleep(0.01)
+                continue
+            fut = next(pending)
+            job = futures.pop(fut)
             try:
-                yield fut.result()
+                rec = _dask_result(fut, workers)
             except KilledWorker as exc:  # the job killed its worker, each time it ran
-                yield _lost(futures[fut], exc)
+                rec = _lost(job, exc)
+            except _NoWorker:
+                futures[fut] = job  # not run either
+                raise
             except Exception as exc:  # noqa: BLE001 - the cluster lost the job: not a result
                 lost.append(f"{type(exc).__name__}: {' '.join(str(exc).split())[:120]}")
+                continue
+            finally:
+                fut.release()  # the scheduler forgets it: never run again
+            yield rec
         if lost:
             raise SweepIncomplete(
                 f"{len(lost)} of {len(jobs)} jobs not run: the Dask cluster lost them "
                 f"({lost[0]}); the finished records are kept, and the same command runs "
                 "the rest"
             )
+    except _NoWorker:
+        left = [j.key for j in futures.values()]
+        more = f" and {len(left) - 3} more" if len(left) > 3 else ""
+        raise SweepIncomplete(
+            f"{len(left) + len(lost)} of {len(jobs)} jobs not run: the Dask cluster at "
+            f"{client.scheduler.address} has had no worker for {DASK_NO_WORKER_S:g} s (its "
+            f"last one died or left; not run: {', '.join(left[:3])}{more}); the finished "
+            "records are kept, and the same command, once workers are back, runs the rest"
+        ) from None
     finally:
         cluster = client.cluster  # ours (scheduler="local") or None
         client.close()
@@ -775,3 +857,62 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
             cluster.close()
         for log, lvl in zip(dask_logs, levels, strict=True):
             log.setLevel(lvl)
+
+
+#: seconds a Dask sweep waits for a worker when its cluster has none left (the last one
+#: died: a nanny restarts its worker within a few seconds) before it gives up the jobs
+#: not run (`SweepIncomplete`); a cluster that has had no worker yet is waited for
+DASK_NO_WORKER_S = 30.0
+
+
+class _NoWorker(Exception):
+    """The Dask cluster has had no worker for DASK_NO_WORKER_S."""
+
+
+def _dask_result(fut, workers: _DaskWorkers) -> dict:
+    """A finished future's record; if its result was lost with its worker before it was
+    fetched, Dask runs the job again: waited for while the cluster has workers."""
+    while True:
+        try:
+            return fut.result(timeout=1.0)
+        except TimeoutError:
+            workers.check()
+
+
+class _DaskWorkers:
+    """The worker count of a Dask sweep's cluster, asked at most once a second: a lost
+    worker is said (log warning: its running job goes to another worker), and a cluster
+    without a worker for DASK_NO_WORKER_S after it had one raises `_NoWorker`."""
+
+    def __init__(self, client):
+        self.client = client
+        self.count: int | None = None
+        self.seen = False
+        self.none_since: float | None = None
+        self.next_check = 0.0
+
+    def check(self) -> None:
+        """Ask the scheduler (if a second has passed)."""
+        now = time.monotonic()
+        if now < self.next_check:
+            return
+        self.next_check = now + 1.0
+        n = int(self.client.scheduler_info(n_workers=0).get("n_workers", 0))
+        if self.count is not None and n < self.count:
+            _log.warning(
+                "Dask worker(s) lost: %d of %d left; %s",
+                n,
+                self.count,
+                "their running jobs go to another worker"
+                if n
+                else f"waiting up to {DASK_NO_WORKER_S:g} s for one before giving up the "
+                "jobs not run",
+            )
+        if n == 0 and self.seen:
+            self.none_since = self.none_since or now
+            if now - self.none_since >= DASK_NO_WORKER_S:
+                raise _NoWorker
+        else:
+            self.none_since = None
+        self.seen = self.seen or n > 0
+        self.count = n

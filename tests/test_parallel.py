@@ -2,6 +2,7 @@
 with their reason, interrupt safety (in process and through a real SIGINT to a process
 pool), Dask, and the `stabctl sweep-cct` command.  Kundur only, to keep it short."""
 
+import collections
 import json
 import os
 import re
@@ -9,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -25,7 +27,13 @@ from stabctl.parallel import (
     read_records,
     run_sweep,
 )
-from stabctl.stability.cct import LineFault, cached_simulator, cct_job, cct_jobs
+from stabctl.stability.cct import (
+    LineFault,
+    SearchOptions,
+    cached_simulator,
+    cct_job,
+    cct_jobs,
+)
 from stabctl.studies.cases import DEFAULT_FAULTS
 
 # -- job functions (module level: spawned workers import them by name; one inputs dict) --
@@ -508,35 +516,12 @@ def test_a_scheduler_killed_mid_sweep_records_no_job_it_did_not_run(tmp_path, ca
     recorded the never-run jobs as failed, which the next run skipped): the finished
     jobs are recorded, the others are not, the sweep ends with SweepIncomplete naming how
     many were not run, and the same call on a new cluster runs exactly those."""
-    import socket
-
     pytest.importorskip("distributed")
     from stabctl.parallel import SweepIncomplete
 
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parent)}
-
-    def start_cluster():
-        with socket.socket() as s:
-            s.bind(("127.0.0.1", 0))
-            port = s.getsockname()[1]
-        dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
-        sched = subprocess.Popen(
-            [*dask, "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
-            env=env,
-            stderr=subprocess.DEVNULL,
-        )
-        worker = subprocess.Popen(
-            [sys.executable, "-m", "distributed.cli.dask_worker", f"tcp://127.0.0.1:{port}",
-             "--nthreads", "1", "--no-dashboard"],
-            env=env,
-            stderr=subprocess.DEVNULL,
-        )  # fmt: skip
-        return f"tcp://127.0.0.1:{port}", sched, worker
-
     out = tmp_path / "d.jsonl"
     jobs = jobs_of(sleepy, *[1.0 + 0.01 * k for k in range(8)])
-    address, sched, worker = start_cluster()
-    try:
+    with separate_cluster(1) as (address, sched, _):
         written = []
 
         def kill_after_three(done, total):
@@ -545,33 +530,191 @@ def test_a_scheduler_killed_mid_sweep_records_no_job_it_did_not_run(tmp_path, ca
                 sched.kill()
 
         with pytest.raises(SweepIncomplete, match=r"(\d) of 8 jobs not run: the Dask cluster lost"):
-            run_sweep(jobs, out, scheduler=_wait_for(address), progress=kill_after_three)
+            run_sweep(jobs, out, scheduler=address, progress=kill_after_three)
         kept = read_records(out)
         assert 3 <= len(kept) < 8 and all(r["status"] == "ok" for r in kept.values())
         # distributed's own log of the lost connection (a traceback on stderr) is not
         # shown: the SweepIncomplete line says it
         assert not [r for r in caplog.records if r.name.startswith("distributed.")]
-    finally:
-        for p in (sched, worker):
-            p.kill()
-            p.wait()
-    address, sched, worker = start_cluster()
-    try:
-        rest = run_sweep(jobs, out, scheduler=_wait_for(address), progress=False)
-    finally:
-        for p in (sched, worker):
-            p.kill()
-            p.wait()
+    with separate_cluster(1) as (address, _, _):
+        rest = run_sweep(jobs, out, scheduler=address, progress=False)
     assert (rest.ran, rest.skipped, rest.failed) == (8 - len(kept), len(kept), 0)
     assert len(lines(out)) == 8
 
 
-def _wait_for(address: str, timeout: float = 60.0) -> str:
-    """address once its scheduler has a worker."""
+def counted_cct(inputs):
+    """`cct_job`, each run's start and end appended to the file $STABCTL_TEST_RUNS (one
+    line each: start|end, key, pid), so that a test counts how often each job ran."""
+    key = inputs["key_for_count"]
+    job = {k: v for k, v in inputs.items() if k != "key_for_count"}
+    with open(os.environ["STABCTL_TEST_RUNS"], "a") as f:
+        f.write(f"start {key} {os.getpid()}\n")
+    try:
+        return cct_job(job)
+    finally:  # a raised verdict ends the job too
+        with open(os.environ["STABCTL_TEST_RUNS"], "a") as f:
+            f.write(f"end {key} {os.getpid()}\n")
+
+
+@pytest.mark.dask
+def test_a_worker_killed_mid_screening_loses_no_job_and_repeats_none(tmp_path, caplog):
+    """Kundur line faults (error_check off) on a scheduler with two workers started apart
+    (`dask worker --nthreads 1 --no-nanny`), one SIGKILLed mid-sweep while it runs a job:
+    Dask runs that job on the other worker; each job is in the file once, ok, with the CCT
+    the same search gives in this process; no finished job ran again (the finding: the
+    finished jobs of the dead worker ran again, their futures being still held); the loss
+    is said on the sweep's log."""
+    pytest.importorskip("distributed")
+    faults = [LineFault(b, f, t) for t in (1.0, 1.5) for b, f in ((3, 101), (13, 101), (13, 14))]
+    faults += [LineFault(3, 101, 2.0), LineFault(13, 101, 2.0)]
+    cct = cct_jobs("kundur", faults, search=SearchOptions(error_check=False))
+    jobs = [Job(j.key, counted_cct, {**j.inputs, "key_for_count": j.key}) for j in cct]
+    reference = run_sweep(cct, tmp_path / "here.jsonl", workers=1, progress=False).records
+    runs = tmp_path / "runs.txt"
+    out = tmp_path / "dask.jsonl"
+    killed: list[int] = []
+    with separate_cluster(2, {"STABCTL_TEST_RUNS": str(runs)}) as (address, _, workers):
+
+        def kill_at_second(done, total):
+            # the worker of the record just written has begun its next job (0.4-0.8 s)
+            if done == 2:
+                pid = int(read_records(out)[last_key(out)]["worker"].rsplit(":", 1)[1])
+                [worker] = [w for w in workers if w.pid == pid]
+                worker.kill()
+                killed.append(pid)
+
+        with caplog.at_level("WARNING", logger="stabctl.parallel"):
+            rep = run_sweep(jobs, out, scheduler=address, progress=kill_at_second)
+    assert killed and (rep.ran, rep.failed) == (len(jobs), 0)
+    recs = lines(out)
+    assert sorted(r["key"] for r in recs) == sorted(j.key for j in jobs)  # each once
+    for r in recs:
+        assert r["status"] == "ok"
+        assert r["result"]["cct_s"] == reference[r["key"]]["result"]["cct_s"]
+    assert killed[0] not in {int(r["worker"].rsplit(":", 1)[1]) for r in recs[2:]}
+    marks = [line.split() for line in runs.read_text().splitlines()]
+    ends = sorted(key for what, key, _ in marks if what == "end")
+    assert ends == sorted(j.key for j in jobs)  # every job finished once, none again
+    on_killed = {(what, key) for what, key, pid in marks if int(pid) == killed[0]}
+    cut = {key for what, key in on_killed if what == "start" and ("end", key) not in on_killed}
+    starts = collections.Counter(key for what, key, _ in marks if what == "start")
+    # the job cut by the kill ran again, to its end, on the other worker; no other
+    assert len(cut) <= 1 and {key for key, n in starts.items() if n > 1} == cut
+    assert max(starts.values()) <= 2
+    assert "Dask worker(s) lost: 1 of 2 left" in caplog.text
+
+
+@pytest.mark.dask
+def test_a_sweep_whose_last_worker_dies_records_no_job_it_did_not_run(tmp_path, monkeypatch):
+    """The one worker of a cluster started apart killed mid-sweep (the finding: the sweep
+    waited for ever): after DASK_NO_WORKER_S without a worker, SweepIncomplete names the
+    jobs not run; the finished ones are recorded, none as failed."""
+    pytest.importorskip("distributed")
+    from stabctl.parallel import SweepIncomplete
+
+    monkeypatch.setattr("stabctl.parallel.DASK_NO_WORKER_S", 2.0)
+    out = tmp_path / "d.jsonl"
+    jobs = jobs_of(sleepy, *[0.5 + 0.01 * k for k in range(6)])
+    with separate_cluster(1) as (address, _, [worker]):
+
+        def kill_at_second(done, total):
+            if done == 2:
+                worker.kill()
+
+        t0 = time.perf_counter()
+        with pytest.raises(
+            SweepIncomplete,
+            match=r"4 of 6 jobs not run: the Dask cluster at tcp://127.0.0.1:\d+ has had no "
+            r"worker for 2 s \(its last one died or left; not run: sleepy/0.5\d, ",
+        ):
+            run_sweep(jobs, out, scheduler=address, progress=kill_at_second)
+    assert time.perf_counter() - t0 < 30
+    kept = lines(out)
+    assert len(kept) == 2 and all(r["status"] == "ok" for r in kept)
+
+
+def marked_sleep(inputs):
+    """Sleep inputs["x"] s; the start and the end appended to $STABCTL_TEST_RUNS."""
+    with open(os.environ["STABCTL_TEST_RUNS"], "a") as f:
+        f.write(f"start {inputs['x']} {os.getpid()}\n")
+    time.sleep(inputs["x"])
+    with open(os.environ["STABCTL_TEST_RUNS"], "a") as f:
+        f.write(f"end {inputs['x']} {os.getpid()}\n")
+    return {"x": inputs["x"], "pid": os.getpid()}
+
+
+@pytest.mark.dask
+def test_worker_pool_on_dask_survives_a_killed_worker_without_rerunning_finished_jobs(
+    tmp_path,
+):
+    """`worker_pool`'s map (place --scheduler) on two workers started apart, one killed
+    while it runs a job: every result, in job order; every job ran to its end once (the
+    finding: the futures were all held until the end, so Dask ran the dead worker's
+    finished jobs again)."""
+    pytest.importorskip("distributed")
+    from stabctl.parallel import worker_pool
+
+    runs = tmp_path / "runs.txt"
+    jobs = [{"x": 0.4 + 0.01 * k} for k in range(8)]
+    killed: list[int] = []
+    with separate_cluster(2, {"STABCTL_TEST_RUNS": str(runs)}) as (address, _, workers):
+
+        def kill_at_second(done, total):
+            if done == 2:
+                ended = [line.split() for line in runs.read_text().splitlines()]
+                pid = int(next(pid for what, _, pid in reversed(ended) if what == "end"))
+                [worker] = [w for w in workers if w.pid == pid]
+                worker.kill()
+                killed.append(pid)
+
+        with worker_pool(1, address) as run_map:
+            results = run_map(marked_sleep, jobs, done=kill_at_second)
+    assert killed and [r["x"] for r in results] == [j["x"] for j in jobs]
+    marks = [line.split() for line in runs.read_text().splitlines()]
+    ends = collections.Counter(x for what, x, _ in marks if what == "end")
+    assert sorted(ends) == sorted(str(j["x"]) for j in jobs) and set(ends.values()) == {1}
+
+
+def last_key(path: Path) -> str:
+    return lines(path)[-1]["key"]
+
+
+@contextmanager
+def separate_cluster(workers: int, env: dict | None = None):
+    """A Dask scheduler and `workers` single-threaded workers (no nanny), each its own
+    process (`python -m distributed.cli.dask_scheduler` / `dask_worker`, as on a cluster)
+    on a free loopback port, with this file's folder and this process's PYTHONPATH on
+    theirs (they import the job functions and stabctl by name); yields (address, the
+    scheduler's Popen, the workers' Popens) once every worker is in; all killed after."""
+    import socket
+
+    path = [str(Path(__file__).parent), *filter(None, [os.environ.get("PYTHONPATH")])]
+    env = {**os.environ, **(env or {}), "PYTHONPATH": os.pathsep.join(path)}
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    local = ["--host", "127.0.0.1", "--no-dashboard"]
+    scheduler = ["distributed.cli.dask_scheduler", "--port", str(port), *local]
+    worker = ["distributed.cli.dask_worker", address, "--nthreads", "1", "--no-nanny", *local]
+    procs = [
+        subprocess.Popen([sys.executable, "-m", *args], env=env, stderr=subprocess.DEVNULL)
+        for args in [scheduler] + [worker] * workers
+    ]
+    try:
+        yield _wait_for(address, workers), procs[0], procs[1:]
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait()
+
+
+def _wait_for(address: str, workers: int = 1, timeout: float = 60.0) -> str:
+    """address once its scheduler has `workers` workers."""
     from distributed import Client
 
     with Client(address, timeout=timeout) as client:
-        client.wait_for_workers(1, timeout=timeout)
+        client.wait_for_workers(workers, timeout=timeout)
     return address
 
 
