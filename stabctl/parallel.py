@@ -409,24 +409,30 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
         ]
 
 
+def _finished(futures, workers):
+    """Dask futures as each finishes; while none is ready, the cluster's workers are
+    checked every 10 ms (`_DaskWorkers.check`, which raises `_NoWorker`)."""
+    from distributed import as_completed
+
+    pending = as_completed(futures)
+    while not pending.is_empty():
+        if not pending.has_ready():
+            workers.check()
+            time.sleep(0.01)
+            continue
+        yield next(pending)
+
+
 def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> list:
     """`worker_pool`'s map on Dask: each result taken, and its future released, as it
     finishes (so that a worker's death makes no finished job run again: a job its worker
     was running runs again on another); a job's exception is raised; `SweepIncomplete`
     when the cluster has had no worker for DASK_NO_WORKER_S."""
-    from distributed import as_completed
-
     futures = {client.submit(func, j, pure=False): i for i, j in enumerate(jobs)}
     results: list = [None] * len(jobs)
     workers = _DaskWorkers(client)
-    pending = as_completed(futures)
     try:
-        while not pending.is_empty():
-            if not pending.has_ready():
-                workers.check()
-                time.sleep(0.01)
-                continue
-            fut = next(pending)
+        for fut in _finished(futures, workers):
             try:
                 results[futures[fut]] = _dask_result(fut, workers)
             finally:
@@ -793,7 +799,7 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
     otherwise are not recorded: `SweepIncomplete` once the others are in, naming them;
     this includes every job left when the cluster has had no worker for
     DASK_NO_WORKER_S after having one (its last worker died)."""
-    from distributed import KilledWorker, as_completed
+    from distributed import KilledWorker
 
     lost: list[str] = []
     # distributed logs a traceback of its own when the scheduler goes away; the jobs it
@@ -814,13 +820,7 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
             for j in jobs
         }
         workers = _DaskWorkers(client)
-        pending = as_completed(futures)
-        while not pending.is_empty():
-            if not pending.has_ready():
-                workers.check()
-                time.sleep(0.01)
-                continue
-            fut = next(pending)
+        for fut in _finished(futures, workers):
             job = futures.pop(fut)
             try:
                 rec = _dask_result(fut, workers)
