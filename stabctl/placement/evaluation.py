@@ -293,7 +293,10 @@ class _Memo:
     """A Simulator whose `run` simulates each distinct call once (events, end, step,
     separation settings, fleet) and counts the runs simulated (`n_runs`); a run that
     raised is not kept (its caller may mark the partial result).  The simulator is
-    deterministic: a repeated run would give the same trajectory."""
+    deterministic: a repeated run would give the same trajectory.  Its runs record the
+    bus voltages whatever a caller asks (`Simulator.run`'s ``voltages``): the placement's
+    own checks read the device buses' (`stabctl.stability.sime.device_modes`) on the runs
+    it shares with the CCT search."""
 
     def __init__(self, sim):
         self._sim, self._done, self.n_runs = sim, {}, 0
@@ -311,6 +314,7 @@ class _Memo:
         stop_at_separation: bool = False,
         storage=None,
         monitor=None,
+        voltages: bool = True,  # recorded always (class docstring)
     ):
         h = self._sim.default_h if h is None else h
         key = (
