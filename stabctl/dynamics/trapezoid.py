@@ -64,9 +64,9 @@ the held states' rows are taken out of each solve (`_Step.solve`), so that a mat
 while other states were held stays right; the first iterate is one chord iteration from
 x_k (x_k + h/2 M^-1 (f0 + f(x_k))) instead of the forward-Euler predictor x_k + h f(x_k),
 whose step the stiff regulators (EXAC2 K_A 1000, T_A 0.05 s) took far past their limits.
-ACTIVSg2000's 1.6 s run with a fault at bus 2021 (1.0-1.1 s, line 2021-2002 tripped) at
-1/60 s: 14 matrices and no halving instead of 67 matrices and three halvings of its first
-faulted step (docs/scale.md).
+ACTIVSg2000 with a fault at bus 2021 (1.0-1.1 s, line 2021-2002 tripped) at 1/60 s: 14
+matrices in a 1.6 s run and no step halved, against 67 matrices in a 1.3 s run and its
+first faulted step halved three times before (docs/cli.md, its PSS/E section).
 
 Heun's predictor-corrector (`stabctl.dynamics.integrator`) stays the simulator's method:
 compiled, with the storage devices' switching located inside the step and the PSTess event
