@@ -33,7 +33,15 @@ step (docs/cli.md) and tests/data/psse/smib_exac2.dyr's in its fifth, until the 
 halved.  Gated at LOCK (by then a converging iteration is near its step's solution,
 where a clamped state's residual points inside) it is meant to act only where Newton
 would not converge: benchmarks/fingerprint.py's runs and the ANDES comparisons are
-bit-identical with it.  A state held on a limit at the end of a step starts the next one
+bit-identical with it.  Likewise, in an iteration that shrank its last correction by less
+than SLOW after the LOCK-th iterate, an integrator the evaluation has stopped at this
+iterate (its derivative exactly 0) that ran at an earlier one is held where it stopped:
+a non-windup PI (IEEE 421.5-2016 E.6, `stabctl.models.blocks.pi_nonwindup`: EXPIC1's)
+stops its integral while its output is at a limit and its input drives it out, without
+clamping the state, so that the rule's equation has no solution where the step's update
+crosses the output's limit (ACTIVSg2000's EXPIC1 at bus 8079 in its first faulted step at
+1/60 s: the integral alternated by 5.4e-3 between stopped and running for 25 iterations,
+the step was halved three times).  A state held on a limit at the end of a step starts the next one
 (in the same network stage) with derivative 0 while still driven into it, and a held
 state's row of the matrix is taken 0 (`_Step.start`, `_Step.factorise`).  The other
 slots, the memory of discrete logic (REECA1's timers and held values), are written
@@ -47,6 +55,18 @@ Ipmax hold ending at 2.1 s). The step is
 the grid's, always: ANDES's own "fixed" step shrinks by 0.95 after any step that took 7-14
 Newton iterations (``ImplicitIter.niter_next_h``), so a like-for-like comparison holds
 ANDES's step too (`stabctl.io.andes.andes_system`, ``fixed_step``).
+
+Above SPARSE_ABOVE states (ACTIVSg2000) the matrix is sparse and a matrix costs seconds
+(some 200 iterations), so the iteration keeps it from step to step and from stage to stage
+and forms it again only where it would not converge with it (`_too_slow`, at most
+MAX_FORMED times a step); the matrix holds every state's free row (`_Step.factorise`) and
+the held states' rows are taken out of each solve (`_Step.solve`), so that a matrix formed
+while other states were held stays right; the first iterate is one chord iteration from
+x_k (x_k + h/2 M^-1 (f0 + f(x_k))) instead of the forward-Euler predictor x_k + h f(x_k),
+whose step the stiff regulators (EXAC2 K_A 1000, T_A 0.05 s) took far past their limits.
+ACTIVSg2000 with a fault at bus 2021 (1.0-1.1 s, line 2021-2002 tripped) at 1/60 s: 14
+matrices in a 1.6 s run and no step halved, against 67 matrices in a 1.3 s run and its
+first faulted step halved three times before (docs/cli.md, its PSS/E section).
 
 Heun's predictor-corrector (`stabctl.dynamics.integrator`) stays the simulator's method:
 compiled, with the storage devices' switching located inside the step and the PSTess event
@@ -110,6 +130,15 @@ REL_STEP = 1e-7
 #: exact): the converged step is the same within TOL, the iteration contracts by about
 #: 3e-4 more per iterate there (the matrix's dropped part, measured).
 SPARSE_ABOVE, SPARSE_DROP = 2000, 1e-6
+#: sparse, the matrix is formed again at most this many times in one step's iteration (a
+#: matrix takes seconds there: ACTIVSg2000's first faulted step formed it 14 times in its
+#: 30 iterations, alternating on a kink no matrix resolves, before it was halved)
+MAX_FORMED = 2
+#: sparse, the matrix is formed again only where the iteration will not converge with it
+#: within MAX_ITER at the rate of its last iteration, or contracts by less than
+#: SLOW_SPARSE, while its correction is above SLOW_FLOOR (`_too_slow`): a matrix costs as
+#: much as some 200 iterations there (ACTIVSg2000: 4 to 6 s against 20 ms)
+SLOW_SPARSE, SLOW_FLOOR = 0.9, 1e-7
 
 
 class _Evaluation:
@@ -154,6 +183,31 @@ class _Evaluation:
         (`_column_groups`): columns (over act) differenced together in one evaluation,
         each with the rows (over act) it can reach; the other columns one at a time."""
         A = np.zeros((act.size, act.size))
+        for rows, c, column in self._columns(x, f_x, stage, act, groups):
+            A[rows, c] = column
+        return A
+
+    def chord_matrix(self, x, f_x, stage, act, groups, h) -> sp.csc_matrix:
+        """I - h/2 A, A = `jacobian`, sparse, its off-diagonal entries (and the diagonal
+        ones of h/2 A) below SPARSE_DROP in magnitude left out: the same numbers as the
+        dense matrix thinned, gathered column by column without forming it (ACTIVSg2000:
+        a dense A of 6467 x 6467 and the passes over it took 3 s of a matrix's 8)."""
+        r_all, c_all, v_all = [], [], []
+        for rows, c, column in self._columns(x, f_x, stage, act, groups):
+            v = column * (-0.5 * h)
+            keep = np.abs(v) >= SPARSE_DROP
+            r_all.append(np.arange(act.size)[rows][keep])
+            c_all.append(np.full(int(keep.sum()), c))
+            v_all.append(v[keep])
+        n = act.size
+        A = sp.csc_matrix(
+            (np.concatenate(v_all), (np.concatenate(r_all), np.concatenate(c_all))), (n, n)
+        )
+        return (A + sp.identity(n, format="csc")).tocsc()
+
+    def _columns(self, x, f_x, stage, act, groups):
+        """The Jacobian's columns (`jacobian`): (rows over act, a slice for all of them;
+        column over act; the difference quotients of those rows)."""
         alone = np.ones(act.size, bool)
         for cols, rows in groups:
             q = act[cols]
@@ -162,15 +216,14 @@ class _Evaluation:
             xp[q] += d
             df = self._difference(xp, f_x, stage, act)
             for c, r, dc in zip(cols, rows, d, strict=True):
-                A[r, c] = df[r] / dc
+                yield r, c, df[r] / dc
             alone[cols] = False
         for c in np.flatnonzero(alone):
             q = act[c]
             d = REL_STEP * max(1.0, abs(x[q]))
             xp = x.copy()
             xp[q] += d
-            A[:, c] = self._difference(xp, f_x, stage, act) / d
-        return A
+            yield slice(None), c, self._difference(xp, f_x, stage, act) / d
 
     def _difference(self, xp, f_x, stage, act) -> np.ndarray:
         """f(xp) - f_x over act, with a copy of the kept buses' memory."""
@@ -201,6 +254,7 @@ class _Step:
         self.groups = groups if self.sparse else ()
         self.key: tuple = ()  # (stage, step) the factorised matrix belongs to (`_key`)
         self.lu: Any = None  # solves with the factorised matrix (`factorise`)
+        self.border: dict = {}  # sparse: the held sets' borderings of the matrix (`solve`)
         # the states held on a limit at the last iterate of the last step (derivative 0
         # there) and the side of it (+1 upper, -1 lower): `start`
         self.held_end = np.zeros(0, np.int64)
@@ -227,32 +281,68 @@ class _Step:
             f0[q[into]] = 0.0
         return f0
 
-    def factorise(self, x, f_x, stage, h, held=None) -> None:
+    def factorise(self, x, f_x, stage, h, held=None, side=None) -> None:
         """Factorise I - h/2 A at x; held: the rows (over the active states) of the states
-        held on a limit there, whose derivative is 0 while held: their rows of A are
-        taken 0, as ANDES leaves a pegged state's Jacobian row out of its iteration (its
-        residual set to 0).  A forward difference there crosses the limit's kink: REGCA1's
-        Ip held on its LVPL is freed by a perturbation of the filtered voltage the LVPL
-        follows, a derivative of 75 pu/s over 1e-7 (kundur_wtdta1: the next iterate's Ip
-        at -700 pu and the step halved twice).  Sparse, A is differenced against one more
-        evaluation at x as the evaluation has clamped it, not against f_x: a state the
+        held on a limit there, whose derivative is 0 while held.  Dense, their rows of A
+        are taken 0, as ANDES leaves a pegged state's Jacobian row out of its iteration
+        (its residual set to 0).  A forward difference there crosses the limit's kink:
+        REGCA1's Ip held on its LVPL is freed by a perturbation of the filtered voltage
+        the LVPL follows, a derivative of 75 pu/s over 1e-7 (kundur_wtdta1: the next
+        iterate's Ip at -700 pu and the step halved twice).
+
+        Sparse (the matrix kept from step to step while the states held change under
+        it), A is differenced at x with each held state moved inside its limit (side:
+        +1 upper, -1 lower, over all states) by twice its difference step, so that its
+        row is its free one (the limiter's kink not crossed), and the rows of the states
+        held at an iterate are taken out of the solve there instead (`solve`).  With the
+        held rows zeroed in the matrix (before), a state held when the matrix was formed
+        and free at a later iterate had a row of 0, its correction the residual itself:
+        ACTIVSg2000's EXAC2 V_A (T_A 0.05 s) then converged by h/(2 T_A) = 0.17 an
+        iterate at 1/60 s, 5 to 13 iterations a step after its fault and a matrix formed
+        again every one or two steps.  A is differenced against one more evaluation at
+        that point as the evaluation has clamped it, not against f_x: a state the
         evaluation clamped onto a limit, its derivative pointing inside, keeps in f_x the
         derivative of the iterate before the clamp, and its row of A was that gap over
         the difference step in every column (ACTIVSg2000's first faulted step: EXAC2 V_A
         past VAMAX by 5.4 pu, T_A 0.05 s: 1e9 1/s), a matrix that slowed the iteration it
         was formed for."""
-        if self.sparse:  # the derivatives at x as the evaluation has clamped it
-            f_x = self.f(x.copy(), stage, kept=self.f.kept_copy())
-        A = self.f.jacobian(x, f_x, stage, self.act, self.groups)
-        if held is not None:
-            A[held, :] = 0.0
-        M = np.eye(self.act.size) - 0.5 * h * A
         if self.sparse:
-            M[np.abs(M) < SPARSE_DROP] = 0.0
-            self.lu = spla.splu(sp.csc_matrix(M)).solve
+            x = x.copy()
+            if held is not None and side is not None and held.any():
+                q = self.act[held]
+                x[q] -= side[q] * 2.0 * REL_STEP * np.maximum(1.0, np.abs(x[q]))
+            f_x = self.f(x.copy(), stage, kept=self.f.kept_copy())
+            M = self.f.chord_matrix(x, f_x, stage, self.act, self.groups, h)
+            self.lu = spla.splu(M).solve
+            self.border = {}
         else:
+            A = self.f.jacobian(x, f_x, stage, self.act, self.groups)
+            if held is not None:
+                A[held, :] = 0.0
+            M = np.eye(self.act.size) - 0.5 * h * A
             self.lu = partial(sla.lu_solve, sla.lu_factor(M))
         self.key = self._key(stage, h)
+
+    def solve(self, r, held) -> np.ndarray:
+        """The correction dy of the chord iteration for the residual r (over the active
+        states) with the states held (over the active states) fixed: dense, the matrix's
+        (their rows 0 when it was formed); sparse, the matrix's with the held rows
+        replaced by the identity's (dy = 0 there, the other rows solved exactly), through
+        the factors of the whole matrix M bordered by the held columns E:
+        dy = z - W S^-1 z_H with z = M^-1 r, W = M^-1 E, S = W_H (one solve per held
+        state, when the held set changes)."""
+        z = self.lu(r)
+        if not self.sparse or not held.any():
+            return z
+        rows = np.flatnonzero(held)
+        key = rows.tobytes()
+        if key not in self.border:
+            E = np.zeros((held.size, rows.size))
+            E[rows, np.arange(rows.size)] = 1.0
+            W = self.lu(E)
+            self.border[key] = (W, sla.lu_factor(W[rows]))
+        W, S = self.border[key]
+        return z - W @ sla.lu_solve(S, z[rows])
 
     def __call__(self, x, f_x, stage, h, f0=None) -> tuple[np.ndarray, int]:
         """(x_k+1, -1) from x_k = x (derivatives f_x; f0 those the rule takes at x,
@@ -262,14 +352,17 @@ class _Step:
         step's solution: ieee14_wt3 after clearing a bus-8 fault through j0.05 pu, the
         first iterate's REGCA1 Ip at -16 pu, which a half step does not reach)."""
         if self.key != self._key(stage, h):
-            self.factorise(x, f_x, stage, h, np.isin(self.act, self.held_end))
+            self.factorise(x, f_x, stage, h, np.isin(self.act, self.held_end), self.side)
         f0 = f_x if f0 is None else f0
         act, rest, y = self.act, self.rest, x + h * f_x
+        if self.sparse:  # the linearly implicit predictor: one chord iteration from x
+            y[act] = x[act] + 0.5 * h * self.solve((f0 + f_x)[act], np.isin(act, self.held_end))
         pegged = np.zeros(x.size, bool)
+        stirred = np.zeros(x.size, bool)  # a derivative not 0 at an iterate of the step
         side = np.zeros(x.size)
         held = np.zeros(act.size, bool)
         self.held_end = np.zeros(0, np.int64)
-        last, slow = np.zeros(STALL), False
+        last, slow, formed = np.zeros(STALL), False, 0
         for it in range(MAX_ITER):
             y_in = y.copy()
             try:
@@ -283,19 +376,30 @@ class _Step:
             now = (pegged & (f_y == 0.0))[act]
             if it > LOCK:
                 # clamped at this iterate with the rule's update beyond the limit: held
-                # there (`_pushed`)
+                # there (`_pushed`); in a slow iteration, an integrator stopped at this
+                # iterate that ran at an earlier one: held where it stopped (module
+                # docstring)
                 now |= _pushed(y_in, y, r)[act]
+                if it >= 2 and last[(it - 1) % STALL] > SLOW * last[(it - 2) % STALL]:
+                    now |= (stirred & (f_y == 0.0))[act]  # in a slow iteration only
+            stirred |= f_y != 0.0
             held = now | (held & (it > LOCK))
             r[act[held]] = 0.0
-            if slow:
-                self.factorise(y, f_y, stage, h, held)
-            dy = self.lu(r[act])
+            if slow and formed < (MAX_FORMED if self.sparse else MAX_ITER):
+                self.factorise(y, f_y, stage, h, held, side)
+                formed += 1
+            dy = self.solve(r[act], held)
             dy[held] = 0.0
             y[act] -= dy
             y[rest] = x[rest] + h * f0[rest]
             worst = int(np.argmax(np.abs(dy)))
             last[it % STALL] = abs(dy[worst])
-            slow = it >= 1 and last[it % STALL] > SLOW * last[(it - 1) % STALL] and not slow
+            if self.sparse:
+                slow = (
+                    it >= 1 and not slow and _too_slow(last[(it - 1) % STALL], last[it % STALL], it)
+                )
+            else:
+                slow = it >= 1 and last[it % STALL] > SLOW * last[(it - 1) % STALL] and not slow
             self.held_end, self.side = act[held], side
             if last[it % STALL] <= TOL:
                 return y, -1
@@ -396,6 +500,17 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             )
             _fail(sim, grid, rec, k, wall, limit, msg, NumericalInstabilityError)
     return sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit)
+
+
+def _too_slow(before, now, it) -> bool:
+    """Sparse: whether the chord iteration, its last two corrections before and now (the
+    largest of a state) at iteration it, is to have its matrix formed again: now above
+    SLOW_FLOOR and either contracting by less than SLOW_SPARSE or, at its rate now / before,
+    not reaching TOL within MAX_ITER iterations."""
+    if now <= SLOW_FLOOR:
+        return False
+    rate = now / before if before > 0.0 else np.inf
+    return rate > SLOW_SPARSE or it + np.log(TOL / now) / np.log(rate) > MAX_ITER - 1
 
 
 def _pushed(y_in, y, r) -> np.ndarray:

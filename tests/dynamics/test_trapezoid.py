@@ -165,13 +165,40 @@ def test_trapezoids_grouped_jacobian_is_the_column_by_column_one(kundur, monkeyp
     monkeypatch.setattr(trapezoid, "SPARSE_ABOVE", 0)
     factorise, checked = trapezoid._Step.factorise, []
 
-    def both(step, x, f_x, stage, h, held=None):
+    def both(step, x, f_x, stage, h, held=None, side=None):
         base = step.f(x.copy(), stage, kept=step.f.kept_copy())
         grouped = step.f.jacobian(x, base, stage, step.act, step.groups)
         assert sum(cols.size for cols, _ in step.groups) == 32  # of Kundur's 56 states
         checked.append(np.array_equal(grouped, step.f.jacobian(x, base, stage, step.act)))
-        factorise(step, x, f_x, stage, h, held)
+        factorise(step, x, f_x, stage, h, held, side)
 
     monkeypatch.setattr(trapezoid._Step, "factorise", both)
     kundur.run(FAULT, 3.0, h=0.005, method="trapezoid")
     assert len(checked) >= 3 and all(checked)
+
+
+def test_trapezoids_sparse_solve_takes_the_held_rows_out():
+    """Sparse, the chord matrix is kept while the held states change under it: a held
+    state's correction is 0 and the other rows are solved exactly, the matrix's rows of
+    the held states replaced by the identity's (what the dense path's zeroed rows of A
+    give, I - h/2 A with row i of A 0), through the factors of the whole matrix bordered
+    by the held columns (`trapezoid._Step.solve`).  Checked against a direct solve of the
+    row-replaced matrix (a random well-conditioned one) to rounding."""
+    rng = np.random.default_rng(52)
+    n = 40
+    M = np.eye(n) + 0.3 * rng.standard_normal((n, n)) * (rng.random((n, n)) < 0.2)
+    step = trapezoid._Step.__new__(trapezoid._Step)
+    step.sparse = True
+    step.lu = trapezoid.spla.splu(trapezoid.sp.csc_matrix(M)).solve
+    step.border = {}
+    r = rng.standard_normal(n)
+    for rows in ([], [3], [0, 7, 21, 39], [3]):
+        held = np.zeros(n, bool)
+        held[rows] = True
+        r_held = np.where(held, 0.0, r)  # the iteration's residual of a held state is 0
+        replaced = M.copy()
+        replaced[held] = np.eye(n)[held]
+        dy = step.solve(r_held, held)
+        assert np.allclose(dy, np.linalg.solve(replaced, r_held), rtol=0, atol=1e-12)
+        assert np.all(np.abs(dy[held]) < 1e-14)
+    assert len(step.border) == 2  # one bordering per held set, kept
