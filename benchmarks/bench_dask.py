@@ -29,12 +29,9 @@ import collections
 import json
 import os
 import signal
-import socket
-import subprocess
 import sys
 import tempfile
 import time
-from contextlib import contextmanager
 from pathlib import Path
 
 from stabctl.io import load_case
@@ -43,6 +40,8 @@ from stabctl.stability.cct import SearchOptions, cct_job, cct_jobs
 from stabctl.stability.screening import screening_faults
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "tests"))
+from dask_cluster import separate_cluster  # noqa: E402 - tests/dask_cluster.py
 
 
 def counted(inputs):
@@ -58,44 +57,12 @@ def counted(inputs):
             f.write(f"end {os.getpid()} {tag}\n")
 
 
-@contextmanager
-def cluster(workers: int, runs: Path):
-    """The address of a scheduler and `workers` single-threaded workers, each
-    its own process, once the workers are in; all killed at the end."""
-    env = {
-        **os.environ,
-        "BENCH_DASK_RUNS": str(runs),
-        "PYTHONPATH": os.pathsep.join(filter(None, [str(HERE), os.environ.get("PYTHONPATH")])),
-    }
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    address = f"tcp://127.0.0.1:{port}"
-    local = ["--host", "127.0.0.1", "--no-dashboard"]
-    scheduler = ["distributed.cli.dask_scheduler", "--port", str(port), *local]
-    worker = ["distributed.cli.dask_worker", address, "--nthreads", "1", "--no-nanny", *local]
-    procs = [
-        subprocess.Popen([sys.executable, "-m", *args], env=env, stderr=subprocess.DEVNULL)
-        for args in [scheduler] + [worker] * workers
-    ]
-    try:
-        from distributed import Client
-
-        with Client(address, timeout=60) as client:
-            client.wait_for_workers(workers, timeout=120)
-        yield address
-    finally:
-        for p in procs:
-            p.kill()
-            p.wait()
-
-
 def sweep(jobs, workers: int, tmp: Path, name: str, kill_at: int | None = None) -> dict:
     """One run on a new cluster; returns its wall time, records, execution marks and the
     1-minute load average before and after (other users' jobs on the cores)."""
     out, runs = tmp / f"{name}.jsonl", tmp / f"{name}.runs"
     killed: list[int] = []
-    with cluster(workers, runs) as address:
+    with separate_cluster(workers, {"BENCH_DASK_RUNS": str(runs)}, (HERE,)) as (address, _, _):
 
         def progress(done, total):
             if done == kill_at:

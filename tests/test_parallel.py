@@ -10,11 +10,11 @@ import signal
 import subprocess
 import sys
 import time
-from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from dask_cluster import separate_cluster
 
 from stabctl.cli import main
 from stabctl.errors import InputError
@@ -677,45 +677,6 @@ def test_worker_pool_on_dask_survives_a_killed_worker_without_rerunning_finished
 
 def last_key(path: Path) -> str:
     return lines(path)[-1]["key"]
-
-
-@contextmanager
-def separate_cluster(workers: int, env: dict | None = None):
-    """A Dask scheduler and `workers` single-threaded workers (no nanny), each its own
-    process (`python -m distributed.cli.dask_scheduler` / `dask_worker`, as on a cluster)
-    on a free loopback port, with this file's folder and this process's PYTHONPATH on
-    theirs (they import the job functions and stabctl by name); yields (address, the
-    scheduler's Popen, the workers' Popens) once every worker is in; all killed after."""
-    import socket
-
-    path = [str(Path(__file__).parent), *filter(None, [os.environ.get("PYTHONPATH")])]
-    env = {**os.environ, **(env or {}), "PYTHONPATH": os.pathsep.join(path)}
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    address = f"tcp://127.0.0.1:{port}"
-    local = ["--host", "127.0.0.1", "--no-dashboard"]
-    scheduler = ["distributed.cli.dask_scheduler", "--port", str(port), *local]
-    worker = ["distributed.cli.dask_worker", address, "--nthreads", "1", "--no-nanny", *local]
-    procs = [
-        subprocess.Popen([sys.executable, "-m", *args], env=env, stderr=subprocess.DEVNULL)
-        for args in [scheduler] + [worker] * workers
-    ]
-    try:
-        yield _wait_for(address, workers), procs[0], procs[1:]
-    finally:
-        for p in procs:
-            p.kill()
-            p.wait()
-
-
-def _wait_for(address: str, workers: int = 1, timeout: float = 60.0) -> str:
-    """address once its scheduler has `workers` workers."""
-    from distributed import Client
-
-    with Client(address, timeout=timeout) as client:
-        client.wait_for_workers(workers, timeout=timeout)
-    return address
 
 
 # ------------------------------------------------------------------------------- CLI
