@@ -22,7 +22,7 @@ the step only), the wall time per CCT, and whether every CCT and half-step CCT o
 "sime" equals the bisection's (same 1 ms bracket).  ``--paper`` adds the paper's two
 faults under both conventions, with and without the error bar (the earlier table).
 For ACTIVSg2000 it also prints the N-1 projection: the bus and line screening's 5 206 CCT
-searches (2 000 buses, 3 206 line-end faults, issue 53's count) at the measured wall per
+searches (2 000 buses, 3 206 line-end faults) at the measured wall per
 search, on 2 cores with perfect scaling, against the 30 min target.
 Run: python benchmarks/bench_cct.py [--every 4] [--activsg] [--paper]
          [--systems kundur miniwecc]

@@ -91,7 +91,7 @@ def _dyr(tmp_path, flags=(1, 0, 0, 1, 0, 0), **cons):
 
 
 def test_control_flags_fill_their_columns(tmp_path):
-    """FreqFlag, VtripFlag, FtripFlag 1 (refused before issue 52) import into their
+    """FreqFlag, VtripFlag, FtripFlag 1 (refused by earlier versions) import into their
     columns with the CONs of the controls they switch on (the README's values)."""
     t = load_psse(RAW, _dyr(tmp_path, (1, 1, 0, 1, 1, 1))).converters
     assert (t.da_FreqFlag[0], t.da_VtripFlag[0], t.da_FtripFlag[0]) == (1.0, 1.0, 1.0)
@@ -180,7 +180,7 @@ def test_power_factor_control_without_power_is_refused(tmp_path):
 
 
 # ---------------------------------------------------------------------------------------
-# FreqFlag 1, VtripFlag 1, FtripFlag 1 (issue 52): the README's CONs (Ddn 20, Dup 0, fdbd
+# FreqFlag 1, VtripFlag 1, FtripFlag 1: the README's CONs (Ddn 20, Dup 0, fdbd
 # +-0.0006, Kpg 0.1, Kig 10, Pmax 1.1, Pmin 0, dPmax 0.5, dPmin -0.5, Tpord 0.02, vl0
 # 0.44, vl1 0.49, vh1 1.15, vh0 1.2, tvl* 0.16, Vrfrac 0.7, Tv 0.02) on MBASE 100 MVA =
 # the system base (device-base powers equal the system-base ones)
