@@ -574,31 +574,46 @@ def stream_probes(cwd: Path, head: bytes, body: list) -> list[tuple[Probe, str]]
             "middle of a frame",
         ),
     ):
-        srv, port = _fake_server(head, body[:40], tail)
-        p = Probe("2", what, cli(args_of(f"127.0.0.1:{port}")), needle=needle)
-        res = run(p.args, cwd, timeout=120)
-        srv.close()
+        p, res = _against_fake(
+            cwd,
+            head,
+            body[:40],
+            lambda port: Probe("2", what, cli(args_of(f"127.0.0.1:{port}")), needle=needle),
+            tail,
+        )
         v = verdict(p, res, cwd)
         if v == "ok" and "estimate track" in what and (cwd / "t.csv").exists():
             rows_kept = (cwd / "t.csv").read_text().count("\n") - 1
             v = "ok" if rows_kept > 0 else "t.csv without rows"
         (cwd / "t.csv").unlink(missing_ok=True)
         rows.append((p, v))
-    srv, port = _fake_server(head, body[:40])
-    p = Probe(
-        "2",
-        "pmu record --frames 1000 of a 40-frame stream",
-        cli(f"pmu record 127.0.0.1:{port} -o r.c37 --frames 1000"),
-        needle="40",
+    p, res = _against_fake(
+        cwd,
+        head,
+        body[:40],
+        lambda port: Probe(
+            "2",
+            "pmu record --frames 1000 of a 40-frame stream",
+            cli(f"pmu record 127.0.0.1:{port} -o r.c37 --frames 1000"),
+            needle="40",
+        ),
     )
-    res = run(p.args, cwd, timeout=120)
-    srv.close()
     v = verdict(p, res, cwd)
     if v == "ok":
         kept = cwd / "r.c37"
         v = "ok" if kept.exists() and kept.stat().st_size > len(head) else "frames not kept"
     rows.append((p, v))
     return rows
+
+
+def _against_fake(cwd: Path, head: bytes, body: list, probe_at, tail: bytes = b""):
+    """(probe, result) of ``probe_at(port)`` run against a `_fake_server` of these frames."""
+    srv, port = _fake_server(head, body, tail)
+    try:
+        p = probe_at(port)
+        return p, run(p.args, cwd, timeout=120)
+    finally:
+        srv.close()
 
 
 def _slow_server(head: bytes, body: list):
@@ -658,25 +673,21 @@ def endless_probes(cwd: Path, head: bytes, body: list) -> list[tuple[Probe, str]
     stop.set()
     srv.close()
     rows.append((p, v))
-    srv, port = _fake_server(head, body[:40])
-    p = Probe(
-        "7",
-        "pmu control --rate 30 against a 60 fps plant",
-        cli(f"pmu control kundur 127.0.0.1:{port} --esd-pct 5 --rate 30 --timeout 10"),
-        needle="60",
-    )
-    res = run(p.args, cwd, timeout=120)
-    srv.close()
-    rows.append((p, verdict(p, res, cwd)))
-    srv, port = _fake_server(head, body[:40])
-    p = Probe(
-        "2",
-        "pmu control, plant dies mid-stream",
-        cli(f"pmu control kundur 127.0.0.1:{port} --esd-pct 5 --timeout 10"),
-    )
-    res = run(p.args, cwd, timeout=120)
-    srv.close()
-    rows.append((p, verdict(p, res, cwd)))
+    for probe in (
+        lambda port: Probe(
+            "7",
+            "pmu control --rate 30 against a 60 fps plant",
+            cli(f"pmu control kundur 127.0.0.1:{port} --esd-pct 5 --rate 30 --timeout 10"),
+            needle="60",
+        ),
+        lambda port: Probe(
+            "2",
+            "pmu control, plant dies mid-stream",
+            cli(f"pmu control kundur 127.0.0.1:{port} --esd-pct 5 --timeout 10"),
+        ),
+    ):
+        p, res = _against_fake(cwd, head, body[:40], probe)
+        rows.append((p, verdict(p, res, cwd)))
     return rows
 
 
