@@ -12,6 +12,16 @@ from stabctl.io import load_case
 from stabctl.models import governors as gov
 
 
+def governor_row(case, **changed) -> list:
+    """The first governor row of `case` (gov_con values, in column order) with the fields
+    `changed` (by name) replaced."""
+    g = case.governors
+    row = [float(getattr(g, name)[0]) for name in g.columns()]
+    for name, value in changed.items():
+        row[gov.GOVERNOR.col(name) - 1] = value
+    return row
+
+
 def started(row, pm0: float):
     """(params, states, P_ref) of the tg_con row on Kundur's machine 1 at mechanical power
     pm0 (machine base)."""

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from governor_alone import WPIDHY, frequency_response, settled, started, threebus_dyr
+from governor_alone import WPIDHY, frequency_response, governor_row, settled, started, threebus_dyr
 
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
@@ -45,14 +45,6 @@ def test_imported_case_starts_at_rest(imported):
     assert residual < 1e-10, where
 
 
-def _row(imported, **changed):
-    g = imported.governors
-    row = [float(getattr(g, name)[0]) for name in g.columns()]
-    for name, value in changed.items():
-        row[gov.GOVERNOR.col(name) - 1] = value
-    return row
-
-
 def _closed_form(s, v=VALUES):
     """IEEEG2's mechanical power over the speed deviation at s (within the gate limits)."""
     governor = -v["K"] * (1 + s * v["T2"]) / ((1 + s * v["T1"]) * (1 + s * v["T3"]))
@@ -63,7 +55,7 @@ def test_frequency_response_is_the_closed_form(imported):
     """From 0.01 to 10 Hz the governor's response of P_m to the speed (its derivatives
     and output linearised by central differences, exact for its linear blocks) is the
     closed form within 1e-7 (relative); its steady-state gain is -K."""
-    p, x0, Pref = started(_row(imported), PM0)
+    p, x0, Pref = started(governor_row(imported), PM0)
     P = p.packed(Pref)
     freqs = (0.01, 0.1, 0.5, 1.0, 3.0, 10.0)
     H, gain = frequency_response(P, x0, freqs)
@@ -77,7 +69,7 @@ def test_steps_settle_as_the_closed_form_says(imported):
     """A step dP of P_ref: the water column first moves the power the other way, by -2
     dP (its high-frequency gain), then it settles at Pm0 + dP; the speed held d above
     rated: Pm0 - K d; a step beyond PMAX: the gate clamped, the power PMAX."""
-    p, x, Pref = started(_row(imported), PM0)
+    p, x, Pref = started(governor_row(imported), PM0)
     dP = 0.01
     P = p.packed(Pref + dP)
     assert gov.pmech(P, x, 0, 1.0) == pytest.approx(PM0 - 2 * dP, rel=1e-14)
@@ -100,4 +92,4 @@ def test_options_it_does_not_model_are_refused(imported):
         ({"Tmax": 0.6}, "initial power order 0.7000 pu outside"),
     ):
         with pytest.raises(CaseError, match=match):
-            started(_row(imported, **changes), PM0)
+            started(governor_row(imported, **changes), PM0)

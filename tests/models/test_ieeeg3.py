@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from governor_alone import WPIDHY, frequency_response, settled, started, threebus_dyr
+from governor_alone import WPIDHY, frequency_response, governor_row, settled, started, threebus_dyr
 
 from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
@@ -66,14 +66,6 @@ def test_imported_case_starts_at_rest(imported):
     assert residual < 1e-10, where
 
 
-def _row(imported, **changed):
-    g = imported.governors
-    row = [float(getattr(g, name)[0]) for name in g.columns()]
-    for name, value in changed.items():
-        row[gov.GOVERNOR.col(name) - 1] = value
-    return row
-
-
 def _closed_form(s, v=VALUES):
     """IEEEG3's mechanical power over the speed deviation at s (inside its limits)."""
     droop = v["SIGMA"] + v["DELTA"] * v["TR"] * s / (1 + s * v["TR"])
@@ -86,7 +78,7 @@ def test_frequency_response_is_the_closed_form(imported):
     """From 0.01 to 10 Hz the governor's response of P_m to the speed (its derivatives
     and output linearised by central differences, exact for its linear blocks) is the
     closed form within 1e-7 (relative); its steady-state gain is -A23/SIGMA."""
-    p, x0, Pref = started(_row(imported), PM0)
+    p, x0, Pref = started(governor_row(imported), PM0)
     P = p.packed(Pref)
     freqs = (0.01, 0.1, 0.5, 1.0, 3.0, 10.0)
     H, gain = frequency_response(P, x0, freqs)
@@ -102,7 +94,7 @@ def test_start_steps_and_limits_are_the_closed_form(imported):
     + A23 dP/SIGMA (after 1000 s: the slowest pole, about TR (1 + DELTA/SIGMA) = 35 s,
     has decayed); after a large step the velocity is held at Uo and the gate opens at Uo,
     then stops at PMAX (both limits non-windup)."""
-    p, x, Pref = started(_row(imported), PM0)
+    p, x, Pref = started(governor_row(imported), PM0)
     assert Pref[0] == pytest.approx(0.05 * PM0, rel=1e-15)
     P = p.packed(Pref)
     dx = np.zeros_like(x)
@@ -140,4 +132,4 @@ def test_options_it_does_not_model_are_refused(imported):
         ({"Tmax": 0.6}, "initial power order 0.7000 pu outside"),
     ):
         with pytest.raises(CaseError, match=match):
-            started(_row(imported, **changes), PM0)
+            started(governor_row(imported, **changes), PM0)
