@@ -45,6 +45,7 @@ from stabctl.dynamics.model import (
     evaluate_kernel,
     stacked_networks,
 )
+from stabctl.dynamics.prefix import PREFIXES_KEPT, Prefix, integrate_from_cache, reach
 from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import (
@@ -223,6 +224,8 @@ class Simulator:
         #: the simulators of this case with WECC batteries (`_for_storage`), and in one of
         #: them the batteries' converter rows
         self._battery_sims: BoundedCache[Simulator] = BoundedCache(MODELS_KEPT)
+        #: the quiet starts of runs without devices (`stabctl.dynamics.prefix`)
+        self._prefixes: BoundedCache[Prefix] = BoundedCache(PREFIXES_KEPT)
         self.battery_rows: np.ndarray | None = None
         self.off_equilibrium = off_equilibrium
         self.model = self.model_for(injection_buses)
@@ -424,7 +427,9 @@ class Simulator:
                 voltages=voltages,
             )
             verdict = None
-            if monitor is None:
+            if monitor is None and sa.pmax.size == 0:
+                integrate_from_cache(run, self._prefixes)
+            elif monitor is None:
                 run.advance(grid.t.size - 1)
             else:
                 verdict = _advance_monitored(run, monitor)
@@ -772,13 +777,15 @@ class _Run:
             devices=device_state(sa, n_commands),
             health=ig.Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3))),
         )
-        self.nets, self.steps = stacked_networks(nets), ig.step_grid(grid)
+        self.nets, self.steps = stacked_networks(nets, voltages), ig.step_grid(grid)
+        #: the stages' networks (`stabctl.dynamics.prefix` tells a run's pre-event one by it)
+        self.nets_list = nets
         self.opts = ig.RunOptions(
             pst=pst, inertia=sim.inertia, island=sim.island, limit=limit, stop=stop
         )
         self.limit = limit
-        #: the model's parameters with the run's largest step as the limiters' reach
-        self.params = m.params._replace(reach=float(np.max(grid.h)))
+        #: the model's parameters with the limiters' reach (`stabctl.dynamics.prefix.reach`)
+        self.params = m.params._replace(reach=reach(grid.h, grid.step))
         self.k, self.status, self.wall, self.stored = 0, ig.OK, 0.0, False
         self.evaluate: int | None = None
 

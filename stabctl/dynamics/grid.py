@@ -29,12 +29,14 @@ from stabctl.errors import InputError
 class TimeGrid:
     """Integration grid: t (N+1,), interval id of each point (a point at an event belongs to
     the interval that starts there; a time repeats after a zero-length interval), step h
-    of each interval (0 for a zero-length one), and the interval start times."""
+    of each interval (0 for a zero-length one), the interval start times, and the nominal
+    step it was built with (s)."""
 
     t: np.ndarray
     interval: np.ndarray
     h: np.ndarray
     starts: np.ndarray
+    step: float
 
 
 def time_grid(starts, t_end: float, h: float, pstess: bool = False) -> TimeGrid:
@@ -57,7 +59,9 @@ def time_grid(starts, t_end: float, h: float, pstess: bool = False) -> TimeGrid:
         ids.append(np.full(n, s))
     t = np.concatenate(ts + [[pts[-1]]])
     interval = np.concatenate(ids + [[len(pts) - 2]])
-    return TimeGrid(t=t, interval=interval, h=np.array(hs), starts=np.array(pts[:-1]))
+    return TimeGrid(
+        t=t, interval=interval, h=np.array(hs), starts=np.array(pts[:-1]), step=float(h)
+    )
 
 
 #: ieee default step: at most this fraction of the fastest time constant (`default_step`).

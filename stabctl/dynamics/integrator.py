@@ -308,6 +308,7 @@ def _stage(nets, s):
         nets.Y22[s],
         nets.Z22[s],
         nets.R[s],
+        nets.R_mac[s],
         nets.switched_on[s],
         nets.targets[s],
         nets.steps[s],
@@ -402,9 +403,8 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
     x_b = x
     while True:
         hh = sw.substep_length(grid.t[k + 1], sa.kind, ds.cmd_t, ds.cmd_next, rem)
-        ok, x_b = _heun(
-            kn, sa, ds, x_a, dx_a, hh, j if hh == rem else s, last and hh == rem, w.dx_j
-        )
+        want = last and hh == rem and rec.V.shape[1] > 0  # the end point's bus voltages
+        ok, x_b = _heun(kn, sa, ds, x_a, dx_a, hh, j if hh == rem else s, want, w.dx_j)
         if not ok:
             return NO_LOAD_FLOW, k, x
         if hh == rem:

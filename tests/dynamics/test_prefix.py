@@ -1,0 +1,79 @@
+"""Runs share their quiet start (`stabctl.dynamics.prefix`): the copied stretch is the
+trajectory the run integrates itself, bit for bit."""
+
+import numpy as np
+import pytest
+
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.grid import time_grid
+from stabctl.dynamics.prefix import quiet_end, reach
+from stabctl.stability.cct import LineFault
+
+QUANTITIES = ("t", "speed", "angle", "pelect", "pmech", "efd", "vmag", "vang")
+
+
+def _whole(sim, events, t_end, **kw):
+    """The run integrated from t = 0 (a monitor that never stops it keeps the prefix
+    out: `Simulator.run`, monitor)."""
+    return sim.run(events, t_end, monitor=lambda partial: None, **kw)
+
+
+@pytest.mark.parametrize(("name", "bus", "far_bus"), [("kundur", 3, 101), ("wecc", 40, 44)])
+@pytest.mark.parametrize("voltages", [True, False])
+def test_a_run_from_a_shared_quiet_start_equals_the_run_integrated_whole(
+    request, name, bus, far_bus, voltages
+):
+    """Three clearing times of one fault, the later runs from the first's quiet start
+    (the second before the fault at 1 s): every recorded quantity equals the run
+    integrated from t = 0, bit for bit, the unstable one's separation included."""
+    case = request.getfixturevalue(name).case
+    sim = Simulator(case)
+    fault = LineFault(bus, far_bus)
+    for tc in (0.05, 0.12, 0.3):
+        events = fault.events(tc)
+        shared = sim.run(events, 3.0, stop_at_separation=True, voltages=voltages)
+        whole = _whole(sim, events, 3.0, stop_at_separation=True, voltages=voltages)
+        for q in QUANTITIES:
+            np.testing.assert_array_equal(getattr(shared, q), getattr(whole, q), err_msg=q)
+        assert shared.stable == whole.stable and shared.separated == whole.separated
+    assert len(sim._prefixes) == 1  # one quiet start served the three
+
+
+def test_the_quiet_start_of_another_step_or_fault_time_is_its_own(kundur):
+    """A run at half the step or with the fault at another time does not take the
+    prefix of another: its trajectory equals its whole run."""
+    sim = Simulator(kundur.case)
+    base = LineFault(3, 101)
+    sim.run(base.events(0.1), 2.0)
+    for events, h in (
+        (base.events(0.1), sim.default_h / 2),
+        (LineFault(3, 101, t_fault=0.5).events(0.1), None),
+    ):
+        shared = sim.run(events, 2.0, h=h)
+        whole = _whole(sim, events, 2.0, h=h)
+        for q in QUANTITIES:
+            np.testing.assert_array_equal(getattr(shared, q), getattr(whole, q), err_msg=q)
+    assert len(sim._prefixes) == 3
+
+
+def test_the_quiet_start_ends_one_point_before_the_first_event():
+    """The first interval of a grid with a fault at 1 s and h = 0.3 s: points 0, 0.25,
+    0.5, 0.75 (ceil(1/0.3) = 4 equal steps), then the fault's point 1.0: the prefix
+    ends at index 3 (the step ending at the event may already use the next network);
+    a grid without events has none."""
+    g = time_grid([0.0, 1.0, 1.1], 2.0, 0.3)
+    np.testing.assert_allclose(g.t[:5], [0.0, 0.25, 0.5, 0.75, 1.0])
+    assert quiet_end(g.interval) == 3
+    assert quiet_end(time_grid([0.0], 2.0, 0.3).interval) == 0
+
+
+def test_the_limiters_reach_is_the_nominal_step_on_the_ieee_grid():
+    """ieee: every step at most h, so the reach is h whatever the events; PSTess's grid:
+    its longest step (fix(length/h) steps, up to 2h: 1.0 s in 3 steps of 1/3 s at h =
+    0.3 s)."""
+    h = 0.3
+    for starts in ([0.0, 1.0, 1.1], [0.0, 1.0, 1.17]):
+        g = time_grid(starts, 2.0, h)
+        assert np.max(g.h) <= h and reach(g.h, g.step) == h
+    g = time_grid([0.0, 1.0], 2.0, h, pstess=True)
+    assert reach(g.h, g.step) == pytest.approx(1 / 3)
