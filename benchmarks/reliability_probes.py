@@ -330,21 +330,57 @@ def foreign_pmu_probe(cwd: Path) -> tuple[Probe, str]:
     )
 
 
-def _web_server_probe(cwd: Path, finding, what, args_of, needle, no_file) -> tuple[Probe, str]:
-    """A command pointed at a web server (which answers anything with a page): it must
-    say so within a minute, not hang."""
-    server = socket.create_server(("127.0.0.1", 0))
-    port = server.getsockname()[1]
+def fake_server(talk, *, answer_all: bool = False) -> tuple[socket.socket, int]:
+    """A fake server on 127.0.0.1 at a free port, for the probes that point a command at
+    one (a web server here; PMU servers in `reliability_probes_3`): a daemon thread
+    accepts a connection and runs ``talk(conn)`` on it.
+
+    Parameters
+    ----------
+    talk : callable
+        What the server does on a connection: ``talk(conn)``, conn the accepted socket.
+    answer_all : bool, optional
+        True: every connection until the caller closes the listening socket, each left
+        open once talked to (the client, not the server, hangs up; an OSError in `talk`
+        ends the thread).  False: the first connection only, closed after `talk` (an
+        OSError in `talk`, the client gone, ends it quietly), then the listening socket.
+
+    Returns
+    -------
+    (socket.socket, int)
+        The listening socket (the caller closes it when done: closing it again is
+        harmless) and its port.
+    """
+    srv = socket.create_server(("127.0.0.1", 0))
 
     def serve():
         while True:
             try:
-                conn, _ = server.accept()
+                conn, _ = srv.accept()
             except OSError:
-                return
-            conn.sendall(b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 50)
+                return  # the caller closed the listening socket
+            if answer_all:
+                talk(conn)
+                continue
+            with conn:
+                try:
+                    talk(conn)
+                except OSError:
+                    pass
+            srv.close()
+            return
 
     threading.Thread(target=serve, daemon=True).start()
+    return srv, srv.getsockname()[1]
+
+
+def _web_server_probe(cwd: Path, finding, what, args_of, needle, no_file) -> tuple[Probe, str]:
+    """A command pointed at a web server (which answers anything with a page): it must
+    say so within a minute, not hang."""
+    server, port = fake_server(
+        lambda conn: conn.sendall(b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 50),
+        answer_all=True,
+    )
     p = Probe(finding, what, args_of(f"127.0.0.1:{port}"), needle=needle, no_file=no_file)
     t0 = time.perf_counter()
     res = run(p.args, cwd)

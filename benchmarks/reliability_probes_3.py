@@ -38,6 +38,7 @@ from reliability_probes import (
     Probe,
     case_file,
     cli,
+    fake_server,
     run,
     table,
     verdict,
@@ -519,30 +520,19 @@ def recording_probes(cwd: Path) -> list[Probe]:
     return out
 
 
-def _fake_server(head: bytes, body: list, tail: bytes = b"", close_after: bool = True):
+def _fake_server(head: bytes, body: list, tail: bytes = b""):
     """A PMU server that sends CFG-2 on request, then the frames `body` and `tail` after
     'start', then closes (a server that dies mid-stream)."""
-    srv = socket.create_server(("127.0.0.1", 0))
 
-    def serve():
-        try:
-            conn, _ = srv.accept()
-        except OSError:
-            return
-        with conn:
-            try:
-                conn.settimeout(30)
-                conn.recv(1000)
-                conn.sendall(head)
-                conn.recv(1000)
-                conn.sendall(b"".join(body) + tail)
-                time.sleep(0.2)
-            except OSError:
-                pass
-        srv.close()
+    def talk(conn):
+        conn.settimeout(30)
+        conn.recv(1000)
+        conn.sendall(head)
+        conn.recv(1000)
+        conn.sendall(b"".join(body) + tail)
+        time.sleep(0.2)
 
-    threading.Thread(target=serve, daemon=True).start()
-    return srv, srv.getsockname()[1]
+    return fake_server(talk)
 
 
 def stream_probes(cwd: Path, head: bytes, body: list) -> list[tuple[Probe, str]]:
@@ -619,28 +609,19 @@ def _against_fake(cwd: Path, head: bytes, body: list, probe_at, tail: bytes = b"
 def _slow_server(head: bytes, body: list):
     """A server that sends CFG-2, then a frame each 0.1 s, and never closes (an endless
     stream, as far as its client knows)."""
-    srv = socket.create_server(("127.0.0.1", 0))
     stop = threading.Event()
 
-    def serve():
-        try:
-            conn, _ = srv.accept()
-        except OSError:
-            return
-        with conn:
-            try:
-                conn.recv(1000)
-                conn.sendall(head)
-                conn.recv(1000)
-                for frame in body:
-                    conn.sendall(frame)
-                    time.sleep(0.1)
-                stop.wait(120)
-            except OSError:
-                pass
+    def talk(conn):
+        conn.recv(1000)
+        conn.sendall(head)
+        conn.recv(1000)
+        for frame in body:
+            conn.sendall(frame)
+            time.sleep(0.1)
+        stop.wait(120)
 
-    threading.Thread(target=serve, daemon=True).start()
-    return srv, srv.getsockname()[1], stop
+    srv, port = fake_server(talk)
+    return srv, port, stop
 
 
 def endless_probes(cwd: Path, head: bytes, body: list) -> list[tuple[Probe, str]]:

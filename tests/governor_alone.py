@@ -1,14 +1,19 @@
 """A governor alone at its machine's rest point, for the governor types' closed-form tests
-(tests/models/test_degov1.py, test_pidgov.py): started from one tg_con row, and settled at
-a held speed by a stiff integration of its own derivatives."""
+(tests/models/test_degov1.py, test_pidgov.py, test_wpidhy.py, test_ieeeg2.py,
+test_ieeeg3.py): started from one tg_con row, and settled at a held speed by a stiff
+integration of its own derivatives; and PSS/E's ThreeBus case with a governor record
+instead of its WPIDHY, for the types checked against their block diagram's closed form."""
 
 from pathlib import Path
 
 import numpy as np
+import pytest
 from scipy.integrate import solve_ivp
 
 from stabctl.case import GovernorTable
+from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
+from stabctl.io.psse import load_psse
 from stabctl.models import governors as gov
 
 
@@ -82,3 +87,33 @@ def threebus_dyr(tmp_path, record: str, values: dict) -> Path:
     cons = " ".join(f"{x:g}" for x in values.values())
     path.write_text(f"{head}    102 '{record}' 1 {cons} /\n")
     return path
+
+
+def threebus_fixture(record: str, values: dict):
+    """A module-scoped fixture ``imported``: PSS/E's ThreeBus WPIDHY run's RAW with
+    `threebus_dyr`'s DYR (governor `record`, its CONs `values` in order), loaded by
+    `load_psse`; assign it to ``imported`` in the test module."""
+
+    @pytest.fixture(scope="module", name="imported")
+    def imported(tmp_path_factory):
+        dyr = threebus_dyr(tmp_path_factory.mktemp(record.lower()), record, values)
+        return load_psse(WPIDHY / "ThreeBusMulti.raw", dyr)
+
+    return imported
+
+
+def initial_residual(case):
+    """The whole case's largest derivative at its initial point and where it is (the
+    simulator's ``model.initial_residual``): 0 at rest."""
+    return Simulator(case, background_compile=False).model.initial_residual
+
+
+#: the frequencies (Hz) of the closed-form frequency-response tests, 0.01 to 10 Hz
+FREQS = (0.01, 0.1, 0.5, 1.0, 3.0, 10.0)
+
+
+def response_at_rest(case, pm0: float, freqs=FREQS):
+    """`frequency_response` at freqs (Hz) of the first governor row of `case` started at
+    mechanical power pm0 (`started`, P_ref its rest value): (H, steady-state gain)."""
+    p, x0, Pref = started(governor_row(case), pm0)
+    return frequency_response(p.packed(Pref), x0, freqs)

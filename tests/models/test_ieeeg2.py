@@ -5,30 +5,19 @@ PSS/E Model Library IEEEG2): K (1 + s T2)/((1 + s T1)(1 + s T3)) on the speed er
 gate clamped to [PMIN, PMAX], the water column (1 - s T4)/(1 + s T4/2).  No PSS/E or
 ANDES run of IEEEG2 is stored (ANDES 2.0 has none)."""
 
-from pathlib import Path
-
+import governor_alone as alone
 import numpy as np
 import pytest
-from governor_alone import WPIDHY, frequency_response, governor_row, settled, started, threebus_dyr
 
-from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
-from stabctl.io.psse import load_psse
 from stabctl.models import governors as gov
 
 #: IEEEG2: K T1 T2 T3 PMAX PMIN T4 (K = 1/R for a 5 % droop)
 VALUES = dict(K=20.0, T1=0.25, T2=0.1, T3=0.1, PMAX=1.0, PMIN=0.0, T4=1.0)
 PM0 = 0.7
 
-
-def dyr(tmp_path, **changed) -> Path:
-    """PSS/E's ThreeBus WPIDHY run's DYR with an IEEEG2 instead of the WPIDHY."""
-    return threebus_dyr(tmp_path, "IEEEG2", {**VALUES, **changed})
-
-
-@pytest.fixture(scope="module")
-def imported(tmp_path_factory):
-    return load_psse(WPIDHY / "ThreeBusMulti.raw", dyr(tmp_path_factory.mktemp("ieeeg2")))
+#: PSS/E's ThreeBus WPIDHY run with an IEEEG2 instead of the WPIDHY
+imported = alone.threebus_fixture("IEEEG2", VALUES)
 
 
 def test_record_fills_the_shared_columns(imported):
@@ -41,7 +30,7 @@ def test_record_fills_the_shared_columns(imported):
 
 def test_imported_case_starts_at_rest(imported):
     """The whole case (GENROU, SEXS, IEEEG2) at its initial point: every derivative 0."""
-    residual, where = Simulator(imported, background_compile=False).model.initial_residual
+    residual, where = alone.initial_residual(imported)
     assert residual < 1e-10, where
 
 
@@ -55,11 +44,8 @@ def test_frequency_response_is_the_closed_form(imported):
     """From 0.01 to 10 Hz the governor's response of P_m to the speed (its derivatives
     and output linearised by central differences, exact for its linear blocks) is the
     closed form within 1e-7 (relative); its steady-state gain is -K."""
-    p, x0, Pref = started(governor_row(imported), PM0)
-    P = p.packed(Pref)
-    freqs = (0.01, 0.1, 0.5, 1.0, 3.0, 10.0)
-    H, gain = frequency_response(P, x0, freqs)
-    for freq, h in zip(freqs, H, strict=True):
+    H, gain = alone.response_at_rest(imported, PM0)
+    for freq, h in zip(alone.FREQS, H, strict=True):
         s = 2j * np.pi * freq
         assert abs(h - _closed_form(s)) < 1e-7 * abs(_closed_form(s)), freq
     assert gain == pytest.approx(-20.0, rel=1e-7)
@@ -69,18 +55,18 @@ def test_steps_settle_as_the_closed_form_says(imported):
     """A step dP of P_ref: the water column first moves the power the other way, by -2
     dP (its high-frequency gain), then it settles at Pm0 + dP; the speed held d above
     rated: Pm0 - K d; a step beyond PMAX: the gate clamped, the power PMAX."""
-    p, x, Pref = started(governor_row(imported), PM0)
+    p, x, Pref = alone.started(alone.governor_row(imported), PM0)
     dP = 0.01
     P = p.packed(Pref + dP)
     assert gov.pmech(P, x, 0, 1.0) == pytest.approx(PM0 - 2 * dP, rel=1e-14)
-    assert gov.pmech(P, settled(P, x, 1.0, 60.0), 0, 1.0) == pytest.approx(PM0 + dP, rel=1e-8)
+    assert gov.pmech(P, alone.settled(P, x, 1.0, 60.0), 0, 1.0) == pytest.approx(PM0 + dP, rel=1e-8)
     d = 1e-3
     P = p.packed(Pref)
-    assert gov.pmech(P, settled(P, x, 1.0 + d, 60.0), 0, 1.0 + d) == pytest.approx(
+    assert gov.pmech(P, alone.settled(P, x, 1.0 + d, 60.0), 0, 1.0 + d) == pytest.approx(
         PM0 - 20.0 * d, rel=1e-8
     )
     P = p.packed(Pref + 0.5)
-    assert gov.pmech(P, settled(P, x, 1.0, 60.0), 0, 1.0) == pytest.approx(1.0, rel=1e-8)
+    assert gov.pmech(P, alone.settled(P, x, 1.0, 60.0), 0, 1.0) == pytest.approx(1.0, rel=1e-8)
 
 
 def test_options_it_does_not_model_are_refused(imported):
@@ -92,4 +78,4 @@ def test_options_it_does_not_model_are_refused(imported):
         ({"Tmax": 0.6}, "initial power order 0.7000 pu outside"),
     ):
         with pytest.raises(CaseError, match=match):
-            started(governor_row(imported, **changes), PM0)
+            alone.started(alone.governor_row(imported, **changes), PM0)

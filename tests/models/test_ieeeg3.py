@@ -7,15 +7,11 @@ its integral the gate, limited to [PMIN, PMAX]; the water column (A23 + s TW (A1
 A13 A21))/(1 + s A11 TW).  No PSS/E or ANDES run of IEEEG3 is stored (ANDES 2.0 has
 none)."""
 
-from pathlib import Path
-
+import governor_alone as alone
 import numpy as np
 import pytest
-from governor_alone import WPIDHY, frequency_response, governor_row, settled, started, threebus_dyr
 
-from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
-from stabctl.io.psse import load_psse
 from stabctl.models import governors as gov
 
 #: IEEEG3: TG TP Uo Uc PMAX PMIN SIGMA DELTA TR TW A11 A13 A21 A23 (PSS/E's typical
@@ -39,15 +35,8 @@ VALUES = dict(
 )
 PM0 = 0.7
 
-
-def dyr(tmp_path, **changed) -> Path:
-    """PSS/E's ThreeBus WPIDHY run's DYR with an IEEEG3 instead of the WPIDHY."""
-    return threebus_dyr(tmp_path, "IEEEG3", {**VALUES, **changed})
-
-
-@pytest.fixture(scope="module")
-def imported(tmp_path_factory):
-    return load_psse(WPIDHY / "ThreeBusMulti.raw", dyr(tmp_path_factory.mktemp("ieeeg3")))
+#: PSS/E's ThreeBus WPIDHY run with an IEEEG3 instead of the WPIDHY
+imported = alone.threebus_fixture("IEEEG3", VALUES)
 
 
 def test_record_fills_its_columns(imported):
@@ -62,7 +51,7 @@ def test_record_fills_its_columns(imported):
 
 def test_imported_case_starts_at_rest(imported):
     """The whole case (GENROU, SEXS, IEEEG3) at its initial point: every derivative 0."""
-    residual, where = Simulator(imported, background_compile=False).model.initial_residual
+    residual, where = alone.initial_residual(imported)
     assert residual < 1e-10, where
 
 
@@ -78,11 +67,8 @@ def test_frequency_response_is_the_closed_form(imported):
     """From 0.01 to 10 Hz the governor's response of P_m to the speed (its derivatives
     and output linearised by central differences, exact for its linear blocks) is the
     closed form within 1e-7 (relative); its steady-state gain is -A23/SIGMA."""
-    p, x0, Pref = started(governor_row(imported), PM0)
-    P = p.packed(Pref)
-    freqs = (0.01, 0.1, 0.5, 1.0, 3.0, 10.0)
-    H, gain = frequency_response(P, x0, freqs)
-    for freq, h in zip(freqs, H, strict=True):
+    H, gain = alone.response_at_rest(imported, PM0)
+    for freq, h in zip(alone.FREQS, H, strict=True):
         s = 2j * np.pi * freq
         assert abs(h - _closed_form(s)) < 1e-7 * abs(_closed_form(s)), freq
     assert gain == pytest.approx(-1.0 / 0.05, rel=1e-7)
@@ -94,7 +80,7 @@ def test_start_steps_and_limits_are_the_closed_form(imported):
     + A23 dP/SIGMA (after 1000 s: the slowest pole, about TR (1 + DELTA/SIGMA) = 35 s,
     has decayed); after a large step the velocity is held at Uo and the gate opens at Uo,
     then stops at PMAX (both limits non-windup)."""
-    p, x, Pref = started(governor_row(imported), PM0)
+    p, x, Pref = alone.started(alone.governor_row(imported), PM0)
     assert Pref[0] == pytest.approx(0.05 * PM0, rel=1e-15)
     P = p.packed(Pref)
     dx = np.zeros_like(x)
@@ -102,12 +88,12 @@ def test_start_steps_and_limits_are_the_closed_form(imported):
     assert gov.pmech(P, x, 0, 1.0) == pytest.approx(PM0, rel=1e-15)
     assert np.max(np.abs(dx)) < 1e-15
     d = 1e-3
-    assert gov.pmech(P, settled(P, x, 1.0 + d, 1000.0), 0, 1.0 + d) == pytest.approx(
+    assert gov.pmech(P, alone.settled(P, x, 1.0 + d, 1000.0), 0, 1.0 + d) == pytest.approx(
         PM0 - d / 0.05, rel=1e-7
     )
     dP = 1e-3
     P = p.packed(Pref + dP)
-    assert gov.pmech(P, settled(P, x, 1.0, 1000.0), 0, 1.0) == pytest.approx(
+    assert gov.pmech(P, alone.settled(P, x, 1.0, 1000.0), 0, 1.0) == pytest.approx(
         PM0 + dP / 0.05, rel=1e-7
     )
     P = p.packed(Pref + 0.5)  # a large step: the pilot valve's input far above Uo TG
@@ -132,4 +118,4 @@ def test_options_it_does_not_model_are_refused(imported):
         ({"Tmax": 0.6}, "initial power order 0.7000 pu outside"),
     ):
         with pytest.raises(CaseError, match=match):
-            started(governor_row(imported, **changes), PM0)
+            alone.started(alone.governor_row(imported, **changes), PM0)

@@ -23,6 +23,21 @@ from stabctl.models.declaration import Param, layout
 PVD1, ESD1, REGCA1, DERA1 = 1, 2, 3, 4
 
 _DEV_PU: dict[str, Any] = dict(unit="pu")  # on the device base mva (ANDES ``power=True``)
+_FLAG: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))  # a 0/1 switch
+
+
+def _columns(
+    col: int, rows: list[tuple[str, dict[str, Any]]], prefix: str = "", model: str = ""
+) -> tuple[Param, ...]:
+    """A component's consecutive ibr_con columns from ``col`` on (1-based), one `Param` per
+    (name, `Param` keywords) of `rows`, in order: named `prefix` + name, and documented
+    "`model`: " + doc where `model` is given (else doc as it stands)."""
+    label = f"{model}: " if model else ""
+    return tuple(
+        Param(prefix + name, col=col + j, **{**kw, "doc": label + kw["doc"]})
+        for j, (name, kw) in enumerate(rows)
+    )
+
 
 #: REGCA1's electrical control (ibr_con ``reec``): none, REECA1 (WECC REEC_A), REECB1 (WECC
 #: REEC_B: REECA1's columns without its VDL curves, Iqinj hold, PFLAG and Vref1; ANDES 2.0
@@ -37,12 +52,11 @@ def _reeca1_params(col: int) -> tuple[Param, ...]:
     on the device base where ANDES converts them (``power``/``current`` True); the gains
     Kqv, Kqp, Kqi, Kvp, Kvi and the currents Iqh1, Iql1, Iqfrz on the system base, as
     ANDES reads them."""
-    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
     rows: list[tuple[str, dict[str, Any]]] = [
-        ("PFFLAG", dict(flag, doc="REECA1: 1 power-factor control, 0 Q control")),
-        ("VFLAG", dict(flag, doc="REECA1: 1 Q control (PI), 0 voltage control")),
-        ("QFLAG", dict(flag, doc="REECA1: 1 voltage/Q control (PI), 0 constant PF or Q")),
-        ("PFLAG", dict(flag, doc="REECA1: 1 P order times the speed (1 here), 0 not")),
+        ("PFFLAG", dict(_FLAG, doc="REECA1: 1 power-factor control, 0 Q control")),
+        ("VFLAG", dict(_FLAG, doc="REECA1: 1 Q control (PI), 0 voltage control")),
+        ("QFLAG", dict(_FLAG, doc="REECA1: 1 voltage/Q control (PI), 0 constant PF or Q")),
+        ("PFLAG", dict(_FLAG, doc="REECA1: 1 P order times the speed (1 here), 0 not")),
         ("Vdip", dict(unit="pu", default=0.8, doc="REECA1: voltage below which it freezes")),
         ("Vup", dict(unit="pu", default=1.2, doc="REECA1: voltage above which it freezes")),
         ("Trv", dict(unit="s", default=0.02, lo=0.0, doc="REECA1: voltage filter")),
@@ -77,7 +91,7 @@ def _reeca1_params(col: int) -> tuple[Param, ...]:
         ("Kvs", dict(unit="", default=2.0, lo=0.0, doc="REECA1: V PI tracking gain (kvs)")),
         ("Tpfilt", dict(unit="s", default=0.02, lo=0.0, doc="REECA1: P reference filter")),
     ]
-    return tuple(Param(name, col=col + j, **kw) for j, (name, kw) in enumerate(rows))
+    return _columns(col, rows)
 
 
 def _vdl_params(curve: str, v_name: str, i_name: str, currents) -> list[tuple[str, dict[str, Any]]]:
@@ -105,12 +119,11 @@ def _repca1_params(col: int) -> tuple[Param, ...]:
     The monitored line's end buses and impedance (system base) and the compensation
     impedance (Rc, Xc or, where not given, the line's: ANDES NumSelect) are written by
     the import; its frequency measurement is the table's Tfm, Twm (ANDES BusFreq)."""
-    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
     rows: list[tuple[str, dict[str, Any]]] = [
-        ("VCFlag", dict(flag, default=1.0, doc="1 compensated voltage, 0 V + Kc Qline")),
-        ("RefFlag", dict(flag, default=1.0, doc="1 voltage control, 0 line Q control")),
-        ("Fflag", dict(flag, doc="1 the frequency path's Pext on, 0 off")),
-        ("PLflag", dict(flag, default=1.0, doc="1 the line P error in the P path, 0 not")),
+        ("VCFlag", dict(_FLAG, default=1.0, doc="1 compensated voltage, 0 V + Kc Qline")),
+        ("RefFlag", dict(_FLAG, default=1.0, doc="1 voltage control, 0 line Q control")),
+        ("Fflag", dict(_FLAG, doc="1 the frequency path's Pext on, 0 off")),
+        ("PLflag", dict(_FLAG, default=1.0, doc="1 the line P error in the P path, 0 not")),
         ("bus1", dict(unit="code", integer=True, doc="monitored line's from bus (0: none)")),
         ("bus2", dict(unit="code", integer=True, doc="monitored line's to bus (0: none)")),
         ("r", dict(unit="pu", default=1.0, doc="monitored line resistance")),
@@ -125,7 +138,7 @@ def _repca1_params(col: int) -> tuple[Param, ...]:
         ("Tft", dict(unit="s", default=1.0, lo=0.0, doc="lead time constant")),
         ("Tfv", dict(unit="s", default=1.0, lo=0.0, doc="lag time constant")),
         ("Vfrz", dict(unit="pu", default=0.8, doc="voltage below which the error is held")),
-        ("freeze", dict(flag, default=1.0, doc="1 the hold below Vfrz on, 0 off")),
+        ("freeze", dict(_FLAG, default=1.0, doc="1 the hold below Vfrz on, 0 off")),
         ("emax", dict(unit="pu", default=999.0, doc="upper error limit")),
         ("emin", dict(unit="pu", default=-999.0, doc="lower error limit")),
         ("dbd1", dict(unit="pu", default=-0.1, hi=0.0, doc="lower error deadband")),
@@ -146,10 +159,7 @@ def _repca1_params(col: int) -> tuple[Param, ...]:
         ("Ddn", dict(unit="pu", default=10.0, doc="droop gain, frequency above 1 pu")),
         ("Dup", dict(unit="pu", default=10.0, doc="droop gain, frequency below 1 pu")),
     ]
-    return tuple(
-        Param(f"pc_{name}", col=col + j, **{**kw, "doc": "REPCA1: " + kw["doc"]})
-        for j, (name, kw) in enumerate(rows)
-    )
+    return _columns(col, rows, "pc_", "REPCA1")
 
 
 _REPCA1_PARAMS = _repca1_params(106)
@@ -166,7 +176,6 @@ def _wind_params(col: int) -> tuple[Param, ...]:
     each with its on/off code.  Inertias, damping, torque limits and the torque
     control's power points on the device base (``wq_Tn`` where given), as ANDES converts
     them; angles in degrees, as ANDES's pitch and aerodynamics read them."""
-    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
     rows: list[tuple[str, dict[str, Any]]] = [
         (
             "wt_H",
@@ -177,10 +186,10 @@ def _wind_params(col: int) -> tuple[Param, ...]:
         ("wt_Freq1", dict(unit="pu", default=1.0, doc="WTDTA1: first shaft torsional frequency")),
         ("wt_Dshaft", dict(_DEV_PU, default=1.0, doc="WTDTA1: shaft damping")),
         ("wt_w0", dict(unit="pu", default=1.0, doc="WTDTA1/WTDS: speed without a torque control")),
-        ("aero", dict(flag, doc="WTARA1 aerodynamics: 1 on (Pm falls with the pitch), 0 off")),
+        ("aero", dict(_FLAG, doc="WTARA1 aerodynamics: 1 on (Pm falls with the pitch), 0 off")),
         ("wa_Ka", dict(unit="pu/deg", default=1.0, lo=0.0, doc="WTARA1: aerodynamic gain")),
         ("wa_theta0", dict(unit="deg", doc="WTARA1: initial pitch angle")),
-        ("pitch", dict(flag, doc="WTPTA1 pitch control: 1 on, 0 off (needs aero)")),
+        ("pitch", dict(_FLAG, doc="WTPTA1 pitch control: 1 on, 0 off (needs aero)")),
         ("wp_Kiw", dict(unit="1/s", default=0.1, doc="WTPTA1: speed PI integral gain")),
         ("wp_Kpw", dict(unit="pu", doc="WTPTA1: speed PI proportional gain")),
         ("wp_Kic", dict(unit="1/s", default=0.1, doc="WTPTA1: power PI integral gain")),
@@ -191,14 +200,14 @@ def _wind_params(col: int) -> tuple[Param, ...]:
         ("wp_thmin", dict(unit="deg", doc="WTPTA1: minimum pitch angle")),
         ("wp_dthmax", dict(unit="deg", default=5.0, doc="WTPTA1: upper rate of Tp dtheta/dt")),
         ("wp_dthmin", dict(unit="deg", default=-5.0, doc="WTPTA1: lower rate of Tp dtheta/dt")),
-        ("torque", dict(flag, doc="WTTQA1 torque control: 1 on, 0 off (needs pitch)")),
+        ("torque", dict(_FLAG, doc="WTTQA1 torque control: 1 on, 0 off (needs pitch)")),
         ("wq_Kip", dict(unit="1/s", default=0.1, doc="WTTQA1: PI integral gain")),
         ("wq_Kpp", dict(unit="pu", doc="WTTQA1: PI proportional gain")),
         ("wq_Tp", dict(unit="s", default=0.05, lo=0.0, doc="WTTQA1: Pe filter")),
         ("wq_Twref", dict(unit="s", default=30.0, lo=0.0, doc="WTTQA1: speed reference lag")),
         ("wq_Temax", dict(_DEV_PU, default=1.2, doc="WTTQA1: maximum electric torque")),
         ("wq_Temin", dict(_DEV_PU, doc="WTTQA1: minimum electric torque")),
-        ("wq_Tflag", dict(flag, doc="WTTQA1: 1 power error, 0 speed error")),
+        ("wq_Tflag", dict(_FLAG, doc="WTTQA1: 1 power error, 0 speed error")),
         *(
             pair
             for j, (p, sp) in enumerate(((0.2, 0.58), (0.4, 0.72), (0.6, 0.86), (0.8, 1.0)), 1)
@@ -209,7 +218,7 @@ def _wind_params(col: int) -> tuple[Param, ...]:
         ),
         ("wq_Tn", dict(unit="MVA", lo=0.0, doc="WTTQA1: turbine rating (0: the device's mva)")),
     ]
-    return tuple(Param(name, col=col + j, **kw) for j, (name, kw) in enumerate(rows))
+    return _columns(col, rows)
 
 
 _WIND_PARAMS = _wind_params(146)
@@ -234,10 +243,9 @@ def _relay_params(col: int) -> tuple[Param, ...]:
     ``distributed/dgprct.py``, DGPRCT1 and DGPRCTExt, after IEEE 1547-2018's ride-through
     categories), ANDES's defaults: its enables, then the frequency bands (Hz) and how long
     the frequency may stay in each, the voltage bands (pu) and their times."""
-    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
     rows: list[tuple[str, dict[str, Any]]] = [
-        ("pr_fen", dict(flag, default=1.0, doc="DGPRCT: frequency protection 1 on, 0 off")),
-        ("pr_Ven", dict(flag, doc="DGPRCT: voltage protection 1 on, 0 off")),
+        ("pr_fen", dict(_FLAG, default=1.0, doc="DGPRCT: frequency protection 1 on, 0 off")),
+        ("pr_Ven", dict(_FLAG, doc="DGPRCT: voltage protection 1 on, 0 off")),
         *(
             (f"pr_{n}", dict(unit="Hz", default=d, doc=f"DGPRCT: frequency point {n}"))
             for n, d in (("fl3", 50.0), ("fl2", 57.5), ("fl1", 59.2))
@@ -273,7 +281,7 @@ def _relay_params(col: int) -> tuple[Param, ...]:
         ("pr_Tvu2", dict(unit="s", default=0.16, lo=0.0, doc="DGPRCT: time in (vu2, vu3)")),
         ("pr_Tres", dict(unit="s", default=0.05, lo=1e-3, doc="DGPRCT: timers' reset time")),
     ]
-    return tuple(Param(name, col=col + j, **kw) for j, (name, kw) in enumerate(rows))
+    return _columns(col, rows)
 
 
 _RELAY_PARAMS = _relay_params(189)
@@ -285,10 +293,9 @@ def _dera1_params(col: int) -> tuple[Param, ...]:
     voltage and power measurements, the voltage control and the current limits and lags
     its FreqFlag 0 reads.  Currents and gains on the device base, as PSS/E's; the
     defaults are the typical values of the WECC DER_A specification."""
-    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
     rows: list[tuple[str, dict[str, Any]]] = [
-        ("PfFlag", dict(flag, default=1.0, doc="1 constant power factor, 0 constant Q")),
-        ("GenFlag", dict(flag, default=1.0, doc="1 a generator (Ip >= 0), 0 storage")),
+        ("PfFlag", dict(_FLAG, default=1.0, doc="1 constant power factor, 0 constant Q")),
+        ("GenFlag", dict(_FLAG, default=1.0, doc="1 a generator (Ip >= 0), 0 storage")),
         ("Trv", dict(unit="s", default=0.02, lo=0.0, doc="voltage measurement lag")),
         ("dbd1", dict(unit="pu", default=-99.0, hi=0.0, doc="lower voltage deadband")),
         ("dbd2", dict(unit="pu", default=99.0, lo=0.0, doc="upper voltage deadband")),
@@ -302,10 +309,7 @@ def _dera1_params(col: int) -> tuple[Param, ...]:
         ("Iqh1", dict(_DEV_PU, default=1.0, doc="upper limit of the voltage control's Iq")),
         ("Iql1", dict(_DEV_PU, default=-1.0, doc="lower limit of the voltage control's Iq")),
     ]
-    return tuple(
-        Param(f"da_{name}", col=col + j, **{**kw, "doc": "DERA1: " + kw["doc"]})
-        for j, (name, kw) in enumerate(rows)
-    )
+    return _columns(col, rows, "da_", "DERA1")
 
 
 _DERA1_PARAMS = _dera1_params(214)
@@ -318,11 +322,10 @@ def _dera1_control_params(col: int) -> tuple[Param, ...]:
     (droop gains, the error, power and ramp limits) on the device base, as PSS/E's;
     frequencies in pu of the nominal; the defaults are PowerSimulationsDynamics.jl's
     test 42 values (tests/data/psse_runs/DERA_FREQFLAG0/README.md)."""
-    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
     rows: list[tuple[str, dict[str, Any]]] = [
-        ("FreqFlag", dict(flag, doc="1 the power-frequency control (droop, PI), 0 P held")),
-        ("VtripFlag", dict(flag, doc="1 the voltage tripping, 0 none")),
-        ("FtripFlag", dict(flag, doc="1 the frequency tripping, 0 none")),
+        ("FreqFlag", dict(_FLAG, doc="1 the power-frequency control (droop, PI), 0 P held")),
+        ("VtripFlag", dict(_FLAG, doc="1 the voltage tripping, 0 none")),
+        ("FtripFlag", dict(_FLAG, doc="1 the frequency tripping, 0 none")),
         ("Trf", dict(unit="s", default=0.02, lo=0.0, doc="frequency measurement lag")),
         ("Ddn", dict(_DEV_PU, default=20.0, doc="droop, P per pu frequency above fdbd2")),
         ("Dup", dict(_DEV_PU, default=0.0, doc="droop, P per pu frequency below fdbd1")),
@@ -356,10 +359,7 @@ def _dera1_control_params(col: int) -> tuple[Param, ...]:
         ("Tv", dict(unit="s", default=0.02, lo=0.0, doc="lag of the trip multiplier")),
         ("Vpr", dict(unit="pu", default=0.8, doc="voltage below which no frequency trip")),
     ]
-    return tuple(
-        Param(f"da_{name}", col=col + j, **{**kw, "doc": "DERA1: " + kw["doc"]})
-        for j, (name, kw) in enumerate(rows)
-    )
+    return _columns(col, rows, "da_", "DERA1")
 
 
 _DERA1_CONTROL_PARAMS = _dera1_control_params(271)
@@ -375,10 +375,9 @@ def _regcb1_params(col: int) -> tuple[Param, ...]:
     limits of its current lags (dy/dt, device base, as PSS/E's: not ANDES's Tg dy/dt of a
     REGCA1's Rrpwr, Iqrmax, Iqrmin), the lag Te of its internal voltage, its current
     limit and the source impedance it sits behind (the RAW generator's ZSORCE)."""
-    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
     rows: list[tuple[str, dict[str, Any]]] = [
-        ("RateFlag", dict(flag, doc="1 Rrpwr bounds the active power, 0 the active current")),
-        ("PQFlag", dict(flag, doc="output current limit priority: 1 active, 0 reactive")),
+        ("RateFlag", dict(_FLAG, doc="1 Rrpwr bounds the active power, 0 the active current")),
+        ("PQFlag", dict(_FLAG, doc="output current limit priority: 1 active, 0 reactive")),
         ("Rrpwr", dict(_DEV_PU, unit="pu/s", default=10.0, lo=0.0, doc="rate of |Ip| (or |P|)")),
         ("Iqrmax", dict(_DEV_PU, unit="pu/s", default=999.0, doc="upper rate of Iq (Q0 > 0)")),
         ("Iqrmin", dict(_DEV_PU, unit="pu/s", default=-999.0, doc="lower rate of Iq (Q0 < 0)")),
@@ -387,10 +386,7 @@ def _regcb1_params(col: int) -> tuple[Param, ...]:
         ("Rsource", dict(unit="pu", lo=0.0, doc="source resistance (device base)")),
         ("Xsource", dict(unit="pu", default=0.2, doc="source reactance (device base)")),
     ]
-    return tuple(
-        Param(f"gb_{name}", col=col + j, **{**kw, "doc": "REGCB1: " + kw["doc"]})
-        for j, (name, kw) in enumerate(rows)
-    )
+    return _columns(col, rows, "gb_", "REGCB1")
 
 
 _REGCB1_PARAMS = _regcb1_params(229)
@@ -402,9 +398,8 @@ def _reecd1_params(col: int) -> tuple[Param, ...]:
     (``rd_``), the charging share Ke of the active current range, the blocking band, and
     points 5-10 of its voltage-dependent current limits (points 1-4 are REECA1's).
     Impedances, droop and currents on the device base, as PSS/E's."""
-    flag: dict[str, Any] = dict(unit="code", choices=(0.0, 1.0))
     rows: list[tuple[str, dict[str, Any]]] = [
-        ("rd_VCMPFLAG", dict(flag, doc="1 |V - (Rc + j Xc) I|, 0 |V| + Kc Q (compensated V)")),
+        ("rd_VCMPFLAG", dict(_FLAG, doc="1 |V - (Rc + j Xc) I|, 0 |V| + Kc Q (compensated V)")),
         ("rd_Rc", dict(unit="pu", doc="compensation resistance (device base)")),
         ("rd_Xc", dict(unit="pu", doc="compensation reactance (device base)")),
         ("rd_Tr1", dict(unit="s", lo=0.0, doc="compensated voltage filter (< 1e-3: none)")),
@@ -427,10 +422,7 @@ def _reecd1_params(col: int) -> tuple[Param, ...]:
             for j in range(5, 11)
         ),
     ]
-    return tuple(
-        Param(name, col=col + j, **{**kw, "doc": "REECD1: " + kw["doc"]})
-        for j, (name, kw) in enumerate(rows)
-    )
+    return _columns(col, rows, model="REECD1")
 
 
 _REECD1_PARAMS = _reecd1_params(238)
