@@ -224,7 +224,7 @@ class Simulator:
         #: the simulators of this case with WECC batteries (`_for_storage`), and in one of
         #: them the batteries' converter rows
         self._battery_sims: BoundedCache[Simulator] = BoundedCache(MODELS_KEPT)
-        #: the quiet starts of runs without devices (`stabctl.dynamics.prefix`)
+        #: the quiet starts of runs without commands (`stabctl.dynamics.prefix`)
         self._prefixes: BoundedCache[Prefix] = BoundedCache(PREFIXES_KEPT)
         self.battery_rows: np.ndarray | None = None
         self.off_equilibrium = off_equilibrium
@@ -427,7 +427,7 @@ class Simulator:
                 voltages=voltages,
             )
             verdict = None
-            if monitor is None and sa.pmax.size == 0:
+            if monitor is None and sa.kind != law.EXTERNAL:
                 integrate_from_cache(run, self._prefixes)
             elif monitor is None:
                 run.advance(grid.t.size - 1)

@@ -14,8 +14,10 @@ network is the same pre-event stage, the limiters' reach is the run's nominal st
 not the event itself: under PSTess's semantics the step ending at an event already uses
 the next network.
 
-Runs with storage devices, commands or a monitor integrate their whole trajectory (their
-devices and monitor act from t = 0).
+Runs with storage devices under a feedback law share it too when their fleets pack alike
+(`fleet_key`: the devices' state and statistics are copied with it).  Runs with commands
+(`stabctl.dynamics.driver.Simulator.run_commanded`) or a monitor integrate their whole
+trajectory: their commands and monitor act from t = 0.
 """
 
 from __future__ import annotations
@@ -82,9 +84,28 @@ def reach(h: np.ndarray, step: float) -> float:
     return float(step) if longest <= step * (1 + 1e-9) else longest
 
 
+def fleet_key(sa) -> tuple:
+    """What identifies a packed fleet (`stabctl.storage.devices.StorageArrays`) for a
+    prefix: every field, arrays by their bytes.
+
+    Parameters
+    ----------
+    sa : StorageArrays
+        The packed fleet (possibly without devices).
+
+    Returns
+    -------
+    tuple
+        Hashable.
+    """
+    return tuple(
+        (v.dtype.str, v.shape, v.tobytes()) if isinstance(v, np.ndarray) else v for v in sa
+    )
+
+
 def integrate_from_cache(run, cache) -> None:
-    """Advance `run` (a fresh `stabctl.dynamics.driver._Run` of a run without devices,
-    commands or monitor) to its end, its quiet start copied from `cache` (a
+    """Advance `run` (a fresh `stabctl.dynamics.driver._Run` without commands or monitor)
+    to its end, its quiet start copied from `cache` (a
     `stabctl.dynamics.bounded.BoundedCache`) or integrated and stored there.
 
     Parameters
@@ -110,6 +131,7 @@ def integrate_from_cache(run, cache) -> None:
         run.params.reach,
         run.opts.limit,
         run.opts.stop,
+        fleet_key(run.sa),
     )
     prefix = cache.get(key, lambda: _integrated(run, k, net0))
     if run.k == 0 and _fits(prefix, run, net0, k):
@@ -135,7 +157,7 @@ def _integrated(run, k: int, net0) -> Prefix:
     t = run.grid.t[: k + 1].copy()
     if run.status != 0 or run.k != k:  # stopped before: nothing to reuse
         return Prefix(run.m, net0, t, k, None, None)
-    c, n = run.carry, k + 1
+    c, n, d = run.carry, k + 1, run.carry.devices
     carry = (
         c.x.copy(),
         c.kept.V.copy(),
@@ -146,15 +168,29 @@ def _integrated(run, k: int, net0) -> Prefix:
         c.health.worst.copy(),
         c.health.n_big.copy(),
         c.health.bad.copy(),
+        d.mode.copy(),
+        d.P.copy(),
+        d.target.copy(),
+        d.e.copy(),
+        run.rec.stats.copy(),
+        run.rec.log.copy(),
     )
     return Prefix(run.m, net0, t, k, carry, tuple(a[:n].copy() for a in _rows(run.rec)))
 
 
 def _restore(run, prefix: Prefix) -> None:
-    """Put `prefix` into the fresh `run`: its carry, recording rows and grid index."""
-    c, n = run.carry, prefix.k + 1
-    x, V, held, S_extra, held_stage, est, worst, n_big, bad = prefix.carry
+    """Put `prefix` into the fresh `run`: its carry (devices included), recording rows,
+    device statistics and switching log, and grid index."""
+    c, n, d = run.carry, prefix.k + 1, run.carry.devices
+    x, V, held, S_extra, held_stage, est, worst, n_big, bad, *devices = prefix.carry
+    mode, P, target, e, stats, log = devices
     for dst, src in (
+        (d.mode, mode),
+        (d.P, P),
+        (d.target, target),
+        (d.e, e),
+        (run.rec.stats, stats),
+        (run.rec.log, log),
         (c.x, x),
         (c.kept.V, V),
         (c.kept.held, held),

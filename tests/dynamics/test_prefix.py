@@ -77,3 +77,24 @@ def test_the_limiters_reach_is_the_nominal_step_on_the_ieee_grid():
         assert np.max(g.h) <= h and reach(g.h, g.step) == h
     g = time_grid([0.0, 1.0], 2.0, h, pstess=True)
     assert reach(g.h, g.step) == pytest.approx(1 / 3)
+
+
+def test_runs_with_a_bang_bang_fleet_share_their_quiet_start_bit_for_bit(kundur):
+    """The paper's 5 % fleet (bang-bang on the COI speed): the devices' powers, switching
+    logs and energy statistics of a run from the shared quiet start equal the whole run's;
+    another fleet rating gets its own prefix."""
+    from stabctl.storage.devices import uniform_fleet
+
+    sim = Simulator(kundur.case)
+    fault = LineFault(3, 101)
+    for pct in (5, 5, 10):
+        fleet = uniform_fleet(kundur.case, pct)
+        for tc in (0.1, 0.2):
+            shared = sim.run(fault.events(tc), 3.0, storage=fleet)
+            whole = _whole(sim, fault.events(tc), 3.0, storage=fleet)
+            for q in (*QUANTITIES, "pesd"):
+                np.testing.assert_array_equal(getattr(shared, q), getattr(whole, q), err_msg=q)
+            assert whole.meta["switchings"] and whole.meta["storage"]  # the devices acted
+            for key in ("switchings", "storage"):  # the log and each device's figures
+                assert repr(shared.meta[key]) == repr(whole.meta[key]), key
+    assert len(sim._prefixes) == 2  # one per fleet rating
