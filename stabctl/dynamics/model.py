@@ -1053,6 +1053,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         vt = np.abs(V_mac[m])
         pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, xm[1, m], pe, vt, dxp)
     vex = p.vex0.copy()
+    ifd_mac = np.empty(nm)  # once per machine, for its exciter and its own derivatives
+    mac.field_currents(p.MP, xm, cur, ifd_mac)
     efd_alg = np.empty(ne)
     ifd = np.empty(ne)
     vb = np.empty(ne)
@@ -1061,7 +1063,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         m = int(EP[i, exc.E.MAC])
         if p.pss_of_exc[i] >= 0:
             pss_exc[i] = pss_out[p.pss_of_exc[i]]
-        ifd[i] = exc.field_current(EP, i, p.MP, xm, cur)
+        ifd[i] = exc.field_current(EP, i, ifd_mac)
         vb[i] = exc.source_voltage(EP, i, p.MP, xm, cur, V_mac[m], ifd[i])
         efd_alg[i] = exc.field_voltage(EP, xe, i, p.MP, xm, cur, pss_exc[i], ifd[i], vb[i], p.ieee)
         vex[m] = efd_alg[i]
@@ -1076,6 +1078,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         p.basrad,
         xm,
         cur,
+        ifd_mac,
         vex,
         _rotor_inputs(p.TP, p.MP, xm, xt, pmech),
         targets,

@@ -617,10 +617,19 @@ def field_current(P, x, cur, i):
 
 
 @kernel
-def derivatives(P, basrad, x, cur, vex, pmech, target, dx, pelect, qelect, eterm):
+def field_currents(P, x, cur, ifd):
+    """Field current of every machine (machine base) into ifd (n_mac,): `field_current`,
+    computed once per evaluation for the exciters that read it and `derivatives`."""
+    for i in range(P.shape[0]):
+        ifd[i] = field_current(P, x, cur, i)
+
+
+@kernel
+def derivatives(P, basrad, x, cur, ifd, vex, pmech, target, dx, pelect, qelect, eterm):
     """Machine derivatives into dx (6, n_mac) and outputs (PST flag 2, docs 1.6-1.9).
 
-    cur: terminal currents (system base, network frame); vex: field voltages; pmech:
+    cur: terminal currents (system base, network frame); ifd: the field currents at cur
+    (machine base, `field_currents`); vex: field voltages; pmech:
     mechanical power (machine base); target (n_mac, 2): a playback source's targets of
     E' and speed (pu; `playback` column, docs/pst_models.md 17).  pelect, qelect on the
     system base; eterm in pu.
@@ -635,7 +644,7 @@ def derivatives(P, basrad, x, cur, vex, pmech, target, dx, pelect, qelect, eterm
         dx[S.delta, i] = basrad * (w - 1.0)
         dx[S.psikd, i] = 0.0
         dx[S.psikq, i] = 0.0
-        fld = _field_current(P, x, i, cdg)
+        fld = ifd[i]
         if kind == SUB:
             psidpp, psiqpp = _fluxes(P, x, i)
             Eqpe = x[S.eqp, i] - x[S.psikd, i] - P[i, K.P8] * cdg

@@ -515,13 +515,12 @@ def initialise(p: ExciterParams, vex, eterm, VB=None, vc=None):
 
 
 @kernel(inline="always")
-def field_current(P, i, MP, xm, cur):
+def field_current(P, i, ifd):
     """The field current (pu on the machine base) of exciter i's machine where its type's
-    equations read it (:data:`READS_IFD`), 0 for the other types; MP, xm, cur as
-    `field_voltage`."""
-    kind = P[i, E.KIND]
-    if kind in READS_IFD:
-        return mac.field_current(MP, xm, cur, int(P[i, E.MAC]))
+    equations read it (:data:`READS_IFD`), 0 for the other types; ifd (n_mac,) every
+    machine's (`stabctl.models.machines.field_currents`)."""
+    if P[i, E.KIND] in READS_IFD:
+        return ifd[int(P[i, E.MAC])]
     return 0.0
 
 
