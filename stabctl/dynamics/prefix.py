@@ -22,6 +22,7 @@ trajectory: their commands and monitor act from t = 0.
 
 from __future__ import annotations
 
+import weakref
 from typing import NamedTuple
 
 import numpy as np
@@ -33,13 +34,14 @@ PREFIXES_KEPT = 4
 
 class Prefix(NamedTuple):
     """A run's state at grid index k, the point before its first event, and what it
-    recorded up to there: the model and pre-event network it was integrated with (by
-    identity), the grid times t (k + 1,), the carry's arrays and the recording's rows
-    (`stabctl.dynamics.integrator.Carry`, `Recording`); None fields when the run stopped
-    before k (nothing to reuse)."""
+    recorded up to there: weak references to the model and pre-event network it was
+    integrated with (told by identity; a prefix keeps neither alive once the simulator's
+    caches drop them), the grid times t (k + 1,), the carry's arrays and the recording's
+    rows (`stabctl.dynamics.integrator.Carry`, `Recording`); None fields when the run
+    stopped before k (nothing to reuse)."""
 
-    model: object
-    net0: object
+    model: weakref.ref
+    net0: weakref.ref
     t: np.ndarray
     k: int
     carry: tuple | None
@@ -144,8 +146,8 @@ def _fits(prefix: Prefix, run, net0, k: int) -> bool:
     objects: the identities and the grid are checked)."""
     return (
         prefix.carry is not None
-        and prefix.model is run.m
-        and prefix.net0 is net0
+        and prefix.model() is run.m
+        and prefix.net0() is net0
         and prefix.k == k
         and np.array_equal(prefix.t, run.grid.t[: k + 1])
     )
@@ -156,7 +158,7 @@ def _integrated(run, k: int, net0) -> Prefix:
     run.advance(k)
     t = run.grid.t[: k + 1].copy()
     if run.status != 0 or run.k != k:  # stopped before: nothing to reuse
-        return Prefix(run.m, net0, t, k, None, None)
+        return Prefix(weakref.ref(run.m), weakref.ref(net0), t, k, None, None)
     c, n, d = run.carry, k + 1, run.carry.devices
     carry = (
         c.x.copy(),
@@ -175,7 +177,8 @@ def _integrated(run, k: int, net0) -> Prefix:
         run.rec.stats.copy(),
         run.rec.log.copy(),
     )
-    return Prefix(run.m, net0, t, k, carry, tuple(a[:n].copy() for a in _rows(run.rec)))
+    rows = tuple(a[:n].copy() for a in _rows(run.rec))
+    return Prefix(weakref.ref(run.m), weakref.ref(net0), t, k, carry, rows)
 
 
 def _restore(run, prefix: Prefix) -> None:

@@ -98,3 +98,25 @@ def test_runs_with_a_bang_bang_fleet_share_their_quiet_start_bit_for_bit(kundur)
             for key in ("switchings", "storage"):  # the log and each device's figures
                 assert repr(shared.meta[key]) == repr(whole.meta[key]), key
     assert len(sim._prefixes) == 2  # one per fleet rating
+
+
+def test_a_prefix_keeps_no_model_alive(kundur):
+    """A prefix refers to its model weakly: once the simulator's model cache drops a
+    fleet's model (`MODELS_KEPT`), the prefixes do not keep it (and its reduced networks)
+    in memory."""
+    import gc
+    import weakref
+
+    from stabctl.dynamics.bounded import BoundedCache
+    from stabctl.dynamics.driver import MODELS_KEPT
+    from stabctl.storage.devices import uniform_fleet
+
+    sim = Simulator(kundur.case)
+    fleet = uniform_fleet(kundur.case, 5)
+    sim.run(LineFault(3, 101).events(0.1), 2.0, storage=fleet)
+    assert len(sim._prefixes) == 1
+    model = weakref.ref(sim.model_for(fleet.buses))
+    assert model() is not None and model() is not sim.model
+    sim._models = BoundedCache(MODELS_KEPT)  # as if 8 other fleets had pushed it out
+    gc.collect()
+    assert model() is None
