@@ -411,9 +411,12 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
 
 def _finished(futures, workers):
     """Dask futures as each finishes; while none is ready, the cluster's workers are
-    checked every 10 ms (`_DaskWorkers.check`, which raises `_NoWorker`)."""
+    checked every 10 ms (`_DaskWorkers.check`, which raises `_NoWorker`), and at the
+    start and the end whatever the timing (a worker lost while results kept coming is
+    said)."""
     from distributed import as_completed
 
+    workers.check(force=True)  # the count the sweep starts with
     pending = as_completed(futures)
     while not pending.is_empty():
         if not pending.has_ready():
@@ -421,6 +424,7 @@ def _finished(futures, workers):
             time.sleep(0.01)
             continue
         yield next(pending)
+    workers.check(force=True)  # a loss while results kept coming is said too
 
 
 def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> list:
@@ -891,10 +895,10 @@ class _DaskWorkers:
         self.none_since: float | None = None
         self.next_check = 0.0
 
-    def check(self) -> None:
-        """Ask the scheduler (if a second has passed)."""
+    def check(self, force: bool = False) -> None:
+        """Ask the scheduler (if a second has passed, or `force`)."""
         now = time.monotonic()
-        if now < self.next_check:
+        if now < self.next_check and not force:
             return
         self.next_check = now + 1.0
         n = int(self.client.scheduler_info(n_workers=0).get("n_workers", 0))

@@ -15,7 +15,7 @@ raises SimulationError; both carry the trajectory up to that point.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -315,7 +315,7 @@ class Simulator:
         storage=None,
         method: str = "heun",
         monitor: Callable[[SimulationResult], str | None] | None = None,
-        voltages: bool = True,
+        voltages: bool | Sequence[int] = True,
     ) -> SimulationResult:
         """Simulate disturbances from the power-flow point, t = 0 to `t_end`.
 
@@ -358,13 +358,16 @@ class Simulator:
             are empty; e.g.
             `stabctl.stability.sime.EarlyVerdict`).  The trajectory up to the stop equals
             the unmonitored run's.  None (default): no monitor.
-        voltages : bool, optional
+        voltages : bool or sequence of int, optional
             Heun only: record every bus voltage (default True).  False: the network
             solution computes only what the models read (the machine buses and the kept
-            buses), the result's vmag and vang are (n_t, 0) and its buses empty.  The
+            buses), the result's vmag and vang are (n_t, 0) and its buses empty.  Bus
+            numbers: those buses' voltages only (the result's buses in the case's order;
+            the placement's runs record its candidate sites').  The
             trajectories are the same to round-off: the machine buses' voltages are then
-            summed row by row instead of by one matrix product (`stabctl._jit.arrays`), bit
-            for bit where the reduced network is small (Kundur, miniWECC).  On
+            summed from R's machine rows instead of taken from every bus's product
+            (`stabctl._jit.arrays`), bit for bit where the reduced network is small
+            (Kundur).  On
             ACTIVSg2000 (2000 buses, 334 machines) a run takes half the time without them
             (3.4-3.8 s instead of 7.4 s for 3 s at the default step, loaded machine) and
             16 bytes per bus per step less memory; the CCT search's probes
@@ -386,7 +389,8 @@ class Simulator:
             positive and finite, too large for the case's fastest time constant under
             Heun, or more steps than `stabctl.dynamics.grid.check_step_count` allows).
         UnknownBusError, CaseError
-            An event or storage device naming a bus, line or machine not in the case.
+            An event, storage device or ``voltages`` naming a bus, line or machine not
+            in the case.
         NumericalInstabilityError
             The run left the integrator's stability region (names the time and the
             state).
@@ -412,6 +416,7 @@ class Simulator:
         if monitor is not None and method != "heun":
             raise InputError(f"a run monitor needs the heun method, got {method!r}")
         m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics, method)
+        rows = voltage_rows(self.case, voltages)
         if method == "trapezoid":
             res = trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation)
         else:
@@ -424,7 +429,7 @@ class Simulator:
                 semantics == "pst",
                 separation_limit,
                 stop_at_separation,
-                voltages=voltages,
+                bus_rows=rows,
             )
             verdict = None
             if monitor is None and sa.kind != law.EXTERNAL:
@@ -589,7 +594,7 @@ class Simulator:
         run.advance(grid.t.size - 1)
         return run.finish(storage)
 
-    def _result(self, t, rec: ig.Recording, n, wall, limit) -> SimulationResult:
+    def _result(self, t, rec: ig.Recording, n, wall, limit, bus_rows=None) -> SimulationResult:
         c = self.case
         angle = rec.angle[:n]
         dev = np.abs(angle - coi_of_islands(angle, self.inertia, self.island))
@@ -603,7 +608,7 @@ class Simulator:
         return SimulationResult(
             t=t[:n].copy(),
             machines=c.machines.number.astype(int),
-            buses=c.buses.number[: rec.V.shape[1]].astype(int),
+            buses=recorded_buses(c, bus_rows)[: rec.V.shape[1]],
             speed=rec.speed[:n],
             angle=angle,
             pelect=rec.pelect[:n],
@@ -760,11 +765,13 @@ class _Run:
     """One simulation in progress: the compiled loop advanced piecewise (see `integrate`)."""
 
     def __init__(
-        self, sim: Simulator, m, sa, grid, nets, pst, limit, stop, n_commands=0, voltages=True
+        self, sim: Simulator, m, sa, grid, nets, pst, limit, stop, n_commands=0, bus_rows=None
     ):
         self.sim, self.m, self.sa, self.grid = sim, m, sa, grid
         n_nc = m.V_nc0.size
-        n_bus = sim.case.n_bus if voltages else 0
+        #: the buses whose voltages the run records (`voltage_rows`: None, every bus)
+        self.bus_rows = bus_rows
+        n_bus = sim.case.n_bus if bus_rows is None else bus_rows.size
         self.rec = ig.recording(grid.t.size, m.mp.n, n_bus, sa.pmax.size, m.cp.n)
         self.carry = ig.Carry(
             x=m.x0.copy(),
@@ -777,7 +784,7 @@ class _Run:
             devices=device_state(sa, n_commands),
             health=ig.Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3))),
         )
-        self.nets, self.steps = stacked_networks(nets, voltages), ig.step_grid(grid)
+        self.nets, self.steps = stacked_networks(nets, bus_rows), ig.step_grid(grid)
         #: the stages' networks (`stabctl.dynamics.prefix` tells a run's pre-event one by it)
         self.nets_list = nets
         self.opts = ig.RunOptions(
@@ -846,7 +853,7 @@ class _Run:
         return SimulationResult(
             t=self.grid.t[lo:n],
             machines=c.machines.number.astype(int),
-            buses=c.buses.number[: V.shape[1]].astype(int),
+            buses=recorded_buses(c, self.bus_rows)[: V.shape[1]],
             speed=r.speed[lo:n],
             angle=r.angle[lo:n],
             pelect=r.pelect[lo:n],
@@ -863,7 +870,7 @@ class _Run:
     def finish(self, storage) -> SimulationResult:
         """The result; raises SimulationError (with the partial result) after a divergence."""
         sim, g, k_end = self.sim, self.grid, self.k
-        res = sim._result(g.t, self.rec, k_end + 1, self.wall, self.limit)
+        res = sim._result(g.t, self.rec, k_end + 1, self.wall, self.limit, self.bus_rows)
         if storage is not None:
             log = self.rec.log
             _attach_storage(
@@ -964,3 +971,36 @@ def separated_group(
     m_lag, m_lead = inertia[lagging].sum(), inertia[leading].sum()
     group = leading if m_lead <= m_lag * (1 + 1e-9) else lagging
     return np.sort(group)
+
+
+def voltage_rows(case: Case, voltages) -> np.ndarray | None:
+    """The buses whose voltages a run records (`Simulator.run`, ``voltages``).
+
+    Parameters
+    ----------
+    case : Case
+        The simulated case.
+    voltages : bool or sequence of int
+        True: every bus; False: none; else bus numbers (any order, repeats ignored).
+
+    Returns
+    -------
+    ndarray of int or None
+        None for every bus (also when the numbers name them all), else the 0-based bus
+        indices in the case's order (possibly none).
+
+    Raises
+    ------
+    UnknownBusError
+        A number that is no bus of the case.
+    """
+    if isinstance(voltages, (bool, np.bool_)):
+        return None if voltages else np.zeros(0, np.int64)
+    rows = np.unique([case.bus_index(int(b)) for b in voltages]).astype(np.int64)
+    return None if rows.size == case.n_bus else rows
+
+
+def recorded_buses(case: Case, bus_rows) -> np.ndarray:
+    """The numbers of the buses a run records (`voltage_rows`), int (n_recorded,)."""
+    numbers = case.buses.number.astype(int)
+    return numbers if bus_rows is None else numbers[bus_rows]

@@ -431,6 +431,7 @@ class DynamicModel:
             n_motor=L.n_motor,
             n_swsh=L.n_swsh,
             n_svc=L.n_svc,
+            n_bus=self.case.n_bus,
         )
 
     def _shunts_packed(self) -> np.ndarray:
@@ -678,6 +679,8 @@ class KernelParams(NamedTuple):
     n_motor: int
     n_swsh: int
     n_svc: int
+    #: buses of the case (R's rows when a run computes every bus voltage)
+    n_bus: int
 
 
 class KernelNetwork(NamedTuple):
@@ -719,27 +722,28 @@ def kernel_network(net: ReducedNetwork) -> KernelNetwork:
     return KernelNetwork(*(np.ascontiguousarray(getattr(net, f)) for f in KernelNetwork._fields))
 
 
-def stacked_networks(nets, voltages: bool = True) -> KernelNetwork:
+def stacked_networks(nets, rows=None) -> KernelNetwork:
     """The stages' matrices stacked on a first axis (stage index), C-contiguous.
 
     Parameters
     ----------
     nets : sequence of ReducedNetwork, length n_stage
         Stages of equal dimensions.
-    voltages : bool, optional
-        Stack R (default); False: R of shape (n_stage, 0, n_mac + n_nc), for a run that
-        records no bus voltage (`evaluate_kernel` then reads R_mac only; ACTIVSg2000's R
-        is 10.7 MB a stage).
+    rows : ndarray of int or None, optional
+        R's rows to stack: None (default) every bus's; else those (0-based bus indices,
+        possibly none) for a run that records only their voltages (`evaluate_kernel` then
+        reads R_mac for the machines; ACTIVSg2000's R is 10.7 MB a stage).
 
     Returns
     -------
     KernelNetwork
-        Each field of shape (n_stage, ...) of the single-stage shape.
+        Each field of shape (n_stage, ...) of the single-stage shape (R: (n_stage,
+        len(rows), n_mac + n_nc) with rows).
     """
 
     def stacked(f):
-        if f == "R" and not voltages:
-            return np.zeros((len(nets), 0, nets[0].R.shape[1]), np.complex128)
+        if f == "R" and rows is not None:
+            return np.ascontiguousarray(np.stack([n.R[rows] for n in nets]))
         return np.ascontiguousarray(np.stack([getattr(n, f) for n in nets]))
 
     return KernelNetwork(*(stacked(f) for f in KernelNetwork._fields))
@@ -962,8 +966,9 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         Kept-bus voltages (guess in, solution out) and held loads, updated in place; the
         device powers drawn there.
     want_vbus : bool
-        Compute every bus voltage into out.V_bus (else none: the machines' terminal
-        voltages come from net.R_mac, and net.R may be empty).
+        Compute the bus voltages of net.R's rows into out.V_bus (every bus, or those a
+        run records); else none (net.R may be empty).  The machines' terminal voltages
+        come from V_bus when it holds every bus, else from net.R_mac.
     dx : ndarray, shape (n_state,)
         Written with the derivatives (slots no model uses are left as they are).
     out : KernelOutputs
@@ -1037,8 +1042,9 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         cur[m] += I_kept[m]
     z = np.concatenate((psi, V_nc))
     V_mac = np.empty(nm, np.complex128)  # the machines' terminal voltages
-    if want_vbus and V_bus.size > 0:  # (none to compute in a run that records none)
+    if want_vbus and V_bus.size > 0:  # R: every bus's rows, or those a run records
         matvec(R, z, V_bus)
+    if want_vbus and V_bus.size == p.n_bus:
         for m in range(nm):
             V_mac[m] = V_bus[p.mac_bus[m]]
     elif z.size > SMALL_MATVEC:  # one BLAS product (ACTIVSg2000's 334 machine rows: 27 us

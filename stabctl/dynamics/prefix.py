@@ -129,7 +129,7 @@ def integrate_from_cache(run, cache) -> None:
         k,
         float(run.grid.t[k]),
         run.opts.pst,
-        run.rec.V.shape[1],
+        None if run.bus_rows is None else run.bus_rows.tobytes(),
         run.params.reach,
         run.opts.limit,
         run.opts.stop,

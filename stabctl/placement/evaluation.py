@@ -118,7 +118,8 @@ def evaluate(job: dict) -> dict:
         The network fails while the fault is on.
     """
     sim = _Memo(
-        cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0))
+        cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0)),
+        [site[0] for site in job["sites"]],
     )
     f, sites, tol, t_max = fault_of_inputs(job["fault"]), job["sites"], job["tol"], job["t_max"]
     ctrl = BangBangCOI(**job["controller"])
@@ -219,7 +220,8 @@ def check(job: dict) -> dict:
         The network fails while the fault is on.
     """
     sim = _Memo(
-        cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0))
+        cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0)),
+        [site[0] for site in job["sites"]],
     )
     ctrl = BangBangCOI(**job["controller"])
     fleet = _fleet(job, ctrl)
@@ -294,12 +296,14 @@ class _Memo:
     separation settings, fleet) and counts the runs simulated (`n_runs`); a run that
     raised is not kept (its caller may mark the partial result).  The simulator is
     deterministic: a repeated run would give the same trajectory.  Its runs record the
-    bus voltages whatever a caller asks (`Simulator.run`'s ``voltages``): the placement's
-    own checks read the device buses' (`stabctl.stability.sime.device_modes`) on the runs
-    it shares with the CCT search."""
+    voltages of the candidate sites' buses (`buses`) whatever a caller asks
+    (`Simulator.run`'s ``voltages``): the placement's own checks read them
+    (`stabctl.stability.sime.device_modes`) on the runs it shares with the CCT search,
+    which reads none."""
 
-    def __init__(self, sim):
+    def __init__(self, sim, buses=()):
         self._sim, self._done, self.n_runs = sim, {}, 0
+        self._buses = sorted({int(b) for b in buses})
 
     def __getattr__(self, name):
         return getattr(self._sim, name)
@@ -314,7 +318,7 @@ class _Memo:
         stop_at_separation: bool = False,
         storage=None,
         monitor=None,
-        voltages: bool = True,  # recorded always (class docstring)
+        voltages: bool = True,  # the sites' recorded always (class docstring)
     ):
         h = self._sim.default_h if h is None else h
         key = (
@@ -338,6 +342,7 @@ class _Memo:
                 stop_at_separation=stop_at_separation,
                 storage=storage,
                 monitor=monitor,
+                voltages=self._buses,
             )
         return self._done[key]
 

@@ -410,6 +410,41 @@ def test_a_run_without_bus_voltages_has_the_same_trajectories(
     assert lean.stable == full.stable
 
 
+@pytest.mark.parametrize(
+    ("name", "bus", "far_bus", "buses", "same_bits"),
+    [("kundur", 3, 101, (10, 1, 10, 3), True), ("wecc", 40, 44, (44, 40, 7), False)],
+)
+def test_a_run_recording_some_buses_has_their_voltages_and_the_same_trajectories(
+    request, name, bus, far_bus, buses, same_bits
+):
+    """voltages=<bus numbers> (the placement's runs: its candidate sites) records those
+    buses only, in the case's order, repeats dropped: their voltages and every machine
+    trajectory are the full run's (bit for bit on Kundur, to round-off on miniWECC, whose
+    machines' terminal voltages then come from R's machine rows); an unknown bus is
+    refused naming it."""
+    sim = request.getfixturevalue(name)
+    events = LineFault(bus, far_bus).events(0.1)
+    full = sim.run(events, 3.0)
+    some = sim.run(events, 3.0, voltages=buses)
+    order = sorted(set(buses), key=lambda b: full.bus(b))
+    np.testing.assert_array_equal(some.buses, order)
+    cols = [full.bus(b) for b in order]
+    for q in ("vmag", "vang"):
+        a, b = getattr(some, q), getattr(full, q)[:, cols]
+        if same_bits:
+            np.testing.assert_array_equal(a, b)
+        else:
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-10)
+    for q in ("angle", "speed", "pelect", "pmech", "efd"):
+        a, b = getattr(some, q), getattr(full, q)
+        if same_bits:
+            np.testing.assert_array_equal(a, b)
+        else:
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * max(1.0, np.abs(b).max()))
+    with pytest.raises(UnknownBusError, match="99999"):
+        sim.run(events, 3.0, voltages=(bus, 99999))
+
+
 def test_a_screening_workers_simulator_keeps_a_bounded_number_of_networks(kundur_case):
     """A worker's simulator runs every fault of a screening: its reduced networks and
     models are kept for the most recently used only (ACTIVSg2000 grew by about 33 MB a
