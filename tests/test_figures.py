@@ -29,7 +29,7 @@ def legend_texts(fig_or_ax) -> list[str]:
 def test_large_case_bus_voltages_name_the_deepest_buses(kept):
     case = stabctl.load_case(CASE2.case)
     res = stabctl.Simulator(case).run(CASE2.fault.events(6 / case.freq_hz), t_end=1.3)
-    figures.simulation_overview(res, "unused.png")
+    figures.simulation_overview(res, "unused.png", case=case)
     names = legend_texts(kept[0].axes[2])
     assert names[0] == f"other {case.n_bus - 3} buses (thin)"
     # the faulted bus first: a bolted fault holds it at 0 pu

@@ -1196,6 +1196,31 @@ class Case:
         except (KeyError, ValueError, TypeError):
             raise CaseError(f"machine {number} is not in case '{self.name}'") from None
 
+    def machine_name(self, number) -> str:
+        """How outputs name machine ``number``: its number and its bus, ``"G14 (bus 3)"``.
+
+        Every listing of machines (the CLI's text, the plots' legends) names them through
+        this one function, so that a reader finds them in the case's machine table (the
+        number) and on its network (the bus).
+
+        Parameters
+        ----------
+        number : int
+            Machine number (PST ``mac_con`` column 1), a scalar; anything ``int()`` accepts.
+
+        Returns
+        -------
+        str
+            ``"G<number> (bus <bus number>)"``.
+
+        Raises
+        ------
+        CaseError
+            The machine is not in the case; the message names it.
+        """
+        k = self.machine_index(number)
+        return f"G{int(self.machines.number[k])} (bus {int(self.machines.bus[k])})"
+
     @property
     def swing_index(self) -> np.ndarray:
         """0-based rows of the swing bus(es), int array."""

@@ -131,7 +131,7 @@ def _ms(t: float) -> str:
     return f"{t:.3f}".rstrip("0").rstrip(".")
 
 
-def save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0) -> None:
+def save_plot_atomically(result, path: Path, title: str, case) -> None:
     """Plot a run (stabctl.plotting.figures.simulation_overview) to a temporary file
     beside ``path``, then rename it, so that ``path`` is whole or absent.
 
@@ -140,14 +140,18 @@ def save_plot_atomically(result, path: Path, title: str, base_mva: float = 100.0
     result : SimulationResult
     path : Path
     title : str
-    base_mva : float
+    case : Case
+        The run's case: its machines named by number and bus (`Case.machine_name`), its
+        system base (MVA) for the device powers.
     """
     from stabctl.parallel import atomic_write
     from stabctl.plotting.figures import simulation_overview
 
     atomic_write(
         path,
-        lambda tmp: simulation_overview(result, tmp, title=title, base_mva=base_mva),
+        lambda tmp: simulation_overview(
+            result, tmp, title=title, base_mva=case.base_mva, case=case
+        ),
         mode=None,
     )
 
@@ -211,12 +215,29 @@ def print_storage(esd: dict, result) -> None:
         )
 
 
-def print_cct(case_name, rating, d) -> None:
+def machine_list(case, numbers) -> str:
+    """Machines named for a reader, ``"G1 (bus 1), G2 (bus 2)"`` (`Case.machine_name`).
+
+    Parameters
+    ----------
+    case : Case
+    numbers : iterable of int
+        Machine numbers of the case.
+
+    Returns
+    -------
+    str
+    """
+    return ", ".join(case.machine_name(m) for m in numbers)
+
+
+def print_cct(case, rating, d) -> None:
     """Print the `cct` result as text.
 
     Parameters
     ----------
-    case_name : str
+    case : Case
+        The case searched (its name; its machines named by number and bus).
     rating : float or None
         Storage rating (% of machine MVA), None: no storage.
     d : dict
@@ -231,7 +252,7 @@ def print_cct(case_name, rating, d) -> None:
         f"{f['t_fault']:g} s, cleared at both ends, line tripped"
     )
     click.echo(
-        f"case {case_name}: {where}"
+        f"case {case.name}: {where}"
         + "".join(f", {a}-{b} also opened" for a, b in f["trips"])
         + (
             "; no storage"
@@ -254,13 +275,14 @@ def print_cct(case_name, rating, d) -> None:
     if "critical_group" in d:
         g = d["critical_group"]
         click.echo(
-            f"storage on the critical group's COI: machines {g['machines']} separate without "
+            f"storage on the critical group's COI: machines {machine_list(case, g['machines'])} "
+            "separate without "
             f"storage (CCT {g['cct_without_storage_s']:.3f} s); their devices brake them "
             "against the other machines' COI, the other devices drive theirs after them"
         )
     if d["separated_machines"]:
         click.echo(
-            f"machine(s) {', '.join(map(str, d['separated_machines']))} lose "
+            f"machine(s) {machine_list(case, d['separated_machines'])} lose "
             f"synchronism when cleared at {d['t_unstable_s']:.3f} s"
         )
     click.echo(
@@ -325,11 +347,13 @@ def print_sweep(rep, n_jobs: int) -> None:
     )
 
 
-def print_screening(rows) -> None:
+def print_screening(case, rows) -> None:
     """Print the `screen` table, one row per fault in the given order.
 
     Parameters
     ----------
+    case : Case
+        The case screened (its machines named by number and bus).
     rows : list of dict
         Screening rows (`stabctl.stability.screening.screen`).
     """
@@ -343,7 +367,8 @@ def print_screening(rows) -> None:
         if r["status"] == "ok":
             err = "-" if r["numerical_error_s"] is None else f"{1000 * r['numerical_error_s']:g}"
             click.echo(
-                f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  {r['separated']}"
+                f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  "
+                + (machine_list(case, r["separated"]) or "-")
             )
         elif r["verdict"] == ABOVE:
             above = f">{r['t_max_s']:.3f}"

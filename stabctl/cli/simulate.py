@@ -10,6 +10,7 @@ from stabctl.cli.checks import OUT_SUFFIXES, PLOT_SUFFIXES, check_suffix
 from stabctl.cli.format import (
     describe_esd,
     describe_event,
+    machine_list,
     print_json,
     print_storage,
     save_plot_atomically,
@@ -426,7 +427,7 @@ def simulate(
         title = f"{case.name}: " + ("; ".join(describe_event(e) for e in events) or "flat run")
         if esd is not None:
             title += "\n" + describe_esd(esd, short=True)
-        save_plot_atomically(result, plot_p, title=title, base_mva=case.base_mva)
+        save_plot_atomically(result, plot_p, title=title, case=case)
         written.append(str(plot_p))
     if out_p is not None:
         if out_p.suffix.lower() == ".npz":
@@ -473,11 +474,10 @@ def simulate(
     if result.stable:
         click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
     else:
-        bus = dict(zip(case.machines.number.astype(int), case.machines.bus.astype(int)))
-        machines = ", ".join(f"{m} (bus {bus[int(m)]})" for m in result.separated)
         click.echo(
             f"loss of synchronism at t = {result.t_separation:.4f} s: machine(s) "
-            f"{machines} separate" + (" (run stopped)" if stop_at_separation else "")
+            f"{machine_list(case, result.separated)} separate"
+            + (" (run stopped)" if stop_at_separation else "")
         )
     for w in written:
         click.echo(f"wrote {w}")

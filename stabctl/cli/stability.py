@@ -195,22 +195,38 @@ def cct(
         else:
             click.echo(f"CCT above the search limit: {exc}")
         return
-    out = {
-        "case": case.name,
-        "esd_pct": esd_pct,
-        "esd_model": esd_model,
-        **res.to_dict(),
-        "q_limits": q_limits,
-    }
+    out = {"case": case.name, "esd_pct": esd_pct, "esd_model": esd_model}
+    for key, value in res.to_dict().items():
+        out[key] = value
+        if key == "separated_machines":  # their buses beside them
+            out["separated_buses"] = _machine_buses(case, value)
+    out["q_limits"] = q_limits
     if base is not None:
         out["critical_group"] = {
             "machines": list(base.separated),
+            "buses": _machine_buses(case, base.separated),
             "cct_without_storage_s": base.cct_s,
         }
     if as_json:
         print_json(out)
     else:
-        print_cct(case.name, esd_pct, out)
+        print_cct(case, esd_pct, out)
+
+
+def _machine_buses(case, numbers) -> list[int]:
+    """The buses of the given machines, in their order: the JSON's bus numbers beside the
+    machine numbers (the text names both, `Case.machine_name`)."""
+    return [int(case.machines.bus[case.machine_index(m)]) for m in numbers]
+
+
+def _with_buses(case, row: dict) -> dict:
+    """A screening row with ``separated_buses`` beside its ``separated`` machines (if any)."""
+    out = {}
+    for key, value in row.items():
+        out[key] = value
+        if key == "separated":
+            out["separated_buses"] = _machine_buses(case, value)
+    return out
 
 
 def _without_storage(sim, line_fault, search, step):
@@ -423,10 +439,11 @@ def screen(
         from stabctl.plotting import figures as plotting
 
         plotting.screening_map(case, rows, plot_p)
+    rows = [_with_buses(case, r) for r in rows]
     if as_json:
         print_json(rows)
         return
-    print_screening(rows)
+    print_screening(case, rows)
 
 
 def _bus_list(text: str) -> list[int]:

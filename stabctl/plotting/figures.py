@@ -150,7 +150,13 @@ def min_time_figures(system, x_release, sols: dict, states_path: Path, costates_
 
 
 def simulation_overview(
-    result, path, title: str | None = None, max_labels: int = 10, base_mva: float = 100.0
+    result,
+    path,
+    title: str | None = None,
+    max_labels: int = 10,
+    base_mva: float = 100.0,
+    *,
+    case,
 ) -> None:
     """Panels versus time for a `stabctl.dynamics.results.SimulationResult`: machine speeds (pu),
     rotor angles relative to the centre of inertia (rad, the result's own COI with H*MVA
@@ -158,8 +164,10 @@ def simulation_overview(
     (MW on `base_mva`, + absorbs).  Loss of synchronism, if any, is marked by a vertical
     line.  Machines keep one colour in every panel; with more than `max_labels` machines
     each has a distinct colour and line style and only the separated ones are drawn thick
-    and named (legend and a label at the end of the trace); with more than `max_labels`
-    buses the three whose voltage falls lowest are named, the others drawn thin grey."""
+    and named (legend and a label at the end of the trace), the legend saying how many
+    others there are; with more than `max_labels` buses the three whose voltage falls
+    lowest are named, the others drawn thin grey.  Machines are named by number and bus,
+    ``G14 (bus 3)``, from the run's `case` (`Case.machine_name`)."""
     t = result.t
     storage = result.pesd is not None and result.devices.size > 0
     fig, axes = plt.subplots(
@@ -167,7 +175,7 @@ def simulation_overview(
     )
     rel = result.relative_angle  # against each machine's island's COI, as the verdict
     lost = set(int(m) for m in result.separated)
-    mstyles = _machine_styles(result.machines, lost, max_labels)
+    mstyles = _machine_styles(result.machines, case, lost, max_labels)
     series = (
         (axes[0], result.speed, "G", result.machines, "speed (pu)"),
         (axes[1], rel, "G", result.machines, "angle - COI angle (rad)"),
@@ -185,14 +193,9 @@ def simulation_overview(
                 ax.plot(t, data[:, j], lw=1.2, label=f"B{int(n)}")
         if prefix == "B" and many:
             _deepest_buses(ax, t, data, numbers)
-        if prefix == "G" and many:
-            ax.plot(
-                [],
-                [],
-                color="0.5",
-                lw=0.7,
-                label=f"other {len(numbers) - len(lost)} machines (thin)",
-            )
+        quiet = sum(1 for st in mstyles if not st["label"])
+        if prefix == "G" and quiet:
+            ax.plot([], [], color="0.5", lw=0.7, label=_others_label(quiet, len(numbers)))
         if result.t_separation is not None:
             ax.axvline(result.t_separation, color="r", ls=":", lw=1.2, label="loss of synchronism")
         ax.set_ylabel(ylabel)
@@ -233,7 +236,7 @@ def simulation_overview(
         "stable"
         if result.stable
         else f"loss of synchronism at {result.t_separation:.3f} s, machine(s) "
-        + ", ".join(str(int(m)) for m in result.separated)
+        + ", ".join(case.machine_name(m) for m in result.separated)
     )
     head = title or str(result.meta.get("case", "simulation"))
     axes[0].set_title(f"{head}\n{verdict}", fontsize=9)
@@ -268,10 +271,20 @@ def _deepest_buses(ax, t, vmag, numbers, n: int = 3) -> None:
         _end_label(ax, t, vmag[:, j], name, line[0].get_color())
 
 
-def _machine_styles(numbers, highlight=(), max_labels: int = 10) -> list[dict]:
+def _others_label(quiet: int, total: int) -> str:
+    """The legend entry of the machines drawn thin and not named: how many, and that
+    they are the ones that did not separate (each in its own colour and line style)."""
+    return (
+        f"{'other ' if quiet < total else ''}{quiet} machine{'s' if quiet != 1 else ''} "
+        "not separated (thin, one colour each)"
+    )
+
+
+def _machine_styles(numbers, case, highlight=(), max_labels: int = 10) -> list[dict]:
     """Plot style per machine: up to max_labels machines each a tab10 colour and a legend
     entry; more machines each a distinct colour and line style (thin, unlabelled) except
-    the `highlight`ed ones (thick, black/red/..., labelled)."""
+    the `highlight`ed ones (thick, black/red/..., labelled).  Labels name the machines
+    by number and bus (`Case.machine_name` of their `case`)."""
     numbers = [int(n) for n in numbers]
     if len(numbers) <= max_labels:
         return [
@@ -279,7 +292,7 @@ def _machine_styles(numbers, highlight=(), max_labels: int = 10) -> list[dict]:
                 "color": plt.get_cmap("tab10")(j % 10),
                 "lw": 1.2,
                 "ls": "-",
-                "label": f"G{n}",
+                "label": case.machine_name(n),
                 "zorder": 2,
             }
             for j, n in enumerate(numbers)
@@ -295,7 +308,7 @@ def _machine_styles(numbers, highlight=(), max_labels: int = 10) -> list[dict]:
                     "color": loud[shown.index(n) % len(loud)],
                     "lw": 2.2,
                     "ls": "-",
-                    "label": f"G{n}",
+                    "label": case.machine_name(n),
                     "zorder": 3,
                 }
             )
@@ -315,7 +328,7 @@ def _machine_styles(numbers, highlight=(), max_labels: int = 10) -> list[dict]:
 
 def _speed_panel(ax, res, styles, label: str) -> None:
     """Machine speeds of one run with the given styles; highlighted machines named at the
-    end of their trace; a legend (with 'other N machines' when some are unlabelled)."""
+    end of their trace; a legend (with how many others when some are unlabelled)."""
     for j, st in enumerate(styles):
         ax.plot(res.t, res.speed[:, j], **st)
         if st["label"] and len(styles) > 10:
@@ -324,22 +337,23 @@ def _speed_panel(ax, res, styles, label: str) -> None:
         ax.set_xlim(res.t[0], res.t[-1] + 0.1 * (res.t[-1] - res.t[0]))
     quiet = sum(1 for st in styles if not st["label"])
     if quiet:
-        ax.plot([], [], color="0.5", lw=0.7, label=f"other {quiet} machines (thin)")
+        ax.plot([], [], color="0.5", lw=0.7, label=_others_label(quiet, len(styles)))
     if res.t_separation is not None:
         ax.axvline(res.t_separation, color="r", ls=":", lw=1.0, label="loss of synchronism")
     ax.set(xlabel="t (s)", ylabel="speed (pu)", title=f"machine speeds, {label}")
     ax.legend(fontsize=7, ncol=2 if len(styles) <= 10 else 1, loc="best")
 
 
-def storage_case_figure(without, with_, path: Path, title: str, highlight=()) -> None:
+def storage_case_figure(without, with_, path: Path, title: str, *, case, highlight=()) -> None:
     """Speeds without and with storage control, and the device powers (paper Figs. 14-19).
 
     Every machine keeps its colour in both speed panels; with many machines the separated
     ones (in either run) and `highlight` are drawn thick and named, the others thin in
-    distinct colours and line styles.  Device powers use their machine's colour."""
+    distinct colours and line styles.  Device powers use their machine's colour.  Machines
+    are named by number and bus from the runs' `case` (`Case.machine_name`)."""
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
     marked = [int(m) for m in (*without.separated, *with_.separated, *highlight)]
-    styles = _machine_styles(without.machines, dict.fromkeys(marked))
+    styles = _machine_styles(without.machines, case, dict.fromkeys(marked))
     colour = {int(n): st["color"] for n, st in zip(without.machines, styles)}
     for ax, res, label in ((axes[0], without, "without control"), (axes[1], with_, "with control")):
         _speed_panel(ax, res, styles, label)

@@ -30,11 +30,9 @@ def _run(pc: PaperCase, cycles: float, t_end: float, **kw):
 def _verdict(case, res) -> str:
     if res.stable:
         return f"  verdict: stable (largest angle from the COI {res.max_angle_spread:.3f} rad)"
-    buses = [int(case.machines.bus[case.machine_index(m)]) for m in res.separated]
     return (
         f"  verdict: loss of synchronism at t = {res.t_separation:.4f} s; machine(s) "
-        f"{', '.join(map(str, res.separated))} (bus {', '.join(map(str, buses))}) "
-        "separate from the rest"
+        f"{', '.join(case.machine_name(m) for m in res.separated)} separate from the rest"
     )
 
 
@@ -49,7 +47,8 @@ def _cct_scan(pc: PaperCase, cycles: int, t_end: float) -> list[str]:
             + (
                 "stable"
                 if r.stable
-                else f"machines {r.separated} separate at {r.t_separation:.3f} s"
+                else f"machine(s) {', '.join(case.machine_name(m) for m in r.separated)} separate "
+                f"at {r.t_separation:.3f} s"
             )
         )
         if r.stable:
@@ -65,7 +64,7 @@ def _cct_scan(pc: PaperCase, cycles: int, t_end: float) -> list[str]:
     return lines
 
 
-def _excursions(res) -> list[str]:
+def _excursions(case, res) -> list[str]:
     """How far each machine strays from the COI of the machines that did not separate."""
     keep = [j for j, m in enumerate(res.machines) if int(m) not in res.separated]
     w = res.inertia[keep]
@@ -75,8 +74,8 @@ def _excursions(res) -> list[str]:
     j13 = res.machine(13)
     return [
         "  largest excursions from the COI of the remaining machines: "
-        + ", ".join(f"machine {int(res.machines[j])} {dev[j]:.2f} rad" for j in order),
-        f"  machine 13: at most {dev[j13]:.2f} rad from that COI -> "
+        + ", ".join(f"{case.machine_name(res.machines[j])} {dev[j]:.2f} rad" for j in order),
+        f"  {case.machine_name(13)}: at most {dev[j13]:.2f} rad from that COI -> "
         + ("stays in synchronism" if dev[j13] < np.pi else "separates too"),
     ]
 
@@ -108,7 +107,7 @@ def no_storage_report(pc: PaperCase, out_dir: Path, t_end: float = 5.0) -> list[
         f"line {pc.bus}-{pc.far_bus} at {pc.fault.t_fault} s, line tripped; {t_end:g} s",
         _verdict(case, res),
     ]
-    lines += _cct_scan(pc, int(cycles), t_end) if pc is CASE1 else _excursions(res)
+    lines += _cct_scan(pc, int(cycles), t_end) if pc is CASE1 else _excursions(case, res)
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / f"{key}_no_storage.png"
     simulation_overview(
@@ -116,6 +115,7 @@ def no_storage_report(pc: PaperCase, out_dir: Path, t_end: float = 5.0) -> list[
         path,
         title=f"{pc.label}, no storage: {case.name}, {cycles}-cycle "
         f"fault at bus {pc.bus}, line {pc.bus}-{pc.far_bus} tripped",
+        case=case,
     )
     return lines + [f"  wrote {path}"]
 

@@ -61,11 +61,12 @@ def _halved(pair, *args, **kw) -> str:
     return "same" if not diff else ", ".join(diff)
 
 
-def _verdict(res) -> str:
+def _verdict(case, res) -> str:
+    names = ", ".join(case.machine_name(m) for m in res.separated)
     return (
         "stable"
         if res.stable
-        else f"loses synchronism at {res.t_separation:.2f} s (machines {res.separated})"
+        else f"loses synchronism at {res.t_separation:.2f} s (machine(s) {names})"
     )
 
 
@@ -111,12 +112,12 @@ def section_case1(fig_dir: Path) -> str:
         ("pstess", paper, 20),
         ("pstess", 17, 5),
     ):
-        without, with_, _case = _run_pair(CASE1, cycles, pct, conv)
+        without, with_, case = _run_pair(CASE1, cycles, pct, conv)
         runs[(conv, cycles, pct)] = (without, with_)
         half = _halved((without, with_), CASE1, cycles, pct, conv)
         lines.append(
-            f"| {conv} | {cycles} cycles | {pct} % | {_verdict(without)} | "
-            f"{_verdict(with_)} | {half} |"
+            f"| {conv} | {cycles} cycles | {pct} % | {_verdict(case, without)} | "
+            f"{_verdict(case, with_)} | {half} |"
         )
     without, with_ = runs[("ieee", fig, 5)]
     plotting.storage_case_figure(
@@ -124,6 +125,7 @@ def section_case1(fig_dir: Path) -> str:
         with_,
         fig_dir / "fig14_15_case1.png",
         "Case 1, Kundur, 11-cycle fault, 5 % ESDs (ieee conventions)",
+        case=case,
     )
     lines += [
         "",
@@ -149,13 +151,14 @@ def section_case1(fig_dir: Path) -> str:
 
 def section_case2(fig_dir: Path) -> str:
     """Case 2 (miniWECC): the Colstrip unit without and with 5 % ESDs (Figs. 17-19)."""
-    without, with_, _case = _run_pair(CASE2, CASE2.cycles["figure"], 5)
+    without, with_, case = _run_pair(CASE2, CASE2.cycles["figure"], 5)
     plotting.storage_case_figure(
         without,
         with_,
         fig_dir / "fig17_19_case2.png",
         "Case 2, miniWECC, 6-cycle fault at bus 83, 5 % ESDs "
         "(thick: machines 13 and 14, named by the paper)",
+        case=case,
         highlight=(13, 14),
     )
     lines = [
@@ -164,8 +167,8 @@ def section_case2(fig_dir: Path) -> str:
         "6-cycle three-phase fault at bus 83 at t = 1 s, line 83-33 tripped; an ESD of 5 % "
         "of machine MVA at each of the 34 generator HV buses.",
         "",
-        f"- without control: {_verdict(without)}",
-        f"- with control: {_verdict(with_)}",
+        f"- without control: {_verdict(case, without)}",
+        f"- with control: {_verdict(case, with_)}",
         "- verdicts at half the step: "
         + _halved((without, with_), CASE2, CASE2.cycles["figure"], 5),
         "",
@@ -321,9 +324,9 @@ def section_wecc(fig_dir: Path, out_dir: Path, progress=None) -> str:
         for h in (sim.default_h, sim.default_h / 2)
     ]
     lines += [
-        f"Case 2, {cycles} cycles, 5 %: without storage {_verdict(without)}; ideal ESDs "
-        f"{_verdict(ideal)}; WECC batteries {_verdict(wecc[0])} (at half the step: "
-        f"{_verdict(wecc[1])}).",
+        f"Case 2, {cycles} cycles, 5 %: without storage {_verdict(case, without)}; ideal ESDs "
+        f"{_verdict(case, ideal)}; WECC batteries {_verdict(case, wecc[0])} (at half the step: "
+        f"{_verdict(case, wecc[1])}).",
         "",
     ]
     for key in ("case2", "case1"):

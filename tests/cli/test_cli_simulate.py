@@ -189,7 +189,9 @@ def test_text_output_reports_verdict(conventions, t_sep):
     )
     assert res.exit_code == 0, res.output
     assert f"loss of synchronism at t = {t_sep}" in res.stdout
-    assert "machine(s) 1 (bus 1), 2 (bus 2) separate" in res.stdout
+    assert (
+        "machine(s) G1 (bus 1), G2 (bus 2) separate" in res.stdout
+    )  # Kundur: G1, G2 at buses 1, 2
     assert f"{conventions} conventions" in res.stdout
 
 

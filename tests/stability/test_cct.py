@@ -313,7 +313,10 @@ def test_cli_cct_text():
     res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--tol-ms", 5)
     assert res.exit_code == 0, res.output
     assert "CCT 0.15" in res.stdout and "cycles" in res.stdout
-    assert "bisection search), wall" in res.stdout and "machine(s) 1, 2" in res.stdout
+    assert (
+        "bisection search), wall" in res.stdout
+        and "machine(s) G1 (bus 1), G2 (bus 2)" in res.stdout
+    )
 
 
 @pytest.mark.parametrize(

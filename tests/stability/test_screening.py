@@ -156,7 +156,7 @@ def test_a_contingency_that_islands_a_load_bus_names_it_in_its_verdict(tmp_path,
         },
     ]
     capsys.readouterr()
-    print_screening(rows)
+    print_screening(load_case("kundur"), rows)
     text = capsys.readouterr().out
     assert "bus 3 line to 4        islands bus(es) [4] (their load shed)" in text
     assert "1 N-1 insecure (CCT 0), 0 failed; 1 island load buses" in text

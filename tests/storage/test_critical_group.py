@@ -81,10 +81,14 @@ def test_cct_cli_finds_the_group_and_other_commands_refuse_it(kundur):
     res = CliRunner().invoke(main, [*args, "--coi", "critical", "--json"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
-    assert out["critical_group"] == {"machines": [1, 2], "cct_without_storage_s": 0.154}
+    assert out["critical_group"] == {
+        "machines": [1, 2],
+        "buses": [1, 2],
+        "cct_without_storage_s": 0.154,
+    }
     assert out["cct_s"] > 0.154
     text = CliRunner().invoke(main, [*args, "--coi", "critical"])
-    assert "machines [1, 2] separate without storage (CCT 0.154 s)" in text.stdout
+    assert "machines G1 (bus 1), G2 (bus 2) separate without storage (CCT 0.154 s)" in text.stdout
     res = CliRunner().invoke(
         main, ["simulate", "kundur", "--fault", "3", "--esd-pct", "5", "--coi", "critical"]
     )
