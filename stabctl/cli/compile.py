@@ -87,8 +87,9 @@ def _warm_steps(case):
         sa = st.pack(st.uniform_fleet(case, 1.0, BangBangCOI()), case, np.arange(case.n_bus))
         n = sa.mac.size  # one device per machine
         desired_modes(sa, np.zeros(n, np.int64), np.zeros(n))
-        for order in "CF":  # rmse's relative speeds come in both layouts
-            _count_actions(sa, np.zeros((2, n), order=order))  # (1, n) is both
+        # rmse's relative speeds come in both layouts ((1, n) would be both at once)
+        _count_actions(sa, np.zeros((2, n)))
+        _count_actions(sa, np.zeros((2, n), order="F"))
 
     def converter_setup():  # `initialise`'s types, on no device (case-independent)
         P, x = np.zeros((0, len(PACKED))), np.zeros((N_STATES, 0))
