@@ -193,9 +193,10 @@ def clear_cache() -> int:
 def cached(dispatcher) -> bool:
     """Whether a kernel has an entry in the on-disk cache (numba's index file of it), i.e.
     a new process loads it instead of compiling it (for the argument types it was compiled
-    for; stale entries are gone, `ensure_fresh_cache`)."""
+    for; stale entries are gone, `ensure_fresh_cache`).  numba names the entry after the
+    source file, so a kernel of a package's ``__init__.py`` is ``__init__.<name>-...``."""
     py = dispatcher.py_func
-    stem = f"{py.__module__.rsplit('.', 1)[-1]}.{py.__qualname__}-"
+    stem = f"{Path(py.__code__.co_filename).stem}.{py.__qualname__}-"
     return any(Path(dispatcher.stats.cache_path).glob(stem + "*.nbi"))
 
 

@@ -26,6 +26,41 @@ import click
 #: commands that run the compiled simulator (the others never compile anything)
 _SIMULATING = {"paper", "simulate", "cct", "sweep-cct", "screen", "eig", "place", "estimate", "pmu"}
 
+#: the kernel sets a command may compile (`stabctl compile` prints them as its parts:
+#: the simulator's model evaluation, integrator and converters' set-up; the
+#: linearisation; the estimators' filters and storage control), when not the simulator's
+_KERNEL_SETS = {
+    "eig": ("the simulator's model", "the linearisation"),
+    "place": ("the simulator", "the linearisation"),
+    "estimate": ("the simulator", "the estimators"),
+    "pmu": ("the simulator", "the estimators"),
+    "paper": ("the simulator", "the linearisation", "the estimators"),
+}
+
+
+def compile_notice(command: str) -> str:
+    """The notice printed on stderr when `command` starts compiling kernels: which kernel
+    sets it uses, that each set compiles once and is then loaded from the on-disk cache,
+    and that ``stabctl compile`` compiles every set at once.
+
+    Parameters
+    ----------
+    command : str
+        A subcommand's name, e.g. ``"eig"``.
+
+    Returns
+    -------
+    str
+        Two lines, without a final newline.
+    """
+    sets = _KERNEL_SETS.get(command, ("the simulator",))
+    named = sets[0] if len(sets) == 1 else ", ".join(sets[:-1]) + " and " + sets[-1]
+    return (
+        f"stabctl: compiling the kernels of {named} not yet in the on-disk cache\n"
+        "  (each set compiles once, later runs load it in about a second; "
+        "`stabctl compile` compiles every set at once)"
+    )
+
 
 class UsageLine(click.ClickException):
     """A usage error (an option's value of the wrong type, an unknown or missing option)
@@ -77,12 +112,7 @@ def main(ctx):
         # said when compiling starts (never for cached kernels; bad input fails before)
         ctx.call_on_close(
             on_first_compile(
-                lambda: click.echo(
-                    "stabctl: compiling the simulator's kernels (once after "
-                    "installation or a source change, 15-30 s; later runs load "
-                    "them in about a second)",
-                    err=True,
-                ),
+                lambda: click.echo(compile_notice(ctx.invoked_subcommand), err=True),
                 still=lambda s: click.echo(f"stabctl: still compiling ({s:.0f} s)", err=True),
             )
         )

@@ -32,24 +32,36 @@ def _filter_kernels() -> list:
 
 
 def _kernels() -> dict[str, list]:
-    """What a first command compiles, by name: the dispatchers of each part."""
+    """What a first command compiles, by name: the dispatchers of each part (the
+    simulator's model evaluation and integrator, `eig`'s linearisation, `estimate`'s
+    filters and storage control, and the converters' set-up, which the first case with
+    converters compiles)."""
     from stabctl.dynamics.integrator import integrate
     from stabctl.dynamics.model import evaluate_kernel
+    from stabctl.models.converters import derivatives_at
+    from stabctl.models.converters.pvd1 import commands
     from stabctl.smallsignal.linearise import _differences
+    from stabctl.storage.control import desired_modes
+    from stabctl.studies.estimation import _count_actions
 
     return {
         "model evaluation": [evaluate_kernel],
         "filters": _filter_kernels(),
+        "storage control": [desired_modes, _count_actions],
         "linearisation": [_differences],
+        "converter set-up": [derivatives_at, commands],
         "integrator": [integrate],
     }
 
 
 def _warm_steps(case):
-    """(part, action) in the order a cold first command takes them: the integrator
-    compiles in a child process (`stabctl.dynamics.driver.Simulator`) while this process
-    compiles the model's evaluation, the filters and the linearisation; then it is loaded
-    here, for this case's argument types."""
+    """(part, action) in the order a cold first command takes them: building the
+    simulator (`stabctl.dynamics.driver.Simulator`) compiles the model's evaluation and
+    starts compiling the integrator in a child process, while this process compiles the
+    filters, the storage control, the linearisation and the converters' set-up; then the
+    integrator is loaded here, for this case's argument types."""
+    import numpy as np
+
     from stabctl._jit.background import await_background
     from stabctl.dynamics.driver import Simulator
     from stabctl.dynamics.integrator import integrate
@@ -57,18 +69,44 @@ def _warm_steps(case):
     from stabctl.estimation.filters import compile_filters
     from stabctl.estimation.models import machine_models
     from stabctl.estimation.pmu import machine_pmus
+    from stabctl.models.converters import N_STATES, derivatives_at
+    from stabctl.models.converters.pvd1 import commands
+    from stabctl.models.converters.table import PACKED
     from stabctl.smallsignal.linearise import compile_differences
+    from stabctl.storage import devices as st
+    from stabctl.storage.control import BangBangCOI, desired_modes
+    from stabctl.studies.estimation import _count_actions
 
-    sim = Simulator(case)
+    built = {}
+
+    def model_evaluation():  # the simulator's set-up evaluates its model: timed here
+        built["sim"] = sim = Simulator(case)
+        evaluate_address(sim.model.params)
+
+    def storage_control():  # as `estimate` calls them (closed-loop; rmse's false actions)
+        sa = st.pack(st.uniform_fleet(case, 1.0, BangBangCOI()), case, np.arange(case.n_bus))
+        n = sa.mac.size  # one device per machine
+        desired_modes(sa, np.zeros(n, np.int64), np.zeros(n))
+        # rmse's relative speeds come in both layouts ((1, n) would be both at once)
+        _count_actions(sa, np.zeros((2, n)))
+        _count_actions(sa, np.zeros((2, n), order="F"))
+
+    def converter_setup():  # `initialise`'s types, on no device (case-independent)
+        P, x = np.zeros((0, len(PACKED))), np.zeros((N_STATES, 0))
+        V = np.zeros(0, np.complex128)
+        derivatives_at(P, x, V, V.copy(), np.zeros_like(x))
+        commands(P, x, V)
 
     def integrator():
         await_background(integrate)
-        integrate.compile(tuple(sim.run_argument_types()))
+        integrate.compile(tuple(built["sim"].run_argument_types()))
 
     return [
-        ("model evaluation", lambda: evaluate_address(sim.model.params)),
+        ("model evaluation", model_evaluation),
         ("filters", lambda: compile_filters(machine_models(case, machine_pmus(case)))),
-        ("linearisation", lambda: compile_differences(sim.model)),
+        ("storage control", storage_control),
+        ("linearisation", lambda: compile_differences(built["sim"].model)),
+        ("converter set-up", converter_setup),
         ("integrator", integrator),
     ]
 
@@ -137,13 +175,16 @@ def _check() -> bool:
 )
 @reports_errors
 def compile_kernels(case_names, check):
-    """Compile the kernels of the simulator, the linearisation and the estimation
-    filters into the on-disk cache, so that the first real command loads them (about a
-    second) instead of compiling them (15-60 s).
+    """Compile every kernel set the commands use into the on-disk cache: the
+    simulator's (model evaluation, integrator, converters' set-up), the linearisation's
+    (`eig`) and the estimators' (filters, storage control), so that the first real
+    command loads them (about a second) instead of compiling them (docs/setup.md gives
+    the CPU seconds).
 
     CASE: built-in cases (`stabctl cases`) whose argument types to compile for; default
-    every one.  Printed per case and part (model evaluation, filters, linearisation,
-    integrator): compiled or loaded from the cache, and the seconds.  The integrator
+    every one.  Printed per case and part (model evaluation, filters, storage control,
+    linearisation, converter set-up, integrator): compiled or loaded from the cache, and
+    the seconds.  The integrator
     compiles in a child process beside the other parts, as in a first simulation.  The
     cache is NUMBA_CACHE_DIR if set, else the package's __pycache__ directories; a change
     of a kernel source empties it (the next command, or this one, compiles again).
