@@ -15,7 +15,10 @@ Protocol, one TCP connection per loop (C37.118.2-2011 frames throughout, CRC che
    extended command frame (CMD 0x0008, Table 15) time-stamped as the data frame it
    answers, its extended data one signed byte per ESD: the mode (-1 inject, 0 idle,
    +1 absorb);
-4. the plant closes the connection at the end of the run.
+4. at the end of its run the plant sends a header frame (frame type 1) reading
+   ``stabctl: end of run at t = <s>`` and closes the connection; a connection closed
+   without it is a plant that stopped early (killed, crashed), which the controller says
+   (`PlantStopped`) instead of presenting the frames it answered as the whole run.
 
 The simulation waits for each answer (lock step), so the run is that of the in-process
 loop with the frames as on the wire (`c37.on_wire`) whatever the network does; the modes
@@ -39,6 +42,50 @@ from stabctl.estimation import c37
 from stabctl.estimation.c37_tcp import Guard, _read_frame, command_word
 
 EXTENDED = 8  # C37.118.2-2011 Table 15: extended frame
+#: C37.118.2-2011 frame type (SYNC bits 6-4) of a header frame
+HEADER = 1
+#: the text of the plant's last frame (a header frame) before it closes the loop
+END_OF_RUN = "stabctl: end of run at t = "
+
+
+class PlantStopped(InputError):
+    """The plant closed the loop without its end-of-run header: it stopped before the end
+    of its run (killed, crashed), so the frames the controller answered are not the whole
+    run."""
+
+
+def end_of_run_frame(idcode: int, t: float) -> bytes:
+    """The plant's last frame: a header frame reading `END_OF_RUN` and the run's end time t
+    (s).
+
+    Parameters
+    ----------
+    idcode : int
+        The stream's ID code.
+    t : float
+        The last simulated instant, s.
+
+    Returns
+    -------
+    bytes
+        The frame, CRC included.
+    """
+    from pyc37.frame import HeaderFrame
+
+    return HeaderFrame(idcode, f"{END_OF_RUN}{t:.6f} s").convert2bytes()
+
+
+def _end_time(data: bytes) -> float | None:
+    """The end time (s) a header frame from the plant gives, None for any other frame."""
+    if len(data) < 16 or (data[1] >> 4) & 0x7 != HEADER:
+        return None
+    text = data[14:-2].decode("ascii", "replace")
+    if not text.startswith(END_OF_RUN):
+        return None
+    try:
+        return float(text[len(END_OF_RUN) :].split()[0])
+    except (ValueError, IndexError):
+        return None
 
 
 @dataclass(frozen=True)
@@ -204,6 +251,15 @@ class PlantLink:
         trips = np.array(self._trips)
         return LinkStats(trips.size, trips, self.ctrl.settings.latency_s)
 
+    def finish(self, t_end: float) -> None:
+        """Tell the controller the run ended at t_end (s): the end-of-run header frame
+        (`end_of_run_frame`), sent before `close` only when the run ended normally."""
+        if self._conn is not None:
+            try:
+                self._conn.sendall(end_of_run_frame(self.cfg.idcode, t_end))
+            except OSError:  # the controller has gone: nothing to tell
+                pass
+
     def close(self) -> None:
         """End the loop: close the controller's connection and the listening socket."""
         for s in (self._conn, self._sock):
@@ -318,7 +374,7 @@ class PlantLink:
 
 def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.0) -> int:
     """The controller's end: subscribe to the plant at host:port, then answer every data
-    frame with the modes `controller.act` gives, until the plant closes the loop.
+    frame with the modes `controller.act` gives, until the plant's end-of-run header.
 
     Parameters
     ----------
@@ -341,6 +397,8 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
     ------
     InputError
         No plant there, silence, or a CFG-2 whose stations are not the controller's.
+    PlantStopped
+        The plant closed the loop without its end-of-run header (an InputError).
     """
     from pyc37.frame import CommandFrame
 
@@ -363,12 +421,20 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                 f"estimator is tuned to {cfg.rate:g} (give --rate {cfg2.get_data_rate()})"
             )
         conn.sendall(CommandFrame(cfg.idcode, "start").convert2bytes())
+        last = None
         while (data := _read_frame(conn)) is not None:
+            if _end_time(data) is not None:
+                return n
             frame = c37.parse_frame(cfg, cfg2, data)
             soc, counts = c37.time_stamp(cfg, frame.t)
             conn.sendall(modes_frame(cfg.idcode, soc, counts, controller.act(frame)))
-            n += 1
-    return n
+            n, last = n + 1, frame.t
+    at = "" if last is None else f", the last at t = {last:.4f} s"
+    raise PlantStopped(
+        f"the plant at {host}:{port} closed the loop without ending its run, after {n} "
+        f"frame(s) answered{at}: it stopped early (killed or crashed), so they are not "
+        "the whole run"
+    )
 
 
 def controller_thread(controller, cfg, address, timeout: float = 30.0):

@@ -483,6 +483,7 @@ def _over_tcp(run, plant: LoopController, remote_of, serve) -> ClosedLoopRun:
         elif serve.on_listen is not None:
             serve.on_listen(link.address)
         res = run(link)
+        link.finish(float(res.t[-1]))
     if serve is None:
         thread.join(timeout=30)
         if errors:

@@ -123,6 +123,39 @@ def test_a_controller_of_other_pmus_is_refused(kundur_loop):
     assert "not the controller's" in str(errors[0])
 
 
+def test_a_plant_that_stops_without_its_end_of_run_header_is_said(kundur_loop):
+    """Three frames answered, then the plant closes: after its end-of-run header (a header
+    frame, `end_of_run_frame`) the controller returns the count; without it (a plant
+    killed mid-run: the finding, exit 0 with a partial result presented as whole) it
+    raises PlantStopped naming the frames answered and the last time stamp."""
+    sim, events = kundur_loop
+    from stabctl.storage.devices import uniform_fleet
+
+    partial = sim.run(events, t_end=0.1)
+    devices = uniform_fleet(sim.case, 10).devices
+    for ends in (True, False):
+        ctrl = cl.LoopController(sim.case, devices, "ekf", *_rest())
+        remote = cl.LoopController(sim.case, devices, "ekf", *_rest())
+        cfg = c37.stream_config(sim.case, ctrl.pmus, 60)
+        out: list = []
+        errors: list = []
+        with c37_loop.PlantLink(ctrl, cfg, timeout=5) as link:
+            thread = threading.Thread(
+                target=_catch, args=(errors, _serve_into, out, remote, cfg, *link.address)
+            )
+            thread.start()
+            for k in (1, 2, 3):
+                link(k / 60, partial)
+            if ends:
+                link.finish(3 / 60)
+        thread.join(timeout=10)
+        if ends:
+            assert out == [3] and not errors
+        else:
+            assert not out and isinstance(errors[0], c37_loop.PlantStopped)
+            assert "after 3 frame(s) answered, the last at t = 0.0500 s" in str(errors[0])
+
+
 def test_a_paced_plant_sends_at_its_time_stamps(kundur_loop):
     """A plant at speed 2 with its own controller (`Listen`, as `pmu plant --speed`):
     the frames from 1/60 s to 1 s go out over at least (1 - 1/60) / 2 s of wall clock,
@@ -157,6 +190,11 @@ def _rest():
     from stabctl.estimation.settings import PMUSettings
 
     return PMUSettings(), 0, 2.0
+
+
+def _serve_into(out, *args):
+    """`serve_controller(*args)`, its count appended to out."""
+    out.append(c37_loop.serve_controller(*args))
 
 
 def _catch(errors, func, *args):
