@@ -531,3 +531,21 @@ def test_warnings_are_said_when_a_command_exits_with_its_own_status():
     res = CliRunner().invoke(check, [])
     assert res.exit_code == 1
     assert res.stderr == "warning: numba cache: /shared is writable by others\n"
+
+
+def test_an_input_file_above_the_size_cap_is_refused_before_it_is_read(tmp_path):
+    """A 257 MiB recording (sparse: no disk used) given to `pmu replay` and as a case file:
+    one error line naming the file and both sizes, exit 2, nothing read (the finding: a
+    2 GB recording was read whole, 2.3 GB RSS); the cap is `inputs.MAX_INPUT_BYTES`."""
+    from stabctl.io.inputs import MAX_INPUT_BYTES
+
+    big = tmp_path / "big.bin"
+    with open(big, "wb") as f:
+        f.truncate(MAX_INPUT_BYTES + 2**20)
+    for args, what in (
+        (["pmu", "replay", big], "RECORDING"),
+        (["simulate", tmp_path / "big.json"], "case file"),
+    ):
+        if args[0] == "simulate":
+            (tmp_path / "big.json").symlink_to(big)
+        assert_error(run(*args), what, "257 MiB, above the 256 MiB an input file may have")

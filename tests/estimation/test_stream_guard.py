@@ -93,6 +93,22 @@ def test_a_stream_ends_at_its_end_and_the_server_is_told_stop(kundur_stream):
     assert len(whole.data) == 61 and not whole.short
 
 
+def test_a_stream_without_an_end_stops_at_the_frame_cap(kundur_stream, monkeypatch):
+    """A source with neither a frame count nor a last time stamp keeps at most
+    `c37_tcp.MAX_FRAMES` frames (the finding: an endless stream held 4.5 GB in 11 min):
+    past them one error naming the cap and what sets an end.  The cap set to 5 against
+    the 61 frames of the fixture; with an end given the cap does not apply."""
+    from stabctl.estimation import c37_tcp
+
+    monkeypatch.setattr(c37_tcp, "MAX_FRAMES", 5)
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames)
+    with StreamServer(cfg2, data, speed=float("inf")) as server:
+        with pytest.raises(InputError, match="more than 5 frames without an end: give the"):
+            receive(*server.address, timeout=10)
+        assert len(receive(*server.address, End(frames=20), timeout=10).data) == 20
+
+
 def test_server_drops_scans_silent_peers_bad_crc_and_strangers(kundur_stream):
     """A port scan (connect, close) does not end the server's session; a silent peer is
     dropped after the time-out while a PDC beside it gets the whole stream; a 'start' whose
