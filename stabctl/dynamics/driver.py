@@ -415,22 +415,14 @@ class Simulator:
             )
         if monitor is not None and method != "heun":
             raise InputError(f"a run monitor needs the heun method, got {method!r}")
-        m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics, method)
+        prepared = self._prepare(events, t_end, h, storage, semantics, method)
+        m, sa, grid, nets = prepared
         rows = voltage_rows(self.case, voltages)
         if method == "trapezoid":
             res = trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation)
         else:
-            run = _Run(
-                self,
-                m,
-                sa,
-                grid,
-                nets,
-                semantics == "pst",
-                separation_limit,
-                stop_at_separation,
-                bus_rows=rows,
-            )
+            pst = semantics == "pst"
+            run = _Run(self, *prepared, pst, separation_limit, stop_at_separation, bus_rows=rows)
             verdict = None
             if monitor is None and sa.kind != law.EXTERNAL:
                 integrate_from_cache(run, self._prefixes)
@@ -569,17 +561,10 @@ class Simulator:
         if np.any(np.diff(frame_times) <= 0) or latency < 0:
             raise InputError("frame times must increase and the latency must be >= 0")
         semantics = self._semantics(semantics)
-        m, sa, grid, nets = self._prepare(events, t_end, h, storage, semantics)
+        prepared = self._prepare(events, t_end, h, storage, semantics)
+        grid, pst = prepared[2], semantics == "pst"
         run = _Run(
-            self,
-            m,
-            sa,
-            grid,
-            nets,
-            semantics == "pst",
-            separation_limit,
-            stop_at_separation,
-            n_commands=frame_times.size,
+            self, *prepared, pst, separation_limit, stop_at_separation, n_commands=frame_times.size
         )
         for i, t_f in enumerate(frame_times[frame_times <= t_end]):
             k = int(np.searchsorted(grid.t, t_f - 1e-12))
