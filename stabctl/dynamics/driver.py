@@ -47,6 +47,7 @@ from stabctl.dynamics.model import (
 )
 from stabctl.dynamics.prefix import PREFIXES_KEPT, Prefix, integrate_from_cache, reach
 from stabctl.dynamics.results import SimulationResult
+from stabctl.dynamics.subinterval import exciter_hmax
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import (
     InputError,
@@ -153,6 +154,13 @@ class Simulator:
         listed in `suspect` and in each result's ``meta["suspect_starts"]``: its limiter
         takes it to the limit at the first step, so such a case does not start at rest
         (the equilibrium check then warns instead of refusing).
+    subintervals : bool, optional
+        Under the ieee conventions, Heun runs integrate an exciter whose inner loop is
+        faster than their step in sub-steps of its own, its inputs held over the step
+        (True, the default; `stabctl.dynamics.subinterval`, PowerWorld's "sub-interval"
+        option), so that the default step and the step check follow the data's time
+        constants; False: one step for the whole model, which such a loop then bounds
+        (the default step at half its time constant).  Never under pstess.
 
     Attributes
     ----------
@@ -166,10 +174,13 @@ class Simulator:
         Each machine's island in the case's network (`DynamicModel.island`): its COI is its
         island's.
     fastest : tuple of (float, str)
-        The case's fastest time constant (s) and where it is (`fastest_time_constant`), or a
-        faster loop's at the operating point (`DynamicModel.fastest_loop`: an ST3's inner
-        loop or an EXST1/ESST1A regulator with its rate feedback,
-        `ExciterParams.inner_loop_time_constants`).
+        The case's fastest time constant (s) and where it is (`fastest_time_constant`), or,
+        without sub-intervals, a faster loop's at the operating point
+        (`DynamicModel.fastest_loop`: an ST3's inner loop or an EXST1/ESST1A/EXAC2
+        regulator with its rate feedback, `ExciterParams.inner_loop_time_constants`).
+    subintervals : bool
+        Whether runs integrate fast exciter loops in sub-intervals (the option, under
+        ieee).
     conventions : str
         ``"ieee"`` or ``"pstess"``.
     suspect : tuple of str
@@ -205,6 +216,7 @@ class Simulator:
         background_compile: bool = True,
         off_equilibrium: str = "refuse",
         suspect_starts: str = "refuse",
+        subintervals: bool = True,
     ):
         if suspect_starts not in ("refuse", "run"):
             raise InputError(f"suspect_starts must be 'refuse' or 'run', got {suspect_starts!r}")
@@ -229,8 +241,13 @@ class Simulator:
         self.battery_rows: np.ndarray | None = None
         self.off_equilibrium = off_equilibrium
         self.model = self.model_for(injection_buses)
-        #: the fastest time constant of the data, or of a loop at the operating point
-        self.fastest = min(fastest_time_constant(case), self.model.fastest_loop)
+        #: whether the Heun runs integrate fast exciter loops in sub-intervals (ieee only)
+        self.subintervals = bool(subintervals) and self.conventions == "ieee"
+        #: the fastest time constant of the data, or of a loop at the operating point that
+        #: is not integrated in sub-intervals
+        self.fastest = fastest_time_constant(case)
+        if not self.subintervals:
+            self.fastest = min(self.fastest, self.model.fastest_loop)
         self.default_h = default_step(case, conventions, self.fastest) if step is None else step
         check_step(self.fastest, self.default_h)
         self.island, self.inertia = self.model.island, self.model.coi_inertia
@@ -415,9 +432,10 @@ class Simulator:
             )
         if monitor is not None and method != "heun":
             raise InputError(f"a run monitor needs the heun method, got {method!r}")
-        prepared = self._prepare(events, t_end, h, storage, semantics, method)
-        m, sa, grid, nets = prepared
         rows = voltage_rows(self.case, voltages)
+        recorded = rows if method == "heun" else None  # the trapezoid records every bus
+        prepared = self._prepare(events, t_end, h, storage, semantics, method, recorded)
+        m, sa, grid, nets = prepared
         if method == "trapezoid":
             res = trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation)
         else:
@@ -463,14 +481,16 @@ class Simulator:
             step=self.default_h,
             background_compile=False,
             off_equilibrium=self.off_equilibrium,
+            subintervals=self.subintervals,
         )
         sim.battery_rows = rows
         return sim
 
-    def _prepare(self, events, t_end, h, storage, semantics, method="heun"):
+    def _prepare(self, events, t_end, h, storage, semantics, method="heun", bus_rows=None):
         """Validate, choose the model (storage buses kept), pack the devices, build the
         event grid and the network of every interval (the step checked against the
-        fastest time constant for Heun only: the trapezoid is A-stable)."""
+        fastest time constant for Heun only: the trapezoid is A-stable; the step count
+        against the recording of the buses bus_rows, `voltage_rows`, None: every bus)."""
         if semantics not in ("pst", "exact"):
             raise InputError(f"semantics must be 'pst' or 'exact', got {semantics!r}")
         events = list(events)
@@ -483,10 +503,30 @@ class Simulator:
             xslot = start + int(conv.PLANT_PREF_SLOT) * m.cp.n + self.battery_rows
         sa = st.pack(storage, self.case, m.nc_idx, xslot)
         check_step(self.fastest, h, explicit=method == "heun")
-        check_step_count(t_end, h, self.case)
+        check_step_count(t_end, h, self.case, None if bus_rows is None else bus_rows.size)
         starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
         grid = time_grid(starts, t_end, h, self.conventions == "pstess")
         return m, sa, grid, [m.network(c) for c in configs]
+
+    def exciter_hmax(self, m: DynamicModel, step: float) -> np.ndarray:
+        """The longest sub-step of each exciter of model m in Heun runs of nominal step
+        `step` (`stabctl.dynamics.subinterval.exciter_hmax`), all inf (none sub-stepped)
+        without sub-intervals.
+
+        Parameters
+        ----------
+        m : DynamicModel
+            One of this simulator's models (`model_for`).
+        step : float
+            The run's nominal step, s.
+
+        Returns
+        -------
+        ndarray, shape (n_exc,)
+        """
+        if not self.subintervals:
+            return np.full(m.ep.n, np.inf)
+        return exciter_hmax(m.inner_loops, step)
 
     def _semantics(self, semantics: str | None) -> str:
         if semantics is None:
@@ -777,7 +817,9 @@ class _Run:
         )
         self.limit = limit
         #: the model's parameters with the limiters' reach (`stabctl.dynamics.prefix.reach`)
-        self.params = m.params._replace(reach=reach(grid.h, grid.step))
+        self.params = m.params._replace(
+            reach=reach(grid.h, grid.step), exc_hmax=sim.exciter_hmax(m, grid.step)
+        )
         self.k, self.status, self.wall, self.stored = 0, ig.OK, 0.0, False
         self.evaluate: int | None = None
 

@@ -162,21 +162,24 @@ MAX_RECORD_BYTES = 1_000_000_000
 MAX_STEPS = 2_000_000
 
 
-def recorded_bytes_per_step(case: Case) -> int:
+def recorded_bytes_per_step(case: Case, n_buses: int | None = None) -> int:
     """Bytes one grid point of a run of `case` records: per machine its speed, angle, P_e,
-    P_m and E_fd (5 x 8), per bus its complex voltage and the result's magnitude and angle
-    (16 + 16), per converter its complex power (16)."""
-    return 40 * len(case.machines) + 32 * case.n_bus + 16 * len(case.converters)
+    P_m and E_fd (5 x 8), per recorded bus (n_buses; None: every bus) its complex voltage
+    and the result's magnitude and angle (16 + 16), per converter its complex power
+    (16)."""
+    n_buses = case.n_bus if n_buses is None else n_buses
+    return 40 * len(case.machines) + 32 * n_buses + 16 * len(case.converters)
 
 
-def check_step_count(t_end: float, h: float, case: Case) -> None:
+def check_step_count(t_end: float, h: float, case: Case, n_buses: int | None = None) -> None:
     """Raise InputError when a run of `case` to t_end (s) with step h (s) needs more steps
     than MAX_STEPS or than its recording may take in MAX_RECORD_BYTES
-    (`recorded_bytes_per_step`)."""
+    (`recorded_bytes_per_step`; n_buses the buses whose voltages the run records, None:
+    every bus)."""
     if not 0 < h < float("inf"):
         raise InputError(f"step must be a finite number > 0 s, got {h}")
     n = t_end / h
-    limit = min(MAX_STEPS, MAX_RECORD_BYTES // recorded_bytes_per_step(case))
+    limit = min(MAX_STEPS, MAX_RECORD_BYTES // recorded_bytes_per_step(case, n_buses))
     if not n <= limit:
         raise InputError(
             f"step {h:g} s: a run to {t_end:g} s needs {n:.3g} steps, more than "

@@ -27,6 +27,7 @@ import numpy as np
 
 from stabctl._jit.arrays import assign, max_abs
 from stabctl._jit.decorators import kernel, njit
+from stabctl.dynamics import subinterval as sub
 from stabctl.dynamics import switching as sw
 from stabctl.dynamics.coi import island_coi
 from stabctl.dynamics.model import (
@@ -200,7 +201,10 @@ class _Workspace(NamedTuple):
     """Scratch arrays of `integrate`: derivatives at the step start (dx_k) and at the
     predictor (dx_j), what the devices see at the sub-step start (a) and end (b), which
     devices switched in the current step, and the powers the network takes from the
-    devices at the sub-step start (P_a) and end (P_b) (`stabctl.dynamics.switching.delivered`)."""
+    devices at the sub-step start (P_a) and end (P_b) (`stabctl.dynamics.switching.delivered`);
+    for exciters integrated in sub-intervals (`stabctl.dynamics.subinterval`): whether
+    there are any, their states' slots (left out of the local error estimate), their
+    inputs at the step's start u_a and their states Phi(x_a, u_a), Phi(x_a, u_p)."""
 
     dx_k: np.ndarray
     dx_j: np.ndarray
@@ -209,6 +213,11 @@ class _Workspace(NamedTuple):
     switched: np.ndarray
     P_a: np.ndarray
     P_b: np.ndarray
+    sub: bool
+    sub_mask: np.ndarray
+    u_a: np.ndarray
+    phi_a: np.ndarray
+    phi_p: np.ndarray
 
 
 class _SplitPoint(NamedTuple):
@@ -221,7 +230,8 @@ class _SplitPoint(NamedTuple):
 
 
 @kernel
-def _workspace(x, nd):
+def _workspace(x, nd, p, u):
+    mask = sub.sub_state_mask(p, x.size)
     return _Workspace(
         np.zeros_like(x),
         np.zeros_like(x),  # slots no kernel writes stay 0
@@ -230,6 +240,11 @@ def _workspace(x, nd):
         np.zeros(nd, np.bool_),
         np.zeros(nd),
         np.zeros(nd),
+        mask.any(),
+        mask,
+        np.zeros_like(u),
+        x.copy(),
+        x.copy(),
     )
 
 
@@ -237,11 +252,14 @@ def _workspace(x, nd):
 
 
 @kernel
-def _local_error(x, f_k, f_j, hh, where):
+def _local_error(x, f_k, f_j, hh, where, skip):
     """Heun's local error estimate (the corrector minus the Euler predictor, hh/2 |f_j -
-    f_k|), largest over the states relative to 1 + |x|; its state index in where[0]."""
+    f_k|), largest over the states relative to 1 + |x| but those in skip (bool, the
+    states of sub-stepped exciters); its state index in where[0]."""
     e = 0.0
     for q in range(x.size):
+        if skip[q]:
+            continue
         eq = 0.5 * hh * abs(f_j[q] - f_k[q]) / (1.0 + abs(x[q]))
         if eq > e:
             e, where[0] = eq, q
@@ -378,17 +396,23 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, at):
 
 
 @kernel(inline="always")
-def _heun(kn, sa, ds, x_a, dx_a, hh, stage, want, dx_j):
-    """Heun's predictor-corrector over hh from x_a (derivatives dx_a), the devices' powers
-    advanced (their energy left as it is): (network solved, corrected state); dx_j is
-    written with the derivatives at the predictor (network of `stage`)."""
+def _heun(kn, sa, ds, w, x_a, dx_a, hh, stage, want, dx_j):
+    """Heun's predictor-corrector over hh from x_a (derivatives dx_a; the last evaluation
+    was at x_a), the devices' powers advanced (their energy left as it is), the exciters
+    of `stabctl.dynamics.subinterval` in sub-steps: (network solved, corrected state);
+    dx_j is written with the derivatives at the predictor (network of `stage`)."""
     xp = x_a + hh * dx_a
+    if w.sub:
+        sub.sub_heun_start(kn.p, x_a, kn.out.exc_in, w.u_a, w.phi_a, hh, xp)
     if sa.pmax.size > 0:  # (a call passing the devices' arrays costs even without devices)
         Pb = sw.powers_after(sa, ds.P, ds.target, ds.e, hh)
         sw.inject(sa, Pb, kn.kept.S_extra, xp)
     if _evaluate(kn, xp, stage, want, dx_j) < 0:
         return False, x_a
-    return True, x_a + 0.5 * hh * (dx_a + dx_j)
+    x_b = x_a + 0.5 * hh * (dx_a + dx_j)
+    if w.sub:
+        sub.sub_heun_end(kn.p, x_a, kn.out.exc_in, w.phi_a, w.phi_p, hh, x_b)
+    return True, x_b
 
 
 @kernel(inline="always")
@@ -404,11 +428,11 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
     while True:
         hh = sw.substep_length(grid.t[k + 1], sa.kind, ds.cmd_t, ds.cmd_next, rem)
         want = last and hh == rem and rec.V.shape[1] > 0  # the end point's bus voltages
-        ok, x_b = _heun(kn, sa, ds, x_a, dx_a, hh, j if hh == rem else s, want, w.dx_j)
+        ok, x_b = _heun(kn, sa, ds, w, x_a, dx_a, hh, j if hh == rem else s, want, w.dx_j)
         if not ok:
             return NO_LOAD_FLOW, k, x
         if hh == rem:
-            health.est[k + 1] = _local_error(x_b, dx_a, w.dx_j, hh, health.worst)
+            health.est[k + 1] = _local_error(x_b, dx_a, w.dx_j, hh, health.worst, w.sub_mask)
         theta, first_d = 2.0, -1
         if sa.kind == law.BANG_BANG and hh == rem:
             theta, first_d = sw.locate_switching(kn, grid, sa, ds, opts, w, x_b, k)
@@ -419,10 +443,15 @@ def _substeps(kn, grid, sa, ds, opts, w, rec, health, x, k):
         Pm = sw.powers_after(sa, ds.P, ds.target, ds.e, hh)
         if first_d >= 0:
             xm = x_a + hh * dx_a
+            if w.sub:  # (w.u_a: the inputs at x_a, kept by _heun)
+                sub.sub_heun_start(kn.p, x_a, w.u_a, w.u_a, w.phi_a, hh, xm)
             sw.inject(sa, Pm, kn.kept.S_extra, xm)
             if _evaluate(kn, xm, s, NO_BUS_VOLTAGES, w.dx_j) < 0:
                 return NO_LOAD_FLOW, k, x
-            x_a = x_a + 0.5 * hh * (dx_a + w.dx_j)
+            x_next = x_a + 0.5 * hh * (dx_a + w.dx_j)
+            if w.sub:
+                sub.sub_heun_end(kn.p, x_a, kn.out.exc_in, w.phi_a, w.phi_p, hh, x_next)
+            x_a = x_next
         else:  # up to the scheduled command (the predictor drew Pm)
             x_a = x_b
         sw.delivered(sa, Pm, kn.kept, w.P_b)
@@ -533,10 +562,9 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
         The last stored grid index.
     """
     n = grid.interval.size
-    kn = _Kernel(
-        p, nets, c.kept, c.held_stage, kernel_outputs(p.n_mac, nets.R.shape[1], p.n_ibr), evaluate
-    )
-    w = _workspace(c.x, sa.pmax.size)
+    out = kernel_outputs(p.n_mac, nets.R.shape[1], p.n_ibr, p.n_exc)
+    kn = _Kernel(p, nets, c.kept, c.held_stage, out, evaluate)
+    w = _workspace(c.x, sa.pmax.size, p, out.exc_in)
     x = c.x.copy()
     for k in range(k0, min(k1, n - 1)):
         status, k_end, x = _step(kn, grid, sa, c.devices, opts, w, rec, c.health, x, k)

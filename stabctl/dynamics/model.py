@@ -370,6 +370,9 @@ class DynamicModel:
         xe, self.Vref, self.ep = exc.initialise(ep, self.vex0[em], eterm0[em], VB0, vc0)
         ep = self.ep
         tau = ep.inner_loop_time_constants(VB0, self.vex0[em])
+        #: each exciter's inner-loop time constant at the operating point (n_exc,), s (inf
+        #: without one; `stabctl.dynamics.subinterval`)
+        self.inner_loops = tau
         k = int(np.argmin(tau)) if tau.size else 0
         #: the fastest loop the data's time constants do not show: (s, where)
         self.fastest_loop = (
@@ -432,6 +435,7 @@ class DynamicModel:
             n_swsh=L.n_swsh,
             n_svc=L.n_svc,
             n_bus=self.case.n_bus,
+            exc_hmax=np.full(L.n_exc, np.inf),
         )
 
     def _shunts_packed(self) -> np.ndarray:
@@ -591,7 +595,7 @@ class DynamicModel:
         Raises:
             SimulationError: the non-conforming load iteration did not converge.
         """
-        ko = kernel_outputs(self.mp.n, self.case.n_bus, self.cp.n)
+        ko = kernel_outputs(self.mp.n, self.case.n_bus, self.cp.n, self.ep.n)
         S = np.zeros(self.nc_idx.size, complex) if S_extra is None else np.asarray(S_extra, complex)
         kept = KeptBuses(
             V=np.array(V_nc_guess, complex), held=np.zeros(S.size, np.bool_), S_extra=S
@@ -681,6 +685,10 @@ class KernelParams(NamedTuple):
     n_svc: int
     #: buses of the case (R's rows when a run computes every bus voltage)
     n_bus: int
+    #: per exciter (n_exc,), the longest step (s) of the sub-intervals it is integrated in
+    #: within a step of the run (`stabctl.dynamics.subinterval`), inf: none (the whole
+    #: model's step); finite only in a run that sub-steps a fast exciter loop
+    exc_hmax: np.ndarray
 
 
 class KernelNetwork(NamedTuple):
@@ -774,12 +782,15 @@ class KernelOutputs(NamedTuple):
     pmech: np.ndarray
     V_bus: np.ndarray
     S_ibr: np.ndarray
+    #: (n_exc, N_FROZEN) the inputs of each exciter integrated in sub-intervals
+    #: (`stabctl.models.exciters.frozen_inputs`; rows of the others not written)
+    exc_in: np.ndarray
 
 
 @njit(cache=True)
-def kernel_outputs(nm, nb, ni):
+def kernel_outputs(nm, nb, ni, ne):
     """Output buffers for `evaluate_kernel`: (n_mac,) each, V_bus (nb,) and S_ibr (ni,)
-    zeros.
+    zeros, exc_in (ne, N_FROZEN).
 
     Parameters
     ----------
@@ -789,6 +800,8 @@ def kernel_outputs(nm, nb, ni):
         Number of buses.
     ni : int
         Number of converters.
+    ne : int
+        Number of exciters.
 
     Returns
     -------
@@ -803,6 +816,7 @@ def kernel_outputs(nm, nb, ni):
         np.empty(nm),
         np.zeros(nb, np.complex128),
         np.zeros(ni, np.complex128),
+        np.zeros((ne, exc.N_FROZEN)),
     )
 
 
@@ -984,7 +998,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     EP = _stepped(p.EP, steps[:ne], _VREF)
     GP = _stepped(p.GP, steps[ne:], _PREF)
     V_nc, held, S_extra = kept
-    cur, pelect, qelect, eterm, efd, pmech, V_bus, S_ibr = out
+    cur, pelect, qelect, eterm, efd, pmech, V_bus, S_ibr, exc_in = out
     o, re, rp, rg = 6 * nm, p.exc_rows, p.pss_rows, p.tg_rows
     xm, dxm = x[:o].reshape(6, nm), dx[:o].reshape(6, nm)
     xe, dxe = x[o : o + re * ne].reshape(re, ne), dx[o : o + re * ne].reshape(re, ne)
@@ -1102,6 +1116,10 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         if EP[i, exc.E.RCOMP] != 0.0 or EP[i, exc.E.XCOMP] != 0.0:
             pot = p.MP[m, mac.K.POT]
             vc = exc.compensated(EP, i, V_mac[m], cur[m] * pot)
+        if p.exc_hmax[i] < np.inf:  # integrated in sub-intervals: its inputs held
+            exc.frozen_inputs(
+                EP, i, p.MP, xm, cur, pss_exc[i], ifd[i], vb[i], vc, eterm[m], exc_in[i]
+            )
         exc.derivatives(
             EP, xe, i, vc, eterm[m], pss_exc[i], efd_alg[i], ifd[i], vb[i], dxe, p.ieee, p.reach
         )
@@ -1169,7 +1187,7 @@ def _evaluate_arg_types() -> tuple:
         typeof(KeptBuses(c, np.zeros(1, np.bool_), c)),
         types.boolean,
         typeof(z),
-        typeof(KernelOutputs(c, z, z, z, z, z, c, c)),
+        typeof(KernelOutputs(c, z, z, z, z, z, c, c, np.zeros((1, 1)))),
     )
 
 

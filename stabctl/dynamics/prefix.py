@@ -131,6 +131,7 @@ def integrate_from_cache(run, cache) -> None:
         run.opts.pst,
         None if run.bus_rows is None else run.bus_rows.tobytes(),
         run.params.reach,
+        run.params.exc_hmax.tobytes(),
         run.opts.limit,
         run.opts.stop,
         fleet_key(run.sa),

@@ -154,7 +154,7 @@ class _Evaluation:
             held=np.zeros(n_nc, np.bool_),
             S_extra=np.zeros(n_nc, np.complex128),
         )
-        self.out = kernel_outputs(m.mp.n, m.case.n_bus, m.cp.n)
+        self.out = kernel_outputs(m.mp.n, m.case.n_bus, m.cp.n, m.ep.n)
         self.stage = -1
 
     def __call__(self, x, stage, want=NO_BUS_VOLTAGES, kept=None) -> np.ndarray:

@@ -567,10 +567,10 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
     J, dV, curv, V0, held = res
     dx = np.zeros_like(x0)  # slots no kernel writes (unused by a model type) must stay 0:
     f0 = np.zeros_like(x0)  # the kink test below looks at every slot
-    out = kernel_outputs(p.n_mac, net.R.shape[0], p.n_ibr)
+    out = kernel_outputs(p.n_mac, net.R.shape[0], p.n_ibr, p.n_exc)
     S = np.zeros(V_nc0.size, np.complex128)
     at_op = KernelOutputs(
-        out.cur, out.pelect, out.qelect, out.eterm, out.efd, out.pmech, V0, out.S_ibr
+        out.cur, out.pelect, out.qelect, out.eterm, out.efd, out.pmech, V0, out.S_ibr, out.exc_in
     )
     if (
         call_evaluate(

@@ -621,3 +621,81 @@ def recorded_efd(P, x, i, efd_alg):
     if P[i, E.EFD_SPEED] == 1:
         return efd_alg
     return type_recorded_efd(P, x, i, efd_alg)
+
+
+#: the inputs an exciter integrated in sub-intervals holds over a step (`frozen_inputs`,
+#: `advance_frozen`), columns of a row: its machine's stator voltage (`field_voltage`'s
+#: V_t), the speed factor of efd_speed, the PSS output, the field current, the source
+#: term, the transducer's input, the terminal voltage and V_ref
+(U_VT, U_SPEED, U_PSS, U_IFD, U_VB, U_VC, U_ETERM, U_VREF) = range(8)
+N_FROZEN = 8
+
+
+@kernel(inline="always")
+def frozen_inputs(P, i, MP, xm, cur, pss_out, ifd, VB, vc, eterm, u):
+    """Write exciter i's inputs of this evaluation into the row u (N_FROZEN,): what
+    `field_voltage` and `derivatives` read besides its own states (their arguments of the
+    same names), for `advance_frozen`."""
+    m = int(P[i, E.MAC])
+    ed, eq, _, _ = mac.stator_without_speed(MP, xm, cur, m)
+    u[U_VT] = np.hypot(ed, eq)
+    u[U_SPEED] = xm[_OMEGA, m] if P[i, E.EFD_SPEED] == 1 else 1.0
+    u[U_PSS], u[U_IFD], u[U_VB], u[U_VC], u[U_ETERM] = pss_out, ifd, VB, vc, eterm
+    u[U_VREF] = P[i, E.VREF]
+
+
+@kernel
+def advance_frozen(P, x, i, u, hh, n, ieee, reach, out):
+    """Exciter i's states over hh (s) in n steps of Heun's method of hh/n each, its inputs
+    held at u (`frozen_inputs`): PowerWorld's sub-interval integration of a fast exciter
+    (its Transient Stability "sub-interval" option), so that a loop faster than the
+    network step (ACTIVSg2000's EXAC2 regulators, `inner_loop_time_constants`) is
+    integrated stably while the network is solved at the step.  Each sub-step evaluates
+    `field_voltage_at` and `derivatives` (which clamp the limited states, as a step of the
+    whole model does).
+
+    Parameters
+    ----------
+    P : ndarray, shape (n_exc, n_cols)
+        The exciters' packed parameters (V_ref taken from u).
+    x : ndarray, shape (n_slots, n_exc)
+        The exciters' states at the step's start (not changed).
+    i : int
+        The exciter.
+    u : ndarray, shape (N_FROZEN,)
+        Its inputs held over the step.
+    hh : float
+        The step, s.
+    n : int
+        The number of sub-steps (>= 1).
+    ieee : bool
+        The IEEE 421.5 convention.
+    reach : float
+        The limiters' reach of the whole step (s), shared out over the sub-steps.
+    out : ndarray, shape (n_slots,)
+        Written with the states at the step's end.
+    """
+    P1 = P[i : i + 1].copy()
+    P1[0, E.VREF] = u[U_VREF]
+    rows = x.shape[0]
+    xs, xq = np.empty((rows, 1)), np.empty((rows, 1))
+    d1, d2 = np.zeros((rows, 1)), np.zeros((rows, 1))
+    xs[:, 0] = x[:, i]
+    hs = hh / n
+    for _ in range(n):
+        efd = field_voltage_at(P1, xs, 0, u[U_VT], u[U_PSS], u[U_VB], u[U_IFD], ieee)
+        derivatives(
+            P1, xs, 0, u[U_VC], u[U_ETERM], u[U_PSS], efd * u[U_SPEED], u[U_IFD], u[U_VB], d1,
+            ieee, reach / n,
+        )  # fmt: skip
+        for r in range(rows):
+            xq[r, 0] = xs[r, 0] + hs * d1[r, 0]
+        efd = field_voltage_at(P1, xq, 0, u[U_VT], u[U_PSS], u[U_VB], u[U_IFD], ieee)
+        derivatives(
+            P1, xq, 0, u[U_VC], u[U_ETERM], u[U_PSS], efd * u[U_SPEED], u[U_IFD], u[U_VB], d2,
+            ieee, reach / n,
+        )  # fmt: skip
+        for r in range(rows):
+            xs[r, 0] = xs[r, 0] + 0.5 * hs * (d1[r, 0] + d2[r, 0])
+    for r in range(rows):
+        out[r] = xs[r, 0]
