@@ -32,6 +32,7 @@ from stabctl.dynamics.grid import (
     check_step,
     check_step_count,
     default_step,
+    exciter_hmax,
     fastest_time_constant,
     time_grid,
 )
@@ -47,7 +48,6 @@ from stabctl.dynamics.model import (
 )
 from stabctl.dynamics.prefix import PREFIXES_KEPT, Prefix, integrate_from_cache, reach
 from stabctl.dynamics.results import SimulationResult
-from stabctl.dynamics.subinterval import exciter_hmax
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import (
     InputError,

@@ -91,6 +91,27 @@ def default_step(
     return min(half_cycle, STEP_PER_TIME_CONSTANT * T)
 
 
+def exciter_hmax(loops: np.ndarray, step: float) -> np.ndarray:
+    """The longest sub-step (s) of each exciter in runs of nominal step `step` (s): at most
+    STEP_PER_TIME_CONSTANT times its inner loop's time constant where that bound is below
+    the step, inf (no sub-intervals) elsewhere.
+
+    Parameters
+    ----------
+    loops : ndarray, shape (n_exc,)
+        Each exciter's inner-loop time constant, s (inf where it has none;
+        `stabctl.models.exciters.ExciterParams.inner_loop_time_constants`).
+    step : float
+        The run's nominal step, s (> 0).
+
+    Returns
+    -------
+    ndarray, shape (n_exc,)
+    """
+    bound = STEP_PER_TIME_CONSTANT * np.asarray(loops, float)
+    return np.where(bound < step, bound, np.inf)
+
+
 def fastest_time_constant(case: Case) -> tuple[float, str]:
     """Smallest time constant among the states of the case's models (s) and where it is
     (table, field, row); a torsional shaft's fastest mode w counts as 0.1 / w

@@ -22,10 +22,11 @@ integrated to second order, as the rest of the model, and stably whatever its sp
 against the step.  The exciter's states take no part in Heun's local error estimate of the
 step (`sub_state_mask`): their own sub-steps are stable by construction.
 
-Which exciters (`exciter_hmax`): under the ieee conventions, with sub-intervals on (the
-default), those whose inner loop time constant T_loop has STEP_PER_TIME_CONSTANT * T_loop
-below the run's nominal step, each sub-stepped at hmax = STEP_PER_TIME_CONSTANT * T_loop
-(the same rule `stabctl.dynamics.grid.default_step` applies to the whole model);
+Which exciters (`stabctl.dynamics.grid.exciter_hmax`): under the ieee conventions, with
+sub-intervals on (the default), those whose inner loop time constant T_loop has
+STEP_PER_TIME_CONSTANT * T_loop below the run's nominal step, each sub-stepped at hmax =
+STEP_PER_TIME_CONSTANT * T_loop (the rule `stabctl.dynamics.grid.default_step` applies to
+the whole model);
 the default step is then set by the data's time constants alone.  Never under pstess
 (PSTess has no sub-intervals: its runs stay bit for bit), and not in the implicit
 trapezoid, the linearisation or the storage switching's location (`Simulator` option
@@ -38,30 +39,9 @@ import math
 
 import numpy as np
 
+from stabctl._jit.arrays import assign
 from stabctl._jit.decorators import kernel
-from stabctl.dynamics.grid import STEP_PER_TIME_CONSTANT
 from stabctl.models import exciters as exc
-
-
-def exciter_hmax(loops: np.ndarray, step: float) -> np.ndarray:
-    """The longest sub-step (s) of each exciter in runs of nominal step `step` (s): at most
-    STEP_PER_TIME_CONSTANT times its inner loop's time constant where that bound is below
-    the step, inf (no sub-intervals) elsewhere.
-
-    Parameters
-    ----------
-    loops : ndarray, shape (n_exc,)
-        Each exciter's inner-loop time constant, s (inf where it has none;
-        `stabctl.models.exciters.ExciterParams.inner_loop_time_constants`).
-    step : float
-        The run's nominal step, s (> 0).
-
-    Returns
-    -------
-    ndarray, shape (n_exc,)
-    """
-    bound = STEP_PER_TIME_CONSTANT * np.asarray(loops, float)
-    return np.where(bound < step, bound, np.inf)
 
 
 @kernel
@@ -103,7 +83,7 @@ def sub_heun_start(p, x_a, u_now, u_a, phi_a, hh, xp):
     of the evaluation at x_a (u_now, copied into u_a), integrate the sub-stepped exciters
     with them (Phi(x_a, u_a) into phi_a) and set the predictor xp's exciter states to it
     (V_ref, which a stage may step, is among the inputs)."""
-    u_a[:] = u_now
+    assign(u_a, u_now)
     _advance(p, x_a, u_a, hh, phi_a)
     xe, pe = _exciter_states(p, xp), _exciter_states(p, phi_a)
     for i in range(p.n_exc):

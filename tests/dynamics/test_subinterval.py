@@ -11,8 +11,7 @@ import pytest
 
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import Fault
-from stabctl.dynamics.grid import STEP_PER_TIME_CONSTANT
-from stabctl.dynamics.subinterval import exciter_hmax
+from stabctl.dynamics.grid import STEP_PER_TIME_CONSTANT, exciter_hmax
 from stabctl.errors import InputError
 from stabctl.io.psse import load_psse
 

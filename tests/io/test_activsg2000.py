@@ -136,10 +136,14 @@ def test_flat_run_stays_at_rest(imported):
 def test_six_cycle_fault_is_stable_and_converged_in_the_step(imported):
     """A 6-cycle fault at 345 kV bus 2021 cleared by tripping line 2021-2002, the case read
     as PSS/E (the default): stable, its largest angle spread the same at half the step
-    (1.11897 against 1.11894 rad at a quarter and an eighth of a cycle).  Half a cycle is
-    refused by name: the EXAC2 at bus 1079 (K_A = 1000, T_A = 0.05 s, K_F = 0.49, T_E =
-    0.55 s, a saturated exciter) has a regulator and exciter mode at -12 +- 184j 1/s, which
-    Heun's method keeps only below h = 4.85 ms (`exac2.heun_step_limit`).  The GENSAL at
+    (1.11897 against 1.11894 rad at a quarter and an eighth of a cycle; 1.11892 at half a
+    cycle, the default step, with 18 EXAC2 in sub-intervals).  Without sub-intervals half
+    a cycle is refused by name: the EXAC2 at bus 1079 (K_A = 1000, T_A = 0.05 s, K_F =
+    0.49, T_E = 0.55 s, a saturated exciter) has a regulator and exciter mode at -12 +-
+    184j 1/s, which Heun's method keeps only below h = 4.85 ms (`exac2.heun_step_limit`);
+    with them (the default, `stabctl.dynamics.subinterval`) the EXAC2s whose loops are
+    faster than the step take sub-steps of their own and the data's time constants set
+    the step, half a cycle.  The GENSAL at
     bus 6268 starts at E_fd0 = 10.2 pu; with PSS/E's quadratic exciter saturation its
     ESDC1A's computed K_E is -3.66 (PST's exponential made it -3573 and the field voltage
     ran away at the fault, docs/pst_models.md 12.6)."""
@@ -147,11 +151,14 @@ def test_six_cycle_fault_is_stable_and_converged_in_the_step(imported):
     sim = Simulator(case)
     fault = Fault(bus=2021, t=1.0, clear_near=1.0 + 6 * CYCLE, far_bus=2002)
     with pytest.raises(InputError, match=r"exc_con row 9: EXAC2 regulator.*h < 0.0048538"):
-        sim.run([fault], t_end=5.0, h=CYCLE / 2)
+        Simulator(case, subintervals=False).run([fault], t_end=5.0, h=CYCLE / 2)
+    assert sim.default_h == pytest.approx(CYCLE / 2)
+    assert np.isfinite(sim.exciter_hmax(sim.model, CYCLE / 2)).sum() == 18
     spread = []
-    for h in (CYCLE / 4, CYCLE / 8):
+    for h in (CYCLE / 2, CYCLE / 4, CYCLE / 8):
         res = sim.run([fault], t_end=5.0, h=h)
         assert res.stable
         spread.append(res.max_angle_spread)
-    print(f"\nACTIVSg2000 fault 2021: spread {spread[0]:.5f} / {spread[1]:.5f} rad")
+    print("\nACTIVSg2000 fault 2021: spread " + " / ".join(f"{s:.5f}" for s in spread) + " rad")
     assert abs(spread[0] - spread[1]) < 1e-3 * spread[1]
+    assert abs(spread[1] - spread[2]) < 1e-3 * spread[2]

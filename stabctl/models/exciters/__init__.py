@@ -629,6 +629,9 @@ def recorded_efd(P, x, i, efd_alg):
 #: term, the transducer's input, the terminal voltage and V_ref
 (U_VT, U_SPEED, U_PSS, U_IFD, U_VB, U_VC, U_ETERM, U_VREF) = range(8)
 N_FROZEN = 8
+#: the one exciter of `advance_frozen`'s one-row arrays, a numpy integer (a Python literal
+#: passed to a kernel compiles it once per value: tests/test_jit_rules.py)
+_ROW = np.int64(0)
 
 
 @kernel(inline="always")
@@ -680,19 +683,20 @@ def advance_frozen(P, x, i, u, hh, n, ieee, reach, out):
     rows = x.shape[0]
     xs, xq = np.empty((rows, 1)), np.empty((rows, 1))
     d1, d2 = np.zeros((rows, 1)), np.zeros((rows, 1))
-    xs[:, 0] = x[:, i]
+    for r in range(rows):
+        xs[r, 0] = x[r, i]
     hs = hh / n
     for _ in range(n):
-        efd = field_voltage_at(P1, xs, 0, u[U_VT], u[U_PSS], u[U_VB], u[U_IFD], ieee)
+        efd = field_voltage_at(P1, xs, _ROW, u[U_VT], u[U_PSS], u[U_VB], u[U_IFD], ieee)
         derivatives(
-            P1, xs, 0, u[U_VC], u[U_ETERM], u[U_PSS], efd * u[U_SPEED], u[U_IFD], u[U_VB], d1,
+            P1, xs, _ROW, u[U_VC], u[U_ETERM], u[U_PSS], efd * u[U_SPEED], u[U_IFD], u[U_VB], d1,
             ieee, reach / n,
         )  # fmt: skip
         for r in range(rows):
             xq[r, 0] = xs[r, 0] + hs * d1[r, 0]
-        efd = field_voltage_at(P1, xq, 0, u[U_VT], u[U_PSS], u[U_VB], u[U_IFD], ieee)
+        efd = field_voltage_at(P1, xq, _ROW, u[U_VT], u[U_PSS], u[U_VB], u[U_IFD], ieee)
         derivatives(
-            P1, xq, 0, u[U_VC], u[U_ETERM], u[U_PSS], efd * u[U_SPEED], u[U_IFD], u[U_VB], d2,
+            P1, xq, _ROW, u[U_VC], u[U_ETERM], u[U_PSS], efd * u[U_SPEED], u[U_IFD], u[U_VB], d2,
             ieee, reach / n,
         )  # fmt: skip
         for r in range(rows):
