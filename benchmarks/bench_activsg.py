@@ -3,9 +3,10 @@ in-run on one core (not a test).
 
 ACTIVSg2000 is imported as docs/cli.md's PSS/E section (``import-psse ... --net-unmodelled``,
 `bench_scale._activsg2000`).  Its EXAC2 at bus 1079 (K_A = 1000, T_A = 0.05 s) has a
-regulator-exciter mode that Heun's method keeps stable only below 4.85 ms, so the default
-step (`Simulator.default_h`) is 1.2 ms, at which a 20 s run needs more steps than its
-recording may take (`stabctl.dynamics.grid.check_step_count`): that row prints the refusal.
+regulator-exciter mode that Heun's method keeps stable only below 4.85 ms: with the fast
+exciter loops in sub-intervals (the default, `stabctl.dynamics.subinterval`) the default
+step (`Simulator.default_h`) is half a cycle and 18 EXAC2 take sub-steps of their own;
+without them (the ``heun-single`` rows, ``subintervals=False``) 1.2 ms.
 
 Fault: bench_scale's, j1e-4 pu at bus 2021 from 1.0 s to 1.1 s, no line lost, 20 s.  Per
 setting: the in-run wall (``meta`` wall of the run, best of --repeat after a warm-up run of
@@ -36,13 +37,15 @@ from stabctl.errors import InputError
 
 BUS, T_FAULT, T_CLEAR, X_FAULT, T_END = 2021, 1.0, 1.1, 1e-4, 20.0
 TARGET_S = 1.3
-#: the converged reference: Heun at 1/600 s (the smallest step whose 20 s run the recording
-#: limit admits, under half Heun's 4.85 ms stability limit of this case)
+#: the converged reference: Heun without sub-intervals at 1/600 s (under half Heun's
+#: 4.85 ms stability limit of this case)
 REF_STEP = 1 / 600
-#: (method, step s or None for the default)
+#: (method, step s or None for the default): heun with the fast exciter loops in
+#: sub-intervals (the default), heun-single without (`Simulator(subintervals=False)`)
 SETTINGS = (
     ("heun", None),
     ("heun", 1 / 240),
+    ("heun-single", None),
     ("trapezoid", 1 / 120),
     ("trapezoid", 1 / 60),
 )
@@ -67,11 +70,13 @@ def _difference(sim, res, ref) -> tuple[float, float]:
 
 
 def run(sim, events, method, h, repeat, tf=T_END):
-    """(best in-run wall s, result) of `repeat` runs of tf s after a warm-up."""
-    sim.run(events, 1.15, h=h, method=method)
+    """(best in-run wall s, result) of `repeat` runs of tf s after a warm-up (Heun's
+    without the bus voltages, which the comparison does not read)."""
+    voltages = method != "heun"
+    sim.run(events, 1.15, h=h, method=method, voltages=voltages)
     best, res = np.inf, None
     for _ in range(repeat):
-        res = sim.run(events, tf, h=h, method=method)
+        res = sim.run(events, tf, h=h, method=method, voltages=voltages)
         best = min(best, res.meta["wall_time_s"])
     return best, res
 
@@ -82,8 +87,8 @@ def main():
     ap.add_argument(
         "--methods",
         nargs="+",
-        choices=("heun", "trapezoid"),
-        default=["heun", "trapezoid"],
+        choices=("heun", "heun-single", "trapezoid"),
+        default=["heun", "heun-single", "trapezoid"],
         help="the rows to run (the trapezoid's take minutes: about 7 solves of its 6467-state "
         "sparse matrix a step after the fault and some 40 matrices, docs/cli.md)",
     )
@@ -96,15 +101,17 @@ def main():
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as work:
         case = _activsg2000(work)
-    sim = Simulator(case)
+    sim, single = Simulator(case), Simulator(case, subintervals=False)
     events = [Fault(BUS, T_FAULT, T_CLEAR, x=X_FAULT)]
     print(
         f"ACTIVSg2000, fault j{X_FAULT:g} pu at bus {BUS} {T_FAULT}-{T_CLEAR} s, {args.tf:g} s run,"
-        f" best of {args.repeat}; default step {sim.default_h * 1e3:.3f} ms ({sim.fastest[1]});"
-        f" reference Heun at {REF_STEP * 1e3:.3f} ms; target {TARGET_S} s in-run"
+        f" best of {args.repeat}; default step {sim.default_h * 1e3:.3f} ms ({sim.fastest[1]}),"
+        f" {single.default_h * 1e3:.3f} ms without sub-intervals ({single.fastest[1]});"
+        f" reference Heun without sub-intervals at {REF_STEP * 1e3:.3f} ms; target {TARGET_S} s"
+        " in-run"
     )
     t = time.perf_counter()
-    ref = sim.run(events, args.tf, h=REF_STEP)
+    ref = single.run(events, args.tf, h=REF_STEP, voltages=False)
     print(f"reference run: {time.perf_counter() - t:.1f} s wall")
     print(
         f"{'method':10} {'step ms':>8} {'wall s':>8} {'vs target':>9} {'d angle rad':>12} "
@@ -114,9 +121,10 @@ def main():
     for method, h in SETTINGS:
         if method not in args.methods:
             continue
-        step = sim.default_h if h is None else h
+        who = single if method == "heun-single" else sim
+        step = who.default_h if h is None else h
         try:
-            wall, res = run(sim, events, method, step, args.repeat, args.tf)
+            wall, res = run(who, events, method.split("-")[0], step, args.repeat, args.tf)
         except InputError as err:
             print(f"{method:10} {step * 1e3:8.3f}  refused: {err}")
             continue
