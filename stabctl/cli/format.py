@@ -265,7 +265,13 @@ def print_cct(case, rating, d) -> None:
         f"CCT {d['cct_s']:.3f} s = {d['cct_cycles']:.2f} cycles (stable at "
         f"{d['t_stable_s']:.3f} s, unstable at {d['t_unstable_s']:.3f} s = "
         f"{d['t_unstable_cycles']:.2f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
-        f"step {step_text(d['step_s'])}, {d['conventions']} conventions)"
+        f"step {step_text(d['step_s'])}"
+        + (
+            f" with {d['sub_stepped_exciters']} exciter(s) in sub-intervals"
+            if d.get("sub_stepped_exciters")
+            else ""
+        )
+        + f", {d['conventions']} conventions)"
     )
     if d["numerical_error_s"] is not None:
         click.echo(

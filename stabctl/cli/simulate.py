@@ -351,6 +351,8 @@ def simulate(
     converging) and a run that diverges exit with status 2 and one `error:` line; no file
     is written then (a diverged run reports where it stopped).
     """
+    import numpy as np
+
     from stabctl.dynamics.driver import Simulator
     from stabctl.dynamics.events import validate as validate_events
     from stabctl.dynamics.grid import check_step_count
@@ -399,6 +401,7 @@ def simulate(
     validate_events(case, events, tf)  # an unknown bus or line before compiling
     sim = Simulator(case, conventions=conventions, q_limits=q_limits, suspect_starts=suspect_starts)
     h = sim.default_h if step is None else step
+    sub = int(np.isfinite(sim.exciter_hmax(sim.model, h)).sum()) if method == "heun" else 0
     result = sim.run(
         events,
         t_end=tf,
@@ -443,6 +446,7 @@ def simulate(
             {
                 **summary,
                 "step_s": h,
+                "sub_stepped_exciters": sub,
                 "method": method,
                 "conventions": conventions,
                 "q_limits": q_limits,
@@ -455,8 +459,9 @@ def simulate(
         return
     click.echo(
         f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
-        f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {step_text(h)}, {method}, "
-        f"{conventions} conventions), "
+        f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {step_text(h)}, {method}"
+        + (f" with {sub} exciter(s) in sub-intervals" if sub else "")
+        + f", {conventions} conventions), "
         f"wall {summary.get('wall_time_s', float('nan')):.2f} s"
     )
     for e in events or ["flat run (no disturbance)"]:

@@ -29,6 +29,10 @@ class ModelOptions:
         Integration step, s; None: the simulator's default (`Simulator.default_h`).
     q_limits : bool
         PV generators' reactive-power limits enforced in the power flow.
+    subintervals : bool
+        Heun runs integrate exciter loops faster than their step in sub-steps of their
+        own (True, the default; `stabctl.dynamics.subinterval`), or the whole model at one
+        step, which such a loop then bounds (False).
 
     Raises
     ------
@@ -39,6 +43,7 @@ class ModelOptions:
     conventions: str = "ieee"
     h: float | None = None
     q_limits: bool = True
+    subintervals: bool = True
 
     def __post_init__(self) -> None:
         check_conventions(self.conventions)
@@ -51,23 +56,32 @@ class ModelOptions:
         from stabctl.dynamics.driver import Simulator
 
         return Simulator(
-            case, conventions=self.conventions, step=self.h, q_limits=self.q_limits, **kwargs
+            case,
+            conventions=self.conventions,
+            step=self.h,
+            q_limits=self.q_limits,
+            subintervals=self.subintervals,
+            **kwargs,
         )
 
     def key_suffix(self) -> str:
-        """Sweep-key tail: '/pstess', '/h<step>', '/no-q-limits' for non-default fields."""
+        """Sweep-key tail: '/pstess', '/h<step>', '/no-q-limits', '/single-rate' for
+        non-default fields."""
         return (
             ("" if self.conventions == "ieee" else f"/{self.conventions}")
             + ("" if self.h is None else f"/h{self.h:g}")
             + ("" if self.q_limits else "/no-q-limits")
+            + ("" if self.subintervals else "/single-rate")
         )
 
     def to_inputs(self) -> dict:
-        """Fields of a job's recorded inputs: conventions, h, and q_limits when off."""
+        """Fields of a job's recorded inputs: conventions, h, and q_limits and
+        subintervals when off."""
         return {
             "conventions": self.conventions,
             "h": self.h,
             **({} if self.q_limits else {"q_limits": False}),
+            **({} if self.subintervals else {"subintervals": False}),
         }
 
     @classmethod
@@ -77,4 +91,5 @@ class ModelOptions:
             conventions=inputs.get("conventions", "ieee"),
             h=inputs.get("h"),
             q_limits=bool(inputs.get("q_limits", True)),
+            subintervals=bool(inputs.get("subintervals", True)),
         )

@@ -222,6 +222,8 @@ class CCTResult:
     conventions: str = "ieee"
     method: str = "bisection"
     early_stops: int = 0
+    #: exciters integrated in sub-intervals at the step (`stabctl.dynamics.subinterval`)
+    sub_stepped: int = 0
 
     @property
     def numerical_error_s(self) -> float | None:
@@ -263,6 +265,7 @@ class CCTResult:
             "n_simulations": self.n_simulations,
             "n_simulations_half_step": len(self.half_step_probes),
             "early_stops": self.early_stops,
+            "sub_stepped_exciters": self.sub_stepped,
             "search": self.method,
             "wall_time_s": self.wall_time_s,
             "criterion": self.criterion,
@@ -510,7 +513,15 @@ def critical_clearing_time(
         conventions=sim.conventions,
         method=o.method,
         early_stops=len(early_stops),
+        sub_stepped=_sub_stepped(sim, h),
     )
+
+
+def _sub_stepped(sim, h: float) -> int:
+    """How many exciters `sim`'s runs at step h integrate in sub-intervals (0 for a
+    simulator without them)."""
+    hmax = getattr(sim, "exciter_hmax", None)
+    return int(np.isfinite(hmax(sim.model, h)).sum()) if hmax is not None else 0
 
 
 #: the CCT search methods (`SearchOptions.method`)

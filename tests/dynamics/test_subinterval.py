@@ -76,3 +76,45 @@ def test_a_sub_stepped_fault_run_converges_to_the_single_rate_one(smib_exac2):
         assert e < 2 * d
         assert f < e / 3
     assert error[0] < 1e-3 and error[1] < 1e-5
+
+
+def test_the_commands_say_how_many_exciters_take_sub_steps(tmp_path, smib_exac2):
+    """`simulate` and `cct` name the exciters integrated in sub-intervals at their step (as
+    many as the simulator's `exciter_hmax` makes finite: the SMIB's one EXAC2 at half a
+    cycle, none at 1 ms), in their text and JSON."""
+    import json
+
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    def run(*args):
+        out = CliRunner().invoke(main, [str(a) for a in args])
+        assert out.exit_code == 0, out.output
+        return out.output
+
+    case = tmp_path / "smib.json"
+    run("import-psse", PSSE / "smib_v33.raw", PSSE / "smib_exac2.dyr", "-o", case)
+    sim = Simulator(smib_exac2, background_compile=False)
+    n = int(np.isfinite(sim.exciter_hmax(sim.model, sim.default_h)).sum())
+    assert n == 1
+    d = json.loads(run("simulate", case, "--fault", 1, "--clear-cycles", 3, "--tf", 2, "--json"))
+    assert d["sub_stepped_exciters"] == n
+    text = run("simulate", case, "--fault", 1, "--clear-cycles", 3, "--tf", 2)
+    assert f"with {n} exciter(s) in sub-intervals" in text
+    fine = run("simulate", case, "--fault", 1, "--clear-cycles", 3, "--tf", 2, "--step", 1e-3)
+    assert "sub-intervals" not in fine
+    d = json.loads(run("cct", case, "--fault", 1, "--t-max", 0.4, "--json"))
+    assert d["sub_stepped_exciters"] == n
+
+
+def test_model_options_carry_the_choice_into_sweeps(smib_exac2):
+    """`ModelOptions.subintervals` reaches the simulator, a sweep's key and its recorded
+    inputs (absent when on, so that earlier records resume unchanged)."""
+    from stabctl.dynamics.options import ModelOptions
+
+    off = ModelOptions(subintervals=False)
+    assert not off.simulator(smib_exac2, background_compile=False).subintervals
+    assert off.key_suffix() == "/single-rate" and ModelOptions().key_suffix() == ""
+    assert ModelOptions.from_inputs(off.to_inputs()) == off
+    assert "subintervals" not in ModelOptions().to_inputs()
