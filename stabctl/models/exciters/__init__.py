@@ -687,19 +687,22 @@ def advance_frozen(P, x, i, u, hh, n, ieee, reach, out):
         xs[r, 0] = x[r, i]
     hs = hh / n
     for _ in range(n):
-        efd = field_voltage_at(P1, xs, _ROW, u[U_VT], u[U_PSS], u[U_VB], u[U_IFD], ieee)
-        derivatives(
-            P1, xs, _ROW, u[U_VC], u[U_ETERM], u[U_PSS], efd * u[U_SPEED], u[U_IFD], u[U_VB], d1,
-            ieee, reach / n,
-        )  # fmt: skip
+        _held_derivatives(P1, xs, u, d1, ieee, reach / n)
         for r in range(rows):
             xq[r, 0] = xs[r, 0] + hs * d1[r, 0]
-        efd = field_voltage_at(P1, xq, _ROW, u[U_VT], u[U_PSS], u[U_VB], u[U_IFD], ieee)
-        derivatives(
-            P1, xq, _ROW, u[U_VC], u[U_ETERM], u[U_PSS], efd * u[U_SPEED], u[U_IFD], u[U_VB], d2,
-            ieee, reach / n,
-        )  # fmt: skip
+        _held_derivatives(P1, xq, u, d2, ieee, reach / n)
         for r in range(rows):
             xs[r, 0] = xs[r, 0] + 0.5 * hs * (d1[r, 0] + d2[r, 0])
     for r in range(rows):
         out[r] = xs[r, 0]
+
+
+@kernel(inline="always")
+def _held_derivatives(P1, x1, u, d, ieee, reach):
+    """The one exciter of P1 (one row) at its states x1 (n_slots, 1) with the inputs u held
+    (`frozen_inputs`): its field voltage, then its derivatives into d (n_slots, 1)."""
+    efd = field_voltage_at(P1, x1, _ROW, u[U_VT], u[U_PSS], u[U_VB], u[U_IFD], ieee)
+    derivatives(
+        P1, x1, _ROW, u[U_VC], u[U_ETERM], u[U_PSS], efd * u[U_SPEED], u[U_IFD], u[U_VB], d,
+        ieee, reach,
+    )  # fmt: skip
