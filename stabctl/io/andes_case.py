@@ -66,10 +66,14 @@ that control's plant control ``REPCA1`` and wind turbine (drive train ``WTDTA1``
 only), a REGCP1's ``PLL1``.  Refused, naming the device: a REGCA1 driven by another
 electrical control (REECA1E) or by two, a REGCP1 whose PLL is a PLL2, measures another
 bus or runs at another frequency, a remote bus ``igreg`` or ``busr``, a nominal frequency
-other than the system's, a wind chain with a missing link or a second drive train, a
-static generator sharing its bus with another, or converters (with a machine on the same
-static generator, which then takes ``gammap``/``gammaq`` of it) taking other than all of
-their static generator's P and Q (ANDES drops the rest of a replaced generator's power).
+other than the system's, a wind chain with a missing link or a second drive train, or a
+static generator sharing its bus with another.  A machine on a converter's static
+generator takes its ``gammap``/``gammaq`` of it; converters and machines taking other
+than all of their static generator's P and Q are refused (CaseError: ANDES drops the rest
+of a replaced generator's power and starts off its power flow), but for converters alone
+on a bus without machine, kept with a change named in the summary from the written
+tables: their ``pfrac``, ``qfrac`` and the rest of the bus's generation, which a run nets
+into the bus's load.
 
 Models with no effect on the network and machines are ignored: ``Summary`` (the case's
 notes, ``andes/models/info.py``), ``Area``, ``COI`` (the centre-of-inertia calculation,
@@ -222,7 +226,10 @@ class AndesImport:
         what"`` per model and change: a machine's rated frequency ``fn`` read as the
         system's (N44 read from PSS/E files: ANDES's DYR reader leaves ``fn`` at 60 Hz in a
         50 Hz system), GENROU's ``xq2`` read as ``xd2``, a DYR parameter ANDES replaced
-        by its default (``file:line MODEL (bus B, id I): NAME = v read by ANDES as w``).
+        by its default (``file:line MODEL (bus B, id I): NAME = v read by ANDES as w``),
+        converters alone on a bus without machine taking other than all of its generation
+        (``"MODEL idx (converter n), ...: take pfrac p, qfrac q of the generation of bus
+        B, which has no machine; the rest, ..."``, from the written converter table).
     unlike_andes : tuple of str
         DYR values stabctl keeps as the file gives them where ANDES replaces them (the
         infinite bus, a GENCLS of H = 0, which ANDES runs with its default H = 3 s).
@@ -289,7 +296,8 @@ def import_andes(
         without machine model, a value out of range), a value stabctl reads that an xlsx
         or json file leaves out or gives as other than a number (ANDES would run with its
         default: :data:`_REQUIRED_INPUTS`), machines whose shares of their static
-        generator do not add up to 1 (a duplicated record), naming the device.
+        generator do not add up to 1 (a duplicated record) or, with converters on it, whose
+        and the converters' shares do not, naming the devices.
 
     Source: ANDES 2.0 documentation and ``psse-dyr.yaml`` (see module doc).
     """
@@ -332,7 +340,7 @@ def read_andes_case(
     mats, numbers = _network(ss, path.name)
     pf_bus, pf_vmag, pf_vang = _powerflow(ss, numbers)  # its generators' P, Q: shares
     mats["load_con"], zip_changed = _zip_loads(ss, numbers, mats["bus"])
-    ibr_con, ibr_refused, with_converter = _converters(ss, numbers)
+    ibr_con, ibr_refused, with_converter, ibr_labels = _converters(ss, numbers, path.name)
     dropped, by_device, unchecked = ([], {}, []) if dyr is None else _dyr_against_andes(ss, dyr)
     gens, records, refused, changed, unlike = _dynamic_records(
         ss, path.name, numbers, with_converter, by_device
@@ -364,6 +372,8 @@ def read_andes_case(
             }
         )
         _mark_playback(mats, gens)
+    if ibr_con:  # from the tables written, machines' included
+        changed += _netted_shares(mats, ibr_labels)
     events, ev_refused, ev_off = _disturbances(ss, numbers, gens, mats, motor_numbers)
     refused += ev_refused
     ignored += tuple(ev_off)
@@ -799,13 +809,18 @@ def _integer(value) -> int | None:
     return int(v) if np.isfinite(v) and v.is_integer() else None
 
 
-def _converters(ss, numbers: dict):
+def _converters(ss, numbers: dict, file: str):
     """The converter table's rows (``ibr_con``, :data:`stabctl.models.converters.CONVERTER`
     order) of ANDES's PVD1, ESD1 and REGCA1 devices in service (a REGCA1 only without an
     electrical control: :data:`RENEWABLE_CONTROLS`), the devices refused (with why),
-    and the static generators the mapped converters replace."""
+    the static generators the mapped converters replace and each row's device (converter
+    number -> ``"MODEL idx"``).  CaseError (naming ``file``) for a static generator whose
+    machines and converters together take other than all of its P or Q: the rest would
+    be lost at a machine's bus (`_netted_shares` names the rest a bus without machine
+    nets)."""
     rows, refused, replaced, protected = [], [], set(), set()
     share: dict = {}
+    labels: dict[int, str] = {}
     sg_bus: dict = {}
     for m in (ss.PV, ss.Slack):
         for k in _in_service(m):
@@ -849,7 +864,8 @@ def _converters(ss, numbers: dict):
                 v.update(_protection_values(ss, m, k, refused))
                 protected.add(m.idx.v[k])
             rows.append([float(v[p.name]) for p in CONVERTER.params])
-            got = share.setdefault(gen, [0.0, 0.0, []])
+            labels[number] = where
+            got = share.setdefault(gen, [0.0, 0.0, [], False])
             got[0] += m.gammap.v[k]
             got[1] += m.gammaq.v[k]
             got[2].append(where)
@@ -866,14 +882,42 @@ def _converters(ss, numbers: dict):
                 share[m.gen.v[k]][0] += m.gammap.v[k]
                 share[m.gen.v[k]][1] += m.gammaq.v[k]
                 share[m.gen.v[k]][2].append(f"{name} {m.idx.v[k]}")
-    for gen, (gp, gq, devs) in share.items():
-        if abs(gp - 1) > 1e-9 or abs(gq - 1) > 1e-9:
-            refused.append(
-                f"{', '.join(devs)}: take gammap = {gp:g}, gammaq = {gq:g} of static "
-                f"generator {gen} (ANDES drops the rest of a replaced generator's power; "
-                "stabctl needs all of it, 1)"
+                share[m.gen.v[k]][3] = True
+    for gen, (gp, gq, devs, machine) in share.items():
+        if machine and (abs(gp - 1) > 1e-9 or abs(gq - 1) > 1e-9):
+            raise CaseError(
+                f"{file}: static generator {gen}: its machines and converters "
+                f"({', '.join(devs)}) take gammap {gp:g} and gammaq {gq:g} of its power, "
+                "not 1 (ANDES drops the rest and starts off its power flow; stabctl nets "
+                "the rest into the load of a bus without machine only)"
             )
-    return rows, refused, replaced
+    return rows, refused, replaced, labels
+
+
+def _netted_shares(mats: dict, labels: dict[int, str]) -> list[str]:
+    """What the written case holds at each bus without machine whose converters take
+    other than all of its generation: their shares (``ibr_con`` ``pfrac``, ``qfrac``
+    summed) and the rest of the bus's power-flow generation, which a run nets into the
+    bus's load (`stabctl.dynamics.model`: the generation of a bus without machine), read
+    from the tables the case is made of (``mac_con``, ``ibr_con``), so that the import's
+    summary states what the case holds.  ``labels``: converter number -> ANDES device.
+    ANDES drops that rest (its run starts off its power flow)."""
+    ibr = mats["ibr_con"]
+    with_machine = set(mats["mac_con"][:, 1].astype(int)) if "mac_con" in mats else set()
+    col = {n: CONVERTER.col(n) - 1 for n in ("number", "bus", "pfrac", "qfrac")}
+    out = []
+    for b in dict.fromkeys(ibr[:, col["bus"]].astype(int)):
+        rows = ibr[ibr[:, col["bus"]].astype(int) == b]
+        fp, fq = rows[:, col["pfrac"]].sum(), rows[:, col["qfrac"]].sum()
+        if b in with_machine or (abs(fp - 1) <= 1e-9 and abs(fq - 1) <= 1e-9):
+            continue
+        devs = ", ".join(f"{labels[int(n)]} (converter {int(n)})" for n in rows[:, col["number"]])
+        out.append(
+            f"{devs}: take pfrac {fp:.12g}, qfrac {fq:.12g} of the generation of bus {b}, "
+            f"which has no machine; the rest, {1 - fp:.12g} of its P and {1 - fq:.12g} of "
+            "its Q (power flow), netted into the bus's load in runs (ANDES drops it)"
+        )
+    return out
 
 
 def _protection_values(ss, m, k, refused: list) -> dict[str, float]:

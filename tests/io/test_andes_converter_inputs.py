@@ -2,11 +2,21 @@
 item 8): a value ANDES would replace by its default (0 where it must be non-zero, a sign
 it must not have) and data that cannot be (REECA1 Imax <= 0, Vdip >= Vup; ESD1 En <= 0,
 SOC limits out of order or above 100 %) are refused naming file, model, row and
-parameter; a parameter the file leaves out is run with ANDES's default and named."""
+parameter; a parameter the file leaves out is run with ANDES's default and named.
+Converters taking other than all of their static generator's power: the import's summary
+states what the written case holds."""
 
+import json
+import re
+
+import numpy as np
 import pytest
+from click.testing import CliRunner
 
+from stabctl.cli import main
+from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError
+from stabctl.io import load_case
 from stabctl.io.andes_case import read_andes_case
 
 andes = pytest.importorskip("andes")
@@ -84,3 +94,70 @@ def test_a_pvd1_naming_a_missing_generator_is_refused(tmp_path):
     path = edited(tmp_path, "ieee14/ieee14_pvd1.xlsx", "PVD1", gen=9999)
     with pytest.raises(CaseError, match=r"PVD1 \S+: its static generator 9999 is no PV or Slack"):
         read_andes_case(path, on_unsupported="skip")
+
+
+#: a share statement of the summary: its devices, shares, bus and rest
+SHARE = re.compile(
+    r"^(?P<devs>.+): take pfrac (?P<fp>\S+), qfrac (?P<fq>\S+) of the generation of bus "
+    r"(?P<bus>\d+), which has no machine; the rest, (?P<rp>\S+) of its P and (?P<rq>\S+) "
+    r"of its Q \(power flow\), netted into the bus's load in runs"
+)
+
+
+def test_a_regca1_share_below_one_is_summarised_as_the_written_case_holds(tmp_path):
+    """ieee14_solar with its REGCA1 taking gammap 0.5, gammaq 0.25 of the bus-8 generator
+    (the finding: `import-andes --skip-unsupported` said it was left out while the written
+    case held it with those shares).  The --json summary names it as kept, with the shares
+    and the rest the written case holds (its converter table; the bus has no machine, so a
+    run nets the rest into the bus's load: the case starts flat)."""
+    path = edited(tmp_path, "ieee14/ieee14_solar.xlsx", "REGCA1", gammap=0.5, gammaq=0.25)
+    out = tmp_path / "out.json"
+    res = CliRunner().invoke(
+        main, ["import-andes", str(path), "-o", str(out), "--skip-unsupported", "--json"]
+    )
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    case = load_case(out)
+    conv = case.converters
+    assert summary["converters"] == len(conv) == 1
+    assert not [t for t in summary["left_out"] if "REGCA1" in t]
+    found = [m for m in map(SHARE.match, summary["changed"]) if m]
+    assert len(found) == 1
+    m = found[0]
+    k = int(np.flatnonzero(conv.bus == int(m["bus"]))[0])
+    assert m["devs"] == f"REGCA1 1 (converter {int(conv.number[k])})"
+    assert int(m["bus"]) not in set(case.machines.bus.astype(int))
+    np.testing.assert_allclose(
+        [float(m[g]) for g in ("fp", "fq", "rp", "rq")],
+        [conv.pfrac[k], conv.qfrac[k], 1 - conv.pfrac[k], 1 - conv.qfrac[k]],
+        rtol=1e-12,
+    )
+    Simulator(case)  # off_equilibrium="refuse": the rest netted, the case starts flat
+
+
+def test_machine_and_converter_shares_not_adding_to_one_are_refused(tmp_path):
+    """ieee14_wt3n with the bus-1 turbine taking gammap 0.7 and its GENCLS 0.2 of the
+    Slack (the finding: summarised as left out, written with both; the rest, lost at a
+    machine's bus, started the case off its power flow): refused, nothing written."""
+    sheets = pd.read_excel(andes.get_case("ieee14/ieee14_wt3n.xlsx"), sheet_name=None)
+    reg = sheets["REGCA1"]
+    reg[["gammap", "gammaq"]] = reg[["gammap", "gammaq"]].astype(float)
+    turbine, machine = 0.7, 0.2
+    reg.loc[reg["gen"] == 1, ["gammap", "gammaq"]] = turbine
+    sheets["GENCLS"][["gammap", "gammaq"]] = machine
+    path = tmp_path / "wt3n_shares.xlsx"
+    with pd.ExcelWriter(path) as w:
+        for name, rows in sheets.items():
+            rows.to_excel(w, sheet_name=name, index=False)
+    out = tmp_path / "out.json"
+    res = CliRunner().invoke(
+        main, ["import-andes", str(path), "-o", str(out), "--skip-unsupported"]
+    )
+    assert res.exit_code == 2
+    assert re.search(
+        r"static generator 1: its machines and converters \(REGCA1 REGCA1_5, GENCLS "
+        rf"GENCLS_1\) take gammap {turbine + machine:g} and gammaq {turbine + machine:g} "
+        r"of its power, not 1",
+        res.output,
+    )
+    assert not out.exists()
