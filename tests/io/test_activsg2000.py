@@ -136,19 +136,19 @@ def test_flat_run_stays_at_rest(imported):
 
 
 def test_six_cycle_fault_is_stable_and_converged_in_the_step(imported):
-    """A 6-cycle fault at 345 kV bus 2021 cleared by tripping line 2021-2002, the case read
-    as PSS/E (the default): stable, its largest angle spread the same at half the step
+    """A 6-cycle fault at 345 kV bus 2021 cleared by tripping line 2021-2002, the case read as
+    PSS/E (the default): stable, its largest angle spread the same at half the step
     (measured 1.13828, 1.13831 and 1.13829 rad at a half, a quarter and an eighth of a
-    cycle; half a cycle, the default step, with 18 EXAC2 in sub-intervals).  Without sub-intervals half
-    a cycle is refused by name: the EXAC2 at bus 1079 (K_A = 1000, T_A = 0.05 s, K_F =
-    0.49, T_E = 0.55 s, a saturated exciter) has a regulator and exciter mode at -12 +-
-    184j 1/s, which Heun's method keeps only below h = 4.85 ms (`exac2.heun_step_limit`);
-    with them (the default, `stabctl.dynamics.subinterval`) the EXAC2s whose loops are
-    faster than the step take sub-steps of their own and the data's time constants set
-    the step, half a cycle.  The GENSAL at
-    bus 6268 starts at E_fd0 = 10.2 pu; with PSS/E's quadratic exciter saturation its
-    ESDC1A's computed K_E is -3.66 (PST's exponential made it -3573 and the field voltage
-    ran away at the fault, docs/pst_models.md 12.6)."""
+    cycle; half a cycle, the default step, with 18 EXAC2 in sub-intervals). Without sub-
+    intervals half a cycle is refused by name: the EXAC2 at bus 1079 (K_A = 1000, T_A = 0.05
+    s, K_F = 0.49, T_E = 0.55 s, a saturated exciter) has a regulator and exciter mode at
+    -12 +- 184j 1/s, which Heun's method keeps only below h = 4.85 ms
+    (`exac2.heun_step_limit`); with them (the default, `stabctl.dynamics.subinterval`) the
+    EXAC2s whose loops are faster than the step take sub-steps of their own and the data's
+    time constants set the step, half a cycle. The GENSAL at bus 6268 starts at E_fd0 = 10.2
+    pu; with PSS/E's quadratic exciter saturation its ESDC1A's computed K_E is -3.66 (PST's
+    exponential made it -3573 and the field voltage ran away at the fault,
+    docs/pst_models.md 12.6)."""
     _, case = imported
     sim = Simulator(case)
     fault = Fault(bus=2021, t=1.0, clear_near=1.0 + 6 * CYCLE, far_bus=2002)
