@@ -125,7 +125,8 @@ def search_settings(tol_ms, t_max, tf):
 
 
 def model_settings(conventions: str, step, q_limits: bool = True):
-    """The model settings of ``--conventions``, ``--step`` and ``--no-q-limits``.
+    """The model settings of ``--conventions``, ``--step``, ``--no-q-limits`` and
+    ``--single-rate`` (`stabctl.cli.options.subintervals_chosen`).
 
     Returns
     -------
@@ -136,6 +137,9 @@ def model_settings(conventions: str, step, q_limits: bool = True):
     InputError
         Unknown conventions or a step not > 0.
     """
+    from stabctl.cli.options import subintervals_chosen
     from stabctl.dynamics.options import ModelOptions
 
-    return ModelOptions(conventions=conventions, h=step, q_limits=q_limits)
+    return ModelOptions(
+        conventions=conventions, h=step, q_limits=q_limits, subintervals=subintervals_chosen()
+    )

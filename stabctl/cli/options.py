@@ -371,8 +371,35 @@ def conventions_option(func):
     )(func)
 
 
+#: where ``--single-rate`` is kept in the command's click context (`subintervals_chosen`)
+_SINGLE_RATE = "stabctl.single_rate"
+
+
+def _remember_single_rate(ctx, _param, value):
+    ctx.meta[_SINGLE_RATE] = bool(value)
+    return value
+
+
+def subintervals_chosen() -> bool:
+    """Whether the running command integrates fast exciter loops in sub-intervals: True
+    unless it was given ``--single-rate`` (`model_options`; True outside a command)."""
+    ctx = click.get_current_context(silent=True)
+    return not (ctx is not None and ctx.meta.get(_SINGLE_RATE, False))
+
+
 def model_options(func):
-    """``--conventions`` and ``--step``, the same on every command that simulates."""
+    """``--conventions``, ``--step`` and ``--single-rate``, the same on every command that
+    simulates (``--single-rate`` read through `subintervals_chosen`)."""
+    func = click.option(
+        "--single-rate",
+        is_flag=True,
+        expose_value=False,
+        callback=_remember_single_rate,
+        help="Integrate the whole model at one step: no exciter in sub-intervals "
+        "(ieee; docs/simulator.md).  The default step then falls to half the time "
+        "constant of the fastest exciter loop (ACTIVSg2000: 1.2 ms instead of half a "
+        "cycle).",
+    )(func)
     func = click.option(
         "--step",
         type=float,

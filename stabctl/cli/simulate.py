@@ -33,6 +33,7 @@ from stabctl.cli.options import (
     q_limits_option,
     reports_errors,
     storage_options,
+    subintervals_chosen,
     tf_option,
 )
 from stabctl.errors import InputError
@@ -399,7 +400,13 @@ def simulate(
             case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz), model=esd_model
         )
     validate_events(case, events, tf)  # an unknown bus or line before compiling
-    sim = Simulator(case, conventions=conventions, q_limits=q_limits, suspect_starts=suspect_starts)
+    sim = Simulator(
+        case,
+        conventions=conventions,
+        q_limits=q_limits,
+        suspect_starts=suspect_starts,
+        subintervals=subintervals_chosen(),
+    )
     h = sim.default_h if step is None else step
     sub = int(np.isfinite(sim.exciter_hmax(sim.model, h)).sum()) if method == "heun" else 0
     result = sim.run(

@@ -81,7 +81,8 @@ def test_a_sub_stepped_fault_run_converges_to_the_single_rate_one(smib_exac2):
 def test_the_commands_say_how_many_exciters_take_sub_steps(tmp_path, smib_exac2):
     """`simulate` and `cct` name the exciters integrated in sub-intervals at their step (as
     many as the simulator's `exciter_hmax` makes finite: the SMIB's one EXAC2 at half a
-    cycle, none at 1 ms), in their text and JSON."""
+    cycle, none at 1 ms), in their text and JSON; with ``--single-rate`` none, at the
+    single-rate simulator's default step."""
     import json
 
     from click.testing import CliRunner
@@ -106,6 +107,12 @@ def test_the_commands_say_how_many_exciters_take_sub_steps(tmp_path, smib_exac2)
     assert "sub-intervals" not in fine
     d = json.loads(run("cct", case, "--fault", 1, "--t-max", 0.4, "--json"))
     assert d["sub_stepped_exciters"] == n
+    single = Simulator(smib_exac2, background_compile=False, subintervals=False)
+    args = ("--fault", 1, "--clear-cycles", 3, "--tf", 2, "--json", "--single-rate")
+    d = json.loads(run("simulate", case, *args))
+    assert d["sub_stepped_exciters"] == 0 and d["step_s"] == single.default_h
+    d = json.loads(run("cct", case, "--fault", 1, "--t-max", 0.4, "--json", "--single-rate"))
+    assert d["sub_stepped_exciters"] == 0 and d["step_s"] == single.default_h
 
 
 def test_model_options_carry_the_choice_into_sweeps(smib_exac2):
