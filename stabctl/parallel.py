@@ -29,7 +29,9 @@ DASK_NO_WORKER_S) are not recorded: `SweepIncomplete` names them, and the same c
 them.  Rerunning with the same file skips the keys already there (failed ones too, unless
 `retry_failed`); the last line of a key wins.  One sweep per file at a time: a sweep
 holds the file's lock (`stabctl.locking.exclusive`) from its repair to its last line, and
-a second one is refused with the holder's pid.
+a second one is refused with the holder's pid.  A sweep's Dask client (and the local
+cluster of ``scheduler="local"``) is closed when the sweep returns or raises, however
+(`dask_client`), and is never made Dask's default client.
 """
 
 from __future__ import annotations
@@ -391,14 +393,8 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
         whose worker died runs again on another worker.
     """
     if scheduler:
-        client = _dask_client(scheduler, workers)
-        try:
+        with dask_client(scheduler, workers) as client:
             yield lambda func, jobs, done=None: _dask_map(client, func, jobs, done)
-        finally:
-            cluster = client.cluster  # ours (scheduler="local") or None
-            client.close()
-            if cluster is not None:
-                cluster.close()
         return
     if workers == 1:
         yield _in_process
@@ -417,7 +413,7 @@ def _finished(futures, workers):
     from distributed import as_completed
 
     workers.check(force=True)  # the count the sweep starts with
-    pending = as_completed(futures)
+    pending = as_completed(futures, loop=workers.client.loop)  # not the default client's
     while not pending.is_empty():
         if not pending.has_ready():
             workers.check()
@@ -502,6 +498,7 @@ def run_sweep(
             Dask not installed or its scheduler unreachable; another process is writing
             `out` (its lock, `stabctl.locking.exclusive`, names the holder's pid).
         KeyboardInterrupt: after cancelling pending jobs; finished ones are in `out`.
+            Whatever ends it, its Dask client and local cluster are closed.
     """
     jobs = list(jobs)
     if workers is not None and workers < 1:
@@ -526,9 +523,8 @@ def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, p
     if todo:
         out.parent.mkdir(parents=True, exist_ok=True)
         _check_space(out, len(todo))
-        results = _dask(todo, scheduler, workers) if scheduler else _local(todo, workers, pool)
         with (
-            closing(results),
+            _records(todo, scheduler, workers, pool) as results,
             _appender(out) as f,
             progress_bar(len(todo), out.name, show=progress is True) as bar,
         ):
@@ -753,15 +749,66 @@ def check_scheduler(address: str) -> str:
     return f"tcp://{parts.hostname}:{port or 8786}"
 
 
-def _dask_client(scheduler: str, workers: int):
-    """A Dask distributed client: of the cluster at `scheduler` (`check_scheduler`), or
-    for scheduler="local" of a new local cluster of `workers` single-threaded processes,
-    each sent only the job it runs (worker-saturation 1.0).  Connects at once, within
-    SCHEDULER_TIMEOUT_S, so that a missing Dask, a wrong address or a service that is not
-    a Dask scheduler fails before anything is written (InputError)."""
+@contextmanager
+def dask_client(scheduler: str, workers: int = 1, timeout: float | None = None) -> Iterator[Any]:
+    """A connected Dask distributed client for the duration of a with block: of the
+    cluster at `scheduler` (`check_scheduler`), or for scheduler="local" of a new local
+    cluster of `workers` single-threaded processes, each sent only the job it runs
+    (worker-saturation 1.0).
+
+    The client is closed, and a local cluster with it, when the block is left however
+    (its end, an exception, Ctrl-C, a generator holding it closed), and so is a client
+    whose start failed or was interrupted: none is left to Dask's finaliser, which closes
+    a forgotten client whenever the garbage collector finds it (the finding: a collection
+    inside a later cluster's start, which holds distributed's class-wide ``LoopRunner``
+    lock, ran the forgotten client's close, which waits for that lock: a hang).  The
+    client is not made Dask's default one (``set_as_default=False``): a sweep leaves
+    ``distributed.default_client()`` and ``dask.config``'s scheduler as they were.
+
+    Parameters
+    ----------
+    scheduler : str
+        'local', or a Dask scheduler's address ('tcp://host:8786').
+    workers : int, optional
+        Worker processes of a 'local' cluster, >= 1 (unused with an address).
+    timeout : float, optional
+        Seconds the first contact with the scheduler may take (default
+        SCHEDULER_TIMEOUT_S).
+
+    Yields
+    ------
+    distributed.Client
+        Connected (it answered within `timeout`).
+
+    Raises
+    ------
+    InputError
+        A bad address (`check_scheduler`), Dask distributed not installed, or no Dask
+        scheduler answering at the address within `timeout` (a missing one, or a service
+        that is not a Dask scheduler): raised before the block runs.
+
+    Notes
+    -----
+    Sources: distributed 2026.8 ``client.py``: ``Client.__del__`` (closes a client that
+    is garbage collected; ``close`` stops its ``LoopRunner``), ``Client.__init__`` and
+    ``start`` (``set_as_default`` sets ``dask.config``'s scheduler and registers the
+    client in ``distributed.client._global_clients``); ``utils.py``: ``LoopRunner``
+    (``start`` and ``stop`` take the one ``LoopRunner._lock``).
+    """
+    client = _connect(scheduler, workers, SCHEDULER_TIMEOUT_S if timeout is None else timeout)
+    try:
+        yield client
+    finally:
+        _close(client)
+
+
+def _connect(scheduler: str, workers: int, timeout: float):
+    """`dask_client`'s client, connected at once (within `timeout`) so that a missing
+    Dask, a wrong address or a service that is not a Dask scheduler fails before
+    anything is written (InputError); nothing is left open when it fails."""
     address = check_scheduler(scheduler)
     try:
-        from distributed import Client, LocalCluster
+        from distributed import LocalCluster
     except ImportError:
         raise InputError(
             f"--scheduler {scheduler} needs Dask distributed, which is not "
@@ -771,25 +818,99 @@ def _dask_client(scheduler: str, workers: int):
         import dask
 
         # a worker is sent only the job it runs (Dask's default, 1.1, queues a second
-        # one there, which a worker killed by the first counts against: KilledWorker)
+        # one there, which a worker killed by the first counts against: KilledWorker);
+        # a cluster whose start fails closes itself (SpecCluster.__init__)
         with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
             cluster = LocalCluster(
                 n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
             )
-        return Client(cluster)
+        try:
+            return _started_client(cluster)
+        except BaseException:
+            with _quiet_dask():
+                cluster.close()
+            raise
     try:
-        return Client(address, timeout=SCHEDULER_TIMEOUT_S)
+        return _started_client(address, timeout=timeout)
     except Exception as exc:  # noqa: BLE001 - whatever a foreign service makes Dask raise
         raise InputError(
-            f"no Dask scheduler answers at {address} within {SCHEDULER_TIMEOUT_S:g} s "
+            f"no Dask scheduler answers at {address} within {timeout:g} s "
             f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})"
         ) from None
 
 
-def _dask(jobs: list, scheduler: str, workers: int | None) -> Generator[dict, None, None]:
-    """Records in completion order from a Dask distributed cluster (`_dask_client`)."""
+def _started_client(address, **kwargs):
+    """``distributed.Client(address, set_as_default=False, **kwargs)``, whose start (in its
+    constructor) connects to the scheduler; if that fails or is interrupted, the
+    half-started client is closed here before the error goes on (a client whose
+    constructor raised is otherwise closed by its finaliser, whenever the garbage
+    collector gets to it: the traceback of the error holds it)."""
+    from distributed import Client
+
+    client = Client.__new__(Client)  # a handle on it even if its __init__ raises
+    try:
+        Client.__init__(client, address, set_as_default=False, **kwargs)
+    except BaseException:
+        _close(client)
+        raise
+    return client
+
+
+def _close(client) -> None:
+    """Close a Dask client and the local cluster it started with (`_connect`), the
+    cluster even if closing the client fails; distributed's own logs of a scheduler
+    already gone are not shown (the sweep says what it lost), and an error of the
+    close itself is logged (debug), not raised over the sweep's outcome."""
+    cluster = getattr(client, "cluster", None)  # ours (scheduler="local") or None
+    with _quiet_dask():
+        try:
+            client.close()
+        except Exception as exc:  # noqa: BLE001 - e.g. a scheduler gone: nothing to keep
+            _log.debug("closing the Dask client: %s: %s", type(exc).__name__, exc)
+        finally:
+            if cluster is not None:
+                cluster.close()
+
+
+@contextmanager
+def _quiet_dask() -> Iterator[None]:
+    """distributed's loggers at CRITICAL for the block: it logs a traceback of its own
+    when the scheduler goes away; the jobs it lost are said in one line
+    (SweepIncomplete)."""
+    dask_logs = [
+        logging.getLogger(name)
+        for name in list(logging.root.manager.loggerDict)
+        if name == "distributed" or name.startswith("distributed.")
+    ]
+    levels = [log.level for log in dask_logs]
+    for log in dask_logs:
+        log.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for log, lvl in zip(dask_logs, levels, strict=True):
+            log.setLevel(lvl)
+
+
+@contextmanager
+def _records(
+    jobs: list, scheduler: str | None, workers: int | None, pool=None
+) -> Iterator[Iterator[dict]]:
+    """`run_sweep`'s records in completion order, for a with block: from a Dask cluster
+    (`dask_client`: connected on entering, before the sweep's file is touched, and
+    closed with its local cluster on leaving, however the block is left, even before
+    the first record) or from local processes (`_local`)."""
+    if not scheduler:
+        with closing(_local(jobs, workers, pool)) as records:
+            yield records
+        return
     n = min(workers or default_workers(), len(jobs))
-    return _dask_records(_dask_client(scheduler, n), jobs)
+    with (
+        dask_client(scheduler, n) as client,
+        _quiet_dask(),
+        closing(_dask_records(client, jobs)) as records,
+    ):
+        yield records
 
 
 def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
@@ -806,16 +927,6 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
     from distributed import KilledWorker
 
     lost: list[str] = []
-    # distributed logs a traceback of its own when the scheduler goes away; the jobs it
-    # lost are said in one line (SweepIncomplete)
-    dask_logs = [
-        logging.getLogger(name)
-        for name in list(logging.root.manager.loggerDict)
-        if name == "distributed" or name.startswith("distributed.")
-    ]
-    levels = [log.level for log in dask_logs]
-    for log in dask_logs:
-        log.setLevel(logging.CRITICAL)
     try:
         futures = {
             client.submit(
@@ -854,13 +965,6 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
             f"last one died or left; not run: {', '.join(left[:3])}{more}); the finished "
             "records are kept, and the same command, once workers are back, runs the rest"
         ) from None
-    finally:
-        cluster = client.cluster  # ours (scheduler="local") or None
-        client.close()
-        if cluster is not None:
-            cluster.close()
-        for log, lvl in zip(dask_logs, levels, strict=True):
-            log.setLevel(lvl)
 
 
 #: seconds a Dask sweep waits for a worker when its cluster has none left (the last one

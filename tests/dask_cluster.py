@@ -41,9 +41,11 @@ def separate_cluster(workers: int, env: dict | None = None, path=(Path(__file__)
 
 
 def wait_for(address: str, workers: int = 1, timeout: float = 60.0) -> str:
-    """address once its scheduler has `workers` workers."""
-    from distributed import Client
+    """address once its scheduler has `workers` workers (asked through
+    `stabctl.parallel.dask_client`, which closes its client however it ends: one left to
+    Dask's finaliser closes in the middle of a later client's start)."""
+    from stabctl.parallel import dask_client
 
-    with Client(address, timeout=timeout) as client:
+    with dask_client(address, timeout=timeout) as client:
         client.wait_for_workers(workers, timeout=timeout)
     return address

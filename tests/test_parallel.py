@@ -478,6 +478,111 @@ def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time
         server.close()
     assert time.perf_counter() - t0 < 20
     assert not (tmp_path / "d.jsonl").exists()
+    # the client whose start failed is closed, not left to Dask's finaliser
+    assert_no_dask_client_left()
+
+
+def assert_no_dask_client_left():
+    """No distributed Client or local cluster of this process open (each closed, none
+    left to Dask's finaliser, which closes a forgotten client whenever the garbage
+    collector finds it: the finding, in the middle of a later client's start), none
+    registered as Dask's default client, and dask.config's scheduler not set to it."""
+    import gc
+
+    import dask
+    import distributed
+    from distributed.client import _global_clients
+    from distributed.deploy.spec import SpecCluster
+
+    alive = [
+        o
+        for o in gc.get_objects()
+        if isinstance(o, distributed.Client) and o.status not in ("closed", "newly-created")
+    ]
+    assert alive == []
+    assert dict(_global_clients) == {}
+    with pytest.raises(ValueError, match="No clients found"):
+        distributed.default_client()
+    assert dask.config.get("scheduler", None) != "dask.distributed"
+    clusters = [c for c in SpecCluster._instances if c.status.name != "closed"]
+    assert clusters == []
+
+
+class _Refused(Exception):
+    pass
+
+
+def _refuse_the_file(monkeypatch):
+    # the sweep's file refused once the cluster has started (e.g. a disk gone): the
+    # records' generator is closed before its first record
+    def refused(self):
+        raise _Refused("disk gone")
+
+    monkeypatch.setattr("stabctl.parallel._appender.__enter__", refused)
+
+
+def _interrupt_the_client_start(monkeypatch):
+    # Ctrl-C as the client's start ends (its constructor raises KeyboardInterrupt)
+    import distributed
+
+    start = distributed.Client.start
+
+    def interrupted(self, **kwargs):
+        start(self, **kwargs)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(distributed.Client, "start", interrupted)
+
+
+def _stop_after_the_first_record(done, total):
+    raise KeyboardInterrupt  # Ctrl-C once the first record is written
+
+
+@pytest.mark.dask
+@pytest.mark.parametrize(
+    "how, raised",
+    [
+        ("normally", None),
+        ("file refused", _Refused),
+        ("ctrl-c in the client's start", KeyboardInterrupt),
+        ("ctrl-c after the first record", KeyboardInterrupt),
+    ],
+)
+def test_a_local_dask_sweep_leaves_no_client_or_cluster_open(tmp_path, monkeypatch, how, raised):
+    """`run_sweep(..., scheduler="local")` (``--scheduler local``) however it ends: its
+    Client and LocalCluster are closed when it returns or raises (the finding: a sweep
+    whose file was refused after the cluster started left both open, and Dask's finaliser
+    closed them inside a later client's start, which hung); a sweep that finds every job
+    done starts none."""
+    pytest.importorskip("distributed")
+    out = tmp_path / "d.jsonl"
+    progress = False
+    if how == "file refused":
+        _refuse_the_file(monkeypatch)
+    elif how == "ctrl-c in the client's start":
+        _interrupt_the_client_start(monkeypatch)
+    elif how == "ctrl-c after the first record":
+        progress = _stop_after_the_first_record
+    jobs = jobs_of(square, 1, 2)
+    if raised is None:
+        rep = run_sweep(jobs, out, scheduler="local", workers=1, progress=progress)
+        assert rep.records["square/2"]["result"] == {"y": 4}
+    else:
+        with pytest.raises(raised):
+            run_sweep(jobs, out, scheduler="local", workers=1, progress=progress)
+    assert_no_dask_client_left()
+    assert len(read_records(out)) == {"normally": 2, "ctrl-c after the first record": 1}.get(how, 0)
+    if how == "normally":  # every job done: the sweep returns without starting a cluster
+        import distributed
+
+        def no_start(*args, **kwargs):
+            raise AssertionError("a Dask client or cluster started")
+
+        monkeypatch.setattr(distributed.Client, "__init__", no_start)
+        monkeypatch.setattr(distributed.LocalCluster, "__init__", no_start)
+        again = run_sweep(jobs, out, scheduler="local", workers=1, progress=False)
+        assert (again.ran, again.skipped) == (0, 2)
+        assert_no_dask_client_left()
 
 
 @pytest.mark.dask
@@ -720,6 +825,30 @@ def test_cli_sweep_cct_default_faults_json_then_resume(tmp_path):
     assert res.exit_code == 0, res.output
     assert "kundur/3-101/t1/esd-none" in res.stdout
     assert "2 job(s): 0 run now, 2 already in" in res.stdout
+
+
+@pytest.mark.dask
+def test_cli_sweep_cct_on_a_local_dask_cluster_leaves_none_open(tmp_path, monkeypatch):
+    """`stabctl sweep-cct --scheduler local` (the users' path to the finding): the
+    cluster and its client are closed when the command ends; run again with every job in
+    the file, it starts none."""
+    distributed = pytest.importorskip("distributed")
+    out = tmp_path / "k.jsonl"
+    args = ("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", out, "--tol-ms", 5)
+    res = run(*args, "--scheduler", "local", "--workers", 1, "--json")
+    assert res.exit_code == 0, res.output
+    assert [r["status"] for r in json.loads(res.stdout)["records"]] == ["ok", "ok"]
+    assert_no_dask_client_left()
+
+    def no_start(*args, **kwargs):
+        raise AssertionError("a Dask client or cluster started")
+
+    monkeypatch.setattr(distributed.Client, "__init__", no_start)
+    monkeypatch.setattr(distributed.LocalCluster, "__init__", no_start)
+    res = run(*args, "--scheduler", "local", "--workers", 1)
+    assert res.exit_code == 0, res.output
+    assert "2 job(s): 0 run now, 2 already in" in res.stdout
+    assert_no_dask_client_left()
 
 
 def test_cli_sweep_cct_faults_csv(tmp_path):
