@@ -440,7 +440,7 @@ def _write_locked(out: Path, keys: list, progress, resume: bool) -> Path:
             log["records"][f.name] = {
                 **write_reproducible(f, out / f.name),
                 "simulations": _simulations(out / f.name),
-                "above_limit": _above_limit(out / f.name),
+                **_verdicts(out / f.name),
             }
             f.unlink()
     try:
@@ -462,12 +462,19 @@ def _simulations(records: Path) -> int:
     return n
 
 
-def _above_limit(records: Path) -> int:
-    """Jobs of a sweep record file whose search found the fault still stable at its upper
-    limit (`stabctl.stability.screening.verdict`): robust faults, not failures."""
-    from stabctl.stability.screening import ABOVE, verdict
+def _verdicts(records: Path) -> dict:
+    """Of a sweep record file's jobs (`stabctl.stability.screening.verdict`): those whose
+    search found the fault still stable at its upper limit (robust, ``above_limit``), those
+    unstable even when cleared at once (``insecure``, N-1 insecure) and those without a
+    verdict (``failures``); verdicts are not failures."""
+    from stabctl.stability.screening import ABOVE, INSECURE, verdict
 
-    return sum(verdict(rec) == ABOVE for rec in read_records(records).values())
+    found = [verdict(rec) for rec in read_records(records).values()]
+    return {
+        "above_limit": found.count(ABOVE),
+        "insecure": found.count(INSECURE),
+        "failures": found.count("failed"),
+    }
 
 
 def run_summary(log: dict) -> str:
@@ -478,7 +485,8 @@ def run_summary(log: dict) -> str:
     lines += [
         f"{'':8}  {name}: {r['jobs']} jobs ("
         + (f"{r['above_limit']} above the search limit, robust; " if r.get("above_limit") else "")
-        + f"{r['failed'] - r.get('above_limit', 0)} failed), {r['simulations']} simulations"
+        + (f"{r['insecure']} N-1 insecure; " if r.get("insecure") else "")
+        + f"{r.get('failures', r['failed'])} failed), {r['simulations']} simulations"
         for name, r in log["records"].items()
     ]
     lines.append(f"{log['total_s']:8.1f}  in all, on {log['cores']} cores")

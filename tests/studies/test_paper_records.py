@@ -119,7 +119,40 @@ def test_resume_starts_from_the_records_in_out(tmp_path, fake_parts):
         "longest_job": None,
         "simulations": 0,
         "above_limit": 0,
+        "insecure": 0,
+        "failures": 0,
     }
+
+
+def test_the_run_summary_counts_verdicts_apart_from_failures(tmp_path):
+    """A screening's records hold CCTs, verdicts (above the search limit, N-1 insecure) and
+    failures: the run log counts each from the records (`screening.verdict`), and the
+    summary says them apart (the placement screening of miniWECC printed "-87 failed" when
+    its 87 robust faults, once recorded as failures, became verdicts)."""
+    from stabctl.stability.screening import ABOVE, INSECURE
+
+    recs = [
+        {"key": "a", "status": "ok", "result": {"cct_s": 0.1}},
+        {"key": "b", "status": "verdict", "verdict": ABOVE, "reason": "still stable"},
+        {"key": "c", "status": "verdict", "verdict": ABOVE, "reason": "still stable"},
+        {"key": "d", "status": "verdict", "verdict": INSECURE, "reason": "unstable at once"},
+        {"key": "e", "status": "failed", "error": "SimulationError: diverged"},
+    ]
+    f = tmp_path / "r.jsonl"
+    f.write_text("".join(json.dumps(r) + "\n" for r in recs))
+    counts = paper._verdicts(f)
+    assert counts == {"above_limit": 2, "insecure": 1, "failures": 1}
+    log = {
+        "sections": [],
+        "records": {"r.jsonl": {"jobs": 5, "failed": 1, "simulations": 7, **counts}},
+        "total_s": 1.0,
+        "cores": 2,
+    }
+    line = paper.run_summary(log).splitlines()[1]
+    assert line.strip() == (
+        "r.jsonl: 5 jobs (2 above the search limit, robust; 1 N-1 insecure; 1 failed), "
+        "7 simulations"
+    )
 
 
 def test_strip_and_natural_order():
