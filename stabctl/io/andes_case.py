@@ -523,8 +523,10 @@ def _converter_inputs(path: Path, ss) -> list[str]:
     current limit of 0 or -1.1 run at 1.3, a WTDTA1 H of 0 at 3 s), an infinite one, or
     data that cannot be (`_CONVERTER_RULES`: REECA1 Imax <= 0, Vdip >= Vup, ESD1 SOC
     limits, En <= 0); returns the parameters left out and run with ANDES's default, one
-    line per model and parameter (``AndesImport.defaulted``)."""
-    from andes.core.param import NumParam
+    line per model and parameter (``AndesImport.defaulted``); the values ANDES copies from a
+    linked device (its ``ExtParam``: a REECA1's bus and Sn from its REGCA1, a REPCA1's
+    monitored line's r and x) are not parameters of the file and not listed."""
+    from andes.core.param import ExtParam, NumParam
 
     missing: dict[tuple[str, str, str], list[int]] = {}
     for model, rows in _input_rows(path).items():
@@ -535,8 +537,8 @@ def _converter_inputs(path: Path, ss) -> list[str]:
             where = f"{path.name}: {model} row {k} (idx {row.get('idx')})"
             values = {}
             for name, p in m.params.items():
-                if not isinstance(p, NumParam):
-                    continue
+                if not isinstance(p, NumParam) or isinstance(p, ExtParam):
+                    continue  # an ExtParam is copied from a linked device, not a default
                 v = row.get(name)
                 if v is None or (isinstance(v, float) and v != v):
                     missing.setdefault((model, name, repr(p.default)), []).append(k)

@@ -88,6 +88,30 @@ def test_parameters_left_out_are_named_with_andes_s_default(tmp_path):
     )
 
 
+def test_values_andes_copies_from_linked_devices_are_not_called_defaults():
+    """The stock ieee14_solar.xlsx: its REECA1's bus, gen and Sn and its REPCA1's reg, bus,
+    bus1, bus2 and monitored line's r and x are ANDES ``ExtParam`` values taken from the
+    linked devices, not parameters of the file run at a default: none is listed (they were,
+    as "REECA1 bus = None", "REPCA1 r = 1.0"); the parameters the file leaves out still
+    are (REGCA1's gammap, with ANDES's 1.0)."""
+    from andes.core.param import ExtParam
+
+    got = read_andes_case(andes.get_case("ieee14/ieee14_solar.xlsx"), on_unsupported="skip")
+    ss = andes.load(
+        andes.get_case("ieee14/ieee14_solar.xlsx"), setup=False, no_output=True,
+        default_config=True,
+    )  # fmt: skip
+    linked = {
+        f"{model} {name} "
+        for model in ("REGCA1", "REECA1", "REPCA1")
+        for name, p in ss.models[model].params.items()
+        if isinstance(p, ExtParam)
+    }
+    assert "REPCA1 r " in linked and "REECA1 bus " in linked
+    assert not [d for d in got.defaulted if any(d.startswith(x) for x in linked)]
+    assert "REGCA1 gammap = 1.0 (row 1)" in got.defaulted
+
+
 def test_a_pvd1_naming_a_missing_generator_is_refused(tmp_path):
     """A PVD1 whose gen is no static generator of the case (the finding: a ValueError
     traceback from list.index): refused naming the device and the generator."""
