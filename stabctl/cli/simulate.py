@@ -352,8 +352,6 @@ def simulate(
     converging) and a run that diverges exit with status 2 and one `error:` line; no file
     is written then (a diverged run reports where it stopped).
     """
-    import numpy as np
-
     from stabctl.dynamics.driver import Simulator
     from stabctl.dynamics.events import validate as validate_events
     from stabctl.dynamics.grid import check_step_count
@@ -408,7 +406,7 @@ def simulate(
         subintervals=subintervals_chosen(),
     )
     h = sim.default_h if step is None else step
-    sub = int(np.isfinite(sim.exciter_hmax(sim.model, h)).sum()) if method == "heun" else 0
+    sub = sim.sub_stepped(h, method)
     result = sim.run(
         events,
         t_end=tf,

@@ -528,6 +528,25 @@ class Simulator:
             return np.full(m.ep.n, np.inf)
         return exciter_hmax(m.inner_loops, step)
 
+    def sub_stepped(self, step: float, method: str = "heun") -> int:
+        """How many exciters Heun runs of nominal step `step` (s) integrate in
+        sub-intervals (`exciter_hmax`); 0 for the trapezoid (`method`), which has none.
+
+        Parameters
+        ----------
+        step : float
+            The run's nominal step, s.
+        method : {"heun", "trapezoid"}, optional
+            The run's integrator; default "heun".
+
+        Returns
+        -------
+        int
+        """
+        if method != "heun":
+            return 0
+        return int(np.isfinite(self.exciter_hmax(self.model, step)).sum())
+
     def _semantics(self, semantics: str | None) -> str:
         if semantics is None:
             return "pst" if self.conventions == "pstess" else "exact"

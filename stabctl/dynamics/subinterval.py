@@ -68,13 +68,10 @@ def _advance(p, x_a, u, hh, out):
     """Every sub-stepped exciter's states over hh from x_a with the inputs u (n_exc,
     N_FROZEN) held, into out's exciter block (other slots untouched)."""
     xe, oe = _exciter_states(p, x_a), _exciter_states(p, out)
-    col = np.empty(p.exc_rows)
     for i in range(p.n_exc):
         if p.exc_hmax[i] < np.inf:
             n = max(1, math.ceil(hh / p.exc_hmax[i] - 1e-9))
-            exc.advance_frozen(p.EP, xe, i, u[i], hh, n, p.ieee, p.reach, col)
-            for r in range(p.exc_rows):
-                oe[r, i] = col[r]
+            exc.advance_frozen(p.EP, xe, i, u[i], hh, n, p.ieee, p.reach, oe[:, i])
 
 
 @kernel

@@ -513,15 +513,8 @@ def critical_clearing_time(
         conventions=sim.conventions,
         method=o.method,
         early_stops=len(early_stops),
-        sub_stepped=_sub_stepped(sim, h),
+        sub_stepped=sim.sub_stepped(h) if hasattr(sim, "sub_stepped") else 0,
     )
-
-
-def _sub_stepped(sim, h: float) -> int:
-    """How many exciters `sim`'s runs at step h integrate in sub-intervals (0 for a
-    simulator without them)."""
-    hmax = getattr(sim, "exciter_hmax", None)
-    return int(np.isfinite(hmax(sim.model, h)).sum()) if hmax is not None else 0
 
 
 #: the CCT search methods (`SearchOptions.method`)

@@ -126,7 +126,7 @@ def test_without_the_leave_out_the_case_is_refused_by_name(files):
 
 def test_flat_run_stays_at_rest(imported):
     """10 s without disturbance at a quarter cycle and at the default half cycle (18
-    EXAC2 in sub-intervals): every state within 1e-8 of its initial value (the issue's
+    EXAC2 in sub-intervals): every state within 1e-8 of its initial value (the
     flat-run target; measured 1.8e-13 at both)."""
     _, case = imported
     for step in (CYCLE / 4, CYCLE / 2):

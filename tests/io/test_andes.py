@@ -3111,7 +3111,7 @@ def test_kundur_esst3a_inner_loop_sets_the_step():
     point) close the inner loop T_M dV_M/dt = K_M (V_A - K_G E_fd) - V_M, E_fd = V_B V_M,
     at -(1 + K_M K_G V_B)/T_M: the linearised model's fastest pole (-21600 1/s) is that
     loop's; without sub-intervals its time constant is the simulator's fastest, the
-    default step is half of it and stays flat for the issue's 10 s (432 000 steps, within
+    default step is half of it and stays flat for 10 s (432 000 steps, within
     the case's recording limit; 5 ms, refused: the test above).  With them (the default)
     the step is the data's (5 ms, half its T_R) and the ESST3As are sub-stepped at half the
     loop's time constant, flat as well."""
