@@ -16,12 +16,10 @@ from __future__ import annotations
 import json
 import os
 import signal
-import socket
 import stat
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,6 +27,9 @@ from pathlib import Path
 STABCTL = [sys.executable, "-m", "stabctl.cli"]
 ROOT = Path(__file__).resolve().parents[1]
 PSSE = ROOT / "tests" / "data" / "psse"
+
+sys.path.insert(0, str(ROOT / "tests"))
+from pmu_streams import fake_server  # noqa: E402  (shared with tests/cli)
 
 
 @dataclass
@@ -328,50 +329,6 @@ def foreign_pmu_probe(cwd: Path) -> tuple[Probe, str]:
         "does not speak C37.118.2",
         "",
     )
-
-
-def fake_server(talk, *, answer_all: bool = False) -> tuple[socket.socket, int]:
-    """A fake server on 127.0.0.1 at a free port, for the probes that point a command at
-    one (a web server here; PMU servers in `reliability_probes_3`): a daemon thread
-    accepts a connection and runs ``talk(conn)`` on it.
-
-    Parameters
-    ----------
-    talk : callable
-        What the server does on a connection: ``talk(conn)``, conn the accepted socket.
-    answer_all : bool, optional
-        True: every connection until the caller closes the listening socket, each left
-        open once talked to (the client, not the server, hangs up; an OSError in `talk`
-        ends the thread).  False: the first connection only, closed after `talk` (an
-        OSError in `talk`, the client gone, ends it quietly), then the listening socket.
-
-    Returns
-    -------
-    (socket.socket, int)
-        The listening socket (the caller closes it when done: closing it again is
-        harmless) and its port.
-    """
-    srv = socket.create_server(("127.0.0.1", 0))
-
-    def serve():
-        while True:
-            try:
-                conn, _ = srv.accept()
-            except OSError:
-                return  # the caller closed the listening socket
-            if answer_all:
-                talk(conn)
-                continue
-            with conn:
-                try:
-                    talk(conn)
-                except OSError:
-                    pass
-            srv.close()
-            return
-
-    threading.Thread(target=serve, daemon=True).start()
-    return srv, srv.getsockname()[1]
 
 
 def _web_server_probe(cwd: Path, finding, what, args_of, needle, no_file) -> tuple[Probe, str]:

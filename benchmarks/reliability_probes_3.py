@@ -26,19 +26,19 @@ import socket
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
+from pmu_streams import endless_server, fake_server, kundur_stream, on_the_wire
 from reliability_probes import (
     PSSE,
     STABCTL,
     Probe,
     case_file,
     cli,
-    fake_server,
     run,
     table,
     verdict,
@@ -417,21 +417,12 @@ def _record(cwd: Path):
     a time stamp repeated, two frames swapped, every value absent, only the CFG-2."""
     import numpy as np
 
-    import stabctl
-    from stabctl.dynamics.events import fault_with_clearing
     from stabctl.estimation import c37
-    from stabctl.estimation import pmu as pm
-    from stabctl.estimation.settings import PMUSettings
 
-    case = stabctl.load_case("kundur")
-    res = stabctl.Simulator(case).run([fault_with_clearing(case, 3, 101, 1.0, 6)], t_end=2.0)
-    pmus = pm.machine_pmus(case)
-    frames = list(pm.measure(pm.phasor_truth(case, res, pmus), PMUSettings(), seed=1))
-    cfg = c37.stream_config(case, pmus, 60)
-    c37.record(cwd / "good.c37", cfg, frames)
-    data = (cwd / "good.c37").read_bytes()
-    parts = c37.split_frames(data)
-    head, body = parts[0], parts[1:]
+    case, pmus, cfg, frames = kundur_stream()
+    head, body = on_the_wire(cfg, frames)
+    data = head + b"".join(body)
+    (cwd / "good.c37").write_bytes(data)
     (cwd / "dup.c37").write_bytes(b"".join([head, *body[:30], body[29], *body[30:]]))
     swapped = [*body[:30], body[31], body[30], *body[32:]]
     (cwd / "back.c37").write_bytes(b"".join([head, *swapped]))
@@ -606,53 +597,33 @@ def _against_fake(cwd: Path, head: bytes, body: list, probe_at, tail: bytes = b"
         srv.close()
 
 
-def _slow_server(head: bytes, body: list):
-    """A server that sends CFG-2, then a frame each 0.1 s, and never closes (an endless
-    stream, as far as its client knows)."""
-    stop = threading.Event()
-
-    def talk(conn):
-        conn.recv(1000)
-        conn.sendall(head)
-        conn.recv(1000)
-        for frame in body:
-            conn.sendall(frame)
-            time.sleep(0.1)
-        stop.wait(120)
-
-    srv, port = fake_server(talk)
-    return srv, port, stop
-
-
 def endless_probes(cwd: Path, head: bytes, body: list) -> list[tuple[Probe, str]]:
     """SIGTERM of `estimate track` on an endless stream ends it within seconds (exit 143);
     `pmu control --rate 30` against a 60 frames/s plant is refused."""
     rows = []
-    srv, port, stop = _slow_server(head, body)
-    p = Probe(
-        "5",
-        "SIGTERM of estimate track on an endless stream",
-        cli(f"estimate track kundur --source tcp://127.0.0.1:{port} --until 100 --out e.csv"),
-        exit=143,
-    )
-    proc = subprocess.Popen(
-        STABCTL + p.args, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
-    )
-    time.sleep(8)
-    t0 = time.monotonic()
-    proc.send_signal(15)
-    try:
-        stdout, stderr = proc.communicate(timeout=20)
-        res = subprocess.CompletedProcess(p.args, proc.returncode, stdout, stderr)
-        v = verdict(p, res, cwd)
-        if v == "ok" and time.monotonic() - t0 > 10:
-            v = f"took {time.monotonic() - t0:.0f} s"
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait()
-        v = "ignored SIGTERM for 20 s"
-    stop.set()
-    srv.close()
+    with endless_server(head, body) as (port, _):
+        p = Probe(
+            "5",
+            "SIGTERM of estimate track on an endless stream",
+            cli(f"estimate track kundur --source tcp://127.0.0.1:{port} --until 100 --out e.csv"),
+            exit=143,
+        )
+        proc = subprocess.Popen(
+            STABCTL + p.args, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+        time.sleep(8)
+        t0 = time.monotonic()
+        proc.send_signal(15)
+        try:
+            stdout, stderr = proc.communicate(timeout=20)
+            res = subprocess.CompletedProcess(p.args, proc.returncode, stdout, stderr)
+            v = verdict(p, res, cwd)
+            if v == "ok" and time.monotonic() - t0 > 10:
+                v = f"took {time.monotonic() - t0:.0f} s"
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+            v = "ignored SIGTERM for 20 s"
     rows.append((p, v))
     for probe in (
         lambda port: Probe(
