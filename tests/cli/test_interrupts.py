@@ -1,4 +1,4 @@
-"""Issue 15: interruptions. SIGKILL of a sweep's main process leaves no worker running;
+"""Interruptions: SIGKILL of a sweep's main process leaves no worker running;
 SIGINT (Ctrl-C) ends every long command the same way: exit 130 and one line saying what was
 kept and the command that resumes; SIGTERM the same with exit 143, also while a command
 waits on a PMU stream that never ends."""
