@@ -24,8 +24,13 @@ faults under both conventions, with and without the error bar (the earlier table
 For ACTIVSg2000 it also prints the N-1 projection: the bus and line screening's 5 206 CCT
 searches (2 000 buses, 3 206 line-end faults) at the measured wall per
 search, on 2 cores with perfect scaling, against the 30 min target.
-Run: python benchmarks/bench_cct.py [--every 4] [--activsg] [--paper]
-         [--systems kundur miniwecc]
+``--activsg-sample N`` searches a random sample of ACTIVSg2000's N-1 (N bus faults, N line
+faults, seed 53) at ``--t-max`` (default 0.5 s, `stabctl screen`'s) with both methods and
+prints the verdicts, simulations per search (verdicts included) and per CCT, the wall per
+search with each fault's network stages built as a screening builds them, and the N-1
+projection from that mean (the two-fault projection above counts CCT searches only).
+Run: python benchmarks/bench_cct.py [--every 4] [--activsg] [--activsg-sample 20]
+         [--paper] [--systems kundur miniwecc]
 """
 
 import argparse
@@ -110,6 +115,55 @@ def n1_projection(walls: dict) -> None:
 N1_SEARCHES = 5206
 
 
+def n1_sample(case, n: int, t_max: float, seed: int = 53) -> None:
+    """A random sample of ACTIVSg2000's N-1 (n bus faults, n line faults with the line
+    tripped; `random.Random(seed)`), searched as `stabctl screen` does (t_max, tol 1 ms,
+    half-step error bar) by each method: verdicts, simulations and wall per search over
+    every search (verdicts included, each at its own cost: a robust fault's runs are all
+    stable, an N-1 insecure one's two are short) and the N-1 projection from that mean."""
+    import random
+
+    rng = random.Random(seed)
+    lines = [f for f in screening_faults(case, lines=True) if f.far_bus is not None]
+    faults = rng.sample(screening_faults(case), n) + rng.sample(lines, n)
+    sim = Simulator(case)
+    sim.run(faults[0].events(0.05), t_end=faults[0].t_fault + 1.0)  # warm-up (compilation)
+    print(
+        f"\nACTIVSg2000 N-1 sample: {n} bus + {n} line faults (seed {seed}), t_max {t_max:g} s "
+        "(stabctl screen's default), tol 1 ms, half-step error bar; each fault's network "
+        "stages built in its search, as in a screening"
+    )
+    print(
+        f"{'method':10} {'CCTs':>5} {'robust':>6} {'insec':>5} {'sims/search':>11} "
+        f"{'sims/CCT':>8} {'wall/search':>11} {'N-1 on 2 cores':>14}"
+    )
+    runs = [0]
+    run = sim.run
+
+    def counted(*a, **k):
+        runs[0] += 1
+        return run(*a, **k)
+
+    sim.run = counted  # type: ignore[method-assign]  # every search's runs, verdicts' too
+    for m in ("bisection", "sime"):
+        opts = SearchOptions(method=m, t_max=t_max)
+        found, kinds, t0, runs[0] = [], [], time.perf_counter(), 0
+        for f in faults:  # each fault's stages evicted by the 8 faults after it
+            try:
+                found.append(critical_clearing_time(sim, f, opts).n_simulations)
+                kinds.append("cct")
+            except InputError as exc:
+                kinds.append(type(exc).__name__)
+        wall = (time.perf_counter() - t0) / len(faults)
+        print(
+            f"{m:10} {kinds.count('cct'):5d} {kinds.count('AboveSearchLimit'):6d} "
+            f"{kinds.count('InsecureContingency'):5d} {runs[0] / len(faults):11.2f} "
+            f"{sum(found) / max(len(found), 1):8.2f} {wall:11.2f} "
+            f"{N1_SEARCHES * wall / 2 / 3600:12.2f} h",
+            flush=True,
+        )
+
+
 def paper_table():
     """The paper's two faults, both conventions, without and with the error bar."""
     print(
@@ -141,6 +195,14 @@ def main(argv=None):
     ap.add_argument("--activsg", action="store_true", help="also ACTIVSg2000 (minutes)")
     ap.add_argument("--paper", action="store_true", help="also the paper's two faults")
     ap.add_argument(
+        "--activsg-sample",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also a random sample of ACTIVSg2000's N-1: N bus and N line faults",
+    )
+    ap.add_argument("--t-max", type=float, default=0.5, help="t_max of the N-1 sample (s)")
+    ap.add_argument(
         "--systems", nargs="*", default=["kundur", "miniwecc"], choices=["kundur", "miniwecc"]
     )
     args = ap.parse_args(argv)
@@ -160,9 +222,13 @@ def main(argv=None):
     if "miniwecc" in args.systems:
         mini = load_case("miniwecc")
         compare(f"miniwecc/{args.every}", mini, screening_faults(mini, lines=True)[:: args.every])
+    if args.activsg or args.activsg_sample:
+        case = activsg2000()
     if args.activsg:
         faults = [LineFault(2021, 2002), LineFault(2021, None)]
-        n1_projection(compare("activsg2000", activsg2000(), faults))
+        n1_projection(compare("activsg2000", case, faults))
+    if args.activsg_sample:
+        n1_sample(case, args.activsg_sample, args.t_max)
     if args.paper:
         paper_table()
 
