@@ -450,13 +450,15 @@ def _check_faults(case, contingencies) -> None:
 
 def _linear_models(sim, sites, controller, zeta_min, amplitude_hz):
     """Distribution factors (`sime.distribution_factors`) and, with zeta_min, the
-    `damping.DampingModel`, both from one linearisation with an ESD input at every site."""
+    `damping.DampingModel`, both from one linearisation with an ESD input at every site;
+    without zeta_min from the ESD columns of B alone (`linearise.esd_columns`: no A)."""
     from stabctl.smallsignal.damping import DampingModel, relay_df
-    from stabctl.smallsignal.linearise import linearise
+    from stabctl.smallsignal.linearise import esd_columns, linearise
     from stabctl.stability.sime import distribution_factors
 
     case = sim.case
-    sys = linearise(sim, esd_buses=list(dict.fromkeys(s.bus for s in sites)))
+    buses = list(dict.fromkeys(s.bus for s in sites))
+    sys = esd_columns(sim, buses) if zeta_min is None else linearise(sim, esd_buses=buses)
     beta = distribution_factors(
         sys, [s.bus for s in sites], case.machines.number, sim.inertia, case.base_mva
     )

@@ -203,7 +203,8 @@ def _table3(rel_hz: np.ndarray, gate: np.ndarray, db: float, hyst: float) -> np.
 def distribution_factors(sys, buses, machines, inertia, base_mva: float) -> np.ndarray:
     """beta (n_mac, n_dev): share of each machine's electrical power in 1 pu drawn at each
     bus of `buses`, at the operating point, from a linearised model
-    (`stabctl.smallsignal.linearise`, ESD inputs at those buses): beta_kj = -(2 H_k S_k /
+    (`stabctl.smallsignal.linearise`, ESD inputs at those buses; or its ESD columns alone,
+    `stabctl.smallsignal.linearise.esd_columns`): beta_kj = -(2 H_k S_k /
     S_base) B[omega_k, P_esd_j] (B in pu speed/s per pu; inertia = H_k S_k in MJ, machines:
     numbers, in that order). Columns sum to ~1 (less the change of losses and voltage-dependent
     loads).

@@ -173,3 +173,26 @@ def test_bad_input(kundur):
     assert [n for n in sys.input_labels if n.startswith("P_esd")] == ["P_esd_B3", "P_esd_B13"]
     with pytest.raises(InputError, match="multiples"):
         compare_pulse(kundur, sys, 3, t_on=0.3)
+
+
+@pytest.mark.parametrize("name", ["kundur", "miniwecc"])
+def test_esd_columns_are_linearise_s_b_columns(name):
+    """`esd_columns` (B's ESD columns alone, no A) gives linearise's B columns for the same
+    buses to round-off (the same central differences, other columns not taken), and the
+    placement's distribution factors from it equal those from the whole model."""
+    from stabctl.smallsignal.linearise import default_esd_buses, esd_columns
+    from stabctl.stability.sime import distribution_factors
+
+    case = load_case(name)
+    sim = Simulator(case)
+    buses = default_esd_buses(case)[:4]
+    full = linearise(sim, esd_buses=buses)
+    cols = esd_columns(sim, buses)
+    n = len(buses)
+    assert cols.input_labels == full.input_labels[:n]
+    assert cols.state_labels == full.state_labels
+    B = np.asarray(full.B)[:, :n]
+    assert np.max(np.abs(cols.B - B)) <= 1e-12 * np.max(np.abs(B))
+    args = (buses, case.machines.number, sim.inertia, case.base_mva)
+    beta = distribution_factors(cols, *args)
+    assert np.array_equal(beta, distribution_factors(full, *args))
