@@ -9,8 +9,15 @@
    contingencies (`stabctl sweep-cct`), targets = CCT of the uniform 5 % fleet, 2 workers:
    wall time, allocations simulated, simulations, total MW.
 3. With --study: the whole study (`stabctl.studies.placement`, into reports/) per case.
+4. With --activsg (alone): ACTIVSg2000 (imported as bench_scale.py does), ten contingencies
+   (`ACTIVSG_FAULTS`: eight line faults with the line tripped, two bus faults, from a random
+   sample of its N-1 with CCTs of 0.09-0.45 s and line 2021-2002) at three load levels
+   (0.97, 0.985, 1.0: at 0.95 and 1.03 its power flow does not converge with PV Q limits, at
+   1.02 a GGOV1 starts above its limit), CCT +5 %, set aside what is infeasible, 2 workers:
+   `stabctl place` in a subprocess, its wall and CPU time (children's getrusage), the runs
+   and the verdict line.  Target: 30 minutes on 2 cores.
 
-Run: python benchmarks/bench_placement.py [--study]
+Run: python benchmarks/bench_placement.py [--study] [--activsg]
 """
 
 import sys
@@ -87,7 +94,63 @@ def verified_placement(case_name: str, workers: int = 2) -> None:
     )
 
 
+#: the ten contingencies of --activsg: (bus, far bus or None, circuit)
+ACTIVSG_FAULTS = (
+    (6030, 7274, 1),
+    (2021, 2002, 1),
+    (8079, None, 1),
+    (1064, None, 1),
+    (2101, 5083, 1),
+    (5252, 5340, 1),
+    (5480, 5048, 4),
+    (4159, 4168, 3),
+    (5161, 5272, 1),
+    (5316, 5161, 1),
+)
+
+
+def activsg_placement(workers: int = 2) -> None:
+    """ACTIVSg2000's placement for ten contingencies at three load levels (module doc)."""
+    import resource
+    import subprocess
+    import tempfile
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from bench_scale import _activsg2000
+
+    from stabctl.io.pst import write_case_json
+
+    with tempfile.TemporaryDirectory() as work:
+        case_path, faults = Path(work) / "activsg.json", Path(work) / "faults.csv"
+        write_case_json(_activsg2000(work), case_path)
+        rows = [f"{b},{'' if f is None else f},{c}" for b, f, c in ACTIVSG_FAULTS]
+        faults.write_text("bus,far_bus,circuit\n" + "\n".join(rows) + "\n")
+        args = ["stabctl", "place", str(case_path), "--faults", str(faults)]
+        args += ["--target-cct-gain", "5", "--set-aside-infeasible"]
+        args += ["--load-levels", "0.97,0.985,1.0", "--workers", str(workers)]
+        print("settings:", " ".join(args[2:]).replace(work, "."), flush=True)
+        subprocess.run(["stabctl", "compile"], check=True, capture_output=True)
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t = time.perf_counter()
+        out = subprocess.run(args, capture_output=True, text=True)
+        wall = time.perf_counter() - t
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    lines = out.stdout.strip().splitlines()
+    print(lines[0] if lines else out.stderr[-500:])
+    print(lines[-1] if lines else "")
+    print(
+        f"activsg2000: 10 contingencies x 3 load levels, {workers} workers: wall "
+        f"{wall / 60:.1f} min, CPU {cpu / 60:.1f} min, exit {out.returncode} "
+        f"(target 30 min wall on 2 cores)"
+    )
+
+
 def main():
+    if "--activsg" in sys.argv:
+        activsg_placement()
+        return
     convex_solve_time()
     for name in ("kundur", "miniwecc"):
         verified_placement(name)

@@ -52,6 +52,21 @@ def _trips(trip) -> tuple[tuple[int, int], ...]:
     return tuple(out)
 
 
+#: --search of cct and screen: how a CCT search finds its bracket
+search_option = click.option(
+    "--search",
+    "method",
+    type=click.Choice(["bisection", "sime"]),
+    default="bisection",
+    show_default=True,
+    help="How the bracket is found: the bound checks, doubling and bisection, or from "
+    "SIME's margins of the unstable runs, --t-max right after a stable 0.1 s, clearing "
+    "at once checked only when no probe was stable first (10 % fewer runs per CCT on "
+    "Kundur and miniWECC, the same CCT cells; 25 % fewer per search on a sample of "
+    "ACTIVSg2000's N-1, robust faults in two runs; docs/cli.md).",
+)
+
+
 @click.command()
 @click.argument("case_name", metavar="CASE")
 @fault_options(required=True, far_required=False)
@@ -69,17 +84,7 @@ def _trips(trip) -> tuple[tuple[int, int], ...]:
 @esd_model_option
 @tol_options()
 @tf_option()
-@click.option(
-    "--search",
-    "method",
-    type=click.Choice(["bisection", "sime"]),
-    default="bisection",
-    show_default=True,
-    help="How the bracket is found: the bound checks, doubling and bisection, or from "
-    "SIME's margins of the unstable runs, clearing at once checked only when no probe "
-    "was stable first (about 12 % fewer runs on Kundur and miniWECC, the same CCT "
-    "cell; docs/cli.md).",
-)
+@search_option
 @model_options
 @q_limits_option
 @json_option()
@@ -118,8 +123,8 @@ def cct(
     more than pi rad before --tf (default fault time + 5 s); runs stop at separation.
     Clearing times are multiples of --tol-ms.  --search bisection checks stability at
     zero clearing (the line trip alone), doubles the upper bound from 0.1 s while stable
-    (up to --t-max), then bisects (the default).  --search sime starts at 0.1 s (doubled
-    while stable; zero clearing checked only when no probe was stable first),
+    (up to --t-max), then bisects (the default).  --search sime starts at 0.1 s (then
+    --t-max if stable; zero clearing checked only when no probe was stable first),
     extrapolates SIME's unstable margin (close to linear in the clearing time) from two
     unstable runs to the CCT, probes there on both sides and bisects only what is left.
     Both end in the same bracket when the verdict is monotone in the clearing time.
@@ -389,6 +394,7 @@ def sweep_cct(
 )
 @plot_option("network map with buses coloured by CCT")
 @parallel_options
+@search_option
 @model_options
 @q_limits_option
 @json_option("every row")
@@ -403,6 +409,7 @@ def screen(
     plot_path,
     workers,
     scheduler,
+    method,
     conventions,
     step,
     q_limits,
@@ -411,11 +418,12 @@ def screen(
     """Contingency screening: CCT of a three-phase fault at every bus (and with --lines of
     every branch fault with the branch tripped), in parallel and resumable.
 
-    Bus faults are cleared without loss of a line (PST sw_con type 7); the CCT search and
-    its stability criterion are `stabctl cct`'s. Rows are sorted by CCT, most critical
-    first; a fault still stable when cleared at --t-max is robust (CCT above it, shown as
-    ">t_max", its verdict "above t_max"); a failed search (e.g. voltage collapse during
-    the fault) is listed with its reason, and the last line counts each kind.
+    Bus faults are cleared without loss of a line (PST sw_con type 7); the CCT search
+    (--search) and its stability criterion are `stabctl cct`'s. Rows are sorted by CCT,
+    most critical first; a fault still stable when cleared at --t-max is robust (CCT
+    above it, shown as ">t_max", its verdict "above t_max"); a failed search (e.g.
+    voltage collapse during the fault) is listed with its reason, and the last line
+    counts each kind.
     """
     from stabctl.io import load_case
     from stabctl.parallel import RunnerOptions
@@ -430,7 +438,7 @@ def screen(
         out_path,
         buses=bus_list,
         lines=lines,
-        search=search_settings(tol_ms, t_max, None),
+        search=replace(search_settings(tol_ms, t_max, None), method=method),
         model=model_settings(conventions, step, q_limits),
         runner=RunnerOptions(workers, scheduler),
     )

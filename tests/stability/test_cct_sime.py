@@ -152,3 +152,28 @@ def test_cli_cct_searches_agree_and_say_how():
     assert out["sime"]["cct_s"] == out["bisection"]["cct_s"]
     assert out["bisection"]["search"] == "bisection" and out["bisection"]["early_stops"] == 0
     assert out["sime"]["n_simulations"] < out["bisection"]["n_simulations"]
+
+
+def test_cli_screen_takes_the_search_and_keeps_the_bisection_s_cells(tmp_path):
+    """`stabctl screen --search sime` ends each search in the bisection's 1 ms cell (the
+    same CCT and verdict as `--search bisection`, Kundur's bus faults 3, 12, 13 and 101:
+    CCTs of 0.24-0.84 s, and a robust one at --t-max 0.5) and its records say the search,
+    so that a screening resumed with the other search runs its faults again."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    rows = {}
+    for method in ("sime", "bisection"):
+        out = tmp_path / f"{method}.jsonl"
+        args = ["screen", "kundur", "--buses", "3,12,13,101", "--workers", "1"]
+        res = CliRunner().invoke(main, [*args, "--search", method, "--out", str(out), "--json"])
+        assert res.exit_code == 0, res.output
+        rows[method] = {r["bus"]: r for r in json.loads(res.stdout)}
+        records = [json.loads(line) for line in out.read_text().splitlines()]
+        assert all(r["inputs"].get("method", "bisection") == method for r in records)
+    assert rows["sime"].keys() == rows["bisection"].keys() == {3, 12, 13, 101}
+    for bus, r in rows["sime"].items():
+        assert r.get("cct_s") == rows["bisection"][bus].get("cct_s")
+        assert r.get("verdict") == rows["bisection"][bus].get("verdict")
+    assert rows["sime"][101].get("cct_s") is None  # 0.835 s: above t_max 0.5
