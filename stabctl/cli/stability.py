@@ -60,10 +60,9 @@ search_option = click.option(
     default="bisection",
     show_default=True,
     help="How the bracket is found: the bound checks, doubling and bisection, or from "
-    "SIME's margins of the unstable runs, --t-max right after a stable 0.1 s, clearing "
-    "at once checked only when no probe was stable first (10 % fewer runs per CCT on "
-    "Kundur and miniWECC, the same CCT cells; 25 % fewer per search on a sample of "
-    "ACTIVSg2000's N-1, robust faults in two runs; docs/cli.md).",
+    "SIME's margins of the unstable runs, clearing at once checked only when no probe "
+    "was stable first (about 12 % fewer runs per CCT on Kundur and miniWECC, 15 % less "
+    "time a search on a sample of ACTIVSg2000's N-1, the same CCT cells; docs/cli.md).",
 )
 
 
@@ -123,8 +122,8 @@ def cct(
     more than pi rad before --tf (default fault time + 5 s); runs stop at separation.
     Clearing times are multiples of --tol-ms.  --search bisection checks stability at
     zero clearing (the line trip alone), doubles the upper bound from 0.1 s while stable
-    (up to --t-max), then bisects (the default).  --search sime starts at 0.1 s (then
-    --t-max if stable; zero clearing checked only when no probe was stable first),
+    (up to --t-max), then bisects (the default).  --search sime starts at 0.1 s (doubled
+    while stable; zero clearing checked only when no probe was stable first),
     extrapolates SIME's unstable margin (close to linear in the clearing time) from two
     unstable runs to the CCT, probes there on both sides and bisects only what is left.
     Both end in the same bracket when the verdict is monotone in the clearing time.

@@ -20,7 +20,7 @@ Two searches (`SearchOptions.method`), both on the lattice below:
 
 - "bisection" (the default): stable at t_lo, the upper bound doubled from 0.1 s while
   stable, bisection;
-- "sime": the first probe at 0.1 s, then (if stable) t_max, stable at t_lo checked only
+- "sime": the first probe at 0.1 s (doubled while stable), stable at t_lo checked only
   when a probe is unstable before any is stable (a probe found stable above t_lo is
   taken to make t_lo stable too: the verdict is assumed monotone below it), then the
   probes placed where SIME's unstable margin (`stabctl.stability.sime.probe_margin`,
@@ -29,13 +29,13 @@ Two searches (`SearchOptions.method`), both on the lattice below:
 
 Both end in the same cell where the verdict is monotone in the clearing time (every fault
 of Kundur's screening and every fourth of miniWECC's, `benchmarks/bench_cct.py`).
-"sime" takes fewer runs there (Kundur 13.1 against 14.5 per CCT, 11.0 against 12.4 at the
-step h; miniWECC 13.0 against 14.4, 10.9 against 12.3 at h), fewer on a sample of
-ACTIVSg2000's N-1 (5.95 runs a search against 7.97, verdicts included;
+"sime" takes fewer runs there (Kundur 12.4 against 14.5 per CCT, 10.3 against 12.4 at the
+step h; miniWECC 12.8 against 14.4, 10.7 against 12.3 at h) and less time on a sample of
+ACTIVSg2000's N-1 (2.35 s a search against 2.75, the same verdicts and cells;
 `benchmarks/bench_cct.py --activsg-sample`), but assumes the verdict monotone below a
 stable probe, so bisection stays the default.
 Neither comes near 5 runs per CCT: the two ends of the final cell and their reruns at
-h/2 make 4, and the margins of runs far from the CCT (the first probes') place no
+h/2 make 4, and the margins of runs far from the CCT (those of the doubling) place no
 probe within a cell of it.
 
 Grid: the simulator's grid lands on every event time (`stabctl.dynamics.grid.time_grid`), so a
@@ -527,11 +527,10 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
 
     SIME's unstable margin is close to linear in the clearing time (`probe_margin`), so
     two unstable probes extrapolate to the CCT (`_margin_zero`).  The first probe is at
-    k_hi; if it is stable, the next is at k_max (a robust fault's verdict in two runs,
-    where doubling took log2(k_max / k_hi) + 1; an unstable one brackets the CCT, and its
-    run stops at separation, cheaper than doubling's stable runs: on miniWECC's every
-    fourth fault 17 % fewer simulated seconds at t_max 0.5 s, 11 % at 1 s, the same cells);
-    the check at k_lo (as `_bracket`) is run only when an
+    k_hi, doubled while stable (as the bisection's bracket: a jump from a stable k_hi
+    straight to k_max, robust faults in two runs, was tried and dropped: ACTIVSg2000's
+    bus 5370 is stable cleared at 0.6 s and 1.0 s but unstable at 0.8 s, and the jump
+    called it robust at t_max 1 s); the check at k_lo (as `_bracket`) is run only when an
     unstable probe comes before any stable one, i.e. it is assumed that a probe found
     stable above k_lo makes k_lo stable too (a verdict monotone below the first stable
     probe).  That is not always so: Kundur's fault at bus 3 on line 3-4 is unstable when
@@ -569,8 +568,8 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
                 _lower_bound_unstable(k_lo, fault, tol)
             known[k_lo] = True
         s = max(j for j, ok in known.items() if ok and (u is None or j < u))
-        if u is None:  # stable so far: straight to the limit (robust in two runs)
-            k = k_max
+        if u is None:  # stable so far: double
+            k = min(2 * k, k_max)
             continue
         start = start or (s, u)
         if u - s == 1:
