@@ -61,8 +61,8 @@ search_option = click.option(
     show_default=True,
     help="How the bracket is found: the bound checks, doubling and bisection, or from "
     "SIME's margins of the unstable runs, clearing at once checked only when no probe "
-    "was stable first (about 12 % fewer runs per CCT on Kundur and miniWECC, 15 % less "
-    "time a search on a sample of ACTIVSg2000's N-1, the same CCT cells; docs/cli.md).",
+    "was stable first (about 12 % fewer runs per CCT on Kundur and miniWECC with the same "
+    "CCT cells, 15 % less time a search on a sample of ACTIVSg2000's N-1; docs/cli.md).",
 )
 
 
