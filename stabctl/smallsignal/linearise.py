@@ -229,10 +229,7 @@ def linearise_model(
 
     Raises InputError when an ESD bus is not kept, plus the errors of `linearise`.
     """
-    if not 0 < rel_step < 0.1:
-        raise InputError(f"rel_step must be in (0, 0.1), got {rel_step}")
-    if limits not in LIMIT_RULES:
-        raise InputError(f"limits must be one of {sorted(LIMIT_RULES)}, got {limits!r}")
+    _check_difference_settings(rel_step, limits)
     case = model.case
     pos = _kept_positions(model, esd_buses)
     act = np.nonzero(active_states(model))[0]
@@ -317,10 +314,7 @@ def esd_columns(sim, esd_buses, rel_step: float = REL_STEP, limits: str = "auto"
     InputError, SimulationError
         As `linearise`.
     """
-    if not 0 < rel_step < 0.1:
-        raise InputError(f"rel_step must be in (0, 0.1), got {rel_step}")
-    if limits not in LIMIT_RULES:
-        raise InputError(f"limits must be one of {sorted(LIMIT_RULES)}, got {limits!r}")
+    _check_difference_settings(rel_step, limits)
     buses = list(dict.fromkeys(int(b) for b in esd_buses))
     sim.case.bus_indices(buses)
     model = sim.model_for(buses)
@@ -426,6 +420,14 @@ def compare_pulse(
         key: (float(np.abs(lin - nl).max()), float(np.abs(nl).max()))
         for key, (lin, nl) in pairs.items()
     }
+
+
+def _check_difference_settings(rel_step: float, limits: str) -> None:
+    """InputError for a rel_step outside (0, 0.1) or an unknown limits rule."""
+    if not 0 < rel_step < 0.1:
+        raise InputError(f"rel_step must be in (0, 0.1), got {rel_step}")
+    if limits not in LIMIT_RULES:
+        raise InputError(f"limits must be one of {sorted(LIMIT_RULES)}, got {limits!r}")
 
 
 def _kept_positions(model: DynamicModel, buses) -> np.ndarray:
