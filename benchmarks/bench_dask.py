@@ -19,8 +19,10 @@ walls summed (the workers' busy time: on a machine shared with other jobs, the s
 contention is a longer wall per job with 2 workers than with 1) and the load average.
 
 Run: python benchmarks/bench_dask.py [--case miniwecc] [--every 4] [--tol-ms 1]
-                                     [--t-max 0.5] [--error-check] [--pool]
-(--pool: also a local process pool of 1 and 2 processes, for comparison)
+                                     [--t-max 0.5] [--error-check] [--search bisection]
+                                     [--pool]
+(--case: a case name or a case file, e.g. ACTIVSg2000 imported by `stabctl import-psse`;
+--pool: also a local process pool of 1 and 2 processes, for comparison)
 (not pinned: the 2-worker run needs two cores)
 """
 
@@ -95,6 +97,7 @@ def main(argv=None):
     ap.add_argument("--tol-ms", type=float, default=1.0)
     ap.add_argument("--t-max", type=float, default=0.5)
     ap.add_argument("--error-check", action="store_true", help="half-step check on")
+    ap.add_argument("--search", choices=("bisection", "sime"), default="bisection")
     ap.add_argument(
         "--pool",
         action="store_true",
@@ -105,12 +108,18 @@ def main(argv=None):
     from bench_dask import counted as job_function  # by this name on the workers
 
     faults = screening_faults(load_case(args.case), buses=[], lines=True)[:: args.every]
-    search = SearchOptions(tol=args.tol_ms / 1000, t_max=args.t_max, error_check=args.error_check)
+    search = SearchOptions(
+        tol=args.tol_ms / 1000,
+        t_max=args.t_max,
+        error_check=args.error_check,
+        method=args.search,
+    )
     plain = cct_jobs(args.case, faults, search=search)
     jobs = [Job(j.key, job_function, j.inputs) for j in plain]
     print(
         f"settings: case {args.case}, every {args.every}th line fault ({len(jobs)} jobs), "
         f"tol {args.tol_ms:g} ms, t_max {args.t_max:g} s, error_check {args.error_check}, "
+        f"search {args.search}, "
         f"workers 1 and 2 (dask worker --nthreads 1 --no-nanny, separate processes), "
         f"{os.cpu_count()} cores"
     )
