@@ -532,3 +532,51 @@ def test_a_round_whose_loop_verifies_nothing_restarts_from_the_least_uniform_fle
     t = res.contingencies[0]["required_s"]
     assert independently_stable("kundur", fault, t, res.allocation())
     assert not independently_stable("kundur", fault, t, [])
+    # with a single round the plan ends at that uniform fleet: checked there and verified
+    # (it used to size the energies from the checks of the loop's allocation, other
+    # sites: IndexError)
+    calls.clear()
+    one = plan("kundur", [fault], Requirement(cycles=11), PlanOptions(max_rounds=1))
+    assert one.rounds[0]["uniform_start_pct"] == pct and len(calls) == 1
+    assert one.verified and "the allocation the last round left" in one.message
+    assert one.total_mw == pytest.approx(start.sum())
+    assert independently_stable("kundur", fault, t, one.allocation())
+
+
+def test_a_last_round_that_sets_aside_keeps_an_allocation_meeting_the_rest(monkeypatch):
+    """The last round's loop proves a contingency infeasible (forced here for the bus-20
+    fault, which fails its check at the first round's allocation): set aside, the
+    allocation the round started from is checked on what is left.  It meets the 3-101
+    fault (its loop verified it there), so the plan ends verified at that allocation,
+    confirmed by an independent run cleared at the required time (stable with the plan,
+    unstable without storage), instead of "not verified after 2 rounds"."""
+    import stabctl.placement.plan as plan_module
+
+    real, calls = plan_module.place, []
+
+    def second_infeasible(*args, **kwargs):
+        calls.append(args[1])
+        if len(calls) > 1:
+            raise InfeasibleError("infeasible: forced", ["20"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(plan_module, "place", second_infeasible)
+    faults = [LineFault(3, 101), LineFault(20, None)]
+    res = plan(
+        "kundur",
+        faults,
+        Requirement(cycles=12),
+        PlanOptions(
+            overrides={"20": Requirement(cycles=16)},
+            n_active=1,
+            max_rounds=2,
+            drop_infeasible=True,
+        ),
+    )
+    assert [[c.name for c in active] for active in calls] == [["3-101"], ["3-101", "20"]]
+    assert "20" in res.rounds[0]["failing"] and res.set_aside == ["20"]
+    assert res.verified and "the allocation the last round left" in res.message
+    assert res.total_mw == pytest.approx(res.rounds[0]["total_mw"])
+    assert [c["name"] for c in res.contingencies] == ["3-101"] and res.contingencies[0]["met"]
+    assert independently_stable("kundur", faults[0], 0.2, res.allocation())
+    assert not independently_stable("kundur", faults[0], 0.2, [])
