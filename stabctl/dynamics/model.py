@@ -1022,8 +1022,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     rv, nv = svc.N_STATES, p.n_svc
     xsv, dxsv = x[o : o + rv * nv].reshape(rv, nv), dx[o : o + rv * nv].reshape(rv, nv)
     dev = KeptDevices(p.IP, xi, p.MO, xmo, on, p.SWP, p.SWY, xsw, p.SVP, xsv)
-    psi = np.empty(nm, np.complex128)
-    mac.internal_voltage(p.MP, xm, psi)
+    psi, rot = np.empty(nm, np.complex128), np.empty(nm, np.complex128)
+    mac.internal_voltage(p.MP, xm, psi, rot)
     v_dep = False
     for k in range(ni):
         conv.clamp_states(p.IP, xi, k, p.reach)
@@ -1074,7 +1074,8 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, xm[1, m], pe, vt, dxp)
     vex = p.vex0.copy()
     ifd_mac = np.empty(nm)  # once per machine, for its exciter and its own derivatives
-    mac.field_currents(p.MP, xm, cur, ifd_mac)
+    gap = np.empty(nm)  # the machines' air-gap saturations, for both
+    mac.field_currents(p.MP, xm, cur, rot, ifd_mac, gap)
     efd_alg = np.empty(ne)
     ifd = np.empty(ne)
     vb = np.empty(ne)
@@ -1098,7 +1099,9 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         p.basrad,
         xm,
         cur,
+        rot,
         ifd_mac,
+        gap,
         vex,
         _rotor_inputs(p.TP, p.MP, xm, xt, pmech),
         targets,

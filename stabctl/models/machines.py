@@ -523,7 +523,14 @@ def _fluxes(P, x, i):
 @kernel
 def _dq(delta, X):
     """(d, q) of the network phasor X in the rotor frame: d + jq = j exp(-j delta) X."""
-    z = 1j * np.exp(-1j * delta) * X
+    return _dq_at(np.exp(-1j * delta), X)
+
+
+@kernel
+def _dq_at(back, X):
+    """`_dq` with the rotation back = exp(-j delta) given (the conjugate of `internal_voltage`'s
+    rot, bit for bit: the cosine is even and the sine odd)."""
+    z = 1j * back * X
     return z.real, z.imag
 
 
@@ -543,14 +550,17 @@ def divides_pmech_by_speed(P, i):
 
 
 @kernel
-def internal_voltage(P, x, psi):
-    """Voltage behind the network reactance, network frame (PST flag 1), into psi (n_mac,).
+def internal_voltage(P, x, psi, rot):
+    """Voltage behind the network reactance, network frame (PST flag 1), into psi (n_mac,),
+    and each machine's rotation exp(j delta) into rot (n_mac,), for `field_currents` and
+    `derivatives` (one sine and cosine per machine and evaluation instead of three).
 
     Subtransient: speed * exp(j delta) (psi"_d + j psi"_q) (speed 1 without speed
     effects); transient and classical: exp(j delta) (E'q - j E'd).
     """
     for i in range(P.shape[0]):
         e = np.exp(1j * x[S.delta, i])
+        rot[i] = e
         if P[i, K.KIND] == SUB:
             psidpp, psiqpp = _fluxes(P, x, i)
             psi[i] = _stator_speed(P, x, i) * e * (psidpp + 1j * psiqpp)
@@ -587,21 +597,30 @@ def _eqp_saturation(P, i, eqp):
 
 
 @kernel
-def _field_current(P, x, i, cdg):
+def _air_gap_saturation(P, x, i):
+    """S_e(|psi"|) of machine i at its state (`_gap_saturation`; 0 unless subtransient)."""
+    if P[i, K.KIND] != SUB:
+        return 0.0
+    psidpp, psiqpp = _fluxes(P, x, i)
+    return _gap_saturation(P, i, psidpp, psiqpp)
+
+
+@kernel
+def _field_current(P, x, i, cdg, gap):
     """Field current of machine i (machine base, vex = it in steady state) for the d-axis
-    current cdg (machine base): subtransient E'q + p7 (i_d + p6 (E'q - psi_kd - p8 i_d))
-    (no saturation, docs 1.6) + S_e psi"_d with PSS/E's GENROU saturation (ANDES
-    ``genrou.py`` ``XadIfd``) or + S_e(E'q) E'q with PSS/E's GENSAL's; transient
-    E_Isat(E'q) + (x_d - x'_d) i_d (docs 1.8, with PST's test on the initial E'q);
-    classical: E' (constant)."""
+    current cdg (machine base) and its air-gap saturation gap (`_air_gap_saturation`):
+    subtransient E'q + p7 (i_d + p6 (E'q - psi_kd - p8 i_d)) (no saturation, docs 1.6)
+    + S_e psi"_d with PSS/E's GENROU saturation (ANDES ``genrou.py`` ``XadIfd``) or
+    + S_e(E'q) E'q with PSS/E's GENSAL's; transient E_Isat(E'q) + (x_d - x'_d) i_d (docs
+    1.8, with PST's test on the initial E'q); classical: E' (constant)."""
     kind = P[i, K.KIND]
     e = x[S.eqp, i]
     if kind == SUB:
-        psidpp, psiqpp = _fluxes(P, x, i)
+        psidpp = _fluxes(P, x, i)[0]
         return (
             e
             + P[i, K.P7] * (cdg + P[i, K.P6] * (e - x[S.psikd, i] - P[i, K.P8] * cdg))
-            + _gap_saturation(P, i, psidpp, psiqpp) * psidpp
+            + gap * psidpp
             + _eqp_saturation(P, i, e)
         )
     if kind == TRA:
@@ -613,23 +632,29 @@ def _field_current(P, x, i, cdg):
 @kernel
 def field_current(P, x, cur, i):
     """Field current of machine i (machine base) at network current cur[i] (system base)."""
-    return _field_current(P, x, i, _dq(x[S.delta, i], cur[i])[0] * P[i, K.POT])
+    cdg = _dq(x[S.delta, i], cur[i])[0] * P[i, K.POT]
+    return _field_current(P, x, i, cdg, _air_gap_saturation(P, x, i))
 
 
 @kernel
-def field_currents(P, x, cur, ifd):
+def field_currents(P, x, cur, rot, ifd, gap):
     """Field current of every machine (machine base) into ifd (n_mac,): `field_current`,
-    computed once per evaluation for the exciters that read it and `derivatives`."""
+    computed once per evaluation for the exciters that read it and `derivatives`; rot:
+    each machine's exp(j delta) (`internal_voltage`); its air-gap saturation into gap
+    (n_mac,), which `derivatives` reads too."""
     for i in range(P.shape[0]):
-        ifd[i] = field_current(P, x, cur, i)
+        gap[i] = _air_gap_saturation(P, x, i)
+        cdg = _dq_at(np.conj(rot[i]), cur[i])[0] * P[i, K.POT]
+        ifd[i] = _field_current(P, x, i, cdg, gap[i])
 
 
 @kernel
-def derivatives(P, basrad, x, cur, ifd, vex, pmech, target, dx, pelect, qelect, eterm):
+def derivatives(P, basrad, x, cur, rot, ifd, gap, vex, pmech, target, dx, pelect, qelect, eterm):
     """Machine derivatives into dx (6, n_mac) and outputs (PST flag 2, docs 1.6-1.9).
 
-    cur: terminal currents (system base, network frame); ifd: the field currents at cur
-    (machine base, `field_currents`); vex: field voltages; pmech:
+    cur: terminal currents (system base, network frame); rot: each machine's exp(j delta)
+    (`internal_voltage`); ifd, gap: the field currents at cur (machine base) and the
+    air-gap saturations (`field_currents`); vex: field voltages; pmech:
     mechanical power (machine base); target (n_mac, 2): a playback source's targets of
     E' and speed (pu; `playback` column, docs/pst_models.md 17).  pelect, qelect on the
     system base; eterm in pu.
@@ -637,7 +662,7 @@ def derivatives(P, basrad, x, cur, ifd, vex, pmech, target, dx, pelect, qelect, 
     for i in range(P.shape[0]):
         w = x[S.omega, i]
         ws = _stator_speed(P, x, i)
-        curd, curq = _dq(x[S.delta, i], cur[i])
+        curd, curq = _dq_at(np.conj(rot[i]), cur[i])
         pot = P[i, K.POT]
         cdg, cqg = curd * pot, curq * pot
         kind = P[i, K.KIND]
@@ -656,7 +681,7 @@ def derivatives(P, basrad, x, cur, ifd, vex, pmech, target, dx, pelect, qelect, 
             # PSS/E's GENROU saturation: - gamma_qd S_e psi"_q (ANDES genrou.py XaqI1q, whose
             # e'_d, psi"_q are -E'd, -psi"_q here); GENSAE's in the subtransient circuit,
             # T"qo dpsi"_q/dt = -psi"_q - (x_q - x"q) i_q - gamma_qd S_e psi"_q
-            gap_q = P[i, K.GQD] * _gap_saturation(P, i, psidpp, psiqpp) * psiqpp
+            gap_q = P[i, K.GQD] * gap[i] * psiqpp
             if P[i, K.GK] == _SALIENT_GAP:
                 dx[S.edp, i] = (-x[S.edp, i] + P[i, K.P12] * (-cqg - P[i, K.P11] * Edpe)) / P[
                     i, K.TQOP

@@ -31,7 +31,7 @@ def fault_network():
     run.advance(k)
     n = m.mp.n
     psi = np.empty(n, complex)
-    internal_voltage(m.params.MP, run.x[: 6 * n].reshape(6, n), psi)
+    internal_voltage(m.params.MP, run.x[: 6 * n].reshape(6, n), psi, np.empty(n, complex))
     return m, nets[grid.interval[k]], nets[0], psi, run.V_nc.copy()
 
 
@@ -109,7 +109,7 @@ def test_a_converter_current_growing_with_the_voltage_is_solved_with_the_network
         net = m.network()
         _dx, out = m.evaluate(x, net, m.V_nc0)
         psi = np.empty(n, complex)
-        internal_voltage(m.params.MP, x[: 6 * n].reshape(6, n), psi)
+        internal_voltage(m.params.MP, x[: 6 * n].reshape(6, n), psi, np.empty(n, complex))
         V = out.V_nc
         drawn = np.zeros(V.size, complex)
         slope = 0.0
