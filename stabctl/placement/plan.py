@@ -556,14 +556,8 @@ def _check_last_allocation(pl: PlanContext, st: _Rounds, rounds: int) -> None:
     on every contingency left (one run each; the energies are sized from these runs), and
     verified when each is stable cleared at its required time there and each of the active
     set meets its target by its CCT there (the evaluations at that allocation)."""
-    st.checks = pl.check(st.cons, st.mw)
-    fails = [c.name for c in st.cons if not st.checks[c.name]["stable_at_check"]]
-    short = [
-        c.name
-        for c in st.active
-        if (st.evs.get(c.name) or {}).get("cct_s") is None
-        or st.evs[c.name]["cct_s"] < c.target_cct_s - 1e-9
-    ]
+    fails = _check_all(pl, st)
+    short = [c for c in st.active if _short_of_target(c, st.evs)]
     pl.say(
         f"after round {rounds}: {st.mw.sum():.1f} MW, checked {len(st.cons)} contingencies: "
         + (f"{len(fails)} fail" if fails else "all stable")
@@ -577,6 +571,20 @@ def _check_last_allocation(pl: PlanContext, st: _Rounds, rounds: int) -> None:
         )
 
 
+def _check_all(pl: PlanContext, st: _Rounds) -> list:
+    """Every contingency checked at the allocation (one run each, into st.checks): those
+    unstable cleared at their required time."""
+    st.checks = pl.check(st.cons, st.mw)
+    return [c for c in st.cons if not st.checks[c.name]["stable_at_check"]]
+
+
+def _short_of_target(c, evs: dict) -> bool:
+    """Whether contingency c's CCT in the evaluations evs (name -> evaluation at one
+    allocation) is missing or below its target."""
+    cct = (evs.get(c.name) or {}).get("cct_s")
+    return cct is None or cct < c.target_cct_s - 1e-9
+
+
 def _recheck(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw) -> bool:
     """Nothing left to solve for: every contingency checked at the allocation; the most
     binding of those that fail are the next active set.  Returns whether none fails."""
@@ -587,8 +595,7 @@ def _recheck(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw) -> bool:
             "no storage to place"
         )
         return True
-    st.checks = pl.check(st.cons, st.mw)
-    fails = [c for c in st.cons if not st.checks[c.name]["stable_at_check"]]
+    fails = _check_all(pl, st)
     if not fails:
         st.verified, st.message = True, f"verified on every contingency after {rnd} round(s)"
         return True
@@ -603,8 +610,7 @@ def _add_failing(pl: PlanContext, st: _Rounds, rnd: int, res, kw) -> bool:
     generation ends: verified (none fails), or not (the loop did not verify, or only
     active contingencies fail)."""
     st.mw, st.evs = res.allocation.mw, dict(res.evaluations)
-    st.checks = pl.check(st.cons, st.mw)
-    fails = [c for c in st.cons if not st.checks[c.name]["stable_at_check"]]
+    fails = _check_all(pl, st)
     st.rounds.append(
         {
             "round": rnd,
@@ -663,7 +669,7 @@ def _uniform_start(pl: PlanContext, st: _Rounds, rnd: int, kw: Study) -> bool:
         return False
     mw = fleet(pct)
     evs = evaluations(pl.case, st.active, mw, kw, VerifyOptions(base=pl.base))
-    if any(evs[c.name]["cct_s"] < c.target_cct_s - 1e-9 for c in st.active):
+    if any(_short_of_target(c, evs) for c in st.active):
         pl.say(f"round {rnd}: the uniform fleet of {pct:g} % misses a target by its CCT")
         return False
     pl.say(
