@@ -73,6 +73,15 @@ class Contingency:
         """Unique name: the fault's, with ``@<load> %`` when not at the base load."""
         return self.fault_name + ("" if self.load == 1.0 else f"@{100 * self.load:g}%")
 
+    def met_by(self, cct_s: float | None) -> bool:
+        """Whether a CCT (s; None: not known) reaches the target, within 1e-9 s (the
+        lattice's rounding)."""
+        return cct_s is not None and cct_s >= self.target_cct_s - TARGET_SLACK_S
+
+
+#: slack of `Contingency.met_by`, s: a CCT on the 1 ms lattice equal to its target counts
+TARGET_SLACK_S = 1e-9
+
 
 # -- one contingency at one allocation (runs in a worker) ------------------------------
 

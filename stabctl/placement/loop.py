@@ -129,7 +129,7 @@ class PlacementResult:
             "target_cct_s": c.target_cct_s,
             "cct_no_storage_s": self.base[c.name]["cct_s"],
             "cct_s": cct,
-            "met": cct >= c.target_cct_s - 1e-9,
+            "met": c.met_by(cct),
         }
 
 
@@ -632,13 +632,13 @@ def _restore(setup: _Setup, tried, best, prices, iterations, say):
     if not near:
         return None
     p0 = min(near, key=lambda p: cost(p.mw))
-    missed = [c for c in setup.contingencies if p0.ev[c.name]["cct_s"] < c.target_cct_s - 1e-9]
+    missed = [c for c in setup.contingencies if not c.met_by(p0.ev[c.name]["cct_s"])]
     for k in RESTORE_SCALE:
         mw = _rounded(np.minimum(k * p0.mw, setup.upper), setup.sites)
         if best is not None and cost(mw) >= cost(best.mw):
             return None
         ev = setup.verify(mw, missed) if missed else {}
-        short = [c for c in missed if ev[c.name]["cct_s"] < c.target_cct_s - 1e-9]
+        short = [c for c in missed if not c.met_by(ev[c.name]["cct_s"])]
         if short:
             iterations.append(
                 _record(
@@ -793,7 +793,7 @@ def _prove_never_met(setup: _Setup, cuts, points, checked: set) -> None:
     never = {
         c.name
         for c in setup.contingencies
-        if all(p.ev[c.name]["cct_s"] < c.target_cct_s - 1e-9 for p in points)
+        if all(not c.met_by(p.ev[c.name]["cct_s"]) for p in points)
     }
     if never:
         checked.update(never)
@@ -856,12 +856,10 @@ def _raise_if_infeasible(setup: _Setup, cuts, also: dict | None = None) -> None:
             if key not in setup.bound_ccts:
                 setup.bound_ccts[key] = setup.verify(mw, [c])[c.name]["cct_s"]
             tried[c.name].append((mw, setup.bound_ccts[key]))
-            if tried[c.name][-1][1] >= c.target_cct_s - 1e-9:
+            if c.met_by(tried[c.name][-1][1]):
                 break
     failing = [
-        by_name[n]
-        for n, t in tried.items()
-        if all(cct < by_name[n].target_cct_s - 1e-9 for _, cct in t)
+        by_name[n] for n, t in tried.items() if all(not by_name[n].met_by(cct) for _, cct in t)
     ]
     if failing:
         raise InfeasibleError(

@@ -406,7 +406,7 @@ def _stable_by_screening(cons, brackets) -> set:
         and c.load == 1.0
         and c.fault_name in brackets
         and brackets[c.fault_name][0] is not None
-        and brackets[c.fault_name][0] >= c.target_cct_s - 1e-9
+        and c.met_by(brackets[c.fault_name][0])
     }
 
 
@@ -582,7 +582,7 @@ def _short_of_target(c, evs: dict) -> bool:
     """Whether contingency c's CCT in the evaluations evs (name -> evaluation at one
     allocation) is missing or below its target."""
     cct = (evs.get(c.name) or {}).get("cct_s")
-    return cct is None or cct < c.target_cct_s - 1e-9
+    return not c.met_by(cct)
 
 
 def _recheck(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw) -> bool:
@@ -694,8 +694,7 @@ def _rows(cons, checks, evs, base) -> list:
                 "fault_name": c.fault_name,
                 "load": c.load,
                 "required_s": c.target_cct_s,
-                "met": bool(checks[c.name]["stable_at_check"])
-                and (cct is None or cct >= c.target_cct_s - 1e-9),
+                "met": bool(checks[c.name]["stable_at_check"]) and (cct is None or c.met_by(cct)),
                 "cct_no_storage_s": base.get(c.name, {}).get("cct_s"),
                 "cct_s": cct,
                 "margin_s": None if cct is None else cct - c.target_cct_s,

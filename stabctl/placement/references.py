@@ -233,7 +233,7 @@ def _verified_pct(pl: PlanContext, cons, failing, pct: float, fleet, pct_max: fl
         if ok:
             pl.add_base(failing, pl.brackets, kw)
             ev = evaluations(pl.case, failing, fleet(pct), kw, VerifyOptions(base=pl.base))
-            ok = all(ev[c.name]["cct_s"] >= c.target_cct_s - 1e-9 for c in failing)
+            ok = all(c.met_by(ev[c.name]["cct_s"]) for c in failing)
         if ok or pct >= pct_max:
             return pct, ok, checks
         pct = round(pct + UNIFORM_RES_PCT, 6)
