@@ -222,6 +222,10 @@ def _load_json(path: Path):
         raise CaseError(f"cannot read {path}: {exc}") from None
     except RecursionError:
         raise CaseError(f"{path}: JSON nested too deeply to be a case") from None
+    except UnicodeDecodeError as exc:
+        raise CaseError(
+            f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason}), so not a JSON case"
+        ) from None
     except json.JSONDecodeError as exc:
         raise CaseError(f"{path}: invalid JSON at line {exc.lineno}: {exc.msg}") from None
 

@@ -549,3 +549,14 @@ def test_an_input_file_above_the_size_cap_is_refused_before_it_is_read(tmp_path)
         if args[0] == "simulate":
             (tmp_path / "big.json").symlink_to(big)
         assert_error(run(*args), what, "257 MiB, above the 256 MiB an input file may have")
+
+
+def test_a_case_file_that_is_not_utf8_is_refused_by_name(tmp_path):
+    """A .json case with bytes that are not UTF-8 stopped `simulate` with a
+    UnicodeDecodeError traceback (exit 1); it is one error line naming the file and the
+    byte (exit 2)."""
+    case = tmp_path / "bin.json"
+    case.write_bytes(b'{"format": "stabctl-case", \x80\x81}')
+    res = CliRunner().invoke(main, ["simulate", str(case), "--tf", "1"])
+    assert res.exit_code == 2, res.output
+    assert f"{case}: not UTF-8 text (byte 27" in res.output
