@@ -10,6 +10,8 @@ import os
 import tempfile
 from pathlib import Path
 
+import click
+
 from stabctl.errors import InputError
 
 
@@ -63,6 +65,33 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         ) from None
     if not directory and p.exists() and not os.access(p, os.W_OK):
         raise InputError(f"{option} {path}: the file is not writable")
+    if not directory:
+        not_an_input(p, option)
+
+
+def not_an_input(path: Path, option: str) -> None:
+    """Raise InputError when the output file ``path`` of ``option`` is a file that another
+    parameter of the running command names (its case, ``--faults``, ``--screening``,
+    ``--source`` ...): writing it would overwrite an input.  Outside a command, or when
+    ``path`` does not exist yet, nothing is checked."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is None or not path.is_file():
+        return
+    for param in ctx.command.params:
+        if option in param.opts:
+            continue
+        value = ctx.params.get(param.name or "")
+        for v in value if isinstance(value, (list, tuple)) else (value,):
+            if isinstance(v, (str, Path)) and _same_file(v, path):
+                what = param.opts[0] if isinstance(param, click.Option) else "the case"
+                raise InputError(
+                    f"{option} {path} is also the input {what} {v}: writing it would "
+                    "overwrite that input; give another file"
+                )
+
+
+def _same_file(value, path: Path) -> bool:
+    return bool(str(value)) and os.path.isfile(value) and os.path.samefile(value, path)
 
 
 OUT_SUFFIXES = (".csv", ".npz")

@@ -15,6 +15,7 @@ beyond the frame it reads).
 from __future__ import annotations
 
 import contextlib
+import math
 import socket
 import threading
 import time
@@ -290,10 +291,24 @@ class End:
         Data frames to receive.
     tf : float or None
         Last time stamp to receive (s after the CFG-2's SOC).
+
+    Raises
+    ------
+    InputError
+        ``frames`` below 1, or ``tf`` not a finite time >= 0 s.
     """
 
     frames: int | None = None
     tf: float | None = None
+
+    def __post_init__(self):
+        if self.frames is not None and self.frames < 1:
+            raise InputError(f"a stream's end needs at least 1 frame, got {self.frames}")
+        if self.tf is not None and not (math.isfinite(self.tf) and self.tf >= 0):
+            raise InputError(
+                f"a stream's last time stamp --until must be a finite time >= 0 s (t = 0 is "
+                f"the CFG-2's time stamp), got {self.tf:g}"
+            )
 
     def __str__(self) -> str:
         parts = [] if self.frames is None else [f"{self.frames} frames"]

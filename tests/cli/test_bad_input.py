@@ -1,4 +1,4 @@
-"""Issue 15 regressions: bad numbers, zero time constants, unwritable outputs and misleading
+"""Regressions: bad numbers, zero time constants, unwritable outputs and misleading
 messages end in one `error:` line naming what and where, exit status 2, nothing written
 and no work done."""
 
@@ -560,3 +560,42 @@ def test_a_case_file_that_is_not_utf8_is_refused_by_name(tmp_path):
     res = CliRunner().invoke(main, ["simulate", str(case), "--tf", "1"])
     assert res.exit_code == 2, res.output
     assert f"{case}: not UTF-8 text (byte 27" in res.output
+
+
+def test_an_output_file_that_is_also_an_input_is_refused(tmp_path, monkeypatch):
+    """`sweep-cct --faults f.csv --out f.csv` set the faults file aside as a damaged
+    records file and wrote the records in its place; every output file that another
+    option names as an input is refused before any work (exit 2), the input unchanged."""
+    monkeypatch.chdir(tmp_path)
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    args = ["sweep-cct", "kundur", "--faults", "f.csv", "--workers", "1", "--out", "f.csv"]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2, res.output
+    assert "--out f.csv is also the input --faults f.csv" in res.output
+    assert faults.read_text() == "bus,far_bus\n3,101\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
+
+
+def test_estimate_track_refuses_its_recording_as_output_and_a_negative_end(tmp_path):
+    """`estimate track --source r.c37 --out r.c37` overwrote the recording with the
+    estimates (exit 0), and `--until -1` was taken; both are one error line (exit 2) and
+    the recording is unchanged."""
+    pytest.importorskip("pyc37")
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from pmu_streams import kundur_stream
+
+    from stabctl.estimation import c37
+
+    _, _, cfg, frames = kundur_stream(t_end=1.2)
+    rec = tmp_path / "r.c37"
+    c37.record(rec, cfg, frames)
+    data = rec.read_bytes()
+    base = ["estimate", "track", "kundur", "--source", str(rec)]
+    res = CliRunner().invoke(main, [*base, "--out", str(rec)])
+    assert res.exit_code == 2 and f"is also the input --source {rec}" in res.output, res.output
+    res = CliRunner().invoke(main, [*base, "--until", "-1", "--out", str(tmp_path / "t.csv")])
+    assert res.exit_code == 2 and "must be a finite time >= 0 s" in res.output, res.output
+    assert rec.read_bytes() == data and not (tmp_path / "t.csv").exists()
