@@ -185,22 +185,53 @@ def _lost(job: Job, exc: BaseException) -> dict:
     }
 
 
+#: longest line a records file may hold, bytes: a sweep record is a few kB; a longer line
+#: means a file that is not a records file (read in bounded pieces, never whole)
+MAX_RECORD_LINE = 16 * 2**20
+
+
+def _record_lines(path: Path) -> Iterator[tuple[int, str, dict | None]]:
+    """(line number, line, the record or None if the line is not a whole sweep record) of
+    every non-blank line of a records file, each read in at most MAX_RECORD_LINE bytes.
+    Raises InputError at a longer line."""
+    with path.open(errors="replace") as f:
+        for n, line in enumerate(iter(lambda: f.readline(MAX_RECORD_LINE + 1), ""), start=1):
+            if len(line) > MAX_RECORD_LINE:
+                raise InputError(
+                    f"{path}: line {n} is longer than {MAX_RECORD_LINE // 2**20} MiB: not a "
+                    "file of sweep records; give another file"
+                )
+            if line.strip():
+                yield n, line, _record(line)
+
+
+def _record(line: str) -> dict | None:
+    """The sweep record of a line (a dict with a string key and a known status), or None."""
+    try:
+        rec = json.loads(line)
+    except (ValueError, RecursionError):  # a damaged or absurdly nested line
+        return None
+    ok = (
+        isinstance(rec, dict)
+        and isinstance(rec.get("key"), str)
+        and rec.get("status") in ("ok", "verdict", "failed")
+    )
+    return rec if ok else None
+
+
 def read_records(path: str | Path) -> dict[str, dict]:
-    """Records of an output file: key -> last line of that key.  Lines that do not parse
-    (a line cut by a kill) are skipped with a warning; a missing file gives {}."""
+    """Records of an output file: key -> last line of that key.  Lines that are not whole
+    sweep records (a line cut by a kill) are skipped with a warning; a missing file gives
+    {}.  Raises InputError for a line longer than MAX_RECORD_LINE."""
     path = Path(path)
     if not path.exists():
         return {}
     records = {}
-    with path.open() as f:
-        for n, line in enumerate(f, start=1):
-            if not line.strip():
-                continue
-            try:
-                rec = json.loads(line)
-                records[rec["key"]] = rec
-            except (ValueError, KeyError, TypeError, RecursionError):
-                warnings.warn(f"{path} line {n}: not a sweep record, ignored", stacklevel=2)
+    for n, _, rec in _record_lines(path):
+        if rec is None:
+            warnings.warn(f"{path} line {n}: not a sweep record, ignored", stacklevel=2)
+        else:
+            records[rec["key"]] = rec
     return records
 
 
@@ -208,26 +239,15 @@ def set_aside_damaged(path: str | Path) -> list[int]:
     """Move the lines of an output file that are not sweep records (a last line cut by a
     kill, a damaged line) to ``<path>.damaged`` with a warning, so that their jobs run
     again and the file holds only whole records; returns their line numbers.  The file is
-    rewritten atomically (a temporary file renamed over it)."""
+    rewritten atomically (a temporary file renamed over it).  Raises InputError for a line
+    longer than MAX_RECORD_LINE (nothing moved)."""
     path = Path(path)
     if not path.exists():
         return []
     good: list = []
     bad: list = []
-    with path.open(errors="replace") as f:
-        for n, line in enumerate(f, start=1):
-            if not line.strip():
-                continue
-            try:
-                rec = json.loads(line)
-                ok = (
-                    isinstance(rec, dict)
-                    and isinstance(rec.get("key"), str)
-                    and rec.get("status") in ("ok", "verdict", "failed")
-                )
-            except (ValueError, RecursionError):  # a damaged or absurdly nested line
-                ok = False
-            (good if ok else bad).append((n, line if line.endswith("\n") else line + "\n"))
+    for n, line, rec in _record_lines(path):
+        (good if rec is not None else bad).append((n, line if line.endswith("\n") else line + "\n"))
     if not bad:
         return []
     aside = path.with_name(path.name + ".damaged")

@@ -253,6 +253,8 @@ def screening_brackets(path) -> dict:
 
     try:
         records = read_records(input_file(path, "screening records"))
+    except InputError:  # it names the file
+        raise
     except (OSError, ValueError) as exc:
         raise InputError(f"screening records {path}: {exc}") from None
     out = {}

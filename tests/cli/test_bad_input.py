@@ -599,3 +599,26 @@ def test_estimate_track_refuses_its_recording_as_output_and_a_negative_end(tmp_p
     res = CliRunner().invoke(main, [*base, "--until", "-1", "--out", str(tmp_path / "t.csv")])
     assert res.exit_code == 2 and "must be a finite time >= 0 s" in res.output, res.output
     assert rec.read_bytes() == data and not (tmp_path / "t.csv").exists()
+
+
+def test_records_files_are_read_in_bounded_lines_and_whole_records_only(tmp_path, monkeypatch):
+    """A 3 GiB file of zeros given as a sweep's --out was read whole (MemoryError), and a
+    --screening line with a key but no status stopped `place` with a KeyError; a line
+    longer than MAX_RECORD_LINE is one error naming the file and line (the file left as it
+    was), and a line that is not a whole record is skipped like a damaged one."""
+    from stabctl import parallel
+
+    monkeypatch.setattr(parallel, "MAX_RECORD_LINE", 1000)
+    long = tmp_path / "long.jsonl"
+    long.write_text('{"key": "a", "status": "ok", "result": {}}\n' + "0" * 5000)
+    before = long.read_bytes()
+    for read in (parallel.read_records, parallel.set_aside_damaged):
+        with pytest.raises(InputError, match=r"long.jsonl: line 2 is longer than"):
+            read(long)
+    assert long.read_bytes() == before and not (tmp_path / "long.jsonl.damaged").exists()
+    monkeypatch.undo()
+    screening = tmp_path / "s.jsonl"
+    screening.write_text('{"key": "k"}\n')
+    args = ["place", "kundur", "--faults", "DEFAULT", "--workers", "1"]
+    res = CliRunner().invoke(main, [*args, "--target-cct-gain", "5", "--screening", str(screening)])
+    assert res.exit_code == 2 and "no fault bracketed without storage" in res.output, res.output
