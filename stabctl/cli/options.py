@@ -267,6 +267,44 @@ def _check_numbers(kwargs) -> None:
 _INF_MEANS = {"--bus-fault"}
 
 
+def comma_list(texts, option: str, convert, what: str) -> list:
+    """The items of a comma-separated option value (or of several: ``multiple=True``),
+    each converted, in order.
+
+    Parameters
+    ----------
+    texts : str or sequence of str
+        The option's value(s).
+    option : str
+        The option named in error messages.
+    convert : callable
+        ``convert(item) -> value``; raises ValueError for an item that is not one.
+    what : str
+        What an item is, for the message (e.g. "a bus number").
+
+    Raises
+    ------
+    InputError
+        An empty item (two commas in a row, a comma at an end), an item `convert` refuses,
+        or a value given twice.
+    """
+    out = []
+    for text in (texts,) if isinstance(texts, str) else texts:
+        for item in (x.strip() for x in str(text).split(",")):
+            if not item:
+                raise InputError(
+                    f"{option} {text!r}: an empty item (two commas in a row or one at an end)"
+                )
+            try:
+                value = convert(item)
+            except ValueError:
+                raise InputError(f"{option} {item!r}: not {what}") from None
+            if value in out:
+                raise InputError(f"{option}: {item} given twice")
+            out.append(value)
+    return out
+
+
 def _numbers(value):
     if isinstance(value, (tuple, list)):
         for v in value:

@@ -12,6 +12,7 @@ from stabctl.cli.checks import check_writable, model_settings, search_settings
 from stabctl.cli.format import print_json, print_plan
 from stabctl.cli.options import (
     AliasedOption,
+    comma_list,
     controller,
     esd_model_option,
     faults_option,
@@ -310,12 +311,7 @@ def place(
 
 def _load_levels(text: str) -> tuple:
     """The --load-levels list: numbers > 0.  Raises InputError."""
-    try:
-        levels = tuple(float(x) for x in str(text).split(",") if x.strip())
-    except ValueError:
-        raise InputError(
-            f"--load-levels: not a comma-separated list of numbers: {text!r}"
-        ) from None
+    levels = tuple(comma_list(text, "--load-levels", float, "a number"))
     if not levels or any(not x > 0 for x in levels):
         raise InputError(
             f"--load-levels: need numbers > 0 (fractions of the base load), got {text!r}"

@@ -18,6 +18,7 @@ from stabctl.cli.options import (
     check_number,
     check_storage_given,
     circuit_option,
+    comma_list,
     controller,
     esd_model_option,
     far_end,
@@ -266,24 +267,22 @@ def _ratings(values) -> list:
     Returns
     -------
     list of float or None
-        Distinct ratings in order (None: no storage; default ``[None]``).
+        The ratings in order (None: no storage; default ``[None]``).
 
     Raises
     ------
     InputError
-        Not a number or 'none', or out of range.
+        Not a number or 'none', out of range, empty or given twice (`comma_list`).
     """
-    out = []
-    for v in values or ("none",):
-        for item in str(v).split(","):
-            item = item.strip().lower()
-            try:
-                out.append(None if item == "none" else float(item))
-            except ValueError:
-                raise InputError(f"--esd-pct {item!r}: not a number or 'none'") from None
-            if out[-1] is not None:
-                check_number("--esd-pct", out[-1])
-    return list(dict.fromkeys(out))
+    out = comma_list(values or ("none",), "--esd-pct", _rating, "a number or 'none'")
+    for v in out:
+        if v is not None:
+            check_number("--esd-pct", v)
+    return out
+
+
+def _rating(item: str) -> float | None:
+    return None if item.lower() == "none" else float(item)
 
 
 @click.command("sweep-cct")
@@ -454,14 +453,8 @@ def screen(
 
 
 def _bus_list(text: str) -> list[int]:
-    """--buses B1,B2,...: bus numbers (InputError naming the first that is not one)."""
-    out = []
-    for item in (b.strip() for b in text.split(",")):
-        if item:
-            try:
-                out.append(int(item))
-            except ValueError:
-                raise InputError(f"--buses {item!r}: not a bus number") from None
-    if not out:
+    """--buses B1,B2,...: bus numbers (InputError naming the first that is not one, an
+    empty item or a bus given twice: `comma_list`)."""
+    if not text.strip():
         raise InputError("--buses: no bus number given")
-    return out
+    return comma_list(text, "--buses", int, "a bus number")

@@ -11,11 +11,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from stabctl import parallel
 from stabctl.case import Case
 from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import AboveSearchLimit, InsecureContingency
 from stabctl.io import load_case
-from stabctl.parallel import RunnerOptions, run_sweep
+from stabctl.parallel import RunnerOptions
 from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs
 
 
@@ -110,7 +111,7 @@ def screen(
     """
     case = load_case(case_name)
     faults = screening_faults(case, buses, lines)
-    report = run_sweep(
+    report = parallel.run_sweep(  # looked up at call time (a test may patch it)
         cct_jobs(case_name, faults, search=search, model=model),
         out,
         workers=runner.workers,

@@ -622,3 +622,52 @@ def test_records_files_are_read_in_bounded_lines_and_whole_records_only(tmp_path
     args = ["place", "kundur", "--faults", "DEFAULT", "--workers", "1"]
     res = CliRunner().invoke(main, [*args, "--target-cct-gain", "5", "--screening", str(screening)])
     assert res.exit_code == 2 and "no fault bracketed without storage" in res.output, res.output
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (("screen", "kundur", "--buses", "3,,4"), "--buses '3,,4': an empty item"),
+        (("screen", "kundur", "--buses", "3,4,3"), "--buses: 3 given twice"),
+        (
+            ("sweep-cct", "kundur", "--faults", "f.csv", "--esd-pct", "5,5"),
+            "--esd-pct: 5 given twice",
+        ),
+        (
+            (
+                "place",
+                "kundur",
+                "--faults",
+                "DEFAULT",
+                "--target-cct-gain",
+                "5",
+                "--load-levels",
+                "1,",
+            ),
+            "--load-levels '1,': an empty item",
+        ),
+        (
+            (
+                "place",
+                "kundur",
+                "--faults",
+                "DEFAULT",
+                "--target-cct-gain",
+                "5",
+                "--load-levels",
+                "1,1",
+            ),
+            "--load-levels: 1 given twice",
+        ),
+    ],
+)
+def test_comma_lists_with_an_empty_or_repeated_item_are_refused(
+    no_simulation, tmp_path, monkeypatch, args, needle
+):
+    """`screen --buses 3,,4`, `sweep-cct --esd-pct 5,5` and `place --load-levels 1,1` (or
+    `1,`) ran, the empty item dropped or the repeat merged without a word; each is one
+    error line naming the option (exit 2), before any work."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "f.csv").write_text("bus,far_bus\n3,101\n")
+    assert_error(run(*args), needle)
+    assert [p.name for p in tmp_path.iterdir()] == ["f.csv"]
