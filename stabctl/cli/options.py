@@ -232,14 +232,20 @@ def check_number(label: str, value) -> None:
     Raises
     ------
     InputError
-        Unless ``value`` is finite and inside the range of ``label``; the message names
-        the option, the value and the allowed range.
+        Unless ``value`` is finite and inside the range of ``label`` (without one: at most
+        :data:`ANY_NUMBER_MAX` in magnitude); the message names the option, the value and
+        the allowed range.
     """
     spec = _RANGES.get(label)
     allowed = f" in {interval(spec)}" if spec else ""
     if isinstance(value, float) and not math.isfinite(value):
         raise InputError(f"{label} {value}: must be a finite number{allowed}")
     if spec is None:
+        if abs(value) > ANY_NUMBER_MAX:
+            raise InputError(
+                f"{label} {value:g}: beyond any value it can take (at most "
+                f"{ANY_NUMBER_MAX:g} in magnitude)"
+            )
         return
     lo, hi, lo_in, hi_in, _ = spec
     if not ((value >= lo if lo_in else value > lo) and (value <= hi if hi_in else value < hi)):
@@ -258,9 +264,14 @@ def _check_numbers(kwargs) -> None:
             next((o for o in param.opts if o.startswith("--")), None) or param.human_readable_name
         )
         for value in _numbers(kwargs[param.name]):
-            if not (label in _INF_MEANS and value == math.inf):
+            # the options of _INF_MEANS are bounded by their command: only nan and -inf here
+            if label not in _INF_MEANS or math.isnan(value) or value == -math.inf:
                 check_number(label, value)
 
+
+#: largest magnitude of a number whose option has no range of its own (a time, a bus
+#: number, a load step in pu): --load-step 4 1 1e308 0 ran, a load of 1e308 pu
+ANY_NUMBER_MAX = 1e9
 
 #: options where inf has a meaning (``--bus-fault``'s T_OFF: never cleared), checked
 #: in place by their command

@@ -671,3 +671,17 @@ def test_comma_lists_with_an_empty_or_repeated_item_are_refused(
     (tmp_path / "f.csv").write_text("bus,far_bus\n3,101\n")
     assert_error(run(*args), needle)
     assert [p.name for p in tmp_path.iterdir()] == ["f.csv"]
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (("--load-step", "4", "1", "1e308", "0"), "--load-step 1e+308: beyond any value"),
+        (("--vref-step", "1", "1", "-1e12"), "--vref-step -1e+12: beyond any value"),
+        (("--fault", "3", "--far-bus", "10000000000"), "--far-bus 1e+10: beyond any value"),
+    ],
+)
+def test_numbers_without_a_range_of_their_own_are_bounded(no_simulation, args, needle):
+    """`simulate --load-step 4 1 1e308 0` ran a load of 1e308 pu (exit 0); a number of an
+    option without its own range is refused beyond 1e9 in magnitude (exit 2)."""
+    assert_error(run("simulate", "kundur", "--tf", "2", *args), needle)
