@@ -51,27 +51,37 @@ class AliasedOption(click.Option):
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM (``kill``, a batch system's time limit) raised as an interrupt, so that a
-    command ends as on Ctrl-C (its pools shut down, finished records kept) with exit
-    status 143 (128 + SIGTERM)."""
+    """SIGTERM (``kill``, a batch system's time limit) or SIGHUP (the terminal or the ssh
+    session closed) raised as an interrupt, so that a command ends as on Ctrl-C (its
+    pools shut down, finished records kept, its lock released) with exit status 128 + the
+    signal's number (143, 129)."""
+
+    def __init__(self, signum: int = signal.SIGTERM):
+        super().__init__(signum)
+        self.signum = int(signum)
 
 
 def _raise_terminated(signum, frame):
-    raise Terminated
+    raise Terminated(signum)
+
+
+#: the signals a command ends on as on Ctrl-C (`Terminated`)
+_ENDING_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
 
 
 @contextmanager
 def _sigterm_as_interrupt():
-    """SIGTERM raises :class:`Terminated` while the block runs (main thread only, where
-    Python delivers signals), the previous handler restored after."""
+    """SIGTERM and SIGHUP raise :class:`Terminated` while the block runs (main thread
+    only, where Python delivers signals), the previous handlers restored after."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    previous = {sig: signal.signal(sig, _raise_terminated) for sig in _ENDING_SIGNALS}
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 def _quiet_stdout() -> None:
@@ -98,9 +108,9 @@ def reports_errors(func):
         error only the ``error:`` line); an
         ``OSError`` (a disk full, a file the system refuses) is one ``error:`` line too
         (exit status 2; the outputs are written whole or not at all, and a sweep's
-        finished records stay); Ctrl-C prints what was kept (exit status 130), and so does
-        SIGTERM (exit status 143); a closed pipe on stdout (``stabctl cases | head``)
-        ends the command without a word (exit status 141, as SIGPIPE).
+        finished records stay); Ctrl-C prints what was kept (exit status 130), and so do
+        SIGTERM and SIGHUP (exit status 143, 129); a closed pipe on stdout (``stabctl
+        cases | head``) ends the command without a word (exit status 141, as SIGPIPE).
     """
 
     @functools.wraps(func)
@@ -122,7 +132,7 @@ def reports_errors(func):
                 sys.exit(2)
             except KeyboardInterrupt as exc:
                 click.echo(_interrupted(kwargs), err=True)
-                sys.exit(143 if isinstance(exc, Terminated) else 130)
+                sys.exit(128 + exc.signum if isinstance(exc, Terminated) else 130)
             except SystemExit:  # the command's own status (`compile --check`'s 1)
                 _say(caught)
                 raise

@@ -12,6 +12,7 @@ from stabctl.cli.checks import check_writable
 from stabctl.cli.options import (
     _apply,
     clear_cycles_option,
+    comma_list,
     controller,
     esd_model_option,
     fault_options,
@@ -79,16 +80,14 @@ _LOOPBACK = ("127.0.0.1", "::1", "localhost")
 
 
 def _allowed(host: str, allow: str) -> tuple:
-    """The --allow list as a tuple; warns when listening beyond loopback to any peer."""
+    """The --allow list as a tuple of addresses (InputError for an item that is not one,
+    an empty item or a repeat: `comma_list`); warns when listening beyond loopback to any
+    peer."""
     import ipaddress
     import warnings
 
-    peers = tuple(a.strip() for a in allow.split(",") if a.strip())
-    for a in peers:
-        try:
-            ipaddress.ip_address(a)
-        except ValueError:
-            raise InputError(f"--allow {allow}: {a!r} is not an IP address") from None
+    given = comma_list(allow, "--allow", ipaddress.ip_address, "an IP address") if allow else []
+    peers = tuple(str(a) for a in given)
     if host not in _LOOPBACK and not peers:
         warnings.warn(
             f"listening on {host}: any host that reaches this port may connect "

@@ -212,7 +212,8 @@ def test_estimate_source_refuses_monte_carlo_options(tmp_path):
             ["track", "kundur", "--source", "tcp://127.0.0.1:1", "--out", "t.csv"],
             "a TCP --source needs its end: --until S or --frames N",
         ),
-        (["replay", "junk.c37", "--allow", "pdc.example"], "'pdc.example' is not an IP address"),
+        (["replay", "junk.c37", "--allow", "pdc.example"], "'pdc.example': not an IP address"),
+        (["replay", "junk.c37", "--allow", "10.0.0.1,,10.0.0.2"], "an empty item"),
         (["plant", "kundur", "--fault", "3", "--far-bus", "101"], "needs --esd-pct"),
         (
             ["plant", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"]

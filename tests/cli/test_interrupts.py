@@ -107,11 +107,14 @@ def test_sigkill_of_a_sweep_leaves_no_worker_running(tmp_path):
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
-@pytest.mark.parametrize("sig,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+@pytest.mark.parametrize(
+    "sig,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143), (signal.SIGHUP, 129)]
+)
 def test_sigint_or_sigterm_of_a_screening_ends_with_the_resume_command(tmp_path, sig, status):
-    """Ctrl-C (SIGINT) or SIGTERM (kill, a batch system's time limit) to a screening on two
-    workers: the resume line, exit status 130 or 143, no traceback, no leaked semaphore,
-    no worker left, and only whole records in the file."""
+    """Ctrl-C (SIGINT), SIGTERM (kill, a batch system's time limit) or SIGHUP (the ssh
+    session closed; it used to kill the command and leave its lock file) to a screening on
+    two workers: the resume line, exit status 130, 143 or 129, no traceback, no leaked
+    semaphore, no worker left, no lock file, and only whole records in the file."""
     args = ["screen", "kundur", "--tol-ms", "0.05", "--workers", "2", "--out", "s.jsonl"]
     proc = _start(args, tmp_path)
     out = tmp_path / "s.jsonl"
@@ -129,6 +132,7 @@ def test_sigint_or_sigterm_of_a_screening_ends_with_the_resume_command(tmp_path,
     assert last.endswith("resume with: stabctl " + " ".join(args)), last
     assert "Traceback" not in err and "Aborted" not in err and "leaked" not in err
     assert _wait_for(lambda: not any(_alive(k) for k in kids), 10)
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.endswith(".lock")) == []
     import json
 
     assert all(
