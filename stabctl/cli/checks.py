@@ -63,10 +63,26 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         raise InputError(
             f"{option} {path}: cannot write in {where} ({exc.strerror or exc})"
         ) from None
-    if not directory and p.exists() and not os.access(p, os.W_OK):
-        raise InputError(f"{option} {path}: the file is not writable")
+    if not directory and p.exists():
+        _replaceable(p, option)
     if not directory:
         not_an_input(p, option)
+
+
+def _replaceable(path: Path, option: str) -> None:
+    """An existing output file must be writable in place: not read-only, and not
+    append-only or immutable (``chattr +a``/``+i``, which the write's final rename over it
+    would hit only after the work), tried by opening it for update (nothing written)."""
+    if not os.access(path, os.W_OK):
+        raise InputError(f"{option} {path}: the file is not writable")
+    try:
+        with open(path, "r+b"):
+            pass
+    except OSError as exc:
+        raise InputError(
+            f"{option} {path}: the file cannot be replaced ({exc.strerror or exc}; "
+            "append-only or immutable?)"
+        ) from None
 
 
 def not_an_input(path: Path, option: str) -> None:

@@ -685,3 +685,23 @@ def test_numbers_without_a_range_of_their_own_are_bounded(no_simulation, args, n
     """`simulate --load-step 4 1 1e308 0` ran a load of 1e308 pu (exit 0); a number of an
     option without its own range is refused beyond 1e9 in magnitude (exit 2)."""
     assert_error(run("simulate", "kundur", "--tf", "2", *args), needle)
+
+
+def test_an_append_only_output_is_refused_before_any_work(no_simulation, tmp_path):
+    """`place --out app.json` with app.json append-only (chattr +a) computed the whole plan,
+    then failed at the write's rename; every output file is tried for update first (exit
+    2), here simulate's."""
+    import shutil
+    import subprocess
+
+    out = tmp_path / "app.csv"
+    out.write_text("{}")
+    chattr = shutil.which("chattr")
+    if chattr is None or subprocess.run([chattr, "+a", str(out)], capture_output=True).returncode:
+        pytest.skip("chattr +a is not available here (not root, or the file system has no flags)")
+    try:
+        res = run("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--out", str(out))
+        assert_error(res, f"--out {out}: the file cannot be replaced")
+    finally:
+        subprocess.run([chattr, "-a", str(out)], check=True)
+    assert out.read_text() == "{}"
