@@ -159,7 +159,42 @@ def _register() -> None:
         io.import_andes,
         compile_.compile_kernels,
     ):
+        _one_value_each(cmd)
         main.add_command(cmd)
+
+
+def _one_value_each(cmd: click.Command) -> None:
+    """Make `cmd` (each command of a group) refuse an option of one value given twice: click
+    keeps the last without a word (`cct --fault 3 --fault 13` searched bus 13's fault).
+    A usage error (`UsageLine`); flags and repeatable options may come more than once."""
+    if isinstance(cmd, click.Group):
+        for sub in cmd.commands.values():
+            _one_value_each(sub)
+        return
+    single = {
+        name: param
+        for param in cmd.params
+        if isinstance(param, click.Option) and not (param.multiple or param.count or param.is_flag)
+        for name in param.opts
+    }
+    parse = cmd.parse_args
+
+    def parse_args(ctx, args):
+        seen: dict[str, str] = {}
+        for token in args:
+            if token == "--":
+                break
+            name = token.split("=", 1)[0]
+            param = single.get(name)
+            if param is not None and param.name in seen:
+                first = seen[str(param.name)]
+                again = "twice" if first == name else f"after {first}, the same option"
+                raise click.UsageError(f"{name} given {again}: it takes one value", ctx=ctx)
+            if param is not None:
+                seen[str(param.name)] = name
+        return parse(ctx, args)
+
+    cmd.parse_args = parse_args  # type: ignore[method-assign]
 
 
 _register()

@@ -705,3 +705,18 @@ def test_an_append_only_output_is_refused_before_any_work(no_simulation, tmp_pat
     finally:
         subprocess.run([chattr, "-a", str(out)], check=True)
     assert out.read_text() == "{}"
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (("cct", "kundur", "--fault", "3", "--fault", "13"), "--fault given twice"),
+        (("eig", "kundur", "--out-dir", "a", "--out", "b"), "--out given after --out-dir"),
+        (("simulate", "kundur", "--tf", "1", "--tf=2"), "--tf given twice"),
+    ],
+)
+def test_an_option_of_one_value_given_twice_is_refused(no_simulation, args, needle):
+    """`cct kundur --fault 3 --fault 13` searched bus 13's fault (click keeps the last value
+    without a word); an option of one value given twice is a usage error (exit 2), under
+    either of its names; repeatable options and flags may still come more than once."""
+    assert_error(run(*args), needle)
