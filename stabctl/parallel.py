@@ -240,7 +240,8 @@ def set_aside_damaged(path: str | Path) -> list[int]:
     kill, a damaged line) to ``<path>.damaged`` with a warning, so that their jobs run
     again and the file holds only whole records; returns their line numbers.  The file is
     rewritten atomically (a temporary file renamed over it).  Raises InputError for a line
-    longer than MAX_RECORD_LINE (nothing moved)."""
+    longer than MAX_RECORD_LINE, or a file of more than one line none of which is a record
+    (another file given as the output: nothing moved)."""
     path = Path(path)
     if not path.exists():
         return []
@@ -250,6 +251,11 @@ def set_aside_damaged(path: str | Path) -> list[int]:
         (good if rec is not None else bad).append((n, line if line.endswith("\n") else line + "\n"))
     if not bad:
         return []
+    if not good and len(bad) > 1:
+        raise InputError(
+            f"{path}: none of its {len(bad)} lines is a sweep record: not the records of an "
+            "earlier run (left as it is); give another file or remove it"
+        )
     aside = path.with_name(path.name + ".damaged")
     with aside.open("a") as f:
         f.writelines(line for _, line in bad)

@@ -26,6 +26,7 @@ from stabctl.parallel import (
     pooled,
     read_records,
     run_sweep,
+    set_aside_damaged,
 )
 from stabctl.stability.cct import (
     LineFault,
@@ -900,7 +901,9 @@ def test_ratings_parse_none_and_lists():
     from stabctl.cli.stability import _ratings
 
     assert _ratings(()) == [None]
-    assert _ratings(("none,5", "10", "5")) == [None, 5.0, 10.0]
+    assert _ratings(("none,5", "10")) == [None, 5.0, 10.0]
+    with pytest.raises(InputError, match="--esd-pct: 5 given twice"):
+        _ratings(("none,5", "10", "5"))  # was merged without a word
     assert [j.key for j in cct_jobs("kundur", [LineFault(3, 101)], [None, 5.0])] == [
         "kundur/3-101/t1/esd-none",
         "kundur/3-101/t1/esd5",
@@ -936,3 +939,19 @@ def test_worker_pool_runs_on_a_local_dask_cluster():
         assert run_map(dict, [{"a": 1}, {"b": 2}]) == [{"a": 1}, {"b": 2}]
         done = run_map(dict, [{"a": 1}, {"b": 2}], done=lambda k, n: seen.append((k, n)))
     assert done == [{"a": 1}, {"b": 2}] and seen == [(1, 2), (2, 2)]  # told as each finished
+
+
+def test_an_output_file_without_any_record_is_left_alone(tmp_path):
+    """`screen --out f.csv` with f.csv a faults table moved the whole table to
+    f.csv.damaged and wrote records in its place; a file of several lines none of which is
+    a record is refused (nothing moved), while a single cut line, a first record cut by a
+    kill, is still set aside."""
+    table = tmp_path / "f.csv"
+    table.write_text("bus,far_bus\n3,101\n")
+    with pytest.raises(InputError, match=r"f.csv: none of its 2 lines is a sweep record"):
+        run_sweep([Job("square/2", square, {"x": 2})], table, workers=1, progress=False)
+    assert table.read_text() == "bus,far_bus\n3,101\n" and not (tmp_path / "f.csv.damaged").exists()
+    cut = tmp_path / "cut.jsonl"
+    cut.write_text('{"key": "square/2", "inp')
+    with pytest.warns(UserWarning, match="cut by a kill"):
+        assert set_aside_damaged(cut) == [1]
