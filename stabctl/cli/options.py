@@ -577,7 +577,8 @@ def faults_option(func):
         required=True,
         metavar="FILE.csv|DEFAULT",
         help="CSV with a header bus,far_bus[,t_fault,circuit], one line fault per row "
-        "(cleared at both ends, line tripped); DEFAULT: the built-in list (kundur: "
+        "(cleared at both ends, line tripped; an empty far_bus: a bus fault, an empty "
+        "t_fault or circuit: 1 s or 1, as without the column); DEFAULT: the built-in list (kundur: "
         "3-101, 13-101; miniwecc: 83-33, 40-44; faults at 1 s).",
     )(func)
 

@@ -954,7 +954,7 @@ def read_faults(path: str | Path) -> list[LineFault]:
     """Faults from a CSV file (a strict table, `stabctl.io.inputs.read_csv`, of
     :data:`FAULT_COLUMNS`): bus, far_bus (empty: a bus fault cleared without a trip)
     [, t_fault (s, default 1, at most T_FAULT_MAX_S)][, circuit (default 1)], one fault
-    per row.
+    per row; an empty t_fault or circuit cell takes the default, as without the column.
 
     Raises
     ------
