@@ -184,7 +184,7 @@ def _one_value_each(cmd: click.Command) -> None:
         for token in args:
             if token == "--":
                 break
-            name = token.split("=", 1)[0]
+            name = str(token).split("=", 1)[0]  # click takes numbers from a caller too
             param = single.get(name)
             if param is not None and param.name in seen:
                 first = seen[str(param.name)]
