@@ -47,13 +47,15 @@ def cli(text: str) -> list[str]:
     return text.split()
 
 
-def run(args, cwd, timeout=600):
+def run(args, cwd, timeout=600, **popen):
+    """One stabctl command in ``cwd`` (``popen``: more `subprocess.run` arguments)."""
     return subprocess.run(
         STABCTL + [str(a) for a in args],
         cwd=cwd,
         capture_output=True,
         text=True,
         timeout=timeout,
+        **popen,
     )
 
 

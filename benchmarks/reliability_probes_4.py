@@ -31,7 +31,7 @@ BENCH = Path(__file__).resolve().parent
 sys.path.insert(0, str(BENCH))
 sys.path.insert(0, str(BENCH.parent / "tests"))
 
-from reliability_probes import PSSE, STABCTL, Probe, cli, table, verdict, write  # noqa: E402
+from reliability_probes import PSSE, STABCTL, Probe, cli, run, table, verdict, write  # noqa: E402
 
 WORK = Path(tempfile.mkdtemp(prefix="stabctl-probes-4."))
 SHORTS = WORK.parent / (WORK.name + ".shorts.txt")
@@ -82,15 +82,7 @@ def run4(args, cwd, timeout=TIMEOUT, limit_as=False):
         if limit_as:
             resource.setrlimit(resource.RLIMIT_AS, (2_500_000_000, 2_500_000_000))
 
-    return subprocess.run(
-        STABCTL + [str(a) for a in args],
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        preexec_fn=pre,
-        stdin=subprocess.DEVNULL,
-    )
+    return run(args, cwd, timeout, preexec_fn=pre, stdin=subprocess.DEVNULL)
 
 
 def log_short(p, v, res, extra=""):

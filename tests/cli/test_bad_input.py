@@ -624,6 +624,9 @@ def test_records_files_are_read_in_bounded_lines_and_whole_records_only(tmp_path
     assert res.exit_code == 2 and "no fault bracketed without storage" in res.output, res.output
 
 
+PLACE = ("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "5")
+
+
 @pytest.mark.parametrize(
     "args,needle",
     [
@@ -633,32 +636,8 @@ def test_records_files_are_read_in_bounded_lines_and_whole_records_only(tmp_path
             ("sweep-cct", "kundur", "--faults", "f.csv", "--esd-pct", "5,5"),
             "--esd-pct: 5 given twice",
         ),
-        (
-            (
-                "place",
-                "kundur",
-                "--faults",
-                "DEFAULT",
-                "--target-cct-gain",
-                "5",
-                "--load-levels",
-                "1,",
-            ),
-            "--load-levels '1,': an empty item",
-        ),
-        (
-            (
-                "place",
-                "kundur",
-                "--faults",
-                "DEFAULT",
-                "--target-cct-gain",
-                "5",
-                "--load-levels",
-                "1,1",
-            ),
-            "--load-levels: 1 given twice",
-        ),
+        ((*PLACE, "--load-levels", "1,"), "--load-levels '1,': an empty item"),
+        ((*PLACE, "--load-levels", "1,1"), "--load-levels: 1 given twice"),
     ],
 )
 def test_comma_lists_with_an_empty_or_repeated_item_are_refused(
