@@ -99,10 +99,14 @@ def not_an_input(path: Path, option: str) -> None:
         value = ctx.params.get(param.name or "")
         for v in value if isinstance(value, (list, tuple)) else (value,):
             if isinstance(v, (str, Path)) and _same_file(v, path):
-                what = param.opts[0] if isinstance(param, click.Option) else "the case"
+                what = (
+                    f"the input {param.opts[0]}"
+                    if isinstance(param, click.Option)
+                    else f"the input {param.human_readable_name}"
+                )
                 raise InputError(
-                    f"{option} {path} is also the input {what} {v}: writing it would "
-                    "overwrite that input; give another file"
+                    f"{option} {path} is also {what} {v}: writing it would overwrite that "
+                    "input; give another file"
                 )
 
 

@@ -575,6 +575,13 @@ def test_an_output_file_that_is_also_an_input_is_refused(tmp_path, monkeypatch):
     assert "--out f.csv is also the input --faults f.csv" in res.output
     assert faults.read_text() == "bus,far_bus\n3,101\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
+    andes = pytest.importorskip("andes")  # the case argument is an input too
+    case = tmp_path / "smib.json"
+    case.write_bytes((Path(andes.__file__).parent / "cases" / "smib" / "SMIB.json").read_bytes())
+    before = case.read_bytes()
+    res = CliRunner().invoke(main, ["import-andes", str(case), "--out", str(case)])
+    assert res.exit_code == 2 and f"is also the input CASE {case}" in res.output, res.output
+    assert case.read_bytes() == before
 
 
 def test_estimate_track_refuses_its_recording_as_output_and_a_negative_end(tmp_path):
