@@ -63,9 +63,9 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         raise InputError(
             f"{option} {path}: cannot write in {where} ({exc.strerror or exc})"
         ) from None
-    if not directory and p.exists():
-        _replaceable(p, option)
     if not directory:
+        if p.exists():
+            _replaceable(p, option)
         not_an_input(p, option)
 
 

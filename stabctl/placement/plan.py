@@ -405,7 +405,6 @@ def _stable_by_screening(cons, brackets) -> set:
         if brackets
         and c.load == 1.0
         and c.fault_name in brackets
-        and brackets[c.fault_name][0] is not None
         and c.met_by(brackets[c.fault_name][0])
     }
 
