@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from stabctl._jit.arrays import assign, max_abs
+from stabctl._jit.borrow import borrowed
 from stabctl._jit.decorators import kernel, njit
 from stabctl.dynamics import subinterval as sub
 from stabctl.dynamics import switching as sw
@@ -561,6 +562,7 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
     k : int
         The last stored grid index.
     """
+    c, grid, nets, p, sa, opts, rec = borrowed((c, grid, nets, p, sa, opts, rec))
     n = grid.interval.size
     out = kernel_outputs(p.n_mac, nets.R.shape[1], p.n_ibr, p.n_exc)
     kn = _Kernel(p, nets, c.kept, c.held_stage, out, evaluate)

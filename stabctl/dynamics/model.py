@@ -19,6 +19,7 @@ from numba import types
 
 from stabctl._jit.address import address_of, by_address
 from stabctl._jit.arrays import SMALL_MATVEC, assign, dot, matvec
+from stabctl._jit.borrow import borrowed
 from stabctl._jit.decorators import kernel, njit
 from stabctl.case import BranchTable, BusTable, Case
 from stabctl.dynamics.bounded import BoundedCache
@@ -993,6 +994,51 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     int
         The load-iteration count, -1 without convergence.
     """
+    nm, ne = p.n_mac, p.n_exc
+    scratch = _Scratch(
+        np.empty(nm, np.complex128),
+        np.empty(nm, np.complex128),
+        np.empty(nm, np.complex128),
+        np.empty(nm, np.complex128),
+        np.empty(p.n_pss),
+        p.vex0.copy(),
+        np.empty(nm),
+        np.empty(nm),
+        np.empty(ne),
+        np.empty(ne),
+        np.empty(ne),
+        np.zeros(ne),
+    )
+    return _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch)
+
+
+class _Scratch(NamedTuple):
+    """The per-evaluation arrays of `_evaluate_into`: per machine its internal voltage psi,
+    rotation exp(j delta), current from the kept buses, terminal voltage (complex), field
+    voltage handed to it, field current and air-gap saturation; per PSS its output; per
+    exciter its algebraic field voltage, field current, source term and PSS input."""
+
+    psi: np.ndarray
+    rot: np.ndarray
+    I_kept: np.ndarray
+    V_mac: np.ndarray
+    pss_out: np.ndarray
+    vex: np.ndarray
+    ifd_mac: np.ndarray
+    gap: np.ndarray
+    efd_alg: np.ndarray
+    ifd: np.ndarray
+    vb: np.ndarray
+    pss_exc: np.ndarray
+
+
+@kernel
+def _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch):
+    """`evaluate_kernel` with its per-evaluation arrays given (`_Scratch`).  Every array
+    is borrowed (`stabctl._jit.borrow`; the caller holds them for the whole call), so that
+    the per-element calls below count no references: half of a run's time before."""
+    x, p, net, kept, dx, out, scratch = borrowed((x, p, net, kept, dx, out, scratch))
+    psi, rot, I_kept, V_mac, pss_out, vex, ifd_mac, gap, efd_alg, ifd, vb, pss_exc = scratch
     nm, ne, nps, ng, ni = p.n_mac, p.n_exc, p.n_pss, p.n_tg, p.n_ibr
     Y11, Y12, Y21, Y22, Z22, R, R_mac, on, targets, steps = net
     EP = _stepped(p.EP, steps[:ne], _VREF)
@@ -1022,7 +1068,6 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     rv, nv = svc.N_STATES, p.n_svc
     xsv, dxsv = x[o : o + rv * nv].reshape(rv, nv), dx[o : o + rv * nv].reshape(rv, nv)
     dev = KeptDevices(p.IP, xi, p.MO, xmo, on, p.SWP, p.SWY, xsw, p.SVP, xsv)
-    psi, rot = np.empty(nm, np.complex128), np.empty(nm, np.complex128)
     mac.internal_voltage(p.MP, xm, psi, rot)
     v_dep = False
     for k in range(ni):
@@ -1050,12 +1095,10 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
             return -1
         it += more
     matvec(Y11, psi, cur)
-    I_kept = np.empty(nm, np.complex128)
     matvec(Y12, V_nc, I_kept)
     for m in range(nm):
         cur[m] += I_kept[m]
     z = np.concatenate((psi, V_nc))
-    V_mac = np.empty(nm, np.complex128)  # the machines' terminal voltages
     if want_vbus and V_bus.size > 0:  # R: every bus's rows, or those a run records
         matvec(R, z, V_bus)
     if want_vbus and V_bus.size == p.n_bus:
@@ -1066,20 +1109,12 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
     else:  # row by row, as every bus's product sums it (a loop at this size)
         for m in range(nm):
             V_mac[m] = dot(R_mac[m], z)
-    pss_out = np.empty(nps)
     for k in range(nps):
         m = int(p.SP[k, pss_.S.MAC])
         pe = (psi[m] * np.conj(cur[m])).real * p.MP[m, mac.K.POT]
         vt = np.abs(V_mac[m])
         pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, xm[1, m], pe, vt, dxp)
-    vex = p.vex0.copy()
-    ifd_mac = np.empty(nm)  # once per machine, for its exciter and its own derivatives
-    gap = np.empty(nm)  # the machines' air-gap saturations, for both
     mac.field_currents(p.MP, xm, cur, rot, ifd_mac, gap)
-    efd_alg = np.empty(ne)
-    ifd = np.empty(ne)
-    vb = np.empty(ne)
-    pss_exc = np.zeros(ne)
     for i in range(ne):
         m = int(EP[i, exc.E.MAC])
         if p.pss_of_exc[i] >= 0:

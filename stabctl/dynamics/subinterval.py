@@ -40,6 +40,7 @@ import math
 import numpy as np
 
 from stabctl._jit.arrays import assign
+from stabctl._jit.borrow import borrowed
 from stabctl._jit.decorators import kernel
 from stabctl.models import exciters as exc
 
@@ -67,6 +68,7 @@ def _exciter_states(p, x):
 def _advance(p, x_a, u, hh, out):
     """Every sub-stepped exciter's states over hh from x_a with the inputs u (n_exc,
     N_FROZEN) held, into out's exciter block (other slots untouched)."""
+    p, x_a, u, out = borrowed((p, x_a, u, out))
     xe, oe = _exciter_states(p, x_a), _exciter_states(p, out)
     for i in range(p.n_exc):
         if p.exc_hmax[i] < np.inf:
@@ -80,6 +82,7 @@ def sub_heun_start(p, x_a, u_now, u_a, phi_a, hh, xp):
     of the evaluation at x_a (u_now, copied into u_a), integrate the sub-stepped exciters
     with them (Phi(x_a, u_a) into phi_a) and set the predictor xp's exciter states to it
     (V_ref, which a stage may step, is among the inputs)."""
+    p, x_a, u_now, u_a, phi_a, xp = borrowed((p, x_a, u_now, u_a, phi_a, xp))
     assign(u_a, u_now)
     _advance(p, x_a, u_a, hh, phi_a)
     xe, pe = _exciter_states(p, xp), _exciter_states(p, phi_a)
@@ -93,6 +96,7 @@ def sub_heun_start(p, x_a, u_now, u_a, phi_a, hh, xp):
 def sub_heun_end(p, x_a, u_p, phi_a, phi_p, hh, x_new):
     """After the predictor's evaluation (its inputs u_p): the sub-stepped exciters' states
     at the step's end, (Phi(x_a, u_a) + Phi(x_a, u_p)) / 2, into x_new."""
+    p, x_a, u_p, phi_a, phi_p, x_new = borrowed((p, x_a, u_p, phi_a, phi_p, x_new))
     _advance(p, x_a, u_p, hh, phi_p)
     xe, pa, pp = _exciter_states(p, x_new), _exciter_states(p, phi_a), _exciter_states(p, phi_p)
     for i in range(p.n_exc):

@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from stabctl._jit.borrow import borrowed
 from stabctl._jit.decorators import kernel
 from stabctl.errors import CaseError
 from stabctl.models import machines as mac
@@ -685,16 +686,26 @@ def advance_frozen(P, x, i, u, hh, n, ieee, reach, out):
     d1, d2 = np.zeros((rows, 1)), np.zeros((rows, 1))
     for r in range(rows):
         xs[r, 0] = x[r, i]
-    hs = hh / n
-    for _ in range(n):
-        _held_derivatives(P1, xs, u, d1, ieee, reach / n)
-        for r in range(rows):
-            xq[r, 0] = xs[r, 0] + hs * d1[r, 0]
-        _held_derivatives(P1, xq, u, d2, ieee, reach / n)
-        for r in range(rows):
-            xs[r, 0] = xs[r, 0] + 0.5 * hs * (d1[r, 0] + d2[r, 0])
+    _heun_substeps(P1, u, hh / n, n, ieee, reach / n, (xs, xq, d1, d2))
     for r in range(rows):
         out[r] = xs[r, 0]
+
+
+@kernel
+def _heun_substeps(P1, u, hs, n, ieee, reach, work):
+    """`advance_frozen`'s n Heun steps of hs (s) on the one exciter of P1, its states
+    work[0] (n_slots, 1) updated in place; work = (states, predictor, derivatives at both).
+    A kernel of its own so that it can borrow its arrays (`stabctl._jit.borrow`): the
+    caller owns them for the whole call."""
+    P1, u, (xs, xq, d1, d2) = borrowed((P1, u, work))
+    rows = xs.shape[0]
+    for _ in range(n):
+        _held_derivatives(P1, xs, u, d1, ieee, reach)
+        for r in range(rows):
+            xq[r, 0] = xs[r, 0] + hs * d1[r, 0]
+        _held_derivatives(P1, xq, u, d2, ieee, reach)
+        for r in range(rows):
+            xs[r, 0] = xs[r, 0] + 0.5 * hs * (d1[r, 0] + d2[r, 0])
 
 
 @kernel(inline="always")
