@@ -914,6 +914,11 @@ TABLES: Mapping[str, type[Table]] = MappingProxyType(
 # --------------------------------------------------------------------------------------
 
 
+#: nominal frequencies a case may have (Hz): 16.7 Hz railway to 400 Hz aircraft and naval
+#: grids, with room; 1e-300 Hz made every cycle 1e300 s long and ran
+FREQ_HZ_RANGE = (1.0, 1000.0)
+
+
 @dataclass(frozen=True, eq=False)
 class Case:
     """One power system: bases, network, machines, controllers, loads.
@@ -1016,8 +1021,12 @@ class Case:
                 raise CaseError(f"case '{self.name}': {fname} must be a {cls.__name__}")
         if not (np.isfinite(self.base_mva) and self.base_mva > 0):
             raise CaseError(f"case '{self.name}': base_mva must be > 0, got {self.base_mva}")
-        if not (np.isfinite(self.freq_hz) and self.freq_hz > 0):
-            raise CaseError(f"case '{self.name}': freq_hz must be > 0, got {self.freq_hz}")
+        lo, hi = FREQ_HZ_RANGE
+        if not (np.isfinite(self.freq_hz) and lo <= self.freq_hz <= hi):
+            raise CaseError(
+                f"case '{self.name}': freq_hz must be a nominal frequency in [{lo:g}, {hi:g}] "
+                f"Hz, got {self.freq_hz:g}"
+            )
         object.__setattr__(self, "base_mva", float(self.base_mva))
         object.__setattr__(self, "freq_hz", float(self.freq_hz))
         object.__setattr__(

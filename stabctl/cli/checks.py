@@ -173,6 +173,32 @@ def search_settings(tol_ms, t_max, tf):
     return SearchOptions(tol=tol_ms / 1000.0, t_max=t_max, t_end=tf)
 
 
+def check_run_end(faults, search) -> None:
+    """Refuse, before any search runs, a --tf that ends a fault's runs before its latest
+    clearing (each search would fail on its own, recorded as a failed job).
+
+    Parameters
+    ----------
+    faults : sequence of stabctl.stability.cct.LineFault
+    search : stabctl.stability.cct.SearchOptions
+        ``t_end`` (s; None: each fault's start + 5 s) and ``t_max`` (s).
+
+    Raises
+    ------
+    InputError
+        Naming the first such fault, its latest clearing and --tf.
+    """
+    if search.t_end is None:
+        return
+    for f in faults:
+        if not search.t_end > f.t_fault + search.t_max:
+            raise InputError(
+                f"--tf {search.t_end:g} s: {f.describe()} is cleared as late as "
+                f"{f.t_fault + search.t_max:g} s (its start + --t-max {search.t_max:g} s); "
+                "the runs must end after it"
+            )
+
+
 def model_settings(conventions: str, step, q_limits: bool = True):
     """The model settings of ``--conventions``, ``--step``, ``--no-q-limits`` and
     ``--single-rate`` (`stabctl.cli.options.subintervals_chosen`).

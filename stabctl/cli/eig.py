@@ -9,10 +9,12 @@ import click
 from stabctl.cli.checks import check_writable
 from stabctl.cli.format import print_json, print_modes
 from stabctl.cli.options import (
+    INT,
     conventions_option,
     json_option,
     out_dir_option,
     q_limits_option,
+    refuse_given,
     reports_errors,
 )
 from stabctl.errors import InputError
@@ -26,7 +28,7 @@ from stabctl.errors import InputError
 @click.option(
     "--areas",
     "n_areas",
-    type=int,
+    type=INT,
     default=None,
     metavar="N",
     help="Number of coherent areas for the local/inter-area classification "
@@ -76,6 +78,8 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limi
     from stabctl.io import load_case
     from stabctl.studies.eigenvalues import eig_study, study_json, write_report
 
+    if not report:
+        refuse_given(("out_dir",), "without --report (nothing is written)")
     if Path(out_dir).exists() and not Path(out_dir).is_dir():
         raise InputError(f"--out-dir {out_dir} is not a directory")
     if report:

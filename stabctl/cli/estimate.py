@@ -14,7 +14,10 @@ import numpy as np
 from stabctl.cli.checks import check_writable, model_settings
 from stabctl.cli.format import closed_loop_lines, estimator_cct_lines, print_estimate, print_json
 from stabctl.cli.options import (
+    FLOAT,
+    INT,
     STORAGE_SETTINGS,
+    PlainIntRange,
     _apply,
     check_storage_given,
     controller,
@@ -23,6 +26,7 @@ from stabctl.cli.options import (
     json_option,
     model_options,
     out_file_option,
+    refuse_given,
     reports_errors,
     storage_options,
 )
@@ -82,7 +86,7 @@ def _runs_seed(func):
         (
             click.option(
                 "--runs",
-                type=int,
+                type=INT,
                 default=20,
                 show_default=True,
                 metavar="N",
@@ -90,7 +94,7 @@ def _runs_seed(func):
             ),
             click.option(
                 "--seed",
-                type=int,
+                type=INT,
                 default=0,
                 show_default=True,
                 metavar="S",
@@ -111,7 +115,7 @@ def _runs_seed(func):
 @_runs_seed
 @click.option(
     "--settle-ms",
-    type=float,
+    type=FLOAT,
     default=100.0,
     show_default=True,
     metavar="MS",
@@ -119,7 +123,7 @@ def _runs_seed(func):
 )
 @click.option(
     "--ambient-s",
-    type=float,
+    type=FLOAT,
     default=60.0,
     show_default=True,
     metavar="S",
@@ -127,7 +131,7 @@ def _runs_seed(func):
 )
 @click.option(
     "--ambient-pct",
-    type=float,
+    type=FLOAT,
     default=1.0,
     show_default=True,
     metavar="P",
@@ -136,7 +140,7 @@ def _runs_seed(func):
 )
 @click.option(
     "--ambient-tau-s",
-    type=float,
+    type=FLOAT,
     default=2.0,
     show_default=True,
     metavar="T",
@@ -144,7 +148,7 @@ def _runs_seed(func):
 )
 @click.option(
     "--ambient-runs",
-    type=int,
+    type=INT,
     default=5,
     show_default=True,
     metavar="N",
@@ -227,6 +231,10 @@ def rmse(
     if min(settle_ms, ambient_s, seed) < 0 or ambient_runs < 1:
         raise InputError("--settle-ms, --ambient-s and --seed must be >= 0, --ambient-runs >= 1")
     src = _source(source)
+    if ambient_s == 0:
+        refuse_given(
+            ("ambient_pct", "ambient_tau_s", "ambient_runs"), "with --ambient-s 0 (no ambient run)"
+        )
     ambient = am.AmbientLoad(ambient_pct, ambient_tau_s, seed)
     settings = pmu_settings(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
@@ -320,7 +328,7 @@ def _check_positive(**values) -> None:
 @storage_options(" Required: the ESDs the estimators command.")
 @esd_model_option
 @click.option(
-    "--seed", type=int, default=0, show_default=True, metavar="S", help="Seed of the PMU noise."
+    "--seed", type=INT, default=0, show_default=True, metavar="S", help="Seed of the PMU noise."
 )
 @click.option(
     "--transport",
@@ -404,7 +412,7 @@ def closed_loop(
 @rate_latency_options
 @click.option(
     "--esd-pct",
-    type=float,
+    type=FLOAT,
     required=True,
     default=None,
     metavar="P",
@@ -474,14 +482,14 @@ def cct(
 @click.option(
     "--until",
     "until_s",
-    type=float,
+    type=FLOAT,
     default=None,
     help="Last time stamp to track (s; t = 0 is the CFG-2's time stamp). A TCP source "
     "needs --until or --frames.",
 )
 @click.option(
     "--frames",
-    type=click.IntRange(1, 10_000_000),
+    type=PlainIntRange(1, 10_000_000),
     default=None,
     help="Data frames to take from each stream.",
 )
@@ -541,6 +549,10 @@ def track(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )
     check_storage_given(esd_pct, _STORAGE_NOT_COI)
+    refuse_given(
+        ("drop", "window_cycles"),
+        "to estimate track: its frames are the recorded ones (no PMU is simulated)",
+    )
     case = load_case(case_name)
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)

@@ -7,7 +7,7 @@ from typing import Any
 import click
 
 from stabctl.cli.format import print_json
-from stabctl.cli.options import _RANGES, interval, json_option, reports_errors
+from stabctl.cli.options import _RANGES, FLOAT, interval, json_option, refuse_given, reports_errors
 from stabctl.errors import InputError
 
 
@@ -15,27 +15,27 @@ from stabctl.errors import InputError
 @click.option(
     "--fault-cycles",
     "-c",
-    type=float,
+    type=FLOAT,
     multiple=True,
     help="Fault durations in cycles: `--fault-cycles 6 12 15` (default 6 12 15).",
 )
-@click.argument("more_cycles", nargs=-1, type=float)
-@click.option("--H", "H", type=float, default=3.0, show_default=True, help="Inertia constant (s).")
-@click.option("--pm", type=float, default=0.5, show_default=True, help="Mechanical power (pu).")
+@click.argument("more_cycles", nargs=-1, type=FLOAT)
+@click.option("--H", "H", type=FLOAT, default=3.0, show_default=True, help="Inertia constant (s).")
+@click.option("--pm", type=FLOAT, default=0.5, show_default=True, help="Mechanical power (pu).")
 @click.option(
     "--delta0",
-    type=float,
+    type=FLOAT,
     default=0.4950,
     show_default=True,
     help="Pre-fault angle (rad); sets Pmax = Pm/sin(delta0).",
 )
 @click.option(
     "--pmax",
-    type=float,
+    type=FLOAT,
     default=None,
     help="Pre/post-fault Pmax (pu) instead of deriving it from delta0.",
 )
-@click.option("--f0", type=float, default=60.0, show_default=True, help="Frequency (Hz).")
+@click.option("--f0", type=FLOAT, default=60.0, show_default=True, help="Frequency (Hz).")
 @json_option("the clearing table and the EAC summary")
 @reports_errors
 def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
@@ -46,6 +46,8 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
     """
     from stabctl.smib.omib import OMIB, clearing_table, eac_summary
 
+    if pmax is not None:
+        refuse_given(("delta0",), "with --pmax (Pmax is given; delta0 follows from it)")
     if pmax is None:
         system = OMIB.from_operating_point(H=H, Pm=pm, delta0=delta0, f0=f0)
         lo, hi = _RANGES["--pmax"][:2]

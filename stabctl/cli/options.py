@@ -33,6 +33,7 @@ import click
 
 from stabctl.cli.format import one_line
 from stabctl.errors import InputError, StabctlError
+from stabctl.io.inputs import plain_number
 
 #: seconds a run continues after the fault start when --tf is not given
 TF_AFTER_FAULT_S = 5.0
@@ -209,6 +210,31 @@ _RANGES = {
     # a PMU link's longest silence: 0 or below waited for ever or timed out at once
     "--timeout": (0, 86400, False, True, "s"),
 }
+
+
+class _Plain(click.ParamType):
+    """A click number type that refuses what `plain_number` refuses before converting."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not plain_number(value):
+            self.fail(f"{value!r}: write numbers in ASCII digits, without '_'", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+class PlainInt(_Plain, click.types.IntParamType):
+    """click's integer type, `plain_number` spellings only."""
+
+
+class PlainFloat(_Plain, click.types.FloatParamType):
+    """click's float type, `plain_number` spellings only."""
+
+
+class PlainIntRange(_Plain, click.IntRange):
+    """click's IntRange, `plain_number` spellings only."""
+
+
+#: the number types of every option and argument (``type=INT`` would read ``1_01`` as 101)
+INT, FLOAT = PlainInt(), PlainFloat()
 
 
 def interval(spec) -> str:
@@ -461,7 +487,7 @@ def model_options(func):
     )(func)
     func = click.option(
         "--step",
-        type=float,
+        type=FLOAT,
         default=None,
         metavar="H",
         help="Integration step (s); default: ieee half a cycle capped at "
@@ -489,7 +515,7 @@ def tf_option(extra: str = ""):
     """``--tf S``: end of each run (s), default the fault start + 5 s (into ``tf``)."""
     return click.option(
         "--tf",
-        type=float,
+        type=FLOAT,
         default=None,
         metavar="S",
         help=f"End of each run (s); default: the fault start + {TF_AFTER_FAULT_S:g} s{extra}.",
@@ -506,7 +532,7 @@ def fault_options(required: bool, t_fault: bool = True, far_required: bool | Non
         (
             click.option(
                 "--fault",
-                type=int,
+                type=INT,
                 required=required,
                 default=None,
                 metavar="BUS",
@@ -514,7 +540,7 @@ def fault_options(required: bool, t_fault: bool = True, far_required: bool | Non
             ),
             click.option(
                 "--far-bus",
-                type=int,
+                type=INT,
                 required=far_required,
                 default=None,
                 metavar="BUS",
@@ -529,7 +555,7 @@ def fault_options(required: bool, t_fault: bool = True, far_required: bool | Non
                 [
                     click.option(
                         "--t-fault",
-                        type=float,
+                        type=FLOAT,
                         default=1.0,
                         show_default=True,
                         metavar="S",
@@ -547,7 +573,7 @@ def circuit_option(func):
     """``--circuit K``: which of parallel circuits BUS-FAR_BUS is faulted."""
     return click.option(
         "--circuit",
-        type=int,
+        type=INT,
         default=1,
         show_default=True,
         metavar="K",
@@ -559,7 +585,7 @@ def clear_cycles_option(help="Clearing after N cycles of the case frequency."):
     """``--clear-cycles N`` (cycles)."""
     return click.option(
         "--clear-cycles",
-        type=float,
+        type=FLOAT,
         default=6.0,
         show_default=True,
         metavar="N",
@@ -610,7 +636,7 @@ def tol_options(t_max: float = 1.0, t_max_help: str = "a CCT above it is an erro
         (
             click.option(
                 "--tol-ms",
-                type=float,
+                type=FLOAT,
                 default=1.0,
                 show_default=True,
                 metavar="MS",
@@ -618,7 +644,7 @@ def tol_options(t_max: float = 1.0, t_max_help: str = "a CCT above it is an erro
             ),
             click.option(
                 "--t-max",
-                type=float,
+                type=FLOAT,
                 default=t_max,
                 show_default=True,
                 metavar="S",
@@ -659,7 +685,7 @@ def storage_options(rating_help: str = "", multiple: bool = False, with_rating: 
         if multiple
         else click.option(
             "--esd-pct",
-            type=float,
+            type=FLOAT,
             default=None,
             metavar="P",
             help="ESD of P % of each generator's MVA at its HV bus (% of "
@@ -672,14 +698,14 @@ def storage_options(rating_help: str = "", multiple: bool = False, with_rating: 
             *([esd] if with_rating else []),
             click.option(
                 "--deadband-hz",
-                type=float,
+                type=FLOAT,
                 default=0.1,
                 show_default=True,
                 help="ESD controller deadband on f_i - f_COI (Hz).",
             ),
             click.option(
                 "--v-gate",
-                type=float,
+                type=FLOAT,
                 default=0.8,
                 show_default=True,
                 help="ESDs act only while their bus voltage is at least this (pu).",
@@ -695,7 +721,7 @@ def storage_options(rating_help: str = "", multiple: bool = False, with_rating: 
             ),
             click.option(
                 "--hysteresis-hz",
-                type=float,
+                type=FLOAT,
                 default=0.0,
                 show_default=True,
                 help="A running ESD stops only inside deadband - hysteresis (Hz).",
@@ -739,6 +765,51 @@ def far_end(spec: str, option: str) -> tuple[int, int]:
 STORAGE_SETTINGS = ("esd_model", "deadband_hz", "v_gate", "coi", "hysteresis_hz")
 
 
+def given_options(*names: str) -> list[str]:
+    """The options among `names` given on the command line (not left at their defaults).
+
+    Parameters
+    ----------
+    *names : str
+        Parameter names of the running command (``far_bus``).
+
+    Returns
+    -------
+    list of str
+        Those given, as options (``--far-bus``), in the order of `names`; empty outside a
+        command.
+    """
+    ctx = click.get_current_context(silent=True)
+    if ctx is None:
+        return []
+    return [
+        "--" + name.replace("_", "-")
+        for name in names
+        if name in ctx.params
+        and ctx.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
+    ]
+
+
+def refuse_given(names: tuple[str, ...], reason: str) -> None:
+    """Refuse options that have no effect in this run, rather than ignore them.
+
+    Parameters
+    ----------
+    names : tuple of str
+        Parameter names of the running command.
+    reason : str
+        Why they have none, completing "OPTIONS given ...": ``"without --fault"``.
+
+    Raises
+    ------
+    InputError
+        One of them given on the command line, naming every such option.
+    """
+    stray = given_options(*names)
+    if stray:
+        raise InputError(f"{', '.join(stray)} given {reason}")
+
+
 def check_storage_given(esd_pct, settings: tuple[str, ...] = STORAGE_SETTINGS) -> None:
     """Refuse storage settings given on the command line without --esd-pct: InputError
     naming them (nothing is ignored silently).
@@ -756,17 +827,8 @@ def check_storage_given(esd_pct, settings: tuple[str, ...] = STORAGE_SETTINGS) -
     InputError
         A storage setting given without a rating.
     """
-    if esd_pct is not None:
-        return
-    ctx = click.get_current_context()
-    given = [
-        "--" + name.replace("_", "-")
-        for name in settings
-        if name in ctx.params
-        and ctx.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
-    ]
-    if given:
-        raise InputError(f"{', '.join(given)} given without --esd-pct (no storage to set)")
+    if esd_pct is None:
+        refuse_given(settings, "without --esd-pct (no storage to set)")
 
 
 def controller(deadband_hz, v_gate, coi, hysteresis_hz, critical=()):
@@ -806,7 +868,7 @@ def parallel_options(func):
         (
             click.option(
                 "--workers",
-                type=int,
+                type=INT,
                 default=None,
                 metavar="N",
                 help="Local worker processes (default: the available cores, at most "

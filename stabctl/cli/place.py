@@ -11,6 +11,8 @@ import click
 from stabctl.cli.checks import check_writable, model_settings, search_settings
 from stabctl.cli.format import print_json, print_plan
 from stabctl.cli.options import (
+    FLOAT,
+    INT,
     AliasedOption,
     comma_list,
     controller,
@@ -21,6 +23,7 @@ from stabctl.cli.options import (
     out_file_option,
     parallel_options,
     read_fault_list,
+    refuse_given,
     reports_errors,
     storage_options,
     tol_options,
@@ -33,21 +36,21 @@ from stabctl.errors import InputError
 @faults_option
 @click.option(
     "--required-clearing-cycles",
-    type=float,
+    type=FLOAT,
     default=None,
     metavar="N",
     help="Every contingency stable when cleared after N cycles (cycles).",
 )
 @click.option(
     "--target-cct-gain",
-    type=float,
+    type=FLOAT,
     default=None,
     metavar="PCT",
     help="Required CCT of every contingency: its CCT without storage raised by PCT (%).",
 )
 @click.option(
     "--target-cct-s",
-    type=float,
+    type=FLOAT,
     default=None,
     metavar="S",
     help="Required CCT of every contingency (s).  Any mix of the three: the "
@@ -65,7 +68,7 @@ from stabctl.errors import InputError
 )
 @click.option(
     "--cost-mw",
-    type=float,
+    type=FLOAT,
     default=1.0,
     show_default=True,
     metavar="C",
@@ -73,7 +76,7 @@ from stabctl.errors import InputError
 )
 @click.option(
     "--cost-mwh",
-    type=float,
+    type=FLOAT,
     default=0.0,
     show_default=True,
     metavar="C",
@@ -84,7 +87,7 @@ from stabctl.errors import InputError
     "--site-cost",
     "cost_site",
     cls=AliasedOption,
-    type=float,
+    type=FLOAT,
     default=0.0,
     show_default=True,
     metavar="C",
@@ -99,18 +102,18 @@ from stabctl.errors import InputError
 )
 @click.option(
     "--zeta-min",
-    type=float,
+    type=FLOAT,
     default=None,
     metavar="Z",
     help="Least damping ratio of every electromechanical mode (bang-bang ESDs "
     "as their describing-function gain at --amplitude-hz).",
 )
 @click.option(
-    "--max-sites", type=int, default=None, metavar="N", help="At most N sites (greedy elimination)."
+    "--max-sites", type=INT, default=None, metavar="N", help="At most N sites (greedy elimination)."
 )
 @click.option(
     "--max-site-pct",
-    type=float,
+    type=FLOAT,
     default=50.0,
     show_default=True,
     metavar="P",
@@ -118,7 +121,7 @@ from stabctl.errors import InputError
 )
 @click.option(
     "--amplitude-hz",
-    type=float,
+    type=FLOAT,
     default=0.2,
     show_default=True,
     help="Relative-speed amplitude at which the damping is required (Hz).",
@@ -152,14 +155,14 @@ from stabctl.errors import InputError
 @tol_options()
 @click.option(
     "--max-iter",
-    type=int,
+    type=INT,
     default=10,
     show_default=True,
     help="Allocations simulated at most per round of constraint generation.",
 )
 @click.option(
     "--max-rounds",
-    type=int,
+    type=INT,
     default=6,
     show_default=True,
     help="Rounds of constraint generation at most (solve, check every "
@@ -246,6 +249,8 @@ def place(
         raise InputError(f"--max-sites must be >= 1, got {max_sites}")
     if zeta_min is not None and not 0 <= zeta_min < 1:
         raise InputError(f"--zeta-min must be in [0, 1), got {zeta_min:g}")
+    if zeta_min is None:
+        refuse_given(("amplitude_hz",), "without --zeta-min (no damping is required)")
     if max_rounds < 1:
         raise InputError(f"--max-rounds must be >= 1, got {max_rounds}")
     if all(v is None for v in (required_clearing_cycles, target_cct_gain, target_cct_s)):

@@ -10,6 +10,9 @@ import click
 
 from stabctl.cli.checks import check_writable
 from stabctl.cli.options import (
+    FLOAT,
+    INT,
+    PlainIntRange,
     _apply,
     clear_cycles_option,
     comma_list,
@@ -63,7 +66,7 @@ _LISTEN = (
     ),
     click.option(
         "--port",
-        type=click.IntRange(0, 65535),
+        type=PlainIntRange(0, 65535),
         default=C37_PORT,
         show_default=True,
         help="TCP port (0: any free one, printed).",
@@ -100,14 +103,14 @@ def _allowed(host: str, allow: str) -> tuple:
 def _serving(func):
     speed = click.option(
         "--speed",
-        type=float,
+        type=FLOAT,
         default=1.0,
         show_default=True,
         help="Time-stamp seconds per second: 1 real time, 0 as fast as the client reads.",
     )
     timeout = click.option(
         "--timeout",
-        type=float,
+        type=FLOAT,
         default=60.0,
         show_default=True,
         help="Longest silence of a peer before its command, and longest wait for it to "
@@ -127,7 +130,7 @@ def _listening(func):
 @tf_option()
 @RATE
 @pmu_noise_options
-@click.option("--seed", type=int, default=0, show_default=True, help="PMU noise seed.")
+@click.option("--seed", type=INT, default=0, show_default=True, help="PMU noise seed.")
 @PMU_AT
 @_serving
 @click.option(
@@ -270,7 +273,7 @@ def _serve(servers) -> None:
 )
 @click.option(
     "--frames",
-    type=click.IntRange(1, 10_000_000),
+    type=PlainIntRange(1, 10_000_000),
     required=True,
     help="Data frames to record.",
 )
@@ -306,13 +309,13 @@ def _host_port(address: str) -> tuple[str, int]:
 
 @pmu.command()
 @fault_run_options
-@click.option("--seed", type=int, default=0, show_default=True, help="PMU noise seed.")
+@click.option("--seed", type=INT, default=0, show_default=True, help="PMU noise seed.")
 @storage_options(" Required: the ESDs the controller commands.")
 @esd_model_option
 @_listening
 @click.option(
     "--speed",
-    type=float,
+    type=FLOAT,
     default=1.0,
     show_default=True,
     help="Time-stamp seconds per second: 1 real time (a real-time simulator), "
@@ -320,7 +323,7 @@ def _host_port(address: str) -> tuple[str, int]:
 )
 @click.option(
     "--timeout",
-    type=float,
+    type=FLOAT,
     default=60.0,
     show_default=True,
     help="Longest wait for the controller to connect, and for each answer (s).",
@@ -414,7 +417,7 @@ def plant(
 @pmu_noise_options
 @storage_options(" Required: the ESDs commanded, as the plant's.")
 @PMU_AT
-@click.option("--timeout", type=float, default=60.0, show_default=True, help="Longest silence (s).")
+@click.option("--timeout", type=FLOAT, default=60.0, show_default=True, help="Longest silence (s).")
 @reports_errors
 def control(
     case_name,

@@ -7,6 +7,7 @@ from __future__ import annotations
 import click
 
 from stabctl.cli.options import (
+    FLOAT,
     TF_AFTER_FAULT_S,
     _apply,
     clear_cycles_option,
@@ -19,7 +20,7 @@ from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are 
 
 RATE = click.option(
     "--rate",
-    type=float,
+    type=FLOAT,
     default=_PMU.rate,
     show_default=True,
     metavar="FPS",
@@ -41,7 +42,7 @@ def rate_latency_options(func):
             RATE,
             click.option(
                 "--latency-ms",
-                type=float,
+                type=FLOAT,
                 default=1000 * _PMU.latency_s,
                 show_default=True,
                 metavar="MS",
@@ -57,7 +58,7 @@ def pmu_noise_options(func):
         (
             click.option(
                 "--drop",
-                type=float,
+                type=FLOAT,
                 default=_PMU.drop_prob,
                 show_default=True,
                 metavar="P",
@@ -65,28 +66,28 @@ def pmu_noise_options(func):
             ),
             click.option(
                 "--tve-pct",
-                type=float,
+                type=FLOAT,
                 default=100 * _PMU.tve,
                 show_default=True,
                 help="Total vector error limit (%), C37.118.1 Table 3.",
             ),
             click.option(
                 "--fe-hz",
-                type=float,
+                type=FLOAT,
                 default=_PMU.fe_hz,
                 show_default=True,
                 help="Frequency error limit (Hz), C37.118.1 Table 4.",
             ),
             click.option(
                 "--rfe-hz-s",
-                type=float,
+                type=FLOAT,
                 default=_PMU.rfe_hz_s,
                 show_default=True,
                 help="ROCOF error limit (Hz/s), C37.118.1 Table 4.",
             ),
             click.option(
                 "--k-sigma",
-                type=float,
+                type=FLOAT,
                 default=_PMU.k_sigma,
                 show_default=True,
                 help="The limits are this many standard deviations of the errors.",
@@ -98,7 +99,7 @@ def pmu_noise_options(func):
 
 WINDOW = click.option(
     "--window-cycles",
-    type=float,
+    type=FLOAT,
     default=_PMU.window_cycles,
     show_default=True,
     metavar="C",

@@ -18,6 +18,8 @@ from stabctl.cli.format import (
 )
 from stabctl.cli.options import (
     _RANGES,
+    FLOAT,
+    INT,
     TF_AFTER_FAULT_S,
     check_storage_given,
     circuit_option,
@@ -31,6 +33,7 @@ from stabctl.cli.options import (
     out_file_option,
     plot_option,
     q_limits_option,
+    refuse_given,
     reports_errors,
     storage_options,
     subintervals_chosen,
@@ -110,11 +113,16 @@ def _build_events(
     if case_events:
         events += from_case(case)
     if fault is None:
-        given = {"--far-bus": far_bus, "--far-clear-cycles": far_clear_cycles}
-        stray = [k for k, v in given.items() if v is not None]
-        if stray:
-            raise InputError(f"{', '.join(stray)} given without --fault")
+        refuse_given(
+            ("far_bus", "circuit", "t_fault", "clear_cycles", "far_clear_cycles"),
+            "without --fault (--bus-fault has its own times)",
+        )
     else:
+        if far_bus is None:
+            refuse_given(
+                ("circuit", "far_clear_cycles"),
+                "without --far-bus (the fault is cleared at --clear-cycles, no line lost)",
+            )
         if clear_cycles < 0:
             raise InputError(f"--clear-cycles must be >= 0, got {clear_cycles:g}")
         if far_clear_cycles is not None and far_clear_cycles < 0:
@@ -152,14 +160,14 @@ def _build_events(
 @clear_cycles_option("Near-end clearing after N cycles of the case frequency")
 @click.option(
     "--far-clear-cycles",
-    type=float,
+    type=FLOAT,
     default=None,
     metavar="M",
     help="Far-end clearing after M cycles from fault start (cycles; default: N).",
 )
 @click.option(
     "--trip",
-    type=(int, str),
+    type=(INT, str),
     multiple=True,
     metavar="FROM TO[:K]",
     help="Trip circuit K (default 1; in data order, as --circuit counts) of line FROM-TO "
@@ -167,14 +175,14 @@ def _build_events(
 )
 @click.option(
     "--t-trip",
-    type=float,
+    type=FLOAT,
     multiple=True,
     metavar="S",
     help="Trip time (s): once for all trips or once per --trip (default 1.0).",
 )
 @click.option(
     "--bus-fault",
-    type=(str, float, float),
+    type=(str, FLOAT, FLOAT),
     multiple=True,
     metavar="BUS[:R:X] T_ON T_OFF",
     help="Three-phase fault at BUS from T_ON to T_OFF (s; inf: never cleared), no line "
@@ -183,7 +191,7 @@ def _build_events(
 )
 @click.option(
     "--close",
-    type=(int, str, float),
+    type=(INT, str, FLOAT),
     multiple=True,
     metavar="FROM TO[:K] T",
     help="Close again at T (s) circuit K (default 1) of line FROM-TO, opened before by "
@@ -191,14 +199,14 @@ def _build_events(
 )
 @click.option(
     "--trip-gen",
-    type=(int, float),
+    type=(INT, FLOAT),
     multiple=True,
     metavar="MACHINE T",
     help="Disconnect machine MACHINE (number as in the data) at T (s) (repeatable).",
 )
 @click.option(
     "--load-step",
-    type=(int, float, float, float),
+    type=(INT, FLOAT, FLOAT, FLOAT),
     multiple=True,
     metavar="BUS T P Q",
     help="Add P + jQ (pu on the system base at the power-flow voltage, constant "
@@ -206,7 +214,7 @@ def _build_events(
 )
 @click.option(
     "--vref-step",
-    type=(int, float, float),
+    type=(INT, FLOAT, FLOAT),
     multiple=True,
     metavar="MACHINE T DV",
     help="Step the voltage reference of machine MACHINE's exciter by DV (pu) at T (s): "
@@ -214,7 +222,7 @@ def _build_events(
 )
 @click.option(
     "--pref-step",
-    type=(int, float, float),
+    type=(INT, FLOAT, FLOAT),
     multiple=True,
     metavar="MACHINE T DP",
     help="Step the power reference of machine MACHINE's governor by DP (pu on the "
@@ -238,7 +246,7 @@ def _build_events(
 @q_limits_option
 @click.option(
     "--separation-limit",
-    type=float,
+    type=FLOAT,
     default=3.141592653589793,
     show_default="pi",
     metavar="RAD",
@@ -375,6 +383,7 @@ def simulate(
         pstess_default,
         case_events,
     )
+    n_own = len(events) - (fault is not None) - len(trip)  # the case's own events first
     events += _study_events(bus_fault, close, trip_gen, load_step, vref_step, pref_step)
     if tf is None and pstess_default and case.sw_con is not None:
         tf = float(case.sw_con[-1, 0])
@@ -386,6 +395,12 @@ def simulate(
     if late:
         raise InputError(
             f"{describe_event(late[0])}: starts at or after the end of the run (--tf {tf:g} s)"
+        )
+    cut = [e for e in events[n_own:] if any(tf <= t < math.inf for t in e.times())]
+    if cut:  # a clearing the run would never reach, reported as if it happened
+        raise InputError(
+            f"{describe_event(cut[0])}: ends at or after the end of the run (--tf {tf:g} s); "
+            "lengthen --tf, or give T_OFF inf to --bus-fault for a fault never cleared"
         )
     if step is not None:
         check_step_count(tf, step, case)  # refused before any work (building the model)

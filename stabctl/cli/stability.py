@@ -8,6 +8,7 @@ import click
 
 from stabctl.cli.checks import (
     PLOT_SUFFIXES,
+    check_run_end,
     check_suffix,
     check_writable,
     model_settings,
@@ -15,6 +16,7 @@ from stabctl.cli.checks import (
 )
 from stabctl.cli.format import print_cct, print_json, print_screening, print_sweep
 from stabctl.cli.options import (
+    INT,
     check_number,
     check_storage_given,
     circuit_option,
@@ -31,6 +33,7 @@ from stabctl.cli.options import (
     plot_option,
     q_limits_option,
     read_fault_list,
+    refuse_given,
     reports_errors,
     storage_options,
     tf_option,
@@ -73,7 +76,7 @@ search_option = click.option(
 @circuit_option
 @click.option(
     "--trip",
-    type=(int, str),
+    type=(INT, str),
     multiple=True,
     metavar="FROM TO[:K]",
     help="Also open circuit 1 of line FROM-TO at the clearing instant "
@@ -151,6 +154,8 @@ def cct(
     from stabctl.storage.devices import uniform_fleet
 
     check_storage_given(esd_pct)
+    if far_bus is None:
+        refuse_given(("circuit",), "without --far-bus (a bus fault loses no line)")
     search = replace(search_settings(tol_ms, t_max, tf), method=method)
     model = model_settings(conventions, None, q_limits)
     case = load_case(case_name)
@@ -355,6 +360,7 @@ def sweep_cct(
     for p in ratings:
         storage_fleet(case, p)
     faults = read_fault_list(case_name, faults_src)
+    check_run_end(faults, search)
     jobs = controlled_cct_jobs(
         case_name, faults, ratings, ctrl, search=search, model=model, esd_model=esd_model
     )

@@ -233,6 +233,7 @@ class DynamicModel:
         y_svc = np.zeros(case.n_bus, complex)
         np.add.at(y_svc, sv.bus_idx, 1j * sv.B0)
         S_free = S_free - 1j * y_svc.imag * V0**2
+        _warn_netted(case, has_mac, S_free)
         S_L = op.S_load - np.where(has_mac, 0.0, S_free)  # generation without machine
         fP, fQ, fIP, fIQ = frac.T
         S_Z = (1 - fP - fIP) * S_L.real + 1j * (1 - fQ - fIQ) * S_L.imag
@@ -1266,6 +1267,28 @@ def _call_evaluate_types() -> tuple:
 call_evaluate = by_address(
     "call_evaluate", ("x", "p", "net", "kept", "want_vbus", "dx", "out"), _call_evaluate_types
 )
+
+
+def _warn_netted(case: Case, has_mac: np.ndarray, S_free: np.ndarray) -> None:
+    """Name the generation the dynamic model nets as negative load: power-flow generation
+    (n_bus,) complex, pu, at buses without a machine (has_mac) and not a converter's or a
+    compensator's share (S_free).  PSS/E nets such generators only when told (GNET; the
+    import's --net-unmodelled); a case file gets the same said aloud."""
+    bus = np.nonzero(~has_mac & (np.abs(S_free) > 1e-6))[0]
+    if bus.size == 0:
+        return
+    shown = ", ".join(
+        f"bus {int(case.buses.number[b])}: {S_free[b].real:.4g}{S_free[b].imag:+.4g}j"
+        for b in bus[:10]
+    )
+    more = f" and {bus.size - 10} more" if bus.size > 10 else ""
+    warnings.warn(
+        f"case '{case.name}': generation at {bus.size} bus(es) without a machine is netted "
+        f"as negative constant-impedance load in dynamic runs ({shown}{more} pu); give "
+        "each a machine (mac_con) to model it",
+        UserWarning,
+        stacklevel=4,
+    )
 
 
 def _islanded(stage: Case, source_buses: np.ndarray, n_orig: int) -> np.ndarray:

@@ -208,8 +208,11 @@ def _recorded_to(end, cfg2, data, name: str) -> tuple:
         stamps = [c37.frame_time(d) - soc for d in data]
         reached = [k for k, t in enumerate(stamps) if t >= end.tf - 0.5e-6]
         data = data[: reached[0] + 1] if reached else data
-    whole = (end.frames is None or len(data) == end.frames) and (
-        end.tf is None or (data and c37.frame_time(data[-1]) - soc >= end.tf - 0.5e-6)
+    # whichever end comes first, as a TCP stream's (`c37_tcp._data_frames`)
+    whole = (
+        not end.given
+        or (end.frames is not None and len(data) == end.frames)
+        or (end.tf is not None and bool(data) and c37.frame_time(data[-1]) - soc >= end.tf - 0.5e-6)
     )
     last = f", the last stamped {c37.frame_time(data[-1]) - soc:.4f} s" if data else ""
     return cfg2, data, "" if whole else f"{name}: {len(data)} data frames{last}, before {end}"

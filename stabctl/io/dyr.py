@@ -140,7 +140,7 @@ def read_dyr(path) -> list[DyrRecord]:
     """
     path = input_file(path, "DYR file")
     try:
-        text = path.read_text(errors="replace")
+        text = path.read_text(encoding="utf-8-sig", errors="replace")  # a BOM as RAW's
     except OSError as exc:
         raise CaseError(f"{path}: cannot read DYR file: {exc.strerror or exc}") from None
     records: list = []

@@ -169,6 +169,22 @@ def _header(fields: list[str], where: str, required, optional) -> list[str]:
     return names
 
 
+def plain_number(text: str) -> bool:
+    """Whether `text` spells a number with ASCII characters only and no ``_``: Python's
+    int() and float() also read ``1_5`` as 15 and fullwidth digits (U+FF13) as 3, which
+    nobody types meaning them.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    bool
+    """
+    return text.isascii() and "_" not in text
+
+
 def number(
     row: CsvRow,
     column: str,
@@ -193,9 +209,13 @@ def number(
             raise InputError(f"{row.where()}: {column} is empty")
         return default
     try:
+        if not plain_number(text):
+            raise ValueError(text)
         v = float(text)
     except ValueError:
-        raise InputError(f"{row.where()}: {column} '{text}' is not a number") from None
+        raise InputError(
+            f"{row.where()}: {column} '{text}' is not a number (ASCII digits, no '_')"
+        ) from None
     if not math.isfinite(v) or not lo <= v <= hi:
         raise InputError(f"{row.where()}: {column} {text} is outside [{lo:g}, {hi:g}]")
     if integer and not text.lstrip("+-").isdigit():  # 3.0, 3e0: a measured value, not a label

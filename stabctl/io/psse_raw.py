@@ -1039,7 +1039,7 @@ def read_raw(
         raise CaseError(f"loads must be 'raw' or 'impedance', got {loads!r}")
     path = input_file(path, "RAW file")
     try:
-        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+        lines = path.read_text(encoding="utf-8-sig", errors="replace").splitlines()
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
     base, version, freq, first = _header(lines, path)

@@ -414,6 +414,25 @@ def case_to_dict(case: Case, licence: str = "") -> dict:
     }
 
 
+#: the top-level keys of the own format (`write_case_json`)
+_CASE_KEYS = frozenset(
+    (
+        "format",
+        "version",
+        "name",
+        "description",
+        "source",
+        "licence",
+        "base_mva",
+        "freq_hz",
+        "tables",
+        "sw_con",
+        "events",
+        "extra",
+    )
+)
+
+
 def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
     """A Case from the own-format dict. Raises :class:`CaseError` on a wrong format or
     version, an unknown table or column name, or invalid data."""
@@ -424,6 +443,15 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
             f"{where}: case format version {data.get('version')!r} not supported "
             f"(this stabctl reads version {FORMAT_VERSION})"
         )
+    unknown_keys = set(data) - _CASE_KEYS
+    if unknown_keys:
+        raise CaseError(
+            f"{where}: unknown key(s) {sorted(unknown_keys)} (a case holds "
+            f"{', '.join(sorted(_CASE_KEYS))}; nothing else is read)"
+        )
+    for key in ("name", "description", "source", "licence"):
+        if key in data and not isinstance(data[key], str):
+            raise CaseError(f"{where}: '{key}' must be text, got {data[key]!r}")
     raw_tables = data.get("tables")
     if not isinstance(raw_tables, Mapping):
         raise CaseError(

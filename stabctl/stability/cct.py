@@ -662,7 +662,7 @@ def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
 
 def _check_trips(case, fault: LineFault) -> None:
     """A further trip must not name the faulted circuit itself (it would do nothing)."""
-    if not fault.trips:
+    if not fault.trips or fault.far_bus is None:  # a bus fault opens no circuit of its own
         return
     faulted = circuit_row(case, fault.bus, fault.far_bus, fault.circuit)
     for a, b in fault.trips:

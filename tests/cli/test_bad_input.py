@@ -706,3 +706,175 @@ def test_an_option_of_one_value_given_twice_is_refused(no_simulation, args, need
     without a word); an option of one value given twice is a usage error (exit 2), under
     either of its names; repeatable options and flags may still come more than once."""
     assert_error(run(*args), needle)
+
+
+# -- fifth round: options without effect, spellings of numbers, case keys, run ends --------
+
+KUNDUR_SIM = ("simulate", "kundur")
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (KUNDUR_SIM + ("--circuit", 2, "--tf", 1), "--circuit given without --fault"),
+        (KUNDUR_SIM + ("--t-fault", 0.5, "--tf", 1), "--t-fault given without --fault"),
+        (
+            KUNDUR_SIM + ("--bus-fault", 3, 1, 1.1, "--clear-cycles", 8, "--tf", 2),
+            "--clear-cycles given without --fault",
+        ),
+        (
+            KUNDUR_SIM + ("--fault", 3, "--far-clear-cycles", 8, "--tf", 2),
+            "--far-clear-cycles given without --far-bus",
+        ),
+        (("cct", "kundur", "--fault", 3, "--circuit", 2), "--circuit given without --far-bus"),
+        (("eig", "kundur", "--out-dir", "eigdir"), "--out-dir given without --report"),
+        (("omib", "--pmax", 1.2, "--delta0", 0.3), "--delta0 given with --pmax"),
+        (
+            ("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 101, "--runs", 1)
+            + ("--ambient-s", 0, "--ambient-pct", 5),
+            "--ambient-pct given with --ambient-s 0",
+        ),
+        (
+            ("place", "kundur", "--faults", "DEFAULT", "--workers", 1)
+            + ("--target-cct-gain", 5, "--amplitude-hz", 0.05),
+            "--amplitude-hz given without --zeta-min",
+        ),
+    ],
+)
+def test_an_option_without_effect_in_the_run_is_refused(no_simulation, args, needle):
+    """Each of these ran (exit 0) with the option silently dropped: the fault options of a
+    flat run or a --bus-fault, a far-end clearing of a bus fault, --out-dir without a
+    report, delta0 beside a given Pmax, ambient settings without ambient runs, a damping
+    amplitude without a damping requirement."""
+    assert_error(run(*args), needle)
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (FAULT + ("--tf", 2, "--clear-cycles", 500), "ends at or after the end of the run"),
+        (FAULT + ("--tf", 2, "--far-clear-cycles", 500), "ends at or after the end of the run"),
+        (KUNDUR_SIM + ("--bus-fault", 3, 1, 9.3, "--tf", 2), "ends at or after the end"),
+    ],
+)
+def test_a_clearing_after_the_end_of_the_run_is_refused(no_simulation, args, needle):
+    """A clearing at 9.33 s in a 2 s run was reported as 'cleared at 9.333 s ... line
+    tripped' while the run never cleared it.  A fault never cleared is --bus-fault's T_OFF
+    inf, still accepted (`test_bus_fault_never_cleared_runs`)."""
+    assert_error(run(*args), needle)
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (("simulate", "kundur", "--fault", "1_01", "--far-bus", 3), "'1_01': write numbers"),
+        (FAULT + ("--tf", "1_2"), "'1_2': write numbers"),
+        (("simulate", "kundur", "--fault", "\uff13", "--far-bus", 101), "write numbers"),
+        (("omib", "--pmax", "1_2"), "'1_2': write numbers"),
+    ],
+)
+def test_numbers_are_written_in_ascii_digits_without_underscores(no_simulation, args, needle):
+    """Python's int() and float() read 1_01 as 101 and a fullwidth 3 as 3: --fault 1_01
+    faulted bus 101 and --tf 1_2 ran to 12 s."""
+    assert_error(run(*args), needle)
+
+
+@pytest.mark.parametrize("cell,column", [("1_5", "t_fault"), ("\uff13", "bus")])
+def test_a_faults_csv_number_is_written_in_ascii_digits(no_simulation, tmp_path, cell, column):
+    """A t_fault cell 1_5 was read as 15 s, a bus cell of a fullwidth 3 as bus 3."""
+    rows = {"t_fault": f"3,101,{cell}", "bus": f"{cell},101,1"}[column]
+    faults = tmp_path / "f.csv"
+    faults.write_text(f"bus,far_bus,t_fault\n{rows}\n", encoding="utf-8")
+    out = tmp_path / "o.jsonl"
+    res = run("sweep-cct", "kundur", "--workers", 1, "--faults", faults, "--out", out)
+    assert_error(res, f"f.csv:2: {column}", "ASCII digits")
+    assert not out.exists()
+
+
+def test_a_sweep_whose_runs_end_before_a_clearing_is_refused_before_any_work(
+    no_simulation, tmp_path
+):
+    """sweep-cct recorded each such fault as a failed job and exited 0."""
+    faults = tmp_path / "late.csv"
+    faults.write_text("bus,far_bus,t_fault\n3,101,3\n", encoding="utf-8")
+    out = tmp_path / "o.jsonl"
+    res = run("sweep-cct", "kundur", "--workers", 1, "--faults", faults, "--out", out, "--tf", 2.5)
+    assert_error(res, "--tf 2.5 s", "cleared as late as 4 s")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "key,value,needle",
+    [
+        ("solver_options", {"tol": 1e-3}, "unknown key(s) ['solver_options']"),
+        ("name", [1, 2], "'name' must be text"),
+        ("freq_hz", 1e-300, "freq_hz must be a nominal frequency in [1, 1000] Hz"),
+    ],
+)
+def test_a_case_file_key_that_would_be_ignored_or_misread_is_refused(tmp_path, key, value, needle):
+    """An unknown top-level key was ignored, a list as the case name printed as such, and
+    a 1e-300 Hz case ran (every cycle 1e300 s long)."""
+    d = pstio.case_to_dict(load_case("kundur"))
+    d[key] = value
+    path = tmp_path / "c.json"
+    path.write_text(json.dumps(d), encoding="utf-8")
+    assert_error(run("simulate", path, "--tf", 0.1), needle)
+
+
+def test_generation_at_a_bus_without_a_machine_is_named_when_netted(tmp_path):
+    """Kundur with machine 1 moved off the swing bus ran without a word, the swing bus's
+    7.26 pu netted as negative load."""
+    d = pstio.case_to_dict(load_case("kundur"))
+    machines = d["tables"]["machines"]
+    machines["rows"][0][machines["columns"].index("bus")] = 4
+    path = tmp_path / "c.json"
+    path.write_text(json.dumps(d), encoding="utf-8")
+    res = run("simulate", path, "--tf", 0.1)
+    assert res.exit_code == 0, res.output
+    assert "generation at 1 bus(es) without a machine is netted" in res.stderr
+    assert "bus 1: 7.261" in res.stderr
+
+
+def test_a_dyr_file_with_a_byte_order_mark_is_read_as_a_raw_file_is(tmp_path):
+    """A DYR file starting with a BOM was refused as a malformed record; a RAW file with
+    one was read."""
+    dyr = tmp_path / "bom.dyr"
+    dyr.write_text("\ufeff" + (PSSE / "smib.dyr").read_text(encoding="utf-8"), encoding="utf-8")
+    out = tmp_path / "p.json"
+    res = run("import-psse", PSSE / "smib_v33.raw", dyr, "-o", out)
+    assert res.exit_code == 0, res.output
+    assert json.loads(out.read_text(encoding="utf-8"))["tables"]["machines"]["rows"]
+
+
+def test_a_bus_fault_cct_takes_further_trips(no_simulation):
+    """cct --fault 3 --trip 13 101 (no --far-bus) failed with 'bus None is not in case'."""
+    from stabctl.stability.cct import LineFault, _check_trips
+
+    _check_trips(load_case("kundur"), LineFault(3, None, 1.0, trips=((13, 101),)))
+
+
+def test_estimate_track_ends_at_the_first_end_reached_and_refuses_pmu_settings(tmp_path):
+    """With --until and --frames both given a recording that reached one of them was
+    named short (exit 2); --drop and --window-cycles were accepted and changed nothing
+    (its frames are the recorded ones)."""
+    pytest.importorskip("pyc37")
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from pmu_streams import kundur_stream
+
+    from stabctl.estimation import c37
+
+    _, _, cfg, frames = kundur_stream(t_end=1.2)
+    rec = tmp_path / "r.c37"
+    c37.record(rec, cfg, frames)
+    out = tmp_path / "t.csv"
+    base = ["estimate", "track", "kundur", "--source", str(rec), "--out", str(out)]
+    for ends in (["--until", "0.1", "--frames", "100"], ["--until", "1.1", "--frames", "3"]):
+        res = CliRunner().invoke(main, [*base, *ends])
+        assert res.exit_code == 0, res.output
+    assert len(out.read_text(encoding="utf-8").splitlines()) == 1 + 3  # header + 3 frames
+    out.unlink()
+    for option in (["--drop", "0.5"], ["--window-cycles", "8"]):
+        assert_error(CliRunner().invoke(main, [*base, *option]), "given to estimate track")
+        assert not out.exists()
