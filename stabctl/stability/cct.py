@@ -31,7 +31,7 @@ Both end in the same cell where the verdict is monotone in the clearing time (ev
 of Kundur's screening and every fourth of miniWECC's, `benchmarks/bench_cct.py`).
 "sime" takes fewer runs there (Kundur 12.4 against 14.5 per CCT, 10.3 against 12.4 at the
 step h; miniWECC 12.8 against 14.4, 10.7 against 12.3 at h) and less time on a sample of
-ACTIVSg2000's N-1 (2.12 s a search against 2.49, the same counts of CCTs and verdicts;
+ACTIVSg2000's N-1 (1.35 s a search against 1.58, the same counts of CCTs and verdicts;
 `benchmarks/bench_cct.py --activsg-sample`), but assumes the verdict monotone below a
 stable probe, so bisection stays the default.
 Neither comes near 5 runs per CCT: the two ends of the final cell and their reruns at
