@@ -233,7 +233,7 @@ class PlainIntRange(_Plain, click.IntRange):
     """click's IntRange, `plain_number` spellings only."""
 
 
-#: the number types of every option and argument (``type=INT`` would read ``1_01`` as 101)
+#: the number types of every option and argument (``type=int`` would read ``1_01`` as 101)
 INT, FLOAT = PlainInt(), PlainFloat()
 
 
@@ -752,6 +752,8 @@ def far_end(spec: str, option: str) -> tuple[int, int]:
     """
     head, _, ckt = spec.partition(":")
     try:
+        if not plain_number(spec):
+            raise ValueError(spec)
         to, k = int(head), int(ckt) if ckt else 1
     except ValueError:
         msg = f"{option} ... {spec}: give the far bus as TO or TO:K (integers)"

@@ -40,6 +40,7 @@ from stabctl.cli.options import (
     tf_option,
 )
 from stabctl.errors import InputError
+from stabctl.io.inputs import plain_number
 
 
 def _bus_fault(spec: str, t_on: float, t_off: float):
@@ -49,6 +50,8 @@ def _bus_fault(spec: str, t_on: float, t_off: float):
 
     parts = spec.split(":")
     try:
+        if not plain_number(spec):
+            raise ValueError(spec)
         bus = int(parts[0])
         r, x = (float(parts[1]), float(parts[2])) if len(parts) == 3 else (0.0, 0.0)
     except ValueError:

@@ -771,6 +771,8 @@ def test_a_clearing_after_the_end_of_the_run_is_refused(no_simulation, args, nee
         (FAULT + ("--tf", "1_2"), "'1_2': write numbers"),
         (("simulate", "kundur", "--fault", "\uff13", "--far-bus", 101), "write numbers"),
         (("omib", "--pmax", "1_2"), "'1_2': write numbers"),
+        (KUNDUR_SIM + ("--trip", 3, "1_01"), "--trip ... 1_01: give the far bus"),
+        (KUNDUR_SIM + ("--bus-fault", "1_01", 1, 1.1), "--bus-fault 1_01 1 1.1: BUS is"),
     ],
 )
 def test_numbers_are_written_in_ascii_digits_without_underscores(no_simulation, args, needle):
