@@ -414,23 +414,19 @@ def case_to_dict(case: Case, licence: str = "") -> dict:
     }
 
 
-#: the top-level keys of the own format (`write_case_json`)
-_CASE_KEYS = frozenset(
-    (
-        "format",
-        "version",
-        "name",
-        "description",
-        "source",
-        "licence",
-        "base_mva",
-        "freq_hz",
-        "tables",
-        "sw_con",
-        "events",
-        "extra",
-    )
+#: the own format's scalar keys, written first in this order (`write_case_json`)
+_HEAD_KEYS = (
+    "format",
+    "version",
+    "name",
+    "description",
+    "source",
+    "licence",
+    "base_mva",
+    "freq_hz",
 )
+#: every top-level key of the own format
+_CASE_KEYS = frozenset((*_HEAD_KEYS, "tables", "sw_con", "events", "extra"))
 
 
 def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
@@ -570,19 +566,7 @@ def write_case_json(case: Case, path: str | Path, licence: str = "") -> Path:
     Python's shortest round-trip repr, so reading gives back identical values.
     """
     d = case_to_dict(case, licence)
-    head = {
-        k: d[k]
-        for k in (
-            "format",
-            "version",
-            "name",
-            "description",
-            "source",
-            "licence",
-            "base_mva",
-            "freq_hz",
-        )
-    }
+    head = {k: d[k] for k in _HEAD_KEYS}
     parts = ["{"]
     for k, v in head.items():
         parts.append(f"  {json.dumps(k)}: {json.dumps(v)},")
