@@ -50,5 +50,6 @@ checks each rule):
    arguments (what its caller holds for the whole call); arrays it allocates itself are
    handed to a kernel of their own that borrows them (`stabctl.dynamics.model.
    _evaluate_into`).  A borrowed array is never returned or stored.  Without it each
-   call counted references atomically: half of a run's time on ACTIVSg2000.
+   call counted references atomically: half of a run's time on ACTIVSg2000
+   (``python benchmarks/bench_refcounts.py`` prints the increments left per step).
 """
