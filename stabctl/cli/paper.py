@@ -44,8 +44,9 @@ def paper(out_dir, resume, only):
     with --resume). Only when every section has succeeded are the reports moved into OUT_DIR
     and the records written to OUT_DIR/table4_<case>.jsonl, OUT_DIR/estimation_cct_<case>.jsonl
     and OUT_DIR/placement_<case>_screening.jsonl, replacing the old ones; reports and records
-    hold no timings or other run-dependent values (two runs give identical files), those
-    go to OUT_DIR/run_log.json (seconds per section, every progress line).
+    hold no timings or other run-dependent values (two runs on one machine give identical
+    files; another machine's libm moves the storage energies in their third or fourth
+    digit), those go to OUT_DIR/run_log.json (seconds per section, every progress line).
     """
     from stabctl.studies.paper import RUN_LOG, run_summary, write_paper_report
 
