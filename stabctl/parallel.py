@@ -214,24 +214,39 @@ def _record(line: str) -> dict | None:
     ok = (
         isinstance(rec, dict)
         and isinstance(rec.get("key"), str)
-        and rec.get("status") in ("ok", "verdict", "failed")
+        and rec.get("status") in _STATUS_FIELD
+        and isinstance(rec.get(_STATUS_FIELD[rec["status"]]), (dict, str))
     )
     return rec if ok else None
 
 
+#: what a whole record of each status holds: its result, its verdict or its error
+_STATUS_FIELD = {"ok": "result", "verdict": "verdict", "failed": "error"}
+
+
 def read_records(path: str | Path) -> dict[str, dict]:
-    """Records of an output file: key -> last line of that key.  Lines that are not whole
-    sweep records (a line cut by a kill) are skipped with a warning; a missing file gives
-    {}.  Raises InputError for a line longer than MAX_RECORD_LINE."""
+    """Records of an output file: key -> last line of that key (a retry's record after
+    its failed one).  Lines that are not whole sweep records (a line cut by a kill, a
+    record without its result) are skipped with a warning; a missing file gives {}.
+    Raises InputError for a line longer than MAX_RECORD_LINE, or a job recorded twice
+    other than after a failure (a file edited by hand: which result holds?)."""
     path = Path(path)
     if not path.exists():
         return {}
-    records = {}
+    records: dict[str, dict] = {}
+    first: dict[str, int] = {}
     for n, _, rec in _record_lines(path):
         if rec is None:
             warnings.warn(f"{path} line {n}: not a sweep record, ignored", stacklevel=2)
-        else:
-            records[rec["key"]] = rec
+            continue
+        key = rec["key"]
+        if key in records and records[key]["status"] != "failed":  # a retry follows a failure
+            raise InputError(
+                f"{path} line {n}: job {key} is recorded again (first on line {first[key]}); "
+                "a records file holds one result per job: remove one of the two lines"
+            )
+        records[key] = rec
+        first.setdefault(key, n)
     return records
 
 

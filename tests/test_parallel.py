@@ -955,3 +955,32 @@ def test_an_output_file_without_any_record_is_left_alone(tmp_path):
     cut.write_text('{"key": "square/2", "inp')
     with pytest.warns(UserWarning, match="cut by a kill"):
         assert set_aside_damaged(cut) == [1]
+
+
+def test_a_record_without_its_result_is_not_a_whole_record(tmp_path):
+    """A line with status ok and no result (a file edited by hand) crashed sweep-cct and
+    screen with KeyError; it is now a damaged line like a cut one."""
+    from stabctl.parallel import read_records, set_aside_damaged
+
+    out = tmp_path / "o.jsonl"
+    good = {"key": "a", "status": "ok", "result": {"cct_s": 0.2}}
+    out.write_text(json.dumps(good) + "\n" + json.dumps({"key": "b", "status": "ok"}) + "\n")
+    with pytest.warns(UserWarning, match="line 2: not a sweep record"):
+        assert list(read_records(out)) == ["a"]
+    with pytest.warns(UserWarning, match="moved to"):
+        assert set_aside_damaged(out) == [2]
+
+
+def test_a_job_recorded_twice_is_refused_unless_the_first_failed(tmp_path):
+    """A key appended again with another CCT was taken silently (the last line won)."""
+    from stabctl.parallel import read_records
+
+    out = tmp_path / "o.jsonl"
+    rec = {"key": "a", "status": "ok", "result": {"cct_s": 0.2}}
+    failed = {"key": "a", "status": "failed", "error": "SimulationError: x"}
+    out.write_text(json.dumps(failed) + "\n" + json.dumps(rec) + "\n")
+    assert read_records(out)["a"]["result"]["cct_s"] == 0.2  # a retry after a failure
+    with out.open("a") as f:
+        f.write(json.dumps({**rec, "result": {"cct_s": 0.999}}) + "\n")
+    with pytest.raises(InputError, match="line 3: job a is recorded again"):
+        read_records(out)

@@ -21,6 +21,7 @@ from stabctl.cli.options import (
     fault_options,
     json_option,
     model_options,
+    refuse_given,
     reports_errors,
     storage_options,
     tf_option,
@@ -87,15 +88,19 @@ def _allowed(host: str, allow: str) -> tuple:
     an empty item or a repeat: `comma_list`); warns when listening beyond loopback to any
     peer."""
     import ipaddress
-    import warnings
 
+    if not host.strip():
+        raise InputError(
+            "--host '': an empty address listens on every interface; give 0.0.0.0 (or :: "
+            "for IPv6) to mean that, or a local address"
+        )
     given = comma_list(allow, "--allow", ipaddress.ip_address, "an IP address") if allow else []
     peers = tuple(str(a) for a in given)
-    if host not in _LOOPBACK and not peers:
-        warnings.warn(
-            f"listening on {host}: any host that reaches this port may connect "
+    if host not in _LOOPBACK and not peers:  # said now, before the server waits for peers
+        click.echo(
+            f"warning: listening on {host}: any host that reaches this port may connect "
             "(name the peers with --allow IP[,IP...])",
-            stacklevel=2,
+            err=True,
         )
     return peers
 
@@ -455,6 +460,10 @@ def control(
 
     if esd_pct is None:
         raise InputError("pmu control needs --esd-pct")
+    refuse_given(
+        ("drop", "window_cycles"),
+        "to pmu control: its frames are the plant's, as received (no PMU is simulated)",
+    )
     host, port = _host_port(address)
     settings = pmu_settings(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles

@@ -739,6 +739,10 @@ KUNDUR_SIM = ("simulate", "kundur")
             + ("--target-cct-gain", 5, "--amplitude-hz", 0.05),
             "--amplitude-hz given without --zeta-min",
         ),
+        (
+            ("pmu", "control", "kundur", "127.0.0.1:9", "--esd-pct", 5, "--drop", 0.5),
+            "--drop given to pmu control",
+        ),
     ],
 )
 def test_an_option_without_effect_in_the_run_is_refused(no_simulation, args, needle):

@@ -262,16 +262,17 @@ def test_record_beyond_the_stream_keeps_what_came_and_says_so(tmp_path):
     assert len(c37.replay(out, c37.stream_config(case, pm.machine_pmus(case), 60))) == 121
 
 
-def test_listening_beyond_loopback_without_allow_list_warns():
+def test_listening_beyond_loopback_without_allow_list_warns(capsys):
     """`--host 0.0.0.0` with no --allow is named a warning (any host that reaches the
-    port may connect); with --allow it is not."""
-    import warnings
-
+    port may connect) as the server starts, not when it ends; with --allow it is not.  An
+    empty --host, which listened on every interface, is refused."""
     from stabctl.cli.pmu import _allowed
+    from stabctl.errors import InputError
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        assert _allowed("0.0.0.0", "") == ()
-        assert _allowed("0.0.0.0", "10.0.0.5, 10.0.0.6") == ("10.0.0.5", "10.0.0.6")
-        assert _allowed("127.0.0.1", "") == ()
-    assert len(caught) == 1 and "listening on 0.0.0.0: any host" in str(caught[0].message)
+    assert _allowed("0.0.0.0", "") == ()
+    assert _allowed("0.0.0.0", "10.0.0.5, 10.0.0.6") == ("10.0.0.5", "10.0.0.6")
+    assert _allowed("127.0.0.1", "") == ()
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("warning: listening on 0.0.0.0: any host")
+    with pytest.raises(InputError, match="--host '': an empty address"):
+        _allowed("", "")
