@@ -406,29 +406,35 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
         conn = socket.create_connection((host, port), timeout=timeout)
     except OSError as exc:
         raise InputError(f"no plant at {host}:{port}: {exc.strerror or exc}") from None
-    n = 0
-    with conn:
-        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        conn.sendall(CommandFrame(cfg.idcode, "cfg2").convert2bytes())
-        cfg2 = c37.read_config(_read_frame(conn) or b"", f"{host}:{port}'s CFG-2")
-        names = cfg2.get_station_name()
-        names = [str(x).strip() for x in (names if isinstance(names, list) else [names])]
-        if names != [p.label for p in cfg.pmus]:
-            raise InputError(f"{host}:{port} streams PMUs {names}, not the controller's")
-        if cfg2.get_data_rate() != cfg.rate:
-            raise InputError(
-                f"{host}:{port} streams {cfg2.get_data_rate()} frames/s, the controller's "
-                f"estimator is tuned to {cfg.rate:g} (give --rate {cfg2.get_data_rate()})"
-            )
-        conn.sendall(CommandFrame(cfg.idcode, "start").convert2bytes())
-        last = None
-        while (data := _read_frame(conn)) is not None:
-            if _end_time(data) is not None:
-                return n
-            frame = c37.parse_frame(cfg, cfg2, data)
-            soc, counts = c37.time_stamp(cfg, frame.t)
-            conn.sendall(modes_frame(cfg.idcode, soc, counts, controller.act(frame)))
-            n, last = n + 1, frame.t
+    n, last = 0, None
+    try:
+        with conn:
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            conn.sendall(CommandFrame(cfg.idcode, "cfg2").convert2bytes())
+            cfg2 = c37.read_config(_read_frame(conn) or b"", f"{host}:{port}'s CFG-2")
+            names = cfg2.get_station_name()
+            names = [str(x).strip() for x in (names if isinstance(names, list) else [names])]
+            if names != [p.label for p in cfg.pmus]:
+                raise InputError(f"{host}:{port} streams PMUs {names}, not the controller's")
+            if cfg2.get_data_rate() != cfg.rate:
+                raise InputError(
+                    f"{host}:{port} streams {cfg2.get_data_rate()} frames/s, the controller's "
+                    f"estimator is tuned to {cfg.rate:g} (give --rate {cfg2.get_data_rate()})"
+                )
+            conn.sendall(CommandFrame(cfg.idcode, "start").convert2bytes())
+            while (data := _read_frame(conn)) is not None:
+                if _end_time(data) is not None:
+                    return n
+                frame = c37.parse_frame(cfg, cfg2, data)
+                soc, counts = c37.time_stamp(cfg, frame.t)
+                conn.sendall(modes_frame(cfg.idcode, soc, counts, controller.act(frame)))
+                n, last = n + 1, frame.t
+    except OSError as exc:  # a reset or broken pipe (not a plant, or a second controller)
+        what = "fell silent" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc))
+        raise InputError(
+            f"the plant at {host}:{port}: {what}, after {n} frame(s) answered (a plant is "
+            "`stabctl pmu plant`, one controller at a time)"
+        ) from None
     at = "" if last is None else f", the last at t = {last:.4f} s"
     raise PlantStopped(
         f"the plant at {host}:{port} closed the loop without ending its run, after {n} "

@@ -276,3 +276,33 @@ def test_listening_beyond_loopback_without_allow_list_warns(capsys):
     assert len(err) == 1 and err[0].startswith("warning: listening on 0.0.0.0: any host")
     with pytest.raises(InputError, match="--host '': an empty address"):
         _allowed("", "")
+
+
+def test_a_peer_that_resets_the_controller_is_named_by_its_address():
+    """`pmu control` against a server that is not a plant (a `pmu serve`) ended with
+    exit 141 and no message: the connection's BrokenPipeError was taken for a closed
+    stdout.  A reset or broken connection is now an InputError naming the address."""
+    import socket
+    import struct
+    import threading
+
+    from stabctl.errors import InputError
+    from stabctl.estimation import c37
+    from stabctl.estimation import pmu as pmus
+    from stabctl.estimation.c37_loop import serve_controller
+
+    srv = socket.create_server(("127.0.0.1", 0))
+    port = srv.getsockname()[1]
+
+    def reset_at_once():
+        conn, _ = srv.accept()
+        conn.recv(64)
+        conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        conn.close()  # an RST, not a FIN
+
+    threading.Thread(target=reset_at_once, daemon=True).start()
+    case = stabctl.load_case("kundur")
+    cfg = c37.stream_config(case, pmus.machine_pmus(case), 60)
+    with pytest.raises(InputError, match=f"the plant at 127.0.0.1:{port}: "):
+        serve_controller(None, cfg, "127.0.0.1", port, 5)  # reset before any frame
+    srv.close()
