@@ -23,6 +23,7 @@ from stabctl.cli.options import (
     controller,
     esd_model_option,
     fault_options,
+    given_options,
     json_option,
     model_options,
     out_file_option,
@@ -300,16 +301,9 @@ def _source(text):
     options given with it are refused, not ignored."""
     if text is None:
         return None
-    from click.core import ParameterSource
-
     from stabctl.estimation.sources import parse_source
 
-    ctx = click.get_current_context()
-    clash = [
-        f"--{name.replace('_', '-')}"
-        for name in ("runs", "ambient_s", "ambient_pct", "ambient_tau_s", "ambient_runs")
-        if ctx.get_parameter_source(name) is ParameterSource.COMMANDLINE
-    ]
+    clash = given_options("runs", "ambient_s", "ambient_pct", "ambient_tau_s", "ambient_runs")
     if clash:
         raise InputError(
             f"--source evaluates the one stream received; {', '.join(clash)} cannot go with it"

@@ -112,9 +112,10 @@ def _build_events(
 ):
     from stabctl.dynamics.events import LineTrip, fault_with_clearing, from_case, from_sw_con
 
-    events = list(from_sw_con(case)) if pstess_default else []
+    own = list(from_sw_con(case)) if pstess_default else []
     if case_events:
-        events += from_case(case)
+        own += from_case(case)
+    events: list = []
     if fault is None:
         refuse_given(
             ("far_bus", "circuit", "t_fault", "clear_cycles", "far_clear_cycles"),
@@ -153,7 +154,7 @@ def _build_events(
             events.append(LineTrip(a, to, t, circuit=k))
     elif t_trips:
         raise InputError("--t-trip given without --trip")
-    return events
+    return own, events
 
 
 @click.command()
@@ -373,7 +374,7 @@ def simulate(
     if not separation_limit > 0:
         raise InputError(f"--separation-limit must be > 0 rad, got {separation_limit:g}")
     case = load_case(case_name)
-    events = _build_events(
+    own, events = _build_events(
         case,
         fault,
         far_bus,
@@ -386,8 +387,8 @@ def simulate(
         pstess_default,
         case_events,
     )
-    n_own = len(events) - (fault is not None) - len(trip)  # the case's own events first
-    events += _study_events(bus_fault, close, trip_gen, load_step, vref_step, pref_step)
+    given = events + _study_events(bus_fault, close, trip_gen, load_step, vref_step, pref_step)
+    events = own + given  # the case's own first
     if tf is None and pstess_default and case.sw_con is not None:
         tf = float(case.sw_con[-1, 0])
     elif tf is None:
@@ -399,8 +400,8 @@ def simulate(
         raise InputError(
             f"{describe_event(late[0])}: starts at or after the end of the run (--tf {tf:g} s)"
         )
-    cut = [e for e in events[n_own:] if any(tf <= t < math.inf for t in e.times())]
-    if cut:  # a clearing the run would never reach, reported as if it happened
+    cut = [e for e in given if any(tf <= t < math.inf for t in e.times())]
+    if cut:  # a clearing the run would never reach (a case's own may end beyond --tf)
         raise InputError(
             f"{describe_event(cut[0])}: ends at or after the end of the run (--tf {tf:g} s); "
             "lengthen --tf, or give T_OFF inf to --bus-fault for a fault never cleared"
