@@ -328,6 +328,7 @@ def _stage(nets, s):
         nets.Z22[s],
         nets.R[s],
         nets.R_mac[s],
+        nets.Z_mac[s],
         nets.switched_on[s],
         nets.targets[s],
         nets.steps[s],

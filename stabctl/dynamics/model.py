@@ -698,7 +698,8 @@ class KernelNetwork(NamedTuple):
     `stabctl.dynamics.integrator.integrate` each is stacked by stage on a first axis): Y11
     (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 and Z22 = inv(Y22) (n_nc, n_nc), R
     (n_bus, n_mac + n_nc), R_mac (n_mac, n_mac + n_nc) its machine buses' rows (R (0, n_mac +
-    n_nc) in a run that records no bus voltage); complex pu on the system base; targets (n_mac,
+    n_nc) in a run that records no bus voltage), Z_mac (n_mac,) the machines' internal
+    impedances (0: tripped); complex pu on the system base; targets (n_mac,
     2) the playback sources' targets (`ReducedNetwork.targets`); switched_on (n_motor,) float,
     1.0 for each motor in service in the stage (`ReducedNetwork.switched_on`); steps (n_exc +
     n_tg,) float, the exciters' VREF and governors' PREF changes in the stage
@@ -711,6 +712,7 @@ class KernelNetwork(NamedTuple):
     Z22: np.ndarray
     R: np.ndarray
     R_mac: np.ndarray
+    Z_mac: np.ndarray
     switched_on: np.ndarray
     targets: np.ndarray
     steps: np.ndarray
@@ -1041,7 +1043,7 @@ def _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch):
     x, p, net, kept, dx, out, scratch = borrowed((x, p, net, kept, dx, out, scratch))
     psi, rot, I_kept, V_mac, pss_out, vex, ifd_mac, gap, efd_alg, ifd, vb, pss_exc = scratch
     nm, ne, nps, ng, ni = p.n_mac, p.n_exc, p.n_pss, p.n_tg, p.n_ibr
-    Y11, Y12, Y21, Y22, Z22, R, R_mac, on, targets, steps = net
+    Y11, Y12, Y21, Y22, Z22, R, R_mac, Z_mac, on, targets, steps = net
     EP = _stepped(p.EP, steps[:ne], _VREF)
     GP = _stepped(p.GP, steps[ne:], _PREF)
     V_nc, held, S_extra = kept
@@ -1105,8 +1107,12 @@ def _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch):
     if want_vbus and V_bus.size == p.n_bus:
         for m in range(nm):
             V_mac[m] = V_bus[p.mac_bus[m]]
-    elif z.size > SMALL_MATVEC:  # one BLAS product (ACTIVSg2000's 334 machine rows: 27 us
-        matvec(R_mac, z, V_mac)  # instead of 53 us for a BLAS dot per row, measured)
+    elif z.size > SMALL_MATVEC:  # behind each machine's impedance: O(n_mac) instead of
+        for m in range(nm):  # the product with R_mac (ACTIVSg2000: 27 us an evaluation,
+            if Z_mac[m] != 0:  # a fifth of it); equal to it up to round-off
+                V_mac[m] = psi[m] - Z_mac[m] * cur[m]
+            else:  # a tripped machine: its bus's voltage
+                V_mac[m] = dot(R_mac[m], z)
     else:  # row by row, as every bus's product sums it (a loop at this size)
         for m in range(nm):
             V_mac[m] = dot(R_mac[m], z)
@@ -1219,7 +1225,7 @@ def _evaluate_arg_types() -> tuple:
 
     z, c = np.zeros(1), np.zeros(1, np.complex128)
     m = np.zeros((1, 1), np.complex128)
-    net = KernelNetwork(m, m, m, m, m, m, m, np.zeros(1), np.zeros((1, 2)), np.zeros(1))
+    net = KernelNetwork(m, m, m, m, m, m, m, c, np.zeros(1), np.zeros((1, 2)), np.zeros(1))
     return (
         typeof(z),
         typeof(net),

@@ -60,12 +60,14 @@ class ReducedNetwork:
     Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 (n_nc, n_nc); R (n_bus, n_mac
     + n_nc) gives every original bus voltage from [psi; V_nc]; Z22 = inv(Y22), the chord of the
     load iteration; R_mac (n_mac, n_mac + n_nc), R's rows of the machines' buses (one per
-    machine, in machine order: their terminal voltages).  switched_on (n_dev,) float: 1.0 for
-    each device switched by events (a motor, `stabctl.models.motors`) in service in this stage,
-    else 0.0; targets (n_mac, 2) float: each playback source's targets of E' and speed in this
-    stage (pu; `stabctl.models.machines`, the ``playback`` column); steps (n_exc + n_tg,) float:
-    each exciter's VREF change (pu), then each governor's PREF change (pu on its machine's base)
-    in this stage (VrefStep / PrefStep events; empty: none); islanded: (bus number, load P + jQ
+    machine, in machine order: their terminal voltages); Z_mac (n_mac,) each machine's internal
+    impedance 1 / y_mac in this stage (0 for a tripped machine), with which V_term = psi - Z_mac
+    I_mac gives the same terminal voltages in O(n_mac). switched_on (n_dev,) float: 1.0 for each
+    device switched by events (a motor, `stabctl.models.motors`) in service in this stage, else
+    0.0; targets (n_mac, 2) float: each playback source's targets of E' and speed in this stage
+    (pu; `stabctl.models.machines`, the ``playback`` column); steps (n_exc + n_tg,) float: each
+    exciter's VREF change (pu), then each governor's PREF change (pu on its machine's base) in
+    this stage (VrefStep / PrefStep events; empty: none); islanded: (bus number, load P + jQ
     shed, pu system base) of each bus the stage cuts from every machine, de-energised (PSS/E's
     islanding: its load and shunts shed, its voltage 0).
     """
@@ -77,6 +79,7 @@ class ReducedNetwork:
     R: np.ndarray
     Z22: np.ndarray
     R_mac: np.ndarray
+    Z_mac: np.ndarray
     switched_on: np.ndarray = field(default_factory=lambda: np.zeros(0))
     targets: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     steps: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -148,6 +151,7 @@ def reduce_network(
         R=c(R[:n_bus_orig]),
         Z22=c(np.linalg.inv(Y22)) if Y22.size else Y22.copy(),
         R_mac=c(R[np.asarray(mac_bus, int)]),
+        Z_mac=np.divide(1.0, y, out=np.zeros(n_mac, complex), where=y != 0),
     )
 
 
