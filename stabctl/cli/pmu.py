@@ -62,8 +62,8 @@ _LISTEN = (
         "--host",
         default="127.0.0.1",
         show_default=True,
-        help="Address to listen on (another than loopback: any host that reaches it may "
-        "connect unless --allow names them).",
+        help="Address to listen on, IPv4 or IPv6 (::1; :: every interface) (another than "
+        "loopback: any host that reaches it may connect unless --allow names them).",
     ),
     click.option(
         "--port",
@@ -87,15 +87,14 @@ def _allowed(host: str, allow: str) -> tuple:
     """The --allow list as a tuple of addresses (InputError for an item that is not one,
     an empty item or a repeat: `comma_list`); warns when listening beyond loopback to any
     peer."""
-    import ipaddress
+    from stabctl.estimation.c37_tcp import plain_ip
 
     if not host.strip():
         raise InputError(
             "--host '': an empty address listens on every interface; give 0.0.0.0 (or :: "
             "for IPv6) to mean that, or a local address"
         )
-    given = comma_list(allow, "--allow", ipaddress.ip_address, "an IP address") if allow else []
-    peers = tuple(str(a) for a in given)
+    peers = tuple(comma_list(allow, "--allow", plain_ip, "an IP address") if allow else ())
     if host not in _LOOPBACK and not peers:  # said now, before the server waits for peers
         click.echo(
             f"warning: listening on {host}: any host that reaches this port may connect "
@@ -249,10 +248,12 @@ def replay(recording, host, port, allow, speed, timeout):
 
 def _serve(servers) -> None:
     """Announce each listening server, wait until each has ended its session."""
+    from stabctl.estimation.c37_tcp import hostport
+
     for server in servers:
-        host, port = server.address
         click.echo(
-            f"serving {server.n_frames} frames on {host}:{port} (C37.118.2); waiting for a PDC",
+            f"serving {server.n_frames} frames on {hostport(*server.address)} (C37.118.2); "
+            "waiting for a PDC",
             err=True,
         )
     for server in servers:
@@ -306,7 +307,9 @@ def record(address, out, frames):
 
 
 def _host_port(address: str) -> tuple[str, int]:
-    host, _, port = address.rpartition(":")
+    from stabctl.estimation.c37_tcp import split_hostport
+
+    host, port = split_hostport(address)
     if not host or not port.isdigit() or not 0 < int(port) < 65536:
         raise InputError(f"address {address!r}: expected HOST:PORT")
     return host, int(port)
@@ -384,6 +387,7 @@ def plant(
     from stabctl.cli.format import closed_loop_lines
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation.c37_loop import Listen
+    from stabctl.estimation.c37_tcp import hostport
 
     if esd_pct is None:
         raise InputError("pmu plant needs --esd-pct")
@@ -396,7 +400,7 @@ def plant(
     # the plant only measures: the estimator named here is never run (the controller's is)
     loop = cl.LoopOptions(esd_pct, "raw", settings, seed, law, esd_model=esd_model, transport="tcp")
     listening = lambda a: click.echo(  # noqa: E731
-        f"plant: PMUs of {case.name} on {a[0]}:{a[1]} (C37.118.2); waiting for a controller",
+        f"plant: PMUs of {case.name} on {hostport(*a)} (C37.118.2); waiting for a controller",
         err=True,
     )
     sim = model_settings(conventions, step).simulator(case)

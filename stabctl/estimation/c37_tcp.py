@@ -15,7 +15,9 @@ beyond the frame it reads).
 from __future__ import annotations
 
 import contextlib
+import ipaddress
 import math
+import os
 import socket
 import threading
 import time
@@ -51,7 +53,102 @@ class Guard:
 
     def admits(self, peer) -> bool:
         """True if the peer's address (a socket's ``getpeername``) may connect."""
-        return not self.allow or peer[0] in self.allow
+        return not self.allow or plain_ip(peer[0]) in self.allow
+
+
+def plain_ip(address: str) -> str:
+    """An IP address as `Guard.allow` holds it: an IPv4-mapped IPv6 address (a dual-stack
+    socket's IPv4 peer, ``::ffff:10.0.0.5``) as its IPv4 address, any other in its
+    compressed form.
+
+    Parameters
+    ----------
+    address : str
+        An IPv4 or IPv6 address.
+
+    Returns
+    -------
+    str
+        The address.
+
+    Raises
+    ------
+    ValueError
+        Not an IP address.
+    """
+    ip = ipaddress.ip_address(address)
+    return str(getattr(ip, "ipv4_mapped", None) or ip)
+
+
+def listen(host: str, port: int) -> socket.socket:
+    """A TCP socket listening on host:port, IPv4 or IPv6 as host resolves (``::``, every
+    IPv6 interface, takes IPv4 peers too where the system can).
+
+    Parameters
+    ----------
+    host : str
+        Address or host name to listen on.
+    port : int
+        TCP port (0: any free one).
+
+    Returns
+    -------
+    socket.socket
+        The listening socket.
+
+    Raises
+    ------
+    InputError
+        A host that does not resolve, an address that is not this machine's, a port in
+        use: naming ``--host`` and ``--port`` and the system's reason.
+    """
+    try:
+        family, _, _, _, addr = socket.getaddrinfo(
+            host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE
+        )[0]
+        dual = addr[0] == "::" and socket.has_dualstack_ipv6()
+        return socket.create_server(addr, family=family, dualstack_ipv6=dual)
+    except OSError as exc:  # create_server's message adds the address as a tuple
+        why = os.strerror(exc.errno) if exc.errno and exc.errno > 0 else exc.strerror or exc
+        raise InputError(f"--host {host} --port {port}: cannot listen: {why}") from None
+
+
+def hostport(host: str, port: int) -> str:
+    """An address as written in a URL and read by `split_hostport`.
+
+    Parameters
+    ----------
+    host : str
+        Host name or IP address.
+    port : int
+        TCP port.
+
+    Returns
+    -------
+    str
+        ``host:port``, an IPv6 address in brackets (``[::1]:4712``).
+    """
+    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+
+
+def split_hostport(text: str) -> tuple[str, str]:
+    """The host and port of an address (``HOST:PORT``, ``[IPv6]:PORT``, or ``::1:4712``:
+    the port is after the last colon).
+
+    Parameters
+    ----------
+    text : str
+        The address.
+
+    Returns
+    -------
+    (str, str)
+        The host (without brackets; empty if none) and the port's text (not checked).
+    """
+    host, _, port = text.rpartition(":")
+    if host.startswith("[") and host.endswith("]"):
+        host = host[1:-1]
+    return host, port
 
 
 class StreamServer:
@@ -94,9 +191,8 @@ class StreamServer:
     Raises
     ------
     InputError
-        A speed that is not > 0, or no frame to serve.
-    OSError
-        The address cannot be listened on (a port in use).
+        A speed that is not > 0, no frame to serve, or an address that cannot be listened
+        on (`listen`).
     """
 
     def __init__(
@@ -111,7 +207,7 @@ class StreamServer:
         self.sent_at = [float("nan")] * len(self._data)
         self.due_at = [float("nan")] * len(self._data)
         self.refused: list[str] = []
-        self._sock = socket.create_server((host, port))
+        self._sock = listen(host, port)
         self._stop, self.finished = threading.Event(), threading.Event()
         self._peers = threading.BoundedSemaphore(guard.max_peers)
         self._thread = threading.Thread(target=self._accept, daemon=True)
@@ -166,10 +262,10 @@ class StreamServer:
             except OSError:  # closed
                 return
             if not self.guard.admits(peer):
-                self.refused.append(f"{peer[0]}:{peer[1]}: not in the allowed peers")
+                self.refused.append(f"{hostport(*peer[:2])}: not in the allowed peers")
                 conn.close()
             elif not self._peers.acquire(blocking=False):
-                self.refused.append(f"{peer[0]}:{peer[1]}: {self.guard.max_peers} peers served")
+                self.refused.append(f"{hostport(*peer[:2])}: {self.guard.max_peers} peers served")
                 conn.close()
             else:
                 threading.Thread(target=self._session, args=(conn, peer), daemon=True).start()
@@ -182,9 +278,9 @@ class StreamServer:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
                 streamed = self._serve(conn)
         except InputError as exc:  # another protocol, a cut frame: dropped, serve on
-            self.refused.append(f"{peer[0]}:{peer[1]}: {exc}")
+            self.refused.append(f"{hostport(*peer[:2])}: {exc}")
         except TimeoutError:
-            self.refused.append(f"{peer[0]}:{peer[1]}: silent for {self.guard.timeout:g} s")
+            self.refused.append(f"{hostport(*peer[:2])}: silent for {self.guard.timeout:g} s")
         except OSError:  # the peer vanished mid-session
             pass
         finally:

@@ -884,3 +884,48 @@ def test_estimate_track_ends_at_the_first_end_reached_and_refuses_pmu_settings(t
     for option in (["--drop", "0.5"], ["--window-cycles", "8"]):
         assert_error(CliRunner().invoke(main, [*base, *option]), "given to estimate track")
         assert not out.exists()
+
+
+# -- C37.118.2 streams: addresses, sources and frames named ------------------------------
+
+
+@pytest.fixture(scope="module")
+def kundur_wire():
+    """Kundur's 4-PMU stream for 1.2 s (73 frames): its `c37.StreamConfig`, frames, and
+    CFG-2 and data frames as bytes."""
+    pytest.importorskip("pyc37")
+    from pmu_streams import kundur_stream, on_the_wire
+
+    _, _, cfg, frames = kundur_stream(t_end=1.2)
+    return cfg, frames, *on_the_wire(cfg, frames)
+
+
+def test_a_server_that_cannot_listen_names_host_and_port(kundur_wire, tmp_path):
+    """A port in use, an address not this machine's and a host that does not resolve were
+    the system's message with the address as a Python tuple; each names --host and --port
+    and their values, for `pmu replay` and the plant's listener alike."""
+    import socket
+
+    from stabctl.estimation import c37
+    from stabctl.estimation.c37_loop import PlantLink
+
+    cfg, frames, _, _ = kundur_wire
+    rec = tmp_path / "r.c37"
+    c37.record(rec, cfg, frames)
+    replay = ("pmu", "replay", rec, "--allow", "127.0.0.1", "--timeout", 1)
+    with socket.create_server(("127.0.0.1", 0)) as busy:
+        port = busy.getsockname()[1]
+        assert_error(
+            run(*replay, "--port", port),
+            f"--host 127.0.0.1 --port {port}: cannot listen: Address already in use",
+        )
+        with pytest.raises(InputError, match=f"--host 127.0.0.1 --port {port}: cannot listen"):
+            PlantLink(None, cfg, port=port)
+    assert_error(
+        run(*replay, "--host", "203.0.113.9", "--port", 4712),
+        "--host 203.0.113.9 --port 4712: cannot listen: Cannot assign requested address",
+    )
+    assert_error(
+        run(*replay, "--host", "no.such.host.invalid", "--port", 0),
+        "--host no.such.host.invalid --port 0: cannot listen: ",
+    )
