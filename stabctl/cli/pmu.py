@@ -174,8 +174,10 @@ def serve(
     --port 0).
 
     The frames are those `stabctl estimate rmse` evaluates for the same seed (C37.118.1
-    noise, lost frames as absent data).  Exits when the PDC has been sent every frame or
-    has closed the connection.
+    noise, lost frames as absent data).  Exits once the PDC has been sent every frame
+    (exit status 0).  A PDC that says 'stop', closes the connection or takes no frame for
+    --timeout s before the last frame ends it too, as a stream not sent whole: an error
+    naming the PDC and the frames sent (exit status 2).
 
     \b
     Example:
@@ -223,7 +225,10 @@ def serve(
 @reports_errors
 def replay(recording, host, port, allow, speed, timeout):
     """Serve RECORDING (a file `pmu record` wrote, or any capture of C37.118.2 frames,
-    CFG-2 first) to one PDC, its frames as recorded, paced by their time stamps.
+    CFG-2 first) to one PDC, its frames as recorded, paced by their time stamps.  Ends as
+    `pmu serve` does: exit status 0 once the PDC has been sent every frame, 2 with an
+    error naming the PDC and the frames sent if it said 'stop', closed the connection or
+    took no frame for --timeout s before the last.
 
     \b
     Example:
@@ -247,7 +252,8 @@ def replay(recording, host, port, allow, speed, timeout):
 
 
 def _serve(servers) -> None:
-    """Announce each listening server, wait until each has ended its session."""
+    """Announce each listening server, wait until each has ended its session; InputError
+    if a PDC ended one before its last frame (`StreamServer.short`)."""
     from stabctl.estimation.c37_tcp import hostport
 
     for server in servers:
@@ -262,6 +268,8 @@ def _serve(servers) -> None:
     for server in servers:
         for peer in server.refused:
             click.echo(f"dropped {peer}", err=True)
+    if short := [f"{hostport(*s.address)}: {s.short}" for s in servers if s.short]:
+        raise InputError(f"{'; '.join(short)}: the stream was not sent whole")
     sent, total = (sum(getattr(s, a) for s in servers) for a in ("n_sent", "n_frames"))
     click.echo(
         f"sent {sent} of {total} frames" + (f" on {len(servers)} ports" if len(servers) > 1 else "")

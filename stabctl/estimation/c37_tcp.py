@@ -185,6 +185,10 @@ class StreamServer:
     finished : threading.Event
         Set when a session that streamed has ended (every frame sent, the peer said
         'stop' or went away).
+    short : str
+        Empty if the last session that streamed sent every frame; else the PDC's address,
+        what ended it before the last frame (it said 'stop', closed the connection, took
+        no frame for the time-out) and the frames sent.
     refused : list of str
         Peers refused or dropped, each with the reason.
 
@@ -207,6 +211,7 @@ class StreamServer:
         self.sent_at = [float("nan")] * len(self._data)
         self.due_at = [float("nan")] * len(self._data)
         self.refused: list[str] = []
+        self.short = ""
         self._sock = listen(host, port)
         self._stop, self.finished = threading.Event(), threading.Event()
         self._peers = threading.BoundedSemaphore(guard.max_peers)
@@ -271,12 +276,12 @@ class StreamServer:
                 threading.Thread(target=self._session, args=(conn, peer), daemon=True).start()
 
     def _session(self, conn: socket.socket, peer) -> None:
-        """One peer's session; the server's `finished` is set if it streamed."""
-        streamed = False
+        """One peer's session; the server's `finished` (and `short`) set if it streamed."""
+        ended = None
         try:
             with conn:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                streamed = self._serve(conn)
+                ended = self._serve(conn)
         except InputError as exc:  # another protocol, a cut frame: dropped, serve on
             self.refused.append(f"{hostport(*peer[:2])}: {exc}")
         except TimeoutError:
@@ -285,43 +290,50 @@ class StreamServer:
             pass
         finally:
             self._peers.release()
-        if streamed:
+        if ended is not None:
+            sent = f"{ended} after {self.n_sent} of {self.n_frames} frames"
+            self.short = f"the PDC {hostport(*peer[:2])} {sent}" if ended else ""
             self.finished.set()
 
-    def _serve(self, conn: socket.socket) -> bool:
+    def _serve(self, conn: socket.socket) -> str | None:
         """Commands until the peer closes; a 'start' streams every frame (commands
-        received meanwhile are read between frames).  True if it streamed."""
+        received meanwhile are read between frames).  None if it did not stream, else
+        `_stream`'s result."""
         while not self._stop.is_set():
             command = self._command(conn, block=True)
             if command is None:
-                return False
+                return None
             if command == "cfg2":
                 conn.sendall(self._cfg2.convert2bytes())
             elif command == "header":
                 conn.sendall(self._header())
             elif command == "start":
-                self._stream(conn)
-                return True
-        return False
+                return self._stream(conn)
+        return None
 
-    def _stream(self, conn: socket.socket) -> bool:
-        """Send the data frames paced by their time stamps; False if the peer left or
-        said 'stop'."""
+    def _stream(self, conn: socket.socket) -> str:
+        """Send the data frames paced by their time stamps: '' once every frame is sent,
+        else what the peer did before the last (said 'stop', closed the connection, ...)."""
         start = time.perf_counter()
         self.sent_at[:] = [float("nan")] * len(self._data)
-        for k, data in enumerate(self._data):
-            due = start + (self._t[k] - self._t[0]) / self.speed
-            self.due_at[k] = due
-            while (wait := due - time.perf_counter()) > 0:
-                if self._command(conn, block=False, timeout=min(wait, 0.05)) in ("stop", None):
-                    return False
-            conn.settimeout(self.guard.timeout)
-            try:
+        try:
+            for k, data in enumerate(self._data):
+                due = start + (self._t[k] - self._t[0]) / self.speed
+                self.due_at[k] = due
+                while (wait := due - time.perf_counter()) > 0:
+                    command = self._command(conn, block=False, timeout=min(wait, 0.05))
+                    if command in ("stop", None):
+                        return "said 'stop'" if command else "closed the connection"
+                conn.settimeout(self.guard.timeout)
                 conn.sendall(data)
-            except OSError:  # gone, or not reading for the time-out
-                return False
-            self.sent_at[k] = time.perf_counter()
-        return True
+                self.sent_at[k] = time.perf_counter()
+        except TimeoutError:  # not reading
+            return f"took no frame for {self.guard.timeout:g} s"
+        except ConnectionError:  # a reset, a broken pipe
+            return "closed the connection"
+        except OSError as exc:
+            return f"failed ({exc.strerror or exc})"
+        return ""
 
     def _command(self, conn: socket.socket, block: bool, timeout: float = 0.0):
         """The next command frame's word as a name (None: the peer closed; '' none, one

@@ -7,6 +7,7 @@ import json
 import re
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -335,3 +336,34 @@ def test_a_server_listens_on_ipv6(kundur_recording, tmp_path):
     record(address, 73, tmp_path / "b.c37")
     assert finished(proc) == (0, "sent 73 of 73 frames\n")
     assert (tmp_path / "b.c37").read_bytes() == kundur_recording.read_bytes()
+
+
+@pytest.mark.parametrize("how, said", [("stop", "said 'stop'"), ("close", "closed the connection")])
+def test_a_pdc_that_ends_the_stream_early_is_named(kundur_recording, how, said):
+    """A PDC's 'stop' after a few frames ended `pmu replay` with exit 0 and "sent 18 of 121
+    frames", a partial stream presented as a normal end.  The session ends, as it does
+    when the PDC closes the connection mid-stream, and both are one error naming the PDC
+    and the frames sent (exit status 2)."""
+    import socket
+
+    from pyc37.frame import CommandFrame
+
+    proc, address = serving("replay", str(kundur_recording), "--speed", "1")
+    host, port = address.rsplit(":", 1)
+    with socket.create_connection((host, int(port)), timeout=10) as pdc:
+        pdc.sendall(CommandFrame(1, "cfg2").convert2bytes())
+        pdc.recv(10_000)
+        pdc.sendall(CommandFrame(1, "start").convert2bytes())
+        pdc.recv(100)  # the first frame(s), sent at once
+        me = f"127.0.0.1:{pdc.getsockname()[1]}"
+        if how == "stop":
+            pdc.sendall(CommandFrame(1, "stop").convert2bytes())
+            time.sleep(0.3)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 2 and out == "", (out, err)
+    [line] = err.splitlines()
+    assert re.fullmatch(
+        rf"error: {address}: the PDC {me} {re.escape(said)} after \d+ of 73 frames: the "
+        "stream was not sent whole",
+        line,
+    ), line
