@@ -464,30 +464,35 @@ def receive(
     ------
     InputError
         No server there, silence for `timeout` s before the first data frame, a reply to
-        'cfg2' that is not a configuration frame, a peer of another protocol, or more than
-        `MAX_FRAMES` frames of a stream without a stated end.
+        'cfg2' that is not a configuration frame, a peer of another protocol or bytes off
+        a frame's start (a FRAMESIZE that is not the frame's), a connection reset before
+        the first data frame, or more than `MAX_FRAMES` frames of a stream without a
+        stated end: each named with host:port.
     """
     from pyc37.frame import CommandFrame
 
+    where = hostport(host, port)
     try:
         conn = socket.create_connection((host, port), timeout=timeout)
     except OSError as exc:
-        raise InputError(f"no C37.118.2 server at {host}:{port}: {exc.strerror or exc}") from None
+        raise InputError(f"no C37.118.2 server at {where}: {exc.strerror or exc}") from None
     with conn:
+        data: list[bytes] = []
         try:
             conn.sendall(CommandFrame(pdc_id, "cfg2").convert2bytes())
             cfg2 = _frame(conn)
             if cfg2[1] & 0x70 != 0x30:  # frame type 011: CFG-2
-                raise InputError(
-                    f"{host}:{port} answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}"
-                )
+                raise InputError(f"answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}")
             conn.sendall(CommandFrame(pdc_id, "start").convert2bytes())
+            short = _data_frames(conn, cfg2, end, data)
         except TimeoutError:
-            raise InputError(f"{host}:{port}: nothing received for {timeout:g} s") from None
-        data: list[bytes] = []
-        short = _data_frames(conn, cfg2, end, data)
+            raise InputError(f"{where}: nothing received for {timeout:g} s") from None
+        except InputError as exc:
+            raise InputError(f"{where}: {exc}") from None
+        except OSError as exc:  # a reset or broken pipe before any data frame
+            raise InputError(f"{where}: {exc.strerror or exc}") from None
         if not data and short:
-            raise InputError(f"{host}:{port}: {short}")
+            raise InputError(f"{where}: {short}")
         if not short and end.given:
             with contextlib.suppress(OSError):
                 conn.sendall(CommandFrame(pdc_id, "stop").convert2bytes())
@@ -507,6 +512,9 @@ def _data_frames(conn: socket.socket, cfg2: bytes, end: End, data: list) -> str:
             cut = "reset the connection"
         except CutFrame:
             cut = "closed the connection in the middle of a frame"
+        except InputError as exc:  # bytes that start no frame
+            off = f" (or data frame {len(data)}'s FRAMESIZE is off)" if data else ""
+            raise InputError(f"after {len(data)} data frames: {exc}{off}") from None
         else:
             if frame is not None:
                 if frame[1] & 0x70 != 0:  # not a data frame (a CFG or header resent)

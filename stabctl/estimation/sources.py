@@ -21,6 +21,7 @@ import numpy as np
 
 from stabctl.errors import InputError
 from stabctl.estimation import c37
+from stabctl.estimation.c37_tcp import hostport
 from stabctl.estimation.pmu import Frame
 
 TCP = "tcp://"
@@ -140,10 +141,11 @@ def read_frames(
     Raises
     ------
     InputError
-        As `c37.recorded_frames` and `c37_tcp.receive`; more TCP servers than PMUs; a
-        stream at another rate, a station that is not one of `pmus` or in two streams, a
-        PMU in no stream, a data frame that is not readable, a stream whose time stamps
-        repeat or go backwards, or frames whose every value is absent.
+        As `c37.recorded_frames` and `c37_tcp.receive` (a TCP stream's named with its
+        ``--source``); more TCP servers than PMUs; a stream at another rate, a station
+        that is not one of `pmus` or in two streams, a PMU in no stream, a data frame that
+        is not readable, a stream whose time stamps repeat or go backwards, or frames
+        whose every value is absent.
     """
     from stabctl.estimation.c37_tcp import End, Stream, receive
 
@@ -175,12 +177,12 @@ def read_frames(
             while t.is_alive():  # a join with a time-out lets Ctrl-C through
                 t.join(0.2)
         if errors := [g for g in got if isinstance(g, Exception)]:
-            raise errors[0]
+            raise InputError(f"--source {source}: {errors[0]}") from None
         streams = [
             (
-                c37.read_config(g.cfg2, f"{h}:{p}'s CFG-2"),
+                c37.read_config(g.cfg2, f"--source {source}: {hostport(h, p)}'s CFG-2"),
                 g.data,
-                f"{h}:{p}: {g.short}" if g.short else "",
+                f"{hostport(h, p)}: {g.short}" if g.short else "",
             )
             for (h, p), g in zip(source.servers, got)
             if isinstance(g, Stream)

@@ -890,14 +890,35 @@ def test_estimate_track_ends_at_the_first_end_reached_and_refuses_pmu_settings(t
 
 
 @pytest.fixture(scope="module")
-def kundur_wire():
+def kundur_wire(tmp_path_factory):
     """Kundur's 4-PMU stream for 1.2 s (73 frames): its `c37.StreamConfig`, frames, and
-    CFG-2 and data frames as bytes."""
+    CFG-2 and data frames as bytes; `estimate track` run once on it, so that its kernels
+    are compiled before a test reads its stderr (a cold cache adds the compile notice)."""
     pytest.importorskip("pyc37")
     from pmu_streams import kundur_stream, on_the_wire
 
+    from stabctl.estimation import c37
+
     _, _, cfg, frames = kundur_stream(t_end=1.2)
+    rec = tmp_path_factory.mktemp("wire") / "k.c37"
+    c37.record(rec, cfg, frames)
+    res = run("estimate", "track", "kundur", "--source", rec, "--out", rec.with_suffix(".csv"))
+    assert res.exit_code == 0, res.output
     return cfg, frames, *on_the_wire(cfg, frames)
+
+
+def _pmu_server(head: bytes, body: list):
+    """A fake PMU server (`pmu_streams.fake_server`): the CFG-2 `head` on 'cfg2', the
+    bytes of `body` on 'start', then it closes."""
+    from pmu_streams import fake_server
+
+    def talk(conn):
+        conn.recv(1000)
+        conn.sendall(head)
+        conn.recv(1000)
+        conn.sendall(b"".join(body))
+
+    return fake_server(talk)
 
 
 def test_a_server_that_cannot_listen_names_host_and_port(kundur_wire, tmp_path):
@@ -929,3 +950,35 @@ def test_a_server_that_cannot_listen_names_host_and_port(kundur_wire, tmp_path):
         run(*replay, "--host", "no.such.host.invalid", "--port", 0),
         "--host no.such.host.invalid --port 0: cannot listen: ",
     )
+
+
+def test_stream_errors_name_the_address_and_the_source(kundur_wire, tmp_path):
+    """`pmu record` from a server that speaks another protocol, and `estimate track` from
+    one whose frame 31 claims 2 bytes less than it has (the stream off its frames' starts
+    after it), said what was wrong but not where: each names the address, and track its
+    --source too.  Nothing is written."""
+    from pmu_streams import fake_server
+
+    _, _, head, body = kundur_wire
+
+    def web(conn):
+        conn.recv(100)
+        conn.sendall(b"HTTP/1.1 200 OK\r\n\r\n")
+
+    srv, port = fake_server(web)
+    with srv:
+        res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 5, "-o", tmp_path / "r.c37")
+    assert_error(res, f"error: 127.0.0.1:{port}: ", "does not speak C37.118.2")
+    cut = body[30][:2] + (len(body[30]) - 2).to_bytes(2, "big") + body[30][4:]
+    srv, port = _pmu_server(head, [*body[:30], cut, *body[31:]])
+    with srv:
+        res = run(
+            "estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}",
+            "--until", 1.1, "--out", tmp_path / "t.csv",
+        )  # fmt: skip
+    assert_error(
+        res,
+        f"--source tcp://127.0.0.1:{port}: 127.0.0.1:{port}: after 31 data frames: ",
+        "(or data frame 31's FRAMESIZE is off)",
+    )
+    assert sorted(tmp_path.iterdir()) == []
