@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+from pathlib import Path
 
 import click
 
@@ -294,9 +295,10 @@ def _serve(servers) -> None:
 @reports_errors
 def record(address, out, frames):
     """Receive a C37.118.2 stream from the PMU or PDC at HOST:PORT (pyc37's client: CFG-2,
-    then 'start') and write its CFG-2 and FRAMES data frames to OUT, as received.  A
-    stream that stops before FRAMES (the server closes, resets or falls silent) is
-    written as far as it came and named an error (exit status 2).
+    then 'start') and write its CFG-2 and FRAMES data frames to OUT, as received (an IPv6
+    HOST in brackets: [::1]:4712).  A stream that stops before FRAMES (the server closes,
+    resets or falls silent) is named an error (exit status 2) and written as far as it
+    came, unless OUT exists: a file there is replaced only by a whole recording.
 
     \b
     Example:
@@ -308,6 +310,11 @@ def record(address, out, frames):
     host, port = _host_port(address)
     check_writable(out, "--out")
     got = receive(host, port, End(frames=frames))
+    if got.short and Path(out).exists():
+        raise InputError(
+            f"{address}: {got.short}; {out} is left as it was (the {len(got.data)} received "
+            "are not written over it)"
+        )
     atomic_write(out, lambda f: f.write(got.cfg2 + b"".join(got.data)), mode="wb")
     if got.short:
         raise InputError(f"{address}: {got.short}; the {len(got.data)} received are in {out}")

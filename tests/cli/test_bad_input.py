@@ -982,3 +982,27 @@ def test_stream_errors_name_the_address_and_the_source(kundur_wire, tmp_path):
         "(or data frame 31's FRAMESIZE is off)",
     )
     assert sorted(tmp_path.iterdir()) == []
+
+
+def test_record_cut_short_leaves_an_existing_recording_as_it_was(kundur_wire, tmp_path):
+    """`pmu record -o good.c37` from a stream cut after 3 frames replaced the good
+    recording with the 3 frames: a file there is replaced only by a whole recording (it
+    is left byte for byte, no temporary file beside it); a whole recording replaces it."""
+    _, _, head, body = kundur_wire
+    out = tmp_path / "good.c37"
+    out.write_bytes(head + b"".join(body))
+    srv, port = _pmu_server(head, body[:3])
+    with srv:
+        res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 50, "-o", out)
+    assert_error(
+        res,
+        f"127.0.0.1:{port}: the server closed the connection after 3 data frames",
+        f"{out} is left as it was (the 3 received are not written over it)",
+    )
+    assert out.read_bytes() == head + b"".join(body)
+    assert list(tmp_path.iterdir()) == [out]
+    srv, port = _pmu_server(head, body[:5])
+    with srv:
+        res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 5, "-o", out)
+    assert res.exit_code == 0, res.output
+    assert out.read_bytes() == head + b"".join(body[:5]) and list(tmp_path.iterdir()) == [out]
