@@ -144,8 +144,8 @@ def read_frames(
         As `c37.recorded_frames` and `c37_tcp.receive` (a TCP stream's named with its
         ``--source``); more TCP servers than PMUs; a stream at another rate, a station
         that is not one of `pmus` or in two streams, a PMU in no stream, a data frame that
-        is not readable, a stream whose time stamps repeat or go backwards, or frames
-        whose every value is absent.
+        is not readable or not the stream's (`c37.parse_frame`), a stream whose time
+        stamps repeat or go backwards, or frames whose every value is absent.
     """
     from stabctl.estimation.c37_tcp import End, Stream, receive
 
@@ -251,7 +251,13 @@ def merge(case, pmus, rate: float, streams) -> Received:
         cfg = c37.stream_config(
             case, [pmus[c] for c in cols], rate, cfg2.get_id_code(), cfg2.get_soc()
         )
-        parsed.append((cols, [c37.parse_frame(cfg, cfg2, d) for d in data]))
+        frames = []
+        for k, d in enumerate(data):
+            try:
+                frames.append(c37.parse_frame(cfg, cfg2, d))
+            except InputError as exc:
+                raise InputError(f"stream {s + 1}, data frame {k + 1}: {exc}") from None
+        parsed.append((cols, frames))
     if lost := [x for x in labels if x not in owner]:
         raise InputError(f"PMU {', '.join(lost)} in no stream")
     return _by_time_stamp(len(labels), parsed)

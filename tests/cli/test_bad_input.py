@@ -921,6 +921,13 @@ def _pmu_server(head: bytes, body: list):
     return fake_server(talk)
 
 
+def _with_crc(frame: bytes) -> bytes:
+    """frame with its CHK (CRC-CCITT, C37.118.2-2011 Annex B) made valid again."""
+    import binascii
+
+    return frame[:-2] + binascii.crc_hqx(frame[:-2], 0xFFFF).to_bytes(2, "big")
+
+
 def test_a_server_that_cannot_listen_names_host_and_port(kundur_wire, tmp_path):
     """A port in use, an address not this machine's and a host that does not resolve were
     the system's message with the address as a Python tuple; each names --host and --port
@@ -1006,3 +1013,32 @@ def test_record_cut_short_leaves_an_existing_recording_as_it_was(kundur_wire, tm
         res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 5, "-o", out)
     assert res.exit_code == 0, res.output
     assert out.read_bytes() == head + b"".join(body[:5]) and list(tmp_path.iterdir()) == [out]
+
+
+@pytest.mark.parametrize(
+    "change, needle",
+    [
+        ("idcode", "a data frame of IDCODE 7, not the stream's 1 (its CFG-2's)"),
+        ("padded", "a data frame of FRAMESIZE 112 bytes, where its CFG-2 makes one 104 bytes"),
+    ],
+)
+def test_track_refuses_a_frame_that_is_not_the_stream_s(kundur_wire, tmp_path, change, needle):
+    """A data frame of another IDCODE (another stream's, CRC valid) was tracked as this
+    stream's; one padded with 8 bytes past what its CFG-2 gives (FRAMESIZE and CRC
+    matching the padding) was read without a word.  Each is refused naming the source,
+    the frame and the two values; no CSV is written."""
+    _, _, head, body = kundur_wire
+    frame = bytearray(body[30])
+    if change == "idcode":
+        frame[4:6] = (7).to_bytes(2, "big")
+    else:
+        frame[2:4] = (len(frame) + 8).to_bytes(2, "big")
+        frame[-2:-2] = bytes(8)
+    srv, port = _pmu_server(head, [*body[:30], _with_crc(bytes(frame)), *body[31:]])
+    with srv:
+        res = run(
+            "estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}",
+            "--until", 1.1, "--out", tmp_path / "t.csv",
+        )  # fmt: skip
+    assert_error(res, f"--source tcp://127.0.0.1:{port}: stream 1, data frame 31: {needle}")
+    assert not (tmp_path / "t.csv").exists()
