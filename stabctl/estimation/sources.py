@@ -21,7 +21,7 @@ import numpy as np
 
 from stabctl.errors import InputError
 from stabctl.estimation import c37
-from stabctl.estimation.c37_tcp import hostport
+from stabctl.estimation.c37_tcp import hostport, split_hostport
 from stabctl.estimation.pmu import Frame
 
 TCP = "tcp://"
@@ -51,7 +51,7 @@ class Source:
         from stabctl.io.inputs import number_ranges
 
         items = [
-            f"{host}:{a}" + (f"-{b}" if b > a else "")
+            hostport(host, a) + (f"-{b}" if b > a else "")
             for host, ports in groupby(self.servers, key=lambda hp: hp[0])
             for a, b in number_ranges(p for _, p in ports)
         ]
@@ -60,14 +60,15 @@ class Source:
 
 def parse_source(text: str) -> Source:
     """The `Source` of ``tcp://HOST:PORT[,HOST:PORT...]`` (a port range ``P1-P2`` for
-    one server per port, as `stabctl pmu serve --each-pmu` serves) or of a recording's
-    path.
+    one server per port, as `stabctl pmu serve --each-pmu` serves; an IPv6 address in
+    brackets, ``[::1]:4712``) or of a recording's path.
 
     Raises
     ------
     InputError
-        A TCP address without a port in 1..65535 (or an empty range), or a recording that
-        is not a regular file of at most `stabctl.io.inputs.MAX_INPUT_BYTES`.
+        A TCP address without a port in 1..65535 (or an empty range), ``tcp://`` written
+        again inside the list, a server given twice, or a recording that is not a regular
+        file of at most `stabctl.io.inputs.MAX_INPUT_BYTES`.
     """
     if not text.startswith(TCP):
         from stabctl.io.inputs import input_file
@@ -75,9 +76,14 @@ def parse_source(text: str) -> Source:
         if not Path(text).exists():
             raise InputError(f"--source {text}: no such recording (or write tcp://HOST:PORT)")
         return Source(path=input_file(text, "--source"))
-    servers = []
+    servers: list[tuple[str, int]] = []
     for item in text[len(TCP) :].split(","):
-        host, _, ports = item.rpartition(":")
+        if item.startswith(TCP):
+            raise InputError(
+                f"--source {text}: {item!r}: write tcp:// once, before the list "
+                "(tcp://HOST:PORT,HOST:PORT)"
+            )
+        host, ports = split_hostport(item)
         first, _, last = ports.partition("-")
         last = last or first
         if not (host and first.isdigit() and last.isdigit()):
@@ -85,6 +91,8 @@ def parse_source(text: str) -> Source:
         span = range(int(first), int(last) + 1)
         if not span or span[0] < 1 or span[-1] > 65535:
             raise InputError(f"--source {text}: {item!r} is not HOST:PORT")
+        if twice := [p for p in span if (host, p) in servers]:
+            raise InputError(f"--source {text}: {hostport(host, twice[0])} given twice")
         servers += [(host, p) for p in span]
     return Source(servers=tuple(servers))
 

@@ -1042,3 +1042,21 @@ def test_track_refuses_a_frame_that_is_not_the_stream_s(kundur_wire, tmp_path, c
         )  # fmt: skip
     assert_error(res, f"--source tcp://127.0.0.1:{port}: stream 1, data frame 31: {needle}")
     assert not (tmp_path / "t.csv").exists()
+
+
+@pytest.mark.parametrize(
+    "servers, needle",
+    [
+        ("tcp://127.0.0.1:4712,tcp://127.0.0.1:4712", "'tcp://127.0.0.1:4712': write tcp:// once"),
+        ("tcp://127.0.0.1:4712,127.0.0.1:4712", "127.0.0.1:4712 given twice"),
+        ("tcp://127.0.0.1:4712-4714,127.0.0.1:4713", "127.0.0.1:4713 given twice"),
+    ],
+)
+def test_a_tcp_source_list_is_written_once_each_server_once(servers, needle, tmp_path):
+    """`--source tcp://A:P,tcp://A:P` was taken for the hosts 'A' and 'tcp://A' (a name
+    resolution error naming neither); ``tcp://`` repeated inside the list and a server
+    given twice are each named, before any connection or work."""
+    out = tmp_path / "t.csv"
+    res = run("estimate", "track", "kundur", "--source", servers, "--until", 1, "--out", out)
+    assert_error(res, f"--source {servers}: {needle}")
+    assert not out.exists()
