@@ -547,13 +547,13 @@ def track(
         ("drop", "window_cycles"),
         "to estimate track: its frames are the recorded ones (no PMU is simulated)",
     )
-    case = load_case(case_name)
-    law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
-    ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
     src = sources.parse_source(source)
     end = End(frames, until_s)
     if src.path is None and not end.given:
         raise InputError("a TCP --source needs its end: --until S or --frames N")
+    case = load_case(case_name)
+    law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
+    ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
     got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end)
     d = cl.track(ctrl, got.frames)
     head, rows = _track_columns(ctrl, d, esd_pct is not None)

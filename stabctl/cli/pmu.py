@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+from pathlib import Path
 
 import click
 
@@ -62,8 +63,8 @@ _LISTEN = (
         "--host",
         default="127.0.0.1",
         show_default=True,
-        help="Address to listen on (another than loopback: any host that reaches it may "
-        "connect unless --allow names them).",
+        help="Address to listen on, IPv4 or IPv6 (::1; :: every interface) (another than "
+        "loopback: any host that reaches it may connect unless --allow names them).",
     ),
     click.option(
         "--port",
@@ -87,15 +88,14 @@ def _allowed(host: str, allow: str) -> tuple:
     """The --allow list as a tuple of addresses (InputError for an item that is not one,
     an empty item or a repeat: `comma_list`); warns when listening beyond loopback to any
     peer."""
-    import ipaddress
+    from stabctl.estimation.c37_tcp import plain_ip
 
     if not host.strip():
         raise InputError(
             "--host '': an empty address listens on every interface; give 0.0.0.0 (or :: "
             "for IPv6) to mean that, or a local address"
         )
-    given = comma_list(allow, "--allow", ipaddress.ip_address, "an IP address") if allow else []
-    peers = tuple(str(a) for a in given)
+    peers = tuple(comma_list(allow, "--allow", plain_ip, "an IP address") if allow else ())
     if host not in _LOOPBACK and not peers:  # said now, before the server waits for peers
         click.echo(
             f"warning: listening on {host}: any host that reaches this port may connect "
@@ -175,8 +175,10 @@ def serve(
     --port 0).
 
     The frames are those `stabctl estimate rmse` evaluates for the same seed (C37.118.1
-    noise, lost frames as absent data).  Exits when the PDC has been sent every frame or
-    has closed the connection.
+    noise, lost frames as absent data).  Exits once the PDC has been sent every frame
+    (exit status 0).  A PDC that says 'stop', closes the connection or takes no frame for
+    --timeout s before the last frame ends it too, as a stream not sent whole: an error
+    naming the PDC and the frames sent (exit status 2).
 
     \b
     Example:
@@ -224,7 +226,10 @@ def serve(
 @reports_errors
 def replay(recording, host, port, allow, speed, timeout):
     """Serve RECORDING (a file `pmu record` wrote, or any capture of C37.118.2 frames,
-    CFG-2 first) to one PDC, its frames as recorded, paced by their time stamps.
+    CFG-2 first) to one PDC, its frames as recorded, paced by their time stamps.  Ends as
+    `pmu serve` does: exit status 0 once the PDC has been sent every frame, 2 with an
+    error naming the PDC and the frames sent if it said 'stop', closed the connection or
+    took no frame for --timeout s before the last.
 
     \b
     Example:
@@ -248,11 +253,14 @@ def replay(recording, host, port, allow, speed, timeout):
 
 
 def _serve(servers) -> None:
-    """Announce each listening server, wait until each has ended its session."""
+    """Announce each listening server, wait until each has ended its session; InputError
+    if a PDC ended one before its last frame (`StreamServer.short`)."""
+    from stabctl.estimation.c37_tcp import hostport
+
     for server in servers:
-        host, port = server.address
         click.echo(
-            f"serving {server.n_frames} frames on {host}:{port} (C37.118.2); waiting for a PDC",
+            f"serving {server.n_frames} frames on {hostport(*server.address)} (C37.118.2); "
+            "waiting for a PDC",
             err=True,
         )
     for server in servers:
@@ -261,6 +269,8 @@ def _serve(servers) -> None:
     for server in servers:
         for peer in server.refused:
             click.echo(f"dropped {peer}", err=True)
+    if short := [f"{hostport(*s.address)}: {s.short}" for s in servers if s.short]:
+        raise InputError(f"{'; '.join(short)}: the stream was not sent whole")
     sent, total = (sum(getattr(s, a) for s in servers) for a in ("n_sent", "n_frames"))
     click.echo(
         f"sent {sent} of {total} frames" + (f" on {len(servers)} ports" if len(servers) > 1 else "")
@@ -285,9 +295,10 @@ def _serve(servers) -> None:
 @reports_errors
 def record(address, out, frames):
     """Receive a C37.118.2 stream from the PMU or PDC at HOST:PORT (pyc37's client: CFG-2,
-    then 'start') and write its CFG-2 and FRAMES data frames to OUT, as received.  A
-    stream that stops before FRAMES (the server closes, resets or falls silent) is
-    written as far as it came and named an error (exit status 2).
+    then 'start') and write its CFG-2 and FRAMES data frames to OUT, as received (an IPv6
+    HOST in brackets: [::1]:4712).  A stream that stops before FRAMES (the server closes,
+    resets or falls silent) is named an error (exit status 2) and written as far as it
+    came, unless OUT exists: a file there is replaced only by a whole recording.
 
     \b
     Example:
@@ -299,6 +310,11 @@ def record(address, out, frames):
     host, port = _host_port(address)
     check_writable(out, "--out")
     got = receive(host, port, End(frames=frames))
+    if got.short and Path(out).exists():
+        raise InputError(
+            f"{address}: {got.short}; {out} is left as it was (the {len(got.data)} received "
+            "are not written over it)"
+        )
     atomic_write(out, lambda f: f.write(got.cfg2 + b"".join(got.data)), mode="wb")
     if got.short:
         raise InputError(f"{address}: {got.short}; the {len(got.data)} received are in {out}")
@@ -306,7 +322,9 @@ def record(address, out, frames):
 
 
 def _host_port(address: str) -> tuple[str, int]:
-    host, _, port = address.rpartition(":")
+    from stabctl.estimation.c37_tcp import split_hostport
+
+    host, port = split_hostport(address)
     if not host or not port.isdigit() or not 0 < int(port) < 65536:
         raise InputError(f"address {address!r}: expected HOST:PORT")
     return host, int(port)
@@ -384,6 +402,7 @@ def plant(
     from stabctl.cli.format import closed_loop_lines
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation.c37_loop import Listen
+    from stabctl.estimation.c37_tcp import hostport
 
     if esd_pct is None:
         raise InputError("pmu plant needs --esd-pct")
@@ -396,7 +415,7 @@ def plant(
     # the plant only measures: the estimator named here is never run (the controller's is)
     loop = cl.LoopOptions(esd_pct, "raw", settings, seed, law, esd_model=esd_model, transport="tcp")
     listening = lambda a: click.echo(  # noqa: E731
-        f"plant: PMUs of {case.name} on {a[0]}:{a[1]} (C37.118.2); waiting for a controller",
+        f"plant: PMUs of {case.name} on {hostport(*a)} (C37.118.2); waiting for a controller",
         err=True,
     )
     sim = model_settings(conventions, step).simulator(case)

@@ -221,7 +221,9 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
     Raises
     ------
     InputError
-        A frame pyc37 rejects (its CRC, size or layout), naming its reason.
+        A frame pyc37 rejects (its CRC, size or layout), naming its reason; a frame of
+        another IDCODE than cfg2's, or whose FRAMESIZE is not the size cfg2 gives a data
+        frame (a frame padded or cut, which pyc37 reads without a word).
     """
     f = _pyc37()
     try:
@@ -230,6 +232,14 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
         raise InputError(f"C37.118.2 data frame not readable: {exc}") from None
     if not isinstance(df, f.DataFrame):
         raise InputError(f"C37.118.2: a {type(df).__name__}, not a data frame")
+    if (idcode := df.get_id_code()) != cfg2.get_id_code():
+        raise InputError(
+            f"a data frame of IDCODE {idcode}, not the stream's {cfg2.get_id_code()} (its CFG-2's)"
+        )
+    if (size := int.from_bytes(data[2:4], "big")) != (want := data_frame_size(cfg2)):
+        raise InputError(
+            f"a data frame of FRAMESIZE {size} bytes, where its CFG-2 makes one {want} bytes"
+        )
     many = (lambda x: [x]) if cfg.n == 1 else (lambda x: x)
     valid = np.array([(s & 0xC000) == 0 for s in many(df._stat)])  # raw words: pyc37
     # 1.0.2 decodes the data-error bits as STAT >> 15
@@ -248,6 +258,33 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
     rocof = np.array(many(df.get_dfreq()), float) / DFREQ_PER_HZ_S * nan
     t = df.get_soc() - cfg.epoch + df.get_frasec()[0] / TIME_BASE
     return Frame(reporting_instant(t, cfg.rate), valid, v, i, freq, rocof)
+
+
+def data_frame_size(cfg2) -> int:
+    """The size of a data frame of a stream (C37.118.2-2011 Table 5): 16 bytes of SYNC,
+    FRAMESIZE, IDCODE, SOC, FRACSEC and CHK, and per PMU its STAT, phasors, FREQ, DFREQ,
+    analog values and digital words in the sizes its FORMAT gives.
+
+    Parameters
+    ----------
+    cfg2 : pyc37 ConfigFrame2
+        The stream's configuration frame.
+
+    Returns
+    -------
+    int
+        Bytes.
+    """
+    many = (lambda x: x) if cfg2.get_num_pmu() > 1 else (lambda x: [x])
+    c = cfg2
+    per_pmu = (c.get_data_format, c.get_phasor_num, c.get_analog_num, c.get_digital_num)
+    size = 16
+    for (_, ph_float, an_float, fr_float), phasors, analogs, digitals in zip(
+        *(many(get()) for get in per_pmu)
+    ):
+        size += 2 + phasors * (8 if ph_float else 4) + 2 * (4 if fr_float else 2)
+        size += analogs * (4 if an_float else 2) + 2 * digitals
+    return size
 
 
 def reporting_instant(t: float, rate: int) -> float:

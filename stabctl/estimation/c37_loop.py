@@ -39,7 +39,7 @@ import numpy as np
 
 from stabctl.errors import InputError
 from stabctl.estimation import c37
-from stabctl.estimation.c37_tcp import Guard, _read_frame, command_word
+from stabctl.estimation.c37_tcp import Guard, _read_frame, command_word, hostport, listen
 
 EXTENDED = 8  # C37.118.2-2011 Table 15: extended frame
 #: C37.118.2-2011 frame type (SYNC bits 6-4) of a header frame
@@ -211,9 +211,8 @@ class PlantLink:
     Raises
     ------
     InputError
-        A speed that is not > 0.
-    OSError
-        The address cannot be listened on.
+        A speed that is not > 0, or an address that cannot be listened on
+        (`c37_tcp.listen`).
     """
 
     def __init__(
@@ -234,7 +233,7 @@ class PlantLink:
         self.refused: list[str] = []
         self.speed, self._start = float(speed), None
         self.cfg2 = c37.config_frame(cfg)
-        self._sock = socket.create_server((host, port))
+        self._sock = listen(host, port)
         self._conn: socket.socket | None = None
         self._trips: list[float] = []
         #: (time stamp s, modes) of every answer
@@ -311,7 +310,7 @@ class PlantLink:
             try:
                 self._handshake(conn, deadline)
             except (InputError, OSError) as exc:
-                self.refused.append(f"{peer[0]}:{peer[1]}: {exc}")
+                self.refused.append(f"{hostport(*peer[:2])}: {exc}")
                 conn.close()
                 return
             with lock:
@@ -329,7 +328,7 @@ class PlantLink:
             if self.guard.admits(peer):
                 threading.Thread(target=shake, args=(conn, peer), daemon=True).start()
             else:
-                self.refused.append(f"{peer[0]}:{peer[1]}: not in the allowed peers")
+                self.refused.append(f"{hostport(*peer[:2])}: not in the allowed peers")
                 conn.close()
         with lock:
             if won:

@@ -15,7 +15,9 @@ beyond the frame it reads).
 from __future__ import annotations
 
 import contextlib
+import ipaddress
 import math
+import os
 import socket
 import threading
 import time
@@ -51,7 +53,102 @@ class Guard:
 
     def admits(self, peer) -> bool:
         """True if the peer's address (a socket's ``getpeername``) may connect."""
-        return not self.allow or peer[0] in self.allow
+        return not self.allow or plain_ip(peer[0]) in self.allow
+
+
+def plain_ip(address: str) -> str:
+    """An IP address as `Guard.allow` holds it: an IPv4-mapped IPv6 address (a dual-stack
+    socket's IPv4 peer, ``::ffff:10.0.0.5``) as its IPv4 address, any other in its
+    compressed form.
+
+    Parameters
+    ----------
+    address : str
+        An IPv4 or IPv6 address.
+
+    Returns
+    -------
+    str
+        The address.
+
+    Raises
+    ------
+    ValueError
+        Not an IP address.
+    """
+    ip = ipaddress.ip_address(address)
+    return str(getattr(ip, "ipv4_mapped", None) or ip)
+
+
+def listen(host: str, port: int) -> socket.socket:
+    """A TCP socket listening on host:port, IPv4 or IPv6 as host resolves (``::``, every
+    IPv6 interface, takes IPv4 peers too where the system can).
+
+    Parameters
+    ----------
+    host : str
+        Address or host name to listen on.
+    port : int
+        TCP port (0: any free one).
+
+    Returns
+    -------
+    socket.socket
+        The listening socket.
+
+    Raises
+    ------
+    InputError
+        A host that does not resolve, an address that is not this machine's, a port in
+        use: naming ``--host`` and ``--port`` and the system's reason.
+    """
+    try:
+        family, _, _, _, addr = socket.getaddrinfo(
+            host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE
+        )[0]
+        dual = addr[0] == "::" and socket.has_dualstack_ipv6()
+        return socket.create_server(addr, family=family, dualstack_ipv6=dual)
+    except OSError as exc:  # create_server's message adds the address as a tuple
+        why = os.strerror(exc.errno) if exc.errno and exc.errno > 0 else exc.strerror or exc
+        raise InputError(f"--host {host} --port {port}: cannot listen: {why}") from None
+
+
+def hostport(host: str, port: int) -> str:
+    """An address as written in a URL and read by `split_hostport`.
+
+    Parameters
+    ----------
+    host : str
+        Host name or IP address.
+    port : int
+        TCP port.
+
+    Returns
+    -------
+    str
+        ``host:port``, an IPv6 address in brackets (``[::1]:4712``).
+    """
+    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+
+
+def split_hostport(text: str) -> tuple[str, str]:
+    """The host and port of an address (``HOST:PORT``, ``[IPv6]:PORT``, or ``::1:4712``:
+    the port is after the last colon).
+
+    Parameters
+    ----------
+    text : str
+        The address.
+
+    Returns
+    -------
+    (str, str)
+        The host (without brackets; empty if none) and the port's text (not checked).
+    """
+    host, _, port = text.rpartition(":")
+    if host.startswith("[") and host.endswith("]"):
+        host = host[1:-1]
+    return host, port
 
 
 class StreamServer:
@@ -88,15 +185,18 @@ class StreamServer:
     finished : threading.Event
         Set when a session that streamed has ended (every frame sent, the peer said
         'stop' or went away).
+    short : str
+        Empty if the last session that streamed sent every frame; else the PDC's address,
+        what ended it before the last frame (it said 'stop', closed the connection, took
+        no frame for the time-out) and the frames sent.
     refused : list of str
         Peers refused or dropped, each with the reason.
 
     Raises
     ------
     InputError
-        A speed that is not > 0, or no frame to serve.
-    OSError
-        The address cannot be listened on (a port in use).
+        A speed that is not > 0, no frame to serve, or an address that cannot be listened
+        on (`listen`).
     """
 
     def __init__(
@@ -111,7 +211,8 @@ class StreamServer:
         self.sent_at = [float("nan")] * len(self._data)
         self.due_at = [float("nan")] * len(self._data)
         self.refused: list[str] = []
-        self._sock = socket.create_server((host, port))
+        self.short = ""
+        self._sock = listen(host, port)
         self._stop, self.finished = threading.Event(), threading.Event()
         self._peers = threading.BoundedSemaphore(guard.max_peers)
         self._thread = threading.Thread(target=self._accept, daemon=True)
@@ -166,66 +267,73 @@ class StreamServer:
             except OSError:  # closed
                 return
             if not self.guard.admits(peer):
-                self.refused.append(f"{peer[0]}:{peer[1]}: not in the allowed peers")
+                self.refused.append(f"{hostport(*peer[:2])}: not in the allowed peers")
                 conn.close()
             elif not self._peers.acquire(blocking=False):
-                self.refused.append(f"{peer[0]}:{peer[1]}: {self.guard.max_peers} peers served")
+                self.refused.append(f"{hostport(*peer[:2])}: {self.guard.max_peers} peers served")
                 conn.close()
             else:
                 threading.Thread(target=self._session, args=(conn, peer), daemon=True).start()
 
     def _session(self, conn: socket.socket, peer) -> None:
-        """One peer's session; the server's `finished` is set if it streamed."""
-        streamed = False
+        """One peer's session; the server's `finished` (and `short`) set if it streamed."""
+        ended = None
         try:
             with conn:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                streamed = self._serve(conn)
+                ended = self._serve(conn)
         except InputError as exc:  # another protocol, a cut frame: dropped, serve on
-            self.refused.append(f"{peer[0]}:{peer[1]}: {exc}")
+            self.refused.append(f"{hostport(*peer[:2])}: {exc}")
         except TimeoutError:
-            self.refused.append(f"{peer[0]}:{peer[1]}: silent for {self.guard.timeout:g} s")
+            self.refused.append(f"{hostport(*peer[:2])}: silent for {self.guard.timeout:g} s")
         except OSError:  # the peer vanished mid-session
             pass
         finally:
             self._peers.release()
-        if streamed:
+        if ended is not None:
+            sent = f"{ended} after {self.n_sent} of {self.n_frames} frames"
+            self.short = f"the PDC {hostport(*peer[:2])} {sent}" if ended else ""
             self.finished.set()
 
-    def _serve(self, conn: socket.socket) -> bool:
+    def _serve(self, conn: socket.socket) -> str | None:
         """Commands until the peer closes; a 'start' streams every frame (commands
-        received meanwhile are read between frames).  True if it streamed."""
+        received meanwhile are read between frames).  None if it did not stream, else
+        `_stream`'s result."""
         while not self._stop.is_set():
             command = self._command(conn, block=True)
             if command is None:
-                return False
+                return None
             if command == "cfg2":
                 conn.sendall(self._cfg2.convert2bytes())
             elif command == "header":
                 conn.sendall(self._header())
             elif command == "start":
-                self._stream(conn)
-                return True
-        return False
+                return self._stream(conn)
+        return None
 
-    def _stream(self, conn: socket.socket) -> bool:
-        """Send the data frames paced by their time stamps; False if the peer left or
-        said 'stop'."""
+    def _stream(self, conn: socket.socket) -> str:
+        """Send the data frames paced by their time stamps: '' once every frame is sent,
+        else what the peer did before the last (said 'stop', closed the connection, ...)."""
         start = time.perf_counter()
         self.sent_at[:] = [float("nan")] * len(self._data)
-        for k, data in enumerate(self._data):
-            due = start + (self._t[k] - self._t[0]) / self.speed
-            self.due_at[k] = due
-            while (wait := due - time.perf_counter()) > 0:
-                if self._command(conn, block=False, timeout=min(wait, 0.05)) in ("stop", None):
-                    return False
-            conn.settimeout(self.guard.timeout)
-            try:
+        try:
+            for k, data in enumerate(self._data):
+                due = start + (self._t[k] - self._t[0]) / self.speed
+                self.due_at[k] = due
+                while (wait := due - time.perf_counter()) > 0:
+                    command = self._command(conn, block=False, timeout=min(wait, 0.05))
+                    if command in ("stop", None):
+                        return "said 'stop'" if command else "closed the connection"
+                conn.settimeout(self.guard.timeout)
                 conn.sendall(data)
-            except OSError:  # gone, or not reading for the time-out
-                return False
-            self.sent_at[k] = time.perf_counter()
-        return True
+                self.sent_at[k] = time.perf_counter()
+        except TimeoutError:  # not reading
+            return f"took no frame for {self.guard.timeout:g} s"
+        except ConnectionError:  # a reset, a broken pipe
+            return "closed the connection"
+        except OSError as exc:
+            return f"failed ({exc.strerror or exc})"
+        return ""
 
     def _command(self, conn: socket.socket, block: bool, timeout: float = 0.0):
         """The next command frame's word as a name (None: the peer closed; '' none, one
@@ -356,30 +464,35 @@ def receive(
     ------
     InputError
         No server there, silence for `timeout` s before the first data frame, a reply to
-        'cfg2' that is not a configuration frame, a peer of another protocol, or more than
-        `MAX_FRAMES` frames of a stream without a stated end.
+        'cfg2' that is not a configuration frame, a peer of another protocol or bytes off
+        a frame's start (a FRAMESIZE that is not the frame's), a connection reset before
+        the first data frame, or more than `MAX_FRAMES` frames of a stream without a
+        stated end: each named with host:port.
     """
     from pyc37.frame import CommandFrame
 
+    where = hostport(host, port)
     try:
         conn = socket.create_connection((host, port), timeout=timeout)
     except OSError as exc:
-        raise InputError(f"no C37.118.2 server at {host}:{port}: {exc.strerror or exc}") from None
+        raise InputError(f"no C37.118.2 server at {where}: {exc.strerror or exc}") from None
     with conn:
+        data: list[bytes] = []
         try:
             conn.sendall(CommandFrame(pdc_id, "cfg2").convert2bytes())
             cfg2 = _frame(conn)
             if cfg2[1] & 0x70 != 0x30:  # frame type 011: CFG-2
-                raise InputError(
-                    f"{host}:{port} answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}"
-                )
+                raise InputError(f"answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}")
             conn.sendall(CommandFrame(pdc_id, "start").convert2bytes())
+            short = _data_frames(conn, cfg2, end, data)
         except TimeoutError:
-            raise InputError(f"{host}:{port}: nothing received for {timeout:g} s") from None
-        data: list[bytes] = []
-        short = _data_frames(conn, cfg2, end, data)
+            raise InputError(f"{where}: nothing received for {timeout:g} s") from None
+        except InputError as exc:
+            raise InputError(f"{where}: {exc}") from None
+        except OSError as exc:  # a reset or broken pipe before any data frame
+            raise InputError(f"{where}: {exc.strerror or exc}") from None
         if not data and short:
-            raise InputError(f"{host}:{port}: {short}")
+            raise InputError(f"{where}: {short}")
         if not short and end.given:
             with contextlib.suppress(OSError):
                 conn.sendall(CommandFrame(pdc_id, "stop").convert2bytes())
@@ -399,6 +512,9 @@ def _data_frames(conn: socket.socket, cfg2: bytes, end: End, data: list) -> str:
             cut = "reset the connection"
         except CutFrame:
             cut = "closed the connection in the middle of a frame"
+        except InputError as exc:  # bytes that start no frame
+            off = f" (or data frame {len(data)}'s FRAMESIZE is off)" if data else ""
+            raise InputError(f"after {len(data)} data frames: {exc}{off}") from None
         else:
             if frame is not None:
                 if frame[1] & 0x70 != 0:  # not a data frame (a CFG or header resent)

@@ -21,6 +21,7 @@ import numpy as np
 
 from stabctl.errors import InputError
 from stabctl.estimation import c37
+from stabctl.estimation.c37_tcp import hostport, split_hostport
 from stabctl.estimation.pmu import Frame
 
 TCP = "tcp://"
@@ -50,7 +51,7 @@ class Source:
         from stabctl.io.inputs import number_ranges
 
         items = [
-            f"{host}:{a}" + (f"-{b}" if b > a else "")
+            hostport(host, a) + (f"-{b}" if b > a else "")
             for host, ports in groupby(self.servers, key=lambda hp: hp[0])
             for a, b in number_ranges(p for _, p in ports)
         ]
@@ -59,14 +60,15 @@ class Source:
 
 def parse_source(text: str) -> Source:
     """The `Source` of ``tcp://HOST:PORT[,HOST:PORT...]`` (a port range ``P1-P2`` for
-    one server per port, as `stabctl pmu serve --each-pmu` serves) or of a recording's
-    path.
+    one server per port, as `stabctl pmu serve --each-pmu` serves; an IPv6 address in
+    brackets, ``[::1]:4712``) or of a recording's path.
 
     Raises
     ------
     InputError
-        A TCP address without a port in 1..65535 (or an empty range), or a recording that
-        is not a regular file of at most `stabctl.io.inputs.MAX_INPUT_BYTES`.
+        A TCP address without a port in 1..65535 (or an empty range), ``tcp://`` written
+        again inside the list, a server given twice, or a recording that is not a regular
+        file of at most `stabctl.io.inputs.MAX_INPUT_BYTES`.
     """
     if not text.startswith(TCP):
         from stabctl.io.inputs import input_file
@@ -74,9 +76,14 @@ def parse_source(text: str) -> Source:
         if not Path(text).exists():
             raise InputError(f"--source {text}: no such recording (or write tcp://HOST:PORT)")
         return Source(path=input_file(text, "--source"))
-    servers = []
+    servers: list[tuple[str, int]] = []
     for item in text[len(TCP) :].split(","):
-        host, _, ports = item.rpartition(":")
+        if item.startswith(TCP):
+            raise InputError(
+                f"--source {text}: {item!r}: write tcp:// once, before the list "
+                "(tcp://HOST:PORT,HOST:PORT)"
+            )
+        host, ports = split_hostport(item)
         first, _, last = ports.partition("-")
         last = last or first
         if not (host and first.isdigit() and last.isdigit()):
@@ -84,6 +91,8 @@ def parse_source(text: str) -> Source:
         span = range(int(first), int(last) + 1)
         if not span or span[0] < 1 or span[-1] > 65535:
             raise InputError(f"--source {text}: {item!r} is not HOST:PORT")
+        if twice := [p for p in span if (host, p) in servers]:
+            raise InputError(f"--source {text}: {hostport(host, twice[0])} given twice")
         servers += [(host, p) for p in span]
     return Source(servers=tuple(servers))
 
@@ -140,10 +149,11 @@ def read_frames(
     Raises
     ------
     InputError
-        As `c37.recorded_frames` and `c37_tcp.receive`; more TCP servers than PMUs; a
-        stream at another rate, a station that is not one of `pmus` or in two streams, a
-        PMU in no stream, a data frame that is not readable, a stream whose time stamps
-        repeat or go backwards, or frames whose every value is absent.
+        As `c37.recorded_frames` and `c37_tcp.receive` (a TCP stream's named with its
+        ``--source``); more TCP servers than PMUs; a stream at another rate, a station
+        that is not one of `pmus` or in two streams, a PMU in no stream, a data frame that
+        is not readable or not the stream's (`c37.parse_frame`), a stream whose time
+        stamps repeat or go backwards, or frames whose every value is absent.
     """
     from stabctl.estimation.c37_tcp import End, Stream, receive
 
@@ -175,12 +185,12 @@ def read_frames(
             while t.is_alive():  # a join with a time-out lets Ctrl-C through
                 t.join(0.2)
         if errors := [g for g in got if isinstance(g, Exception)]:
-            raise errors[0]
+            raise InputError(f"--source {source}: {errors[0]}") from None
         streams = [
             (
-                c37.read_config(g.cfg2, f"{h}:{p}'s CFG-2"),
+                c37.read_config(g.cfg2, f"--source {source}: {hostport(h, p)}'s CFG-2"),
                 g.data,
-                f"{h}:{p}: {g.short}" if g.short else "",
+                f"{hostport(h, p)}: {g.short}" if g.short else "",
             )
             for (h, p), g in zip(source.servers, got)
             if isinstance(g, Stream)
@@ -249,7 +259,13 @@ def merge(case, pmus, rate: float, streams) -> Received:
         cfg = c37.stream_config(
             case, [pmus[c] for c in cols], rate, cfg2.get_id_code(), cfg2.get_soc()
         )
-        parsed.append((cols, [c37.parse_frame(cfg, cfg2, d) for d in data]))
+        frames = []
+        for k, d in enumerate(data):
+            try:
+                frames.append(c37.parse_frame(cfg, cfg2, d))
+            except InputError as exc:
+                raise InputError(f"stream {s + 1}, data frame {k + 1}: {exc}") from None
+        parsed.append((cols, frames))
     if lost := [x for x in labels if x not in owner]:
         raise InputError(f"PMU {', '.join(lost)} in no stream")
     return _by_time_stamp(len(labels), parsed)

@@ -884,3 +884,179 @@ def test_estimate_track_ends_at_the_first_end_reached_and_refuses_pmu_settings(t
     for option in (["--drop", "0.5"], ["--window-cycles", "8"]):
         assert_error(CliRunner().invoke(main, [*base, *option]), "given to estimate track")
         assert not out.exists()
+
+
+# -- C37.118.2 streams: addresses, sources and frames named ------------------------------
+
+
+@pytest.fixture(scope="module")
+def kundur_wire(tmp_path_factory):
+    """Kundur's 4-PMU stream for 1.2 s (73 frames): its `c37.StreamConfig`, frames, and
+    CFG-2 and data frames as bytes; `estimate track` run once on it, so that its kernels
+    are compiled before a test reads its stderr (a cold cache adds the compile notice)."""
+    pytest.importorskip("pyc37")
+    from pmu_streams import kundur_stream, on_the_wire
+
+    from stabctl.estimation import c37
+
+    _, _, cfg, frames = kundur_stream(t_end=1.2)
+    rec = tmp_path_factory.mktemp("wire") / "k.c37"
+    c37.record(rec, cfg, frames)
+    res = run("estimate", "track", "kundur", "--source", rec, "--out", rec.with_suffix(".csv"))
+    assert res.exit_code == 0, res.output
+    return cfg, frames, *on_the_wire(cfg, frames)
+
+
+def _pmu_server(head: bytes, body: list):
+    """A fake PMU server (`pmu_streams.fake_server`): the CFG-2 `head` on 'cfg2', the
+    bytes of `body` on 'start', then it closes."""
+    from pmu_streams import fake_server
+
+    def talk(conn):
+        conn.recv(1000)
+        conn.sendall(head)
+        conn.recv(1000)
+        conn.sendall(b"".join(body))
+
+    return fake_server(talk)
+
+
+def _with_crc(frame: bytes) -> bytes:
+    """frame with its CHK (CRC-CCITT, C37.118.2-2011 Annex B) made valid again."""
+    import binascii
+
+    return frame[:-2] + binascii.crc_hqx(frame[:-2], 0xFFFF).to_bytes(2, "big")
+
+
+def test_a_server_that_cannot_listen_names_host_and_port(kundur_wire, tmp_path):
+    """A port in use, an address not this machine's and a host that does not resolve were
+    the system's message with the address as a Python tuple; each names --host and --port
+    and their values, for `pmu replay` and the plant's listener alike."""
+    import socket
+
+    from stabctl.estimation import c37
+    from stabctl.estimation.c37_loop import PlantLink
+
+    cfg, frames, _, _ = kundur_wire
+    rec = tmp_path / "r.c37"
+    c37.record(rec, cfg, frames)
+    replay = ("pmu", "replay", rec, "--allow", "127.0.0.1", "--timeout", 1)
+    with socket.create_server(("127.0.0.1", 0)) as busy:
+        port = busy.getsockname()[1]
+        assert_error(
+            run(*replay, "--port", port),
+            f"--host 127.0.0.1 --port {port}: cannot listen: Address already in use",
+        )
+        with pytest.raises(InputError, match=f"--host 127.0.0.1 --port {port}: cannot listen"):
+            PlantLink(None, cfg, port=port)
+    assert_error(
+        run(*replay, "--host", "203.0.113.9", "--port", 4712),
+        "--host 203.0.113.9 --port 4712: cannot listen: Cannot assign requested address",
+    )
+    assert_error(
+        run(*replay, "--host", "no.such.host.invalid", "--port", 0),
+        "--host no.such.host.invalid --port 0: cannot listen: ",
+    )
+
+
+def test_stream_errors_name_the_address_and_the_source(kundur_wire, tmp_path):
+    """`pmu record` from a server that speaks another protocol, and `estimate track` from
+    one whose frame 31 claims 2 bytes less than it has (the stream off its frames' starts
+    after it), said what was wrong but not where: each names the address, and track its
+    --source too.  Nothing is written."""
+    from pmu_streams import fake_server
+
+    _, _, head, body = kundur_wire
+
+    def web(conn):
+        conn.recv(100)
+        conn.sendall(b"HTTP/1.1 200 OK\r\n\r\n")
+
+    srv, port = fake_server(web)
+    with srv:
+        res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 5, "-o", tmp_path / "r.c37")
+    assert_error(res, f"error: 127.0.0.1:{port}: ", "does not speak C37.118.2")
+    cut = body[30][:2] + (len(body[30]) - 2).to_bytes(2, "big") + body[30][4:]
+    srv, port = _pmu_server(head, [*body[:30], cut, *body[31:]])
+    with srv:
+        res = run(
+            "estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}",
+            "--until", 1.1, "--out", tmp_path / "t.csv",
+        )  # fmt: skip
+    assert_error(
+        res,
+        f"--source tcp://127.0.0.1:{port}: 127.0.0.1:{port}: after 31 data frames: ",
+        "(or data frame 31's FRAMESIZE is off)",
+    )
+    assert sorted(tmp_path.iterdir()) == []
+
+
+def test_record_cut_short_leaves_an_existing_recording_as_it_was(kundur_wire, tmp_path):
+    """`pmu record -o good.c37` from a stream cut after 3 frames replaced the good
+    recording with the 3 frames: a file there is replaced only by a whole recording (it
+    is left byte for byte, no temporary file beside it); a whole recording replaces it."""
+    _, _, head, body = kundur_wire
+    out = tmp_path / "good.c37"
+    out.write_bytes(head + b"".join(body))
+    srv, port = _pmu_server(head, body[:3])
+    with srv:
+        res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 50, "-o", out)
+    assert_error(
+        res,
+        f"127.0.0.1:{port}: the server closed the connection after 3 data frames",
+        f"{out} is left as it was (the 3 received are not written over it)",
+    )
+    assert out.read_bytes() == head + b"".join(body)
+    assert list(tmp_path.iterdir()) == [out]
+    srv, port = _pmu_server(head, body[:5])
+    with srv:
+        res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 5, "-o", out)
+    assert res.exit_code == 0, res.output
+    assert out.read_bytes() == head + b"".join(body[:5]) and list(tmp_path.iterdir()) == [out]
+
+
+@pytest.mark.parametrize(
+    "change, needle",
+    [
+        ("idcode", "a data frame of IDCODE 7, not the stream's 1 (its CFG-2's)"),
+        ("padded", "a data frame of FRAMESIZE 112 bytes, where its CFG-2 makes one 104 bytes"),
+    ],
+)
+def test_track_refuses_a_frame_that_is_not_the_stream_s(kundur_wire, tmp_path, change, needle):
+    """A data frame of another IDCODE (another stream's, CRC valid) was tracked as this
+    stream's; one padded with 8 bytes past what its CFG-2 gives (FRAMESIZE and CRC
+    matching the padding) was read without a word.  Each is refused naming the source,
+    the frame and the two values; no CSV is written."""
+    _, _, head, body = kundur_wire
+    frame = bytearray(body[30])
+    if change == "idcode":
+        frame[4:6] = (7).to_bytes(2, "big")
+    else:
+        frame[2:4] = (len(frame) + 8).to_bytes(2, "big")
+        frame[-2:-2] = bytes(8)
+    srv, port = _pmu_server(head, [*body[:30], _with_crc(bytes(frame)), *body[31:]])
+    with srv:
+        res = run(
+            "estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}",
+            "--until", 1.1, "--out", tmp_path / "t.csv",
+        )  # fmt: skip
+    assert_error(res, f"--source tcp://127.0.0.1:{port}: stream 1, data frame 31: {needle}")
+    assert not (tmp_path / "t.csv").exists()
+
+
+@pytest.mark.parametrize(
+    "servers, needle",
+    [
+        ("tcp://127.0.0.1:4712,tcp://127.0.0.1:4712", "'tcp://127.0.0.1:4712': write tcp:// once"),
+        ("tcp://127.0.0.1:4712,127.0.0.1:4712", "127.0.0.1:4712 given twice"),
+        ("tcp://127.0.0.1:4712-4714,127.0.0.1:4713", "127.0.0.1:4713 given twice"),
+    ],
+)
+def test_a_tcp_source_list_is_written_once_each_server_once(servers, needle, tmp_path):
+    """`--source tcp://A:P,tcp://A:P` was taken for the hosts 'A' and 'tcp://A' (a name
+    resolution error naming neither); ``tcp://`` repeated inside the list and a server
+    given twice are each named, before any connection or work."""
+    out = tmp_path / "t.csv"
+    res = run("estimate", "track", "kundur", "--source", servers, "--until", 1, "--out", out)
+    assert_error(res, f"--source {servers}: {needle}")
+    assert not out.exists()

@@ -7,6 +7,7 @@ import json
 import re
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -33,7 +34,7 @@ def serving(*args, servers=1):
     )
     found = []
     for line in proc.stderr:
-        found += re.findall(r"on (127\.0\.0\.1:\d+)", line)
+        found += re.findall(r"on (127\.0\.0\.1:\d+|\[::1\]:\d+)", line)
         if len(found) == servers:
             return proc, found[0] if servers == 1 else found
     proc.wait(timeout=60)
@@ -306,3 +307,63 @@ def test_a_peer_that_resets_the_controller_is_named_by_its_address():
     with pytest.raises(InputError, match=f"the plant at 127.0.0.1:{port}: "):
         serve_controller(None, cfg, "127.0.0.1", port, 5)  # reset before any frame
     srv.close()
+
+
+@pytest.fixture(scope="module")
+def kundur_recording(tmp_path_factory):
+    """A recording of Kundur's 4-PMU stream for 1.2 s (73 frames)."""
+    from pmu_streams import kundur_stream
+
+    _, _, cfg, frames = kundur_stream(t_end=1.2)
+    path = tmp_path_factory.mktemp("rec") / "k.c37"
+    c37.record(path, cfg, frames)
+    return path
+
+
+def test_a_server_listens_on_ipv6(kundur_recording, tmp_path):
+    """`--host ::1` could not be served (the listening socket was IPv4 only, while --allow
+    took IPv6 addresses): a replay on ::1, allowed only to ::1, is recorded from
+    [::1]:PORT byte for byte."""
+    import socket
+
+    try:
+        socket.create_server(("::1", 0), family=socket.AF_INET6).close()
+    except OSError:
+        pytest.skip("this machine has no IPv6 loopback (::1)")
+    rec = str(kundur_recording)
+    proc, address = serving("replay", rec, "--host", "::1", "--allow", "::1", "--speed", "0")
+    assert address.startswith("[::1]:")
+    record(address, 73, tmp_path / "b.c37")
+    assert finished(proc) == (0, "sent 73 of 73 frames\n")
+    assert (tmp_path / "b.c37").read_bytes() == kundur_recording.read_bytes()
+
+
+@pytest.mark.parametrize("how, said", [("stop", "said 'stop'"), ("close", "closed the connection")])
+def test_a_pdc_that_ends_the_stream_early_is_named(kundur_recording, how, said):
+    """A PDC's 'stop' after a few frames ended `pmu replay` with exit 0 and "sent 18 of 121
+    frames", a partial stream presented as a normal end.  The session ends, as it does
+    when the PDC closes the connection mid-stream, and both are one error naming the PDC
+    and the frames sent (exit status 2)."""
+    import socket
+
+    from pyc37.frame import CommandFrame
+
+    proc, address = serving("replay", str(kundur_recording), "--speed", "1")
+    host, port = address.rsplit(":", 1)
+    with socket.create_connection((host, int(port)), timeout=10) as pdc:
+        pdc.sendall(CommandFrame(1, "cfg2").convert2bytes())
+        pdc.recv(10_000)
+        pdc.sendall(CommandFrame(1, "start").convert2bytes())
+        pdc.recv(100)  # the first frame(s), sent at once
+        me = f"127.0.0.1:{pdc.getsockname()[1]}"
+        if how == "stop":
+            pdc.sendall(CommandFrame(1, "stop").convert2bytes())
+            time.sleep(0.3)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 2 and out == "", (out, err)
+    [line] = err.splitlines()
+    assert re.fullmatch(
+        rf"error: {address}: the PDC {me} {re.escape(said)} after \d+ of 73 frames: the "
+        "stream was not sent whole",
+        line,
+    ), line

@@ -191,6 +191,8 @@ def test_a_port_range_is_one_server_per_port():
         ("pdc", 4800),
     )
     assert str(src) == "tcp://10.0.0.1:4712-4714,pdc:4800"
+    src = sources.parse_source("tcp://[::1]:4712-4713")
+    assert src.servers == (("::1", 4712), ("::1", 4713)) and str(src) == "tcp://[::1]:4712-4713"
 
 
 @pytest.mark.parametrize(
@@ -201,6 +203,8 @@ def test_a_port_range_is_one_server_per_port():
         ("no/such.c37", "no such recording"),
         ("tcp://a:4714-4712", "'a:4714-4712' is not HOST:PORT"),
         ("tcp://a:0-3", "'a:0-3' is not HOST:PORT"),
+        ("tcp://a:1,tcp://a:1", "'tcp://a:1': write tcp:// once"),
+        ("tcp://a:1-3,a:2", "a:2 given twice"),
     ],
 )
 def test_bad_sources_are_named(text, needle):
