@@ -289,6 +289,9 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
     that writers choosing the format by extension still do), renamed over `path` only when
     complete; the temporary file is removed if writing fails.  The file gets the mode
     ``open`` gives a new one (0o666 less the umask).  The one atomic write of stabctl.
+    A symbolic link stays: the file it points to is the one replaced.  A path that is
+    neither a file nor a directory (a device or pipe: ``/dev/stdout``, a FIFO) is written
+    in place, as no file can replace it.
 
     Parameters
     ----------
@@ -303,14 +306,22 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
     Returns
     -------
     Path
-        `path`.
+        `path`, as given.
 
     Raises
     ------
     OSError
         The directory cannot be created or written; whatever `write` raises.
     """
-    path = Path(path)
+    given = Path(path)
+    path = given.resolve() if given.is_symlink() else given
+    if path.exists() and not (path.is_file() or path.is_dir()):
+        if mode is None:
+            write(str(path))
+        else:
+            with open(path, mode) as f:
+                write(f)
+        return given
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
     try:
@@ -325,7 +336,7 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-    return path
+    return given
 
 
 def _umask() -> int:

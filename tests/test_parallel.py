@@ -984,3 +984,20 @@ def test_a_job_recorded_twice_is_refused_unless_the_first_failed(tmp_path):
         f.write(json.dumps({**rec, "result": {"cct_s": 0.999}}) + "\n")
     with pytest.raises(InputError, match="line 3: job a is recorded again"):
         read_records(out)
+
+
+def test_atomic_write_keeps_links_and_writes_devices_in_place(tmp_path):
+    """A link named as the output stays a link (its file is replaced), and a device such
+    as /dev/null (or /dev/stdout) is written in place: never a regular file renamed over
+    it, which had turned /dev/stdout into a file."""
+    real = tmp_path / "real.json"
+    real.write_text("old")
+    link = tmp_path / "link.json"
+    link.symlink_to(real)
+    assert atomic_write(link, lambda f: f.write("new")) == link
+    assert link.is_symlink() and real.read_text() == "new"
+    sink = tmp_path / "sink"
+    sink.symlink_to(os.devnull)
+    atomic_write(sink, lambda f: f.write(b"frames"), mode="wb")
+    assert sink.is_symlink() and Path(os.devnull).is_char_device()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.json", "real.json", "sink"]
