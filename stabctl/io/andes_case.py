@@ -1389,6 +1389,14 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
         m = ss.models[name]
         sg = ss.PV if m.gen.v[k] in ss.PV.idx.v else ss.Slack
         j = list(sg.idx.v).index(m.gen.v[k])
+        if sg.bus.v[j] != m.bus.v[k]:
+            there = [f"{s.class_name} {s.idx.v[i]}" for s, i in static if s.bus.v[i] == m.bus.v[k]]
+            raise CaseError(
+                f"{file}: {name} {m.idx.v[k]} is at bus {numbers[m.bus.v[k]]}, its static "
+                f"generator {sg.class_name} {m.gen.v[k]} at bus {numbers[sg.bus.v[j]]} (bus "
+                f"{numbers[m.bus.v[k]]} has {', '.join(there) or 'no PV or Slack'}): a machine "
+                "takes its generator's power flow at its own bus (ANDES fails to initialise it)"
+            )
         gid = str(m.idx.v[k])
         gens.append(
             {

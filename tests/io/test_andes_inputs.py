@@ -57,6 +57,11 @@ def cells_edited(tmp_path, edits, case=KUNDUR):
             [("Line", 2, "r", 0), ("Line", 2, "x", 0)],
             "Line row 1 (idx Line_0): r = x = 0 between buses 5 and 6: a zero impedance",
         ),
+        (
+            [("GENROU", 2, "bus", 7)],
+            "GENROU 1 is at bus 7, its static generator Slack 1 at bus 1 (bus 7 has no PV "
+            "or Slack)",
+        ),
     ],
 )
 def test_values_andes_would_change_or_cannot_run_are_refused(tmp_path, edits, needle):
