@@ -400,7 +400,7 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
         _mark_playback(mats, gens)
     if ibr_con:  # from the tables written, machines' included
         changed += _netted_shares(mats, ibr_labels)
-    events, ev_refused, ev_off = _disturbances(ss, numbers, gens, mats, motor_numbers)
+    events, ev_refused, ev_off = _disturbances(ss, path.name, numbers, gens, mats, motor_numbers)
     refused += ev_refused
     ignored += tuple(ev_off)
     left_out = tuple(lacking + given.unknown + refused)
@@ -1674,7 +1674,7 @@ def _motors(ss, numbers: dict, kept: dict) -> tuple[list[list[float]], list[str]
     return rows, refused
 
 
-def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict):
+def _disturbances(ss, file: str, numbers: dict, gens: list, mats: dict, motor_numbers: dict):
     """The case's own events (`Case.events` records) from ANDES's Toggle, Fault and Alter
     devices in service, those refused (``"MODEL idx: why"``) and those off (u = 0: ANDES
     does not run them either).
@@ -1689,7 +1689,8 @@ def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict
     tc (none: never cleared), without loss of a line.  Alter (``+``, ``-``, ``=``; ``*``,
     ``/`` of a known value) of an exciter's ``vref0``: a VrefStep; of a TGOV1's
     ``paux0`` (0 at the start): a PrefStep of the change / R (machine base).  Any other
-    target is refused with the device and attribute."""
+    target is refused with the device and attribute.  CaseError (naming ``file``) for an
+    event time (t, tf, tc) that is not finite and >= 0 (ANDES's Toggle t defaults to -1)."""
     events: list = []
     refused: list = []
     off: list = []
@@ -1709,6 +1710,12 @@ def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict
                 off.append(f"{name} {m.idx.v[k]} (u = 0: not run, as in ANDES)")
                 continue
             t = float(m.tf.v[k] if name == "Fault" else m.t.v[k])
+            for what, when in (("tf" if name == "Fault" else "t", t), ("tc", _clearing(m, k))):
+                if when is not None and not (np.isfinite(when) and when >= 0):
+                    raise CaseError(
+                        f"{file}: {name} {m.idx.v[k]}: {what} = {when:g} s: an event time "
+                        "must be finite and >= 0"
+                    )
             timed.append((t, name, k))
     state: dict = {}
     for t, name, k in sorted(timed, key=lambda e: e[0]):
@@ -1717,12 +1724,11 @@ def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict
         rec: dict = {}
         why = ""
         if name == "Fault":
-            tc = float(m.tc.v[k]) if m.tc.v[k] is not None else np.nan
             rec = {
                 "kind": "Fault",
                 "bus": numbers[m.bus.v[k]],
                 "t": t,
-                "clear_near": tc if np.isfinite(tc) else None,
+                "clear_near": _clearing(m, k),
                 "r": float(m.rf.v[k]),
                 "x": float(m.xf.v[k]),
             }
@@ -1765,6 +1771,12 @@ def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict
         else:
             events.append({**rec, "source": where})
     return events, refused, off
+
+
+def _clearing(m, k: int) -> float | None:
+    """A Fault's clearing time ``tc`` (s; None for none: never cleared), else None."""
+    tc = m.tc.v[k] if m.class_name == "Fault" else None
+    return None if tc is None else float(tc)
 
 
 def _alter(ss, m, k, t: float, state: dict, machine_of: dict, have: dict):

@@ -57,6 +57,7 @@ def cells_edited(tmp_path, edits, case=KUNDUR):
             [("Line", 2, "r", 0), ("Line", 2, "x", 0)],
             "Line row 1 (idx Line_0): r = x = 0 between buses 5 and 6: a zero impedance",
         ),
+        ([("Toggler", 2, "t", -1)], "Toggle 1: t = -1 s: an event time must be finite and >= 0"),
         (
             [("GENROU", 2, "bus", 7)],
             "GENROU 1 is at bus 7, its static generator Slack 1 at bus 1 (bus 7 has no PV "
