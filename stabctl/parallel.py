@@ -643,6 +643,9 @@ def write_reproducible(src: str | Path, dst: str | Path) -> dict:
 
 
 def _check_jobs(jobs, done: dict, out: Path) -> None:
+    """InputError for a key given twice, a job `out` holds with other inputs, or a record
+    of `out` run on a case none of `jobs` runs on (`_foreign_case`)."""
+    _foreign_case(jobs, out)
     seen = set()
     for j in jobs:
         if j.key in seen:
@@ -653,6 +656,26 @@ def _check_jobs(jobs, done: dict, out: Path) -> None:
                 f"{out} already holds job {j.key!r} with other inputs ("
                 f"{_differences(done[j.key].get('inputs') or {}, j.inputs)}); "
                 "use another output file"
+            )
+
+
+def _foreign_case(jobs, out: Path) -> None:
+    """InputError naming the first record of `out` (its line) whose inputs name a
+    ``case`` that none of `jobs` runs on: the records of another case's sweep or screen
+    (a resume into the wrong file would keep them beside this run's, and a reader of the
+    file take them for its own).  Jobs without a ``case`` input are not checked."""
+    cases = {j.inputs.get("case") for j in jobs}
+    if not cases or None in cases or not out.exists():
+        return
+    for n, _, rec in _record_lines(out):
+        inputs = (rec or {}).get("inputs")
+        case = inputs.get("case") if isinstance(inputs, dict) else None
+        if rec is not None and case is not None and case not in cases:
+            mine = ", ".join(sorted(map(str, cases)))
+            raise InputError(
+                f"{out} line {n}: job {rec['key']} was run on case {case!r}, not on this "
+                f"run's ({mine}): the file holds another case's records; give another "
+                "output file"
             )
 
 

@@ -984,3 +984,23 @@ def test_a_job_recorded_twice_is_refused_unless_the_first_failed(tmp_path):
         f.write(json.dumps({**rec, "result": {"cct_s": 0.999}}) + "\n")
     with pytest.raises(InputError, match="line 3: job a is recorded again"):
         read_records(out)
+
+
+def test_a_record_of_another_case_is_refused_naming_its_line(tmp_path):
+    """A kundur sweep resumed into a file holding a miniwecc record kept the foreign record
+    without a word (the report listed only this run's jobs); refused, naming the file, the
+    line, the job and its case, the file unchanged."""
+    out = tmp_path / "o.jsonl"
+    jobs = [Job(f"kundur/{x}", square, {"case": "kundur", "x": x}) for x in (1, 2)]
+    run_sweep(jobs[:1], out, workers=1, progress=False)
+    foreign = {"key": "miniwecc/3", "inputs": {"case": "miniwecc", "x": 3}, "status": "ok"}
+    with out.open("a") as f:
+        f.write(json.dumps({**foreign, "result": {"y": 9}}) + "\n")
+    before = out.read_text()
+    with pytest.raises(
+        InputError,
+        match=r"o.jsonl line 2: job miniwecc/3 was run on case 'miniwecc', not on this run's "
+        r"\(kundur\)",
+    ):
+        run_sweep(jobs, out, workers=1, progress=False)
+    assert out.read_text() == before
