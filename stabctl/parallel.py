@@ -883,10 +883,17 @@ def _connect(scheduler: str, workers: int, timeout: float):
 
         # a worker is sent only the job it runs (Dask's default, 1.1, queues a second
         # one there, which a worker killed by the first counts against: KilledWorker);
-        # a cluster whose start fails closes itself (SpecCluster.__init__)
+        # a cluster whose start fails closes itself (SpecCluster.__init__); its worker
+        # processes log errors only (silence_logs): the warnings of the jobs they cancel
+        # when an interrupted sweep closes them ("Async instruction ... ended with
+        # CancelledError", two per running job) are not shown, the sweep says what it kept
         with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
             cluster = LocalCluster(
-                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
             )
         try:
             return _started_client(cluster)
