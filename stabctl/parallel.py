@@ -654,6 +654,9 @@ def write_reproducible(src: str | Path, dst: str | Path) -> dict:
 
 
 def _check_jobs(jobs, done: dict, out: Path) -> None:
+    """InputError for a key given twice, a job `out` holds with other inputs, or a record
+    of `out` run on a case none of `jobs` runs on (`_foreign_case`)."""
+    _foreign_case(jobs, out)
     seen = set()
     for j in jobs:
         if j.key in seen:
@@ -664,6 +667,26 @@ def _check_jobs(jobs, done: dict, out: Path) -> None:
                 f"{out} already holds job {j.key!r} with other inputs ("
                 f"{_differences(done[j.key].get('inputs') or {}, j.inputs)}); "
                 "use another output file"
+            )
+
+
+def _foreign_case(jobs, out: Path) -> None:
+    """InputError naming the first record of `out` (its line) whose inputs name a
+    ``case`` that none of `jobs` runs on: the records of another case's sweep or screen
+    (a resume into the wrong file would keep them beside this run's, and a reader of the
+    file take them for its own).  Jobs without a ``case`` input are not checked."""
+    cases = {j.inputs.get("case") for j in jobs}
+    if not cases or None in cases or not out.exists():
+        return
+    for n, _, rec in _record_lines(out):
+        inputs = (rec or {}).get("inputs")
+        case = inputs.get("case") if isinstance(inputs, dict) else None
+        if rec is not None and case is not None and case not in cases:
+            mine = ", ".join(sorted(map(str, cases)))
+            raise InputError(
+                f"{out} line {n}: job {rec['key']} was run on case {case!r}, not on this "
+                f"run's ({mine}): the file holds another case's records; give another "
+                "output file"
             )
 
 
@@ -871,10 +894,17 @@ def _connect(scheduler: str, workers: int, timeout: float):
 
         # a worker is sent only the job it runs (Dask's default, 1.1, queues a second
         # one there, which a worker killed by the first counts against: KilledWorker);
-        # a cluster whose start fails closes itself (SpecCluster.__init__)
+        # a cluster whose start fails closes itself (SpecCluster.__init__); its worker
+        # processes log errors only (silence_logs): the warnings of the jobs they cancel
+        # when an interrupted sweep closes them ("Async instruction ... ended with
+        # CancelledError", two per running job) are not shown, the sweep says what it kept
         with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
             cluster = LocalCluster(
-                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
             )
         try:
             return _started_client(cluster)

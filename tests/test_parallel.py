@@ -1001,3 +1001,23 @@ def test_atomic_write_keeps_links_and_writes_devices_in_place(tmp_path):
     atomic_write(sink, lambda f: f.write(b"frames"), mode="wb")
     assert sink.is_symlink() and Path(os.devnull).is_char_device()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.json", "real.json", "sink"]
+
+
+def test_a_record_of_another_case_is_refused_naming_its_line(tmp_path):
+    """A kundur sweep resumed into a file holding a miniwecc record kept the foreign record
+    without a word (the report listed only this run's jobs); refused, naming the file, the
+    line, the job and its case, the file unchanged."""
+    out = tmp_path / "o.jsonl"
+    jobs = [Job(f"kundur/{x}", square, {"case": "kundur", "x": x}) for x in (1, 2)]
+    run_sweep(jobs[:1], out, workers=1, progress=False)
+    foreign = {"key": "miniwecc/3", "inputs": {"case": "miniwecc", "x": 3}, "status": "ok"}
+    with out.open("a") as f:
+        f.write(json.dumps({**foreign, "result": {"y": 9}}) + "\n")
+    before = out.read_text()
+    with pytest.raises(
+        InputError,
+        match=r"o.jsonl line 2: job miniwecc/3 was run on case 'miniwecc', not on this run's "
+        r"\(kundur\)",
+    ):
+        run_sweep(jobs, out, workers=1, progress=False)
+    assert out.read_text() == before

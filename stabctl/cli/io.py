@@ -376,8 +376,8 @@ def import_psse(
 @click.option(
     "--skip-unsupported",
     is_flag=True,
-    help="Leave out the ANDES models stabctl lacks (listed as warnings) instead "
-    "of refusing the case.",
+    help="Leave out the ANDES models stabctl lacks and the columns ANDES ignores "
+    "(listed as warnings) instead of refusing the case.",
 )
 @click.option(
     "--dyr-conventions",
@@ -415,7 +415,11 @@ def import_andes(
     stop the import (exit status 2, nothing written), as does a case without machine
     models unless --static asks for a power-flow-only case. DYR records ANDES's reader
     skips are left out by name, values ANDES holds other than the DYR's are named as
-    changes (PSS/E's infinite bus keeps H = 0). The power flow of the case is compared
+    changes (PSS/E's infinite bus keeps H = 0). Values are read as the file gives them:
+    one ANDES would replace by its default (an M of 0), a formula without a stored value,
+    a status u other than 0 or 1, a line of zero impedance, a sheet that is no ANDES model
+    stop the import; columns ANDES ignores too, or are left out by name with
+    --skip-unsupported. The power flow of the case is compared
     with ANDES's (PV Q limits off in both) and, for a RAW file, with the RAW's own
     solution, and the largest differences reported.
 

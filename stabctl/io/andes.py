@@ -31,6 +31,9 @@ Source: ANDES 2.0 documentation (``andes.load``, ``System.add``, ``PFlow``, ``TD
 from __future__ import annotations
 
 import functools
+import logging
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -71,6 +74,57 @@ def _andes():
         raise InputError("ANDES is not installed: pip install 'stabctl[andes]'") from None
     andes.config_logger(stream_level=40)
     return andes
+
+
+class _Held(logging.Handler):
+    """A log handler that keeps the records it is given (`_andes_log`)."""
+
+    def __init__(self, level: int):
+        super().__init__(level)
+        self.records: list[logging.LogRecord] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append(record)
+
+
+@contextmanager
+def _andes_log() -> Iterator[list[logging.LogRecord]]:
+    """ANDES's log (its logger ``andes``) held for the block instead of printed: the
+    records of WARNING and above, for the caller to say what matters in its own words
+    (:func:`_andes_said`); ANDES's handlers are put back after."""
+    log = logging.getLogger("andes")
+    held = _Held(logging.WARNING)
+    saved = log.handlers[:], log.propagate, log.level
+    log.handlers, log.propagate = [held], False
+    log.setLevel(logging.WARNING)
+    try:
+        yield held.records
+    finally:
+        log.handlers, log.propagate = saved[0], saved[1]
+        log.setLevel(saved[2])
+
+
+def _andes_said(records: list[logging.LogRecord], exc: BaseException | None = None) -> str:
+    """What ANDES said of a failure, one line: its first logged error (held by
+    `_andes_log`; it names the model, parameter and device, where the exception it then
+    raises often does not), else ``exc``'s message.
+
+    Parameters
+    ----------
+    records : list of logging.LogRecord
+        ANDES's log records.
+    exc : BaseException, optional
+        The exception ANDES raised.
+
+    Returns
+    -------
+    str
+        At most 300 characters.
+    """
+    errors = [r.getMessage() for r in records if r.levelno >= logging.ERROR]
+    text = errors[0] if errors else (str(exc) if exc is not None else "")
+    text = " ".join(text.split())
+    return text.removeprefix("Error: ")[:300]  # ANDES's prefix of some
 
 
 def strip_dyr(

@@ -36,12 +36,21 @@ Network (ANDES's values after set-up, pu on the system base):
   held at ``v0``, ``a0`` in ANDES's run (``andes/models/static/slack.py``), becomes an
   infinite bus (GENCLS, H = 0, behind :data:`INFINITE_BUS_X`); a machine whose static
   generator is out of service is left out with its controls (one warning: ANDES starts it
-  from the generator's ``p0`` and fails to initialise);
+  from the generator's ``p0`` and fails to initialise); a machine at another bus than its
+  static generator's is refused (ANDES fails to initialise it);
 * ``Line`` (lines and transformers): ``r``, ``x``, tap ``tap`` on the from side, phase
   ``phi`` (PST's phase is its opposite, :mod:`stabctl.network.ybus`), and the shunts as
   ANDES's ``Line`` equations apply them: ``g1 + g/2 + j (b1 + b/2)`` at both ends, the
   from end behind the tap (ANDES 2.0 ignores ``g2``, ``b2``), i.e. stabctl's charging
-  ``b + 2 b1``, ``g_from = (g1 + g/2)/tap^2`` and ``g_to = g1 + g/2``.
+  ``b + 2 b1``, ``g_from = (g1 + g/2)/tap^2`` and ``g_to = g1 + g/2``; a line of zero
+  impedance (r = x = 0, which ANDES runs at x = 1e-8) is refused, as import-psse refuses
+  it.
+
+Values are read as the file gives them (:func:`read_andes_case` raises for a value ANDES
+would replace by its default, a formula without a stored value, a status ``u`` other than
+0 or 1, a sheet that is no ANDES model; names a column that is no parameter of its model
+and a parameter left out, run at ANDES's default), and ANDES's own log is never printed:
+what it says of a case it cannot read is the error's message.
 
 Dynamic models: each ANDES model whose parameters are PSS/E's (ANDES's
 ``andes/io/psse-dyr.yaml`` maps every PSS/E parameter of the model onto one ANDES parameter)
@@ -105,7 +114,7 @@ import numpy as np
 from stabctl.case import PQ, PV, SWING, Case
 from stabctl.case.system import SWITCHED_GROUPS
 from stabctl.errors import CaseError, InputError
-from stabctl.io.andes import _andes
+from stabctl.io.andes import _andes, _andes_log, _andes_said
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
 from stabctl.io.inputs import number_ranges
 from stabctl.io.pst import case_from_matrices
@@ -214,8 +223,9 @@ class AndesImport:
         The stabctl case.
     left_out : tuple of str
         What was left out (``on_unsupported="skip"``): ``"MODEL (count)"`` per ANDES model,
-        then each refused device with why (``MODEL idx: why``, a DYR-level refusal as
-        ``file:row MODEL (bus B, id I): why``).
+        then each column of an xlsx or json file that is no parameter of its model (``SHEET
+        column 'NAME': why``: ANDES ignores it), then each refused device with why
+        (``MODEL idx: why``, a DYR-level refusal as ``file:row MODEL (bus B, id I): why``).
     ignored : tuple of str
         ANDES models ignored as without effect, ``"MODEL (count)"``.
     pf_bus, pf_vmag, pf_vang : numpy.ndarray
@@ -229,14 +239,17 @@ class AndesImport:
         by its default (``file:line MODEL (bus B, id I): NAME = v read by ANDES as w``),
         converters alone on a bus without machine taking other than all of its generation
         (``"MODEL idx (converter n), ...: take pfrac p, qfrac q of the generation of bus
-        B, which has no machine; the rest, ..."``, from the written converter table).
+        B, which has no machine; the rest, ..."``, from the written converter table), a
+        parameter of a machine or its controls that ANDES requires non-zero or of one sign
+        left empty in an xlsx or json file (``NAME left empty, run at ANDES's default d``).
     unlike_andes : tuple of str
         DYR values stabctl keeps as the file gives them where ANDES replaces them (the
         infinite bus, a GENCLS of H = 0, which ANDES runs with its default H = 3 s).
     defaulted : tuple of str
-        Converter, plant-control, wind and battery parameters the case file leaves out
-        (no column, an empty cell, NaN), run with ANDES's default: ``"MODEL NAME = default
-        (rows ...)"`` per model and parameter (`_converter_inputs`).
+        Converter, plant-control, wind and battery parameters, and those of the machines
+        and their controls, that an xlsx or json case file leaves out (no column, an empty
+        cell, NaN), run with ANDES's default: ``"MODEL NAME = default (rows ...)"`` per
+        model and parameter (`_file_inputs`).
     data_solution : numpy.ndarray or None
         The RAW file's own power-flow solution, shape (n, 3): bus number, VM (pu), VA
         (degrees) (ANDES's ``Bus.v0``, ``a0``); None unless the case is a PSS/E RAW.
@@ -288,16 +301,23 @@ def import_andes(
     Raises
     ------
     InputError
-        ANDES is not installed, ANDES cannot read the file, a bad option value, or
-        (``on_unsupported="error"``) models stabctl lacks: one message naming every such
-        ANDES model with its device count, and every refused model option.
+        ANDES is not installed, ANDES cannot read the file (with ANDES's own first error:
+        its log is never printed), an xlsx sheet (json key) that is no ANDES model, a bad
+        option value, or (``on_unsupported="error"``) models stabctl lacks: one message
+        naming every such ANDES model with its device count, every refused model option
+        and every column that is no parameter of its model (ANDES ignores it).
     CaseError
         Data stabctl's tables refuse (a bus ``idx`` that is not an integer, a generator
         without machine model, a value out of range), a value stabctl reads that an xlsx
         or json file leaves out or gives as other than a number (ANDES would run with its
-        default: :data:`_REQUIRED_INPUTS`), machines whose shares of their static
-        generator do not add up to 1 (a duplicated record) or, with converters on it, whose
-        and the converters' shares do not, naming the devices.
+        default: :data:`_REQUIRED_INPUTS`), a value of any model ANDES would replace by its
+        default (its declaration: non-zero, non-negative, ...; a GENROU M of 0), in an
+        xlsx or json file or (network data) a RAW or MATPOWER file, a formula cell without
+        a stored value, a status ``u`` other than 0 or 1, a line of zero impedance (r = x =
+        0, as :func:`stabctl.io.psse.load_psse`), an event time not finite and >= 0, a
+        machine at a bus other than its static generator's, machines whose shares of their
+        static generator do not add up to 1 (a duplicated record) or, with converters on
+        it, whose and the converters' shares do not, naming the devices.
 
     Source: ANDES 2.0 documentation and ``psse-dyr.yaml`` (see module doc).
     """
@@ -316,10 +336,16 @@ def read_andes_case(
         raise InputError(f"conventions must be one of {CONVENTIONS}, got {conventions!r}")
     if on_unsupported not in ("error", "skip"):
         raise InputError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
-    path = Path(path)
-    ss = _load(path, dyr)
-    _check_inputs(path, ss)
-    defaulted = _converter_inputs(path, ss)
+    with _andes_log() as said:  # ANDES's own log is not shown: its failures are said here
+        return _read(Path(path), conventions, on_unsupported, dyr, said)
+
+
+def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) -> AndesImport:
+    """`read_andes_case`'s work, ANDES's log records collected in ``said``."""
+    ss = _load(path, dyr, said)
+    given = _file_inputs(path, ss)
+    _corrections(path.name, ss)
+    _set_up(ss, path, said)
     counts = {name: m.n for name, m in ss.models.items() if m.n}
     lacking = [
         f"{name} ({n})"
@@ -347,7 +373,7 @@ def read_andes_case(
     )
     changed += unchecked
     refused = dropped + refused
-    changed += _grouped(zip_changed)
+    changed += _grouped(zip_changed + given.changed)
     refused += ibr_refused
     motor_numbers: dict = {}
     for key, (rows, why) in (  # stabctl's own tables of the devices ANDES has
@@ -374,13 +400,14 @@ def read_andes_case(
         _mark_playback(mats, gens)
     if ibr_con:  # from the tables written, machines' included
         changed += _netted_shares(mats, ibr_labels)
-    events, ev_refused, ev_off = _disturbances(ss, numbers, gens, mats, motor_numbers)
+    events, ev_refused, ev_off = _disturbances(ss, path.name, numbers, gens, mats, motor_numbers)
     refused += ev_refused
     ignored += tuple(ev_off)
-    left_out = tuple(lacking + refused)
+    left_out = tuple(lacking + given.unknown + refused)
     if left_out or changed:
         listing = "; ".join(
             ([f"ANDES models stabctl lacks (devices): {', '.join(lacking)}"] if lacking else [])
+            + ([f"columns ANDES ignores: {'; '.join(given.unknown)}"] if given.unknown else [])
             + ([f"devices refused: {'; '.join(refused)}"] if refused else [])
         )
         kept = f"kept with a change: {'; '.join(changed)}" if changed else ""
@@ -398,7 +425,7 @@ def read_andes_case(
                 f"changing the power flow: {'; '.join(bare)}"
             )
         text = "; ".join(t for t in ((f"left out {listing}" if listing else ""), kept) if t)
-        warnings.warn(f"{path.name}: {text}", UserWarning, stacklevel=3)
+        warnings.warn(f"{path.name}: {text}", UserWarning, stacklevel=4)
     case = case_from_matrices(
         mats,
         path.stem,
@@ -425,12 +452,12 @@ def read_andes_case(
         tuple(changed),
         tuple(unlike),
         solution,
-        tuple(defaulted),
+        tuple(given.defaulted),
     )
 
 
 #: parameters stabctl reads that ANDES fills with its default when the case file leaves
-#: them out (an empty cell, NaN, no column): refused instead (`_check_inputs`)
+#: them out (an empty cell, NaN, no column): refused instead (`_file_inputs`)
 _REQUIRED_INPUTS = {
     "Line": ("r", "x"),
     "PQ": ("p0", "q0"),
@@ -439,11 +466,42 @@ _REQUIRED_INPUTS = {
     "GENCLS": ("M", "xd1"),
     "GENROU": ("M", "xd", "xq", "xd1", "xq1", "xd2", "Td10", "Tq10", "Td20", "Tq20"),
 }
+#: ANDES's groups of the machines and their controls (`_file_inputs`): a parameter the
+#: file leaves out is named with the default ANDES runs; one ANDES declares non-zero or
+#: of one sign (`_SIGNED`) is a change, refused unless on_unsupported="skip"
+_DYNAMIC_GROUPS = ("SynGen", "Exciter", "TurbineGov", "PSS")
+#: ANDES's NumParam flags for a value it replaces by its default (``NumParam.add``)
+_SIGNED = ("non_zero", "non_negative", "non_positive")
+#: columns of a model's rows that are not its parameters: ANDES's row number ``uid`` (the
+#: xlsx files it writes) and ``idx`` (a parameter of some models only)
+_ROW_COLUMNS = ("uid", "idx")
+_ZERO_IMPEDANCE = (
+    "a zero impedance, refused as import-psse refuses R + jX = 0 (merge the two buses, "
+    "or give the line its impedance)"
+)
+
+
+class _Formula(str):
+    """The text of a spreadsheet formula whose value the file does not hold (saved by a
+    program that does not compute formulas): read by pandas, and so ANDES, as empty."""
+
+
+@dataclass(frozen=True)
+class _Given:
+    """What `_file_inputs` found in the rows of a case file."""
+
+    #: parameters left out, run at ANDES's default (``AndesImport.defaulted``)
+    defaulted: list[str]
+    #: (sheet, idx, why) of the required ones left out in the machines and their controls
+    changed: list[tuple[str, str, str]]
+    #: "SHEET column 'NAME': why" of the columns that are no parameter of their model
+    unknown: list[str]
 
 
 def _input_rows(path: Path) -> dict:
     """ANDES model -> the rows (dicts) of an xlsx or json case file as written, before
-    ANDES fills its defaults ({} for other formats, whose own readers give defaults)."""
+    ANDES fills its defaults ({} for other formats, whose own readers give defaults); an
+    xlsx formula cell without a stored value is a `_Formula`."""
     if path.suffix.lower() == ".json":
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
@@ -457,40 +515,185 @@ def _input_rows(path: Path) -> dict:
 
         try:
             sheets = pd.read_excel(path, sheet_name=None)
+            formulas = _formulas(path)
         except Exception:  # noqa: BLE001 - ANDES's own reading names what is wrong
             return {}
+        for name, df in sheets.items():
+            for (i, col), text in formulas.get(name, {}).items():
+                if col in df.columns and i in df.index and pd.isna(df.at[i, col]):
+                    df[col] = df[col].astype(object)
+                    df.at[i, col] = _Formula(text)
         return {
             name: df.dropna(axis=0, how="all").to_dict("records") for name, df in sheets.items()
         }
     return {}
 
 
-def _check_inputs(path: Path, ss) -> None:
-    """CaseError naming file, model, row and parameter of a value stabctl reads that the
-    case file leaves out (:data:`_REQUIRED_INPUTS`) or gives as something other than a
-    number: ANDES would run with its default (a line reactance of 1e-8 pu, H = 3 s)."""
-    for model, rows in _input_rows(path).items():
+def _formulas(path: Path) -> dict[str, dict[tuple[int, Any], str]]:
+    """Sheet -> {(row from 0 below the header, column name): formula} of the formula cells
+    of an xlsx file (pandas reads the values the file holds: NaN where it holds none)."""
+    import openpyxl  # type: ignore[import-untyped]  # ANDES reads xlsx with it (pandas)
+
+    book = openpyxl.load_workbook(path, read_only=True, data_only=False)
+    try:
+        found = {}
+        for sheet in book.worksheets:
+            sheet.reset_dimensions()  # read-only sheets may give no size
+            rows = sheet.iter_rows(values_only=True)
+            header = next(rows, ())
+            found[sheet.title] = {
+                (i, col): v
+                for i, row in enumerate(rows)
+                for col, v in zip(header, row)
+                if isinstance(v, str) and v.startswith("=")
+            }
+        return found
+    finally:
+        book.close()
+
+
+def _file_inputs(path: Path, ss) -> _Given:
+    """The rows of an xlsx or json case file as written, checked before ANDES fills its
+    defaults (nothing for other formats, whose readers give their own).
+
+    Refused, naming file, sheet, row, idx, parameter and value: a sheet (json key) that
+    is no ANDES model (InputError: ANDES skips it); CaseError for a formula without a
+    stored value; a status ``u`` other than 0 or 1; a line of zero impedance (r = x = 0);
+    a value of :data:`_REQUIRED_INPUTS` left out or other than a number; in any model
+    stabctl reads, a value ANDES would replace by its default (`_violated`: 0 where its
+    declaration says non-zero, a sign it must not have, a PVD1 current limit of 0 or -1.1
+    run at 1.3, a GENROU M of 0 or -13 at H = 3 s) or an infinite one; converter data that
+    cannot be (:data:`_CONVERTER_RULES`: REECA1 Imax <= 0, Vdip >= Vup, ESD1 SOC limits,
+    En <= 0).
+
+    Returned (`_Given`): the parameters of the converter family and of the machines and
+    their controls that the file leaves out (no column, an empty cell), run at ANDES's
+    default, one line per model and parameter; those of the machines and their controls
+    that ANDES declares non-zero or signed as changes; the columns that are no parameter
+    of their model (ANDES ignores them).  The values ANDES copies from a linked device
+    (its ``ExtParam``: a REECA1's bus and Sn from its REGCA1, a REPCA1's monitored line's
+    r and x) are not parameters of the file."""
+    from andes.core.param import ExtParam, NumParam
+
+    missing: dict[tuple[str, str, str], list[int]] = {}
+    given = _Given([], [], [])
+    for sheet, rows in _input_rows(path).items():
+        if sheet == "_config":  # ANDES's settings, in the files it writes
+            continue
+        m = ss.models.get(sheet)
+        m = ss.model_aliases.get(sheet) if m is None else m  # Toggler: Toggle
+        if m is None:
+            what = "sheet" if path.suffix.lower() == ".xlsx" else "key"
+            raise InputError(
+                f"{path.name}: {what} {sheet!r} is no ANDES model (ANDES would skip its "
+                f"{len(rows)} row(s))"
+            )
+        model = m.class_name
+        given.unknown.extend(
+            f"{sheet} column {c!r}: no parameter of ANDES's {model}"
+            for c in dict.fromkeys(c for row in rows for c in row)
+            if c not in m.params and c not in _ROW_COLUMNS
+        )
+        dynamic = m.group in _DYNAMIC_GROUPS
         for k, row in enumerate(rows, start=1):
-            for name in _REQUIRED_INPUTS.get(model, ()):
+            where = f"{path.name}: {sheet} row {k} (idx {row.get('idx')})"
+            _check_row(where, model, row)
+            values = {}
+            for name, p in m.params.items():
+                if not isinstance(p, NumParam) or isinstance(p, ExtParam):
+                    continue  # an ExtParam is copied from a linked device, not a default
                 v = row.get(name)
-                ok = isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
-                if not ok:
-                    default = ss.models[model].params[name].default
+                empty = v is None or (isinstance(v, float) and v != v)
+                number = not empty and isinstance(v, (int, float)) and not isinstance(v, bool)
+                if name in _REQUIRED_INPUTS.get(model, ()) and not (number and np.isfinite(v)):
                     raise CaseError(
-                        f"{path.name}: {model} row {k} (idx {row.get('idx')}): {name} "
-                        f"{'missing' if v is None or v != v else repr(v)} (ANDES would "
-                        f"run with its default {default!r})"
+                        f"{where}: {name} "
+                        + (f"{v!r} is not a finite number" if not empty else "missing")
+                        + f" (ANDES would run with its default {p.default!r})"
                     )
+                if empty:
+                    values[name] = p.default
+                    if dynamic and any(p.get_property(f) for f in _SIGNED):
+                        why = f"{name} left empty, run at ANDES's default {p.default!r}"
+                        given.changed.append((sheet, str(row.get("idx")), f"{why} ({_must(p)})"))
+                    elif dynamic or model in _CONVERTER_FAMILY:
+                        missing.setdefault((model, name, repr(p.default)), []).append(k)
+                    continue
+                if not number:
+                    continue  # text: ANDES's own reading names it
+                values[name] = v
+                rule = _violated(p, v) if model not in IGNORED_MODELS else ""
+                if rule:
+                    raise CaseError(
+                        f"{where}: {name} = {v:g} ({rule}: ANDES would run with its "
+                        f"default {p.default!r})"
+                    )
+            for test, what in _CONVERTER_RULES.get(model, ()):
+                if not test(values):
+                    shown = ", ".join(f"{n} = {values[n]:g}" for n in _names_in(what, values))
+                    raise CaseError(f"{where}: {shown}: it must be {what}")
+    given.defaulted.extend(
+        f"{model} {name} = {default} (row{'s' * (len(rows) > 1)} {_row_list(rows)})"
+        for (model, name, default), rows in missing.items()
+    )
+    return given
+
+
+def _check_row(where: str, model: str, row: dict) -> None:
+    """CaseError for a formula without a stored value in any column of a case file's row,
+    a connection status ``u`` other than 0 or 1 (ANDES multiplies by it), or a Line of zero
+    impedance."""
+    for name, v in row.items():
+        if isinstance(v, _Formula):
+            raise CaseError(
+                f"{where}: {name} is a formula ({v}) whose value the file does not hold "
+                "(saved without computing it: ANDES would read it as empty)"
+            )
+    u = row.get("u")
+    if u is not None and u == u and u not in (0, 1):
+        raise CaseError(f"{where}: u = {u!r}: the connection status must be 0 or 1")
+    if model == "Line" and row.get("r") == 0 and row.get("x") == 0:
+        buses = f"buses {row.get('bus1')} and {row.get('bus2')}"
+        raise CaseError(f"{where}: r = x = 0 between {buses}: {_ZERO_IMPEDANCE}")
+
+
+def _corrections(file: str, ss) -> None:
+    """CaseError for network data ANDES replaced by its defaults as it added the devices
+    (its ``Model._param_corrections``: a value 0 where its declaration says non-zero or
+    of a sign it must not have, a RAW file's branch of zero reactance run at x = 1e-8):
+    a RAW or MATPOWER file's; an xlsx or json file's values were checked before
+    (`_file_inputs`), the DYR records' are after (`_against_dyr`)."""
+    shown = {"non_zero": "= 0", "non_negative": "< 0", "non_positive": "> 0"}
+    for name in _NETWORK:
+        m = ss.models[name]
+        for (param, violation), idxes in getattr(m, "_param_corrections", {}).items():
+            k = m.uid[idxes[0]]
+            where = f"{file}: {name} {idxes[0]}"
+            if name == "Line":
+                where += f" (buses {m.bus1.v[k]}-{m.bus2.v[k]})"
+                if param == "x" and m.r.v[k] == 0:
+                    raise CaseError(f"{where}: r = x = 0: {_ZERO_IMPEDANCE}")
+            raise CaseError(
+                f"{where}: {param} {shown.get(violation, violation)} (ANDES would run with "
+                f"its default {m.params[param].default!r})"
+            )
+
+
+def _must(p) -> str:
+    """What ANDES's NumParam ``p`` declares its value must be ("> 0", ">= 0", ...)."""
+    non_zero, non_negative, non_positive = (p.get_property(f) for f in _SIGNED)
+    sign = ">" if non_negative else "<" if non_positive else ""
+    return f"it must be {sign}{'' if non_zero else '='} 0" if sign else "it must not be 0"
 
 
 #: the converter family's models whose input rows are checked before ANDES fills its
-#: defaults (`_converter_inputs`)
+#: defaults (`_file_inputs`)
 _CONVERTER_FAMILY = (
     "REGCA1", "REGCP1", "REECA1", "REECA1E", "REECB1", "REPCA1", "PVD1", "ESD1",
     "WTDTA1", "WTDS", "WTARA1", "WTPTA1", "WTTQA1",
 )  # fmt: skip
 
-#: physically impossible converter and battery data, refused (`_converter_inputs`):
+#: physically impossible converter and battery data, refused (`_file_inputs`):
 #: model -> (test on a row's values, what it must be); ANDES runs them
 _CONVERTER_RULES: dict[str, tuple] = {
     "REECA1": (
@@ -514,53 +717,6 @@ _CONVERTER_RULES: dict[str, tuple] = {
     "PVD1": ((lambda r: r["ialim"] > 0, "ialim > 0"),),
     "WTDTA1": ((lambda r: r["H"] > 0 and r["Htfrac"] < 1, "H > 0, Htfrac < 1"),),
 }
-
-
-def _converter_inputs(path: Path, ss) -> list[str]:
-    """The converter family's parameters as the case file gives them, before ANDES's
-    defaults: CaseError naming file, model, row and parameter for a value ANDES would
-    replace by its default (0 where it must be non-zero, a sign it must not have: a PVD1
-    current limit of 0 or -1.1 run at 1.3, a WTDTA1 H of 0 at 3 s), an infinite one, or
-    data that cannot be (`_CONVERTER_RULES`: REECA1 Imax <= 0, Vdip >= Vup, ESD1 SOC
-    limits, En <= 0); returns the parameters left out and run with ANDES's default, one
-    line per model and parameter (``AndesImport.defaulted``); the values ANDES copies from a
-    linked device (its ``ExtParam``: a REECA1's bus and Sn from its REGCA1, a REPCA1's
-    monitored line's r and x) are not parameters of the file and not listed."""
-    from andes.core.param import ExtParam, NumParam
-
-    missing: dict[tuple[str, str, str], list[int]] = {}
-    for model, rows in _input_rows(path).items():
-        if model not in _CONVERTER_FAMILY or model not in ss.models:
-            continue
-        m = ss.models[model]
-        for k, row in enumerate(rows, start=1):
-            where = f"{path.name}: {model} row {k} (idx {row.get('idx')})"
-            values = {}
-            for name, p in m.params.items():
-                if not isinstance(p, NumParam) or isinstance(p, ExtParam):
-                    continue  # an ExtParam is copied from a linked device, not a default
-                v = row.get(name)
-                if v is None or (isinstance(v, float) and v != v):
-                    missing.setdefault((model, name, repr(p.default)), []).append(k)
-                    values[name] = p.default
-                    continue
-                if not isinstance(v, (int, float)) or isinstance(v, bool):
-                    continue  # text: ANDES's own reading names it
-                values[name] = v
-                rule = _violated(p, v)
-                if rule:
-                    raise CaseError(
-                        f"{where}: {name} = {v:g} ({rule}: ANDES would run with its "
-                        f"default {p.default!r})"
-                    )
-            for test, what in _CONVERTER_RULES.get(model, ()):
-                if not test(values):
-                    shown = ", ".join(f"{n} = {values[n]:g}" for n in _names_in(what, values))
-                    raise CaseError(f"{where}: {shown}: it must be {what}")
-    return [
-        f"{model} {name} = {default} (row{'s' * (len(rows) > 1)} {_row_list(rows)})"
-        for (model, name, default), rows in missing.items()
-    ]
 
 
 def _violated(p, v: float) -> str:
@@ -588,9 +744,9 @@ def _row_list(rows: list[int]) -> str:
     return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in number_ranges(rows))
 
 
-def _load(path: Path, dyr):
-    """ANDES's ``System`` of ``path`` (+ ``dyr``), set up; InputError if ANDES cannot read
-    it."""
+def _load(path: Path, dyr, said: list):
+    """ANDES's ``System`` of ``path`` (+ ``dyr``), parsed, not set up; InputError if ANDES
+    cannot read it, with what ANDES said (``said``: its log records)."""
     andes = _andes()
     for file in (path,) if dyr is None else (path, Path(dyr)):
         if not file.is_file():
@@ -599,15 +755,34 @@ def _load(path: Path, dyr):
     try:
         with warnings.catch_warnings():  # ANDES's own deprecation notices
             warnings.simplefilter("ignore")
-            ss = andes.load(str(path), setup=True, no_output=True, default_config=True, **kw)
+            ss = andes.load(str(path), setup=False, no_output=True, default_config=True, **kw)
     except Exception as exc:  # noqa: BLE001 - ANDES raises many kinds for a file it cannot parse
-        raise InputError(f"{path.name}: ANDES cannot read the case: {exc}") from None
-    if ss is None or not ss.is_setup:
-        raise InputError(
-            f"{path.name}: ANDES cannot read the case (its parser or set-up "
-            "failed; run `andes run` on it for ANDES's own message)"
-        )
+        raise _unreadable(path, said, exc) from None
+    if ss is None:
+        raise _unreadable(path, said)
     return ss
+
+
+def _set_up(ss, path: Path, said: list) -> None:
+    """ANDES's set-up of the parsed ``ss`` (its devices linked: a device naming one that
+    does not exist fails here); InputError with what ANDES said if it fails."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ss.setup()
+    except Exception as exc:  # noqa: BLE001 - as _load
+        raise _unreadable(path, said, exc) from None
+    if not ss.is_setup:
+        raise _unreadable(path, said)
+
+
+def _unreadable(path: Path, said: list, exc: BaseException | None = None) -> InputError:
+    """The InputError of a case ANDES cannot read or set up: ANDES's first logged error
+    (its words name the model and device; its exception often does not), else ``exc``."""
+    why = _andes_said(said, exc) or (
+        "its parser or set-up failed; run `andes run` on it for ANDES's own message"
+    )
+    return InputError(f"{path.name}: ANDES cannot read the case: {why}")
 
 
 def _network(ss, file: str) -> tuple[dict, dict]:
@@ -630,7 +805,7 @@ def _network(ss, file: str) -> tuple[dict, dict]:
             f"{file}: Bus idx {zero[0]!r} is numbered {numbers[zero[0]]} (stabctl numbers "
             "buses from 1)",
             UserWarning,
-            stacklevel=4,
+            stacklevel=5,
         )
     b = ss.Bus
     on = _in_service(b)
@@ -785,7 +960,7 @@ def _warn_out_of_service(ss, file: str, buses: list, numbers: dict) -> None:
         f"{file}: bus(es) {', '.join(str(numbers[i]) for i in buses)} out of service (u = 0) "
         f"left out with the {gone} device(s) connected to them (ANDES's effective status)",
         UserWarning,
-        stacklevel=4,
+        stacklevel=5,
     )
 
 
@@ -799,7 +974,7 @@ def _warn_generator_off(file: str, machines: set) -> None:
             f"{file}: machine(s) {', '.join(sorted(map(str, machines)))} left out with their "
             "controls: their static generator is out of service (u = 0)",
             UserWarning,
-            stacklevel=4,
+            stacklevel=5,
         )
 
 
@@ -1214,6 +1389,14 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
         m = ss.models[name]
         sg = ss.PV if m.gen.v[k] in ss.PV.idx.v else ss.Slack
         j = list(sg.idx.v).index(m.gen.v[k])
+        if sg.bus.v[j] != m.bus.v[k]:
+            there = [f"{s.class_name} {s.idx.v[i]}" for s, i in static if s.bus.v[i] == m.bus.v[k]]
+            raise CaseError(
+                f"{file}: {name} {m.idx.v[k]} is at bus {numbers[m.bus.v[k]]}, its static "
+                f"generator {sg.class_name} {m.gen.v[k]} at bus {numbers[sg.bus.v[j]]} (bus "
+                f"{numbers[m.bus.v[k]]} has {', '.join(there) or 'no PV or Slack'}): a machine "
+                "takes its generator's power flow at its own bus (ANDES fails to initialise it)"
+            )
         gid = str(m.idx.v[k])
         gens.append(
             {
@@ -1491,7 +1674,7 @@ def _motors(ss, numbers: dict, kept: dict) -> tuple[list[list[float]], list[str]
     return rows, refused
 
 
-def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict):
+def _disturbances(ss, file: str, numbers: dict, gens: list, mats: dict, motor_numbers: dict):
     """The case's own events (`Case.events` records) from ANDES's Toggle, Fault and Alter
     devices in service, those refused (``"MODEL idx: why"``) and those off (u = 0: ANDES
     does not run them either).
@@ -1506,7 +1689,8 @@ def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict
     tc (none: never cleared), without loss of a line.  Alter (``+``, ``-``, ``=``; ``*``,
     ``/`` of a known value) of an exciter's ``vref0``: a VrefStep; of a TGOV1's
     ``paux0`` (0 at the start): a PrefStep of the change / R (machine base).  Any other
-    target is refused with the device and attribute."""
+    target is refused with the device and attribute.  CaseError (naming ``file``) for an
+    event time (t, tf, tc) that is not finite and >= 0 (ANDES's Toggle t defaults to -1)."""
     events: list = []
     refused: list = []
     off: list = []
@@ -1526,6 +1710,12 @@ def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict
                 off.append(f"{name} {m.idx.v[k]} (u = 0: not run, as in ANDES)")
                 continue
             t = float(m.tf.v[k] if name == "Fault" else m.t.v[k])
+            for what, when in (("tf" if name == "Fault" else "t", t), ("tc", _clearing(m, k))):
+                if when is not None and not (np.isfinite(when) and when >= 0):
+                    raise CaseError(
+                        f"{file}: {name} {m.idx.v[k]}: {what} = {when:g} s: an event time "
+                        "must be finite and >= 0"
+                    )
             timed.append((t, name, k))
     state: dict = {}
     for t, name, k in sorted(timed, key=lambda e: e[0]):
@@ -1534,12 +1724,11 @@ def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict
         rec: dict = {}
         why = ""
         if name == "Fault":
-            tc = float(m.tc.v[k]) if m.tc.v[k] is not None else np.nan
             rec = {
                 "kind": "Fault",
                 "bus": numbers[m.bus.v[k]],
                 "t": t,
-                "clear_near": tc if np.isfinite(tc) else None,
+                "clear_near": _clearing(m, k),
                 "r": float(m.rf.v[k]),
                 "x": float(m.xf.v[k]),
             }
@@ -1582,6 +1771,12 @@ def _disturbances(ss, numbers: dict, gens: list, mats: dict, motor_numbers: dict
         else:
             events.append({**rec, "source": where})
     return events, refused, off
+
+
+def _clearing(m, k: int) -> float | None:
+    """A Fault's clearing time ``tc`` (s; None for none: never cleared), else None."""
+    tc = m.tc.v[k] if m.class_name == "Fault" else None
+    return None if tc is None else float(tc)
 
 
 def _alter(ss, m, k, t: float, state: dict, machine_of: dict, have: dict):

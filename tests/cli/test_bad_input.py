@@ -366,6 +366,38 @@ def test_import_andes_without_andes_says_how_to_install_and_writes_nothing(monke
 
 
 @pytest.mark.parametrize(
+    "sheet, column, value, needles",
+    [
+        ("GENROU", "M", 0, ("GENROU row 1 (idx 1): M = 0", "ANDES would run with its default 6")),
+        ("GENROU", "u", 0.5, ("GENROU row 1 (idx 1): u = 0.5", "must be 0 or 1")),
+        ("Toggler", "t", -1, ("Toggle 1: t = -1 s", "finite and >= 0")),
+        ("GENROU", "Hfoo", 3, ("GENROU column 'Hfoo': no parameter of ANDES's GENROU",)),
+        ("FOOBAR", "idx", 1, ("sheet 'FOOBAR' is no ANDES model",)),
+    ],
+)
+def test_import_andes_refuses_what_andes_would_change_or_skip_and_writes_nothing(
+    tmp_path, sheet, column, value, needles
+):
+    """kundur_full.xlsx with one cell written: a value ANDES replaces by its default (M = 0
+    run at H = 3 s), a status that is neither 0 nor 1, an event before the start, a column
+    or a sheet ANDES ignores were imported without a word; one error line naming the
+    sheet, row, idx, parameter and value, nothing written."""
+    andes = pytest.importorskip("andes")
+    openpyxl = pytest.importorskip("openpyxl")
+    book = openpyxl.load_workbook(andes.get_case("kundur/kundur_full.xlsx"))
+    ws = book[sheet] if sheet in book.sheetnames else book.create_sheet(sheet)
+    header = [c.value for c in ws[1]]
+    if column not in header:
+        header.append(column)
+        ws.cell(1, len(header)).value = column
+    ws.cell(2, header.index(column) + 1).value = value
+    book.save(tmp_path / "k.xlsx")
+    out = tmp_path / "k.json"
+    assert_error(run("import-andes", tmp_path / "k.xlsx", "-o", out), "k.xlsx: ", *needles)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
     "args",
     [
         ("simulate", "kundur", "--fault", 7, "--far-bus", 8),

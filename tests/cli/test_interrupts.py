@@ -140,6 +140,33 @@ def test_sigint_or_sigterm_of_a_screening_ends_with_the_resume_command(tmp_path,
     )
 
 
+@pytest.mark.dask
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
+@pytest.mark.parametrize("sig,status", [(signal.SIGTERM, 143), (signal.SIGHUP, 129)])
+def test_a_signal_to_a_screening_on_a_local_dask_cluster_says_only_what_it_kept(
+    tmp_path, sig, status
+):
+    """SIGTERM or SIGHUP to a screening on `--scheduler local`: its worker processes
+    printed two Dask warnings per running job they cancelled as the cluster closed
+    ("Async instruction ... ended with CancelledError"); only the resume line is said."""
+    pytest.importorskip("distributed")
+    args = ["screen", "kundur", "--tol-ms", "0.05", "--workers", "2", "--scheduler", "local"]
+    args += ["--out", "s.jsonl"]
+    proc = _start(args, tmp_path)
+    out = tmp_path / "s.jsonl"
+    try:
+        assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == status, err
+    said = [line for line in err.splitlines() if not line.startswith("s.jsonl:")]  # the bar
+    assert said[-1].startswith("interrupted: finished searches are in s.jsonl ("), err
+    assert "CancelledError" not in err and "distributed" not in err, err
+
+
 @pytest.mark.parametrize(
     "command,target,kept",
     [

@@ -99,8 +99,8 @@ def own_bus_andes(monkeypatch):
 
     load = ac._load
 
-    def own_bus(path, dyr):
-        ss = load(path, dyr)
+    def own_bus(path, dyr, said):
+        ss = load(path, dyr, said)
         for name in ("REECA1", "REECB1"):
             ss.models[name].busr.v[:] = [None] * ss.models[name].n
         return ss

@@ -1,0 +1,148 @@
+"""An ANDES case file's values checked as written, before ANDES fills its defaults, for
+every model: a value ANDES would replace by its default (a GENROU M of 0 or -13 run at
+H = 3 s), a formula whose value the file does not hold (read as empty: EXDC2 TA run at
+0.04 s), a status ``u`` other than 0 or 1, a line of zero impedance, a negative event
+time, a sheet that is no ANDES model, a column that is no parameter of its model, a
+machine away from its static generator's bus.  Refused naming file, sheet, row, idx,
+parameter and value; ANDES's own log is never shown."""
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from stabctl.errors import CaseError, InputError
+from stabctl.io.andes_case import read_andes_case
+
+andes = pytest.importorskip("andes")
+openpyxl = pytest.importorskip("openpyxl")
+
+KUNDUR = "kundur/kundur_full.xlsx"
+
+
+def cells_edited(tmp_path, edits, case=KUNDUR):
+    """ANDES's case file with each (sheet, row, column, value) written (row 2: the first
+    device; a column or sheet not there is added), saved by openpyxl, which computes no
+    formula: a formula cell holds no value."""
+    book = openpyxl.load_workbook(andes.get_case(case))
+    for sheet, row, column, value in edits:
+        ws = book[sheet] if sheet in book.sheetnames else book.create_sheet(sheet)
+        header = [c.value for c in ws[1]]
+        if column not in header:
+            ws.cell(1, len(header) + 1, column)
+            header.append(column)
+        ws.cell(row, header.index(column) + 1).value = value  # None: emptied
+    path = tmp_path / "edited.xlsx"
+    book.save(path)
+    return path
+
+
+@pytest.mark.parametrize(
+    "edits, needle",
+    [
+        # values ANDES replaces by its default (its NumParam flags), any model
+        ([("GENROU", 2, "M", 0)], "GENROU row 1 (idx 1): M = 0 (must not be 0: ANDES would "),
+        ([("GENROU", 2, "M", -13)], "GENROU row 1 (idx 1): M = -13 (must not be negative"),
+        ([("EXDC2", 2, "TF1", 0)], "EXDC2 row 1 (idx 1): TF1 = 0 (must not be 0"),
+        ([("Bus", 2, "Vn", 0)], "Bus row 1 (idx 1): Vn = 0 (must not be 0"),
+        # a formula without a stored value, which pandas and ANDES read as empty
+        (
+            [("EXDC2", 2, "TA", "=1/0")],
+            "EXDC2 row 1 (idx 1): TA is a formula (=1/0) whose value the file does not hold",
+        ),
+        ([("GENROU", 2, "u", 0.5)], "GENROU row 1 (idx 1): u = 0.5: the connection status"),
+        (
+            [("Line", 2, "r", 0), ("Line", 2, "x", 0)],
+            "Line row 1 (idx Line_0): r = x = 0 between buses 5 and 6: a zero impedance",
+        ),
+        ([("Toggler", 2, "t", -1)], "Toggle 1: t = -1 s: an event time must be finite and >= 0"),
+        (
+            [("GENROU", 2, "bus", 7)],
+            "GENROU 1 is at bus 7, its static generator Slack 1 at bus 1 (bus 7 has no PV "
+            "or Slack)",
+        ),
+    ],
+)
+def test_values_andes_would_change_or_cannot_run_are_refused(tmp_path, edits, needle):
+    path = cells_edited(tmp_path, edits)
+    with pytest.raises(CaseError) as err:
+        read_andes_case(path, on_unsupported="skip")
+    assert str(err.value).startswith(f"{path.name}: ") and needle in str(err.value)
+
+
+def test_a_required_control_parameter_left_empty_is_a_change_refused_unless_skipped(tmp_path):
+    """EXDC2's TF1, which ANDES declares non-zero, left empty runs at ANDES's default 1 s:
+    refused, or kept and named with --skip-unsupported; its TA (no such declaration) left
+    empty is named with the default ANDES runs."""
+    path = cells_edited(tmp_path, [("EXDC2", 2, "TF1", None), ("EXDC2", 2, "TA", None)])
+    change = "EXDC2 (1: 1): TF1 left empty, run at ANDES's default 1 (it must not be 0)"
+    with pytest.raises(InputError, match=r"to keep with a change: .*" + re.escape(change)):
+        read_andes_case(path)
+    with pytest.warns(UserWarning, match=re.escape(change)):
+        got = read_andes_case(path, on_unsupported="skip")
+    assert change in got.changed and "EXDC2 TA = 0.04 (row 1)" in got.defaulted
+
+
+def test_a_sheet_that_is_no_model_or_a_column_that_is_no_parameter_is_named(tmp_path):
+    """ANDES skips a sheet that is no model of its and a column that is no parameter of its
+    model, with a log line stabctl did not show: a sheet is refused; a column is refused,
+    or left out by name with --skip-unsupported (ANDES's own cases carry columns of its
+    earlier versions: kundur_reg's REGCA1 Iqmax and Iqmin)."""
+    with pytest.raises(InputError, match=r"edited.xlsx: sheet 'FOOBAR' is no ANDES model"):
+        read_andes_case(cells_edited(tmp_path, [("FOOBAR", 2, "idx", 1)]), on_unsupported="skip")
+    path = cells_edited(tmp_path, [("GENROU", 2, "Hfoo", 3.0)])
+    column = "GENROU column 'Hfoo': no parameter of ANDES's GENROU"
+    with pytest.raises(InputError, match=f"columns ANDES ignores: {column}"):
+        read_andes_case(path)
+    with pytest.warns(UserWarning, match=column):
+        assert column in read_andes_case(path, on_unsupported="skip").left_out
+
+
+def run_cli(*args, cwd):
+    return subprocess.run(
+        [sys.executable, "-m", "stabctl.cli", *map(str, args)],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+def test_andes_s_log_is_said_in_stabctl_s_words_not_shown(tmp_path):
+    """ANDES's own log lines reached stderr (its handler, set up on first use): a case ANDES
+    cannot set up (a line to bus 999) is one error line with ANDES's words; a case whose
+    ANDES power flow fails imports with stabctl's warning only."""
+    bad = cells_edited(tmp_path, [("Line", 2, "bus2", 999)])
+    res = run_cli("import-andes", bad, "-o", "bad.json", cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    assert res.stderr.splitlines() == [
+        "error: edited.xlsx: ANDES cannot read the case: <Line> cannot retrieve <a2> from "
+        "<Bus> using <bus2>: KeyError('<Bus>: device not exist with idx=999.')"
+    ]
+    assert not (tmp_path / "bad.json").exists()
+    heavy = cells_edited(tmp_path, [("PQ", 2, "p0", 100.0)])  # beyond what the grid carries
+    res = run_cli("import-andes", heavy, "-o", "heavy.json", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert [line for line in res.stderr.splitlines() if not line.startswith("warning: ")] == []
+    assert "ANDES's power flow of the case did not converge" in res.stderr
+
+
+def test_a_zero_impedance_branch_of_a_raw_file_is_refused_by_both_importers(tmp_path):
+    """Kundur's RAW file with branch 8-9 '1' of R = X = 0: import-psse refuses it (R + jX
+    must not be 0); ANDES's reader ran it at X = 1e-8 pu, which import-andes kept without a
+    word: refused too, naming the line and its buses."""
+    from stabctl.io.psse import load_psse
+
+    text = Path(andes.get_case("kundur/kundur.raw")).read_text()
+    branch = "     8,      9,'1 ', 2.00000E-3, 2.00000E-2,"
+    assert text.count(branch) == 1
+    raw = tmp_path / "kundur_zero.raw"
+    raw.write_text(text.replace(branch, "     8,      9,'1 ', 0.00000E+0, 0.00000E+0,"))
+    with pytest.raises((CaseError, InputError), match=r"branch 8-9 '1': R \+ jX must not be 0"):
+        load_psse(raw)
+    with pytest.raises(
+        CaseError, match=r"kundur_zero.raw: Line Line_8 \(buses 8-9\): r = x = 0: a zero"
+    ):
+        read_andes_case(raw, on_unsupported="skip")
