@@ -380,11 +380,18 @@ def process_pool(workers: int) -> ProcessPoolExecutor:
 
 def stop_pool(pool: ProcessPoolExecutor) -> None:
     """Stop a pool at once (interrupted): pending jobs cancelled, running ones killed
-    (their workers sent SIGKILL: they ignore SIGTERM) instead of waited for."""
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+    (their workers sent SIGKILL: they ignore SIGTERM) instead of waited for, and reaped:
+    no worker outlives the sweep, not even as a zombie for init to collect."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    for proc in procs:
         try:
             proc.kill()
         except (OSError, ValueError, AttributeError):  # already gone
+            pass
+    for proc in procs:
+        try:
+            proc.join(timeout=5.0)
+        except (OSError, ValueError, AssertionError):  # closed, or not started here
             pass
     pool.shutdown(wait=False, cancel_futures=True)
 

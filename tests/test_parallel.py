@@ -24,9 +24,11 @@ from stabctl.parallel import (
     atomic_write,
     check_scheduler,
     pooled,
+    process_pool,
     read_records,
     run_sweep,
     set_aside_damaged,
+    stop_pool,
 )
 from stabctl.stability.cct import (
     LineFault,
@@ -1021,3 +1023,17 @@ def test_a_record_of_another_case_is_refused_naming_its_line(tmp_path):
     ):
         run_sweep(jobs, out, workers=1, progress=False)
     assert out.read_text() == before
+
+
+def test_a_stopped_pool_leaves_no_worker_behind():
+    """An interrupted sweep's pool (`stop_pool`) kills its running workers and reaps
+    them before the sweep exits: none is left, not even as a zombie."""
+    pool = process_pool(2)
+    futures = [pool.submit(sleepy, {"x": 30}) for _ in range(2)]
+    deadline = time.monotonic() + 60
+    while not all(f.running() for f in futures) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    procs = list(pool._processes.values())
+    assert len(procs) == 2
+    stop_pool(pool)
+    assert all(p.exitcode is not None for p in procs)
