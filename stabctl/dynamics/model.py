@@ -34,6 +34,7 @@ from stabctl.models import pss as pss_
 from stabctl.models import shafts as shaft
 from stabctl.models import shunts as shunt
 from stabctl.models import svcs as svc
+from stabctl.network import solution
 from stabctl.network import switched_shunts as sws
 from stabctl.network.solution import (
     NEWTON_MAX_ITER,
@@ -316,7 +317,14 @@ class DynamicModel:
             y_shunt[dead] = 0.0  # the island's Y is regular and its voltages 0
             stage = stage.replace(buses=BusTable.from_matrix(bus))
         net = reduce_network(
-            stage, y_shunt, self.mp.y_internal, self.mp.bus_idx, online, self.nc_idx, case.n_bus
+            stage,
+            y_shunt,
+            self.mp.y_internal,
+            self.mp.bus_idx,
+            online,
+            self.nc_idx,
+            case.n_bus,
+            base=self._pre_event_factor(config),
         )
         targets = np.column_stack([self.eqp0, np.ones(self.mp.n)])
         for m, dV, df in config.playback:
@@ -329,6 +337,15 @@ class DynamicModel:
         shed = case.buses.pload[dead] + 1j * case.buses.qload[dead]
         islanded = tuple((int(case.buses.number[b]), complex(shed[k])) for k, b in enumerate(dead))
         return replace(net, switched_on=on, targets=targets, steps=steps, islanded=islanded)
+
+    def _pre_event_factor(self, config: StageConfig):
+        """The pre-event network's sparse reduction (`ReducedNetwork.factor`) for a stage
+        of a network reduced sparse (`solution.DENSE_MAX`), which is then updated from
+        it (`stabctl.network.lowrank`); None for the pre-event stage itself and for
+        networks reduced dense (their stages stay bit for bit PSTess's reduction)."""
+        if config == StageConfig() or self.mp.n + self.case.n_bus <= solution.DENSE_MAX:
+            return None
+        return self.network().factor
 
     def _check_sheddable(self, dead: np.ndarray) -> None:
         """Refuse to de-energise an island holding a device whose model needs a live

@@ -28,6 +28,7 @@ from stabctl._jit.arrays import assign, matvec, max_abs
 from stabctl._jit.decorators import kernel
 from stabctl.case import Case
 from stabctl.errors import SimulationError
+from stabctl.network import lowrank
 from stabctl.network.ybus import build_ybus
 
 V_SWITCH = 0.5  # below this voltage PST turns non-conforming loads into impedances
@@ -84,6 +85,7 @@ class ReducedNetwork:
     targets: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     steps: np.ndarray = field(default_factory=lambda: np.zeros(0))
     islanded: tuple = ()
+    factor: lowrank.SparseReduction | None = None
 
 
 def reduce_network(
@@ -94,6 +96,7 @@ def reduce_network(
     mac_online: np.ndarray,
     nc_idx: np.ndarray,
     n_bus_orig: int,
+    base: lowrank.SparseReduction | None = None,
 ) -> ReducedNetwork:
     """Kron-reduce the network of `case` (a stage variant, possibly with extra fault buses).
 
@@ -104,6 +107,9 @@ def reduce_network(
         mac_online: False for tripped machines (their node is disconnected).
         nc_idx: indices of the kept buses; n_bus_orig: number of buses of the base case
             (buses beyond it are stage-only fault nodes, not reported).
+        base: above `DENSE_MAX`, the pre-event network's reduction (its
+            `ReducedNetwork.factor`): a stage that changes a few of its nodes is updated
+            from it (`stabctl.network.lowrank`) instead of factorised again.
     Raises:
         SimulationError: the eliminated part of the network is singular (an island with no
             path to ground or a machine).
@@ -124,19 +130,19 @@ def reduce_network(
             raise SimulationError(
                 f"singular network in stage of case '{case.name}': {exc}"
             ) from exc
-    else:  # a sparse LU of the eliminated part: memory in the kept columns only
-        full = _augmented(build_ybus(case), y_shunt, y, mac_bus, mac_online).tocsc()
-        Ykk = full[keep][:, keep].toarray()
-        Yke = full[keep][:, elim]
-        try:
-            rec = -spla.splu(full[elim][:, elim]).solve(full[elim][:, keep].toarray())
-        except RuntimeError as exc:  # "Factor is exactly singular"
+        if not np.all(np.isfinite(rec)):
             raise SimulationError(
-                f"singular network in stage of case '{case.name}': {exc}"
-            ) from exc
-    if not np.all(np.isfinite(rec)):
-        raise SimulationError(f"singular network (island without a source) in case '{case.name}'")
-    Yred = Ykk + Yke @ rec
+                f"singular network (island without a source) in case '{case.name}'"
+            )
+        Yred, factor = Ykk + Yke @ rec, None
+    else:  # a sparse LU of the eliminated part: memory in the kept columns only
+        full = _augmented(build_ybus(case), y_shunt, y, mac_bus, mac_online).tocsr()
+        got = None if base is None else lowrank.updated(base, full, keep, elim)
+        if got is None:
+            factor = _sparse_reduction(full, keep, elim, case.name)
+            rec, Yred = factor.rec, factor.Yred
+        else:
+            (rec, Yred), factor = got, None
     R = np.zeros((n_bus, keep.size), complex)
     R[np.asarray(nc_idx, int), n_mac + np.arange(len(nc_idx))] = 1.0
     bus_elim = elim[elim >= n_mac] - n_mac
@@ -152,7 +158,23 @@ def reduce_network(
         Z22=c(np.linalg.inv(Y22)) if Y22.size else Y22.copy(),
         R_mac=c(R[np.asarray(mac_bus, int)]),
         Z_mac=np.divide(1.0, y, out=np.zeros(n_mac, complex), where=y != 0),
+        factor=factor,
     )
+
+
+def _sparse_reduction(full, keep, elim, name: str) -> lowrank.SparseReduction:
+    """The sparse LU reduction of `full` (CSR) onto `keep` (SuperLU of the eliminated
+    part); SimulationError when that part is singular (an island without a source)."""
+    a_ke = full[keep][:, elim]
+    try:
+        lu = spla.splu(full[elim][:, elim].tocsc())
+        rec = -lu.solve(full[elim][:, keep].toarray())
+    except RuntimeError as exc:  # "Factor is exactly singular"
+        raise SimulationError(f"singular network in stage of case '{name}': {exc}") from exc
+    if not np.all(np.isfinite(rec)):
+        raise SimulationError(f"singular network (island without a source) in case '{name}'")
+    Yred = full[keep][:, keep].toarray() + a_ke @ rec
+    return lowrank.SparseReduction(full, keep, elim, lu, rec, Yred, a_ke)
 
 
 #: largest order (machines + buses) of a network reduced with a dense LU (LAPACK's, as
