@@ -108,12 +108,11 @@ def updated(
         rhs[pos[old], np.arange(rhs.shape[1])] = 1.0
         G[:n_e0, old] = base.lu.solve(rhs)
     G[pos[~old], np.flatnonzero(~old)] = 1.0  # an added node: isolated, A = 1
-    rec = np.zeros((elim.size, keep.size), complex)
-    rec[:n_e0] = base.rec
+    rec0 = base.rec if n == n0 else np.vstack([base.rec, np.zeros((n - n0, keep.size))])
     C = np.eye(s_e.size) + G[pos] @ D
     if s_e.size and not np.linalg.cond(C) < MAX_COND:
         return None
-    F = E + D @ np.linalg.solve(C, rec[pos] - G[pos] @ E) if s_e.size else E
-    rec -= G @ F
+    F = E + D @ np.linalg.solve(C, rec0[pos] - G[pos] @ E) if s_e.size else E
+    rec = rec0 - G @ F
     Yred = base.Yred + delta[keep][:, keep].toarray() - (base.a_ke @ G[:n_e0]) @ F + E2 @ rec[pos]
     return rec, Yred
