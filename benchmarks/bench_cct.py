@@ -29,8 +29,11 @@ faults, seed 53) at ``--t-max`` (default 0.5 s, `stabctl screen`'s) with both me
 prints the verdicts, simulations per search (verdicts included) and per CCT, the wall per
 search with each fault's network stages built as a screening builds them, and the N-1
 projection from that mean (the two-fault projection above counts CCT searches only).
+``--activsg-stages N`` times the network stages of N new bus and N new line faults of
+ACTIVSg2000 (a first run of a fault less a second), updated from the pre-event network's
+reduction (`stabctl.network.lowrank`) and factorised anew.
 Run: python benchmarks/bench_cct.py [--every 4] [--activsg] [--activsg-sample 20]
-         [--paper] [--systems kundur miniwecc]
+         [--activsg-stages 15] [--paper] [--systems kundur miniwecc]
 """
 
 import argparse
@@ -189,6 +192,39 @@ def paper_table():
                     )
 
 
+def stage_builds(case, n: int, seed: int = 5) -> None:
+    """Mean and median time (ms) of the network stages of n new bus and n new line faults
+    (random, `random.Random(seed)`): a first short run of each fault less a second, with
+    the stages updated from the pre-event reduction and factorised anew."""
+    import random
+
+    import numpy as np
+
+    rng = random.Random(seed)
+    buses = rng.sample(screening_faults(case), n)
+    lines = rng.sample([f for f in screening_faults(case, lines=True) if f.far_bus], n)
+    sim = Simulator(case)
+    model = sim.model
+
+    def run(f):
+        t = time.perf_counter()
+        sim.run(f.events(0.05), f.t_fault + 0.06, voltages=False)
+        return time.perf_counter() - t
+
+    run(buses[0])  # warm-up (compilation)
+    print(f"\nACTIVSg2000 network stages of a new fault ({n} bus, {n} line faults, seed {seed})")
+    for label in ("updated", "anew"):
+        if label == "anew":
+            model._pre_event_factor = lambda config: None  # type: ignore[method-assign]
+        for kind, faults in (("bus", buses), ("line", lines)):
+            model._stage_cache._entries.clear()
+            ms = [1e3 * (run(f) - run(f)) for f in faults]
+            print(
+                f"  {label:8} {kind:4} faults: mean {np.mean(ms):6.1f} ms, "
+                f"median {np.median(ms):6.1f} ms"
+            )
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--every", type=int, default=4, help="miniWECC: every N-th fault")
@@ -202,6 +238,13 @@ def main(argv=None):
         help="also a random sample of ACTIVSg2000's N-1: N bus and N line faults",
     )
     ap.add_argument("--t-max", type=float, default=0.5, help="t_max of the N-1 sample (s)")
+    ap.add_argument(
+        "--activsg-stages",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also time ACTIVSg2000's stages of N new bus and N new line faults",
+    )
     ap.add_argument(
         "--systems", nargs="*", default=["kundur", "miniwecc"], choices=["kundur", "miniwecc"]
     )
@@ -222,8 +265,10 @@ def main(argv=None):
     if "miniwecc" in args.systems:
         mini = load_case("miniwecc")
         compare(f"miniwecc/{args.every}", mini, screening_faults(mini, lines=True)[:: args.every])
-    if args.activsg or args.activsg_sample:
+    if args.activsg or args.activsg_sample or args.activsg_stages:
         case = activsg2000()
+    if args.activsg_stages:
+        stage_builds(case, args.activsg_stages)
     if args.activsg:
         faults = [LineFault(2021, 2002), LineFault(2021, None)]
         n1_projection(compare("activsg2000", case, faults))
