@@ -226,7 +226,12 @@ class PlainInt(_Plain, click.types.IntParamType):
 
 
 class PlainFloat(_Plain, click.types.FloatParamType):
-    """click's float type, `plain_number` spellings only."""
+    """click's float type, `plain_number` spellings only, -0 read as 0 (``--t-fault -0``
+    was printed as a fault at -0 s)."""
+
+    def convert(self, value, param, ctx):
+        """The value as a float, -0 as 0 (click's `ParamType.convert`)."""
+        return super().convert(value, param, ctx) + 0.0
 
 
 class PlainIntRange(_Plain, click.IntRange):
@@ -332,8 +337,10 @@ def comma_list(texts, option: str, convert, what: str) -> list:
     Raises
     ------
     InputError
-        An empty item (two commas in a row, a comma at an end), an item `convert` refuses,
-        or a value given twice.
+        An empty item (two commas in a row, a comma at an end), an item written with other
+        than ASCII characters or with ``_`` (`plain_number`: int() reads ``1_3`` as 13),
+        an item `convert` refuses, a number that is not finite (inf, nan, 1e400), or a
+        value given twice.
     """
     out = []
     for text in (texts,) if isinstance(texts, str) else texts:
@@ -342,14 +349,25 @@ def comma_list(texts, option: str, convert, what: str) -> list:
                 raise InputError(
                     f"{option} {text!r}: an empty item (two commas in a row or one at an end)"
                 )
-            try:
-                value = convert(item)
-            except ValueError:
-                raise InputError(f"{option} {item!r}: not {what}") from None
+            value = _list_item(item, option, convert, what)
             if value in out:
                 raise InputError(f"{option}: {item} given twice")
             out.append(value)
     return out
+
+
+def _list_item(item: str, option: str, convert, what: str):
+    """One item of `comma_list`, converted: InputError unless `plain_number`, accepted by
+    `convert` and, a float, finite."""
+    if not plain_number(item):
+        raise InputError(f"{option} {item!r}: write numbers in ASCII digits, without '_'")
+    try:
+        value = convert(item)
+    except ValueError:
+        raise InputError(f"{option} {item!r}: not {what}") from None
+    if isinstance(value, float) and not math.isfinite(value):
+        raise InputError(f"{option} {item}: must be a finite number")
+    return value
 
 
 def _numbers(value):

@@ -110,7 +110,7 @@ import numpy as np
 
 from stabctl.case import PQ, PV, SWING
 from stabctl.errors import CaseError
-from stabctl.io.inputs import input_file
+from stabctl.io.inputs import input_file, plain_float
 
 __all__ = ["RawSource", "Generator", "RawData", "read_raw", "split_fields"]
 
@@ -338,9 +338,9 @@ class _Rec:
                 self.fail(f"field {k + 1} missing")
             return float(default)
         try:
-            v = float(vals[k].replace("D", "E").replace("d", "e"))
+            v = plain_float(vals[k], fortran=True)
         except ValueError:
-            self.fail(f"field {k + 1} '{vals[k]}' is not a number")
+            self.fail(f"field {k + 1} '{vals[k]}' is not a number (ASCII digits, no '_')")
         if not math.isfinite(v):
             self.fail(f"field {k + 1} '{vals[k]}' is not a finite number")
         if abs(v) > _LARGEST:

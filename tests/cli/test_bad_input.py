@@ -1092,3 +1092,47 @@ def test_a_tcp_source_list_is_written_once_each_server_once(servers, needle, tmp
     res = run("estimate", "track", "kundur", "--source", servers, "--until", 1, "--out", out)
     assert_error(res, f"--source {servers}: {needle}")
     assert not out.exists()
+
+
+# -- numbers as written, options without effect, records named ----------------------------
+
+SWEEP = ("sweep-cct", "kundur", "--workers", 1, "--faults", "f.csv", "--out", "o.jsonl")
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        ((*SWEEP, "--esd-pct", "1_0"), "--esd-pct '1_0': write numbers in ASCII digits"),
+        ((*SWEEP, "--esd-pct", "\uff15"), "--esd-pct '\uff15': write numbers"),
+        ((*SWEEP, "--esd-pct", "none,1_0"), "--esd-pct '1_0': write numbers"),
+        (("screen", "kundur", "--buses", "1_3"), "--buses '1_3': write numbers"),
+        (("screen", "kundur", "--buses", "\uff13"), "--buses '\uff13': write numbers"),
+        ((*PLACE, "--load-levels", "\uff11"), "--load-levels '\uff11': write numbers"),
+        ((*PLACE, "--load-levels", "1_0"), "--load-levels '1_0': write numbers"),
+        ((*PLACE, "--load-levels", "1,inf"), "--load-levels inf: must be a finite number"),
+        ((*PLACE, "--load-levels", "1,1e400"), "--load-levels 1e400: must be a finite number"),
+        (("pmu", "record", "127.0.0.1:\uff19", "--frames", 1, "-o", "r.c37"), "HOST:PORT"),
+        (
+            ("estimate", "track", "kundur", "--source", "tcp://127.0.0.1:\uff19")
+            + ("--until", 1, "--out", "t.csv"),
+            "'127.0.0.1:\uff19' is not HOST:PORT",
+        ),
+    ],
+)
+def test_comma_list_numbers_are_ascii_digits_and_finite(
+    no_simulation, tmp_path, monkeypatch, args, needle
+):
+    """`sweep-cct --esd-pct 1_0` ran at 10 %, `screen --buses 1_3` screened bus 13 and a
+    fullwidth digit was read as its ASCII one; `place --load-levels 1,inf` was refused
+    without naming the option; a PMU port of a fullwidth 9 was port 9."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "f.csv").write_text("bus,far_bus\n3,101\n")
+    assert_error(run(*args), needle)
+    assert [p.name for p in tmp_path.iterdir()] == ["f.csv"]
+
+
+def test_a_time_of_minus_zero_is_zero():
+    """`simulate --t-fault -0` printed a fault 'at -0 s'."""
+    res = run(*FAULT, "--t-fault", "-0", "--tf", 0.3)
+    assert res.exit_code == 0, res.output
+    assert "3-phase fault at bus 3 at 0 s on line 3-101" in res.stdout

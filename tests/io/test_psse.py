@@ -357,10 +357,10 @@ def test_three_winding_solves_as_its_star_of_two_winding_transformers(tmp_path):
 
 
 def _edit(tmp_path, old, new, src=V33):
-    text = src.read_text()
+    text = src.read_text(encoding="utf-8")
     assert old in text
     path = tmp_path / "edited.raw"
-    path.write_text(text.replace(old, new, 1))
+    path.write_text(text.replace(old, new, 1), encoding="utf-8")
     return path
 
 
@@ -373,6 +373,15 @@ def test_malformed_number_names_file_line_and_record(tmp_path):
         "  0.00000,  0.00000,  0.00000,  0.00000,1,1",
     )
     with pytest.raises(CaseError, match=r"edited\.raw:22 branch record: field 5 '1\.0O000E-1'"):
+        read_raw(path)
+
+
+@pytest.mark.parametrize("value", ["4_0.000", "\uff14\uff10.000"])
+def test_a_raw_number_is_written_in_ascii_digits(tmp_path, value):
+    """float() read a load's PL 4_0.000 as 40 MW, and fullwidth digits as ASCII ones."""
+    load = "    4,'1 ',1,   1,   1,    "
+    path = _edit(tmp_path, f"{load}40.000", f"{load}{value}")
+    with pytest.raises(CaseError, match=rf"edited\.raw:12 load record: field 6 '{value}' is not"):
         read_raw(path)
 
 
