@@ -120,6 +120,7 @@ def reports_errors(func):
             warnings.simplefilter("default")
             try:
                 _check_numbers(kwargs)
+                _check_single_rate(kwargs)
                 out = func(*args, **kwargs)
             except StabctlError as exc:
                 click.echo(f"error: {one_line(exc)}", err=True)
@@ -483,6 +484,16 @@ def _remember_single_rate(ctx, _param, value):
     return value
 
 
+def _check_single_rate(kwargs) -> None:
+    """Refuse --single-rate with --conventions pstess: PSTess never integrates an exciter
+    in sub-intervals, so the option would change nothing."""
+    if kwargs.get("conventions") == "pstess" and not subintervals_chosen():
+        raise InputError(
+            "--single-rate given with --conventions pstess: the pstess conventions always "
+            "integrate the whole model at one step (sub-intervals are an ieee option)"
+        )
+
+
 def subintervals_chosen() -> bool:
     """Whether the running command integrates fast exciter loops in sub-intervals: True
     unless it was given ``--single-rate`` (`model_options`; True outside a command)."""
@@ -499,9 +510,9 @@ def model_options(func):
         expose_value=False,
         callback=_remember_single_rate,
         help="Integrate the whole model at one step: no exciter in sub-intervals "
-        "(ieee; docs/simulator.md).  The default step then falls to half the time "
-        "constant of the fastest exciter loop (ACTIVSg2000: 1.2 ms instead of half a "
-        "cycle).",
+        "(ieee; docs/simulator.md; refused with --conventions pstess, which never uses "
+        "them).  The default step then falls to half the time constant of the fastest "
+        "exciter loop (ACTIVSg2000: 1.2 ms instead of half a cycle).",
     )(func)
     func = click.option(
         "--step",

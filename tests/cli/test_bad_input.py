@@ -1136,3 +1136,17 @@ def test_a_time_of_minus_zero_is_zero():
     res = run(*FAULT, "--t-fault", "-0", "--tf", 0.3)
     assert res.exit_code == 0, res.output
     assert "3-phase fault at bus 3 at 0 s on line 3-101" in res.stdout
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        KUNDUR_SIM + ("--tf", 1),
+        ("cct", "kundur", "--fault", 3, "--far-bus", 101),
+    ],
+)
+def test_single_rate_under_pstess_is_refused(no_simulation, args):
+    """`--single-rate --conventions pstess` ran as without it (the pstess conventions
+    never integrate an exciter in sub-intervals): the same runs, exit 0."""
+    res = run(*args, "--single-rate", "--conventions", "pstess")
+    assert_error(res, "--single-rate given with --conventions pstess")
