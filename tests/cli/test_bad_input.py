@@ -1150,3 +1150,12 @@ def test_single_rate_under_pstess_is_refused(no_simulation, args):
     never integrate an exciter in sub-intervals): the same runs, exit 0."""
     res = run(*args, "--single-rate", "--conventions", "pstess")
     assert_error(res, "--single-rate given with --conventions pstess")
+
+
+def test_estimate_refuses_both_old_mode_flags(no_simulation):
+    """`estimate CASE --closed-loop --cct` ran the cct study only, --closed-loop dropped."""
+    res = run(
+        "estimate", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", 5,
+        "--closed-loop", "--cct", "--runs", 1,
+    )  # fmt: skip
+    assert_error(res, "--cct and --closed-loop select different subcommands")
