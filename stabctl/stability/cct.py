@@ -953,14 +953,15 @@ T_FAULT_MAX_S = 1000.0
 def read_faults(path: str | Path) -> list[LineFault]:
     """Faults from a CSV file (a strict table, `stabctl.io.inputs.read_csv`, of
     :data:`FAULT_COLUMNS`): bus, far_bus (empty: a bus fault cleared without a trip)
-    [, t_fault (s, default 1, at most T_FAULT_MAX_S)][, circuit (default 1)], one fault
-    per row; an empty t_fault or circuit cell takes the default, as without the column.
+    [, t_fault (s, default 1, at most T_FAULT_MAX_S)][, circuit (default 1; empty in a
+    bus fault's row)], one fault per row; an empty t_fault or circuit cell takes the
+    default, as without the column.
 
     Raises
     ------
     InputError
-        A row or header the table refuses, a value out of range, a fault listed twice;
-        naming file:line.
+        A row or header the table refuses, a value out of range, a circuit given for a
+        bus fault, a fault listed twice; naming file:line.
     """
     faults: dict[LineFault, int] = {}
     for row in read_csv(path, "fault list", *FAULT_COLUMNS):
@@ -977,6 +978,11 @@ def read_faults(path: str | Path) -> list[LineFault]:
 
 def _fault_row(row: CsvRow) -> LineFault:
     far = row.values["far_bus"]
+    if not far and row.values.get("circuit"):
+        raise InputError(
+            f"{row.where()}: circuit {row.values['circuit']} given for a bus fault (far_bus "
+            "empty): a circuit names a line; give its far_bus, or leave circuit empty"
+        )
     return LineFault(
         bus=int(number(row, "bus", 1, _LARGEST_BUS, integer=True)),
         far_bus=int(number(row, "far_bus", 1, _LARGEST_BUS, integer=True)) if far else None,

@@ -1159,3 +1159,14 @@ def test_estimate_refuses_both_old_mode_flags(no_simulation):
         "--closed-loop", "--cct", "--runs", 1,
     )  # fmt: skip
     assert_error(res, "--cct and --closed-loop select different subcommands")
+
+
+def test_a_bus_fault_row_with_a_circuit_is_refused(no_simulation, tmp_path):
+    """A fault list row `3,,2` ran as a bus fault recorded as circuit 2, where `cct`
+    refuses --circuit without --far-bus."""
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus,circuit\n3,101,2\n3,,2\n", encoding="utf-8")
+    out = tmp_path / "o.jsonl"
+    res = run("sweep-cct", "kundur", "--workers", 1, "--faults", faults, "--out", out)
+    assert_error(res, "f.csv:3: circuit 2 given for a bus fault (far_bus empty)")
+    assert not out.exists()

@@ -38,6 +38,8 @@ def _csv(tmp_path, text, name="f.csv", encoding="utf-8"):
         ("bus,far_bus\n3.0,101\n", r"f\.csv:2: bus 3.0 is not an integer \(write it as digits\)"),
         ("bus,far_bus\n3,1.01e2\n", r"f\.csv:2: far_bus 1.01e2 is not an integer"),
         ("bus,far_bus\n0,101\n", r"f\.csv:2: bus 0 is outside"),
+        # a bus fault's row with a circuit ran, recorded as that circuit (cct refuses it)
+        ("bus,far_bus,circuit\n3,,2\n", r"f\.csv:2: circuit 2 given for a bus fault"),
         ("bus,far_bus\n", r"needs a header \(bus,far_bus\[,t_fault\]"),
     ],
 )
