@@ -302,13 +302,17 @@ def _check_numbers(kwargs) -> None:
     for param in ctx.command.params:
         if param.name not in kwargs:
             continue
-        label = (
-            next((o for o in param.opts if o.startswith("--")), None) or param.human_readable_name
-        )
+        label = _option_name(param)
         for value in _numbers(kwargs[param.name]):
             # the options of _INF_MEANS are bounded by their command: only nan and -inf here
             if label not in _INF_MEANS or math.isnan(value) or value == -math.inf:
                 check_number(label, value)
+
+
+def _option_name(param: click.Parameter) -> str:
+    """How messages name a parameter: its first long option name (``--dyr-conventions``,
+    not its hidden alias or its Python name), or an argument's name."""
+    return next((o for o in param.opts if o.startswith("--")), None) or param.human_readable_name
 
 
 #: largest magnitude of a number whose option has no range of its own (a time, a bus
@@ -807,14 +811,15 @@ def given_options(*names: str) -> list[str]:
     Returns
     -------
     list of str
-        Those given, as options (``--far-bus``), in the order of `names`; empty outside a
-        command.
+        Those given, by their first long option name (``--far-bus``; ``--out`` for
+        ``out_path``), in the order of `names`; empty outside a command.
     """
     ctx = click.get_current_context(silent=True)
     if ctx is None:
         return []
+    params = {p.name: p for p in ctx.command.params}
     return [
-        "--" + name.replace("_", "-")
+        _option_name(params[name])
         for name in names
         if name in ctx.params
         and ctx.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE

@@ -1170,3 +1170,36 @@ def test_a_bus_fault_row_with_a_circuit_is_refused(no_simulation, tmp_path):
     res = run("sweep-cct", "kundur", "--workers", 1, "--faults", faults, "--out", out)
     assert_error(res, "f.csv:3: circuit 2 given for a bus fault (far_bus empty)")
     assert not out.exists()
+
+
+FIVE = PSSE / "five_bus_v33.raw"
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (
+            ("--static", "--dyr-conventions", "pst"),
+            "--dyr-conventions given without a DYR file",
+        ),
+        (("--static", "--net-unmodelled"), "--net-unmodelled given without a DYR file"),
+        (
+            ("--static", "--leave-out-infeasible"),
+            "--leave-out-infeasible given for a power-flow-only case",
+        ),
+        (("--static", "--loads", "raw"), "--loads given for a power-flow-only case"),
+        (
+            (PSSE / "five_bus.dyr", "--static"),
+            "--static given for five_bus_v33.raw with dynamic data (3 machine(s))",
+        ),
+    ],
+)
+def test_import_psse_refuses_options_without_effect(tmp_path, args, needle):
+    """Each was accepted and changed nothing (exit 0): the DYR conventions or netting
+    without a DYR file, --static with machines, the load model or the infeasible
+    controls of a case without machines."""
+    out = tmp_path / "p.json"
+    dyr = [a for a in args if isinstance(a, Path)]
+    flags = [a for a in args if not isinstance(a, Path)]
+    assert_error(run("import-psse", FIVE, *dyr, "-o", out, *flags), needle)
+    assert not out.exists()
