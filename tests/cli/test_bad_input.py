@@ -1203,3 +1203,9 @@ def test_import_psse_refuses_options_without_effect(tmp_path, args, needle):
     flags = [a for a in args if not isinstance(a, Path)]
     assert_error(run("import-psse", FIVE, *dyr, "-o", out, *flags), needle)
     assert not out.exists()
+
+
+@pytest.mark.parametrize("args", [("-c", 6, "-c", 6), ("6", "12", "-c", "6.0")])
+def test_omib_refuses_a_duration_given_twice(args):
+    """`omib -c 6 -c 6` printed the 6-cycle row twice."""
+    assert_error(run("omib", *args), "--fault-cycles: 6 given twice")
