@@ -1209,3 +1209,9 @@ def test_import_psse_refuses_options_without_effect(tmp_path, args, needle):
 def test_omib_refuses_a_duration_given_twice(args):
     """`omib -c 6 -c 6` printed the 6-cycle row twice."""
     assert_error(run("omib", *args), "--fault-cycles: 6 given twice")
+
+
+def test_eig_names_areas_above_the_machines(no_simulation):
+    """`eig kundur --areas 5` said 'the number of areas must be between 1 and 4' after
+    linearising, without naming --areas."""
+    assert_error(run("eig", "kundur", "--areas", 5), "--areas 5: case 'kundur' has 4 machine(s)")
