@@ -886,9 +886,9 @@ def test_a_dyr_file_with_a_byte_order_mark_is_read_as_a_raw_file_is(tmp_path):
 
 def test_a_bus_fault_cct_takes_further_trips(no_simulation):
     """cct --fault 3 --trip 13 101 (no --far-bus) failed with 'bus None is not in case'."""
-    from stabctl.stability.cct import LineFault, _check_trips
+    from stabctl.stability.cct import LineFault, check_trips
 
-    _check_trips(load_case("kundur"), LineFault(3, None, 1.0, trips=((13, 101),)))
+    check_trips(load_case("kundur"), LineFault(3, None, 1.0, trips=((13, 101),)))
 
 
 def test_estimate_track_ends_at_the_first_end_reached_and_refuses_pmu_settings(tmp_path):
@@ -1215,3 +1215,10 @@ def test_eig_names_areas_above_the_machines(no_simulation):
     """`eig kundur --areas 5` said 'the number of areas must be between 1 and 4' after
     linearising, without naming --areas."""
     assert_error(run("eig", "kundur", "--areas", 5), "--areas 5: case 'kundur' has 4 machine(s)")
+
+
+def test_a_trip_of_the_faulted_circuit_names_trip(no_simulation):
+    """`cct --fault 3 --far-bus 101 --trip 101 3` was refused by the events' check, with
+    the events as Python reprs and no word of --trip."""
+    res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--trip", 101, 3)
+    assert_error(res, "--trip 101 3: 101-3 is the faulted circuit itself (line 3-101 circuit 1")
