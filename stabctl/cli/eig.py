@@ -76,6 +76,7 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limi
     one `error:` line; nothing is written then.
     """
     from stabctl.io import load_case
+    from stabctl.smallsignal.modal import AreaCountError
     from stabctl.studies.eigenvalues import eig_study, study_json, write_report
 
     if not report:
@@ -84,14 +85,23 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limi
         raise InputError(f"--out-dir {out_dir} is not a directory")
     if report:
         check_writable(out_dir, "--out-dir", directory=True)
-    st = eig_study(
-        load_case(case_name),
-        no_pss=no_pss,
-        n_areas=n_areas,
-        conventions=conventions,
-        q_limits=q_limits,
-        limits=limits,
-    )
+    case = load_case(case_name)
+    if n_areas is not None and n_areas > len(case.machines):
+        raise InputError(
+            f"--areas {n_areas}: case '{case.name}' has {len(case.machines)} machine(s), "
+            "and each area at least one"
+        )
+    try:
+        st = eig_study(
+            case,
+            no_pss=no_pss,
+            n_areas=n_areas,
+            conventions=conventions,
+            q_limits=q_limits,
+            limits=limits,
+        )
+    except AreaCountError as exc:  # fewer electromechanical modes than machines - 1
+        raise InputError(f"--areas {n_areas}: {exc}") from None
     written = [str(write_report(st, out_dir))] if report else []
     if as_json:
         print_json({**study_json(st), "files": written})

@@ -48,7 +48,7 @@ from stabctl.errors import InputError
 #: centre of inertia the relative speeds are taken from)
 _STORAGE_NOT_COI = tuple(n for n in STORAGE_SETTINGS if n != "coi")
 
-#: the old mode flags of `estimate CASE`, by the subcommand they select (first wins)
+#: the old mode flags of `estimate CASE`, by the subcommand they select (one at most)
 _LEGACY_FLAGS = (("--cct", "cct"), ("--closed-loop", "closed-loop"))
 
 
@@ -59,7 +59,14 @@ class _EstimateGroup(click.Group):
 
     def parse_args(self, ctx, args):
         if args and args[0] not in self.commands and args[0] not in ctx.help_option_names:
-            mode = next((m for flag, m in _LEGACY_FLAGS if flag in args), "rmse")
+            modes = [flag for flag, _ in _LEGACY_FLAGS if flag in args]
+            if len(modes) > 1:
+                raise click.UsageError(
+                    f"{' and '.join(modes)} select different subcommands (estimate "
+                    f"{', estimate '.join(dict(_LEGACY_FLAGS)[f] for f in modes)}): give one",
+                    ctx,
+                )
+            mode = dict(_LEGACY_FLAGS)[modes[0]] if modes else "rmse"
             args = [mode, *(a for a in args if a not in dict(_LEGACY_FLAGS))]
         return super().parse_args(ctx, args)
 
@@ -77,7 +84,7 @@ def estimate():
                  simulation (field data)
 
     `stabctl estimate CASE ...` (no subcommand) is `stabctl estimate rmse CASE ...`;
-    the old flags --closed-loop and --cct select those subcommands.
+    the old flags --closed-loop and --cct select those subcommands (one of them).
     """
 
 

@@ -10,7 +10,7 @@ import click
 
 from stabctl.cli.checks import check_suffix
 from stabctl.cli.format import describe_event, describe_sw_con, print_json
-from stabctl.cli.options import AliasedOption, json_option, reports_errors
+from stabctl.cli.options import AliasedOption, json_option, refuse_given, reports_errors
 from stabctl.errors import InputError
 
 
@@ -165,7 +165,8 @@ def _static_option(func):
         "--static",
         is_flag=True,
         help="Write a power-flow-only case when the files have no dynamic data (no "
-        "machine model); without it such an import is refused (nothing written).",
+        "machine model); without it such an import is refused (nothing written), and "
+        "with it one with machines.",
     )(func)
 
 
@@ -194,13 +195,19 @@ def _leave_out_islands(case, asked: bool):
 
 
 def _check_dynamic(case, source: str, static: bool) -> None:
-    """Refuse a case without machines unless --static asked for one."""
+    """Refuse a case without machines unless --static asked for one, and --static for a
+    case with machines (it would change nothing)."""
     from stabctl.errors import InputError
 
     if len(case.machines) == 0 and not static:
         raise InputError(
             f"{source}: no dynamic data: the case would have no machines (give the DYR "
             "file, or --static for a power-flow-only case)"
+        )
+    if len(case.machines) and static:
+        raise InputError(
+            f"--static given for {source} with dynamic data ({len(case.machines)} "
+            "machine(s)): it only lets a case without machines be written; leave it out"
         )
 
 
@@ -257,7 +264,8 @@ def _imported(case, out) -> tuple[dict, str]:
     show_default=True,
     help="Load model in dynamic runs: all constant impedance, or the RAW "
     "composition (constant power, current, admittance; PST's network "
-    "solution may fail with constant power under deep voltage dips).",
+    "solution may fail with constant power under deep voltage dips).  Refused for a "
+    "case without machines (no dynamic run).",
 )
 @click.option(
     "--dyr-conventions",
@@ -271,14 +279,14 @@ def _imported(case, out) -> tuple[dict, str]:
     "at rated speed, Pm and D divided by speed, each model's saturation), PST's "
     "(machines with speed effects and no saturation, EXDC2 limits times the "
     "terminal voltage) or ANDES 2.0's (to compare with ANDES like for like); "
-    "docs/pst_models.md section 12.",
+    "docs/pst_models.md section 12.  Only with a DYR file.",
 )
 @click.option(
     "--net-unmodelled",
     is_flag=True,
     help="Net the generators the DYR file gives no machine model (PSS/E's netting: "
     "each a negative constant-power load PG + jQG at its bus, listed as a warning) "
-    "instead of refusing the files.",
+    "instead of refusing the files.  Only with a DYR file.",
 )
 @click.option(
     "--leave-out-infeasible",
@@ -315,9 +323,11 @@ def import_psse(
     negative loads with --net-unmodelled (synthetic grids such as ACTIVSg2000 give their
     wind and solar plants no dynamic data). Exciters and governors that cannot start
     within their own limits make simulate refuse the case; --leave-out-infeasible leaves
-    them out, each named. The summary names each record left out and generator netted
-    with why, and compares the power flow (Q limits on) with the RAW's own solution
-    (the largest voltage and angle differences and their buses; a warning above 1e-3).
+    them out, each named. The summary names each record left out, out of the network
+    (isolated buses and what is at them, equipment out of service: left out as PSS/E
+    leaves them) and generator netted with why, and compares the power flow (Q limits on)
+    with the RAW's own solution (the largest voltage and angle differences and their
+    buses; a warning above 1e-3).
 
     \b
     Example:
@@ -327,7 +337,12 @@ def import_psse(
     from stabctl.io.psse import import_psse as run_import
 
     out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
-    case, left_out, netted, solution, changed = run_import(
+    if dyr_path is None:
+        refuse_given(
+            ("conventions", "net_unmodelled"),
+            "without a DYR file (no dynamic models to read, no generator to net)",
+        )
+    imported = run_import(
         raw_path,
         dyr_path,
         "skip" if skip_unsupported else "error",
@@ -335,23 +350,23 @@ def import_psse(
         conventions,
         "net" if net_unmodelled else "error",
     )
-    _check_dynamic(case, Path(raw_path).name, static)
-    case, islands = _leave_out_islands(case, leave_out_islands)
-    infeasible: tuple[str, ...] = ()
-    if leave_out_infeasible and len(case.machines):
-        from stabctl.dynamics.infeasible import leave_out_infeasible as leave_out
-
-        case, infeasible = leave_out(case)
-        for line in infeasible:
-            click.echo(f"warning: left out the {line}", err=True)
-    against_raw = _raw_gap(case, solution, q_limits=True) if len(case.machines) else None
+    _check_dynamic(imported.case, Path(raw_path).name, static)
+    if len(imported.case.machines) == 0:
+        refuse_given(
+            ("loads", "leave_out_infeasible"),
+            "for a power-flow-only case (no machines: no dynamic run, no control)",
+        )
+    case, islands = _leave_out_islands(imported.case, leave_out_islands)
+    case, infeasible = _leave_out_infeasible(case, leave_out_infeasible)
+    against_raw = _raw_gap(case, imported.solution, q_limits=True) if len(case.machines) else None
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
     summary.update(
         nonconforming_loads=len(case.loads),
-        left_out=list(left_out),
-        netted=list(netted),
-        changed=list(changed),
+        left_out=list(imported.left_out),
+        out_of_service=list(imported.out_of_service),
+        netted=list(imported.netted),
+        changed=list(imported.changed),
         infeasible=list(infeasible),
         islands=list(islands),
         powerflow_against_raw=against_raw,
@@ -359,15 +374,41 @@ def import_psse(
     if as_json:
         print_json(summary)
         return
+    _echo_psse_import(text, imported, infeasible, islands)
+    _echo_raw_gap(against_raw, "Q limits on, as simulate solves it")
+
+
+def _leave_out_infeasible(case, asked: bool) -> tuple:
+    """(case, lines): with --leave-out-infeasible the case without its controls that
+    cannot start inside their limits (each line echoed as a warning), else as it is."""
+    if not asked:
+        return case, ()
+    from stabctl.dynamics.infeasible import leave_out_infeasible
+
+    case, infeasible = leave_out_infeasible(case)
+    for line in infeasible:
+        click.echo(f"warning: left out the {line}", err=True)
+    return case, infeasible
+
+
+def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
+    """import-psse's summary lines: the counts, then each record left out, out of the
+    network, netted or changed."""
     click.echo(
-        f"{text}; {len(left_out)} record(s) left out, {len(netted)} generator(s) netted, "
+        f"{text}; {len(imported.left_out)} record(s) left out, "
+        f"{len(imported.out_of_service)} out of the network (as PSS/E), "
+        f"{len(imported.netted)} generator(s) netted, "
         f"{len(infeasible)} control(s) outside their limits left out"
         + (f", {len(islands)} island(s) without a swing bus left out" if islands else "")
     )
-    for what, items in (("left out", left_out), ("netted", netted), ("changed", changed)):
+    for what, items in (
+        ("left out", imported.left_out),
+        ("out of the network", imported.out_of_service),
+        ("netted", imported.netted),
+        ("changed", imported.changed),
+    ):
         for item in items:
             click.echo(f"  {what}: {item}")
-    _echo_raw_gap(against_raw, "Q limits on, as simulate solves it")
 
 
 @click.command("import-andes")

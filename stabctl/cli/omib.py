@@ -60,6 +60,9 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
     else:
         system = OMIB(H=H, Pm=pm, Pmax_pre=pmax, Pmax_fault=0.0, Pmax_post=pmax, f0=f0)
     cycles = tuple(fault_cycles) + tuple(more_cycles) or (6.0, 12.0, 15.0)
+    twice = [c for k, c in enumerate(cycles) if c in cycles[:k]]
+    if twice:
+        raise InputError(f"--fault-cycles: {twice[0]:g} given twice (each duration once)")
     out: dict[str, Any] = {"cases": clearing_table(system, cycles), "eac": eac_summary(system)}
     if as_json:
         print_json(out)

@@ -120,6 +120,7 @@ def reports_errors(func):
             warnings.simplefilter("default")
             try:
                 _check_numbers(kwargs)
+                _check_single_rate(kwargs)
                 out = func(*args, **kwargs)
             except StabctlError as exc:
                 click.echo(f"error: {one_line(exc)}", err=True)
@@ -226,7 +227,12 @@ class PlainInt(_Plain, click.types.IntParamType):
 
 
 class PlainFloat(_Plain, click.types.FloatParamType):
-    """click's float type, `plain_number` spellings only."""
+    """click's float type, `plain_number` spellings only, -0 read as 0 (``--t-fault -0``
+    was printed as a fault at -0 s)."""
+
+    def convert(self, value, param, ctx):
+        """The value as a float, -0 as 0 (click's `ParamType.convert`)."""
+        return super().convert(value, param, ctx) + 0.0
 
 
 class PlainIntRange(_Plain, click.IntRange):
@@ -296,13 +302,17 @@ def _check_numbers(kwargs) -> None:
     for param in ctx.command.params:
         if param.name not in kwargs:
             continue
-        label = (
-            next((o for o in param.opts if o.startswith("--")), None) or param.human_readable_name
-        )
+        label = _option_name(param)
         for value in _numbers(kwargs[param.name]):
             # the options of _INF_MEANS are bounded by their command: only nan and -inf here
             if label not in _INF_MEANS or math.isnan(value) or value == -math.inf:
                 check_number(label, value)
+
+
+def _option_name(param: click.Parameter) -> str:
+    """How messages name a parameter: its first long option name (``--dyr-conventions``,
+    not its hidden alias or its Python name), or an argument's name."""
+    return next((o for o in param.opts if o.startswith("--")), None) or param.human_readable_name
 
 
 #: largest magnitude of a number whose option has no range of its own (a time, a bus
@@ -332,8 +342,10 @@ def comma_list(texts, option: str, convert, what: str) -> list:
     Raises
     ------
     InputError
-        An empty item (two commas in a row, a comma at an end), an item `convert` refuses,
-        or a value given twice.
+        An empty item (two commas in a row, a comma at an end), an item written with other
+        than ASCII characters or with ``_`` (`plain_number`: int() reads ``1_3`` as 13),
+        an item `convert` refuses, a number that is not finite (inf, nan, 1e400), or a
+        value given twice.
     """
     out = []
     for text in (texts,) if isinstance(texts, str) else texts:
@@ -342,14 +354,25 @@ def comma_list(texts, option: str, convert, what: str) -> list:
                 raise InputError(
                     f"{option} {text!r}: an empty item (two commas in a row or one at an end)"
                 )
-            try:
-                value = convert(item)
-            except ValueError:
-                raise InputError(f"{option} {item!r}: not {what}") from None
+            value = _list_item(item, option, convert, what)
             if value in out:
                 raise InputError(f"{option}: {item} given twice")
             out.append(value)
     return out
+
+
+def _list_item(item: str, option: str, convert, what: str):
+    """One item of `comma_list`, converted: InputError unless `plain_number`, accepted by
+    `convert` and, a float, finite."""
+    if not plain_number(item):
+        raise InputError(f"{option} {item!r}: write numbers in ASCII digits, without '_'")
+    try:
+        value = convert(item)
+    except ValueError:
+        raise InputError(f"{option} {item!r}: not {what}") from None
+    if isinstance(value, float) and not math.isfinite(value):
+        raise InputError(f"{option} {item}: must be a finite number")
+    return value
 
 
 def _numbers(value):
@@ -465,6 +488,16 @@ def _remember_single_rate(ctx, _param, value):
     return value
 
 
+def _check_single_rate(kwargs) -> None:
+    """Refuse --single-rate with --conventions pstess: PSTess never integrates an exciter
+    in sub-intervals, so the option would change nothing."""
+    if kwargs.get("conventions") == "pstess" and not subintervals_chosen():
+        raise InputError(
+            "--single-rate given with --conventions pstess: the pstess conventions always "
+            "integrate the whole model at one step (sub-intervals are an ieee option)"
+        )
+
+
 def subintervals_chosen() -> bool:
     """Whether the running command integrates fast exciter loops in sub-intervals: True
     unless it was given ``--single-rate`` (`model_options`; True outside a command)."""
@@ -481,9 +514,9 @@ def model_options(func):
         expose_value=False,
         callback=_remember_single_rate,
         help="Integrate the whole model at one step: no exciter in sub-intervals "
-        "(ieee; docs/simulator.md).  The default step then falls to half the time "
-        "constant of the fastest exciter loop (ACTIVSg2000: 1.2 ms instead of half a "
-        "cycle).",
+        "(ieee; docs/simulator.md; refused with --conventions pstess, which never uses "
+        "them).  The default step then falls to half the time constant of the fastest "
+        "exciter loop (ACTIVSg2000: 1.2 ms instead of half a cycle).",
     )(func)
     func = click.option(
         "--step",
@@ -778,14 +811,15 @@ def given_options(*names: str) -> list[str]:
     Returns
     -------
     list of str
-        Those given, as options (``--far-bus``), in the order of `names`; empty outside a
-        command.
+        Those given, by their first long option name (``--far-bus``; ``--out`` for
+        ``out_path``), in the order of `names`; empty outside a command.
     """
     ctx = click.get_current_context(silent=True)
     if ctx is None:
         return []
+    params = {p.name: p for p in ctx.command.params}
     return [
-        "--" + name.replace("_", "-")
+        _option_name(params[name])
         for name in names
         if name in ctx.params
         and ctx.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE

@@ -325,7 +325,7 @@ def _host_port(address: str) -> tuple[str, int]:
     from stabctl.estimation.c37_tcp import split_hostport
 
     host, port = split_hostport(address)
-    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+    if not host or not (port.isascii() and port.isdigit()) or not 0 < int(port) < 65536:
         raise InputError(f"address {address!r}: expected HOST:PORT")
     return host, int(port)
 

@@ -150,7 +150,7 @@ def cct(
     from stabctl.dynamics.events import validate as validate_events
     from stabctl.errors import AboveSearchLimit, InsecureContingency
     from stabctl.io import load_case
-    from stabctl.stability.cct import LineFault, critical_clearing_time
+    from stabctl.stability.cct import LineFault, check_trips, critical_clearing_time
     from stabctl.storage.devices import uniform_fleet
 
     check_storage_given(esd_pct)
@@ -160,6 +160,7 @@ def cct(
     model = model_settings(conventions, None, q_limits)
     case = load_case(case_name)
     line_fault = LineFault(fault, far_bus, t_fault, circuit, _trips(trip))
+    check_trips(case, line_fault, "--trip")  # before the events' check names none
     validate_events(case, line_fault.events(0.0), t_fault + 1.0)  # before compiling
     sim = model.simulator(case)
     base = None

@@ -86,7 +86,7 @@ def parse_source(text: str) -> Source:
         host, ports = split_hostport(item)
         first, _, last = ports.partition("-")
         last = last or first
-        if not (host and first.isdigit() and last.isdigit()):
+        if not (host and ports.isascii() and first.isdigit() and last.isdigit()):
             raise InputError(f"--source {text}: {item!r} is not HOST:PORT")
         span = range(int(first), int(last) + 1)
         if not span or span[0] < 1 or span[-1] > 65535:

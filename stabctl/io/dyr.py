@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from stabctl.errors import CaseError
-from stabctl.io.inputs import input_file
+from stabctl.io.inputs import input_file, plain_float
 from stabctl.models.converters import CONVERTER
 from stabctl.models.declaration import DyrModel, Family
 from stabctl.models.exciters import EXCITER
@@ -187,7 +187,10 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
     bus = _integer(tokens[0])
     if bus is None:
         if model in N_PARAMS:
-            raise CaseError(f"{file}:{line}: {model} bus field {tokens[0]!r} is not an integer")
+            raise CaseError(
+                f"{file}:{line}: {model} bus field {tokens[0]!r} is not an integer (ASCII "
+                "digits, no '_')"
+            )
         bus = 0
     params, text = [], []
     strings = [_field_number(model, name) for name in TEXT_FIELDS.get(model, ())]
@@ -199,11 +202,12 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
             text.append(machine_id(tok))
             continue
         try:
-            value = float(tok.replace("D", "E").replace("d", "e"))
+            value = plain_float(tok, fortran=True)
         except ValueError:
             if model in N_PARAMS:
                 raise CaseError(
-                    f"{file}:{line}: {model} parameter {k} {tok!r} is not a number"
+                    f"{file}:{line}: {model} parameter {k} {tok!r} is not a number (ASCII "
+                    "digits, no '_')"
                 ) from None
             value = float("nan")  # e.g. USRMDL's quoted names: reported unsupported
         else:
@@ -288,7 +292,7 @@ SOURCE_UNSUPPORTED = "generator model not supported by stabctl (yet)"
 
 def _integer(tok: str) -> int | None:
     try:
-        v = float(tok.strip("'"))
+        v = plain_float(tok.strip("'"))
     except ValueError:
         return None
     return int(v) if math.isfinite(v) and v.is_integer() else None

@@ -24,7 +24,15 @@ from pathlib import Path
 
 from stabctl.errors import InputError
 
-__all__ = ["MAX_INPUT_BYTES", "CsvRow", "input_file", "number", "read_csv"]
+__all__ = [
+    "MAX_INPUT_BYTES",
+    "CsvRow",
+    "input_file",
+    "number",
+    "plain_float",
+    "plain_number",
+    "read_csv",
+]
 
 #: largest input file read, bytes (the largest case shipped, ACTIVSg2000's RAW, is 0.7 MB)
 MAX_INPUT_BYTES = 256 * 2**20
@@ -185,6 +193,35 @@ def plain_number(text: str) -> bool:
     return text.isascii() and "_" not in text
 
 
+def plain_float(text: str, fortran: bool = False) -> float:
+    """``float(text)`` for a `plain_number` spelling, -0 read as 0 (a time of -0 s is
+    printed as 0 s).
+
+    Parameters
+    ----------
+    text : str
+        The number as written.
+    fortran : bool, optional
+        Also read ``D`` as the exponent letter (``1.5D0``, as PSS/E and MATLAB files may
+        write it).
+
+    Returns
+    -------
+    float
+        Its value (inf and nan as float() reads them: the caller bounds it).
+
+    Raises
+    ------
+    ValueError
+        Not a number, or written with other than ASCII characters or with ``_``.
+    """
+    if not plain_number(text):
+        raise ValueError(f"{text!r}: write numbers in ASCII digits, without '_'")
+    if fortran:
+        text = text.replace("D", "E").replace("d", "e")
+    return float(text) + 0.0
+
+
 def number(
     row: CsvRow,
     column: str,
@@ -209,9 +246,7 @@ def number(
             raise InputError(f"{row.where()}: {column} is empty")
         return default
     try:
-        if not plain_number(text):
-            raise ValueError(text)
-        v = float(text)
+        v = plain_float(text)
     except ValueError:
         raise InputError(
             f"{row.where()}: {column} '{text}' is not a number (ASCII digits, no '_')"

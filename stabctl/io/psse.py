@@ -18,10 +18,13 @@ or netted (``"net"``, PSS/E's netting: a negative constant-power load at their b
 :func:`stabctl.io.psse_raw.read_raw`), listed in one warning; wind and solar plants of
 synthetic grids (ACTIVSg) often come without dynamic data.
 
-Dynamic records of generators out of service in the RAW file are ignored, as PSS/E
-ignores them. Records that stabctl cannot represent are collected from both files and either refused
-together (``on_unsupported="error"``: one :class:`~stabctl.errors.CaseError` listing every
-one as ``file:line record``) or left out with one warning listing them (``"skip"``).
+The records PSS/E leaves out of the network (isolated buses and the records at them,
+equipment out of service) are left out too, each named in one warning and in
+``PsseImport.out_of_service``; so are the dynamic records of generators out of service,
+as PSS/E ignores them. Records that stabctl cannot represent are collected from both
+files and either refused together (``on_unsupported="error"``: one
+:class:`~stabctl.errors.CaseError` listing every one as ``file:line record``) or left out
+with one warning listing them (``"skip"``).
 """
 
 from __future__ import annotations
@@ -47,14 +50,18 @@ class PsseImport(NamedTuple):
     """What :func:`import_psse` gives: the case, the records left out and the generators
     netted, each as ``"file:line record: why"`` text, the RAW file's own power-flow
     solution (:attr:`stabctl.io.psse_raw.RawData.solution`: bus number, VM pu, VA
-    degrees; shape (n, 3)) to compare the case's power flow with, and the DYR records
-    read with a value other than the file's (:attr:`stabctl.io.dyr.DyrTables.changed`)."""
+    degrees; shape (n, 3)) to compare the case's power flow with, the DYR records
+    read with a value other than the file's (:attr:`stabctl.io.dyr.DyrTables.changed`),
+    and the records left out of the network as PSS/E leaves them (isolated buses and what
+    is at them, equipment out of service, the DYR records of generators out of service:
+    :attr:`stabctl.io.psse_raw.RawData.switched_off`)."""
 
     case: Case
     left_out: tuple[str, ...]
     netted: tuple[str, ...]
     solution: np.ndarray
     changed: tuple[str, ...] = ()
+    out_of_service: tuple[str, ...] = ()
 
 
 def load_psse(
@@ -112,9 +119,10 @@ def import_psse(
     unmodelled: str = "error",
 ) -> PsseImport:
     """:func:`load_psse` that also returns the records left out (empty unless
-    ``on_unsupported="skip"``) and the generators netted (empty unless
-    ``unmodelled="net"``). Same arguments and errors."""
-    from stabctl.io.dyr import machine_id, read_dyr
+    ``on_unsupported="skip"``), the generators netted (empty unless
+    ``unmodelled="net"``) and the records out of the network (`PsseImport`). Same
+    arguments and errors."""
+    from stabctl.io.dyr import read_dyr
 
     if on_unsupported not in _MODES:
         raise CaseError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
@@ -127,9 +135,10 @@ def import_psse(
     unsupported = [str(s) for s in raw.unsupported]
     changed: tuple[str, ...] = ()
     lost: list[str] = []
+    off_network = [str(s) for s in raw.switched_off]
     if records is not None:
-        off = {(bus, machine_id(gid)) for bus, gid in raw.out_of_service}
-        records = [r for r in records if (r.bus, r.id) not in off]
+        records, ignored = _in_service(records, raw.out_of_service)
+        off_network += ignored
         dyn, dyr_unsupported, lost, changed = _dynamic_tables(raw, records, conventions)
         mats.update(dyn)
         unsupported += dyr_unsupported
@@ -140,6 +149,7 @@ def import_psse(
             f"{where}: generator(s) left without a model, their converter records left "
             f"out (listed above): {', '.join(lost)}"
         )
+    _say_off_network(off_network, where)
     netted = tuple(str(s) for s in raw.netted)
     if netted:
         warnings.warn(
@@ -159,7 +169,32 @@ def import_psse(
             UserWarning,
             stacklevel=3,
         )
-    return PsseImport(case, tuple(unsupported), netted, raw.solution, changed)
+    return PsseImport(case, tuple(unsupported), netted, raw.solution, changed, tuple(off_network))
+
+
+def _in_service(records, out_of_service) -> tuple[list, list[str]]:
+    """The DYR records of the generators in service, and the others named (PSS/E ignores
+    the dynamic records of a generator out of service or at an isolated bus)."""
+    from stabctl.io.dyr import machine_id
+
+    off = {(bus, machine_id(gid)) for bus, gid in out_of_service}
+    ignored = [
+        f"{r.label()}: its generator is out of the network (out of service or at an isolated bus)"
+        for r in records
+        if (r.bus, r.id) in off
+    ]
+    return [r for r in records if (r.bus, r.id) not in off], ignored
+
+
+def _say_off_network(records: list[str], where: str) -> None:
+    """One warning naming the records left out of the network, as PSS/E leaves them."""
+    if records:
+        warnings.warn(
+            f"{where}: left out {len(records)} record(s) out of the network, as PSS/E "
+            f"leaves them (isolated buses, equipment out of service): {'; '.join(records)}",
+            UserWarning,
+            stacklevel=4,
+        )
 
 
 def _without_machine(records):

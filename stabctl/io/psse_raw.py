@@ -26,7 +26,9 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
 
 * case identification: SBASE, version, BASFRQ (60 Hz when absent), the two title lines;
 * buses: number, BASKV, IDE (1 load, 2 generator, 3 swing; 4 isolated buses are dropped
-  with every record at them, as PSS/E leaves them out of the solution), VM, VA;
+  with every record at them, as PSS/E leaves them out of the solution), VM, VA; the
+  records dropped so, and those out of service (status 0), are each named with why
+  (:attr:`RawData.switched_off`);
 * loads (in service): PL + jQL constant power, IP + jIQ constant current (MW/Mvar at
   1 pu), YP + jYQ constant admittance (MW/Mvar at 1 pu, YQ < 0 inductive). The admittance
   part is exact as a bus shunt ``G + jB = (YP + jYQ) / SBASE``. The constant-current part
@@ -110,7 +112,7 @@ import numpy as np
 
 from stabctl.case import PQ, PV, SWING
 from stabctl.errors import CaseError
-from stabctl.io.inputs import input_file
+from stabctl.io.inputs import input_file, plain_float
 
 __all__ = ["RawSource", "Generator", "RawData", "read_raw", "split_fields"]
 
@@ -253,8 +255,12 @@ class RawData:
         unsupported: records that could not be represented, in file order.
         netted: the in-service generators netted as negative loads (``read_raw``'s
             ``net``), in file order, each record named with the reason.
-        out_of_service: (bus, ID) of the generators out of service (STAT 0) at in-service
-            buses: PSS/E ignores their dynamic records.
+        out_of_service: (bus, ID) of the generators out of service (STAT 0) or at an
+            isolated bus: PSS/E ignores their dynamic records.
+        switched_off: the records PSS/E leaves out of the network, in file order, each
+            named with why: the isolated buses (IDE 4), the records at them, and the
+            loads, shunts, generators, branches and transformers out of service (status
+            0; a three-winding transformer with fewer than two windings in service).
         solution: the file's own power-flow solution, shape (n, 3): bus number, VM (pu),
             VA (degrees) of each bus record not isolated, in file order (the ``bus``
             matrix holds VS at generator buses instead; no three-winding star points).
@@ -276,6 +282,7 @@ class RawData:
     unsupported: tuple[RawSource, ...]
     netted: tuple[RawSource, ...] = ()
     out_of_service: frozenset[tuple[int, str]] = frozenset()
+    switched_off: tuple[RawSource, ...] = ()
     solution: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     vreg_con: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
     changed: tuple[RawSource, ...] = ()
@@ -338,9 +345,9 @@ class _Rec:
                 self.fail(f"field {k + 1} missing")
             return float(default)
         try:
-            v = float(vals[k].replace("D", "E").replace("d", "e"))
+            v = plain_float(vals[k], fortran=True)
         except ValueError:
-            self.fail(f"field {k + 1} '{vals[k]}' is not a number")
+            self.fail(f"field {k + 1} '{vals[k]}' is not a number (ASCII digits, no '_')")
         if not math.isfinite(v):
             self.fail(f"field {k + 1} '{vals[k]}' is not a finite number")
         if abs(v) > _LARGEST:
@@ -544,6 +551,7 @@ class _Builder:
     net: Callable[[int, str], str | None] | None = None  # (bus, id) -> why netted, or None
     netted: list = field(default_factory=list)  # (bus, RawSource) of netted generators
     out_of_service: list = field(default_factory=list)  # (bus, ID) of generators
+    switched_off: list = field(default_factory=list)  # RawSource of records out of the network
     seen: dict = field(default_factory=dict)  # (section, ids) -> first line
     stars: int = 0  # star-point buses of three-winding transformers so far
     base_kv: dict = field(default_factory=dict)  # bus number -> BASKV (isolated ones too)
@@ -562,6 +570,20 @@ class _Builder:
 
     def skip(self, rec: _Rec, what: str):
         self.unsupported.append(rec.source(what))
+
+    def out(self, rec: _Rec, what: str, buses: tuple, status: tuple[str, int]) -> bool:
+        """Whether the record ``what`` is out of the network, as PSS/E leaves it: at an
+        isolated bus among ``buses``, or its status field (name, 0-based field of line 1)
+        0; such a record is named in ``switched_off``."""
+        isolated = [n for n in buses if n in self.isolated]
+        if isolated:
+            why = f"at isolated bus {isolated[0]} (IDE 4)"
+        elif rec.int(0, status[1], 1) == 0:
+            why = f"out of service ({status[0]} 0)"
+        else:
+            return False
+        self.switched_off.append(rec.source(f"{what}: {why}"))
+        return True
 
     def bus_row(self, rec: _Rec, number: int, role: str):
         """The bus row of ``number``, None for an isolated bus; CaseError if unknown."""
@@ -583,6 +605,7 @@ def _bus(b: _Builder, rec: _Rec):
     b.base_kv[num] = rec.num(0, 2, 0.0)
     if ide == _IDE_ISOLATED:
         b.isolated.add(num)
+        b.switched_off.append(rec.source(f"bus {num}: isolated (IDE 4)"))
         return
     if ide not in (1, 2, 3):
         rec.fail(f"bus {num}: IDE {ide} must be 1, 2, 3 or 4")
@@ -640,12 +663,12 @@ def _load(b: _Builder, rec: _Rec):
     """Load: I, ID, STATUS, AREA, ZONE, PL, QL, IP, IQ, YP, YQ, [OWNER, SCALE, INTRPT,
     DGENP, DGENQ, DGENM (v34), LOADTYPE (v35), NAME (v36)] (POM Load Data)."""
     num = rec.int(0, 0)
-    b.once(rec, (num, rec.text(0, 1)), f"load at bus {num} '{rec.text(0, 1)}'")
+    what = f"load at bus {num} '{rec.text(0, 1)}'"
+    b.once(rec, (num, rec.text(0, 1)), what)
     row = b.bus_row(rec, num, "load")
-    if row is None or rec.int(0, 2, 1) == 0:
+    if b.out(rec, what, (num,), ("STATUS", 2)) or row is None:
         return
     if b.version >= 34 and rec.int(0, 16, 0) == 1 and (rec.num(0, 14, 0.0) or rec.num(0, 15, 0.0)):
-        what = f"load at bus {num} '{rec.text(0, 1)}'"
         return b.skip(rec, f"{what}: distributed generation in service (DGENM 1, DGENP, DGENQ)")
     pl, ql, ip, iq, yp, yq = (rec.num(0, k, 0.0) for k in range(5, 11))
     v0 = b.v0(num)
@@ -659,13 +682,11 @@ def _load(b: _Builder, rec: _Rec):
 
 def _fixed_shunt(b: _Builder, rec: _Rec):
     """Fixed shunt: I, ID, STATUS, GL, BL (POM Fixed Shunt Data)."""
-    b.once(
-        rec,
-        (rec.int(0, 0), rec.text(0, 1)),
-        f"fixed shunt at bus {rec.int(0, 0)} '{rec.text(0, 1)}'",
-    )
-    row = b.bus_row(rec, rec.int(0, 0), "fixed shunt")
-    if row is not None and rec.int(0, 2, 1) != 0:
+    num = rec.int(0, 0)
+    what = f"fixed shunt at bus {num} '{rec.text(0, 1)}'"
+    b.once(rec, (num, rec.text(0, 1)), what)
+    row = b.bus_row(rec, num, "fixed shunt")
+    if not b.out(rec, what, (num,), ("STATUS", 2)) and row is not None:
         row[7] += rec.num(0, 3, 0.0) / b.base
         row[8] += rec.num(0, 4, 0.0) / b.base
 
@@ -681,14 +702,13 @@ def _generator(b: _Builder, rec: _Rec):
     """Generator: I, ID, PG, QG, QT, QB, VS, IREG, [NREG (v35)], MBASE, ZR, ZX, RT, XT,
     GTAP, STAT, RMPCT (POM Generator Data)."""
     num, gid = rec.int(0, 0), rec.text(0, 1)
-    b.once(rec, (num, gid), f"generator at bus {num} '{gid}'")
+    what = f"generator at bus {num} '{gid}'"
+    b.once(rec, (num, gid), what)
     row = b.bus_row(rec, num, "generator")
     o = _nreg_offset(b.version)
-    if row is not None and rec.int(0, 14 + o, 1) == 0:
+    if b.out(rec, what, (num,), ("STAT", 14 + o)) or row is None:
         b.out_of_service.append((num, gid))
-    if row is None or rec.int(0, 14 + o, 1) == 0:
         return
-    what = f"generator at bus {num} '{gid}'"
     why = None if b.net is None else b.net(num, gid)
     if why:
         return _net_generator(b, rec, num, f"{what}: {why}")
@@ -759,10 +779,9 @@ def _branch(b: _Builder, rec: _Rec):
     i, j, ckt = rec.int(0, 0), abs(rec.int(0, 1)), rec.text(0, 2)
     what = f"branch {i}-{j} '{ckt}'"
     b.once(rec, (min(i, j), max(i, j), ckt), what)
-    if _ends(b, rec, i, j, "branch") is None:
-        return
+    _ends(b, rec, i, j, "branch")
     k = 19 if b.version >= 34 else 9  # GI
-    if rec.int(0, k + 4, 1) == 0:
+    if b.out(rec, what, (i, j), ("ST", k + 4)):
         return
     r, x, bc = rec.num(0, 3), rec.num(0, 4), rec.num(0, 5, 0.0)
     gi, bi, gj, bj = (rec.num(0, k + n, 0.0) for n in range(4))
@@ -786,7 +805,9 @@ def _transformer(b: _Builder, rec: _Rec):
     if k3 != 0:
         return _three_winding(b, rec, (i, j, k3), f"three-winding {what}")
     ends = _ends(b, rec, i, j, "transformer")
-    if ends is None or rec.int(0, 11, 1) == 0 or not _modelled(b, rec, (2,), what):
+    if b.out(rec, what, (i, j), ("STAT", 11)) or ends is None:
+        return
+    if not _modelled(b, rec, (2,), what):
         return
     g_mag, b_mag = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
     t1, t2 = (_ratio(rec, row, bus[12], what) for row, bus in ((2, ends[0]), (3, ends[1])))
@@ -827,7 +848,15 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
     if stat not in (0, *_WINDINGS_IN):
         rec.fail(f"{what}: STAT {stat} must be 0, 1, 2, 3 or 4")
     windings = [w for w in _WINDINGS_IN.get(stat, ()) if rows[w] is not None]
-    if len(windings) < 2 or not _modelled(b, rec, (2, 3, 4), what):
+    if len(windings) < 2:
+        why = (
+            "out of service (STAT 0)"
+            if stat == 0
+            else f"fewer than two windings in service (STAT {stat}, isolated buses)"
+        )
+        b.switched_off.append(rec.source(f"{what}: {why}"))
+        return
+    if not _modelled(b, rec, (2, 3, 4), what):
         return
     kvs = [b.base_kv[n] for n in buses]
     z12, z23, z31 = (_impedance(b, rec, (3 * p, 2 + p), kvs[p], what) for p in range(3))
@@ -888,13 +917,15 @@ def _switched_shunt(b: _Builder, rec: _Rec):
     VSWLO, SWREG, [NREG (v35; v34 writes it at the end)], RMPCT, 'RMIDNT', BINIT (POM
     Switched Shunt Data); v32/v33 have one per bus, v35 and later one per bus and ID."""
     num = rec.int(0, 0)
+    what = f"switched shunt at bus {num}"
     if b.version < 34:
-        b.once(rec, (num,), f"switched shunt at bus {num}")
+        b.once(rec, (num,), what)
     elif b.version >= 35:
-        b.once(rec, (num, rec.text(0, 1)), f"switched shunt at bus {num} '{rec.text(0, 1)}'")
+        what += f" '{rec.text(0, 1)}'"
+        b.once(rec, (num, rec.text(0, 1)), what)
     row = b.bus_row(rec, num, "switched shunt")
     o = 1 if b.version >= 35 else 0  # v35 inserts ID after I
-    if row is not None and rec.int(0, 3 + o, 1) != 0:
+    if not b.out(rec, what, (num,), ("STAT", 3 + o)) and row is not None:
         row[8] += rec.num(0, 9 + o + _nreg_offset(b.version)) / b.base
 
 
@@ -1089,6 +1120,7 @@ def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawDa
         unsupported=tuple(sorted(b.unsupported, key=lambda s: s.line)),
         netted=tuple(src for _, src in b.netted),
         out_of_service=frozenset(b.out_of_service),
+        switched_off=tuple(b.switched_off),
         solution=np.array([[n, *vm_va] for n, vm_va in b.solution.items()], float).reshape(-1, 3),
         vreg_con=vreg_con,
         changed=tuple(b.changed),

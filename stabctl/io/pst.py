@@ -31,7 +31,7 @@ import numpy as np
 
 from stabctl.case import TABLES, Case
 from stabctl.errors import CaseError
-from stabctl.io.inputs import input_file
+from stabctl.io.inputs import input_file, plain_float
 
 __all__ = [
     "FORMAT",
@@ -234,7 +234,7 @@ def _load_json(path: Path):
 # .m parser (literal matrices only)
 # --------------------------------------------------------------------------------------
 
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?\Z")
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?\Z", re.ASCII)
 _ASSIGN = re.compile(r"([A-Za-z]\w*)\s*=\s*(.*)\Z", re.S)
 _DISP = re.compile(r"(?:disp|fprintf)\s*\(.*\)\s*;?\s*\Z")
 
@@ -368,7 +368,7 @@ def _parse_matrix(body: str, start: int, where: str, name: str) -> np.ndarray:
 
 
 def _to_float(tok: str) -> float:
-    return float(tok.replace("d", "e").replace("D", "e"))
+    return plain_float(tok, fortran=True)
 
 
 # --------------------------------------------------------------------------------------

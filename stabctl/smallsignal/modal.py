@@ -54,6 +54,11 @@ MAX_COND = 1e10
 DEFECTIVE_TOL = 1e-4
 
 
+class AreaCountError(InputError):
+    """A number of coherent areas outside [1, the electromechanical modes + 1] or above
+    the machines (`coherent_areas`)."""
+
+
 @dataclass(frozen=True, eq=False)
 class ModalAnalysis:
     """Modes of a linearised model.
@@ -408,14 +413,15 @@ def coherent_areas(
     areas pass n_areas or `modal_analysis(areas=...)`.  Returns labels (g,), 0 for a
     single area, numbered in the order of each area's first machine (machine order of the
     data: Kundur's area 1 = G1, G2 as in his book).
-    Raises InputError for n_areas outside [1, number of EM modes + 1] or above g.
+    Raises AreaCountError (an InputError) for n_areas outside [1, number of EM modes + 1]
+    or above g.
     """
     g = shape.shape[0]
     em = em[np.argsort(freq_hz[em])]
     if n_areas is None:
         n_areas = min(1 + _slow_mode_count(freq_hz[em]), g)  # one machine: one area
     if not 1 <= n_areas <= min(em.size + 1, g):
-        raise InputError(
+        raise AreaCountError(
             f"the number of areas must be between 1 and {min(em.size + 1, g)} "
             f"(electromechanical modes + 1, at most the machines), got {n_areas}"
         )

@@ -441,7 +441,7 @@ def critical_clearing_time(
     t_end = fault.t_fault + T_AFTER_FAULT if o.t_end is None else o.t_end
     t_hi = min(T_HI, t_max) if o.t_hi is None else o.t_hi
     _check_settings(fault, tol, o.t_lo, t_hi, t_max, t_end)
-    _check_trips(sim.case, fault)
+    check_trips(sim.case, fault)
     h = sim.default_h if h is None else h
     crit = no_separation if o.criterion is None else o.criterion
     stop = o.criterion is None if o.stop_at_separation is None else o.stop_at_separation
@@ -660,16 +660,35 @@ def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
         )
 
 
-def _check_trips(case, fault: LineFault) -> None:
-    """A further trip must not name the faulted circuit itself (it would do nothing)."""
+def check_trips(case, fault: LineFault, name: str = "trip") -> None:
+    """Refuse a further trip of the faulted circuit itself (the fault's clearing opens
+    it: the trip would do nothing).
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+        The case.
+    fault : LineFault
+        The fault and its further trips.
+    name : str, optional
+        What a trip is called in the message (the CLI's ``--trip``).
+
+    Raises
+    ------
+    InputError
+        A trip of the faulted circuit, naming `name`, the trip and the fault.
+    CaseError
+        A trip or faulted circuit not in the case.
+    """
     if not fault.trips or fault.far_bus is None:  # a bus fault opens no circuit of its own
         return
     faulted = circuit_row(case, fault.bus, fault.far_bus, fault.circuit)
     for a, b in fault.trips:
         if circuit_row(case, a, b) == faulted:
             raise InputError(
-                f"{fault.describe()}: trip {a}-{b} is the faulted circuit itself; "
-                f"to open both circuits fault circuit 2 and trip circuit 1"
+                f"{name} {a} {b}: {a}-{b} is the faulted circuit itself (line "
+                f"{fault.bus}-{fault.far_bus} circuit {fault.circuit}, which the fault's "
+                "clearing opens); to open both circuits fault circuit 2 and trip circuit 1"
             )
 
 
@@ -953,14 +972,15 @@ T_FAULT_MAX_S = 1000.0
 def read_faults(path: str | Path) -> list[LineFault]:
     """Faults from a CSV file (a strict table, `stabctl.io.inputs.read_csv`, of
     :data:`FAULT_COLUMNS`): bus, far_bus (empty: a bus fault cleared without a trip)
-    [, t_fault (s, default 1, at most T_FAULT_MAX_S)][, circuit (default 1)], one fault
-    per row; an empty t_fault or circuit cell takes the default, as without the column.
+    [, t_fault (s, default 1, at most T_FAULT_MAX_S)][, circuit (default 1; empty in a
+    bus fault's row)], one fault per row; an empty t_fault or circuit cell takes the
+    default, as without the column.
 
     Raises
     ------
     InputError
-        A row or header the table refuses, a value out of range, a fault listed twice;
-        naming file:line.
+        A row or header the table refuses, a value out of range, a circuit given for a
+        bus fault, a fault listed twice; naming file:line.
     """
     faults: dict[LineFault, int] = {}
     for row in read_csv(path, "fault list", *FAULT_COLUMNS):
@@ -977,6 +997,11 @@ def read_faults(path: str | Path) -> list[LineFault]:
 
 def _fault_row(row: CsvRow) -> LineFault:
     far = row.values["far_bus"]
+    if not far and row.values.get("circuit"):
+        raise InputError(
+            f"{row.where()}: circuit {row.values['circuit']} given for a bus fault (far_bus "
+            "empty): a circuit names a line; give its far_bus, or leave circuit empty"
+        )
     return LineFault(
         bus=int(number(row, "bus", 1, _LARGEST_BUS, integer=True)),
         far_bus=int(number(row, "far_bus", 1, _LARGEST_BUS, integer=True)) if far else None,

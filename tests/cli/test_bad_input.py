@@ -886,9 +886,9 @@ def test_a_dyr_file_with_a_byte_order_mark_is_read_as_a_raw_file_is(tmp_path):
 
 def test_a_bus_fault_cct_takes_further_trips(no_simulation):
     """cct --fault 3 --trip 13 101 (no --far-bus) failed with 'bus None is not in case'."""
-    from stabctl.stability.cct import LineFault, _check_trips
+    from stabctl.stability.cct import LineFault, check_trips
 
-    _check_trips(load_case("kundur"), LineFault(3, None, 1.0, trips=((13, 101),)))
+    check_trips(load_case("kundur"), LineFault(3, None, 1.0, trips=((13, 101),)))
 
 
 def test_estimate_track_ends_at_the_first_end_reached_and_refuses_pmu_settings(tmp_path):
@@ -1092,3 +1092,133 @@ def test_a_tcp_source_list_is_written_once_each_server_once(servers, needle, tmp
     res = run("estimate", "track", "kundur", "--source", servers, "--until", 1, "--out", out)
     assert_error(res, f"--source {servers}: {needle}")
     assert not out.exists()
+
+
+# -- numbers as written, options without effect, records named ----------------------------
+
+SWEEP = ("sweep-cct", "kundur", "--workers", 1, "--faults", "f.csv", "--out", "o.jsonl")
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        ((*SWEEP, "--esd-pct", "1_0"), "--esd-pct '1_0': write numbers in ASCII digits"),
+        ((*SWEEP, "--esd-pct", "\uff15"), "--esd-pct '\uff15': write numbers"),
+        ((*SWEEP, "--esd-pct", "none,1_0"), "--esd-pct '1_0': write numbers"),
+        (("screen", "kundur", "--buses", "1_3"), "--buses '1_3': write numbers"),
+        (("screen", "kundur", "--buses", "\uff13"), "--buses '\uff13': write numbers"),
+        ((*PLACE, "--load-levels", "\uff11"), "--load-levels '\uff11': write numbers"),
+        ((*PLACE, "--load-levels", "1_0"), "--load-levels '1_0': write numbers"),
+        ((*PLACE, "--load-levels", "1,inf"), "--load-levels inf: must be a finite number"),
+        ((*PLACE, "--load-levels", "1,1e400"), "--load-levels 1e400: must be a finite number"),
+        (("pmu", "record", "127.0.0.1:\uff19", "--frames", 1, "-o", "r.c37"), "HOST:PORT"),
+        (
+            ("estimate", "track", "kundur", "--source", "tcp://127.0.0.1:\uff19")
+            + ("--until", 1, "--out", "t.csv"),
+            "'127.0.0.1:\uff19' is not HOST:PORT",
+        ),
+    ],
+)
+def test_comma_list_numbers_are_ascii_digits_and_finite(
+    no_simulation, tmp_path, monkeypatch, args, needle
+):
+    """`sweep-cct --esd-pct 1_0` ran at 10 %, `screen --buses 1_3` screened bus 13 and a
+    fullwidth digit was read as its ASCII one; `place --load-levels 1,inf` was refused
+    without naming the option; a PMU port of a fullwidth 9 was port 9."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "f.csv").write_text("bus,far_bus\n3,101\n")
+    assert_error(run(*args), needle)
+    assert [p.name for p in tmp_path.iterdir()] == ["f.csv"]
+
+
+def test_a_time_of_minus_zero_is_zero():
+    """`simulate --t-fault -0` printed a fault 'at -0 s'."""
+    res = run(*FAULT, "--t-fault", "-0", "--tf", 0.3)
+    assert res.exit_code == 0, res.output
+    assert "3-phase fault at bus 3 at 0 s on line 3-101" in res.stdout
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        KUNDUR_SIM + ("--tf", 1),
+        ("cct", "kundur", "--fault", 3, "--far-bus", 101),
+    ],
+)
+def test_single_rate_under_pstess_is_refused(no_simulation, args):
+    """`--single-rate --conventions pstess` ran as without it (the pstess conventions
+    never integrate an exciter in sub-intervals): the same runs, exit 0."""
+    res = run(*args, "--single-rate", "--conventions", "pstess")
+    assert_error(res, "--single-rate given with --conventions pstess")
+
+
+def test_estimate_refuses_both_old_mode_flags(no_simulation):
+    """`estimate CASE --closed-loop --cct` ran the cct study only, --closed-loop dropped."""
+    res = run(
+        "estimate", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", 5,
+        "--closed-loop", "--cct", "--runs", 1,
+    )  # fmt: skip
+    assert_error(res, "--cct and --closed-loop select different subcommands")
+
+
+def test_a_bus_fault_row_with_a_circuit_is_refused(no_simulation, tmp_path):
+    """A fault list row `3,,2` ran as a bus fault recorded as circuit 2, where `cct`
+    refuses --circuit without --far-bus."""
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus,circuit\n3,101,2\n3,,2\n", encoding="utf-8")
+    out = tmp_path / "o.jsonl"
+    res = run("sweep-cct", "kundur", "--workers", 1, "--faults", faults, "--out", out)
+    assert_error(res, "f.csv:3: circuit 2 given for a bus fault (far_bus empty)")
+    assert not out.exists()
+
+
+FIVE = PSSE / "five_bus_v33.raw"
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (
+            ("--static", "--dyr-conventions", "pst"),
+            "--dyr-conventions given without a DYR file",
+        ),
+        (("--static", "--net-unmodelled"), "--net-unmodelled given without a DYR file"),
+        (
+            ("--static", "--leave-out-infeasible"),
+            "--leave-out-infeasible given for a power-flow-only case",
+        ),
+        (("--static", "--loads", "raw"), "--loads given for a power-flow-only case"),
+        (
+            (PSSE / "five_bus.dyr", "--static"),
+            "--static given for five_bus_v33.raw with dynamic data (3 machine(s))",
+        ),
+    ],
+)
+def test_import_psse_refuses_options_without_effect(tmp_path, args, needle):
+    """Each was accepted and changed nothing (exit 0): the DYR conventions or netting
+    without a DYR file, --static with machines, the load model or the infeasible
+    controls of a case without machines."""
+    out = tmp_path / "p.json"
+    dyr = [a for a in args if isinstance(a, Path)]
+    flags = [a for a in args if not isinstance(a, Path)]
+    assert_error(run("import-psse", FIVE, *dyr, "-o", out, *flags), needle)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("args", [("-c", 6, "-c", 6), ("6", "12", "-c", "6.0")])
+def test_omib_refuses_a_duration_given_twice(args):
+    """`omib -c 6 -c 6` printed the 6-cycle row twice."""
+    assert_error(run("omib", *args), "--fault-cycles: 6 given twice")
+
+
+def test_eig_names_areas_above_the_machines(no_simulation):
+    """`eig kundur --areas 5` said 'the number of areas must be between 1 and 4' after
+    linearising, without naming --areas."""
+    assert_error(run("eig", "kundur", "--areas", 5), "--areas 5: case 'kundur' has 4 machine(s)")
+
+
+def test_a_trip_of_the_faulted_circuit_names_trip(no_simulation):
+    """`cct --fault 3 --far-bus 101 --trip 101 3` was refused by the events' check, with
+    the events as Python reprs and no word of --trip."""
+    res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--trip", 101, 3)
+    assert_error(res, "--trip 101 3: 101-3 is the faulted circuit itself (line 3-101 circuit 1")

@@ -64,7 +64,7 @@ def andes_initialised(folder):
 
 def write(tmp_path, text, name="t.dyr"):
     p = tmp_path / name
-    p.write_text(text)
+    p.write_text(text, encoding="utf-8")
     return p
 
 
@@ -436,6 +436,11 @@ def test_gensal_has_no_q_axis_transient_circuit(tmp_path):
         ("\n1 'GENCLS' 1 3.0 x0 /\n", r"t.dyr:2: GENCLS parameter 2 'x0' is not a number"),
         ("1 GENCLS 1 3.0 0.0 /\n", r"t.dyr:1: malformed record"),
         ("B1 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1: GENCLS bus field 'B1' is not an integer"),
+        # float() and int() read 3_0 as 30, 0_2 as 2 and fullwidth digits as ASCII ones
+        ("1 'GENCLS' 1 3_0 0.0 /\n", r"t.dyr:1: GENCLS parameter 1 '3_0' is not a number"),
+        ("1 'GENCLS' 1 \uff13.0 0.0 /\n", r"t.dyr:1: GENCLS parameter 1 '\uff13.0' is not a"),
+        ("0_2 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1: GENCLS bus field '0_2' is not an integer"),
+        ("\uff12 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1: GENCLS bus field '\uff12' is not an"),
     ],
 )
 def test_malformed_records_name_file_and_line(tmp_path, text, message):

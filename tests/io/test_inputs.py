@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 from stabctl.cli import main
 from stabctl.errors import InputError
-from stabctl.io.inputs import input_file, read_csv
+from stabctl.io.inputs import input_file, plain_float, read_csv
 from stabctl.placement.requirements import read_requirements, read_site_costs
 from stabctl.stability.cct import LineFault, read_faults
 
@@ -38,6 +38,8 @@ def _csv(tmp_path, text, name="f.csv", encoding="utf-8"):
         ("bus,far_bus\n3.0,101\n", r"f\.csv:2: bus 3.0 is not an integer \(write it as digits\)"),
         ("bus,far_bus\n3,1.01e2\n", r"f\.csv:2: far_bus 1.01e2 is not an integer"),
         ("bus,far_bus\n0,101\n", r"f\.csv:2: bus 0 is outside"),
+        # a bus fault's row with a circuit ran, recorded as that circuit (cct refuses it)
+        ("bus,far_bus,circuit\n3,,2\n", r"f\.csv:2: circuit 2 given for a bus fault"),
         ("bus,far_bus\n", r"needs a header \(bus,far_bus\[,t_fault\]"),
     ],
 )
@@ -171,3 +173,15 @@ def test_a_plan_whose_file_cannot_be_written_is_still_shown(tmp_path, monkeypatc
     )
     assert res.exit_code == 2 and "No space left on device" in res.stderr
     assert '"verified": true' in res.stdout and not out.exists()
+
+
+def test_plain_float_reads_ascii_numbers_only_and_minus_zero_as_zero():
+    """float() reads 1_0 as 10 and a fullwidth 5 as 5; every hand-parsed number of the
+    readers and options goes through plain_float, which refuses both, reads Fortran's D
+    exponent when asked, and gives -0 as 0 (a fault 'at -0 s' was printed)."""
+    for text in ("1_0", "\uff15", "\u0665", "1.5D0"):
+        with pytest.raises(ValueError):
+            plain_float(text)
+    assert plain_float("1.5D0", fortran=True) == 1.5
+    assert str(plain_float("-0")) == "0.0" and str(plain_float("-0.0e0")) == "0.0"
+    assert plain_float("-2.5e-1") == -0.25

@@ -192,7 +192,7 @@ def test_generators_without_a_machine_model_are_refused_or_netted(tmp_path):
     with pytest.raises(CaseError, match=r"machine 3 \(bus 3, id 2\).*--net-unmodelled"):
         load_psse(V33, dyr)
     with pytest.warns(UserWarning, match="netted 1 generator"):
-        case, left_out, netted, _, _ = import_psse(V33, dyr, unmodelled="net")
+        case, left_out, netted, *_ = import_psse(V33, dyr, unmodelled="net")
     assert left_out == () and netted == (
         "five_bus_v33.raw:19 generator at bus 3 '2': no machine model record in the DYR data",
     )
@@ -221,6 +221,40 @@ def test_records_of_generators_out_of_service_are_ignored(tmp_path):
     dyr = _dyr(tmp_path, (DATA / "five_bus.dyr").read_text(), extra)
     case = load_psse(V33, dyr)
     assert len(case.machines) == 3
+
+
+#: what PSS/E leaves out of the five-bus network, each record named with why
+FIVE_BUS_OFF = (
+    "five_bus_v33.raw:8 bus 5: isolated (IDE 4)",
+    "five_bus_v33.raw:11 load at bus 2 '2': out of service (STATUS 0)",
+    "five_bus_v33.raw:13 load at bus 5 '1': at isolated bus 5 (IDE 4)",
+    "five_bus_v33.raw:20 generator at bus 3 '3': out of service (STAT 0)",
+    "five_bus_v33.raw:23 branch 1-2 '2': out of service (ST 0)",
+)
+
+
+def test_records_out_of_the_network_are_named(tmp_path):
+    """The import reported nothing left out while it dropped isolated bus 5 with its
+    load, the load, branch and generator out of service and the DYR record of that
+    generator: each is named with why, in a warning, `PsseImport.out_of_service` and
+    the CLI's summary (JSON `out_of_service`), and still left out, as PSS/E does."""
+    extra = f"3 'GENROU' 3 {_GENROU.format(H=2.0)}"
+    dyr = _dyr(tmp_path, (DATA / "five_bus.dyr").read_text(), extra)
+    named = (
+        *FIVE_BUS_OFF,
+        "edited.dyr:6 GENROU (bus 3, id 3): its generator is out of the network (out of "
+        "service or at an isolated bus)",
+    )
+    with pytest.warns(UserWarning, match=r"left out 6 record\(s\) out of the network"):
+        imported = import_psse(V33, dyr)
+    assert imported.out_of_service == named and imported.left_out == ()
+    assert read_raw(V33).switched_off[0].line == 8
+    res = run("import-psse", V33, dyr, "-o", tmp_path / "x.json", "--json")
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["out_of_service"] == list(named)
+    res = run("import-psse", V33, dyr, "-o", tmp_path / "x.json")
+    assert f"  out of the network: {FIVE_BUS_OFF[3]}" in res.stdout
+    assert "6 out of the network (as PSS/E)" in res.stdout
 
 
 def test_magnetizing_admittance_is_a_shunt_at_the_winding_1_bus(tmp_path):
@@ -357,10 +391,10 @@ def test_three_winding_solves_as_its_star_of_two_winding_transformers(tmp_path):
 
 
 def _edit(tmp_path, old, new, src=V33):
-    text = src.read_text()
+    text = src.read_text(encoding="utf-8")
     assert old in text
     path = tmp_path / "edited.raw"
-    path.write_text(text.replace(old, new, 1))
+    path.write_text(text.replace(old, new, 1), encoding="utf-8")
     return path
 
 
@@ -373,6 +407,15 @@ def test_malformed_number_names_file_line_and_record(tmp_path):
         "  0.00000,  0.00000,  0.00000,  0.00000,1,1",
     )
     with pytest.raises(CaseError, match=r"edited\.raw:22 branch record: field 5 '1\.0O000E-1'"):
+        read_raw(path)
+
+
+@pytest.mark.parametrize("value", ["4_0.000", "\uff14\uff10.000"])
+def test_a_raw_number_is_written_in_ascii_digits(tmp_path, value):
+    """float() read a load's PL 4_0.000 as 40 MW, and fullwidth digits as ASCII ones."""
+    load = "    4,'1 ',1,   1,   1,    "
+    path = _edit(tmp_path, f"{load}40.000", f"{load}{value}")
+    with pytest.raises(CaseError, match=rf"edited\.raw:12 load record: field 6 '{value}' is not"):
         read_raw(path)
 
 
@@ -458,11 +501,12 @@ def test_two_iregs_at_one_bus_are_unsupported(tmp_path):
 
 def test_import_psse_writes_a_case_that_reads_back(tmp_path):
     out = tmp_path / "five.json"
-    res = run("import-psse", V34, "-o", out, "--json", "--loads", "raw", "--static")
+    dyr = DATA / "five_bus.dyr"
+    res = run("import-psse", V34, dyr, "-o", out, "--json", "--loads", "raw")
     assert res.exit_code == 0, res.output
     summary = json.loads(res.stdout)
     assert (summary["buses"], summary["branches"], summary["nonconforming_loads"]) == (4, 4, 2)
-    assert load_case(out).equals(load_psse(V34, loads="raw"))
+    assert load_case(out).equals(load_psse(V34, dyr, loads="raw"))
 
 
 def test_import_psse_without_dyr_is_refused_unless_static(tmp_path):
@@ -666,9 +710,7 @@ def test_an_unsupported_machine_record_is_named_not_called_missing(tmp_path):
     with pytest.raises(CaseError, match=r"1 unsupported record\(s\).*edited\.dyr:3 GENTPJ1"):
         import_psse(V33, dyr, unmodelled="net")
     with pytest.warns(UserWarning):
-        case, left_out, netted, _, _ = import_psse(
-            V33, dyr, on_unsupported="skip", unmodelled="net"
-        )
+        case, left_out, netted, *_ = import_psse(V33, dyr, on_unsupported="skip", unmodelled="net")
     assert left_out == (
         "edited.dyr:3 GENTPJ1 at bus 3 '2': generator model not supported by stabctl (yet)",
     )
