@@ -14,6 +14,7 @@ change of VREF and of PREF, the PSS/E Program Operation Manual's ``change_vref``
 
 from __future__ import annotations
 
+import re
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -26,6 +27,22 @@ from stabctl.network.ybus import circuit_row
 
 class _AtOneTime:
     """An event that happens at one instant ``self.t`` (s)."""
+
+    def __str__(self) -> str:
+        """The event in words for messages, e.g. ``line trip 3-101 (circuit 1) at 1 s``."""
+        kind = re.sub(r"(?<!^)(?=[A-Z])", " ", type(self).__name__).lower()
+        f = {k: v for k, v in vars(self).items() if k != "t"}
+        if "from_bus" in f:
+            what = f"{f.pop('from_bus')}-{f.pop('to_bus')}"
+            f = {"circuit": f.pop("circuit", 1), **f}
+        else:
+            what = ""
+        detail = ", ".join(
+            f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in f.items()
+        )
+        return " ".join(
+            t for t in (kind, what, f"({detail})" if detail else "", f"at {self.t:g} s") if t
+        )
 
     def times(self):
         """The event's times.
@@ -107,6 +124,19 @@ class Fault:
     def far_clear(self):
         """Far-end clearing time (s): `clear_far`, or `clear_near` when that is None."""
         return self.clear_near if self.clear_far is None else self.clear_far
+
+    def __str__(self) -> str:
+        """The fault in words for messages, e.g. ``fault at bus 3 on line 3-101 at 1 s,
+        cleared at 1.1 s``."""
+        line = "" if self.far_bus is None else f" on line {self.bus}-{self.far_bus}"
+        if self.far_bus is not None and self.circuit != 1:
+            line += f" (circuit {self.circuit})"
+        if self.clear_near is None:
+            return f"fault at bus {self.bus}{line} at {self.t:g} s, never cleared"
+        far = "" if self.far_clear == self.clear_near else f", far end at {self.far_clear:g} s"
+        return (
+            f"fault at bus {self.bus}{line} at {self.t:g} s, cleared at {self.clear_near:g} s{far}"
+        )
 
 
 @dataclass(frozen=True)

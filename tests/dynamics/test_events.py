@@ -131,3 +131,19 @@ def test_line_switchings_must_alternate(kundur, events, needle):
         return
     with pytest.raises(InputError, match=needle):
         kundur.run(events, t_end=2.5)
+
+
+def test_events_read_as_words_in_messages():
+    """A message naming events shows them as a planner writes them, not as Python
+    reprs: a line trip, a generator trip and a fault with its clearing."""
+    from stabctl.dynamics.events import Fault, GeneratorTrip, LineTrip
+
+    assert str(LineTrip(3, 101, 1.0)) == "line trip 3-101 (circuit 1) at 1 s"
+    assert str(GeneratorTrip(2, 1.5)) == "generator trip (machine 2) at 1.5 s"
+    assert str(Fault(3, 1.0, 1.1, far_bus=101)) == (
+        "fault at bus 3 on line 3-101 at 1 s, cleared at 1.1 s"
+    )
+    assert str(Fault(7, 1.0)) == "fault at bus 7 at 1 s, never cleared"
+    assert str(Fault(3, 1.0, 1.1, 1.15, far_bus=101, circuit=2)) == (
+        "fault at bus 3 on line 3-101 (circuit 2) at 1 s, cleared at 1.1 s, far end at 1.15 s"
+    )
