@@ -486,7 +486,7 @@ class MachineTable(Table):
         0): its internal voltage E' and angle delta stay at their initial values, its speed at
         1 pu; where a case holds infinite buses they are its centre of inertia
         (:func:`stabctl.dynamics.coi.coi_inertia`).
-        Validation: unique positive integer machine numbers, mva > 0, H > 0 (or 0 for a
+        Validation: unique positive integer machine numbers, mva > 0, D0 >= 0, H > 0 (or 0 for a
         classical machine with x'd > 0), reactances and
         ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), x_d >= x'd >= x"d (where given),
         speed_effects and psse_swing 0 or 1, psse_sat 0 to 4.

@@ -267,6 +267,79 @@ def test_case_file_without_tables_or_bases_names_what_is_missing(tmp_path):
         load_case(path)
 
 
+def _drop(d, table, column):
+    """The case dict ``d`` without ``column`` of ``table``."""
+    t = d["tables"][table]
+    k = t["columns"].index(column)
+    t["columns"].pop(k)
+    for row in t["rows"]:
+        row.pop(k)
+    return d
+
+
+@pytest.mark.parametrize(
+    "edit,where",
+    [
+        # x_d left out ran with x_d = 0 (a classical machine): 0.7145 rad, not 0.7480
+        (lambda d: _drop(d, "machines", "xd"), "table 'mac_con' has no column(s) ['xd']"),
+        (lambda d: _drop(d, "governors", "invR"), "table 'tg_con' has no column(s) ['invR']"),
+        (lambda d: _drop(d, "pss", "T1"), "table 'pss_con' has no column(s) ['T1']"),
+        # K_A left out stopped the run with "initial point is not an equilibrium ... nan"
+        (lambda d: _drop(d, "exciters", "KA"), "table 'exc_con' has no column(s) ['KA']"),
+        (
+            lambda d: d["tables"]["machines"].update(units="pu"),
+            "table 'mac_con' has unknown key(s) ['units']",
+        ),
+        (lambda d: d["extra"].update(foo=[[1.0]]), "extra: unknown matrix 'foo'"),
+        (
+            lambda d: _set(d, "machines", "D0", -50.0),
+            "mac_con row 1 (machine 1), field 'D0': must be >= 0, got -50",
+        ),
+    ],
+)
+def test_case_file_columns_keys_and_values_the_model_cannot_take_are_refused(tmp_path, edit, where):
+    """A column the model needs left out of a case file ran with 0 in its place, a key
+    stabctl does not read was ignored and a negative damping ran: each refused by
+    simulate, eig and cases, naming the file, the table and the column, key or value."""
+    d = _kundur_dict()
+    edit(d)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(d))
+    for args in (
+        ("simulate", path, "--fault", 3, "--far-bus", 101, "--tf", 1.5),
+        ("eig", path),
+        ("cases", path),
+    ):
+        assert_error(run(*args), f"bad.json: {where}")
+
+
+def test_case_file_columns_left_to_their_defaults_are_named(tmp_path):
+    """A column after the ones every row needs may be left out of a case file: it takes
+    its documented default, named in a warning."""
+    path = tmp_path / "short.json"
+    path.write_text(json.dumps(_drop(_drop(_kundur_dict(), "machines", "pfrac"), "machines", "D1")))
+    with pytest.warns(
+        UserWarning,
+        match=r"short.json: table 'mac_con' gives no column\(s\) D1, pfrac: taken at their "
+        r"defaults \(D1 = 0; pfrac = 1\)",
+    ):
+        case = load_case(path)
+    assert case.machines.pfrac.tolist() == [1.0] * 4 and not case.machines.D1.any()
+
+
+def test_a_pst_file_s_working_variables_are_left_out_by_name(tmp_path):
+    """A PST data file's variables that are no data matrix (its script's own) were kept
+    in the case's extra matrices, which a case file then refused: left out, named."""
+    path = tmp_path / "tiny.m"
+    path.write_text(
+        "basmva = 100;\nsys_freq = 60;\nbus = [1 1 0 0 0 0 0 0 0 1; 2 1 0 0 0 0.5 0.1 0 0 3];\n"
+        "line = [1 2 0 0.1 0 1 0 0 0 0];\nlmod_con = [1 2 100 1 0 1 0];\ntmp_ud1 = [1 2];\n"
+    )
+    with pytest.warns(UserWarning, match="tiny: variable.s. tmp_ud1 left out"):
+        case = load_case(path)
+    assert list(case.extra) == ["lmod_con"]
+
+
 def test_pst_file_without_bases_names_the_defaults(tmp_path):
     path = tmp_path / "tiny.m"
     path.write_text(
