@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING, ClassVar, Self
 
 import numpy as np
 
+from stabctl.case.events import events_of_records
 from stabctl.errors import CaseError, UnknownBusError
 from stabctl.models.converters import CONVERTER, ESD1, REGCA1
 from stabctl.models.declaration import Family, array_dataclass, choices_message
@@ -969,9 +970,10 @@ class Case:
     events : tuple of dict
         The case's own disturbance as imported (ANDES's Toggle, Fault and Alter records,
         `stabctl.io.andes_case`): each a dict with ``kind`` (the name of a
-        `stabctl.dynamics.events` class), that class's fields (s, pu on the system base,
+        `stabctl.case.events` class), that class's fields (s, pu on the system base,
         bus and machine numbers as in the data) and ``source`` (the record it came from);
-        `stabctl.dynamics.events.from_case` makes them events.  Empty by default.
+        `stabctl.case.events.events_of_records` makes them events (a record it cannot
+        make one of is refused when the case is made).  Empty by default.
     extra : Mapping[str, numpy.ndarray]
         Other PST matrices of the data file kept as given (``lmod_con``, ``PDC``, ...),
         name -> read-only 2-D float array (units as in the file).
@@ -985,7 +987,7 @@ class Case:
     CaseError
         On construction: bus numbers referenced but not in ``buses`` (branches, machines,
         loads, injections, converters), controllers on machines not in ``machines``, no swing bus, a
-        malformed ``sw_con``, an event record without a string ``kind``, a table of the
+        malformed ``sw_con``, a malformed event record, a table of the
         wrong class, or a non-positive base or
         frequency.
     """
@@ -1294,14 +1296,11 @@ class Case:
 
 
 def _check_events(events) -> tuple:
-    """The event records as a tuple of dicts; CaseError for one that is not a mapping
-    with a string ``kind``."""
-    out = []
-    for k, rec in enumerate(events or ()):
-        if not isinstance(rec, Mapping) or not isinstance(rec.get("kind"), str):
-            raise CaseError(f"events[{k}]: not a record with a 'kind' (an event class name)")
-        out.append(dict(rec))
-    return tuple(out)
+    """The event records as a tuple of dicts; CaseError for a malformed one
+    (`stabctl.case.events.events_of_records`)."""
+    records = tuple(events or ())
+    events_of_records(records)
+    return tuple(dict(rec) for rec in records)
 
 
 def _check_sw_con(sw) -> np.ndarray | None:
