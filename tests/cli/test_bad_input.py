@@ -340,6 +340,29 @@ def test_a_pst_file_s_working_variables_are_left_out_by_name(tmp_path):
     assert list(case.extra) == ["lmod_con"]
 
 
+def test_the_case_s_own_disturbance_a_run_cannot_take_is_refused(tmp_path, no_simulation):
+    """--pstess-default with a --tf before the data file's clearing printed the fault as
+    cleared and the run stable, and --case-events on a case without events ran flat:
+    each refused before any work, naming the event or the case and the option."""
+    assert_error(
+        run("simulate", "kundur", "--pstess-default", "--tf", 0.12),
+        "cleared at 0.15 s",
+        "ends at or after the end of the run (--tf 0.12 s); it is the case's own",
+    )
+    assert_error(
+        run("simulate", "kundur", "--case-events", "--tf", 1),
+        "--case-events: case kundur has no events of its own; give --fault",
+    )
+    d = _kundur_dict()
+    d["sw_con"] = None
+    path = tmp_path / "no_sw.json"
+    path.write_text(json.dumps(d))
+    assert_error(
+        run("simulate", path, "--pstess-default", "--tf", 1),
+        "--pstess-default: case kundur has no PST sw_con disturbance",
+    )
+
+
 def test_pst_file_without_bases_names_the_defaults(tmp_path):
     path = tmp_path / "tiny.m"
     path.write_text(
