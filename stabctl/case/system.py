@@ -31,6 +31,8 @@ table, the row (1-based, with its bus or machine number) and the field.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -1259,6 +1261,28 @@ class Case:
             A name is not a field of :class:`Case`.
         """
         return dataclasses.replace(self, **changes)
+
+    def digest(self) -> str:
+        """A digest of the data a run of the case reads, to tell whether records made
+        from a case were made from this content (`stabctl.parallel`).
+
+        Returns
+        -------
+        str
+            16 hex digits of the SHA-256 of the bases, every table (its columns, shape
+            and float64 values), ``sw_con`` and the event records; the name,
+            description, source and ``extra`` (read by no run) are not part of it.
+        """
+        h = hashlib.sha256(json.dumps([self.base_mva, self.freq_hz]).encode())
+        for name in TABLES:
+            table = getattr(self, name)
+            mat = np.ascontiguousarray(table.matrix(), dtype="<f8")
+            h.update(json.dumps([name, table.columns(), mat.shape]).encode())
+            h.update(mat.tobytes())
+        sw = np.zeros((0, 7)) if self.sw_con is None else self.sw_con
+        h.update(np.ascontiguousarray(sw, dtype="<f8").tobytes())
+        h.update(json.dumps(self.events, sort_keys=True).encode())
+        return h.hexdigest()[:16]
 
     def equals(self, other: Case) -> bool:
         """Compare two cases value by value.

@@ -759,6 +759,26 @@ def test_records_files_are_read_in_bounded_lines_and_whole_records_only(tmp_path
     assert res.exit_code == 2 and "no fault bracketed without storage" in res.output, res.output
 
 
+def test_screening_records_of_another_case_or_content_are_refused(tmp_path, no_simulation):
+    """place kundur --screening of a miniWECC screening took its brackets as kundur's
+    (and a screening of a case file edited since as the file's): refused before any work,
+    naming the file, the line and the case the record belongs to."""
+    fault = {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1, "trips": []}
+    result = {"fault": fault, "t_stable_s": 0.155, "t_unstable_s": 0.16}
+    args = ["place", "kundur", "--faults", "DEFAULT", "--workers", "1", "--target-cct-gain", "5"]
+    for case, digest, needle in (
+        ("miniwecc", "0123456789abcdef", "was run on case 'miniwecc', not on this run's (kundur)"),
+        ("kundur", "0123456789abcdef", "was run on case 'kundur' as it was then: its content"),
+    ):
+        rec = {"key": f"{case}/3-101/t1/esd-none", "status": "ok", "result": result}
+        rec["inputs"] = {"case": case, "case_digest": digest, **fault, "esd_pct": None}
+        screening = tmp_path / "s.jsonl"
+        screening.write_text(json.dumps(rec) + "\n")
+        assert_error(
+            run(*args, "--screening", screening), f"{screening} line 1: job {rec['key']} ", needle
+        )
+
+
 PLACE = ("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "5")
 
 
