@@ -779,6 +779,38 @@ def test_screening_records_of_another_case_or_content_are_refused(tmp_path, no_s
         )
 
 
+@pytest.mark.parametrize(
+    "requirement,needle",
+    [
+        (
+            ("--target-cct-s", "0.35", "--t-max", "0.3"),
+            "its target CCT 0.350 s (CCT 350 ms) is at or above the CCT search limit "
+            "t_max = 0.3 s (--t-max)",
+        ),
+        (
+            ("--target-cct-gain", "50", "--t-max", "0.2"),
+            "its target CCT 0.225 s (CCT +50 %, its CCT without storage 0.150 s) is at or "
+            "above the CCT search limit t_max = 0.2 s (--t-max)",
+        ),
+    ],
+)
+def test_a_target_the_search_limit_bounds_is_refused_not_called_infeasible(
+    tmp_path, requirement, needle
+):
+    """place with a target at or above --t-max said the fault was infeasible, reaching a
+    CCT of only --t-max with every site at its bound: the search limit, not the storage,
+    bounded it.  Refused naming the contingency, its target and --t-max."""
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    args = ["place", "kundur", "--faults", faults, "--workers", "1", "--tol-ms", "5"]
+    res = run(*args, *requirement)
+    assert res.exit_code == 2, res.output
+    assert "infeasible" not in res.stderr, res.stderr
+    assert f"error: contingency 3-101 (fault at bus 3 on line 3-101 at 1 s): {needle}" in (
+        res.stderr
+    )
+
+
 PLACE = ("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "5")
 
 
