@@ -16,6 +16,9 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
+from numbers import Real
+
+import numpy as np
 
 from stabctl.errors import CaseError
 
@@ -419,9 +422,10 @@ _KIND_TEXT = {
 
 
 def _fits(annotation: str, value) -> bool:
-    """Whether ``value`` (as read from JSON) is of the kind ``annotation`` names."""
-    if value is None or isinstance(value, bool):
+    """Whether ``value`` (as read from JSON, or a numpy scalar as an importer makes it)
+    is of the kind ``annotation`` names."""
+    if value is None or isinstance(value, (bool, np.bool_)):
         return ("None" in annotation) if value is None else annotation == "bool"
-    if not isinstance(value, (int, float)) or not math.isfinite(value):
+    if not isinstance(value, Real) or not math.isfinite(value):
         return False
     return "float" in annotation or float(value).is_integer()
