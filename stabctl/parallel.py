@@ -662,8 +662,12 @@ def write_reproducible(src: str | Path, dst: str | Path) -> dict:
 
 def _check_jobs(jobs, done: dict, out: Path) -> None:
     """InputError for a key given twice, a job `out` holds with other inputs, or a record
-    of `out` run on a case none of `jobs` runs on (`_foreign_case`)."""
-    _foreign_case(jobs, out)
+    of `out` run on a case none of `jobs` runs on or on other content of one of their
+    cases (`check_records_case`)."""
+    if out.exists():
+        cases = {j.inputs.get("case"): j.inputs.get("case_digest") for j in jobs}
+        if cases and None not in cases:  # jobs without a case input are not checked
+            check_records_case(out, cases, "give another output file (--out)")
     seen = set()
     for j in jobs:
         if j.key in seen:
@@ -677,24 +681,53 @@ def _check_jobs(jobs, done: dict, out: Path) -> None:
             )
 
 
-def _foreign_case(jobs, out: Path) -> None:
-    """InputError naming the first record of `out` (its line) whose inputs name a
-    ``case`` that none of `jobs` runs on: the records of another case's sweep or screen
-    (a resume into the wrong file would keep them beside this run's, and a reader of the
-    file take them for its own).  Jobs without a ``case`` input are not checked."""
-    cases = {j.inputs.get("case") for j in jobs}
-    if not cases or None in cases or not out.exists():
-        return
-    for n, _, rec in _record_lines(out):
+def check_records_case(path: str | Path, cases: Mapping, remedy: str) -> None:
+    """Refuse records of another case, or of other content of the case, in a records file.
+
+    A record's inputs name its ``case`` (a built-in name or a case file) and
+    ``case_digest``, the digest of the case's content it was run on
+    (`stabctl.case.Case.digest`): a resumed sweep would keep records of another case
+    beside its own, or keep the results of a case file edited since as those of its new
+    content.  Records without a ``case`` input are not checked.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The records file (JSON lines, `run_sweep`'s output).
+    cases : Mapping
+        Case input -> its content's digest (None: its digest is not checked).
+    remedy : str
+        What the user does instead, ending each message.
+
+    Raises
+    ------
+    InputError
+        Naming the file, the line and job of the first record run on a case not in
+        `cases`, or on one whose digest differs from the given (the case changed since,
+        or the record has none: made before records carried it).
+    """
+    for n, _, rec in _record_lines(Path(path)):
         inputs = (rec or {}).get("inputs")
-        case = inputs.get("case") if isinstance(inputs, dict) else None
-        if rec is not None and case is not None and case not in cases:
+        if rec is None or not isinstance(inputs, dict) or inputs.get("case") is None:
+            continue
+        case = inputs["case"]
+        where = f"{path} line {n}: job {rec['key']} was run on case {case!r}"
+        if case not in cases:
             mine = ", ".join(sorted(map(str, cases)))
             raise InputError(
-                f"{out} line {n}: job {rec['key']} was run on case {case!r}, not on this "
-                f"run's ({mine}): the file holds another case's records; give another "
-                "output file"
+                f"{where}, not on this run's ({mine}): the file holds another case's "
+                f"records; {remedy}"
             )
+        old = inputs.get("case_digest")
+        if cases[case] is not None and old != cases[case]:
+            why = (
+                "before records carried the digest of a case's content: whether the case "
+                "changed since cannot be told"
+                if old is None
+                else f"as it was then: its content has changed since (digest {old} there, "
+                f"{cases[case]} now)"
+            )
+            raise InputError(f"{where} {why}; {remedy}")
 
 
 def _differences(old: dict, new: Mapping) -> str:

@@ -1025,6 +1025,50 @@ def test_a_record_of_another_case_is_refused_naming_its_line(tmp_path):
     assert out.read_text() == before
 
 
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("sweep-cct", "case.json", "--faults", "f.csv"),
+        ("screen", "case.json", "--buses", "3"),
+    ],
+)
+def test_records_of_a_case_file_edited_since_are_refused(tmp_path, monkeypatch, command):
+    """sweep-cct and screen of a case file, the file edited (every H doubled), the same
+    command again: the records were keyed by the file's name, so the rerun said its job
+    was already there and kept the old CCT.  Each job records the digest of the case's
+    content: refused, naming the file, the line, the job, the case and that it changed,
+    the records left as they were; records without a digest are refused likewise."""
+    from stabctl.io import load_case
+    from stabctl.io.pst import write_case_json
+
+    monkeypatch.chdir(tmp_path)
+    kundur = load_case("kundur")
+    write_case_json(kundur, "case.json")
+    (tmp_path / "f.csv").write_text("bus,far_bus\n3,101\n")
+    args = (*command, "--workers", 1, "--tol-ms", 20, "--out", "o.jsonl")
+    assert run(*args).exit_code == 0
+    before = (tmp_path / "o.jsonl").read_text()
+    first = json.loads(before.splitlines()[0])
+    assert first["inputs"]["case_digest"] == kundur.digest()
+    write_case_json(
+        kundur.replace(machines=kundur.machines.replace(H=2 * kundur.machines.H)), "case.json"
+    )
+    res = run(*args)
+    assert res.exit_code == 2 and res.stdout == "", res.output
+    assert (
+        f"error: o.jsonl line 1: job {first['key']} was run on case 'case.json' as it was "
+        f"then: its content has changed since (digest {kundur.digest()} there, "
+    ) in res.stderr
+    assert "give another output file (--out)" in res.stderr
+    assert (tmp_path / "o.jsonl").read_text() == before
+    write_case_json(kundur, "case.json")
+    del first["inputs"]["case_digest"]
+    (tmp_path / "o.jsonl").write_text(json.dumps(first) + "\n")
+    res = run(*args)
+    assert res.exit_code == 2, res.output
+    assert "line 1: job" in res.stderr and "before records carried the digest" in res.stderr
+
+
 def test_a_stopped_pool_leaves_no_worker_behind():
     """An interrupted sweep's pool (`stop_pool`) kills its running workers and reaps
     them before the sweep exits: none is left, not even as a zombie."""

@@ -31,6 +31,8 @@ table, the row (1-based, with its bus or machine number) and the field.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,6 +41,7 @@ from typing import TYPE_CHECKING, ClassVar, Self
 
 import numpy as np
 
+from stabctl.case.events import events_of_records
 from stabctl.errors import CaseError, UnknownBusError
 from stabctl.models.converters import CONVERTER, ESD1, REGCA1
 from stabctl.models.declaration import Family, array_dataclass, choices_message
@@ -486,7 +489,7 @@ class MachineTable(Table):
         0): its internal voltage E' and angle delta stay at their initial values, its speed at
         1 pu; where a case holds infinite buses they are its centre of inertia
         (:func:`stabctl.dynamics.coi.coi_inertia`).
-        Validation: unique positive integer machine numbers, mva > 0, H > 0 (or 0 for a
+        Validation: unique positive integer machine numbers, mva > 0, D0 >= 0, H > 0 (or 0 for a
         classical machine with x'd > 0), reactances and
         ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), x_d >= x'd >= x"d (where given),
         speed_effects and psse_swing 0 or 1, psse_sat 0 to 4.
@@ -969,9 +972,10 @@ class Case:
     events : tuple of dict
         The case's own disturbance as imported (ANDES's Toggle, Fault and Alter records,
         `stabctl.io.andes_case`): each a dict with ``kind`` (the name of a
-        `stabctl.dynamics.events` class), that class's fields (s, pu on the system base,
+        `stabctl.case.events` class), that class's fields (s, pu on the system base,
         bus and machine numbers as in the data) and ``source`` (the record it came from);
-        `stabctl.dynamics.events.from_case` makes them events.  Empty by default.
+        `stabctl.case.events.events_of_records` makes them events (a record it cannot
+        make one of is refused when the case is made).  Empty by default.
     extra : Mapping[str, numpy.ndarray]
         Other PST matrices of the data file kept as given (``lmod_con``, ``PDC``, ...),
         name -> read-only 2-D float array (units as in the file).
@@ -985,7 +989,7 @@ class Case:
     CaseError
         On construction: bus numbers referenced but not in ``buses`` (branches, machines,
         loads, injections, converters), controllers on machines not in ``machines``, no swing bus, a
-        malformed ``sw_con``, an event record without a string ``kind``, a table of the
+        malformed ``sw_con``, a malformed event record, a table of the
         wrong class, or a non-positive base or
         frequency.
     """
@@ -1258,6 +1262,28 @@ class Case:
         """
         return dataclasses.replace(self, **changes)
 
+    def digest(self) -> str:
+        """A digest of the data a run of the case reads, to tell whether records made
+        from a case were made from this content (`stabctl.parallel`).
+
+        Returns
+        -------
+        str
+            16 hex digits of the SHA-256 of the bases, every table (its columns, shape
+            and float64 values), ``sw_con`` and the event records; the name,
+            description, source and ``extra`` (read by no run) are not part of it.
+        """
+        h = hashlib.sha256(json.dumps([self.base_mva, self.freq_hz]).encode())
+        for name in TABLES:
+            table = getattr(self, name)
+            mat = np.ascontiguousarray(table.matrix(), dtype="<f8")
+            h.update(json.dumps([name, table.columns(), mat.shape]).encode())
+            h.update(mat.tobytes())
+        sw = np.zeros((0, 7)) if self.sw_con is None else self.sw_con
+        h.update(np.ascontiguousarray(sw, dtype="<f8").tobytes())
+        h.update(json.dumps(self.events, sort_keys=True).encode())
+        return h.hexdigest()[:16]
+
     def equals(self, other: Case) -> bool:
         """Compare two cases value by value.
 
@@ -1294,14 +1320,11 @@ class Case:
 
 
 def _check_events(events) -> tuple:
-    """The event records as a tuple of dicts; CaseError for one that is not a mapping
-    with a string ``kind``."""
-    out = []
-    for k, rec in enumerate(events or ()):
-        if not isinstance(rec, Mapping) or not isinstance(rec.get("kind"), str):
-            raise CaseError(f"events[{k}]: not a record with a 'kind' (an event class name)")
-        out.append(dict(rec))
-    return tuple(out)
+    """The event records as a tuple of dicts; CaseError for a malformed one
+    (`stabctl.case.events.events_of_records`)."""
+    records = tuple(events or ())
+    events_of_records(records)
+    return tuple(dict(rec) for rec in records)
 
 
 def _check_sw_con(sw) -> np.ndarray | None:

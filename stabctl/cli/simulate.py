@@ -112,6 +112,16 @@ def _build_events(
 ):
     from stabctl.dynamics.events import LineTrip, fault_with_clearing, from_case, from_sw_con
 
+    if case_events and not case.events:
+        raise InputError(
+            f"--case-events: case {case.name} has no events of its own; give --fault, "
+            "--trip, --bus-fault, ... (a PST data file's sw_con runs with --pstess-default)"
+        )
+    if pstess_default and case.sw_con is None:
+        raise InputError(
+            f"--pstess-default: case {case.name} has no PST sw_con disturbance of its own; "
+            "give --fault, --trip, --bus-fault, ..."
+        )
     own = list(from_sw_con(case)) if pstess_default else []
     if case_events:
         own += from_case(case)
@@ -155,6 +165,22 @@ def _build_events(
     elif t_trips:
         raise InputError("--t-trip given without --trip")
     return own, events
+
+
+def _check_ends(own: list, given: list, tf: float) -> None:
+    """InputError naming the first event, the case's own (``own``) or the options'
+    (``given``), that changes the network again at or after the run's end ``tf`` (a
+    clearing the run would never reach, while its summary called the fault cleared)."""
+    for events, hint in (
+        (own, "it is the case's own (--pstess-default, --case-events): lengthen --tf"),
+        (given, "lengthen --tf, or give T_OFF inf to --bus-fault for a fault never cleared"),
+    ):
+        cut = [e for e in events if any(tf <= t < math.inf for t in e.times())]
+        if cut:
+            raise InputError(
+                f"{describe_event(cut[0])}: ends at or after the end of the run "
+                f"(--tf {tf:g} s); {hint}"
+            )
 
 
 @click.command()
@@ -400,12 +426,7 @@ def simulate(
         raise InputError(
             f"{describe_event(late[0])}: starts at or after the end of the run (--tf {tf:g} s)"
         )
-    cut = [e for e in given if any(tf <= t < math.inf for t in e.times())]
-    if cut:  # a clearing the run would never reach (a case's own may end beyond --tf)
-        raise InputError(
-            f"{describe_event(cut[0])}: ends at or after the end of the run (--tf {tf:g} s); "
-            "lengthen --tf, or give T_OFF inf to --bus-fault for a fault never cleared"
-        )
+    _check_ends(own, given, tf)
     if step is not None:
         check_step_count(tf, step, case)  # refused before any work (building the model)
     check_storage_given(esd_pct)

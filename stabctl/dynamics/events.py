@@ -14,326 +14,26 @@ change of VREF and of PREF, the PSS/E Program Operation Manual's ``change_vref``
 
 from __future__ import annotations
 
-import re
-from dataclasses import asdict, dataclass
-
 import numpy as np
 
 from stabctl.case import Case
-from stabctl.dynamics.model import FAULT_B, StageConfig
+from stabctl.case.events import EVENT_KINDS as EVENT_KINDS
+from stabctl.case.events import (
+    Fault,
+    GeneratorTrip,
+    LineClose,
+    LineTrip,
+    LoadStep,
+    MotorSwitch,
+    Playback,
+    PrefStep,
+    VrefStep,
+    events_of_records,
+)
+from stabctl.case.events import as_record as as_record
+from stabctl.dynamics.model import StageConfig
 from stabctl.errors import CaseError, InputError
 from stabctl.network.ybus import circuit_row
-
-
-class _AtOneTime:
-    """An event that happens at one instant ``self.t`` (s)."""
-
-    def __str__(self) -> str:
-        """The event in words for messages, e.g. ``line trip 3-101 (circuit 1) at 1 s``."""
-        kind = re.sub(r"(?<!^)(?=[A-Z])", " ", type(self).__name__).lower()
-        f = {k: v for k, v in vars(self).items() if k != "t"}
-        if "from_bus" in f:
-            what = f"{f.pop('from_bus')}-{f.pop('to_bus')}"
-            f = {"circuit": f.pop("circuit", 1), **f}
-        else:
-            what = ""
-        detail = ", ".join(
-            f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in f.items()
-        )
-        return " ".join(
-            t for t in (kind, what, f"({detail})" if detail else "", f"at {self.t:g} s") if t
-        )
-
-    def times(self):
-        """The event's times.
-
-        Returns
-        -------
-        list of float
-            ``[t]``, s.
-        """
-        return [self.t]
-
-
-@dataclass(frozen=True)
-class Fault:
-    """Three-phase fault at `bus` from `t`, cleared as PST's ``sw_con`` sequence
-    (``y_switch.m``, PST manual section 2.5).
-
-    At `clear_near` the faulted circuit opens at the near end (`bus`), the far end still
-    feeding the fault through it; at `clear_far` it opens at the far end too and the fault is
-    gone, the circuit staying out (a line opened as PST: reactance 1e7 pu; its charging
-    kept under pstess, removed under ieee):
-    PST's fault type 0.  With equal near and far times the zero-length interval between
-    the two openings is kept, as PSTess does.  The times are checked against the case when the
-    run starts (`Simulator.run`): InputError for a clearing before the fault or a far end
-    before the near end, CaseError / UnknownBusError for an unknown bus or line.
-
-    Attributes
-    ----------
-    bus : int
-        Faulted bus number (as in the data; the near end of the faulted line).
-    t : float
-        Fault start, s (absolute run time, >= 0).
-    clear_near : float or None, optional
-        Absolute time the near end clears, s (>= `t`); None (default): never cleared.
-    clear_far : float or None, optional
-        Absolute time the far end clears, s (>= `clear_near`); None (default): with the
-        near end.
-    far_bus : int or None, optional
-        Bus number of the far end of the faulted line, tripped at clearing; None (default):
-        the fault is cleared at `clear_near` without loss of a line.
-    circuit : int, optional
-        Which of the parallel circuits between `bus` and `far_bus` is faulted (1 = the
-        first branch row joining them); default 1.
-    r, x : float, optional
-        Fault resistance and reactance, pu on the system base; ``r = x = 0`` (default) is
-        PST's bolted fault (shunt susceptance -1e7 pu at the bus).  A negative `x` is
-        taken as 0.
-    """
-
-    bus: int
-    t: float
-    clear_near: float | None = None
-    clear_far: float | None = None
-    far_bus: int | None = None
-    circuit: int = 1
-    r: float = 0.0
-    x: float = 0.0
-
-    @property
-    def admittance(self) -> complex:
-        """Fault shunt admittance (pu, system base): ``-1j * 1e7`` for a bolted fault, else
-        ``1 / (r + j max(x, 0))``."""
-        if self.r == 0 and self.x == 0:
-            return -1j * FAULT_B
-        return 1.0 / complex(self.r, max(self.x, 0.0))
-
-    def times(self):
-        """The event's times that are set.
-
-        Returns
-        -------
-        list of float
-            Fault start, near-end clearing and far-end clearing (`far_clear`), s, those
-            that are not None, in that order.
-        """
-        return [t for t in (self.t, self.clear_near, self.far_clear) if t is not None]
-
-    @property
-    def far_clear(self):
-        """Far-end clearing time (s): `clear_far`, or `clear_near` when that is None."""
-        return self.clear_near if self.clear_far is None else self.clear_far
-
-    def __str__(self) -> str:
-        """The fault in words for messages, e.g. ``fault at bus 3 on line 3-101 at 1 s,
-        cleared at 1.1 s``."""
-        line = "" if self.far_bus is None else f" on line {self.bus}-{self.far_bus}"
-        if self.far_bus is not None and self.circuit != 1:
-            line += f" (circuit {self.circuit})"
-        if self.clear_near is None:
-            return f"fault at bus {self.bus}{line} at {self.t:g} s, never cleared"
-        far = "" if self.far_clear == self.clear_near else f", far end at {self.far_clear:g} s"
-        return (
-            f"fault at bus {self.bus}{line} at {self.t:g} s, cleared at {self.clear_near:g} s{far}"
-        )
-
-
-@dataclass(frozen=True)
-class LineTrip(_AtOneTime):
-    """Open one circuit of the line `from_bus`-`to_bus` at `t`, without fault (PST's
-    ``sw_con`` type 4; the line opened as PST: reactance 1e7 pu, its charging kept under
-    the pstess conventions, removed under ieee).
-
-    Attributes
-    ----------
-    from_bus, to_bus : int
-        Bus numbers (as in the data) of the line's ends, in either order.
-    t : float
-        Opening time, s (absolute run time, >= 0).
-    circuit : int, optional
-        Which of the parallel circuits between the two buses (1 = the first branch row
-        joining them); default 1.  An unknown line raises CaseError when the run starts.
-    """
-
-    from_bus: int
-    to_bus: int
-    t: float
-    circuit: int = 1
-
-
-@dataclass(frozen=True)
-class LineClose(_AtOneTime):
-    """Close again at `t` one circuit of the line `from_bus`-`to_bus` that an earlier
-    `LineTrip` or a `Fault`'s clearing opened (a reclosure; PSS/E's ``dist_branch_close``):
-    from `t` the line is back in the network with its charging.
-
-    Attributes
-    ----------
-    from_bus, to_bus : int
-        Bus numbers (as in the data) of the line's ends, in either order.
-    t : float
-        Closing time, s (absolute run time, >= 0); after the opening (and after a fault's
-        far-end clearing), else InputError when the run starts.
-    circuit : int, optional
-        Which of the parallel circuits between the two buses (1 = the first branch row
-        joining them); default 1.
-    """
-
-    from_bus: int
-    to_bus: int
-    t: float
-    circuit: int = 1
-
-
-@dataclass(frozen=True)
-class GeneratorTrip(_AtOneTime):
-    """Disconnect a generator at `t`.
-
-    Attributes
-    ----------
-    machine : int
-        Machine number (as in the data, PST ``mac_con`` column 1); an unknown machine
-        raises CaseError when the run starts.
-    t : float
-        Disconnection time, s (absolute run time, >= 0).
-    """
-
-    machine: int
-    t: float
-
-
-@dataclass(frozen=True)
-class LoadStep(_AtOneTime):
-    """Add P + jQ of constant-impedance load at `bus` from `t`.
-
-    The load is the shunt admittance (P - jQ) / abs(V0)^2, V0 the bus voltage of the power
-    flow, so it draws P + jQ at that voltage and scales with abs(V)^2; negative values remove
-    load (a pulse is two steps of opposite sign).
-
-    Attributes
-    ----------
-    bus : int
-        Bus number (as in the data); an unknown bus raises UnknownBusError when the run
-        starts.
-    t : float
-        Time of the step, s (absolute run time, >= 0).
-    P : float
-        Real power added, pu on the system base (+ drawn from the network).
-    Q : float, optional
-        Reactive power added, pu on the system base (+ inductive, drawn); default 0.
-    """
-
-    bus: int
-    t: float
-    P: float
-    Q: float = 0.0
-
-
-@dataclass(frozen=True)
-class VrefStep(_AtOneTime):
-    """Step the voltage reference of a machine's exciter by `dV` at `t` (PSS/E's change of
-    VREF, ``change_vref``; ANDES's Alter of an exciter's ``vref0``): from `t` the exciter's
-    summing junction takes VREF0 + dV, VREF0 its initial reference.  Steps of one machine
-    add up.
-
-    Attributes
-    ----------
-    machine : int
-        Machine number (as in the data, ``mac_con`` column 1); a machine without an exciter
-        (``exc_con``) raises CaseError when the run starts.
-    t : float
-        Time of the step, s (absolute run time, >= 0).
-    dV : float
-        Change of the reference, pu of the machine's terminal voltage base.
-    """
-
-    machine: int
-    t: float
-    dV: float
-
-
-@dataclass(frozen=True)
-class PrefStep(_AtOneTime):
-    """Step the power reference of a machine's governor by `dP` at `t` (PSS/E's change of
-    PREF, ``change_gref``; ANDES's Alter of a governor's ``pref0``): from `t` the governor
-    takes PREF0 + dP, PREF0 its initial reference (its load reference).  With droop R the
-    speed settles (1 / R) dP per unit of the machine's own reference change, the others'
-    governors sharing it.  Steps of one machine add up.
-
-    Attributes
-    ----------
-    machine : int
-        Machine number (as in the data, ``mac_con`` column 1; a cross-compound unit's HP
-        machine); a machine without a governor (``tg_con``) raises CaseError when the run
-        starts.
-    t : float
-        Time of the step, s (absolute run time, >= 0).
-    dP : float
-        Change of the reference, pu on the machine's base.
-    """
-
-    machine: int
-    t: float
-    dP: float
-
-
-@dataclass(frozen=True)
-class MotorSwitch(_AtOneTime):
-    """Switch an induction motor (`stabctl.models.motors`, the case's ``motors``) on or
-    off at `t` (ANDES's Toggle of a Motor5): on, it is a dynamic load at its bus from its
-    present states (at the first switching all 0: energised at synchronous speed without
-    flux, as ANDES's); off, it draws nothing and its states stand still.
-
-    Attributes
-    ----------
-    motor : int
-        Motor number (``mot_con`` column 1); an unknown motor raises CaseError when the
-        run starts.
-    t : float
-        Switching time, s (absolute run time, >= 0).
-    on : bool, optional
-        True (default) to switch on, False off.
-    """
-
-    motor: int
-    t: float
-    on: bool = True
-
-
-@dataclass(frozen=True)
-class Playback:
-    """Move a playback source's targets (a machine with ``playback`` 1: ANDES's PLBVFU1)
-    at given times: from at[k] on, its E' target is its initial E' + dV[k] and its speed
-    target 1 + df[k] (pu), held until the next time (ANDES's TimeSeries, mode 1); E' and
-    the speed follow through the lags pb_Tv, pb_Tf.  From a recorded V, f series (ANDES:
-    Vts, fts with Vscale, fscale): dV = (V - V[0]) / Vscale, df = (f - f[0]) / fscale.
-
-    Attributes
-    ----------
-    machine : int
-        Machine number (``mac_con`` column 1) of a playback source; another raises
-        CaseError when the run starts.
-    at : tuple of float
-        Times of the values, s, rising, >= 0.
-    dV, df : tuple of float
-        The targets' changes from those times on, pu (as many as `at`).
-    """
-
-    machine: int
-    at: tuple
-    dV: tuple
-    df: tuple
-
-    def times(self):
-        """The times the targets change.
-
-        Returns
-        -------
-        list of float
-            ``at``, s.
-        """
-        return [float(t) for t in self.at]
 
 
 def validate(case: Case, events, t_end: float) -> None:
@@ -610,75 +310,21 @@ def fault_with_clearing(
     )
 
 
-#: the event classes a case's own records may name (`Case.events`, ``kind``)
-EVENT_KINDS = {
-    cls.__name__: cls
-    for cls in (
-        Fault,
-        LineTrip,
-        LineClose,
-        GeneratorTrip,
-        LoadStep,
-        VrefStep,
-        PrefStep,
-        MotorSwitch,
-    )
-}
-
-
-def as_record(ev, source: str) -> dict:
-    """A `Case.events` record of an event: its class name as ``kind``, its fields, and
-    ``source`` (where it came from, e.g. ``"Toggle Toggler_1 (ieee14.xlsx)"``).
-
-    Parameters
-    ----------
-    ev : Fault, LineTrip, LineClose, GeneratorTrip, LoadStep, VrefStep, PrefStep or MotorSwitch
-        The event.
-    source : str
-        The record it was read from.
-
-    Returns
-    -------
-    dict
-        JSON-ready (numbers and strings).
-    """
-    return {"kind": type(ev).__name__, **asdict(ev), "source": source}
-
-
 def from_case(case: Case) -> list:
     """The events of the case's own disturbance records (`Case.events`, written by
-    `as_record`), in their order.
+    `as_record`; `stabctl.case.events.events_of_records`), in their order.
 
     Parameters
     ----------
     case : Case
-        The case.
+        The case (its records were checked when it was made).
 
     Returns
     -------
     list
         One event per record.
-
-    Raises
-    ------
-    CaseError
-        A record of an unknown ``kind`` or with fields its class does not take, named
-        with its ``source``.
     """
-    out = []
-    for k, rec in enumerate(case.events):
-        fields = {f: v for f, v in rec.items() if f not in ("kind", "source")}
-        where = f"events[{k}] ({rec.get('source', 'no source')})"
-        cls = EVENT_KINDS.get(rec["kind"])
-        if cls is None:
-            raise CaseError(
-                f"{where}: unknown event kind {rec['kind']!r} (known: {', '.join(EVENT_KINDS)})"
-            )
-        try:
-            out.append(cls(**fields))
-        except TypeError as e:
-            raise CaseError(f"{where}: {rec['kind']} {e}") from None
-    return out
+    return events_of_records(case.events)
 
 
 def from_sw_con(case: Case) -> list:

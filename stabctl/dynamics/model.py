@@ -22,6 +22,7 @@ from stabctl._jit.arrays import SMALL_MATVEC, assign, dot, matvec
 from stabctl._jit.borrow import borrowed
 from stabctl._jit.decorators import kernel, njit
 from stabctl.case import BranchTable, BusTable, Case
+from stabctl.case.events import FAULT_B
 from stabctl.dynamics.bounded import BoundedCache
 from stabctl.dynamics.coi import coi_inertia
 from stabctl.errors import CaseError, InputError, SimulationError
@@ -48,7 +49,6 @@ from stabctl.network.solution import (
 from stabctl.network.solution import L as LOAD
 from stabctl.network.topology import OPEN_X, bus_islands, machine_islands
 
-FAULT_B = 1e7  # PST's bolted-fault shunt susceptance (1/1e-7)
 #: largest |derivative| at t = 0 of an equilibrium (DynamicModel.check_equilibrium)
 EQUILIBRIUM_TOL = 1e-8
 

@@ -745,7 +745,8 @@ def cct_study(
     rule = runs if isinstance(runs, SeedRule) else None
     if rule is None and runs < 1:
         raise InputError(f"need at least one run, got {runs}")
-    tol_cycles = CCT_TOL_S * load_case(case).freq_hz
+    loaded = load_case(case)
+    tol_cycles, digest = CCT_TOL_S * loaded.freq_hz, loaded.digest()
     rate, latency, bus, far_bus = pmu.rate, pmu.latency_s, fault.bus, fault.far_bus
     window = (
         {}
@@ -766,6 +767,7 @@ def cct_study(
             cct_job,
             dict(
                 case=case,
+                case_digest=digest,
                 bus=bus,
                 far_bus=far_bus,
                 esd_pct=p,

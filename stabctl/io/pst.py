@@ -12,8 +12,9 @@ Three inputs give a :class:`~stabctl.case.Case`:
 
 PST matrix names mapped to tables: ``bus`` -> buses, ``line`` -> branches, ``mac_con`` ->
 machines, ``exc_con`` -> exciters, ``pss_con`` -> pss, ``tg_con`` -> governors,
-``load_con`` -> loads; ``sw_con`` is kept as ``Case.sw_con``; every other numeric matrix
-(``lmod_con``, ``PDC``, ...) goes to ``Case.extra``. Bus and machine numbers stay as in the
+``load_con`` -> loads; ``sw_con`` is kept as ``Case.sw_con``; the data matrices stabctl does
+not model (:data:`EXTRA_MATRICES`: ``lmod_con``, ``PDC``, ...) go to ``Case.extra``, and any
+other variable is left out with a warning naming it. Bus and machine numbers stay as in the
 data. ``basmva`` and ``sys_freq`` are read when the file defines them (PST defaults 100 MVA,
 60 Hz otherwise). Source: PST manual sections 1.3 and 2.1 (data file structure).
 """
@@ -23,7 +24,8 @@ from __future__ import annotations
 import json
 import re
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -77,6 +79,38 @@ _DEFAULT_FREQ_HZ = 60.0
 _DEFAULTS = {"base_mva": _DEFAULT_BASE_MVA, "freq_hz": _DEFAULT_FREQ_HZ}
 _UNITS = {"base_mva": "MVA", "freq_hz": "Hz"}
 
+#: the data matrices of PST 3.0 (``pst_var.m``) and PSTess 1.1 that stabctl keeps as given
+#: without modelling them (``Case.extra``), and the shipped miniWECC data file's own
+#: (``PDC``, ``TCSC_Gen``, ``pssGen``, ``pssType``); a PST file's other variables are left
+#: out with a warning, and a case file's other ``extra`` names refused
+EXTRA_MATRICES = frozenset(
+    (
+        "lmod_con",
+        "rlmod_con",
+        "lmon_con",
+        "ibus_con",
+        "ind_con",
+        "mld_con",
+        "igen_con",
+        "tcsc_con",
+        "dpw_con",
+        "dcsp_con",
+        "dcl_con",
+        "dcc_con",
+        "scr_con",
+        "netg_con",
+        "stab_con",
+        "pwrmod_con",
+        "ivm_con",
+        "ess_con",
+        "lsc_con",
+        "PDC",
+        "TCSC_Gen",
+        "pssGen",
+        "pssType",
+    )
+)
+
 
 # --------------------------------------------------------------------------------------
 # PST matrices -> Case
@@ -114,25 +148,37 @@ def case_from_matrices(
                 UserWarning,
                 stacklevel=2,
             )
-    extra = {
-        k: v
-        for k, v in mats.items()
-        if k not in PST_TABLES
-        and k not in _SCALARS
-        and k != "sw_con"
-        and _is_numeric(v)
-        and not _is_empty(v)
-    }
     return Case(
         name=name,
         base_mva=bases.get("base_mva", _DEFAULT_BASE_MVA),
         freq_hz=bases.get("freq_hz", _DEFAULT_FREQ_HZ),
         sw_con=mats.get("sw_con"),
-        extra=extra,
+        extra=_extra_matrices(mats, name),
         source=source,
         description=description,
         **tables,
     )
+
+
+def _extra_matrices(mats: Mapping[str, Any], name: str) -> dict:
+    """The non-empty numeric matrices of :data:`EXTRA_MATRICES` among ``mats``; the
+    file's other variables (neither a table, a base, ``sw_con`` nor such a matrix) are
+    left out with a warning naming them."""
+    others = {
+        k: v
+        for k, v in mats.items()
+        if k not in PST_TABLES and k not in _SCALARS and k != "sw_con" and not _is_empty(v)
+    }
+    kept = {k: v for k, v in others.items() if k in EXTRA_MATRICES and _is_numeric(v)}
+    left_out = sorted(set(others) - set(kept))
+    if left_out:
+        warnings.warn(
+            f"{name}: variable(s) {', '.join(left_out)} left out: no PST data matrix "
+            "stabctl keeps (a data file's own working variables)",
+            UserWarning,
+            stacklevel=3,
+        )
+    return kept
 
 
 def _is_empty(v) -> bool:
@@ -430,8 +476,30 @@ _CASE_KEYS = frozenset((*_HEAD_KEYS, "tables", "sw_con", "events", "extra"))
 
 
 def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
-    """A Case from the own-format dict. Raises :class:`CaseError` on a wrong format or
-    version, an unknown table or column name, or invalid data."""
+    """A Case from the own-format dict.
+
+    Each table gives at least the columns a PST matrix must (its first ``MIN_COLUMNS``);
+    a later column left out takes its default (``DEFAULTS``, else 0) with a warning naming
+    it.
+
+    Parameters
+    ----------
+    data : Mapping
+        The parsed case file (:func:`write_case_json`'s layout).
+    where : str, optional
+        The file, named first in every error.
+
+    Returns
+    -------
+    Case
+
+    Raises
+    ------
+    CaseError
+        A wrong format or version; an unknown top-level key, table, table key, column or
+        ``extra`` matrix (not in :data:`EXTRA_MATRICES`); a column the model needs left
+        out; invalid data (the file, table, row and field named).
+    """
     if data.get("format") != FORMAT:
         raise CaseError(f"{where}: not a stabctl case (format is {data.get('format')!r})")
     if data.get("version") != FORMAT_VERSION:
@@ -465,23 +533,45 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
         for field in TABLES
         if field in raw_tables
     }
-    extra = data.get("extra") or {}
+    extra = _extra_field(data.get("extra"), where)
+    with _located(where):
+        return Case(
+            name=str(data.get("name", Path(where).stem)),
+            base_mva=_field_number(data, "base_mva", where),
+            freq_hz=_field_number(data, "freq_hz", where),
+            sw_con=data.get("sw_con"),
+            events=_events_field(data.get("events"), where),
+            extra=extra,
+            source=str(data.get("source", "")),
+            description=str(data.get("description", "")),
+            **tables,
+        )
+
+
+@contextmanager
+def _located(where: str) -> Iterator[None]:
+    """A CaseError raised inside, its message prefixed with the file ``where``."""
+    try:
+        yield
+    except CaseError as exc:
+        raise type(exc)(f"{where}: {exc}") from None
+
+
+def _extra_field(extra, where: str) -> Mapping:
+    """The ``extra`` matrices of a case file: numeric matrices named in
+    :data:`EXTRA_MATRICES` (absent: none)."""
+    extra = extra or {}
     if not isinstance(extra, Mapping):
         raise CaseError(f"{where}: 'extra' must be an object of matrices by name")
     for key, value in extra.items():
+        if key not in EXTRA_MATRICES:
+            raise CaseError(
+                f"{where}: extra: unknown matrix '{key}' (extra keeps PST data matrices "
+                f"stabctl does not model: {', '.join(sorted(EXTRA_MATRICES))})"
+            )
         if not _is_numeric(value):
             raise CaseError(f"{where}: extra matrix '{key}' is not a numeric matrix")
-    return Case(
-        name=str(data.get("name", Path(where).stem)),
-        base_mva=_field_number(data, "base_mva", where),
-        freq_hz=_field_number(data, "freq_hz", where),
-        sw_con=data.get("sw_con"),
-        events=_events_field(data.get("events"), where),
-        extra=extra,
-        source=str(data.get("source", "")),
-        description=str(data.get("description", "")),
-        **tables,
-    )
+    return extra
 
 
 def _field_number(data: Mapping, key: str, where: str) -> float:
@@ -496,9 +586,19 @@ def _field_number(data: Mapping, key: str, where: str) -> float:
     return float(value)
 
 
+#: the keys of a table of the own format
+_TABLE_KEYS = ("columns", "rows")
+
+
 def _table_from_json(cls, raw: Mapping, where: str):
     if not isinstance(raw, Mapping):
         raise CaseError(f"{where}: table '{cls.TABLE}' must be an object with 'columns' and 'rows'")
+    unknown = sorted(set(raw) - set(_TABLE_KEYS))
+    if unknown:
+        raise CaseError(
+            f"{where}: table '{cls.TABLE}' has unknown key(s) {unknown} (a table holds "
+            "'columns' and 'rows'; nothing else is read)"
+        )
     cols = raw.get("columns")
     rows = raw.get("rows", [])
     if not isinstance(cols, list) or not all(isinstance(c, str) for c in cols):
@@ -525,11 +625,40 @@ def _table_from_json(cls, raw: Mapping, where: str):
             f"{len(cols)} columns named"
         )
     n = mat.shape[0]
+    _check_missing(cls, cols, where)
     data = {
         c: mat[:, cols.index(c)] if c in cols else np.full(n, float(cls.DEFAULTS.get(c, 0.0)))
         for c in known
     }
-    return cls(**data)
+    with _located(where):
+        return cls(**data)
+
+
+def _check_missing(cls, cols: list, where: str) -> None:
+    """CaseError naming the columns of ``cls`` among its first ``MIN_COLUMNS`` (those a
+    PST matrix must give: no default) that ``cols`` leaves out; a warning naming the
+    later ones it leaves out, which take their documented defaults (``DEFAULTS``, else
+    0)."""
+    known = cls.columns()
+    missing = [c for c in known if c not in cols]
+    needed = [c for c in missing if known.index(c) < cls.MIN_COLUMNS]
+    if needed:
+        raise CaseError(
+            f"{where}: table '{cls.TABLE}' has no column(s) {needed}: the model needs its "
+            f"first {cls.MIN_COLUMNS} columns ({known[0]} to {known[cls.MIN_COLUMNS - 1]}); "
+            "only later ones have defaults"
+        )
+    if missing:
+        by_value: dict[float, list[str]] = {}
+        for c in missing:
+            by_value.setdefault(float(cls.DEFAULTS.get(c, 0.0)), []).append(c)
+        taken = "; ".join(f"{', '.join(c)} = {v:g}" for v, c in by_value.items())
+        warnings.warn(
+            f"{where}: table '{cls.TABLE}' gives no column(s) {', '.join(missing)}: taken "
+            f"at their defaults ({taken})",
+            UserWarning,
+            stacklevel=5,
+        )
 
 
 def _check_numbers(rows: list, cols: list, where: str) -> None:

@@ -107,7 +107,14 @@ MACHINE = Family(
         ),
         Param("Tqopp", col=15, doc='q-axis open-circuit subtransient time constant T"qo', **_TC),
         Param("H", "s", 16, doc="inertia constant (MW s / MVA on machine base)"),
-        Param("D0", "pu", 17, doc="local damping coefficient d_o"),
+        Param(
+            "D0",
+            "pu",
+            17,
+            lo=0.0,
+            doc="local damping coefficient d_o (>= 0: a damping torque opposes the speed "
+            "deviation)",
+        ),
         Param("D1", "pu", 18, doc="system damping coefficient d_1"),
         Param("col19", "", 19, doc='"bus number" in the manual; unused by PSTess, kept as given'),
         Param("S10", "", 20, doc="saturation factor S(1.0)"),

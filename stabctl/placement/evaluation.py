@@ -73,6 +73,12 @@ class Contingency:
         """Unique name: the fault's, with ``@<load> %`` when not at the base load."""
         return self.fault_name + ("" if self.load == 1.0 else f"@{100 * self.load:g}%")
 
+    def describe(self) -> str:
+        """How messages name it: ``contingency 3-101 (fault at bus 3 on line 3-101 at 1
+        s, load 90 % of the base)``, the load only when not the base load."""
+        load = "" if self.load == 1.0 else f", load {100 * self.load:g} % of the base"
+        return f"contingency {self.name} ({self.fault.describe()}{load})"
+
     def met_by(self, cct_s: float | None) -> bool:
         """Whether a CCT (s; None: not known) reaches the target, within 1e-9 s (the
         lattice's rounding)."""

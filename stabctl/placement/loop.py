@@ -881,10 +881,8 @@ def _infeasible_text(c: Contingency, tried) -> str:
         for k, (mw, cct) in enumerate(tried)
     ]
     return (
-        f"contingency {c.name} ({c.fault.describe()}"
-        f"{'' if c.load == 1.0 else f', load {100 * c.load:g} % of the base'}) "
-        f"reaches a CCT of only {' and '.join(at)} against its target {c.target_cct_s:.3f} s, "
-        "simulated"
+        f"{c.describe()} reaches a CCT of only {' and '.join(at)} against its target "
+        f"{c.target_cct_s:.3f} s, simulated"
     )
 
 

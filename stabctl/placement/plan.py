@@ -35,7 +35,7 @@ from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import InputError
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import mwh_per_mw, size_energy
-from stabctl.placement.evaluation import VerifyOptions
+from stabctl.placement.evaluation import TARGET_SLACK_S, VerifyOptions
 from stabctl.placement.loop import (
     PlaceOptions,
     Study,
@@ -244,7 +244,8 @@ def plan(
         with its load level).
     InputError
         No faults, bad settings (`check_damping_model`), a fault unstable already when
-        cleared at once.
+        cleared at once, a contingency's target at or above the search limit
+        ``study.search.t_max`` (named with its target).
     PowerFlowError, CaseError
         A load level without a power flow or a valid initial state (named).
     """
@@ -330,7 +331,28 @@ def _contingencies(
         every = contingencies_of(faults, Requirement(cct_s=pl.t_max), freq_hz, pl.tol, levels)
         pl.say(f"CCT without storage of {len(every)} contingencies")
         pl.add_base(every, pl.brackets, kw)
-    return contingencies_of(faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base)
+    cons = contingencies_of(faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base)
+    _check_search_limit(pl, cons, requirement, overrides)
+    return cons
+
+
+def _check_search_limit(pl: PlanContext, cons, requirement: Requirement, overrides) -> None:
+    """InputError naming the first contingency whose target reaches the CCT search limit
+    t_max: every CCT searched is at most t_max, so no allocation could be shown to meet
+    it, and the loop would call it infeasible, its CCT "only" t_max with every site at
+    its bound (the search limit, not the storage, bounding it)."""
+    for c in cons:
+        if c.target_cct_s < pl.t_max - TARGET_SLACK_S:
+            continue
+        req = (overrides or {}).get(c.fault_name, requirement)
+        cct = (pl.base.get(c.name) or {}).get("cct_s") if req.needs_base else None
+        without = "" if cct is None else f", its CCT without storage {cct:.3f} s"
+        raise InputError(
+            f"{c.describe()}: its target CCT {c.target_cct_s:.3f} s ({req.describe()}"
+            f"{without}) is at or above the CCT search limit t_max = {pl.t_max:g} s "
+            "(--t-max), which bounds every CCT searched, with or without storage: raise "
+            "--t-max above the target, or lower the requirement"
+        )
 
 
 def _without_storage(

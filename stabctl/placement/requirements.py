@@ -238,21 +238,46 @@ def read_site_costs(path, n_machines: int) -> dict:
     return out
 
 
-def screening_brackets(path) -> dict:
-    """The [stable, unstable] clearing times without storage (s) of every fault a
-    screening (`stabctl screen --out`, or a placement study's records) bracketed: fault
-    name (`Contingency.fault_name`) -> (t_stable, t_unstable), for `plan`'s `brackets`; a
-    fault still stable at the screening's limit t_max: (t_max, None).  Records with
-    storage or with another outcome are skipped.  Raises InputError for a file that is not
-    a regular file, not sweep records, a malformed screening record, or records that
-    bracket no fault."""
+def screening_brackets(path, case: str, digest: str) -> dict:
+    """The [stable, unstable] clearing times without storage of a case's faults, as a
+    screening bracketed them.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Records of a screening (`stabctl screen --out`, or a placement study's).
+    case : str
+        The case they must be of: its input as the screening's jobs record it (a built-in
+        name or a case file).
+    digest : str
+        The digest of that case's content (`stabctl.case.Case.digest`).
+
+    Returns
+    -------
+    dict
+        Fault name (`Contingency.fault_name`) -> (t_stable, t_unstable) in s, for
+        `plan`'s `brackets`; a fault still stable at the screening's limit t_max:
+        (t_max, None).  Records with storage or with another outcome are skipped.
+
+    Raises
+    ------
+    InputError
+        A file that is not a regular file, not sweep records, a record of another case or
+        of other content of the case (its line named,
+        `stabctl.parallel.check_records_case`), a malformed screening record, or records
+        that bracket no fault.
+    """
     from stabctl.io.inputs import input_file
-    from stabctl.parallel import read_records
+    from stabctl.parallel import check_records_case, read_records
     from stabctl.stability.cct import LineFault
     from stabctl.stability.screening import ABOVE, verdict
 
     try:
-        records = read_records(input_file(path, "screening records"))
+        path = input_file(path, "screening records")
+        check_records_case(
+            path, {case: digest}, f"give the records of a screening of {case} as it is now"
+        )
+        records = read_records(path)
     except InputError:  # it names the file
         raise
     except (OSError, ValueError) as exc:

@@ -873,10 +873,10 @@ def cct_job(inputs: dict) -> dict:
     Parameters
     ----------
     inputs : dict
-        The job's JSON-able recorded inputs (`cct_jobs`): case; the fault (bus, far_bus,
-        t_fault, circuit, trips); esd_pct (storage rating in %, None = no storage); the
-        search settings (`SearchOptions.to_inputs`) and model settings
-        (`ModelOptions.to_inputs`).
+        The job's JSON-able recorded inputs (`cct_jobs`): case (case_digest is not read
+        here); the fault (bus, far_bus, t_fault, circuit, trips); esd_pct (storage rating
+        in %, None = no storage); the search settings (`SearchOptions.to_inputs`) and
+        model settings (`ModelOptions.to_inputs`).
 
     Returns
     -------
@@ -927,9 +927,11 @@ def cct_jobs(
 ) -> list:
     """One `stabctl.parallel.Job` per (fault, storage rating %, None = no storage) pair.
 
-    Each job's inputs record the case, the fault, the rating, the search settings
+    Each job's inputs record the case, the digest of its content (``case_digest``,
+    `stabctl.case.Case.digest`: a sweep resumed after the case file changed is refused,
+    `stabctl.parallel.check_records_case`), the fault, the rating, the search settings
     (`SearchOptions.to_inputs`: error_check only when off) and the model settings
-    (`ModelOptions.to_inputs`: q_limits only when off), so earlier records still resume.
+    (`ModelOptions.to_inputs`: q_limits only when off).
 
     Checks every fault's bus and line against the case first (UnknownBusError, CaseError)
     so that bad input fails before any job runs, then compiles the simulator's kernels in
@@ -947,11 +949,18 @@ def cct_jobs(
     checked = {"error_check": recorded.pop("error_check")} if "error_check" in recorded else {}
     settings = {**recorded, **model.to_inputs(), **checked}
     compile_here(case_name, model)
+    digest = case.digest()
     return [
         Job(
             key=cct_key(case_name, f, p, model),
             func=cct_job,
-            inputs={"case": case_name, **fault_inputs(f), "esd_pct": p, **settings},
+            inputs={
+                "case": case_name,
+                "case_digest": digest,
+                **fault_inputs(f),
+                "esd_pct": p,
+                **settings,
+            },
         )
         for f in faults
         for p in ratings

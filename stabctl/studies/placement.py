@@ -172,7 +172,9 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
         )
         scope = in_scope(rows)
         faults = [r["fault"] for r in scope]
-        brackets = screening_brackets(records_dir / f"placement_{case_name}_screening.jsonl")
+        brackets = screening_brackets(
+            records_dir / f"placement_{case_name}_screening.jsonl", case_name, case.digest()
+        )
         say(
             f"{case_name}: screened {len(rows)} faults in {time.perf_counter() - wall:.0f} s;"
             f" {len(faults)} stable when cleared at once"

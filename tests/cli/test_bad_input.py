@@ -267,6 +267,102 @@ def test_case_file_without_tables_or_bases_names_what_is_missing(tmp_path):
         load_case(path)
 
 
+def _drop(d, table, column):
+    """The case dict ``d`` without ``column`` of ``table``."""
+    t = d["tables"][table]
+    k = t["columns"].index(column)
+    t["columns"].pop(k)
+    for row in t["rows"]:
+        row.pop(k)
+    return d
+
+
+@pytest.mark.parametrize(
+    "edit,where",
+    [
+        # x_d left out ran with x_d = 0 (a classical machine): 0.7145 rad, not 0.7480
+        (lambda d: _drop(d, "machines", "xd"), "table 'mac_con' has no column(s) ['xd']"),
+        (lambda d: _drop(d, "governors", "invR"), "table 'tg_con' has no column(s) ['invR']"),
+        (lambda d: _drop(d, "pss", "T1"), "table 'pss_con' has no column(s) ['T1']"),
+        # K_A left out stopped the run with "initial point is not an equilibrium ... nan"
+        (lambda d: _drop(d, "exciters", "KA"), "table 'exc_con' has no column(s) ['KA']"),
+        (
+            lambda d: d["tables"]["machines"].update(units="pu"),
+            "table 'mac_con' has unknown key(s) ['units']",
+        ),
+        (lambda d: d["extra"].update(foo=[[1.0]]), "extra: unknown matrix 'foo'"),
+        (
+            lambda d: _set(d, "machines", "D0", -50.0),
+            "mac_con row 1 (machine 1), field 'D0': must be >= 0, got -50",
+        ),
+    ],
+)
+def test_case_file_columns_keys_and_values_the_model_cannot_take_are_refused(tmp_path, edit, where):
+    """A column the model needs left out of a case file ran with 0 in its place, a key
+    stabctl does not read was ignored and a negative damping ran: each refused by
+    simulate, eig and cases, naming the file, the table and the column, key or value."""
+    d = _kundur_dict()
+    edit(d)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(d))
+    for args in (
+        ("simulate", path, "--fault", 3, "--far-bus", 101, "--tf", 1.5),
+        ("eig", path),
+        ("cases", path),
+    ):
+        assert_error(run(*args), f"bad.json: {where}")
+
+
+def test_case_file_columns_left_to_their_defaults_are_named(tmp_path):
+    """A column after the ones every row needs may be left out of a case file: it takes
+    its documented default, named in a warning."""
+    path = tmp_path / "short.json"
+    path.write_text(json.dumps(_drop(_drop(_kundur_dict(), "machines", "pfrac"), "machines", "D1")))
+    with pytest.warns(
+        UserWarning,
+        match=r"short.json: table 'mac_con' gives no column\(s\) D1, pfrac: taken at their "
+        r"defaults \(D1 = 0; pfrac = 1\)",
+    ):
+        case = load_case(path)
+    assert case.machines.pfrac.tolist() == [1.0] * 4 and not case.machines.D1.any()
+
+
+def test_a_pst_file_s_working_variables_are_left_out_by_name(tmp_path):
+    """A PST data file's variables that are no data matrix (its script's own) were kept
+    in the case's extra matrices, which a case file then refused: left out, named."""
+    path = tmp_path / "tiny.m"
+    path.write_text(
+        "basmva = 100;\nsys_freq = 60;\nbus = [1 1 0 0 0 0 0 0 0 1; 2 1 0 0 0 0.5 0.1 0 0 3];\n"
+        "line = [1 2 0 0.1 0 1 0 0 0 0];\nlmod_con = [1 2 100 1 0 1 0];\ntmp_ud1 = [1 2];\n"
+    )
+    with pytest.warns(UserWarning, match="tiny: variable.s. tmp_ud1 left out"):
+        case = load_case(path)
+    assert list(case.extra) == ["lmod_con"]
+
+
+def test_the_case_s_own_disturbance_a_run_cannot_take_is_refused(tmp_path, no_simulation):
+    """--pstess-default with a --tf before the data file's clearing printed the fault as
+    cleared and the run stable, and --case-events on a case without events ran flat:
+    each refused before any work, naming the event or the case and the option."""
+    assert_error(
+        run("simulate", "kundur", "--pstess-default", "--tf", 0.12),
+        "cleared at 0.15 s",
+        "ends at or after the end of the run (--tf 0.12 s); it is the case's own",
+    )
+    assert_error(
+        run("simulate", "kundur", "--case-events", "--tf", 1),
+        "--case-events: case kundur has no events of its own; give --fault",
+    )
+    d = _kundur_dict()
+    d["sw_con"] = None
+    path = tmp_path / "no_sw.json"
+    path.write_text(json.dumps(d))
+    assert_error(
+        run("simulate", path, "--pstess-default", "--tf", 1),
+        "--pstess-default: case kundur has no PST sw_con disturbance",
+    )
+
+
 def test_pst_file_without_bases_names_the_defaults(tmp_path):
     path = tmp_path / "tiny.m"
     path.write_text(
@@ -661,6 +757,58 @@ def test_records_files_are_read_in_bounded_lines_and_whole_records_only(tmp_path
     args = ["place", "kundur", "--faults", "DEFAULT", "--workers", "1"]
     res = CliRunner().invoke(main, [*args, "--target-cct-gain", "5", "--screening", str(screening)])
     assert res.exit_code == 2 and "no fault bracketed without storage" in res.output, res.output
+
+
+def test_screening_records_of_another_case_or_content_are_refused(tmp_path, no_simulation):
+    """place kundur --screening of a miniWECC screening took its brackets as kundur's
+    (and a screening of a case file edited since as the file's): refused before any work,
+    naming the file, the line and the case the record belongs to."""
+    fault = {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1, "trips": []}
+    result = {"fault": fault, "t_stable_s": 0.155, "t_unstable_s": 0.16}
+    args = ["place", "kundur", "--faults", "DEFAULT", "--workers", "1", "--target-cct-gain", "5"]
+    for case, digest, needle in (
+        ("miniwecc", "0123456789abcdef", "was run on case 'miniwecc', not on this run's (kundur)"),
+        ("kundur", "0123456789abcdef", "was run on case 'kundur' as it was then: its content"),
+    ):
+        rec = {"key": f"{case}/3-101/t1/esd-none", "status": "ok", "result": result}
+        rec["inputs"] = {"case": case, "case_digest": digest, **fault, "esd_pct": None}
+        screening = tmp_path / "s.jsonl"
+        screening.write_text(json.dumps(rec) + "\n")
+        assert_error(
+            run(*args, "--screening", screening), f"{screening} line 1: job {rec['key']} ", needle
+        )
+
+
+@pytest.mark.parametrize(
+    "requirement,needle",
+    [
+        (
+            ("--target-cct-s", "0.35", "--t-max", "0.3"),
+            "its target CCT 0.350 s (CCT 350 ms) is at or above the CCT search limit "
+            "t_max = 0.3 s (--t-max)",
+        ),
+        (
+            ("--target-cct-gain", "50", "--t-max", "0.2"),
+            "its target CCT 0.225 s (CCT +50 %, its CCT without storage 0.150 s) is at or "
+            "above the CCT search limit t_max = 0.2 s (--t-max)",
+        ),
+    ],
+)
+def test_a_target_the_search_limit_bounds_is_refused_not_called_infeasible(
+    tmp_path, requirement, needle
+):
+    """place with a target at or above --t-max said the fault was infeasible, reaching a
+    CCT of only --t-max with every site at its bound: the search limit, not the storage,
+    bounded it.  Refused naming the contingency, its target and --t-max."""
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    args = ["place", "kundur", "--faults", faults, "--workers", "1", "--tol-ms", "5"]
+    res = run(*args, *requirement)
+    assert res.exit_code == 2, res.output
+    assert "infeasible" not in res.stderr, res.stderr
+    assert f"error: contingency 3-101 (fault at bus 3 on line 3-101 at 1 s): {needle}" in (
+        res.stderr
+    )
 
 
 PLACE = ("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "5")

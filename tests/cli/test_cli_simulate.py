@@ -457,7 +457,9 @@ def test_bad_study_events_exit_2(tmp_path, args, needles):
 def test_case_events_runs_the_case_s_own_disturbance(tmp_path):
     """--case-events runs the events stored in a case file (as import-andes stores ANDES's
     Toggle records), before the options' own; without it the run is flat.  A record of an
-    unknown kind is refused naming its source."""
+    unknown kind, without a field its kind needs or with a value of the wrong kind makes
+    the case file malformed: refused, with or without --case-events, naming the file, the
+    record and its source."""
     from stabctl.dynamics.events import LineClose, LineTrip, as_record
 
     case = load_case("kundur")
@@ -473,14 +475,22 @@ def test_case_events_runs_the_case_s_own_disturbance(tmp_path):
     ]
     assert s["t_end_s"] == 6.0  # the first event + 5 s
     assert json.loads(run("simulate", path, "--tf", 2, "--json").stdout)["events"] == []
-    bad = pstio.write_case_json(
-        case.replace(events=({"kind": "Reclose", "bus": 3, "source": "Alter 7"},)),
-        tmp_path / "bad.json",
-    )
     out_dir = tmp_path / "out"
     out_dir.mkdir()
-    res = run("simulate", bad, "--case-events", "--out", out_dir / "r.csv")
-    assert_bad_input(res, out_dir, "events[0] (Alter 7): unknown event kind 'Reclose'")
+    for record, needle in (
+        ({"kind": "Reclose", "bus": 3}, "unknown event kind 'Reclose'"),
+        ({"kind": "LineTrip", "from_bus": 3, "t": 1.0}, "missing 1 required positional"),
+        ({"kind": "LoadStep", "bus": 4, "t": "1", "P": 0.1}, "field 't': '1' is not a finite"),
+        ({"kind": "GeneratorTrip", "machine": 1.5, "t": 1.0}, "'machine': 1.5 is not an int"),
+    ):
+        d = pstio.case_to_dict(case)
+        d["events"] = [{**record, "source": "Alter 7"}]
+        bad = tmp_path / "bad.json"
+        bad.write_text(json.dumps(d))
+        # a malformed event is a malformed case, run or not
+        for args in (["--case-events"], ["--tf", 1]):
+            res = run("simulate", bad, *args, "--out", out_dir / "r.csv")
+            assert_bad_input(res, out_dir, "bad.json: events[0] (Alter 7): ", needle)
 
 
 def test_storage_settings_without_a_rating_are_refused(tmp_path):

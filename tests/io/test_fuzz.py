@@ -263,7 +263,7 @@ def screening_property(text):
 
     with tempfile.TemporaryDirectory() as tmp:
         path = _file(tmp, "screening.jsonl", text)
-        outcome("screening", lambda: screening_brackets(path))
+        outcome("screening", lambda: screening_brackets(path, "kundur", "any"))
 
 
 def _valid(case):

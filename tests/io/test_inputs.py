@@ -123,13 +123,13 @@ def test_screening_records_must_bracket_a_fault(tmp_path):
     other = tmp_path / "other.jsonl"
     other.write_text('{"key": "k", "status": "ok", "inputs": {}, "result": {"y": 1}}\n')
     with pytest.raises(InputError, match="no fault bracketed without storage"):
-        screening_brackets(other)
+        screening_brackets(other, "kundur", "any")
     bad = tmp_path / "bad.jsonl"
     bad.write_text('{"key": "k", "status": "ok", "inputs": {}, "result": {"t_stable_s": 1}}\n')
     with pytest.raises(InputError, match=r"record 'k' is not a screening record \(KeyError"):
-        screening_brackets(bad)
+        screening_brackets(bad, "kundur", "any")
     with pytest.raises(InputError, match="not a regular file"):
-        screening_brackets(tmp_path)
+        screening_brackets(tmp_path, "kundur", "any")
 
 
 def test_outputs_that_are_devices_and_write_failures_end_in_one_error_line(tmp_path, monkeypatch):

@@ -364,7 +364,7 @@ def test_screening_brackets_and_requirement_overrides_are_read_from_their_files(
     stored = {**ok, "key": "k3", "inputs": {"esd_pct": 5.0}}  # with storage
     failed = {"key": "k4", "status": "failed", "inputs": {"esd_pct": None}, "error": "x"}
     rec.write_text("\n".join(json.dumps(r) for r in (ok, bus, stored, failed)) + "\n")
-    assert screening_brackets(rec) == {"3-101": (0.155, 0.16), "1": (0.155, 0.16)}
+    assert screening_brackets(rec, "kundur", "any") == {"3-101": (0.155, 0.16), "1": (0.155, 0.16)}
     csv = tmp_path / "f.csv"
     csv.write_text(
         "bus,far_bus,required_clearing_cycles,target_cct_s\n3,101,6,\n1,,,0.3\n13,101,,\n"
