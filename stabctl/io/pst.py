@@ -395,10 +395,12 @@ def _parse_matrix(body: str, start: int, where: str, name: str) -> np.ndarray:
         elif _NUMBER.match(tok):
             row.append(_to_float(tok))
         else:
-            raise CaseError(
-                f"{where} line {lineno}: '{name}': '{tok}' is not a number "
-                "(only literal matrices are read; evaluate the file with Octave first)"
+            hint = (
+                "a number is written in ASCII digits"
+                if not tok.isascii()
+                else "only literal matrices are read; evaluate the file with Octave first"
             )
+            raise CaseError(f"{where} line {lineno}: '{name}': '{tok}' is not a number ({hint})")
     if row:
         rows.append(row)
         row_lines.append(lineno)

@@ -80,7 +80,10 @@ c = [1.5e-3 -2 +3];
         ("r = [1 2] * 3;\n", r"line 1: 'r' is not a literal matrix or number"),
         ("s = [1 - 2];\n", r"line 1: 's': '-' is not a number"),
         # float() reads a fullwidth digit as its ASCII one (and Python's \d matches it)
-        ("mac_con = [1 2;\n 3 \uff16.5];\n", r"line 2: 'mac_con': '\uff16.5' is not a number"),
+        (
+            "mac_con = [1 2;\n 3 \uff16.5];\n",
+            r"line 2: 'mac_con': '\uff16.5' is not a number \(a number is written in ASCII",
+        ),
         ("basmva = \uff11\uff10\uff10;\n", r"line 1: 'basmva' is not a literal matrix or number"),
     ],
 )
