@@ -325,7 +325,7 @@ def probes(cwd: Path) -> list[P4]:
         ("simulate kundur --trip 3 101 --t-trip 1 --t-trip 1.2 --tf 2", "--t-trip"),
         ("simulate kundur --trip-gen 99 1 --tf 2", "99"),
         ("simulate kundur --trip-gen 1 nan --tf 2", "--trip-gen"),
-        ("simulate kundur --trip-gen 1 1 --trip-gen 1 1.5 --tf 2", "generator trip (machine 1) at 1.5 s"),
+        ("simulate kundur --trip-gen 1 1 --trip-gen 1 1.5 --tf 2", "machine 1 tripped at 1.5 s"),
         ("simulate kundur --load-step 999 1 0.1 0 --tf 2", "999"),
         ("simulate kundur --load-step 4 1 nan 0 --tf 2", "--load-step"),
         ("simulate kundur --load-step 4 1 1e308 0 --tf 2", "--load-step"),

@@ -14,7 +14,6 @@ when it runs (`stabctl.dynamics.events.validate`).
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
 from numbers import Real
@@ -47,21 +46,6 @@ class _AtOneTime:
     """An event that happens at one instant ``self.t`` (s)."""
 
     t: float  # each subclass's field (a plain annotation: no field of this base)
-
-    def __str__(self) -> str:
-        """The event in words for messages, e.g. ``line trip 3-101 (circuit 1) at 1 s``."""
-        kind = re.sub(r"(?<!^)(?=[A-Z])", " ", type(self).__name__).lower()
-        f = {k: v for k, v in vars(self).items() if k != "t"}
-        if "from_bus" in f:
-            what = f"{f.pop('from_bus')}-{f.pop('to_bus')}"
-            f = {"circuit": f.pop("circuit", 1), **f}
-        else:
-            what = ""
-        detail = ", ".join(
-            f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in f.items()
-        )
-        parts = (kind, what, f"({detail})" if detail else "", f"at {self.t:g} s")
-        return " ".join(t for t in parts if t)
 
     def times(self):
         """The event's times.
@@ -145,16 +129,23 @@ class Fault:
         return self.clear_near if self.clear_far is None else self.clear_far
 
     def __str__(self) -> str:
-        """The fault in words for messages, e.g. ``fault at bus 3 on line 3-101 at 1 s,
-        cleared at 1.1 s``."""
-        line = "" if self.far_bus is None else f" on line {self.bus}-{self.far_bus}"
-        if self.far_bus is not None and self.circuit != 1:
-            line += f" (circuit {self.circuit})"
-        at = f"fault at bus {self.bus}{line} at {self.t:g} s"
+        """The fault in words, as messages and the CLI give it: ``3-phase fault at bus 3
+        at 1 s on line 3-101 (circuit 1), cleared at 1.1 s (after 100.0 ms), line
+        tripped``."""
+        z = "" if self.r == 0 and self.x == 0 else f" through {self.r:g}{self.x:+g}j pu"
+        s = f"3-phase fault{z} at bus {self.bus} at {self.t:g} s"
         if self.clear_near is None:
-            return f"{at}, never cleared"
-        far = "" if self.far_clear == self.clear_near else f", far end at {self.far_clear:g} s"
-        return f"{at}, cleared at {self.clear_near:g} s{far}"
+            return s + ", never cleared"
+        near = f"at {_ms(self.clear_near)} s (after {1000 * (self.clear_near - self.t):.1f} ms)"
+        if self.far_bus is None:
+            return s + f", cleared {near} without loss of a line"
+        far = f"at {_ms(self.far_clear)} s (after {1000 * (self.far_clear - self.t):.1f} ms)"
+        return (
+            s
+            + f" on line {self.bus}-{self.far_bus} (circuit {self.circuit}), cleared "
+            + (near if far == near else f"{near} near / {far} far end")
+            + ", line tripped"
+        )
 
 
 @dataclass(frozen=True)
@@ -178,6 +169,12 @@ class LineTrip(_AtOneTime):
     to_bus: int
     t: float
     circuit: int = 1
+
+    def __str__(self) -> str:
+        """The event in words, as messages and the CLI give it."""
+        return (
+            f"line {self.from_bus}-{self.to_bus} (circuit {self.circuit}) tripped at {self.t:g} s"
+        )
 
 
 @dataclass(frozen=True)
@@ -203,6 +200,10 @@ class LineClose(_AtOneTime):
     t: float
     circuit: int = 1
 
+    def __str__(self) -> str:
+        """The event in words, as messages and the CLI give it."""
+        return f"line {self.from_bus}-{self.to_bus} (circuit {self.circuit}) closed at {self.t:g} s"
+
 
 @dataclass(frozen=True)
 class GeneratorTrip(_AtOneTime):
@@ -219,6 +220,10 @@ class GeneratorTrip(_AtOneTime):
 
     machine: int
     t: float
+
+    def __str__(self) -> str:
+        """The event in words, as messages and the CLI give it."""
+        return f"machine {self.machine} tripped at {self.t:g} s"
 
 
 @dataclass(frozen=True)
@@ -247,6 +252,10 @@ class LoadStep(_AtOneTime):
     P: float
     Q: float = 0.0
 
+    def __str__(self) -> str:
+        """The event in words, as messages and the CLI give it."""
+        return f"load step {self.P:g}{self.Q:+g}j pu at bus {self.bus} at {self.t:g} s"
+
 
 @dataclass(frozen=True)
 class VrefStep(_AtOneTime):
@@ -269,6 +278,10 @@ class VrefStep(_AtOneTime):
     machine: int
     t: float
     dV: float
+
+    def __str__(self) -> str:
+        """The event in words, as messages and the CLI give it."""
+        return f"VREF of machine {self.machine} stepped by {self.dV:+g} pu at {self.t:g} s"
 
 
 @dataclass(frozen=True)
@@ -295,6 +308,10 @@ class PrefStep(_AtOneTime):
     t: float
     dP: float
 
+    def __str__(self) -> str:
+        """The event in words, as messages and the CLI give it."""
+        return f"PREF of machine {self.machine} stepped by {self.dP:+g} pu at {self.t:g} s"
+
 
 @dataclass(frozen=True)
 class MotorSwitch(_AtOneTime):
@@ -317,6 +334,10 @@ class MotorSwitch(_AtOneTime):
     motor: int
     t: float
     on: bool = True
+
+    def __str__(self) -> str:
+        """The event in words, as messages and the CLI give it."""
+        return f"motor {self.motor} switched {'on' if self.on else 'off'} at {self.t:g} s"
 
 
 @dataclass(frozen=True)
@@ -352,6 +373,11 @@ class Playback:
             ``at``, s.
         """
         return [float(t) for t in self.at]
+
+    def __str__(self) -> str:
+        """The event in words, as messages and the CLI give it."""
+        start = f" from {self.at[0]:g} s" if len(self.at) else ""
+        return f"playback of machine {self.machine} at {len(self.at)} time(s){start}"
 
 
 #: the event classes a case's own records may name (`Case.events`, ``kind``)
@@ -457,3 +483,8 @@ def _fits(annotation: str, value) -> bool:
     if not isinstance(value, Real) or not math.isfinite(value):
         return False
     return "float" in annotation or float(value).is_integer()
+
+
+def _ms(t: float) -> str:
+    """A time in s to the ms, without trailing zeros (1.18333 -> 1.183, 1.35 -> 1.35)."""
+    return f"{t:.3f}".rstrip("0").rstrip(".")

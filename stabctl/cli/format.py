@@ -61,74 +61,14 @@ def describe_sw_con(case) -> str | None:
         evs = from_sw_con(case)
     except StabctlError as exc:
         return f"unsupported ({exc})"
-    what = "; ".join(describe_event(e) for e in evs) or "no disturbance"
+    what = "; ".join(map(str, evs)) or "no disturbance"
     return f"{what}; {float(case.sw_con[-1, 0]):g} s, data-file step {float(case.sw_con[0, 6]):g} s"
-
-
-def describe_event(ev) -> str:
-    """One line describing a disturbance event (fault, line trip or reclosure, machine
-    trip, load step, VREF or PREF step, motor switching).
-
-    Parameters
-    ----------
-    ev : stabctl.dynamics.events event
-
-    Returns
-    -------
-    str
-    """
-    from stabctl.dynamics.events import (
-        Fault,
-        GeneratorTrip,
-        LineClose,
-        LineTrip,
-        LoadStep,
-        MotorSwitch,
-        PrefStep,
-        VrefStep,
-    )
-
-    if isinstance(ev, Fault):
-        z = "" if ev.r == 0 and ev.x == 0 else f" through {ev.r:g}{ev.x:+g}j pu"
-        s = f"3-phase fault{z} at bus {ev.bus} at {ev.t:g} s"
-        if ev.clear_near is None:
-            return s + ", never cleared"
-        near = f"at {_ms(ev.clear_near)} s (after {1000 * (ev.clear_near - ev.t):.1f} ms)"
-        if ev.far_bus is None:
-            return s + f", cleared {near} without loss of a line"
-        far = f"at {_ms(ev.far_clear)} s (after {1000 * (ev.far_clear - ev.t):.1f} ms)"
-        return (
-            s
-            + f" on line {ev.bus}-{ev.far_bus} (circuit {ev.circuit}), cleared "
-            + (near if far == near else f"{near} near / {far} far end")
-            + ", line tripped"
-        )
-    if isinstance(ev, LineTrip):
-        return f"line {ev.from_bus}-{ev.to_bus} (circuit {ev.circuit}) tripped at {ev.t:g} s"
-    if isinstance(ev, LineClose):
-        return f"line {ev.from_bus}-{ev.to_bus} (circuit {ev.circuit}) closed at {ev.t:g} s"
-    if isinstance(ev, GeneratorTrip):
-        return f"machine {ev.machine} tripped at {ev.t:g} s"
-    if isinstance(ev, LoadStep):
-        return f"load step {ev.P:g}{ev.Q:+g}j pu at bus {ev.bus} at {ev.t:g} s"
-    if isinstance(ev, VrefStep):
-        return f"VREF of machine {ev.machine} stepped by {ev.dV:+g} pu at {ev.t:g} s"
-    if isinstance(ev, PrefStep):
-        return f"PREF of machine {ev.machine} stepped by {ev.dP:+g} pu at {ev.t:g} s"
-    if isinstance(ev, MotorSwitch):
-        return f"motor {ev.motor} switched {'on' if ev.on else 'off'} at {ev.t:g} s"
-    return repr(ev)
 
 
 def step_text(h: float) -> str:
     """An integration step for a person: in ms to four significant digits (0.00634328 s ->
     '6.343 ms', 1/120 s -> '8.333 ms'); JSON keeps the step in s, whole."""
     return f"{1000 * h:.4g} ms"
-
-
-def _ms(t: float) -> str:
-    """A time in s to the ms, without trailing zeros (1.18333 -> 1.183, 1.35 -> 1.35)."""
-    return f"{t:.3f}".rstrip("0").rstrip(".")
 
 
 def save_plot_atomically(result, path: Path, title: str, case) -> None:

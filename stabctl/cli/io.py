@@ -9,7 +9,7 @@ from typing import cast
 import click
 
 from stabctl.cli.checks import check_suffix
-from stabctl.cli.format import describe_event, describe_sw_con, print_json
+from stabctl.cli.format import describe_sw_con, print_json
 from stabctl.cli.options import AliasedOption, json_option, refuse_given, reports_errors
 from stabctl.errors import InputError
 
@@ -240,9 +240,7 @@ def _imported(case, out) -> tuple[dict, str]:
     if case.events:  # the case's own disturbance (simulate --case-events runs it)
         from stabctl.dynamics.events import from_case
 
-        named = [
-            f"{describe_event(e)} ({rec['source']})" for e, rec in zip(from_case(case), case.events)
-        ]
+        named = [f"{e} ({rec['source']})" for e, rec in zip(from_case(case), case.events)]
         summary["events"] = named
         text += "; its own events (simulate --case-events): " + "; ".join(named)
     return summary, text

@@ -9,7 +9,6 @@ import click
 from stabctl.cli.checks import OUT_SUFFIXES, PLOT_SUFFIXES, check_suffix
 from stabctl.cli.format import (
     describe_esd,
-    describe_event,
     machine_list,
     print_json,
     print_storage,
@@ -178,8 +177,7 @@ def _check_ends(own: list, given: list, tf: float) -> None:
         cut = [e for e in events if any(tf <= t < math.inf for t in e.times())]
         if cut:
             raise InputError(
-                f"{describe_event(cut[0])}: ends at or after the end of the run "
-                f"(--tf {tf:g} s); {hint}"
+                f"{cut[0]}: ends at or after the end of the run (--tf {tf:g} s); {hint}"
             )
 
 
@@ -423,9 +421,7 @@ def simulate(
         raise InputError(f"--tf must be > 0 s, got {tf:g}")
     late = [e for e in events if min(e.times()) >= tf]
     if late:
-        raise InputError(
-            f"{describe_event(late[0])}: starts at or after the end of the run (--tf {tf:g} s)"
-        )
+        raise InputError(f"{late[0]}: starts at or after the end of the run (--tf {tf:g} s)")
     _check_ends(own, given, tf)
     if step is not None:
         check_step_count(tf, step, case)  # refused before any work (building the model)
@@ -472,7 +468,7 @@ def simulate(
     )
     written = []
     if plot_p is not None:
-        title = f"{case.name}: " + ("; ".join(describe_event(e) for e in events) or "flat run")
+        title = f"{case.name}: " + ("; ".join(map(str, events)) or "flat run")
         if esd is not None:
             title += "\n" + describe_esd(esd, short=True)
         save_plot_atomically(result, plot_p, title=title, case=case)
@@ -496,7 +492,7 @@ def simulate(
                 "conventions": conventions,
                 "q_limits": q_limits,
                 "esd": esd,
-                "events": [describe_event(e) for e in events],
+                "events": [str(e) for e in events],
                 "suspect_starts": list(sim.suspect),
                 "files": written,
             }
@@ -510,7 +506,7 @@ def simulate(
         f"wall {summary.get('wall_time_s', float('nan')):.2f} s"
     )
     for e in events or ["flat run (no disturbance)"]:
-        click.echo(f"  {e if isinstance(e, str) else describe_event(e)}")
+        click.echo(f"  {e}")
     for line in sim.suspect:
         click.echo(f"  initial condition suspect, run on: {line}")
     for isl in result.meta.get("islanded", []):

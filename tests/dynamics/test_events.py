@@ -134,16 +134,19 @@ def test_line_switchings_must_alternate(kundur, events, needle):
 
 
 def test_events_read_as_words_in_messages():
-    """A message naming events shows them as a planner writes them, not as Python
-    reprs: a line trip, a generator trip and a fault with its clearing."""
+    """A message naming events shows them as the CLI's summary does, not as Python
+    reprs: a line trip, a generator trip, a fault with its clearing, one never cleared
+    and one cleared at the far end later."""
     from stabctl.dynamics.events import Fault, GeneratorTrip, LineTrip
 
-    assert str(LineTrip(3, 101, 1.0)) == "line trip 3-101 (circuit 1) at 1 s"
-    assert str(GeneratorTrip(2, 1.5)) == "generator trip (machine 2) at 1.5 s"
+    assert str(LineTrip(3, 101, 1.0)) == "line 3-101 (circuit 1) tripped at 1 s"
+    assert str(GeneratorTrip(2, 1.5)) == "machine 2 tripped at 1.5 s"
     assert str(Fault(3, 1.0, 1.1, far_bus=101)) == (
-        "fault at bus 3 on line 3-101 at 1 s, cleared at 1.1 s"
+        "3-phase fault at bus 3 at 1 s on line 3-101 (circuit 1), cleared at 1.1 s "
+        "(after 100.0 ms), line tripped"
     )
-    assert str(Fault(7, 1.0)) == "fault at bus 7 at 1 s, never cleared"
+    assert str(Fault(7, 1.0)) == "3-phase fault at bus 7 at 1 s, never cleared"
     assert str(Fault(3, 1.0, 1.1, 1.15, far_bus=101, circuit=2)) == (
-        "fault at bus 3 on line 3-101 (circuit 2) at 1 s, cleared at 1.1 s, far end at 1.15 s"
+        "3-phase fault at bus 3 at 1 s on line 3-101 (circuit 2), cleared at 1.1 s "
+        "(after 100.0 ms) near / at 1.15 s (after 150.0 ms) far end, line tripped"
     )
