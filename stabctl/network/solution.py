@@ -130,10 +130,6 @@ def reduce_network(
             raise SimulationError(
                 f"singular network in stage of case '{case.name}': {exc}"
             ) from exc
-        if not np.all(np.isfinite(rec)):
-            raise SimulationError(
-                f"singular network (island without a source) in case '{case.name}'"
-            )
         Yred, factor = Ykk + Yke @ rec, None
     else:  # a sparse LU of the eliminated part: memory in the kept columns only
         full = _augmented(build_ybus(case), y_shunt, y, mac_bus, mac_online).tocsr()
@@ -143,6 +139,8 @@ def reduce_network(
             rec, Yred = factor.rec, factor.Yred
         else:
             (rec, Yred), factor = got, None
+    if not np.all(np.isfinite(rec)):  # every path's check, before any stage is kept
+        raise SimulationError(f"singular network (island without a source) in case '{case.name}'")
     if len(nc_idx):
         R = np.zeros((n_bus, keep.size), complex)
         R[np.asarray(nc_idx, int), n_mac + np.arange(len(nc_idx))] = 1.0
@@ -166,15 +164,14 @@ def reduce_network(
 
 def _sparse_reduction(full, keep, elim, name: str) -> lowrank.SparseReduction:
     """The sparse LU reduction of `full` (CSR) onto `keep` (SuperLU of the eliminated
-    part); SimulationError when that part is singular (an island without a source)."""
+    part); SimulationError when SuperLU finds that part singular (`reduce_network` checks
+    the result for an island without a source)."""
     a_ke = full[keep][:, elim]
     try:
         lu = spla.splu(full[elim][:, elim].tocsc())
         rec = -lu.solve(full[elim][:, keep].toarray())
     except RuntimeError as exc:  # "Factor is exactly singular"
         raise SimulationError(f"singular network in stage of case '{name}': {exc}") from exc
-    if not np.all(np.isfinite(rec)):
-        raise SimulationError(f"singular network (island without a source) in case '{name}'")
     Yred = full[keep][:, keep].toarray() + a_ke @ rec
     return lowrank.SparseReduction(full, keep, elim, lu, rec, Yred, a_ke)
 
