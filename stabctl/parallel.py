@@ -188,6 +188,7 @@ def _lost(job: Job, exc: BaseException) -> dict:
 #: longest line a records file may hold, bytes: a sweep record is a few kB; a longer line
 #: means a file that is not a records file (read in bounded pieces, never whole)
 MAX_RECORD_LINE = 16 * 2**20
+REAP_TIMEOUT = 30.0  # s a stopped pool waits for its killed workers to be reaped
 
 
 def _record_lines(path: Path) -> Iterator[tuple[int, str, dict | None]]:
@@ -388,12 +389,22 @@ def stop_pool(pool: ProcessPoolExecutor) -> None:
             proc.kill()
         except (OSError, ValueError, AttributeError):  # already gone
             pass
+    deadline = time.monotonic() + REAP_TIMEOUT
     for proc in procs:
-        try:
-            proc.join(timeout=5.0)
-        except (OSError, ValueError, AssertionError):  # closed, or not started here
-            pass
+        _reap(proc, deadline)
     pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _reap(proc: Any, deadline: float) -> None:
+    """Wait (until `deadline`, monotonic s) for a killed worker's exit code.  The pool's
+    own management thread may reap the worker at the same moment: its waitpid then
+    wins and ours sees no child until that thread has stored the code, so the code is
+    polled rather than taken from one join."""
+    try:
+        while proc.exitcode is None and time.monotonic() < deadline:
+            proc.join(timeout=0.05)
+    except (OSError, ValueError, AssertionError):  # closed, or not started here
+        pass
 
 
 @contextmanager
