@@ -7,8 +7,10 @@ stages of a run.  A case's own disturbance (`Case.events`, as ``import-andes`` s
 ANDES's Toggle, Fault and Alter records) is a tuple of records, each its event's class
 name as ``kind``, its fields and its ``source``; `events_of_records` makes them events,
 and a case is made only if it can (`stabctl.case.Case`): a case with a malformed event is
-a malformed case.  Whether the buses, lines and machines an event names exist is checked
-when it runs (`stabctl.dynamics.events.validate`).
+a malformed case.  `check_names` looks up the buses, lines, machines and motors an event
+names in a case (`stabctl.dynamics.events.validate` when a run starts), and
+`check_case_events` those of a case's own records (a case file's reader, when it is
+loaded); the event's times against each other are checked when it runs.
 """
 
 from __future__ import annotations
@@ -17,10 +19,14 @@ import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
 from numbers import Real
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from stabctl.errors import CaseError
+
+if TYPE_CHECKING:
+    from stabctl.case.system import Case
 
 __all__ = [
     "FAULT_B",
@@ -36,6 +42,8 @@ __all__ = [
     "EVENT_KINDS",
     "as_record",
     "events_of_records",
+    "check_names",
+    "check_case_events",
 ]
 
 #: PST's bolted-fault shunt susceptance (1/1e-7), pu
@@ -463,6 +471,64 @@ def _event_of_record(k: int, rec):
         return cls(**values)
     except TypeError as e:
         raise CaseError(f"{where}: {rec['kind']} {e}") from None
+
+
+def check_names(case: Case, ev) -> None:
+    """Look up in ``case`` every bus, line, machine and motor ``ev`` names.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+    ev : Fault, LineTrip, LineClose, GeneratorTrip, LoadStep, VrefStep, PrefStep, \
+MotorSwitch or Playback
+        The event.
+
+    Raises
+    ------
+    UnknownBusError
+        A bus not in the case (`Case.bus_index`), the message naming it.
+    CaseError
+        A line (circuit) not in the case (`Case.circuit_row`), a machine
+        (`Case.machine_index`) or a motor (`Case.motor_index`) it lacks, the message
+        naming it.
+    """
+    if isinstance(ev, Fault):
+        case.bus_index(ev.bus)
+        if ev.far_bus is not None:
+            case.circuit_row(ev.bus, ev.far_bus, ev.circuit)
+    elif isinstance(ev, (LineTrip, LineClose)):
+        case.circuit_row(ev.from_bus, ev.to_bus, ev.circuit)
+    elif isinstance(ev, LoadStep):
+        case.bus_index(ev.bus)
+    elif isinstance(ev, (GeneratorTrip, VrefStep, PrefStep, Playback)):
+        case.machine_index(ev.machine)
+    elif isinstance(ev, MotorSwitch):
+        case.motor_index(ev.motor)
+
+
+def check_case_events(case: Case) -> None:
+    """Look up in ``case`` the buses, lines, machines and motors of its own events
+    (`Case.events`, `check_names`).
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+
+    Raises
+    ------
+    CaseError
+        An event naming what the case lacks (UnknownBusError for a bus): the message
+        names the record (``events[k]`` with its ``source``), the event in words and what
+        is missing.
+    """
+    for k, (ev, rec) in enumerate(zip(events_of_records(case.events), case.events)):
+        try:
+            check_names(case, ev)
+        except CaseError as exc:
+            where = f"events[{k}] ({rec.get('source', 'no source')})"
+            raise type(exc)(f"{where}: {ev}: {exc}") from None
 
 
 #: what a value of each field annotation of the event classes must be

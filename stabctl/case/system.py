@@ -975,7 +975,9 @@ class Case:
         `stabctl.case.events` class), that class's fields (s, pu on the system base,
         bus and machine numbers as in the data) and ``source`` (the record it came from);
         `stabctl.case.events.events_of_records` makes them events (a record it cannot
-        make one of is refused when the case is made).  Empty by default.
+        make one of is refused when the case is made; a case file's record naming a bus,
+        line, machine or motor the case lacks is refused when the file is read,
+        `stabctl.case.events.check_case_events`).  Empty by default.
     extra : Mapping[str, numpy.ndarray]
         Other PST matrices of the data file kept as given (``lmod_con``, ``PDC``, ...),
         name -> read-only 2-D float array (units as in the file).
@@ -1233,6 +1235,93 @@ class Case:
         """
         k = self.machine_index(number)
         return f"G{int(self.machines.number[k])} (bus {int(self.machines.bus[k])})"
+
+    def motor_index(self, number) -> int:
+        """0-based row of motor ``number`` in ``motors``.
+
+        Parameters
+        ----------
+        number : int
+            Motor number (``mot_con`` column 1), a scalar.
+
+        Returns
+        -------
+        int
+            0-based row of the motor in ``motors``.
+
+        Raises
+        ------
+        CaseError
+            The case has no such motor; the message names it.
+        """
+        hit = np.flatnonzero(self.motors.number == number)
+        if hit.size == 0:
+            raise CaseError(f"motor {number} does not exist in mot_con")
+        return int(hit[0])
+
+    def branch_rows(self, bus_a, bus_b) -> np.ndarray:
+        """0-based rows of every branch joining buses ``bus_a`` and ``bus_b``.
+
+        Parameters
+        ----------
+        bus_a, bus_b : int
+            Bus numbers (as in the data), in either order.
+
+        Returns
+        -------
+        numpy.ndarray
+            int array of the rows in ``branches`` joining them (either direction), in
+            table order: the row order numbers the parallel circuits 1, 2, ...; empty if
+            none does.
+
+        Raises
+        ------
+        UnknownBusError
+            A bus not in the case.
+        """
+        self.bus_index(bus_a)
+        self.bus_index(bus_b)
+        br = self.branches
+        hit = ((br.from_bus == bus_a) & (br.to_bus == bus_b)) | (
+            (br.from_bus == bus_b) & (br.to_bus == bus_a)
+        )
+        return np.flatnonzero(hit)
+
+    def circuit_row(self, bus_a, bus_b, circuit: int = 1) -> int:
+        """0-based branch row of circuit ``circuit`` of the line ``bus_a``-``bus_b``.
+
+        PST's ``sw_con`` trips the first line found between the fault bus and the far bus,
+        i.e. circuit 1.
+
+        Parameters
+        ----------
+        bus_a, bus_b : int
+            Bus numbers (as in the data) of the line's ends, in either order.
+        circuit : int, optional
+            Which of the parallel circuits (1 = the first branch row joining them, as
+            `branch_rows` orders them); default 1.
+
+        Returns
+        -------
+        int
+            0-based row in ``branches``.
+
+        Raises
+        ------
+        UnknownBusError
+            A bus not in the case.
+        CaseError
+            No branch joins the two buses, or fewer than ``circuit`` do.
+        """
+        rows = self.branch_rows(bus_a, bus_b)
+        if rows.size == 0:
+            raise CaseError(f"line: no branch between bus {bus_a} and bus {bus_b}")
+        if not 1 <= circuit <= rows.size:
+            raise CaseError(
+                f"line: circuit {circuit} between bus {bus_a} and bus {bus_b} does not exist "
+                f"({rows.size} circuit(s))"
+            )
+        return int(rows[circuit - 1])
 
     @property
     def swing_index(self) -> np.ndarray:

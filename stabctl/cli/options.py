@@ -555,6 +555,54 @@ def tf_option(extra: str = ""):
     )
 
 
+def fault_text(fault, far_bus, circuit: int = 1) -> str:
+    """The options of a fault as given: ``--fault BUS [--far-bus FAR] [--circuit K]``.
+
+    Parameters
+    ----------
+    fault : int
+        --fault's bus.
+    far_bus : int or None
+        --far-bus's bus, None if not given.
+    circuit : int, optional
+        --circuit's value (named only when not 1).
+
+    Returns
+    -------
+    str
+        For messages.
+    """
+    far = "" if far_bus is None else f" --far-bus {far_bus}"
+    return f"--fault {fault}{far}" + (f" --circuit {circuit}" if circuit != 1 else "")
+
+
+def check_option_events(case, given) -> None:
+    """Look up in ``case`` the buses, lines, machines and motors the events of the options
+    name (`stabctl.case.events.check_names`), before any work.
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+        The case.
+    given : iterable of (str, event)
+        Each event with the option that gave it, as given (``"--trip 3 77"``).
+
+    Raises
+    ------
+    InputError
+        The first event naming what the case lacks: the option, and the bus, line,
+        machine or motor missing.
+    """
+    from stabctl.case.events import check_names
+    from stabctl.errors import CaseError
+
+    for option, ev in given:
+        try:
+            check_names(case, ev)
+        except CaseError as exc:
+            raise InputError(f"{option}: {exc}") from None
+
+
 def fault_options(required: bool, t_fault: bool = True, far_required: bool | None = None):
     """``--fault BUS --far-bus BUS`` and (``t_fault``) ``--t-fault S``: a bolted fault;
     `far_required` (default `required`): whether --far-bus must be given (without it the
@@ -642,24 +690,38 @@ def faults_option(func):
     )(func)
 
 
-def read_fault_list(case_name: str, src: str):
-    """The faults of ``--faults``: the built-in list for DEFAULT, else the CSV file.
+def read_fault_list(case, case_name: str, src: str):
+    """The faults of ``--faults``: the built-in list for DEFAULT, else the CSV file; each
+    fault's buses and lines looked up in the case before any work.
 
     Parameters
     ----------
+    case : stabctl.case.Case
+        The case loaded from `case_name`.
     case_name : str
+        The command's CASE, as given.
     src : str
         ``DEFAULT`` or a CSV path.
 
     Returns
     -------
     sequence of stabctl.stability.cct.LineFault
+
+    Raises
+    ------
+    InputError
+        A file the table refuses (`stabctl.stability.cct.read_faults`), or a fault of a
+        bus or line the case lacks: ``--faults`` with the file, the fault and what is
+        missing named.
     """
     # the one place the CLI imports the paper's default fault lists
     from stabctl.stability.cct import read_faults
     from stabctl.studies.cases import default_faults
 
-    return default_faults(case_name) if src == "DEFAULT" else read_faults(src)
+    faults = default_faults(case_name) if src == "DEFAULT" else read_faults(src)
+    for f in faults:
+        check_option_events(case, ((f"--faults {src}: {f.describe()}", ev) for ev in f.events(0)))
+    return faults
 
 
 def tol_options(t_max: float = 1.0, t_max_help: str = "a CCT above it is an error"):

@@ -274,7 +274,7 @@ def place(
         cost_mw, cost_mwh, cost_site, read_site_costs(site_costs, n_mac) if site_costs else {}
     )
     brackets = screening_brackets(screening, case_name, case.digest()) if screening else None
-    faults = read_fault_list(case_name, faults_src)
+    faults = read_fault_list(case, case_name, faults_src)
     overrides = read_requirements(faults_src) if faults_src != "DEFAULT" else {}
     sites = candidate_sites(case, max_site_pct)
     n = min(workers or default_workers(), len(faults) * len(levels))

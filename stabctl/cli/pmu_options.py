@@ -10,8 +10,10 @@ from stabctl.cli.options import (
     FLOAT,
     TF_AFTER_FAULT_S,
     _apply,
+    check_option_events,
     clear_cycles_option,
     fault_options,
+    fault_text,
     tf_option,
 )
 from stabctl.errors import InputError
@@ -138,7 +140,9 @@ def pmu_settings(
 
 
 def fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
-    """The case, the fault event and the end of the run (default: fault + 5 s)."""
+    """The case, the fault event and the end of the run (default: fault + 5 s); an unknown
+    bus or line refused before any work, naming --fault / --far-bus
+    (`check_option_events`)."""
     from stabctl.dynamics.events import fault_with_clearing
     from stabctl.io import load_case
 
@@ -146,7 +150,9 @@ def fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
     if not tf > 0:
         raise InputError(f"--tf must be > 0, got {tf:g}")
     case = load_case(case_name)
-    return case, fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles), tf
+    ev = fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles)
+    check_option_events(case, [(fault_text(fault, far_bus), ev)])
+    return case, ev, tf
 
 
 def fault_run_options(func):

@@ -20,6 +20,7 @@ from stabctl.cli.options import (
     FLOAT,
     INT,
     TF_AFTER_FAULT_S,
+    check_option_events,
     check_storage_given,
     circuit_option,
     clear_cycles_option,
@@ -27,6 +28,7 @@ from stabctl.cli.options import (
     esd_model_option,
     far_end,
     fault_options,
+    fault_text,
     json_option,
     model_options,
     out_file_option,
@@ -82,18 +84,24 @@ def _line_close(a: int, b: str, t: float):
     return LineClose(a, to, t, circuit=k)
 
 
-def _study_events(bus_faults, closes, gen_trips, load_steps, vref_steps, pref_steps):
-    """The events of the PSS/E-study options, in the order given per option."""
+def _study_events(case, bus_faults, closes, gen_trips, load_steps, vref_steps, pref_steps):
+    """The events of the PSS/E-study options, in the order given per option; InputError
+    naming the option of the first whose bus, line or machine the case lacks."""
     from stabctl.dynamics.events import GeneratorTrip, LoadStep, PrefStep, VrefStep
 
-    return [
-        *(_bus_fault(*f) for f in bus_faults),
-        *(_line_close(a, b, t) for a, b, t in closes),
-        *(GeneratorTrip(m, t) for m, t in gen_trips),
-        *(LoadStep(b, t, p, q) for b, t, p, q in load_steps),
-        *(VrefStep(m, t, dv) for m, t, dv in vref_steps),
-        *(PrefStep(m, t, dp) for m, t, dp in pref_steps),
+    given = [
+        *((f"--bus-fault {s} {a:g} {b:g}", _bus_fault(s, a, b)) for s, a, b in bus_faults),
+        *((f"--close {a} {b} {t:g}", _line_close(a, b, t)) for a, b, t in closes),
+        *((f"--trip-gen {m} {t:g}", GeneratorTrip(m, t)) for m, t in gen_trips),
+        *(
+            (f"--load-step {b} {t:g} {p:g} {q:g}", LoadStep(b, t, p, q))
+            for b, t, p, q in load_steps
+        ),
+        *((f"--vref-step {m} {t:g} {dv:g}", VrefStep(m, t, dv)) for m, t, dv in vref_steps),
+        *((f"--pref-step {m} {t:g} {dp:g}", PrefStep(m, t, dp)) for m, t, dp in pref_steps),
     ]
+    check_option_events(case, given)
+    return [ev for _, ev in given]
 
 
 def _build_events(
@@ -142,11 +150,11 @@ def _build_events(
             raise InputError(f"--far-clear-cycles must be >= 0, got {far_clear_cycles:g}")
         if t_fault < 0:
             raise InputError(f"--t-fault must be >= 0 s, got {t_fault:g}")
-        events.append(
-            fault_with_clearing(
-                case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit=circuit
-            )
+        ev = fault_with_clearing(
+            case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit=circuit
         )
+        check_option_events(case, [(fault_text(fault, far_bus, circuit), ev)])
+        events.append(ev)
     if trips:
         times = list(t_trips) or [1.0]
         if len(times) == 1:
@@ -161,6 +169,7 @@ def _build_events(
                 raise InputError(f"--t-trip must be >= 0 s, got {t:g}")
             to, k = far_end(b, "--trip")
             events.append(LineTrip(a, to, t, circuit=k))
+            check_option_events(case, [(f"--trip {a} {b}", events[-1])])
     elif t_trips:
         raise InputError("--t-trip given without --trip")
     return own, events
@@ -411,7 +420,9 @@ def simulate(
         pstess_default,
         case_events,
     )
-    given = events + _study_events(bus_fault, close, trip_gen, load_step, vref_step, pref_step)
+    given = events + _study_events(
+        case, bus_fault, close, trip_gen, load_step, vref_step, pref_step
+    )
     events = own + given  # the case's own first
     if tf is None and pstess_default and case.sw_con is not None:
         tf = float(case.sw_con[-1, 0])

@@ -18,6 +18,7 @@ from stabctl.cli.format import print_cct, print_json, print_screening, print_swe
 from stabctl.cli.options import (
     INT,
     check_number,
+    check_option_events,
     check_storage_given,
     circuit_option,
     comma_list,
@@ -25,6 +26,7 @@ from stabctl.cli.options import (
     esd_model_option,
     far_end,
     fault_options,
+    fault_text,
     faults_option,
     json_option,
     model_options,
@@ -160,6 +162,14 @@ def cct(
     model = model_settings(conventions, None, q_limits)
     case = load_case(case_name)
     line_fault = LineFault(fault, far_bus, t_fault, circuit, _trips(trip))
+    fault_ev, *trip_evs = line_fault.events(0.0)
+    check_option_events(
+        case,
+        [
+            (fault_text(fault, far_bus, circuit), fault_ev),
+            *((f"--trip {a} {b}", ev) for (a, b), ev in zip(trip, trip_evs)),
+        ],
+    )
     check_trips(case, line_fault, "--trip")  # before the events' check names none
     validate_events(case, line_fault.events(0.0), t_fault + 1.0)  # before compiling
     sim = model.simulator(case)
@@ -360,7 +370,7 @@ def sweep_cct(
     check_storage_given(next((p for p in ratings if p is not None), None))
     for p in ratings:
         storage_fleet(case, p)
-    faults = read_fault_list(case_name, faults_src)
+    faults = read_fault_list(case, case_name, faults_src)
     check_run_end(faults, search)
     jobs = controlled_cct_jobs(
         case_name, faults, ratings, ctrl, search=search, model=model, esd_model=esd_model

@@ -28,12 +28,12 @@ from stabctl.case.events import (
     Playback,
     PrefStep,
     VrefStep,
+    check_names,
     events_of_records,
 )
 from stabctl.case.events import as_record as as_record
 from stabctl.dynamics.model import StageConfig
 from stabctl.errors import CaseError, InputError
-from stabctl.network.ybus import circuit_row
 
 
 def validate(case: Case, events, t_end: float) -> None:
@@ -46,8 +46,8 @@ def validate(case: Case, events, t_end: float) -> None:
     opened: dict = {}
     switchings: dict = {}
     for ev in events:
+        check_names(case, ev)  # the one lookup of what it names, a case's own at load too
         if isinstance(ev, Fault):
-            case.bus_index(ev.bus)
             if ev.clear_near is not None and ev.clear_near < ev.t:
                 raise InputError(
                     f"fault at bus {ev.bus}: cleared at {ev.clear_near} s "
@@ -60,21 +60,18 @@ def validate(case: Case, events, t_end: float) -> None:
             ):
                 raise InputError(f"fault at bus {ev.bus}: far end clears before near end")
             if ev.far_bus is not None:
-                row = circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
+                row = case.circuit_row(ev.bus, ev.far_bus, ev.circuit)
                 if ev.clear_near is not None:
                     switchings.setdefault(row, []).append((ev.clear_near, ev.far_clear, ev))
         elif isinstance(ev, (LineTrip, LineClose)):
-            row = circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit)
+            row = case.circuit_row(ev.from_bus, ev.to_bus, ev.circuit)
             switchings.setdefault(row, []).append((ev.t, ev.t, ev))
         elif isinstance(ev, (VrefStep, PrefStep)):
             _controlled(case, ev)
         elif isinstance(ev, GeneratorTrip):
-            case.machine_index(ev.machine)
             _open_once(opened, f"machine {ev.machine}", ev)
-        elif isinstance(ev, LoadStep):
-            case.bus_index(ev.bus)
-        elif isinstance(ev, MotorSwitch):
-            _motor_index(case, ev.motor)
+        elif isinstance(ev, (LoadStep, MotorSwitch)):
+            pass
         elif isinstance(ev, Playback):
             _check_playback(case, ev)
         else:
@@ -112,8 +109,7 @@ def _check_switchings(what: str, sw: list) -> None:
 
 def _controlled(case: Case, ev) -> None:
     """CaseError if the machine of a `VrefStep` has no exciter or that of a `PrefStep` no
-    governor (UnknownBusError-like CaseError for an unknown machine)."""
-    case.machine_index(ev.machine)
+    governor (the machine itself looked up by `check_names`)."""
     table, what = (
         (case.exciters, "exciter (exc_con)")
         if isinstance(ev, VrefStep)
@@ -133,14 +129,6 @@ def _check_playback(case: Case, ev: Playback) -> None:
         raise InputError(f"playback of machine {ev.machine}: one dV and one df per time")
     if np.any(np.diff(ev.at) <= 0):
         raise InputError(f"playback of machine {ev.machine}: the times must rise")
-
-
-def _motor_index(case: Case, number: int) -> int:
-    """The row of motor ``number`` in ``case.motors``; CaseError if it has none."""
-    hit = np.flatnonzero(case.motors.number == number)
-    if hit.size == 0:
-        raise CaseError(f"motor {number} does not exist in mot_con")
-    return int(hit[0])
 
 
 def _circuit(case: Case, row: int) -> str:
@@ -194,11 +182,11 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
             if n == 1:
                 faults.append((case.bus_index(ev.bus), ev.admittance))
             elif ev.far_bus is not None:
-                row = circuit_row(case, ev.bus, ev.far_bus, ev.circuit)
+                row = case.circuit_row(ev.bus, ev.far_bus, ev.circuit)
                 feeds.append((row, ev.far_bus, n == 2))
                 lines.append((ev.clear_near, row, True))
         elif isinstance(ev, (LineTrip, LineClose)):
-            row = circuit_row(case, ev.from_bus, ev.to_bus, ev.circuit)
+            row = case.circuit_row(ev.from_bus, ev.to_bus, ev.circuit)
             lines.append((ev.t, row, isinstance(ev, LineTrip)))
         elif isinstance(ev, VrefStep):
             m = case.machine_index(ev.machine)
@@ -212,7 +200,7 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
             b = case.bus_index(ev.bus)
             loads.append((b, complex(ev.P, -ev.Q) / abs(V0[b]) ** 2))
         elif isinstance(ev, MotorSwitch):
-            switched.append((ev.t, _motor_index(case, ev.motor), ev.on))
+            switched.append((ev.t, case.motor_index(ev.motor), ev.on))
         elif isinstance(ev, Playback):
             played.append((case.machine_index(ev.machine), ev.dV[n - 1], ev.df[n - 1]))
     for _t, k, state in sorted(switched):  # the last switching of each motor holds

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.case import TABLES, Case
+from stabctl.case.events import check_case_events
 from stabctl.errors import CaseError
 from stabctl.io.inputs import input_file, plain_float
 
@@ -500,7 +501,9 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
     CaseError
         A wrong format or version; an unknown top-level key, table, table key, column or
         ``extra`` matrix (not in :data:`EXTRA_MATRICES`); a column the model needs left
-        out; invalid data (the file, table, row and field named).
+        out; invalid data (the file, table, row and field named); an event of the case's
+        own that names a bus, line, machine or motor the case lacks (the file, the record,
+        the event and what is missing named; UnknownBusError for a bus).
     """
     if data.get("format") != FORMAT:
         raise CaseError(f"{where}: not a stabctl case (format is {data.get('format')!r})")
@@ -537,7 +540,7 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
     }
     extra = _extra_field(data.get("extra"), where)
     with _located(where):
-        return Case(
+        case = Case(
             name=str(data.get("name", Path(where).stem)),
             base_mva=_field_number(data, "base_mva", where),
             freq_hz=_field_number(data, "freq_hz", where),
@@ -548,6 +551,8 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
             description=str(data.get("description", "")),
             **tables,
         )
+        check_case_events(case)  # a stored event of a bus or line the case lacks
+    return case
 
 
 @contextmanager

@@ -184,35 +184,23 @@ def add_shunts(ybus: sp.spmatrix, index, y) -> sp.csr_matrix:
 
 def find_branches(case: Case, bus_a, bus_b) -> np.ndarray:
     """0-based rows of all branches joining buses ``bus_a`` and ``bus_b`` (either direction),
-    in table order (row order defines the circuit numbers 1, 2, ... of parallel lines).
+    in table order (row order defines the circuit numbers 1, 2, ... of parallel lines):
+    `Case.branch_rows`.
 
     Raises :class:`UnknownBusError` for a bus not in the case.
     """
-    case.bus_index(bus_a)
-    case.bus_index(bus_b)
-    br = case.branches
-    hit = ((br.from_bus == bus_a) & (br.to_bus == bus_b)) | (
-        (br.from_bus == bus_b) & (br.to_bus == bus_a)
-    )
-    return np.flatnonzero(hit)
+    return case.branch_rows(bus_a, bus_b)
 
 
 def circuit_row(case: Case, bus_a, bus_b, circuit: int = 1) -> int:
-    """0-based branch row of circuit ``circuit`` (1-based) between ``bus_a`` and ``bus_b``.
+    """0-based branch row of circuit ``circuit`` (1-based) between ``bus_a`` and ``bus_b``:
+    `Case.circuit_row`.
 
     PST's ``sw_con`` trips the first line found between the fault bus and the far bus,
     i.e. circuit 1. Raises :class:`CaseError` if there is no such branch or circuit,
     :class:`UnknownBusError` for an unknown bus.
     """
-    rows = find_branches(case, bus_a, bus_b)
-    if rows.size == 0:
-        raise CaseError(f"line: no branch between bus {bus_a} and bus {bus_b}")
-    if not 1 <= circuit <= rows.size:
-        raise CaseError(
-            f"line: circuit {circuit} between bus {bus_a} and bus {bus_b} does not exist "
-            f"({rows.size} circuit(s))"
-        )
-    return int(rows[circuit - 1])
+    return case.circuit_row(bus_a, bus_b, circuit)
 
 
 def branch_flows(

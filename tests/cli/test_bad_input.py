@@ -513,6 +513,79 @@ def test_unknown_bus_or_line_is_refused_before_the_model_is_built(args, monkeypa
     assert res.exit_code == 2 and re.search(r"bus \d+|line", res.stderr), res.stderr
 
 
+NO_LINE = "line: no branch between bus 3 and bus 13"  # kundur: bus 3 joins 1, 4, 101, 110
+NO_BUS = "bus 77 is not in case 'kundur'"
+F313 = f"--fault 3 --far-bus 13: {NO_LINE}"
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 13), F313),
+        (
+            ("estimate", "closed-loop", "kundur", "--fault", 3, "--far-bus", 13, "--esd-pct", 5),
+            F313,
+        ),
+        (
+            ("estimate", "cct", "kundur", "--fault", 3, "--far-bus", 13, "--esd-pct", 5),
+            F313,
+        ),
+        (
+            ("pmu", "plant", "kundur", "--fault", 3, "--far-bus", 13, "--esd-pct", 5),
+            F313,
+        ),
+        (("simulate", "kundur", "--fault", 3, "--far-bus", 13), F313),
+        (("cct", "kundur", "--fault", 3, "--far-bus", 13), F313),
+        (("cct", "kundur", "--fault", 3, "--trip", 13, 77), f"--trip 13 77: {NO_BUS}"),
+        (("simulate", "kundur", "--trip", 3, 13), f"--trip 3 13: {NO_LINE}"),
+        (("simulate", "kundur", "--close", 3, "77:2", 1.5), f"--close 3 77:2 1.5: {NO_BUS}"),
+        (
+            ("simulate", "kundur", "--bus-fault", "77:0:0.1", 1, 1.1),
+            f"--bus-fault 77:0:0.1 1 1.1: {NO_BUS}",
+        ),
+        (("simulate", "kundur", "--load-step", 77, 1, 0.1, 0), f"--load-step 77 1 0.1 0: {NO_BUS}"),
+        (("simulate", "kundur", "--trip-gen", 9, 1), "--trip-gen 9 1: machine 9 is not in case"),
+    ],
+)
+def test_an_unknown_bus_or_line_of_an_option_is_named_before_any_work(no_simulation, args, needle):
+    """estimate and pmu built their simulator (and estimate cct started its searches)
+    before the fault's line was looked up; simulate and cct named the bus or line but not
+    the option giving it.  Each is refused first, naming the option as given."""
+    assert_error(run(*args), needle)
+
+
+@pytest.mark.parametrize("command", [("sweep-cct",), ("place", "--required-clearing-cycles", 6)])
+def test_a_fault_list_s_unknown_line_is_named_before_any_work(no_simulation, tmp_path, command):
+    """place compiled its kernels and solved its power flows (a minute and more, cold)
+    before it said 'line: no branch between bus 3 and bus 13' without naming the file;
+    sweep-cct named neither.  Both refuse it first, naming --faults, the file and the
+    fault."""
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n3,101\n3,13\n", encoding="utf-8")
+    out = tmp_path / "o.jsonl"
+    res = run(command[0], "kundur", "--faults", faults, *command[1:], "--out", out)
+    assert_error(res, f"--faults {faults}: fault at bus 3 on line 3-13 at 1 s: {NO_LINE}")
+    assert not out.exists()
+
+
+def test_a_stored_event_of_a_line_the_case_lacks_is_refused_run_or_not(tmp_path):
+    """A case file whose own event trips a line it lacks ran flat (and its summary listed
+    no event) unless --case-events was given: the file is refused when it is loaded,
+    naming the file, the record, the event and the line."""
+    d = _kundur_dict()
+    d["events"] = [{"kind": "LineTrip", "from_bus": 3, "to_bus": 13, "t": 1.0, "source": "T 1"}]
+    path = tmp_path / "own.json"
+    path.write_text(json.dumps(d))
+    out = tmp_path / "r.csv"
+    for args in (["--case-events"], ["--fault", 3, "--far-bus", 101]):
+        res = run("simulate", path, *args, "--tf", 2, "--out", out)
+        assert_error(
+            res,
+            f"{path}: events[0] (T 1): line 3-13 (circuit 1) tripped at 1 s: {NO_LINE}",
+        )
+        assert not out.exists()
+
+
 def test_devices_and_deeply_nested_json_are_refused_by_name(tmp_path):
     """`import-psse /dev/zero` read without end (MemoryError) and a case file of 100 000
     nested JSON arrays stopped `simulate` with a RecursionError; each is now one error line

@@ -165,6 +165,59 @@ def test_validation_errors_surface_through_the_readers(tmp_path):
         load_case(p)
 
 
+@pytest.mark.parametrize(
+    "record, needles",
+    [
+        (
+            {"kind": "LineTrip", "from_bus": 3, "to_bus": 13, "t": 1.0},
+            ["line 3-13 (circuit 1) tripped at 1 s: ", "no branch between bus 3 and bus 13"],
+        ),
+        (
+            {"kind": "LineClose", "from_bus": 3, "to_bus": 101, "t": 1.5, "circuit": 3},
+            ["line 3-101 (circuit 3) closed at 1.5 s: ", "circuit 3 between bus 3 and bus 101"],
+        ),
+        (
+            {"kind": "Fault", "bus": 77, "t": 1.0, "clear_near": 1.1},
+            ["3-phase fault at bus 77 at 1 s, cleared at 1.1 s", "bus 77 is not in case"],
+        ),
+        (
+            {"kind": "Fault", "bus": 3, "t": 1.0, "clear_near": 1.1, "far_bus": 13},
+            ["on line 3-13 (circuit 1)", "no branch between bus 3 and bus 13"],
+        ),
+        (
+            {"kind": "LoadStep", "bus": 77, "t": 1.0, "P": 0.1},
+            ["load step 0.1+0j pu at bus 77 at 1 s: ", "bus 77 is not in case"],
+        ),
+        (
+            {"kind": "GeneratorTrip", "machine": 9, "t": 1.0},
+            ["machine 9 tripped at 1 s: ", "machine 9 is not in case"],
+        ),
+    ],
+)
+def test_a_stored_event_of_a_bus_or_line_the_case_lacks_is_refused_at_load(
+    tmp_path, record, needles
+):
+    """Kundur's buses are 1-4, 10-14, 20, 101, 110 and 120, bus 3 has no branch to bus 13
+    and two circuits to bus 101, and its machines are 1-4: a case file whose own event
+    names another bus, line or machine is refused when it is read, naming the file, the
+    record, the event in words and what is missing, not when a run starts."""
+    data = pstio.case_to_dict(load_case("kundur"))
+    data["events"] = [{"kind": "LoadStep", "bus": 4, "t": 1.0, "P": 0.1, "source": "ok"}]
+    data["events"].append({**record, "source": "Toggle 2"})
+    p = tmp_path / "own.json"
+    p.write_text(json.dumps(data))
+    with pytest.raises(CaseError) as err:
+        load_case(p)
+    assert str(err.value).startswith(f"{p}: events[1] (Toggle 2): ")
+    for needle in needles:
+        assert needle in str(err.value)
+    del data["events"][1]  # the same file with its first event alone loads
+    p.write_text(json.dumps(data))
+    assert load_case(p).events == (
+        {"kind": "LoadStep", "bus": 4, "t": 1.0, "P": 0.1, "source": "ok"},
+    )
+
+
 def test_read_any_rejects_unknown_content(tmp_path):
     p = tmp_path / "x.json"
     p.write_text('{"hello": 1}')
