@@ -564,7 +564,9 @@ def _file_inputs(path: Path, ss) -> _Given:
     declaration says non-zero, a sign it must not have, a PVD1 current limit of 0 or -1.1
     run at 1.3, a GENROU M of 0 or -13 at H = 3 s) or an infinite one; converter data that
     cannot be (:data:`_CONVERTER_RULES`: REECA1 Imax <= 0, Vdip >= Vup, ESD1 SOC limits,
-    En <= 0).
+    En <= 0); machine, exciter and governor data that cannot be (:data:`_DYNAMIC_LIMITS`:
+    M <= 0, D < 0, a negative time constant, a zero one the model does not bypass, a
+    droop R <= 0).
 
     Returned (`_Given`): the parameters of the converter family and of the machines and
     their controls that the file leaves out (no column, an empty cell), run at ANDES's
@@ -632,6 +634,7 @@ def _file_inputs(path: Path, ss) -> _Given:
                 if not test(values):
                     shown = ", ".join(f"{n} = {values[n]:g}" for n in _names_in(what, values))
                     raise CaseError(f"{where}: {shown}: it must be {what}")
+            _check_limits(where, model, values)
     given.defaulted.extend(
         f"{model} {name} = {default} (row{'s' * (len(rows) > 1)} {_row_list(rows)})"
         for (model, name, default), rows in missing.items()
@@ -716,6 +719,86 @@ _CONVERTER_RULES: dict[str, tuple] = {
     ),
     "PVD1": ((lambda r: r["ialim"] > 0, "ialim > 0"),),
     "WTDTA1": ((lambda r: r["H"] > 0 and r["Htfrac"] < 1, "H > 0, Htfrac < 1"),),
+}
+
+
+#: the synchronous machines', exciters' and governors' values that cannot be, refused
+#: before ANDES runs them (`_file_inputs`, `_check_limits`): ANDES model -> (parameters
+#: that must be > 0, parameters that must be >= 0, rate feedback (TF, KF): TF > 0 where
+#: KF != 0).  Machines: M = 2H > 0, damping D >= 0; GENROU's T'do and T''do > 0, its
+#: T'qo and T''qo >= 0 (0: no such q-axis winding, kept as PST keeps it; stabctl's
+#: mac_con check).  Controls: every time constant >= 0 (0 bypasses its block, a negative
+#: one is no lag); > 0 those the model cannot bypass, each type module's ``NEEDS``
+#: (`stabctl.models.exciters`, `stabctl.models.governors`: TGOV1 T1 and T3, the DC
+#: exciters' TE and TF, ...) and HYGOV's r, Tr, TW (`stabctl.io.dyr`); a droop R that
+#: divides (TGOV1, GAST, TG2: 1/R) > 0, one that multiplies (HYGOV's R, HYGOV4's Rperm
+#: and Rtemp: 0 isochronous) >= 0.  Sources: PSS/E Model Library (GENROU, TGOV1, HYGOV),
+#: ANDES 2.0 ``andes/models`` (its parameters' names; a LeadLag with T2 = 0 bypassed).
+_DYNAMIC_LIMITS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]] = {
+    "GENROU": (("M", "Td10", "Td20"), ("D", "Tq10", "Tq20"), ()),
+    "GENCLS": (("M",), ("D",), ()),
+    "ESST3A": ((), ("TR", "TC", "TB", "TA", "TM"), ()),
+    **{
+        dc: (("TE", "TF1"), ("TR", "TA", "TB", "TC"), ())
+        for dc in ("IEEEX1", "EXDC2", "ESDC2A", "ESDC1A")
+    },
+    "IEEET1": (("TE", "TF"), ("TR", "TA"), ()),
+    "EXST1": (("TA",), ("TR", "TC", "TB"), ("TF", "KF")),
+    "ESST1A": (("TA",), ("TR", "TB", "TC", "TB1", "TC1"), ("TF", "KF")),
+    "EXAC4": (("TA",), ("TR", "TC", "TB"), ()),
+    "EXAC1": (("TA", "TE"), ("TR", "TB", "TC"), ("TF", "KF")),
+    "ESAC1A": (("TA", "TE"), ("TR", "TB", "TC"), ("TF", "KF")),
+    "AC8B": (("TA", "TE"), ("TR", "Td"), ()),
+    "IEEET3": (("TA", "TE"), ("TR",), ("TF", "KF")),
+    "ESST4B": ((), ("TR", "TA"), ()),
+    "EXAC2": (("TE",), ("TR", "TB", "TC", "TA"), ("TF", "KF")),
+    "SEXS": ((), ("TATB", "TB", "TE"), ()),
+    **{tg: (("R", "T1", "T3"), ("T2",), ()) for tg in ("TGOV1", "TGOV1N")},
+    "IEEEG1": (("T3",), ("T1", "T2", "T4", "T5", "T6", "T7"), ()),
+    **{hy: (("r", "Tr", "Tf", "Tg", "Tw"), ("R",), ()) for hy in ("HYGOV", "HYGOVDB")},
+    "IEESGO": ((), ("T1", "T2", "T3", "T4", "T5", "T6"), ()),
+    "GAST": (("R", "T1"), ("T2", "T3"), ()),
+    "TG2": (("R", "T2"), ("T1",), ()),
+    "HYGOV4": (("Tp", "Tg", "Tr", "Tw"), ("Rperm", "Rtemp"), ()),
+}
+
+
+def _check_limits(where: str, model: str, values: dict) -> None:
+    """CaseError naming ``where`` (file, sheet, row, idx), the parameter and its value for
+    a machine's, exciter's or governor's value :data:`_DYNAMIC_LIMITS` refuses; a value
+    the row does not hold as a number is left to ANDES's own reading."""
+    positive, non_negative, rate = _DYNAMIC_LIMITS.get(model, ((), (), ()))
+    for names, ok, must, lag in (
+        (
+            positive,
+            lambda v: v > 0,
+            "> 0",
+            "a time constant whose block the model has no bypass for",
+        ),
+        (non_negative, lambda v: v >= 0, ">= 0", "a time constant: 0 bypasses its block"),
+    ):
+        for name in names:
+            if name in values and not ok(values[name]):
+                what = _WHAT.get(name, lag)
+                raise CaseError(f"{where}: {name} = {values[name]:g}: it must be {must} ({what})")
+    if rate:
+        tf, kf = rate
+        if tf in values and kf in values and values[kf] != 0 and not values[tf] > 0:
+            raise CaseError(
+                f"{where}: {tf} = {values[tf]:g} with {kf} = {values[kf]:g}: it must be > 0 "
+                f"(the rate feedback's time constant, where {kf} != 0)"
+            )
+
+
+#: what a parameter of :data:`_DYNAMIC_LIMITS` that is no time constant is, for messages
+_WHAT = {
+    "M": "M = 2H, the inertia",
+    "D": "the damping",
+    "R": "the droop",
+    "r": "the temporary droop",
+    "Rperm": "the permanent droop",
+    "Rtemp": "the temporary droop",
+    "TATB": "TA/TB, the ratio of two time constants",
 }
 
 

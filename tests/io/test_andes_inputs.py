@@ -72,6 +72,109 @@ def test_values_andes_would_change_or_cannot_run_are_refused(tmp_path, edits, ne
     assert str(err.value).startswith(f"{path.name}: ") and needle in str(err.value)
 
 
+@pytest.mark.parametrize(
+    "edits, needle, bypassed",
+    [
+        # GENROU: negative damping, T'do of 0; T''qo of 0 is kept (no q-axis subtransient
+        # winding, PST's convention), a negative one refused
+        ([("GENROU", 2, "D", -1)], "GENROU row 1 (idx 1): D = -1: it must be >= 0", None),
+        ([("GENROU", 2, "Td10", 0)], "GENROU row 1 (idx 1): Td10 = 0: it must be > 0", None),
+        (
+            [("GENROU", 2, "Tq20", -0.05)],
+            "GENROU row 1 (idx 1): Tq20 = -0.05: it must be >= 0",
+            [("GENROU", 2, "Tq20", 0)],
+        ),
+        # TGOV1: the lead T2 of 0 bypassed, a negative one refused; the valve lag T1 and
+        # the lag T3 are no bypass (PSS/E Model Library: T1 > 0, T3 > 0); the droop R
+        (
+            [("TGOV1", 2, "T2", -2.1)],
+            "TGOV1 row 1 (idx 1): T2 = -2.1: it must be >= 0",
+            [("TGOV1", 2, "T2", 0)],
+        ),
+        ([("TGOV1", 2, "T1", 0)], "TGOV1 row 1 (idx 1): T1 = 0: it must be > 0", None),
+        ([("TGOV1", 2, "T3", -7)], "TGOV1 row 1 (idx 1): T3 = -7: it must be > 0", None),
+        ([("TGOV1", 2, "R", 0)], "TGOV1 row 1 (idx 1): R = 0: it must be > 0 (the droop)", None),
+        # EXDC2: TA of 0 bypassed (PSS/E: no regulator lag); the exciter TE and the rate
+        # feedback TF1 are no bypass
+        (
+            [("EXDC2", 2, "TA", -0.02)],
+            "EXDC2 row 1 (idx 1): TA = -0.02: it must be >= 0",
+            [("EXDC2", 2, "TA", 0)],
+        ),
+        ([("EXDC2", 2, "TE", 0)], "EXDC2 row 1 (idx 1): TE = 0: it must be > 0", None),
+        ([("EXDC2", 2, "TF1", -1.246)], "EXDC2 row 1 (idx 1): TF1 = -1.246: it must be > 0", None),
+    ],
+)
+def test_machine_exciter_and_governor_values_that_cannot_be_are_refused(
+    tmp_path, edits, needle, bypassed
+):
+    """Kundur's GENROU, TGOV1 and EXDC2 rows with a negative damping or time constant, or
+    a zero time constant or droop their model cannot take, imported without a word or were
+    refused by a table row of the converted case (``mac_con row 4 (machine 4), field
+    'D0'``) instead of the file's: refused before ANDES runs them, naming file, sheet,
+    row, idx, parameter and value; a zero time constant the model bypasses imports."""
+    path = cells_edited(tmp_path, edits)
+    with pytest.raises(CaseError) as err:
+        read_andes_case(path, on_unsupported="skip")
+    assert str(err.value).startswith(f"{path.name}: {needle}"), str(err.value)
+    if bypassed is not None:
+        read_andes_case(cells_edited(tmp_path, bypassed), on_unsupported="skip")
+
+
+def test_a_rate_feedback_without_its_time_constant_is_refused(tmp_path):
+    """ESST1A's rate feedback KF / (1 + s TF) needs TF > 0 where KF != 0 (ANDES declares
+    no limit on TF): refused naming both; with KF = 0 the feedback is off and TF = 0
+    imports."""
+    case = "ieee14/ieee14_esst1a.xlsx"
+    path = cells_edited(tmp_path, [("ESST1A", 2, "KF", 0.1), ("ESST1A", 2, "TF", 0)], case)
+    with pytest.raises(CaseError) as err:
+        read_andes_case(path, on_unsupported="skip")
+    assert str(err.value).startswith(
+        "edited.xlsx: ESST1A row 1 (idx ESST1A_1): TF = 0 with KF = 0.1: it must be > 0"
+    ), str(err.value)
+    path = cells_edited(tmp_path, [("ESST1A", 2, "KF", 0), ("ESST1A", 2, "TF", 0)], case)
+    read_andes_case(path, on_unsupported="skip")
+
+
+def test_every_machine_exciter_and_governor_read_from_andes_has_its_limits():
+    """Each synchronous machine, exciter and governor model stabctl reads from ANDES has
+    its value limits, each naming a parameter of ANDES's model; those it refuses at 0
+    include every time constant its stabctl type needs (the type module's ``NEEDS``,
+    through the record's copies and ANDES's psse-dyr.yaml)."""
+    from stabctl.io import andes_case as ac
+    from stabctl.io.dyr import DYR_MODELS
+    from stabctl.models import exciters, governors
+
+    ss = andes.system.System()
+    groups = ("SynGen", "Exciter", "TurbineGov")
+    read = {a for a in ac.MAPPED_MODELS if ss.models[a].group in groups}
+    assert read == set(ac._DYNAMIC_LIMITS)
+    yaml = ac._psse_yaml()
+    for model, (positive, non_negative, rate) in ac._DYNAMIC_LIMITS.items():
+        params = ss.models[model].params
+        assert set(positive) | set(non_negative) | set(rate) <= set(params), model
+        if ss.models[model].group == "SynGen":
+            continue
+        decl = DYR_MODELS[ac.MAPPED_MODELS[model]]
+        family = exciters if ss.models[model].group == "Exciter" else governors
+        needs = family.TYPES[decl.kind].NEEDS
+        table = family.EXCITER if family is exciters else family.GOVERNOR
+        fields = [n[1] if isinstance(n, tuple) else n for n in needs]
+        spec = yaml.get(decl.name)  # None: ANDES's own model, its parameters by name
+        inputs = spec["inputs"][2:] if spec else list(decl.fields)
+        # by name where the names agree, else by position (as the import reads them)
+        same = sorted(inputs) == sorted(decl.fields)
+        named = dict(zip(decl.fields, decl.fields if same else inputs))
+        andes_of = {
+            str(v).split(";")[0]: k for k, v in (spec or {"outputs": {}})["outputs"].items()
+        }
+        for f in fields:
+            copied = [d for t, d in decl.copy.items() if table.param(t) is table.param(f)]
+            assert copied, (model, f)
+            name = named.get(copied[0], copied[0])
+            assert andes_of.get(name, name) in positive, (model, f, copied)
+
+
 def test_a_required_control_parameter_left_empty_is_a_change_refused_unless_skipped(tmp_path):
     """EXDC2's TF1, which ANDES declares non-zero, left empty runs at ANDES's default 1 s:
     refused, or kept and named with --skip-unsupported; its TA (no such declaration) left
