@@ -101,9 +101,6 @@ def ours_run(case, bus, t_end, h, clear=CYCLES / 60):
 
 def andes_load(raw, dyr, fault: AndesFault | None, numba: bool):
     """A freshly loaded ANDES system (default configuration, numba on or off), set up."""
-    import andes
-
-    andes.config_logger(stream_level=40)
     return andes_system(raw, dyr, fault, config_option=[f"Runtime.numba={int(numba)}"])
 
 

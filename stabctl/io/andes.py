@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import functools
 import logging
+import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -68,11 +69,19 @@ class AndesFault:
 
 
 def _andes():
+    """The ``andes`` package, its logger set to print errors only and to write no file.
+
+    ANDES's ``config_logger`` makes a directory ``andes-XXXXXXXX`` in the temporary
+    directory (``andes.utils.paths.get_log_dir``: ``tempfile.mkdtemp``) on every call that
+    gives no ``log_path``, for a log file it writes only with ``file=True`` (on the first
+    call of a process: every ANDES message at DEBUG); given a ``log_path`` and
+    ``file=False`` it makes and writes nothing, so that no load leaves a directory behind.
+    """
     try:
         import andes
     except ImportError:
         raise InputError("ANDES is not installed: pip install 'stabctl[andes]'") from None
-    andes.config_logger(stream_level=40)
+    andes.config_logger(stream_level=40, file=False, log_path=os.devnull)  # not written
     return andes
 
 

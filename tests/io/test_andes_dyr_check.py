@@ -10,6 +10,7 @@ import pytest
 
 andes = pytest.importorskip("andes")
 
+from stabctl.io.andes import _andes  # noqa: E402
 from stabctl.io.andes_case import _dyr_against_andes  # noqa: E402
 
 
@@ -20,7 +21,7 @@ def test_devices_not_matched_to_records_are_named_not_checked(tmp_path):
     dyr = tmp_path / "kundur.dyr"
     lines = Path(andes.get_case("kundur/kundur_full.dyr")).read_text().splitlines()
     dyr.write_text("\n".join(ln for ln in lines if "TOGGLE" not in ln.upper()) + "\n")
-    andes.config_logger(40)
+    _andes()  # ANDES's logger as stabctl sets it (no log directory left behind)
     ss = andes.load(str(raw), addfile=str(dyr), default_config=True, no_output=True)
     dropped, by_device, unchecked = _dyr_against_andes(ss, dyr)
     assert dropped == [] and unchecked == []

@@ -249,3 +249,26 @@ def test_a_zero_impedance_branch_of_a_raw_file_is_refused_by_both_importers(tmp_
         CaseError, match=r"kundur_zero.raw: Line Line_8 \(buses 8-9\): r = x = 0: a zero"
     ):
         read_andes_case(raw, on_unsupported="skip")
+
+
+def test_andes_loads_leave_nothing_in_the_temporary_directory(tmp_path, monkeypatch):
+    """ANDES's logger set-up made a directory andes-XXXXXXXX in the temporary directory on
+    every ANDES call stabctl made (its ``get_log_dir``), the first of a process holding a
+    debug log, the others empty: import-andes and the reference run's system leave the
+    temporary directory as they found it."""
+    import tempfile
+
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+    from stabctl.io.andes import andes_system
+
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    monkeypatch.setenv("TMPDIR", str(tmp))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))
+    case = andes.get_case(KUNDUR)
+    res = CliRunner().invoke(main, ["import-andes", case, "-o", str(tmp_path / "k.json")])
+    assert res.exit_code == 0, res.output
+    assert andes_system(case, off=("Toggle",)).is_setup
+    assert sorted(p.name for p in tmp.iterdir()) == []

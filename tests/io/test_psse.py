@@ -15,6 +15,7 @@ from stabctl.cli import main
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import CaseError
 from stabctl.io import load_case
+from stabctl.io.andes import _andes
 from stabctl.io.psse import import_psse, load_psse
 from stabctl.io.psse_raw import ZERO_Q_LIMIT, read_raw, split_fields
 from stabctl.network.powerflow import solve_powerflow
@@ -553,8 +554,8 @@ def test_import_psse_bad_input_exits_2_and_writes_nothing(tmp_path):
 
 
 def _andes_case(name):
-    andes = pytest.importorskip("andes")
-    andes.config_logger(stream_level=40)
+    pytest.importorskip("andes")
+    andes = _andes()  # its logger set as stabctl sets it: no log directory left behind
     return andes, Path(andes.__file__).parent / "cases" / name
 
 
