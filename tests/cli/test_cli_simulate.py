@@ -48,6 +48,20 @@ def test_cases_json_lists_builtins_with_counts():
     assert "bus 3" in k["sw_con"] and "3-101" in k["sw_con"]
 
 
+def test_python_dash_m_stabctl_is_the_command():
+    """`python -m stabctl` runs the `stabctl` command, as `python -m stabctl.cli` does."""
+    import subprocess
+    import sys
+
+    out = [
+        subprocess.run([sys.executable, "-m", m, "cases", "--json"], capture_output=True, text=True)
+        for m in ("stabctl", "stabctl.cli")
+    ]
+    assert [r.returncode for r in out] == [0, 0], [r.stderr for r in out]
+    assert json.loads(out[0].stdout) == json.loads(out[1].stdout)
+    assert {r["name"] for r in json.loads(out[0].stdout)} == {"kundur", "miniwecc"}
+
+
 def test_cases_text():
     res = run("cases")
     assert res.exit_code == 0
