@@ -34,7 +34,7 @@ import numpy as np
 from stabctl.case import TABLES, Case
 from stabctl.case.events import check_case_events
 from stabctl.errors import CaseError
-from stabctl.io.inputs import input_file, plain_float
+from stabctl.io.inputs import input_file, parse_json, plain_float
 
 __all__ = [
     "FORMAT",
@@ -263,8 +263,7 @@ def read_any(path: str | Path) -> Case:
 def _load_json(path: Path):
     path = input_file(path, "case file")
     try:
-        with open(path, encoding="utf-8") as fh:
-            return json.load(fh)
+        return parse_json(path.read_text(encoding="utf-8"), str(path), CaseError)
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
     except RecursionError:

@@ -226,3 +226,42 @@ def test_read_any_rejects_unknown_content(tmp_path):
     p.write_text("{not json")
     with pytest.raises(CaseError, match="invalid JSON at line 1"):
         pstio.read_any(p)
+
+
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        # json keeps the last of a key given twice: the case ran at 50 MVA without a word
+        (lambda text, _: text[:-1] + ', "base_mva": 50.0}', '"base_mva" given twice'),
+        # a second "tables" replaced every table of the first
+        (
+            lambda text, data: text[:-1] + ', "tables": ' + json.dumps(data["tables"]) + "}",
+            '"tables" given twice',
+        ),
+        # inside a table: the second "rows" replaced the first
+        (
+            lambda text, _: text.replace('"rows": [', '"rows": [], "rows": [', 1),
+            '"rows" given twice',
+        ),
+    ],
+    ids=["base_mva", "tables", "rows"],
+)
+def test_a_case_file_giving_a_key_twice_is_refused_naming_file_and_key(tmp_path, edit, needle):
+    data = pstio.case_to_dict(load_case("kundur"))
+    p = tmp_path / "twice.json"
+    p.write_text(edit(json.dumps(data), data))
+    with pytest.raises(CaseError, match=rf"^{p}: key {needle} in one object"):
+        load_case(p)
+    with pytest.raises(CaseError, match=rf"^{p}: key {needle}"):
+        pstio.read_case_header(p)
+
+
+def test_a_pstess_matrix_json_giving_a_key_twice_is_refused(tmp_path):
+    case = load_case("kundur")
+    p = tmp_path / "m.json"
+    bus = json.dumps(case.buses.matrix().tolist())
+    line = json.dumps(case.branches.matrix().tolist())
+    p.write_text(f'{{"bus": {bus}, "line": {line}, "basmva": 100, "sys_freq": 60, "basmva": 10}}')
+    twice = r'"basmva" given twice in one object \(100, then 10\)'
+    with pytest.raises(CaseError, match=rf"^{p}: key {twice}"):
+        pstio.read_any(p)
