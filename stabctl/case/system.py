@@ -320,13 +320,15 @@ def _as_matrix(matrix, table: str) -> np.ndarray:
         return np.zeros((0, 0))
     if np.isscalar(rows[0]):  # a single row given flat
         rows = [rows]
-    lengths = {len(r) for r in rows}
-    if len(lengths) != 1:
-        for i, r in enumerate(rows):
-            if len(r) != len(rows[0]):
-                raise CaseError(
-                    f"{table} row {i + 1}: wrong column count {len(r)}, row 1 has {len(rows[0])}"
-                )
+    lengths = [len(r) for r in rows]
+    if len(set(lengths)) != 1:  # the row that differs from the most rows, not from row 1
+        count = max(set(lengths), key=lambda n: (lengths.count(n), -lengths.index(n)))
+        i = next(i for i, n in enumerate(lengths) if n != count)
+        others = lengths.count(count)
+        raise CaseError(
+            f"{table} row {i + 1}: {lengths[i]} columns, {others} other row(s) have {count}"
+            + ("" if others > 1 else f" (row {lengths.index(count) + 1})")
+        )
     try:
         return np.array(rows, dtype=float)
     except (TypeError, ValueError) as exc:

@@ -288,8 +288,15 @@ def test_wrong_column_count():
         PssTable.from_matrix([r[:9] for r in PSS])
     with pytest.raises(CaseError, match=r"bus: wrong column count 16, expected 10 to 15"):
         BusTable.from_matrix([r + [0] for r in BUS])
-    with pytest.raises(CaseError, match=r"line row 2: wrong column count 9, row 1 has 10"):
+    with pytest.raises(
+        CaseError, match=r"line row 2: 9 columns, 1 other row\(s\) have 10 \(row 1\)"
+    ):
         BranchTable.from_matrix([LINE[0], LINE[1][:9]])
+    # the row that differs from the others is named, not the row after a broken first row
+    with pytest.raises(CaseError, match=r"^line row 1: 11 columns, 2 other row\(s\) have 10$"):
+        BranchTable.from_matrix([LINE[0] + [1.0], LINE[1], LINE[1]])
+    with pytest.raises(CaseError, match=r"^line row 1: 9 columns, 2 other row\(s\) have 10$"):
+        BranchTable.from_matrix([LINE[0][:9], LINE[1], LINE[1]])
 
 
 def test_bad_bases_and_sw_con():
