@@ -218,6 +218,8 @@ def _set(d, table, field, value, row=0):
         # reported as power-flow non-convergence
         ("buses", "qmin", 99.0, "field 'qmax': generator Q limits: qmax must be >= qmin"),
         ("buses", "vmin", 1.6, "field 'vmax': voltage limits: vmax must be >= vmin"),
+        # a negative tap: "power flow did not converge"
+        ("branches", "tap", -1.0, "line row 1 (1-10), field 'tap': off-nominal tap ratio must be"),
         # H = 1e308 ran, overflowing (numpy's warnings the only word)
         ("machines", "H", 1e308, "field 'H': 1e+308 is beyond +-1e+15: no datum is"),
         ("buses", "pload", -1e16, "field 'pload': -1e+16 is beyond +-1e+15"),
