@@ -557,16 +557,33 @@ def test_an_unknown_bus_or_line_of_an_option_is_named_before_any_work(no_simulat
 
 
 @pytest.mark.parametrize("command", [("sweep-cct",), ("place", "--required-clearing-cycles", 6)])
-def test_a_fault_list_s_unknown_line_is_named_before_any_work(no_simulation, tmp_path, command):
+@pytest.mark.parametrize(
+    "text, line, needle",
+    [
+        ("bus,far_bus\n3,101\n3,13\n", 3, f"fault at bus 3 on line 3-13 at 1 s: {NO_LINE}"),
+        # the row of a long list is named: bus 999 on its last of 3 001 rows
+        (
+            "bus,far_bus,t_fault\n"
+            + "".join(f"3,101,{1 + i * 1e-3:.3f}\n" for i in range(3000))
+            + "3,999,1\n",
+            3002,
+            "fault at bus 3 on line 3-999 at 1 s: bus 999 is not in case 'kundur'",
+        ),
+    ],
+    ids=["no line", "last of 3001 rows"],
+)
+def test_a_fault_list_s_unknown_line_is_named_before_any_work(
+    no_simulation, tmp_path, command, text, line, needle
+):
     """place compiled its kernels and solved its power flows (a minute and more, cold)
     before it said 'line: no branch between bus 3 and bus 13' without naming the file;
-    sweep-cct named neither.  Both refuse it first, naming --faults, the file and the
-    fault."""
+    sweep-cct named neither.  Both refuse it first, naming --faults, the file and line,
+    and the fault."""
     faults = tmp_path / "f.csv"
-    faults.write_text("bus,far_bus\n3,101\n3,13\n", encoding="utf-8")
+    faults.write_text(text, encoding="utf-8")
     out = tmp_path / "o.jsonl"
     res = run(command[0], "kundur", "--faults", faults, *command[1:], "--out", out)
-    assert_error(res, f"--faults {faults}: fault at bus 3 on line 3-13 at 1 s: {NO_LINE}")
+    assert_error(res, f"--faults {faults}:{line}: {needle}")
     assert not out.exists()
 
 
