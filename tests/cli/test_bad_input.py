@@ -1124,6 +1124,18 @@ def test_a_dyr_file_with_a_byte_order_mark_is_read_as_a_raw_file_is(tmp_path):
     assert json.loads(out.read_text(encoding="utf-8"))["tables"]["machines"]["rows"]
 
 
+def test_an_empty_dyr_file_is_named(tmp_path):
+    """import-psse with an empty DYR file listed the generators without a machine model
+    and never named the DYR file that gave none."""
+    dyr = tmp_path / "d_empty.dyr"
+    dyr.write_text("")
+    out = tmp_path / "p.json"
+    for extra in ((), ("--net-unmodelled",)):
+        res = run("import-psse", PSSE / "five_bus_v33.raw", dyr, "-o", out, *extra)
+        assert_error(res, "d_empty.dyr: the DYR file is empty")
+        assert not out.exists()
+
+
 def test_a_bus_fault_cct_takes_further_trips(no_simulation):
     """cct --fault 3 --trip 13 101 (no --far-bus) failed with 'bus None is not in case'."""
     from stabctl.stability.cct import LineFault, check_trips
