@@ -194,7 +194,7 @@ REAP_TIMEOUT = 30.0  # s a stopped pool waits for its killed workers to be reape
 def _record_lines(path: Path) -> Iterator[tuple[int, str, dict | None]]:
     """(line number, line, the record or None if the line is not a whole sweep record) of
     every non-blank line of a records file, each read in at most MAX_RECORD_LINE bytes.
-    Raises InputError at a longer line."""
+    Raises InputError at a longer line, or a line giving a key twice."""
     with path.open(errors="replace") as f:
         for n, line in enumerate(iter(lambda: f.readline(MAX_RECORD_LINE + 1), ""), start=1):
             if len(line) > MAX_RECORD_LINE:
@@ -203,13 +203,19 @@ def _record_lines(path: Path) -> Iterator[tuple[int, str, dict | None]]:
                     "file of sweep records; give another file"
                 )
             if line.strip():
-                yield n, line, _record(line)
+                yield n, line, _record(line, f"{path} line {n}")
 
 
-def _record(line: str) -> dict | None:
-    """The sweep record of a line (a dict with a string key and a known status), or None."""
+def _record(line: str, where: str) -> dict | None:
+    """The sweep record of a line (a dict with a string key and a known status), or None.
+    Raises InputError, naming ``where``, for a line giving a key twice (no kill cuts a
+    line so: an edited record, whose value json would take the last of)."""
+    from stabctl.io.inputs import parse_json
+
     try:
-        rec = json.loads(line)
+        rec = parse_json(line, where)
+    except InputError:
+        raise
     except (ValueError, RecursionError):  # a damaged or absurdly nested line
         return None
     ok = (
@@ -229,8 +235,9 @@ def read_records(path: str | Path) -> dict[str, dict]:
     """Records of an output file: key -> last line of that key (a retry's record after
     its failed one).  Lines that are not whole sweep records (a line cut by a kill, a
     record without its result) are skipped with a warning; a missing file gives {}.
-    Raises InputError for a line longer than MAX_RECORD_LINE, or a job recorded twice
-    other than after a failure (a file edited by hand: which result holds?)."""
+    Raises InputError for a line longer than MAX_RECORD_LINE, a line giving a key twice,
+    or a job recorded twice other than after a failure (a file edited by hand: which
+    result holds?)."""
     path = Path(path)
     if not path.exists():
         return {}

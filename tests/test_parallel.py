@@ -1081,3 +1081,18 @@ def test_a_stopped_pool_leaves_no_worker_behind():
     assert len(procs) == 2
     stop_pool(pool)
     assert all(p.exitcode is not None for p in procs)
+
+
+def test_a_record_giving_a_key_twice_is_refused_naming_its_line(tmp_path):
+    """json keeps the last value of a key given twice: a record edited to hold two
+    results was read with the second without a word (and --screening, resumed sweeps and
+    check_records_case all read records so)."""
+    from stabctl.parallel import check_records_case, read_records, set_aside_damaged
+
+    out = tmp_path / "o.jsonl"
+    rec = {"key": "a", "status": "ok", "result": {"cct_s": 0.2}}
+    out.write_text(json.dumps(rec) + "\n" + json.dumps(rec)[:-1] + ', "result": {"cct_s": 0.9}}\n')
+    needle = rf'{out} line 2: key "result" given twice in one object \(an object, then an object\)'
+    for read in (read_records, set_aside_damaged, lambda p: check_records_case(p, {}, "")):
+        with pytest.raises(InputError, match=needle):
+            read(out)

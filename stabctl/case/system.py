@@ -320,13 +320,15 @@ def _as_matrix(matrix, table: str) -> np.ndarray:
         return np.zeros((0, 0))
     if np.isscalar(rows[0]):  # a single row given flat
         rows = [rows]
-    lengths = {len(r) for r in rows}
-    if len(lengths) != 1:
-        for i, r in enumerate(rows):
-            if len(r) != len(rows[0]):
-                raise CaseError(
-                    f"{table} row {i + 1}: wrong column count {len(r)}, row 1 has {len(rows[0])}"
-                )
+    lengths = [len(r) for r in rows]
+    if len(set(lengths)) != 1:  # the row that differs from the most rows, not from row 1
+        count = max(set(lengths), key=lambda n: (lengths.count(n), -lengths.index(n)))
+        i = next(i for i, n in enumerate(lengths) if n != count)
+        others = lengths.count(count)
+        raise CaseError(
+            f"{table} row {i + 1}: {lengths[i]} columns, {others} other row(s) have {count}"
+            + ("" if others > 1 else f" (row {lengths.index(count) + 1})")
+        )
     try:
         return np.array(rows, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -432,7 +434,9 @@ class BranchTable(Table):
     ``line`` matrix has 5 columns, PST's 10).  Line-end shunts (columns 11-14, stabctl's)
     are switched with the branch, in addition to the charging ``b``. Validation: from/to are
     integers, the series impedance is not zero (r < 0 allowed: network equivalents carry
-    it), from != to."""
+    it; x < 0: series capacitors), from != to, tap >= 0; a tap changer (tapmax != 0) has
+    tapmin > 0, tapmax >= tapmin and tapstep > 0.  The phase shift and the shunts take
+    any value."""
 
     from_bus: np.ndarray
     to_bus: np.ndarray
@@ -465,6 +469,17 @@ class BranchTable(Table):
         self._require((self.r != 0) | (self.x != 0), "x", "series impedance r+jx must not be 0")
         self._require(
             self.from_bus != self.to_bus, "to_bus", "branch must join two different buses"
+        )
+        # a ratio of turns is positive: a negative tap ran into a power flow that did not
+        # converge (0 is PST's "no off-nominal tap", read as 1)
+        self._require(self.tap >= 0, "tap", "off-nominal tap ratio must be > 0 (0 stands for 1)")
+        ltc = self.tapmax != 0  # an on-load tap changer (PST lftap) steps within its limits
+        self._require(~ltc | (self.tapmin > 0), "tapmin", "tap changer's lowest ratio must be > 0")
+        self._require(
+            ~ltc | (self.tapmax >= self.tapmin), "tapmax", "tap changer's tapmax must be >= tapmin"
+        )
+        self._require(
+            ~ltc | (self.tapstep > 0), "tapstep", "tap changer's step must be > 0 (it divides)"
         )
 
 

@@ -711,17 +711,20 @@ def read_fault_list(case, case_name: str, src: str):
     ------
     InputError
         A file the table refuses (`stabctl.stability.cct.read_faults`), or a fault of a
-        bus or line the case lacks: ``--faults`` with the file, the fault and what is
-        missing named.
+        bus or line the case lacks: ``--faults`` with the file and line, the fault and
+        what is missing named.
     """
     # the one place the CLI imports the paper's default fault lists
-    from stabctl.stability.cct import read_faults
+    from stabctl.stability.cct import read_fault_rows
     from stabctl.studies.cases import default_faults
 
-    faults = default_faults(case_name) if src == "DEFAULT" else read_faults(src)
-    for f in faults:
-        check_option_events(case, ((f"--faults {src}: {f.describe()}", ev) for ev in f.events(0)))
-    return faults
+    if src == "DEFAULT":
+        rows = [(f, f"--faults {src}") for f in default_faults(case_name)]
+    else:  # each fault named with its file:line
+        rows = [(f, f"--faults {src}:{row.line}") for f, row in read_fault_rows(src)]
+    for f, where in rows:
+        check_option_events(case, ((f"{where}: {f.describe()}", ev) for ev in f.events(0)))
+    return [f for f, _ in rows]
 
 
 def tol_options(t_max: float = 1.0, t_max_help: str = "a CCT above it is an error"):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import click
 
@@ -175,19 +176,27 @@ def _build_events(
     return own, events
 
 
-def _check_ends(own: list, given: list, tf: float) -> None:
+@dataclass(frozen=True)
+class _RunEnd:
+    """Where a run's end time came from, for messages: ``where`` (``--tf 2 s``, its
+    default, the case's sw_con row) and what the user does about an event it cuts."""
+
+    where: str
+    remedy: str
+
+
+def _check_ends(own: list, given: list, tf: float, end: _RunEnd) -> None:
     """InputError naming the first event, the case's own (``own``) or the options'
     (``given``), that changes the network again at or after the run's end ``tf`` (a
-    clearing the run would never reach, while its summary called the fault cleared)."""
+    clearing the run would never reach, while its summary called the fault cleared),
+    and where ``tf`` came from (``end``)."""
     for events, hint in (
-        (own, "it is the case's own (--pstess-default, --case-events): lengthen --tf"),
-        (given, "lengthen --tf, or give T_OFF inf to --bus-fault for a fault never cleared"),
+        (own, f"it is the case's own (--pstess-default, --case-events): {end.remedy}"),
+        (given, f"{end.remedy}, or give T_OFF inf to --bus-fault for a fault never cleared"),
     ):
         cut = [e for e in events if any(tf <= t < math.inf for t in e.times())]
         if cut:
-            raise InputError(
-                f"{cut[0]}: ends at or after the end of the run (--tf {tf:g} s); {hint}"
-            )
+            raise InputError(f"{cut[0]}: ends at or after the end of the run ({end.where}); {hint}")
 
 
 @click.command()
@@ -424,16 +433,29 @@ def simulate(
         case, bus_fault, close, trip_gen, load_step, vref_step, pref_step
     )
     events = own + given  # the case's own first
+    end = _RunEnd(f"--tf {tf:g} s" if tf is not None else "", "lengthen --tf")
     if tf is None and pstess_default and case.sw_con is not None:
-        tf = float(case.sw_con[-1, 0])
+        tf = float(case.sw_con[-1, 0])  # the data file's own end, named as such
+        end = _RunEnd(
+            f"{case_name}: sw_con row {len(case.sw_con)} (its last), column 1 (time): "
+            f"{tf:g} s, the end of the data file's run",
+            "give --tf, or correct that time",
+        )
     elif tf is None:
         tf = min((min(e.times()) for e in events), default=0.0) + TF_AFTER_FAULT_S
+        end = _RunEnd(f"--tf {tf:g} s, by default", "give a longer --tf")
     if not tf > 0:
-        raise InputError(f"--tf must be > 0 s, got {tf:g}")
+        raise InputError(
+            f"--tf must be > 0 s, got {tf:g}"
+            if end.where.startswith("--tf")
+            else f"{end.where}: a run must end after 0 s; {end.remedy}"
+        )
     late = [e for e in events if min(e.times()) >= tf]
     if late:
-        raise InputError(f"{late[0]}: starts at or after the end of the run (--tf {tf:g} s)")
-    _check_ends(own, given, tf)
+        raise InputError(
+            f"{late[0]}: starts at or after the end of the run ({end.where}); {end.remedy}"
+        )
+    _check_ends(own, given, tf, end)
     if step is not None:
         check_step_count(tf, step, case)  # refused before any work (building the model)
     check_storage_given(esd_pct)

@@ -116,7 +116,7 @@ from stabctl.case.system import SWITCHED_GROUPS
 from stabctl.errors import CaseError, InputError
 from stabctl.io.andes import _andes, _andes_log, _andes_said
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
-from stabctl.io.inputs import number_ranges
+from stabctl.io.inputs import number_ranges, parse_json
 from stabctl.io.pst import case_from_matrices
 from stabctl.models.converters import (
     CONVERTER,
@@ -302,10 +302,12 @@ def import_andes(
     ------
     InputError
         ANDES is not installed, ANDES cannot read the file (with ANDES's own first error:
-        its log is never printed), an xlsx sheet (json key) that is no ANDES model, a bad
-        option value, or (``on_unsupported="error"``) models stabctl lacks: one message
-        naming every such ANDES model with its device count, every refused model option
-        and every column that is no parameter of its model (ANDES ignores it).
+        its log is never printed), a json file not in ANDES's layout (a stabctl case, a
+        PSTess matrix file: named so) or giving a key twice, an xlsx sheet (json key) that
+        is no ANDES model, a bad option value, or (``on_unsupported="error"``) models
+        stabctl lacks: one message naming every such ANDES model with its device count,
+        every refused model option and every column that is no parameter of its model
+        (ANDES ignores it).
     CaseError
         Data stabctl's tables refuse (a bus ``idx`` that is not an integer, a generator
         without machine model, a value out of range), a value stabctl reads that an xlsx
@@ -342,6 +344,8 @@ def read_andes_case(
 
 def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) -> AndesImport:
     """`read_andes_case`'s work, ANDES's log records collected in ``said``."""
+    if path.suffix.lower() == ".json" and path.is_file():
+        _check_json_layout(path)  # before ANDES reads another layout without sense
     ss = _load(path, dyr, said)
     given = _file_inputs(path, ss)
     _corrections(path.name, ss)
@@ -498,15 +502,92 @@ class _Given:
     unknown: list[str]
 
 
+def _json_data(path: Path) -> Any:
+    """The parsed content of a json case file, None if it is not JSON text (ANDES's own
+    reading names what is wrong).
+
+    Raises
+    ------
+    InputError
+        An object giving a key twice (`stabctl.io.inputs.parse_json`: ANDES would read
+        the last model sheet of that name only).
+    """
+    try:
+        return parse_json(path.read_text(encoding="utf-8"), path.name)
+    except InputError:
+        raise
+    except (OSError, ValueError, RecursionError):  # UnicodeDecodeError is a ValueError
+        return None
+
+
+#: what import_andes reads of a json file, for messages
+_ANDES_JSON = (
+    "an ANDES json case is an object of ANDES model names (Bus, Line, GENROU, ...), each a "
+    "list of device records (objects of parameter -> value)"
+)
+
+
+def _check_json_layout(path: Path) -> None:
+    """InputError for a json file that is not in ANDES's layout (`_ANDES_JSON`), naming
+    what it is (a stabctl case, a PSTess matrix file) or the key that breaks the layout:
+    ANDES read a stabctl case's ``"version": 1`` as model rows and failed with
+    "'int' object is not iterable".  A key given twice is refused (`_json_data`); a file
+    that is not JSON is left to ANDES, whose message names it."""
+    from stabctl.io.pst import FORMAT
+
+    data = _json_data(path)
+    if data is None:
+        return
+    own = "stabctl's commands read it as it is (simulate, cct, eig, ...: CASE)"
+    if isinstance(data, dict) and data.get("format") == FORMAT:
+        raise InputError(
+            f'{path.name}: a stabctl case file ("format": "{FORMAT}"), not an ANDES case: '
+            f"{own}; import-andes converts a case ANDES reads ({_ANDES_JSON}; xlsx, PSS/E "
+            "RAW [+ DYR], MATPOWER)"
+        )
+    bus = data.get("bus") if isinstance(data, dict) else None
+    if isinstance(bus, list) and bus and all(isinstance(r, list) for r in bus):
+        raise InputError(
+            f"{path.name}: a PSTess matrix file (its 'bus' a matrix), not an ANDES case: "
+            f"{own}; {_ANDES_JSON}"
+        )
+    if not isinstance(data, dict):
+        raise InputError(f"{path.name}: holds {_json_kind(data)}, not an ANDES case: {_ANDES_JSON}")
+    for key, value in data.items():
+        bad = (
+            value
+            if not isinstance(value, list)
+            else next((v for v in value if not isinstance(v, dict)), None)
+        )
+        if key != "_config" and (not isinstance(value, list) or bad is not None):
+            what = (
+                _json_kind(value)
+                if not isinstance(value, list)
+                else f"a list holding {_json_kind(bad)}"
+            )
+            raise InputError(
+                f"{path.name}: key {key!r} holds {what}, not a list of device records: not "
+                f"an ANDES case ({_ANDES_JSON})"
+            )
+
+
+def _json_kind(value) -> str:
+    """What a JSON value is, for a message."""
+    if isinstance(value, dict):
+        return "an object"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, str):
+        return f"the text {json.dumps(value[:40])}"
+    return f"the value {json.dumps(value)}"
+
+
 def _input_rows(path: Path) -> dict:
     """ANDES model -> the rows (dicts) of an xlsx or json case file as written, before
     ANDES fills its defaults ({} for other formats, whose own readers give defaults); an
     xlsx formula cell without a stored value is a `_Formula`."""
     if path.suffix.lower() == ".json":
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError, UnicodeDecodeError, RecursionError):
-            return {}  # ANDES's own reading names what is wrong
+        data = _json_data(path)
         return (
             {k: v for k, v in data.items() if isinstance(v, list)} if isinstance(data, dict) else {}
         )

@@ -136,7 +136,8 @@ def read_dyr(path) -> list[DyrRecord]:
         or without a quoted model name after the bus, a record after another's '/' on
         one line (a comment in PSS/E, so never read), and, for the models stabctl maps, a
         non-integer bus or a parameter that is not a number (other models' records are
-        kept, with bus 0 and NaN parameters there, for the unsupported report).
+        kept, with bus 0 and NaN parameters there, for the unsupported report);
+        "{file}: ..." for a file without any record (empty, or comments only).
     """
     path = input_file(path, "DYR file")
     try:
@@ -160,6 +161,13 @@ def read_dyr(path) -> list[DyrRecord]:
             tokens.append(tok)
     if tokens:
         raise CaseError(f"{path.name}:{start}: record not terminated by '/'")
+    if not records:  # a DYR file given gives the dynamic models: none is a wrong file
+        what = "is empty" if not text.strip() else "holds no record, only comments"
+        raise CaseError(
+            f"{path.name}: the DYR file {what}: no machine, exciter or governor model "
+            "(records IBUS 'MODEL' ID ... /); give the case's DYR file, or none for a "
+            "power-flow case"
+        )
     return records
 
 

@@ -25,7 +25,7 @@ import json
 import re
 import warnings
 from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +34,7 @@ import numpy as np
 from stabctl.case import TABLES, Case
 from stabctl.case.events import check_case_events
 from stabctl.errors import CaseError
-from stabctl.io.inputs import input_file, plain_float
+from stabctl.io.inputs import input_file, parse_json, plain_float
 
 __all__ = [
     "FORMAT",
@@ -124,16 +124,25 @@ def case_from_matrices(
     *,
     source: str = "",
     description: str = "",
+    where: str = "",
 ) -> Case:
     """Build a Case from PST matrices by PST name (``bus``, ``line``, ``mac_con``, ...).
 
     ``mats`` values are nested lists or arrays (rows x columns); ``bus`` and ``line`` are
     required. ``basmva``/``sys_freq`` scalars set the bases. Raises :class:`CaseError`
-    for a missing ``bus``/``line`` or any invalid table (see :mod:`stabctl.case`).
+    for a missing ``bus``/``line`` or any invalid table (see :mod:`stabctl.case`), its
+    message starting with ``where`` (the file read) when given, else (a missing matrix)
+    with ``name``.
     """
     for key in ("bus", "line"):
         if key not in mats or _is_empty(mats[key]):
-            raise CaseError(f"{name}: the data defines no '{key}' matrix")
+            raise CaseError(f"{where or name}: the data defines no '{key}' matrix")
+    with _located(where) if where else nullcontext():
+        return _case_of_matrices(mats, name, source, description)
+
+
+def _case_of_matrices(mats: Mapping[str, Any], name: str, source: str, description: str) -> Case:
+    """`case_from_matrices`'s Case, ``bus`` and ``line`` given."""
     tables: dict[str, Any] = {
         field: TABLES[field].from_matrix(mats[key])
         for key, field in PST_TABLES.items()
@@ -147,7 +156,7 @@ def case_from_matrices(
                 f"{name}: the data defines no '{key}': {field} = {default:g} "
                 f"{_UNITS[field]} (PST's default)",
                 UserWarning,
-                stacklevel=2,
+                stacklevel=3,
             )
     return Case(
         name=name,
@@ -177,7 +186,7 @@ def _extra_matrices(mats: Mapping[str, Any], name: str) -> dict:
             f"{name}: variable(s) {', '.join(left_out)} left out: no PST data matrix "
             "stabctl keeps (a data file's own working variables)",
             UserWarning,
-            stacklevel=3,
+            stacklevel=4,
         )
     return kept
 
@@ -219,7 +228,11 @@ def read_pstess_json(path: str | Path, name: str | None = None, description: str
     if not isinstance(data, dict) or "bus" not in data:
         raise CaseError(f"{path}: not a PSTess matrix JSON (no 'bus' key)")
     return case_from_matrices(
-        data, name or path.stem, source=f"PSTess data {path.name}", description=description
+        data,
+        name or path.stem,
+        source=f"PSTess data {path.name}",
+        description=description,
+        where=str(path),
     )
 
 
@@ -236,7 +249,11 @@ def read_pst_m(path: str | Path, name: str | None = None, description: str = "")
         raise CaseError(f"cannot read {path}: {exc}") from None
     mats = parse_m(text, str(path))
     return case_from_matrices(
-        mats, name or path.stem, source=f"PST data file {path.name}", description=description
+        mats,
+        name or path.stem,
+        source=f"PST data file {path.name}",
+        description=description,
+        where=str(path),
     )
 
 
@@ -263,8 +280,7 @@ def read_any(path: str | Path) -> Case:
 def _load_json(path: Path):
     path = input_file(path, "case file")
     try:
-        with open(path, encoding="utf-8") as fh:
-            return json.load(fh)
+        return parse_json(path.read_text(encoding="utf-8"), str(path), CaseError)
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
     except RecursionError:
@@ -407,12 +423,14 @@ def _parse_matrix(body: str, start: int, where: str, name: str) -> np.ndarray:
         row_lines.append(lineno)
     if not rows:
         return np.zeros((0, 0))
-    for r, ln in zip(rows, row_lines):
-        if len(r) != len(rows[0]):
-            raise CaseError(
-                f"{where} line {ln}: '{name}': row has {len(r)} columns, "
-                f"first row has {len(rows[0])}"
-            )
+    lengths = [len(r) for r in rows]
+    if len(set(lengths)) != 1:  # the row that differs from the most rows, not from row 1
+        count = max(set(lengths), key=lambda n: (lengths.count(n), -lengths.index(n)))
+        k = next(k for k, n in enumerate(lengths) if n != count)
+        raise CaseError(
+            f"{where} line {row_lines[k]}: '{name}': row {k + 1} has {lengths[k]} columns, "
+            f"{lengths.count(count)} other row(s) have {count}"
+        )
     return np.array(rows, dtype=float)
 
 
@@ -621,16 +639,17 @@ def _table_from_json(cls, raw: Mapping, where: str):
             f"{where}: table '{cls.TABLE}' has unknown column(s) {bad}; known: {list(known)}"
         )
     _check_numbers(rows, cols, f"{where}: table '{cls.TABLE}'")
+    for i, row in enumerate(rows, start=1):  # each row against the columns named
+        if len(row) != len(cols):
+            raise CaseError(
+                f"{where}: table '{cls.TABLE}' row {i}: {len(row)} value(s), the table "
+                f"names {len(cols)} columns"
+            )
     from stabctl.case.system import _as_matrix
 
     mat = _as_matrix(rows, cls.TABLE)
     if mat.shape[0] == 0:
         return cls.empty()
-    if mat.shape[1] != len(cols):
-        raise CaseError(
-            f"{where}: table '{cls.TABLE}' rows have {mat.shape[1]} values, "
-            f"{len(cols)} columns named"
-        )
     n = mat.shape[0]
     _check_missing(cls, cols, where)
     data = {

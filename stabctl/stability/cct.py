@@ -989,19 +989,41 @@ def read_faults(path: str | Path) -> list[LineFault]:
     ------
     InputError
         A row or header the table refuses, a value out of range, a circuit given for a
-        bus fault, a fault listed twice; naming file:line.
+        bus fault, a line from a bus to itself, a fault listed twice; naming file:line.
     """
-    faults: dict[LineFault, int] = {}
+    return [fault for fault, _ in read_fault_rows(path)]
+
+
+def read_fault_rows(path: str | Path) -> list[tuple[LineFault, CsvRow]]:
+    """`read_faults` with the row of each fault, for messages about a fault that name
+    its ``file:line`` (a bus or line the case lacks).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The fault list.
+
+    Returns
+    -------
+    list of (LineFault, stabctl.io.inputs.CsvRow)
+        In file order.
+
+    Raises
+    ------
+    InputError
+        As `read_faults`.
+    """
+    faults: dict[LineFault, CsvRow] = {}
     for row in read_csv(path, "fault list", *FAULT_COLUMNS):
         fault = _fault_row(row)
         if fault in faults:
             name = f"{fault.bus}" if fault.far_bus is None else f"{fault.bus}-{fault.far_bus}"
             raise InputError(
-                f"{row.where()}: fault {name} listed twice (first at line {faults[fault]}; "
-                "each fault once)"
+                f"{row.where()}: fault {name} listed twice (first at line "
+                f"{faults[fault].line}; each fault once)"
             )
-        faults[fault] = row.line
-    return list(faults)
+        faults[fault] = row
+    return list(faults.items())
 
 
 def _fault_row(row: CsvRow) -> LineFault:
@@ -1011,9 +1033,16 @@ def _fault_row(row: CsvRow) -> LineFault:
             f"{row.where()}: circuit {row.values['circuit']} given for a bus fault (far_bus "
             "empty): a circuit names a line; give its far_bus, or leave circuit empty"
         )
+    bus = int(number(row, "bus", 1, _LARGEST_BUS, integer=True))
+    far_bus = int(number(row, "far_bus", 1, _LARGEST_BUS, integer=True)) if far else None
+    if far_bus == bus:
+        raise InputError(
+            f"{row.where()}: far_bus {far} is the fault's bus: a line joins two buses; give "
+            "the line's other end, or leave far_bus empty for a bus fault"
+        )
     return LineFault(
-        bus=int(number(row, "bus", 1, _LARGEST_BUS, integer=True)),
-        far_bus=int(number(row, "far_bus", 1, _LARGEST_BUS, integer=True)) if far else None,
+        bus=bus,
+        far_bus=far_bus,
         t_fault=number(row, "t_fault", 0.0, T_FAULT_MAX_S, default=1.0),
         circuit=int(number(row, "circuit", 1, 999, integer=True, default=1)),
     )

@@ -254,6 +254,24 @@ def test_machine_index():
             dict(line=modified(modified(LINE, 0, 2, 0.0), 0, 3, 0.0)),
             r"line row 1 \(1-3\), field 'x': series impedance",
         ),
+        # a negative tap ran into a power flow that did not converge
+        (
+            dict(line=modified(LINE, 1, 5, -1.0)),
+            r"line row 2 \(2-3\), field 'tap': off-nominal tap ratio must be > 0 \(0 stands "
+            r"for 1\), got -1",
+        ),
+        (  # a tap changer (tapmax != 0) steps between its limits by its step
+            dict(line=[LINE[0], LINE[1][:7] + [1.2, -0.8, 0.01]]),
+            r"line row 2 \(2-3\), field 'tapmin': tap changer's lowest ratio must be > 0, got -0.8",
+        ),
+        (
+            dict(line=[LINE[0], LINE[1][:7] + [0.9, 1.1, 0.01]]),
+            r"line row 2 \(2-3\), field 'tapmax': tap changer's tapmax must be >= tapmin, got 0.9",
+        ),
+        (
+            dict(line=[LINE[0], LINE[1][:7] + [1.2, 0.8, 0.0]]),
+            r"line row 2 \(2-3\), field 'tapstep': tap changer's step must be > 0",
+        ),
         (
             dict(bus=modified(BUS, 1, 1, float("nan"))),
             r"bus row 2 \(bus 2\), field 'vmag': non-finite value",
@@ -283,13 +301,28 @@ def test_validation_names_table_row_and_field(kwargs, pattern):
         make_case(**kwargs)
 
 
+def test_series_capacitors_phase_shifts_and_a_tap_of_0_are_taken():
+    """The branch checks refuse what cannot be (a negative tap), nothing a network holds:
+    a series capacitor's x < 0, a phase shift of any sign, PST's tap 0 for 1."""
+    rows = [LINE[0], modified([LINE[1]], 0, 3, -0.004)[0][:5] + [0.0, -30.0, 0, 0, 0]]
+    br = BranchTable.from_matrix(rows)
+    assert (br.x[1], br.tap[1], br.phase_deg[1]) == (-0.004, 0.0, -30.0)
+
+
 def test_wrong_column_count():
     with pytest.raises(CaseError, match=r"pss_con: wrong column count 9, expected 10"):
         PssTable.from_matrix([r[:9] for r in PSS])
     with pytest.raises(CaseError, match=r"bus: wrong column count 16, expected 10 to 15"):
         BusTable.from_matrix([r + [0] for r in BUS])
-    with pytest.raises(CaseError, match=r"line row 2: wrong column count 9, row 1 has 10"):
+    with pytest.raises(
+        CaseError, match=r"line row 2: 9 columns, 1 other row\(s\) have 10 \(row 1\)"
+    ):
         BranchTable.from_matrix([LINE[0], LINE[1][:9]])
+    # the row that differs from the others is named, not the row after a broken first row
+    with pytest.raises(CaseError, match=r"^line row 1: 11 columns, 2 other row\(s\) have 10$"):
+        BranchTable.from_matrix([LINE[0] + [1.0], LINE[1], LINE[1]])
+    with pytest.raises(CaseError, match=r"^line row 1: 9 columns, 2 other row\(s\) have 10$"):
+        BranchTable.from_matrix([LINE[0][:9], LINE[1], LINE[1]])
 
 
 def test_bad_bases_and_sw_con():

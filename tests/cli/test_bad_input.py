@@ -218,6 +218,8 @@ def _set(d, table, field, value, row=0):
         # reported as power-flow non-convergence
         ("buses", "qmin", 99.0, "field 'qmax': generator Q limits: qmax must be >= qmin"),
         ("buses", "vmin", 1.6, "field 'vmax': voltage limits: vmax must be >= vmin"),
+        # a negative tap: "power flow did not converge"
+        ("branches", "tap", -1.0, "line row 1 (1-10), field 'tap': off-nominal tap ratio must be"),
         # H = 1e308 ran, overflowing (numpy's warnings the only word)
         ("machines", "H", 1e308, "field 'H': 1e+308 is beyond +-1e+15: no datum is"),
         ("buses", "pload", -1e16, "field 'pload': -1e+16 is beyond +-1e+15"),
@@ -338,6 +340,34 @@ def test_a_pst_file_s_working_variables_are_left_out_by_name(tmp_path):
     with pytest.warns(UserWarning, match="tiny: variable.s. tmp_ud1 left out"):
         case = load_case(path)
     assert list(case.extra) == ["lmod_con"]
+
+
+@pytest.mark.parametrize(
+    "end, needle",
+    [
+        (0.1, "starts at or after the end of the run"),
+        (0.2, "ends at or after the end of the run"),
+        (0.0, "a run must end after 0 s"),
+    ],
+)
+def test_a_run_end_taken_from_sw_con_is_named_as_such(tmp_path, no_simulation, end, needle):
+    """--pstess-default on a case whose sw_con ends before its fault clears said
+    "(--tf 0.1 s)", an option never given, and did not name sw_con: the row and column
+    the end came from are named, with the file."""
+    d = _kundur_dict()
+    d["sw_con"][-1][0] = end  # kundur's sw_con: fault at 0.1 s, cleared 0.15 / 0.2 s
+    path = tmp_path / "swcon.json"
+    path.write_text(json.dumps(d))
+    res = run("simulate", path, "--pstess-default")
+    where = f"{path}: sw_con row 5 (its last), column 1 (time): {end:g} s"
+    assert_error(res, needle, where, "give --tf, or correct that time")
+    assert "--tf 0." not in res.stderr
+
+
+def test_a_default_run_end_is_not_called_an_option_given(no_simulation):
+    """A bus fault cleared after the default end said "(--tf 6 s)" without a --tf given."""
+    res = run("simulate", "kundur", "--bus-fault", 3, 1, 20)
+    assert_error(res, "ends at or after the end of the run (--tf 6 s, by default); give a longer")
 
 
 def test_the_case_s_own_disturbance_a_run_cannot_take_is_refused(tmp_path, no_simulation):
@@ -555,16 +585,33 @@ def test_an_unknown_bus_or_line_of_an_option_is_named_before_any_work(no_simulat
 
 
 @pytest.mark.parametrize("command", [("sweep-cct",), ("place", "--required-clearing-cycles", 6)])
-def test_a_fault_list_s_unknown_line_is_named_before_any_work(no_simulation, tmp_path, command):
+@pytest.mark.parametrize(
+    "text, line, needle",
+    [
+        ("bus,far_bus\n3,101\n3,13\n", 3, f"fault at bus 3 on line 3-13 at 1 s: {NO_LINE}"),
+        # the row of a long list is named: bus 999 on its last of 3 001 rows
+        (
+            "bus,far_bus,t_fault\n"
+            + "".join(f"3,101,{1 + i * 1e-3:.3f}\n" for i in range(3000))
+            + "3,999,1\n",
+            3002,
+            "fault at bus 3 on line 3-999 at 1 s: bus 999 is not in case 'kundur'",
+        ),
+    ],
+    ids=["no line", "last of 3001 rows"],
+)
+def test_a_fault_list_s_unknown_line_is_named_before_any_work(
+    no_simulation, tmp_path, command, text, line, needle
+):
     """place compiled its kernels and solved its power flows (a minute and more, cold)
     before it said 'line: no branch between bus 3 and bus 13' without naming the file;
-    sweep-cct named neither.  Both refuse it first, naming --faults, the file and the
-    fault."""
+    sweep-cct named neither.  Both refuse it first, naming --faults, the file and line,
+    and the fault."""
     faults = tmp_path / "f.csv"
-    faults.write_text("bus,far_bus\n3,101\n3,13\n", encoding="utf-8")
+    faults.write_text(text, encoding="utf-8")
     out = tmp_path / "o.jsonl"
     res = run(command[0], "kundur", "--faults", faults, *command[1:], "--out", out)
-    assert_error(res, f"--faults {faults}: fault at bus 3 on line 3-13 at 1 s: {NO_LINE}")
+    assert_error(res, f"--faults {faults}:{line}: {needle}")
     assert not out.exists()
 
 
@@ -1103,6 +1150,18 @@ def test_a_dyr_file_with_a_byte_order_mark_is_read_as_a_raw_file_is(tmp_path):
     res = run("import-psse", PSSE / "smib_v33.raw", dyr, "-o", out)
     assert res.exit_code == 0, res.output
     assert json.loads(out.read_text(encoding="utf-8"))["tables"]["machines"]["rows"]
+
+
+def test_an_empty_dyr_file_is_named(tmp_path):
+    """import-psse with an empty DYR file listed the generators without a machine model
+    and never named the DYR file that gave none."""
+    dyr = tmp_path / "d_empty.dyr"
+    dyr.write_text("")
+    out = tmp_path / "p.json"
+    for extra in ((), ("--net-unmodelled",)):
+        res = run("import-psse", PSSE / "five_bus_v33.raw", dyr, "-o", out, *extra)
+        assert_error(res, "d_empty.dyr: the DYR file is empty")
+        assert not out.exists()
 
 
 def test_a_bus_fault_cct_takes_further_trips(no_simulation):

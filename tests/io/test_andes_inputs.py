@@ -272,3 +272,54 @@ def test_andes_loads_leave_nothing_in_the_temporary_directory(tmp_path, monkeypa
     assert res.exit_code == 0, res.output
     assert andes_system(case, off=("Toggle",)).is_setup
     assert sorted(p.name for p in tmp.iterdir()) == []
+
+
+def test_a_json_file_not_in_andes_s_layout_is_named_for_what_it_is(tmp_path):
+    """import-andes of a stabctl case file ended in "ANDES cannot read the case: 'int'
+    object is not iterable" (ANDES read its "version": 1 as model rows); a stabctl case, a
+    PSTess matrix file and any json whose key holds no list of device records are named
+    for what they are, with the layout import-andes reads."""
+    import json
+
+    from stabctl.io import load_case
+    from stabctl.io.pst import case_to_dict, write_case_json
+
+    own = write_case_json(load_case("kundur"), tmp_path / "k.json")
+    with pytest.raises(InputError, match=r'^k.json: a stabctl case file \("format": "stabctl-'):
+        read_andes_case(own)
+    res = run_cli("import-andes", own, "-o", "a.json", cwd=tmp_path)
+    assert res.returncode == 2 and not (tmp_path / "a.json").exists()
+    assert (
+        res.stderr.startswith("error: k.json: a stabctl case file") and "iterable" not in res.stderr
+    )
+    assert "stabctl's commands read it as it is" in res.stderr and len(res.stderr.splitlines()) == 1
+    tables = case_to_dict(load_case("kundur"))["tables"]
+    pstess = tmp_path / "m.json"
+    pstess.write_text(
+        json.dumps({"bus": tables["buses"]["rows"], "line": tables["branches"]["rows"]})
+    )
+    with pytest.raises(InputError, match=r"^m.json: a PSTess matrix file"):
+        read_andes_case(pstess)
+    ieee14 = json.loads(Path(andes.get_case("ieee14/ieee14.json")).read_text())
+    for key, value, what in (
+        ("Bus", {"idx": 1}, "an object"),
+        ("Line", [[1, 2]], "a list holding a list"),
+        ("PQ", 3, "the value 3"),
+    ):
+        other = tmp_path / "other.json"
+        other.write_text(json.dumps({**ieee14, key: value}))
+        with pytest.raises(InputError, match=rf"^other.json: key '{key}' holds {what}, not a list"):
+            read_andes_case(other)
+    other.write_text("[1, 2]")
+    with pytest.raises(InputError, match=r"^other.json: holds a list, not an ANDES case: an ANDES"):
+        read_andes_case(other)
+
+
+def test_an_andes_json_giving_a_key_twice_is_refused(tmp_path):
+    """ANDES's json reader keeps the last of a model given twice: the first's devices were
+    left out without a word."""
+    text = Path(andes.get_case("5bus/pjm5bus.json")).read_text().rstrip()
+    path = tmp_path / "twice.json"
+    path.write_text(text[:-1] + ', "Area": [{"idx": 9, "u": 1, "name": "9"}]}')
+    with pytest.raises(InputError, match=r'^twice.json: key "Area" given twice in one object'):
+        read_andes_case(path)

@@ -41,6 +41,9 @@ def _csv(tmp_path, text, name="f.csv", encoding="utf-8"):
         # a bus fault's row with a circuit ran, recorded as that circuit (cct refuses it)
         ("bus,far_bus,circuit\n3,,2\n", r"f\.csv:2: circuit 2 given for a bus fault"),
         ("bus,far_bus\n", r"needs a header \(bus,far_bus\[,t_fault\]"),
+        # a line from a bus to itself: "line: no branch between bus 3 and bus 3", no row
+        ("bus,far_bus\n3,101\n3,3\n", r"f\.csv:3: far_bus 3 is the fault's bus: a line joins"),
+        ("bus,far_bus\n3,003\n", r"f\.csv:2: far_bus 003 is the fault's bus"),
     ],
 )
 def test_fault_list_refusals_name_file_line_and_field(tmp_path, text, needle):

@@ -137,3 +137,22 @@ def test_dyr_cut_inside_a_record_is_refused(tmp_path):
     )
     with pytest.raises(CaseError, match=r"cut\.dyr:3: record not terminated by '/'"):
         load_psse(V33, path)
+
+
+@pytest.mark.parametrize(
+    "text, what",
+    [
+        ("", "is empty"),
+        ("\n  \n", "is empty"),
+        (" / a comment\n", "holds no record, only comments"),
+    ],
+    ids=["empty", "blank lines", "comments"],
+)
+def test_a_dyr_file_without_any_record_is_refused_by_name(tmp_path, text, what):
+    """An empty DYR file read as no records: import-psse listed every generator as
+    without a machine model, never naming the file that gave none."""
+    path = _write(tmp_path, text, "empty.dyr")
+    with pytest.raises(CaseError, match=rf"^empty\.dyr: the DYR file {what}: no machine"):
+        read_dyr(path)
+    with pytest.raises(CaseError, match=rf"^empty\.dyr: the DYR file {what}"):
+        load_psse(V33, path, unmodelled="net")

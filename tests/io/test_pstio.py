@@ -75,7 +75,9 @@ c = [1.5e-3 -2 +3];
         ("for k = 1:3\n  z(k) = k;\nend\n", r"line 1: not a literal assignment: for k"),
         ("p = (1:1:34).';\n", r"line 1: 'p' is not a literal matrix or number"),
         ("q = [1 2]';\n", r"line 1: 'q' is not a literal matrix or number"),
-        ("m = [1 2 3;\n 4 5];\n", r"line 2: 'm': row has 2 columns, first row has 3"),
+        ("m = [1 2 3;\n 4 5];\n", r"line 2: 'm': row 2 has 2 columns, 1 other row\(s\) have 3"),
+        # a broken first row is named, not the next one
+        ("m = [1 2 3 4;\n 4 5 6;\n 7 8 9];\n", r"line 1: 'm': row 1 has 4 columns, 2 other"),
         ("m = [1 2 3;\n 4 5 6;\n", r"line 1: unterminated matrix"),
         ("r = [1 2] * 3;\n", r"line 1: 'r' is not a literal matrix or number"),
         ("s = [1 - 2];\n", r"line 1: 's': '-' is not a number"),
@@ -226,3 +228,63 @@ def test_read_any_rejects_unknown_content(tmp_path):
     p.write_text("{not json")
     with pytest.raises(CaseError, match="invalid JSON at line 1"):
         pstio.read_any(p)
+
+
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        # json keeps the last of a key given twice: the case ran at 50 MVA without a word
+        (lambda text, _: text[:-1] + ', "base_mva": 50.0}', '"base_mva" given twice'),
+        # a second "tables" replaced every table of the first
+        (
+            lambda text, data: text[:-1] + ', "tables": ' + json.dumps(data["tables"]) + "}",
+            '"tables" given twice',
+        ),
+        # inside a table: the second "rows" replaced the first
+        (
+            lambda text, _: text.replace('"rows": [', '"rows": [], "rows": [', 1),
+            '"rows" given twice',
+        ),
+    ],
+    ids=["base_mva", "tables", "rows"],
+)
+def test_a_case_file_giving_a_key_twice_is_refused_naming_file_and_key(tmp_path, edit, needle):
+    data = pstio.case_to_dict(load_case("kundur"))
+    p = tmp_path / "twice.json"
+    p.write_text(edit(json.dumps(data), data))
+    with pytest.raises(CaseError, match=rf"^{p}: key {needle} in one object"):
+        load_case(p)
+    with pytest.raises(CaseError, match=rf"^{p}: key {needle}"):
+        pstio.read_case_header(p)
+
+
+def test_a_pstess_matrix_json_giving_a_key_twice_is_refused(tmp_path):
+    case = load_case("kundur")
+    p = tmp_path / "m.json"
+    bus = json.dumps(case.buses.matrix().tolist())
+    line = json.dumps(case.branches.matrix().tolist())
+    p.write_text(f'{{"bus": {bus}, "line": {line}, "basmva": 100, "sys_freq": 60, "basmva": 10}}')
+    twice = r'"basmva" given twice in one object \(100, then 10\)'
+    with pytest.raises(CaseError, match=rf"^{p}: key {twice}"):
+        pstio.read_any(p)
+
+
+@pytest.mark.parametrize("edit", ["append", "pop"])
+def test_a_table_row_of_another_width_is_named_with_file_table_and_counts(tmp_path, edit):
+    """A first branch row with a value too many or too few was reported as "line row 2:
+    wrong column count 14, row 1 has 15", without the file and blaming the good row 2."""
+    data = pstio.case_to_dict(load_case("kundur"))
+    row = data["tables"]["branches"]["rows"][0]
+    row.append(1.0) if edit == "append" else row.pop()
+    found = 15 if edit == "append" else 13
+    p = tmp_path / "ragged.json"
+    p.write_text(json.dumps(data))
+    want = rf"^{p}: table 'line' row 1: {found} value\(s\), the table names 14 columns$"
+    with pytest.raises(CaseError, match=want):
+        load_case(p)
+    # a PSTess matrix file: its rows against the most rows' width, the file named
+    mats = {"bus": data["tables"]["buses"]["rows"], "line": data["tables"]["branches"]["rows"]}
+    p = tmp_path / "matrices.json"
+    p.write_text(json.dumps({**mats, "basmva": 100.0, "sys_freq": 60.0}))
+    with pytest.raises(CaseError, match=rf"^{p}: line row 1: {found} columns, 13 other row"):
+        load_case(p)
