@@ -1442,6 +1442,13 @@ def _check_sw_con(sw) -> np.ndarray | None:
     bad = np.argwhere(~np.isfinite(mat))
     if bad.size:
         raise CaseError(f"sw_con row {bad[0][0] + 1}, column {bad[0][1] + 1}: non-finite value")
+    back = np.flatnonzero(np.diff(mat[:, 0]) < 0)
+    if back.size:  # PST switches at each row's time in turn (PST manual, sw_con)
+        r = int(back[0]) + 2
+        raise CaseError(
+            f"sw_con row {r}, column 1 (time): {mat[r - 1, 0]:g} s comes before row {r - 1}'s "
+            f"{mat[r - 2, 0]:g} s: the switching times must not go backwards"
+        )
     mat.setflags(write=False)
     return mat
 

@@ -331,6 +331,17 @@ def test_bad_bases_and_sw_con():
         c.replace(base_mva=0)
     with pytest.raises(CaseError, match="sw_con: wrong column count 6"):
         c.replace(sw_con=[[0, 0, 0, 0, 0, 0]])
+    sw = [[0, 0, 0, 0, 0, 0, 0.01], [0.1, 3, 4, 0, 0, 0, 0.01], [0.15] + [0] * 6]
+    sw += [[0.2] + [0] * 6, [5.0] + [0] * 6]  # PST's layout: start, fault, near, far, end
+    backwards = np.array(sw)
+    backwards[3, 0] = 0.12  # the far end cleared before the near end, 0.15 s
+    with pytest.raises(
+        CaseError, match=r"sw_con row 4, column 1 \(time\): 0.12 s comes before row 3's 0.15 s"
+    ):
+        c.replace(sw_con=backwards)
+    same = np.array(sw)
+    same[3, 0] = same[2, 0]  # both ends cleared at once: PSTess's own Kundur-type data
+    assert c.replace(sw_con=same).sw_con[3, 0] == same[2, 0]
 
 
 # ---------------------------------------------------------------------------- built-ins
