@@ -1443,3 +1443,13 @@ def test_a_trip_of_the_faulted_circuit_names_trip(no_simulation):
     the events as Python reprs and no word of --trip."""
     res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--trip", 101, 3)
     assert_error(res, "--trip 101 3: 101-3 is the faulted circuit itself (line 3-101 circuit 1")
+
+
+# -- eighth round: event sizes, faults of no length, run ends, ports, names ----------------
+
+
+@pytest.mark.parametrize("name", ["", " "])
+def test_cases_refuses_an_empty_case_name(name):
+    """`stabctl cases ''` listed every built-in case (exit 0), the empty CASE taken for
+    none given: refused naming CASE."""
+    assert_error(run("cases", name), f"CASE {name!r}: an empty case name")
