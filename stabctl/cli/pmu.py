@@ -322,12 +322,17 @@ def record(address, out, frames):
 
 
 def _host_port(address: str) -> tuple[str, int]:
-    from stabctl.estimation.c37_tcp import split_hostport
+    """(host, port) of a HOST:PORT argument; InputError naming the address: no host or
+    port, or a port outside 1-65535 (`c37_tcp.port_number`)."""
+    from stabctl.estimation.c37_tcp import port_number, split_hostport
 
     host, port = split_hostport(address)
-    if not host or not (port.isascii() and port.isdigit()) or not 0 < int(port) < 65536:
-        raise InputError(f"address {address!r}: expected HOST:PORT")
-    return host, int(port)
+    try:
+        if not host:
+            raise InputError("expected HOST:PORT")
+        return host, port_number(port)
+    except InputError as exc:
+        raise InputError(f"address {address!r}: {exc}") from None
 
 
 @pmu.command()

@@ -201,6 +201,14 @@ def test_estimate_source_refuses_monte_carlo_options(tmp_path):
     "args, needle",
     [
         (["record", "nonsense", "--frames", "5", "-o", "r.c37"], "expected HOST:PORT"),
+        (
+            ["record", "127.0.0.1:99999", "--frames", "5", "-o", "r.c37"],
+            "address '127.0.0.1:99999': port 99999 is out of range (1-65535)",
+        ),
+        (
+            ["control", "kundur", "[::1]:0", "--esd-pct", "5"],
+            "address '[::1]:0': port 0 is out of range (1-65535)",
+        ),
         (["record", "127.0.0.1:1", "--frames", "5", "-o", "r.c37"], "no C37.118.2 server"),
         (["replay", "missing.c37"], "RECORDING"),
         (["replay", "junk.c37"], "C37.118.2 recording junk.c37: no frame SYNC at byte 0"),
