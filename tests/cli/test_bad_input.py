@@ -1453,3 +1453,21 @@ def test_cases_refuses_an_empty_case_name(name):
     """`stabctl cases ''` listed every built-in case (exit 0), the empty CASE taken for
     none given: refused naming CASE."""
     assert_error(run("cases", name), f"CASE {name!r}: an empty case name")
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (("-c", 600), "--fault-cycles 600: 600 cycles = 10 s at --f0 60 Hz, not cleared before"),
+        (("-c", 200), "the end of each run, 3 s (omib's fixed run length): give fewer than 180"),
+        (("6", "180"), "MORE_CYCLES 180: 180 cycles = 3 s at --f0 60 Hz"),
+        (("--f0", 10, "-c", 30), "--fault-cycles 30: 30 cycles = 3 s at --f0 10 Hz"),
+    ],
+)
+def test_omib_refuses_a_fault_not_cleared_before_the_run_ends(args, needle):
+    """`omib -c 600` passed the range check of [0, 600] cycles, then failed with 'need 0
+    <= t_clear < t_end, got t_clear=10.0, t_end=3.0', naming neither the option nor the
+    limit: a duration not cleared before the run's end is refused naming the option, its
+    cycles and seconds, the end and the most cycles that fit."""
+    assert_error(run("omib", *args), needle)
+    assert run("omib", "-c", 179).exit_code == 0
