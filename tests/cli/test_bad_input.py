@@ -1471,3 +1471,33 @@ def test_omib_refuses_a_fault_not_cleared_before_the_run_ends(args, needle):
     cycles and seconds, the end and the most cycles that fit."""
     assert_error(run("omib", *args), needle)
     assert run("omib", "-c", 179).exit_code == 0
+
+
+def test_track_of_a_stream_cut_short_replaces_no_file_on_an_error(kundur_wire, tmp_path):
+    """`estimate track --until 100` of a 1.2 s recording replaced an existing --out with
+    the frames tracked and exited 2 (a new --out was left behind by that error exit): as
+    `pmu record`, an existing file is replaced only by the track of a whole stream (exit
+    2, left byte for byte), a new one is written as far as the stream came with a warning
+    naming the shortfall (exit 0)."""
+    from stabctl.estimation import c37
+
+    cfg, frames, _, _ = kundur_wire
+    rec = tmp_path / "r.c37"
+    c37.record(rec, cfg, frames)
+    out = tmp_path / "keep.csv"
+    out.write_text("keep\n")
+    track = ("estimate", "track", "kundur", "--source", rec, "--until", 100, "--out")
+    res = run(*track, out)
+    assert_error(
+        res,
+        f"--source {rec} stopped before t = 100 s: ",
+        f"; {out} is left as it was (the 73 frames tracked are not written over it)",
+    )
+    assert out.read_text() == "keep\n" and sorted(tmp_path.iterdir()) == [out, rec]
+    new = tmp_path / "new.csv"
+    res = run(*track, new)
+    assert res.exit_code == 0, res.output
+    said = res.stderr.splitlines()
+    assert len(said) == 1 and said[0].startswith(f"warning: --source {rec} stopped before")
+    assert said[0].endswith(f"; the 73 frames tracked are in {new}")
+    assert len(new.read_text().splitlines()) == 1 + 73
