@@ -603,6 +603,33 @@ def check_option_events(case, given) -> None:
             raise InputError(f"{option}: {exc}") from None
 
 
+def refuse_fault_of_no_length(ev, given: str, hint: str = "") -> None:
+    """Refuse a fault cleared at both ends as it starts: it would do nothing (a zero-length
+    interval of fault, the line, if any, tripped without one), as a second trip is
+    refused.
+
+    Parameters
+    ----------
+    ev : stabctl.case.events.Fault
+        The fault.
+    given : str
+        The options that gave it, as given (``"--bus-fault 3 1 1"``).
+    hint : str, optional
+        What to give instead, completing the message.
+
+    Raises
+    ------
+    InputError
+        `ev` is cleared (near end, and far end if it has one) at its start: the message
+        names `given`, the time and why.
+    """
+    if ev.clear_near is not None and ev.far_clear == ev.t:
+        raise InputError(
+            f"{given}: cleared at {ev.t:g} s, as it starts: a fault of no length would do "
+            f"nothing{hint}"
+        )
+
+
 def fault_options(required: bool, t_fault: bool = True, far_required: bool | None = None):
     """``--fault BUS --far-bus BUS`` and (``t_fault``) ``--t-fault S``: a bolted fault;
     `far_required` (default `required`): whether --far-bus must be given (without it the

@@ -17,6 +17,7 @@ from stabctl.cli.options import (
     clear_cycles_option,
     fault_options,
     fault_text,
+    refuse_fault_of_no_length,
     tf_option,
 )
 from stabctl.errors import InputError
@@ -154,6 +155,11 @@ def fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
         raise InputError(f"--tf must be > 0, got {tf:g}")
     case = load_case(case_name)
     ev = fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles)
+    refuse_fault_of_no_length(
+        ev,
+        f"{fault_text(fault, far_bus)} --clear-cycles {clear_cycles:g}",
+        ": give --clear-cycles > 0",
+    )
     check_option_events(case, [(fault_text(fault, far_bus), ev)])
     return case, ev, tf
 

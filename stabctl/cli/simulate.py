@@ -34,6 +34,7 @@ from stabctl.cli.options import (
     out_file_option,
     plot_option,
     q_limits_option,
+    refuse_fault_of_no_length,
     refuse_given,
     reports_errors,
     storage_options,
@@ -71,6 +72,11 @@ def _bus_fault(spec: str, t_on: float, t_off: float):
         raise InputError(
             f"--bus-fault {spec} {t_on:g} {t_off:g}: T_ON and T_OFF must be at most "
             f"{latest:g} s (T_OFF inf: never cleared)"
+        )
+    if t_on == t_off:
+        raise InputError(
+            f"--bus-fault {spec} {t_on:g} {t_off:g}: cleared at {t_on:g} s, as it starts: a "
+            "fault of no length would do nothing (give T_OFF > T_ON)"
         )
     clear = None if t_off == float("inf") else t_off
     return Fault(bus=bus, t=t_on, clear_near=clear, r=r, x=x)
@@ -117,7 +123,13 @@ def _build_events(
     pstess_default,
     case_events,
 ):
-    from stabctl.dynamics.events import LineTrip, fault_with_clearing, from_case, from_sw_con
+    from stabctl.dynamics.events import (
+        Fault,
+        LineTrip,
+        fault_with_clearing,
+        from_case,
+        from_sw_con,
+    )
 
     if case_events and not case.events:
         raise InputError(
@@ -129,9 +141,15 @@ def _build_events(
             f"--pstess-default: case {case.name} has no PST sw_con disturbance of its own; "
             "give --fault, --trip, --bus-fault, ..."
         )
-    own = list(from_sw_con(case)) if pstess_default else []
-    if case_events:
-        own += from_case(case)
+    own: list = []
+    for option, given in (
+        ("--pstess-default", from_sw_con(case) if pstess_default else []),
+        ("--case-events", from_case(case) if case_events else []),
+    ):
+        for ev in given:
+            if isinstance(ev, Fault):
+                refuse_fault_of_no_length(ev, f"{option}: the case's own {ev}")
+        own += given
     events: list = []
     if fault is None:
         refuse_given(
@@ -152,6 +170,19 @@ def _build_events(
             raise InputError(f"--t-fault must be >= 0 s, got {t_fault:g}")
         ev = fault_with_clearing(
             case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit=circuit
+        )
+        far = "" if far_clear_cycles is None else f" --far-clear-cycles {far_clear_cycles:g}"
+        refuse_fault_of_no_length(
+            ev,
+            f"{fault_text(fault, far_bus, circuit)} --clear-cycles {clear_cycles:g}{far}",
+            ": give --clear-cycles > 0"
+            + (
+                ""
+                if far_bus is None
+                else f" (the line's trip alone: --trip {fault} {far_bus}"
+                + ("" if circuit == 1 else f":{circuit}")
+                + ")"
+            ),
         )
         check_option_events(case, [(fault_text(fault, far_bus, circuit), ev)])
         events.append(ev)

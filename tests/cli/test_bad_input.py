@@ -1501,3 +1501,61 @@ def test_track_of_a_stream_cut_short_replaces_no_file_on_an_error(kundur_wire, t
     assert len(said) == 1 and said[0].startswith(f"warning: --source {rec} stopped before")
     assert said[0].endswith(f"; the 73 frames tracked are in {new}")
     assert len(new.read_text().splitlines()) == 1 + 73
+
+
+NO_LENGTH = "as it starts: a fault of no length would do nothing"
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (KUNDUR_SIM + ("--bus-fault", 3, 1, 1, "--tf", 2), "--bus-fault 3 1 1: cleared at 1 s"),
+        (
+            KUNDUR_SIM + ("--fault", 3, "--clear-cycles", 0, "--tf", 2),
+            "--fault 3 --clear-cycles 0: cleared at 1 s",
+        ),
+        (
+            KUNDUR_SIM + ("--fault", 3, "--far-bus", 101, "--clear-cycles", 0, "--tf", 2),
+            "(the line's trip alone: --trip 3 101)",
+        ),
+        (
+            KUNDUR_SIM
+            + ("--fault", 3, "--far-bus", 101, "--clear-cycles", 0, "--far-clear-cycles", 0),
+            "--fault 3 --far-bus 101 --clear-cycles 0 --far-clear-cycles 0: cleared at 1 s",
+        ),
+        (
+            ("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 0),
+            "--fault 3 --far-bus 101 --clear-cycles 0: cleared at 1 s",
+        ),
+        (
+            ("pmu", "serve", "kundur", "--fault", 3, "--clear-cycles", 0),
+            "--fault 3 --clear-cycles 0: cleared at 1 s",
+        ),
+    ],
+)
+def test_a_fault_of_no_length_is_refused(no_simulation, args, needle):
+    """`simulate kundur --bus-fault 3 1 1` ran (exit 0) and said 'cleared at 1 s (after 0.0
+    ms)': a fault cleared as it starts does nothing (a line fault only trips its line), and
+    is refused naming the options, as a second trip of a line is."""
+    assert_error(run(*args), needle, NO_LENGTH)
+
+
+def test_a_case_s_own_fault_of_no_length_is_refused_and_a_far_end_feed_runs(tmp_path):
+    """A case's own fault cleared as it starts is refused when its events run, naming
+    --case-events and the event; a fault cleared at once at the near end while the far end
+    still feeds it through the line is a fault and runs."""
+    from stabctl.dynamics.events import Fault, as_record
+
+    case = load_case("kundur")
+    own = (as_record(Fault(3, 1.0, 1.0), "Fault 1"),)
+    path = pstio.write_case_json(case.replace(events=own), tmp_path / "own.json")
+    assert_error(
+        run("simulate", path, "--case-events", "--tf", 2),
+        "--case-events: the case's own 3-phase fault at bus 3 at 1 s, cleared at 1 s",
+        NO_LENGTH,
+    )
+    res = run(
+        *KUNDUR_SIM, "--fault", 3, "--far-bus", 101, "--clear-cycles", 0,
+        "--far-clear-cycles", 3, "--tf", 1.5,
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
