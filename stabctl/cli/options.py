@@ -578,7 +578,8 @@ def fault_text(fault, far_bus, circuit: int = 1) -> str:
 
 def check_option_events(case, given) -> None:
     """Look up in ``case`` the buses, lines, machines and motors the events of the options
-    name (`stabctl.case.events.check_names`), before any work.
+    name, and check the size of each step (`stabctl.case.events.check_event`), before any
+    work.
 
     Parameters
     ----------
@@ -590,16 +591,17 @@ def check_option_events(case, given) -> None:
     Raises
     ------
     InputError
-        The first event naming what the case lacks: the option, and the bus, line,
-        machine or motor missing.
+        The first event naming what the case lacks, or a load, VREF or PREF step of 0 or
+        beyond its bound (`stabctl.case.events.step_limit`): the option as given, and the
+        bus, line, machine or motor missing, or the step's size, the bound and why.
     """
-    from stabctl.case.events import check_names
+    from stabctl.case.events import check_event
     from stabctl.errors import CaseError
 
     for option, ev in given:
         try:
-            check_names(case, ev)
-        except CaseError as exc:
+            check_event(case, ev)
+        except (CaseError, InputError) as exc:
             raise InputError(f"{option}: {exc}") from None
 
 

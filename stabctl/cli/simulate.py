@@ -93,6 +93,7 @@ def _line_close(a: int, b: str, t: float):
 def _study_events(case, bus_faults, closes, gen_trips, load_steps, vref_steps, pref_steps):
     """The events of the PSS/E-study options, in the order given per option; InputError
     naming the option of the first whose bus, line or machine the case lacks."""
+    from stabctl.case.events import check_totals
     from stabctl.dynamics.events import GeneratorTrip, LoadStep, PrefStep, VrefStep
 
     given = [
@@ -107,6 +108,8 @@ def _study_events(case, bus_faults, closes, gen_trips, load_steps, vref_steps, p
         *((f"--pref-step {m} {t:g} {dp:g}", PrefStep(m, t, dp)) for m, t, dp in pref_steps),
     ]
     check_option_events(case, given)
+    options = {"LoadStep": "--load-step", "VrefStep": "--vref-step", "PrefStep": "--pref-step"}
+    check_totals(case, [ev for _, ev in given], options)  # steps that add up
     return [ev for _, ev in given]
 
 
@@ -278,7 +281,8 @@ def _check_ends(own: list, given: list, tf: float) -> None:
     multiple=True,
     metavar="BUS T P Q",
     help="Add P + jQ (pu on the system base at the power-flow voltage, constant "
-    "impedance; negative: shed) at bus BUS at T (s) (repeatable).",
+    "impedance; negative: shed) at bus BUS at T (s) (repeatable; abs(P + jQ) and the "
+    "steps' sum at most the case's total load or rating, Kundur 36 pu).",
 )
 @click.option(
     "--vref-step",
@@ -286,7 +290,7 @@ def _check_ends(own: list, given: list, tf: float) -> None:
     multiple=True,
     metavar="MACHINE T DV",
     help="Step the voltage reference of machine MACHINE's exciter by DV (pu) at T (s): "
-    "PSS/E's change of VREF (repeatable; steps add up).",
+    "PSS/E's change of VREF (repeatable; steps add up, to at most 1 pu).",
 )
 @click.option(
     "--pref-step",
@@ -294,7 +298,8 @@ def _check_ends(own: list, given: list, tf: float) -> None:
     multiple=True,
     metavar="MACHINE T DP",
     help="Step the power reference of machine MACHINE's governor by DP (pu on the "
-    "machine base) at T (s): PSS/E's change of PREF (repeatable; steps add up).",
+    "machine base) at T (s): PSS/E's change of PREF (repeatable; steps add up, to at "
+    "most the larger of 1 pu and the governor's Tmax).",
 )
 @click.option(
     "--case-events",

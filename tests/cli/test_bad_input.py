@@ -1559,3 +1559,76 @@ def test_a_case_s_own_fault_of_no_length_is_refused_and_a_far_end_feed_runs(tmp_
         "--far-clear-cycles", 3, "--tf", 1.5,
     )  # fmt: skip
     assert res.exit_code == 0, res.output
+
+
+@pytest.mark.parametrize(
+    "args, needles",
+    [
+        (
+            ("--load-step", 4, 0.5, "1e6", 0),
+            (
+                "--load-step 4 0.5 1e+06 0: load step 1e+06+0j pu at bus 4 at 0.5 s: 1e+06 pu "
+                "(1e+08 MVA) is beyond 36 pu, the largest of the case's total load, its "
+                "machines' and converters' total rating",
+                "pulls the bus down as a fault does",
+            ),
+        ),
+        (
+            ("--vref-step", 1, 1, "1e9"),
+            ("--vref-step 1 1 1e+09: VREF of machine 1 stepped by +1e+09 pu at 1 s: 1e+09 pu "
+             "is beyond 1 pu, the terminal voltage's set point", "ceiling or floor"),
+        ),
+        (
+            ("--pref-step", 1, 1, "-1e9"),
+            ("--pref-step 1 1 -1e+09: ", "-1e+09 pu at 1 s: 1e+09 pu is beyond 1 pu, the larger "
+             "of the machine's rating (1 pu) and its governor's maximum power order"),
+        ),
+        (("--load-step", 4, 1, 0, 0), ("--load-step 4 1 0 0: ", "a step of 0 would do nothing")),
+        (("--vref-step", 1, 1, 0), ("--vref-step 1 1 0: ", "a step of 0 would do nothing")),
+        (
+            ("--vref-step", 1, 1, 0.6, "--vref-step", 1, 1.5, 0.6),
+            ("--vref-step: the VREF steps of machine 1 add up to +1.2 pu at 1.5 s, beyond 1 pu",),
+        ),
+        (
+            ("--load-step", 4, 1, 20, 0, "--load-step", 14, 1, 20, 5),
+            ("--load-step: the load steps add up to 40+5j pu at 1 s, beyond 36 pu",),
+        ),
+    ],
+)  # fmt: skip
+def test_a_step_beyond_any_physical_size_or_of_none_is_refused(no_simulation, args, needles):
+    """`simulate --load-step 4 0.5 1e6 0` (1e8 MW), `--vref-step 1 1 1e9` and
+    `--pref-step 1 1 1e9` ran (exit 0; the VREF run printed the flat run's largest angle,
+    its field held at the exciter's ceiling): a step beyond its bound, a step of 0 and
+    steps adding up beyond it are refused, naming the option, the size, the bound and
+    why."""
+    assert_error(run(*KUNDUR_SIM, *args, "--tf", 2), *needles)
+
+
+@pytest.mark.parametrize(
+    "records, needle",
+    [
+        (
+            [{"kind": "LoadStep", "bus": 4, "t": 1.0, "P": 1e6}],
+            "events[0] (Alter 7): load step 1e+06+0j pu at bus 4 at 1 s: 1e+06 pu (1e+08 MVA) "
+            "is beyond 36 pu",
+        ),
+        (
+            [{"kind": "VrefStep", "machine": 1, "t": 1.0, "dV": 0.0}],
+            "events[0] (Alter 7): VREF of machine 1 stepped by +0 pu at 1 s: a step of 0",
+        ),
+        (
+            [{"kind": "PrefStep", "machine": 1, "t": t, "dP": 0.7} for t in (1.0, 2.0)],
+            "events: the PREF steps of machine 1 add up to +1.4 pu at 2 s, beyond 1 pu",
+        ),
+    ],
+)
+def test_a_case_s_own_steps_have_the_options_bounds(tmp_path, records, needle):
+    """A case file's own load, VREF and PREF steps are the same events as the options':
+    beyond their bounds, of size 0 or adding up beyond them, the case is malformed,
+    refused when it is loaded, run or not, naming the file and the record."""
+    d = pstio.case_to_dict(load_case("kundur"))
+    d["events"] = [{**r, "source": "Alter 7"} for r in records]
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(d))
+    for args in (["--case-events"], ["--tf", 1]):
+        assert_error(run("simulate", bad, *args), f"bad.json: {needle}")
