@@ -21,6 +21,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import psse_reference as ref
 
+from stabctl.plotting.figures import save_figure
+
 
 def draw(run: ref.Run, out: Path) -> None:
     """Write the figure of `run` to `out`: one column per compared quantity, its two
@@ -42,9 +44,7 @@ def draw(run: ref.Run, out: Path) -> None:
         tol = "" if q.tol is None else f" (tolerance {q.tol:g})"
         bottom.set_title(f"stabctl - PSS/E{tol}")
         bottom.set_xlabel("t (s)")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    save_figure(fig, out)  # stabctl's one figure writer: the same bytes every time
 
 
 def main(argv=None) -> int:

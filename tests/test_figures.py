@@ -78,3 +78,31 @@ def test_a_screening_of_some_buses_maps_them_readably(kept):
     figures.screening_map(case, every, "unused.png")
     ax = kept[-1].axes[0]
     assert ax.get_title().endswith("at each bus") and len(ax.texts) == 10
+
+
+@pytest.mark.parametrize("suffix", ["png", "pdf", "svg"])
+def test_a_figure_written_twice_is_the_same_bytes(suffix, tmp_path, monkeypatch):
+    """`simulate --plot r.pdf` (or .svg, and `screen --plot s.svg`) differed from run to
+    run in its date of writing (the PDF's /CreationDate, the SVG's <dc:date>) and the
+    SVG's random element ids: the one figure writer stores no date and salts the ids with
+    a constant, so that the same figure gives the same bytes at any time, whatever
+    SOURCE_DATE_EPOCH says."""
+
+    def draw():
+        fig, ax = plt.subplots()
+        ax.plot([0, 1], [1, 2], label="a")
+        ax.fill_between([0, 1], [0, 1], alpha=0.3)  # clipped: the SVG names a clip path
+        ax.set_title("two writes")
+        ax.legend()
+        return fig
+
+    written = []
+    for epoch in ("0", "1000000000", None):  # other times of writing
+        if epoch is None:
+            monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
+        else:
+            monkeypatch.setenv("SOURCE_DATE_EPOCH", epoch)
+        path = tmp_path / f"{len(written)}.{suffix}"
+        figures.save_figure(draw(), path)
+        written.append(path.read_bytes())
+    assert written[0] == written[1] == written[2]

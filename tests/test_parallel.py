@@ -434,10 +434,19 @@ def test_scheduler_without_dask_is_a_clear_error(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize(
-    "address", ["tls://127.0.0.1:8786", "ucx://127.0.0.1:8786", "tcp://127.0.0.1:99999", "tcp://"]
+    "address, needle",
+    [
+        ("tls://127.0.0.1:8786", "give 'local' or a Dask scheduler's tcp://host:port"),
+        ("ucx://127.0.0.1:8786", "give 'local' or a Dask scheduler's tcp://host:port"),
+        ("tcp://", "give 'local' or a Dask scheduler's tcp://host:port"),
+        ("tcp://127.0.0.1:99999", "tcp://127.0.0.1:99999: port 99999 is out of range"),
+        ("127.0.0.1:0", "127.0.0.1:0: port 0 is out of range"),
+    ],
 )
-def test_scheduler_addresses_are_checked_before_any_contact(tmp_path, address):
-    with pytest.raises(InputError, match=r"give 'local' or a Dask scheduler's tcp://host:port"):
+def test_scheduler_addresses_are_checked_before_any_contact(tmp_path, address, needle):
+    """Another scheme, no host or a port outside 1-65535 are refused before any contact,
+    the port named as out of range (port 0 was taken for Dask's 8786 without a word)."""
+    with pytest.raises(InputError, match=needle):
         run_sweep(jobs_of(square, 1), tmp_path / "d.jsonl", scheduler=address, progress=False)
     assert not (tmp_path / "d.jsonl").exists()
     assert check_scheduler("127.0.0.1") == "tcp://127.0.0.1:8786"

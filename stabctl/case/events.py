@@ -8,9 +8,12 @@ ANDES's Toggle, Fault and Alter records) is a tuple of records, each its event's
 name as ``kind``, its fields and its ``source``; `events_of_records` makes them events,
 and a case is made only if it can (`stabctl.case.Case`): a case with a malformed event is
 a malformed case.  `check_names` looks up the buses, lines, machines and motors an event
-names in a case (`stabctl.dynamics.events.validate` when a run starts), and
-`check_case_events` those of a case's own records (a case file's reader, when it is
-loaded); the event's times against each other are checked when it runs.
+names in a case (`stabctl.dynamics.events.validate` when a run starts), `check_values`
+the size of a load, VREF or PREF step against its bound in the case (`step_limit`; 0, a
+step that would do nothing, refused too) and `check_totals` the steps' running sums;
+`check_event` does the first two, `check_case_events` all three for a case's own records
+(a case file's reader, when it is loaded); the event's times against each other are
+checked when it runs.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, InputError
 
 if TYPE_CHECKING:
     from stabctl.case.system import Case
@@ -43,6 +46,11 @@ __all__ = [
     "as_record",
     "events_of_records",
     "check_names",
+    "VREF_STEP_MAX",
+    "step_limit",
+    "check_values",
+    "check_event",
+    "check_totals",
     "check_case_events",
 ]
 
@@ -507,9 +515,190 @@ MotorSwitch or Playback
         case.motor_index(ev.motor)
 
 
+#: largest VREF step, pu: the reference is the terminal voltage's set point, about 1 pu,
+#: which a step of 1 pu doubles or takes to 0, far outside the 0.9-1.1 pu a terminal runs
+#: at; every exciter's output reaches its ceiling or floor well before (on Kundur a step
+#: of +1e9 pu holds machine 1's field at its ceiling, 5 pu, as +0.3 pu does), so a larger
+#: step does nothing more
+VREF_STEP_MAX = 1.0
+
+#: why each step is bounded, completing "beyond BOUND pu, "
+_WHY = {
+    "LoadStep": "the largest of the case's total load, its machines' and converters' total "
+    "rating and the 1 pu base: a step of more than the whole system is no load its machines "
+    "could pick up, a constant impedance that large pulls the bus down as a fault does (a "
+    "Fault through r + jx models that)",
+    "VrefStep": "the terminal voltage's set point (about 1 pu) doubled or taken to 0: every "
+    "exciter is at its ceiling or floor well before, a larger step does nothing more",
+    "PrefStep": "the larger of the machine's rating (1 pu) and its governor's maximum power "
+    "order (tg_con Tmax): the governor holds its power order within its limits, so a larger "
+    "step cannot move the turbine further",
+}
+
+
+def step_limit(case: Case, ev) -> float:
+    """The largest size a step event may have in ``case``.
+
+    A `LoadStep`'s ``abs(P + jQ)`` (pu, system base) at most the largest of the case's
+    total load ``abs(sum(pload) + j sum(qload))``, its machines' and converters' total
+    rating (their MVA over the base) and 1 pu: a step of more than the whole system is no
+    load change the machines could pick up but a collapse (a constant impedance that large
+    holds the bus down as a fault does; Kundur: 36 pu, its four 900 MVA machines).  A
+    `VrefStep`'s ``abs(dV)`` at most :data:`VREF_STEP_MAX` (1 pu: the set point doubled or
+    taken to 0, every exciter at its ceiling or floor well before).  A `PrefStep`'s
+    ``abs(dP)`` (machine base) at most the larger of 1 pu (the machine's rating, the whole
+    way from no load to full load) and its governor's maximum power order (tg_con Tmax):
+    the governor keeps its order within its limits, a larger step moves nothing further.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+    ev : LoadStep, VrefStep or PrefStep
+        The step (another event: no limit).
+
+    Returns
+    -------
+    float
+        The bound, pu (inf for an event that is no step).
+    """
+    if isinstance(ev, LoadStep):
+        load = abs(complex(np.sum(case.buses.pload), np.sum(case.buses.qload)))
+        rating = (np.sum(case.machines.mva) + np.sum(case.converters.mva)) / case.base_mva
+        return float(max(load, rating, 1.0))
+    if isinstance(ev, VrefStep):
+        return VREF_STEP_MAX
+    if isinstance(ev, PrefStep):
+        own = np.asarray(case.governors.machine, int) == ev.machine
+        return float(max([1.0, *np.abs(np.asarray(case.governors.Tmax, float)[own])]))
+    return math.inf
+
+
+def _amount(ev) -> complex | float:
+    """What a step event adds, pu: a load's P + jQ, a VREF step's dV, a PREF step's dP
+    (its magnitude is `step_limit`'s measure)."""
+    if isinstance(ev, LoadStep):
+        return complex(ev.P, ev.Q)
+    return ev.dV if isinstance(ev, VrefStep) else ev.dP
+
+
+def check_values(case: Case, ev) -> None:
+    """Check the size of a load, VREF or PREF step against its bound in ``case``.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+    ev : Fault, LineTrip, LineClose, GeneratorTrip, LoadStep, VrefStep, PrefStep, \
+MotorSwitch or Playback
+        The event (only the steps have sizes to check).
+
+    Raises
+    ------
+    InputError
+        A step of size 0 (it would do nothing), or one beyond `step_limit`: the message
+        names the event, its size, the bound and why.
+    """
+    if not isinstance(ev, (LoadStep, VrefStep, PrefStep)):
+        return
+    size, limit = abs(_amount(ev)), step_limit(case, ev)
+    if size == 0:
+        raise InputError(f"{ev}: a step of 0 would do nothing")
+    if size > limit:
+        mva = f" ({size * case.base_mva:g} MVA)" if isinstance(ev, LoadStep) else ""
+        raise InputError(
+            f"{ev}: {size:g} pu{mva} is beyond {limit:g} pu, {_WHY[type(ev).__name__]}"
+        )
+
+
+def check_event(case: Case, ev) -> None:
+    """Check one event against ``case``: what it names (`check_names`) and the size of a
+    step (`check_values`).
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+    ev : Fault, LineTrip, LineClose, GeneratorTrip, LoadStep, VrefStep, PrefStep, \
+MotorSwitch or Playback
+        The event.
+
+    Raises
+    ------
+    UnknownBusError, CaseError
+        As `check_names`.
+    InputError
+        As `check_values`.
+    """
+    check_names(case, ev)
+    check_values(case, ev)
+
+
+def check_totals(case: Case, events, labels: Mapping[str, str] | None = None) -> None:
+    """Check the running sums of steps that add up against their bounds (`step_limit`):
+    each machine's VREF steps, each machine's PREF steps, and the load steps of the whole
+    case (as one load added to the system), in time order, those of one instant together.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+    events : iterable
+        The run's events (others than steps are passed over).
+    labels : Mapping of str to str, optional
+        What gave the steps of each kind (``{"VrefStep": "--vref-step"}``), to start the
+        message; default none.
+
+    Raises
+    ------
+    InputError
+        A running sum beyond its bound: the message names the machine (or the load
+        steps), the sum, the time, the bound and why.
+    """
+    sums: dict = {}
+    steps = sorted(
+        (ev for ev in events if isinstance(ev, (LoadStep, VrefStep, PrefStep))),
+        key=lambda ev: ev.t,
+    )
+    for k, ev in enumerate(steps):
+        kind = type(ev).__name__
+        key = (kind, None if isinstance(ev, LoadStep) else ev.machine)
+        sums[key] = sums.get(key, 0) + _amount(ev)
+        if k + 1 < len(steps) and steps[k + 1].t == ev.t:
+            continue  # the instant's other steps first
+        for (kind_, machine), total in sums.items():
+            limit = step_limit(case, _STEP_OF[kind_](machine))
+            if abs(total) > limit:
+                what = (
+                    "the load steps"
+                    if machine is None
+                    else f"the {kind_[:4].upper()} steps of machine {machine}"
+                )
+                given = (labels or {}).get(kind_)
+                raise InputError(
+                    ("" if given is None else f"{given}: ")
+                    + f"{what} add up to {_signed(total)} pu at {ev.t:g} s, beyond "
+                    f"{limit:g} pu, {_WHY[kind_]}"
+                )
+
+
+#: a step of each kind for `step_limit` (its machine the only field that counts)
+_STEP_OF = {
+    "LoadStep": lambda machine: LoadStep(0, 0.0, 0.0),
+    "VrefStep": lambda machine: VrefStep(machine, 0.0, 0.0),
+    "PrefStep": lambda machine: PrefStep(machine, 0.0, 0.0),
+}
+
+
+def _signed(value) -> str:
+    """A sum of steps in words: ``+1.5`` or, a load, ``2+0.5j``."""
+    return f"{value.real:g}{value.imag:+g}j" if isinstance(value, complex) else f"{value:+g}"
+
+
 def check_case_events(case: Case) -> None:
-    """Look up in ``case`` the buses, lines, machines and motors of its own events
-    (`Case.events`, `check_names`).
+    """Check a case's own events (`Case.events`): the buses, lines, machines and motors
+    they name (`check_names`), the size of each step (`check_values`) and their running
+    sums (`check_totals`).
 
     Parameters
     ----------
@@ -519,16 +708,24 @@ def check_case_events(case: Case) -> None:
     Raises
     ------
     CaseError
-        An event naming what the case lacks (UnknownBusError for a bus): the message
-        names the record (``events[k]`` with its ``source``), the event in words and what
-        is missing.
+        An event naming what the case lacks (UnknownBusError for a bus), or a step of 0 or
+        beyond its bound: the message names the record (``events[k]`` with its
+        ``source``), the event in words and what is wrong; steps adding up beyond a bound:
+        the steps, the sum and the bound.
     """
-    for k, (ev, rec) in enumerate(zip(events_of_records(case.events), case.events)):
+    events = events_of_records(case.events)
+    for k, (ev, rec) in enumerate(zip(events, case.events)):
         try:
-            check_names(case, ev)
-        except CaseError as exc:
+            check_event(case, ev)
+        except (CaseError, InputError) as exc:
             where = f"events[{k}] ({rec.get('source', 'no source')})"
-            raise type(exc)(f"{where}: {ev}: {exc}") from None
+            cls = type(exc) if isinstance(exc, CaseError) else CaseError
+            text = str(exc) if str(exc).startswith(str(ev)) else f"{ev}: {exc}"
+            raise cls(f"{where}: {text}") from None
+    try:
+        check_totals(case, events)
+    except InputError as exc:
+        raise CaseError(f"events: {exc}") from None
 
 
 #: what a value of each field annotation of the event classes must be

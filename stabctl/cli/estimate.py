@@ -40,7 +40,9 @@ from stabctl.cli.pmu_options import (
     pmu_noise_options,
     pmu_settings,
     rate_latency_options,
+    refuse_short_over,
     stream_controller,
+    warn_short,
 )
 from stabctl.errors import InputError
 
@@ -529,8 +531,10 @@ def track(
     --latency-ms as the ESD controllers use them, and with --esd-pct the modes Table 3
     would command.  The PMUs' station names must be CASE's generator PMUs
     (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
-    tuned to.  A stream that stops before --until or --frames is tracked as far as it came,
-    written, and named an error (exit status 2).
+    tuned to.  A stream that stops before --until or --frames is tracked as far as it came
+    and written, with a warning naming the shortfall (exit status 0), unless --out exists:
+    a file there is replaced only by the track of a whole stream (an error then, exit
+    status 2, the file left as it was), as `pmu record` does.
 
     \b
     Example:
@@ -562,6 +566,10 @@ def track(
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
     got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end)
+    why = f"--source {src} stopped before {end}: {'; '.join(got.short)}"
+    kept = f"{len(got.frames)} frames tracked"
+    if got.short:
+        refuse_short_over(out_path, why, kept)
     d = cl.track(ctrl, got.frames)
     head, rows = _track_columns(ctrl, d, esd_pct is not None)
     atomic_write(
@@ -581,10 +589,7 @@ def track(
         + f"; wrote {out_path}"
     )
     if got.short:
-        raise InputError(
-            f"--source {src} stopped before {end}: {'; '.join(got.short)}; "
-            f"{out_path} holds the {len(got.frames)} frames tracked"
-        )
+        warn_short(out_path, why, kept)
 
 
 def _track_columns(ctrl, d, with_modes: bool) -> tuple[str, np.ndarray]:

@@ -59,6 +59,11 @@ def cases(case_name, buses, lines, as_json):
     """
     from stabctl.io import list_cases
 
+    if case_name is not None and not case_name.strip():  # '' listed every case
+        raise InputError(
+            f"CASE {case_name!r}: an empty case name; give a built-in "
+            f"({', '.join(list_cases())}) or a case file, or no CASE to list the built-ins"
+        )
     if case_name is None and (buses or lines):
         raise InputError("--bus-table and --line-table list one case's: give CASE")
     rows = [_case_info(name) for name in ([case_name] if case_name else list_cases())]

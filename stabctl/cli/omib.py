@@ -9,6 +9,7 @@ import click
 from stabctl.cli.format import print_json
 from stabctl.cli.options import _RANGES, FLOAT, interval, json_option, refuse_given, reports_errors
 from stabctl.errors import InputError
+from stabctl.smib.omib import TABLE_T_END
 
 
 @click.command()
@@ -17,7 +18,9 @@ from stabctl.errors import InputError
     "-c",
     type=FLOAT,
     multiple=True,
-    help="Fault durations in cycles: `--fault-cycles 6 12 15` (default 6 12 15).",
+    help="Fault durations in cycles: `--fault-cycles 6 12 15` (default 6 12 15); each "
+    f"cleared before the run's end, {TABLE_T_END:g} s (at 60 Hz: fewer than "
+    f"{TABLE_T_END * 60:g} cycles).",
 )
 @click.argument("more_cycles", nargs=-1, type=FLOAT)
 @click.option("--H", "H", type=FLOAT, default=3.0, show_default=True, help="Inertia constant (s).")
@@ -60,6 +63,8 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
     else:
         system = OMIB(H=H, Pm=pm, Pmax_pre=pmax, Pmax_fault=0.0, Pmax_post=pmax, f0=f0)
     cycles = tuple(fault_cycles) + tuple(more_cycles) or (6.0, 12.0, 15.0)
+    _check_before_end([("--fault-cycles", c) for c in fault_cycles], f0)
+    _check_before_end([("MORE_CYCLES", c) for c in more_cycles], f0)
     twice = [c for k, c in enumerate(cycles) if c in cycles[:k]]
     if twice:
         raise InputError(f"--fault-cycles: {twice[0]:g} given twice (each duration once)")
@@ -78,3 +83,16 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
         f"EAC: critical clearing angle {e['delta_cr_rad']:.4f} rad, CCT {e['t_cr_s']:.4f} s "
         f"({e['t_cr_cycles']:.2f} cycles); bisection {e['t_cr_bisection_s']:.4f} s"
     )
+
+
+def _check_before_end(given, f0: float) -> None:
+    """InputError naming the first of ``given`` ((option, cycles) pairs) whose fault lasts
+    until or past the end of each run (`stabctl.smib.omib.TABLE_T_END`): the option, the
+    duration in cycles and s at --f0, the end and the most cycles that fit."""
+    for option, cyc in given:
+        if cyc / f0 >= TABLE_T_END:
+            raise InputError(
+                f"{option} {cyc:g}: {cyc:g} cycles = {cyc / f0:g} s at --f0 {f0:g} Hz, not "
+                f"cleared before the end of each run, {TABLE_T_END:g} s (omib's fixed run "
+                f"length): give fewer than {TABLE_T_END * f0:g} cycles"
+            )

@@ -578,7 +578,8 @@ def fault_text(fault, far_bus, circuit: int = 1) -> str:
 
 def check_option_events(case, given) -> None:
     """Look up in ``case`` the buses, lines, machines and motors the events of the options
-    name (`stabctl.case.events.check_names`), before any work.
+    name, and check the size of each step (`stabctl.case.events.check_event`), before any
+    work.
 
     Parameters
     ----------
@@ -590,17 +591,45 @@ def check_option_events(case, given) -> None:
     Raises
     ------
     InputError
-        The first event naming what the case lacks: the option, and the bus, line,
-        machine or motor missing.
+        The first event naming what the case lacks, or a load, VREF or PREF step of 0 or
+        beyond its bound (`stabctl.case.events.step_limit`): the option as given, and the
+        bus, line, machine or motor missing, or the step's size, the bound and why.
     """
-    from stabctl.case.events import check_names
+    from stabctl.case.events import check_event
     from stabctl.errors import CaseError
 
     for option, ev in given:
         try:
-            check_names(case, ev)
-        except CaseError as exc:
+            check_event(case, ev)
+        except (CaseError, InputError) as exc:
             raise InputError(f"{option}: {exc}") from None
+
+
+def refuse_fault_of_no_length(ev, given: str, hint: str = "") -> None:
+    """Refuse a fault cleared at both ends as it starts: it would do nothing (a zero-length
+    interval of fault, the line, if any, tripped without one), as a second trip is
+    refused.
+
+    Parameters
+    ----------
+    ev : stabctl.case.events.Fault
+        The fault.
+    given : str
+        The options that gave it, as given (``"--bus-fault 3 1 1"``).
+    hint : str, optional
+        What to give instead, completing the message.
+
+    Raises
+    ------
+    InputError
+        `ev` is cleared (near end, and far end if it has one) at its start: the message
+        names `given`, the time and why.
+    """
+    if ev.clear_near is not None and ev.far_clear == ev.t:
+        raise InputError(
+            f"{given}: cleared at {ev.t:g} s, as it starts: a fault of no length would do "
+            f"nothing{hint}"
+        )
 
 
 def fault_options(required: bool, t_fault: bool = True, far_required: bool | None = None):

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-from pathlib import Path
 
 import click
 
@@ -36,7 +35,9 @@ from stabctl.cli.pmu_options import (
     pmu_noise_options,
     pmu_settings,
     rate_latency_options,
+    refuse_short_over,
     stream_controller,
+    warn_short,
 )
 from stabctl.errors import InputError
 
@@ -297,8 +298,9 @@ def record(address, out, frames):
     """Receive a C37.118.2 stream from the PMU or PDC at HOST:PORT (pyc37's client: CFG-2,
     then 'start') and write its CFG-2 and FRAMES data frames to OUT, as received (an IPv6
     HOST in brackets: [::1]:4712).  A stream that stops before FRAMES (the server closes,
-    resets or falls silent) is named an error (exit status 2) and written as far as it
-    came, unless OUT exists: a file there is replaced only by a whole recording.
+    resets or falls silent) is written as far as it came, with a warning naming the
+    shortfall (exit status 0), unless OUT exists: a file there is replaced only by a
+    whole recording (an error then, exit status 2, OUT left as it was).
 
     \b
     Example:
@@ -310,24 +312,27 @@ def record(address, out, frames):
     host, port = _host_port(address)
     check_writable(out, "--out")
     got = receive(host, port, End(frames=frames))
-    if got.short and Path(out).exists():
-        raise InputError(
-            f"{address}: {got.short}; {out} is left as it was (the {len(got.data)} received "
-            "are not written over it)"
-        )
+    why, kept = f"{address}: {got.short}", f"{len(got.data)} received"
+    if got.short:
+        refuse_short_over(out, why, kept)
     atomic_write(out, lambda f: f.write(got.cfg2 + b"".join(got.data)), mode="wb")
     if got.short:
-        raise InputError(f"{address}: {got.short}; the {len(got.data)} received are in {out}")
+        warn_short(out, why, kept)
     click.echo(f"recorded {len(got.data)} frames from {address} to {out}")
 
 
 def _host_port(address: str) -> tuple[str, int]:
-    from stabctl.estimation.c37_tcp import split_hostport
+    """(host, port) of a HOST:PORT argument; InputError naming the address: no host or
+    port, or a port outside 1-65535 (`c37_tcp.port_number`)."""
+    from stabctl.estimation.c37_tcp import port_number, split_hostport
 
     host, port = split_hostport(address)
-    if not host or not (port.isascii() and port.isdigit()) or not 0 < int(port) < 65536:
-        raise InputError(f"address {address!r}: expected HOST:PORT")
-    return host, int(port)
+    try:
+        if not host:
+            raise InputError("expected HOST:PORT")
+        return host, port_number(port)
+    except InputError as exc:
+        raise InputError(f"address {address!r}: {exc}") from None
 
 
 @pmu.command()

@@ -4,6 +4,9 @@ measure."""
 
 from __future__ import annotations
 
+import warnings
+from pathlib import Path
+
 import click
 
 from stabctl.cli.options import (
@@ -14,6 +17,7 @@ from stabctl.cli.options import (
     clear_cycles_option,
     fault_options,
     fault_text,
+    refuse_fault_of_no_length,
     tf_option,
 )
 from stabctl.errors import InputError
@@ -151,6 +155,11 @@ def fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
         raise InputError(f"--tf must be > 0, got {tf:g}")
     case = load_case(case_name)
     ev = fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles)
+    refuse_fault_of_no_length(
+        ev,
+        f"{fault_text(fault, far_bus)} --clear-cycles {clear_cycles:g}",
+        ": give --clear-cycles > 0",
+    )
     check_option_events(case, [(fault_text(fault, far_bus), ev)])
     return case, ev, tf
 
@@ -193,3 +202,43 @@ def stream_controller(case, estimator, settings, esd_pct, law, pmu_at):
     ctrl = LoopController(case, devices, estimator, settings, 0, 1.0, law, pmu_at)
     compile_filters(ctrl.models)
     return ctrl
+
+
+def refuse_short_over(out, why: str, kept: str) -> None:
+    """Refuse to write what a stream that stopped before its end brought over an existing
+    output: a file there is replaced only by a whole stream (`pmu record`, `estimate
+    track`).
+
+    Parameters
+    ----------
+    out : str or Path
+        The output file.
+    why : str
+        The stream and what cut it, as the message starts.
+    kept : str
+        What came, e.g. ``"121 received"``.
+
+    Raises
+    ------
+    InputError
+        `out` exists: the message says it is left as it was.
+    """
+    if Path(out).exists():
+        raise InputError(f"{why}; {out} is left as it was (the {kept} are not written over it)")
+
+
+def warn_short(out, why: str, kept: str) -> None:
+    """Say, as a warning, that `out` holds what a stream that stopped before its end
+    brought: the command has written it whole and ends with exit status 0 (a new file;
+    `refuse_short_over` refused an existing one).
+
+    Parameters
+    ----------
+    out : str or Path
+        The output file written.
+    why : str
+        The stream and what cut it.
+    kept : str
+        What came, e.g. ``"121 received"``.
+    """
+    warnings.warn(f"{why}; the {kept} are in {out}", stacklevel=2)

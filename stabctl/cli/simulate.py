@@ -35,6 +35,7 @@ from stabctl.cli.options import (
     out_file_option,
     plot_option,
     q_limits_option,
+    refuse_fault_of_no_length,
     refuse_given,
     reports_errors,
     storage_options,
@@ -73,6 +74,11 @@ def _bus_fault(spec: str, t_on: float, t_off: float):
             f"--bus-fault {spec} {t_on:g} {t_off:g}: T_ON and T_OFF must be at most "
             f"{latest:g} s (T_OFF inf: never cleared)"
         )
+    if t_on == t_off:
+        raise InputError(
+            f"--bus-fault {spec} {t_on:g} {t_off:g}: cleared at {t_on:g} s, as it starts: a "
+            "fault of no length would do nothing (give T_OFF > T_ON)"
+        )
     clear = None if t_off == float("inf") else t_off
     return Fault(bus=bus, t=t_on, clear_near=clear, r=r, x=x)
 
@@ -88,6 +94,7 @@ def _line_close(a: int, b: str, t: float):
 def _study_events(case, bus_faults, closes, gen_trips, load_steps, vref_steps, pref_steps):
     """The events of the PSS/E-study options, in the order given per option; InputError
     naming the option of the first whose bus, line or machine the case lacks."""
+    from stabctl.case.events import check_totals
     from stabctl.dynamics.events import GeneratorTrip, LoadStep, PrefStep, VrefStep
 
     given = [
@@ -102,6 +109,8 @@ def _study_events(case, bus_faults, closes, gen_trips, load_steps, vref_steps, p
         *((f"--pref-step {m} {t:g} {dp:g}", PrefStep(m, t, dp)) for m, t, dp in pref_steps),
     ]
     check_option_events(case, given)
+    options = {"LoadStep": "--load-step", "VrefStep": "--vref-step", "PrefStep": "--pref-step"}
+    check_totals(case, [ev for _, ev in given], options)  # steps that add up
     return [ev for _, ev in given]
 
 
@@ -118,7 +127,13 @@ def _build_events(
     pstess_default,
     case_events,
 ):
-    from stabctl.dynamics.events import LineTrip, fault_with_clearing, from_case, from_sw_con
+    from stabctl.dynamics.events import (
+        Fault,
+        LineTrip,
+        fault_with_clearing,
+        from_case,
+        from_sw_con,
+    )
 
     if case_events and not case.events:
         raise InputError(
@@ -130,9 +145,15 @@ def _build_events(
             f"--pstess-default: case {case.name} has no PST sw_con disturbance of its own; "
             "give --fault, --trip, --bus-fault, ..."
         )
-    own = list(from_sw_con(case)) if pstess_default else []
-    if case_events:
-        own += from_case(case)
+    own: list = []
+    for option, given in (
+        ("--pstess-default", from_sw_con(case) if pstess_default else []),
+        ("--case-events", from_case(case) if case_events else []),
+    ):
+        for ev in given:
+            if isinstance(ev, Fault):
+                refuse_fault_of_no_length(ev, f"{option}: the case's own {ev}")
+        own += given
     events: list = []
     if fault is None:
         refuse_given(
@@ -153,6 +174,19 @@ def _build_events(
             raise InputError(f"--t-fault must be >= 0 s, got {t_fault:g}")
         ev = fault_with_clearing(
             case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit=circuit
+        )
+        far = "" if far_clear_cycles is None else f" --far-clear-cycles {far_clear_cycles:g}"
+        refuse_fault_of_no_length(
+            ev,
+            f"{fault_text(fault, far_bus, circuit)} --clear-cycles {clear_cycles:g}{far}",
+            ": give --clear-cycles > 0"
+            + (
+                ""
+                if far_bus is None
+                else f" (the line's trip alone: --trip {fault} {far_bus}"
+                + ("" if circuit == 1 else f":{circuit}")
+                + ")"
+            ),
         )
         check_option_events(case, [(fault_text(fault, far_bus, circuit), ev)])
         events.append(ev)
@@ -256,7 +290,8 @@ def _check_ends(own: list, given: list, tf: float, end: _RunEnd) -> None:
     multiple=True,
     metavar="BUS T P Q",
     help="Add P + jQ (pu on the system base at the power-flow voltage, constant "
-    "impedance; negative: shed) at bus BUS at T (s) (repeatable).",
+    "impedance; negative: shed) at bus BUS at T (s) (repeatable; abs(P + jQ) and the "
+    "steps' sum at most the case's total load or rating, Kundur 36 pu).",
 )
 @click.option(
     "--vref-step",
@@ -264,7 +299,7 @@ def _check_ends(own: list, given: list, tf: float, end: _RunEnd) -> None:
     multiple=True,
     metavar="MACHINE T DV",
     help="Step the voltage reference of machine MACHINE's exciter by DV (pu) at T (s): "
-    "PSS/E's change of VREF (repeatable; steps add up).",
+    "PSS/E's change of VREF (repeatable; steps add up, to at most 1 pu).",
 )
 @click.option(
     "--pref-step",
@@ -272,7 +307,8 @@ def _check_ends(own: list, given: list, tf: float, end: _RunEnd) -> None:
     multiple=True,
     metavar="MACHINE T DP",
     help="Step the power reference of machine MACHINE's governor by DP (pu on the "
-    "machine base) at T (s): PSS/E's change of PREF (repeatable; steps add up).",
+    "machine base) at T (s): PSS/E's change of PREF (repeatable; steps add up, to at "
+    "most the larger of 1 pu and the governor's Tmax).",
 )
 @click.option(
     "--case-events",

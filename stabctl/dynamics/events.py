@@ -28,7 +28,8 @@ from stabctl.case.events import (
     Playback,
     PrefStep,
     VrefStep,
-    check_names,
+    check_event,
+    check_totals,
     events_of_records,
 )
 from stabctl.case.events import as_record as as_record
@@ -37,8 +38,10 @@ from stabctl.errors import CaseError, InputError
 
 
 def validate(case: Case, events, t_end: float) -> None:
-    """Check every event against the case (buses, lines, machines, times >= 0); raises
-    UnknownBusError, CaseError, InputError.  Events after t_end are allowed (not reached).
+    """Check every event against the case (buses, lines, machines, times >= 0, the size of
+    each load, VREF and PREF step and their running sums: `stabctl.case.events.check_event`,
+    `check_totals`); raises UnknownBusError, CaseError, InputError.  Events after t_end are
+    allowed (not reached).
     A circuit opened twice (a line trip of the line a fault's clearing opens, two trips of
     one circuit without a `LineClose` between) or a machine tripped twice is an InputError:
     the second would do nothing; so is a `LineClose` of a circuit that is not open then
@@ -46,7 +49,7 @@ def validate(case: Case, events, t_end: float) -> None:
     opened: dict = {}
     switchings: dict = {}
     for ev in events:
-        check_names(case, ev)  # the one lookup of what it names, a case's own at load too
+        check_event(case, ev)  # the one check of what it names and its size, at load too
         if isinstance(ev, Fault):
             if ev.clear_near is not None and ev.clear_near < ev.t:
                 raise InputError(
@@ -83,6 +86,7 @@ def validate(case: Case, events, t_end: float) -> None:
             )
     for row, sw in switchings.items():
         _check_switchings(_circuit(case, row), sw)
+    check_totals(case, events)
 
 
 def _check_switchings(what: str, sw: list) -> None:

@@ -151,6 +151,36 @@ def split_hostport(text: str) -> tuple[str, str]:
     return host, port
 
 
+#: the TCP ports an address may name (0, "any free one", only where a server listens)
+PORTS = range(1, 65536)
+
+
+def port_number(text: str) -> int:
+    """The TCP port of an address's port text (`split_hostport`).
+
+    Parameters
+    ----------
+    text : str
+        The port as written: ASCII digits.
+
+    Returns
+    -------
+    int
+        In :data:`PORTS`, 1-65535.
+
+    Raises
+    ------
+    InputError
+        Not ASCII digits (``expected HOST:PORT``), or a number outside 1-65535 (``port
+        99999 is out of range (1-65535)``); the caller adds the address.
+    """
+    if not (text.isascii() and text.isdigit()):
+        raise InputError("expected HOST:PORT")
+    if int(text) not in PORTS:
+        raise InputError(f"port {int(text)} is out of range ({PORTS[0]}-{PORTS[-1]})")
+    return int(text)
+
+
 class StreamServer:
     """Serve one stream's frames on ``host``:``port`` (0: a free port, `address` tells
     which), each peer on a thread of its own: CFG-2 and header on request, the data frames

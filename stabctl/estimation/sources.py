@@ -21,7 +21,7 @@ import numpy as np
 
 from stabctl.errors import InputError
 from stabctl.estimation import c37
-from stabctl.estimation.c37_tcp import hostport, split_hostport
+from stabctl.estimation.c37_tcp import hostport, port_number, split_hostport
 from stabctl.estimation.pmu import Frame
 
 TCP = "tcp://"
@@ -85,12 +85,15 @@ def parse_source(text: str) -> Source:
             )
         host, ports = split_hostport(item)
         first, _, last = ports.partition("-")
-        last = last or first
-        if not (host and ports.isascii() and first.isdigit() and last.isdigit()):
-            raise InputError(f"--source {text}: {item!r} is not HOST:PORT")
-        span = range(int(first), int(last) + 1)
-        if not span or span[0] < 1 or span[-1] > 65535:
-            raise InputError(f"--source {text}: {item!r} is not HOST:PORT")
+        try:
+            if not host:
+                raise InputError("expected HOST:PORT")
+            span = range(port_number(first), port_number(last or first) + 1)
+        except InputError as exc:
+            why = " is not HOST:PORT" if str(exc) == "expected HOST:PORT" else f": {exc}"
+            raise InputError(f"--source {text}: {item!r}{why}") from None
+        if not span:
+            raise InputError(f"--source {text}: {item!r}: the port range {ports} is empty")
         if twice := [p for p in span if (host, p) in servers]:
             raise InputError(f"--source {text}: {hostport(host, twice[0])} given twice")
         servers += [(host, p) for p in span]

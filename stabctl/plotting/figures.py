@@ -17,19 +17,44 @@ import numpy as np
 
 from stabctl.smallsignal.modal import SIGNIFICANT
 
+#: the savefig metadata of each format that would otherwise stamp the time of writing
+#: (the PDF's /CreationDate, the SVG's <dc:date>, PostScript's %%CreationDate): left out,
+#: so that one figure written twice gives the same bytes; matplotlib's own stamp
+#: (Software, Producer, Creator: its version) stays
+_UNDATED = {
+    "pdf": {"CreationDate": None},
+    "svg": {"Date": None},
+    "ps": {"CreationDate": None},
+    "eps": {"CreationDate": None},
+}
+
+#: the salt of the SVG element ids (matplotlib's ``svg.hashsalt``; unset, each write
+#: draws a random one, and every clip path and glyph id differs from write to write)
+_SVG_SALT = "stabctl"
+
 
 def save_figure(fig, path) -> None:
     """Save a figure as the reports do (tight layout, 110 dpi, format from the suffix) and
     close it.  The one figure-saving helper of stabctl.
 
+    The file is reproducible: the same figure written twice, at any time and whatever
+    ``SOURCE_DATE_EPOCH`` says, gives the same bytes (PNG, PDF, SVG, PS): no date of
+    writing is stored (:data:`_UNDATED`) and the SVG ids are salted with a constant
+    (:data:`_SVG_SALT`).
+
     Parameters
     ----------
     fig : matplotlib.figure.Figure
     path : str or Path
-        The image file.
+        The image file; its suffix chooses the format (matplotlib's ``savefig.format``,
+        PNG, without one).
     """
+    fmt = Path(path).suffix.lower().lstrip(".") or matplotlib.rcParams["savefig.format"]
     fig.tight_layout()
-    fig.savefig(path, dpi=110, bbox_inches="tight")  # legends placed outside the axes
+    with matplotlib.rc_context({"svg.hashsalt": _SVG_SALT}):
+        fig.savefig(  # legends placed outside the axes: tight bounding box
+            path, dpi=110, bbox_inches="tight", metadata=_UNDATED.get(fmt)
+        )
     plt.close(fig)
 
 

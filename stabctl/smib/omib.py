@@ -551,11 +551,17 @@ def critical_clearing_time_bisection(
     return 0.5 * (lo + hi), runs
 
 
-def clearing_table(system: OMIB, fault_cycles, t_end: float = 3.0) -> list[dict]:
+#: end of each run of `clearing_table` (s): the fault must be cleared before it
+TABLE_T_END = 3.0
+
+
+def clearing_table(system: OMIB, fault_cycles, t_end: float = TABLE_T_END) -> list[dict]:
     """Per fault duration: clearing time, delta and speed at clearing, stable or not.
 
     The paper's Table 1 for PAPER_OMIB and 6, 12, 15 cycles.  Returns one dict per case with
-    keys cycles, t_clear_s, delta_cl_rad, omega_cl_rad_s, stable.
+    keys cycles, t_clear_s, delta_cl_rad, omega_cl_rad_s, stable.  Each fault (cycles of
+    ``system.f0``) must be cleared before `t_end` (s; :data:`TABLE_T_END` by default),
+    else InputError (`simulate`).
     """
     rows = []
     for cyc in fault_cycles:

@@ -1502,3 +1502,192 @@ def test_a_trip_of_the_faulted_circuit_names_trip(no_simulation):
     the events as Python reprs and no word of --trip."""
     res = run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--trip", 101, 3)
     assert_error(res, "--trip 101 3: 101-3 is the faulted circuit itself (line 3-101 circuit 1")
+
+
+# -- eighth round: event sizes, faults of no length, run ends, ports, names ----------------
+
+
+@pytest.mark.parametrize("name", ["", " "])
+def test_cases_refuses_an_empty_case_name(name):
+    """`stabctl cases ''` listed every built-in case (exit 0), the empty CASE taken for
+    none given: refused naming CASE."""
+    assert_error(run("cases", name), f"CASE {name!r}: an empty case name")
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (("-c", 600), "--fault-cycles 600: 600 cycles = 10 s at --f0 60 Hz, not cleared before"),
+        (("-c", 200), "the end of each run, 3 s (omib's fixed run length): give fewer than 180"),
+        (("6", "180"), "MORE_CYCLES 180: 180 cycles = 3 s at --f0 60 Hz"),
+        (("--f0", 10, "-c", 30), "--fault-cycles 30: 30 cycles = 3 s at --f0 10 Hz"),
+    ],
+)
+def test_omib_refuses_a_fault_not_cleared_before_the_run_ends(args, needle):
+    """`omib -c 600` passed the range check of [0, 600] cycles, then failed with 'need 0
+    <= t_clear < t_end, got t_clear=10.0, t_end=3.0', naming neither the option nor the
+    limit: a duration not cleared before the run's end is refused naming the option, its
+    cycles and seconds, the end and the most cycles that fit."""
+    assert_error(run("omib", *args), needle)
+    assert run("omib", "-c", 179).exit_code == 0
+
+
+def test_track_of_a_stream_cut_short_replaces_no_file_on_an_error(kundur_wire, tmp_path):
+    """`estimate track --until 100` of a 1.2 s recording replaced an existing --out with
+    the frames tracked and exited 2 (a new --out was left behind by that error exit): as
+    `pmu record`, an existing file is replaced only by the track of a whole stream (exit
+    2, left byte for byte), a new one is written as far as the stream came with a warning
+    naming the shortfall (exit 0)."""
+    from stabctl.estimation import c37
+
+    cfg, frames, _, _ = kundur_wire
+    rec = tmp_path / "r.c37"
+    c37.record(rec, cfg, frames)
+    out = tmp_path / "keep.csv"
+    out.write_text("keep\n")
+    track = ("estimate", "track", "kundur", "--source", rec, "--until", 100, "--out")
+    res = run(*track, out)
+    assert_error(
+        res,
+        f"--source {rec} stopped before t = 100 s: ",
+        f"; {out} is left as it was (the 73 frames tracked are not written over it)",
+    )
+    assert out.read_text() == "keep\n" and sorted(tmp_path.iterdir()) == [out, rec]
+    new = tmp_path / "new.csv"
+    res = run(*track, new)
+    assert res.exit_code == 0, res.output
+    said = res.stderr.splitlines()
+    assert len(said) == 1 and said[0].startswith(f"warning: --source {rec} stopped before")
+    assert said[0].endswith(f"; the 73 frames tracked are in {new}")
+    assert len(new.read_text().splitlines()) == 1 + 73
+
+
+NO_LENGTH = "as it starts: a fault of no length would do nothing"
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (KUNDUR_SIM + ("--bus-fault", 3, 1, 1, "--tf", 2), "--bus-fault 3 1 1: cleared at 1 s"),
+        (
+            KUNDUR_SIM + ("--fault", 3, "--clear-cycles", 0, "--tf", 2),
+            "--fault 3 --clear-cycles 0: cleared at 1 s",
+        ),
+        (
+            KUNDUR_SIM + ("--fault", 3, "--far-bus", 101, "--clear-cycles", 0, "--tf", 2),
+            "(the line's trip alone: --trip 3 101)",
+        ),
+        (
+            KUNDUR_SIM
+            + ("--fault", 3, "--far-bus", 101, "--clear-cycles", 0, "--far-clear-cycles", 0),
+            "--fault 3 --far-bus 101 --clear-cycles 0 --far-clear-cycles 0: cleared at 1 s",
+        ),
+        (
+            ("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 0),
+            "--fault 3 --far-bus 101 --clear-cycles 0: cleared at 1 s",
+        ),
+        (
+            ("pmu", "serve", "kundur", "--fault", 3, "--clear-cycles", 0),
+            "--fault 3 --clear-cycles 0: cleared at 1 s",
+        ),
+    ],
+)
+def test_a_fault_of_no_length_is_refused(no_simulation, args, needle):
+    """`simulate kundur --bus-fault 3 1 1` ran (exit 0) and said 'cleared at 1 s (after 0.0
+    ms)': a fault cleared as it starts does nothing (a line fault only trips its line), and
+    is refused naming the options, as a second trip of a line is."""
+    assert_error(run(*args), needle, NO_LENGTH)
+
+
+def test_a_case_s_own_fault_of_no_length_is_refused_and_a_far_end_feed_runs(tmp_path):
+    """A case's own fault cleared as it starts is refused when its events run, naming
+    --case-events and the event; a fault cleared at once at the near end while the far end
+    still feeds it through the line is a fault and runs."""
+    from stabctl.dynamics.events import Fault, as_record
+
+    case = load_case("kundur")
+    own = (as_record(Fault(3, 1.0, 1.0), "Fault 1"),)
+    path = pstio.write_case_json(case.replace(events=own), tmp_path / "own.json")
+    assert_error(
+        run("simulate", path, "--case-events", "--tf", 2),
+        "--case-events: the case's own 3-phase fault at bus 3 at 1 s, cleared at 1 s",
+        NO_LENGTH,
+    )
+    res = run(
+        *KUNDUR_SIM, "--fault", 3, "--far-bus", 101, "--clear-cycles", 0,
+        "--far-clear-cycles", 3, "--tf", 1.5,
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+
+
+@pytest.mark.parametrize(
+    "args, needles",
+    [
+        (
+            ("--load-step", 4, 0.5, "1e6", 0),
+            (
+                "--load-step 4 0.5 1e+06 0: load step 1e+06+0j pu at bus 4 at 0.5 s: 1e+06 pu "
+                "(1e+08 MVA) is beyond 36 pu, the largest of the case's total load, its "
+                "machines' and converters' total rating",
+                "pulls the bus down as a fault does",
+            ),
+        ),
+        (
+            ("--vref-step", 1, 1, "1e9"),
+            ("--vref-step 1 1 1e+09: VREF of machine 1 stepped by +1e+09 pu at 1 s: 1e+09 pu "
+             "is beyond 1 pu, the terminal voltage's set point", "ceiling or floor"),
+        ),
+        (
+            ("--pref-step", 1, 1, "-1e9"),
+            ("--pref-step 1 1 -1e+09: ", "-1e+09 pu at 1 s: 1e+09 pu is beyond 1 pu, the larger "
+             "of the machine's rating (1 pu) and its governor's maximum power order"),
+        ),
+        (("--load-step", 4, 1, 0, 0), ("--load-step 4 1 0 0: ", "a step of 0 would do nothing")),
+        (("--vref-step", 1, 1, 0), ("--vref-step 1 1 0: ", "a step of 0 would do nothing")),
+        (
+            ("--vref-step", 1, 1, 0.6, "--vref-step", 1, 1.5, 0.6),
+            ("--vref-step: the VREF steps of machine 1 add up to +1.2 pu at 1.5 s, beyond 1 pu",),
+        ),
+        (
+            ("--load-step", 4, 1, 20, 0, "--load-step", 14, 1, 20, 5),
+            ("--load-step: the load steps add up to 40+5j pu at 1 s, beyond 36 pu",),
+        ),
+    ],
+)  # fmt: skip
+def test_a_step_beyond_any_physical_size_or_of_none_is_refused(no_simulation, args, needles):
+    """`simulate --load-step 4 0.5 1e6 0` (1e8 MW), `--vref-step 1 1 1e9` and
+    `--pref-step 1 1 1e9` ran (exit 0; the VREF run printed the flat run's largest angle,
+    its field held at the exciter's ceiling): a step beyond its bound, a step of 0 and
+    steps adding up beyond it are refused, naming the option, the size, the bound and
+    why."""
+    assert_error(run(*KUNDUR_SIM, *args, "--tf", 2), *needles)
+
+
+@pytest.mark.parametrize(
+    "records, needle",
+    [
+        (
+            [{"kind": "LoadStep", "bus": 4, "t": 1.0, "P": 1e6}],
+            "events[0] (Alter 7): load step 1e+06+0j pu at bus 4 at 1 s: 1e+06 pu (1e+08 MVA) "
+            "is beyond 36 pu",
+        ),
+        (
+            [{"kind": "VrefStep", "machine": 1, "t": 1.0, "dV": 0.0}],
+            "events[0] (Alter 7): VREF of machine 1 stepped by +0 pu at 1 s: a step of 0",
+        ),
+        (
+            [{"kind": "PrefStep", "machine": 1, "t": t, "dP": 0.7} for t in (1.0, 2.0)],
+            "events: the PREF steps of machine 1 add up to +1.4 pu at 2 s, beyond 1 pu",
+        ),
+    ],
+)
+def test_a_case_s_own_steps_have_the_options_bounds(tmp_path, records, needle):
+    """A case file's own load, VREF and PREF steps are the same events as the options':
+    beyond their bounds, of size 0 or adding up beyond them, the case is malformed,
+    refused when it is loaded, run or not, naming the file and the record."""
+    d = pstio.case_to_dict(load_case("kundur"))
+    d["events"] = [{**r, "source": "Alter 7"} for r in records]
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(d))
+    for args in (["--case-events"], ["--tf", 1]):
+        assert_error(run("simulate", bad, *args), f"bad.json: {needle}")

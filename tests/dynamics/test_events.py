@@ -150,3 +150,30 @@ def test_events_read_as_words_in_messages():
         "3-phase fault at bus 3 at 1 s on line 3-101 (circuit 2), cleared at 1.1 s "
         "(after 100.0 ms) near / at 1.15 s (after 150.0 ms) far end, line tripped"
     )
+
+
+def test_step_sizes_are_bounded_where_the_events_are_checked():
+    """A run's steps are checked as the options' and a case file's are (one check,
+    `stabctl.case.events.check_event` and `check_totals`): a VREF step of 1e9 pu (its
+    exciter held at its ceiling, the run the same as one of 0.3 pu), a load of 1e6 pu, a
+    step of 0 and PREF steps adding up beyond the machine's rating are refused when the
+    run starts, naming the bound."""
+    from stabctl.case.events import step_limit
+    from stabctl.dynamics.events import validate
+
+    case = load_case("kundur")
+    assert step_limit(case, LoadStep(4, 1.0, 1.0)) == 36.0  # four 900 MVA machines
+    assert step_limit(case, VrefStep(1, 1.0, 0.1)) == 1.0
+    assert step_limit(case, PrefStep(1, 1.0, 0.1)) == 1.0  # tg_con Tmax 1
+    for events, needle in (
+        ([VrefStep(1, 1.0, 1e9)], r"1e\+09 pu is beyond 1 pu, the terminal voltage's"),
+        ([LoadStep(4, 1.0, 1e6)], r"1e\+06 pu \(1e\+08 MVA\) is beyond 36 pu"),
+        ([PrefStep(2, 1.0, 0.0)], "a step of 0 would do nothing"),
+        (
+            [PrefStep(2, 1.0, 0.6), PrefStep(2, 1.0, 0.6)],
+            r"the PREF steps of machine 2 add up to \+1.2 pu at 1 s, beyond 1 pu",
+        ),
+    ):
+        with pytest.raises(InputError, match=needle):
+            validate(case, events, 2.0)
+    validate(case, [PrefStep(2, 1.0, 0.6), PrefStep(2, 1.5, -0.6)], 2.0)  # back: fine

@@ -199,10 +199,10 @@ def test_a_port_range_is_one_server_per_port():
     "text, needle",
     [
         ("tcp://localhost", "'localhost' is not HOST:PORT"),
-        ("tcp://a:1,b:70000", "'b:70000' is not HOST:PORT"),
+        ("tcp://a:1,b:70000", "'b:70000': port 70000 is out of range"),
         ("no/such.c37", "no such recording"),
-        ("tcp://a:4714-4712", "'a:4714-4712' is not HOST:PORT"),
-        ("tcp://a:0-3", "'a:0-3' is not HOST:PORT"),
+        ("tcp://a:4714-4712", "'a:4714-4712': the port range 4714-4712 is empty"),
+        ("tcp://a:0-3", "'a:0-3': port 0 is out of range"),
         ("tcp://a:1,tcp://a:1", "'tcp://a:1': write tcp:// once"),
         ("tcp://a:1-3,a:2", "a:2 given twice"),
     ],
