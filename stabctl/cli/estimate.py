@@ -35,6 +35,7 @@ from stabctl.cli.pmu_options import (
     ESTIMATOR,
     PMU_AT,
     WINDOW,
+    fail_short,
     fault_event,
     fault_run_options,
     pmu_noise_options,
@@ -42,7 +43,6 @@ from stabctl.cli.pmu_options import (
     rate_latency_options,
     refuse_short_over,
     stream_controller,
-    warn_short,
 )
 from stabctl.errors import InputError
 
@@ -531,10 +531,10 @@ def track(
     --latency-ms as the ESD controllers use them, and with --esd-pct the modes Table 3
     would command.  The PMUs' station names must be CASE's generator PMUs
     (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
-    tuned to.  A stream that stops before --until or --frames is tracked as far as it came
-    and written, with a warning naming the shortfall (exit status 0), unless --out exists:
-    a file there is replaced only by the track of a whole stream (an error then, exit
-    status 2, the file left as it was), as `pmu record` does.
+    tuned to.  A stream that stops before --until or --frames is tracked as far as it came,
+    written, and named an error (exit status 2: the result is partial), unless --out
+    exists: a file there is replaced only by the track of a whole stream (the file left
+    as it was, refused before any tracking), as `pmu record` does.
 
     \b
     Example:
@@ -589,7 +589,7 @@ def track(
         + f"; wrote {out_path}"
     )
     if got.short:
-        warn_short(out_path, why, kept)
+        fail_short(out_path, why, kept)
 
 
 def _track_columns(ctrl, d, with_modes: bool) -> tuple[str, np.ndarray]:

@@ -30,6 +30,7 @@ from stabctl.cli.pmu_options import (
     ESTIMATOR,
     PMU_AT,
     RATE,
+    fail_short,
     fault_event,
     fault_run_options,
     pmu_noise_options,
@@ -37,7 +38,6 @@ from stabctl.cli.pmu_options import (
     rate_latency_options,
     refuse_short_over,
     stream_controller,
-    warn_short,
 )
 from stabctl.errors import InputError
 
@@ -298,9 +298,9 @@ def record(address, out, frames):
     """Receive a C37.118.2 stream from the PMU or PDC at HOST:PORT (pyc37's client: CFG-2,
     then 'start') and write its CFG-2 and FRAMES data frames to OUT, as received (an IPv6
     HOST in brackets: [::1]:4712).  A stream that stops before FRAMES (the server closes,
-    resets or falls silent) is written as far as it came, with a warning naming the
-    shortfall (exit status 0), unless OUT exists: a file there is replaced only by a
-    whole recording (an error then, exit status 2, OUT left as it was).
+    resets or falls silent) is written as far as it came and named an error (exit status
+    2: the recording is partial), unless OUT exists: a file there is replaced only by a
+    whole recording (OUT left as it was).
 
     \b
     Example:
@@ -317,7 +317,7 @@ def record(address, out, frames):
         refuse_short_over(out, why, kept)
     atomic_write(out, lambda f: f.write(got.cfg2 + b"".join(got.data)), mode="wb")
     if got.short:
-        warn_short(out, why, kept)
+        fail_short(out, why, kept)
     click.echo(f"recorded {len(got.data)} frames from {address} to {out}")
 
 

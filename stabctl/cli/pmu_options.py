@@ -4,7 +4,6 @@ measure."""
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import click
@@ -227,10 +226,11 @@ def refuse_short_over(out, why: str, kept: str) -> None:
         raise InputError(f"{why}; {out} is left as it was (the {kept} are not written over it)")
 
 
-def warn_short(out, why: str, kept: str) -> None:
-    """Say, as a warning, that `out` holds what a stream that stopped before its end
-    brought: the command has written it whole and ends with exit status 0 (a new file;
-    `refuse_short_over` refused an existing one).
+def fail_short(out, why: str, kept: str) -> None:
+    """Name, as an error, a stream that stopped before its end: `out` holds what it
+    brought (a new file, written whole as far as the stream came; `refuse_short_over`
+    refused an existing one), so the frames received are kept while the exit status says
+    the result is partial.
 
     Parameters
     ----------
@@ -240,5 +240,10 @@ def warn_short(out, why: str, kept: str) -> None:
         The stream and what cut it.
     kept : str
         What came, e.g. ``"121 received"``.
+
+    Raises
+    ------
+    InputError
+        Always: the message names the shortfall and where what came is (exit status 2).
     """
-    warnings.warn(f"{why}; the {kept} are in {out}", stacklevel=2)
+    raise InputError(f"{why}; the {kept} are in {out}")

@@ -1534,10 +1534,10 @@ def test_omib_refuses_a_fault_not_cleared_before_the_run_ends(args, needle):
 
 def test_track_of_a_stream_cut_short_replaces_no_file_on_an_error(kundur_wire, tmp_path):
     """`estimate track --until 100` of a 1.2 s recording replaced an existing --out with
-    the frames tracked and exited 2 (a new --out was left behind by that error exit): as
-    `pmu record`, an existing file is replaced only by the track of a whole stream (exit
-    2, left byte for byte), a new one is written as far as the stream came with a warning
-    naming the shortfall (exit 0)."""
+    the frames tracked and exited 2: as `pmu record`, an existing file is replaced only by
+    the track of a whole stream (exit 2, left byte for byte, refused before tracking); a
+    new one is written as far as the stream came and the shortfall named an error (exit
+    2: the result is partial, the frames received kept)."""
     from stabctl.estimation import c37
 
     cfg, frames, _, _ = kundur_wire
@@ -1555,10 +1555,11 @@ def test_track_of_a_stream_cut_short_replaces_no_file_on_an_error(kundur_wire, t
     assert out.read_text() == "keep\n" and sorted(tmp_path.iterdir()) == [out, rec]
     new = tmp_path / "new.csv"
     res = run(*track, new)
-    assert res.exit_code == 0, res.output
+    assert res.exit_code == 2, res.output
     said = res.stderr.splitlines()
-    assert len(said) == 1 and said[0].startswith(f"warning: --source {rec} stopped before")
+    assert len(said) == 1 and said[0].startswith(f"error: --source {rec} stopped before")
     assert said[0].endswith(f"; the 73 frames tracked are in {new}")
+    assert res.stdout.startswith("tracked 73 frames") and res.stdout.endswith(f"wrote {new}\n")
     assert len(new.read_text().splitlines()) == 1 + 73
 
 

@@ -256,19 +256,19 @@ def test_each_pmu_ports_beyond_65535_are_refused_by_name():
 def test_record_beyond_the_stream_keeps_what_came_and_says_so(tmp_path):
     """`pmu record --frames 500` of a 121-frame stream (the finding: every frame received
     was discarded, or a partial result presented as whole): the 121 frames are written,
-    the shortfall is one warning line (exit 0: an error exit writes nothing); the server
-    is told nothing else."""
+    the shortfall is one error line (exit 2: the recording is partial); the server is
+    told nothing else."""
     args = ["kundur", "--fault", "3", "--far-bus", "101", "--tf", "2", "--speed", "0"]
     proc, address = serving("serve", *args)
     out = tmp_path / "a.c37"
     res = CliRunner().invoke(main, ["pmu", "record", address, "--frames", "500", "-o", str(out)])
     assert finished(proc)[0] == 0
-    assert res.exit_code == 0, res.output
+    assert res.exit_code == 2, res.output
     assert res.stderr == (
-        f"warning: {address}: the server closed the connection after 121 data frames, the "
+        f"error: {address}: the server closed the connection after 121 data frames, the "
         f"last stamped 2.0000 s, before 500 frames; the 121 received are in {out}\n"
     )
-    assert res.stdout == f"recorded 121 frames from {address} to {out}\n"
+    assert res.stdout == ""
     case = stabctl.load_case("kundur")
     assert len(c37.replay(out, c37.stream_config(case, pm.machine_pmus(case), 60))) == 121
 
