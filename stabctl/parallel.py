@@ -351,11 +351,12 @@ def die_with_parent(parent: int) -> None:
     """Initializer of every worker process: on Linux the kernel kills the worker when its
     parent dies (prctl PR_SET_PDEATHSIG, SIGKILL), so a sweep killed with SIGKILL leaves
     no worker running (nor the resource tracker, which exits once no process holds its
-    pipe); a worker whose parent is already gone exits at once.  Workers ignore SIGINT and
-    SIGTERM: Ctrl-C, or a batch system's SIGTERM, reaches the whole process group, and the
-    parent stops the pool itself (`stop_pool`) rather than record its jobs as lost."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    pipe); a worker whose parent is already gone exits at once.  Workers ignore SIGINT,
+    SIGTERM and SIGHUP: Ctrl-C, a batch system's SIGTERM or a closed terminal's SIGHUP
+    reaches the whole process group, and the parent stops the pool itself (`stop_pool`)
+    rather than record its jobs as lost."""
+    for sig in _GROUP_SIGNALS:
+        signal.signal(sig, signal.SIG_IGN)
     if sys.platform.startswith("linux"):
         try:
             libc = ctypes.CDLL(None, use_errno=True)
@@ -368,9 +369,44 @@ def die_with_parent(parent: int) -> None:
 
 _PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
+#: the signals that reach a sweep's whole process group and that its parent alone acts on
+_GROUP_SIGNALS = (
+    signal.SIGINT,
+    signal.SIGTERM,
+    *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else []),
+)
+
+
+def start_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker, if it is not running, with SIGHUP blocked
+    for its life.  The tracker (the process that unlinks the semaphores of a pool left
+    behind) ignores SIGINT and SIGTERM, but a SIGHUP to the process group (the terminal
+    closed) killed it: the pool's shutdown then started a new one, which printed a
+    traceback (``KeyError: '/mp-...'``) for every semaphore the first had registered.
+    The signal mask is inherited through the tracker's fork and exec; it is set in this
+    thread only for the start (a SIGHUP meanwhile is delivered after it).
+
+    Notes
+    -----
+    Source: CPython 3.11 ``multiprocessing/resource_tracker.py`` (``ensure_running``,
+    ``main``: the tracker unblocks only SIGINT and SIGTERM, which it ignores).
+    """
+    from multiprocessing import resource_tracker
+
+    if not hasattr(signal, "SIGHUP") or not hasattr(signal, "pthread_sigmask"):
+        resource_tracker.ensure_running()  # pragma: no cover - not POSIX
+        return
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGHUP})
+    try:
+        resource_tracker.ensure_running()
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
 
 def process_pool(workers: int) -> ProcessPoolExecutor:
-    """A spawned process pool whose workers die with this process (`die_with_parent`)."""
+    """A spawned process pool whose workers die with this process (`die_with_parent`),
+    its resource tracker started to outlive a SIGHUP (`start_resource_tracker`)."""
+    start_resource_tracker()
     return ProcessPoolExecutor(
         workers,
         mp_context=multiprocessing.get_context("spawn"),
@@ -948,7 +984,9 @@ def _connect(scheduler: str, workers: int, timeout: float):
         # a cluster whose start fails closes itself (SpecCluster.__init__); its worker
         # processes log errors only (silence_logs): the warnings of the jobs they cancel
         # when an interrupted sweep closes them ("Async instruction ... ended with
-        # CancelledError", two per running job) are not shown, the sweep says what it kept
+        # CancelledError", two per running job) are not shown, the sweep says what it kept;
+        # its processes' semaphores are tracked by a tracker that outlives a SIGHUP
+        start_resource_tracker()
         with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
             cluster = LocalCluster(
                 n_workers=workers,
