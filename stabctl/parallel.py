@@ -985,21 +985,30 @@ def _connect(scheduler: str, workers: int, timeout: float):
         # processes log errors only (silence_logs): the warnings of the jobs they cancel
         # when an interrupted sweep closes them ("Async instruction ... ended with
         # CancelledError", two per running job) are not shown, the sweep says what it kept;
-        # its processes' semaphores are tracked by a tracker that outlives a SIGHUP
+        # its processes' semaphores are tracked by a tracker that outlives a SIGHUP; the
+        # scratch space of its scheduler and workers (``dask-scratch-space``, left in the
+        # temporary directory by Dask) is a directory of its own, removed with the cluster
         start_resource_tracker()
-        with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
-            cluster = LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
+        scratch = tempfile.mkdtemp(prefix="stabctl-dask-")
+        try:
+            settings = {"distributed.scheduler.worker-saturation": 1.0}
+            with dask.config.set({**settings, "temporary-directory": scratch}):
+                cluster = LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    silence_logs=logging.ERROR,
+                    local_directory=scratch,
+                )
+        except BaseException:
+            shutil.rmtree(scratch, ignore_errors=True)
+            raise
+        cluster.stabctl_scratch = scratch  # type: ignore[attr-defined] # removed by `_close`
         try:
             return _started_client(cluster)
         except BaseException:
-            with _quiet_dask():
-                cluster.close()
+            _close_cluster(cluster)
             raise
     try:
         return _started_client(address, timeout=timeout)
@@ -1040,7 +1049,18 @@ def _close(client) -> None:
             _log.debug("closing the Dask client: %s: %s", type(exc).__name__, exc)
         finally:
             if cluster is not None:
-                cluster.close()
+                _close_cluster(cluster)
+
+
+def _close_cluster(cluster) -> None:
+    """Close a local cluster of `_connect` and remove its workers' scratch directory."""
+    with _quiet_dask():
+        try:
+            cluster.close()
+        finally:
+            scratch = getattr(cluster, "stabctl_scratch", None)
+            if scratch is not None:
+                shutil.rmtree(scratch, ignore_errors=True)
 
 
 @contextmanager

@@ -558,8 +558,15 @@ def test_a_local_dask_sweep_leaves_no_client_or_cluster_open(tmp_path, monkeypat
     Client and LocalCluster are closed when it returns or raises (the finding: a sweep
     whose file was refused after the cluster started left both open, and Dask's finaliser
     closed them inside a later client's start, which hung); a sweep that finds every job
-    done starts none."""
+    done starts none.  Nothing is left in the temporary directory (the cluster's workers
+    kept their ``dask-scratch-space`` there)."""
     pytest.importorskip("distributed")
+    import tempfile
+
+    temp = tmp_path / "tmp"
+    temp.mkdir()
+    monkeypatch.setenv("TMPDIR", str(temp))
+    monkeypatch.setattr(tempfile, "tempdir", None)  # gettempdir() reads TMPDIR again
     out = tmp_path / "d.jsonl"
     progress = False
     if how == "file refused":
@@ -576,6 +583,7 @@ def test_a_local_dask_sweep_leaves_no_client_or_cluster_open(tmp_path, monkeypat
         with pytest.raises(raised):
             run_sweep(jobs, out, scheduler="local", workers=1, progress=progress)
     assert_no_dask_client_left()
+    assert list(temp.iterdir()) == []
     assert len(read_records(out)) == {"normally": 2, "ctrl-c after the first record": 1}.get(how, 0)
     if how == "normally":  # every job done: the sweep returns without starting a cluster
         import distributed
