@@ -1000,6 +1000,8 @@ def _connect(scheduler: str, workers: int, timeout: float):
                     dashboard_address=None,
                     silence_logs=logging.ERROR,
                     local_directory=scratch,
+                    # no dashboard; the scheduler's own HTTP server on a free port
+                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                 )
         except BaseException:
             shutil.rmtree(scratch, ignore_errors=True)

@@ -599,6 +599,37 @@ def test_a_local_dask_sweep_leaves_no_client_or_cluster_open(tmp_path, monkeypat
 
 
 @pytest.mark.dask
+def test_a_local_dask_sweep_says_nothing_of_port_8787_in_use(tmp_path):
+    """A local cluster's scheduler serves no dashboard, but its HTTP server took port 8787
+    and, that port held by another cluster on the machine, warned "Port 8787 is already
+    in use ... Hosting the HTTP server on port N instead" on every `--scheduler local`
+    run: it takes a free port."""
+    pytest.importorskip("distributed")
+    import socket
+    import warnings
+
+    taken = socket.socket()
+    try:
+        taken.bind(("127.0.0.1", 8787))
+        taken.listen()
+    except OSError:  # held by another process: in use all the same
+        pass
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            run_sweep(
+                jobs_of(square, 1),
+                tmp_path / "d.jsonl",
+                scheduler="local",
+                workers=1,
+                progress=False,
+            )
+    finally:
+        taken.close()
+    assert [str(w.message) for w in caught if "8787" in str(w.message)] == []
+
+
+@pytest.mark.dask
 def test_dask_cluster(tmp_path):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=1, processes=False, dashboard_address=None) as c:
