@@ -92,9 +92,13 @@ class _Group(click.Group):
     error, not a silent exit status 0)."""
 
     def main(self, *args, **kwargs):
-        """Run the command line (click's ``main``) on a checked standard output."""
+        """Run the command line (click's ``main``) on a checked standard output, or say
+        what is wrong with numba's settings in the environment (exit status 2)."""
         from stabctl.cli.stdout import checked_stdout
 
+        if _ENVIRONMENT_PROBLEM:
+            click.echo(f"error: {_ENVIRONMENT_PROBLEM}", err=True)
+            sys.exit(2)
         with checked_stdout():
             return super().main(*args, **kwargs)
 
@@ -207,4 +211,14 @@ def _one_value_each(cmd: click.Command) -> None:
     cmd.parse_args = parse_args  # type: ignore[method-assign]
 
 
-_register()
+def _environment_problem() -> str:
+    """numba's settings in the environment checked before any command imports numba
+    (`stabctl._jit.environment`): '' or the error, said when the command line runs."""
+    from stabctl._jit.environment import environment_problem
+
+    return environment_problem()
+
+
+_ENVIRONMENT_PROBLEM = _environment_problem()
+if not _ENVIRONMENT_PROBLEM:  # numba may not even import: no command is registered
+    _register()

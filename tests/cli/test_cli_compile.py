@@ -131,3 +131,39 @@ def test_a_cold_cache_from_a_first_run_and_compile_to_warm(tmp_path):
     again = _stabctl("compile", "kundur", cache=cache)
     assert again.returncode == 0, again.stdout + again.stderr
     assert _parts(again.stdout) == dict.fromkeys(PARTS, "loaded"), again.stdout
+
+
+def _with_env(*args, **env):
+    return subprocess.run(
+        [sys.executable, "-m", "stabctl.cli", *args],
+        env={**os.environ, **env},
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+@pytest.mark.parametrize(
+    "name,value,needle",
+    [
+        ("NUMBA_NUM_THREADS", "0", "numba needs a whole number of threads >= 1"),
+        ("NUMBA_OPT", "x", "supported values are 0, 1, 2, 3, and 'max'"),
+        ("NUMBA_CACHE_DIR", "FILE", "is not a directory"),
+    ],
+)
+@pytest.mark.parametrize("args", [["cases"], ["compile", "--check"]])
+def test_a_numba_setting_numba_cannot_use_is_one_error_line(tmp_path, name, value, needle, args):
+    """numba's variables in the environment: NUMBA_NUM_THREADS=0 stopped every command with
+    a traceback (numba's ValueError, not naming the variable); NUMBA_OPT=x printed numba's
+    warning with a whole traceback and ran; a NUMBA_CACHE_DIR that is a file was passed
+    over by numba (the kernels cached in __pycache__) while `compile --check` called the
+    file the cache.  Each is one error line naming the variable, exit status 2."""
+    if value == "FILE":
+        value = str(tmp_path / "keep.csv")
+        (tmp_path / "keep.csv").write_text("keep\n")
+    run = _with_env(*args, **{name: value})
+    assert run.returncode == 2, run.stdout + run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {name}="), run.stderr
+    assert needle in lines[0] and run.stdout == ""
+
