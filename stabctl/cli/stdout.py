@@ -2,9 +2,9 @@
 
 A command's results go to stdout (a table, ``--json``); when they cannot be written the
 command must not end with exit status 0, nor blame a file: stdout closed (``>&-``), a
-full disk (``> /dev/full``) end with one line ``error: cannot write to standard output:
-<reason>`` and exit status 2 (:func:`checked_stdout`, :func:`cannot_write`).  A closed
-pipe (``stabctl cases | head``) stays the quiet end it is
+full disk (``> /dev/full``) end with one line ``error: cannot write to standard output
+(stdout): <reason>`` and exit status 2 (:func:`checked_stdout`, :func:`cannot_write`).  A
+closed pipe (``stabctl cases | head``) stays the quiet end it is
 (:func:`stabctl.cli.options.reports_errors`).
 
 Standard output is replaced for the run by a stream over file descriptor 1 whose failed
@@ -64,12 +64,12 @@ def cannot_write(exc: OSError) -> str:
     Returns
     -------
     str
-        ``"error: cannot write to standard output: <reason>"``.
+        ``"error: cannot write to standard output (stdout): <reason>"``.
     """
     raw = getattr(getattr(sys.stdout, "buffer", None), "raw", None)
     if isinstance(raw, _Stdout):
         raw.discarding = True
-    return f"error: cannot write to standard output: {exc.strerror or exc}"
+    return f"error: cannot write to standard output (stdout): {exc.strerror or exc}"
 
 
 @contextmanager

@@ -574,7 +574,7 @@ def test_output_that_cannot_reach_stdout_is_an_error(where, args):
         reason = "No space left on device"
     said = [x for x in proc.stderr.splitlines() if not x.startswith(("stabctl: ", "  ("))]
     assert proc.returncode == 2, proc.stderr
-    assert said == [f"error: cannot write to standard output: {reason}"], proc.stderr
+    assert said == [f"error: cannot write to standard output (stdout): {reason}"], proc.stderr
 
 
 def test_a_trapezoid_step_above_two_cycles_is_a_warning():
