@@ -982,9 +982,12 @@ def _connect(scheduler: str, workers: int, timeout: float):
         # a worker is sent only the job it runs (Dask's default, 1.1, queues a second
         # one there, which a worker killed by the first counts against: KilledWorker);
         # a cluster whose start fails closes itself (SpecCluster.__init__); its worker
-        # processes log errors only (silence_logs): the warnings of the jobs they cancel
-        # when an interrupted sweep closes them ("Async instruction ... ended with
-        # CancelledError", two per running job) are not shown, the sweep says what it kept;
+        # processes log nothing below CRITICAL (silence_logs): what they say as an
+        # interrupted sweep closes them is not shown, the sweep says what it kept (the
+        # warnings of the jobs they cancel, "Async instruction ... ended with
+        # CancelledError", two per running job; the error and traceback of a heartbeat
+        # that met the scheduler closed, "Failed to communicate with scheduler"), and a
+        # job's own error is in its record;
         # its processes' semaphores are tracked by a tracker that outlives a SIGHUP; the
         # scratch space of its scheduler and workers (``dask-scratch-space``, left in the
         # temporary directory by Dask) is a directory of its own, removed with the cluster
@@ -998,7 +1001,7 @@ def _connect(scheduler: str, workers: int, timeout: float):
                     threads_per_worker=1,
                     processes=True,
                     dashboard_address=None,
-                    silence_logs=logging.ERROR,
+                    silence_logs=logging.CRITICAL,
                     local_directory=scratch,
                     # no dashboard; the scheduler's own HTTP server on a free port
                     scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},

@@ -190,7 +190,9 @@ def test_a_signal_to_a_screening_on_a_local_dask_cluster_says_only_what_it_kept(
 ):
     """SIGTERM or SIGHUP to a screening on `--scheduler local`: its worker processes
     printed two Dask warnings per running job they cancelled as the cluster closed
-    ("Async instruction ... ended with CancelledError"); only the resume line is said."""
+    ("Async instruction ... ended with CancelledError"), and often a worker whose heartbeat
+    met the scheduler closed an error with its traceback ("Failed to communicate with
+    scheduler during heartbeat"); only the resume line is said."""
     pytest.importorskip("distributed")
     args = ["screen", "kundur", "--tol-ms", "0.05", "--workers", "2", "--scheduler", "local"]
     args += ["--out", "s.jsonl"]
