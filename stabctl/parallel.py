@@ -358,11 +358,12 @@ def die_with_parent(parent: int) -> None:
     """Initializer of every worker process: on Linux the kernel kills the worker when its
     parent dies (prctl PR_SET_PDEATHSIG, SIGKILL), so a sweep killed with SIGKILL leaves
     no worker running (nor the resource tracker, which exits once no process holds its
-    pipe); a worker whose parent is already gone exits at once.  Workers ignore SIGINT and
-    SIGTERM: Ctrl-C, or a batch system's SIGTERM, reaches the whole process group, and the
-    parent stops the pool itself (`stop_pool`) rather than record its jobs as lost."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    pipe); a worker whose parent is already gone exits at once.  Workers ignore SIGINT,
+    SIGTERM and SIGHUP: Ctrl-C, a batch system's SIGTERM or a closed terminal's SIGHUP
+    reaches the whole process group, and the parent stops the pool itself (`stop_pool`)
+    rather than record its jobs as lost."""
+    for sig in _GROUP_SIGNALS:
+        signal.signal(sig, signal.SIG_IGN)
     if sys.platform.startswith("linux"):
         try:
             libc = ctypes.CDLL(None, use_errno=True)
@@ -375,9 +376,44 @@ def die_with_parent(parent: int) -> None:
 
 _PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
+#: the signals that reach a sweep's whole process group and that its parent alone acts on
+_GROUP_SIGNALS = (
+    signal.SIGINT,
+    signal.SIGTERM,
+    *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else []),
+)
+
+
+def start_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker, if it is not running, with SIGHUP blocked
+    for its life.  The tracker (the process that unlinks the semaphores of a pool left
+    behind) ignores SIGINT and SIGTERM, but a SIGHUP to the process group (the terminal
+    closed) killed it: the pool's shutdown then started a new one, which printed a
+    traceback (``KeyError: '/mp-...'``) for every semaphore the first had registered.
+    The signal mask is inherited through the tracker's fork and exec; it is set in this
+    thread only for the start (a SIGHUP meanwhile is delivered after it).
+
+    Notes
+    -----
+    Source: CPython 3.11 ``multiprocessing/resource_tracker.py`` (``ensure_running``,
+    ``main``: the tracker unblocks only SIGINT and SIGTERM, which it ignores).
+    """
+    from multiprocessing import resource_tracker
+
+    if not hasattr(signal, "SIGHUP") or not hasattr(signal, "pthread_sigmask"):
+        resource_tracker.ensure_running()  # pragma: no cover - not POSIX
+        return
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGHUP})
+    try:
+        resource_tracker.ensure_running()
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
 
 def process_pool(workers: int) -> ProcessPoolExecutor:
-    """A spawned process pool whose workers die with this process (`die_with_parent`)."""
+    """A spawned process pool whose workers die with this process (`die_with_parent`),
+    its resource tracker started to outlive a SIGHUP (`start_resource_tracker`)."""
+    start_resource_tracker()
     return ProcessPoolExecutor(
         workers,
         mp_context=multiprocessing.get_context("spawn"),
@@ -956,22 +992,38 @@ def _connect(scheduler: str, workers: int, timeout: float):
         # a worker is sent only the job it runs (Dask's default, 1.1, queues a second
         # one there, which a worker killed by the first counts against: KilledWorker);
         # a cluster whose start fails closes itself (SpecCluster.__init__); its worker
-        # processes log errors only (silence_logs): the warnings of the jobs they cancel
-        # when an interrupted sweep closes them ("Async instruction ... ended with
-        # CancelledError", two per running job) are not shown, the sweep says what it kept
-        with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
-            cluster = LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
+        # processes log nothing below CRITICAL (silence_logs): what they say as an
+        # interrupted sweep closes them is not shown, the sweep says what it kept (the
+        # warnings of the jobs they cancel, "Async instruction ... ended with
+        # CancelledError", two per running job; the error and traceback of a heartbeat
+        # that met the scheduler closed, "Failed to communicate with scheduler"), and a
+        # job's own error is in its record;
+        # its processes' semaphores are tracked by a tracker that outlives a SIGHUP; the
+        # scratch space of its scheduler and workers (``dask-scratch-space``, left in the
+        # temporary directory by Dask) is a directory of its own, removed with the cluster
+        start_resource_tracker()
+        scratch = tempfile.mkdtemp(prefix="stabctl-dask-")
+        try:
+            settings = {"distributed.scheduler.worker-saturation": 1.0}
+            with dask.config.set({**settings, "temporary-directory": scratch}):
+                cluster = LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    silence_logs=logging.CRITICAL,
+                    local_directory=scratch,
+                    # no dashboard; the scheduler's own HTTP server on a free port
+                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                )
+        except BaseException:
+            shutil.rmtree(scratch, ignore_errors=True)
+            raise
+        cluster.stabctl_scratch = scratch  # type: ignore[attr-defined] # removed by `_close`
         try:
             return _started_client(cluster)
         except BaseException:
-            with _quiet_dask():
-                cluster.close()
+            _close_cluster(cluster)
             raise
     try:
         return _started_client(address, timeout=timeout)
@@ -1012,7 +1064,18 @@ def _close(client) -> None:
             _log.debug("closing the Dask client: %s: %s", type(exc).__name__, exc)
         finally:
             if cluster is not None:
-                cluster.close()
+                _close_cluster(cluster)
+
+
+def _close_cluster(cluster) -> None:
+    """Close a local cluster of `_connect` and remove its workers' scratch directory."""
+    with _quiet_dask():
+        try:
+            cluster.close()
+        finally:
+            scratch = getattr(cluster, "stabctl_scratch", None)
+            if scratch is not None:
+                shutil.rmtree(scratch, ignore_errors=True)
 
 
 @contextmanager

@@ -32,6 +32,8 @@ def test_a_source_change_clears_the_kernels_under_numba_cache_dir(tmp_path, monk
     stamp.write_text("a digest of other sources")
     jc.ensure_fresh_cache()
     assert not (kernels / "f-1.py311.nbi").exists()
+    assert stamp.read_text() == "a digest of other sources"  # written with the first kernel
+    jc.stamp_cache()
     assert stamp.read_text() == jc.source_digest()
     (kernels / "f-1.py311.nbi").write_text("fresh")
     jc.ensure_fresh_cache()  # same sources: kept
@@ -268,6 +270,23 @@ def test_a_damaged_cache_entry_is_compiled_again(tmp_path):
         again = _fresh_process(_LOAD, tmp_path)
         assert again.returncode == 0, again.stderr
         assert again.stdout.split()[0] == first.stdout.split()[0]  # sqrt(0.75 - 0.25)
+
+
+def test_kernels_make_their_cache_directories_only_when_compiled(tmp_path):
+    """A process that declares kernels but compiles none makes nothing in an empty
+    NUMBA_CACHE_DIR (the finding: numba made each kernel's directory as it was declared,
+    13 of them for `stabctl compile --check`, and stabctl wrote its cache key); the first
+    kernel compiled makes its directory and the key, and the next process loads it."""
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    declared = _fresh_process("import stabctl.dynamics.integrator, stabctl.models.blocks", cache)
+    assert declared.returncode == 0, declared.stderr
+    assert list(cache.iterdir()) == []
+    first = _fresh_process(_LOAD, cache)
+    assert first.returncode == 0, first.stderr
+    assert len(list(cache.rglob("blocks.rectifier_loading-*.nbi"))) == 1
+    assert len(list(cache.rglob("numba-sources.sha256"))) == 1
+    assert _fresh_process(_LOAD, cache).stdout.split()[1] != "Counter()"  # a cache hit
 
 
 def test_a_cache_others_may_write_into_is_not_used(tmp_path):

@@ -567,8 +567,15 @@ def test_a_local_dask_sweep_leaves_no_client_or_cluster_open(tmp_path, monkeypat
     Client and LocalCluster are closed when it returns or raises (the finding: a sweep
     whose file was refused after the cluster started left both open, and Dask's finaliser
     closed them inside a later client's start, which hung); a sweep that finds every job
-    done starts none."""
+    done starts none.  Nothing is left in the temporary directory (the cluster's workers
+    kept their ``dask-scratch-space`` there)."""
     pytest.importorskip("distributed")
+    import tempfile
+
+    temp = tmp_path / "tmp"
+    temp.mkdir()
+    monkeypatch.setenv("TMPDIR", str(temp))
+    monkeypatch.setattr(tempfile, "tempdir", None)  # gettempdir() reads TMPDIR again
     out = tmp_path / "d.jsonl"
     progress = False
     if how == "file refused":
@@ -585,6 +592,7 @@ def test_a_local_dask_sweep_leaves_no_client_or_cluster_open(tmp_path, monkeypat
         with pytest.raises(raised):
             run_sweep(jobs, out, scheduler="local", workers=1, progress=progress)
     assert_no_dask_client_left()
+    assert list(temp.iterdir()) == []
     assert len(read_records(out)) == {"normally": 2, "ctrl-c after the first record": 1}.get(how, 0)
     if how == "normally":  # every job done: the sweep returns without starting a cluster
         import distributed
@@ -597,6 +605,37 @@ def test_a_local_dask_sweep_leaves_no_client_or_cluster_open(tmp_path, monkeypat
         again = run_sweep(jobs, out, scheduler="local", workers=1, progress=False)
         assert (again.ran, again.skipped) == (0, 2)
         assert_no_dask_client_left()
+
+
+@pytest.mark.dask
+def test_a_local_dask_sweep_says_nothing_of_port_8787_in_use(tmp_path):
+    """A local cluster's scheduler serves no dashboard, but its HTTP server took port 8787
+    and, that port held by another cluster on the machine, warned "Port 8787 is already
+    in use ... Hosting the HTTP server on port N instead" on every `--scheduler local`
+    run: it takes a free port."""
+    pytest.importorskip("distributed")
+    import socket
+    import warnings
+
+    taken = socket.socket()
+    try:
+        taken.bind(("127.0.0.1", 8787))
+        taken.listen()
+    except OSError:  # held by another process: in use all the same
+        pass
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            run_sweep(
+                jobs_of(square, 1),
+                tmp_path / "d.jsonl",
+                scheduler="local",
+                workers=1,
+                progress=False,
+            )
+    finally:
+        taken.close()
+    assert [str(w.message) for w in caught if "8787" in str(w.message)] == []
 
 
 @pytest.mark.dask

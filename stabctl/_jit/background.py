@@ -22,7 +22,7 @@ from pathlib import Path
 
 from numba.core import event
 
-from stabctl._jit.cache import cached
+from stabctl._jit.cache import cached, stamp_cache
 
 #: compiles under way in child processes (`compile_in_background`), by dispatcher name
 _BACKGROUND: dict[str, tuple[subprocess.Popen, object]] = {}
@@ -77,6 +77,7 @@ def compile_in_background(dispatcher, argtypes, opt: int | None = None) -> bool:
         or not _writable(Path(dispatcher.stats.cache_path))
     ):
         return False
+    stamp_cache()  # the child finds the cache's key up to date: it clears nothing
     err = tempfile.TemporaryFile()  # noqa: SIM115 - the child's stderr, read after it exits
     env = dict(os.environ, **({} if opt is None else {"NUMBA_OPT": str(opt)}))
     proc = subprocess.Popen(

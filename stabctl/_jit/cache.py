@@ -24,15 +24,17 @@ garbage) is deleted and the kernel compiled again (`GuardedCache`).
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import os
 import re
 import stat
 import warnings
 from pathlib import Path
+from typing import ClassVar
 
 import numba
-from numba.core.caching import FunctionCache
+from numba.core.caching import CompileResultCacheImpl, FunctionCache
 
 _PKG = Path(__file__).resolve().parents[1]
 
@@ -200,10 +202,56 @@ def cached(dispatcher) -> bool:
     return any(Path(dispatcher.stats.cache_path).glob(stem + "*.nbi"))
 
 
+def _could_make(directory: str) -> None:
+    """Raise the OSError that making `directory` (``os.makedirs``) and writing into it
+    would raise, without making it: its nearest existing ancestor is not a directory, or
+    this process may not write there."""
+    path = Path(directory)
+    while not path.exists() and path.parent != path:
+        if path.is_symlink():  # a dangling link: makedirs fails on it
+            raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), str(path))
+        path = path.parent
+    if not path.is_dir():
+        raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(path))
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(path))
+
+
+class _LooksFirst:
+    """Mixin of a numba cache locator whose first ``ensure_cache_path`` (numba's choice of
+    a locator when a kernel is declared) only checks that the cache directory could be
+    made and written (`_could_make`), and whose later ones (before a kernel is saved)
+    make it: declaring a kernel creates no directory, only compiling one does (numba
+    made every kernel's directory as the kernel was declared, so that ``stabctl --help``
+    or ``compile --check`` filled an empty NUMBA_CACHE_DIR)."""
+
+    def ensure_cache_path(self):
+        """Check (the first call) or make (later ones) the cache directory."""
+        if self.__dict__.get("_chosen"):
+            return super().ensure_cache_path()  # type: ignore[misc]
+        self._chosen = True
+        _could_make(self.get_cache_path())  # type: ignore[attr-defined]
+        return None
+
+
+class _LazyCacheImpl(CompileResultCacheImpl):
+    """numba's cache implementation of a compiled function, with numba's locators in
+    numba's order, each making its directory only when a kernel is saved (`_LooksFirst`)."""
+
+    _locator_classes: ClassVar[list] = [
+        type(cls.__name__, (_LooksFirst, cls), {"__doc__": cls.__doc__})
+        for cls in CompileResultCacheImpl._locator_classes
+    ]
+
+
 class GuardedCache(FunctionCache):
     """numba's on-disk cache of one kernel, whose load survives a damaged entry: an index
     or data file that does not unpickle (truncated, garbage) is deleted and the kernel
-    compiled again, instead of the run stopping with an UnpicklingError."""
+    compiled again, instead of the run stopping with an UnpicklingError.  Its directory is
+    made only when the kernel is first saved (`_LooksFirst`), and the cache's key
+    (`stamp_cache`) written before."""
+
+    _impl_class = _LazyCacheImpl
 
     def load_overload(self, sig, target_context):
         """The cached kernel for sig, or None (compile it) if none or damaged."""
@@ -216,11 +264,27 @@ class GuardedCache(FunctionCache):
                 path.unlink(missing_ok=True)
             return None
 
+    def save_overload(self, sig, data):
+        """Save a compiled kernel, the cache's key (`stamp_cache`) first."""
+        stamp_cache()
+        return super().save_overload(sig, data)
+
 
 def guard(dispatcher):
-    """`dispatcher` with its on-disk cache a `GuardedCache` (returned)."""
-    if isinstance(dispatcher._cache, FunctionCache):
-        dispatcher._cache.__class__ = GuardedCache
+    """`dispatcher` with an on-disk cache, a `GuardedCache` (returned).
+
+    Parameters
+    ----------
+    dispatcher : numba dispatcher
+        Declared without numba's own cache (``cache=False``: numba's would make its
+        directory at once) or with it (replaced).
+
+    Returns
+    -------
+    numba dispatcher
+        The same dispatcher.
+    """
+    dispatcher._cache = GuardedCache(dispatcher.py_func)
     return dispatcher
 
 
@@ -264,18 +328,45 @@ def ensure_safe_cache() -> None:
         )
 
 
+#: the cache key `stamp_cache` is to write (None: the stamp is up to date)
+_STAMP_DUE: str | None = None
+
+
+def _stamp() -> Path:
+    return cache_dirs()[0] / "numba-sources.sha256"
+
+
 def ensure_fresh_cache() -> None:
     """Delete stabctl's compiled kernels (`clear_cache`) if a kernel source changed since
-    they were written (`source_digest`; the stamp sits beside the first cache directory).
-    A read-only installation is left alone (numba then compiles in memory)."""
+    they were written (`source_digest`; the stamp sits in the first cache directory).
+    The new stamp is written when the first kernel is saved (`stamp_cache`), not here: a
+    process that compiles nothing makes nothing (``stabctl compile --check``).  A
+    read-only installation is left alone (numba then compiles in memory)."""
+    global _STAMP_DUE
     ensure_safe_cache()
-    stamp = cache_dirs()[0] / "numba-sources.sha256"
     now = source_digest()
     try:
+        stamp = _stamp()
         if stamp.exists() and stamp.read_text() == now:
             return
         clear_cache()
+    except OSError:
+        return
+    _STAMP_DUE = now
+
+
+def stamp_cache() -> None:
+    """Write the cache's key (`source_digest`) that `ensure_fresh_cache` found missing or
+    out of date, making its directory, before a kernel is saved (`GuardedCache`) or
+    compiled in a child process (`stabctl._jit.background`); nothing when it is up to
+    date.  A directory that cannot be written is left alone."""
+    global _STAMP_DUE
+    if _STAMP_DUE is None:
+        return
+    stamp = _stamp()
+    try:
         stamp.parent.mkdir(parents=True, exist_ok=True)
-        stamp.write_text(now)
+        stamp.write_text(_STAMP_DUE)
     except OSError:
         pass
+    _STAMP_DUE = None

@@ -16,9 +16,10 @@ ensure_fresh_cache()
 
 
 def njit(func=None, **options):
-    """Decorator of a kernel that Python code calls: ``numba.njit`` with ``cache=True``
-    (its on-disk cache guarded against damaged entries, `stabctl._jit.cache.guard`) and
-    no C-callable (``cfunc``) wrapper: nothing takes a kernel's C address.
+    """Decorator of a kernel that Python code calls: ``numba.njit`` with an on-disk cache
+    (``cache=True`` unless given False: `stabctl._jit.cache.guard`'s, guarded against
+    damaged entries, its directory made when a kernel is first saved) and no C-callable
+    (``cfunc``) wrapper: nothing takes a kernel's C address.
 
     Parameters
     ----------
@@ -33,10 +34,12 @@ def njit(func=None, **options):
         The dispatcher.
     """
 
-    options = {"cache": True, "no_cfunc_wrapper": True, **options}
+    cache = options.pop("cache", True)
+    options = {"no_cfunc_wrapper": True, **options}
 
     def declare(f):
-        return guard(numba.njit(f, **options))
+        dispatcher = numba.njit(f, **options)  # without numba's cache, which makes its dir
+        return guard(dispatcher) if cache else dispatcher
 
     return declare if func is None else declare(func)
 
@@ -71,10 +74,10 @@ class CompiledOnly(CPUDispatcher):
 
 def kernel(func=None, **options):
     """Decorator of a kernel called only from other kernels: ``numba.njit`` with
-    ``cache=True`` and without the CPython and C wrappers that a call from Python needs.
-    Each wrapper unpacks every argument (a NamedTuple of arrays field by field); leaving
-    them out took about 4 s off a cold first simulation when it compiled in one process
-    (39 -> 35 s on this 2-core machine).
+    ``cache=True`` (`stabctl._jit.cache.guard`'s cache, as `njit`) and without the CPython
+    and C wrappers that a call from Python needs.  Each wrapper unpacks every argument (a
+    NamedTuple of arrays field by field); leaving them out took about 4 s off a cold first
+    simulation when it compiled in one process (39 -> 35 s on this 2-core machine).
 
     Parameters
     ----------
@@ -89,11 +92,11 @@ def kernel(func=None, **options):
         The dispatcher (a call from Python compiles a trampoline first).
     """
 
+    cache = options.pop("cache", True)
+
     def declare(f):
-        dispatcher = numba.njit(
-            f, cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True, **options
-        )
+        dispatcher = numba.njit(f, no_cpython_wrapper=True, no_cfunc_wrapper=True, **options)
         dispatcher.__class__ = CompiledOnly
-        return guard(dispatcher)
+        return guard(dispatcher) if cache else dispatcher
 
     return declare if func is None else declare(func)

@@ -6,7 +6,8 @@ commands, one module per family: :mod:`~stabctl.cli.omib` (omib), :mod:`~stabctl
 :mod:`~stabctl.cli.stability` (cct, sweep-cct, screen), :mod:`~stabctl.cli.eig`,
 :mod:`~stabctl.cli.place`, :mod:`~stabctl.cli.estimate` and :mod:`~stabctl.cli.compile`
 (compile: the kernel cache). Shared options, checks and error handling are in
-:mod:`~stabctl.cli.options`, text and JSON output in :mod:`~stabctl.cli.format`.
+:mod:`~stabctl.cli.options`, text and JSON output in :mod:`~stabctl.cli.format`, a
+checked standard output (a failed write is an error) in :mod:`~stabctl.cli.stdout`.
 
 Errors in the input (stabctl.errors.StabctlError) are printed as one line naming what and
 where, with exit status 2; nothing is written in that case.  The library's progress lines
@@ -86,7 +87,20 @@ class UsageLine(click.ClickException):
 
 
 class _Group(click.Group):
-    """The `stabctl` group: its commands' usage errors as one line (`UsageLine`)."""
+    """The `stabctl` group: its commands' usage errors as one line (`UsageLine`), its
+    standard output checked (`stabctl.cli.stdout.checked_stdout`: a failed write is an
+    error, not a silent exit status 0)."""
+
+    def main(self, *args, **kwargs):
+        """Run the command line (click's ``main``) on a checked standard output, or say
+        what is wrong with numba's settings in the environment (exit status 2)."""
+        from stabctl.cli.stdout import checked_stdout
+
+        if _ENVIRONMENT_PROBLEM:
+            click.echo(f"error: {_ENVIRONMENT_PROBLEM}", err=True)
+            sys.exit(2)
+        with checked_stdout():
+            return super().main(*args, **kwargs)
 
     def invoke(self, ctx):
         try:
@@ -197,4 +211,14 @@ def _one_value_each(cmd: click.Command) -> None:
     cmd.parse_args = parse_args  # type: ignore[method-assign]
 
 
-_register()
+def _environment_problem() -> str:
+    """numba's settings in the environment checked before any command imports numba
+    (`stabctl._jit.environment`): '' or the error, said when the command line runs."""
+    from stabctl._jit.environment import environment_problem
+
+    return environment_problem()
+
+
+_ENVIRONMENT_PROBLEM = _environment_problem()
+if not _ENVIRONMENT_PROBLEM:  # numba may not even import: no command is registered
+    _register()

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import importlib
+import os
 import time
+from pathlib import Path
 
 import click
 
@@ -141,27 +143,35 @@ def _warm(names) -> None:
                 f"{time.perf_counter() - t0:6.1f} s{beside}"
             )
     click.echo(
-        f"kernel cache warm ({_location()}): {n_compiled} compiled, "
+        f"kernel cache warm ({_location(kernels)}): {n_compiled} compiled, "
         f"{time.perf_counter() - t_all:.1f} s in all"
     )
 
 
-def _location() -> str:
-    import numba
+def _location(kernels: dict[str, list]) -> str:
+    """Where numba caches the kernels, from their own caches (not NUMBA_CACHE_DIR, which
+    numba passes over when it cannot write there): the package's __pycache__
+    directories, or the directory holding their cache directories."""
+    from stabctl._jit.cache import _PKG
 
-    return numba.config.CACHE_DIR or "the package's __pycache__ directories"
+    paths = {Path(d.stats.cache_path) for ds in kernels.values() for d in ds}
+    in_tree = {p for p in paths if p.name == "__pycache__" and _PKG in p.parents}
+    places = ["the package's __pycache__ directories"] if in_tree else []
+    if paths - in_tree:
+        places.append(os.path.commonpath(sorted(paths - in_tree)))
+    return " and ".join(places)
 
 
 def _check() -> bool:
     """Print whether each part's kernels are in the on-disk cache; True if all are."""
     from stabctl._jit.cache import cached
 
-    warm = True
-    for part, dispatchers in _kernels().items():
+    warm, kernels = True, _kernels()
+    for part, dispatchers in kernels.items():
         missing = [d.py_func.__qualname__ for d in dispatchers if not cached(d)]
         warm = warm and not missing
         click.echo(f"{part:<17} " + (f"not cached: {', '.join(missing)}" if missing else "cached"))
-    click.echo(f"kernel cache {'warm' if warm else 'cold'} ({_location()})")
+    click.echo(f"kernel cache {'warm' if warm else 'cold'} ({_location(kernels)})")
     return warm
 
 
@@ -186,8 +196,9 @@ def compile_kernels(case_names, check):
     linearisation, converter set-up, integrator): compiled or loaded from the cache, and
     the seconds.  The integrator
     compiles in a child process beside the other parts, as in a first simulation.  The
-    cache is NUMBA_CACHE_DIR if set, else the package's __pycache__ directories; a change
-    of a kernel source empties it (the next command, or this one, compiles again).
+    cache is NUMBA_CACHE_DIR if set (a directory), else the package's __pycache__
+    directories; a change of a kernel source empties it (the next command, or this one,
+    compiles again).  --check makes no file or directory.
 
     \b
     Examples:

@@ -32,6 +32,7 @@ from contextlib import contextmanager
 import click
 
 from stabctl.cli.format import one_line
+from stabctl.cli.stdout import StdoutError, cannot_write
 from stabctl.errors import InputError, StabctlError
 from stabctl.io.inputs import plain_number
 
@@ -109,9 +110,11 @@ def reports_errors(func):
         error only the ``error:`` line); an
         ``OSError`` (a disk full, a file the system refuses) is one ``error:`` line too
         (exit status 2; the outputs are written whole or not at all, and a sweep's
-        finished records stay); Ctrl-C prints what was kept (exit status 130), and so do
-        SIGTERM and SIGHUP (exit status 143, 129); a closed pipe on stdout (``stabctl
-        cases | head``) ends the command without a word (exit status 141, as SIGPIPE).
+        finished records stay), one saying ``cannot write to standard output`` when it
+        is stdout that failed (closed, its disk full: `stabctl.cli.stdout`); Ctrl-C
+        prints what was kept (exit status 130), and so do SIGTERM and SIGHUP (exit
+        status 143, 129); a closed pipe on stdout (``stabctl cases | head``) ends the
+        command without a word (exit status 141, as SIGPIPE).
     """
 
     @functools.wraps(func)
@@ -124,6 +127,9 @@ def reports_errors(func):
                 out = func(*args, **kwargs)
             except StabctlError as exc:
                 click.echo(f"error: {one_line(exc)}", err=True)
+                sys.exit(2)
+            except StdoutError as exc:  # stdout closed, its disk full
+                click.echo(cannot_write(exc), err=True)
                 sys.exit(2)
             except BrokenPipeError:  # the reader went away (`stabctl cases | head`)
                 _quiet_stdout()

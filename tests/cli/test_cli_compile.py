@@ -131,3 +131,74 @@ def test_a_cold_cache_from_a_first_run_and_compile_to_warm(tmp_path):
     again = _stabctl("compile", "kundur", cache=cache)
     assert again.returncode == 0, again.stdout + again.stderr
     assert _parts(again.stdout) == dict.fromkeys(PARTS, "loaded"), again.stdout
+
+
+def test_compile_check_makes_nothing_in_an_empty_cache(tmp_path):
+    """`compile --check` on an empty NUMBA_CACHE_DIR: cold, named as the place, and the
+    directory still empty (numba made 13 kernel directories there, and stabctl its key,
+    although --check compiles nothing)."""
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    check = _stabctl("compile", "--check", cache=cache)
+    assert check.returncode == 1, check.stdout + check.stderr
+    assert check.stdout.splitlines()[-1] == f"kernel cache cold ({cache})"
+    assert list(cache.iterdir()) == []
+
+
+def _with_env(*args, **env):
+    return subprocess.run(
+        [sys.executable, "-m", "stabctl.cli", *args],
+        env={**os.environ, **env},
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+@pytest.mark.parametrize(
+    "name,value,needle",
+    [
+        ("NUMBA_NUM_THREADS", "0", "numba needs a whole number of threads >= 1"),
+        ("NUMBA_OPT", "x", "supported values are 0, 1, 2, 3, and 'max'"),
+        ("NUMBA_CACHE_DIR", "FILE", "is not a directory"),
+    ],
+)
+@pytest.mark.parametrize("args", [["cases"], ["compile", "--check"]])
+def test_a_numba_setting_numba_cannot_use_is_one_error_line(tmp_path, name, value, needle, args):
+    """numba's variables in the environment: NUMBA_NUM_THREADS=0 stopped every command with
+    a traceback (numba's ValueError, not naming the variable); NUMBA_OPT=x printed numba's
+    warning with a whole traceback and ran; a NUMBA_CACHE_DIR that is a file was passed
+    over by numba (the kernels cached in __pycache__) while `compile --check` called the
+    file the cache.  Each is one error line naming the variable, exit status 2."""
+    if value == "FILE":
+        value = str(tmp_path / "keep.csv")
+        (tmp_path / "keep.csv").write_text("keep\n")
+    run = _with_env(*args, **{name: value})
+    assert run.returncode == 2, run.stdout + run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {name}="), run.stderr
+    assert needle in lines[0] and run.stdout == ""
+
+
+def test_compile_check_names_the_cache_numba_really_uses(tmp_path):
+    """A NUMBA_CACHE_DIR numba cannot write into (here immutable) is passed over by numba,
+    which caches the kernels in the package's __pycache__ instead: `compile --check` says
+    so, not that the kernels are cached in NUMBA_CACHE_DIR."""
+    import shutil
+
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    chattr = shutil.which("chattr")
+    if chattr is None or subprocess.run([chattr, "+i", str(cache)], capture_output=True).returncode:
+        if os.access(cache, os.W_OK) and (cache.chmod(0o500) or os.access(cache, os.W_OK)):
+            pytest.skip("no way to make a directory this user cannot write into")
+        chattr = None
+    try:
+        check = _stabctl("compile", "--check", cache=cache)
+    finally:
+        if chattr is not None:
+            subprocess.run([chattr, "-i", str(cache)], check=True)
+        cache.chmod(0o700)
+    assert check.returncode in (0, 1), check.stdout + check.stderr
+    assert check.stdout.splitlines()[-1].endswith("(the package's __pycache__ directories)")
+    assert list(cache.iterdir()) == []

@@ -561,6 +561,36 @@ def test_a_closed_pipe_ends_a_command_quietly():
     assert (proc.returncode, proc.stderr) == (141, "")
 
 
+@pytest.mark.parametrize("where", ["closed", "full"])
+@pytest.mark.parametrize(
+    "args",
+    [["cases"], ["--version"], ["simulate", "kundur", "--fault", "3", "--tf", "1.2", "--json"]],
+)
+def test_output_that_cannot_reach_stdout_is_an_error(where, args):
+    """stdout closed (``>&-``) or on a full disk (``> /dev/full``): one line saying that
+    standard output cannot be written, and why, exit status 2; not exit 0 with the
+    results lost without a word, nor the disk's error without saying whose."""
+    import os
+    import subprocess
+    import sys
+
+    if where == "full" and not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full")
+    cmd = [sys.executable, "-m", "stabctl.cli", *args]
+    if where == "closed":
+        proc = subprocess.run(
+            cmd, stderr=subprocess.PIPE, text=True, preexec_fn=lambda: os.close(1)
+        )
+        reason = "it is closed"
+    else:
+        with open("/dev/full", "w") as full:
+            proc = subprocess.run(cmd, stdout=full, stderr=subprocess.PIPE, text=True)
+        reason = "No space left on device"
+    said = [x for x in proc.stderr.splitlines() if not x.startswith(("stabctl: ", "  ("))]
+    assert proc.returncode == 2, proc.stderr
+    assert said == [f"error: cannot write to standard output (stdout): {reason}"], proc.stderr
+
+
 def test_a_trapezoid_step_above_two_cycles_is_a_warning():
     """`simulate --method trapezoid --step 0.25` (the finding: a stable fault reported
     unstable with angles of 13-26 rad, exit 0, no word): at 0.1 s Kundur's bus-3 fault

@@ -1,7 +1,8 @@
 """Interruptions: SIGKILL of a sweep's main process leaves no worker running;
 SIGINT (Ctrl-C) ends every long command the same way: exit 130 and one line saying what was
 kept and the command that resumes; SIGTERM the same with exit 143, also while a command
-waits on a PMU stream that never ends."""
+waits on a PMU stream that never ends; SIGHUP to the whole process group (a closed
+terminal) the same with exit 129."""
 
 import signal
 import subprocess
@@ -140,6 +141,47 @@ def test_sigint_or_sigterm_of_a_screening_ends_with_the_resume_command(tmp_path,
     )
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
+@pytest.mark.parametrize(
+    "scheduler", [[], pytest.param(["--scheduler", "local"], marks=pytest.mark.dask)]
+)
+def test_a_hangup_of_the_whole_process_group_ends_a_sweep_with_one_line(tmp_path, scheduler):
+    """SIGHUP to a sweep's process group (its terminal closed: the parent, its workers and
+    multiprocessing's resource tracker all get it), in a local pool or on a local Dask
+    cluster: exit status 129 and the resume line alone.  The tracker, which ignores only
+    SIGINT and SIGTERM, died of it; the shutdown started another, which printed a
+    traceback (KeyError: '/mp-...') for each semaphore it had never registered."""
+    import os
+
+    if scheduler:
+        pytest.importorskip("distributed")
+    args = ["sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "none,5,10,20"]
+    args += ["--tol-ms", "0.05", "--workers", "2", *scheduler, "--out", "h.jsonl"]
+    proc = subprocess.Popen(
+        STABCTL + args,
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=_default_sigint,
+    )
+    out = tmp_path / "h.jsonl"
+    try:
+        assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
+        kids = _children(proc.pid)
+        os.killpg(proc.pid, signal.SIGHUP)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 129, err
+    said = [line for line in err.splitlines() if line.strip() and not line.startswith("h.jsonl")]
+    assert len(said) == 1 and said[0].startswith("interrupted: finished jobs are in h.jsonl ("), err
+    assert _wait_for(lambda: not any(_alive(k) for k in kids), 10)
+
+
 @pytest.mark.dask
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
 @pytest.mark.parametrize("sig,status", [(signal.SIGTERM, 143), (signal.SIGHUP, 129)])
@@ -148,7 +190,9 @@ def test_a_signal_to_a_screening_on_a_local_dask_cluster_says_only_what_it_kept(
 ):
     """SIGTERM or SIGHUP to a screening on `--scheduler local`: its worker processes
     printed two Dask warnings per running job they cancelled as the cluster closed
-    ("Async instruction ... ended with CancelledError"); only the resume line is said."""
+    ("Async instruction ... ended with CancelledError"), and often a worker whose heartbeat
+    met the scheduler closed an error with its traceback ("Failed to communicate with
+    scheduler during heartbeat"); only the resume line is said."""
     pytest.importorskip("distributed")
     args = ["screen", "kundur", "--tol-ms", "0.05", "--workers", "2", "--scheduler", "local"]
     args += ["--out", "s.jsonl"]
