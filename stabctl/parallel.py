@@ -918,7 +918,8 @@ def check_scheduler(address: str) -> str:
             f"--scheduler {address}: give 'local' or a Dask scheduler's tcp://host:port "
             "(port 1-65535; tls:// and ucx:// are not supported)"
         )
-    return f"tcp://{parts.hostname}:{port or 8786}"
+    host = f"[{parts.hostname}]" if ":" in parts.hostname else parts.hostname  # IPv6
+    return f"tcp://{host}:{port or 8786}"
 
 
 @contextmanager

@@ -450,6 +450,8 @@ def test_scheduler_addresses_are_checked_before_any_contact(tmp_path, address, n
         run_sweep(jobs_of(square, 1), tmp_path / "d.jsonl", scheduler=address, progress=False)
     assert not (tmp_path / "d.jsonl").exists()
     assert check_scheduler("127.0.0.1") == "tcp://127.0.0.1:8786"
+    assert check_scheduler("tcp://[::1]:5") == "tcp://[::1]:5"  # IPv6 keeps its brackets
+    assert check_scheduler("[::1]") == "tcp://[::1]:8786"
 
 
 @pytest.mark.dask
