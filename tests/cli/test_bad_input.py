@@ -342,26 +342,24 @@ def test_a_pst_file_s_working_variables_are_left_out_by_name(tmp_path):
     assert list(case.extra) == ["lmod_con"]
 
 
-@pytest.mark.parametrize(
-    "end, needle",
-    [
-        (0.1, "starts at or after the end of the run"),
-        (0.2, "ends at or after the end of the run"),
-        (0.0, "a run must end after 0 s"),
-    ],
-)
-def test_a_run_end_taken_from_sw_con_is_named_as_such(tmp_path, no_simulation, end, needle):
+def test_a_run_end_taken_from_sw_con_is_named_as_such(tmp_path, no_simulation):
     """--pstess-default on a case whose sw_con ends before its fault clears said
     "(--tf 0.1 s)", an option never given, and did not name sw_con: the row and column
-    the end came from are named, with the file."""
+    the end came from are named, with the file.  An end before an earlier row's time is
+    no schedule at all: the case is refused as it is read, naming both rows."""
     d = _kundur_dict()
-    d["sw_con"][-1][0] = end  # kundur's sw_con: fault at 0.1 s, cleared 0.15 / 0.2 s
+    d["sw_con"][-1][0] = 0.2  # kundur's sw_con: fault at 0.1 s, cleared 0.15 / 0.2 s
     path = tmp_path / "swcon.json"
     path.write_text(json.dumps(d))
     res = run("simulate", path, "--pstess-default")
-    where = f"{path}: sw_con row 5 (its last), column 1 (time): {end:g} s"
-    assert_error(res, needle, where, "give --tf, or correct that time")
+    where = f"{path}: sw_con row 5 (its last), column 1 (time): 0.2 s"
+    assert_error(res, "ends at or after the end of the run", where, "give --tf, or correct")
     assert "--tf 0." not in res.stderr
+    for end in (0.1, 0.0):
+        d["sw_con"][-1][0] = end
+        path.write_text(json.dumps(d))
+        res = run("simulate", path, "--pstess-default")
+        assert_error(res, f"sw_con row 5, column 1 (time): {end:g} s comes before row 4's 0.2 s")
 
 
 def test_a_default_run_end_is_not_called_an_option_given(no_simulation):
