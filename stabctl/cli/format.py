@@ -171,6 +171,50 @@ def machine_list(case, numbers) -> str:
     return ", ".join(case.machine_name(m) for m in numbers)
 
 
+def islanding_lines(case, islanded, tripped=(), timed: bool = True) -> list[str]:
+    """The islanding and trips of a run or a search, one line each, in time order.
+
+    Parameters
+    ----------
+    case : Case
+        The case (its machines named by number and bus, its base for the load shed).
+    islanded : sequence of dict
+        ``SimulationResult.meta["islanded"]`` (`stabctl.dynamics.driver.islanding_log`):
+        buses cut from every machine (``load_shed_pu``) or an island apart from the main
+        grid (``machines``).
+    tripped : sequence of dict, optional
+        ``SimulationResult.meta["tripped"]``: machines tripped (``t_s``, ``machines``).
+    timed : bool, optional
+        Each line starts with its time (default); False: without (a CCT search's
+        islanding, whose time is its probes' clearing instant).
+
+    Returns
+    -------
+    list of str
+    """
+    lines = []
+    for entry in sorted([*islanded, *tripped], key=lambda e: e["t_s"]):
+        at = f"at t = {entry['t_s']:g} s " if timed else ""
+        if "load_shed_pu" in entry:
+            P, Q = entry["load_shed_pu"]
+            lines.append(
+                f"{at}bus(es) {entry['buses']} islanded from every generator: de-energised, "
+                f"load shed {P * case.base_mva:.1f} MW, {Q * case.base_mva:.1f} Mvar"
+            )
+        elif "buses" in entry:
+            lines.append(
+                f"{at}bus(es) {entry['buses']} islanded with machine(s) "
+                f"{machine_list(case, entry['machines'])} apart from the main grid: "
+                "lost, out of the loss-of-synchronism criterion"
+            )
+        else:
+            lines.append(
+                f"{at}machine(s) {machine_list(case, entry['machines'])} tripped: out of "
+                "the loss-of-synchronism criterion"
+            )
+    return lines
+
+
 def print_cct(case, rating, d) -> None:
     """Print the `cct` result as text.
 

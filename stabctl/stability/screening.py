@@ -62,12 +62,17 @@ def verdict(rec: dict) -> str:
     return INSECURE if "unstable even when cleared instantly" in error else "failed"
 
 
+def _islanding(rec: dict) -> list[dict]:
+    """A CCT record's islanding log (`stabctl.dynamics.driver.islanding_log`), from a CCT
+    found or a verdict; empty when there is none or the search failed."""
+    return rec.get("islanded") or (rec.get("result") or {}).get("islanded") or []
+
+
 def islanded_buses(rec: dict) -> list[int]:
     """The buses a CCT record's contingency islands from every generator (their load shed,
     as PSS/E does; `stabctl.dynamics.driver.islanding_log`), from a CCT found or a verdict;
     empty when it islands none or the search failed."""
-    log = rec.get("islanded") or (rec.get("result") or {}).get("islanded") or []
-    return sorted({b for stage in log for b in stage["buses"]})
+    return sorted({b for e in _islanding(rec) if "machines" not in e for b in e["buses"]})
 
 
 def screen(

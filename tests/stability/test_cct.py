@@ -137,10 +137,30 @@ def test_custom_criterion_sees_whole_runs(kundur_pstess):
     assert len(seen) == res.n_simulations
 
 
-def test_losing_both_tie_circuits_is_unstable_even_when_cleared_instantly(kundur):
-    both = LineFault(3, 101, circuit=2, trips=((3, 101),))  # areas 1 and 2 islanded
-    with pytest.raises(InputError, match="3-101 also opened: unstable even when cleared instantly"):
-        critical_clearing_time(kundur, both)
+def own_coi_deviation(res, keep):
+    """abs(delta_i - delta_COI) of the machines `keep` (indices) against the COI of those
+    machines alone (paper eq. 40, weights H * MVA), computed here from the angles."""
+    M, a = res.inertia[keep], res.angle[:, keep]
+    return np.abs(a - (a @ M / M.sum())[:, None])
+
+
+def test_losing_both_tie_circuits_islands_an_area_and_judges_the_other(kundur):
+    """Opening both circuits of 3-101 splits Kundur into its areas, of equal inertia: area
+    2 (more buses) is the main grid, area 1 (G1, G2, buses 1-4, 10, 20) the island named
+    lost.  The line trip alone leaves G3 and G4 together (checked here against their own
+    COI), so the CCT is not 0: it is where the areas, still joined by the faulted circuit,
+    swing apart during the fault (G1 and G2 more than pi from the four machines' COI
+    before the clearing)."""
+    both = LineFault(3, 101, circuit=2, trips=((3, 101),))
+    res = critical_clearing_time(kundur, both, SearchOptions(tol=0.01, error_check=False))
+    assert res.islanded == ({"t_s": 1.0, "buses": [1, 2, 3, 4, 10, 20], "machines": [1, 2]},)
+    alone = kundur.run(both.events(0.0), 6.0)
+    assert own_coi_deviation(alone, [2, 3]).max() < 1.0 and alone.stable
+    late = kundur.run(both.events(res.t_unstable), 6.0)
+    joined = own_coi_deviation(late, [0, 1, 2, 3])
+    k = int(np.flatnonzero(joined.max(axis=1) > np.pi)[0])
+    assert late.t[k] < 1.0 + res.t_unstable and late.t_separation == late.t[k]
+    assert res.separated == (1, 2) and res.cct_s == 0.83
 
 
 def test_tripping_the_faulted_circuit_again_is_an_error(kundur):

@@ -90,9 +90,10 @@ def test_spectral_layout_is_finite_and_distinct():
     assert len({tuple(p.round(9)) for p in xy}) > 100
 
 
-#: Kundur's tie 3-101 faulted on circuit 2 with circuit 1 also opened: the two areas lose
-#: their last link, unstable however fast the fault is cleared (N-1 insecure)
-BOTH_TIES = LineFault(3, 101, circuit=2, trips=((3, 101),))
+#: Kundur's transformer 3-4 faulted at bus 3: its trip cuts load bus 4 from every
+#: generator (976 MW shed) and area 1 then loses synchronism however fast the fault is
+#: cleared (N-1 insecure; tests/dynamics/test_islands.py)
+LOAD_TRANSFORMER = LineFault(3, 4)
 
 
 def test_n1_insecure_is_a_verdict_not_a_failure(tmp_path):
@@ -105,7 +106,7 @@ def test_n1_insecure_is_a_verdict_not_a_failure(tmp_path):
     from stabctl.stability.screening import INSECURE, verdict
 
     out = tmp_path / "r.jsonl"
-    jobs = cct_jobs("kundur", [BOTH_TIES], search=SearchOptions(t_max=0.5))
+    jobs = cct_jobs("kundur", [LOAD_TRANSFORMER], search=SearchOptions(t_max=0.5))
     rep = run_sweep(jobs, out, workers=1)
     (rec,) = rep.records.values()
     assert rep.failed == 0 and rec["status"] == "verdict" and verdict(rec) == INSECURE
@@ -115,8 +116,8 @@ def test_n1_insecure_is_a_verdict_not_a_failure(tmp_path):
     # a record of the older form (status failed with the exception's text) reads the same
     old = {"status": "failed", "error": "InputError: " + rec["reason"]}
     assert verdict(old) == INSECURE
-    args = ["cct", "kundur", "--fault", 3, "--far-bus", 101, "--circuit", 2]
-    res = CliRunner().invoke(main, [*args, "--trip", 3, 101, "--json"])
+    args = ["cct", "kundur", "--fault", 3, "--far-bus", 4]
+    res = CliRunner().invoke(main, [*args, "--json"])
     assert res.exit_code == 0, res.output
     got = json.loads(res.stdout)
     assert (got["cct_s"], got["verdict"]) == (0.0, "N-1 insecure")
