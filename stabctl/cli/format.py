@@ -270,6 +270,8 @@ def print_cct(case, rating, d) -> None:
             f"storage (CCT {g['cct_without_storage_s']:.3f} s); their devices brake them "
             "against the other machines' COI, the other devices drive theirs after them"
         )
+    for line in islanding_lines(case, d.get("islanded", []), timed=False):
+        click.echo(f"the contingency's trip: {line}")
     if d["separated_machines"]:
         click.echo(
             f"machine(s) {machine_list(case, d['separated_machines'])} lose "
@@ -354,6 +356,11 @@ def print_screening(case, rows) -> None:
         where = f"bus {r['bus']}" + (f" line to {r['far_bus']}" if r["far_bus"] else "")
         if r.get("islanded"):
             click.echo(f"{where:<22} islands bus(es) {r['islanded']} (their load shed):")
+        if r.get("islanded_machines"):
+            click.echo(
+                f"{where:<22} islands machine(s) {machine_list(case, r['islanded_machines'])}"
+                f" with bus(es) {r['islanded_machine_buses']} (lost; the rest judged):"
+            )
         if r["status"] == "ok":
             err = "-" if r["numerical_error_s"] is None else f"{1000 * r['numerical_error_s']:g}"
             click.echo(
@@ -373,11 +380,13 @@ def print_screening(case, rows) -> None:
         else:
             click.echo(f"{where:<22} {'-':>7} {'-':>7} {'-':>6}  {r['error'][:70]}")
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
+    n_lost = sum(bool(r.get("islanded_machines")) for r in rows)
     click.echo(
         f"{len(rows)} fault(s): {counts['cct']} CCT(s) found, {counts[ABOVE]} above the "
         f"search limit (robust), {counts[INSECURE]} N-1 insecure (CCT 0), "
         f"{counts['failed']} failed; {sum(bool(r.get('islanded')) for r in rows)} island "
         "load buses (their load shed, counted in the verdicts above)"
+        + (f", {n_lost} island machines (lost; the verdicts judge the rest)" if n_lost else "")
     )
 
 
