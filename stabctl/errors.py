@@ -25,8 +25,9 @@ class Verdict(StabctlError):
 
     #: the verdict's label in records, tables and summaries
     label = "verdict"
-    #: buses the contingency islands from every generator (`SimulationResult.meta`
-    #: ``islanded``: t_s, buses, load_shed_pu per stage), set by the search; empty: none
+    #: the contingency's islanding (`SimulationResult.meta` ``islanded``: per stage the
+    #: buses cut from every generator, t_s, buses, load_shed_pu, and each island apart from
+    #: the main grid, t_s, buses, machines), set by the search; empty: none
     islanded: tuple = ()
 
 

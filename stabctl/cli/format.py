@@ -171,6 +171,50 @@ def machine_list(case, numbers) -> str:
     return ", ".join(case.machine_name(m) for m in numbers)
 
 
+def islanding_lines(case, islanded, tripped=(), timed: bool = True) -> list[str]:
+    """The islanding and trips of a run or a search, one line each, in time order.
+
+    Parameters
+    ----------
+    case : Case
+        The case (its machines named by number and bus, its base for the load shed).
+    islanded : sequence of dict
+        ``SimulationResult.meta["islanded"]`` (`stabctl.dynamics.driver.islanding_log`):
+        buses cut from every machine (``load_shed_pu``) or an island apart from the main
+        grid (``machines``).
+    tripped : sequence of dict, optional
+        ``SimulationResult.meta["tripped"]``: machines tripped (``t_s``, ``machines``).
+    timed : bool, optional
+        Each line starts with its time (default); False: without (a CCT search's
+        islanding, whose time is its probes' clearing instant).
+
+    Returns
+    -------
+    list of str
+    """
+    lines = []
+    for entry in sorted([*islanded, *tripped], key=lambda e: e["t_s"]):
+        at = f"at t = {entry['t_s']:g} s " if timed else ""
+        if "load_shed_pu" in entry:
+            P, Q = entry["load_shed_pu"]
+            lines.append(
+                f"{at}bus(es) {entry['buses']} islanded from every generator: de-energised, "
+                f"load shed {P * case.base_mva:.1f} MW, {Q * case.base_mva:.1f} Mvar"
+            )
+        elif "buses" in entry:
+            lines.append(
+                f"{at}bus(es) {entry['buses']} islanded with machine(s) "
+                f"{machine_list(case, entry['machines'])} apart from the main grid: "
+                "lost, out of the loss-of-synchronism criterion"
+            )
+        else:
+            lines.append(
+                f"{at}machine(s) {machine_list(case, entry['machines'])} tripped: out of "
+                "the loss-of-synchronism criterion"
+            )
+    return lines
+
+
 def print_cct(case, rating, d) -> None:
     """Print the `cct` result as text.
 
@@ -226,6 +270,8 @@ def print_cct(case, rating, d) -> None:
             f"storage (CCT {g['cct_without_storage_s']:.3f} s); their devices brake them "
             "against the other machines' COI, the other devices drive theirs after them"
         )
+    for line in islanding_lines(case, d.get("islanded", []), timed=False):
+        click.echo(f"the contingency's trip: {line}")
     if d["separated_machines"]:
         click.echo(
             f"machine(s) {machine_list(case, d['separated_machines'])} lose "
@@ -310,6 +356,11 @@ def print_screening(case, rows) -> None:
         where = f"bus {r['bus']}" + (f" line to {r['far_bus']}" if r["far_bus"] else "")
         if r.get("islanded"):
             click.echo(f"{where:<22} islands bus(es) {r['islanded']} (their load shed):")
+        if r.get("islanded_machines"):
+            click.echo(
+                f"{where:<22} islands machine(s) {machine_list(case, r['islanded_machines'])}"
+                f" with bus(es) {r['islanded_machine_buses']} (lost; the rest judged):"
+            )
         if r["status"] == "ok":
             err = "-" if r["numerical_error_s"] is None else f"{1000 * r['numerical_error_s']:g}"
             click.echo(
@@ -329,11 +380,13 @@ def print_screening(case, rows) -> None:
         else:
             click.echo(f"{where:<22} {'-':>7} {'-':>7} {'-':>6}  {r['error'][:70]}")
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
+    n_lost = sum(bool(r.get("islanded_machines")) for r in rows)
     click.echo(
         f"{len(rows)} fault(s): {counts['cct']} CCT(s) found, {counts[ABOVE]} above the "
         f"search limit (robust), {counts[INSECURE]} N-1 insecure (CCT 0), "
         f"{counts['failed']} failed; {sum(bool(r.get('islanded')) for r in rows)} island "
         "load buses (their load shed, counted in the verdicts above)"
+        + (f", {n_lost} island machines (lost; the verdicts judge the rest)" if n_lost else "")
     )
 
 

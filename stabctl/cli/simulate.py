@@ -10,6 +10,7 @@ import click
 from stabctl.cli.checks import OUT_SUFFIXES, PLOT_SUFFIXES, check_suffix
 from stabctl.cli.format import (
     describe_esd,
+    islanding_lines,
     machine_list,
     print_json,
     print_storage,
@@ -578,12 +579,10 @@ def simulate(
         click.echo(f"  {e}")
     for line in sim.suspect:
         click.echo(f"  initial condition suspect, run on: {line}")
-    for isl in result.meta.get("islanded", []):
-        P, Q = isl["load_shed_pu"]
-        click.echo(
-            f"  at t = {isl['t_s']:g} s bus(es) {isl['buses']} islanded from every generator: "
-            f"de-energised, load shed {P * case.base_mva:.1f} MW, {Q * case.base_mva:.1f} Mvar"
-        )
+    for line in islanding_lines(
+        case, result.meta.get("islanded", []), result.meta.get("tripped", [])
+    ):
+        click.echo(f"  {line}")
     if esd is not None:
         print_storage(esd, result)
     if result.stable:

@@ -14,7 +14,13 @@ from stabctl.cli.checks import (
     model_settings,
     search_settings,
 )
-from stabctl.cli.format import print_cct, print_json, print_screening, print_sweep
+from stabctl.cli.format import (
+    islanding_lines,
+    print_cct,
+    print_json,
+    print_screening,
+    print_sweep,
+)
 from stabctl.cli.options import (
     INT,
     check_number,
@@ -126,6 +132,9 @@ def cct(
     \b
     Criterion: unstable if a rotor angle leaves the centre of inertia (H*MVA weights) by
     more than pi rad before --tf (default fault time + 5 s); runs stop at separation.
+    A fault whose clearing cuts machines off the main grid (a generator's step-up
+    transformer) has the CCT, or the verdict, of the rest of the system: the islanded
+    machines are lost and named with their buses.
     Clearing times are multiples of --tol-ms.  --search bisection checks stability at
     zero clearing (the line trip alone), doubles the upper bound from 0.1 s while stable
     (up to --t-max), then bisects (the default).  --search sime starts at 0.1 s (doubled
@@ -197,10 +206,12 @@ def cct(
                     "cct_s": 0.0,
                     "verdict": exc.label,
                     "reason": str(exc),
+                    "islanded": list(exc.islanded),
                 }
             )
         else:
             click.echo(f"CCT 0 s, N-1 insecure: {exc}")
+            _echo_islanding(case, exc.islanded)
         return
     except AboveSearchLimit as exc:  # a verdict: the fault is robust up to --t-max
         if as_json:
@@ -211,10 +222,12 @@ def cct(
                     "cct_s": None,
                     "above_t_max_s": search.t_max,
                     "verdict": str(exc),
+                    "islanded": list(exc.islanded),
                 }
             )
         else:
             click.echo(f"CCT above the search limit: {exc}")
+            _echo_islanding(case, exc.islanded)
         return
     out = {"case": case.name, "esd_pct": esd_pct, "esd_model": esd_model}
     for key, value in res.to_dict().items():
@@ -232,6 +245,12 @@ def cct(
         print_json(out)
     else:
         print_cct(case, esd_pct, out)
+
+
+def _echo_islanding(case, islanded) -> None:
+    """Print a search's islanding (`stabctl.cli.format.islanding_lines`), one line each."""
+    for line in islanding_lines(case, islanded, timed=False):
+        click.echo(f"the contingency's trip: {line}")
 
 
 def _machine_buses(case, numbers) -> list[int]:
@@ -438,7 +457,9 @@ def screen(
     most critical first; a fault still stable when cleared at --t-max is robust (CCT
     above it, shown as ">t_max", its verdict "above t_max"); a failed search (e.g.
     voltage collapse during the fault) is listed with its reason, and the last line
-    counts each kind.
+    counts each kind.  A branch fault that islands load buses or machines names them
+    above its row (a machine islanded apart from the main grid is lost: the row's CCT
+    or verdict is the rest's), and the last line counts those too.
     """
     from stabctl.io import load_case
     from stabctl.parallel import RunnerOptions

@@ -5,11 +5,18 @@ turning its recording into a `SimulationResult`.
 Loss of synchronism: a machine's angle leaves the centre of inertia (eq. 40, weights H*MVA)
 of its island (the machines its network joins it to before the disturbance,
 `DynamicModel.island`) by more than `separation_limit` rad; the separated machines are the
-smaller coherent group (`separated_group`); the run can stop there.  A disturbance that
-splits the network is judged against the COI of the island before it: the parts it
-leaves drift apart, a separation.  A run that leaves the integrator's stability
-region raises NumericalInstabilityError naming the time and the state; a singular network
-raises SimulationError; both carry the trajectory up to that point.
+smaller coherent group (`separated_group`); the run can stop there.  A machine tripped, or
+cut off with its island from the main grid of its island before the disturbance (a
+generator's step-up transformer opened, a system split), is out of the criterion from
+that stage on, and the rest is judged against the COI of its own part of the network
+(`stabctl.dynamics.partition`): the result names the machines tripped and each island
+apart from the main grid with its buses and machines (lost, as PSS/E trips a generator
+whose breaker opened).  Such a run is integrated without the compiled loop's stop at
+separation (which knows the islands before the disturbance only), in pieces of
+`MONITOR_EVERY_S` when it is to stop there, and cut at the first separation found.  A run
+that leaves the integrator's stability region raises NumericalInstabilityError naming the
+time and the state; a singular network raises SimulationError; both carry the trajectory
+up to that point.
 """
 
 from __future__ import annotations
@@ -45,6 +52,14 @@ from stabctl.dynamics.model import (
     evaluate_address,
     evaluate_kernel,
     stacked_networks,
+)
+from stabctl.dynamics.partition import (
+    Partition,
+    judged_deviation,
+    machine_islands_log,
+    stage_at,
+    stage_partitions,
+    tripped_log,
 )
 from stabctl.dynamics.prefix import PREFIXES_KEPT, Prefix, integrate_from_cache, reach
 from stabctl.dynamics.results import SimulationResult
@@ -436,24 +451,28 @@ class Simulator:
         recorded = rows if method == "heun" else None  # the trapezoid records every bus
         prepared = self._prepare(events, t_end, h, storage, semantics, method, recorded)
         m, sa, grid, nets = prepared
+        parts = self.partitions(m, grid, nets)
         if method == "trapezoid":
-            res = trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation)
+            res = trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation, parts)
         else:
             pst = semantics == "pst"
             run = _Run(self, *prepared, pst, separation_limit, stop_at_separation, bus_rows=rows)
             verdict = None
-            if monitor is None and sa.kind != law.EXTERNAL:
+            if monitor is None and sa.kind != law.EXTERNAL and not run.watch:
                 integrate_from_cache(run, self._prefixes)
-            elif monitor is None:
+            elif monitor is None and not run.watch:
                 run.advance(grid.t.size - 1)
             else:
                 verdict = _advance_monitored(run, monitor)
             res = run.finish(storage)
             if verdict is not None:
                 res.meta["early_verdict"] = verdict
-        islanded = islanding_log(grid, nets)
+        islanded = islanding_log(grid, nets, self.case, parts)
         if islanded:
             res.meta["islanded"] = islanded
+        tripped = tripped_log(parts, self.case.machines.number)
+        if tripped:
+            res.meta["tripped"] = tripped
         if self.suspect:
             res.meta["suspect_starts"] = list(self.suspect)
         return res
@@ -547,6 +566,33 @@ class Simulator:
             return 0
         return int(np.isfinite(self.exciter_hmax(self.model, step)).sum())
 
+    def partitions(self, m: DynamicModel, grid, nets) -> tuple[Partition, ...]:
+        """The machines' islands stage by stage in a run of model m
+        (`stabctl.dynamics.partition.stage_partitions`): empty when no stage trips a
+        machine or splits an island.
+
+        Parameters
+        ----------
+        m : DynamicModel
+            One of this simulator's models (`model_for`).
+        grid : TimeGrid
+            The run's grid (its interval start times).
+        nets : sequence of ReducedNetwork
+            The network of each interval.
+
+        Returns
+        -------
+        tuple of Partition
+        """
+        return stage_partitions(
+            grid.starts,
+            [n.machine_island for n in nets],
+            [n.bus_island for n in nets],
+            self.island,
+            m.mp.H,
+            self.case.machines.mva,
+        )
+
     def _semantics(self, semantics: str | None) -> str:
         if semantics is None:
             return "pst" if self.conventions == "pstess" else "exact"
@@ -627,27 +673,38 @@ class Simulator:
         )
         for i, t_f in enumerate(frame_times[frame_times <= t_end]):
             k = int(np.searchsorted(grid.t, t_f - 1e-12))
+            k0 = run.k
             run.advance(k)
-            if run.status != ig.OK:
+            if run.status != ig.OK or run.separated_since(k0):
                 break
             run.command(
                 i,
                 t_f + latency,
                 np.asarray(frames.decide(float(t_f), run.partial(k, frames.history_s)), float),
             )
-        run.advance(grid.t.size - 1)
+        else:
+            run.advance(grid.t.size - 1)
         return run.finish(storage)
 
-    def _result(self, t, rec: ig.Recording, n, wall, limit, bus_rows=None) -> SimulationResult:
+    def _result(
+        self, t, rec: ig.Recording, n, wall, limit, bus_rows=None, partitions=()
+    ) -> SimulationResult:
         c = self.case
         angle = rec.angle[:n]
-        dev = np.abs(angle - coi_of_islands(angle, self.inertia, self.island))
+        if partitions:
+            dev = judged_deviation(angle, t[:n], self.inertia, self.island, partitions)
+        else:
+            dev = np.abs(angle - coi_of_islands(angle, self.inertia, self.island))
         lost = np.nonzero(dev.max(axis=1) > limit)[0]
         t_sep, separated = None, []
         if lost.size:
             k = int(lost[0])
             t_sep = float(t[k])
-            group = separated_group(angle[k], self.inertia, self.island)
+            if partitions:
+                now = partitions[int(stage_at(t[k : k + 1], partitions)[0])]
+                group = judged_group(angle[k], now)
+            else:
+                group = separated_group(angle[k], self.inertia, self.island)
             separated = [int(x) for x in c.machines.number[group]]
         return SimulationResult(
             t=t[:n].copy(),
@@ -668,6 +725,7 @@ class Simulator:
             stable=t_sep is None,
             t_separation=t_sep,
             separated=separated,
+            partitions=partitions,
             meta={
                 "case": c.name,
                 "conventions": self.conventions,
@@ -683,25 +741,31 @@ MONITOR_EVERY_S = 0.1
 
 
 def _advance_monitored(run: _Run, monitor) -> str | None:
-    """Advance `run` to its end in pieces of MONITOR_EVERY_S, calling `monitor` with the
-    trajectory so far after each; returns its first verdict (the run stops there) or None
-    (the run went to its end or stopped by itself).  Pausing does not change the
-    trajectory (`integrate` continues from its carry)."""
+    """Advance `run` to its end in pieces of MONITOR_EVERY_S, calling `monitor` (if any)
+    with the trajectory so far after each; returns its first verdict (the run stops there)
+    or None (the run went to its end or stopped by itself, or, watched for separation
+    (`_Run.watch`), separated in the last piece).  Pausing does not change the trajectory
+    (`integrate` continues from its carry)."""
     t, last = run.grid.t, run.grid.t.size - 1
     while run.k < last and run.status == ig.OK:
+        k0 = run.k
         k1 = min(int(np.searchsorted(t, t[run.k] + MONITOR_EVERY_S - 1e-12)), last)
         run.advance(max(k1, run.k + 1))
-        if run.status != ig.OK:
+        if run.status != ig.OK or run.separated_since(k0):
             return None
+        if monitor is None:
+            continue
         verdict = monitor(run.partial(run.k, np.inf, voltages=False))
         if verdict is not None:
             return verdict
     return None
 
 
-def islanding_log(grid, nets) -> list[dict]:
+def islanding_log(grid, nets, case: Case | None = None, partitions=()) -> list[dict]:
     """The buses each stage of a run newly cuts from every machine (de-energised, their
-    load shed: PSS/E's islanding, `stabctl.dynamics.model.Model.network`).
+    load shed: PSS/E's islanding, `stabctl.dynamics.model.Model.network`), and the islands
+    with machines it newly cuts off the main grid (their machines lost,
+    `stabctl.dynamics.partition`).
 
     Parameters
     ----------
@@ -709,13 +773,19 @@ def islanding_log(grid, nets) -> list[dict]:
         The run's grid (its interval start times).
     nets : sequence of ReducedNetwork
         The network of each interval.
+    case : Case or None, optional
+        The case run (its bus and machine numbers); needed with `partitions`.
+    partitions : sequence of Partition, optional
+        The run's partitions (`Simulator.partitions`); default none.
 
     Returns
     -------
     list of dict
-        One per stage that islands buses: ``t_s`` (its start, s), ``buses`` (numbers),
-        ``load_shed_pu`` (P and Q shed, [P, Q] pu on the system base).  Empty when no
-        stage islands a bus.
+        In stage order, per stage first the buses cut from every machine: ``t_s`` (its
+        start, s), ``buses`` (numbers), ``load_shed_pu`` (P and Q shed, [P, Q] pu on the
+        system base); then one per island apart from the main grid: ``t_s``, ``buses``
+        (the island's) and ``machines`` (its machine numbers).  Empty when no stage
+        islands a bus.
     """
     out, seen = [], set()
     for start, net in zip(grid.starts, nets):
@@ -730,6 +800,15 @@ def islanding_log(grid, nets) -> list[dict]:
                 }
             )
         seen = {b for b, _ in net.islanded}
+    if partitions and case is not None:
+        out += machine_islands_log(
+            partitions,
+            [n.bus_island for n in nets],
+            case.bus_indices(case.machines.bus),
+            case.buses.number.astype(int),
+            case.machines.number.astype(int),
+        )
+        out.sort(key=lambda entry: entry["t_s"])  # stable: a stage's dead buses first
     return out
 
 
@@ -831,8 +910,19 @@ class _Run:
         self.nets, self.steps = stacked_networks(nets, bus_rows), ig.step_grid(grid)
         #: the stages' networks (`stabctl.dynamics.prefix` tells a run's pre-event one by it)
         self.nets_list = nets
+        #: the machines' islands stage by stage when a stage trips a machine or splits an
+        #: island (`Simulator.partitions`), else empty
+        self.partitions = sim.partitions(m, grid, nets)
+        #: a run to stop at separation whose criterion the compiled loop cannot judge (it
+        #: knows the islands before the disturbance only): checked here between pieces
+        #: (`separated_since`) and cut at the separation (`finish`)
+        self.watch = bool(stop and self.partitions)
         self.opts = ig.RunOptions(
-            pst=pst, inertia=sim.inertia, island=sim.island, limit=limit, stop=stop
+            pst=pst,
+            inertia=sim.inertia,
+            island=sim.island,
+            limit=limit,
+            stop=stop and not self.watch,
         )
         self.limit = limit
         #: the model's parameters with the limiters' reach (`stabctl.dynamics.prefix.reach`)
@@ -882,6 +972,17 @@ class _Run:
             self.evaluate or 0,
         )
 
+    def separated_since(self, k0: int) -> bool:
+        """Whether a watched run (`watch`) has separated (`judged_deviation` above the
+        limit) at a grid index from k0 to the last stored one; False for a run that is not
+        watched."""
+        if not self.watch:
+            return False
+        n, sim = self.k + 1, self.sim
+        angle, t = self.rec.angle[k0:n], self.grid.t[k0:n]
+        dev = judged_deviation(angle, t, sim.inertia, sim.island, self.partitions)
+        return bool(np.any(dev > self.limit))
+
     def command(self, i: int, t_apply: float, modes) -> None:
         """Schedule command i: device set-points (units of each rating) from t_apply (s)."""
         ds = self.carry.devices
@@ -911,21 +1012,37 @@ class _Run:
             island=self.sim.island,
             devices=np.arange(1, self.sa.pmax.size + 1),
             pesd=self.rec.P[lo:n],
+            partitions=self.partitions,
         )
 
     def finish(self, storage) -> SimulationResult:
-        """The result; raises SimulationError (with the partial result) after a divergence."""
+        """The result; raises SimulationError (with the partial result) after a divergence.
+        A watched run (`watch`) ends at its first separation, as the compiled loop's stop
+        ends the others: its switching log too, its storage figures (switchings, energies,
+        counted by the compiled loop) up to the last piece integrated
+        (`_advance_monitored`, at most MONITOR_EVERY_S later)."""
         sim, g, k_end = self.sim, self.grid, self.k
-        res = sim._result(g.t, self.rec, k_end + 1, self.wall, self.limit, self.bus_rows)
+        res = sim._result(
+            g.t, self.rec, k_end + 1, self.wall, self.limit, self.bus_rows, self.partitions
+        )
+        if self.watch and not res.stable:
+            k_end = int(np.flatnonzero(res.t == res.t_separation)[0])
+            res = sim._result(
+                g.t, self.rec, k_end + 1, self.wall, self.limit, self.bus_rows, self.partitions
+            )
+            self.status = ig.SEPARATED
         if storage is not None:
             log = self.rec.log
+            log = log[~np.isnan(log[:, 0])]
+            if self.status == ig.SEPARATED and self.watch:
+                log = log[log[:, 0] <= g.t[k_end]]
             _attach_storage(
                 res,
                 storage,
                 self.rec.P[: k_end + 1],
                 self.rec.stats,
                 sim.case.base_mva,
-                log[~np.isnan(log[:, 0])],
+                log,
                 sim.case.freq_hz,
                 sim.battery_rows,
             )
@@ -1017,6 +1134,26 @@ def separated_group(
     m_lag, m_lead = inertia[lagging].sum(), inertia[leading].sum()
     group = leading if m_lead <= m_lag * (1 + 1e-9) else lagging
     return np.sort(group)
+
+
+def judged_group(delta: np.ndarray, partition: Partition) -> np.ndarray:
+    """The machines that lost synchronism (`separated_group`) among those a partition
+    judges (`stabctl.dynamics.partition.Partition`), against its islands.
+
+    Parameters
+    ----------
+    delta : ndarray, shape (n_mac,)
+        Rotor angles, rad.
+    partition : Partition
+        The machines' islands at that time.
+
+    Returns
+    -------
+    ndarray of int
+        Machine indices (0-based), sorted.
+    """
+    on = np.flatnonzero(partition.judged)
+    return on[separated_group(delta[on], partition.inertia[on], partition.island[on])]
 
 
 def voltage_rows(case: Case, voltages) -> np.ndarray | None:

@@ -310,7 +310,8 @@ class DynamicModel:
         )
         online = np.ones(self.mp.n, bool)
         online[list(config.tripped_machines)] = False
-        dead = _islanded(stage, self.mp.bus_idx[online], case.n_bus)
+        label = bus_islands(_check_machines(stage))
+        dead = _islanded(label, self.mp.bus_idx[online], case.n_bus)
         if dead.size:  # PSS/E: the island is de-energised, its load and shunts shed
             self._check_sheddable(dead)
             bus[dead, 7], bus[dead, 8] = 0.0, -FAULT_B  # grounded as by a bolted fault:
@@ -336,7 +337,15 @@ class DynamicModel:
             steps[self.ep.n + np.flatnonzero(self.gp.mac == m)] += dp
         shed = case.buses.pload[dead] + 1j * case.buses.qload[dead]
         islanded = tuple((int(case.buses.number[b]), complex(shed[k])) for k, b in enumerate(dead))
-        return replace(net, switched_on=on, targets=targets, steps=steps, islanded=islanded)
+        return replace(
+            net,
+            switched_on=on,
+            targets=targets,
+            steps=steps,
+            islanded=islanded,
+            bus_island=label[: case.n_bus].astype(np.int64),
+            machine_island=np.where(online, label[self.mp.bus_idx], -1).astype(np.int64),
+        )
 
     def _pre_event_factor(self, config: StageConfig):
         """The pre-event network's sparse reduction (`ReducedNetwork.factor`) for a stage
@@ -1314,15 +1323,20 @@ def _warn_netted(case: Case, has_mac: np.ndarray, S_free: np.ndarray) -> None:
     )
 
 
-def _islanded(stage: Case, source_buses: np.ndarray, n_orig: int) -> np.ndarray:
-    """Indices (< n_orig) of the buses a stage leaves without a path to any online
-    machine (source_buses: their bus indices); InputError for a case without machines."""
+def _check_machines(stage: Case) -> Case:
+    """The stage; InputError for a case without machines."""
     if len(stage.machines) == 0:
         raise InputError(
             f"case '{stage.name}' has no machines (mac_con is empty): a dynamic "
             "run or linearisation needs at least one"
         )
-    label = bus_islands(stage)
+    return stage
+
+
+def _islanded(label: np.ndarray, source_buses: np.ndarray, n_orig: int) -> np.ndarray:
+    """Indices (< n_orig) of the buses a stage leaves without a path to any online
+    machine (label: the stage's bus islands, `bus_islands`; source_buses: the online
+    machines' bus indices)."""
     live = np.isin(label, label[source_buses])
     return np.nonzero(~live[:n_orig])[0]
 

@@ -17,7 +17,16 @@ from pathlib import Path
 import numpy as np
 
 from stabctl.dynamics.coi import coi_angle, coi_of_islands, coi_speed
+from stabctl.dynamics.partition import (
+    Partition,
+    judged_deviation,
+    relative_to_islands,
+    stage_at,
+)
 from stabctl.parallel import atomic_write
+
+#: the `Partition` fields written to a .npz (`SimulationResult.to_npz`), in its order
+PARTITION_FIELDS = ("t_s", "island", "inertia", "judged", "tripped")
 
 SERIES = ("speed", "angle", "pelect", "pmech", "efd")
 SERIES_UNITS = {
@@ -38,7 +47,10 @@ class SimulationResult:
     both ends at the same instant, as PSTess), n_mac the number of machines, n_bus
     of buses, n_dev of storage devices.
     The loss-of-synchronism verdict uses the centre of inertia (paper eq. 40, weights
-    `inertia`) of each machine's island (`island`; one in a connected network).
+    `inertia`) of each machine's island (`island`; one in a connected network); once a
+    run's events trip machines or cut islands apart, that of each stage's islands, judging
+    only the machines in service in the main grid (`partitions`,
+    `stabctl.dynamics.partition`).
 
     Attributes
     ----------
@@ -92,7 +104,15 @@ class SimulationResult:
         Run description: ``case``, ``conventions``, ``wall_time_s`` (s),
         ``max_initial_derivative`` and its state, and with storage ``switchings`` (the
         switching log, see `switching_records`) and ``storage`` (per-device figures:
-        switchings, chattering, energy absorbed / delivered in MJ, peak power in MW).
+        switchings, chattering, energy absorbed / delivered in MJ, peak power in MW); with
+        islanding ``islanded`` (per stage: buses cut from every machine with the load
+        shed, or an island apart from the main grid with its buses and machines,
+        `stabctl.dynamics.driver.islanding_log`) and with machines tripped ``tripped``
+        (per stage: time and machine numbers).
+    partitions : tuple of Partition, optional
+        The machines' islands stage by stage (`stabctl.dynamics.partition.Partition`)
+        when the run trips machines or splits an island; empty (default) otherwise, every
+        machine then judged against `island`'s COI throughout.
     """
 
     t: np.ndarray
@@ -116,6 +136,7 @@ class SimulationResult:
     t_separation: float | None = None
     separated: list = field(default_factory=list)
     meta: dict = field(default_factory=dict)
+    partitions: tuple[Partition, ...] = ()
 
     def __post_init__(self) -> None:
         if self.island.size == 0:
@@ -137,20 +158,52 @@ class SimulationResult:
     @property
     def relative_angle(self) -> np.ndarray:
         """delta_i - delta_COI of machine i's island (rad), shape (n_t, n_mac): what the
-        loss-of-synchronism verdict judges."""
-        return self.angle - coi_of_islands(self.angle, self.inertia, self.island)
+        loss-of-synchronism verdict judges (with `partitions`, the island of the stage at
+        each time; 0 for a tripped machine)."""
+        return relative_to_islands(self.angle, self.t, self.inertia, self.island, self.partitions)
 
     @property
     def relative_speed(self) -> np.ndarray:
         """omega_i - omega_COI of machine i's island (pu), shape (n_t, n_mac): what a
-        storage device's controller acts on."""
+        storage device's controller acts on (the islands before the disturbance, as the
+        simulator's controllers, also after a trip or a split)."""
         return self.speed - coi_of_islands(self.speed, self.inertia, self.island)
 
     @property
     def max_angle_spread(self) -> float:
         """Largest abs(delta_i - delta_COI) over the run, each machine against its
-        island's COI (rad)."""
-        return float(np.max(np.abs(self.relative_angle)))
+        island's COI (rad); with `partitions`, over the machines the criterion judges
+        (`judged_angle`)."""
+        if not self.partitions:
+            return float(np.max(np.abs(self.relative_angle)))
+        return float(np.max(self.judged_angle))
+
+    @property
+    def judged_angle(self) -> np.ndarray:
+        """abs(delta_i - delta_COI) of the machines the loss-of-synchronism criterion
+        judges (rad), shape (n_t, n_mac), 0 for the others (tripped, or islanded apart from
+        the main grid: `stabctl.dynamics.partition.judged_deviation`)."""
+        return judged_deviation(self.angle, self.t, self.inertia, self.island, self.partitions)
+
+    @property
+    def judged(self) -> np.ndarray:
+        """The machines the criterion judges at the end of the run, bool (n_mac,): every
+        machine without `partitions`."""
+        last = self.last_partition()
+        return np.ones(self.machines.size, bool) if last is None else last.judged.copy()
+
+    def last_partition(self) -> Partition | None:
+        """The partition of the last recorded time (`partitions`).
+
+        Returns
+        -------
+        Partition or None
+            None without partitions.
+        """
+        if not self.partitions:
+            return None
+        t = self.t[-1:] if self.t.size else np.zeros(1)
+        return self.partitions[int(stage_at(t, self.partitions)[0])]
 
     def speed_at(self, t: np.ndarray) -> np.ndarray:
         """Rotor speeds at given times, by linear interpolation in the trajectory.
@@ -329,7 +382,8 @@ class SimulationResult:
 
     def to_npz(self, path: str | os.PathLike) -> Path:
         """Write every array and the verdict to a compressed .npz, atomically (temporary
-        file beside it, then rename); `meta` is not written.
+        file beside it, then rename); `meta` is not written, `partitions` (if any) as one
+        array per field (``partition_t_s``, ``partition_island``, ...).
 
         Parameters
         ----------
@@ -346,6 +400,9 @@ class SimulationResult:
             arrays.pop("converters", None)
         arrays["verdict"] = np.array([self.stable, self.t_separation or np.nan], float)
         arrays["separated"] = np.asarray(self.separated, int)
+        if self.partitions:  # files of runs without trips or splits as before
+            for name in PARTITION_FIELDS:
+                arrays[f"partition_{name}"] = np.array([getattr(p, name) for p in self.partitions])
         return atomic_write(path, lambda f: np.savez_compressed(f, **arrays), mode="wb")
 
     @classmethod
@@ -366,6 +423,15 @@ class SimulationResult:
             d = {k: z[k] for k in z.files}
         stable, tsep = d.pop("verdict")
         sep = list(d.pop("separated"))
+        parts = {name: d.pop(f"partition_{name}", ()) for name in PARTITION_FIELDS}
+        partitions = tuple(
+            Partition(float(t), island, inertia, judged.astype(bool), tripped.astype(bool))
+            for t, island, inertia, judged, tripped in zip(*parts.values())
+        )
         return cls(
-            **d, stable=bool(stable), t_separation=None if np.isnan(tsep) else tsep, separated=sep
+            **d,
+            stable=bool(stable),
+            t_separation=None if np.isnan(tsep) else tsep,
+            separated=sep,
+            partitions=partitions,
         )

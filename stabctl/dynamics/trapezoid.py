@@ -97,6 +97,7 @@ from stabctl.dynamics.model import (
     kernel_network,
     kernel_outputs,
 )
+from stabctl.dynamics.partition import judged_deviation
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import NumericalInstabilityError, SimulationError
 from stabctl.network.solution import V_RELEASE, L
@@ -428,7 +429,9 @@ class _Step:
         return self.halving(y, f_y, stage, 0.5 * h, self.start(f_y), depth + 1)
 
 
-def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> SimulationResult:
+def run(
+    sim, m: DynamicModel, grid, nets, limit: float, stop: bool, partitions=()
+) -> SimulationResult:
     """Integrate the grid's steps with the trapezoidal rule (module docstring).
 
     Parameters
@@ -445,6 +448,10 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
         Loss of synchronism: an angle more than this from its island's COI (rad, eq. 40).
     stop : bool
         End the run at the first step after which the limit is exceeded.
+    partitions : sequence of Partition, optional
+        The machines' islands stage by stage when the run trips machines or splits an
+        island (`stabctl.dynamics.driver.Simulator.partitions`): the limit is judged
+        against them; default none.
 
     Returns
     -------
@@ -470,10 +477,10 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
         try:
             f_x = f(x, s, BUS_VOLTAGES)
         except SimulationError as e:
-            _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
+            _fail(sim, grid, rec, k, wall, limit, e, SimulationError, partitions)
         _record(rec, k, x, f.out, nm)
         h = float(grid.t[k + 1] - grid.t[k]) if k + 1 < n_t else 0.0
-        if k + 1 == n_t or (stop and _separated(sim, x, nm, limit)):
+        if k + 1 == n_t or (stop and _separated(sim, x, nm, limit, partitions, grid.t[k])):
             break
         if h == 0.0:
             continue
@@ -482,12 +489,12 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
             x, bad = step.halving(x, f_x, s, h, step.start(f_x) if s == s_step else None)
             s_step = s
         except SimulationError as e:
-            _fail(sim, grid, rec, k, wall, limit, e, SimulationError)
+            _fail(sim, grid, rec, k, wall, limit, e, SimulationError, partitions)
         finally:
             f.lock(False)
         if bad == NO_NETWORK:
             why = "the network/load equations did not converge"
-            _fail(sim, grid, rec, k, wall, limit, why, SimulationError)
+            _fail(sim, grid, rec, k, wall, limit, why, SimulationError, partitions)
         why = "Newton's iteration did not converge"
         if bad < 0:
             bad = _unhealthy_state(x, nm)
@@ -498,8 +505,8 @@ def run(sim, m: DynamicModel, grid, nets, limit: float, stop: bool) -> Simulatio
                 f" state {m.state_name(bad)} = {x[bad]:.6g} ({why}); use a smaller step"
                 f" (trajectory kept up to {grid.t[k]:.4f} s)"
             )
-            _fail(sim, grid, rec, k, wall, limit, msg, NumericalInstabilityError)
-    return sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit)
+            _fail(sim, grid, rec, k, wall, limit, msg, NumericalInstabilityError, partitions)
+    return sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit, None, partitions)
 
 
 def _too_slow(before, now, it) -> bool:
@@ -558,8 +565,13 @@ def _column_groups(m: DynamicModel, act: np.ndarray) -> list[tuple[np.ndarray, l
     return groups
 
 
-def _separated(sim, x, nm, limit) -> bool:
+def _separated(sim, x, nm, limit, partitions=(), t=0.0) -> bool:
+    """Whether an angle of state x at time t (s) is more than limit from its island's COI
+    (with partitions, among the machines judged then)."""
     angle = x[:nm]
+    if partitions:
+        dev = judged_deviation(angle[None], np.array([t]), sim.inertia, sim.island, partitions)
+        return bool(np.max(dev) > limit)
     return bool(np.max(np.abs(angle - coi_of_islands(angle, sim.inertia, sim.island))) > limit)
 
 
@@ -573,8 +585,8 @@ def _unhealthy_state(x, nm) -> int:
     return q if abs(x[q] - 1.0) > SPEED_BAND else -1
 
 
-def _fail(sim, grid, rec, k, wall, limit, why, error) -> None:
-    res = sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit)
+def _fail(sim, grid, rec, k, wall, limit, why, error, partitions=()) -> None:
+    res = sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit, None, partitions)
     if error is SimulationError:
         why = (
             f"case '{sim.case.name}': {why} in the step ending at t = "

@@ -70,7 +70,10 @@ class ReducedNetwork:
     exciter's VREF change (pu), then each governor's PREF change (pu on its machine's base) in
     this stage (VrefStep / PrefStep events; empty: none); islanded: (bus number, load P + jQ
     shed, pu system base) of each bus the stage cuts from every machine, de-energised (PSS/E's
-    islanding: its load and shunts shed, its voltage 0).
+    islanding: its load and shunts shed, its voltage 0); bus_island (n_bus,) int: each bus's
+    island in this stage's network (`stabctl.network.topology.bus_islands`; empty: not
+    computed); machine_island (n_mac,) int: the island of each machine's bus, -1 for a
+    tripped machine (empty: not computed).
     """
 
     Y11: np.ndarray
@@ -85,6 +88,8 @@ class ReducedNetwork:
     targets: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     steps: np.ndarray = field(default_factory=lambda: np.zeros(0))
     islanded: tuple = ()
+    bus_island: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    machine_island: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     factor: lowrank.SparseReduction | None = None
 
 

@@ -16,6 +16,14 @@ inertia (paper eq. 40, weights H*MVA) by more than `separation_limit` (pi rad) b
 Kundur and miniWECC).  Any callable(SimulationResult) -> bool (True = stable) can replace
 it (its runs then go to the end).
 
+Islanding: a fault whose clearing cuts a machine, or a group of machines, off the main
+grid (a generator's step-up transformer opened, a system split) has the CCT of the rest
+of the system: the longest clearing time for which the machines left in the main grid
+stay in synchronism, the islanded machines counted as lost (as PSS/E trips a generator
+whose breaker opened; `stabctl.dynamics.partition`) and named with their island's buses
+in `CCTResult.islanded` (and a verdict's ``islanded``); N-1 insecure then means that the
+main grid loses synchronism even when the fault is cleared at once.
+
 Two searches (`SearchOptions.method`), both on the lattice below:
 
 - "bisection" (the default): stable at t_lo, the upper bound doubled from 0.1 s while
@@ -196,7 +204,10 @@ class CCTResult:
     search_bracket: the (stable, unstable) interval the bisection started from, after the
     bound checks and expansion.  probes: every (clearing time s, stable) simulated, in
     order.  separated: machines that lose synchronism when cleared at t_unstable (empty if
-    the criterion failed without separation).  step_s: integration step h; wall_time_s:
+    the criterion failed without separation).  islanded: the islanding of the first probe
+    that islands (`stabctl.dynamics.driver.islanding_log`: buses cut from every machine,
+    their load shed, or an island with machines apart from the main grid, those machines
+    lost and the CCT that of the rest; empty: none).  step_s: integration step h; wall_time_s:
     the whole search.  cct_half_step_s: the CCT at h/2 (module docstring; None when the
     check was not asked for), half_step_probes: its runs; conventions: the model's.
     n_simulations: every run of the search (probes and half_step_probes); early_stops:

@@ -62,12 +62,42 @@ def verdict(rec: dict) -> str:
     return INSECURE if "unstable even when cleared instantly" in error else "failed"
 
 
+def _islanding(rec: dict) -> list[dict]:
+    """A CCT record's islanding log (`stabctl.dynamics.driver.islanding_log`), from a CCT
+    found or a verdict; empty when there is none or the search failed."""
+    return rec.get("islanded") or (rec.get("result") or {}).get("islanded") or []
+
+
 def islanded_buses(rec: dict) -> list[int]:
     """The buses a CCT record's contingency islands from every generator (their load shed,
     as PSS/E does; `stabctl.dynamics.driver.islanding_log`), from a CCT found or a verdict;
     empty when it islands none or the search failed."""
-    log = rec.get("islanded") or (rec.get("result") or {}).get("islanded") or []
-    return sorted({b for stage in log for b in stage["buses"]})
+    return sorted({b for e in _islanding(rec) if "machines" not in e for b in e["buses"]})
+
+
+def islanded_machines(rec: dict) -> tuple[list[int], list[int]]:
+    """The machines a CCT record's contingency cuts off, in islands apart from the main
+    grid, and those islands' buses (`stabctl.dynamics.partition`: the machines lost, the
+    CCT or verdict that of the rest of the system).
+
+    Parameters
+    ----------
+    rec : dict
+        A CCT record (a CCT found or a verdict).
+
+    Returns
+    -------
+    machines : list of int
+        Machine numbers, sorted; empty when the contingency islands none or the search
+        failed.
+    buses : list of int
+        The islands' bus numbers, sorted.
+    """
+    log = [e for e in _islanding(rec) if "machines" in e]
+    return (
+        sorted({m for e in log for m in e["machines"]}),
+        sorted({b for e in log for b in e["buses"]}),
+    )
 
 
 def screen(
@@ -101,8 +131,11 @@ def screen(
     list of dict
         One row per fault: key, bus, far_bus, status, verdict (`verdict`; with
         :data:`ABOVE` the search's limit ``t_max_s``; with :data:`INSECURE` CCT 0 and the
-        reason), CCT (s and cycles) with its numerical error (s), separated machines,
-        simulations, or the error.
+        reason), the buses it islands from every generator (``islanded``) and the
+        machines it cuts off the main grid with their islands' buses
+        (``islanded_machines``, ``islanded_machine_buses``: `islanded_machines`), CCT (s
+        and cycles) with its numerical error (s), separated machines, simulations, or the
+        error.
 
     Raises
     ------
@@ -128,6 +161,7 @@ def screen(
         }
         row["verdict"] = verdict(rec)
         row["islanded"] = islanded_buses(rec)
+        row["islanded_machines"], row["islanded_machine_buses"] = islanded_machines(rec)
         if row["verdict"] == ABOVE:
             row["t_max_s"] = search.t_max
         if row["verdict"] == INSECURE:

@@ -46,7 +46,9 @@ class OmibEquivalent:
     """The OMIB of one run: t (n_t,) s; delta (n_t,) rad and omega (n_t,) electrical rad/s
     oriented so that the critical group runs away in +delta; M (pu*s^2/rad); critical:
     machine numbers of C; sigma: +1 if C leads N, -1 if it lags; in_critical (n_mac,) bool;
-    M_machine (n_mac,) pu*s^2/rad of every machine."""
+    M_machine (n_mac,) pu*s^2/rad of every machine; in_rest (n_mac,) bool, the machines of
+    N, or None: every machine not in C (none tripped nor islanded apart from the main
+    grid, `omib_equivalent`)."""
 
     t: np.ndarray
     delta: np.ndarray
@@ -56,42 +58,53 @@ class OmibEquivalent:
     sigma: int
     in_critical: np.ndarray
     M_machine: np.ndarray
+    in_rest: np.ndarray | None = None
 
     def group_weights(self, beta: np.ndarray) -> np.ndarray:
         """g (n_dev,): effect of 1 pu drawn by each ESD on the OMIB accelerating power
         (dimensionless; beta (n_mac, n_dev) as `distribution_factors`)."""
         C, Mk = self.in_critical, self.M_machine
-        return self.M * (beta[C].sum(axis=0) / Mk[C].sum() - beta[~C].sum(axis=0) / Mk[~C].sum())
+        N = ~C if self.in_rest is None else self.in_rest
+        return self.M * (beta[C].sum(axis=0) / Mk[C].sum() - beta[N].sum(axis=0) / Mk[N].sum())
 
 
 def critical_machines(result: SimulationResult) -> list[int]:
     """Machines that lost synchronism (`result.separated`); after a divergence without
     separation, the smaller coherent group at the last computed point (largest angle gap,
-    as `stabctl.dynamics.driver.separated_group`)."""
+    as `stabctl.dynamics.driver.separated_group`), among the machines the criterion judges
+    there (`SimulationResult.judged`: not tripped nor islanded apart from the main grid)."""
     if result.separated:
         return [int(k) for k in result.separated]
-    from stabctl.dynamics.driver import separated_group
+    from stabctl.dynamics.driver import judged_group, separated_group
 
+    last = result.last_partition()
+    if last is not None:
+        return [int(k) for k in result.machines[judged_group(result.angle[-1], last)]]
     return [int(k) for k in result.machines[separated_group(result.angle[-1], result.inertia)]]
 
 
 def omib_equivalent(
     result: SimulationResult, critical, base_mva: float, freq_hz: float
 ) -> OmibEquivalent:
-    """The OMIB of `result` for the critical machines `critical` (numbers).
+    """The OMIB of `result` for the critical machines `critical` (numbers), against the
+    rest of the machines the criterion judges at the end of the run
+    (`SimulationResult.judged`: every machine, but those tripped or islanded apart from
+    the main grid).
 
-    Raises InputError when the critical group is empty or holds every machine.
+    Raises InputError when the critical group is empty or holds every judged machine.
     """
     C = np.isin(result.machines, list(critical))
-    if not C.any() or C.all():
+    judged = result.judged
+    N = ~C & judged
+    if not C.any() or not N.any():
         raise InputError(
             f"critical group {list(critical)} must be a proper, non-empty subset of the machines"
         )
     ws = 2 * np.pi * freq_hz
     Mk = 2 * np.asarray(result.inertia, float) / (base_mva * ws)
-    MC, MN = Mk[C].sum(), Mk[~C].sum()
-    delta = coi_angle(result.angle[:, C], Mk[C]) - coi_angle(result.angle[:, ~C], Mk[~C])
-    omega = ws * (coi_speed(result.speed[:, C], Mk[C]) - coi_speed(result.speed[:, ~C], Mk[~C]))
+    MC, MN = Mk[C].sum(), Mk[N].sum()
+    delta = coi_angle(result.angle[:, C], Mk[C]) - coi_angle(result.angle[:, N], Mk[N])
+    omega = ws * (coi_speed(result.speed[:, C], Mk[C]) - coi_speed(result.speed[:, N], Mk[N]))
     sigma = 1 if delta[-1] >= delta[0] else -1
     return OmibEquivalent(
         t=result.t,
@@ -102,6 +115,7 @@ def omib_equivalent(
         sigma=sigma,
         in_critical=C,
         M_machine=Mk,
+        in_rest=None if judged.all() else N,
     )
 
 
@@ -292,18 +306,32 @@ class EarlyVerdict:
     settle_s: float = 0.5
 
     def __call__(self, result: SimulationResult) -> str | None:
-        """ "unstable", "stable" or None (not certain yet) for the trajectory so far."""
+        """ "unstable", "stable" or None (not certain yet) for the trajectory so far.
+
+        A run whose events trip machines or cut islands apart (`result.partitions`) is
+        judged as its criterion judges it: on the machines in service in the main grid,
+        against the COI of their islands, from the start of the last stage on (or the
+        clearing, if later); None while fewer than two machines are judged."""
         t = result.t
         k_cl = max(int(np.searchsorted(t, self.t_clear + 1e-9)) - 1, 0)
         if t[-1] - self.t_clear < 2 * self.confirm_s:
             return None
-        angle, speed = result.angle[k_cl:], result.speed[k_cl:]
         inertia, island = np.asarray(result.inertia, float), result.island
+        every_angle, every_speed = result.angle, result.speed
+        last = result.last_partition()
+        if last is not None:  # the machines judged now, since their islands were formed
+            on = np.flatnonzero(last.judged)
+            k_cl = max(k_cl, int(np.searchsorted(t, last.t_s)))
+            if on.size < 2 or t[-1] - t[k_cl] < 2 * self.confirm_s:
+                return None
+            inertia, island = last.inertia[on], last.island[on]
+            every_angle, every_speed = result.angle[:, on], result.speed[:, on]
+        angle, speed = every_angle[k_cl:], every_speed[k_cl:]
         from stabctl.dynamics.driver import separated_group
 
         # the cheap tests first (the last point, the last settle_s): most calls stop there
         rel = angle[-1] - coi_of_islands(angle[-1], inertia, island)
-        pre = result.angle[0] - coi_of_islands(result.angle[0], inertia, island)
+        pre = every_angle[0] - coi_of_islands(every_angle[0], inertia, island)
         rel_speed = speed[-1] - coi_of_islands(speed[-1], inertia, island)
         if np.abs(rel - pre).max() > self.min_excursion and self._runs_away(
             rel, rel_speed, float(t[-1])

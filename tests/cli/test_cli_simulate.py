@@ -399,6 +399,30 @@ def test_pss_e_study_events_in_any_number_and_order():
     assert "  PREF of machine 1 stepped by +0.05 pu at 4 s" in text.stdout.splitlines()
 
 
+def test_a_tripped_machine_is_named_and_not_a_separation():
+    """`--trip-gen 4 1`: G4 out of service from 1 s.  Its rotor runs away, but the machines
+    left in service stay within pi of their own COI (checked here from the angles): the
+    run is stable, no machine separates, and --json and the text name G4 as tripped."""
+    import numpy as np
+
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import GeneratorTrip
+
+    args = ("simulate", "kundur", "--trip-gen", 4, 1, "--tf", 3)
+    res = run(*args, "--json")
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert s["stable"] is True and s["separated_machines"] == []
+    assert s["tripped"] == [{"t_s": 1.0, "machines": [4]}]
+    lib = Simulator(load_case("kundur")).run([GeneratorTrip(4, 1.0)], 3.0)
+    M, a = lib.inertia[:3], lib.angle[:, :3]
+    rest = np.abs(a - (a @ M / M.sum())[:, None]).max()
+    assert rest < np.pi and s["max_angle_spread_rad"] == pytest.approx(rest, rel=1e-12)
+    text = run(*args).stdout
+    assert "  at t = 1 s machine(s) G4 (bus 12) tripped: out of the loss-of-synchronism" in text
+    assert "stable: largest angle from the COI 0.9477 rad" in text and "separate" not in text
+
+
 def test_study_events_match_the_library(tmp_path):
     """The CLI's events are the library's: a fault through j0.05 pu and a PREF step give the
     same trajectories as `Simulator.run` with Fault(r=0, x=0.05) and PrefStep."""

@@ -137,3 +137,143 @@ def test_a_trip_that_islands_a_load_bus_sheds_its_load_as_pss_e(kundur):
     assert np.all(res.speed[-1, area1] > res.speed[-1, [2, 3]])  # area 1 lost its load
     flat = sim.run([], 3.0)
     assert "islanded" not in flat.meta
+
+
+# ------------------------------------------ machines tripped or islanded from the main grid
+
+
+def own_coi_deviation(res, keep):
+    """abs(delta_i - delta_COI) of the machines `keep` (indices) against the COI of those
+    machines alone (paper eq. 40, weights H * MVA), computed here from the angles."""
+    M = res.inertia[keep]
+    a = res.angle[:, keep]
+    return np.abs(a - (a @ M / M.sum())[:, None])
+
+
+def test_a_tripped_machine_is_out_of_the_loss_of_synchronism_criterion(kundur):
+    """Kundur's G4 tripped at 1 s: out of service, its rotor runs away (more than pi from
+    the four machines' COI by 3 s), but G1-G3 stay within 0.95 rad of their own COI: the
+    run is stable, no machine separated, G4 named as tripped, and the angle spread is the
+    three machines'."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import GeneratorTrip
+
+    res = Simulator(kundur).run([GeneratorTrip(4, 1.0)], 3.0)
+    everyone = np.abs(res.angle - coi_of_islands(res.angle, res.inertia, np.zeros(4, int)))
+    assert everyone[:, 3].max() > np.pi  # the tripped machine's angle means nothing
+    rest = own_coi_deviation(res, [0, 1, 2])
+    assert 0.9 < rest.max() < 1.0
+    assert res.stable and res.separated == [] and res.t_separation is None
+    assert res.meta["tripped"] == [{"t_s": 1.0, "machines": [4]}]
+    assert "islanded" not in res.meta
+    assert res.max_angle_spread == pytest.approx(rest.max(), rel=1e-12)
+    assert np.all(res.relative_angle[res.t > 1.0, 3] == 0.0)  # alone in its own island
+    assert list(res.judged) == [True, True, True, False]
+    trapezoid = Simulator(kundur).run([GeneratorTrip(4, 1.0)], 3.0, method="trapezoid")
+    assert trapezoid.stable and trapezoid.meta["tripped"] == res.meta["tripped"]
+
+
+def islanded_and_tripped(kundur, t_clear, t_end=6.0, **kw):
+    """The fault at bus 1 cleared at t_clear by opening G1's step-up transformer 1-10 (G1
+    islanded at bus 1), and the same fault cleared without loss of the line with G1
+    tripped at that instant; each with its repeated grid times dropped (the zero-length
+    interval between near- and far-end clearing)."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import Fault, GeneratorTrip
+
+    sim = Simulator(kundur)
+    out = []
+    for events in (
+        [Fault(bus=1, t=1.0, clear_near=t_clear, clear_far=t_clear, far_bus=10)],
+        [Fault(bus=1, t=1.0, clear_near=t_clear), GeneratorTrip(1, t_clear)],
+    ):
+        res = sim.run(events, t_end, **kw)
+        once = np.r_[np.diff(res.t) > 0, True]
+        out.append((res, once))
+    return out
+
+
+def test_islanding_a_generator_judges_the_rest_of_the_system(kundur):
+    """Opening transformer 1-10 at the clearing of a fault at bus 1 leaves G1 alone at bus
+    1 without load: islanded apart from the main grid, lost.  The others then follow the
+    run where the fault is cleared without the line and G1 is tripped at the same instant
+    (within 1e-6 rad and 1e-8 pu: the open line keeps a 1e7 pu reactance); the verdict is
+    theirs, judged against their own COI (stable at 0.1 s: 1.78 rad at most), and the
+    result names the island's bus and machine."""
+    (isl, a), (trip, b) = islanded_and_tripped(kundur, 1.1)
+    assert np.array_equal(isl.t[a], trip.t[b])
+    rest = [1, 2, 3]
+    assert np.abs(isl.angle[a][:, rest] - trip.angle[b][:, rest]).max() < 1e-6
+    assert np.abs(isl.speed[a][:, rest] - trip.speed[b][:, rest]).max() < 1e-8
+    assert isl.speed[-1, 0] > 1.1  # G1 runs away with no load
+    dev = own_coi_deviation(isl, rest)
+    assert dev.max() < np.pi and isl.stable and isl.separated == []
+    assert isl.max_angle_spread == pytest.approx(dev.max(), rel=1e-12)
+    assert isl.meta["islanded"] == [{"t_s": 1.1, "buses": [1], "machines": [1]}]
+    assert "tripped" not in isl.meta and trip.meta["tripped"] == [{"t_s": 1.1, "machines": [1]}]
+    assert trip.stable and trip.separated == []
+
+
+def test_an_islanded_run_stops_when_the_rest_separates(kundur):
+    """Cleared at 0.5 s the fault at bus 1 on 1-10 is too long for the rest: G2 leaves the
+    COI of G2-G4 by more than pi (computed here from the angles).  The run stopped at
+    separation ends at that first time, names G2 and not the islanded G1, and holds the
+    full run's trajectory up to there (4.745 s); the run with G1 tripped instead separates
+    at the same grid time."""
+    (full, _), (trip, _) = islanded_and_tripped(kundur, 1.5)
+    dev = own_coi_deviation(full, [1, 2, 3])
+    first = int(np.flatnonzero(dev.max(axis=1) > np.pi)[0])
+    assert not full.stable and full.t_separation == full.t[first] and full.separated == [2]
+    (stopped, _), (trip_stopped, _) = islanded_and_tripped(kundur, 1.5, stop_at_separation=True)
+    assert stopped.t[-1] == full.t_separation == stopped.t_separation
+    assert stopped.separated == [2] and stopped.t.size == first + 1
+    assert np.array_equal(stopped.angle, full.angle[: first + 1])
+    assert trip_stopped.t_separation == full.t_separation == 4.745
+    assert trip_stopped.separated == [2] and not trip.stable
+
+
+def test_the_main_grid_is_the_part_with_most_inertia_then_most_buses():
+    """A split of one island (machines 0-3; bus labels of the stage): machines 0, 1 in
+    part 5, machines 2, 3 in part 7.  With more inertia in part 7 it is the main grid;
+    with equal inertia the part with more buses; an infinite bus (H = 0) makes its part
+    the main grid; a trip alone changes nothing but the tripped machine."""
+    from stabctl.dynamics.partition import stage_partitions
+
+    base = np.zeros(4, np.int64)
+    machines = [base, np.array([5, 5, 7, 7])]
+    buses = [np.zeros(9, np.int64), np.array([5, 5, 5, 5, 5, 7, 7, 7, 7])]
+    mva = np.full(4, 900.0)
+
+    def judged(H, b=buses):
+        parts = stage_partitions([0.0, 1.0], machines, b, base, np.array(H, float), mva)
+        return list(parts[1].judged)
+
+    assert judged([6.5, 6.5, 7.0, 7.0]) == [False, False, True, True]
+    assert judged([7.0, 7.0, 6.5, 6.5]) == [True, True, False, False]
+    assert judged([6.5] * 4) == [True, True, False, False]  # 5 buses against 4
+    fewer = [buses[0], np.array([5, 5, 7, 7, 7, 7, 7, 7, 7])]
+    assert judged([6.5] * 4, fewer) == [False, False, True, True]
+    assert judged([0.0, 6.5, 7.0, 7.0]) == [True, True, False, False]  # the infinite bus
+    parts = stage_partitions([0.0, 1.0], machines, buses, base, np.full(4, 6.5), mva)
+    assert list(parts[1].island) == [0, 0, 1, 1] and list(parts[1].inertia) == [5850.0] * 4
+    trip = [base, np.array([0, -1, 0, 0])]
+    parts = stage_partitions([0.0, 1.0], trip, buses[:1] * 2, base, np.full(4, 6.5), mva)
+    assert list(parts[1].judged) == [True, False, True, True]
+    assert list(parts[1].tripped) == [False, True, False, False]
+    assert list(parts[1].island) == [0, 1, 0, 0]  # the tripped machine alone
+    assert stage_partitions([0.0, 1.0], [base, base], buses[:1] * 2, base, mva, mva) == ()
+
+
+def test_a_partitioned_result_keeps_its_islands_in_npz(kundur, tmp_path):
+    """A run with a machine tripped writes its partitions to .npz and reads them back: the
+    verdict and the judged machines are the same."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import GeneratorTrip
+    from stabctl.dynamics.results import SimulationResult
+
+    res = Simulator(kundur).run([GeneratorTrip(4, 1.0)], 2.0)
+    back = SimulationResult.from_npz(res.to_npz(tmp_path / "r.npz"))
+    assert len(back.partitions) == len(res.partitions) == 2
+    assert list(back.judged) == list(res.judged) and back.stable
+    assert back.max_angle_spread == res.max_angle_spread
+    assert np.array_equal(back.relative_angle, res.relative_angle)

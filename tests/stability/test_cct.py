@@ -137,10 +137,30 @@ def test_custom_criterion_sees_whole_runs(kundur_pstess):
     assert len(seen) == res.n_simulations
 
 
-def test_losing_both_tie_circuits_is_unstable_even_when_cleared_instantly(kundur):
-    both = LineFault(3, 101, circuit=2, trips=((3, 101),))  # areas 1 and 2 islanded
-    with pytest.raises(InputError, match="3-101 also opened: unstable even when cleared instantly"):
-        critical_clearing_time(kundur, both)
+def own_coi_deviation(res, keep):
+    """abs(delta_i - delta_COI) of the machines `keep` (indices) against the COI of those
+    machines alone (paper eq. 40, weights H * MVA), computed here from the angles."""
+    M, a = res.inertia[keep], res.angle[:, keep]
+    return np.abs(a - (a @ M / M.sum())[:, None])
+
+
+def test_losing_both_tie_circuits_islands_an_area_and_judges_the_other(kundur):
+    """Opening both circuits of 3-101 splits Kundur into its areas, of equal inertia: area
+    2 (more buses) is the main grid, area 1 (G1, G2, buses 1-4, 10, 20) the island named
+    lost.  The line trip alone leaves G3 and G4 together (checked here against their own
+    COI), so the CCT is not 0: it is where the areas, still joined by the faulted circuit,
+    swing apart during the fault (G1 and G2 more than pi from the four machines' COI
+    before the clearing)."""
+    both = LineFault(3, 101, circuit=2, trips=((3, 101),))
+    res = critical_clearing_time(kundur, both, SearchOptions(tol=0.01, error_check=False))
+    assert res.islanded == ({"t_s": 1.0, "buses": [1, 2, 3, 4, 10, 20], "machines": [1, 2]},)
+    alone = kundur.run(both.events(0.0), 6.0)
+    assert own_coi_deviation(alone, [2, 3]).max() < 1.0 and alone.stable
+    late = kundur.run(both.events(res.t_unstable), 6.0)
+    joined = own_coi_deviation(late, [0, 1, 2, 3])
+    k = int(np.flatnonzero(joined.max(axis=1) > np.pi)[0])
+    assert late.t[k] < 1.0 + res.t_unstable and late.t_separation == late.t[k]
+    assert res.separated == (1, 2) and res.cct_s == 0.83
 
 
 def test_tripping_the_faulted_circuit_again_is_an_error(kundur):
@@ -254,6 +274,46 @@ def test_other_divergence_is_raised_naming_the_clearing_time():
         critical_clearing_time(sim, CASE1, BISECTION, h=0.01)
 
 
+def rest_stays_together(sim, t_clear, machine, t_end=6.0):
+    """Independent check of a fault on a generator's step-up transformer: the fault at
+    the generator's bus cleared without loss of a line and the generator tripped at the
+    clearing instant; whether the other machines stay within pi of their own COI (computed
+    here from the angles)."""
+    from stabctl.dynamics.events import Fault, GeneratorTrip
+
+    i = int(np.flatnonzero(sim.case.machines.number == machine)[0])
+    bus = int(sim.case.machines.bus[i])
+    t_cl = 1.0 + t_clear
+    res = sim.run([Fault(bus=bus, t=1.0, clear_near=t_cl), GeneratorTrip(machine, t_cl)], t_end)
+    rest = [k for k in range(len(sim.case.machines)) if k != i]
+    return own_coi_deviation(res, rest).max() < np.pi
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        {},
+        {"early_stop": True},
+        {"method": "sime"},
+    ],
+)
+def test_islanding_a_generator_has_the_cct_of_the_rest(kundur, options):
+    """A fault at bus 1 cleared by opening G1's step-up transformer 1-10 islands G1 at bus
+    1 (lost): the CCT is the rest's, 0.44 s at 20 ms (G2 separates at 0.46 s), the
+    bracket checked by the same fault cleared without the line and G1 tripped at the
+    clearing instant; G1 and bus 1 named as islanded.  The early verdicts and SIME's
+    search judge the same machines and find the same bracket."""
+    search = SearchOptions(tol=0.02, error_check=False, **options)
+    res = critical_clearing_time(kundur, LineFault(1, 10), search)
+    (island,) = res.islanded  # at its first probe's clearing (0 or 0.1 s after the fault)
+    assert (island["buses"], island["machines"]) == ([1], [1])
+    assert (res.t_stable, res.t_unstable) == (0.44, 0.46) and res.separated == (2,)
+    assert rest_stays_together(kundur, res.t_stable, 1)
+    assert not rest_stays_together(kundur, res.t_unstable, 1)
+    if options.get("early_stop"):
+        assert res.early_stops > 0
+
+
 # ----------------------------------------------------------- fault lists, storage, cache
 
 
@@ -345,6 +405,29 @@ def test_cli_cct_above_its_search_limit_is_a_verdict_not_an_error():
     assert res.stdout.startswith("CCT above the search limit: ") and "t_max = 0.1 s" in res.stdout
     d = json.loads(run(*args, "--json").stdout)
     assert d["cct_s"] is None and d["above_t_max_s"] == 0.1
+
+
+def test_cli_cct_names_a_generator_it_islands():
+    """`cct` on G1's step-up transformer 1-10: the CCT of the rest (0.44 s at 20 ms) with
+    G1 and bus 1 named as islanded, in --json and the text; on G2's, 2-20, the rest loses
+    synchronism even when cleared at once (as tripping G2 alone: checked here), a verdict
+    that names the islanding too."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import GeneratorTrip
+
+    args = ("cct", "kundur", "--fault", 1, "--far-bus", 10, "--tol-ms", 20)
+    d = json.loads(run(*args, "--json").stdout)
+    assert "verdict" not in d and d["cct_s"] == 0.44
+    assert d["islanded"] == [{"t_s": 1.0, "buses": [1], "machines": [1]}]
+    text = run(*args).stdout
+    assert "CCT 0.440 s" in text
+    assert "bus(es) [1] islanded with machine(s) G1 (bus 1) apart from the main grid" in text
+    g2 = run("cct", "kundur", "--fault", 2, "--far-bus", 20, "--tol-ms", 20, "--json")
+    d = json.loads(g2.stdout)
+    assert (d["cct_s"], d["verdict"]) == (0.0, "N-1 insecure")
+    assert d["islanded"] == [{"t_s": 1.0, "buses": [2], "machines": [2]}]
+    trip = Simulator(load_case("kundur")).run([GeneratorTrip(2, 1.0)], 6.0)
+    assert own_coi_deviation(trip, [0, 2, 3]).max() > np.pi and not trip.stable
 
 
 def test_cli_cct_with_storage():

@@ -90,9 +90,10 @@ def test_spectral_layout_is_finite_and_distinct():
     assert len({tuple(p.round(9)) for p in xy}) > 100
 
 
-#: Kundur's tie 3-101 faulted on circuit 2 with circuit 1 also opened: the two areas lose
-#: their last link, unstable however fast the fault is cleared (N-1 insecure)
-BOTH_TIES = LineFault(3, 101, circuit=2, trips=((3, 101),))
+#: Kundur's transformer 3-4 faulted at bus 3: its trip cuts load bus 4 from every
+#: generator (976 MW shed) and area 1 then loses synchronism however fast the fault is
+#: cleared (N-1 insecure; tests/dynamics/test_islands.py)
+LOAD_TRANSFORMER = LineFault(3, 4)
 
 
 def test_n1_insecure_is_a_verdict_not_a_failure(tmp_path):
@@ -105,7 +106,7 @@ def test_n1_insecure_is_a_verdict_not_a_failure(tmp_path):
     from stabctl.stability.screening import INSECURE, verdict
 
     out = tmp_path / "r.jsonl"
-    jobs = cct_jobs("kundur", [BOTH_TIES], search=SearchOptions(t_max=0.5))
+    jobs = cct_jobs("kundur", [LOAD_TRANSFORMER], search=SearchOptions(t_max=0.5))
     rep = run_sweep(jobs, out, workers=1)
     (rec,) = rep.records.values()
     assert rep.failed == 0 and rec["status"] == "verdict" and verdict(rec) == INSECURE
@@ -115,8 +116,8 @@ def test_n1_insecure_is_a_verdict_not_a_failure(tmp_path):
     # a record of the older form (status failed with the exception's text) reads the same
     old = {"status": "failed", "error": "InputError: " + rec["reason"]}
     assert verdict(old) == INSECURE
-    args = ["cct", "kundur", "--fault", 3, "--far-bus", 101, "--circuit", 2]
-    res = CliRunner().invoke(main, [*args, "--trip", 3, 101, "--json"])
+    args = ["cct", "kundur", "--fault", 3, "--far-bus", 4]
+    res = CliRunner().invoke(main, [*args, "--json"])
     assert res.exit_code == 0, res.output
     got = json.loads(res.stdout)
     assert (got["cct_s"], got["verdict"]) == (0.0, "N-1 insecure")
@@ -160,3 +161,63 @@ def test_a_contingency_that_islands_a_load_bus_names_it_in_its_verdict(tmp_path,
     text = capsys.readouterr().out
     assert "bus 3 line to 4        islands bus(es) [4] (their load shed)" in text
     assert "1 N-1 insecure (CCT 0), 0 failed; 1 island load buses" in text
+
+
+def rest_after_trip_stable(sim, machine, t_clear):
+    """Independent check: a fault at the machine's bus cleared after t_clear s without
+    loss of a line, the machine tripped then; whether the other machines stay within pi
+    of their own COI (paper eq. 40, H * MVA weights, computed here) until 6 s."""
+    import numpy as np
+
+    from stabctl.dynamics.events import Fault, GeneratorTrip
+
+    i = int(np.flatnonzero(sim.case.machines.number == machine)[0])
+    t_cl = 1.0 + t_clear
+    events = [Fault(bus=int(sim.case.machines.bus[i]), t=1.0, clear_near=t_cl)]
+    res = sim.run([*events, GeneratorTrip(machine, t_cl)], 6.0)
+    rest = [k for k in range(len(sim.case.machines)) if k != i]
+    M, a = res.inertia[rest], res.angle[:, rest]
+    return np.abs(a - (a @ M / M.sum())[:, None]).max() < np.pi
+
+
+def test_a_screening_names_the_generators_its_line_faults_island(tmp_path, capsys):
+    """`screen kundur --lines`: a fault on a generator's step-up transformer (1-10, 2-20,
+    11-110, 12-120) islands that generator at its bus.  Each row names the machine and
+    the island's bus, and its verdict is the rest's, as tripping the machine at the
+    clearing instant gives: 1-10 a CCT (0.44 s at 20 ms), 2-20 and 11-110 N-1 insecure
+    (the rest separates even without the fault), 12-120 robust up to 0.5 s.  The table
+    names them and the summary counts the 8 line faults that island machines (those
+    four, 10-20 and 110-120 with their generator, 3-20 and 13-120 splitting an area off)."""
+    from stabctl.cli.format import print_screening
+    from stabctl.stability.screening import ABOVE, INSECURE
+
+    rows = screen(
+        "kundur",
+        tmp_path / "s.jsonl",
+        buses=[],
+        lines=True,
+        search=SearchOptions(tol=0.02, t_max=0.5),
+        runner=RunnerOptions(workers=1, progress=False),
+    )
+    by_line = {(r["bus"], r["far_bus"]): r for r in rows}
+    expected = {(1, 10): (1, "cct"), (2, 20): (2, INSECURE), (11, 110): (3, INSECURE)}
+    expected[(12, 120)] = (4, ABOVE)
+    sim = Simulator(load_case("kundur"))
+    for line, (machine, verdict) in expected.items():
+        r = by_line[line]  # the machine at the line's near end, its bus the island
+        assert (r["islanded_machines"], r["islanded_machine_buses"]) == ([machine], [line[0]])
+        assert r["verdict"] == verdict and r["islanded"] == []
+    assert by_line[(1, 10)]["cct_s"] == 0.44 and by_line[(1, 10)]["separated"] == [2]
+    assert rest_after_trip_stable(sim, 1, 0.44) and not rest_after_trip_stable(sim, 1, 0.46)
+    assert not rest_after_trip_stable(sim, 2, 0.0) and not rest_after_trip_stable(sim, 3, 0.0)
+    assert rest_after_trip_stable(sim, 4, 0.5)
+    assert sum(bool(r["islanded_machines"]) for r in rows) == 8
+    capsys.readouterr()
+    print_screening(load_case("kundur"), rows)
+    text = capsys.readouterr().out
+    assert (
+        "bus 1 line to 10       islands machine(s) G1 (bus 1) with bus(es) [1] (lost; the rest "
+        "judged):" in text
+    )
+    assert "bus 12 line to 120     islands machine(s) G4 (bus 12) with bus(es) [12]" in text
+    assert "2 island load buses (their load shed, counted in the verdicts above), 8 island " in text

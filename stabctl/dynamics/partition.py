@@ -1,0 +1,302 @@
+"""The machines' islands stage by stage: which machines a run's loss-of-synchronism
+criterion judges, and against which centre of inertia, once its events trip machines or
+cut the network apart.
+
+Before the disturbance each machine swings against the centre of inertia (COI, paper eq.
+40) of its island (`stabctl.network.topology.machine_islands`).  A stage of a run
+(`stabctl.dynamics.events.stages`) can take machines out of that picture:
+
+- a tripped machine (`GeneratorTrip`) is out of service: its angle says nothing about the
+  system, so it leaves the criterion and every COI (it is alone in an island of its own);
+- a trip that cuts a machine, or a group of machines, off the rest of its island (a
+  generator's step-up transformer opened, a system split) leaves it in an island apart
+  from the main grid.  The machine is lost to the system, as PSS/E trips a generator whose
+  breaker opened: it leaves the criterion, which judges the main grid, and the result
+  names it and its island's buses (`machine_islands_log`).  The island keeps running in
+  the simulation, against its own COI (`SimulationResult.relative_angle`).
+
+The main grid of an island before the disturbance is the part, in the stage's network,
+that holds its infinite bus (a machine with H = 0), else the part with the largest
+inertia (sum of H * MVA), on a tie the one with more buses (more of the network), then
+the one holding the machine first in the data.  Each part has its own COI weights
+(`stabctl.dynamics.coi.coi_inertia` over the stage's islands).
+
+A run none of whose stages trips a machine or splits an island has no partitions (an
+empty tuple): its criterion is the one of the islands before the disturbance, computed as
+it always was.  The Kundur check: tripping G4 at 1 s leaves G1-G3 within 0.95 rad of
+their COI (stable, G4 listed as tripped); a fault at bus 1 cleared by opening G1's
+step-up transformer 1-10 islands G1 at bus 1, and G2-G4 then follow, to 1e-6 rad, the
+trajectories of the same fault cleared without the line and G1 tripped at the clearing
+instant (tests/dynamics/test_islands.py).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from stabctl.dynamics.coi import coi_inertia, coi_of_islands
+
+__all__ = [
+    "Partition",
+    "stage_partitions",
+    "stage_at",
+    "relative_to_islands",
+    "judged_deviation",
+    "machine_islands_log",
+    "tripped_log",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class Partition:
+    """The machines' islands from a stage's start on (module docstring).
+
+    Attributes
+    ----------
+    t_s : float
+        Start of the stage, s (absolute run time).
+    island : ndarray of int, shape (n_mac,)
+        Each machine's island in the stage's network, labels 0, 1, ... in the order of the
+        machines' first appearance; a tripped machine alone in its own.
+    inertia : ndarray, shape (n_mac,)
+        COI weights within those islands (`stabctl.dynamics.coi.coi_inertia`).
+    judged : ndarray of bool, shape (n_mac,)
+        The machines the loss-of-synchronism criterion judges: in service and in the main
+        grid of their island before the disturbance.
+    tripped : ndarray of bool, shape (n_mac,)
+        The machines out of service in this stage.
+    """
+
+    t_s: float
+    island: np.ndarray
+    inertia: np.ndarray
+    judged: np.ndarray
+    tripped: np.ndarray
+
+
+def stage_partitions(
+    starts, machine_island, bus_island, base_island: np.ndarray, H: np.ndarray, mva: np.ndarray
+) -> tuple[Partition, ...]:
+    """The partition of every stage of a run, or none when no stage trips a machine or
+    splits an island of the network before the disturbance.
+
+    Parameters
+    ----------
+    starts : sequence of float
+        Each stage's start, s (the first 0).
+    machine_island : sequence of ndarray of int, each shape (n_mac,)
+        Each stage's island label of each machine's bus, -1 for a tripped machine
+        (`stabctl.network.solution.ReducedNetwork.machine_island`).
+    bus_island : sequence of ndarray of int, each shape (n_bus,)
+        Each stage's bus island labels, in the labels of `machine_island`
+        (`stabctl.network.solution.ReducedNetwork.bus_island`).
+    base_island : ndarray of int, shape (n_mac,)
+        Each machine's island before the disturbance
+        (`stabctl.network.topology.machine_islands`).
+    H, mva : ndarray, shape (n_mac,)
+        Inertia constants (s, machine base; 0: an infinite bus) and machine bases (MVA).
+
+    Returns
+    -------
+    tuple of Partition
+        One per stage, in order; empty when every stage keeps the machines as before the
+        disturbance.
+    """
+    labels = [np.asarray(m, np.int64) for m in machine_island]
+    base = np.asarray(base_island, np.int64)
+    if all(_same_partition(lab, base) for lab in labels):
+        return ()
+    H, mva = np.asarray(H, float), np.asarray(mva, float)
+    return tuple(
+        _partition(float(t), lab, np.asarray(buses), base, H, mva)
+        for t, lab, buses in zip(starts, labels, bus_island)
+    )
+
+
+def _same_partition(stage: np.ndarray, base: np.ndarray) -> bool:
+    """Whether a stage's labels (-1: tripped) group the machines as the base labels do."""
+    if np.any(stage < 0):
+        return False
+    pairs = set(zip(stage.tolist(), base.tolist()))
+    return len(pairs) == len(set(stage.tolist())) == len(set(base.tolist()))
+
+
+def _partition(t_s, stage, buses, base, H, mva) -> Partition:
+    tripped = stage < 0
+    size = {int(k): int(np.sum(buses == k)) for k in np.unique(stage[~tripped])}
+    lab = stage.copy()
+    lab[tripped] = stage.max() + 1 + np.arange(int(tripped.sum()))  # each alone
+    _, first, inverse = np.unique(lab, return_index=True, return_inverse=True)
+    island = np.argsort(np.argsort(first))[inverse].astype(np.int64)
+    judged = np.zeros(stage.size, bool)
+    for b in np.unique(base):
+        online = np.flatnonzero((base == b) & ~tripped)
+        if online.size:
+            main = _main_part(online, stage, size, H, mva)
+            judged[online[stage[online] == main]] = True
+    return Partition(t_s, island, coi_inertia(H, mva, island), judged, tripped)
+
+
+def _main_part(machines: np.ndarray, stage: np.ndarray, size: dict, H, mva) -> int:
+    """The stage island (label of `stage`) of the main grid among those of `machines`
+    (module docstring: an infinite bus's, else the largest inertia, else the most buses
+    (`size`: buses per label), else the first)."""
+    best, rank = -1, (-1.0, -1)
+    for i in machines:  # in the data's order: a tie keeps the first
+        k = int(stage[i])
+        here = machines[stage[machines] == k]
+        w = np.inf if np.any(H[here] == 0) else float(np.sum(H[here] * mva[here]))
+        if (w, size[k]) > rank:
+            best, rank = k, (w, size[k])
+    return best
+
+
+def stage_at(t: np.ndarray, partitions) -> np.ndarray:
+    """The partition of each time: the last one started at or before it.
+
+    Parameters
+    ----------
+    t : ndarray, shape (n_t,)
+        Times, s.
+    partitions : sequence of Partition
+        A run's partitions (non-empty).
+
+    Returns
+    -------
+    ndarray of int, shape (n_t,)
+        Indices into `partitions`.
+    """
+    starts = np.array([p.t_s for p in partitions])
+    return np.maximum(np.searchsorted(starts, np.asarray(t, float), side="right") - 1, 0)
+
+
+def relative_to_islands(values, t, inertia, island, partitions) -> np.ndarray:
+    """Each machine's value less its island's COI value, the islands those of the stage at
+    each time (`Partition`), or, without partitions, those before the disturbance.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n_t, n_mac)
+        Rotor angles (rad) or speeds (pu).
+    t : ndarray, shape (n_t,)
+        Their times, s.
+    inertia : ndarray, shape (n_mac,)
+        COI weights before the disturbance (`stabctl.dynamics.coi.coi_inertia`).
+    island : ndarray of int, shape (n_mac,)
+        Islands before the disturbance.
+    partitions : sequence of Partition
+        The run's partitions; empty: none.
+
+    Returns
+    -------
+    ndarray, shape (n_t, n_mac)
+        0 for a tripped machine.
+    """
+    if not partitions:
+        return values - coi_of_islands(values, inertia, island)
+    out = np.empty_like(values)
+    which = stage_at(t, partitions)
+    for s in np.unique(which):
+        rows, p = which == s, partitions[s]
+        out[rows] = values[rows] - coi_of_islands(values[rows], p.inertia, p.island)
+    return out
+
+
+def judged_deviation(angle, t, inertia, island, partitions) -> np.ndarray:
+    """abs(delta_i - delta_COI) of each machine the loss-of-synchronism criterion judges
+    at each time, 0 for the others (module docstring).
+
+    Parameters
+    ----------
+    angle : ndarray, shape (n_t, n_mac)
+        Rotor angles, rad.
+    t : ndarray, shape (n_t,)
+        Their times, s.
+    inertia, island : ndarray, shape (n_mac,)
+        COI weights and islands before the disturbance.
+    partitions : sequence of Partition
+        The run's partitions; empty: every machine judged against its island before the
+        disturbance.
+
+    Returns
+    -------
+    ndarray, shape (n_t, n_mac)
+        rad.
+    """
+    dev = np.abs(relative_to_islands(angle, t, inertia, island, partitions))
+    if partitions:
+        dev *= np.stack([p.judged for p in partitions])[stage_at(t, partitions)]
+    return dev
+
+
+def machine_islands_log(
+    partitions, bus_islands, machine_rows, bus_numbers, machine_numbers
+) -> list[dict]:
+    """The islands apart from the main grid that each stage newly forms with machines in
+    them (module docstring).
+
+    Parameters
+    ----------
+    partitions : sequence of Partition
+        The run's partitions (empty: none).
+    bus_islands : sequence of ndarray of int, each shape (n_bus,)
+        Each stage's bus island labels (`stabctl.network.solution.ReducedNetwork.bus_island`).
+    machine_rows : ndarray of int, shape (n_mac,)
+        Each machine's bus, 0-based row of the bus table.
+    bus_numbers, machine_numbers : ndarray of int
+        The case's bus and machine numbers.
+
+    Returns
+    -------
+    list of dict
+        One per island, in stage order: ``t_s`` (the stage's start, s), ``buses`` (its bus
+        numbers) and ``machines`` (its machine numbers, out of the criterion: lost).
+    """
+    out: list[dict] = []
+    seen: set = set()
+    for p, buses in zip(partitions, bus_islands):
+        now = set()
+        lost = np.flatnonzero(~p.judged & ~p.tripped)
+        for k in dict.fromkeys(p.island[lost].tolist()):
+            here = lost[p.island[lost] == k]
+            key = tuple(int(m) for m in machine_numbers[here])
+            now.add(key)
+            if key in seen:
+                continue
+            label = buses[int(machine_rows[here[0]])]
+            out.append(
+                {
+                    "t_s": float(p.t_s),
+                    "buses": [int(b) for b in bus_numbers[buses == label]],
+                    "machines": list(key),
+                }
+            )
+        seen = now
+    return out
+
+
+def tripped_log(partitions, machine_numbers) -> list[dict]:
+    """The machines each stage newly takes out of service.
+
+    Parameters
+    ----------
+    partitions : sequence of Partition
+        The run's partitions (empty: none).
+    machine_numbers : ndarray of int
+        The case's machine numbers.
+
+    Returns
+    -------
+    list of dict
+        One per stage that trips machines: ``t_s`` (its start, s) and ``machines``
+        (numbers).
+    """
+    out, before = [], None
+    for p in partitions:
+        new = p.tripped if before is None else p.tripped & ~before
+        if new.any():
+            out.append({"t_s": float(p.t_s), "machines": [int(m) for m in machine_numbers[new]]})
+        before = p.tripped
+    return out
