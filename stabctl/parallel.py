@@ -58,6 +58,7 @@ from pathlib import Path
 from typing import Any
 
 from stabctl.errors import InputError, SimulationError, StabctlError, Verdict
+from stabctl.jsontext import parse_json
 from stabctl.locking import exclusive
 from stabctl.progress import bar as progress_bar
 
@@ -210,8 +211,6 @@ def _record(line: str, where: str) -> dict | None:
     """The sweep record of a line (a dict with a string key and a known status), or None.
     Raises InputError, naming ``where``, for a line giving a key twice (no kill cuts a
     line so: an edited record, whose value json would take the last of)."""
-    from stabctl.io.inputs import parse_json
-
     try:
         rec = parse_json(line, where)
     except InputError:
