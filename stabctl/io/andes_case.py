@@ -509,7 +509,7 @@ def _json_data(path: Path) -> Any:
     Raises
     ------
     InputError
-        An object giving a key twice (`stabctl.io.inputs.parse_json`: ANDES would read
+        An object giving a key twice (`stabctl.jsontext.parse_json`: ANDES would read
         the last model sheet of that name only).
     """
     try:
