@@ -591,6 +591,7 @@ class Simulator:
             self.island,
             m.mp.H,
             self.case.machines.mva,
+            self.case.buses.pload,
         )
 
     def _semantics(self, semantics: str | None) -> str:

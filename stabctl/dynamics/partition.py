@@ -16,9 +16,11 @@ Before the disturbance each machine swings against the centre of inertia (COI, p
   the simulation, against its own COI (`SimulationResult.relative_angle`).
 
 The main grid of an island before the disturbance is the part, in the stage's network,
-that holds its infinite bus (a machine with H = 0), else the part with the largest
-inertia (sum of H * MVA), on a tie the one with more buses (more of the network), then
-the one holding the machine first in the data.  Each part has its own COI weights
+that holds its infinite bus (a machine with H = 0), else the part that serves the most
+load (sum of the buses' active load: where the customers are, so that generators cut off
+with little or no load are the ones lost), on a tie the one with the largest inertia (sum
+of H * MVA), then the one with more buses (more of the network), then the one holding the
+machine first in the data.  Each part has its own COI weights
 (`stabctl.dynamics.coi.coi_inertia` over the stage's islands).
 
 A run none of whose stages trips a machine or splits an island has no partitions (an
@@ -77,7 +79,13 @@ class Partition:
 
 
 def stage_partitions(
-    starts, machine_island, bus_island, base_island: np.ndarray, H: np.ndarray, mva: np.ndarray
+    starts,
+    machine_island,
+    bus_island,
+    base_island: np.ndarray,
+    H: np.ndarray,
+    mva: np.ndarray,
+    load: np.ndarray,
 ) -> tuple[Partition, ...]:
     """The partition of every stage of a run, or none when no stage trips a machine or
     splits an island of the network before the disturbance.
@@ -97,6 +105,8 @@ def stage_partitions(
         (`stabctl.network.topology.machine_islands`).
     H, mva : ndarray, shape (n_mac,)
         Inertia constants (s, machine base; 0: an infinite bus) and machine bases (MVA).
+    load : ndarray, shape (n_bus,)
+        Each bus's active load, pu (the case's bus table, in the order of `bus_island`).
 
     Returns
     -------
@@ -108,9 +118,9 @@ def stage_partitions(
     base = np.asarray(base_island, np.int64)
     if all(_same_partition(lab, base) for lab in labels):
         return ()
-    H, mva = np.asarray(H, float), np.asarray(mva, float)
+    H, mva, load = np.asarray(H, float), np.asarray(mva, float), np.asarray(load, float)
     return tuple(
-        _partition(float(t), lab, np.asarray(buses), base, H, mva)
+        _partition(float(t), lab, np.asarray(buses), base, H, mva, load)
         for t, lab, buses in zip(starts, labels, bus_island)
     )
 
@@ -123,9 +133,12 @@ def _same_partition(stage: np.ndarray, base: np.ndarray) -> bool:
     return len(pairs) == len(set(stage.tolist())) == len(set(base.tolist()))
 
 
-def _partition(t_s, stage, buses, base, H, mva) -> Partition:
+def _partition(t_s, stage, buses, base, H, mva, load) -> Partition:
     tripped = stage < 0
-    size = {int(k): int(np.sum(buses == k)) for k in np.unique(stage[~tripped])}
+    size = {
+        int(k): (float(np.sum(np.abs(load[buses == k]))), int(np.sum(buses == k)))
+        for k in np.unique(stage[~tripped])
+    }
     lab = stage.copy()
     lab[tripped] = stage.max() + 1 + np.arange(int(tripped.sum()))  # each alone
     _, first, inverse = np.unique(lab, return_index=True, return_inverse=True)
@@ -141,15 +154,16 @@ def _partition(t_s, stage, buses, base, H, mva) -> Partition:
 
 def _main_part(machines: np.ndarray, stage: np.ndarray, size: dict, H, mva) -> int:
     """The stage island (label of `stage`) of the main grid among those of `machines`
-    (module docstring: an infinite bus's, else the largest inertia, else the most buses
-    (`size`: buses per label), else the first)."""
-    best, rank = -1, (-1.0, -1)
+    (module docstring: an infinite bus's, else the most load, else the largest inertia,
+    else the most buses (`size`: (load pu, buses) per label), else the first)."""
+    best, rank = -1, (False, -1.0, -1.0, -1)
     for i in machines:  # in the data's order: a tie keeps the first
         k = int(stage[i])
         here = machines[stage[machines] == k]
-        w = np.inf if np.any(H[here] == 0) else float(np.sum(H[here] * mva[here]))
-        if (w, size[k]) > rank:
-            best, rank = k, (w, size[k])
+        infinite = bool(np.any(H[here] == 0))
+        here_rank = (infinite, size[k][0], float(np.sum(H[here] * mva[here])), size[k][1])
+        if here_rank > rank:
+            best, rank = k, here_rank
     return best
 
 

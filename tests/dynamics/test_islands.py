@@ -232,36 +232,54 @@ def test_an_islanded_run_stops_when_the_rest_separates(kundur):
     assert trip_stopped.separated == [2] and not trip.stable
 
 
-def test_the_main_grid_is_the_part_with_most_inertia_then_most_buses():
+def test_the_main_grid_is_the_part_with_most_load_then_inertia_then_buses():
     """A split of one island (machines 0-3; bus labels of the stage): machines 0, 1 in
-    part 5, machines 2, 3 in part 7.  With more inertia in part 7 it is the main grid;
-    with equal inertia the part with more buses; an infinite bus (H = 0) makes its part
-    the main grid; a trip alone changes nothing but the tripped machine."""
+    part 5, machines 2, 3 in part 7.  The part serving more load is the main grid, however
+    much inertia the other has (generators cut off from the customers are the ones
+    lost); with equal load, the part with more inertia; with equal inertia too, the part
+    with more buses; an infinite bus (H = 0) makes its part the main grid; a trip alone
+    changes nothing but the tripped machine."""
     from stabctl.dynamics.partition import stage_partitions
 
     base = np.zeros(4, np.int64)
     machines = [base, np.array([5, 5, 7, 7])]
     buses = [np.zeros(9, np.int64), np.array([5, 5, 5, 5, 5, 7, 7, 7, 7])]
     mva = np.full(4, 900.0)
+    no_load = np.zeros(9)
 
-    def judged(H, b=buses):
-        parts = stage_partitions([0.0, 1.0], machines, b, base, np.array(H, float), mva)
+    def judged(H, b=buses, load=no_load):
+        parts = stage_partitions([0.0, 1.0], machines, b, base, np.array(H, float), mva, load)
         return list(parts[1].judged)
 
+    at_bus_8 = np.r_[np.zeros(8), 9.0]  # bus 8, in part 7
+    assert judged([7.0, 7.0, 6.5, 6.5], load=at_bus_8) == [False, False, True, True]
     assert judged([6.5, 6.5, 7.0, 7.0]) == [False, False, True, True]
     assert judged([7.0, 7.0, 6.5, 6.5]) == [True, True, False, False]
     assert judged([6.5] * 4) == [True, True, False, False]  # 5 buses against 4
     fewer = [buses[0], np.array([5, 5, 7, 7, 7, 7, 7, 7, 7])]
     assert judged([6.5] * 4, fewer) == [False, False, True, True]
-    assert judged([0.0, 6.5, 7.0, 7.0]) == [True, True, False, False]  # the infinite bus
-    parts = stage_partitions([0.0, 1.0], machines, buses, base, np.full(4, 6.5), mva)
+    assert judged([0.0, 6.5, 7.0, 7.0], load=at_bus_8) == [True, True, False, False]
+    parts = stage_partitions([0.0, 1.0], machines, buses, base, np.full(4, 6.5), mva, no_load)
     assert list(parts[1].island) == [0, 0, 1, 1] and list(parts[1].inertia) == [5850.0] * 4
     trip = [base, np.array([0, -1, 0, 0])]
-    parts = stage_partitions([0.0, 1.0], trip, buses[:1] * 2, base, np.full(4, 6.5), mva)
+    parts = stage_partitions([0.0, 1.0], trip, buses[:1] * 2, base, np.full(4, 6.5), mva, no_load)
     assert list(parts[1].judged) == [True, False, True, True]
     assert list(parts[1].tripped) == [False, True, False, False]
     assert list(parts[1].island) == [0, 1, 0, 0]  # the tripped machine alone
-    assert stage_partitions([0.0, 1.0], [base, base], buses[:1] * 2, base, mva, mva) == ()
+    assert stage_partitions([0.0, 1.0], [base, base], buses[:1] * 2, base, mva, mva, no_load) == ()
+
+
+def test_a_trip_that_cuts_the_generators_off_the_load_judges_the_part_with_the_load(kundur):
+    """Kundur's line 3-20 opened (no fault) cuts G1 and G2 (the larger inertia, 6.5 s
+    against 6.175 s) off every load: the main grid is G3, G4 and the loads, and G1, G2 are
+    the machines reported lost."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import LineTrip
+
+    res = Simulator(kundur).run([LineTrip(3, 20, 1.0)], 1.5)
+    assert list(res.machines) == [1, 2, 3, 4]
+    assert list(res.partitions[-1].judged) == [False, False, True, True]
+    assert [e["machines"] for e in res.meta["islanded"] if "machines" in e] == [[1, 2]]
 
 
 def test_a_partitioned_result_keeps_its_islands_in_npz(kundur, tmp_path):
