@@ -104,12 +104,14 @@ def screen(case_name: str, out_dir: Path, workers: int, progress=None) -> list[d
     rows = []
     for f, rec in zip(faults, rep.records.values()):
         ok = rec["status"] == "ok"
+        islands = (rec["result"] if ok else rec).get("islanded") or []
         rows.append(
             {
                 "fault": f,
                 "cct_s": rec["result"]["cct_s"] if ok else None,
                 "t_unstable_s": rec["result"]["t_unstable_s"] if ok else None,
                 "error": None if ok else rec.get("error") or rec.get("reason", ""),
+                "islands_machines": any(e.get("machines") for e in islands),
             }
         )
     return rows
@@ -117,8 +119,34 @@ def screen(case_name: str, out_dir: Path, workers: int, progress=None) -> list[d
 
 def in_scope(rows) -> list[dict]:
     """The screened faults the planner must meet: those stable when cleared at once (a
-    CCT, or still stable at the screening's limit)."""
-    return [r for r in rows if r["cct_s"] is not None or "still stable" in (r["error"] or "")]
+    CCT, or still stable at the screening's limit) whose trip cuts no generator off the
+    main grid.  A fault that islands generators (`islands_machines`: their step-up
+    transformer or the only line to them opened) loses them whatever the clearing time:
+    a question of the island's frequency and of the generation lost, not of the ESDs'
+    transient-stability law, so it is named out of scope (`islanding`) and not planned
+    for."""
+    return [
+        r
+        for r in rows
+        if not r.get("islands_machines")
+        and (r["cct_s"] is not None or "still stable" in (r["error"] or ""))
+    ]
+
+
+def islanding(rows) -> list[str]:
+    """Names of the screened faults left out because they island generators (`in_scope`).
+
+    Parameters
+    ----------
+    rows : list of dict
+        The screening rows (`screen`).
+
+    Returns
+    -------
+    list of str
+        Each fault's short name, in screening order.
+    """
+    return [Contingency(r["fault"], 1).name for r in rows if r.get("islands_machines")]
 
 
 def paper_continuity(case_name: str, sites, mva, kw: Study, say) -> dict:
@@ -243,6 +271,7 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
             }
             for r in rows
         ],
+        "islanding": islanding(rows),
         "n_faults": len(faults),
         "sites": [
             {"bus": s.bus, "machine": s.machine, "max_mw": s.max_mw, "mva": m}
@@ -749,7 +778,15 @@ def _screening_text(d: dict) -> str:
     return (
         f"Screened {n_line} line faults (each end of every line{scope}, line tripped)"
         f"{buses}; coarse CCT without storage, {1000 * SCREEN_TOL:g} ms, up to "
-        f"{SCREEN_T_MAX:g} s: {len(ok)} with a CCT.  Every fault stable when cleared at "
+        f"{SCREEN_T_MAX:g} s: {len(ok)} with a CCT.  "
+        + (
+            f"Out of scope, islanding generators (their trip cuts them off the main grid, "
+            f"lost whatever the clearing time: the island's frequency, not the ESD law's "
+            f"question): {', '.join(d['islanding'])}.  "
+            if d.get("islanding")
+            else ""
+        )
+        + f"Every {'other ' if d.get('islanding') else ''}fault stable when cleared at "
         f"once ({d['n_faults']}) is a contingency at each of the "
         f"{len(d['load_levels'])} load levels: {_contingency_count(d)}.  "
         + (

@@ -405,3 +405,19 @@ def test_a_start_already_evaluated_is_not_simulated_again():
     assert res.evaluations["3-101"]["cct_s"] == pytest.approx(
         again.evaluations["3-101"]["cct_s"], abs=1e-9
     )
+
+
+def test_the_paper_s_placement_leaves_faults_that_island_generators_out_of_scope(tmp_path):
+    """Kundur's candidate line faults screened as the paper's placement screens them: a
+    fault whose trip cuts generators off the main grid (10-20 and 20-10 leave G1 alone,
+    3-20 and 20-3 G1 and G2, away from every load) loses them whatever the clearing time,
+    so it is named out of scope and not planned for; the tie and the rest stay in scope.
+    The islanded generators are those the topology gives."""
+    from stabctl.studies.placement import in_scope, islanding, screen
+
+    rows = screen("kundur", tmp_path, workers=1)
+    named = set(islanding(rows))
+    assert {"10-20", "20-10", "3-20", "20-3"} <= named
+    assert not named & {"3-101", "101-3", "13-101", "101-13"}
+    scoped = {Contingency(r["fault"], 1).name for r in in_scope(rows)}
+    assert not scoped & named and "3-101" in scoped
