@@ -37,8 +37,8 @@ Two searches (`SearchOptions.method`), both on the lattice below:
 
 Both end in the same cell where the verdict is monotone in the clearing time (every fault
 of Kundur's screening and every fourth of miniWECC's, `benchmarks/bench_cct.py`).
-"sime" takes fewer runs there (Kundur 12.4 against 14.5 per CCT, 10.3 against 12.4 at the
-step h; miniWECC 12.8 against 14.4, 10.7 against 12.3 at h) and less time on a sample of
+"sime" takes fewer runs there (Kundur 12.7 against 14.8 per CCT, 10.5 against 12.6 at the
+step h; miniWECC 13.2 against 14.6, 10.9 against 12.4 at h) and less time on a sample of
 ACTIVSg2000's N-1 (1.35 s a search against 1.58, the same counts of CCTs and verdicts;
 `benchmarks/bench_cct.py --activsg-sample`), but assumes the verdict monotone below a
 stable probe, so bisection stays the default.
