@@ -911,7 +911,10 @@ def check_scheduler(address: str) -> str:
         port = -1
     given = parts.netloc.rpartition("]")[2].partition(":")[2]  # the port as written
     if given.isascii() and given.isdigit() and not 0 < int(given) < 65536:  # 0 ran on 8786
-        raise InputError(f"--scheduler {address}: port {int(given)} is out of range (1-65535)")
+        raise InputError(
+            f"--scheduler {address}: port {int(given)} is out of range (1-65535); give "
+            "'local' or a Dask scheduler's tcp://host:port"
+        )
     if parts.scheme != "tcp" or not parts.hostname or port == -1 or parts.path:
         raise InputError(
             f"--scheduler {address}: give 'local' or a Dask scheduler's tcp://host:port "

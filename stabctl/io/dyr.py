@@ -165,8 +165,8 @@ def read_dyr(path) -> list[DyrRecord]:
         what = "is empty" if not text.strip() else "holds no record, only comments"
         raise CaseError(
             f"{path.name}: the DYR file {what}: no machine, exciter or governor model "
-            "(records IBUS 'MODEL' ID ... /); give the case's DYR file, or none for a "
-            "power-flow case"
+            "(records IBUS 'MODEL' ID ... /), every generator would be without a machine "
+            "model; give the case's DYR file, or none for a power-flow case"
         )
     return records
 

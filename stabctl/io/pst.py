@@ -643,7 +643,7 @@ def _table_from_json(cls, raw: Mapping, where: str):
         if len(row) != len(cols):
             raise CaseError(
                 f"{where}: table '{cls.TABLE}' row {i}: {len(row)} value(s), the table "
-                f"names {len(cols)} columns"
+                f"names {len(cols)} columns (wrong column count)"
             )
     from stabctl.case.system import _as_matrix
 

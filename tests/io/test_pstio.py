@@ -279,7 +279,8 @@ def test_a_table_row_of_another_width_is_named_with_file_table_and_counts(tmp_pa
     found = 15 if edit == "append" else 13
     p = tmp_path / "ragged.json"
     p.write_text(json.dumps(data))
-    want = rf"^{p}: table 'line' row 1: {found} value\(s\), the table names 14 columns$"
+    want = rf"^{p}: table 'line' row 1: {found} value\(s\), the table names 14 columns "
+    want += r"\(wrong column count\)$"
     with pytest.raises(CaseError, match=want):
         load_case(p)
     # a PSTess matrix file: its rows against the most rows' width, the file named
