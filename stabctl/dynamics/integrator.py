@@ -176,7 +176,9 @@ class RunOptions(NamedTuple):
         stage (grid interval), within its islands.
     island : ndarray of int, shape (n_stage, n_mac)
         Each machine's island in each stage, labels 0, 1, ...: a machine's COI is its
-        island's (`stabctl.dynamics.partition.Partition.island`; a tripped machine alone).
+        island's (`stabctl.dynamics.partition.Partition.island`).  A tripped machine is
+        alone in an island of its own: it weighs in no other machine's COI, and its
+        device sees relative speed 0 (`stabctl.storage.control.relative_speeds`).
     judged : ndarray of bool, shape (n_stage, n_mac)
         The machines the loss-of-synchronism check judges in each stage
         (`stabctl.dynamics.partition.Partition.judged`).
