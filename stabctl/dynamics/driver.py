@@ -11,12 +11,13 @@ generator's step-up transformer opened, a system split), is out of the criterion
 that stage on, and the rest is judged against the COI of its own part of the network
 (`stabctl.dynamics.partition`): the result names the machines tripped and each island
 apart from the main grid with its buses and machines (lost, as PSS/E trips a generator
-whose breaker opened).  Such a run is integrated without the compiled loop's stop at
-separation (which knows the islands before the disturbance only), in pieces of
-`MONITOR_EVERY_S` when it is to stop there, and cut at the first separation found.  A run
-that leaves the integrator's stability region raises NumericalInstabilityError naming the
-time and the state; a singular network raises SimulationError; both carry the trajectory
-up to that point.
+whose breaker opened).  The compiled loop knows each stage's islands
+(`stabctl.dynamics.integrator.RunOptions`): its storage devices follow the COI of their
+machine's island in the current stage, and its stop at separation judges the machines
+the stage's partition judges, so a run stops where its verdict says, never for a machine
+tripped or cut off from the main grid.  A run that leaves the integrator's stability
+region raises NumericalInstabilityError naming the time and the state; a singular network
+raises SimulationError; both carry the trajectory up to that point.
 """
 
 from __future__ import annotations
@@ -458,9 +459,9 @@ class Simulator:
             pst = semantics == "pst"
             run = _Run(self, *prepared, pst, separation_limit, stop_at_separation, bus_rows=rows)
             verdict = None
-            if monitor is None and sa.kind != law.EXTERNAL and not run.watch:
+            if monitor is None and sa.kind != law.EXTERNAL:
                 integrate_from_cache(run, self._prefixes)
-            elif monitor is None and not run.watch:
+            elif monitor is None:
                 run.advance(grid.t.size - 1)
             else:
                 verdict = _advance_monitored(run, monitor)
@@ -674,9 +675,8 @@ class Simulator:
         )
         for i, t_f in enumerate(frame_times[frame_times <= t_end]):
             k = int(np.searchsorted(grid.t, t_f - 1e-12))
-            k0 = run.k
             run.advance(k)
-            if run.status != ig.OK or run.separated_since(k0):
+            if run.status != ig.OK:
                 break
             run.command(
                 i,
@@ -742,20 +742,16 @@ MONITOR_EVERY_S = 0.1
 
 
 def _advance_monitored(run: _Run, monitor) -> str | None:
-    """Advance `run` to its end in pieces of MONITOR_EVERY_S, calling `monitor` (if any)
-    with the trajectory so far after each; returns its first verdict (the run stops there)
-    or None (the run went to its end or stopped by itself, or, watched for separation
-    (`_Run.watch`), separated in the last piece).  Pausing does not change the trajectory
-    (`integrate` continues from its carry)."""
+    """Advance `run` to its end in pieces of MONITOR_EVERY_S, calling `monitor` with the
+    trajectory so far after each; returns its first verdict (the run stops there) or None
+    (the run went to its end or stopped by itself).  Pausing does not change the
+    trajectory (`integrate` continues from its carry)."""
     t, last = run.grid.t, run.grid.t.size - 1
     while run.k < last and run.status == ig.OK:
-        k0 = run.k
         k1 = min(int(np.searchsorted(t, t[run.k] + MONITOR_EVERY_S - 1e-12)), last)
         run.advance(max(k1, run.k + 1))
-        if run.status != ig.OK or run.separated_since(k0):
+        if run.status != ig.OK:
             return None
-        if monitor is None:
-            continue
         verdict = monitor(run.partial(run.k, np.inf, voltages=False))
         if verdict is not None:
             return verdict
@@ -914,16 +910,10 @@ class _Run:
         #: the machines' islands stage by stage when a stage trips a machine or splits an
         #: island (`Simulator.partitions`), else empty
         self.partitions = sim.partitions(m, grid, nets)
-        #: a run to stop at separation whose criterion the compiled loop cannot judge (it
-        #: knows the islands before the disturbance only): checked here between pieces
-        #: (`separated_since`) and cut at the separation (`finish`)
-        self.watch = bool(stop and self.partitions)
-        self.opts = ig.RunOptions(
-            pst=pst,
-            inertia=sim.inertia,
-            island=sim.island,
-            limit=limit,
-            stop=stop and not self.watch,
+        #: each stage's islands, COI weights and judged machines for the compiled loop (its
+        #: devices' relative speeds and its stop at separation)
+        self.opts = ig.run_options(
+            pst, sim.inertia, sim.island, self.partitions, len(nets), limit, stop
         )
         self.limit = limit
         #: the model's parameters with the limiters' reach (`stabctl.dynamics.prefix.reach`)
@@ -973,17 +963,6 @@ class _Run:
             self.evaluate or 0,
         )
 
-    def separated_since(self, k0: int) -> bool:
-        """Whether a watched run (`watch`) has separated (`judged_deviation` above the
-        limit) at a grid index from k0 to the last stored one; False for a run that is not
-        watched."""
-        if not self.watch:
-            return False
-        n, sim = self.k + 1, self.sim
-        angle, t = self.rec.angle[k0:n], self.grid.t[k0:n]
-        dev = judged_deviation(angle, t, sim.inertia, sim.island, self.partitions)
-        return bool(np.any(dev > self.limit))
-
     def command(self, i: int, t_apply: float, modes) -> None:
         """Schedule command i: device set-points (units of each rating) from t_apply (s)."""
         ds = self.carry.devices
@@ -1017,26 +996,14 @@ class _Run:
         )
 
     def finish(self, storage) -> SimulationResult:
-        """The result; raises SimulationError (with the partial result) after a divergence.
-        A watched run (`watch`) ends at its first separation, as the compiled loop's stop
-        ends the others: its switching log too, its storage figures (switchings, energies,
-        counted by the compiled loop) up to the last piece integrated
-        (`_advance_monitored`, at most MONITOR_EVERY_S later)."""
+        """The result; raises SimulationError (with the partial result) after a divergence."""
         sim, g, k_end = self.sim, self.grid, self.k
         res = sim._result(
             g.t, self.rec, k_end + 1, self.wall, self.limit, self.bus_rows, self.partitions
         )
-        if self.watch and not res.stable:
-            k_end = int(np.flatnonzero(res.t == res.t_separation)[0])
-            res = sim._result(
-                g.t, self.rec, k_end + 1, self.wall, self.limit, self.bus_rows, self.partitions
-            )
-            self.status = ig.SEPARATED
         if storage is not None:
             log = self.rec.log
             log = log[~np.isnan(log[:, 0])]
-            if self.status == ig.SEPARATED and self.watch:
-                log = log[log[:, 0] <= g.t[k_end]]
             _attach_storage(
                 res,
                 storage,

@@ -16,7 +16,11 @@ outside [1 - SPEED_BAND, 1 + SPEED_BAND] pu or Heun's local error estimate above
 more than EST_STEPS steps in a row (the signature of an explicit method beyond its
 stability region) stops the run (UNSTABLE_STEP), so that a loss of synchronism (an angle
 more than `RunOptions.limit` rad from the centre of inertia, eq. 40) is only ever judged on
-a numerically healthy run.  The storage devices are advanced by `stabctl.dynamics.switching`.
+a numerically healthy run.  Both the loss of synchronism and the storage devices' relative
+speeds use the islands of the current network stage (`RunOptions`, from
+`stabctl.dynamics.partition`): after a trip or a split the machines the stage's partition
+does not judge never stop a run, and each device follows its machine's island as it is
+now.  The storage devices are advanced by `stabctl.dynamics.switching`.
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from stabctl._jit.arrays import assign, max_abs
+from stabctl._jit.arrays import assign
 from stabctl._jit.borrow import borrowed
 from stabctl._jit.decorators import kernel, njit
 from stabctl.dynamics import subinterval as sub
@@ -161,15 +165,92 @@ def step_grid(grid: TimeGrid) -> StepGrid:
 
 
 class RunOptions(NamedTuple):
-    """Settings of a run: pst event semantics (module docstring); inertia (n_mac,) the COI
-    weights H * MVA; island (n_mac,) int, each machine's island (its COI is its island's);
-    limit (rad) and stop: end the run when an angle leaves its COI by more than limit."""
+    """Settings of a run (`run_options`).
+
+    Attributes
+    ----------
+    pst : bool
+        PSTess's event semantics (module docstring).
+    inertia : ndarray, shape (n_stage, n_mac)
+        COI weights H * MVA (MW s, `stabctl.dynamics.coi.coi_inertia`) of each network
+        stage (grid interval), within its islands.
+    island : ndarray of int, shape (n_stage, n_mac)
+        Each machine's island in each stage, labels 0, 1, ...: a machine's COI is its
+        island's (`stabctl.dynamics.partition.Partition.island`).  A tripped machine is
+        alone in an island of its own: it weighs in no other machine's COI, and its
+        device sees relative speed 0 (`stabctl.storage.control.relative_speeds`).
+    judged : ndarray of bool, shape (n_stage, n_mac)
+        The machines the loss-of-synchronism check judges in each stage
+        (`stabctl.dynamics.partition.Partition.judged`).
+    limit : float
+        Separation limit, rad.
+    stop : bool
+        End the run when a judged machine's angle leaves its island's COI by more than
+        `limit` (`_separated`).
+
+    Without partitions (no stage trips a machine or splits an island) every row is the
+    islands before the disturbance, every machine judged: the run computes as it did with
+    one row.  The storage devices observe the islands of the stage whose network a grid
+    point or a step is evaluated with (`stabctl.dynamics.switching.observe`), the check
+    judges a grid point against the stage that starts at or before its time, the later
+    of a zero-length interval's (`_judged_stage`, as
+    `stabctl.dynamics.partition.judged_deviation`).
+    """
 
     pst: bool
     inertia: np.ndarray
     island: np.ndarray
+    judged: np.ndarray
     limit: float
     stop: bool
+
+
+def run_options(
+    pst: bool,
+    inertia: np.ndarray,
+    island: np.ndarray,
+    partitions,
+    n_stage: int,
+    limit: float,
+    stop: bool,
+) -> RunOptions:
+    """The options of a run whose network has `n_stage` stages.
+
+    Parameters
+    ----------
+    pst : bool
+        PSTess's event semantics.
+    inertia : ndarray, shape (n_mac,)
+        COI weights before the disturbance, MW s (`stabctl.dynamics.coi.coi_inertia`).
+    island : ndarray of int, shape (n_mac,)
+        Islands before the disturbance (`stabctl.network.topology.machine_islands`).
+    partitions : sequence of Partition
+        The run's partitions, one per stage (`stabctl.dynamics.partition.stage_partitions`);
+        empty: every stage has the islands before the disturbance.
+    n_stage : int
+        Network stages (grid intervals).
+    limit : float
+        Separation limit, rad.
+    stop : bool
+        Stop at separation.
+
+    Returns
+    -------
+    RunOptions
+        Arrays C-contiguous, float64, int64 and bool (one compiled signature).
+    """
+    if partitions:
+        rows = [(p.inertia, p.island, p.judged) for p in partitions]
+    else:
+        rows = [(inertia, island, np.ones(np.size(island), bool))] * n_stage
+    return RunOptions(
+        pst=pst,
+        inertia=np.ascontiguousarray([r[0] for r in rows], np.float64),
+        island=np.ascontiguousarray([r[1] for r in rows], np.int64),
+        judged=np.ascontiguousarray([r[2] for r in rows], np.bool_),
+        limit=limit,
+        stop=stop,
+    )
 
 
 class Carry(NamedTuple):
@@ -287,9 +368,27 @@ def _healthy(x, est, nm, health):
 
 
 @kernel
-def _separated(x, nm, opts):
-    """Whether a rotor angle is more than opts.limit from its island's COI angle (eq. 40)."""
-    return max_abs(x[:nm] - island_coi(x[:nm], opts.inertia, opts.island)[0]) > opts.limit
+def _judged_stage(grid, k):
+    """The stage that judges grid index k: the last one started at or before t_k (the
+    later of a zero-length interval's, whose start time repeats), as
+    `stabctl.dynamics.partition.stage_at`."""
+    n = grid.t.size
+    while k + 1 < n and grid.t[k + 1] == grid.t[k]:
+        k += 1
+    return grid.interval[k]
+
+
+@kernel
+def _separated(x, nm, opts, s):
+    """Whether the rotor angle of a machine that stage s judges (opts.judged[s]) is more
+    than opts.limit from its island's COI angle (eq. 40, the islands and weights of stage
+    s): a machine tripped or cut off from the main grid never stops a run."""
+    coi = island_coi(x[:nm], opts.inertia[s], opts.island[s])[0]
+    judged = opts.judged[s]
+    for i in range(nm):
+        if judged[i] and abs(x[i] - coi[i]) > opts.limit:
+            return True
+    return False
 
 
 # -- recording -------------------------------------------------------------------------------
@@ -357,7 +456,7 @@ def _evaluate(kn, x, stage, want, dx):
 def _control_at_grid_point(kn, grid, sa, ds, opts, w, rec, x, k):
     """The controller at grid index k (events make voltages jump here): commands due,
     Table 3 modes, targets and powers; the network is solved again if a power changed."""
-    sw.observe(x, w.dx_k, kn.p.n_mac, opts, sa, kn.kept.V, w.a)
+    sw.observe(x, w.dx_k, kn.p.n_mac, opts, grid.interval[k], sa, kn.kept.V, w.a)
     if sa.kind == law.EXTERNAL:
         sw.apply_commands(ds, grid.t[k], rec, w.a.r)
     for d in range(sa.pmax.size):
@@ -380,7 +479,7 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, at):
     network takes (w.P_a).  Returns (network solved, derivatives)."""
     k, rem, first_d = at
     t_now = grid.t[k + 1] - rem
-    sw.observe(x_a, w.dx_j, kn.p.n_mac, opts, sa, kn.kept.V, w.a)
+    sw.observe(x_a, w.dx_j, kn.p.n_mac, opts, grid.interval[k], sa, kn.kept.V, w.a)
     if sa.kind == law.EXTERNAL:
         sw.apply_commands(ds, t_now, rec, w.a.r)
     if first_d >= 0:
@@ -497,11 +596,12 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
 
 
 @kernel(inline="always")
-def _after_step(kn, sa, ds, opts, w, rec, health, x, k):
-    """Numerical health and loss of synchronism after the step from k: (status, index)."""
+def _after_step(kn, grid, sa, ds, opts, w, rec, health, x, k):
+    """Numerical health and loss of synchronism after the step from k (the state at
+    k + 1, judged by its stage, `_judged_stage`): (status, index)."""
     if not _healthy(x, health.est[k + 1], kn.p.n_mac, health):
         return UNSTABLE_STEP, k
-    if opts.stop and _separated(x, kn.p.n_mac, opts):
+    if opts.stop and _separated(x, kn.p.n_mac, opts, _judged_stage(grid, k + 1)):
         sw.delivered(sa, ds.P, kn.kept, w.P_b)
         _record(rec, k + 1, x, kn.out, w.P_b)
         return SEPARATED, k + 1
@@ -547,7 +647,8 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
         schedule (c.devices.cmd_t sorted) takes effect at its exact time, splitting the
         step.
     opts : RunOptions
-        Event semantics, COI weights, separation limit and stop.
+        Event semantics, each stage's islands, COI weights and judged machines (the
+        devices' relative speeds and the separation check), separation limit and stop.
     rec : Recording
         Filled at every index with the predictor-stage outputs, the states, the device
         powers, their switching and energy statistics and the switching log.
@@ -572,7 +673,7 @@ def integrate(c, k0, k1, grid, nets, p, sa, opts, rec, evaluate):
     for k in range(k0, min(k1, n - 1)):
         status, k_end, x = _step(kn, grid, sa, c.devices, opts, w, rec, c.health, x, k)
         if status == OK:
-            status, k_end = _after_step(kn, sa, c.devices, opts, w, rec, c.health, x, k)
+            status, k_end = _after_step(kn, grid, sa, c.devices, opts, w, rec, c.health, x, k)
         if status != OK:
             assign(c.x, x)
             return status, k_end

@@ -23,13 +23,27 @@ of H * MVA), then the one with more buses (more of the network), then the one ho
 machine first in the data.  Each part has its own COI weights
 (`stabctl.dynamics.coi.coi_inertia` over the stage's islands).
 
+The compiled loop takes each stage's islands, weights and judged machines too
+(`stabctl.dynamics.integrator.run_options`, from the grid point where the stage starts):
+its stop at separation judges the machines `judged` does, against the stage's COI, so a
+machine tripped or cut off never stops a run; and each storage device watches its machine
+against the COI of the machine's island in the current stage
+(`stabctl.dynamics.switching.observe`): a device whose machine is cut off follows the COI
+of the machine's own island (a machine alone: relative speed 0, the device idles), the
+devices of the main grid the COI of the main grid without it, and the device of a tripped
+machine sees 0 and idles.
+
 A run none of whose stages trips a machine or splits an island has no partitions (an
 empty tuple): its criterion is the one of the islands before the disturbance, computed as
-it always was.  The Kundur check: tripping G4 at 1 s leaves G1-G3 within 0.95 rad of
-their COI (stable, G4 listed as tripped); a fault at bus 1 cleared by opening G1's
-step-up transformer 1-10 islands G1 at bus 1, and G2-G4 then follow, to 1e-6 rad, the
-trajectories of the same fault cleared without the line and G1 tripped at the clearing
-instant (tests/dynamics/test_islands.py).
+it always was, and so are its devices' relative speeds.
+
+The Kundur check: tripping G4 at 1 s leaves G1-G3 within 0.95 rad of their COI (stable,
+G4 listed as tripped); a fault at bus 1 cleared by opening G1's step-up transformer 1-10
+islands G1 at bus 1, and G2-G4 then follow, to 1e-6 rad, the trajectories of the same
+fault cleared without the line and G1 tripped at the clearing instant
+(tests/dynamics/test_islands.py).  With a storage fleet G1's device idles from the
+clearing on and G2-G4's follow the run with G1 tripped, and a tripped machine's device
+does nothing after the trip (tests/storage/test_islands_esd.py).
 """
 
 from __future__ import annotations

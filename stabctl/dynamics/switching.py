@@ -12,6 +12,16 @@ two parts (`stabctl.dynamics.integrator`); each device switches at most once per
 Externally commanded devices: each command of the schedule takes effect at its exact time
 (`apply_commands`, `substep_length`).  Every switching is counted and logged
 (`log_switching`) in the run's `stabctl.dynamics.integrator.Recording`.
+
+What the devices see (`observe`): each device's machine's speed relative to the centre of
+inertia of its island in the current network stage (`stabctl.dynamics.partition`; the
+stage's islands and weights in `stabctl.dynamics.integrator.RunOptions`), not of the
+islands before the disturbance.  Once a stage cuts a machine off the main grid, its device
+follows the COI of the machine's own island (a machine alone: relative speed 0, the device
+idles), and the devices of the main grid the COI of the main grid without it; the device
+of a tripped machine sees 0 and idles (`stabctl.storage.control.relative_speeds`).  The
+islands change at the grid point where the stage starts (events are grid points); a step
+is observed at both ends with the islands of its own stage.
 """
 
 from __future__ import annotations
@@ -173,11 +183,31 @@ def account(sa, Pa, Pb, e, hh, stats):
 
 
 @kernel
-def observe(x, dx, nm, opts, sa, V_nc, seen):
-    """Relative speeds, bus voltages and relative accelerations seen by the devices (COI
-    weights and islands of the run's options, `stabctl.dynamics.integrator.RunOptions`)."""
-    law.relative_speeds(x, nm, opts.inertia, opts.island, sa, seen.r)
-    law.relative_speeds(dx, nm, opts.inertia, opts.island, sa, seen.acc)
+def observe(x, dx, nm, opts, s, sa, V_nc, seen):
+    """What the devices see (module docstring): relative speeds, bus voltages and relative
+    accelerations.
+
+    Parameters
+    ----------
+    x, dx : ndarray, shape (n_state,)
+        Flat state and its derivatives.
+    nm : int
+        Machines.
+    opts : stabctl.dynamics.integrator.RunOptions
+        Each stage's islands and COI weights, (n_stage, n_mac).
+    s : int
+        The network stage whose islands the devices observe.
+    sa : stabctl.storage.devices.StorageArrays
+        The devices.
+    V_nc : ndarray of complex, shape (n_kept,)
+        Kept-bus voltages, pu.
+    seen : Seen
+        Written: r (pu) and acc (pu/s) against the COI of the machine's island in stage s
+        (`stabctl.storage.control.relative_speeds`; 0 for a tripped machine or one alone
+        in its island), v (pu).
+    """
+    law.relative_speeds(x, nm, opts.inertia[s], opts.island[s], sa, seen.r)
+    law.relative_speeds(dx, nm, opts.inertia[s], opts.island[s], sa, seen.acc)
     for d in range(seen.r.size):
         seen.v[d] = abs(V_nc[sa.pos[d]])
 
@@ -212,8 +242,11 @@ def substep_length(t_end, kind, cmd_t, cmd_next, rem):
 def locate_switching(kn, grid, sa, ds, opts, w, x_b, k):
     """First bang-bang switching inside the step from grid index k (state x_b and w.dx_j at
     its end): (fraction of the step, device), (2.0, -1) if none.  A device switches at most
-    once per step; a voltage-gate jump at an event is taken at the grid point."""
-    observe(x_b, w.dx_j, kn.p.n_mac, opts, sa, kn.kept.V, w.b)
+    once per step; a voltage-gate jump at an event is taken at the grid point, and so is
+    a change of the islands (both ends are observed with the islands of the step's stage,
+    grid.interval[k]: the relative speeds jump at the grid point where the stage starts,
+    `observe` there)."""
+    observe(x_b, w.dx_j, kn.p.n_mac, opts, grid.interval[k], sa, kn.kept.V, w.b)
     at_event = grid.interval[k + 1] != grid.interval[k]
     theta, first_d = 2.0, -1
     for d in range(sa.pmax.size):

@@ -265,16 +265,39 @@ def relative_speeds(x, nm, inertia, island, sa, out):
     """omega_i - omega_COI (pu) of each device's machine: COI of the machines of its island
     (eq. 40; the whole system when connected) or of the rest of them (sa.rest); with a
     critical group (sa.group, `BangBangCOI` coi="critical"), the COI of the other group in
-    its island (`group_reference`); 0 for a device without a machine.  x: flat state
-    (speeds in x[nm:2 nm]); island (n_mac,) int (`island_coi`); out (n_dev,) is
-    written."""
+    its island (`group_reference`).
+
+    Exactly 0 (the device idles under every law) for a device without a machine and for
+    one whose machine carries its island's whole COI weight: a machine alone in its island
+    (cut off from the rest of the network, `stabctl.dynamics.partition`: its own COI is
+    itself), a tripped machine (alone in an island of its own in a stage's partition, so
+    in no other machine's COI) or an infinite bus (the reference of its island).  Its
+    relative speed is 0 by definition there, not the round-off of w - (w M) / M, and the
+    "rest" of its island, empty or weightless, is never divided by.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n_state,)
+        Flat state, or its derivatives (speeds in x[nm:2 nm], pu; or pu/s).
+    nm : int
+        Machines.
+    inertia : ndarray, shape (n_mac,)
+        COI weights (MW s, `stabctl.dynamics.coi.coi_inertia` over `island`).
+    island : ndarray of int, shape (n_mac,)
+        Each machine's island, labels 0, 1, ... (`island_coi`); the run's stage's
+        (`stabctl.dynamics.integrator.RunOptions`).
+    sa : stabctl.storage.devices.StorageArrays
+        The devices (their machines sa.mac, -1: none).
+    out : ndarray, shape (n_dev,)
+        Written with the relative speeds, pu (pu/s for derivatives).
+    """
     w_all = x[nm : 2 * nm]
     coi, M = island_coi(w_all, inertia, island)
     ref = group_reference(w_all, inertia, island, sa.group) if sa.group.size else coi
     for d in range(sa.mac.size):
         i = sa.mac[d]
         w = x[nm + i]
-        if i < 0:
+        if i < 0 or inertia[i] == M[i]:
             out[d] = 0.0
         elif sa.rest:
             out[d] = w - (coi[i] * M[i] - w * inertia[i]) / (M[i] - inertia[i])
