@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stabctl.dynamics.coi import coi_angle, coi_of_islands, coi_speed
+from stabctl.dynamics.coi import coi_angle, coi_speed
 from stabctl.dynamics.partition import (
     Partition,
     judged_deviation,
@@ -165,9 +165,9 @@ class SimulationResult:
     @property
     def relative_speed(self) -> np.ndarray:
         """omega_i - omega_COI of machine i's island (pu), shape (n_t, n_mac): what a
-        storage device's controller acts on (the islands before the disturbance, as the
-        simulator's controllers, also after a trip or a split)."""
-        return self.speed - coi_of_islands(self.speed, self.inertia, self.island)
+        storage device's controller acts on (with `partitions`, as the simulator's
+        controllers, the island of the stage at each time; 0 for a tripped machine)."""
+        return relative_to_islands(self.speed, self.t, self.inertia, self.island, self.partitions)
 
     @property
     def max_angle_spread(self) -> float:

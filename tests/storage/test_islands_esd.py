@@ -86,6 +86,12 @@ def test_an_islanded_generators_device_idles_and_the_others_follow_the_main_grid
     assert np.all(trip.pesd[trip.t >= T_CLEAR, 0] == 0.0)  # as the tripped G1's
     rest = [1, 2, 3]
     check_bang_bang_follows(isl, case, rest, after & (isl.t > T_CLEAR + 0.05))
+    late = isl.t > T_CLEAR + 1e-9  # the result's relative speeds are what the devices see
+    assert (
+        np.abs(isl.relative_speed[late][:, rest] - own_relative_speed(isl, rest)[late]).max()
+        < 1e-15
+    )
+    assert np.all(isl.relative_speed[late, 0] == 0.0)  # G1 alone in its island
     assert np.array_equal(isl.t[a], trip.t[b])
     assert np.abs(isl.pesd[a][:, rest] - trip.pesd[b][:, rest]).max() < 1e-9
     assert np.abs(isl.angle[a][:, rest] - trip.angle[b][:, rest]).max() < 1e-6
