@@ -27,8 +27,9 @@ search, on 2 cores with perfect scaling, against the 30 min target.
 ``--activsg-sample N`` searches a random sample of ACTIVSg2000's N-1 (N bus faults, N line
 faults, seed 53) at ``--t-max`` (default 0.5 s, `stabctl screen`'s) with both methods and
 prints the verdicts, simulations per search (verdicts included) and per CCT, the wall per
-search with each fault's network stages built as a screening builds them, and the N-1
-projection from that mean (the two-fault projection above counts CCT searches only).
+search with each fault's network stages built as a screening builds them, the N-1
+projection from that mean and how many faults end with the same verdict, cell and
+half-step CCT in both (the two-fault projection above counts CCT searches only).
 ``--activsg-stages N`` times the network stages of N new bus and N new line faults of
 ACTIVSg2000 (a first run of a fault less a second), updated from the pre-event network's
 reduction (`stabctl.network.lowrank`) and factorised anew.
@@ -148,15 +149,19 @@ def n1_sample(case, n: int, t_max: float, seed: int = 53) -> None:
         return run(*a, **k)
 
     sim.run = counted  # type: ignore[method-assign]  # every search's runs, verdicts' too
+    outcomes: dict = {}
     for m in ("bisection", "sime"):
         opts = SearchOptions(method=m, t_max=t_max)
         found, kinds, t0, runs[0] = [], [], time.perf_counter(), 0
         for f in faults:  # each fault's stages evicted by the 8 faults after it
             try:
-                found.append(critical_clearing_time(sim, f, opts).n_simulations)
+                res = critical_clearing_time(sim, f, opts)
+                found.append(res.n_simulations)
                 kinds.append("cct")
+                outcomes.setdefault(m, []).append((res.bracket, res.cct_half_step_s))
             except InputError as exc:
                 kinds.append(type(exc).__name__)
+                outcomes.setdefault(m, []).append(type(exc).__name__)
         wall = (time.perf_counter() - t0) / len(faults)
         print(
             f"{m:10} {kinds.count('cct'):5d} {kinds.count('AboveSearchLimit'):6d} "
@@ -165,6 +170,8 @@ def n1_sample(case, n: int, t_max: float, seed: int = 53) -> None:
             f"{N1_SEARCHES * wall / 2 / 3600:12.2f} h",
             flush=True,
         )
+    same = sum(a == b for a, b in zip(outcomes["bisection"], outcomes["sime"]))
+    print(f"same verdict, 1 ms cell and half-step CCT in both: {same}/{len(faults)}")
 
 
 def paper_table():

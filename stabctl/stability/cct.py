@@ -28,8 +28,10 @@ Two searches (`SearchOptions.method`), both on the lattice below:
 
 - "bisection" (the default): stable at t_lo, the upper bound doubled from 0.1 s while
   stable, bisection;
-- "sime": the first probe at 0.1 s (doubled while stable), stable at t_lo checked only
-  when a probe is unstable before any is stable (a probe found stable above t_lo is
+- "sime": the first probe at t_max (stable there with every machine within 1 rad of
+  its angle to the COI before the fault: robust in one run), then at 0.1 s (doubled
+  while stable), stable at t_lo checked only when a probe is unstable before any is
+  stable (a probe found stable above t_lo is
   taken to make t_lo stable too: the verdict is assumed monotone below it), then the
   probes placed where SIME's unstable margin (`stabctl.stability.sime.probe_margin`,
   close to linear in the clearing time) extrapolated from two unstable probes
@@ -37,11 +39,13 @@ Two searches (`SearchOptions.method`), both on the lattice below:
 
 Both end in the same cell where the verdict is monotone in the clearing time (every fault
 of Kundur's screening and every fourth of miniWECC's, `benchmarks/bench_cct.py`).
-"sime" takes fewer runs there (Kundur 12.7 against 14.8 per CCT, 10.5 against 12.6 at the
-step h; miniWECC 13.2 against 14.6, 10.9 against 12.4 at h) and less time on a sample of
-ACTIVSg2000's N-1 (1.35 s a search against 1.58, the same counts of CCTs and verdicts;
+"sime" takes fewer runs there (Kundur 13.2 against 14.8 per CCT, 11.0 against 12.6 at the
+step h; miniWECC 14.4 against 14.6, 12.2 against 12.4 at h: the run at t_max costs about
+one run a CCT and saves the doubling's three for a robust fault) and less time on a
+sample of ACTIVSg2000's N-1, where most faults are robust at t_max 0.5 s (1.02 s a search
+against 1.45, 6.2 runs a search against 8.4, the same counts of CCTs and verdicts;
 `benchmarks/bench_cct.py --activsg-sample`), but assumes the verdict monotone below a
-stable probe, so bisection stays the default.
+stable probe and below a gentle run at t_max, so bisection stays the default.
 Neither comes near 5 runs per CCT: the two ends of the final cell and their reruns at
 h/2 make 4, and the margins of runs far from the CCT (those of the doubling) place no
 probe within a cell of it.
@@ -465,6 +469,7 @@ def critical_clearing_time(
     probes: dict[float, list] = {h: [], h / 2: []}
     separated: dict = {}
     margins: dict = {}
+    swings: dict = {}
     early_stops = []
     islanded: list = []
 
@@ -485,6 +490,8 @@ def critical_clearing_time(
             separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))
         if o.method == "sime" and step == h and not ok:
             margins[k] = probe_margin(res, t_cl, sim.case.base_mva, sim.case.freq_hz)
+        if o.method == "sime" and step == h and ok:
+            swings[k] = largest_swing(res)
         return ok
 
     wall = time.perf_counter()
@@ -492,7 +499,7 @@ def critical_clearing_time(
     try:
         if o.method == "sime":
             k_lo, k_hi, start_k = _sime_search(
-                stable_at, margins, (k_lo, k_hi, k_max), fault, tol, sim.case.freq_hz
+                stable_at, margins, swings, (k_lo, k_hi, k_max), fault, tol, sim.case.freq_hz
             )
             start = (_lattice(start_k[0], tol), _lattice(start_k[1], tol))
         else:
@@ -532,40 +539,68 @@ def critical_clearing_time(
 METHODS = ("sime", "bisection")
 
 
-def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
+def _sime_search(stable_at, margins: dict, swings: dict, bounds, fault: LineFault, tol, freq):
     """The "sime" search on the lattice: returns (k_stable, k_unstable = k_stable + 1,
     the first (stable, unstable) pair found).
 
+    The first probe is at k_max (when above k_hi): stable there with no machine swung
+    more than GENTLE_SWING rad from its angle to the centre of inertia before the fault
+    (`largest_swing`, `swings` filled by `stable_at` for each stable probe), the fault is
+    robust in one run (AboveSearchLimit).  The verdicts below such a gentle run are taken
+    to be stable too: a shorter fault swings the machines less, and the non-monotone
+    verdicts seen come with wide swings (ACTIVSg2000's bus 5370, stable cleared at 0.6 s
+    and 1.0 s but unstable at 0.8 s, swings 1.6 rad when cleared at 0.5 s).  Of
+    ACTIVSg2000's bus and line faults (a random sample, seed 7: 150 bus faults and about
+    100 line faults) the 178 found stable at 0.1 s and at 0.5 s were stable at 0.2 and
+    0.4 s too (the doubling's probes), 146 of them within 1 rad.  Any other outcome at
+    k_max leaves the doubling below as it would be without that probe (its verdict is
+    reused when the doubling reaches k_max; a run there that fails while the fault is on,
+    SimulationError, is left to the doubling, which may never reach it); an unstable
+    margin there is one more point for the extrapolation below (Kundur: 10.95 runs at
+    the step a CCT against 11.36 without it, the same cells).
+
     SIME's unstable margin is close to linear in the clearing time (`probe_margin`), so
-    two unstable probes extrapolate to the CCT (`_margin_zero`).  The first probe is at
-    k_hi, doubled while stable (as the bisection's bracket: a jump from a stable k_hi
-    straight to k_max, robust faults in two runs, was tried and dropped: ACTIVSg2000's
-    bus 5370 is stable cleared at 0.6 s and 1.0 s but unstable at 0.8 s, and the jump
-    called it robust at t_max 1 s); the check at k_lo (as `_bracket`) is run only when an
-    unstable probe comes before any stable one, i.e. it is assumed that a probe found
-    stable above k_lo makes k_lo stable too (a verdict monotone below the first stable
-    probe).  That is not always so: Kundur's fault at bus 3 on line 3-4 is unstable when
-    cleared within 0-10 ms and stable at 30-67 ms; its verdict (N-1 insecure) equals the
-    bisection's because its first probe, 0.1 s, is unstable, but a first probe (t_hi) in
-    30-67 ms would give a CCT there.  Then bisection until two unstable probes have a
-    margin.  Then, up to SIME_GUIDED times, the zero x of the margin extrapolated from
-    the two unstable probes closest to it sets the probe: more than SIME_NEAR cells below
-    the unstable end, at ceil(x) (the margin bends towards 0 near the CCT, so the zero
-    extrapolated from above mostly lands on the unstable side, and the next
-    extrapolation is short); within SIME_NEAR cells, at x rounded (the cell above the
-    stable end when floor(x) is that end, the cell below the unstable end when x is above
-    it); below the stable end, a quarter of the bracket above it.  Two guided probes in a
-    row that moved the same end by at most 2 cells (the bracket creeping) are followed by
-    a bisection step; after SIME_GUIDED guided probes, bisection.  A probe at k_max found
-    stable raises AboveSearchLimit.  `margins` (lattice index -> margin or None) is
-    filled by `stable_at` for each unstable probe."""
+    two unstable probes extrapolate to the CCT (`_margin_zero`).  After the probe at
+    k_max the search starts at k_hi, doubled while stable (as the bisection's bracket: a
+    jump from a stable k_hi straight to k_max and a bisection from there was tried and
+    dropped: it found other ends of non-monotone verdicts than the doubling, e.g.
+    ACTIVSg2000's bus 1050, 0.172 s against 0.121 s); the check at k_lo (as `_bracket`)
+    is run only when an unstable probe comes before any stable one, i.e. it is assumed
+    that a probe found stable above k_lo makes k_lo stable too (a verdict monotone below
+    the first stable probe).  That is not always so: Kundur's fault at bus 3 on line 3-4
+    is unstable when cleared within 0-10 ms and stable at 30-67 ms; its verdict (N-1
+    insecure) equals the bisection's because its probes at k_max and at 0.1 s are
+    unstable, but a first probe (t_hi) in 30-67 ms would give a CCT there. Then
+    bisection until two unstable probes have a margin.  Then, up to SIME_GUIDED times,
+    the zero x of the margin extrapolated from the two unstable probes closest to it
+    sets the probe: more than SIME_NEAR cells below the unstable end, at ceil(x) (the
+    margin bends towards 0 near the CCT, so the zero extrapolated from above mostly
+    lands on the unstable side, and the next extrapolation is short); within SIME_NEAR
+    cells, at x rounded (the cell above the stable end when floor(x) is that end, the
+    cell below the unstable end when x is above it); below the stable end, a quarter of
+    the bracket above it.  Two guided probes in a row that moved the same end by at most
+    2 cells (the bracket creeping) are followed by a bisection step; after SIME_GUIDED
+    guided probes, bisection.  A probe at k_max found stable raises AboveSearchLimit.
+    `margins` (lattice index -> margin or None) is filled by `stable_at` for each
+    unstable probe."""
     k_lo, k_hi, k_max = bounds
     known: dict[int, bool] = {}
+    at_max: dict[int, bool] = {}
+    if k_max > k_hi:  # robust in one run when gentle there; else reused by the doubling
+        try:
+            at_max[k_max] = stable_at(k_max)
+        except SimulationError:  # a long fault the doubling may never reach: left to it
+            pass
+        if at_max.get(k_max) and swings[k_max] < GENTLE_SWING:
+            _above_limit(k_max, fault, tol, freq)
     start = None
     n_guided, guided, ends, last = 0, None, (k_lo, k_max), None
     k = k_hi
     while True:
-        known[k] = stable_at(k)
+        if k in at_max:
+            known[k] = at_max.pop(k)
+        else:
+            known[k] = stable_at(k)
         if k == k_max and known[k]:
             _above_limit(k_max, fault, tol, freq)
         creeping, moved = False, None
@@ -601,6 +636,19 @@ def _sime_search(stable_at, margins: dict, bounds, fault: LineFault, tol, freq):
         k = guided = min(k, u - 1)
         ends = (s, u)
         n_guided += 1
+
+
+#: largest swing (rad) of a stable run at t_max that makes a fault robust in one run
+#: (`_sime_search`, `largest_swing`)
+GENTLE_SWING = 1.0
+
+
+def largest_swing(result: SimulationResult) -> float:
+    """The largest move (rad) of a machine's angle to its centre of inertia from its value
+    at the start of the run (`SimulationResult.relative_angle`: with `partitions`, the
+    island of the stage at each time, a tripped machine 0)."""
+    rel = result.relative_angle
+    return float(np.abs(rel - rel[0]).max())
 
 
 #: probes placed from SIME's margins before the "sime" search bisects what is left; the

@@ -177,3 +177,76 @@ def test_cli_screen_takes_the_search_and_keeps_the_bisection_s_cells(tmp_path):
         assert r.get("cct_s") == rows["bisection"][bus].get("cct_s")
         assert r.get("verdict") == rows["bisection"][bus].get("verdict")
     assert rows["sime"][101].get("cct_s") is None  # 0.835 s: above t_max 0.5
+
+
+def counting_runs(sim):
+    """The simulator with its runs counted in ``sim.runs[0]`` (every run of a search, a
+    verdict's too)."""
+    run, sim.runs = sim.run, [0]
+
+    def counted(*args, **kw):
+        sim.runs[0] += 1
+        return run(*args, **kw)
+
+    sim.run = counted
+    return sim
+
+
+@pytest.mark.parametrize(
+    ("bus", "far_bus", "t_max"), [(3, None, 0.15), (3, None, 0.2), (3, 101, 0.13)]
+)
+def test_a_gentle_run_at_t_max_makes_a_fault_robust_in_one_run(bus, far_bus, t_max):
+    """Kundur's bus-3 fault (CCT 0.238 s) and line 3-101 (0.154 s) under a t_max below
+    their CCTs: the bisection's check at 0 and its doubling take 3 runs to the verdict;
+    sime's first run, at t_max, is stable with no machine swung 1 rad from its angle to
+    the COI before the fault (0.45-0.71 rad), which settles it."""
+    from stabctl.stability.cct import GENTLE_SWING, largest_swing
+
+    sim = counting_runs(Simulator(load_case("kundur")))
+    fault = LineFault(bus, far_bus)
+    for method, runs in (("bisection", 3), ("sime", 1)):
+        sim.runs[0] = 0
+        assert search_outcome(sim, fault, SearchOptions(method=method, t_max=t_max)) == (
+            "AboveSearchLimit"
+        )
+        assert sim.runs[0] == runs
+    res = sim.run(fault.events(t_max), fault.t_fault + 5.0)
+    assert 0.3 < largest_swing(res) < GENTLE_SWING
+
+
+def test_a_wide_swing_at_t_max_leaves_the_verdict_to_the_doubling(monkeypatch):
+    """With the gentle bound at 0 rad no run at t_max settles a fault: sime then doubles
+    from 0.1 s as the bisection does, reusing the run at t_max when it gets there (two
+    runs for the robust bus-3 fault under t_max 0.2 s), and a CCT below t_max ends in
+    the bisection's cell (line 3-101)."""
+    import stabctl.stability.cct as cct
+
+    monkeypatch.setattr(cct, "GENTLE_SWING", 0.0)
+    sim = counting_runs(Simulator(load_case("kundur")))
+    opts = SearchOptions(method="sime", t_max=0.2)
+    assert search_outcome(sim, LineFault(3, None), opts) == "AboveSearchLimit"
+    assert sim.runs[0] == 2
+    fault = LineFault(3, 101)
+    ref = critical_clearing_time(sim, fault, SearchOptions(method="bisection"))
+    res = critical_clearing_time(sim, fault, SearchOptions(method="sime"))
+    assert res.bracket == ref.bracket == (0.154, 0.155)
+    assert res.probes[0] == (1.0, False)  # t_max first: unstable there
+
+
+def test_a_run_at_t_max_that_fails_while_the_fault_is_on_is_left_to_the_doubling():
+    """A network failure in the first run (the fault on for t_max, longer than the
+    doubling may ever hold it) is not the search's verdict: the search goes on from
+    0.1 s as without that run, to the bisection's verdict."""
+    sim = counting_runs(Simulator(load_case("kundur")))
+    run = sim.run
+
+    def fails_first(*args, **kw):
+        if sim.runs[0] == 0:
+            sim.runs[0] += 1
+            raise SimulationError("network singular while the fault is on")
+        return run(*args, **kw)
+
+    sim.run = fails_first
+    opts = SearchOptions(method="sime", t_max=0.2)
+    assert search_outcome(sim, LineFault(3, None), opts) == "AboveSearchLimit"
+    assert sim.runs[0] == 3  # the failed run, 0.1 s, 0.2 s again
