@@ -55,13 +55,21 @@ def edited(tmp_path, case: str, model: str, **values):
             "ieee14/ieee14_esd1.xlsx",
             "ESD1",
             {"SOCmin": 0.9, "SOCmax": 0.2},
-            "SOCmin = 0.9, SOCmax = 0.2: it must be 0 <= SOCmin < SOCmax <= 1",
+            "SOCmin = 0.9, SOCmax = 0.2: it must be SOCmin < SOCmax",
         ),
         (
             "ieee14/ieee14_esd1.xlsx",
             "ESD1",
             {"SOCmax": 2.0},
-            "SOCmax = 2: it must be 0 <= SOCmin < SOCmax <= 1",
+            "SOCmax = 2: it must be SOCmax <= 1",
+        ),
+        # REGCA1's Iq rate limits hold the rest point's rate 0 between them (the table's rule,
+        # the same for a case file's ibr_con)
+        (
+            "kundur/kundur_reg.xlsx",
+            "REGCA1",
+            {"Iqrmax": -999.0},
+            "Iqrmax = -999, Iqrmin = -999: it must be Iqrmin <= 0 <= Iqrmax",
         ),
     ],
 )
