@@ -255,6 +255,20 @@ def test_a_negative_regulator_gain_is_refused_by_every_command(tmp_path, no_simu
     )
 
 
+def test_two_swing_buses_of_one_island_are_said_in_one_warning_line(tmp_path):
+    """Kundur's bus 2 made a second swing bus ran without a word: it runs (both held at
+    their voltage and angle, as PSS/E's several type-3 buses) and says so, naming both."""
+    d = _kundur_dict()
+    rows = d["tables"]["buses"]["rows"]
+    _set(d, "buses", "kind", 1.0, row=[r[0] for r in rows].index(2))
+    path = tmp_path / "two.json"
+    path.write_text(json.dumps(d))
+    res = run("simulate", path, "--tf", 0.1)
+    assert res.exit_code == 0, (res.output, res.exception)
+    said = [x for x in res.stderr.splitlines() if x.startswith(("warning:", "note:"))]
+    assert len(said) == 1 and "buses 1 and 2 are both swing buses" in said[0], res.stderr
+
+
 def test_case_without_machines_says_so(tmp_path):
     d = _kundur_dict()
     for t in ("machines", "exciters", "pss", "governors"):
