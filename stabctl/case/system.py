@@ -43,9 +43,10 @@ import numpy as np
 
 from stabctl.case.events import events_of_records
 from stabctl.errors import CaseError, UnknownBusError
-from stabctl.models.converters import CONVERTER, ESD1, REGCA1
+from stabctl.models.converters import CONVERTER
+from stabctl.models.converters.rules import COMPONENTS
 from stabctl.models.declaration import Family, array_dataclass, choices_message
-from stabctl.models.exciters import EXCITER
+from stabctl.models.exciters import EXCITER, SATURATED_EXCITERS
 from stabctl.models.governors import GOVERNOR
 from stabctl.models.machines import MACHINE
 from stabctl.models.motors import MOTOR
@@ -85,10 +86,11 @@ SWING, PV, PQ = 1, 2, 3
 # --------------------------------------------------------------------------------------
 
 
-def _where(table: str, row: int, key: str | None, value, fld: str) -> str:
-    """Location prefix of an error: table, 1-based row, its bus/machine number, field."""
+def _where(table: str, row: int, key: str | None, value, fld: str, col: int | None = None) -> str:
+    """Location prefix of an error: table, 1-based row, its bus/machine number, field (and
+    its column, for a field named by another type's name of the column)."""
     ident = "" if key is None or value is None else f" ({key} {_fmt(value)})"
-    return f"{table} row {row + 1}{ident}, field '{fld}'"
+    return f"{table} row {row + 1}{ident}, field '{fld}'" + (f" (column {col})" if col else "")
 
 
 def _fmt(x) -> str:
@@ -241,9 +243,9 @@ class Table:
             return None
         return getattr(self, self.KEY)[row]
 
-    def _fail(self, row: int, fld: str, what: str):
-        where = _where(self.TABLE, int(row), self.KEY_LABEL, self._key_value(int(row)), fld)
-        raise CaseError(f"{where}: {what}")
+    def _fail(self, row: int, fld: str, what: str, col: int | None = None):
+        key = self._key_value(int(row))
+        raise CaseError(f"{_where(self.TABLE, int(row), self.KEY_LABEL, key, fld, col)}: {what}")
 
     def _require(self, mask: np.ndarray, fld: str, what: str):
         """Raise for the first row where ``mask`` is False."""
@@ -251,6 +253,13 @@ class Table:
         if bad.size:
             val = getattr(self, fld)[bad[0]]
             self._fail(bad[0], fld, f"{what}, got {_fmt(val)}")
+
+    def _require_row(self, mask: np.ndarray, fld: str, what):
+        """Raise for the first row where ``mask`` is False, ``what(row)`` saying why."""
+        bad = np.flatnonzero(~np.asarray(mask, dtype=bool))
+        if bad.size:
+            val = getattr(self, fld)[bad[0]]
+            self._fail(bad[0], fld, f"{what(bad[0])}, got {_fmt(val)}")
 
     def _nonnegative(self, *fields: str):
         for f in fields:
@@ -276,6 +285,52 @@ class Table:
                 self._require(arr >= p.lo, p.name, f"must be >= {_fmt(p.lo)}")
             if p.hi is not None:
                 self._require(arr <= p.hi, p.name, f"must be <= {_fmt(p.hi)}")
+        self._check_limits()
+
+    def _named(self, name: str) -> tuple[np.ndarray, int | None]:
+        """The column of field ``name``, or of the column another type reads as ``name``
+        (a declared ``alt`` name) with its 1-based column number (None for a field)."""
+        if name in self.columns():
+            return getattr(self, name), None
+        assert self.FAMILY is not None
+        k = self.FAMILY.col(name)
+        return self.col(k), k
+
+    def _check_limits(self):
+        """The `stabctl.models.declaration.Limits` of each row's type (``FAMILY.limits``):
+        the first row of a type holding a value its type's equations cannot take, named
+        with the type and the limits' source."""
+        fam = self.FAMILY
+        if fam is None or not fam.limits or not len(self):
+            return
+        for kind, limits in fam.limits.items():
+            rows = self.type == kind
+            if not rows.any():
+                continue
+            for lim in limits:
+                tail = f"{fam.type_names.get(kind, f'type {kind}')}; {lim.source}"
+                for names, ok, must in (
+                    (lim.nonnegative, lambda v: v >= 0, ">= 0"),
+                    (lim.positive, lambda v: v > 0, "> 0"),
+                ):
+                    for name in names:
+                        v, col = self._named(name)
+                        bad = np.flatnonzero(rows & ~ok(v))
+                        if bad.size:
+                            r = bad[0]
+                            self._fail(r, name, f"must be {must} ({tail}), got {_fmt(v[r])}", col)
+                for hi, lo in lim.ordered:
+                    (a, col), (b, _) = self._named(hi), self._named(lo)
+                    bad = np.flatnonzero(rows & ~(a >= b))
+                    if bad.size:
+                        r = bad[0]
+                        what = f"must be >= {lo} = {_fmt(b[r])} ({tail}), got {_fmt(a[r])}"
+                        self._fail(r, hi, what, col)
+                for name in lim.one:
+                    v, col = self._named(name)
+                    bad = np.flatnonzero(rows & (v != 1))
+                    if bad.size:
+                        self._fail(bad[0], name, f"must be 1 ({tail}), got {_fmt(v[bad[0]])}", col)
 
     def _check(self):
         """Table-local validation (subclasses)."""
@@ -364,7 +419,7 @@ class BusTable(Table):
 
     Omitted columns (PST's ``loadflow`` defaults): qmax 9999, qmin -9999, kv 1, vmax 1.5,
     vmin 0.5. Validation: unique positive integer numbers, kind in {1, 2, 3}, vmag > 0,
-    qmax >= qmin and vmax >= vmin (0 read as above).
+    qmax >= qmin and vmax >= vmin (0 read as above), kv >= 0.
     """
 
     number: np.ndarray
@@ -407,6 +462,9 @@ class BusTable(Table):
         vmax = np.where(self.vmax == 0, 1.5, self.vmax)
         vmin = np.where(self.vmin == 0, 0.5, self.vmin)
         self._require(vmax >= vmin, "vmax", "voltage limits: vmax must be >= vmin")
+        # a rated voltage is a magnitude; 0 is "not given" (PST's loadflow reads it as 1,
+        # PSS/E RAW's BASKV 0), which stabctl.estimation.c37 refuses for a PMU's bus
+        self._require(self.kv >= 0, "kv", "rated voltage must be >= 0 kV (0: not given)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -459,7 +517,7 @@ class BranchTable(Table):
     KEY: ClassVar[str | None] = None
     INTEGER: ClassVar[tuple[str, ...]] = ("from_bus", "to_bus")
 
-    def _fail(self, row: int, fld: str, what: str):
+    def _fail(self, row: int, fld: str, what: str, col: int | None = None):
         row = int(row)
         ident = f" ({_fmt(self.from_bus[row])}-{_fmt(self.to_bus[row])})" if len(self) else ""
         raise CaseError(f"line row {row + 1}{ident}, field '{fld}': {what}")
@@ -507,7 +565,9 @@ class MachineTable(Table):
         Validation: unique positive integer machine numbers, mva > 0, D0 >= 0, H > 0 (or 0 for a
         classical machine with x'd > 0), reactances and
         ra >= 0, T'do > 0 (x_d > 0) and T"do > 0 (x"d > 0), x_d >= x'd >= x"d (where given),
-        speed_effects and psse_swing 0 or 1, psse_sat 0 to 4.
+        a subtransient machine's x_l < x'd, x_l < x'q (x"d where T"qo = 0) and x'q <= x_q
+        (T"qo > 0), 0 <= S(1.0) <= S(1.2) (x_d > 0), speed_effects and psse_swing 0 or 1,
+        psse_sat 0 to 4.
     """
 
     def _check(self):
@@ -545,6 +605,46 @@ class MachineTable(Table):
             "xdp",
             "x'd must be >= x\"d (a subtransient machine)",
         )
+        # the subtransient model (PST mac_sub, PSS/E GENROU, GENSAL) splits the flux linkages
+        # through x'd - x_l and x'q - x_l and divides by them (PST mac_pot columns 8, 13):
+        # the stator leakage lies below both (the model's x'q is x"d where T"qo = 0).  PSS/E's
+        # Xl < X"d is not required: ANDES's ieee39_full has Xl > X"d on two units and runs
+        sub = (self.xd != 0) & (self.xdpp != 0)
+        self._require_row(
+            ~sub | (self.xl < self.xdp),
+            "xl",
+            lambda r: f"leakage x_l must be < x'd = {_fmt(self.xdp[r])} (a subtransient machine)",
+        )
+        xqp = np.where(self.Tqopp == 0, self.xdpp, self.xqp)
+        self._require_row(
+            ~sub | (self.xl < xqp),
+            "xl",
+            lambda r: (
+                f'leakage x_l must be < x\'q = {_fmt(xqp[r])} (x"d where T"qo = 0; a '
+                "subtransient machine)"
+            ),
+        )
+        # the q-axis reactances as seen ever sooner after a disturbance can only fall, as
+        # the d axis's (PSS/E Model Library GENROU: Xq >= X'q)
+        self._require_row(
+            ~sub | (self.Tqopp == 0) | (self.xq >= self.xqp),
+            "xqp",
+            lambda r: (
+                f"x'q must be <= x_q = {_fmt(self.xq[r])} (a subtransient machine with T\"qo > 0)"
+            ),
+        )
+        # saturation grows with the flux: 0 <= S(1.0) <= S(1.2) (PSS/E Model Library GENROU,
+        # GENSAL; PST mac_con columns 20-21) for every machine with a field winding
+        field = self.xd != 0
+        self._require(~field | (self.S10 >= 0), "S10", "saturation S(1.0) must be >= 0")
+        self._require_row(
+            ~field | (self.S12 >= self.S10),
+            "S12",
+            lambda r: (
+                f"saturation S(1.2) must be >= S(1.0) = {_fmt(self.S10[r])} (it grows "
+                "with the flux)"
+            ),
+        )
 
 
 @_declared(EXCITER)
@@ -564,12 +664,32 @@ class ExciterTable(Table):
         reads column 19 as ``bus_fed`` (PSS/E SCRX, output times V_t).  EXST1 (type 4) uses
         columns 3-11 and KC (17) as named, with Vrmax, Vrmin its output limits (times V_t) and
         KF, TF (21, 22).  Omitted trailing columns are 0 (a simple exciter needs 9). Validation:
-        each column's declared range and codes (``type`` among the declared exciter types), one
-        exciter per machine (machine existence is checked by :class:`Case`).
+        each column's declared range and codes (``type`` among the declared exciter types),
+        each type's limits (its module's ``LIMITS``: Vrmax >= Vrmin and the other pairs of
+        limits it reads, saturation points >= 0), a saturation that does not fall as the
+        voltage rises (SE(E2) >= SE(E1) where E2 > E1), one exciter per machine (machine
+        existence is checked by :class:`Case`).
     """
 
     def _check(self):
         self._unique("machine", "exciter on machine")
+        # the DC and AC exciters' saturation SE(E) grows with the exciter voltage (IEEE Std
+        # 421.5-2016's exciter saturation function: SE(E1) at E1 below SE(E2) at E2 > E1;
+        # PSS/E Model Library, the same points)
+        sat = np.isin(self.type, SATURATED_EXCITERS)
+        E1, SE1, E2, SE2 = (self._named(n)[0] for n in ("E1", "SE1", "E2", "SE2"))
+        lo, hi = np.where(E1 <= E2, SE1, SE2), np.where(E1 <= E2, SE2, SE1)
+        bad = np.flatnonzero(sat & (E1 > 0) & (E2 > 0) & (E1 != E2) & (hi < lo))
+        if bad.size:
+            r = bad[0]
+            self._fail(
+                r,
+                "SE2",
+                f"saturation must grow with the voltage: SE(E1 = {_fmt(E1[r])}) = "
+                f"{_fmt(SE1[r])}, SE(E2 = {_fmt(E2[r])}) = {_fmt(SE2[r])} (IEEE Std 421.5's "
+                "exciter saturation)",
+                EXCITER.col("SE2"),
+            )
 
 
 @_declared(PSS)
@@ -581,12 +701,25 @@ class PssTable(Table):
 
     {columns}
 
-        Omitted columns are 0.  Validation: type in {1, 2, 3, 4}, one PSS per machine, washout
-        and lag constants (Tw, T2, T4, T6, Tr1, Tr2) >= 0, Tw > 0, T2 > 0 for types 1 and 2.
+        Omitted columns are 0.  Validation: the declared types, one PSS per machine, the
+        declared bounds (every time constant >= 0, IEEEST's filter denominator A1..A4 >= 0),
+        ymax >= ymin and each type's limits (its module's ``LIMITS``), VCU > VCL where both
+        cut-offs are given, Tw > 0, T2 > 0 for types 1 and 2.
     """
 
     def _check(self):
         self._unique("machine", "pss on machine")
+        # the output is cut off above VCU and below VCL (0: no such cut-off): both given,
+        # VCU <= VCL would cut it off at every voltage (PSS/E Model Library IEEEST, ST2CUT)
+        both = (self.VCU != 0) & (self.VCL != 0)
+        self._require_row(
+            ~both | (self.VCU > self.VCL),
+            "VCU",
+            lambda r: (
+                f"must be > VCL = {_fmt(self.VCL[r])} where both cut-offs are given (else "
+                "the output is cut off at every voltage; PSS/E Model Library IEEEST)"
+            ),
+        )
         self._require(self.Tw > 0, "Tw", "washout time constant must be > 0 s")
         self._require(
             (self.type >= 3) | (self.T2 > 0),
@@ -605,9 +738,11 @@ class GovernorTable(Table):
     {columns}
 
         PST files give 10 columns; the omitted ones are 0 (Tmin = 0 is PST tg's lower clip).
-        Validation: type in {1, ..., 5}, one governor per machine, lag time constants Ts, Tc,
-        T5, T6, T7 >= 0 (the lead constants T3, T4 may be negative: miniWECC's hydro units use
-        T4 = -1).
+        Validation: the declared types, one governor per machine, the declared bounds (lag
+        time constants >= 0, the lead constants T3, T4 may be negative: miniWECC's hydro units
+        use T4 = -1; 1/R, the damping and the power fractions >= 0; Uo >= 0 >= Uc), Tmax >=
+        Tmin, and each type's limits (its module's ``LIMITS``: the speed set point wf 1 where
+        the speed error is wf - omega, ...).
     """
 
     def _check(self):
@@ -872,9 +1007,12 @@ class ConverterTable(Table):
         Omitted columns take ANDES's defaults (as declared).  Validation: unique positive
         integer numbers, type 1, 2, 3 or 4, mva > 0, Twm > 0, tip, tiq, Tfm >= 0, ft0 < ft1 <=
         ft2 < ft3 and vt0 < vt1 <= vt2 < vt3 (the trip curves divide by the differences),
-        dqdv < 0, ESD1: Tf > 0, En > 0, 0 < EtaC, EtaD and SOCmin <= SOCinit <= SOCmax;
-        REGCA1: Lvpnt0 < Lvpnt1 and (Lvplsw 1) Zerox < Brkpt (the piecewise gains divide by
-        the differences).
+        dqdv < 0, and each component's rules
+        (:data:`stabctl.models.converters.rules.RULES`, the same that ``import-andes`` checks
+        in an ANDES file: PVD1, ESD1 ialim > 0; ESD1 En, Tf, EtaC, EtaD > 0 and 0 <= SOCmin <
+        SOCmax <= 1, SOCinit between them (a REGCA1 battery's too); REGCA1 Lvpnt0 < Lvpnt1,
+        (Lvplsw 1) Zerox < Brkpt (the piecewise gains divide by the differences), Iqrmin <= 0
+        <= Iqrmax; its REECA1's (REECB1's, REECD1's) Imax > 0, Vdip < Vup).
     """
 
     def _check(self):
@@ -887,23 +1025,17 @@ class ConverterTable(Table):
             self._require(getattr(self, b) > getattr(self, a), b, f"must be > {a}")
         self._require(self.vt2 >= self.vt1, "vt2", "must be >= vt1")
         self._require(self.ft2 >= self.ft1, "ft2", "must be >= ft1")
-        esd = self.type == ESD1
-        self._require(~esd | (self.Tf > 0), "Tf", "ESD1 integrator time constant must be > 0 s")
-        self._require(~esd | (self.En > 0), "En", "ESD1 rated energy must be > 0 MWh")
-        self._require(~esd | (self.EtaC > 0), "EtaC", "ESD1 efficiency must be > 0")
-        self._require(~esd | (self.EtaD > 0), "EtaD", "ESD1 efficiency must be > 0")
-        self._require(
-            ~esd | ((self.SOCinit >= self.SOCmin) & (self.SOCinit <= self.SOCmax)),
-            "SOCinit",
-            "ESD1 initial state of charge must be in [SOCmin, SOCmax]",
-        )
-        reg = self.type == REGCA1
-        self._require(~reg | (self.Lvpnt1 > self.Lvpnt0), "Lvpnt1", "REGCA1: must be > Lvpnt0")
-        self._require(
-            ~reg | (self.Lvplsw == 0) | (self.Brkpt > self.Zerox),
-            "Brkpt",
-            "REGCA1: must be > Zerox",
-        )
+        values = {c: getattr(self, c) for c in self.columns()}
+        for model, has, rules in COMPONENTS:  # the limits import-andes checks, as it does
+            rows = has(self)
+            if not rows.any():
+                continue
+            for rule in rules:
+                bad = np.flatnonzero(rows & ~np.asarray(rule.holds(values), dtype=bool))
+                if bad.size:
+                    r = bad[0]
+                    shown = ", ".join(f"{n} = {_fmt(getattr(self, n)[r])}" for n in rule.names)
+                    self._fail(r, rule.names[0], f"{model}: {shown}: it must be {rule.what}")
 
 
 #: table field of Case -> table class, in file order

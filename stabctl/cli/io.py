@@ -521,7 +521,10 @@ def import_andes(
         for item in items:
             click.echo(f"  {what}: {item}")
     if dv is not None:
-        click.echo(f"power flow against ANDES's: max |dV| {dv:.1e} pu, max |d angle| {da:.1e} rad")
+        click.echo(
+            f"power flow against ANDES's (PV Q limits off in both, as ANDES solves it; the "
+            f"commands' --no-q-limits): max |dV| {dv:.1e} pu, max |d angle| {da:.1e} rad"
+        )
     _echo_raw_gap(against_raw, "Q limits on, as PSS/E solved it")
 
 

@@ -23,6 +23,7 @@ raises SimulationError; both carry the trajectory up to that point.
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -66,9 +67,11 @@ from stabctl.dynamics.prefix import PREFIXES_KEPT, Prefix, integrate_from_cache,
 from stabctl.dynamics.results import SimulationResult
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import (
+    CaseError,
     InputError,
     NumericalInstabilityError,
     SimulationError,
+    StabctlError,
     run_on_suspect_starts,
 )
 from stabctl.models import converters as conv
@@ -240,12 +243,36 @@ class Simulator:
         self.suspect: tuple[str, ...] = ()
         self.conventions = check_conventions(conventions)
         self.q_limits = bool(q_limits)
+        given, held = case, np.zeros(0, int)
         if op is None:
             from stabctl.network.powerflow import solve_powerflow
 
             pf = solve_powerflow(case, q_limits=self.q_limits)
+            held = case.buses.number[pf.q_limited].astype(int)
             op = OperatingPoint.from_bus_matrix(pf.bus_matrix())
             case = _with_solved_shunts(_with_solved_taps(case, pf.taps), pf.shunt_levels)
+        try:
+            self._start(case, op, injection_buses, step, background_compile, off_equilibrium,
+                        subintervals)  # fmt: skip
+        except CaseError as exc:
+            settings = dict(
+                injection_buses=injection_buses,
+                conventions=conventions,
+                step=step,
+                off_equilibrium=off_equilibrium,
+                suspect_starts=suspect_starts,
+                subintervals=subintervals,
+            )
+            hint = _held_at_q_limits(given, held, settings)
+            if hint:  # the same error (its class and fields), its message completed
+                exc.args = (f"{exc}{hint}", *exc.args[1:])
+            raise
+
+    def _start(
+        self, case, op, injection_buses, step, background_compile, off_equilibrium, subintervals
+    ) -> None:
+        """The rest of the construction at the solved operating point `op` (the arguments
+        as the constructor's): the model, its step, its start checked."""
         single_threaded_blas()
         self.case, self.op = case, op
         self._models: BoundedCache[DynamicModel] = BoundedCache(MODELS_KEPT)
@@ -264,7 +291,9 @@ class Simulator:
         self.fastest = fastest_time_constant(case)
         if not self.subintervals:
             self.fastest = min(self.fastest, self.model.fastest_loop)
-        self.default_h = default_step(case, conventions, self.fastest) if step is None else step
+        self.default_h = (
+            default_step(case, self.conventions, self.fastest) if step is None else step
+        )
         check_step(self.fastest, self.default_h)
         self.island, self.inertia = self.model.island, self.model.coi_inertia
         if background_compile:
@@ -807,6 +836,46 @@ def islanding_log(grid, nets, case: Case | None = None, partitions=()) -> list[d
         )
         out.sort(key=lambda entry: entry["t_s"])  # stable: a stage's dead buses first
     return out
+
+
+def _held_at_q_limits(case: Case, held: np.ndarray, settings: dict) -> str:
+    """What to add to a refusal of `case`'s start when its power flow held the PV buses
+    `held` (bus numbers) at their Q limits and a simulator of the power flow without Q
+    limits (as ANDES solves it, pv2pq = 0) starts: their numbers and the option; '' when
+    none was held or that start is refused too (then the Q limits are not the cause).
+
+    Parameters
+    ----------
+    case : Case
+        The case as given to the simulator.
+    held : numpy.ndarray
+        Bus numbers the power flow held at a Q limit.
+    settings : dict
+        The simulator's other arguments (`Simulator`).
+
+    Returns
+    -------
+    str
+        ``"; the power flow held bus 3 at its Q limit ..."`` or ''.
+    """
+    if not held.size:
+        return ""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # said by the first try already
+            Simulator(case, q_limits=False, background_compile=False, **settings)
+    except StabctlError:
+        return ""
+    listed = ", ".join(map(str, held[:10])) + (
+        f" and {held.size - 10} more" if held.size > 10 else ""
+    )
+    one = held.size == 1
+    return (
+        f"; the power flow held bus{'' if one else 'es'} {listed} at "
+        f"{'its Q limit' if one else 'their Q limits'}, and without Q limits the case starts "
+        "at rest: --no-q-limits (q_limits=False) solves the power flow as ANDES does (pv2pq "
+        "= 0, the power flow import-andes compares with)"
+    )
 
 
 def _with_solved_taps(case: Case, taps: np.ndarray) -> Case:

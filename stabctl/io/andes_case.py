@@ -136,6 +136,7 @@ from stabctl.models.converters import (
     WTDS,
     WTDTA1,
 )
+from stabctl.models.converters.rules import RULES as CONVERTER_RULES
 from stabctl.models.machines import MACHINE
 from stabctl.models.motors import MOTOR
 from stabctl.models.shafts import SHAFT
@@ -644,10 +645,10 @@ def _file_inputs(path: Path, ss) -> _Given:
     stabctl reads, a value ANDES would replace by its default (`_violated`: 0 where its
     declaration says non-zero, a sign it must not have, a PVD1 current limit of 0 or -1.1
     run at 1.3, a GENROU M of 0 or -13 at H = 3 s) or an infinite one; converter data that
-    cannot be (:data:`_CONVERTER_RULES`: REECA1 Imax <= 0, Vdip >= Vup, ESD1 SOC limits,
-    En <= 0); machine, exciter and governor data that cannot be (:data:`_DYNAMIC_LIMITS`:
-    M <= 0, D < 0, a negative time constant, a zero one the model does not bypass, a
-    droop R <= 0).
+    cannot be (`stabctl.models.converters.rules.RULES`, the ibr_con table's: REECA1 Imax <=
+    0, Vdip >= Vup, ESD1 SOC limits, En <= 0, REGCA1's Iq rate limits, ...); machine,
+    exciter and governor data that cannot be (:data:`_DYNAMIC_LIMITS`: M <= 0, D < 0, a
+    negative time constant, a zero one the model does not bypass, a droop R <= 0).
 
     Returned (`_Given`): the parameters of the converter family and of the machines and
     their controls that the file leaves out (no column, an empty cell), run at ANDES's
@@ -711,10 +712,10 @@ def _file_inputs(path: Path, ss) -> _Given:
                         f"{where}: {name} = {v:g} ({rule}: ANDES would run with its "
                         f"default {p.default!r})"
                     )
-            for test, what in _CONVERTER_RULES.get(model, ()):
-                if not test(values):
-                    shown = ", ".join(f"{n} = {values[n]:g}" for n in _names_in(what, values))
-                    raise CaseError(f"{where}: {shown}: it must be {what}")
+            for law in CONVERTER_RULES.get(model, ()):  # the ibr_con table's own, the same
+                if all(n in values for n in law.names) and not law.holds(values):
+                    shown = ", ".join(f"{n} = {values[n]:g}" for n in law.names)
+                    raise CaseError(f"{where}: {shown}: it must be {law.what}")
             _check_limits(where, model, values)
     given.defaulted.extend(
         f"{model} {name} = {default} (row{'s' * (len(rows) > 1)} {_row_list(rows)})"
@@ -776,32 +777,6 @@ _CONVERTER_FAMILY = (
     "REGCA1", "REGCP1", "REECA1", "REECA1E", "REECB1", "REPCA1", "PVD1", "ESD1",
     "WTDTA1", "WTDS", "WTARA1", "WTPTA1", "WTTQA1",
 )  # fmt: skip
-
-#: physically impossible converter and battery data, refused (`_file_inputs`):
-#: model -> (test on a row's values, what it must be); ANDES runs them
-_CONVERTER_RULES: dict[str, tuple] = {
-    "REECA1": (
-        (lambda r: r["Imax"] > 0, "Imax > 0"),
-        (lambda r: r["Vdip"] < r["Vup"], "Vdip < Vup"),
-    ),
-    "REECA1E": (
-        (lambda r: r["Imax"] > 0, "Imax > 0"),
-        (lambda r: r["Vdip"] < r["Vup"], "Vdip < Vup"),
-    ),
-    "REECB1": (
-        (lambda r: r["Imax"] > 0, "Imax > 0"),
-        (lambda r: r["Vdip"] < r["Vup"], "Vdip < Vup"),
-    ),
-    "ESD1": (
-        (lambda r: r["En"] > 0, "En > 0"),
-        (lambda r: 0 <= r["SOCmin"] < r["SOCmax"] <= 1, "0 <= SOCmin < SOCmax <= 1"),
-        (lambda r: r["SOCmin"] <= r["SOCinit"] <= r["SOCmax"], "SOCmin <= SOCinit <= SOCmax"),
-        (lambda r: r["ialim"] > 0, "ialim > 0"),
-    ),
-    "PVD1": ((lambda r: r["ialim"] > 0, "ialim > 0"),),
-    "WTDTA1": ((lambda r: r["H"] > 0 and r["Htfrac"] < 1, "H > 0, Htfrac < 1"),),
-}
-
 
 #: the synchronous machines', exciters' and governors' values that cannot be, refused
 #: before ANDES runs them (`_file_inputs`, `_check_limits`): ANDES model -> (parameters
@@ -894,13 +869,6 @@ def _violated(p, v: float) -> str:
     if v < 0 and p.get_property("non_negative"):
         return "must not be negative"
     return ""
-
-
-def _names_in(what: str, values: dict) -> list[str]:
-    """The parameter names a rule's text mentions, in its order."""
-    import re
-
-    return [n for n in dict.fromkeys(re.findall(r"[A-Za-z]\w*", what)) if n in values]
 
 
 def _row_list(rows: list[int]) -> str:

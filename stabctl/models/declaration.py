@@ -49,6 +49,7 @@ import numpy as np
 __all__ = [
     "Param",
     "DyrModel",
+    "Limits",
     "Family",
     "choices_message",
     "array_dataclass",
@@ -163,6 +164,41 @@ class DyrModel:  # fields of a dataclass: numpydoc ignore=PR02
 
 
 @dataclass(frozen=True)
+class Limits:  # fields of a dataclass: numpydoc ignore=PR02
+    """The values a model type's equations cannot take, refused by name when a case table
+    is made (`stabctl.case.system`), beyond the bounds its columns declare for every type
+    (`Param.lo`, `Param.hi`): the columns a table shares are read under other names and
+    meanings by other types (exc_con column 11 is one type's VImin, another's T_E).
+
+    Parameters
+    ----------
+    source : str
+        Where the limits come from (the model's standard or library, or the physics), said
+        in the messages.
+    nonnegative : tuple of str, optional
+        Fields (or ``alt`` names) that must be >= 0: gains a negative of which the model
+        cannot have, time constants (0 bypasses the block).
+    positive : tuple of str, optional
+        Fields that must be > 0 (the model divides by them, no bypass).
+    ordered : tuple of (str, str), optional
+        (upper, lower) pairs of limits: upper >= lower.
+    one : tuple of str, optional
+        Fields that must be 1 (a set point the model's start takes as 1).
+    """
+
+    source: str
+    nonnegative: tuple[str, ...] = ()
+    positive: tuple[str, ...] = ()
+    ordered: tuple[tuple[str, str], ...] = ()
+    one: tuple[str, ...] = ()
+
+    def names(self) -> tuple[str, ...]:
+        """Every field the limits name, in their order."""
+        pairs = (n for pair in self.ordered for n in pair)
+        return (*self.nonnegative, *self.positive, *pairs, *self.one)
+
+
+@dataclass(frozen=True)
 class Family:  # fields of a dataclass: numpydoc ignore=PR02
     """The declaration of one PST dynamic-data matrix and the DYR models that fill it.
 
@@ -178,11 +214,17 @@ class Family:  # fields of a dataclass: numpydoc ignore=PR02
         Field identifying a row in messages, and what messages call it (``"machine"``).
     dyr : tuple of DyrModel, optional
         The PSS/E models imported into this table.
+    limits : Mapping[int, tuple of Limits], optional
+        Type code (the ``type`` column) -> the `Limits` of its rows, checked when a table
+        is made; empty by default.
+    type_names : Mapping[int, str], optional
+        Type code -> how messages name a row's type ("exciter type 3, ST3 (exc_st3)").
 
     Raises
     ------
     ValueError
-        If columns are not 1, 2, ... in order, or a name or alternative name repeats.
+        If columns are not 1, 2, ... in order, a name or alternative name repeats, or a
+        `Limits` names a field the table has not.
     """
 
     table: str
@@ -191,6 +233,8 @@ class Family:  # fields of a dataclass: numpydoc ignore=PR02
     key: str
     key_label: str
     dyr: tuple[DyrModel, ...] = ()
+    limits: Mapping[int, tuple[Limits, ...]] = field(default_factory=dict)
+    type_names: Mapping[int, str] = field(default_factory=dict)
 
     def __post_init__(self):
         for k, p in enumerate(self.params):
@@ -202,6 +246,10 @@ class Family:  # fields of a dataclass: numpydoc ignore=PR02
         names = [p.name for p in self.params] + [p.alt for p in self.params if p.alt]
         if len(set(names)) != len(names):
             raise ValueError(f"{self.table}: a parameter name or alternative name repeats")
+        for kind, limits in self.limits.items():
+            unknown = {n for lim in limits for n in lim.names()} - set(names)
+            if unknown:
+                raise ValueError(f"{self.table} type {kind}: limits of unknown {sorted(unknown)}")
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -332,10 +380,19 @@ def type_modules(package: str, *names: str) -> tuple:
 
 
 def typed_family(
-    table: str, min_columns: int, label: str, types, params, dyr, sep: str = ", "
+    table: str,
+    min_columns: int,
+    label: str,
+    types,
+    params,
+    dyr,
+    sep: str = ", ",
+    common: Limits | None = None,
 ) -> Family:
     """The `Family` of a machine's controller table (keyed by machine, column 1 its type
-    from `model_types`), with `params` after the type and the DYR records `dyr`.
+    from `model_types`), with `params` after the type and the DYR records `dyr`; each
+    type's `Limits` its module's ``LIMITS`` (one `Limits` for all its types, or type code
+    -> its `Limits`, each one `Limits` or a tuple of them), and `common`.
 
     Parameters
     ----------
@@ -353,6 +410,8 @@ def typed_family(
         The DYR records read into the table.
     sep : str, optional
         Separator of the types in the type column's doc (default ", ").
+    common : Limits, optional
+        The limits of every type (the columns all of them read alike).
 
     Returns
     -------
@@ -368,6 +427,12 @@ def typed_family(
         label=label,
         doc=sep.join(f"{k} {m.KINDS[k]}" for k, m in types.items()),
     )
+    limits = {}
+    for k, m in types.items():
+        own = getattr(m, "LIMITS", ())
+        own = own.get(k, ()) if isinstance(own, Mapping) else own
+        own = (own,) if isinstance(own, Limits) else tuple(own)
+        limits[k] = (*(() if common is None else (common,)), *own)
     return Family(
         table=table,
         min_columns=min_columns,
@@ -375,6 +440,8 @@ def typed_family(
         key_label="machine",
         params=(kind, *params),
         dyr=dyr,
+        limits=MappingProxyType(limits),
+        type_names=MappingProxyType({k: f"{label} {k}, {m.KINDS[k]}" for k, m in types.items()}),
     )
 
 

@@ -47,7 +47,7 @@ import scipy.sparse.linalg as spla
 from stabctl.case import PQ, PV, SWING, Case
 from stabctl.errors import PowerFlowError
 from stabctl.network import switched_shunts as sws
-from stabctl.network.topology import OPEN_X, dead_buses
+from stabctl.network.topology import OPEN_X, bus_islands, dead_buses
 from stabctl.network.ybus import add_shunts, branch_flows, build_ybus
 
 __all__ = ["PowerFlowResult", "solve_powerflow", "power_injections", "jacobian"]
@@ -439,6 +439,32 @@ def _check_islands(case: Case, drop=()) -> None:
         )
 
 
+def _note_shared_swing(case: Case) -> None:
+    """A UserWarning naming the swing buses that share an island of the case's network:
+    the Newton step holds every swing bus at its magnitude and angle (no P or Q equation
+    of its own), so each generates what balances the flow at its fixed angle, as PSS/E's
+    power flow does with several type-3 buses in one island; legitimate, but seldom meant
+    (one slack is the usual case), so said, never silent."""
+    sw = case.swing_index
+    if sw.size < 2:
+        return
+    label = bus_islands(case)[sw]
+    for island in np.unique(label):
+        nums = [int(b) for b in case.buses.number[sw[label == island]]]
+        if len(nums) > 1:
+            listed = ", ".join(map(str, nums[:-1])) + f" and {nums[-1]}"
+            warnings.warn(
+                f"case '{case.name}': buses {listed} are "
+                + ("both" if len(nums) == 2 else "all")
+                + " swing buses (kind 1) of one "
+                "island: the power flow holds each at its voltage magnitude and angle, each "
+                "generating what balances the flow there (as PSS/E does with several type-3 "
+                "buses); make all but one PV buses (kind 2) for a single slack",
+                UserWarning,
+                stacklevel=3,
+            )
+
+
 def _move_taps(case: Case, vmag, taps) -> bool:
     """PST ``lftap``: step the taps of branches feeding a bus at a voltage limit.
 
@@ -585,6 +611,7 @@ def solve_powerflow(
     """
     drop = tuple(int(d) for d in drop)
     _check_islands(case, drop)
+    _note_shared_swing(case)
     taps = case.branches.tap.copy()
     taps[taps == 0] = 1.0
     sw = case.switched_shunts

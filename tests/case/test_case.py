@@ -419,7 +419,10 @@ def test_tables_are_their_declaration(kind):
     assert [p.col for p in fam.params] == list(range(1, len(fam.params) + 1))
     assert (cls.TABLE, cls.MIN_COLUMNS, cls.FAMILY) == (fam.table, fam.min_columns, fam)
     assert cls.INTEGER == tuple(p.name for p in fam.params if p.integer)
-    tab = cls.from_matrix(np.ones((1, fam.min_columns)))  # omitted columns: the defaults
+    given = np.ones((1, fam.min_columns))
+    if kind == "machines":  # a subtransient machine's leakage lies below its x'd (x_l = 0.5)
+        given[0, fam.col("xl") - 1] = 0.5
+    tab = cls.from_matrix(given)  # omitted columns: the defaults
     for p in fam.params[fam.min_columns :]:
         assert getattr(tab, p.name)[0] == p.default
     for p in fam.params:
@@ -459,7 +462,8 @@ def test_declared_bound_violated_names_the_field(fam, table, row):
 
 def test_packed_kernel_columns_come_from_the_declaration():
     case = load_case("kundur").replace(
-        exciters=ExciterTable.from_matrix([[3, 1] + list(np.arange(3.0, 21.0)) + [0, 0, 0, 0]])
+        # columns 3-20 all different, each limit above its lower one (Vrmax 15 > Vrmin 14)
+        exciters=ExciterTable.from_matrix([[3, 1] + list(np.arange(20.0, 2.0, -1)) + [0, 0, 0, 0]])
     )
     ep = exc_m.exciter_params(case)
     P = ep.packed(np.zeros(1))

@@ -237,6 +237,38 @@ def test_case_values_out_of_range_of_the_wrong_type_or_order_name_row_and_field(
     assert_error(run("simulate", path, "--tf", 1), where)
 
 
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("simulate", "--tf", 0.5),
+        # cct ran it and gave "CCT 0 s, N-1 insecure"
+        ("cct", "--fault", 3, "--far-bus", 101, "--tol-ms", 50),
+        ("eig",),
+    ],
+)
+def test_a_negative_regulator_gain_is_refused_by_every_command(tmp_path, no_simulation, command):
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(_set(_kundur_dict(), "exciters", "KA", -200.0)))
+    assert_error(
+        run(command[0], path, *command[1:]),
+        "bad.json: exc_con row 1 (machine 1), field 'KA': must be >= 0, got -200",
+    )
+
+
+def test_two_swing_buses_of_one_island_are_said_in_one_warning_line(tmp_path):
+    """Kundur's bus 2 made a second swing bus ran without a word: it runs (both held at
+    their voltage and angle, as PSS/E's several type-3 buses) and says so, naming both."""
+    d = _kundur_dict()
+    rows = d["tables"]["buses"]["rows"]
+    _set(d, "buses", "kind", 1.0, row=[r[0] for r in rows].index(2))
+    path = tmp_path / "two.json"
+    path.write_text(json.dumps(d))
+    res = run("simulate", path, "--tf", 0.1)
+    assert res.exit_code == 0, (res.output, res.exception)
+    said = [x for x in res.stderr.splitlines() if x.startswith(("warning:", "note:"))]
+    assert len(said) == 1 and "buses 1 and 2 are both swing buses" in said[0], res.stderr
+
+
 def test_case_without_machines_says_so(tmp_path):
     d = _kundur_dict()
     for t in ("machines", "exciters", "pss", "governors"):

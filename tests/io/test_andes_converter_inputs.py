@@ -55,13 +55,21 @@ def edited(tmp_path, case: str, model: str, **values):
             "ieee14/ieee14_esd1.xlsx",
             "ESD1",
             {"SOCmin": 0.9, "SOCmax": 0.2},
-            "SOCmin = 0.9, SOCmax = 0.2: it must be 0 <= SOCmin < SOCmax <= 1",
+            "SOCmin = 0.9, SOCmax = 0.2: it must be SOCmin < SOCmax",
         ),
         (
             "ieee14/ieee14_esd1.xlsx",
             "ESD1",
             {"SOCmax": 2.0},
-            "SOCmax = 2: it must be 0 <= SOCmin < SOCmax <= 1",
+            "SOCmax = 2: it must be SOCmax <= 1",
+        ),
+        # REGCA1's Iq rate limits hold the rest point's rate 0 between them (the table's rule,
+        # the same for a case file's ibr_con)
+        (
+            "kundur/kundur_reg.xlsx",
+            "REGCA1",
+            {"Iqrmax": -999.0},
+            "Iqrmax = -999, Iqrmin = -999: it must be Iqrmin <= 0 <= Iqrmax",
         ),
     ],
 )
@@ -185,3 +193,27 @@ def test_machine_and_converter_shares_not_adding_to_one_are_refused(tmp_path):
         res.output,
     )
     assert not out.exists()
+
+
+@pytest.mark.parametrize("name", ["ieee14/ieee14_pvd1.xlsx", "ieee14/ieee14_esd1.xlsx"])
+def test_a_start_refused_at_the_q_limits_names_the_held_buses_and_no_q_limits(name):
+    """ANDES's ieee14_pvd1 and ieee14_esd1 as import-andes reads them (its power flow
+    compared with ANDES's, Q limits off in both): stabctl's default power flow holds PV
+    buses at their Q limits, the PVD1's Q droop then acts at the start and the start is
+    refused; the refusal names the buses held and --no-q-limits (it said neither), with
+    which the case starts.  A start refused for a cause of its own (a current limit ialim
+    of 0.001 pu) is refused without that hint."""
+    case = read_andes_case(andes.get_case(name)).case
+    with pytest.raises(
+        CaseError,
+        match=r"ibr_con row 1: the converter cannot start at its power-flow point .*; the "
+        r"power flow held buses 2, 3, 4, 6 at their Q limits, and without Q limits the case "
+        r"starts at rest: --no-q-limits \(q_limits=False\) solves the power flow as ANDES does",
+    ):
+        Simulator(case, background_compile=False)
+    Simulator(case, q_limits=False, background_compile=False)
+    t = case.converters
+    limited = case.replace(converters=t.replace(ialim=np.full(len(t), 0.001)))
+    with pytest.raises(CaseError, match=r"cannot start") as err:
+        Simulator(limited, background_compile=False)
+    assert "Q limit" not in str(err.value) and "no-q-limits" not in str(err.value)

@@ -135,7 +135,7 @@ def test_soc_derivative_is_the_discharge_over_the_energy():
         ("dqdv", 0.5, r"Q-V droop must be < 0"),
         ("ft1", 59.0, r"field 'ft1': must be > ft0"),
         ("Twm", 0.0, r"washout time constant must be > 0"),
-        ("SOCinit", 2.0, r"field 'SOCinit': ESD1 initial state of charge"),
+        ("SOCinit", 2.0, r"field 'SOCinit': ESD1: SOCinit = 2, .*SOCmin <= SOCinit <= SOCmax"),
     ],
 )
 def test_converter_table_refuses_bad_values_naming_the_field(field, value, message):
@@ -236,11 +236,54 @@ def test_regca1_start_with_a_limit_active_is_refused():
 
 @pytest.mark.parametrize(
     "field, value, message",
-    [("Lvpnt1", 0.3, r"REGCA1: must be > Lvpnt0"), ("Brkpt", 0.4, r"REGCA1: must be > Zerox")],
+    [
+        ("Lvpnt1", 0.3, r"field 'Lvpnt1': REGCA1: .*it must be Lvpnt1 > Lvpnt0"),
+        ("Brkpt", 0.4, r"field 'Brkpt': REGCA1: .*it must be Brkpt > Zerox"),
+    ],
 )
 def test_regca1_piecewise_points_are_checked(field, value, message):
     with pytest.raises(CaseError, match=rf"ibr_con row 1 \(converter 1\).*{message}"):
         make_case(REG_ROW, **{field: value})
+
+
+@pytest.mark.parametrize(
+    "row, cols, message",
+    [
+        (  # a REECA1 freezing above 1.3 pu and recovering at 1.1 ran
+            REG_ROW,
+            dict(reec=1, Vdip=1.3, Vup=1.1),
+            r"field 'Vdip': REECA1: Vdip = 1.3, Vup = 1.1: it must be Vdip < Vup",
+        ),
+        (REG_ROW, dict(reec=2, Imax=0.0), r"field 'Imax': REECB1: Imax = 0: it must be Imax > 0"),
+        (  # the start was refused naming the REGCA1's Iq, not its rate limits
+            REG_ROW,
+            dict(Iqrmax=-999.0),
+            r"field 'Iqrmax': REGCA1: Iqrmax = -999, Iqrmin = -1: it must be Iqrmin <= 0 <= "
+            r"Iqrmax",
+        ),
+        (  # a state of charge of up to 200 % ran
+            [1, 2, 2, 100.0, 1.0, 1.0, 0.0, 1],
+            dict(SOCmax=2.0),
+            r"field 'SOCmax': ESD1: SOCmax = 2: it must be SOCmax <= 1",
+        ),
+        (
+            [1, 2, 2, 100.0, 1.0, 1.0, 0.0, 1],
+            dict(SOCmin=-0.1),
+            r"field 'SOCmin': ESD1: SOCmin = -0.1: it must be SOCmin >= 0",
+        ),
+        (  # a REGCA1 battery (storage 1 with En > 0) keeps an ESD1's state of charge limits
+            REG_ROW,
+            dict(reec=1, storage=1, En=10.0, SOCmax=1.5),
+            r"field 'SOCmax': REGCA1 battery: SOCmax = 1.5: it must be SOCmax <= 1",
+        ),
+    ],
+)
+def test_converter_data_import_andes_refuses_is_refused_in_a_case_too(row, cols, message):
+    """The rules `import-andes` applies to an ANDES file's rows
+    (`stabctl.models.converters.rules.RULES`) hold for a case's ibr_con table: the same
+    data is refused whichever route it comes by."""
+    with pytest.raises(CaseError, match=rf"ibr_con row 1 \(converter 1\), {message}"):
+        make_case(row, **cols)
 
 
 # -- REECA1 (ANDES renewable/reeca1.py, docs/ibr.md 6) --------------------------------------

@@ -131,7 +131,7 @@ def test_options_it_does_not_model_are_refused():
     row = _row(0)
     for name, value, match in (
         ("Teng", 0.1, "DEGOV1's TD"),
-        ("Tmin", 100.0, "'Tmax', 'Tmin'"),
+        ("Tmin", 100.0, "field 'Tmax': must be >= Tmin = 100"),
         ("droop_flag", 2.0, "droop_flag must be 0 or 1"),
     ):
         changed = list(row)

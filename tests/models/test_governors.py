@@ -451,7 +451,7 @@ def test_degov_options_it_does_not_model_are_refused():
         ({"Teng": 0.1}, "DEGOV's TD"),
         ({"T3": 0.2}, "'T3'"),
         ({"T5": 0.0, "T6": 0.0}, "'T4'"),
-        ({"Tmin": 1.2}, "'Tmax', 'Tmin'"),
+        ({"Tmin": 1.2}, "field 'Tmax': must be >= Tmin = 1.2"),
     ):
         with pytest.raises(CaseError, match=match):
             params(degov_row(**changed))

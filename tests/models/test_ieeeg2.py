@@ -73,7 +73,7 @@ def test_options_it_does_not_model_are_refused(imported):
     """PMAX below PMIN, a lead T2 without its lag T1, a start-up power outside [PMIN,
     PMAX]."""
     for changes, match in (
-        ({"Tmin": 2.0}, "IEEEG2's PMAX 1 is below PMIN 2"),
+        ({"Tmin": 2.0}, r"field 'Tmax': must be >= Tmin = 2 \(governor type 14, IEEEG2"),
         ({"Tc": 0.0}, "IEEEG2's lead T2 needs its lag T1"),
         ({"Tmax": 0.6}, "initial power order 0.7000 pu outside"),
     ):

@@ -142,7 +142,7 @@ def test_options_it_does_not_model_are_refused():
     for changes, match in (
         ({"G1": 0.95}, "G0 < G1 < G2 < 1"),
         ({"P2": 0.2}, "0 < P1 < P2 < P3"),
-        ({"Tmin": 2.0}, "GMAX 1 is below GMIN 2"),
+        ({"Tmin": 2.0}, r"field 'Tmax': must be >= Tmin = 2 \(governor type 12, PIDGOV"),
         ({"Uo": 0.0}, "VELMAX > 0 > VELMIN"),
         ({"feedback_flag": 2.0}, "feedback_flag must be 0 or 1"),
         ({"Tmax": 0.9}, "start-up gate 0.9500 pu outside"),

@@ -127,10 +127,10 @@ def test_options_it_does_not_model_are_refused():
     PIDGOV checks of the shared columns apply as well: test_pidgov.py)."""
     row = _row()
     for changes, match in (
-        ({"Pmax": -1.0}, "WPIDHY's PMAX -1 is below PMIN 0"),
+        ({"Pmax": -1.0}, r"field 'Pmax': must be >= Pmin = 0 \(governor type 13, WPIDHY"),
         ({"Pmax": 0.6}, "WPIDHY's start-up power 0.7000 pu outside"),
         ({"Tmin": 0.8}, "start-up gate 0.7417 pu outside"),
-        ({"Uc": 0.01}, "VELMAX > 0 > VELMIN"),
+        ({"Uc": 0.01}, r"field 'Uc': must be <= 0, got 0.01"),
     ):
         changed = list(row)
         for name, value in changes.items():

@@ -6,6 +6,7 @@ see LICENSE and NOTICE there).
 """
 
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -331,3 +332,32 @@ def test_a_flow_that_fails_only_with_q_limits_says_so():
     with pytest.raises(PowerFlowError) as err:
         solve_powerflow(hopeless)
     assert "Q limits off" not in str(err.value)
+
+
+def _with_kind(case, bus, kind):
+    kinds = case.buses.kind.copy()
+    kinds[case.bus_index(bus)] = kind
+    return case.replace(buses=case.buses.replace(kind=kinds))
+
+
+def test_two_swing_buses_of_one_island_are_held_and_said():
+    """Kundur's PV bus 2 made a second swing bus (kind 1): the flow holds both at their
+    magnitude and angle, as PSS/E holds several type-3 buses, and says so naming both (it
+    ran without a word); a swing bus per island (an island of its own for bus 99) says
+    nothing."""
+    case = _with_kind(load_case("kundur"), 2, 1)
+    with pytest.warns(
+        UserWarning,
+        match=r"case 'kundur': buses 1 and 2 are both swing buses \(kind 1\) of one island: "
+        r"the power flow holds each at its voltage magnitude and angle",
+    ):
+        res = solve_powerflow(case)
+    for bus in (1, 2):
+        i = case.bus_index(bus)
+        assert res.vmag[i] == case.buses.vmag[i]
+        assert res.vang_deg[i] == pytest.approx(case.buses.vang_deg[i], abs=1e-12)
+    islands = _with_kind(with_dead_island(load_case("kundur")), 99, 1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        solve_powerflow(islands)
+        solve_powerflow(load_case("kundur"))

@@ -42,6 +42,7 @@ from stabctl.models.blocks import LBND, lag
 from stabctl.models.declaration import (
     Declared,
     DyrModel,
+    Limits,
     check_packed,
     model_types,
     own_params,
@@ -105,6 +106,7 @@ __all__ = [
     "N_OWN",
     "MODULES",
     "TABLE_FIELDS",
+    "SATURATED_EXCITERS",
     "PID_TRACKING",
     "ST3Machine",
     "StatorQuantities",
@@ -163,6 +165,11 @@ EXCITER = typed_family(
         DyrModel("IEEEVC", ("RC", "XC"), {"Rcomp": "RC", "Xcomp": "XC"}, andes=("IEEEVC",)),
         *(model for m in MODULES for model in m.DYR),
     ),
+    # every type limits its regulator's output V_R to [Vrmin, Vrmax] (IEEE Std 421.5-2016;
+    # PST manual 3.11, 3.13, 3.38)
+    common=Limits(
+        "IEEE Std 421.5: an upper limit at or above its lower", ordered=(("Vrmax", "Vrmin"),)
+    ),
 )
 
 #: the types whose equations read the machine's field current (`field_current`)
@@ -183,6 +190,9 @@ MAX_SLOTS = max(len(names) for names in STATE_NAMES.values())
 DC_KINDS = tuple(k for k, m in TYPES.items() if m.EXCITER_COLUMNS == "dc")
 #: the types reading K_E and T_E (exc_con columns 10-11): those above and IEEET3
 KE_KINDS = tuple(k for k, m in TYPES.items() if m.EXCITER_COLUMNS)
+#: the types with the saturation points E1, SE(E1), E2, SE(E2) (exc_con columns 12-15): the
+#: DC exciters and those with PSS/E's quadratic saturation
+SATURATED_EXCITERS = tuple(k for k, m in TYPES.items() if m.EXCITER_COLUMNS in ("dc", "quadratic"))
 #: the machine's speed among its states (``efd_speed``)
 _OMEGA = mac.STATE_NAMES.index("omega")
 

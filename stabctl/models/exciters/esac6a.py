@@ -20,7 +20,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, clip, leadlag, leadlag_input_state
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters.exac1 import exciter, exciter_feedback, initial_exciter, rectified
 from stabctl.models.exciters.table import IEEE_RULE, E, upper
 
@@ -29,6 +29,8 @@ if TYPE_CHECKING:
 
 AC6A = 14
 KINDS = {AC6A: "ESAC6A (IEEE 421.5 AC6A)"}
+#: AC6A's saturation point E2 and T_E >= 0, its V_A limits ordered (IEEE Std 421.5 AC6A)
+LIMITS = Limits("IEEE Std 421.5 AC6A", nonnegative=("E2", "TE"), ordered=(("VAmax", "VAmin"),))
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

@@ -17,7 +17,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import GAIN_OVER_T, clip, leadlag_input_state, nonwindup_lag, washout
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters import exst1
 from stabctl.models.exciters.exst1 import check_start
 from stabctl.models.exciters.table import IEEE_RULE, E, upper
@@ -27,6 +27,8 @@ if TYPE_CHECKING:
 
 ST1A = 6
 KINDS = {ST1A: "ESST1A (IEEE 421.5 ST1A)"}
+#: ST1A's V_I and V_A limits ordered (IEEE Std 421.5-2016 ST1A)
+LIMITS = Limits("IEEE Std 421.5 ST1A", ordered=(("VImax", "VImin"), ("VAmax", "VAmin")))
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

@@ -18,7 +18,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import LBND, clip, lag, pi_track_aw, rectifier_loading
-from stabctl.models.declaration import DyrModel, beyond, states
+from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.table import PID_TRACKING, E, potential_source, upper
 
 if TYPE_CHECKING:
@@ -26,6 +26,8 @@ if TYPE_CHECKING:
 
 ST4B = 12
 KINDS = {ST4B: "ESST4B (IEEE 421.5 ST4B, PI regulators)"}
+#: ST4B's inner-loop PI limits ordered (IEEE Std 421.5-2016 ST4B)
+LIMITS = Limits("IEEE Std 421.5 ST4B", ordered=(("VMmax", "VMmin"),))
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

@@ -28,7 +28,7 @@ from stabctl.models.blocks import (
     rectifier_loading,
     washout,
 )
-from stabctl.models.declaration import DyrModel, beyond, states
+from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.dc import dc_feedback
 from stabctl.models.exciters.table import IEEE_RULE, E, upper
 
@@ -37,6 +37,12 @@ if TYPE_CHECKING:
 
 AC1, AC1A = 7, 9
 KINDS = {AC1: "EXAC1 (IEEE AC1)", AC1A: "ESAC1A (IEEE 421.5 AC1A)"}
+#: AC1's and AC1A's saturation point E2 and T_E >= 0, AC1A's V_A limits ordered (IEEE Std
+#: 421.5-2016 AC1A; PSS/E Model Library EXAC1)
+LIMITS = {
+    AC1: Limits("PSS/E Model Library EXAC1", nonnegative=("E2", "TE")),
+    AC1A: Limits("IEEE Std 421.5 AC1A", nonnegative=("E2", "TE"), ordered=(("VAmax", "VAmin"),)),
+}
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

@@ -33,7 +33,7 @@ from stabctl.models.blocks import (
     nonwindup_lag,
     washout,
 )
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters.exac1 import exciter, exciter_feedback, initial_exciter, rectified
 from stabctl.models.exciters.table import IEEE_RULE, E, upper
 
@@ -45,6 +45,11 @@ AC2 = 13
 #: Python False passed from compiled code is typed as a literal, a second compile
 UNLIMITED_VE = np.bool_(False)
 KINDS = {AC2: "EXAC2 (IEEE AC2)"}
+#: AC2's saturation point E2 and T_E >= 0, its V_A limits ordered (PSS/E Model Library
+#: EXAC2; IEEE Std 421.5 AC2A)
+LIMITS = Limits(
+    "PSS/E Model Library EXAC2", nonnegative=("E2", "TE"), ordered=(("VAmax", "VAmin"),)
+)
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import clip, lag, leadlag_input_state
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters.exst1 import check_start
 from stabctl.models.exciters.table import E, upper
 
@@ -19,6 +19,8 @@ if TYPE_CHECKING:
 
 AC4 = 8
 KINDS = {AC4: "EXAC4 (IEEE AC4)"}
+#: AC4's V_I limits ordered (PSS/E Model Library EXAC4; IEEE Std 421.5 AC4A)
+LIMITS = Limits("PSS/E Model Library EXAC4", ordered=(("VImax", "VImin"),))
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

@@ -32,7 +32,7 @@ from stabctl.models.blocks import (
     pi_nonwindup,
     washout,
 )
-from stabctl.models.declaration import DyrModel, beyond, states
+from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.dc import dc_feedback
 from stabctl.models.exciters.esst4b import source_voltage as rectified_source
 from stabctl.models.exciters.table import E, upper
@@ -42,6 +42,13 @@ if TYPE_CHECKING:
 
 PIC1 = 15
 KINDS = {PIC1: "EXPIC1 (PSS/E proportional-integral exciter)"}
+#: EXPIC1's saturation point E2 and T_E >= 0, its PI (VR1, VR2) and E_0 limits ordered
+#: (PSS/E Model Library EXPIC1)
+LIMITS = Limits(
+    "PSS/E Model Library EXPIC1",
+    nonnegative=("E2", "TE"),
+    ordered=(("VAmax", "VAmin"), ("Efdmax", "Efdmin")),
+)
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

@@ -15,7 +15,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import GAIN_OVER_T, LBND, clip, lag, leadlag_input_state, washout
-from stabctl.models.declaration import DyrModel, beyond, states
+from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.table import E, upper
 
 if TYPE_CHECKING:
@@ -23,6 +23,8 @@ if TYPE_CHECKING:
 
 ST1 = 4
 KINDS = {ST1: "EXST1"}
+#: EXST1's V_I limits ordered (PSS/E Model Library EXST1)
+LIMITS = Limits("PSS/E Model Library EXST1", ordered=(("VImax", "VImin"),))
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

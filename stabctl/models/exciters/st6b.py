@@ -20,7 +20,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.errors import CaseError, refuse_initial
 from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, pi_nonwindup, washout
-from stabctl.models.declaration import DyrModel, beyond, states
+from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.table import E, upper
 
 if TYPE_CHECKING:
@@ -28,6 +28,8 @@ if TYPE_CHECKING:
 
 ST6B = 16
 KINDS = {ST6B: "ST6B (IEEE 421.5 ST6B)"}
+#: ST6B's V_A limits ordered (IEEE Std 421.5-2016 ST6B)
+LIMITS = Limits("IEEE Std 421.5 ST6B", ordered=(("VAmax", "VAmin"),))
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

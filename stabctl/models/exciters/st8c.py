@@ -27,7 +27,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import clip, lag, nonwindup_lag, pi_nonwindup, rectifier_loading
-from stabctl.models.declaration import DyrModel, Param, beyond, states
+from stabctl.models.declaration import DyrModel, Limits, Param, beyond, states
 from stabctl.models.exciters.table import E, own, upper
 
 if TYPE_CHECKING:
@@ -35,6 +35,8 @@ if TYPE_CHECKING:
 
 ST8C = 17
 KINDS = {ST8C: "ST8C (IEEE 421.5 ST8C, field current regulator)"}
+#: ST8C's V_A and voltage PI limits ordered (IEEE Std 421.5-2016 ST8C)
+LIMITS = Limits("IEEE Std 421.5 ST8C", ordered=(("VAmax", "VAmin"), ("VPmax", "VPmin")))
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
@@ -49,11 +51,11 @@ EXCITER_COLUMNS = ""
 NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"), ("TF", "TF_ifd"))
 #: ST8C's own exc_con columns
 PARAMS = (
-    Param("KPA", "", 67, doc="ST8C: field current regulator proportional gain K_PA"),
-    Param("KIA", "1/s", 68, doc="ST8C: field current regulator integral gain K_IA (!= 0)"),
-    Param("KF_ifd", "", 69, doc="ST8C: field current feedback gain K_F"),
+    Param("KPA", "", 67, lo=0.0, doc="ST8C: field current regulator proportional gain K_PA"),
+    Param("KIA", "1/s", 68, lo=0.0, doc="ST8C: field current regulator integral gain K_IA (!= 0)"),
+    Param("KF_ifd", "", 69, lo=0.0, doc="ST8C: field current feedback gain K_F"),
     Param("TF_ifd", "s", 70, lo=0.0, doc="ST8C: field current feedback time constant T_F"),
-    Param("VB1max", "pu", 71, doc="ST8C: upper limit of the source V_B1"),
+    Param("VB1max", "pu", 71, lo=0.0, doc="ST8C: upper limit of the source V_B1"),
     Param(
         "SW1",
         "code",

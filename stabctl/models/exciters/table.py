@@ -29,14 +29,23 @@ def upper(*names: str, **renamed: str) -> dict[str, str]:
     return {**{n: n.upper() for n in names}, **renamed}
 
 
-#: exc_con columns 2-48 (column 1, the type, is declared by the registry from the types)
+#: exc_con columns 2-66 (column 1, the type, is declared by the registry from the types).
+#: Bounds: every time constant >= 0 (0 bypasses its block; a lead as a lag) and every gain
+#: >= 0 (the regulators, rectifier loading, feedbacks, potential and current sources,
+#: field current limiters), under every name a type reads the column by (columns 12-20:
+#: the DC and AC exciters' saturation points E1, SE(E1), SE(E2), their K_F, T_F, all >= 0):
+#: the parameter tables of IEEE Std 421.5-2016 and the PSS/E Model Library.  K_E (column
+#: 10) may be negative (a self-excited DC exciter, IEEE 421.5 DC1A), theta_P (14) and the
+#: compensation R_C, X_C (46, 47) take either sign.  What one type's equations need of
+#: columns others read otherwise is its module's ``LIMITS``
+#: (`stabctl.models.declaration.Limits`)
 PARAMS = (
     Param("machine", "code", 2, integer=True, doc="machine number"),
     Param("TR", "s", 3, lo=0.0, doc="input filter time constant"),
-    Param("KA", "", 4, doc="voltage regulator gain"),
+    Param("KA", "", 4, lo=0.0, doc="voltage regulator gain"),
     Param("TA", "s", 5, lo=0.0, doc="voltage regulator time constant"),
     Param("TB", "s", 6, lo=0.0, doc="transient gain reduction time constant"),
-    Param("TC", "s", 7, doc="transient gain reduction time constant"),
+    Param("TC", "s", 7, lo=0.0, doc="transient gain reduction time constant"),
     Param("Vrmax", "pu", 8, doc="maximum regulator output"),
     Param("Vrmin", "pu", 9, doc="minimum regulator output"),
     Param(
@@ -59,6 +68,7 @@ PARAMS = (
         "",
         12,
         alt="E1",
+        lo=0.0,
         doc="ST3: first stage regulator gain | DC1/2, EXAC1/ESAC1A: E1, pu",
     ),
     Param(
@@ -66,6 +76,7 @@ PARAMS = (
         "",
         13,
         alt="SE1",
+        lo=0.0,
         doc="ST3, IEEET3, ESST4B: potential circuit gain | DC1/2, EXAC1/ESAC1A: SE(E1)",
     ),
     Param(
@@ -80,6 +91,7 @@ PARAMS = (
         "",
         15,
         alt="SE2",
+        lo=0.0,
         doc="ST3, IEEET3, ESST4B: current circuit gain | DC1/2, EXAC1/ESAC1A: SE(E2)",
     ),
     Param(
@@ -87,6 +99,7 @@ PARAMS = (
         "pu",
         16,
         alt="KF_dc",
+        lo=0.0,
         doc="ST3, ESST4B: potential source reactance | DC1/2: KF stabilizer gain",
     ),
     Param(
@@ -94,6 +107,7 @@ PARAMS = (
         "",
         17,
         alt="TF_dc",
+        lo=0.0,
         doc="ST3, EXST1, ESST1A, EXAC1, EXAC4, ESAC1A, ESST4B: rectifier loading factor "
         "| DC1/2: TF stabilizer time constant, s",
     ),
@@ -109,6 +123,7 @@ PARAMS = (
         "",
         19,
         alt="bus_fed",
+        lo=0.0,
         doc="ST3, ESST4B: inner loop feedback constant | smpexc: 1 the output times the "
         "terminal voltage (bus-fed SCRX), 0 not",
     ),
@@ -117,11 +132,18 @@ PARAMS = (
         "pu",
         20,
         alt="vos_after_va",
+        lo=0.0,
         doc="ST3, ESST4B: maximum inner loop feedback | ESST1A: 1 the stabiliser output "
         "added after V_A (PSS/E VOS = 2), 0 at the voltage error (VOS = 1)",
     ),
-    Param("KF", "", 21, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback gain"),
-    Param("TF", "s", 22, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback time constant"),
+    Param("KF", "", 21, lo=0.0, doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback gain"),
+    Param(
+        "TF",
+        "s",
+        22,
+        lo=0.0,
+        doc="EXST1, ESST1A, EXAC1, ESAC1A, IEEET3: rate feedback time constant",
+    ),
     Param(
         "dc_sat",
         "code",
@@ -146,7 +168,7 @@ PARAMS = (
         "E_Isat(E'q) + p6 (E'q - psi_kd) + p7 i_d, 1 the machine's (IEEE 421.5 "
         "I_FD; ANDES esst3a.py XadIfd)",
     ),
-    Param("TC1", "s", 26, doc="ESST1A: second lead time constant"),
+    Param("TC1", "s", 26, lo=0.0, doc="ESST1A: second lead time constant"),
     Param("TB1", "s", 27, lo=0.0, doc="ESST1A: second lag time constant"),
     Param(
         "VAmax",
@@ -162,9 +184,9 @@ PARAMS = (
         doc="ESST1A, ESAC1A: minimum regulator output V_A | ST3: ESST3A's VRMIN on "
         "its regulator lag (with TA_st3a)",
     ),
-    Param("KLR", "", 30, doc="ESST1A: field current limiter gain"),
-    Param("ILR", "pu", 31, doc="ESST1A: field current limiter pick-up (machine base)"),
-    Param("KD", "", 32, doc="EXAC1, ESAC1A: demagnetising factor of the field current"),
+    Param("KLR", "", 30, lo=0.0, doc="ESST1A: field current limiter gain"),
+    Param("ILR", "pu", 31, lo=0.0, doc="ESST1A: field current limiter pick-up (machine base)"),
+    Param("KD", "", 32, lo=0.0, doc="EXAC1, ESAC1A: demagnetising factor of the field current"),
     Param(
         "VBmax",
         "pu",
@@ -173,14 +195,14 @@ PARAMS = (
         doc="ST3, ESST4B: upper limit of the source voltage V_B = V_E F_EX (PSS/E "
         "ESST3A, ESST4B VBMAX); IEEET3: of V_B + V_R; 0 none (PST exc_st3)",
     ),
-    Param("Kpid_P", "", 34, doc="AC8B: PID proportional gain | ESST4B: K_PR"),
-    Param("Kpid_I", "1/s", 35, doc="AC8B: PID integral gain | ESST4B: K_IR"),
-    Param("Kpid_D", "s", 36, doc="AC8B: PID derivative gain"),
+    Param("Kpid_P", "", 34, lo=0.0, doc="AC8B: PID proportional gain | ESST4B: K_PR"),
+    Param("Kpid_I", "1/s", 35, lo=0.0, doc="AC8B: PID integral gain | ESST4B: K_IR"),
+    Param("Kpid_D", "s", 36, lo=0.0, doc="AC8B: PID derivative gain"),
     Param("Td", "s", 37, lo=0.0, doc="AC8B: PID derivative time constant"),
     Param("VPmax", "pu", 38, doc="AC8B: PID output upper limit"),
     Param("VPmin", "pu", 39, doc="AC8B: PID output lower limit"),
-    Param("KPM", "", 40, doc="ESST4B: inner-loop PI proportional gain"),
-    Param("KIM", "1/s", 41, doc="ESST4B: inner-loop PI integral gain"),
+    Param("KPM", "", 40, lo=0.0, doc="ESST4B: inner-loop PI proportional gain"),
+    Param("KIM", "1/s", 41, lo=0.0, doc="ESST4B: inner-loop PI integral gain"),
     Param("VMmax", "pu", 42, doc="ESST4B: inner-loop PI output upper limit"),
     Param("VMmin", "pu", 43, doc="ESST4B: inner-loop PI output lower limit"),
     Param(
@@ -218,18 +240,26 @@ PARAMS = (
         "PSSE.ES.EXST1, PowerSimulationsDynamics.jl); 0 (default) the lower limit "
         "V_t VRMIN and the feedback of the field voltage",
     ),
-    Param("KB", "", 49, doc="EXAC2: second stage regulator gain K_B (> 0)"),
-    Param("KL", "", 50, doc="EXAC2: gain of the exciter field current limit signal V_L"),
-    Param("KH", "", 51, doc="EXAC2, ESAC6A: exciter field current feedback gain K_H"),
+    Param("KB", "", 49, lo=0.0, doc="EXAC2: second stage regulator gain K_B (> 0)"),
+    Param("KL", "", 50, lo=0.0, doc="EXAC2: gain of the exciter field current limit signal V_L"),
+    Param("KH", "", 51, lo=0.0, doc="EXAC2, ESAC6A: exciter field current feedback gain K_H"),
     Param("VLR", "pu", 52, doc="EXAC2: exciter field current limit reference V_LR"),
     Param(
-        "TK", "s", 53, doc="ESAC6A: lead time constant of the regulator K_A (1 + s T_K)/(1 + s T_A)"
+        "TK",
+        "s",
+        53,
+        lo=0.0,
+        doc="ESAC6A: lead time constant of the regulator K_A (1 + s T_K)/(1 + s T_A)",
     ),
     Param("VFELIM", "pu", 54, doc="ESAC6A: exciter field current limit reference"),
-    Param("VHMAX", "pu", 55, doc="ESAC6A: upper limit of the field current limiter signal V_H"),
+    Param(
+        "VHMAX", "pu", 55, lo=0.0, doc="ESAC6A: upper limit of the field current limiter signal V_H"
+    ),
     Param("TH", "s", 56, lo=0.0, doc="ESAC6A: lag time constant of the field current limiter"),
-    Param("TJ", "s", 57, doc="ESAC6A: lead time constant of the field current limiter"),
-    Param("TA1", "s", 58, doc="EXPIC1: the PI regulator K_A (1 + s T_A1)/s's time constant"),
+    Param("TJ", "s", 57, lo=0.0, doc="ESAC6A: lead time constant of the field current limiter"),
+    Param(
+        "TA1", "s", 58, lo=0.0, doc="EXPIC1: the PI regulator K_A (1 + s T_A1)/s's time constant"
+    ),
     Param(
         "TF_2",
         "s",
@@ -238,11 +268,17 @@ PARAMS = (
         doc="EXPIC1: second lag of the rate feedback s K_F/((1 + s T_F1)(1 + s T_F2))",
     ),
     Param("Efdmin", "pu", 60, doc="EXPIC1: lower limit of E_0 = V_B V_R (Efdmax: column 18)"),
-    Param("KP_pic", "", 61, doc="EXPIC1: potential circuit gain K_P (real; 0 with K_I: V_B = 1)"),
-    Param("KI_pic", "", 62, doc="EXPIC1: current circuit gain K_I"),
-    Param("KFF", "", 63, doc="ST6B: feed-forward gain of the regulator output V_A"),
-    Param("KM", "", 64, doc="ST6B: gain of the inner loop K_M (V_A - V_G)"),
-    Param("KCI", "", 65, doc="ST6B: field current limiter's current reference factor"),
+    Param(
+        "KP_pic",
+        "",
+        61,
+        lo=0.0,
+        doc="EXPIC1: potential circuit gain K_P (real; 0 with K_I: V_B = 1)",
+    ),
+    Param("KI_pic", "", 62, lo=0.0, doc="EXPIC1: current circuit gain K_I"),
+    Param("KFF", "", 63, lo=0.0, doc="ST6B: feed-forward gain of the regulator output V_A"),
+    Param("KM", "", 64, lo=0.0, doc="ST6B: gain of the inner loop K_M (V_A - V_G)"),
+    Param("KCI", "", 65, lo=0.0, doc="ST6B: field current limiter's current reference factor"),
     Param("TG", "s", 66, lo=0.0, doc="ST6B: lag of the inner loop's field voltage feedback"),
 )
 

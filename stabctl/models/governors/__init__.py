@@ -30,6 +30,7 @@ from stabctl.errors import CaseError, refuse_initial
 from stabctl.models.blocks import LBND
 from stabctl.models.declaration import (
     Declared,
+    Limits,
     beyond,
     check_packed,
     model_types,
@@ -122,6 +123,11 @@ GOVERNOR = typed_family(
     TYPES,
     PARAMS + OWN_PARAMS,
     tuple(m for mod in MODULES for m in mod.DYR),
+    # every type limits its power order, gate or valve to [Tmin, Tmax] (PSS/E Model
+    # Library: VMIN/VMAX, PMIN/PMAX, GMIN/GMAX; PSTess tg.m)
+    common=Limits(
+        "PSS/E Model Library: an upper limit at or above its lower", ordered=(("Tmax", "Tmin"),)
+    ),
 )
 
 #: the labels of `GovernorParams.time_constants`, by declared field, in reporting order
@@ -221,8 +227,9 @@ def governor_params(case: Case) -> GovernorParams:
     Raises CaseError (tg_con row, field) for a time constant the type needs below 1e-3 s
     (each type module's ``NEEDS``; tg: Ts, Tc, T5; TGOV1: T1 = Ts, T3 = Tc; IEEEG1: T3 =
     Ts; HYGOV: T_g = Ts, T_f = Tc, T_w = T4; TG2: T2 = Tc: a lag below it would be absent,
-    `blocks.LBND`), a row its module's ``check`` refuses (a zero HYGOV r = K2), or an
-    IEEEG1 without power fractions."""
+    `blocks.LBND`), a row its module's ``check`` refuses (GGOV1's options, a DEGOV lead
+    without its lag), or an IEEEG1 without power fractions; the values no type can take
+    are the tg_con table's (`stabctl.case.GovernorTable`)."""
     g = case.governors
     for r in range(len(g)):
         module = TYPES[int(g.type[r])]

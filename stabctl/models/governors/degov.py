@@ -23,7 +23,7 @@ A block whose lag is below 1e-3 s is absent: T1 (with T2) the control box's, T5 
 the actuator's (the second-order lag falls to the one left).  Refused by name (`check`):
 the engine's transport delay TD > 0 (an ODE model has no delay; PSS/E's run "nodelay"
 is TD = 0), a lead T3 without the control box's lag T1 or a lead T4 without an actuator
-lag (improper), TMAX < TMIN.
+lag (improper); TMAX < TMIN by the tg_con table (every governor's limits).
 
 The DYR record (PSS/E Model Library DEGOV; PowerWorld's DEGOV, the same ten CONs): T1
 T2 T3 K T4 T5 T6 TD TMAX TMIN, stored in the shared tg_con columns T1 -> Tc, T2 -> Ts,
@@ -108,9 +108,7 @@ def check(g, r: int, model: str = "DEGOV") -> str | None:
         )
     if g.T5[r] < LBND and g.T6[r] < LBND and abs(g.T4[r]) >= LBND:
         return f"field 'T4': {model}'s actuator lead T4 needs T5 or T6 >= {LBND} s"
-    if g.Tmax[r] < g.Tmin[r]:
-        return f"fields 'Tmax', 'Tmin': {model}'s TMAX {g.Tmax[r]:g} is below TMIN {g.Tmin[r]:g}"
-    return None
+    return None  # TMAX below TMIN: the tg_con table's check (the family's limits)
 
 
 def initialise(p: GovernorParams, r, pmech0, order, x):

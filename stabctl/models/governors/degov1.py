@@ -16,7 +16,7 @@ settles where P_ref - (omega - 1) = R f, its droop line.
 
 A block whose lag is below 1e-3 s is absent, as DEGOV's.  Refused by name (`check`): the
 engine's transport delay TD > 0 (an ODE model has no delay; PSS/E's runs are "nodelay"),
-a lead without its lag, TMAX < TMIN.
+a lead without its lag; TMAX < TMIN by the tg_con table.
 
 The DYR record (PSS/E Model Library DEGOV1; PowerSystems.jl's DEGOV1): ICON M, then T1
 T2 T3 K T4 T5 T6 TD TMAX TMIN DROOP TE; T1 .. TMIN in DEGOV's tg_con columns, M, DROOP

@@ -15,14 +15,17 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import LBND, lag, nonwindup_lag
-from stabctl.models.declaration import DyrModel, beyond, states
-from stabctl.models.governors.table import AT_LIMIT, G
+from stabctl.models.declaration import DyrModel, Limits, beyond, states
+from stabctl.models.governors.table import AT_LIMIT, AT_RATED_SPEED, G
 
 if TYPE_CHECKING:
     from stabctl.models.governors import GovernorParams
 
 GAST = 6
 KINDS = {GAST: "GAST"}
+#: the speed set point w_f (`table.AT_RATED_SPEED`) and GAST's load-limit feedback lag T3
+#: >= 0 (PSS/E Model Library GAST)
+LIMITS = (AT_RATED_SPEED, Limits("PSS/E Model Library GAST", nonnegative=("T3",)))
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts",)
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:

@@ -50,7 +50,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, leadlag, nonwindup, washout
-from stabctl.models.declaration import DyrModel, beyond, states
+from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.governors.table import AT_LIMIT, G
 
 if TYPE_CHECKING:
@@ -58,6 +58,8 @@ if TYPE_CHECKING:
 
 GGOV1 = 9
 KINDS = {GGOV1: "GGOV1"}
+#: GGOV1's speed error limits ordered (PSS/E Model Library GGOV1)
+LIMITS = Limits("PSS/E Model Library GGOV1", ordered=(("maxerr", "minerr"),))
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Tpelec", "Tact", "Tb", "Tfload", "Tsb", "Tacc")
 #: not the family's start-up check of the order against [Tmin, Tmax]: `initialise`

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import clip, lag, nonwindup
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.governors.table import AT_LIMIT, G
 
 if TYPE_CHECKING:
@@ -23,6 +23,9 @@ if TYPE_CHECKING:
 
 HYGOV = 4
 KINDS = {HYGOV: "HYGOV"}
+#: HYGOV's temporary droop r > 0 (the desired gate is e/r) and its filter time constant
+#: T_r >= 0 (PSS/E Model Library HYGOV)
+LIMITS = Limits("PSS/E Model Library HYGOV", positive=("rt",), nonnegative=("T3",))
 #: the time constants that must be >= 1e-3 s (declared tg_con fields: T_g, T_f, T_w)
 NEEDS = ("Ts", "Tc", "T4")
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
@@ -68,14 +71,6 @@ def has_state(p: GovernorParams):
 def time_constants(p: GovernorParams):
     """The declared time constants that set a state's speed: field -> where."""
     return {"Ts": True, "Tc": True, "T4": True}
-
-
-def check(g, r: int) -> str | None:
-    """The first field of tg_con row r (0-based) HYGOV cannot take, with the reason, or
-    None: r = K2 must be non-zero (e/r)."""
-    if g.K2[r] == 0:
-        return f"field 'K2': must be non-zero for governor type {HYGOV}"
-    return None
 
 
 def start_order(p: GovernorParams, r, pmech0, total):

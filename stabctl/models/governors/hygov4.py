@@ -15,13 +15,15 @@ from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import clip, lag, nonwindup
 from stabctl.models.declaration import DyrModel, states
 from stabctl.models.governors import hygov
-from stabctl.models.governors.table import AT_LIMIT, G
+from stabctl.models.governors.table import AT_LIMIT, AT_RATED_SPEED, G
 
 if TYPE_CHECKING:
     from stabctl.models.governors import GovernorParams
 
 HYGOV4 = 8
 KINDS = {HYGOV4: "HYGOV4 (ANDES)"}
+#: the speed set point w_f (`table.AT_RATED_SPEED`)
+LIMITS = AT_RATED_SPEED
 #: the time constants that must be >= 1e-3 s (declared tg_con fields: T_g, T_p, T_r, T_w)
 NEEDS = ("Ts", "Tc", "T3", "T4")
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:

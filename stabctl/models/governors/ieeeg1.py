@@ -15,7 +15,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, clip, lag, leadlag, nonwindup
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.governors.table import AT_LIMIT, G, fractions
 
 if TYPE_CHECKING:
@@ -23,6 +23,8 @@ if TYPE_CHECKING:
 
 IEEEG1 = 3
 KINDS = {IEEEG1: "IEEEG1"}
+#: IEEEG1's steam chest time constant T4 >= 0 (PSS/E Model Library IEEEG1)
+LIMITS = Limits("PSS/E Model Library IEEEG1", nonnegative=("T4",))
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts",)
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:

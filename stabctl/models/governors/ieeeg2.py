@@ -23,14 +23,17 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, clip, lag, leadlag
-from stabctl.models.declaration import DyrModel, states
-from stabctl.models.governors.table import G
+from stabctl.models.declaration import DyrModel, Limits, states
+from stabctl.models.governors.table import AT_RATED_SPEED, G
 
 if TYPE_CHECKING:
     from stabctl.models.governors import GovernorParams
 
 IEEEG2 = 14
 KINDS = {IEEEG2: "IEEEG2"}
+#: the speed set point w_f (`table.AT_RATED_SPEED`) and the water time constant T_W >= 0
+#: (PSS/E Model Library IEEEG2)
+LIMITS = (AT_RATED_SPEED, Limits("PSS/E Model Library IEEEG2", nonnegative=("Tw",)))
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): none (each lag
 #: may be absent)
 NEEDS: tuple[str, ...] = ()
@@ -71,9 +74,8 @@ def time_constants(p: GovernorParams):
 
 def check(g, r: int) -> str | None:
     """The first IEEEG2 option of tg_con row r (0-based) stabctl does not model, with the
-    reason, or None: PMAX below PMIN, a lead T2 without its lag T1."""
-    if g.Tmax[r] < g.Tmin[r]:
-        return f"fields 'Tmax', 'Tmin': IEEEG2's PMAX {g.Tmax[r]:g} is below PMIN {g.Tmin[r]:g}"
+    reason, or None: a lead T2 without its lag T1 (PMAX below PMIN is the tg_con table's
+    check, the family's limits)."""
     if g.T3[r] != 0 and g.Tc[r] < LBND:
         return "fields 'T3', 'Tc': IEEEG2's lead T2 needs its lag T1 >= 1e-3 s"
     return None

@@ -37,14 +37,20 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, lag, leadlag, nonwindup, nonwindup_lag
-from stabctl.models.declaration import DyrModel, Param, states
-from stabctl.models.governors.table import AT_LIMIT, G, own
+from stabctl.models.declaration import DyrModel, Limits, Param, states
+from stabctl.models.governors.table import AT_LIMIT, AT_RATED_SPEED, G, own
 
 if TYPE_CHECKING:
     from stabctl.models.governors import GovernorParams
 
 IEEEG3 = 15
 KINDS = {IEEEG3: "IEEEG3"}
+#: the speed set point w_f (`table.AT_RATED_SPEED`), the water time constant T_W >= 0 and
+#: the gate's power A23 > 0 (PSS/E Model Library IEEEG3)
+LIMITS = (
+    AT_RATED_SPEED,
+    Limits("PSS/E Model Library IEEEG3", nonnegative=("Tw",), positive=("a23",)),
+)
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): the gate
 #: servomotor TG (its gain 1/TG)
 NEEDS: tuple[str, ...] = ("Ts",)
@@ -123,20 +129,6 @@ def time_constants(p: GovernorParams):
     """The declared time constants that set a state's speed: field -> where (the water
     column's lag is A11 TW; its declared field TW, T4, stands for it)."""
     return {"Tc": p.Tc >= LBND, "Tr": p.Tr >= LBND, "T4": _water_lag(p) >= LBND}
-
-
-def check(g, r: int) -> str | None:
-    """The first IEEEG3 option of tg_con row r (0-based) stabctl does not model, with the
-    reason, or None: PMAX below PMIN, Uo below Uc, a negative TW, A23 not positive."""
-    if g.Tmax[r] < g.Tmin[r]:
-        return f"fields 'Tmax', 'Tmin': IEEEG3's PMAX {g.Tmax[r]:g} is below PMIN {g.Tmin[r]:g}"
-    if g.Uo[r] < g.Uc[r]:
-        return f"fields 'Uo', 'Uc': IEEEG3's Uo {g.Uo[r]:g} is below Uc {g.Uc[r]:g}"
-    if g.T4[r] < 0:
-        return f"field 'T4': IEEEG3's TW {g.T4[r]:g} is negative"
-    if not g.a23[r] > 0:
-        return f"field 'a23': IEEEG3's A23 {g.a23[r]:g} must be positive (the gate's power)"
-    return None
 
 
 def start_order(p: GovernorParams, r, pmech0, total):

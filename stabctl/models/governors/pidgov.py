@@ -23,8 +23,8 @@ PowerSimulationsDynamics.jl's x_g2 times Ki.
 TREG or Tz/2 below 1e-3 s drops its block; TA and TB must be >= 1e-3 s (``NEEDS``); the
 feedback flag is 0 or 1 (its column's choices).  Refused by name (`check`): a gate table
 whose gates G0 < G1 < G2 < 1 or powers 0 < P1 < P2 < P3 do not rise (its inverse gives
-the start-up gate), GMAX < GMIN, VELMAX <= 0 or VELMIN >= 0; by `initialise`, a start-up
-gate outside [GMIN, GMAX].
+the start-up gate), VELMAX <= 0 or VELMIN >= 0; by the tg_con table, GMAX < GMIN and
+WPIDHY's PMAX < PMIN (``LIMITS``); by `initialise`, a start-up gate outside [GMIN, GMAX].
 
 WPIDHY (the Woodward PID hydro governor) differs in its gate: the PID's output is the
 gate's velocity, not its position.  The droop REG/(1 + s TREG) on P_e - P_ref (PSS/E's
@@ -64,7 +64,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import GAIN_OVER_T, LBND, clip, lag, leadlag, nonwindup, pi, washout
-from stabctl.models.declaration import DyrModel, Param, beyond, states
+from stabctl.models.declaration import DyrModel, Limits, Param, beyond, states
 from stabctl.models.governors.table import AT_LIMIT, G, own
 
 if TYPE_CHECKING:
@@ -72,6 +72,12 @@ if TYPE_CHECKING:
 
 PIDGOV, WPIDHY = 12, 13
 KINDS = {PIDGOV: "PIDGOV", WPIDHY: "WPIDHY"}
+#: the water time constant T_W >= 0 and WPIDHY's power limits ordered (PSS/E Model Library
+#: PIDGOV, WPIDHY)
+LIMITS = {
+    PIDGOV: Limits("PSS/E Model Library PIDGOV", nonnegative=("Tw",)),
+    WPIDHY: Limits("PSS/E Model Library WPIDHY", nonnegative=("Tw",), ordered=(("Pmax", "Pmin"),)),
+}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): the TA lags (the
 #: derivative's among them) and the gate servo (WPIDHY: the velocity lag TB)
 NEEDS: tuple[str, ...] = ("Ta", "Tgate")
@@ -228,13 +234,9 @@ def check(g, r: int) -> str | None:
         return "fields 'G0', 'G1', 'G2': PIDGOV's gate table needs G0 < G1 < G2 < 1"
     if not all(a < b for a, b in zip(powers, powers[1:])):
         return "fields 'P1', 'P2', 'P3': PIDGOV's gate table needs 0 < P1 < P2 < P3"
-    if g.Tmax[r] < g.Tmin[r]:
-        return f"fields 'Tmax', 'Tmin': PIDGOV's GMAX {g.Tmax[r]:g} is below GMIN {g.Tmin[r]:g}"
     if g.Uo[r] <= 0 or g.Uc[r] >= 0:
         return "fields 'Uo', 'Uc': PIDGOV's gate velocity limits need VELMAX > 0 > VELMIN"
-    if g.type[r] == WPIDHY and g.Pmax[r] < g.Pmin[r]:
-        return f"fields 'Pmax', 'Pmin': WPIDHY's PMAX {g.Pmax[r]:g} is below PMIN {g.Pmin[r]:g}"
-    return None
+    return None  # GMAX below GMIN, WPIDHY's PMAX below PMIN: the tg_con table's (LIMITS)
 
 
 def gate_at(p: GovernorParams, r, power):

@@ -19,7 +19,7 @@ import functools
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.declaration import Param, layout, own_columns
+from stabctl.models.declaration import Limits, Param, layout, own_columns
 
 #: tg_con columns 17-22 (IEEEG1's K1..K6) as HYGOV reads them: (alternative name, doc)
 _HYGOV_ALT = {
@@ -36,7 +36,16 @@ _HYGOV_ALT = {
     ),
 }
 
-#: tg_con columns 2-27 (column 1, the type, is declared by the registry from the types)
+#: tg_con columns 2-59 (column 1, the type, is declared by the registry from the types).
+#: Bounds (PSS/E Model Library TGOV1, IEEEG1, HYGOV, GAST, IEESGO, DEGOV; PSTess tg.m):
+#: the gain 1/R (or K) >= 0, the turbine damping >= 0, the lag time constants >= 0 (the
+#: lead constants T3, T4 may be negative: miniWECC's hydro units use T4 = -1), the power
+#: fractions K1..K8 (HYGOV's droops, no-load flow and integrator gain) >= 0, GAST's load
+#: limit and its gain >= 0, the gate's opening rate Uo >= 0 and closing rate Uc <= 0 (at
+#: rest the gate's rate, 0, lies between them; PSS/E IEEEG1: Uo > 0, Uc < 0).  What one
+#: type's equations need of columns others read otherwise is its module's ``LIMITS``
+#: (`stabctl.models.declaration.Limits`; the speed set point, `AT_RATED_SPEED`); Tmax >=
+#: Tmin every type's (the family's common limits, `stabctl.models.governors`)
 PARAMS = (
     Param("machine", "code", 2, integer=True, doc="machine number"),
     Param("wf", "pu", 3, doc="speed set point"),
@@ -44,6 +53,7 @@ PARAMS = (
         "invR",
         "pu",
         4,
+        lo=0.0,
         doc="steady-state gain 1/R (IEEEG1: K; DEGOV: the actuator gain K), on machine base",
     ),
     Param("Tmax", "pu", 5, doc="maximum power order (TGOV1: VMAX, IEEEG1: PMAX, DEGOV: TMAX)"),
@@ -86,24 +96,25 @@ PARAMS = (
         11,
         doc="minimum power order (tg: 0 as PST; TGOV1: VMIN; IEEEG1: PMIN; DEGOV: TMIN)",
     ),
-    Param("Dt", "pu", 12, doc="turbine damping (TGOV1), pu power / pu speed"),
+    Param("Dt", "pu", 12, lo=0.0, doc="turbine damping (TGOV1), pu power / pu speed"),
     Param("T6", "s", 13, lo=0.0, doc="IEEEG1 third turbine time constant; DEGOV actuator lag T6"),
     Param("T7", "s", 14, lo=0.0, doc="IEEEG1 fourth turbine time constant"),
-    Param("Uo", "pu/s", 15, doc="IEEEG1 maximum valve opening rate"),
-    Param("Uc", "pu/s", 16, doc="IEEEG1 maximum valve closing rate (< 0)"),
+    Param("Uo", "pu/s", 15, lo=0.0, doc="IEEEG1 maximum valve opening rate"),
+    Param("Uc", "pu/s", 16, hi=0.0, doc="IEEEG1 maximum valve closing rate (< 0)"),
     *(
         Param(
             f"K{k}",
             "",
             16 + k,
+            lo=0.0,
             alt=_HYGOV_ALT.get(k, ("", ""))[0],
             doc=f"IEEEG1 fraction of power after T{3 + (k + 1) // 2} "
             f"({'HP' if k % 2 else 'LP'} shaft)" + _HYGOV_ALT.get(k, ("", ""))[1],
         )
         for k in range(1, 9)
     ),
-    Param("AT", "pu", 25, doc="GAST ambient temperature load limit"),
-    Param("KT", "", 26, doc="GAST temperature limiter gain"),
+    Param("AT", "pu", 25, lo=0.0, doc="GAST ambient temperature load limit"),
+    Param("KT", "", 26, lo=0.0, doc="GAST temperature limiter gain"),
     Param(
         "machine2",
         "code",
@@ -113,47 +124,72 @@ PARAMS = (
         "M): K2, K4, K6, K8 drive it; 0 one shaft (every fraction on `machine`)",
     ),
     *(
-        Param(name, unit, 28 + i, doc="GGOV1: " + doc)
-        for i, (name, unit, doc) in enumerate(
+        # GGOV1's bounds (PSS/E Model Library GGOV1; GE's and WECC's GGOV1 documentation):
+        # time constants, gains, droop, rating and deadband >= 0, the opening rates >= 0 and
+        # the closing rates <= 0 (a rest point, rate 0, lies between them); "+" marks >= 0,
+        # "-" <= 0
+        Param(
+            name,
+            unit,
+            28 + i,
+            lo=0.0 if sign == "+" else None,
+            hi=0.0 if sign == "-" else None,
+            doc="GGOV1: " + doc,
+        )
+        for i, (name, unit, sign, doc) in enumerate(
             (
-                ("Rselect", "code", "droop feedback: 1 electrical power, 0 none, -2 valve stroke"),
-                ("Flag", "code", "1 fuel flow proportional to speed, 0 independent of it"),
-                ("Rdroop", "pu", "permanent droop R"),
-                ("Tpelec", "s", "electrical power transducer time constant"),
-                ("maxerr", "pu", "maximum speed error"),
-                ("minerr", "pu", "minimum speed error"),
-                ("Kpgov", "pu", "governor proportional gain"),
-                ("Kigov", "1/s", "governor integral gain"),
-                ("Kdgov", "s", "governor derivative gain"),
-                ("Tdgov", "s", "governor derivative time constant"),
-                ("Tact", "s", "actuator time constant"),
-                ("Kturb", "pu", "turbine gain"),
-                ("Wfnl", "pu", "no-load fuel flow"),
-                ("Tb", "s", "turbine lag time constant (the lead is Tc, column 7)"),
-                ("Teng", "s", "transport delay of a diesel engine (0 only; also DEGOV's TD)"),
-                ("Tfload", "s", "load limiter time constant"),
-                ("Kpload", "pu", "load limiter proportional gain"),
-                ("Kiload", "1/s", "load limiter integral gain"),
-                ("Ldref", "pu", "load limiter reference"),
-                ("Dm", "pu", "speed damping (>= 0)"),
-                ("Ropen", "pu/s", "maximum valve opening rate"),
-                ("Rclose", "pu/s", "maximum valve closing rate (< 0)"),
-                ("Kimw", "1/s", "supplementary load controller gain (0 only)"),
-                ("Aset", "pu/s", "acceleration limiter set point"),
-                ("Kacc", "pu", "acceleration limiter gain Ka"),
-                ("Tacc", "s", "acceleration limiter time constant Ta"),
-                ("Trate", "MW", "turbine rating (0: the machine's MVA)"),
-                ("db", "pu", "speed deadband"),
-                ("Tsa", "s", "temperature detection lead time constant"),
-                ("Tsb", "s", "temperature detection lag time constant"),
-                ("Rup", "pu/s", "maximum rate of the load limit's increase"),
-                ("Rdown", "pu/s", "maximum rate of the load limit's decrease (< 0)"),
+                (
+                    "Rselect",
+                    "code",
+                    "",
+                    "droop feedback: 1 electrical power, 0 none, -2 valve stroke",
+                ),
+                ("Flag", "code", "", "1 fuel flow proportional to speed, 0 independent of it"),
+                ("Rdroop", "pu", "+", "permanent droop R"),
+                ("Tpelec", "s", "+", "electrical power transducer time constant"),
+                ("maxerr", "pu", "", "maximum speed error"),
+                ("minerr", "pu", "", "minimum speed error"),
+                ("Kpgov", "pu", "+", "governor proportional gain"),
+                ("Kigov", "1/s", "+", "governor integral gain"),
+                ("Kdgov", "s", "+", "governor derivative gain"),
+                ("Tdgov", "s", "+", "governor derivative time constant"),
+                ("Tact", "s", "+", "actuator time constant"),
+                ("Kturb", "pu", "+", "turbine gain"),
+                ("Wfnl", "pu", "+", "no-load fuel flow"),
+                ("Tb", "s", "+", "turbine lag time constant (the lead is Tc, column 7)"),
+                ("Teng", "s", "+", "transport delay of a diesel engine (0 only; also DEGOV's TD)"),
+                ("Tfload", "s", "+", "load limiter time constant"),
+                ("Kpload", "pu", "+", "load limiter proportional gain"),
+                ("Kiload", "1/s", "+", "load limiter integral gain"),
+                ("Ldref", "pu", "", "load limiter reference"),
+                ("Dm", "pu", "+", "speed damping (>= 0)"),
+                ("Ropen", "pu/s", "+", "maximum valve opening rate"),
+                ("Rclose", "pu/s", "-", "maximum valve closing rate (<= 0)"),
+                ("Kimw", "1/s", "", "supplementary load controller gain (0 only)"),
+                ("Aset", "pu/s", "", "acceleration limiter set point"),
+                ("Kacc", "pu", "+", "acceleration limiter gain Ka"),
+                ("Tacc", "s", "+", "acceleration limiter time constant Ta"),
+                ("Trate", "MW", "+", "turbine rating (0: the machine's MVA)"),
+                ("db", "pu", "+", "speed deadband"),
+                ("Tsa", "s", "+", "temperature detection lead time constant"),
+                ("Tsb", "s", "+", "temperature detection lag time constant"),
+                ("Rup", "pu/s", "+", "maximum rate of the load limit's increase"),
+                ("Rdown", "pu/s", "-", "maximum rate of the load limit's decrease (<= 0)"),
             )
         )
     ),
 )
 
 _NAMES = tuple(p.name for p in PARAMS)
+
+#: the limits of the types whose speed error is w_f - omega (tg, TGOV1, GAST, TG2, HYGOV4,
+#: IEEEG2, IEEEG3): every governor starts at rated speed, omega = 1, with P_ref its
+#: initial power order (`stabctl.models.governors.initialise`; PSTess tg.m the same), so a
+#: speed set point w_f other than 1 pu starts it off its rest point
+AT_RATED_SPEED = Limits(
+    "every governor starts at rated speed with P_ref its initial power (PSTess tg.m)",
+    one=("wf",),
+)
 #: HYGOV's fields in tg_con columns 17-22 (alternative names of K1..K6)
 HYGOV_FIELDS = ("Rp", "rt", "qNL", "Kg", "velm_rel", "psse_gate")
 #: tg_con fields the kernels take as given: columns 3-16 and GAST's 25-26 (the IEEEG1

@@ -15,13 +15,15 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, clip, lag, leadlag
 from stabctl.models.declaration import DyrModel, states
-from stabctl.models.governors.table import G
+from stabctl.models.governors.table import AT_RATED_SPEED, G
 
 if TYPE_CHECKING:
     from stabctl.models.governors import GovernorParams
 
 TG = 1
 KINDS = {TG: "PST tg"}
+#: the speed set point w_f (`table.AT_RATED_SPEED`)
+LIMITS = AT_RATED_SPEED
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts", "Tc", "T5")
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:

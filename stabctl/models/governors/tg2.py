@@ -12,13 +12,15 @@ from typing import TYPE_CHECKING
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import clip, leadlag
 from stabctl.models.declaration import DyrModel, states
-from stabctl.models.governors.table import G
+from stabctl.models.governors.table import AT_RATED_SPEED, G
 
 if TYPE_CHECKING:
     from stabctl.models.governors import GovernorParams
 
 TG2 = 7
 KINDS = {TG2: "TG2 (ANDES)"}
+#: the speed set point w_f (`table.AT_RATED_SPEED`)
+LIMITS = AT_RATED_SPEED
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Tc",)
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:

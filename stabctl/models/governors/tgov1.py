@@ -14,13 +14,15 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, leadlag, nonwindup_lag
 from stabctl.models.declaration import DyrModel, states
-from stabctl.models.governors.table import AT_LIMIT, G
+from stabctl.models.governors.table import AT_LIMIT, AT_RATED_SPEED, G
 
 if TYPE_CHECKING:
     from stabctl.models.governors import GovernorParams
 
 TGOV1 = 2
 KINDS = {TGOV1: "TGOV1"}
+#: the speed set point w_f (`table.AT_RATED_SPEED`)
+LIMITS = AT_RATED_SPEED
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts", "Tc")
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:

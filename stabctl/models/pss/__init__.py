@@ -32,6 +32,7 @@ from stabctl.errors import CaseError
 from stabctl.models.blocks import LBND
 from stabctl.models.declaration import (
     Declared,
+    Limits,
     check_packed,
     model_types,
     own_params,
@@ -125,6 +126,11 @@ PSS = typed_family(
     PARAMS + OWN_PARAMS,
     tuple(m for mod in MODULES for m in mod.DYR),
     sep="; ",
+    # every type limits its output to [ymin, ymax] (IEEE Std 421.5-2016 PSS1A, PSS2A-C;
+    # PST manual 3.30 Table 13; STAB2A's [-HLIM, HLIM])
+    common=Limits(
+        "IEEE Std 421.5: an upper limit at or above its lower", ordered=(("ymax", "ymin"),)
+    ),
 )
 
 #: the kernels' column of each PACKED name, under the name it had before the package

@@ -28,7 +28,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.errors import CaseError
 from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, leadlag, washout
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.pss.table import POWER, SPEED, C, signal
 
 if TYPE_CHECKING:
@@ -36,6 +36,8 @@ if TYPE_CHECKING:
 
 PSSE = 3
 KINDS = {PSSE: "PSS/E IEEEST, ST2CUT"}
+#: the third lead time constant T5 >= 0 (PSS/E Model Library IEEEST, ST2CUT)
+LIMITS = Limits("PSS/E Model Library IEEEST", nonnegative=("T5",))
 #: the family refuses a washout T_w below 1e-3 s (`stabctl.models.pss.pss_params`)
 NEEDS_TW = True
 #: pss_con input1, input2 are PSS/E input codes (else read as 0)

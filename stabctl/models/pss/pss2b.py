@@ -7,11 +7,18 @@ order).
 
 from __future__ import annotations
 
-from stabctl.models.declaration import DyrModel
+from stabctl.models.declaration import DyrModel, Limits
 from stabctl.models.pss import pss2a
 
 PSS2B = 6
 KINDS = {PSS2B: "PSS/E PSS2B"}
+#: the third lead time constant T10 (column T5) >= 0 and the input limits ordered (PSS/E
+#: Model Library PSS2B; IEEE Std 421.5-2016 PSS2B)
+LIMITS = Limits(
+    "IEEE Std 421.5 PSS2B",
+    nonnegative=("T5",),
+    ordered=(("VS1MAX", "VS1MIN"), ("VS2MAX", "VS2MIN")),
+)
 #: the family refuses a washout T_w below 1e-3 s (`stabctl.models.pss.pss_params`)
 NEEDS_TW = True
 #: pss_con input1, input2 are PSS/E input codes (else read as 0)

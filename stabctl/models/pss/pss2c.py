@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.declaration import DyrModel
+from stabctl.models.declaration import DyrModel, Limits
 from stabctl.models.pss import pss2a, pss2b
 from stabctl.models.pss.table import C
 
@@ -25,6 +25,13 @@ if TYPE_CHECKING:
 
 PSS2C = 7
 KINDS = {PSS2C: "PSS/E PSS2C"}
+#: PSS2B's limits, and the output logic's switching-on power at or above its switching-off
+#: power (a hysteresis; PSS/E Model Library PSS2C; IEEE Std 421.5-2016 PSS2C)
+LIMITS = Limits(
+    "IEEE Std 421.5 PSS2C",
+    nonnegative=("T5",),
+    ordered=(("VS1MAX", "VS1MIN"), ("VS2MAX", "VS2MIN"), ("PSSON", "PSSOFF")),
+)
 #: the family refuses a washout T_w below 1e-3 s (`stabctl.models.pss.pss_params`)
 NEEDS_TW = True
 #: pss_con input1, input2 are PSS/E input codes (else read as 0)

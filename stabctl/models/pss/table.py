@@ -22,14 +22,21 @@ from stabctl.models.declaration import Param, layout, own_columns
 #: deviation, generator electrical power (machine base)
 SPEED, POWER = 1, 3
 
-#: pss_con columns 2-44 (column 1, the type, is declared by the registry from the types)
+#: pss_con columns 2-44 (column 1, the type, is declared by the registry from the types).
+#: Bounds: every lead and lag time constant >= 0 (IEEE Std 421.5-2016 PSS1A, PSS2A-C;
+#: PSS/E Model Library IEEEST, STAB2A), the denominator coefficients A1..A4 of IEEEST's
+#: filter >= 0 (a second-order factor 1 + a s + b s^2 with a coefficient below 0 has a pole
+#: in the right half plane: the filter is unstable); the gains take either sign (a power
+#: input stabiliser's is negative: PST's pss type 2).  What one type's equations need of
+#: columns others read otherwise is its module's ``LIMITS``
+#: (`stabctl.models.declaration.Limits`), ymax >= ymin every type's (`stabctl.models.pss`)
 PARAMS = (
     Param("machine", "code", 2, integer=True, doc="machine number"),
     Param("KTw", "", 3, doc="gain times washout time constant (K*Tw); type 3: washout gain K_w"),
     Param("Tw", "s", 4, lo=0.0, doc="washout time constant (PSS2A/B/C: Tw1)"),
-    Param("T1", "s", 5, doc="first lead time constant"),
+    Param("T1", "s", 5, lo=0.0, doc="first lead time constant"),
     Param("T2", "s", 6, lo=0.0, doc="first lag time constant"),
-    Param("T3", "s", 7, doc="second lead time constant"),
+    Param("T3", "s", 7, lo=0.0, doc="second lead time constant"),
     Param("T4", "s", 8, lo=0.0, doc="second lag time constant"),
     Param("ymax", "pu", 9, doc="maximum output (PSS2A/B/C: VSTMAX)"),
     Param("ymin", "pu", 10, doc="minimum output (PSS2A/B/C: VSTMIN)"),
@@ -76,6 +83,7 @@ PARAMS = (
             f"A{k}",
             "s" if k % 2 else "s^2",
             18 + k,
+            lo=0.0 if k <= 4 else None,
             doc=f"type 3: filter (1 + A5 s + A6 s^2)/((1 + A1 s + A2 s^2)(1 + A3 s + "
             f"A4 s^2)), A{k}",
         )
@@ -103,7 +111,7 @@ PARAMS = (
                 ("Tw3", "s", 0.0, False, "first washout of input 2"),
                 ("Tw4", "s", 0.0, False, "second washout of input 2 (< 1e-3 s: none)"),
                 ("Ks3", "", None, False, "gain of input 2 into the ramp-tracking filter"),
-                ("T8", "s", None, False, "ramp-tracking filter lead time constant"),
+                ("T8", "s", 0.0, False, "ramp-tracking filter lead time constant"),
                 ("T9", "s", 0.0, False, "ramp-tracking filter lag time constant"),
                 ("M", "", 0.0, True, "ramp-tracking filter: lags per stage"),
                 ("N", "", 0.0, True, "ramp-tracking filter: stages (0: no filter)"),
@@ -111,12 +119,12 @@ PARAMS = (
                 ("VS1MIN", "pu", None, False, "PSS2B/C: input 1 minimum"),
                 ("VS2MAX", "pu", None, False, "PSS2B/C: input 2 maximum"),
                 ("VS2MIN", "pu", None, False, "PSS2B/C: input 2 minimum"),
-                ("T12", "s", None, False, "PSS2C: fourth lead time constant"),
+                ("T12", "s", 0.0, False, "PSS2C: fourth lead time constant"),
                 ("T13", "s", 0.0, False, "PSS2C: fourth lag time constant"),
                 ("PSSON", "pu", None, False, "PSS2C: power (machine base) switching on"),
                 ("PSSOFF", "pu", None, False, "PSS2C: power (machine base) switching off"),
                 ("XCOMP", "pu", None, False, "PSS2C: compensated frequency's reactance"),
-                ("TCOMP", "s", None, False, "PSS2C: compensated frequency's time constant"),
+                ("TCOMP", "s", 0.0, False, "PSS2C: compensated frequency's time constant"),
             )
         )
     ),
