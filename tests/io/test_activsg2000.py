@@ -180,3 +180,18 @@ def test_terminal_voltages_behind_the_machine_impedance_equal_the_bus_voltages(i
     assert every_bus.vmag.shape[1] == case.n_bus and machines_only.vmag.size == 0
     assert np.abs(every_bus.angle - machines_only.angle).max() < 1e-9
     assert np.abs(every_bus.efd - machines_only.efd).max() < 1e-6
+
+
+def test_sime_keeps_the_lowest_end_of_a_verdict_that_is_not_monotone(imported):
+    """Bus 4162 is unstable cleared at 0.224-0.3 s but stable again at 0.392 s (unstable at
+    0.393, 0.4 and 0.5 s).  The sime search runs t_max (0.5 s) first; were that run's
+    margin used at once, with 0.4 s's, it extrapolated to 0.393 s and called the CCT
+    0.392 s.  It waits for the doubling, whose 0.3 s probe finds the bisection's CCT,
+    0.223 s (the earlier screening's record of this fault)."""
+    from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
+
+    sim = Simulator(imported[1])
+    fault = LineFault(4162, None, 1.0)
+    res = critical_clearing_time(sim, fault, SearchOptions(method="sime", t_max=0.5))
+    assert res.bracket == (0.223, 0.224)
+    assert res.probes[0] == (0.5, False) and (0.3, False) in res.probes
